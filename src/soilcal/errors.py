@@ -1,0 +1,35 @@
+"""Errors that carry the file, the field and what was expected.
+
+Every bad input (config, photo, table, measurement, simulation setting) raises
+:class:`InputError`, whose message reads::
+
+    <file>: <field>: expected <expected>, got <got>
+
+so a user sees in one line what to fix and where.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+
+class SoilcalError(Exception):
+    """Base class of all soilcal errors."""
+
+
+class InputError(SoilcalError, ValueError):
+    """Bad user input: names the file, the field and what was expected."""
+
+    def __init__(self, path: str | Path | None, field: str, expected: str, got: object = None):
+        self.path = str(path) if path is not None else "<input>"
+        self.field = field
+        self.expected = expected
+        self.got = got
+        msg = f"{self.path}: {field}: expected {expected}"
+        if got is not None:
+            msg += f", got {got!r}"
+        super().__init__(msg)
+
+
+class SimulationError(SoilcalError, RuntimeError):
+    """A DEM run that cannot continue (blow-up, NaN), naming the step and particle."""
