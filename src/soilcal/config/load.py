@@ -1,0 +1,293 @@
+"""Load and validate soil entries and the workflow configuration."""
+
+from __future__ import annotations
+
+import math
+import re
+from dataclasses import dataclass, field
+from functools import cached_property
+from importlib import resources
+from pathlib import Path
+from typing import Any
+
+import jsonschema
+import pandas as pd
+import yaml
+
+from soilcal.errors import InputError
+
+SOIL_SCHEMA = Path(str(resources.files("soilcal.config") / "soil.schema.yaml"))
+
+
+class _Loader(yaml.SafeLoader):
+    """SafeLoader that also reads ``7.9e10`` (no sign, no dot) as a float, as YAML 1.2 does."""
+
+
+_Loader.add_implicit_resolver(
+    "tag:yaml.org,2002:float",
+    re.compile(
+        r"""^(?:[-+]?(?:[0-9][0-9_]*)\.[0-9_]*(?:[eE][-+]?[0-9]+)?
+        |[-+]?(?:[0-9][0-9_]*)(?:[eE][-+]?[0-9]+)
+        |\.[0-9_]+(?:[eE][-+]?[0-9]+)?
+        |[-+]?\.(?:inf|Inf|INF)
+        |\.(?:nan|NaN|NAN))$""",
+        re.X,
+    ),
+    list("-+0123456789."),
+)
+
+
+def read_yaml(path: str | Path) -> Any:
+    """Read a YAML file; a missing or unparsable file raises InputError naming it."""
+    path = Path(path)
+    if not path.is_file():
+        raise InputError(path, "<file>", "an existing YAML file", "no such file")
+    try:
+        with open(path, encoding="utf-8") as fh:
+            return yaml.load(fh, Loader=_Loader)  # noqa: S506 - SafeLoader subclass
+    except yaml.YAMLError as exc:
+        mark = getattr(exc, "problem_mark", None)
+        where = f"line {mark.line + 1}" if mark is not None else "<document>"
+        raise InputError(path, where, "valid YAML", str(getattr(exc, "problem", exc))) from None
+
+
+def _field_path(parts) -> str:
+    out = ""
+    for p in parts:
+        out += f"[{p}]" if isinstance(p, int) else (f".{p}" if out else str(p))
+    return out or "<root>"
+
+
+def _schema_error(path: Path, schema: dict, data: Any) -> None:
+    validator = jsonschema.Draft202012Validator(schema)
+    errors = list(validator.iter_errors(data))
+    if not errors:
+        return
+    err = jsonschema.exceptions.best_match(errors)
+    where = _field_path(err.absolute_path)
+    if err.validator == "additionalProperties":
+        allowed = sorted(err.schema.get("properties", {}))
+        extra = sorted(set(err.instance) - set(allowed)) if isinstance(err.instance, dict) else []
+        name = extra[0] if extra else "?"
+        fld = f"{where}.{name}" if where != "<root>" else name
+        raise InputError(path, fld, "one of the known fields " + ", ".join(allowed), f"unknown field {name!r}")
+    if err.validator == "required":
+        missing = err.message.split("'")[1] if "'" in err.message else err.message
+        fld = f"{where}.{missing}" if where != "<root>" else missing
+        raise InputError(path, fld, "a required field", "nothing")
+    if err.validator == "type":
+        raise InputError(path, where, f"a value of type {err.validator_value}", err.instance)
+    if err.validator == "enum":
+        raise InputError(path, where, "one of " + ", ".join(map(str, err.validator_value)), err.instance)
+    if err.validator == "pattern":
+        raise InputError(path, where, f"text matching {err.validator_value}", err.instance)
+    raise InputError(path, where, err.message)
+
+
+def design_runs(stage: dict) -> int:
+    """Number of runs of a stage's design, from its kind and factor count."""
+    kind = stage["kind"]
+    k = len(stage["factors"])
+    if kind == "plackett_burman":
+        cols = k + len(stage.get("dummies", []))
+        return int(stage.get("runs") or 4 * (cols // 4 + 1))
+    if kind == "box_behnken":
+        # pyDOE3.bbdesign: a 2^2 factorial on every pair of factors, the others at 0.
+        return 4 * math.comb(k, 2) + int(stage.get("center_points", 0))
+    if kind == "steepest_ascent":
+        lengths = {len(f.get("levels", [])) for f in stage["factors"].values()}
+        return max(lengths) if lengths else 0
+    raise ValueError(kind)
+
+
+@dataclass
+class Soil:
+    """A validated soil entry."""
+
+    path: Path
+    data: dict
+    resources_root: Path = field(default=Path("resources"))
+
+    @property
+    def name(self) -> str:
+        return self.data["name"]
+
+    @property
+    def stages(self) -> list[dict]:
+        return self.data["stages"]
+
+    def stage(self, stage_id: str) -> dict:
+        for s in self.stages:
+            if s["id"] == stage_id:
+                return s
+        raise InputError(self.path, "stages", f"a stage with id {stage_id!r}", [s["id"] for s in self.stages])
+
+    def published_dir(self) -> Path:
+        return self.resources_root / "published" / self.name
+
+    def table_path(self, stage_id: str) -> Path | None:
+        t = self.stage(stage_id).get("table")
+        return None if t is None else self.published_dir() / t
+
+    def printed_path(self, name: str) -> Path:
+        return self.published_dir() / name
+
+    @cached_property
+    def tables(self) -> dict[str, pd.DataFrame]:
+        return {s["id"]: read_table(self.table_path(s["id"])) for s in self.stages if s.get("table")}
+
+
+def read_table(path: Path) -> pd.DataFrame:
+    """Read a published CSV table; a missing or unreadable file raises InputError."""
+    if not path.is_file():
+        raise InputError(path, "<file>", "an existing CSV table", "no such file")
+    try:
+        return pd.read_csv(path)
+    except Exception as exc:  # pandas raises several types for bad CSV
+        raise InputError(path, "<file>", "a readable CSV table", str(exc)) from None
+
+
+def _check_levels(path: Path, where: str, d: dict) -> None:
+    lo, hi, c = d.get("low"), d.get("high"), d.get("centre")
+    if lo is not None and hi is not None and not lo < hi:
+        raise InputError(path, f"{where}.low", f"a number below high ({hi})", lo)
+    if c is not None and lo is not None and hi is not None and not lo <= c <= hi:
+        raise InputError(path, f"{where}.centre", f"a number between low ({lo}) and high ({hi})", c)
+
+
+def _semantic_checks(path: Path, d: dict, resources_root: Path) -> None:
+    if d["name"] != path.stem:
+        raise InputError(path, "name", f"the file name without .yaml ({path.stem!r})", d["name"])
+    for k, q in d.get("properties", {}).items():
+        if isinstance(q, dict) and "bins" not in q:
+            _check_levels(path, f"properties.{k}", q)
+    params = d["parameters"]
+    targets = d.get("targets", {})
+    seen: dict[str, dict] = {}
+    for i, st in enumerate(d["stages"]):
+        where = f"stages[{i}]"
+        sid = st["id"]
+        if sid in seen:
+            raise InputError(path, f"{where}.id", "a stage id used once", sid)
+        for sym, f in st["factors"].items():
+            fw = f"{where}.factors.{sym}"
+            if f["parameter"] not in params:
+                raise InputError(path, f"{fw}.parameter", "an id listed under parameters", f["parameter"])
+            _check_levels(path, fw, f)
+            if st["kind"] in ("plackett_burman", "box_behnken") and ("low" not in f or "high" not in f):
+                raise InputError(path, fw, "low and high levels for a two/three-level design", f)
+            if st["kind"] == "steepest_ascent" and not f.get("levels"):
+                raise InputError(path, f"{fw}.levels", "the actual value of every step", None)
+        if st["kind"] == "steepest_ascent":
+            lengths = {len(f["levels"]) for f in st["factors"].values()}
+            if len(lengths) != 1:
+                raise InputError(path, f"{where}.factors", "the same number of levels for every factor", sorted(lengths))
+            if "chosen_step" in st and not 1 <= st["chosen_step"] <= lengths.pop():
+                raise InputError(path, f"{where}.chosen_step", "a step number of the path", st["chosen_step"])
+        for p in st.get("fixed", {}):
+            if p not in params:
+                raise InputError(path, f"{where}.fixed.{p}", "an id listed under parameters", p)
+        for key in ("from_stage",):
+            if key in st and st[key] not in seen:
+                raise InputError(path, f"{where}.{key}", "the id of an earlier stage", st[key])
+        if "fixed_from" in st and st["fixed_from"]["stage"] not in seen:
+            raise InputError(path, f"{where}.fixed_from.stage", "the id of an earlier stage", st["fixed_from"]["stage"])
+        rids = [r["id"] for r in st["responses"]]
+        if len(set(rids)) != len(rids):
+            raise InputError(path, f"{where}.responses", "distinct response ids", rids)
+        for r in st.get("printed", {}):
+            if r not in rids:
+                raise InputError(path, f"{where}.printed.{r}", "a response id of this stage (" + ", ".join(rids) + ")", r)
+        for r in st.get("transform", {}):
+            if r not in rids:
+                raise InputError(path, f"{where}.transform.{r}", "a response id of this stage", r)
+        opt = st.get("optimise")
+        if opt:
+            for j, case in enumerate(opt["cases"]):
+                for r, g in case["goals"].items():
+                    gw = f"{where}.optimise.cases[{j}].goals.{r}"
+                    if r not in rids:
+                        raise InputError(path, gw, "a response id of this stage (" + ", ".join(rids) + ")", r)
+                    if g["goal"] == "target" and "value" not in g and "target" not in g:
+                        raise InputError(path, gw, "a target value or a target id", g)
+                    if "target" in g and g["target"] not in targets:
+                        raise InputError(path, f"{gw}.target", "an id listed under targets", g["target"])
+                    if g["goal"] == "in_range" and not ("low" in g and "high" in g and g["low"] < g["high"]):
+                        raise InputError(path, gw, "low < high for an in_range goal", g)
+        _check_table(path, st, where, resources_root / "published" / d["name"])
+        for r, pr in st.get("printed", {}).items():
+            for key in ("anova_full", "anova_reduced", "effects", "coefficients"):
+                if key in pr and not (resources_root / "published" / d["name"] / pr[key]).is_file():
+                    raise InputError(path, f"{where}.printed.{r}.{key}", "an existing file under resources/published/" + d["name"], pr[key])
+        seen[sid] = st
+
+
+def _check_table(path: Path, st: dict, where: str, pub: Path) -> None:
+    if st.get("table") is None:
+        return
+    tpath = pub / st["table"]
+    if not tpath.is_file():
+        raise InputError(path, f"{where}.table", f"an existing file {tpath}", "no such file")
+    df = read_table(tpath)
+    rcols = [r.get("column", r["id"]) for r in st["responses"]]
+    need = list(st["factors"]) + rcols
+    absent = [c for c in need if c not in df.columns]
+    if absent:
+        raise InputError(tpath, "columns", "columns " + ", ".join(need), f"missing {', '.join(absent)}")
+    n = design_runs(st)
+    if len(df) != n:
+        raise InputError(tpath, "rows", f"{n} rows for the {st['kind']} design of stage {st['id']!r} (from {path.name})", len(df))
+    for c in list(st["factors"]) + rcols:
+        if not pd.api.types.is_numeric_dtype(df[c]) and not df[c].isna().all():
+            raise InputError(tpath, f"column {c}", "numbers", df[c].tolist())
+    coding = st.get("table_coding", "coded" if st["kind"] != "steepest_ascent" else "actual")
+    if coding == "coded":
+        allowed = {-1, 1} if st["kind"] == "plackett_burman" else {-1, 0, 1}
+        for c in list(st["factors"]) + [x for x in st.get("dummies", []) if x in df.columns]:
+            bad = sorted(set(df[c].dropna()) - allowed)
+            if bad:
+                raise InputError(tpath, f"column {c}", "coded levels " + "/".join(map(str, sorted(allowed))), bad)
+    elif st["kind"] != "steepest_ascent":
+        for c, f in st["factors"].items():
+            lo, hi = f["low"], f["high"]
+            bad = df[c][(df[c] < lo - 1e-9 * abs(hi)) | (df[c] > hi + 1e-9 * abs(hi))]
+            if len(bad):
+                raise InputError(tpath, f"column {c}", f"values within [{lo}, {hi}]", bad.tolist())
+
+
+def load_soil(path: str | Path, resources_root: str | Path = "resources") -> Soil:
+    """Read, schema-validate and check one soil file; return a :class:`Soil`."""
+    path = Path(path)
+    data = read_yaml(path)
+    if not isinstance(data, dict):
+        raise InputError(path, "<root>", "a mapping of soil fields", type(data).__name__)
+    schema = read_yaml(SOIL_SCHEMA)
+    _schema_error(path, schema, data)
+    _semantic_checks(path, data, Path(resources_root))
+    return Soil(path=path, data=data, resources_root=Path(resources_root))
+
+
+WORKFLOW_SCHEMA = {
+    "type": "object",
+    "additionalProperties": False,
+    "required": ["soils"],
+    "properties": {
+        "soils": {"type": "array", "minItems": 1, "items": {"type": "string", "pattern": "^[a-z0-9][a-z0-9-]*$"}},
+        "soil_dir": {"type": "string"},
+        "resources": {"type": "string"},
+    },
+}
+
+
+def load_workflow_config(cfg: dict, origin: str | Path = "config/config.yaml") -> dict[str, Soil]:
+    """Validate the workflow config and every soil it lists; return soils by name."""
+    _schema_error(Path(origin), WORKFLOW_SCHEMA, cfg)
+    soil_dir = Path(cfg.get("soil_dir", "config/soils"))
+    res = Path(cfg.get("resources", "resources"))
+    out = {}
+    for name in cfg["soils"]:
+        p = soil_dir / f"{name}.yaml"
+        if not p.is_file():
+            raise InputError(origin, "soils", f"a soil file {p}", "no such file")
+        out[name] = load_soil(p, res)
+    return out

@@ -1,0 +1,59 @@
+# Configuration, validated before any job runs: the workflow config against its schema, then
+# every soil file against the soil schema and the published tables against their designs.
+from snakemake.utils import validate
+
+from soilcal.config import load_workflow_config
+
+
+validate(config, "../schemas/config.schema.yaml")
+SOILS = load_workflow_config(config)
+RES = config.get("resources", "resources")
+
+wildcard_constraints:
+    soil="|".join(SOILS),
+    stage="[a-z0-9][a-z0-9-]*",
+
+
+def soil_cfg(soil):
+    return SOILS[soil].data
+
+
+def stage_cfg(soil, stage):
+    return SOILS[soil].stage(stage)
+
+
+def stage_table(wildcards):
+    st = stage_cfg(wildcards.soil, wildcards.stage)
+    return [] if st.get("table") is None else f"{RES}/published/{wildcards.soil}/{st['table']}"
+
+
+def stage_dir(soil, stage):
+    return f"results/{soil}/published/{stage}"
+
+
+def stage_targets(soil, st):
+    d = stage_dir(soil, st["id"])
+    out = [f"{d}/design.csv"]
+    if st.get("table") is None:
+        return out
+    if st["kind"] in ("plackett_burman", "box_behnken"):
+        out += [f"{d}/{x}.csv" for x in ("anova", "fit", "coefficients", "effects")]
+        out += [f"{d}/figures/diagnostics"]
+    if st["kind"] == "plackett_burman":
+        out += [f"{d}/figures/pareto"]
+    if st["kind"] == "box_behnken":
+        out += [f"{d}/figures/surfaces"]
+        if st.get("optimise"):
+            out += [f"{d}/optimum.csv"]
+    if st["kind"] == "steepest_ascent":
+        out += [f"{d}/optimum.csv", f"{d}/figures/steepest"]
+    return out
+
+
+def all_targets():
+    out = []
+    for soil, s in SOILS.items():
+        for st in s.stages:
+            out += stage_targets(soil, st)
+        out.append(f"results/{soil}/published/errata.csv")
+    return out

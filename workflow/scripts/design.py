@@ -1,0 +1,7 @@
+from soilcal.logs import redirect
+from soilcal.replay.run import write_design
+
+with redirect(snakemake.log[0]):
+    info = write_design(snakemake.params.stage, snakemake.input.table or None,
+                        snakemake.output.design, snakemake.output.check)
+    print("printed design equals the generated one as a set of rows:", info["equal"])

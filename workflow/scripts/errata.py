@@ -1,0 +1,7 @@
+from soilcal.logs import redirect
+from soilcal.replay.run import write_errata
+
+with redirect(snakemake.log[0]):
+    df = write_errata(snakemake.params.soil, snakemake.params.published, snakemake.params.stage_dirs,
+                      snakemake.output[0])
+    print(f"{len(df)} errata")

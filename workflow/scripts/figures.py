@@ -1,0 +1,7 @@
+from soilcal.logs import redirect
+from soilcal.replay.run import write_figures
+
+with redirect(snakemake.log[0]):
+    paths = write_figures(snakemake.wildcards.kind, snakemake.params.stage, snakemake.input.table,
+                          snakemake.params.targets, snakemake.output[0])
+    print("\n".join(map(str, paths)))
