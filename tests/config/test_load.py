@@ -1,0 +1,137 @@
+"""Config validation: one clear error naming file and field for every kind of bad input."""
+
+from __future__ import annotations
+
+import shutil
+from pathlib import Path
+
+import pytest
+import yaml
+
+from soilcal.config import design_runs, load_soil, load_workflow_config
+from soilcal.errors import InputError
+
+ROOT = Path(__file__).resolve().parents[2]
+SOILS = sorted(p.stem for p in (ROOT / "config" / "soils").glob("*.yaml"))
+
+
+@pytest.mark.parametrize("soil", SOILS)
+def test_shipped_soils_validate(soil):
+    s = load_soil(ROOT / "config" / "soils" / f"{soil}.yaml", ROOT / "resources")
+    assert s.name == soil
+    for st in s.stages:
+        if st.get("table"):
+            assert len(s.tables[st["id"]]) == design_runs(st)
+
+
+def test_workflow_config_lists_shipped_soils():
+    cfg = yaml.safe_load((ROOT / "config" / "config.yaml").read_text())
+    assert set(cfg["soils"]) <= set(SOILS) or pytest.skip("not every soil is encoded yet")
+
+
+@pytest.fixture
+def workspace(tmp_path):
+    """A copy of the cinnamon soil entry and its published tables."""
+    (tmp_path / "config" / "soils").mkdir(parents=True)
+    shutil.copy(ROOT / "config/soils/cinnamon-soil.yaml", tmp_path / "config/soils/cinnamon-soil.yaml")
+    shutil.copytree(ROOT / "resources/published/cinnamon-soil", tmp_path / "resources/published/cinnamon-soil")
+    return tmp_path
+
+
+def _edit(ws: Path, fn):
+    p = ws / "config/soils/cinnamon-soil.yaml"
+    d = yaml.safe_load(p.read_text())
+    fn(d)
+    p.write_text(yaml.safe_dump(d, sort_keys=False))
+    return p
+
+
+def _load(ws):
+    return load_soil(ws / "config/soils/cinnamon-soil.yaml", ws / "resources")
+
+
+def test_misspelt_field_names_file_and_field(workspace):
+    p = _edit(workspace, lambda d: d["stages"][2]["factors"]["A"].update({"hgih": 0.2}))
+    with pytest.raises(InputError) as e:
+        _load(workspace)
+    msg = str(e.value)
+    assert str(p) in msg and "stages[2].factors.A.hgih" in msg and "unknown field" in msg
+
+
+def test_wrong_type(workspace):
+    _edit(workspace, lambda d: d["stages"][0]["factors"]["X1"].update({"low": "low"}))
+    with pytest.raises(InputError, match=r"stages\[0\]\.factors\.X1\.low: expected a value of type number"):
+        _load(workspace)
+
+
+def test_low_not_below_high(workspace):
+    _edit(workspace, lambda d: d["stages"][2]["factors"]["B"].update({"low": 0.6}))
+    with pytest.raises(InputError, match=r"cinnamon-soil\.yaml: stages\[2\]\.factors\.B\.low: expected a number below high \(0\.52\), got 0\.6"):
+        _load(workspace)
+
+
+def test_missing_required_field(workspace):
+    _edit(workspace, lambda d: d.pop("seed"))
+    with pytest.raises(InputError, match=r"seed: expected a required field"):
+        _load(workspace)
+
+
+def test_table_row_count_must_match_design(workspace):
+    t = workspace / "resources/published/cinnamon-soil/bbd.csv"
+    lines = t.read_text().splitlines()
+    t.write_text("\n".join(lines[:-1]) + "\n")  # drop one centre point: 16 rows for a 17-run BBD
+    with pytest.raises(InputError, match=r"bbd\.csv: rows: expected 17 rows for the box_behnken design"):
+        _load(workspace)
+
+
+def test_coded_table_with_a_stray_level(workspace):
+    t = workspace / "resources/published/cinnamon-soil/pb.csv"
+    t.write_text(t.read_text().replace("\n7,-1,", "\n7,0,", 1))
+    with pytest.raises(InputError, match=r"pb\.csv: column X1: expected coded levels -1/1"):
+        _load(workspace)
+
+
+def test_missing_table_file(workspace):
+    (workspace / "resources/published/cinnamon-soil/steepest.csv").unlink()
+    with pytest.raises(InputError, match=r"stages\[1\]\.table: expected an existing file .*steepest\.csv"):
+        _load(workspace)
+
+
+def test_unknown_parameter_reference(workspace):
+    _edit(workspace, lambda d: d["stages"][2]["factors"]["A"].update({"parameter": "soil_soil_rollin"}))
+    with pytest.raises(InputError, match=r"factors\.A\.parameter: expected an id listed under parameters"):
+        _load(workspace)
+
+
+def test_name_must_match_file(workspace):
+    _edit(workspace, lambda d: d.update({"name": "other-soil"}))
+    with pytest.raises(InputError, match=r"name: expected the file name"):
+        _load(workspace)
+
+
+def test_unparsable_yaml(workspace):
+    p = workspace / "config/soils/cinnamon-soil.yaml"
+    p.write_text("name: [unclosed\n")
+    with pytest.raises(InputError, match=r"cinnamon-soil\.yaml: line \d+: expected valid YAML"):
+        _load(workspace)
+
+
+def test_workflow_config_unknown_soil(workspace):
+    cfg = {"soils": ["no-such-soil"], "soil_dir": str(workspace / "config/soils")}
+    with pytest.raises(InputError, match=r"soils: expected a soil file .*no-such-soil\.yaml"):
+        load_workflow_config(cfg, "config/config.yaml")
+
+
+def test_yaml_exponent_without_sign_is_a_number(workspace):
+    from soilcal.config import read_yaml
+
+    p = workspace / "x.yaml"
+    p.write_text("g: 7.9e10\nh: 1e7\n")
+    assert read_yaml(p) == {"g": 7.9e10, "h": 1e7}
+
+
+def test_bbd_run_counts():
+    # Box-Behnken with the papers' centre points: 29 runs for 4 factors, 17 for 3 (5 centres).
+    four = {"kind": "box_behnken", "factors": dict.fromkeys("ABCD", {}), "center_points": 5}
+    three = {"kind": "box_behnken", "factors": dict.fromkeys("ABC", {}), "center_points": 5}
+    assert design_runs(four) == 29 and design_runs(three) == 17
