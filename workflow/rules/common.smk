@@ -57,3 +57,12 @@ def all_targets():
             out += stage_targets(soil, st)
         out.append(f"results/{soil}/published/errata.csv")
     return out
+
+
+def errata_inputs(wildcards):
+    out = []
+    for st in SOILS[wildcards.soil].stages:
+        out += [f for f in stage_targets(wildcards.soil, st) if f.endswith(".csv")]
+        if st.get("table") is not None:
+            out.append(f"{stage_dir(wildcards.soil, st['id'])}/design_check.csv")
+    return out

@@ -10,6 +10,8 @@ rule design:
         check="results/{soil}/published/{stage}/design_check.csv",
     params:
         stage=lambda w: stage_cfg(w.soil, w.stage),
+    conda:
+        "../../envs/soilcal.yaml"
     log:
         "logs/{soil}/published/{stage}/design.log",
     benchmark:

@@ -11,6 +11,8 @@ rule optimum:
         stage=lambda w: stage_cfg(w.soil, w.stage),
         targets=lambda w: soil_cfg(w.soil)["targets"],
         seed=lambda w: soil_cfg(w.soil)["seed"],
+    conda:
+        "../../envs/soilcal.yaml"
     log:
         "logs/{soil}/published/{stage}/optimum.log",
     benchmark:

@@ -17,6 +17,8 @@ rule figures:
         targets=lambda w: soil_cfg(w.soil)["targets"],
     wildcard_constraints:
         kind="pareto|steepest|surfaces|diagnostics",
+    conda:
+        "../../envs/soilcal.yaml"
     log:
         "logs/{soil}/published/{stage}/figures_{kind}.log",
     benchmark:

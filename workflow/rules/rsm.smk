@@ -11,6 +11,8 @@ rule regression:
         effects="results/{soil}/published/{stage}/effects.csv",
     params:
         stage=lambda w: stage_cfg(w.soil, w.stage),
+    conda:
+        "../../envs/soilcal.yaml"
     log:
         "logs/{soil}/published/{stage}/regression.log",
     benchmark:
