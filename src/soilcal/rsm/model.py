@@ -1,0 +1,526 @@
+"""Response-surface regression with Design-Expert semantics (statsmodels OLS underneath).
+
+Model (coded units, Montgomery ch. 11; Myers, Montgomery & Anderson-Cook, RSM 4th ed.):
+
+    y' = b0 + sum_i b_i x_i + sum_{i<j} b_ij x_i x_j + sum_i b_ii x_i^2 + e,
+    y' = f(y) the (optional) response transform, x = (X - centre)/half_range.
+
+ANOVA as printed by Design-Expert for response surfaces:
+- Model SS = Cor Total SS - Residual SS, df = p - 1.
+- Each term: partial (Type III) SS = SSE(model without the term) - SSE(model). For the
+  cinnamon-soil Box-Behnken data (Qiu et al. 2022, Table 7) this reproduces the printed
+  squares A^2 2.09, B^2 24.15, C^2 9.10 (sequential SS would not: the squares of a BBD are
+  correlated with each other).
+- F = MS_term / MS_residual, p = 1 - F_cdf(F; df_term, df_res).
+- Pure error: within-group SS of replicated design points (identical factor settings),
+  df = sum(n_g - 1); Lack of fit = Residual - Pure error.
+
+Fit statistics (Design-Expert "Fit Statistics" panel, on the transformed scale):
+- Std. Dev. = sqrt(MS_res), C.V.% = 100 Std.Dev / mean(y').
+- PRESS = sum (e_i / (1 - h_ii))^2, Pred R^2 = 1 - PRESS / SS_total.
+- Adeq Precision = (max yhat - min yhat) / sqrt(mean V(yhat)), with
+  mean V(yhat) = p sigma^2 / n (the average of x_i^T (X^T X)^-1 x_i sigma^2 over the design
+  points equals p sigma^2 / n).
+
+Diagnostics: leverage h_ii, internally studentized r_i = e_i / (s sqrt(1 - h_ii)),
+externally studentized residuals, Cook's D = r_i^2 h_ii / (p (1 - h_ii)).
+
+Actual-unit equation: each coded monomial prod (x_f)^k with x_f = (X_f - c_f)/h_f is
+expanded into monomials of the actual factors and collected.
+"""
+
+from __future__ import annotations
+
+import re
+from collections import defaultdict
+from dataclasses import dataclass, field
+from itertools import combinations
+from typing import Mapping, Sequence
+
+import numpy as np
+import pandas as pd
+import statsmodels.api as sm
+from scipy import stats
+
+from soilcal.errors import InputError
+
+# --------------------------------------------------------------------------- terms
+
+_TERM_PIECE = re.compile(r"^\s*([^\^\s]+)\s*(?:\^\s*(\d+))?\s*$")
+
+
+def parse_term(term: str, factors: Sequence[str]) -> tuple[int, ...]:
+    """Exponent vector of a term name ("A", "A*B", "A^2", "A*B^2") over ``factors``."""
+    exps = [0] * len(factors)
+    for piece in term.split("*"):
+        m = _TERM_PIECE.match(piece)
+        if not m or m.group(1) not in factors:
+            raise InputError(None, "terms", f"products of factors {list(factors)} like 'A', 'A*B', 'A^2'", term)
+        exps[list(factors).index(m.group(1))] += int(m.group(2) or 1)
+    if sum(exps) == 0:
+        raise InputError(None, "terms", "a non-constant term", term)
+    return tuple(exps)
+
+
+def term_name(exps: Sequence[int], factors: Sequence[str]) -> str:
+    """Canonical name of an exponent vector: factors in list order, 'A*B', 'A^2'."""
+    parts = []
+    for f, k in zip(factors, exps):
+        if k == 1:
+            parts.append(f)
+        elif k > 1:
+            parts.append(f"{f}^{k}")
+    return "*".join(parts) if parts else "Intercept"
+
+
+def full_quadratic_terms(factors: Sequence[str]) -> list[str]:
+    """Design-Expert order: main effects, two-factor interactions, squares."""
+    f = list(factors)
+    return f + [f"{a}*{b}" for a, b in combinations(f, 2)] + [f"{a}^2" for a in f]
+
+
+def _contains(big: tuple[int, ...], small: tuple[int, ...]) -> bool:
+    return big != small and all(b >= s for b, s in zip(big, small))
+
+
+# --------------------------------------------------------------------------- transforms
+
+_TRANSFORM_NAMES = {"none", "sqrt", "ln", "log", "log10", "inverse", "inverse_sqrt"}
+
+
+def _normalise_transform(transform) -> tuple[str, float | None]:
+    if isinstance(transform, (tuple, list)):
+        if len(transform) != 2 or transform[0] != "power":
+            raise InputError(None, "transform", "('power', lambda)", transform)
+        return "power", float(transform[1])
+    if transform not in _TRANSFORM_NAMES:
+        raise InputError(None, "transform", f"one of {sorted(_TRANSFORM_NAMES)} or ('power', lambda)", transform)
+    name = {"log": "ln"}.get(transform, transform)
+    return name, None
+
+
+def apply_transform(y, transform="none", constant: float = 0.0) -> np.ndarray:
+    """y' = f(y + k). 'ln' (alias 'log') natural log, 'log10', 'inverse' 1/y, 'inverse_sqrt'."""
+    name, lam = _normalise_transform(transform)
+    z = np.asarray(y, dtype=float) + constant
+    if name == "none":
+        return z
+    if name in ("sqrt", "ln", "log10", "inverse_sqrt") or (name == "power" and lam is not None and lam <= 0):
+        if np.any(z <= 0):
+            raise InputError(None, "transform", f"positive response values for transform {transform!r}", float(z.min()))
+    if name == "sqrt":
+        return np.sqrt(z)
+    if name == "ln":
+        return np.log(z)
+    if name == "log10":
+        return np.log10(z)
+    if name == "inverse":
+        if np.any(z == 0):
+            raise InputError(None, "transform", "non-zero response values for 'inverse'", 0.0)
+        return 1.0 / z
+    if name == "inverse_sqrt":
+        return 1.0 / np.sqrt(z)
+    return np.log(z) if lam == 0 else z**lam
+
+
+def inverse_transform(yt, transform="none", constant: float = 0.0) -> np.ndarray:
+    """Back-transform predictions to original units."""
+    name, lam = _normalise_transform(transform)
+    z = np.asarray(yt, dtype=float)
+    if name == "none":
+        out = z
+    elif name == "sqrt":
+        out = z**2
+    elif name == "ln":
+        out = np.exp(z)
+    elif name == "log10":
+        out = 10.0**z
+    elif name == "inverse":
+        out = 1.0 / z
+    elif name == "inverse_sqrt":
+        out = 1.0 / z**2
+    else:
+        out = np.exp(z) if lam == 0 else np.sign(z) * np.abs(z) ** (1.0 / lam)
+    return out - constant
+
+
+# --------------------------------------------------------------------------- fit
+
+
+def _bounds(values, factors: Sequence[str], name: str) -> np.ndarray:
+    if isinstance(values, Mapping):
+        missing = [f for f in factors if f not in values]
+        if missing:
+            raise InputError(None, name, f"a value for each factor {list(factors)}", f"missing {missing}")
+        return np.array([float(values[f]) for f in factors])
+    arr = np.asarray(values, dtype=float).reshape(-1)
+    if arr.size != len(factors):
+        raise InputError(None, name, f"{len(factors)} values, one per factor {list(factors)}", arr.size)
+    return arr
+
+
+def _model_matrix(xc: np.ndarray, exps: Sequence[tuple[int, ...]]) -> np.ndarray:
+    cols = [np.ones(xc.shape[0])]
+    for e in exps:
+        cols.append(np.prod(xc ** np.array(e, dtype=float), axis=1))
+    return np.column_stack(cols)
+
+
+@dataclass
+class RSMFit:
+    """A fitted response surface; see the module docstring for the statistics."""
+
+    factors: list[str]
+    low: np.ndarray
+    high: np.ndarray
+    response: str
+    transform: object
+    terms: list[str]
+    X_coded: np.ndarray
+    observed: np.ndarray
+    transform_constant: float = 0.0
+    _res: object = field(default=None, repr=False)
+
+    def __post_init__(self) -> None:
+        self._exps = [parse_term(t, self.factors) for t in self.terms]
+        self.terms = [term_name(e, self.factors) for e in self._exps]
+        if len(set(self.terms)) != len(self.terms):
+            raise InputError(None, "terms", "each term at most once", self.terms)
+        self.y_t = apply_transform(self.observed, self.transform, self.transform_constant)
+        self.model_matrix = _model_matrix(self.X_coded, self._exps)
+        self.n, self.p = self.model_matrix.shape
+        if self.n <= self.p:
+            raise InputError(None, "data", f"more runs than model parameters ({self.p})", self.n)
+        if np.linalg.matrix_rank(self.model_matrix) < self.p:
+            raise InputError(None, "terms", "terms estimable from the design (full-rank model matrix)", self.terms)
+        self._res = sm.OLS(self.y_t, self.model_matrix).fit()
+
+    # -- basic quantities
+    @property
+    def params(self) -> np.ndarray:
+        """Coded coefficients [Intercept, terms...] on the transformed scale."""
+        return np.asarray(self._res.params)
+
+    @property
+    def fitted_transformed(self) -> np.ndarray:
+        return np.asarray(self._res.fittedvalues)
+
+    @property
+    def fitted(self) -> np.ndarray:
+        """Fitted values in original units."""
+        return inverse_transform(self.fitted_transformed, self.transform, self.transform_constant)
+
+    @property
+    def residuals(self) -> np.ndarray:
+        """Residuals on the transformed scale."""
+        return np.asarray(self._res.resid)
+
+    @property
+    def centre(self) -> np.ndarray:
+        return (self.low + self.high) / 2.0
+
+    @property
+    def half_range(self) -> np.ndarray:
+        return (self.high - self.low) / 2.0
+
+    @property
+    def df_resid(self) -> int:
+        return self.n - self.p
+
+    @property
+    def sse(self) -> float:
+        return float(self.residuals @ self.residuals)
+
+    @property
+    def mse(self) -> float:
+        return self.sse / self.df_resid
+
+    @property
+    def ols(self):
+        """The underlying statsmodels RegressionResults."""
+        return self._res
+
+    # -- prediction
+    def _coded_input(self, X) -> np.ndarray:
+        if isinstance(X, pd.DataFrame):
+            X = X[self.factors].to_numpy(dtype=float)
+        X = np.atleast_2d(np.asarray(X, dtype=float))
+        if X.shape[1] != len(self.factors):
+            raise InputError(None, "X", f"{len(self.factors)} columns {self.factors}", X.shape[1])
+        return X
+
+    def predict_transformed(self, X_coded) -> np.ndarray:
+        return _model_matrix(self._coded_input(X_coded), self._exps) @ self.params
+
+    def predict(self, X_coded) -> np.ndarray:
+        """Prediction in original units from coded factor levels."""
+        return inverse_transform(self.predict_transformed(X_coded), self.transform, self.transform_constant)
+
+    def predict_actual(self, X_actual) -> np.ndarray:
+        """Prediction in original units from actual factor levels."""
+        xa = self._coded_input(X_actual)
+        return self.predict((xa - self.centre) / self.half_range)
+
+    # -- ANOVA
+    def _pure_error(self) -> tuple[float, int]:
+        groups: dict[tuple, list[float]] = defaultdict(list)
+        for row, y in zip(np.round(self.X_coded, 9), self.y_t):
+            groups[tuple(row)].append(y)
+        ss, df = 0.0, 0
+        for vals in groups.values():
+            if len(vals) > 1:
+                v = np.asarray(vals)
+                ss += float(((v - v.mean()) ** 2).sum())
+                df += len(v) - 1
+        return ss, df
+
+    def term_sum_sq(self) -> dict[str, float]:
+        """Partial (Type III) sum of squares of each term."""
+        out = {}
+        for j, t in enumerate(self.terms):
+            keep = [i for i in range(self.p) if i != j + 1]
+            red = sm.OLS(self.y_t, self.model_matrix[:, keep]).fit()
+            out[t] = float(red.ssr) - self.sse
+        return out
+
+    def anova(self) -> pd.DataFrame:
+        """Design-Expert ANOVA table: Model, terms, Residual, Lack of Fit, Pure Error, Cor Total."""
+        mse, dfr = self.mse, self.df_resid
+        sst = float(((self.y_t - self.y_t.mean()) ** 2).sum())
+        ssm = sst - self.sse
+        rows = []
+
+        def frow(src, ss, df):
+            ms = ss / df
+            f = ms / mse
+            rows.append((src, ss, df, ms, f, float(stats.f.sf(f, df, dfr))))
+
+        frow("Model", ssm, self.p - 1)
+        for t, ss in self.term_sum_sq().items():
+            frow(t, ss, 1)
+        rows.append(("Residual", self.sse, dfr, mse, np.nan, np.nan))
+        sspe, dfpe = self._pure_error()
+        if dfpe > 0:
+            sslof, dflof = self.sse - sspe, dfr - dfpe
+            if dflof > 0:
+                mslof, mspe = sslof / dflof, sspe / dfpe
+                flof = mslof / mspe
+                rows.append(("Lack of Fit", sslof, dflof, mslof, flof, float(stats.f.sf(flof, dflof, dfpe))))
+            rows.append(("Pure Error", sspe, dfpe, sspe / dfpe, np.nan, np.nan))
+        rows.append(("Cor Total", sst, self.n - 1, np.nan, np.nan, np.nan))
+        return pd.DataFrame(rows, columns=["source", "sum_sq", "df", "mean_sq", "F", "p"])
+
+    # -- fit statistics
+    @property
+    def leverage(self) -> np.ndarray:
+        X = self.model_matrix
+        return np.einsum("ij,ji->i", X, np.linalg.solve(X.T @ X, X.T))
+
+    @property
+    def press(self) -> float:
+        return float(((self.residuals / (1.0 - self.leverage)) ** 2).sum())
+
+    def fit_statistics(self) -> dict[str, float]:
+        """Std. Dev., Mean, C.V.%, R2, adj R2, pred R2, PRESS, Adeq Precision."""
+        sst = float(((self.y_t - self.y_t.mean()) ** 2).sum())
+        sd = float(np.sqrt(self.mse))
+        mean = float(self.y_t.mean())
+        yhat = self.fitted_transformed
+        v_mean = self.p * self.mse / self.n
+        press = self.press
+        return {
+            "std_dev": sd,
+            "mean": mean,
+            "CV_percent": 100.0 * sd / mean,
+            "R2": 1.0 - self.sse / sst,
+            "adj_R2": 1.0 - (self.sse / self.df_resid) / (sst / (self.n - 1)),
+            "pred_R2": 1.0 - press / sst,
+            "PRESS": press,
+            "adeq_precision": float((yhat.max() - yhat.min()) / np.sqrt(v_mean)),
+        }
+
+    # -- diagnostics
+    @property
+    def studentized_residuals(self) -> np.ndarray:
+        """Internally studentized residuals e_i / (s sqrt(1 - h_ii))."""
+        return self.residuals / np.sqrt(self.mse * (1.0 - self.leverage))
+
+    @property
+    def externally_studentized_residuals(self) -> np.ndarray:
+        r = self.studentized_residuals
+        d = self.df_resid
+        return r * np.sqrt((d - 1) / np.maximum(d - r**2, 1e-300))
+
+    @property
+    def cooks_distance(self) -> np.ndarray:
+        h = self.leverage
+        return self.studentized_residuals**2 * h / (self.p * (1.0 - h))
+
+    def diagnostics(self) -> pd.DataFrame:
+        return pd.DataFrame(
+            {
+                "run": np.arange(1, self.n + 1),
+                "observed": self.observed,
+                "fitted": self.fitted,
+                "residual": self.residuals,
+                "leverage": self.leverage,
+                "studentized": self.studentized_residuals,
+                "ext_studentized": self.externally_studentized_residuals,
+                "cooks_distance": self.cooks_distance,
+            }
+        )
+
+    # -- equations
+    def actual_coefficients(self) -> dict[tuple[int, ...], float]:
+        """Monomial exponents (actual units) -> coefficient, from expanding the coded model."""
+        k = len(self.factors)
+        poly: dict[tuple[int, ...], float] = defaultdict(float)
+        poly[(0,) * k] += float(self.params[0])
+        c, h = self.centre, self.half_range
+        for b, e in zip(self.params[1:], self._exps):
+            # prod_f ((X_f - c_f)/h_f)^e_f, expanded by the binomial theorem per factor
+            term = {(0,) * k: float(b)}
+            for f, ef in enumerate(e):
+                if ef == 0:
+                    continue
+                new: dict[tuple[int, ...], float] = defaultdict(float)
+                from math import comb
+
+                for mono, coef in term.items():
+                    for j in range(ef + 1):
+                        m = list(mono)
+                        m[f] += j
+                        new[tuple(m)] += coef * comb(ef, j) * (-c[f]) ** (ef - j) / h[f] ** ef
+                term = new
+            for mono, coef in term.items():
+                poly[mono] += coef
+        return dict(poly)
+
+    def coefficients(self) -> pd.DataFrame:
+        """[term, coded, actual]: Intercept first, then the model terms; monomials that
+        appear only in the actual-unit expansion (non-hierarchical models) are appended
+        with coded coefficient 0."""
+        k = len(self.factors)
+        act = self.actual_coefficients()
+        rows = [("Intercept", float(self.params[0]), act.get((0,) * k, 0.0))]
+        for t, e, b in zip(self.terms, self._exps, self.params[1:]):
+            rows.append((t, float(b), act.get(e, 0.0)))
+        known = {(0,) * k, *self._exps}
+        for mono in sorted(act, key=lambda m: (sum(m), [-x for x in m])):
+            if mono not in known and abs(act[mono]) > 0:
+                rows.append((term_name(mono, self.factors), 0.0, act[mono]))
+        return pd.DataFrame(rows, columns=["term", "coded", "actual"])
+
+    def equation(self, units: str = "coded", digits: int = 4) -> str:
+        col = "coded" if units == "coded" else "actual"
+        df = self.coefficients()
+        s = f"{self.response} = {df[col].iloc[0]:.{digits}g}"
+        for t, v in zip(df["term"].iloc[1:], df[col].iloc[1:]):
+            s += f" {'-' if v < 0 else '+'} {abs(v):.{digits}g}*{t}"
+        return s
+
+
+def fit_response_surface(
+    data: pd.DataFrame,
+    factors: list[str],
+    response: str,
+    low,
+    high,
+    terms: list[str] | None = None,
+    transform="none",
+    data_coding: str = "coded",
+    transform_constant: float = 0.0,
+) -> RSMFit:
+    """Fit a response surface by OLS with Design-Expert ANOVA semantics.
+
+    data: one row per run, columns ``factors`` (coded or actual per ``data_coding``) and
+    ``response``. low/high: actual factor bounds (mapping or sequence), used for coding and
+    for the actual-unit equation. terms: None = full quadratic.
+    """
+    if not isinstance(data, pd.DataFrame):
+        raise InputError(None, "data", "a pandas DataFrame", type(data).__name__)
+    missing = [c for c in [*factors, response] if c not in data.columns]
+    if missing:
+        raise InputError(None, "data", f"columns {list(factors) + [response]}", f"missing {missing}")
+    if data_coding not in ("coded", "actual"):
+        raise InputError(None, "data_coding", "'coded' or 'actual'", data_coding)
+    lo = _bounds(low, factors, "low")
+    hi = _bounds(high, factors, "high")
+    if np.any(hi == lo):
+        raise InputError(None, "low/high", "high != low for every factor", list(zip(lo, hi)))
+    X = data[list(factors)].to_numpy(dtype=float)
+    if data_coding == "actual":
+        X = (X - (lo + hi) / 2.0) / ((hi - lo) / 2.0)
+    y = data[response].to_numpy(dtype=float)
+    if not np.all(np.isfinite(y)) or not np.all(np.isfinite(X)):
+        raise InputError(None, "data", "finite factor levels and responses", "NaN/inf")
+    return RSMFit(
+        factors=list(factors),
+        low=lo,
+        high=hi,
+        response=response,
+        transform=transform,
+        terms=list(terms) if terms is not None else full_quadratic_terms(factors),
+        X_coded=X,
+        observed=y,
+        transform_constant=float(transform_constant),
+    )
+
+
+def _refit(fit: RSMFit, terms: list[str]) -> RSMFit:
+    return RSMFit(
+        factors=fit.factors,
+        low=fit.low,
+        high=fit.high,
+        response=fit.response,
+        transform=fit.transform,
+        terms=terms,
+        X_coded=fit.X_coded,
+        observed=fit.observed,
+        transform_constant=fit.transform_constant,
+    )
+
+
+def drop_terms(fit: RSMFit, terms: Sequence[str]) -> RSMFit:
+    """Refit without the named terms."""
+    drop = {term_name(parse_term(t, fit.factors), fit.factors) for t in terms}
+    unknown = drop - set(fit.terms)
+    if unknown:
+        raise InputError(None, "terms", f"terms of the model {fit.terms}", sorted(unknown))
+    return _refit(fit, [t for t in fit.terms if t not in drop])
+
+
+def backward_eliminate(fit: RSMFit, alpha_out: float = 0.1, hierarchical: bool = True) -> RSMFit:
+    """Design-Expert backward elimination: repeatedly remove the term with the largest
+    partial-F p-value above ``alpha_out``; with ``hierarchical`` a term is not a candidate
+    while a higher-order term containing it (e.g. A inside A*B or A^2) is in the model."""
+    current = fit
+    while current.terms:
+        tab = current.anova().set_index("source")
+        exps = dict(zip(current.terms, current._exps))
+        cands = []
+        for t in current.terms:
+            if hierarchical and any(_contains(exps[u], exps[t]) for u in current.terms if u != t):
+                continue
+            cands.append((float(tab.loc[t, "p"]), t))
+        cands = [c for c in cands if c[0] > alpha_out]
+        if not cands:
+            break
+        worst = max(cands)[1]
+        if len(current.terms) == 1:
+            break
+        current = _refit(current, [t for t in current.terms if t != worst])
+    return current
+
+
+__all__ = [
+    "RSMFit",
+    "fit_response_surface",
+    "drop_terms",
+    "backward_eliminate",
+    "full_quadratic_terms",
+    "parse_term",
+    "term_name",
+    "apply_transform",
+    "inverse_transform",
+]
