@@ -174,11 +174,13 @@ def _semantic_checks(path: Path, d: dict, resources_root: Path) -> None:
             if f["parameter"] not in params:
                 raise InputError(path, f"{fw}.parameter", "an id listed under parameters", f["parameter"])
             _check_levels(path, fw, f)
+            if st.get("table") is None:
+                continue  # a stage whose table the paper does not print: levels may be missing too
             if st["kind"] in ("plackett_burman", "box_behnken") and ("low" not in f or "high" not in f):
                 raise InputError(path, fw, "low and high levels for a two/three-level design", f)
             if st["kind"] == "steepest_ascent" and not f.get("levels"):
                 raise InputError(path, f"{fw}.levels", "the actual value of every step", None)
-        if st["kind"] == "steepest_ascent":
+        if st["kind"] == "steepest_ascent" and st.get("table") is not None:
             lengths = {len(f["levels"]) for f in st["factors"].values()}
             if len(lengths) != 1:
                 raise InputError(path, f"{where}.factors", "the same number of levels for every factor", sorted(lengths))

@@ -33,14 +33,29 @@ def response_columns(stage: dict) -> dict[str, str]:
     return {r["id"]: r.get("column", r["id"]) for r in stage["responses"]}
 
 
-def stage_data(stage: dict, table: pd.DataFrame) -> pd.DataFrame:
-    """The printed table in coded units with one column per response id."""
+SNAP_TOLERANCE = 0.05
+"""Largest distance (coded units) of a printed actual level from its design level that is taken
+as print rounding (e.g. a centre 0.175 printed as 0.17 on a 0.05..0.3 range is -0.04 coded)."""
+
+
+def stage_data(stage: dict, table: pd.DataFrame, snap: bool = True) -> pd.DataFrame:
+    """The printed table in coded units with one column per response id.
+
+    With ``snap``, actual levels printed within :data:`SNAP_TOLERANCE` (coded) of a design level
+    are put on that level; :func:`design_frame` compares the unsnapped values, so every such
+    level still appears as a difference from the generated design in the errata.
+    """
     syms, low, high = bounds(stage)
     coding = stage.get("table_coding", "coded")
     out = pd.DataFrame(index=table.index)
     for j, s in enumerate(syms):
         x = table[s].to_numpy(float)
-        out[s] = x if coding == "coded" else doe.actual_to_coded(x, low[j], high[j])
+        if coding != "coded":
+            x = doe.actual_to_coded(x, low[j], high[j])
+            if snap and stage["kind"] in ("plackett_burman", "box_behnken"):
+                r = np.round(x)
+                x = np.where(np.abs(x - r) <= SNAP_TOLERANCE, r, x)
+        out[s] = x
     for rid, col in response_columns(stage).items():
         out[rid] = table[col].to_numpy(float)
     return out
@@ -68,10 +83,10 @@ def design_frame(stage: dict, table: pd.DataFrame | None) -> tuple[pd.DataFrame,
     kind = stage["kind"]
     if kind == "steepest_ascent":
         syms = list(stage["factors"])
-        n = len(stage["factors"][syms[0]]["levels"])
+        n = len(stage["factors"][syms[0]].get("levels", []))
         df = pd.DataFrame({"step": np.arange(1, n + 1)})
         for s in syms:
-            df[s] = stage["factors"][s]["levels"]
+            df[s] = stage["factors"][s].get("levels", [])
         info = {"equal": True, "only_generated": [], "only_printed": [], "columns": syms}
         if table is not None:
             diff = []
@@ -84,18 +99,20 @@ def design_frame(stage: dict, table: pd.DataFrame | None) -> tuple[pd.DataFrame,
         return df, info
 
     coded = generated_design(stage)
-    syms, low, high = bounds(stage)
+    syms = list(stage["factors"])
     dummies = list(stage.get("dummies", []))
     all_cols = syms + dummies
     df = pd.DataFrame({"run": np.arange(1, len(coded) + 1)})
     for j, s in enumerate(all_cols):
         df[s] = coded[:, j].astype(int)
-    for j, s in enumerate(syms):
-        df[f"{s}_actual"] = doe.coded_to_actual(coded[:, j], low[j], high[j])
+    if all("low" in f and "high" in f for f in stage["factors"].values()):
+        _, low, high = bounds(stage)
+        for j, s in enumerate(syms):
+            df[f"{s}_actual"] = doe.coded_to_actual(coded[:, j], low[j], high[j])
     info = {"equal": None, "only_generated": [], "only_printed": [], "columns": []}
     if table is not None:
         cols = [c for c in all_cols if c in table.columns]
-        printed = stage_data(stage, table)
+        printed = stage_data(stage, table, snap=False)
         p = np.column_stack([printed[c] if c in syms else table[c].to_numpy(float) for c in cols])
         g = df[cols].to_numpy(float)
         cmp = doe.same_rows(g, p)
