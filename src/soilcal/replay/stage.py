@@ -102,6 +102,18 @@ def design_frame(stage: dict, table: pd.DataFrame | None) -> tuple[pd.DataFrame,
     syms = list(stage["factors"])
     dummies = list(stage.get("dummies", []))
     all_cols = syms + dummies
+    assignment = None
+    if kind == "plackett_burman" and table is not None:
+        # Which generator column carries which factor is the experimenter's choice: adopt the
+        # printed assignment when the printed design is the generated one with columns permuted.
+        cols = [c for c in all_cols if c in table.columns]
+        m = doe.match_columns(coded, table[cols].to_numpy(float), allow_sign_flip=False)
+        if m.found and not m.identity:
+            rest = [j for j in range(coded.shape[1]) if j not in m.columns]
+            order = list(m.columns) + rest
+            coded = coded[:, order]
+            all_cols = cols + [c for c in all_cols if c not in cols]
+            assignment = {c: int(j) + 1 for c, j in zip(all_cols, order)}
     df = pd.DataFrame({"run": np.arange(1, len(coded) + 1)})
     for j, s in enumerate(all_cols):
         df[s] = coded[:, j].astype(int)
@@ -117,6 +129,7 @@ def design_frame(stage: dict, table: pd.DataFrame | None) -> tuple[pd.DataFrame,
         g = df[cols].to_numpy(float)
         cmp = doe.same_rows(g, p)
         info = {
+            "generator_columns": assignment,
             "equal": bool(cmp.equal),
             "only_generated": [list(map(float, r)) for r in cmp.only_in_a],
             "only_printed": [list(map(float, r)) for r in cmp.only_in_b],
