@@ -1,0 +1,163 @@
+"""Analytic checks of the response-surface code (exact polynomials, identities)."""
+
+import numpy as np
+import pandas as pd
+import pytest
+from statsmodels.stats.outliers_influence import OLSInfluence
+
+from soilcal.doe import box_behnken, coded_to_actual
+from soilcal.errors import InputError
+from soilcal.rsm import (
+    apply_transform,
+    backward_eliminate,
+    boxcox,
+    compare_printed,
+    fit_response_surface,
+    inverse_transform,
+    transform_suggestion,
+)
+
+LOW, HIGH = [0.05, 0.1, 0.3, 2.0], [0.2, 0.8, 0.9, 6.0]
+FACTORS = ["A", "B", "C", "D"]
+# exact coded polynomial
+TRUE = {"Intercept": 10.0, "A": 1.5, "B": -0.7, "C": 0.3, "D": 2.0, "A*B": 0.4, "A*C": -0.25, "A*D": 0.0,
+        "B*C": 0.1, "B*D": -0.6, "C*D": 0.2, "A^2": -1.1, "B^2": 0.8, "C^2": 0.05, "D^2": -0.3}
+
+
+def _poly(x):
+    a, b, c, d = x.T
+    t = TRUE
+    return (t["Intercept"] + t["A"] * a + t["B"] * b + t["C"] * c + t["D"] * d + t["A*B"] * a * b
+            + t["A*C"] * a * c + t["A*D"] * a * d + t["B*C"] * b * c + t["B*D"] * b * d + t["C*D"] * c * d
+            + t["A^2"] * a**2 + t["B^2"] * b**2 + t["C^2"] * c**2 + t["D^2"] * d**2)
+
+
+def _data(noise=0.0, seed=0, actual=False):
+    x = box_behnken(4, 5)
+    y = _poly(x) + np.random.default_rng(seed).normal(0, noise, len(x))
+    df = pd.DataFrame(coded_to_actual(x, LOW, HIGH) if actual else x, columns=FACTORS)
+    df["y"] = y
+    return df
+
+
+def test_noise_free_quadratic_exact():
+    for actual in (False, True):
+        fit = fit_response_surface(_data(actual=actual), FACTORS, "y", LOW, HIGH,
+                                   data_coding="actual" if actual else "coded")
+        coef = fit.coefficients().set_index("term")["coded"]
+        for t, v in TRUE.items():
+            assert coef[t] == pytest.approx(v, abs=1e-10)
+        assert fit.fit_statistics()["R2"] == pytest.approx(1.0, abs=1e-12)
+        assert fit.n == 29 and fit.df_resid == 14
+
+
+def test_actual_coefficients_one_factor_by_hand():
+    # y = 1 + 2x + 3x^2 with x = (X - 5)/2  =>  y = 1 + (X-5) + 0.75 (X-5)^2
+    X = np.array([3.0, 4.0, 5.0, 6.0, 7.0, 5.0])
+    x = (X - 5) / 2
+    df = pd.DataFrame({"A": X, "y": 1 + 2 * x + 3 * x**2})
+    fit = fit_response_surface(df, ["A"], "y", [3.0], [7.0], data_coding="actual")
+    act = fit.coefficients().set_index("term")["actual"]
+    assert act["Intercept"] == pytest.approx(1 - 5 + 0.75 * 25)
+    assert act["A"] == pytest.approx(1 - 0.75 * 10)
+    assert act["A^2"] == pytest.approx(0.75)
+
+
+def test_diagnostics_match_statsmodels_influence():
+    fit = fit_response_surface(_data(noise=0.3, seed=3), FACTORS, "y", LOW, HIGH)
+    infl = OLSInfluence(fit.ols)
+    np.testing.assert_allclose(fit.leverage, infl.hat_matrix_diag, rtol=1e-10)
+    np.testing.assert_allclose(fit.studentized_residuals, infl.resid_studentized_internal, rtol=1e-8)
+    np.testing.assert_allclose(fit.externally_studentized_residuals, infl.resid_studentized_external, rtol=1e-8)
+    np.testing.assert_allclose(fit.cooks_distance, infl.cooks_distance[0], rtol=1e-8)
+    # PRESS identity and mean leverage p/n
+    assert fit.leverage.mean() == pytest.approx(fit.p / fit.n)
+    loo = []
+    for i in range(fit.n):
+        keep = np.arange(fit.n) != i
+        beta = np.linalg.lstsq(fit.model_matrix[keep], fit.y_t[keep], rcond=None)[0]
+        loo.append(fit.y_t[i] - fit.model_matrix[i] @ beta)
+    assert fit.press == pytest.approx(np.sum(np.square(loo)))
+
+
+def test_anova_partitions():
+    fit = fit_response_surface(_data(noise=0.3, seed=4), FACTORS, "y", LOW, HIGH)
+    tab = fit.anova().set_index("source")
+    assert tab.loc["Model", "sum_sq"] + tab.loc["Residual", "sum_sq"] == pytest.approx(tab.loc["Cor Total", "sum_sq"])
+    assert tab.loc["Lack of Fit", "sum_sq"] + tab.loc["Pure Error", "sum_sq"] == pytest.approx(tab.loc["Residual", "sum_sq"])
+    assert tab.loc["Pure Error", "df"] == 4 and tab.loc["Lack of Fit", "df"] == 10
+    # no replicates -> no lack-of-fit rows
+    nodup = _data(noise=0.3, seed=4).iloc[:25]
+    t2 = fit_response_surface(nodup, FACTORS, "y", LOW, HIGH).anova()
+    assert "Pure Error" not in set(t2["source"]) and "Lack of Fit" not in set(t2["source"])
+
+
+def test_backward_elimination_keeps_hierarchy():
+    # y depends on A only through A*B: A has a zero coefficient but must stay
+    x = box_behnken(3, 3)
+    a, b, c = x.T
+    y = 5 + 2 * b + 3 * a * b + np.random.default_rng(5).normal(0, 0.01, len(x))
+    df = pd.DataFrame(x, columns=["A", "B", "C"])
+    df["y"] = y
+    full = fit_response_surface(df, ["A", "B", "C"], "y", [-1] * 3, [1] * 3)
+    red = backward_eliminate(full, alpha_out=0.1, hierarchical=True)
+    assert set(red.terms) == {"A", "B", "A*B"}
+    assert "A" not in backward_eliminate(full, alpha_out=0.1, hierarchical=False).terms
+
+
+@pytest.mark.parametrize("tr", ["sqrt", "ln", "log10", "inverse", "inverse_sqrt", ("power", 0.3), ("power", 0.0)])
+def test_transform_round_trip_and_fit(tr):
+    y = np.linspace(0.5, 40.0, 17)
+    np.testing.assert_allclose(inverse_transform(apply_transform(y, tr), tr), y, rtol=1e-12)
+    # a response that is exactly quadratic on the transformed scale is fitted exactly
+    x = box_behnken(3, 5)
+    yt = 3 + 0.5 * x[:, 0] - 0.2 * x[:, 1] ** 2 + 0.1 * x[:, 0] * x[:, 2]
+    if tr in ("inverse", "inverse_sqrt"):
+        yt = yt / 10
+    yy = inverse_transform(yt, tr)
+    df = pd.DataFrame(x, columns=["A", "B", "C"])
+    df["y"] = yy
+    fit = fit_response_surface(df, ["A", "B", "C"], "y", [-1] * 3, [1] * 3, transform=tr)
+    np.testing.assert_allclose(fit.fitted, yy, rtol=1e-9)
+    np.testing.assert_allclose(fit.predict(x), yy, rtol=1e-9)
+    assert fit.residuals == pytest.approx(np.zeros(17), abs=1e-9)
+
+
+def test_transform_suggestion_ratio_rule():
+    assert transform_suggestion([2.0, 30.0])["recommend"] == "sqrt"
+    s = transform_suggestion([24.2, 33.1])  # cinnamon Table 6 range
+    assert s["recommend"] == "none" and s["ratio"] == pytest.approx(33.1 / 24.2)
+
+
+def test_boxcox_recovers_log_and_identity():
+    rng = np.random.default_rng(11)
+    x = rng.uniform(-1, 1, 60)
+    X = np.column_stack([np.ones(60), x])
+    y_log = np.exp(1.0 + 0.8 * x + rng.normal(0, 0.05, 60))
+    r = boxcox(X, y_log)
+    assert r["ci_low"] < 0.0 < r["ci_high"] and r["ci_high"] < 1.0
+    assert r["recommended_transform"] == "ln"
+    y_lin = 20 + 5 * x + rng.normal(0, 0.3, 60)
+    assert boxcox(X, y_lin)["recommended_transform"] == "none"
+
+
+@pytest.mark.parametrize("printed,value,ok,dec", [
+    ("24.15", 24.1517, True, 2), ("24.15", 24.1551, False, 2), ("0.0002", 0.000163, True, 4),
+    ("<0.0001", 6.8e-5, True, 4), ("<0.0001", 1.2e-4, False, 4), ("2.10", 2.0963, True, 2),
+    ("\u22120.88", -0.875, True, 2), ("1.42", 1.425, True, 2), ("1.43", 1.425, True, 2),
+    ("0.3515", 0.35179, False, 4), ("77.98%", 77.984, True, 2), ("16", 15.6, True, 0),
+])
+def test_compare_printed(printed, value, ok, dec):
+    assert compare_printed(printed, value) == (ok, dec)
+
+
+def test_bad_inputs_raise_input_error():
+    df = _data()
+    with pytest.raises(InputError, match="data"):
+        fit_response_surface(df, FACTORS + ["E"], "y", LOW + [0], HIGH + [1])
+    with pytest.raises(InputError, match="terms"):
+        fit_response_surface(df, FACTORS, "y", LOW, HIGH, terms=["A", "Z^2"])
+    with pytest.raises(InputError, match="transform"):
+        fit_response_surface(df, FACTORS, "y", LOW, HIGH, transform="cube")
+    with pytest.raises(InputError):
+        compare_printed("n.s.", 1.0)
