@@ -1,0 +1,413 @@
+"""Angle and profile measurement from photos (scikit-image).
+
+Pile (stacking / repose angle), as in 001 Sec. 2.2.1 and 002 Sec. 2.4: grayscale ->
+threshold (global Otsu or adaptive ``threshold_local``) -> morphological opening, hole filling
+-> the connected component standing on the plate -> boundary -> straight-line fit of each
+flank -> angle = atan(slope).  Here the reference is the plate line itself, found by a Hough
+transform of the Canny edges (near-horizontal lines) and refined by a RANSAC line fit, so a
+rolled camera does not bias the angle: the image is rotated by the plate's tilt before the
+flanks are read.  Each flank is fitted with RANSAC (``skimage.measure.ransac`` with
+``LineModelND``) between 20 % and 75 % of the heap height (top cap and toe excluded):
+
+    alpha = atan(|d_v| / |d_u|)     (d = fitted line direction in the plate frame)
+
+Photo value = (alpha_L + alpha_R) / 2; several views are averaged over all flanks, spread =
+sample standard deviation of the flank angles.
+
+Drum (dynamic angle, 003 Sec. 2): the soil segment is the dark component above the base
+plate; its upper boundary in the central 60 % of its width is the free surface, fitted with
+RANSAC; frames are averaged.
+
+Furrow (000 Sec. 2.1/3.1): the profile-meter beam (dark bar of known length L) gives the
+scale s = length_px / L, the horizontal direction and the origin (beam centre, x = 0); the soil
+top boundary below it gives z(x) = datum - depth, fitted with a polynomial of selectable
+degree (``numpy.polynomial.Polynomial.fit``), area = integral over the span of
+(chord - z(x)) dx.
+"""
+
+from __future__ import annotations
+
+from dataclasses import asdict, dataclass, field
+
+import numpy as np
+from scipy import ndimage as ndi
+from skimage import color, feature, filters, measure, morphology, transform
+
+from soilcal.errors import InputError
+from soilcal.imaging.io import read_photo
+
+BAND = (0.20, 0.75)
+
+
+@dataclass
+class Stages:
+    """Intermediate images kept for the figures."""
+
+    rgb: np.ndarray
+    gray: np.ndarray
+    binary: np.ndarray
+    level: np.ndarray | None = None  # levelled (roll-corrected) object mask
+    lines: list = field(default_factory=list)  # (u0, v0, du, dv, label) in levelled pixel frame
+    points: list = field(default_factory=list)
+
+
+@dataclass
+class PileResult:
+    path: str
+    angle_deg: float
+    left_deg: float
+    right_deg: float
+    spread_deg: float
+    roll_deg: float
+    stages: Stages | None = None
+
+    def as_dict(self):
+        d = asdict(self)
+        d.pop("stages")
+        return d
+
+
+def _gray(rgb, channel="gray"):
+    """Smoothed single channel in which soil is darker than its surroundings.
+
+    "gray": luminance (rgb2gray).  "chroma": 1 - (R - B) / (R + G + B) scaled to [0, 1], the
+    hue contrast of brown soil against grey/dark backgrounds, independent of shading.
+    """
+    if channel == "gray":
+        return filters.gaussian(color.rgb2gray(rgb), 1.2)
+    if channel == "chroma":
+        rgb = filters.gaussian(rgb, 1.5, channel_axis=-1)
+        c = (rgb[..., 0] - rgb[..., 2]) / (rgb.sum(-1) + 0.05)
+        return np.clip(0.5 - 2.0 * c, 0, 1)
+    raise InputError(None, "channel", "'gray', 'chroma' or 'auto'", channel)
+
+
+def _binary(path, gray, method, classes=2):
+    if method == "otsu":
+        t = filters.threshold_otsu(gray) if classes == 2 else filters.threshold_multiotsu(gray, classes)[-1]
+        dark = gray < t
+    elif method == "adaptive":
+        dark = gray < filters.threshold_local(gray, 201, offset=0.02)
+    else:
+        raise InputError(path, "threshold", "'otsu' or 'adaptive'", method)
+    dark = morphology.opening(dark, morphology.disk(2))
+    return ndi.binary_fill_holes(dark)
+
+
+def plate_line(path, gray, binary):
+    """(slope, intercept) of the plate's top edge, row = slope * col + intercept."""
+    edges = feature.canny(gray, sigma=1.5)
+    h, w = gray.shape
+    thetas = np.radians(np.linspace(84, 96, 241))
+    hs, ang, dist = transform.hough_line(edges, theta=thetas)
+    _, angs, dists = transform.hough_line_peaks(hs, ang, dist, num_peaks=12, min_distance=4,
+                                                threshold=0.2 * w)
+    best, best_score = None, 0
+    cols = np.arange(w)
+    for a, d in zip(angs, dists):
+        rows = (d - cols * np.cos(a)) / np.sin(a)
+        ri = np.round(rows).astype(int)
+        ok = (ri > 8) & (ri < h - 8)
+        above = binary[ri[ok] - 5, cols[ok]]
+        below = binary[ri[ok] + 4, cols[ok]]
+        score = np.sum(above & ~below)
+        if score > best_score:
+            best, best_score = (a, d), score
+    if best is None or best_score < 0.05 * w:
+        raise InputError(path, "image", "a heap standing on a straight plate edge", "no plate line with soil on it")
+    a, d = best
+    rows = (d - cols * np.cos(a)) / np.sin(a)
+    er, ec = np.nonzero(edges)
+    near = np.abs(er - rows[ec]) < 3
+    pts = np.column_stack([ec[near], er[near]]).astype(float)
+    model, _ = measure.ransac(pts, measure.LineModelND, min_samples=2, residual_threshold=1.0,
+                              max_trials=200, rng=0)
+    (c0, r0), (dc, dr) = model.origin, model.direction
+    slope = dr / dc
+    return slope, r0 - slope * c0
+
+
+def _level(mask, slope, intercept):
+    """Rotate so the plate line is horizontal; returns (levelled float mask, plate row, roll).
+
+    roll is the camera roll, counter-clockwise positive (the plate appears rotated by it).
+    """
+    roll = np.degrees(np.arctan(slope))
+    h, w = mask.shape
+    lev = transform.rotate(np.asarray(mask, float), roll, order=1, center=(w / 2 - 0.5, h / 2 - 0.5))
+    # plate row after rotation: the plate point under the image centre
+    row_c = slope * (w / 2 - 0.5) + intercept
+    ang = np.arctan(slope)
+    # distance along the image vertical from centre, after rotation by -ang around the centre
+    plate_row = (h / 2 - 0.5) + (row_c - (h / 2 - 0.5)) * np.cos(ang)
+    return lev, plate_row, -roll
+
+
+def _top_edge(lev, c0, c1, glev=None):
+    """Subpixel row of the object's top edge in columns c0..c1.
+
+    The first 0.5 crossing of the levelled mask gives the edge to a pixel; with the levelled
+    gray image ``glev`` it is refined to the row where the gray level crosses the local
+    mid-level (median of 5 px of background above and of object below), which removes the
+    dependence on a global threshold.
+    """
+    cols, rows = [], []
+    n = lev.shape[0]
+    for c in range(int(c0), int(c1)):
+        col = lev[:, c]
+        idx = np.nonzero(col >= 0.5)[0]
+        if idx.size == 0 or idx[0] == 0:
+            continue
+        i = idx[0]
+        a, b = col[i - 1], col[i]
+        r = i - 1 + (0.5 - a) / (b - a)
+        if glev is not None and 12 <= i < n - 12:
+            g = glev[:, c]
+            bg, fg = np.median(g[i - 12:i - 6]), np.median(g[i + 6:i + 12])
+            mid = 0.5 * (bg + fg)
+            seg = g[i - 6:i + 6]
+            if abs(bg - fg) > 0.03:
+                sgn = np.sign(bg - fg)
+                k = np.nonzero(sgn * (seg - mid) <= 0)[0]
+                if k.size and k[0] > 0:
+                    j = k[0]
+                    r = i - 6 + j - 1 + (seg[j - 1] - mid) / (seg[j - 1] - seg[j])
+        rows.append(r)
+        cols.append(c)
+    return np.asarray(cols, float), np.asarray(rows, float)
+
+
+def _fit(path, u, v, label, seed=0):
+    if u.size < 20:
+        raise InputError(path, label, "a flank of at least 20 boundary pixels", int(u.size))
+    pts = np.column_stack([u, v])
+    model, inl = measure.ransac(pts, measure.LineModelND, min_samples=2, residual_threshold=1.5,
+                                max_trials=500, rng=seed)
+    (u0, v0), (du, dv) = model.origin, model.direction
+    return float(np.degrees(np.arctan2(abs(dv), abs(du)))), (u0, v0, du, dv), pts[inl]
+
+
+def _components_on_plate(path, binary, slope, intercept, kind):
+    h, w = binary.shape
+    rr, cc = np.mgrid[0:h, 0:w]
+    plate_rows = slope * cc + intercept
+    above = binary & (rr < plate_rows - 1)
+    lab = measure.label(above)
+    touching = np.unique(lab[(rr > plate_rows - 8) & (rr < plate_rows - 1) & above])
+    touching = touching[touching > 0]
+    props = {p.label: p for p in measure.regionprops(lab)}
+    cands = sorted((props[t] for t in touching if props[t].area > 0.004 * h * w), key=lambda p: -p.area)
+    if not cands:
+        raise InputError(path, "image", f"one {kind} standing on the plate", "none found")
+    if len(cands) > 1 and cands[1].area > 0.25 * cands[0].area:
+        raise InputError(path, "image", f"one {kind}", f"{len(cands)} separate {kind}s on the plate")
+    comp = lab == cands[0].label
+    r0, c0, r1, c1 = cands[0].bbox
+    if r0 <= 2 or c0 <= 2 or c1 >= w - 2:
+        raise InputError(path, "image", f"the whole {kind} inside the frame", "it is cut by the image border")
+    return comp
+
+
+def measure_pile(path, threshold="otsu", keep_stages=False, channel="auto") -> PileResult:
+    """Left/right flank angles of one heap photo relative to the plate line.
+
+    channel "auto" uses the luminance and falls back to the chroma channel when no single
+    heap is found in it (dark soil on a dark background).
+    """
+    if channel == "auto":
+        try:
+            return measure_pile(path, threshold, keep_stages, "gray")
+        except InputError as first:
+            if first.field != "image":
+                raise
+            try:
+                return measure_pile(path, threshold, keep_stages, "chroma")
+            except InputError:
+                raise first from None
+    rgb = read_photo(path)
+    gray = _gray(rgb, channel)
+    if channel == "chroma":
+        # plate edge from the luminance; soil/background threshold from the pixels above it
+        slope, intercept = plate_line_any(path, _gray(rgb))
+        h, w = gray.shape
+        rr, cc = np.mgrid[0:h, 0:w]
+        prow = slope * cc + intercept
+        band = (rr < prow - 3) & (rr > prow - 0.35 * h)  # where heap and wall meet
+        t = filters.threshold_otsu(gray[band])
+        binary = ndi.binary_fill_holes(morphology.opening(gray < t, morphology.disk(2)))
+    else:
+        binary = _binary(path, gray, threshold)
+        slope, intercept = plate_line(path, gray, binary)
+    comp = _components_on_plate(path, binary, slope, intercept, "heap")
+    lev, prow, roll = _level(comp, slope, intercept)
+    glev = _level(gray, slope, intercept)[0]
+    cols = np.nonzero(lev.max(axis=0) >= 0.5)[0]
+    cu, rv = _top_edge(lev, cols.min(), cols.max() + 1, glev)
+    v = prow - rv
+    hmax = np.percentile(v, 99.5)
+    apex = np.median(cu[v > 0.97 * hmax])
+    band = (v > BAND[0] * hmax) & (v < BAND[1] * hmax)
+    left, lline, lp = _fit(path, cu[band & (cu < apex)], v[band & (cu < apex)], "left flank")
+    right, rline, rp = _fit(path, cu[band & (cu > apex)], v[band & (cu > apex)], "right flank")
+    ang = np.array([left, right])
+    st = None
+    if keep_stages:
+        st = Stages(rgb, gray, binary, lev, [lline + ("left",), rline + ("right",)], [lp, rp])
+        st.plate_row = prow
+    return PileResult(str(path), float(ang.mean()), left, right, float(ang.std(ddof=1)), float(roll), st)
+
+
+def measure_piles(paths, threshold="otsu", keep_stages=False, channel="auto"):
+    """Multi-view average: mean of all flank angles, spread = their sample std."""
+    res = [measure_pile(p, threshold, keep_stages, channel) for p in paths]
+    lefts = np.array([r.left_deg for r in res])
+    rights = np.array([r.right_deg for r in res])
+    allf = np.concatenate([lefts, rights])
+    summary = {
+        "angle_deg": float(allf.mean()),
+        "left_deg": float(lefts.mean()),
+        "right_deg": float(rights.mean()),
+        "spread_deg": float(allf.std(ddof=1)) if allf.size > 1 else 0.0,
+        "n_photos": len(res),
+        "photos": [r.as_dict() for r in res],
+    }
+    return summary, res
+
+
+def measure_drum_frame(path, threshold="otsu", keep_stages=False) -> PileResult:
+    """Free-surface angle of one drum frame relative to the base plate."""
+    rgb = read_photo(path)
+    gray = _gray(rgb)
+    binary = _binary(path, gray, threshold)
+    slope, intercept = plate_line_any(path, gray)
+    h, w = binary.shape
+    rr, cc = np.mgrid[0:h, 0:w]
+    above = binary & (rr < slope * cc + intercept - 3)
+    lab = measure.label(above)
+    props = sorted(measure.regionprops(lab), key=lambda p: -p.area)
+    if not props or props[0].area < 0.01 * h * w:
+        raise InputError(path, "image", "soil in the drum", "no soil region found")
+    p = props[0]
+    if p.bbox[0] <= 2 or p.bbox[1] <= 2 or p.bbox[3] >= w - 2:
+        raise InputError(path, "image", "the whole drum inside the frame", "soil region cut by the image border")
+    comp = lab == p.label
+    lev, prow, roll = _level(comp, slope, intercept)
+    cols = np.nonzero(lev.max(axis=0) >= 0.5)[0]
+    span = cols.max() - cols.min()
+    c0, c1 = cols.min() + 0.2 * span, cols.max() - 0.2 * span
+    cu, rv = _top_edge(lev, c0, c1, _level(gray, slope, intercept)[0])
+    ang, line, pts = _fit(path, cu, prow - rv, "free surface")
+    st = Stages(rgb, gray, binary, lev, [line + ("surface",)], [pts]) if keep_stages else None
+    if st is not None:
+        st.plate_row = prow
+    return PileResult(str(path), ang, float("nan"), float("nan"), 0.0, float(roll), st)
+
+
+def plate_line_any(path, gray):
+    """Strongest long near-horizontal edge below the image middle (drum base plate)."""
+    edges = feature.canny(gray, sigma=1.5)
+    h, w = gray.shape
+    thetas = np.radians(np.linspace(84, 96, 241))
+    hs, ang, dist = transform.hough_line(edges, theta=thetas)
+    _, angs, dists = transform.hough_line_peaks(hs, ang, dist, num_peaks=6, min_distance=4,
+                                                threshold=0.4 * w)
+    cand = [(a, d) for a, d in zip(angs, dists) if d / np.sin(a) > 0.5 * h]
+    if not cand:
+        raise InputError(path, "image", "a straight base plate edge", "none found")
+    # topmost long edge in the lower half = plate top (the plate face and table edges lie below)
+    a, d = min(cand, key=lambda t: t[1] / np.sin(t[0]))
+    cols = np.arange(w)
+    rows = (d - cols * np.cos(a)) / np.sin(a)
+    er, ec = np.nonzero(edges)
+    near = np.abs(er - rows[ec]) < 3
+    pts = np.column_stack([ec[near], er[near]]).astype(float)
+    model, _ = measure.ransac(pts, measure.LineModelND, min_samples=2, residual_threshold=1.0,
+                              max_trials=200, rng=0)
+    (c0, r0), (dc, dr) = model.origin, model.direction
+    return dr / dc, r0 - dr / dc * c0
+
+
+def measure_drum(paths, threshold="otsu", keep_stages=False):
+    res = [measure_drum_frame(p, threshold, keep_stages) for p in paths]
+    a = np.array([r.angle_deg for r in res])
+    summary = {"angle_deg": float(a.mean()), "spread_deg": float(a.std(ddof=1)) if a.size > 1 else 0.0,
+               "n_frames": len(res), "frames": [{"path": r.path, "angle_deg": r.angle_deg, "roll_deg": r.roll_deg}
+                                                for r in res]}
+    return summary, res
+
+
+@dataclass
+class FurrowResult:
+    path: str
+    x_mm: np.ndarray
+    z_mm: np.ndarray
+    coeffs: list  # highest power first, x and z in mm
+    degree: int
+    area_mm2: float
+    px_per_mm: float
+    roll_deg: float
+    stages: Stages | None = None
+
+    def as_dict(self):
+        return {"path": self.path, "degree": self.degree, "coeffs": self.coeffs,
+                "area_mm2": self.area_mm2, "area_dm2": self.area_mm2 / 1e4,
+                "px_per_mm": self.px_per_mm, "roll_deg": self.roll_deg,
+                "profile": {"x_mm": np.round(self.x_mm[::10], 2).tolist(),
+                            "z_mm": np.round(self.z_mm[::10], 2).tolist()}}
+
+
+def measure_furrow(path, scale_length_mm, datum_mm=0.0, degree=9, threshold="otsu", keep_stages=False):
+    """Furrow profile in mm from the profile-meter beam (scale reference of known length)."""
+    if not scale_length_mm or scale_length_mm <= 0:
+        raise InputError(path, "scale_length_mm", "a positive length of the scale reference in mm", scale_length_mm)
+    rgb = read_photo(path)
+    gray = _gray(rgb)
+    binary = _binary(path, gray, threshold)
+    h, w = binary.shape
+    lab = measure.label(binary)
+    beams = [p for p in measure.regionprops(lab)
+             if p.area > 500 and p.axis_minor_length > 0 and p.axis_major_length / p.axis_minor_length > 15]
+    if not beams:
+        raise InputError(path, "image", "a profile-meter beam (long dark bar)", "none found")
+    beam = max(beams, key=lambda p: p.axis_major_length)
+    br, bc = np.nonzero(lab == beam.label)
+    # direction from a line fit through the beam pixels
+    A = np.column_stack([bc, np.ones_like(bc)]).astype(float)
+    slope, _ = np.linalg.lstsq(A, br.astype(float), rcond=None)[0]
+    roll = -float(np.degrees(np.arctan(slope)))
+    ux = np.array([1.0, slope]) / np.hypot(1.0, slope)  # (col, row) along the beam
+    uz = np.array([slope, -1.0]) / np.hypot(1.0, slope)  # up
+    t = bc * ux[0] + br * ux[1]
+    length_px = t.max() - t.min() + 1.0
+    s = length_px / scale_length_mm
+    mid = (t.max() + t.min()) / 2
+    vb = bc * uz[0] + br * uz[1]
+    beam_lower = vb.min() - 0.5
+    # soil: largest component below the beam
+    soil = lab == max((p for p in measure.regionprops(lab) if p.label != beam.label), key=lambda p: p.area).label
+    lev, _, _ = _level(soil, slope, 0.0)
+    # transform beam frame into the levelled image: rotate points about the centre
+    ang = np.arctan(slope)
+    cy, cx = h / 2 - 0.5, w / 2 - 0.5
+    def to_lev(c, r):
+        dc, dr = c - cx, r - cy
+        return cx + dc * np.cos(ang) + dr * np.sin(ang), cy - dc * np.sin(ang) + dr * np.cos(ang)
+    lc, lr = to_lev(bc.astype(float), br.astype(float))
+    c_left, c_right = lc.min() - 0.5, lc.max() + 0.5
+    lower_row = lr.max() + 0.5
+    cu, rv = _top_edge(lev, np.ceil(c_left), np.floor(c_right) + 1, _level(gray, slope, 0.0)[0])
+    x = (cu - (c_left + c_right) / 2) / s
+    z = datum_mm - (rv - lower_row) / s
+    poly = np.polynomial.Polynomial.fit(x, z, degree)
+    a, b = -scale_length_mm / 2, scale_length_mm / 2
+    P = poly.integ()
+    za, zb = poly(a), poly(b)
+    area = 0.5 * (za + zb) * (b - a) - (P(b) - P(a))
+    coeffs = poly.convert().coef[::-1].tolist()
+    st = None
+    if keep_stages:
+        st = Stages(rgb, gray, binary, lev, [], [np.column_stack([cu, rv])])
+        st.poly = poly
+        st.frame = (c_left, c_right, lower_row, s, datum_mm)
+    del beam_lower, mid, vb
+    return FurrowResult(str(path), x, z, coeffs, degree, float(area), float(s), roll, st)

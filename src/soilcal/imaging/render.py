@@ -1,0 +1,385 @@
+"""Seeded photo renderer: soil heaps, rotating-drum frames and a furrow cross-section.
+
+Geometry (world units mm, x right, y away from the camera, z up):
+
+* Heap: height field over the plate, a cone per azimuth sector (left/right/front/back slope
+  angles alpha_k, sectors of 90 deg blended over +/-6 deg at the diagonals) with a rounded top
+  (parabolic cap tangent to the cone at r_c), a concave toe
+  h = h_t exp(-(r - r_t) tan(alpha) / h_t) (continuous in value and slope at r_t) and
+  particle-scale roughness (Gaussian-filtered noise, std ~0.3 mm).  In a horizontal side view
+  with weak perspective (uniform scale s px/mm) the silhouette of each straight flank has
+  exactly the slope tan(alpha) relative to the plate; the flank angle is the ground truth.
+* Drum: 25 % fill; the free surface is the chord at angle theta whose circular segment holds
+  the fill, A = R^2 acos(d/R) - d sqrt(R^2 - d^2); a symmetric bulge and grain noise (no
+  tilt) are added.  Per-frame angles scatter around the printed mean with zero mean.
+* Furrow: the soil face below z = F(x) (Eq. 3 of 000) on the profile-meter span, seen
+  square-on in front of a gridded profile board; the meter beam (scale reference, known
+  length = span) hangs above the furrow with its lower edge at ``beam_datum_mm``.
+
+Shading: Lambert n.L with ambient term and multi-scale albedo texture, a cast shadow of the
+heap on the back wall (silhouette shifted along the light direction, blurred), uneven
+illumination (linear + radial gradient), clutter on the wall, a steel plate, a checker
+scale bar, camera roll (rotation about the image centre), optical blur, sensor noise and
+JPEG (quality 85).  Every random choice comes from ``numpy.random.default_rng(seed)``; the
+ground truth (angles, roll, pixel scale, seed) is returned and written to a sidecar
+``<photo>.truth.json`` that the measurement code never reads.
+"""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import numpy as np
+from scipy import ndimage as ndi
+from skimage.transform import rotate
+
+W, H = 1200, 900
+MARGIN = 60
+
+SOIL_COLOURS = {
+    "cinnamon-soil": (0.60, 0.45, 0.31),
+    "black-soil": (0.25, 0.21, 0.18),
+    "xinjiang-vineyard": (0.62, 0.55, 0.45),
+    "guangxi-cohesive": (0.55, 0.34, 0.24),
+    "yangtze-clay-loam": (0.45, 0.36, 0.28),
+}
+
+
+def _noise(rng, shape, sigma):
+    n = ndi.gaussian_filter(rng.standard_normal(shape), sigma)
+    return n / (n.std() + 1e-12)
+
+
+def _texture(rng, shape):
+    return 0.55 * _noise(rng, shape, 1.0) + 0.3 * _noise(rng, shape, 4.0) + 0.25 * _noise(rng, shape, 15.0)
+
+
+def _wall(rng, h, w, hard, avoid=None, floor_row=None):
+    """Back wall with uneven light and clutter; ``avoid`` = (r0, r1, c0, c1) kept free and
+    clutter hangs on the wall (ends 20 px above ``floor_row``, the plate)."""
+    base = np.array([0.20, 0.19, 0.18]) if hard else np.array([0.80, 0.78, 0.74])
+    base = base * (1 + 0.05 * rng.standard_normal(3))
+    img = np.ones((h, w, 3)) * base
+    img *= (1 + 0.03 * _noise(rng, (h, w), 20.0))[..., None]
+    rr, cc = np.mgrid[0:h, 0:w]
+    for _ in range(int(rng.integers(6, 12))):
+        hh, ww = rng.integers(40, 220, size=2)
+        r0, c0 = int(rng.integers(0, h - hh)), int(rng.integers(0, w - ww))
+        if floor_row is not None and r0 + hh > floor_row - 20:
+            continue
+        if avoid is not None:
+            a0, a1, b0, b1 = avoid
+            if r0 < a1 and r0 + hh > a0 and c0 < b1 and c0 + ww > b0:
+                continue
+        col = rng.uniform(0.35, 0.95, 3) if not hard else rng.uniform(0.1, 0.35, 3)
+        if rng.random() < 0.5:
+            m = (rr >= r0) & (rr < r0 + hh) & (cc >= c0) & (cc < c0 + ww)
+        else:
+            m = ((rr - r0 - hh / 2) / (hh / 2)) ** 2 + ((cc - c0 - ww / 2) / (ww / 2)) ** 2 <= 1
+        img[m] = col * (1 + 0.04 * rng.standard_normal())
+    return ndi.gaussian_filter(img, (1.5, 1.5, 0))
+
+
+def _light_field(rng, h, w, strength):
+    rr, cc = np.mgrid[0:h, 0:w] / max(h, w)
+    g = 1 + strength * (rng.uniform(-1, 1) * (cc - 0.5) + rng.uniform(-1, 1) * (rr - 0.5))
+    r2 = (cc - rng.uniform(0.3, 0.7)) ** 2 + (rr - rng.uniform(0.2, 0.6)) ** 2
+    return g * (1 - 0.35 * strength * r2)
+
+
+def _plate(img, rng, row, c0, c1, thick_px):
+    """Steel plate seen edge-on: top edge at ``row``, brushed front face."""
+    h = img.shape[0]
+    r1 = min(h, row + thick_px)
+    face = 0.68 + 0.08 * _noise(rng, (r1 - row, c1 - c0), 0.7)[:, :] * 0.3
+    face += 0.10 * np.linspace(1, -1, r1 - row)[:, None]
+    img[row:r1, c0:c1] = np.clip(face, 0, 1)[..., None] * np.array([0.97, 0.99, 1.0])
+    img[row:row + 2, c0:c1] = 0.92  # bright chamfer highlight along the top edge
+
+
+def _table(img, rng, row):
+    h, w, _ = img.shape
+    grain = _noise(rng, (h - row, w), (1.0, 25.0))
+    img[row:] = (np.array([0.45, 0.33, 0.22]) * (1 + 0.12 * grain)[..., None])
+
+
+def _scale_bar(img, row, col, s, squares=10, size_mm=10.0):
+    """Checker bar, ``squares`` x 2 squares of ``size_mm``; returns its length in mm."""
+    q = size_mm * s
+    for i in range(squares):
+        for j in range(2):
+            v = 0.05 if (i + j) % 2 == 0 else 0.95
+            r0, c0 = int(round(row + j * q)), int(round(col + i * q))
+            img[r0:int(round(row + (j + 1) * q)), c0:int(round(col + (i + 1) * q))] = v
+    return squares * size_mm
+
+
+def _finish(rng, canvas, roll_deg, hard):
+    """Camera: roll about the image centre, crop, blur, vignetting, noise."""
+    rolled = rotate(canvas, roll_deg, order=1, mode="edge")
+    img = rolled[MARGIN:MARGIN + H, MARGIN:MARGIN + W]
+    img = ndi.gaussian_filter(img, (0.8, 0.8, 0))
+    img = img * _light_field(rng, H, W, 0.15)[..., None]
+    img = img + rng.normal(0, 0.012 if not hard else 0.02, img.shape)
+    return (np.clip(img, 0, 1) * 255 + 0.5).astype(np.uint8)
+
+
+def _sector_tan(phi, right, back, left, front, blend_deg=6.0):
+    """tan(alpha) for azimuth phi (rad, 0 = +x right, pi/2 = +y away); 90-deg sectors."""
+    tans = np.tan(np.radians([right, back, left, front]))
+    centres = np.radians([0.0, 90.0, 180.0, 270.0])
+    wsum = np.zeros_like(phi)
+    tsum = np.zeros_like(phi)
+    for t, c in zip(tans, centres):
+        d = np.abs((phi - c + np.pi) % (2 * np.pi) - np.pi)
+        wk = np.clip((np.radians(45.0 + blend_deg) - d) / np.radians(2 * blend_deg), 0, 1)
+        wsum += wk
+        tsum += wk * t
+    return tsum / wsum
+
+
+def heap_height(x, y, slopes, r0, rng=None, rough=0.15):
+    """Height field (mm) of the heap; ``slopes`` = (right, back, left, front) in deg."""
+    r = np.hypot(x, y)
+    t = _sector_tan(np.arctan2(y, x), *slopes)
+    tm = np.tan(np.radians(np.mean(slopes)))
+    H0 = r0 * tm
+    rc = 0.22 * r0 * tm / t
+    ht = 0.10 * H0
+    rt = (H0 - ht) / t
+    h = H0 - r * t
+    cap = r < rc
+    h[cap] = (H0 - t * (r ** 2 + rc ** 2) / (2 * rc))[cap]
+    toe = r > rt
+    h[toe] = (ht * np.exp(-(r - rt) * t / ht))[toe]
+    if rng is not None and rough > 0:
+        h = h + rough * _noise(rng, h.shape, 2.0) * np.clip(h / ht, 0, 1)
+    h[h < 0.3] = 0.0
+    return h
+
+
+def render_pile(seed, left_deg, right_deg, front_deg=None, back_deg=None, soil="cinnamon-soil",
+                hard=False, roll_deg=None, n_heaps=1, cut=False):
+    """Render one side-view photo of a heap; returns (uint8 RGB, truth dict)."""
+    rng = np.random.default_rng(seed)
+    front_deg = (left_deg + right_deg) / 2 if front_deg is None else front_deg
+    back_deg = (left_deg + right_deg) / 2 if back_deg is None else back_deg
+    slopes = (right_deg, back_deg, left_deg, front_deg)
+    if roll_deg is None:
+        roll_deg = float(rng.uniform(-3, 3) if hard else rng.uniform(-1.5, 1.5))
+    s = float(rng.uniform(2.6, 3.2)) / (1.6 if n_heaps == 2 else 1.0)
+    r0 = float(rng.uniform(85, 100))
+    ch, cw = H + 2 * MARGIN, W + 2 * MARGIN
+    row_p = int(MARGIN + rng.uniform(0.68, 0.76) * H)
+    centres = [cw / 2 + rng.uniform(-50, 50)]
+    if n_heaps == 2:
+        centres = [cw / 2 - 0.25 * W, cw / 2 + 0.25 * W]
+    if cut:
+        centres = [MARGIN + 0.12 * W]
+    tm = np.tan(np.radians(np.mean(slopes)))
+    apex_row = row_p - r0 * tm * s
+    reach = int(1.6 * r0 * s)
+    avoid = (int(apex_row - 80), row_p, int(min(centres) - reach - 40), int(max(centres) + reach + 40))
+    canvas = _wall(rng, ch, cw, hard, avoid, row_p)
+    light = np.array([-0.55, -0.55, 0.63]) * np.array([rng.uniform(0.7, 1.3), 1, 1])
+    light = light / np.linalg.norm(light)
+    albedo = np.array(SOIL_COLOURS.get(soil, SOIL_COLOURS["cinnamon-soil"]))
+    if hard:
+        albedo = np.array(SOIL_COLOURS["black-soil"]) * 0.9
+    sil_all = np.zeros((ch, cw), bool)
+    layers = []
+    for cx in centres:
+        cols = np.arange(max(0, int(cx - reach)), min(cw, int(cx + reach)))
+        xs = (cols - cx) / s
+        ys = np.arange(-1.6 * r0, 1.6 * r0, 0.4)
+        X, Y = np.meshgrid(xs, ys, indexing="ij")
+        h = heap_height(X, Y, slopes, r0, rng)
+        gx, gy = np.gradient(h, xs, ys)
+        n = np.stack([-gx, -gy, np.ones_like(h)], -1)
+        n /= np.linalg.norm(n, axis=-1, keepdims=True)
+        shade = 0.35 + 0.8 * np.clip(n @ light, 0, None)
+        tex = 1 + 0.12 * _texture(rng, h.shape)
+        sil = h.max(axis=1)
+        front = np.maximum.accumulate(h[:, : len(ys) // 2 + 1], axis=1)
+        layer = np.zeros((ch, cw, 3))
+        lm = np.zeros((ch, cw), bool)
+        for i, c in enumerate(cols):
+            top = sil[i] * s
+            if top <= 0:
+                continue
+            rows = np.arange(int(np.ceil(row_p - top)), row_p)
+            z = (row_p - rows) / s
+            j = np.minimum(np.searchsorted(front[i], z), front.shape[1] - 1)
+            v = shade[i, j] * tex[i, j]
+            layer[rows, c] = v[:, None] * albedo
+            lm[rows, c] = True
+        layers.append((layer, lm))
+        sil_all |= lm
+    # cast shadow on the wall, then heap(s)
+    dx, dy = int(round(-light[0] / light[2] * 25 * s * 0.3)), int(round(8 * s * 0.3))
+    shadow = np.roll(np.roll(sil_all.astype(float), dx, axis=1), dy, axis=0)
+    shadow = ndi.gaussian_filter(shadow, 2.0 if hard else 7.0)
+    canvas *= (1 - (0.55 if hard else 0.25) * shadow)[..., None]
+    for layer, lm in layers:
+        canvas[lm] = layer[lm]
+    # crumbs on the plate next to the toe
+    rr, cc = np.mgrid[0:ch, 0:cw]
+    for _ in range(int(rng.integers(4, 10))):
+        side = rng.choice([-1, 1])
+        cx = centres[0] + side * rng.uniform(1.15, 1.45) * r0 * s
+        a, b = rng.uniform(1.0, 3.0) * s, rng.uniform(0.8, 2.0) * s
+        m = (((cc - cx) / a) ** 2 + ((rr - row_p) / b) ** 2 <= 1) & (rr < row_p)
+        canvas[m] = albedo * rng.uniform(0.6, 1.0)
+    _plate(canvas, rng, row_p, 0, cw, int(6 * s))
+    _table(canvas, rng, row_p + int(6 * s))
+    bar_len = _scale_bar(canvas, row_p + int(12 * s), int(MARGIN + rng.uniform(0.05, 0.6) * W), s)
+    img = _finish(rng, canvas, roll_deg, hard)
+    truth = {
+        "kind": "pile", "seed": int(seed), "left_deg": float(left_deg), "right_deg": float(right_deg),
+        "front_deg": float(front_deg), "back_deg": float(back_deg),
+        "angle_deg": float((left_deg + right_deg) / 2), "roll_deg": float(roll_deg),
+        "px_per_mm": s, "scale_bar_mm": bar_len, "hard": bool(hard), "n_heaps": n_heaps, "cut": cut,
+    }
+    return img, truth
+
+
+def segment_fill(radius, fill):
+    """Distance d of the chord from the centre whose segment holds ``fill`` of the disc."""
+    from scipy.optimize import brentq
+
+    target = fill * np.pi * radius ** 2
+    return brentq(lambda d: radius ** 2 * np.arccos(d / radius) - d * np.sqrt(radius ** 2 - d ** 2) - target,
+                  0.0, radius * (1 - 1e-9))
+
+
+def render_drum(seed, angle_deg, soil="xinjiang-vineyard", fill=0.25, hard=False, roll_deg=None):
+    """One front-view frame of the rotating drum; free surface at ``angle_deg``."""
+    rng = np.random.default_rng(seed)
+    if roll_deg is None:
+        roll_deg = float(rng.uniform(-3, 3) if hard else rng.uniform(-1.5, 1.5))
+    s = float(rng.uniform(2.8, 3.2))
+    R = 100.0
+    ch, cw = H + 2 * MARGIN, W + 2 * MARGIN
+    row_p = int(MARGIN + 0.86 * H)
+    cx, cz = cw / 2 + rng.uniform(-40, 40), row_p - (R + 22) * s
+    canvas = _wall(rng, ch, cw, hard, (int(cz - 1.2 * R * s), row_p, int(cx - 1.2 * R * s), int(cx + 1.2 * R * s)))
+    rr, cc = np.mgrid[0:ch, 0:cw]
+    X, Z = (cc - cx) / s, (cz - rr) / s
+    rad = np.hypot(X, Z)
+    inside = rad < R
+    canvas[inside] = np.array([0.88, 0.88, 0.86]) * (1 + 0.02 * _noise(rng, (ch, cw), 8.0))[inside][:, None]
+    th = np.radians(angle_deg)
+    d = segment_fill(R, fill)
+    u = X * np.cos(th) + Z * np.sin(th)
+    nrm = -X * np.sin(th) + Z * np.cos(th)
+    L = np.sqrt(R ** 2 - d ** 2)
+    bulge = 1.2 * np.cos(np.pi * np.clip(u / L, -1, 1) / 2) + 0.25 * _noise(rng, (1, cw * 2), 3.0)[0, np.clip((u * s + cw).astype(int), 0, 2 * cw - 1)]
+    soil_m = inside & (nrm < -d + bulge)
+    albedo = np.array(SOIL_COLOURS.get(soil, SOIL_COLOURS["xinjiang-vineyard"]))
+    tex = 1 + 0.12 * _texture(rng, (ch, cw))
+    canvas[soil_m] = (albedo * (0.85 + 0.1 * (nrm[soil_m] / R))[:, None]) * tex[soil_m][:, None]
+    ring = (rad >= R) & (rad < R + 6)
+    canvas[ring] = np.array([0.55, 0.56, 0.58]) * (1 + 0.2 * np.cos(np.arctan2(Z, X)[ring] * 2))[:, None]
+    # stand legs and base plate
+    for sgn in (-1, 1):
+        leg = (np.abs(X - sgn * 0.6 * R) < 4) & (Z < -0.75 * R) & (rr < row_p)
+        canvas[leg] = 0.5
+    _plate(canvas, rng, row_p, 0, cw, int(6 * s))
+    _table(canvas, rng, row_p + int(6 * s))
+    _scale_bar(canvas, row_p + int(10 * s), int(MARGIN + 0.05 * W), s)
+    img = _finish(rng, canvas, roll_deg, hard)
+    truth = {"kind": "drum", "seed": int(seed), "angle_deg": float(angle_deg), "roll_deg": float(roll_deg),
+             "px_per_mm": s, "fill": fill, "drum_radius_mm": R}
+    return img, truth
+
+
+def render_furrow(seed, coeffs, span_mm, beam_datum_mm=180.0, soil="yangtze-clay-loam", roll_deg=None):
+    """Furrow cross-section in front of a gridded profile board, meter beam above."""
+    rng = np.random.default_rng(seed)
+    if roll_deg is None:
+        roll_deg = float(rng.uniform(-1.5, 1.5))
+    a, b = span_mm
+    s = float(W * 0.85 / (b - a + 60))
+    ch, cw = H + 2 * MARGIN, W + 2 * MARGIN
+    cx = cw / 2 + rng.uniform(-20, 20)
+    z0_row = MARGIN + 0.80 * H  # row of F = 0
+    rr, cc = np.mgrid[0:ch, 0:cw]
+    X, Z = (cc - cx) / s, (z0_row - rr) / s
+    board = np.ones((ch, cw, 3)) * np.array([0.93, 0.93, 0.90])
+    grid = (np.abs(((X + 1000) % 20) - 10) > 9.6) | (np.abs(((Z + 1000) % 20) - 10) > 9.6)
+    board[grid] = np.array([0.55, 0.6, 0.7])
+    board *= (1 + 0.02 * _noise(rng, (ch, cw), 10.0))[..., None]
+    canvas = _wall(rng, ch, cw, False, None)
+    on_board = (X > a - 40) & (X < b + 40) & (Z > -10) & (Z < beam_datum_mm + 60)
+    canvas[on_board] = board[on_board]
+    xc = np.clip(X[0], a, b)
+    prof = np.polyval(coeffs, xc)
+    soil_m = Z < prof[None, :] + 0.3 * _noise(rng, (1, cw), 1.5)
+    albedo = np.array(SOIL_COLOURS.get(soil, SOIL_COLOURS["yangtze-clay-loam"]))
+    canvas[soil_m] = albedo * (1 + 0.12 * _texture(rng, (ch, cw)))[soil_m][:, None]
+    beam = (X >= a) & (X <= b) & (Z >= beam_datum_mm) & (Z < beam_datum_mm + 12)
+    canvas[beam] = np.array([0.08, 0.08, 0.09])
+    img = _finish(rng, canvas, roll_deg, False)
+    from soilcal.imaging.scenes import furrow_chord_area
+
+    truth = {"kind": "furrow", "seed": int(seed), "roll_deg": float(roll_deg), "px_per_mm": s,
+             "span_mm": [a, b], "beam_datum_mm": beam_datum_mm, "coeffs": list(coeffs),
+             "area_mm2": furrow_chord_area(a, b)}
+    return img, truth
+
+
+def save_photo(path, img, truth, quality=85):
+    """Write the JPEG and its sidecar ``<photo>.truth.json``."""
+    from PIL import Image
+
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    Image.fromarray(img).save(path, quality=quality)
+    Path(str(path) + ".truth.json").write_text(json.dumps(truth, indent=2) + "\n")
+    return path
+
+
+def render_soil(soil, outdir, seed=None):
+    """Render every scene of ``soil`` into ``outdir`` and write ``manifest.yaml``."""
+    import yaml
+
+    from soilcal.imaging.scenes import FURROW_F_COEFFS, scenes_for
+
+    outdir = Path(outdir)
+    base = seed if seed is not None else sum(ord(ch) for ch in soil) * 101
+    photos = []
+    for k, sc in enumerate(scenes_for(soil)):
+        sd = base + 17 * k
+        if sc.kind == "pile":
+            img, truth = render_pile(sd, sc.left_deg, sc.right_deg, sc.front_deg, sc.back_deg, soil=soil)
+            fn = f"{sc.name}.jpg"
+            save_photo(outdir / fn, img, truth | {"source": sc.source, "label": sc.label})
+            photos.append({"file": fn, "kind": "pile", "view": sc.view, "group": sc.group,
+                           "scale_length_mm": truth["scale_bar_mm"], "substrate": sc.substrate})
+        elif sc.kind == "drum":
+            frng = np.random.default_rng(sd)
+            dev = frng.normal(0, 0.4, sc.frames)
+            dev -= dev.mean()  # frame angles average exactly to the printed value
+            for f in range(sc.frames):
+                img, truth = render_drum(sd + f + 1, sc.target_deg + dev[f], soil=soil, fill=sc.extra["fill"])
+                fn = f"{sc.name}_f{f + 1:02d}.jpg"
+                save_photo(outdir / fn, img, truth | {"source": sc.source, "frame_mean_deg": sc.target_deg})
+                photos.append({"file": fn, "kind": "drum", "view": "front", "group": sc.group,
+                               "scale_length_mm": 100.0})
+        else:
+            img, truth = render_furrow(sd, FURROW_F_COEFFS, tuple(sc.extra["span_mm"]), soil=soil)
+            fn = f"{sc.name}.jpg"
+            save_photo(outdir / fn, img, truth | {"source": sc.source})
+            photos.append({"file": fn, "kind": "furrow", "view": "section", "group": sc.group,
+                           "scale_length_mm": float(sc.extra["span_mm"][1] - sc.extra["span_mm"][0]),
+                           "beam_datum_mm": truth["beam_datum_mm"]})
+    manifest = {
+        "soil": soil,
+        "note": ("Rendered by soilcal.imaging.render (seeded); *.truth.json sidecars hold the "
+                 "ground truth and are never read by the measurement. Real photos are added "
+                 "here with the same fields."),
+        "photos": photos,
+    }
+    (outdir / "manifest.yaml").write_text(yaml.safe_dump(manifest, sort_keys=False))
+    return outdir / "manifest.yaml"
