@@ -1,0 +1,294 @@
+r"""Contact laws, composed by name like LIGGGHTS/LAMMPS ``pair granular``.
+
+A contact model is the tuple (normal, damping, tangential, rolling, cohesion) chosen with
+:func:`model_codes`; the kernel :func:`contact_force` evaluates it for one particle of a pair
+(the partner evaluates the same pair with n -> -n, which gives exactly the opposite force).
+
+Notation: overlap delta = R_i + R_j - |x_i - x_j| (sphere-wall: R_i - dist), n the unit
+normal from partner to particle, v_n = v_rel . n (< 0 when approaching), v_t the tangential
+relative velocity at the contact point, a the contact radius.  Effective E*, G*, R*, m* and
+beta are defined in :mod:`soilcal.dem.materials`.
+
+Normal, ``hertz`` (Hertz 1882; EDEM Theory Reference Guide, Hertz-Mindlin (no slip))::
+
+    F_n = 4/3 E* sqrt(R*) delta^(3/2),   a = sqrt(R* delta),   S_n = 2 E* a
+
+Damping, ``viscoelastic`` (EDEM guide; LIGGGHTS ``model hertz`` with ``tangential history``;
+Tsuji et al. 1992, Powder Technol. 71:239 for the delta^(1/4) dependence)::
+
+    F_n^d = -2 sqrt(5/6) |beta| sqrt(S_n m*) v_n,   beta = ln e / sqrt(ln^2 e + pi^2)
+    F_t^d = -2 sqrt(5/6) |beta| sqrt(S_t m*) v_t
+
+Tangential, ``mindlin`` (Mindlin 1949 no-slip; EDEM guide; LIGGGHTS ``tangential history``)::
+
+    S_t = 8 G* a,   F_t = -S_t xi - F_t^d,   |F_t| <= mu_s |F_n,tot|
+
+with xi the tangential displacement history: every step xi is projected onto the current
+tangent plane keeping its length (rigid rotation of the contact frame) and incremented by
+v_t dt.  When the spring force exceeds the Coulomb limit, xi is shortened so that
+|S_t xi| = mu_s |F_n,tot| and F_t = -S_t xi (no damping while sliding), as in LIGGGHTS.
+F_n,tot = F_n + F_n^d (plus 2 F_pulloff with JKR, Thornton & Yin 1991, as LAMMPS ``jkr``).
+
+Rolling, ``constant_torque`` (EDEM rolling friction "type A", Zhou et al. 1999, Physica A
+269:536)::
+
+    tau_r,i = -mu_r |F_n,tot| R_i omega_rel / |omega_rel|,   omega_rel = omega_i - omega_j
+
+Rolling, ``epsd`` (elastic-plastic spring-dashpot, "type C", Ai, Chen, Rotter & Ooi 2011,
+Powder Technol. 206:269, Eqs. 11-14; undamped, eta_r = 0)::
+
+    k_r = 2.25 k_n mu_r^2 R_r^2 (k_n = S_n, R_r = R*),  M_r <- M_r - k_r dtheta_r,
+    dtheta_r = (omega_i - omega_j)_t dt,  |M_r| <= mu_r R_r |F_n,tot|
+
+Cohesion, ``jkr`` (Johnson, Kendall & Roberts 1971, Proc. R. Soc. A 324:301), written with
+the work of adhesion w (energy per unit area to separate the two surfaces)::
+
+    delta = a^2/R* - sqrt(2 pi w a / E*)
+    F_n   = 4 E* a^3/(3 R*) - sqrt(8 pi w E* a^3)
+    pull-off (force-controlled minimum): F_po = -3/2 pi w R*  at a = (9 pi w R*^2/(8 E*))^(1/3)
+    separation (displacement-controlled): a_c = (pi w R*^2 / (8 E*))^(1/3), delta_c = delta(a_c)
+
+The contact is formed at delta > 0 and kept on the attractive branch beyond zero overlap
+until delta < delta_c (< 0).  S_n = 2 E* a and S_t = 8 G* a use the JKR contact radius.
+
+Conventions for the surface energy gamma given by the user (``jkr_convention``):
+
+* ``"edem"`` (default): w = gamma, so the pull-off force is 1.5 pi gamma R*, as printed in the
+  EDEM guide for its "JKR cohesion" (pull-out force -3/2 pi gamma R*).
+* ``"lammps"``: gamma is the surface energy of each surface, w = 2 gamma (Dupre), so the
+  pull-off force is 3 pi gamma R* as in the LAMMPS ``pair granular jkr`` documentation.
+  The force law the EDEM guide prints, F = -4 sqrt(pi gamma E*) a^(3/2) + 4 E* a^3/(3 R*)
+  with delta = a^2/R* - sqrt(4 pi gamma a / E*), is the same law with w = 2 gamma, i.e. this
+  convention; it gives a pull-off of 3 pi gamma R*, twice the pull-off the EDEM guide prints
+  next to it.  The two printed EDEM statements disagree by that factor 2 (errata); select the
+  convention explicitly when matching EDEM values.
+
+The contact radius a(delta) is the largest root of x^4/R* - c x - delta = 0 with x = sqrt(a),
+c = sqrt(2 pi w / E*), found by Newton's method from the upper bound
+x0 = (R* max(delta,0))^(1/4) + (R* c)^(1/3) (f is convex, so the iteration decreases
+monotonically to the stable-branch root).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit
+
+from soilcal.dem.materials import P_BETA, P_ESTAR, P_GSTAR, P_MUR, P_MUS, P_W
+from soilcal.errors import InputError
+
+NORMAL = {"hertz": 0}
+DAMPING = {"viscoelastic": 0, "none": 1}
+TANGENTIAL = {"mindlin": 0, "none": 1}
+ROLLING = {"none": 0, "constant_torque": 1, "epsd": 2}
+COHESION = {"none": 0, "jkr": 1}
+JKR_CONVENTION = {"edem": 1.0, "lammps": 2.0}  # w = factor * gamma
+
+# history slot layout (per particle and contact partner)
+H_XI = 0  # 3 tangential displacement
+H_MR = 3  # 3 rolling spring moment (epsd)
+H_TOUCH = 6  # 1 if in contact (JKR hysteresis)
+H_SIZE = 8
+
+SQ56 = math.sqrt(5.0 / 6.0)
+
+
+def model_codes(normal="hertz", damping="viscoelastic", tangential="mindlin", rolling="none",
+                cohesion="none", jkr_convention="edem", source="<input>"):
+    """Return (codes int64[5], w_factor) for a model composed by names."""
+    out = []
+    for key, val, table in (("normal", normal, NORMAL), ("damping", damping, DAMPING),
+                            ("tangential", tangential, TANGENTIAL), ("rolling", rolling, ROLLING),
+                            ("cohesion", cohesion, COHESION)):
+        if val not in table:
+            raise InputError(source, f"contact_model.{key}", f"one of {sorted(table)}", val)
+        out.append(table[val])
+    if jkr_convention not in JKR_CONVENTION:
+        raise InputError(source, "contact_model.jkr_convention", f"one of {sorted(JKR_CONVENTION)}",
+                         jkr_convention)
+    return np.array(out, dtype=np.int64), JKR_CONVENTION[jkr_convention]
+
+
+@njit(cache=True)
+def jkr_radius(delta, rstar, estar, w):
+    """Contact radius a on the stable JKR branch for overlap delta (may be negative)."""
+    c = math.sqrt(2.0 * math.pi * w / estar)
+    x = (rstar * max(delta, 0.0)) ** 0.25 + (rstar * c) ** (1.0 / 3.0)
+    for _ in range(60):
+        x3 = x * x * x
+        f = x3 * x / rstar - c * x - delta
+        fp = 4.0 * x3 / rstar - c
+        dx = f / fp
+        x -= dx
+        if abs(dx) <= 1e-15 * x:
+            break
+    return x * x
+
+
+@njit(cache=True)
+def jkr_force(a, rstar, estar, w):
+    """JKR normal force (positive repulsive) for contact radius a."""
+    a3 = a * a * a
+    return 4.0 * estar * a3 / (3.0 * rstar) - math.sqrt(8.0 * math.pi * w * estar * a3)
+
+
+@njit(cache=True)
+def jkr_delta(a, rstar, estar, w):
+    """JKR overlap for contact radius a."""
+    return a * a / rstar - math.sqrt(2.0 * math.pi * w * a / estar)
+
+
+@njit(cache=True)
+def jkr_separation(rstar, estar, w):
+    """Overlap (negative) at which a JKR contact breaks under displacement control."""
+    if w <= 0.0:
+        return 0.0
+    ac = (math.pi * w * rstar * rstar / (8.0 * estar)) ** (1.0 / 3.0)
+    return jkr_delta(ac, rstar, estar, w)
+
+
+@njit(cache=True)
+def contact_force(codes, prm, delta, nx, ny, nz, rvx, rvy, rvz, wrx, wry, wrz,
+                  ri, rstar, mstar, dt, hist):
+    """Force and torque on particle i from one contact; updates the history row ``hist``.
+
+    delta: overlap; (nx,ny,nz): unit normal from partner towards i; (rvx..): relative
+    velocity of i's contact point w.r.t. the partner's; (wrx..): omega_i - omega_partner;
+    ri: distance from i's centre to the contact point used for moments; prm: pair row.
+    Returns (active, fx, fy, fz, tx, ty, tz): force and torque on i.
+    """
+    estar = prm[P_ESTAR]
+    w = prm[P_W]
+    cohesive = codes[4] == 1 and w > 0.0
+    if cohesive:
+        if delta <= 0.0:
+            if hist[H_TOUCH] == 0.0 or delta < jkr_separation(rstar, estar, w):
+                for q in range(H_SIZE):
+                    hist[q] = 0.0
+                return False, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0
+        a = jkr_radius(delta, rstar, estar, w)
+        fne = jkr_force(a, rstar, estar, w)
+        fpo2 = 3.0 * math.pi * w * rstar  # 2 |F_pulloff|
+    else:
+        if delta <= 0.0:
+            for q in range(H_SIZE):
+                hist[q] = 0.0
+            return False, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0
+        a = math.sqrt(rstar * delta)
+        fne = 4.0 / 3.0 * estar * a * delta
+        fpo2 = 0.0
+    hist[H_TOUCH] = 1.0
+    beta = prm[P_BETA]
+    sn = 2.0 * estar * a
+    vn = rvx * nx + rvy * ny + rvz * nz
+    fnd = 0.0
+    if codes[1] == 0:
+        fnd = 2.0 * SQ56 * beta * math.sqrt(sn * mstar) * vn  # beta <= 0: opposes v_n
+    fn = fne + fnd
+    fnf = abs(fn + fpo2)
+    fx = fn * nx
+    fy = fn * ny
+    fz = fn * nz
+    tx = 0.0
+    ty = 0.0
+    tz = 0.0
+    if codes[2] == 0:
+        vtx = rvx - vn * nx
+        vty = rvy - vn * ny
+        vtz = rvz - vn * nz
+        # rotate history into the current tangent plane, keeping its length
+        xx = hist[H_XI]
+        xy = hist[H_XI + 1]
+        xz = hist[H_XI + 2]
+        old2 = xx * xx + xy * xy + xz * xz
+        if old2 > 0.0:
+            xn = xx * nx + xy * ny + xz * nz
+            xx -= xn * nx
+            xy -= xn * ny
+            xz -= xn * nz
+            new2 = xx * xx + xy * xy + xz * xz
+            if new2 > 0.0:
+                s = math.sqrt(old2 / new2)
+                xx *= s
+                xy *= s
+                xz *= s
+        xx += vtx * dt
+        xy += vty * dt
+        xz += vtz * dt
+        st = 8.0 * prm[P_GSTAR] * a
+        ftx = -st * xx
+        fty = -st * xy
+        ftz = -st * xz
+        fs2 = ftx * ftx + fty * fty + ftz * ftz
+        fmax = prm[P_MUS] * fnf
+        if fs2 > fmax * fmax:
+            r = fmax / math.sqrt(fs2)
+            xx *= r
+            xy *= r
+            xz *= r
+            ftx *= r
+            fty *= r
+            ftz *= r
+        elif codes[1] == 0:
+            ct = 2.0 * SQ56 * beta * math.sqrt(st * mstar)
+            ftx += ct * vtx
+            fty += ct * vty
+            ftz += ct * vtz
+        hist[H_XI] = xx
+        hist[H_XI + 1] = xy
+        hist[H_XI + 2] = xz
+        fx += ftx
+        fy += fty
+        fz += ftz
+        # moment arm from centre of i to contact point: -ri n
+        tx += -ri * (ny * ftz - nz * fty)
+        ty += -ri * (nz * ftx - nx * ftz)
+        tz += -ri * (nx * fty - ny * ftx)
+    mur = prm[P_MUR]
+    if codes[3] == 1 and mur > 0.0:
+        wn = math.sqrt(wrx * wrx + wry * wry + wrz * wrz)
+        if wn > 0.0:
+            m = -mur * fnf * ri / wn
+            tx += m * wrx
+            ty += m * wry
+            tz += m * wrz
+    elif codes[3] == 2 and mur > 0.0:
+        wd = wrx * nx + wry * ny + wrz * nz
+        dtx = (wrx - wd * nx) * dt
+        dty = (wry - wd * ny) * dt
+        dtz = (wrz - wd * nz) * dt
+        mx = hist[H_MR]
+        my = hist[H_MR + 1]
+        mz = hist[H_MR + 2]
+        old2 = mx * mx + my * my + mz * mz
+        if old2 > 0.0:
+            mn = mx * nx + my * ny + mz * nz
+            mx -= mn * nx
+            my -= mn * ny
+            mz -= mn * nz
+            new2 = mx * mx + my * my + mz * mz
+            if new2 > 0.0:
+                s = math.sqrt(old2 / new2)
+                mx *= s
+                my *= s
+                mz *= s
+        kr = 2.25 * sn * mur * mur * rstar * rstar
+        mx -= kr * dtx
+        my -= kr * dty
+        mz -= kr * dtz
+        mlim = mur * rstar * fnf
+        m2 = mx * mx + my * my + mz * mz
+        if m2 > mlim * mlim:
+            r = mlim / math.sqrt(m2)
+            mx *= r
+            my *= r
+            mz *= r
+        hist[H_MR] = mx
+        hist[H_MR + 1] = my
+        hist[H_MR + 2] = mz
+        tx += mx
+        ty += my
+        tz += mz
+    return True, fx, fy, fz, tx, ty, tz

@@ -1,0 +1,318 @@
+"""Python front end of the DEM engine: :class:`Simulation`.
+
+Example::
+
+    mats = MaterialTable()
+    soil = mats.add(Material("soil", density=2600, youngs=2.6e7, poisson=0.3))
+    mats.set_pair("soil", "soil", restitution=0.5, friction=0.5, rolling_friction=0.1)
+    sim = Simulation(mats, dt=2e-5, box=(0, 0.05, 0, 0.05), periodic=(True, True),
+                     contact_model=dict(rolling="constant_torque"))
+    sim.add_particles(x, r, "soil")
+    sim.add_plane((0, 0, 0), (0, 0, 1), "soil")
+    sim.run(20000)
+
+The time step is checked against the Rayleigh time (materials.py) and the contact model is
+composed by name (contact.py).  All arrays are structure-of-arrays numpy float64 and stay
+owned by the object between calls to :meth:`Simulation.run`.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from soilcal.dem import integrator as itg
+from soilcal.dem.contact import H_SIZE, jkr_separation, model_codes
+from soilcal.dem.materials import P_ESTAR, P_W, MaterialTable
+from soilcal.dem.state import ParticleState
+from soilcal.dem.walls import NPAR, PLANE, WallSet
+from soilcal.errors import InputError, SimulationError
+
+
+class Simulation:
+    """Spheres, walls and a contact model advanced by velocity Verlet in compiled loops."""
+
+    def __init__(self, materials: MaterialTable, dt: float | None = None,
+                 dt_fraction: float = 0.2, gravity=(0.0, 0.0, -9.81), box=None,
+                 periodic=(False, False), contact_model: dict | None = None,
+                 skin: float | None = None, coarse_grain: float = 1.0,
+                 max_overlap: float = 0.05, source: str = "<input>"):
+        self.source = source
+        self.materials = materials
+        self.codes, self.w_factor = model_codes(**(contact_model or {}), source=source)
+        self.dt_user = dt
+        self.dt_fraction = float(dt_fraction)
+        if not (0.0 < self.dt_fraction <= 1.0):
+            raise InputError(source, "dt_fraction", "a fraction of the Rayleigh time in (0, 1]",
+                             dt_fraction)
+        self.gravity = np.asarray(gravity, dtype=np.float64).reshape(3).copy()
+        self.periodic = np.array([bool(periodic[0]), bool(periodic[1])], dtype=np.bool_)
+        if box is None:
+            if self.periodic.any():
+                raise InputError(source, "box", "(xlo, xhi, ylo, yhi) for periodic boundaries", None)
+            box = (0.0, 1.0, 0.0, 1.0)
+        self.box = np.asarray(box, dtype=np.float64).reshape(4).copy()
+        if self.box[1] <= self.box[0] or self.box[3] <= self.box[2]:
+            raise InputError(source, "box", "xlo < xhi and ylo < yhi", tuple(box))
+        self.skin_user = skin
+        if coarse_grain <= 0:
+            raise InputError(source, "coarse_grain", "a size factor > 0", coarse_grain)
+        self.coarse_grain = float(coarse_grain)
+        self.max_overlap = float(max_overlap)
+        self.p = ParticleState()
+        self.walls = WallSet()
+        self._warr = self.walls.arrays()
+        self.step = 0
+        self._need_forces = True
+        self._k = 24
+        self._kw = 4
+        self._lists = None
+        self._cells = np.zeros(1024, dtype=np.int64)
+        self.wall_force = np.zeros((0, 3))
+        self.wall_torque = np.zeros((0, 3))
+        self.wall_log = np.zeros((0, 0, 6))
+        self._pair = None
+        self.dt = None
+
+    # ------------------------------------------------------------------ building
+    def add_particles(self, x, r, material, v=None, omega=None, fixed=False, lock_rotation=False):
+        """Add spheres (radii multiplied by the coarse-graining factor); returns their ids."""
+        k = self.materials.index(material)
+        r = np.asarray(r, dtype=np.float64) * self.coarse_grain
+        if np.any(~np.isfinite(r)) or np.any(r <= 0):
+            raise InputError(self.source, "particles.radius", "radii > 0 m", float(np.min(r)))
+        ids = self.p.append(x, r, self.materials.materials[k].density, k, v, omega, fixed,
+                            lock_rotation)
+        self._invalidate()
+        return ids
+
+    def add_wall(self, name, material, primitives, velocity=(0, 0, 0), omega=(0, 0, 0),
+                 centre=(0, 0, 0)) -> int:
+        """Add a rigid wall made of primitives [(kind, values, point_rows, dir_rows), ...]."""
+        k = self.materials.index(material)
+        ws = self.walls
+        # keep moved primitives: rebuild the python lists from the current arrays
+        a = self._warr
+        ws.par = [row.copy() for row in a["prim_par"]]
+        ws.centre = [row.copy() for row in a["wall_centre"]]
+        wid = ws.new_wall(name, velocity, omega, centre)
+        for kind, values, pts, dirs in primitives:
+            ws.add_prim(wid, kind, k, values, pts, dirs)
+        self._warr = ws.arrays()
+        self.wall_force = np.zeros((len(ws.names), 3))
+        self.wall_torque = np.zeros((len(ws.names), 3))
+        self._invalidate()
+        return wid
+
+    def add_plane(self, point, normal, material, name=None, velocity=(0, 0, 0),
+                  omega=(0, 0, 0), centre=None) -> int:
+        """Infinite plane through ``point``; particles live on the side of ``normal``."""
+        nrm = np.asarray(normal, dtype=np.float64).reshape(3)
+        ln = float(np.linalg.norm(nrm))
+        if not ln > 0:
+            raise InputError(self.source, "walls.plane.normal", "a non-zero vector", tuple(nrm))
+        pt = np.asarray(point, dtype=np.float64).reshape(3)
+        vals = np.concatenate([pt, nrm / ln])
+        return self.add_wall(name or f"plane{len(self.walls.names)}", material,
+                             [(PLANE, vals, 0b1, 0b10)], velocity, omega,
+                             pt if centre is None else centre)
+
+    def set_wall_motion(self, wall, velocity=None, omega=None):
+        if velocity is not None:
+            self._warr["wall_vel"][wall] = velocity
+        if omega is not None:
+            self._warr["wall_omega"][wall] = omega
+
+    def _invalidate(self):
+        self._need_forces = True
+        self._pair = None
+
+    # ------------------------------------------------------------------ checks
+    def _prepare(self):
+        p = self.p
+        if p.n == 0:
+            raise InputError(self.source, "particles", "at least one particle", 0)
+        self._pair = self.materials.table(self.w_factor)
+        rmin = {}
+        for k in np.unique(p.mat):
+            rmin[int(k)] = float(p.r[p.mat == k].min())
+        self.rayleigh = self.materials.rayleigh_dt(rmin)
+        dt = self.dt_user if self.dt_user is not None else self.dt_fraction * self.rayleigh
+        if not (dt > 0 and math.isfinite(dt)):
+            raise InputError(self.source, "dt", "a time step > 0 s", dt)
+        if dt > self.rayleigh:
+            raise InputError(self.source, "dt",
+                             f"a time step <= the Rayleigh time {self.rayleigh:.4g} s "
+                             f"(stable bound; 20-40 % of it is usual)", dt)
+        self.dt = float(dt)
+        rmax = float(p.r.max())
+        # JKR separation range
+        extra = 0.0
+        if self.codes[4] == 1:
+            pr = self._pair
+            for a in range(pr.shape[0]):
+                for b in range(pr.shape[1]):
+                    if pr[a, b, P_W] > 0:
+                        extra = max(extra, -jkr_separation(rmax, pr[a, b, P_ESTAR], pr[a, b, P_W]))
+        self.extra = extra * 1.01
+        self.skin = float(self.skin_user) if self.skin_user is not None else 0.3 * rmax
+        if self.skin <= 0:
+            raise InputError(self.source, "skin", "a neighbour skin > 0 m", self.skin)
+        cell = 2 * rmax + self.skin + self.extra
+        for q, nm in ((0, "x"), (1, "y")):
+            if self.periodic[q] and (self.box[2 * q + 1] - self.box[2 * q]) < 2 * cell:
+                raise InputError(self.source, f"box.{nm}",
+                                 f"a periodic length >= {2 * cell:.4g} m (two neighbour cells)",
+                                 float(self.box[2 * q + 1] - self.box[2 * q]))
+        n = p.n
+        if self._lists is None or self._lists["nbr_a"].shape[0] != n:
+            self._alloc_lists(n, self._k, self._kw)
+
+    def _alloc_lists(self, n, k, kw, old=None):
+        L = {}
+        for s in ("a", "b"):
+            L["nbr_" + s] = np.full((n, k), -1, dtype=np.int64)
+            L["cnt_" + s] = np.zeros(n, dtype=np.int64)
+            L["hist_" + s] = np.zeros((n, k, H_SIZE))
+            L["wnbr_" + s] = np.full((n, kw), -1, dtype=np.int64)
+            L["wcnt_" + s] = np.zeros(n, dtype=np.int64)
+            L["whist_" + s] = np.zeros((n, kw, H_SIZE))
+        L["wslot"] = np.zeros((n, kw, 6))
+        if old is not None:
+            ko = old["nbr_a"].shape[1]
+            kwo = old["wnbr_a"].shape[1]
+            L["nbr_a"][:, :ko] = old["nbr_a"]
+            L["cnt_a"][:] = old["cnt_a"]
+            L["hist_a"][:, :ko] = old["hist_a"]
+            L["wnbr_a"][:, :kwo] = old["wnbr_a"]
+            L["wcnt_a"][:] = old["wcnt_a"]
+            L["whist_a"][:, :kwo] = old["whist_a"]
+        self._lists = L
+        self._k, self._kw = k, kw
+
+    # ------------------------------------------------------------------ running
+    def run(self, steps: int, ke_tol: float = -1.0, ke_every: int = 0,
+            wall_log_every: int = 0) -> int:
+        """Advance ``steps`` steps (stop early when settled if ke_tol >= 0); returns steps done.
+
+        Raises SimulationError on blow-up (non-finite state or overlap above max_overlap of a
+        particle's radius), naming the step and the particle.
+        """
+        steps = int(steps)
+        if steps < 0:
+            raise InputError(self.source, "steps", "a number of steps >= 0", steps)
+        if self._pair is None or self._need_forces:
+            self._prepare()
+        p, wa = self.p, self._warr
+        nw = wa["wall_vel"].shape[0]
+        nlog = steps // wall_log_every if wall_log_every > 0 else 0
+        self.wall_log = np.zeros((nlog, nw, 6))
+        lo = p.x.min(axis=0) - p.r.max()
+        hi = p.x.max(axis=0) + p.r.max()
+        reach = 0.0
+        for c in wa["wall_centre"]:
+            reach = max(reach, float(np.linalg.norm(np.maximum(abs(lo - c), abs(hi - c)))))
+        reach *= 1.5
+        fstate = np.zeros(1)
+        status = np.zeros(5, dtype=np.int64)
+        total = 0
+        resume_mid = False
+        step0 = self.step
+        while True:
+            L = self._lists
+            done = itg.run_loop(
+                steps - total, self.step, resume_mid,
+                self._need_forces, float(ke_tol), int(ke_every), self.max_overlap,
+                int(wall_log_every), p.x, p.v, p.omega, p.f, p.t, p.r, p.m, p.inv_m, p.inv_i,
+                p.mat, p.disp, p.ovr, self.gravity, self.box, self.periodic, self.dt,
+                self.skin, self.extra, self._pair, self.codes, self._cells,
+                self._cidx(), self._cof(), L["nbr_a"], L["cnt_a"], L["hist_a"], L["nbr_b"], L["cnt_b"],
+                L["hist_b"], L["wnbr_a"], L["wcnt_a"], L["whist_a"], L["wnbr_b"], L["wcnt_b"],
+                L["whist_b"], L["wslot"], wa["prim_kind"], wa["prim_wall"], wa["prim_mat"],
+                wa["prim_par"], wa["prim_pts"], wa["prim_dirs"], wa["wall_vel"],
+                wa["wall_omega"], wa["wall_centre"], self.wall_force, self.wall_torque, reach,
+                self.wall_log, fstate, status)
+            total += done
+            self.step = step0 + total
+            code = int(status[0])
+            if code in (itg.NEED_K, itg.NEED_KW, itg.NEED_CELLS):
+                if status[4] == 1:
+                    self._need_forces = False
+                    resume_mid = True
+                need = int(status[3])
+                if code == itg.NEED_CELLS:
+                    self._cells = np.zeros(2 * need, dtype=np.int64)
+                elif code == itg.NEED_K:
+                    self._alloc_lists(p.n, need + 8, self._kw, self._lists)
+                else:
+                    self._alloc_lists(p.n, self._k, need + 2, self._lists)
+                continue
+            self._need_forces = False
+            if code == itg.BLOWUP:
+                i = int(status[2])
+                why = ("overlap above %g %% of its radius" % (100 * self.max_overlap)
+                       if status[3] == 1 else "non-finite velocity")
+                raise SimulationError(
+                    f"step {int(status[1])}: particle {i}: {why} "
+                    f"(radius {p.r[i]:.4g} m, dt {self.dt:.4g} s); reduce the time step or "
+                    f"check the stiffness")
+            return total
+
+    def _cidx(self):
+        if getattr(self, "_cidx_arr", None) is None or self._cidx_arr.shape[0] != self.p.n:
+            self._cidx_arr = np.zeros(self.p.n, dtype=np.int64)
+            self._cof_arr = np.zeros(self.p.n, dtype=np.int64)
+        return self._cidx_arr
+
+    def _cof(self):
+        self._cidx()
+        return self._cof_arr
+
+    def compute_forces(self):
+        """Evaluate forces of the current state without stepping (into p.f, p.t, wall_force)."""
+        self._need_forces = True
+        self.run(0)
+        return self.p.f, self.p.t
+
+    def run_until_settled(self, ke_tol: float, check_every: int = 100,
+                          max_steps: int = 10_000_000) -> bool:
+        """Run until the translational kinetic energy (J) falls below ke_tol; True if settled."""
+        if ke_tol < 0:
+            raise InputError(self.source, "ke_tol", "a kinetic energy threshold >= 0 J", ke_tol)
+        start = self.step
+        self.run(max_steps, ke_tol=ke_tol, ke_every=check_every)
+        return self.step - start < max_steps or self.kinetic_energy() < ke_tol
+
+    # ------------------------------------------------------------------ results
+    def kinetic_energy(self) -> float:
+        return float(itg.kinetic_translational(self.p.v, self.p.m, self.p.inv_m))
+
+    def rotational_energy(self) -> float:
+        p = self.p
+        ok = p.inv_i > 0
+        inertia = 0.4 * p.m * p.r**2
+        return float(0.5 * np.sum(inertia[ok] * np.sum(p.omega[ok] ** 2, axis=1)))
+
+    @property
+    def x(self):
+        return self.p.x
+
+    @property
+    def v(self):
+        return self.p.v
+
+    @property
+    def omega(self):
+        return self.p.omega
+
+    @property
+    def n(self):
+        return self.p.n
+
+    @property
+    def prim_par(self):
+        return self._warr["prim_par"]
+
+
+__all__ = ["Simulation", "NPAR"]

@@ -1,0 +1,201 @@
+"""Materials, per-pair contact parameter tables and the DEM time step.
+
+Effective (pair) properties, as defined in the EDEM Theory Reference Guide (Hertz-Mindlin
+with no slip) and in LIGGGHTS ``model hertz``/``tangential history``::
+
+    1/E* = (1 - nu_i^2)/E_i + (1 - nu_j^2)/E_j
+    1/G* = (2 - nu_i)/G_i + (2 - nu_j)/G_j,        G = E / (2 (1 + nu))
+    1/R* = 1/R_i + 1/R_j,  1/m* = 1/m_i + 1/m_j
+    beta = ln(e) / sqrt(ln(e)^2 + pi^2)             (e: coefficient of restitution)
+
+Rayleigh time step (EDEM guide; Li, Xu & Thornton 2005, Powder Technol. 160:219)::
+
+    T_R = pi R sqrt(rho / G) / (0.1631 nu + 0.8766)
+
+evaluated for the smallest particle of each material, the minimum over materials is used.
+A time step above T_R is rejected as unstable (EDEM recommends 20-40 % of T_R).
+
+Stiffness scaling (Lommen, Schott & Lodewijks 2014, Particuology 12:107; shear modulus
+reduced to ``G_mod`` keeps cohesion comparable, e.g. Thakur et al. 2014, Powder Technol.
+254:28, via the JKR scaling of the surface energy)::
+
+    gamma_mod = gamma (G_mod / G)^(2/5)
+
+Coarse graining (particles scaled by factor ``s``, material properties unchanged, as in
+Bierwisch et al. 2009, J. Mech. Phys. Solids 57:10) is applied to radii by
+:class:`soilcal.dem.engine.Simulation`.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from soilcal.errors import InputError
+
+# Columns of the per-pair parameter table ``pair[mi, mj, :]``.
+P_ESTAR, P_GSTAR, P_BETA, P_MUS, P_MUR, P_W, P_NCOL = 0, 1, 2, 3, 4, 5, 6
+
+
+def _num(v, name, src):
+    try:
+        x = float(v)
+    except (TypeError, ValueError):
+        raise InputError(src, name, "a number", v) from None
+    if not math.isfinite(x):
+        raise InputError(src, name, "a finite number", v)
+    return x
+
+
+@dataclass
+class Material:
+    """Bulk material: density [kg/m^3], Poisson ratio and Young's E or shear G [Pa]."""
+
+    name: str
+    density: float
+    poisson: float
+    youngs: float | None = None
+    shear: float | None = None
+    source: str = "<input>"
+
+    def __post_init__(self):
+        src = self.source
+        self.density = _num(self.density, f"materials.{self.name}.density", src)
+        self.poisson = _num(self.poisson, f"materials.{self.name}.poisson", src)
+        if self.density <= 0:
+            raise InputError(src, f"materials.{self.name}.density", "> 0 kg/m^3", self.density)
+        if not (-1.0 < self.poisson < 0.5):
+            raise InputError(src, f"materials.{self.name}.poisson", "in (-1, 0.5)", self.poisson)
+        if self.youngs is None and self.shear is None:
+            raise InputError(src, f"materials.{self.name}", "youngs (E) or shear (G) modulus", None)
+        if self.shear is not None:
+            self.shear = _num(self.shear, f"materials.{self.name}.shear", src)
+            if self.shear <= 0:
+                raise InputError(src, f"materials.{self.name}.shear", "G > 0 Pa", self.shear)
+            e_from_g = 2.0 * self.shear * (1.0 + self.poisson)
+            if self.youngs is not None:
+                self.youngs = _num(self.youngs, f"materials.{self.name}.youngs", src)
+                if abs(self.youngs - e_from_g) > 1e-6 * e_from_g:
+                    raise InputError(src, f"materials.{self.name}.youngs",
+                                     f"consistent with G and nu (E = 2G(1+nu) = {e_from_g:g})",
+                                     self.youngs)
+            self.youngs = e_from_g
+        else:
+            self.youngs = _num(self.youngs, f"materials.{self.name}.youngs", src)
+            if self.youngs <= 0:
+                raise InputError(src, f"materials.{self.name}.youngs", "E > 0 Pa", self.youngs)
+            self.shear = self.youngs / (2.0 * (1.0 + self.poisson))
+
+
+@dataclass
+class PairParams:
+    """Contact parameters of one material pair."""
+
+    restitution: float
+    friction: float
+    rolling_friction: float = 0.0
+    surface_energy: float = 0.0  # J/m^2, meaning set by the JKR convention (contact.py)
+
+
+def restitution_beta(e: float) -> float:
+    """beta = ln e / sqrt(ln^2 e + pi^2) (EDEM / LIGGGHTS damping coefficient, <= 0)."""
+    le = math.log(e)
+    return le / math.sqrt(le * le + math.pi * math.pi)
+
+
+def rayleigh_time(radius: float, density: float, shear: float, poisson: float) -> float:
+    """T_R = pi R sqrt(rho/G) / (0.1631 nu + 0.8766)."""
+    return math.pi * radius * math.sqrt(density / shear) / (0.1631 * poisson + 0.8766)
+
+
+@dataclass
+class MaterialTable:
+    """Materials and per-pair parameters; builds the numeric table used by the kernels."""
+
+    materials: list[Material] = field(default_factory=list)
+    pairs: dict[tuple[int, int], PairParams] = field(default_factory=dict)
+    shear_mod: float | None = None  # stiffness scaling: G_mod applied to every material
+    source: str = "<input>"
+
+    def add(self, mat: Material) -> int:
+        if any(m.name == mat.name for m in self.materials):
+            raise InputError(self.source, f"materials.{mat.name}", "a unique material name", mat.name)
+        self.materials.append(mat)
+        return len(self.materials) - 1
+
+    def index(self, name_or_id) -> int:
+        if isinstance(name_or_id, (int, np.integer)):
+            if not 0 <= int(name_or_id) < len(self.materials):
+                raise InputError(self.source, "material", f"an index < {len(self.materials)}", name_or_id)
+            return int(name_or_id)
+        for k, m in enumerate(self.materials):
+            if m.name == name_or_id:
+                return k
+        raise InputError(self.source, "material", f"one of {[m.name for m in self.materials]}", name_or_id)
+
+    def set_pair(self, a, b, restitution, friction, rolling_friction=0.0, surface_energy=0.0):
+        i, j = self.index(a), self.index(b)
+        na, nb = self.materials[i].name, self.materials[j].name
+        f = f"interactions.{na}-{nb}"
+        e = _num(restitution, f + ".restitution", self.source)
+        if not (0.0 < e <= 1.0):
+            raise InputError(self.source, f + ".restitution", "a coefficient of restitution in (0, 1]", e)
+        mu = _num(friction, f + ".friction", self.source)
+        if mu < 0:
+            raise InputError(self.source, f + ".friction", "sliding friction >= 0", mu)
+        mur = _num(rolling_friction, f + ".rolling_friction", self.source)
+        if mur < 0:
+            raise InputError(self.source, f + ".rolling_friction", "rolling friction >= 0", mur)
+        g = _num(surface_energy, f + ".surface_energy", self.source)
+        if g < 0:
+            raise InputError(self.source, f + ".surface_energy", "surface energy >= 0 J/m^2", g)
+        p = PairParams(e, mu, mur, g)
+        self.pairs[(i, j)] = p
+        self.pairs[(j, i)] = p
+
+    def effective_shear(self, k: int) -> float:
+        return self.shear_mod if self.shear_mod is not None else self.materials[k].shear
+
+    def table(self, jkr_w_factor: float) -> np.ndarray:
+        """pair[M, M, P_NCOL] float64: E*, G*, beta, mu_s, mu_r, w (work of adhesion).
+
+        ``jkr_w_factor`` converts the input surface energy to the work of adhesion w used by
+        the kernel (1 for the EDEM convention, 2 for the LAMMPS convention, see contact.py).
+        With stiffness scaling the surface energy is scaled by (G_mod/G)^(2/5), with G the
+        harmonic mean-like pair value 1/G* of the unscaled materials.
+        """
+        nm = len(self.materials)
+        if nm == 0:
+            raise InputError(self.source, "materials", "at least one material", None)
+        if self.shear_mod is not None and self.shear_mod <= 0:
+            raise InputError(self.source, "shear_mod", "G_mod > 0 Pa", self.shear_mod)
+        out = np.zeros((nm, nm, P_NCOL))
+        for i in range(nm):
+            for j in range(nm):
+                if (i, j) not in self.pairs:
+                    raise InputError(self.source,
+                                     f"interactions.{self.materials[i].name}-{self.materials[j].name}",
+                                     "contact parameters for every material pair", None)
+                mi, mj = self.materials[i], self.materials[j]
+                p = self.pairs[(i, j)]
+                gi, gj = self.effective_shear(i), self.effective_shear(j)
+                ei, ej = 2 * gi * (1 + mi.poisson), 2 * gj * (1 + mj.poisson)
+                estar = 1.0 / ((1 - mi.poisson**2) / ei + (1 - mj.poisson**2) / ej)
+                gstar = 1.0 / ((2 - mi.poisson) / gi + (2 - mj.poisson) / gj)
+                gamma = p.surface_energy
+                if self.shear_mod is not None and gamma > 0:
+                    g0 = 1.0 / ((2 - mi.poisson) / mi.shear + (2 - mj.poisson) / mj.shear)
+                    gamma = gamma * (gstar / g0) ** 0.4
+                out[i, j] = (estar, gstar, restitution_beta(p.restitution), p.friction,
+                             p.rolling_friction, jkr_w_factor * gamma)
+        return out
+
+    def rayleigh_dt(self, rmin_per_material: dict[int, float]) -> float:
+        """Minimum Rayleigh time over materials present (radius = smallest of each)."""
+        t = math.inf
+        for k, rmin in rmin_per_material.items():
+            m = self.materials[k]
+            t = min(t, rayleigh_time(rmin, m.density, self.effective_shear(k), m.poisson))
+        return t

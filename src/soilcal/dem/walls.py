@@ -1,0 +1,153 @@
+"""Walls: primitive arrays, prescribed rigid motion, closest-point dispatch.
+
+A wall is a rigid body made of one or more primitives (plane, cylinder, cone, box, triangle
+mesh).  Arrays (structure of arrays, float64)::
+
+    prim_kind[P]   kind code (PLANE, CYLINDER, CONE, BOX, TRIANGLE)
+    prim_wall[P]   owning wall id
+    prim_mat[P]    material id of the wall surface
+    prim_par[P,16] parameters; rows of 3 at offsets 0,3,6,9,12 are points or directions as
+                   flagged by prim_pts[P] (bit k: row k is a point) and prim_dirs[P]
+                   (bit k: row k is a direction); the remaining scalars are not moved
+    wall_vel[W,3], wall_omega[W,3], wall_centre[W,3]   prescribed motion
+    wall_force[W,3], wall_torque[W,3] (about wall_centre)   reaction of the particles
+
+Rigid motion per step dt (Rodrigues' rotation formula, rotation angle |omega| dt about the
+axis omega through the wall centre c)::
+
+    p' = c + Rot(p - c) + v dt,   d' = Rot d,   c' = c + v dt
+    wall velocity at a point q: v + omega x (q - c)
+
+Closest point: every kind returns (dist, nx, ny, nz, cx, cy, cz), the signed distance from
+the sphere centre to the surface along the outward unit normal n (pointing from the wall to
+the sphere centre) and the closest surface point c; overlap = radius - dist.  Plane::
+
+    dist = (p - p0) . n0,   c = p - dist n0
+
+Parameter layouts:
+    PLANE     point(0:3) unit normal(3:6)
+    CYLINDER  axis point(0:3) unit axis(3:6) radius(6) half length(7) inner flag(8)
+    CONE      apex/base parameters as in soilcal.dem.geometry.cone_closest
+    BOX       centre(0:3) axes rows (3:6, 6:9, 9:12) half extents(12:15)
+    TRIANGLE  v0(0:3) v1(3:6) v2(6:9)
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit
+
+PLANE, CYLINDER, CONE, BOX, TRIANGLE = 0, 1, 2, 3, 4
+NPAR = 16
+
+
+@njit(cache=True)
+def plane_dist(px, py, pz, par):
+    nx, ny, nz = par[3], par[4], par[5]
+    d = (px - par[0]) * nx + (py - par[1]) * ny + (pz - par[2]) * nz
+    return d, nx, ny, nz, px - d * nx, py - d * ny, pz - d * nz
+
+
+@njit(cache=True)
+def prim_closest(kind, par, px, py, pz):
+    """Dispatch to the closest-point function of a primitive kind."""
+    if kind == PLANE:
+        return plane_dist(px, py, pz, par)
+    return math.inf, 0.0, 0.0, 1.0, px, py, pz
+
+
+@njit(cache=True)
+def _rotate(vx, vy, vz, kx, ky, kz, c, s):
+    # Rodrigues: v c + (k x v) s + k (k.v)(1 - c)
+    kv = kx * vx + ky * vy + kz * vz
+    return (vx * c + (ky * vz - kz * vy) * s + kx * kv * (1.0 - c),
+            vy * c + (kz * vx - kx * vz) * s + ky * kv * (1.0 - c),
+            vz * c + (kx * vy - ky * vx) * s + kz * kv * (1.0 - c))
+
+
+@njit(cache=True)
+def move_walls(dt, prim_wall, prim_par, prim_pts, prim_dirs, wall_vel, wall_omega, wall_centre):
+    """Advance every primitive by its wall's rigid motion over dt."""
+    nw = wall_vel.shape[0]
+    for p in range(prim_par.shape[0]):
+        w = prim_wall[p]
+        ox, oy, oz = wall_omega[w, 0], wall_omega[w, 1], wall_omega[w, 2]
+        om = math.sqrt(ox * ox + oy * oy + oz * oz)
+        vx, vy, vz = wall_vel[w, 0] * dt, wall_vel[w, 1] * dt, wall_vel[w, 2] * dt
+        if om == 0.0 and vx == 0.0 and vy == 0.0 and vz == 0.0:
+            continue
+        c = math.cos(om * dt)
+        s = math.sin(om * dt)
+        kx, ky, kz = 0.0, 0.0, 1.0
+        if om > 0.0:
+            kx, ky, kz = ox / om, oy / om, oz / om
+        for row in range(5):
+            b = 3 * row
+            if (prim_pts[p] >> row) & 1:
+                qx = prim_par[p, b] - wall_centre[w, 0]
+                qy = prim_par[p, b + 1] - wall_centre[w, 1]
+                qz = prim_par[p, b + 2] - wall_centre[w, 2]
+                if om > 0.0:
+                    qx, qy, qz = _rotate(qx, qy, qz, kx, ky, kz, c, s)
+                prim_par[p, b] = wall_centre[w, 0] + qx + vx
+                prim_par[p, b + 1] = wall_centre[w, 1] + qy + vy
+                prim_par[p, b + 2] = wall_centre[w, 2] + qz + vz
+            elif (prim_dirs[p] >> row) & 1 and om > 0.0:
+                qx, qy, qz = _rotate(prim_par[p, b], prim_par[p, b + 1], prim_par[p, b + 2],
+                                     kx, ky, kz, c, s)
+                prim_par[p, b] = qx
+                prim_par[p, b + 1] = qy
+                prim_par[p, b + 2] = qz
+    for w in range(nw):
+        for q in range(3):
+            wall_centre[w, q] += wall_vel[w, q] * dt
+
+
+class WallSet:
+    """Python-side container of walls and their primitives (grown by Simulation.add_wall)."""
+
+    def __init__(self):
+        self.kind: list[int] = []
+        self.wall: list[int] = []
+        self.mat: list[int] = []
+        self.par: list[np.ndarray] = []
+        self.pts: list[int] = []
+        self.dirs: list[int] = []
+        self.vel: list[np.ndarray] = []
+        self.omega: list[np.ndarray] = []
+        self.centre: list[np.ndarray] = []
+        self.names: list[str] = []
+
+    def new_wall(self, name, velocity=(0, 0, 0), omega=(0, 0, 0), centre=(0, 0, 0)) -> int:
+        self.names.append(name)
+        self.vel.append(np.asarray(velocity, float).reshape(3))
+        self.omega.append(np.asarray(omega, float).reshape(3))
+        self.centre.append(np.asarray(centre, float).reshape(3))
+        return len(self.names) - 1
+
+    def add_prim(self, wall, kind, mat, values, pts, dirs):
+        row = np.zeros(NPAR)
+        row[: len(values)] = values
+        self.kind.append(kind)
+        self.wall.append(wall)
+        self.mat.append(mat)
+        self.par.append(row)
+        self.pts.append(pts)
+        self.dirs.append(dirs)
+
+    def arrays(self):
+        npr = len(self.kind)
+        nw = len(self.names)
+        return dict(
+            prim_kind=np.array(self.kind, dtype=np.int64).reshape(npr),
+            prim_wall=np.array(self.wall, dtype=np.int64).reshape(npr),
+            prim_mat=np.array(self.mat, dtype=np.int64).reshape(npr),
+            prim_par=np.array(self.par, dtype=np.float64).reshape(npr, NPAR),
+            prim_pts=np.array(self.pts, dtype=np.int64).reshape(npr),
+            prim_dirs=np.array(self.dirs, dtype=np.int64).reshape(npr),
+            wall_vel=np.array(self.vel, dtype=np.float64).reshape(nw, 3),
+            wall_omega=np.array(self.omega, dtype=np.float64).reshape(nw, 3),
+            wall_centre=np.array(self.centre, dtype=np.float64).reshape(nw, 3),
+        )
