@@ -211,33 +211,43 @@ def _components_on_plate(path, binary, slope, intercept, kind):
 def measure_pile(path, threshold="otsu", keep_stages=False, channel="auto") -> PileResult:
     """Left/right flank angles of one heap photo relative to the plate line.
 
-    channel "auto" uses the luminance and falls back to the chroma channel when no single
-    heap is found in it (dark soil on a dark background).
+    The plate edge is found first (luminance); the threshold is Otsu's on the band of the
+    image just above the plate (where heap and background meet).  channel "auto" picks, of
+    luminance and chroma, the one that separates that band best (Otsu's eta) and falls back
+    to the other when no single heap is found (e.g. dark soil on a dark background).
     """
+    rgb = read_photo(path)
+    lum = _gray(rgb)
+    # plate edge from the luminance; soil/background threshold from the band above it
+    slope, intercept = plate_line_any(path, lum)
+    h, w = lum.shape
+    rr, cc = np.mgrid[0:h, 0:w]
+    prow = slope * cc + intercept
+    band = (rr < prow - 3) & (rr > prow - 0.35 * h)  # where heap and wall meet
     if channel == "auto":
+        # the channel separating the band into two classes best (Otsu's eta = s_b^2 / s_T^2)
+        etas = {}
+        for ch in ("gray", "chroma"):
+            g = _gray(rgb, ch)[band]
+            t = filters.threshold_otsu(g)
+            lo, hi = g[g < t], g[g >= t]
+            etas[ch] = lo.size * hi.size / g.size ** 2 * (hi.mean() - lo.mean()) ** 2 / (g.var() + 1e-12)
+        order = sorted(etas, key=lambda k: -etas[k])
         try:
-            return measure_pile(path, threshold, keep_stages, "gray")
+            return measure_pile(path, threshold, keep_stages, order[0])
         except InputError as first:
             if first.field != "image":
                 raise
             try:
-                return measure_pile(path, threshold, keep_stages, "chroma")
+                return measure_pile(path, threshold, keep_stages, order[1])
             except InputError:
                 raise first from None
-    rgb = read_photo(path)
-    gray = _gray(rgb, channel)
-    if channel == "chroma":
-        # plate edge from the luminance; soil/background threshold from the pixels above it
-        slope, intercept = plate_line_any(path, _gray(rgb))
-        h, w = gray.shape
-        rr, cc = np.mgrid[0:h, 0:w]
-        prow = slope * cc + intercept
-        band = (rr < prow - 3) & (rr > prow - 0.35 * h)  # where heap and wall meet
+    gray = lum if channel == "gray" else _gray(rgb, channel)
+    if threshold == "otsu":
         t = filters.threshold_otsu(gray[band])
         binary = ndi.binary_fill_holes(morphology.opening(gray < t, morphology.disk(2)))
     else:
         binary = _binary(path, gray, threshold)
-        slope, intercept = plate_line(path, gray, binary)
     comp = _components_on_plate(path, binary, slope, intercept, "heap")
     lev, prow, roll = _level(comp, slope, intercept)
     glev = _level(gray, slope, intercept)[0]
@@ -293,10 +303,16 @@ def measure_drum_frame(path, threshold="otsu", keep_stages=False) -> PileResult:
     comp = lab == p.label
     lev, prow, roll = _level(comp, slope, intercept)
     cols = np.nonzero(lev.max(axis=0) >= 0.5)[0]
-    span = cols.max() - cols.min()
-    c0, c1 = cols.min() + 0.2 * span, cols.max() - 0.2 * span
-    cu, rv = _top_edge(lev, c0, c1, _level(gray, slope, intercept)[0])
-    ang, line, pts = _fit(path, cu, prow - rv, "free surface")
+    cu, rv = _top_edge(lev, cols.min(), cols.max() + 1, _level(gray, slope, intercept)[0])
+    v = prow - rv
+    # the chord: RANSAC over the whole top edge (the wall arc is outlier), then refit on the
+    # central 60 % of the chord so the wall corners and any bulge stay symmetric
+    _, (u0, v0, du, dv), inl = _fit(path, cu, v, "free surface")
+    tproj = (inl[:, 0] - u0) * du + (inl[:, 1] - v0) * dv
+    t_all = (cu - u0) * du + (v - v0) * dv
+    lo, hi = np.min(tproj), np.max(tproj)
+    keep = (t_all > lo + 0.2 * (hi - lo)) & (t_all < hi - 0.2 * (hi - lo))
+    ang, line, pts = _fit(path, cu[keep], v[keep], "free surface")
     st = Stages(rgb, gray, binary, lev, [line + ("surface",)], [pts]) if keep_stages else None
     if st is not None:
         st.plate_row = prow
@@ -309,8 +325,8 @@ def plate_line_any(path, gray):
     h, w = gray.shape
     thetas = np.radians(np.linspace(84, 96, 241))
     hs, ang, dist = transform.hough_line(edges, theta=thetas)
-    _, angs, dists = transform.hough_line_peaks(hs, ang, dist, num_peaks=6, min_distance=4,
-                                                threshold=0.4 * w)
+    _, angs, dists = transform.hough_line_peaks(hs, ang, dist, num_peaks=8, min_distance=4,
+                                                threshold=0.25 * w)
     cand = [(a, d) for a, d in zip(angs, dists) if d / np.sin(a) > 0.5 * h]
     if not cand:
         raise InputError(path, "image", "a straight base plate edge", "none found")

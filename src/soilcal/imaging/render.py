@@ -59,7 +59,7 @@ def _wall(rng, h, w, hard, avoid=None, floor_row=None):
     """Back wall with uneven light and clutter; ``avoid`` = (r0, r1, c0, c1) kept free and
     clutter hangs on the wall (ends 20 px above ``floor_row``, the plate)."""
     base = np.array([0.20, 0.19, 0.18]) if hard else np.array([0.80, 0.78, 0.74])
-    base = base * (1 + 0.05 * rng.standard_normal(3))
+    base = base * (1 + 0.02 * rng.standard_normal(3))
     img = np.ones((h, w, 3)) * base
     img *= (1 + 0.03 * _noise(rng, (h, w), 20.0))[..., None]
     rr, cc = np.mgrid[0:h, 0:w]

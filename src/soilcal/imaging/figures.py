@@ -1,0 +1,79 @@
+"""Figures of the image pipeline as the papers show them (002 Fig. 4, 003 Fig. 2):
+(a) original, (b) gray, (c) binary, (d) contour, (e) fitted lines; furrow: photo, binary and
+the profile with its polynomial F(x).  Every figure is written as <stem>.png (dpi 150) and
+<stem>.pdf.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt  # noqa: E402
+import numpy as np  # noqa: E402
+
+
+def _save(fig, stem):
+    stem = Path(stem)
+    stem.parent.mkdir(parents=True, exist_ok=True)
+    fig.savefig(stem.with_suffix(".png"), dpi=150)
+    fig.savefig(stem.with_suffix(".pdf"))
+    plt.close(fig)
+    return stem.with_suffix(".png"), stem.with_suffix(".pdf")
+
+
+def angle_figure(result, stem, title=""):
+    """Five panels for a pile photo or a drum frame measured with ``keep_stages=True``."""
+    st = result.stages
+    fig, ax = plt.subplots(1, 5, figsize=(17, 3.4))
+    ax[0].imshow(st.rgb)
+    ax[0].set_title("(a) original")
+    ax[1].imshow(st.gray, cmap="gray")
+    ax[1].set_title("(b) gray (segmentation channel)")
+    ax[2].imshow(st.binary, cmap="gray")
+    ax[2].set_title("(c) binary")
+    ax[3].imshow(st.level, cmap="gray")
+    ax[3].contour(st.level, [0.5], colors="r", linewidths=0.8)
+    ax[3].axhline(st.plate_row, color="c", lw=0.8)
+    ax[3].set_title("(d) contour (levelled to plate)")
+    for pts in st.points:
+        ax[4].plot(pts[:, 0], pts[:, 1], ".", ms=1.5)
+    allp = np.vstack(st.points)
+    for u0, v0, du, dv, lab in st.lines:
+        proj = (allp[:, 0] - u0) * du + (allp[:, 1] - v0) * dv
+        t = np.array([proj.min(), proj.max()]) * 1.3
+        ang = np.degrees(np.arctan2(abs(dv), abs(du)))
+        ax[4].plot(u0 + t * du, v0 + t * dv, "-", lw=1, label=f"{lab}: {ang:.2f} deg")
+    ax[4].set_aspect("equal")
+    ax[4].set_xlabel("u / px (along plate)")
+    ax[4].set_ylabel("v / px (above plate)")
+    ax[4].legend(fontsize=7)
+    ax[4].set_title(f"(e) fitted lines, {result.angle_deg:.2f} deg")
+    for a in ax[:4]:
+        a.set_axis_off()
+    fig.suptitle(title or Path(result.path).name)
+    fig.tight_layout()
+    return _save(fig, stem)
+
+
+def furrow_figure(result, stem, title=""):
+    st = result.stages
+    fig, ax = plt.subplots(1, 3, figsize=(15, 3.8))
+    ax[0].imshow(st.rgb)
+    ax[0].set_title("(a) original")
+    ax[1].imshow(st.binary, cmap="gray")
+    ax[1].set_title("(b) binary")
+    ax[2].plot(result.x_mm, result.z_mm, ".", ms=1, label="contour")
+    x = np.linspace(result.x_mm.min(), result.x_mm.max(), 400)
+    ax[2].plot(x, np.polyval(result.coeffs, x), "r-", lw=1, label=f"degree-{result.degree} fit")
+    ax[2].set_xlabel("x / mm")
+    ax[2].set_ylabel("F(x) / mm")
+    ax[2].set_title(f"(c) profile, area {result.area_mm2 / 1e4:.3f} dm$^2$")
+    ax[2].legend(fontsize=7)
+    for a in ax[:2]:
+        a.set_axis_off()
+    fig.suptitle(title or Path(result.path).name)
+    fig.tight_layout()
+    return _save(fig, stem)
