@@ -177,10 +177,13 @@ def render_pile(seed, left_deg, right_deg, front_deg=None, back_deg=None, soil="
         centres = [cw / 2 - 0.25 * W, cw / 2 + 0.25 * W]
     if cut:
         centres = [MARGIN + 0.12 * W]
+    if n_heaps == 0:  # an empty plate
+        centres = []
     tm = np.tan(np.radians(np.mean(slopes)))
     apex_row = row_p - r0 * tm * s
     reach = int(1.6 * r0 * s)
-    avoid = (int(apex_row - 80), row_p, int(min(centres) - reach - 40), int(max(centres) + reach + 40))
+    avoid = (int(apex_row - 80), row_p, int(min(centres, default=cw / 2) - reach - 40),
+             int(max(centres, default=cw / 2) + reach + 40))
     canvas = _wall(rng, ch, cw, hard, avoid, row_p)
     light = np.array([-0.55, -0.55, 0.63]) * np.array([rng.uniform(0.7, 1.3), 1, 1])
     light = light / np.linalg.norm(light)
@@ -225,7 +228,7 @@ def render_pile(seed, left_deg, right_deg, front_deg=None, back_deg=None, soil="
         canvas[lm] = layer[lm]
     # crumbs on the plate next to the toe
     rr, cc = np.mgrid[0:ch, 0:cw]
-    for _ in range(int(rng.integers(4, 10))):
+    for _ in range(int(rng.integers(4, 10)) if centres else 0):
         side = rng.choice([-1, 1])
         cx = centres[0] + side * rng.uniform(1.15, 1.45) * r0 * s
         a, b = rng.uniform(1.0, 3.0) * s, rng.uniform(0.8, 2.0) * s
