@@ -150,23 +150,25 @@ def jkr_separation(rstar, estar, w):
 
 
 @njit(cache=True)
-def contact_force(codes, prm, delta, nx, ny, nz, rvx, rvy, rvz, wrx, wry, wrz,
-                  ri, rstar, mstar, dt, hist):
+def contact_force(codes, pair, ma, mb, delta, nx, ny, nz, rvx, rvy, rvz, wrx, wry, wrz,
+                  ri, rstar, mstar, dt, hist, hi, hk):
     """Force and torque on particle i from one contact; updates the history row ``hist``.
 
     delta: overlap; (nx,ny,nz): unit normal from partner towards i; (rvx..): relative
     velocity of i's contact point w.r.t. the partner's; (wrx..): omega_i - omega_partner;
-    ri: distance from i's centre to the contact point used for moments; prm: pair row.
+    ri: distance from i's centre to the contact point used for moments; pair[ma, mb]: pair
+    parameters; hist[hi, hk]: history row (indices are passed instead of array views, which
+    would touch the shared reference count in every parallel iteration).
     Returns (active, fx, fy, fz, tx, ty, tz): force and torque on i.
     """
-    estar = prm[P_ESTAR]
-    w = prm[P_W]
+    estar = pair[ma, mb, P_ESTAR]
+    w = pair[ma, mb, P_W]
     cohesive = codes[4] == 1 and w > 0.0
     if cohesive:
         if delta <= 0.0:
-            if hist[H_TOUCH] == 0.0 or delta < jkr_separation(rstar, estar, w):
+            if hist[hi, hk, H_TOUCH] == 0.0 or delta < jkr_separation(rstar, estar, w):
                 for q in range(H_SIZE):
-                    hist[q] = 0.0
+                    hist[hi, hk, q] = 0.0
                 return False, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0
         a = jkr_radius(delta, rstar, estar, w)
         fne = jkr_force(a, rstar, estar, w)
@@ -174,13 +176,13 @@ def contact_force(codes, prm, delta, nx, ny, nz, rvx, rvy, rvz, wrx, wry, wrz,
     else:
         if delta <= 0.0:
             for q in range(H_SIZE):
-                hist[q] = 0.0
+                hist[hi, hk, q] = 0.0
             return False, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0
         a = math.sqrt(rstar * delta)
         fne = 4.0 / 3.0 * estar * a * delta
         fpo2 = 0.0
-    hist[H_TOUCH] = 1.0
-    beta = prm[P_BETA]
+    hist[hi, hk, H_TOUCH] = 1.0
+    beta = pair[ma, mb, P_BETA]
     sn = 2.0 * estar * a
     vn = rvx * nx + rvy * ny + rvz * nz
     fnd = 0.0
@@ -199,9 +201,9 @@ def contact_force(codes, prm, delta, nx, ny, nz, rvx, rvy, rvz, wrx, wry, wrz,
         vty = rvy - vn * ny
         vtz = rvz - vn * nz
         # rotate history into the current tangent plane, keeping its length
-        xx = hist[H_XI]
-        xy = hist[H_XI + 1]
-        xz = hist[H_XI + 2]
+        xx = hist[hi, hk, H_XI]
+        xy = hist[hi, hk, H_XI + 1]
+        xz = hist[hi, hk, H_XI + 2]
         old2 = xx * xx + xy * xy + xz * xz
         if old2 > 0.0:
             xn = xx * nx + xy * ny + xz * nz
@@ -217,12 +219,12 @@ def contact_force(codes, prm, delta, nx, ny, nz, rvx, rvy, rvz, wrx, wry, wrz,
         xx += vtx * dt
         xy += vty * dt
         xz += vtz * dt
-        st = 8.0 * prm[P_GSTAR] * a
+        st = 8.0 * pair[ma, mb, P_GSTAR] * a
         ftx = -st * xx
         fty = -st * xy
         ftz = -st * xz
         fs2 = ftx * ftx + fty * fty + ftz * ftz
-        fmax = prm[P_MUS] * fnf
+        fmax = pair[ma, mb, P_MUS] * fnf
         if fs2 > fmax * fmax:
             r = fmax / math.sqrt(fs2)
             xx *= r
@@ -236,9 +238,9 @@ def contact_force(codes, prm, delta, nx, ny, nz, rvx, rvy, rvz, wrx, wry, wrz,
             ftx += ct * vtx
             fty += ct * vty
             ftz += ct * vtz
-        hist[H_XI] = xx
-        hist[H_XI + 1] = xy
-        hist[H_XI + 2] = xz
+        hist[hi, hk, H_XI] = xx
+        hist[hi, hk, H_XI + 1] = xy
+        hist[hi, hk, H_XI + 2] = xz
         fx += ftx
         fy += fty
         fz += ftz
@@ -246,7 +248,7 @@ def contact_force(codes, prm, delta, nx, ny, nz, rvx, rvy, rvz, wrx, wry, wrz,
         tx += -ri * (ny * ftz - nz * fty)
         ty += -ri * (nz * ftx - nx * ftz)
         tz += -ri * (nx * fty - ny * ftx)
-    mur = prm[P_MUR]
+    mur = pair[ma, mb, P_MUR]
     if codes[3] == 1 and mur > 0.0:
         wn = math.sqrt(wrx * wrx + wry * wry + wrz * wrz)
         if wn > 0.0:
@@ -259,9 +261,9 @@ def contact_force(codes, prm, delta, nx, ny, nz, rvx, rvy, rvz, wrx, wry, wrz,
         dtx = (wrx - wd * nx) * dt
         dty = (wry - wd * ny) * dt
         dtz = (wrz - wd * nz) * dt
-        mx = hist[H_MR]
-        my = hist[H_MR + 1]
-        mz = hist[H_MR + 2]
+        mx = hist[hi, hk, H_MR]
+        my = hist[hi, hk, H_MR + 1]
+        mz = hist[hi, hk, H_MR + 2]
         old2 = mx * mx + my * my + mz * mz
         if old2 > 0.0:
             mn = mx * nx + my * ny + mz * nz
@@ -285,9 +287,9 @@ def contact_force(codes, prm, delta, nx, ny, nz, rvx, rvy, rvz, wrx, wry, wrz,
             mx *= r
             my *= r
             mz *= r
-        hist[H_MR] = mx
-        hist[H_MR + 1] = my
-        hist[H_MR + 2] = mz
+        hist[hi, hk, H_MR] = mx
+        hist[hi, hk, H_MR + 1] = my
+        hist[hi, hk, H_MR + 2] = mz
         tx += mx
         ty += my
         tz += mz

@@ -37,6 +37,8 @@ def compute_forces(x, v, om, r, m, inv_m, mat, f, t, ovr, gravity, box, periodic
     n = x.shape[0]
     L0 = box[1] - box[0]
     L1 = box[3] - box[2]
+    h0 = 0.5 * L0
+    h1 = 0.5 * L1
     p0 = periodic[0]
     p1 = periodic[1]
     gx, gy, gz = gravity[0], gravity[1], gravity[2]
@@ -59,9 +61,15 @@ def compute_forces(x, v, om, r, m, inv_m, mat, f, t, ovr, gravity, box, periodic
             dy = yi - x[j, 1]
             dz = zi - x[j, 2]
             if p0:
-                dx -= L0 * round(dx / L0)
+                if dx > h0:
+                    dx -= L0
+                elif dx < -h0:
+                    dx += L0
             if p1:
-                dy -= L1 * round(dy / L1)
+                if dy > h1:
+                    dy -= L1
+                elif dy < -h1:
+                    dy += L1
             rj = r[j]
             rs = ri + rj
             d2 = dx * dx + dy * dy + dz * dz
@@ -84,9 +92,9 @@ def compute_forces(x, v, om, r, m, inv_m, mat, f, t, ovr, gravity, box, periodic
             rvy = vyi - v[j, 1] - (az * nx - ax * nz)
             rvz = vzi - v[j, 2] - (ax * ny - ay * nx)
             act, cfx, cfy, cfz, ctx, cty, ctz = contact_force(
-                codes, pair[mi, mat[j]], delta, nx, ny, nz, rvx, rvy, rvz,
+                codes, pair, mi, mat[j], delta, nx, ny, nz, rvx, rvy, rvz,
                 wxi - om[j, 0], wyi - om[j, 1], wzi - om[j, 2],
-                ci, ri * rj / rs, 1.0 / ims, dt, hist[i, k])
+                ci, ri * rj / rs, 1.0 / ims, dt, hist, i, k)
             if act:
                 fx += cfx
                 fy += cfy
@@ -100,7 +108,7 @@ def compute_forces(x, v, om, r, m, inv_m, mat, f, t, ovr, gravity, box, periodic
             p = wnbr[i, k]
             for q in range(6):
                 wslot[i, k, q] = 0.0
-            dist, nx, ny, nz, cx, cy, cz = prim_closest(prim_kind[p], prim_par[p], xi, yi, zi)
+            dist, nx, ny, nz, cx, cy, cz = prim_closest(prim_kind[p], prim_par, p, xi, yi, zi)
             delta = ri - dist
             if delta <= 0.0 and whist[i, k, H_TOUCH] == 0.0:
                 continue
@@ -119,8 +127,8 @@ def compute_forces(x, v, om, r, m, inv_m, mat, f, t, ovr, gravity, box, periodic
             rvy = vyi - vwy - ci * (wzi * nx - wxi * nz)
             rvz = vzi - vwz - ci * (wxi * ny - wyi * nx)
             act, cfx, cfy, cfz, ctx, cty, ctz = contact_force(
-                codes, pair[mi, prim_mat[p]], delta, nx, ny, nz, rvx, rvy, rvz,
-                wxi - ox, wyi - oy, wzi - oz, ci, ri, 1.0 / imi, dt, whist[i, k])
+                codes, pair, mi, prim_mat[p], delta, nx, ny, nz, rvx, rvy, rvz,
+                wxi - ox, wyi - oy, wzi - oz, ci, ri, 1.0 / imi, dt, whist, i, k)
             if act:
                 fx += cfx
                 fy += cfy

@@ -112,6 +112,8 @@ def build_lists(x, r, box, periodic, skin, extra, cell_start, cell_idx, cell_of,
         cell_start[c + 1] += 1
     L0 = box[1] - box[0]
     L1 = box[3] - box[2]
+    h0 = 0.5 * L0
+    h1 = 0.5 * L1
     p0 = periodic[0]
     p1 = periodic[1]
     need = 0
@@ -141,9 +143,15 @@ def build_lists(x, r, box, periodic, skin, extra, cell_start, cell_idx, cell_of,
                         ddy = yi - x[j, 1]
                         ddz = zi - x[j, 2]
                         if p0:
-                            ddx -= L0 * round(ddx / L0)
+                            if ddx > h0:
+                                ddx -= L0
+                            elif ddx < -h0:
+                                ddx += L0
                         if p1:
-                            ddy -= L1 * round(ddy / L1)
+                            if ddy > h1:
+                                ddy -= L1
+                            elif ddy < -h1:
+                                ddy += L1
                         cut = ri + r[j] + skin + extra
                         if ddx * ddx + ddy * ddy + ddz * ddz < cut * cut:
                             if cnt < K:
@@ -162,7 +170,7 @@ def build_lists(x, r, box, periodic, skin, extra, cell_start, cell_idx, cell_of,
         # walls
         wc = 0
         for p in range(prim_kind.shape[0]):
-            d = prim_closest(prim_kind[p], prim_par[p], xi, yi, zi)[0]
+            d = prim_closest(prim_kind[p], prim_par, p, xi, yi, zi)[0]
             if d < ri + skin + extra:
                 if wc < KW:
                     wnbr_new[i, wc] = p

@@ -44,17 +44,17 @@ NPAR = 16
 
 
 @njit(cache=True)
-def plane_dist(px, py, pz, par):
-    nx, ny, nz = par[3], par[4], par[5]
-    d = (px - par[0]) * nx + (py - par[1]) * ny + (pz - par[2]) * nz
+def plane_dist(px, py, pz, par, p):
+    nx, ny, nz = par[p, 3], par[p, 4], par[p, 5]
+    d = (px - par[p, 0]) * nx + (py - par[p, 1]) * ny + (pz - par[p, 2]) * nz
     return d, nx, ny, nz, px - d * nx, py - d * ny, pz - d * nz
 
 
 @njit(cache=True)
-def prim_closest(kind, par, px, py, pz):
-    """Dispatch to the closest-point function of a primitive kind."""
+def prim_closest(kind, par, p, px, py, pz):
+    """Dispatch to the closest-point function of primitive p (row of par) of a kind."""
     if kind == PLANE:
-        return plane_dist(px, py, pz, par)
+        return plane_dist(px, py, pz, par, p)
     return math.inf, 0.0, 0.0, 1.0, px, py, pz
 
 

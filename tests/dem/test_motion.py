@@ -1,0 +1,144 @@
+"""Incline stick/slip, constant-torque rolling deceleration, energy and momentum, wall vs
+large sphere, thread independence."""
+
+import math
+
+import numba
+import numpy as np
+import pytest
+
+from conftest import table
+from soilcal.dem.bench import settle_simulation
+from soilcal.dem.engine import Simulation
+
+G = 9.81
+R = 5e-3
+
+
+def incline(theta_deg, mu=0.5, steps=20000):
+    th = math.radians(theta_deg)
+    sim = Simulation(table(e=0.3, mu=mu, E=1e8), dt_fraction=0.2,
+                     gravity=(G * math.sin(th), 0.0, -G * math.cos(th)))
+    sim.add_particles([[0, 0, R * 0.9999]], R, "soil", lock_rotation=True)
+    sim.add_plane((0, 0, 0), (0, 0, 1), "soil")
+    sim.run(2000)  # normal contact settles
+    x0, t0 = sim.x[0, 0], sim.step * sim.dt
+    v0 = sim.v[0, 0]
+    sim.run(steps)
+    t = sim.step * sim.dt - t0
+    return sim.x[0, 0] - x0, sim.v[0, 0], v0, t
+
+
+def test_block_sticks_and_slides_at_friction_angle():
+    mu = 0.5
+    crit = math.degrees(math.atan(mu))
+    # 0.5 deg below tan(theta) = mu: sticks (creep below 1 % of the radius)
+    dx, v, _, _ = incline(crit - 0.5, mu)
+    assert abs(dx) < 0.01 * R and abs(v) < 1e-4
+    # 0.5 deg above: slides with a = g (sin theta - mu cos theta)
+    th = math.radians(crit + 0.5)
+    dx, v, v0, t = incline(crit + 0.5, mu)
+    a_expected = G * (math.sin(th) - mu * math.cos(th))
+    assert (v - v0) / t == pytest.approx(a_expected, rel=0.02)
+
+
+def test_constant_torque_rolling_deceleration():
+    mur, v0 = 0.1, 0.2
+    sim = Simulation(table(e=0.5, mu=0.5, mur=mur, E=1e8), dt_fraction=0.2,
+                     contact_model=dict(rolling="constant_torque"))
+    # rolling without slip: v = omega_y R
+    sim.add_particles([[0, 0, R * 0.99993]], R, "soil", v=[[v0, 0, 0]], omega=[[0, v0 / R, 0]])
+    sim.add_plane((0, 0, 0), (0, 0, 1), "soil")
+    sim.run(500)
+    ts, vs = [], []
+    for _ in range(40):
+        sim.run(200)
+        ts.append(sim.step * sim.dt)
+        vs.append(sim.v[0, 0])
+    slope = np.polyfit(ts, vs, 1)[0]
+    # torque mu_r m g R against rolling: m a = F_t, I alpha = -F_t R - mu_r m g R, a = alpha R
+    # -> a = -mu_r g / (1 + I/(m R^2)) = -5/7 mu_r g for a solid sphere
+    assert vs[-1] > 0.02
+    assert slope == pytest.approx(-5.0 / 7.0 * mur * G, rel=0.02)
+
+
+def hertz_energy(sim, estar):
+    x, r = sim.x, sim.p.r
+    L = sim.box[1] - sim.box[0]
+    d = x[:, None, :] - x[None, :, :]
+    d -= L * np.round(d / L) * np.array([1, 1, 1])
+    dist = np.sqrt((d**2).sum(-1))
+    rs = r[:, None] + r[None, :]
+    delta = np.triu(np.clip(rs - dist, 0, None), 1)
+    rstar = r[:, None] * r[None, :] / rs
+    return float((8.0 / 15.0 * estar * np.sqrt(rstar) * delta**2.5).sum())
+
+
+def test_energy_and_momentum_conserved(rng):
+    E, nu = 1e9, 0.3
+    estar = E / (2 * (1 - nu**2))
+    L = 0.05
+    n = 60
+    sim = Simulation(table(e=1.0, mu=0.0, E=E, nu=nu), dt_fraction=0.1, gravity=(0, 0, 0),
+                     box=(0, L, 0, L), periodic=(True, True))
+    # x, y periodic; z confined by two frictionless elastic planes
+    sim.add_plane((0, 0, 0), (0, 0, 1), "soil")
+    sim.add_plane((0, 0, L), (0, 0, -1), "soil")
+    g = np.stack(np.meshgrid(*(np.arange(4),) * 3, indexing="ij"), -1).reshape(-1, 3)[:n]
+    x = (g + 0.5) * (L / 4)
+    r = rng.uniform(3e-3, 4e-3, len(x))
+    v = rng.normal(0, 0.3, (len(x), 3))
+    sim.add_particles(x, r, "soil", v=v)
+    m = sim.p.m
+
+    def energy():
+        # sphere-plane: same material pair, R* = r
+        ez = sum(8.0 / 15.0 * estar * np.sqrt(ri) * max(0.0, ri - min(zi, L - zi)) ** 2.5
+                 for ri, zi in zip(r, sim.x[:, 2]))
+        return sim.kinetic_energy() + sim.rotational_energy() + hertz_energy(sim, estar) + ez
+
+    e0 = energy()
+    p0 = (m[:, None] * sim.v).sum(0)[:2]
+    sim.run(100_000)
+    assert np.abs(sim.v - v).max() > 0.1  # collisions happened
+    assert energy() == pytest.approx(e0, rel=0.01)
+    p1 = (m[:, None] * sim.v).sum(0)[:2]
+    scale = float((m[:, None] * np.abs(v)).sum())
+    assert np.abs(p1 - p0).max() < 1e-12 * scale
+
+
+def test_plane_equals_infinitely_large_sphere():
+    def build(wall):
+        sim = Simulation(table(e=0.4, mu=0.4, mur=0.05, E=1e8), dt=1e-6, gravity=(0, 0, -G),
+                         contact_model=dict(rolling="constant_torque"))
+        sim.add_particles([[0, 0, R * 0.999]], R, "soil", v=[[0.05, 0.02, -0.1]],
+                          omega=[[1.0, -3.0, 2.0]])
+        if wall:
+            sim.add_plane((0, 0, 0), (0, 0, 1), "soil")
+        else:
+            big = 1e3
+            sim.add_particles([[0, 0, -big]], big, "soil", fixed=True)
+        return sim
+
+    a, b = build(True), build(False)
+    for _ in range(5):
+        a.run(20)
+        b.run(20)
+        fa, fb = a.p.f[0], b.p.f[0]
+        assert np.allclose(fa, fb, rtol=1e-4, atol=1e-6 * np.abs(fa).max())
+        assert np.allclose(a.p.t[0], b.p.t[0], rtol=1e-4, atol=1e-6 * np.abs(a.p.t[0]).max())
+        # the wall carries the reaction (gravity removed)
+        grav = a.p.m[0] * np.array([0, 0, -G])
+        assert np.allclose(a.wall_force[0], -(fa - grav), rtol=1e-12, atol=1e-15)
+
+
+def test_one_and_two_threads_identical():
+    out = []
+    for nt in (1, 2):
+        numba.set_num_threads(nt)
+        sim = settle_simulation(3, "jkr", seed=7, layers=12)
+        sim.run(1500)
+        out.append((sim.x.copy(), sim.v.copy(), sim.omega.copy(), sim.wall_force.copy()))
+    numba.set_num_threads(numba.config.NUMBA_NUM_THREADS)
+    for a, b in zip(*out):
+        assert np.array_equal(a, b)
