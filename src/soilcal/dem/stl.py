@@ -1,0 +1,166 @@
+"""STL read/write for wall meshes (tool geometries, containers).
+
+Format (3D Systems StereoLithography interface specification, 1988/1989):
+
+* binary: 80-byte header, uint32 little-endian triangle count ``n``, then
+  ``n`` records of 50 bytes: normal (3 x float32), three vertices
+  (9 x float32), uint16 attribute byte count.  The file size is therefore
+  exactly ``84 + 50 n`` bytes, which is how a binary file is recognised
+  (a binary header may itself start with the word ``solid``).
+* ASCII: ``solid name`` / ``facet normal nx ny nz`` / ``outer loop`` /
+  three ``vertex x y z`` / ``endloop`` / ``endfacet`` ... ``endsolid``.
+
+STL stores a triangle soup; :func:`read_stl` welds vertices with identical
+coordinates (exact match, or within ``weld_tol`` when given) into an indexed
+mesh ``(vertices float64[nv, 3], triangles int64[nt, 3])`` and drops
+triangles that collapse to a line or point after welding.  Any truncated,
+malformed or non-finite file raises :class:`soilcal.errors.InputError`
+naming the file.  Units are whatever the file uses; scale on read if the
+tool drawing is in millimetres (``scale=1e-3``).
+"""
+
+from __future__ import annotations
+
+import re
+import struct
+from pathlib import Path
+
+import numpy as np
+
+from soilcal.errors import InputError
+
+_BIN_DTYPE = np.dtype([("normal", "<f4", (3,)), ("v", "<f4", (3, 3)), ("attr", "<u2")])
+_FLOAT = r"[-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?|[-+]?(?:nan|inf)"
+
+
+def write_stl(path, vertices, triangles, binary=True, name="soilcal"):
+    """Write an indexed triangle mesh as STL (binary by default)."""
+    path = Path(path)
+    v = np.asarray(vertices, dtype=np.float64)
+    t = np.asarray(triangles, dtype=np.int64)
+    if v.ndim != 2 or v.shape[1] != 3 or t.ndim != 2 or t.shape[1] != 3:
+        raise ValueError("vertices must be (n, 3) and triangles (m, 3)")
+    tri = v[t]  # (m, 3, 3)
+    n = np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0])
+    ln = np.linalg.norm(n, axis=1)
+    n = n / np.where(ln > 0, ln, 1.0)[:, None]
+    if binary:
+        rec = np.zeros(len(t), dtype=_BIN_DTYPE)
+        rec["normal"] = n
+        rec["v"] = tri
+        header = f"binary STL {name}".encode("ascii", "replace")[:80].ljust(80, b" ")
+        with open(path, "wb") as f:
+            f.write(header)
+            f.write(struct.pack("<I", len(t)))
+            f.write(rec.tobytes())
+    else:
+        lines = [f"solid {name}"]
+        for k in range(len(t)):
+            lines.append("  facet normal {:.9e} {:.9e} {:.9e}".format(*n[k]))
+            lines.append("    outer loop")
+            for j in range(3):
+                lines.append("      vertex {!r} {!r} {!r}".format(*map(float, tri[k, j])))
+            lines.append("    endloop")
+            lines.append("  endfacet")
+        lines.append(f"endsolid {name}")
+        path.write_text("\n".join(lines) + "\n", encoding="ascii")
+
+
+def _parse_ascii(path, text):
+    toks = text.split()
+    if not toks or toks[0].lower() != "solid":
+        raise InputError(path, "STL", "binary STL of 84 + 50 n bytes or ASCII STL starting "
+                         "with 'solid'", "neither")
+    tris = []
+    i = 1
+    # skip the solid name (until the first 'facet' or 'endsolid')
+    while i < len(toks) and toks[i].lower() not in ("facet", "endsolid"):
+        i += 1
+    num = re.compile(rf"^(?:{_FLOAT})$", re.IGNORECASE)
+    ended = False
+    while i < len(toks):
+        w = toks[i].lower()
+        if w == "endsolid":
+            ended = True
+            break
+        if w != "facet":
+            raise InputError(path, f"ASCII STL token {i}", "'facet' or 'endsolid'", toks[i])
+        # facet normal a b c outer loop vertex x y z (x3) endloop endfacet = 21 tokens
+        chunk = toks[i:i + 21]
+        if len(chunk) < 21:
+            raise InputError(path, f"facet {len(tris)}", "a complete facet", "truncated file")
+        kw = [c.lower() for c in chunk]
+        if (kw[1] != "normal" or kw[5] != "outer" or kw[6] != "loop" or kw[7] != "vertex"
+                or kw[11] != "vertex" or kw[15] != "vertex" or kw[19] != "endloop"
+                or kw[20] != "endfacet"):
+            raise InputError(path, f"facet {len(tris)}",
+                             "'facet normal n n n outer loop vertex x y z (x3) endloop "
+                             "endfacet'", " ".join(chunk))
+        vals = chunk[8:11] + chunk[12:15] + chunk[16:19]
+        if not all(num.match(s) for s in vals + chunk[2:5]):
+            raise InputError(path, f"facet {len(tris)} coordinates", "numbers", vals)
+        tris.append([float(s) for s in vals])
+        i += 21
+    if not ended:
+        raise InputError(path, "endsolid", "'endsolid' closing the solid", "truncated file")
+    return np.array(tris, dtype=np.float64).reshape(-1, 3, 3)
+
+
+def read_stl_soup(path):
+    """Triangle soup ``float64[nt, 3, 3]`` from a binary or ASCII STL file."""
+    path = Path(path)
+    try:
+        data = path.read_bytes()
+    except OSError as exc:
+        raise InputError(path, "file", "a readable STL file", str(exc)) from None
+    if len(data) >= 84:
+        (n,) = struct.unpack("<I", data[80:84])
+        if len(data) == 84 + 50 * n:
+            rec = np.frombuffer(data, dtype=_BIN_DTYPE, count=n, offset=84)
+            tri = rec["v"].astype(np.float64)
+            if not np.all(np.isfinite(tri)):
+                raise InputError(path, "vertices", "finite coordinates", "NaN or inf")
+            if n == 0:
+                raise InputError(path, "triangle count", "at least one triangle", 0)
+            return tri
+    head = data[:5].lower()
+    if head != b"solid":
+        if len(data) >= 84:
+            (n,) = struct.unpack("<I", data[80:84])
+            raise InputError(path, "file size", f"84 + 50 * {n} = {84 + 50 * n} bytes for a "
+                             f"binary STL of {n} triangles", f"{len(data)} bytes")
+        raise InputError(path, "file size", "at least 84 bytes (binary STL header)",
+                         f"{len(data)} bytes")
+    try:
+        text = data.decode("ascii")
+    except UnicodeDecodeError:
+        raise InputError(path, "STL", "ASCII text after 'solid' (or a binary STL of "
+                         "84 + 50 n bytes)", "non-ASCII bytes") from None
+    tri = _parse_ascii(path, text)
+    if tri.shape[0] == 0:
+        raise InputError(path, "triangle count", "at least one facet", 0)
+    if not np.all(np.isfinite(tri)):
+        raise InputError(path, "vertices", "finite coordinates", "NaN or inf")
+    return tri
+
+
+def weld(soup, weld_tol=0.0):
+    """Indexed mesh from a triangle soup; vertices within ``weld_tol``
+    (rounded to a grid of that size) or identical (``weld_tol=0``) merge."""
+    pts = soup.reshape(-1, 3)
+    key = np.round(pts / weld_tol) if weld_tol > 0 else pts
+    _, first, inv = np.unique(key, axis=0, return_index=True, return_inverse=True)
+    verts = pts[first]
+    tris = inv.reshape(-1, 3).astype(np.int64)
+    keep = (tris[:, 0] != tris[:, 1]) & (tris[:, 1] != tris[:, 2]) & (tris[:, 0] != tris[:, 2])
+    return verts, tris[keep]
+
+
+def read_stl(path, scale=1.0, weld_tol=0.0):
+    """Read an STL file into ``(vertices float64[nv, 3], triangles int64[nt, 3])``,
+    coordinates multiplied by ``scale``."""
+    soup = read_stl_soup(path) * float(scale)
+    v, t = weld(soup, weld_tol)
+    if t.shape[0] == 0:
+        raise InputError(path, "triangles", "at least one non-degenerate triangle", 0)
+    return v, t
