@@ -80,7 +80,17 @@ def test_drum_groups_rendered_set():
         assert abs(np.mean([t["angle_deg"] for t in truths]) - mean_truth) < 1e-9
         assert abs(summary["angle_deg"] - mean_truth) <= 0.3, name
         for r, t in zip(res, truths):
-            assert abs(r.angle_deg - t["angle_deg"]) <= 0.6
+            assert abs(r.angle_deg - t["angle_deg"]) <= 0.3
+
+
+def test_adaptive_threshold_pile_and_drum_rejects_it():
+    photo = IMAGES / "cinnamon-soil" / "stacking_1.jpg"
+    t = _truth(photo)
+    r = measure.measure_pile(photo, threshold="adaptive")
+    assert abs(r.left_deg - t["left_deg"]) <= 0.3 and abs(r.right_deg - t["right_deg"]) <= 0.3
+    frame = IMAGES / "xinjiang-vineyard" / "drum_upper_f01.jpg"
+    with pytest.raises(InputError, match="threshold"):
+        measure.measure_drum_frame(frame, threshold="adaptive")
 
 
 def test_multiview_average_black_soil():

@@ -87,7 +87,8 @@ def _binary(path, gray, method, classes=2):
         t = filters.threshold_otsu(gray) if classes == 2 else filters.threshold_multiotsu(gray, classes)[-1]
         dark = gray < t
     elif method == "adaptive":
-        dark = gray < filters.threshold_local(gray, 201, offset=0.02)
+        block = 2 * (min(gray.shape) // 4) + 1  # larger than the object, so its inside is not split
+        dark = gray < filters.threshold_local(gray, block, offset=0.02)
     else:
         raise InputError(path, "threshold", "'otsu' or 'adaptive'", method)
     dark = morphology.opening(dark, morphology.disk(2))
@@ -177,11 +178,11 @@ def _top_edge(lev, c0, c1, glev=None):
     return np.asarray(cols, float), np.asarray(rows, float)
 
 
-def _fit(path, u, v, label, seed=0):
+def _fit(path, u, v, label, seed=0, residual=1.5):
     if u.size < 20:
         raise InputError(path, label, "a flank of at least 20 boundary pixels", int(u.size))
     pts = np.column_stack([u, v])
-    model, inl = measure.ransac(pts, measure.LineModelND, min_samples=2, residual_threshold=1.5,
+    model, inl = measure.ransac(pts, measure.LineModelND, min_samples=2, residual_threshold=residual,
                                 max_trials=500, rng=seed)
     (u0, v0), (du, dv) = model.origin, model.direction
     return float(np.degrees(np.arctan2(abs(dv), abs(du)))), (u0, v0, du, dv), pts[inl]
@@ -285,14 +286,21 @@ def measure_piles(paths, threshold="otsu", keep_stages=False, channel="auto"):
 
 
 def measure_drum_frame(path, threshold="otsu", keep_stages=False) -> PileResult:
-    """Free-surface angle of one drum frame relative to the base plate."""
+    """Free-surface angle of one drum frame relative to the base plate.
+
+    Only the global (Otsu) threshold over the whole frame is offered: a local threshold
+    splits the large uniform soil segment of a drum.
+    """
+    if threshold != "otsu":
+        raise InputError(path, "threshold", "'otsu' for drum frames", threshold)
     rgb = read_photo(path)
     gray = _gray(rgb)
-    binary = _binary(path, gray, threshold)
     slope, intercept = plate_line_any(path, gray)
-    h, w = binary.shape
+    h, w = gray.shape
     rr, cc = np.mgrid[0:h, 0:w]
-    above = binary & (rr < slope * cc + intercept - 3)
+    above_plate = rr < slope * cc + intercept - 3
+    binary = _binary(path, gray, "otsu")
+    above = binary & above_plate
     lab = measure.label(above)
     props = sorted(measure.regionprops(lab), key=lambda p: -p.area)
     if not props or props[0].area < 0.01 * h * w:
@@ -307,7 +315,7 @@ def measure_drum_frame(path, threshold="otsu", keep_stages=False) -> PileResult:
     v = prow - rv
     # the chord: RANSAC over the whole top edge (the wall arc is outlier), then refit on the
     # central 60 % of the chord so the wall corners and any bulge stay symmetric
-    _, (u0, v0, du, dv), inl = _fit(path, cu, v, "free surface")
+    _, (u0, v0, du, dv), inl = _fit(path, cu, v, "free surface", residual=6.0)
     tproj = (inl[:, 0] - u0) * du + (inl[:, 1] - v0) * dv
     t_all = (cu - u0) * du + (v - v0) * dv
     lo, hi = np.min(tproj), np.max(tproj)
