@@ -423,4 +423,6 @@ def build_errata(soil: dict, published_dir, stages: dict[str, dict]) -> pd.DataF
                     optimum_check(err, f"{case.get('source', src)} ({sid}, case {case['id']})", fits[rid], syms,
                                   printed, tgt, rid)
     duplicated_sequences(err, dup_tables)
+    for e in soil.get("errata", []):
+        err.add(e["where"], e["printed"], e.get("recomputed") or "", "found while encoding: " + e["note"])
     return err.frame()
