@@ -277,3 +277,36 @@ def test_revolve_sphere_volume_and_watertight():
     v, t = g.revolve_profile(prof, 180)
     assert g.is_watertight(t)
     assert g.mesh_volume(v, t) == pytest.approx(4 / 3 * math.pi, rel=2e-3)
+
+
+def test_parameter_row_variants_agree_with_array_kernels():
+    rng = np.random.default_rng(0)
+    par = np.zeros((6, 16))
+    d = arr(0.3, -0.2, 1.0)
+    d /= np.linalg.norm(d)
+    u = np.cross(d, arr(1, 0, 0))
+    u /= np.linalg.norm(u)
+    par[0, 0:6] = [0.1, 0.2, 0.3, *d]
+    par[1, 0:11] = [0.0, 0.0, 0.1, *d, *u, 0.4, 0.2]
+    par[2, 0:7] = [0.0, 0.1, 0.0, *d, 0.3]
+    par[3, 0:9] = [0.1, 0.0, 0.0, *d, 0.5, 0.4, 1.0]
+    par[4, 0:11] = [0.0, 0.0, 0.0, *d, 0.2, 0.6, -0.3, 0.5, 1.0]
+    par[5, 0:9] = rng.normal(size=9)
+    for _ in range(10):
+        p = rng.normal(size=3) * 0.5
+        a = p[0], p[1], p[2]
+        assert g.plane_closest_par(*a, par, 0) == pytest.approx(
+            g.plane_closest(p, par[0, 0:3], d))
+        assert g.rectangle_closest_par(*a, par, 1) == pytest.approx(
+            g.rectangle_closest(p, par[1, 0:3], d, u, 0.4, 0.2))
+        assert g.disk_closest_par(*a, par, 2) == pytest.approx(
+            g.disk_closest(p, par[2, 0:3], d, 0.3))
+        assert g.cylinder_closest_par(*a, par, 3) == pytest.approx(
+            g.cylinder_closest(p, par[3, 0:3], d, 0.5, -0.4, 0.4, True))
+        assert g.cone_closest_par(*a, par, 4) == pytest.approx(
+            g.cone_closest(p, par[4, 0:3], d, 0.2, 0.6, -0.3, 0.5, True))
+        assert g.triangle_closest_par(*a, par, 5) == pytest.approx(
+            g.triangle_closest(p, par[5, 0:3], par[5, 3:6], par[5, 6:9]))
+    v, t = g.box_mesh([0, 0, 0], [1, 1, 1])
+    mp = g.mesh_to_par(v, t)
+    assert mp.shape == (12, 16) and np.array_equal(mp[3, 0:3], v[t[3, 0]])

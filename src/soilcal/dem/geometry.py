@@ -706,3 +706,60 @@ def extrude_curve(curve, direction, length, n_along=1, origin=(0.0, 0.0, 0.0)):
     o = np.asarray(origin, dtype=np.float64)
     verts = (o + cv[:, None, :] + s[None, :, None] * g).reshape(-1, 3)
     return verts, _grid_triangles(cv.shape[0], s.shape[0])
+
+
+# ---------------------------------------------------------------------------
+# parameter-row variants for wall tables (scalars in, no allocation)
+# ---------------------------------------------------------------------------
+# The kernels above accept any indexable (array, array view or tuple) for
+# points and directions, so an engine can pass ``(px, py, pz)`` and rows of a
+# float64[P, 16] parameter table.  Row layouts:
+#   plane      point(0:3) unit normal(3:6)
+#   rectangle  centre(0:3) unit normal(3:6) unit u axis(6:9) half_u(9) half_v(10)
+#   disk       centre(0:3) unit normal(3:6) radius(6)
+#   cylinder   axis point = centre(0:3) unit axis(3:6) radius(6) half length(7)
+#              inner flag(8)   (shell from -half length to +half length)
+#   cone       axis point(0:3) unit axis(3:6) r0(6) r1(7) z0(8) z1(9) inner flag(10)
+#   triangle   v0(0:3) v1(3:6) v2(6:9)
+
+
+@njit(cache=True)
+def plane_closest_par(px, py, pz, par, k):
+    return plane_closest((px, py, pz), par[k, 0:3], par[k, 3:6])
+
+
+@njit(cache=True)
+def rectangle_closest_par(px, py, pz, par, k):
+    return rectangle_closest((px, py, pz), par[k, 0:3], par[k, 3:6], par[k, 6:9],
+                             par[k, 9], par[k, 10])
+
+
+@njit(cache=True)
+def disk_closest_par(px, py, pz, par, k):
+    return disk_closest((px, py, pz), par[k, 0:3], par[k, 3:6], par[k, 6])
+
+
+@njit(cache=True)
+def cylinder_closest_par(px, py, pz, par, k):
+    h = par[k, 7]
+    return cone_closest((px, py, pz), par[k, 0:3], par[k, 3:6], par[k, 6], par[k, 6], -h, h,
+                        par[k, 8] != 0.0)
+
+
+@njit(cache=True)
+def cone_closest_par(px, py, pz, par, k):
+    return cone_closest((px, py, pz), par[k, 0:3], par[k, 3:6], par[k, 6], par[k, 7],
+                        par[k, 8], par[k, 9], par[k, 10] != 0.0)
+
+
+@njit(cache=True)
+def triangle_closest_par(px, py, pz, par, k):
+    return triangle_closest((px, py, pz), par[k, 0:3], par[k, 3:6], par[k, 6:9])
+
+
+def mesh_to_par(vertices, triangles, npar=16):
+    """Triangle parameter rows ``v0(0:3) v1(3:6) v2(6:9)`` of a mesh."""
+    v, t = _as_mesh(vertices, triangles)
+    par = np.zeros((t.shape[0], npar))
+    par[:, 0:9] = v[t].reshape(-1, 9)
+    return par
