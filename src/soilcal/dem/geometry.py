@@ -724,37 +724,44 @@ def extrude_curve(curve, direction, length, n_along=1, origin=(0.0, 0.0, 0.0)):
 
 
 @njit(cache=True)
+def _row3(par, k, o):
+    """Three consecutive entries of a parameter row as a tuple (array views
+    would cost reference counting in the inner loop)."""
+    return (par[k, o], par[k, o + 1], par[k, o + 2])
+
+
+@njit(cache=True)
 def plane_closest_par(px, py, pz, par, k):
-    return plane_closest((px, py, pz), par[k, 0:3], par[k, 3:6])
+    return plane_closest((px, py, pz), _row3(par, k, 0), _row3(par, k, 3))
 
 
 @njit(cache=True)
 def rectangle_closest_par(px, py, pz, par, k):
-    return rectangle_closest((px, py, pz), par[k, 0:3], par[k, 3:6], par[k, 6:9],
+    return rectangle_closest((px, py, pz), _row3(par, k, 0), _row3(par, k, 3), _row3(par, k, 6),
                              par[k, 9], par[k, 10])
 
 
 @njit(cache=True)
 def disk_closest_par(px, py, pz, par, k):
-    return disk_closest((px, py, pz), par[k, 0:3], par[k, 3:6], par[k, 6])
+    return disk_closest((px, py, pz), _row3(par, k, 0), _row3(par, k, 3), par[k, 6])
 
 
 @njit(cache=True)
 def cylinder_closest_par(px, py, pz, par, k):
     h = par[k, 7]
-    return cone_closest((px, py, pz), par[k, 0:3], par[k, 3:6], par[k, 6], par[k, 6], -h, h,
-                        par[k, 8] != 0.0)
+    return cone_closest((px, py, pz), _row3(par, k, 0), _row3(par, k, 3), par[k, 6],
+                        par[k, 6], -h, h, par[k, 8] != 0.0)
 
 
 @njit(cache=True)
 def cone_closest_par(px, py, pz, par, k):
-    return cone_closest((px, py, pz), par[k, 0:3], par[k, 3:6], par[k, 6], par[k, 7],
+    return cone_closest((px, py, pz), _row3(par, k, 0), _row3(par, k, 3), par[k, 6], par[k, 7],
                         par[k, 8], par[k, 9], par[k, 10] != 0.0)
 
 
 @njit(cache=True)
 def triangle_closest_par(px, py, pz, par, k):
-    return triangle_closest((px, py, pz), par[k, 0:3], par[k, 3:6], par[k, 6:9])
+    return triangle_closest((px, py, pz), _row3(par, k, 0), _row3(par, k, 3), _row3(par, k, 6))
 
 
 def mesh_to_par(vertices, triangles, npar=16):
