@@ -178,10 +178,20 @@ def _top_edge(lev, c0, c1, glev=None):
     return np.asarray(cols, float), np.asarray(rows, float)
 
 
-def _fit(path, u, v, label, seed=0, residual=1.5):
+def _fit(path, u, v, label, seed=0, residual=None):
+    """RANSAC line (``LineModelND``); residual threshold = max(1.5 px, 3 x robust sigma of the
+    residuals about a first total-least-squares line) unless given, so a noisy edge keeps its
+    full length instead of a short, locally straight piece."""
     if u.size < 20:
         raise InputError(path, label, "a flank of at least 20 boundary pixels", int(u.size))
     pts = np.column_stack([u, v])
+    if residual is None:
+        first = measure.LineModelND.from_estimate(pts)
+        if not first:
+            raise InputError(path, label, "boundary points that define a line", "a degenerate point set")
+        res = first.residuals(pts)
+        sigma = 1.4826 * np.median(np.abs(res - np.median(res)))
+        residual = max(1.5, 3.0 * sigma)
     model, inl = measure.ransac(pts, measure.LineModelND, min_samples=2, residual_threshold=residual,
                                 max_trials=500, rng=seed)
     (u0, v0), (du, dv) = model.origin, model.direction
