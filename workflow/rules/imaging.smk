@@ -27,7 +27,7 @@ rule image_measure:
     log:
         "logs/{soil}/images/image_measure.log",
     benchmark:
-        "benchmarks/{soil}/images/image_measure.tsv"
+        "benchmarks/workflow/{soil}/images/image_measure.tsv"
     script:
         "../scripts/image_measure.py"
 
