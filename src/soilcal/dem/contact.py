@@ -24,8 +24,8 @@ Tangential, ``mindlin`` (Mindlin 1949 no-slip; EDEM guide; LIGGGHTS ``tangential
     S_t = 8 G* a,   F_t = -S_t xi - F_t^d,   |F_t| <= mu_s |F_n,tot|
 
 with xi the tangential displacement history: every step xi is projected onto the current
-tangent plane keeping its length (rigid rotation of the contact frame) and incremented by
-v_t dt.  When the spring force exceeds the Coulomb limit, xi is shortened so that
+tangent plane (xi <- xi - (xi.n) n, as LIGGGHTS ``tangential history``; the length lost is
+second order in the rotation per step) and incremented by v_t dt.  When the spring force exceeds the Coulomb limit, xi is shortened so that
 |S_t xi| = mu_s |F_n,tot| and F_t = -S_t xi (no damping while sliding), as in LIGGGHTS.
 F_n,tot = F_n + F_n^d (plus 2 F_pulloff with JKR, Thornton & Yin 1991, as LAMMPS ``jkr``).
 
@@ -76,7 +76,7 @@ import math
 import numpy as np
 from numba import njit
 
-from soilcal.dem.materials import P_BETA, P_ESTAR, P_GSTAR, P_MUR, P_MUS, P_W
+from soilcal.dem.materials import P_BETA, P_ESTAR, P_GSTAR, P_MUR, P_MUS, P_TRATIO, P_W
 from soilcal.errors import InputError
 
 NORMAL = {"hertz": 0}
@@ -149,7 +149,7 @@ def jkr_separation(rstar, estar, w):
     return jkr_delta(ac, rstar, estar, w)
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def contact_force(codes, pair, ma, mb, delta, nx, ny, nz, rvx, rvy, rvz, wrx, wry, wrz,
                   ri, rstar, mstar, dt, hist, hi, hk):
     """Force and torque on particle i from one contact; updates the history row ``hist``.
@@ -186,8 +186,10 @@ def contact_force(codes, pair, ma, mb, delta, nx, ny, nz, rvx, rvy, rvz, wrx, wr
     sn = 2.0 * estar * a
     vn = rvx * nx + rvy * ny + rvz * nz
     fnd = 0.0
+    sq = 0.0
     if codes[1] == 0:
-        fnd = 2.0 * SQ56 * beta * math.sqrt(sn * mstar) * vn  # beta <= 0: opposes v_n
+        sq = 2.0 * SQ56 * beta * math.sqrt(sn * mstar)
+        fnd = sq * vn  # beta <= 0: opposes v_n
     fn = fne + fnd
     fnf = abs(fn + fpo2)
     fx = fn * nx
@@ -204,18 +206,10 @@ def contact_force(codes, pair, ma, mb, delta, nx, ny, nz, rvx, rvy, rvz, wrx, wr
         xx = hist[hi, hk, H_XI]
         xy = hist[hi, hk, H_XI + 1]
         xz = hist[hi, hk, H_XI + 2]
-        old2 = xx * xx + xy * xy + xz * xz
-        if old2 > 0.0:
-            xn = xx * nx + xy * ny + xz * nz
-            xx -= xn * nx
-            xy -= xn * ny
-            xz -= xn * nz
-            new2 = xx * xx + xy * xy + xz * xz
-            if new2 > 0.0:
-                s = math.sqrt(old2 / new2)
-                xx *= s
-                xy *= s
-                xz *= s
+        xn = xx * nx + xy * ny + xz * nz
+        xx -= xn * nx
+        xy -= xn * ny
+        xz -= xn * nz
         xx += vtx * dt
         xy += vty * dt
         xz += vtz * dt
@@ -234,7 +228,8 @@ def contact_force(codes, pair, ma, mb, delta, nx, ny, nz, rvx, rvy, rvz, wrx, wr
             fty *= r
             ftz *= r
         elif codes[1] == 0:
-            ct = 2.0 * SQ56 * beta * math.sqrt(st * mstar)
+            # sqrt(S_t m*) = sqrt(S_n m*) sqrt(4 G*/E*)
+            ct = sq * pair[ma, mb, P_TRATIO]
             ftx += ct * vtx
             fty += ct * vty
             ftz += ct * vtz

@@ -26,7 +26,7 @@ from soilcal.dem import integrator as itg
 from soilcal.dem.contact import H_SIZE, jkr_separation, model_codes
 from soilcal.dem.materials import P_ESTAR, P_W, MaterialTable
 from soilcal.dem.state import ParticleState
-from soilcal.dem.walls import NPAR, PLANE, WallSet
+from soilcal.dem.walls import CONE, CYLINDER, DISK, NPAR, PLANE, RECTANGLE, TRIANGLE, WallSet
 from soilcal.errors import InputError, SimulationError
 
 
@@ -74,6 +74,7 @@ class Simulation:
         self.wall_log = np.zeros((0, 0, 6))
         self._pair = None
         self.dt = None
+        self._fstate = np.zeros(2)
 
     # ------------------------------------------------------------------ building
     def add_particles(self, x, r, material, v=None, omega=None, fixed=False, lock_rotation=False):
@@ -117,6 +118,78 @@ class Simulation:
         return self.add_wall(name or f"plane{len(self.walls.names)}", material,
                              [(PLANE, vals, 0b1, 0b10)], velocity, omega,
                              pt if centre is None else centre)
+
+    def _unit(self, v, field):
+        v = np.asarray(v, dtype=np.float64).reshape(3)
+        ln = float(np.linalg.norm(v))
+        if not ln > 0:
+            raise InputError(self.source, field, "a non-zero vector", tuple(v))
+        return v / ln
+
+    def add_cylinder(self, axis_point, axis_dir, radius, half_length, material, inner=True,
+                     name=None, velocity=(0, 0, 0), omega=(0, 0, 0), centre=None) -> int:
+        """Cylindrical shell about an axis (inner=True: particles inside, e.g. a drum)."""
+        if not radius > 0 or not half_length > 0:
+            raise InputError(self.source, "walls.cylinder", "radius > 0 and half_length > 0",
+                             (radius, half_length))
+        a = np.asarray(axis_point, dtype=np.float64).reshape(3)
+        vals = np.concatenate([a, self._unit(axis_dir, "walls.cylinder.axis_dir"),
+                               [radius, half_length, 1.0 if inner else 0.0]])
+        return self.add_wall(name or f"cylinder{len(self.walls.names)}", material,
+                             [(CYLINDER, vals, 0b1, 0b10)], velocity, omega,
+                             a if centre is None else centre)
+
+    def add_cone(self, axis_point, axis_dir, r0, r1, z0, z1, material, inner=True, name=None,
+                 velocity=(0, 0, 0), omega=(0, 0, 0), centre=None) -> int:
+        """Cone frustum shell: radius r0 at axial coordinate z0 to r1 at z1 (z1 > z0)."""
+        if not z1 > z0 or min(r0, r1) < 0 or max(r0, r1) <= 0:
+            raise InputError(self.source, "walls.cone", "z1 > z0, radii >= 0, one > 0",
+                             (r0, r1, z0, z1))
+        a = np.asarray(axis_point, dtype=np.float64).reshape(3)
+        vals = np.concatenate([a, self._unit(axis_dir, "walls.cone.axis_dir"),
+                               [r0, r1, z0, z1, 1.0 if inner else 0.0]])
+        return self.add_wall(name or f"cone{len(self.walls.names)}", material,
+                             [(CONE, vals, 0b1, 0b10)], velocity, omega,
+                             a if centre is None else centre)
+
+    def add_rectangle(self, centre, normal, u_axis, half_u, half_v, material, name=None,
+                      velocity=(0, 0, 0), omega=(0, 0, 0)) -> int:
+        """Bounded plane (e.g. a tool blade): centre, normal, in-plane u axis, half sizes."""
+        c = np.asarray(centre, dtype=np.float64).reshape(3)
+        nrm = self._unit(normal, "walls.rectangle.normal")
+        u = np.asarray(u_axis, dtype=np.float64).reshape(3)
+        u = self._unit(u - np.dot(u, nrm) * nrm, "walls.rectangle.u_axis")
+        vals = np.concatenate([c, nrm, u, [half_u, half_v]])
+        return self.add_wall(name or f"rectangle{len(self.walls.names)}", material,
+                             [(RECTANGLE, vals, 0b1, 0b110)], velocity, omega, c)
+
+    def add_disk(self, centre, normal, radius, material, name=None, velocity=(0, 0, 0),
+                 omega=(0, 0, 0)) -> int:
+        c = np.asarray(centre, dtype=np.float64).reshape(3)
+        vals = np.concatenate([c, self._unit(normal, "walls.disk.normal"), [radius]])
+        return self.add_wall(name or f"disk{len(self.walls.names)}", material,
+                             [(DISK, vals, 0b1, 0b10)], velocity, omega, c)
+
+    def add_mesh(self, vertices, triangles, material, name=None, velocity=(0, 0, 0),
+                 omega=(0, 0, 0), centre=None) -> int:
+        """Triangle mesh wall (boxes, STL tools); one primitive per triangle."""
+        v = np.asarray(vertices, dtype=np.float64).reshape(-1, 3)
+        t = np.asarray(triangles, dtype=np.int64).reshape(-1, 3)
+        if t.size == 0 or t.min() < 0 or t.max() >= len(v):
+            raise InputError(self.source, "walls.mesh.triangles",
+                             f"vertex indices in [0, {len(v)})", None)
+        rows = v[t].reshape(-1, 9)
+        c = v.mean(axis=0) if centre is None else centre
+        return self.add_wall(name or f"mesh{len(self.walls.names)}", material,
+                             [(TRIANGLE, row, 0b111, 0) for row in rows], velocity, omega, c)
+
+    def add_box(self, lo, hi, material, name=None, velocity=(0, 0, 0), omega=(0, 0, 0)) -> int:
+        """Closed box surface as a triangle mesh (particles outside or inside)."""
+        from soilcal.dem.geometry import box_mesh
+
+        v, t = box_mesh(lo, hi)
+        return self.add_mesh(v, t, material, name or f"box{len(self.walls.names)}", velocity,
+                             omega)
 
     def set_wall_motion(self, wall, velocity=None, omega=None):
         if velocity is not None:
@@ -214,7 +287,6 @@ class Simulation:
         for c in wa["wall_centre"]:
             reach = max(reach, float(np.linalg.norm(np.maximum(abs(lo - c), abs(hi - c)))))
         reach *= 1.5
-        fstate = np.zeros(1)
         status = np.zeros(5, dtype=np.int64)
         total = 0
         resume_mid = False
@@ -232,7 +304,7 @@ class Simulation:
                 L["whist_b"], L["wslot"], wa["prim_kind"], wa["prim_wall"], wa["prim_mat"],
                 wa["prim_par"], wa["prim_pts"], wa["prim_dirs"], wa["wall_vel"],
                 wa["wall_omega"], wa["wall_centre"], self.wall_force, self.wall_torque, reach,
-                self.wall_log, fstate, status)
+                self.wall_log, self._fstate, status)
             total += done
             self.step = step0 + total
             code = int(status[0])
@@ -293,6 +365,10 @@ class Simulation:
         ok = p.inv_i > 0
         inertia = 0.4 * p.m * p.r**2
         return float(0.5 * np.sum(inertia[ok] * np.sum(p.omega[ok] ** 2, axis=1)))
+
+    @property
+    def n_rebuilds(self) -> int:
+        return int(self._fstate[1])
 
     @property
     def x(self):

@@ -22,9 +22,9 @@ import math
 
 from numba import njit, prange
 
-from soilcal.dem.contact import H_TOUCH, contact_force
+from soilcal.dem.contact import H_SIZE, H_TOUCH, contact_force
 from soilcal.dem.neighbour import build_lists
-from soilcal.dem.walls import move_walls, prim_closest
+from soilcal.dem.walls import TRIANGLE, move_walls, prim_closest
 
 DONE, NEED_K, NEED_KW, NEED_CELLS, BLOWUP, SETTLED = 0, 1, 2, 3, 4, 5
 
@@ -79,9 +79,10 @@ def compute_forces(x, v, om, r, m, inv_m, mat, f, t, ovr, gravity, box, periodic
             if ims == 0.0:
                 continue
             d = math.sqrt(d2)
-            nx = dx / d
-            ny = dy / d
-            nz = dz / d
+            invd = 1.0 / d
+            nx = dx * invd
+            ny = dy * invd
+            nz = dz * invd
             delta = rs - d
             ci = ri - 0.5 * delta
             cj = rj - 0.5 * delta
@@ -104,16 +105,48 @@ def compute_forces(x, v, om, r, m, inv_m, mat, f, t, ovr, gravity, box, periodic
                 tz += ctz
                 if delta > mo * ri:
                     mo = delta / ri
-        for k in range(wcnt[i]):
+        # walls with a face contact (bit w): their edge/vertex contacts are dropped
+        face_mask = 0
+        nwc = wcnt[i]
+        has_tri = False
+        for k in range(nwc):
+            p = wnbr[i, k]
+            if prim_kind[p] == TRIANGLE:
+                has_tri = True
+                r8 = prim_closest(prim_kind[p], prim_par, p, xi, yi, zi)
+                if r8[7] == 0 and r8[0] < ri:
+                    face_mask |= 1 << min(prim_wall[p], 62)
+        for k in range(nwc):
             p = wnbr[i, k]
             for q in range(6):
                 wslot[i, k, q] = 0.0
-            dist, nx, ny, nz, cx, cy, cz = prim_closest(prim_kind[p], prim_par, p, xi, yi, zi)
+            dist, nx, ny, nz, cx, cy, cz, feat = prim_closest(prim_kind[p], prim_par, p,
+                                                              xi, yi, zi)
             delta = ri - dist
             if delta <= 0.0 and whist[i, k, H_TOUCH] == 0.0:
                 continue
             if imi == 0.0:
                 continue
+            if has_tri and feat != 0:
+                w = prim_wall[p]
+                dup = (face_mask >> min(w, 62)) & 1 == 1
+                if not dup:
+                    for kk in range(k):
+                        pp = wnbr[i, kk]
+                        if prim_wall[pp] != w or prim_kind[pp] != TRIANGLE:
+                            continue
+                        o8 = prim_closest(prim_kind[pp], prim_par, pp, xi, yi, zi)
+                        if o8[7] != 0 and o8[0] < ri:
+                            ex = o8[4] - cx
+                            ey = o8[5] - cy
+                            ez = o8[6] - cz
+                            if ex * ex + ey * ey + ez * ez < (1e-9 * ri) ** 2:
+                                dup = True
+                                break
+                if dup:
+                    for q in range(H_SIZE):
+                        whist[i, k, q] = 0.0
+                    continue
             w = prim_wall[p]
             ci = ri - 0.5 * delta
             ox, oy, oz = wall_omega[w, 0], wall_omega[w, 1], wall_omega[w, 2]
@@ -277,7 +310,8 @@ def run_loop(nsteps, step0, resume_mid, need_forces, ke_tol, ke_every, max_ovr, 
     The lists live in the *_a buffers on entry and on return.  need_forces: compute the
     forces of the initial state first (fresh or modified system).  resume_mid: the first
     step's kick-drift was already done by a call that stopped for a list reallocation.
-    fstate[0] carries the accumulated wall displacement since the last rebuild.
+    fstate[0] carries the accumulated wall displacement since the last rebuild, fstate[1]
+    counts list builds.
     """
     n = x.shape[0]
     skin2 = 0.25 * skin * skin
@@ -302,6 +336,7 @@ def run_loop(nsteps, step0, resume_mid, need_forces, ke_tol, ke_every, max_ovr, 
             return 0
         swapped = True
         disp[:, :] = 0.0
+        fstate[1] += 1.0
         fstate[0] = 0.0
         _forces(swapped, x, v, om, r, m, inv_m, mat, f, t, ovr, gravity, box, periodic, dt,
                 nbr_a, cnt_a, hist_a, nbr_b, cnt_b, hist_b, pair, codes, prim_kind, prim_wall,
@@ -336,6 +371,7 @@ def run_loop(nsteps, step0, resume_mid, need_forces, ke_tol, ke_every, max_ovr, 
                 return done
             swapped = not swapped
             rebuild = False
+            fstate[1] += 1.0
             fstate[0] = 0.0
             disp[:, :] = 0.0
         _forces(swapped, x, v, om, r, m, inv_m, mat, f, t, ovr, gravity, box, periodic, dt,

@@ -36,7 +36,7 @@ import numpy as np
 from soilcal.errors import InputError
 
 # Columns of the per-pair parameter table ``pair[mi, mj, :]``.
-P_ESTAR, P_GSTAR, P_BETA, P_MUS, P_MUR, P_W, P_NCOL = 0, 1, 2, 3, 4, 5, 6
+P_ESTAR, P_GSTAR, P_BETA, P_MUS, P_MUR, P_W, P_TRATIO, P_NCOL = 0, 1, 2, 3, 4, 5, 6, 7
 
 
 def _num(v, name, src):
@@ -159,7 +159,8 @@ class MaterialTable:
         return self.shear_mod if self.shear_mod is not None else self.materials[k].shear
 
     def table(self, jkr_w_factor: float) -> np.ndarray:
-        """pair[M, M, P_NCOL] float64: E*, G*, beta, mu_s, mu_r, w (work of adhesion).
+        """pair[M, M, P_NCOL] float64: E*, G*, beta, mu_s, mu_r, w (work of adhesion),
+        sqrt(4 G*/E*) (ratio of tangential to normal damping).
 
         ``jkr_w_factor`` converts the input surface energy to the work of adhesion w used by
         the kernel (1 for the EDEM convention, 2 for the LAMMPS convention, see contact.py).
@@ -189,7 +190,8 @@ class MaterialTable:
                     g0 = 1.0 / ((2 - mi.poisson) / mi.shear + (2 - mj.poisson) / mj.shear)
                     gamma = gamma * (gstar / g0) ** 0.4
                 out[i, j] = (estar, gstar, restitution_beta(p.restitution), p.friction,
-                             p.rolling_friction, jkr_w_factor * gamma)
+                             p.rolling_friction, jkr_w_factor * gamma,
+                             math.sqrt(4.0 * gstar / estar))
         return out
 
     def rayleigh_dt(self, rmin_per_material: dict[int, float]) -> float:

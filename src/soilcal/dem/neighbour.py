@@ -131,9 +131,17 @@ def build_lists(x, r, box, periodic, skin, extra, cell_start, cell_idx, cell_of,
         for dz in range(a2, b2 + 1):
             zz = cz + dz
             for dy in range(a1, b1 + 1):
-                yy = (cy + dy) % n1
+                yy = cy + dy
+                if yy < 0:
+                    yy += n1
+                elif yy >= n1:
+                    yy -= n1
                 for dx in range(a0, b0 + 1):
-                    xx = (cx + dx) % n0
+                    xx = cx + dx
+                    if xx < 0:
+                        xx += n0
+                    elif xx >= n0:
+                        xx -= n0
                     cc = xx + n0 * (yy + n1 * zz)
                     for q in range(cell_start[cc], cell_start[cc + 1]):
                         j = cell_idx[q]

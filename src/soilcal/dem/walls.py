@@ -18,18 +18,27 @@ axis omega through the wall centre c)::
     p' = c + Rot(p - c) + v dt,   d' = Rot d,   c' = c + v dt
     wall velocity at a point q: v + omega x (q - c)
 
-Closest point: every kind returns (dist, nx, ny, nz, cx, cy, cz), the signed distance from
-the sphere centre to the surface along the outward unit normal n (pointing from the wall to
-the sphere centre) and the closest surface point c; overlap = radius - dist.  Plane::
+Closest point: every kind returns (dist, nx, ny, nz, cx, cy, cz, feature), the signed
+distance from the sphere centre to the surface along the outward unit normal n (pointing from
+the wall to the sphere centre), the closest surface point c and, for triangles, the feature
+of c (0 face, 1 edge, 2 vertex); overlap = radius - dist.  Plane::
 
     dist = (p - p0) . n0,   c = p - dist n0
 
-Parameter layouts:
-    PLANE     point(0:3) unit normal(3:6)
-    CYLINDER  axis point(0:3) unit axis(3:6) radius(6) half length(7) inner flag(8)
-    CONE      apex/base parameters as in soilcal.dem.geometry.cone_closest
-    BOX       centre(0:3) axes rows (3:6, 6:9, 9:12) half extents(12:15)
-    TRIANGLE  v0(0:3) v1(3:6) v2(6:9)
+the other kinds are the kernels of :mod:`soilcal.dem.geometry` (formulas there).
+
+Parameter layouts (rows of prim_par):
+    PLANE      point(0:3) unit normal(3:6)
+    CYLINDER   axis point(0:3) unit axis(3:6) radius(6) half length(7) inner flag(8)
+    CONE       axis point(0:3) unit axis(3:6) r0(6) r1(7) z0(8) z1(9) inner flag(10)
+    RECTANGLE  centre(0:3) unit normal(3:6) unit u axis(6:9) half_u(9) half_v(10)
+    DISK       centre(0:3) unit normal(3:6) radius(6)
+    TRIANGLE   v0(0:3) v1(3:6) v2(6:9)   (boxes and any STL surface are triangle meshes)
+
+Triangle meshes: a sphere touching a mesh at a shared edge or vertex would be reported by
+every triangle sharing it.  Per particle and wall, edge/vertex contacts are ignored when the
+same wall has a face contact with the particle, and among edge/vertex contacts with the same
+contact point (within 1e-9 of the radius) only the first is kept.
 """
 
 from __future__ import annotations
@@ -39,11 +48,14 @@ import math
 import numpy as np
 from numba import njit
 
-PLANE, CYLINDER, CONE, BOX, TRIANGLE = 0, 1, 2, 3, 4
+from soilcal.dem.geometry import (cone_closest_par, cylinder_closest_par, disk_closest_par,
+                                  rectangle_closest_par, triangle_closest_par)
+
+PLANE, CYLINDER, CONE, BOX, TRIANGLE, RECTANGLE, DISK = 0, 1, 2, 3, 4, 5, 6
 NPAR = 16
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def plane_dist(px, py, pz, par, p):
     nx, ny, nz = par[p, 3], par[p, 4], par[p, 5]
     d = (px - par[p, 0]) * nx + (py - par[p, 1]) * ny + (pz - par[p, 2]) * nz
@@ -54,8 +66,22 @@ def plane_dist(px, py, pz, par, p):
 def prim_closest(kind, par, p, px, py, pz):
     """Dispatch to the closest-point function of primitive p (row of par) of a kind."""
     if kind == PLANE:
-        return plane_dist(px, py, pz, par, p)
-    return math.inf, 0.0, 0.0, 1.0, px, py, pz
+        d, nx, ny, nz, cx, cy, cz = plane_dist(px, py, pz, par, p)
+        return d, nx, ny, nz, cx, cy, cz, 0
+    if kind == TRIANGLE:
+        r = triangle_closest_par(px, py, pz, par, p)
+        return r[0], r[1], r[2], r[3], r[4], r[5], r[6], int(r[7])
+    if kind == CYLINDER:
+        r = cylinder_closest_par(px, py, pz, par, p)
+    elif kind == CONE:
+        r = cone_closest_par(px, py, pz, par, p)
+    elif kind == RECTANGLE:
+        r = rectangle_closest_par(px, py, pz, par, p)
+    elif kind == DISK:
+        r = disk_closest_par(px, py, pz, par, p)
+    else:
+        return math.inf, 0.0, 0.0, 1.0, px, py, pz, 0
+    return r[0], r[1], r[2], r[3], r[4], r[5], r[6], 0
 
 
 @njit(cache=True)
