@@ -8,6 +8,7 @@ include: "workflow/rules/rsm.smk"
 include: "workflow/rules/optimise.smk"
 include: "workflow/rules/plots.smk"
 include: "workflow/rules/errata.smk"
+include: "workflow/rules/imaging.smk"
 
 
 rule all:

@@ -1,13 +1,21 @@
 # Configuration, validated before any job runs: the workflow config against its schema, then
 # every soil file against the soil schema and the published tables against their designs.
+import os
+
 from snakemake.utils import validate
 
 from soilcal.config import load_workflow_config
+from soilcal.imaging.manifest import read_manifest
 
 
 validate(config, "../schemas/config.schema.yaml")
 SOILS = load_workflow_config(config)
 RES = config.get("resources", "resources")
+IMAGE_MANIFESTS = {
+    soil: read_manifest(f"{RES}/images/{soil}/manifest.yaml")
+    for soil in SOILS
+    if os.path.isfile(f"{RES}/images/{soil}/manifest.yaml")
+}
 
 wildcard_constraints:
     soil="|".join(SOILS),
@@ -56,7 +64,15 @@ def all_targets():
         for st in s.stages:
             out += stage_targets(soil, st)
         out.append(f"results/{soil}/published/errata.csv")
+        if soil in IMAGE_MANIFESTS:
+            out.append(f"results/{soil}/images/measurements.json")
     return out
+
+
+def image_photos(wildcards):
+    m = IMAGE_MANIFESTS[wildcards.soil]
+    base = f"{RES}/images/{wildcards.soil}"
+    return [f"{base}/manifest.yaml"] + [f"{base}/{p['file']}" for p in m["photos"]]
 
 
 def errata_inputs(wildcards):

@@ -2,21 +2,18 @@
 
 import json
 import logging
-import sys
 from pathlib import Path
 
-log = open(snakemake.log[0], "w")  # noqa: F821
-sys.stdout = sys.stderr = log
-logging.basicConfig(stream=log, level=logging.INFO, format="%(asctime)s %(levelname)s %(message)s")
+from soilcal.imaging.manifest import measure_manifest
+from soilcal.logs import redirect
 
-from soilcal.imaging.manifest import measure_manifest  # noqa: E402
-
-out = Path(snakemake.output.json)  # noqa: F821
-figdir = Path(snakemake.output.figures)  # noqa: F821
-figdir.mkdir(parents=True, exist_ok=True)
-logging.info("measuring %s", snakemake.params.manifest)  # noqa: F821
-result = measure_manifest(snakemake.params.manifest, figdir, snakemake.params.threshold)  # noqa: F821
-for group, r in result.items():
-    logging.info("%s: %s", group, {k: r[k] for k in ("angle_deg", "spread_deg", "area_mm2") if k in r})
-out.parent.mkdir(parents=True, exist_ok=True)
-out.write_text(json.dumps(result, indent=2) + "\n")
+with redirect(snakemake.log[0]):  # noqa: F821
+    out = Path(snakemake.output.json)  # noqa: F821
+    figdir = Path(snakemake.output.figures)  # noqa: F821
+    figdir.mkdir(parents=True, exist_ok=True)
+    logging.info("measuring %s", snakemake.params.manifest)  # noqa: F821
+    result = measure_manifest(snakemake.params.manifest, figdir, snakemake.params.threshold)  # noqa: F821
+    for group, r in result.items():
+        logging.info("%s: %s", group, {k: r[k] for k in ("angle_deg", "spread_deg", "area_mm2") if k in r})
+    out.parent.mkdir(parents=True, exist_ok=True)
+    out.write_text(json.dumps(result, indent=2) + "\n")

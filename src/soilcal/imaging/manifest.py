@@ -31,6 +31,8 @@ def read_manifest(path):
             raise InputError(path, f"photos[{i}].file", "a file name", p)
         if p.get("kind") not in KINDS:
             raise InputError(path, f"photos[{i}].kind", f"one of {KINDS}", p.get("kind"))
+        if not (path.parent / str(p["file"])).is_file():
+            raise InputError(path, f"photos[{i}].file", f"an existing image file in {path.parent}", p["file"])
         p.setdefault("group", p["kind"])
     return data
 
