@@ -15,6 +15,7 @@ rule figures:
     params:
         stage=lambda w: stage_cfg(w.soil, w.stage),
         targets=lambda w: soil_cfg(w.soil)["targets"],
+        parameters=lambda w: soil_cfg(w.soil)["parameters"],
     wildcard_constraints:
         kind="pareto|steepest|surfaces|diagnostics",
     conda:

@@ -56,8 +56,11 @@ def write_optimum(stage: dict, table_path, targets: dict, seed: int, out) -> Non
     df.to_csv(out, index=False)
 
 
-def write_figures(kind: str, stage: dict, table_path, targets: dict, outdir) -> list[Path]:
-    """Figures of one kind for a stage: pareto, steepest, surfaces, diagnostics."""
+def write_figures(kind: str, stage: dict, table_path, targets: dict, outdir, parameters: dict | None = None) -> list[Path]:
+    """Figures of one kind for a stage: pareto, steepest, surfaces, diagnostics.
+
+    ``parameters`` (the soil's parameter table) gives the axis labels 'A: name (unit)'.
+    """
     from soilcal import plots, rsm
 
     outdir = Path(outdir)
@@ -67,21 +70,25 @@ def write_figures(kind: str, stage: dict, table_path, targets: dict, outdir) -> 
     if kind == "steepest":
         for rid, col in response_columns(stage).items():
             df = table.rename(columns={col: rid})
+            rlab = next(f"{r['name']} ({r['unit']})" for r in stage["responses"] if r["id"] == rid)
             written += list(plots.steepest_ascent(df, list(stage["factors"]), rid,
-                                                  targets.get(rid, {}).get("value"), outdir / rid))
+                                                  targets.get(rid, {}).get("value"), outdir / rid,
+                                                  response_label=rlab))
         return written
     data = stage_data(stage, table)
     syms = list(stage["factors"])
-    labels = _labels(stage)
+    labels = _labels(stage, parameters or {})
+    rlabels = {r["id"]: f"{r['name']} ({r['unit']})" for r in stage["responses"]}
     for sf in fit_stage(stage, table):
         rid = sf.response
+        rlab = rlabels[rid]
         if kind == "pareto":
             eff = rsm.screening_effects(data, syms, rid, dummies=stage.get("dummies"))
-            written += list(plots.pareto_effects(eff, outdir / rid))
+            written += list(plots.pareto_effects(eff, outdir / rid, response_label=rlab))
         elif kind == "diagnostics":
             model = sf.reduced
-            written += list(plots.predicted_vs_actual(model, outdir / f"{rid}_predicted_vs_actual"))
-            written += list(plots.residual_diagnostics(model, outdir / f"{rid}_residuals"))
+            written += list(plots.predicted_vs_actual(model, outdir / f"{rid}_predicted_vs_actual", response_label=rlab))
+            written += list(plots.residual_diagnostics(model, outdir / f"{rid}_residuals", response_label=rlab))
         elif kind == "surfaces":
             model = sf.reduced
             a = model.anova()
@@ -99,14 +106,26 @@ def write_figures(kind: str, stage: dict, table_path, targets: dict, outdir) -> 
             points = data[syms].to_numpy(float)
             for i, j in pairs:
                 written += list(plots.response_surface(model, i, j, stem=outdir / f"{rid}_{syms[i]}{syms[j]}",
-                                                       labels=labels, design_points=points))
+                                                       labels=labels, design_points=points, response_label=rlab))
         else:
             raise ValueError(kind)
     return written
 
 
-def _labels(stage: dict) -> list[str]:
-    return [f"{s}" for s in stage["factors"]]
+def _labels(stage: dict, parameters: dict) -> list[str]:
+    out = []
+    for sym, f in stage["factors"].items():
+        p = parameters.get(f["parameter"])
+        out.append(plots_label(sym, p))
+    return out
+
+
+def plots_label(sym: str, p: dict | None) -> str:
+    from soilcal.plots import factor_label
+
+    if not p:
+        return sym
+    return factor_label(sym, (p["name"], None if p["unit"] == "-" else p["unit"]))
 
 
 def fitted_models(stage: dict, table: pd.DataFrame, which: str = "reduced") -> dict:
