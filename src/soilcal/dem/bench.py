@@ -15,6 +15,7 @@ instead of the default 5 %.
 from __future__ import annotations
 
 import math
+import os
 import resource
 import time
 
@@ -66,13 +67,16 @@ def run_settle(n: int, steps: int, threads: int, cohesion: str = "none", seed: i
     t0 = time.perf_counter()
     sim.run(0)  # list build and initial forces
     t1 = time.perf_counter()
+    c1 = time.process_time()
     sim.run(steps)
     t2 = time.perf_counter()
+    cpu_s = time.process_time() - c1
     wall_s = t2 - t1
     rss = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0
     zmax = float((sim.x[:, 2] + sim.p.r).max())
     return dict(case="settle", n=int(sim.n), steps=int(steps), threads=int(threads),
-                cohesion=cohesion, wall_s=round(wall_s, 4), setup_s=round(t1 - t0, 4),
+                cohesion=cohesion, wall_s=round(wall_s, 4), cpu_s=round(cpu_s, 4),
+                setup_s=round(t1 - t0, 4), load_avg_1min=os.getloadavg()[0],
                 particle_steps_per_s=float(sim.n * steps / wall_s) if wall_s > 0 else None,
                 peak_rss_mb=round(rss, 1), ke_final_J=sim.kinetic_energy(),
                 bed_top_m=zmax, neighbour_width=int(sim._k), skin_m=sim.skin,

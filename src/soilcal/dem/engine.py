@@ -229,7 +229,7 @@ class Simulation:
                     if pr[a, b, P_W] > 0:
                         extra = max(extra, -jkr_separation(rmax, pr[a, b, P_ESTAR], pr[a, b, P_W]))
         self.extra = extra * 1.01
-        self.skin = float(self.skin_user) if self.skin_user is not None else 0.3 * rmax
+        self.skin = float(self.skin_user) if self.skin_user is not None else 0.2 * rmax
         if self.skin <= 0:
             raise InputError(self.source, "skin", "a neighbour skin > 0 m", self.skin)
         cell = 2 * rmax + self.skin + self.extra

@@ -27,6 +27,7 @@ from soilcal.dem.neighbour import build_lists
 from soilcal.dem.walls import TRIANGLE, move_walls, prim_closest
 
 DONE, NEED_K, NEED_KW, NEED_CELLS, BLOWUP, SETTLED = 0, 1, 2, 3, 4, 5
+NBLK_GROUPS = 32
 
 
 @njit(cache=True, parallel=True)
@@ -42,153 +43,159 @@ def compute_forces(x, v, om, r, m, inv_m, mat, f, t, ovr, gravity, box, periodic
     p0 = periodic[0]
     p1 = periodic[1]
     gx, gy, gz = gravity[0], gravity[1], gravity[2]
-    for i in prange(n):
-        xi, yi, zi, ri = x[i, 0], x[i, 1], x[i, 2], r[i]
-        vxi, vyi, vzi = v[i, 0], v[i, 1], v[i, 2]
-        wxi, wyi, wzi = om[i, 0], om[i, 1], om[i, 2]
-        imi = inv_m[i]
-        mi = mat[i]
-        fx = m[i] * gx
-        fy = m[i] * gy
-        fz = m[i] * gz
-        tx = 0.0
-        ty = 0.0
-        tz = 0.0
-        mo = 0.0
-        for k in range(cnt[i]):
-            j = nbr[i, k]
-            dx = xi - x[j, 0]
-            dy = yi - x[j, 1]
-            dz = zi - x[j, 2]
-            if p0:
-                if dx > h0:
-                    dx -= L0
-                elif dx < -h0:
-                    dx += L0
-            if p1:
-                if dy > h1:
-                    dy -= L1
-                elif dy < -h1:
-                    dy += L1
-            rj = r[j]
-            rs = ri + rj
-            d2 = dx * dx + dy * dy + dz * dz
-            if d2 >= rs * rs and hist[i, k, H_TOUCH] == 0.0:
-                continue
-            ims = imi + inv_m[j]
-            if ims == 0.0:
-                continue
-            d = math.sqrt(d2)
-            invd = 1.0 / d
-            nx = dx * invd
-            ny = dy * invd
-            nz = dz * invd
-            delta = rs - d
-            ci = ri - 0.5 * delta
-            cj = rj - 0.5 * delta
-            ax = ci * wxi + cj * om[j, 0]
-            ay = ci * wyi + cj * om[j, 1]
-            az = ci * wzi + cj * om[j, 2]
-            rvx = vxi - v[j, 0] - (ay * nz - az * ny)
-            rvy = vyi - v[j, 1] - (az * nx - ax * nz)
-            rvz = vzi - v[j, 2] - (ax * ny - ay * nx)
-            act, cfx, cfy, cfz, ctx, cty, ctz = contact_force(
-                codes, pair, mi, mat[j], delta, nx, ny, nz, rvx, rvy, rvz,
-                wxi - om[j, 0], wyi - om[j, 1], wzi - om[j, 2],
-                ci, ri * rj / rs, 1.0 / ims, dt, hist, i, k)
-            if act:
-                fx += cfx
-                fy += cfy
-                fz += cfz
-                tx += ctx
-                ty += cty
-                tz += ctz
-                if delta > mo * ri:
-                    mo = delta / ri
-        # walls with a face contact (bit w): their edge/vertex contacts are dropped
-        face_mask = 0
-        nwc = wcnt[i]
-        has_tri = False
-        for k in range(nwc):
-            p = wnbr[i, k]
-            if prim_kind[p] == TRIANGLE:
-                has_tri = True
-                r8 = prim_closest(prim_kind[p], prim_par, p, xi, yi, zi)
-                if r8[7] == 0 and r8[0] < ri:
-                    face_mask |= 1 << min(prim_wall[p], 62)
-        for k in range(nwc):
-            p = wnbr[i, k]
-            for q in range(6):
-                wslot[i, k, q] = 0.0
-            dist, nx, ny, nz, cx, cy, cz, feat = prim_closest(prim_kind[p], prim_par, p,
-                                                              xi, yi, zi)
-            delta = ri - dist
-            if delta <= 0.0 and whist[i, k, H_TOUCH] == 0.0:
-                continue
-            if imi == 0.0:
-                continue
-            if has_tri and feat != 0:
-                w = prim_wall[p]
-                dup = (face_mask >> min(w, 62)) & 1 == 1
-                if not dup:
-                    for kk in range(k):
-                        pp = wnbr[i, kk]
-                        if prim_wall[pp] != w or prim_kind[pp] != TRIANGLE:
+    # particles are processed in blocks of 64 dealt round-robin over NBLK_GROUPS groups, so
+    # the threads share every region of the domain (balanced when contacts are unevenly
+    # spread, e.g. a falling column over a settled bed); results do not depend on it
+    nblk = (n + 63) // 64
+    for c in prange(NBLK_GROUPS):
+        for blk in range(c, nblk, NBLK_GROUPS):
+            for i in range(blk * 64, min(n, blk * 64 + 64)):
+                xi, yi, zi, ri = x[i, 0], x[i, 1], x[i, 2], r[i]
+                vxi, vyi, vzi = v[i, 0], v[i, 1], v[i, 2]
+                wxi, wyi, wzi = om[i, 0], om[i, 1], om[i, 2]
+                imi = inv_m[i]
+                mi = mat[i]
+                fx = m[i] * gx
+                fy = m[i] * gy
+                fz = m[i] * gz
+                tx = 0.0
+                ty = 0.0
+                tz = 0.0
+                mo = 0.0
+                for k in range(cnt[i]):
+                    j = nbr[i, k]
+                    dx = xi - x[j, 0]
+                    dy = yi - x[j, 1]
+                    dz = zi - x[j, 2]
+                    if p0:
+                        if dx > h0:
+                            dx -= L0
+                        elif dx < -h0:
+                            dx += L0
+                    if p1:
+                        if dy > h1:
+                            dy -= L1
+                        elif dy < -h1:
+                            dy += L1
+                    rj = r[j]
+                    rs = ri + rj
+                    d2 = dx * dx + dy * dy + dz * dz
+                    if d2 >= rs * rs and hist[i, k, H_TOUCH] == 0.0:
+                        continue
+                    ims = imi + inv_m[j]
+                    if ims == 0.0:
+                        continue
+                    d = math.sqrt(d2)
+                    invd = 1.0 / d
+                    nx = dx * invd
+                    ny = dy * invd
+                    nz = dz * invd
+                    delta = rs - d
+                    ci = ri - 0.5 * delta
+                    cj = rj - 0.5 * delta
+                    ax = ci * wxi + cj * om[j, 0]
+                    ay = ci * wyi + cj * om[j, 1]
+                    az = ci * wzi + cj * om[j, 2]
+                    rvx = vxi - v[j, 0] - (ay * nz - az * ny)
+                    rvy = vyi - v[j, 1] - (az * nx - ax * nz)
+                    rvz = vzi - v[j, 2] - (ax * ny - ay * nx)
+                    act, cfx, cfy, cfz, ctx, cty, ctz = contact_force(
+                        codes, pair, mi, mat[j], delta, nx, ny, nz, rvx, rvy, rvz,
+                        wxi - om[j, 0], wyi - om[j, 1], wzi - om[j, 2],
+                        ci, ri * rj / rs, 1.0 / ims, dt, hist, i, k)
+                    if act:
+                        fx += cfx
+                        fy += cfy
+                        fz += cfz
+                        tx += ctx
+                        ty += cty
+                        tz += ctz
+                        if delta > mo * ri:
+                            mo = delta / ri
+                # walls with a face contact (bit w): their edge/vertex contacts are dropped
+                face_mask = 0
+                nwc = wcnt[i]
+                has_tri = False
+                for k in range(nwc):
+                    p = wnbr[i, k]
+                    if prim_kind[p] == TRIANGLE:
+                        has_tri = True
+                        r8 = prim_closest(prim_kind[p], prim_par, p, xi, yi, zi)
+                        if r8[7] == 0 and r8[0] < ri:
+                            face_mask |= 1 << min(prim_wall[p], 62)
+                for k in range(nwc):
+                    p = wnbr[i, k]
+                    for q in range(6):
+                        wslot[i, k, q] = 0.0
+                    dist, nx, ny, nz, cx, cy, cz, feat = prim_closest(prim_kind[p], prim_par, p,
+                                                                      xi, yi, zi)
+                    delta = ri - dist
+                    if delta <= 0.0 and whist[i, k, H_TOUCH] == 0.0:
+                        continue
+                    if imi == 0.0:
+                        continue
+                    if has_tri and feat != 0:
+                        w = prim_wall[p]
+                        dup = (face_mask >> min(w, 62)) & 1 == 1
+                        if not dup:
+                            for kk in range(k):
+                                pp = wnbr[i, kk]
+                                if prim_wall[pp] != w or prim_kind[pp] != TRIANGLE:
+                                    continue
+                                o8 = prim_closest(prim_kind[pp], prim_par, pp, xi, yi, zi)
+                                if o8[7] != 0 and o8[0] < ri:
+                                    ex = o8[4] - cx
+                                    ey = o8[5] - cy
+                                    ez = o8[6] - cz
+                                    if ex * ex + ey * ey + ez * ez < (1e-9 * ri) ** 2:
+                                        dup = True
+                                        break
+                        if dup:
+                            for q in range(H_SIZE):
+                                whist[i, k, q] = 0.0
                             continue
-                        o8 = prim_closest(prim_kind[pp], prim_par, pp, xi, yi, zi)
-                        if o8[7] != 0 and o8[0] < ri:
-                            ex = o8[4] - cx
-                            ey = o8[5] - cy
-                            ez = o8[6] - cz
-                            if ex * ex + ey * ey + ez * ez < (1e-9 * ri) ** 2:
-                                dup = True
-                                break
-                if dup:
-                    for q in range(H_SIZE):
-                        whist[i, k, q] = 0.0
-                    continue
-            w = prim_wall[p]
-            ci = ri - 0.5 * delta
-            ox, oy, oz = wall_omega[w, 0], wall_omega[w, 1], wall_omega[w, 2]
-            qx = cx - wall_centre[w, 0]
-            qy = cy - wall_centre[w, 1]
-            qz = cz - wall_centre[w, 2]
-            vwx = wall_vel[w, 0] + oy * qz - oz * qy
-            vwy = wall_vel[w, 1] + oz * qx - ox * qz
-            vwz = wall_vel[w, 2] + ox * qy - oy * qx
-            rvx = vxi - vwx - ci * (wyi * nz - wzi * ny)
-            rvy = vyi - vwy - ci * (wzi * nx - wxi * nz)
-            rvz = vzi - vwz - ci * (wxi * ny - wyi * nx)
-            act, cfx, cfy, cfz, ctx, cty, ctz = contact_force(
-                codes, pair, mi, prim_mat[p], delta, nx, ny, nz, rvx, rvy, rvz,
-                wxi - ox, wyi - oy, wzi - oz, ci, ri, 1.0 / imi, dt, whist, i, k)
-            if act:
-                fx += cfx
-                fy += cfy
-                fz += cfz
-                tx += ctx
-                ty += cty
-                tz += ctz
-                if delta > mo * ri:
-                    mo = delta / ri
-                # reaction on the wall: force -F, torque about the wall centre
-                # -(x_i - c_w) x F - T_i  (conserves angular momentum exactly)
-                px = xi - wall_centre[w, 0]
-                py = yi - wall_centre[w, 1]
-                pz = zi - wall_centre[w, 2]
-                wslot[i, k, 0] = -cfx
-                wslot[i, k, 1] = -cfy
-                wslot[i, k, 2] = -cfz
-                wslot[i, k, 3] = -(py * cfz - pz * cfy) - ctx
-                wslot[i, k, 4] = -(pz * cfx - px * cfz) - cty
-                wslot[i, k, 5] = -(px * cfy - py * cfx) - ctz
-        f[i, 0] = fx
-        f[i, 1] = fy
-        f[i, 2] = fz
-        t[i, 0] = tx
-        t[i, 1] = ty
-        t[i, 2] = tz
-        ovr[i] = mo
+                    w = prim_wall[p]
+                    ci = ri - 0.5 * delta
+                    ox, oy, oz = wall_omega[w, 0], wall_omega[w, 1], wall_omega[w, 2]
+                    qx = cx - wall_centre[w, 0]
+                    qy = cy - wall_centre[w, 1]
+                    qz = cz - wall_centre[w, 2]
+                    vwx = wall_vel[w, 0] + oy * qz - oz * qy
+                    vwy = wall_vel[w, 1] + oz * qx - ox * qz
+                    vwz = wall_vel[w, 2] + ox * qy - oy * qx
+                    rvx = vxi - vwx - ci * (wyi * nz - wzi * ny)
+                    rvy = vyi - vwy - ci * (wzi * nx - wxi * nz)
+                    rvz = vzi - vwz - ci * (wxi * ny - wyi * nx)
+                    act, cfx, cfy, cfz, ctx, cty, ctz = contact_force(
+                        codes, pair, mi, prim_mat[p], delta, nx, ny, nz, rvx, rvy, rvz,
+                        wxi - ox, wyi - oy, wzi - oz, ci, ri, 1.0 / imi, dt, whist, i, k)
+                    if act:
+                        fx += cfx
+                        fy += cfy
+                        fz += cfz
+                        tx += ctx
+                        ty += cty
+                        tz += ctz
+                        if delta > mo * ri:
+                            mo = delta / ri
+                        # reaction on the wall: force -F, torque about the wall centre
+                        # -(x_i - c_w) x F - T_i  (conserves angular momentum exactly)
+                        px = xi - wall_centre[w, 0]
+                        py = yi - wall_centre[w, 1]
+                        pz = zi - wall_centre[w, 2]
+                        wslot[i, k, 0] = -cfx
+                        wslot[i, k, 1] = -cfy
+                        wslot[i, k, 2] = -cfz
+                        wslot[i, k, 3] = -(py * cfz - pz * cfy) - ctx
+                        wslot[i, k, 4] = -(pz * cfx - px * cfz) - cty
+                        wslot[i, k, 5] = -(px * cfy - py * cfx) - ctz
+                f[i, 0] = fx
+                f[i, 1] = fy
+                f[i, 2] = fz
+                t[i, 0] = tx
+                t[i, 1] = ty
+                t[i, 2] = tz
+                ovr[i] = mo
 
 
 @njit(cache=True)
