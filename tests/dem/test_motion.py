@@ -42,10 +42,13 @@ def test_block_sticks_and_slides_at_friction_angle():
     assert (v - v0) / t == pytest.approx(a_expected, rel=0.02)
 
 
-def test_constant_torque_rolling_deceleration():
+@pytest.mark.parametrize("model", ["constant_torque", "epsd"])
+def test_rolling_deceleration(model):
+    # EPSD: once the rolling spring is fully mobilised its moment is mu_r R* F_n with
+    # R* = R for a sphere on a plane, the same torque as the constant-torque model
     mur, v0 = 0.1, 0.2
     sim = Simulation(table(e=0.5, mu=0.5, mur=mur, E=1e8), dt_fraction=0.2,
-                     contact_model=dict(rolling="constant_torque"))
+                     contact_model=dict(rolling=model))
     # rolling without slip: v = omega_y R
     sim.add_particles([[0, 0, R * 0.99993]], R, "soil", v=[[v0, 0, 0]], omega=[[0, v0 / R, 0]])
     sim.add_plane((0, 0, 0), (0, 0, 1), "soil")
