@@ -18,16 +18,19 @@ SOILS = ["cinnamon-soil", "yangtze-clay-loam"]
 
 
 def _copy(tmp: Path) -> Path:
-    for item in ("Snakefile", "workflow", "config"):
-        src = ROOT / item
-        (shutil.copytree if src.is_dir() else shutil.copy)(src, tmp / item, symlinks=True)
+    shutil.copy(ROOT / "Snakefile", tmp / "Snakefile")
+    shutil.copytree(ROOT / "envs", tmp / "envs")
+    for item in ("workflow", "config"):
+        shutil.copytree(ROOT / item, tmp / item, symlinks=True)
     # the schema symlink points into the package; resolve it for the copy
     link = tmp / "workflow/schemas/soil.schema.yaml"
     if link.is_symlink():
         link.unlink()
         shutil.copy(ROOT / "src/soilcal/config/soil.schema.yaml", link)
     for soil in SOILS:
-        shutil.copytree(ROOT / "resources/published" / soil, tmp / "resources/published" / soil)
+        for kind in ("published", "images"):
+            if (ROOT / "resources" / kind / soil).is_dir():
+                shutil.copytree(ROOT / "resources" / kind / soil, tmp / "resources" / kind / soil)
     cfg = yaml.safe_load((tmp / "config/config.yaml").read_text())
     cfg["soils"] = SOILS
     (tmp / "config/config.yaml").write_text(yaml.safe_dump(cfg))
@@ -65,6 +68,16 @@ def test_replay_outputs(done):
     assert list((d / "pb/figures/pareto").glob("*.png"))
     errata = pd.read_csv(d / "errata.csv")
     assert list(errata.columns) == ["where", "printed", "recomputed", "note"]
+    photos = done / "results/cinnamon-soil/images/measurements.json"
+    assert abs(__import__("json").loads(photos.read_text())["stacking"]["angle_deg"] - 27.69) <= 0.3
+
+
+def test_missing_photo_is_one_clear_error(tmp_path):
+    tmp = _copy(tmp_path)
+    (tmp / "resources/images/cinnamon-soil/stacking_2.jpg").unlink()
+    r = _run(tmp, "-n", "--cores", "2", check=False)
+    assert r.returncode != 0
+    assert "manifest.yaml: photos[1].file: expected an existing image file" in r.stdout + r.stderr
 
 
 def _planned_jobs(tmp: Path) -> list[str]:
