@@ -46,7 +46,8 @@ the work of adhesion w (energy per unit area to separate the two surfaces)::
     delta = a^2/R* - sqrt(2 pi w a / E*)
     F_n   = 4 E* a^3/(3 R*) - sqrt(8 pi w E* a^3)
     pull-off (force-controlled minimum): F_po = -3/2 pi w R*  at a = (9 pi w R*^2/(8 E*))^(1/3)
-    separation (displacement-controlled): a_c = (pi w R*^2 / (8 E*))^(1/3), delta_c = delta(a_c)
+    separation (displacement-controlled): a_c = (pi w R*^2 / (8 E*))^(1/3),
+        delta_c = delta(a_c) = -3/4 (pi^2 w^2 R* / E*^2)^(1/3)
 
 The contact is formed at delta > 0 and kept on the attractive branch beyond zero overlap
 until delta < delta_c (< 0).  S_n = 2 E* a and S_t = 8 G* a use the JKR contact radius.
@@ -76,7 +77,7 @@ import math
 import numpy as np
 from numba import njit
 
-from soilcal.dem.materials import P_BETA, P_ESTAR, P_GSTAR, P_MUR, P_MUS, P_TRATIO, P_W
+from soilcal.dem.materials import P_BETA, P_ESTAR, P_GSTAR, P_JKRK, P_MUR, P_MUS, P_TRATIO, P_W
 from soilcal.errors import InputError
 
 NORMAL = {"hertz": 0}
@@ -90,6 +91,7 @@ JKR_CONVENTION = {"edem": 1.0, "lammps": 2.0}  # w = factor * gamma
 H_XI = 0  # 3 tangential displacement
 H_MR = 3  # 3 rolling spring moment (epsd)
 H_TOUCH = 6  # 1 if in contact (JKR hysteresis)
+H_A = 7  # last JKR contact radius (Newton warm start)
 H_SIZE = 8
 
 SQ56 = math.sqrt(5.0 / 6.0)
@@ -123,6 +125,29 @@ def jkr_radius(delta, rstar, estar, w):
         dx = f / fp
         x -= dx
         if abs(dx) <= 1e-15 * x:
+            break
+    return x * x
+
+
+@njit(cache=True, inline="always")
+def jkr_radius_from(delta, rstar, estar, w, a_prev):
+    """jkr_radius with a warm start from the previous step's contact radius (if > 0).
+
+    Newton on the convex f(x) = x^4/R* - c x - delta from any x >= x_c (f' > 0 there; the
+    stable-branch radii are >= a_c > x_c^2) lands right of the root after one step and then
+    decreases monotonically to it.
+    """
+    if a_prev <= 0.0:
+        return jkr_radius(delta, rstar, estar, w)
+    c = math.sqrt(2.0 * math.pi * w / estar)
+    x = math.sqrt(a_prev)
+    for _ in range(60):
+        x3 = x * x * x
+        f = x3 * x / rstar - c * x - delta
+        fp = 4.0 * x3 / rstar - c
+        dx = f / fp
+        x -= dx
+        if abs(dx) <= 1e-13 * x:
             break
     return x * x
 
@@ -166,11 +191,14 @@ def contact_force(codes, pair, ma, mb, delta, nx, ny, nz, rvx, rvy, rvz, wrx, wr
     cohesive = codes[4] == 1 and w > 0.0
     if cohesive:
         if delta <= 0.0:
-            if hist[hi, hk, H_TOUCH] == 0.0 or delta < jkr_separation(rstar, estar, w):
+            # separation: delta < delta_c  <=>  delta^3 < -(27/64) pi^2 w^2 R* / E*^2
+            if (hist[hi, hk, H_TOUCH] == 0.0
+                    or delta * delta * delta < -pair[ma, mb, P_JKRK] * rstar):
                 for q in range(H_SIZE):
                     hist[hi, hk, q] = 0.0
                 return False, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0
-        a = jkr_radius(delta, rstar, estar, w)
+        a = jkr_radius_from(delta, rstar, estar, w, hist[hi, hk, H_A])
+        hist[hi, hk, H_A] = a
         fne = jkr_force(a, rstar, estar, w)
         fpo2 = 3.0 * math.pi * w * rstar  # 2 |F_pulloff|
     else:

@@ -36,7 +36,7 @@ import numpy as np
 from soilcal.errors import InputError
 
 # Columns of the per-pair parameter table ``pair[mi, mj, :]``.
-P_ESTAR, P_GSTAR, P_BETA, P_MUS, P_MUR, P_W, P_TRATIO, P_NCOL = 0, 1, 2, 3, 4, 5, 6, 7
+P_ESTAR, P_GSTAR, P_BETA, P_MUS, P_MUR, P_W, P_TRATIO, P_JKRK, P_NCOL = 0, 1, 2, 3, 4, 5, 6, 7, 8
 
 
 def _num(v, name, src):
@@ -160,7 +160,8 @@ class MaterialTable:
 
     def table(self, jkr_w_factor: float) -> np.ndarray:
         """pair[M, M, P_NCOL] float64: E*, G*, beta, mu_s, mu_r, w (work of adhesion),
-        sqrt(4 G*/E*) (ratio of tangential to normal damping).
+        sqrt(4 G*/E*) (ratio of tangential to normal damping), (27/64) pi^2 w^2 / E*^2 (JKR
+        separation: delta_c^3 = -that * R*).
 
         ``jkr_w_factor`` converts the input surface energy to the work of adhesion w used by
         the kernel (1 for the EDEM convention, 2 for the LAMMPS convention, see contact.py).
@@ -191,7 +192,8 @@ class MaterialTable:
                     gamma = gamma * (gstar / g0) ** 0.4
                 out[i, j] = (estar, gstar, restitution_beta(p.restitution), p.friction,
                              p.rolling_friction, jkr_w_factor * gamma,
-                             math.sqrt(4.0 * gstar / estar))
+                             math.sqrt(4.0 * gstar / estar),
+                             27.0 / 64.0 * math.pi**2 * (jkr_w_factor * gamma / estar) ** 2)
         return out
 
     def rayleigh_dt(self, rmin_per_material: dict[int, float]) -> float:
