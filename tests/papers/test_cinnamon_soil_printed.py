@@ -105,19 +105,9 @@ def test_screening_table_4_contradicts_table_3(soil):
 
 
 def test_steepest_choice_and_copied_column_in_errata(soil, tmp_path):
-    from soilcal.replay.run import write_design, write_errata, write_optimum, write_regression
+    from soilcal.replay.run import replay_soil
 
-    dirs = {}
-    for st in soil.stages:
-        d = tmp_path / st["id"]
-        dirs[st["id"]] = str(d)
-        t = soil.table_path(st["id"])
-        write_design(st, t, d / "design.csv", d / "design_check.csv")
-        if st["kind"] != "steepest_ascent":
-            write_regression(st, t, {k: d / f"{k}.csv" for k in ("anova", "fit", "coefficients", "effects")})
-        if st["kind"] == "steepest_ascent" or st.get("optimise"):
-            write_optimum(st, t, soil.data["targets"], soil.data["seed"], d / "optimum.csv")
-    errata = write_errata(soil.data, soil.published_dir(), dirs, tmp_path / "errata.csv")
+    dirs, errata = replay_soil(soil, tmp_path)
     notes = " | ".join(errata["where"] + " :: " + errata["note"])
     # Table 5's stacking angles repeat Table 3 runs 1-6 verbatim ...
     assert "copied column" in notes

@@ -9,7 +9,6 @@ Sources:
   (PB ANOVA), Table 7 (29-run BBD in actual levels), Tables 8-9 (ANOVA), R^2 in the text.
 """
 
-import re
 
 import numpy as np
 import pandas as pd
@@ -270,26 +269,8 @@ def test_vineyard_pb_tables_4_5(y, table):
     np.testing.assert_allclose(eff["contribution_percent"].sum(), 100 * model["sum_sq"] / eff.attrs["cor_total"])
 
 
-# Qiu et al. 2022, Table 3: X1..X11 of runs 1..12 as the extracted text prints them (cells
-# run together) and the stacking angle (deg).
-_CIN_PB_TEXT = """
-1−111−11−1−111−1
-1−1−1−11−11111−1
-11−1111−11−1−1−1
-−11−111−1−1−1111
-1−1111−11−1−1−11
-−1−1−11−11111−11
-−1−1−1−1−1−1−1−1−1−1−1
-−1111−1−111−11−1
-111−1−1−1−111−11
-−1−11−111−11−111
-11−1−1−111−1−111
-−111−1111−11−1−1
-"""
-CIN_PB = np.array(
-    [[int(t) for t in re.findall(r"-?1", ln.replace("\u2212", "-"))] for ln in _CIN_PB_TEXT.split()],
-    dtype=float,
-)
+from printed_tables import CINNAMON_PB as CIN_PB  # noqa: E402  (Qiu et al. 2022, Table 3)
+
 CIN_PB_Y = [30.2, 28.6, 19.2, 19.0, 49.3, 25.3, 15.1, 35.2, 28.9, 37.0, 14.9, 42.0]
 
 

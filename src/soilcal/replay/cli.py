@@ -7,24 +7,12 @@ from pathlib import Path
 
 def _replay(args) -> int:
     from soilcal.config import load_soil
-    from soilcal.replay.run import write_design, write_errata, write_optimum, write_regression
+    from soilcal.replay.run import replay_soil
 
     soil = load_soil(args.soil, args.resources)
     base = Path(args.out) / soil.name / "published"
-    dirs = {}
-    for st in soil.stages:
-        d = base / st["id"]
-        dirs[st["id"]] = str(d)
-        table = soil.table_path(st["id"])
-        write_design(st, table, d / "design.csv", d / "design_check.csv")
-        if table is None:
-            continue
-        if st["kind"] in ("plackett_burman", "box_behnken"):
-            write_regression(st, table, {k: d / f"{k}.csv" for k in ("anova", "fit", "coefficients", "effects")})
-        if st["kind"] == "steepest_ascent" or st.get("optimise"):
-            write_optimum(st, table, soil.data["targets"], soil.data["seed"], d / "optimum.csv")
-    df = write_errata(soil.data, soil.published_dir(), dirs, base / "errata.csv")
-    print(f"{soil.name}: {len(df)} errata -> {base / 'errata.csv'}")
+    _, errata = replay_soil(soil, base)
+    print(f"{soil.name}: {len(errata)} errata -> {base / 'errata.csv'}")
     return 0
 
 

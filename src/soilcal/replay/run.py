@@ -159,4 +159,24 @@ def write_errata(soil: dict, published_dir, stage_dirs: dict[str, str], out) -> 
     return df
 
 
-__all__ = ["write_design", "write_regression", "write_optimum", "write_figures", "write_errata"]
+def replay_soil(soil, out_dir) -> tuple[dict[str, str], pd.DataFrame]:
+    """Replay every stage of a loaded :class:`~soilcal.config.Soil` (no figures) into
+    ``out_dir/<stage>/`` and write ``out_dir/errata.csv``; return the stage folders and errata."""
+    out_dir = Path(out_dir)
+    dirs = {}
+    for st in soil.stages:
+        d = out_dir / st["id"]
+        dirs[st["id"]] = str(d)
+        table = soil.table_path(st["id"])
+        write_design(st, table, d / "design.csv", d / "design_check.csv")
+        if table is None:
+            continue
+        if st["kind"] in ("plackett_burman", "box_behnken"):
+            write_regression(st, table, {k: d / f"{k}.csv" for k in ("anova", "fit", "coefficients", "effects")})
+        if st["kind"] == "steepest_ascent" or st.get("optimise"):
+            write_optimum(st, table, soil.data["targets"], soil.data["seed"], d / "optimum.csv")
+    errata = write_errata(soil.data, soil.published_dir(), dirs, out_dir / "errata.csv")
+    return dirs, errata
+
+
+__all__ = ["replay_soil", "write_design", "write_regression", "write_optimum", "write_figures", "write_errata"]
