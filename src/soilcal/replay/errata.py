@@ -19,6 +19,9 @@ import numpy as np
 import pandas as pd
 from scipy import stats
 
+from soilcal.errors import InputError
+from soilcal.rsm.printed import parse_printed as rsm_parse_printed
+
 COLUMNS = ["where", "printed", "recomputed", "note"]
 
 
@@ -42,26 +45,22 @@ class Printed:
         return not (hi < self.lo - eps or lo > self.hi + eps)
 
 
-_NUM = re.compile(r"^([<>]=?)?\s*([-+]?(?:\d+\.?\d*|\.\d+))(?:[eE]([-+]?\d+))?$")
-
-
 def parse_printed(text) -> Printed | None:
-    """Interpret a printed number; ``None`` for an empty cell."""
+    """Interval a printed number stands for (via :func:`soilcal.rsm.printed.parse_printed`);
+    ``None`` for an empty cell or text that is no number."""
     if text is None or (isinstance(text, float) and math.isnan(text)):
         return None
-    s = str(text).strip().replace("\u2212", "-").replace(" ", "")
+    s = str(text).strip()
     if s in ("", "-", "nan"):
         return None
-    m = _NUM.match(s)
-    if not m:
+    try:
+        op, value, decimals = rsm_parse_printed(s)
+    except InputError:
         return None
-    rel, mant, exp = m.groups()
-    value = float(mant) * (10 ** int(exp) if exp else 1)
-    decimals = len(mant.split(".")[1]) if "." in mant else 0
-    half = 0.5 * 10 ** (-decimals) * (10 ** int(exp) if exp else 1)
-    if rel in ("<", "<="):
+    half = 0.5 * 10.0 ** (-decimals)
+    if op in ("<", "<="):
         return Printed(s, value, -math.inf if value <= 0 else 0.0, value)
-    if rel in (">", ">="):
+    if op in (">", ">="):
         return Printed(s, value, value, math.inf)
     return Printed(s, value, value - half, value + half)
 
@@ -200,12 +199,7 @@ def compare_fit(err: Errata, where: str, printed: dict, recomputed: dict) -> Non
     for k, v in printed.items():
         if k == "source" or k not in recomputed:
             continue
-        err.check(f"{where} / {k}", repr_printed(v), recomputed[k])
-
-
-def repr_printed(v) -> str:
-    """YAML numbers lose trailing zeros (2.10 -> 2.1); keep what is left as the printed text."""
-    return str(v)
+        err.check(f"{where} / {k}", str(v), recomputed[k])
 
 
 def compare_effects(err: Errata, where: str, printed: pd.DataFrame, recomputed: pd.DataFrame) -> None:
@@ -321,14 +315,14 @@ def plausibility(err: Errata, soil: dict) -> None:
 def optimum_check(err: Errata, where: str, model, syms: list[str], printed: dict, target: float,
                   response: str) -> None:
     """Does the printed optimum, within its printed rounding, reach the target on the recomputed model?"""
-    ivs = [parse_printed(repr_printed(printed[s])) for s in syms]
+    ivs = [parse_printed(str(printed[s])) for s in syms]
     if not all(ivs):
         return
     grid = np.array(np.meshgrid(*[np.linspace(i.lo, i.hi, 5) for i in ivs])).reshape(len(syms), -1).T
     pred = model.predict_actual(grid)
     lo, hi = float(np.min(pred)), float(np.max(pred))
     centre = float(model.predict_actual(np.array([[i.value for i in ivs]]))[0])
-    tp = parse_printed(repr_printed(target))
+    tp = parse_printed(str(target))
     if tp is not None and not tp.overlaps(lo, hi):
         err.add(f"{where} / predicted {response} at the printed optimum", f"target {target}", centre,
                 f"the printed optimum does not reach the target on the recomputed model (range over its rounding {lo:.4g}..{hi:.4g})")
