@@ -23,7 +23,7 @@ import math
 from numba import njit, prange
 
 from soilcal.dem.contact import H_SIZE, H_TOUCH, contact_force
-from soilcal.dem.neighbour import build_lists
+from soilcal.dem.neighbour import build_lists, min_image
 from soilcal.dem.walls import TRIANGLE, move_walls, prim_closest
 
 DONE, NEED_K, NEED_KW, NEED_CELLS, BLOWUP, SETTLED = 0, 1, 2, 3, 4, 5
@@ -64,19 +64,9 @@ def compute_forces(x, v, om, r, m, inv_m, mat, f, t, ovr, gravity, box, periodic
                 mo = 0.0
                 for k in range(cnt[i]):
                     j = nbr[i, k]
-                    dx = xi - x[j, 0]
-                    dy = yi - x[j, 1]
+                    dx = min_image(xi - x[j, 0], p0, h0, L0)
+                    dy = min_image(yi - x[j, 1], p1, h1, L1)
                     dz = zi - x[j, 2]
-                    if p0:
-                        if dx > h0:
-                            dx -= L0
-                        elif dx < -h0:
-                            dx += L0
-                    if p1:
-                        if dy > h1:
-                            dy -= L1
-                        elif dy < -h1:
-                            dy += L1
                     rj = r[j]
                     rs = ri + rj
                     d2 = dx * dx + dy * dy + dz * dz

@@ -46,6 +46,17 @@ def _cell_coord(x, lo, cs, nc, per):
     return c
 
 
+@njit(cache=True, inline="always")
+def min_image(d, periodic, half, length):
+    """Minimum-image separation along one axis of a periodic box (no-op if not periodic)."""
+    if periodic:
+        if d > half:
+            return d - length
+        if d < -half:
+            return d + length
+    return d
+
+
 @njit(cache=True)
 def _range(c, nc, per):
     # neighbour cell offsets along one dimension without duplicates
@@ -147,19 +158,9 @@ def build_lists(x, r, box, periodic, skin, extra, cell_start, cell_idx, cell_of,
                         j = cell_idx[q]
                         if j == i:
                             continue
-                        ddx = xi - x[j, 0]
-                        ddy = yi - x[j, 1]
+                        ddx = min_image(xi - x[j, 0], p0, h0, L0)
+                        ddy = min_image(yi - x[j, 1], p1, h1, L1)
                         ddz = zi - x[j, 2]
-                        if p0:
-                            if ddx > h0:
-                                ddx -= L0
-                            elif ddx < -h0:
-                                ddx += L0
-                        if p1:
-                            if ddy > h1:
-                                ddy -= L1
-                            elif ddy < -h1:
-                                ddy += L1
                         cut = ri + r[j] + skin + extra
                         if ddx * ddx + ddy * ddy + ddz * ddz < cut * cut:
                             if cnt < K:
