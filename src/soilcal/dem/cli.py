@@ -14,6 +14,9 @@ def _settle(args) -> int:
 
 
 def register(subparsers) -> None:
+    from soilcal.dem.scenarios.cli import register as register_scenarios
+
+    register_scenarios(subparsers)
     p = subparsers.add_parser("bench", help="DEM engine benchmarks")
     sub = p.add_subparsers(dest="bench_cmd", required=True)
     s = sub.add_parser("settle", help="gravity settling of a lattice of spheres on a floor")

@@ -1,0 +1,56 @@
+"""DEM scenarios of the papers' physical tests, each a module with a common interface.
+
+Every scenario module defines:
+
+* ``NAME``: the registry name (also the CLI name: ``soilcal scenario run NAME``);
+* ``setups()``: named setups from the papers (dicts of dimensions, speeds, durations, each
+  number cited beside it in the module);
+* ``validate(setup, preset, source)``: raises :class:`soilcal.errors.InputError` for bad
+  geometry or impossible settings, before anything runs;
+* ``run(setup, params, preset="quick", seed=0, threads=None, vtk_dir=None)``: returns a
+  :class:`soilcal.dem.scenarios.base.Result`.
+
+``SCENARIOS`` maps names to modules; a module that cannot be imported (not present in this
+installation) is skipped so that the others keep working.
+"""
+
+from __future__ import annotations
+
+import importlib
+
+_MODULES = (
+    "repose",
+    "drum",
+    "incline",
+    "compression",
+    "furrow",
+    "bulldozing",
+    "rotary",
+)
+
+
+def _load(names):
+    out = {}
+    for mod in names:
+        try:
+            m = importlib.import_module(f"{__name__}.{mod}")
+        except ModuleNotFoundError as exc:
+            if exc.name == f"{__name__}.{mod}":
+                continue
+            raise
+        names_in = getattr(m, "NAMES", None) or (m.NAME,)
+        for nm in names_in:
+            out[nm] = m
+    return out
+
+
+SCENARIOS = _load(_MODULES)
+
+
+def get(name: str, source: str = "<input>"):
+    """The scenario module called ``name`` (InputError listing the known names otherwise)."""
+    from soilcal.errors import InputError
+
+    if name not in SCENARIOS:
+        raise InputError(source, "scenario", f"one of {', '.join(sorted(SCENARIOS))}", name)
+    return SCENARIOS[name]

@@ -1,0 +1,287 @@
+"""Shared pieces of the DEM test scenarios: parameters, materials, results, validation.
+
+Parameter names
+---------------
+:class:`DemParams` holds the fourteen inputs of a soil-calibration DEM run under the names
+the soil configs use for their ``(pair, kind)`` entries: pair ``soil-soil`` with kind
+``rolling_friction`` is ``soil_soil_rolling_friction`` and so on (``static_friction`` maps to
+the engine's sliding friction coefficient mu_s).  SI units throughout (kg/m^3, Pa, J/m^2).
+
+Defaults
+--------
+Soil intrinsic properties and contact parameters default to the cinnamon-soil study (Qiu et
+al., Agriculture 2022, 12, 1082; ``config/soils/cinnamon-soil.yaml``):
+
+* density 1394 kg/m^3 (Sec. 2.1; the only density the paper prints, used in its EDEM model),
+* Poisson ratio 0.311 (Sec. 2.2, Eq. 1), shear modulus 3.814 MPa (Sec. 2.3, Eq. 4),
+* soil-soil restitution 0.45, static friction 0.56 (fixed values of Table 5 / Sec. 3.3.2),
+  rolling friction 0.11 and JKR surface energy 0.38 J/m^2 (Box-Behnken centre, Table 6),
+* soil-steel restitution 0.45, static friction 0.54 (Box-Behnken centre, Table 6), rolling
+  friction 0.125 (fixed, Sec. 3.3.2); the paper has no soil-steel surface energy (0).
+
+Steel (65Mn/Q235 tools, plates, tubes): 7850 kg/m^3, Poisson 0.3, G = 7.9e10 Pa (cinnamon
+soil Sec. 3.1; cohesive soil Sec. 2.6).
+
+Stiffness scaling
+-----------------
+:func:`build_materials` multiplies every shear modulus by ``stiffness_scale`` (s) and
+scales the JKR surface energy as printed in the vineyard-soil study (grapevine-burying paper,
+``003_77672a72fffb4fcc.txt``, section on the scaled model; after Lommen et al. 2014 and Thakur
+et al. 2014)::
+
+    G_mod = s G,        gamma_mod = gamma (G_mod / G)^(2/5) = gamma s^(2/5)
+
+Results
+-------
+:class:`Result` is one run: scenario, preset, seed, particle count, steps, simulated and
+wall time, thread count, parameters, setup, scalar responses and time series.  ``row()``
+flattens it to one CSV row with columns ``p:<param>``, ``s:<setup key>`` (scalars only) and
+``r:<response>``; :func:`write_row` writes it atomically (temporary file + rename).
+
+Stable-stage statistics
+-----------------------
+:func:`stable_mean` returns the mean and the sample standard deviation (ddof = 1) of the
+samples y(t) with t_start <= t <= t_end, the "stable stage" mean force the tool papers report.
+"""
+
+from __future__ import annotations
+
+import csv
+import io
+import math
+import os
+import tempfile
+from dataclasses import asdict, dataclass, field, fields
+from pathlib import Path
+
+import numpy as np
+
+from soilcal.dem.materials import Material, MaterialTable
+from soilcal.errors import InputError
+
+PRESETS = ("quick", "paper")
+
+# name -> (low, high, low_inclusive, high_inclusive, unit/meaning) of the accepted range
+_RANGES = {
+    "restitution": (0.0, 1.0, False, True, "a coefficient of restitution in (0, 1]"),
+    "static_friction": (0.0, 5.0, True, True, "a sliding friction coefficient in [0, 5]"),
+    "rolling_friction": (0.0, 1.0, True, True, "a rolling friction coefficient in [0, 1]"),
+    "surface_energy": (0.0, 1.0e3, True, True, "a JKR surface energy in [0, 1000] J/m^2"),
+    "density": (0.0, 3.0e4, False, True, "a density in (0, 30000] kg/m^3"),
+    "poisson": (-1.0, 0.5, False, False, "a Poisson ratio in (-1, 0.5)"),
+    "shear_modulus": (0.0, 1.0e13, False, True, "a shear modulus in (0, 1e13] Pa"),
+}
+
+
+def _kind(name: str) -> str:
+    for k in _RANGES:
+        if name.endswith(k):
+            return k
+    raise KeyError(name)
+
+
+@dataclass
+class DemParams:
+    """Inputs of a soil DEM run (SI units); defaults: cinnamon soil, see module docstring."""
+
+    soil_soil_restitution: float = 0.45
+    soil_soil_static_friction: float = 0.56
+    soil_soil_rolling_friction: float = 0.11
+    soil_soil_surface_energy: float = 0.38
+    soil_steel_restitution: float = 0.45
+    soil_steel_static_friction: float = 0.54
+    soil_steel_rolling_friction: float = 0.125
+    soil_steel_surface_energy: float = 0.0
+    soil_density: float = 1394.0
+    soil_poisson: float = 0.311
+    soil_shear_modulus: float = 3.814e6
+    steel_density: float = 7850.0
+    steel_poisson: float = 0.3
+    steel_shear_modulus: float = 7.9e10
+
+    @classmethod
+    def names(cls) -> tuple[str, ...]:
+        return tuple(f.name for f in fields(cls))
+
+    @classmethod
+    def from_mapping(cls, mapping, source="<input>", base: "DemParams | None" = None) -> "DemParams":
+        """Parameters from a name -> value mapping (others from ``base`` or the defaults).
+
+        Unknown names and values outside the physical range raise :class:`InputError`.
+        """
+        if mapping is None:
+            mapping = {}
+        if not hasattr(mapping, "items"):
+            raise InputError(source, "params", "a mapping of parameter name -> value",
+                             type(mapping).__name__)
+        known = cls.names()
+        values = (base or cls()).as_dict()
+        for key, val in mapping.items():
+            if key not in known:
+                raise InputError(source, f"params.{key}", f"one of {', '.join(known)}", key)
+            try:
+                x = float(val)
+            except (TypeError, ValueError):
+                raise InputError(source, f"params.{key}", "a number", val) from None
+            lo, hi, lo_in, hi_in, what = _RANGES[_kind(key)]
+            ok = math.isfinite(x) and (x >= lo if lo_in else x > lo) and (x <= hi if hi_in else x < hi)
+            if not ok:
+                raise InputError(source, f"params.{key}", what, val)
+            values[key] = x
+        return cls(**values)
+
+    def as_dict(self) -> dict:
+        return {k: float(v) for k, v in asdict(self).items()}
+
+    def replace(self, **kw) -> "DemParams":
+        return DemParams.from_mapping(kw, "<replace>", base=self)
+
+
+def build_materials(params: DemParams, stiffness_scale: float = 1.0,
+                    source: str = "<input>") -> MaterialTable:
+    """MaterialTable with materials "soil", "steel" and pairs soil-soil, soil-steel.
+
+    Shear moduli are multiplied by ``stiffness_scale`` (s) and the surface energies become
+    gamma s^(2/5) (vineyard-soil paper's rule for the scaled model, see module docstring).
+    """
+    s = float(stiffness_scale)
+    if not (math.isfinite(s) and 0.0 < s <= 1.0e3):
+        raise InputError(source, "stiffness_scale", "a shear-modulus factor in (0, 1000]",
+                         stiffness_scale)
+    mats = MaterialTable(source=source)
+    mats.add(Material("soil", density=params.soil_density, poisson=params.soil_poisson,
+                      shear=params.soil_shear_modulus * s, source=source))
+    mats.add(Material("steel", density=params.steel_density, poisson=params.steel_poisson,
+                      shear=params.steel_shear_modulus * s, source=source))
+    g = s ** 0.4
+    mats.set_pair("soil", "soil", restitution=params.soil_soil_restitution,
+                  friction=params.soil_soil_static_friction,
+                  rolling_friction=params.soil_soil_rolling_friction,
+                  surface_energy=params.soil_soil_surface_energy * g)
+    mats.set_pair("soil", "steel", restitution=params.soil_steel_restitution,
+                  friction=params.soil_steel_static_friction,
+                  rolling_friction=params.soil_steel_rolling_friction,
+                  surface_energy=params.soil_steel_surface_energy * g)
+    # walls never touch each other; the engine's table still wants every pair
+    mats.set_pair("steel", "steel", restitution=0.5, friction=0.3)
+    return mats
+
+
+def contact_model(params: DemParams, rolling: str = "constant_torque") -> dict:
+    """Engine contact model: Hertz-Mindlin, rolling resistance, JKR when any energy > 0.
+
+    EDEM convention for the surface energy (pull-off 1.5 pi gamma R*), as the papers use EDEM.
+    """
+    jkr = params.soil_soil_surface_energy > 0 or params.soil_steel_surface_energy > 0
+    return dict(rolling=rolling, cohesion="jkr" if jkr else "none", jkr_convention="edem")
+
+
+def check(ok, source, field, expected, got=None) -> None:
+    """Raise InputError(source, field, expected, got) unless ``ok`` (validation before a run)."""
+    if not ok:
+        raise InputError(source, field, expected, got)
+
+
+def rng(seed, stream: str = "") -> np.random.Generator:
+    """A numpy Generator seeded by (seed, stream) so independent choices use separate streams."""
+    if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or seed < 0:
+        raise InputError("<input>", "seed", "an integer >= 0", seed)
+    words = [int(seed)] + [ord(c) for c in stream]
+    return np.random.default_rng(np.random.SeedSequence(words))
+
+
+def stable_mean(t, y, t_start, t_end=None) -> tuple[float, float]:
+    """Mean and sample SD of y over t_start <= t <= t_end (the stable stage)."""
+    t = np.asarray(t, dtype=float)
+    y = np.asarray(y, dtype=float)
+    if t.shape != y.shape[:1]:
+        raise InputError("<input>", "stable_mean.y", f"{t.shape[0]} samples like t", y.shape)
+    hi = np.inf if t_end is None else float(t_end)
+    sel = (t >= float(t_start)) & (t <= hi)
+    if sel.sum() < 2:
+        raise InputError("<input>", "stable_mean.t_start",
+                         f"a window holding at least 2 samples (t in [{t.min() if t.size else 'n/a'}, "
+                         f"{t.max() if t.size else 'n/a'}])", (t_start, t_end))
+    ys = y[sel]
+    mean, sd = ys.mean(axis=0), ys.std(axis=0, ddof=1)
+    if ys.ndim == 1:
+        return float(mean), float(sd)
+    return mean, sd
+
+
+def merge_setup(setups: dict, name: str, overrides: dict | None, source: str) -> dict:
+    """A named setup with user overrides (keys must exist in the named setup)."""
+    if name not in setups:
+        raise InputError(source, "setup", f"one of {', '.join(sorted(setups))}", name)
+    out = dict(setups[name])
+    for k, v in (overrides or {}).items():
+        if k not in out:
+            raise InputError(source, f"setup.{k}", f"one of {', '.join(sorted(out))}", k)
+        out[k] = v
+    out["name"] = out.get("name", name)
+    return out
+
+
+@dataclass
+class Result:
+    """One scenario run: identity, cost, inputs and responses."""
+
+    scenario: str
+    preset: str
+    seed: int
+    n_particles: int
+    steps: int
+    sim_time_s: float
+    wall_s: float
+    threads: int
+    params: dict = field(default_factory=dict)
+    setup: dict = field(default_factory=dict)
+    responses: dict = field(default_factory=dict)
+    series: dict = field(default_factory=dict)
+
+    def row(self) -> dict:
+        out = dict(scenario=self.scenario, preset=self.preset, seed=int(self.seed),
+                   n_particles=int(self.n_particles), steps=int(self.steps),
+                   sim_time_s=float(self.sim_time_s), wall_s=float(self.wall_s),
+                   threads=int(self.threads))
+        for k, v in self.params.items():
+            out[f"p:{k}"] = v
+        for k, v in self.setup.items():
+            if isinstance(v, (bool, int, float, str, np.integer, np.floating)) or v is None:
+                out[f"s:{k}"] = v.item() if isinstance(v, np.generic) else v
+        for k, v in self.responses.items():
+            out[f"r:{k}"] = v.item() if isinstance(v, np.generic) else v
+        return out
+
+
+def write_row(path, result: Result) -> Path:
+    """Write ``result.row()`` as a one-row CSV (header + values), atomically."""
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    row = result.row()
+    buf = io.StringIO()
+    w = csv.DictWriter(buf, fieldnames=list(row), lineterminator="\n")
+    w.writeheader()
+    w.writerow(row)
+    fd, tmp = tempfile.mkstemp(prefix=path.name + ".", suffix=".tmp", dir=path.parent)
+    try:
+        with os.fdopen(fd, "w", newline="") as fh:
+            fh.write(buf.getvalue())
+        os.replace(tmp, path)
+    except BaseException:
+        if os.path.exists(tmp):
+            os.unlink(tmp)
+        raise
+    return path
+
+
+def threads_used(threads) -> int:
+    """Set numba's thread count (None: keep the current one); returns the count in use."""
+    import numba
+
+    if threads is not None:
+        t = int(threads)
+        check(1 <= t <= numba.config.NUMBA_NUM_THREADS, "<input>", "threads",
+              f"an integer in [1, {numba.config.NUMBA_NUM_THREADS}]", threads)
+        numba.set_num_threads(t)
+    return int(numba.get_num_threads())
