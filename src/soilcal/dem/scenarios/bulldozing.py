@@ -1,0 +1,193 @@
+"""Bulldozing-plate cutting resistance in a soil bin (cinnamon soil, four directrix shapes).
+
+Source: Qiu et al., Agriculture 2022, 12, 1082, Sec. 4 (``config/soils/cinnamon-soil.yaml``).
+
+Test (Sec. 4.2.1-4.2.2): plates 150 x 300 mm (height x breadth) with the four directrices of
+Table 9 (line, arc, parabola, bionic curve; geometry :func:`soilcal.dem.tools.bulldozing_plate`)
+advance at 0.16 m/s, 30 mm deep, through a simulated bin of 1 x 0.6 x 0.2 m for 4.5 s.
+Soil particle sizes 3, 2 and 1 mm (mass 8.85, 8.2, 82.95 %, Sec. 3.1).
+
+Forces (Sec. 4.2.1, Figure 10b): the horizontal resistance ``Fx = -F_x`` and the vertical
+force ``Fy = F_z`` of the soil on the plate (F: force of the particles on the plate; the
+soil resists the motion, so Fx > 0; the paper's vertical resistance is reported as a
+magnitude, the signed value is given here with + up), each as the mean and sample SD over
+the stable stage (``stable_from`` of the pass to its end).  The resultant
+``F = sqrt(Fx^2 + Fy^2)`` and its angle to the horizontal ``theta = atan(Fy / Fx)``
+(Figure 10b) are reported too.  Measured soil-bin means (Sec. 4.3,
+``resources/measurements/cinnamon-soil/cutting_resistance.csv``): horizontal 304.80 (line),
+321.10 (arc), 252.10 (parabola), 154.50 N (bionic); vertical 10.40, 48.80, 13.98, 15.50 N.
+
+Presets: ``paper`` is the paper's bin and pass with particle radii 0.5-1.5 mm (the printed
+1-3 mm sizes read as diameters) and the full plate between side walls.  ``quick`` cuts a
+periodic slab of width ``slab_width`` (70 mm) out of the bin across the plate: the plate
+spans the slab (no plate ends, so no side spill), the bed is 60 mm deep (twice the cut),
+particles of 7 mm radius (0.9-1.1), shear modulus scaled by 0.1 (surface energy by
+0.1^0.4, :func:`soilcal.dem.scenarios.base.build_materials`), 30 % of the Rayleigh step
+and a 0.2 m pass; forces are scaled to the printed breadth by ``breadth / slab_width``
+(plane-strain reading of the cut).  The convergence study shows the effect of each choice.
+"""
+
+from __future__ import annotations
+
+import csv
+import math
+import time
+from pathlib import Path
+
+import numpy as np
+
+from soilcal.dem import tools
+from soilcal.dem.scenarios.base import (PRESETS, DemParams, Result, check, merge_setup,
+                                        stable_mean, threads_used)
+from soilcal.dem.scenarios.soilbin import BinSpec, settled_bin, tool_pass, validate_bin
+
+NAME = "bulldozing"
+MEASURED = (Path(__file__).resolve().parents[4] / "resources" / "measurements"
+            / "cinnamon-soil" / "cutting_resistance.csv")
+
+
+def _setup(shape):
+    return dict(
+        shape=shape,               # Table 9 directrix (line: the ruled surface plate)
+        depth=0.030,               # Sec. 4.2.1/4.2.2: tillage depth 30 mm
+        speed=0.16,                # Sec. 4.2.1/4.2.2: 0.16 m/s
+        duration=4.5,              # Sec. 4.2.2: 4.5 s at constant speed
+        bin_length=1.0,            # Sec. 4.2.2: simulated bin 1 x 0.6 x 0.2 m
+        bin_width=0.6,
+        bin_height=0.2,
+        plate_height=tools.PLATE["height"],    # Sec. 4.2.1: 150 mm
+        plate_breadth=tools.PLATE["breadth"],  # Sec. 4.2.1: 300 mm
+        stable_from=0.5,           # stable stage: second half of the pass
+    )
+
+
+def setups() -> dict:
+    return {f"plate-{s}": _setup(s) for s in ("line", "arc", "parabola", "bionic")}
+
+
+PRESET_SETTINGS = {
+    "quick": dict(periodic=True, slab_width=0.07, bin_length=0.45, bin_height=0.06,
+                  particle_radius=0.007, radius_spread=0.1, stiffness_scale=0.1,
+                  dt_fraction=0.3, travel=0.2, settle_time=0.2),
+    "paper": dict(periodic=False, slab_width=None, bin_length=None, bin_height=None,
+                  particle_radius=0.001, radius_spread=0.5, stiffness_scale=1.0,
+                  dt_fraction=0.2, travel=None, settle_time=1.0),
+}
+START = 0.1  # m: cutting edge's start position from the bin's x = 0 end
+
+
+def paper_params() -> DemParams:
+    """Cinnamon soil at the paper's optimum (Sec. 3.3.4): rolling 0.08, JKR 0.37 J/m^2,
+    soil-steel static friction 0.64; other values as in the base defaults (same paper)."""
+    return DemParams.from_mapping(dict(soil_soil_rolling_friction=0.08,
+                                       soil_soil_surface_energy=0.37,
+                                       soil_steel_static_friction=0.64),
+                                  "<bulldozing.paper_params>")
+
+
+def measured() -> dict:
+    with open(MEASURED, newline="") as fh:
+        return {r["directrix"]: (float(r["horizontal_measured_N"]),
+                                 float(r["vertical_measured_N"])) for r in csv.DictReader(fh)}
+
+
+def _settings(setup, preset):
+    s = dict(setup)
+    for k, v in PRESET_SETTINGS[preset].items():
+        if v is not None:
+            s[k] = v
+    if s.get("travel") is None:
+        s["travel"] = s["speed"] * s["duration"]
+    if not s.get("periodic"):
+        s["slab_width"] = s["bin_width"]
+    return s
+
+
+def _num(s, k, source):
+    v = s.get(k)
+    check(isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v) and v > 0,
+          source, f"setup.{k}", "a number > 0", v)
+    return v
+
+
+def validate(setup: dict, preset: str = "quick", source: str = "<bulldozing>") -> None:
+    check(preset in PRESETS, source, "preset", f"one of {PRESETS}", preset)
+    check(setup.get("shape") in tools.SHAPES, source, "setup.shape",
+          f"one of {', '.join(tools.SHAPES)} (Table 9)", setup.get("shape"))
+    s = _settings(setup, preset)
+    for k in ("depth", "speed", "duration", "bin_length", "bin_width", "bin_height",
+              "plate_height", "plate_breadth", "travel", "slab_width"):
+        _num(s, k, source)
+    check(s["depth"] < s["bin_height"], source, "setup.depth",
+          f"a cutting depth below the soil height of the bin ({s['bin_height']} m)", s["depth"])
+    check(s["depth"] < s["plate_height"], source, "setup.depth",
+          f"a cutting depth below the plate height ({s['plate_height']} m)", s["depth"])
+    if not s["periodic"]:
+        check(s["plate_breadth"] + 4 * s["particle_radius"] <= s["bin_width"], source,
+              "setup.bin_width", f"wider than the plate ({s['plate_breadth']} m)",
+              s["bin_width"])
+    need = START + s["travel"] + 0.05
+    check(need <= s["bin_length"], source, "setup.bin_length",
+          f">= start + pass + margin = {need:.3g} m", s["bin_length"])
+    check(0.0 <= s["stable_from"] < 1.0, source, "setup.stable_from",
+          "a fraction of the pass in [0, 1)", s["stable_from"])
+    # directrix itself (raises InputError naming the field if the angles cannot be met)
+    tools.directrix(s["shape"], height=s["plate_height"], source=source)
+    validate_bin(_bin(s), source, "setup")
+
+
+def _bin(s) -> BinSpec:
+    return BinSpec(length=s["bin_length"], width=s["slab_width"], height=s["bin_height"],
+                   radius=s["particle_radius"], spread=s["radius_spread"],
+                   periodic_y=bool(s["periodic"]), settle_time=s["settle_time"],
+                   stiffness_scale=s["stiffness_scale"], dt_fraction=s["dt_fraction"])
+
+
+def run(setup: dict, params: DemParams, preset: str = "quick", seed: int = 0, threads=None,
+        vtk_dir=None, source: str = "<bulldozing>", use_cache: bool = True) -> Result:
+    if "name" not in setup and setup.get("shape") in tools.SHAPES:
+        setup = merge_setup(setups(), f"plate-{setup['shape']}", setup, source)
+    validate(setup, preset, source)
+    s = _settings(setup, preset)
+    nthreads = threads_used(threads)
+    t0 = time.perf_counter()
+    spec = _bin(s)
+    bed = settled_bin(spec, params, preset, seed, source, use_cache)
+    pad = 2.0 * spec.r_max
+    breadth = s["slab_width"] + 2 * pad if s["periodic"] else s["plate_breadth"]
+    v, t = tools.bulldozing_plate(s["shape"], breadth=breadth, height=s["plate_height"],
+                                  source=source)
+    z_tool = bed["surface"] - s["depth"]
+    v = v + np.array([START, 0.5 * s["slab_width"], z_tool])
+    lo, hi = v.min(axis=0), v.max(axis=0)
+
+    def trench(x, r):
+        return ((x[:, 0] >= lo[0] - pad) & (x[:, 0] <= hi[0] + pad) & (x[:, 2] >= lo[2] - pad)
+                & (np.abs(x[:, 1] - 0.5 * s["slab_width"]) <= 0.5 * breadth + pad))
+
+    duration = s["travel"] / s["speed"]
+
+    def pose(tt):
+        return v + np.array([s["speed"] * tt, 0, 0]), t
+
+    out = tool_pass(spec, params, preset, seed, source, v, t, (s["speed"], 0.0, 0.0), duration,
+                    trench, vtk_dir=vtk_dir, stem=f"bulldozing_{s['shape']}",
+                    use_cache=use_cache, tool_pose=pose, log_dt=0.01, bed=bed)
+    scale = s["plate_breadth"] / s["slab_width"] if s["periodic"] else 1.0
+    tt, f = out["t"], out["force"] * scale
+    ts = s["stable_from"] * duration
+    fx, fx_sd = stable_mean(tt, -f[:, 0], ts)
+    fz, fz_sd = stable_mean(tt, f[:, 2], ts)
+    meas = measured().get(s["shape"], (float("nan"), float("nan")))
+    resp = dict(horizontal_force_N=fx, horizontal_force_sd_N=fx_sd,
+                vertical_force_N=fz, vertical_force_sd_N=fz_sd,
+                resultant_force_N=math.hypot(fx, fz),
+                resultant_angle_deg=math.degrees(math.atan2(abs(fz), fx)),
+                horizontal_measured_N=meas[0], vertical_measured_N=meas[1],
+                horizontal_error_percent=100.0 * (fx - meas[0]) / meas[0],
+                force_scale=scale, bin_from_cache=bool(out["from_cache"]))
+    return Result(scenario=NAME, preset=preset, seed=int(seed), n_particles=out["n"],
+                  steps=int(out["steps"] + out["settle_steps"]),
+                  sim_time_s=out["steps"] * out["dt"], wall_s=time.perf_counter() - t0,
+                  threads=nthreads, params=params.as_dict(), setup=dict(s), responses=resp,
+                  series=dict(t=tt, horizontal_N=-f[:, 0], vertical_N=f[:, 2]))

@@ -1,0 +1,316 @@
+"""Furrow opening in a soil bin by a moldboard-style ridge and furrow opener (Yangtze clay loam).
+
+Source: Zeng et al., Agriculture 2023, 13, 648 (``config/soils/yangtze-clay-loam.yaml``).
+
+Test (Sec. 2.1.2, 2.2.4): the opener (geometry: :func:`soilcal.dem.tools.furrow_opener`)
+moves at 0.72 m/s, 200 mm deep, through a soil tank (simulated 3000 x 1200 x 300 mm,
+particles of radius 8 mm, 0.9-1.1 times, time step 20 % of the Rayleigh time).
+
+Furrow profile (Sec. 3.1): slices perpendicular to the travel direction, 50 mm thick and
+100 mm apart, six of them in the central part of the furrow; in each slice the soil surface
+is the upper envelope of the particles, taken here as the highest particle top ``z + r`` in
+lateral bins of one particle diameter.  Coordinates are translated so that the profile is
+symmetric about the opener's centre line (``x = 0`` in the paper's notation; here the
+lateral offset from the opener's centre plane) and heights are measured from the opener's
+working bottom (200 mm below the undisturbed surface), the datum for which the measured
+polynomial gives F(0) = 7.28 mm at the furrow bottom (assumption: the paper prints neither
+the datum nor the units; mm as in the soil config).  Each slice's points within
+``|x| <= x_limit`` are fitted by a polynomial Phi_i of degree ``profile_degree`` (least
+squares on a scaled domain, :class:`numpy.polynomial.Polynomial`).
+
+Area difference (Eq. 4), mm^2, reported in dm^2 as in Table 4::
+
+    Delta S = (1/n) sum_i Delta S_i,   Delta S_i = int_a^b |Phi_i(x) - F(x)| dx
+
+with the measured profile F of Eq. (3) (``resources/measurements/yangtze-clay-loam/
+furrow_profile_polynomial.csv``).  Eq. (4) prints the signed integral; every printed Delta S
+is positive and Figure 10 counts the (+) and (-) parts as enclosed area, so the response is
+the enclosed (unsigned) area, computed exactly: the real roots of the polynomial
+``Phi_i - F`` in (a, b) split the interval and the antiderivative is evaluated on each piece.
+The signed integral is reported too (``area_difference_signed_dm2``).  Limits
+``a, b = -x_limit, +x_limit`` with ``x_limit = 200 mm`` (assumption: F is fitted inside the
+furrow and turns over at +-223.8 mm).
+
+Traction resistance (Sec. 3.3): the opener's resistance along the travel direction,
+``R = -F_x`` (F: force of the particles on the opener; soil pushes it back, so R > 0), as
+the mean and sample SD over the stable working stage (``stable_from`` .. end of the pass,
+as a fraction of the pass duration).  Measured 1303.07 N, simulated 1167.30 N (stable-stage
+means, Sec. 3.3, ``traction_resistance.csv``).
+
+Presets: ``paper`` keeps the paper's tank, 8 mm particles (0.9-1.1), 20 % Rayleigh step and
+a pass of 2 m; ``quick`` shrinks the tank to 1.3 x 0.8 x 0.25 m with 22 mm particles (a 2.75x
+coarse-graining of the 8 mm particles), a 0.7 m pass, two slices and a 6th-degree fit, so that a run
+takes seconds; the convergence study (``benchmarks/convergence_tools.py``) shows what that
+costs.
+"""
+
+from __future__ import annotations
+
+import csv
+import math
+import time
+from pathlib import Path
+
+import numpy as np
+from numpy.polynomial import Polynomial
+
+from soilcal.dem import tools
+from soilcal.dem.scenarios.base import (PRESETS, DemParams, Result, check, merge_setup,
+                                        stable_mean, threads_used)
+from soilcal.dem.scenarios.soilbin import BinSpec, column_tops, tool_pass, validate_bin
+
+NAME = "furrow"
+MEASURED = (Path(__file__).resolve().parents[4] / "resources" / "measurements"
+            / "yangtze-clay-loam")
+
+
+def setups() -> dict:
+    return {
+        "yangtze-opener": dict(
+            depth=0.200,             # Sec. 2.1.2 / 2.2.4: depth of soil entry 200 mm
+            speed=0.72,              # Sec. 2.1.2 / 2.2.4: 0.72 m/s (2.6 km/h)
+            tank_length=3.0,         # Sec. 2.2.4: simulated tank 3000 mm
+            tank_width=1.2,          # Sec. 2.2.4: 1200 mm
+            tank_height=0.3,         # Sec. 2.2.4: 300 mm
+            particle_radius=0.008,   # Sec. 2.2.4: 8 mm
+            radius_spread=0.1,       # Sec. 2.2.4: 0.9-1.1 times the base radius
+            dt_fraction=0.2,         # Sec. 2.2.4: 20 % of the Rayleigh time step
+            slice_thickness=0.05,    # Sec. 3.1: slices 50 mm thick
+            slice_spacing=0.10,      # Sec. 3.1: 100 mm apart
+            n_slices=6,              # Sec. 3.1: six slices
+            profile_degree=9,        # Eq. (3): 9th-degree polynomial
+            x_limit=0.200,           # assumption: integration limits +-200 mm (Eq. 4)
+            stable_from=0.5,         # stable working stage: second half of the pass
+            opener_length=tools.OPENER["length"],   # assumption (tools.py)
+            opener_half_width=tools.OPENER["half_width"],
+            opener_upper_half_width=tools.OPENER["upper_half_width"],
+            opener_upper_height=tools.OPENER["upper_height"],
+            opener_bottom_half_width=tools.OPENER["bottom_half_width"],
+        ),
+    }
+
+
+# discretisation per preset (geometry of the test stays in the setup)
+PRESET_SETTINGS = {
+    "quick": dict(tank_length=1.3, tank_width=0.8, tank_height=0.25, particle_radius=0.022,
+                  travel=0.7, n_slices=2, profile_degree=6, settle_time=0.3, stiffness_scale=1.0),
+    "paper": dict(tank_length=None, tank_width=None, tank_height=None, particle_radius=None,
+                  travel=2.0, n_slices=None, profile_degree=None, settle_time=1.0,
+                  stiffness_scale=1.0),
+}
+MARGIN = 0.05  # m of soil between the trench and the tank end
+
+
+def paper_params() -> DemParams:
+    """Yangtze clay loam at the paper's optimum (Sec. 3.2.3) with its printed constants."""
+    return DemParams.from_mapping(dict(
+        soil_soil_restitution=0.5, soil_soil_static_friction=0.2,   # Sec. 3.2.3 optimum
+        soil_soil_rolling_friction=0.05, soil_soil_surface_energy=5.0,
+        soil_steel_restitution=0.3,                    # Sec. 2.2.4, from [11]
+        soil_steel_static_friction=0.71,               # Table 1 mean
+        soil_steel_rolling_friction=0.097,             # Table 2 mean
+        soil_steel_surface_energy=0.0,                 # Hertz-Mindlin (no slip) soil-opener
+        soil_density=2570.0, soil_poisson=0.38, soil_shear_modulus=1.0e6,  # Sec. 2.1.1, 2.2.4
+        steel_density=7861.0, steel_poisson=0.30, steel_shear_modulus=7.9e10,  # Sec. 2.2.4
+    ), "<furrow.paper_params>")
+
+
+def measured_profile() -> Polynomial:
+    """F(x) of Eq. (3), x and F in mm."""
+    path = MEASURED / "furrow_profile_polynomial.csv"
+    with open(path, newline="") as fh:
+        rows = sorted((int(r["power"]), float(r["coefficient"])) for r in csv.DictReader(fh))
+    return Polynomial([c for _, c in rows])
+
+
+def measured_traction() -> float:
+    with open(MEASURED / "traction_resistance.csv", newline="") as fh:
+        return float(next(csv.DictReader(fh))["measured_N"])
+
+
+def _settings(setup: dict, preset: str) -> dict:
+    s = dict(setup)
+    for k, v in PRESET_SETTINGS[preset].items():
+        if v is not None:
+            s[k] = v
+        elif k not in s:
+            s[k] = None
+    return s
+
+
+def validate(setup: dict, preset: str = "quick", source: str = "<furrow>") -> None:
+    check(preset in PRESETS, source, "preset", f"one of {PRESETS}", preset)
+    s = _settings(setup, preset)
+    for k in ("depth", "speed", "tank_length", "tank_width", "tank_height", "particle_radius",
+              "slice_thickness", "slice_spacing", "x_limit", "opener_length",
+              "opener_half_width", "opener_upper_half_width", "opener_upper_height",
+              "opener_bottom_half_width", "travel", "dt_fraction"):
+        v = s.get(k)
+        check(isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v)
+              and v > 0, source, f"setup.{k}", "a number > 0", v)
+    check(s["depth"] < s["tank_height"], source, "setup.depth",
+          f"a working depth below the soil height of the tank ({s['tank_height']} m)", s["depth"])
+    check(s["tank_height"] - s["depth"] >= 2 * s["particle_radius"], source, "setup.depth",
+          "at least one particle diameter of soil under the opener", s["depth"])
+    check(2 * s["opener_upper_half_width"] + 4 * s["particle_radius"] <= s["tank_width"], source,
+          "setup.tank_width", f"wider than the opener ({2 * s['opener_upper_half_width']} m) "
+          "plus a particle diameter each side", s["tank_width"])
+    check(s["opener_bottom_half_width"] < s["opener_half_width"] <= s["opener_upper_half_width"],
+          source, "setup.opener_half_width",
+          "opener_bottom_half_width < opener_half_width <= opener_upper_half_width",
+          s["opener_half_width"])
+    need = s["opener_length"] + 2 * MARGIN + s["travel"]
+    check(need <= s["tank_length"], source, "setup.tank_length",
+          f">= opener length + pass + margins = {need:.3g} m", s["tank_length"])
+    n = s["n_slices"]
+    check(isinstance(n, int) and n >= 1, source, "setup.n_slices", "an integer >= 1", n)
+    deg = s["profile_degree"]
+    check(isinstance(deg, int) and 1 <= deg <= 12, source, "setup.profile_degree",
+          "an integer degree in [1, 12]", deg)
+    furrow_len = s["travel"] - s["opener_length"]
+    span = (n - 1) * s["slice_spacing"] + s["slice_thickness"]
+    check(span <= furrow_len, source, "setup.n_slices",
+          f"slices spanning <= the finished furrow behind the opener ({furrow_len:.3g} m)",
+          f"{n} slices spanning {span:.3g} m")
+    check(s["x_limit"] <= 0.2238, source, "setup.x_limit",
+          "<= 0.2238 m (F(x) of Eq. 3 turns over at 223.8 mm)", s["x_limit"])
+    check(0.0 <= s["stable_from"] < 1.0, source, "setup.stable_from",
+          "a fraction of the pass in [0, 1)", s["stable_from"])
+    check(0 < s["dt_fraction"] <= 1, source, "setup.dt_fraction", "a fraction in (0, 1]",
+          s["dt_fraction"])
+    validate_bin(_bin(s), source, "setup")
+
+
+def _bin(s) -> BinSpec:
+    return BinSpec(length=s["tank_length"], width=s["tank_width"], height=s["tank_height"],
+                   radius=s["particle_radius"], spread=s["radius_spread"],
+                   settle_time=s["settle_time"], stiffness_scale=s["stiffness_scale"],
+                   dt_fraction=s["dt_fraction"])
+
+
+# ---------------------------------------------------------------------------
+# profile analysis
+# ---------------------------------------------------------------------------
+
+
+def slice_profile(x, r, x_lo, x_hi, y_centre, z_datum, step, y_range):
+    """Upper envelope of the particles whose spheres reach into the slice
+    ``x_lo <= x <= x_hi``: at lateral sample points ``y_k`` (spacing ``step``) the height
+    ``max_i z_i + sqrt(r_i^2 - (y_k - y_i)^2)`` over spheres with ``|y_k - y_i| < r_i``.
+    Returns lateral offsets from ``y_centre`` and heights above ``z_datum`` (both mm);
+    samples no sphere covers are left out."""
+    sel = (x[:, 0] + r >= x_lo) & (x[:, 0] - r <= x_hi)
+    xs, rs = x[sel], r[sel]
+    yk = np.arange(y_range[0] + 0.5 * step, y_range[1], step)
+    dy = yk[None, :] - xs[:, 1:2]
+    h2 = rs[:, None] ** 2 - dy * dy
+    top = np.where(h2 > 0, xs[:, 2:3] + np.sqrt(np.clip(h2, 0, None)), -np.inf).max(axis=0)
+    ok = np.isfinite(top)
+    return 1e3 * (yk[ok] - y_centre), 1e3 * (top[ok] - z_datum)
+
+
+def fit_profile(y_mm, z_mm, degree, x_limit_mm) -> Polynomial:
+    """Least-squares polynomial Phi(x) (mm) of the points with |x| <= x_limit."""
+    sel = np.abs(y_mm) <= x_limit_mm
+    if sel.sum() <= degree:
+        raise ValueError(f"{int(sel.sum())} profile points for a degree-{degree} fit")
+    return Polynomial.fit(y_mm[sel], z_mm[sel], degree).convert()
+
+
+def area_difference(phi: Polynomial, f: Polynomial, a: float, b: float) -> tuple[float, float]:
+    """(enclosed area int_a^b |phi - f|, signed int_a^b (phi - f)), exact for polynomials."""
+    d = (phi - f).convert()
+    anti = d.integ()
+    roots = d.roots() if d.degree() > 0 else np.array([])
+    cuts = np.sort(np.real(roots[np.abs(np.imag(roots)) < 1e-9 * (1 + np.abs(roots))]))
+    cuts = cuts[(cuts > a) & (cuts < b)]
+    edges = np.concatenate([[a], cuts, [b]])
+    pieces = anti(edges[1:]) - anti(edges[:-1])
+    return float(np.sum(np.abs(pieces))), float(anti(b) - anti(a))
+
+
+# ---------------------------------------------------------------------------
+# run
+# ---------------------------------------------------------------------------
+
+
+def run(setup: dict, params: DemParams, preset: str = "quick", seed: int = 0, threads=None,
+        vtk_dir=None, source: str = "<furrow>", use_cache: bool = True) -> Result:
+    if "name" not in setup and set(setup) <= set(setups()["yangtze-opener"]):
+        setup = merge_setup(setups(), "yangtze-opener", setup, source)
+    validate(setup, preset, source)
+    s = _settings(setup, preset)
+    nthreads = threads_used(threads)
+    t0 = time.perf_counter()
+    spec = _bin(s)
+    v, t = tools.furrow_opener(depth=s["depth"], half_width=s["opener_half_width"],
+                               bottom_half_width=s["opener_bottom_half_width"],
+                               upper_height=s["opener_upper_height"],
+                               upper_half_width=s["opener_upper_half_width"],
+                               length=s["opener_length"], source=source)
+    from soilcal.dem.scenarios.soilbin import settled_bin
+
+    bed = settled_bin(spec, params, preset, seed, source, use_cache)
+    surface = bed["surface"]
+    yc = 0.5 * s["tank_width"]
+    x_start = MARGIN + s["opener_length"]
+    z_tool = surface - s["depth"]
+    v = v + np.array([x_start, yc, z_tool])
+    lo, hi = v.min(axis=0), v.max(axis=0)
+    pad = 2.0 * spec.r_max
+
+    def trench(x, r):
+        return np.all((x >= lo - pad) & (x <= hi + pad), axis=1)
+
+    duration = s["travel"] / s["speed"]
+
+    def pose(tt):
+        return v + np.array([s["speed"] * tt, 0, 0]), t
+
+    out = tool_pass(spec, params, preset, seed, source, v, t, (s["speed"], 0.0, 0.0),
+                    duration, trench, vtk_dir=vtk_dir, stem="furrow", use_cache=use_cache,
+                    tool_pose=pose, log_dt=0.005, bed=bed)
+    sim = out["sim"]
+    tt, force = out["t"], out["force"]
+    resist = -force[:, 0]
+    r_mean, r_sd = stable_mean(tt, resist, s["stable_from"] * duration)
+    fz_mean, fz_sd = stable_mean(tt, force[:, 2], s["stable_from"] * duration)
+    # slices in the finished furrow: between the start and the opener's final rear end
+    x_end_rear = x_start + s["travel"] - s["opener_length"]
+    mid = 0.5 * (x_start + x_end_rear)
+    n = s["n_slices"]
+    centres = mid + (np.arange(n) - 0.5 * (n - 1)) * s["slice_spacing"]
+    F = measured_profile()
+    xl = 1e3 * s["x_limit"]
+    bw = 0.5 * s["particle_radius"]
+    half = 0.5 * s["tank_width"] - pad
+    enclosed, signed, areas = [], [], []
+    x = sim.x
+    r = sim.p.r
+    for c in centres:
+        ym, zm = slice_profile(x, r, c - 0.5 * s["slice_thickness"],
+                               c + 0.5 * s["slice_thickness"], yc, z_tool, bw,
+                               (yc - half, yc + half))
+        phi = fit_profile(ym, zm, s["profile_degree"], xl)
+        e, sg = area_difference(phi, F, -xl, xl)
+        enclosed.append(e)
+        signed.append(sg)
+        # furrow cross-section: area between the undisturbed surface and the profile
+        areas.append(float(np.sum(np.clip(1e3 * s["depth"] - phi(np.linspace(-xl, xl, 401)), 0,
+                                          None)) * (2 * xl / 400)))
+    wall = time.perf_counter() - t0
+    resp = dict(
+        area_difference_dm2=float(np.mean(enclosed)) / 1e4,
+        area_difference_sd_dm2=float(np.std(enclosed, ddof=1)) / 1e4 if n > 1 else 0.0,
+        area_difference_signed_dm2=float(np.mean(signed)) / 1e4,
+        furrow_area_dm2=float(np.mean(areas)) / 1e4,
+        traction_N=r_mean, traction_sd_N=r_sd,
+        vertical_force_N=fz_mean, vertical_force_sd_N=fz_sd,
+        traction_measured_N=measured_traction(),
+        settled_surface_m=float(surface), bin_from_cache=bool(out["from_cache"]),
+    )
+    return Result(scenario=NAME, preset=preset, seed=int(seed), n_particles=out["n"],
+                  steps=int(out["steps"] + out["settle_steps"]), sim_time_s=out["steps"] * out["dt"],
+                  wall_s=wall, threads=nthreads, params=params.as_dict(), setup=dict(s),
+                  responses=resp, series=dict(t=tt, traction_N=resist, force=force,
+                                               slice_x=centres))

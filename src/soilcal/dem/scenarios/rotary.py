@@ -1,0 +1,299 @@
+"""Rotary tillage: power and surface flatness of a blade set (black soil, 150-350 rpm).
+
+Source: Qi et al., Sustainability 2025, 17, 8126, Sec. 2.1 (2), 2.3, 3.3
+(``config/soils/black-soil.yaml``).
+
+Test (Sec. 2.3): the 1GKN-160 rotary tiller (36 IT225 blades, working width 1.6 m, Table 1;
+blade set geometry :func:`soilcal.dem.tools.rotary_blade_set`) advances at 1 km/h with the
+blade shaft at 150, 200, 250, 300 or 350 r/min.  The blade shaft turns down-cut (like the
+tractor wheels): ``omega = +2 pi n / 60 e_y`` with travel along +x.  The tillage depth is
+not printed; 120 mm is assumed (``depth``), which keeps the blade holders (radius 100 mm)
+above the 225 mm blade tips' cutting zone.
+
+Power (Sec. 3.3, Figure 10): the torque of the particles on the blade set about the shaft,
+``tau_y``, opposes the rotation; the shaft power is
+
+    P = -tau_y omega
+
+reported as the stable-stage mean and sample SD (``stable_from`` of the pass to its end),
+in kW for the full working width.  The draft ``-F_x`` (positive when the soil resists the
+advance) and the advance power ``-F_x v`` are reported too.  The paper prints only the
+absolute differences between simulated and measured power (0.138-0.460 kW,
+``tillage_power_difference.csv``), not the powers.
+
+Surface flatness (Eqs. 3-4; five equidistant points on the tilled surface, Sec. 2.3)::
+
+    d_mean = (1/n) sum d_i,     Sd = sqrt( sum (d_i - d_mean)^2 / (n - 1) )
+
+``d_i`` the height of the tilled surface above the undisturbed surface at point i (mm).
+The tiller's hood is a steel ceiling ``hood_clearance`` above the blade tips at the
+start (it keeps thrown soil in the bin, as the hood of a tiller does; its height is an
+assumption).  After the pass the rotor stops turning and is lifted out of the soil with the hood (2 m/s
+for ``lift_time``), the soil settles for ``rest_time``, and the surface height at a point is the
+upper envelope of the particles (highest sphere top ``z_i + sqrt(r_i^2 - rho^2)`` over
+spheres whose horizontal distance rho to the point is below r_i) averaged over lateral
+samples across the tilled width.  The points lie equidistant along the travel direction over
+the ground the shaft passed over.  Measured Sd: 159.2, 134.4, 120.6, 109.8, 102.1 mm at
+150-350 r/min (``surface_flatness.csv``).  A dense version over ``dense_points`` points is
+reported as ``flatness_dense_mm``.
+
+Presets: ``paper`` simulates the whole 1.6 m blade set between side walls with particles of
+1.5 mm radius (the printed 2-4 mm diameters, +-33 %); ``quick`` simulates one flange of
+three blades in a periodic slab of one flange spacing (1.6 m / 12), 12 mm particles
+(0.9-1.1) in a 0.19 m deep bed, shear modulus scaled by 0.1 (1e8 -> 1e7 Pa with the paper's
+G; surface energies by 0.1^0.4), a 0.15 m pass, and scales the torque to the full working width by
+``n_flanges`` (the helix repeats every flange up to a phase).  The time step is the smaller
+of ``dt_fraction`` x the Rayleigh time and the time the blade tip needs to move a tenth of
+the smallest radius (tip speed ``omega R + v``).
+"""
+
+from __future__ import annotations
+
+import csv
+import math
+import time
+from pathlib import Path
+
+import numpy as np
+
+from soilcal.dem import tools
+from soilcal.dem.scenarios.base import (PRESETS, DemParams, Result, check, merge_setup,
+                                        stable_mean, threads_used)
+from soilcal.dem.scenarios.soilbin import BinSpec, settled_bin, tool_pass, validate_bin
+
+NAME = "rotary"
+MEASURED = (Path(__file__).resolve().parents[4] / "resources" / "measurements"
+            / "black-soil")
+RPMS = (150, 200, 250, 300, 350)  # Sec. 2.3
+
+
+def _setup(rpm):
+    return dict(
+        rpm=float(rpm),                   # Sec. 2.3: blade shaft speed, r/min
+        forward_speed=1.0 / 3.6,          # Sec. 2.3: 1 km/h in m/s
+        depth=0.12,                       # assumption (not printed)
+        working_width=tools.ROTOR["working_width"],  # Table 1: 160 cm
+        n_flanges=tools.ROTOR["n_flanges"],          # assumption (36 = 12 x 3 blades)
+        blades_per_flange=tools.ROTOR["blades_per_flange"],
+        radius=tools.ROTOR["radius"],     # IT225: 225 mm
+        hub_radius=tools.ROTOR["hub_radius"],
+        flatness_points=5,                # Sec. 2.3: five equidistant points
+        dense_points=20,
+        stable_from=0.4,
+        lift_time=0.08,
+        hood_clearance=0.05,              # assumption: hood 50 mm above the blade tips
+        rest_time=0.05,
+    )
+
+
+def setups() -> dict:
+    return {f"rpm-{n}": _setup(n) for n in RPMS}
+
+
+PRESET_SETTINGS = {
+    "quick": dict(periodic=True, bin_length=0.7, bin_height=0.19, particle_radius=0.012,
+                  radius_spread=0.1, stiffness_scale=0.1, dt_fraction=0.2, travel=0.15,
+                  settle_time=0.25, flanges_simulated=1, skin_fraction=1.0),
+    "paper": dict(periodic=False, bin_length=2.5, bin_height=0.25, particle_radius=0.0015,
+                  radius_spread=1.0 / 3.0, stiffness_scale=1.0, dt_fraction=0.2, travel=1.0,
+                  settle_time=1.0, flanges_simulated=None, skin_fraction=0.6),
+}
+
+
+def paper_params() -> DemParams:
+    """Black soil at the printed optima: stage 1 soil-soil (x1-x4 = 0.46 J/m^2, 0.51, 0.65,
+    0.13; Sec. 3.1.2), stage 2 soil-65Mn (x5-x8 = 0.29 J/m^2, 0.55, 0.64, 0.07; Sec. 3.2.2);
+    particle density 1560 kg/m^3 (liquid displacement), Poisson 0.46 and the printed shear
+    modulus G = 1e8 Pa (triaxial test, Sec. 2.1 (1); it contradicts the printed E = 1 MPa and
+    nu, see the soil config, but it is the only G printed); 65Mn 7865 kg/m^3, 0.3,
+    7.9e10 Pa (Sec. 2.1)."""
+    return DemParams.from_mapping(dict(
+        soil_soil_surface_energy=0.46, soil_soil_restitution=0.51,
+        soil_soil_static_friction=0.65, soil_soil_rolling_friction=0.13,
+        soil_steel_surface_energy=0.29, soil_steel_restitution=0.55,
+        soil_steel_static_friction=0.64, soil_steel_rolling_friction=0.07,
+        soil_density=1560.0, soil_poisson=0.46, soil_shear_modulus=1.0e8,
+        steel_density=7865.0, steel_poisson=0.3, steel_shear_modulus=7.9e10,
+    ), "<rotary.paper_params>")
+
+
+def measured_flatness() -> dict:
+    with open(MEASURED / "surface_flatness.csv", newline="") as fh:
+        return {float(r["rotor_speed_rpm"]): float(r["Sd_measured_mm"])
+                for r in csv.DictReader(fh)}
+
+
+def flatness(d) -> tuple[float, float]:
+    """(d_mean, Sd) of Eqs. (3)-(4): mean and sample standard deviation (n - 1)."""
+    d = np.asarray(d, dtype=float)
+    if d.size < 2:
+        raise ValueError("surface flatness needs at least two points")
+    return float(d.mean()), float(d.std(ddof=1))
+
+
+def shaft_power(torque_axis, omega) -> np.ndarray:
+    """P = -tau omega (W): power the shaft delivers against the soil's torque tau."""
+    return -np.asarray(torque_axis, dtype=float) * float(omega)
+
+
+def surface_heights(x, r, px, py, lateral_half):
+    """Envelope height at points (px, py): highest sphere top over spheres within their
+    radius horizontally, averaged over 9 lateral samples in py +- lateral_half."""
+    out = np.empty(len(px))
+    offs = np.linspace(-lateral_half, lateral_half, 9)
+    for k, (a, b) in enumerate(zip(px, py)):
+        near = np.abs(x[:, 0] - a) < r
+        xs, rs = x[near], r[near]
+        hs = []
+        for o in offs:
+            rho2 = (xs[:, 0] - a) ** 2 + (xs[:, 1] - (b + o)) ** 2
+            h2 = rs**2 - rho2
+            ok = h2 > 0
+            hs.append(np.max(xs[ok, 2] + np.sqrt(h2[ok])) if ok.any() else 0.0)
+        out[k] = float(np.mean(hs))
+    return out
+
+
+def flatness_region(x0, travel, radius, min_length=0.1):
+    """Stretch of the travel axis where the flatness points lie: the ground behind the
+    rotor's final position that its whole footprint passed over, ``[x0 + R, x0 + travel -
+    R]``, when that is at least ``min_length`` long; otherwise (short passes) the whole
+    disturbed footprint ``[x0 - R, x0 + travel + R]``."""
+    if travel - 2.0 * radius >= min_length:
+        return x0 + radius, x0 + travel - radius
+    return x0 - radius, x0 + travel + radius
+
+
+def _settings(setup, preset):
+    s = dict(setup)
+    for k, v in PRESET_SETTINGS[preset].items():
+        if v is not None:
+            s[k] = v
+    if s.get("flanges_simulated") is None:
+        s["flanges_simulated"] = s["n_flanges"]
+    spacing = s["working_width"] / s["n_flanges"]
+    s["slab_width"] = (s["flanges_simulated"] * spacing if s["periodic"]
+                       else s["working_width"] + 0.2)
+    return s
+
+
+def validate(setup: dict, preset: str = "quick", source: str = "<rotary>") -> None:
+    check(preset in PRESETS, source, "preset", f"one of {PRESETS}", preset)
+    s = _settings(setup, preset)
+    for k in ("rpm", "forward_speed", "depth", "working_width", "radius", "hub_radius",
+              "bin_length", "bin_height", "travel", "lift_time", "rest_time"):
+        v = s.get(k)
+        check(isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v)
+              and v > 0, source, f"setup.{k}", "a number > 0", v)
+    for k in ("n_flanges", "blades_per_flange", "flatness_points", "dense_points"):
+        v = s.get(k)
+        check(isinstance(v, int) and v >= (2 if "points" in k else 1), source, f"setup.{k}",
+              "an integer >= 2" if "points" in k else "an integer >= 1", v)
+    check(s["depth"] < s["bin_height"], source, "setup.depth",
+          f"a tillage depth below the soil height of the bin ({s['bin_height']} m)", s["depth"])
+    check(s["depth"] <= s["radius"] - s["hub_radius"], source, "setup.depth",
+          f"<= rotary radius - holder radius = {s['radius'] - s['hub_radius']:.3g} m "
+          "(blade holders stay above the soil)", s["depth"])
+    need = 2 * s["radius"] + s["travel"] + 0.1
+    check(need <= s["bin_length"], source, "setup.bin_length",
+          f">= rotor diameter + pass + margin = {need:.3g} m", s["bin_length"])
+    check(0.0 <= s["stable_from"] < 1.0, source, "setup.stable_from",
+          "a fraction of the pass in [0, 1)", s["stable_from"])
+    validate_bin(_bin(s), source, "setup")
+
+
+def _bin(s) -> BinSpec:
+    return BinSpec(length=s["bin_length"], width=s["slab_width"], height=s["bin_height"],
+                   radius=s["particle_radius"], spread=s["radius_spread"],
+                   periodic_y=bool(s["periodic"]), settle_time=s["settle_time"],
+                   stiffness_scale=s["stiffness_scale"], dt_fraction=s["dt_fraction"],
+                   skin_fraction=s["skin_fraction"])
+
+
+def run(setup: dict, params: DemParams, preset: str = "quick", seed: int = 0, threads=None,
+        vtk_dir=None, source: str = "<rotary>", use_cache: bool = True) -> Result:
+    if "name" not in setup and "rpm" in setup:
+        setup = merge_setup({"custom": _setup(setup["rpm"])}, "custom", setup, source)
+    validate(setup, preset, source)
+    s = _settings(setup, preset)
+    nthreads = threads_used(threads)
+    t0 = time.perf_counter()
+    spec = _bin(s)
+    bed = settled_bin(spec, params, preset, seed, source, use_cache)
+    omega = 2.0 * math.pi * s["rpm"] / 60.0
+    R = s["radius"]
+    spacing = s["working_width"] / s["n_flanges"]
+    nf = s["flanges_simulated"]
+    v, t = tools.rotary_blade_set(n_flanges=nf, blades_per_flange=s["blades_per_flange"],
+                                  width=nf * spacing, radius=R, hub_radius=s["hub_radius"],
+                                  source=source)
+    x0 = R + 0.05
+    axis = np.array([x0, 0.5 * s["slab_width"], bed["surface"] - s["depth"] + R])
+    v = v + axis
+    pad = 2.0 * spec.r_max
+
+    def trench(x, r):
+        return (x[:, 0] - axis[0]) ** 2 + (x[:, 2] - axis[2]) ** 2 <= (R + pad) ** 2
+
+    hood_z = axis[2] + R + s["hood_clearance"]
+
+    def hood(sim):
+        # the tiller's hood: a steel ceiling over the rotor that keeps thrown soil in the bin
+        sim.add_plane((0.0, 0.0, hood_z), (0.0, 0.0, -1.0), "steel", name="hood",
+                      centre=(0.5 * s["bin_length"], 0.5 * s["slab_width"], hood_z))
+
+    vf = s["forward_speed"]
+    duration = s["travel"] / vf
+    dt_max = 0.1 * spec.r_min / (omega * R + vf)
+    from soilcal.dem.geometry import rotation_matrix
+
+    def pose(tt):
+        rot = rotation_matrix(np.array([0.0, 1.0, 0.0]), omega * tt)
+        c = axis + np.array([vf * tt, 0, 0])
+        return (v - axis) @ rot.T + c, t
+
+    out = tool_pass(spec, params, preset, seed, source, v, t, (vf, 0.0, 0.0), duration, trench,
+                    omega=(0.0, omega, 0.0), centre=axis, dt_max=dt_max, log_dt=0.005,
+                    vtk_dir=vtk_dir, stem="rotary", use_cache=use_cache, tool_pose=pose,
+                    bed=bed, extra_walls=hood)
+    sim, dt = out["sim"], out["dt"]
+    tt = out["t"]
+    scale = s["n_flanges"] / nf if s["periodic"] else 1.0
+    power = shaft_power(out["torque"][:, 1], omega) * scale
+    ts = s["stable_from"] * duration
+    p_mean, p_sd = stable_mean(tt, power, ts)
+    draft, draft_sd = stable_mean(tt, -out["force"][:, 0] * scale, ts)
+    # lift the rotor out, let the soil come to rest, measure the surface
+    wall = out["wall"]
+    hood_w = wall + 1
+    sim.set_wall_motion(wall, velocity=(0.0, 0.0, 2.0), omega=(0.0, 0.0, 0.0))
+    sim.set_wall_motion(hood_w, velocity=(0.0, 0.0, 2.0))
+    n_lift = int(math.ceil(s["lift_time"] / dt))
+    sim.run(n_lift)
+    sim.set_wall_motion(wall, velocity=(0.0, 0.0, 0.0))
+    sim.set_wall_motion(hood_w, velocity=(0.0, 0.0, 0.0))
+    n_rest = int(math.ceil(s["rest_time"] / dt))
+    sim.run(n_rest)
+    x, r = sim.x, sim.p.r
+    yc = 0.5 * s["slab_width"]
+    lat = 0.5 * min(s["slab_width"], nf * spacing) - spec.r_max
+    xa, xb = flatness_region(x0, s["travel"], R)
+    pts = np.linspace(xa, xb, s["flatness_points"])
+    d = 1e3 * (surface_heights(x, r, pts, np.full(len(pts), yc), lat) - bed["surface"])
+    d_mean, sd = flatness(d)
+    dense = np.linspace(xa, xb, s["dense_points"])
+    dd = 1e3 * (surface_heights(x, r, dense, np.full(len(dense), yc), lat) - bed["surface"])
+    meas = measured_flatness().get(float(s["rpm"]), float("nan"))
+    resp = dict(power_kW=p_mean / 1e3, power_sd_kW=p_sd / 1e3,
+                torque_Nm=p_mean / omega, draft_N=draft, draft_sd_N=draft_sd,
+                advance_power_kW=draft * vf / 1e3,
+                flatness_mm=sd, flatness_dense_mm=flatness(dd)[1], surface_change_mm=d_mean,
+                flatness_measured_mm=meas, power_scale=scale,
+                bin_from_cache=bool(out["from_cache"]))
+    steps = out["steps"] + out["settle_steps"] + n_lift + n_rest
+    return Result(scenario=NAME, preset=preset, seed=int(seed), n_particles=out["n"],
+                  steps=int(steps), sim_time_s=(out["steps"] + n_lift + n_rest) * dt,
+                  wall_s=time.perf_counter() - t0, threads=nthreads, params=params.as_dict(),
+                  setup=dict(s), responses=resp,
+                  series=dict(t=tt, power_W=power, torque_Nm=out["torque"][:, 1] * scale,
+                              flatness_points_mm=d))

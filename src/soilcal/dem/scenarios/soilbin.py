@@ -1,0 +1,300 @@
+"""Soil bin shared by the tool scenarios (furrow opener, bulldozing plate, rotary tiller).
+
+Filling and settling
+--------------------
+The bin ``[0, L] x [0, W] x [0, H]`` is filled with spheres on a jittered hexagonal
+close-packed lattice (:func:`soilcal.dem.factories.lattice_fill`, spacing 2.02 r_max) with
+radii uniform by number on ``[r (1 - spread), r (1 + spread)]`` (Yangtze clay loam: 8 mm,
+0.9-1.1 times, Sec. 2.2.4 of Zeng et al. 2023), then settled under gravity against a floor
+and side walls (periodic in y when the bin is a slab of a wider tool, see the scenarios)
+for 70 % of ``settle_time`` (or until the translational kinetic energy per particle falls
+below ``0.5 m_mean (1e-3 m/s)^2``); the lattice region is 1.3 times the fill height, and the
+particles whose top is above the fill height (plus half a radius) are then removed and the
+rest settles for the remaining 30 %, so the surface ends close to the fill height.  The bin walls are of the soil
+material, so a settled bin depends on the soil-soil parameters and the soil's intrinsic
+properties only: design points that change only soil-steel parameters reuse it.
+
+The soil surface level is the median over lateral columns (width 2 r_max) of the highest
+particle top ``z_i + r_i`` (:func:`surface_level`); a tool's working depth is measured from
+it.
+
+Reuse
+-----
+A settled bin is saved as an npz snapshot (:func:`soilcal.dem.io.write_snapshot`) under
+``$SOILCAL_SCENARIO_CACHE`` (default ``results/cache/soil_bins``) named by the SHA-1 of
+the bin geometry, preset, seed, stiffness scale and the soil parameters; the full key is
+stored in the snapshot's metadata and compared on load, so a bin is reused only when all
+of them match, and settled afresh otherwise.  The tool phase always starts from the
+snapshot's positions with zero velocities, so a reused and a fresh bin give the same run.
+
+Trench
+------
+As in the soil-tank test of the opener, which starts in a trench "slightly greater than
+the opener" (Zeng et al. 2023, Sec. 2.1.2), particles inside the tool's starting envelope
+(plus one particle diameter) are removed before the tool moves, so the tool never starts
+overlapping particles.
+
+Forces
+------
+The engine reports, for each wall, the force of the particles on the wall and the torque
+about the wall centre every ``log_every`` steps.  Stable-stage statistics are
+:func:`soilcal.dem.scenarios.base.stable_mean` over a time window.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import math
+import os
+import time
+from dataclasses import asdict, dataclass
+from pathlib import Path
+
+import numpy as np
+
+from soilcal.dem.engine import Simulation
+from soilcal.dem.factories import BoxRegion, UniformRadius, lattice_fill
+from soilcal.dem.io import read_snapshot, write_particles_vtu, write_mesh_vtp, write_snapshot
+from soilcal.dem.materials import rayleigh_time
+from soilcal.dem.scenarios.base import (DemParams, build_materials, check, contact_model, rng)
+
+CACHE_VERSION = 1
+FILL_FACTOR = 1.3  # lattice region height / fill height (the bed compacts when it settles)
+SOIL_KEYS = ("soil_soil_restitution", "soil_soil_static_friction", "soil_soil_rolling_friction",
+             "soil_soil_surface_energy", "soil_density", "soil_poisson", "soil_shear_modulus")
+
+
+@dataclass(frozen=True)
+class BinSpec:
+    """Soil bin: length (x), width (y), fill height (z), radius and spread, periodic y."""
+
+    length: float
+    width: float
+    height: float
+    radius: float
+    spread: float = 0.1
+    periodic_y: bool = False
+    settle_time: float = 0.5
+    stiffness_scale: float = 1.0
+    dt_fraction: float = 0.2
+    max_overlap: float = 0.5
+    skin_fraction: float = 0.6
+
+    @property
+    def r_min(self):
+        return self.radius * (1.0 - self.spread)
+
+    @property
+    def r_max(self):
+        return self.radius * (1.0 + self.spread)
+
+
+def validate_bin(spec: BinSpec, source: str, prefix: str = "bin"):
+    for k in ("length", "width", "height", "radius", "settle_time", "stiffness_scale",
+              "dt_fraction"):
+        v = getattr(spec, k)
+        check(isinstance(v, (int, float)) and math.isfinite(v) and v > 0, source,
+              f"{prefix}.{k}", "a number > 0", v)
+    check(0.0 <= spec.spread < 1.0, source, f"{prefix}.spread", "a radius spread in [0, 1)",
+          spec.spread)
+    check(spec.dt_fraction <= 1.0, source, f"{prefix}.dt_fraction",
+          "a fraction of the Rayleigh time in (0, 1]", spec.dt_fraction)
+    lim = 3.0 * 2.02 * spec.r_max
+    for k in ("length", "width", "height"):
+        check(getattr(spec, k) >= lim, source, f"{prefix}.{k}",
+              f">= 3 particle diameters ({lim:.4g} m) for radius {spec.radius:g} m",
+              getattr(spec, k))
+
+
+def soil_time_step(spec: BinSpec, params: DemParams) -> float:
+    """dt_fraction x the Rayleigh time of the smallest particle (stiffness-scaled soil)."""
+    g = params.soil_shear_modulus * spec.stiffness_scale
+    return spec.dt_fraction * rayleigh_time(spec.r_min, params.soil_density, g,
+                                            params.soil_poisson)
+
+
+def new_sim(spec: BinSpec, params: DemParams, dt: float, source: str) -> Simulation:
+    mats = build_materials(params, spec.stiffness_scale, source)
+    box = (0.0, spec.length, 0.0, spec.width)
+    sim = Simulation(mats, dt=dt, box=box, periodic=(False, spec.periodic_y),
+                     contact_model=contact_model(params), max_overlap=spec.max_overlap,
+                     skin=spec.skin_fraction * spec.r_max, source=source)
+    # static planes; their centres (used by the engine only to bound how far a moving
+    # wall can sweep per step) sit at the bin centre
+    c = (0.5 * spec.length, 0.5 * spec.width, 0.5 * spec.height)
+    sim.add_plane((0, 0, 0), (0, 0, 1), "soil", name="floor", centre=c)
+    sim.add_plane((0, 0, 0), (1, 0, 0), "soil", name="x_lo", centre=c)
+    sim.add_plane((spec.length, 0, 0), (-1, 0, 0), "soil", name="x_hi", centre=c)
+    if not spec.periodic_y:
+        sim.add_plane((0, 0, 0), (0, 1, 0), "soil", name="y_lo", centre=c)
+        sim.add_plane((0, spec.width, 0), (0, -1, 0), "soil", name="y_hi", centre=c)
+    return sim
+
+
+def cache_key(spec: BinSpec, params: DemParams, preset: str, seed: int) -> dict:
+    p = params.as_dict()
+    return dict(version=CACHE_VERSION, bin=asdict(spec), preset=preset, seed=int(seed),
+                soil={k: p[k] for k in SOIL_KEYS})
+
+
+def cache_dir() -> Path:
+    return Path(os.environ.get("SOILCAL_SCENARIO_CACHE", "results/cache/soil_bins"))
+
+
+def surface_level(x, r, spec: BinSpec) -> float:
+    """Median over lateral columns of the highest particle top z + r."""
+    tops = column_tops(x, r, 2.0 * spec.r_max, (0.0, spec.length), (0.0, spec.width))
+    return float(np.nanmedian(tops))
+
+
+def column_tops(x, r, cell, xr, yr):
+    """Highest particle top z + r in each (x, y) column of size ``cell``; NaN if empty."""
+    nx = max(1, int((xr[1] - xr[0]) / cell))
+    ny = max(1, int((yr[1] - yr[0]) / cell))
+    ix = np.clip(((x[:, 0] - xr[0]) / (xr[1] - xr[0]) * nx).astype(int), 0, nx - 1)
+    iy = np.clip(((x[:, 1] - yr[0]) / (yr[1] - yr[0]) * ny).astype(int), 0, ny - 1)
+    ok = ((x[:, 0] >= xr[0]) & (x[:, 0] <= xr[1]) & (x[:, 1] >= yr[0]) & (x[:, 1] <= yr[1]))
+    tops = np.full(nx * ny, -np.inf)
+    np.maximum.at(tops, (ix * ny + iy)[ok], (x[:, 2] + r)[ok])
+    tops[~np.isfinite(tops)] = np.nan
+    return tops.reshape(nx, ny)
+
+
+def settled_bin(spec: BinSpec, params: DemParams, preset: str, seed: int, source: str,
+                use_cache: bool = True) -> dict:
+    """Positions and radii of a settled bin (from the cache when the key matches).
+
+    Returns dict(x, r, surface, settle_steps, settle_wall_s, from_cache, n)."""
+    key = cache_key(spec, params, preset, seed)
+    text = json.dumps(key, sort_keys=True)
+    path = cache_dir() / f"bin-{hashlib.sha1(text.encode()).hexdigest()[:20]}.npz"
+    if use_cache and path.exists():
+        try:
+            snap = read_snapshot(path)
+        except Exception:  # unreadable cache file: settle afresh
+            snap = None
+        if snap is not None and snap["metadata"].get("key") == key:
+            md = snap["metadata"]
+            return dict(x=snap["positions"], r=snap["radii"], surface=md["surface"],
+                        settle_steps=int(snap["step"]), settle_wall_s=md["settle_wall_s"],
+                        from_cache=True, n=len(snap["radii"]))
+    t0 = time.perf_counter()
+    g = rng(seed, "soil-bin")
+    # fill a taller region, settle, trim to the fill height, settle again
+    region = BoxRegion((0.0, 0.0, 0.0), (spec.length, spec.width, FILL_FACTOR * spec.height))
+    dist = UniformRadius(spec.r_min, spec.r_max)
+    x, r = lattice_fill(region, dist=dist, kind="hcp", jitter=0.5, rng=g, source=source,
+                        field="bin")
+    dt = soil_time_step(spec, params)
+    m_mean = float(np.mean(params.soil_density * 4.0 / 3.0 * math.pi * r**3))
+    steps = 0
+    for frac in (0.7, 0.3):
+        sim = new_sim(spec, params, dt, source)
+        sim.add_particles(x, r, "soil")
+        ke_tol = len(r) * 0.5 * m_mean * 1e-6
+        max_steps = int(math.ceil(frac * spec.settle_time / dt))
+        first = max(1, max_steps // 5)
+        sim.run(first)
+        if max_steps > first:
+            sim.run(max_steps - first, ke_tol=ke_tol, ke_every=50)
+        steps += sim.step
+        x, r = sim.x.copy(), sim.p.r.copy()
+        if frac == 0.7:
+            keep = x[:, 2] + r <= spec.height + 0.5 * spec.radius
+            x, r = x[keep], r[keep]
+    xs, rs = x, r
+    surf = surface_level(xs, rs, spec)
+    wall = time.perf_counter() - t0
+    if use_cache:
+        write_snapshot(path, xs, np.zeros_like(xs), rs, np.zeros(len(rs), dtype=np.int32),
+                       steps * dt, steps,
+                       metadata=dict(key=key, surface=surf, settle_wall_s=wall))
+    return dict(x=xs, r=rs, surface=surf, settle_steps=int(steps), settle_wall_s=wall,
+                from_cache=False, n=len(rs))
+
+
+def dig(x, r, inside) -> np.ndarray:
+    """Boolean mask of particles to keep: ``inside(x, r)`` True marks the trench."""
+    return ~np.asarray(inside(x, r), dtype=bool)
+
+
+def force_series(sim: Simulation, wall: int, log_every: int, step0: int, dt: float):
+    """(t, force[n, 3], torque[n, 3]) of one wall from the last run's wall log; t is the time
+    since ``step0``."""
+    wl = sim.wall_log
+    n = wl.shape[0]
+    steps = step0 + (np.arange(n) + 1) * log_every
+    return (steps - step0) * dt, wl[:, wall, 0:3].copy(), wl[:, wall, 3:6].copy()
+
+
+def tool_pass(spec: BinSpec, params: DemParams, preset: str, seed: int, source: str,
+              vertices, triangles, velocity, duration: float, trench, omega=(0.0, 0.0, 0.0),
+              centre=None, dt_max: float | None = None, log_dt: float = 0.01,
+              vtk_dir=None, stem: str = "tool", n_frames: int = 5, use_cache: bool = True,
+              tool_pose=None, bed=None, extra_walls=None):
+    """Settled (or cached) bin, trench dug by ``trench(x, r) -> bool``, the tool mesh
+    (steel) moved with ``velocity``/``omega`` about ``centre`` for ``duration`` s.
+
+    Returns dict(sim, t, force, torque, dt, steps, settle_steps, n, from_cache, surface,
+    log_every); ``force``/``torque`` are the particles' force on the tool and its torque
+    about the (moving) tool centre, sampled every ``log_every`` steps."""
+    if bed is None:
+        bed = settled_bin(spec, params, preset, seed, source, use_cache)
+    keep = dig(bed["x"], bed["r"], trench)
+    dt = soil_time_step(spec, params)
+    if dt_max is not None:
+        dt = min(dt, float(dt_max))
+    sim = new_sim(spec, params, dt, source)
+    sim.add_particles(bed["x"][keep], bed["r"][keep], "soil")
+    wall = sim.add_mesh(vertices, triangles, "steel", name=stem, velocity=velocity,
+                        omega=omega, centre=centre)
+    if extra_walls is not None:
+        extra_walls(sim)
+    log_every = max(1, int(round(log_dt / dt)))
+    steps = int(math.ceil(duration / dt / log_every)) * log_every
+    vtk = VtkWriter(vtk_dir, stem)
+    chunks = max(1, int(n_frames) - 1) if vtk.folder else 1
+    per = int(math.ceil(steps / log_every / chunks)) * log_every
+    ts, fs, qs = [], [], []
+    step0 = sim.step
+    if vtk.folder:
+        vtk.frame(sim, *(tool_pose(0.0) if tool_pose else (None, None)))
+    done = 0
+    while done < steps:
+        k = min(per, steps - done)
+        s0 = sim.step
+        sim.run(k, wall_log_every=log_every)
+        t, f, q = force_series(sim, wall, log_every, s0, dt)
+        ts.append(t + (s0 - step0) * dt)
+        fs.append(f)
+        qs.append(q)
+        done += k
+        if vtk.folder:
+            tt = (sim.step - step0) * dt
+            vtk.frame(sim, *(tool_pose(tt) if tool_pose else (None, None)))
+    return dict(sim=sim, t=np.concatenate(ts), force=np.concatenate(fs),
+                torque=np.concatenate(qs), dt=dt, steps=steps, settle_steps=bed["settle_steps"],
+                n=int(keep.sum()), from_cache=bed["from_cache"], surface=bed["surface"],
+                log_every=log_every, wall=wall)
+
+
+class VtkWriter:
+    """Particle (.vtu) and tool (.vtp) frames into a folder (no-op without a folder)."""
+
+    def __init__(self, folder, stem):
+        self.folder = Path(folder) if folder else None
+        self.stem = stem
+        self.k = 0
+        if self.folder:
+            self.folder.mkdir(parents=True, exist_ok=True)
+
+    def frame(self, sim: Simulation, tool_vertices=None, tool_triangles=None):
+        if not self.folder:
+            return
+        write_particles_vtu(self.folder / f"{self.stem}_particles_{self.k:04d}.vtu",
+                            sim.x, sim.p.r, velocities=sim.v)
+        if tool_vertices is not None:
+            write_mesh_vtp(self.folder / f"{self.stem}_tool_{self.k:04d}.vtp", tool_vertices,
+                           tool_triangles)
+        self.k += 1
