@@ -285,3 +285,112 @@ def threads_used(threads) -> int:
               f"an integer in [1, {numba.config.NUMBA_NUM_THREADS}]", threads)
         numba.set_num_threads(t)
     return int(numba.get_num_threads())
+
+
+# ---------------------------------------------------------------- presets and run helpers
+#: Preset defaults shared by the scenarios (each scenario adds its own sizes):
+#:
+#: * ``quick``: soil shear modulus reduced to at most ``g_max`` = 5e5 Pa (stiffness scaling
+#:   with the surface-energy rule above), time step 30 % of the Rayleigh time (the upper end
+#:   of the 10-30 % the vineyard-soil paper recommends), about ``n_particles`` spheres;
+#: * ``paper``: unscaled moduli, time step 20 % of the Rayleigh time (003: "20 % of the
+#:   Rayleigh time step"; 004 Sec. 2.6: "fixed simulation time step of 20 %"), the papers'
+#:   particle sizes.
+PRESET_DEFAULTS = {
+    "quick": dict(g_max=5.0e5, dt_fraction=0.3, n_particles=1000, max_overlap=0.3),
+    "paper": dict(g_max=None, dt_fraction=0.2, n_particles=None, max_overlap=0.3),
+}
+
+
+def check_preset(preset, source="<input>") -> dict:
+    check(preset in PRESETS, source, "preset", f"one of {PRESETS}", preset)
+    return PRESET_DEFAULTS[preset]
+
+
+def stiffness_scale_for(params: DemParams, preset: str, override=None) -> float:
+    """Shear-modulus factor: the override if given, else the preset's cap g_max / G_soil."""
+    if override is not None:
+        return float(override)
+    g_max = PRESET_DEFAULTS[preset]["g_max"]
+    if g_max is None:
+        return 1.0
+    return min(1.0, g_max / params.soil_shear_modulus)
+
+
+def make_simulation(params: DemParams, setup: dict, preset: str, source: str, **kw):
+    """Simulation with the scenario materials, Hertz-Mindlin + constant-torque rolling
+    (+ JKR when a surface energy is > 0) and the preset's time step; returns (sim, scale)."""
+    from soilcal.dem.engine import Simulation
+
+    d = PRESET_DEFAULTS[preset]
+    scale = stiffness_scale_for(params, preset, setup.get("stiffness_scale"))
+    mats = build_materials(params, scale, source)
+    dtf = setup.get("dt_fraction") or d["dt_fraction"]
+    sim = Simulation(mats, dt_fraction=float(dtf), contact_model=contact_model(params),
+                     max_overlap=d["max_overlap"], source=source, **kw)
+    return sim, scale
+
+
+def rest_tolerance(sim, rest_speed: float, mask=None) -> float:
+    """Kinetic-energy threshold 1/2 M v_rest^2 of the (masked) particles [J]."""
+    m = sim.p.m if mask is None else sim.p.m[mask]
+    return 0.5 * float(np.sum(m)) * rest_speed**2
+
+
+def settle(sim, rest_speed: float, max_time: float, check_every: int = 200) -> tuple[bool, float]:
+    """Run until the translational kinetic energy is below 1/2 M v_rest^2 or ``max_time``
+    seconds have passed; returns (settled, simulated seconds)."""
+    if sim.dt is None:
+        sim.run(0)
+    t0 = sim.step
+    ok = sim.run_until_settled(rest_tolerance(sim, rest_speed), check_every=check_every,
+                               max_steps=max(1, int(round(max_time / sim.dt))))
+    return bool(ok), (sim.step - t0) * sim.dt
+
+
+def run_time(sim, seconds: float) -> int:
+    """Advance ``seconds`` of simulated time (at least one step); returns steps done."""
+    if sim.dt is None:
+        sim.run(0)
+    return sim.run(max(1, int(round(seconds / sim.dt))))
+
+
+class Frames:
+    """Optional VTK output: particle frames (``frame_NNNN.vtu``) and a ``frames.pvd``."""
+
+    def __init__(self, vtk_dir, name: str):
+        self.dir = Path(vtk_dir) if vtk_dir else None
+        self.name = name
+        self.entries = []
+        if self.dir is not None:
+            self.dir.mkdir(parents=True, exist_ok=True)
+
+    def __call__(self, sim, label: str = ""):
+        if self.dir is None:
+            return
+        from soilcal.dem.io import write_particles_vtu
+
+        k = len(self.entries)
+        path = self.dir / f"{self.name}_{k:04d}.vtu"
+        write_particles_vtu(path, sim.x, sim.p.r, sim.v, sim.omega, sim.p.mat)
+        self.entries.append((sim.step * (sim.dt or 0.0), path))
+
+    def close(self):
+        if self.dir is not None and self.entries:
+            from soilcal.dem.io import write_pvd
+
+            write_pvd(self.dir / f"{self.name}.pvd", self.entries)
+
+
+class Timer:
+    """Wall-clock timer of a run (time.perf_counter)."""
+
+    def __init__(self):
+        import time
+
+        self._t = time.perf_counter
+        self.t0 = self._t()
+
+    @property
+    def seconds(self) -> float:
+        return self._t() - self.t0

@@ -1,0 +1,270 @@
+"""Responses measured on DEM particle states: repose angle, drum angle, stress-strain.
+
+Repose angle from radial bins (vineyard-soil paper, 003, section "Simulated static/dynamic
+angle of repose determination": EDEMpy measurement, a radial array of bins, the highest
+particle of each bin, a least-squares line through those points, eight directions averaged)
+--------------------------------------------------------------------------------------
+Particles above the plate (z_top = z + r > plate_z) are split into ``n_dir`` azimuthal
+sectors of width 360/n_dir deg about the pile axis (x_c, y_c) (the horizontal centroid of the
+particles standing on the plate unless given).  Along each sector (or each of ``n_sub``
+rays per sector; containers must stay wider than a particle, or the highest particle of a
+narrow container near the axis lies below the surface and the angle is biased low) the
+radial distance rho = |(x, y) - (x_c, y_c)| is cut into containers of width
+``bin_width`` (default one mean diameter); each container gives the top of its highest
+particle, h_k = max(z + r) - plate_z, at the radial position rho_k of that particle.  With the height of the sector H = max_k h_k, the
+rounded top and the toe are excluded by keeping the bins with
+
+    BAND[0] H < h_k < BAND[1] H          (BAND = (0.20, 0.75), as the photo measurement)
+
+and lie outside the highest container of their ray (rho_k > rho_top: containers near the
+axis hold few particles and are not on the flank), and fitting h = a + b rho by least squares (``numpy.polyfit``), so the flank angle is
+
+    alpha = atan(-b)
+
+The repose angle is the mean of the n_dir flank angles; their sample standard deviation is
+reported as the spread.
+
+Side silhouette
+---------------
+The same pile is also rendered as an orthographic side view (each sphere a dark disc of
+radius r on a light background, seen along x or along y, a grey plate whose top edge is the
+plate plane) and measured by :func:`soilcal.imaging.measure.measure_pile`, the pipeline used
+for photos (Otsu threshold, plate line from a Hough transform, RANSAC flank lines between 20
+and 75 % of the heap height).  Two views (along x and along y) give four flanks, averaged as
+the papers average both sides of each photo (002 Sec. 2.4, 003 Sec. static angle, 001 Sec.
+2.2.1 four directions).
+
+Drum free surface (003, section "Dynamic angle of repose measurement")
+--------------------------------------------------------------------
+In the drum's mid-section slab |s - s_mid| <= w (s the coordinate along the drum axis),
+particle centres are projected on the section plane (u horizontal, z vertical).  The u range
+of the slab's particles is cut into bins of width ``bin_width``; the highest top z + r of each
+bin traces the free surface.  Bins in the central fraction ``central`` of the surface chord
+(default 60 %, as the photo measurement of drum frames) are fitted with z = a + b u and the
+frame's dynamic angle is
+
+    theta = atan(|b|)
+
+Frames are averaged in time (mean and sample standard deviation).
+
+Stress-strain (cohesive-soil paper, 004 Sec. 3.7)
+---------------------------------------------------
+Axial stress of the loading rod of radius R_rod pressing down with force F_z (the particles'
+reaction on the rod, upward positive) and axial strain from the rod travel::
+
+    sigma = F_z / (pi R_rod^2),      epsilon = (h0 - z_rod) / h0
+
+with h0 the height of the sample top (rod face at first contact) above the tube floor.
+"""
+
+from __future__ import annotations
+
+import math
+import tempfile
+from pathlib import Path
+
+import numpy as np
+
+from soilcal.errors import InputError
+
+BAND = (0.20, 0.75)
+
+
+def _xr(x, r, src="<input>"):
+    x = np.asarray(x, dtype=float).reshape(-1, 3)
+    r = np.broadcast_to(np.asarray(r, dtype=float), (len(x),)).copy()
+    if len(x) < 10:
+        raise InputError(src, "particles", "at least 10 particles to measure a pile", len(x))
+    return x, r
+
+
+def pile_centre(x, r, plate_z=0.0, layer=None):
+    """Horizontal centroid of the particles standing on the plate (bottom layer)."""
+    x, r = _xr(x, r)
+    layer = 2.5 * float(np.mean(r)) if layer is None else layer
+    on = (x[:, 2] - r - plate_z) < layer
+    on &= x[:, 2] > plate_z
+    pts = x[on] if on.sum() >= 3 else x[x[:, 2] > plate_z]
+    return float(pts[:, 0].mean()), float(pts[:, 1].mean())
+
+
+def repose_angle_bins(x, r, plate_z=0.0, centre=None, n_dir=8, bin_width=None, band=BAND,
+                      n_sub=1, source="<measurement>") -> dict:
+    """Repose angle from radial bins over ``n_dir`` directions (see module docstring).
+
+    Returns dict(angle_deg, spread_deg, per_direction_deg, height_m, centre, n_bins_used).
+    """
+    x, r = _xr(x, r, source)
+    above = x[:, 2] > plate_z
+    x, r = x[above], r[above]
+    if len(x) < 10:
+        raise InputError(source, "particles", "at least 10 particles above the plate", len(x))
+    if centre is None:
+        centre = pile_centre(x, r, plate_z)
+    cx, cy = centre
+    dx, dy = x[:, 0] - cx, x[:, 1] - cy
+    rho = np.hypot(dx, dy)
+    phi = np.mod(np.arctan2(dy, dx), 2 * np.pi)
+    top = x[:, 2] + r - plate_z
+    w = 2.0 * float(np.mean(r)) if bin_width is None else float(bin_width)
+    if not w > 0:
+        raise InputError(source, "bin_width", "a bin width > 0 m", bin_width)
+    height = float(top.max())
+    n_ray = n_dir * int(n_sub)
+    ray = np.floor((phi + np.pi / n_ray) / (2 * np.pi / n_ray)).astype(int) % n_ray
+    rb = np.floor(rho / w).astype(int)
+    cell = ray * (int(rb.max()) + 1) + rb
+    order = np.lexsort((-top, cell))  # per container, highest first
+    first = np.ones(order.size, bool)
+    first[1:] = cell[order][1:] != cell[order][:-1]
+    idx = order[first]
+    c_ray, c_rho, c_top = ray[idx], rho[idx], top[idx]
+    c_dir = ((c_ray + n_sub // 2) // n_sub) % n_dir if n_sub > 1 else c_ray
+    angles, used = [], []
+    for k in range(n_dir):
+        keep_k = np.zeros(idx.size, bool)
+        sel = c_dir == k
+        if sel.sum() < 3:
+            raise InputError(source, f"direction {k}", "particles in every direction of the pile",
+                             int(sel.sum()))
+        hd = c_top[sel].max()
+        for q in np.unique(c_ray[sel]):
+            s_q = c_ray == q
+            rho_top = c_rho[s_q][np.argmax(c_top[s_q])]
+            keep_k |= s_q & (c_rho > rho_top)
+        keep = keep_k & (c_top > band[0] * hd) & (c_top < band[1] * hd)
+        if keep.sum() < 3:
+            raise InputError(source, f"direction {k}",
+                             "at least 3 radial bins on the flank (pile too small for the bins)",
+                             int(keep.sum()))
+        b = np.polyfit(c_rho[keep], c_top[keep], 1)[0]
+        angles.append(math.degrees(math.atan(-b)))
+        used.append(int(keep.sum()))
+    a = np.array(angles)
+    return dict(angle_deg=float(a.mean()), spread_deg=float(a.std(ddof=1)),
+                per_direction_deg=[float(v) for v in a], height_m=height,
+                centre=(float(cx), float(cy)), n_bins_used=used)
+
+
+# ---------------------------------------------------------------- side silhouette
+def render_side(x, r, plate_z=0.0, view="y", px_per_m=None, width_px=1000, path=None,
+                background=0.93, soil=0.22, plate=0.62):
+    """Orthographic side view of the particles above the plate as an 8-bit RGB image.
+
+    ``view`` is the axis the camera looks along ("y": image columns = x, "x": columns = y).
+    Returns (image uint8[H, W, 3], px_per_m); writes a PNG when ``path`` is given.
+    """
+    from skimage.draw import disk
+
+    x, r = _xr(x, r)
+    above = x[:, 2] + r > plate_z
+    x, r = x[above], r[above]
+    col = 0 if view == "y" else 1
+    if view not in ("x", "y"):
+        raise InputError("<render>", "view", "'x' or 'y'", view)
+    u = x[:, col]
+    lo, hi = float((u - r).min()), float((u + r).max())
+    top = float((x[:, 2] + r).max()) - plate_z
+    span = hi - lo
+    s = float(px_per_m) if px_per_m else 0.8 * width_px / span
+    w = int(round(span * s / 0.8))
+    margin_u = 0.1 * w
+    plate_px = max(20, int(0.12 * top * s))
+    h = int(round(top * s + 0.25 * w + plate_px + 40))
+    plate_row = h - plate_px - 20
+    img = np.full((h, w), background)
+    img[plate_row:plate_row + plate_px, :] = plate
+    img[plate_row + plate_px:, :] = 0.45
+    uc = (u - lo) * s + margin_u
+    vc = plate_row - (x[:, 2] - plate_z) * s
+    for ui, vi, ri in zip(uc, vc, r * s):
+        rr, cc = disk((vi, ui), max(ri, 0.7), shape=img.shape)
+        keep = rr < plate_row  # the plate hides what lies behind/below its top edge
+        img[rr[keep], cc[keep]] = soil
+    rgb = (np.repeat(img[..., None], 3, axis=2) * 255 + 0.5).astype(np.uint8)
+    if path is not None:
+        from PIL import Image
+
+        Image.fromarray(rgb).save(path)
+    return rgb, s
+
+
+def repose_angle_image(x, r, plate_z=0.0, views=("y", "x"), workdir=None) -> dict:
+    """Repose angle of side silhouettes measured by :func:`soilcal.imaging.measure.measure_piles`."""
+    from soilcal.imaging.measure import measure_piles
+
+    with tempfile.TemporaryDirectory(dir=workdir) as tmp:
+        paths = []
+        for v in views:
+            p = Path(tmp) / f"side_{v}.png"
+            render_side(x, r, plate_z, view=v, path=p)
+            paths.append(p)
+        summary, _ = measure_piles(paths, threshold="otsu", channel="gray")
+    return dict(angle_deg=summary["angle_deg"], spread_deg=summary["spread_deg"],
+                flanks_deg=[f for ph in summary["photos"] for f in (ph["left_deg"], ph["right_deg"])])
+
+
+# ---------------------------------------------------------------- drum
+def drum_surface_angle(x, r, axis_point, axis_dir=(0.0, 1.0, 0.0), slab_half=None,
+                       bin_width=None, central=0.6, source="<measurement>") -> dict:
+    """Free-surface angle of one drum frame in the mid-section (see module docstring).
+
+    The drum axis must be horizontal; u is the horizontal direction normal to it.
+    """
+    x, r = _xr(x, r, source)
+    a = np.asarray(axis_dir, float)
+    a = a / np.linalg.norm(a)
+    if abs(a[2]) > 1e-9:
+        raise InputError(source, "axis_dir", "a horizontal drum axis", tuple(a))
+    e_u = np.cross(a, [0.0, 0.0, 1.0])
+    rel = x - np.asarray(axis_point, float)
+    s = rel @ a
+    rm = float(np.mean(r))
+    half = 3.0 * rm if slab_half is None else float(slab_half)
+    sel = np.abs(s) <= half
+    if sel.sum() < 10:
+        raise InputError(source, "slab_half", "a mid-section slab holding at least 10 particles",
+                         int(sel.sum()))
+    u = rel[sel] @ e_u
+    top = rel[sel, 2] + r[sel]
+    w = 2.0 * rm if bin_width is None else float(bin_width)
+    ub = np.floor((u - u.min()) / w).astype(int)
+    order = np.lexsort((-top, ub))
+    first = np.ones(order.size, bool)
+    first[1:] = ub[order][1:] != ub[order][:-1]
+    uk, zk = u[order][first], top[order][first]
+    lo, hi = uk.min(), uk.max()
+    keep = (uk >= lo + 0.5 * (1 - central) * (hi - lo)) & (uk <= hi - 0.5 * (1 - central) * (hi - lo))
+    if keep.sum() < 3:
+        raise InputError(source, "central", "at least 3 surface bins in the central chord",
+                         int(keep.sum()))
+    b, c = np.polyfit(uk[keep], zk[keep], 1)
+    return dict(angle_deg=float(math.degrees(math.atan(abs(b)))), slope=float(b),
+                n_bins=int(keep.sum()))
+
+
+def mean_sd(values) -> tuple[float, float]:
+    v = np.asarray(values, float)
+    return float(v.mean()), float(v.std(ddof=1)) if v.size > 1 else 0.0
+
+
+# ---------------------------------------------------------------- compression
+def stress_strain(z_rod, force_z, rod_radius, h0, tube_floor=0.0):
+    """(strain, stress) arrays: sigma = F_z / (pi R_rod^2), eps = (h0 - (z_rod - floor)) / h0."""
+    z = np.asarray(z_rod, float)
+    f = np.asarray(force_z, float)
+    if not (rod_radius > 0 and h0 > 0):
+        raise InputError("<measurement>", "rod_radius/h0", "positive lengths", (rod_radius, h0))
+    eps = (h0 - (z - tube_floor)) / h0
+    sigma = f / (math.pi * rod_radius**2)
+    return eps, sigma
+
+
+def value_at(x, y, x0):
+    """y at x0 by linear interpolation on the increasing part of x (NaN outside the data)."""
+    x = np.asarray(x, float)
+    y = np.asarray(y, float)
+    if x.size < 2 or x0 < x.min() or x0 > x.max():
+        return float("nan")
+    order = np.argsort(x, kind="stable")
+    return float(np.interp(x0, x[order], y[order]))

@@ -1,0 +1,339 @@
+"""Static angle of repose: cylinder lifting and funnel discharge onto a plate.
+
+Procedures (dimensions and speeds cited in :func:`setups`)
+----------------------------------------------------------
+Cylinder lifting (cinnamon soil, 002 Sec. 2.4; vineyard soil, 003 "Static angle of repose"):
+a steel tube standing on the plate is filled with loose soil, then lifted vertically at a
+constant speed until all soil has left it; the heap on the plate is measured at rest.  In the
+simulation the spheres are placed at random in the tube (random sequential addition, at most
+30 % solid fraction) and settle under gravity inside it; the tube is then moved up at
+``lift_speed`` by ``fill_height + 2 d_max`` (d_max the largest diameter), stopped, and the
+heap settles.
+
+Funnel discharge (black soil, 001 Sec. 2.2.1; cohesive soil, 004 Sec. 2.2 / Fig. 4): soil is
+loaded into a funnel whose outlet is covered, the cover is removed and the soil flows onto
+the plate.  In the simulation the load settles in the funnel on a disc covering the outlet;
+the disc is pulled sideways at ``cover_speed`` (1 m/s) until clear of the outlet, and the heap
+settles.
+
+Rest: the translational kinetic energy falls below 1/2 M v_rest^2 with M the total mass and
+v_rest = ``rest_speed`` (a mean speed of 2 mm/s by default), checked every 200 steps, with
+``max_settle_time`` as an upper bound (the run then reports ``settled = 0``).
+
+Number of particles for a fill volume V (tube: pi D^2/4 h_fill; funnel: load mass /
+(rho_p phi)) at the settled solid fraction phi = 0.6::
+
+    N = phi V / <v_p>,      <v_p> = 4/3 pi <r^3>
+
+``quick``: radii uniform in [0.9, 1.1] r_q with r_q from N = ``n_particles`` (1000 spheres by
+default) for cylinders; for funnels r_q = outlet diameter / 16 (8 diameters across the
+outlet) and the load mass follows from N (the heap is then smaller than the paper's); soil
+shear modulus capped at 5e5 Pa (stiffness scaling, base.py).  ``paper``: the papers'
+particle sizes and masses, unscaled moduli.
+
+Walls: tube, funnel and cover are triangle meshes (``N_SEG`` = 36 facets around, vertices
+at R / cos(pi/36) so the facet mid-lines lie on the nominal radius R): triangles act on both
+sides, whereas the engine's analytic cylinder, cone and disc walls are one-sided and would
+push a sphere that reaches their back side (outside the tube or funnel, below the cover).
+
+Plate: the plane z = 0 (steel, 65Mn, or soil for the black-soil stage 1); spheres beyond the
+square plate's outline would have fallen off it: they are counted as ``n_lost`` and excluded
+from the measurement.
+
+Responses: ``angle_deg`` (radial bins, eight directions, :mod:`soilcal.dem.measure`),
+``angle_sd_deg`` (spread of the eight directions), ``angle_image_deg`` (side silhouettes
+through the photo pipeline, four flanks), ``height_m``, ``n_on_plate``, ``n_lost``,
+``n_retained`` (funnel), ``settled``, ``settle_time_s``.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from soilcal.dem import measure
+from soilcal.dem.factories import PSD, CylinderRegion, UniformRadius, insert_random
+from soilcal.dem.geometry import cone_mesh, cylinder_mesh, disk_mesh
+from soilcal.dem.scenarios.base import (DemParams, Frames, Result, Timer, check, check_preset,
+                                        make_simulation, rng, run_time, settle, threads_used)
+
+NAME = "repose"
+PHI = 0.6  # settled solid fraction used to size the fill
+N_SEG = 36  # facets of the tube and funnel meshes (facet mid-lines on the nominal radius)
+
+
+def setups() -> dict:
+    """Named setups; every number with the section of the paper it comes from."""
+    common = dict(rest_speed=0.002, max_settle_time=4.0, image=True, n_particles=None,
+                  radius=None, stiffness_scale=None, dt_fraction=None, seed_stream="repose")
+    cyl = dict(common, method="cylinder", wall_material="steel", plate_material="steel")
+    fun = dict(common, method="funnel", wall_material="steel", plate_material="steel",
+               cover_speed=1.0)
+    return {
+        # 002 Sec. 2.4: steel cylinder 60 mm diameter, lifted at 0.05 m/s, square steel plate.
+        # Tube height, fill and plate size are not printed: fill height = diameter, 0.3 m plate.
+        # 002 Sec. 3.1: model particle sizes 3, 2, 1 mm (mass 8.85, 8.2, 82.95 %), diameters.
+        "cinnamon-soil": dict(cyl, tube_diameter=0.060, tube_height=0.120, fill_height=0.060,
+                              lift_speed=0.05, plate_size=0.30,
+                              paper_psd=[[0.0015, 8.85], [0.0010, 8.20], [0.0005, 82.95]]),
+        # 003 "Test apparatus": cylinder 1, inner diameter 40 mm, height 100 mm; 65Mn sheet;
+        # "Static angle of repose": lifted at 25 mm/s, cylinder filled with the soil.
+        # 003 "Discrete element simulation modeling": scaled particles 2.5, 5, 10 mm (taken as
+        # diameters; their mass split is not printed: equal thirds).  Plate size not printed.
+        "xinjiang-vineyard-40mm": dict(cyl, tube_diameter=0.040, tube_height=0.100,
+                                       fill_height=0.100, lift_speed=0.025, plate_size=0.30,
+                                       paper_psd=[[0.00125, 33.34], [0.0025, 33.33],
+                                                  [0.005, 33.33]]),
+        # 003 "Test apparatus": cylinder 2, inner diameter 100 mm, height 100 mm.
+        "xinjiang-vineyard-100mm": dict(cyl, tube_diameter=0.100, tube_height=0.100,
+                                        fill_height=0.100, lift_speed=0.025, plate_size=0.40,
+                                        paper_psd=[[0.00125, 33.34], [0.0025, 33.33],
+                                                   [0.005, 33.33]]),
+        # 001 Sec. 2.2.1: funnel top 192 mm, bottom 50 mm, height 274 mm, 400 x 400 mm base
+        # plate; particle diameters 2-4 mm; stage 1: every entity has the soil's properties.
+        # Outlet height above the plate and load mass not printed: 100 mm, 0.5 kg.
+        "black-soil-stage1": dict(fun, wall_material="soil", plate_material="soil",
+                                  funnel_top_diameter=0.192, funnel_bottom_diameter=0.050,
+                                  funnel_height=0.274, outlet_height=0.100, plate_size=0.40,
+                                  load_mass=0.5, paper_psd=[[0.0010, 50.0], [0.0020, 50.0]]),
+        # 001 Sec. 2.2.2: same apparatus, 65Mn steel base plate (stage 2).
+        "black-soil-stage2": dict(fun, funnel_top_diameter=0.192, funnel_bottom_diameter=0.050,
+                                  funnel_height=0.274, outlet_height=0.100, plate_size=0.40,
+                                  load_mass=0.5, paper_psd=[[0.0010, 50.0], [0.0020, 50.0]]),
+        # 004 Sec. 2.2 / Fig. 4: funnel top 150 mm, bottom 30 mm, height 130 mm, outlet 70 mm
+        # above the receiving plate; 200-250 g per test; Sec. 2.6: 0.2 kg generated in the
+        # simulation; sizes 2.5 (14 %), 1.25 (14 %), 0.63 (22 %), 0.315 mm (50 %) (diameters).
+        # Plate size not printed: 0.3 m.
+        "guangxi-cohesive": dict(fun, funnel_top_diameter=0.150, funnel_bottom_diameter=0.030,
+                                 funnel_height=0.130, outlet_height=0.070, plate_size=0.30,
+                                 load_mass=0.2,
+                                 paper_psd=[[0.00125, 14.0], [0.000625, 14.0],
+                                            [0.000315, 22.0], [0.0001575, 50.0]]),
+    }
+
+
+def _num(setup, key, source, positive=True, allow_none=False):
+    v = setup.get(key)
+    if v is None and allow_none:
+        return None
+    try:
+        x = float(v)
+    except (TypeError, ValueError):
+        check(False, source, f"setup.{key}", "a number", v)
+    check(math.isfinite(x) and (x > 0 if positive else x >= 0), source, f"setup.{key}",
+          "a finite number > 0" if positive else "a finite number >= 0", v)
+    return x
+
+
+def _paper_psd(setup, source):
+    rows = setup.get("paper_psd")
+    check(isinstance(rows, (list, tuple)) and len(rows) >= 1, source, "setup.paper_psd",
+          "a list of [radius_m, mass_percent] rows", rows)
+    r = np.array([float(a) for a, _ in rows])
+    p = np.array([float(b) for _, b in rows])
+    check(np.all(r > 0) and np.all(p >= 0) and p.sum() > 0, source, "setup.paper_psd",
+          "radii > 0 m and mass percentages >= 0", rows)
+    return PSD(tuple(r), tuple(r), tuple(p / p.sum()))
+
+
+def _fill_volume(setup, params: DemParams | None):
+    if setup["method"] == "cylinder":
+        return math.pi * setup["tube_diameter"] ** 2 / 4 * setup["fill_height"]
+    rho = params.soil_density if params is not None else DemParams().soil_density
+    return setup["load_mass"] / (rho * PHI)
+
+
+def _funnel_volume(setup):
+    R, r, h = setup["funnel_top_diameter"] / 2, setup["funnel_bottom_diameter"] / 2, setup["funnel_height"]
+    return math.pi * h / 3 * (R * R + R * r + r * r)
+
+
+def sizing(setup, preset, params: DemParams | None = None) -> dict:
+    """Radius distribution, particle count and load of a run (before any simulation)."""
+    d = check_preset(preset)
+    n_set = setup.get("n_particles")
+    r_set = setup.get("radius")
+    if setup["method"] == "funnel" and preset == "quick" and r_set is None and n_set is None:
+        r_set = setup["funnel_bottom_diameter"] / 16.0
+        n_set = d["n_particles"]
+    if preset == "paper" and r_set is None and n_set is None:
+        dist = _paper_psd(setup, "<setup>")
+    else:
+        if r_set is None:
+            n = int(n_set or d["n_particles"])
+            v = _fill_volume(setup, params)
+            r_set = (PHI * v * 3.0 / (4.0 * math.pi * n)) ** (1.0 / 3.0)
+        dist = UniformRadius(0.9 * float(r_set), 1.1 * float(r_set))
+    vmean = dist.mean_volume()
+    if setup["method"] == "funnel" and preset == "quick" and setup.get("radius") is None \
+            and setup.get("n_particles") is None:
+        n = int(d["n_particles"])
+        rho = params.soil_density if params is not None else DemParams().soil_density
+        load_mass = n * vmean * rho
+    elif n_set is not None and setup["method"] == "funnel":
+        n = int(n_set)
+        rho = params.soil_density if params is not None else DemParams().soil_density
+        load_mass = n * vmean * rho
+    else:
+        n = int(round(PHI * _fill_volume(setup, params) / vmean))
+        load_mass = setup.get("load_mass")
+    return dict(dist=dist, n=n, r_max=float(dist.r_max), r_mean=float((3 * vmean / (4 * math.pi)) ** (1 / 3)),
+                load_mass=load_mass)
+
+
+def validate(setup: dict, preset: str = "quick", source: str = "<input>") -> None:
+    """Bad geometry or impossible settings raise InputError before anything runs."""
+    check_preset(preset, source)
+    method = setup.get("method")
+    check(method in ("cylinder", "funnel"), source, "setup.method", "'cylinder' or 'funnel'", method)
+    for key in ("plate_material", "wall_material"):
+        check(setup.get(key) in ("steel", "soil"), source, f"setup.{key}", "'steel' or 'soil'",
+              setup.get(key))
+    plate = _num(setup, "plate_size", source)
+    _num(setup, "rest_speed", source)
+    _num(setup, "max_settle_time", source)
+    n = setup.get("n_particles")
+    if n is not None:
+        check(isinstance(n, (int, np.integer)) and not isinstance(n, bool) and n >= 20, source,
+              "setup.n_particles", "an integer >= 20 (or None for the preset)", n)
+    _num(setup, "radius", source, allow_none=True)
+    s = _num(setup, "stiffness_scale", source, allow_none=True)
+    if s is not None:
+        check(s <= 1000, source, "setup.stiffness_scale", "a factor in (0, 1000]", s)
+    f = _num(setup, "dt_fraction", source, allow_none=True)
+    if f is not None:
+        check(f <= 1.0, source, "setup.dt_fraction", "a fraction of the Rayleigh time in (0, 1]", f)
+    if method == "cylinder":
+        dia = _num(setup, "tube_diameter", source)
+        h = _num(setup, "tube_height", source)
+        fill = _num(setup, "fill_height", source)
+        _num(setup, "lift_speed", source)
+        check(dia < plate, source, "setup.tube_diameter",
+              f"a tube narrower than the plate ({plate} m)", dia)
+        check(fill <= h, source, "setup.fill_height", f"at most the tube height {h} m", fill)
+    else:
+        top = _num(setup, "funnel_top_diameter", source)
+        bot = _num(setup, "funnel_bottom_diameter", source)
+        _num(setup, "funnel_height", source)
+        _num(setup, "outlet_height", source, positive=False)
+        _num(setup, "cover_speed", source)
+        _num(setup, "load_mass", source)
+        check(bot < top, source, "setup.funnel_bottom_diameter",
+              f"an outlet narrower than the funnel top ({top} m)", bot)
+        check(top < plate, source, "setup.funnel_top_diameter",
+              f"a funnel narrower than the plate ({plate} m)", top)
+    sz = sizing(setup, preset)
+    check(sz["n"] >= 20, source, "setup", "a fill holding at least 20 particles", sz["n"])
+    if method == "cylinder":
+        check(setup["tube_diameter"] >= 4 * 2 * sz["r_max"], source, "setup.tube_diameter",
+              f"at least 4 particle diameters ({8 * sz['r_max']:.4g} m)", setup["tube_diameter"])
+    else:
+        check(setup["funnel_bottom_diameter"] >= 5 * 2 * sz["r_max"], source,
+              "setup.funnel_bottom_diameter",
+              f"an outlet of at least 5 particle diameters ({10 * sz['r_max']:.4g} m)",
+              setup["funnel_bottom_diameter"])
+        load_v = sz["load_mass"] / (DemParams().soil_density * PHI) if sz["load_mass"] else 0.0
+        check(load_v <= _funnel_volume(setup), source, "setup.load_mass",
+              f"a load that fits the funnel ({_funnel_volume(setup) * 1e3:.3g} L)", sz["load_mass"])
+
+
+def _plate(sim, setup):
+    """The plate as the plane z = 0 (a disc or rectangle wall is one-sided: a sphere below it
+    inside its outline would see a negative distance); spheres beyond the plate's outline
+    are counted as lost."""
+    sim.add_plane((0.0, 0.0, 0.0), (0, 0, 1), setup["plate_material"], name="plate")
+
+
+def _insert(sim, region, dist, n, gen, source):
+    x, r = insert_random(region, dist, n=n, rng=gen, max_fraction=0.35, source=source,
+                         field="particles")
+    # spheres carry no per-particle id from the factory; lexsort by height keeps memory local
+    order = np.argsort(x[:, 2], kind="stable")
+    sim.add_particles(x[order], r[order], "soil")
+
+
+def run(setup: dict, params: DemParams, preset: str = "quick", seed: int = 0, threads=None,
+        vtk_dir=None, source: str = "<repose>") -> Result:
+    validate(setup, preset, source)
+    timer = Timer()
+    nthreads = threads_used(threads)
+    sz = sizing(setup, preset, params)
+    gen = rng(seed, setup.get("seed_stream", NAME))
+    # a neighbour skin of 0.6 r_max: falling spheres would otherwise rebuild the lists every
+    # few steps (the engine default is 0.2 r_max, tuned for packed beds)
+    sim, scale = make_simulation(params, setup, preset, source, skin=0.6 * sz["r_max"])
+    frames = Frames(vtk_dir, NAME)
+    dmax = 2 * sz["r_max"]
+    info = {}
+    if setup["method"] == "cylinder":
+        R, fill = setup["tube_diameter"] / 2, setup["fill_height"]
+        vol = sz["n"] * sz["dist"].mean_volume()
+        h_ins = vol / (0.30 * math.pi * (R - sz["r_max"]) ** 2)
+        tube_h = max(setup["tube_height"], h_ins + dmax)
+        tv, tt = cylinder_mesh(R / math.cos(math.pi / N_SEG), 0.0, tube_h, N_SEG)
+        tube = sim.add_mesh(tv, tt, setup["wall_material"], name="tube")
+        _plate(sim, setup)
+        _insert(sim, CylinderRegion(R - 1.001 * sz["r_max"], 1.001 * sz["r_max"], h_ins), sz["dist"],
+                sz["n"], gen, source)
+        frames(sim)
+        ok0, t_fill = settle(sim, setup["rest_speed"], setup["max_settle_time"])
+        info["fill_settled"] = int(ok0)
+        info["fill_height_m"] = float((sim.x[:, 2] + sim.p.r).max())
+        frames(sim)
+        lift = info["fill_height_m"] + dmax
+        sim.set_wall_motion(tube, velocity=(0, 0, setup["lift_speed"]))
+        run_time(sim, lift / setup["lift_speed"])
+        sim.set_wall_motion(tube, velocity=(0, 0, 0))
+        frames(sim)
+        z_out = math.inf
+    else:
+        Rt, Rb = setup["funnel_top_diameter"] / 2, setup["funnel_bottom_diameter"] / 2
+        hf, z_out = setup["funnel_height"], setup["outlet_height"]
+        k = 1.0 / math.cos(math.pi / N_SEG)
+        fv, ft = cone_mesh(k * Rb, k * Rt, z_out, z_out + hf, N_SEG)
+        sim.add_mesh(fv, ft, setup["wall_material"], name="funnel")
+        # the cover is a triangulated disc (triangles are two-sided, a disc wall is not)
+        cv, ct = disk_mesh(1.25 * Rb, 24, centre=(0, 0, z_out))
+        cover = sim.add_mesh(cv, ct, setup["wall_material"], name="cover")
+        _plate(sim, setup)
+        vol = sz["n"] * sz["dist"].mean_volume()
+        za = 0.25 * hf
+        ra = Rb + (Rt - Rb) * za / hf - 1.001 * sz["r_max"]
+        h_ins = vol / (0.30 * math.pi * ra * ra)
+        _insert(sim, CylinderRegion(ra, z_out + za, z_out + za + h_ins), sz["dist"], sz["n"], gen,
+                source)
+        frames(sim)
+        ok0, t_fill = settle(sim, setup["rest_speed"], setup["max_settle_time"])
+        info["fill_settled"] = int(ok0)
+        frames(sim)
+        sim.set_wall_motion(cover, velocity=(setup["cover_speed"], 0, 0))
+        run_time(sim, (2.5 * Rb + dmax) / setup["cover_speed"])
+        sim.set_wall_motion(cover, velocity=(0, 0, 0))
+        frames(sim)
+    ok, t_rest = settle(sim, setup["rest_speed"], setup["max_settle_time"])
+    frames(sim)
+    frames.close()
+    x, r = sim.x.copy(), sim.p.r.copy()
+    half = setup["plate_size"] / 2
+    inside = (np.abs(x[:, 0]) <= half) & (np.abs(x[:, 1]) <= half)
+    on = inside & (x[:, 2] < z_out - 0.5 * sz["r_max"])
+    responses = dict(n_on_plate=int(on.sum()), n_lost=int((~inside).sum()),
+                     n_retained=int((x[:, 2] >= z_out - 0.5 * sz["r_max"]).sum())
+                     if math.isfinite(z_out) else 0,
+                     settled=int(ok), settle_time_s=float(t_rest))
+    bins = measure.repose_angle_bins(x[on], r[on], 0.0, centre=(0.0, 0.0), source=source)
+    responses.update(angle_deg=bins["angle_deg"], angle_sd_deg=bins["spread_deg"],
+                     height_m=bins["height_m"])
+    if setup.get("image", True):
+        img = measure.repose_angle_image(x[on], r[on], 0.0)
+        responses.update(angle_image_deg=img["angle_deg"], angle_image_sd_deg=img["spread_deg"])
+    setup_out = dict(setup)
+    setup_out.pop("paper_psd", None)
+    setup_out.update(stiffness_scale=scale, dt=sim.dt, dt_fraction=sim.dt / sim.rayleigh,
+                     r_mean=sz["r_mean"], r_max=sz["r_max"], load_mass=sz["load_mass"], **info)
+    return Result(scenario=NAME, preset=preset, seed=int(seed), n_particles=int(sim.n),
+                  steps=int(sim.step), sim_time_s=float(sim.step * sim.dt), wall_s=timer.seconds,
+                  threads=nthreads, params=params.as_dict(), setup=setup_out,
+                  responses=responses,
+                  series=dict(per_direction_deg=np.asarray(bins["per_direction_deg"]), x=x, r=r))
