@@ -1,0 +1,190 @@
+"""Dynamic angle of repose in a rotating drum (vineyard soil, 003).
+
+Apparatus and procedure (003, "Dynamic angle of repose measurement" and "Discrete element
+simulation modeling"): a drum 100 mm in diameter and 100 mm long with a steel sheet on its
+inner wall, filled to 25 % of its volume (0.209 kg in the paper's simulation), rotated at
+7 r/min after the particles have settled; the angle of the free surface is read from video
+(five repeats averaged).
+
+Simulation: the drum axis is horizontal along y through the origin, from y = 0 to y = L.
+The shell is the engine's cylinder wall (inner side) and the two end plates are disc walls,
+all rotating at omega = 2 pi n / 60 rad/s about the axis (the shell is steel, 003; the end
+plates' material is not printed: steel).  Spheres are placed at random in the drum (at 15 %
+solid fraction for a 25 % fill), settle (translational kinetic energy below
+1/2 M v_rest^2), then the drum turns for ``spin_time`` seconds; after ``transient_time`` a
+frame is measured every ``frame_every`` seconds in the mid-section slab
+|y - L/2| <= max(1.5 d, 0.1 L) (:func:`soilcal.dem.measure.drum_surface_angle`: highest
+particle per one-diameter bin across the section, straight line on the central 60 % of the
+chord, theta = atan|slope|).
+
+Number of spheres for fill fraction f at settled solid fraction phi = 0.6::
+
+    N = phi f pi R^2 L / <v_p>
+
+``quick``: about 1000 spheres (radii uniform in [0.9, 1.1] r_q), shear modulus capped at
+5e5 Pa, 2.5 s of rotation (0.29 turn) with frames from 1.0 s; ``paper``: scaled particles
+2.5, 5, 10 mm (003, taken as diameters, equal mass thirds), unscaled modulus, 10 s of
+rotation (1.17 turns) with frames from 3 s.
+
+Responses: ``angle_deg`` (time mean of the frame angles), ``angle_sd_deg`` (their sample
+standard deviation), ``angle_max_deg`` (largest frame angle, the paper's "maximum angle before
+collapse"), ``n_frames``.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from soilcal.dem import measure
+from soilcal.dem.factories import PSD, CylinderRegion, UniformRadius, insert_random
+from soilcal.dem.scenarios.base import (DemParams, Frames, Result, Timer, check, check_preset,
+                                        make_simulation, rng, run_time, settle, threads_used)
+
+NAME = "drum"
+PHI = 0.6
+
+
+def setups() -> dict:
+    return {
+        # 003 "Dynamic angle of repose measurement": drum 100 mm diameter, 100 mm long, steel
+        # sheet on the inner wall, 25 % fill, 7 r/min.  "Discrete element simulation
+        # modeling": scaled particles 2.5, 5, 10 mm, 0.209 kg for the 25 % fill.
+        "xinjiang-vineyard": dict(drum_diameter=0.100, drum_length=0.100, fill_fraction=0.25,
+                                  rpm=7.0, wall_material="steel", end_material="steel",
+                                  rest_speed=0.002, max_settle_time=3.0,
+                                  spin_time=None, transient_time=None, frame_every=0.1,
+                                  n_particles=None, radius=None, stiffness_scale=None,
+                                  dt_fraction=None,
+                                  paper_psd=[[0.00125, 33.34], [0.0025, 33.33], [0.005, 33.33]]),
+    }
+
+
+PRESET_TIMES = {"quick": (2.5, 1.0), "paper": (10.0, 3.0)}
+
+
+def _pos(setup, key, source, allow_none=False):
+    v = setup.get(key)
+    if v is None and allow_none:
+        return None
+    try:
+        x = float(v)
+    except (TypeError, ValueError):
+        check(False, source, f"setup.{key}", "a number", v)
+    check(math.isfinite(x) and x > 0, source, f"setup.{key}", "a finite number > 0", v)
+    return x
+
+
+def sizing(setup, preset):
+    d = check_preset(preset)
+    R, L = setup["drum_diameter"] / 2, setup["drum_length"]
+    vol = setup["fill_fraction"] * math.pi * R * R * L
+    r_set, n_set = setup.get("radius"), setup.get("n_particles")
+    if preset == "paper" and r_set is None and n_set is None:
+        rows = setup["paper_psd"]
+        r = np.array([float(a) for a, _ in rows])
+        p = np.array([float(b) for _, b in rows])
+        dist = PSD(tuple(r), tuple(r), tuple(p / p.sum()))
+    else:
+        if r_set is None:
+            n = int(n_set or d["n_particles"])
+            r_set = (PHI * vol * 3.0 / (4.0 * math.pi * n)) ** (1.0 / 3.0)
+        dist = UniformRadius(0.9 * float(r_set), 1.1 * float(r_set))
+    n = int(round(PHI * vol / dist.mean_volume()))
+    return dict(dist=dist, n=n, r_max=float(dist.r_max), vol=vol)
+
+
+def validate(setup, preset="quick", source="<input>"):
+    check_preset(preset, source)
+    D = _pos(setup, "drum_diameter", source)
+    L = _pos(setup, "drum_length", source)
+    f = setup.get("fill_fraction")
+    check(isinstance(f, (int, float)) and not isinstance(f, bool) and 0 < f <= 1.0, source,
+          "setup.fill_fraction", "a fill fraction in (0, 1] (0.25 = 25 % of the drum volume)", f)
+    check(f <= 0.5, source, "setup.fill_fraction",
+          "at most half the drum (a free surface across the mid-section)", f)
+    _pos(setup, "rpm", source)
+    _pos(setup, "rest_speed", source)
+    _pos(setup, "max_settle_time", source)
+    _pos(setup, "frame_every", source)
+    st = _pos(setup, "spin_time", source, allow_none=True)
+    tt = _pos(setup, "transient_time", source, allow_none=True)
+    spin, trans = PRESET_TIMES[preset]
+    spin, trans = st or spin, tt or trans
+    check(trans < spin, source, "setup.transient_time",
+          f"shorter than the rotation time {spin} s", trans)
+    for key in ("wall_material", "end_material"):
+        check(setup.get(key) in ("steel", "soil"), source, f"setup.{key}", "'steel' or 'soil'",
+              setup.get(key))
+    n = setup.get("n_particles")
+    if n is not None:
+        check(isinstance(n, (int, np.integer)) and not isinstance(n, bool) and n >= 20, source,
+              "setup.n_particles", "an integer >= 20", n)
+    _pos(setup, "radius", source, allow_none=True)
+    _pos(setup, "stiffness_scale", source, allow_none=True)
+    dtf = _pos(setup, "dt_fraction", source, allow_none=True)
+    if dtf is not None:
+        check(dtf <= 1, source, "setup.dt_fraction", "a fraction of the Rayleigh time in (0, 1]", dtf)
+    sz = sizing(setup, preset)
+    check(2 * sz["r_max"] * 6 <= min(D, L), source, "setup.drum_diameter",
+          f"a drum at least 6 particle diameters across ({12 * sz['r_max']:.4g} m)", (D, L))
+
+
+def run(setup, params: DemParams, preset="quick", seed=0, threads=None, vtk_dir=None,
+        source="<drum>") -> Result:
+    validate(setup, preset, source)
+    timer = Timer()
+    nthreads = threads_used(threads)
+    sz = sizing(setup, preset)
+    gen = rng(seed, NAME)
+    R, L = setup["drum_diameter"] / 2, setup["drum_length"]
+    sim, scale = make_simulation(params, setup, preset, source, skin=0.5 * sz["r_max"])
+    w = 2 * math.pi * setup["rpm"] / 60.0
+    shell = sim.add_cylinder((0, L / 2, 0), (0, 1, 0), R, L / 2, setup["wall_material"],
+                             inner=True, name="shell", centre=(0, L / 2, 0))
+    e0 = sim.add_disk((0, 0, 0), (0, 1, 0), R, setup["end_material"], name="end0")
+    e1 = sim.add_disk((0, L, 0), (0, -1, 0), R, setup["end_material"], name="end1")
+    rm = sz["r_max"]
+    region = CylinderRegion(R - 1.001 * rm, 1.001 * rm, L - 1.001 * rm, axis_point=(0, 0, 0),
+                            axis_dir=(0, 1, 0))
+    x, r = insert_random(region, sz["dist"], n=sz["n"], rng=gen, max_fraction=0.35,
+                         source=source, field="particles")
+    order = np.argsort(x[:, 2], kind="stable")
+    sim.add_particles(x[order], r[order], "soil")
+    frames = Frames(vtk_dir, NAME)
+    frames(sim)
+    ok0, _ = settle(sim, setup["rest_speed"], setup["max_settle_time"])
+    frames(sim)
+    for wall in (shell, e0, e1):
+        sim.set_wall_motion(wall, omega=(0, w, 0))
+    spin, trans = PRESET_TIMES[preset]
+    spin = setup.get("spin_time") or spin
+    trans = setup.get("transient_time") or trans
+    run_time(sim, trans)
+    t_frames, angles = [], []
+    slab = max(3.0 * float(np.mean(sim.p.r)), 0.1 * L)
+    n_fr = int(math.floor((spin - trans) / setup["frame_every"] + 1e-9)) + 1
+    for k in range(n_fr):
+        if k:
+            run_time(sim, setup["frame_every"])
+        fr = measure.drum_surface_angle(sim.x, sim.p.r, (0, L / 2, 0), (0, 1, 0), slab_half=slab,
+                                        source=source)
+        angles.append(fr["angle_deg"])
+        t_frames.append(sim.step * sim.dt)
+        frames(sim)
+    frames.close()
+    a = np.asarray(angles)
+    mean, sd = measure.mean_sd(a)
+    responses = dict(angle_deg=mean, angle_sd_deg=sd, angle_max_deg=float(a.max()),
+                     n_frames=int(a.size), fill_settled=int(ok0))
+    setup_out = dict(setup)
+    setup_out.pop("paper_psd", None)
+    setup_out.update(stiffness_scale=scale, dt=sim.dt, dt_fraction=sim.dt / sim.rayleigh,
+                     spin_time=spin, transient_time=trans, r_max=sz["r_max"],
+                     omega_rad_s=w, slab_half=slab)
+    return Result(scenario=NAME, preset=preset, seed=int(seed), n_particles=int(sim.n),
+                  steps=int(sim.step), sim_time_s=float(sim.step * sim.dt), wall_s=timer.seconds,
+                  threads=nthreads, params=params.as_dict(), setup=setup_out,
+                  responses=responses,
+                  series=dict(t=np.asarray(t_frames), angle_deg=a, x=sim.x.copy(), r=sim.p.r.copy()))
