@@ -1,0 +1,195 @@
+"""Confined (uniaxial) compression in a steel tube: axial stress-strain curve.
+
+Apparatus and procedure (cohesive soil, 004 Sec. 3.7, Fig. 15): a steel cylinder of inner
+diameter 100 mm and height 300 mm, a loading rod of diameter 99 mm, 3 kg of soil poured in
+naturally, the rod pushed down at a constant 0.008 m/s by a UTM5105 testing machine; the
+axial stress-strain curve after loading starts is recorded (5, 10, 15 % moisture, five
+repeats each).
+
+Simulation: tube = the engine's cylinder wall (inner side), floor = the plane z = 0, rod face
+= a disc wall of the rod's radius facing down, all steel.  Spheres are placed at random in
+the tube (at most 30 % solid fraction), settle (translational kinetic energy below
+1/2 M v_rest^2), the rod starts half a radius above the highest sphere and moves down at
+``rod_speed``; every ``sample_dz`` of travel the rod's height z_rod and the vertical force of
+the particles on it, F_z, are recorded.  With h0 the rod height at the first sample with
+F_z > 0 (first contact; the paper records only after loading starts)::
+
+    sigma = F_z / (pi R_rod^2),     epsilon = (h0 - z_rod) / h0
+
+(:func:`soilcal.dem.measure.stress_strain`).  The run stops at ``max_strain``.
+
+Fill: N = phi m / (rho_p <v_p>) spheres for the load mass m at settled solid fraction
+phi = 0.6 of the particle density.  ``quick``: the load is reduced to about 1000 spheres of
+radius r_q sized for a sample about 40 mm high (radii uniform in [0.9, 1.1] r_q), shear
+modulus capped at 5e5 Pa (the stress level scales with it: the convergence study shows by
+how much); ``paper``: 3 kg of the paper's particle sizes (004 Sec. 2.6, taken as diameters)
+and the unscaled modulus.
+
+Responses: ``stress_5_kpa``, ``stress_10_kpa``, ``stress_20_kpa`` (stress at 5, 10, 20 %
+strain, linear interpolation), ``stress_max_kpa``, ``h0_m``; series: strain, stress (Pa),
+rod height and force.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from soilcal.dem import measure
+from soilcal.dem.factories import PSD, CylinderRegion, UniformRadius, insert_random
+from soilcal.dem.scenarios.base import (DemParams, Frames, Result, Timer, check, check_preset,
+                                        make_simulation, rng, settle, threads_used)
+
+NAME = "compression"
+PHI = 0.6
+
+
+def setups() -> dict:
+    return {
+        # 004 Sec. 3.7: tube inner diameter 100 mm, height 300 mm, loading rod 99 mm,
+        # 3 kg of soil, 0.008 m/s.  Sec. 2.6: particle sizes 2.5 (14 %), 1.25 (14 %),
+        # 0.63 (22 %), 0.315 mm (50 %).  Final strain not printed: 30 %.
+        "guangxi-cohesive": dict(tube_diameter=0.100, tube_height=0.300, rod_diameter=0.099,
+                                 load_mass=3.0, rod_speed=0.008, max_strain=0.30,
+                                 quick_height=0.040, sample_dz=0.0002, rest_speed=0.002,
+                                 max_settle_time=3.0, n_particles=None, radius=None,
+                                 stiffness_scale=None, dt_fraction=None,
+                                 paper_psd=[[0.00125, 14.0], [0.000625, 14.0],
+                                            [0.000315, 22.0], [0.0001575, 50.0]]),
+    }
+
+
+def _num(setup, key, source, allow_none=False):
+    v = setup.get(key)
+    if v is None and allow_none:
+        return None
+    try:
+        x = float(v)
+    except (TypeError, ValueError):
+        check(False, source, f"setup.{key}", "a number", v)
+    check(math.isfinite(x) and x > 0, source, f"setup.{key}", "a finite number > 0", v)
+    return x
+
+
+def sizing(setup, preset, params: DemParams | None = None):
+    d = check_preset(preset)
+    rho = (params or DemParams()).soil_density
+    R = setup["tube_diameter"] / 2
+    r_set, n_set = setup.get("radius"), setup.get("n_particles")
+    if preset == "paper" and r_set is None and n_set is None:
+        rows = setup["paper_psd"]
+        r = np.array([float(a) for a, _ in rows])
+        p = np.array([float(b) for _, b in rows])
+        dist = PSD(tuple(r), tuple(r), tuple(p / p.sum()))
+        n = int(round(setup["load_mass"] / (rho * dist.mean_volume())))
+    else:
+        vol = math.pi * R * R * setup["quick_height"]
+        if r_set is None:
+            n = int(n_set or d["n_particles"])
+            r_set = (PHI * vol * 3.0 / (4.0 * math.pi * n)) ** (1.0 / 3.0)
+        dist = UniformRadius(0.9 * float(r_set), 1.1 * float(r_set))
+        n = int(n_set) if n_set is not None else int(round(PHI * vol / dist.mean_volume()))
+    return dict(dist=dist, n=n, r_max=float(dist.r_max),
+                load_mass=n * dist.mean_volume() * rho)
+
+
+def validate(setup, preset="quick", source="<input>"):
+    check_preset(preset, source)
+    D = _num(setup, "tube_diameter", source)
+    H = _num(setup, "tube_height", source)
+    Dr = _num(setup, "rod_diameter", source)
+    check(Dr < D, source, "setup.rod_diameter", f"a rod narrower than the tube ({D} m)", Dr)
+    _num(setup, "load_mass", source)
+    _num(setup, "rod_speed", source)
+    e = _num(setup, "max_strain", source)
+    check(e < 0.9, source, "setup.max_strain", "a strain in (0, 0.9)", e)
+    hq = _num(setup, "quick_height", source)
+    check(hq < H, source, "setup.quick_height", f"a sample lower than the tube ({H} m)", hq)
+    _num(setup, "sample_dz", source)
+    _num(setup, "rest_speed", source)
+    _num(setup, "max_settle_time", source)
+    n = setup.get("n_particles")
+    if n is not None:
+        check(isinstance(n, (int, np.integer)) and not isinstance(n, bool) and n >= 20, source,
+              "setup.n_particles", "an integer >= 20", n)
+    _num(setup, "radius", source, allow_none=True)
+    _num(setup, "stiffness_scale", source, allow_none=True)
+    f = _num(setup, "dt_fraction", source, allow_none=True)
+    if f is not None:
+        check(f <= 1, source, "setup.dt_fraction", "a fraction of the Rayleigh time in (0, 1]", f)
+    sz = sizing(setup, preset)
+    check(D >= 8 * sz["r_max"], source, "setup.tube_diameter",
+          f"at least 4 particle diameters ({8 * sz['r_max']:.4g} m)", D)
+    rho = DemParams().soil_density
+    h_fill = sz["load_mass"] / (rho * PHI) / (math.pi * D * D / 4)
+    check(h_fill < H, source, "setup.load_mass",
+          f"a load whose settled height ({h_fill:.3g} m) fits the tube ({H} m)", setup["load_mass"])
+
+
+def run(setup, params: DemParams, preset="quick", seed=0, threads=None, vtk_dir=None,
+        source="<compression>") -> Result:
+    validate(setup, preset, source)
+    timer = Timer()
+    nthreads = threads_used(threads)
+    sz = sizing(setup, preset, params)
+    gen = rng(seed, NAME)
+    R, H = setup["tube_diameter"] / 2, setup["tube_height"]
+    Rr = setup["rod_diameter"] / 2
+    sim, scale = make_simulation(params, setup, preset, source, skin=0.5 * sz["r_max"])
+    sim.add_plane((0, 0, 0), (0, 0, 1), "steel", name="floor")
+    vol = sz["n"] * sz["dist"].mean_volume()
+    rm = sz["r_max"]
+    h_ins = vol / (0.30 * math.pi * (R - rm) ** 2)
+    tube_h = max(H, h_ins + 4 * rm)
+    sim.add_cylinder((0, 0, tube_h / 2), (0, 0, 1), R, tube_h / 2, "steel", inner=True,
+                     name="tube")
+    x, r = insert_random(CylinderRegion(R - 1.001 * rm, 1.001 * rm, h_ins), sz["dist"],
+                         n=sz["n"], rng=gen, max_fraction=0.35, source=source, field="particles")
+    order = np.argsort(x[:, 2], kind="stable")
+    sim.add_particles(x[order], r[order], "soil")
+    frames = Frames(vtk_dir, NAME)
+    frames(sim)
+    ok0, _ = settle(sim, setup["rest_speed"], setup["max_settle_time"])
+    top = float((sim.x[:, 2] + sim.p.r).max())
+    z0 = top + 0.5 * float(sim.p.r.min())
+    rod = sim.add_disk((0, 0, z0), (0, 0, -1), Rr, "steel", name="rod",
+                       velocity=(0, 0, -setup["rod_speed"]))
+    frames(sim)
+    sim.run(0)
+    step0 = sim.step
+    nsub = max(1, int(round(setup["sample_dz"] / setup["rod_speed"] / sim.dt)))
+    dz_step = setup["rod_speed"] * sim.dt
+    z_rod, fz = [], []
+    z = z0
+    h0 = None
+    # upper bound of the travel: the whole height above the floor
+    while z > 0.05 * top:
+        sim.run(nsub)
+        z = z0 - setup["rod_speed"] * (sim.step - step0) * sim.dt  # rigid translation
+        f = float(sim.wall_force[rod, 2])
+        z_rod.append(z)
+        fz.append(f)
+        if h0 is None and f > 0:
+            h0 = z
+        if h0 is not None and (h0 - z) / h0 >= setup["max_strain"]:
+            break
+    frames(sim)
+    frames.close()
+    z_rod, fz = np.asarray(z_rod), np.asarray(fz)
+    if h0 is None:
+        h0 = top
+    eps, sig = measure.stress_strain(z_rod, fz, Rr, h0)
+    resp = dict(h0_m=float(h0), fill_settled=int(ok0),
+                stress_max_kpa=float(sig.max() / 1e3) if sig.size else float("nan"))
+    for e in (0.05, 0.10, 0.20):
+        resp[f"stress_{int(round(e * 100))}_kpa"] = measure.value_at(eps, sig, e) / 1e3
+    setup_out = dict(setup)
+    setup_out.pop("paper_psd", None)
+    setup_out.update(stiffness_scale=scale, dt=sim.dt, dt_fraction=sim.dt / sim.rayleigh,
+                     r_max=sz["r_max"], load_mass=sz["load_mass"], rod_step_m=dz_step)
+    return Result(scenario=NAME, preset=preset, seed=int(seed), n_particles=int(sim.n),
+                  steps=int(sim.step), sim_time_s=float(sim.step * sim.dt), wall_s=timer.seconds,
+                  threads=nthreads, params=params.as_dict(), setup=setup_out, responses=resp,
+                  series=dict(strain=eps, stress_pa=sig, z_rod_m=z_rod, force_n=fz))
+
