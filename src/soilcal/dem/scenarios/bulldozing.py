@@ -39,7 +39,8 @@ import numpy as np
 from soilcal.dem import tools
 from soilcal.dem.scenarios.base import (PRESETS, DemParams, Result, check, merge_setup,
                                         stable_mean, threads_used)
-from soilcal.dem.scenarios.soilbin import BinSpec, settled_bin, tool_pass, validate_bin
+from soilcal.dem.scenarios.soilbin import (BinSpec, apply_preset, settled_bin, tool_pass,
+                                           validate_bin)
 
 NAME = "bulldozing"
 MEASURED = (Path(__file__).resolve().parents[4] / "resources" / "measurements"
@@ -92,10 +93,7 @@ def measured() -> dict:
 
 
 def _settings(setup, preset):
-    s = dict(setup)
-    for k, v in PRESET_SETTINGS[preset].items():
-        if v is not None:
-            s[k] = v
+    s = apply_preset(setup, _setup(setup.get("shape")), PRESET_SETTINGS[preset])
     if s.get("travel") is None:
         s["travel"] = s["speed"] * s["duration"]
     if not s.get("periodic"):

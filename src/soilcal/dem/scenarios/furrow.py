@@ -57,7 +57,8 @@ from numpy.polynomial import Polynomial
 from soilcal.dem import tools
 from soilcal.dem.scenarios.base import (PRESETS, DemParams, Result, check, merge_setup,
                                         stable_mean, threads_used)
-from soilcal.dem.scenarios.soilbin import BinSpec, column_tops, tool_pass, validate_bin
+from soilcal.dem.scenarios.soilbin import (BinSpec, apply_preset, column_tops, tool_pass,
+                                           validate_bin)
 
 NAME = "furrow"
 MEASURED = (Path(__file__).resolve().parents[4] / "resources" / "measurements"
@@ -129,13 +130,7 @@ def measured_traction() -> float:
 
 
 def _settings(setup: dict, preset: str) -> dict:
-    s = dict(setup)
-    for k, v in PRESET_SETTINGS[preset].items():
-        if v is not None:
-            s[k] = v
-        elif k not in s:
-            s[k] = None
-    return s
+    return apply_preset(setup, setups()["yangtze-opener"], PRESET_SETTINGS[preset])
 
 
 def validate(setup: dict, preset: str = "quick", source: str = "<furrow>") -> None:

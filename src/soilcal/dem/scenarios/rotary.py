@@ -59,7 +59,8 @@ import numpy as np
 from soilcal.dem import tools
 from soilcal.dem.scenarios.base import (PRESETS, DemParams, Result, check, merge_setup,
                                         stable_mean, threads_used)
-from soilcal.dem.scenarios.soilbin import BinSpec, settled_bin, tool_pass, validate_bin
+from soilcal.dem.scenarios.soilbin import (BinSpec, apply_preset, settled_bin, tool_pass,
+                                           validate_bin)
 
 NAME = "rotary"
 MEASURED = (Path(__file__).resolve().parents[4] / "resources" / "measurements"
@@ -165,10 +166,7 @@ def flatness_region(x0, travel, radius, min_length=0.1):
 
 
 def _settings(setup, preset):
-    s = dict(setup)
-    for k, v in PRESET_SETTINGS[preset].items():
-        if v is not None:
-            s[k] = v
+    s = apply_preset(setup, _setup(setup.get("rpm", 250)), PRESET_SETTINGS[preset])
     if s.get("flanges_simulated") is None:
         s["flanges_simulated"] = s["n_flanges"]
     spacing = s["working_width"] / s["n_flanges"]

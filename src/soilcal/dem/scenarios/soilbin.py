@@ -90,6 +90,20 @@ class BinSpec:
         return self.radius * (1.0 + self.spread)
 
 
+def apply_preset(setup: dict, defaults: dict, settings: dict) -> dict:
+    """Setup with the preset's discretisation: a preset value replaces the setup's value
+    unless the user changed that value from the named setup's default (``defaults``); keys
+    the preset leaves at None keep the setup's value."""
+    s = dict(setup)
+    for k, v in settings.items():
+        user = k in setup and k in defaults and setup[k] != defaults[k]
+        if v is not None and not user:
+            s[k] = v
+        elif k not in s:
+            s[k] = v
+    return s
+
+
 def validate_bin(spec: BinSpec, source: str, prefix: str = "bin"):
     for k in ("length", "width", "height", "radius", "settle_time", "stiffness_scale",
               "dt_fraction"):

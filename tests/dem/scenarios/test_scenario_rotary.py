@@ -1,0 +1,90 @@
+"""Rotary tillage scenario: Eqs. (3)-(4) flatness, shaft power sign, validation, a run."""
+
+import math
+
+import numpy as np
+import pytest
+
+from soilcal.dem.engine import Simulation
+from soilcal.dem.scenarios import rotary
+from soilcal.dem.scenarios.base import DemParams, build_materials, stable_mean
+from soilcal.errors import InputError
+
+
+def test_flatness_is_sample_sd():
+    d_mean, sd = rotary.flatness([1.0, 2.0, 3.0, 4.0, 5.0])
+    assert d_mean == 3.0 and sd == pytest.approx(math.sqrt(2.5))
+    rng = np.random.default_rng(3)
+    d = rng.normal(100.0, 7.0, 200000)
+    assert rotary.flatness(d)[1] == pytest.approx(7.0, rel=0.01)
+
+
+def test_surface_heights_of_a_flat_layer():
+    r = 0.01
+    gx, gy = np.meshgrid(np.arange(0, 0.6, 2 * r), np.arange(0, 0.2, 2 * r), indexing="ij")
+    x = np.column_stack([gx.ravel(), gy.ravel(), np.full(gx.size, 0.05)])
+    h = rotary.surface_heights(x, np.full(len(x), r), np.array([0.2, 0.3, 0.4]),
+                               np.full(3, 0.1), 0.0)
+    # sample points on sphere centres (lateral half-width 0): heights are the sphere tops
+    assert h == pytest.approx(0.06)
+    _, sd = rotary.flatness(h)
+    assert sd == pytest.approx(0.0, abs=1e-12)
+
+
+def test_stable_mean_of_a_ramp_then_plateau():
+    t = np.linspace(0, 2, 2001)
+    y = np.where(t < 1, 100 * t, 100 + np.sin(40 * np.pi * t))
+    m, sd = stable_mean(t, y, 1.0)
+    assert m == pytest.approx(100.0, abs=0.01)
+    assert sd == pytest.approx(1 / math.sqrt(2), rel=0.01)
+
+
+def test_power_of_a_rotating_disk_against_known_friction_torque():
+    """A particle held against a stop slides on a disk turning at omega: the disk feels the
+    torque -mu m g rho about its axis, so the shaft power is mu m g rho omega."""
+    # the stop is of "soil" with zero soil-soil friction, so it carries no weight
+    p = DemParams(soil_steel_static_friction=0.4, soil_steel_rolling_friction=0.0,
+                  soil_soil_static_friction=0.0, soil_soil_rolling_friction=0.0,
+                  soil_soil_surface_energy=0.0, soil_steel_surface_energy=0.0,
+                  soil_density=2000.0, soil_shear_modulus=5e6)
+    mats = build_materials(p)
+    sim = Simulation(mats, dt=2e-5, contact_model=dict(rolling="constant_torque"),
+                     max_overlap=0.2)
+    r, rho, omega = 0.01, 0.05, 3.0
+    sim.add_particles([[rho, 0.0, r * 0.999]], [r], "soil", lock_rotation=True)
+    disk = sim.add_disk((0, 0, 0), (0, 0, 1), 0.1, "steel", omega=(0, 0, omega))
+    sim.add_plane((0, r, 0), (0, -1, 0), "soil")  # stop ahead of the disk's motion (+y)
+    sim.run(6000, wall_log_every=100)
+    tz = sim.wall_log[-20:, disk, 5]
+    m = 2000.0 * 4 / 3 * math.pi * r**3
+    expect = 0.4 * m * 9.81 * rho * omega
+    power = rotary.shaft_power(tz, omega)
+    assert power.mean() == pytest.approx(expect, rel=0.03)
+    assert np.all(tz < 0)  # the soil's torque opposes the rotation
+
+
+@pytest.mark.parametrize("field,value,match", [
+    ("rpm", 0.0, "setup.rpm"),
+    ("rpm", -250.0, "setup.rpm"),
+    ("forward_speed", 0.0, "setup.forward_speed"),
+    ("depth", 0.2, "setup.depth"),     # holders would enter the soil / deeper than the bin
+])
+def test_impossible_settings(field, value, match):
+    s = dict(rotary.setups()["rpm-250"])
+    s[field] = value
+    with pytest.raises(InputError, match=match):
+        rotary.validate(s, "quick", "test")
+    with pytest.raises(InputError, match=match):
+        rotary.run(s, rotary.paper_params(), "quick", use_cache=False)
+
+
+@pytest.mark.slow
+def test_quick_run_positive_power(tmp_path, monkeypatch):
+    monkeypatch.setenv("SOILCAL_SCENARIO_CACHE", str(tmp_path))
+    res = rotary.run(rotary.setups()["rpm-250"], rotary.paper_params(), "quick", seed=0,
+                     threads=1)
+    r = res.responses
+    assert all(math.isfinite(r[k]) for k in ("power_kW", "flatness_mm", "draft_N"))
+    assert r["power_kW"] > 0   # the shaft drives the blades against the soil
+    assert r["flatness_mm"] >= 0
+    assert len(res.series["flatness_points_mm"]) == 5
