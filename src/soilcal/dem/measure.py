@@ -11,18 +11,23 @@ rays per sector; containers must stay wider than a particle, or the highest part
 narrow container near the axis lies below the surface and the angle is biased low) the
 radial distance rho = |(x, y) - (x_c, y_c)| is cut into containers of width
 ``bin_width`` (default one mean diameter); each container gives the top of its highest
-particle, h_k = max(z + r) - plate_z, at the radial position rho_k of that particle.  With the height of the sector H = max_k h_k, the
-rounded top and the toe are excluded by keeping the bins with
+particle, h_k = max(z + r) - plate_z, at the radial position rho_k of that particle.  With
+the height of the sector H = max_k h_k, the rounded top and the toe are excluded by keeping
+the bins with
 
-    BAND[0] H < h_k < BAND[1] H          (BAND = (0.20, 0.75), as the photo measurement)
+    max(BAND[0] H, 3 <r>) < h_k < BAND[1] H     (BAND = (0.20, 0.75), as the photo measurement)
 
-and lie outside the highest container of their ray (rho_k > rho_top: containers near the
-axis hold few particles and are not on the flank), and fitting h = a + b rho by least squares (``numpy.polyfit``), so the flank angle is
+(the 3 <r> bound drops the skirt of single spheres around a low heap, whose tops stand 2 r
+above the plate; it is dropped when fewer than 3 bins remain) and lie outside the highest
+container of their ray (rho_k > rho_top: containers near the axis hold few particles and
+are not on the flank), and fitting h = a + b rho by least squares (``numpy.polyfit``), so
+the flank angle is
 
     alpha = atan(-b)
 
-The repose angle is the mean of the n_dir flank angles; their sample standard deviation is
-reported as the spread.
+The repose angle is the mean of the n_dir flank angles (a direction with fewer than two flank
+bins is left out; fewer than half the directions is an error); their sample standard
+deviation is reported as the spread.
 
 Side silhouette
 ---------------
@@ -110,6 +115,7 @@ def repose_angle_bins(x, r, plate_z=0.0, centre=None, n_dir=8, bin_width=None, b
     if not w > 0:
         raise InputError(source, "bin_width", "a bin width > 0 m", bin_width)
     height = float(top.max())
+    r_mean = float(np.mean(r))
     n_ray = n_dir * int(n_sub)
     ray = np.floor((phi + np.pi / n_ray) / (2 * np.pi / n_ray)).astype(int) % n_ray
     rb = np.floor(rho / w).astype(int)
@@ -132,16 +138,23 @@ def repose_angle_bins(x, r, plate_z=0.0, centre=None, n_dir=8, bin_width=None, b
             s_q = c_ray == q
             rho_top = c_rho[s_q][np.argmax(c_top[s_q])]
             keep_k |= s_q & (c_rho > rho_top)
-        keep = keep_k & (c_top > band[0] * hd) & (c_top < band[1] * hd)
-        if keep.sum() < 3:
-            raise InputError(source, f"direction {k}",
-                             "at least 3 radial bins on the flank (pile too small for the bins)",
-                             int(keep.sum()))
+        keep = keep_k & (c_top > max(band[0] * hd, 3.0 * r_mean)) & (c_top < band[1] * hd)
+        if keep.sum() < 3:  # a low heap: keep the skirt bound only
+            keep = keep_k & (c_top > band[0] * hd) & (c_top < band[1] * hd)
+        if keep.sum() < 2 or np.ptp(c_rho[keep]) <= 0:
+            angles.append(float("nan"))
+            used.append(int(keep.sum()))
+            continue
         b = np.polyfit(c_rho[keep], c_top[keep], 1)[0]
         angles.append(math.degrees(math.atan(-b)))
         used.append(int(keep.sum()))
     a = np.array(angles)
-    return dict(angle_deg=float(a.mean()), spread_deg=float(a.std(ddof=1)),
+    ok = np.isfinite(a)
+    if ok.sum() < (n_dir + 1) // 2:
+        raise InputError(source, "pile", "flank bins in at least half of the directions "
+                         "(pile too small for the bins)", used)
+    a = a[ok]
+    return dict(angle_deg=float(a.mean()), spread_deg=float(a.std(ddof=1)) if a.size > 1 else 0.0,
                 per_direction_deg=[float(v) for v in a], height_m=height,
                 centre=(float(cx), float(cy)), n_bins_used=used)
 

@@ -233,9 +233,11 @@ def validate(setup: dict, preset: str = "quick", source: str = "<input>") -> Non
               "setup.funnel_bottom_diameter",
               f"an outlet of at least 5 particle diameters ({10 * sz['r_max']:.4g} m)",
               setup["funnel_bottom_diameter"])
-        load_v = sz["load_mass"] / (DemParams().soil_density * PHI) if sz["load_mass"] else 0.0
-        check(load_v <= _funnel_volume(setup), source, "setup.load_mass",
-              f"a load that fits the funnel ({_funnel_volume(setup) * 1e3:.3g} L)", sz["load_mass"])
+        for m in {setup["load_mass"], sz["load_mass"]}:
+            load_v = m / (DemParams().soil_density * PHI)
+            check(load_v <= _funnel_volume(setup), source, "setup.load_mass",
+                  f"a load that fits the funnel ({_funnel_volume(setup) * 1e3:.3g} L at "
+                  f"{DemParams().soil_density:g} kg/m^3, solid fraction {PHI})", m)
 
 
 def _plate(sim, setup):

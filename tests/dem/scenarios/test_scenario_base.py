@@ -1,0 +1,111 @@
+"""Scenario base: parameter names and ranges, stiffness scaling, result rows, statistics."""
+
+import csv
+import math
+
+import numpy as np
+import pytest
+
+from soilcal.dem.materials import P_ESTAR, P_GSTAR, P_MUR, P_MUS, P_W
+from soilcal.dem.scenarios import SCENARIOS, get
+from soilcal.dem.scenarios.base import (PRESETS, DemParams, Result, build_materials, check,
+                                        merge_setup, rng, stable_mean, write_row)
+from soilcal.errors import InputError
+
+
+def test_names_follow_pair_and_kind():
+    names = DemParams.names()
+    for pair in ("soil_soil", "soil_steel"):
+        for kind in ("restitution", "static_friction", "rolling_friction", "surface_energy"):
+            assert f"{pair}_{kind}" in names
+    p = DemParams()
+    assert (p.steel_density, p.steel_poisson, p.steel_shear_modulus) == (7850.0, 0.3, 7.9e10)
+    assert PRESETS == ("quick", "paper")
+
+
+def test_from_mapping_rejects_unknown_and_out_of_range():
+    with pytest.raises(InputError) as e:
+        DemParams.from_mapping({"soil_soil_rolling": 0.1}, "cfg.yaml")
+    assert e.value.path == "cfg.yaml" and e.value.field == "params.soil_soil_rolling"
+    with pytest.raises(InputError, match="restitution"):
+        DemParams.from_mapping({"soil_soil_restitution": 1.5}, "cfg.yaml")
+    with pytest.raises(InputError, match="params.soil_poisson"):
+        DemParams.from_mapping({"soil_poisson": 0.5}, "cfg.yaml")
+    with pytest.raises(InputError, match="a number"):
+        DemParams.from_mapping({"soil_density": "heavy"}, "cfg.yaml")
+    p = DemParams.from_mapping({"soil_soil_rolling_friction": "0.2"}, "cfg.yaml")
+    assert p.soil_soil_rolling_friction == 0.2
+    assert p.as_dict()["soil_soil_static_friction"] == DemParams().soil_soil_static_friction
+
+
+def test_stiffness_scaling_and_surface_energy_rule():
+    p = DemParams(soil_soil_surface_energy=0.5, soil_steel_surface_energy=0.2)
+    t1 = build_materials(p, 1.0).table(1.0)
+    s = 0.01
+    ts = build_materials(p, s).table(1.0)
+    # G* and E* scale with s; w = gamma (G_mod/G)^(2/5) (vineyard paper, Eq. 6)
+    for i, j in ((0, 0), (0, 1)):
+        assert ts[i, j, P_GSTAR] == pytest.approx(s * t1[i, j, P_GSTAR], rel=1e-12)
+        assert ts[i, j, P_ESTAR] == pytest.approx(s * t1[i, j, P_ESTAR], rel=1e-12)
+        assert ts[i, j, P_W] == pytest.approx(t1[i, j, P_W] * s**0.4, rel=1e-12)
+    assert t1[0, 0, P_W] == 0.5 and t1[0, 1, P_W] == 0.2
+    assert t1[0, 1, P_MUS] == p.soil_steel_static_friction
+    assert t1[0, 0, P_MUR] == p.soil_soil_rolling_friction
+    with pytest.raises(InputError, match="stiffness_scale"):
+        build_materials(p, 0.0)
+
+
+def test_result_row_and_atomic_write(tmp_path):
+    res = Result("repose", "quick", 3, 100, 2000, 0.5, 1.25, 1, params=DemParams().as_dict(),
+                 setup=dict(tube_diameter=0.06, method="cylinder", psd=[1, 2], none=None),
+                 responses=dict(angle_deg=np.float64(31.5)), series=dict(t=np.arange(3)))
+    row = res.row()
+    assert row["p:soil_soil_restitution"] == DemParams().soil_soil_restitution
+    assert row["s:tube_diameter"] == 0.06 and row["s:method"] == "cylinder"
+    assert "s:psd" not in row  # non-scalar setup values stay out of the row
+    assert row["r:angle_deg"] == 31.5 and type(row["r:angle_deg"]) is float
+    out = write_row(tmp_path / "sub" / "row.csv", res)
+    rows = list(csv.DictReader(open(out)))
+    assert len(rows) == 1 and float(rows[0]["r:angle_deg"]) == 31.5
+    assert rows[0]["seed"] == "3"
+    assert [p.name for p in (tmp_path / "sub").iterdir()] == ["row.csv"]  # no temp file left
+
+
+def test_stable_mean_of_a_known_signal():
+    t = np.linspace(0, 2, 201)
+    y = np.where(t < 0.5, 10 * t, 5.0 + np.sin(2 * np.pi * 10 * t))
+    m, sd = stable_mean(t, y, 0.5, 1.5)
+    # ten full periods of a unit sine on [0.5, 1.5] (101 samples, ends equal)
+    assert m == pytest.approx(5.0, abs=1e-9)
+    assert sd == pytest.approx(math.sqrt(0.5 * 100 / 100), rel=0.02)
+    with pytest.raises(InputError, match="t_start"):
+        stable_mean(t, y, 3.0)
+
+
+def test_check_rng_and_merge_setup():
+    with pytest.raises(InputError) as e:
+        check(False, "run.yaml", "setup.fill_fraction", "<= 1", 1.2)
+    assert str(e.value) == "run.yaml: setup.fill_fraction: expected <= 1, got 1.2"
+    a = rng(7, "repose").uniform(size=3)
+    assert np.array_equal(a, rng(7, "repose").uniform(size=3))
+    assert not np.array_equal(a, rng(8, "repose").uniform(size=3))
+    assert not np.array_equal(a, rng(7, "drum").uniform(size=3))
+    with pytest.raises(InputError, match="seed"):
+        rng(-1)
+    s = merge_setup({"a": {"x": 1}}, "a", {"x": 2}, "cli")
+    assert s == {"x": 2, "name": "a"}
+    with pytest.raises(InputError, match="setup.y"):
+        merge_setup({"a": {"x": 1}}, "a", {"y": 2}, "cli")
+    with pytest.raises(InputError, match="setup"):
+        merge_setup({"a": {"x": 1}}, "b", {}, "cli")
+
+
+def test_registry_and_named_setups_validate():
+    for name in ("repose", "drum", "incline", "compression"):
+        mod = SCENARIOS[name]
+        assert mod.NAME == name
+        for sname, setup in mod.setups().items():
+            for preset in PRESETS:
+                mod.validate(dict(setup, name=sname), preset, "test")
+    with pytest.raises(InputError, match="scenario"):
+        get("no-such-scenario")

@@ -1,0 +1,38 @@
+"""``soilcal scenario`` commands: list, one run writing one CSV row, errors naming the field."""
+
+import csv
+
+from soilcal.cli import main
+
+
+def test_list_names_the_scenarios(capsys):
+    assert main(["scenario", "list"]) == 0
+    out = capsys.readouterr().out
+    for name in ("repose", "drum", "incline", "compression"):
+        assert name in out
+
+
+def test_run_writes_one_row(tmp_path, capsys):
+    out = tmp_path / "row.csv"
+    rc = main(["scenario", "run", "incline", "--setup", "yangtze-rolling", "--threads", "1",
+               "--set", "start_deg=4", "--param", "soil_steel_rolling_friction=0.097",
+               "--seed", "5", "--out", str(out)])
+    assert rc == 0
+    rows = list(csv.DictReader(open(out)))
+    assert len(rows) == 1
+    row = rows[0]
+    assert row["scenario"] == "incline" and row["seed"] == "5" and row["preset"] == "quick"
+    assert float(row["p:soil_steel_rolling_friction"]) == 0.097
+    assert float(row["s:start_deg"]) == 4.0
+    assert 5.3 < float(row["r:onset_deg"]) < 5.9   # atan(0.097) = 5.54 deg
+    assert float(row["wall_s"]) > 0 and int(row["n_particles"]) == 1
+
+
+def test_bad_values_exit_2_naming_the_field(capsys):
+    assert main(["scenario", "run", "repose", "--set", "tube_diameter=0.5"]) == 2
+    err = capsys.readouterr().err
+    assert "setup.tube_diameter" in err and "narrower than the plate" in err
+    assert main(["scenario", "run", "repose", "--param", "soil_soil_restitution=2"]) == 2
+    assert "params.soil_soil_restitution" in capsys.readouterr().err
+    assert main(["scenario", "run", "drum", "--set", "no_such_key=1"]) == 2
+    assert main(["scenario", "run", "drum", "--preset", "slow"]) == 2

@@ -1,0 +1,144 @@
+"""Measurements on synthetic particle states with known answers: analytic heaps (rounded top,
+concave toe), a tilted drum free surface, stress = force / area."""
+
+import math
+
+import numpy as np
+import pytest
+
+from soilcal.dem import measure
+from soilcal.errors import InputError
+
+
+def heap(alpha_deg, R=0.06, r=0.002, cap=0.25, toe=0.85, seed=0, centre=(0.0, 0.0), skew=None):
+    """Spheres filling a heap h(rho): cone of slope alpha with a parabolic cap tangent to it
+    at rho_c = cap R and an exponential toe h_t exp(-(rho - rho_t) tan(alpha) / h_t) from
+    rho_t = toe R (continuous in value and slope).  Columns of spheres on a jittered square
+    grid of pitch 2r; the top sphere of each column touches the surface.  ``skew`` gives
+    per-direction slopes (alpha varies with azimuth as alpha + skew cos(phi))."""
+    rng = np.random.default_rng(seed)
+    g = np.arange(-1.4 * R, 1.4 * R, 2 * r)
+    X, Y = np.meshgrid(g, g)
+    X = X + rng.uniform(-0.2 * r, 0.2 * r, X.shape)
+    Y = Y + rng.uniform(-0.2 * r, 0.2 * r, Y.shape)
+    rho = np.hypot(X, Y)
+    phi = np.arctan2(Y, X)
+    a = np.radians(alpha_deg + (skew * np.cos(phi) if skew else 0.0))
+    t = np.tan(a)
+    rc, rt = cap * R, toe * R
+    H0 = R * t
+    ht = (R - rt) * t
+    cone = (R - rho) * t
+    capv = H0 - rc * t / 2 - t * rho**2 / (2 * rc)
+    toev = ht * np.exp(-(rho - rt) * t / ht)
+    h = np.where(rho < rc, capv, np.where(rho > rt, toev, cone))
+    pts = []
+    for xx, yy, hh in zip(X.ravel(), Y.ravel(), h.ravel()):
+        if hh < 0.5 * r:
+            continue
+        zt = hh - r
+        zs = np.arange(zt, r * 0.99, -2 * r) if zt > r else np.array([max(zt, 0.5 * r)])
+        pts += [(xx + centre[0], yy + centre[1], z) for z in zs]
+    x = np.array(pts)
+    return x, np.full(len(x), r)
+
+
+@pytest.mark.parametrize("alpha", [22.0, 30.0, 38.0])
+def test_radial_bins_recover_the_flank_angle_of_an_analytic_heap(alpha):
+    x, r = heap(alpha)
+    res = measure.repose_angle_bins(x, r, 0.0)
+    # the rounded top and the toe are excluded: the flank slope is recovered
+    assert res["angle_deg"] == pytest.approx(alpha, abs=0.3)
+    assert len(res["per_direction_deg"]) == 8
+    assert res["spread_deg"] < 0.5
+
+
+def test_radial_bins_average_directions_and_find_the_axis():
+    # slopes alpha + 4 cos(phi): the eight sector fits average back to alpha (cos sums to 0)
+    x, r = heap(30.0, skew=4.0, centre=(0.02, -0.01))
+    res = measure.repose_angle_bins(x, r, 0.0)
+    assert res["centre"][0] == pytest.approx(0.02, abs=0.004)
+    assert res["centre"][1] == pytest.approx(-0.01, abs=0.004)
+    per = np.array(res["per_direction_deg"])
+    assert per[0] > per[4] + 5.0  # +x side steeper than -x side
+    assert res["angle_deg"] == pytest.approx(30.0, abs=0.6)
+
+
+def test_radial_bins_ignore_the_plate_offset():
+    x, r = heap(30.0)
+    x[:, 2] += 0.1
+    assert measure.repose_angle_bins(x, r, 0.1)["angle_deg"] == pytest.approx(30.0, abs=0.3)
+
+
+def test_too_small_pile_is_refused():
+    x = np.array([[0.0, 0.0, 0.002]] * 5)
+    with pytest.raises(InputError, match="particles"):
+        measure.repose_angle_bins(x, 0.002)
+
+
+@pytest.mark.parametrize("alpha", [25.0, 35.0])
+def test_side_silhouette_through_the_photo_pipeline(alpha, tmp_path):
+    x, r = heap(alpha, R=0.05)
+    res = measure.repose_angle_image(x, r, 0.0, workdir=tmp_path)
+    assert len(res["flanks_deg"]) == 4
+    # the silhouette of discs on a straight flank is the flank offset by the radius
+    assert res["angle_deg"] == pytest.approx(alpha, abs=0.6)
+
+
+def test_render_side_draws_the_heap_above_a_plate(tmp_path):
+    x, r = heap(30.0, R=0.04)
+    img, s = measure.render_side(x, r, 0.0, view="y", path=tmp_path / "a.png")
+    assert (tmp_path / "a.png").is_file()
+    dark = img[..., 0] < 100
+    rows = np.nonzero(dark.any(axis=1))[0]
+    # heap height in pixels = max(z + r) * scale (orthographic)
+    h_px = rows.max() - rows.min() + 1
+    assert h_px == pytest.approx((x[:, 2] + r).max() * s, abs=3)
+    with pytest.raises(InputError, match="view"):
+        measure.render_side(x, r, view="z")
+
+
+def drum_state(theta_deg, R=0.05, L=0.1, r=0.002, fill=0.25, seed=1):
+    """Spheres filling the circular segment below a chord tilted by theta (drum axis along y)
+    that holds ``fill`` of the section (A = R^2 acos(d/R) - d sqrt(R^2 - d^2))."""
+    from scipy.optimize import brentq
+
+    target = fill * math.pi * R * R
+    d = brentq(lambda d: R * R * math.acos(d / R) - d * math.sqrt(R * R - d * d) - target, 0, R)
+    rng = np.random.default_rng(seed)
+    th = math.radians(theta_deg)
+    pts = []
+    # columns of spheres every 2 r across the section; the top sphere of each column touches
+    # the chord z_s(u) = (u sin(theta) - d) / cos(theta), the lowest stays inside the circle
+    for u in np.arange(-R + r, R - r, 2 * r) + rng.uniform(-0.1 * r, 0.1 * r):
+        zs = (u * math.sin(th) - d) / math.cos(th)
+        zb = -math.sqrt(max(R * R - u * u, 0.0))
+        for z in np.arange(zs - r, zb + r, -2 * r):
+            if math.hypot(u, z) < R - r:
+                pts += [(u, y, z) for y in np.arange(r, L, 2 * r)]
+    x = np.array(pts)
+    return x, np.full(len(x), r)
+
+
+@pytest.mark.parametrize("theta", [30.0, 42.7])
+def test_drum_surface_angle_of_a_tilted_segment(theta):
+    x, r = drum_state(theta)
+    res = measure.drum_surface_angle(x, r, (0.0, 0.05, 0.0), (0, 1, 0))
+    assert res["angle_deg"] == pytest.approx(theta, abs=0.3)
+
+
+def test_drum_axis_must_be_horizontal():
+    x, r = drum_state(30.0)
+    with pytest.raises(InputError, match="axis_dir"):
+        measure.drum_surface_angle(x, r, (0, 0.05, 0), (0, 0, 1))
+
+
+def test_stress_strain_is_force_over_area():
+    z = np.array([0.05, 0.049, 0.045])
+    f = np.array([0.0, 10.0, 100.0])
+    eps, sig = measure.stress_strain(z, f, 0.0495, 0.05)
+    assert eps == pytest.approx([0.0, 0.02, 0.1])
+    assert sig == pytest.approx(f / (math.pi * 0.0495**2))
+    assert measure.value_at(eps, sig, 0.06) == pytest.approx(
+        (10 + (100 - 10) * (0.04 / 0.08)) / (math.pi * 0.0495**2))
+    assert math.isnan(measure.value_at(eps, sig, 0.5))

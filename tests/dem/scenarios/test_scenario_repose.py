@@ -1,0 +1,95 @@
+"""Repose scenarios: fail-before-run validation, a small pile measured both ways,
+determinism, and (slow) the screening trends of the papers."""
+
+import numpy as np
+import pytest
+
+from soilcal.dem.scenarios import drum, repose
+from soilcal.dem.scenarios.base import DemParams
+from soilcal.errors import InputError
+
+
+def cyl(**kw):
+    return dict(repose.setups()["cinnamon-soil"], **kw)
+
+
+def fun(**kw):
+    return dict(repose.setups()["guangxi-cohesive"], **kw)
+
+
+@pytest.mark.parametrize("setup, field", [
+    (cyl(tube_diameter=0.5), "setup.tube_diameter"),           # tube wider than the plate
+    (cyl(fill_height=0.2), "setup.fill_height"),               # fill above the tube
+    (cyl(lift_speed=-0.05), "setup.lift_speed"),               # negative speed
+    (cyl(lift_speed=0.0), "setup.lift_speed"),
+    (cyl(method="pour"), "setup.method"),
+    (cyl(plate_material="glass"), "setup.plate_material"),
+    (cyl(n_particles=5), "setup.n_particles"),
+    (cyl(radius=0.01), "setup.tube_diameter"),                 # 3 diameters across the tube
+    (fun(funnel_bottom_diameter=0.2), "setup.funnel_bottom_diameter"),
+    (fun(funnel_top_diameter=0.5), "setup.funnel_top_diameter"),
+    (fun(load_mass=50.0), "setup.load_mass"),
+    (fun(outlet_height=-0.01), "setup.outlet_height"),
+    (fun(radius=0.004), "setup.funnel_bottom_diameter"),       # outlet under 5 diameters
+])
+def test_bad_settings_fail_before_the_run(setup, field):
+    with pytest.raises(InputError) as e:
+        repose.run(setup, DemParams(), "quick", seed=0, threads=1, source="run.yaml")
+    assert e.value.field == field and e.value.path == "run.yaml"
+
+
+def test_drum_fill_and_preset_validation():
+    s = dict(drum.setups()["xinjiang-vineyard"])
+    with pytest.raises(InputError, match="setup.fill_fraction"):
+        drum.validate(dict(s, fill_fraction=1.2), "quick", "t")
+    with pytest.raises(InputError, match="setup.fill_fraction"):
+        drum.validate(dict(s, fill_fraction=0.7), "quick", "t")
+    with pytest.raises(InputError, match="setup.rpm"):
+        drum.validate(dict(s, rpm=-7), "quick", "t")
+    with pytest.raises(InputError, match="setup.transient_time"):
+        drum.validate(dict(s, spin_time=1.0, transient_time=2.0), "quick", "t")
+    with pytest.raises(InputError, match="preset"):
+        drum.validate(s, "fast", "t")
+
+
+SMALL = dict(n_particles=400, fill_height=0.04)
+
+
+def test_small_pile_bins_and_silhouette_agree_and_repeat():
+    p = DemParams(soil_soil_surface_energy=0.0, soil_soil_rolling_friction=0.2)
+    a = repose.run(cyl(**SMALL), p, "quick", seed=3, threads=1)
+    r = a.responses
+    assert r["settled"] == 1 and r["n_lost"] == 0 and r["n_on_plate"] == a.n_particles
+    # a heap: lower than the 40 mm fill, wider than the 60 mm tube
+    assert 0.01 < r["height_m"] < 0.04
+    assert np.hypot(a.series["x"][:, 0], a.series["x"][:, 1]).max() > 0.03
+    assert 10.0 < r["angle_deg"] < 50.0
+    assert abs(r["angle_deg"] - r["angle_image_deg"]) < 6.0
+    b = repose.run(cyl(**SMALL), p, "quick", seed=3, threads=1)
+    assert b.responses["angle_deg"] == r["angle_deg"]  # same seed, same threads: identical
+    assert np.array_equal(a.series["x"], b.series["x"])
+
+
+def _angle(seed=0, **params):
+    p = DemParams.from_mapping(params, "test")
+    s = cyl(n_particles=700, image=False)
+    return repose.run(s, p, "quick", seed=seed, threads=1).responses["angle_deg"]
+
+
+@pytest.mark.slow
+def test_static_angle_trends_of_the_screening_designs():
+    """002 Table 4 / 003 Table 4 / 001 Table 6: the angle rises with soil-soil rolling
+    friction, sliding friction and JKR surface energy (two seeds averaged per level)."""
+    base = dict(soil_soil_surface_energy=0.0, soil_soil_rolling_friction=0.1,
+                soil_soil_static_friction=0.5)
+
+    def mean_angle(**kw):
+        return np.mean([_angle(seed, **dict(base, **kw)) for seed in (0, 1)])
+
+    lo_r, hi_r = mean_angle(soil_soil_rolling_friction=0.02), mean_angle(soil_soil_rolling_friction=0.3)
+    assert hi_r > lo_r + 4.0
+    lo_s, hi_s = mean_angle(soil_soil_static_friction=0.15), mean_angle(soil_soil_static_friction=0.9)
+    assert hi_s > lo_s + 4.0
+    hi_g = mean_angle(soil_soil_surface_energy=3.0)
+    lo_g = 0.5 * (_angle(0, **base) + _angle(1, **base))
+    assert hi_g > lo_g + 2.0
