@@ -1,0 +1,181 @@
+"""Convergence of the bench-top scenarios: response vs particle count, stiffness, seed.
+
+After the cohesive-soil paper's own check (004 Sec. 3.6, Table 12: the simulated angle of
+repose for generated masses 0.1-0.3 kg, 31.3-32.2 deg, converged from 0.15 kg), each bench-top
+scenario runs at its quick-preset settings and with one factor changed at a time:
+
+* particle count ``n_particles`` (repose, drum, compression; radii follow from the fill),
+* shear-modulus scale relative to the quick preset's (``stiffness_scale``; the JKR surface
+  energy follows gamma s^(2/5)),
+* seed (random insertion).
+
+The incline scenario has no particle-count axis (one block or ball); its stiffness and seed
+axes are run.  Each run is one row of ``benchmarks/results/convergence/convergence.csv``
+(scenario, setup, factor, value, seed, particle count, steps, wall time, responses); the
+figure ``convergence.png`` / ``convergence.pdf`` plots the main response of every scenario
+against the three factors, and ``convergence.md`` tabulates the rows with the spread over
+seeds.
+
+    python benchmarks/convergence.py --level reduced      # a few CPU-minutes
+    python benchmarks/convergence.py --level full         # more levels, paper-like counts
+    python benchmarks/convergence.py --scenarios repose,incline
+"""
+
+from __future__ import annotations
+
+import argparse
+import csv
+import os
+import sys
+import time
+from pathlib import Path
+
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt  # noqa: E402
+import numpy as np  # noqa: E402
+
+HERE = Path(__file__).resolve().parent
+OUT = HERE / "results" / "convergence"
+
+# scenario -> (setup, main response, extra setup for every run)
+CASES = {
+    "repose": ("cinnamon-soil", "angle_deg", {}),
+    "drum": ("xinjiang-vineyard", "angle_deg", {}),
+    "incline": ("yangtze-static", "onset_deg", {}),
+    "compression": ("guangxi-cohesive", "stress_10_kpa", {}),
+}
+LEVELS = {
+    "reduced": dict(n=[500, 1000, 2000], stiff=[1.0, 4.0], seeds=[0, 1, 2]),
+    "full": dict(n=[500, 1000, 2000, 4000, 8000], stiff=[0.5, 1.0, 2.0, 4.0, 8.0],
+                 seeds=[0, 1, 2, 3, 4]),
+}
+QUICK_N = 1000  # the quick preset's particle count (base.PRESET_DEFAULTS)
+FIELDS = ["scenario", "setup", "factor", "value", "seed", "n_particles", "steps", "sim_time_s",
+          "wall_s", "stiffness_scale", "response", "value_response", "responses"]
+
+
+def runs(level, scenarios):
+    lv = LEVELS[level]
+    for sc in scenarios:
+        if sc != "incline":
+            for n in lv["n"]:
+                yield sc, "n_particles", n, 0
+        for f in lv["stiff"]:
+            yield sc, "stiffness", f, 0
+        for s in lv["seeds"]:
+            yield sc, "seed", s, s
+
+
+def one(sc, factor, value, seed, threads):
+    from soilcal.dem.scenarios import SCENARIOS
+    from soilcal.dem.scenarios.base import DemParams, stiffness_scale_for
+
+    mod = SCENARIOS[sc]
+    setup_name, resp, extra = CASES[sc]
+    setup = dict(mod.setups()[setup_name], name=setup_name, **extra)
+    if "image" in setup:
+        setup["image"] = False
+    params = DemParams()
+    if sc == "incline":
+        params = DemParams(soil_steel_static_friction=0.71, soil_soil_surface_energy=0.0)
+    base_scale = stiffness_scale_for(params, "quick")
+    if factor == "n_particles":
+        setup["n_particles"] = int(value)
+    elif factor == "stiffness":
+        setup["stiffness_scale"] = base_scale * float(value)
+    res = mod.run(setup, params, "quick", seed=int(seed), threads=threads)
+    return dict(scenario=sc, setup=setup_name, factor=factor, value=value, seed=seed,
+                n_particles=res.n_particles, steps=res.steps, sim_time_s=round(res.sim_time_s, 4),
+                wall_s=round(res.wall_s, 2), stiffness_scale=res.setup["stiffness_scale"],
+                response=resp, value_response=res.responses[resp],
+                responses=";".join(f"{k}={v:.6g}" for k, v in res.responses.items()
+                                   if isinstance(v, (int, float))))
+
+
+def figure(rows, out):
+    scen = sorted({r["scenario"] for r in rows}, key=list(CASES).index)
+    facs = ["n_particles", "stiffness", "seed"]
+    fig, axes = plt.subplots(len(scen), 3, figsize=(11, 2.6 * len(scen)), squeeze=False)
+    for i, sc in enumerate(scen):
+        for j, fac in enumerate(facs):
+            ax = axes[i, j]
+            sel = [r for r in rows if r["scenario"] == sc and r["factor"] == fac]
+            if not sel:
+                ax.axis("off")
+                continue
+            x = [float(r["value"]) for r in sel]
+            y = [float(r["value_response"]) for r in sel]
+            ax.plot(x, y, "o-" if fac != "seed" else "o", color="C%d" % j)
+            if fac == "stiffness":
+                ax.set_xscale("log", base=2)
+            ax.set_xlabel({"n_particles": "particle count", "stiffness":
+                           "G scale / quick preset's", "seed": "seed"}[fac])
+            if j == 0 or (sc == "incline" and j == 1):
+                ax.set_ylabel(f"{sc}: {sel[0]['response']}")
+            ax.grid(alpha=0.3)
+    fig.tight_layout()
+    for ext in ("png", "pdf"):
+        fig.savefig(out / f"convergence.{ext}", dpi=120)
+    plt.close(fig)
+
+
+def table(rows, out, cmd):
+    lines = ["# Convergence of the bench-top scenarios (quick preset, one factor at a time)", "",
+             f"Command: `{cmd}`; {time.strftime('%Y-%m-%d %H:%M UTC', time.gmtime())}; "
+             f"load_avg_1min at the end {os.getloadavg()[0]:.2f} (shared machine).", "",
+             "| scenario | factor | value | seed | N | steps | wall s | G scale | response | value |",
+             "|---|---|---:|---:|---:|---:|---:|---:|---|---:|"]
+    for r in rows:
+        lines.append(f"| {r['scenario']} | {r['factor']} | {r['value']} | {r['seed']} | "
+                     f"{r['n_particles']} | {r['steps']} | {r['wall_s']} | "
+                     f"{float(r['stiffness_scale']):.4g} | {r['response']} | "
+                     f"{float(r['value_response']):.3f} |")
+    lines += ["", "Spread over seeds (sample standard deviation):", ""]
+    for sc in CASES:
+        v = [float(r["value_response"]) for r in rows if r["scenario"] == sc and r["factor"] == "seed"]
+        if len(v) > 1:
+            lines.append(f"* {sc}: mean {np.mean(v):.3f}, SD {np.std(v, ddof=1):.3f} "
+                         f"({len(v)} seeds)")
+    (out / "convergence.md").write_text("\n".join(lines) + "\n")
+
+
+def main(argv=None):
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--level", choices=sorted(LEVELS), default="reduced")
+    ap.add_argument("--scenarios", default=",".join(CASES))
+    ap.add_argument("--threads", type=int, default=1)
+    ap.add_argument("--out", default=str(OUT))
+    args = ap.parse_args(argv)
+    scenarios = [s for s in args.scenarios.split(",") if s]
+    for s in scenarios:
+        if s not in CASES:
+            ap.error(f"--scenarios: expected names from {sorted(CASES)}, got {s!r}")
+    out = Path(args.out)
+    out.mkdir(parents=True, exist_ok=True)
+    rows = []
+    cache = {}
+    path = out / "convergence.csv"
+    with open(path, "w", newline="") as fh:
+        w = csv.DictWriter(fh, fieldnames=FIELDS)
+        w.writeheader()
+        for case in runs(args.level, scenarios):
+            sc, factor, value, seed = case
+            # the quick-preset point (1000 spheres, scale 1, seed 0) is run once per scenario
+            key = (sc, value if factor == "n_particles" else QUICK_N,
+                   value if factor == "stiffness" else 1.0, seed)
+            if key not in cache:
+                cache[key] = one(*case, threads=args.threads)
+            row = dict(cache[key], factor=factor, value=value)
+            rows.append(row)
+            w.writerow(row)
+            fh.flush()
+            print({k: row[k] for k in ("scenario", "factor", "value", "seed", "n_particles",
+                                       "wall_s", "value_response")}, flush=True)
+    figure(rows, out)
+    table(rows, out, "python benchmarks/convergence.py " + " ".join(sys.argv[1:]))
+
+
+if __name__ == "__main__":
+    main()
