@@ -50,7 +50,9 @@ def test_quick_bin_shallower_than_cut_fails():
 def test_quick_run_resists_motion(tmp_path, monkeypatch):
     monkeypatch.setenv("SOILCAL_SCENARIO_CACHE", str(tmp_path))
     res = bulldozing.run(bulldozing.setups()["plate-line"], bulldozing.paper_params(), "quick",
-                         seed=0, threads=1)
+                         seed=0, threads=1, vtk_dir=tmp_path / "vtk")
+    assert len(list((tmp_path / "vtk").glob("*.vtu"))) == 5
+    assert len(list((tmp_path / "vtk").glob("*.vtp"))) == 5
     r = res.responses
     assert all(math.isfinite(r[k]) for k in ("horizontal_force_N", "vertical_force_N",
                                              "horizontal_force_sd_N"))

@@ -95,3 +95,12 @@ def test_quick_run_finite_and_opposing(tmp_path, monkeypatch):
     row = res.row()
     assert row["r:traction_N"] == r["traction_N"] and row["p:soil_density"] == 2570.0
     assert list(tmp_path.glob("bin-*.npz"))  # settled bin kept for reuse
+
+
+@pytest.mark.parametrize("preset", ["quick", "paper"])
+def test_every_named_tool_setup_validates(preset):
+    from soilcal.dem.scenarios import bulldozing, rotary
+
+    for mod in (furrow, bulldozing, rotary):
+        for name, s in mod.setups().items():
+            mod.validate(dict(s, name=name), preset, f"{mod.NAME}:{name}")

@@ -37,8 +37,8 @@ from pathlib import Path
 import numpy as np
 
 from soilcal.dem import tools
-from soilcal.dem.scenarios.base import (PRESETS, DemParams, Result, check, merge_setup,
-                                        stable_mean, threads_used)
+from soilcal.dem.scenarios.base import (PRESETS, DemParams, Result, check, stable_mean,
+                                        threads_used)
 from soilcal.dem.scenarios.soilbin import (BinSpec, apply_preset, settled_bin, tool_pass,
                                            validate_bin)
 
@@ -143,8 +143,6 @@ def _bin(s) -> BinSpec:
 
 def run(setup: dict, params: DemParams, preset: str = "quick", seed: int = 0, threads=None,
         vtk_dir=None, source: str = "<bulldozing>", use_cache: bool = True) -> Result:
-    if "name" not in setup and setup.get("shape") in tools.SHAPES:
-        setup = merge_setup(setups(), f"plate-{setup['shape']}", setup, source)
     validate(setup, preset, source)
     s = _settings(setup, preset)
     nthreads = threads_used(threads)

@@ -55,10 +55,9 @@ import numpy as np
 from numpy.polynomial import Polynomial
 
 from soilcal.dem import tools
-from soilcal.dem.scenarios.base import (PRESETS, DemParams, Result, check, merge_setup,
-                                        stable_mean, threads_used)
-from soilcal.dem.scenarios.soilbin import (BinSpec, apply_preset, column_tops, tool_pass,
-                                           validate_bin)
+from soilcal.dem.scenarios.base import (PRESETS, DemParams, Result, check, stable_mean,
+                                        threads_used)
+from soilcal.dem.scenarios.soilbin import BinSpec, apply_preset, tool_pass, validate_bin
 
 NAME = "furrow"
 MEASURED = (Path(__file__).resolve().parents[4] / "resources" / "measurements"
@@ -231,8 +230,6 @@ def area_difference(phi: Polynomial, f: Polynomial, a: float, b: float) -> tuple
 
 def run(setup: dict, params: DemParams, preset: str = "quick", seed: int = 0, threads=None,
         vtk_dir=None, source: str = "<furrow>", use_cache: bool = True) -> Result:
-    if "name" not in setup and set(setup) <= set(setups()["yangtze-opener"]):
-        setup = merge_setup(setups(), "yangtze-opener", setup, source)
     validate(setup, preset, source)
     s = _settings(setup, preset)
     nthreads = threads_used(threads)
@@ -305,7 +302,8 @@ def run(setup: dict, params: DemParams, preset: str = "quick", seed: int = 0, th
         settled_surface_m=float(surface), bin_from_cache=bool(out["from_cache"]),
     )
     return Result(scenario=NAME, preset=preset, seed=int(seed), n_particles=out["n"],
-                  steps=int(out["steps"] + out["settle_steps"]), sim_time_s=out["steps"] * out["dt"],
+                  steps=int(out["steps"] + out["settle_steps"]),
+                  sim_time_s=out["steps"] * out["dt"],
                   wall_s=wall, threads=nthreads, params=params.as_dict(), setup=dict(s),
                   responses=resp, series=dict(t=tt, traction_N=resist, force=force,
                                                slice_x=centres))

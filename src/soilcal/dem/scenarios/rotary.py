@@ -7,11 +7,11 @@ Test (Sec. 2.3): the 1GKN-160 rotary tiller (36 IT225 blades, working width 1.6 
 blade set geometry :func:`soilcal.dem.tools.rotary_blade_set`) advances at 1 km/h with the
 blade shaft at 150, 200, 250, 300 or 350 r/min.  The blade shaft turns down-cut (like the
 tractor wheels): ``omega = +2 pi n / 60 e_y`` with travel along +x.  The tillage depth is
-not printed; 120 mm is assumed (``depth``), which keeps the blade holders (radius 100 mm)
-above the 225 mm blade tips' cutting zone.
+not printed; 120 mm is assumed (``depth``); validation requires depth <= 225 - 100 mm so
+that the blade holders (radius 100 mm, assumed) stay above the soil.
 
 Power (Sec. 3.3, Figure 10): the torque of the particles on the blade set about the shaft,
-``tau_y``, opposes the rotation; the shaft power is
+``tau_y``, opposes the rotation; the shaft power is::
 
     P = -tau_y omega
 
@@ -25,15 +25,17 @@ Surface flatness (Eqs. 3-4; five equidistant points on the tilled surface, Sec. 
 
     d_mean = (1/n) sum d_i,     Sd = sqrt( sum (d_i - d_mean)^2 / (n - 1) )
 
-``d_i`` the height of the tilled surface above the undisturbed surface at point i (mm).
-The tiller's hood is a steel ceiling ``hood_clearance`` above the blade tips at the
-start (it keeps thrown soil in the bin, as the hood of a tiller does; its height is an
-assumption).  After the pass the rotor stops turning and is lifted out of the soil with the hood (2 m/s
-for ``lift_time``), the soil settles for ``rest_time``, and the surface height at a point is the
-upper envelope of the particles (highest sphere top ``z_i + sqrt(r_i^2 - rho^2)`` over
+``d_i`` the height of the tilled surface above the undisturbed surface at point i (mm). The
+tiller's hood is a steel ceiling ``hood_clearance`` above the blade tips at the start (it
+keeps thrown soil in the bin, as the hood of a tiller does; its height is an assumption).
+After the pass the rotor stops turning and is lifted out of the soil with the hood (2 m/s
+for ``lift_time``), the soil settles for ``rest_time``, and the surface height at a point is
+the upper envelope of the particles (highest sphere top ``z_i + sqrt(r_i^2 - rho^2)`` over
 spheres whose horizontal distance rho to the point is below r_i) averaged over lateral
-samples across the tilled width.  The points lie equidistant along the travel direction over
-the ground the shaft passed over.  Measured Sd: 159.2, 134.4, 120.6, 109.8, 102.1 mm at
+samples across the tilled width.  The points lie equidistant along the travel direction
+(:func:`flatness_region`): behind the rotor's final position over ground its whole footprint
+passed, or, for passes shorter than the rotor diameter plus 0.1 m (the quick preset), over
+the whole disturbed footprint including the starting trench.  Measured Sd: 159.2, 134.4, 120.6, 109.8, 102.1 mm at
 150-350 r/min (``surface_flatness.csv``).  A dense version over ``dense_points`` points is
 reported as ``flatness_dense_mm``.
 
@@ -41,11 +43,10 @@ Presets: ``paper`` simulates the whole 1.6 m blade set between side walls with p
 1.5 mm radius (the printed 2-4 mm diameters, +-33 %); ``quick`` simulates one flange of
 three blades in a periodic slab of one flange spacing (1.6 m / 12), 12 mm particles
 (0.9-1.1) in a 0.19 m deep bed, shear modulus scaled by 0.1 (1e8 -> 1e7 Pa with the paper's
-G; surface energies by 0.1^0.4), a 0.15 m pass, and scales the torque to the full working width by
-``n_flanges`` (the helix repeats every flange up to a phase).  The time step is the smaller
-of ``dt_fraction`` x the Rayleigh time and the time the blade tip needs to move a tenth of
-the smallest radius (tip speed ``omega R + v``).
-"""
+G; surface energies by 0.1^0.4), a 0.15 m pass, and scales the torque to the full working
+width by ``n_flanges`` (the helix repeats every flange up to a phase).  The time step is the
+smaller of ``dt_fraction`` x the Rayleigh time and the time the blade tip needs to move a
+tenth of the smallest radius (tip speed ``omega R + v``)."""
 
 from __future__ import annotations
 
@@ -57,8 +58,8 @@ from pathlib import Path
 import numpy as np
 
 from soilcal.dem import tools
-from soilcal.dem.scenarios.base import (PRESETS, DemParams, Result, check, merge_setup,
-                                        stable_mean, threads_used)
+from soilcal.dem.scenarios.base import (PRESETS, DemParams, Result, check, stable_mean,
+                                        threads_used)
 from soilcal.dem.scenarios.soilbin import (BinSpec, apply_preset, settled_bin, tool_pass,
                                            validate_bin)
 
@@ -210,8 +211,6 @@ def _bin(s) -> BinSpec:
 
 def run(setup: dict, params: DemParams, preset: str = "quick", seed: int = 0, threads=None,
         vtk_dir=None, source: str = "<rotary>", use_cache: bool = True) -> Result:
-    if "name" not in setup and "rpm" in setup:
-        setup = merge_setup({"custom": _setup(setup["rpm"])}, "custom", setup, source)
     validate(setup, preset, source)
     s = _settings(setup, preset)
     nthreads = threads_used(threads)

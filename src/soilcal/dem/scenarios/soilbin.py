@@ -1,18 +1,18 @@
 """Soil bin shared by the tool scenarios (furrow opener, bulldozing plate, rotary tiller).
 
-Filling and settling
---------------------
-The bin ``[0, L] x [0, W] x [0, H]`` is filled with spheres on a jittered hexagonal
-close-packed lattice (:func:`soilcal.dem.factories.lattice_fill`, spacing 2.02 r_max) with
-radii uniform by number on ``[r (1 - spread), r (1 + spread)]`` (Yangtze clay loam: 8 mm,
-0.9-1.1 times, Sec. 2.2.4 of Zeng et al. 2023), then settled under gravity against a floor
-and side walls (periodic in y when the bin is a slab of a wider tool, see the scenarios)
-for 70 % of ``settle_time`` (or until the translational kinetic energy per particle falls
-below ``0.5 m_mean (1e-3 m/s)^2``); the lattice region is 1.3 times the fill height, and the
-particles whose top is above the fill height (plus half a radius) are then removed and the
-rest settles for the remaining 30 %, so the surface ends close to the fill height.  The bin walls are of the soil
-material, so a settled bin depends on the soil-soil parameters and the soil's intrinsic
-properties only: design points that change only soil-steel parameters reuse it.
+Filling and settling -------------------- The bin ``[0, L] x [0, W] x [0, H]`` is filled
+with spheres on a jittered hexagonal close-packed lattice
+(:func:`soilcal.dem.factories.lattice_fill`, spacing 2.02 r_max) with radii uniform by
+number on ``[r (1 - spread), r (1 + spread)]`` (Yangtze clay loam: 8 mm, 0.9-1.1 times, Sec.
+2.2.4 of Zeng et al. 2023), then settled under gravity against a floor and side walls
+(periodic in y when the bin is a slab of a wider tool, see the scenarios) for 70 % of
+``settle_time`` (or until the translational kinetic energy per particle falls below ``0.5
+m_mean (1e-3 m/s)^2``); the lattice region is 1.3 times the fill height, and the particles
+whose top is above the fill height (plus half a radius) are then removed and the rest
+settles for the remaining 30 %, so the surface ends close to the fill height.  The bin walls
+are of the soil material, so a settled bin depends on the soil-soil parameters and the
+soil's intrinsic properties only: design points that change only soil-steel parameters reuse
+it.
 
 The soil surface level is the median over lateral columns (width 2 r_max) of the highest
 particle top ``z_i + r_i`` (:func:`surface_level`); a tool's working depth is measured from
@@ -92,11 +92,12 @@ class BinSpec:
 
 def apply_preset(setup: dict, defaults: dict, settings: dict) -> dict:
     """Setup with the preset's discretisation: a preset value replaces the setup's value
-    unless the user changed that value from the named setup's default (``defaults``); keys
+    unless the user set it (a value that differs from the named setup's default
+    ``defaults``, or a key the named setup does not have, e.g. ``stiffness_scale``); keys
     the preset leaves at None keep the setup's value."""
     s = dict(setup)
     for k, v in settings.items():
-        user = k in setup and k in defaults and setup[k] != defaults[k]
+        user = k in setup and (k not in defaults or setup[k] != defaults[k])
         if v is not None and not user:
             s[k] = v
         elif k not in s:

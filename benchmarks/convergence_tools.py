@@ -1,0 +1,158 @@
+"""Convergence of the tool scenarios: response vs particle size (count), stiffness scaling, seed.
+
+For each tool scenario (furrow opener, bulldozing plate, rotary tiller) the quick preset is
+run at its own settings and with one factor changed at a time:
+
+* particle radius x ``radius_factors`` (particle count ~ factor^-3),
+* shear-modulus scale x ``stiffness_factors`` relative to the quick preset's scale (the JKR
+  surface energy follows gamma s^(2/5), soilcal.dem.scenarios.base.build_materials),
+* seed in ``seeds`` (bin packing and radii).
+
+Each run writes one row (scenario, factor, value, seed, particle count, steps, wall time,
+responses) to ``benchmarks/results/convergence/convergence_tools.csv`` and the figure
+``convergence_tools.png`` plots each scenario's responses against the three factors.
+
+    python benchmarks/convergence_tools.py --level reduced   # a few minutes on 2 cores
+    python benchmarks/convergence_tools.py --level full      # more levels and seeds
+"""
+
+from __future__ import annotations
+
+import argparse
+import csv
+import os
+import tempfile
+import time
+from pathlib import Path
+
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt  # noqa: E402
+
+from soilcal.dem.scenarios import bulldozing, furrow, rotary  # noqa: E402
+
+OUT = Path(__file__).resolve().parent / "results" / "convergence"
+
+CASES = {
+    "furrow": (furrow, "yangtze-opener", ("traction_N", "area_difference_dm2")),
+    "bulldozing": (bulldozing, "plate-line", ("horizontal_force_N", "vertical_force_N")),
+    "rotary": (rotary, "rpm-250", ("power_kW", "flatness_mm")),
+}
+LEVELS = {
+    "reduced": dict(radius=(1.0, 0.85), stiffness=(1.0, 3.0), seeds=(0, 1)),
+    "full": dict(radius=(1.25, 1.0, 0.85, 0.7), stiffness=(0.3, 1.0, 3.0, 10.0),
+                 seeds=(0, 1, 2, 3, 4)),
+}
+
+
+def _run(mod, setup_name, overrides, seed, threads):
+    setup = dict(mod.setups()[setup_name])
+    setup.update(overrides)
+    res = mod.run(setup, mod.paper_params(), "quick", seed=seed, threads=threads)
+    return res
+
+
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--level", choices=sorted(LEVELS), default="reduced")
+    ap.add_argument("--scenarios", default=",".join(CASES))
+    ap.add_argument("--out", default=str(OUT))
+    ap.add_argument("--threads", type=int, default=1,
+                    help="numba threads (1: a shared machine's second core stays free)")
+    args = ap.parse_args(argv)
+    lev = LEVELS[args.level]
+    out = Path(args.out)
+    out.mkdir(parents=True, exist_ok=True)
+    os.environ.setdefault("SOILCAL_SCENARIO_CACHE", tempfile.mkdtemp(prefix="soilcal-bins-"))
+    path = out / "convergence_tools.csv"
+    todo = args.scenarios.split(",")
+    rows = []
+    if path.exists():  # keep the rows of scenarios not rerun now
+        with open(path, newline="") as fh:
+            for r in csv.DictReader(fh):
+                if r["scenario"] not in todo:
+                    rows.append({k: _num(v) for k, v in r.items()})
+    for name in todo:
+        mod, setup_name, keys = CASES[name]
+        base = mod.PRESET_SETTINGS["quick"]
+        plan = [("base", 1.0, {}, 0)]
+        plan += [("radius", f, {"particle_radius": base["particle_radius"] * f}, 0)
+                 for f in lev["radius"] if f != 1.0]
+        plan += [("stiffness", f, {"stiffness_scale": base["stiffness_scale"] * f}, 0)
+                 for f in lev["stiffness"] if f != 1.0]
+        plan += [("seed", s, {}, s) for s in lev["seeds"] if s != 0]
+        for factor, value, ov, seed in plan:
+            t0 = time.perf_counter()
+            cpu0 = time.process_time()
+            try:
+                res = _run(mod, setup_name, ov, seed, args.threads)
+                resp = {k: res.responses[k] for k in keys}
+                n, steps, err = res.n_particles, res.steps, ""
+            except Exception as exc:  # record a failed point (e.g. blow-up) and go on
+                resp = {k: float("nan") for k in keys}
+                n, steps, err = 0, 0, f"{type(exc).__name__}: {exc}"
+            row = dict(scenario=name, setup=setup_name, factor=factor, value=value, seed=seed,
+                       particle_radius=ov.get("particle_radius", base["particle_radius"]),
+                       stiffness_scale=ov.get("stiffness_scale", base["stiffness_scale"]),
+                       n_particles=n, steps=steps, threads=args.threads,
+                       wall_s=round(time.perf_counter() - t0, 2),
+                       cpu_s=round(time.process_time() - cpu0, 2), error=err)
+            row.update({f"r:{k}": v for k, v in resp.items()})
+            rows.append(row)
+            print({k: row[k] for k in ("scenario", "factor", "value", "n_particles", "wall_s")},
+                  resp, err, flush=True)
+            _write(path, rows)
+    plot(rows, out / "convergence_tools.png")
+    print(path)
+    return 0
+
+
+def _num(text):
+    try:
+        return int(text)
+    except ValueError:
+        try:
+            return float(text)
+        except ValueError:
+            return text
+
+
+def _write(path, rows):
+    fields = []
+    for r in rows:
+        fields += [k for k in r if k not in fields]
+    with open(path, "w", newline="") as fh:
+        w = csv.DictWriter(fh, fieldnames=fields)
+        w.writeheader()
+        w.writerows(rows)
+
+
+def plot(rows, path):
+    names = list(dict.fromkeys(r["scenario"] for r in rows))
+    fig, axes = plt.subplots(len(names), 3, figsize=(12, 3.2 * len(names)), squeeze=False)
+    for i, name in enumerate(names):
+        rs = [r for r in rows if r["scenario"] == name]
+        keys = [k for k in rs[0] if k.startswith("r:")]
+        base = [r for r in rs if r["factor"] == "base"]
+        for j, (factor, xkey, label) in enumerate((
+                ("radius", "n_particles", "particles"),
+                ("stiffness", "stiffness_scale", "shear-modulus scale"),
+                ("seed", "seed", "seed"))):
+            ax = axes[i, j]
+            pts = base + [r for r in rs if r["factor"] == factor]
+            pts = sorted(pts, key=lambda r: r[xkey])
+            for k, mk in zip(keys, ("o-", "s--")):
+                ax.plot([r[xkey] for r in pts], [r[k] for r in pts], mk, label=k[2:])
+            ax.set_xlabel(label)
+            if factor == "stiffness":
+                ax.set_xscale("log")
+            ax.set_title(f"{name}: vs {label}", fontsize=9)
+            ax.legend(fontsize=7)
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
