@@ -58,6 +58,8 @@ def main(argv=None) -> int:
     ap.add_argument("--level", choices=sorted(LEVELS), default="reduced")
     ap.add_argument("--scenarios", default=",".join(CASES))
     ap.add_argument("--out", default=str(OUT))
+    ap.add_argument("--plot-only", action="store_true",
+                    help="redraw the figure from the existing CSV")
     ap.add_argument("--threads", type=int, default=1,
                     help="numba threads (1: a shared machine's second core stays free)")
     args = ap.parse_args(argv)
@@ -73,6 +75,11 @@ def main(argv=None) -> int:
             for r in csv.DictReader(fh):
                 if r["scenario"] not in todo:
                     rows.append({k: _num(v) for k, v in r.items()})
+    if args.plot_only:
+        with open(path, newline="") as fh:
+            plot([{k: _num(v) for k, v in r.items()} for r in csv.DictReader(fh)],
+                 out / "convergence_tools.png")
+        return 0
     for name in todo:
         mod, setup_name, keys = CASES[name]
         base = mod.PRESET_SETTINGS["quick"]
@@ -129,26 +136,30 @@ def _write(path, rows):
 
 
 def plot(rows, path):
+    """One row of panels per scenario: its two responses (left and right axes) against
+    the particle count, the shear-modulus scale and the seed, the base run in each panel."""
     names = list(dict.fromkeys(r["scenario"] for r in rows))
     fig, axes = plt.subplots(len(names), 3, figsize=(12, 3.2 * len(names)), squeeze=False)
     for i, name in enumerate(names):
-        rs = [r for r in rows if r["scenario"] == name]
-        keys = [k for k in rs[0] if k.startswith("r:")]
+        rs = [r for r in rows if r["scenario"] == name and not r.get("error")]
+        keys = CASES[name][2]
         base = [r for r in rs if r["factor"] == "base"]
         for j, (factor, xkey, label) in enumerate((
                 ("radius", "n_particles", "particles"),
                 ("stiffness", "stiffness_scale", "shear-modulus scale"),
                 ("seed", "seed", "seed"))):
             ax = axes[i, j]
-            pts = base + [r for r in rs if r["factor"] == factor]
-            pts = sorted(pts, key=lambda r: r[xkey])
-            for k, mk in zip(keys, ("o-", "s--")):
-                ax.plot([r[xkey] for r in pts], [r[k] for r in pts], mk, label=k[2:])
+            pts = sorted(base + [r for r in rs if r["factor"] == factor], key=lambda r: r[xkey])
+            xs = [r[xkey] for r in pts]
+            ax.plot(xs, [r[f"r:{keys[0]}"] for r in pts], "o-", color="C0")
+            ax.set_ylabel(keys[0], color="C0", fontsize=8)
+            ax2 = ax.twinx()
+            ax2.plot(xs, [r[f"r:{keys[1]}"] for r in pts], "s--", color="C1")
+            ax2.set_ylabel(keys[1], color="C1", fontsize=8)
             ax.set_xlabel(label)
             if factor == "stiffness":
                 ax.set_xscale("log")
             ax.set_title(f"{name}: vs {label}", fontsize=9)
-            ax.legend(fontsize=7)
     fig.tight_layout()
     fig.savefig(path, dpi=110)
     plt.close(fig)
