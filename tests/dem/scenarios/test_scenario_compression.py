@@ -26,8 +26,6 @@ def test_compression_stress_is_rod_force_over_area_and_rises():
     assert r["stress_10_kpa"] > r["stress_5_kpa"] > 0
     loaded = se["strain"] > 0.02
     assert np.corrcoef(se["strain"][loaded], se["stress_pa"][loaded])[0, 1] > 0.8
-    # the weight of the bed bounds the stress from below near the end: sigma A > 0
-    assert r["stress_max_kpa"] * 1e3 * area > 0
 
 
 def test_compression_validation():

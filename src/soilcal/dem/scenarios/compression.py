@@ -52,7 +52,7 @@ def setups() -> dict:
         # 0.63 (22 %), 0.315 mm (50 %).  Final strain not printed: 30 %.
         "guangxi-cohesive": dict(tube_diameter=0.100, tube_height=0.300, rod_diameter=0.099,
                                  load_mass=3.0, rod_speed=0.008, max_strain=0.30,
-                                 quick_height=0.040, sample_dz=0.0002, rest_speed=0.002,
+                                 quick_height=0.040, sample_dz=0.0002, rest_speed=0.005,
                                  max_settle_time=3.0, n_particles=None, radius=None,
                                  stiffness_scale=None, dt_fraction=None,
                                  paper_psd=[[0.00125, 14.0], [0.000625, 14.0],

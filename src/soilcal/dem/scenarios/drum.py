@@ -53,7 +53,7 @@ def setups() -> dict:
         # modeling": scaled particles 2.5, 5, 10 mm, 0.209 kg for the 25 % fill.
         "xinjiang-vineyard": dict(drum_diameter=0.100, drum_length=0.100, fill_fraction=0.25,
                                   rpm=7.0, wall_material="steel", end_material="steel",
-                                  rest_speed=0.002, max_settle_time=3.0,
+                                  rest_speed=0.005, max_settle_time=3.0,
                                   spin_time=None, transient_time=None, frame_every=0.1,
                                   n_particles=None, radius=None, stiffness_scale=None,
                                   dt_fraction=None,

@@ -17,7 +17,9 @@ the disc is pulled sideways at ``cover_speed`` (1 m/s) until clear of the outlet
 settles.
 
 Rest: the translational kinetic energy falls below 1/2 M v_rest^2 with M the total mass and
-v_rest = ``rest_speed`` (a mean speed of 2 mm/s by default), checked every 200 steps, with
+v_rest = ``rest_speed`` (a mean speed of 5 mm/s by default: resting beds keep a
+jitter of about 1/2 M (3 mm/s)^2 with the constant-torque rolling model, whose torque flips
+with the sign of a vanishing angular velocity), checked every 200 steps, with
 ``max_settle_time`` as an upper bound (the run then reports ``settled = 0``).
 
 Number of particles for a fill volume V (tube: pi D^2/4 h_fill; funnel: load mass /
@@ -29,12 +31,18 @@ Number of particles for a fill volume V (tube: pi D^2/4 h_fill; funnel: load mas
 default) for cylinders; for funnels r_q = outlet diameter / 16 (8 diameters across the
 outlet) and the load mass follows from N (the heap is then smaller than the paper's); soil
 shear modulus capped at 5e5 Pa (stiffness scaling, base.py).  ``paper``: the papers'
-particle sizes and masses, unscaled moduli.
+particle sizes and masses, unscaled moduli.  A setup's ``n_particles`` or ``radius`` (either
+preset) splits the tube fill or the funnel's ``load_mass`` into that many spheres or spheres
+of that radius.
 
-Walls: tube, funnel and cover are triangle meshes (``N_SEG`` = 36 facets around, vertices
-at R / cos(pi/36) so the facet mid-lines lie on the nominal radius R): triangles act on both
-sides, whereas the engine's analytic cylinder, cone and disc walls are one-sided and would
-push a sphere that reaches their back side (outside the tube or funnel, below the cover).
+Walls: the engine's analytic cylinder, cone and disc walls are one-sided: a sphere anywhere
+on their back side within the axial span of the face (outside a tube or funnel, below a disc)
+sees a negative distance and a huge overlap.  The tube is the analytic cylinder (spheres leave
+it only below its rim, so they never reach its back side); the funnel and its cover are
+triangle meshes (``N_SEG`` = 24 facets around, vertices at R / cos(pi/24) so the facet
+mid-lines lie on the nominal radius R), because spheres bouncing off the plate can reach the
+back side of a funnel's cone and the cover moves sideways over the plate; triangles act on
+both sides.
 
 Plate: the plane z = 0 (steel, 65Mn, or soil for the black-soil stage 1); spheres beyond the
 square plate's outline would have fallen off it: they are counted as ``n_lost`` and excluded
@@ -54,18 +62,18 @@ import numpy as np
 
 from soilcal.dem import measure
 from soilcal.dem.factories import PSD, CylinderRegion, UniformRadius, insert_random
-from soilcal.dem.geometry import cone_mesh, cylinder_mesh, disk_mesh
+from soilcal.dem.geometry import cone_mesh, disk_mesh
 from soilcal.dem.scenarios.base import (DemParams, Frames, Result, Timer, check, check_preset,
                                         make_simulation, rng, run_time, settle, threads_used)
 
 NAME = "repose"
 PHI = 0.6  # settled solid fraction used to size the fill
-N_SEG = 36  # facets of the tube and funnel meshes (facet mid-lines on the nominal radius)
+N_SEG = 24  # facets of the funnel and cover meshes (facet mid-lines on the nominal radius)
 
 
 def setups() -> dict:
     """Named setups; every number with the section of the paper it comes from."""
-    common = dict(rest_speed=0.002, max_settle_time=4.0, image=True, n_particles=None,
+    common = dict(rest_speed=0.005, max_settle_time=4.0, image=True, n_particles=None,
                   radius=None, stiffness_scale=None, dt_fraction=None, seed_stream="repose")
     cyl = dict(common, method="cylinder", wall_material="steel", plate_material="steel")
     fun = dict(common, method="funnel", wall_material="steel", plate_material="steel",
@@ -273,8 +281,8 @@ def run(setup: dict, params: DemParams, preset: str = "quick", seed: int = 0, th
         vol = sz["n"] * sz["dist"].mean_volume()
         h_ins = vol / (0.30 * math.pi * (R - sz["r_max"]) ** 2)
         tube_h = max(setup["tube_height"], h_ins + dmax)
-        tv, tt = cylinder_mesh(R / math.cos(math.pi / N_SEG), 0.0, tube_h, N_SEG)
-        tube = sim.add_mesh(tv, tt, setup["wall_material"], name="tube")
+        tube = sim.add_cylinder((0, 0, tube_h / 2), (0, 0, 1), R, tube_h / 2,
+                                setup["wall_material"], inner=True, name="tube")
         _plate(sim, setup)
         _insert(sim, CylinderRegion(R - 1.001 * sz["r_max"], 1.001 * sz["r_max"], h_ins), sz["dist"],
                 sz["n"], gen, source)
