@@ -135,7 +135,10 @@ def test_plane_equals_infinitely_large_sphere():
         assert np.allclose(a.wall_force[0], -(fa - grav), rtol=1e-12, atol=1e-15)
 
 
-def test_one_and_two_threads_identical():
+def test_one_and_two_threads_identical(monkeypatch):
+    from soilcal.dem import integrator
+
+    monkeypatch.setattr(integrator, "PARALLEL_MIN", 0)  # small system, parallel loops anyway
     out = []
     for nt in (1, 2):
         numba.set_num_threads(nt)

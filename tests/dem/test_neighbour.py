@@ -29,15 +29,20 @@ def test_lists_contain_every_pair_within_cutoff(rng, periodic):
     dist = np.sqrt((d**2).sum(-1))
     cut = r[:, None] + r[None, :] + sim.skin + sim.extra
     want = (dist < cut) & ~np.eye(len(r), dtype=bool)
-    nbr, cnt = sim._lists["nbr_a"], sim._lists["cnt_a"]
+    start, nbr = sim._lists["start_a"], sim._lists["nbr_a"]
+    rstart, rev = sim._lists["rstart"], sim._lists["rev"]
     for i in range(len(r)):
-        got = set(nbr[i, : cnt[i]].tolist())
-        assert got == set(np.nonzero(want[i])[0].tolist())
+        # half list: the partners j > i, sorted; reverse index: the pairs naming i
+        row = nbr[start[i]:start[i + 1]].tolist()
+        assert row == sorted(j for j in np.nonzero(want[i])[0].tolist() if j > i)
+        owners = np.searchsorted(start, rev[rstart[i]:rstart[i + 1]], side="right") - 1
+        assert owners.tolist() == sorted(j for j in np.nonzero(want[i])[0].tolist() if j < i)
 
 
-def test_list_width_grows_without_changing_results():
+def test_pair_buffers_grow_without_changing_results():
     # two large spheres (r = 3 mm) embedded in a lattice of small ones (r = 0.5 mm): a large
-    # sphere has about 60 partners within its cutoff, more than the initial list width
+    # sphere has about 60 partners within its cutoff; starting from a pair buffer of one
+    # pair per particle forces the buffers to grow during the run
     def build(k):
         L, h = 0.015, 1.25e-3
         sim = Simulation(table(E=1e8, mu=0.5), dt_fraction=0.2, box=(0, L, 0, L),
@@ -50,13 +55,13 @@ def test_list_width_grows_without_changing_results():
         sim.add_particles(big, 3e-3, "soil")
         sim.add_particles(x[keep], 0.5e-3, "soil")
         sim.add_plane((0, 0, 0), (0, 0, 1), "soil")
-        sim._k = k
+        sim._npair_per = k
         return sim
 
-    a, b = build(24), build(200)
+    a, b = build(1), build(200)
     a.run(1500)
     b.run(1500)
-    assert a._k > 24  # the narrow list had to grow
+    assert a._npair > a.n  # the small buffers had to grow
     assert np.array_equal(a.x, b.x) and np.array_equal(a.omega, b.omega)
 
 
@@ -89,3 +94,37 @@ def test_run_until_settled():
     assert sim.run_until_settled(ke_tol=1e-12, check_every=50, max_steps=200_000)
     assert sim.kinetic_energy() < 1e-12
     assert sim.step % 50 == 0 and sim.step < 200_000
+
+
+@pytest.mark.parametrize("periodic", [True, False])
+@pytest.mark.parametrize("lift", [0.0, 0.007])
+def test_wall_lists_equal_brute_force_with_binned_triangles(rng, periodic, lift):
+    # a finely meshed tilted plate (800 triangles, binned by cell) at two heights, an
+    # analytic plane and a cylinder (tested by every particle): the wall list of every
+    # particle must hold exactly the primitives within R + skin of its centre
+    from soilcal.dem.geometry import plate_mesh
+    from soilcal.dem.walls import prim_closest
+
+    L = 0.04
+    sim = random_box(rng, n=400, L=L, periodic=periodic)
+    sim.p.x[:, 2] *= 0.5
+    v, t = plate_mesh((L / 2, L / 2, 0.006 + lift), (1, 0, 0.2), (0, 1, 0), 0.05, 0.05,
+                      n_u=20, n_v=20)
+    sim.add_mesh(v, t, "soil")
+    sim.add_plane((0, 0, 0), (0, 0, 1), "soil")
+    sim.add_cylinder((L / 2, L / 2, 0), (0, 0, 1), 0.03, 0.05, "soil")
+    sim._kw = 32
+    sim.run(0)
+    wa, lists = sim._warr, sim._lists
+    assert wa["prim_kind"].shape[0] == 802
+    total = 0
+    for i in range(sim.n):
+        want = set()
+        for p in range(wa["prim_kind"].shape[0]):
+            d = prim_closest(wa["prim_kind"][p], wa["prim_par"], p, *sim.x[i])[0]
+            if d < sim.p.r[i] + sim.skin + sim.extra:
+                want.add(p)
+        got = set(lists["wnbr_a"][i, : lists["wcnt_a"][i]].tolist())
+        assert got == want
+        total += sum(1 for p in want if p < 800)
+    assert total > 50  # the plate is near many particles

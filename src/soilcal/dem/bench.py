@@ -79,5 +79,5 @@ def run_settle(n: int, steps: int, threads: int, cohesion: str = "none", seed: i
                 setup_s=round(t1 - t0, 4), load_avg_1min=os.getloadavg()[0],
                 particle_steps_per_s=float(sim.n * steps / wall_s) if wall_s > 0 else None,
                 peak_rss_mb=round(rss, 1), ke_final_J=sim.kinetic_energy(),
-                bed_top_m=zmax, neighbour_width=int(sim._k), skin_m=sim.skin,
+                bed_top_m=zmax, pairs_per_particle=round(float(sim._lists["start_a"][-1]) / sim.n, 3), skin_m=sim.skin,
                 list_builds=sim.n_rebuilds)

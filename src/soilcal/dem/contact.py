@@ -90,9 +90,8 @@ JKR_CONVENTION = {"edem": 1.0, "lammps": 2.0}  # w = factor * gamma
 # history slot layout (per particle and contact partner)
 H_XI = 0  # 3 tangential displacement
 H_MR = 3  # 3 rolling spring moment (epsd)
-H_TOUCH = 6  # 1 if in contact (JKR hysteresis)
-H_A = 7  # last JKR contact radius (Newton warm start)
-H_SIZE = 8
+H_A = 6  # last JKR contact radius (Newton warm start)
+H_SIZE = 8  # (slot 7 unused: rows of 64 bytes)
 
 SQ56 = math.sqrt(5.0 / 6.0)
 
@@ -176,15 +175,22 @@ def jkr_separation(rstar, estar, w):
 
 @njit(cache=True, inline="always")
 def contact_force(codes, pair, ma, mb, delta, nx, ny, nz, rvx, rvy, rvz, wrx, wry, wrz,
-                  ri, rstar, mstar, dt, hist, hi, hk):
-    """Force and torque on particle i from one contact; updates the history row ``hist``.
+                  ci, cj, rstar, mstar, dt, touching, hist, hk):
+    """Force on particle i and torques on both bodies from one contact; updates ``hist``.
 
-    delta: overlap; (nx,ny,nz): unit normal from partner towards i; (rvx..): relative
-    velocity of i's contact point w.r.t. the partner's; (wrx..): omega_i - omega_partner;
-    ri: distance from i's centre to the contact point used for moments; pair[ma, mb]: pair
-    parameters; hist[hi, hk]: history row (indices are passed instead of array views, which
-    would touch the shared reference count in every parallel iteration).
-    Returns (active, fx, fy, fz, tx, ty, tz): force and torque on i.
+    delta: overlap; (nx,ny,nz): unit normal from partner j towards i; (rvx..): relative
+    velocity of i's contact point w.r.t. j's; (wrx..): omega_i - omega_j; ci, cj: distances
+    from the centres of i and j to the contact point (moment arms; cj = 0 for a wall);
+    touching: the pair was in contact after the previous step (JKR keeps it on the
+    attractive branch); pair[ma, mb]: pair parameters; hist[hk]: history row (the index is
+    passed instead of an array view, which would touch the shared reference count in
+    every parallel iteration).
+
+    The force on j is exactly the opposite of the force on i.  With u = n x F_t, the
+    tangential torques are -c_i u on i and -c_j u on j; the constant rolling torque is
+    -mu_r |F_n,tot| c omega_rel/|omega_rel| on each body with its own omega_rel (so the
+    partner's is -(c_j/c_i) times i's) and the EPSD moment acts as +M_r on i and -M_r on j.
+    Returns (active, fx, fy, fz, tix, tiy, tiz, tjx, tjy, tjz).
     """
     estar = pair[ma, mb, P_ESTAR]
     w = pair[ma, mb, P_W]
@@ -192,24 +198,24 @@ def contact_force(codes, pair, ma, mb, delta, nx, ny, nz, rvx, rvy, rvz, wrx, wr
     if cohesive:
         if delta <= 0.0:
             # separation: delta < delta_c  <=>  delta^3 < -(27/64) pi^2 w^2 R* / E*^2
-            if (hist[hi, hk, H_TOUCH] == 0.0
-                    or delta * delta * delta < -pair[ma, mb, P_JKRK] * rstar):
-                for q in range(H_SIZE):
-                    hist[hi, hk, q] = 0.0
-                return False, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0
-        a = jkr_radius_from(delta, rstar, estar, w, hist[hi, hk, H_A])
-        hist[hi, hk, H_A] = a
+            if not touching or delta * delta * delta < -pair[ma, mb, P_JKRK] * rstar:
+                if touching:
+                    for q in range(H_SIZE):
+                        hist[hk, q] = 0.0
+                return False, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0
+        a = jkr_radius_from(delta, rstar, estar, w, hist[hk, H_A])
+        hist[hk, H_A] = a
         fne = jkr_force(a, rstar, estar, w)
         fpo2 = 3.0 * math.pi * w * rstar  # 2 |F_pulloff|
     else:
         if delta <= 0.0:
-            for q in range(H_SIZE):
-                hist[hi, hk, q] = 0.0
-            return False, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0
+            if touching:
+                for q in range(H_SIZE):
+                    hist[hk, q] = 0.0
+            return False, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0
         a = math.sqrt(rstar * delta)
         fne = 4.0 / 3.0 * estar * a * delta
         fpo2 = 0.0
-    hist[hi, hk, H_TOUCH] = 1.0
     beta = pair[ma, mb, P_BETA]
     sn = 2.0 * estar * a
     vn = rvx * nx + rvy * ny + rvz * nz
@@ -223,17 +229,20 @@ def contact_force(codes, pair, ma, mb, delta, nx, ny, nz, rvx, rvy, rvz, wrx, wr
     fx = fn * nx
     fy = fn * ny
     fz = fn * nz
-    tx = 0.0
-    ty = 0.0
-    tz = 0.0
+    tix = 0.0
+    tiy = 0.0
+    tiz = 0.0
+    tjx = 0.0
+    tjy = 0.0
+    tjz = 0.0
     if codes[2] == 0:
         vtx = rvx - vn * nx
         vty = rvy - vn * ny
         vtz = rvz - vn * nz
-        # rotate history into the current tangent plane, keeping its length
-        xx = hist[hi, hk, H_XI]
-        xy = hist[hi, hk, H_XI + 1]
-        xz = hist[hi, hk, H_XI + 2]
+        # project the history onto the current tangent plane, then add v_t dt
+        xx = hist[hk, H_XI]
+        xy = hist[hk, H_XI + 1]
+        xz = hist[hk, H_XI + 2]
         xn = xx * nx + xy * ny + xz * nz
         xx -= xn * nx
         xy -= xn * ny
@@ -261,32 +270,41 @@ def contact_force(codes, pair, ma, mb, delta, nx, ny, nz, rvx, rvy, rvz, wrx, wr
             ftx += ct * vtx
             fty += ct * vty
             ftz += ct * vtz
-        hist[hi, hk, H_XI] = xx
-        hist[hi, hk, H_XI + 1] = xy
-        hist[hi, hk, H_XI + 2] = xz
+        hist[hk, H_XI] = xx
+        hist[hk, H_XI + 1] = xy
+        hist[hk, H_XI + 2] = xz
         fx += ftx
         fy += fty
         fz += ftz
-        # moment arm from centre of i to contact point: -ri n
-        tx += -ri * (ny * ftz - nz * fty)
-        ty += -ri * (nz * ftx - nx * ftz)
-        tz += -ri * (nx * fty - ny * ftx)
+        # moment arms from the centres to the contact point: -ci n (i), +cj n (j)
+        ux = ny * ftz - nz * fty
+        uy = nz * ftx - nx * ftz
+        uz = nx * fty - ny * ftx
+        tix = -ci * ux
+        tiy = -ci * uy
+        tiz = -ci * uz
+        tjx = -cj * ux
+        tjy = -cj * uy
+        tjz = -cj * uz
     mur = pair[ma, mb, P_MUR]
     if codes[3] == 1 and mur > 0.0:
         wn = math.sqrt(wrx * wrx + wry * wry + wrz * wrz)
         if wn > 0.0:
-            m = -mur * fnf * ri / wn
-            tx += m * wrx
-            ty += m * wry
-            tz += m * wrz
+            m = mur * fnf / wn
+            tix -= m * ci * wrx
+            tiy -= m * ci * wry
+            tiz -= m * ci * wrz
+            tjx += m * cj * wrx
+            tjy += m * cj * wry
+            tjz += m * cj * wrz
     elif codes[3] == 2 and mur > 0.0:
         wd = wrx * nx + wry * ny + wrz * nz
         dtx = (wrx - wd * nx) * dt
         dty = (wry - wd * ny) * dt
         dtz = (wrz - wd * nz) * dt
-        mx = hist[hi, hk, H_MR]
-        my = hist[hi, hk, H_MR + 1]
-        mz = hist[hi, hk, H_MR + 2]
+        mx = hist[hk, H_MR]
+        my = hist[hk, H_MR + 1]
+        mz = hist[hk, H_MR + 2]
         old2 = mx * mx + my * my + mz * mz
         if old2 > 0.0:
             mn = mx * nx + my * ny + mz * nz
@@ -310,10 +328,13 @@ def contact_force(codes, pair, ma, mb, delta, nx, ny, nz, rvx, rvy, rvz, wrx, wr
             mx *= r
             my *= r
             mz *= r
-        hist[hi, hk, H_MR] = mx
-        hist[hi, hk, H_MR + 1] = my
-        hist[hi, hk, H_MR + 2] = mz
-        tx += mx
-        ty += my
-        tz += mz
-    return True, fx, fy, fz, tx, ty, tz
+        hist[hk, H_MR] = mx
+        hist[hk, H_MR + 1] = my
+        hist[hk, H_MR + 2] = mz
+        tix += mx
+        tiy += my
+        tiz += mz
+        tjx -= mx
+        tjy -= my
+        tjz -= mz
+    return True, fx, fy, fz, tix, tiy, tiz, tjx, tjy, tjz

@@ -20,6 +20,7 @@ from __future__ import annotations
 
 import math
 
+import numba
 import numpy as np
 
 from soilcal.dem import integrator as itg
@@ -65,10 +66,13 @@ class Simulation:
         self._warr = self.walls.arrays()
         self.step = 0
         self._need_forces = True
-        self._k = 24
+        self._npair_per = 8  # initial pair capacity per particle (grows on demand)
+        self._npair = 0
         self._kw = 4
         self._lists = None
         self._cells = np.zeros(1024, dtype=np.int64)
+        self._wcells = np.zeros(1024, dtype=np.int64)
+        self._wbins = np.zeros(1024, dtype=np.int64)
         self.wall_force = np.zeros((0, 3))
         self.wall_torque = np.zeros((0, 3))
         self.wall_log = np.zeros((0, 0, 6))
@@ -239,30 +243,42 @@ class Simulation:
                                  f"a periodic length >= {2 * cell:.4g} m (two neighbour cells)",
                                  float(self.box[2 * q + 1] - self.box[2 * q]))
         n = p.n
-        if self._lists is None or self._lists["nbr_a"].shape[0] != n:
-            self._alloc_lists(n, self._k, self._kw)
+        if self._lists is None or self._lists["start_a"].shape[0] != n + 1:
+            self._alloc_lists(n, self._npair_per * n, self._kw)
 
-    def _alloc_lists(self, n, k, kw, old=None):
+    def _alloc_lists(self, n, npair, kw, old=None):
+        """Pair buffers for ``npair`` pairs (CSR half lists), wall lists of width ``kw``;
+        with ``old``, the current lists are carried over."""
         L = {}
         for s in ("a", "b"):
-            L["nbr_" + s] = np.full((n, k), -1, dtype=np.int64)
-            L["cnt_" + s] = np.zeros(n, dtype=np.int64)
-            L["hist_" + s] = np.zeros((n, k, H_SIZE))
+            L["start_" + s] = np.zeros(n + 1, dtype=np.int64)
+            L["nbr_" + s] = np.full(npair, -1, dtype=np.int64)
+            L["hist_" + s] = np.zeros((npair, H_SIZE))
+            L["act_" + s] = np.zeros(npair, dtype=np.int8)
             L["wnbr_" + s] = np.full((n, kw), -1, dtype=np.int64)
             L["wcnt_" + s] = np.zeros(n, dtype=np.int64)
-            L["whist_" + s] = np.zeros((n, kw, H_SIZE))
+            # wall history rows i * kw + k
+            L["whist_" + s] = np.zeros((n * kw, H_SIZE))
+        L["rstart"] = np.zeros(n + 1, dtype=np.int64)
+        L["rev"] = np.zeros(npair, dtype=np.int64)
+        L["slot"] = np.zeros((npair, itg.S_SIZE))
         L["wslot"] = np.zeros((n, kw, 6))
+        L["xr"] = np.zeros((n, 4))
+        L["vw"] = np.zeros((n, 8))
         if old is not None:
-            ko = old["nbr_a"].shape[1]
+            npo = int(old["start_a"][-1])
             kwo = old["wnbr_a"].shape[1]
-            L["nbr_a"][:, :ko] = old["nbr_a"]
-            L["cnt_a"][:] = old["cnt_a"]
-            L["hist_a"][:, :ko] = old["hist_a"]
+            L["start_a"][:] = old["start_a"]
+            L["nbr_a"][:npo] = old["nbr_a"][:npo]
+            L["hist_a"][:npo] = old["hist_a"][:npo]
+            L["act_a"][:npo] = old["act_a"][:npo]
             L["wnbr_a"][:, :kwo] = old["wnbr_a"]
             L["wcnt_a"][:] = old["wcnt_a"]
-            L["whist_a"][:, :kwo] = old["whist_a"]
+            L["whist_a"].reshape(n, kw, H_SIZE)[:, :kwo] = old["whist_a"].reshape(n, kwo, H_SIZE)
+            L["xr"][:] = old["xr"]
+            L["vw"][:] = old["vw"]
         self._lists = L
-        self._k, self._kw = k, kw
+        self._npair, self._kw = npair, kw
 
     # ------------------------------------------------------------------ running
     def run(self, steps: int, ke_tol: float = -1.0, ke_every: int = 0,
@@ -288,6 +304,16 @@ class Simulation:
             reach = max(reach, float(np.linalg.norm(np.maximum(abs(lo - c), abs(hi - c)))))
         reach *= 1.5
         status = np.zeros(5, dtype=np.int64)
+        threads = numba.get_num_threads()
+        if p.n < itg.PARALLEL_MIN:
+            numba.set_num_threads(1)
+        try:
+            return self._run(steps, ke_tol, ke_every, wall_log_every, reach, status)
+        finally:
+            numba.set_num_threads(threads)
+
+    def _run(self, steps, ke_tol, ke_every, wall_log_every, reach, status):
+        p, wa = self.p, self._warr
         total = 0
         resume_mid = False
         step0 = self.step
@@ -297,10 +323,12 @@ class Simulation:
                 steps - total, self.step, resume_mid,
                 self._need_forces, float(ke_tol), int(ke_every), self.max_overlap,
                 int(wall_log_every), p.x, p.v, p.omega, p.f, p.t, p.r, p.m, p.inv_m, p.inv_i,
-                p.mat, p.disp, p.ovr, self.gravity, self.box, self.periodic, self.dt,
-                self.skin, self.extra, self._pair, self.codes, self._cells,
-                self._cidx(), self._cof(), L["nbr_a"], L["cnt_a"], L["hist_a"], L["nbr_b"], L["cnt_b"],
-                L["hist_b"], L["wnbr_a"], L["wcnt_a"], L["whist_a"], L["wnbr_b"], L["wcnt_b"],
+                p.mat, p.disp, p.ovr, L["xr"], L["vw"], self.gravity, self.box, self.periodic,
+                self.dt, self.skin, self.extra, self._pair, self.codes, self._cells,
+                self._cidx(), self._cof(), self._wcells, self._wbins, self._glob(),
+                L["start_a"], L["nbr_a"], L["hist_a"], L["act_a"], L["start_b"], L["nbr_b"],
+                L["hist_b"], L["act_b"], L["rstart"], L["rev"], L["slot"],
+                L["wnbr_a"], L["wcnt_a"], L["whist_a"], L["wnbr_b"], L["wcnt_b"],
                 L["whist_b"], L["wslot"], wa["prim_kind"], wa["prim_wall"], wa["prim_mat"],
                 wa["prim_par"], wa["prim_pts"], wa["prim_dirs"], wa["wall_vel"],
                 wa["wall_omega"], wa["wall_centre"], self.wall_force, self.wall_torque, reach,
@@ -308,17 +336,20 @@ class Simulation:
             total += done
             self.step = step0 + total
             code = int(status[0])
-            if code in (itg.NEED_K, itg.NEED_KW, itg.NEED_CELLS):
+            if code in (itg.NEED_PAIRS, itg.NEED_KW, itg.NEED_CELLS, itg.NEED_WBINS):
                 if status[4] == 1:
                     self._need_forces = False
                     resume_mid = True
                 need = int(status[3])
                 if code == itg.NEED_CELLS:
                     self._cells = np.zeros(2 * need, dtype=np.int64)
-                elif code == itg.NEED_K:
-                    self._alloc_lists(p.n, need + 8, self._kw, self._lists)
+                    self._wcells = np.zeros(2 * need, dtype=np.int64)
+                elif code == itg.NEED_WBINS:
+                    self._wbins = np.zeros(2 * need, dtype=np.int64)
+                elif code == itg.NEED_PAIRS:
+                    self._alloc_lists(p.n, int(1.25 * need) + 64, self._kw, self._lists)
                 else:
-                    self._alloc_lists(p.n, self._k, need + 2, self._lists)
+                    self._alloc_lists(p.n, self._npair, need + 2, self._lists)
                 continue
             self._need_forces = False
             if code == itg.BLOWUP:
@@ -336,6 +367,12 @@ class Simulation:
             self._cidx_arr = np.zeros(self.p.n, dtype=np.int64)
             self._cof_arr = np.zeros(self.p.n, dtype=np.int64)
         return self._cidx_arr
+
+    def _glob(self):
+        npr = self._warr["prim_kind"].shape[0]
+        if getattr(self, "_glob_arr", None) is None or self._glob_arr.shape[0] != npr:
+            self._glob_arr = np.zeros(npr, dtype=np.int64)
+        return self._glob_arr
 
     def _cof(self):
         self._cidx()

@@ -4,16 +4,29 @@ Per step (LIGGGHTS ``fix nve/sphere`` scheme)::
 
     v += F/m dt/2,  omega += T/I dt/2,  x += v dt          (kick-drift, periodic wrap)
     walls move by their rigid motion;  lists rebuilt if max |dx| > skin/2
-    F, T from gravity and contacts (each particle sums its own contacts: no scatter writes)
-    v += F/m dt/2,  omega += T/I dt/2                     (kick)
+    F, T from gravity and contacts                          (pair pass, then gather)
+    v += F/m dt/2,  omega += T/I dt/2                       (kick, fused with the gather)
 
-I = 2/5 m R^2 for a solid sphere.  Fixed particles have 1/m = 1/I = 0.  Wall reactions are
-stored per (particle, wall slot) and summed per wall serially after the force loop, so the
-wall force and torque are race free and independent of the thread count.
+I = 2/5 m R^2 for a solid sphere.  Fixed particles have 1/m = 1/I = 0.
 
-Stop codes (status[0]): 0 finished, 1 neighbour list too short, 2 wall list too short,
+Forces are evaluated in two race-free parallel passes:
+
+* pair pass: every pair of the half lists (j > i) is evaluated once; its force on i, the
+  torques on i and on j and the overlap go to the pair's slot, and the slot's touching flag
+  is set (Newton's third law: the force on j is the exact opposite);
+* gather pass: every particle sums gravity, its own slots and the slots that name it (the
+  reverse index, in increasing i), evaluates its wall contacts and kicks.
+
+The kick-drift pass also packs (x, y, z, R) and (v, omega, 1/m, material) per particle into
+two contiguous rows, so the pair pass reads one partner's data from two cache lines.  The
+summation order is fixed by the lists, never by the threads, so trajectories do not depend
+on the thread count.  Wall reactions are stored per (particle, wall slot) and summed per wall
+serially after the gather, so wall force and torque are race free too.
+
+Stop codes (status[0]): 0 finished, 1 pair buffers too short, 2 wall list too short,
 3 cell buffer too short, 4 blow-up (status[1] step, status[2] particle, reason in status[3]:
-1 overlap above the limit, 2 non-finite state), 5 settled (status[1] steps done).
+1 overlap above the limit, 2 non-finite state), 5 settled (status[1] steps done), 6 triangle
+bins too short.
 """
 
 from __future__ import annotations
@@ -22,30 +35,102 @@ import math
 
 from numba import njit, prange
 
-from soilcal.dem.contact import H_SIZE, H_TOUCH, contact_force
+from soilcal.dem.contact import H_SIZE, contact_force
 from soilcal.dem.neighbour import build_lists, min_image
 from soilcal.dem.walls import TRIANGLE, move_walls, prim_closest
 
-DONE, NEED_K, NEED_KW, NEED_CELLS, BLOWUP, SETTLED = 0, 1, 2, 3, 4, 5
+DONE, NEED_PAIRS, NEED_KW, NEED_CELLS, BLOWUP, SETTLED, NEED_WBINS = 0, 1, 2, 3, 4, 5, 6
 NBLK_GROUPS = 32
+# below this many particles a step is shorter than waking the worker threads three times
+# (milliseconds when other processes hold the cores): Simulation.run runs such systems on
+# one thread (results do not depend on the thread count)
+PARALLEL_MIN = 1024
+# pair slot layout: force on i (3), torque on i (3), torque on j (3), overlap
+S_F, S_TI, S_TJ, S_D, S_SIZE = 0, 3, 6, 9, 10
 
 
 @njit(cache=True, parallel=True)
-def compute_forces(x, v, om, r, m, inv_m, mat, f, t, ovr, gravity, box, periodic, dt,
-                   nbr, cnt, hist, pair, codes,
-                   prim_kind, prim_wall, prim_mat, prim_par, wall_vel, wall_omega, wall_centre,
-                   wnbr, wcnt, whist, wslot):
-    n = x.shape[0]
+def pair_forces(xr, vw, pair, codes, box, periodic, dt, start, nbr, hist, act, slot):
+    """Pair pass: evaluate every listed pair once; results and touching flags to its slot."""
+    n = xr.shape[0]
     L0 = box[1] - box[0]
     L1 = box[3] - box[2]
     h0 = 0.5 * L0
     h1 = 0.5 * L1
     p0 = periodic[0]
     p1 = periodic[1]
-    gx, gy, gz = gravity[0], gravity[1], gravity[2]
     # particles are processed in blocks of 64 dealt round-robin over NBLK_GROUPS groups, so
     # the threads share every region of the domain (balanced when contacts are unevenly
     # spread, e.g. a falling column over a settled bed); results do not depend on it
+    nblk = (n + 63) // 64
+    for c in prange(NBLK_GROUPS):
+        for blk in range(c, nblk, NBLK_GROUPS):
+            for i in range(blk * 64, min(n, blk * 64 + 64)):
+                xi, yi, zi, ri = xr[i, 0], xr[i, 1], xr[i, 2], xr[i, 3]
+                for k in range(start[i], start[i + 1]):
+                    j = nbr[k]
+                    dx = min_image(xi - xr[j, 0], p0, h0, L0)
+                    dy = min_image(yi - xr[j, 1], p1, h1, L1)
+                    dz = zi - xr[j, 2]
+                    rj = xr[j, 3]
+                    rs = ri + rj
+                    d2 = dx * dx + dy * dy + dz * dz
+                    touching = act[k] != 0
+                    if d2 >= rs * rs and not touching:
+                        continue
+                    ims = vw[i, 6] + vw[j, 6]
+                    if ims == 0.0:
+                        act[k] = 0
+                        continue
+                    d = math.sqrt(d2)
+                    invd = 1.0 / d
+                    nx = dx * invd
+                    ny = dy * invd
+                    nz = dz * invd
+                    delta = rs - d
+                    ci = ri - 0.5 * delta
+                    cj = rj - 0.5 * delta
+                    wxi, wyi, wzi = vw[i, 3], vw[i, 4], vw[i, 5]
+                    wxj, wyj, wzj = vw[j, 3], vw[j, 4], vw[j, 5]
+                    ax = ci * wxi + cj * wxj
+                    ay = ci * wyi + cj * wyj
+                    az = ci * wzi + cj * wzj
+                    rvx = vw[i, 0] - vw[j, 0] - (ay * nz - az * ny)
+                    rvy = vw[i, 1] - vw[j, 1] - (az * nx - ax * nz)
+                    rvz = vw[i, 2] - vw[j, 2] - (ax * ny - ay * nx)
+                    on, fx, fy, fz, tix, tiy, tiz, tjx, tjy, tjz = contact_force(
+                        codes, pair, int(vw[i, 7]), int(vw[j, 7]), delta, nx, ny, nz,
+                        rvx, rvy, rvz, wxi - wxj, wyi - wyj, wzi - wzj,
+                        ci, cj, ri * rj / rs, 1.0 / ims, dt, touching, hist, k)
+                    if on:
+                        act[k] = 1
+                        slot[k, 0] = fx
+                        slot[k, 1] = fy
+                        slot[k, 2] = fz
+                        slot[k, 3] = tix
+                        slot[k, 4] = tiy
+                        slot[k, 5] = tiz
+                        slot[k, 6] = tjx
+                        slot[k, 7] = tjy
+                        slot[k, 8] = tjz
+                        slot[k, 9] = delta
+                    else:
+                        act[k] = 0
+
+
+@njit(cache=True, parallel=True)
+def gather(x, v, om, r, m, inv_m, inv_i, mat, f, t, ovr, gravity, dt, kick, max_ovr,
+           start, act, slot, rstart, rev, pair, codes,
+           prim_kind, prim_wall, prim_mat, prim_par, wall_vel, wall_omega, wall_centre,
+           wnbr, wcnt, whist, wslot):
+    """Gather pass: per particle, gravity + pair slots + wall contacts; then the closing kick
+    if ``kick``.  Returns the number of particles with an overlap above max_ovr (of their
+    radius) or a non-finite velocity."""
+    n = x.shape[0]
+    KW = wnbr.shape[1]
+    gx, gy, gz = gravity[0], gravity[1], gravity[2]
+    h = 0.5 * dt
+    nbad = 0
     nblk = (n + 63) // 64
     for c in prange(NBLK_GROUPS):
         for blk in range(c, nblk, NBLK_GROUPS):
@@ -61,47 +146,27 @@ def compute_forces(x, v, om, r, m, inv_m, mat, f, t, ovr, gravity, box, periodic
                 tx = 0.0
                 ty = 0.0
                 tz = 0.0
-                mo = 0.0
-                for k in range(cnt[i]):
-                    j = nbr[i, k]
-                    dx = min_image(xi - x[j, 0], p0, h0, L0)
-                    dy = min_image(yi - x[j, 1], p1, h1, L1)
-                    dz = zi - x[j, 2]
-                    rj = r[j]
-                    rs = ri + rj
-                    d2 = dx * dx + dy * dy + dz * dz
-                    if d2 >= rs * rs and hist[i, k, H_TOUCH] == 0.0:
-                        continue
-                    ims = imi + inv_m[j]
-                    if ims == 0.0:
-                        continue
-                    d = math.sqrt(d2)
-                    invd = 1.0 / d
-                    nx = dx * invd
-                    ny = dy * invd
-                    nz = dz * invd
-                    delta = rs - d
-                    ci = ri - 0.5 * delta
-                    cj = rj - 0.5 * delta
-                    ax = ci * wxi + cj * om[j, 0]
-                    ay = ci * wyi + cj * om[j, 1]
-                    az = ci * wzi + cj * om[j, 2]
-                    rvx = vxi - v[j, 0] - (ay * nz - az * ny)
-                    rvy = vyi - v[j, 1] - (az * nx - ax * nz)
-                    rvz = vzi - v[j, 2] - (ax * ny - ay * nx)
-                    act, cfx, cfy, cfz, ctx, cty, ctz = contact_force(
-                        codes, pair, mi, mat[j], delta, nx, ny, nz, rvx, rvy, rvz,
-                        wxi - om[j, 0], wyi - om[j, 1], wzi - om[j, 2],
-                        ci, ri * rj / rs, 1.0 / ims, dt, hist, i, k)
-                    if act:
-                        fx += cfx
-                        fy += cfy
-                        fz += cfz
-                        tx += ctx
-                        ty += cty
-                        tz += ctz
-                        if delta > mo * ri:
-                            mo = delta / ri
+                dmax = 0.0
+                for k in range(start[i], start[i + 1]):
+                    if act[k] != 0:
+                        fx += slot[k, 0]
+                        fy += slot[k, 1]
+                        fz += slot[k, 2]
+                        tx += slot[k, 3]
+                        ty += slot[k, 4]
+                        tz += slot[k, 5]
+                        dmax = max(dmax, slot[k, 9])
+                for q in range(rstart[i], rstart[i + 1]):
+                    k = rev[q]
+                    if act[k] != 0:
+                        fx -= slot[k, 0]
+                        fy -= slot[k, 1]
+                        fz -= slot[k, 2]
+                        tx += slot[k, 6]
+                        ty += slot[k, 7]
+                        tz += slot[k, 8]
+                        dmax = max(dmax, slot[k, 9])
+                mo = dmax / ri
                 # walls with a face contact (bit w): their edge/vertex contacts are dropped
                 face_mask = 0
                 nwc = wcnt[i]
@@ -120,7 +185,9 @@ def compute_forces(x, v, om, r, m, inv_m, mat, f, t, ovr, gravity, box, periodic
                     dist, nx, ny, nz, cx, cy, cz, feat = prim_closest(prim_kind[p], prim_par, p,
                                                                       xi, yi, zi)
                     delta = ri - dist
-                    if delta <= 0.0 and whist[i, k, H_TOUCH] == 0.0:
+                    row = i * KW + k
+                    touching = whist[row, H_SIZE - 1] != 0.0
+                    if delta <= 0.0 and not touching:
                         continue
                     if imi == 0.0:
                         continue
@@ -142,7 +209,7 @@ def compute_forces(x, v, om, r, m, inv_m, mat, f, t, ovr, gravity, box, periodic
                                         break
                         if dup:
                             for q in range(H_SIZE):
-                                whist[i, k, q] = 0.0
+                                whist[row, q] = 0.0
                             continue
                     w = prim_wall[p]
                     ci = ri - 0.5 * delta
@@ -156,10 +223,13 @@ def compute_forces(x, v, om, r, m, inv_m, mat, f, t, ovr, gravity, box, periodic
                     rvx = vxi - vwx - ci * (wyi * nz - wzi * ny)
                     rvy = vyi - vwy - ci * (wzi * nx - wxi * nz)
                     rvz = vzi - vwz - ci * (wxi * ny - wyi * nx)
-                    act, cfx, cfy, cfz, ctx, cty, ctz = contact_force(
+                    on, cfx, cfy, cfz, ctx, cty, ctz, _, _, _ = contact_force(
                         codes, pair, mi, prim_mat[p], delta, nx, ny, nz, rvx, rvy, rvz,
-                        wxi - ox, wyi - oy, wzi - oz, ci, ri, 1.0 / imi, dt, whist, i, k)
-                    if act:
+                        wxi - ox, wyi - oy, wzi - oz, ci, 0.0, ri, 1.0 / imi, dt, touching,
+                        whist, row)
+                    # the last history slot of a wall row is its touching flag
+                    whist[row, H_SIZE - 1] = 1.0 if on else 0.0
+                    if on:
                         fx += cfx
                         fy += cfy
                         fz += cfz
@@ -186,6 +256,25 @@ def compute_forces(x, v, om, r, m, inv_m, mat, f, t, ovr, gravity, box, periodic
                 t[i, 1] = ty
                 t[i, 2] = tz
                 ovr[i] = mo
+                if kick:
+                    a = imi * h
+                    b = inv_i[i] * h
+                    vxi += fx * a
+                    vyi += fy * a
+                    vzi += fz * a
+                    v[i, 0] = vxi
+                    v[i, 1] = vyi
+                    v[i, 2] = vzi
+                    om[i, 0] = wxi + tx * b
+                    om[i, 1] = wyi + ty * b
+                    om[i, 2] = wzi + tz * b
+                bad = 0
+                if not (mo <= max_ovr):
+                    bad = 1
+                if not (abs(vxi) + abs(vyi) + abs(vzi) < math.inf):
+                    bad = 1
+                nbad += bad
+    return nbad
 
 
 @njit(cache=True)
@@ -201,9 +290,13 @@ def reduce_wall_forces(wcnt, wnbr, wslot, prim_wall, wall_force, wall_torque):
 
 
 @njit(cache=True, parallel=True)
-def _kick_drift(x, v, om, f, t, inv_m, inv_i, disp, dt, box, periodic, skin2):
+def _kick_drift(x, v, om, f, t, r, inv_m, inv_i, mat, disp, xr, vw, dt, box, periodic, skin2,
+                drift):
+    """Opening kick and drift (if ``drift``), periodic wrap, displacement since the last
+    list build; packs (x, R) and (v, omega, 1/m, material) rows for the pair pass.
+    Returns the number of particles that moved more than half the skin."""
     n = x.shape[0]
-    h = 0.5 * dt
+    h = 0.5 * dt if drift else 0.0
     nfar = 0
     for i in prange(n):
         a = inv_m[i] * h
@@ -213,9 +306,10 @@ def _kick_drift(x, v, om, f, t, inv_m, inv_i, disp, dt, box, periodic, skin2):
         for q in range(3):
             v[i, q] += f[i, q] * a
             om[i, q] += t[i, q] * b
-            dq = v[i, q] * dt
-            x[i, q] += dq
-            disp[i, q] += dq
+            if drift:
+                dq = v[i, q] * dt
+                x[i, q] += dq
+                disp[i, q] += dq
             s2 += disp[i, q] * disp[i, q]
         if s2 > skin2:
             far = 1
@@ -227,28 +321,15 @@ def _kick_drift(x, v, om, f, t, inv_m, inv_i, disp, dt, box, periodic, skin2):
                     x[i, q] += L
                 elif x[i, q] >= box[2 * q + 1]:
                     x[i, q] -= L
+        for q in range(3):
+            xr[i, q] = x[i, q]
+            vw[i, q] = v[i, q]
+            vw[i, 3 + q] = om[i, q]
+        xr[i, 3] = r[i]
+        vw[i, 6] = inv_m[i]
+        vw[i, 7] = mat[i]
         nfar += far
     return nfar
-
-
-@njit(cache=True, parallel=True)
-def _kick(v, om, f, t, inv_m, inv_i, ovr, dt, max_ovr):
-    n = v.shape[0]
-    h = 0.5 * dt
-    nbad = 0
-    for i in prange(n):
-        a = inv_m[i] * h
-        b = inv_i[i] * h
-        for q in range(3):
-            v[i, q] += f[i, q] * a
-            om[i, q] += t[i, q] * b
-        bad = 0
-        if not (ovr[i] <= max_ovr):
-            bad = 1
-        if not (abs(v[i, 0]) + abs(v[i, 1]) + abs(v[i, 2]) < math.inf):
-            bad = 1
-        nbad += bad
-    return nbad
 
 
 @njit(cache=True)
@@ -261,54 +342,22 @@ def kinetic_translational(v, m, inv_m):
 
 
 @njit(cache=True)
-def _rebuild(swapped, x, r, box, periodic, skin, extra, cell_start, cell_idx, cell_of,
-             nbr_a, cnt_a, hist_a, nbr_b, cnt_b, hist_b, prim_kind, prim_par,
-             wnbr_a, wcnt_a, whist_a, wnbr_b, wcnt_b, whist_b):
-    if swapped:
-        return build_lists(x, r, box, periodic, skin, extra, cell_start, cell_idx, cell_of,
-                           nbr_b, cnt_b, hist_b, nbr_a, cnt_a, hist_a, prim_kind, prim_par,
-                           wnbr_b, wcnt_b, whist_b, wnbr_a, wcnt_a, whist_a)
-    return build_lists(x, r, box, periodic, skin, extra, cell_start, cell_idx, cell_of,
-                       nbr_a, cnt_a, hist_a, nbr_b, cnt_b, hist_b, prim_kind, prim_par,
-                       wnbr_a, wcnt_a, whist_a, wnbr_b, wcnt_b, whist_b)
-
-
-@njit(cache=True)
-def _forces(swapped, x, v, om, r, m, inv_m, mat, f, t, ovr, gravity, box, periodic, dt,
-            nbr_a, cnt_a, hist_a, nbr_b, cnt_b, hist_b, pair, codes, prim_kind, prim_wall,
-            prim_mat, prim_par, wall_vel, wall_omega, wall_centre,
-            wnbr_a, wcnt_a, whist_a, wnbr_b, wcnt_b, whist_b, wslot, wall_force, wall_torque):
-    if swapped:
-        compute_forces(x, v, om, r, m, inv_m, mat, f, t, ovr, gravity, box, periodic, dt,
-                       nbr_b, cnt_b, hist_b, pair, codes, prim_kind, prim_wall, prim_mat,
-                       prim_par, wall_vel, wall_omega, wall_centre, wnbr_b, wcnt_b, whist_b,
-                       wslot)
-        reduce_wall_forces(wcnt_b, wnbr_b, wslot, prim_wall, wall_force, wall_torque)
-    else:
-        compute_forces(x, v, om, r, m, inv_m, mat, f, t, ovr, gravity, box, periodic, dt,
-                       nbr_a, cnt_a, hist_a, pair, codes, prim_kind, prim_wall, prim_mat,
-                       prim_par, wall_vel, wall_omega, wall_centre, wnbr_a, wcnt_a, whist_a,
-                       wslot)
-        reduce_wall_forces(wcnt_a, wnbr_a, wslot, prim_wall, wall_force, wall_torque)
-
-
-@njit(cache=True)
 def run_loop(nsteps, step0, resume_mid, need_forces, ke_tol, ke_every, max_ovr, wlog_every,
-             x, v, om, f, t, r, m, inv_m, inv_i, mat, disp, ovr,
+             x, v, om, f, t, r, m, inv_m, inv_i, mat, disp, ovr, xr, vw,
              gravity, box, periodic, dt, skin, extra, pair, codes,
-             cell_start, cell_idx, cell_of,
-             nbr_a, cnt_a, hist_a, nbr_b, cnt_b, hist_b,
+             cell_start, cell_idx, cell_of, wcell_start, wcell_idx, glob,
+             start_a, nbr_a, hist_a, act_a, start_b, nbr_b, hist_b, act_b, rstart, rev, slot,
              wnbr_a, wcnt_a, whist_a, wnbr_b, wcnt_b, whist_b, wslot,
              prim_kind, prim_wall, prim_mat, prim_par, prim_pts, prim_dirs,
              wall_vel, wall_omega, wall_centre, wall_force, wall_torque, wall_reach, wlog,
              fstate, status):
     """Run up to nsteps steps; returns the number of completed steps.
 
-    The lists live in the *_a buffers on entry and on return.  need_forces: compute the
-    forces of the initial state first (fresh or modified system).  resume_mid: the first
-    step's kick-drift was already done by a call that stopped for a list reallocation.
-    fstate[0] carries the accumulated wall displacement since the last rebuild, fstate[1]
-    counts list builds.
+    The lists live in the *_a buffers on entry and on return (a rebuild writes the other
+    buffer and the two swap roles).  need_forces: compute the forces of the initial state
+    first (fresh or modified system).  resume_mid: the first step's kick-drift was already
+    done by a call that stopped for a buffer reallocation.  fstate[0] carries the
+    accumulated wall displacement since the last rebuild, fstate[1] counts list builds.
     """
     n = x.shape[0]
     skin2 = 0.25 * skin * skin
@@ -323,47 +372,44 @@ def run_loop(nsteps, step0, resume_mid, need_forces, ke_tol, ke_every, max_ovr, 
         vv = math.sqrt(wall_vel[w, 0] ** 2 + wall_vel[w, 1] ** 2 + wall_vel[w, 2] ** 2)
         oo = math.sqrt(wall_omega[w, 0] ** 2 + wall_omega[w, 1] ** 2 + wall_omega[w, 2] ** 2)
         wstep = max(wstep, (vv + oo * wall_reach) * dt)
-    if need_forces:
-        code, need = _rebuild(swapped, x, r, box, periodic, skin, extra, cell_start, cell_idx,
-                              cell_of, nbr_a, cnt_a, hist_a, nbr_b, cnt_b, hist_b, prim_kind,
-                              prim_par, wnbr_a, wcnt_a, whist_a, wnbr_b, wcnt_b, whist_b)
-        if code != 0:
-            status[0] = code
-            status[3] = need
-            return 0
-        swapped = True
-        disp[:, :] = 0.0
-        fstate[1] += 1.0
-        fstate[0] = 0.0
-        _forces(swapped, x, v, om, r, m, inv_m, mat, f, t, ovr, gravity, box, periodic, dt,
-                nbr_a, cnt_a, hist_a, nbr_b, cnt_b, hist_b, pair, codes, prim_kind, prim_wall,
-                prim_mat, prim_par, wall_vel, wall_omega, wall_centre,
-                wnbr_a, wcnt_a, whist_a, wnbr_b, wcnt_b, whist_b, wslot, wall_force, wall_torque)
-    rebuild = resume_mid
+    rebuild = need_forces or resume_mid
     done = 0
-    for s in range(nsteps):
-        if s > 0 or not resume_mid:
-            nfar = _kick_drift(x, v, om, f, t, inv_m, inv_i, disp, dt, box, periodic, skin2)
+    for s in range(-1 if need_forces else 0, nsteps):
+        first = s == -1
+        if first or s > 0 or not resume_mid:
+            # s == -1: no motion, only the packed rows for the initial forces
+            nfar = _kick_drift(x, v, om, f, t, r, inv_m, inv_i, mat, disp, xr, vw, dt, box,
+                               periodic, skin2, not first)
             if nfar > 0:
                 rebuild = True
-            if wstep > 0.0:
+            if wstep > 0.0 and not first:
                 move_walls(dt, prim_wall, prim_par, prim_pts, prim_dirs, wall_vel,
                            wall_omega, wall_centre)
                 fstate[0] += wstep
                 if fstate[0] > 0.5 * skin:
                     rebuild = True
         if rebuild:
-            code, need = _rebuild(swapped, x, r, box, periodic, skin, extra, cell_start,
-                                  cell_idx, cell_of, nbr_a, cnt_a, hist_a, nbr_b, cnt_b, hist_b,
-                                  prim_kind, prim_par, wnbr_a, wcnt_a, whist_a, wnbr_b, wcnt_b,
-                                  whist_b)
+            if swapped:
+                code, need = build_lists(
+                    x, r, box, periodic, skin, extra, cell_start, cell_idx, cell_of,
+                    start_b, nbr_b, hist_b, act_b, start_a, nbr_a, hist_a, act_a,
+                    rstart, rev,
+                    prim_kind, prim_par, wcell_start, wcell_idx, glob,
+                    wnbr_b, wcnt_b, whist_b, wnbr_a, wcnt_a, whist_a)
+            else:
+                code, need = build_lists(
+                    x, r, box, periodic, skin, extra, cell_start, cell_idx, cell_of,
+                    start_a, nbr_a, hist_a, act_a, start_b, nbr_b, hist_b, act_b,
+                    rstart, rev,
+                    prim_kind, prim_par, wcell_start, wcell_idx, glob,
+                    wnbr_a, wcnt_a, whist_a, wnbr_b, wcnt_b, whist_b)
             if code != 0:
-                status[0] = code
-                status[1] = step0 + s
+                status[0] = NEED_WBINS if code == 5 else code
+                status[1] = step0 + max(s, 0)
                 status[3] = need
-                status[4] = 1
+                status[4] = 0 if first else 1
                 if swapped:
-                    _copy_lists(nbr_b, cnt_b, hist_b, nbr_a, cnt_a, hist_a,
+                    _copy_lists(start_b, nbr_b, hist_b, act_b, start_a, nbr_a, hist_a, act_a,
                                 wnbr_b, wcnt_b, whist_b, wnbr_a, wcnt_a, whist_a)
                 return done
             swapped = not swapped
@@ -371,11 +417,24 @@ def run_loop(nsteps, step0, resume_mid, need_forces, ke_tol, ke_every, max_ovr, 
             fstate[1] += 1.0
             fstate[0] = 0.0
             disp[:, :] = 0.0
-        _forces(swapped, x, v, om, r, m, inv_m, mat, f, t, ovr, gravity, box, periodic, dt,
-                nbr_a, cnt_a, hist_a, nbr_b, cnt_b, hist_b, pair, codes, prim_kind, prim_wall,
-                prim_mat, prim_par, wall_vel, wall_omega, wall_centre,
-                wnbr_a, wcnt_a, whist_a, wnbr_b, wcnt_b, whist_b, wslot, wall_force, wall_torque)
-        nbad = _kick(v, om, f, t, inv_m, inv_i, ovr, dt, max_ovr)
+        if swapped:
+            pair_forces(xr, vw, pair, codes, box, periodic, dt, start_b, nbr_b, hist_b,
+                        act_b, slot)
+            nbad = gather(x, v, om, r, m, inv_m, inv_i, mat, f, t, ovr, gravity, dt,
+                          not first, max_ovr, start_b, act_b, slot, rstart, rev, pair,
+                          codes, prim_kind, prim_wall, prim_mat, prim_par, wall_vel,
+                          wall_omega, wall_centre, wnbr_b, wcnt_b, whist_b, wslot)
+            reduce_wall_forces(wcnt_b, wnbr_b, wslot, prim_wall, wall_force, wall_torque)
+        else:
+            pair_forces(xr, vw, pair, codes, box, periodic, dt, start_a, nbr_a, hist_a,
+                        act_a, slot)
+            nbad = gather(x, v, om, r, m, inv_m, inv_i, mat, f, t, ovr, gravity, dt,
+                          not first, max_ovr, start_a, act_a, slot, rstart, rev, pair,
+                          codes, prim_kind, prim_wall, prim_mat, prim_par, wall_vel,
+                          wall_omega, wall_centre, wnbr_a, wcnt_a, whist_a, wslot)
+            reduce_wall_forces(wcnt_a, wnbr_a, wslot, prim_wall, wall_force, wall_torque)
+        if first:
+            continue
         done = s + 1
         status[1] = step0 + done
         if wlog_every > 0 and (step0 + done) % wlog_every == 0:
@@ -403,17 +462,19 @@ def run_loop(nsteps, step0, resume_mid, need_forces, ke_tol, ke_every, max_ovr, 
                 status[0] = SETTLED
                 break
     if swapped:
-        _copy_lists(nbr_b, cnt_b, hist_b, nbr_a, cnt_a, hist_a,
+        _copy_lists(start_b, nbr_b, hist_b, act_b, start_a, nbr_a, hist_a, act_a,
                     wnbr_b, wcnt_b, whist_b, wnbr_a, wcnt_a, whist_a)
     return done
 
 
 @njit(cache=True)
-def _copy_lists(nbr_b, cnt_b, hist_b, nbr_a, cnt_a, hist_a,
+def _copy_lists(start_b, nbr_b, hist_b, act_b, start_a, nbr_a, hist_a, act_a,
                 wnbr_b, wcnt_b, whist_b, wnbr_a, wcnt_a, whist_a):
-    nbr_a[:, :] = nbr_b
-    cnt_a[:] = cnt_b
-    hist_a[:, :, :] = hist_b
+    start_a[:] = start_b
+    npair = start_b[start_b.shape[0] - 1]
+    nbr_a[:npair] = nbr_b[:npair]
+    hist_a[:npair, :] = hist_b[:npair, :]
+    act_a[:npair] = act_b[:npair]
     wnbr_a[:, :] = wnbr_b
     wcnt_a[:] = wcnt_b
-    whist_a[:, :, :] = whist_b
+    whist_a[:, :] = whist_b

@@ -4,25 +4,37 @@ Cell list: cubic-ish cells of edge >= 2 R_max + skin + s_c (s_c: largest JKR sep
 range), particles counting-sorted by cell index (x fastest).  Periodic dimensions (x, y) use
 the box and the minimum-image convention, so the box must be at least two cells wide.
 
-Verlet list: for every particle i the full list of partners j (both i-j and j-i are stored)
-with |x_i - x_j| < R_i + R_j + skin + s_c.  The list is valid while no particle moved more
-than skin/2 since the build (then no pair can close the skin) and no wall moved more than
-skin/2.  Each list slot owns a contact-history row (tangential spring, rolling spring,
-touching flag), keyed by partner id: on rebuild every surviving pair copies its row from the
-old list, so history is never lost while two particles stay within the cutoff.
+Verlet list: a half list, for every particle i the partners j > i with
+|x_i - x_j| < R_i + R_j + skin + s_c, sorted by j, so that each pair is evaluated once (LIGGGHTS
+``newton on``).  Rows are stored compactly (CSR): the partners of i are
+nbr[start[i]:start[i+1]], and every per-pair array (history, touching flag, pair results) is
+indexed by the same pair index, so a particle's pairs are contiguous in memory.  A reverse index lists, for every particle j, the slots (i, k) of the lists
+that name j, in increasing i, so that each particle sums its own pair results in a fixed
+order without scatter writes.  The lists are valid while no particle moved more than skin/2
+since the build (then no pair can close the skin) and no wall moved more than skin/2.  Each
+list slot owns a contact-history row (tangential spring, rolling spring, JKR radius) and a
+touching flag; on rebuild every surviving pair copies both from the old list (a merge of the
+two sorted lists), so history is never lost while two particles stay within the cutoff.
 
-Walls: each particle also lists the wall primitives within R_i + skin + s_c.
+Walls: each particle also lists the wall primitives within R_i + skin + s_c (at most KW;
+wall history row i * KW + k).  Unbounded
+primitives (planes, cylinders, cones, rectangles, disks) are tested by every particle;
+triangles are binned into the cells their bounding box, grown by the cutoff, overlaps, and
+tested only by the particles of those cells.
 
-Everything runs in parallel over particles; each particle writes only its own rows.
+The particle loop runs in parallel; each particle writes only its own rows.  The reverse
+index and the triangle bins are filled serially, so their order never depends on the thread
+count.
 """
 
 from __future__ import annotations
 
 import math
 
+import numpy as np
 from numba import njit, prange
 
-from soilcal.dem.walls import prim_closest
+from soilcal.dem.walls import TRIANGLE, prim_closest
 
 
 @njit(cache=True)
@@ -71,20 +83,144 @@ def _range(c, nc, per):
     return lo, hi
 
 
-@njit(cache=True)
-def build_lists(x, r, box, periodic, skin, extra, cell_start, cell_idx, cell_of,
-                nbr_old, cnt_old, hist_old, nbr_new, cnt_new, hist_new,
-                prim_kind, prim_par, wnbr_old, wcnt_old, whist_old, wnbr_new, wcnt_new, whist_new):
-    """Rebuild particle and wall lists into *_new, copying history from *_old.
+@njit(cache=True, inline="always")
+def _tri_cells(prim_par, p, q, cut, lo, cs, nc, per):
+    """Cell range [c0, c1] along axis q covered by triangle p grown by cut (c0 > c1: none)."""
+    mn = min(prim_par[p, q], prim_par[p, 3 + q], prim_par[p, 6 + q]) - cut
+    mx = max(prim_par[p, q], prim_par[p, 3 + q], prim_par[p, 6 + q]) + cut
+    c0 = int(math.floor((mn - lo) / cs))
+    c1 = int(math.floor((mx - lo) / cs))
+    if per:
+        if c1 - c0 + 1 >= nc:
+            return 0, nc - 1
+        return c0, c1
+    if c1 < 0 or c0 > nc - 1:
+        return 1, 0
+    return max(c0, 0), min(c1, nc - 1)
 
-    Returns (status, need): status 0 ok, 1 particle list too short (need = required width),
-    2 wall list too short, 3 cell buffer too short (need = cells).
+
+@njit(cache=True)
+def _bin_triangles(prim_kind, prim_par, cut, lo0, cs0, n0, per0, lo1, cs1, n1, per1,
+                   lo2, cs2, n2, wcell_start, wcell_idx, glob):
+    """Bin triangle primitives by cell (counting sort); other kinds go to ``glob``.
+
+    Returns (n_global, status, need): status 0 ok, 5 bin buffer too short (need entries).
+    """
+    ncell = n0 * n1 * n2
+    for c in range(ncell + 1):
+        wcell_start[c] = 0
+    ng = 0
+    total = 0
+    for sweep in range(2):
+        for p in range(prim_kind.shape[0]):
+            if prim_kind[p] != TRIANGLE:
+                if sweep == 0:
+                    glob[ng] = p
+                    ng += 1
+                continue
+            ax, bx = _tri_cells(prim_par, p, 0, cut, lo0, cs0, n0, per0)
+            ay, by = _tri_cells(prim_par, p, 1, cut, lo1, cs1, n1, per1)
+            az, bz = _tri_cells(prim_par, p, 2, cut, lo2, cs2, n2, False)
+            for zz in range(az, bz + 1):
+                for yy0 in range(ay, by + 1):
+                    yy = yy0 % n1
+                    for xx0 in range(ax, bx + 1):
+                        c = xx0 % n0 + n0 * (yy + n1 * zz)
+                        if sweep == 0:
+                            wcell_start[c + 1] += 1
+                            total += 1
+                        else:
+                            q = wcell_start[c + 1]
+                            wcell_idx[q] = p
+                            wcell_start[c + 1] = q + 1
+        if sweep == 0:
+            if total > wcell_idx.shape[0]:
+                return ng, 5, total
+            for c in range(ncell):
+                wcell_start[c + 1] += wcell_start[c]
+            for c in range(ncell, 0, -1):
+                wcell_start[c] = wcell_start[c - 1]
+    return ng, 0, 0
+
+
+@njit(cache=True, inline="always")
+def _cell_ranges(c, n0, n1, n2, p0, p1):
+    cx = c % n0
+    cy = (c // n0) % n1
+    cz = c // (n0 * n1)
+    a0, b0 = _range(cx, n0, p0)
+    a1, b1 = _range(cy, n1, p1)
+    a2, b2 = _range(cz, n2, False)
+    return cx, cy, cz, a0, b0, a1, b1, a2, b2
+
+
+@njit(cache=True)
+def _row(i, x, r, box, periodic, cut0, cell_start, cell_idx, cell_of, n0, n1, n2, out, o0,
+         fill):
+    """Partners j > i of particle i within the cutoff; if ``fill`` they are written sorted
+    to out[o0:]; returns their number."""
+    L0 = box[1] - box[0]
+    L1 = box[3] - box[2]
+    h0 = 0.5 * L0
+    h1 = 0.5 * L1
+    p0 = periodic[0]
+    p1 = periodic[1]
+    cx, cy, cz, a0, b0, a1, b1, a2, b2 = _cell_ranges(cell_of[i], n0, n1, n2, p0, p1)
+    xi, yi, zi, ri = x[i, 0], x[i, 1], x[i, 2], r[i]
+    cnt = 0
+    for dz in range(a2, b2 + 1):
+        zz = cz + dz
+        for dy in range(a1, b1 + 1):
+            yy = cy + dy
+            if yy < 0:
+                yy += n1
+            elif yy >= n1:
+                yy -= n1
+            for dx in range(a0, b0 + 1):
+                xx = cx + dx
+                if xx < 0:
+                    xx += n0
+                elif xx >= n0:
+                    xx -= n0
+                cc = xx + n0 * (yy + n1 * zz)
+                for q in range(cell_start[cc], cell_start[cc + 1]):
+                    j = cell_idx[q]
+                    if j <= i:
+                        continue
+                    ddx = min_image(xi - x[j, 0], p0, h0, L0)
+                    ddy = min_image(yi - x[j, 1], p1, h1, L1)
+                    ddz = zi - x[j, 2]
+                    cut = ri + r[j] + cut0
+                    if ddx * ddx + ddy * ddy + ddz * ddz < cut * cut:
+                        if fill:
+                            # insertion into the sorted row
+                            s = o0 + cnt
+                            while s > o0 and out[s - 1] > j:
+                                out[s] = out[s - 1]
+                                s -= 1
+                            out[s] = j
+                        cnt += 1
+    return cnt
+
+
+@njit(cache=True, parallel=True)
+def build_lists(x, r, box, periodic, skin, extra, cell_start, cell_idx, cell_of,
+                start_old, nbr_old, hist_old, act_old, start_new, nbr_new, hist_new, act_new,
+                rstart, rev, prim_kind, prim_par, wcell_start, wcell_idx, glob,
+                wnbr_old, wcnt_old, whist_old, wnbr_new, wcnt_new, whist_new):
+    """Rebuild the half lists (CSR), reverse index and wall lists into *_new.
+
+    History rows and touching flags are copied from *_old.  Returns (status, need):
+    status 0 ok, 1 pair buffers too short (need = pairs), 2 wall list too short (need =
+    width), 3 cell buffer too short (need = cells), 5 triangle bins too short (need =
+    entries).
     """
     n = x.shape[0]
-    K = nbr_new.shape[1]
+    P = nbr_new.shape[0]
     KW = wnbr_new.shape[1]
-    H = hist_new.shape[2]
+    H = hist_new.shape[1]
     if n == 0:
+        start_new[0] = 0
         return 0, 0
     rmax = 0.0
     mn0, mn1, mn2 = x[0, 0], x[0, 1], x[0, 2]
@@ -102,7 +238,7 @@ def build_lists(x, r, box, periodic, skin, extra, cell_start, cell_idx, cell_of,
     lo1, cs1, n1 = _grid_dim(box[2], box[3], periodic[1], mn1, mx1, cell)
     lo2, cs2, n2 = _grid_dim(0.0, 0.0, False, mn2, mx2, cell)
     ncell = n0 * n1 * n2
-    if ncell + 1 > cell_start.shape[0]:
+    if ncell + 1 > cell_start.shape[0] or ncell + 1 > wcell_start.shape[0]:
         return 3, ncell + 1
     for c in range(ncell + 1):
         cell_start[c] = 0
@@ -121,81 +257,86 @@ def build_lists(x, r, box, periodic, skin, extra, cell_start, cell_idx, cell_of,
         c = cell_of[i]
         cell_idx[cell_start[c + 1]] = i
         cell_start[c + 1] += 1
-    L0 = box[1] - box[0]
-    L1 = box[3] - box[2]
-    h0 = 0.5 * L0
-    h1 = 0.5 * L1
-    p0 = periodic[0]
-    p1 = periodic[1]
-    need = 0
-    wneed = 0
+    wcut = rmax + skin + extra
+    ng, code, wneed = _bin_triangles(prim_kind, prim_par, wcut, lo0, cs0, n0, periodic[0],
+                                     lo1, cs1, n1, periodic[1], lo2, cs2, n2,
+                                     wcell_start, wcell_idx, glob)
+    if code != 0:
+        return code, wneed
+    cut0 = skin + extra
+    # pass 1: row lengths -> offsets
     for i in prange(n):
+        start_new[i + 1] = _row(i, x, r, box, periodic, cut0, cell_start, cell_idx, cell_of,
+                                n0, n1, n2, nbr_new, 0, False)
+    start_new[0] = 0
+    for i in range(n):
+        start_new[i + 1] += start_new[i]
+    if start_new[n] > P:
+        return 1, start_new[n]
+    # pass 2: sorted rows, history merged from the old sorted rows; wall lists
+    for i in prange(n):
+        o0 = start_new[i]
+        o1 = start_new[i + 1]
+        _row(i, x, r, box, periodic, cut0, cell_start, cell_idx, cell_of, n0, n1, n2,
+             nbr_new, o0, True)
+        ko = start_old[i]
+        kend = start_old[i + 1]
+        for k in range(o0, o1):
+            j = nbr_new[k]
+            while ko < kend and nbr_old[ko] < j:
+                ko += 1
+            if ko < kend and nbr_old[ko] == j:
+                act_new[k] = act_old[ko]
+                for h in range(H):
+                    hist_new[k, h] = hist_old[ko, h]
+            else:
+                act_new[k] = 0
+                for h in range(H):
+                    hist_new[k, h] = 0.0
+        # walls: unbounded primitives, then the triangles binned in this particle's cell
         c = cell_of[i]
-        cx = c % n0
-        cy = (c // n0) % n1
-        cz = c // (n0 * n1)
         xi, yi, zi, ri = x[i, 0], x[i, 1], x[i, 2], r[i]
-        cnt = 0
-        a0, b0 = _range(cx, n0, p0)
-        a1, b1 = _range(cy, n1, p1)
-        a2, b2 = _range(cz, n2, False)
-        for dz in range(a2, b2 + 1):
-            zz = cz + dz
-            for dy in range(a1, b1 + 1):
-                yy = cy + dy
-                if yy < 0:
-                    yy += n1
-                elif yy >= n1:
-                    yy -= n1
-                for dx in range(a0, b0 + 1):
-                    xx = cx + dx
-                    if xx < 0:
-                        xx += n0
-                    elif xx >= n0:
-                        xx -= n0
-                    cc = xx + n0 * (yy + n1 * zz)
-                    for q in range(cell_start[cc], cell_start[cc + 1]):
-                        j = cell_idx[q]
-                        if j == i:
-                            continue
-                        ddx = min_image(xi - x[j, 0], p0, h0, L0)
-                        ddy = min_image(yi - x[j, 1], p1, h1, L1)
-                        ddz = zi - x[j, 2]
-                        cut = ri + r[j] + skin + extra
-                        if ddx * ddx + ddy * ddy + ddz * ddz < cut * cut:
-                            if cnt < K:
-                                nbr_new[i, cnt] = j
-                                for h in range(H):
-                                    hist_new[i, cnt, h] = 0.0
-                                for k in range(cnt_old[i]):
-                                    if nbr_old[i, k] == j:
-                                        for h in range(H):
-                                            hist_new[i, cnt, h] = hist_old[i, k, h]
-                                        break
-                            cnt += 1
-        if cnt > K:
-            need = max(need, cnt)  # noqa: numba max-reduction
-        cnt_new[i] = min(cnt, K)
-        # walls
         wc = 0
-        for p in range(prim_kind.shape[0]):
+        nb = wcell_start[c + 1] - wcell_start[c]
+        for t in range(ng + nb):
+            if t < ng:
+                p = glob[t]
+            else:
+                p = wcell_idx[wcell_start[c] + t - ng]
             d = prim_closest(prim_kind[p], prim_par, p, xi, yi, zi)[0]
             if d < ri + skin + extra:
                 if wc < KW:
                     wnbr_new[i, wc] = p
+                    row = i * KW + wc
                     for h in range(H):
-                        whist_new[i, wc, h] = 0.0
+                        whist_new[row, h] = 0.0
                     for k in range(wcnt_old[i]):
                         if wnbr_old[i, k] == p:
                             for h in range(H):
-                                whist_new[i, wc, h] = whist_old[i, k, h]
+                                whist_new[row, h] = whist_old[i * KW + k, h]
                             break
                 wc += 1
-        if wc > KW:
-            wneed = max(wneed, wc)
-        wcnt_new[i] = min(wc, KW)
-    if need > 0:
-        return 1, need
+        wcnt_new[i] = wc
+    wneed = 0
+    for i in range(n):
+        if wcnt_new[i] > KW:
+            wneed = max(wneed, wcnt_new[i])
+            wcnt_new[i] = KW
     if wneed > 0:
         return 2, wneed
+    # reverse index (pairs naming j as partner), in increasing i
+    for j in range(n + 1):
+        rstart[j] = 0
+    for k in range(start_new[n]):
+        rstart[nbr_new[k] + 1] += 1
+    for j in range(n):
+        rstart[j + 1] += rstart[j]
+    for i in range(n):
+        for k in range(start_new[i], start_new[i + 1]):
+            j = nbr_new[k]
+            rev[rstart[j]] = k
+            rstart[j] += 1
+    for j in range(n, 0, -1):
+        rstart[j] = rstart[j - 1]
+    rstart[0] = 0
     return 0, 0
