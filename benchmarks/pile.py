@@ -44,7 +44,7 @@ def main(argv=None):
                        soil_soil_rolling_friction=0.1)
     setup = dict(repose.setups()["cinnamon-soil"], name="cinnamon-soil")
     t0 = time.perf_counter()
-    repose.run(dict(setup, n_particles=60, fill_height=0.02, image=False), params, "quick", 0,
+    repose.run(dict(setup, n_particles=300, fill_height=0.02, image=False), params, "quick", 0,
                args.threads)  # compile / warm-up
     warm = time.perf_counter() - t0
     c0 = time.process_time()
