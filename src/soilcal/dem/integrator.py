@@ -11,11 +11,12 @@ I = 2/5 m R^2 for a solid sphere.  Fixed particles have 1/m = 1/I = 0.
 
 Forces are evaluated in two race-free parallel passes:
 
-* pair pass: every pair of the half lists (j > i) is evaluated once; its force on i, the
-  torques on i and on j and the overlap go to the pair's slot, and the slot's touching flag
-  is set (Newton's third law: the force on j is the exact opposite);
-* gather pass: every particle sums gravity, its own slots and the slots that name it (the
-  reverse index, in increasing i), evaluates its wall contacts and kicks.
+* pair pass: every pair of the half lists (j > i) is evaluated once by the thread that owns
+  row i; it adds gravity and the force and torque of its pairs on i to f[i], t[i] and writes
+  the partner's share (force on i, whose opposite acts on j (Newton's third law), torque on
+  j, overlap) to the pair's slot, and sets the slot's touching flag;
+* gather pass: every particle adds the slots that name it as partner (the reverse index, in
+  increasing i), evaluates its wall contacts and kicks.
 
 The kick-drift pass also packs (x, y, z, R) and (v, omega, 1/m, material) per particle into
 two contiguous rows, so the pair pass reads one partner's data from two cache lines.  The
@@ -45,13 +46,15 @@ NBLK_GROUPS = 32
 # (milliseconds when other processes hold the cores): Simulation.run runs such systems on
 # one thread (results do not depend on the thread count)
 PARALLEL_MIN = 1024
-# pair slot layout: force on i (3), torque on i (3), torque on j (3), overlap
-S_F, S_TI, S_TJ, S_D, S_SIZE = 0, 3, 6, 9, 10
+# pair slot layout (one 64-byte row): force on i (3), torque on j (3), overlap, unused
+S_F, S_TJ, S_D, S_SIZE = 0, 3, 6, 8
 
 
 @njit(cache=True, parallel=True)
-def pair_forces(xr, vw, pair, codes, box, periodic, dt, start, nbr, hist, act, slot):
-    """Pair pass: evaluate every listed pair once; results and touching flags to its slot."""
+def pair_forces(xr, vw, m, gravity, pair, codes, box, periodic, dt, start, nbr, hist, act,
+                slot, f, t, ovr):
+    """Pair pass: evaluate every listed pair once; gravity and the row's pairs to f[i], t[i]
+    (ovr[i]: largest overlap of the row), the partner's share and touching flag to the slot."""
     n = xr.shape[0]
     L0 = box[1] - box[0]
     L1 = box[3] - box[2]
@@ -59,6 +62,7 @@ def pair_forces(xr, vw, pair, codes, box, periodic, dt, start, nbr, hist, act, s
     h1 = 0.5 * L1
     p0 = periodic[0]
     p1 = periodic[1]
+    gx, gy, gz = gravity[0], gravity[1], gravity[2]
     # particles are processed in blocks of 64 dealt round-robin over NBLK_GROUPS groups, so
     # the threads share every region of the domain (balanced when contacts are unevenly
     # spread, e.g. a falling column over a settled bed); results do not depend on it
@@ -67,6 +71,13 @@ def pair_forces(xr, vw, pair, codes, box, periodic, dt, start, nbr, hist, act, s
         for blk in range(c, nblk, NBLK_GROUPS):
             for i in range(blk * 64, min(n, blk * 64 + 64)):
                 xi, yi, zi, ri = xr[i, 0], xr[i, 1], xr[i, 2], xr[i, 3]
+                fxi = m[i] * gx
+                fyi = m[i] * gy
+                fzi = m[i] * gz
+                txi = 0.0
+                tyi = 0.0
+                tzi = 0.0
+                dmax = 0.0
                 for k in range(start[i], start[i + 1]):
                     j = nbr[k]
                     dx = min_image(xi - xr[j, 0], p0, h0, L0)
@@ -104,31 +115,41 @@ def pair_forces(xr, vw, pair, codes, box, periodic, dt, start, nbr, hist, act, s
                         ci, cj, ri * rj / rs, 1.0 / ims, dt, touching, hist, k)
                     if on:
                         act[k] = 1
+                        fxi += fx
+                        fyi += fy
+                        fzi += fz
+                        txi += tix
+                        tyi += tiy
+                        tzi += tiz
+                        dmax = max(dmax, delta)
                         slot[k, 0] = fx
                         slot[k, 1] = fy
                         slot[k, 2] = fz
-                        slot[k, 3] = tix
-                        slot[k, 4] = tiy
-                        slot[k, 5] = tiz
-                        slot[k, 6] = tjx
-                        slot[k, 7] = tjy
-                        slot[k, 8] = tjz
-                        slot[k, 9] = delta
+                        slot[k, 3] = tjx
+                        slot[k, 4] = tjy
+                        slot[k, 5] = tjz
+                        slot[k, 6] = delta
                     else:
                         act[k] = 0
+                f[i, 0] = fxi
+                f[i, 1] = fyi
+                f[i, 2] = fzi
+                t[i, 0] = txi
+                t[i, 1] = tyi
+                t[i, 2] = tzi
+                ovr[i] = dmax
 
 
 @njit(cache=True, parallel=True)
-def gather(x, v, om, r, m, inv_m, inv_i, mat, f, t, ovr, gravity, dt, kick, max_ovr,
-           start, act, slot, rstart, rev, pair, codes,
+def gather(x, v, om, r, inv_m, inv_i, mat, f, t, ovr, dt, kick, max_ovr,
+           act, slot, rstart, rev, pair, codes,
            prim_kind, prim_wall, prim_mat, prim_par, wall_vel, wall_omega, wall_centre,
            wnbr, wcnt, whist, wslot):
-    """Gather pass: per particle, gravity + pair slots + wall contacts; then the closing kick
-    if ``kick``.  Returns the number of particles with an overlap above max_ovr (of their
-    radius) or a non-finite velocity."""
+    """Gather pass: per particle, the row sums of the pair pass (f, t, ovr) + the slots that
+    name it + wall contacts; then the closing kick if ``kick``.  Returns the number of
+    particles with an overlap above max_ovr (of their radius) or a non-finite velocity."""
     n = x.shape[0]
     KW = wnbr.shape[1]
-    gx, gy, gz = gravity[0], gravity[1], gravity[2]
     h = 0.5 * dt
     nbad = 0
     nblk = (n + 63) // 64
@@ -140,32 +161,23 @@ def gather(x, v, om, r, m, inv_m, inv_i, mat, f, t, ovr, gravity, dt, kick, max_
                 wxi, wyi, wzi = om[i, 0], om[i, 1], om[i, 2]
                 imi = inv_m[i]
                 mi = mat[i]
-                fx = m[i] * gx
-                fy = m[i] * gy
-                fz = m[i] * gz
-                tx = 0.0
-                ty = 0.0
-                tz = 0.0
-                dmax = 0.0
-                for k in range(start[i], start[i + 1]):
-                    if act[k] != 0:
-                        fx += slot[k, 0]
-                        fy += slot[k, 1]
-                        fz += slot[k, 2]
-                        tx += slot[k, 3]
-                        ty += slot[k, 4]
-                        tz += slot[k, 5]
-                        dmax = max(dmax, slot[k, 9])
+                fx = f[i, 0]
+                fy = f[i, 1]
+                fz = f[i, 2]
+                tx = t[i, 0]
+                ty = t[i, 1]
+                tz = t[i, 2]
+                dmax = ovr[i]
                 for q in range(rstart[i], rstart[i + 1]):
                     k = rev[q]
                     if act[k] != 0:
                         fx -= slot[k, 0]
                         fy -= slot[k, 1]
                         fz -= slot[k, 2]
-                        tx += slot[k, 6]
-                        ty += slot[k, 7]
-                        tz += slot[k, 8]
-                        dmax = max(dmax, slot[k, 9])
+                        tx += slot[k, 3]
+                        ty += slot[k, 4]
+                        tz += slot[k, 5]
+                        dmax = max(dmax, slot[k, 6])
                 mo = dmax / ri
                 # walls with a face contact (bit w): their edge/vertex contacts are dropped
                 face_mask = 0
@@ -418,18 +430,18 @@ def run_loop(nsteps, step0, resume_mid, need_forces, ke_tol, ke_every, max_ovr, 
             fstate[0] = 0.0
             disp[:, :] = 0.0
         if swapped:
-            pair_forces(xr, vw, pair, codes, box, periodic, dt, start_b, nbr_b, hist_b,
-                        act_b, slot)
-            nbad = gather(x, v, om, r, m, inv_m, inv_i, mat, f, t, ovr, gravity, dt,
-                          not first, max_ovr, start_b, act_b, slot, rstart, rev, pair,
+            pair_forces(xr, vw, m, gravity, pair, codes, box, periodic, dt, start_b, nbr_b,
+                        hist_b, act_b, slot, f, t, ovr)
+            nbad = gather(x, v, om, r, inv_m, inv_i, mat, f, t, ovr, dt,
+                          not first, max_ovr, act_b, slot, rstart, rev, pair,
                           codes, prim_kind, prim_wall, prim_mat, prim_par, wall_vel,
                           wall_omega, wall_centre, wnbr_b, wcnt_b, whist_b, wslot)
             reduce_wall_forces(wcnt_b, wnbr_b, wslot, prim_wall, wall_force, wall_torque)
         else:
-            pair_forces(xr, vw, pair, codes, box, periodic, dt, start_a, nbr_a, hist_a,
-                        act_a, slot)
-            nbad = gather(x, v, om, r, m, inv_m, inv_i, mat, f, t, ovr, gravity, dt,
-                          not first, max_ovr, start_a, act_a, slot, rstart, rev, pair,
+            pair_forces(xr, vw, m, gravity, pair, codes, box, periodic, dt, start_a, nbr_a,
+                        hist_a, act_a, slot, f, t, ovr)
+            nbad = gather(x, v, om, r, inv_m, inv_i, mat, f, t, ovr, dt,
+                          not first, max_ovr, act_a, slot, rstart, rev, pair,
                           codes, prim_kind, prim_wall, prim_mat, prim_par, wall_vel,
                           wall_omega, wall_centre, wnbr_a, wcnt_a, whist_a, wslot)
             reduce_wall_forces(wcnt_a, wnbr_a, wslot, prim_wall, wall_force, wall_torque)
