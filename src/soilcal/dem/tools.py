@@ -26,7 +26,9 @@ The three tools
    with ``w(z)`` piecewise linear through the rear section points, so the wing meets the
    soil at ``atan(w / (2 L))`` at the share point and turns it out at
    ``atan(3 w / (2 L))`` at the rear (a concave moldboard).  A flat sole joins the two
-   lower wing edges.
+   lower wing edges and a flat cover the two upper ones, so the body is closed except at
+   the rear (soil spilling over the upper wings would otherwise fall into the converging
+   wedge and be pushed along, a resistance that grows without bound).
 
 2. **Bulldozing plates** (cinnamon soil, Qiu et al., Agriculture 2022, 12, 1082,
    Sec. 4.2.1, Figure 7, Table 9).  Printed: plate height x breadth 150 x 300 mm, straight
@@ -203,8 +205,8 @@ def furrow_opener(depth=OPENER["depth"], half_width=OPENER["half_width"],
                   upper_half_width=OPENER["upper_half_width"], length=OPENER["length"],
                   n_length=6, n_height=5, source="<furrow_opener>"):
     """Symmetric double-moldboard ridge/furrow opener (see module docstring); share point
-    at the origin, body towards -x, open surface of ``4 n_length n_height + 2 n_length - 1``
-    triangles."""
+    at the origin, body towards -x; open at the rear, ``4 n_length n_height +
+    2 (2 n_length - 1)`` triangles."""
     depth = _pos(depth, source, "depth")
     half_width = _pos(half_width, source, "half_width")
     b0 = _pos(bottom_half_width, source, "bottom_half_width")
@@ -249,7 +251,19 @@ def furrow_opener(depth=OPENER["depth"], half_width=OPENER["half_width"],
         else:
             sole.append((rb[i], lb[i], lb[i + 1]))
             sole.append((rb[i], lb[i + 1], rb[i + 1]))
-    tris = np.concatenate([tri, tl, np.array(sole, dtype=np.int64)])
+    # cover: the same strip between the top edges of the wings, wound the other way, so
+    # that soil spilling over the upper wings cannot fall into the wedge and be pushed along
+    rt = np.arange(ni) * nj + (nj - 1)
+    lt = remap[nr + np.arange(ni) * nj + (nj - 1)]
+    cover = []
+    for i in range(ni - 1):
+        if i == 0:
+            cover.append((rt[0], rt[1], lt[1]))
+        else:
+            cover.append((rt[i], lt[i + 1], lt[i]))
+            cover.append((rt[i], rt[i + 1], lt[i + 1]))
+    tris = np.concatenate([tri, tl, np.array(sole, dtype=np.int64),
+                           np.array(cover, dtype=np.int64)])
     used = np.unique(tris)
     new = -np.ones(len(verts), dtype=np.int64)
     new[used] = np.arange(len(used))

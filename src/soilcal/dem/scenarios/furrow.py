@@ -38,7 +38,7 @@ as a fraction of the pass duration).  Measured 1303.07 N, simulated 1167.30 N (s
 means, Sec. 3.3, ``traction_resistance.csv``).
 
 Presets: ``paper`` keeps the paper's tank, 8 mm particles (0.9-1.1), 20 % Rayleigh step and
-a pass of 2 m; ``quick`` shrinks the tank to 1.3 x 0.8 x 0.25 m with 22 mm particles (a 2.75x
+a pass of 2 m; ``quick`` shrinks the tank to 1.3 x 0.8 x 0.3 m with 22 mm particles (a 2.75x
 coarse-graining of the 8 mm particles), a 0.7 m pass, two slices and a 6th-degree fit, so that a run
 takes seconds; the convergence study (``benchmarks/convergence_tools.py``) shows what that
 costs.
@@ -92,7 +92,7 @@ def setups() -> dict:
 
 # discretisation per preset (geometry of the test stays in the setup)
 PRESET_SETTINGS = {
-    "quick": dict(tank_length=1.3, tank_width=0.8, tank_height=0.25, particle_radius=0.022,
+    "quick": dict(tank_length=1.3, tank_width=0.8, tank_height=None, particle_radius=0.022,
                   travel=0.7, n_slices=2, profile_degree=6, settle_time=0.3, stiffness_scale=1.0),
     "paper": dict(tank_length=None, tank_width=None, tank_height=None, particle_radius=None,
                   travel=2.0, n_slices=None, profile_degree=None, settle_time=1.0,
