@@ -128,3 +128,30 @@ def test_wall_lists_equal_brute_force_with_binned_triangles(rng, periodic, lift)
         assert got == want
         total += sum(1 for p in want if p < 800)
     assert total > 50  # the plate is near many particles
+
+
+def test_moving_mesh_renews_wall_lists_alone_and_misses_no_contact():
+    # a finely meshed floor sweeps sideways and tilts under a resting layer of spheres: the
+    # wall lists are renewed on their own (the particles hardly move) and at every check
+    # every triangle a sphere overlaps is in that sphere's wall list
+    from soilcal.dem.geometry import plate_mesh
+    from soilcal.dem.walls import prim_closest
+
+    r = 1e-3
+    sim = Simulation(table(E=1e7, mu=0.5, e=0.3), dt_fraction=0.2)
+    g = np.stack(np.meshgrid(np.arange(8), np.arange(8), indexing="ij"), -1).reshape(-1, 2)
+    x = np.c_[(g + 0.5) * 2.2 * r - 8.8 * r, np.full(len(g), 0.999 * r)]
+    sim.add_particles(x, r, "soil")
+    v, t = plate_mesh((0, 0, 0), (1, 0, 0), (0, 1, 0), 0.06, 0.06, n_u=24, n_v=24)
+    sim.add_mesh(v, t, "soil", velocity=(0.02, 0.0, 0.0), omega=(0.0, 0.3, 0.0),
+                 centre=(0, 0, 0))
+    for _ in range(10):
+        sim.run(400)
+        wa, lists = sim._warr, sim._lists
+        for i in range(sim.n):
+            got = set(lists["wnbr_a"][i, : lists["wcnt_a"][i]].tolist())
+            for p in range(wa["prim_kind"].shape[0]):
+                if prim_closest(wa["prim_kind"][p], wa["prim_par"], p, *sim.x[i])[0] < r:
+                    assert p in got
+    assert sim.n_wall_rebuilds > 0
+    assert sim.wall_force[0, 2] < 0.0  # the spheres press on the floor

@@ -91,3 +91,15 @@ def test_rotating_drum_carries_particle_and_torque_balances():
     torque_expected = np.cross(rel, f) - sim.p.t[0]
     assert sim.wall_torque[w] == pytest.approx(torque_expected, abs=1e-9 + 1e-6 * abs(torque_expected).max())
     assert sim.x[0, 1] != 0.0  # dragged sideways by the turning drum
+
+
+def test_wall_log_of_a_continued_run():
+    # the log of every run() call starts with that call: a sphere at rest on a plane presses
+    # it with its weight in every logged row of a later call
+    sim = resting(lambda s: s.add_plane((0, 0, 0), (0, 0, 1), "soil"))
+    sim.run(1000, wall_log_every=100)
+    log = sim.wall_log
+    assert log.shape == (10, 1, 6)
+    weight = sim.p.m[0] * G
+    assert np.allclose(log[:, 0, 2], -weight, rtol=1e-3)
+    assert np.allclose(log[:, 0, :2], 0.0, atol=1e-6 * weight)

@@ -78,7 +78,7 @@ class Simulation:
         self.wall_log = np.zeros((0, 0, 6))
         self._pair = None
         self.dt = None
-        self._fstate = np.zeros(2)
+        self._fstate = np.zeros(3)
 
     # ------------------------------------------------------------------ building
     def add_particles(self, x, r, material, v=None, omega=None, fixed=False, lock_rotation=False):
@@ -299,10 +299,10 @@ class Simulation:
         self.wall_log = np.zeros((nlog, nw, 6))
         lo = p.x.min(axis=0) - p.r.max()
         hi = p.x.max(axis=0) + p.r.max()
-        reach = 0.0
-        for c in wa["wall_centre"]:
-            reach = max(reach, float(np.linalg.norm(np.maximum(abs(lo - c), abs(hi - c)))))
-        reach *= 1.5
+        # a wall point that can touch a particle lies within the particles' box (grown by
+        # half of it, for the particles' own motion) and on the wall's own extent
+        reach = np.array([min(1.5 * float(np.linalg.norm(np.maximum(abs(lo - c), abs(hi - c)))),
+                              e) for c, e in zip(wa["wall_centre"], self._wall_extent())])
         status = np.zeros(5, dtype=np.int64)
         threads = numba.get_num_threads()
         if p.n < itg.PARALLEL_MIN:
@@ -322,7 +322,7 @@ class Simulation:
             done = itg.run_loop(
                 steps - total, self.step, resume_mid,
                 self._need_forces, float(ke_tol), int(ke_every), self.max_overlap,
-                int(wall_log_every), p.x, p.v, p.omega, p.f, p.t, p.r, p.m, p.inv_m, p.inv_i,
+                int(wall_log_every), step0, p.x, p.v, p.omega, p.f, p.t, p.r, p.m, p.inv_m, p.inv_i,
                 p.mat, p.disp, p.ovr, L["xr"], L["vw"], self.gravity, self.box, self.periodic,
                 self.dt, self.skin, self.extra, self._pair, self.codes, self._cells,
                 self._cidx(), self._cof(), self._wcells, self._wbins, self._glob(),
@@ -368,6 +368,29 @@ class Simulation:
             self._cof_arr = np.zeros(self.p.n, dtype=np.int64)
         return self._cidx_arr
 
+    def _wall_extent(self):
+        """Largest distance from each wall's centre to its surface (inf for planes); rigid
+        motion keeps it."""
+        wa = self._warr
+        ext = np.zeros(wa["wall_centre"].shape[0])
+        for p, (kind, w) in enumerate(zip(wa["prim_kind"], wa["prim_wall"])):
+            par, c = wa["prim_par"][p], wa["wall_centre"][w]
+            if kind == TRIANGLE:
+                e = max(float(np.linalg.norm(par[3 * k:3 * k + 3] - c)) for k in range(3))
+            elif kind == RECTANGLE:
+                e = float(np.linalg.norm(par[0:3] - c) + math.hypot(par[9], par[10]))
+            elif kind == DISK:
+                e = float(np.linalg.norm(par[0:3] - c) + par[6])
+            elif kind == CYLINDER:
+                e = float(np.linalg.norm(par[0:3] - c) + math.hypot(par[6], par[7]))
+            elif kind == CONE:
+                e = float(np.linalg.norm(par[0:3] - c)
+                          + math.hypot(max(par[6], par[7]), max(abs(par[8]), abs(par[9]))))
+            else:
+                e = math.inf
+            ext[w] = max(ext[w], e)
+        return ext
+
     def _glob(self):
         npr = self._warr["prim_kind"].shape[0]
         if getattr(self, "_glob_arr", None) is None or self._glob_arr.shape[0] != npr:
@@ -405,7 +428,13 @@ class Simulation:
 
     @property
     def n_rebuilds(self) -> int:
+        """Builds of the pair lists (the wall lists are built with them)."""
         return int(self._fstate[1])
+
+    @property
+    def n_wall_rebuilds(self) -> int:
+        """Builds of the wall lists alone (walls moved, particles did not)."""
+        return int(self._fstate[2])
 
     @property
     def x(self):

@@ -37,7 +37,7 @@ import math
 from numba import njit, prange
 
 from soilcal.dem.contact import H_SIZE, contact_force
-from soilcal.dem.neighbour import build_lists, min_image
+from soilcal.dem.neighbour import build_lists, build_wall_lists, min_image
 from soilcal.dem.walls import TRIANGLE, move_walls, prim_closest
 
 DONE, NEED_PAIRS, NEED_KW, NEED_CELLS, BLOWUP, SETTLED, NEED_WBINS = 0, 1, 2, 3, 4, 5, 6
@@ -355,7 +355,7 @@ def kinetic_translational(v, m, inv_m):
 
 @njit(cache=True)
 def run_loop(nsteps, step0, resume_mid, need_forces, ke_tol, ke_every, max_ovr, wlog_every,
-             x, v, om, f, t, r, m, inv_m, inv_i, mat, disp, ovr, xr, vw,
+             log0, x, v, om, f, t, r, m, inv_m, inv_i, mat, disp, ovr, xr, vw,
              gravity, box, periodic, dt, skin, extra, pair, codes,
              cell_start, cell_idx, cell_of, wcell_start, wcell_idx, glob,
              start_a, nbr_a, hist_a, act_a, start_b, nbr_b, hist_b, act_b, rstart, rev, slot,
@@ -366,10 +366,15 @@ def run_loop(nsteps, step0, resume_mid, need_forces, ke_tol, ke_every, max_ovr, 
     """Run up to nsteps steps; returns the number of completed steps.
 
     The lists live in the *_a buffers on entry and on return (a rebuild writes the other
-    buffer and the two swap roles).  need_forces: compute the forces of the initial state
-    first (fresh or modified system).  resume_mid: the first step's kick-drift was already
-    done by a call that stopped for a buffer reallocation.  fstate[0] carries the
-    accumulated wall displacement since the last rebuild, fstate[1] counts list builds.
+    buffer and the two swap roles; the wall lists swap on their own when only they are
+    renewed).  need_forces: compute the forces of the initial state first (fresh or
+    modified system).  resume_mid: the first step's kick-drift was already done by a call
+    that stopped for a buffer reallocation.  wall_reach[w]: largest distance from wall w's
+    centre at which its surface can touch a particle (a point there moves at most
+    (|v_w| + |omega_w| wall_reach[w]) dt per step).  fstate[0] carries the accumulated wall
+    displacement since the last list build, fstate[1] counts builds of the pair lists,
+    fstate[2] builds of the wall lists alone.  Wall force and torque go to row
+    (step - log0) / wlog_every - 1 of wlog every wlog_every steps after step log0.
     """
     n = x.shape[0]
     skin2 = 0.25 * skin * skin
@@ -379,12 +384,14 @@ def run_loop(nsteps, step0, resume_mid, need_forces, ke_tol, ke_every, max_ovr, 
     status[3] = 0
     status[4] = 0
     swapped = False
+    wswapped = False
     wstep = 0.0
     for w in range(wall_vel.shape[0]):
         vv = math.sqrt(wall_vel[w, 0] ** 2 + wall_vel[w, 1] ** 2 + wall_vel[w, 2] ** 2)
         oo = math.sqrt(wall_omega[w, 0] ** 2 + wall_omega[w, 1] ** 2 + wall_omega[w, 2] ** 2)
-        wstep = max(wstep, (vv + oo * wall_reach) * dt)
+        wstep = max(wstep, (vv + oo * wall_reach[w]) * dt)
     rebuild = need_forces or resume_mid
+    wrebuild = False
     done = 0
     for s in range(-1 if need_forces else 0, nsteps):
         first = s == -1
@@ -399,58 +406,61 @@ def run_loop(nsteps, step0, resume_mid, need_forces, ke_tol, ke_every, max_ovr, 
                            wall_omega, wall_centre)
                 fstate[0] += wstep
                 if fstate[0] > 0.5 * skin:
-                    rebuild = True
-        if rebuild:
-            if swapped:
-                code, need = build_lists(
-                    x, r, box, periodic, skin, extra, cell_start, cell_idx, cell_of,
-                    start_b, nbr_b, hist_b, act_b, start_a, nbr_a, hist_a, act_a,
-                    rstart, rev,
-                    prim_kind, prim_par, wcell_start, wcell_idx, glob,
-                    wnbr_b, wcnt_b, whist_b, wnbr_a, wcnt_a, whist_a)
+                    wrebuild = True
+        # current (c) and other (o) buffers
+        if swapped:
+            sc, nc, hc, ac, so, no, ho, ao = (start_b, nbr_b, hist_b, act_b,
+                                              start_a, nbr_a, hist_a, act_a)
+        else:
+            sc, nc, hc, ac, so, no, ho, ao = (start_a, nbr_a, hist_a, act_a,
+                                              start_b, nbr_b, hist_b, act_b)
+        if wswapped:
+            wnc, wcc, whc, wno, wco, who = wnbr_b, wcnt_b, whist_b, wnbr_a, wcnt_a, whist_a
+        else:
+            wnc, wcc, whc, wno, wco, who = wnbr_a, wcnt_a, whist_a, wnbr_b, wcnt_b, whist_b
+        if rebuild or wrebuild:
+            if rebuild:
+                code, need = build_lists(x, r, box, periodic, skin, extra, cell_start,
+                                         cell_idx, cell_of, sc, nc, hc, ac, so, no, ho, ao,
+                                         rstart, rev, prim_kind, prim_par, wcell_start,
+                                         wcell_idx, glob, wnc, wcc, whc, wno, wco, who)
             else:
-                code, need = build_lists(
-                    x, r, box, periodic, skin, extra, cell_start, cell_idx, cell_of,
-                    start_a, nbr_a, hist_a, act_a, start_b, nbr_b, hist_b, act_b,
-                    rstart, rev,
-                    prim_kind, prim_par, wcell_start, wcell_idx, glob,
-                    wnbr_a, wcnt_a, whist_a, wnbr_b, wcnt_b, whist_b)
+                code, need = build_wall_lists(x, r, box, periodic, skin, extra, cell_start,
+                                              cell_idx, cell_of, prim_kind, prim_par,
+                                              wcell_start, wcell_idx, glob,
+                                              wnc, wcc, whc, wno, wco, who)
             if code != 0:
                 status[0] = NEED_WBINS if code == 5 else code
                 status[1] = step0 + max(s, 0)
                 status[3] = need
                 status[4] = 0 if first else 1
-                if swapped:
-                    _copy_lists(start_b, nbr_b, hist_b, act_b, start_a, nbr_a, hist_a, act_a,
-                                wnbr_b, wcnt_b, whist_b, wnbr_a, wcnt_a, whist_a)
+                _restore(swapped, wswapped, start_a, nbr_a, hist_a, act_a, start_b, nbr_b,
+                         hist_b, act_b, wnbr_a, wcnt_a, whist_a, wnbr_b, wcnt_b, whist_b)
                 return done
-            swapped = not swapped
+            if rebuild:
+                swapped = not swapped
+                sc, nc, hc, ac = so, no, ho, ao
+                disp[:, :] = 0.0
+                fstate[1] += 1.0
+            else:
+                fstate[2] += 1.0
+            wswapped = not wswapped
+            wnc, wcc, whc = wno, wco, who
             rebuild = False
-            fstate[1] += 1.0
+            wrebuild = False
             fstate[0] = 0.0
-            disp[:, :] = 0.0
-        if swapped:
-            pair_forces(xr, vw, m, gravity, pair, codes, box, periodic, dt, start_b, nbr_b,
-                        hist_b, act_b, slot, f, t, ovr)
-            nbad = gather(x, v, om, r, inv_m, inv_i, mat, f, t, ovr, dt,
-                          not first, max_ovr, act_b, slot, rstart, rev, pair,
-                          codes, prim_kind, prim_wall, prim_mat, prim_par, wall_vel,
-                          wall_omega, wall_centre, wnbr_b, wcnt_b, whist_b, wslot)
-            reduce_wall_forces(wcnt_b, wnbr_b, wslot, prim_wall, wall_force, wall_torque)
-        else:
-            pair_forces(xr, vw, m, gravity, pair, codes, box, periodic, dt, start_a, nbr_a,
-                        hist_a, act_a, slot, f, t, ovr)
-            nbad = gather(x, v, om, r, inv_m, inv_i, mat, f, t, ovr, dt,
-                          not first, max_ovr, act_a, slot, rstart, rev, pair,
-                          codes, prim_kind, prim_wall, prim_mat, prim_par, wall_vel,
-                          wall_omega, wall_centre, wnbr_a, wcnt_a, whist_a, wslot)
-            reduce_wall_forces(wcnt_a, wnbr_a, wslot, prim_wall, wall_force, wall_torque)
+        pair_forces(xr, vw, m, gravity, pair, codes, box, periodic, dt, sc, nc, hc, ac, slot,
+                    f, t, ovr)
+        nbad = gather(x, v, om, r, inv_m, inv_i, mat, f, t, ovr, dt, not first, max_ovr,
+                      ac, slot, rstart, rev, pair, codes, prim_kind, prim_wall, prim_mat,
+                      prim_par, wall_vel, wall_omega, wall_centre, wnc, wcc, whc, wslot)
+        reduce_wall_forces(wcc, wnc, wslot, prim_wall, wall_force, wall_torque)
         if first:
             continue
         done = s + 1
         status[1] = step0 + done
-        if wlog_every > 0 and (step0 + done) % wlog_every == 0:
-            row = (step0 + done) // wlog_every - 1
+        if wlog_every > 0 and (step0 + done - log0) % wlog_every == 0:
+            row = (step0 + done - log0) // wlog_every - 1
             if row < wlog.shape[0]:
                 for w in range(wall_force.shape[0]):
                     for q in range(3):
@@ -473,20 +483,22 @@ def run_loop(nsteps, step0, resume_mid, need_forces, ke_tol, ke_every, max_ovr, 
             if kinetic_translational(v, m, inv_m) < ke_tol:
                 status[0] = SETTLED
                 break
-    if swapped:
-        _copy_lists(start_b, nbr_b, hist_b, act_b, start_a, nbr_a, hist_a, act_a,
-                    wnbr_b, wcnt_b, whist_b, wnbr_a, wcnt_a, whist_a)
+    _restore(swapped, wswapped, start_a, nbr_a, hist_a, act_a, start_b, nbr_b, hist_b, act_b,
+             wnbr_a, wcnt_a, whist_a, wnbr_b, wcnt_b, whist_b)
     return done
 
 
 @njit(cache=True)
-def _copy_lists(start_b, nbr_b, hist_b, act_b, start_a, nbr_a, hist_a, act_a,
-                wnbr_b, wcnt_b, whist_b, wnbr_a, wcnt_a, whist_a):
-    start_a[:] = start_b
-    npair = start_b[start_b.shape[0] - 1]
-    nbr_a[:npair] = nbr_b[:npair]
-    hist_a[:npair, :] = hist_b[:npair, :]
-    act_a[:npair] = act_b[:npair]
-    wnbr_a[:, :] = wnbr_b
-    wcnt_a[:] = wcnt_b
-    whist_a[:, :] = whist_b
+def _restore(swapped, wswapped, start_a, nbr_a, hist_a, act_a, start_b, nbr_b, hist_b, act_b,
+             wnbr_a, wcnt_a, whist_a, wnbr_b, wcnt_b, whist_b):
+    """Copy the current lists back into the *_a buffers."""
+    if swapped:
+        start_a[:] = start_b
+        npair = start_b[start_b.shape[0] - 1]
+        nbr_a[:npair] = nbr_b[:npair]
+        hist_a[:npair, :] = hist_b[:npair, :]
+        act_a[:npair] = act_b[:npair]
+    if wswapped:
+        wnbr_a[:, :] = wnbr_b
+        wcnt_a[:] = wcnt_b
+        whist_a[:, :] = whist_b

@@ -22,6 +22,9 @@ primitives (planes, cylinders, cones, rectangles, disks) are tested by every par
 triangles are binned into the cells their bounding box, grown by the cutoff, overlaps, and
 tested only by the particles of those cells.
 
+When only walls moved by half the skin (the particles did not), :func:`build_wall_lists`
+renews the wall lists alone.
+
 The particle loop runs in parallel; each particle writes only its own rows.  The reverse
 index and the triangle bins are filled serially, so their order never depends on the thread
 count.
@@ -203,25 +206,14 @@ def _row(i, x, r, box, periodic, cut0, cell_start, cell_idx, cell_of, n0, n1, n2
     return cnt
 
 
-@njit(cache=True, parallel=True)
-def build_lists(x, r, box, periodic, skin, extra, cell_start, cell_idx, cell_of,
-                start_old, nbr_old, hist_old, act_old, start_new, nbr_new, hist_new, act_new,
-                rstart, rev, prim_kind, prim_par, wcell_start, wcell_idx, glob,
-                wnbr_old, wcnt_old, whist_old, wnbr_new, wcnt_new, whist_new):
-    """Rebuild the half lists (CSR), reverse index and wall lists into *_new.
+@njit(cache=True)
+def _grid(x, r, box, periodic, skin, extra, cell_start, cell_idx, cell_of):
+    """Cell grid over the particles' bounding box, particles counting-sorted by cell.
 
-    History rows and touching flags are copied from *_old.  Returns (status, need):
-    status 0 ok, 1 pair buffers too short (need = pairs), 2 wall list too short (need =
-    width), 3 cell buffer too short (need = cells), 5 triangle bins too short (need =
-    entries).
+    Returns (ok, rmax, lo0, cs0, n0, lo1, cs1, n1, lo2, cs2, n2); ok is False when
+    cell_start is too short (n0 * n1 * n2 + 1 needed).
     """
     n = x.shape[0]
-    P = nbr_new.shape[0]
-    KW = wnbr_new.shape[1]
-    H = hist_new.shape[1]
-    if n == 0:
-        start_new[0] = 0
-        return 0, 0
     rmax = 0.0
     mn0, mn1, mn2 = x[0, 0], x[0, 1], x[0, 2]
     mx0, mx1, mx2 = mn0, mn1, mn2
@@ -238,8 +230,8 @@ def build_lists(x, r, box, periodic, skin, extra, cell_start, cell_idx, cell_of,
     lo1, cs1, n1 = _grid_dim(box[2], box[3], periodic[1], mn1, mx1, cell)
     lo2, cs2, n2 = _grid_dim(0.0, 0.0, False, mn2, mx2, cell)
     ncell = n0 * n1 * n2
-    if ncell + 1 > cell_start.shape[0] or ncell + 1 > wcell_start.shape[0]:
-        return 3, ncell + 1
+    if ncell + 1 > cell_start.shape[0]:
+        return False, rmax, lo0, cs0, n0, lo1, cs1, n1, lo2, cs2, n2
     for c in range(ncell + 1):
         cell_start[c] = 0
     for i in range(n):
@@ -257,9 +249,103 @@ def build_lists(x, r, box, periodic, skin, extra, cell_start, cell_idx, cell_of,
         c = cell_of[i]
         cell_idx[cell_start[c + 1]] = i
         cell_start[c + 1] += 1
-    wcut = rmax + skin + extra
-    ng, code, wneed = _bin_triangles(prim_kind, prim_par, wcut, lo0, cs0, n0, periodic[0],
-                                     lo1, cs1, n1, periodic[1], lo2, cs2, n2,
+    return True, rmax, lo0, cs0, n0, lo1, cs1, n1, lo2, cs2, n2
+
+
+@njit(cache=True, inline="always")
+def _wall_row(i, x, r, cut0, cell_of, prim_kind, prim_par, wcell_start, wcell_idx, glob, ng,
+              wnbr_old, wcnt_old, whist_old, wnbr_new, wcnt_new, whist_new):
+    """Wall list of particle i: unbounded primitives, then the triangles binned in its cell
+    (history rows i * KW + k copied from the old list); wcnt_new[i] may exceed KW."""
+    KW = wnbr_new.shape[1]
+    H = whist_new.shape[1]
+    c = cell_of[i]
+    xi, yi, zi, ri = x[i, 0], x[i, 1], x[i, 2], r[i]
+    wc = 0
+    nb = wcell_start[c + 1] - wcell_start[c]
+    for t in range(ng + nb):
+        if t < ng:
+            p = glob[t]
+        else:
+            p = wcell_idx[wcell_start[c] + t - ng]
+        d = prim_closest(prim_kind[p], prim_par, p, xi, yi, zi)[0]
+        if d < ri + cut0:
+            if wc < KW:
+                wnbr_new[i, wc] = p
+                row = i * KW + wc
+                for h in range(H):
+                    whist_new[row, h] = 0.0
+                for k in range(wcnt_old[i]):
+                    if wnbr_old[i, k] == p:
+                        for h in range(H):
+                            whist_new[row, h] = whist_old[i * KW + k, h]
+                        break
+            wc += 1
+    wcnt_new[i] = wc
+
+
+@njit(cache=True)
+def _wall_need(wcnt_new, KW):
+    wneed = 0
+    for i in range(wcnt_new.shape[0]):
+        if wcnt_new[i] > KW:
+            wneed = max(wneed, wcnt_new[i])
+            wcnt_new[i] = KW
+    return wneed
+
+
+@njit(cache=True, parallel=True)
+def build_wall_lists(x, r, box, periodic, skin, extra, cell_start, cell_idx, cell_of,
+                     prim_kind, prim_par, wcell_start, wcell_idx, glob,
+                     wnbr_old, wcnt_old, whist_old, wnbr_new, wcnt_new, whist_new):
+    """Rebuild only the wall lists (walls moved, particles did not move enough for the
+    pair lists to expire).  Same status codes as :func:`build_lists`."""
+    n = x.shape[0]
+    if n == 0:
+        return 0, 0
+    ok, rmax, lo0, cs0, n0, lo1, cs1, n1, lo2, cs2, n2 = _grid(
+        x, r, box, periodic, skin, extra, cell_start, cell_idx, cell_of)
+    if not ok or n0 * n1 * n2 + 1 > wcell_start.shape[0]:
+        return 3, n0 * n1 * n2 + 1
+    ng, code, wneed = _bin_triangles(prim_kind, prim_par, rmax + skin + extra, lo0, cs0, n0,
+                                     periodic[0], lo1, cs1, n1, periodic[1], lo2, cs2, n2,
+                                     wcell_start, wcell_idx, glob)
+    if code != 0:
+        return code, wneed
+    for i in prange(n):
+        _wall_row(i, x, r, skin + extra, cell_of, prim_kind, prim_par, wcell_start,
+                  wcell_idx, glob, ng, wnbr_old, wcnt_old, whist_old, wnbr_new, wcnt_new,
+                  whist_new)
+    wneed = _wall_need(wcnt_new, wnbr_new.shape[1])
+    if wneed > 0:
+        return 2, wneed
+    return 0, 0
+
+
+@njit(cache=True, parallel=True)
+def build_lists(x, r, box, periodic, skin, extra, cell_start, cell_idx, cell_of,
+                start_old, nbr_old, hist_old, act_old, start_new, nbr_new, hist_new, act_new,
+                rstart, rev, prim_kind, prim_par, wcell_start, wcell_idx, glob,
+                wnbr_old, wcnt_old, whist_old, wnbr_new, wcnt_new, whist_new):
+    """Rebuild the half lists (CSR), reverse index and wall lists into *_new.
+
+    History rows and touching flags are copied from *_old.  Returns (status, need):
+    status 0 ok, 1 pair buffers too short (need = pairs), 2 wall list too short (need =
+    width), 3 cell buffer too short (need = cells), 5 triangle bins too short (need =
+    entries).
+    """
+    n = x.shape[0]
+    P = nbr_new.shape[0]
+    H = hist_new.shape[1]
+    if n == 0:
+        start_new[0] = 0
+        return 0, 0
+    ok, rmax, lo0, cs0, n0, lo1, cs1, n1, lo2, cs2, n2 = _grid(
+        x, r, box, periodic, skin, extra, cell_start, cell_idx, cell_of)
+    if not ok or n0 * n1 * n2 + 1 > wcell_start.shape[0]:
+        return 3, n0 * n1 * n2 + 1
+    ng, code, wneed = _bin_triangles(prim_kind, prim_par, rmax + skin + extra, lo0, cs0, n0,
+                                     periodic[0], lo1, cs1, n1, periodic[1], lo2, cs2, n2,
                                      wcell_start, wcell_idx, glob)
     if code != 0:
         return code, wneed
@@ -293,35 +379,9 @@ def build_lists(x, r, box, periodic, skin, extra, cell_start, cell_idx, cell_of,
                 act_new[k] = 0
                 for h in range(H):
                     hist_new[k, h] = 0.0
-        # walls: unbounded primitives, then the triangles binned in this particle's cell
-        c = cell_of[i]
-        xi, yi, zi, ri = x[i, 0], x[i, 1], x[i, 2], r[i]
-        wc = 0
-        nb = wcell_start[c + 1] - wcell_start[c]
-        for t in range(ng + nb):
-            if t < ng:
-                p = glob[t]
-            else:
-                p = wcell_idx[wcell_start[c] + t - ng]
-            d = prim_closest(prim_kind[p], prim_par, p, xi, yi, zi)[0]
-            if d < ri + skin + extra:
-                if wc < KW:
-                    wnbr_new[i, wc] = p
-                    row = i * KW + wc
-                    for h in range(H):
-                        whist_new[row, h] = 0.0
-                    for k in range(wcnt_old[i]):
-                        if wnbr_old[i, k] == p:
-                            for h in range(H):
-                                whist_new[row, h] = whist_old[i * KW + k, h]
-                            break
-                wc += 1
-        wcnt_new[i] = wc
-    wneed = 0
-    for i in range(n):
-        if wcnt_new[i] > KW:
-            wneed = max(wneed, wcnt_new[i])
-            wcnt_new[i] = KW
+        _wall_row(i, x, r, cut0, cell_of, prim_kind, prim_par, wcell_start, wcell_idx, glob,
+                  ng, wnbr_old, wcnt_old, whist_old, wnbr_new, wcnt_new, whist_new)
+    wneed = _wall_need(wcnt_new, wnbr_new.shape[1])
     if wneed > 0:
         return 2, wneed
     # reverse index (pairs naming j as partner), in increasing i
