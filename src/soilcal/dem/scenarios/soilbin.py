@@ -279,11 +279,7 @@ def tool_pass(spec: BinSpec, params: DemParams, preset: str, seed: int, source: 
     while done < steps:
         k = min(per, steps - done)
         s0 = sim.step
-        # the engine indexes wall-log rows by the absolute step count, so a run continued
-        # from step s0 > 0 would log nothing: count this chunk from 0 and restore after
-        sim.step = 0
-        done_k = sim.run(k, wall_log_every=log_every)
-        sim.step = s0 + done_k
+        sim.run(k, wall_log_every=log_every)  # log rows counted from the start of this call
         t, f, q = force_series(sim, wall, log_every, 0, dt)
         ts.append(t + (s0 - step0) * dt)
         fs.append(f)
