@@ -36,3 +36,16 @@ def test_bad_values_exit_2_naming_the_field(capsys):
     assert "params.soil_soil_restitution" in capsys.readouterr().err
     assert main(["scenario", "run", "drum", "--set", "no_such_key=1"]) == 2
     assert main(["scenario", "run", "drum", "--preset", "slow"]) == 2
+
+
+def test_vtk_frames_are_written_and_readable(tmp_path):
+    from soilcal.dem.io import read_pvd, read_vtk_arrays
+
+    rc = main(["scenario", "run", "incline", "--setup", "yangtze-rolling", "--threads", "1",
+               "--set", "start_deg=5", "--vtk", str(tmp_path / "vtk")])
+    assert rc == 0
+    frames = read_pvd(tmp_path / "vtk" / "incline.pvd")
+    assert len(frames) == 2  # settled on the plate, and at the rolling onset
+    assert frames[1][0] > frames[0][0]
+    arrays = read_vtk_arrays(frames[1][1])
+    assert arrays["PointData/radius"].shape == (1,) and arrays["PointData/radius"][0] == 0.010
