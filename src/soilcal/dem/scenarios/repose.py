@@ -7,8 +7,9 @@ a steel tube standing on the plate is filled with loose soil, then lifted vertic
 constant speed until all soil has left it; the heap on the plate is measured at rest.  In the
 simulation the spheres are placed at random in the tube (random sequential addition, at most
 30 % solid fraction) and settle under gravity inside it; the tube is then moved up at
-``lift_speed`` by ``fill_height + 2 d_max`` (d_max the largest diameter), stopped, and the
-heap settles.
+``lift_speed`` by the settled fill height plus d_max (the largest diameter), or until its rim
+is a radius above the highest sphere (nothing touches it any more), stopped, and the heap
+settles.
 
 Funnel discharge (black soil, 001 Sec. 2.2.1; cohesive soil, 004 Sec. 2.2 / Fig. 4): soil is
 loaded into a funnel whose outlet is covered, the cover is removed and the soil flows onto
@@ -292,8 +293,16 @@ def run(setup: dict, params: DemParams, preset: str = "quick", seed: int = 0, th
         info["fill_height_m"] = float((sim.x[:, 2] + sim.p.r).max())
         frames(sim)
         lift = info["fill_height_m"] + dmax
-        sim.set_wall_motion(tube, velocity=(0, 0, setup["lift_speed"]))
-        run_time(sim, lift / setup["lift_speed"])
+        v = setup["lift_speed"]
+        sim.set_wall_motion(tube, velocity=(0, 0, v))
+        step0, bottom = sim.step, 0.0
+        chunk = max(sim.dt, min(0.05, 0.5 * sz["r_max"] / v))  # rim moves half a radius
+        while bottom < lift:
+            run_time(sim, min(chunk, (lift - bottom) / v))
+            bottom = v * (sim.step - step0) * sim.dt  # rigid translation of the rim
+            if bottom > float((sim.x[:, 2] + sim.p.r).max()) + sz["r_max"]:
+                break  # every sphere is below the rim: the rest of the lift touches nothing
+        info["lift_m"] = bottom
         sim.set_wall_motion(tube, velocity=(0, 0, 0))
         frames(sim)
         z_out = math.inf
