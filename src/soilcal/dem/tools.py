@@ -14,11 +14,14 @@ The three tools
    Agriculture 2023, 13, 648).  Printed: working depth 200 mm and speed 0.72 m/s
    (Sec. 2.1.2, Sec. 2.2.4); "upper and lower wings" whose intersection line is flush with
    the ground (Sec. 2.1.2, Figure 1c); the measured furrow contour F(x) of Eq. (3) turns
-   over at x = +-223.8 mm.  The drawing (Figure 1c) prints no dimension, so the opener is a
-   symmetric double moldboard whose rear section follows an assumed theoretical furrow
-   (Figure 2): bottom half-width ``b0`` = 50 mm (assumption), half-width 225 mm at the
-   ground line (the turning point of Eq. 3), an upper wing ``h_up`` = 100 mm above the
-   ground widening to 300 mm (assumption), body length ``L`` = 450 mm (assumption).  Each
+   over at x = +223.8 mm (its right-hand maximum, F = 129.6 mm); on the left it has no
+   maximum and keeps rising (F(-223.8) = 128.6 mm, F(-300) = 1706 mm), so the opener is
+   made symmetric about the right-hand turning point.  The drawing (Figure 1c) prints no
+   dimension, so the opener is a symmetric double moldboard whose rear section follows an
+   assumed theoretical furrow (Figure 2): bottom half-width ``b0`` = 50 mm (assumption),
+   half-width 225 mm at the ground line (the right-hand turning point of Eq. 3, used on
+   both sides), an upper wing ``h_up`` = 100 mm above the ground widening to 300 mm
+   (assumption), body length ``L`` = 450 mm (assumption).  Each
    wing is the surface::
 
        y(u, z) = w(z) (u + u^2) / 2,   x = -L u,   u in [0, 1]
@@ -58,9 +61,11 @@ The three tools
      tangent ``180 - beta_k``; ``c1, Ls`` solve the two position conditions (assumption:
      "variable curvature" of Sec. 4.2.1 taken as linear in arc length).
 
-   The printed clearance angle 20 deg and point angle 30 deg (Table 9; 48 deg in the text)
-   shape the back of the cutting edge, which the soil in front of the plate does not touch;
-   the plate is modelled as its soil-engaging face only.
+   Table 9 prints a clearance angle alpha = 20 deg and a shovel point closed angle
+   beta = 30 deg for the three curved plates (arc, parabola, bionic) and 30 deg / 48 deg
+   for the straight-line plate (the text of Sec. 4.2.1 gives 20 deg and 48 deg).  These
+   angles shape the back of the cutting edge, which the soil in front of the plate does not
+   touch, so they are not used: the plate is modelled as its soil-engaging face only.
 
 3. **Rotary tiller blade set** (black soil, Qi et al., Sustainability 2025, 17, 8126,
    Sec. 2.1 (2), Table 1): 1GKN-160 tiller, working width 1.6 m, 36 IT225 curved blades,
@@ -109,7 +114,7 @@ from soilcal.errors import InputError
 # Yangtze clay loam ridge/furrow opener (Zeng et al. 2023)
 OPENER = dict(
     depth=0.200,          # Sec. 2.1.2 / 2.2.4: depth of soil entry 200 mm
-    half_width=0.225,     # Eq. (3): F(x) turns over at x = +-223.8 mm (rounded)
+    half_width=0.225,     # Eq. (3): F(x) turns over at x = +223.8 mm (rounded; both sides)
     bottom_half_width=0.05,  # assumption (Figure 2 prints no dimension)
     upper_height=0.10,    # assumption: upper wing above the ground line
     upper_half_width=0.30,  # assumption
@@ -125,6 +130,9 @@ PLATE = dict(
     skew_angle=78.0,      # Table 9, epsilon; ruled plate cut at 78 deg (Sec. 4.2.1)
 )
 FRONT_ROLL = {"arc": 72.4, "parabola": 80.2, "bionic": 69.4}  # Table 9, beta_k (deg)
+# Table 9 also prints clearance / shovel point closed angles of 20 / 30 deg (arc, parabola,
+# bionic) and 30 / 48 deg (straight line); they shape the back of the edge and are not
+# modelled (module notes)
 SHAPES = ("line", "arc", "parabola", "bionic")
 
 # Black soil rotary tiller (Qi et al. 2025, Table 1, Sec. 2.1 (2)); blade shape assumed

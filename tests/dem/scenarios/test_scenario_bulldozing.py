@@ -2,10 +2,39 @@
 
 import math
 
+import numpy as np
 import pytest
 
 from soilcal.dem.scenarios import bulldozing
+from soilcal.dem.scenarios.soilbin import BinSpec, fill_bin, psd_field
 from soilcal.errors import InputError
+
+
+def test_paper_preset_uses_printed_mass_split():
+    # Sec. 3.1: sizes 3, 2, 1 mm (read as diameters) with 8.85, 8.2, 82.95 % of the mass
+    s = bulldozing._settings(bulldozing.setups()["plate-line"], "paper")
+    psd = bulldozing.size_distribution(s)
+    assert psd.lower == psd.upper == pytest.approx((0.0015, 0.0010, 0.0005))
+    assert psd.mass_fraction == pytest.approx((0.0885, 0.0820, 0.8295))
+    spec = bulldozing._bin(s)
+    assert (spec.r_min, spec.r_max) == pytest.approx((0.0005, 0.0015))
+    # the quick preset keeps uniform radii (7 mm, 0.9-1.1)
+    q = bulldozing._bin(bulldozing._settings(bulldozing.setups()["plate-line"], "quick"))
+    assert q.psd is None and (q.r_min, q.r_max) == pytest.approx((0.0063, 0.0077))
+
+
+def test_psd_bin_fill_has_the_printed_mass_split():
+    # the paper's distribution, three times coarser so that the fill stays small
+    s = bulldozing._settings(bulldozing.setups()["plate-line"], "paper")
+    psd = bulldozing.size_distribution(s).scaled(3.0)
+    spec = BinSpec(0.06, 0.04, 0.03, 0.002, psd=psd_field(psd))
+    x, r = fill_bin(spec, np.random.default_rng(0), "test")
+    m = r**3
+    for rk, fk in zip(psd.lower, psd.mass_fraction):
+        assert m[np.isclose(r, rk)].sum() / m.sum() == pytest.approx(fk, abs=0.01)
+    # no overlaps
+    d = np.linalg.norm(x[:, None, :] - x[None, :, :], axis=2) + np.eye(len(r))
+    assert np.all(d >= (r[:, None] + r[None, :]) * (1 - 1e-9))
 
 
 def test_printed_cutting_resistances():
@@ -46,6 +75,15 @@ def test_quick_bin_shallower_than_cut_fails():
         bulldozing.validate(s, "quick", "test")
 
 
+@pytest.mark.parametrize("preset,depth", [("quick", 0.015), ("paper", 0.0029)])
+def test_cut_shallower_than_a_particle_diameter_fails(preset, depth):
+    # quick: 2 r_max = 2 x 7.7 mm; paper: 2 r_max = 3 mm (largest printed size)
+    s = dict(bulldozing.setups()["plate-line"], depth=depth)
+    with pytest.raises(InputError, match="setup.depth"):
+        bulldozing.validate(s, preset, "test")
+    bulldozing.validate(dict(s, depth=0.0155 if preset == "quick" else 0.0031), preset, "t")
+
+
 @pytest.mark.slow
 def test_quick_run_resists_motion(tmp_path, monkeypatch):
     monkeypatch.setenv("SOILCAL_SCENARIO_CACHE", str(tmp_path))
@@ -57,7 +95,6 @@ def test_quick_run_resists_motion(tmp_path, monkeypatch):
     assert all(math.isfinite(r[k]) for k in ("horizontal_force_N", "vertical_force_N",
                                              "horizontal_force_sd_N"))
     assert r["horizontal_force_N"] > 0
-    assert r["horizontal_force_sd_N"] >= 0
     # same soil, other plate and soil-steel friction: the settled bin is reused
     res2 = bulldozing.run(bulldozing.setups()["plate-arc"],
                           bulldozing.paper_params().replace(soil_steel_static_friction=0.3),

@@ -22,15 +22,46 @@ def test_area_difference_known_integrals():
     assert e == pytest.approx(5.0) and s == pytest.approx(0.0, abs=1e-12)
 
 
+def test_area_difference_of_eq3_against_itself_shifted():
+    # Phi = F - 5 mm over [-200, 200] mm: enclosed 5 x 400 = 2000 mm^2 = 0.2 dm^2
+    F = furrow.measured_profile()
+    assert furrow.area_difference(F - 5.0, F, -200.0, 200.0) == pytest.approx(
+        (2000.0, -2000.0), rel=1e-9)
+
+
+def test_furrow_area_of_known_profiles():
+    # flat bottom 30 mm below the surface over [-200, 200]: 30 x 400 mm^2 exactly (the
+    # end points carry half weight)
+    assert furrow.furrow_area(Polynomial([170.0]), 200.0, -200.0, 200.0) == pytest.approx(
+        12000.0, rel=1e-12)
+    # parabolic furrow Phi = 100 + x^2 / 400 under a surface at 200 mm: the profile stays
+    # below it on [-200, 200], area = int (100 - x^2/400) dx = 40000 - 2 x 200^3 / 1200
+    phi = Polynomial([100.0, 0.0, 1.0 / 400.0])
+    exact = 40000.0 - 2 * 200.0**3 / 1200.0
+    assert furrow.furrow_area(phi, 200.0, -200.0, 200.0) == pytest.approx(exact, rel=1e-5)
+
+
+def test_named_default_values_set_by_the_user_are_kept():
+    base = furrow.setups()["yangtze-opener"]
+    assert furrow._settings(dict(base), "quick")["tank_length"] == 1.3
+    # the user asks for the paper's 3.0 m tank under the quick preset
+    s = furrow._settings(dict(base, overrides=["tank_length"]), "quick")
+    assert s["tank_length"] == 3.0 and s["particle_radius"] == 0.022
+    # a value other than the default is a user value even without the list
+    assert furrow._settings(dict(base, tank_length=2.0), "quick")["tank_length"] == 2.0
+
+
 def test_measured_profile_is_eq3():
     F = furrow.measured_profile()
     assert F.degree() == 9
     assert F(0.0) == pytest.approx(7.28)              # constant term of Eq. (3)
     assert F.coef[9] == pytest.approx(-5.04e-19)
-    # the polynomial turns over near +-223.8 mm (soil config note)
+    # the polynomial turns over near +223.8 mm only: on the left it keeps rising
     d = F.deriv()
     r = np.real(d.roots()[np.abs(np.imag(d.roots())) < 1e-9])
     assert np.min(np.abs(r[r > 100] - 223.8)) < 1.0
+    assert not np.any(r < 0)
+    assert F(-300.0) == pytest.approx(1706.336, abs=1e-3)
 
 
 def test_slice_profile_envelope_of_a_row_of_spheres():
@@ -69,6 +100,7 @@ def _setup(**kw):
     ("speed", -0.72, "setup.speed"),
     ("x_limit", 0.3, "setup.x_limit"),
     ("n_slices", 20, "setup.n_slices"),
+    ("depth", 0.04, "setup.depth"),         # shallower than 2 r_max = 48.4 mm (quick)
 ])
 def test_impossible_settings_fail_before_the_run(field, value, match):
     with pytest.raises(InputError, match=match):
@@ -90,7 +122,6 @@ def test_quick_run_finite_and_opposing(tmp_path, monkeypatch):
     for k in ("area_difference_dm2", "traction_N", "traction_sd_N", "furrow_area_dm2"):
         assert math.isfinite(r[k]), k
     assert r["traction_N"] > 0          # the soil resists the opener's advance
-    assert r["area_difference_dm2"] > 0
     assert res.n_particles > 500 and res.seed == 1
     row = res.row()
     assert row["r:traction_N"] == r["traction_N"] and row["p:soil_density"] == 2570.0

@@ -17,8 +17,13 @@ the stable stage (``stable_from`` of the pass to its end).  The resultant
 ``resources/measurements/cinnamon-soil/cutting_resistance.csv``): horizontal 304.80 (line),
 321.10 (arc), 252.10 (parabola), 154.50 N (bionic); vertical 10.40, 48.80, 13.98, 15.50 N.
 
-Presets: ``paper`` is the paper's bin and pass with particle radii 0.5-1.5 mm (the printed
-1-3 mm sizes read as diameters) and the full plate between side walls.  ``quick`` cuts a
+Presets: ``paper`` is the paper's bin and pass with the full plate between side walls and
+the printed size distribution (Sec. 3.1): particle sizes 3, 2 and 1 mm with mass percentages
+8.85, 8.2 and 82.95 %, read as diameters (assumption: the paper does not say whether the
+sizes are diameters or radii), i.e. radii 1.5, 1.0 and 0.5 mm
+(:class:`soilcal.dem.factories.PSD`, fields ``psd_sizes`` and ``psd_mass_percent``; a
+setup that sets ``psd_mass_percent`` to None uses ``particle_radius`` and
+``radius_spread`` instead).  ``quick`` cuts a
 periodic slab of width ``slab_width`` (70 mm) out of the bin across the plate: the plate
 spans the slab (no plate ends, so no side spill), the bed is 60 mm deep (twice the cut),
 particles of 7 mm radius (0.9-1.1), shear modulus scaled by 0.1 (surface energy by
@@ -37,10 +42,11 @@ from pathlib import Path
 import numpy as np
 
 from soilcal.dem import tools
+from soilcal.dem.factories import PSD
 from soilcal.dem.scenarios.base import (PRESETS, DemParams, Result, check, stable_mean,
                                         threads_used)
-from soilcal.dem.scenarios.soilbin import (BinSpec, apply_preset, settled_bin, tool_pass,
-                                           validate_bin)
+from soilcal.dem.scenarios.soilbin import (BinSpec, apply_preset, psd_field, settled_bin,
+                                           tool_pass, validate_bin)
 
 NAME = "bulldozing"
 MEASURED = (Path(__file__).resolve().parents[4] / "resources" / "measurements"
@@ -66,13 +72,20 @@ def setups() -> dict:
     return {f"plate-{s}": _setup(s) for s in ("line", "arc", "parabola", "bionic")}
 
 
+# Sec. 3.1: model particle sizes 3, 2, 1 mm (read as diameters, assumption) with mass
+# percentages 8.85, 8.2, 82.95 %
+PAPER_PSD_SIZES = (0.003, 0.002, 0.001)
+PAPER_PSD_MASS_PERCENT = (8.85, 8.2, 82.95)
+
 PRESET_SETTINGS = {
     "quick": dict(periodic=True, slab_width=0.07, bin_length=0.45, bin_height=0.06,
                   particle_radius=0.007, radius_spread=0.1, stiffness_scale=0.1,
-                  dt_fraction=0.3, travel=0.2, settle_time=0.2),
+                  dt_fraction=0.3, travel=0.2, settle_time=0.2, psd_sizes=None,
+                  psd_mass_percent=None),
     "paper": dict(periodic=False, slab_width=None, bin_length=None, bin_height=None,
-                  particle_radius=0.001, radius_spread=0.5, stiffness_scale=1.0,
-                  dt_fraction=0.2, travel=None, settle_time=1.0),
+                  particle_radius=None, radius_spread=None, stiffness_scale=1.0,
+                  dt_fraction=0.2, travel=None, settle_time=1.0,
+                  psd_sizes=PAPER_PSD_SIZES, psd_mass_percent=PAPER_PSD_MASS_PERCENT),
 }
 START = 0.1  # m: cutting edge's start position from the bin's x = 0 end
 
@@ -101,6 +114,29 @@ def _settings(setup, preset):
     return s
 
 
+def size_distribution(s, source="<bulldozing>"):
+    """The run's :class:`soilcal.dem.factories.PSD` (mass percentages of diameters
+    ``psd_sizes``), or None when ``psd_mass_percent`` is None (uniform radii)."""
+    if s.get("psd_mass_percent") is None:
+        return None
+    sizes = s.get("psd_sizes")
+    check(isinstance(sizes, (list, tuple)) and len(sizes) > 0, source, "setup.psd_sizes",
+          "a list of particle diameters (m)", sizes)
+    pct = s["psd_mass_percent"]
+    check(isinstance(pct, (list, tuple)) and len(pct) > 0, source, "setup.psd_mass_percent",
+          "a list of mass percentages", pct)
+    return PSD.from_mass_percent(sizes, pct, diameter=True, source=source, field="setup.psd")
+
+
+def _radii(s, source="<bulldozing>"):
+    """(nominal radius, spread, BinSpec.psd) of the run's particles."""
+    psd = size_distribution(s, source)
+    if psd is None:
+        return s.get("particle_radius"), s.get("radius_spread"), None
+    r_nom = (3.0 * psd.mean_volume() / (4.0 * math.pi)) ** (1.0 / 3.0)
+    return r_nom, 0.0, psd_field(psd)
+
+
 def _num(s, k, source):
     v = s.get(k)
     check(isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v) and v > 0,
@@ -120,8 +156,17 @@ def validate(setup: dict, preset: str = "quick", source: str = "<bulldozing>") -
           f"a cutting depth below the soil height of the bin ({s['bin_height']} m)", s["depth"])
     check(s["depth"] < s["plate_height"], source, "setup.depth",
           f"a cutting depth below the plate height ({s['plate_height']} m)", s["depth"])
+    r_nom, spread, _ = _radii(s, source)
+    _num(dict(particle_radius=r_nom), "particle_radius", source)
+    check(isinstance(spread, (int, float)) and not isinstance(spread, bool)
+          and 0.0 <= spread < 1.0, source, "setup.radius_spread", "a radius spread in [0, 1)",
+          spread)
+    r_max = _bin(s, source).r_max
+    check(s["depth"] >= 2.0 * r_max, source, "setup.depth",
+          f">= 2 r_max = {2.0 * r_max:.4g} m (a cut at least one largest particle diameter "
+          "deep)", s["depth"])
     if not s["periodic"]:
-        check(s["plate_breadth"] + 4 * s["particle_radius"] <= s["bin_width"], source,
+        check(s["plate_breadth"] + 4 * r_max <= s["bin_width"], source,
               "setup.bin_width", f"wider than the plate ({s['plate_breadth']} m)",
               s["bin_width"])
     need = START + s["travel"] + 0.05
@@ -131,14 +176,16 @@ def validate(setup: dict, preset: str = "quick", source: str = "<bulldozing>") -
           "a fraction of the pass in [0, 1)", s["stable_from"])
     # directrix itself (raises InputError naming the field if the angles cannot be met)
     tools.directrix(s["shape"], height=s["plate_height"], source=source)
-    validate_bin(_bin(s), source, "setup")
+    validate_bin(_bin(s, source), source, "setup")
 
 
-def _bin(s) -> BinSpec:
+def _bin(s, source="<bulldozing>") -> BinSpec:
+    radius, spread, psd = _radii(s, source)
     return BinSpec(length=s["bin_length"], width=s["slab_width"], height=s["bin_height"],
-                   radius=s["particle_radius"], spread=s["radius_spread"],
+                   radius=radius, spread=spread,
                    periodic_y=bool(s["periodic"]), settle_time=s["settle_time"],
-                   stiffness_scale=s["stiffness_scale"], dt_fraction=s["dt_fraction"])
+                   stiffness_scale=s["stiffness_scale"], dt_fraction=s["dt_fraction"],
+                   psd=psd)
 
 
 def run(setup: dict, params: DemParams, preset: str = "quick", seed: int = 0, threads=None,
@@ -147,7 +194,7 @@ def run(setup: dict, params: DemParams, preset: str = "quick", seed: int = 0, th
     s = _settings(setup, preset)
     nthreads = threads_used(threads)
     t0 = time.perf_counter()
-    spec = _bin(s)
+    spec = _bin(s, source)
     bed = settled_bin(spec, params, preset, seed, source, use_cache)
     pad = 2.0 * spec.r_max
     breadth = s["slab_width"] + 2 * pad if s["periodic"] else s["plate_breadth"]

@@ -29,7 +29,9 @@ the enclosed (unsigned) area, computed exactly: the real roots of the polynomial
 ``Phi_i - F`` in (a, b) split the interval and the antiderivative is evaluated on each piece.
 The signed integral is reported too (``area_difference_signed_dm2``).  Limits
 ``a, b = -x_limit, +x_limit`` with ``x_limit = 200 mm`` (assumption: F is fitted inside the
-furrow and turns over at +-223.8 mm).
+furrow; as encoded, F has its right-hand maximum at x = +223.8 mm, F = 129.6 mm, and falls
+beyond it, while on the left it keeps rising, F(-223.8) = 128.6 mm, F(-300) = 1706 mm, so
+only the right side turns over and the limits stay inside +-223.8 mm).
 
 Traction resistance (Sec. 3.3): the opener's resistance along the travel direction,
 ``R = -F_x`` (F: force of the particles on the opener; soil pushes it back, so R > 0), as
@@ -146,6 +148,10 @@ def validate(setup: dict, preset: str = "quick", source: str = "<furrow>") -> No
           f"a working depth below the soil height of the tank ({s['tank_height']} m)", s["depth"])
     check(s["tank_height"] - s["depth"] >= 2 * s["particle_radius"], source, "setup.depth",
           "at least one particle diameter of soil under the opener", s["depth"])
+    r_max = s["particle_radius"] * (1.0 + s["radius_spread"])
+    check(s["depth"] >= 2.0 * r_max, source, "setup.depth",
+          f">= 2 r_max = {2.0 * r_max:.4g} m (a cut at least one largest particle diameter "
+          "deep)", s["depth"])
     check(2 * s["opener_upper_half_width"] + 4 * s["particle_radius"] <= s["tank_width"], source,
           "setup.tank_width", f"wider than the opener ({2 * s['opener_upper_half_width']} m) "
           "plus a particle diameter each side", s["tank_width"])
@@ -167,7 +173,7 @@ def validate(setup: dict, preset: str = "quick", source: str = "<furrow>") -> No
           f"slices spanning <= the finished furrow behind the opener ({furrow_len:.3g} m)",
           f"{n} slices spanning {span:.3g} m")
     check(s["x_limit"] <= 0.2238, source, "setup.x_limit",
-          "<= 0.2238 m (F(x) of Eq. 3 turns over at 223.8 mm)", s["x_limit"])
+          "<= 0.2238 m (F(x) of Eq. 3 turns over at x = +223.8 mm)", s["x_limit"])
     check(0.0 <= s["stable_from"] < 1.0, source, "setup.stable_from",
           "a fraction of the pass in [0, 1)", s["stable_from"])
     check(0 < s["dt_fraction"] <= 1, source, "setup.dt_fraction", "a fraction in (0, 1]",
@@ -221,6 +227,14 @@ def area_difference(phi: Polynomial, f: Polynomial, a: float, b: float) -> tuple
     edges = np.concatenate([[a], cuts, [b]])
     pieces = anti(edges[1:]) - anti(edges[:-1])
     return float(np.sum(np.abs(pieces))), float(anti(b) - anti(a))
+
+
+def furrow_area(phi: Polynomial, depth_mm: float, a: float, b: float, n: int = 401) -> float:
+    """Furrow cross-section (mm^2): area between the undisturbed surface, ``depth_mm``
+    above the datum, and the profile ``phi`` where it lies below it, over [a, b]
+    (trapezoidal rule on ``n`` points)."""
+    xs = np.linspace(a, b, n)
+    return float(np.trapezoid(np.clip(depth_mm - phi(xs), 0.0, None), xs))
 
 
 # ---------------------------------------------------------------------------
@@ -287,9 +301,7 @@ def run(setup: dict, params: DemParams, preset: str = "quick", seed: int = 0, th
         e, sg = area_difference(phi, F, -xl, xl)
         enclosed.append(e)
         signed.append(sg)
-        # furrow cross-section: area between the undisturbed surface and the profile
-        areas.append(float(np.sum(np.clip(1e3 * s["depth"] - phi(np.linspace(-xl, xl, 401)), 0,
-                                          None)) * (2 * xl / 400)))
+        areas.append(furrow_area(phi, 1e3 * s["depth"], -xl, xl))
     wall = time.perf_counter() - t0
     resp = dict(
         area_difference_dm2=float(np.mean(enclosed)) / 1e4,

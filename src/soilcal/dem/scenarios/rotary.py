@@ -31,13 +31,20 @@ keeps thrown soil in the bin, as the hood of a tiller does; its height is an ass
 After the pass the rotor stops turning and is lifted out of the soil with the hood (2 m/s
 for ``lift_time``), the soil settles for ``rest_time``, and the surface height at a point is
 the upper envelope of the particles (highest sphere top ``z_i + sqrt(r_i^2 - rho^2)`` over
-spheres whose horizontal distance rho to the point is below r_i) averaged over lateral
-samples across the tilled width.  The points lie equidistant along the travel direction
-(:func:`flatness_region`): behind the rotor's final position over ground its whole footprint
-passed, or, for passes shorter than the rotor diameter plus 0.1 m (the quick preset), over
-the whole disturbed footprint including the starting trench.  Measured Sd: 159.2, 134.4, 120.6, 109.8, 102.1 mm at
-150-350 r/min (``surface_flatness.csv``).  A dense version over ``dense_points`` points is
-reported as ``flatness_dense_mm``.
+spheres whose horizontal distance rho to the point is below r_i) averaged over the lateral
+samples across the tilled width that a sphere covers; a point no sphere covers at any
+lateral sample has no surface height (NaN) and is left out of Eqs. (3)-(4) (the number of
+such points is reported as ``flatness_empty_points``; with fewer than two covered points
+the flatness is NaN).  The points lie equidistant along the travel direction
+(:func:`flatness_region`) outside the starting trench (dug as a circle of radius R + 2
+r_max about the starting shaft position, so its footprint ``|x - x0| <= R + 2 r_max``):
+behind the rotor's final position over ground its whole footprint passed, or, for passes
+shorter than the rotor diameter plus 0.1 m (the quick preset), from the trench's front
+edge to the front of the rotor's final footprint.  Validation requires that stretch to
+hold the ``flatness_points`` at least one particle diameter (2 r_max) apart (a pass too
+short for the rotor radius fails on ``setup.travel``).  Measured Sd: 159.2, 134.4, 120.6,
+109.8, 102.1 mm at 150-350 r/min (``surface_flatness.csv``).  A dense version over
+``dense_points`` points is reported as ``flatness_dense_mm``.
 
 Presets: ``paper`` simulates the whole 1.6 m blade set between side walls with particles of
 1.5 mm radius (the printed 2-4 mm diameters, +-33 %); ``quick`` simulates one flange of
@@ -126,11 +133,25 @@ def measured_flatness() -> dict:
 
 
 def flatness(d) -> tuple[float, float]:
-    """(d_mean, Sd) of Eqs. (3)-(4): mean and sample standard deviation (n - 1)."""
+    """(d_mean, Sd) of Eqs. (3)-(4): mean and sample standard deviation (n - 1) over the
+    points with a surface height (NaN points, which no particle covers, are left out)."""
     d = np.asarray(d, dtype=float)
+    d = d[np.isfinite(d)]
     if d.size < 2:
-        raise ValueError("surface flatness needs at least two points")
+        raise ValueError(f"surface flatness needs at least two points with a surface "
+                         f"height, got {d.size}")
     return float(d.mean()), float(d.std(ddof=1))
+
+
+def flatness_or_nan(d) -> tuple[float, float, int]:
+    """(d_mean, Sd, number of empty points); NaN, NaN when fewer than two points have a
+    surface height."""
+    d = np.asarray(d, dtype=float)
+    empty = int(np.count_nonzero(~np.isfinite(d)))
+    if d.size - empty < 2:
+        return float("nan"), float("nan"), empty
+    m, sd = flatness(d)
+    return m, sd, empty
 
 
 def shaft_power(torque_axis, omega) -> np.ndarray:
@@ -140,7 +161,8 @@ def shaft_power(torque_axis, omega) -> np.ndarray:
 
 def surface_heights(x, r, px, py, lateral_half):
     """Envelope height at points (px, py): highest sphere top over spheres within their
-    radius horizontally, averaged over 9 lateral samples in py +- lateral_half."""
+    radius horizontally, averaged over the 9 lateral samples in py +- lateral_half that a
+    sphere covers; NaN at a point where no sphere covers any lateral sample."""
     out = np.empty(len(px))
     offs = np.linspace(-lateral_half, lateral_half, 9)
     for k, (a, b) in enumerate(zip(px, py)):
@@ -151,19 +173,28 @@ def surface_heights(x, r, px, py, lateral_half):
             rho2 = (xs[:, 0] - a) ** 2 + (xs[:, 1] - (b + o)) ** 2
             h2 = rs**2 - rho2
             ok = h2 > 0
-            hs.append(np.max(xs[ok, 2] + np.sqrt(h2[ok])) if ok.any() else 0.0)
-        out[k] = float(np.mean(hs))
+            hs.append(np.max(xs[ok, 2] + np.sqrt(h2[ok])) if ok.any() else np.nan)
+        hs = np.asarray(hs)
+        out[k] = float(np.mean(hs[np.isfinite(hs)])) if np.isfinite(hs).any() else np.nan
     return out
 
 
-def flatness_region(x0, travel, radius, min_length=0.1):
-    """Stretch of the travel axis where the flatness points lie: the ground behind the
-    rotor's final position that its whole footprint passed over, ``[x0 + R, x0 + travel -
-    R]``, when that is at least ``min_length`` long; otherwise (short passes) the whole
-    disturbed footprint ``[x0 - R, x0 + travel + R]``."""
+def flatness_region(x0, travel, radius, trench_half=None, min_length=0.1):
+    """Stretch of the travel axis where the flatness points lie, outside the starting
+    trench ``|x - x0| <= trench_half`` (default R): the ground behind the rotor's final
+    position that its whole footprint passed over, ``[x0 + max(R, trench_half), x0 + travel
+    - R]``, when ``travel - 2 R >= min_length``; otherwise (short passes) the disturbed
+    footprint ahead of the trench, ``[x0 + trench_half, x0 + travel + R]``.  The stretch
+    may be empty or reversed (``b <= a``) when the pass is too short."""
+    th = radius if trench_half is None else float(trench_half)
     if travel - 2.0 * radius >= min_length:
-        return x0 + radius, x0 + travel - radius
-    return x0 - radius, x0 + travel + radius
+        return x0 + max(radius, th), x0 + travel - radius
+    return x0 + th, x0 + travel + radius
+
+
+def _trench_half(s, spec) -> float:
+    """Half-length along x of the starting trench (circle of radius R + 2 r_max)."""
+    return s["radius"] + 2.0 * spec.r_max
 
 
 def _settings(setup, preset):
@@ -180,7 +211,8 @@ def validate(setup: dict, preset: str = "quick", source: str = "<rotary>") -> No
     check(preset in PRESETS, source, "preset", f"one of {PRESETS}", preset)
     s = _settings(setup, preset)
     for k in ("rpm", "forward_speed", "depth", "working_width", "radius", "hub_radius",
-              "bin_length", "bin_height", "travel", "lift_time", "rest_time"):
+              "bin_length", "bin_height", "travel", "lift_time", "rest_time",
+              "hood_clearance"):
         v = s.get(k)
         check(isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v)
               and v > 0, source, f"setup.{k}", "a number > 0", v)
@@ -198,7 +230,17 @@ def validate(setup: dict, preset: str = "quick", source: str = "<rotary>") -> No
           f">= rotor diameter + pass + margin = {need:.3g} m", s["bin_length"])
     check(0.0 <= s["stable_from"] < 1.0, source, "setup.stable_from",
           "a fraction of the pass in [0, 1)", s["stable_from"])
-    validate_bin(_bin(s), source, "setup")
+    spec = _bin(s)
+    validate_bin(spec, source, "setup")
+    # flatness points outside the starting trench, at least a particle diameter apart
+    th = _trench_half(s, spec)
+    xa, xb = flatness_region(0.0, s["travel"], s["radius"], th)
+    need = (s["flatness_points"] - 1) * 2.0 * spec.r_max
+    check(xb - xa >= need, source, "setup.travel",
+          f"a pass long enough for the rotor radius: the flatness stretch outside the "
+          f"starting trench (|x - x0| <= R + 2 r_max = {th:.3g} m) is {xb - xa:.3g} m, "
+          f"needs >= {need:.3g} m for {s['flatness_points']} points one particle diameter "
+          "apart", s["travel"])
 
 
 def _bin(s) -> BinSpec:
@@ -227,7 +269,7 @@ def run(setup: dict, params: DemParams, preset: str = "quick", seed: int = 0, th
     x0 = R + 0.05
     axis = np.array([x0, 0.5 * s["slab_width"], bed["surface"] - s["depth"] + R])
     v = v + axis
-    pad = 2.0 * spec.r_max
+    pad = 2.0 * spec.r_max  # trench radius R + pad (see _trench_half)
 
     def trench(x, r):
         return (x[:, 0] - axis[0]) ** 2 + (x[:, 2] - axis[2]) ** 2 <= (R + pad) ** 2
@@ -274,17 +316,18 @@ def run(setup: dict, params: DemParams, preset: str = "quick", seed: int = 0, th
     x, r = sim.x, sim.p.r
     yc = 0.5 * s["slab_width"]
     lat = 0.5 * min(s["slab_width"], nf * spacing) - spec.r_max
-    xa, xb = flatness_region(x0, s["travel"], R)
+    xa, xb = flatness_region(x0, s["travel"], R, _trench_half(s, spec))
     pts = np.linspace(xa, xb, s["flatness_points"])
     d = 1e3 * (surface_heights(x, r, pts, np.full(len(pts), yc), lat) - bed["surface"])
-    d_mean, sd = flatness(d)
+    d_mean, sd, n_empty = flatness_or_nan(d)
     dense = np.linspace(xa, xb, s["dense_points"])
     dd = 1e3 * (surface_heights(x, r, dense, np.full(len(dense), yc), lat) - bed["surface"])
     meas = measured_flatness().get(float(s["rpm"]), float("nan"))
     resp = dict(power_kW=p_mean / 1e3, power_sd_kW=p_sd / 1e3,
                 torque_Nm=p_mean / omega, draft_N=draft, draft_sd_N=draft_sd,
                 advance_power_kW=draft * vf / 1e3,
-                flatness_mm=sd, flatness_dense_mm=flatness(dd)[1], surface_change_mm=d_mean,
+                flatness_mm=sd, flatness_dense_mm=flatness_or_nan(dd)[1],
+                surface_change_mm=d_mean, flatness_empty_points=n_empty,
                 flatness_measured_mm=meas, power_scale=scale,
                 bin_from_cache=bool(out["from_cache"]))
     steps = out["steps"] + out["settle_steps"] + n_lift + n_rest

@@ -4,7 +4,12 @@ Filling and settling -------------------- The bin ``[0, L] x [0, W] x [0, H]`` i
 with spheres on a jittered hexagonal close-packed lattice
 (:func:`soilcal.dem.factories.lattice_fill`, spacing 2.02 r_max) with radii uniform by
 number on ``[r (1 - spread), r (1 + spread)]`` (Yangtze clay loam: 8 mm, 0.9-1.1 times, Sec.
-2.2.4 of Zeng et al. 2023), then settled under gravity against a floor and side walls
+2.2.4 of Zeng et al. 2023).  A bin with a mass-fraction size distribution (``psd``, e.g.
+the printed 3/2/1 mm split of the cinnamon soil) is filled instead by random sequential
+addition (:func:`soilcal.dem.factories.insert_random`) of the distribution's mass at a
+solid fraction of ``PSD_FILL_FRACTION`` in a region ``PSD_FILL_FACTOR`` times the fill
+height (a lattice sized for the largest particle would hold mostly small ones and collapse
+far below the fill height).  The bin is then settled under gravity against a floor and side walls
 (periodic in y when the bin is a slab of a wider tool, see the scenarios) for 70 % of
 ``settle_time`` (or until the translational kinetic energy per particle falls below ``0.5
 m_mean (1e-3 m/s)^2``); the lattice region is 1.3 times the fill height, and the particles
@@ -54,20 +59,26 @@ from pathlib import Path
 import numpy as np
 
 from soilcal.dem.engine import Simulation
-from soilcal.dem.factories import BoxRegion, UniformRadius, lattice_fill
+from soilcal.dem.factories import PSD, BoxRegion, UniformRadius, insert_random, lattice_fill
 from soilcal.dem.io import read_snapshot, write_particles_vtu, write_mesh_vtp, write_snapshot
 from soilcal.dem.materials import rayleigh_time
 from soilcal.dem.scenarios.base import (DemParams, build_materials, check, contact_model, rng)
 
 CACHE_VERSION = 1
 FILL_FACTOR = 1.3  # lattice region height / fill height (the bed compacts when it settles)
+PSD_FILL_FRACTION = 0.3  # solid fraction of a random (PSD) fill
+PSD_FILL_FACTOR = 2.2    # random-fill region height / fill height (0.3 -> about 0.6 settled)
 SOIL_KEYS = ("soil_soil_restitution", "soil_soil_static_friction", "soil_soil_rolling_friction",
              "soil_soil_surface_energy", "soil_density", "soil_poisson", "soil_shear_modulus")
 
 
 @dataclass(frozen=True)
 class BinSpec:
-    """Soil bin: length (x), width (y), fill height (z), radius and spread, periodic y."""
+    """Soil bin: length (x), width (y), fill height (z), radius and spread, periodic y.
+
+    ``psd``: optional mass-fraction size distribution ``(lower radii, upper radii, mass
+    fractions)`` (the fields of :class:`soilcal.dem.factories.PSD`); when given it sets the
+    radii (``radius`` is then the nominal radius and ``spread`` is unused)."""
 
     length: float
     width: float
@@ -80,25 +91,54 @@ class BinSpec:
     dt_fraction: float = 0.2
     max_overlap: float = 0.5
     skin_fraction: float = 0.6
+    psd: tuple | None = None
+
+    @property
+    def dist(self):
+        """Radius distribution: the PSD if given, else uniform by number."""
+        if self.psd is not None:
+            return PSD(*(tuple(float(v) for v in col) for col in self.psd))
+        return UniformRadius(self.r_min, self.r_max)
 
     @property
     def r_min(self):
+        if self.psd is not None:
+            return float(min(self.psd[0]))
         return self.radius * (1.0 - self.spread)
 
     @property
     def r_max(self):
+        if self.psd is not None:
+            return float(max(self.psd[1]))
         return self.radius * (1.0 + self.spread)
 
 
-def apply_preset(setup: dict, defaults: dict, settings: dict) -> dict:
+def psd_field(psd: PSD) -> tuple:
+    """``BinSpec.psd`` value of a :class:`soilcal.dem.factories.PSD`."""
+    return (tuple(float(v) for v in psd.lower), tuple(float(v) for v in psd.upper),
+            tuple(float(v) for v in psd.mass_fraction))
+
+
+def apply_preset(setup: dict, defaults: dict, settings: dict, overrides=None) -> dict:
     """Setup with the preset's discretisation: a preset value replaces the setup's value
-    unless the user set it (a value that differs from the named setup's default
-    ``defaults``, or a key the named setup does not have, e.g. ``stiffness_scale``); keys
-    the preset leaves at None keep the setup's value."""
+    unless the user set it; keys the preset leaves at None keep the setup's value.
+
+    User-set keys are those whose value differs from the named setup ``defaults`` or that
+    the named setup does not have (e.g. ``stiffness_scale``), plus the keys listed in
+    ``overrides`` (an iterable of key names; when None, the setup's own ``"overrides"``
+    entry).  A value equal to the named setup's default cannot be told apart from the
+    default by comparison, so it counts as set by the user only when listed: with
+    ``overrides=["tank_length"]``, ``tank_length=3.0`` under the quick preset stays 3.0.
+    Callers that take user overrides should pass their keys."""
+    if overrides is None:
+        overrides = setup.get("overrides")
+    if isinstance(overrides, str):
+        overrides = [overrides]
+    user_keys = {k for k in setup if k not in defaults or setup[k] != defaults[k]}
+    user_keys |= {str(k) for k in (overrides or ())} & set(setup)
     s = dict(setup)
     for k, v in settings.items():
-        user = k in setup and (k not in defaults or setup[k] != defaults[k])
-        if v is not None and not user:
+        if v is not None and k not in user_keys:
             s[k] = v
         elif k not in s:
             s[k] = v
@@ -149,8 +189,27 @@ def new_sim(spec: BinSpec, params: DemParams, dt: float, source: str) -> Simulat
 
 def cache_key(spec: BinSpec, params: DemParams, preset: str, seed: int) -> dict:
     p = params.as_dict()
-    return dict(version=CACHE_VERSION, bin=asdict(spec), preset=preset, seed=int(seed),
-                soil={k: p[k] for k in SOIL_KEYS})
+    b = asdict(spec)
+    if b["psd"] is None:
+        del b["psd"]  # uniform bins keep the key they had before PSD bins existed
+    key = dict(version=CACHE_VERSION, bin=b, preset=preset, seed=int(seed),
+               soil={k: p[k] for k in SOIL_KEYS})
+    return json.loads(json.dumps(key))  # as stored in (and read back from) the snapshot
+
+
+def fill_bin(spec: BinSpec, g, source: str):
+    """Unsettled positions and radii of the bin's fill (see the module notes)."""
+    if spec.psd is None:
+        region = BoxRegion((0.0, 0.0, 0.0),
+                           (spec.length, spec.width, FILL_FACTOR * spec.height))
+        return lattice_fill(region, dist=spec.dist, kind="hcp", jitter=0.5, rng=g,
+                            source=source, field="bin")
+    h = PSD_FILL_FACTOR * spec.height
+    region = BoxRegion((0.0, 0.0, 0.0), (spec.length, spec.width, h))
+    # any density works: the mass only sets the solid volume
+    vol = PSD_FILL_FRACTION * spec.length * spec.width * h
+    return insert_random(region, spec.dist, mass=vol, density=1.0, rng=g, source=source,
+                         field="bin")
 
 
 def cache_dir() -> Path:
@@ -197,10 +256,7 @@ def settled_bin(spec: BinSpec, params: DemParams, preset: str, seed: int, source
     t0 = time.perf_counter()
     g = rng(seed, "soil-bin")
     # fill a taller region, settle, trim to the fill height, settle again
-    region = BoxRegion((0.0, 0.0, 0.0), (spec.length, spec.width, FILL_FACTOR * spec.height))
-    dist = UniformRadius(spec.r_min, spec.r_max)
-    x, r = lattice_fill(region, dist=dist, kind="hcp", jitter=0.5, rng=g, source=source,
-                        field="bin")
+    x, r = fill_bin(spec, g, source)
     dt = soil_time_step(spec, params)
     m_mean = float(np.mean(params.soil_density * 4.0 / 3.0 * math.pi * r**3))
     steps = 0
