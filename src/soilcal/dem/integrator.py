@@ -42,6 +42,14 @@ from soilcal.dem.walls import TRIANGLE, move_walls, prim_closest
 
 DONE, NEED_PAIRS, NEED_KW, NEED_CELLS, BLOWUP, SETTLED, NEED_WBINS = 0, 1, 2, 3, 4, 5, 6
 NBLK_GROUPS = 32
+
+
+@njit(cache=True, inline="always")
+def block_size(n):
+    """Particles per block: about 64, and a whole number of blocks per group, so that every
+    group (and thread) gets the same number of blocks (only the last block may be short)."""
+    per_group = max(1, (n + 64 * NBLK_GROUPS - 1) // (64 * NBLK_GROUPS))
+    return max(1, (n + per_group * NBLK_GROUPS - 1) // (per_group * NBLK_GROUPS))
 # below this many particles a step is shorter than waking the worker threads three times
 # (milliseconds when other processes hold the cores): Simulation.run runs such systems on
 # one thread (results do not depend on the thread count)
@@ -63,13 +71,15 @@ def pair_forces(xr, vw, m, gravity, pair, codes, box, periodic, dt, start, nbr, 
     p0 = periodic[0]
     p1 = periodic[1]
     gx, gy, gz = gravity[0], gravity[1], gravity[2]
-    # particles are processed in blocks of 64 dealt round-robin over NBLK_GROUPS groups, so
+    # particles are processed in blocks of about 64 dealt round-robin over NBLK_GROUPS
+    # groups (the same number of blocks in every group), so
     # the threads share every region of the domain (balanced when contacts are unevenly
     # spread, e.g. a falling column over a settled bed); results do not depend on it
-    nblk = (n + 63) // 64
+    bs = block_size(n)
+    nblk = (n + bs - 1) // bs
     for c in prange(NBLK_GROUPS):
         for blk in range(c, nblk, NBLK_GROUPS):
-            for i in range(blk * 64, min(n, blk * 64 + 64)):
+            for i in range(blk * bs, min(n, blk * bs + bs)):
                 xi, yi, zi, ri = xr[i, 0], xr[i, 1], xr[i, 2], xr[i, 3]
                 fxi = m[i] * gx
                 fyi = m[i] * gy
@@ -152,10 +162,11 @@ def gather(x, v, om, r, inv_m, inv_i, mat, f, t, ovr, dt, kick, max_ovr,
     KW = wnbr.shape[1]
     h = 0.5 * dt
     nbad = 0
-    nblk = (n + 63) // 64
+    bs = block_size(n)
+    nblk = (n + bs - 1) // bs
     for c in prange(NBLK_GROUPS):
         for blk in range(c, nblk, NBLK_GROUPS):
-            for i in range(blk * 64, min(n, blk * 64 + 64)):
+            for i in range(blk * bs, min(n, blk * bs + bs)):
                 xi, yi, zi, ri = x[i, 0], x[i, 1], x[i, 2], r[i]
                 vxi, vyi, vzi = v[i, 0], v[i, 1], v[i, 2]
                 wxi, wyi, wzi = om[i, 0], om[i, 1], om[i, 2]
