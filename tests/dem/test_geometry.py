@@ -38,6 +38,16 @@ def test_rectangle_face_and_rim():
     assert r[1:4] == pytest.approx((0.8, 0.0, 0.6))
 
 
+def test_disk_and_rectangle_back_side():
+    # thin walls have two sides: below a disk or rectangle facing +z the distance is
+    # positive and the normal points down, towards the point
+    r = g.disk_closest(arr(0.3, 0.4, -0.1), O, EZ, 1.0)
+    assert r[0] == pytest.approx(0.1) and r[1:4] == pytest.approx((0, 0, -1))
+    assert r[4:7] == pytest.approx((0.3, 0.4, 0.0))
+    r = g.rectangle_closest(arr(0.5, 0.2, -0.3), O, EZ, arr(1, 0, 0), 1.0, 0.5)
+    assert r[0] == pytest.approx(0.3) and r[1:4] == pytest.approx((0, 0, -1))
+
+
 def test_disk_face_and_rim():
     r = g.disk_closest(arr(0.3, 0.4, 0.1), O, EZ, 1.0)
     assert r[0] == pytest.approx(0.1)
@@ -71,9 +81,10 @@ def test_point_inside_drum_distance_is_R_minus_r(r):
 def test_cylinder_outer_and_penetration_sign():
     res = g.cylinder_closest(arr(1.5, 0, 0.5), O, EZ, 1.0, 0.0, 1.0, False)
     assert res[0] == pytest.approx(0.5) and res[1:4] == pytest.approx((1, 0, 0))
-    # a particle centre that crossed an inner wall has negative distance
+    # a shell has two sides: a centre outside an inner (drum) wall is 0.1 from it, pushed out
     res = g.cylinder_closest(arr(1.1, 0, 0.5), O, EZ, 1.0, 0.0, 1.0, True)
-    assert res[0] == pytest.approx(-0.1)
+    assert res[0] == pytest.approx(0.1) and res[1:4] == pytest.approx((1, 0, 0))
+    assert res[4:7] == pytest.approx((1.0, 0.0, 0.5))
 
 
 def test_cylinder_rim_edge():
@@ -93,9 +104,10 @@ def test_cone_distance_vs_hand_geometry():
     assert res[0] == pytest.approx(0.3 / math.sqrt(2.0))
     assert res[4:7] == pytest.approx((1.35, 0.0, 0.35))
     assert res[1:4] == pytest.approx((-1 / math.sqrt(2), 0.0, 1 / math.sqrt(2)))
-    # same point, outer orientation: sign flips
-    assert g.cone_closest(p, O, EZ, 1.0, 2.0, 0.0, 1.0, False)[0] == pytest.approx(
-        -0.3 / math.sqrt(2.0))
+    # same point, outer orientation: same distance and normal (two-sided shell)
+    out = g.cone_closest(p, O, EZ, 1.0, 2.0, 0.0, 1.0, False)
+    assert out[0] == pytest.approx(0.3 / math.sqrt(2.0))
+    assert out[1:4] == pytest.approx(res[1:4])
     # below the small rim: closest is the rim circle (r = 1, z = 0)
     res = g.cone_closest(arr(0.0, 0.5, -0.5), O, EZ, 1.0, 2.0, 0.0, 1.0, True)
     assert res[0] == pytest.approx(math.sqrt(0.5))

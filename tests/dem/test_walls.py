@@ -20,7 +20,8 @@ def resting(add_wall, steps=6000):
     return sim
 
 
-@pytest.mark.parametrize("kind", ["mesh_edge", "mesh_vertex", "drum", "rectangle", "disk"])
+@pytest.mark.parametrize("kind", ["mesh_edge", "mesh_vertex", "drum", "rectangle", "disk",
+                                  "disk_back", "drum_outside"])
 def test_sphere_rests_with_weight_on_each_wall_kind(kind):
     def add(sim):
         if kind == "mesh_edge":  # two triangles, sphere above the shared diagonal
@@ -32,6 +33,10 @@ def test_sphere_rests_with_weight_on_each_wall_kind(kind):
             sim.add_mesh(v, [[0, 1 + k, 1 + (k + 1) % 6] for k in range(6)], "soil")
         elif kind == "drum":  # horizontal inner cylinder, sphere at its bottom
             sim.add_cylinder((0, 0, 0.05), (1, 0, 0), 0.05, 0.1, "soil", inner=True)
+        elif kind == "disk_back":  # disk facing down: the sphere rests on its back side
+            sim.add_disk((0, 0, 0), (0, 0, -1), 0.05, "soil")
+        elif kind == "drum_outside":  # sphere on top of a drum shell, outside it
+            sim.add_cylinder((0, 0, -0.05), (1, 0, 0), 0.05, 0.1, "soil", inner=True)
         elif kind == "rectangle":
             sim.add_rectangle((0, 0, 0), (0, 0, 1), (1, 0, 0), 0.05, 0.05, "soil")
         else:

@@ -17,8 +17,9 @@ engine computes the overlap of a sphere of radius ``R`` as ``R - dist``
       dist = (p - q) . m ,   c = p - dist m ,   n = m
 
 * Bounded planes (rectangle, disk): ``c`` is ``p`` projected onto the plane and
-  clamped to the bounded region; on the face ``dist`` is signed as above, off
-  the face (rim region) ``dist = |p - c|`` and ``n = (p - c)/|p - c|``.
+  clamped to the bounded region; on the face ``dist = |(p - c) . m|`` with ``n``
+  the face normal turned towards ``p``, off the face (rim region)
+  ``dist = |p - c|`` and ``n = (p - c)/|p - c|``.
 
 * Surfaces of revolution (cylinder and cone frustum shells).  With the unit
   axis ``d`` through ``a``, write ``z = (p - a) . d`` and the radial vector
@@ -35,9 +36,17 @@ engine computes the overlap of a sphere of radius ``R`` as ``R - dist``
 
   On the shell (``0 < t < 1``) the 2-D normal of the generator is
   ``m = (-(r1 - r0), z1 - z0) / L`` (pointing to larger radius; z1 > z0), the
-  signed distance is ``dist = (q - s) . m`` for an outer wall and
-  ``(q - s) . (-m)`` for an inner one (particles inside a drum, tube or
-  funnel).  For a cylinder this gives ``dist = R - r`` inside.  At a rim
+  distance is ``dist = |(q - s) . m|`` and ``n`` is ``m`` or ``-m``, whichever
+  points to the side of ``p``; ``inner`` (particles inside a drum, tube or funnel)
+  orients ``n`` for a point exactly on the shell.  For a cylinder this gives
+  ``dist = R - r`` inside.
+
+  Rectangles, disks, cylinders and cones are thin walls with two sides, like
+  triangles: a sphere behind a face is pushed back towards its own side.  (A
+  sphere on the front side cannot reach a negative signed distance without an
+  overlap above its radius, far beyond the engine's blow-up limit, so a negative
+  signed distance only ever means the back side.)  Infinite planes stay
+  half-spaces: ``dist`` is signed, and a centre below the plane is pushed up.  At a rim
   (``t`` clamped to 0 or 1) the closest point is on the edge circle and
   ``dist = |q - s|``, ``n`` the unit vector from that circle point to ``p``.
 
@@ -149,6 +158,8 @@ def rectangle_closest(p, centre, normal, u_axis, half_u, half_v):
     cy = centre[1] + ac * uy + bc * vy
     cz = centre[2] + ac * uz + bc * vz
     if ac == a and bc == b:
+        if h < 0.0:
+            return (-h, -nx, -ny, -nz, cx, cy, cz)
         return (h, nx, ny, nz, cx, cy, cz)
     return _rim_result(p, cx, cy, cz, nx, ny, nz)
 
@@ -162,6 +173,8 @@ def disk_closest(p, centre, normal, radius):
     ix, iy, iz = rx - h * nx, ry - h * ny, rz - h * nz
     rho = math.sqrt(ix * ix + iy * iy + iz * iz)
     if rho <= radius:
+        if h < 0.0:
+            return (-h, -nx, -ny, -nz, p[0] - h * nx, p[1] - h * ny, p[2] - h * nz)
         return (h, nx, ny, nz, p[0] - h * nx, p[1] - h * ny, p[2] - h * nz)
     s = radius / rho
     cx, cy, cz = centre[0] + s * ix, centre[1] + s * iy, centre[2] + s * iz
@@ -211,6 +224,10 @@ def cone_closest(p, axis_point, axis_dir, r0, r1, z0, z1, inner):
         mr = -mr
     if 0.0 < t < 1.0:
         dist = (z - sz) * mz + (r - sr) * mr
+        if dist < 0.0:  # behind the face: the other side of the thin shell
+            dist = -dist
+            mz = -mz
+            mr = -mr
         nx = mz * dx + mr * ex
         ny = mz * dy + mr * ey
         nz = mz * dz + mr * ez
