@@ -10,14 +10,14 @@ particles standing on the plate unless given).  Along each sector (or each of ``
 rays per sector; containers must stay wider than a particle, or the highest particle of a
 narrow container near the axis lies below the surface and the angle is biased low) the
 radial distance rho = |(x, y) - (x_c, y_c)| is cut into containers of width
-``bin_width`` (default one mean diameter); each container gives the top of its highest
-particle, h_k = max(z + r) - plate_z, at the radial position rho_k of that particle.  With
-the height of the sector H = max_k h_k, the rounded top and the toe are excluded by keeping
-the bins with
+``bin_width`` (default one mean diameter); each container gives its highest particle (by
+centre height) and, as the paper fits "the centre-of-mass coordinates of these particles",
+the point (rho_k, h_k) of that particle's centre, h_k = z - plate_z.  With the height of the
+sector H = max_k h_k, the rounded top and the toe are excluded by keeping the bins with
 
-    max(BAND[0] H, 3 <r>) < h_k < BAND[1] H     (BAND = (0.20, 0.75), as the photo measurement)
+    max(BAND[0] H, 2 <r>) < h_k < BAND[1] H     (BAND = (0.20, 0.75), as the photo measurement)
 
-(the 3 <r> bound drops the skirt of single spheres around a low heap, whose tops stand 2 r
+(the 2 <r> bound drops the skirt of single spheres around a low heap, whose centres stand r
 above the plate; it is dropped when fewer than 3 bins remain) and lie outside the highest
 container of their ray (rho_k > rho_top: containers near the axis hold few particles and
 are not on the flank), and fitting h = a + b rho by least squares (``numpy.polyfit``), so
@@ -25,9 +25,10 @@ the flank angle is
 
     alpha = atan(-b)
 
-The repose angle is the mean of the n_dir flank angles (a direction with fewer than two flank
-bins is left out; fewer than half the directions is an error); their sample standard
-deviation is reported as the spread.
+The repose angle is the mean of the n_dir flank angles (a direction with fewer than three
+containers or fewer than two flank bins is left out; fewer than half the directions is an
+error); their sample standard deviation is reported as the spread.  ``n_sub`` must be odd, so
+that the rays of a direction lie symmetrically about its centre line.
 
 Side silhouette
 ---------------
@@ -116,6 +117,9 @@ def repose_angle_bins(x, r, plate_z=0.0, centre=None, n_dir=8, bin_width=None, b
         raise InputError(source, "bin_width", "a bin width > 0 m", bin_width)
     height = float(top.max())
     r_mean = float(np.mean(r))
+    if int(n_sub) < 1 or int(n_sub) % 2 == 0:
+        raise InputError(source, "n_sub", "an odd number of rays per direction (>= 1)", n_sub)
+    top = x[:, 2] - plate_z  # centre heights: the fitted points (see module docstring)
     n_ray = n_dir * int(n_sub)
     ray = np.floor((phi + np.pi / n_ray) / (2 * np.pi / n_ray)).astype(int) % n_ray
     rb = np.floor(rho / w).astype(int)
@@ -130,15 +134,16 @@ def repose_angle_bins(x, r, plate_z=0.0, centre=None, n_dir=8, bin_width=None, b
     for k in range(n_dir):
         keep_k = np.zeros(idx.size, bool)
         sel = c_dir == k
-        if sel.sum() < 3:
-            raise InputError(source, f"direction {k}", "particles in every direction of the pile",
-                             int(sel.sum()))
+        if sel.sum() < 3:  # too few containers in this direction: left out
+            angles.append(float("nan"))
+            used.append(int(sel.sum()))
+            continue
         hd = c_top[sel].max()
         for q in np.unique(c_ray[sel]):
             s_q = c_ray == q
             rho_top = c_rho[s_q][np.argmax(c_top[s_q])]
             keep_k |= s_q & (c_rho > rho_top)
-        keep = keep_k & (c_top > max(band[0] * hd, 3.0 * r_mean)) & (c_top < band[1] * hd)
+        keep = keep_k & (c_top > max(band[0] * hd, 2.0 * r_mean)) & (c_top < band[1] * hd)
         if keep.sum() < 3:  # a low heap: keep the skirt bound only
             keep = keep_k & (c_top > band[0] * hd) & (c_top < band[1] * hd)
         if keep.sum() < 2 or np.ptp(c_rho[keep]) <= 0:
