@@ -93,7 +93,9 @@ def test_check_rng_and_merge_setup():
     with pytest.raises(InputError, match="seed"):
         rng(-1)
     s = merge_setup({"a": {"x": 1}}, "a", {"x": 2}, "cli")
-    assert s == {"x": 2, "name": "a"}
+    # the keys the user set are recorded, so presets never replace them
+    assert s == {"x": 2, "name": "a", "overrides": ["x"]}
+    assert merge_setup({"a": {"x": 1}}, "a", None, "cli") == {"x": 1, "name": "a"}
     with pytest.raises(InputError, match="setup.y"):
         merge_setup({"a": {"x": 1}}, "a", {"y": 2}, "cli")
     with pytest.raises(InputError, match="setup"):

@@ -14,13 +14,16 @@ al., Agriculture 2022, 12, 1082; ``config/soils/cinnamon-soil.yaml``):
 
 * density 1394 kg/m^3 (Sec. 2.1; the only density the paper prints, used in its EDEM model),
 * Poisson ratio 0.311 (Sec. 2.2, Eq. 1), shear modulus 3.814 MPa (Sec. 2.3, Eq. 4),
-* soil-soil restitution 0.45, static friction 0.56 (fixed values of Table 5 / Sec. 3.3.2),
-  rolling friction 0.11 and JKR surface energy 0.38 J/m^2 (Box-Behnken centre, Table 6),
-* soil-steel restitution 0.45, static friction 0.54 (Box-Behnken centre, Table 6), rolling
-  friction 0.125 (fixed, Sec. 3.3.2); the paper has no soil-steel surface energy (0).
+* soil-soil restitution 0.45, static friction 0.56 (the "intermediate level values" the
+  non-significant parameters were held at, Sec. 3.3.2), rolling friction 0.11 and JKR
+  surface energy 0.38 J/m^2 (Box-Behnken centre levels, Sec. 3.3.2 / Table 6),
+* soil-steel restitution 0.45 and rolling friction 0.125 (intermediate level values,
+  Sec. 3.3.2), static friction 0.54 (Box-Behnken centre level, Sec. 3.3.2 / Table 6); the
+  paper has no soil-steel surface energy (0).
 
 Steel (65Mn/Q235 tools, plates, tubes): 7850 kg/m^3, Poisson 0.3, G = 7.9e10 Pa (cinnamon
-soil Sec. 3.1; cohesive soil Sec. 2.6).
+soil Sec. 3.1, printed "7.9 x 10^10 MPa", a unit slip for 79 GPa (errata of that soil);
+cohesive soil Sec. 2.6).
 
 Stiffness scaling
 -----------------
@@ -219,6 +222,9 @@ def merge_setup(setups: dict, name: str, overrides: dict | None, source: str) ->
             raise InputError(source, f"setup.{k}", f"one of {', '.join(sorted(out))}", k)
         out[k] = v
     out["name"] = out.get("name", name)
+    if overrides:
+        # keys the user set keep their value under every preset, even when equal to the default
+        out["overrides"] = sorted(set(out.get("overrides", [])) | set(overrides))
     return out
 
 
@@ -292,7 +298,10 @@ def threads_used(threads) -> int:
 #:
 #: * ``quick``: soil shear modulus reduced to at most ``g_max`` = 5e5 Pa (stiffness scaling
 #:   with the surface-energy rule above), time step 30 % of the Rayleigh time (the upper end
-#:   of the 10-30 % the vineyard-soil paper recommends), about ``n_particles`` spheres;
+#:   of the 10-30 % the vineyard-soil paper recommends), about ``n_particles`` spheres.
+#:   The vineyard-soil paper keeps scaled moduli above 1e7 Pa (after Lommen et al.); the
+#:   quick preset departs from that limit for speed, which the convergence study
+#:   (benchmarks/convergence.py, stiffness factor) quantifies;
 #: * ``paper``: unscaled moduli, time step 20 % of the Rayleigh time (003: "20 % of the
 #:   Rayleigh time step"; 004 Sec. 2.6: "fixed simulation time step of 20 %"), the papers'
 #:   particle sizes.

@@ -94,7 +94,9 @@ def sizing(setup, preset, params: DemParams | None = None):
                 load_mass=n * dist.mean_volume() * rho)
 
 
-def validate(setup, preset="quick", source="<input>"):
+def validate(setup, preset="quick", source="<input>", params=None):
+    """Fail before the run on impossible settings (``params``: the run's DEM parameters, for
+    the soil density; the defaults when None)."""
     check_preset(preset, source)
     D = _num(setup, "tube_diameter", source)
     H = _num(setup, "tube_height", source)
@@ -121,7 +123,7 @@ def validate(setup, preset="quick", source="<input>"):
     sz = sizing(setup, preset)
     check(D >= 8 * sz["r_max"], source, "setup.tube_diameter",
           f"at least 4 particle diameters ({8 * sz['r_max']:.4g} m)", D)
-    rho = DemParams().soil_density
+    rho = (params or DemParams()).soil_density
     h_fill = sz["load_mass"] / (rho * PHI) / (math.pi * D * D / 4)
     # the particle density of the soil is not known here (the papers' densities mix bulk and
     # particle values): refuse only a load that would overflow the tube twice over
@@ -132,7 +134,7 @@ def validate(setup, preset="quick", source="<input>"):
 
 def run(setup, params: DemParams, preset="quick", seed=0, threads=None, vtk_dir=None,
         source="<compression>") -> Result:
-    validate(setup, preset, source)
+    validate(setup, preset, source, params)
     timer = Timer()
     nthreads = threads_used(threads)
     sz = sizing(setup, preset, params)

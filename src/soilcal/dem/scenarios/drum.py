@@ -38,7 +38,7 @@ import math
 import numpy as np
 
 from soilcal.dem import measure
-from soilcal.dem.factories import PSD, CylinderRegion, UniformRadius, insert_random
+from soilcal.dem.factories import CylinderRegion, UniformRadius, insert_random
 from soilcal.dem.scenarios.base import (DemParams, Frames, Result, Timer, check, check_preset,
                                         make_simulation, rng, run_time, settle, threads_used)
 
@@ -76,16 +76,15 @@ def _pos(setup, key, source, allow_none=False):
     return x
 
 
-def sizing(setup, preset):
+def sizing(setup, preset, source="<input>"):
     d = check_preset(preset)
     R, L = setup["drum_diameter"] / 2, setup["drum_length"]
     vol = setup["fill_fraction"] * math.pi * R * R * L
     r_set, n_set = setup.get("radius"), setup.get("n_particles")
     if preset == "paper" and r_set is None and n_set is None:
-        rows = setup["paper_psd"]
-        r = np.array([float(a) for a, _ in rows])
-        p = np.array([float(b) for _, b in rows])
-        dist = PSD(tuple(r), tuple(r), tuple(p / p.sum()))
+        from soilcal.dem.scenarios.repose import _paper_psd
+
+        dist = _paper_psd(setup, source)
     else:
         if r_set is None:
             n = int(n_set or d["n_particles"])
@@ -126,7 +125,7 @@ def validate(setup, preset="quick", source="<input>"):
     dtf = _pos(setup, "dt_fraction", source, allow_none=True)
     if dtf is not None:
         check(dtf <= 1, source, "setup.dt_fraction", "a fraction of the Rayleigh time in (0, 1]", dtf)
-    sz = sizing(setup, preset)
+    sz = sizing(setup, preset, source)
     check(2 * sz["r_max"] * 6 <= min(D, L), source, "setup.drum_diameter",
           f"a drum at least 6 particle diameters across ({12 * sz['r_max']:.4g} m)", (D, L))
 

@@ -82,7 +82,8 @@ def setups() -> dict:
     return {
         # 002 Sec. 2.4: steel cylinder 60 mm diameter, lifted at 0.05 m/s, square steel plate.
         # Tube height, fill and plate size are not printed: fill height = diameter, 0.3 m plate.
-        # 002 Sec. 3.1: model particle sizes 3, 2, 1 mm (mass 8.85, 8.2, 82.95 %), diameters.
+        # 002 Sec. 3.1: model particle sizes 3, 2, 1 mm (mass 8.85, 8.2, 82.95 %); reading them
+        # as diameters is an assumption (the paper says only 'particle size').
         "cinnamon-soil": dict(cyl, tube_diameter=0.060, tube_height=0.120, fill_height=0.060,
                               lift_speed=0.05, plate_size=0.30,
                               paper_psd=[[0.0015, 8.85], [0.0010, 8.20], [0.0005, 82.95]]),
@@ -101,7 +102,8 @@ def setups() -> dict:
                                                    [0.005, 33.33]]),
         # 001 Sec. 2.2.1: funnel top 192 mm, bottom 50 mm, height 274 mm, 400 x 400 mm base
         # plate; particle diameters 2-4 mm; stage 1: every entity has the soil's properties.
-        # Outlet height above the plate and load mass not printed: 100 mm, 0.5 kg.
+        # Outlet height above the plate and load mass not printed: 100 mm, 0.5 kg.  The mass
+        # split over the 2-4 mm range is not printed either: 50 % at each end is an assumption.
         "black-soil-stage1": dict(fun, wall_material="soil", plate_material="soil",
                                   funnel_top_diameter=0.192, funnel_bottom_diameter=0.050,
                                   funnel_height=0.274, outlet_height=0.100, plate_size=0.40,
@@ -149,7 +151,7 @@ def _paper_psd(setup, source):
 def _fill_volume(setup, params: DemParams | None):
     if setup["method"] == "cylinder":
         return math.pi * setup["tube_diameter"] ** 2 / 4 * setup["fill_height"]
-    rho = params.soil_density if params is not None else DemParams().soil_density
+    rho = (params or DemParams()).soil_density
     return setup["load_mass"] / (rho * PHI)
 
 
@@ -178,11 +180,11 @@ def sizing(setup, preset, params: DemParams | None = None) -> dict:
     if setup["method"] == "funnel" and preset == "quick" and setup.get("radius") is None \
             and setup.get("n_particles") is None:
         n = int(d["n_particles"])
-        rho = params.soil_density if params is not None else DemParams().soil_density
+        rho = (params or DemParams()).soil_density
         load_mass = n * vmean * rho
     elif n_set is not None and setup["method"] == "funnel":
         n = int(n_set)
-        rho = params.soil_density if params is not None else DemParams().soil_density
+        rho = (params or DemParams()).soil_density
         load_mass = n * vmean * rho
     else:
         n = int(round(PHI * _fill_volume(setup, params) / vmean))
@@ -191,7 +193,8 @@ def sizing(setup, preset, params: DemParams | None = None) -> dict:
                 load_mass=load_mass)
 
 
-def validate(setup: dict, preset: str = "quick", source: str = "<input>") -> None:
+def validate(setup: dict, preset: str = "quick", source: str = "<input>",
+             params: DemParams | None = None) -> None:
     """Bad geometry or impossible settings raise InputError before anything runs."""
     check_preset(preset, source)
     method = setup.get("method")
@@ -243,10 +246,10 @@ def validate(setup: dict, preset: str = "quick", source: str = "<input>") -> Non
               f"an outlet of at least 5 particle diameters ({10 * sz['r_max']:.4g} m)",
               setup["funnel_bottom_diameter"])
         for m in {setup["load_mass"], sz["load_mass"]}:
-            load_v = m / (DemParams().soil_density * PHI)
+            load_v = m / ((params or DemParams()).soil_density * PHI)
             check(load_v <= _funnel_volume(setup), source, "setup.load_mass",
                   f"a load that fits the funnel ({_funnel_volume(setup) * 1e3:.3g} L at "
-                  f"{DemParams().soil_density:g} kg/m^3, solid fraction {PHI})", m)
+                  f"{(params or DemParams()).soil_density:g} kg/m^3, solid fraction {PHI})", m)
 
 
 def _plate(sim, setup):
@@ -266,7 +269,7 @@ def _insert(sim, region, dist, n, gen, source):
 
 def run(setup: dict, params: DemParams, preset: str = "quick", seed: int = 0, threads=None,
         vtk_dir=None, source: str = "<repose>") -> Result:
-    validate(setup, preset, source)
+    validate(setup, preset, source, params)
     timer = Timer()
     nthreads = threads_used(threads)
     sz = sizing(setup, preset, params)
