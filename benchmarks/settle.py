@@ -180,8 +180,9 @@ def write_tables(rows, notes, out: Path, quick: bool) -> None:
         lines += ["", "The large-N row runs only the first steps (free fall, almost no contacts): "
                   "it is there for peak memory, its throughput is not comparable with the "
                   "20,000-step rows.",
-                  "soilcal's memory is dominated by the double-buffered contact-history slots "
-                  "(24 partners x 8 float64 per particle, two buffers)."]
+                  "soilcal's lists grow with the number of neighbour pairs (CSR half lists: partner, "
+                  "history and pair slot, about 150 bytes a pair); most of its RSS is the "
+                  "Python, NumPy and Numba runtime (about 300 MB)."]
     if notes:
         lines += ["", "Notes from this run:", ""] + [f"* {n}" for n in notes]
     (out / "settle.md").write_text("\n".join(lines) + "\n")
