@@ -185,6 +185,21 @@ def check(ok, source, field, expected, got=None) -> None:
         raise InputError(source, field, expected, got)
 
 
+def setup_number(setup, key, source, lo=0.0, inclusive=False, allow_none=False):
+    """``setup[key]`` as a finite float above ``lo`` (at least ``lo`` if ``inclusive``), or
+    None when missing and ``allow_none``; otherwise InputError naming ``setup.<key>``."""
+    v = setup.get(key)
+    if v is None and allow_none:
+        return None
+    try:
+        x = float(v)
+    except (TypeError, ValueError):
+        raise InputError(source, f"setup.{key}", "a number", v) from None
+    ok = math.isfinite(x) and (x >= lo if inclusive else x > lo)
+    check(ok, source, f"setup.{key}", f"a finite number {'>=' if inclusive else '>'} {lo:g}", v)
+    return x
+
+
 def rng(seed, stream: str = "") -> np.random.Generator:
     """A numpy Generator seeded by (seed, stream) so independent choices use separate streams."""
     if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or seed < 0:

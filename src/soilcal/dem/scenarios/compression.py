@@ -39,7 +39,7 @@ import numpy as np
 from soilcal.dem import measure
 from soilcal.dem.factories import PSD, CylinderRegion, UniformRadius, insert_random
 from soilcal.dem.scenarios.base import (DemParams, Frames, Result, Timer, check, check_preset,
-                                        make_simulation, rng, settle, threads_used)
+                                        make_simulation, rng, settle, setup_number, threads_used)
 
 NAME = "compression"
 PHI = 0.6
@@ -60,16 +60,6 @@ def setups() -> dict:
     }
 
 
-def _num(setup, key, source, allow_none=False):
-    v = setup.get(key)
-    if v is None and allow_none:
-        return None
-    try:
-        x = float(v)
-    except (TypeError, ValueError):
-        check(False, source, f"setup.{key}", "a number", v)
-    check(math.isfinite(x) and x > 0, source, f"setup.{key}", "a finite number > 0", v)
-    return x
 
 
 def sizing(setup, preset, params: DemParams | None = None):
@@ -98,26 +88,26 @@ def validate(setup, preset="quick", source="<input>", params=None):
     """Fail before the run on impossible settings (``params``: the run's DEM parameters, for
     the soil density; the defaults when None)."""
     check_preset(preset, source)
-    D = _num(setup, "tube_diameter", source)
-    H = _num(setup, "tube_height", source)
-    Dr = _num(setup, "rod_diameter", source)
+    D = setup_number(setup, "tube_diameter", source)
+    H = setup_number(setup, "tube_height", source)
+    Dr = setup_number(setup, "rod_diameter", source)
     check(Dr < D, source, "setup.rod_diameter", f"a rod narrower than the tube ({D} m)", Dr)
-    _num(setup, "load_mass", source)
-    _num(setup, "rod_speed", source)
-    e = _num(setup, "max_strain", source)
+    setup_number(setup, "load_mass", source)
+    setup_number(setup, "rod_speed", source)
+    e = setup_number(setup, "max_strain", source)
     check(e < 0.9, source, "setup.max_strain", "a strain in (0, 0.9)", e)
-    hq = _num(setup, "quick_height", source)
+    hq = setup_number(setup, "quick_height", source)
     check(hq < H, source, "setup.quick_height", f"a sample lower than the tube ({H} m)", hq)
-    _num(setup, "sample_dz", source)
-    _num(setup, "rest_speed", source)
-    _num(setup, "max_settle_time", source)
+    setup_number(setup, "sample_dz", source)
+    setup_number(setup, "rest_speed", source)
+    setup_number(setup, "max_settle_time", source)
     n = setup.get("n_particles")
     if n is not None:
         check(isinstance(n, (int, np.integer)) and not isinstance(n, bool) and n >= 20, source,
               "setup.n_particles", "an integer >= 20", n)
-    _num(setup, "radius", source, allow_none=True)
-    _num(setup, "stiffness_scale", source, allow_none=True)
-    f = _num(setup, "dt_fraction", source, allow_none=True)
+    setup_number(setup, "radius", source, allow_none=True)
+    setup_number(setup, "stiffness_scale", source, allow_none=True)
+    f = setup_number(setup, "dt_fraction", source, allow_none=True)
     if f is not None:
         check(f <= 1, source, "setup.dt_fraction", "a fraction of the Rayleigh time in (0, 1]", f)
     sz = sizing(setup, preset)

@@ -40,7 +40,8 @@ import numpy as np
 from soilcal.dem import measure
 from soilcal.dem.factories import CylinderRegion, UniformRadius, insert_random
 from soilcal.dem.scenarios.base import (DemParams, Frames, Result, Timer, check, check_preset,
-                                        make_simulation, rng, run_time, settle, threads_used)
+                                        make_simulation, rng, run_time, settle, setup_number,
+                                        threads_used)
 
 NAME = "drum"
 PHI = 0.6
@@ -64,16 +65,6 @@ def setups() -> dict:
 PRESET_TIMES = {"quick": (2.5, 1.0), "paper": (10.0, 3.0)}
 
 
-def _pos(setup, key, source, allow_none=False):
-    v = setup.get(key)
-    if v is None and allow_none:
-        return None
-    try:
-        x = float(v)
-    except (TypeError, ValueError):
-        check(False, source, f"setup.{key}", "a number", v)
-    check(math.isfinite(x) and x > 0, source, f"setup.{key}", "a finite number > 0", v)
-    return x
 
 
 def sizing(setup, preset, source="<input>"):
@@ -96,19 +87,19 @@ def sizing(setup, preset, source="<input>"):
 
 def validate(setup, preset="quick", source="<input>"):
     check_preset(preset, source)
-    D = _pos(setup, "drum_diameter", source)
-    L = _pos(setup, "drum_length", source)
+    D = setup_number(setup, "drum_diameter", source)
+    L = setup_number(setup, "drum_length", source)
     f = setup.get("fill_fraction")
     check(isinstance(f, (int, float)) and not isinstance(f, bool) and 0 < f <= 1.0, source,
           "setup.fill_fraction", "a fill fraction in (0, 1] (0.25 = 25 % of the drum volume)", f)
     check(f <= 0.5, source, "setup.fill_fraction",
           "at most half the drum (a free surface across the mid-section)", f)
-    _pos(setup, "rpm", source)
-    _pos(setup, "rest_speed", source)
-    _pos(setup, "max_settle_time", source)
-    _pos(setup, "frame_every", source)
-    st = _pos(setup, "spin_time", source, allow_none=True)
-    tt = _pos(setup, "transient_time", source, allow_none=True)
+    setup_number(setup, "rpm", source)
+    setup_number(setup, "rest_speed", source)
+    setup_number(setup, "max_settle_time", source)
+    setup_number(setup, "frame_every", source)
+    st = setup_number(setup, "spin_time", source, allow_none=True)
+    tt = setup_number(setup, "transient_time", source, allow_none=True)
     spin, trans = PRESET_TIMES[preset]
     spin, trans = st or spin, tt or trans
     check(trans < spin, source, "setup.transient_time",
@@ -120,9 +111,9 @@ def validate(setup, preset="quick", source="<input>"):
     if n is not None:
         check(isinstance(n, (int, np.integer)) and not isinstance(n, bool) and n >= 20, source,
               "setup.n_particles", "an integer >= 20", n)
-    _pos(setup, "radius", source, allow_none=True)
-    _pos(setup, "stiffness_scale", source, allow_none=True)
-    dtf = _pos(setup, "dt_fraction", source, allow_none=True)
+    setup_number(setup, "radius", source, allow_none=True)
+    setup_number(setup, "stiffness_scale", source, allow_none=True)
+    dtf = setup_number(setup, "dt_fraction", source, allow_none=True)
     if dtf is not None:
         check(dtf <= 1, source, "setup.dt_fraction", "a fraction of the Rayleigh time in (0, 1]", dtf)
     sz = sizing(setup, preset, source)

@@ -42,7 +42,7 @@ import math
 import numpy as np
 
 from soilcal.dem.scenarios.base import (DemParams, Frames, Result, Timer, check, check_preset,
-                                        make_simulation, rng, threads_used)
+                                        make_simulation, rng, setup_number, threads_used)
 
 NAME = "incline"
 G = 9.81
@@ -66,44 +66,33 @@ STEPS = {("quick", "sliding"): (0.25, 0.1), ("quick", "rolling"): (0.1, 0.2),
          ("paper", "sliding"): (0.1, 0.2), ("paper", "rolling"): (0.05, 0.3)}
 
 
-def _num(setup, key, source, lo=0.0, allow_none=False, inclusive=False):
-    v = setup.get(key)
-    if v is None and allow_none:
-        return None
-    try:
-        x = float(v)
-    except (TypeError, ValueError):
-        check(False, source, f"setup.{key}", "a number", v)
-    ok = math.isfinite(x) and (x >= lo if inclusive else x > lo)
-    check(ok, source, f"setup.{key}", f"a finite number {'>=' if inclusive else '>'} {lo}", v)
-    return x
 
 
 def validate(setup, preset="quick", source="<input>"):
     check_preset(preset, source)
     kind = setup.get("kind")
     check(kind in ("sliding", "rolling"), source, "setup.kind", "'sliding' or 'rolling'", kind)
-    a0 = _num(setup, "start_deg", source, 0.0, inclusive=True)
-    a1 = _num(setup, "max_deg", source)
+    a0 = setup_number(setup, "start_deg", source, 0.0, inclusive=True)
+    a1 = setup_number(setup, "max_deg", source)
     check(a1 < 90 and a0 < a1, source, "setup.max_deg", f"an angle in ({a0}, 90) deg", a1)
-    _num(setup, "step_deg", source, allow_none=True)
-    _num(setup, "hold_time", source, allow_none=True)
-    _num(setup, "move_fraction", source)
-    _num(setup, "stiffness_scale", source, allow_none=True)
-    f = _num(setup, "dt_fraction", source, allow_none=True)
+    setup_number(setup, "step_deg", source, allow_none=True)
+    setup_number(setup, "hold_time", source, allow_none=True)
+    setup_number(setup, "move_fraction", source)
+    setup_number(setup, "stiffness_scale", source, allow_none=True)
+    f = setup_number(setup, "dt_fraction", source, allow_none=True)
     if f is not None:
         check(f <= 1, source, "setup.dt_fraction", "a fraction of the Rayleigh time in (0, 1]", f)
     check(setup.get("plate_material") in ("steel", "soil"), source, "setup.plate_material",
           "'steel' or 'soil'", setup.get("plate_material"))
     if kind == "sliding":
-        d = _num(setup, "block_diameter", source)
-        r = _num(setup, "sphere_radius", source)
+        d = setup_number(setup, "block_diameter", source)
+        r = setup_number(setup, "sphere_radius", source)
         n = setup.get("layers")
         check(isinstance(n, int) and not isinstance(n, bool) and 1 <= n <= 5, source,
               "setup.layers", "an integer in [1, 5]", n)
         check(d >= 4 * r, source, "setup.block_diameter", f"at least 2 sphere diameters ({4 * r} m)", d)
     else:
-        _num(setup, "ball_radius", source)
+        setup_number(setup, "ball_radius", source)
 
 
 def _block(setup):

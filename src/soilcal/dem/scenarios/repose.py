@@ -65,7 +65,8 @@ from soilcal.dem import measure
 from soilcal.dem.factories import PSD, CylinderRegion, UniformRadius, insert_random
 from soilcal.dem.geometry import cone_mesh, disk_mesh
 from soilcal.dem.scenarios.base import (DemParams, Frames, Result, Timer, check, check_preset,
-                                        make_simulation, rng, run_time, settle, threads_used)
+                                        make_simulation, rng, run_time, settle, setup_number,
+                                        threads_used)
 
 NAME = "repose"
 PHI = 0.6  # settled solid fraction used to size the fill
@@ -124,17 +125,6 @@ def setups() -> dict:
     }
 
 
-def _num(setup, key, source, positive=True, allow_none=False):
-    v = setup.get(key)
-    if v is None and allow_none:
-        return None
-    try:
-        x = float(v)
-    except (TypeError, ValueError):
-        check(False, source, f"setup.{key}", "a number", v)
-    check(math.isfinite(x) and (x > 0 if positive else x >= 0), source, f"setup.{key}",
-          "a finite number > 0" if positive else "a finite number >= 0", v)
-    return x
 
 
 def _paper_psd(setup, source):
@@ -202,35 +192,35 @@ def validate(setup: dict, preset: str = "quick", source: str = "<input>",
     for key in ("plate_material", "wall_material"):
         check(setup.get(key) in ("steel", "soil"), source, f"setup.{key}", "'steel' or 'soil'",
               setup.get(key))
-    plate = _num(setup, "plate_size", source)
-    _num(setup, "rest_speed", source)
-    _num(setup, "max_settle_time", source)
+    plate = setup_number(setup, "plate_size", source)
+    setup_number(setup, "rest_speed", source)
+    setup_number(setup, "max_settle_time", source)
     n = setup.get("n_particles")
     if n is not None:
         check(isinstance(n, (int, np.integer)) and not isinstance(n, bool) and n >= 20, source,
               "setup.n_particles", "an integer >= 20 (or None for the preset)", n)
-    _num(setup, "radius", source, allow_none=True)
-    s = _num(setup, "stiffness_scale", source, allow_none=True)
+    setup_number(setup, "radius", source, allow_none=True)
+    s = setup_number(setup, "stiffness_scale", source, allow_none=True)
     if s is not None:
         check(s <= 1000, source, "setup.stiffness_scale", "a factor in (0, 1000]", s)
-    f = _num(setup, "dt_fraction", source, allow_none=True)
+    f = setup_number(setup, "dt_fraction", source, allow_none=True)
     if f is not None:
         check(f <= 1.0, source, "setup.dt_fraction", "a fraction of the Rayleigh time in (0, 1]", f)
     if method == "cylinder":
-        dia = _num(setup, "tube_diameter", source)
-        h = _num(setup, "tube_height", source)
-        fill = _num(setup, "fill_height", source)
-        _num(setup, "lift_speed", source)
+        dia = setup_number(setup, "tube_diameter", source)
+        h = setup_number(setup, "tube_height", source)
+        fill = setup_number(setup, "fill_height", source)
+        setup_number(setup, "lift_speed", source)
         check(dia < plate, source, "setup.tube_diameter",
               f"a tube narrower than the plate ({plate} m)", dia)
         check(fill <= h, source, "setup.fill_height", f"at most the tube height {h} m", fill)
     else:
-        top = _num(setup, "funnel_top_diameter", source)
-        bot = _num(setup, "funnel_bottom_diameter", source)
-        _num(setup, "funnel_height", source)
-        _num(setup, "outlet_height", source, positive=False)
-        _num(setup, "cover_speed", source)
-        _num(setup, "load_mass", source)
+        top = setup_number(setup, "funnel_top_diameter", source)
+        bot = setup_number(setup, "funnel_bottom_diameter", source)
+        setup_number(setup, "funnel_height", source)
+        setup_number(setup, "outlet_height", source, inclusive=True)
+        setup_number(setup, "cover_speed", source)
+        setup_number(setup, "load_mass", source)
         check(bot < top, source, "setup.funnel_bottom_diameter",
               f"an outlet narrower than the funnel top ({top} m)", bot)
         check(top < plate, source, "setup.funnel_top_diameter",
@@ -281,7 +271,7 @@ def run(setup: dict, params: DemParams, preset: str = "quick", seed: int = 0, th
     dmax = 2 * sz["r_max"]
     info = {}
     if setup["method"] == "cylinder":
-        R, fill = setup["tube_diameter"] / 2, setup["fill_height"]
+        R = setup["tube_diameter"] / 2
         vol = sz["n"] * sz["dist"].mean_volume()
         h_ins = vol / (0.30 * math.pi * (R - sz["r_max"]) ** 2)
         tube_h = max(setup["tube_height"], h_ins + dmax)
