@@ -11,7 +11,8 @@ until the translational kinetic energy is below 1/2 M (2 mm/s)^2.
 Reported: wall time of the whole run (compile excluded: a small warm-up run first), steps,
 simulated time, particle-steps per second, the time to rest after the lift, the angle by
 radial bins and by silhouette, and the machine load (other processes share the cores).
-Results go to benchmarks/results/pile.csv and pile.md (``--out`` elsewhere).
+Each run adds a row to benchmarks/results/pile.csv and regenerates pile.md (notes below its
+marker are kept; ``--out`` elsewhere).
 
     python benchmarks/pile.py [--n 5000] [--threads 2] [--out DIR]
 """
@@ -27,6 +28,24 @@ import time
 from pathlib import Path
 
 HERE = Path(__file__).resolve().parent
+NOTES = "<!-- notes: kept when the table is regenerated -->"
+
+
+def _commit():
+    import subprocess
+    try:
+        return subprocess.run(["git", "rev-parse", "--short", "HEAD"], cwd=HERE,
+                              capture_output=True, text=True, check=True).stdout.strip()
+    except (OSError, subprocess.CalledProcessError):
+        return ""
+
+
+def _read_rows(path, fields):
+    """Earlier rows of the results table (columns they lack are left empty)."""
+    if not path.exists():
+        return []
+    with open(path, newline="") as fh:
+        return [{k: r.get(k, "") for k in fields} for r in csv.DictReader(fh)]
 
 
 def main(argv=None):
@@ -60,30 +79,38 @@ def main(argv=None):
                height_mm=round(1e3 * r["height_m"], 2), dt_s=f"{res.setup['dt']:.4g}",
                stiffness_scale=round(res.setup["stiffness_scale"], 4),
                warmup_s=round(warm, 1), load_avg_1min=round(os.getloadavg()[0], 2))
+    row = dict(utc=time.strftime("%Y-%m-%d %H:%M", time.gmtime()), commit=_commit(), **row)
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
+    rows = _read_rows(out / "pile.csv", list(row)) + [row]
     with open(out / "pile.csv", "w", newline="") as fh:
         w = csv.DictWriter(fh, fieldnames=list(row))
         w.writeheader()
-        w.writerow(row)
+        w.writerows(rows)
+    md_path = out / "pile.md"
+    notes = ""
+    if md_path.exists() and NOTES in md_path.read_text():
+        notes = md_path.read_text().split(NOTES, 1)[1]
     md = [
         "# Pile benchmark (cylinder lifting, non-cohesive)",
         "",
         f"Machine: {platform.machine()}, {os.cpu_count()} logical CPUs, Python "
-        f"{platform.python_version()}; {time.strftime('%Y-%m-%d %H:%M UTC', time.gmtime())}.",
-        "Command: `python benchmarks/pile.py " + " ".join(sys.argv[1:]) + "`",
+        f"{platform.python_version()}.  Every run of `python benchmarks/pile.py` adds a row "
+        "(utc, commit); the last was `python benchmarks/pile.py " + " ".join(sys.argv[1:]) + "`.",
         "",
         "| " + " | ".join(row) + " |",
         "|" + "---|" * len(row),
-        "| " + " | ".join(str(v) for v in row.values()) + " |",
+        *("| " + " | ".join(str(r.get(k, "")) for k in row) + " |" for r in rows),
         "",
         "Setup: 60 mm steel tube, fill 60 mm, lifted at 0.05 m/s (002 Sec. 2.4), 65Mn plate; "
         "Hertz-Mindlin + constant-torque rolling (mu_r 0.1), no cohesion; quick-preset "
         "stiffness and time step.  wall_s covers filling, settling in the tube, the lift and "
         "the rest (compile excluded); load_avg_1min is the machine load at the end (other "
         "processes share the two cores).",
+        "",
+        NOTES + notes.rstrip("\n"),
     ]
-    (out / "pile.md").write_text("\n".join(md) + "\n")
+    md_path.write_text("\n".join(md) + "\n")
     print(row)
 
 
