@@ -11,7 +11,8 @@ Example::
     sim.add_plane((0, 0, 0), (0, 0, 1), "soil")
     sim.run(20000)
 
-The time step is checked against the Rayleigh time (materials.py) and the contact model is
+The time step is checked against the Rayleigh time and, with JKR, the zero-load JKR
+stiffness (materials.py) and the contact model is
 composed by name (contact.py).  All arrays are structure-of-arrays numpy float64 and stay
 owned by the object between calls to :meth:`Simulation.run`.
 """
@@ -215,13 +216,20 @@ class Simulation:
         for k in np.unique(p.mat):
             rmin[int(k)] = float(p.r[p.mat == k].min())
         self.rayleigh = self.materials.rayleigh_dt(rmin)
-        dt = self.dt_user if self.dt_user is not None else self.dt_fraction * self.rayleigh
+        self.jkr_dt = (self.materials.jkr_dt(rmin, self.w_factor) if self.codes[4] == 1
+                       else math.inf)
+        dt = self.dt_user if self.dt_user is not None else min(
+            self.dt_fraction * self.rayleigh, self.jkr_dt)
         if not (dt > 0 and math.isfinite(dt)):
             raise InputError(self.source, "dt", "a time step > 0 s", dt)
         if dt > self.rayleigh:
             raise InputError(self.source, "dt",
                              f"a time step <= the Rayleigh time {self.rayleigh:.4g} s "
                              f"(stable bound; 20-40 % of it is usual)", dt)
+        if dt > self.jkr_dt * (1 + 1e-12):
+            raise InputError(self.source, "dt",
+                             f"a time step <= the JKR bound {self.jkr_dt:.4g} s "
+                             f"(0.17 sqrt(m / (2 E* a_0)), materials.py)", dt)
         self.dt = float(dt)
         rmax = float(p.r.max())
         # JKR separation range

@@ -15,6 +15,21 @@ Rayleigh time step (EDEM guide; Li, Xu & Thornton 2005, Powder Technol. 160:219)
 evaluated for the smallest particle of each material, the minimum over materials is used.
 A time step above T_R is rejected as unstable (EDEM recommends 20-40 % of T_R).
 
+JKR bound.  T_R follows from Hertz contacts, whose stiffness S_n = 2 E* a vanishes at zero
+load; a JKR contact at zero load already has the contact radius
+a_0 = (9 pi w R*^2 / (2 E*))^(1/3) (contact.py; about 0.12 r for the soils here), so a bed
+held together by cohesion is much stiffer than a Hertz bed under its weight.  The critical
+step of the central-difference scheme for a 3-D packing with rotations is
+0.17 sqrt(m / k) (O'Sullivan & Bray 2004, Eng. Comput. 21:278, their 3-D result with
+rotational degrees of freedom); with k = 2 E* a_0 (the larger of the normal and Mindlin
+tangential stiffness there) and m the smaller mass of the pair::
+
+    dt_JKR = 0.17 sqrt(m / (2 E* a_0))
+
+A requested step above dt_JKR is rejected; a step from ``dt_fraction`` is capped at it
+(the run records the step used).  At 30 % of T_R a JKR bed whose dt_JKR is below that step
+keeps jittering at about 1 cm/s and never comes to rest.
+
 Stiffness scaling (Lommen, Schott & Lodewijks 2014, Particuology 12:107; shear modulus
 reduced to ``G_mod`` keeps cohesion comparable, e.g. Thakur et al. 2014, Powder Technol.
 254:28, via the JKR scaling of the surface energy)::
@@ -103,6 +118,21 @@ def restitution_beta(e: float) -> float:
     """beta = ln e / sqrt(ln^2 e + pi^2) (EDEM / LIGGGHTS damping coefficient, <= 0)."""
     le = math.log(e)
     return le / math.sqrt(le * le + math.pi * math.pi)
+
+
+JKR_DT_COEFF = 0.17  # O'Sullivan & Bray 2004: 3-D, with rotation
+
+
+def jkr_zero_load_radius(estar: float, w: float, rstar: float) -> float:
+    """JKR contact radius at zero load, a_0 = (9 pi w R*^2 / (2 E*))^(1/3) [m]."""
+    return (9.0 * math.pi * w * rstar * rstar / (2.0 * estar)) ** (1.0 / 3.0)
+
+
+def jkr_critical_dt(mass: float, estar: float, w: float, rstar: float) -> float:
+    """dt_JKR = 0.17 sqrt(m / (2 E* a_0)) (module docstring); inf without adhesion."""
+    if w <= 0.0:
+        return math.inf
+    return JKR_DT_COEFF * math.sqrt(mass / (2.0 * estar * jkr_zero_load_radius(estar, w, rstar)))
 
 
 def rayleigh_time(radius: float, density: float, shear: float, poisson: float) -> float:
@@ -195,6 +225,27 @@ class MaterialTable:
                              math.sqrt(4.0 * gstar / estar),
                              27.0 / 64.0 * math.pi**2 * (jkr_w_factor * gamma / estar) ** 2)
         return out
+
+    def jkr_dt(self, rmin_per_material: dict[int, float], jkr_w_factor: float = 1.0) -> float:
+        """Smallest dt_JKR over the pairs with adhesion: particle-particle pairs of the
+        materials present (R* and the mass from the smallest sphere of each), and
+        particle-wall pairs with any other material (R* = r)."""
+        tab = self.table(jkr_w_factor)
+        t = math.inf
+        for a, ra in rmin_per_material.items():
+            ma = self.materials[a].density * 4.0 / 3.0 * math.pi * ra**3
+            for b in range(len(self.materials)):
+                w = tab[a, b, P_W]
+                if w <= 0.0:
+                    continue
+                if b in rmin_per_material:
+                    rb = rmin_per_material[b]
+                    mb = self.materials[b].density * 4.0 / 3.0 * math.pi * rb**3
+                    rstar, m = ra * rb / (ra + rb), min(ma, mb)
+                    t = min(t, jkr_critical_dt(m, tab[a, b, P_ESTAR], w, rstar))
+                # the same material can also be a wall's (a steel tube, a soil plate)
+                t = min(t, jkr_critical_dt(ma, tab[a, b, P_ESTAR], w, ra))
+        return t
 
     def rayleigh_dt(self, rmin_per_material: dict[int, float]) -> float:
         """Minimum Rayleigh time over materials present (radius = smallest of each)."""
