@@ -111,3 +111,38 @@ def test_registry_and_named_setups_validate():
                 mod.validate(dict(setup, name=sname), preset, "test")
     with pytest.raises(InputError, match="scenario"):
         get("no-such-scenario")
+
+
+def test_sauter_radius_of_the_size_distributions():
+    from soilcal.dem.factories import PSD, UniformRadius
+    from soilcal.dem.scenarios.base import sauter_radius
+
+    a, b = 1.0e-3, 3.0e-3
+    # uniform by number: <r^3>/<r^2> = (b^4 - a^4)/4 / ((b^3 - a^3)/3)
+    assert sauter_radius(UniformRadius(a, b)) == pytest.approx(
+        3 * (b**4 - a**4) / (4 * (b**3 - a**3)), rel=1e-14)
+    assert sauter_radius(UniformRadius(a, a)) == a
+    # discrete sizes with mass fractions f: r32 = 1 / sum(f / r)
+    d = PSD((1e-3, 2e-3), (1e-3, 2e-3), (0.25, 0.75))
+    assert sauter_radius(d) == pytest.approx(1 / (0.25 / 1e-3 + 0.75 / 2e-3), rel=1e-14)
+    # a bin [a, b] as the factory draws it: compare with a large seeded sample
+    binned = PSD((a,), (b,), (1.0,))
+    r = binned.sample_iid(400_000, np.random.default_rng(1))
+    assert sauter_radius(binned) == pytest.approx((r**3).sum() / (r**2).sum(), rel=5e-3)
+
+
+def test_cohesion_scale_follows_the_particle_size():
+    from soilcal.dem.factories import UniformRadius
+    from soilcal.dem.scenarios.base import cohesion_scale
+
+    model, ref = UniformRadius(2.7e-3, 3.3e-3), UniformRadius(0.9e-3, 1.1e-3)
+    assert cohesion_scale(model, ref) == pytest.approx(3.0, rel=1e-12)
+    assert cohesion_scale(model, ref, dict(scale_cohesion=False)) == 1.0
+    assert cohesion_scale(model, None) == 1.0
+    with pytest.raises(InputError, match="setup.scale_cohesion"):
+        cohesion_scale(model, ref, dict(scale_cohesion="yes"), "s.yaml")
+    p = DemParams()
+    w = build_materials(p, 0.1, "t", cohesion_scale=3.0).table(1.0)[0, 0, P_W]
+    assert w == pytest.approx(p.soil_soil_surface_energy * 0.1**0.4 * 3.0, rel=1e-12)
+    with pytest.raises(InputError, match="cohesion_scale"):
+        build_materials(p, 1.0, "t", cohesion_scale=0.0)

@@ -34,6 +34,23 @@ et al. 2014)::
 
     G_mod = s G,        gamma_mod = gamma (G_mod / G)^(2/5) = gamma s^(2/5)
 
+Cohesion scaling with particle size
+-----------------------------------
+A preset whose spheres are larger than the model particles a paper calibrated its surface
+energy for (``quick``, or a setup's own ``radius``/``n_particles``) multiplies the JKR
+surface energies by the ratio of Sauter radii (surface-volume mean, r32 = <r^3>/<r^2>)::
+
+    gamma_model = gamma * r32_model / r32_reference
+
+JKR pull-off is 1.5 pi gamma R*, so this scales the adhesive force with the square of the
+particle size, the rule Thakur, Ooi & Ahmadian (Powder Technol. 293 (2016) 130-137) found to
+keep the bulk response of a coarse-grained cohesive solid; equivalently the bulk cohesive
+stress, pull-off force over the area per contact, ~ gamma / r, stays the same.  Without it a
+heap of spheres five times the paper's size carries a fifth of the cohesion per unit area and
+the response depends on the particle count.  The reference is the paper preset's size
+distribution of the same setup; ``scale_cohesion: false`` in a setup turns the rule off.
+The factor is recorded in the run's setup as ``cohesion_scale``.
+
 Results
 -------
 :class:`Result` is one run: scenario, preset, seed, particle count, steps, simulated and
@@ -140,23 +157,63 @@ class DemParams:
         return DemParams.from_mapping(kw, "<replace>", base=self)
 
 
+def sauter_radius(dist) -> float:
+    """Surface-volume mean radius r32 = <r^3>/<r^2> of a radius distribution.
+
+    :class:`UniformRadius` (uniform by number on [a, b]): (b^4 - a^4)/4 / ((b^3 - a^3)/3).
+    :class:`PSD` (mass fractions f_k; within a bin [a, b] the factory draws radii with
+    number density ~ r^-3, i.e. mass uniform in r): r32 = 1 / sum_k f_k <1/r>_k with
+    <1/r>_k = ln(b/a)/(b - a), or 1/a for a discrete size.
+    """
+    from soilcal.dem.factories import PSD, UniformRadius
+
+    if isinstance(dist, UniformRadius):
+        a, b = float(dist.r_min), float(dist.r_max)
+        if b <= a * (1 + 1e-12):
+            return a
+        return 0.75 * (b**4 - a**4) / (b**3 - a**3)
+    if isinstance(dist, PSD):
+        a = np.asarray(dist.lower, np.float64)
+        b = np.asarray(dist.upper, np.float64)
+        f = np.asarray(dist.mass_fraction, np.float64)
+        disc = b <= a * (1 + 1e-12)
+        inv = np.where(disc, 1.0 / a, np.log(b / a) / np.where(disc, 1.0, b - a))
+        return float(1.0 / np.sum(f * inv))
+    raise TypeError(f"no Sauter radius for {type(dist).__name__}")
+
+
+def cohesion_scale(model, reference, setup: dict | None = None,
+                   source: str = "<input>") -> float:
+    """Surface-energy factor r32(model) / r32(reference) (module docstring), or 1 when the
+    setup sets ``scale_cohesion`` to false or there is no reference."""
+    flag = (setup or {}).get("scale_cohesion", True)
+    check(isinstance(flag, bool), source, "setup.scale_cohesion", "true or false", flag)
+    if not flag or reference is None:
+        return 1.0
+    return sauter_radius(model) / sauter_radius(reference)
+
+
 def build_materials(params: DemParams, stiffness_scale: float = 1.0,
-                    source: str = "<input>") -> MaterialTable:
+                    source: str = "<input>", cohesion_scale: float = 1.0) -> MaterialTable:
     """MaterialTable with materials "soil", "steel" and pairs soil-soil, soil-steel.
 
     Shear moduli are multiplied by ``stiffness_scale`` (s) and the surface energies become
-    gamma s^(2/5) (vineyard-soil paper's rule for the scaled model, see module docstring).
+    gamma s^(2/5) (vineyard-soil paper's rule for the scaled model, see module docstring),
+    times ``cohesion_scale`` (particle-size rule, module docstring).
     """
     s = float(stiffness_scale)
     if not (math.isfinite(s) and 0.0 < s <= 1.0e3):
         raise InputError(source, "stiffness_scale", "a shear-modulus factor in (0, 1000]",
                          stiffness_scale)
+    c = float(cohesion_scale)
+    if not (math.isfinite(c) and c > 0.0):
+        raise InputError(source, "cohesion_scale", "a surface-energy factor > 0", cohesion_scale)
     mats = MaterialTable(source=source)
     mats.add(Material("soil", density=params.soil_density, poisson=params.soil_poisson,
                       shear=params.soil_shear_modulus * s, source=source))
     mats.add(Material("steel", density=params.steel_density, poisson=params.steel_poisson,
                       shear=params.steel_shear_modulus * s, source=source))
-    g = s ** 0.4
+    g = s ** 0.4 * c
     mats.set_pair("soil", "soil", restitution=params.soil_soil_restitution,
                   friction=params.soil_soil_static_friction,
                   rolling_friction=params.soil_soil_rolling_friction,
@@ -341,14 +398,16 @@ def stiffness_scale_for(params: DemParams, preset: str, override=None) -> float:
     return min(1.0, g_max / params.soil_shear_modulus)
 
 
-def make_simulation(params: DemParams, setup: dict, preset: str, source: str, **kw):
+def make_simulation(params: DemParams, setup: dict, preset: str, source: str,
+                    cohesion: float = 1.0, **kw):
     """Simulation with the scenario materials, Hertz-Mindlin + constant-torque rolling
-    (+ JKR when a surface energy is > 0) and the preset's time step; returns (sim, scale)."""
+    (+ JKR when a surface energy is > 0) and the preset's time step; surface energies times
+    ``cohesion`` (:func:`cohesion_scale`); returns (sim, scale)."""
     from soilcal.dem.engine import Simulation
 
     d = PRESET_DEFAULTS[preset]
     scale = stiffness_scale_for(params, preset, setup.get("stiffness_scale"))
-    mats = build_materials(params, scale, source)
+    mats = build_materials(params, scale, source, cohesion)
     dtf = setup.get("dt_fraction") or d["dt_fraction"]
     sim = Simulation(mats, dt_fraction=float(dtf), contact_model=contact_model(params),
                      max_overlap=d["max_overlap"], source=source, **kw)

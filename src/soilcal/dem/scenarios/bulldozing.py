@@ -45,8 +45,8 @@ from soilcal.dem import tools
 from soilcal.dem.factories import PSD
 from soilcal.dem.scenarios.base import (PRESETS, DemParams, Result, check, stable_mean,
                                         threads_used)
-from soilcal.dem.scenarios.soilbin import (BinSpec, apply_preset, psd_field, settled_bin,
-                                           tool_pass, validate_bin)
+from soilcal.dem.scenarios.soilbin import (BinSpec, apply_preset, psd_field, reference_cohesion,
+                                           settled_bin, tool_pass, validate_bin)
 
 NAME = "bulldozing"
 MEASURED = (Path(__file__).resolve().parents[4] / "resources" / "measurements"
@@ -185,13 +185,15 @@ def _bin(s, source="<bulldozing>") -> BinSpec:
                    radius=radius, spread=spread,
                    periodic_y=bool(s["periodic"]), settle_time=s["settle_time"],
                    stiffness_scale=s["stiffness_scale"], dt_fraction=s["dt_fraction"],
-                   psd=psd)
+                   psd=psd, cohesion_scale=s.get("cohesion_scale", 1.0))
 
 
 def run(setup: dict, params: DemParams, preset: str = "quick", seed: int = 0, threads=None,
         vtk_dir=None, source: str = "<bulldozing>", use_cache: bool = True) -> Result:
     validate(setup, preset, source)
     s = _settings(setup, preset)
+    s["cohesion_scale"] = reference_cohesion(
+        _bin(s, source), _bin(_settings(_setup(s["shape"]), "paper"), source), setup, source)
     nthreads = threads_used(threads)
     t0 = time.perf_counter()
     spec = _bin(s, source)

@@ -39,7 +39,8 @@ import numpy as np
 from soilcal.dem import measure
 from soilcal.dem.factories import PSD, CylinderRegion, UniformRadius, insert_random
 from soilcal.dem.scenarios.base import (DemParams, Frames, Result, Timer, check, check_preset,
-                                        make_simulation, rng, settle, setup_number, threads_used)
+                                        cohesion_scale, make_simulation, rng, settle,
+                                        setup_number, threads_used)
 
 NAME = "compression"
 PHI = 0.6
@@ -62,16 +63,20 @@ def setups() -> dict:
 
 
 
+def _paper_dist(setup):
+    rows = setup["paper_psd"]
+    r = np.array([float(a) for a, _ in rows])
+    p = np.array([float(b) for _, b in rows])
+    return PSD(tuple(r), tuple(r), tuple(p / p.sum()))
+
+
 def sizing(setup, preset, params: DemParams | None = None):
     d = check_preset(preset)
     rho = (params or DemParams()).soil_density
     R = setup["tube_diameter"] / 2
     r_set, n_set = setup.get("radius"), setup.get("n_particles")
     if preset == "paper" and r_set is None and n_set is None:
-        rows = setup["paper_psd"]
-        r = np.array([float(a) for a, _ in rows])
-        p = np.array([float(b) for _, b in rows])
-        dist = PSD(tuple(r), tuple(r), tuple(p / p.sum()))
+        dist = _paper_dist(setup)
         n = int(round(setup["load_mass"] / (rho * dist.mean_volume())))
     else:
         vol = math.pi * R * R * setup["quick_height"]
@@ -131,7 +136,10 @@ def run(setup, params: DemParams, preset="quick", seed=0, threads=None, vtk_dir=
     gen = rng(seed, NAME)
     R, H = setup["tube_diameter"] / 2, setup["tube_height"]
     Rr = setup["rod_diameter"] / 2
-    sim, scale = make_simulation(params, setup, preset, source, skin=0.5 * sz["r_max"])
+    coh = cohesion_scale(sz["dist"], _paper_dist(setup) if setup.get("paper_psd") else None,
+                         setup, source)
+    sim, scale = make_simulation(params, setup, preset, source, cohesion=coh,
+                                 skin=0.5 * sz["r_max"])
     sim.add_plane((0, 0, 0), (0, 0, 1), "steel", name="floor")
     vol = sz["n"] * sz["dist"].mean_volume()
     rm = sz["r_max"]
@@ -181,8 +189,8 @@ def run(setup, params: DemParams, preset="quick", seed=0, threads=None, vtk_dir=
         resp[f"stress_{int(round(e * 100))}_kpa"] = measure.value_at(eps, sig, e) / 1e3
     setup_out = dict(setup)
     setup_out.pop("paper_psd", None)
-    setup_out.update(stiffness_scale=scale, dt=sim.dt, dt_fraction=sim.dt / sim.rayleigh,
-                     r_max=sz["r_max"], load_mass=sz["load_mass"], rod_step_m=dz_step)
+    setup_out.update(stiffness_scale=scale, cohesion_scale=coh, dt=sim.dt,
+                     dt_fraction=sim.dt / sim.rayleigh, r_max=sz["r_max"], load_mass=sz["load_mass"], rod_step_m=dz_step)
     return Result(scenario=NAME, preset=preset, seed=int(seed), n_particles=int(sim.n),
                   steps=int(sim.step), sim_time_s=float(sim.step * sim.dt), wall_s=timer.seconds,
                   threads=nthreads, params=params.as_dict(), setup=setup_out, responses=resp,

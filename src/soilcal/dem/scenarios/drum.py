@@ -40,8 +40,8 @@ import numpy as np
 from soilcal.dem import measure
 from soilcal.dem.factories import CylinderRegion, UniformRadius, insert_random
 from soilcal.dem.scenarios.base import (DemParams, Frames, Result, Timer, check, check_preset,
-                                        make_simulation, rng, run_time, settle, setup_number,
-                                        threads_used)
+                                        cohesion_scale, make_simulation, rng, run_time, settle,
+                                        setup_number, threads_used)
 
 NAME = "drum"
 PHI = 0.6
@@ -129,7 +129,12 @@ def run(setup, params: DemParams, preset="quick", seed=0, threads=None, vtk_dir=
     sz = sizing(setup, preset)
     gen = rng(seed, NAME)
     R, L = setup["drum_diameter"] / 2, setup["drum_length"]
-    sim, scale = make_simulation(params, setup, preset, source, skin=0.5 * sz["r_max"])
+    from soilcal.dem.scenarios.repose import _paper_psd
+
+    coh = cohesion_scale(sz["dist"], _paper_psd(setup, source) if setup.get("paper_psd")
+                         else None, setup, source)
+    sim, scale = make_simulation(params, setup, preset, source, cohesion=coh,
+                                 skin=0.5 * sz["r_max"])
     w = 2 * math.pi * setup["rpm"] / 60.0
     shell = sim.add_cylinder((0, L / 2, 0), (0, 1, 0), R, L / 2, setup["wall_material"],
                              inner=True, name="shell", centre=(0, L / 2, 0))
@@ -170,8 +175,8 @@ def run(setup, params: DemParams, preset="quick", seed=0, threads=None, vtk_dir=
                      n_frames=int(a.size), fill_settled=int(ok0))
     setup_out = dict(setup)
     setup_out.pop("paper_psd", None)
-    setup_out.update(stiffness_scale=scale, dt=sim.dt, dt_fraction=sim.dt / sim.rayleigh,
-                     spin_time=spin, transient_time=trans, r_max=sz["r_max"],
+    setup_out.update(stiffness_scale=scale, cohesion_scale=coh, dt=sim.dt,
+                     dt_fraction=sim.dt / sim.rayleigh, spin_time=spin, transient_time=trans, r_max=sz["r_max"],
                      omega_rad_s=w, slab_half=slab)
     return Result(scenario=NAME, preset=preset, seed=int(seed), n_particles=int(sim.n),
                   steps=int(sim.step), sim_time_s=float(sim.step * sim.dt), wall_s=timer.seconds,

@@ -59,7 +59,8 @@ from numpy.polynomial import Polynomial
 from soilcal.dem import tools
 from soilcal.dem.scenarios.base import (PRESETS, DemParams, Result, check, stable_mean,
                                         threads_used)
-from soilcal.dem.scenarios.soilbin import BinSpec, apply_preset, tool_pass, validate_bin
+from soilcal.dem.scenarios.soilbin import (BinSpec, apply_preset, reference_cohesion, tool_pass,
+                                           validate_bin)
 
 NAME = "furrow"
 MEASURED = (Path(__file__).resolve().parents[4] / "resources" / "measurements"
@@ -185,7 +186,7 @@ def _bin(s) -> BinSpec:
     return BinSpec(length=s["tank_length"], width=s["tank_width"], height=s["tank_height"],
                    radius=s["particle_radius"], spread=s["radius_spread"],
                    settle_time=s["settle_time"], stiffness_scale=s["stiffness_scale"],
-                   dt_fraction=s["dt_fraction"])
+                   dt_fraction=s["dt_fraction"], cohesion_scale=s.get("cohesion_scale", 1.0))
 
 
 # ---------------------------------------------------------------------------
@@ -246,6 +247,8 @@ def run(setup: dict, params: DemParams, preset: str = "quick", seed: int = 0, th
         vtk_dir=None, source: str = "<furrow>", use_cache: bool = True) -> Result:
     validate(setup, preset, source)
     s = _settings(setup, preset)
+    s["cohesion_scale"] = reference_cohesion(
+        _bin(s), _bin(_settings(setups()["yangtze-opener"], "paper")), setup, source)
     nthreads = threads_used(threads)
     t0 = time.perf_counter()
     spec = _bin(s)

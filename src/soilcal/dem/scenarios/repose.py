@@ -31,19 +31,15 @@ Number of particles for a fill volume V (tube: pi D^2/4 h_fill; funnel: load mas
 ``quick``: radii uniform in [0.9, 1.1] r_q with r_q from N = ``n_particles`` (1000 spheres by
 default) for cylinders; for funnels r_q = outlet diameter / 16 (8 diameters across the
 outlet) and the load mass follows from N (the heap is then smaller than the paper's); soil
-shear modulus capped at 5e5 Pa (stiffness scaling, base.py).  ``paper``: the papers'
-particle sizes and masses, unscaled moduli.  A setup's ``n_particles`` or ``radius`` (either
-preset) splits the tube fill or the funnel's ``load_mass`` into that many spheres or spheres
-of that radius.
+shear modulus capped at 5e5 Pa (stiffness scaling, base.py); surface energies times
+r32(quick) / r32(paper PSD) (cohesion scaling, base.py; ``cohesion_scale`` in the run's
+setup).  ``paper``: the papers' particle sizes and masses, unscaled moduli.  A setup's
+``n_particles`` or ``radius`` (either preset) splits the tube fill or the funnel's
+``load_mass`` into that many spheres or spheres of that radius.
 
-Walls: the engine's analytic cylinder, cone and disc walls are one-sided: a sphere anywhere
-on their back side within the axial span of the face (outside a tube or funnel, below a disc)
-sees a negative distance and a huge overlap.  The tube is the analytic cylinder (spheres leave
-it only below its rim, so they never reach its back side); the funnel and its cover are
-triangle meshes (``N_SEG`` = 24 facets around, vertices at R / cos(pi/24) so the facet
-mid-lines lie on the nominal radius R), because spheres bouncing off the plate can reach the
-back side of a funnel's cone and the cover moves sideways over the plate; triangles act on
-both sides.
+Walls: the tube is the engine's analytic cylinder; the funnel and its cover are triangle
+meshes (``N_SEG`` = 24 facets around, vertices at R / cos(pi/24) so the facet mid-lines lie
+on the nominal radius R).  Cylinders, cones, discs and triangles push from both sides.
 
 Plate: the plane z = 0 (steel, 65Mn, or soil for the black-soil stage 1); spheres beyond the
 square plate's outline would have fallen off it: they are counted as ``n_lost`` and excluded
@@ -65,8 +61,8 @@ from soilcal.dem import measure
 from soilcal.dem.factories import PSD, CylinderRegion, UniformRadius, insert_random
 from soilcal.dem.geometry import cone_mesh, disk_mesh
 from soilcal.dem.scenarios.base import (DemParams, Frames, Result, Timer, check, check_preset,
-                                        make_simulation, rng, run_time, settle, setup_number,
-                                        threads_used)
+                                        cohesion_scale, make_simulation, rng, run_time, settle,
+                                        setup_number, threads_used)
 
 NAME = "repose"
 PHI = 0.6  # settled solid fraction used to size the fill
@@ -266,7 +262,10 @@ def run(setup: dict, params: DemParams, preset: str = "quick", seed: int = 0, th
     gen = rng(seed, setup.get("seed_stream", NAME))
     # a neighbour skin of 0.6 r_max: falling spheres would otherwise rebuild the lists every
     # few steps (the engine default is 0.2 r_max, tuned for packed beds)
-    sim, scale = make_simulation(params, setup, preset, source, skin=0.6 * sz["r_max"])
+    coh = cohesion_scale(sz["dist"], _paper_psd(setup, source) if setup.get("paper_psd")
+                         else None, setup, source)
+    sim, scale = make_simulation(params, setup, preset, source, cohesion=coh,
+                                 skin=0.6 * sz["r_max"])
     frames = Frames(vtk_dir, NAME)
     dmax = 2 * sz["r_max"]
     info = {}
@@ -342,8 +341,8 @@ def run(setup: dict, params: DemParams, preset: str = "quick", seed: int = 0, th
         responses.update(angle_image_deg=img["angle_deg"], angle_image_sd_deg=img["spread_deg"])
     setup_out = dict(setup)
     setup_out.pop("paper_psd", None)
-    setup_out.update(stiffness_scale=scale, dt=sim.dt, dt_fraction=sim.dt / sim.rayleigh,
-                     r_mean=sz["r_mean"], r_max=sz["r_max"], load_mass=sz["load_mass"], **info)
+    setup_out.update(stiffness_scale=scale, cohesion_scale=coh, dt=sim.dt,
+                     dt_fraction=sim.dt / sim.rayleigh, r_mean=sz["r_mean"], r_max=sz["r_max"], load_mass=sz["load_mass"], **info)
     return Result(scenario=NAME, preset=preset, seed=int(seed), n_particles=int(sim.n),
                   steps=int(sim.step), sim_time_s=float(sim.step * sim.dt), wall_s=timer.seconds,
                   threads=nthreads, params=params.as_dict(), setup=setup_out,

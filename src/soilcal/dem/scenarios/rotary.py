@@ -67,8 +67,8 @@ import numpy as np
 from soilcal.dem import tools
 from soilcal.dem.scenarios.base import (PRESETS, DemParams, Result, check, stable_mean,
                                         threads_used)
-from soilcal.dem.scenarios.soilbin import (BinSpec, apply_preset, settled_bin, tool_pass,
-                                           validate_bin)
+from soilcal.dem.scenarios.soilbin import (BinSpec, apply_preset, reference_cohesion, settled_bin,
+                                           tool_pass, validate_bin)
 
 NAME = "rotary"
 MEASURED = (Path(__file__).resolve().parents[4] / "resources" / "measurements"
@@ -248,13 +248,15 @@ def _bin(s) -> BinSpec:
                    radius=s["particle_radius"], spread=s["radius_spread"],
                    periodic_y=bool(s["periodic"]), settle_time=s["settle_time"],
                    stiffness_scale=s["stiffness_scale"], dt_fraction=s["dt_fraction"],
-                   skin_fraction=s["skin_fraction"])
+                   skin_fraction=s["skin_fraction"], cohesion_scale=s.get("cohesion_scale", 1.0))
 
 
 def run(setup: dict, params: DemParams, preset: str = "quick", seed: int = 0, threads=None,
         vtk_dir=None, source: str = "<rotary>", use_cache: bool = True) -> Result:
     validate(setup, preset, source)
     s = _settings(setup, preset)
+    s["cohesion_scale"] = reference_cohesion(
+        _bin(s), _bin(_settings(_setup(s["rpm"]), "paper")), setup, source)
     nthreads = threads_used(threads)
     t0 = time.perf_counter()
     spec = _bin(s)

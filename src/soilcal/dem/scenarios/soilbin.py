@@ -62,7 +62,8 @@ from soilcal.dem.engine import Simulation
 from soilcal.dem.factories import PSD, BoxRegion, UniformRadius, insert_random, lattice_fill
 from soilcal.dem.io import read_snapshot, write_particles_vtu, write_mesh_vtp, write_snapshot
 from soilcal.dem.materials import rayleigh_time
-from soilcal.dem.scenarios.base import (DemParams, build_materials, check, contact_model, rng)
+from soilcal.dem.scenarios.base import (DemParams, build_materials, check, cohesion_scale,
+                                        contact_model, rng)
 
 CACHE_VERSION = 1
 FILL_FACTOR = 1.3  # lattice region height / fill height (the bed compacts when it settles)
@@ -78,7 +79,10 @@ class BinSpec:
 
     ``psd``: optional mass-fraction size distribution ``(lower radii, upper radii, mass
     fractions)`` (the fields of :class:`soilcal.dem.factories.PSD`); when given it sets the
-    radii (``radius`` is then the nominal radius and ``spread`` is unused)."""
+    radii (``radius`` is then the nominal radius and ``spread`` is unused).
+
+    ``cohesion_scale``: factor on the surface energies for particles larger than the ones
+    the soil's surface energy was calibrated for (base.py, "Cohesion scaling")."""
 
     length: float
     width: float
@@ -92,6 +96,7 @@ class BinSpec:
     max_overlap: float = 0.5
     skin_fraction: float = 0.6
     psd: tuple | None = None
+    cohesion_scale: float = 1.0
 
     @property
     def dist(self):
@@ -151,6 +156,9 @@ def validate_bin(spec: BinSpec, source: str, prefix: str = "bin"):
         v = getattr(spec, k)
         check(isinstance(v, (int, float)) and math.isfinite(v) and v > 0, source,
               f"{prefix}.{k}", "a number > 0", v)
+    check(isinstance(spec.cohesion_scale, (int, float)) and math.isfinite(spec.cohesion_scale)
+          and spec.cohesion_scale > 0, source, f"{prefix}.cohesion_scale",
+          "a surface-energy factor > 0", spec.cohesion_scale)
     check(0.0 <= spec.spread < 1.0, source, f"{prefix}.spread", "a radius spread in [0, 1)",
           spec.spread)
     check(spec.dt_fraction <= 1.0, source, f"{prefix}.dt_fraction",
@@ -163,14 +171,25 @@ def validate_bin(spec: BinSpec, source: str, prefix: str = "bin"):
 
 
 def soil_time_step(spec: BinSpec, params: DemParams) -> float:
-    """dt_fraction x the Rayleigh time of the smallest particle (stiffness-scaled soil)."""
+    """dt_fraction x the Rayleigh time of the smallest particle (stiffness-scaled soil),
+    capped with JKR at the zero-load JKR bound (materials.py) of its soil-soil and
+    soil-steel contacts."""
     g = params.soil_shear_modulus * spec.stiffness_scale
-    return spec.dt_fraction * rayleigh_time(spec.r_min, params.soil_density, g,
-                                            params.soil_poisson)
+    dt = spec.dt_fraction * rayleigh_time(spec.r_min, params.soil_density, g,
+                                          params.soil_poisson)
+    if contact_model(params)["cohesion"] == "jkr":
+        mats = build_materials(params, spec.stiffness_scale, "<bin>", spec.cohesion_scale)
+        dt = min(dt, mats.jkr_dt({mats.index("soil"): spec.r_min}))
+    return dt
+
+
+def reference_cohesion(spec: BinSpec, reference: BinSpec, setup: dict, source: str) -> float:
+    """Surface-energy factor of a bin against the paper preset's bin (base.py)."""
+    return cohesion_scale(spec.dist, reference.dist, setup, source)
 
 
 def new_sim(spec: BinSpec, params: DemParams, dt: float, source: str) -> Simulation:
-    mats = build_materials(params, spec.stiffness_scale, source)
+    mats = build_materials(params, spec.stiffness_scale, source, spec.cohesion_scale)
     box = (0.0, spec.length, 0.0, spec.width)
     sim = Simulation(mats, dt=dt, box=box, periodic=(False, spec.periodic_y),
                      contact_model=contact_model(params), max_overlap=spec.max_overlap,
