@@ -51,9 +51,11 @@ LEVELS = {
     "full": dict(n=[500, 1000, 2000, 4000, 8000], stiff=[0.5, 1.0, 2.0, 4.0, 8.0],
                  seeds=[0, 1, 2, 3, 4]),
 }
+NOTES = "<!-- notes: kept when the table is regenerated -->"
 QUICK_N = 1000  # the quick preset's particle count (base.PRESET_DEFAULTS)
 FIELDS = ["scenario", "setup", "factor", "value", "seed", "n_particles", "steps", "sim_time_s",
-          "wall_s", "stiffness_scale", "response", "value_response", "responses"]
+          "wall_s", "stiffness_scale", "cohesion_scale", "response", "value_response",
+          "responses"]
 
 
 def runs(level, scenarios):
@@ -89,6 +91,7 @@ def one(sc, factor, value, seed, threads):
     return dict(scenario=sc, setup=setup_name, factor=factor, value=value, seed=seed,
                 n_particles=res.n_particles, steps=res.steps, sim_time_s=round(res.sim_time_s, 4),
                 wall_s=round(res.wall_s, 2), stiffness_scale=res.setup["stiffness_scale"],
+                cohesion_scale=round(float(res.setup.get("cohesion_scale", 1.0)), 4),
                 response=resp, value_response=res.responses[resp],
                 responses=";".join(f"{k}={v:.6g}" for k, v in res.responses.items()
                                    if isinstance(v, (int, float))))
@@ -125,20 +128,26 @@ def table(rows, out, cmd):
     lines = ["# Convergence of the bench-top scenarios (quick preset, one factor at a time)", "",
              f"Command: `{cmd}`; {time.strftime('%Y-%m-%d %H:%M UTC', time.gmtime())}; "
              f"load_avg_1min at the end {os.getloadavg()[0]:.2f} (shared machine).", "",
-             "| scenario | factor | value | seed | N | steps | wall s | G scale | response | value |",
-             "|---|---|---:|---:|---:|---:|---:|---:|---|---:|"]
+             "| scenario | factor | value | seed | N | steps | wall s | G scale | gamma scale | "
+             "response | value |",
+             "|---|---|---:|---:|---:|---:|---:|---:|---:|---|---:|"]
     for r in rows:
         lines.append(f"| {r['scenario']} | {r['factor']} | {r['value']} | {r['seed']} | "
                      f"{r['n_particles']} | {r['steps']} | {r['wall_s']} | "
-                     f"{float(r['stiffness_scale']):.4g} | {r['response']} | "
+                     f"{float(r['stiffness_scale']):.4g} | {r['cohesion_scale']} | "
+                     f"{r['response']} | "
                      f"{float(r['value_response']):.3f} |")
     lines += ["", "Spread over seeds (sample standard deviation):", ""]
     for sc in CASES:
         v = [float(r["value_response"]) for r in rows if r["scenario"] == sc and r["factor"] == "seed"]
+        v = [x for x in v if np.isfinite(x)]
         if len(v) > 1:
             lines.append(f"* {sc}: mean {np.mean(v):.3f}, SD {np.std(v, ddof=1):.3f} "
                          f"({len(v)} seeds)")
-    (out / "convergence.md").write_text("\n".join(lines) + "\n")
+    md = out / "convergence.md"
+    notes = md.read_text().split(NOTES, 1)[1] if md.exists() and NOTES in md.read_text() else ""
+    lines += ["", NOTES + notes.rstrip("\n")]
+    md.write_text("\n".join(lines) + "\n")
 
 
 def main(argv=None):
@@ -154,6 +163,8 @@ def main(argv=None):
             ap.error(f"--scenarios: expected names from {sorted(CASES)}, got {s!r}")
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
+    from soilcal.errors import SimulationError
+
     rows = []
     cache = {}
     path = out / "convergence.csv"
@@ -166,7 +177,15 @@ def main(argv=None):
             key = (sc, value if factor == "n_particles" else QUICK_N,
                    value if factor == "stiffness" else 1.0, seed)
             if key not in cache:
-                cache[key] = one(*case, threads=args.threads)
+                try:
+                    cache[key] = one(*case, threads=args.threads)
+                except SimulationError as e:  # a blow-up is a result: one row, no response
+                    cache[key] = dict(scenario=sc, setup=CASES[sc][0], factor=factor,
+                                      value=value, seed=seed, n_particles="", steps="",
+                                      sim_time_s="", wall_s="", stiffness_scale=float("nan"),
+                                      cohesion_scale="",
+                                      response=CASES[sc][1], value_response=float("nan"),
+                                      responses=f"error={e}")
             row = dict(cache[key], factor=factor, value=value)
             rows.append(row)
             w.writerow(row)
