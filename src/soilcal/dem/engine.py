@@ -216,7 +216,7 @@ class Simulation:
         for k in np.unique(p.mat):
             rmin[int(k)] = float(p.r[p.mat == k].min())
         self.rayleigh = self.materials.rayleigh_dt(rmin)
-        self.jkr_dt = (self.materials.jkr_dt(rmin, self.w_factor) if self.codes[4] == 1
+        self.jkr_dt = (self.materials.jkr_dt(rmin, self._pair) if self.codes[4] == 1
                        else math.inf)
         dt = self.dt_user if self.dt_user is not None else min(
             self.dt_fraction * self.rayleigh, self.jkr_dt)

@@ -226,11 +226,11 @@ class MaterialTable:
                              27.0 / 64.0 * math.pi**2 * (jkr_w_factor * gamma / estar) ** 2)
         return out
 
-    def jkr_dt(self, rmin_per_material: dict[int, float], jkr_w_factor: float = 1.0) -> float:
-        """Smallest dt_JKR over the pairs with adhesion: particle-particle pairs of the
-        materials present (R* and the mass from the smallest sphere of each), and
-        particle-wall pairs with any other material (R* = r)."""
-        tab = self.table(jkr_w_factor)
+    def jkr_dt(self, rmin_per_material: dict[int, float], tab: np.ndarray) -> float:
+        """Smallest dt_JKR over the pairs with adhesion of the pair table ``tab`` (from
+        :meth:`table`): particle-particle pairs of the materials present (R* and the mass
+        from the smallest sphere of each), and particle-wall pairs with any material
+        (R* = r)."""
         t = math.inf
         for a, ra in rmin_per_material.items():
             ma = self.materials[a].density * 4.0 / 3.0 * math.pi * ra**3

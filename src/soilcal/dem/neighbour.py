@@ -293,6 +293,21 @@ def _wall_need(wcnt_new, KW):
     return wneed
 
 
+@njit(cache=True)
+def _grid_and_bins(x, r, box, periodic, skin, extra, cell_start, cell_idx, cell_of, prim_kind,
+                   prim_par, wcell_start, wcell_idx, glob):
+    """Cell grid (:func:`_grid`) and triangle bins (:func:`_bin_triangles`) of a list build.
+    Returns (status, need, ng, n0, n1, n2) with the status codes of :func:`build_lists`."""
+    ok, rmax, lo0, cs0, n0, lo1, cs1, n1, lo2, cs2, n2 = _grid(
+        x, r, box, periodic, skin, extra, cell_start, cell_idx, cell_of)
+    if not ok or n0 * n1 * n2 + 1 > wcell_start.shape[0]:
+        return 3, n0 * n1 * n2 + 1, 0, n0, n1, n2
+    ng, code, wneed = _bin_triangles(prim_kind, prim_par, rmax + skin + extra, lo0, cs0, n0,
+                                     periodic[0], lo1, cs1, n1, periodic[1], lo2, cs2, n2,
+                                     wcell_start, wcell_idx, glob)
+    return code, wneed, ng, n0, n1, n2
+
+
 @njit(cache=True, parallel=True)
 def build_wall_lists(x, r, box, periodic, skin, extra, cell_start, cell_idx, cell_of,
                      prim_kind, prim_par, wcell_start, wcell_idx, glob,
@@ -302,15 +317,11 @@ def build_wall_lists(x, r, box, periodic, skin, extra, cell_start, cell_idx, cel
     n = x.shape[0]
     if n == 0:
         return 0, 0
-    ok, rmax, lo0, cs0, n0, lo1, cs1, n1, lo2, cs2, n2 = _grid(
-        x, r, box, periodic, skin, extra, cell_start, cell_idx, cell_of)
-    if not ok or n0 * n1 * n2 + 1 > wcell_start.shape[0]:
-        return 3, n0 * n1 * n2 + 1
-    ng, code, wneed = _bin_triangles(prim_kind, prim_par, rmax + skin + extra, lo0, cs0, n0,
-                                     periodic[0], lo1, cs1, n1, periodic[1], lo2, cs2, n2,
-                                     wcell_start, wcell_idx, glob)
+    code, need, ng, n0, n1, n2 = _grid_and_bins(x, r, box, periodic, skin, extra, cell_start,
+                                                cell_idx, cell_of, prim_kind, prim_par,
+                                                wcell_start, wcell_idx, glob)
     if code != 0:
-        return code, wneed
+        return code, need
     for i in prange(n):
         _wall_row(i, x, r, skin + extra, cell_of, prim_kind, prim_par, wcell_start,
                   wcell_idx, glob, ng, wnbr_old, wcnt_old, whist_old, wnbr_new, wcnt_new,
@@ -339,15 +350,11 @@ def build_lists(x, r, box, periodic, skin, extra, cell_start, cell_idx, cell_of,
     if n == 0:
         start_new[0] = 0
         return 0, 0
-    ok, rmax, lo0, cs0, n0, lo1, cs1, n1, lo2, cs2, n2 = _grid(
-        x, r, box, periodic, skin, extra, cell_start, cell_idx, cell_of)
-    if not ok or n0 * n1 * n2 + 1 > wcell_start.shape[0]:
-        return 3, n0 * n1 * n2 + 1
-    ng, code, wneed = _bin_triangles(prim_kind, prim_par, rmax + skin + extra, lo0, cs0, n0,
-                                     periodic[0], lo1, cs1, n1, periodic[1], lo2, cs2, n2,
-                                     wcell_start, wcell_idx, glob)
+    code, need, ng, n0, n1, n2 = _grid_and_bins(x, r, box, periodic, skin, extra, cell_start,
+                                                cell_idx, cell_of, prim_kind, prim_par,
+                                                wcell_start, wcell_idx, glob)
     if code != 0:
-        return code, wneed
+        return code, need
     cut0 = skin + extra
     # pass 1: row lengths -> offsets
     for i in prange(n):

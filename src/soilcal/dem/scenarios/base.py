@@ -193,6 +193,45 @@ def cohesion_scale(model, reference, setup: dict | None = None,
     return sauter_radius(model) / sauter_radius(reference)
 
 
+def paper_psd(setup: dict, source: str = "<input>"):
+    """The setup's ``paper_psd`` rows ``[radius_m, mass_percent]`` as a discrete-size
+    :class:`soilcal.dem.factories.PSD` (percentages renormalised)."""
+    from soilcal.dem.factories import PSD
+
+    rows = setup.get("paper_psd")
+    check(isinstance(rows, (list, tuple)) and len(rows) >= 1, source, "setup.paper_psd",
+          "a list of [radius_m, mass_percent] rows", rows)
+    r = np.array([float(a) for a, _ in rows])
+    p = np.array([float(b) for _, b in rows])
+    check(np.all(r > 0) and np.all(p >= 0) and p.sum() > 0, source, "setup.paper_psd",
+          "radii > 0 m and mass percentages >= 0", rows)
+    return PSD(tuple(r), tuple(r), tuple(p / p.sum()))
+
+
+def paper_cohesion(setup: dict, model, source: str = "<input>") -> float:
+    """:func:`cohesion_scale` of the ``model`` radius distribution against the setup's
+    ``paper_psd`` (1 when the setup has none)."""
+    ref = paper_psd(setup, source) if setup.get("paper_psd") else None
+    return cohesion_scale(model, ref, setup, source)
+
+
+def check_discretisation(setup: dict, source: str) -> None:
+    """Validate the optional discretisation keys of a bench-top setup: ``n_particles``
+    (integer >= 20), ``radius`` (> 0), ``stiffness_scale`` (in (0, 1000]) and
+    ``dt_fraction`` (in (0, 1]); None means the preset's value."""
+    n = setup.get("n_particles")
+    if n is not None:
+        check(isinstance(n, (int, np.integer)) and not isinstance(n, bool) and n >= 20, source,
+              "setup.n_particles", "an integer >= 20 (or None for the preset)", n)
+    setup_number(setup, "radius", source, allow_none=True)
+    s = setup_number(setup, "stiffness_scale", source, allow_none=True)
+    if s is not None:
+        check(s <= 1000, source, "setup.stiffness_scale", "a factor in (0, 1000]", s)
+    f = setup_number(setup, "dt_fraction", source, allow_none=True)
+    if f is not None:
+        check(f <= 1.0, source, "setup.dt_fraction", "a fraction of the Rayleigh time in (0, 1]", f)
+
+
 def build_materials(params: DemParams, stiffness_scale: float = 1.0,
                     source: str = "<input>", cohesion_scale: float = 1.0) -> MaterialTable:
     """MaterialTable with materials "soil", "steel" and pairs soil-soil, soil-steel.

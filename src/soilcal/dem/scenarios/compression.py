@@ -37,10 +37,10 @@ import math
 import numpy as np
 
 from soilcal.dem import measure
-from soilcal.dem.factories import PSD, CylinderRegion, UniformRadius, insert_random
-from soilcal.dem.scenarios.base import (DemParams, Frames, Result, Timer, check, check_preset,
-                                        cohesion_scale, make_simulation, rng, settle,
-                                        setup_number, threads_used)
+from soilcal.dem.factories import CylinderRegion, UniformRadius, insert_random
+from soilcal.dem.scenarios.base import (DemParams, Frames, Result, Timer, check, check_discretisation,
+                                        check_preset, make_simulation, paper_cohesion, paper_psd,
+                                        rng, settle, setup_number, threads_used)
 
 NAME = "compression"
 PHI = 0.6
@@ -63,20 +63,13 @@ def setups() -> dict:
 
 
 
-def _paper_dist(setup):
-    rows = setup["paper_psd"]
-    r = np.array([float(a) for a, _ in rows])
-    p = np.array([float(b) for _, b in rows])
-    return PSD(tuple(r), tuple(r), tuple(p / p.sum()))
-
-
 def sizing(setup, preset, params: DemParams | None = None):
     d = check_preset(preset)
     rho = (params or DemParams()).soil_density
     R = setup["tube_diameter"] / 2
     r_set, n_set = setup.get("radius"), setup.get("n_particles")
     if preset == "paper" and r_set is None and n_set is None:
-        dist = _paper_dist(setup)
+        dist = paper_psd(setup)
         n = int(round(setup["load_mass"] / (rho * dist.mean_volume())))
     else:
         vol = math.pi * R * R * setup["quick_height"]
@@ -106,15 +99,7 @@ def validate(setup, preset="quick", source="<input>", params=None):
     setup_number(setup, "sample_dz", source)
     setup_number(setup, "rest_speed", source)
     setup_number(setup, "max_settle_time", source)
-    n = setup.get("n_particles")
-    if n is not None:
-        check(isinstance(n, (int, np.integer)) and not isinstance(n, bool) and n >= 20, source,
-              "setup.n_particles", "an integer >= 20", n)
-    setup_number(setup, "radius", source, allow_none=True)
-    setup_number(setup, "stiffness_scale", source, allow_none=True)
-    f = setup_number(setup, "dt_fraction", source, allow_none=True)
-    if f is not None:
-        check(f <= 1, source, "setup.dt_fraction", "a fraction of the Rayleigh time in (0, 1]", f)
+    check_discretisation(setup, source)
     sz = sizing(setup, preset)
     check(D >= 8 * sz["r_max"], source, "setup.tube_diameter",
           f"at least 4 particle diameters ({8 * sz['r_max']:.4g} m)", D)
@@ -136,8 +121,7 @@ def run(setup, params: DemParams, preset="quick", seed=0, threads=None, vtk_dir=
     gen = rng(seed, NAME)
     R, H = setup["tube_diameter"] / 2, setup["tube_height"]
     Rr = setup["rod_diameter"] / 2
-    coh = cohesion_scale(sz["dist"], _paper_dist(setup) if setup.get("paper_psd") else None,
-                         setup, source)
+    coh = paper_cohesion(setup, sz["dist"], source)
     sim, scale = make_simulation(params, setup, preset, source, cohesion=coh,
                                  skin=0.5 * sz["r_max"])
     sim.add_plane((0, 0, 0), (0, 0, 1), "steel", name="floor")

@@ -39,9 +39,9 @@ import numpy as np
 
 from soilcal.dem import measure
 from soilcal.dem.factories import CylinderRegion, UniformRadius, insert_random
-from soilcal.dem.scenarios.base import (DemParams, Frames, Result, Timer, check, check_preset,
-                                        cohesion_scale, make_simulation, rng, run_time, settle,
-                                        setup_number, threads_used)
+from soilcal.dem.scenarios.base import (DemParams, Frames, Result, Timer, check, check_discretisation,
+                                        check_preset, make_simulation, paper_cohesion, paper_psd,
+                                        rng, run_time, settle, setup_number, threads_used)
 
 NAME = "drum"
 PHI = 0.6
@@ -73,9 +73,7 @@ def sizing(setup, preset, source="<input>"):
     vol = setup["fill_fraction"] * math.pi * R * R * L
     r_set, n_set = setup.get("radius"), setup.get("n_particles")
     if preset == "paper" and r_set is None and n_set is None:
-        from soilcal.dem.scenarios.repose import _paper_psd
-
-        dist = _paper_psd(setup, source)
+        dist = paper_psd(setup, source)
     else:
         if r_set is None:
             n = int(n_set or d["n_particles"])
@@ -107,15 +105,7 @@ def validate(setup, preset="quick", source="<input>"):
     for key in ("wall_material", "end_material"):
         check(setup.get(key) in ("steel", "soil"), source, f"setup.{key}", "'steel' or 'soil'",
               setup.get(key))
-    n = setup.get("n_particles")
-    if n is not None:
-        check(isinstance(n, (int, np.integer)) and not isinstance(n, bool) and n >= 20, source,
-              "setup.n_particles", "an integer >= 20", n)
-    setup_number(setup, "radius", source, allow_none=True)
-    setup_number(setup, "stiffness_scale", source, allow_none=True)
-    dtf = setup_number(setup, "dt_fraction", source, allow_none=True)
-    if dtf is not None:
-        check(dtf <= 1, source, "setup.dt_fraction", "a fraction of the Rayleigh time in (0, 1]", dtf)
+    check_discretisation(setup, source)
     sz = sizing(setup, preset, source)
     check(2 * sz["r_max"] * 6 <= min(D, L), source, "setup.drum_diameter",
           f"a drum at least 6 particle diameters across ({12 * sz['r_max']:.4g} m)", (D, L))
@@ -129,10 +119,7 @@ def run(setup, params: DemParams, preset="quick", seed=0, threads=None, vtk_dir=
     sz = sizing(setup, preset)
     gen = rng(seed, NAME)
     R, L = setup["drum_diameter"] / 2, setup["drum_length"]
-    from soilcal.dem.scenarios.repose import _paper_psd
-
-    coh = cohesion_scale(sz["dist"], _paper_psd(setup, source) if setup.get("paper_psd")
-                         else None, setup, source)
+    coh = paper_cohesion(setup, sz["dist"], source)
     sim, scale = make_simulation(params, setup, preset, source, cohesion=coh,
                                  skin=0.5 * sz["r_max"])
     w = 2 * math.pi * setup["rpm"] / 60.0

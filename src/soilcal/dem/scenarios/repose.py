@@ -58,11 +58,11 @@ import math
 import numpy as np
 
 from soilcal.dem import measure
-from soilcal.dem.factories import PSD, CylinderRegion, UniformRadius, insert_random
+from soilcal.dem.factories import CylinderRegion, UniformRadius, insert_random
 from soilcal.dem.geometry import cone_mesh, disk_mesh
-from soilcal.dem.scenarios.base import (DemParams, Frames, Result, Timer, check, check_preset,
-                                        cohesion_scale, make_simulation, rng, run_time, settle,
-                                        setup_number, threads_used)
+from soilcal.dem.scenarios.base import (DemParams, Frames, Result, Timer, check, check_discretisation,
+                                        check_preset, make_simulation, paper_cohesion, paper_psd,
+                                        rng, run_time, settle, setup_number, threads_used)
 
 NAME = "repose"
 PHI = 0.6  # settled solid fraction used to size the fill
@@ -123,17 +123,6 @@ def setups() -> dict:
 
 
 
-def _paper_psd(setup, source):
-    rows = setup.get("paper_psd")
-    check(isinstance(rows, (list, tuple)) and len(rows) >= 1, source, "setup.paper_psd",
-          "a list of [radius_m, mass_percent] rows", rows)
-    r = np.array([float(a) for a, _ in rows])
-    p = np.array([float(b) for _, b in rows])
-    check(np.all(r > 0) and np.all(p >= 0) and p.sum() > 0, source, "setup.paper_psd",
-          "radii > 0 m and mass percentages >= 0", rows)
-    return PSD(tuple(r), tuple(r), tuple(p / p.sum()))
-
-
 def _fill_volume(setup, params: DemParams | None):
     if setup["method"] == "cylinder":
         return math.pi * setup["tube_diameter"] ** 2 / 4 * setup["fill_height"]
@@ -155,7 +144,7 @@ def sizing(setup, preset, params: DemParams | None = None) -> dict:
         r_set = setup["funnel_bottom_diameter"] / 16.0
         n_set = d["n_particles"]
     if preset == "paper" and r_set is None and n_set is None:
-        dist = _paper_psd(setup, "<setup>")
+        dist = paper_psd(setup, "<setup>")
     else:
         if r_set is None:
             n = int(n_set or d["n_particles"])
@@ -191,17 +180,7 @@ def validate(setup: dict, preset: str = "quick", source: str = "<input>",
     plate = setup_number(setup, "plate_size", source)
     setup_number(setup, "rest_speed", source)
     setup_number(setup, "max_settle_time", source)
-    n = setup.get("n_particles")
-    if n is not None:
-        check(isinstance(n, (int, np.integer)) and not isinstance(n, bool) and n >= 20, source,
-              "setup.n_particles", "an integer >= 20 (or None for the preset)", n)
-    setup_number(setup, "radius", source, allow_none=True)
-    s = setup_number(setup, "stiffness_scale", source, allow_none=True)
-    if s is not None:
-        check(s <= 1000, source, "setup.stiffness_scale", "a factor in (0, 1000]", s)
-    f = setup_number(setup, "dt_fraction", source, allow_none=True)
-    if f is not None:
-        check(f <= 1.0, source, "setup.dt_fraction", "a fraction of the Rayleigh time in (0, 1]", f)
+    check_discretisation(setup, source)
     if method == "cylinder":
         dia = setup_number(setup, "tube_diameter", source)
         h = setup_number(setup, "tube_height", source)
@@ -239,9 +218,8 @@ def validate(setup: dict, preset: str = "quick", source: str = "<input>",
 
 
 def _plate(sim, setup):
-    """The plate as the plane z = 0 (a disc or rectangle wall is one-sided: a sphere below it
-    inside its outline would see a negative distance); spheres beyond the plate's outline
-    are counted as lost."""
+    """The plate as the plane z = 0 (unbounded, so spheres rolling past the plate's edge do
+    not fall); spheres beyond the plate's outline are counted as lost."""
     sim.add_plane((0.0, 0.0, 0.0), (0, 0, 1), setup["plate_material"], name="plate")
 
 
@@ -262,8 +240,7 @@ def run(setup: dict, params: DemParams, preset: str = "quick", seed: int = 0, th
     gen = rng(seed, setup.get("seed_stream", NAME))
     # a neighbour skin of 0.6 r_max: falling spheres would otherwise rebuild the lists every
     # few steps (the engine default is 0.2 r_max, tuned for packed beds)
-    coh = cohesion_scale(sz["dist"], _paper_psd(setup, source) if setup.get("paper_psd")
-                         else None, setup, source)
+    coh = paper_cohesion(setup, sz["dist"], source)
     sim, scale = make_simulation(params, setup, preset, source, cohesion=coh,
                                  skin=0.6 * sz["r_max"])
     frames = Frames(vtk_dir, NAME)

@@ -58,6 +58,7 @@ from pathlib import Path
 
 import numpy as np
 
+from soilcal.dem.contact import model_codes
 from soilcal.dem.engine import Simulation
 from soilcal.dem.factories import PSD, BoxRegion, UniformRadius, insert_random, lattice_fill
 from soilcal.dem.io import read_snapshot, write_particles_vtu, write_mesh_vtp, write_snapshot
@@ -179,7 +180,8 @@ def soil_time_step(spec: BinSpec, params: DemParams) -> float:
                                           params.soil_poisson)
     if contact_model(params)["cohesion"] == "jkr":
         mats = build_materials(params, spec.stiffness_scale, "<bin>", spec.cohesion_scale)
-        dt = min(dt, mats.jkr_dt({mats.index("soil"): spec.r_min}))
+        w_factor = model_codes(**contact_model(params))[1]
+        dt = min(dt, mats.jkr_dt({mats.index("soil"): spec.r_min}, mats.table(w_factor)))
     return dt
 
 
