@@ -68,6 +68,7 @@ def test_jkr_zero_load_radius_is_where_the_jkr_force_vanishes():
 
     estar, w, rstar = 7.3e5, 0.7, 1.2e-3
     a0 = jkr_zero_load_radius(estar, w, rstar)
+    assert a0 == pytest.approx((9 * math.pi * w * rstar**2 / (2 * estar)) ** (1 / 3), rel=1e-14)
     # F(a) = 4 E* a^3 / (3 R*) - sqrt(8 pi w E* a^3) (JKR 1971) is zero at a0 and changes
     # sign there; the Hertz part alone is of order 4 E* a0^3 / (3 R*)
     scale = 4 * estar * a0**3 / (3 * rstar)

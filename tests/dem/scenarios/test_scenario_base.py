@@ -77,7 +77,8 @@ def test_stable_mean_of_a_known_signal():
     m, sd = stable_mean(t, y, 0.5, 1.5)
     # ten full periods of a unit sine on [0.5, 1.5] (101 samples, ends equal)
     assert m == pytest.approx(5.0, abs=1e-9)
-    assert sd == pytest.approx(math.sqrt(0.5 * 100 / 100), rel=0.02)
+    # sample SD (ddof = 1): sum of sin^2 over the 101 samples is 50, over n - 1 = 100
+    assert sd == pytest.approx(math.sqrt(50 / 100), rel=1e-9)
     with pytest.raises(InputError, match="t_start"):
         stable_mean(t, y, 3.0)
 

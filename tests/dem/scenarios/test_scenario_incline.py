@@ -24,7 +24,8 @@ def test_block_slides_at_the_friction_angle(mu):
     crit = math.degrees(math.atan(mu))
     r = res.responses
     assert r["moved"] == 1
-    # stuck below the friction angle, moving within two 0.25 deg steps above it
+    # the last stuck step may lie up to one 0.25 deg step above the friction angle (the
+    # staircase samples the onset); the first moving step is above it
     assert r["last_stuck_deg"] < crit + 0.3
     assert r["first_moving_deg"] > crit
     assert r["coefficient"] == pytest.approx(mu, abs=0.012)

@@ -87,13 +87,14 @@ def test_side_silhouette_through_the_photo_pipeline(alpha, tmp_path):
 
 def test_render_side_draws_the_heap_above_a_plate(tmp_path):
     x, r = heap(30.0, R=0.04)
-    img, s = measure.render_side(x, r, 0.0, view="y", path=tmp_path / "a.png")
-    assert (tmp_path / "a.png").is_file()
+    scale = 5000.0  # px per m, given
+    img, s = measure.render_side(x, r, 0.0, view="y", px_per_m=scale, path=tmp_path / "a.png")
+    assert (tmp_path / "a.png").is_file() and s == scale
     dark = img[..., 0] < 100
     rows = np.nonzero(dark.any(axis=1))[0]
     # heap height in pixels = max(z + r) * scale (orthographic)
     h_px = rows.max() - rows.min() + 1
-    assert h_px == pytest.approx((x[:, 2] + r).max() * s, abs=3)
+    assert h_px == pytest.approx((x[:, 2] + r).max() * scale, abs=3)
     with pytest.raises(InputError, match="view"):
         measure.render_side(x, r, view="z")
 

@@ -102,7 +102,8 @@ def test_stable_mean_of_a_ramp_then_plateau():
     y = np.where(t < 1, 100 * t, 100 + np.sin(40 * np.pi * t))
     m, sd = stable_mean(t, y, 1.0)
     assert m == pytest.approx(100.0, abs=0.01)
-    assert sd == pytest.approx(1 / math.sqrt(2), rel=0.01)
+    # 1001 samples, 50 per period: sum of sin^2 = 500 over n - 1 = 1000 (sample SD)
+    assert sd == pytest.approx(math.sqrt(500 / 1000), rel=1e-9)
 
 
 def test_power_of_a_rotating_disk_against_known_friction_torque():
