@@ -35,6 +35,7 @@ import matplotlib
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
+from _report import kept_notes  # noqa: E402
 
 HERE = Path(__file__).resolve().parent
 OUT = HERE / "results" / "convergence"
@@ -51,7 +52,6 @@ LEVELS = {
     "full": dict(n=[500, 1000, 2000, 4000, 8000], stiff=[0.5, 1.0, 2.0, 4.0, 8.0],
                  seeds=[0, 1, 2, 3, 4]),
 }
-NOTES = "<!-- notes: kept when the table is regenerated -->"
 QUICK_N = 1000  # the quick preset's particle count (base.PRESET_DEFAULTS)
 FIELDS = ["scenario", "setup", "factor", "value", "seed", "n_particles", "steps", "sim_time_s",
           "wall_s", "stiffness_scale", "cohesion_scale", "response", "value_response",
@@ -145,8 +145,7 @@ def table(rows, out, cmd):
             lines.append(f"* {sc}: mean {np.mean(v):.3f}, SD {np.std(v, ddof=1):.3f} "
                          f"({len(v)} seeds)")
     md = out / "convergence.md"
-    notes = md.read_text().split(NOTES, 1)[1] if md.exists() and NOTES in md.read_text() else ""
-    lines += ["", NOTES + notes.rstrip("\n")]
+    lines += ["", kept_notes(md)]
     md.write_text("\n".join(lines) + "\n")
 
 

@@ -20,32 +20,15 @@ marker are kept; ``--out`` elsewhere).
 from __future__ import annotations
 
 import argparse
-import csv
 import os
 import platform
 import sys
 import time
 from pathlib import Path
 
+from _report import commit, kept_notes, read_rows, write_rows
+
 HERE = Path(__file__).resolve().parent
-NOTES = "<!-- notes: kept when the table is regenerated -->"
-
-
-def _commit():
-    import subprocess
-    try:
-        return subprocess.run(["git", "rev-parse", "--short", "HEAD"], cwd=HERE,
-                              capture_output=True, text=True, check=True).stdout.strip()
-    except (OSError, subprocess.CalledProcessError):
-        return ""
-
-
-def _read_rows(path, fields):
-    """Earlier rows of the results table (columns they lack are left empty)."""
-    if not path.exists():
-        return []
-    with open(path, newline="") as fh:
-        return [{k: r.get(k, "") for k in fields} for r in csv.DictReader(fh)]
 
 
 def main(argv=None):
@@ -79,18 +62,12 @@ def main(argv=None):
                height_mm=round(1e3 * r["height_m"], 2), dt_s=f"{res.setup['dt']:.4g}",
                stiffness_scale=round(res.setup["stiffness_scale"], 4),
                warmup_s=round(warm, 1), load_avg_1min=round(os.getloadavg()[0], 2))
-    row = dict(utc=time.strftime("%Y-%m-%d %H:%M", time.gmtime()), commit=_commit(), **row)
+    row = dict(utc=time.strftime("%Y-%m-%d %H:%M", time.gmtime()), commit=commit(), **row)
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
-    rows = _read_rows(out / "pile.csv", list(row)) + [row]
-    with open(out / "pile.csv", "w", newline="") as fh:
-        w = csv.DictWriter(fh, fieldnames=list(row))
-        w.writeheader()
-        w.writerows(rows)
+    rows = read_rows(out / "pile.csv", list(row)) + [row]
+    write_rows(out / "pile.csv", rows, list(row))
     md_path = out / "pile.md"
-    notes = ""
-    if md_path.exists() and NOTES in md_path.read_text():
-        notes = md_path.read_text().split(NOTES, 1)[1]
     md = [
         "# Pile benchmark (cylinder lifting, non-cohesive)",
         "",
@@ -108,7 +85,7 @@ def main(argv=None):
         "the rest (compile excluded); load_avg_1min is the machine load at the end (other "
         "processes share the two cores).",
         "",
-        NOTES + notes.rstrip("\n"),
+        kept_notes(md_path),
     ]
     md_path.write_text("\n".join(md) + "\n")
     print(row)

@@ -76,6 +76,47 @@ def test_too_small_pile_is_refused():
         measure.repose_angle_bins(x, 0.002)
 
 
+@pytest.mark.parametrize("alpha", [22.0, 30.0, 38.0])
+def test_surface_scan_recovers_the_flank_angle_of_an_analytic_heap(alpha):
+    x, r = heap(alpha)
+    res = measure.repose_angle_surface(x, r, 0.0)
+    # the probe's surface is the heap's offset by one radius: same flank slope
+    assert res["angle_deg"] == pytest.approx(alpha, abs=0.1)
+    assert len(res["per_direction_deg"]) == 8
+    assert res["spread_deg"] < 0.2
+
+
+def test_surface_scan_follows_per_direction_slopes():
+    # slopes alpha + 4 cos(phi): the +x sector is steeper than the -x sector by about 8 deg
+    x, r = heap(30.0, skew=4.0, centre=(0.02, -0.01))
+    res = measure.repose_angle_surface(x, r, 0.0)
+    per = np.array(res["per_direction_deg"])
+    assert per[0] - per[4] == pytest.approx(8.0, abs=1.5)
+    assert res["angle_deg"] == pytest.approx(30.0, abs=0.6)
+
+
+def test_surface_height_map_of_one_sphere():
+    # bare caps (probe 0): H = z + sqrt(r^2 - d^2) over the disc, the plate elsewhere
+    x = np.array([[0.0, 0.0, 0.01]] * 10)
+    X, Y, H = measure.surface_height_map(x, 0.004, 0.0, cell=0.0005, probe=0.0)
+    d2 = X**2 + Y**2
+    inside = d2 < 0.004**2
+    assert H[inside] == pytest.approx(0.01 + np.sqrt(0.004**2 - d2[inside]), abs=1e-12)
+    assert np.all(H[~inside] == 0.0)
+    # a probe of radius p rides on the sphere inflated by p: its lowest point at the apex
+    # is z + r, and it reaches the plate only beyond the inflated disc
+    _, _, Hp = measure.surface_height_map(x, 0.004, 0.0, cell=0.0005, probe=0.002)
+    assert Hp.max() == pytest.approx(0.014, abs=2e-5)
+
+
+def test_surface_scan_refuses_a_bad_grid():
+    x, r = heap(30.0, R=0.03)
+    with pytest.raises(InputError, match="cell"):
+        measure.repose_angle_surface(x, r, 0.0, cell=0.0)
+    with pytest.raises(InputError, match="probe"):
+        measure.repose_angle_surface(x, r, 0.0, probe=-1.0)
+
+
 @pytest.mark.parametrize("alpha", [25.0, 35.0])
 def test_side_silhouette_through_the_photo_pipeline(alpha, tmp_path):
     x, r = heap(alpha, R=0.05)

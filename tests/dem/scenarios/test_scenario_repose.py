@@ -1,4 +1,4 @@
-"""Repose scenarios: fail-before-run validation, a small pile measured both ways,
+"""Repose scenarios: fail-before-run validation, a small pile measured three ways,
 determinism, and (slow) the screening trends of the papers."""
 
 import numpy as np
@@ -55,7 +55,7 @@ def test_drum_fill_and_preset_validation():
 SMALL = dict(n_particles=400, fill_height=0.04)
 
 
-def test_small_pile_bins_and_silhouette_agree_and_repeat():
+def test_small_pile_bins_scan_and_silhouette_agree_and_repeat():
     p = DemParams(soil_soil_surface_energy=0.0, soil_soil_rolling_friction=0.2)
     a = repose.run(cyl(**SMALL), p, "quick", seed=3, threads=1)
     r = a.responses
@@ -65,8 +65,9 @@ def test_small_pile_bins_and_silhouette_agree_and_repeat():
     assert np.hypot(a.series["x"][:, 0], a.series["x"][:, 1]).max() > 0.03
     assert 10.0 < r["angle_deg"] < 50.0
     assert abs(r["angle_deg"] - r["angle_image_deg"]) < 6.0
+    assert abs(r["angle_surface_deg"] - r["angle_image_deg"]) < 6.0
     b = repose.run(cyl(**SMALL), p, "quick", seed=3, threads=1)
-    assert b.responses["angle_deg"] == r["angle_deg"]  # same seed, same threads: identical
+    assert b.responses == r  # same seed, same threads: identical
     assert np.array_equal(a.series["x"], b.series["x"])
 
 

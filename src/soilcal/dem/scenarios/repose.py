@@ -46,8 +46,11 @@ square plate's outline would have fallen off it: they are counted as ``n_lost`` 
 from the measurement.
 
 Responses: ``angle_deg`` (radial bins, eight directions, :mod:`soilcal.dem.measure`),
-``angle_sd_deg`` (spread of the eight directions), ``angle_image_deg`` (side silhouettes
-through the photo pipeline, four flanks), ``height_m``, ``n_on_plate``, ``n_lost``,
+``angle_sd_deg`` (spread of the eight directions), ``angle_surface_deg`` and
+``angle_surface_sd_deg`` (surface scan: sector profiles of the height map traced by a probe
+of one mean radius, eight directions; the estimator with the least scatter over seeds,
+``benchmarks/repose_seeds.py``), ``angle_image_deg`` (side silhouettes through the photo
+pipeline, four flanks), ``height_m``, ``n_on_plate``, ``n_lost``,
 ``n_retained`` (funnel), ``settled``, ``settle_time_s``.
 """
 
@@ -313,6 +316,8 @@ def run(setup: dict, params: DemParams, preset: str = "quick", seed: int = 0, th
     bins = measure.repose_angle_bins(x[on], r[on], 0.0, centre=(0.0, 0.0), source=source)
     responses.update(angle_deg=bins["angle_deg"], angle_sd_deg=bins["spread_deg"],
                      height_m=bins["height_m"])
+    scan = measure.repose_angle_surface(x[on], r[on], 0.0, centre=(0.0, 0.0), source=source)
+    responses.update(angle_surface_deg=scan["angle_deg"], angle_surface_sd_deg=scan["spread_deg"])
     if setup.get("image", True):
         img = measure.repose_angle_image(x[on], r[on], 0.0)
         responses.update(angle_image_deg=img["angle_deg"], angle_image_sd_deg=img["spread_deg"])

@@ -1,0 +1,43 @@
+"""Shared helpers of the benchmark scripts: commit id, CSV rows kept across runs, the notes
+below a results page's marker (hand-written, kept when the table is regenerated)."""
+
+from __future__ import annotations
+
+import csv
+import subprocess
+from pathlib import Path
+
+HERE = Path(__file__).resolve().parent
+NOTES = "<!-- notes: kept when the table is regenerated -->"
+
+
+def commit() -> str:
+    """Short id of the checked-out commit ('' outside a git checkout)."""
+    try:
+        return subprocess.run(["git", "rev-parse", "--short", "HEAD"], cwd=HERE,
+                              capture_output=True, text=True, check=True).stdout.strip()
+    except (OSError, subprocess.CalledProcessError):
+        return ""
+
+
+def read_rows(path: Path, fields) -> list[dict]:
+    """Earlier rows of a results table (columns they lack are left empty)."""
+    if not path.exists():
+        return []
+    with open(path, newline="") as fh:
+        return [{k: r.get(k, "") for k in fields} for r in csv.DictReader(fh)]
+
+
+def write_rows(path: Path, rows, fields) -> None:
+    with open(path, "w", newline="") as fh:
+        w = csv.DictWriter(fh, fieldnames=list(fields), extrasaction="ignore")
+        w.writeheader()
+        w.writerows(rows)
+
+
+def kept_notes(md_path: Path) -> str:
+    """The marker line and the notes below it, to end a regenerated page with."""
+    notes = ""
+    if md_path.exists() and NOTES in md_path.read_text():
+        notes = md_path.read_text().split(NOTES, 1)[1]
+    return NOTES + notes.rstrip("\n")

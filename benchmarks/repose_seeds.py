@@ -1,0 +1,126 @@
+"""Seed scatter of the static angle of repose: repeated cylinder-lift heaps that differ only
+in the seed of the random insertion, measured three ways.
+
+The case is the cinnamon-soil cylinder lift (002 Sec. 2.4: 60 mm steel tube, 0.05 m/s, fill
+height = diameter) at the quick preset with ``n_particles`` spheres, for two soils:
+
+* ``noncohesive``: the cinnamon soil's BBD centre (rolling friction 0.11, sliding 0.56,
+  restitution 0.45; ``DemParams()``) without surface energy;
+* ``cohesive``: the same with the JKR surface energy 0.38 J/m^2 (BBD centre, Table 6),
+  scaled by the Sauter-radius ratio of the quick to the paper particles (base.py).
+
+Each heap gives the angle by radial bins (``angle_deg``, the papers' EDEMpy method), by the
+surface scan (``angle_surface_deg``) and by side silhouettes (``angle_image_deg``).  Every
+run is a row of ``benchmarks/results/repose_seeds.csv`` (a rerun of the same case, size and
+seed replaces its row); ``repose_seeds.md`` tabulates mean and sample standard deviation over
+the seeds of each case and estimator (notes below its marker are kept).
+
+    python benchmarks/repose_seeds.py                       # 5 seeds, the default cases
+    python benchmarks/repose_seeds.py --cases noncohesive:5000 --seeds 0,1,2,3,4,5,6,7
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+import os
+import platform
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+from _report import commit, kept_notes, read_rows, write_rows
+
+HERE = Path(__file__).resolve().parent
+ESTIMATORS = ("angle_deg", "angle_surface_deg", "angle_image_deg")
+FIELDS = ["utc", "commit", "case", "n", "seed", "particles", "threads", "steps", "wall_s",
+          "settled", "cohesion_scale", *ESTIMATORS, "height_mm", "load_avg_1min"]
+DEFAULT_CASES = "noncohesive:1000,noncohesive:5000,cohesive:1000,cohesive:5000"
+
+
+def params(case):
+    from soilcal.dem.scenarios.base import DemParams
+
+    if case == "noncohesive":
+        return DemParams(soil_soil_surface_energy=0.0, soil_steel_surface_energy=0.0)
+    if case == "cohesive":
+        return DemParams()
+    raise SystemExit(f"--cases: expected noncohesive:N or cohesive:N, got {case!r}")
+
+
+def run_one(case, n, seed, threads):
+    from soilcal.dem.scenarios import repose
+
+    setup = dict(repose.setups()["cinnamon-soil"], name="cinnamon-soil", n_particles=n)
+    res = repose.run(setup, params(case), "quick", seed, threads)
+    r = res.responses
+    return dict(utc=time.strftime("%Y-%m-%d %H:%M", time.gmtime()), commit=commit(), case=case,
+                n=n, seed=seed, particles=res.n_particles, threads=res.threads, steps=res.steps,
+                wall_s=round(res.wall_s, 2), settled=r["settled"],
+                cohesion_scale=round(res.setup["cohesion_scale"], 4),
+                **{k: round(r[k], 3) for k in ESTIMATORS},
+                height_mm=round(1e3 * r["height_m"], 2), load_avg_1min=round(os.getloadavg()[0], 2))
+
+
+def summary(rows):
+    """(case, n, seeds, mean and SD of every estimator) per case and size."""
+    out = []
+    for key in sorted({(r["case"], int(r["n"])) for r in rows}):
+        sel = [r for r in rows if (r["case"], int(r["n"])) == key]
+        line = dict(case=key[0], n=key[1], seeds=len(sel))
+        for k in ESTIMATORS:
+            v = np.array([float(r[k]) for r in sel], float)
+            v = v[np.isfinite(v)]
+            line[k] = (float(v.mean()), float(v.std(ddof=1)) if v.size > 1 else math.nan)
+        out.append(line)
+    return out
+
+
+def main(argv=None):
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--cases", default=DEFAULT_CASES)
+    ap.add_argument("--seeds", default="0,1,2,3,4")
+    ap.add_argument("--threads", type=int, default=2)
+    ap.add_argument("--out", default=str(HERE / "results"))
+    args = ap.parse_args(argv)
+    cases = []
+    for item in args.cases.split(","):
+        case, _, n = item.partition(":")
+        params(case)
+        cases.append((case, int(n)))
+    seeds = [int(s) for s in args.seeds.split(",")]
+    out = Path(args.out)
+    out.mkdir(parents=True, exist_ok=True)
+    csv_path, md_path = out / "repose_seeds.csv", out / "repose_seeds.md"
+    rows = read_rows(csv_path, FIELDS)
+    for case, n in cases:
+        for seed in seeds:
+            row = run_one(case, n, seed, args.threads)
+            print(row, flush=True)
+            rows = [r for r in rows if (r["case"], int(r["n"]), int(r["seed"])) != (case, n, seed)]
+            rows.append(row)
+            rows.sort(key=lambda r: (r["case"], int(r["n"]), int(r["seed"])))
+            write_rows(csv_path, rows, FIELDS)
+    md = ["# Seed scatter of the static angle of repose (cinnamon-soil cylinder lift, quick preset)",
+          "",
+          f"Machine: {platform.machine()}, {os.cpu_count()} logical CPUs, Python "
+          f"{platform.python_version()}.  Last command: `python benchmarks/repose_seeds.py "
+          + " ".join(sys.argv[1:]) + "`.  Rows: `repose_seeds.csv` (utc and commit per row).",
+          "",
+          "Mean and sample standard deviation over the seeds [deg]:",
+          "",
+          "| case | spheres | seeds | radial bins | surface scan | silhouette |",
+          "|---|---:|---:|---|---|---|"]
+    for s in summary(rows):
+        cells = [f"{s[k][0]:.2f} +- {s[k][1]:.2f}" for k in ESTIMATORS]
+        md.append(f"| {s['case']} | {s['n']} | {s['seeds']} | " + " | ".join(cells) + " |")
+    md += ["", "Runs:", "",
+           "| " + " | ".join(FIELDS) + " |", "|" + "---|" * len(FIELDS),
+           *("| " + " | ".join(str(r.get(k, "")) for k in FIELDS) + " |" for r in rows),
+           "", kept_notes(md_path)]
+    md_path.write_text("\n".join(md) + "\n")
+
+
+if __name__ == "__main__":
+    main()
