@@ -18,7 +18,7 @@ seeds.
 
     python benchmarks/convergence.py --level reduced      # a few CPU-minutes
     python benchmarks/convergence.py --level full         # more levels, paper-like counts
-    python benchmarks/convergence.py --scenarios repose,incline
+    python benchmarks/convergence.py --scenarios repose,incline   # other rows are kept
 """
 
 from __future__ import annotations
@@ -35,7 +35,7 @@ import matplotlib
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
-from _report import kept_notes  # noqa: E402
+from _report import kept_notes, read_rows  # noqa: E402
 
 HERE = Path(__file__).resolve().parent
 OUT = HERE / "results" / "convergence"
@@ -164,12 +164,16 @@ def main(argv=None):
     out.mkdir(parents=True, exist_ok=True)
     from soilcal.errors import SimulationError
 
-    rows = []
-    cache = {}
     path = out / "convergence.csv"
+    # rows of the scenarios not run this time are kept
+    rows = [r for r in read_rows(path, FIELDS) if r["scenario"] not in scenarios]
+    for r in rows:
+        r["value_response"] = float(r["value_response"] or "nan")
+    cache = {}
     with open(path, "w", newline="") as fh:
         w = csv.DictWriter(fh, fieldnames=FIELDS)
         w.writeheader()
+        w.writerows(rows)
         for case in runs(args.level, scenarios):
             sc, factor, value, seed = case
             # the quick-preset point (1000 spheres, scale 1, seed 0) is run once per scenario

@@ -25,6 +25,20 @@ def test_compression_stress_rises_with_strain():
     assert np.corrcoef(se["strain"][loaded], se["stress_pa"][loaded])[0, 1] > 0.8
 
 
+def test_compression_stops_at_jamming_instead_of_blowing_up():
+    # a loose bed cannot be pressed much beyond random close packing (solid fraction 0.64):
+    # asked for 60 % strain, the run stops when the largest overlap reaches jam_overlap
+    s = dict(compression.setups()["guangxi-cohesive"], n_particles=300, max_strain=0.6,
+             quick_height=0.03, jam_overlap=0.15)
+    res = compression.run(s, DemParams(soil_soil_surface_energy=0.0), "quick", seed=1, threads=1)
+    r = res.responses
+    assert r["stop_reason"] == "overlap" and r["strain_end"] < 0.6
+    assert r["strain_end"] == pytest.approx(res.series["strain"][-1])
+    phi_end = r["solid_fraction_0"] / (1.0 - r["strain_end"])
+    assert r["solid_fraction_0"] < 0.5 < phi_end < 0.72
+    assert np.isnan(compression.measure.value_at(res.series["strain"], res.series["stress_pa"], 0.59))
+
+
 def test_compression_validation():
     s = dict(compression.setups()["guangxi-cohesive"])
     with pytest.raises(InputError, match="setup.rod_diameter"):
@@ -33,3 +47,5 @@ def test_compression_validation():
         compression.validate(dict(s, rod_speed=-0.008), "quick", "t")
     with pytest.raises(InputError, match="setup.max_strain"):
         compression.validate(dict(s, max_strain=1.5), "quick", "t")
+    with pytest.raises(InputError, match="setup.jam_overlap"):
+        compression.validate(dict(s, jam_overlap=0.3), "quick", "t")

@@ -16,7 +16,13 @@ F_z > 0 (first contact; the paper records only after loading starts)::
 
     sigma = F_z / (pi R_rod^2),     epsilon = (h0 - z_rod) / h0
 
-(:func:`soilcal.dem.measure.stress_strain`).  The run stops at ``max_strain``.
+(:func:`soilcal.dem.measure.stress_strain`).  The run stops at ``max_strain`` or, earlier,
+when the largest overlap reaches ``jam_overlap`` (default 15 %) of a radius: a bed poured at
+solid fraction phi0 jams near 1 - phi0 / 0.64 strain (random close packing), beyond which
+spheres of the soft quick stiffness can only interpenetrate (the engine stops at 30 %).  The
+stop is reported (``stop_reason``: ``max_strain`` or ``overlap``, ``strain_end``) with the
+fill's solid fraction under the rod at first contact (``solid_fraction_0``); stresses at
+strains beyond ``strain_end`` are NaN.
 
 Fill: N = phi m / (rho_p <v_p>) spheres for the load mass m at settled solid fraction
 phi = 0.6 of the particle density.  ``quick``: the load is reduced to about 1000 spheres of
@@ -26,7 +32,8 @@ how much); ``paper``: 3 kg of the paper's particle sizes (004 Sec. 2.6, taken as
 and the unscaled modulus.
 
 Responses: ``stress_5_kpa``, ``stress_10_kpa``, ``stress_20_kpa`` (stress at 5, 10, 20 %
-strain, linear interpolation), ``stress_max_kpa``, ``h0_m``; series: strain, stress (Pa),
+strain, linear interpolation), ``stress_max_kpa``, ``h0_m``, ``strain_end``, ``stop_reason``,
+``solid_fraction_0``; series: strain, stress (Pa),
 rod height and force.
 """
 
@@ -53,7 +60,8 @@ def setups() -> dict:
         # 0.63 (22 %), 0.315 mm (50 %).  Final strain not printed: 30 %.
         "guangxi-cohesive": dict(tube_diameter=0.100, tube_height=0.300, rod_diameter=0.099,
                                  load_mass=3.0, rod_speed=0.008, max_strain=0.30,
-                                 quick_height=0.040, sample_dz=0.0002, rest_speed=0.005,
+                                 quick_height=0.040, sample_dz=0.0002, jam_overlap=0.15,
+                                 rest_speed=0.005,
                                  max_settle_time=3.0, n_particles=None, radius=None,
                                  stiffness_scale=None, dt_fraction=None,
                                  paper_psd=[[0.00125, 14.0], [0.000625, 14.0],
@@ -97,6 +105,10 @@ def validate(setup, preset="quick", source="<input>", params=None):
     hq = setup_number(setup, "quick_height", source)
     check(hq < H, source, "setup.quick_height", f"a sample lower than the tube ({H} m)", hq)
     setup_number(setup, "sample_dz", source)
+    jam = setup_number(setup, "jam_overlap", source)
+    limit = check_preset(preset, source)["max_overlap"]
+    check(jam < limit, source, "setup.jam_overlap",
+          f"an overlap fraction below the engine's blow-up limit {limit}", jam)
     setup_number(setup, "rest_speed", source)
     setup_number(setup, "max_settle_time", source)
     check_discretisation(setup, source)
@@ -150,6 +162,7 @@ def run(setup, params: DemParams, preset="quick", seed=0, threads=None, vtk_dir=
     z_rod, fz = [], []
     z = z0
     h0 = None
+    stop = "max_strain"
     # upper bound of the travel: the whole height above the floor
     while z > 0.05 * top:
         sim.run(nsub)
@@ -161,6 +174,9 @@ def run(setup, params: DemParams, preset="quick", seed=0, threads=None, vtk_dir=
             h0 = z
         if h0 is not None and (h0 - z) / h0 >= setup["max_strain"]:
             break
+        if float(sim.p.ovr.max()) >= setup["jam_overlap"]:
+            stop = "overlap"  # jammed: further travel only squeezes spheres into each other
+            break
     frames(sim)
     frames.close()
     z_rod, fz = np.asarray(z_rod), np.asarray(fz)
@@ -168,7 +184,9 @@ def run(setup, params: DemParams, preset="quick", seed=0, threads=None, vtk_dir=
         h0 = top
     eps, sig = measure.stress_strain(z_rod, fz, Rr, h0)
     resp = dict(h0_m=float(h0), fill_settled=int(ok0),
-                stress_max_kpa=float(sig.max() / 1e3) if sig.size else float("nan"))
+                stress_max_kpa=float(sig.max() / 1e3) if sig.size else float("nan"),
+                strain_end=float(eps[-1]) if eps.size else 0.0, stop_reason=stop,
+                solid_fraction_0=float((4.0 / 3.0 * math.pi * sim.p.r**3).sum() / (math.pi * R * R * h0)))
     for e in (0.05, 0.10, 0.20):
         resp[f"stress_{int(round(e * 100))}_kpa"] = measure.value_at(eps, sig, e) / 1e3
     setup_out = dict(setup)
