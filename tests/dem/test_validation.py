@@ -1,6 +1,5 @@
 """Bad parameters fail before the run with a clear message; blow-ups name step and particle."""
 
-import numpy as np
 import pytest
 
 from conftest import table
