@@ -48,7 +48,7 @@ from the measurement.
 Responses: ``angle_deg`` (radial bins, eight directions, :mod:`soilcal.dem.measure`),
 ``angle_sd_deg`` (spread of the eight directions), ``angle_surface_deg`` and
 ``angle_surface_sd_deg`` (surface scan: sector profiles of the height map traced by a probe
-of one mean radius, eight directions; the estimator with the least scatter over seeds,
+of one mean radius, eight directions; scatter over seeds of the three estimators:
 ``benchmarks/repose_seeds.py``), ``angle_image_deg`` (side silhouettes through the photo
 pipeline, four flanks), ``height_m``, ``n_on_plate``, ``n_lost``,
 ``n_retained`` (funnel), ``settled``, ``settle_time_s``.
