@@ -49,13 +49,13 @@ def params(case):
     raise SystemExit(f"--cases: expected noncohesive:N or cohesive:N, got {case!r}")
 
 
-def run_one(case, n, seed, threads):
+def run_one(case, n, seed, threads, rev):
     from soilcal.dem.scenarios import repose
 
     setup = dict(repose.setups()["cinnamon-soil"], name="cinnamon-soil", n_particles=n)
     res = repose.run(setup, params(case), "quick", seed, threads)
     r = res.responses
-    return dict(utc=time.strftime("%Y-%m-%d %H:%M", time.gmtime()), commit=commit(), case=case,
+    return dict(utc=time.strftime("%Y-%m-%d %H:%M", time.gmtime()), commit=rev, case=case,
                 n=n, seed=seed, particles=res.n_particles, threads=res.threads, steps=res.steps,
                 wall_s=round(res.wall_s, 2), settled=r["settled"],
                 cohesion_scale=round(res.setup["cohesion_scale"], 4),
@@ -94,9 +94,10 @@ def main(argv=None):
     out.mkdir(parents=True, exist_ok=True)
     csv_path, md_path = out / "repose_seeds.csv", out / "repose_seeds.md"
     rows = read_rows(csv_path, FIELDS)
+    rev = commit()  # the code this process runs, whatever is committed meanwhile
     for case, n in cases:
         for seed in seeds:
-            row = run_one(case, n, seed, args.threads)
+            row = run_one(case, n, seed, args.threads, rev)
             print(row, flush=True)
             rows = [r for r in rows if (r["case"], int(r["n"]), int(r["seed"])) != (case, n, seed)]
             rows.append(row)
