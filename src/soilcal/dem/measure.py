@@ -224,8 +224,8 @@ def surface_height_map(x, r, plate_z=0.0, cell=None, probe=None, margin=None,
     probe = float(np.mean(r)) if probe is None else float(probe)
     if not probe >= 0:
         raise InputError(source, "probe", "a probe radius >= 0 m", probe)
+    cell = 0.5 * float(np.mean(r)) if cell is None else float(cell)
     r = r + probe
-    cell = 0.5 * float(np.mean(r - probe)) if cell is None else float(cell)
     if not cell > 0:
         raise InputError(source, "cell", "a grid pitch > 0 m", cell)
     margin = 2.0 * cell if margin is None else float(margin)
@@ -262,8 +262,8 @@ def repose_angle_surface(x, r, plate_z=0.0, centre=None, n_dir=8, cell=None, pro
     if centre is None:
         centre = pile_centre(x, r, plate_z)
     cx, cy = float(centre[0]), float(centre[1])
+    cell = 0.5 * float(np.mean(r)) if cell is None else float(cell)
     X, Y, H = surface_height_map(x, r, plate_z, cell, probe, source=source)
-    cell = X[1, 0] - X[0, 0] if X.shape[0] > 1 else 0.5 * float(np.mean(r))
     dx, dy = (X - cx).ravel(), (Y - cy).ravel()
     h = H.ravel()
     rho = np.hypot(dx, dy)

@@ -33,7 +33,6 @@ def test_compression_stops_at_jamming_instead_of_blowing_up():
     res = compression.run(s, DemParams(soil_soil_surface_energy=0.0), "quick", seed=1, threads=1)
     r = res.responses
     assert r["stop_reason"] == "overlap" and r["strain_end"] < 0.6
-    assert r["strain_end"] == pytest.approx(res.series["strain"][-1])
     phi_end = r["solid_fraction_0"] / (1.0 - r["strain_end"])
     assert r["solid_fraction_0"] < 0.5 < phi_end < 0.72
     assert np.isnan(compression.measure.value_at(res.series["strain"], res.series["stress_pa"], 0.59))

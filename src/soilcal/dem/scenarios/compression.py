@@ -33,8 +33,7 @@ and the unscaled modulus.
 
 Responses: ``stress_5_kpa``, ``stress_10_kpa``, ``stress_20_kpa`` (stress at 5, 10, 20 %
 strain, linear interpolation), ``stress_max_kpa``, ``h0_m``, ``strain_end``, ``stop_reason``,
-``solid_fraction_0``; series: strain, stress (Pa),
-rod height and force.
+``solid_fraction_0``; series: strain, stress (Pa), rod height and force.
 """
 
 from __future__ import annotations
@@ -61,9 +60,8 @@ def setups() -> dict:
         "guangxi-cohesive": dict(tube_diameter=0.100, tube_height=0.300, rod_diameter=0.099,
                                  load_mass=3.0, rod_speed=0.008, max_strain=0.30,
                                  quick_height=0.040, sample_dz=0.0002, jam_overlap=0.15,
-                                 rest_speed=0.005,
-                                 max_settle_time=3.0, n_particles=None, radius=None,
-                                 stiffness_scale=None, dt_fraction=None,
+                                 rest_speed=0.005, max_settle_time=3.0, n_particles=None,
+                                 radius=None, stiffness_scale=None, dt_fraction=None,
                                  paper_psd=[[0.00125, 14.0], [0.000625, 14.0],
                                             [0.000315, 22.0], [0.0001575, 50.0]]),
     }
@@ -186,13 +184,15 @@ def run(setup, params: DemParams, preset="quick", seed=0, threads=None, vtk_dir=
     resp = dict(h0_m=float(h0), fill_settled=int(ok0),
                 stress_max_kpa=float(sig.max() / 1e3) if sig.size else float("nan"),
                 strain_end=float(eps[-1]) if eps.size else 0.0, stop_reason=stop,
-                solid_fraction_0=float((4.0 / 3.0 * math.pi * sim.p.r**3).sum() / (math.pi * R * R * h0)))
+                solid_fraction_0=float((4.0 / 3.0 * math.pi * sim.p.r**3).sum()
+                                       / (math.pi * R * R * h0)))
     for e in (0.05, 0.10, 0.20):
         resp[f"stress_{int(round(e * 100))}_kpa"] = measure.value_at(eps, sig, e) / 1e3
     setup_out = dict(setup)
     setup_out.pop("paper_psd", None)
     setup_out.update(stiffness_scale=scale, cohesion_scale=coh, dt=sim.dt,
-                     dt_fraction=sim.dt / sim.rayleigh, r_max=sz["r_max"], load_mass=sz["load_mass"], rod_step_m=dz_step)
+                     dt_fraction=sim.dt / sim.rayleigh, r_max=sz["r_max"],
+                     load_mass=sz["load_mass"], rod_step_m=dz_step)
     return Result(scenario=NAME, preset=preset, seed=int(seed), n_particles=int(sim.n),
                   steps=int(sim.step), sim_time_s=float(sim.step * sim.dt), wall_s=timer.seconds,
                   threads=nthreads, params=params.as_dict(), setup=setup_out, responses=resp,

@@ -163,8 +163,8 @@ def run(setup, params: DemParams, preset="quick", seed=0, threads=None, vtk_dir=
     setup_out = dict(setup)
     setup_out.pop("paper_psd", None)
     setup_out.update(stiffness_scale=scale, cohesion_scale=coh, dt=sim.dt,
-                     dt_fraction=sim.dt / sim.rayleigh, spin_time=spin, transient_time=trans, r_max=sz["r_max"],
-                     omega_rad_s=w, slab_half=slab)
+                     dt_fraction=sim.dt / sim.rayleigh, spin_time=spin, transient_time=trans,
+                     r_max=sz["r_max"], omega_rad_s=w, slab_half=slab)
     return Result(scenario=NAME, preset=preset, seed=int(seed), n_particles=int(sim.n),
                   steps=int(sim.step), sim_time_s=float(sim.step * sim.dt), wall_s=timer.seconds,
                   threads=nthreads, params=params.as_dict(), setup=setup_out,
