@@ -333,7 +333,7 @@ class Simulation:
                 int(wall_log_every), step0, p.x, p.v, p.omega, p.f, p.t, p.r, p.m, p.inv_m, p.inv_i,
                 p.mat, p.disp, p.ovr, L["xr"], L["vw"], self.gravity, self.box, self.periodic,
                 self.dt, self.skin, self.extra, self._pair, self.codes, self._cells,
-                self._cidx(), self._cof(), self._wcells, self._wbins, self._glob(),
+                self._cidx(), self._cof(), self._cpos_arr, self._wcells, self._wbins, self._glob(),
                 L["start_a"], L["nbr_a"], L["hist_a"], L["act_a"], L["start_b"], L["nbr_b"],
                 L["hist_b"], L["act_b"], L["rstart"], L["rev"], L["slot"],
                 L["wnbr_a"], L["wcnt_a"], L["whist_a"], L["wnbr_b"], L["wcnt_b"],
@@ -374,6 +374,7 @@ class Simulation:
         if getattr(self, "_cidx_arr", None) is None or self._cidx_arr.shape[0] != self.p.n:
             self._cidx_arr = np.zeros(self.p.n, dtype=np.int64)
             self._cof_arr = np.zeros(self.p.n, dtype=np.int64)
+            self._cpos_arr = np.zeros((self.p.n, 4))  # cell-sorted x, y, z, R
         return self._cidx_arr
 
     def _wall_extent(self):

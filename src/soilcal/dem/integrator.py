@@ -368,7 +368,7 @@ def kinetic_translational(v, m, inv_m):
 def run_loop(nsteps, step0, resume_mid, need_forces, ke_tol, ke_every, max_ovr, wlog_every,
              log0, x, v, om, f, t, r, m, inv_m, inv_i, mat, disp, ovr, xr, vw,
              gravity, box, periodic, dt, skin, extra, pair, codes,
-             cell_start, cell_idx, cell_of, wcell_start, wcell_idx, glob,
+             cell_start, cell_idx, cell_of, cpos, wcell_start, wcell_idx, glob,
              start_a, nbr_a, hist_a, act_a, start_b, nbr_b, hist_b, act_b, rstart, rev, slot,
              wnbr_a, wcnt_a, whist_a, wnbr_b, wcnt_b, whist_b, wslot,
              prim_kind, prim_wall, prim_mat, prim_par, prim_pts, prim_dirs,
@@ -432,12 +432,13 @@ def run_loop(nsteps, step0, resume_mid, need_forces, ke_tol, ke_every, max_ovr, 
         if rebuild or wrebuild:
             if rebuild:
                 code, need = build_lists(x, r, box, periodic, skin, extra, cell_start,
-                                         cell_idx, cell_of, sc, nc, hc, ac, so, no, ho, ao,
-                                         rstart, rev, prim_kind, prim_par, wcell_start,
-                                         wcell_idx, glob, wnc, wcc, whc, wno, wco, who)
+                                         cell_idx, cell_of, cpos, sc, nc, hc, ac, so, no,
+                                         ho, ao, rstart, rev, prim_kind, prim_par,
+                                         wcell_start, wcell_idx, glob, wnc, wcc, whc, wno,
+                                         wco, who)
             else:
                 code, need = build_wall_lists(x, r, box, periodic, skin, extra, cell_start,
-                                              cell_idx, cell_of, prim_kind, prim_par,
+                                              cell_idx, cell_of, cpos, prim_kind, prim_par,
                                               wcell_start, wcell_idx, glob,
                                               wnc, wcc, whc, wno, wco, who)
             if code != 0:

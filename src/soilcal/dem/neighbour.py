@@ -156,19 +156,48 @@ def _cell_ranges(c, n0, n1, n2, p0, p1):
     return cx, cy, cz, a0, b0, a1, b1, a2, b2
 
 
+@njit(cache=True, inline="always")
+def _scan(q0, q1, i, xi, yi, zi, ri, cpos, cell_idx, p0, h0, L0, p1, h1, L1, cut0, out, o0,
+          cnt, fill):
+    """Candidates q0..q1-1 of the cell-sorted arrays against particle i (see :func:`_row`)."""
+    for q in range(q0, q1):
+        j = cell_idx[q]
+        if j <= i:
+            continue
+        ddx = min_image(xi - cpos[q, 0], p0, h0, L0)
+        ddy = min_image(yi - cpos[q, 1], p1, h1, L1)
+        ddz = zi - cpos[q, 2]
+        cut = ri + cpos[q, 3] + cut0
+        if ddx * ddx + ddy * ddy + ddz * ddz < cut * cut:
+            if fill:
+                # insertion into the sorted row
+                s = o0 + cnt
+                while s > o0 and out[s - 1] > j:
+                    out[s] = out[s - 1]
+                    s -= 1
+                out[s] = j
+            cnt += 1
+    return cnt
+
+
 @njit(cache=True)
-def _row(i, x, r, box, periodic, cut0, cell_start, cell_idx, cell_of, n0, n1, n2, out, o0,
+def _row(q, cpos, cell_idx, cell_of, box, periodic, cut0, cell_start, n0, n1, n2, out, o0,
          fill):
-    """Partners j > i of particle i within the cutoff; if ``fill`` they are written sorted
-    to out[o0:]; returns their number."""
+    """Partners j > i of particle i = cell_idx[q] within the cutoff; if ``fill`` they are
+    written sorted to out[o0:]; returns their number.
+
+    Candidates are read from the cell-sorted copy ``cpos`` (x, y, z, R per slot of
+    ``cell_idx``), so each neighbour cell is a contiguous stretch of memory; the three cells
+    of a row of the stencil along x are one stretch unless the row wraps around the box."""
     L0 = box[1] - box[0]
     L1 = box[3] - box[2]
     h0 = 0.5 * L0
     h1 = 0.5 * L1
     p0 = periodic[0]
     p1 = periodic[1]
+    i = cell_idx[q]
     cx, cy, cz, a0, b0, a1, b1, a2, b2 = _cell_ranges(cell_of[i], n0, n1, n2, p0, p1)
-    xi, yi, zi, ri = x[i, 0], x[i, 1], x[i, 2], r[i]
+    xi, yi, zi, ri = cpos[q, 0], cpos[q, 1], cpos[q, 2], cpos[q, 3]
     cnt = 0
     for dz in range(a2, b2 + 1):
         zz = cz + dz
@@ -178,36 +207,28 @@ def _row(i, x, r, box, periodic, cut0, cell_start, cell_idx, cell_of, n0, n1, n2
                 yy += n1
             elif yy >= n1:
                 yy -= n1
-            for dx in range(a0, b0 + 1):
-                xx = cx + dx
-                if xx < 0:
-                    xx += n0
-                elif xx >= n0:
-                    xx -= n0
-                cc = xx + n0 * (yy + n1 * zz)
-                for q in range(cell_start[cc], cell_start[cc + 1]):
-                    j = cell_idx[q]
-                    if j <= i:
-                        continue
-                    ddx = min_image(xi - x[j, 0], p0, h0, L0)
-                    ddy = min_image(yi - x[j, 1], p1, h1, L1)
-                    ddz = zi - x[j, 2]
-                    cut = ri + r[j] + cut0
-                    if ddx * ddx + ddy * ddy + ddz * ddz < cut * cut:
-                        if fill:
-                            # insertion into the sorted row
-                            s = o0 + cnt
-                            while s > o0 and out[s - 1] > j:
-                                out[s] = out[s - 1]
-                                s -= 1
-                            out[s] = j
-                        cnt += 1
+            base = n0 * (yy + n1 * zz)
+            if cx + a0 >= 0 and cx + b0 < n0:
+                cnt = _scan(cell_start[base + cx + a0], cell_start[base + cx + b0 + 1], i,
+                            xi, yi, zi, ri, cpos, cell_idx, p0, h0, L0, p1, h1, L1, cut0, out,
+                            o0, cnt, fill)
+            else:
+                for dx in range(a0, b0 + 1):
+                    xx = cx + dx
+                    if xx < 0:
+                        xx += n0
+                    elif xx >= n0:
+                        xx -= n0
+                    cc = base + xx
+                    cnt = _scan(cell_start[cc], cell_start[cc + 1], i, xi, yi, zi, ri, cpos,
+                                cell_idx, p0, h0, L0, p1, h1, L1, cut0, out, o0, cnt, fill)
     return cnt
 
 
 @njit(cache=True)
-def _grid(x, r, box, periodic, skin, extra, cell_start, cell_idx, cell_of):
-    """Cell grid over the particles' bounding box, particles counting-sorted by cell.
+def _grid(x, r, box, periodic, skin, extra, cell_start, cell_idx, cell_of, cpos):
+    """Cell grid over the particles' bounding box, particles counting-sorted by cell
+    (cell_idx; cpos holds their x, y, z, R in the same order).
 
     Returns (ok, rmax, lo0, cs0, n0, lo1, cs1, n1, lo2, cs2, n2); ok is False when
     cell_start is too short (n0 * n1 * n2 + 1 needed).
@@ -246,8 +267,13 @@ def _grid(x, r, box, periodic, skin, extra, cell_start, cell_idx, cell_of):
         cell_start[c] = cell_start[c - 1]
     for i in range(n):
         c = cell_of[i]
-        cell_idx[cell_start[c + 1]] = i
-        cell_start[c + 1] += 1
+        q = cell_start[c + 1]
+        cell_idx[q] = i
+        cpos[q, 0] = x[i, 0]
+        cpos[q, 1] = x[i, 1]
+        cpos[q, 2] = x[i, 2]
+        cpos[q, 3] = r[i]
+        cell_start[c + 1] = q + 1
     return True, rmax, lo0, cs0, n0, lo1, cs1, n1, lo2, cs2, n2
 
 
@@ -294,12 +320,12 @@ def _wall_need(wcnt_new, KW):
 
 
 @njit(cache=True)
-def _grid_and_bins(x, r, box, periodic, skin, extra, cell_start, cell_idx, cell_of, prim_kind,
-                   prim_par, wcell_start, wcell_idx, glob):
+def _grid_and_bins(x, r, box, periodic, skin, extra, cell_start, cell_idx, cell_of, cpos,
+                   prim_kind, prim_par, wcell_start, wcell_idx, glob):
     """Cell grid (:func:`_grid`) and triangle bins (:func:`_bin_triangles`) of a list build.
     Returns (status, need, ng, n0, n1, n2) with the status codes of :func:`build_lists`."""
     ok, rmax, lo0, cs0, n0, lo1, cs1, n1, lo2, cs2, n2 = _grid(
-        x, r, box, periodic, skin, extra, cell_start, cell_idx, cell_of)
+        x, r, box, periodic, skin, extra, cell_start, cell_idx, cell_of, cpos)
     if not ok or n0 * n1 * n2 + 1 > wcell_start.shape[0]:
         return 3, n0 * n1 * n2 + 1, 0, n0, n1, n2
     ng, code, wneed = _bin_triangles(prim_kind, prim_par, rmax + skin + extra, lo0, cs0, n0,
@@ -309,7 +335,7 @@ def _grid_and_bins(x, r, box, periodic, skin, extra, cell_start, cell_idx, cell_
 
 
 @njit(cache=True, parallel=True)
-def build_wall_lists(x, r, box, periodic, skin, extra, cell_start, cell_idx, cell_of,
+def build_wall_lists(x, r, box, periodic, skin, extra, cell_start, cell_idx, cell_of, cpos,
                      prim_kind, prim_par, wcell_start, wcell_idx, glob,
                      wnbr_old, wcnt_old, whist_old, wnbr_new, wcnt_new, whist_new):
     """Rebuild only the wall lists (walls moved, particles did not move enough for the
@@ -318,7 +344,7 @@ def build_wall_lists(x, r, box, periodic, skin, extra, cell_start, cell_idx, cel
     if n == 0:
         return 0, 0
     code, need, ng, n0, n1, n2 = _grid_and_bins(x, r, box, periodic, skin, extra, cell_start,
-                                                cell_idx, cell_of, prim_kind, prim_par,
+                                                cell_idx, cell_of, cpos, prim_kind, prim_par,
                                                 wcell_start, wcell_idx, glob)
     if code != 0:
         return code, need
@@ -333,7 +359,7 @@ def build_wall_lists(x, r, box, periodic, skin, extra, cell_start, cell_idx, cel
 
 
 @njit(cache=True, parallel=True)
-def build_lists(x, r, box, periodic, skin, extra, cell_start, cell_idx, cell_of,
+def build_lists(x, r, box, periodic, skin, extra, cell_start, cell_idx, cell_of, cpos,
                 start_old, nbr_old, hist_old, act_old, start_new, nbr_new, hist_new, act_new,
                 rstart, rev, prim_kind, prim_par, wcell_start, wcell_idx, glob,
                 wnbr_old, wcnt_old, whist_old, wnbr_new, wcnt_new, whist_new):
@@ -351,26 +377,28 @@ def build_lists(x, r, box, periodic, skin, extra, cell_start, cell_idx, cell_of,
         start_new[0] = 0
         return 0, 0
     code, need, ng, n0, n1, n2 = _grid_and_bins(x, r, box, periodic, skin, extra, cell_start,
-                                                cell_idx, cell_of, prim_kind, prim_par,
+                                                cell_idx, cell_of, cpos, prim_kind, prim_par,
                                                 wcell_start, wcell_idx, glob)
     if code != 0:
         return code, need
     cut0 = skin + extra
-    # pass 1: row lengths -> offsets
-    for i in prange(n):
-        start_new[i + 1] = _row(i, x, r, box, periodic, cut0, cell_start, cell_idx, cell_of,
-                                n0, n1, n2, nbr_new, 0, False)
+    # pass 1: row lengths -> offsets (particles taken in cell order: neighbouring
+    # particles are processed together and their candidates stay in cache)
+    for q in prange(n):
+        start_new[cell_idx[q] + 1] = _row(q, cpos, cell_idx, cell_of, box, periodic, cut0,
+                                          cell_start, n0, n1, n2, nbr_new, 0, False)
     start_new[0] = 0
     for i in range(n):
         start_new[i + 1] += start_new[i]
     if start_new[n] > P:
         return 1, start_new[n]
     # pass 2: sorted rows, history merged from the old sorted rows; wall lists
-    for i in prange(n):
+    for q in prange(n):
+        i = cell_idx[q]
         o0 = start_new[i]
         o1 = start_new[i + 1]
-        _row(i, x, r, box, periodic, cut0, cell_start, cell_idx, cell_of, n0, n1, n2,
-             nbr_new, o0, True)
+        _row(q, cpos, cell_idx, cell_of, box, periodic, cut0, cell_start, n0, n1, n2, nbr_new,
+             o0, True)
         ko = start_old[i]
         kend = start_old[i + 1]
         for k in range(o0, o1):
