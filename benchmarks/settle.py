@@ -180,9 +180,10 @@ def write_tables(rows, notes, out: Path, quick: bool) -> None:
         lines += ["", "The large-N row runs only the first steps (free fall, almost no contacts): "
                   "it is there for peak memory, its throughput is not comparable with the "
                   "20,000-step rows.",
-                  "soilcal's lists grow with the number of neighbour pairs (CSR half lists: partner, "
-                  "history and pair slot, about 150 bytes a pair); most of its RSS is the "
-                  "Python, NumPy and Numba runtime (about 300 MB)."]
+                  "soilcal's lists grow with the number of neighbour pairs (CSR half lists: partner "
+                  "8 bytes, history 32 bytes (64 with the EPSD rolling spring), touching flag 1 "
+                  "byte, twice for the rebuild); most of its RSS is the Python, NumPy and Numba "
+                  "runtime (about 300 MB)."]
     if notes:
         lines += ["", "Notes from this run:", ""] + [f"* {n}" for n in notes]
     (out / "settle.md").write_text("\n".join(lines) + "\n")

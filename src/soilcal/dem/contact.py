@@ -89,9 +89,15 @@ JKR_CONVENTION = {"edem": 1.0, "lammps": 2.0}  # w = factor * gamma
 
 # history slot layout (per particle and contact partner)
 H_XI = 0  # 3 tangential displacement
-H_MR = 3  # 3 rolling spring moment (epsd)
-H_A = 6  # last JKR contact radius (Newton warm start)
-H_SIZE = 8  # (slot 7 unused: rows of 64 bytes)
+H_A = 3  # last JKR contact radius (Newton warm start)
+H_MR = 4  # 3 rolling spring moment (epsd)
+H_SIZE = 8  # full row (64 bytes; walls keep their touching flag in slot 7)
+H_SHORT = 4  # particle pairs without the EPSD spring: tangential + JKR only (32 bytes)
+
+
+def hist_width(codes) -> int:
+    """History row width of particle pairs: the EPSD rolling spring needs the full row."""
+    return H_SIZE if codes[3] == ROLLING["epsd"] else H_SHORT
 
 SQ56 = math.sqrt(5.0 / 6.0)
 
@@ -200,7 +206,7 @@ def contact_force(codes, pair, ma, mb, delta, nx, ny, nz, rvx, rvy, rvz, wrx, wr
             # separation: delta < delta_c  <=>  delta^3 < -(27/64) pi^2 w^2 R* / E*^2
             if not touching or delta * delta * delta < -pair[ma, mb, P_JKRK] * rstar:
                 if touching:
-                    for q in range(H_SIZE):
+                    for q in range(hist.shape[1]):
                         hist[hk, q] = 0.0
                 return False, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0
         a = jkr_radius_from(delta, rstar, estar, w, hist[hk, H_A])
@@ -210,7 +216,7 @@ def contact_force(codes, pair, ma, mb, delta, nx, ny, nz, rvx, rvy, rvz, wrx, wr
     else:
         if delta <= 0.0:
             if touching:
-                for q in range(H_SIZE):
+                for q in range(hist.shape[1]):
                     hist[hk, q] = 0.0
             return False, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0
         a = math.sqrt(rstar * delta)

@@ -25,8 +25,9 @@ import numba
 import numpy as np
 
 from soilcal.dem import integrator as itg
-from soilcal.dem.contact import H_SIZE, jkr_separation, model_codes
+from soilcal.dem.contact import H_SIZE, hist_width, jkr_separation, model_codes
 from soilcal.dem.materials import P_ESTAR, P_W, MaterialTable
+from soilcal.dem.neighbour import SLAB_MAX
 from soilcal.dem.state import ParticleState
 from soilcal.dem.walls import CONE, CYLINDER, DISK, NPAR, PLANE, RECTANGLE, TRIANGLE, WallSet
 from soilcal.errors import InputError, SimulationError
@@ -261,15 +262,14 @@ class Simulation:
         for s in ("a", "b"):
             L["start_" + s] = np.zeros(n + 1, dtype=np.int64)
             L["nbr_" + s] = np.full(npair, -1, dtype=np.int64)
-            L["hist_" + s] = np.zeros((npair, H_SIZE))
+            L["hist_" + s] = np.zeros((npair, hist_width(self.codes)))
             L["act_" + s] = np.zeros(npair, dtype=np.int8)
             L["wnbr_" + s] = np.full((n, kw), -1, dtype=np.int64)
             L["wcnt_" + s] = np.zeros(n, dtype=np.int64)
             # wall history rows i * kw + k
             L["whist_" + s] = np.zeros((n * kw, H_SIZE))
-        L["rstart"] = np.zeros(n + 1, dtype=np.int64)
-        L["rev"] = np.zeros(npair, dtype=np.int64)
-        L["slot"] = np.zeros((npair, itg.S_SIZE))
+        L["sorder"] = np.zeros(n, dtype=np.int64)  # particles grouped by slab
+        L["sstart"] = np.zeros(SLAB_MAX + 2, dtype=np.int64)
         L["wslot"] = np.zeros((n, kw, 6))
         L["xr"] = np.zeros((n, 4))
         L["vw"] = np.zeros((n, 8))
@@ -285,6 +285,8 @@ class Simulation:
             L["whist_a"].reshape(n, kw, H_SIZE)[:, :kwo] = old["whist_a"].reshape(n, kwo, H_SIZE)
             L["xr"][:] = old["xr"]
             L["vw"][:] = old["vw"]
+            L["sorder"][:] = old["sorder"]
+            L["sstart"][:] = old["sstart"]
         self._lists = L
         self._npair, self._kw = npair, kw
 
@@ -335,7 +337,7 @@ class Simulation:
                 self.dt, self.skin, self.extra, self._pair, self.codes, self._cells,
                 self._cidx(), self._cof(), self._cpos_arr, self._wcells, self._wbins, self._glob(),
                 L["start_a"], L["nbr_a"], L["hist_a"], L["act_a"], L["start_b"], L["nbr_b"],
-                L["hist_b"], L["act_b"], L["rstart"], L["rev"], L["slot"],
+                L["hist_b"], L["act_b"], L["sorder"], L["sstart"],
                 L["wnbr_a"], L["wcnt_a"], L["whist_a"], L["wnbr_b"], L["wcnt_b"],
                 L["whist_b"], L["wslot"], wa["prim_kind"], wa["prim_wall"], wa["prim_mat"],
                 wa["prim_par"], wa["prim_pts"], wa["prim_dirs"], wa["wall_vel"],

@@ -4,25 +4,28 @@ Per step (LIGGGHTS ``fix nve/sphere`` scheme)::
 
     v += F/m dt/2,  omega += T/I dt/2,  x += v dt          (kick-drift, periodic wrap)
     walls move by their rigid motion;  lists rebuilt if max |dx| > skin/2
-    F, T from gravity and contacts                          (pair pass, then gather)
-    v += F/m dt/2,  omega += T/I dt/2                       (kick, fused with the gather)
+    F, T from gravity and contacts                          (three pair passes, wall pass)
+    v += F/m dt/2,  omega += T/I dt/2                       (kick, fused with the wall pass)
 
 I = 2/5 m R^2 for a solid sphere.  Fixed particles have 1/m = 1/I = 0.
 
-Forces are evaluated in two race-free parallel passes:
+Forces are evaluated in race-free parallel passes:
 
-* pair pass: every pair of the half lists (j > i) is evaluated once by the thread that owns
-  row i; it adds gravity and the force and torque of its pairs on i to f[i], t[i] and writes
-  the partner's share (force on i, whose opposite acts on j (Newton's third law), torque on
-  j, overlap) to the pair's slot, and sets the slot's touching flag;
-* gather pass: every particle adds the slots that name it as partner (the reverse index, in
-  increasing i), evaluates its wall contacts and kicks.
+* the kick-drift pass, after using the previous forces, resets every particle's force to its
+  weight and its torque and largest overlap to zero;
+* three pair passes, one per slab colour: the list build groups the particles into slabs of
+  whole cells (:func:`soilcal.dem.neighbour._slabs`) so that both particles of a listed pair
+  lie in the same or adjacent slabs; the slabs of one colour (s mod 3) share no particle and
+  run in parallel, each evaluating its particles' rows (pairs j > i, once each, LIGGGHTS
+  ``newton on``) and adding the force and torques to both particles directly;
+* the wall pass: every particle evaluates its wall contacts and kicks.
 
 The kick-drift pass also packs (x, y, z, R) and (v, omega, 1/m, material) per particle into
 two contiguous rows, so the pair pass reads one partner's data from two cache lines.  The
-summation order is fixed by the lists, never by the threads, so trajectories do not depend
-on the thread count.  Wall reactions are stored per (particle, wall slot) and summed per wall
-serially after the gather, so wall force and torque are race free too.
+order in which contributions are added to a particle is fixed by the lists and the slabs,
+never by the threads, so trajectories do not depend on the thread count.  Wall reactions
+are stored per (particle, wall slot) and summed per wall serially after the wall pass, so
+wall force and torque are race free too.
 
 Stop codes (status[0]): 0 finished, 1 pair buffers too short, 2 wall list too short,
 3 cell buffer too short, 4 blow-up (status[1] step, status[2] particle, reason in status[3]:
@@ -37,7 +40,7 @@ import math
 from numba import njit, prange
 
 from soilcal.dem.contact import H_SIZE, contact_force
-from soilcal.dem.neighbour import build_lists, build_wall_lists, min_image
+from soilcal.dem.neighbour import SLAB_MAX, build_lists, build_wall_lists, min_image
 from soilcal.dem.walls import TRIANGLE, move_walls, prim_closest
 
 DONE, NEED_PAIRS, NEED_KW, NEED_CELLS, BLOWUP, SETTLED, NEED_WBINS = 0, 1, 2, 3, 4, 5, 6
@@ -54,109 +57,104 @@ def block_size(n):
 # (milliseconds when other processes hold the cores): Simulation.run runs such systems on
 # one thread (results do not depend on the thread count)
 PARALLEL_MIN = 1024
-# pair slot layout (one 64-byte row): force on i (3), torque on j (3), overlap, unused
-S_F, S_TJ, S_D, S_SIZE = 0, 3, 6, 8
 
 
 @njit(cache=True, parallel=True)
-def pair_forces(xr, vw, m, gravity, pair, codes, box, periodic, dt, start, nbr, hist, act,
-                slot, f, t, ovr):
-    """Pair pass: evaluate every listed pair once; gravity and the row's pairs to f[i], t[i]
-    (ovr[i]: largest overlap of the row), the partner's share and touching flag to the slot."""
-    n = xr.shape[0]
+def pair_forces(colour, xr, vw, pair, codes, box, periodic, dt, start, nbr, hist, act,
+                sorder, sstart, f, t, ovr):
+    """Pair pass of one colour: the slabs s = colour, colour + 3, ... in parallel; each
+    evaluates the listed pairs of its particles' rows and adds the force and torques to both
+    particles (f, t; ovr: largest overlap of each particle).  Slabs three apart share no
+    particle (:func:`soilcal.dem.neighbour._slabs`), so the writes never race."""
     L0 = box[1] - box[0]
     L1 = box[3] - box[2]
     h0 = 0.5 * L0
     h1 = 0.5 * L1
     p0 = periodic[0]
     p1 = periodic[1]
-    gx, gy, gz = gravity[0], gravity[1], gravity[2]
-    # particles are processed in blocks of about 64 dealt round-robin over NBLK_GROUPS
-    # groups (the same number of blocks in every group), so
-    # the threads share every region of the domain (balanced when contacts are unevenly
-    # spread, e.g. a falling column over a settled bed); results do not depend on it
-    bs = block_size(n)
-    nblk = (n + bs - 1) // bs
-    for c in prange(NBLK_GROUPS):
-        for blk in range(c, nblk, NBLK_GROUPS):
-            for i in range(blk * bs, min(n, blk * bs + bs)):
-                xi, yi, zi, ri = xr[i, 0], xr[i, 1], xr[i, 2], xr[i, 3]
-                fxi = m[i] * gx
-                fyi = m[i] * gy
-                fzi = m[i] * gz
-                txi = 0.0
-                tyi = 0.0
-                tzi = 0.0
-                dmax = 0.0
-                for k in range(start[i], start[i + 1]):
-                    j = nbr[k]
-                    dx = min_image(xi - xr[j, 0], p0, h0, L0)
-                    dy = min_image(yi - xr[j, 1], p1, h1, L1)
-                    dz = zi - xr[j, 2]
-                    rj = xr[j, 3]
-                    rs = ri + rj
-                    d2 = dx * dx + dy * dy + dz * dz
-                    touching = act[k] != 0
-                    if d2 >= rs * rs and not touching:
-                        continue
-                    ims = vw[i, 6] + vw[j, 6]
-                    if ims == 0.0:
-                        act[k] = 0
-                        continue
-                    d = math.sqrt(d2)
-                    invd = 1.0 / d
-                    nx = dx * invd
-                    ny = dy * invd
-                    nz = dz * invd
-                    delta = rs - d
-                    ci = ri - 0.5 * delta
-                    cj = rj - 0.5 * delta
-                    wxi, wyi, wzi = vw[i, 3], vw[i, 4], vw[i, 5]
-                    wxj, wyj, wzj = vw[j, 3], vw[j, 4], vw[j, 5]
-                    ax = ci * wxi + cj * wxj
-                    ay = ci * wyi + cj * wyj
-                    az = ci * wzi + cj * wzj
-                    rvx = vw[i, 0] - vw[j, 0] - (ay * nz - az * ny)
-                    rvy = vw[i, 1] - vw[j, 1] - (az * nx - ax * nz)
-                    rvz = vw[i, 2] - vw[j, 2] - (ax * ny - ay * nx)
-                    on, fx, fy, fz, tix, tiy, tiz, tjx, tjy, tjz = contact_force(
-                        codes, pair, int(vw[i, 7]), int(vw[j, 7]), delta, nx, ny, nz,
-                        rvx, rvy, rvz, wxi - wxj, wyi - wyj, wzi - wzj,
-                        ci, cj, ri * rj / rs, 1.0 / ims, dt, touching, hist, k)
-                    if on:
-                        act[k] = 1
-                        fxi += fx
-                        fyi += fy
-                        fzi += fz
-                        txi += tix
-                        tyi += tiy
-                        tzi += tiz
-                        dmax = max(dmax, delta)
-                        slot[k, 0] = fx
-                        slot[k, 1] = fy
-                        slot[k, 2] = fz
-                        slot[k, 3] = tjx
-                        slot[k, 4] = tjy
-                        slot[k, 5] = tjz
-                        slot[k, 6] = delta
-                    else:
-                        act[k] = 0
-                f[i, 0] = fxi
-                f[i, 1] = fyi
-                f[i, 2] = fzi
-                t[i, 0] = txi
-                t[i, 1] = tyi
-                t[i, 2] = tzi
-                ovr[i] = dmax
+    ns = sstart[SLAB_MAX + 1]
+    for u in prange((ns - colour + 2) // 3):
+        s = colour + 3 * u
+        for q in range(sstart[s], sstart[s + 1]):
+            i = sorder[q]
+            xi, yi, zi, ri = xr[i, 0], xr[i, 1], xr[i, 2], xr[i, 3]
+            fxi = 0.0
+            fyi = 0.0
+            fzi = 0.0
+            txi = 0.0
+            tyi = 0.0
+            tzi = 0.0
+            dmax = ovr[i]
+            for k in range(start[i], start[i + 1]):
+                j = nbr[k]
+                dx = min_image(xi - xr[j, 0], p0, h0, L0)
+                dy = min_image(yi - xr[j, 1], p1, h1, L1)
+                dz = zi - xr[j, 2]
+                rj = xr[j, 3]
+                rs = ri + rj
+                d2 = dx * dx + dy * dy + dz * dz
+                touching = act[k] != 0
+                if d2 >= rs * rs and not touching:
+                    continue
+                ims = vw[i, 6] + vw[j, 6]
+                if ims == 0.0:
+                    act[k] = 0
+                    continue
+                d = math.sqrt(d2)
+                invd = 1.0 / d
+                nx = dx * invd
+                ny = dy * invd
+                nz = dz * invd
+                delta = rs - d
+                ci = ri - 0.5 * delta
+                cj = rj - 0.5 * delta
+                wxi, wyi, wzi = vw[i, 3], vw[i, 4], vw[i, 5]
+                wxj, wyj, wzj = vw[j, 3], vw[j, 4], vw[j, 5]
+                ax = ci * wxi + cj * wxj
+                ay = ci * wyi + cj * wyj
+                az = ci * wzi + cj * wzj
+                rvx = vw[i, 0] - vw[j, 0] - (ay * nz - az * ny)
+                rvy = vw[i, 1] - vw[j, 1] - (az * nx - ax * nz)
+                rvz = vw[i, 2] - vw[j, 2] - (ax * ny - ay * nx)
+                on, fx, fy, fz, tix, tiy, tiz, tjx, tjy, tjz = contact_force(
+                    codes, pair, int(vw[i, 7]), int(vw[j, 7]), delta, nx, ny, nz,
+                    rvx, rvy, rvz, wxi - wxj, wyi - wyj, wzi - wzj,
+                    ci, cj, ri * rj / rs, 1.0 / ims, dt, touching, hist, k)
+                if on:
+                    act[k] = 1
+                    fxi += fx
+                    fyi += fy
+                    fzi += fz
+                    txi += tix
+                    tyi += tiy
+                    tzi += tiz
+                    dmax = max(dmax, delta)
+                    # Newton's third law: the opposite force on j
+                    f[j, 0] -= fx
+                    f[j, 1] -= fy
+                    f[j, 2] -= fz
+                    t[j, 0] += tjx
+                    t[j, 1] += tjy
+                    t[j, 2] += tjz
+                    if delta > ovr[j]:
+                        ovr[j] = delta
+                else:
+                    act[k] = 0
+            f[i, 0] += fxi
+            f[i, 1] += fyi
+            f[i, 2] += fzi
+            t[i, 0] += txi
+            t[i, 1] += tyi
+            t[i, 2] += tzi
+            ovr[i] = dmax
 
 
 @njit(cache=True, parallel=True)
-def gather(x, v, om, r, inv_m, inv_i, mat, f, t, ovr, dt, kick, max_ovr,
-           act, slot, rstart, rev, pair, codes,
+def gather(x, v, om, r, inv_m, inv_i, mat, f, t, ovr, dt, kick, max_ovr, pair, codes,
            prim_kind, prim_wall, prim_mat, prim_par, wall_vel, wall_omega, wall_centre,
            wnbr, wcnt, whist, wslot):
-    """Gather pass: per particle, the row sums of the pair pass (f, t, ovr) + the slots that
-    name it + wall contacts; then the closing kick if ``kick``.  Returns the number of
+    """Wall pass: per particle, the pair sums (f, t, ovr) + wall contacts; then the closing
+    kick if ``kick``.  Returns the number of
     particles with an overlap above max_ovr (of their radius) or a non-finite velocity."""
     n = x.shape[0]
     KW = wnbr.shape[1]
@@ -178,18 +176,7 @@ def gather(x, v, om, r, inv_m, inv_i, mat, f, t, ovr, dt, kick, max_ovr,
                 tx = t[i, 0]
                 ty = t[i, 1]
                 tz = t[i, 2]
-                dmax = ovr[i]
-                for q in range(rstart[i], rstart[i + 1]):
-                    k = rev[q]
-                    if act[k] != 0:
-                        fx -= slot[k, 0]
-                        fy -= slot[k, 1]
-                        fz -= slot[k, 2]
-                        tx += slot[k, 3]
-                        ty += slot[k, 4]
-                        tz += slot[k, 5]
-                        dmax = max(dmax, slot[k, 6])
-                mo = dmax / ri
+                mo = ovr[i] / ri
                 # walls with a face contact (bit w): their edge/vertex contacts are dropped
                 face_mask = 0
                 nwc = wcnt[i]
@@ -313,11 +300,12 @@ def reduce_wall_forces(wcnt, wnbr, wslot, prim_wall, wall_force, wall_torque):
 
 
 @njit(cache=True, parallel=True)
-def _kick_drift(x, v, om, f, t, r, inv_m, inv_i, mat, disp, xr, vw, dt, box, periodic, skin2,
-                drift):
+def _kick_drift(x, v, om, f, t, r, m, inv_m, inv_i, mat, disp, ovr, xr, vw, gravity, dt,
+                box, periodic, skin2, drift):
     """Opening kick and drift (if ``drift``), periodic wrap, displacement since the last
-    list build; packs (x, R) and (v, omega, 1/m, material) rows for the pair pass.
-    Returns the number of particles that moved more than half the skin."""
+    list build; packs (x, R) and (v, omega, 1/m, material) rows for the pair pass and resets
+    the force to the weight, torque and largest overlap to zero.  Returns the number of
+    particles that moved more than half the skin."""
     n = x.shape[0]
     h = 0.5 * dt if drift else 0.0
     nfar = 0
@@ -351,6 +339,10 @@ def _kick_drift(x, v, om, f, t, r, inv_m, inv_i, mat, disp, xr, vw, dt, box, per
         xr[i, 3] = r[i]
         vw[i, 6] = inv_m[i]
         vw[i, 7] = mat[i]
+        for q in range(3):
+            f[i, q] = m[i] * gravity[q]
+            t[i, q] = 0.0
+        ovr[i] = 0.0
         nfar += far
     return nfar
 
@@ -369,7 +361,7 @@ def run_loop(nsteps, step0, resume_mid, need_forces, ke_tol, ke_every, max_ovr, 
              log0, x, v, om, f, t, r, m, inv_m, inv_i, mat, disp, ovr, xr, vw,
              gravity, box, periodic, dt, skin, extra, pair, codes,
              cell_start, cell_idx, cell_of, cpos, wcell_start, wcell_idx, glob,
-             start_a, nbr_a, hist_a, act_a, start_b, nbr_b, hist_b, act_b, rstart, rev, slot,
+             start_a, nbr_a, hist_a, act_a, start_b, nbr_b, hist_b, act_b, sorder, sstart,
              wnbr_a, wcnt_a, whist_a, wnbr_b, wcnt_b, whist_b, wslot,
              prim_kind, prim_wall, prim_mat, prim_par, prim_pts, prim_dirs,
              wall_vel, wall_omega, wall_centre, wall_force, wall_torque, wall_reach, wlog,
@@ -408,8 +400,8 @@ def run_loop(nsteps, step0, resume_mid, need_forces, ke_tol, ke_every, max_ovr, 
         first = s == -1
         if first or s > 0 or not resume_mid:
             # s == -1: no motion, only the packed rows for the initial forces
-            nfar = _kick_drift(x, v, om, f, t, r, inv_m, inv_i, mat, disp, xr, vw, dt, box,
-                               periodic, skin2, not first)
+            nfar = _kick_drift(x, v, om, f, t, r, m, inv_m, inv_i, mat, disp, ovr, xr, vw,
+                               gravity, dt, box, periodic, skin2, not first)
             if nfar > 0:
                 rebuild = True
             if wstep > 0.0 and not first:
@@ -433,7 +425,7 @@ def run_loop(nsteps, step0, resume_mid, need_forces, ke_tol, ke_every, max_ovr, 
             if rebuild:
                 code, need = build_lists(x, r, box, periodic, skin, extra, cell_start,
                                          cell_idx, cell_of, cpos, sc, nc, hc, ac, so, no,
-                                         ho, ao, rstart, rev, prim_kind, prim_par,
+                                         ho, ao, sorder, sstart, prim_kind, prim_par,
                                          wcell_start, wcell_idx, glob, wnc, wcc, whc, wno,
                                          wco, who)
             else:
@@ -461,11 +453,12 @@ def run_loop(nsteps, step0, resume_mid, need_forces, ke_tol, ke_every, max_ovr, 
             rebuild = False
             wrebuild = False
             fstate[0] = 0.0
-        pair_forces(xr, vw, m, gravity, pair, codes, box, periodic, dt, sc, nc, hc, ac, slot,
-                    f, t, ovr)
+        for colour in range(3):
+            pair_forces(colour, xr, vw, pair, codes, box, periodic, dt, sc, nc, hc, ac,
+                        sorder, sstart, f, t, ovr)
         nbad = gather(x, v, om, r, inv_m, inv_i, mat, f, t, ovr, dt, not first, max_ovr,
-                      ac, slot, rstart, rev, pair, codes, prim_kind, prim_wall, prim_mat,
-                      prim_par, wall_vel, wall_omega, wall_centre, wnc, wcc, whc, wslot)
+                      pair, codes, prim_kind, prim_wall, prim_mat, prim_par, wall_vel,
+                      wall_omega, wall_centre, wnc, wcc, whc, wslot)
         reduce_wall_forces(wcc, wnc, wslot, prim_wall, wall_force, wall_torque)
         if first:
             continue

@@ -8,9 +8,10 @@ Verlet list: a half list, for every particle i the partners j > i with
 |x_i - x_j| < R_i + R_j + skin + s_c, sorted by j, so that each pair is evaluated once (LIGGGHTS
 ``newton on``).  Rows are stored compactly (CSR): the partners of i are
 nbr[start[i]:start[i+1]], and every per-pair array (history, touching flag, pair results) is
-indexed by the same pair index, so a particle's pairs are contiguous in memory.  A reverse index lists, for every particle j, the slots (i, k) of the lists
-that name j, in increasing i, so that each particle sums its own pair results in a fixed
-order without scatter writes.  The lists are valid while no particle moved more than skin/2
+indexed by the same pair index, so a particle's pairs are contiguous in memory.  The
+particles are also grouped into slabs of whole cells (:func:`_slabs`): the pair pass works
+through the slabs in three colours and adds each pair's force to both particles without
+races and in an order fixed by the lists.  The lists are valid while no particle moved more than skin/2
 since the build (then no pair can close the skin) and no wall moved more than skin/2.  Each
 list slot owns a contact-history row (tangential spring, rolling spring, JKR radius) and a
 touching flag; on rebuild every surviving pair copies both from the old list (a merge of the
@@ -25,8 +26,8 @@ tested only by the particles of those cells.
 When only walls moved by half the skin (the particles did not), :func:`build_wall_lists`
 renews the wall lists alone.
 
-The particle loop runs in parallel; each particle writes only its own rows.  The reverse
-index and the triangle bins are filled serially, so their order never depends on the thread
+The particle loop runs in parallel; each particle writes only its own rows.  The slab
+order and the triangle bins are filled serially, so their order never depends on the thread
 count.
 """
 
@@ -334,6 +335,57 @@ def _grid_and_bins(x, r, box, periodic, skin, extra, cell_start, cell_idx, cell_
     return code, wneed, ng, n0, n1, n2
 
 
+SLAB_MAX = 768  # at most this many slabs (a multiple of 3)
+
+
+@njit(cache=True)
+def _slabs(cell_idx, cell_of, n0, n1, n2, p0, p1, sorder, sstart):
+    """Slabs for race-free force accumulation: the cells are cut along the axis with the
+    most cells into ns slabs of whole cells (ns a multiple of 3 along a periodic axis, so
+    that slabs three apart never touch across the boundary).  A listed pair is closer than
+    one cell edge at the build, so its two particles lie in the same or adjacent slabs, and
+    slabs of the same colour (s mod 3) can accumulate forces on both particles of their
+    rows' pairs in parallel.
+
+    sorder: particle indices grouped by slab (cell order inside a slab); sstart[s] ..
+    sstart[s + 1]: slab s; sstart[SLAB_MAX + 1] = ns.  Filled serially, so the order
+    never depends on the thread count."""
+    n = cell_idx.shape[0]
+    axis = 2
+    nc = n2
+    per = False
+    if n0 > nc:
+        axis, nc, per = 0, n0, p0
+    if n1 > nc:
+        axis, nc, per = 1, n1, p1
+    ns = nc
+    if per and nc >= 3:
+        ns = 3 * (nc // 3)
+    ns = min(ns, SLAB_MAX)
+    for s in range(SLAB_MAX + 2):
+        sstart[s] = 0
+    for q in range(n):
+        c = cell_of[cell_idx[q]]
+        ca = c % n0 if axis == 0 else ((c // n0) % n1 if axis == 1 else c // (n0 * n1))
+        sstart[ca * ns // nc + 1] += 1
+    for s in range(ns):
+        sstart[s + 1] += sstart[s]
+    for q in range(n):
+        i = cell_idx[q]
+        c = cell_of[i]
+        ca = c % n0 if axis == 0 else ((c // n0) % n1 if axis == 1 else c // (n0 * n1))
+        s = ca * ns // nc
+        sorder[sstart[s]] = i
+        sstart[s] += 1
+    for s in range(ns, 0, -1):
+        sstart[s] = sstart[s - 1]
+    sstart[0] = 0
+    for s in range(ns + 1, SLAB_MAX + 1):
+        sstart[s] = n
+    sstart[SLAB_MAX + 1] = ns
+
+
+
 @njit(cache=True, parallel=True)
 def build_wall_lists(x, r, box, periodic, skin, extra, cell_start, cell_idx, cell_of, cpos,
                      prim_kind, prim_par, wcell_start, wcell_idx, glob,
@@ -361,9 +413,10 @@ def build_wall_lists(x, r, box, periodic, skin, extra, cell_start, cell_idx, cel
 @njit(cache=True, parallel=True)
 def build_lists(x, r, box, periodic, skin, extra, cell_start, cell_idx, cell_of, cpos,
                 start_old, nbr_old, hist_old, act_old, start_new, nbr_new, hist_new, act_new,
-                rstart, rev, prim_kind, prim_par, wcell_start, wcell_idx, glob,
+                sorder, sstart, prim_kind, prim_par, wcell_start, wcell_idx, glob,
                 wnbr_old, wcnt_old, whist_old, wnbr_new, wcnt_new, whist_new):
-    """Rebuild the half lists (CSR), reverse index and wall lists into *_new.
+    """Rebuild the half lists (CSR), the slab order (:func:`_slabs`) and the wall lists
+    into *_new.
 
     History rows and touching flags are copied from *_old.  Returns (status, need):
     status 0 ok, 1 pair buffers too short (need = pairs), 2 wall list too short (need =
@@ -375,6 +428,7 @@ def build_lists(x, r, box, periodic, skin, extra, cell_start, cell_idx, cell_of,
     H = hist_new.shape[1]
     if n == 0:
         start_new[0] = 0
+        sstart[SLAB_MAX + 1] = 0
         return 0, 0
     code, need, ng, n0, n1, n2 = _grid_and_bins(x, r, box, periodic, skin, extra, cell_start,
                                                 cell_idx, cell_of, cpos, prim_kind, prim_par,
@@ -418,19 +472,5 @@ def build_lists(x, r, box, periodic, skin, extra, cell_start, cell_idx, cell_of,
     wneed = _wall_need(wcnt_new, wnbr_new.shape[1])
     if wneed > 0:
         return 2, wneed
-    # reverse index (pairs naming j as partner), in increasing i
-    for j in range(n + 1):
-        rstart[j] = 0
-    for k in range(start_new[n]):
-        rstart[nbr_new[k] + 1] += 1
-    for j in range(n):
-        rstart[j + 1] += rstart[j]
-    for i in range(n):
-        for k in range(start_new[i], start_new[i + 1]):
-            j = nbr_new[k]
-            rev[rstart[j]] = k
-            rstart[j] += 1
-    for j in range(n, 0, -1):
-        rstart[j] = rstart[j - 1]
-    rstart[0] = 0
+    _slabs(cell_idx, cell_of, n0, n1, n2, periodic[0], periodic[1], sorder, sstart)
     return 0, 0

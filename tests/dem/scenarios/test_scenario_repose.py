@@ -64,8 +64,12 @@ def test_small_pile_bins_scan_and_silhouette_agree_and_repeat():
     assert 0.01 < r["height_m"] < 0.04
     assert np.hypot(a.series["x"][:, 0], a.series["x"][:, 1]).max() > 0.03
     assert 10.0 < r["angle_deg"] < 50.0
-    assert abs(r["angle_deg"] - r["angle_image_deg"]) < 6.0
-    assert abs(r["angle_surface_deg"] - r["angle_image_deg"]) < 6.0
+    # the estimators' accuracy is checked on analytic heaps (test_measure.py); on one
+    # 400-sphere heap they sample a rough flank differently: each scatters about 2 degrees
+    # over seeds (1.2-1.4 degrees at 990 spheres, benchmarks/results/repose_seeds.md, x
+    # sqrt(990/400)), so two of them differ by up to about 3 sigma = 9 degrees
+    assert abs(r["angle_deg"] - r["angle_image_deg"]) < 9.0
+    assert abs(r["angle_surface_deg"] - r["angle_image_deg"]) < 9.0
     b = repose.run(cyl(**SMALL), p, "quick", seed=3, threads=1)
     assert b.responses == r  # same seed, same threads: identical
     assert np.array_equal(a.series["x"], b.series["x"])
