@@ -338,6 +338,13 @@ def _grid_and_bins(x, r, box, periodic, skin, extra, cell_start, cell_idx, cell_
 SLAB_MAX = 768  # at most this many slabs (a multiple of 3)
 
 
+@njit(cache=True, inline="always")
+def _slab(c, axis, n0, n1, ns, nc):
+    """Slab of cell c: its coordinate along ``axis`` (nc cells) mapped onto ns slabs."""
+    ca = c % n0 if axis == 0 else ((c // n0) % n1 if axis == 1 else c // (n0 * n1))
+    return ca * ns // nc
+
+
 @njit(cache=True)
 def _slabs(cell_idx, cell_of, n0, n1, n2, p0, p1, sorder, sstart):
     """Slabs for race-free force accumulation: the cells are cut along the axis with the
@@ -365,16 +372,12 @@ def _slabs(cell_idx, cell_of, n0, n1, n2, p0, p1, sorder, sstart):
     for s in range(SLAB_MAX + 2):
         sstart[s] = 0
     for q in range(n):
-        c = cell_of[cell_idx[q]]
-        ca = c % n0 if axis == 0 else ((c // n0) % n1 if axis == 1 else c // (n0 * n1))
-        sstart[ca * ns // nc + 1] += 1
+        sstart[_slab(cell_of[cell_idx[q]], axis, n0, n1, ns, nc) + 1] += 1
     for s in range(ns):
         sstart[s + 1] += sstart[s]
     for q in range(n):
         i = cell_idx[q]
-        c = cell_of[i]
-        ca = c % n0 if axis == 0 else ((c // n0) % n1 if axis == 1 else c // (n0 * n1))
-        s = ca * ns // nc
+        s = _slab(cell_of[i], axis, n0, n1, ns, nc)
         sorder[sstart[s]] = i
         sstart[s] += 1
     for s in range(ns, 0, -1):
