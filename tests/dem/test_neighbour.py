@@ -5,6 +5,7 @@ import numpy as np
 import pytest
 
 from conftest import table
+from soilcal.dem import neighbour as nb
 from soilcal.dem.engine import Simulation
 
 
@@ -36,31 +37,62 @@ def test_lists_contain_every_pair_within_cutoff(rng, periodic):
         assert row == sorted(j for j in np.nonzero(want[i])[0].tolist() if j > i)
 
 
+def slab_groups(sim, groups):
+    """The slab groups of the pair pass (neighbour._slabs) for the current lists, dealt to
+    ``groups`` groups per colour (the engine uses one per thread)."""
+    n, L = sim.n, sim._lists
+    cidx, cof = np.zeros(n, np.int64), np.zeros(n, np.int64)
+    grid = nb._grid(sim.x, sim.p.r, sim.box, sim.periodic, sim.skin, sim.extra,
+                    np.zeros(sim._cells.shape[0], np.int64), cidx, cof, np.zeros((n, 4)))
+    sorder = np.zeros(n, np.int64)
+    sgroup = np.zeros(nb.SGROUP_LEN, np.int64)
+    nb._slabs(cidx, cof, L["start_a"], grid[4], grid[7], grid[10], sim.periodic[0],
+              sim.periodic[1], groups, sorder, sgroup, np.zeros(nb.SCRATCH_LEN, np.int64))
+    assert sgroup[-1] == groups
+    assert sorted(sorder.tolist()) == list(range(n))
+    return [[sorder[sgroup[c * groups + g]:sgroup[c * groups + g + 1]] for g in range(groups)]
+            for c in range(3)]
+
+
+@pytest.mark.parametrize("groups", [1, 2, 5])
 @pytest.mark.parametrize("periodic", [True, False])
-def test_slabs_of_one_colour_share_no_particle(rng, periodic):
-    # the pair pass adds each pair's force to both particles from the slab of the row's
-    # owner; slabs of the same colour (s mod 3) run in parallel, so the particles they write
-    # (their own and all their partners) must be disjoint, also across a periodic boundary
+def test_groups_of_one_colour_share_no_particle(rng, periodic, groups):
+    # the pair pass adds each pair's force to both particles; the groups of one colour run
+    # in parallel, so the particles they write (their own and all their partners) must be
+    # disjoint, also across a periodic boundary
     sim = random_box(rng, n=600, periodic=periodic)
     if periodic:
-        sim.p.x[:, 2] *= 0.25  # a flat layer: the slabs cut the periodic x axis
+        sim.p.x[:, 2] *= 0.25  # a flat layer: the slabs cut a periodic axis
     sim.run(0)
-    L = sim._lists
-    start, nbr, sorder, sstart = L["start_a"], L["nbr_a"], L["sorder"], L["sstart"]
-    ns = int(sstart[-1])
-    # 7 cells of 5.5 mm across the 40 mm box: 6 slabs along a periodic axis (a multiple
-    # of 3, so slabs 0 and 5, neighbours across the boundary, differ in colour), 8 along z
-    assert ns == (6 if periodic else 8)
-    assert sorted(sorder.tolist()) == list(range(sim.n))
-    for colour in range(3):
+    start, nbr = sim._lists["start_a"], sim._lists["nbr_a"]
+    for colour, grps in enumerate(slab_groups(sim, groups)):
         seen = {}
-        for s in range(colour, ns, 3):
-            rows = sorder[sstart[s]:sstart[s + 1]]
+        for g, rows in enumerate(grps):
             touched = set(rows.tolist())
             for i in rows:
                 touched.update(nbr[start[i]:start[i + 1]].tolist())
             for j in touched:
-                assert seen.setdefault(j, s) == s, (colour, s, seen[j], j)
+                assert seen.setdefault(j, g) == g, (colour, g, seen[j], j)
+
+
+def test_groups_balance_a_bed_dense_below_and_sparse_above(rng):
+    # a settling bed: 3,000 particles in the bottom 8 mm of a 60 mm periodic box, 200
+    # falling ones spread over the 100 mm above.  Slabs across the height would put almost
+    # all the work in the bottom slabs (one thread); the groups of each colour must share
+    # the work (particles plus listed pairs) between two threads.  About 7 slabs of a
+    # colour across the box are dealt whole, so a group may be off its half by half a
+    # slab's work: 1 + 1/7 of the mean at most, 1.2 with the scatter of slab work
+    side = 0.06
+    sim = Simulation(table(E=1e8), dt_fraction=0.2, gravity=(0, 0, 0),
+                     box=(0, side, 0, side), periodic=(True, True))
+    x = np.concatenate([rng.uniform((0, 0, 0), (side, side, 0.008), (3000, 3)),
+                        rng.uniform((0, 0, 0.01), (side, side, 0.11), (200, 3))])
+    sim.add_particles(x, rng.uniform(0.8e-3, 1.2e-3, len(x)), "soil")
+    sim.run(0)
+    start = sim._lists["start_a"]
+    for grps in slab_groups(sim, 2):
+        work = [int(np.sum(start[rows + 1] - start[rows] + 1)) for rows in grps]
+        assert max(work) <= 1.2 * 0.5 * sum(work), work
 
 
 def test_pair_buffers_grow_without_changing_results():

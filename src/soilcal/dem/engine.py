@@ -27,7 +27,7 @@ import numpy as np
 from soilcal.dem import integrator as itg
 from soilcal.dem.contact import H_SIZE, hist_width, jkr_separation, model_codes
 from soilcal.dem.materials import P_ESTAR, P_W, MaterialTable
-from soilcal.dem.neighbour import SLAB_MAX
+from soilcal.dem.neighbour import GROUPS_MAX, SCRATCH_LEN, SGROUP_LEN
 from soilcal.dem.state import ParticleState
 from soilcal.dem.walls import CONE, CYLINDER, DISK, NPAR, PLANE, RECTANGLE, TRIANGLE, WallSet
 from soilcal.errors import InputError, SimulationError
@@ -268,8 +268,9 @@ class Simulation:
             L["wcnt_" + s] = np.zeros(n, dtype=np.int64)
             # wall history rows i * kw + k
             L["whist_" + s] = np.zeros((n * kw, H_SIZE))
-        L["sorder"] = np.zeros(n, dtype=np.int64)  # particles grouped by slab
-        L["sstart"] = np.zeros(SLAB_MAX + 2, dtype=np.int64)
+        L["sorder"] = np.zeros(n, dtype=np.int64)  # particles grouped by slab group
+        L["sgroup"] = np.zeros(SGROUP_LEN, dtype=np.int64)  # group offsets, last: groups
+        L["sscratch"] = np.zeros(SCRATCH_LEN, dtype=np.int64)  # work space of the build
         L["wslot"] = np.zeros((n, kw, 6))
         L["xr"] = np.zeros((n, 4))
         L["vw"] = np.zeros((n, 8))
@@ -286,7 +287,7 @@ class Simulation:
             L["xr"][:] = old["xr"]
             L["vw"][:] = old["vw"]
             L["sorder"][:] = old["sorder"]
-            L["sstart"][:] = old["sstart"]
+            L["sgroup"][:] = old["sgroup"]
         self._lists = L
         self._npair, self._kw = npair, kw
 
@@ -337,7 +338,8 @@ class Simulation:
                 self.dt, self.skin, self.extra, self._pair, self.codes, self._cells,
                 self._cidx(), self._cof(), self._cpos_arr, self._wcells, self._wbins, self._glob(),
                 L["start_a"], L["nbr_a"], L["hist_a"], L["act_a"], L["start_b"], L["nbr_b"],
-                L["hist_b"], L["act_b"], L["sorder"], L["sstart"],
+                L["hist_b"], L["act_b"], min(numba.get_num_threads(), GROUPS_MAX),
+                L["sorder"], L["sgroup"], L["sscratch"],
                 L["wnbr_a"], L["wcnt_a"], L["whist_a"], L["wnbr_b"], L["wcnt_b"],
                 L["whist_b"], L["wslot"], wa["prim_kind"], wa["prim_wall"], wa["prim_mat"],
                 wa["prim_par"], wa["prim_pts"], wa["prim_dirs"], wa["wall_vel"],

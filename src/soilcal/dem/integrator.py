@@ -16,8 +16,9 @@ Forces are evaluated in race-free parallel passes:
 * three pair passes, one per slab colour: the list build groups the particles into slabs of
   whole cells (:func:`soilcal.dem.neighbour._slabs`) so that both particles of a listed pair
   lie in the same or adjacent slabs; the slabs of one colour (s mod 3) share no particle and
-  run in parallel, each evaluating its particles' rows (pairs j > i, once each, LIGGGHTS
-  ``newton on``) and adding the force and torques to both particles directly;
+  are dealt to one group per thread, balanced by their work; each group evaluates its
+  particles' rows (pairs j > i, once each, LIGGGHTS ``newton on``) and adds the force and
+  torques to both particles directly;
 * the wall pass: every particle evaluates its wall contacts and kicks.
 
 The kick-drift pass also packs (x, y, z, R) and (v, omega, 1/m, material) per particle into
@@ -40,19 +41,13 @@ import math
 from numba import njit, prange
 
 from soilcal.dem.contact import H_SIZE, contact_force
-from soilcal.dem.neighbour import SLAB_MAX, build_lists, build_wall_lists, min_image
+from soilcal.dem.neighbour import (NBLK_GROUPS, SGROUP_LEN, block_size, build_lists,
+                                   build_wall_lists, min_image)
 from soilcal.dem.walls import TRIANGLE, move_walls, prim_closest
 
 DONE, NEED_PAIRS, NEED_KW, NEED_CELLS, BLOWUP, SETTLED, NEED_WBINS = 0, 1, 2, 3, 4, 5, 6
-NBLK_GROUPS = 32
 
 
-@njit(cache=True, inline="always")
-def block_size(n):
-    """Particles per block: about 64, and a whole number of blocks per group, so that every
-    group (and thread) gets the same number of blocks (only the last block may be short)."""
-    per_group = max(1, (n + 64 * NBLK_GROUPS - 1) // (64 * NBLK_GROUPS))
-    return max(1, (n + per_group * NBLK_GROUPS - 1) // (per_group * NBLK_GROUPS))
 # below this many particles a step is shorter than waking the worker threads three times
 # (milliseconds when other processes hold the cores): Simulation.run runs such systems on
 # one thread (results do not depend on the thread count)
@@ -61,21 +56,22 @@ PARALLEL_MIN = 1024
 
 @njit(cache=True, parallel=True)
 def pair_forces(colour, xr, vw, pair, codes, box, periodic, dt, start, nbr, hist, act,
-                sorder, sstart, f, t, ovr):
-    """Pair pass of one colour: the slabs s = colour, colour + 3, ... in parallel; each
-    evaluates the listed pairs of its particles' rows and adds the force and torques to both
-    particles (f, t; ovr: largest overlap of each particle).  Slabs three apart share no
-    particle (:func:`soilcal.dem.neighbour._slabs`), so the writes never race."""
+                sorder, sgroup, f, t, ovr):
+    """Pair pass of one colour: the slab groups of that colour in parallel (one per
+    thread); each evaluates the listed pairs of its particles' rows and adds the force and
+    torques to both particles (f, t; ovr: largest overlap of each particle).  Slabs of one
+    colour share no particle (:func:`soilcal.dem.neighbour._slabs`), so the writes never
+    race."""
     L0 = box[1] - box[0]
     L1 = box[3] - box[2]
     h0 = 0.5 * L0
     h1 = 0.5 * L1
     p0 = periodic[0]
     p1 = periodic[1]
-    ns = sstart[SLAB_MAX + 1]
-    for u in prange((ns - colour + 2) // 3):
-        s = colour + 3 * u
-        for q in range(sstart[s], sstart[s + 1]):
+    G = sgroup[SGROUP_LEN - 1]
+    for g in prange(G):
+        k = colour * G + g
+        for q in range(sgroup[k], sgroup[k + 1]):
             i = sorder[q]
             xi, yi, zi, ri = xr[i, 0], xr[i, 1], xr[i, 2], xr[i, 3]
             fxi = 0.0
@@ -361,8 +357,8 @@ def run_loop(nsteps, step0, resume_mid, need_forces, ke_tol, ke_every, max_ovr, 
              log0, x, v, om, f, t, r, m, inv_m, inv_i, mat, disp, ovr, xr, vw,
              gravity, box, periodic, dt, skin, extra, pair, codes,
              cell_start, cell_idx, cell_of, cpos, wcell_start, wcell_idx, glob,
-             start_a, nbr_a, hist_a, act_a, start_b, nbr_b, hist_b, act_b, sorder, sstart,
-             wnbr_a, wcnt_a, whist_a, wnbr_b, wcnt_b, whist_b, wslot,
+             start_a, nbr_a, hist_a, act_a, start_b, nbr_b, hist_b, act_b, groups, sorder,
+             sgroup, scratch, wnbr_a, wcnt_a, whist_a, wnbr_b, wcnt_b, whist_b, wslot,
              prim_kind, prim_wall, prim_mat, prim_par, prim_pts, prim_dirs,
              wall_vel, wall_omega, wall_centre, wall_force, wall_torque, wall_reach, wlog,
              fstate, status):
@@ -372,7 +368,8 @@ def run_loop(nsteps, step0, resume_mid, need_forces, ke_tol, ke_every, max_ovr, 
     buffer and the two swap roles; the wall lists swap on their own when only they are
     renewed).  need_forces: compute the forces of the initial state first (fresh or
     modified system).  resume_mid: the first step's kick-drift was already done by a call
-    that stopped for a buffer reallocation.  wall_reach[w]: largest distance from wall w's
+    that stopped for a buffer reallocation.  groups: slab groups per colour of the pair
+    pass (the thread count).  wall_reach[w]: largest distance from wall w's
     centre at which its surface can touch a particle (a point there moves at most
     (|v_w| + |omega_w| wall_reach[w]) dt per step).  fstate[0] carries the accumulated wall
     displacement since the last list build, fstate[1] counts builds of the pair lists,
@@ -393,7 +390,9 @@ def run_loop(nsteps, step0, resume_mid, need_forces, ke_tol, ke_every, max_ovr, 
         vv = math.sqrt(wall_vel[w, 0] ** 2 + wall_vel[w, 1] ** 2 + wall_vel[w, 2] ** 2)
         oo = math.sqrt(wall_omega[w, 0] ** 2 + wall_omega[w, 1] ** 2 + wall_omega[w, 2] ** 2)
         wstep = max(wstep, (vv + oo * wall_reach[w]) * dt)
-    rebuild = need_forces or resume_mid
+    # lists grouped for fewer threads than now run (set_num_threads between runs) are
+    # regrouped at once rather than at the next natural rebuild
+    rebuild = need_forces or resume_mid or sgroup[SGROUP_LEN - 1] < groups
     wrebuild = False
     done = 0
     for s in range(-1 if need_forces else 0, nsteps):
@@ -425,9 +424,9 @@ def run_loop(nsteps, step0, resume_mid, need_forces, ke_tol, ke_every, max_ovr, 
             if rebuild:
                 code, need = build_lists(x, r, box, periodic, skin, extra, cell_start,
                                          cell_idx, cell_of, cpos, sc, nc, hc, ac, so, no,
-                                         ho, ao, sorder, sstart, prim_kind, prim_par,
-                                         wcell_start, wcell_idx, glob, wnc, wcc, whc, wno,
-                                         wco, who)
+                                         ho, ao, groups, sorder, sgroup, scratch, prim_kind,
+                                         prim_par, wcell_start, wcell_idx, glob, wnc, wcc,
+                                         whc, wno, wco, who)
             else:
                 code, need = build_wall_lists(x, r, box, periodic, skin, extra, cell_start,
                                               cell_idx, cell_of, cpos, prim_kind, prim_par,
@@ -455,7 +454,7 @@ def run_loop(nsteps, step0, resume_mid, need_forces, ke_tol, ke_every, max_ovr, 
             fstate[0] = 0.0
         for colour in range(3):
             pair_forces(colour, xr, vw, pair, codes, box, periodic, dt, sc, nc, hc, ac,
-                        sorder, sstart, f, t, ovr)
+                        sorder, sgroup, f, t, ovr)
         nbad = gather(x, v, om, r, inv_m, inv_i, mat, f, t, ovr, dt, not first, max_ovr,
                       pair, codes, prim_kind, prim_wall, prim_mat, prim_par, wall_vel,
                       wall_omega, wall_centre, wnc, wcc, whc, wslot)

@@ -10,8 +10,9 @@ Verlet list: a half list, for every particle i the partners j > i with
 nbr[start[i]:start[i+1]], and every per-pair array (history, touching flag, pair results) is
 indexed by the same pair index, so a particle's pairs are contiguous in memory.  The
 particles are also grouped into slabs of whole cells (:func:`_slabs`): the pair pass works
-through the slabs in three colours and adds each pair's force to both particles without
-races and in an order fixed by the lists.  The lists are valid while no particle moved more than skin/2
+through the slabs in three colours, the slabs of a colour dealt to one group per thread by
+their work, and adds each pair's force to both particles without races and in an order
+fixed by the lists.  The lists are valid while no particle moved more than skin/2
 since the build (then no pair can close the skin) and no wall moved more than skin/2.  Each
 list slot owns a contact-history row (tangential spring, rolling spring, JKR radius) and a
 touching flag; on rebuild every surviving pair copies both from the old list (a merge of the
@@ -26,9 +27,10 @@ tested only by the particles of those cells.
 When only walls moved by half the skin (the particles did not), :func:`build_wall_lists`
 renews the wall lists alone.
 
-The particle loop runs in parallel; each particle writes only its own rows.  The slab
-order and the triangle bins are filled serially, so their order never depends on the thread
-count.
+The particle loops run in parallel over interleaved blocks of particles in cell order
+(every thread gets blocks from the whole domain, dense and sparse alike); each particle
+writes only its own rows.  The slab groups and the triangle bins are filled serially, so
+their order never depends on the thread count.
 """
 
 from __future__ import annotations
@@ -335,7 +337,24 @@ def _grid_and_bins(x, r, box, periodic, skin, extra, cell_start, cell_idx, cell_
     return code, wneed, ng, n0, n1, n2
 
 
-SLAB_MAX = 768  # at most this many slabs (a multiple of 3)
+SLAB_MAX = 768  # at most this many slabs
+GROUPS_MAX = 64  # at most this many slab groups per colour (threads of the pair pass)
+# groups assumed when the slab axis is chosen (fixed, never the thread count: the axis sets
+# the colours and so the order in which contributions are added to a particle)
+BALANCE_GROUPS = 2
+SGROUP_LEN = 3 * GROUPS_MAX + 2  # group offsets (3 G + 1) and, last, G
+SCRATCH_LEN = 2 * SLAB_MAX + GROUPS_MAX  # slab work, slab owner, group load
+NBLK_GROUPS = 32
+
+
+@njit(cache=True, inline="always")
+def block_size(n):
+    """Particles per block: about 64, and a whole number of blocks per group, so that every
+    group (and thread) gets the same number of blocks (only the last block may be short).
+    Parallel particle loops take the blocks of group c as c, c + NBLK_GROUPS, ...: every
+    group samples the whole domain, so dense and sparse regions are shared evenly."""
+    per_group = max(1, (n + 64 * NBLK_GROUPS - 1) // (64 * NBLK_GROUPS))
+    return max(1, (n + per_group * NBLK_GROUPS - 1) // (per_group * NBLK_GROUPS))
 
 
 @njit(cache=True, inline="always")
@@ -346,47 +365,127 @@ def _slab(c, axis, n0, n1, ns, nc):
 
 
 @njit(cache=True)
-def _slabs(cell_idx, cell_of, n0, n1, n2, p0, p1, sorder, sstart):
-    """Slabs for race-free force accumulation: the cells are cut along the axis with the
-    most cells into ns slabs of whole cells (ns a multiple of 3 along a periodic axis, so
-    that slabs three apart never touch across the boundary).  A listed pair is closer than
-    one cell edge at the build, so its two particles lie in the same or adjacent slabs, and
-    slabs of the same colour (s mod 3) can accumulate forces on both particles of their
-    rows' pairs in parallel.
-
-    sorder: particle indices grouped by slab (cell order inside a slab); sstart[s] ..
-    sstart[s + 1]: slab s; sstart[SLAB_MAX + 1] = ns.  Filled serially, so the order
-    never depends on the thread count."""
-    n = cell_idx.shape[0]
-    axis = 2
-    nc = n2
-    per = False
-    if n0 > nc:
-        axis, nc, per = 0, n0, p0
-    if n1 > nc:
-        axis, nc, per = 1, n1, p1
+def _slab_count(axis, n0, n1, n2, p0, p1):
+    """(cells along ``axis``, slabs): slabs of whole cells, a multiple of 3 along a
+    periodic axis of at least 3 cells (slabs three apart then never touch across the
+    boundary), at most SLAB_MAX."""
+    nc = n0 if axis == 0 else (n1 if axis == 1 else n2)
+    per = p0 if axis == 0 else (p1 if axis == 1 else False)
     ns = nc
     if per and nc >= 3:
         ns = 3 * (nc // 3)
-    ns = min(ns, SLAB_MAX)
-    for s in range(SLAB_MAX + 2):
-        sstart[s] = 0
-    for q in range(n):
-        sstart[_slab(cell_of[cell_idx[q]], axis, n0, n1, ns, nc) + 1] += 1
+    return nc, min(ns, 3 * (SLAB_MAX // 3))
+
+
+@njit(cache=True)
+def _slab_work(axis, nc, ns, cell_idx, cell_of, start, n0, n1, work):
+    """work[s]: pair-pass work of slab s, its particles plus their listed pairs."""
     for s in range(ns):
-        sstart[s + 1] += sstart[s]
+        work[s] = 0
+    for q in range(cell_idx.shape[0]):
+        i = cell_idx[q]
+        work[_slab(cell_of[i], axis, n0, n1, ns, nc)] += start[i + 1] - start[i] + 1
+
+
+@njit(cache=True)
+def _deal(work, ns, G, owner, load):
+    """Deal the slabs of each colour to G groups as contiguous ranges balanced by work:
+    slab s goes to the group in whose share of its colour's cumulative work the middle of
+    its own work falls (owner[s]).  Each thread so keeps about one region of the domain in
+    all three colours (and in its cache), and no group is off its share by more than half
+    a slab's work.  Returns the summed largest group load of the three colours, the time of
+    the three pair passes on G threads in units of work."""
+    cost = 0
+    for colour in range(3):
+        total = 0
+        for s in range(colour, ns, 3):
+            total += work[s]
+        for g in range(G):
+            load[g] = 0
+        pre = 0
+        for s in range(colour, ns, 3):
+            g = 0 if total == 0 else min(G - 1, G * (2 * pre + work[s]) // (2 * total))
+            owner[s] = g
+            load[g] += work[s]
+            pre += work[s]
+        mx = 0
+        for g in range(G):
+            mx = max(mx, load[g])
+        cost += mx
+    return cost
+
+
+@njit(cache=True)
+def _axis_cost(axis, cell_idx, cell_of, start, n0, n1, n2, p0, p1, work, owner, load):
+    """Pair-pass time (:func:`_deal`) of slabs along ``axis`` on BALANCE_GROUPS threads."""
+    nc, ns = _slab_count(axis, n0, n1, n2, p0, p1)
+    _slab_work(axis, nc, ns, cell_idx, cell_of, start, n0, n1, work)
+    return _deal(work, ns, BALANCE_GROUPS, owner, load)
+
+
+@njit(cache=True)
+def _slabs(cell_idx, cell_of, start, n0, n1, n2, p0, p1, G, sorder, sgroup, scratch):
+    """Slab groups for race-free force accumulation.
+
+    The cells are cut into slabs of whole cells along one axis.  A listed pair is closer
+    than one cell edge at the build, so its two particles lie in the same or adjacent slabs,
+    and slabs of the same colour (s mod 3) can add forces to both particles of their rows'
+    pairs in parallel.  The slabs are dealt to G groups (one per thread) as contiguous
+    ranges balanced by their work (particles plus listed pairs, :func:`_deal`), so a bed
+    that is dense at the bottom and sparse above keeps both threads busy and each thread
+    works on one region of the domain.
+
+    The axis is the one with the most cells, unless another axis balances clearly better
+    (summed largest group load below 4/5 of it) for BALANCE_GROUPS groups.  It never
+    depends on G: the axis fixes which contributions to a particle come in which colour
+    pass, so the summation order, and with it the trajectory, is the same for any thread
+    count; G only decides which thread runs which slab.
+
+    sorder: particle indices grouped by (colour, group), cell order inside a group;
+    sgroup[colour * G + g] .. sgroup[colour * G + g + 1]: group g of that colour;
+    sgroup[SGROUP_LEN - 1] = G.  scratch: SCRATCH_LEN integers of work space.  Filled
+    serially, so the order never depends on the thread count."""
+    n = cell_idx.shape[0]
+    work = scratch[:SLAB_MAX]
+    owner = scratch[SLAB_MAX:2 * SLAB_MAX]
+    load = scratch[2 * SLAB_MAX:]
+    # slabs along the axis with the most cells (ties: z, then y): the most slabs to deal;
+    # another axis only if it balances clearly better (a thin dense layer under sparse
+    # particles: across the layer a few slabs hold all the work)
+    main = 2
+    if n0 > n2 and n0 >= n1:
+        main = 0
+    elif n1 > n2 and n1 > n0:
+        main = 1
+    axis = main
+    best = _axis_cost(main, cell_idx, cell_of, start, n0, n1, n2, p0, p1, work, owner, load)
+    for a in range(3):
+        if a != main:
+            cost = _axis_cost(a, cell_idx, cell_of, start, n0, n1, n2, p0, p1, work, owner,
+                              load)
+            if 5 * cost < 4 * best:
+                axis, best = a, cost
+    nc, ns = _slab_count(axis, n0, n1, n2, p0, p1)
+    _slab_work(axis, nc, ns, cell_idx, cell_of, start, n0, n1, work)
+    _deal(work, ns, G, owner, load)
+    # counting sort of the particles by group k = colour * G + owner (stable: cell order)
+    for k in range(SGROUP_LEN):
+        sgroup[k] = 0
+    for q in range(n):
+        s = _slab(cell_of[cell_idx[q]], axis, n0, n1, ns, nc)
+        sgroup[(s % 3) * G + owner[s] + 1] += 1
+    for k in range(3 * G):
+        sgroup[k + 1] += sgroup[k]
     for q in range(n):
         i = cell_idx[q]
         s = _slab(cell_of[i], axis, n0, n1, ns, nc)
-        sorder[sstart[s]] = i
-        sstart[s] += 1
-    for s in range(ns, 0, -1):
-        sstart[s] = sstart[s - 1]
-    sstart[0] = 0
-    for s in range(ns + 1, SLAB_MAX + 1):
-        sstart[s] = n
-    sstart[SLAB_MAX + 1] = ns
-
+        k = (s % 3) * G + owner[s]
+        sorder[sgroup[k]] = i
+        sgroup[k] += 1
+    for k in range(3 * G, 0, -1):
+        sgroup[k] = sgroup[k - 1]
+    sgroup[0] = 0
+    sgroup[SGROUP_LEN - 1] = G
 
 
 @njit(cache=True, parallel=True)
@@ -413,13 +512,44 @@ def build_wall_lists(x, r, box, periodic, skin, extra, cell_start, cell_idx, cel
     return 0, 0
 
 
+@njit(cache=True)
+def _fill_row(q, x, r, cpos, cell_idx, cell_of, box, periodic, cut0, cell_start, n0, n1, n2,
+              start_old, nbr_old, hist_old, act_old, start_new, nbr_new, hist_new, act_new,
+              prim_kind, prim_par, wcell_start, wcell_idx, glob, ng, wnbr_old, wcnt_old,
+              whist_old, wnbr_new, wcnt_new, whist_new):
+    """Sorted row of particle i = cell_idx[q] (offsets already in start_new), history rows
+    and touching flags merged from i's old sorted row, and i's wall list."""
+    H = hist_new.shape[1]
+    i = cell_idx[q]
+    o0 = start_new[i]
+    o1 = start_new[i + 1]
+    _row(q, cpos, cell_idx, cell_of, box, periodic, cut0, cell_start, n0, n1, n2, nbr_new,
+         o0, True)
+    ko = start_old[i]
+    kend = start_old[i + 1]
+    for k in range(o0, o1):
+        j = nbr_new[k]
+        while ko < kend and nbr_old[ko] < j:
+            ko += 1
+        if ko < kend and nbr_old[ko] == j:
+            act_new[k] = act_old[ko]
+            for h in range(H):
+                hist_new[k, h] = hist_old[ko, h]
+        else:
+            act_new[k] = 0
+            for h in range(H):
+                hist_new[k, h] = 0.0
+    _wall_row(i, x, r, cut0, cell_of, prim_kind, prim_par, wcell_start, wcell_idx, glob, ng,
+              wnbr_old, wcnt_old, whist_old, wnbr_new, wcnt_new, whist_new)
+
+
 @njit(cache=True, parallel=True)
 def build_lists(x, r, box, periodic, skin, extra, cell_start, cell_idx, cell_of, cpos,
                 start_old, nbr_old, hist_old, act_old, start_new, nbr_new, hist_new, act_new,
-                sorder, sstart, prim_kind, prim_par, wcell_start, wcell_idx, glob,
-                wnbr_old, wcnt_old, whist_old, wnbr_new, wcnt_new, whist_new):
-    """Rebuild the half lists (CSR), the slab order (:func:`_slabs`) and the wall lists
-    into *_new.
+                groups, sorder, sgroup, scratch, prim_kind, prim_par, wcell_start, wcell_idx,
+                glob, wnbr_old, wcnt_old, whist_old, wnbr_new, wcnt_new, whist_new):
+    """Rebuild the half lists (CSR), the slab groups (:func:`_slabs`, ``groups`` per
+    colour: one per thread) and the wall lists into *_new.
 
     History rows and touching flags are copied from *_old.  Returns (status, need):
     status 0 ok, 1 pair buffers too short (need = pairs), 2 wall list too short (need =
@@ -428,10 +558,11 @@ def build_lists(x, r, box, periodic, skin, extra, cell_start, cell_idx, cell_of,
     """
     n = x.shape[0]
     P = nbr_new.shape[0]
-    H = hist_new.shape[1]
     if n == 0:
         start_new[0] = 0
-        sstart[SLAB_MAX + 1] = 0
+        for k in range(SGROUP_LEN):
+            sgroup[k] = 0
+        sgroup[SGROUP_LEN - 1] = 1
         return 0, 0
     code, need, ng, n0, n1, n2 = _grid_and_bins(x, r, box, periodic, skin, extra, cell_start,
                                                 cell_idx, cell_of, cpos, prim_kind, prim_par,
@@ -439,41 +570,33 @@ def build_lists(x, r, box, periodic, skin, extra, cell_start, cell_idx, cell_of,
     if code != 0:
         return code, need
     cut0 = skin + extra
-    # pass 1: row lengths -> offsets (particles taken in cell order: neighbouring
+    # pass 1: row lengths -> offsets (particles taken in cell order, in blocks: neighbouring
     # particles are processed together and their candidates stay in cache)
-    for q in prange(n):
-        start_new[cell_idx[q] + 1] = _row(q, cpos, cell_idx, cell_of, box, periodic, cut0,
-                                          cell_start, n0, n1, n2, nbr_new, 0, False)
+    bs = block_size(n)
+    nblk = (n + bs - 1) // bs
+    for c in prange(NBLK_GROUPS):
+        for blk in range(c, nblk, NBLK_GROUPS):
+            for q in range(blk * bs, min(n, blk * bs + bs)):
+                start_new[cell_idx[q] + 1] = _row(q, cpos, cell_idx, cell_of, box, periodic,
+                                                  cut0, cell_start, n0, n1, n2, nbr_new, 0,
+                                                  False)
     start_new[0] = 0
     for i in range(n):
         start_new[i + 1] += start_new[i]
     if start_new[n] > P:
         return 1, start_new[n]
     # pass 2: sorted rows, history merged from the old sorted rows; wall lists
-    for q in prange(n):
-        i = cell_idx[q]
-        o0 = start_new[i]
-        o1 = start_new[i + 1]
-        _row(q, cpos, cell_idx, cell_of, box, periodic, cut0, cell_start, n0, n1, n2, nbr_new,
-             o0, True)
-        ko = start_old[i]
-        kend = start_old[i + 1]
-        for k in range(o0, o1):
-            j = nbr_new[k]
-            while ko < kend and nbr_old[ko] < j:
-                ko += 1
-            if ko < kend and nbr_old[ko] == j:
-                act_new[k] = act_old[ko]
-                for h in range(H):
-                    hist_new[k, h] = hist_old[ko, h]
-            else:
-                act_new[k] = 0
-                for h in range(H):
-                    hist_new[k, h] = 0.0
-        _wall_row(i, x, r, cut0, cell_of, prim_kind, prim_par, wcell_start, wcell_idx, glob,
-                  ng, wnbr_old, wcnt_old, whist_old, wnbr_new, wcnt_new, whist_new)
+    for c in prange(NBLK_GROUPS):
+        for blk in range(c, nblk, NBLK_GROUPS):
+            for q in range(blk * bs, min(n, blk * bs + bs)):
+                _fill_row(q, x, r, cpos, cell_idx, cell_of, box, periodic, cut0, cell_start,
+                          n0, n1, n2, start_old, nbr_old, hist_old, act_old, start_new,
+                          nbr_new, hist_new, act_new, prim_kind, prim_par, wcell_start,
+                          wcell_idx, glob, ng, wnbr_old, wcnt_old, whist_old, wnbr_new,
+                          wcnt_new, whist_new)
     wneed = _wall_need(wcnt_new, wnbr_new.shape[1])
     if wneed > 0:
         return 2, wneed
-    _slabs(cell_idx, cell_of, n0, n1, n2, periodic[0], periodic[1], sorder, sstart)
+    _slabs(cell_idx, cell_of, start_new, n0, n1, n2, periodic[0], periodic[1],
+           min(max(groups, 1), GROUPS_MAX), sorder, sgroup, scratch)
     return 0, 0
