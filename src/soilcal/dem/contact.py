@@ -64,10 +64,12 @@ Conventions for the surface energy gamma given by the user (``jkr_convention``):
   next to it.  The two printed EDEM statements disagree by that factor 2 (errata); select the
   convention explicitly when matching EDEM values.
 
-The contact radius a(delta) is the largest root of x^4/R* - c x - delta = 0 with x = sqrt(a),
+The contact radius a(delta) is a = x^2 with x the largest root of x^4/R* - c x - delta = 0,
 c = sqrt(2 pi w / E*), found by Newton's method from the upper bound
 x0 = (R* max(delta,0))^(1/4) + (R* c)^(1/3) (f is convex, so the iteration decreases
-monotonically to the stable-branch root).
+monotonically to the stable-branch root), or from the previous step's root.  In x the force
+needs no root: sqrt(8 pi w E* a^3) = 2 E* c x^3, so F_n = E* x^3 (4 x^3/(3 R*) - 2 c).  The
+contact history keeps x, and c is a column of the pair table.
 """
 
 from __future__ import annotations
@@ -77,7 +79,8 @@ import math
 import numpy as np
 from numba import njit
 
-from soilcal.dem.materials import P_BETA, P_ESTAR, P_GSTAR, P_JKRK, P_MUR, P_MUS, P_TRATIO, P_W
+from soilcal.dem.materials import (P_BETA, P_ESTAR, P_GSTAR, P_JKRC, P_JKRK, P_MUR, P_MUS,
+                                   P_TRATIO, P_W)
 from soilcal.errors import InputError
 
 NORMAL = {"hertz": 0}
@@ -89,7 +92,7 @@ JKR_CONVENTION = {"edem": 1.0, "lammps": 2.0}  # w = factor * gamma
 
 # history slot layout (per particle and contact partner)
 H_XI = 0  # 3 tangential displacement
-H_A = 3  # last JKR contact radius (Newton warm start)
+H_A = 3  # sqrt of the last JKR contact radius (Newton warm start)
 H_MR = 4  # 3 rolling spring moment (epsd)
 H_SIZE = 8  # full row (64 bytes; walls keep their touching flag in slot 7)
 H_SHORT = 4  # particle pairs without the EPSD spring: tangential + JKR only (32 bytes)
@@ -118,42 +121,36 @@ def model_codes(normal="hertz", damping="viscoelastic", tangential="mindlin", ro
     return np.array(out, dtype=np.int64), JKR_CONVENTION[jkr_convention]
 
 
-@njit(cache=True)
-def jkr_radius(delta, rstar, estar, w):
-    """Contact radius a on the stable JKR branch for overlap delta (may be negative)."""
-    c = math.sqrt(2.0 * math.pi * w / estar)
-    x = (rstar * max(delta, 0.0)) ** 0.25 + (rstar * c) ** (1.0 / 3.0)
-    for _ in range(60):
-        x3 = x * x * x
-        f = x3 * x / rstar - c * x - delta
-        fp = 4.0 * x3 / rstar - c
-        dx = f / fp
-        x -= dx
-        if abs(dx) <= 1e-15 * x:
-            break
-    return x * x
-
-
 @njit(cache=True, inline="always")
-def jkr_radius_from(delta, rstar, estar, w, a_prev):
-    """jkr_radius with a warm start from the previous step's contact radius (if > 0).
+def jkr_root(delta, rstar, c, x_prev):
+    """x = sqrt(a) on the stable JKR branch for overlap delta (may be negative), c =
+    sqrt(2 pi w / E*); Newton from the previous step's root x_prev if > 0, else from the
+    upper bound x0 (module docstring); relative tolerance 1e-13 warm, 1e-15 cold.
 
     Newton on the convex f(x) = x^4/R* - c x - delta from any x >= x_c (f' > 0 there; the
     stable-branch radii are >= a_c > x_c^2) lands right of the root after one step and then
     decreases monotonically to it.
     """
-    if a_prev <= 0.0:
-        return jkr_radius(delta, rstar, estar, w)
-    c = math.sqrt(2.0 * math.pi * w / estar)
-    x = math.sqrt(a_prev)
+    x = x_prev
+    tol = 1e-13
+    if x <= 0.0:
+        x = (rstar * max(delta, 0.0)) ** 0.25 + (rstar * c) ** (1.0 / 3.0)
+        tol = 1e-15
     for _ in range(60):
         x3 = x * x * x
         f = x3 * x / rstar - c * x - delta
         fp = 4.0 * x3 / rstar - c
         dx = f / fp
         x -= dx
-        if abs(dx) <= 1e-13 * x:
+        if abs(dx) <= tol * x:
             break
+    return x
+
+
+@njit(cache=True)
+def jkr_radius(delta, rstar, estar, w):
+    """Contact radius a on the stable JKR branch for overlap delta (may be negative)."""
+    x = jkr_root(delta, rstar, math.sqrt(2.0 * math.pi * w / estar), 0.0)
     return x * x
 
 
@@ -209,9 +206,11 @@ def contact_force(codes, pair, ma, mb, delta, nx, ny, nz, rvx, rvy, rvz, wrx, wr
                     for q in range(hist.shape[1]):
                         hist[hk, q] = 0.0
                 return False, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0
-        a = jkr_radius_from(delta, rstar, estar, w, hist[hk, H_A])
-        hist[hk, H_A] = a
-        fne = jkr_force(a, rstar, estar, w)
+        x = jkr_root(delta, rstar, pair[ma, mb, P_JKRC], hist[hk, H_A])
+        hist[hk, H_A] = x
+        a = x * x
+        x3 = a * x
+        fne = estar * x3 * (4.0 * x3 / (3.0 * rstar) - 2.0 * pair[ma, mb, P_JKRC])
         fpo2 = 3.0 * math.pi * w * rstar  # 2 |F_pulloff|
     else:
         if delta <= 0.0:

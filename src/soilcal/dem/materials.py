@@ -51,7 +51,7 @@ import numpy as np
 from soilcal.errors import InputError
 
 # Columns of the per-pair parameter table ``pair[mi, mj, :]``.
-P_ESTAR, P_GSTAR, P_BETA, P_MUS, P_MUR, P_W, P_TRATIO, P_JKRK, P_NCOL = 0, 1, 2, 3, 4, 5, 6, 7, 8
+P_ESTAR, P_GSTAR, P_BETA, P_MUS, P_MUR, P_W, P_TRATIO, P_JKRK, P_JKRC, P_NCOL = range(10)
 
 
 def _num(v, name, src):
@@ -191,7 +191,7 @@ class MaterialTable:
     def table(self, jkr_w_factor: float) -> np.ndarray:
         """pair[M, M, P_NCOL] float64: E*, G*, beta, mu_s, mu_r, w (work of adhesion),
         sqrt(4 G*/E*) (ratio of tangential to normal damping), (27/64) pi^2 w^2 / E*^2 (JKR
-        separation: delta_c^3 = -that * R*).
+        separation: delta_c^3 = -that * R*), c = sqrt(2 pi w / E*) (JKR, see contact.py).
 
         ``jkr_w_factor`` converts the input surface energy to the work of adhesion w used by
         the kernel (1 for the EDEM convention, 2 for the LAMMPS convention, see contact.py).
@@ -223,7 +223,8 @@ class MaterialTable:
                 out[i, j] = (estar, gstar, restitution_beta(p.restitution), p.friction,
                              p.rolling_friction, jkr_w_factor * gamma,
                              math.sqrt(4.0 * gstar / estar),
-                             27.0 / 64.0 * math.pi**2 * (jkr_w_factor * gamma / estar) ** 2)
+                             27.0 / 64.0 * math.pi**2 * (jkr_w_factor * gamma / estar) ** 2,
+                             math.sqrt(2.0 * math.pi * jkr_w_factor * gamma / estar))
         return out
 
     def jkr_dt(self, rmin_per_material: dict[int, float], tab: np.ndarray) -> float:
