@@ -54,7 +54,13 @@ DONE, NEED_PAIRS, NEED_KW, NEED_CELLS, BLOWUP, SETTLED, NEED_WBINS = 0, 1, 2, 3,
 PARALLEL_MIN = 1024
 
 
-@njit(cache=True, parallel=True)
+# contact kernels: multiply-adds fused into FMA instructions (a fixed property of the
+# compiled code, so results still do not depend on the thread count); no other fast-math
+# flag, since NaN and infinity must survive for the blow-up check
+CONTACT_MATH = {"contract"}
+
+
+@njit(cache=True, parallel=True, fastmath=CONTACT_MATH)
 def pair_forces(colour, xr, vw, pair, codes, box, periodic, dt, start, nbr, hist, act,
                 sorder, sgroup, f, t, ovr):
     """Pair pass of one colour: the slab groups of that colour in parallel (one per
@@ -145,7 +151,7 @@ def pair_forces(colour, xr, vw, pair, codes, box, periodic, dt, start, nbr, hist
             ovr[i] = dmax
 
 
-@njit(cache=True, parallel=True)
+@njit(cache=True, parallel=True, fastmath=CONTACT_MATH)
 def gather(x, v, om, r, inv_m, inv_i, mat, f, t, ovr, dt, kick, max_ovr, pair, codes,
            prim_kind, prim_wall, prim_mat, prim_par, wall_vel, wall_omega, wall_centre,
            wnbr, wcnt, whist, wslot):
