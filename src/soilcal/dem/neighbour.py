@@ -14,9 +14,10 @@ through the slabs in three colours, the slabs of a colour dealt to one group per
 their work, and adds each pair's force to both particles without races and in an order
 fixed by the lists.  The lists are valid while no particle moved more than skin/2
 since the build (then no pair can close the skin) and no wall moved more than skin/2.  Each
-list slot owns a contact-history row (tangential spring, rolling spring, JKR radius) and a
-touching flag; on rebuild every surviving pair copies both from the old list (a merge of the
-two sorted lists), so history is never lost while two particles stay within the cutoff.
+list slot owns a contact-history row (tangential spring, rolling spring, square root of the
+JKR contact radius) and a touching flag; on rebuild every surviving pair copies both from
+the old list (a merge of the two sorted lists), so history is never lost while two
+particles stay within the cutoff.
 
 Walls: each particle also lists the wall primitives within R_i + skin + s_c (at most KW;
 wall history row i * KW + k).  Unbounded
