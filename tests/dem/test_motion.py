@@ -135,6 +135,26 @@ def test_plane_equals_infinitely_large_sphere():
         assert np.allclose(a.wall_force[0], -(fa - grav), rtol=1e-12, atol=1e-15)
 
 
+def test_lists_regrouped_when_more_threads_run(monkeypatch):
+    # the pair pass runs one slab group per thread and colour; lists grouped for one
+    # thread are regrouped as soon as a run has two, not at the next natural rebuild
+    from soilcal.dem import integrator
+
+    if numba.config.NUMBA_NUM_THREADS < 2:
+        pytest.skip("needs two threads")
+    monkeypatch.setattr(integrator, "PARALLEL_MIN", 0)
+    sim = settle_simulation(3, "none", layers=4)
+    try:
+        numba.set_num_threads(1)
+        sim.run(5)
+        assert sim._lists["sgroup"][-1] == 1
+        numba.set_num_threads(2)
+        sim.run(1)
+        assert sim._lists["sgroup"][-1] == 2
+    finally:
+        numba.set_num_threads(numba.config.NUMBA_NUM_THREADS)
+
+
 def test_one_and_two_threads_identical(monkeypatch):
     from soilcal.dem import integrator
 
