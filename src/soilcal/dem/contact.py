@@ -148,13 +148,6 @@ def jkr_root(delta, rstar, c, x_prev):
 
 
 @njit(cache=True)
-def jkr_radius(delta, rstar, estar, w):
-    """Contact radius a on the stable JKR branch for overlap delta (may be negative)."""
-    x = jkr_root(delta, rstar, math.sqrt(2.0 * math.pi * w / estar), 0.0)
-    return x * x
-
-
-@njit(cache=True)
 def jkr_force(a, rstar, estar, w):
     """JKR normal force (positive repulsive) for contact radius a."""
     a3 = a * a * a
