@@ -15,6 +15,16 @@ The time step is checked against the Rayleigh time and, with JKR, the zero-load 
 stiffness (materials.py) and the contact model is
 composed by name (contact.py).  All arrays are structure-of-arrays numpy float64 and stay
 owned by the object between calls to :meth:`Simulation.run`.
+
+Storage order: every ``sort_every`` steps (default 1000, 0 = never; an attribute that may
+change between runs), at the next build of the neighbour lists, and at the first build
+after particles were added, the particle rows are re-sorted in memory into neighbour-cell
+order, as LAMMPS does (``atom_modify sort``):
+a random insertion otherwise scatters the partners of every list row over the whole
+state, and each contact then reads cold cache lines.  Row i of ``x``, ``v``, ... is
+therefore not the i-th particle added after a run: ``p.id`` holds each row's insertion id
+(the ids :meth:`Simulation.add_particles` returned) and :meth:`Simulation.index` maps ids
+to rows.  Contact histories follow their pairs through the sort.
 """
 
 from __future__ import annotations
@@ -40,7 +50,7 @@ class Simulation:
                  dt_fraction: float = 0.2, gravity=(0.0, 0.0, -9.81), box=None,
                  periodic=(False, False), contact_model: dict | None = None,
                  skin: float | None = None, coarse_grain: float = 1.0,
-                 max_overlap: float = 0.05, source: str = "<input>"):
+                 max_overlap: float = 0.05, sort_every: int = 1000, source: str = "<input>"):
         self.source = source
         self.materials = materials
         self.codes, self.w_factor = model_codes(**(contact_model or {}), source=source)
@@ -63,6 +73,12 @@ class Simulation:
             raise InputError(source, "coarse_grain", "a size factor > 0", coarse_grain)
         self.coarse_grain = float(coarse_grain)
         self.max_overlap = float(max_overlap)
+        if (isinstance(sort_every, bool) or not isinstance(sort_every, (int, np.integer))
+                or sort_every < 0):
+            raise InputError(source, "sort_every",
+                             "a whole number of steps >= 0 between spatial sorts (0: never)",
+                             sort_every)
+        self.sort_every = int(sort_every)
         self.p = ParticleState()
         self.walls = WallSet()
         self._warr = self.walls.arrays()
@@ -80,17 +96,21 @@ class Simulation:
         self.wall_log = np.zeros((0, 0, 6))
         self._pair = None
         self.dt = None
-        self._fstate = np.zeros(3)
+        # wall travel since the list build, pair-list builds, wall-list builds, steps since
+        # the last spatial sort (inf: sort at the first build)
+        self._fstate = np.array([0.0, 0.0, 0.0, math.inf])
 
     # ------------------------------------------------------------------ building
     def add_particles(self, x, r, material, v=None, omega=None, fixed=False, lock_rotation=False):
-        """Add spheres (radii multiplied by the coarse-graining factor); returns their ids."""
+        """Add spheres (radii multiplied by the coarse-graining factor); returns their
+        insertion ids (rows until the first spatial sort; :meth:`index`)."""
         k = self.materials.index(material)
         r = np.asarray(r, dtype=np.float64) * self.coarse_grain
         if np.any(~np.isfinite(r)) or np.any(r <= 0):
             raise InputError(self.source, "particles.radius", "radii > 0 m", float(np.min(r)))
         ids = self.p.append(x, r, self.materials.materials[k].density, k, v, omega, fixed,
                             lock_rotation)
+        self._fstate[3] = math.inf  # new particles sit at the end: sort at the next build
         self._invalidate()
         return ids
 
@@ -274,6 +294,9 @@ class Simulation:
         L["wslot"] = np.zeros((n, kw, 6))
         L["xr"] = np.zeros((n, 4))
         L["vw"] = np.zeros((n, 8))
+        L["perm"] = np.zeros(n, dtype=np.int64)  # spatial sort: new row -> old row
+        L["pbuf"] = np.zeros((n, 8))
+        L["ibuf"] = np.zeros(n, dtype=np.int64)
         if old is not None:
             npo = int(old["start_a"][-1])
             kwo = old["wnbr_a"].shape[1]
@@ -297,7 +320,7 @@ class Simulation:
         """Advance ``steps`` steps (stop early when settled if ke_tol >= 0); returns steps done.
 
         Raises SimulationError on blow-up (non-finite state or overlap above max_overlap of a
-        particle's radius), naming the step and the particle.
+        particle's radius), naming the step and the particle (its insertion id).
         """
         steps = int(steps)
         if steps < 0:
@@ -334,8 +357,9 @@ class Simulation:
                 steps - total, self.step, resume_mid,
                 self._need_forces, float(ke_tol), int(ke_every), self.max_overlap,
                 int(wall_log_every), step0, p.x, p.v, p.omega, p.f, p.t, p.r, p.m, p.inv_m, p.inv_i,
-                p.mat, p.disp, p.ovr, L["xr"], L["vw"], self.gravity, self.box, self.periodic,
-                self.dt, self.skin, self.extra, self._pair, self.codes, self._cells,
+                p.mat, p.disp, p.ovr, p.id, L["xr"], L["vw"], self.gravity, self.box,
+                self.periodic, self.dt, self.skin, self.extra, self._pair, self.codes,
+                self.sort_every, L["perm"], L["pbuf"], L["ibuf"], self._cells,
                 self._cidx(), self._cof(), self._cpos_arr, self._wcells, self._wbins, self._glob(),
                 L["start_a"], L["nbr_a"], L["hist_a"], L["act_a"], L["start_b"], L["nbr_b"],
                 L["hist_b"], L["act_b"], min(numba.get_num_threads(), GROUPS_MAX),
@@ -369,7 +393,7 @@ class Simulation:
                 why = ("overlap above %g %% of its radius" % (100 * self.max_overlap)
                        if status[3] == 1 else "non-finite velocity")
                 raise SimulationError(
-                    f"step {int(status[1])}: particle {i}: {why} "
+                    f"step {int(status[1])}: particle {int(p.id[i])}: {why} "
                     f"(radius {p.r[i]:.4g} m, dt {self.dt:.4g} s); reduce the time step or "
                     f"check the stiffness")
             return total
@@ -448,6 +472,17 @@ class Simulation:
     def n_wall_rebuilds(self) -> int:
         """Builds of the wall lists alone (walls moved, particles did not)."""
         return int(self._fstate[2])
+
+    def index(self, ids):
+        """Rows of the particles with insertion ids ``ids`` (the rows move when the engine
+        re-sorts the particles in memory, module docstring)."""
+        row = np.empty(self.p.n, dtype=np.int64)
+        row[self.p.id] = np.arange(self.p.n)
+        ids = np.asarray(ids)
+        if ids.size and (ids.min() < 0 or ids.max() >= self.p.n):
+            raise InputError(self.source, "ids", f"insertion ids in [0, {self.p.n})",
+                             (int(ids.min()), int(ids.max())))
+        return row[ids]
 
     @property
     def x(self):

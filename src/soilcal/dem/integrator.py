@@ -42,7 +42,7 @@ from numba import njit, prange
 
 from soilcal.dem.contact import H_SIZE, contact_force
 from soilcal.dem.neighbour import (NBLK_GROUPS, SGROUP_LEN, block_size, build_lists,
-                                   build_wall_lists, min_image)
+                                   build_wall_lists, min_image, sort_particles)
 from soilcal.dem.walls import TRIANGLE, move_walls, prim_closest
 
 DONE, NEED_PAIRS, NEED_KW, NEED_CELLS, BLOWUP, SETTLED, NEED_WBINS = 0, 1, 2, 3, 4, 5, 6
@@ -360,8 +360,8 @@ def kinetic_translational(v, m, inv_m):
 
 @njit(cache=True)
 def run_loop(nsteps, step0, resume_mid, need_forces, ke_tol, ke_every, max_ovr, wlog_every,
-             log0, x, v, om, f, t, r, m, inv_m, inv_i, mat, disp, ovr, xr, vw,
-             gravity, box, periodic, dt, skin, extra, pair, codes,
+             log0, x, v, om, f, t, r, m, inv_m, inv_i, mat, disp, ovr, pid, xr, vw,
+             gravity, box, periodic, dt, skin, extra, pair, codes, sort_every, perm, fbuf, ibuf,
              cell_start, cell_idx, cell_of, cpos, wcell_start, wcell_idx, glob,
              start_a, nbr_a, hist_a, act_a, start_b, nbr_b, hist_b, act_b, groups, sorder,
              sgroup, scratch, wnbr_a, wcnt_a, whist_a, wnbr_b, wcnt_b, whist_b, wslot,
@@ -379,7 +379,10 @@ def run_loop(nsteps, step0, resume_mid, need_forces, ke_tol, ke_every, max_ovr, 
     centre at which its surface can touch a particle (a point there moves at most
     (|v_w| + |omega_w| wall_reach[w]) dt per step).  fstate[0] carries the accumulated wall
     displacement since the last list build, fstate[1] counts builds of the pair lists,
-    fstate[2] builds of the wall lists alone.  Wall force and torque go to row
+    fstate[2] builds of the wall lists alone, fstate[3] the steps since the last spatial
+    sort: a pair-list build with fstate[3] >= sort_every > 0 first re-sorts the particle
+    rows into cell order (:func:`soilcal.dem.neighbour.sort_particles`; perm, fbuf, ibuf:
+    its work space; pid: insertion ids, which follow the rows).  Wall force and torque go to row
     (step - log0) / wlog_every - 1 of wlog every wlog_every steps after step log0.
     """
     n = x.shape[0]
@@ -428,11 +431,29 @@ def run_loop(nsteps, step0, resume_mid, need_forces, ke_tol, ke_every, max_ovr, 
             wnc, wcc, whc, wno, wco, who = wnbr_a, wcnt_a, whist_a, wnbr_b, wcnt_b, whist_b
         if rebuild or wrebuild:
             if rebuild:
-                code, need = build_lists(x, r, box, periodic, skin, extra, cell_start,
-                                         cell_idx, cell_of, cpos, sc, nc, hc, ac, so, no,
-                                         ho, ao, groups, sorder, sgroup, scratch, prim_kind,
-                                         prim_par, wcell_start, wcell_idx, glob, wnc, wcc,
-                                         whc, wno, wco, who)
+                remap = False
+                code = 0
+                if sort_every > 0 and fstate[3] >= sort_every:
+                    ok, need = sort_particles(False, x, v, om, f, t, r, m, inv_m, inv_i, mat,
+                                              disp, ovr, pid, xr, vw, box, periodic, skin,
+                                              extra, cell_start, cell_idx, cell_of, cpos,
+                                              perm, fbuf, ibuf)
+                    remap = ok
+                    if not ok:
+                        code = 3
+                if code == 0:
+                    code, need = build_lists(x, r, box, periodic, skin, extra, cell_start,
+                                             cell_idx, cell_of, cpos, sc, nc, hc, ac, so, no,
+                                             ho, ao, groups, sorder, sgroup, scratch, remap,
+                                             perm, prim_kind, prim_par, wcell_start,
+                                             wcell_idx, glob, wnc, wcc, whc, wno, wco, who)
+                if code != 0 and remap:
+                    # the old lists use the old rows: restore them for the retry
+                    sort_particles(True, x, v, om, f, t, r, m, inv_m, inv_i, mat, disp, ovr,
+                                   pid, xr, vw, box, periodic, skin, extra, cell_start,
+                                   cell_idx, cell_of, cpos, perm, fbuf, ibuf)
+                elif remap:
+                    fstate[3] = 0.0
             else:
                 code, need = build_wall_lists(x, r, box, periodic, skin, extra, cell_start,
                                               cell_idx, cell_of, cpos, prim_kind, prim_par,
@@ -468,6 +489,7 @@ def run_loop(nsteps, step0, resume_mid, need_forces, ke_tol, ke_every, max_ovr, 
         if first:
             continue
         done = s + 1
+        fstate[3] += 1.0
         status[1] = step0 + done
         if wlog_every > 0 and (step0 + done - log0) % wlog_every == 0:
             row = (step0 + done - log0) // wlog_every - 1

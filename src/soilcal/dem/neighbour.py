@@ -40,6 +40,7 @@ import math
 
 from numba import njit, prange
 
+from soilcal.dem.contact import H_A
 from soilcal.dem.walls import TRIANGLE, prim_closest
 
 
@@ -282,10 +283,11 @@ def _grid(x, r, box, periodic, skin, extra, cell_start, cell_idx, cell_of, cpos)
 
 
 @njit(cache=True, inline="always")
-def _wall_row(i, x, r, cut0, cell_of, prim_kind, prim_par, wcell_start, wcell_idx, glob, ng,
-              wnbr_old, wcnt_old, whist_old, wnbr_new, wcnt_new, whist_new):
+def _wall_row(i, io, x, r, cut0, cell_of, prim_kind, prim_par, wcell_start, wcell_idx, glob,
+              ng, wnbr_old, wcnt_old, whist_old, wnbr_new, wcnt_new, whist_new):
     """Wall list of particle i: unbounded primitives, then the triangles binned in its cell
-    (history rows i * KW + k copied from the old list); wcnt_new[i] may exceed KW."""
+    (history rows copied from row io of the old list: i itself, or the row it had before a
+    spatial sort); wcnt_new[i] may exceed KW."""
     KW = wnbr_new.shape[1]
     H = whist_new.shape[1]
     c = cell_of[i]
@@ -304,10 +306,10 @@ def _wall_row(i, x, r, cut0, cell_of, prim_kind, prim_par, wcell_start, wcell_id
                 row = i * KW + wc
                 for h in range(H):
                     whist_new[row, h] = 0.0
-                for k in range(wcnt_old[i]):
-                    if wnbr_old[i, k] == p:
+                for k in range(wcnt_old[io]):
+                    if wnbr_old[io, k] == p:
                         for h in range(H):
-                            whist_new[row, h] = whist_old[i * KW + k, h]
+                            whist_new[row, h] = whist_old[io * KW + k, h]
                         break
             wc += 1
     wcnt_new[i] = wc
@@ -504,7 +506,7 @@ def build_wall_lists(x, r, box, periodic, skin, extra, cell_start, cell_idx, cel
     if code != 0:
         return code, need
     for i in prange(n):
-        _wall_row(i, x, r, skin + extra, cell_of, prim_kind, prim_par, wcell_start,
+        _wall_row(i, i, x, r, skin + extra, cell_of, prim_kind, prim_par, wcell_start,
                   wcell_idx, glob, ng, wnbr_old, wcnt_old, whist_old, wnbr_new, wcnt_new,
                   whist_new)
     wneed = _wall_need(wcnt_new, wnbr_new.shape[1])
@@ -513,46 +515,85 @@ def build_wall_lists(x, r, box, periodic, skin, extra, cell_start, cell_idx, cel
     return 0, 0
 
 
+@njit(cache=True, inline="always")
+def _old_slot(start_old, nbr_old, io, jo):
+    """Slot of partner jo in old row io (linear scan of the short sorted row), or -1."""
+    for k in range(start_old[io], start_old[io + 1]):
+        j = nbr_old[k]
+        if j == jo:
+            return k
+        if j > jo:
+            break
+    return -1
+
+
 @njit(cache=True)
 def _fill_row(q, x, r, cpos, cell_idx, cell_of, box, periodic, cut0, cell_start, n0, n1, n2,
               start_old, nbr_old, hist_old, act_old, start_new, nbr_new, hist_new, act_new,
-              prim_kind, prim_par, wcell_start, wcell_idx, glob, ng, wnbr_old, wcnt_old,
-              whist_old, wnbr_new, wcnt_new, whist_new):
+              remap, perm, prim_kind, prim_par, wcell_start, wcell_idx, glob, ng, wnbr_old,
+              wcnt_old, whist_old, wnbr_new, wcnt_new, whist_new):
     """Sorted row of particle i = cell_idx[q] (offsets already in start_new), history rows
-    and touching flags merged from i's old sorted row, and i's wall list."""
+    and touching flags merged from i's old sorted row, and i's wall list.
+
+    remap: the particles were just re-sorted (:func:`sort_particles`) and the old lists
+    still use the previous rows, perm[new row] = old row.  Pair (i, j), j > i, is then found
+    in the old row of min(perm[i], perm[j]); when that is j's, the pair's orientation is
+    reversed and the antisymmetric history (tangential displacement and rolling moment of
+    i relative to j) changes sign; sqrt(a) of JKR is symmetric."""
     H = hist_new.shape[1]
     i = cell_idx[q]
     o0 = start_new[i]
     o1 = start_new[i + 1]
     _row(q, cpos, cell_idx, cell_of, box, periodic, cut0, cell_start, n0, n1, n2, nbr_new,
          o0, True)
-    ko = start_old[i]
-    kend = start_old[i + 1]
-    for k in range(o0, o1):
-        j = nbr_new[k]
-        while ko < kend and nbr_old[ko] < j:
-            ko += 1
-        if ko < kend and nbr_old[ko] == j:
-            act_new[k] = act_old[ko]
-            for h in range(H):
-                hist_new[k, h] = hist_old[ko, h]
-        else:
-            act_new[k] = 0
-            for h in range(H):
-                hist_new[k, h] = 0.0
-    _wall_row(i, x, r, cut0, cell_of, prim_kind, prim_par, wcell_start, wcell_idx, glob, ng,
-              wnbr_old, wcnt_old, whist_old, wnbr_new, wcnt_new, whist_new)
+    io = i
+    if remap:
+        io = perm[i]
+        for k in range(o0, o1):
+            jo = perm[nbr_new[k]]
+            flip = jo < io
+            ko = _old_slot(start_old, nbr_old, jo, io) if flip else _old_slot(start_old, nbr_old,
+                                                                              io, jo)
+            if ko >= 0:
+                act_new[k] = act_old[ko]
+                for h in range(H):
+                    v = hist_old[ko, h]
+                    if flip and h != H_A:
+                        v = -v
+                    hist_new[k, h] = v
+            else:
+                act_new[k] = 0
+                for h in range(H):
+                    hist_new[k, h] = 0.0
+    else:
+        ko = start_old[i]
+        kend = start_old[i + 1]
+        for k in range(o0, o1):
+            j = nbr_new[k]
+            while ko < kend and nbr_old[ko] < j:
+                ko += 1
+            if ko < kend and nbr_old[ko] == j:
+                act_new[k] = act_old[ko]
+                for h in range(H):
+                    hist_new[k, h] = hist_old[ko, h]
+            else:
+                act_new[k] = 0
+                for h in range(H):
+                    hist_new[k, h] = 0.0
+    _wall_row(i, io, x, r, cut0, cell_of, prim_kind, prim_par, wcell_start, wcell_idx, glob,
+              ng, wnbr_old, wcnt_old, whist_old, wnbr_new, wcnt_new, whist_new)
 
 
 @njit(cache=True, parallel=True)
 def build_lists(x, r, box, periodic, skin, extra, cell_start, cell_idx, cell_of, cpos,
                 start_old, nbr_old, hist_old, act_old, start_new, nbr_new, hist_new, act_new,
-                groups, sorder, sgroup, scratch, prim_kind, prim_par, wcell_start, wcell_idx,
-                glob, wnbr_old, wcnt_old, whist_old, wnbr_new, wcnt_new, whist_new):
+                groups, sorder, sgroup, scratch, remap, perm, prim_kind, prim_par, wcell_start,
+                wcell_idx, glob, wnbr_old, wcnt_old, whist_old, wnbr_new, wcnt_new, whist_new):
     """Rebuild the half lists (CSR), the slab groups (:func:`_slabs`, ``groups`` per
     colour: one per thread) and the wall lists into *_new.
 
-    History rows and touching flags are copied from *_old.  Returns (status, need):
+    History rows and touching flags are copied from *_old (``remap``: the old lists use
+    the rows before a spatial sort, perm[new row] = old row; :func:`_fill_row`).  Returns (status, need):
     status 0 ok, 1 pair buffers too short (need = pairs), 2 wall list too short (need =
     width), 3 cell buffer too short (need = cells), 5 triangle bins too short (need =
     entries).
@@ -592,12 +633,82 @@ def build_lists(x, r, box, periodic, skin, extra, cell_start, cell_idx, cell_of,
             for q in range(blk * bs, min(n, blk * bs + bs)):
                 _fill_row(q, x, r, cpos, cell_idx, cell_of, box, periodic, cut0, cell_start,
                           n0, n1, n2, start_old, nbr_old, hist_old, act_old, start_new,
-                          nbr_new, hist_new, act_new, prim_kind, prim_par, wcell_start,
-                          wcell_idx, glob, ng, wnbr_old, wcnt_old, whist_old, wnbr_new,
-                          wcnt_new, whist_new)
+                          nbr_new, hist_new, act_new, remap, perm, prim_kind, prim_par,
+                          wcell_start, wcell_idx, glob, ng, wnbr_old, wcnt_old, whist_old,
+                          wnbr_new, wcnt_new, whist_new)
     wneed = _wall_need(wcnt_new, wnbr_new.shape[1])
     if wneed > 0:
         return 2, wneed
     _slabs(cell_idx, cell_of, start_new, n0, n1, n2, periodic[0], periodic[1],
            min(max(groups, 1), GROUPS_MAX), sorder, sgroup, scratch)
     return 0, 0
+
+
+# ---------------------------------------------------------------- spatial sort
+@njit(cache=True)
+def _permute2(a, perm, buf, inverse):
+    """Rows of a 2-D array reordered: a[q] = old a[perm[q]] (``inverse``: undone)."""
+    n, w = a.shape
+    for q in range(n):
+        for c in range(w):
+            if inverse:
+                buf[perm[q], c] = a[q, c]
+            else:
+                buf[q, c] = a[perm[q], c]
+    for q in range(n):
+        for c in range(w):
+            a[q, c] = buf[q, c]
+
+
+@njit(cache=True)
+def _permute1(a, perm, buf, inverse):
+    """1-D version of :func:`_permute2` (``buf`` of a's dtype)."""
+    n = a.shape[0]
+    for q in range(n):
+        if inverse:
+            buf[perm[q]] = a[q]
+        else:
+            buf[q] = a[perm[q]]
+    for q in range(n):
+        a[q] = buf[q]
+
+
+@njit(cache=True)
+def sort_particles(inverse, x, v, om, f, t, r, m, inv_m, inv_i, mat, disp, ovr, pid, xr, vw,
+                   box, periodic, skin, extra, cell_start, cell_idx, cell_of, cpos, perm,
+                   fbuf, ibuf):
+    """Spatial sort: the particle rows of every per-particle array reordered into cell order
+    (x fastest, then y, then z; the order of :func:`_grid`), so that particles close in
+    space are close in memory and a list row's partners share cache lines (LAMMPS
+    ``atom_modify sort``).  perm[new row] = old row; ``pid`` (insertion ids) follows the
+    rows.  The lists still use the old rows: the next :func:`build_lists` remaps them
+    (``remap``).  ``inverse``: undo the last sort with the same perm (a build that has to
+    stop for larger buffers restores the old rows).
+
+    Returns (ok, need): ok False when cell_start is too short (need cells, nothing moved).
+    """
+    n = x.shape[0]
+    if not inverse:
+        ok, rmax, lo0, cs0, n0, lo1, cs1, n1, lo2, cs2, n2 = _grid(
+            x, r, box, periodic, skin, extra, cell_start, cell_idx, cell_of, cpos)
+        if not ok:
+            return False, n0 * n1 * n2 + 1
+        for q in range(n):
+            perm[q] = cell_idx[q]
+    _permute2(x, perm, fbuf, inverse)
+    _permute2(v, perm, fbuf, inverse)
+    _permute2(om, perm, fbuf, inverse)
+    _permute2(f, perm, fbuf, inverse)
+    _permute2(t, perm, fbuf, inverse)
+    _permute2(disp, perm, fbuf, inverse)
+    _permute2(xr, perm, fbuf, inverse)
+    _permute2(vw, perm, fbuf, inverse)
+    fb = fbuf[:, 0]
+    _permute1(r, perm, fb, inverse)
+    _permute1(m, perm, fb, inverse)
+    _permute1(inv_m, perm, fb, inverse)
+    _permute1(inv_i, perm, fb, inverse)
+    _permute1(ovr, perm, fb, inverse)
+    _permute1(mat, perm, ibuf, inverse)
+    _permute1(pid, perm, ibuf, inverse)
+    return True, 0

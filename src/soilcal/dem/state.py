@@ -2,7 +2,12 @@
 
 Spheres: position x[N,3], velocity v[N,3], angular velocity omega[N,3], radius r[N], mass
 m[N] = 4/3 pi r^3 rho, moment of inertia I = 2/5 m r^2 (solid sphere), inverse mass and
-inverse inertia (0 for fixed particles or locked rotation), material id mat[N].
+inverse inertia (0 for fixed particles or locked rotation), material id mat[N], insertion id
+id[N] (0, 1, ... in the order the particles were added).
+
+The engine re-sorts the rows in memory by neighbour cell (``Simulation(sort_every=...)``), so
+row i is not particle i after a run: ``id`` follows every row, and ``Simulation.index`` maps
+insertion ids to rows.
 """
 
 from __future__ import annotations
@@ -26,6 +31,7 @@ class ParticleState:
         self.inv_m = np.zeros(0)
         self.inv_i = np.zeros(0)
         self.mat = np.zeros(0, dtype=np.int64)
+        self.id = np.zeros(0, dtype=np.int64)
         self.disp = np.zeros((0, 3))
         self.ovr = np.zeros(0)
 
@@ -53,6 +59,7 @@ class ParticleState:
         self.inv_m = cat([self.inv_m, inv_m])
         self.inv_i = cat([self.inv_i, inv_i])
         self.mat = cat([self.mat, np.full(k, mat, dtype=np.int64)])
+        self.id = cat([self.id, np.arange(self.n - k, self.n, dtype=np.int64)])
         self.disp = np.zeros((self.n, 3))
         self.ovr = np.zeros(self.n)
         return np.arange(self.n - k, self.n)
