@@ -230,3 +230,23 @@ def test_lattice_jitter_psd_cylinder_and_count():
         F.lattice_fill(BOX, radius=1e-3, spacing=1.5e-3)
     with pytest.raises(InputError, match="lattice.n"):
         F.lattice_fill(BOX, radius=1e-3, n=10**7)
+
+
+def test_samples_beyond_the_available_memory_are_refused(monkeypatch):
+    from soilcal.dem import state
+
+    # 1 MB available: 600 spheres of BYTES_PER_PARTICLE (1,888 bytes) do not fit
+    monkeypatch.setattr(state, "available_memory", lambda: 1_000_000)
+    assert state.BYTES_PER_PARTICLE * 600 > 1_000_000 > state.BYTES_PER_PARTICLE * 500
+    with pytest.raises(InputError, match=r"fill\.n: expected a particle count whose engine"):
+        F.insert_random(BOX, F.UniformRadius(1e-3, 1e-3), n=600, seed=1, source="s",
+                      field="fill")
+    x, _ = F.insert_random(BOX, F.UniformRadius(1e-3, 1e-3), n=500, seed=1)
+    assert len(x) == 500
+    # by mass: 600 spheres' worth of 1 mm spheres at 1000 kg/m^3
+    m1 = 1000.0 * 4.0 / 3.0 * math.pi * 1e-9
+    with pytest.raises(InputError, match=r"fill\.mass: expected a particle count"):
+        F.insert_random(BOX, F.UniformRadius(1e-3, 1e-3), mass=600 * m1, density=1000.0,
+                      seed=1, source="s", field="fill")
+    with pytest.raises(InputError, match=r"lattice: expected a particle count"):
+        F.lattice_fill(F.BoxRegion((0, 0, 0), (0.1, 0.1, 0.1)), radius=1e-3, source="s")

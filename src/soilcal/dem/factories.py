@@ -62,6 +62,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from numba import njit
 
+from soilcal.dem.state import check_memory
 from soilcal.errors import InputError
 
 RSA_SATURATION = 0.3841  # Zhang & Torquato (2013), equal spheres in 3-D
@@ -590,11 +591,14 @@ def insert_random(region, dist, n=None, mass=None, density=None, rng=None, seed=
     if n is not None:
         if int(n) < 0:
             raise InputError(source, f"{field}.n", "a non-negative particle count", n)
+        check_memory(int(n), source, f"{field}.n")
         radii = dist.sample(int(n), rng)
     else:
         if density is None or density <= 0 or mass < 0:
             raise InputError(source, f"{field}.mass", "mass >= 0 with a positive density",
                              {"mass": mass, "density": density})
+        check_memory(float(mass) / (float(density) * dist.mean_volume()), source,
+                     f"{field}.mass")
         radii = dist.sample_mass(float(mass), float(density), rng)
     radii = np.sort(radii)[::-1].copy()
     _check_fit(region, radii, max_fraction, source, field)
@@ -733,6 +737,7 @@ def lattice_fill(region, radius=None, dist=None, kind="hcp", spacing=None, jitte
     else:
         steps = np.array([a, a * math.sqrt(3) / 2, a * math.sqrt(6) / 3])
     nk = np.floor((lhi - llo) / steps).astype(int) + 2
+    check_memory(float(np.prod(nk.astype(float))), source, field)  # lattice sites tried
     i, jj, k = np.meshgrid(np.arange(nk[0]), np.arange(nk[1]), np.arange(nk[2]), indexing="ij")
     i, jj, k = i.ravel(), jj.ravel(), k.ravel()
     if kind == "sc":

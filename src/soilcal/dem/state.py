@@ -13,6 +13,7 @@ insertion ids to rows.
 from __future__ import annotations
 
 import math
+import os
 
 import numpy as np
 
@@ -63,3 +64,49 @@ class ParticleState:
         self.disp = np.zeros((self.n, 3))
         self.ovr = np.zeros(self.n)
         return np.arange(self.n - k, self.n)
+
+
+# ---------------------------------------------------------------- memory
+# Engine bytes per sphere (Simulation and its lists, engine.py ``_alloc_lists``), float64 and
+# int64 unless noted:
+#   state: x, v, omega, f, t, disp (3 each), r, m, 1/m, 1/I, largest overlap, material, id
+STATE_BYTES = 8 * (6 * 3 + 7)
+#   two list buffers, each: row offset; 8 pair slots (partner, 4 history columns, int8
+#   touching flag); 4 wall slots (primitive, 8 history columns) and a wall count
+LIST_BYTES = 2 * (8 + 8 * (8 + 4 * 8 + 1) + 4 * (8 + 8 * 8) + 8)
+#   wall reactions (4 x 6), packed rows (4 + 8), sort work space (1 + 8 + 1), slab order,
+#   cell index, cell of, cell-sorted copy (4)
+WORK_BYTES = 8 * (4 * 6 + 4 + 8 + 1 + 8 + 1 + 1 + 1 + 1 + 4)
+BYTES_PER_PARTICLE = STATE_BYTES + LIST_BYTES + WORK_BYTES
+
+
+def available_memory() -> int:
+    """Bytes of memory available to a new allocation on this machine (Linux MemAvailable;
+    elsewhere the physical memory)."""
+    try:
+        with open("/proc/meminfo") as fh:
+            for line in fh:
+                if line.startswith("MemAvailable:"):
+                    return int(line.split()[1]) * 1024
+    except OSError:
+        pass
+    try:
+        return int(os.sysconf("SC_PHYS_PAGES") * os.sysconf("SC_PAGE_SIZE"))
+    except (ValueError, OSError, AttributeError):
+        return 1 << 62
+
+
+def check_memory(n, source, field, hint=""):
+    """Refuse, before anything is allocated, a particle count whose engine state
+    (BYTES_PER_PARTICLE each, pair lists at their initial 8 slots per sphere) would not fit
+    in the memory available here."""
+    from soilcal.errors import InputError
+
+    need = float(n) * BYTES_PER_PARTICLE
+    avail = available_memory()
+    if need > avail:
+        raise InputError(source, field,
+                         f"a particle count whose engine state fits in the memory available "
+                         f"here ({avail / 1e9:.3g} GB at about {BYTES_PER_PARTICLE} bytes per "
+                         f"sphere; fewer or larger spheres){hint}",
+                         f"{int(n):,} spheres (about {need / 1e9:.3g} GB)")

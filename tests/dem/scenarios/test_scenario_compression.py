@@ -48,3 +48,19 @@ def test_compression_validation():
         compression.validate(dict(s, max_strain=1.5), "quick", "t")
     with pytest.raises(InputError, match="setup.jam_overlap"):
         compression.validate(dict(s, jam_overlap=0.3), "quick", "t")
+
+
+def test_paper_sample_too_large_for_memory_fails_before_the_run(monkeypatch):
+    # 3 kg of the printed particle sizes (004 Sec. 3.7 and 2.6, half the spheres 0.315 mm
+    # across) are tens of millions of spheres; with 8 GB available the run must stop at the
+    # insertion with the count and the memory it would need, before any allocation
+    from soilcal.dem import state
+
+    monkeypatch.setattr(state, "available_memory", lambda: 8_000_000_000)
+    s = dict(compression.setups()["guangxi-cohesive"])
+    n = compression.sizing(s, "paper")["n"]
+    assert n > 8e9 / state.BYTES_PER_PARTICLE
+    with pytest.raises(InputError, match=r"particles\.n: expected a particle count whose engine "
+                       r"state fits in the memory available here \(8 GB") as err:
+        compression.run(s, DemParams(), "paper", seed=0, threads=1)
+    assert f"{n:,} spheres" in str(err.value)

@@ -29,7 +29,12 @@ phi = 0.6 of the particle density.  ``quick``: the load is reduced to about 1000
 radius r_q sized for a sample about 40 mm high (radii uniform in [0.9, 1.1] r_q), shear
 modulus capped at 5e5 Pa (the stress level scales with it: the convergence study shows by
 how much); ``paper``: 3 kg of the paper's particle sizes (004 Sec. 2.6, taken as diameters)
-and the unscaled modulus.
+and the unscaled modulus.  That is 69.7 million spheres (half of them 0.315 mm across), about
+130 GB of engine state (:data:`soilcal.dem.state.BYTES_PER_PARTICLE`); the paper prints the
+mass but no particle count, and its own repose runs used 0.1-0.3 kg (Sec. 2.6, 3.6).  On a
+machine with less memory the run stops at the insertion, before anything is allocated,
+with the count and the memory it needs; ``n_particles`` or ``radius`` in the setup give a
+smaller sample of the quick height.
 
 Responses: ``stress_5_kpa``, ``stress_10_kpa``, ``stress_20_kpa`` (stress at 5, 10, 20 %
 strain, linear interpolation), ``stress_max_kpa``, ``h0_m``, ``strain_end``, ``stop_reason``,
