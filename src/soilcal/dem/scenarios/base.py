@@ -494,7 +494,7 @@ class Frames:
 
         k = len(self.entries)
         path = self.dir / f"{self.name}_{k:04d}.vtu"
-        write_particles_vtu(path, sim.x, sim.p.r, sim.v, sim.omega, sim.p.mat)
+        write_particles_vtu(path, sim.x, sim.p.r, sim.v, sim.omega, sim.p.mat, ids=sim.p.id)
         self.entries.append((sim.step * (sim.dt or 0.0), path))
 
     def close(self):

@@ -385,7 +385,7 @@ class VtkWriter:
         if not self.folder:
             return
         write_particles_vtu(self.folder / f"{self.stem}_particles_{self.k:04d}.vtu",
-                            sim.x, sim.p.r, velocities=sim.v)
+                            sim.x, sim.p.r, velocities=sim.v, ids=sim.p.id)
         if tool_vertices is not None:
             write_mesh_vtp(self.folder / f"{self.stem}_tool_{self.k:04d}.vtp", tool_vertices,
                            tool_triangles)
