@@ -147,3 +147,20 @@ def test_index_maps_ids_to_rows_and_rejects_unknown_ids():
     with pytest.raises(InputError, match="sort_every"):
         Simulation(table(), sort_every=2.5)
     assert math.isfinite(sim.x.sum())
+
+
+def test_bytes_per_particle_matches_the_engine_allocation():
+    # BYTES_PER_PARTICLE (state.py, the memory guard) is counted by hand from the engine's
+    # arrays: it must equal the per-particle arrays a fresh simulation really holds (pair
+    # lists at their initial 8 slots, 4 wall slots, tangential + JKR history)
+    from soilcal.dem.state import BYTES_PER_PARTICLE
+
+    sim = random_box(n=200)
+    sim.run(0)
+    n = sim.n
+    assert sim._npair == 8 * n and sim._kw == 4
+    per = [a for a in vars(sim.p).values() if isinstance(a, np.ndarray)]
+    per += [a for a in sim._lists.values() if a.shape[0] in (n, n + 1, 8 * n, 4 * n)]
+    per += [sim._cidx_arr, sim._cof_arr, sim._cpos_arr]
+    total = sum(a.nbytes for a in per) - 2 * 8  # the two row-offset arrays hold n + 1
+    assert total == n * BYTES_PER_PARTICLE

@@ -17,6 +17,8 @@ import os
 
 import numpy as np
 
+from soilcal.errors import InputError
+
 
 class ParticleState:
     """Growable SoA container of sphere states."""
@@ -100,8 +102,6 @@ def check_memory(n, source, field, hint=""):
     """Refuse, before anything is allocated, a particle count whose engine state
     (BYTES_PER_PARTICLE each, pair lists at their initial 8 slots per sphere) would not fit
     in the memory available here."""
-    from soilcal.errors import InputError
-
     need = float(n) * BYTES_PER_PARTICLE
     avail = available_memory()
     if need > avail:
