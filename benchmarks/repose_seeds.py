@@ -11,12 +11,14 @@ height = diameter) at the quick preset with ``n_particles`` spheres, for two soi
 
 Each heap gives the angle by radial bins (``angle_deg``, the papers' EDEMpy method), by the
 surface scan (``angle_surface_deg``) and by side silhouettes (``angle_image_deg``).  Every
-run is a row of ``benchmarks/results/repose_seeds.csv`` (a rerun of the same case, size and
-seed replaces its row); ``repose_seeds.md`` tabulates mean and sample standard deviation over
-the seeds of each case and estimator (notes below its marker are kept).
+run is a row of ``benchmarks/results/repose_seeds.csv`` (``--rolling`` chooses the
+rolling-resistance model, a column of its own; a rerun of the same case, model, size and seed
+replaces its row); ``repose_seeds.md`` tabulates mean and sample standard deviation over
+the seeds of each case, model and estimator (notes below its marker are kept).
 
     python benchmarks/repose_seeds.py                       # 5 seeds, the default cases
     python benchmarks/repose_seeds.py --cases noncohesive:5000 --seeds 0,1,2,3,4,5,6,7
+    python benchmarks/repose_seeds.py --cases noncohesive:5000 --rolling bounded
 """
 
 from __future__ import annotations
@@ -32,9 +34,12 @@ from pathlib import Path
 import numpy as np
 from _report import commit, kept_notes, read_rows, write_rows
 
+from soilcal.dem.scenarios.base import DEFAULT_ROLLING, ROLLING_MODELS
+
 HERE = Path(__file__).resolve().parent
 ESTIMATORS = ("angle_deg", "angle_surface_deg", "angle_image_deg")
-FIELDS = ["utc", "commit", "case", "n", "seed", "particles", "threads", "steps", "wall_s",
+FIELDS = ["utc", "commit", "case", "rolling", "n", "seed", "particles", "threads", "steps",
+          "wall_s",
           "settled", "cohesion_scale", *ESTIMATORS, "height_mm", "load_avg_1min"]
 DEFAULT_CASES = "noncohesive:1000,noncohesive:5000,cohesive:1000,cohesive:5000"
 
@@ -49,26 +54,33 @@ def params(case):
     raise SystemExit(f"--cases: expected noncohesive:N or cohesive:N, got {case!r}")
 
 
-def run_one(case, n, seed, threads, rev):
+def run_one(case, n, seed, threads, rev, rolling):
     from soilcal.dem.scenarios import repose
 
-    setup = dict(repose.setups()["cinnamon-soil"], name="cinnamon-soil", n_particles=n)
+    setup = dict(repose.setups()["cinnamon-soil"], name="cinnamon-soil", n_particles=n,
+                 rolling_model=rolling)
     res = repose.run(setup, params(case), "quick", seed, threads)
     r = res.responses
     return dict(utc=time.strftime("%Y-%m-%d %H:%M", time.gmtime()), commit=rev, case=case,
-                n=n, seed=seed, particles=res.n_particles, threads=res.threads, steps=res.steps,
+                rolling=rolling, n=n, seed=seed, particles=res.n_particles, threads=res.threads,
+                steps=res.steps,
                 wall_s=round(res.wall_s, 2), settled=r["settled"],
                 cohesion_scale=round(res.setup["cohesion_scale"], 4),
                 **{k: round(r[k], 3) for k in ESTIMATORS},
                 height_mm=round(1e3 * r["height_m"], 2), load_avg_1min=round(os.getloadavg()[0], 2))
 
 
+def _key(r):
+    return r["case"], r["rolling"] or DEFAULT_ROLLING, int(r["n"])
+
+
 def summary(rows):
-    """(case, n, seeds, mean and SD of every estimator) per case and size."""
+    """(case, rolling model, n, seeds, mean and SD of every estimator) per case, model and
+    size."""
     out = []
-    for key in sorted({(r["case"], int(r["n"])) for r in rows}):
-        sel = [r for r in rows if (r["case"], int(r["n"])) == key]
-        line = dict(case=key[0], n=key[1], seeds=len(sel))
+    for key in sorted({_key(r) for r in rows}):
+        sel = [r for r in rows if _key(r) == key]
+        line = dict(case=key[0], rolling=key[1], n=key[2], seeds=len(sel))
         for k in ESTIMATORS:
             v = np.array([float(r[k]) for r in sel], float)
             v = v[np.isfinite(v)]
@@ -82,6 +94,8 @@ def main(argv=None):
     ap.add_argument("--cases", default=DEFAULT_CASES)
     ap.add_argument("--seeds", default="0,1,2,3,4")
     ap.add_argument("--threads", type=int, default=2)
+    ap.add_argument("--rolling", default=DEFAULT_ROLLING, choices=ROLLING_MODELS,
+                    help="rolling-resistance model (setup.rolling_model)")
     ap.add_argument("--out", default=str(HERE / "results"))
     args = ap.parse_args(argv)
     cases = []
@@ -97,11 +111,11 @@ def main(argv=None):
     rev = commit()  # the code this process runs, whatever is committed meanwhile
     for case, n in cases:
         for seed in seeds:
-            row = run_one(case, n, seed, args.threads, rev)
+            row = run_one(case, n, seed, args.threads, rev, args.rolling)
             print(row, flush=True)
-            rows = [r for r in rows if (r["case"], int(r["n"]), int(r["seed"])) != (case, n, seed)]
+            rows = [r for r in rows if (*_key(r), int(r["seed"])) != (case, args.rolling, n, seed)]
             rows.append(row)
-            rows.sort(key=lambda r: (r["case"], int(r["n"]), int(r["seed"])))
+            rows.sort(key=lambda r: (*_key(r), int(r["seed"])))
             write_rows(csv_path, rows, FIELDS)
     md = ["# Seed scatter of the static angle of repose (cinnamon-soil cylinder lift, quick preset)",
           "",
@@ -111,11 +125,12 @@ def main(argv=None):
           "",
           "Mean and sample standard deviation over the seeds [deg]:",
           "",
-          "| case | spheres | seeds | radial bins | surface scan | silhouette |",
-          "|---|---:|---:|---|---|---|"]
+          "| case | rolling model | spheres | seeds | radial bins | surface scan | silhouette |",
+          "|---|---|---:|---:|---|---|---|"]
     for s in summary(rows):
         cells = [f"{s[k][0]:.2f} +- {s[k][1]:.2f}" for k in ESTIMATORS]
-        md.append(f"| {s['case']} | {s['n']} | {s['seeds']} | " + " | ".join(cells) + " |")
+        md.append(f"| {s['case']} | {s['rolling']} | {s['n']} | {s['seeds']} | "
+                  + " | ".join(cells) + " |")
     md += ["", "Runs:", "",
            "| " + " | ".join(FIELDS) + " |", "|" + "---|" * len(FIELDS),
            *("| " + " | ".join(str(r.get(k, "")) for k in FIELDS) + " |" for r in rows),

@@ -1,5 +1,5 @@
-"""Incline stick/slip, constant-torque rolling deceleration, energy and momentum, wall vs
-large sphere, thread independence."""
+"""Incline stick/slip, rolling deceleration and rest (constant torque, EPSD, bounded), energy
+and momentum, wall vs large sphere, thread independence."""
 
 import math
 
@@ -42,7 +42,7 @@ def test_block_sticks_and_slides_at_friction_angle():
     assert (v - v0) / t == pytest.approx(a_expected, rel=0.02)
 
 
-@pytest.mark.parametrize("model", ["constant_torque", "epsd"])
+@pytest.mark.parametrize("model", ["constant_torque", "epsd", "bounded"])
 def test_rolling_deceleration(model):
     # EPSD: once the rolling spring is fully mobilised its moment is mu_r R* F_n with
     # R* = R for a sphere on a plane, the same torque as the constant-torque model
@@ -63,6 +63,59 @@ def test_rolling_deceleration(model):
     # -> a = -mu_r g / (1 + I/(m R^2)) = -5/7 mu_r g for a solid sphere
     assert vs[-1] > 0.02
     assert slope == pytest.approx(-5.0 / 7.0 * mur * G, rel=0.02)
+
+
+def rolling_on_incline(model, theta_deg, mur=0.1, steps=20000):
+    """A free sphere (rotation not locked) released at rest on a plane tilted by theta;
+    returns (displacement down the slope, final velocity, velocity after the first 2000
+    steps, angular velocity magnitudes of the last 200 steps, time since those 2000 steps,
+    the simulation)."""
+    th = math.radians(theta_deg)
+    sim = Simulation(table(e=0.3, mu=0.9, mur=mur, E=1e8), dt_fraction=0.2,
+                     gravity=(G * math.sin(th), 0.0, -G * math.cos(th)),
+                     contact_model=dict(rolling=model))
+    sim.add_particles([[0, 0, R * 0.9999]], R, "soil")
+    sim.add_plane((0, 0, 0), (0, 0, 1), "soil")
+    sim.run(2000)
+    x0, t0, v0 = sim.x[0, 0], sim.step * sim.dt, sim.v[0, 0]
+    sim.run(steps - 200)
+    w = []
+    for _ in range(200):
+        sim.run(1)
+        w.append(float(np.linalg.norm(sim.omega[0])))
+    return sim.x[0, 0] - x0, sim.v[0, 0], v0, np.array(w), sim.step * sim.dt - t0, sim
+
+
+def test_bounded_rolling_holds_a_sphere_below_the_rolling_angle():
+    # A sphere on an incline rolls when the weight's moment about the contact point exceeds
+    # the rolling resistance, m g sin(theta) R > mu_r m g cos(theta) R: tan(theta) > mu_r.
+    mur = 0.1
+    crit = math.degrees(math.atan(mur))
+    # 0.5 deg below: at rest, the angular velocity exactly zero (the bound stops it)
+    dx, v, _, w, _, sim = rolling_on_incline("bounded", crit - 0.5, mur)
+    assert abs(dx) < 1e-4 * R and abs(v) < 1e-7
+    assert w.max() < 1e-12
+    # the plane takes the whole reaction of its one contact, the rolling torque included:
+    # torque about its centre (the origin) -(x - c) x F - T with F, T on the sphere
+    F = -sim.wall_force[0]
+    expected = -np.cross(sim.x[0], F) - sim.p.t[0]
+    assert np.allclose(sim.wall_torque[0], expected, rtol=1e-9, atol=1e-15)
+    # 0.5 deg above: rolls without slip, a = 5/7 g (sin theta - mu_r cos theta)
+    th = math.radians(crit + 0.5)
+    dx, v, v0, _, t, _ = rolling_on_incline("bounded", crit + 0.5, mur)
+    assert (v - v0) / t == pytest.approx(5.0 / 7.0 * G * (math.sin(th) - mur * math.cos(th)),
+                                         rel=0.02)
+
+
+def test_constant_torque_keeps_flipping_below_the_rolling_angle():
+    # the same sphere with the unbounded constant torque: the torque flips with the sign of a
+    # vanishing angular velocity, which therefore never settles.  One step of the full torque
+    # mu_r m g cos(theta) R changes omega by 2.5 mu_r g cos(theta) dt / R (I = 0.4 m R^2);
+    # the jitter reaches at least a quarter of that
+    mur = 0.1
+    th = math.atan(mur) - math.radians(0.5)
+    _, _, _, w, _, sim = rolling_on_incline("constant_torque", math.degrees(th), mur)
+    assert w.max() > 0.25 * 2.5 * mur * G * math.cos(th) * sim.dt / R
 
 
 def hertz_energy(sim, estar):
@@ -155,14 +208,15 @@ def test_lists_regrouped_when_more_threads_run(monkeypatch):
         numba.set_num_threads(numba.config.NUMBA_NUM_THREADS)
 
 
-def test_one_and_two_threads_identical(monkeypatch):
+@pytest.mark.parametrize("rolling", ["constant_torque", "bounded"])
+def test_one_and_two_threads_identical(monkeypatch, rolling):
     from soilcal.dem import integrator
 
     monkeypatch.setattr(integrator, "PARALLEL_MIN", 0)  # small system, parallel loops anyway
     out = []
     for nt in (1, 2):
         numba.set_num_threads(nt)
-        sim = settle_simulation(3, "jkr", seed=7, layers=12)
+        sim = settle_simulation(3, "jkr", seed=7, layers=12, rolling=rolling)
         sim.run(1500)
         out.append((sim.x.copy(), sim.v.copy(), sim.omega.copy(), sim.wall_force.copy()))
     numba.set_num_threads(numba.config.NUMBA_NUM_THREADS)

@@ -29,7 +29,7 @@ LAYERS = 50
 
 
 def settle_simulation(nx: int, cohesion: str = "none", seed: int = 2024, layers: int = LAYERS,
-                      skin: float | None = None) -> Simulation:
+                      skin: float | None = None, rolling: str = "constant_torque") -> Simulation:
     rng = np.random.default_rng(seed)
     mats = MaterialTable()
     mats.add(Material("soil", density=2600.0, poisson=0.3, youngs=2.6e7))
@@ -39,7 +39,7 @@ def settle_simulation(nx: int, cohesion: str = "none", seed: int = 2024, layers:
     side = nx * SPACING
     sim = Simulation(mats, dt=2e-5, gravity=(0.0, 0.0, -9.81), box=(0.0, side, 0.0, side),
                      periodic=(True, True), skin=skin, max_overlap=0.2,
-                     contact_model=dict(rolling="constant_torque", cohesion=cohesion))
+                     contact_model=dict(rolling=rolling, cohesion=cohesion))
     i, j, k = np.meshgrid(np.arange(nx), np.arange(nx), np.arange(layers), indexing="ij")
     n = i.size
     x = np.empty((n, 3))

@@ -40,6 +40,28 @@ Powder Technol. 206:269, Eqs. 11-14; undamped, eta_r = 0)::
     k_r = 2.25 k_n mu_r^2 R_r^2 (k_n = S_n, R_r = R*),  M_r <- M_r - k_r dtheta_r,
     dtheta_r = (omega_i - omega_j)_t dt,  |M_r| <= mu_r R_r |F_n,tot|
 
+Rolling, ``bounded`` (EDEM's type A torque on each particle's own rotation, bounded so that it
+cannot reverse that rotation within a step; Irazabal, Salazar & Onate 2017, "Numerical
+modelling of granular materials with spherical discrete particles and the bounded rolling
+friction model", Comput. Part. Mech.)::
+
+    M_R,i  = sum over the contacts of i of  mu_r |F_n,tot| c_i     (c_i: centre to contact)
+    w*_i   = omega_i + dt T_i / I_i        (rotation at the next force evaluation, T_i: all
+                                            other torques on i)
+    tau_r,i = -min(M_R,i, I_i |w*_i| / dt) w*_i / |w*_i|
+
+Without the bound this is the type A torque as the EDEM guide writes it, -mu_r F_n R_i
+omega_i/|omega_i| with the particle's own angular velocity, summed over its contacts.  The
+bound is the torque that stops the rotation within the step: a particle whose resistance
+suffices comes to rest exactly, as the continuous law (any torque in [-M_R, M_R] at
+omega = 0) allows.  ``constant_torque`` instead flips sign every step at rest, so a heap at
+rest keeps an angular jitter of about M_R dt / I and creeps (its angle falls with time).
+A wall takes as reaction the share mu_r |F_n| c_i / M_R,i of tau_r,i of each of its contacts;
+a partner sphere takes none (the torque acts on each particle's own rotation, as in the EDEM
+form), so this model does not conserve angular momentum, and it resists the absolute
+rotation: a particle carried round by a rotating wall without rolling on it is resisted
+too (the drum scenario refuses it).
+
 Cohesion, ``jkr`` (Johnson, Kendall & Roberts 1971, Proc. R. Soc. A 324:301), written with
 the work of adhesion w (energy per unit area to separate the two surfaces)::
 
@@ -86,14 +108,14 @@ from soilcal.errors import InputError
 NORMAL = {"hertz": 0}
 DAMPING = {"viscoelastic": 0, "none": 1}
 TANGENTIAL = {"mindlin": 0, "none": 1}
-ROLLING = {"none": 0, "constant_torque": 1, "epsd": 2}
+ROLLING = {"none": 0, "constant_torque": 1, "epsd": 2, "bounded": 3}
 COHESION = {"none": 0, "jkr": 1}
 JKR_CONVENTION = {"edem": 1.0, "lammps": 2.0}  # w = factor * gamma
 
 # history slot layout (per particle and contact partner)
 H_XI = 0  # 3 tangential displacement
 H_A = 3  # sqrt of the last JKR contact radius (Newton warm start)
-H_MR = 4  # 3 rolling spring moment (epsd)
+H_MR = 4  # 3 rolling spring moment (epsd); wall rows of "bounded": its resistance mu_r |F_n| c_i
 H_SIZE = 8  # full row (64 bytes; walls keep their touching flag in slot 7)
 H_SHORT = 4  # particle pairs without the EPSD spring: tangential + JKR only (32 bytes)
 
@@ -186,7 +208,9 @@ def contact_force(codes, pair, ma, mb, delta, nx, ny, nz, rvx, rvy, rvz, wrx, wr
     tangential torques are -c_i u on i and -c_j u on j; the constant rolling torque is
     -mu_r |F_n,tot| c omega_rel/|omega_rel| on each body with its own omega_rel (so the
     partner's is -(c_j/c_i) times i's) and the EPSD moment acts as +M_r on i and -M_r on j.
-    Returns (active, fx, fy, fz, tix, tiy, tiz, tjx, tjy, tjz).
+    The ``bounded`` rolling model adds no torque here: it returns mu_r |F_n,tot| as
+    ``mroll`` and the caller sums mu_r |F_n,tot| c over each particle's contacts.
+    Returns (active, fx, fy, fz, tix, tiy, tiz, tjx, tjy, tjz, mroll).
     """
     estar = pair[ma, mb, P_ESTAR]
     w = pair[ma, mb, P_W]
@@ -198,7 +222,7 @@ def contact_force(codes, pair, ma, mb, delta, nx, ny, nz, rvx, rvy, rvz, wrx, wr
                 if touching:
                     for q in range(hist.shape[1]):
                         hist[hk, q] = 0.0
-                return False, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0
+                return False, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0
         x = jkr_root(delta, rstar, pair[ma, mb, P_JKRC], hist[hk, H_A])
         hist[hk, H_A] = x
         a = x * x
@@ -210,7 +234,7 @@ def contact_force(codes, pair, ma, mb, delta, nx, ny, nz, rvx, rvy, rvz, wrx, wr
             if touching:
                 for q in range(hist.shape[1]):
                     hist[hk, q] = 0.0
-            return False, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0
+            return False, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0
         a = math.sqrt(rstar * delta)
         fne = 4.0 / 3.0 * estar * a * delta
         fpo2 = 0.0
@@ -285,7 +309,10 @@ def contact_force(codes, pair, ma, mb, delta, nx, ny, nz, rvx, rvy, rvz, wrx, wr
         tjy = -cj * uy
         tjz = -cj * uz
     mur = pair[ma, mb, P_MUR]
-    if codes[3] == 1 and mur > 0.0:
+    mroll = 0.0
+    if codes[3] == 3:
+        mroll = mur * fnf
+    elif codes[3] == 1 and mur > 0.0:
         wn = math.sqrt(wrx * wrx + wry * wry + wrz * wrz)
         if wn > 0.0:
             m = mur * fnf / wn
@@ -335,4 +362,4 @@ def contact_force(codes, pair, ma, mb, delta, nx, ny, nz, rvx, rvy, rvz, wrx, wr
         tjx -= mx
         tjy -= my
         tjz -= mz
-    return True, fx, fy, fz, tix, tiy, tiz, tjx, tjy, tjz
+    return True, fx, fy, fz, tix, tiy, tiz, tjx, tjy, tjz, mroll

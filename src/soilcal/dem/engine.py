@@ -357,7 +357,7 @@ class Simulation:
                 steps - total, self.step, resume_mid,
                 self._need_forces, float(ke_tol), int(ke_every), self.max_overlap,
                 int(wall_log_every), step0, p.x, p.v, p.omega, p.f, p.t, p.r, p.m, p.inv_m, p.inv_i,
-                p.mat, p.disp, p.ovr, p.id, L["xr"], L["vw"], self.gravity, self.box,
+                p.mat, p.disp, p.ovr, p.mroll, p.id, L["xr"], L["vw"], self.gravity, self.box,
                 self.periodic, self.dt, self.skin, self.extra, self._pair, self.codes,
                 self.sort_every, L["perm"], L["pbuf"], L["ibuf"], self._cells,
                 self._cidx(), self._cof(), self._cpos_arr, self._wcells, self._wbins, self._glob(),

@@ -12,7 +12,7 @@ I = 2/5 m R^2 for a solid sphere.  Fixed particles have 1/m = 1/I = 0.
 Forces are evaluated in race-free parallel passes:
 
 * the kick-drift pass, after using the previous forces, resets every particle's force to its
-  weight and its torque and largest overlap to zero;
+  weight and its torque, largest overlap and ``bounded`` rolling resistance to zero;
 * three pair passes, one per slab colour: the list build groups the particles into slabs of
   whole cells (:func:`soilcal.dem.neighbour._slabs`) so that both particles of a listed pair
   lie in the same or adjacent slabs; the slabs of one colour (s mod 3) share no particle and
@@ -40,7 +40,7 @@ import math
 
 from numba import njit, prange
 
-from soilcal.dem.contact import H_SIZE, contact_force
+from soilcal.dem.contact import H_MR, H_SIZE, contact_force
 from soilcal.dem.neighbour import (NBLK_GROUPS, SGROUP_LEN, block_size, build_lists,
                                    build_wall_lists, min_image, sort_particles)
 from soilcal.dem.walls import TRIANGLE, move_walls, prim_closest
@@ -62,10 +62,11 @@ CONTACT_MATH = {"contract"}
 
 @njit(cache=True, parallel=True, fastmath=CONTACT_MATH)
 def pair_forces(colour, xr, vw, pair, codes, box, periodic, dt, start, nbr, hist, act,
-                sorder, sgroup, f, t, ovr):
+                sorder, sgroup, f, t, ovr, mroll):
     """Pair pass of one colour: the slab groups of that colour in parallel (one per
     thread); each evaluates the listed pairs of its particles' rows and adds the force and
-    torques to both particles (f, t; ovr: largest overlap of each particle).  Slabs of one
+    torques to both particles (f, t; ovr: largest overlap of each particle; mroll: the
+    ``bounded`` rolling resistance mu_r |F_n| c of each particle).  Slabs of one
     colour share no particle (:func:`soilcal.dem.neighbour._slabs`), so the writes never
     race."""
     L0 = box[1] - box[0]
@@ -87,6 +88,7 @@ def pair_forces(colour, xr, vw, pair, codes, box, periodic, dt, start, nbr, hist
             tyi = 0.0
             tzi = 0.0
             dmax = ovr[i]
+            mri = 0.0
             for k in range(start[i], start[i + 1]):
                 j = nbr[k]
                 dx = min_image(xi - xr[j, 0], p0, h0, L0)
@@ -118,12 +120,15 @@ def pair_forces(colour, xr, vw, pair, codes, box, periodic, dt, start, nbr, hist
                 rvx = vw[i, 0] - vw[j, 0] - (ay * nz - az * ny)
                 rvy = vw[i, 1] - vw[j, 1] - (az * nx - ax * nz)
                 rvz = vw[i, 2] - vw[j, 2] - (ax * ny - ay * nx)
-                on, fx, fy, fz, tix, tiy, tiz, tjx, tjy, tjz = contact_force(
+                on, fx, fy, fz, tix, tiy, tiz, tjx, tjy, tjz, mr = contact_force(
                     codes, pair, int(vw[i, 7]), int(vw[j, 7]), delta, nx, ny, nz,
                     rvx, rvy, rvz, wxi - wxj, wyi - wyj, wzi - wzj,
                     ci, cj, ri * rj / rs, 1.0 / ims, dt, touching, hist, k)
                 if on:
                     act[k] = 1
+                    if mr > 0.0:
+                        mri += mr * ci
+                        mroll[j] += mr * cj
                     fxi += fx
                     fyi += fy
                     fzi += fz
@@ -149,19 +154,22 @@ def pair_forces(colour, xr, vw, pair, codes, box, periodic, dt, start, nbr, hist
             t[i, 1] += tyi
             t[i, 2] += tzi
             ovr[i] = dmax
+            mroll[i] += mri
 
 
 @njit(cache=True, parallel=True, fastmath=CONTACT_MATH)
-def gather(x, v, om, r, inv_m, inv_i, mat, f, t, ovr, dt, kick, max_ovr, pair, codes,
+def gather(x, v, om, r, inv_m, inv_i, mat, f, t, ovr, mroll, dt, kick, max_ovr, pair, codes,
            prim_kind, prim_wall, prim_mat, prim_par, wall_vel, wall_omega, wall_centre,
            wnbr, wcnt, whist, wslot):
-    """Wall pass: per particle, the pair sums (f, t, ovr) + wall contacts; then the closing
-    kick if ``kick``.  Returns the number of
-    particles with an overlap above max_ovr (of their radius) or a non-finite velocity."""
+    """Wall pass: per particle, the pair sums (f, t, ovr, mroll) + wall contacts; the
+    ``bounded`` rolling torque (contact.py); then the closing kick if ``kick``.  Returns the
+    number of particles with an overlap above max_ovr (of their radius) or a non-finite
+    velocity."""
     n = x.shape[0]
     KW = wnbr.shape[1]
     h = 0.5 * dt
     nbad = 0
+    bounded = codes[3] == 3
     bs = block_size(n)
     nblk = (n + bs - 1) // bs
     for c in prange(NBLK_GROUPS):
@@ -179,6 +187,7 @@ def gather(x, v, om, r, inv_m, inv_i, mat, f, t, ovr, dt, kick, max_ovr, pair, c
                 ty = t[i, 1]
                 tz = t[i, 2]
                 mo = ovr[i] / ri
+                mres = mroll[i]
                 # walls with a face contact (bit w): their edge/vertex contacts are dropped
                 face_mask = 0
                 nwc = wcnt[i]
@@ -235,12 +244,16 @@ def gather(x, v, om, r, inv_m, inv_i, mat, f, t, ovr, dt, kick, max_ovr, pair, c
                     rvx = vxi - vwx - ci * (wyi * nz - wzi * ny)
                     rvy = vyi - vwy - ci * (wzi * nx - wxi * nz)
                     rvz = vzi - vwz - ci * (wxi * ny - wyi * nx)
-                    on, cfx, cfy, cfz, ctx, cty, ctz, _, _, _ = contact_force(
+                    on, cfx, cfy, cfz, ctx, cty, ctz, _, _, _, mr = contact_force(
                         codes, pair, mi, prim_mat[p], delta, nx, ny, nz, rvx, rvy, rvz,
                         wxi - ox, wyi - oy, wzi - oz, ci, 0.0, ri, 1.0 / imi, dt, touching,
                         whist, row)
                     # the last history slot of a wall row is its touching flag
                     whist[row, H_SIZE - 1] = 1.0 if on else 0.0
+                    if on and bounded:
+                        # this contact's resistance, for its share of the reaction below
+                        whist[row, H_MR] = mr * ci
+                        mres += mr * ci
                     if on:
                         fx += cfx
                         fy += cfy
@@ -251,7 +264,8 @@ def gather(x, v, om, r, inv_m, inv_i, mat, f, t, ovr, dt, kick, max_ovr, pair, c
                         if delta > mo * ri:
                             mo = delta / ri
                         # reaction on the wall: force -F, torque about the wall centre
-                        # -(x_i - c_w) x F - T_i  (conserves angular momentum exactly)
+                        # -(x_i - c_w) x F - T_i  (conserves angular momentum exactly; the
+                        # ``bounded`` rolling torque is added below, by shares)
                         px = xi - wall_centre[w, 0]
                         py = yi - wall_centre[w, 1]
                         pz = zi - wall_centre[w, 2]
@@ -268,6 +282,34 @@ def gather(x, v, om, r, inv_m, inv_i, mat, f, t, ovr, dt, kick, max_ovr, pair, c
                 t[i, 1] = ty
                 t[i, 2] = tz
                 ovr[i] = mo
+                iinv = inv_i[i]
+                if bounded and mres > 0.0 and iinv > 0.0:
+                    # rotation at the next force evaluation without the resistance: the
+                    # closing and the next opening kick apply t h / I each (the first
+                    # evaluation, without a closing kick, only the opening one)
+                    hb = dt if kick else h
+                    sx = wxi + tx * iinv * hb
+                    sy = wyi + ty * iinv * hb
+                    sz = wzi + tz * iinv * hb
+                    sn = math.sqrt(sx * sx + sy * sy + sz * sz)
+                    if sn > 0.0:
+                        mb = min(mres, sn / (iinv * hb)) / sn
+                        rx = -mb * sx
+                        ry = -mb * sy
+                        rz = -mb * sz
+                        tx += rx
+                        ty += ry
+                        tz += rz
+                        t[i, 0] = tx
+                        t[i, 1] = ty
+                        t[i, 2] = tz
+                        for k in range(nwc):
+                            row = i * KW + k
+                            if whist[row, H_SIZE - 1] != 0.0:
+                                sh = whist[row, H_MR] / mres
+                                wslot[i, k, 3] -= sh * rx
+                                wslot[i, k, 4] -= sh * ry
+                                wslot[i, k, 5] -= sh * rz
                 if kick:
                     a = imi * h
                     b = inv_i[i] * h
@@ -302,12 +344,12 @@ def reduce_wall_forces(wcnt, wnbr, wslot, prim_wall, wall_force, wall_torque):
 
 
 @njit(cache=True, parallel=True)
-def _kick_drift(x, v, om, f, t, r, m, inv_m, inv_i, mat, disp, ovr, xr, vw, gravity, dt,
-                box, periodic, skin2, drift):
+def _kick_drift(x, v, om, f, t, r, m, inv_m, inv_i, mat, disp, ovr, mroll, xr, vw, gravity,
+                dt, box, periodic, skin2, drift):
     """Opening kick and drift (if ``drift``), periodic wrap, displacement since the last
     list build; packs (x, R) and (v, omega, 1/m, material) rows for the pair pass and resets
-    the force to the weight, torque and largest overlap to zero.  Returns the number of
-    particles that moved more than half the skin."""
+    the force to the weight, torque, largest overlap and rolling resistance to zero.  Returns
+    the number of particles that moved more than half the skin."""
     n = x.shape[0]
     h = 0.5 * dt if drift else 0.0
     nfar = 0
@@ -345,6 +387,7 @@ def _kick_drift(x, v, om, f, t, r, m, inv_m, inv_i, mat, disp, ovr, xr, vw, grav
             f[i, q] = m[i] * gravity[q]
             t[i, q] = 0.0
         ovr[i] = 0.0
+        mroll[i] = 0.0
         nfar += far
     return nfar
 
@@ -360,7 +403,7 @@ def kinetic_translational(v, m, inv_m):
 
 @njit(cache=True)
 def run_loop(nsteps, step0, resume_mid, need_forces, ke_tol, ke_every, max_ovr, wlog_every,
-             log0, x, v, om, f, t, r, m, inv_m, inv_i, mat, disp, ovr, pid, xr, vw,
+             log0, x, v, om, f, t, r, m, inv_m, inv_i, mat, disp, ovr, mroll, pid, xr, vw,
              gravity, box, periodic, dt, skin, extra, pair, codes, sort_every, perm, fbuf, ibuf,
              cell_start, cell_idx, cell_of, cpos, wcell_start, wcell_idx, glob,
              start_a, nbr_a, hist_a, act_a, start_b, nbr_b, hist_b, act_b, groups, sorder,
@@ -408,8 +451,8 @@ def run_loop(nsteps, step0, resume_mid, need_forces, ke_tol, ke_every, max_ovr, 
         first = s == -1
         if first or s > 0 or not resume_mid:
             # s == -1: no motion, only the packed rows for the initial forces
-            nfar = _kick_drift(x, v, om, f, t, r, m, inv_m, inv_i, mat, disp, ovr, xr, vw,
-                               gravity, dt, box, periodic, skin2, not first)
+            nfar = _kick_drift(x, v, om, f, t, r, m, inv_m, inv_i, mat, disp, ovr, mroll, xr,
+                               vw, gravity, dt, box, periodic, skin2, not first)
             if nfar > 0:
                 rebuild = True
             if wstep > 0.0 and not first:
@@ -481,8 +524,8 @@ def run_loop(nsteps, step0, resume_mid, need_forces, ke_tol, ke_every, max_ovr, 
             fstate[0] = 0.0
         for colour in range(3):
             pair_forces(colour, xr, vw, pair, codes, box, periodic, dt, sc, nc, hc, ac,
-                        sorder, sgroup, f, t, ovr)
-        nbad = gather(x, v, om, r, inv_m, inv_i, mat, f, t, ovr, dt, not first, max_ovr,
+                        sorder, sgroup, f, t, ovr, mroll)
+        nbad = gather(x, v, om, r, inv_m, inv_i, mat, f, t, ovr, mroll, dt, not first, max_ovr,
                       pair, codes, prim_kind, prim_wall, prim_mat, prim_par, wall_vel,
                       wall_omega, wall_centre, wnc, wcc, whc, wslot)
         reduce_wall_forces(wcc, wnc, wslot, prim_wall, wall_force, wall_torque)

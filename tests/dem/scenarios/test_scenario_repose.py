@@ -25,6 +25,7 @@ def fun(**kw):
     (cyl(method="pour"), "setup.method"),
     (cyl(plate_material="glass"), "setup.plate_material"),
     (cyl(n_particles=5), "setup.n_particles"),
+    (cyl(rolling_model="type_b"), "setup.rolling_model"),
     (cyl(radius=0.01), "setup.tube_diameter"),                 # 3 diameters across the tube
     (fun(funnel_bottom_diameter=0.2), "setup.funnel_bottom_diameter"),
     (fun(funnel_top_diameter=0.5), "setup.funnel_top_diameter"),
@@ -50,6 +51,21 @@ def test_drum_fill_and_preset_validation():
         drum.validate(dict(s, spin_time=1.0, transient_time=2.0), "quick", "t")
     with pytest.raises(InputError, match="preset"):
         drum.validate(s, "fast", "t")
+    with pytest.raises(InputError, match="setup.rolling_model"):
+        drum.validate(dict(s, rolling_model="cdt"), "quick", "t")
+    with pytest.raises(InputError, match="setup.rolling_model"):
+        drum.validate(dict(s, rolling_model="bounded"), "quick", "t")
+
+
+@pytest.mark.parametrize("model, name", [(None, "constant_torque"),
+                                         ("constant_torque", "constant_torque"),
+                                         ("bounded", "bounded"), ("epsd", "epsd")])
+def test_setup_rolling_model_reaches_the_engine(model, name):
+    from soilcal.dem.contact import ROLLING
+    from soilcal.dem.scenarios.base import make_simulation
+
+    sim, _ = make_simulation(DemParams(), cyl(rolling_model=model), "quick", "t")
+    assert sim.codes[3] == ROLLING[name]
 
 
 SMALL = dict(n_particles=400, fill_height=0.04)

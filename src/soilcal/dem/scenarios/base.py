@@ -51,6 +51,19 @@ the response depends on the particle count.  The reference is the paper preset's
 distribution of the same setup; ``scale_cohesion: false`` in a setup turns the rule off.
 The factor is recorded in the run's setup as ``cohesion_scale``.
 
+Rolling model
+-------------
+``rolling_model`` in a bench-top setup (repose, drum, incline, compression) chooses the
+engine's rolling-resistance sub-model (:mod:`soilcal.dem.contact`): ``constant_torque``
+(the default: EDEM's type A as LIGGGHTS ``cdt`` writes it, on each contact's relative
+rotation), ``bounded`` (the type A torque on each particle's own rotation, bounded so that a
+particle whose resistance suffices stays exactly at rest) or ``epsd`` (elastic-plastic
+spring, type C).  With ``constant_torque`` a heap never rests exactly: the torque flips with
+the sign of a vanishing rotation (a sphere below its rolling angle keeps an angular jitter
+of about one step of the full torque, tests/dem/test_motion.py), and the heap keeps
+creeping after the rest criterion fires.  The soil-bin scenarios use the default; the drum
+refuses ``bounded``, which resists the rotation of spheres carried round by the drum.
+
 Results
 -------
 :class:`Result` is one run: scenario, preset, seed, particle count, steps, simulated and
@@ -218,7 +231,8 @@ def paper_cohesion(setup: dict, model, source: str = "<input>") -> float:
 def check_discretisation(setup: dict, source: str) -> None:
     """Validate the optional discretisation keys of a bench-top setup: ``n_particles``
     (integer >= 20), ``radius`` (> 0), ``stiffness_scale`` (in (0, 1000]) and
-    ``dt_fraction`` (in (0, 1]); None means the preset's value."""
+    ``dt_fraction`` (in (0, 1]); None means the preset's value; ``rolling_model``
+    (:data:`ROLLING_MODELS`, None for :data:`DEFAULT_ROLLING`)."""
     n = setup.get("n_particles")
     if n is not None:
         check(isinstance(n, (int, np.integer)) and not isinstance(n, bool) and n >= 20, source,
@@ -230,6 +244,7 @@ def check_discretisation(setup: dict, source: str) -> None:
     f = setup_number(setup, "dt_fraction", source, allow_none=True)
     if f is not None:
         check(f <= 1.0, source, "setup.dt_fraction", "a fraction of the Rayleigh time in (0, 1]", f)
+    check_rolling(setup, source)
 
 
 def build_materials(params: DemParams, stiffness_scale: float = 1.0,
@@ -266,13 +281,27 @@ def build_materials(params: DemParams, stiffness_scale: float = 1.0,
     return mats
 
 
-def contact_model(params: DemParams, rolling: str = "constant_torque") -> dict:
-    """Engine contact model: Hertz-Mindlin, rolling resistance, JKR when any energy > 0.
+#: Rolling-resistance models a setup may choose (``rolling_model``; contact.py documents each)
+ROLLING_MODELS = ("constant_torque", "bounded", "epsd")
+DEFAULT_ROLLING = "constant_torque"
+
+
+def contact_model(params: DemParams, rolling: str | None = None) -> dict:
+    """Engine contact model: Hertz-Mindlin, rolling resistance (``rolling``, default
+    :data:`DEFAULT_ROLLING`), JKR when any energy > 0.
 
     EDEM convention for the surface energy (pull-off 1.5 pi gamma R*), as the papers use EDEM.
     """
     jkr = params.soil_soil_surface_energy > 0 or params.soil_steel_surface_energy > 0
-    return dict(rolling=rolling, cohesion="jkr" if jkr else "none", jkr_convention="edem")
+    return dict(rolling=rolling or DEFAULT_ROLLING, cohesion="jkr" if jkr else "none",
+                jkr_convention="edem")
+
+
+def check_rolling(setup: dict, source: str) -> None:
+    """``setup.rolling_model``: one of :data:`ROLLING_MODELS` or None (the default)."""
+    m = setup.get("rolling_model")
+    check(m is None or m in ROLLING_MODELS, source, "setup.rolling_model",
+          f"one of {', '.join(ROLLING_MODELS)} (or None for {DEFAULT_ROLLING})", m)
 
 
 def check(ok, source, field, expected, got=None) -> None:
@@ -439,16 +468,18 @@ def stiffness_scale_for(params: DemParams, preset: str, override=None) -> float:
 
 def make_simulation(params: DemParams, setup: dict, preset: str, source: str,
                     cohesion: float = 1.0, **kw):
-    """Simulation with the scenario materials, Hertz-Mindlin + constant-torque rolling
-    (+ JKR when a surface energy is > 0) and the preset's time step; surface energies times
-    ``cohesion`` (:func:`cohesion_scale`); returns (sim, scale)."""
+    """Simulation with the scenario materials, Hertz-Mindlin + the setup's rolling model
+    (``rolling_model``, default constant torque), JKR when a surface energy is > 0, and the
+    preset's time step; surface energies times ``cohesion`` (:func:`cohesion_scale`);
+    returns (sim, scale)."""
     from soilcal.dem.engine import Simulation
 
     d = PRESET_DEFAULTS[preset]
     scale = stiffness_scale_for(params, preset, setup.get("stiffness_scale"))
     mats = build_materials(params, scale, source, cohesion)
     dtf = setup.get("dt_fraction") or d["dt_fraction"]
-    sim = Simulation(mats, dt_fraction=float(dtf), contact_model=contact_model(params),
+    sim = Simulation(mats, dt_fraction=float(dtf),
+                     contact_model=contact_model(params, setup.get("rolling_model")),
                      max_overlap=d["max_overlap"], source=source, **kw)
     return sim, scale
 

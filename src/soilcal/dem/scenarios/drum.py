@@ -57,7 +57,7 @@ def setups() -> dict:
                                   rest_speed=0.005, max_settle_time=3.0,
                                   spin_time=None, transient_time=None, frame_every=0.1,
                                   n_particles=None, radius=None, stiffness_scale=None,
-                                  dt_fraction=None,
+                                  dt_fraction=None, rolling_model=None,
                                   paper_psd=[[0.00125, 33.34], [0.0025, 33.33], [0.005, 33.33]]),
     }
 
@@ -106,6 +106,10 @@ def validate(setup, preset="quick", source="<input>"):
         check(setup.get(key) in ("steel", "soil"), source, f"setup.{key}", "'steel' or 'soil'",
               setup.get(key))
     check_discretisation(setup, source)
+    # the bounded model resists absolute rotation, so it would brake spheres that the drum
+    # merely carries round (contact.py)
+    check(setup.get("rolling_model") != "bounded", source, "setup.rolling_model",
+          "constant_torque or epsd (bounded resists the rotation the drum imposes)", "bounded")
     sz = sizing(setup, preset, source)
     check(2 * sz["r_max"] * 6 <= min(D, L), source, "setup.drum_diameter",
           f"a drum at least 6 particle diameters across ({12 * sz['r_max']:.4g} m)", (D, L))

@@ -42,7 +42,8 @@ import math
 import numpy as np
 
 from soilcal.dem.scenarios.base import (DemParams, Frames, Result, Timer, check, check_preset,
-                                        make_simulation, rng, setup_number, threads_used)
+                                        check_rolling, make_simulation, rng, setup_number,
+                                        threads_used)
 
 NAME = "incline"
 G = 9.81
@@ -50,7 +51,8 @@ G = 9.81
 
 def setups() -> dict:
     common = dict(start_deg=0.0, max_deg=60.0, step_deg=None, hold_time=None, move_fraction=0.05,
-                  stiffness_scale=None, dt_fraction=None, plate_material="steel")
+                  stiffness_scale=None, dt_fraction=None, plate_material="steel",
+                  rolling_model=None)
     return {
         # 000 Sec. 2.2.2 (1), Table 1: cylindrical soil block on the 300 x 500 mm 65Mn plate.
         # Block size not printed: 40 mm across, one layer of 4 mm spheres.
@@ -84,6 +86,7 @@ def validate(setup, preset="quick", source="<input>"):
         check(f <= 1, source, "setup.dt_fraction", "a fraction of the Rayleigh time in (0, 1]", f)
     check(setup.get("plate_material") in ("steel", "soil"), source, "setup.plate_material",
           "'steel' or 'soil'", setup.get("plate_material"))
+    check_rolling(setup, source)
     if kind == "sliding":
         d = setup_number(setup, "block_diameter", source)
         r = setup_number(setup, "sphere_radius", source)

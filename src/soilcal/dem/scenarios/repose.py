@@ -23,6 +23,10 @@ jitter of about 1/2 M (3 mm/s)^2 with the constant-torque rolling model, whose t
 with the sign of a vanishing angular velocity), checked every 200 steps, with
 ``max_settle_time`` as an upper bound (the run then reports ``settled = 0``).
 
+Rolling resistance: the setup's ``rolling_model`` (base.py; ``constant_torque`` by default,
+under which the heap keeps creeping after the rest criterion; ``bounded`` stops the
+rotation of every sphere whose resistance suffices).
+
 Number of particles for a fill volume V (tube: pi D^2/4 h_fill; funnel: load mass /
 (rho_p phi)) at the settled solid fraction phi = 0.6::
 
@@ -75,7 +79,8 @@ N_SEG = 24  # facets of the funnel and cover meshes (facet mid-lines on the nomi
 def setups() -> dict:
     """Named setups; every number with the section of the paper it comes from."""
     common = dict(rest_speed=0.005, max_settle_time=4.0, image=True, n_particles=None,
-                  radius=None, stiffness_scale=None, dt_fraction=None, seed_stream="repose")
+                  radius=None, stiffness_scale=None, dt_fraction=None, rolling_model=None,
+                  seed_stream="repose")
     cyl = dict(common, method="cylinder", wall_material="steel", plate_material="steel")
     fun = dict(common, method="funnel", wall_material="steel", plate_material="steel",
                cover_speed=1.0)
