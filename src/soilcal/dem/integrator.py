@@ -275,13 +275,6 @@ def gather(x, v, om, r, inv_m, inv_i, mat, f, t, ovr, mroll, dt, kick, max_ovr, 
                         wslot[i, k, 3] = -(py * cfz - pz * cfy) - ctx
                         wslot[i, k, 4] = -(pz * cfx - px * cfz) - cty
                         wslot[i, k, 5] = -(px * cfy - py * cfx) - ctz
-                f[i, 0] = fx
-                f[i, 1] = fy
-                f[i, 2] = fz
-                t[i, 0] = tx
-                t[i, 1] = ty
-                t[i, 2] = tz
-                ovr[i] = mo
                 iinv = inv_i[i]
                 if bounded and mres > 0.0 and iinv > 0.0:
                     # rotation at the next force evaluation without the resistance: the
@@ -300,9 +293,6 @@ def gather(x, v, om, r, inv_m, inv_i, mat, f, t, ovr, mroll, dt, kick, max_ovr, 
                         tx += rx
                         ty += ry
                         tz += rz
-                        t[i, 0] = tx
-                        t[i, 1] = ty
-                        t[i, 2] = tz
                         for k in range(nwc):
                             row = i * KW + k
                             if whist[row, H_SIZE - 1] != 0.0:
@@ -310,9 +300,16 @@ def gather(x, v, om, r, inv_m, inv_i, mat, f, t, ovr, mroll, dt, kick, max_ovr, 
                                 wslot[i, k, 3] -= sh * rx
                                 wslot[i, k, 4] -= sh * ry
                                 wslot[i, k, 5] -= sh * rz
+                f[i, 0] = fx
+                f[i, 1] = fy
+                f[i, 2] = fz
+                t[i, 0] = tx
+                t[i, 1] = ty
+                t[i, 2] = tz
+                ovr[i] = mo
                 if kick:
                     a = imi * h
-                    b = inv_i[i] * h
+                    b = iinv * h
                     vxi += fx * a
                     vyi += fy * a
                     vzi += fz * a

@@ -89,6 +89,7 @@ from pathlib import Path
 
 import numpy as np
 
+from soilcal.dem.contact import ROLLING
 from soilcal.dem.materials import Material, MaterialTable
 from soilcal.errors import InputError
 
@@ -282,7 +283,7 @@ def build_materials(params: DemParams, stiffness_scale: float = 1.0,
 
 
 #: Rolling-resistance models a setup may choose (``rolling_model``; contact.py documents each)
-ROLLING_MODELS = ("constant_torque", "bounded", "epsd")
+ROLLING_MODELS = tuple(k for k in ROLLING if k != "none")
 DEFAULT_ROLLING = "constant_torque"
 
 
