@@ -100,3 +100,21 @@ def test_jkr_curve_and_pulloff(convention, factor, wall):
     else:
         sim.p.x[1, 2] = 2 * R - 0.5 * dsep
     assert sim.compute_forces()[0][0 if wall else 1, 2] == 0.0
+
+
+@pytest.mark.parametrize("warm", [0.0, 1e-4, -1e-4, 1e-2])
+def test_jkr_root_inverts_the_jkr_overlap(warm):
+    """The Newton root a = x^2 returns the contact radius whose analytic JKR overlap was
+    given, to 1e-12 relative, from a cold start and from warm starts off by `warm`."""
+    from soilcal.dem.contact import jkr_root
+
+    gamma = 0.3
+    rstar = R / 2
+    c = math.sqrt(2 * math.pi * gamma / ESTAR)
+    a0 = (9 * math.pi * gamma * rstar**2 / (2 * ESTAR)) ** (1 / 3)
+    ac = (math.pi * gamma * rstar**2 / (8 * ESTAR)) ** (1 / 3)
+    for a in np.geomspace(1.0005 * ac, 20 * a0, 60):
+        delta, _ = jkr_analytic(a, rstar, gamma)
+        x_prev = math.sqrt(a) * (1 + warm) if warm else 0.0
+        x = jkr_root(delta, rstar, c, x_prev)
+        assert x * x == pytest.approx(a, rel=1e-12)
