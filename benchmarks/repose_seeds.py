@@ -14,11 +14,14 @@ surface scan (``angle_surface_deg``) and by side silhouettes (``angle_image_deg`
 run is a row of ``benchmarks/results/repose_seeds.csv`` (``--rolling`` chooses the
 rolling-resistance model, a column of its own; a rerun of the same case, model, size and seed
 replaces its row); ``repose_seeds.md`` tabulates mean and sample standard deviation over
-the seeds of each case, model and estimator (notes below its marker are kept).
+the seeds of each case, model and estimator, and the scatter of the mean of ``--group``
+consecutive seeds (the replicate mean of ``soilcal scenario run --replicates``; notes below
+its marker are kept).
 
     python benchmarks/repose_seeds.py                       # 5 seeds, the default cases
     python benchmarks/repose_seeds.py --cases noncohesive:5000 --seeds 0,1,2,3,4,5,6,7
     python benchmarks/repose_seeds.py --cases noncohesive:5000 --rolling bounded
+    python benchmarks/repose_seeds.py --cases noncohesive:5000 --seeds 10-39 --group 4
 """
 
 from __future__ import annotations
@@ -89,13 +92,36 @@ def summary(rows):
     return out
 
 
+def replicate_means(rows, k):
+    """Scatter of the mean of k replicates: the seeds of each case, model and size in
+    consecutive groups of k (0..k-1, k..2k-1, ...; full groups only), each group's mean
+    angle, and the sample SD of those means beside the single-seed SD over sqrt(k)."""
+    out = []
+    for key in sorted({_key(r) for r in rows}):
+        by_seed = {int(r["seed"]): r for r in rows if _key(r) == key}
+        groups = [[by_seed[s] for s in range(g * k, g * k + k)]
+                  for g in range(max(by_seed) // k + 1)
+                  if all(s in by_seed for s in range(g * k, g * k + k))]
+        if len(groups) < 2:
+            continue
+        line = dict(case=key[0], rolling=key[1], n=key[2], k=k, groups=len(groups))
+        for e in ESTIMATORS:
+            means = np.array([np.mean([float(r[e]) for r in g]) for g in groups])
+            single = np.array([float(r[e]) for g in groups for r in g])
+            line[e] = (float(means.std(ddof=1)), float(single.std(ddof=1) / math.sqrt(k)))
+        out.append(line)
+    return out
+
+
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--cases", default=DEFAULT_CASES)
-    ap.add_argument("--seeds", default="0,1,2,3,4")
+    ap.add_argument("--seeds", default="0,1,2,3,4", help="comma list; a-b is a range")
     ap.add_argument("--threads", type=int, default=2)
     ap.add_argument("--rolling", default=DEFAULT_ROLLING, choices=ROLLING_MODELS,
                     help="rolling-resistance model (setup.rolling_model)")
+    ap.add_argument("--group", type=int, default=4,
+                    help="replicates per mean in the replicate-mean table (default 4)")
     ap.add_argument("--out", default=str(HERE / "results"))
     args = ap.parse_args(argv)
     cases = []
@@ -103,7 +129,10 @@ def main(argv=None):
         case, _, n = item.partition(":")
         params(case)
         cases.append((case, int(n)))
-    seeds = [int(s) for s in args.seeds.split(",")]
+    seeds = []
+    for item in args.seeds.split(","):
+        lo, _, hi = item.partition("-")
+        seeds += list(range(int(lo), int(hi or lo) + 1))
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
     csv_path, md_path = out / "repose_seeds.csv", out / "repose_seeds.md"
@@ -131,6 +160,18 @@ def main(argv=None):
         cells = [f"{s[k][0]:.2f} +- {s[k][1]:.2f}" for k in ESTIMATORS]
         md.append(f"| {s['case']} | {s['rolling']} | {s['n']} | {s['seeds']} | "
                   + " | ".join(cells) + " |")
+    groups = replicate_means(rows, args.group)
+    if groups:
+        md += ["", f"Scatter of the mean of {args.group} replicates (`soilcal scenario run ... "
+               f"--replicates {args.group}`): seeds in consecutive groups of {args.group}, sample "
+               f"SD of the group means, and beside it the single-seed SD of the same runs over "
+               f"sqrt({args.group}) [deg]:", "",
+               "| case | rolling model | spheres | groups | radial bins | surface scan | silhouette |",
+               "|---|---|---:|---:|---|---|---|"]
+        for s in groups:
+            cells = [f"{s[k][0]:.2f} ({s[k][1]:.2f})" for k in ESTIMATORS]
+            md.append(f"| {s['case']} | {s['rolling']} | {s['n']} | {s['groups']} | "
+                      + " | ".join(cells) + " |")
     md += ["", "Runs:", "",
            "| " + " | ".join(FIELDS) + " |", "|" + "---|" * len(FIELDS),
            *("| " + " | ".join(str(r.get(k, "")) for k in FIELDS) + " |" for r in rows),

@@ -9,7 +9,8 @@ import pytest
 from soilcal.dem.materials import P_ESTAR, P_GSTAR, P_MUR, P_MUS, P_W
 from soilcal.dem.scenarios import SCENARIOS, get
 from soilcal.dem.scenarios.base import (PRESETS, DemParams, Result, build_materials, check,
-                                        merge_setup, rng, stable_mean, write_row)
+                                        combine_replicates, merge_setup, rng, run_replicates,
+                                        stable_mean, write_row)
 from soilcal.errors import InputError
 
 
@@ -69,6 +70,60 @@ def test_result_row_and_atomic_write(tmp_path):
     assert len(rows) == 1 and float(rows[0]["r:angle_deg"]) == 31.5
     assert rows[0]["seed"] == "3"
     assert [p.name for p in (tmp_path / "sub").iterdir()] == ["row.csv"]  # no temp file left
+
+
+def _run_result(seed, angle, settled, reason, params=None):
+    return Result("compression", "quick", seed, 100 + seed, 1000, 0.5, 2.0, 1,
+                  params=params or DemParams().as_dict(), setup=dict(tube_diameter=0.1),
+                  responses=dict(angle_deg=angle, settled=settled, stop_reason=reason),
+                  series=dict(t=np.arange(2) + seed))
+
+
+def test_replicates_are_averaged_with_their_standard_deviation(tmp_path):
+    runs = [_run_result(4, 30.0, 1, "max_strain"), _run_result(5, 31.0, 1, "max_strain"),
+            _run_result(6, 35.0, 0, "overlap")]
+    res = combine_replicates(runs)
+    # mean of 30, 31, 35 is 32; deviations -2, -1, 3: s^2 = (4 + 1 + 9) / 2 = 7
+    assert res.responses["angle_deg"] == pytest.approx(32.0, abs=1e-12)
+    assert res.responses["angle_deg_rep_sd"] == pytest.approx(math.sqrt(7.0), rel=1e-12)
+    assert res.responses["settled"] == pytest.approx(2.0 / 3.0)
+    assert res.responses["stop_reason"] == "max_strain|overlap"
+    assert res.seed == 4 and res.n_particles == 105 and res.steps == 3000
+    assert res.wall_s == pytest.approx(6.0) and res.sim_time_s == pytest.approx(1.5)
+    assert res.setup["replicates"] == 3 and res.setup["replicate_seeds"] == "4 5 6"
+    assert [r["seed"] for r in res.per_run] == [4, 5, 6] and res.per_run[2]["angle_deg"] == 35.0
+    assert sorted(res.series) == ["seed4:t", "seed5:t", "seed6:t"]
+    row = list(csv.DictReader(open(write_row(tmp_path / "row.csv", res))))[0]
+    assert float(row["r:angle_deg"]) == 32.0 and row["s:replicate_seeds"] == "4 5 6"
+    other = _run_result(7, 30.0, 1, "x", params=DemParams(soil_density=1500.0).as_dict())
+    with pytest.raises(InputError, match="differ only in the seed"):
+        combine_replicates([runs[0], other])
+    with pytest.raises(InputError, match="distinct seeds"):
+        combine_replicates([runs[0], runs[0]])
+    with pytest.raises(InputError, match="at least two runs"):
+        combine_replicates(runs[:1])
+
+
+def test_run_replicates_uses_consecutive_seeds(tmp_path):
+    calls = []
+
+    class Fake:
+        @staticmethod
+        def run(setup, params, preset, seed, threads, vtk_dir):
+            calls.append((seed, vtk_dir))
+            return _run_result(seed, 10.0 * seed, 1, "max_strain")
+
+    one = run_replicates(Fake, {}, DemParams(), seed=3, vtk_dir=tmp_path)
+    assert calls == [(3, tmp_path)] and one.responses["angle_deg"] == 30.0
+    assert "angle_deg_rep_sd" not in one.responses
+    calls.clear()
+    res = run_replicates(Fake, {}, DemParams(), seed=3, replicates=2, vtk_dir=tmp_path)
+    assert calls == [(3, tmp_path / "seed3"), (4, tmp_path / "seed4")]
+    assert res.responses["angle_deg"] == 35.0
+    assert res.responses["angle_deg_rep_sd"] == pytest.approx(math.sqrt(50.0))
+    for bad in (0, 1.5, True):
+        with pytest.raises(InputError, match="replicates"):
+            run_replicates(Fake, {}, DemParams(), replicates=bad, source="soil.yaml")
 
 
 def test_stable_mean_of_a_known_signal():

@@ -28,6 +28,22 @@ def test_run_writes_one_row(tmp_path, capsys):
     assert float(row["wall_s"]) > 0 and int(row["n_particles"]) == 1
 
 
+def test_replicates_average_the_runs(tmp_path, capsys):
+    out = tmp_path / "row.csv"
+    rc = main(["scenario", "run", "incline", "--setup", "yangtze-rolling", "--threads", "1",
+               "--set", "start_deg=4", "--param", "soil_steel_rolling_friction=0.097",
+               "--seed", "5", "--replicates", "2", "--out", str(out)])
+    assert rc == 0
+    row = list(csv.DictReader(open(out)))[0]
+    assert row["seed"] == "5" and row["s:replicates"] == "2" and row["s:replicate_seeds"] == "5 6"
+    assert 5.3 < float(row["r:onset_deg"]) < 5.9   # atan(0.097) = 5.54 deg
+    # one sphere on a plane: nothing random, so the seeds give the same onset
+    assert float(row["r:onset_deg_rep_sd"]) == 0.0
+    assert '"per_run"' in capsys.readouterr().out
+    assert main(["scenario", "run", "incline", "--replicates", "0"]) == 2
+    assert "replicates" in capsys.readouterr().err
+
+
 def test_bad_values_exit_2_naming_the_field(capsys):
     assert main(["scenario", "run", "repose", "--set", "tube_diameter=0.5"]) == 2
     err = capsys.readouterr().err

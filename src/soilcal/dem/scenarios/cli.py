@@ -3,11 +3,13 @@
     soilcal scenario list
     soilcal scenario setups NAME
     soilcal scenario run NAME --setup S --preset quick|paper --seed N --threads T \\
-        --set key=value ... --param name=value ... --out row.csv [--vtk DIR]
+        --set key=value ... --param name=value ... --out row.csv [--vtk DIR] [--replicates K]
 
 ``--set`` overrides a value of the named setup (numbers are parsed as numbers), ``--param``
 sets a :class:`soilcal.dem.scenarios.base.DemParams` field; the run writes one CSV row
 (:func:`soilcal.dem.scenarios.base.write_row`) and prints the responses as JSON.
+``--replicates K`` runs the seeds N .. N+K-1 and reports the mean of each response with the
+replicates' standard deviation (:func:`soilcal.dem.scenarios.base.run_replicates`).
 """
 
 from __future__ import annotations
@@ -62,7 +64,8 @@ def _setups(args) -> int:
 
 def _run(args) -> int:
     from soilcal.dem.scenarios import get
-    from soilcal.dem.scenarios.base import PRESETS, DemParams, merge_setup, write_row
+    from soilcal.dem.scenarios.base import (PRESETS, DemParams, merge_setup, run_replicates,
+                                            write_row)
 
     src = "<command line>"
     mod = get(args.name, src)
@@ -73,13 +76,15 @@ def _run(args) -> int:
         raise InputError(src, "--preset", f"one of {PRESETS}", args.preset)
     params = DemParams.from_mapping(_pairs(args.param, "--param"), src)
     mod.validate(setup, args.preset, src)
-    res = mod.run(setup, params, preset=args.preset, seed=args.seed, threads=args.threads,
-                  vtk_dir=args.vtk)
+    res = run_replicates(mod, setup, params, preset=args.preset, seed=args.seed,
+                         replicates=args.replicates, threads=args.threads, vtk_dir=args.vtk,
+                         source=src)
     if args.out:
         write_row(args.out, res)
     print(json.dumps(dict(scenario=res.scenario, setup=name, preset=res.preset, seed=res.seed,
                           n_particles=res.n_particles, steps=res.steps,
-                          wall_s=round(res.wall_s, 2), responses=res.responses), default=float))
+                          wall_s=round(res.wall_s, 2), responses=res.responses,
+                          **({"per_run": res.per_run} if res.per_run else {})), default=float))
     return 0
 
 
@@ -101,4 +106,6 @@ def register(subparsers) -> None:
     s.add_argument("--param", action="append", metavar="NAME=VALUE", help="DEM parameter")
     s.add_argument("--out", default=None, help="CSV file for the result row")
     s.add_argument("--vtk", default=None, help="directory for VTK frames")
+    s.add_argument("--replicates", type=int, default=1,
+                   help="runs with seeds SEED .. SEED+K-1, responses averaged (default 1)")
     s.set_defaults(func=_run)
