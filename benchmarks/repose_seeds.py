@@ -94,15 +94,16 @@ def summary(rows):
 
 def replicate_means(rows, k):
     """Scatter of the mean of k replicates: the seeds of each case, model and size in
-    consecutive groups of k (0..k-1, k..2k-1, ...; full groups only), each group's mean
-    angle, and the sample SD of those means beside the single-seed SD over sqrt(k)."""
+    consecutive groups of k (0..k-1, k..2k-1, ...; full groups only, at least five), each
+    group's mean angle, and the sample SD of those means beside the single-seed SD of the
+    same runs over sqrt(k)."""
     out = []
     for key in sorted({_key(r) for r in rows}):
         by_seed = {int(r["seed"]): r for r in rows if _key(r) == key}
         groups = [[by_seed[s] for s in range(g * k, g * k + k)]
                   for g in range(max(by_seed) // k + 1)
                   if all(s in by_seed for s in range(g * k, g * k + k))]
-        if len(groups) < 2:
+        if len(groups) < 5:
             continue
         line = dict(case=key[0], rolling=key[1], n=key[2], k=k, groups=len(groups))
         for e in ESTIMATORS:

@@ -173,7 +173,7 @@ def write_tables(rows, notes, out: Path, quick: bool) -> None:
         "(same pull-off), with `rolling sds` (spring-slider) instead of constant torque.  Details "
         "and parameter matching in benchmarks/reference.py.",
         "",
-        "Target (issue): soilcal at least as fast as LIGGGHTS on two threads, without and with "
+        "Target: soilcal at least as fast as LIGGGHTS on two threads, without and with "
         "JKR (ratio soilcal / LIGGGHTS >= 1 in the threads = 2 rows).",
     ]
     if not quick:

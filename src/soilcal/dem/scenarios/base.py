@@ -75,10 +75,9 @@ Replicates
 ----------
 :func:`run_replicates` repeats a run with consecutive seeds and reports the mean of each
 response with the replicates' sample standard deviation beside it (``<response>_rep_sd``),
-the way the cinnamon-soil study averages three repeated simulations per design point.  A
-5,000-sphere quick heap scatters by about 0.8 deg from seed to seed
-(benchmarks/results/repose_seeds.md); the mean of k replicates scatters by that over
-sqrt(k).
+the way the cinnamon-soil study averages three repeated simulations per design point.  The
+repose angle of a 5,000-sphere quick heap scatters by 0.5-0.9 deg from seed to seed, and the
+mean of k replicates by about that over sqrt(k) (benchmarks/results/repose_seeds.md).
 
 Stable-stage statistics
 -----------------------
