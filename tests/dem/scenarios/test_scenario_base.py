@@ -10,7 +10,7 @@ from soilcal.dem.materials import P_ESTAR, P_GSTAR, P_MUR, P_MUS, P_W
 from soilcal.dem.scenarios import SCENARIOS, get
 from soilcal.dem.scenarios.base import (PRESETS, DemParams, Result, build_materials, check,
                                         combine_replicates, merge_setup, rng, run_replicates,
-                                        stable_mean, write_row)
+                                        stable_mean, stage_params, write_row)
 from soilcal.errors import InputError
 
 
@@ -124,6 +124,30 @@ def test_run_replicates_uses_consecutive_seeds(tmp_path):
     for bad in (0, 1.5, True):
         with pytest.raises(InputError, match="replicates"):
             run_replicates(Fake, {}, DemParams(), replicates=bad, source="soil.yaml")
+
+
+def test_stage_params_map_a_design_row_to_dem_parameters():
+    from pathlib import Path
+
+    from soilcal.config.load import load_soil
+
+    root = Path(__file__).resolve().parents[3]
+    soil = load_soil(root / "config/soils/xinjiang-vineyard.yaml", root / "resources")
+    # 003 Table 7 run 22: B 0.63, D 0.08, F 0.5, H 0.1; fixed (Sec. Steepest Ascent Test):
+    # G 10 MPa, soil-soil mu 0.68, soil-steel e 0.45, soil-steel mu_r 0.30; Table 2:
+    # Poisson 0.33, density 175.7567 (as printed)
+    p = stage_params(soil, "bbd", dict(B=0.63, D=0.08, F=0.5, H=0.1))
+    assert p.soil_soil_restitution == 0.63 and p.soil_soil_rolling_friction == 0.08
+    assert p.soil_steel_static_friction == 0.5 and p.soil_soil_surface_energy == 0.1
+    assert p.soil_shear_modulus == 1.0e7  # 10 MPa
+    assert p.soil_soil_static_friction == 0.68 and p.soil_steel_restitution == 0.45
+    assert p.soil_steel_rolling_friction == 0.30
+    assert p.soil_poisson == 0.33 and p.soil_density == 175.7567
+    assert p.soil_steel_surface_energy == 0.0  # not a parameter of that study
+    with pytest.raises(InputError, match="stages.bbd.factors"):
+        stage_params(soil, "bbd", dict(Z=1.0))
+    with pytest.raises(InputError, match="params.soil_soil_restitution"):
+        stage_params(soil, "bbd", dict(B=1.5))
 
 
 def test_stable_mean_of_a_known_signal():

@@ -179,6 +179,55 @@ class DemParams:
         return DemParams.from_mapping(kw, "<replace>", base=self)
 
 
+_UNIT_SCALE = {"Pa": 1.0, "kPa": 1e3, "MPa": 1e6, "GPa": 1e9}
+
+
+def stage_params(soil, stage_id: str, levels: dict, base: "DemParams | None" = None) -> DemParams:
+    """DEM parameters of one design point of a soil's stage, from its config.
+
+    ``levels`` maps factor letters of the stage to actual values (a row of the paper's
+    design table); the stage's ``fixed`` values and the soil's printed Poisson ratio and
+    particle density (``properties.poisson_ratio``, ``properties.particle_density``) fill the
+    rest; anything else keeps ``base`` (default :class:`DemParams`).  A config parameter maps
+    to the field ``<pair>_<kind>`` (``soil-steel`` + ``static_friction`` ->
+    ``soil_steel_static_friction``), its value converted from the unit it is printed in
+    (Pa, kPa, MPa, GPa; others are taken as SI).
+    """
+    path = soil.path
+    stage = soil.stage(stage_id)
+    known = DemParams.names()
+
+    def field_of(pname, where):
+        entry = soil.data.get("parameters", {}).get(pname)
+        if entry is None or "pair" not in entry or "kind" not in entry:
+            raise InputError(path, where, "a parameter with pair and kind under `parameters`",
+                             pname)
+        name = f"{entry['pair'].replace('-', '_')}_{entry['kind']}"
+        if name not in known:
+            raise InputError(path, f"parameters.{pname}", f"a DEM parameter ({', '.join(known)})",
+                             name)
+        return name, _UNIT_SCALE.get(entry.get("unit"), 1.0)
+
+    values = {}
+    props = soil.data.get("properties", {})
+    for prop, name in (("poisson_ratio", "soil_poisson"), ("particle_density", "soil_density")):
+        v = (props.get(prop) or {}).get("value")
+        if v is not None:
+            values[name] = v
+    for pname, v in (stage.get("fixed") or {}).items():
+        name, scale = field_of(pname, f"stages.{stage_id}.fixed.{pname}")
+        values[name] = float(v) * scale
+    factors = stage["factors"]
+    for letter, v in levels.items():
+        if letter not in factors:
+            raise InputError(path, f"stages.{stage_id}.factors",
+                             f"one of the factors {', '.join(factors)}", letter)
+        name, scale = field_of(factors[letter]["parameter"],
+                               f"stages.{stage_id}.factors.{letter}")
+        values[name] = float(v) * scale
+    return DemParams.from_mapping(values, str(path), base=base)
+
+
 def sauter_radius(dist) -> float:
     """Surface-volume mean radius r32 = <r^3>/<r^2> of a radius distribution.
 
