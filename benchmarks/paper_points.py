@@ -38,7 +38,10 @@ def _pairs(items):
     out = {}
     for it in items or []:
         k, _, v = it.partition("=")
-        out[k.strip()] = float(v)
+        try:
+            out[k.strip()] = float(v)
+        except ValueError:
+            raise SystemExit(f"--param: expected NAME=NUMBER, got {it!r}") from None
     return out
 
 
@@ -79,8 +82,7 @@ def _key(r):
 
 
 def main(argv=None):
-    from soilcal.config.load import load_soil
-    from soilcal.config.load import read_table
+    from soilcal.config.load import load_soil, read_table
 
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--soil", required=True)
