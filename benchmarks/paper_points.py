@@ -6,7 +6,8 @@ parameter set by :func:`soilcal.dem.scenarios.base.stage_params` (the row's fact
 the stage's fixed values, the soil's printed Poisson ratio and density; ``--param`` overrides
 any of them, e.g. a density printed with a unit slip), runs ``--replicates`` seeds of the
 scenario, and is written as one row of ``benchmarks/results/paper_points.csv`` (a rerun of
-the same soil, stage, run, scenario, measure, preset and overrides replaces its row).
+the same soil, stage, run, scenario, setup, preset, overrides, measure and response replaces
+its row).  Coded tables (``table_coding: coded``) are decoded to actual levels.
 ``paper_points.md`` lists the rows and, per group of runs, the spread of the printed and of
 the simulated response (max - min over the runs) and their Pearson correlation.
 
@@ -49,15 +50,18 @@ def run_point(soil, stage_id, row, args, overrides, rev):
     from soilcal.dem.scenarios import get
     from soilcal.dem.scenarios.base import DemParams, merge_setup, run_replicates, stage_params
 
-    letters = list(soil.stage(stage_id)["factors"])
-    levels = {k: float(row[k]) for k in letters if k in row}
-    params = stage_params(soil, stage_id, levels)
+    stage = soil.stage(stage_id)
+    levels = {k: float(row[k]) for k in stage["factors"] if k in row}
+    params = stage_params(soil, stage_id, levels, coded=stage.get("table_coding") == "coded")
     params = DemParams.from_mapping(overrides, "--param", base=params)
     mod = get(args.scenario)
     setup = merge_setup(mod.setups(), args.setup or soil.name, {}, "--setup")
     mod.validate(setup, args.preset, "--setup")
     res = run_replicates(mod, setup, params, preset=args.preset, seed=args.seed,
                          replicates=args.replicates, threads=args.threads)
+    if args.measure not in res.responses:
+        raise SystemExit(f"--measure: expected a response of {args.scenario} "
+                         f"({', '.join(res.responses)}), got {args.measure!r}")
     sims = [r[args.measure] for r in res.per_run] if res.per_run else [res.responses[args.measure]]
     return dict(utc=time.strftime("%Y-%m-%d %H:%M", time.gmtime()), commit=rev, soil=soil.name,
                 stage=stage_id, run=int(row["run"]),
@@ -73,8 +77,8 @@ def run_point(soil, stage_id, row, args, overrides, rev):
 
 
 def _group(r):
-    return (r["soil"], r["stage"], r["scenario"], r["preset"], r["overrides"], r["measure"],
-            r["response"])
+    return (r["soil"], r["stage"], r["scenario"], r["setup"], r["preset"], r["overrides"],
+            r["measure"], r["response"])
 
 
 def _key(r):
@@ -87,7 +91,8 @@ def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--soil", required=True)
     ap.add_argument("--stage", required=True)
-    ap.add_argument("--runs", required=True, help="comma list of run numbers of the table")
+    ap.add_argument("--runs", default="",
+                    help="comma list of run numbers of the table (none: rewrite the page only)")
     ap.add_argument("--scenario", required=True)
     ap.add_argument("--setup", default=None, help="named setup (default: the soil's name)")
     ap.add_argument("--response", required=True, help="column of the printed table")
@@ -110,7 +115,7 @@ def main(argv=None):
     csv_path, md_path = out / "paper_points.csv", out / "paper_points.md"
     rows = read_rows(csv_path, FIELDS)
     rev = commit()
-    for run in (int(x) for x in args.runs.split(",")):
+    for run in (int(x) for x in args.runs.split(",") if x.strip()):
         sel = table[table["run"] == run]
         if len(sel) != 1:
             raise SystemExit(f"--runs: run {run} is not a row of {soil.table_path(args.stage)}")
@@ -125,15 +130,15 @@ def main(argv=None):
           + " ".join(sys.argv[1:]) + "`.  Rows: `paper_points.csv` (utc and commit per row).",
           "", "Per group: spread (max - min over the runs) of the printed and of the simulated "
           "response, and their Pearson correlation over the runs:", "",
-          "| soil | stage | scenario | preset | overrides | measure vs printed | runs | "
+          "| soil | stage | scenario | setup | preset | overrides | measure vs printed | runs | "
           "printed spread | simulated spread | correlation |",
-          "|---|---|---|---|---|---|---:|---:|---:|---:|"]
+          "|---|---|---|---|---|---|---|---:|---:|---:|---:|"]
     for g in sorted({_group(r) for r in rows}):
         sel = [r for r in rows if _group(r) == g]
         p = np.array([float(r["printed"]) for r in sel])
         s = np.array([float(r["simulated"]) for r in sel])
         corr = f"{np.corrcoef(p, s)[0, 1]:.2f}" if len(sel) > 2 and p.std() > 0 and s.std() > 0 else ""
-        md.append(f"| {g[0]} | {g[1]} | {g[2]} | {g[3]} | {g[4]} | {g[5]} vs {g[6]} | {len(sel)} | "
+        md.append(f"| {g[0]} | {g[1]} | {g[2]} | {g[3]} | {g[4]} | {g[5]} | {g[6]} vs {g[7]} | {len(sel)} | "
                   f"{np.ptp(p):.2f} | {np.ptp(s):.2f} | {corr} |")
     md += ["", "Runs:", "", "| " + " | ".join(FIELDS) + " |", "|" + "---|" * len(FIELDS),
            *("| " + " | ".join(str(r.get(k, "")) for k in FIELDS) + " |" for r in rows),

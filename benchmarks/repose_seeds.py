@@ -130,9 +130,13 @@ def main(argv=None):
         case, _, n = item.partition(":")
         params(case)
         cases.append((case, int(n)))
+    if args.group < 2:
+        raise SystemExit(f"--group: expected an integer >= 2, got {args.group}")
     seeds = []
     for item in args.seeds.split(","):
         lo, _, hi = item.partition("-")
+        if int(hi or lo) < int(lo):
+            raise SystemExit(f"--seeds: expected a range a-b with a <= b, got {item!r}")
         seeds += list(range(int(lo), int(hi or lo) + 1))
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)

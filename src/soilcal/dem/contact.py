@@ -149,13 +149,16 @@ def jkr_root(delta, rstar, c, x_prev):
     sqrt(2 pi w / E*); Newton from the previous step's root x_prev if > 0, else from the
     upper bound x0 (module docstring); relative tolerance 1e-13 warm, 1e-15 cold.
 
-    Newton on the convex f(x) = x^4/R* - c x - delta from any x >= x_c (f' > 0 there; the
-    stable-branch radii are >= a_c > x_c^2) lands right of the root after one step and then
-    decreases monotonically to it.  A step dx from x0 leaves the error
+    Newton on the convex f(x) = x^4/R* - c x - delta from any x > x_c = (c R*/4)^(1/3)
+    (f' > 0 there; the stable-branch radii are a >= a_c = x_c^2, with the double root
+    f = f' = 0 at separation) lands right of the root after one step and then decreases
+    monotonically to it.  A step dx from x0 right of the root leaves the error
     e1 = f''(xi) e0^2 / (2 f'(x0)) <= (f''/(2 f')) (2 dx)^2 = 24 x0^2 dx^2 / (R* f'(x0))
-    (f'' = 12 x^2/R* grows with x, and e0 <= 2 dx once the iteration converges), so the loop
-    stops when that bound is below the tolerance: one division per step, and a warm start
-    whose root moved by a relative 1e-4 stops after two steps instead of three.
+    (f'' = 12 x^2/R* grows with x, and |e0| <= 2 |dx| while the convergence is at least
+    linear with ratio 1/2), so the loop stops when that bound is below the tolerance, or
+    when the step itself is at the rounding level (4e-16 x: near the double root the
+    convergence is only linear).  One division per step; a warm start whose root moved by a
+    relative 1e-4 stops after two steps instead of three.
     """
     x = x_prev
     tol = 1e-13
@@ -169,7 +172,7 @@ def jkr_root(delta, rstar, c, x_prev):
         fp = 4.0 * x3 * ir - c
         dx = (x3 * x * ir - c * x - delta) / fp
         x -= dx
-        if 24.0 * x2 * dx * dx <= tol * x * rstar * fp:
+        if 24.0 * x2 * dx * dx <= tol * x * rstar * fp or abs(dx) <= 4e-16 * x:
             break
     return x
 

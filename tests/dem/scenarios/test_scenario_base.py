@@ -98,6 +98,10 @@ def test_replicates_are_averaged_with_their_standard_deviation(tmp_path):
     other = _run_result(7, 30.0, 1, "x", params=DemParams(soil_density=1500.0).as_dict())
     with pytest.raises(InputError, match="differ only in the seed"):
         combine_replicates([runs[0], other])
+    moved = _run_result(8, 30.0, 1, "x")
+    moved.setup = dict(tube_diameter=0.2)
+    with pytest.raises(InputError, match="differ only in the seed"):
+        combine_replicates([runs[0], moved])
     with pytest.raises(InputError, match="distinct seeds"):
         combine_replicates([runs[0], runs[0]])
     with pytest.raises(InputError, match="at least two runs"):
@@ -146,8 +150,22 @@ def test_stage_params_map_a_design_row_to_dem_parameters():
     assert p.soil_steel_surface_energy == 0.0  # not a parameter of that study
     with pytest.raises(InputError, match="stages.bbd.factors"):
         stage_params(soil, "bbd", dict(Z=1.0))
-    with pytest.raises(InputError, match="params.soil_soil_restitution"):
+    with pytest.raises(InputError, match=r"stages\.bbd\.factors\.B: expected a coefficient of restitution"):
         stage_params(soil, "bbd", dict(B=1.5))
+    # coded Plackett-Burman levels decode to the Table 2 range ends: B 0.15-0.75, H 0.1-0.3
+    lo = stage_params(soil, "pb", dict(B=-1, H=-1), coded=True)
+    hi = stage_params(soil, "pb", dict(B=1, H=1), coded=True)
+    assert (lo.soil_soil_restitution, hi.soil_soil_restitution) == pytest.approx((0.15, 0.75))
+    assert (lo.soil_soil_surface_energy, hi.soil_soil_surface_energy) == pytest.approx((0.1, 0.3))
+    # a unit the mapping does not know is an error naming the entry
+    import copy
+
+    from soilcal.config.load import Soil
+
+    data = copy.deepcopy(soil.data)
+    data["parameters"]["soil_shear_modulus"]["unit"] = "psi"
+    with pytest.raises(InputError, match=r"parameters\.soil_shear_modulus\.unit"):
+        stage_params(Soil(soil.path, data, soil.resources_root), "bbd", {})
 
 
 def test_stable_mean_of_a_known_signal():

@@ -41,7 +41,7 @@ def test_replicates_average_the_runs(tmp_path, capsys):
     assert float(row["r:onset_deg_rep_sd"]) == 0.0
     assert '"per_run"' in capsys.readouterr().out
     assert main(["scenario", "run", "incline", "--replicates", "0"]) == 2
-    assert "replicates" in capsys.readouterr().err
+    assert "--replicates: expected an integer >= 1" in capsys.readouterr().err
 
 
 def test_bad_values_exit_2_naming_the_field(capsys):

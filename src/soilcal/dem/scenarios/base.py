@@ -75,7 +75,8 @@ Replicates
 ----------
 :func:`run_replicates` repeats a run with consecutive seeds and reports the mean of each
 response with the replicates' sample standard deviation beside it (``<response>_rep_sd``),
-the way the cinnamon-soil study averages three repeated simulations per design point.  The
+the way the black-soil study averages three simulations per design point (its Tables 4
+and 7: mean +/- SD of n = 3).  The
 repose angle of a 5,000-sphere quick heap scatters by 0.5-0.9 deg from seed to seed, and the
 mean of k replicates by about that over sqrt(k) (benchmarks/results/repose_seeds.md).
 
@@ -179,23 +180,45 @@ class DemParams:
         return DemParams.from_mapping(kw, "<replace>", base=self)
 
 
-_UNIT_SCALE = {"Pa": 1.0, "kPa": 1e3, "MPa": 1e6, "GPa": 1e9}
+#: printed unit -> factor to SI of the config values stage_params reads
+_UNIT_SCALE = {"-": 1.0, "Pa": 1.0, "kPa": 1e3, "MPa": 1e6, "GPa": 1e9, "J/m^2": 1.0,
+               "mJ/m^2": 1e-3, "kg/m^3": 1.0, "g/cm^3": 1e3}
 
 
-def stage_params(soil, stage_id: str, levels: dict, base: "DemParams | None" = None) -> DemParams:
+def stage_params(soil, stage_id: str, levels: dict, base: "DemParams | None" = None,
+                 coded: bool = False) -> DemParams:
     """DEM parameters of one design point of a soil's stage, from its config.
 
-    ``levels`` maps factor letters of the stage to actual values (a row of the paper's
-    design table); the stage's ``fixed`` values and the soil's printed Poisson ratio and
-    particle density (``properties.poisson_ratio``, ``properties.particle_density``) fill the
-    rest; anything else keeps ``base`` (default :class:`DemParams`).  A config parameter maps
-    to the field ``<pair>_<kind>`` (``soil-steel`` + ``static_friction`` ->
-    ``soil_steel_static_friction``), its value converted from the unit it is printed in
-    (Pa, kPa, MPa, GPa; others are taken as SI).
+    ``levels`` maps factor letters of the stage to values, actual values or, with
+    ``coded``, coded levels -1..+1 decoded as centre + c (high - low)/2 (centre: the factor's
+    ``centre`` or the midpoint).  The stage's ``fixed`` values and the soil's printed Poisson
+    ratio and particle density (``properties.poisson_ratio``, ``properties.particle_density``)
+    fill the rest; anything else keeps ``base`` (default :class:`DemParams`; a printed shear
+    modulus among the soil properties is not read).  A config parameter maps to the field
+    ``<pair>_<kind>`` (``soil-steel`` + ``static_friction`` -> ``soil_steel_static_friction``),
+    its value converted to SI from the unit it is printed in (``_UNIT_SCALE``; another unit
+    is an error naming the entry).  A value outside the physical range is an error naming
+    the stage's factor or fixed entry.
     """
     path = soil.path
     stage = soil.stage(stage_id)
     known = DemParams.names()
+    values = {}
+
+    def scale_of(entry, where):
+        unit = entry.get("unit", "-")
+        if unit not in _UNIT_SCALE:
+            raise InputError(path, f"{where}.unit", f"one of {', '.join(_UNIT_SCALE)}", unit)
+        return _UNIT_SCALE[unit]
+
+    def put(name, value, where):
+        try:
+            x = float(value)
+            DemParams.from_mapping({name: x}, str(path))
+        except (TypeError, ValueError) as exc:
+            expected = getattr(exc, "expected", "a number")
+            raise InputError(path, where, f"{expected} (DEM parameter {name})", value) from None
+        values[name] = x
 
     def field_of(pname, where):
         entry = soil.data.get("parameters", {}).get(pname)
@@ -206,25 +229,31 @@ def stage_params(soil, stage_id: str, levels: dict, base: "DemParams | None" = N
         if name not in known:
             raise InputError(path, f"parameters.{pname}", f"a DEM parameter ({', '.join(known)})",
                              name)
-        return name, _UNIT_SCALE.get(entry.get("unit"), 1.0)
+        return name, scale_of(entry, f"parameters.{pname}")
 
-    values = {}
     props = soil.data.get("properties", {})
     for prop, name in (("poisson_ratio", "soil_poisson"), ("particle_density", "soil_density")):
-        v = (props.get(prop) or {}).get("value")
-        if v is not None:
-            values[name] = v
+        entry = props.get(prop) or {}
+        if entry.get("value") is not None:
+            put(name, float(entry["value"]) * scale_of(entry, f"properties.{prop}"),
+                f"properties.{prop}.value")
     for pname, v in (stage.get("fixed") or {}).items():
         name, scale = field_of(pname, f"stages.{stage_id}.fixed.{pname}")
-        values[name] = float(v) * scale
+        put(name, float(v) * scale, f"stages.{stage_id}.fixed.{pname}")
     factors = stage["factors"]
     for letter, v in levels.items():
         if letter not in factors:
             raise InputError(path, f"stages.{stage_id}.factors",
                              f"one of the factors {', '.join(factors)}", letter)
-        name, scale = field_of(factors[letter]["parameter"],
-                               f"stages.{stage_id}.factors.{letter}")
-        values[name] = float(v) * scale
+        where = f"stages.{stage_id}.factors.{letter}"
+        name, scale = field_of(factors[letter]["parameter"], where)
+        if coded:
+            f = factors[letter]
+            if f.get("low") is None or f.get("high") is None:
+                raise InputError(path, where, "low and high levels to decode a coded table", f)
+            centre = f.get("centre", 0.5 * (f["low"] + f["high"]))
+            v = centre + float(v) * 0.5 * (f["high"] - f["low"])
+        put(name, float(v) * scale, where)
     return DemParams.from_mapping(values, str(path), base=base)
 
 
@@ -501,11 +530,14 @@ def run_replicates(module, setup: dict, params: DemParams, preset: str = "quick"
 
 
 def combine_replicates(runs) -> Result:
-    """One :class:`Result` from runs that differ only in their seed.
+    """One :class:`Result` from runs that differ only in their seed (same scenario, preset,
+    parameters and setup).
 
     Numeric responses become the mean over the runs, with the sample standard deviation
     (ddof = 1) of the runs as ``<response>_rep_sd`` (the standard error of the mean is that
-    over sqrt(replicates)); 0/1 flags such as ``settled`` become the fraction of runs.  A text
+    over sqrt(replicates)); 0/1 flags such as ``settled`` become the fraction of runs.  A
+    response that is NaN in any run (e.g. an incline onset never reached) is NaN in the
+    mean: averaging the other runs would bias it.  A text
     response keeps its value when all runs agree and lists the distinct values joined by
     ``|`` otherwise.  Steps, simulated and wall time are summed; the particle count is the
     mean, rounded.  The setup gains ``replicates`` and ``replicate_seeds`` (space separated);
@@ -513,19 +545,20 @@ def combine_replicates(runs) -> Result:
     responses.
     """
     runs = list(runs)
-    check(len(runs) >= 2, "<replicates>", "runs", "at least two runs", len(runs))
+    check(len(runs) >= 2, "<input>", "runs", "at least two runs", len(runs))
     first = runs[0]
     for r in runs[1:]:
         same = (r.scenario == first.scenario and r.preset == first.preset
-                and r.params == first.params and set(r.responses) == set(first.responses))
-        check(same, "<replicates>", "runs", f"runs of {first.scenario} ({first.preset}) that "
+                and r.params == first.params and r.setup == first.setup
+                and set(r.responses) == set(first.responses))
+        check(same, "<input>", "runs", f"runs of {first.scenario} ({first.preset}) that "
               "differ only in the seed", f"{r.scenario} ({r.preset}), seed {r.seed}")
     seeds = [int(r.seed) for r in runs]
-    check(len(set(seeds)) == len(seeds), "<replicates>", "seeds", "distinct seeds", seeds)
+    check(len(set(seeds)) == len(seeds), "<input>", "seeds", "distinct seeds", seeds)
     resp = {}
     for key in first.responses:
         vals = [r.responses[key] for r in runs]
-        if all(isinstance(v, (bool, int, float, np.integer, np.floating)) for v in vals):
+        if all(isinstance(v, (bool, int, float, np.bool_, np.integer, np.floating)) for v in vals):
             arr = np.asarray(vals, dtype=float)
             resp[key] = float(arr.mean())
             resp[f"{key}_rep_sd"] = float(arr.std(ddof=1))

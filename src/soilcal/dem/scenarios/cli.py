@@ -74,6 +74,10 @@ def _run(args) -> int:
     setup = merge_setup(setups, name, _pairs(args.set, "--set"), src)
     if args.preset not in PRESETS:
         raise InputError(src, "--preset", f"one of {PRESETS}", args.preset)
+    if args.replicates < 1:
+        raise InputError(src, "--replicates", "an integer >= 1", args.replicates)
+    if args.seed < 0:
+        raise InputError(src, "--seed", "an integer >= 0", args.seed)
     params = DemParams.from_mapping(_pairs(args.param, "--param"), src)
     mod.validate(setup, args.preset, src)
     res = run_replicates(mod, setup, params, preset=args.preset, seed=args.seed,
