@@ -250,11 +250,11 @@ def gather(x, v, om, r, inv_m, inv_i, mat, f, t, ovr, mroll, dt, kick, max_ovr, 
                         whist, row)
                     # the last history slot of a wall row is its touching flag
                     whist[row, H_SIZE - 1] = 1.0 if on else 0.0
-                    if on and bounded:
-                        # this contact's resistance, for its share of the reaction below
-                        whist[row, H_MR] = mr * ci
-                        mres += mr * ci
                     if on:
+                        if bounded:
+                            # this contact's resistance, for its share of the reaction below
+                            whist[row, H_MR] = mr * ci
+                            mres += mr * ci
                         fx += cfx
                         fy += cfy
                         fz += cfz

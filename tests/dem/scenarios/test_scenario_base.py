@@ -98,10 +98,14 @@ def test_replicates_are_averaged_with_their_standard_deviation(tmp_path):
     other = _run_result(7, 30.0, 1, "x", params=DemParams(soil_density=1500.0).as_dict())
     with pytest.raises(InputError, match="differ only in the seed"):
         combine_replicates([runs[0], other])
-    moved = _run_result(8, 30.0, 1, "x")
-    moved.setup = dict(tube_diameter=0.2)
+    # a setup value derived per run (the time step from the smallest sphere) is averaged;
+    # a text setup value that differs means another setup
+    a, b = _run_result(8, 30.0, 1, "x"), _run_result(9, 31.0, 1, "x")
+    a.setup, b.setup = dict(method="cylinder", dt=1e-4), dict(method="cylinder", dt=2e-4)
+    assert combine_replicates([a, b]).setup["dt"] == pytest.approx(1.5e-4)
+    b.setup = dict(method="funnel", dt=1e-4)
     with pytest.raises(InputError, match="differ only in the seed"):
-        combine_replicates([runs[0], moved])
+        combine_replicates([a, b])
     with pytest.raises(InputError, match="distinct seeds"):
         combine_replicates([runs[0], runs[0]])
     with pytest.raises(InputError, match="at least two runs"):

@@ -44,6 +44,16 @@ def test_replicates_average_the_runs(tmp_path, capsys):
     assert "--replicates: expected an integer >= 1" in capsys.readouterr().err
 
 
+def test_replicates_of_a_heap(tmp_path):
+    # each seed draws other radii, so the runs' time steps differ: still one averaged row
+    out = tmp_path / "row.csv"
+    assert main(["scenario", "run", "repose", "--threads", "1", "--set", "n_particles=300",
+                 "--replicates", "2", "--out", str(out)]) == 0
+    row = list(csv.DictReader(open(out)))[0]
+    assert row["s:replicate_seeds"] == "0 1" and 0.0 < float(row["r:angle_deg"]) < 90.0
+    assert float(row["r:angle_deg_rep_sd"]) >= 0.0
+
+
 def test_bad_values_exit_2_naming_the_field(capsys):
     assert main(["scenario", "run", "repose", "--set", "tube_diameter=0.5"]) == 2
     err = capsys.readouterr().err

@@ -190,8 +190,8 @@ def stage_params(soil, stage_id: str, levels: dict, base: "DemParams | None" = N
     """DEM parameters of one design point of a soil's stage, from its config.
 
     ``levels`` maps factor letters of the stage to values, actual values or, with
-    ``coded``, coded levels -1..+1 decoded as centre + c (high - low)/2 (centre: the factor's
-    ``centre`` or the midpoint).  The stage's ``fixed`` values and the soil's printed Poisson
+    ``coded``, coded levels -1..+1 decoded as (low + high)/2 + c (high - low)/2 (the coding
+    of :mod:`soilcal.rsm.model`).  The stage's ``fixed`` values and the soil's printed Poisson
     ratio and particle density (``properties.poisson_ratio``, ``properties.particle_density``)
     fill the rest; anything else keeps ``base`` (default :class:`DemParams`; a printed shear
     modulus among the soil properties is not read).  A config parameter maps to the field
@@ -251,8 +251,7 @@ def stage_params(soil, stage_id: str, levels: dict, base: "DemParams | None" = N
             f = factors[letter]
             if f.get("low") is None or f.get("high") is None:
                 raise InputError(path, where, "low and high levels to decode a coded table", f)
-            centre = f.get("centre", 0.5 * (f["low"] + f["high"]))
-            v = centre + float(v) * 0.5 * (f["high"] - f["low"])
+            v = 0.5 * (f["low"] + f["high"]) + float(v) * 0.5 * (f["high"] - f["low"])
         put(name, float(v) * scale, where)
     return DemParams.from_mapping(values, str(path), base=base)
 
@@ -529,28 +528,35 @@ def run_replicates(module, setup: dict, params: DemParams, preset: str = "quick"
     return runs[0] if replicates == 1 else combine_replicates(runs)
 
 
+def _is_number(v) -> bool:
+    return isinstance(v, (bool, int, float, np.bool_, np.integer, np.floating))
+
+
 def combine_replicates(runs) -> Result:
     """One :class:`Result` from runs that differ only in their seed (same scenario, preset,
-    parameters and setup).
+    parameters, setup keys and text setup values).
 
     Numeric responses become the mean over the runs, with the sample standard deviation
     (ddof = 1) of the runs as ``<response>_rep_sd`` (the standard error of the mean is that
     over sqrt(replicates)); 0/1 flags such as ``settled`` become the fraction of runs.  A
     response that is NaN in any run (e.g. an incline onset never reached) is NaN in the
-    mean: averaging the other runs would bias it.  A text
-    response keeps its value when all runs agree and lists the distinct values joined by
-    ``|`` otherwise.  Steps, simulated and wall time are summed; the particle count is the
-    mean, rounded.  The setup gains ``replicates`` and ``replicate_seeds`` (space separated);
-    time series are kept per run as ``seed<s>:<name>``; ``per_run`` holds each run's
-    responses.
+    mean: averaging the other runs would bias it.  A text response keeps its value when all
+    runs agree and lists the distinct values joined by ``|`` otherwise.  Numeric setup values
+    that a run derives from its own particles (the time step from the smallest sphere drawn,
+    the fill height) differ between seeds and are averaged too.  Steps, simulated and wall
+    time are summed; the particle count is the mean, rounded.  The setup gains
+    ``replicates`` and ``replicate_seeds`` (space separated); time series are kept per run
+    as ``seed<s>:<name>``; ``per_run`` holds each run's responses.
     """
     runs = list(runs)
     check(len(runs) >= 2, "<input>", "runs", "at least two runs", len(runs))
     first = runs[0]
     for r in runs[1:]:
         same = (r.scenario == first.scenario and r.preset == first.preset
-                and r.params == first.params and r.setup == first.setup
-                and set(r.responses) == set(first.responses))
+                and r.params == first.params and set(r.setup) == set(first.setup)
+                and set(r.responses) == set(first.responses)
+                and all(_is_number(v) or str(v) == str(r.setup[k])
+                        for k, v in first.setup.items()))
         check(same, "<input>", "runs", f"runs of {first.scenario} ({first.preset}) that "
               "differ only in the seed", f"{r.scenario} ({r.preset}), seed {r.seed}")
     seeds = [int(r.seed) for r in runs]
@@ -558,16 +564,20 @@ def combine_replicates(runs) -> Result:
     resp = {}
     for key in first.responses:
         vals = [r.responses[key] for r in runs]
-        if all(isinstance(v, (bool, int, float, np.bool_, np.integer, np.floating)) for v in vals):
+        if all(_is_number(v) for v in vals):
             arr = np.asarray(vals, dtype=float)
             resp[key] = float(arr.mean())
             resp[f"{key}_rep_sd"] = float(arr.std(ddof=1))
         else:
             uniq = sorted({str(v) for v in vals})
             resp[key] = uniq[0] if len(uniq) == 1 else "|".join(uniq)
+    setup_out = dict(first.setup)
+    for key, v in first.setup.items():
+        vals = [r.setup[key] for r in runs]
+        if all(_is_number(u) for u in vals) and any(u != v for u in vals):
+            setup_out[key] = float(np.mean(vals))
+    setup_out.update(replicates=len(runs), replicate_seeds=" ".join(str(s) for s in seeds))
     series = {f"seed{r.seed}:{k}": v for r in runs for k, v in r.series.items()}
-    setup_out = dict(first.setup, replicates=len(runs),
-                     replicate_seeds=" ".join(str(s) for s in seeds))
     return Result(scenario=first.scenario, preset=first.preset, seed=seeds[0],
                   n_particles=int(round(np.mean([r.n_particles for r in runs]))),
                   steps=int(sum(r.steps for r in runs)),
