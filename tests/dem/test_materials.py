@@ -101,11 +101,11 @@ def test_jkr_step_bound_caps_the_default_step_and_rejects_larger_steps():
     sim.add_particles([[0, 0, 0.01], [0.01, 0, 0.01]], r, "soil")
     sim.run(1)
     assert sim.dt == pytest.approx(bound, rel=1e-12)
-    # no adhesion: the Rayleigh fraction as before
-    sim0 = Simulation(jkr_table(0.0), dt_fraction=0.3, contact_model=dict(cohesion="jkr"))
+    # no adhesion: the Rayleigh fraction as before (0.2: below the damped-contact cap)
+    sim0 = Simulation(jkr_table(0.0), dt_fraction=0.2, contact_model=dict(cohesion="jkr"))
     sim0.add_particles([[0, 0, 0.01]], r, "soil")
     sim0.run(1)
-    assert sim0.dt == pytest.approx(0.3 * tr, rel=1e-12)
+    assert sim0.dt == pytest.approx(0.2 * tr, rel=1e-12)
     bad = Simulation(jkr_table(gamma), dt=1.05 * bound, contact_model=dict(cohesion="jkr"))
     bad.add_particles([[0, 0, 0.01]], r, "soil")
     with pytest.raises(InputError, match="JKR bound") as e:
@@ -132,3 +132,61 @@ def test_cohesive_bed_comes_to_rest():
     sim.run(int(1.5 / sim.dt))
     v = np.sqrt(2 * sim.kinetic_energy() / sim.p.m.sum())
     assert v < 2e-3
+
+
+def _damped_step(k, m, z):
+    # stable step of x'' + 2 z w x' + w^2 x = 0 under leapfrog with half-step damping:
+    # the roots of l^2 + (h^2 + 2 z h - 2) l + (1 - 2 z h) = 0 (h = w dt) stay in the unit
+    # circle while h^2 + 4 z h - 4 < 0 (Jury), i.e. h < 2 (sqrt(1 + z^2) - z)
+    w = math.sqrt(k / m)
+    h = -2 * z + math.sqrt(4 * z * z + 4)
+    return h / w
+
+
+def test_damped_contact_bound_for_low_restitution():
+    """The damped-contact step bound (materials.py) from the spring and dashpot of each
+    contact at max_overlap: tangential spring 8 G* sqrt(R* d) on the effective slip mass
+    2/7 m*, dashpot 2 sqrt(5/6) |beta| sqrt(S m*); normal spring 2 E* sqrt(R* d) on m*."""
+    r, rho, nu, g, e, ov = 3e-3, 1800.0, 0.33, 5e5, 0.15, 0.3
+    mats = MaterialTable()
+    mats.add(Material("soil", rho, nu, shear=g))
+    mats.add(Material("steel", 7850, 0.3, shear=7.9e10))
+    mats.set_pair("soil", "soil", e, 0.8, 0.0, 0.0)
+    mats.set_pair("soil", "steel", 0.9, 0.0, 0.0, 0.0)  # frictionless wall: normal mode only
+    mats.set_pair("steel", "steel", 0.5, 0.3)
+    m = rho * 4 / 3 * math.pi * r**3
+    le = math.log(e)
+    beta = le / math.sqrt(le * le + math.pi**2)
+    z = math.sqrt(5 / 6) * abs(beta)
+    estar = 2 * g * (1 + nu) / (2 * (1 - nu**2))
+    gstar = g / (2 * (2 - nu))
+    d = ov * r
+    rs, ms = r / 2, m / 2
+    tangential = _damped_step(8 * gstar * math.sqrt(rs * d), 2 / 7 * ms, z * math.sqrt(7 / 2))
+    normal = _damped_step(2 * estar * math.sqrt(rs * d), ms, z)
+    assert tangential < normal
+    le9 = math.log(0.9)
+    z_wall = math.sqrt(5 / 6) * abs(le9 / math.sqrt(le9 * le9 + math.pi**2))
+    e_wall = 1 / ((1 - nu**2) / (2 * g * (1 + nu)) + (1 - 0.3**2) / (2 * 7.9e10 * 1.3))
+    wall = _damped_step(2 * e_wall * math.sqrt(r * d), m, z_wall)
+    bound = min(tangential, normal, wall)
+    tr = math.pi * r * math.sqrt(rho / g) / (0.1631 * nu + 0.8766)
+    sim = Simulation(mats, dt_fraction=0.3, max_overlap=ov)
+    sim.add_particles([[0, 0, 0.01], [0.01, 0, 0.01]], r, "soil")
+    sim.add_plane((0, 0, 0), (0, 0, 1), "steel")
+    sim.run(1)
+    assert sim.damping_dt == pytest.approx(bound, rel=1e-12)
+    assert 0.7 * bound < 0.3 * tr  # heavy damping: the cap binds
+    assert sim.dt == pytest.approx(0.7 * bound, rel=1e-12)
+    # in units of the Rayleigh time the bound does not depend on the modulus
+    mats.materials[0].shear = 100 * g
+    stiff = Simulation(mats, dt_fraction=0.3, max_overlap=ov)
+    stiff.add_particles([[0, 0, 0.01]], r, "soil")
+    stiff.run(1)
+    assert stiff.damping_dt / stiff.rayleigh == pytest.approx(bound / tr, rel=1e-9)
+    mats.materials[0].shear = g
+    bad = Simulation(mats, dt=1.05 * bound, max_overlap=ov)
+    bad.add_particles([[0, 0, 0.01]], r, "soil")
+    with pytest.raises(InputError, match="damped-contact bound") as err:
+        bad.run(1)
+    assert err.value.field == "dt"

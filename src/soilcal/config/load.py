@@ -222,6 +222,10 @@ def _semantic_checks(path: Path, d: dict, resources_root: Path) -> None:
                 if key in pr and not (resources_root / "published" / d["name"] / pr[key]).is_file():
                     raise InputError(path, f"{where}.printed.{r}.{key}", "an existing file under resources/published/" + d["name"], pr[key])
         seen[sid] = st
+    if d.get("simulation"):
+        from soilcal.dem.scenarios.design import check_block
+
+        check_block(path, d)
 
 
 def _check_table(path: Path, st: dict, where: str, pub: Path) -> None:

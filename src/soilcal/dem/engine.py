@@ -36,7 +36,7 @@ import numpy as np
 
 from soilcal.dem import integrator as itg
 from soilcal.dem.contact import H_SIZE, hist_width, jkr_separation, model_codes
-from soilcal.dem.materials import P_ESTAR, P_W, MaterialTable
+from soilcal.dem.materials import DAMPING_DT_SAFETY, P_ESTAR, P_W, MaterialTable
 from soilcal.dem.neighbour import GROUPS_MAX, SCRATCH_LEN, SGROUP_LEN
 from soilcal.dem.state import ParticleState
 from soilcal.dem.walls import CONE, CYLINDER, DISK, NPAR, PLANE, RECTANGLE, TRIANGLE, WallSet
@@ -239,8 +239,9 @@ class Simulation:
         self.rayleigh = self.materials.rayleigh_dt(rmin)
         self.jkr_dt = (self.materials.jkr_dt(rmin, self._pair) if self.codes[4] == 1
                        else math.inf)
+        self.damping_dt = self.materials.damping_dt(rmin, self._pair, self.max_overlap)
         dt = self.dt_user if self.dt_user is not None else min(
-            self.dt_fraction * self.rayleigh, self.jkr_dt)
+            self.dt_fraction * self.rayleigh, self.jkr_dt, DAMPING_DT_SAFETY * self.damping_dt)
         if not (dt > 0 and math.isfinite(dt)):
             raise InputError(self.source, "dt", "a time step > 0 s", dt)
         if dt > self.rayleigh:
@@ -251,6 +252,11 @@ class Simulation:
             raise InputError(self.source, "dt",
                              f"a time step <= the JKR bound {self.jkr_dt:.4g} s "
                              f"(0.17 sqrt(m / (2 E* a_0)), materials.py)", dt)
+        if dt > self.damping_dt * (1 + 1e-12):
+            raise InputError(self.source, "dt",
+                             f"a time step <= the damped-contact bound {self.damping_dt:.4g} s "
+                             f"(tangential and normal modes at {100 * self.max_overlap:g} % "
+                             f"overlap, materials.py)", dt)
         self.dt = float(dt)
         rmax = float(p.r.max())
         # JKR separation range

@@ -30,6 +30,33 @@ A requested step above dt_JKR is rejected; a step from ``dt_fraction`` is capped
 (the run records the step used).  At 30 % of T_R a JKR bed whose dt_JKR is below that step
 keeps jittering at about 1 cm/s and never comes to rest.
 
+Damping bound.  The viscoelastic damping of contact.py is a dashpot c = 2 sqrt(5/6) |beta|
+sqrt(S m*) on each spring S.  For a linear oscillator of frequency w and damping ratio z,
+integrated as the engine does (velocity Verlet, the damping force from the half-step
+velocity), the step is stable for
+
+    w dt < 2 (sqrt(1 + z^2) - z)                (= 2 without damping)
+
+The stiffest damped mode of a contact is the tangential one while it sticks: the Mindlin
+spring S_t = 8 G* sqrt(R* delta) acts on the relative slip of the contact point, whose
+effective mass with the rotation of two solid spheres is m_t = 2/7 m* (1/m_t = 1/m* +
+r_i^2/I_i + r_j^2/I_j), while the dashpot is sized with m* (EDEM, LIGGGHTS), so
+
+    w_t = sqrt(S_t / m_t),   z_t = sqrt(5/6) |beta| sqrt(m* / m_t) = sqrt(35/12) |beta|
+    w_n = sqrt(S_n / m*),    z_n = sqrt(5/6) |beta|,    S_n = 2 E* sqrt(R* delta)
+
+Evaluated at the largest overlap a run accepts (delta = ``max_overlap`` r, the blow-up
+stop), with the smallest sphere of each material, for particle-particle pairs (R* = r/2,
+m* = m/2) and particle-wall pairs with every material (R* = r, m* = m), the smallest step
+over the modes is ``damping_dt``; the tangential mode counts only with friction (mu_s > 0).
+In units of the Rayleigh time it does not depend on the shear modulus or the size
+(w dt ~ (delta / r)^(1/4)); at max_overlap 0.3 and Poisson 0.33 it is 0.476 (2 (sqrt(1 +
+z_t^2) - z_t)) T_R: 0.32 T_R for e = 0.45, 0.21 T_R for e = 0.15.  Heavy damping
+(low restitution) thus lowers the stable step: a 990-sphere heap (G 5e5 Pa, mu_s 1.16,
+100 mm tube) blew up above about 0.18 / 0.25 / 0.32 / 0.43 T_R for e = 0.15 / 0.3 / 0.45 /
+0.75, 0.84-1.04 times this bound.  A requested step above ``damping_dt`` is rejected; a
+step from ``dt_fraction`` is capped at ``DAMPING_DT_SAFETY`` (0.7) times it.
+
 Stiffness scaling (Lommen, Schott & Lodewijks 2014, Particuology 12:107; shear modulus
 reduced to ``G_mod`` keeps cohesion comparable, e.g. Thakur et al. 2014, Powder Technol.
 254:28, via the JKR scaling of the surface energy)::
@@ -133,6 +160,18 @@ def jkr_critical_dt(mass: float, estar: float, w: float, rstar: float) -> float:
     if w <= 0.0:
         return math.inf
     return JKR_DT_COEFF * math.sqrt(mass / (2.0 * estar * jkr_zero_load_radius(estar, w, rstar)))
+
+
+#: fraction of :meth:`MaterialTable.damping_dt` a step from ``dt_fraction`` is capped at
+#: (module docstring: measured blow-ups at 0.84-1.04 times the bound)
+DAMPING_DT_SAFETY = 0.7
+TANGENTIAL_MASS = 2.0 / 7.0  # m_t / m* for solid spheres with rotation
+
+
+def damped_critical_dt(stiffness: float, mass: float, zeta: float) -> float:
+    """2 (sqrt(1 + z^2) - z) / w with w = sqrt(stiffness / mass): the stable step of a
+    damped oscillator under velocity Verlet with half-step-velocity damping."""
+    return 2.0 * (math.sqrt(1.0 + zeta * zeta) - zeta) / math.sqrt(stiffness / mass)
 
 
 def rayleigh_time(radius: float, density: float, shear: float, poisson: float) -> float:
@@ -246,6 +285,33 @@ class MaterialTable:
                     t = min(t, jkr_critical_dt(m, tab[a, b, P_ESTAR], w, rstar))
                 # the same material can also be a wall's (a steel tube, a soil plate)
                 t = min(t, jkr_critical_dt(ma, tab[a, b, P_ESTAR], w, ra))
+        return t
+
+    def damping_dt(self, rmin_per_material: dict[int, float], tab: np.ndarray,
+                   max_overlap: float) -> float:
+        """Smallest damped-mode step (module docstring, "Damping bound") over the contacts
+        of the pair table ``tab``: particle-particle pairs of each material present with
+        itself and with the others (smallest spheres), particle-wall pairs with every
+        material; at the overlap ``max_overlap`` x the smaller radius."""
+        t = math.inf
+        mats = sorted(rmin_per_material)
+        for a in mats:
+            ra = rmin_per_material[a]
+            ma = self.materials[a].density * 4.0 / 3.0 * math.pi * ra**3
+            for b in range(len(self.materials)):
+                cases = [(ra, ma, ra)]  # wall of material b: R* = r, m* = m
+                if b in rmin_per_material:
+                    rb = rmin_per_material[b]
+                    mb = self.materials[b].density * 4.0 / 3.0 * math.pi * rb**3
+                    cases.append((ra * rb / (ra + rb), ma * mb / (ma + mb), min(ra, rb)))
+                z = math.sqrt(5.0 / 6.0) * abs(tab[a, b, P_BETA])
+                for rstar, mstar, r in cases:
+                    root = math.sqrt(rstar * max_overlap * r)
+                    t = min(t, damped_critical_dt(2.0 * tab[a, b, P_ESTAR] * root, mstar, z))
+                    if tab[a, b, P_MUS] > 0.0:
+                        t = min(t, damped_critical_dt(8.0 * tab[a, b, P_GSTAR] * root,
+                                                      TANGENTIAL_MASS * mstar,
+                                                      z / math.sqrt(TANGENTIAL_MASS)))
         return t
 
     def rayleigh_dt(self, rmin_per_material: dict[int, float]) -> float:

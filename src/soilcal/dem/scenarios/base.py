@@ -186,15 +186,19 @@ _UNIT_SCALE = {"-": 1.0, "Pa": 1.0, "kPa": 1e3, "MPa": 1e6, "GPa": 1e9, "J/m^2":
 
 
 def stage_params(soil, stage_id: str, levels: dict, base: "DemParams | None" = None,
-                 coded: bool = False) -> DemParams:
+                 coded: bool = False, params: dict | None = None,
+                 params_field: str = "simulation.params") -> DemParams:
     """DEM parameters of one design point of a soil's stage, from its config.
 
     ``levels`` maps factor letters of the stage to values, actual values or, with
     ``coded``, coded levels -1..+1 decoded as (low + high)/2 + c (high - low)/2 (the coding
     of :mod:`soilcal.rsm.model`).  The stage's ``fixed`` values and the soil's printed Poisson
-    ratio and particle density (``properties.poisson_ratio``, ``properties.particle_density``)
-    fill the rest; anything else keeps ``base`` (default :class:`DemParams`; a printed shear
-    modulus among the soil properties is not read).  A config parameter maps to the field
+    ratio, particle density and shear modulus (``properties.poisson_ratio``,
+    ``properties.particle_density``, ``properties.shear_modulus``, each when it has a single
+    ``value``) fill the rest; anything else keeps ``base`` (default :class:`DemParams`).
+    ``params`` (DEM parameter name -> SI value, e.g. a soil config's ``simulation.params``,
+    reported as ``params_field``) go over the printed properties and under the stage's fixed
+    values and the levels.  A config parameter maps to the field
     ``<pair>_<kind>`` (``soil-steel`` + ``static_friction`` -> ``soil_steel_static_friction``),
     its value converted to SI from the unit it is printed in (``_UNIT_SCALE``; another unit
     is an error naming the entry).  A value outside the physical range is an error naming
@@ -232,11 +236,16 @@ def stage_params(soil, stage_id: str, levels: dict, base: "DemParams | None" = N
         return name, scale_of(entry, f"parameters.{pname}")
 
     props = soil.data.get("properties", {})
-    for prop, name in (("poisson_ratio", "soil_poisson"), ("particle_density", "soil_density")):
+    for prop, name in (("poisson_ratio", "soil_poisson"), ("particle_density", "soil_density"),
+                       ("shear_modulus", "soil_shear_modulus")):
         entry = props.get(prop) or {}
         if entry.get("value") is not None:
             put(name, float(entry["value"]) * scale_of(entry, f"properties.{prop}"),
                 f"properties.{prop}.value")
+    for name, v in (params or {}).items():
+        if name not in known:
+            raise InputError(path, f"{params_field}.{name}", f"a DEM parameter ({', '.join(known)})", name)
+        put(name, v, f"{params_field}.{name}")
     for pname, v in (stage.get("fixed") or {}).items():
         name, scale = field_of(pname, f"stages.{stage_id}.fixed.{pname}")
         put(name, float(v) * scale, f"stages.{stage_id}.fixed.{pname}")

@@ -62,7 +62,7 @@ from soilcal.dem.contact import model_codes
 from soilcal.dem.engine import Simulation
 from soilcal.dem.factories import PSD, BoxRegion, UniformRadius, insert_random, lattice_fill
 from soilcal.dem.io import read_snapshot, write_particles_vtu, write_mesh_vtp, write_snapshot
-from soilcal.dem.materials import rayleigh_time
+from soilcal.dem.materials import DAMPING_DT_SAFETY, rayleigh_time
 from soilcal.dem.scenarios.base import (DemParams, build_materials, check, cohesion_scale,
                                         contact_model, rng)
 
@@ -174,15 +174,17 @@ def validate_bin(spec: BinSpec, source: str, prefix: str = "bin"):
 def soil_time_step(spec: BinSpec, params: DemParams) -> float:
     """dt_fraction x the Rayleigh time of the smallest particle (stiffness-scaled soil),
     capped with JKR at the zero-load JKR bound (materials.py) of its soil-soil and
-    soil-steel contacts."""
+    soil-steel contacts, and at DAMPING_DT_SAFETY x the damped-contact bound (materials.py)
+    at the bin's ``max_overlap``."""
     g = params.soil_shear_modulus * spec.stiffness_scale
     dt = spec.dt_fraction * rayleigh_time(spec.r_min, params.soil_density, g,
                                           params.soil_poisson)
+    mats = build_materials(params, spec.stiffness_scale, "<bin>", spec.cohesion_scale)
+    w_factor = model_codes(**contact_model(params))[1]
+    rmin, tab = {mats.index("soil"): spec.r_min}, mats.table(w_factor)
     if contact_model(params)["cohesion"] == "jkr":
-        mats = build_materials(params, spec.stiffness_scale, "<bin>", spec.cohesion_scale)
-        w_factor = model_codes(**contact_model(params))[1]
-        dt = min(dt, mats.jkr_dt({mats.index("soil"): spec.r_min}, mats.table(w_factor)))
-    return dt
+        dt = min(dt, mats.jkr_dt(rmin, tab))
+    return min(dt, DAMPING_DT_SAFETY * mats.damping_dt(rmin, tab, spec.max_overlap))
 
 
 def reference_cohesion(spec: BinSpec, reference: BinSpec, setup: dict, source: str) -> float:

@@ -1,0 +1,208 @@
+"""Every design point of every soil through its DEM scenario: the cost of a calibration pass.
+
+For each soil config with a ``simulation`` block, each response it maps to a scenario and
+each stage that has that response, every run of the stage's design
+(:func:`soilcal.dem.scenarios.design.design_levels`: the printed table, or the design generated
+from the factor levels when the paper's table is lost) is simulated once
+(:func:`~soilcal.dem.scenarios.design.simulate_point`, the soil's seed, the block's preset).
+One row per design point goes to ``benchmarks/results/design_budget.csv`` (written after each
+point, so an interrupted sweep keeps its rows; a rerun skips the points already there unless
+``--fresh``); ``design_budget.md`` sums the wall time per soil, stage and response, projects
+the whole pass from the points run (``--every k`` runs every k-th row only), and sets the
+simulated response beside the printed (EDEM) one (spread and Pearson correlation).
+
+    python benchmarks/design_budget.py --threads 2
+    python benchmarks/design_budget.py --soils cinnamon-soil --every 3
+    python benchmarks/design_budget.py --report-only
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import platform
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+from _report import commit, kept_notes, read_rows, write_rows
+
+HERE = Path(__file__).resolve().parent
+ROOT = HERE.parent
+FIELDS = ["utc", "commit", "soil", "stage", "response", "run", "design_runs", "levels", "scenario",
+          "setup", "measure", "preset", "seed", "threads", "particles", "steps", "wall_s", "printed",
+          "simulated", "error"]
+
+
+def _key(r):
+    return (r["soil"], r["stage"], r["response"], int(r["run"]))
+
+
+def plan(soils, only_responses=None, only_stages=None):
+    """(soil, stage id, response id, design rows | error text) for every simulated response."""
+    from soilcal.dem.scenarios import design
+    from soilcal.errors import InputError
+
+    out = []
+    for soil in soils:
+        sim = soil.data.get("simulation") or {}
+        for rid in sim.get("responses", {}):
+            if only_responses and rid not in only_responses:
+                continue
+            for st in soil.stages:
+                if rid not in [r["id"] for r in st["responses"]]:
+                    continue
+                if only_stages and st["id"] not in only_stages:
+                    continue
+                try:
+                    rows = design.design_levels(soil, st["id"])
+                except InputError as exc:
+                    rows = str(exc)
+                out.append((soil, st["id"], rid, rows))
+    return out
+
+
+def run_point(soil, stage_id, rid, row, n_runs, args, rev):
+    from soilcal.dem.scenarios import design
+
+    stage = soil.stage(stage_id)
+    letters = list(stage["factors"])
+    levels = {k: float(row[k]) for k in letters}
+    spec = design.spec(soil, rid)
+    col = next(r.get("column", r["id"]) for r in stage["responses"] if r["id"] == rid)
+    printed = row.get(col, "")
+    out = dict(utc=time.strftime("%Y-%m-%d %H:%M", time.gmtime()), commit=rev, soil=soil.name,
+               stage=stage_id, response=rid, run=int(row["run"]), design_runs=n_runs,
+               levels=" ".join(f"{k}={v:g}" for k, v in levels.items()), scenario=spec.scenario,
+               setup=spec.setup["name"], measure=spec.measure, preset=spec.preset,
+               seed=int(soil.data["seed"]),
+               printed="" if printed == "" or not np.isfinite(float(printed)) else float(printed))
+    t0 = time.perf_counter()
+    try:
+        value, res = design.simulate_point(soil, stage_id, levels, rid, replicates=1,
+                                           threads=args.threads)
+    except Exception as exc:  # a failed point is a row of the table, not the end of the sweep
+        out.update(wall_s=round(time.perf_counter() - t0, 1), simulated="",
+                   error=f"{type(exc).__name__}: {exc}"[:300].replace("|", "/"), threads=args.threads)
+        return out
+    out.update(threads=res.threads, particles=res.n_particles, steps=res.steps,
+               wall_s=round(res.wall_s, 1), simulated=round(value, 3), error="")
+    return out
+
+
+def _f(v):
+    try:
+        return float(v)
+    except (TypeError, ValueError):
+        return float("nan")
+
+
+def report(rows, planned, md_path, argv):
+    md = ["# A calibration pass: every design point of every soil through its DEM scenario", "",
+          f"Machine: {platform.machine()}, {os.cpu_count()} logical CPUs, Python "
+          f"{platform.python_version()}.  Last command: `python benchmarks/design_budget.py "
+          + " ".join(argv) + "`.  Rows: `design_budget.csv` (utc, commit and threads per row).", "",
+          "Per soil, stage and response: the design's runs, the runs simulated (one seed each), "
+          "their wall time (sum and mean), the projected wall time of the whole stage (mean x runs), "
+          "and the simulated against the printed (EDEM) response over the runs simulated: spread "
+          "(max - min) and Pearson correlation.  Failed runs count in the time and are listed "
+          "below the table.", "",
+          "| soil | stage | response | scenario / setup / measure | runs | simulated | wall s (sum) | "
+          "wall s (mean) | projected s | printed spread | simulated spread | correlation |",
+          "|---|---|---|---|---:|---:|---:|---:|---:|---:|---:|---:|"]
+    total, total_proj = 0.0, 0.0
+    for soil, sid, rid, design_rows in planned:
+        if isinstance(design_rows, str):
+            md.append(f"| {soil.name} | {sid} | {rid} | not simulated: {design_rows.split(': ', 1)[-1]} "
+                      "| | 0 | | | | | | |")
+            continue
+        sel = [r for r in rows if (r["soil"], r["stage"], r["response"]) == (soil.name, sid, rid)]
+        n = len(design_rows)
+        w = np.array([_f(r["wall_s"]) for r in sel])
+        ok = [r for r in sel if not r["error"]]
+        p = np.array([_f(r["printed"]) for r in ok])
+        s = np.array([_f(r["simulated"]) for r in ok])
+        good = np.isfinite(p) & np.isfinite(s)
+        corr = ""
+        if good.sum() > 2 and p[good].std() > 0 and s[good].std() > 0:
+            corr = f"{np.corrcoef(p[good], s[good])[0, 1]:.2f}"
+        mean = float(w.mean()) if len(w) else float("nan")
+        proj = mean * n if len(w) else float("nan")
+        total += float(w.sum())
+        total_proj += proj if np.isfinite(proj) else 0.0
+        sc = f"{sel[0]['scenario']} / {sel[0]['setup']} / {sel[0]['measure']}" if sel else ""
+        md.append(f"| {soil.name} | {sid} | {rid} | {sc} | {n} | {len(sel)} | {w.sum():.0f} | "
+                  f"{mean:.1f} | {proj:.0f} | "
+                  + (f"{np.ptp(p[good]):.2f}" if good.any() else "") + " | "
+                  + (f"{np.ptp(s[good]):.2f}" if good.any() else "") + f" | {corr} |")
+    md += ["", f"Wall time of the runs in the table: {total:.0f} s ({total / 60:.1f} min); projected "
+           f"for every design point with one seed: {total_proj:.0f} s ({total_proj / 60:.1f} min).", ""]
+    failed = [r for r in rows if r["error"]]
+    if failed:
+        md += ["Failed runs:", ""] + [f"* {r['soil']} {r['stage']} run {r['run']} ({r['response']}): "
+                                      f"{r['error']}" for r in failed] + [""]
+    md += ["Runs:", "", "| " + " | ".join(FIELDS) + " |", "|" + "---|" * len(FIELDS),
+           *("| " + " | ".join(str(r.get(k, "")) for k in FIELDS) + " |" for r in rows),
+           "", kept_notes(md_path)]
+    md_path.write_text("\n".join(md) + "\n")
+
+
+def main(argv=None):
+    from soilcal.config.load import load_soil
+
+    argv = sys.argv[1:] if argv is None else argv
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--soils", default="", help="comma list (default: every soil with a simulation block)")
+    ap.add_argument("--responses", default="", help="comma list of response ids (default: all)")
+    ap.add_argument("--stages", default="", help="comma list of stage ids (default: all)")
+    ap.add_argument("--every", type=int, default=1, help="run every k-th row of each design")
+    ap.add_argument("--threads", type=int, default=2)
+    ap.add_argument("--fresh", action="store_true", help="rerun points already in the CSV")
+    ap.add_argument("--report-only", action="store_true", help="rewrite the page, run nothing")
+    ap.add_argument("--out", default=str(HERE / "results"))
+    args = ap.parse_args(argv)
+    if args.every < 1:
+        raise SystemExit(f"--every: expected an integer >= 1, got {args.every}")
+    names = [s for s in args.soils.split(",") if s] or sorted(
+        p.stem for p in (ROOT / "config" / "soils").glob("*.yaml"))
+    soils = []
+    for nm in names:
+        path = ROOT / "config" / "soils" / f"{nm}.yaml"
+        if not path.is_file():
+            raise SystemExit(f"--soils: no soil file {path}")
+        soil = load_soil(path, ROOT / "resources")
+        if soil.data.get("simulation"):
+            soils.append(soil)
+    planned = plan(soils, set(filter(None, args.responses.split(","))),
+                   set(filter(None, args.stages.split(","))))
+    out = Path(args.out)
+    out.mkdir(parents=True, exist_ok=True)
+    csv_path, md_path = out / "design_budget.csv", out / "design_budget.md"
+    rows = read_rows(csv_path, FIELDS)
+    rev = commit()
+    if not args.report_only:
+        import numba
+
+        numba.set_num_threads(args.threads)
+        for soil, sid, rid, design_rows in planned:
+            if isinstance(design_rows, str):
+                print(f"{soil.name} {sid} {rid}: not simulated: {design_rows}", flush=True)
+                continue
+            for i, (_, row) in enumerate(design_rows.iterrows()):
+                if i % args.every:
+                    continue
+                key = (soil.name, sid, rid, int(row["run"]))
+                if not args.fresh and any(_key(r) == key for r in rows):
+                    continue
+                new = run_point(soil, sid, rid, row.to_dict(), len(design_rows), args, rev)
+                print({k: new[k] for k in ("soil", "stage", "response", "run", "printed", "simulated",
+                                           "wall_s", "error")}, flush=True)
+                rows = [r for r in rows if _key(r) != key] + [new]
+                rows.sort(key=_key)
+                write_rows(csv_path, rows, FIELDS)
+    report(rows, planned, md_path, argv)
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,218 @@
+"""A soil's design points as DEM runs: which scenario measures which response.
+
+A soil config's ``simulation`` block names, for each response of its design stages, the
+physical test that measures it, the scenario setup (a named setup of the scenario with
+optional ``set`` overrides, e.g. another tube diameter), the scenario response that is the
+measured value, and DEM parameters the paper's printed values do not give (or give with a
+unit slip the config documents)::
+
+    simulation:
+      preset: quick          # quick (default) or paper
+      replicates: 1          # seeds per design point, responses averaged (base.run_replicates)
+      params: {soil_density: 1757.567}
+      responses:
+        static_angle: {scenario: repose, setup: xinjiang-vineyard-100mm, measure: angle_deg}
+        dynamic_angle: {scenario: drum, setup: xinjiang-vineyard, measure: angle_deg}
+
+The DEM parameters of one design point are, in increasing precedence: the defaults of
+:class:`~soilcal.dem.scenarios.base.DemParams`, the soil's printed properties, the block's
+``params``, the stage's ``fixed`` values and the design row's factor levels (so a factor
+always wins; :func:`design_params`).
+
+:func:`design_levels` gives every run of a stage in actual units: the printed table when the
+paper prints one (coded tables decoded), otherwise the design generated from the stage's
+factor levels (:mod:`soilcal.doe`: Plackett-Burman or Box-Behnken columns in the order of
+the config's factors, or the steepest-ascent path of ``levels``).
+
+Every design point of a soil runs with the soil's ``seed`` (common random numbers: the same
+packing draw at every point, so differences between points are not seed noise);
+``replicates`` adds the seeds that follow it.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+import pandas as pd
+
+from soilcal.errors import InputError
+
+BLOCK = "simulation"
+
+
+@dataclass(frozen=True)
+class SimulationSpec:
+    """How one response of a soil is simulated (validated)."""
+
+    response: str
+    scenario: str
+    setup: dict
+    measure: str
+    preset: str = "quick"
+    replicates: int = 1
+    params: dict = field(default_factory=dict)
+
+
+def _block(soil_path, data: dict) -> dict:
+    sim = data.get(BLOCK)
+    if not sim:
+        raise InputError(soil_path, BLOCK, "a simulation block naming the scenario of each response", None)
+    return sim
+
+
+def response_ids(data: dict) -> list[str]:
+    """Response ids of all stages of a soil, in config order."""
+    out = []
+    for st in data["stages"]:
+        for r in st["responses"]:
+            if r["id"] not in out:
+                out.append(r["id"])
+    return out
+
+
+def spec_from(soil_path, data: dict, response_id: str) -> SimulationSpec:
+    """The validated :class:`SimulationSpec` of one response; errors name the config field."""
+    from soilcal.dem.scenarios import SCENARIOS
+    from soilcal.dem.scenarios.base import PRESETS, DemParams
+
+    sim = _block(soil_path, data)
+    where = f"{BLOCK}.responses.{response_id}"
+    entry = (sim.get("responses") or {}).get(response_id)
+    if entry is None:
+        raise InputError(soil_path, f"{BLOCK}.responses", "an entry for the response " + repr(response_id),
+                         sorted(sim.get("responses") or {}))
+    name = entry["scenario"]
+    if name not in SCENARIOS:
+        raise InputError(soil_path, f"{where}.scenario", f"one of {', '.join(sorted(SCENARIOS))}", name)
+    mod = SCENARIOS[name]
+    setups = mod.setups()
+    sname = entry["setup"]
+    if sname not in setups:
+        raise InputError(soil_path, f"{where}.setup", f"a setup of {name} ({', '.join(setups)})", sname)
+    setup = dict(setups[sname])
+    overrides = dict(entry.get("set") or {})
+    for k, v in overrides.items():
+        if k not in setup or k == "name":
+            raise InputError(soil_path, f"{where}.set.{k}", f"a key of the {name} setup {sname!r} "
+                             f"({', '.join(sorted(x for x in setup if x != 'name'))})", k)
+        setup[k] = v
+    setup["name"] = sname
+    if overrides:
+        setup["overrides"] = sorted(set(setup.get("overrides", [])) | set(overrides))
+    preset = sim.get("preset", "quick")
+    if preset not in PRESETS:  # the schema already refuses this; kept for direct callers
+        raise InputError(soil_path, f"{BLOCK}.preset", f"one of {', '.join(PRESETS)}", preset)
+    params = dict(sim.get("params") or {})
+    try:
+        DemParams.from_mapping(params, str(soil_path))
+    except InputError as exc:
+        fld = exc.field[len("params."):] if exc.field.startswith("params.") else exc.field
+        raise InputError(soil_path, f"{BLOCK}.params.{fld}", exc.expected, exc.got) from None
+    try:
+        mod.validate(setup, preset, str(soil_path))
+    except InputError as exc:
+        fld = exc.field[len("setup."):] if exc.field.startswith("setup.") else exc.field
+        raise InputError(soil_path, f"{where}.set.{fld}", exc.expected, exc.got) from None
+    return SimulationSpec(response=response_id, scenario=name, setup=setup, measure=entry["measure"],
+                          preset=preset, replicates=int(sim.get("replicates", 1)), params=params)
+
+
+def check_block(soil_path, data: dict) -> None:
+    """Start-up check of a soil's ``simulation`` block (called by the config loader)."""
+    sim = data.get(BLOCK)
+    if not sim:
+        return
+    rids = response_ids(data)
+    for rid in sim.get("responses") or {}:
+        if rid not in rids:
+            raise InputError(soil_path, f"{BLOCK}.responses.{rid}",
+                             "a response id of a stage (" + ", ".join(rids) + ")", rid)
+        spec_from(soil_path, data, rid)
+
+
+def spec(soil, response_id: str) -> SimulationSpec:
+    """:func:`spec_from` for a loaded :class:`~soilcal.config.load.Soil`."""
+    return spec_from(soil.path, soil.data, response_id)
+
+
+def design_levels(soil, stage_id: str) -> pd.DataFrame:
+    """Every run of a stage: ``run`` (1-based), one column per factor letter in actual units,
+    and the printed response columns when the paper prints the table."""
+    from soilcal.doe.designs import box_behnken, coded_to_actual, plackett_burman
+
+    stage = soil.stage(stage_id)
+    letters = list(stage["factors"])
+    where = f"stages.{stage_id}"
+    if stage.get("table"):
+        df = soil.tables[stage_id].copy()
+        if stage.get("table_coding") == "coded":
+            for c in letters:
+                f = stage["factors"][c]
+                df[c] = np.round(0.5 * (f["low"] + f["high"]) + df[c].astype(float) * 0.5 * (f["high"] - f["low"]), 12)
+        if "run" not in df.columns:
+            df.insert(0, "run", np.arange(1, len(df) + 1))
+        keep = ["run"] + letters + [r.get("column", r["id"]) for r in stage["responses"]]
+        return df[[c for c in keep if c in df.columns]].reset_index(drop=True)
+    kind = stage["kind"]
+    if kind == "steepest_ascent":
+        levels = {}
+        for c in letters:
+            lv = stage["factors"][c].get("levels")
+            if not lv:
+                raise InputError(soil.path, f"{where}.factors.{c}.levels",
+                                 "the actual value of every step (no printed table to take them from)", None)
+            levels[c] = [float(v) for v in lv]
+        n = {len(v) for v in levels.values()}
+        if len(n) != 1:
+            raise InputError(soil.path, f"{where}.factors", "the same number of levels for every factor",
+                             sorted(n))
+        df = pd.DataFrame(levels)
+    else:
+        lo, hi = [], []
+        for c in letters:
+            f = stage["factors"][c]
+            if f.get("low") is None or f.get("high") is None:
+                raise InputError(soil.path, f"{where}.factors.{c}",
+                                 "low and high levels to generate the design (the paper's table is not printed)", f)
+            lo.append(float(f["low"]))
+            hi.append(float(f["high"]))
+        if kind == "plackett_burman":
+            coded = plackett_burman(len(letters) + len(stage.get("dummies", [])))[:, : len(letters)]
+        else:
+            coded = box_behnken(len(letters), int(stage.get("center_points", 0)))
+        df = pd.DataFrame(np.round(coded_to_actual(coded, lo, hi), 12), columns=letters)
+    df.insert(0, "run", np.arange(1, len(df) + 1))
+    return df
+
+
+def design_params(soil, stage_id: str, levels: dict, sim: SimulationSpec, coded: bool = False):
+    """DEM parameters of one design point (precedence in the module docstring)."""
+    from soilcal.dem.scenarios.base import stage_params
+
+    return stage_params(soil, stage_id, levels, coded=coded, params=sim.params,
+                        params_field=f"{BLOCK}.params")
+
+
+def simulate_point(soil, stage_id: str, levels: dict, response_id: str, seed: int | None = None,
+                   replicates: int | None = None, threads=None, vtk_dir=None, coded: bool = False):
+    """Run one design point through the scenario that measures ``response_id``.
+
+    Returns ``(value, result)``: the measured response (the replicates' mean) and the
+    scenario's :class:`~soilcal.dem.scenarios.base.Result`.  ``seed`` defaults to the soil's
+    ``seed``, ``replicates`` to the block's.
+    """
+    from soilcal.dem.scenarios import get
+    from soilcal.dem.scenarios.base import run_replicates
+
+    sim = spec(soil, response_id)
+    params = design_params(soil, stage_id, levels, sim, coded=coded)
+    mod = get(sim.scenario)
+    seed = int(soil.data["seed"]) if seed is None else seed
+    k = sim.replicates if replicates is None else replicates
+    res = run_replicates(mod, sim.setup, params, preset=sim.preset, seed=seed, replicates=k,
+                         threads=threads, vtk_dir=vtk_dir, source=str(soil.path))
+    if sim.measure not in res.responses:
+        raise InputError(soil.path, f"{BLOCK}.responses.{response_id}.measure",
+                         f"a response of {sim.scenario} ({', '.join(res.responses)})", sim.measure)
+    return float(res.responses[sim.measure]), res
