@@ -4,11 +4,13 @@ For each soil config with a ``simulation`` block, each response it maps to a sce
 each stage that has that response, every run of the stage's design
 (:func:`soilcal.dem.scenarios.design.design_levels`: the printed table, or the design generated
 from the factor levels when the paper's table is lost) is simulated once
-(:func:`~soilcal.dem.scenarios.design.simulate_point`, the soil's seed, the block's preset).
+(:func:`~soilcal.dem.scenarios.design.simulate_point`, the block's preset, the seed of
+:func:`~soilcal.dem.scenarios.design.design_seeds`: the soil's seed, the next one for each
+repetition of a point).
 One row per design point goes to ``benchmarks/results/design_budget.csv`` (written after each
-point, so an interrupted sweep keeps its rows; a rerun skips the points already there unless
-``--fresh``); ``design_budget.md`` sums the wall time per soil, stage and response, projects
-the whole pass from the points run (``--every k`` runs every k-th row only), and sets the
+point, so an interrupted sweep keeps its rows; a rerun skips the points already there with
+the same seed unless ``--fresh``); ``design_budget.md`` sums the wall time per soil, stage
+and response, projects the whole pass from the points run (``--every k`` runs every k-th row only), and sets the
 simulated response beside the printed (EDEM) one (spread and Pearson correlation).
 
     python benchmarks/design_budget.py --threads 2
@@ -63,7 +65,7 @@ def plan(soils, only_responses=None, only_stages=None):
     return out
 
 
-def run_point(soil, stage_id, rid, row, n_runs, args, rev):
+def run_point(soil, stage_id, rid, row, n_runs, seed, args, rev):
     from soilcal.dem.scenarios import design
 
     stage = soil.stage(stage_id)
@@ -76,11 +78,11 @@ def run_point(soil, stage_id, rid, row, n_runs, args, rev):
                stage=stage_id, response=rid, run=int(row["run"]), design_runs=n_runs,
                levels=" ".join(f"{k}={v:g}" for k, v in levels.items()), scenario=spec.scenario,
                setup=spec.setup["name"], measure=spec.measure, preset=spec.preset,
-               seed=int(soil.data["seed"]),
+               seed=int(seed),
                printed="" if printed == "" or not np.isfinite(float(printed)) else float(printed))
     t0 = time.perf_counter()
     try:
-        value, res = design.simulate_point(soil, stage_id, levels, rid, replicates=1,
+        value, res = design.simulate_point(soil, stage_id, levels, rid, seed=seed, replicates=1,
                                            threads=args.threads)
     except Exception as exc:  # a failed point is a row of the table, not the end of the sweep
         out.update(wall_s=round(time.perf_counter() - t0, 1), simulated="",
@@ -184,18 +186,21 @@ def main(argv=None):
     if not args.report_only:
         import numba
 
+        from soilcal.dem.scenarios import design
+
         numba.set_num_threads(args.threads)
         for soil, sid, rid, design_rows in planned:
             if isinstance(design_rows, str):
                 print(f"{soil.name} {sid} {rid}: not simulated: {design_rows}", flush=True)
                 continue
+            seeds = design.design_seeds(soil, sid, design_rows)
             for i, (_, row) in enumerate(design_rows.iterrows()):
                 if i % args.every:
                     continue
                 key = (soil.name, sid, rid, int(row["run"]))
-                if not args.fresh and any(_key(r) == key for r in rows):
+                if not args.fresh and any(_key(r) == key and int(r["seed"]) == seeds[i] for r in rows):
                     continue
-                new = run_point(soil, sid, rid, row.to_dict(), len(design_rows), args, rev)
+                new = run_point(soil, sid, rid, row.to_dict(), len(design_rows), seeds[i], args, rev)
                 print({k: new[k] for k in ("soil", "stage", "response", "run", "printed", "simulated",
                                            "wall_s", "error")}, flush=True)
                 rows = [r for r in rows if _key(r) != key] + [new]

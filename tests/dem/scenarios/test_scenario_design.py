@@ -120,3 +120,15 @@ def test_low_restitution_corner_of_a_screening_design_runs():
     value, res = design.simulate_point(soil, "pb", levels, "static_angle", threads=2)
     assert res.responses["settled"] == 1 and np.isfinite(value) and 15 < value < 50
     assert res.setup["dt_fraction"] < 0.3
+
+
+def test_repeated_points_get_the_next_seeds():
+    # cinnamon soil Table 6: 12 edge points and 5 centre points (A 0.11, B 0.38, C 0.54)
+    soil = _soil("cinnamon-soil")
+    df = design.design_levels(soil, "bbd")
+    seeds = design.design_seeds(soil, "bbd", df)
+    centre = ((df["A"] == 0.11) & (df["B"] == 0.38) & (df["C"] == 0.54)).to_numpy()
+    assert centre.sum() == 5
+    assert sorted(np.asarray(seeds)[centre]) == [1082, 1083, 1084, 1085, 1086]  # seed: 1082
+    assert set(np.asarray(seeds)[~centre]) == {1082}
+    assert design.design_seeds(soil, "bbd", df, seed=0)[:1] == [0]

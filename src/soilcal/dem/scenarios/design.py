@@ -25,8 +25,11 @@ factor levels (:mod:`soilcal.doe`: Plackett-Burman or Box-Behnken columns in the
 the config's factors, or the steepest-ascent path of ``levels``).
 
 Every design point of a soil runs with the soil's ``seed`` (common random numbers: the same
-packing draw at every point, so differences between points are not seed noise);
-``replicates`` adds the seeds that follow it.
+packing draw at every point, so differences between points are not seed noise), except
+that a repeated point (a Box-Behnken centre point, a row equal to an earlier one) takes the
+next seed at each repetition (:func:`design_seeds`): identical runs of a deterministic
+engine would give a pure error of zero and void the lack-of-fit test.  ``replicates`` adds
+the seeds that follow a point's seed.
 """
 
 from __future__ import annotations
@@ -184,6 +187,20 @@ def design_levels(soil, stage_id: str) -> pd.DataFrame:
         df = pd.DataFrame(np.round(coded_to_actual(coded, lo, hi), 12), columns=letters)
     df.insert(0, "run", np.arange(1, len(df) + 1))
     return df
+
+
+def design_seeds(soil, stage_id: str, rows: pd.DataFrame, seed: int | None = None) -> list[int]:
+    """Seed of each row of :func:`design_levels`: the soil's ``seed`` (or ``seed``) plus the
+    number of earlier rows with the same factor levels (module docstring)."""
+    base = int(soil.data["seed"]) if seed is None else int(seed)
+    letters = list(soil.stage(stage_id)["factors"])
+    seen: dict[tuple, int] = {}
+    out = []
+    for vals in rows[letters].itertuples(index=False):
+        key = tuple(round(float(v), 12) for v in vals)
+        out.append(base + seen.get(key, 0))
+        seen[key] = seen.get(key, 0) + 1
+    return out
 
 
 def design_params(soil, stage_id: str, levels: dict, sim: SimulationSpec, coded: bool = False):

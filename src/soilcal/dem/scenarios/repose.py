@@ -55,7 +55,10 @@ Responses: ``angle_deg`` (radial bins, eight directions, :mod:`soilcal.dem.measu
 of one mean radius, eight directions; scatter over seeds of the three estimators:
 ``benchmarks/repose_seeds.py``), ``angle_image_deg`` (side silhouettes through the photo
 pipeline, four flanks), ``height_m``, ``n_on_plate``, ``n_lost``,
-``n_retained`` (funnel), ``settled``, ``settle_time_s``.
+``n_retained`` (funnel), ``settled``, ``settle_time_s``.  An estimator that cannot read the
+heap (a load spread flat over the plate has no flank the silhouette pipeline can find; too
+few spheres stayed on the plate) reports NaN and its reason in ``measure_errors`` (empty when
+all three read the heap); the run itself does not fail.
 """
 
 from __future__ import annotations
@@ -70,6 +73,7 @@ from soilcal.dem.geometry import cone_mesh, disk_mesh
 from soilcal.dem.scenarios.base import (DemParams, Frames, Result, Timer, check, check_discretisation,
                                         check_preset, make_simulation, paper_cohesion, paper_psd,
                                         rng, run_time, settle, setup_number, threads_used)
+from soilcal.errors import InputError
 
 NAME = "repose"
 PHI = 0.6  # settled solid fraction used to size the fill
@@ -318,14 +322,29 @@ def run(setup: dict, params: DemParams, preset: str = "quick", seed: int = 0, th
                      n_retained=int((x[:, 2] >= z_out - 0.5 * sz["r_max"]).sum())
                      if math.isfinite(z_out) else 0,
                      settled=int(ok), settle_time_s=float(t_rest))
-    bins = measure.repose_angle_bins(x[on], r[on], 0.0, centre=(0.0, 0.0), source=source)
+    failed = []
+
+    def measured(name, fn, *args, **kw):
+        # a heap an estimator cannot read (spread flat, too few spheres on the plate) is a
+        # result of the run, not an error of it: that estimator's angle is NaN
+        try:
+            return fn(*args, **kw)
+        except InputError as exc:
+            failed.append(f"{name}: {exc.field}: expected {exc.expected}, got {exc.got}")
+            return dict(angle_deg=math.nan, spread_deg=math.nan, height_m=math.nan,
+                        per_direction_deg=[])
+
+    bins = measured("bins", measure.repose_angle_bins, x[on], r[on], 0.0, centre=(0.0, 0.0),
+                    source=source)
     responses.update(angle_deg=bins["angle_deg"], angle_sd_deg=bins["spread_deg"],
                      height_m=bins["height_m"])
-    scan = measure.repose_angle_surface(x[on], r[on], 0.0, centre=(0.0, 0.0), source=source)
+    scan = measured("surface", measure.repose_angle_surface, x[on], r[on], 0.0,
+                    centre=(0.0, 0.0), source=source)
     responses.update(angle_surface_deg=scan["angle_deg"], angle_surface_sd_deg=scan["spread_deg"])
     if setup.get("image", True):
-        img = measure.repose_angle_image(x[on], r[on], 0.0)
+        img = measured("image", measure.repose_angle_image, x[on], r[on], 0.0)
         responses.update(angle_image_deg=img["angle_deg"], angle_image_sd_deg=img["spread_deg"])
+    responses["measure_errors"] = "; ".join(failed)
     setup_out = dict(setup)
     setup_out.pop("paper_psd", None)
     setup_out.update(stiffness_scale=scale, cohesion_scale=coh, dt=sim.dt,
