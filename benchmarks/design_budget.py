@@ -89,7 +89,8 @@ def run_point(soil, stage_id, rid, row, n_runs, seed, args, rev):
                    error=f"{type(exc).__name__}: {exc}"[:300].replace("|", "/"), threads=args.threads)
         return out
     out.update(threads=res.threads, particles=res.n_particles, steps=res.steps,
-               wall_s=round(res.wall_s, 1), simulated=round(value, 3), error="")
+               wall_s=round(res.wall_s, 1), simulated=round(value, 3),
+               error=str(res.responses.get("measure_errors", ""))[:300].replace("|", "/"))
     return out
 
 

@@ -239,7 +239,8 @@ class Simulation:
         self.rayleigh = self.materials.rayleigh_dt(rmin)
         self.jkr_dt = (self.materials.jkr_dt(rmin, self._pair) if self.codes[4] == 1
                        else math.inf)
-        self.damping_dt = self.materials.damping_dt(rmin, self._pair, self.max_overlap)
+        self.damping_dt = self.materials.damping_dt(rmin, self._pair, self.max_overlap,
+                                                    wall_materials=set(self.walls.mat))
         dt = self.dt_user if self.dt_user is not None else min(
             self.dt_fraction * self.rayleigh, self.jkr_dt, DAMPING_DT_SAFETY * self.damping_dt)
         if not (dt > 0 and math.isfinite(dt)):

@@ -132,3 +132,6 @@ def test_repeated_points_get_the_next_seeds():
     assert sorted(np.asarray(seeds)[centre]) == [1082, 1083, 1084, 1085, 1086]  # seed: 1082
     assert set(np.asarray(seeds)[~centre]) == {1082}
     assert design.design_seeds(soil, "bbd", df, seed=0)[:1] == [0]
+    # with k replicates per point, repetition j starts at seed + j k (no shared seeds)
+    s3 = np.asarray(design.design_seeds(soil, "bbd", df, replicates=3))
+    assert sorted(s3[centre]) == [1082, 1085, 1088, 1091, 1094]

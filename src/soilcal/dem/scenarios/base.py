@@ -623,8 +623,9 @@ def threads_used(threads) -> int:
 #:   particle sizes.
 #:
 #: Either step is capped at the JKR bound and at 0.7 x the damped-contact bound
-#: (materials.py): with restitution below about 0.65 the quick step is below 30 % (0.15 T_R
-#: at e = 0.15), as 30 % blew up heaps of heavily damped spheres.
+#: (materials.py), as 30 % blew up heaps of heavily damped spheres: with friction on steel
+#: walls the quick step is at most 0.28 T_R (0.15 T_R at e = 0.15), and the paper step is
+#: below 20 % for restitution below about 0.5.
 PRESET_DEFAULTS = {
     "quick": dict(g_max=5.0e5, dt_fraction=0.3, n_particles=1000, max_overlap=0.3),
     "paper": dict(g_max=None, dt_fraction=0.2, n_particles=None, max_overlap=0.3),

@@ -189,16 +189,18 @@ def design_levels(soil, stage_id: str) -> pd.DataFrame:
     return df
 
 
-def design_seeds(soil, stage_id: str, rows: pd.DataFrame, seed: int | None = None) -> list[int]:
-    """Seed of each row of :func:`design_levels`: the soil's ``seed`` (or ``seed``) plus the
-    number of earlier rows with the same factor levels (module docstring)."""
+def design_seeds(soil, stage_id: str, rows: pd.DataFrame, seed: int | None = None,
+                 replicates: int = 1) -> list[int]:
+    """Seed of each row of :func:`design_levels`: the soil's ``seed`` (or ``seed``) plus
+    ``replicates`` times the number of earlier rows with the same factor levels (module
+    docstring), so that the replicate seeds of repeated points do not overlap."""
     base = int(soil.data["seed"]) if seed is None else int(seed)
     letters = list(soil.stage(stage_id)["factors"])
     seen: dict[tuple, int] = {}
     out = []
     for vals in rows[letters].itertuples(index=False):
         key = tuple(round(float(v), 12) for v in vals)
-        out.append(base + seen.get(key, 0))
+        out.append(base + int(replicates) * seen.get(key, 0))
         seen[key] = seen.get(key, 0) + 1
     return out
 
