@@ -190,3 +190,28 @@ def test_damped_contact_bound_for_low_restitution():
     with pytest.raises(InputError, match="damped-contact bound") as err:
         bad.run(1)
     assert err.value.field == "dt"
+
+
+@pytest.mark.parametrize("zeta", [0.0, 0.2, 0.47, 0.9])
+def test_damped_step_bound_is_the_leapfrog_stability_limit(zeta):
+    """Integrate x'' = -w^2 x - 2 z w v as the engine does (kick with the force from the
+    half-step velocity, drift): bounded just below damped_critical_dt, growing just above."""
+    from soilcal.dem.materials import damped_critical_dt
+
+    k, m = 4.0e3, 2.0e-4
+    w = math.sqrt(k / m)
+    hc = damped_critical_dt(k, m, zeta)
+
+    def growth(dt):
+        # largest |x| over the last 200 of 4000 steps over the largest of the first 200
+        x, v, peaks = 1.0, 0.0, []
+        for _ in range(4000):
+            v += dt * (-w * w * x - 2 * zeta * w * v)
+            x += dt * v
+            peaks.append(abs(x))
+            if abs(x) > 1e12:
+                return math.inf
+        return max(peaks[-200:]) / max(peaks[:200])
+
+    assert growth(0.99 * hc) < 1.01  # undamped: sampled peaks of a steady oscillation
+    assert growth(1.01 * hc) > 1e3

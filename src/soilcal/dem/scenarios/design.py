@@ -64,6 +64,13 @@ def _block(soil_path, data: dict) -> dict:
     return sim
 
 
+def _renamed(exc: InputError, soil_path, prefix: str, field_prefix: str) -> InputError:
+    """``exc`` reported against the soil file, its field ``<prefix>X`` renamed to
+    ``<field_prefix>X`` (the config key the user wrote)."""
+    fld = exc.field[len(prefix):] if exc.field.startswith(prefix) else exc.field
+    return InputError(soil_path, field_prefix + fld, exc.expected, exc.got)
+
+
 def response_ids(data: dict) -> list[str]:
     """Response ids of all stages of a soil, in config order."""
     out = []
@@ -77,7 +84,7 @@ def response_ids(data: dict) -> list[str]:
 def spec_from(soil_path, data: dict, response_id: str) -> SimulationSpec:
     """The validated :class:`SimulationSpec` of one response; errors name the config field."""
     from soilcal.dem.scenarios import SCENARIOS
-    from soilcal.dem.scenarios.base import PRESETS, DemParams
+    from soilcal.dem.scenarios.base import PRESETS, DemParams, merge_setup
 
     sim = _block(soil_path, data)
     where = f"{BLOCK}.responses.{response_id}"
@@ -93,16 +100,10 @@ def spec_from(soil_path, data: dict, response_id: str) -> SimulationSpec:
     sname = entry["setup"]
     if sname not in setups:
         raise InputError(soil_path, f"{where}.setup", f"a setup of {name} ({', '.join(setups)})", sname)
-    setup = dict(setups[sname])
-    overrides = dict(entry.get("set") or {})
-    for k, v in overrides.items():
-        if k not in setup or k == "name":
-            raise InputError(soil_path, f"{where}.set.{k}", f"a key of the {name} setup {sname!r} "
-                             f"({', '.join(sorted(x for x in setup if x != 'name'))})", k)
-        setup[k] = v
-    setup["name"] = sname
-    if overrides:
-        setup["overrides"] = sorted(set(setup.get("overrides", [])) | set(overrides))
+    try:
+        setup = merge_setup(setups, sname, dict(entry.get("set") or {}), str(soil_path))
+    except InputError as exc:
+        raise _renamed(exc, soil_path, "setup.", f"{where}.set.") from None
     preset = sim.get("preset", "quick")
     if preset not in PRESETS:  # the schema already refuses this; kept for direct callers
         raise InputError(soil_path, f"{BLOCK}.preset", f"one of {', '.join(PRESETS)}", preset)
@@ -110,13 +111,11 @@ def spec_from(soil_path, data: dict, response_id: str) -> SimulationSpec:
     try:
         DemParams.from_mapping(params, str(soil_path))
     except InputError as exc:
-        fld = exc.field[len("params."):] if exc.field.startswith("params.") else exc.field
-        raise InputError(soil_path, f"{BLOCK}.params.{fld}", exc.expected, exc.got) from None
+        raise _renamed(exc, soil_path, "params.", f"{BLOCK}.params.") from None
     try:
         mod.validate(setup, preset, str(soil_path))
     except InputError as exc:
-        fld = exc.field[len("setup."):] if exc.field.startswith("setup.") else exc.field
-        raise InputError(soil_path, f"{where}.set.{fld}", exc.expected, exc.got) from None
+        raise _renamed(exc, soil_path, "setup.", f"{where}.set.") from None
     return SimulationSpec(response=response_id, scenario=name, setup=setup, measure=entry["measure"],
                           preset=preset, replicates=int(sim.get("replicates", 1)), params=params)
 
@@ -150,9 +149,9 @@ def design_levels(soil, stage_id: str) -> pd.DataFrame:
     if stage.get("table"):
         df = soil.tables[stage_id].copy()
         if stage.get("table_coding") == "coded":
-            for c in letters:
-                f = stage["factors"][c]
-                df[c] = np.round(0.5 * (f["low"] + f["high"]) + df[c].astype(float) * 0.5 * (f["high"] - f["low"]), 12)
+            lo = [stage["factors"][c]["low"] for c in letters]
+            hi = [stage["factors"][c]["high"] for c in letters]
+            df[letters] = np.round(coded_to_actual(df[letters].to_numpy(float), lo, hi), 12)
         if "run" not in df.columns:
             df.insert(0, "run", np.arange(1, len(df) + 1))
         keep = ["run"] + letters + [r.get("column", r["id"]) for r in stage["responses"]]
