@@ -4,6 +4,7 @@ below a results page's marker (hand-written, kept when the table is regenerated)
 from __future__ import annotations
 
 import csv
+import os
 import subprocess
 from pathlib import Path
 
@@ -29,10 +30,15 @@ def read_rows(path: Path, fields) -> list[dict]:
 
 
 def write_rows(path: Path, rows, fields) -> None:
-    with open(path, "w", newline="") as fh:
+    """Write the table to a temporary file beside ``path`` and move it into place, so an
+    interrupted write leaves the previous table whole."""
+    path = Path(path)
+    tmp = path.with_name(path.name + ".tmp")
+    with open(tmp, "w", newline="") as fh:
         w = csv.DictWriter(fh, fieldnames=list(fields), extrasaction="ignore")
         w.writeheader()
         w.writerows(rows)
+    os.replace(tmp, path)
 
 
 def kept_notes(md_path: Path) -> str:

@@ -34,7 +34,7 @@ HERE = Path(__file__).resolve().parent
 ROOT = HERE.parent
 FIELDS = ["utc", "commit", "soil", "stage", "response", "run", "design_runs", "levels", "scenario",
           "setup", "measure", "preset", "seed", "threads", "particles", "steps", "wall_s", "printed",
-          "simulated", "error"]
+          "simulated", "peak_overlap", "error"]
 
 
 def _key(r):
@@ -90,6 +90,7 @@ def run_point(soil, stage_id, rid, row, n_runs, seed, args, rev):
         return out
     out.update(threads=res.threads, particles=res.n_particles, steps=res.steps,
                wall_s=round(res.wall_s, 1), simulated=round(value, 3),
+               peak_overlap=round(float(res.responses.get("peak_overlap", float("nan"))), 3),
                error=str(res.responses.get("measure_errors", ""))[:300].replace("|", "/"))
     return out
 
@@ -148,7 +149,9 @@ def report(rows, planned, md_path, argv):
     md += ["Runs:", "", "| " + " | ".join(FIELDS) + " |", "|" + "---|" * len(FIELDS),
            *("| " + " | ".join(str(r.get(k, "")) for k in FIELDS) + " |" for r in rows),
            "", kept_notes(md_path)]
-    md_path.write_text("\n".join(md) + "\n")
+    tmp = md_path.with_name(md_path.name + ".tmp")
+    tmp.write_text("\n".join(md) + "\n")
+    os.replace(tmp, md_path)
 
 
 def main(argv=None):

@@ -118,3 +118,22 @@ def test_jkr_root_inverts_the_jkr_overlap(warm):
         x_prev = math.sqrt(a) * (1 + warm) if warm else 0.0
         x = jkr_root(delta, rstar, c, x_prev)
         assert x * x == pytest.approx(a, rel=1e-12)
+
+
+@pytest.mark.parametrize("v0", [0.02, 0.1])
+def test_peak_overlap_is_the_hertz_maximum_compression(v0):
+    """Elastic head-on impact: the largest overlap is Hertz's maximum compression
+    delta_max = (15 m* v0^2 / (16 E* sqrt(R*)))^(2/5) (Johnson 1985, Sec. 11.1)."""
+    sim = Simulation(table(e=1.0, mu=0.0, E=E), dt=1e-7, gravity=(0, 0, 0),
+                     contact_model=dict(tangential="none"))
+    sim.add_particles([[0, 0, 0], [2 * R + 1e-7, 0, 0]], R, "soil",
+                      v=[[v0 / 2, 0, 0], [-v0 / 2, 0, 0]])
+    assert sim.peak_overlap == 0.0
+    sim.run(int(4 * 2.868 * ((MASS / 2) ** 2 / (R / 2 * ESTAR**2 * v0)) ** 0.2 / 1e-7))
+    mstar, rstar = MASS / 2, R / 2
+    dmax = (15 * mstar * v0**2 / (16 * ESTAR * math.sqrt(rstar))) ** 0.4
+    assert sim.x[1, 0] - sim.x[0, 0] > 2 * R  # separated again
+    assert sim.peak_overlap * R == pytest.approx(dmax, rel=1e-3)
+    sim.reset_peak_overlap()
+    sim.run(10)
+    assert sim.peak_overlap == 0.0

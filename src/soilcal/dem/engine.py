@@ -97,8 +97,8 @@ class Simulation:
         self._pair = None
         self.dt = None
         # wall travel since the list build, pair-list builds, wall-list builds, steps since
-        # the last spatial sort (inf: sort at the first build)
-        self._fstate = np.array([0.0, 0.0, 0.0, math.inf])
+        # the last spatial sort (inf: sort at the first build), peak overlap / radius
+        self._fstate = np.array([0.0, 0.0, 0.0, math.inf, 0.0])
 
     # ------------------------------------------------------------------ building
     def add_particles(self, x, r, material, v=None, omega=None, fixed=False, lock_rotation=False):
@@ -474,6 +474,15 @@ class Simulation:
     def n_rebuilds(self) -> int:
         """Builds of the pair lists (the wall lists are built with them)."""
         return int(self._fstate[1])
+
+    @property
+    def peak_overlap(self) -> float:
+        """Largest overlap of any particle, as a fraction of its radius, over the steps run
+        since the simulation was built or :meth:`reset_peak_overlap` was called."""
+        return float(self._fstate[4])
+
+    def reset_peak_overlap(self) -> None:
+        self._fstate[4] = 0.0
 
     @property
     def n_wall_rebuilds(self) -> int:

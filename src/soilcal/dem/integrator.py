@@ -422,7 +422,8 @@ def run_loop(nsteps, step0, resume_mid, need_forces, ke_tol, ke_every, max_ovr, 
     fstate[2] builds of the wall lists alone, fstate[3] the steps since the last spatial
     sort: a pair-list build with fstate[3] >= sort_every > 0 first re-sorts the particle
     rows into cell order (:func:`soilcal.dem.neighbour.sort_particles`; perm, fbuf, ibuf:
-    its work space; pid: insertion ids, which follow the rows).  Wall force and torque go to row
+    its work space; pid: insertion ids, which follow the rows); fstate[4] keeps the largest
+    overlap of any particle (of its radius, ovr) over the completed steps.  Wall force and torque go to row
     (step - log0) / wlog_every - 1 of wlog every wlog_every steps after step log0.
     """
     n = x.shape[0]
@@ -530,6 +531,11 @@ def run_loop(nsteps, step0, resume_mid, need_forces, ke_tol, ke_every, max_ovr, 
             continue
         done = s + 1
         fstate[3] += 1.0
+        peak = fstate[4]
+        for i in range(n):
+            if ovr[i] > peak:
+                peak = ovr[i]
+        fstate[4] = peak
         status[1] = step0 + done
         if wlog_every > 0 and (step0 + done - log0) % wlog_every == 0:
             row = (step0 + done - log0) // wlog_every - 1

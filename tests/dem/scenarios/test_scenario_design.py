@@ -122,6 +122,26 @@ def test_low_restitution_corner_of_a_screening_design_runs():
     assert res.setup["dt_fraction"] < 0.3
 
 
+@pytest.mark.slow
+def test_furrow_centre_point_does_not_jam_against_the_tank_end(tmp_path, monkeypatch):
+    """Zeng et al. 2023 Table 4 run 25 (centre point; G 1 MPa): with 0.1 m of soil left
+    ahead of the opener at the end of the pass, the soil pushed ahead of it jammed against
+    the tank's far wall (overlap above 50 % of a radius); the quick tank keeps
+    ``front_clearance`` (furrow.py) of soil ahead of the share point."""
+    monkeypatch.setenv("SOILCAL_SCENARIO_CACHE", str(tmp_path))
+    soil = _soil("yangtze-clay-loam")
+    row = design.design_levels(soil, "bbd").iloc[24]
+    assert (row["A"], row["B"], row["C"], row["D"]) == (0.45, 0.40, 0.17, 7.00)
+    levels = {k: row[k] for k in soil.stage("bbd")["factors"]}
+    value, res = design.simulate_point(soil, "bbd", levels, "area_difference", threads=2)
+    assert np.isfinite(value) and value > 0
+    assert res.responses["traction_N"] > 0
+    assert 0.0 < res.responses["peak_overlap"] <= res.setup["max_overlap"]
+    s = res.setup
+    ahead = s["tank_length"] - (0.05 + s["opener_length"] + s["travel"])
+    assert ahead >= 2 * s["depth"] - 1e-12
+
+
 def test_repeated_points_get_the_next_seeds():
     # cinnamon soil Table 6: 12 edge points and 5 centre points (A 0.11, B 0.38, C 0.54)
     soil = _soil("cinnamon-soil")

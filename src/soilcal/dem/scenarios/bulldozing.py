@@ -230,7 +230,8 @@ def run(setup: dict, params: DemParams, preset: str = "quick", seed: int = 0, th
                 resultant_angle_deg=math.degrees(math.atan2(abs(fz), fx)),
                 horizontal_measured_N=meas[0], vertical_measured_N=meas[1],
                 horizontal_error_percent=100.0 * (fx - meas[0]) / meas[0],
-                force_scale=scale, bin_from_cache=bool(out["from_cache"]))
+                force_scale=scale, peak_overlap=float(out["peak_overlap"]),
+                bin_from_cache=bool(out["from_cache"]))
     return Result(scenario=NAME, preset=preset, seed=int(seed), n_particles=out["n"],
                   steps=int(out["steps"] + out["settle_steps"]),
                   sim_time_s=out["steps"] * out["dt"], wall_s=time.perf_counter() - t0,

@@ -187,7 +187,7 @@ def run(setup, params: DemParams, preset="quick", seed=0, threads=None, vtk_dir=
     if h0 is None:
         h0 = top
     eps, sig = measure.stress_strain(z_rod, fz, Rr, h0)
-    resp = dict(h0_m=float(h0), fill_settled=int(ok0),
+    resp = dict(h0_m=float(h0), fill_settled=int(ok0), peak_overlap=sim.peak_overlap,
                 stress_max_kpa=float(sig.max() / 1e3) if sig.size else float("nan"),
                 strain_end=float(eps[-1]) if eps.size else 0.0, stop_reason=stop,
                 solid_fraction_0=float((4.0 / 3.0 * math.pi * sim.p.r**3).sum()

@@ -163,7 +163,8 @@ def run(setup, params: DemParams, preset="quick", seed=0, threads=None, vtk_dir=
     a = np.asarray(angles)
     mean, sd = measure.mean_sd(a)
     responses = dict(angle_deg=mean, angle_sd_deg=sd, angle_max_deg=float(a.max()),
-                     n_frames=int(a.size), fill_settled=int(ok0))
+                     n_frames=int(a.size), fill_settled=int(ok0),
+                     peak_overlap=sim.peak_overlap)
     setup_out = dict(setup)
     setup_out.pop("paper_psd", None)
     setup_out.update(stiffness_scale=scale, cohesion_scale=coh, dt=sim.dt,

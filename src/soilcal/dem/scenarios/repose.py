@@ -345,6 +345,7 @@ def run(setup: dict, params: DemParams, preset: str = "quick", seed: int = 0, th
         img = measured("image", measure.repose_angle_image, x[on], r[on], 0.0)
         responses.update(angle_image_deg=img["angle_deg"], angle_image_sd_deg=img["spread_deg"])
     responses["measure_errors"] = "; ".join(failed)
+    responses["peak_overlap"] = sim.peak_overlap
     setup_out = dict(setup)
     setup_out.pop("paper_psd", None)
     setup_out.update(stiffness_scale=scale, cohesion_scale=coh, dt=sim.dt,

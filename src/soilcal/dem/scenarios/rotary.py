@@ -331,6 +331,7 @@ def run(setup: dict, params: DemParams, preset: str = "quick", seed: int = 0, th
                 flatness_mm=sd, flatness_dense_mm=flatness_or_nan(dd)[1],
                 surface_change_mm=d_mean, flatness_empty_points=n_empty,
                 flatness_measured_mm=meas, power_scale=scale,
+                peak_overlap=float(out["sim"].peak_overlap),
                 bin_from_cache=bool(out["from_cache"]))
     steps = out["steps"] + out["settle_steps"] + n_lift + n_rest
     return Result(scenario=NAME, preset=preset, seed=int(seed), n_particles=out["n"],

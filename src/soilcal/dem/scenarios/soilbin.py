@@ -333,9 +333,10 @@ def tool_pass(spec: BinSpec, params: DemParams, preset: str, seed: int, source: 
     """Settled (or cached) bin, trench dug by ``trench(x, r) -> bool``, the tool mesh
     (steel) moved with ``velocity``/``omega`` about ``centre`` for ``duration`` s.
 
-    Returns dict(sim, t, force, torque, dt, steps, settle_steps, n, from_cache, surface,
-    log_every); ``force``/``torque`` are the particles' force on the tool and its torque
-    about the (moving) tool centre, sampled every ``log_every`` steps."""
+    Returns dict(sim, t, force, torque, dt, steps, settle_steps, peak_overlap, n,
+    from_cache, surface, log_every); ``force``/``torque`` are the particles' force on the
+    tool and its torque about the (moving) tool centre, sampled every ``log_every`` steps;
+    ``peak_overlap`` is the largest overlap of the pass as a fraction of a radius."""
     if bed is None:
         bed = settled_bin(spec, params, preset, seed, source, use_cache)
     keep = dig(bed["x"], bed["r"], trench)
@@ -372,6 +373,7 @@ def tool_pass(spec: BinSpec, params: DemParams, preset: str, seed: int, source: 
             vtk.frame(sim, *(tool_pose(tt) if tool_pose else (None, None)))
     return dict(sim=sim, t=np.concatenate(ts), force=np.concatenate(fs),
                 torque=np.concatenate(qs), dt=dt, steps=steps, settle_steps=bed["settle_steps"],
+                peak_overlap=sim.peak_overlap,
                 n=int(keep.sum()), from_cache=bed["from_cache"], surface=bed["surface"],
                 log_every=log_every, wall=wall)
 
