@@ -134,6 +134,9 @@ def test_peak_overlap_is_the_hertz_maximum_compression(v0):
     dmax = (15 * mstar * v0**2 / (16 * ESTAR * math.sqrt(rstar))) ** 0.4
     assert sim.x[1, 0] - sim.x[0, 0] > 2 * R  # separated again
     assert sim.peak_overlap * R == pytest.approx(dmax, rel=1e-3)
+    peak = sim.peak_overlap
+    sim.add_particles([[0, 10 * R, 0]], R, "soil")  # a new row array keeps the run's peak
+    assert sim.peak_overlap == peak
     sim.reset_peak_overlap()
     sim.run(10)
     assert sim.peak_overlap == 0.0

@@ -97,8 +97,9 @@ class Simulation:
         self._pair = None
         self.dt = None
         # wall travel since the list build, pair-list builds, wall-list builds, steps since
-        # the last spatial sort (inf: sort at the first build), peak overlap / radius
-        self._fstate = np.array([0.0, 0.0, 0.0, math.inf, 0.0])
+        # the last spatial sort (inf: sort at the first build)
+        self._fstate = np.array([0.0, 0.0, 0.0, math.inf])
+        self._peak_before = 0.0  # peak overlap / radius before the last add_particles
 
     # ------------------------------------------------------------------ building
     def add_particles(self, x, r, material, v=None, omega=None, fixed=False, lock_rotation=False):
@@ -108,6 +109,7 @@ class Simulation:
         r = np.asarray(r, dtype=np.float64) * self.coarse_grain
         if np.any(~np.isfinite(r)) or np.any(r <= 0):
             raise InputError(self.source, "particles.radius", "radii > 0 m", float(np.min(r)))
+        self._peak_before = self.peak_overlap  # append() starts a new per-row peak array
         ids = self.p.append(x, r, self.materials.materials[k].density, k, v, omega, fixed,
                             lock_rotation)
         self._fstate[3] = math.inf  # new particles sit at the end: sort at the next build
@@ -364,7 +366,7 @@ class Simulation:
                 steps - total, self.step, resume_mid,
                 self._need_forces, float(ke_tol), int(ke_every), self.max_overlap,
                 int(wall_log_every), step0, p.x, p.v, p.omega, p.f, p.t, p.r, p.m, p.inv_m, p.inv_i,
-                p.mat, p.disp, p.ovr, p.mroll, p.id, L["xr"], L["vw"], self.gravity, self.box,
+                p.mat, p.disp, p.ovr, p.peak, p.mroll, p.id, L["xr"], L["vw"], self.gravity, self.box,
                 self.periodic, self.dt, self.skin, self.extra, self._pair, self.codes,
                 self.sort_every, L["perm"], L["pbuf"], L["ibuf"], self._cells,
                 self._cidx(), self._cof(), self._cpos_arr, self._wcells, self._wbins, self._glob(),
@@ -477,12 +479,15 @@ class Simulation:
 
     @property
     def peak_overlap(self) -> float:
-        """Largest overlap of any particle, as a fraction of its radius, over the steps run
-        since the simulation was built or :meth:`reset_peak_overlap` was called."""
-        return float(self._fstate[4])
+        """Largest overlap of any particle, as a fraction of its radius, over the force
+        evaluations since the simulation was built or :meth:`reset_peak_overlap` was called
+        (kept per row in the time loop, the maximum taken here)."""
+        rows = float(self.p.peak.max()) if self.p.n else 0.0
+        return max(self._peak_before, rows)
 
     def reset_peak_overlap(self) -> None:
-        self._fstate[4] = 0.0
+        self._peak_before = 0.0
+        self.p.peak[:] = 0.0
 
     @property
     def n_wall_rebuilds(self) -> int:

@@ -158,13 +158,13 @@ def pair_forces(colour, xr, vw, pair, codes, box, periodic, dt, start, nbr, hist
 
 
 @njit(cache=True, parallel=True, fastmath=CONTACT_MATH)
-def gather(x, v, om, r, inv_m, inv_i, mat, f, t, ovr, mroll, dt, kick, max_ovr, pair, codes,
+def gather(x, v, om, r, inv_m, inv_i, mat, f, t, ovr, peak, mroll, dt, kick, max_ovr, pair, codes,
            prim_kind, prim_wall, prim_mat, prim_par, wall_vel, wall_omega, wall_centre,
            wnbr, wcnt, whist, wslot):
     """Wall pass: per particle, the pair sums (f, t, ovr, mroll) + wall contacts; the
     ``bounded`` rolling torque (contact.py); then the closing kick if ``kick``.  Returns the
     number of particles with an overlap above max_ovr (of their radius) or a non-finite
-    velocity."""
+    velocity.  ``peak[i]`` keeps the largest overlap of row i (of its radius) seen here."""
     n = x.shape[0]
     KW = wnbr.shape[1]
     h = 0.5 * dt
@@ -307,6 +307,8 @@ def gather(x, v, om, r, inv_m, inv_i, mat, f, t, ovr, mroll, dt, kick, max_ovr, 
                 t[i, 1] = ty
                 t[i, 2] = tz
                 ovr[i] = mo
+                if mo > peak[i]:
+                    peak[i] = mo
                 if kick:
                     a = imi * h
                     b = iinv * h
@@ -400,7 +402,7 @@ def kinetic_translational(v, m, inv_m):
 
 @njit(cache=True)
 def run_loop(nsteps, step0, resume_mid, need_forces, ke_tol, ke_every, max_ovr, wlog_every,
-             log0, x, v, om, f, t, r, m, inv_m, inv_i, mat, disp, ovr, mroll, pid, xr, vw,
+             log0, x, v, om, f, t, r, m, inv_m, inv_i, mat, disp, ovr, peak, mroll, pid, xr, vw,
              gravity, box, periodic, dt, skin, extra, pair, codes, sort_every, perm, fbuf, ibuf,
              cell_start, cell_idx, cell_of, cpos, wcell_start, wcell_idx, glob,
              start_a, nbr_a, hist_a, act_a, start_b, nbr_b, hist_b, act_b, groups, sorder,
@@ -422,8 +424,8 @@ def run_loop(nsteps, step0, resume_mid, need_forces, ke_tol, ke_every, max_ovr, 
     fstate[2] builds of the wall lists alone, fstate[3] the steps since the last spatial
     sort: a pair-list build with fstate[3] >= sort_every > 0 first re-sorts the particle
     rows into cell order (:func:`soilcal.dem.neighbour.sort_particles`; perm, fbuf, ibuf:
-    its work space; pid: insertion ids, which follow the rows); fstate[4] keeps the largest
-    overlap of any particle (of its radius, ovr) over the completed steps.  Wall force and torque go to row
+    its work space; pid: insertion ids, which follow the rows; peak: the largest overlap of
+    each row, gather).  Wall force and torque go to row
     (step - log0) / wlog_every - 1 of wlog every wlog_every steps after step log0.
     """
     n = x.shape[0]
@@ -523,7 +525,7 @@ def run_loop(nsteps, step0, resume_mid, need_forces, ke_tol, ke_every, max_ovr, 
         for colour in range(3):
             pair_forces(colour, xr, vw, pair, codes, box, periodic, dt, sc, nc, hc, ac,
                         sorder, sgroup, f, t, ovr, mroll)
-        nbad = gather(x, v, om, r, inv_m, inv_i, mat, f, t, ovr, mroll, dt, not first, max_ovr,
+        nbad = gather(x, v, om, r, inv_m, inv_i, mat, f, t, ovr, peak, mroll, dt, not first, max_ovr,
                       pair, codes, prim_kind, prim_wall, prim_mat, prim_par, wall_vel,
                       wall_omega, wall_centre, wnc, wcc, whc, wslot)
         reduce_wall_forces(wcc, wnc, wslot, prim_wall, wall_force, wall_torque)
@@ -531,11 +533,6 @@ def run_loop(nsteps, step0, resume_mid, need_forces, ke_tol, ke_every, max_ovr, 
             continue
         done = s + 1
         fstate[3] += 1.0
-        peak = fstate[4]
-        for i in range(n):
-            if ovr[i] > peak:
-                peak = ovr[i]
-        fstate[4] = peak
         status[1] = step0 + done
         if wlog_every > 0 and (step0 + done - log0) % wlog_every == 0:
             row = (step0 + done - log0) // wlog_every - 1

@@ -37,7 +37,8 @@ class ParticleState:
         self.id = np.zeros(0, dtype=np.int64)
         self.disp = np.zeros((0, 3))
         self.ovr = np.zeros(0)
-        self.mroll = np.zeros(0)
+        self.peak = np.zeros(0)  # largest ovr of a row over the run (rows are re-sorted:
+        self.mroll = np.zeros(0)  # only its maximum over all rows is meaningful)
 
     @property
     def n(self) -> int:
@@ -66,6 +67,7 @@ class ParticleState:
         self.id = cat([self.id, np.arange(self.n - k, self.n, dtype=np.int64)])
         self.disp = np.zeros((self.n, 3))
         self.ovr = np.zeros(self.n)
+        self.peak = np.zeros(self.n)
         self.mroll = np.zeros(self.n)
         return np.arange(self.n - k, self.n)
 
@@ -73,9 +75,9 @@ class ParticleState:
 # ---------------------------------------------------------------- memory
 # Engine bytes per sphere (Simulation and its lists, engine.py ``_alloc_lists``), float64 and
 # int64 unless noted:
-#   state: x, v, omega, f, t, disp (3 each), r, m, 1/m, 1/I, largest overlap, rolling
-#   resistance (``bounded``), material, id
-STATE_BYTES = 8 * (6 * 3 + 8)
+#   state: x, v, omega, f, t, disp (3 each), r, m, 1/m, 1/I, largest overlap (step and
+#   run), rolling resistance (``bounded``), material, id
+STATE_BYTES = 8 * (6 * 3 + 9)
 #   two list buffers, each: row offset; 8 pair slots (partner, 4 history columns, int8
 #   touching flag); 4 wall slots (primitive, 8 history columns) and a wall count
 LIST_BYTES = 2 * (8 + 8 * (8 + 4 * 8 + 1) + 4 * (8 + 8 * 8) + 8)
