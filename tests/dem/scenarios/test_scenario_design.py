@@ -43,6 +43,26 @@ def test_generated_box_behnken_of_a_lost_table():
         design.design_levels(_soil("guangxi-cohesive"), "steepest")
 
 
+def test_generated_screening_design_has_the_printed_run_count():
+    # guangxi-cohesive Sec. 3.1: a 12-run Plackett-Burman design of 7 factors (an N-run
+    # design has N - 1 columns; 7 columns alone would give the 8-run design).  The levels
+    # of A..F are lost; with levels supplied every column is balanced: 6 high, 6 low.
+    soil = _soil("guangxi-cohesive")
+    data = copy.deepcopy(soil.data)
+    pb = next(st for st in data["stages"] if st["id"] == "pb")
+    for c in "ABCDEF":
+        pb["factors"][c].update(low=0.1, high=0.2)
+    df = design.design_levels(Soil(soil.path, data, soil.resources_root), "pb")
+    assert len(df) == 12
+    for c in "ABCDEFG":
+        assert sorted(df[c].value_counts().to_dict().values()) == [6, 6]
+    pb["runs"] = 16
+    assert len(design.design_levels(Soil(soil.path, data, soil.resources_root), "pb")) == 16
+    pb["runs"] = 14  # no Plackett-Burman design has 14 runs
+    with pytest.raises(InputError, match=r"stages\.pb\.runs"):
+        design.design_levels(Soil(soil.path, data, soil.resources_root), "pb")
+
+
 def test_printed_coded_table_is_decoded():
     # cinnamon soil Table 6 (coded) -> A 0.08/0.11/0.14, B 0.24/0.38/0.52, C 0.42/0.54/0.66
     df = design.design_levels(_soil("cinnamon-soil"), "bbd")

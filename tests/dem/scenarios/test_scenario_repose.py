@@ -124,3 +124,18 @@ def test_static_angle_trends_of_the_screening_designs():
     lo, hi = rise(dict(soil_soil_surface_energy=0.0), dict(soil_soil_surface_energy=0.45),
                   soil_soil_rolling_friction=0.1, soil_soil_static_friction=0.5)
     assert hi > lo + 3.0
+
+
+@pytest.mark.slow
+def test_drum_quick_run_reports_a_tilted_free_surface():
+    """Rotating drum (003, 7 r/min, 25 % fill) with 400 cohesionless spheres: the free
+    surface is tilted in the rolling regime (between 10 and 60 deg for mu 0.56 and rolling
+    friction 0.11), its maximum over the frames is at least the mean, and every response is
+    one the module declares."""
+    s = dict(drum.setups()["xinjiang-vineyard"], n_particles=400, spin_time=1.5,
+             transient_time=0.5)
+    res = drum.run(s, DemParams(soil_soil_surface_energy=0.0), "quick", seed=0, threads=1)
+    r = res.responses
+    assert set(r) == set(drum.RESPONSES)
+    assert 10.0 < r["angle_deg"] < 60.0
+    assert r["angle_max_deg"] >= r["angle_deg"] and r["n_frames"] >= 5

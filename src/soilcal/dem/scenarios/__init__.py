@@ -3,6 +3,7 @@
 Every scenario module defines:
 
 * ``NAME``: the registry name (also the CLI name: ``soilcal scenario run NAME``);
+* ``RESPONSES``: the names of every response a run reports;
 * ``setups()``: named setups from the papers (dicts of dimensions, speeds, durations, each
   number cited beside it in the module);
 * ``validate(setup, preset, source)``: raises :class:`soilcal.errors.InputError` for bad

@@ -104,6 +104,9 @@ def spec_from(soil_path, data: dict, response_id: str) -> SimulationSpec:
         setup = merge_setup(setups, sname, dict(entry.get("set") or {}), str(soil_path))
     except InputError as exc:
         raise _renamed(exc, soil_path, "setup.", f"{where}.set.") from None
+    if entry["measure"] not in mod.RESPONSES:
+        raise InputError(soil_path, f"{where}.measure", f"a response of {name} ({', '.join(mod.RESPONSES)})",
+                         entry["measure"])
     preset = sim.get("preset", "quick")
     if preset not in PRESETS:  # the schema already refuses this; kept for direct callers
         raise InputError(soil_path, f"{BLOCK}.preset", f"one of {', '.join(PRESETS)}", preset)
@@ -155,6 +158,7 @@ def design_levels(soil, stage_id: str) -> pd.DataFrame:
         if "run" not in df.columns:
             df.insert(0, "run", np.arange(1, len(df) + 1))
         keep = ["run"] + letters + [r.get("column", r["id"]) for r in stage["responses"]]
+        _check_runs(soil, stage, where, df, f"printed table {stage['table']}")
         return df[[c for c in keep if c in df.columns]].reset_index(drop=True)
     kind = stage["kind"]
     if kind == "steepest_ascent":
@@ -180,12 +184,25 @@ def design_levels(soil, stage_id: str) -> pd.DataFrame:
             lo.append(float(f["low"]))
             hi.append(float(f["high"]))
         if kind == "plackett_burman":
-            coded = plackett_burman(len(letters) + len(stage.get("dummies", [])))[:, : len(letters)]
+            # an N-run design has N - 1 columns: the printed run count fixes N (a 12-run
+            # screening of 7 factors is not the 8-run design 7 columns would give)
+            cols = len(letters) + len(stage.get("dummies", []))
+            if stage.get("runs"):
+                cols = max(cols, int(stage["runs"]) - 1)
+            coded = plackett_burman(cols)[:, : len(letters)]
         else:
             coded = box_behnken(len(letters), int(stage.get("center_points", 0)))
         df = pd.DataFrame(np.round(coded_to_actual(coded, lo, hi), 12), columns=letters)
     df.insert(0, "run", np.arange(1, len(df) + 1))
+    _check_runs(soil, stage, where, df, "generated design")
     return df
+
+
+def _check_runs(soil, stage, where, df, what):
+    runs = stage.get("runs")
+    if runs is not None and len(df) != int(runs):
+        raise InputError(soil.path, f"{where}.runs", f"the number of rows of the {what} ({len(df)})",
+                         runs)
 
 
 def design_seeds(soil, stage_id: str, rows: pd.DataFrame, seed: int | None = None,

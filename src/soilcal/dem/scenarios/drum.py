@@ -44,6 +44,11 @@ from soilcal.dem.scenarios.base import (DemParams, Frames, Result, Timer, check,
                                         rng, run_time, settle, setup_number, threads_used)
 
 NAME = "drum"
+#: every response a run reports (``Result.responses``; a soil's ``simulation`` block
+#: measures one of them)
+RESPONSES = (
+    "angle_deg", "angle_sd_deg", "angle_max_deg", "n_frames", "fill_settled", "peak_overlap",
+)
 PHI = 0.6
 
 

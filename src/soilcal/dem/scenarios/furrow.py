@@ -83,6 +83,13 @@ from soilcal.dem.scenarios.soilbin import (BinSpec, apply_preset, reference_cohe
                                            validate_bin)
 
 NAME = "furrow"
+#: every response a run reports (``Result.responses``; a soil's ``simulation`` block
+#: measures one of them)
+RESPONSES = (
+    "area_difference_dm2", "area_difference_sd_dm2", "area_difference_signed_dm2",
+    "furrow_area_dm2", "traction_N", "traction_sd_N", "vertical_force_N", "vertical_force_sd_N",
+    "traction_measured_N", "peak_overlap", "settled_surface_m", "bin_from_cache",
+)
 MEASURED = (Path(__file__).resolve().parents[4] / "resources" / "measurements"
             / "yangtze-clay-loam")
 

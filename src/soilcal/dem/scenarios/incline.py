@@ -46,6 +46,11 @@ from soilcal.dem.scenarios.base import (DemParams, Frames, Result, Timer, check,
                                         threads_used)
 
 NAME = "incline"
+#: every response a run reports (``Result.responses``; a soil's ``simulation`` block
+#: measures one of them)
+RESPONSES = (
+    "onset_deg", "coefficient", "last_stuck_deg", "first_moving_deg", "moved", "peak_overlap",
+)
 G = 9.81
 
 
@@ -172,7 +177,7 @@ def run(setup, params: DemParams, preset="quick", seed=0, threads=None, vtk_dir=
     responses = dict(onset_deg=onset, coefficient=math.tan(math.radians(onset)),
                      last_stuck_deg=float("nan") if last_stuck is None else last_stuck,
                      first_moving_deg=float("nan") if first_moving is None else first_moving,
-                     moved=int(first_moving is not None))
+                     moved=int(first_moving is not None), peak_overlap=sim.peak_overlap)
     h = np.array(history)
     setup_out = dict(setup)
     setup_out.update(stiffness_scale=scale, dt=sim.dt, step_deg=step_deg, hold_time=hold)

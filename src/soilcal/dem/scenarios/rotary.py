@@ -71,6 +71,13 @@ from soilcal.dem.scenarios.soilbin import (BinSpec, apply_preset, reference_cohe
                                            tool_pass, validate_bin)
 
 NAME = "rotary"
+#: every response a run reports (``Result.responses``; a soil's ``simulation`` block
+#: measures one of them)
+RESPONSES = (
+    "power_kW", "power_sd_kW", "torque_Nm", "draft_N", "draft_sd_N", "advance_power_kW",
+    "flatness_mm", "flatness_dense_mm", "surface_change_mm", "flatness_empty_points",
+    "flatness_measured_mm", "power_scale", "peak_overlap", "bin_from_cache",
+)
 MEASURED = (Path(__file__).resolve().parents[4] / "resources" / "measurements"
             / "black-soil")
 RPMS = (150, 200, 250, 300, 350)  # Sec. 2.3
