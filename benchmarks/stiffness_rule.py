@@ -14,13 +14,16 @@ modulus factors ``--scales`` with two surface-energy rules:
 * ``none``: gamma kept (the pull-off force kept), by passing gamma s^(-2/5) to the rule.
 
 At s = 1 (the printed modulus, the reference) the two rules coincide and only ``paper`` is
-run.  Everything else is the quick preset (particle size, cohesion scaling with particle
+run.  ``--set`` overrides setup values (a finer ``radius``, ``scale_cohesion=false``).
+Everything else is the quick preset (particle size, cohesion scaling with particle
 size, time step).  One row per run in ``benchmarks/results/stiffness_rule.csv`` (a rerun of
 the same soil, levels, scale, rule and seed replaces its row); ``stiffness_rule.md``
 tabulates them with the mean per case.
 
     python benchmarks/stiffness_rule.py --soil black-soil --scales 1,0.005 --seeds 0-3
     python benchmarks/stiffness_rule.py --soil black-soil --levels x1=0.4 --jobs 2
+    python benchmarks/stiffness_rule.py --levels x1=0.4 --scales 1 --seeds 0-1 \
+        --set radius=0.0015625,n_particles=8000      # half the quick radius
 """
 
 from __future__ import annotations
@@ -40,7 +43,7 @@ from _report import commit, kept_notes, read_rows, write_rows
 
 HERE = Path(__file__).resolve().parent
 ROOT = HERE.parent
-FIELDS = ["utc", "commit", "soil", "stage", "response", "levels", "scale", "G_Pa", "rule",
+FIELDS = ["utc", "commit", "soil", "stage", "response", "levels", "set", "scale", "G_Pa", "rule",
           "gamma_soil_soil", "seed", "particles", "steps", "dt_fraction", "wall_s", "measure",
           "value", "n_retained", "n_on_plate", "peak_overlap", "settled", "measure_errors"]
 
@@ -58,7 +61,7 @@ def _seeds(text):
 
 def one(job):
     """Run one (soil, levels, scale, rule, seed) point; returns a row."""
-    soil_name, overrides, s, rule, seed = job
+    soil_name, overrides, setup_set, s, rule, seed = job
     import numba
 
     from soilcal.config.load import load_soil
@@ -78,13 +81,15 @@ def one(job):
         d["soil_steel_surface_energy"] /= s ** 0.4
     params = DemParams.from_mapping(d, "<stiffness_rule>")
     t0 = time.perf_counter()
-    res = get(sim.scenario).run(dict(sim.setup, stiffness_scale=s), params, preset=sim.preset,
+    res = get(sim.scenario).run(dict(sim.setup, stiffness_scale=s, **setup_set), params,
+                                preset=sim.preset,
                                 seed=seed, threads=1, source=str(soil.path))
     r = res.responses
     value = float(r.get(sim.measure, math.nan))
     return dict(utc=time.strftime("%Y-%m-%d %H:%M", time.gmtime()), soil=soil_name,
                 stage=stage["id"], response=rid,
-                levels=" ".join(f"{k}={v:g}" for k, v in levels.items()), scale=s,
+                levels=" ".join(f"{k}={v:g}" for k, v in levels.items()),
+                set=" ".join(f"{k}={v}" for k, v in setup_set.items()), scale=s,
                 G_Pa=f"{d['soil_shear_modulus'] * s:.4g}", rule=rule,
                 gamma_soil_soil=round(d["soil_soil_surface_energy"], 6), seed=seed,
                 particles=res.n_particles, steps=res.steps,
@@ -98,7 +103,7 @@ def one(job):
 
 
 def _key(r):
-    return (r["soil"], r["levels"], float(r["scale"]), r["rule"], int(r["seed"]))
+    return (r["soil"], r["levels"], r["set"], float(r["scale"]), r["rule"], int(r["seed"]))
 
 
 def report(rows, md_path, argv):
@@ -108,15 +113,16 @@ def report(rows, md_path, argv):
           "", "Per case (soil, design point, shear-modulus factor s, rule): the runs, how many "
           "discharged (at most 5 % of the load left in a funnel) and gave a value, the mean and "
           "sample SD of the values, the mean spheres retained.", "",
-          "| soil | levels | s | G (Pa) | rule | runs | with a value | mean | SD | mean retained |",
-          "|---|---|---:|---:|---|---:|---:|---:|---:|---:|"]
+          "| soil | levels | setup set | s | G (Pa) | rule | runs | with a value | mean | SD | mean retained |",
+          "|---|---|---|---:|---:|---|---:|---:|---:|---:|---:|"]
     cases = {}
     for r in rows:
-        cases.setdefault((r["soil"], r["levels"], float(r["scale"]), r["rule"]), []).append(r)
-    for (soil, lv, s, rule), rs in sorted(cases.items(), key=lambda kv: (kv[0][0], kv[0][1], -kv[0][2], kv[0][3])):
+        cases.setdefault((r["soil"], r["levels"], r["set"], float(r["scale"]), r["rule"]), []).append(r)
+    for (soil, lv, st, s, rule), rs in sorted(cases.items(),
+                                             key=lambda kv: (kv[0][0], kv[0][1], kv[0][2], -kv[0][3], kv[0][4])):
         v = np.array([float(r["value"]) for r in rs if r["value"] not in ("", None)])
         ret = [float(r["n_retained"]) for r in rs if r["n_retained"] not in ("", None)]
-        md.append(f"| {soil} | {lv} | {s:g} | {rs[0]['G_Pa']} | {rule} | {len(rs)} | {len(v)} | "
+        md.append(f"| {soil} | {lv} | {st} | {s:g} | {rs[0]['G_Pa']} | {rule} | {len(rs)} | {len(v)} | "
                   + (f"{v.mean():.1f}" if len(v) else "") + " | "
                   + (f"{v.std(ddof=1):.1f}" if len(v) > 1 else "") + " | "
                   + (f"{np.mean(ret):.0f}" if ret else "") + " |")
@@ -136,6 +142,7 @@ def main(argv=None):
     ap.add_argument("--scales", default="1,0.005", help="shear-modulus factors s")
     ap.add_argument("--rules", default="paper,none")
     ap.add_argument("--seeds", default="0-3")
+    ap.add_argument("--set", default="", help="setup overrides, e.g. radius=0.0015625,n_particles=8000")
     ap.add_argument("--jobs", type=int, default=2, help="runs in parallel (one thread each)")
     ap.add_argument("--report-only", action="store_true")
     ap.add_argument("--out", default=str(HERE / "results"))
@@ -144,6 +151,12 @@ def main(argv=None):
     for kv in filter(None, args.levels.split(",")):
         k, v = kv.split("=")
         overrides[k.strip()] = float(v)
+    setup_set = {}
+    for kv in filter(None, args.set.split(",")):
+        k, v = kv.split("=")
+        v = v.strip()
+        setup_set[k.strip()] = (v.lower() == "true" if v.lower() in ("true", "false")
+                                else int(v) if v.isdigit() else float(v))
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
     csv_path, md_path = out / "stiffness_rule.csv", out / "stiffness_rule.md"
@@ -155,7 +168,7 @@ def main(argv=None):
                 if s == 1.0 and rule != "paper":
                     continue  # the rules coincide at the printed modulus
                 for seed in _seeds(args.seeds):
-                    jobs.append((args.soil, overrides, s, rule, seed))
+                    jobs.append((args.soil, overrides, setup_set, s, rule, seed))
         rev = commit()
         with ProcessPoolExecutor(max_workers=max(1, args.jobs)) as ex:
             for new in ex.map(one, jobs):
@@ -163,8 +176,8 @@ def main(argv=None):
                 print(json.dumps({k: new[k] for k in ("levels", "scale", "rule", "seed", "value",
                                                       "n_retained", "wall_s")}), flush=True)
                 rows = [r for r in rows if _key(r) != _key(new)] + [new]
-                rows.sort(key=lambda r: (r["soil"], r["levels"], -float(r["scale"]), r["rule"],
-                                         int(r["seed"])))
+                rows.sort(key=lambda r: (r["soil"], r["levels"], r["set"], -float(r["scale"]),
+                                         r["rule"], int(r["seed"])))
                 write_rows(csv_path, rows, FIELDS)
     report(rows, md_path, argv)
 
