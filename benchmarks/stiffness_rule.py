@@ -16,7 +16,9 @@ modulus factors ``--scales`` with two surface-energy rules:
 At s = 1 (the printed modulus, the reference) the two rules coincide and only ``paper`` is
 run.  ``--set`` overrides setup values (a finer ``radius``, ``scale_cohesion=false``).
 Everything else is the quick preset (particle size, cohesion scaling with particle
-size, time step).  One row per run in ``benchmarks/results/stiffness_rule.csv`` (a rerun of
+size, time step).  ``gamma_soil_soil`` in a row is the surface energy handed to the rule
+(the design point's, or s^(-2/5) times it for ``none``); the contact's is that times
+s^(2/5) and the size factor ``cohesion_scale`` of the run (base.py).  One row per run in ``benchmarks/results/stiffness_rule.csv`` (a rerun of
 the same soil, levels, scale, rule and seed replaces its row); ``stiffness_rule.md``
 tabulates them with the mean per case.
 
@@ -72,7 +74,14 @@ def one(job):
     soil = load_soil(ROOT / "config" / "soils" / f"{soil_name}.yaml", ROOT / "resources")
     stage = soil.data["stages"][0]
     rid = stage["responses"][0]["id"]
-    levels = {k: 0.5 * (float(v["low"]) + float(v["high"])) for k, v in stage["factors"].items()}
+    levels = {}
+    for k, v in stage["factors"].items():
+        if k in overrides:
+            continue
+        if v.get("low") is None or v.get("high") is None:
+            raise SystemExit(f"{soil_name}: stages.{stage['id']}.factors.{k}: no low/high levels "
+                             "for the centre point; give --levels")
+        levels[k] = 0.5 * (float(v["low"]) + float(v["high"]))
     levels.update(overrides)
     sim = design.spec(soil, rid)
     d = design.design_params(soil, stage["id"], levels, sim).as_dict()
@@ -111,7 +120,8 @@ def report(rows, md_path, argv):
           f"Machine: {platform.machine()}, {os.cpu_count()} logical CPUs.  Last command: "
           f"`python benchmarks/stiffness_rule.py {' '.join(argv)}`.  Rows: `stiffness_rule.csv`.",
           "", "Per case (soil, design point, shear-modulus factor s, rule): the runs, how many "
-          "discharged (at most 5 % of the load left in a funnel) and gave a value, the mean and "
+          "gave a value (a funnel load with more than the setup's max_retained of its spheres left "
+          "in the funnel gives none), the mean and "
           "sample SD of the values, the mean spheres retained.", "",
           "| soil | levels | setup set | s | G (Pa) | rule | runs | with a value | mean | SD | mean retained |",
           "|---|---|---|---:|---:|---|---:|---:|---:|---:|---:|"]

@@ -37,8 +37,10 @@ class ParticleState:
         self.id = np.zeros(0, dtype=np.int64)
         self.disp = np.zeros((0, 3))
         self.ovr = np.zeros(0)
-        self.peak = np.zeros(0)  # largest ovr of a row over the run (rows are re-sorted:
-        self.mroll = np.zeros(0)  # only its maximum over all rows is meaningful)
+        # largest ovr of a row over the run; rows are re-sorted without it, so only its
+        # maximum over all rows is meaningful
+        self.peak = np.zeros(0)
+        self.mroll = np.zeros(0)
 
     @property
     def n(self) -> int:

@@ -213,6 +213,8 @@ def test_registry_and_named_setups_validate():
                 mod.validate(dict(setup, name=sname), preset, "test")
     with pytest.raises(InputError, match="scenario"):
         get("no-such-scenario")
+    for mod in set(SCENARIOS.values()):  # what a soil may measure is a response of the run
+        assert set(mod.MEASURES) <= set(mod.RESPONSES), mod.NAME
 
 
 def test_sauter_radius_of_the_size_distributions():

@@ -43,7 +43,7 @@ def test_furrow_area_of_known_profiles():
 
 def test_named_default_values_set_by_the_user_are_kept():
     base = furrow.setups()["yangtze-opener"]
-    assert furrow._settings(dict(base), "quick")["tank_length"] == 1.6
+    assert furrow._settings(dict(base), "quick")["tank_length"] == 2.0
     # the user asks for the paper's 3.0 m tank under the quick preset
     s = furrow._settings(dict(base, overrides=["tank_length"]), "quick")
     assert s["tank_length"] == 3.0 and s["particle_radius"] == 0.022
@@ -103,8 +103,8 @@ def _setup(**kw):
     ("x_limit", 0.3, "setup.x_limit"),
     ("n_slices", 20, "setup.n_slices"),
     ("depth", 0.04, "setup.depth"),         # shallower than 2 r_max = 48.4 mm (quick)
-    # 0.05 + 0.45 + 0.7 + 0.5 = 1.7 m of tank needed, the quick tank is 1.6 m
-    ("front_clearance", 0.5, "setup.tank_length"),
+    # 0.05 + 0.45 + 0.7 + 0.9 = 2.1 m of tank needed, the quick tank is 2.0 m
+    ("front_clearance", 0.9, "setup.tank_length"),
     ("front_clearance", 0.0, "setup.front_clearance"),
     ("max_overlap", 1.0, "setup.max_overlap"),
 ])

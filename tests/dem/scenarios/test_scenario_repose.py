@@ -138,4 +138,6 @@ def test_drum_quick_run_reports_a_tilted_free_surface():
     r = res.responses
     assert set(r) == set(drum.RESPONSES)
     assert 10.0 < r["angle_deg"] < 60.0
-    assert r["angle_max_deg"] >= r["angle_deg"] and r["n_frames"] >= 5
+    # frames every 0.1 s from 0.5 s to 1.5 s of rotation
+    assert r["n_frames"] == 11 and r["angle_max_deg"] >= r["angle_deg"]
+    assert r["angle_sd_deg"] < 10.0  # a rolling surface, not a collapsing one

@@ -3,7 +3,9 @@
 Every scenario module defines:
 
 * ``NAME``: the registry name (also the CLI name: ``soilcal scenario run NAME``);
-* ``RESPONSES``: the names of every response a run reports;
+* ``RESPONSES``: the names of every response a run reports; ``MEASURES``: those a soil's
+  ``simulation`` block may measure (numeric results of the test, not diagnostics), and
+  optionally ``measures(setup)``: the ones a given setup yields;
 * ``setups()``: named setups from the papers (dicts of dimensions, speeds, durations, each
   number cited beside it in the module);
 * ``validate(setup, preset, source)``: raises :class:`soilcal.errors.InputError` for bad

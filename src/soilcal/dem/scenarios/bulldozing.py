@@ -49,12 +49,15 @@ from soilcal.dem.scenarios.soilbin import (BinSpec, apply_preset, psd_field, ref
                                            settled_bin, tool_pass, validate_bin)
 
 NAME = "bulldozing"
-#: every response a run reports (``Result.responses``; a soil's ``simulation`` block
-#: measures one of them)
+#: every response a run reports (``Result.responses``)
 RESPONSES = (
     "horizontal_force_N", "horizontal_force_sd_N", "vertical_force_N", "vertical_force_sd_N",
     "resultant_force_N", "resultant_angle_deg", "horizontal_measured_N", "vertical_measured_N",
     "horizontal_error_percent", "force_scale", "peak_overlap", "bin_from_cache",
+)
+#: the responses a soil's ``simulation`` block may measure (numbers a design point yields)
+MEASURES = (
+    "horizontal_force_N", "vertical_force_N", "resultant_force_N", "resultant_angle_deg",
 )
 MEASURED = (Path(__file__).resolve().parents[4] / "resources" / "measurements"
             / "cinnamon-soil" / "cutting_resistance.csv")

@@ -22,7 +22,9 @@ always wins; :func:`design_params`).
 :func:`design_levels` gives every run of a stage in actual units: the printed table when the
 paper prints one (coded tables decoded), otherwise the design generated from the stage's
 factor levels (:mod:`soilcal.doe`: Plackett-Burman or Box-Behnken columns in the order of
-the config's factors, or the steepest-ascent path of ``levels``).
+the config's factors, or the steepest-ascent path of ``levels``).  A Plackett-Burman design
+of N runs has N - 1 columns, so a stage's ``runs`` fixes N (a 12-run screening of 7
+factors); a printed or generated design whose row count differs from ``runs`` is refused.
 
 Every design point of a soil runs with the soil's ``seed`` (common random numbers: the same
 packing draw at every point, so differences between points are not seed noise), except
@@ -104,8 +106,10 @@ def spec_from(soil_path, data: dict, response_id: str) -> SimulationSpec:
         setup = merge_setup(setups, sname, dict(entry.get("set") or {}), str(soil_path))
     except InputError as exc:
         raise _renamed(exc, soil_path, "setup.", f"{where}.set.") from None
-    if entry["measure"] not in mod.RESPONSES:
-        raise InputError(soil_path, f"{where}.measure", f"a response of {name} ({', '.join(mod.RESPONSES)})",
+    allowed = mod.measures(setup) if hasattr(mod, "measures") else mod.MEASURES
+    if entry["measure"] not in allowed:
+        raise InputError(soil_path, f"{where}.measure",
+                         f"a measured response of {name} with this setup ({', '.join(allowed)})",
                          entry["measure"])
     preset = sim.get("preset", "quick")
     if preset not in PRESETS:  # the schema already refuses this; kept for direct callers
@@ -201,8 +205,12 @@ def design_levels(soil, stage_id: str) -> pd.DataFrame:
 def _check_runs(soil, stage, where, df, what):
     runs = stage.get("runs")
     if runs is not None and len(df) != int(runs):
-        raise InputError(soil.path, f"{where}.runs", f"the number of rows of the {what} ({len(df)})",
-                         runs)
+        hint = {"plackett_burman": "; a Plackett-Burman design has a multiple of 4 runs, more "
+                                   "than its factors and dummies",
+                "box_behnken": "; a Box-Behnken design of k factors has 2k(k-1) runs (k = 3, 4; "
+                               "pyDOE3) plus center_points"}.get(stage["kind"], "")
+        raise InputError(soil.path, f"{where}.runs",
+                         f"the number of rows of the {what} ({len(df)}){hint}", runs)
 
 
 def design_seeds(soil, stage_id: str, rows: pd.DataFrame, seed: int | None = None,

@@ -46,10 +46,13 @@ from soilcal.dem.scenarios.base import (DemParams, Frames, Result, Timer, check,
                                         threads_used)
 
 NAME = "incline"
-#: every response a run reports (``Result.responses``; a soil's ``simulation`` block
-#: measures one of them)
+#: every response a run reports (``Result.responses``)
 RESPONSES = (
     "onset_deg", "coefficient", "last_stuck_deg", "first_moving_deg", "moved", "peak_overlap",
+)
+#: the responses a soil's ``simulation`` block may measure (numbers a design point yields)
+MEASURES = (
+    "onset_deg", "coefficient",
 )
 G = 9.81
 

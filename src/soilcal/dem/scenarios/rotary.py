@@ -71,12 +71,16 @@ from soilcal.dem.scenarios.soilbin import (BinSpec, apply_preset, reference_cohe
                                            tool_pass, validate_bin)
 
 NAME = "rotary"
-#: every response a run reports (``Result.responses``; a soil's ``simulation`` block
-#: measures one of them)
+#: every response a run reports (``Result.responses``)
 RESPONSES = (
     "power_kW", "power_sd_kW", "torque_Nm", "draft_N", "draft_sd_N", "advance_power_kW",
     "flatness_mm", "flatness_dense_mm", "surface_change_mm", "flatness_empty_points",
     "flatness_measured_mm", "power_scale", "peak_overlap", "bin_from_cache",
+)
+#: the responses a soil's ``simulation`` block may measure (numbers a design point yields)
+MEASURES = (
+    "power_kW", "torque_Nm", "draft_N", "advance_power_kW", "flatness_mm", "flatness_dense_mm",
+    "surface_change_mm",
 )
 MEASURED = (Path(__file__).resolve().parents[4] / "resources" / "measurements"
             / "black-soil")
@@ -338,7 +342,7 @@ def run(setup: dict, params: DemParams, preset: str = "quick", seed: int = 0, th
                 flatness_mm=sd, flatness_dense_mm=flatness_or_nan(dd)[1],
                 surface_change_mm=d_mean, flatness_empty_points=n_empty,
                 flatness_measured_mm=meas, power_scale=scale,
-                peak_overlap=float(out["sim"].peak_overlap),
+                peak_overlap=float(out["peak_overlap"]),
                 bin_from_cache=bool(out["from_cache"]))
     steps = out["steps"] + out["settle_steps"] + n_lift + n_rest
     return Result(scenario=NAME, preset=preset, seed=int(seed), n_particles=out["n"],

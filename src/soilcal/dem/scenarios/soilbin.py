@@ -333,10 +333,12 @@ def tool_pass(spec: BinSpec, params: DemParams, preset: str, seed: int, source: 
     """Settled (or cached) bin, trench dug by ``trench(x, r) -> bool``, the tool mesh
     (steel) moved with ``velocity``/``omega`` about ``centre`` for ``duration`` s.
 
-    Returns dict(sim, t, force, torque, dt, steps, settle_steps, peak_overlap, n,
-    from_cache, surface, log_every); ``force``/``torque`` are the particles' force on the
-    tool and its torque about the (moving) tool centre, sampled every ``log_every`` steps;
-    ``peak_overlap`` is the largest overlap of the pass as a fraction of a radius."""
+    Returns dict(sim, t, force, torque, dt, steps, settle_steps, peak_overlap,
+    wall_forces, n, from_cache, surface, log_every); ``force``/``torque`` are the particles'
+    force on the tool and its torque about the (moving) tool centre, sampled every
+    ``log_every`` steps; ``wall_forces[k, w]`` the particles' force on every wall w (in the
+    order of ``sim.walls.names``) at the same samples; ``peak_overlap`` is the largest
+    overlap of the pass as a fraction of a radius."""
     if bed is None:
         bed = settled_bin(spec, params, preset, seed, source, use_cache)
     keep = dig(bed["x"], bed["r"], trench)
@@ -354,7 +356,7 @@ def tool_pass(spec: BinSpec, params: DemParams, preset: str, seed: int, source: 
     vtk = VtkWriter(vtk_dir, stem)
     chunks = max(1, int(n_frames) - 1) if vtk.folder else 1
     per = int(math.ceil(steps / log_every / chunks)) * log_every
-    ts, fs, qs = [], [], []
+    ts, fs, qs, fa = [], [], [], []
     step0 = sim.step
     if vtk.folder:
         vtk.frame(sim, *(tool_pose(0.0) if tool_pose else (None, None)))
@@ -366,6 +368,7 @@ def tool_pass(spec: BinSpec, params: DemParams, preset: str, seed: int, source: 
         t, f, q = force_series(sim, wall, log_every, 0, dt)
         ts.append(t + (s0 - step0) * dt)
         fs.append(f)
+        fa.append(sim.wall_log[:, :, 0:3].copy())
         qs.append(q)
         done += k
         if vtk.folder:
@@ -373,7 +376,7 @@ def tool_pass(spec: BinSpec, params: DemParams, preset: str, seed: int, source: 
             vtk.frame(sim, *(tool_pose(tt) if tool_pose else (None, None)))
     return dict(sim=sim, t=np.concatenate(ts), force=np.concatenate(fs),
                 torque=np.concatenate(qs), dt=dt, steps=steps, settle_steps=bed["settle_steps"],
-                peak_overlap=sim.peak_overlap,
+                peak_overlap=sim.peak_overlap, wall_forces=np.concatenate(fa),
                 n=int(keep.sum()), from_cache=bed["from_cache"], surface=bed["surface"],
                 log_every=log_every, wall=wall)
 
