@@ -13,12 +13,16 @@ NOTES = "<!-- notes: kept when the table is regenerated -->"
 
 
 def commit() -> str:
-    """Short id of the checked-out commit ('' outside a git checkout)."""
+    """Short id of the checked-out commit, with ``+dirty`` when tracked files differ from it
+    ('' outside a git checkout)."""
     try:
-        return subprocess.run(["git", "rev-parse", "--short", "HEAD"], cwd=HERE,
-                              capture_output=True, text=True, check=True).stdout.strip()
+        rev = subprocess.run(["git", "rev-parse", "--short", "HEAD"], cwd=HERE,
+                             capture_output=True, text=True, check=True).stdout.strip()
+        dirty = subprocess.run(["git", "status", "--porcelain", "--untracked-files=no"],
+                               cwd=HERE, capture_output=True, text=True, check=True).stdout
     except (OSError, subprocess.CalledProcessError):
         return ""
+    return rev + ("+dirty" if dirty.strip() else "")
 
 
 def read_rows(path: Path, fields) -> list[dict]:
