@@ -122,8 +122,8 @@ def report(rows, md_path, argv):
           "", "Per case (soil, design point, shear-modulus factor s, rule): the runs, how many "
           "gave a value (a funnel load with more than the setup's max_retained of its spheres left "
           "in the funnel gives none), the mean and "
-          "sample SD of the values, the mean spheres retained.", "",
-          "| soil | levels | setup set | s | G (Pa) | rule | runs | with a value | mean | SD | mean retained |",
+          "sample SD of the values, the share of the spheres left in the funnel.", "",
+          "| soil | levels | setup set | s | G (Pa) | rule | runs | with a value | mean | SD | retained % (min-max) |",
           "|---|---|---|---:|---:|---|---:|---:|---:|---:|---:|"]
     cases = {}
     for r in rows:
@@ -131,11 +131,12 @@ def report(rows, md_path, argv):
     for (soil, lv, st, s, rule), rs in sorted(cases.items(),
                                              key=lambda kv: (kv[0][0], kv[0][1], kv[0][2], -kv[0][3], kv[0][4])):
         v = np.array([float(r["value"]) for r in rs if r["value"] not in ("", None)])
-        ret = [float(r["n_retained"]) for r in rs if r["n_retained"] not in ("", None)]
+        ret = [100.0 * float(r["n_retained"]) / float(r["particles"]) for r in rs
+               if r["n_retained"] not in ("", None)]
         md.append(f"| {soil} | {lv} | {st} | {s:g} | {rs[0]['G_Pa']} | {rule} | {len(rs)} | {len(v)} | "
                   + (f"{v.mean():.1f}" if len(v) else "") + " | "
                   + (f"{v.std(ddof=1):.1f}" if len(v) > 1 else "") + " | "
-                  + (f"{np.mean(ret):.0f}" if ret else "") + " |")
+                  + (f"{min(ret):.1f}-{max(ret):.1f}" if ret else "") + " |")
     md += ["", "Runs:", "", "| " + " | ".join(FIELDS) + " |", "|" + "---|" * len(FIELDS),
            *("| " + " | ".join(str(r.get(k, "")) for k in FIELDS) + " |" for r in rows),
            "", kept_notes(md_path)]
