@@ -6,6 +6,7 @@ from __future__ import annotations
 import csv
 import os
 import subprocess
+import tempfile
 from pathlib import Path
 
 HERE = Path(__file__).resolve().parent
@@ -37,12 +38,29 @@ def write_rows(path: Path, rows, fields) -> None:
     """Write the table to a temporary file beside ``path`` and move it into place, so an
     interrupted write leaves the previous table whole."""
     path = Path(path)
-    tmp = path.with_name(path.name + ".tmp")
-    with open(tmp, "w", newline="") as fh:
+    with tempfile.NamedTemporaryFile("w", newline="", dir=path.parent, prefix=path.name,
+                                     suffix=".tmp", delete=False) as fh:
         w = csv.DictWriter(fh, fieldnames=list(fields), extrasaction="ignore")
         w.writeheader()
         w.writerows(rows)
-    os.replace(tmp, path)
+    os.replace(fh.name, path)
+
+
+def runs_table(rows, fields) -> list[str]:
+    """Markdown lines of a table with one row per run, every field a column."""
+    return ["| " + " | ".join(fields) + " |", "|" + "---|" * len(fields),
+            *("| " + " | ".join(str(r.get(k, "")) for k in fields) + " |" for r in rows)]
+
+
+def write_page(md_path: Path, lines) -> None:
+    """Write a results page: ``lines``, then the notes kept below its marker; atomically,
+    like :func:`write_rows`."""
+    md_path = Path(md_path)
+    text = "\n".join(list(lines) + ["", kept_notes(md_path)]) + "\n"
+    with tempfile.NamedTemporaryFile("w", dir=md_path.parent, prefix=md_path.name,
+                                     suffix=".tmp", delete=False) as fh:
+        fh.write(text)
+    os.replace(fh.name, md_path)
 
 
 def kept_notes(md_path: Path) -> str:

@@ -28,7 +28,7 @@ import time
 from pathlib import Path
 
 import numpy as np
-from _report import commit, kept_notes, read_rows, write_rows
+from _report import commit, read_rows, runs_table, write_page, write_rows
 
 HERE = Path(__file__).resolve().parent
 ROOT = HERE.parent
@@ -146,12 +146,8 @@ def report(rows, planned, md_path, argv):
     if failed:
         md += ["Failed runs:", ""] + [f"* {r['soil']} {r['stage']} run {r['run']} ({r['response']}): "
                                       f"{r['error']}" for r in failed] + [""]
-    md += ["Runs:", "", "| " + " | ".join(FIELDS) + " |", "|" + "---|" * len(FIELDS),
-           *("| " + " | ".join(str(r.get(k, "")) for k in FIELDS) + " |" for r in rows),
-           "", kept_notes(md_path)]
-    tmp = md_path.with_name(md_path.name + ".tmp")
-    tmp.write_text("\n".join(md) + "\n")
-    os.replace(tmp, md_path)
+    md += ["Runs:", "", *runs_table(rows, FIELDS)]
+    write_page(md_path, md)
 
 
 def main(argv=None):

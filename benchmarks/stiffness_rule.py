@@ -41,7 +41,7 @@ from concurrent.futures import ProcessPoolExecutor
 from pathlib import Path
 
 import numpy as np
-from _report import commit, kept_notes, read_rows, write_rows
+from _report import commit, read_rows, runs_table, write_page, write_rows
 
 HERE = Path(__file__).resolve().parent
 ROOT = HERE.parent
@@ -137,12 +137,8 @@ def report(rows, md_path, argv):
                   + (f"{v.mean():.1f}" if len(v) else "") + " | "
                   + (f"{v.std(ddof=1):.1f}" if len(v) > 1 else "") + " | "
                   + (f"{min(ret):.1f}-{max(ret):.1f}" if ret else "") + " |")
-    md += ["", "Runs:", "", "| " + " | ".join(FIELDS) + " |", "|" + "---|" * len(FIELDS),
-           *("| " + " | ".join(str(r.get(k, "")) for k in FIELDS) + " |" for r in rows),
-           "", kept_notes(md_path)]
-    tmp = md_path.with_name(md_path.name + ".tmp")
-    tmp.write_text("\n".join(md) + "\n")
-    os.replace(tmp, md_path)
+    md += ["", "Runs:", "", *runs_table(rows, FIELDS)]
+    write_page(md_path, md)
 
 
 def main(argv=None):

@@ -38,8 +38,9 @@ The JKR pull-off force 1.5 pi gamma R* does not depend on the stiffness, so the 
 the adhesion by s^(2/5) (0.12 for the black soil's printed G = 1e8 Pa under the quick
 cap).  It does not keep every response: the black soil's funnel load (stage 1, quick
 spheres) arched over the outlet in all 8 runs at the printed modulus but discharged into
-heaps of 23 and 26 deg (means of four seeds) with the rule at s = 0.005 (``benchmarks/stiffness_rule.py``, results and
-notes in ``benchmarks/results/stiffness_rule.md``).
+heaps of 23 and 26 deg (means of four seeds) with the rule at s = 0.005
+(``benchmarks/stiffness_rule.py``; results and notes in
+``benchmarks/results/stiffness_rule.md``).
 
 Cohesion scaling with particle size
 -----------------------------------
