@@ -5,7 +5,10 @@ Every scenario module defines:
 * ``NAME``: the registry name (also the CLI name: ``soilcal scenario run NAME``);
 * ``RESPONSES``: the names of every response a run reports; ``MEASURES``: those a soil's
   ``simulation`` block may measure (numeric results of the test, not diagnostics), and
-  optionally ``measures(setup)``: the ones a given setup yields;
+  optionally ``measures(setup)``: the ones a given setup yields.  Every scenario reports
+  ``peak_overlap``, the largest overlap as a fraction of a radius: over the tool pass in
+  the soil-bin scenarios (furrow, bulldozing, rotary), over the whole run (filling
+  included) in the bench-top ones;
 * ``setups()``: named setups from the papers (dicts of dimensions, speeds, durations, each
   number cited beside it in the module);
 * ``validate(setup, preset, source)``: raises :class:`soilcal.errors.InputError` for bad
