@@ -14,12 +14,14 @@ NOTES = "<!-- notes: kept when the table is regenerated -->"
 
 
 def commit() -> str:
-    """Short id of the checked-out commit, with ``+dirty`` when tracked files differ from it
-    ('' outside a git checkout)."""
+    """Short id of the checked-out commit, with ``+dirty`` when tracked files outside
+    ``benchmarks/results`` differ from it ('' outside a git checkout)."""
     try:
         rev = subprocess.run(["git", "rev-parse", "--short", "HEAD"], cwd=HERE,
                              capture_output=True, text=True, check=True).stdout.strip()
-        dirty = subprocess.run(["git", "status", "--porcelain", "--untracked-files=no"],
+        # results tables rewritten by a sweep do not make the code dirty
+        dirty = subprocess.run(["git", "status", "--porcelain", "--untracked-files=no", "--",
+                                ":/", ":(top,exclude)benchmarks/results"],
                                cwd=HERE, capture_output=True, text=True, check=True).stdout
     except (OSError, subprocess.CalledProcessError):
         return ""
@@ -43,7 +45,16 @@ def write_rows(path: Path, rows, fields) -> None:
         w = csv.DictWriter(fh, fieldnames=list(fields), extrasaction="ignore")
         w.writeheader()
         w.writerows(rows)
-    os.replace(fh.name, path)
+    _publish(fh.name, path)
+
+
+def _publish(tmp: str, path: Path) -> None:
+    """Give the temporary file the mode of a newly created file (tempfile makes it 0600)
+    and move it into place."""
+    umask = os.umask(0)
+    os.umask(umask)
+    os.chmod(tmp, 0o666 & ~umask)
+    os.replace(tmp, path)
 
 
 def runs_table(rows, fields) -> list[str]:
@@ -60,7 +71,7 @@ def write_page(md_path: Path, lines) -> None:
     with tempfile.NamedTemporaryFile("w", dir=md_path.parent, prefix=md_path.name,
                                      suffix=".tmp", delete=False) as fh:
         fh.write(text)
-    os.replace(fh.name, md_path)
+    _publish(fh.name, md_path)
 
 
 def kept_notes(md_path: Path) -> str:

@@ -6,7 +6,7 @@ JKR surface energy as gamma_mod = gamma s^(2/5) (``base.build_materials``).  The
 pull-off force 1.5 pi gamma R* does not depend on the stiffness, so the rule weakens the
 adhesive force by s^(2/5): 0.12 for the black soil (printed G = 1e8 Pa, s = 0.005).
 
-This benchmark runs one design point of a soil's first stage (the stage centre unless
+This benchmark runs one design point of a soil's first stage (the midpoints of its factors unless
 levels are given) through the soil's simulation block (scenario, setup, measure) at shear
 modulus factors ``--scales`` with two surface-energy rules:
 
@@ -61,6 +61,19 @@ def _seeds(text):
     return out
 
 
+def centre_levels(stage, overrides):
+    """Midpoints of the low and high levels of the factors not in ``overrides``."""
+    levels = {}
+    for k, v in stage["factors"].items():
+        if k in overrides:
+            continue
+        if v.get("low") is None or v.get("high") is None:
+            raise SystemExit(f"stages.{stage['id']}.factors.{k}: no low/high levels for the "
+                             "midpoint; give it with --levels")
+        levels[k] = 0.5 * (float(v["low"]) + float(v["high"]))
+    return levels
+
+
 def one(job):
     """Run one (soil, levels, scale, rule, seed) point; returns a row."""
     soil_name, overrides, setup_set, s, rule, seed = job
@@ -74,15 +87,7 @@ def one(job):
     soil = load_soil(ROOT / "config" / "soils" / f"{soil_name}.yaml", ROOT / "resources")
     stage = soil.data["stages"][0]
     rid = stage["responses"][0]["id"]
-    levels = {}
-    for k, v in stage["factors"].items():
-        if k in overrides:
-            continue
-        if v.get("low") is None or v.get("high") is None:
-            raise SystemExit(f"{soil_name}: stages.{stage['id']}.factors.{k}: no low/high levels "
-                             "for the centre point; give --levels")
-        levels[k] = 0.5 * (float(v["low"]) + float(v["high"]))
-    levels.update(overrides)
+    levels = dict(centre_levels(stage, overrides), **overrides)
     sim = design.spec(soil, rid)
     d = design.design_params(soil, stage["id"], levels, sim).as_dict()
     if rule == "none":  # undo build_materials' gamma s^(2/5)
@@ -164,6 +169,11 @@ def main(argv=None):
         v = v.strip()
         setup_set[k.strip()] = (v.lower() == "true" if v.lower() in ("true", "false")
                                 else int(v) if v.isdigit() else float(v))
+    if not args.report_only:  # levels checked here, before any worker starts
+        from soilcal.config.load import load_soil
+
+        soil = load_soil(ROOT / "config" / "soils" / f"{args.soil}.yaml", ROOT / "resources")
+        centre_levels(soil.data["stages"][0], overrides)
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
     csv_path, md_path = out / "stiffness_rule.csv", out / "stiffness_rule.md"

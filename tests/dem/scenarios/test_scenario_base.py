@@ -72,17 +72,20 @@ def test_result_row_and_atomic_write(tmp_path):
     assert [p.name for p in (tmp_path / "sub").iterdir()] == ["row.csv"]  # no temp file left
 
 
-def _run_result(seed, angle, settled, reason, params=None):
+def _run_result(seed, angle, settled, reason, params=None, peak=0.1):
     return Result("compression", "quick", seed, 100 + seed, 1000, 0.5, 2.0, 1,
                   params=params or DemParams().as_dict(), setup=dict(tube_diameter=0.1),
-                  responses=dict(angle_deg=angle, settled=settled, stop_reason=reason),
+                  responses=dict(angle_deg=angle, settled=settled, stop_reason=reason,
+                                 peak_overlap=peak),
                   series=dict(t=np.arange(2) + seed))
 
 
 def test_replicates_are_averaged_with_their_standard_deviation(tmp_path):
-    runs = [_run_result(4, 30.0, 1, "max_strain"), _run_result(5, 31.0, 1, "max_strain"),
-            _run_result(6, 35.0, 0, "overlap")]
+    runs = [_run_result(4, 30.0, 1, "max_strain", peak=0.12),
+            _run_result(5, 31.0, 1, "max_strain", peak=0.31),
+            _run_result(6, 35.0, 0, "overlap", peak=0.2)]
     res = combine_replicates(runs)
+    assert res.responses["peak_overlap"] == 0.31  # the largest peak, not the mean 0.21
     # mean of 30, 31, 35 is 32; deviations -2, -1, 3: s^2 = (4 + 1 + 9) / 2 = 7
     assert res.responses["angle_deg"] == pytest.approx(32.0, abs=1e-12)
     assert res.responses["angle_deg_rep_sd"] == pytest.approx(math.sqrt(7.0), rel=1e-12)

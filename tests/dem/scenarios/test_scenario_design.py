@@ -171,8 +171,9 @@ def test_furrow_centre_point_does_not_jam_against_the_tank_end(tmp_path, monkeyp
     r = res.responses
     assert np.isfinite(value) and value > 0
     assert r["traction_N"] > 0
-    assert r["far_wall_rise_N"] < 0.25 * r["traction_N"]
-    assert r["peak_overlap"] < 0.5  # below the soil bin's guard: no jam
+    # the far wall (x_hi) is pushed, not pulled: its load may rise a little, not by a jam's
+    # share of the traction (919 N of 1710 N with 0.4 m of clearance, furrow.py)
+    assert -0.1 * r["traction_N"] < r["far_wall_rise_N"] < 0.25 * r["traction_N"]
 
 
 def test_repeated_points_get_the_next_seeds():

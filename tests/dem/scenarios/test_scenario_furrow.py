@@ -106,6 +106,7 @@ def _setup(**kw):
     # 0.05 + 0.45 + 0.7 + 0.9 = 2.1 m of tank needed, the quick tank is 2.0 m
     ("front_clearance", 0.9, "setup.tank_length"),
     ("front_clearance", 0.0, "setup.front_clearance"),
+    ("front_clearance", 0.6, "setup.front_clearance"),  # less than four depths (0.8 m)
     ("max_overlap", 1.0, "setup.max_overlap"),
 ])
 def test_impossible_settings_fail_before_the_run(field, value, match):

@@ -553,9 +553,10 @@ def combine_replicates(runs) -> Result:
     """One :class:`Result` from runs that differ only in their seed (same scenario, preset,
     parameters, setup keys and text setup values).
 
-    Numeric responses become the mean over the runs, with the sample standard deviation
-    (ddof = 1) of the runs as ``<response>_rep_sd`` (the standard error of the mean is that
-    over sqrt(replicates)); 0/1 flags such as ``settled`` become the fraction of runs.  A
+    Numeric responses become the mean over the runs (the peaks of ``MAX_OVER_RUNS``, e.g.
+    ``peak_overlap``, their maximum), with the sample standard deviation (ddof = 1) of the
+    runs as ``<response>_rep_sd`` (the standard error of the mean is that over
+    sqrt(replicates)); 0/1 flags such as ``settled`` become the fraction of runs.  A
     response that is NaN in any run (e.g. an incline onset never reached) is NaN in the
     mean: averaging the other runs would bias it.  A text response keeps its value when all
     runs agree and lists the distinct values joined by ``|`` otherwise.  Numeric setup values
@@ -618,6 +619,9 @@ def threads_used(threads) -> int:
     return int(numba.get_num_threads())
 
 
+MAX_OVER_RUNS = ("peak_overlap",)  # combined over replicates by their maximum
+
+
 # ---------------------------------------------------------------- presets and run helpers
 #: Preset defaults shared by the scenarios (each scenario adds its own sizes):
 #:
@@ -635,8 +639,6 @@ def threads_used(threads) -> int:
 #: (materials.py), as 30 % blew up heaps of heavily damped spheres: with friction on steel
 #: walls the quick step is at most 0.28 T_R (0.15 T_R at e = 0.15), and the paper step is
 #: below 20 % for restitution below about 0.5.
-MAX_OVER_RUNS = ("peak_overlap",)  # combined over replicates by their maximum
-
 PRESET_DEFAULTS = {
     "quick": dict(g_max=5.0e5, dt_fraction=0.3, n_particles=1000, max_overlap=0.3),
     "paper": dict(g_max=None, dt_fraction=0.2, n_particles=None, max_overlap=0.3),

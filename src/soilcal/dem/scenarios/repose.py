@@ -60,12 +60,12 @@ estimator that cannot read the heap (a load spread flat over the plate has no fl
 silhouette pipeline can find; too few spheres stayed on the plate) reports NaN and its
 reason in ``measure_errors`` (empty when all three read the heap); the run itself does not
 fail.  A cohesive load can arch over the funnel's outlet and stay in the funnel: when more
-than ``max_retained`` (default 5 %, by sphere count) of the spheres are still above the
-outlet when the run stops, every angle is NaN and ``measure_errors`` says so (the few
-spheres on the plate are not the test's heap).  The default: loads that discharged kept
-2-3 % of their spheres on the funnel walls (black soil, quick preset); with the black soil's
-surface energy at the paper's shear modulus 88-95 % stayed in the funnel
-(``benchmarks/results/stiffness_rule.md``).
+than ``max_retained`` (default 20 %, by sphere count) of the spheres are still above the
+outlet when the run stops, every angle is NaN and ``measure_errors`` says so (the spheres on
+the plate are not the test's heap).  The default: black-soil loads that discharged kept
+0.2-9 % of their spheres on the funnel walls (quick preset, design points of stage 1);
+loads that arched kept 60-98 %, and 88-95 % at the paper's shear modulus
+(``benchmarks/results/stiffness_rule.md``, ``design_budget.md``).
 """
 
 from __future__ import annotations
@@ -92,17 +92,16 @@ RESPONSES = (
 #: the responses a soil's ``simulation`` block may measure (numbers a design point yields)
 MEASURES = (
     "angle_deg", "angle_sd_deg", "height_m", "angle_surface_deg", "angle_surface_sd_deg",
-    "angle_image_deg", "angle_image_sd_deg", "n_on_plate", "retained_fraction",
+    "angle_image_deg", "angle_image_sd_deg",
 )
 PHI = 0.6  # settled solid fraction used to size the fill
 N_SEG = 24  # facets of the funnel and cover meshes (facet mid-lines on the nominal radius)
 
 
 def measures(setup: dict) -> tuple:
-    """MEASURES a run of ``setup`` yields (the silhouette angle needs ``image``, the
-    retained fraction a funnel)."""
-    out = [m for m in MEASURES if not (m.startswith("angle_image") and not setup.get("image", True))]
-    return tuple(m for m in out if m != "retained_fraction" or setup.get("method") == "funnel")
+    """MEASURES a run of ``setup`` yields (the silhouette angle needs ``image``)."""
+    return tuple(m for m in MEASURES
+                 if not (m.startswith("angle_image") and not setup.get("image", True)))
 
 
 def setups() -> dict:
@@ -112,7 +111,7 @@ def setups() -> dict:
                   seed_stream="repose")
     cyl = dict(common, method="cylinder", wall_material="steel", plate_material="steel")
     fun = dict(common, method="funnel", wall_material="steel", plate_material="steel",
-               cover_speed=1.0, max_retained=0.05)
+               cover_speed=1.0, max_retained=0.2)
     return {
         # 002 Sec. 2.4: steel cylinder 60 mm diameter, lifted at 0.05 m/s, square steel plate.
         # Tube height, fill and plate size are not printed: fill height = diameter, 0.3 m plate.
@@ -233,7 +232,7 @@ def validate(setup: dict, preset: str = "quick", source: str = "<input>",
         setup_number(setup, "outlet_height", source, inclusive=True)
         setup_number(setup, "cover_speed", source)
         setup_number(setup, "load_mass", source)
-        keep = setup.get("max_retained", 0.05)
+        keep = setup.get("max_retained", 0.2)
         check(isinstance(keep, (int, float)) and not isinstance(keep, bool) and 0 <= keep < 1,
               source, "setup.max_retained", "a fraction of the fill in [0, 1)", keep)
         check(bot < top, source, "setup.funnel_bottom_diameter",
@@ -355,9 +354,9 @@ def run(setup: dict, params: DemParams, preset: str = "quick", seed: int = 0, th
     if math.isfinite(z_out):
         frac = responses["n_retained"] / max(1, int(sim.n))
         responses["retained_fraction"] = frac
-        keep = setup.get("max_retained", 0.05)
+        keep = setup.get("max_retained", 0.2)
         if frac > keep:
-            why = ("arched over the outlet" if ok else
+            why = ("held by cohesion: arched over the outlet or stuck to the walls" if ok else
                    f"still there when the run stopped unsettled after {t_rest:.3g} s")
             arched = (f"funnel: {responses['n_retained']} of {int(sim.n)} spheres "
                       f"({100 * frac:.0f} %) stayed in the funnel ({why}), more than "
