@@ -57,6 +57,22 @@ def _publish(tmp: str, path: Path) -> None:
     os.replace(tmp, path)
 
 
+def spread_and_correlation(printed, simulated):
+    """(printed spread, simulated spread, Pearson correlation) over the pairs where both are
+    finite: spreads as max - min ('' when no pair), the correlation as text ('' for fewer
+    than three pairs or a constant side)."""
+    import numpy as np
+
+    p = np.asarray(printed, dtype=float)
+    s = np.asarray(simulated, dtype=float)
+    good = np.isfinite(p) & np.isfinite(s)
+    p, s = p[good], s[good]
+    if not len(p):
+        return "", "", ""
+    corr = f"{np.corrcoef(p, s)[0, 1]:.2f}" if len(p) > 2 and p.std() > 0 and s.std() > 0 else ""
+    return f"{np.ptp(p):.2f}", f"{np.ptp(s):.2f}", corr
+
+
 def runs_table(rows, fields) -> list[str]:
     """Markdown lines of a table with one row per run, every field a column."""
     return ["| " + " | ".join(fields) + " |", "|" + "---|" * len(fields),

@@ -28,7 +28,8 @@ import time
 from pathlib import Path
 
 import numpy as np
-from _report import commit, read_rows, runs_table, write_page, write_rows
+from _report import (commit, read_rows, runs_table, spread_and_correlation, write_page,
+                     write_rows)
 
 HERE = Path(__file__).resolve().parent
 ROOT = HERE.parent
@@ -125,22 +126,15 @@ def report(rows, planned, md_path, argv):
         n = len(design_rows)
         w = np.array([_f(r["wall_s"]) for r in sel])
         # a run with a value counts even when another estimator wrote to measure_errors
-        ok = [r for r in sel if np.isfinite(_f(r["simulated"]))]
-        p = np.array([_f(r["printed"]) for r in ok])
-        s = np.array([_f(r["simulated"]) for r in ok])
-        good = np.isfinite(p) & np.isfinite(s)
-        corr = ""
-        if good.sum() > 2 and p[good].std() > 0 and s[good].std() > 0:
-            corr = f"{np.corrcoef(p[good], s[good])[0, 1]:.2f}"
+        p_spread, s_spread, corr = spread_and_correlation([_f(r["printed"]) for r in sel],
+                                                          [_f(r["simulated"]) for r in sel])
         mean = float(w.mean()) if len(w) else float("nan")
         proj = mean * n if len(w) else float("nan")
         total += float(w.sum())
         total_proj += proj if np.isfinite(proj) else 0.0
         sc = f"{sel[0]['scenario']} / {sel[0]['setup']} / {sel[0]['measure']}" if sel else ""
         md.append(f"| {soil.name} | {sid} | {rid} | {sc} | {n} | {len(sel)} | {w.sum():.0f} | "
-                  f"{mean:.1f} | {proj:.0f} | "
-                  + (f"{np.ptp(p[good]):.2f}" if good.any() else "") + " | "
-                  + (f"{np.ptp(s[good]):.2f}" if good.any() else "") + f" | {corr} |")
+                  f"{mean:.1f} | {proj:.0f} | {p_spread} | {s_spread} | {corr} |")
     md += ["", f"Wall time of the runs in the table: {total:.0f} s ({total / 60:.1f} min); projected "
            f"for every design point with one seed: {total_proj:.0f} s ({total_proj / 60:.1f} min).", ""]
     failed = [r for r in rows if r["error"]]

@@ -26,7 +26,8 @@ import time
 from pathlib import Path
 
 import numpy as np
-from _report import commit, kept_notes, read_rows, write_rows
+from _report import (commit, read_rows, runs_table, spread_and_correlation, write_page,
+                     write_rows)
 
 HERE = Path(__file__).resolve().parent
 ROOT = HERE.parent
@@ -47,7 +48,7 @@ def _pairs(items):
 
 
 def run_point(soil, stage_id, row, args, overrides, rev):
-    from soilcal.dem.scenarios import get
+    from soilcal.dem.scenarios import get, measures_of
     from soilcal.dem.scenarios.base import DemParams, merge_setup, run_replicates, stage_params
 
     stage = soil.stage(stage_id)
@@ -57,11 +58,12 @@ def run_point(soil, stage_id, row, args, overrides, rev):
     mod = get(args.scenario)
     setup = merge_setup(mod.setups(), args.setup or soil.name, {}, "--setup")
     mod.validate(setup, args.preset, "--setup")
+    allowed = measures_of(mod, setup)
+    if args.measure not in allowed:
+        raise SystemExit(f"--measure: expected a measured response of {args.scenario} "
+                         f"({', '.join(allowed)}), got {args.measure!r}")
     res = run_replicates(mod, setup, params, preset=args.preset, seed=args.seed,
                          replicates=args.replicates, threads=args.threads)
-    if args.measure not in res.responses:
-        raise SystemExit(f"--measure: expected a response of {args.scenario} "
-                         f"({', '.join(res.responses)}), got {args.measure!r}")
     sims = [r[args.measure] for r in res.per_run] if res.per_run else [res.responses[args.measure]]
     return dict(utc=time.strftime("%Y-%m-%d %H:%M", time.gmtime()), commit=rev, soil=soil.name,
                 stage=stage_id, run=int(row["run"]),
@@ -135,15 +137,12 @@ def main(argv=None):
           "|---|---|---|---|---|---|---|---:|---:|---:|---:|"]
     for g in sorted({_group(r) for r in rows}):
         sel = [r for r in rows if _group(r) == g]
-        p = np.array([float(r["printed"]) for r in sel])
-        s = np.array([float(r["simulated"]) for r in sel])
-        corr = f"{np.corrcoef(p, s)[0, 1]:.2f}" if len(sel) > 2 and p.std() > 0 and s.std() > 0 else ""
+        p_spread, s_spread, corr = spread_and_correlation([float(r["printed"]) for r in sel],
+                                                          [float(r["simulated"]) for r in sel])
         md.append(f"| {g[0]} | {g[1]} | {g[2]} | {g[3]} | {g[4]} | {g[5]} | {g[6]} vs {g[7]} | {len(sel)} | "
-                  f"{np.ptp(p):.2f} | {np.ptp(s):.2f} | {corr} |")
-    md += ["", "Runs:", "", "| " + " | ".join(FIELDS) + " |", "|" + "---|" * len(FIELDS),
-           *("| " + " | ".join(str(r.get(k, "")) for k in FIELDS) + " |" for r in rows),
-           "", kept_notes(md_path)]
-    md_path.write_text("\n".join(md) + "\n")
+                  f"{p_spread} | {s_spread} | {corr} |")
+    md += ["", "Runs:", "", *runs_table(rows, FIELDS)]
+    write_page(md_path, md)
 
 
 if __name__ == "__main__":

@@ -53,6 +53,11 @@ def _load(names):
 SCENARIOS = _load(_MODULES)
 
 
+def measures_of(mod, setup: dict) -> tuple:
+    """The responses a run of scenario module ``mod`` with ``setup`` yields to measure."""
+    return tuple(mod.measures(setup)) if hasattr(mod, "measures") else tuple(mod.MEASURES)
+
+
 def get(name: str, source: str = "<input>"):
     """The scenario module called ``name`` (InputError listing the known names otherwise)."""
     from soilcal.errors import InputError

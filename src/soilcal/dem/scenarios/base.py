@@ -199,8 +199,7 @@ def stage_params(soil, stage_id: str, levels: dict, base: "DemParams | None" = N
     """DEM parameters of one design point of a soil's stage, from its config.
 
     ``levels`` maps factor letters of the stage to values, actual values or, with
-    ``coded``, coded levels -1..+1 decoded as (low + high)/2 + c (high - low)/2 (the coding
-    of :mod:`soilcal.rsm.model`).  The stage's ``fixed`` values and the soil's printed Poisson
+    ``coded``, coded levels -1..+1 decoded by :func:`soilcal.doe.designs.coded_to_actual`.  The stage's ``fixed`` values and the soil's printed Poisson
     ratio, particle density and shear modulus (``properties.poisson_ratio``,
     ``properties.particle_density``, ``properties.shear_modulus``, each when it has a single
     ``value``) fill the rest; anything else keeps ``base`` (default :class:`DemParams`).
@@ -212,6 +211,8 @@ def stage_params(soil, stage_id: str, levels: dict, base: "DemParams | None" = N
     is an error naming the entry).  A value outside the physical range is an error naming
     the stage's factor or fixed entry.
     """
+    from soilcal.doe.designs import coded_to_actual
+
     path = soil.path
     stage = soil.stage(stage_id)
     known = DemParams.names()
@@ -268,7 +269,7 @@ def stage_params(soil, stage_id: str, levels: dict, base: "DemParams | None" = N
             f = factors[letter]
             if f.get("low") is None or f.get("high") is None:
                 raise InputError(path, where, "low and high levels to decode a coded table", f)
-            v = 0.5 * (f["low"] + f["high"]) + float(v) * 0.5 * (f["high"] - f["low"])
+            v = float(coded_to_actual([float(v)], [f["low"]], [f["high"]])[0])
         put(name, float(v) * scale, where)
     return DemParams.from_mapping(values, str(path), base=base)
 

@@ -85,7 +85,7 @@ def response_ids(data: dict) -> list[str]:
 
 def spec_from(soil_path, data: dict, response_id: str) -> SimulationSpec:
     """The validated :class:`SimulationSpec` of one response; errors name the config field."""
-    from soilcal.dem.scenarios import SCENARIOS
+    from soilcal.dem.scenarios import SCENARIOS, measures_of
     from soilcal.dem.scenarios.base import PRESETS, DemParams, merge_setup
 
     sim = _block(soil_path, data)
@@ -106,7 +106,7 @@ def spec_from(soil_path, data: dict, response_id: str) -> SimulationSpec:
         setup = merge_setup(setups, sname, dict(entry.get("set") or {}), str(soil_path))
     except InputError as exc:
         raise _renamed(exc, soil_path, "setup.", f"{where}.set.") from None
-    allowed = mod.measures(setup) if hasattr(mod, "measures") else mod.MEASURES
+    allowed = measures_of(mod, setup)
     if entry["measure"] not in allowed:
         raise InputError(soil_path, f"{where}.measure",
                          f"a measured response of {name} with this setup ({', '.join(allowed)})",

@@ -95,6 +95,7 @@ MEASURES = (
     "angle_image_deg", "angle_image_sd_deg",
 )
 PHI = 0.6  # settled solid fraction used to size the fill
+MAX_RETAINED = 0.2  # share of a funnel's spheres that may stay in it (module docstring)
 N_SEG = 24  # facets of the funnel and cover meshes (facet mid-lines on the nominal radius)
 
 
@@ -111,7 +112,7 @@ def setups() -> dict:
                   seed_stream="repose")
     cyl = dict(common, method="cylinder", wall_material="steel", plate_material="steel")
     fun = dict(common, method="funnel", wall_material="steel", plate_material="steel",
-               cover_speed=1.0, max_retained=0.2)
+               cover_speed=1.0, max_retained=MAX_RETAINED)
     return {
         # 002 Sec. 2.4: steel cylinder 60 mm diameter, lifted at 0.05 m/s, square steel plate.
         # Tube height, fill and plate size are not printed: fill height = diameter, 0.3 m plate.
@@ -232,7 +233,7 @@ def validate(setup: dict, preset: str = "quick", source: str = "<input>",
         setup_number(setup, "outlet_height", source, inclusive=True)
         setup_number(setup, "cover_speed", source)
         setup_number(setup, "load_mass", source)
-        keep = setup.get("max_retained", 0.2)
+        keep = setup.get("max_retained", MAX_RETAINED)
         check(isinstance(keep, (int, float)) and not isinstance(keep, bool) and 0 <= keep < 1,
               source, "setup.max_retained", "a fraction of the fill in [0, 1)", keep)
         check(bot < top, source, "setup.funnel_bottom_diameter",
@@ -354,7 +355,7 @@ def run(setup: dict, params: DemParams, preset: str = "quick", seed: int = 0, th
     if math.isfinite(z_out):
         frac = responses["n_retained"] / max(1, int(sim.n))
         responses["retained_fraction"] = frac
-        keep = setup.get("max_retained", 0.2)
+        keep = setup.get("max_retained", MAX_RETAINED)
         if frac > keep:
             why = ("held by cohesion: arched over the outlet or stuck to the walls" if ok else
                    f"still there when the run stopped unsettled after {t_rest:.3g} s")
@@ -368,15 +369,13 @@ def run(setup: dict, params: DemParams, preset: str = "quick", seed: int = 0, th
         # a heap an estimator cannot read (spread flat, too few spheres on the plate, the
         # load arched in the funnel) is a result of the run, not an error of it: that
         # estimator's angle is NaN
-        if arched:
-            return dict(angle_deg=math.nan, spread_deg=math.nan, height_m=math.nan,
-                        per_direction_deg=[])
-        try:
-            return fn(*args, **kw)
-        except InputError as exc:
-            failed.append(f"{name}: {exc.field}: expected {exc.expected}, got {exc.got}")
-            return dict(angle_deg=math.nan, spread_deg=math.nan, height_m=math.nan,
-                        per_direction_deg=[])
+        if not arched:
+            try:
+                return fn(*args, **kw)
+            except InputError as exc:
+                failed.append(f"{name}: {exc.field}: expected {exc.expected}, got {exc.got}")
+        return dict(angle_deg=math.nan, spread_deg=math.nan, height_m=math.nan,
+                    per_direction_deg=[])
 
     bins = measured("bins", measure.repose_angle_bins, x[on], r[on], 0.0, centre=(0.0, 0.0),
                     source=source)

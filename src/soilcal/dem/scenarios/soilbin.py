@@ -181,9 +181,9 @@ def soil_time_step(spec: BinSpec, params: DemParams) -> float:
     dt = spec.dt_fraction * rayleigh_time(spec.r_min, params.soil_density, g,
                                           params.soil_poisson)
     mats = build_materials(params, spec.stiffness_scale, "<bin>", spec.cohesion_scale)
-    w_factor = model_codes(**contact_model(params))[1]
-    rmin, tab = {mats.index("soil"): spec.r_min}, mats.table(w_factor)
-    if contact_model(params)["cohesion"] == "jkr":
+    model = contact_model(params)
+    rmin, tab = {mats.index("soil"): spec.r_min}, mats.table(model_codes(**model)[1])
+    if model["cohesion"] == "jkr":
         dt = min(dt, mats.jkr_dt(rmin, tab))
     # soil walls only: the settled bin (cached) must not depend on the tool's steel
     return min(dt, DAMPING_DT_SAFETY * mats.damping_dt(rmin, tab, spec.max_overlap,
@@ -356,7 +356,7 @@ def tool_pass(spec: BinSpec, params: DemParams, preset: str, seed: int, source: 
     vtk = VtkWriter(vtk_dir, stem)
     chunks = max(1, int(n_frames) - 1) if vtk.folder else 1
     per = int(math.ceil(steps / log_every / chunks)) * log_every
-    ts, fs, qs, fa = [], [], [], []
+    ts, qs, fa = [], [], []
     step0 = sim.step
     if vtk.folder:
         vtk.frame(sim, *(tool_pose(0.0) if tool_pose else (None, None)))
@@ -365,18 +365,18 @@ def tool_pass(spec: BinSpec, params: DemParams, preset: str, seed: int, source: 
         k = min(per, steps - done)
         s0 = sim.step
         sim.run(k, wall_log_every=log_every)  # log rows counted from the start of this call
-        t, f, q = force_series(sim, wall, log_every, 0, dt)
+        t, _, q = force_series(sim, wall, log_every, 0, dt)
         ts.append(t + (s0 - step0) * dt)
-        fs.append(f)
         fa.append(sim.wall_log[:, :, 0:3].copy())
         qs.append(q)
         done += k
         if vtk.folder:
             tt = (sim.step - step0) * dt
             vtk.frame(sim, *(tool_pose(tt) if tool_pose else (None, None)))
-    return dict(sim=sim, t=np.concatenate(ts), force=np.concatenate(fs),
+    wall_forces = np.concatenate(fa)
+    return dict(sim=sim, t=np.concatenate(ts), force=wall_forces[:, wall].copy(),
                 torque=np.concatenate(qs), dt=dt, steps=steps, settle_steps=bed["settle_steps"],
-                peak_overlap=sim.peak_overlap, wall_forces=np.concatenate(fa),
+                peak_overlap=sim.peak_overlap, wall_forces=wall_forces,
                 n=int(keep.sum()), from_cache=bed["from_cache"], surface=bed["surface"],
                 log_every=log_every, wall=wall)
 
