@@ -116,6 +116,33 @@ def test_insert_count_no_overlap_inside(region):
     assert r.min() >= 1.0e-3 and r.max() <= 2.0e-3
 
 
+def test_cone_region_insertion_fills_the_frustum_uniformly():
+    """A frustum of radius 10 mm at z = 0 and 40 mm at z = 60 mm (side slope dR/dz = 1/2),
+    tilted: its volume is pi h/3 (a^2 + ab + b^2); every inserted sphere lies at least its
+    radius from the side, (R(z) - rho) / sqrt(1 + 1/4), and inside the end planes; the
+    centres are spread by volume: the share below mid-height is the accessible (eroded)
+    frustum's share, integrated by hand."""
+    a, b, h = 0.010, 0.040, 0.060
+    axis_point, d = np.array([0.1, 0.0, 0.0]), np.array([0.0, 1.0, 1.0]) / math.sqrt(2)
+    cone = F.ConeRegion(a, b, 0.0, h, axis_point=tuple(axis_point), axis_dir=tuple(d))
+    assert cone.volume == pytest.approx(math.pi * h / 3 * (a * a + a * b + b * b), rel=1e-12)
+    rr = 0.5e-3
+    n = int(0.05 * cone.volume / vol(rr))
+    x, r = F.insert_random(cone, F.UniformRadius(rr, rr), n=n, seed=3)
+    w = x - axis_point
+    z = w @ d
+    rho = np.linalg.norm(w - np.outer(z, d), axis=1)
+    assert len(r) == n and min_gap(x, r) >= -1e-12
+    assert (z >= rr - 1e-12).all() and (z <= h - rr + 1e-12).all()
+    assert ((a + z / 2 - rho) / math.sqrt(1.25) >= rr - 1e-12).all()
+    zz = np.linspace(rr, h - rr, 200_001)
+    area = (a + zz / 2 - rr * math.sqrt(1.25)) ** 2  # pi cancels
+    low = area[zz <= h / 2].sum() / area.sum()
+    assert np.mean(z <= h / 2) == pytest.approx(low, abs=0.015)
+    with pytest.raises(ValueError):
+        F.ConeRegion(0.01, 0.02, 0.05, 0.05)
+
+
 def test_insert_mass_and_avoid_existing_particles():
     psd = F.PSD.from_mass_percent([2e-3, 3e-3, 5e-3], [60, 40])
     x0, r0 = F.insert_random(BOX, psd, n=300, seed=1)

@@ -30,7 +30,9 @@ Size distributions
 Random insertion
 ----------------
 Random sequential addition (RSA): candidate centres are drawn uniformly in
-the part of the region where the sphere lies entirely inside, and accepted
+the part of the region where the sphere lies entirely inside (a frustum,
+:class:`ConeRegion`: drawn in its enclosing cylinder, those outside the cone
+rejected), and accepted
 when no existing or already placed sphere overlaps (``|x_i - x_j| >= r_i +
 r_j``), the check running over the 27 cells of a uniform grid of cell size
 ``>= r_new,max + r_max``.  Spheres are placed largest first.  RSA of equal
@@ -185,6 +187,79 @@ class CylinderRegion:
         R = self.radius
         return (np.asarray(self.axis_point, np.float64), np.vstack([e1, e2, d]),
                 np.array([-R, -R, self.z0]), np.array([R, R, self.z1]))
+
+
+@dataclass(frozen=True)
+class ConeRegion:
+    """Solid frustum (truncated cone) between axial coordinates ``z0 < z1`` measured from
+    ``axis_point`` along ``axis_dir``, of radius ``radius0`` at ``z0`` and ``radius1`` at
+    ``z1`` (a funnel's inside).
+
+    A sphere of radius r at axial coordinate z and distance rho from the axis lies inside
+    when ``z - r >= z0``, ``z + r <= z1`` and its distance to the cone's side,
+    ``(R(z) - rho) cos(alpha)`` with ``R(z)`` the radius at z and ``tan(alpha) =
+    (radius1 - radius0) / (z1 - z0)`` the half-angle, is at least r.  Random insertion
+    draws candidates in the enclosing cylinder and rejects those outside.
+    """
+
+    radius0: float
+    radius1: float
+    z0: float
+    z1: float
+    axis_point: tuple = (0.0, 0.0, 0.0)
+    axis_dir: tuple = (0.0, 0.0, 1.0)
+    _frame: tuple = field(init=False, repr=False, compare=False)
+
+    def __post_init__(self):
+        if self.radius0 <= 0 or self.radius1 <= 0 or self.z1 <= self.z0:
+            raise ValueError("cone region needs radii > 0 and z1 > z0")
+        cyl = CylinderRegion(max(self.radius0, self.radius1), self.z0, self.z1,
+                             self.axis_point, self.axis_dir)
+        object.__setattr__(self, "_frame", cyl._frame)
+
+    @property
+    def _cos(self):
+        return 1.0 / math.hypot(1.0, (self.radius1 - self.radius0) / (self.z1 - self.z0))
+
+    @property
+    def _cyl(self):
+        return CylinderRegion(max(self.radius0, self.radius1), self.z0, self.z1,
+                              self.axis_point, self.axis_dir)
+
+    @property
+    def volume(self):
+        a, b = self.radius0, self.radius1
+        return math.pi * (self.z1 - self.z0) / 3.0 * (a * a + a * b + b * b)
+
+    def min_extent(self):
+        return min(2 * min(self.radius0, self.radius1), self.z1 - self.z0)
+
+    def bbox(self):
+        return self._cyl.bbox()
+
+    def radius_at(self, z):
+        return self.radius0 + (self.radius1 - self.radius0) * (np.asarray(z) - self.z0) / (
+            self.z1 - self.z0)
+
+    def contains(self, x, r):
+        x = np.atleast_2d(x)
+        r = np.asarray(r, dtype=np.float64).reshape(-1)
+        d = self._frame[0]
+        w = x - np.asarray(self.axis_point, dtype=np.float64)
+        z = w @ d
+        rho = np.linalg.norm(w - z[:, None] * d, axis=1)
+        return ((z - r >= self.z0 - 1e-12) & (z + r <= self.z1 + 1e-12)
+                & ((self.radius_at(z) - rho) * self._cos >= r - 1e-12))
+
+    def kernel_params(self):
+        _, p16 = self._cyl.kernel_params()
+        p = np.zeros(18)
+        p[:16] = p16
+        p[15], p[16], p[17] = self.radius0, self.radius1, self._cos
+        return 2, p
+
+    def local_frame(self):
+        return self._cyl.local_frame()
 
 
 # ---------------------------------------------------------------------------
@@ -414,11 +489,13 @@ def coarse_graining_scale(dist, bulk_volume, solid_fraction, n_max):
 
 @njit(cache=True)
 def _candidate(kind, prm, r, u0, u1, u2):
+    """A candidate centre and whether the sphere lies inside the region (kind 0 box, 1
+    cylinder: always; 2 frustum: drawn in the enclosing cylinder, rejected outside)."""
     if kind == 0:
         x = prm[0] + r + u0 * (prm[3] - prm[0] - 2.0 * r)
         y = prm[1] + r + u1 * (prm[4] - prm[1] - 2.0 * r)
         z = prm[2] + r + u2 * (prm[5] - prm[2] - 2.0 * r)
-        return x, y, z
+        return x, y, z, True
     rho = (prm[12] - r) * math.sqrt(u0)
     th = 2.0 * math.pi * u1
     zz = prm[13] + r + u2 * (prm[14] - prm[13] - 2.0 * r)
@@ -426,7 +503,11 @@ def _candidate(kind, prm, r, u0, u1, u2):
     x = prm[0] + zz * prm[3] + c * prm[6] + s * prm[9]
     y = prm[1] + zz * prm[4] + c * prm[7] + s * prm[10]
     z = prm[2] + zz * prm[5] + c * prm[8] + s * prm[11]
-    return x, y, z
+    inside = True
+    if kind == 2:
+        rz = prm[15] + (prm[16] - prm[15]) * (zz - prm[13]) / (prm[14] - prm[13])
+        inside = (rz - rho) * prm[17] >= r
+    return x, y, z, inside
 
 
 @njit(cache=True)
@@ -465,9 +546,11 @@ def _rsa_kernel(radii, i_start, att_start, kind, prm, pos, rad, n_stored, glo, h
                 return i, att, ub, n_stored, 2
             if ub >= uni.shape[0]:
                 return i, att, ub, n_stored, 1
-            x, y, z = _candidate(kind, prm, r, uni[ub, 0], uni[ub, 1], uni[ub, 2])
+            x, y, z, inside = _candidate(kind, prm, r, uni[ub, 0], uni[ub, 1], uni[ub, 2])
             ub += 1
             att += 1
+            if not inside:
+                continue
             ci, cj, ck = _cell_of(x, y, z, glo, h, dims)
             ok = True
             for a in range(max(ci - 1, 0), min(ci + 2, dims[0])):

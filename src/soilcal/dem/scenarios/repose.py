@@ -13,9 +13,13 @@ settles.
 
 Funnel discharge (black soil, 001 Sec. 2.2.1; cohesive soil, 004 Sec. 2.2 / Fig. 4): soil is
 loaded into a funnel whose outlet is covered, the cover is removed and the soil flows onto
-the plate.  In the simulation the load settles in the funnel on a disc covering the outlet;
-the disc is pulled sideways at ``cover_speed`` (1 m/s) until clear of the outlet, and the heap
-settles.
+the plate.  In the simulation the spheres are placed at random above a disc covering the
+outlet, in the frustum of the funnel just tall enough to hold them at 30 % solid fraction (a
+cylinder above the funnel's top takes what the funnel cannot), and settle; no sphere falls
+much more than half that height (placed in a column above the funnel's lower quarter, a
+1600-sphere black-soil load hit overlaps of 30 % of a radius on the quick preset's soft
+spheres).  The disc is pulled sideways at ``cover_speed`` (1 m/s) until clear of the outlet,
+and the heap settles.
 
 Rest: the translational kinetic energy falls below 1/2 M v_rest^2 with M the total mass and
 v_rest = ``rest_speed`` (a mean speed of 5 mm/s by default: resting beds keep a
@@ -33,9 +37,11 @@ Number of particles for a fill volume V (tube: pi D^2/4 h_fill; funnel: load mas
     N = phi V / <v_p>,      <v_p> = 4/3 pi <r^3>
 
 ``quick``: radii uniform in [0.9, 1.1] r_q with r_q from N = ``n_particles`` (1000 spheres by
-default) for cylinders; for funnels r_q = outlet diameter / 16 (8 diameters across the
-outlet) and the load mass follows from N (the heap is then smaller than the paper's); soil
-shear modulus capped at 5e5 Pa (stiffness scaling, base.py); surface energies times
+default) for cylinders; funnels keep the setup's ``load_mass`` with r_q = outlet diameter / 16
+(8 diameters across the outlet), or the larger r_q that splits the load into
+``QUICK_FUNNEL_MAX`` = 8000 spheres (black soil, 0.5 kg: 2482 spheres; cohesive soil, 0.2 kg:
+3980).  The heap needs the load: 1000 spheres of black soil (0.2 kg) left the outlet as a thin
+stream and spread into a layer two or three spheres deep on the plate.  Soil shear modulus capped at 5e5 Pa (stiffness scaling, base.py); surface energies times
 r32(quick) / r32(paper PSD) (cohesion scaling, base.py; ``cohesion_scale`` in the run's
 setup).  ``paper``: the papers' particle sizes and masses, unscaled moduli.  A setup's
 ``n_particles`` or ``radius`` (either preset) splits the tube fill or the funnel's
@@ -73,9 +79,10 @@ from __future__ import annotations
 import math
 
 import numpy as np
+from scipy.optimize import brentq
 
 from soilcal.dem import measure
-from soilcal.dem.factories import CylinderRegion, UniformRadius, insert_random
+from soilcal.dem.factories import ConeRegion, CylinderRegion, UniformRadius, insert_random
 from soilcal.dem.geometry import cone_mesh, disk_mesh
 from soilcal.dem.scenarios.base import (DemParams, Frames, Result, Timer, check, check_discretisation,
                                         check_preset, make_simulation, paper_cohesion, paper_psd,
@@ -95,6 +102,8 @@ MEASURES = (
     "angle_image_deg", "angle_image_sd_deg",
 )
 PHI = 0.6  # settled solid fraction used to size the fill
+FILL_FRACTION = 0.30  # solid fraction of the random placement before the load settles
+QUICK_FUNNEL_MAX = 8000  # most spheres of a quick funnel load (module docstring)
 MAX_RETAINED = 0.2  # share of a funnel's spheres that may stay in it (module docstring)
 N_SEG = 24  # facets of the funnel and cover meshes (facet mid-lines on the nominal radius)
 
@@ -178,8 +187,11 @@ def sizing(setup, preset, params: DemParams | None = None) -> dict:
     n_set = setup.get("n_particles")
     r_set = setup.get("radius")
     if setup["method"] == "funnel" and preset == "quick" and r_set is None and n_set is None:
-        r_set = setup["funnel_bottom_diameter"] / 16.0
-        n_set = d["n_particles"]
+        # the setup's load, 8 diameters across the outlet, at most QUICK_FUNNEL_MAX spheres
+        v = _fill_volume(setup, params)
+        unit = UniformRadius(0.9, 1.1).mean_volume()  # mean volume at r_q = 1 m
+        r_set = max(setup["funnel_bottom_diameter"] / 16.0,
+                    (PHI * v / (QUICK_FUNNEL_MAX * unit)) ** (1.0 / 3.0))
     if preset == "paper" and r_set is None and n_set is None:
         dist = paper_psd(setup, "<setup>")
     else:
@@ -189,12 +201,7 @@ def sizing(setup, preset, params: DemParams | None = None) -> dict:
             r_set = (PHI * v * 3.0 / (4.0 * math.pi * n)) ** (1.0 / 3.0)
         dist = UniformRadius(0.9 * float(r_set), 1.1 * float(r_set))
     vmean = dist.mean_volume()
-    if setup["method"] == "funnel" and preset == "quick" and setup.get("radius") is None \
-            and setup.get("n_particles") is None:
-        n = int(d["n_particles"])
-        rho = (params or DemParams()).soil_density
-        load_mass = n * vmean * rho
-    elif n_set is not None and setup["method"] == "funnel":
+    if n_set is not None and setup["method"] == "funnel":
         n = int(n_set)
         rho = (params or DemParams()).soil_density
         load_mass = n * vmean * rho
@@ -241,6 +248,12 @@ def validate(setup: dict, preset: str = "quick", source: str = "<input>",
         check(top < plate, source, "setup.funnel_top_diameter",
               f"a funnel narrower than the plate ({plate} m)", top)
     sz = sizing(setup, preset)
+    if method == "funnel":  # before the outlet check: a quick load's spheres grow with it
+        rho = (params or DemParams()).soil_density
+        for m in {setup["load_mass"], sz["load_mass"]}:
+            check(m / (rho * PHI) <= _funnel_volume(setup), source, "setup.load_mass",
+                  f"a load that fits the funnel ({_funnel_volume(setup) * 1e3:.3g} L at "
+                  f"{rho:g} kg/m^3, solid fraction {PHI})", m)
     check(sz["n"] >= 20, source, "setup", "a fill holding at least 20 particles", sz["n"])
     if method == "cylinder":
         check(setup["tube_diameter"] >= 4 * 2 * sz["r_max"], source, "setup.tube_diameter",
@@ -250,11 +263,6 @@ def validate(setup: dict, preset: str = "quick", source: str = "<input>",
               "setup.funnel_bottom_diameter",
               f"an outlet of at least 5 particle diameters ({10 * sz['r_max']:.4g} m)",
               setup["funnel_bottom_diameter"])
-        for m in {setup["load_mass"], sz["load_mass"]}:
-            load_v = m / ((params or DemParams()).soil_density * PHI)
-            check(load_v <= _funnel_volume(setup), source, "setup.load_mass",
-                  f"a load that fits the funnel ({_funnel_volume(setup) * 1e3:.3g} L at "
-                  f"{(params or DemParams()).soil_density:g} kg/m^3, solid fraction {PHI})", m)
 
 
 def _plate(sim, setup):
@@ -267,6 +275,38 @@ def _insert(sim, region, dist, n, gen, source):
     x, r = insert_random(region, dist, n=n, rng=gen, max_fraction=0.35, source=source,
                          field="particles")
     # spheres carry no per-particle id from the factory; lexsort by height keeps memory local
+    order = np.argsort(x[:, 2], kind="stable")
+    sim.add_particles(x[order], r[order], "soil")
+
+
+def _fill_funnel(sim, setup, sz, gen, source):
+    """Spheres placed at random (solid fraction ``FILL_FRACTION``) in the funnel from the
+    cover up, in the frustum just tall enough to hold them, so that the load falls at most
+    about half that height onto the cover; a load the whole funnel cannot hold at that
+    fraction has its rest placed in a cylinder above the funnel's top."""
+    Rt, Rb = setup["funnel_top_diameter"] / 2, setup["funnel_bottom_diameter"] / 2
+    hf, z_out = setup["funnel_height"], setup["outlet_height"]
+    vmean = sz["dist"].mean_volume()
+    need = sz["n"] * vmean / FILL_FRACTION
+    gap = 0.002 * sz["r_max"]  # clear of the walls' facets
+
+    def frustum(h):
+        return ConeRegion(Rb - gap, Rb - gap + (Rt - Rb) * h / hf, z_out, z_out + h)
+
+    h = hf if frustum(hf).volume <= need else brentq(lambda q: frustum(q).volume - need,
+                                                     4 * sz["r_max"], hf)
+    cone = frustum(h)
+    in_cone = min(sz["n"], int(FILL_FRACTION * cone.volume / vmean))
+    x, r = insert_random(cone, sz["dist"], n=in_cone, rng=gen, max_fraction=0.35,
+                         source=source, field="particles")
+    if in_cone < sz["n"]:
+        rest = sz["n"] - in_cone
+        ra = Rt - 1.001 * sz["r_max"]
+        h_ins = rest * vmean / (FILL_FRACTION * math.pi * ra * ra) + 2.002 * sz["r_max"]
+        x2, r2 = insert_random(CylinderRegion(ra, z_out + hf, z_out + hf + h_ins), sz["dist"],
+                               n=rest, rng=gen, max_fraction=0.35, existing_positions=x,
+                               existing_radii=r, source=source, field="particles")
+        x, r = np.vstack([x, x2]), np.concatenate([r, r2])
     order = np.argsort(x[:, 2], kind="stable")
     sim.add_particles(x[order], r[order], "soil")
 
@@ -289,7 +329,7 @@ def run(setup: dict, params: DemParams, preset: str = "quick", seed: int = 0, th
     if setup["method"] == "cylinder":
         R = setup["tube_diameter"] / 2
         vol = sz["n"] * sz["dist"].mean_volume()
-        h_ins = vol / (0.30 * math.pi * (R - sz["r_max"]) ** 2)
+        h_ins = vol / (FILL_FRACTION * math.pi * (R - sz["r_max"]) ** 2)
         tube_h = max(setup["tube_height"], h_ins + dmax)
         tube = sim.add_cylinder((0, 0, tube_h / 2), (0, 0, 1), R, tube_h / 2,
                                 setup["wall_material"], inner=True, name="tube")
@@ -325,12 +365,7 @@ def run(setup: dict, params: DemParams, preset: str = "quick", seed: int = 0, th
         cv, ct = disk_mesh(1.25 * Rb, 24, centre=(0, 0, z_out))
         cover = sim.add_mesh(cv, ct, setup["wall_material"], name="cover")
         _plate(sim, setup)
-        vol = sz["n"] * sz["dist"].mean_volume()
-        za = 0.25 * hf
-        ra = Rb + (Rt - Rb) * za / hf - 1.001 * sz["r_max"]
-        h_ins = vol / (0.30 * math.pi * ra * ra)
-        _insert(sim, CylinderRegion(ra, z_out + za, z_out + za + h_ins), sz["dist"], sz["n"], gen,
-                source)
+        _fill_funnel(sim, setup, sz, gen, source)
         frames(sim)
         ok0, t_fill = settle(sim, setup["rest_speed"], setup["max_settle_time"])
         info["fill_settled"] = int(ok0)
