@@ -213,9 +213,7 @@ class ConeRegion:
     def __post_init__(self):
         if self.radius0 <= 0 or self.radius1 <= 0 or self.z1 <= self.z0:
             raise ValueError("cone region needs radii > 0 and z1 > z0")
-        cyl = CylinderRegion(max(self.radius0, self.radius1), self.z0, self.z1,
-                             self.axis_point, self.axis_dir)
-        object.__setattr__(self, "_frame", cyl._frame)
+        object.__setattr__(self, "_frame", self._cyl._frame)
 
     @property
     def _cos(self):

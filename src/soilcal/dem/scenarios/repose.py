@@ -41,9 +41,10 @@ default) for cylinders; funnels keep the setup's ``load_mass`` with r_q = outlet
 (8 diameters across the outlet), or the larger r_q that splits the load into
 ``QUICK_FUNNEL_MAX`` = 8000 spheres (black soil, 0.5 kg: 2482 spheres; cohesive soil, 0.2 kg:
 3980).  The heap needs the load: 1000 spheres of black soil (0.2 kg) left the outlet as a thin
-stream and spread into a layer two or three spheres deep on the plate.  Soil shear modulus capped at 5e5 Pa (stiffness scaling, base.py); surface energies times
-r32(quick) / r32(paper PSD) (cohesion scaling, base.py; ``cohesion_scale`` in the run's
-setup).  ``paper``: the papers' particle sizes and masses, unscaled moduli.  A setup's
+stream and spread into a layer two or three spheres deep on the plate.  Soil shear modulus
+capped at 5e5 Pa (stiffness scaling, base.py); surface energies times r32(quick) /
+r32(paper PSD) (cohesion scaling, base.py; ``cohesion_scale`` in the run's setup).
+``paper``: the papers' particle sizes and masses, unscaled moduli.  A setup's
 ``n_particles`` or ``radius`` (either preset) splits the tube fill or the funnel's
 ``load_mass`` into that many spheres or spheres of that radius.
 
@@ -247,7 +248,7 @@ def validate(setup: dict, preset: str = "quick", source: str = "<input>",
               f"an outlet narrower than the funnel top ({top} m)", bot)
         check(top < plate, source, "setup.funnel_top_diameter",
               f"a funnel narrower than the plate ({plate} m)", top)
-    sz = sizing(setup, preset)
+    sz = sizing(setup, preset, params)
     if method == "funnel":  # before the outlet check: a quick load's spheres grow with it
         rho = (params or DemParams()).soil_density
         for m in {setup["load_mass"], sz["load_mass"]}:
