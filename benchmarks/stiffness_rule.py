@@ -87,7 +87,8 @@ def one(job):
     soil = load_soil(ROOT / "config" / "soils" / f"{soil_name}.yaml", ROOT / "resources")
     stage = soil.data["stages"][0]
     rid = stage["responses"][0]["id"]
-    levels = dict(centre_levels(stage, overrides), **overrides)
+    merged = dict(centre_levels(stage, overrides), **overrides)
+    levels = {k: merged[k] for k in stage["factors"]}  # the stage's order: one key per point
     sim = design.spec(soil, rid)
     d = design.design_params(soil, stage["id"], levels, sim).as_dict()
     if rule == "none":  # undo build_materials' gamma s^(2/5)
