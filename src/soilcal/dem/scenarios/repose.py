@@ -69,10 +69,11 @@ reason in ``measure_errors`` (empty when all three read the heap); the run itsel
 fail.  A cohesive load can arch over the funnel's outlet and stay in the funnel: when more
 than ``max_retained`` (default 20 %, by sphere count) of the spheres are still above the
 outlet when the run stops, every angle is NaN and ``measure_errors`` says so (the spheres on
-the plate are not the test's heap).  The default: black-soil loads that discharged kept
-0.2-9 % of their spheres on the funnel walls (quick preset, design points of stage 1);
-loads that arched kept 60-98 %, and 88-95 % at the paper's shear modulus
-(``benchmarks/results/stiffness_rule.md``, ``design_budget.md``).
+the plate are not the test's heap).  The default: quick black-soil loads of 1000 spheres
+that discharged kept 0.2-9 % of their spheres on the funnel walls (design points of stage
+1), those that arched 60-98 %; full 2482-sphere loads kept 0.2-3.4 % with the quick
+preset and 79-99 % when they arched (``benchmarks/results/stiffness_rule.md``,
+``design_budget.md``).
 """
 
 from __future__ import annotations
