@@ -57,7 +57,7 @@ def run_point(soil, stage_id, row, args, overrides, rev):
     params = DemParams.from_mapping(overrides, "--param", base=params)
     mod = get(args.scenario)
     setup = merge_setup(mod.setups(), args.setup or soil.name, {}, "--setup")
-    mod.validate(setup, args.preset, "--setup")
+    mod.validate(setup, args.preset, "--setup", params=params)
     allowed = measures_of(mod, setup)
     if args.measure not in allowed:
         raise SystemExit(f"--measure: expected a measured response of {args.scenario} "

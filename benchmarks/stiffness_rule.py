@@ -174,7 +174,12 @@ def main(argv=None):
         from soilcal.config.load import load_soil
 
         soil = load_soil(ROOT / "config" / "soils" / f"{args.soil}.yaml", ROOT / "resources")
-        centre_levels(soil.data["stages"][0], overrides)
+        stage = soil.data["stages"][0]
+        unknown = sorted(set(overrides) - set(stage["factors"]))
+        if unknown:
+            raise SystemExit(f"--levels: expected factors of stage {stage['id']} "
+                             f"({', '.join(stage['factors'])}), got {', '.join(unknown)}")
+        centre_levels(stage, overrides)
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
     csv_path, md_path = out / "stiffness_rule.csv", out / "stiffness_rule.md"

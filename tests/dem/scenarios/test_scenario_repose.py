@@ -58,15 +58,45 @@ def test_drum_fill_and_preset_validation():
         drum.validate(dict(s, rolling_model="bounded"), "quick", "t")
 
 
+def _funnel_fill(setup, rho, seed=0):
+    """The quick load of a funnel setup as placed before settling: (x, r, sizing)."""
+    from soilcal.dem.scenarios.base import rng
+
+    class Catch:
+        def add_particles(self, x, r, material):
+            self.x, self.r = x, r
+
+    sz = repose.sizing(setup, "quick", DemParams(soil_density=rho))
+    sim = Catch()
+    repose._fill_funnel(sim, setup, sz, rng(seed, "repose"), "t")
+    return sim.x, sim.r, sz
+
+
+def _inside_funnel(setup, x, r):
+    """Each sphere above the cover, below the funnel's top and at least its radius from the
+    cone's side (the facets' mid-lines lie on the nominal radius), and no two overlapping."""
+    from scipy.spatial import cKDTree
+
+    hf = setup["funnel_height"]
+    rb, rt = setup["funnel_bottom_diameter"] / 2, setup["funnel_top_diameter"] / 2
+    z = x[:, 2] - setup["outlet_height"]
+    rho = np.hypot(x[:, 0], x[:, 1])
+    slope = (rt - rb) / hf
+    assert (z >= r).all() and (z + r <= hf).all()
+    assert ((rb + slope * z - rho) / np.hypot(1, slope) >= r).all()
+    pairs = cKDTree(x).query_pairs(2.0 * r.max(), output_type="ndarray")
+    gap = np.linalg.norm(x[pairs[:, 0]] - x[pairs[:, 1]], axis=1) - r[pairs].sum(axis=1)
+    assert gap.min() >= -1e-12
+    return z
+
+
 def test_quick_funnel_keeps_the_load_and_fills_the_funnel_from_the_cover():
     """Black soil (001 Sec. 2.2.1): outlet 50 mm, funnel 192 mm / 274 mm, load 0.5 kg (the
     setup's assumption) at 1560 kg/m^3.  The quick load keeps the 0.5 kg with r_q = 50/16 mm:
     N = 0.5 / (1560 * 4/3 pi <r^3>), <r^3> = r_q^3 (1.1^4 - 0.9^4) / 0.8 = 1.01 r_q^3, so
     2482 spheres; a 5 kg load in a wider funnel is split into the 8000-sphere cap.  The random
-    fill lies inside the cone (at least a radius from its side), above the cover and within
-    the funnel, with no overlaps."""
-    from soilcal.dem.scenarios.base import rng
-
+    fill lies inside the cone, above the cover, with no overlaps; at 30 % solid fraction it
+    reaches the height where the frustum holds N <v> / 0.3, about 156 mm, not the top."""
     s = dict(repose.setups()["black-soil-stage1"])
     p = DemParams(soil_density=1560.0)
     rq = 0.050 / 16
@@ -80,22 +110,27 @@ def test_quick_funnel_keeps_the_load_and_fills_the_funnel_from_the_cover():
     with pytest.raises(InputError, match="setup.funnel_bottom_diameter"):  # 8000 too coarse
         repose.validate(dict(big, funnel_bottom_diameter=0.05), "quick", "t", p)
 
-    class Catch:
-        def add_particles(self, x, r, material):
-            self.x, self.r = x, r
+    x, r, _ = _funnel_fill(s, 1560.0)
+    z = _inside_funnel(s, x, r)
+    assert len(r) == 2482 and 0.150 < (z + r).max() < 0.160
 
-    sim = Catch()
-    repose._fill_funnel(sim, s, sz, rng(0, "repose"), "t")
-    x, r = sim.x, sim.r
-    z = x[:, 2] - s["outlet_height"]
-    rho = np.hypot(x[:, 0], x[:, 1])
-    slope = (0.192 - 0.050) / 2 / 0.274
-    assert len(r) == 2482 and (z >= r).all() and (z + r <= 0.274).all()
-    assert ((0.025 + slope * z - rho) / np.hypot(1, slope) >= r).all()
-    d = np.linalg.norm(x[:, None, :] - x[None, :, :], axis=2) - r[:, None] - r[None, :]
-    assert d[~np.eye(len(r), dtype=bool)].min() >= -1e-12
-    # at 30 % solid the frustum holds the load up to about 156 mm, not to the 274 mm top
-    assert (z + r).max() < 0.16
+
+@pytest.mark.parametrize("name, rho, load, n", [
+    ("guangxi-cohesive", 1802.0, 0.2, 3980),    # 004: 0.2 kg through a 30 mm outlet
+    ("black-soil-stage1", 1300.0, 0.5, 2979),
+    ("black-soil-stage1", 1560.0, 0.004, 20),   # the smallest load validate accepts
+])
+def test_every_sphere_of_a_load_the_funnel_holds_starts_inside_it(name, rho, load, n):
+    """Loads the funnel holds at 30 % solid fraction are placed in it whole (none above its
+    top), whatever the density; a 20-sphere load goes into the shortest frustum.  The counts:
+    N = m / (rho 4/3 pi 1.01 r_q^3), r_q = outlet / 16, rounded."""
+    s = dict(repose.setups()[name], load_mass=load)
+    rq = s["funnel_bottom_diameter"] / 16
+    assert round(load / (rho * 4 / 3 * np.pi * 1.01 * rq ** 3)) == n
+    repose.validate(s, "quick", "t", DemParams(soil_density=rho))
+    x, r, sz = _funnel_fill(s, rho)
+    assert sz["n"] == len(r) == n
+    _inside_funnel(s, x, r)
 
 
 @pytest.mark.parametrize("model, name", [(None, "constant_torque"),

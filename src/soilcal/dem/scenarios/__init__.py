@@ -11,8 +11,10 @@ Every scenario module defines:
   included) in the bench-top ones;
 * ``setups()``: named setups from the papers (dicts of dimensions, speeds, durations, each
   number cited beside it in the module);
-* ``validate(setup, preset, source)``: raises :class:`soilcal.errors.InputError` for bad
-  geometry or impossible settings, before anything runs;
+* ``validate(setup, preset, source, params=None)``: raises
+  :class:`soilcal.errors.InputError` for bad geometry or impossible settings, before
+  anything runs (``params``, the run's :class:`~soilcal.dem.scenarios.base.DemParams`, for
+  checks that depend on them: the funnel load's volume at the soil density);
 * ``run(setup, params, preset="quick", seed=0, threads=None, vtk_dir=None)``: returns a
   :class:`soilcal.dem.scenarios.base.Result`.
 

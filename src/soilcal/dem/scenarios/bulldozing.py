@@ -154,7 +154,9 @@ def _num(s, k, source):
     return v
 
 
-def validate(setup: dict, preset: str = "quick", source: str = "<bulldozing>") -> None:
+def validate(setup: dict, preset: str = "quick", source: str = "<bulldozing>",
+             params=None) -> None:
+    """Bad settings raise InputError before the run (``params``: no check needs them)."""
     check(preset in PRESETS, source, "preset", f"one of {PRESETS}", preset)
     check(setup.get("shape") in tools.SHAPES, source, "setup.shape",
           f"one of {', '.join(tools.SHAPES)} (Table 9)", setup.get("shape"))

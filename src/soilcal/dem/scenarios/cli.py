@@ -79,7 +79,7 @@ def _run(args) -> int:
     if args.seed < 0:
         raise InputError(src, "--seed", "an integer >= 0", args.seed)
     params = DemParams.from_mapping(_pairs(args.param, "--param"), src)
-    mod.validate(setup, args.preset, src)
+    mod.validate(setup, args.preset, src, params=params)
     res = run_replicates(mod, setup, params, preset=args.preset, seed=args.seed,
                          replicates=args.replicates, threads=args.threads, vtk_dir=args.vtk,
                          source=src)

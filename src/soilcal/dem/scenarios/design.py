@@ -116,11 +116,11 @@ def spec_from(soil_path, data: dict, response_id: str) -> SimulationSpec:
         raise InputError(soil_path, f"{BLOCK}.preset", f"one of {', '.join(PRESETS)}", preset)
     params = dict(sim.get("params") or {})
     try:
-        DemParams.from_mapping(params, str(soil_path))
+        dem_params = DemParams.from_mapping(params, str(soil_path))
     except InputError as exc:
         raise _renamed(exc, soil_path, "params.", f"{BLOCK}.params.") from None
     try:
-        mod.validate(setup, preset, str(soil_path))
+        mod.validate(setup, preset, str(soil_path), params=dem_params)
     except InputError as exc:
         raise _renamed(exc, soil_path, "setup.", f"{where}.set.") from None
     return SimulationSpec(response=response_id, scenario=name, setup=setup, measure=entry["measure"],

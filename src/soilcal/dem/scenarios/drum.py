@@ -91,7 +91,8 @@ def sizing(setup, preset, source="<input>"):
     return dict(dist=dist, n=n, r_max=float(dist.r_max), vol=vol)
 
 
-def validate(setup, preset="quick", source="<input>"):
+def validate(setup, preset="quick", source="<input>", params=None):
+    """Bad settings raise InputError before the run (``params``: no check needs them)."""
     check_preset(preset, source)
     D = setup_number(setup, "drum_diameter", source)
     L = setup_number(setup, "drum_length", source)

@@ -180,7 +180,9 @@ def _settings(setup: dict, preset: str) -> dict:
     return apply_preset(setup, setups()["yangtze-opener"], PRESET_SETTINGS[preset])
 
 
-def validate(setup: dict, preset: str = "quick", source: str = "<furrow>") -> None:
+def validate(setup: dict, preset: str = "quick", source: str = "<furrow>",
+             params=None) -> None:
+    """Bad settings raise InputError before the run (``params``: no check needs them)."""
     check(preset in PRESETS, source, "preset", f"one of {PRESETS}", preset)
     s = _settings(setup, preset)
     for k in ("depth", "speed", "tank_length", "tank_width", "tank_height", "particle_radius",

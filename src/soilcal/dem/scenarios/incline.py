@@ -78,7 +78,8 @@ STEPS = {("quick", "sliding"): (0.25, 0.1), ("quick", "rolling"): (0.1, 0.2),
 
 
 
-def validate(setup, preset="quick", source="<input>"):
+def validate(setup, preset="quick", source="<input>", params=None):
+    """Bad settings raise InputError before the run (``params``: no check needs them)."""
     check_preset(preset, source)
     kind = setup.get("kind")
     check(kind in ("sliding", "rolling"), source, "setup.kind", "'sliding' or 'rolling'", kind)

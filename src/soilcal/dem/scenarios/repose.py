@@ -14,11 +14,11 @@ settles.
 Funnel discharge (black soil, 001 Sec. 2.2.1; cohesive soil, 004 Sec. 2.2 / Fig. 4): soil is
 loaded into a funnel whose outlet is covered, the cover is removed and the soil flows onto
 the plate.  In the simulation the spheres are placed at random above a disc covering the
-outlet, in the frustum of the funnel just tall enough to hold them at 30 % solid fraction (a
-cylinder above the funnel's top takes what the funnel cannot), and settle; no sphere falls
-much more than half that height (placed in a column above the funnel's lower quarter, a
-1600-sphere black-soil load hit overlaps of 30 % of a radius on the quick preset's soft
-spheres).  The disc is pulled sideways at ``cover_speed`` (1 m/s) until clear of the outlet,
+outlet, in the frustum of the funnel just tall enough to hold them at 30 % solid fraction
+(at least four radii tall; a cylinder above the funnel's top takes what the whole funnel
+cannot hold), and settle, so that no sphere falls much more than half that height onto
+the cover or the spheres below (the quick preset's soft spheres take large overlaps on
+impact).  The disc is pulled sideways at ``cover_speed`` (1 m/s) until clear of the outlet,
 and the heap settles.
 
 Rest: the translational kinetic energy falls below 1/2 M v_rest^2 with M the total mass and
@@ -39,8 +39,8 @@ Number of particles for a fill volume V (tube: pi D^2/4 h_fill; funnel: load mas
 ``quick``: radii uniform in [0.9, 1.1] r_q with r_q from N = ``n_particles`` (1000 spheres by
 default) for cylinders; funnels keep the setup's ``load_mass`` with r_q = outlet diameter / 16
 (8 diameters across the outlet), or the larger r_q that splits the load into
-``QUICK_FUNNEL_MAX`` = 8000 spheres (black soil, 0.5 kg: 2482 spheres; cohesive soil, 0.2 kg:
-3980).  The heap needs the load: 1000 spheres of black soil (0.2 kg) left the outlet as a thin
+``QUICK_FUNNEL_MAX`` = 8000 spheres (black soil, 0.5 kg at 1560 kg/m^3: 2482 spheres;
+cohesive soil, 0.2 kg at 1802 kg/m^3: 3980).  The heap needs the load: 1000 spheres of black soil (0.2 kg) left the outlet as a thin
 stream and spread into a layer two or three spheres deep on the plate.  Soil shear modulus
 capped at 5e5 Pa (stiffness scaling, base.py); surface energies times r32(quick) /
 r32(paper PSD) (cohesion scaling, base.py; ``cohesion_scale`` in the run's setup).
@@ -71,9 +71,9 @@ than ``max_retained`` (default 20 %, by sphere count) of the spheres are still a
 outlet when the run stops, every angle is NaN and ``measure_errors`` says so (the spheres on
 the plate are not the test's heap).  The default: quick black-soil loads of 1000 spheres
 that discharged kept 0.2-9 % of their spheres on the funnel walls (design points of stage
-1), those that arched 60-98 %; full 2482-sphere loads kept 0.2-3.4 % with the quick
-preset and 79-99 % when they arched (``benchmarks/results/stiffness_rule.md``,
-``design_budget.md``).
+1, before commit ff7f5f6), those that arched 60-98 %; full 2482-sphere loads kept
+0.2-3.4 % with the quick preset and 79-99 % when they arched or stopped unsettled (two
+design points, ``benchmarks/results/stiffness_rule.md``).
 """
 
 from __future__ import annotations
@@ -295,10 +295,15 @@ def _fill_funnel(sim, setup, sz, gen, source):
     def frustum(h):
         return ConeRegion(Rb - gap, Rb - gap + (Rt - Rb) * h / hf, z_out, z_out + h)
 
-    h = hf if frustum(hf).volume <= need else brentq(lambda q: frustum(q).volume - need,
-                                                     4 * sz["r_max"], hf)
+    h_min = 4 * sz["r_max"]  # the shortest frustum a load is placed in
+    if frustum(hf).volume <= need:  # the whole funnel, the rest above it
+        h = hf
+        in_cone = min(sz["n"], int(FILL_FRACTION * frustum(hf).volume / vmean))
+    else:
+        h = h_min if frustum(h_min).volume >= need else brentq(
+            lambda q: frustum(q).volume - need, h_min, hf)
+        in_cone = sz["n"]
     cone = frustum(h)
-    in_cone = min(sz["n"], int(FILL_FRACTION * cone.volume / vmean))
     x, r = insert_random(cone, sz["dist"], n=in_cone, rng=gen, max_fraction=0.35,
                          source=source, field="particles")
     if in_cone < sz["n"]:

@@ -218,7 +218,9 @@ def _settings(setup, preset):
     return s
 
 
-def validate(setup: dict, preset: str = "quick", source: str = "<rotary>") -> None:
+def validate(setup: dict, preset: str = "quick", source: str = "<rotary>",
+             params=None) -> None:
+    """Bad settings raise InputError before the run (``params``: no check needs them)."""
     check(preset in PRESETS, source, "preset", f"one of {PRESETS}", preset)
     s = _settings(setup, preset)
     for k in ("rpm", "forward_speed", "depth", "working_width", "radius", "hub_radius",
