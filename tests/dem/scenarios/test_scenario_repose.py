@@ -224,9 +224,8 @@ def test_drum_quick_run_reports_a_tilted_free_surface():
 def test_a_load_held_in_the_funnel_gives_no_angle():
     """Black soil, stage-1 centre with surface energy 0.7 J/m^2 at the printed shear modulus
     (stiffness_scale 1): the quick load stays in the funnel (2422 of 2482 spheres with seed 0;
-    939 of a 1000-sphere load, benchmarks/results/stiffness_rule.md).  Every angle is then
-    NaN and measure_errors names the funnel, whatever the few spheres on the plate look
-    like."""
+    the same point in benchmarks/results/stiffness_rule.md).  Every angle is then NaN and
+    measure_errors names the funnel, whatever the few spheres on the plate look like."""
     from pathlib import Path
 
     from soilcal.config.load import load_soil
