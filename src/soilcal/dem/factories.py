@@ -125,6 +125,17 @@ class BoxRegion:
                 np.asarray(self.hi, np.float64))
 
 
+def _axial(region, x, r):
+    """Axial coordinate and distance from the axis of points x in an axisymmetric region,
+    with the radii r as a flat array."""
+    x = np.atleast_2d(x)
+    d = region._frame[0]
+    w = x - np.asarray(region.axis_point, dtype=np.float64)
+    z = w @ d
+    rho = np.linalg.norm(w - z[:, None] * d, axis=1)
+    return z, rho, np.asarray(r, dtype=np.float64).reshape(-1)
+
+
 @dataclass(frozen=True)
 class CylinderRegion:
     """Solid cylinder of ``radius`` between axial coordinates ``z0 < z1``
@@ -163,12 +174,7 @@ class CylinderRegion:
         return np.minimum(c0, c1) - ext, np.maximum(c0, c1) + ext
 
     def contains(self, x, r):
-        x = np.atleast_2d(x)
-        r = np.asarray(r, dtype=np.float64).reshape(-1)
-        d = self._frame[0]
-        w = x - np.asarray(self.axis_point, dtype=np.float64)
-        z = w @ d
-        rho = np.linalg.norm(w - z[:, None] * d, axis=1)
+        z, rho, r = _axial(self, x, r)
         return ((z - r >= self.z0 - 1e-12) & (z + r <= self.z1 + 1e-12)
                 & (rho + r <= self.radius + 1e-12))
 
@@ -240,12 +246,7 @@ class ConeRegion:
             self.z1 - self.z0)
 
     def contains(self, x, r):
-        x = np.atleast_2d(x)
-        r = np.asarray(r, dtype=np.float64).reshape(-1)
-        d = self._frame[0]
-        w = x - np.asarray(self.axis_point, dtype=np.float64)
-        z = w @ d
-        rho = np.linalg.norm(w - z[:, None] * d, axis=1)
+        z, rho, r = _axial(self, x, r)
         return ((z - r >= self.z0 - 1e-12) & (z + r <= self.z1 + 1e-12)
                 & ((self.radius_at(z) - rho) * self._cos >= r - 1e-12))
 
