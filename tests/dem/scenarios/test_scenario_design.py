@@ -141,6 +141,20 @@ def test_a_measure_that_is_not_a_result_of_the_setup_fails_at_load(soil_name, ri
         design.check_block(soil.path, data)
 
 
+def test_a_funnel_load_is_checked_at_the_soils_density_at_load():
+    """Black soil: 0.5 kg fills 0.5 / (rho 0.6) of the 3.51 L funnel (192/50 mm, 274 mm
+    high).  At the soil's 1560 kg/m^3 that is 0.53 L; at 200 kg/m^3 it is 4.2 L, which the
+    funnel cannot hold, and the config check must say so (the default density, 1394 kg/m^3,
+    would let it pass)."""
+    soil = _soil("black-soil")
+    data = copy.deepcopy(soil.data)
+    design.check_block(soil.path, data)
+    data["simulation"]["params"]["soil_density"] = 200.0
+    with pytest.raises(InputError, match=r"accumulation_angle\.set\.load_mass: expected a load "
+                                         r"that fits the funnel \(3\.51 L at 200 kg/m\^3"):
+        design.check_block(soil.path, data)
+
+
 @pytest.mark.slow
 def test_low_restitution_corner_of_a_screening_design_runs():
     """003 Table 3 run 1 (G 10 MPa, soil-soil e 0.15, mu 1.16, H 0.3 J/m^2) through the

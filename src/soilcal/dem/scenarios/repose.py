@@ -40,8 +40,9 @@ Number of particles for a fill volume V (tube: pi D^2/4 h_fill; funnel: load mas
 default) for cylinders; funnels keep the setup's ``load_mass`` with r_q = outlet diameter / 16
 (8 diameters across the outlet), or the larger r_q that splits the load into
 ``QUICK_FUNNEL_MAX`` = 8000 spheres (black soil, 0.5 kg at 1560 kg/m^3: 2482 spheres;
-cohesive soil, 0.2 kg at 1802 kg/m^3: 3980).  The heap needs the load: 1000 spheres of black soil (0.2 kg) left the outlet as a thin
-stream and spread into a layer two or three spheres deep on the plate.  Soil shear modulus
+cohesive soil, 0.2 kg at 1802 kg/m^3: 3980).  The heap needs the load: 1000 spheres of
+black soil (0.2 kg) left the outlet as a thin stream and spread into a layer two or three
+spheres deep on the plate.  Soil shear modulus
 capped at 5e5 Pa (stiffness scaling, base.py); surface energies times r32(quick) /
 r32(paper PSD) (cohesion scaling, base.py; ``cohesion_scale`` in the run's setup).
 ``paper``: the papers' particle sizes and masses, unscaled moduli.  A setup's
@@ -295,7 +296,7 @@ def _fill_funnel(sim, setup, sz, gen, source):
     def frustum(h):
         return ConeRegion(Rb - gap, Rb - gap + (Rt - Rb) * h / hf, z_out, z_out + h)
 
-    h_min = 4 * sz["r_max"]  # the shortest frustum a load is placed in
+    h_min = min(4 * sz["r_max"], hf)  # the shortest frustum a load is placed in
     if frustum(hf).volume <= need:  # the whole funnel, the rest above it
         h = hf
         in_cone = min(sz["n"], int(FILL_FRACTION * frustum(hf).volume / vmean))
