@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import csv
 import os
+from contextlib import contextmanager
 import subprocess
 import tempfile
 from pathlib import Path
@@ -36,25 +37,27 @@ def read_rows(path: Path, fields) -> list[dict]:
         return [{k: r.get(k, "") for k in fields} for r in csv.DictReader(fh)]
 
 
-def write_rows(path: Path, rows, fields) -> None:
-    """Write the table to a temporary file beside ``path`` and move it into place, so an
-    interrupted write leaves the previous table whole."""
+@contextmanager
+def _replacing(path):
+    """A text file to write in place of ``path``: written to a temporary file beside it,
+    given the mode of a newly created file (tempfile makes it 0600) and moved into place,
+    so an interrupted write leaves the previous file whole."""
     path = Path(path)
     with tempfile.NamedTemporaryFile("w", newline="", dir=path.parent, prefix=path.name,
                                      suffix=".tmp", delete=False) as fh:
+        yield fh
+    umask = os.umask(0)
+    os.umask(umask)
+    os.chmod(fh.name, 0o666 & ~umask)
+    os.replace(fh.name, path)
+
+
+def write_rows(path: Path, rows, fields) -> None:
+    """Write the table atomically (:func:`_replacing`)."""
+    with _replacing(path) as fh:
         w = csv.DictWriter(fh, fieldnames=list(fields), extrasaction="ignore")
         w.writeheader()
         w.writerows(rows)
-    _publish(fh.name, path)
-
-
-def _publish(tmp: str, path: Path) -> None:
-    """Give the temporary file the mode of a newly created file (tempfile makes it 0600)
-    and move it into place."""
-    umask = os.umask(0)
-    os.umask(umask)
-    os.chmod(tmp, 0o666 & ~umask)
-    os.replace(tmp, path)
 
 
 def spread_and_correlation(printed, simulated):
@@ -84,10 +87,8 @@ def write_page(md_path: Path, lines) -> None:
     like :func:`write_rows`."""
     md_path = Path(md_path)
     text = "\n".join(list(lines) + ["", kept_notes(md_path)]) + "\n"
-    with tempfile.NamedTemporaryFile("w", dir=md_path.parent, prefix=md_path.name,
-                                     suffix=".tmp", delete=False) as fh:
+    with _replacing(md_path) as fh:
         fh.write(text)
-    _publish(fh.name, md_path)
 
 
 def kept_notes(md_path: Path) -> str:

@@ -99,7 +99,6 @@ class Simulation:
         # wall travel since the list build, pair-list builds, wall-list builds, steps since
         # the last spatial sort (inf: sort at the first build)
         self._fstate = np.array([0.0, 0.0, 0.0, math.inf])
-        self._peak_before = 0.0  # peak overlap / radius before the last add_particles
 
     # ------------------------------------------------------------------ building
     def add_particles(self, x, r, material, v=None, omega=None, fixed=False, lock_rotation=False):
@@ -109,7 +108,6 @@ class Simulation:
         r = np.asarray(r, dtype=np.float64) * self.coarse_grain
         if np.any(~np.isfinite(r)) or np.any(r <= 0):
             raise InputError(self.source, "particles.radius", "radii > 0 m", float(np.min(r)))
-        self._peak_before = self.peak_overlap  # append() starts a new per-row peak array
         ids = self.p.append(x, r, self.materials.materials[k].density, k, v, omega, fixed,
                             lock_rotation)
         self._fstate[3] = math.inf  # new particles sit at the end: sort at the next build
@@ -482,11 +480,9 @@ class Simulation:
         """Largest overlap of any particle, as a fraction of its radius, over the force
         evaluations since the simulation was built or :meth:`reset_peak_overlap` was called
         (kept per row in the time loop, the maximum taken here)."""
-        rows = float(self.p.peak.max()) if self.p.n else 0.0
-        return max(self._peak_before, rows)
+        return float(self.p.peak.max()) if self.p.n else 0.0
 
     def reset_peak_overlap(self) -> None:
-        self._peak_before = 0.0
         self.p.peak[:] = 0.0
 
     @property

@@ -56,10 +56,11 @@ z_t^2) - z_t)) T_R: 0.32 T_R for e = 0.45, 0.21 T_R for e = 0.15.  Heavy damping
 (low restitution) thus lowers the stable step: a 990-sphere heap (G 5e5 Pa, mu_s 1.16,
 100 mm tube, steel tube and plate with e 0.65, mu_s 0.8) blew up above about 0.18 / 0.25 /
 0.32 / 0.43 T_R for e = 0.15 / 0.3 / 0.45 / 0.75, which is 0.84 / 0.94 / 1.0 / 1.34 times
-this bound (the last one set by the steel walls, which the bound overrates there).  With friction on a steel wall, 0.7 times the bound is
-below 30 % of T_R even at e = 1 (0.28 T_R), so the quick step of any scenario with steel
-walls is set by this cap.  A requested step above ``damping_dt`` is rejected; a
-step from ``dt_fraction`` is capped at ``DAMPING_DT_SAFETY`` (0.7) times it.
+this bound (the last one set by the steel walls, which the bound overrates there).  With
+friction on a steel wall, 0.7 times the bound is below 30 % of T_R even at e = 1 (0.28
+T_R), so the quick step of any scenario with steel walls is set by this cap.  A requested
+step above ``damping_dt`` is rejected; a step from ``dt_fraction`` is capped at
+``DAMPING_DT_SAFETY`` (0.7) times it.
 
 Stiffness scaling (Lommen, Schott & Lodewijks 2014, Particuology 12:107; shear modulus
 reduced to ``G_mod`` keeps cohesion comparable, e.g. Thakur et al. 2014, Powder Technol.

@@ -69,7 +69,7 @@ class ParticleState:
         self.id = cat([self.id, np.arange(self.n - k, self.n, dtype=np.int64)])
         self.disp = np.zeros((self.n, 3))
         self.ovr = np.zeros(self.n)
-        self.peak = np.zeros(self.n)
+        self.peak = cat([self.peak, np.zeros(k)])  # the run's peak survives an append
         self.mroll = np.zeros(self.n)
         return np.arange(self.n - k, self.n)
 

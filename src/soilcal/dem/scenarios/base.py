@@ -37,10 +37,10 @@ et al. 2014)::
 The JKR pull-off force 1.5 pi gamma R* does not depend on the stiffness, so the rule weakens
 the adhesion by s^(2/5) (0.12 for the black soil's printed G = 1e8 Pa under the quick
 cap).  It does not keep every response: the black soil's funnel load (stage 1, quick
-spheres) arched over the outlet in all 8 runs at the printed modulus but discharged into
-heaps of 23 and 26 deg (means of four seeds) with the rule at s = 0.005
-(``benchmarks/stiffness_rule.py``; results and notes in
-``benchmarks/results/stiffness_rule.md``).
+spheres, the full 0.5 kg) arched over the outlet in all 8 runs at the printed modulus but
+discharged into heaps of 35.6 and 40.0 deg (means of four seeds at surface energies 0.4
+and 0.7 J/m^2) with the rule at s = 0.005 (``benchmarks/stiffness_rule.py``; results and
+notes in ``benchmarks/results/stiffness_rule.md``).
 
 Cohesion scaling with particle size
 -----------------------------------
@@ -199,8 +199,8 @@ def stage_params(soil, stage_id: str, levels: dict, base: "DemParams | None" = N
     """DEM parameters of one design point of a soil's stage, from its config.
 
     ``levels`` maps factor letters of the stage to values, actual values or, with
-    ``coded``, coded levels -1..+1 decoded by :func:`soilcal.doe.designs.coded_to_actual`.  The stage's ``fixed`` values and the soil's printed Poisson
-    ratio, particle density and shear modulus (``properties.poisson_ratio``,
+    ``coded``, coded levels -1..+1 decoded by :func:`soilcal.doe.designs.coded_to_actual`.
+    The stage's ``fixed`` values and the soil's printed Poisson ratio, particle density and shear modulus (``properties.poisson_ratio``,
     ``properties.particle_density``, ``properties.shear_modulus``, each when it has a single
     ``value``) fill the rest; anything else keeps ``base`` (default :class:`DemParams`).
     ``params`` (DEM parameter name -> SI value, e.g. a soil config's ``simulation.params``,
@@ -550,6 +550,9 @@ def _is_number(v) -> bool:
     return isinstance(v, (bool, int, float, np.bool_, np.integer, np.floating))
 
 
+MAX_OVER_RUNS = ("peak_overlap",)  # combined over replicates by their maximum
+
+
 def combine_replicates(runs) -> Result:
     """One :class:`Result` from runs that differ only in their seed (same scenario, preset,
     parameters, setup keys and text setup values).
@@ -618,9 +621,6 @@ def threads_used(threads) -> int:
               f"an integer in [1, {numba.config.NUMBA_NUM_THREADS}]", threads)
         numba.set_num_threads(t)
     return int(numba.get_num_threads())
-
-
-MAX_OVER_RUNS = ("peak_overlap",)  # combined over replicates by their maximum
 
 
 # ---------------------------------------------------------------- presets and run helpers

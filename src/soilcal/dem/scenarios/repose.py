@@ -42,10 +42,10 @@ default) for cylinders; funnels keep the setup's ``load_mass`` with r_q = outlet
 ``QUICK_FUNNEL_MAX`` = 8000 spheres (black soil, 0.5 kg at 1560 kg/m^3: 2482 spheres;
 cohesive soil, 0.2 kg at 1802 kg/m^3: 3980).  The heap needs the load: 1000 spheres of
 black soil (0.2 kg) left the outlet as a thin stream and spread into a layer two or three
-spheres deep on the plate.  Soil shear modulus
-capped at 5e5 Pa (stiffness scaling, base.py); surface energies times r32(quick) /
-r32(paper PSD) (cohesion scaling, base.py; ``cohesion_scale`` in the run's setup).
-``paper``: the papers' particle sizes and masses, unscaled moduli.  A setup's
+spheres deep on the plate.  Soil shear modulus capped at 5e5 Pa (stiffness scaling,
+base.py); surface energies times r32(quick) / r32(paper PSD) (cohesion scaling, base.py;
+``cohesion_scale`` in the run's setup).  ``paper``: the papers' particle sizes and masses,
+unscaled moduli.  A setup's
 ``n_particles`` or ``radius`` (either preset) splits the tube fill or the funnel's
 ``load_mass`` into that many spheres or spheres of that radius.
 
@@ -277,7 +277,11 @@ def _plate(sim, setup):
 def _insert(sim, region, dist, n, gen, source):
     x, r = insert_random(region, dist, n=n, rng=gen, max_fraction=0.35, source=source,
                          field="particles")
-    # spheres carry no per-particle id from the factory; lexsort by height keeps memory local
+    _add_by_height(sim, x, r)
+
+
+def _add_by_height(sim, x, r):
+    # spheres carry no per-particle id from the factory; sorting by height keeps memory local
     order = np.argsort(x[:, 2], kind="stable")
     sim.add_particles(x[order], r[order], "soil")
 
@@ -297,9 +301,10 @@ def _fill_funnel(sim, setup, sz, gen, source):
         return ConeRegion(Rb - gap, Rb - gap + (Rt - Rb) * h / hf, z_out, z_out + h)
 
     h_min = min(4 * sz["r_max"], hf)  # the shortest frustum a load is placed in
-    if frustum(hf).volume <= need:  # the whole funnel, the rest above it
+    whole = frustum(hf).volume
+    if whole <= need:  # the whole funnel, the rest above it
         h = hf
-        in_cone = min(sz["n"], int(FILL_FRACTION * frustum(hf).volume / vmean))
+        in_cone = min(sz["n"], int(FILL_FRACTION * whole / vmean))
     else:
         h = h_min if frustum(h_min).volume >= need else brentq(
             lambda q: frustum(q).volume - need, h_min, hf)
@@ -315,8 +320,7 @@ def _fill_funnel(sim, setup, sz, gen, source):
                                n=rest, rng=gen, max_fraction=0.35, existing_positions=x,
                                existing_radii=r, source=source, field="particles")
         x, r = np.vstack([x, x2]), np.concatenate([r, r2])
-    order = np.argsort(x[:, 2], kind="stable")
-    sim.add_particles(x[order], r[order], "soil")
+    _add_by_height(sim, x, r)
 
 
 def run(setup: dict, params: DemParams, preset: str = "quick", seed: int = 0, threads=None,
