@@ -281,6 +281,15 @@ class UniformRadius:
         if not (0 < self.r_min <= self.r_max):
             raise ValueError(f"need 0 < r_min <= r_max, got {self.r_min}, {self.r_max}")
 
+    @classmethod
+    def splitting(cls, volume: float, n: int, spread: float = 0.1) -> "UniformRadius":
+        """Radii uniform on [(1 - spread) r, (1 + spread) r] with the mean sphere volume
+        ``volume / n``: ``n`` spheres of this distribution fill ``volume`` on average
+        (<r^3> = r^3 ((1 + s)^4 - (1 - s)^4) / (8 s), 1.01 r^3 at s = 0.1)."""
+        unit = cls(1.0 - spread, 1.0 + spread).mean_volume()  # at r = 1 m
+        r = (volume / (int(n) * unit)) ** (1.0 / 3.0)
+        return cls((1.0 - spread) * r, (1.0 + spread) * r)
+
     def mean_volume(self):
         a, b = self.r_min, self.r_max
         er3 = a**3 if a == b else (b**4 - a**4) / (4 * (b - a))

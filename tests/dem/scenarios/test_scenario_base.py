@@ -253,3 +253,20 @@ def test_cohesion_scale_follows_the_particle_size():
     assert w == pytest.approx(p.soil_soil_surface_energy * 0.1**0.4 * 3.0, rel=1e-12)
     with pytest.raises(InputError, match="cohesion_scale"):
         build_materials(p, 1.0, "t", cohesion_scale=0.0)
+
+
+@pytest.mark.parametrize("name, setup", [
+    ("repose", "cinnamon-soil"), ("repose", "xinjiang-vineyard-40mm"),
+    ("drum", "xinjiang-vineyard"), ("compression", "guangxi-cohesive")])
+@pytest.mark.parametrize("n", [None, 1000, 2500])
+def test_a_quick_fill_holds_the_requested_number_of_spheres(name, setup, n):
+    """A fill of volume V split into N spheres of radii uniform on [0.9, 1.1] r_q has
+    N <v> = phi V with <v> = 4/3 pi <r^3>, <r^3> = r_q^3 (1.1^4 - 0.9^4) / 0.8 = 1.01 r_q^3
+    (not r_q^3): the count comes out as asked (1000 by default), not 1 % short."""
+    mod = get(name)
+    s = dict(mod.setups()[setup], n_particles=n)
+    sz = mod.sizing(s, "quick")
+    rq = 0.5 * (sz["dist"].r_min + sz["dist"].r_max)
+    assert sz["dist"].r_min == pytest.approx(0.9 * rq) and sz["r_max"] == pytest.approx(1.1 * rq)
+    assert sz["n"] == (n or 1000)
+    assert sz["dist"].mean_volume() == pytest.approx(4 / 3 * math.pi * 1.01 * rq ** 3, rel=1e-12)

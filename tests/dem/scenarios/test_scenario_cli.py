@@ -47,7 +47,7 @@ def test_replicates_average_the_runs(tmp_path, capsys):
 def test_replicates_of_a_heap(tmp_path):
     # each seed draws other radii, so the runs' time steps differ: still one averaged row
     out = tmp_path / "row.csv"
-    assert main(["scenario", "run", "repose", "--threads", "1", "--set", "n_particles=300",
+    assert main(["scenario", "run", "repose", "--threads", "1", "--set", "n_particles=400",
                  "--replicates", "2", "--out", str(out)]) == 0
     row = list(csv.DictReader(open(out)))[0]
     assert row["s:replicate_seeds"] == "0 1" and 0.0 < float(row["r:angle_deg"]) < 90.0

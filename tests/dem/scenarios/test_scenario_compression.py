@@ -10,11 +10,11 @@ from soilcal.errors import InputError
 
 
 def test_compression_stress_rises_with_strain():
-    s = dict(compression.setups()["guangxi-cohesive"], n_particles=300, max_strain=0.15,
+    s = dict(compression.setups()["guangxi-cohesive"], n_particles=600, max_strain=0.12,
              quick_height=0.03)
     res = compression.run(s, DemParams(soil_soil_surface_energy=0.0), "quick", seed=1, threads=1)
     se = res.series
-    assert se["strain"].max() >= 0.15
+    assert se["strain"].max() >= 0.12
     # the rod moves down at constant speed: strain grows linearly in time from first contact
     assert np.all(np.diff(se["strain"]) > 0)
     # loading: the stress at 10 % strain exceeds the stress at 5 %, and the curve rises

@@ -152,7 +152,7 @@ def test_setup_rolling_model_reaches_the_engine(model, name):
     assert sim.codes[3] == ROLLING[name]
 
 
-SMALL = dict(n_particles=400, fill_height=0.04)
+SMALL = dict(n_particles=500, fill_height=0.04)
 
 
 def test_small_pile_bins_scan_and_silhouette_agree_and_repeat():
@@ -165,9 +165,11 @@ def test_small_pile_bins_scan_and_silhouette_agree_and_repeat():
     assert np.hypot(a.series["x"][:, 0], a.series["x"][:, 1]).max() > 0.03
     assert 10.0 < r["angle_deg"] < 50.0
     # the estimators' accuracy is checked on analytic heaps (test_measure.py); on one
-    # 400-sphere heap they sample a rough flank differently: each scatters about 2 degrees
+    # 500-sphere heap they sample a rough flank differently: each scatters about 2 degrees
     # over seeds (1.2-1.4 degrees at 990 spheres, benchmarks/results/repose_seeds.md, x
-    # sqrt(990/400)), so two of them differ by up to about 3 sigma = 9 degrees
+    # sqrt(990/500)), so two of them differ by up to about 3 sigma = 9 degrees.  (At 400
+    # spheres the heap is four diameters high and the radial bins about the tube axis can
+    # fail: seed 3 gave 6.8 degrees against 22 from the silhouette.)
     assert abs(r["angle_deg"] - r["angle_image_deg"]) < 9.0
     assert abs(r["angle_surface_deg"] - r["angle_image_deg"]) < 9.0
     b = repose.run(cyl(**SMALL), p, "quick", seed=3, threads=1)

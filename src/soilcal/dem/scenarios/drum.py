@@ -84,9 +84,9 @@ def sizing(setup, preset, source="<input>"):
         dist = paper_psd(setup, source)
     else:
         if r_set is None:
-            n = int(n_set or d["n_particles"])
-            r_set = (PHI * vol * 3.0 / (4.0 * math.pi * n)) ** (1.0 / 3.0)
-        dist = UniformRadius(0.9 * float(r_set), 1.1 * float(r_set))
+            dist = UniformRadius.splitting(PHI * vol, int(n_set or d["n_particles"]))
+        else:
+            dist = UniformRadius(0.9 * float(r_set), 1.1 * float(r_set))
     n = int(round(PHI * vol / dist.mean_volume()))
     return dict(dist=dist, n=n, r_max=float(dist.r_max), vol=vol)
 

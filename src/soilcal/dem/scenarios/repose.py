@@ -191,18 +191,16 @@ def sizing(setup, preset, params: DemParams | None = None) -> dict:
     r_set = setup.get("radius")
     if setup["method"] == "funnel" and preset == "quick" and r_set is None and n_set is None:
         # the setup's load, 8 diameters across the outlet, at most QUICK_FUNNEL_MAX spheres
-        v = _fill_volume(setup, params)
-        unit = UniformRadius(0.9, 1.1).mean_volume()  # mean volume at r_q = 1 m
-        r_set = max(setup["funnel_bottom_diameter"] / 16.0,
-                    (PHI * v / (QUICK_FUNNEL_MAX * unit)) ** (1.0 / 3.0))
+        r_cap = UniformRadius.splitting(PHI * _fill_volume(setup, params), QUICK_FUNNEL_MAX)
+        r_set = max(setup["funnel_bottom_diameter"] / 16.0, 0.5 * (r_cap.r_min + r_cap.r_max))
     if preset == "paper" and r_set is None and n_set is None:
         dist = paper_psd(setup, "<setup>")
     else:
         if r_set is None:
-            n = int(n_set or d["n_particles"])
-            v = _fill_volume(setup, params)
-            r_set = (PHI * v * 3.0 / (4.0 * math.pi * n)) ** (1.0 / 3.0)
-        dist = UniformRadius(0.9 * float(r_set), 1.1 * float(r_set))
+            dist = UniformRadius.splitting(PHI * _fill_volume(setup, params),
+                                           int(n_set or d["n_particles"]))
+        else:
+            dist = UniformRadius(0.9 * float(r_set), 1.1 * float(r_set))
     vmean = dist.mean_volume()
     if n_set is not None and setup["method"] == "funnel":
         n = int(n_set)
