@@ -13,6 +13,11 @@ the same seed unless ``--fresh``); ``design_budget.md`` sums the wall time per s
 and response, projects the whole pass from the points run (``--every k`` runs every k-th row only), and sets the
 simulated response beside the printed (EDEM) one (spread and Pearson correlation).
 
+``--jobs k`` runs k points at a time (``--threads`` each), the way ``snakemake --cores 2``
+schedules one DEM job per design point; the elapsed time of each sweep, beside the sum of its
+runs' wall times, goes to ``design_budget_sweeps.csv`` and the page.
+
+    python benchmarks/design_budget.py --jobs 2 --threads 1 --fresh
     python benchmarks/design_budget.py --threads 2
     python benchmarks/design_budget.py --soils cinnamon-soil --every 3
     python benchmarks/design_budget.py --report-only
@@ -22,6 +27,7 @@ from __future__ import annotations
 
 import argparse
 import os
+from concurrent.futures import ProcessPoolExecutor, as_completed
 import platform
 import sys
 import time
@@ -36,6 +42,7 @@ ROOT = HERE.parent
 FIELDS = ["utc", "commit", "soil", "stage", "response", "run", "design_runs", "levels", "scenario",
           "setup", "measure", "preset", "seed", "threads", "particles", "steps", "wall_s", "printed",
           "simulated", "peak_overlap", "error"]
+SWEEP_FIELDS = ["utc", "commit", "soils", "jobs", "threads", "points", "elapsed_s", "runs_wall_s"]
 
 
 def _key(r):
@@ -66,7 +73,26 @@ def plan(soils, only_responses=None, only_stages=None):
     return out
 
 
-def run_point(soil, stage_id, rid, row, n_runs, seed, args, rev):
+_SOILS: dict = {}
+
+
+def _init_worker(threads):
+    import numba
+
+    numba.set_num_threads(threads)
+
+
+def _point(task):
+    """:func:`run_point` in a worker process (the soil is loaded there, once per process)."""
+    from soilcal.config.load import load_soil
+
+    name, stage_id, rid, row, n_runs, seed, threads, rev = task
+    if name not in _SOILS:
+        _SOILS[name] = load_soil(ROOT / "config" / "soils" / f"{name}.yaml", ROOT / "resources")
+    return run_point(_SOILS[name], stage_id, rid, row, n_runs, seed, threads, rev)
+
+
+def run_point(soil, stage_id, rid, row, n_runs, seed, threads, rev):
     from soilcal.dem.scenarios import design
 
     stage = soil.stage(stage_id)
@@ -84,10 +110,10 @@ def run_point(soil, stage_id, rid, row, n_runs, seed, args, rev):
     t0 = time.perf_counter()
     try:
         value, res = design.simulate_point(soil, stage_id, levels, rid, seed=seed, replicates=1,
-                                           threads=args.threads)
+                                           threads=threads)
     except Exception as exc:  # a failed point is a row of the table, not the end of the sweep
         out.update(wall_s=round(time.perf_counter() - t0, 1), simulated="",
-                   error=f"{type(exc).__name__}: {exc}"[:300].replace("|", "/"), threads=args.threads)
+                   error=f"{type(exc).__name__}: {exc}"[:300].replace("|", "/"), threads=threads)
         return out
     out.update(threads=res.threads, particles=res.n_particles, steps=res.steps,
                wall_s=round(res.wall_s, 1), simulated=round(value, 3),
@@ -103,7 +129,7 @@ def _f(v):
         return float("nan")
 
 
-def report(rows, planned, md_path, argv):
+def report(rows, planned, md_path, argv, sweeps=()):
     md = ["# A calibration pass: every design point of every soil through its DEM scenario", "",
           f"Machine: {platform.machine()}, {os.cpu_count()} logical CPUs, Python "
           f"{platform.python_version()}.  Last command: `python benchmarks/design_budget.py "
@@ -137,6 +163,14 @@ def report(rows, planned, md_path, argv):
                   f"{mean:.1f} | {proj:.0f} | {p_spread} | {s_spread} | {corr} |")
     md += ["", f"Wall time of the runs in the table: {total:.0f} s ({total / 60:.1f} min); projected "
            f"for every design point with one seed: {total_proj:.0f} s ({total_proj / 60:.1f} min).", ""]
+    if sweeps:
+        md += ["Sweeps (elapsed: the sweep's wall-clock time; runs: the sum of its runs' wall "
+               "times, each run measured while the other jobs ran):", "",
+               "| utc | commit | soils | jobs | threads per job | points | elapsed min | runs min |",
+               "|---|---|---|---:|---:|---:|---:|---:|"]
+        md += [f"| {w['utc']} | {w['commit']} | {w['soils']} | {w['jobs']} | {w['threads']} | "
+               f"{w['points']} | {_f(w['elapsed_s']) / 60:.1f} | {_f(w['runs_wall_s']) / 60:.1f} |"
+               for w in sweeps] + [""]
     failed = [r for r in rows if r["error"]]
     if failed:
         md += ["Runs with errors (a value in the table's simulated column means the measured "
@@ -155,13 +189,17 @@ def main(argv=None):
     ap.add_argument("--responses", default="", help="comma list of response ids (default: all)")
     ap.add_argument("--stages", default="", help="comma list of stage ids (default: all)")
     ap.add_argument("--every", type=int, default=1, help="run every k-th row of each design")
-    ap.add_argument("--threads", type=int, default=2)
+    ap.add_argument("--threads", type=int, default=2, help="threads per run")
+    ap.add_argument("--jobs", type=int, default=1, help="runs at a time (processes)")
     ap.add_argument("--fresh", action="store_true", help="rerun points already in the CSV")
     ap.add_argument("--report-only", action="store_true", help="rewrite the page, run nothing")
     ap.add_argument("--out", default=str(HERE / "results"))
     args = ap.parse_args(argv)
     if args.every < 1:
         raise SystemExit(f"--every: expected an integer >= 1, got {args.every}")
+    if args.jobs < 1 or args.threads < 1:
+        raise SystemExit(f"--jobs, --threads: expected integers >= 1, got {args.jobs}, "
+                         f"{args.threads}")
     names = [s for s in args.soils.split(",") if s] or sorted(
         p.stem for p in (ROOT / "config" / "soils").glob("*.yaml"))
     soils = []
@@ -177,14 +215,14 @@ def main(argv=None):
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
     csv_path, md_path = out / "design_budget.csv", out / "design_budget.md"
+    sweep_path = out / "design_budget_sweeps.csv"
     rows = read_rows(csv_path, FIELDS)
+    sweeps = read_rows(sweep_path, SWEEP_FIELDS)
     rev = commit()
     if not args.report_only:
-        import numba
-
         from soilcal.dem.scenarios import design
 
-        numba.set_num_threads(args.threads)
+        tasks = []
         for soil, sid, rid, design_rows in planned:
             if isinstance(design_rows, str):
                 print(f"{soil.name} {sid} {rid}: not simulated: {design_rows}", flush=True)
@@ -196,13 +234,27 @@ def main(argv=None):
                 key = (soil.name, sid, rid, int(row["run"]))
                 if not args.fresh and any(_key(r) == key and int(r["seed"]) == seeds[i] for r in rows):
                     continue
-                new = run_point(soil, sid, rid, row.to_dict(), len(design_rows), seeds[i], args, rev)
+                tasks.append((soil.name, sid, rid, row.to_dict(), len(design_rows), seeds[i],
+                              args.threads, rev))
+        t0, runs_wall = time.perf_counter(), 0.0
+        with ProcessPoolExecutor(max_workers=args.jobs, initializer=_init_worker,
+                                 initargs=(args.threads,)) as ex:
+            for fut in as_completed([ex.submit(_point, t) for t in tasks]):
+                new = fut.result()
+                runs_wall += _f(new["wall_s"])
                 print({k: new[k] for k in ("soil", "stage", "response", "run", "printed", "simulated",
                                            "wall_s", "error")}, flush=True)
-                rows = [r for r in rows if _key(r) != key] + [new]
+                rows = [r for r in rows if _key(r) != _key(new)] + [new]
                 rows.sort(key=_key)
                 write_rows(csv_path, rows, FIELDS)
-    report(rows, planned, md_path, argv)
+        if tasks:
+            sweeps.append(dict(utc=time.strftime("%Y-%m-%d %H:%M", time.gmtime()), commit=rev,
+                               soils=" ".join(sorted({t[0] for t in tasks})), jobs=args.jobs,
+                               threads=args.threads, points=len(tasks),
+                               elapsed_s=round(time.perf_counter() - t0, 1),
+                               runs_wall_s=round(runs_wall, 1)))
+            write_rows(sweep_path, sweeps, SWEEP_FIELDS)
+    report(rows, planned, md_path, argv, sweeps)
 
 
 if __name__ == "__main__":
