@@ -161,8 +161,10 @@ def report(rows, planned, md_path, argv, sweeps=()):
         sc = f"{sel[0]['scenario']} / {sel[0]['setup']} / {sel[0]['measure']}" if sel else ""
         md.append(f"| {soil.name} | {sid} | {rid} | {sc} | {n} | {len(sel)} | {w.sum():.0f} | "
                   f"{mean:.1f} | {proj:.0f} | {p_spread} | {s_spread} | {corr} |")
-    md += ["", f"Wall time of the runs in the table: {total:.0f} s ({total / 60:.1f} min); projected "
-           f"for every design point with one seed: {total_proj:.0f} s ({total_proj / 60:.1f} min).", ""]
+    md += ["", f"Sum of the wall times of the runs in the table: {total:.0f} s ({total / 60:.1f} min); "
+           f"projected for every design point with one seed: {total_proj:.0f} s "
+           f"({total_proj / 60:.1f} min).  Runs made with --jobs k > 1 shared the cores with "
+           "k - 1 others: their sum is not the time the pass took; the sweeps table gives that.", ""]
     if sweeps:
         md += ["Sweeps (elapsed: the sweep's wall-clock time; runs: the sum of its runs' wall "
                "times, each run measured while the other jobs ran):", "",
