@@ -1,5 +1,6 @@
 """Measurements on synthetic particle states with known answers: analytic heaps (rounded top,
-concave toe), a tilted drum free surface, stress = force / area."""
+concave toe), a tilted drum free surface, the avalanche angle of a sawtooth, stress = force /
+area."""
 
 import math
 
@@ -168,6 +169,50 @@ def test_drum_axis_must_be_horizontal():
     x, r = drum_state(30.0)
     with pytest.raises(InputError, match="axis_dir"):
         measure.drum_surface_angle(x, r, (0, 0.05, 0), (0, 0, 1))
+
+
+def sawtooth(peaks, trough=30.0, rise_per_frame=2.1, jitter=0.0, seed=0):
+    """Frame angles of a slumping drum: from ``trough`` the surface is carried up by
+    ``rise_per_frame`` degrees per frame (7 r/min, 0.05 s) to each peak, then collapses to
+    the trough in one frame; optional uniform jitter of +-``jitter`` degrees."""
+    a = []
+    for p in peaks:
+        k = int(math.ceil((p - trough) / rise_per_frame))
+        a += list(p - rise_per_frame * np.arange(k, 0, -1)) + [p]
+    a.append(trough)
+    a = np.array(a)
+    return a + np.random.default_rng(seed).uniform(-jitter, jitter, a.size)
+
+
+def test_avalanche_angle_is_the_mean_angle_before_collapse():
+    """003: "the maximum angle ... before collapse occurs".  Peaks 50, 54, 47 deg on a
+    sawtooth with 2 deg of frame jitter: each collapse (17-24 deg) is found, the jitter is
+    not, and the angle is the mean of the three peaks (50.33 deg, within the jitter), where
+    the time mean of the frames, half-way up each linear rise from the 30 deg trough, is
+    about 10 deg lower."""
+    a = sawtooth([50.0, 54.0, 47.0], jitter=2.0)
+    res = measure.avalanche_angle(a, 10.0)
+    assert res["n_avalanches"] == 3
+    assert res["angle_deg"] == pytest.approx((50 + 54 + 47) / 3, abs=2.0)
+    assert a.mean() < res["angle_deg"] - 8.0
+    exact = measure.avalanche_angle(sawtooth([50.0, 54.0, 47.0]), 10.0)
+    assert exact["peaks_deg"] == pytest.approx([50.0, 54.0, 47.0], abs=1e-12)
+
+
+def test_avalanche_angle_without_collapse_is_the_time_mean():
+    """A surface flowing steadily (rolling regime): fluctuations of +-2 deg about 40 deg
+    never drop by 10 deg, so no avalanche is counted and the angle is the time mean; a rise
+    that ends on the last frame is not seen to collapse and is not counted either."""
+    rng = np.random.default_rng(1)
+    flat = 40.0 + rng.uniform(-2.0, 2.0, 60)
+    res = measure.avalanche_angle(flat, 10.0)
+    assert res["n_avalanches"] == 0 and res["angle_deg"] == pytest.approx(flat.mean())
+    rising = np.linspace(30.0, 55.0, 12)
+    assert measure.avalanche_angle(rising, 10.0)["n_avalanches"] == 0
+    with pytest.raises(InputError, match="min_drop"):
+        measure.avalanche_angle(flat, 0.0)
+    with pytest.raises(InputError, match="angles"):
+        measure.avalanche_angle([40.0, float("nan"), 41.0], 10.0)
 
 
 def test_stress_strain_is_force_over_area():
