@@ -13,9 +13,11 @@ the same seed unless ``--fresh``); ``design_budget.md`` sums the wall time per s
 and response, projects the whole pass from the points run (``--every k`` runs every k-th row only), and sets the
 simulated response beside the printed (EDEM) one (spread and Pearson correlation).
 
-``--jobs k`` runs k points at a time (``--threads`` each), the way ``snakemake --cores 2``
-schedules one DEM job per design point; the elapsed time of each sweep, beside the sum of its
-runs' wall times, goes to ``design_budget_sweeps.csv`` and the page.
+``--jobs k`` runs k points at a time (``--threads`` each), one process per point, as a
+workflow with one DEM job per design point runs them on k cores; the elapsed time of each
+sweep, beside the sum of its runs' wall times, goes to ``design_budget_sweeps.csv`` and the
+page.  The page summarises every soil, stage and response, whatever ``--soils``,
+``--responses`` and ``--stages`` chose to run.
 
     python benchmarks/design_budget.py --jobs 2 --threads 1 --fresh
     python benchmarks/design_budget.py --threads 2
@@ -27,10 +29,10 @@ from __future__ import annotations
 
 import argparse
 import os
-from concurrent.futures import ProcessPoolExecutor, as_completed
 import platform
 import sys
 import time
+from concurrent.futures import ProcessPoolExecutor, as_completed
 from pathlib import Path
 
 import numpy as np
@@ -161,18 +163,20 @@ def report(rows, planned, md_path, argv, sweeps=()):
         sc = f"{sel[0]['scenario']} / {sel[0]['setup']} / {sel[0]['measure']}" if sel else ""
         md.append(f"| {soil.name} | {sid} | {rid} | {sc} | {n} | {len(sel)} | {w.sum():.0f} | "
                   f"{mean:.1f} | {proj:.0f} | {p_spread} | {s_spread} | {corr} |")
-    md += ["", f"Sum of the wall times of the runs in the table: {total:.0f} s ({total / 60:.1f} min); "
-           f"projected for every design point with one seed: {total_proj:.0f} s "
-           f"({total_proj / 60:.1f} min).  Runs made with --jobs k > 1 shared the cores with "
-           "k - 1 others: their sum is not the time the pass took; the sweeps table gives that.", ""]
+    md += ["", f"Sum of the wall times of the runs in the table: {total:.0f} s "
+           f"({total / 60:.1f} min); projected for every design point with one seed: "
+           f"{total_proj:.0f} s ({total_proj / 60:.1f} min).  Runs made with --jobs k > 1 shared "
+           "the cores with k - 1 others: their sum is not the time the pass took; the sweeps "
+           "table gives that.", ""]
     if sweeps:
         md += ["Sweeps (elapsed: the sweep's wall-clock time; runs: the sum of its runs' wall "
                "times, each run measured while the other jobs ran):", "",
-               "| utc | commit | soils | jobs | threads per job | points | elapsed min | runs min |",
+               "| utc | commit | soils | jobs | threads per job | points | elapsed min | "
+               "runs min |",
                "|---|---|---|---:|---:|---:|---:|---:|"]
         md += [f"| {w['utc']} | {w['commit']} | {w['soils']} | {w['jobs']} | {w['threads']} | "
-               f"{w['points']} | {_f(w['elapsed_s']) / 60:.1f} | {_f(w['runs_wall_s']) / 60:.1f} |"
-               for w in sweeps] + [""]
+               f"{w['points']} | {_f(w['elapsed_s']) / 60:.1f} | "
+               f"{_f(w['runs_wall_s']) / 60:.1f} |" for w in sweeps] + [""]
     failed = [r for r in rows if r["error"]]
     if failed:
         md += ["Runs with errors (a value in the table's simulated column means the measured "
@@ -202,16 +206,15 @@ def main(argv=None):
     if args.jobs < 1 or args.threads < 1:
         raise SystemExit(f"--jobs, --threads: expected integers >= 1, got {args.jobs}, "
                          f"{args.threads}")
-    names = [s for s in args.soils.split(",") if s] or sorted(
-        p.stem for p in (ROOT / "config" / "soils").glob("*.yaml"))
-    soils = []
+    every = sorted(p.stem for p in (ROOT / "config" / "soils").glob("*.yaml"))
+    names = [s for s in args.soils.split(",") if s] or every
     for nm in names:
-        path = ROOT / "config" / "soils" / f"{nm}.yaml"
-        if not path.is_file():
-            raise SystemExit(f"--soils: no soil file {path}")
-        soil = load_soil(path, ROOT / "resources")
-        if soil.data.get("simulation"):
-            soils.append(soil)
+        if nm not in every:
+            raise SystemExit(f"--soils: no soil file {ROOT / 'config' / 'soils' / nm}.yaml")
+    loaded = {nm: load_soil(ROOT / "config" / "soils" / f"{nm}.yaml", ROOT / "resources")
+              for nm in every}
+    simulated = [s for s in loaded.values() if s.data.get("simulation")]
+    soils = [loaded[nm] for nm in names if loaded[nm].data.get("simulation")]
     planned = plan(soils, set(filter(None, args.responses.split(","))),
                    set(filter(None, args.stages.split(","))))
     out = Path(args.out)
@@ -256,7 +259,7 @@ def main(argv=None):
                                elapsed_s=round(time.perf_counter() - t0, 1),
                                runs_wall_s=round(runs_wall, 1)))
             write_rows(sweep_path, sweeps, SWEEP_FIELDS)
-    report(rows, planned, md_path, argv, sweeps)
+    report(rows, plan(simulated), md_path, argv, sweeps)
 
 
 if __name__ == "__main__":

@@ -277,3 +277,16 @@ def test_samples_beyond_the_available_memory_are_refused(monkeypatch):
                       seed=1, source="s", field="fill")
     with pytest.raises(InputError, match=r"lattice: expected a particle count"):
         F.lattice_fill(F.BoxRegion((0, 0, 0), (0.1, 0.1, 0.1)), radius=1e-3, source="s")
+
+
+def test_splitting_a_volume_into_n_spheres():
+    """n spheres of radii uniform on [0.9, 1.1] r have mean volume 4/3 pi 1.01 r^3
+    (<r^3> = r^3 (1.1^4 - 0.9^4) / 0.8), so they fill V exactly on average; a count below
+    one or a volume <= 0 is refused."""
+    d = F.UniformRadius.splitting(1e-4, 1000)
+    r = 0.5 * (d.r_min + d.r_max)
+    assert d.r_min == pytest.approx(0.9 * r) and d.r_max == pytest.approx(1.1 * r)
+    assert 1000 * 4 / 3 * math.pi * 1.01 * r ** 3 == pytest.approx(1e-4, rel=1e-12)
+    for n, v in ((0, 1e-4), (-5, 1e-4), (2.5, 1e-4), (10, 0.0), (10, -1.0)):
+        with pytest.raises(ValueError):
+            F.UniformRadius.splitting(v, n)

@@ -286,8 +286,12 @@ class UniformRadius:
         """Radii uniform on [(1 - spread) r, (1 + spread) r] with the mean sphere volume
         ``volume / n``: ``n`` spheres of this distribution fill ``volume`` on average
         (<r^3> = r^3 ((1 + s)^4 - (1 - s)^4) / (8 s), 1.01 r^3 at s = 0.1)."""
+        if not (isinstance(n, (int, np.integer)) and n >= 1):
+            raise ValueError(f"need a whole number of spheres n >= 1, got {n!r}")
+        if not (volume > 0 and 0 <= spread < 1):
+            raise ValueError(f"need volume > 0 and 0 <= spread < 1, got {volume}, {spread}")
         unit = cls(1.0 - spread, 1.0 + spread).mean_volume()  # at r = 1 m
-        r = (volume / (int(n) * unit)) ** (1.0 / 3.0)
+        r = (volume / (n * unit)) ** (1.0 / 3.0)
         return cls((1.0 - spread) * r, (1.0 + spread) * r)
 
     def mean_volume(self):

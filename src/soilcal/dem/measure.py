@@ -84,7 +84,9 @@ avalanche angle is the mean of those peaks.  A peak on the first or the last fra
 seen to collapse and does not count.  A surface that flows without collapses (the rolling
 regime, fluctuations below ``min_drop``) has no such peak: its steady angle, the time mean,
 is reported, with ``n_avalanches`` = 0.  Frames must be close enough to resolve the rise
-(at 7 r/min the drum turns 2.1 deg in 0.05 s).
+(at 7 r/min the drum turns 2.1 deg in 0.05 s).  A lone frame that jumps ``min_drop`` above
+both neighbours counts as a collapse too: ``min_drop`` must exceed the frame-to-frame
+jitter of the fitted surface.
 
 Stress-strain (cohesive-soil paper, 004 Sec. 3.7)
 ---------------------------------------------------

@@ -172,9 +172,10 @@ def test_drum_axis_must_be_horizontal():
 
 
 def sawtooth(peaks, trough=30.0, rise_per_frame=2.1, jitter=0.0, seed=0):
-    """Frame angles of a slumping drum: from ``trough`` the surface is carried up by
-    ``rise_per_frame`` degrees per frame (7 r/min, 0.05 s) to each peak, then collapses to
-    the trough in one frame; optional uniform jitter of +-``jitter`` degrees."""
+    """Frame angles of a slumping drum: each cycle rises by ``rise_per_frame`` degrees per
+    frame (7 r/min, 0.05 s) to its peak, from within one step above ``trough``; after the
+    peak the next frame starts the next cycle (one-frame collapse), and the series ends on
+    ``trough``; optional uniform jitter of +-``jitter`` degrees."""
     a = []
     for p in peaks:
         k = int(math.ceil((p - trough) / rise_per_frame))
@@ -186,7 +187,8 @@ def sawtooth(peaks, trough=30.0, rise_per_frame=2.1, jitter=0.0, seed=0):
 
 def test_avalanche_angle_is_the_mean_angle_before_collapse():
     """003: "the maximum angle ... before collapse occurs".  Peaks 50, 54, 47 deg on a
-    sawtooth with 2 deg of frame jitter: each collapse (17-24 deg) is found, the jitter is
+    sawtooth with 2 deg of frame jitter: each collapse (21, 26 and 17 deg before the
+    jitter) is found, the jitter is
     not, and the angle is the mean of the three peaks (50.33 deg, within the jitter), where
     the time mean of the frames, half-way up each linear rise from the 30 deg trough, is
     about 10 deg lower."""
@@ -209,6 +211,9 @@ def test_avalanche_angle_without_collapse_is_the_time_mean():
     assert res["n_avalanches"] == 0 and res["angle_deg"] == pytest.approx(flat.mean())
     rising = np.linspace(30.0, 55.0, 12)
     assert measure.avalanche_angle(rising, 10.0)["n_avalanches"] == 0
+    # a rise that peaks two frames before the end and dips by 4 deg: no collapse seen
+    dip = np.concatenate([rising, [53.0, 51.0]])
+    assert measure.avalanche_angle(dip, 10.0)["n_avalanches"] == 0
     with pytest.raises(InputError, match="min_drop"):
         measure.avalanche_angle(flat, 0.0)
     with pytest.raises(InputError, match="angles"):

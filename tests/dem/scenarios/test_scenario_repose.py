@@ -165,13 +165,13 @@ def test_small_pile_bins_scan_and_silhouette_agree_and_repeat():
     assert np.hypot(a.series["x"][:, 0], a.series["x"][:, 1]).max() > 0.03
     assert 10.0 < r["angle_deg"] < 50.0
     # the estimators' accuracy is checked on analytic heaps (test_measure.py); on one
-    # 500-sphere heap they sample a rough flank differently: each scatters about 2 degrees
-    # over seeds (1.2-1.4 degrees at 990 spheres, benchmarks/results/repose_seeds.md, x
-    # sqrt(990/500)), so two of them differ by up to about 3 sigma = 9 degrees.  (At 400
-    # spheres the heap is four diameters high and the radial bins about the tube axis can
-    # fail: seed 3 gave 6.8 degrees against 22 from the silhouette.)
-    assert abs(r["angle_deg"] - r["angle_image_deg"]) < 9.0
-    assert abs(r["angle_surface_deg"] - r["angle_image_deg"]) < 9.0
+    # 500-sphere heap they sample a rough flank differently: each scatters about 2.4 degrees
+    # over seeds (1.5-1.7 degrees at 1000 spheres, benchmarks/results/repose_seeds.md, x
+    # sqrt(1000/500)), so two of them differ by up to about 3 sigma = 3 x 2.4 x sqrt(2) = 10
+    # degrees.  (At 400 spheres the heap is four diameters high and the radial bins about the
+    # tube axis can fail: seed 3 gave 6.8 degrees against 22 from the silhouette.)
+    assert abs(r["angle_deg"] - r["angle_image_deg"]) < 10.0
+    assert abs(r["angle_surface_deg"] - r["angle_image_deg"]) < 10.0
     b = repose.run(cyl(**SMALL), p, "quick", seed=3, threads=1)
     assert b.responses == r  # same seed, same threads: identical
     assert np.array_equal(a.series["x"], b.series["x"])
@@ -215,10 +215,9 @@ def test_static_angle_trends_of_the_screening_designs():
 @pytest.mark.slow
 def test_drum_quick_run_reports_a_tilted_free_surface():
     """Rotating drum (003, 7 r/min, 25 % fill) with 400 cohesionless spheres: the free
-    surface is tilted in the rolling regime (between 10 and 60 deg for mu 0.56 and rolling
-    friction 0.11), its maximum over the frames is at least the mean, the frames differ
-    (a 400-sphere surface line scatters: SD 12 deg measured), and every response is one the
-    module declares."""
+    surface is tilted (between 10 and 60 deg for mu 0.56 and rolling friction 0.11), its
+    maximum over the frames is at least the mean, the frames differ (a 400-sphere surface
+    line scatters), and every response is one the module declares."""
     s = dict(drum.setups()["xinjiang-vineyard"], n_particles=400, spin_time=1.5,
              transient_time=0.5)
     res = drum.run(s, DemParams(soil_soil_surface_energy=0.0), "quick", seed=0, threads=1)
@@ -228,11 +227,25 @@ def test_drum_quick_run_reports_a_tilted_free_surface():
     # frames every 0.05 s from 0.5 s to 1.5 s of rotation
     assert r["n_frames"] == 21 and r["angle_max_deg"] >= r["angle_deg"]
     assert 0.0 < r["angle_sd_deg"] < 30.0  # the surface moves between frames
-    # the angle before collapse is a mean of frame angles (the time mean when no collapse of
-    # 10 deg was seen), so at most the largest
-    assert r["angle_avalanche_deg"] <= r["angle_max_deg"]
-    if r["n_avalanches"] == 0:
-        assert r["angle_avalanche_deg"] == r["angle_deg"]
+
+
+@pytest.mark.slow
+def test_the_quick_drum_slumps_at_the_vineyard_centre_point():
+    """003 defines the dynamic angle as "the maximum angle ... before collapse occurs": its
+    drum slumps.  The quick drum at the vineyard soil's BBD centre (config, 1000 spheres,
+    3 s of frames at 7 r/min) must slump too: at least one collapse of 10 deg, the angle
+    before collapse above the time mean, and no note that the estimator fell back."""
+    from soilcal.config.load import load_soil
+    from soilcal.dem.scenarios import design
+
+    soil = load_soil("config/soils/xinjiang-vineyard.yaml")
+    factors = soil.stage("bbd")["factors"]
+    levels = {c: 0.5 * (f["low"] + f["high"]) for c, f in factors.items()}
+    value, res = design.simulate_point(soil, "bbd", levels, "dynamic_angle", replicates=1,
+                                       threads=1)
+    r = res.responses
+    assert value == r["angle_avalanche_deg"] and r["n_avalanches"] >= 1
+    assert r["angle_avalanche_deg"] > r["angle_deg"] and r["measure_errors"] == ""
 
 
 @pytest.mark.slow

@@ -12,7 +12,7 @@ unit slip the config documents)::
       params: {soil_density: 1757.567}
       responses:
         static_angle: {scenario: repose, setup: xinjiang-vineyard-100mm, measure: angle_deg}
-        dynamic_angle: {scenario: drum, setup: xinjiang-vineyard, measure: angle_deg}
+        dynamic_angle: {scenario: drum, setup: xinjiang-vineyard, measure: angle_avalanche_deg}
 
 The DEM parameters of one design point are, in increasing precedence: the defaults of
 :class:`~soilcal.dem.scenarios.base.DemParams`, the soil's printed properties, the block's
