@@ -290,9 +290,17 @@ class UniformRadius:
             raise ValueError(f"need a whole number of spheres n >= 1, got {n!r}")
         if not (volume > 0 and 0 <= spread < 1):
             raise ValueError(f"need volume > 0 and 0 <= spread < 1, got {volume}, {spread}")
-        unit = cls(1.0 - spread, 1.0 + spread).mean_volume()  # at r = 1 m
-        r = (volume / (n * unit)) ** (1.0 / 3.0)
-        return cls((1.0 - spread) * r, (1.0 + spread) * r)
+        unit = cls.about(1.0, spread).mean_volume()  # at r = 1 m
+        return cls.about((volume / (n * unit)) ** (1.0 / 3.0), spread)
+
+    @classmethod
+    def about(cls, r: float, spread: float = 0.1) -> "UniformRadius":
+        """Radii uniform on [(1 - spread) r, (1 + spread) r]."""
+        return cls((1.0 - spread) * float(r), (1.0 + spread) * float(r))
+
+    @property
+    def r_mid(self) -> float:
+        return 0.5 * (self.r_min + self.r_max)
 
     def mean_volume(self):
         a, b = self.r_min, self.r_max

@@ -409,12 +409,13 @@ def avalanche_angle(angles, min_drop, source="<measurement>") -> dict:
     """Mean angle before collapse of a drum's frame angles (module docstring).
 
     Returns dict(angle_deg, n_avalanches, peaks_deg); angle_deg is the time mean when no
-    peak has a prominence of ``min_drop`` degrees."""
+    peak has a prominence of ``min_drop`` degrees (always so for fewer than 3 frames, where
+    no collapse can be seen)."""
     from scipy.signal import find_peaks
 
     a = np.asarray(angles, float)
-    if a.ndim != 1 or a.size < 3 or not np.all(np.isfinite(a)):
-        raise InputError(source, "angles", "at least 3 finite frame angles", a.size)
+    if a.ndim != 1 or a.size < 1 or not np.all(np.isfinite(a)):
+        raise InputError(source, "angles", "finite frame angles, at least one", a.size)
     if not min_drop > 0:
         raise InputError(source, "min_drop", "a collapse size > 0 deg", min_drop)
     idx, _ = find_peaks(a, prominence=float(min_drop))

@@ -214,6 +214,8 @@ def test_avalanche_angle_without_collapse_is_the_time_mean():
     # a rise that peaks two frames before the end and dips by 4 deg: no collapse seen
     dip = np.concatenate([rising, [53.0, 51.0]])
     assert measure.avalanche_angle(dip, 10.0)["n_avalanches"] == 0
+    two = measure.avalanche_angle([40.0, 44.0], 10.0)  # too short to see a collapse
+    assert two["n_avalanches"] == 0 and two["angle_deg"] == 42.0
     with pytest.raises(InputError, match="min_drop"):
         measure.avalanche_angle(flat, 0.0)
     with pytest.raises(InputError, match="angles"):

@@ -95,10 +95,8 @@ def sizing(setup, preset, params: DemParams | None = None):
         n = int(round(setup["load_mass"] / (rho * dist.mean_volume())))
     else:
         vol = math.pi * R * R * setup["quick_height"]
-        if r_set is None:
-            dist = UniformRadius.splitting(PHI * vol, int(n_set or d["n_particles"]))
-        else:
-            dist = UniformRadius(0.9 * float(r_set), 1.1 * float(r_set))
+        dist = (UniformRadius.splitting(PHI * vol, int(n_set or d["n_particles"]))
+                if r_set is None else UniformRadius.about(r_set))
         n = int(n_set) if n_set is not None else int(round(PHI * vol / dist.mean_volume()))
     return dict(dist=dist, n=n, r_max=float(dist.r_max),
                 load_mass=n * dist.mean_volume() * rho)

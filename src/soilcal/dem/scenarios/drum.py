@@ -94,11 +94,10 @@ def sizing(setup, preset, source="<input>"):
     r_set, n_set = setup.get("radius"), setup.get("n_particles")
     if preset == "paper" and r_set is None and n_set is None:
         dist = paper_psd(setup, source)
+    elif r_set is None:
+        dist = UniformRadius.splitting(PHI * vol, int(n_set or d["n_particles"]))
     else:
-        if r_set is None:
-            dist = UniformRadius.splitting(PHI * vol, int(n_set or d["n_particles"]))
-        else:
-            dist = UniformRadius(0.9 * float(r_set), 1.1 * float(r_set))
+        dist = UniformRadius.about(r_set)
     n = int(round(PHI * vol / dist.mean_volume()))
     return dict(dist=dist, n=n, r_max=float(dist.r_max), vol=vol)
 
@@ -184,10 +183,7 @@ def run(setup, params: DemParams, preset="quick", seed=0, threads=None, vtk_dir=
     frames.close()
     a = np.asarray(angles)
     mean, sd = measure.mean_sd(a)
-    if a.size >= 3:
-        av = measure.avalanche_angle(a, setup["min_drop"], source)
-    else:  # too few frames to see a collapse
-        av = dict(angle_deg=mean, n_avalanches=0)
+    av = measure.avalanche_angle(a, setup["min_drop"], source)
     note = ("" if av["n_avalanches"] else
             f"avalanche: no collapse of at least {setup['min_drop']:g} deg in {a.size} frames "
             f"(a flowing surface, or too few frames): angle_avalanche_deg is the time mean")

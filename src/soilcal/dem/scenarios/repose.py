@@ -189,25 +189,24 @@ def sizing(setup, preset, params: DemParams | None = None) -> dict:
     d = check_preset(preset)
     n_set = setup.get("n_particles")
     r_set = setup.get("radius")
+    vol = _fill_volume(setup, params)
     if setup["method"] == "funnel" and preset == "quick" and r_set is None and n_set is None:
         # the setup's load, 8 diameters across the outlet, at most QUICK_FUNNEL_MAX spheres
-        r_cap = UniformRadius.splitting(PHI * _fill_volume(setup, params), QUICK_FUNNEL_MAX)
-        r_set = max(setup["funnel_bottom_diameter"] / 16.0, 0.5 * (r_cap.r_min + r_cap.r_max))
+        r_cap = UniformRadius.splitting(PHI * vol, QUICK_FUNNEL_MAX)
+        r_set = max(setup["funnel_bottom_diameter"] / 16.0, r_cap.r_mid)
     if preset == "paper" and r_set is None and n_set is None:
         dist = paper_psd(setup, "<setup>")
+    elif r_set is None:
+        dist = UniformRadius.splitting(PHI * vol, int(n_set or d["n_particles"]))
     else:
-        if r_set is None:
-            dist = UniformRadius.splitting(PHI * _fill_volume(setup, params),
-                                           int(n_set or d["n_particles"]))
-        else:
-            dist = UniformRadius(0.9 * float(r_set), 1.1 * float(r_set))
+        dist = UniformRadius.about(r_set)
     vmean = dist.mean_volume()
     if n_set is not None and setup["method"] == "funnel":
         n = int(n_set)
         rho = (params or DemParams()).soil_density
         load_mass = n * vmean * rho
     else:
-        n = int(round(PHI * _fill_volume(setup, params) / vmean))
+        n = int(round(PHI * vol / vmean))
         load_mass = setup.get("load_mass")
     return dict(dist=dist, n=n, r_max=float(dist.r_max), r_mean=float((3 * vmean / (4 * math.pi)) ** (1 / 3)),
                 load_mass=load_mass)
