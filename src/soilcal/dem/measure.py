@@ -84,9 +84,13 @@ avalanche angle is the mean of those peaks.  A peak on the first or the last fra
 seen to collapse and does not count.  A surface that flows without collapses (the rolling
 regime, fluctuations below ``min_drop``) has no such peak: its steady angle, the time mean,
 is reported, with ``n_avalanches`` = 0.  Frames must be close enough to resolve the rise
-(at 7 r/min the drum turns 2.1 deg in 0.05 s).  A lone frame that jumps ``min_drop`` above
-both neighbours counts as a collapse too: ``min_drop`` must exceed the frame-to-frame
-jitter of the fitted surface.
+(at 7 r/min the drum turns 2.1 deg in 0.05 s).  A bed carried up with the drum steepens by
+about that much per frame, so a lone frame that lies ``min_drop`` or more above both of its
+neighbours (or as far below both) is a misfit surface, not a collapse (a collapse falls
+after a build-up, so the frame before its peak is close to it).  Such a frame is replaced
+by the nearer of its neighbours (the median of the three) before the peaks are sought, and
+counted in ``n_spikes``.  A two-frame excursion is not a lone frame: ``min_drop`` must
+still exceed the frame-to-frame jitter of the fitted surface.
 
 Stress-strain (cohesive-soil paper, 004 Sec. 3.7)
 ---------------------------------------------------
@@ -408,9 +412,10 @@ def drum_surface_angle(x, r, axis_point, axis_dir=(0.0, 1.0, 0.0), slab_half=Non
 def avalanche_angle(angles, min_drop, source="<measurement>") -> dict:
     """Mean angle before collapse of a drum's frame angles (module docstring).
 
-    Returns dict(angle_deg, n_avalanches, peaks_deg); angle_deg is the time mean when no
-    peak has a prominence of ``min_drop`` degrees (always so for fewer than 3 frames, where
-    no collapse can be seen)."""
+    Returns dict(angle_deg, n_avalanches, peaks_deg, n_spikes); angle_deg is the time mean
+    (of the frames as measured) when no peak has a prominence of ``min_drop`` degrees
+    (always so for fewer than 3 frames, where no collapse can be seen); ``n_spikes`` lone
+    frames were replaced by a neighbour before the peaks were sought."""
     from scipy.signal import find_peaks
 
     a = np.asarray(angles, float)
@@ -418,11 +423,30 @@ def avalanche_angle(angles, min_drop, source="<measurement>") -> dict:
         raise InputError(source, "angles", "finite frame angles, at least one", a.size)
     if not min_drop > 0:
         raise InputError(source, "min_drop", "a collapse size > 0 deg", min_drop)
-    idx, _ = find_peaks(a, prominence=float(min_drop))
-    peaks = a[idx]
+    b, n_spikes = despike(a, float(min_drop))
+    idx, _ = find_peaks(b, prominence=float(min_drop))
+    peaks = b[idx]
     angle = float(peaks.mean()) if peaks.size else float(a.mean())
     return dict(angle_deg=angle, n_avalanches=int(peaks.size),
-                peaks_deg=[float(v) for v in peaks])
+                peaks_deg=[float(v) for v in peaks], n_spikes=n_spikes)
+
+
+def despike(a, jump) -> tuple[np.ndarray, int]:
+    """(series, count): every interior value lying ``jump`` or more above both neighbours,
+    or as far below both, replaced by the median of the three (the nearer neighbour).  The
+    test uses the input values, so two adjacent outliers are both kept."""
+    a = np.asarray(a, float)
+    b = a.copy()
+    if a.size < 3:
+        return b, 0
+    lo = np.minimum(a[:-2], a[2:])
+    hi = np.maximum(a[:-2], a[2:])
+    mid = a[1:-1]
+    up = mid - hi >= jump
+    down = lo - mid >= jump
+    b[1:-1][up] = hi[up]
+    b[1:-1][down] = lo[down]
+    return b, int(up.sum() + down.sum())
 
 
 def mean_sd(values) -> tuple[float, float]:

@@ -201,6 +201,37 @@ def test_avalanche_angle_is_the_mean_angle_before_collapse():
     assert exact["peaks_deg"] == pytest.approx([50.0, 54.0, 47.0], abs=1e-12)
 
 
+def test_avalanche_angle_ignores_lone_frames():
+    """A bed carried up with the drum steepens by about 2.1 deg a frame, so a lone frame
+    15 deg above both neighbours (a misfit surface) is no collapse; nor does a lone frame
+    15 deg below both make the frame before it one.  The sawtooth's three peaks are found as
+    without the outliers, the two outliers are counted, and a two-frame excursion (not a
+    lone frame) still counts."""
+    clean = sawtooth([50.0, 54.0, 47.0])
+    a = clean.copy()
+    # mid-rise of the first cycle (29 -> 50 deg) and of the second (28.8 -> 54 deg)
+    up, down = 4, 17
+    a[up] += 15.0
+    a[down] -= 15.0
+    naive = find_peaks_count(a, 10.0)
+    assert naive == 5  # without the despiking each outlier adds a collapse
+    res = measure.avalanche_angle(a, 10.0)
+    assert res["n_spikes"] == 2 and res["n_avalanches"] == 3
+    assert res["peaks_deg"] == pytest.approx([50.0, 54.0, 47.0], abs=1e-12)
+    two = clean.copy()
+    two[up:up + 2] += 15.0
+    res2 = measure.avalanche_angle(two, 10.0)
+    assert res2["n_spikes"] == 0 and clean[up + 1] + 15.0 in res2["peaks_deg"]
+    b, n = measure.despike([1.0, 20.0, 2.0, -20.0, 3.0, 3.0], 10.0)
+    assert n == 2 and list(b) == [1.0, 2.0, 2.0, 2.0, 3.0, 3.0]  # medians of three
+
+
+def find_peaks_count(a, prominence):
+    from scipy.signal import find_peaks
+
+    return find_peaks(a, prominence=prominence)[0].size
+
+
 def test_avalanche_angle_without_collapse_is_the_time_mean():
     """A surface flowing steadily (rolling regime): fluctuations of +-2 deg about 40 deg
     never drop by 10 deg, so no avalanche is counted and the angle is the time mean; a rise

@@ -33,12 +33,13 @@ standard deviation), ``angle_max_deg`` (largest frame angle), ``angle_avalanche_
 paper's "maximum angle before collapse": the mean of the frame angles just before each
 collapse of at least ``min_drop`` degrees, :func:`soilcal.dem.measure.avalanche_angle`;
 the time mean when the surface flows without collapses, said in ``measure_errors``) and
-``n_avalanches``, ``n_frames``.  The quick drum slumps: at 44 of the vineyard soil's 47
+``n_avalanches``, ``n_spikes``, ``n_frames``.  The quick drum slumps: at 44 of the vineyard soil's 47
 design points it collapsed by at least 10 deg, and there the avalanche angle lies 4-14 deg
 above the time mean (benchmarks/results/design_budget.md, notes).  The fitted line of a
 1000-sphere surface also jitters from frame to frame by several degrees (rotation alone
-turns it 2.1 deg between frames), so ``min_drop`` = 10 deg; a single-frame jump of that
-size up and down still counts as a collapse.
+turns it 2.1 deg between frames), so ``min_drop`` = 10 deg; a lone frame that far above
+(or below) both neighbours is taken as a misfit and replaced before the peaks are sought
+(``n_spikes``).
 """
 
 from __future__ import annotations
@@ -57,7 +58,7 @@ NAME = "drum"
 #: every response a run reports (``Result.responses``)
 RESPONSES = (
     "angle_deg", "angle_sd_deg", "angle_max_deg", "angle_avalanche_deg", "n_avalanches",
-    "n_frames", "fill_settled", "peak_overlap", "measure_errors",
+    "n_spikes", "n_frames", "fill_settled", "peak_overlap", "measure_errors",
 )
 #: the responses a soil's ``simulation`` block may measure (numbers a design point yields)
 MEASURES = (
@@ -189,7 +190,7 @@ def run(setup, params: DemParams, preset="quick", seed=0, threads=None, vtk_dir=
             f"(a flowing surface, or too few frames): angle_avalanche_deg is the time mean")
     responses = dict(angle_deg=mean, angle_sd_deg=sd, angle_max_deg=float(a.max()),
                      angle_avalanche_deg=av["angle_deg"], n_avalanches=av["n_avalanches"],
-                     n_frames=int(a.size), fill_settled=int(ok0), measure_errors=note,
+                     n_spikes=av["n_spikes"], n_frames=int(a.size), fill_settled=int(ok0), measure_errors=note,
                      peak_overlap=sim.peak_overlap)
     setup_out = dict(setup)
     setup_out.pop("paper_psd", None)
