@@ -43,7 +43,7 @@ OUT = HERE / "results" / "convergence"
 # scenario -> (setup, main response, extra setup for every run)
 CASES = {
     "repose": ("cinnamon-soil", "angle_deg", {}),
-    "drum": ("xinjiang-vineyard", "angle_deg", {}),
+    "drum": ("xinjiang-vineyard", "angle_avalanche_deg", {}),  # the vineyard soil's measure
     "incline": ("yangtze-static", "onset_deg", {}),
     "compression": ("guangxi-cohesive", "stress_10_kpa", {}),
 }
