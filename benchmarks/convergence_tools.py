@@ -9,8 +9,10 @@ run at its own settings and with one factor changed at a time:
 * seed in ``seeds`` (bin packing and radii).
 
 Each run writes one row (scenario, factor, value, seed, particle count, steps, wall time,
-responses) to ``benchmarks/results/convergence/convergence_tools.csv`` and the figure
-``convergence_tools.png`` plots each scenario's responses against the three factors.
+responses) to ``benchmarks/results/convergence/convergence_tools.csv``; the figure
+``convergence_tools.png`` plots each scenario's responses against the three factors and
+``convergence_tools.md`` tabulates the rows, with each response's spread over the seeds
+beside its range over the particle sizes and over the stiffness scales.
 
     python benchmarks/convergence_tools.py --level reduced   # a few minutes on 2 cores
     python benchmarks/convergence_tools.py --level full      # more levels and seeds
@@ -21,6 +23,7 @@ from __future__ import annotations
 import argparse
 import csv
 import os
+import sys
 import tempfile
 import time
 from pathlib import Path
@@ -29,6 +32,8 @@ import matplotlib
 
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
+import numpy as np  # noqa: E402
+from _report import commit, kept_notes  # noqa: E402
 
 from soilcal.dem.scenarios import bulldozing, furrow, rotary  # noqa: E402
 
@@ -77,8 +82,9 @@ def main(argv=None) -> int:
                     rows.append({k: _num(v) for k, v in r.items()})
     if args.plot_only:
         with open(path, newline="") as fh:
-            plot([{k: _num(v) for k, v in r.items()} for r in csv.DictReader(fh)],
-                 out / "convergence_tools.png")
+                rows = [{k: _num(v) for k, v in r.items()} for r in csv.DictReader(fh)]
+        plot(rows, out / "convergence_tools.png")
+        table(rows, out / "convergence_tools.md", None)
         return 0
     for name in todo:
         mod, setup_name, keys = CASES[name]
@@ -104,15 +110,69 @@ def main(argv=None) -> int:
                        stiffness_scale=ov.get("stiffness_scale", base["stiffness_scale"]),
                        n_particles=n, steps=steps, threads=args.threads,
                        wall_s=round(time.perf_counter() - t0, 2),
-                       cpu_s=round(time.process_time() - cpu0, 2), error=err)
+                       cpu_s=round(time.process_time() - cpu0, 2), error=err,
+                       utc=time.strftime("%Y-%m-%d %H:%M", time.gmtime()), commit=commit())
             row.update({f"r:{k}": v for k, v in resp.items()})
             rows.append(row)
             print({k: row[k] for k in ("scenario", "factor", "value", "n_particles", "wall_s")},
                   resp, err, flush=True)
             _write(path, rows)
     plot(rows, out / "convergence_tools.png")
+    table(rows, out / "convergence_tools.md",
+          "python benchmarks/convergence_tools.py " + " ".join(sys.argv[1:] if argv is None else argv))
     print(path)
     return 0
+
+
+def _spread(v):
+    v = np.asarray([x for x in v if isinstance(x, (int, float)) and np.isfinite(x)], float)
+    return v
+
+
+def table(rows, path, cmd):
+    """The results page: every run, then per scenario and response the mean and sample SD
+    over the seeds beside the range (max - min, base run included) over the particle sizes
+    and over the stiffness scales, each also as a multiple of the seed SD."""
+    lines = ["# Convergence of the tool scenarios (quick preset, one factor at a time)", ""]
+    if cmd:
+        lines += [f"Last command: `{cmd}`, ended {time.strftime('%Y-%m-%d %H:%M UTC', time.gmtime())}"
+                  f"; load_avg_1min at the end {os.getloadavg()[0]:.2f}.  Rows: "
+                  "`convergence_tools.csv` (utc and commit per row), figure "
+                  "`convergence_tools.png`.", ""]
+    lines += ["| scenario | factor | value | seed | radius mm | G scale | particles | steps | "
+              "threads | wall s | response 1 | response 2 | error |",
+              "|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---|"]
+    for r in rows:
+        keys = CASES[r["scenario"]][2]
+        vals = []
+        for k in keys:
+            v = r.get(f"r:{k}", "")
+            vals.append(f"{k} {v:.4g}" if isinstance(v, float) and np.isfinite(v) else "")
+        lines.append(f"| {r['scenario']} | {r['factor']} | {r['value']} | {r['seed']} | "
+                     f"{1000 * float(r['particle_radius']):.3g} | {float(r['stiffness_scale']):.3g} | "
+                     f"{r['n_particles']} | {r['steps']} | {r.get('threads', '')} | {r['wall_s']} | "
+                     f"{vals[0]} | {vals[1]} | {str(r.get('error', ''))[:80]} |")
+    lines += ["", "Spread over seeds against the range over each factor (base run included in "
+              "every group; ratio = range / seed SD):", "",
+              "| scenario | response | seeds | mean | seed SD | radius range (ratio) | "
+              "stiffness range (ratio) |", "|---|---|---:|---:|---:|---:|---:|"]
+    for name in dict.fromkeys(r["scenario"] for r in rows):
+        rs = [r for r in rows if r["scenario"] == name and not r.get("error")]
+        base = [r for r in rs if r["factor"] == "base"]
+        for k in CASES[name][2]:
+            seed = _spread([r[f"r:{k}"] for r in base + [r for r in rs if r["factor"] == "seed"]])
+            if seed.size < 2:
+                continue
+            sd = float(seed.std(ddof=1))
+            cells = []
+            for fac in ("radius", "stiffness"):
+                v = _spread([r[f"r:{k}"] for r in base + [r for r in rs if r["factor"] == fac]])
+                rng = float(np.ptp(v)) if v.size > 1 else float("nan")
+                cells.append(f"{rng:.4g} ({rng / sd:.1f})" if sd > 0 and np.isfinite(rng) else "")
+            lines.append(f"| {name} | {k} | {seed.size} | {seed.mean():.4g} | {sd:.3g} | "
+                         f"{cells[0]} | {cells[1]} |")
+    lines += ["", kept_notes(path)]
+    path.write_text("\n".join(lines) + "\n")
 
 
 def _num(text):
