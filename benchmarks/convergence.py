@@ -13,12 +13,14 @@ The incline scenario has no particle-count axis (one block or ball); its stiffne
 axes are run.  Each run is one row of ``benchmarks/results/convergence/convergence.csv``
 (scenario, setup, factor, value, seed, particle count, steps, wall time, responses); the
 figure ``convergence.png`` / ``convergence.pdf`` plots the main response of every scenario
-against the three factors, and ``convergence.md`` tabulates the rows with the spread over
-seeds.
+against the three factors (the quick preset's seed scatter, mean +- SD, shaded), and
+``convergence.md`` tabulates the rows with the spread over seeds beside the range over
+each factor.
 
     python benchmarks/convergence.py --level reduced      # a few CPU-minutes
     python benchmarks/convergence.py --level full         # more levels, paper-like counts
     python benchmarks/convergence.py --scenarios repose,incline   # other rows are kept
+    python benchmarks/convergence.py --report-only   # figure and page from the CSV
 """
 
 from __future__ import annotations
@@ -110,9 +112,17 @@ def figure(rows, out):
                 continue
             x = [float(r["value"]) for r in sel]
             y = [float(r["value_response"]) for r in sel]
+            seeds = _finite([r["value_response"] for r in rows
+                             if r["scenario"] == sc and r["factor"] == "seed"])
+            if seeds.size > 1:  # the quick preset's seed scatter, mean +- 1 SD
+                m, sd = seeds.mean(), seeds.std(ddof=1)
+                ax.axhspan(m - sd, m + sd, color="0.85", zorder=0,
+                           label=f"seeds: mean +- SD ({seeds.size})")
             ax.plot(x, y, "o-" if fac != "seed" else "o", color="C%d" % j)
-            if fac == "stiffness":
+            if fac in ("stiffness", "n_particles"):
                 ax.set_xscale("log", base=2)
+            if i == 0 and j == 0 and seeds.size > 1:
+                ax.legend(fontsize=7, loc="best")
             ax.set_xlabel({"n_particles": "particle count", "stiffness":
                            "G scale / quick preset's", "seed": "seed"}[fac])
             if j == 0 or (sc == "incline" and j == 1):
@@ -124,10 +134,20 @@ def figure(rows, out):
     plt.close(fig)
 
 
+def _finite(values):
+    v = np.asarray([float(x) for x in values], float)
+    return v[np.isfinite(v)]
+
+
 def table(rows, out, cmd):
+    md = out / "convergence.md"
+    head = [f"Command: `{cmd}`; {time.strftime('%Y-%m-%d %H:%M UTC', time.gmtime())}; "
+            f"load_avg_1min at the end {os.getloadavg()[0]:.2f} (shared machine).", ""]
+    if cmd is None:  # a page redrawn from the CSV keeps the line of the run
+        old = md.read_text().splitlines() if md.exists() else []
+        head = [x for x in old[2:3] if x.startswith("Command:")] + [""]
     lines = ["# Convergence of the bench-top scenarios (quick preset, one factor at a time)", "",
-             f"Command: `{cmd}`; {time.strftime('%Y-%m-%d %H:%M UTC', time.gmtime())}; "
-             f"load_avg_1min at the end {os.getloadavg()[0]:.2f} (shared machine).", "",
+             *head,
              "| scenario | factor | value | seed | N | steps | wall s | G scale | gamma scale | "
              "response | value |",
              "|---|---|---:|---:|---:|---:|---:|---:|---:|---|---:|"]
@@ -137,14 +157,25 @@ def table(rows, out, cmd):
                      f"{float(r['stiffness_scale']):.4g} | {r['cohesion_scale']} | "
                      f"{r['response']} | "
                      f"{float(r['value_response']):.3f} |")
-    lines += ["", "Spread over seeds (sample standard deviation):", ""]
+    lines += ["", "Spread over seeds (sample standard deviation) against the range (max - min) "
+              "over each factor's levels; ratio = range / seed SD.  The seed alone gives an "
+              "expected range of 2.06 SD over four levels and 2.33 SD over five (normal "
+              "scatter), so a ratio near those does not tell the factor from the seed:", "",
+              "| scenario | response | seeds | mean | seed SD | particle-count range (ratio) | "
+              "stiffness range (ratio) |", "|---|---|---:|---:|---:|---:|---:|"]
     for sc in CASES:
-        v = [float(r["value_response"]) for r in rows if r["scenario"] == sc and r["factor"] == "seed"]
-        v = [x for x in v if np.isfinite(x)]
-        if len(v) > 1:
-            lines.append(f"* {sc}: mean {np.mean(v):.3f}, SD {np.std(v, ddof=1):.3f} "
-                         f"({len(v)} seeds)")
-    md = out / "convergence.md"
+        v = _finite([r["value_response"] for r in rows if r["scenario"] == sc and r["factor"] == "seed"])
+        if v.size < 2:
+            continue
+        sd = float(v.std(ddof=1))
+        cells = []
+        for fac in ("n_particles", "stiffness"):
+            f = _finite([r["value_response"] for r in rows if r["scenario"] == sc and r["factor"] == fac])
+            rng = float(np.ptp(f)) if f.size > 1 else float("nan")
+            cells.append("" if not np.isfinite(rng) else
+                         f"{rng:.3f} ({rng / sd:.1f})" if sd > 0 else f"{rng:.3f}")
+        lines.append(f"| {sc} | {CASES[sc][1]} | {v.size} | {v.mean():.3f} | {sd:.3f} | "
+                     f"{cells[0]} | {cells[1]} |")
     lines += ["", kept_notes(md)]
     md.write_text("\n".join(lines) + "\n")
 
@@ -155,6 +186,8 @@ def main(argv=None):
     ap.add_argument("--scenarios", default=",".join(CASES))
     ap.add_argument("--threads", type=int, default=1)
     ap.add_argument("--out", default=str(OUT))
+    ap.add_argument("--report-only", action="store_true",
+                    help="redraw the figure and the page from the CSV, run nothing")
     args = ap.parse_args(argv)
     scenarios = [s for s in args.scenarios.split(",") if s]
     for s in scenarios:
@@ -165,6 +198,13 @@ def main(argv=None):
     from soilcal.errors import SimulationError
 
     path = out / "convergence.csv"
+    if args.report_only:
+        rows = read_rows(path, FIELDS)
+        for r in rows:
+            r["value_response"] = float(r["value_response"] or "nan")
+        figure(rows, out)
+        table(rows, out, None)
+        return
     # rows of the scenarios not run this time are kept
     rows = [r for r in read_rows(path, FIELDS) if r["scenario"] not in scenarios]
     for r in rows:

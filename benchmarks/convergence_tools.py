@@ -153,7 +153,9 @@ def table(rows, path, cmd):
                      f"{r['n_particles']} | {r['steps']} | {r.get('threads', '')} | {r['wall_s']} | "
                      f"{vals[0]} | {vals[1]} | {str(r.get('error', ''))[:80]} |")
     lines += ["", "Spread over seeds against the range over each factor (base run included in "
-              "every group; ratio = range / seed SD):", "",
+              "every group; ratio = range / seed SD).  The seed alone gives an expected range "
+              "of 2.06 SD over four levels (normal scatter), so a ratio near that does not "
+              "tell the factor from the seed:", "",
               "| scenario | response | seeds | mean | seed SD | radius range (ratio) | "
               "stiffness range (ratio) |", "|---|---|---:|---:|---:|---:|---:|"]
     for name in dict.fromkeys(r["scenario"] for r in rows):
