@@ -49,11 +49,15 @@ short for the rotor radius fails on ``setup.travel``).  Measured Sd: 159.2, 134.
 Presets: ``paper`` simulates the whole 1.6 m blade set between side walls with particles of
 1.5 mm radius (the printed 2-4 mm diameters, +-33 %); ``quick`` simulates one flange of
 three blades in a periodic slab of one flange spacing (1.6 m / 12), 12 mm particles
-(0.9-1.1) in a 0.19 m deep bed, shear modulus scaled by 0.1 (1e8 -> 1e7 Pa with the paper's
-G; surface energies by 0.1^0.4), a 0.3 m pass (a 0.15 m pass averaged the power over about
-1.4 turns of the rotor, and its power scattered over seeds by a quarter of its mean; the
-0.3 m pass halves that scatter, convergence_tools.md), and scales the torque to the full
-working width by ``n_flanges`` (the helix repeats every flange up to a phase).  The time step is the
+(0.9-1.1) in a 0.19 m deep bed, the paper's shear modulus unscaled, a 0.3 m pass, and
+scales the torque to the full working width by ``n_flanges`` (the helix repeats every
+flange up to a phase).  The convergence study
+(``benchmarks/results/convergence/convergence_tools.md``) set the pass and the modulus: a
+0.15 m pass averaged the power over about 1.4 turns of the rotor at 250 r/min and the power
+scattered over seeds by a quarter of its mean, about twice as much as over the 0.3 m pass;
+with the modulus scaled by 0.1 (1e8 -> 1e7 Pa, surface energies by 0.1^0.4) the power fell
+by about 0.9 kW of 3.5 kW, several times the seed scatter, while the unscaled run takes about
+10 s on one thread.  The time step is the
 smaller of ``dt_fraction`` x the Rayleigh time and the time the blade tip needs to move a
 tenth of the smallest radius (tip speed ``omega R + v``)."""
 
@@ -114,7 +118,7 @@ def setups() -> dict:
 
 PRESET_SETTINGS = {
     "quick": dict(periodic=True, bin_length=0.85, bin_height=0.19, particle_radius=0.012,
-                  radius_spread=0.1, stiffness_scale=0.1, dt_fraction=0.2, travel=0.3,
+                  radius_spread=0.1, stiffness_scale=1.0, dt_fraction=0.2, travel=0.3,
                   settle_time=0.25, flanges_simulated=1, skin_fraction=1.0),
     "paper": dict(periodic=False, bin_length=2.5, bin_height=0.25, particle_radius=0.0015,
                   radius_spread=1.0 / 3.0, stiffness_scale=1.0, dt_fraction=0.2, travel=1.0,
