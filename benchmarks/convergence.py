@@ -36,6 +36,7 @@ import matplotlib
 
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
+import matplotlib.ticker  # noqa: E402
 import numpy as np  # noqa: E402
 from _report import kept_notes, read_rows  # noqa: E402
 
@@ -121,6 +122,10 @@ def figure(rows, out):
             ax.plot(x, y, "o-" if fac != "seed" else "o", color="C%d" % j)
             if fac in ("stiffness", "n_particles"):
                 ax.set_xscale("log", base=2)
+            if fac == "n_particles":
+                ax.set_xticks(x)
+                ax.xaxis.set_major_formatter(matplotlib.ticker.ScalarFormatter())
+                ax.xaxis.set_minor_formatter(matplotlib.ticker.NullFormatter())
             if i == 0 and j == 0 and seeds.size > 1:
                 ax.legend(fontsize=7, loc="best")
             ax.set_xlabel({"n_particles": "particle count", "stiffness":

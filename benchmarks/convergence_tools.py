@@ -199,18 +199,23 @@ def _write(path, rows):
 
 def plot(rows, path):
     """One row of panels per scenario: its two responses (left and right axes) against
-    the particle count, the shear-modulus scale and the seed, the base run in each panel."""
+    the particle count, the shear-modulus scale and the seed, the base run in each panel;
+    the band is the first response's mean +- SD over the seeds."""
     names = list(dict.fromkeys(r["scenario"] for r in rows))
     fig, axes = plt.subplots(len(names), 3, figsize=(12, 3.2 * len(names)), squeeze=False)
     for i, name in enumerate(names):
         rs = [r for r in rows if r["scenario"] == name and not r.get("error")]
         keys = CASES[name][2]
         base = [r for r in rs if r["factor"] == "base"]
+        seed = _spread([r[f"r:{keys[0]}"] for r in base + [r for r in rs if r["factor"] == "seed"]])
         for j, (factor, xkey, label) in enumerate((
                 ("radius", "n_particles", "particles"),
                 ("stiffness", "stiffness_scale", "shear-modulus scale"),
                 ("seed", "seed", "seed"))):
             ax = axes[i, j]
+            if seed.size > 1:  # the first response's seed scatter, mean +- 1 SD
+                ax.axhspan(seed.mean() - seed.std(ddof=1), seed.mean() + seed.std(ddof=1),
+                           color="C0", alpha=0.12, zorder=0)
             pts = sorted(base + [r for r in rs if r["factor"] == factor], key=lambda r: r[xkey])
             xs = [r[xkey] for r in pts]
             ax.plot(xs, [r[f"r:{keys[0]}"] for r in pts], "o-", color="C0")
