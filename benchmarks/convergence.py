@@ -38,7 +38,7 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import matplotlib.ticker  # noqa: E402
 import numpy as np  # noqa: E402
-from _report import kept_notes, read_rows  # noqa: E402
+from _report import read_rows, write_page  # noqa: E402
 
 HERE = Path(__file__).resolve().parent
 OUT = HERE / "results" / "convergence"
@@ -164,8 +164,9 @@ def table(rows, out, cmd):
                      f"{float(r['value_response']):.3f} |")
     lines += ["", "Spread over seeds (sample standard deviation) against the range (max - min) "
               "over each factor's levels; ratio = range / seed SD.  The seed alone gives an "
-              "expected range of 2.06 SD over four levels and 2.33 SD over five (normal "
-              "scatter), so a ratio near those does not tell the factor from the seed:", "",
+              "expected range of 1.13, 1.69, 2.06 and 2.33 SD over 2, 3, 4 and 5 levels "
+              "(normal scatter), so a ratio near those does not tell the factor from the "
+              "seed:", "",
               "| scenario | response | seeds | mean | seed SD | particle-count range (ratio) | "
               "stiffness range (ratio) |", "|---|---|---:|---:|---:|---:|---:|"]
     for sc in CASES:
@@ -181,8 +182,7 @@ def table(rows, out, cmd):
                          f"{rng:.3f} ({rng / sd:.1f})" if sd > 0 else f"{rng:.3f}")
         lines.append(f"| {sc} | {CASES[sc][1]} | {v.size} | {v.mean():.3f} | {sd:.3f} | "
                      f"{cells[0]} | {cells[1]} |")
-    lines += ["", kept_notes(md)]
-    md.write_text("\n".join(lines) + "\n")
+    write_page(md, lines)
 
 
 def main(argv=None):

@@ -16,6 +16,8 @@ beside its range over the particle sizes and over the stiffness scales.
 
     python benchmarks/convergence_tools.py --level reduced   # a few minutes on 2 cores
     python benchmarks/convergence_tools.py --level full      # more levels and seeds
+    python benchmarks/convergence_tools.py --plot-only       # figure and page from the CSV
+    python benchmarks/convergence_tools.py --setups          # every plate and speed once
 """
 
 from __future__ import annotations
@@ -33,7 +35,7 @@ import matplotlib
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
-from _report import commit, kept_notes  # noqa: E402
+from _report import commit, write_page  # noqa: E402
 
 from soilcal.dem.scenarios import bulldozing, furrow, rotary  # noqa: E402
 
@@ -64,9 +66,12 @@ def main(argv=None) -> int:
     ap.add_argument("--scenarios", default=",".join(CASES))
     ap.add_argument("--out", default=str(OUT))
     ap.add_argument("--plot-only", action="store_true",
-                    help="redraw the figure from the existing CSV")
+                    help="redraw the figure and the page from the existing CSV")
     ap.add_argument("--threads", type=int, default=1,
                     help="numba threads (1: a shared machine's second core stays free)")
+    ap.add_argument("--setups", action="store_true",
+                    help="run every named bulldozing and rotary setup once (seed 0) into "
+                         "convergence_tools_setups.csv instead")
     args = ap.parse_args(argv)
     lev = LEVELS[args.level]
     out = Path(args.out)
@@ -79,13 +84,16 @@ def main(argv=None) -> int:
         with open(path, newline="") as fh:
             for r in csv.DictReader(fh):
                 if r["scenario"] not in todo:
-                    rows.append({k: _num(v) for k, v in r.items()})
+                    rows.append({k: _num(k, v) for k, v in r.items()})
+    if args.setups:
+        return every_setup(out / "convergence_tools_setups.csv", args.threads)
     if args.plot_only:
         with open(path, newline="") as fh:
-                rows = [{k: _num(v) for k, v in r.items()} for r in csv.DictReader(fh)]
+            rows = [{k: _num(k, v) for k, v in r.items()} for r in csv.DictReader(fh)]
         plot(rows, out / "convergence_tools.png")
         table(rows, out / "convergence_tools.md", None)
         return 0
+    rev = commit()  # the code this process runs
     for name in todo:
         mod, setup_name, keys = CASES[name]
         base = mod.PRESET_SETTINGS["quick"]
@@ -111,7 +119,7 @@ def main(argv=None) -> int:
                        n_particles=n, steps=steps, threads=args.threads,
                        wall_s=round(time.perf_counter() - t0, 2),
                        cpu_s=round(time.process_time() - cpu0, 2), error=err,
-                       utc=time.strftime("%Y-%m-%d %H:%M", time.gmtime()), commit=commit())
+                       utc=time.strftime("%Y-%m-%d %H:%M", time.gmtime()), commit=rev)
             row.update({f"r:{k}": v for k, v in resp.items()})
             rows.append(row)
             print({k: row[k] for k in ("scenario", "factor", "value", "n_particles", "wall_s")},
@@ -139,6 +147,9 @@ def table(rows, path, cmd):
                   f"; load_avg_1min at the end {os.getloadavg()[0]:.2f}.  Rows: "
                   "`convergence_tools.csv` (utc and commit per row), figure "
                   "`convergence_tools.png`.", ""]
+    elif path.exists():  # a page redrawn from the CSV keeps the line of the last run
+        lines += [x for x in path.read_text().splitlines()[2:3] if x.startswith("Last command:")]
+        lines += [""] if len(lines) > 2 else []
     lines += ["| scenario | factor | value | seed | radius mm | G scale | particles | steps | "
               "threads | wall s | response 1 | response 2 | error |",
               "|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---|"]
@@ -154,8 +165,8 @@ def table(rows, path, cmd):
                      f"{vals[0]} | {vals[1]} | {str(r.get('error', ''))[:80]} |")
     lines += ["", "Spread over seeds against the range over each factor (base run included in "
               "every group; ratio = range / seed SD).  The seed alone gives an expected range "
-              "of 2.06 SD over four levels (normal scatter), so a ratio near that does not "
-              "tell the factor from the seed:", "",
+              "of 1.13, 1.69, 2.06 and 2.33 SD over 2, 3, 4 and 5 levels (normal scatter), so "
+              "a ratio near those does not tell the factor from the seed:", "",
               "| scenario | response | seeds | mean | seed SD | radius range (ratio) | "
               "stiffness range (ratio) |", "|---|---|---:|---:|---:|---:|---:|"]
     for name in dict.fromkeys(r["scenario"] for r in rows):
@@ -170,14 +181,38 @@ def table(rows, path, cmd):
             for fac in ("radius", "stiffness"):
                 v = _spread([r[f"r:{k}"] for r in base + [r for r in rs if r["factor"] == fac]])
                 rng = float(np.ptp(v)) if v.size > 1 else float("nan")
-                cells.append(f"{rng:.4g} ({rng / sd:.1f})" if sd > 0 and np.isfinite(rng) else "")
+                cells.append("" if not np.isfinite(rng) else
+                             f"{rng:.4g} ({rng / sd:.1f})" if sd > 0 else f"{rng:.4g}")
             lines.append(f"| {name} | {k} | {seed.size} | {seed.mean():.4g} | {sd:.3g} | "
                          f"{cells[0]} | {cells[1]} |")
-    lines += ["", kept_notes(path)]
-    path.write_text("\n".join(lines) + "\n")
+    write_page(path, lines)
 
 
-def _num(text):
+def every_setup(path, threads):
+    """Each named setup of the plate and the rotor scenarios at the quick preset, seed 0,
+    the paper's parameters; one row each with every numeric response."""
+    rev = commit()
+    rows = []
+    for mod in (bulldozing, rotary):
+        for name, setup in mod.setups().items():
+            t0 = time.perf_counter()
+            res = mod.run(dict(setup), mod.paper_params(), "quick", seed=0, threads=threads)
+            row = dict(utc=time.strftime("%Y-%m-%d %H:%M", time.gmtime()), commit=rev,
+                       scenario=mod.NAME, setup=name, n_particles=res.n_particles,
+                       steps=res.steps, threads=threads,
+                       wall_s=round(time.perf_counter() - t0, 2))
+            row.update({f"r:{k}": v for k, v in res.responses.items()
+                        if isinstance(v, (int, float))})
+            rows.append(row)
+            print({k: row[k] for k in ("scenario", "setup", "wall_s")}, flush=True)
+            _write(path, rows)
+    print(path)
+    return 0
+
+
+def _num(key, text):
+    if key in ("utc", "commit", "error", "scenario", "setup", "factor"):
+        return text
     try:
         return int(text)
     except ValueError:

@@ -88,9 +88,11 @@ is reported, with ``n_avalanches`` = 0.  Frames must be close enough to resolve 
 about that much per frame, so a lone frame that lies ``min_drop`` or more above both of its
 neighbours (or as far below both) is a misfit surface, not a collapse (a collapse falls
 after a build-up, so the frame before its peak is close to it).  Such a frame is replaced
-by the nearer of its neighbours (the median of the three) before the peaks are sought, and
-counted in ``n_spikes``.  A two-frame excursion is not a lone frame: ``min_drop`` must
-still exceed the frame-to-frame jitter of the fitted surface.
+by the nearer of its neighbours (the median of the three), repeatedly until none is left,
+before the peaks are sought, and counted in ``n_spikes`` (:func:`despike`).  A two-frame
+excursion is not a lone frame, nor is the last frame (it has one neighbour), and a real peak
+whose previous frame jitters ``min_drop`` below it is taken for one: ``min_drop`` must
+exceed the frame-to-frame jitter of the fitted surface.
 
 Stress-strain (cohesive-soil paper, 004 Sec. 3.7)
 ---------------------------------------------------
@@ -423,7 +425,7 @@ def avalanche_angle(angles, min_drop, source="<measurement>") -> dict:
         raise InputError(source, "angles", "finite frame angles, at least one", a.size)
     if not min_drop > 0:
         raise InputError(source, "min_drop", "a collapse size > 0 deg", min_drop)
-    b, n_spikes = despike(a, float(min_drop))
+    b, n_spikes = despike(a, float(min_drop), source)
     idx, _ = find_peaks(b, prominence=float(min_drop))
     peaks = b[idx]
     angle = float(peaks.mean()) if peaks.size else float(a.mean())
@@ -431,22 +433,34 @@ def avalanche_angle(angles, min_drop, source="<measurement>") -> dict:
                 peaks_deg=[float(v) for v in peaks], n_spikes=n_spikes)
 
 
-def despike(a, jump) -> tuple[np.ndarray, int]:
+def despike(a, jump, source="<measurement>") -> tuple[np.ndarray, int]:
     """(series, count): every interior value lying ``jump`` or more above both neighbours,
-    or as far below both, replaced by the median of the three (the nearer neighbour).  The
-    test uses the input values, so two adjacent outliers are both kept."""
-    a = np.asarray(a, float)
-    b = a.copy()
-    if a.size < 3:
-        return b, 0
-    lo = np.minimum(a[:-2], a[2:])
-    hi = np.maximum(a[:-2], a[2:])
-    mid = a[1:-1]
-    up = mid - hi >= jump
-    down = lo - mid >= jump
-    b[1:-1][up] = hi[up]
-    b[1:-1][down] = lo[down]
-    return b, int(up.sum() + down.sum())
+    or as far below both, replaced by the median of the three (the nearer neighbour),
+    repeated until no such value is left (a zig-zag of misfits, up next to down, leaves no
+    new lone frame behind); ``count`` is the number of replacements.  Two adjacent outliers
+    on the same side are kept (neither lies beyond both of its neighbours), and so is a
+    value on the first or the last frame (one neighbour only): a last frame ``jump`` below
+    the one before it makes that one a peak.  A real peak is replaced too when the frame
+    before it lies ``jump`` or more below it, i.e. when the frame jitter reaches ``jump``
+    minus the rise per frame."""
+    if not jump > 0:
+        raise InputError(source, "jump", "an outlier size > 0", jump)
+    b = np.asarray(a, float).copy()
+    count = 0
+    for _ in range(b.size):
+        if b.size < 3:
+            break
+        lo = np.minimum(b[:-2], b[2:])
+        hi = np.maximum(b[:-2], b[2:])
+        mid = b[1:-1]
+        up = mid - hi >= jump
+        down = lo - mid >= jump
+        if not (up.any() or down.any()):
+            break
+        new = np.where(up, hi, np.where(down, lo, mid))
+        b[1:-1] = new
+        count += int(up.sum() + down.sum())
+    return b, count
 
 
 def mean_sd(values) -> tuple[float, float]:

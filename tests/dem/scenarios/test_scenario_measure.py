@@ -224,6 +224,12 @@ def test_avalanche_angle_ignores_lone_frames():
     assert res2["n_spikes"] == 0 and clean[up + 1] + 15.0 in res2["peaks_deg"]
     b, n = measure.despike([1.0, 20.0, 2.0, -20.0, 3.0, 3.0], 10.0)
     assert n == 2 and list(b) == [1.0, 2.0, 2.0, 2.0, 3.0, 3.0]  # medians of three
+    # a zig-zag of misfits (up, down, up) leaves no new lone frame behind: the first pass
+    # gives 30, 30, 50, 30, 30, the second flattens the 50 it made
+    b, n = measure.despike([30.0, 50.0, 20.0, 50.0, 30.0], 10.0)
+    assert n == 4 and list(b) == [30.0] * 5
+    with pytest.raises(InputError, match="jump"):
+        measure.despike([1.0, 2.0, 3.0], 0.0)
 
 
 def find_peaks_count(a, prominence):

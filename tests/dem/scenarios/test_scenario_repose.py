@@ -233,7 +233,7 @@ def test_drum_quick_run_reports_a_tilted_free_surface():
 def test_the_quick_drum_slumps_at_the_vineyard_centre_point():
     """003 defines the dynamic angle as "the maximum angle ... before collapse occurs": its
     drum slumps.  The quick drum at the vineyard soil's BBD centre (config, 1000 spheres,
-    3 s of frames at 7 r/min) must slump too: at least one collapse of 10 deg, the angle
+    7 s of frames at 7 r/min) must slump too: at least one collapse of 10 deg, the angle
     before collapse above the time mean, and no note that the estimator fell back."""
     from soilcal.config.load import load_soil
     from soilcal.dem.scenarios import design

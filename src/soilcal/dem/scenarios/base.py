@@ -631,7 +631,9 @@ def threads_used(threads) -> int:
 #:   of the 10-30 % the vineyard-soil paper recommends), about ``n_particles`` spheres.
 #:   The vineyard-soil paper keeps scaled moduli above 1e7 Pa (after Lommen et al.); the
 #:   quick preset departs from that limit for speed, which the convergence study
-#:   (benchmarks/convergence.py, stiffness factor) quantifies;
+#:   (benchmarks/convergence.py, stiffness factor) quantifies.  The soil-bin scenarios
+#:   (furrow, bulldozing, rotary) set their own ``stiffness_scale`` in their presets
+#:   (the papers' moduli in ``quick``, benchmarks/convergence_tools.py);
 #: * ``paper``: unscaled moduli, time step 20 % of the Rayleigh time (003: "20 % of the
 #:   Rayleigh time step"; 004 Sec. 2.6: "fixed simulation time step of 20 %"), the papers'
 #:   particle sizes.
