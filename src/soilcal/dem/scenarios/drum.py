@@ -29,16 +29,17 @@ rotation (1.17 turns) with frames from 3 s.  Frames every ``frame_every`` = 0.05
 turns 2.1 deg between frames at 7 r/min).  The quick rotation is long enough to see 7-10
 collapses: at the vineyard soil's BBD centre point the angle before collapse scattered over
 six seeds with an SD of 2.16 deg after 4 s of rotation (2-4 collapses) and 1.29 deg after
-8 s, where the time mean scattered by 0.82 and 0.57 deg.
+8 s, where the time mean scattered by 0.82 and 0.57 deg (benchmarks/results/drum_seeds.md).
 
 Responses: ``angle_deg`` (time mean of the frame angles), ``angle_sd_deg`` (their sample
 standard deviation), ``angle_max_deg`` (largest frame angle), ``angle_avalanche_deg`` (the
 paper's "maximum angle before collapse": the mean of the frame angles just before each
 collapse of at least ``min_drop`` degrees, :func:`soilcal.dem.measure.avalanche_angle`;
 the time mean when the surface flows without collapses, said in ``measure_errors``) and
-``n_avalanches``, ``n_spikes``, ``n_frames``.  The quick drum slumps: at 44 of the vineyard soil's 47
-design points it collapsed by at least 10 deg, and there the avalanche angle lies 4-14 deg
-above the time mean (benchmarks/results/design_budget.md, notes).  The fitted line of a
+``n_avalanches``, ``n_spikes``, ``n_frames``.  The quick drum slumps: at the vineyard soil's
+BBD centre point the angle before collapse lies about 10 deg above the time mean
+(drum_seeds.md), and the design points where no collapse of 10 deg was seen are listed on
+benchmarks/results/design_budget.md.  The fitted line of a
 1000-sphere surface also jitters from frame to frame by several degrees (rotation alone
 turns it 2.1 deg between frames), so ``min_drop`` = 10 deg; a lone frame that far above
 (or below) both neighbours is taken as a misfit and replaced before the peaks are sought
