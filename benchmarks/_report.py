@@ -97,3 +97,20 @@ def kept_notes(md_path: Path) -> str:
     if md_path.exists() and NOTES in md_path.read_text():
         notes = md_path.read_text().split(NOTES, 1)[1]
     return NOTES + notes.rstrip("\n")
+
+
+def seed_and_ranges(seed, groups, fmt=".3f") -> list[str]:
+    """Cells of a convergence summary row: the number of seeds, their mean and sample SD,
+    then for each group of values over one factor's levels its range (max - min) and, in
+    brackets, the range over the seed SD.  ``seed`` and ``groups`` hold finite values."""
+    import numpy as np
+
+    sd = float(np.std(seed, ddof=1))
+    cells = [str(len(seed)), f"{np.mean(seed):{fmt}}", f"{sd:{fmt}}"]
+    for v in groups:
+        if len(v) < 2:
+            cells.append("")
+            continue
+        rng = float(np.ptp(v))
+        cells.append(f"{rng:{fmt}} ({rng / sd:.1f})" if sd > 0 else f"{rng:{fmt}}")
+    return cells

@@ -38,7 +38,7 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import matplotlib.ticker  # noqa: E402
 import numpy as np  # noqa: E402
-from _report import read_rows, write_page  # noqa: E402
+from _report import read_rows, seed_and_ranges, write_page  # noqa: E402
 
 HERE = Path(__file__).resolve().parent
 OUT = HERE / "results" / "convergence"
@@ -173,15 +173,10 @@ def table(rows, out, cmd):
         v = _finite([r["value_response"] for r in rows if r["scenario"] == sc and r["factor"] == "seed"])
         if v.size < 2:
             continue
-        sd = float(v.std(ddof=1))
-        cells = []
-        for fac in ("n_particles", "stiffness"):
-            f = _finite([r["value_response"] for r in rows if r["scenario"] == sc and r["factor"] == fac])
-            rng = float(np.ptp(f)) if f.size > 1 else float("nan")
-            cells.append("" if not np.isfinite(rng) else
-                         f"{rng:.3f} ({rng / sd:.1f})" if sd > 0 else f"{rng:.3f}")
-        lines.append(f"| {sc} | {CASES[sc][1]} | {v.size} | {v.mean():.3f} | {sd:.3f} | "
-                     f"{cells[0]} | {cells[1]} |")
+        groups = [_finite([r["value_response"] for r in rows
+                           if r["scenario"] == sc and r["factor"] == fac])
+                  for fac in ("n_particles", "stiffness")]
+        lines.append("| " + " | ".join([sc, CASES[sc][1], *seed_and_ranges(v, groups)]) + " |")
     write_page(md, lines)
 
 

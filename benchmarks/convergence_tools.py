@@ -35,7 +35,7 @@ import matplotlib
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
-from _report import commit, write_page  # noqa: E402
+from _report import commit, seed_and_ranges, write_page  # noqa: E402
 
 from soilcal.dem.scenarios import bulldozing, furrow, rotary  # noqa: E402
 
@@ -176,15 +176,9 @@ def table(rows, path, cmd):
             seed = _spread([r[f"r:{k}"] for r in base + [r for r in rs if r["factor"] == "seed"]])
             if seed.size < 2:
                 continue
-            sd = float(seed.std(ddof=1))
-            cells = []
-            for fac in ("radius", "stiffness"):
-                v = _spread([r[f"r:{k}"] for r in base + [r for r in rs if r["factor"] == fac]])
-                rng = float(np.ptp(v)) if v.size > 1 else float("nan")
-                cells.append("" if not np.isfinite(rng) else
-                             f"{rng:.4g} ({rng / sd:.1f})" if sd > 0 else f"{rng:.4g}")
-            lines.append(f"| {name} | {k} | {seed.size} | {seed.mean():.4g} | {sd:.3g} | "
-                         f"{cells[0]} | {cells[1]} |")
+            groups = [_spread([r[f"r:{k}"] for r in base + [r for r in rs if r["factor"] == fac]])
+                      for fac in ("radius", "stiffness")]
+            lines.append("| " + " | ".join([name, k, *seed_and_ranges(seed, groups, ".4g")]) + " |")
     write_page(path, lines)
 
 
