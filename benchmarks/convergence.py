@@ -170,7 +170,8 @@ def table(rows, out, cmd):
               "| scenario | response | seeds | mean | seed SD | particle-count range (ratio) | "
               "stiffness range (ratio) |", "|---|---|---:|---:|---:|---:|---:|"]
     for sc in CASES:
-        v = _finite([r["value_response"] for r in rows if r["scenario"] == sc and r["factor"] == "seed"])
+        v = _finite([r["value_response"] for r in rows
+                     if r["scenario"] == sc and r["factor"] == "seed"])
         if v.size < 2:
             continue
         groups = [_finite([r["value_response"] for r in rows

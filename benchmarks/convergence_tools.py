@@ -127,7 +127,8 @@ def main(argv=None) -> int:
             _write(path, rows)
     plot(rows, out / "convergence_tools.png")
     table(rows, out / "convergence_tools.md",
-          "python benchmarks/convergence_tools.py " + " ".join(sys.argv[1:] if argv is None else argv))
+          "python benchmarks/convergence_tools.py "
+          + " ".join(sys.argv[1:] if argv is None else argv))
     print(path)
     return 0
 
@@ -143,7 +144,8 @@ def table(rows, path, cmd):
     and over the stiffness scales, each also as a multiple of the seed SD."""
     lines = ["# Convergence of the tool scenarios (quick preset, one factor at a time)", ""]
     if cmd:
-        lines += [f"Last command: `{cmd}`, ended {time.strftime('%Y-%m-%d %H:%M UTC', time.gmtime())}"
+        ended = time.strftime("%Y-%m-%d %H:%M UTC", time.gmtime())
+        lines += [f"Last command: `{cmd}`, ended {ended}"
                   f"; load_avg_1min at the end {os.getloadavg()[0]:.2f}.  Rows: "
                   "`convergence_tools.csv` (utc and commit per row), figure "
                   "`convergence_tools.png`.", ""]
@@ -160,8 +162,9 @@ def table(rows, path, cmd):
             v = r.get(f"r:{k}", "")
             vals.append(f"{k} {v:.4g}" if isinstance(v, float) and np.isfinite(v) else "")
         lines.append(f"| {r['scenario']} | {r['factor']} | {r['value']} | {r['seed']} | "
-                     f"{1000 * float(r['particle_radius']):.3g} | {float(r['stiffness_scale']):.3g} | "
-                     f"{r['n_particles']} | {r['steps']} | {r.get('threads', '')} | {r['wall_s']} | "
+                     f"{1000 * float(r['particle_radius']):.3g} | "
+                     f"{float(r['stiffness_scale']):.3g} | {r['n_particles']} | {r['steps']} | "
+                     f"{r.get('threads', '')} | {r['wall_s']} | "
                      f"{vals[0]} | {vals[1]} | {str(r.get('error', ''))[:80]} |")
     lines += ["", "Spread over seeds against the range over each factor (base run included in "
               "every group; ratio = range / seed SD).  The seed alone gives an expected range "

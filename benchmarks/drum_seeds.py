@@ -74,7 +74,8 @@ def page(rows, md, cmd):
              "SD | time mean: mean | SD |", "|---|---:|---:|---:|---|---:|---:|---:|---:|"]
     groups = sorted({(r["stage"], int(r["run"]), float(r["spin_time_s"])) for r in rows})
     for st, run, spin in groups:
-        g = [r for r in rows if (r["stage"], int(r["run"]), float(r["spin_time_s"])) == (st, run, spin)]
+        g = [r for r in rows
+             if (r["stage"], int(r["run"]), float(r["spin_time_s"])) == (st, run, spin)]
         av = np.array([float(r["angle_avalanche_deg"]) for r in g])
         tm = np.array([float(r["angle_deg"]) for r in g])
         na = [int(r["n_avalanches"]) for r in g]

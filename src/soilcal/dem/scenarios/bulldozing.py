@@ -32,7 +32,8 @@ slab_width`` (plane-strain reading of the cut).  The convergence study
 (``benchmarks/results/convergence/convergence_tools.md``) shows the effect of each choice:
 with the modulus scaled by 0.1 (and the surface energy by 0.1^0.4,
 :func:`soilcal.dem.scenarios.base.build_materials`) the line plate's horizontal force fell
-from 40.8 to 31.0 N (means of five seeds, SDs 2.2 and 1.9 N), while a run at the unscaled
+from 40.8 to 30.9 N (means of five seeds, SDs 2.2 and 1.9 N; the scaled rows are in
+convergence_tools_replaced.csv), while a run at the unscaled
 modulus takes about 2 s on one thread, so the quick preset does not scale it; 0.85 and 0.7
 times the radius gave 46.8 and 42.7 N against 38.3-44.3 N over the five seeds.
 """

@@ -26,10 +26,11 @@ Number of spheres for fill fraction f at settled solid fraction phi = 0.6::
 5e5 Pa, 8 s of rotation (0.93 turn) with frames from 1.0 s; ``paper``: scaled particles
 2.5, 5, 10 mm (003, taken as diameters, equal mass thirds), unscaled modulus, 10 s of
 rotation (1.17 turns) with frames from 3 s.  Frames every ``frame_every`` = 0.05 s (the drum
-turns 2.1 deg between frames at 7 r/min).  The quick rotation is long enough to see 7-10
+turns 2.1 deg between frames at 7 r/min).  The quick rotation is long enough to see several
 collapses: at the vineyard soil's BBD centre point the angle before collapse scattered over
 six seeds with an SD of 2.16 deg after 4 s of rotation (2-4 collapses) and 1.29 deg after
-8 s, where the time mean scattered by 0.82 and 0.57 deg (benchmarks/results/drum_seeds.md).
+8 s (7-10 collapses), where the time mean scattered by 0.82 and 0.57 deg
+(benchmarks/results/drum_seeds.md).
 
 Responses: ``angle_deg`` (time mean of the frame angles), ``angle_sd_deg`` (their sample
 standard deviation), ``angle_max_deg`` (largest frame angle), ``angle_avalanche_deg`` (the
@@ -194,8 +195,8 @@ def run(setup, params: DemParams, preset="quick", seed=0, threads=None, vtk_dir=
             f"(a flowing surface, or too few frames): angle_avalanche_deg is the time mean")
     responses = dict(angle_deg=mean, angle_sd_deg=sd, angle_max_deg=float(a.max()),
                      angle_avalanche_deg=av["angle_deg"], n_avalanches=av["n_avalanches"],
-                     n_spikes=av["n_spikes"], n_frames=int(a.size), fill_settled=int(ok0), measure_errors=note,
-                     peak_overlap=sim.peak_overlap)
+                     n_spikes=av["n_spikes"], n_frames=int(a.size), fill_settled=int(ok0),
+                     measure_errors=note, peak_overlap=sim.peak_overlap)
     setup_out = dict(setup)
     setup_out.pop("paper_psd", None)
     setup_out.update(stiffness_scale=scale, cohesion_scale=coh, dt=sim.dt,

@@ -57,7 +57,8 @@ flange up to a phase).  The convergence study
 scattered over seeds by a quarter of its mean (SD 0.61 of 2.55 kW, five seeds), the 0.3 m
 pass by 0.27 of 2.39 kW; with the modulus scaled by 0.1 (1e8 -> 1e7 Pa, surface energies
 by 0.1^0.4) the 0.3 m pass gave 2.39 kW against 3.34 kW (SD 0.38) unscaled, while the
-unscaled run takes about 10 s on one thread.  The time step is the
+unscaled run takes about 10 s on one thread (the rows of the earlier presets are in
+convergence_tools_replaced.csv).  The time step is the
 smaller of ``dt_fraction`` x the Rayleigh time and the time the blade tip needs to move a
 tenth of the smallest radius (tip speed ``omega R + v``)."""
 
