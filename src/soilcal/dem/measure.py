@@ -89,8 +89,9 @@ about that much per frame, so a lone frame that lies ``min_drop`` or more above 
 neighbours (or as far below both) is a misfit surface, not a collapse (a collapse falls
 after a build-up, so the frame before its peak is close to it).  Such a frame is replaced
 by the nearer of its neighbours (the median of the three), repeatedly until none is left,
-before the peaks are sought, and counted in ``n_spikes`` (:func:`despike`).  A two-frame
-excursion is not a lone frame, nor is the last frame (it has one neighbour), and a real peak
+before the peaks are sought, and counted in ``n_spikes`` (:func:`despike`).  The last frame
+has one neighbour, so it cannot be tested that way: a fall that only the last frame shows
+is not counted as a collapse.  A two-frame excursion is not a lone frame, and a real peak
 whose previous frame jitters ``min_drop`` below it is taken for one: ``min_drop`` must
 exceed the frame-to-frame jitter of the fitted surface.
 
@@ -427,10 +428,20 @@ def avalanche_angle(angles, min_drop, source="<measurement>") -> dict:
         raise InputError(source, "min_drop", "a collapse size > 0 deg", min_drop)
     b, n_spikes = despike(a, float(min_drop), source)
     idx, _ = find_peaks(b, prominence=float(min_drop))
-    peaks = b[idx]
+    peaks = b[[i for i in idx if _fall_seen(b, i, min_drop)]]
     angle = float(peaks.mean()) if peaks.size else float(a.mean())
     return dict(angle_deg=angle, n_avalanches=int(peaks.size),
                 peaks_deg=[float(v) for v in peaks], n_spikes=n_spikes)
+
+
+def _fall_seen(b, i, drop) -> bool:
+    """True when some frame after peak ``i``, before the series rises above the peak again
+    and before the last frame, lies ``drop`` or more below it: a fall that only the last
+    frame shows (one neighbour, so no lone-frame test) is not taken for a collapse."""
+    higher = np.nonzero(b[i + 1:] > b[i])[0]
+    end = i + 1 + (int(higher[0]) if higher.size else b.size - i - 1)
+    seg = b[i + 1:min(end, b.size - 1)]
+    return bool(seg.size) and float(seg.min()) <= b[i] - drop
 
 
 def despike(a, jump, source="<measurement>") -> tuple[np.ndarray, int]:
@@ -439,8 +450,8 @@ def despike(a, jump, source="<measurement>") -> tuple[np.ndarray, int]:
     repeated until no such value is left (a zig-zag of misfits, up next to down, leaves no
     new lone frame behind); ``count`` is the number of replacements.  Two adjacent outliers
     on the same side are kept (neither lies beyond both of its neighbours), and so is a
-    value on the first or the last frame (one neighbour only): a last frame ``jump`` below
-    the one before it makes that one a peak.  A real peak is replaced too when the frame
+    value on the first or the last frame (one neighbour only; :func:`avalanche_angle` does
+    not count a fall that only the last frame shows).  A real peak is replaced too when the frame
     before it lies ``jump`` or more below it, i.e. when the frame jitter reaches ``jump``
     minus the rise per frame."""
     if not jump > 0:

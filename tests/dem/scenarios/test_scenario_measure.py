@@ -175,12 +175,14 @@ def sawtooth(peaks, trough=30.0, rise_per_frame=2.1, jitter=0.0, seed=0):
     """Frame angles of a slumping drum: each cycle rises by ``rise_per_frame`` degrees per
     frame (7 r/min, 0.05 s) to its peak, from within one step above ``trough``; after the
     peak the next frame starts the next cycle (one-frame collapse), and the series ends on
-    ``trough``; optional uniform jitter of +-``jitter`` degrees."""
+    the first two frames of a next cycle (``trough`` and one step above, so that the last
+    collapse shows on a frame before the last); optional uniform jitter of +-``jitter``
+    degrees."""
     a = []
     for p in peaks:
         k = int(math.ceil((p - trough) / rise_per_frame))
         a += list(p - rise_per_frame * np.arange(k, 0, -1)) + [p]
-    a.append(trough)
+    a += [trough, trough + rise_per_frame]
     a = np.array(a)
     return a + np.random.default_rng(seed).uniform(-jitter, jitter, a.size)
 
@@ -251,6 +253,15 @@ def test_avalanche_angle_without_collapse_is_the_time_mean():
     # a rise that peaks two frames before the end and dips by 4 deg: no collapse seen
     dip = np.concatenate([rising, [53.0, 51.0]])
     assert measure.avalanche_angle(dip, 10.0)["n_avalanches"] == 0
+    # a last frame 12 deg below a rise: prominent for find_peaks, but only the last frame
+    # shows the fall (it has one neighbour, so it may be a misfit): no collapse seen
+    last = np.concatenate([rising, [rising[-1] - 12.0]])
+    assert find_peaks_count(last, 10.0) == 1
+    assert measure.avalanche_angle(last, 10.0)["n_avalanches"] == 0
+    # the fall shown on the last two frames is a collapse
+    fall = np.concatenate([rising, [rising[-1] - 12.0, rising[-1] - 14.0]])
+    res = measure.avalanche_angle(fall, 10.0)
+    assert res["n_avalanches"] == 1 and res["angle_deg"] == pytest.approx(55.0)
     two = measure.avalanche_angle([40.0, 44.0], 10.0)  # too short to see a collapse
     assert two["n_avalanches"] == 0 and two["angle_deg"] == 42.0
     with pytest.raises(InputError, match="min_drop"):
