@@ -9,6 +9,11 @@ scenario runs at its quick-preset settings and with one factor changed at a time
   energy follows gamma s^(2/5)),
 * seed (random insertion).
 
+``--paper`` adds one run of each scenario at its ``paper`` preset (seed 0; factor
+``preset``), when that preset's particle count is at most ``--paper-max-n``; the page lists
+every scenario's quick and paper particle counts (from the scenario's own sizing, before any
+run) and where the paper run lies against the quick preset's seed scatter.
+
 The incline scenario has no particle-count axis (one block or ball); its stiffness and seed
 axes are run.  Each run is one row of ``benchmarks/results/convergence/convergence.csv``
 (scenario, setup, factor, value, seed, particle count, steps, wall time, responses); the
@@ -21,6 +26,8 @@ each factor.
     python benchmarks/convergence.py --level full         # more levels, paper-like counts
     python benchmarks/convergence.py --scenarios repose,incline   # other rows are kept
     python benchmarks/convergence.py --report-only   # figure and page from the CSV
+    python benchmarks/convergence.py --level full --scenarios drum --paper   # + paper run
+    python benchmarks/convergence.py --paper-only    # only the paper runs, rows kept
 """
 
 from __future__ import annotations
@@ -56,14 +63,19 @@ LEVELS = {
                  seeds=[0, 1, 2, 3, 4]),
 }
 QUICK_N = 1000  # the quick preset's particle count (base.PRESET_DEFAULTS)
+PAPER_MAX_N = 20000  # --paper runs a scenario's paper preset up to this many spheres
 FIELDS = ["scenario", "setup", "factor", "value", "seed", "n_particles", "steps", "sim_time_s",
           "wall_s", "stiffness_scale", "cohesion_scale", "response", "value_response",
           "responses"]
 
 
-def runs(level, scenarios):
+def runs(level, scenarios, paper=(), quick=True):
     lv = LEVELS[level]
     for sc in scenarios:
+        if sc in paper:
+            yield sc, "preset", "paper", 0
+        if not quick:
+            continue
         if sc != "incline":
             for n in lv["n"]:
                 yield sc, "n_particles", n, 0
@@ -73,24 +85,43 @@ def runs(level, scenarios):
             yield sc, "seed", s, s
 
 
-def one(sc, factor, value, seed, threads):
+def _case(sc):
+    """Scenario module, setup (image off) and DEM parameters of a scenario's runs."""
     from soilcal.dem.scenarios import SCENARIOS
-    from soilcal.dem.scenarios.base import DemParams, stiffness_scale_for
+    from soilcal.dem.scenarios.base import DemParams
 
     mod = SCENARIOS[sc]
-    setup_name, resp, extra = CASES[sc]
+    setup_name, _, extra = CASES[sc]
     setup = dict(mod.setups()[setup_name], name=setup_name, **extra)
     if "image" in setup:
         setup["image"] = False
     params = DemParams()
     if sc == "incline":
         params = DemParams(soil_steel_static_friction=0.71, soil_soil_surface_energy=0.0)
-    base_scale = stiffness_scale_for(params, "quick")
+    return mod, setup, params
+
+
+def preset_count(sc, preset):
+    """Particle count of a scenario's run at ``preset``, from the scenario's own sizing
+    (no run); None for the incline (one block or ball)."""
+    mod, setup, _ = _case(sc)
+    if not hasattr(mod, "sizing"):
+        return None
+    return int(mod.sizing(setup, preset)["n"])
+
+
+def one(sc, factor, value, seed, threads):
+    from soilcal.dem.scenarios.base import stiffness_scale_for
+
+    mod, setup, params = _case(sc)
+    setup_name, resp, _ = CASES[sc]
+    preset = value if factor == "preset" else "quick"
+    base_scale = stiffness_scale_for(params, preset)
     if factor == "n_particles":
         setup["n_particles"] = int(value)
     elif factor == "stiffness":
         setup["stiffness_scale"] = base_scale * float(value)
-    res = mod.run(setup, params, "quick", seed=int(seed), threads=threads)
+    res = mod.run(setup, params, preset, seed=int(seed), threads=threads)
     return dict(scenario=sc, setup=setup_name, factor=factor, value=value, seed=seed,
                 n_particles=res.n_particles, steps=res.steps, sim_time_s=round(res.sim_time_s, 4),
                 wall_s=round(res.wall_s, 2), stiffness_scale=res.setup["stiffness_scale"],
@@ -120,6 +151,11 @@ def figure(rows, out):
                 ax.axhspan(m - sd, m + sd, color="0.85", zorder=0,
                            label=f"seeds: mean +- SD ({seeds.size})")
             ax.plot(x, y, "o-" if fac != "seed" else "o", color="C%d" % j)
+            paper = [r for r in rows if r["scenario"] == sc and r["factor"] == "preset"]
+            if fac == "n_particles" and paper and paper[0]["n_particles"] != "":
+                ax.plot([float(paper[0]["n_particles"])], [float(paper[0]["value_response"])],
+                        "*", ms=11, color="C3", label="paper preset (seed 0)")
+                ax.legend(fontsize=7, loc="best")
             if fac in ("stiffness", "n_particles"):
                 ax.set_xscale("log", base=2)
             if fac == "n_particles":
@@ -178,7 +214,38 @@ def table(rows, out, cmd):
                            if r["scenario"] == sc and r["factor"] == fac])
                   for fac in ("n_particles", "stiffness")]
         lines.append("| " + " | ".join([sc, CASES[sc][1], *seed_and_ranges(v, groups)]) + " |")
+    lines += paper_lines(rows)
     write_page(md, lines)
+
+
+def paper_lines(rows) -> list[str]:
+    """Quick against paper preset: particle counts from the scenarios' sizing, and the
+    paper-preset runs (factor ``preset``) against the quick preset's seed scatter."""
+    lines = ["", "Quick against paper preset: particle counts from each scenario's sizing "
+             "(no run); a paper run (`--paper`, seed 0) against the quick preset's seeds, "
+             "as (paper - seed mean) / seed SD:", "",
+             "| scenario | quick N | paper N | paper / quick | response | quick seeds: mean "
+             "(SD) | paper run | in seed SDs | paper wall s |",
+             "|---|---:|---:|---:|---|---|---:|---:|---:|"]
+    for sc in CASES:
+        if not any(r["scenario"] == sc for r in rows):
+            continue
+        nq, npp = preset_count(sc, "quick"), preset_count(sc, "paper")
+        v = _finite([r["value_response"] for r in rows
+                     if r["scenario"] == sc and r["factor"] == "seed"])
+        p = [r for r in rows if r["scenario"] == sc and r["factor"] == "preset"]
+        m, sd = (v.mean(), v.std(ddof=1)) if v.size > 1 else (float("nan"), float("nan"))
+        cells = [sc, "-" if nq is None else str(nq), "-" if npp is None else str(npp),
+                 "-" if nq is None else f"{npp / nq:.3g}", CASES[sc][1],
+                 f"{m:.3f} ({sd:.3f})" if v.size > 1 else "-"]
+        if p:
+            pv = float(p[0]["value_response"])
+            z = (pv - m) / sd if sd > 0 else float("nan")
+            cells += [f"{pv:.3f}", f"{z:+.1f}" if np.isfinite(z) else "-", str(p[0]["wall_s"])]
+        else:
+            cells += ["not run", "-", "-"]
+        lines.append("| " + " | ".join(cells) + " |")
+    return lines
 
 
 def main(argv=None):
@@ -189,6 +256,13 @@ def main(argv=None):
     ap.add_argument("--out", default=str(OUT))
     ap.add_argument("--report-only", action="store_true",
                     help="redraw the figure and the page from the CSV, run nothing")
+    ap.add_argument("--paper", action="store_true",
+                    help="also run each scenario once at its paper preset (seed 0)")
+    ap.add_argument("--paper-only", action="store_true",
+                    help="run only the paper-preset points; every other row is kept")
+    ap.add_argument("--paper-max-n", type=int, default=PAPER_MAX_N,
+                    help="largest paper-preset particle count --paper runs "
+                         f"(default {PAPER_MAX_N}); larger ones are listed, not run")
     args = ap.parse_args(argv)
     scenarios = [s for s in args.scenarios.split(",") if s]
     for s in scenarios:
@@ -206,20 +280,29 @@ def main(argv=None):
         figure(rows, out)
         table(rows, out, None)
         return
-    # rows of the scenarios not run this time are kept
-    rows = [r for r in read_rows(path, FIELDS) if r["scenario"] not in scenarios]
+    # rows of the scenarios not run this time are kept (with --paper-only, all but the
+    # paper-preset rows of the scenarios run)
+    rows = [r for r in read_rows(path, FIELDS) if r["scenario"] not in scenarios
+            or (args.paper_only and r["factor"] != "preset")]
     for r in rows:
         r["value_response"] = float(r["value_response"] or "nan")
     cache = {}
+    paper = ()
+    if args.paper or args.paper_only:
+        paper = [sc for sc in scenarios
+                 if (preset_count(sc, "paper") or 0) <= args.paper_max_n]
+        print("paper preset runs:", paper or "none", flush=True)
     with open(path, "w", newline="") as fh:
         w = csv.DictWriter(fh, fieldnames=FIELDS)
         w.writeheader()
         w.writerows(rows)
-        for case in runs(args.level, scenarios):
+        for case in runs(args.level, scenarios, paper, quick=not args.paper_only):
             sc, factor, value, seed = case
             # the quick-preset point (1000 spheres, scale 1, seed 0) is run once per scenario
             key = (sc, value if factor == "n_particles" else QUICK_N,
                    value if factor == "stiffness" else 1.0, seed)
+            if factor == "preset":
+                key = (sc, value)
             if key not in cache:
                 try:
                     cache[key] = one(*case, threads=args.threads)

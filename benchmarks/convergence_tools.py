@@ -182,7 +182,40 @@ def table(rows, path, cmd):
             groups = [_spread([r[f"r:{k}"] for r in base + [r for r in rs if r["factor"] == fac]])
                       for fac in ("radius", "stiffness")]
             lines.append("| " + " | ".join([name, k, *seed_and_ranges(seed, groups, ".4g")]) + " |")
+    lines += paper_lines(rows)
     write_page(path, lines)
+
+
+def bed(name, preset):
+    """Bin volume [m^3] and mean particle volume [m^3] of a scenario's preset (no run)."""
+    mod, setup_name, _ = CASES[name]
+    spec = mod._bin(mod._settings(dict(mod.setups()[setup_name]), preset))
+    return spec.length * spec.width * spec.height, spec.dist.mean_volume(), spec
+
+
+def paper_lines(rows) -> list[str]:
+    """Quick against paper preset: the paper bed's particle count estimated from the quick
+    run's count at the same packing (count x bin volume ratio / particle volume ratio)."""
+    lines = ["", "Quick against paper preset (no paper run: the count is the quick base "
+             "run's, scaled by the ratio of bin volumes over the ratio of mean particle "
+             "volumes, i.e. at the quick bed's packing):", "",
+             "| scenario | quick bin m | quick radii mm | quick N | paper bin m | "
+             "paper radii mm | paper N (about) | paper / quick |",
+             "|---|---|---|---:|---|---|---:|---:|"]
+    for name in dict.fromkeys(r["scenario"] for r in rows):
+        base = [r for r in rows if r["scenario"] == name and r["factor"] == "base"
+                and not r.get("error")]
+        if not base:
+            continue
+        nq = int(base[0]["n_particles"])
+        (vq, pq, sq), (vp, pp, sp) = bed(name, "quick"), bed(name, "paper")
+        npp = nq * (vp / vq) / (pp / pq)
+        lines.append(
+            f"| {name} | {sq.length:.3g} x {sq.width:.3g} x {sq.height:.3g} | "
+            f"{1e3 * sq.r_min:.3g}-{1e3 * sq.r_max:.3g} | {nq} | "
+            f"{sp.length:.3g} x {sp.width:.3g} x {sp.height:.3g} | "
+            f"{1e3 * sp.r_min:.3g}-{1e3 * sp.r_max:.3g} | {npp:.3g} | {npp / nq:.3g} |")
+    return lines
 
 
 def every_setup(path, threads):
