@@ -280,15 +280,17 @@ def main(argv=None):
         figure(rows, out)
         table(rows, out, None)
         return
-    # rows of the scenarios not run this time are kept (with --paper-only, all but the
-    # paper-preset rows of the scenarios run)
+    # rows of the scenarios not run this time are kept, and of those run, the quick rows
+    # with --paper-only and the paper-preset rows without --paper
+    paper_run = args.paper or args.paper_only
     rows = [r for r in read_rows(path, FIELDS) if r["scenario"] not in scenarios
-            or (args.paper_only and r["factor"] != "preset")]
+            or (args.paper_only and r["factor"] != "preset")
+            or (not paper_run and r["factor"] == "preset")]
     for r in rows:
         r["value_response"] = float(r["value_response"] or "nan")
     cache = {}
     paper = ()
-    if args.paper or args.paper_only:
+    if paper_run:
         paper = [sc for sc in scenarios
                  if (preset_count(sc, "paper") or 0) <= args.paper_max_n]
         print("paper preset runs:", paper or "none", flush=True)

@@ -12,7 +12,8 @@ Each run writes one row (scenario, factor, value, seed, particle count, steps, w
 responses) to ``benchmarks/results/convergence/convergence_tools.csv``; the figure
 ``convergence_tools.png`` plots each scenario's responses against the three factors and
 ``convergence_tools.md`` tabulates the rows, with each response's spread over the seeds
-beside its range over the particle sizes and over the stiffness scales.
+beside its range over the particle sizes and over the stiffness scales, and the particle
+count the ``paper`` preset's bin would hold (none of them is run here: 1e5-1e8 spheres).
 
     python benchmarks/convergence_tools.py --level reduced   # a few minutes on 2 cores
     python benchmarks/convergence_tools.py --level full      # more levels and seeds
@@ -187,7 +188,8 @@ def table(rows, path, cmd):
 
 
 def bed(name, preset):
-    """Bin volume [m^3] and mean particle volume [m^3] of a scenario's preset (no run)."""
+    """Bin volume [m^3], mean particle volume [m^3] and the BinSpec of a scenario's preset
+    (no run)."""
     mod, setup_name, _ = CASES[name]
     spec = mod._bin(mod._settings(dict(mod.setups()[setup_name]), preset))
     return spec.length * spec.width * spec.height, spec.dist.mean_volume(), spec
