@@ -17,8 +17,15 @@ note.
 
 Usage: python benchmarks/settle.py [--steps 20000] [--big-steps 200] [--quick]
            [--engines soilcal,liggghts,lammps] [--out DIR] [--sanity]
+       python benchmarks/settle.py --repeat K --case N:THREADS:COHESION [--case ...]
 ``--quick`` runs N = 5,000 with 2,000 steps only and, without ``--out``, writes to a fresh
 temporary directory (never over benchmarks/results).
+
+``--repeat K`` runs only the given cases, K times each, soilcal and the references
+alternating (so a slow spell of the machine hits both), and writes ``settle_repeats.csv``
+and ``settle_repeats.md``: every repeat's throughputs and ratio, and per case the median and
+the range of the ratios.  One sample of a 2-thread case on a shared 2-core machine scatters
+by about 10 %; the median of alternating repeats is the fairer comparison.
 """
 
 from __future__ import annotations
@@ -189,6 +196,91 @@ def write_tables(rows, notes, out: Path, quick: bool) -> None:
     (out / "settle.md").write_text("\n".join(lines) + "\n")
 
 
+def parse_case(text, ap):
+    """'20000:2:jkr' -> (20000, 2, 'jkr'); a clear argparse error otherwise."""
+    parts = text.split(":")
+    try:
+        n, threads, cohesion = int(parts[0]), int(parts[1]), parts[2]
+        if len(parts) != 3 or n < 1 or threads < 1 or cohesion not in ("none", "jkr"):
+            raise ValueError
+    except (ValueError, IndexError):
+        ap.error(f"--case {text!r}: expected N:THREADS:COHESION with N, THREADS >= 1 and "
+                 "COHESION none or jkr, e.g. 20000:2:jkr")
+    return n, threads, cohesion
+
+
+def repeats(cases, steps, k, engines, refs, notes, out: Path) -> None:
+    """Alternating repeats of a few cases; per-repeat ratios and their median (module doc)."""
+    rows = []
+    for ci, (n, threads, cohesion) in enumerate(cases):
+        for rep in range(k):
+            for eng in [e for e in ("soilcal", *refs) if e in engines]:
+                t = time.time()
+                try:
+                    if eng == "soilcal":
+                        res = run_case(n, steps, threads, cohesion)
+                    else:
+                        res = reference.run_reference(eng, n, steps, threads, cohesion,
+                                                      timeout=max(600.0, n * steps / 2e5))
+                except Exception as exc:  # noqa: BLE001 - record and go on
+                    notes.append(f"{NAMES[eng]} N={n} threads={threads} cohesion={cohesion} "
+                                 f"repeat {rep}: {str(exc).splitlines()[0]}")
+                    continue
+                res["engine"] = eng
+                res["repeat"] = rep
+                res["case_index"] = ci
+                rows.append(res)
+                print(json.dumps(res), f"# {time.time() - t:.0f} s incl. start-up", flush=True)
+    out.mkdir(parents=True, exist_ok=True)
+    with open(out / "settle_repeats.csv", "w", newline="") as fh:
+        w = csv.DictWriter(fh, fieldnames=["repeat"] + FIELDS, extrasaction="ignore")
+        w.writeheader()
+        w.writerows(rows)
+    ref_cols = [e for e in ("liggghts", "lammps") if e in refs]
+    head = ["N", "steps", "threads", "cohesion", "repeat", "soilcal p-steps/s", "load"]
+    for e in ref_cols:
+        head += [f"{NAMES[e]} p-steps/s", f"soilcal / {NAMES[e]}"]
+    lines = ["# DEM settle benchmark: alternating repeats", "",
+             f"Machine: {platform.processor() or platform.machine()}, {os.cpu_count()} logical "
+             f"CPUs, Python {platform.python_version()}; date "
+             f"{time.strftime('%Y-%m-%d %H:%M UTC', time.gmtime())}.",
+             f"Command: python benchmarks/settle.py --repeat {k} "
+             + " ".join(f"--case {n}:{t}:{c}" for n, t, c in cases)
+             + (f" --steps {steps}" if steps != 20000 else "") + ".",
+             "Same case and throughput definition as settle.md; in every repeat soilcal runs "
+             "first, then each reference engine, so the engines share the machine's state.", "",
+             "| " + " | ".join(head) + " |", "|" + "---:|" * 3 + "---|" + "---:|" * (len(head) - 4)]
+    summary = []
+    for ci, (n, threads, cohesion) in enumerate(cases):
+        ratios = {e: [] for e in ref_cols}
+        for rep in range(k):
+            got = {r["engine"]: r for r in rows if (r["case_index"], r["repeat"]) == (ci, rep)}
+            n = got.get("soilcal", {}).get("n", n)  # the lattice rounds N to nx*nx*50
+            s = got.get("soilcal", {}).get("particle_steps_per_s")
+            load = got.get("soilcal", {}).get("load_avg_1min")
+            cells = [str(n), str(steps), str(threads), cohesion, str(rep), _fmt(s, ".3g"),
+                     _fmt(load, ".1f")]
+            for e in ref_cols:
+                p = got.get(e, {}).get("particle_steps_per_s")
+                q = _ratio(s, p)
+                if q is not None:
+                    ratios[e].append(q)
+                cells += [_fmt(p, ".3g"), _fmt(q, ".2f")]
+            lines.append("| " + " | ".join(cells) + " |")
+        for e in ref_cols:
+            v = sorted(ratios[e])
+            if v:
+                med = v[len(v) // 2] if len(v) % 2 else 0.5 * (v[len(v) // 2 - 1] + v[len(v) // 2])
+                summary.append(f"* N = {n}, {threads} thread(s), cohesion {cohesion}: soilcal / "
+                               f"{NAMES[e]} median {med:.2f} over {len(v)} repeats (range "
+                               f"{v[0]:.2f}-{v[-1]:.2f}).")
+    lines += ["", "## Ratios", ""] + (summary or ["* no complete repeat"])
+    if notes:
+        lines += ["", "Notes from this run:", ""] + [f"* {x}" for x in notes]
+    (out / "settle_repeats.md").write_text("\n".join(lines) + "\n")
+    print(f"# wrote {out / 'settle_repeats.csv'} and {out / 'settle_repeats.md'}", flush=True)
+
+
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--steps", type=int, default=20000)
@@ -199,6 +291,11 @@ def main(argv=None):
     ap.add_argument("--engines", default=",".join(ENGINES),
                     help="comma-separated subset of soilcal,liggghts,lammps")
     ap.add_argument("--out", default=None, help="output directory (default benchmarks/results)")
+    ap.add_argument("--repeat", type=int, default=0,
+                    help="run only the --case cases, this many times each, engines alternating; "
+                         "writes settle_repeats.{csv,md}")
+    ap.add_argument("--case", action="append", default=[], metavar="N:THREADS:COHESION",
+                    help="with --repeat: a case such as 20000:2:jkr (repeatable)")
     ap.add_argument("--sanity", action="store_true",
                     help=f"with --quick: also run the N={SANITY_N} bed for --steps steps "
                          "(always part of the full run)")
@@ -224,6 +321,12 @@ def main(argv=None):
         else:
             notes.append(f"{NAMES[eng]} skipped: {what}.")
             print(f"# {NAMES[eng]} skipped: {what}", flush=True)
+    if args.repeat or args.case:
+        if args.repeat < 1 or not args.case or args.quick:
+            ap.error("--repeat K (K >= 1) needs at least one --case and no --quick")
+        cases = [parse_case(c, ap) for c in args.case]
+        repeats(cases, args.steps, args.repeat, engines, refs, notes, out)
+        return 0
     cases = []
     sizes = [5000] if args.quick else [5000, 20000]
     steps = 2000 if args.quick else args.steps

@@ -37,16 +37,18 @@ def test_lists_contain_every_pair_within_cutoff(rng, periodic):
         assert row == sorted(j for j in np.nonzero(want[i])[0].tolist() if j > i)
 
 
-def slab_groups(sim, groups):
+def slab_groups(sim, groups, act=None):
     """The slab groups of the pair pass (neighbour._slabs) for the current lists, dealt to
-    ``groups`` groups per colour (the engine uses one per thread)."""
+    ``groups`` groups per colour (the engine uses one per thread); act: touching flags of
+    the listed pairs (default: the lists' own)."""
     n, L = sim.n, sim._lists
     cidx, cof = np.zeros(n, np.int64), np.zeros(n, np.int64)
     grid = nb._grid(sim.x, sim.p.r, sim.box, sim.periodic, sim.skin, sim.extra,
                     np.zeros(sim._cells.shape[0], np.int64), cidx, cof, np.zeros((n, 4)))
     sorder = np.zeros(n, np.int64)
     sgroup = np.zeros(nb.SGROUP_LEN, np.int64)
-    nb._slabs(cidx, cof, L["start_a"], grid[4], grid[7], grid[10], sim.periodic[0],
+    act = L["act_a"] if act is None else act
+    nb._slabs(cidx, cof, L["start_a"], act, grid[4], grid[7], grid[10], sim.periodic[0],
               sim.periodic[1], groups, sorder, sgroup, np.zeros(nb.SCRATCH_LEN, np.int64))
     assert sgroup[-1] == groups
     assert sorted(sorder.tolist()) == list(range(n))
@@ -93,6 +95,40 @@ def test_groups_balance_a_bed_dense_below_and_sparse_above(rng):
     for grps in slab_groups(sim, 2):
         work = [int(np.sum(start[rows + 1] - start[rows] + 1)) for rows in grps]
         assert max(work) <= 1.2 * 0.5 * sum(work), work
+
+
+def test_touching_pairs_weigh_more_when_the_slabs_are_dealt(rng):
+    # a layer of uniform particle and pair density whose pairs touch only in the half of
+    # the box with x < L/2 (the first layers landing on a floor: contacts in one region).
+    # A contact force costs about TOUCH_WEIGHT times a pair's distance check, so each colour
+    # must split particles + pairs + TOUCH_WEIGHT x touching pairs evenly (within half a
+    # slab's work, 1.2 of the half), which a split by particles and pairs misses
+    side = 0.06
+    sim = Simulation(table(E=1e8), dt_fraction=0.2, gravity=(0, 0, 0),
+                     box=(0, side, 0, side), periodic=(True, True))
+    sim.add_particles(rng.uniform((0, 0, 0), (side, side, 0.004), (3000, 3)),
+                      rng.uniform(0.8e-3, 1.2e-3, 3000), "soil")
+    sim.run(0)
+    start, nbr = sim._lists["start_a"], sim._lists["nbr_a"]
+    npair = int(start[sim.n])
+    act = np.zeros(sim._lists["act_a"].shape[0], np.int8)
+    row = np.repeat(np.arange(sim.n), np.diff(start))
+    act[:npair] = (sim.x[row, 0] < side / 2) & (sim.x[nbr[:npair], 0] < side / 2)
+    assert 0.4 * npair < act.sum() < 0.6 * npair
+
+    def work(rows, weight):
+        return sum(int(start[i + 1] - start[i] + 1 + weight * act[start[i]:start[i + 1]].sum())
+                   for i in rows)
+
+    for grps in slab_groups(sim, 2, act):
+        w = [work(rows, nb.TOUCH_WEIGHT) for rows in grps]
+        assert max(w) <= 1.2 * 0.5 * sum(w), w
+    # the unweighted split of the same slabs leaves the thread with the contacts at least
+    # 1.3 times its share
+    worst = max(max(work(rows, nb.TOUCH_WEIGHT) for rows in grps)
+                / (0.5 * sum(work(rows, nb.TOUCH_WEIGHT) for rows in grps))
+                for grps in slab_groups(sim, 2, np.zeros_like(act)))
+    assert worst > 1.3, worst
 
 
 def test_pair_buffers_grow_without_changing_results():

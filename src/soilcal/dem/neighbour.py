@@ -345,6 +345,10 @@ GROUPS_MAX = 64  # at most this many slab groups per colour (threads of the pair
 # groups assumed when the slab axis is chosen (fixed, never the thread count: the axis sets
 # the colours and so the order in which contributions are added to a particle)
 BALANCE_GROUPS = 2
+# work of a touching pair in units of a particle or a listed pair when the slabs are dealt
+# to the threads: a contact force costs 50-60 ns, a particle's row and a pair's distance
+# check about 5 ns (settle benchmark bed, N = 20,000, one thread)
+TOUCH_WEIGHT = 8
 SGROUP_LEN = 3 * GROUPS_MAX + 2  # group offsets (3 G + 1) and, last, G
 SCRATCH_LEN = 2 * SLAB_MAX + GROUPS_MAX  # slab work, slab owner, group load
 NBLK_GROUPS = 32
@@ -381,13 +385,18 @@ def _slab_count(axis, n0, n1, n2, p0, p1):
 
 
 @njit(cache=True)
-def _slab_work(axis, nc, ns, cell_idx, cell_of, start, n0, n1, work):
-    """work[s]: pair-pass work of slab s, its particles plus their listed pairs."""
+def _slab_work(axis, nc, ns, cell_idx, cell_of, start, act, touch_weight, n0, n1, work):
+    """work[s]: pair-pass work of slab s, its particles plus their listed pairs, plus
+    ``touch_weight`` per pair that touched after the last step (act; 0: not counted)."""
     for s in range(ns):
         work[s] = 0
     for q in range(cell_idx.shape[0]):
         i = cell_idx[q]
-        work[_slab(cell_of[i], axis, n0, n1, ns, nc)] += start[i + 1] - start[i] + 1
+        w = start[i + 1] - start[i] + 1
+        if touch_weight > 0:
+            for k in range(start[i], start[i + 1]):
+                w += touch_weight * act[k]
+        work[_slab(cell_of[i], axis, n0, n1, ns, nc)] += w
 
 
 @njit(cache=True)
@@ -419,27 +428,34 @@ def _deal(work, ns, G, owner, load):
 
 
 @njit(cache=True)
-def _axis_cost(axis, cell_idx, cell_of, start, n0, n1, n2, p0, p1, work, owner, load):
-    """Pair-pass time (:func:`_deal`) of slabs along ``axis`` on BALANCE_GROUPS threads."""
+def _axis_cost(axis, cell_idx, cell_of, start, act, n0, n1, n2, p0, p1, work, owner, load):
+    """Pair-pass time (:func:`_deal`) of slabs along ``axis`` on BALANCE_GROUPS threads,
+    in particles plus listed pairs (touching pairs not weighted: the axis stays the one
+    chosen before the weight was introduced, and with it every trajectory)."""
     nc, ns = _slab_count(axis, n0, n1, n2, p0, p1)
-    _slab_work(axis, nc, ns, cell_idx, cell_of, start, n0, n1, work)
+    _slab_work(axis, nc, ns, cell_idx, cell_of, start, act, 0, n0, n1, work)
     return _deal(work, ns, BALANCE_GROUPS, owner, load)
 
 
 @njit(cache=True)
-def _slabs(cell_idx, cell_of, start, n0, n1, n2, p0, p1, G, sorder, sgroup, scratch):
+def _slabs(cell_idx, cell_of, start, act, n0, n1, n2, p0, p1, G, sorder, sgroup, scratch):
     """Slab groups for race-free force accumulation.
 
     The cells are cut into slabs of whole cells along one axis.  A listed pair is closer
     than one cell edge at the build, so its two particles lie in the same or adjacent slabs,
     and slabs of the same colour (s mod 3) can add forces to both particles of their rows'
     pairs in parallel.  The slabs are dealt to G groups (one per thread) as contiguous
-    ranges balanced by their work (particles plus listed pairs, :func:`_deal`), so a bed
-    that is dense at the bottom and sparse above keeps both threads busy and each thread
-    works on one region of the domain.
+    ranges balanced by their work (:func:`_deal`): particles plus listed pairs plus
+    TOUCH_WEIGHT per pair that touched after the last step (act), since a contact costs
+    about ten times a listed pair that only has its distance checked.  A bed that is dense
+    at the bottom and sparse above, or whose contacts sit in one region (the first layers
+    landing on the floor), so keeps both threads busy, and each thread works on one region
+    of the domain.
 
     The axis is the one with the most cells, unless another axis balances clearly better
-    (summed largest group load below 4/5 of it) for BALANCE_GROUPS groups.  It never
+    (summed largest group load below 4/5 of it) for BALANCE_GROUPS groups, counting
+    particles and listed pairs only (the contact weight only deals the slabs, which
+    changes no trajectory).  It never
     depends on G: the axis fixes which contributions to a particle come in which colour
     pass, so the summation order, and with it the trajectory, is the same for any thread
     count; G only decides which thread runs which slab.
@@ -461,15 +477,16 @@ def _slabs(cell_idx, cell_of, start, n0, n1, n2, p0, p1, G, sorder, sgroup, scra
     elif n1 > n2 and n1 > n0:
         main = 1
     axis = main
-    best = _axis_cost(main, cell_idx, cell_of, start, n0, n1, n2, p0, p1, work, owner, load)
+    best = _axis_cost(main, cell_idx, cell_of, start, act, n0, n1, n2, p0, p1, work, owner,
+                      load)
     for a in range(3):
         if a != main:
-            cost = _axis_cost(a, cell_idx, cell_of, start, n0, n1, n2, p0, p1, work, owner,
-                              load)
+            cost = _axis_cost(a, cell_idx, cell_of, start, act, n0, n1, n2, p0, p1, work,
+                              owner, load)
             if 5 * cost < 4 * best:
                 axis, best = a, cost
     nc, ns = _slab_count(axis, n0, n1, n2, p0, p1)
-    _slab_work(axis, nc, ns, cell_idx, cell_of, start, n0, n1, work)
+    _slab_work(axis, nc, ns, cell_idx, cell_of, start, act, TOUCH_WEIGHT, n0, n1, work)
     _deal(work, ns, G, owner, load)
     # counting sort of the particles by group k = colour * G + owner (stable: cell order)
     for k in range(SGROUP_LEN):
@@ -639,7 +656,7 @@ def build_lists(x, r, box, periodic, skin, extra, cell_start, cell_idx, cell_of,
     wneed = _wall_need(wcnt_new, wnbr_new.shape[1])
     if wneed > 0:
         return 2, wneed
-    _slabs(cell_idx, cell_of, start_new, n0, n1, n2, periodic[0], periodic[1],
+    _slabs(cell_idx, cell_of, start_new, act_new, n0, n1, n2, periodic[0], periodic[1],
            min(max(groups, 1), GROUPS_MAX), sorder, sgroup, scratch)
     return 0, 0
 
