@@ -17,3 +17,9 @@ from numba import config as _numba_config
 # fallbacks where no OpenMP runtime is found) unless the user chose a layer or a priority.
 if "NUMBA_THREADING_LAYER" not in os.environ and "NUMBA_THREADING_LAYER_PRIORITY" not in os.environ:
     _numba_config.THREADING_LAYER_PRIORITY = ["omp", "tbb", "workqueue"]
+
+# Numba's cache follows each function's own file only: drop the package's cached kernels
+# when any of its sources changed, before a kernel loads (soilcal.dem._kernel_cache)
+from soilcal.dem._kernel_cache import refresh_package as _refresh_kernel_cache  # noqa: E402
+
+_refresh_kernel_cache()

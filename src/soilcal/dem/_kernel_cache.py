@@ -1,0 +1,108 @@
+"""Keep Numba's on-disk kernel cache in step with the sources of ``soilcal.dem``.
+
+Numba keys a cached function on the stamp (modification time and size) of its own source
+file only.  A kernel that calls or inlines functions of another file (``run_loop`` in
+``integrator.py`` calls ``build_lists`` of ``neighbour.py`` and inlines ``contact_force``
+of ``contact.py``) keeps their old machine code when only that other file changes, for
+example after ``git pull`` in an editable install: the run would silently use the old
+physics.  So a digest of every source file of the package is kept beside each cache
+directory, and where it differs from the sources the cache files of the package's modules
+are removed before any kernel loads; Numba then compiles afresh and caches again.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import os
+import tempfile
+from pathlib import Path
+
+STAMP = "soilcal-dem-sources.sha256"
+HERE = Path(__file__).resolve().parent
+
+
+def source_files(root: Path = HERE) -> list[Path]:
+    """Every Python source file of the package below ``root``, in a fixed order."""
+    return sorted(p for p in root.rglob("*.py") if "__pycache__" not in p.parts)
+
+
+def source_digest(files) -> str:
+    """SHA-256 over the files' names (relative to their common root) and contents."""
+    files = sorted(Path(f) for f in files)
+    root = Path(os.path.commonpath([str(f.parent) for f in files])) if files else Path(".")
+    h = hashlib.sha256()
+    for f in files:
+        h.update(str(f.relative_to(root)).encode())
+        h.update(b"\0")
+        h.update(f.read_bytes())
+        h.update(b"\0")
+    return h.hexdigest()
+
+
+def cache_dir(py_file: Path) -> Path | None:
+    """The directory Numba caches the functions of ``py_file`` in (its own locator order:
+    NUMBA_CACHE_DIR, then ``__pycache__`` beside the file, then the user-wide cache), or
+    None where Numba would not cache."""
+    from numba.core import caching
+
+    impl = getattr(caching, "CacheImpl", None) or getattr(caching, "_CacheImpl", None)
+    locators = getattr(impl, "_locator_classes", None)
+    if not locators:  # pragma: no cover - a Numba without this internal
+        return None
+
+    def probe():
+        pass
+
+    for cls in locators:
+        try:
+            loc = cls.from_function(probe, str(py_file))
+        except Exception:  # noqa: BLE001 - a locator that does not apply
+            loc = None
+        if loc is not None:
+            return Path(loc.get_cache_path())
+    return None
+
+
+def refresh(files, dirs_of_files) -> int:
+    """Remove the cache files of the modules in ``files`` from every directory in
+    ``dirs_of_files`` (a mapping directory -> the files cached there) whose stamp differs
+    from the digest of ``files``, then write the stamp.  Returns the number of files
+    removed.  Other files in those directories are left alone."""
+    digest = source_digest(files)
+    removed = 0
+    for d, cached in dirs_of_files.items():
+        d = Path(d)
+        stamp = d / STAMP
+        try:
+            if stamp.read_text().strip() == digest:
+                continue
+        except OSError:
+            pass
+        prefixes = tuple(Path(f).stem + "." for f in cached)
+        for f in list(d.glob("*.nbi")) + list(d.glob("*.nbc")):
+            if f.name.startswith(prefixes):
+                try:
+                    f.unlink()
+                    removed += 1
+                except OSError:
+                    pass
+        try:
+            d.mkdir(parents=True, exist_ok=True)
+            fd, tmp = tempfile.mkstemp(dir=d, prefix=STAMP, suffix=".tmp")
+            with os.fdopen(fd, "w") as fh:
+                fh.write(digest + "\n")
+            os.replace(tmp, stamp)
+        except OSError:
+            pass
+    return removed
+
+
+def refresh_package(root: Path = HERE) -> int:
+    """:func:`refresh` for the sources of ``soilcal.dem`` and Numba's cache directories."""
+    files = source_files(root)
+    dirs: dict[Path, list[Path]] = {}
+    for f in files:
+        d = cache_dir(f)
+        if d is not None:
+            dirs.setdefault(d, []).append(f)
+    return refresh(files, dirs)
