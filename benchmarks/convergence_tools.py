@@ -188,11 +188,9 @@ def table(rows, path, cmd):
 
 
 def bed(name, preset):
-    """Bin volume [m^3], mean particle volume [m^3] and the BinSpec of a scenario's preset
-    (no run)."""
+    """The BinSpec of a scenario's preset (no run)."""
     mod, setup_name, _ = CASES[name]
-    spec = mod._bin(mod._settings(dict(mod.setups()[setup_name]), preset))
-    return spec.length * spec.width * spec.height, spec.dist.mean_volume(), spec
+    return mod._bin(mod._settings(dict(mod.setups()[setup_name]), preset))
 
 
 def paper_lines(rows) -> list[str]:
@@ -210,8 +208,9 @@ def paper_lines(rows) -> list[str]:
         if not base:
             continue
         nq = int(base[0]["n_particles"])
-        (vq, pq, sq), (vp, pp, sp) = bed(name, "quick"), bed(name, "paper")
-        npp = nq * (vp / vq) / (pp / pq)
+        sq, sp = bed(name, "quick"), bed(name, "paper")
+        vq, vp = (b.length * b.width * b.height for b in (sq, sp))
+        npp = nq * (vp / vq) / (sp.dist.mean_volume() / sq.dist.mean_volume())
         lines.append(
             f"| {name} | {sq.length:.3g} x {sq.width:.3g} x {sq.height:.3g} | "
             f"{1e3 * sq.r_min:.3g}-{1e3 * sq.r_max:.3g} | {nq} | "

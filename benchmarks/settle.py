@@ -35,6 +35,7 @@ import csv
 import json
 import os
 import platform
+import statistics
 import subprocess
 import sys
 import tempfile
@@ -99,8 +100,7 @@ def write_tables(rows, notes, out: Path, quick: bool) -> None:
     lines = [
         "# DEM settle benchmark" + (" (quick run: N 5,000, 2,000 steps)" if quick else ""),
         "",
-        f"Machine: {platform.processor() or platform.machine()}, {os.cpu_count()} logical CPUs, "
-        f"Python {platform.python_version()}; date {time.strftime('%Y-%m-%d %H:%M UTC', time.gmtime())}.",
+        _machine(),
         "Case: lattice of nx*nx*50 spheres (spacing 5 mm) settling on a floor, periodic x/y, "
         "Hertz-Mindlin + constant-torque rolling (mu_r 0.1), dt 2e-5 s; compile excluded.",
         "Each case runs soilcal and then the reference engines on the identical configuration "
@@ -196,6 +196,41 @@ def write_tables(rows, notes, out: Path, quick: bool) -> None:
     (out / "settle.md").write_text("\n".join(lines) + "\n")
 
 
+def run_engines(case, engines, refs, notes) -> list[dict]:
+    """Rows of one case (n, steps, threads, cohesion): soilcal (if chosen), then each
+    reference engine; a failing reference or lost atoms become a note, not an abort."""
+    n, st, threads, cohesion = case
+    rows = []
+    if "soilcal" in engines:
+        t = time.time()
+        res = run_case(*case)
+        rows.append(res)
+        print(json.dumps(res), f"# {time.time() - t:.0f} s incl. start-up", flush=True)
+    for eng in refs:
+        t = time.time()
+        try:
+            res = reference.run_reference(eng, n, st, threads, cohesion,
+                                          timeout=max(600.0, n * st / 2e5))
+        except Exception as exc:  # noqa: BLE001 - record and go on with the matrix
+            msg = f"{NAMES[eng]} N={n} threads={threads} cohesion={cohesion} failed: " \
+                  f"{str(exc).splitlines()[0]}"
+            notes.append(msg)
+            print("#", msg, flush=True)
+            continue
+        rows.append(res)
+        print(json.dumps(res), f"# {time.time() - t:.0f} s incl. start-up", flush=True)
+        if res.get("atoms_final") is not None and res["atoms_final"] != res["n"]:
+            notes.append(f"{NAMES[eng]} N={n} threads={threads} cohesion={cohesion}: "
+                         f"{res['n'] - res['atoms_final']} atoms lost.")
+    return rows
+
+
+def _machine() -> str:
+    return (f"Machine: {platform.processor() or platform.machine()}, {os.cpu_count()} logical "
+            f"CPUs, Python {platform.python_version()}; date "
+            f"{time.strftime('%Y-%m-%d %H:%M UTC', time.gmtime())}.")
+
+
 def parse_case(text, ap):
     """'20000:2:jkr' -> (20000, 2, 'jkr'); a clear argparse error otherwise."""
     parts = text.split(":")
@@ -214,23 +249,8 @@ def repeats(cases, steps, k, engines, refs, notes, out: Path) -> None:
     rows = []
     for ci, (n, threads, cohesion) in enumerate(cases):
         for rep in range(k):
-            for eng in [e for e in ("soilcal", *refs) if e in engines]:
-                t = time.time()
-                try:
-                    if eng == "soilcal":
-                        res = run_case(n, steps, threads, cohesion)
-                    else:
-                        res = reference.run_reference(eng, n, steps, threads, cohesion,
-                                                      timeout=max(600.0, n * steps / 2e5))
-                except Exception as exc:  # noqa: BLE001 - record and go on
-                    notes.append(f"{NAMES[eng]} N={n} threads={threads} cohesion={cohesion} "
-                                 f"repeat {rep}: {str(exc).splitlines()[0]}")
-                    continue
-                res["engine"] = eng
-                res["repeat"] = rep
-                res["case_index"] = ci
-                rows.append(res)
-                print(json.dumps(res), f"# {time.time() - t:.0f} s incl. start-up", flush=True)
+            for res in run_engines((n, steps, threads, cohesion), engines, refs, notes):
+                rows.append(dict(res, repeat=rep, case_index=ci))
     out.mkdir(parents=True, exist_ok=True)
     with open(out / "settle_repeats.csv", "w", newline="") as fh:
         w = csv.DictWriter(fh, fieldnames=["repeat"] + FIELDS, extrasaction="ignore")
@@ -240,10 +260,7 @@ def repeats(cases, steps, k, engines, refs, notes, out: Path) -> None:
     head = ["N", "steps", "threads", "cohesion", "repeat", "soilcal p-steps/s", "load"]
     for e in ref_cols:
         head += [f"{NAMES[e]} p-steps/s", f"soilcal / {NAMES[e]}"]
-    lines = ["# DEM settle benchmark: alternating repeats", "",
-             f"Machine: {platform.processor() or platform.machine()}, {os.cpu_count()} logical "
-             f"CPUs, Python {platform.python_version()}; date "
-             f"{time.strftime('%Y-%m-%d %H:%M UTC', time.gmtime())}.",
+    lines = ["# DEM settle benchmark: alternating repeats", "", _machine(),
              f"Command: python benchmarks/settle.py --repeat {k} "
              + " ".join(f"--case {n}:{t}:{c}" for n, t, c in cases)
              + (f" --steps {steps}" if steps != 20000 else "") + ".",
@@ -270,7 +287,7 @@ def repeats(cases, steps, k, engines, refs, notes, out: Path) -> None:
         for e in ref_cols:
             v = sorted(ratios[e])
             if v:
-                med = v[len(v) // 2] if len(v) % 2 else 0.5 * (v[len(v) // 2 - 1] + v[len(v) // 2])
+                med = statistics.median(v)
                 summary.append(f"* N = {n}, {threads} thread(s), cohesion {cohesion}: soilcal / "
                                f"{NAMES[e]} median {med:.2f} over {len(v)} repeats (range "
                                f"{v[0]:.2f}-{v[-1]:.2f}).")
@@ -342,28 +359,7 @@ def main(argv=None):
             cases.append((SANITY_N, args.steps, 1, cohesion))
     rows = []
     for case in cases:
-        n, st, threads, cohesion = case
-        if "soilcal" in engines:
-            t = time.time()
-            res = run_case(*case)
-            rows.append(res)
-            print(json.dumps(res), f"# {time.time() - t:.0f} s incl. start-up", flush=True)
-        for eng in refs:
-            t = time.time()
-            try:
-                res = reference.run_reference(eng, n, st, threads, cohesion,
-                                              timeout=max(600.0, n * st / 2e5))
-            except Exception as exc:  # noqa: BLE001 - record and go on with the matrix
-                msg = f"{NAMES[eng]} N={n} threads={threads} cohesion={cohesion} failed: " \
-                      f"{str(exc).splitlines()[0]}"
-                notes.append(msg)
-                print("#", msg, flush=True)
-                continue
-            rows.append(res)
-            print(json.dumps(res), f"# {time.time() - t:.0f} s incl. start-up", flush=True)
-            if res.get("atoms_final") is not None and res["atoms_final"] != res["n"]:
-                notes.append(f"{NAMES[eng]} N={n} threads={threads} cohesion={cohesion}: "
-                             f"{res['n'] - res['atoms_final']} atoms lost.")
+        rows += run_engines(case, engines, refs, notes)
     write_tables(rows, notes, out, args.quick)
     print(f"# wrote {out / 'settle.csv'} and {out / 'settle.md'}", flush=True)
     return 0

@@ -100,9 +100,12 @@ def refresh(files, dirs_of_files) -> int:
 def refresh_package(root: Path = HERE) -> int:
     """:func:`refresh` for the sources of ``soilcal.dem`` and Numba's cache directories."""
     files = source_files(root)
-    dirs: dict[Path, list[Path]] = {}
+    by_parent: dict[Path, list[Path]] = {}
     for f in files:
-        d = cache_dir(f)
+        by_parent.setdefault(f.parent, []).append(f)
+    dirs: dict[Path, list[Path]] = {}
+    for group in by_parent.values():  # Numba's locators place a directory's files together
+        d = cache_dir(group[0])
         if d is not None:
-            dirs.setdefault(d, []).append(f)
+            dirs.setdefault(d, []).extend(group)
     return refresh(files, dirs)
