@@ -19,7 +19,7 @@ _GROUP_MODULES = (
     "soilcal.rsm.cli",
     "soilcal.optimise.cli",
     "soilcal.dem.cli",
-    "soilcal.replay.cli",
+    "soilcal.chain.cli",
     "soilcal.loop.cli",
     "soilcal.plots.cli",
 )

@@ -12,8 +12,8 @@ import pandas as pd
 import pytest
 
 from soilcal.config import load_soil
-from soilcal.replay.errata import parse_printed
-from soilcal.replay.stage import design_frame, optimum_frame, regression_frames
+from soilcal.chain.errata import parse_printed
+from soilcal.chain.stage import design_frame, optimum_frame, regression_frames
 
 ROOT = Path(__file__).resolve().parents[2]
 
@@ -105,7 +105,7 @@ def test_screening_table_4_contradicts_table_3(soil):
 
 
 def test_steepest_choice_and_copied_column_in_errata(soil, tmp_path):
-    from soilcal.replay.run import replay_soil
+    from soilcal.chain.files import replay_soil
 
     dirs, errata = replay_soil(soil, tmp_path)
     notes = " | ".join(errata["where"] + " :: " + errata["note"])

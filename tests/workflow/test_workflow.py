@@ -1,47 +1,25 @@
-"""The Snakemake workflow end to end on a copy of the repository's config and data."""
+"""The Snakemake workflow end to end on a copy of the repository's config and data: the replay of
+the printed tables (published source)."""
 
 from __future__ import annotations
 
-import re
-import shutil
-import subprocess
-import sys
 from pathlib import Path
 
 import pandas as pd
 import pytest
-import yaml
 
-ROOT = Path(__file__).resolve().parents[2]
-SNAKEMAKE = [sys.executable, "-m", "snakemake"]
+from wfutil import ROOT, copy_workflow, planned_jobs, run
+
 SOILS = ["cinnamon-soil", "yangtze-clay-loam"]
 
 
 def _copy(tmp: Path) -> Path:
-    shutil.copy(ROOT / "Snakefile", tmp / "Snakefile")
-    shutil.copytree(ROOT / "envs", tmp / "envs")
-    for item in ("workflow", "config"):
-        shutil.copytree(ROOT / item, tmp / item, symlinks=True)
-    # the schema symlink points into the package; resolve it for the copy
-    link = tmp / "workflow/schemas/soil.schema.yaml"
-    if link.is_symlink():
-        link.unlink()
-        shutil.copy(ROOT / "src/soilcal/config/soil.schema.yaml", link)
-    for soil in SOILS:
-        for kind in ("published", "images"):
-            if (ROOT / "resources" / kind / soil).is_dir():
-                shutil.copytree(ROOT / "resources" / kind / soil, tmp / "resources" / kind / soil)
-    cfg = yaml.safe_load((tmp / "config/config.yaml").read_text())
-    cfg["soils"] = SOILS
-    (tmp / "config/config.yaml").write_text(yaml.safe_dump(cfg))
-    return tmp
+    # the replay; tests/workflow/test_dem_workflow.py runs the DEM source
+    return copy_workflow(tmp, SOILS, source="published")
 
 
 def _run(tmp: Path, *args, check=True):
-    p = subprocess.run(SNAKEMAKE + list(args), cwd=tmp, capture_output=True, text=True)
-    if check and p.returncode != 0:
-        raise AssertionError(p.stdout[-3000:] + p.stderr[-3000:])
-    return p
+    return run(tmp, *args, check=check)
 
 
 @pytest.fixture(scope="module")
@@ -81,8 +59,7 @@ def test_missing_photo_is_one_clear_error(tmp_path):
 
 
 def _planned_jobs(tmp: Path) -> list[str]:
-    out = _run(tmp, "-n", "--cores", "2").stdout
-    return re.findall(r"^\s+output: (.+)$", out, flags=re.M)
+    return planned_jobs(tmp)
 
 
 def test_editing_one_soil_reruns_only_that_soil(done):

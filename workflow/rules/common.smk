@@ -1,16 +1,22 @@
 # Configuration, validated before any job runs: the workflow config against its schema, then
-# every soil file against the soil schema and the published tables against their designs.
+# every soil file against the soil schema, its published tables against their designs and its
+# simulation block against the DEM scenarios.  Paths and target lists of the calibration chain.
+import json
 import os
 
 from snakemake.utils import validate
 
+from soilcal.chain import derive, verify
+from soilcal.chain.files import read_stage
 from soilcal.config import load_workflow_config
 from soilcal.imaging.manifest import read_manifest
+from soilcal.chain.plan import dem_context, soil_sources
 
 
 validate(config, "../schemas/config.schema.yaml")
 SOILS = load_workflow_config(config)
 RES = config.get("resources", "resources")
+SOURCES = {soil: soil_sources(s, config.get("source")) for soil, s in SOILS.items()}
 IMAGE_MANIFESTS = {
     soil: read_manifest(f"{RES}/images/{soil}/manifest.yaml")
     for soil in SOILS
@@ -19,7 +25,14 @@ IMAGE_MANIFESTS = {
 
 wildcard_constraints:
     soil="|".join(SOILS),
+    source="published|dem",
     stage="[a-z0-9][a-z0-9-]*",
+    run=r"\d+",
+    rep=r"\d+",
+    row=r"\d+",
+    case="[A-Za-z0-9_][A-Za-z0-9_.-]*",
+    key="[0-9a-f]{12}",
+    preset="quick|paper",
 
 
 def soil_cfg(soil):
@@ -30,20 +43,32 @@ def stage_cfg(soil, stage):
     return SOILS[soil].stage(stage)
 
 
-def stage_table(wildcards):
-    st = stage_cfg(wildcards.soil, wildcards.stage)
-    return [] if st.get("table") is None else f"{RES}/published/{wildcards.soil}/{st['table']}"
+def stage_dir(soil, stage, source="published"):
+    return f"results/{soil}/{source}/{stage}"
 
 
-def stage_dir(soil, stage):
-    return f"results/{soil}/published/{stage}"
+def printed_table(soil, stage):
+    st = stage_cfg(soil, stage)
+    return None if st.get("table") is None else f"{RES}/published/{soil}/{st['table']}"
 
 
-def stage_targets(soil, st):
-    d = stage_dir(soil, st["id"])
+def source_stages(soil, source):
+    """Stage ids a source runs: every stage (published), simulation.stages (dem)."""
+    if source == "dem":
+        return derive.dem_stage_ids(soil_cfg(soil))
+    return [st["id"] for st in SOILS[soil].stages]
+
+
+def has_responses(soil, source, stage):
+    return source == "dem" or printed_table(soil, stage) is not None
+
+
+def stage_targets(soil, st, source="published"):
+    d = stage_dir(soil, st["id"], source)
     out = [f"{d}/design.csv"]
-    if st.get("table") is None:
+    if not has_responses(soil, source, st["id"]):
         return out
+    out.append(f"{d}/responses.csv")
     if st["kind"] in ("plackett_burman", "box_behnken"):
         out += [f"{d}/{x}.csv" for x in ("anova", "fit", "coefficients", "effects")]
         out += [f"{d}/figures/diagnostics"]
@@ -52,20 +77,41 @@ def stage_targets(soil, st):
     if st["kind"] == "box_behnken":
         out += [f"{d}/figures/surfaces"]
         if st.get("optimise"):
-            out += [f"{d}/optimum.csv"]
+            out += [f"{d}/optimum.csv", f"{d}/identifiability.csv"]
     if st["kind"] == "steepest_ascent":
         out += [f"{d}/optimum.csv", f"{d}/figures/steepest"]
+    if source == "dem" and derive.design_mode(soil_cfg(soil)) == "printed" and printed_table(soil, st["id"]):
+        out.append(f"{d}/printed_comparison.csv")
+    return out
+
+
+def optimised_stages(soil):
+    return [s for s in source_stages(soil, "dem") if stage_cfg(soil, s).get("optimise")]
+
+
+def dem_soil_targets(soil):
+    d = f"results/{soil}/dem"
+    out = [f"{d}/targets.csv", f"{d}/verification.csv", f"{d}/calibrated_vs_paper.csv",
+           f"{d}/figures/verification"]
+    if soil_cfg(soil).get("measurements"):
+        out += [f"{d}/tool_verification.csv", f"{d}/figures/tools"]
     return out
 
 
 def all_targets():
     out = []
     for soil, s in SOILS.items():
-        for st in s.stages:
-            out += stage_targets(soil, st)
-        out.append(f"results/{soil}/published/errata.csv")
+        for source in SOURCES[soil]:
+            for sid in source_stages(soil, source):
+                out += stage_targets(soil, s.stage(sid), source)
+        if "published" in SOURCES[soil]:
+            out.append(f"results/{soil}/published/errata.csv")
+        if "dem" in SOURCES[soil]:
+            out += dem_soil_targets(soil)
         if soil in IMAGE_MANIFESTS:
             out.append(f"results/{soil}/images/measurements.json")
+    if any("dem" in v for v in SOURCES.values()):
+        out += ["results/summary.csv", "results/figures/summary"]
     return out
 
 
@@ -82,3 +128,179 @@ def errata_inputs(wildcards):
         if st.get("table") is not None:
             out.append(f"{stage_dir(wildcards.soil, st['id'])}/design_check.csv")
     return out
+
+
+# ------------------------------------------------------------------ the DEM source
+
+
+def sim_cfg(soil):
+    return soil_cfg(soil).get("simulation") or {}
+
+
+def dem_threads(soil):
+    return int(sim_cfg(soil).get("threads", 1))
+
+
+def dem_mem_mb(soil):
+    return int((sim_cfg(soil).get("resources") or {}).get("mem_mb", 2000))
+
+
+def dem_runtime(soil):
+    return int((sim_cfg(soil).get("resources") or {}).get("runtime", 30))
+
+
+def dem_design(w):
+    """The DEM design of a stage, once its checkpoint has run."""
+    return checkpoints.design.get(soil=w.soil, source="dem", stage=w.stage).output.design
+
+
+_POINTS = {}
+
+
+def _points(soil, stage):
+    """(stage, design points, seeds) of a DEM stage, read once per file version."""
+    from soilcal.chain.sources import design_points, point_seeds
+
+    import pandas as pd
+
+    d = stage_dir(soil, stage, "dem")
+    key = (soil, stage, os.path.getmtime(f"{d}/design.csv"), os.path.getmtime(f"{d}/stage.json"))
+    if key not in _POINTS:
+        st = read_stage(f"{d}/stage.json")
+        pts = design_points(st, pd.read_csv(f"{d}/design.csv"))
+        seeds = point_seeds(pts, int(soil_cfg(soil)["seed"]), int(sim_cfg(soil).get("replicates", 1)))
+        _POINTS[key] = (st, dict(pts), seeds)
+    return _POINTS[key]
+
+
+def dem_runs(w):
+    dem_design(w)
+    st, pts, _ = _points(w.soil, w.stage)
+    return [f"{stage_dir(w.soil, w.stage, 'dem')}/runs/{r}.csv" for r in pts]
+
+
+def point_spec(w):
+    from soilcal.chain.sources import point_spec as spec
+
+    dem_design(w)
+    st, pts, seeds = _points(w.soil, w.stage)
+    run = int(w.run)
+    return spec(SOILS[w.soil], st, pts[run], run, seeds[run])
+
+
+def stage_inputs(w):
+    """What a stage's design is made from: the printed table (published; dem with
+    design: printed), and for a derived DEM stage the DEM results it is derived from."""
+    out = {}
+    table = printed_table(w.soil, w.stage)
+    if w.source == "published" or derive.design_mode(soil_cfg(w.soil)) == "printed":
+        if table:
+            out["table"] = table
+    if w.source == "dem":
+        out["targets"] = f"results/{w.soil}/dem/targets.csv"
+        deps = derive.dependencies(soil_cfg(w.soil), w.stage)
+        if "from" in deps:
+            d = stage_dir(w.soil, deps["from"], "dem")
+            out["from_stage"] = f"{d}/stage.json"
+            out["from_responses"] = f"{d}/responses.csv"
+            if stage_cfg(w.soil, deps["from"])["kind"] == "plackett_burman":
+                out["from_effects"] = f"{d}/effects.csv"
+        if "fixed_from" in deps:
+            d = stage_dir(w.soil, deps["fixed_from"], "dem")
+            out["fixed_stage"] = f"{d}/stage.json"
+            out["fixed_optimum"] = f"{d}/optimum.csv"
+    return out
+
+
+def verify_presets(soil, stage, case):
+    """The soil's preset, and `paper` where its verification admits one of the case's responses."""
+    presets = [sim_cfg(soil).get("preset", "quick")]
+    goals = next(c for c in stage_cfg(soil, stage)["optimise"]["cases"] if c["id"] == case)["goals"]
+    if verify.paper_responses(SOILS[soil], list(goals)):
+        presets.append("paper")
+    return presets
+
+
+def verify_runs(w):
+    reps = int(verify.verify_settings(soil_cfg(w.soil))["replicates"])
+    out = []
+    for sid, case in verify.verification_cases(soil_cfg(w.soil), optimised_stages(w.soil)):
+        for preset in verify_presets(w.soil, sid, case):
+            out += [f"results/{w.soil}/dem/verify/{preset}/{sid}/{case}/{k}.csv" for k in range(reps)]
+    return out
+
+
+_CALIBRATED = {}
+
+
+def _calibration(soil, stage):
+    """(stage, optimum) of a DEM stage once its optimum checkpoint has run, read once per file
+    version."""
+    import pandas as pd
+
+    opt = checkpoints.optimum.get(soil=soil, source="dem", stage=stage).output.optimum
+    d = stage_dir(soil, stage, "dem")
+    key = (soil, stage, os.path.getmtime(opt), os.path.getmtime(f"{d}/stage.json"))
+    if key not in _CALIBRATED:
+        _CALIBRATED[key] = (read_stage(f"{d}/stage.json"), pd.read_csv(opt))
+    return _CALIBRATED[key]
+
+
+def optimum_of(soil, stage):
+    return ancient(checkpoints.optimum.get(soil=soil, source="dem", stage=stage).output.optimum)
+
+
+def verify_spec(w):
+    st, opt = _calibration(w.soil, w.stage)
+    return verify.verification_point(SOILS[w.soil], st, opt, w.case, int(w.rep), w.preset)
+
+
+def tool_jobs(soil):
+    """The soil's measured conditions as DEM jobs, keyed by what they simulate
+    (verify.tool_key): conditions that need the same runs share one job.  Returns
+    ({key: job}, {(measurement, row): key})."""
+    cals = {s: _calibration(soil, s) for s in sorted({c.stage for c in conditions(soil)})}
+    stamp = (soil,) + tuple(id(v) for v in cals.values())
+    if stamp not in _TOOL_JOBS:
+        jobs, keys = {}, {}
+        for c in conditions(soil):
+            job = verify.tool_point(SOILS[soil], c, *cals[c.stage])
+            key = verify.tool_key(job)
+            keys[(c.measurement, c.row)] = key
+            jobs[key] = verify.merge_tool_jobs(jobs[key], job) if key in jobs else job
+        _TOOL_JOBS[stamp] = (jobs, keys)
+    return _TOOL_JOBS[stamp]
+
+
+_TOOL_JOBS = {}
+
+
+def tool_spec(w):
+    return tool_jobs(w.soil)[0][w.key]
+
+
+def tool_optima(w):
+    return [optimum_of(w.soil, s) for s in sorted({c.stage for c in conditions(w.soil)})]
+
+
+def calibration_files(w, names=("stage.json", "optimum.csv")):
+    return [f"{stage_dir(w.soil, s, 'dem')}/{n}" for s in optimised_stages(w.soil) for n in names]
+
+
+_CONDITIONS = {}
+
+
+def conditions(soil):
+    from soilcal.config.measurements import conditions as conds
+
+    if soil not in _CONDITIONS:
+        _CONDITIONS[soil] = conds(SOILS[soil])
+    return _CONDITIONS[soil]
+
+
+def tool_runs(w):
+    return [f"results/{w.soil}/dem/tools/{k}.csv" for k in dict.fromkeys(tool_jobs(w.soil)[1].values())]
+
+
+def tool_run_map(w):
+    return {f"{m}/{r}": k for (m, r), k in tool_jobs(w.soil)[1].items()}

@@ -1,4 +1,4 @@
-# Errata: every printed number the recomputation does not reproduce, per soil.
+# Errata: every printed number the recomputation does not reproduce, per soil (published source).
 
 
 rule errata:

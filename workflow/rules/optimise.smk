@@ -1,21 +1,44 @@
-# Optimisation to the measured targets: desirability (several distinct solutions), PSO where
-# the paper used it, and the step closest to the target on a steepest-ascent path.
+# Targets and optimisation: the value each target has for a source (printed, or measured on the
+# soil's photos for the DEM source), desirability (several distinct solutions, the near-optimal
+# sets and the calibrated one), PSO where the paper used it, and the step closest to the target
+# on a steepest-ascent path.  A checkpoint: the verification and tool-test jobs take the
+# calibrated set as their params, so a new optimum re-runs exactly the jobs whose set changed.
 
 
-rule optimum:
+rule targets:
     input:
-        table=stage_table,
+        images=lambda w: [f"results/{w.soil}/images/measurements.json"]
+        if w.source == "dem" and any(t.get("image") for t in soil_cfg(w.soil)["targets"].values())
+        else [],
     output:
-        "results/{soil}/published/{stage}/optimum.csv",
+        "results/{soil}/{source}/targets.csv",
     params:
-        stage=lambda w: stage_cfg(w.soil, w.stage),
-        targets=lambda w: soil_cfg(w.soil)["targets"],
+        soil=lambda w: {"targets": soil_cfg(w.soil)["targets"]},
+    conda:
+        "../../envs/soilcal.yaml"
+    log:
+        "logs/{soil}/{source}/targets.log",
+    script:
+        "../scripts/targets.py"
+
+
+checkpoint optimum:
+    input:
+        stage="results/{soil}/{source}/{stage}/stage.json",
+        responses="results/{soil}/{source}/{stage}/responses.csv",
+        targets="results/{soil}/{source}/targets.csv",
+    output:
+        optimum="results/{soil}/{source}/{stage}/optimum.csv",
+        identifiability=report("results/{soil}/{source}/{stage}/identifiability.csv",
+                               caption="../report/identifiability.rst", category="{soil}",
+                               subcategory="{source} {stage}"),
+    params:
         seed=lambda w: soil_cfg(w.soil)["seed"],
     conda:
         "../../envs/soilcal.yaml"
     log:
-        "logs/{soil}/published/{stage}/optimum.log",
+        "logs/{soil}/{source}/{stage}/optimum.log",
     benchmark:
-        "benchmarks/workflow/{soil}/published/{stage}/optimum.tsv"
+        "benchmarks/workflow/{soil}/{source}/{stage}/optimum.tsv"
     script:
         "../scripts/optimum.py"

@@ -1,21 +1,21 @@
-# Regression and ANOVA (Design-Expert style) on the printed responses of PB and BBD stages.
+# Regression and ANOVA (Design-Expert style) of every PB and BBD stage, whatever the source of
+# its responses.
 
 
 rule regression:
     input:
-        table=stage_table,
+        stage="results/{soil}/{source}/{stage}/stage.json",
+        responses="results/{soil}/{source}/{stage}/responses.csv",
     output:
-        anova="results/{soil}/published/{stage}/anova.csv",
-        fit="results/{soil}/published/{stage}/fit.csv",
-        coefficients="results/{soil}/published/{stage}/coefficients.csv",
-        effects="results/{soil}/published/{stage}/effects.csv",
-    params:
-        stage=lambda w: stage_cfg(w.soil, w.stage),
+        anova="results/{soil}/{source}/{stage}/anova.csv",
+        fit="results/{soil}/{source}/{stage}/fit.csv",
+        coefficients="results/{soil}/{source}/{stage}/coefficients.csv",
+        effects="results/{soil}/{source}/{stage}/effects.csv",
     conda:
         "../../envs/soilcal.yaml"
     log:
-        "logs/{soil}/published/{stage}/regression.log",
+        "logs/{soil}/{source}/{stage}/regression.log",
     benchmark:
-        "benchmarks/workflow/{soil}/published/{stage}/regression.tsv"
+        "benchmarks/workflow/{soil}/{source}/{stage}/regression.tsv"
     script:
         "../scripts/regression.py"

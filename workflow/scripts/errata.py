@@ -1,5 +1,5 @@
 from soilcal.logs import redirect
-from soilcal.replay.run import write_errata
+from soilcal.chain.files import write_errata
 
 with redirect(snakemake.log[0]):
     df = write_errata(snakemake.params.soil, snakemake.params.published, snakemake.params.stage_dirs,

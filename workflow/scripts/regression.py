@@ -1,5 +1,8 @@
-from soilcal.logs import redirect
-from soilcal.replay.run import write_regression
+"""Snakemake adapter: regression and ANOVA of one stage (rule regression)."""
 
-with redirect(snakemake.log[0]):
-    write_regression(snakemake.params.stage, snakemake.input.table, dict(snakemake.output.items()))
+from soilcal.chain.files import read_stage, write_regression
+from soilcal.logs import redirect
+
+with redirect(snakemake.log[0]):  # noqa: F821
+    write_regression(read_stage(snakemake.input.stage), snakemake.input.responses,  # noqa: F821
+                     dict(snakemake.output.items()))  # noqa: F821

@@ -222,10 +222,31 @@ def _semantic_checks(path: Path, d: dict, resources_root: Path) -> None:
                 if key in pr and not (resources_root / "published" / d["name"] / pr[key]).is_file():
                     raise InputError(path, f"{where}.printed.{r}.{key}", "an existing file under resources/published/" + d["name"], pr[key])
         seen[sid] = st
+    _check_image_targets(path, d, resources_root)
     if d.get("simulation"):
         from soilcal.dem.scenarios.design import check_block
 
         check_block(path, d)
+    if d.get("measurements"):
+        from soilcal.config.measurements import check_measurements
+
+        check_measurements(path, d, resources_root)
+
+
+def _check_image_targets(path: Path, d: dict, resources_root: Path) -> None:
+    """A target measured on photos names a photo group of the soil's manifest."""
+    named = {tid: t["image"] for tid, t in d.get("targets", {}).items() if t.get("image")}
+    if not named:
+        return
+    manifest = resources_root / "images" / d["name"] / "manifest.yaml"
+    tid = next(iter(named))
+    if not manifest.is_file():
+        raise InputError(path, f"targets.{tid}.image", f"a photo group of {manifest}", "no such file")
+    m = read_yaml(manifest) or {}
+    groups = sorted({str(ph.get("group", "")) for ph in m.get("photos") or [] if isinstance(ph, dict)})
+    for tid, g in named.items():
+        if g not in groups:
+            raise InputError(path, f"targets.{tid}.image", f"a photo group of {manifest} ({', '.join(groups)})", g)
 
 
 def _check_table(path: Path, st: dict, where: str, pub: Path) -> None:
@@ -281,6 +302,7 @@ WORKFLOW_SCHEMA = {
         "soils": {"type": "array", "minItems": 1, "items": {"type": "string", "pattern": "^[a-z0-9][a-z0-9-]*$"}},
         "soil_dir": {"type": "string"},
         "resources": {"type": "string"},
+        "source": {"enum": ["published", "dem", "both"]},
     },
 }
 

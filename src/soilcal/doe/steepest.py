@@ -6,6 +6,20 @@ proportional to the coefficients. Choose a base factor i and its step in actual 
 Delta_i; in coded units Delta x_i = Delta_i / h_i (h = half range). The other coded steps are
 Delta x_j = b_j / |b_i| * |Delta x_i| (ascent) or its negative (descent), and in actual
 units Delta_j = Delta x_j * h_j. Step s is start + s * Delta.
+
+Deriving the climbing stage from our own screening (instead of copying the papers' levels):
+
+1. :func:`select_factors` picks the factors of the Plackett-Burman screening that are
+   significant for any response (p < alpha), topped up to the three factors a Box-Behnken
+   design needs.
+2. :func:`path_direction` turns the coded first-order coefficients of every targeted response
+   into one direction: the negative gradient of the summed squared relative error to the
+   targets (Montgomery sec. 11.2 with the response replaced by that error).
+3. :func:`derive_path` lays the steps out in actual units, either the papers' way (every factor
+   walks its whole screening range) or Montgomery's (steps proportional to the coefficients).
+4. :func:`chosen_step` picks the simulated step closest to the targets.
+5. :func:`bbd_levels` takes that step as the Box-Behnken centre and its neighbours as the low
+   and high levels.
 """
 
 from __future__ import annotations
@@ -81,4 +95,480 @@ def steepest_ascent_path(
     return df
 
 
-__all__ = ["steepest_ascent_path"]
+
+# --------------------------------------------------------------------------- derivation
+def _fmt(x: float) -> str:
+    """Short number for notes and reasons: 3 significant digits, no trailing zeros."""
+    return f"{x:.3g}"
+
+
+def _check_int(value, field: str, minimum: int) -> int:
+    if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < minimum:
+        raise InputError(None, field, f"an integer >= {minimum}", value)
+    return int(value)
+
+
+def select_factors(
+    effects: pd.DataFrame,
+    alpha: float = 0.05,
+    min_factors: int = 3,
+    max_factors: int | None = None,
+) -> pd.DataFrame:
+    """Factors of a two-level screening to carry into the climbing and Box-Behnken stages.
+
+    ``effects`` has columns response, term, coefficient, p: one block of rows per response,
+    e.g. :func:`soilcal.rsm.screening_effects` of each response with a ``response`` column
+    added. A factor is significant when p < ``alpha`` for ANY response (the papers carry a
+    factor forward when it is significant for at least one measured angle; Montgomery ch. 8
+    for the screening F tests). Factors are ranked by their smallest p over the responses
+    (``p_min``; ties: larger max |coefficient|, then order of first appearance; a factor
+    whose p is NaN for every response ranks last).
+
+    Selected: every significant factor, at most ``max_factors`` of them (best ranked kept);
+    when fewer than ``min_factors`` are significant, the best-ranked non-significant factors
+    are added up to ``min_factors`` (a Box-Behnken design needs at least 3 factors).
+
+    Returns one row per factor in rank order: term, rank (1 = best), p_min, significant,
+    selected, reason, then ``b_<response>`` (coded coefficient) and ``p_<response>`` per
+    response (NaN where a response has no row for the factor).
+    """
+    if not isinstance(effects, pd.DataFrame):
+        raise InputError(None, "effects", "a pandas DataFrame", type(effects).__name__)
+    need = ["response", "term", "coefficient", "p"]
+    missing = [c for c in need if c not in effects.columns]
+    if missing:
+        raise InputError(None, "effects", f"columns {need}", f"missing {missing}")
+    try:
+        alpha_f = float(alpha)
+    except (TypeError, ValueError):
+        raise InputError(None, "alpha", "a number in (0, 1)", alpha) from None
+    if not 0.0 < alpha_f < 1.0:
+        raise InputError(None, "alpha", "a number in (0, 1)", alpha)
+    min_factors = _check_int(min_factors, "min_factors", 1)
+    if max_factors is not None:
+        max_factors = _check_int(max_factors, "max_factors", 1)
+        if max_factors < min_factors:
+            raise InputError(None, "max_factors", f"None or an integer >= min_factors = {min_factors}",
+                             max_factors)
+    tab = effects[need].copy()
+    for c in ("coefficient", "p"):
+        try:
+            tab[c] = pd.to_numeric(tab[c], errors="raise").astype(float)
+        except (TypeError, ValueError):
+            raise InputError(None, f"effects.{c}", "numbers", list(effects[c])) from None
+    dup = tab.duplicated(["response", "term"])
+    if dup.any():
+        raise InputError(None, "effects", "one row per (response, term)",
+                         tab.loc[dup, ["response", "term"]].values.tolist())
+    terms = list(dict.fromkeys(tab["term"]))
+    responses = list(dict.fromkeys(tab["response"]))
+    if len(terms) < min_factors:
+        raise InputError(None, "effects.term", f"at least min_factors = {min_factors} factors", terms)
+
+    b = tab.pivot(index="term", columns="response", values="coefficient").reindex(index=terms, columns=responses)
+    p = tab.pivot(index="term", columns="response", values="p").reindex(index=terms, columns=responses)
+    p_arr = p.to_numpy(dtype=float)
+    b_arr = np.abs(b.to_numpy(dtype=float))
+    with np.errstate(all="ignore"):
+        all_nan_p = np.isnan(p_arr).all(axis=1)
+        p_min = np.where(all_nan_p, np.nan, np.nanmin(np.where(np.isnan(p_arr), np.inf, p_arr), axis=1))
+        b_max = np.where(np.isnan(b_arr).all(axis=1), -np.inf,
+                         np.nanmax(np.where(np.isnan(b_arr), -np.inf, b_arr), axis=1))
+    # sort key: p_min ascending (NaN last), then max |b| descending, then first appearance
+    order = sorted(range(len(terms)),
+                   key=lambda i: (np.isnan(p_min[i]), 0.0 if np.isnan(p_min[i]) else p_min[i], -b_max[i], i))
+
+    rows = []
+    n_sig_kept = 0
+    for i in order:
+        sig = bool(p_min[i] < alpha_f)  # NaN compares False
+        rows.append({"i": i, "term": terms[i], "p_min": float(p_min[i]), "significant": sig})
+    for r in rows:
+        if not r["significant"]:
+            continue
+        if max_factors is None or n_sig_kept < max_factors:
+            n_sig_kept += 1
+            j = int(np.nanargmin(np.where(np.isnan(p_arr[r["i"]]), np.inf, p_arr[r["i"]])))
+            r["selected"] = True
+            r["reason"] = f"p = {_fmt(p_arr[r['i'], j])} < {alpha_f:g} ({responses[j]})"
+        else:
+            r["selected"] = False
+            r["reason"] = f"significant but beyond max_factors = {max_factors}"
+    n_sel = n_sig_kept
+    for r in rows:
+        if r["significant"]:
+            continue
+        if n_sel < min_factors:
+            n_sel += 1
+            r["selected"] = True
+            r["reason"] = ("added: a Box-Behnken design needs at least 3 factors" if min_factors == 3
+                           else f"added: min_factors = {min_factors} (p_min = {_fmt(r['p_min'])})")
+        else:
+            r["selected"] = False
+            r["reason"] = f"not significant (p_min = {_fmt(r['p_min'])})"
+
+    out = pd.DataFrame({
+        "term": [r["term"] for r in rows],
+        "rank": np.arange(1, len(rows) + 1),
+        "p_min": [r["p_min"] for r in rows],
+        "significant": [r["significant"] for r in rows],
+        "selected": [r["selected"] for r in rows],
+        "reason": [r["reason"] for r in rows],
+    })
+    idx = [terms[r["i"]] for r in rows]
+    for resp in responses:
+        out[f"b_{resp}"] = b.loc[idx, resp].to_numpy(dtype=float)
+        out[f"p_{resp}"] = p.loc[idx, resp].to_numpy(dtype=float)
+    out.attrs["alpha"] = alpha_f
+    out.attrs["min_factors"] = min_factors
+    out.attrs["max_factors"] = max_factors
+    return out
+
+
+def path_direction(
+    coefficients: dict[str, dict[str, float]],
+    intercepts: dict[str, float],
+    targets: dict[str, float],
+) -> dict[str, float]:
+    """Coded direction of the climbing path towards the measured targets.
+
+    Montgomery (Design and Analysis of Experiments, sec. 11.2) moves along the gradient of the
+    fitted first-order model y = b0 + sum_j b_j x_j. Here the quantity to improve is the
+    distance to the targets, so the path descends the summed squared relative error of the
+    first-order models, f(x) = sum_r ((y_r(x) - t_r) / t_r)^2. Its negative half-gradient at
+    the design centre x = 0 is
+
+        d_j = sum_r (t_r - b0_r) / t_r^2 * b_rj,
+
+    which for one response is |t - b0| / t^2 * sign(t - b0) * b_j: steepest ascent when the
+    centre response b0 is below the target, steepest descent when above. Relative errors keep
+    responses of different units and sizes comparable.
+
+    coefficients: response -> {factor: coded b_j}; intercepts: response -> b0 (the response
+    predicted at the centre, for a two-level screening the mean response); targets: response
+    -> target. Responses without a target are ignored; every targeted response needs
+    coefficients and an intercept, and all targeted responses the same factors.
+    Returns {factor: d_j}, unnormalised, in the factor order of the first targeted response.
+    """
+    if not isinstance(targets, Mapping) or not targets:
+        raise InputError(None, "targets", "at least one response -> target value", targets)
+    if not isinstance(coefficients, Mapping):
+        raise InputError(None, "coefficients", "a mapping response -> {factor: coefficient}",
+                         type(coefficients).__name__)
+    if not isinstance(intercepts, Mapping):
+        raise InputError(None, "intercepts", "a mapping response -> intercept", type(intercepts).__name__)
+    factors: list[str] | None = None
+    d: dict[str, float] = {}
+    for r, t in targets.items():
+        t = float(t)
+        if not np.isfinite(t) or t == 0.0:
+            raise InputError(None, f"targets[{r}]", "a finite non-zero target (errors are relative to it)", t)
+        if r not in coefficients:
+            raise InputError(None, "coefficients", f"coefficients for the targeted response {r!r}",
+                             sorted(coefficients))
+        if r not in intercepts:
+            raise InputError(None, "intercepts", f"an intercept for the targeted response {r!r}",
+                             sorted(intercepts))
+        b0 = float(intercepts[r])
+        if not np.isfinite(b0):
+            raise InputError(None, f"intercepts[{r}]", "a finite number", b0)
+        br = coefficients[r]
+        if not isinstance(br, Mapping) or not br:
+            raise InputError(None, f"coefficients[{r}]", "a non-empty mapping factor -> coefficient", br)
+        if factors is None:
+            factors = list(br)
+            d = {f: 0.0 for f in factors}
+        elif set(br) != set(factors):
+            raise InputError(None, f"coefficients[{r}]", f"the same factors as the other responses {factors}",
+                             list(br))
+        w = (t - b0) / t**2
+        for f in factors:
+            bj = float(br[f])
+            if not np.isfinite(bj):
+                raise InputError(None, f"coefficients[{r}][{f}]", "a finite number", bj)
+            d[f] += w * bj
+    if all(v == 0.0 for v in d.values()):
+        raise InputError(None, "coefficients/intercepts",
+                         "a non-zero path direction (some target different from its centre "
+                         "response and some factor with a non-zero coefficient)", d)
+    return d
+
+
+def _factor_bounds(direction, low, high) -> tuple[list[str], dict, dict, dict]:
+    if not isinstance(direction, Mapping) or not direction:
+        raise InputError(None, "direction", "a non-empty mapping factor -> direction component", direction)
+    factors = list(direction)
+    for name, m in (("low", low), ("high", high)):
+        if not isinstance(m, Mapping) or set(m) != set(factors):
+            got = sorted(m) if isinstance(m, Mapping) else m
+            raise InputError(None, name, f"a value for exactly the factors {factors}", got)
+    d = {f: float(direction[f]) for f in factors}
+    lo = {f: float(low[f]) for f in factors}
+    hi = {f: float(high[f]) for f in factors}
+    for f in factors:
+        if not np.isfinite(d[f]):
+            raise InputError(None, f"direction[{f}]", "a finite number", d[f])
+        if not (np.isfinite(lo[f]) and np.isfinite(hi[f]) and lo[f] < hi[f]):
+            raise InputError(None, f"low/high[{f}]", "finite bounds with low < high", (lo[f], hi[f]))
+    return factors, d, lo, hi
+
+
+def derive_path(
+    direction: dict[str, float],
+    low: dict[str, float],
+    high: dict[str, float],
+    n_steps: int,
+    rule: str = "range",
+    base: str | None = None,
+    base_step: float | None = None,
+) -> pd.DataFrame:
+    """Factor levels (actual units) of the climbing path, steps 1..n_steps.
+
+    direction: factor -> coded direction component d_j (e.g. from :func:`path_direction`);
+    low/high: the factors' screening ranges (actual units), half range h_j.
+
+    rule "range" (the papers' practice; cinnamon soil, Table 5: A 0.05 -> 0.2, B 0.1 -> 0.8,
+    C 0.3 -> 0.9 in 6 steps): every factor with d_j != 0 walks its whole screening range in
+    n_steps equal steps, from the end opposite to its direction to the other end (d_j > 0:
+    low -> high; d_j < 0: high -> low). Only the signs of d are used. A factor with d_j == 0
+    stays at its centre.
+
+    rule "proportional" (Montgomery, Design and Analysis of Experiments, sec. 11.2): the base
+    factor (default: the largest |d_j|, first on ties) moves ``base_step`` actual units per step
+    (sign ignored; default: its full range / (n_steps - 1)), i.e. a coded step
+    Delta x_base = sign(d_base) * base_step / h_base; every other factor moves the coded step
+    Delta x_j = d_j / |d_base| * |Delta x_base|, i.e. h_j * Delta x_j actual units. The path is
+    centred on the screening centre: step 1 is the centre shifted back by (n_steps - 1) / 2
+    steps, so the middle of the path (a step for odd n_steps, between two steps for even) is the
+    centre. With the default base_step the base factor walks exactly its screening range, as in
+    the "range" rule; other factors may leave their screening ranges (no clipping).
+
+    Returns columns step and one per factor; ``attrs["rule"]``, ``attrs["step"]`` (signed
+    actual increment per factor), ``attrs["direction"]`` (sign per factor: +1, -1 or 0) and,
+    for "proportional", ``attrs["base"]`` and ``attrs["coded_step"]``.
+    """
+    factors, d, lo, hi = _factor_bounds(direction, low, high)
+    n = _check_int(n_steps, "n_steps", 2)
+    if rule not in ("range", "proportional"):
+        raise InputError(None, "rule", "'range' or 'proportional'", rule)
+    if all(v == 0.0 for v in d.values()):
+        raise InputError(None, "direction", "at least one non-zero component", d)
+    sign = {f: int(np.sign(d[f])) for f in factors}
+    half = {f: (hi[f] - lo[f]) / 2.0 for f in factors}
+    centre = {f: (hi[f] + lo[f]) / 2.0 for f in factors}
+    steps = np.arange(1, n + 1)
+    out = pd.DataFrame({"step": steps})
+    step_actual: dict[str, float] = {}
+    if rule == "range":
+        if base is not None or base_step is not None:
+            raise InputError(None, "base/base_step", "None with rule 'range' (they apply to 'proportional')",
+                             (base, base_step))
+        for f in factors:
+            if sign[f] > 0:
+                out[f] = np.linspace(lo[f], hi[f], n)
+            elif sign[f] < 0:
+                out[f] = np.linspace(hi[f], lo[f], n)
+            else:
+                out[f] = np.full(n, centre[f])
+            step_actual[f] = sign[f] * (hi[f] - lo[f]) / (n - 1)
+    else:
+        if base is None:
+            base = max(factors, key=lambda f: abs(d[f]))  # max() keeps the first on ties
+        elif base not in d:
+            raise InputError(None, "base", f"one of the factors {factors}", base)
+        if d[base] == 0.0:
+            raise InputError(None, "base", "a factor with a non-zero direction component", base)
+        if base_step is None:
+            base_step_f = (hi[base] - lo[base]) / (n - 1)
+        else:
+            base_step_f = abs(float(base_step))
+            if not np.isfinite(base_step_f) or base_step_f == 0.0:
+                raise InputError(None, "base_step", "a finite non-zero step in actual units", base_step)
+        dx_base = base_step_f / half[base]
+        coded = {f: d[f] / abs(d[base]) * dx_base for f in factors}
+        shift = (n - 1) / 2.0
+        for f in factors:
+            step_actual[f] = coded[f] * half[f]
+            out[f] = centre[f] + (steps - 1 - shift) * step_actual[f]
+        out.attrs["base"] = base
+        out.attrs["coded_step"] = coded
+    out.attrs["rule"] = rule
+    out.attrs["step"] = step_actual
+    out.attrs["direction"] = sign
+    return out
+
+
+def _path_steps(path) -> np.ndarray:
+    if not isinstance(path, pd.DataFrame) or "step" not in path.columns:
+        raise InputError(None, "path", "a DataFrame with a 'step' column", type(path).__name__)
+    if len(path) == 0:
+        raise InputError(None, "path", "at least one step", 0)
+    return path["step"].to_numpy()
+
+
+def chosen_step(
+    path: pd.DataFrame,
+    responses: dict[str, np.ndarray | list],
+    targets: dict[str, float],
+) -> tuple[int, pd.DataFrame]:
+    """Step of the climbing path whose simulated responses are closest to the targets.
+
+    responses: response -> simulated value per path step (row order of ``path``; NaN for a
+    failed step). targets: response -> measured target; every targeted response must be in
+    ``responses`` (responses without a target are reported but do not count). Combined error
+
+        E_s = 100 * sqrt(mean_r ((y_rs - t_r) / t_r)^2)   (%),
+
+    over the targeted responses; for one response this is the papers' relative error
+    |y - t| / |t| * 100. A step where any targeted response is NaN has E_s = NaN and is skipped.
+    The chosen step has the smallest finite E_s (ties: the earlier step) and becomes the
+    Box-Behnken centre (see :func:`bbd_levels`).
+
+    Returns (chosen step number, frame with columns step, one per response,
+    ``error_<response>_percent`` per targeted response, error_percent, chosen).
+    """
+    steps = _path_steps(path)
+    if not isinstance(responses, Mapping) or not responses:
+        raise InputError(None, "responses", "a mapping response -> values per path step", responses)
+    if not isinstance(targets, Mapping) or not targets:
+        raise InputError(None, "targets", "at least one response -> target value", targets)
+    out = pd.DataFrame({"step": steps})
+    for r, v in responses.items():
+        arr = np.asarray(v, dtype=float).reshape(-1)
+        if arr.size != len(steps):
+            raise InputError(None, f"responses[{r}]", f"{len(steps)} values (one per path step)", arr.size)
+        out[r] = arr
+    rel = []
+    for r, t in targets.items():
+        if r not in responses:
+            raise InputError(None, "targets", f"targets only for given responses {list(responses)}", r)
+        t = float(t)
+        if not np.isfinite(t) or t == 0.0:
+            raise InputError(None, f"targets[{r}]", "a finite non-zero target (errors are relative to it)", t)
+        e = (out[r].to_numpy() - t) / t
+        out[f"error_{r}_percent"] = np.abs(e) * 100.0
+        rel.append(e)
+    with np.errstate(invalid="ignore"):
+        err = np.sqrt(np.mean(np.square(np.vstack(rel)), axis=0)) * 100.0
+    err = np.where(np.isfinite(err), err, np.nan)
+    out["error_percent"] = err
+    if not np.isfinite(err).any():
+        raise InputError(None, "responses", "at least one step with finite responses for every target",
+                         "no finite error")
+    i = int(np.nanargmin(err))  # first occurrence on ties
+    out["chosen"] = np.arange(len(out)) == i
+    best = steps[i]
+    return (int(best) if float(best).is_integer() else best), out
+
+
+def bbd_levels(
+    path: pd.DataFrame,
+    step: int,
+    factors: list[str],
+    bounds: dict[str, tuple[float, float]] | None = None,
+) -> dict[str, dict[str, float]]:
+    """Box-Behnken low / centre / high levels from the chosen step of the climbing path.
+
+    The papers take the chosen step as the centre and its neighbours on the path as the low
+    and high levels ("levels of no. 2, no. 3 and no. 4 were selected as low, medium and high",
+    cinnamon soil; vineyard soil: step 2 centre, steps 1 and 3 low/high, with B descending
+    along the path so step 1 is its HIGH level). For each factor the centre is its level at
+    ``step`` and the other two levels are those of the previous and next rows of ``path``
+    (sorted by step), sorted so low < high. At the first or last step the missing neighbour is
+    the centre mirrored: centre -/+ the distance to the one existing neighbour.
+
+    bounds: optional physical limits factor -> (lower, upper), closed, None for no limit on a
+    side (e.g. restitution (1e-6, 1), friction (0, None)). A triple with a level outside is
+    shifted as a whole inside the violated bound, keeping its spacing (so the coded
+    -1/0/+1 levels stay equally spaced); if the spacing high - low does not fit between the
+    bounds, InputError. A factor without three distinct levels around ``step`` (e.g. d_j == 0,
+    constant along the path) raises InputError.
+
+    Returns {factor: {"low", "centre", "high", "note"}}; the note names the steps that gave
+    the levels and any mirroring or shift.
+    """
+    _path_steps(path)
+    if not isinstance(factors, (list, tuple)) or not factors:
+        raise InputError(None, "factors", "a non-empty list of path columns", factors)
+    missing = [f for f in factors if f not in path.columns or f == "step"]
+    if missing:
+        raise InputError(None, "factors", f"factor columns of the path {[c for c in path.columns if c != 'step']}",
+                         missing)
+    if len(path) < 2:
+        raise InputError(None, "path", "at least 2 steps (the centre needs a neighbour)", len(path))
+    p = path.sort_values("step", kind="stable").reset_index(drop=True)
+    steps = p["step"].tolist()
+    if len(set(steps)) != len(steps):
+        raise InputError(None, "path.step", "unique step numbers", steps)
+    if step not in steps:
+        raise InputError(None, "step", f"one of the path steps {steps}", step)
+    i = steps.index(step)
+    bounds = {} if bounds is None else bounds
+    if not isinstance(bounds, Mapping):
+        raise InputError(None, "bounds", "a mapping factor -> (lower, upper)", bounds)
+    out: dict[str, dict[str, float]] = {}
+    for f in factors:
+        vals = p[f].to_numpy(dtype=float)
+        c = vals[i]
+        prev = vals[i - 1] if i > 0 else None
+        nxt = vals[i + 1] if i + 1 < len(vals) else None
+        if prev is None:
+            prev = 2.0 * c - nxt
+            note = (f"centre = step {steps[i]}, other level = step {steps[i + 1]}, "
+                    f"mirrored level = 2 * centre - step {steps[i + 1]} (first step of the path)")
+        elif nxt is None:
+            nxt = 2.0 * c - prev
+            note = (f"centre = step {steps[i]}, other level = step {steps[i - 1]}, "
+                    f"mirrored level = 2 * centre - step {steps[i - 1]} (last step of the path)")
+        else:
+            lo_s, hi_s = (steps[i - 1], steps[i + 1]) if prev < nxt else (steps[i + 1], steps[i - 1])
+            note = f"low = step {lo_s}, centre = step {steps[i]}, high = step {hi_s}"
+        lo, hi = min(prev, nxt), max(prev, nxt)
+        if not all(np.isfinite([lo, c, hi])):
+            raise InputError(None, f"path.{f}", "finite levels around the chosen step", (prev, c, nxt))
+        if not lo < c < hi:
+            raise InputError(None, f"path.{f}",
+                             f"three distinct levels around step {step} with the centre between its "
+                             "neighbours (a Box-Behnken factor needs low < centre < high; a factor "
+                             "constant along the path cannot be one)", (prev, c, nxt))
+        if f in bounds and bounds[f] is not None:
+            bl, bu = _bound_pair(bounds[f], f)
+            if hi - lo > bu - bl:
+                raise InputError(None, f"bounds[{f}]",
+                                 f"room for the level spacing high - low = {_fmt(hi - lo)}", (bl, bu))
+            shift = 0.0
+            if lo < bl:
+                shift = bl - lo
+            elif hi > bu:
+                shift = bu - hi
+            if shift != 0.0:
+                lo, c, hi = lo + shift, c + shift, hi + shift
+                if shift > 0:
+                    lo = bl  # exact bound (avoid round-off just outside)
+                else:
+                    hi = bu
+                note += f"; shifted by {shift:+.3g} to stay within bounds [{_fmt(bl)}, {_fmt(bu)}]"
+        out[f] = {"low": float(lo), "centre": float(c), "high": float(hi), "note": note}
+    return out
+
+
+def _bound_pair(b, f: str) -> tuple[float, float]:
+    try:
+        bl, bu = b
+    except (TypeError, ValueError):
+        raise InputError(None, f"bounds[{f}]", "a pair (lower, upper), None for no limit", b) from None
+    bl = -np.inf if bl is None else float(bl)
+    bu = np.inf if bu is None else float(bu)
+    if np.isnan(bl) or np.isnan(bu) or not bl < bu:
+        raise InputError(None, f"bounds[{f}]", "lower < upper", (bl, bu))
+    return bl, bu
+
+
+__all__ = [
+    "bbd_levels",
+    "chosen_step",
+    "derive_path",
+    "path_direction",
+    "select_factors",
+    "steepest_ascent_path",
+]

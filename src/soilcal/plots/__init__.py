@@ -1,7 +1,10 @@
 """soilcal.plots: calibration figures (response surfaces, Pareto chart, steepest-ascent path,
-regression diagnostics, optimiser convergence), each written as <stem>.png (150 dpi) and
-<stem>.pdf; see :mod:`soilcal.plots.figures`."""
+regression diagnostics, optimiser convergence; DEM verification against targets, tool
+measurements and the papers' printed simulations), each written as <stem>.png (150 dpi) and
+<stem>.pdf; see :mod:`soilcal.plots.figures` and
+:mod:`soilcal.plots.dem`."""
 
+from soilcal.plots.dem import summary_figure, tool_bars, tool_curves, verification_bars
 from soilcal.plots.figures import (
     convergence,
     factor_label,
@@ -24,4 +27,8 @@ __all__ = [
     "save_figure",
     "standardized_effects",
     "steepest_ascent",
+    "summary_figure",
+    "tool_bars",
+    "tool_curves",
+    "verification_bars",
 ]

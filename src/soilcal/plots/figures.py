@@ -236,12 +236,37 @@ def pareto_effects(
     bonferroni: bool = True,
     df_resid: float | None = None,
     response_label: str | None = None,
+    reference: pd.DataFrame | None = None,
+    reference_label: str = "paper",
 ) -> tuple[Path, Path]:
     """Pareto chart of |standardized effects| with the t critical and Bonferroni limits.
 
     ``df_resid`` defaults to ``effects.attrs['residual']['df']`` (as
     :func:`soilcal.rsm.screening_effects` records it).
+
+    reference: published standardized effects, columns term and t (as the paper prints them or
+    as computed from its ANOVA table), drawn as black diamonds at |t| on the rows of the same
+    terms; terms missing from either side, and NaN t, are skipped.
     """
+    fig = _pareto_figure(effects, alpha, bonferroni, df_resid, response_label, reference, reference_label)
+    return save_figure(fig, stem)
+
+
+def _reference_effects(reference, terms) -> pd.DataFrame:
+    """[term, t] of a published effects table, restricted to ``terms`` (NaN t dropped)."""
+    if not isinstance(reference, pd.DataFrame):
+        raise InputError(None, "reference", "a DataFrame with columns term, t", type(reference).__name__)
+    missing = [c for c in ("term", "t") if c not in reference.columns]
+    if missing:
+        raise InputError(None, "reference", "columns ['term', 't']", f"missing {missing}")
+    ref = pd.DataFrame({"term": reference["term"].astype(str).to_numpy(),
+                        "t": pd.to_numeric(reference["t"], errors="coerce").to_numpy(float)})
+    ref = ref[np.isfinite(ref["t"]) & ref["term"].isin(list(terms))]
+    return ref.drop_duplicates("term", keep="first")
+
+
+def _pareto_figure(effects, alpha, bonferroni, df_resid, response_label, reference=None,
+                   reference_label: str = "paper") -> Figure:
     if not 0 < alpha < 1:
         raise InputError(None, "alpha", "a significance level in (0, 1)", alpha)
     if df_resid is None:
@@ -258,9 +283,14 @@ def pareto_effects(
     ax = fig.add_subplot(1, 1, 1)
     colours = np.where(tab["t"] >= 0, "#d95f02", "#1b9e77")
     ax.barh(tab["term"], tab["abs_t"], color=colours, edgecolor="k")
+    ref = None if reference is None else _reference_effects(reference, tab["term"])
     ax.axvline(t_crit, color="k", ls="-", lw=1.2, label=f"t critical = {t_crit:.3f} (alpha = {alpha:g}, df = {df_resid:g})")
     if bonferroni:
         ax.axvline(t_bonf, color="k", ls="--", lw=1.2, label=f"Bonferroni limit = {t_bonf:.3f}")
+    if ref is not None and not ref.empty:
+        # category axis: the term strings land on the rows of the bars
+        ax.plot(ref["t"].abs().to_numpy(), ref["term"].to_numpy(), "D", color="k", mfc="k", ms=7, ls="none",
+                zorder=4, label=f"{reference_label} |t|")
     from matplotlib.patches import Patch
 
     handles, _ = ax.get_legend_handles_labels()
@@ -269,9 +299,12 @@ def pareto_effects(
     ax.set_xlabel("|standardized effect| (t-value)")
     ax.set_ylabel("term")
     ax.set_title(f"Pareto chart{': ' + response_label if response_label else ''}")
-    ax.set_xlim(0, max(float(tab["abs_t"].max()), t_bonf if bonferroni else t_crit) * 1.1)
+    xmax = max(float(tab["abs_t"].max()), t_bonf if bonferroni else t_crit)
+    if ref is not None and not ref.empty:
+        xmax = max(xmax, float(ref["t"].abs().max()))
+    ax.set_xlim(0, xmax * 1.1)
     fig.tight_layout()
-    return save_figure(fig, stem)
+    return fig
 
 
 # --------------------------------------------------------------------------- steepest ascent
@@ -284,9 +317,20 @@ def steepest_ascent(
     target: float | None,
     stem="steepest_ascent",
     response_label: str | None = None,
+    reference: pd.DataFrame | None = None,
+    reference_label: str = "paper",
 ) -> tuple[Path, Path]:
     """Response against step of a steepest-ascent (climbing) path, with the target line and the
-    relative error |y - target| / target (%) on a second axis; factor levels under each step."""
+    relative error |y - target| / target (%) on a second axis; factor levels under each step.
+
+    reference: the published path, columns step and ``response``, drawn as a second line
+    (orange squares, dashed) on the response axis; NaN responses are skipped."""
+    fig = _steepest_ascent_figure(df, factors, response, target, response_label, reference, reference_label)
+    return save_figure(fig, stem)
+
+
+def _steepest_ascent_figure(df, factors, response, target, response_label=None, reference=None,
+                            reference_label: str = "paper") -> Figure:
     if not isinstance(df, pd.DataFrame):
         raise InputError(None, "df", "a DataFrame with columns step, factors, response", type(df).__name__)
     missing = [c for c in ["step", *factors, response] if c not in df.columns]
@@ -294,12 +338,24 @@ def steepest_ascent(
         raise InputError(None, "df", f"columns {['step', *factors, response]}", f"missing {missing}")
     if df.empty:
         raise InputError(None, "df", "at least one step", 0)
+    if reference is not None:
+        if not isinstance(reference, pd.DataFrame):
+            raise InputError(None, "reference", f"a DataFrame with columns step, {response}", type(reference).__name__)
+        missing = [c for c in ("step", response) if c not in reference.columns]
+        if missing:
+            raise InputError(None, "reference", f"columns {['step', response]}", f"missing {missing}")
     steps = df["step"].to_numpy()
     y = df[response].to_numpy(float)
     rlab = response_label or response
     fig = _figure(7.5, 5.0)
     ax = fig.add_subplot(1, 1, 1)
     ax.plot(steps, y, "o-", color="C0", label=rlab)
+    if reference is not None:
+        rs = pd.to_numeric(reference["step"], errors="coerce").to_numpy(float)
+        ry = pd.to_numeric(reference[response], errors="coerce").to_numpy(float)
+        keep = np.isfinite(rs) & np.isfinite(ry)
+        if keep.any():
+            ax.plot(rs[keep], ry[keep], "s--", color="C1", mec="k", label=f"{reference_label}: {rlab}")
     if target is not None and np.isfinite(target):
         ax.axhline(target, color="C3", ls="--", label=f"target = {target:g}")
         if target != 0:
@@ -325,7 +381,7 @@ def steepest_ascent(
     ax.set_ylabel(rlab)
     ax.set_title("Steepest ascent path")
     fig.tight_layout()
-    return save_figure(fig, stem)
+    return fig
 
 
 # --------------------------------------------------------------------------- diagnostics

@@ -108,3 +108,29 @@ def test_quick_run_resists_motion(tmp_path, monkeypatch):
                           seed=0, threads=1)
     assert res3.responses["horizontal_force_N"] == pytest.approx(r["horizontal_force_N"],
                                                                  rel=1e-9)
+
+
+def test_tool_step_respects_the_damped_soil_steel_bound():
+    """A heavily damped soil-steel contact (restitution 0.2, as a calibrated set may have)
+    lowers the damped-contact bound of the tool's contacts below the settling step: the tool
+    pass must step within it (the engine refuses a step above the bound)."""
+    from soilcal.dem.engine import Simulation
+    from soilcal.dem.scenarios import soilbin
+    from soilcal.dem.scenarios.base import build_materials, contact_model
+
+    s = bulldozing._settings(bulldozing.setups()["plate-arc"], "quick")
+    spec = bulldozing._bin(s)
+    params = bulldozing.paper_params().replace(soil_steel_restitution=0.2, soil_soil_restitution=0.6)
+    settle_dt, tool_dt = soilbin.soil_time_step(spec, params), soilbin.tool_time_step(spec, params)
+    assert tool_dt < settle_dt
+    mats = build_materials(params, spec.stiffness_scale, "t", spec.cohesion_scale)
+    sim = Simulation(mats, dt=tool_dt, contact_model=contact_model(params), max_overlap=spec.max_overlap)
+    sim.add_particles(np.array([[0.0, 0.0, spec.r_min]]), np.array([spec.r_min]), "soil")
+    sim.add_plane((0, 0, 0), (0, 0, 1), "steel")
+    sim.run(1)
+    assert sim.dt == tool_dt
+    with pytest.raises(InputError, match="damped-contact bound"):
+        over = Simulation(mats, dt=settle_dt, contact_model=contact_model(params), max_overlap=spec.max_overlap)
+        over.add_particles(np.array([[0.0, 0.0, spec.r_min]]), np.array([spec.r_min]), "soil")
+        over.add_plane((0, 0, 0), (0, 0, 1), "steel")
+        over.run(1)

@@ -128,7 +128,10 @@ def spec_from(soil_path, data: dict, response_id: str) -> SimulationSpec:
 
 
 def check_block(soil_path, data: dict) -> None:
-    """Start-up check of a soil's ``simulation`` block (called by the config loader)."""
+    """Start-up check of a soil's ``simulation`` block (called by the config loader): every
+    response mapped to a scenario it can be measured with, every stage the DEM source runs
+    (``stages``) known and simulable - its levels given, or derived from an earlier DEM stage
+    (:mod:`soilcal.chain.derive`) - and every response of those stages simulated."""
     sim = data.get(BLOCK)
     if not sim:
         return
@@ -138,6 +141,50 @@ def check_block(soil_path, data: dict) -> None:
             raise InputError(soil_path, f"{BLOCK}.responses.{rid}",
                              "a response id of a stage (" + ", ".join(rids) + ")", rid)
         spec_from(soil_path, data, rid)
+    ids = [s["id"] for s in data["stages"]]
+    for i, sid in enumerate(sim.get("stages") or []):
+        if sid not in ids:
+            raise InputError(soil_path, f"{BLOCK}.stages[{i}]", "a stage id (" + ", ".join(ids) + ")", sid)
+    from soilcal.chain.derive import dem_stage_ids, dependencies, design_mode
+
+    for sid in dem_stage_ids(data):
+        st = next(s for s in data["stages"] if s["id"] == sid)
+        for r in st["responses"]:
+            if r["id"] not in (sim.get("responses") or {}):
+                raise InputError(soil_path, f"{BLOCK}.responses",
+                                 f"an entry for the response {r['id']!r} of stage {sid!r} (or leave the stage out "
+                                 f"of {BLOCK}.stages)", sorted(sim.get("responses") or {}))
+        deps = dependencies(data, sid)
+        if "from" in deps:
+            if st["kind"] == "steepest_ascent" and not _has_target(data, [r["id"] for r in st["responses"]]):
+                raise InputError(soil_path, f"stages.{sid}.responses",
+                                 "a target for at least one response (a target id equal to the response id, or an "
+                                 "optimisation case aiming at it) to lay the steepest-ascent path towards",
+                                 [r["id"] for r in st["responses"]])
+            continue
+        if design_mode(data) == "printed" and st.get("table"):
+            continue
+        for sym, f in st["factors"].items():
+            where = f"stages.{sid}.factors.{sym}"
+            if st["kind"] == "steepest_ascent" and not f.get("levels"):
+                raise InputError(soil_path, f"{where}.levels",
+                                 f"the level of every step to simulate the stage (or leave {sid!r} out of "
+                                 f"{BLOCK}.stages)", None)
+            if st["kind"] != "steepest_ascent" and (f.get("low") is None or f.get("high") is None):
+                raise InputError(soil_path, where,
+                                 f"low and high levels to simulate the stage (or leave {sid!r} out of "
+                                 f"{BLOCK}.stages)", f)
+
+
+def _has_target(data: dict, rids) -> bool:
+    targets = data.get("targets") or {}
+    if any(r in targets for r in rids):
+        return True
+    for st in data["stages"]:
+        for case in (st.get("optimise") or {}).get("cases", []):
+            if any(r in case["goals"] and case["goals"][r].get("goal") == "target" for r in rids):
+                return True
+    return False
 
 
 def spec(soil, response_id: str) -> SimulationSpec:

@@ -190,6 +190,17 @@ def soil_time_step(spec: BinSpec, params: DemParams) -> float:
                                                        wall_materials={mats.index("soil")}))
 
 
+def tool_time_step(spec: BinSpec, params: DemParams) -> float:
+    """:func:`soil_time_step` also capped at DAMPING_DT_SAFETY x the damped-contact bound of
+    the soil-steel contacts: the tool is a steel wall, and a low soil-steel restitution (a
+    heavily damped contact) lowers the bound below the settling step's."""
+    mats = build_materials(params, spec.stiffness_scale, "<bin>", spec.cohesion_scale)
+    model = contact_model(params)
+    rmin, tab = {mats.index("soil"): spec.r_min}, mats.table(model_codes(**model)[1])
+    return min(soil_time_step(spec, params),
+               DAMPING_DT_SAFETY * mats.damping_dt(rmin, tab, spec.max_overlap))
+
+
 def reference_cohesion(spec: BinSpec, reference: BinSpec, setup: dict, source: str) -> float:
     """Surface-energy factor of a bin against the paper preset's bin (base.py)."""
     return cohesion_scale(spec.dist, reference.dist, setup, source)
@@ -342,7 +353,7 @@ def tool_pass(spec: BinSpec, params: DemParams, preset: str, seed: int, source: 
     if bed is None:
         bed = settled_bin(spec, params, preset, seed, source, use_cache)
     keep = dig(bed["x"], bed["r"], trench)
-    dt = soil_time_step(spec, params)
+    dt = tool_time_step(spec, params)
     if dt_max is not None:
         dt = min(dt, float(dt_max))
     sim = new_sim(spec, params, dt, source)

@@ -7,7 +7,7 @@ from pathlib import Path
 
 def _replay(args) -> int:
     from soilcal.config import load_soil
-    from soilcal.replay.run import replay_soil
+    from soilcal.chain.files import replay_soil
 
     soil = load_soil(args.soil, args.resources)
     base = Path(args.out) / soil.name / "published"

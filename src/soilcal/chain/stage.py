@@ -1,7 +1,9 @@
-"""One stage of a replay: design, regression/ANOVA, optimum.
+"""One stage of the calibration chain: design, regression/ANOVA, optimum.
 
-Inputs are plain data: the soil mapping (as loaded from YAML), the stage id and the printed
-table. Functions return pandas frames; writing files is left to the caller.
+Inputs are plain data: the stage mapping (the soil config's stage for the published source,
+the derived stage of :mod:`soilcal.chain.derive` for the DEM source) and the stage's response
+table (the printed table, or the DEM runs gathered by :mod:`soilcal.chain.sources` in the same
+layout).  Functions return pandas frames; writing files is left to the caller.
 """
 
 from __future__ import annotations
@@ -120,7 +122,8 @@ def design_frame(stage: dict, table: pd.DataFrame | None) -> tuple[pd.DataFrame,
     if all("low" in f and "high" in f for f in stage["factors"].values()):
         _, low, high = bounds(stage)
         for j, s in enumerate(syms):
-            df[f"{s}_actual"] = doe.coded_to_actual(coded[:, j], low[j], high[j])
+            # 12 significant digits: 0.05 stays 0.05, not 0.0499999999999999 (centre - half range)
+            df[f"{s}_actual"] = [float(f"{v:.12g}") for v in doe.coded_to_actual(coded[:, j], low[j], high[j])]
     info = {"equal": None, "only_generated": [], "only_printed": [], "columns": []}
     if table is not None:
         cols = [c for c in all_cols if c in table.columns]
@@ -145,6 +148,38 @@ def design_frame(stage: dict, table: pd.DataFrame | None) -> tuple[pd.DataFrame,
             match.append(np.nan if hit is None else int(table["run"].iloc[hit]) if "run" in table else hit + 1)
         df["printed_run"] = match
     return df, info
+
+
+def printed_design(stage: dict, table: pd.DataFrame, coding: str | None = None) -> pd.DataFrame:
+    """The printed table's own design points in the layout of :func:`design_frame`.
+
+    Steepest ascent: ``step`` and the actual levels.  Plackett-Burman / Box-Behnken: ``run``,
+    the coded levels (print rounding snapped, :func:`stage_data`), ``<factor>_actual`` as
+    printed (decoded when the table is printed coded) and ``printed_run``.  ``coding``: how the
+    printed table's factor columns are printed (default: the stage's ``table_coding``).
+    """
+    syms = list(stage["factors"])
+    coding = coding or stage.get("table_coding", "coded")
+    stage = {**stage, "table_coding": coding}
+    if stage["kind"] == "steepest_ascent":
+        df = pd.DataFrame({"step": table["step"].to_numpy() if "step" in table else np.arange(1, len(table) + 1)})
+        for s in syms:
+            df[s] = table[s].to_numpy(float)
+        return df
+    _, low, high = bounds(stage)
+    coded = stage_data(stage, table)
+    runs = table["run"].to_numpy() if "run" in table else np.arange(1, len(table) + 1)
+    df = pd.DataFrame({"run": np.arange(1, len(table) + 1)})
+    for s in syms:
+        df[s] = coded[s].to_numpy(float)
+    for j, s in enumerate(syms):
+        if coding == "coded":
+            df[f"{s}_actual"] = [float(f"{v:.12g}") for v in doe.coded_to_actual(table[s].to_numpy(float),
+                                                                                   low[j], high[j])]
+        else:
+            df[f"{s}_actual"] = table[s].to_numpy(float)
+    df["printed_run"] = runs
+    return df
 
 
 # --------------------------------------------------------------------------- regression
@@ -172,6 +207,7 @@ def fit_stage(stage: dict, table: pd.DataFrame) -> list[StageFit]:
     fits = []
     for rid in response_columns(stage):
         sub = data.dropna(subset=[rid])
+        _enough_points(stage, table, rid, len(sub), len(syms))
         transform = stage.get("transform", {}).get(rid, "none")
         full = rsm.fit_response_surface(
             sub, syms, rid, low, high, terms=_terms_of(stage), transform=transform, data_coding="coded"
@@ -188,6 +224,25 @@ def fit_stage(stage: dict, table: pd.DataFrame) -> list[StageFit]:
             how = "hierarchical backward elimination (alpha 0.10): removed " + (", ".join(removed) or "nothing")
         fits.append(StageFit(rid, full, reduced, how, transform))
     return fits
+
+
+def _enough_points(stage: dict, table: pd.DataFrame, rid: str, n: int, k: int) -> None:
+    """Refuse a fit with no residual degree of freedom, naming the points without a response."""
+    p = 1 + (k if stage["kind"] == "plackett_burman" else k + k * (k - 1) // 2 + k)
+    if n > p:
+        return
+    col = response_columns(stage)[rid]
+    key = "step" if "step" in table.columns else "run"
+    missing = table[table[col].isna()] if col in table.columns else table
+    why = []
+    for _, r in missing.iterrows():
+        reason = str(r.get("error", "") or "no response")
+        label = f"{key} {int(r[key])}" if key in r and pd.notna(r[key]) else "a point"
+        why.append(f"{label}: {reason}")
+    raise InputError(stage.get("table") or stage.get("id"), f"{rid}",
+                     f"at least {p + 1} design points with a response for the {p} terms of the "
+                     f"{stage['kind']} model of stage {stage.get('id')!r} and one residual degree of freedom",
+                     f"{n}; without a response: " + ("; ".join(why) or "none"))
 
 
 def regression_frames(stage: dict, table: pd.DataFrame) -> dict[str, pd.DataFrame]:
@@ -220,7 +275,8 @@ def regression_frames(stage: dict, table: pd.DataFrame) -> dict[str, pd.DataFram
             c.insert(0, "response", sf.response)
             coef.append(c)
         if stage["kind"] == "plackett_burman":
-            e = rsm.screening_effects(data, syms, sf.response, dummies=stage.get("dummies"))
+            e = rsm.screening_effects(data.dropna(subset=[sf.response]), syms, sf.response,
+                                      dummies=stage.get("dummies"))
             e.insert(0, "response", sf.response)
             effects.append(e)
         else:
@@ -243,50 +299,86 @@ def _goal_values(goals: dict, targets: dict) -> dict:
     for rid, g in goals.items():
         g = dict(g)
         if "target" in g:
-            t = targets[g.pop("target")]
-            g["value"] = t.get("value")
+            t = targets.get(g.pop("target"), {})
+            v = t.get("value")
+            g["value"] = None if v is None or not np.isfinite(float(v)) else float(v)
         out[rid] = g
     return out
 
 
-def optimum_frame(stage: dict, table: pd.DataFrame, targets: dict, seed: int) -> pd.DataFrame:
-    """Optimal settings for every optimisation case of the stage.
+def _steepest_frame(stage: dict, table: pd.DataFrame, targets: dict) -> pd.DataFrame:
+    """The step closest to the target, per response, and over all targeted responses together.
 
-    Steepest ascent: the step whose response is closest to the target (and the printed choice).
-    Box-Behnken: Derringer-Suich desirability solutions (several distinct ones, as Design-Expert
-    lists them) and, for ``method: pso``, particle-swarm solutions too; the printed optimum is
-    added as a row with its predicted responses.
+    A response's target is the stage's ``path_targets`` entry (the DEM source writes it,
+    :func:`soilcal.chain.derive.response_targets`) or the target with the response's id.
+    With two or more targeted responses, rows ``response = all`` carry the combined error
+    sqrt(mean_r ((y_r - t_r)/t_r)^2) that chooses the path step
+    (:func:`soilcal.doe.steepest.chosen_step`).
+    """
+    from soilcal.doe.steepest import chosen_step
+
+    path_targets = stage.get("path_targets") or {}
+    rows, tg, ys = [], {}, {}
+    for rid, col in response_columns(stage).items():
+        tgt = (path_targets.get(rid) or {}).get("value", targets.get(rid, {}).get("value"))
+        tgt = None if tgt is None or not np.isfinite(float(tgt)) else float(tgt)
+        y = table[col].to_numpy(float)
+        err = np.abs(y - tgt) / tgt * 100 if tgt else np.full(len(y), np.nan)
+        best = int(np.nanargmin(err)) if tgt and np.isfinite(err).any() else -1
+        if tgt:
+            tg[rid], ys[rid] = tgt, y
+        for i in range(len(y)):
+            r = {"response": rid, "step": int(table["step"].iloc[i]), "value": y[i], "target": tgt,
+                 "relative_error_percent": err[i], "chosen": i == best,
+                 "printed_choice": int(table["step"].iloc[i]) == stage.get("chosen_step")}
+            for s in stage["factors"]:
+                r[s] = table[s].iloc[i]
+            rows.append(r)
+    if len(tg) >= 2:
+        path = table[["step", *stage["factors"]]].reset_index(drop=True)
+        step, comb = chosen_step(path, ys, tg)
+        for i, c in comb.iterrows():
+            r = {"response": "all", "step": int(c["step"]), "value": np.nan, "target": np.nan,
+                 "relative_error_percent": float(c["error_percent"]), "chosen": bool(c["chosen"]),
+                 "printed_choice": int(c["step"]) == stage.get("chosen_step")}
+            for s in stage["factors"]:
+                r[s] = path[s].iloc[i]
+            rows.append(r)
+    return pd.DataFrame(rows)
+
+
+def optimum_frames(stage: dict, table: pd.DataFrame, targets: dict, seed: int) -> dict[str, pd.DataFrame]:
+    """Optimal settings for every optimisation case of the stage, and how well the data pin
+    each factor down.
+
+    Steepest ascent: the step whose response is closest to the target (and the printed choice),
+    :func:`_steepest_frame`.  Box-Behnken: Derringer-Suich desirability solutions (several
+    distinct ones, as Design-Expert lists them); for ``method: pso`` particle-swarm solutions
+    too; the printed optimum as a row with its predicted responses; and every distinct set of
+    factor levels whose desirability is within 0.01 of the best (``method = near_optimal``,
+    :func:`soilcal.optimise.near_optimal.near_optimal_sets`), of which the one nearest the
+    design centre is the calibrated set (``calibrated = True``,
+    :func:`soilcal.optimise.near_optimal.calibrated_choice`).  ``identifiability`` gives, per
+    case and factor, the spread of the near-optimal sets and whether the data pin it down.
     """
     from soilcal import optimise
+    from soilcal.optimise.near_optimal import calibrated_choice, identifiability, near_optimal_sets
 
     if stage["kind"] == "steepest_ascent":
-        rows = []
-        for rid, col in response_columns(stage).items():
-            tgt = targets.get(rid, {}).get("value")
-            y = table[col].to_numpy(float)
-            err = np.abs(y - tgt) / tgt * 100 if tgt else np.full(len(y), np.nan)
-            best = int(np.nanargmin(err)) if tgt else -1
-            for i in range(len(y)):
-                r = {"response": rid, "step": int(table["step"].iloc[i]), "value": y[i], "target": tgt,
-                     "relative_error_percent": err[i], "chosen": i == best,
-                     "printed_choice": int(table["step"].iloc[i]) == stage.get("chosen_step")}
-                for s in stage["factors"]:
-                    r[s] = table[s].iloc[i]
-                rows.append(r)
-        return pd.DataFrame(rows)
+        return {"optimum": _steepest_frame(stage, table, targets), "identifiability": None}
 
     opt = stage.get("optimise")
     if not opt:
-        return pd.DataFrame(columns=["case", "method", "solution"])
+        return {"optimum": pd.DataFrame(columns=["case", "method", "solution"]), "identifiability": None}
     fits = {sf.response: (sf.reduced if opt.get("model", "reduced") == "reduced" else sf.full)
             for sf in fit_stage(stage, table)}
     syms, low, high = bounds(stage)
-    frames = []
+    frames, ident = [], []
     for case in opt["cases"]:
         goals = _goal_values(case["goals"], targets)
         if any(g["goal"] == "target" and g.get("value") is None for g in goals.values()):
             frames.append(pd.DataFrame([{"case": case["id"], "method": "none", "solution": "",
-                                         "note": "target value not printed"}]))
+                                         "note": "target value not available"}]))
             continue
         models = {rid: fits[rid] for rid in goals}
         d = optimise.desirability_optimise(models, goals, seed=seed, n_solutions=opt.get("n_solutions", 5))
@@ -315,6 +407,17 @@ def optimum_frame(stage: dict, table: pd.DataFrame, targets: dict, seed: int) ->
                 row[rid] = float(model.predict_actual(xa[None, :])[0])
                 row["objective"] = float(res["f"])
                 frames.append(pd.DataFrame([row]))
+        near = near_optimal_sets(models, goals, seed=seed)
+        if len(near):
+            chosen = calibrated_choice(near)
+            near = near.drop(columns=["near_optimal"])
+            near.insert(0, "method", "near_optimal")
+            near.insert(0, "case", case["id"])
+            near["calibrated"] = near.index == chosen.name
+            frames.append(near)
+            idt = identifiability(near, syms, low, high)
+            idt.insert(0, "case", case["id"])
+            ident.append(idt)
         printed = case.get("printed_optimum")
         if printed and all(s in printed for s in syms):
             xa = np.array([printed[s] for s in syms], float)
@@ -326,4 +429,38 @@ def optimum_frame(stage: dict, table: pd.DataFrame, targets: dict, seed: int) ->
             for rid, m in models.items():
                 row[rid] = float(m.predict_actual(xa[None, :])[0])
             frames.append(pd.DataFrame([row]))
-    return pd.concat(frames, ignore_index=True)
+    out = pd.concat(frames, ignore_index=True)
+    if "calibrated" in out.columns:
+        out["calibrated"] = out["calibrated"].fillna(False).astype(bool)
+    return {"optimum": out,
+            "identifiability": pd.concat(ident, ignore_index=True) if ident else
+            pd.DataFrame(columns=["case", "factor", "n_sets", "min", "max", "spread", "spread_coded", "pinned", "note"])}
+
+
+def optimum_frame(stage: dict, table: pd.DataFrame, targets: dict, seed: int) -> pd.DataFrame:
+    """The ``optimum`` frame of :func:`optimum_frames`."""
+    return optimum_frames(stage, table, targets, seed)["optimum"]
+
+
+def calibrated_levels(stage: dict, optimum: pd.DataFrame, case: str | None = None) -> dict[str, float]:
+    """Actual factor levels of the calibrated set of one optimisation case (the first case
+    when ``case`` is None); InputError when the case has none (e.g. its target is missing)."""
+    opt = stage.get("optimise") or {}
+    cases = [c["id"] for c in opt.get("cases", [])]
+    if case is None:
+        if not cases:
+            raise InputError(stage.get("id"), "optimise", "an optimisation case", None)
+        case = cases[0]
+    sel = optimum[(optimum["case"].astype(str) == str(case))]
+    if "calibrated" in sel.columns:
+        sel = sel[sel["calibrated"].astype(str).str.lower() == "true"]
+    else:
+        sel = sel.iloc[0:0]
+    if sel.empty:
+        note = optimum.loc[optimum["case"].astype(str) == str(case), "note"] if "note" in optimum else []
+        raise InputError(f"optimum of stage {stage.get('id')}", f"case {case}",
+                         "a calibrated set of factor levels",
+                         next((str(n) for n in note if isinstance(n, str)), "none"))
+    row = sel.iloc[0]
+    # 12 significant digits: a level on a bound stays the bound (0.2, not 0.1999999999999999)
+    return {s: float(f"{float(row[s]):.12g}") for s in stage["factors"]}

@@ -8,7 +8,7 @@ import pandas as pd
 import pytest
 from scipy import stats
 
-from soilcal.replay.errata import Errata, anova_self_consistency, duplicated_sequences, parse_printed, plausibility
+from soilcal.chain.errata import Errata, anova_self_consistency, duplicated_sequences, parse_printed, plausibility
 
 
 @pytest.mark.parametrize(

@@ -1,0 +1,184 @@
+"""The whole DEM calibration from an empty results/ with `snakemake --cores N`: its wall time,
+the time of every rule from Snakemake's benchmark files, whether a second run has nothing to
+do, and whether a run killed midway recomputes only its unfinished jobs.
+
+The workflow (Snakefile, workflow/, config/, resources/, envs/) is copied into a fresh work
+directory, so the repository's own results/ are never touched; ``--soils`` restricts the copy's
+config to some soils.  Rows go to ``benchmarks/results/calibration.csv`` (one per rule and run)
+and ``calibration_runs.csv`` (one per workflow run); ``calibration.md`` is the page.
+
+    python benchmarks/calibration.py                       # the five soils, 2 cores
+    python benchmarks/calibration.py --kill-after 300      # also: kill at 300 s, restart
+    python benchmarks/calibration.py --soils cinnamon-soil --kill-after 60
+    python benchmarks/calibration.py --report-only
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import platform
+import re
+import shutil
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import pandas as pd
+import yaml
+from _report import commit, read_rows, write_page, write_rows
+
+HERE = Path(__file__).resolve().parent
+ROOT = HERE.parent
+OUT = HERE / "results"
+RULE_FIELDS = ["utc", "commit", "run_id", "rule", "jobs", "sum_s", "mean_s", "max_s", "max_rss_mb"]
+RUN_FIELDS = ["utc", "commit", "run_id", "soils", "cores", "kind", "elapsed_s", "jobs_done", "rc", "note"]
+SNAKEMAKE = [sys.executable, "-m", "snakemake"]
+
+
+def copy_workflow(dest: Path, soils: list[str] | None) -> Path:
+    if dest.exists():
+        shutil.rmtree(dest)
+    dest.mkdir(parents=True)
+    for f in ("Snakefile",):
+        shutil.copy(ROOT / f, dest / f)
+    for d in ("workflow", "config", "resources", "envs", "profiles"):
+        shutil.copytree(ROOT / d, dest / d, symlinks=False)
+    if soils:
+        cfg = yaml.safe_load((dest / "config/config.yaml").read_text())
+        cfg["soils"] = soils
+        (dest / "config/config.yaml").write_text(yaml.safe_dump(cfg))
+    return dest
+
+
+def rule_of(path: Path) -> str:
+    """The rule a benchmark file belongs to, from its place under benchmarks/workflow/."""
+    parts = path.parts
+    if "runs" in parts:
+        return "dem_point"
+    if "verify" in parts:
+        return "verify_point"
+    if "tools" in parts:
+        return "tool_point"
+    stem = path.stem
+    if stem.startswith("figures_"):
+        return "figures"
+    return {"responses": "dem_responses"}.get(stem, stem)
+
+
+def rule_times(workdir: Path) -> pd.DataFrame:
+    rows = []
+    for p in (workdir / "benchmarks/workflow").rglob("*.tsv"):
+        df = pd.read_csv(p, sep="\t")
+        if len(df):
+            rows.append({"rule": rule_of(p.relative_to(workdir / "benchmarks/workflow")), "s": float(df["s"].iloc[-1]),
+                         "max_rss": float(pd.to_numeric(df["max_rss"], errors="coerce").iloc[-1])})
+    return pd.DataFrame(rows)
+
+
+def snakemake(workdir: Path, cores: int, *extra, timeout=None):
+    t0 = time.perf_counter()
+    p = subprocess.Popen(SNAKEMAKE + ["--cores", str(cores), *extra], cwd=workdir, stdout=subprocess.PIPE,
+                         stderr=subprocess.STDOUT, text=True, start_new_session=True)
+    killed = False
+    try:
+        out, _ = p.communicate(timeout=timeout)
+    except subprocess.TimeoutExpired:
+        os.killpg(p.pid, signal.SIGKILL)
+        out, _ = p.communicate()
+        killed = True
+    return p.returncode, time.perf_counter() - t0, out, killed
+
+
+def jobs_done(log: str) -> int:
+    return len(re.findall(r"^Finished jobid: \d+ \(Rule: (?!all\))", log, flags=re.M))
+
+
+def planned(workdir: Path, cores: int) -> int:
+    rc, _, out, _ = snakemake(workdir, cores, "-n")
+    m = re.search(r"^total\s+(\d+)", out, flags=re.M)
+    return int(m.group(1)) if m else 0
+
+
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("--soils", nargs="*", default=None)
+    ap.add_argument("--cores", type=int, default=2)
+    ap.add_argument("--workdir", default="/tmp/soilcal-calibration-bench")
+    ap.add_argument("--kill-after", type=float, default=None,
+                    help="also run a second copy, kill it after this many seconds, restart it")
+    ap.add_argument("--report-only", action="store_true")
+    args = ap.parse_args(argv)
+    OUT.mkdir(exist_ok=True)
+    rev = commit()
+    utc = time.strftime("%Y-%m-%d %H:%M", time.gmtime())
+    run_id = time.strftime("%Y%m%dT%H%M%S", time.gmtime())
+    if not args.report_only:
+        soils = args.soils
+        wd = copy_workflow(Path(args.workdir), soils)
+        label = " ".join(soils or yaml.safe_load((ROOT / "config/config.yaml").read_text())["soils"])
+        rc, el, log, _ = snakemake(wd, args.cores)
+        (wd / "calibration.log").write_text(log)
+        runs = [dict(utc=utc, commit=rev, run_id=run_id, soils=label, cores=args.cores, kind="from empty results/",
+                     elapsed_s=round(el, 1), jobs_done=jobs_done(log), rc=rc, note="")]
+        left = planned(wd, args.cores) if rc == 0 else -1
+        runs.append(dict(utc=utc, commit=rev, run_id=run_id, soils=label, cores=args.cores, kind="second run (dry)",
+                         elapsed_s="", jobs_done=left, rc=0, note="jobs a second run would do"))
+        rt = rule_times(wd)
+        rules = []
+        for rule, g in rt.groupby("rule"):
+            rules.append(dict(utc=utc, commit=rev, run_id=run_id, rule=rule, jobs=len(g), sum_s=round(g["s"].sum(), 1),
+                              mean_s=round(g["s"].mean(), 2), max_s=round(g["s"].max(), 1),
+                              max_rss_mb=round(g["max_rss"].max(), 0)))
+        if args.kill_after:
+            wk = copy_workflow(Path(args.workdir + "-kill"), soils)
+            rc1, el1, log1, killed = snakemake(wk, args.cores, timeout=args.kill_after)
+            done1 = jobs_done(log1)
+            rc2, el2, log2, _ = snakemake(wk, args.cores, "--rerun-incomplete")
+            done2 = jobs_done(log2)
+            total = runs[0]["jobs_done"]
+            runs.append(dict(utc=utc, commit=rev, run_id=run_id, soils=label, cores=args.cores,
+                             kind=f"killed (SIGKILL) after {args.kill_after:g} s", elapsed_s=round(el1, 1),
+                             jobs_done=done1, rc=rc1, note="killed" if killed else "finished before the kill"))
+            runs.append(dict(utc=utc, commit=rev, run_id=run_id, soils=label, cores=args.cores,
+                             kind="restart of the killed run", elapsed_s=round(el2, 1), jobs_done=done2, rc=rc2,
+                             note=f"{done1} + {done2} = {done1 + done2} jobs against {total} in one run"))
+        write_rows(OUT / "calibration_runs.csv", read_rows(OUT / "calibration_runs.csv", RUN_FIELDS) + runs,
+                   RUN_FIELDS)
+        write_rows(OUT / "calibration.csv", read_rows(OUT / "calibration.csv", RULE_FIELDS) + rules, RULE_FIELDS)
+    report(OUT / "calibration.md", argv if argv is not None else sys.argv[1:])
+    return 0
+
+
+def report(md_path: Path, argv) -> None:
+    runs = read_rows(OUT / "calibration_runs.csv", RUN_FIELDS)
+    rules = read_rows(OUT / "calibration.csv", RULE_FIELDS)
+    md = ["# The DEM calibration of every soil, from an empty results/", "",
+          f"Machine: {platform.machine()}, {os.cpu_count()} logical CPUs, Python {platform.python_version()}.  "
+          f"Last command: `python benchmarks/calibration.py {' '.join(argv)}`.  Rows: `calibration_runs.csv`, "
+          "`calibration.csv` (utc and commit per row).", "",
+          "Workflow runs (a fresh copy of Snakefile, workflow/, config/, resources/ per run; elapsed is the "
+          "wall-clock time of `snakemake --cores N`):", "",
+          "| utc | commit | soils | cores | run | elapsed min | jobs | rc | note |",
+          "|---|---|---|---:|---|---:|---:|---:|---|"]
+    for r in runs:
+        el = f"{float(r['elapsed_s']) / 60:.1f}" if r["elapsed_s"] not in ("", None) else ""
+        md.append(f"| {r['utc']} | {r['commit']} | {r['soils']} | {r['cores']} | {r['kind']} | {el} | "
+                  f"{r['jobs_done']} | {r['rc']} | {r['note']} |")
+    if rules:
+        last = rules[-1]["run_id"]
+        sel = [r for r in rules if r["run_id"] == last]
+        tot = sum(float(r["sum_s"]) for r in sel)
+        md += ["", f"Time per rule in the last run ({last}, from the jobs' benchmark files: each job's own wall "
+               "time while the other job ran beside it; the sum is CPU-side work, not elapsed time):", "",
+               "| rule | jobs | sum s | share | mean s | max s | max RSS MB |", "|---|---:|---:|---:|---:|---:|---:|"]
+        for r in sorted(sel, key=lambda r: -float(r["sum_s"])):
+            md.append(f"| {r['rule']} | {r['jobs']} | {r['sum_s']} | {100 * float(r['sum_s']) / tot:.0f} % | "
+                      f"{r['mean_s']} | {r['max_s']} | {r['max_rss_mb']} |")
+    write_page(md_path, md)
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,346 @@
+"""The stage a response source actually runs: its factors, levels and fixed values.
+
+A soil's config describes each stage as the paper ran it.  The published source replays
+exactly that stage.  The DEM source runs the papers' *recipe* on its own results
+(``simulation.design: recipe``, the default), so a stage that follows another one is derived
+from the DEM results of the earlier stage, as the papers derived it from theirs:
+
+* **steepest ascent after a screening** (``from_stage`` is a Plackett-Burman stage): the
+  factors whose screening effect is significant (p < ``simulation.screening.alpha``, 0.05 as
+  the papers: vineyard soil "the factors with P-values less than 0.05 in Tables 4 and 5 were
+  selected"; at least ``min_factors`` = 3, what a Box-Behnken design needs, at most
+  ``max_factors``, by default as many as the config's path stage lists) go on the path;
+  its direction descends the summed squared relative error of the first-order models to the
+  targets (:func:`soilcal.doe.steepest.path_direction`); the path walks each factor's
+  screening range (``simulation.path.rule: range``, the papers' practice) or steps in the
+  ratio of the effects (``proportional``, Montgomery 11.2); the other screened factors are
+  held at their intermediate levels (the centre of their screening range: "the parameters
+  with insignificant influence were taken as intermediate level values", cinnamon soil
+  Sec. 3.3.2).
+* **Box-Behnken after a steepest ascent**: the path step whose DEM responses are closest to
+  the targets is the centre, its neighbours the low and high levels ("the levels of no. 2,
+  no. 3 and no. 4 were selected as low, medium and high", cinnamon soil;
+  :func:`soilcal.doe.steepest.bbd_levels`), shifted inside the parameters' physical ranges.
+* **parameters fixed at an earlier stage's optimum** (``fixed_from``, black soil stage 2):
+  the DEM source fixes them at ITS calibrated set of that stage (``optimum.csv``, the
+  ``calibrated`` row), not at the paper's.
+
+``simulation.design: printed`` runs every stage on the paper's own printed levels instead
+(the same for a stage that follows one the DEM source does not run, ``simulation.stages``).
+The derivation is recorded in the stage's ``derivation`` entry (``stage.json``).
+
+Targets of a path: a response's own target (a target id equal to the response id) or, when
+the soil's targets are per layer or moisture content, the mean of the targets its
+optimisation cases aim that response at (``path_targets``).
+"""
+
+from __future__ import annotations
+
+import copy
+
+import numpy as np
+import pandas as pd
+
+from soilcal.errors import InputError
+
+#: physical range of a parameter kind, in the config's units where they are unit-free
+_BOUNDS = {
+    "restitution": (0.01, 1.0),
+    "static_friction": (0.0, 5.0),
+    "rolling_friction": (0.0, 1.0),
+    "surface_energy": (0.0, 1.0e3),
+}
+DEFAULT_STEPS = 6
+SCREENING_DEFAULTS = {"alpha": 0.05, "min_factors": 3}
+
+
+def sim_block(soil_data: dict) -> dict:
+    return soil_data.get("simulation") or {}
+
+
+def dem_stage_ids(soil_data: dict) -> list[str]:
+    """Stage ids the DEM source runs (``simulation.stages``, default every stage)."""
+    ids = [s["id"] for s in soil_data["stages"]]
+    chosen = sim_block(soil_data).get("stages")
+    return ids if not chosen else [s for s in ids if s in chosen]
+
+
+def design_mode(soil_data: dict) -> str:
+    return sim_block(soil_data).get("design", "recipe")
+
+
+def _stage(soil_data: dict, stage_id: str) -> dict:
+    for s in soil_data["stages"]:
+        if s["id"] == stage_id:
+            return s
+    raise InputError(soil_data.get("name", "<soil>"), "stages", f"a stage with id {stage_id!r}", stage_id)
+
+
+def dependencies(soil_data: dict, stage_id: str) -> dict[str, str]:
+    """Earlier DEM stages a DEM stage is derived from: ``{"from": id, "fixed_from": id}``
+    (only the keys that apply)."""
+    st = _stage(soil_data, stage_id)
+    run = dem_stage_ids(soil_data)
+    out = {}
+    if design_mode(soil_data) == "recipe" and st.get("from_stage") in run:
+        out["from"] = st["from_stage"]
+    ff = (st.get("fixed_from") or {}).get("stage")
+    if ff in run:
+        out["fixed_from"] = ff
+    return out
+
+
+def published_stage(soil_data: dict, stage_id: str) -> dict:
+    """The stage as the paper ran it (the published source)."""
+    st = copy.deepcopy(_stage(soil_data, stage_id))
+    st["source"] = "published"
+    st["derivation"] = {"kind": "config", "text": "as printed in the soil config"}
+    return st
+
+
+def _dem_base(stage: dict) -> dict:
+    """A config stage as the DEM source writes it: responses by id, no printed analysis."""
+    st = copy.deepcopy(stage)
+    st.pop("printed", None)
+    st["source"] = "dem"
+    st["table"] = "responses.csv"
+    st["table_coding"] = "actual"
+    st["responses"] = [{k: v for k, v in r.items() if k != "column"} for r in st["responses"]]
+    return st
+
+
+def response_targets(soil_data: dict, response_ids, targets: dict) -> dict[str, dict]:
+    """Target of each response for a path: its own target id, else the mean of the targets
+    the soil's optimisation cases give it (``{rid: {"value", "from"}}``; responses without
+    one are left out)."""
+    out = {}
+    for rid in response_ids:
+        t = targets.get(rid, {})
+        if t.get("value") is not None and np.isfinite(float(t["value"])):
+            out[rid] = {"value": float(t["value"]), "from": [rid]}
+            continue
+        ids, vals = [], []
+        for st in soil_data["stages"]:
+            for case in (st.get("optimise") or {}).get("cases", []):
+                g = case["goals"].get(rid)
+                if not g or g.get("goal") != "target":
+                    continue
+                if "target" in g:
+                    v = targets.get(g["target"], {}).get("value")
+                    name = g["target"]
+                else:
+                    v, name = g.get("value"), f"{case['id']} (value)"
+                if v is not None and np.isfinite(float(v)) and name not in ids:
+                    ids.append(name)
+                    vals.append(float(v))
+        if vals:
+            out[rid] = {"value": float(np.mean(vals)), "from": ids}
+    return out
+
+
+def _g12(v) -> float:
+    """A level to 12 significant digits (0.08, not 0.08000000000000002 from a path step)."""
+    return float(f"{float(v):.12g}")
+
+
+def _param_kind(soil_data: dict, pname: str) -> str | None:
+    return (soil_data.get("parameters", {}).get(pname) or {}).get("kind")
+
+
+def _centre(f: dict) -> float:
+    if f.get("centre") is not None:
+        return float(f["centre"])
+    return (float(f["low"]) + float(f["high"])) / 2.0
+
+
+def _symbol_for(pname: str, pb_sym: str, config_stage: dict, taken: set) -> str:
+    """The config path stage's symbol of a parameter (the paper's symbol) when it has one,
+    else the screening symbol; never one already used for another parameter."""
+    for sym, f in config_stage["factors"].items():
+        if f["parameter"] == pname and sym not in taken:
+            return sym
+    cand = pb_sym
+    k = 2
+    while cand in taken or cand in config_stage["factors"]:
+        cand = f"{pb_sym}{k}"
+        k += 1
+    return cand
+
+
+def _keep_printed_optimum(st: dict, config_stage: dict) -> None:
+    """Keep a case's printed optimum only where it is expressed on the same parameters."""
+    opt = st.get("optimise")
+    if not opt:
+        return
+    par_of = {s: f["parameter"] for s, f in config_stage["factors"].items()}
+    ours = {f["parameter"]: s for s, f in st["factors"].items()}
+    for case in opt.get("cases", []):
+        po = case.get("printed_optimum")
+        if not po:
+            continue
+        mapped = {ours[par_of[s]]: v for s, v in po.items() if s in par_of and par_of[s] in ours}
+        if set(mapped) == set(st["factors"]):
+            case["printed_optimum"] = mapped
+        else:
+            case.pop("printed_optimum")
+
+
+def path_from_screening(soil_data: dict, stage_id: str, screening_stage: dict, effects: pd.DataFrame,
+                        responses: pd.DataFrame, targets: dict) -> dict:
+    """A steepest-ascent stage laid out from the DEM screening (module docstring)."""
+    from soilcal.doe.steepest import derive_path, path_direction, select_factors
+
+    config_stage = _stage(soil_data, stage_id)
+    sim = sim_block(soil_data)
+    scr = {**SCREENING_DEFAULTS, **(sim.get("screening") or {})}
+    if scr.get("max_factors") is None:
+        scr["max_factors"] = max(len(config_stage["factors"]), scr["min_factors"])
+    path_cfg = sim.get("path") or {}
+    n_levels = {len(f.get("levels") or []) for f in config_stage["factors"].values()} - {0}
+    n_steps = int(path_cfg.get("steps") or (n_levels.pop() if len(n_levels) == 1 else DEFAULT_STEPS))
+    rule = path_cfg.get("rule", "range")
+
+    rids = [r["id"] for r in config_stage["responses"]]
+    ptargets = response_targets(soil_data, rids, targets)
+    if not ptargets:
+        raise InputError(soil_data.get("name"), f"stages.{stage_id}.responses",
+                         "a target for at least one response of the path (a target id equal to "
+                         "the response id, or optimisation cases aiming at it)", rids)
+    eff = effects[effects["response"].isin(list(ptargets))]
+    sel = select_factors(eff, alpha=scr["alpha"], min_factors=scr["min_factors"],
+                         max_factors=scr["max_factors"])
+    chosen = [t for t in sel.loc[sel["selected"], "term"]]
+    coefs = {r: {t: float(b) for t, b in zip(g["term"], g["coefficient"]) if t in chosen}
+             for r, g in eff.groupby("response", sort=False)}
+    intercepts = {r: float(responses[r].mean()) for r in coefs}
+    direction = path_direction(coefs, intercepts, {r: ptargets[r]["value"] for r in coefs})
+    sf = screening_stage["factors"]
+    low = {t: float(sf[t]["low"]) for t in chosen}
+    high = {t: float(sf[t]["high"]) for t in chosen}
+    path = derive_path(direction, low, high, n_steps, rule=rule)
+
+    st = _dem_base(config_stage)
+    st.pop("chosen_step", None)  # the paper's choice on the paper's path
+    taken: set = set()
+    factors = {}
+    for t in chosen:
+        pname = sf[t]["parameter"]
+        sym = _symbol_for(pname, t, config_stage, taken)
+        taken.add(sym)
+        factors[sym] = {"parameter": pname, "levels": [_g12(v) for v in path[t]], "screening_symbol": t}
+    st["factors"] = factors
+    fixed = {k: v for k, v in (config_stage.get("fixed") or {}).items()
+             if k not in {f["parameter"] for f in sf.values()}}
+    fixed.update({k: v for k, v in (screening_stage.get("fixed") or {}).items()})
+    for t, f in sf.items():
+        if t not in chosen:
+            fixed[f["parameter"]] = _g12(_centre(f))
+    st["fixed"] = fixed
+    st["path_targets"] = ptargets
+    st["derivation"] = {
+        "kind": "screening",
+        "from_stage": screening_stage["id"],
+        "text": (f"path over {', '.join(chosen)} of the DEM screening {screening_stage['id']} "
+                 f"({rule} rule, {n_steps} steps); other screened factors at the centre of their range"),
+        "selection": sel.to_dict("records"),
+        "direction": {t: float(v) for t, v in direction.items()},
+        "rule": rule,
+        "screening": scr,
+        "paper_factors": {s: f["parameter"] for s, f in config_stage["factors"].items()},
+    }
+    return st
+
+
+def bbd_from_path(soil_data: dict, stage_id: str, path_stage: dict, path_responses: pd.DataFrame) -> dict:
+    """A Box-Behnken stage centred on the DEM path step closest to the targets."""
+    from soilcal.doe.steepest import bbd_levels, chosen_step
+
+    config_stage = _stage(soil_data, stage_id)
+    syms = list(path_stage["factors"])
+    path = pd.DataFrame({"step": np.arange(1, len(path_stage["factors"][syms[0]]["levels"]) + 1)})
+    for s in syms:
+        path[s] = path_stage["factors"][s]["levels"]
+    targets = {r: t["value"] for r, t in (path_stage.get("path_targets") or {}).items()}
+    resp = path_responses.sort_values("step")
+    ys = {r: resp[r].to_numpy(float) for r in targets if r in resp.columns}
+    step, table = chosen_step(path, ys, targets)
+    bounds = {}
+    for s in syms:
+        kind = _param_kind(soil_data, path_stage["factors"][s]["parameter"])
+        if kind in _BOUNDS:
+            bounds[s] = _BOUNDS[kind]
+    levels = bbd_levels(path, step, syms, bounds)
+    st = _dem_base(config_stage)
+    st["factors"] = {s: {"parameter": path_stage["factors"][s]["parameter"],
+                         "low": _g12(levels[s]["low"]), "centre": _g12(levels[s]["centre"]),
+                         "high": _g12(levels[s]["high"])} for s in syms}
+    st["fixed"] = dict(path_stage.get("fixed") or {})
+    k = len(syms)
+    st["runs"] = 2 * k * (k - 1) + int(st.get("center_points", 0))
+    _keep_printed_optimum(st, config_stage)
+    st["derivation"] = {
+        "kind": "path",
+        "from_stage": path_stage["id"],
+        "text": f"Box-Behnken centred on step {step} of the DEM path {path_stage['id']}",
+        "chosen_step": int(step),
+        "steps": table.to_dict("records"),
+        "levels": {s: levels[s].get("note", "") for s in syms},
+    }
+    return st
+
+
+def fix_from_optimum(st: dict, upstream_stage: dict, optimum: pd.DataFrame, case: str | None) -> dict:
+    """``st`` with the parameters of ``upstream_stage``'s factors fixed at its calibrated set."""
+    from soilcal.chain.stage import calibrated_levels
+
+    levels = calibrated_levels(upstream_stage, optimum, case)
+    fixed = dict(st.get("fixed") or {})
+    paper = {}
+    for sym, v in levels.items():
+        pname = upstream_stage["factors"][sym]["parameter"]
+        paper[pname] = fixed.get(pname)
+        fixed[pname] = float(v)
+    st["fixed"] = fixed
+    st.setdefault("derivation", {})
+    st["derivation"]["fixed_from"] = {"stage": upstream_stage["id"], "case": case,
+                                      "values": {k: fixed[k] for k in paper}, "paper": paper}
+    return st
+
+
+def dem_stage(soil_data: dict, stage_id: str, targets: dict, upstream: dict | None = None) -> dict:
+    """The stage the DEM source runs (module docstring).
+
+    ``upstream`` holds the DEM results of the stages of :func:`dependencies`:
+    ``{"from": {"stage", "responses", "effects"}, "fixed_from": {"stage", "optimum"}}``.
+    """
+    upstream = upstream or {}
+    config_stage = _stage(soil_data, stage_id)
+    deps = dependencies(soil_data, stage_id)
+    if "from" in deps:
+        up = upstream["from"]
+        if up["stage"]["kind"] == "plackett_burman" and config_stage["kind"] == "steepest_ascent":
+            st = path_from_screening(soil_data, stage_id, up["stage"], up["effects"], up["responses"], targets)
+        elif up["stage"]["kind"] == "steepest_ascent" and config_stage["kind"] == "box_behnken":
+            st = bbd_from_path(soil_data, stage_id, up["stage"], up["responses"])
+        else:
+            raise InputError(soil_data.get("name"), f"stages.{stage_id}.from_stage",
+                             "a steepest ascent after a Plackett-Burman screening, or a Box-Behnken "
+                             "design after a steepest ascent",
+                             f"{config_stage['kind']} after {up['stage']['kind']}")
+    else:
+        st = _dem_base(config_stage)
+        why = ("the paper's printed levels (simulation.design: printed)" if design_mode(soil_data) == "printed"
+               else "the levels in the soil config")
+        if config_stage.get("from_stage") and config_stage["from_stage"] not in dem_stage_ids(soil_data):
+            why += f" (stage {config_stage['from_stage']} is not simulated: simulation.stages)"
+        st["derivation"] = {"kind": "config", "text": why}
+        if st["kind"] == "steepest_ascent":
+            st["path_targets"] = response_targets(soil_data, [r["id"] for r in st["responses"]], targets)
+    if "fixed_from" in deps:
+        up = upstream["fixed_from"]
+        st = fix_from_optimum(st, up["stage"], up["optimum"], (config_stage.get("fixed_from") or {}).get("case"))
+    return st
+
+
+__all__ = ["bbd_from_path", "dem_stage", "dem_stage_ids", "dependencies", "design_mode",
+           "path_from_screening", "published_stage", "response_targets"]

@@ -1,0 +1,44 @@
+"""Which response sources a soil runs, and the part of its config a DEM job depends on."""
+
+from __future__ import annotations
+
+import copy
+
+from soilcal.errors import InputError
+
+SOURCES = ("published", "dem", "both")
+#: soil config keys that document the paper and never change a computed number
+_DOCUMENTATION = ("title", "citation", "notes", "missing", "errata", "verification")
+
+
+def soil_sources(soil, override: str | None = None) -> list[str]:
+    """``["published"]``, ``["dem"]`` or both: the workflow's ``source`` (``--config
+    source=...``) when given, else the soil's own ``source``."""
+    s = override or soil.data.get("source", "published")
+    if s not in SOURCES:
+        raise InputError("config/config.yaml", "source", f"one of {', '.join(SOURCES)}", s)
+    out = ["published", "dem"] if s == "both" else [s]
+    if "dem" in out and not soil.data.get("simulation"):
+        raise InputError(soil.path, "simulation",
+                         "a simulation block naming the scenario of each response (the DEM source needs it; "
+                         "or run the published source: --config source=published)", None)
+    return out
+
+
+def _strip_notes(obj):
+    if isinstance(obj, dict):
+        return {k: _strip_notes(v) for k, v in obj.items() if k not in ("note", "notes", "source")}
+    if isinstance(obj, list):
+        return [_strip_notes(v) for v in obj]
+    return obj
+
+
+def dem_context(soil_data: dict) -> dict:
+    """The soil config without its documentation (citation, notes, errata, printed
+    verification prose): what the DEM source's results depend on.  Passed to the DEM rules
+    as params, so that editing a note re-runs nothing."""
+    d = {k: copy.deepcopy(v) for k, v in soil_data.items() if k not in _DOCUMENTATION}
+    return _strip_notes(d)
+
+
+__all__ = ["SOURCES", "dem_context", "soil_sources"]

@@ -1,0 +1,78 @@
+"""The calibration targets of a soil, and where each value comes from.
+
+``targets.csv`` (one per source, ``results/<soil>/<source>/targets.csv``) lists every target
+of the soil config with the value the chain calibrates to:
+
+* published source: the printed value (``source = printed``), as the paper calibrated;
+* DEM source: the soil's own photo measurement where the target names a photo group
+  (``image: <group>`` of ``resources/images/<soil>/manifest.yaml``; the group's
+  ``angle_deg``, or ``image_measure``, in ``results/<soil>/images/measurements.json``,
+  ``source = image``), otherwise the measured value the config holds (the paper's
+  measurement, also under ``resources/measurements/<soil>/``; ``source = measurement``).
+
+A target whose value is neither measured on a photo nor printed is kept with an empty value
+and says so (``source = not available``); the optimisation cases that aim at it say why they
+have no optimum.  Columns: target_id, value, unit, source, image_group, image_value,
+image_spread, image_n, printed_value, layer, moisture_content, note.
+"""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+
+from soilcal.errors import InputError
+
+COLUMNS = ["target_id", "value", "unit", "source", "image_group", "image_value", "image_spread", "image_n",
+           "printed_value", "layer", "moisture_content", "note"]
+
+
+def targets_frame(soil_data: dict, source: str, measurements: dict | None = None,
+                  measurements_path: str | Path = "measurements.json") -> pd.DataFrame:
+    """The targets table of a soil for ``source`` (module docstring)."""
+    rows = []
+    for tid, t in (soil_data.get("targets") or {}).items():
+        printed = t.get("value")
+        printed = float(printed) if printed is not None else np.nan
+        row = {"target_id": tid, "unit": t.get("unit", ""), "printed_value": printed,
+               "layer": t.get("layer", ""), "moisture_content": t.get("moisture_content", np.nan),
+               "image_group": t.get("image", ""), "image_value": np.nan, "image_spread": np.nan,
+               "image_n": np.nan}
+        if source == "dem" and t.get("image"):
+            group, key = t["image"], t.get("image_measure", "angle_deg")
+            entry = (measurements or {}).get(group)
+            if entry is None or key not in entry:
+                raise InputError(measurements_path, f"{group}.{key}",
+                                 f"the photo measurement of target {tid} (targets.{tid}.image)",
+                                 sorted(measurements or {}) if entry is None else sorted(entry))
+            val = float(entry[key])
+            row.update(value=val, source="image", image_value=val,
+                       image_spread=float(entry.get("spread_deg", np.nan)),
+                       image_n=int(entry.get("n_photos", entry.get("n_frames", 1))),
+                       note=f"photo group {group} ({key}); printed {printed:g}"
+                       if np.isfinite(printed) else f"photo group {group} ({key})")
+        elif np.isfinite(printed):
+            row.update(value=printed, source="printed" if source == "published" else "measurement",
+                       note=t.get("source", ""))
+        else:
+            row.update(value=np.nan, source="not available",
+                       note="no photo group and no printed value: " + str(t.get("note", t.get("source", ""))))
+        rows.append(row)
+    return pd.DataFrame(rows, columns=COLUMNS)
+
+
+def write_targets(soil_data: dict, source: str, out, measurements_json=None) -> pd.DataFrame:
+    from soilcal.chain.files import write_csv
+
+    meas = None
+    if measurements_json:
+        meas = json.loads(Path(measurements_json).read_text())
+    df = targets_frame(soil_data, source, meas, measurements_json or "measurements.json")
+    write_csv(df, out)
+    return df
+
+
+__all__ = ["COLUMNS", "targets_frame", "write_targets"]

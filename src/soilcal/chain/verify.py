@@ -1,0 +1,529 @@
+"""Verification of a calibration: the DEM at the calibrated parameters against the targets,
+the papers' tool and process tests, and the calibrated set beside the paper's.
+
+* :func:`verification_frame` - every optimisation case and response at its calibrated set
+  (``optimum.csv``, ``calibrated = True``), simulated with ``simulation.verification.replicates``
+  seeds apart from the design seeds (``seed + seed_offset + k``): target, simulated mean and
+  SD, signed relative error, whether the mean meets the target within 2 %, the response
+  surface's prediction at the optimum (and its distance from the target) and the paper's own
+  verification numbers (``printed_verification`` of the case) beside them.  A row that misses
+  says why (:func:`diagnose`).
+* :func:`tool_frame` - the soil's ``measurements`` (:mod:`soilcal.config.measurements`)
+  simulated at the calibrated set of the case each row names.
+* :func:`calibrated_vs_paper` - every calibrated parameter beside the paper's calibrated value.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pandas as pd
+
+from soilcal.errors import InputError
+
+VERIFY_DEFAULTS = {"replicates": 4, "seed_offset": 10000, "paper_max_particles": 0}
+TOLERANCE_PERCENT = 2.0
+SURFACE_TOLERANCE = 0.5
+VERIFICATION_COLUMNS = ["stage", "case", "response", "target_id", "target", "target_source", "preset", "n",
+                        "seeds", "simulated_mean", "simulated_sd", "relative_error_percent",
+                        "within_2_percent", "predicted", "predicted_minus_target", "paper_target",
+                        "paper_simulated", "paper_relative_error_percent", "status", "note"]
+TOOL_COLUMNS = ["measurement", "row", "covariate", "covariate_value", "scenario", "setup", "measure", "unit",
+                "preset", "stage", "case", "n", "seeds", "measured", "measured_sd", "simulated_mean",
+                "simulated_sd", "relative_error_percent", "paper_simulated", "paper_relative_error_percent",
+                "paper_difference", "status", "note"]
+
+
+def verify_settings(soil_data: dict) -> dict:
+    return {**VERIFY_DEFAULTS, **((soil_data.get("simulation") or {}).get("verification") or {})}
+
+
+def verification_cases(soil_data: dict, stage_ids) -> list[tuple[str, str]]:
+    """(stage, case) of every optimisation case of the stages ``stage_ids``."""
+    out = []
+    for st in soil_data["stages"]:
+        if st["id"] in stage_ids:
+            for c in (st.get("optimise") or {}).get("cases", []):
+                out.append((st["id"], c["id"]))
+    return out
+
+
+def _case(stage: dict, case_id: str) -> dict:
+    for c in (stage.get("optimise") or {}).get("cases", []):
+        if c["id"] == case_id:
+            return c
+    raise InputError(stage.get("id"), "optimise.cases", f"a case {case_id!r}", None)
+
+
+def verification_spec(soil, stage: dict, optimum: pd.DataFrame, case_id: str, rep: int,
+                      preset: str | None = None) -> dict:
+    """The point spec (:func:`soilcal.chain.sources.point_spec`) of verification replicate
+    ``rep`` of one case: the calibrated set, every response the case aims at, one seed; with
+    ``preset`` (``paper``) only the responses :func:`paper_responses` admits, at that preset."""
+    from soilcal.chain.sources import point_spec
+    from soilcal.chain.stage import calibrated_levels
+
+    v = verify_settings(soil.data)
+    levels = calibrated_levels(stage, optimum, case_id)
+    case = _case(stage, case_id)
+    seed = int(soil.data["seed"]) + int(v["seed_offset"]) + int(rep)
+    rids = list(case["goals"])
+    if preset == "paper":
+        rids = [r for r in rids if r in paper_responses(soil, rids)]
+    spec = point_spec(soil, stage, levels, run=rep, seed=seed, replicates=1, responses=rids)
+    if preset:
+        for rs in spec["responses"].values():
+            rs["preset"] = preset
+    return spec
+
+
+def paper_particles(soil, response_id: str) -> int | None:
+    """Particle count of a response's run at the ``paper`` preset, from its scenario's own
+    sizing before any run (None when the scenario does not size itself that way)."""
+    import inspect
+
+    from soilcal.dem.scenarios import get
+    from soilcal.dem.scenarios.base import DemParams
+    from soilcal.dem.scenarios.design import spec
+
+    sp = spec(soil, response_id)
+    mod = get(sp.scenario)
+    if not hasattr(mod, "sizing"):
+        return None
+    params = DemParams.from_mapping(sp.params, str(soil.path))
+    if "params" in inspect.signature(mod.sizing).parameters:
+        sz = mod.sizing(sp.setup, "paper", params)
+    else:
+        sz = mod.sizing(sp.setup, "paper")
+    return int(sz["n"])
+
+
+def paper_responses(soil, response_ids) -> list[str]:
+    """Responses also verified at the ``paper`` preset: those whose paper-preset run has at
+    most ``simulation.verification.paper_max_particles`` particles (none when 0, the default,
+    or when the soil already runs at the paper preset)."""
+    limit = int(verify_settings(soil.data)["paper_max_particles"])
+    if limit <= 0 or (soil.data.get("simulation") or {}).get("preset", "quick") == "paper":
+        return []
+    out = []
+    for rid in response_ids:
+        n = paper_particles(soil, rid)
+        if n is not None and n <= limit:
+            out.append(rid)
+    return out
+
+
+def not_run_rows(stage_id: str, case: dict, reason: str) -> pd.DataFrame:
+    """Rows of a verification replicate that could not run (e.g. the case has no target)."""
+    from soilcal.chain.sources import RUN_COLUMNS
+
+    rows = [{c: "" for c in RUN_COLUMNS} | {"stage": stage_id, "run": 0, "response": rid, "status": "not run",
+                                              "error": reason, "value": np.nan, "n": 0}
+            for rid in case["goals"]]
+    return pd.DataFrame(rows, columns=RUN_COLUMNS)
+
+
+def diagnose(mean: float, sd: float, n: int, target: float, predicted: float | None) -> str:
+    """Why a verification mean misses its target by more than 2 % (empty when it meets it).
+
+    * the surface cannot reach the target: the prediction at the optimum is more than 0.5
+      from the target (a model limit within the design region);
+    * seed scatter: the miss is within two standard errors of the mean (sd / sqrt(n)), so
+      more replicates (or larger heaps) are needed to tell;
+    * surface bias: the surface predicts the target but the DEM mean differs by more than
+      the seed scatter explains (lack of fit of the quadratic at the optimum).
+    """
+    if not np.isfinite(target) or target == 0 or not np.isfinite(mean):
+        return ""
+    rel = abs(mean - target) / abs(target) * 100
+    if rel <= TOLERANCE_PERCENT:
+        return ""
+    notes = []
+    if predicted is not None and np.isfinite(predicted) and abs(predicted - target) > SURFACE_TOLERANCE:
+        notes.append(f"model limit: the response surface predicts {predicted:.2f} at its best set, "
+                     f"{predicted - target:+.2f} from the target, within the design region")
+    sem = sd / np.sqrt(n) if n > 1 and np.isfinite(sd) else np.nan
+    if np.isfinite(sem) and abs(mean - target) <= 2 * sem:
+        notes.append(f"seed scatter: the miss {mean - target:+.2f} is within two standard errors "
+                     f"({sem:.2f}) of the mean of {n} seeds; more seeds or larger heaps would tell")
+    elif not notes and predicted is not None and np.isfinite(predicted):
+        notes.append(f"surface bias: the surface predicts the target but {n} seeds give {mean:.2f} "
+                     f"(+-{sem if np.isfinite(sem) else float('nan'):.2f} standard error): the quadratic "
+                     "misrepresents the DEM at the optimum (see the lack-of-fit test)")
+    elif not notes:
+        notes.append(f"the mean of {n} seeds, {mean:.2f}, misses the target by more than the seed scatter "
+                     "explains (no surface prediction at this set)")
+    return "; ".join(notes)
+
+
+def verification_frame(soil_data: dict, stage: dict, optimum: pd.DataFrame, targets: dict,
+                       runs: dict[str, list[pd.DataFrame]]) -> pd.DataFrame:
+    """Verification rows of one stage (module docstring); ``runs``: case id -> its replicate
+    run frames."""
+    rows = []
+    for case in (stage.get("optimise") or {}).get("cases", []):
+        frames = runs.get(case["id"], [])
+        allruns = pd.concat(frames, ignore_index=True) if frames else pd.DataFrame(columns=["response", "status"])
+        cal = optimum[(optimum["case"].astype(str) == case["id"])]
+        if "calibrated" in cal.columns:
+            cal = cal[cal["calibrated"].astype(str).str.lower() == "true"]
+        else:
+            cal = cal.iloc[0:0]
+        for rid, goal in case["goals"].items():
+            rsel = allruns[allruns["response"] == rid]
+            presets = sorted({str(x) for x in rsel["preset"]} - {"", "nan"}, key=lambda x: x != "quick") \
+                if "preset" in rsel.columns and len(rsel) else []
+            for preset in presets or [""]:
+                sel = rsel[rsel["preset"].astype(str) == preset] if preset else rsel
+                rows.append(_verification_row(stage, case, rid, goal, targets, soil_data, cal, sel, preset))
+    return pd.DataFrame(rows, columns=VERIFICATION_COLUMNS)
+
+
+def _verification_row(stage, case, rid, goal, targets, soil_data, cal, sel, preset) -> dict:
+    """One row of :func:`verification_frame`: one case, response and preset."""
+    tid = goal.get("target", "")
+    t = targets.get(tid, {}) if tid else {}
+    target = float(goal["value"]) if "value" in goal else (
+        t.get("value") if t.get("value") is not None else np.nan)
+    target = float(target) if target is not None else np.nan
+    paper_target = (soil_data.get("targets", {}).get(tid) or {}).get("value") if tid else goal.get("value")
+    paper_target = float(paper_target) if paper_target is not None else np.nan
+    ok = sel[sel["status"].astype(str) == "ok"]
+    vals = ok["value"].to_numpy(float) if len(ok) else np.array([])
+    n = int(np.isfinite(vals).sum())
+    mean = float(np.nanmean(vals)) if n else np.nan
+    sd = float(np.nanstd(vals, ddof=1)) if n > 1 else np.nan
+    pred = float(cal[rid].iloc[0]) if len(cal) and rid in cal.columns else np.nan
+    paper_sim = (case.get("printed_verification") or {}).get(rid)
+    paper_sim = float(paper_sim) if paper_sim is not None else np.nan
+    rel = (mean - target) / target * 100 if np.isfinite(target) and target != 0 and n else np.nan
+    if len(cal) == 0:
+        reasons = sel["error"].astype(str).unique().tolist() if len(sel) else []
+        status = "not run: " + ("; ".join(r for r in reasons if r) or "no calibrated set")
+    elif n == 0:
+        status = ("failed: " + "; ".join(sel["error"].astype(str).unique())) if len(sel) else "not run"
+    else:
+        status = "ok"
+    note = diagnose(mean, sd, n, target, pred) if status == "ok" else ""
+    if status == "ok" and goal.get("goal") != "target":
+        note = f"goal {goal.get('goal')}: no target value; the paper's verification is beside it"
+    return {
+        "stage": stage["id"], "case": case["id"], "response": rid, "target_id": tid or goal.get("goal"),
+        "target": target, "target_source": t.get("source", "config" if "value" in goal else ""),
+        "preset": preset or (ok["preset"].iloc[0] if len(ok) else ""), "n": n,
+        "seeds": " ".join(str(int(s)) for s in ok["seed"]) if len(ok) else "",
+        "simulated_mean": mean, "simulated_sd": sd, "relative_error_percent": rel,
+        "within_2_percent": bool(np.isfinite(rel) and abs(rel) <= TOLERANCE_PERCENT),
+        "predicted": pred, "predicted_minus_target": pred - target if np.isfinite(target) else np.nan,
+        "paper_target": paper_target, "paper_simulated": paper_sim,
+        "paper_relative_error_percent": (paper_sim - paper_target) / paper_target * 100
+        if np.isfinite(paper_sim) and np.isfinite(paper_target) and paper_target else np.nan,
+        "status": status, "note": note}
+
+
+def calibrated_vs_paper(soil_data: dict, stages: dict[str, tuple[dict, pd.DataFrame, pd.DataFrame]]) -> pd.DataFrame:
+    """Every calibrated parameter of every case beside the paper's calibrated value.
+
+    ``stages``: stage id -> (DEM stage, optimum frame, identifiability frame).  A factor's
+    paper value is the case's ``printed_optimum`` (the paper's symbol of the same parameter);
+    a fixed parameter's is the value the config's stage fixes it at.
+    """
+    params = soil_data.get("parameters", {})
+    rows = []
+    for sid, (stage, optimum, ident) in stages.items():
+        config_stage = next(s for s in soil_data["stages"] if s["id"] == sid)
+        paper_sym = {f["parameter"]: s for s, f in config_stage["factors"].items()}
+        for case in (stage.get("optimise") or {}).get("cases", []):
+            cfg_case = next((c for c in (config_stage.get("optimise") or {}).get("cases", [])
+                             if c["id"] == case["id"]), {})
+            printed = cfg_case.get("printed_optimum") or {}
+            cal = optimum[(optimum["case"].astype(str) == case["id"])]
+            cal = cal[cal["calibrated"].astype(str).str.lower() == "true"] if "calibrated" in cal.columns \
+                else cal.iloc[0:0]
+            idt = ident[ident["case"].astype(str) == case["id"]] if ident is not None and len(ident) else None
+            entries = [(s, f["parameter"], "factor") for s, f in stage["factors"].items()]
+            entries += [("", p, "fixed") for p in (stage.get("fixed") or {})]
+            for sym, pname, role in entries:
+                if role == "factor":
+                    ours = float(cal[sym].iloc[0]) if len(cal) else np.nan
+                else:
+                    ours = float(stage["fixed"][pname])
+                ps = paper_sym.get(pname)
+                if ps is not None and ps in printed:
+                    paper, psrc = float(printed[ps]), f"printed optimum ({ps})"
+                elif pname in (config_stage.get("fixed") or {}):
+                    paper, psrc = float(config_stage["fixed"][pname]), "fixed in the paper's stage"
+                else:
+                    paper, psrc = np.nan, "not printed"
+                row = {"stage": sid, "case": case["id"], "parameter": pname, "symbol": sym, "role": role,
+                       "unit": (params.get(pname) or {}).get("unit", ""), "calibrated": ours, "paper": paper,
+                       "paper_source": psrc, "difference": ours - paper,
+                       "relative_difference_percent": (ours - paper) / paper * 100 if paper else np.nan,
+                       "pinned": "", "near_optimal_min": np.nan, "near_optimal_max": np.nan}
+                if role == "factor" and idt is not None:
+                    r = idt[idt["factor"] == sym]
+                    if len(r):
+                        row.update(pinned=bool(r["pinned"].iloc[0]), near_optimal_min=float(r["min"].iloc[0]),
+                                   near_optimal_max=float(r["max"].iloc[0]))
+                if role == "fixed":
+                    row["pinned"] = "fixed"
+                rows.append(row)
+    return pd.DataFrame(rows)
+
+
+def tool_frame(conditions, runs: dict[tuple[str, int], pd.DataFrame]) -> pd.DataFrame:
+    """Tool-verification rows: every measured condition and quantity, measured beside simulated.
+
+    ``conditions``: :class:`soilcal.config.measurements.Condition` objects; ``runs``:
+    (measurement, row) -> that condition's run rows (one per response and replicate seed).
+    """
+    rows = []
+    for c in conditions:
+        df = runs.get((c.measurement, c.row))
+        for resp in c.responses:
+            measure = resp["measure"]
+            sel = df[df["measure"] == measure] if df is not None and len(df) else pd.DataFrame()
+            ok = sel[sel["status"].astype(str) == "ok"] if len(sel) else sel
+            vals = ok["value"].to_numpy(float) if len(ok) else np.array([])
+            n = int(np.isfinite(vals).sum())
+            mean = float(np.nanmean(vals)) if n else np.nan
+            sd = float(np.nanstd(vals, ddof=1)) if n > 1 else np.nan
+            measured = resp.get("measured")
+            measured = float(measured) if measured is not None else np.nan
+            paper = resp.get("paper_simulated")
+            paper = float(paper) if paper is not None else np.nan
+            if df is None:
+                status = "not run"
+            elif len(sel) and (sel["status"].astype(str) != "ok").all():
+                status = "; ".join(sel["status"].astype(str).unique()) + ": " + \
+                    "; ".join(sel["error"].astype(str).unique())
+            elif n == 0:
+                status = "no value: the runs measured nothing for this quantity"
+            else:
+                status = "ok"
+            note = resp.get("note") or ""
+            if not np.isfinite(measured):
+                note = (note + "; " if note else "") + "measured value not printed"
+            pdiff = resp.get("paper_difference")
+            rows.append({
+                "measurement": c.measurement, "row": c.row, "covariate": c.covariate,
+                "covariate_value": c.covariate_value, "scenario": c.scenario, "setup": c.setup.get("name", ""),
+                "measure": measure, "unit": resp.get("unit", ""), "preset": c.preset, "stage": c.stage,
+                "case": c.case, "n": n, "seeds": " ".join(str(int(s)) for s in ok["seed"]) if len(ok) else "",
+                "measured": measured, "measured_sd": resp.get("measured_sd"), "simulated_mean": mean,
+                "simulated_sd": sd,
+                "relative_error_percent": (mean - measured) / measured * 100 if np.isfinite(measured) and measured
+                else np.nan,
+                "paper_simulated": paper,
+                "paper_relative_error_percent": (paper - measured) / measured * 100
+                if np.isfinite(paper) and np.isfinite(measured) and measured else np.nan,
+                "paper_difference": pdiff if pdiff is not None else np.nan,
+                "status": status, "note": note})
+    return pd.DataFrame(rows, columns=TOOL_COLUMNS)
+
+
+__all__ = ["TOOL_COLUMNS", "VERIFICATION_COLUMNS", "calibrated_vs_paper", "diagnose", "not_run_rows",
+           "tool_frame", "verification_cases", "verification_frame", "verification_spec", "verify_settings"]
+
+
+# --------------------------------------------------------------------------- file level
+
+
+def _soil(soil_path, soil_data, resources_root="resources"):
+    from pathlib import Path
+
+    from soilcal.config.load import Soil
+
+    return Soil(path=Path(soil_path), data=soil_data, resources_root=Path(resources_root))
+
+
+def verification_point(soil, stage: dict, optimum: pd.DataFrame, case_id: str, rep: int,
+                       preset: str | None = None) -> dict:
+    """Everything one verification job simulates (plain data, the job's params): the spec of
+    :func:`verification_spec`, or ``{"not_run": reason}`` when the case has no calibrated set
+    (e.g. its target is missing)."""
+    try:
+        spec = verification_spec(soil, stage, optimum, case_id, rep, preset)
+    except InputError as exc:
+        return {"not_run": str(exc), "stage": stage["id"], "case": case_id,
+                "responses": list(_case(stage, case_id)["goals"])}
+    return dict(spec, case=case_id)
+
+
+def run_verification_point(spec: dict, out, threads: int | None = None) -> pd.DataFrame:
+    """Simulate one verification job (:func:`verification_point`) and write its rows."""
+    from soilcal.chain.files import write_csv
+    from soilcal.chain.sources import simulate
+
+    if "not_run" in spec:
+        df = not_run_rows(spec["stage"], {"goals": {r: {} for r in spec["responses"]}}, spec["not_run"])
+    else:
+        df = simulate({k: v for k, v in spec.items() if k != "case"}, threads=threads)
+    df.insert(2, "case", spec["case"])
+    write_csv(df, out)
+    return df
+
+
+def write_verification(soil_data: dict, stage_ids, stage_dirs: dict[str, str], targets_csv, run_paths, out) -> pd.DataFrame:
+    """``verification.csv`` of a soil from its replicate runs ``verify/<preset>/<stage>/<case>/<k>.csv``."""
+    from pathlib import Path
+
+    from soilcal.chain.files import read_stage, read_targets, write_csv
+
+    targets = read_targets(targets_csv)
+    by_case: dict[tuple[str, str], list[pd.DataFrame]] = {}
+    for p in run_paths:
+        p = Path(p)
+        by_case.setdefault((p.parent.parent.name, p.parent.name), []).append(pd.read_csv(p))
+    frames = []
+    for sid in stage_ids:
+        d = Path(stage_dirs[sid])
+        stage = read_stage(d / "stage.json")
+        runs = {case: fr for (s, case), fr in by_case.items() if s == sid}
+        frames.append(verification_frame(soil_data, stage, pd.read_csv(d / "optimum.csv"), targets, runs))
+    df = pd.concat(frames, ignore_index=True) if frames else pd.DataFrame(columns=VERIFICATION_COLUMNS)
+    write_csv(df, out)
+    return df
+
+
+def tool_point(soil, cond, stage: dict, optimum: pd.DataFrame) -> dict:
+    """Everything one measured condition's job simulates (plain data, the job's params): one
+    point spec per replicate seed (``seed + seed_offset + k``) at the calibrated set of the
+    condition's case, with the condition's setup and parameters; ``{"not_run": reason}`` when
+    that case has no calibrated set."""
+    from soilcal.chain.sources import point_spec
+    from soilcal.chain.stage import calibrated_levels
+
+    base = {"measurement": cond.measurement, "row": cond.row, "stage": stage["id"],
+            "measures": [r["measure"] for r in cond.responses]}
+    try:
+        levels = calibrated_levels(stage, optimum, cond.case or None)
+    except InputError as exc:
+        return dict(base, not_run=str(exc))
+    v = verify_settings(soil.data)
+    specs = []
+    for k in range(int(cond.replicates)):
+        spec = point_spec(soil, stage, levels, run=int(cond.row), seed=int(soil.data["seed"]) + int(v["seed_offset"]) + k,
+                          replicates=1, extra_params=dict(cond.params), responses=[])
+        spec["responses"] = {r["measure"]: {"scenario": cond.scenario, "setup": dict(cond.setup),
+                                            "measure": r["measure"], "preset": cond.preset}
+                             for r in cond.responses}
+        specs.append(spec)
+    return dict(base, specs=specs)
+
+
+def run_tool_point(job: dict, out, threads: int | None = None) -> pd.DataFrame:
+    """Simulate one measured condition (:func:`tool_point`) and write one row per measured
+    quantity and seed."""
+    from soilcal.chain.files import write_csv
+    from soilcal.chain.sources import RUN_COLUMNS, simulate
+
+    if "not_run" in job:
+        df = pd.DataFrame([{c: "" for c in RUN_COLUMNS} | {"stage": job["stage"], "response": m, "measure": m,
+                                                            "status": "not run", "error": job["not_run"],
+                                                            "value": np.nan, "n": 0}
+                           for m in job["measures"]], columns=RUN_COLUMNS)
+    else:
+        df = pd.concat([simulate(spec, threads=threads) for spec in job["specs"]], ignore_index=True)
+    df.insert(2, "measurement", job["measurement"])
+    write_csv(df, out)
+    return df
+
+
+def write_tool_verification(soil_path, resources_root, run_paths, run_map: dict, out) -> pd.DataFrame:
+    """``tool_verification.csv`` of a soil from its runs ``tools/<key>.csv``; ``run_map``:
+    ``"<measurement>/<row>"`` -> the key of the job that simulated that condition."""
+    from pathlib import Path
+
+    from soilcal.chain.files import write_csv
+    from soilcal.config.load import load_soil
+    from soilcal.config.measurements import conditions
+
+    soil = load_soil(soil_path, resources_root)
+    files = {Path(p).stem: pd.read_csv(p) for p in run_paths}
+    runs = {}
+    for cond_id, key in run_map.items():
+        m, r = cond_id.rsplit("/", 1)
+        runs[(m, int(r))] = files[key]
+    df = tool_frame(conditions(soil), runs)
+    write_csv(df, out)
+    return df
+
+
+def write_calibrated_vs_paper(soil_data: dict, stage_ids, stage_dirs: dict[str, str], out) -> pd.DataFrame:
+    from pathlib import Path
+
+    from soilcal.chain.files import read_stage, write_csv
+
+    stages = {}
+    for sid in stage_ids:
+        d = Path(stage_dirs[sid])
+        stages[sid] = (read_stage(d / "stage.json"), pd.read_csv(d / "optimum.csv"),
+                       pd.read_csv(d / "identifiability.csv"))
+    df = calibrated_vs_paper(soil_data, stages)
+    write_csv(df, out)
+    return df
+
+
+SUMMARY_COLUMNS = ["soil", "stage", "case", "response", "target", "target_source", "simulated_mean",
+                   "simulated_sd", "n", "relative_error_percent", "within_2_percent", "predicted_minus_target",
+                   "paper_relative_error_percent", "status", "dem_points", "dem_failed", "dem_wall_s"]
+
+
+def summary_frame(verifications: dict[str, pd.DataFrame], responses: dict[str, list[pd.DataFrame]]) -> pd.DataFrame:
+    """One row per soil, case and response at the calibrated set, with each soil's DEM design
+    points (count, failed, summed wall time)."""
+    rows = []
+    for soil, v in verifications.items():
+        tabs = responses.get(soil, [])
+        pts = sum(len(t) for t in tabs)
+        failed = sum(int((t["status"] != "ok").sum()) for t in tabs if "status" in t)
+        wall = sum(float(t["wall_s"].sum()) for t in tabs if "wall_s" in t)
+        for r in v.to_dict("records"):
+            rows.append({"soil": soil, **{k: r.get(k) for k in SUMMARY_COLUMNS if k in r},
+                         "dem_points": pts, "dem_failed": failed, "dem_wall_s": round(wall, 1)})
+    return pd.DataFrame(rows, columns=SUMMARY_COLUMNS)
+
+
+def write_summary(soils, verification_paths, response_paths, out_table, out_figures) -> pd.DataFrame:
+    from pathlib import Path
+
+    from soilcal import plots
+    from soilcal.chain.files import write_csv
+
+    ver = {s: pd.read_csv(p) for s, p in zip(soils, verification_paths)}
+    resp: dict[str, list[pd.DataFrame]] = {}
+    for p in response_paths:
+        soil = Path(p).parts[-4]
+        resp.setdefault(soil, []).append(pd.read_csv(p))
+    df = summary_frame(ver, resp)
+    write_csv(df, out_table)
+    Path(out_figures).mkdir(parents=True, exist_ok=True)
+    plot = df[np.isfinite(pd.to_numeric(df["relative_error_percent"], errors="coerce"))]
+    if len(plot):
+        plots.summary_figure(plot, Path(out_figures) / "summary")
+    return df
+
+
+def tool_key(job: dict) -> str:
+    """Identity of the DEM runs a measured condition needs: two conditions with the same
+    scenario, setup, preset, parameters and seeds (a tiller speed whose flatness and power are
+    tabled apart) share one job, which measures both."""
+    import hashlib
+    import json
+
+    if "not_run" in job:
+        ident = {"not_run": job["not_run"], "measurement": job["measurement"], "row": job["row"]}
+    else:
+        ident = [{"params": s["params"], "seed": s["seed"], "replicates": s["replicates"],
+                  "runs": sorted({json.dumps([r["scenario"], r["setup"], r["preset"]], sort_keys=True, default=str)
+                                  for r in s["responses"].values()})} for s in job["specs"]]
+    return hashlib.sha1(json.dumps(ident, sort_keys=True, default=str).encode()).hexdigest()[:12]
+
+
+def merge_tool_jobs(a: dict, b: dict) -> dict:
+    """One job for two conditions of the same :func:`tool_key`: the union of their measures."""
+    out = dict(a, measures=list(dict.fromkeys(list(a["measures"]) + list(b["measures"]))))
+    if "specs" in a:
+        out["specs"] = [dict(sa, responses={**sa["responses"], **sb["responses"]})
+                        for sa, sb in zip(a["specs"], b["specs"])]
+    return out

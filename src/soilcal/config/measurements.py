@@ -1,0 +1,462 @@
+"""Measured tool and process tests of a soil, declared as data in its ``measurements`` block.
+
+A calibrated DEM is verified against measured tests the calibration did not use (soil-bin
+forces, rotary tiller power and surface flatness, confined compression).  Each test is one
+CSV table under ``resources/measurements/<soil>/`` and one entry of the soil's
+``measurements`` block, keyed by an id (``^[a-z][a-z0-9_]*$``)::
+
+    measurements:
+      cutting_resistance:
+        table: cutting_resistance.csv       # one row = one simulated condition
+        source: "Sec. 4.3, Figure 12b"
+        scenario: bulldozing                 # scenario that simulates one row
+        setup: plate-line                    # its default named setup
+        set: {}                              # setup overrides for every row (optional)
+        params: {}                           # DEM parameter overrides, SI, every row (optional)
+        covariates:                          # table column -> how it maps onto the simulation
+          directrix: {setup: {arc: plate-arc, parabola: plate-parabola, line: plate-line}}
+          plate: {ignore: true, note: "plate number"}
+        ignore_columns: [source]             # further columns that change nothing (optional)
+        responses:
+          - {measure: horizontal_force_N, value: horizontal_measured_N, unit: N}
+        calibrated: {stage: bbd, case: stacking_angle}
+        replicates: 3                        # seeds per row (default 3)
+        preset: quick                        # quick (default) or paper
+
+Covariate forms (exactly one per column):
+
+* ``{setup: {value: setup-name}}``: the row runs that named setup of the scenario;
+* ``{set: key, scale: s}``: setup key ``key`` = cell value * ``s`` (default 1);
+* ``{param: name, scale: s}``: DEM parameter ``name`` (:class:`~soilcal.dem.scenarios.base.DemParams`)
+  = cell value * ``s``;
+* ``{case: {value: case-id}}``: the row uses the optimum of that case of the calibrated stage;
+* ``{ignore: true}``: an id or label column that does not change the simulation.
+
+Response columns: ``value`` (the measured value; ``null`` when the paper does not print it,
+then a ``note`` is required and the row is simulated and reported without a measured value),
+``sd``, ``n``, ``paper_simulated`` (the paper's own simulation), ``paper_difference`` (the
+printed simulated - measured difference).  The measure's unit follows from its name's suffix
+(:data:`UNIT_SUFFIXES`; a name without one is dimensionless, unit ``-``) and ``unit`` must
+say the same.  Every table column must be a covariate, a response column or listed under
+``ignore_columns``, so that a column nobody declared (a second speed, a depth) cannot be
+silently left out of the simulation.
+
+:func:`check_measurements` validates the block at start-up (called by the config loader);
+:func:`conditions` returns one :class:`Condition` per table row.  ``Condition.params`` is the
+soil's ``simulation.params``, then the entry's ``params``, then the row's ``param``
+covariates (later wins); the calibrated stage's optimum is applied on top of these by the
+runner (``stage``, ``case``).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from pathlib import Path
+
+import pandas as pd
+
+from soilcal.errors import InputError
+
+BLOCK = "measurements"
+DEFAULT_REPLICATES = 3
+DEFAULT_PRESET = "quick"
+
+#: measure-name suffix -> unit the response's ``unit`` must equal (suffixes matched without
+#: regard to case, so ``stress_10_kpa`` is in kPa); a measure without a suffix is
+#: dimensionless (``-``)
+UNIT_SUFFIXES = (
+    ("_kPa", "kPa"),
+    ("_Pa", "Pa"),
+    ("_kW", "kW"),
+    ("_Nm", "N m"),
+    ("_N", "N"),
+    ("_mm", "mm"),
+    ("_dm2", "dm^2"),
+    ("_deg", "deg"),
+    ("_m", "m"),
+)
+DIMENSIONLESS = "-"
+
+_FORMS = ("setup", "set", "param", "case", "ignore")
+_RESPONSE_COLUMNS = ("value", "sd", "n", "paper_simulated", "paper_difference")
+
+
+@dataclass(frozen=True)
+class Condition:
+    """One row of a measured table as a simulation: what to run and what it is compared to."""
+
+    measurement: str
+    row: int
+    label: str
+    covariate: str
+    covariate_value: str
+    scenario: str
+    setup: dict
+    params: dict
+    stage: str
+    case: str
+    preset: str
+    replicates: int
+    responses: tuple
+
+
+def unit_of(measure: str) -> str:
+    """The unit a measure's name implies (:data:`UNIT_SUFFIXES`)."""
+    low = measure.lower()
+    for suffix, unit in UNIT_SUFFIXES:
+        if low.endswith(suffix.lower()):
+            return unit
+    return DIMENSIONLESS
+
+
+def measurements_dir(resources_root, soil_name: str) -> Path:
+    return Path(resources_root) / BLOCK / soil_name
+
+
+def _text(v) -> str:
+    """A cell or map key as text: 150, 150.0 and "150" all read "150"."""
+    if isinstance(v, bool):
+        return str(v).lower()
+    if isinstance(v, (int, float)) or hasattr(v, "dtype"):
+        try:
+            x = float(v)
+        except (TypeError, ValueError):
+            return str(v).strip()
+        if math.isfinite(x) and x == int(x):
+            return str(int(x))
+        return f"{x:g}"
+    return str(v).strip()
+
+
+def _missing(v) -> bool:
+    if v is None:
+        return True
+    if isinstance(v, str):
+        return v.strip() == ""
+    try:
+        return bool(pd.isna(v))
+    except (TypeError, ValueError):
+        return False
+
+
+def _number(v):
+    """The cell as a float, or None if it is not a number."""
+    if isinstance(v, bool):
+        return None
+    try:
+        x = float(v)
+    except (TypeError, ValueError):
+        return None
+    return x if math.isfinite(x) else None
+
+
+def _plain(v):
+    """A table cell as a plain Python value (numbers as float, text as str)."""
+    x = _number(v)
+    return x if x is not None else str(v).strip()
+
+
+def _read(soil_path, where: str, tpath: Path) -> pd.DataFrame:
+    from soilcal.config.load import read_table
+
+    if not tpath.is_file():
+        raise InputError(soil_path, f"{where}.table", f"an existing file {tpath}", "no such file")
+    df = read_table(tpath)
+    if len(df) == 0:
+        raise InputError(tpath, "rows", "at least one row (one measured condition)", 0)
+    return df
+
+
+def _stage_cases(soil_path, data: dict, where: str, entry: dict) -> tuple[dict, list[str]]:
+    cal = entry["calibrated"]
+    stages = {s["id"]: s for s in data["stages"]}
+    sid = cal["stage"]
+    if sid not in stages:
+        raise InputError(soil_path, f"{where}.calibrated.stage", "the id of a stage (" + ", ".join(stages) + ")", sid)
+    opt = stages[sid].get("optimise")
+    if not opt:
+        with_opt = [s for s, st in stages.items() if st.get("optimise")]
+        raise InputError(soil_path, f"{where}.calibrated.stage",
+                         "a stage with an optimise block (" + ", ".join(with_opt) + ")", sid)
+    return stages[sid], [c["id"] for c in opt["cases"]]
+
+
+def _entries(soil_path, data: dict, resources_root) -> list[tuple[str, dict, Path, pd.DataFrame, list[Condition]]]:
+    """Validate every entry of the block; return (id, entry, table path, table, conditions)."""
+    block = data.get(BLOCK) or {}
+    out = []
+    for mid, entry in block.items():
+        tpath = measurements_dir(resources_root, data["name"]) / entry["table"]
+        df, conds = _entry(soil_path, data, mid, entry, tpath)
+        out.append((mid, entry, tpath, df, conds))
+    return out
+
+
+def _entry(soil_path, data: dict, mid: str, entry: dict, tpath: Path):
+    from soilcal.dem.scenarios import SCENARIOS, measures_of
+    from soilcal.dem.scenarios.base import PRESETS, DemParams, merge_setup
+
+    where = f"{BLOCK}.{mid}"
+    src = str(soil_path)
+
+    # -- scenario and named setup
+    name = entry["scenario"]
+    if name not in SCENARIOS:
+        raise InputError(soil_path, f"{where}.scenario", f"one of {', '.join(sorted(SCENARIOS))}", name)
+    mod = SCENARIOS[name]
+    setups = mod.setups()
+    if entry["setup"] not in setups:
+        raise InputError(soil_path, f"{where}.setup", f"a setup of {name} ({', '.join(setups)})", entry["setup"])
+    preset = entry.get("preset", DEFAULT_PRESET)
+    if preset not in PRESETS:  # the schema refuses this already; kept for direct callers
+        raise InputError(soil_path, f"{where}.preset", f"one of {', '.join(PRESETS)}", preset)
+    entry_set = dict(entry.get("set") or {})
+    try:
+        merge_setup(setups, entry["setup"], entry_set, src)
+    except InputError as exc:
+        raise _renamed(exc, soil_path, "setup.", f"{where}.set.") from None
+
+    # -- parameters every row shares: the soil's simulation.params, then the entry's
+    sim_params = dict((data.get("simulation") or {}).get("params") or {})
+    entry_params = dict(entry.get("params") or {})
+    try:
+        DemParams.from_mapping(entry_params, src)
+    except InputError as exc:
+        raise _renamed(exc, soil_path, "params.", f"{where}.params.") from None
+    base_params = {**sim_params, **{k: float(v) for k, v in entry_params.items()}}
+
+    # -- calibrated stage and case
+    stage, case_ids = _stage_cases(soil_path, data, where, entry)
+    cal_case = entry["calibrated"].get("case")
+    if cal_case is not None and cal_case not in case_ids:
+        raise InputError(soil_path, f"{where}.calibrated.case",
+                         f"a case id of stage {stage['id']!r} (" + ", ".join(case_ids) + ")", cal_case)
+
+    # -- covariates (the form of each, before the table is read)
+    covs = dict(entry.get("covariates") or {})
+    known = DemParams.names()
+    setup_cols, case_cols = [], []
+    for col, cv in covs.items():
+        cw = f"{where}.covariates.{col}"
+        forms = [f for f in _FORMS if f in cv and not (f == "ignore" and cv[f] is False)]
+        if len(forms) != 1:
+            raise InputError(soil_path, cw, "exactly one of " + ", ".join(_FORMS), sorted(cv))
+        form = forms[0]
+        if form == "ignore" and cv["ignore"] is not True:
+            raise InputError(soil_path, f"{cw}.ignore", "true", cv["ignore"])
+        if "scale" in cv and form not in ("set", "param"):
+            raise InputError(soil_path, f"{cw}.scale", "no scale except with set or param", cv["scale"])
+        if form == "setup":
+            if not cv["setup"]:
+                raise InputError(soil_path, f"{cw}.setup", "a map of cell value -> setup name", cv["setup"])
+            for k, s in cv["setup"].items():
+                if s not in setups:
+                    raise InputError(soil_path, f"{cw}.setup.{k}", f"a setup of {name} ({', '.join(setups)})", s)
+            setup_cols.append(col)
+        elif form == "set":
+            key = cv["set"]
+            if key not in setups[entry["setup"]]:
+                raise InputError(soil_path, f"{cw}.set",
+                                 f"a key of the {name} setup {entry['setup']!r} ({', '.join(sorted(setups[entry['setup']]))})",
+                                 key)
+            if key in entry_set:
+                raise InputError(soil_path, f"{cw}.set", f"a setup key not also fixed under {where}.set", key)
+        elif form == "param":
+            if cv["param"] not in known:
+                raise InputError(soil_path, f"{cw}.param", f"a DEM parameter ({', '.join(known)})", cv["param"])
+        elif form == "case":
+            if not cv["case"]:
+                raise InputError(soil_path, f"{cw}.case", "a map of cell value -> case id", cv["case"])
+            for k, c in cv["case"].items():
+                if c not in case_ids:
+                    raise InputError(soil_path, f"{cw}.case.{k}",
+                                     f"a case id of stage {stage['id']!r} (" + ", ".join(case_ids) + ")", c)
+            case_cols.append(col)
+    if len(setup_cols) > 1:
+        raise InputError(soil_path, f"{where}.covariates", "at most one column that chooses the setup", setup_cols)
+    if len(case_cols) > 1:
+        raise InputError(soil_path, f"{where}.covariates", "at most one column that chooses the case", case_cols)
+    if case_cols and cal_case is not None:
+        raise InputError(soil_path, f"{where}.calibrated.case",
+                         f"no case: covariate {case_cols[0]!r} maps each row to its case", cal_case)
+    if not case_cols and cal_case is None:
+        raise InputError(soil_path, f"{where}.calibrated.case",
+                         f"a case id of stage {stage['id']!r} (" + ", ".join(case_ids)
+                         + ") or a covariate with a case map", None)
+
+    # -- responses (before the table: names and units)
+    resps = entry["responses"]
+    seen = []
+    for j, r in enumerate(resps):
+        rw = f"{where}.responses[{j}]"
+        if r["measure"] in seen:
+            raise InputError(soil_path, f"{rw}.measure", "a measure listed once", r["measure"])
+        seen.append(r["measure"])
+        if r.get("value") is None and not r.get("note"):
+            raise InputError(soil_path, f"{rw}.note",
+                             "a note saying why the measured value is not printed (value: null)", None)
+
+    # -- the table: columns
+    df = _read(soil_path, where, tpath)
+    cols = [str(c) for c in df.columns]
+    listed = ", ".join(cols)
+    for col in covs:
+        if col not in cols:
+            raise InputError(soil_path, f"{where}.covariates.{col}", f"a column of {tpath.name} ({listed})", col)
+    ignore_cols = list(entry.get("ignore_columns") or [])
+    for k, col in enumerate(ignore_cols):
+        if col not in cols:
+            raise InputError(soil_path, f"{where}.ignore_columns[{k}]", f"a column of {tpath.name} ({listed})", col)
+    declared = set(covs) | set(ignore_cols)
+    for j, r in enumerate(resps):
+        for key in _RESPONSE_COLUMNS:
+            col = r.get(key)
+            if col is None:
+                continue
+            if col not in cols:
+                raise InputError(soil_path, f"{where}.responses[{j}].{key}",
+                                 f"a column of {tpath.name} ({listed})", col)
+            declared.add(col)
+    for col in cols:
+        if col not in declared:
+            raise InputError(tpath, f"column {col}",
+                             f"a column declared in {Path(soil_path).name} under {where} (a covariate, "
+                             "a response column or an entry of ignore_columns)", col)
+
+    # -- rows
+    active = [c for c in covs if not covs[c].get("ignore")]
+    replicates = int(entry.get("replicates", DEFAULT_REPLICATES))
+    conds = []
+    for i, rec in enumerate(df.to_dict("records")):
+        row = i + 1
+        at = lambda col: f"row {row}, column {col}"  # noqa: E731
+        sname = entry["setup"]
+        overrides = dict(entry_set)
+        set_from = {}  # setup key -> column
+        params = dict(base_params)
+        param_from = {}  # parameter -> column
+        case = cal_case
+        for col in active:
+            cv = covs[col]
+            cell = rec[col]
+            if _missing(cell):
+                raise InputError(tpath, at(col), f"a value of the covariate {col}", "empty")
+            if "setup" in cv or "case" in cv:
+                form = "setup" if "setup" in cv else "case"
+                amap = {_text(k): v for k, v in cv[form].items()}
+                key = _text(cell)
+                if key not in amap:
+                    raise InputError(tpath, at(col),
+                                     f"a value mapped under {where}.covariates.{col}.{form} ({', '.join(amap)})",
+                                     _plain(cell))
+                if form == "setup":
+                    sname = amap[key]
+                else:
+                    case = amap[key]
+                continue
+            scale = float(cv.get("scale", 1.0))
+            x = _number(cell)
+            if "param" in cv:
+                if x is None:
+                    raise InputError(tpath, at(col), f"a number (DEM parameter {cv['param']})", _plain(cell))
+                params[cv["param"]] = x * scale
+                param_from[cv["param"]] = col
+                try:
+                    DemParams.from_mapping({cv["param"]: x * scale}, src)
+                except InputError as exc:
+                    raise InputError(tpath, at(col), f"{exc.expected} (after scale {scale:g})", _plain(cell)) from None
+            else:  # set
+                if x is None and "scale" in cv:
+                    raise InputError(tpath, at(col), f"a number (setup key {cv['set']} = value * {scale:g})",
+                                     _plain(cell))
+                overrides[cv["set"]] = x * scale if x is not None else str(cell).strip()
+                set_from[cv["set"]] = col
+        try:
+            setup = merge_setup(setups, sname, overrides, src)
+        except InputError as exc:  # a set covariate's key that the row's named setup lacks
+            key = exc.field[len("setup."):]
+            raise InputError(soil_path, f"{where}.covariates.{set_from.get(key, '?')}.set",
+                             f"a key of the {name} setup {sname!r} (row {row}): {exc.expected}", key) from None
+        allowed = measures_of(mod, setup)
+        for j, r in enumerate(resps):
+            if r["measure"] not in allowed:
+                raise InputError(soil_path, f"{where}.responses[{j}].measure",
+                                 f"a measured response of {name} with setup {sname!r} ({', '.join(allowed)})",
+                                 r["measure"])
+            want = unit_of(r["measure"])
+            if r["unit"] != want:
+                raise InputError(soil_path, f"{where}.responses[{j}].unit",
+                                 f"{want} (the unit of {r['measure']}, from its name)", r["unit"])
+        try:
+            dem = DemParams.from_mapping(params, src)
+        except InputError as exc:  # a soil-wide simulation.params value: reported by its own check
+            raise _renamed(exc, soil_path, "params.", "simulation.params.") from None
+        try:
+            mod.validate(setup, preset, src, params=dem)
+        except InputError as exc:
+            key = exc.field[len("setup."):] if exc.field.startswith("setup.") else exc.field
+            if key in set_from:
+                col = set_from[key]
+                scale = float(covs[col].get("scale", 1.0))
+                raise InputError(tpath, at(col), f"{exc.expected} (setup.{key} = value * {scale:g})",
+                                 _plain(rec[col])) from None
+            if key in entry_set:
+                raise InputError(soil_path, f"{where}.set.{key}", exc.expected, exc.got) from None
+            if setup_cols:
+                raise InputError(tpath, at(setup_cols[0]), f"{exc.expected} ({exc.field} of setup {sname!r})",
+                                 exc.got) from None
+            raise InputError(soil_path, f"{where}.setup", f"{exc.expected} ({exc.field})", exc.got) from None
+
+        responses = []
+        for j, r in enumerate(resps):
+            vals = {}
+            for key in _RESPONSE_COLUMNS:
+                col = r.get(key)
+                if col is None:
+                    vals[key] = None
+                    continue
+                cell = rec[col]
+                if _missing(cell):
+                    if key == "value":
+                        raise InputError(tpath, at(col),
+                                         f"the measured {r['measure']} (or value: null in {where}.responses[{j}])",
+                                         "empty")
+                    vals[key] = None
+                    continue
+                x = _number(cell)
+                if x is None:
+                    raise InputError(tpath, at(col), "a number", _plain(cell))
+                vals[key] = x
+            n = vals["n"]
+            responses.append(dict(measure=r["measure"], unit=r["unit"], measured=vals["value"],
+                                  measured_sd=vals["sd"], n=None if n is None else int(round(n)),
+                                  paper_simulated=vals["paper_simulated"],
+                                  paper_difference=vals["paper_difference"], note=r.get("note", "")))
+        label_parts = [f"{c}={_text(rec[c])}" for c in active]
+        conds.append(Condition(
+            measurement=mid, row=row, label=", ".join(label_parts) if label_parts else f"row {row}",
+            covariate=active[0] if active else "", covariate_value=_text(rec[active[0]]) if active else "",
+            scenario=name, setup=setup, params=params, stage=stage["id"], case=case, preset=preset,
+            replicates=replicates, responses=tuple(responses)))
+    return df, conds
+
+
+def _renamed(exc: InputError, soil_path, prefix: str, field_prefix: str) -> InputError:
+    fld = exc.field[len(prefix):] if exc.field.startswith(prefix) else exc.field
+    return InputError(soil_path, field_prefix + fld, exc.expected, exc.got)
+
+
+def check_measurements(soil_path, data: dict, resources_root) -> None:
+    """Start-up check of a soil's ``measurements`` block (called by the config loader)."""
+    if data.get(BLOCK):
+        _entries(soil_path, data, resources_root)
+
+
+def conditions(soil) -> list[Condition]:
+    """One :class:`Condition` per row of every measured table of a loaded
+    :class:`~soilcal.config.load.Soil`, in block and table order."""
+    out = []
+    for _mid, _entry, _tpath, _df, conds in _entries(soil.path, soil.data, soil.resources_root):
+        out.extend(conds)
+    return out

@@ -1,0 +1,105 @@
+"""The targets table of a soil (soilcal.chain.targets.targets_frame): printed value or photo
+measurement, and what is said when neither exists."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+import pytest
+
+from soilcal.chain.targets import COLUMNS, targets_frame, write_targets
+from soilcal.config.load import load_soil
+from soilcal.errors import InputError
+
+ROOT = Path(__file__).resolve().parents[2]
+
+SOIL = {
+    "targets": {
+        # a photo group and a printed value (cinnamon soil, Sec. 2.4: 27.69 deg)
+        "stacking_angle": {"value": 27.69, "unit": "deg", "image": "stacking", "source": "Sec. 2.4"},
+        # a printed measurement without photos (black soil, stage 1: 35.2 deg)
+        "accumulation_angle": {"value": 35.2, "unit": "deg", "source": "Sec. 3.1.2"},
+        # lost in extraction (guangxi, angle at 5 % moisture)
+        "angle_mc05": {"value": None, "unit": "deg", "moisture_content": 5, "note": "Table 1 lost"},
+        # a photo group with another measure and no printed value
+        "slope": {"unit": "deg", "image": "side", "image_measure": "slope_deg", "layer": "upper"},
+    }
+}
+MEAS = {"stacking": {"angle_deg": 28.4, "spread_deg": 0.7, "n_photos": 10},
+        "side": {"slope_deg": 31.5, "angle_deg": 99.0, "n_frames": 4}}
+
+
+def _by_id(df: pd.DataFrame) -> dict[str, dict]:
+    return {r["target_id"]: r for r in df.to_dict("records")}
+
+
+def test_published_source_uses_the_printed_values():
+    df = targets_frame(SOIL, "published")
+    assert list(df.columns) == COLUMNS
+    r = _by_id(df)
+    assert r["stacking_angle"]["value"] == 27.69 and r["stacking_angle"]["source"] == "printed"
+    assert r["stacking_angle"]["printed_value"] == 27.69 and r["stacking_angle"]["image_group"] == "stacking"
+    assert np.isnan(r["stacking_angle"]["image_value"])  # photos are not read for the published source
+    assert r["stacking_angle"]["note"] == "Sec. 2.4"
+    assert r["accumulation_angle"]["value"] == 35.2 and r["accumulation_angle"]["source"] == "printed"
+    assert np.isnan(r["angle_mc05"]["value"]) and r["angle_mc05"]["source"] == "not available"
+    assert r["angle_mc05"]["moisture_content"] == 5
+    assert r["slope"]["source"] == "not available"
+
+
+def test_dem_source_photo_replaces_the_printed_value():
+    r = _by_id(targets_frame(SOIL, "dem", MEAS))
+    s = r["stacking_angle"]
+    assert s["value"] == 28.4 and s["source"] == "image" and s["image_value"] == 28.4
+    assert s["printed_value"] == 27.69  # kept beside it
+    assert s["image_spread"] == 0.7 and s["image_n"] == 10
+    assert "stacking" in s["note"] and "printed 27.69" in s["note"]
+    # image_measure chooses the key; n_frames when there is no n_photos
+    sl = r["slope"]
+    assert sl["value"] == 31.5 and sl["source"] == "image" and sl["image_n"] == 4
+    assert np.isnan(sl["printed_value"]) and np.isnan(sl["image_spread"]) and sl["layer"] == "upper"
+    assert "printed" not in sl["note"]
+    # no photo group, a printed value: the paper's measurement
+    a = r["accumulation_angle"]
+    assert a["value"] == 35.2 and a["source"] == "measurement" and np.isnan(a["image_value"])
+    # neither: NaN, not available, and why
+    m = r["angle_mc05"]
+    assert np.isnan(m["value"]) and m["source"] == "not available"
+    assert "no photo group and no printed value" in m["note"] and "Table 1 lost" in m["note"]
+
+
+def test_dem_source_missing_photo_group_is_named():
+    with pytest.raises(InputError, match="stacking") as exc:
+        targets_frame(SOIL, "dem", {"side": MEAS["side"]}, measurements_path="results/x/images/measurements.json")
+    assert exc.value.field == "stacking.angle_deg"
+    assert exc.value.path == "results/x/images/measurements.json"
+    assert exc.value.got == ["side"]
+    with pytest.raises(InputError, match="stacking"):
+        targets_frame(SOIL, "dem", None)
+    # the group is there but not the measure the target reads
+    with pytest.raises(InputError) as exc:
+        targets_frame(SOIL, "dem", {"stacking": MEAS["stacking"], "side": {"angle_deg": 30.0}})
+    assert exc.value.field == "side.slope_deg" and exc.value.got == ["angle_deg"]
+
+
+def test_shipped_soils_published_targets():
+    cin = load_soil(ROOT / "config" / "soils" / "cinnamon-soil.yaml", ROOT / "resources").data
+    r = _by_id(targets_frame(cin, "published"))
+    assert r["stacking_angle"]["value"] == 27.69 and r["stacking_angle"]["source"] == "printed"
+    gx = load_soil(ROOT / "config" / "soils" / "guangxi-cohesive.yaml", ROOT / "resources").data
+    r = _by_id(targets_frame(gx, "published"))
+    assert r["angle_mc00"]["value"] == 30.83 and r["angle_mc20"]["value"] == 37.13
+    assert r["angle_mc05"]["source"] == "not available" and r["angle_mc15"]["source"] == "not available"
+
+
+def test_write_targets_reads_the_measurements_json(tmp_path):
+    mj = tmp_path / "measurements.json"
+    mj.write_text(json.dumps(MEAS))
+    out = tmp_path / "t" / "targets.csv"
+    write_targets(SOIL, "dem", out, mj)
+    df = pd.read_csv(out)
+    assert list(df.columns) == COLUMNS
+    assert df.set_index("target_id").loc["stacking_angle", "value"] == 28.4

@@ -1,0 +1,349 @@
+"""Verification of a calibration (soilcal.chain.verify) and the calibrated set of a stage
+(soilcal.chain.stage.calibrated_levels), on hand-made optima and replicate run rows.
+
+The paper numbers are those the cinnamon soil config quotes: target 27.69 deg (Sec. 2.4),
+printed optimum A 0.08, B 0.37, C 0.64 and verification 27.62 deg with a relative error of
+0.253 % (Sec. 3.4), intermediate levels 0.45 / 0.56 / 0.45 / 0.125 (Sec. 3.3.2).
+"""
+
+from __future__ import annotations
+
+import copy
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+import pytest
+
+from soilcal.chain.sources import RUN_COLUMNS
+from soilcal.chain.stage import calibrated_levels
+from soilcal.chain.verify import (
+    TOOL_COLUMNS,
+    VERIFICATION_COLUMNS,
+    calibrated_vs_paper,
+    diagnose,
+    not_run_rows,
+    summary_frame,
+    tool_frame,
+    verification_cases,
+    verification_frame,
+)
+from soilcal.config.load import load_soil
+from soilcal.errors import InputError
+
+ROOT = Path(__file__).resolve().parents[2]
+
+
+@pytest.fixture(scope="module")
+def cinnamon() -> dict:
+    return copy.deepcopy(load_soil(ROOT / "config" / "soils" / "cinnamon-soil.yaml", ROOT / "resources").data)
+
+
+# --------------------------------------------------------------------------- diagnose
+
+
+def test_diagnose_meets_the_target():
+    # |30.5 - 30| / 30 = 1.67 % <= 2 %: nothing to explain, whatever the surface says
+    assert diagnose(30.5, 0.1, 4, 30.0, 35.0) == ""
+    assert diagnose(29.5, np.nan, 1, 30.0, None) == ""
+    # nothing to judge: no target, a zero target, no mean
+    assert diagnose(31.0, 0.1, 4, np.nan, 30.0) == ""
+    assert diagnose(31.0, 0.1, 4, 0.0, 30.0) == ""
+    assert diagnose(np.nan, 0.1, 4, 30.0, 30.0) == ""
+
+
+def test_diagnose_model_limit():
+    # 33 vs 30 is 10 % off; the surface's best is 31, 1.0 > 0.5 from the target; the miss 3 is far
+    # beyond two standard errors 2 * 0.1/sqrt(4) = 0.1
+    note = diagnose(33.0, 0.1, 4, 30.0, 31.0)
+    assert note.startswith("model limit") and "+1.00" in note
+    assert "seed scatter" not in note and "surface bias" not in note
+
+
+def test_diagnose_model_limit_and_seed_scatter_together():
+    # surface 1.0 off and the miss 3 within 2 * 4/sqrt(4) = 4: both reasons
+    note = diagnose(33.0, 4.0, 4, 30.0, 31.0)
+    assert note.startswith("model limit") and "; seed scatter" in note
+
+
+def test_diagnose_seed_scatter():
+    # 31 vs 30 is 3.3 % off; surface 30.2 (0.2 <= 0.5 from the target);
+    # standard error 1.2/sqrt(4) = 0.6, two of them 1.2 >= the miss 1.0
+    note = diagnose(31.0, 1.2, 4, 30.0, 30.2)
+    assert note.startswith("seed scatter") and "+1.00" in note and "0.60" in note
+    assert "model limit" not in note and "surface bias" not in note
+
+
+def test_diagnose_surface_bias():
+    # the same miss with a standard error of 0.4/sqrt(4) = 0.2: 2 * 0.2 = 0.4 < 1.0
+    note = diagnose(31.0, 0.4, 4, 30.0, 30.1)
+    assert note.startswith("surface bias") and "0.20" in note
+    # a single seed has no standard error: not seed scatter
+    assert diagnose(31.0, np.nan, 1, 30.0, 30.1).startswith("surface bias")
+    # predicted exactly 0.5 from the target is not beyond the surface tolerance
+    assert diagnose(31.0, 0.4, 4, 30.0, 30.5).startswith("surface bias")
+
+
+# --------------------------------------------------------------------------- verification frame
+
+
+def _runs(values, response="stacking_angle", status="ok", error="", seed0=11082, preset="quick"):
+    """One replicate frame per value, as run_verification_point writes them (RUN_COLUMNS + case)."""
+    out = []
+    for k, v in enumerate(values):
+        row = {c: "" for c in RUN_COLUMNS} | {"stage": "bbd", "run": k, "response": response, "value": v,
+                                              "sd": np.nan, "n": 1 if status == "ok" else 0, "status": status,
+                                              "error": error, "seed": seed0 + k, "preset": preset}
+        out.append(pd.DataFrame([row], columns=RUN_COLUMNS))
+    return out
+
+
+def _stage():
+    return {"id": "bbd", "factors": {"A": {"parameter": "soil_soil_rolling_friction"}},
+            "optimise": {"cases": [
+                {"id": "stacking_angle", "goals": {"stacking_angle": {"goal": "target", "target": "stacking_angle"}},
+                 "printed_verification": {"stacking_angle": 27.62}},
+                {"id": "lost", "goals": {"stacking_angle": {"goal": "target", "target": "lost_target"}}},
+            ]}}
+
+
+OPTIMUM = pd.DataFrame({
+    "case": ["stacking_angle", "stacking_angle", "stacking_angle", "lost"],
+    "method": ["desirability", "near_optimal", "near_optimal", "none"],
+    "A": [0.14, 0.09, 0.1, np.nan],
+    "stacking_angle": [27.0, 28.1, 28.3, np.nan],  # surface prediction at each set
+    "calibrated": [False, True, False, False],
+    "note": ["", "", "", "target value not available"],
+})
+
+
+def test_verification_frame_statistics(cinnamon):
+    targets = {"stacking_angle": {"value": 28.0, "source": "image"}, "lost_target": {"value": None}}
+    soil = dict(cinnamon, targets={**cinnamon["targets"], "lost_target": {"value": None}})
+    runs = {"stacking_angle": _runs([28.2, 28.4, 28.6, 28.8])
+            + _runs([np.nan], status="failed", error="SimulationError: blow-up", seed0=11086)}
+    df = verification_frame(soil, _stage(), OPTIMUM, targets, runs)
+    assert list(df.columns) == VERIFICATION_COLUMNS
+    r = df.iloc[0]
+    assert (r["stage"], r["case"], r["response"], r["target_id"]) == ("bbd", "stacking_angle", "stacking_angle",
+                                                                      "stacking_angle")
+    assert r["target"] == 28.0 and r["target_source"] == "image"  # the DEM source's own target
+    assert r["n"] == 4 and r["seeds"] == "11082 11083 11084 11085"  # the failed replicate left out
+    assert r["preset"] == "quick"
+    assert r["simulated_mean"] == pytest.approx(28.5)
+    # deviations -0.3, -0.1, 0.1, 0.3: sum of squares 0.2 over n - 1 = 3
+    assert r["simulated_sd"] == pytest.approx(np.sqrt(0.2 / 3))
+    assert r["relative_error_percent"] == pytest.approx((28.5 - 28.0) / 28.0 * 100)  # +1.786 %, signed
+    assert bool(r["within_2_percent"]) is True
+    assert r["predicted"] == pytest.approx(28.1)  # the calibrated row, not the other near-optimal set
+    assert r["predicted_minus_target"] == pytest.approx(0.1)
+    # the paper: target 27.69, its simulation 27.62 -> -0.253 % (printed 0.253 %, Sec. 3.4)
+    assert r["paper_target"] == 27.69 and r["paper_simulated"] == 27.62
+    assert r["paper_relative_error_percent"] == pytest.approx((27.62 - 27.69) / 27.69 * 100)
+    assert round(abs(r["paper_relative_error_percent"]), 3) == 0.253
+    assert r["status"] == "ok" and r["note"] == ""
+
+
+def test_verification_frame_not_run_and_misses(cinnamon):
+    stage = _stage()
+    targets = {"stacking_angle": {"value": 28.0, "source": "image"}}
+    # the lost case has no calibrated set: its replicate files are not-run rows with the reason
+    lost_case = stage["optimise"]["cases"][1]
+    reason = "optimum of stage bbd: case lost: expected a calibrated set of factor levels"
+    runs = {"stacking_angle": _runs([30.0, 30.2, 30.4]), "lost": [not_run_rows("bbd", lost_case, reason)]}
+    df = verification_frame(cinnamon, stage, OPTIMUM, targets, runs)
+    ok, lost = df.iloc[0], df.iloc[1]
+    assert lost["status"] == "not run: " + reason
+    assert lost["n"] == 0 and np.isnan(lost["simulated_mean"]) and not lost["within_2_percent"]
+    assert np.isnan(lost["target"]) and np.isnan(lost["predicted"])
+    # mean 30.2 is +7.86 % off 28; the surface predicted 28.1 (0.1 from the target); the standard
+    # error 0.2/sqrt(3) = 0.115 is far below the miss 2.2: surface bias
+    assert ok["relative_error_percent"] == pytest.approx(2.2 / 28 * 100)
+    assert not ok["within_2_percent"] and ok["note"].startswith("surface bias")
+    # without any run file the case is still "not run"
+    df = verification_frame(cinnamon, stage, OPTIMUM, targets, {})
+    assert df.iloc[1]["status"] == "not run: no calibrated set"
+    assert df.iloc[0]["status"] == "not run" and df.iloc[0]["n"] == 0
+
+
+def test_verification_frame_failed_replicates_and_inline_goals(cinnamon):
+    stage = _stage()
+    stage["optimise"]["cases"][0]["goals"]["bulk"] = {"goal": "maximize"}
+    stage["optimise"]["cases"][0]["goals"]["flow"] = {"goal": "target", "value": 10.0}
+    runs = {"stacking_angle": _runs([np.nan, np.nan], status="failed", error="SimulationError: blow-up")
+            + _runs([5.0, 7.0], response="bulk") + _runs([10.1, 10.1], response="flow")}
+    df = verification_frame(cinnamon, stage, OPTIMUM, {"stacking_angle": {"value": 28.0}}, runs)
+    r = df[df["case"] == "stacking_angle"].set_index("response")
+    assert list(r.index) == ["stacking_angle", "bulk", "flow"]
+    assert r.loc["stacking_angle", "status"] == "failed: SimulationError: blow-up"
+    assert r.loc["stacking_angle", "n"] == 0
+    # a maximize goal has no target; the row says so
+    assert r.loc["bulk", "status"] == "ok" and r.loc["bulk", "note"].startswith("goal maximize")
+    assert r.loc["bulk", "target_id"] == "maximize" and np.isnan(r.loc["bulk", "target"])
+    assert r.loc["bulk", "simulated_mean"] == 6.0
+    # an inline target value: 10.1 vs 10 = +1 %, from the config
+    assert r.loc["flow", "target"] == 10.0 and r.loc["flow", "target_source"] == "config"
+    assert r.loc["flow", "relative_error_percent"] == pytest.approx(1.0)
+    assert r.loc["flow", "paper_target"] == 10.0
+
+
+def test_verification_cases(cinnamon):
+    assert verification_cases(cinnamon, ["bbd"]) == [("bbd", "stacking_angle")]
+    assert verification_cases(cinnamon, ["pb", "steepest"]) == []
+
+
+# --------------------------------------------------------------------------- calibrated vs paper
+
+
+def test_calibrated_vs_paper(cinnamon):
+    # a DEM stage whose path carried X1 (soil-soil restitution) instead of the paper's C (X5):
+    # symbols differ from the paper's, and C's parameter is held fixed
+    stage = {"id": "bbd",
+             "factors": {"A": {"parameter": "soil_soil_rolling_friction"},
+                         "B": {"parameter": "jkr_surface_energy"},
+                         "X1": {"parameter": "soil_soil_restitution"}},
+             "fixed": {"soil_soil_static_friction": 0.56, "soil_steel_restitution": 0.5,
+                       "soil_steel_rolling_friction": 0.125, "soil_steel_static_friction": 0.6,
+                       "soil_steel_surface_energy": 0.0},
+             "optimise": {"cases": [{"id": "stacking_angle", "goals": {}}]}}
+    optimum = pd.DataFrame({"case": ["stacking_angle", "stacking_angle"], "method": ["desirability", "near_optimal"],
+                            "A": [0.2, 0.1], "B": [0.9, 0.4], "X1": [0.9, 0.5], "calibrated": [False, True]})
+    ident = pd.DataFrame({"case": ["stacking_angle"] * 3, "factor": ["A", "B", "X1"], "pinned": [True, False, True],
+                          "min": [0.09, 0.3, 0.49], "max": [0.11, 0.5, 0.51]})
+    df = calibrated_vs_paper(cinnamon, {"bbd": (stage, optimum, ident)}).set_index("parameter")
+    a = df.loc["soil_soil_rolling_friction"]
+    assert (a["symbol"], a["role"], a["calibrated"], a["paper"]) == ("A", "factor", 0.1, 0.08)
+    assert a["paper_source"] == "printed optimum (A)"
+    assert a["difference"] == pytest.approx(0.02) and a["relative_difference_percent"] == pytest.approx(25.0)
+    assert a["pinned"] == True  # noqa: E712  (object column: True beside "" and "fixed")
+    assert (a["near_optimal_min"], a["near_optimal_max"]) == (0.09, 0.11)
+    b = df.loc["jkr_surface_energy"]
+    assert (b["calibrated"], b["paper"], b["unit"]) == (0.4, 0.37, "J/m^2")
+    # X1's parameter is fixed at its intermediate level 0.45 in the paper's BBD
+    x1 = df.loc["soil_soil_restitution"]
+    assert (x1["symbol"], x1["calibrated"], x1["paper"]) == ("X1", 0.5, 0.45)
+    assert x1["paper_source"] == "fixed in the paper's stage"
+    # a fixed parameter the paper varied: its paper value is the printed optimum of C
+    c = df.loc["soil_steel_static_friction"]
+    assert (c["role"], c["symbol"], c["calibrated"], c["paper"]) == ("fixed", "", 0.6, 0.64)
+    assert c["paper_source"] == "printed optimum (C)" and c["pinned"] == "fixed"
+    # fixed in both
+    r = df.loc["soil_steel_restitution"]
+    assert (r["calibrated"], r["paper"], r["paper_source"]) == (0.5, 0.45, "fixed in the paper's stage")
+    # not printed at all
+    se = df.loc["soil_steel_surface_energy"]
+    assert np.isnan(se["paper"]) and se["paper_source"] == "not printed"
+    assert len(df) == 8
+
+
+def test_calibrated_vs_paper_without_a_calibrated_set(cinnamon):
+    stage = copy.deepcopy(next(s for s in cinnamon["stages"] if s["id"] == "bbd"))
+    optimum = pd.DataFrame({"case": ["stacking_angle"], "method": ["none"], "note": ["target value not available"]})
+    df = calibrated_vs_paper(cinnamon, {"bbd": (stage, optimum, None)})
+    f = df[df["role"] == "factor"].set_index("symbol")
+    assert f["calibrated"].isna().all()
+    assert list(f.loc[["A", "B", "C"], "paper"]) == [0.08, 0.37, 0.64]
+
+
+# --------------------------------------------------------------------------- tool verification
+
+
+@dataclass
+class Cond:
+    """The attributes of soilcal.config.measurements.Condition that tool_frame reads."""
+
+    measurement: str
+    row: int
+    covariate: str = "directrix"
+    covariate_value: str = "line"
+    scenario: str = "bulldozing"
+    setup: dict = field(default_factory=lambda: {"name": "plate-line"})
+    preset: str = "quick"
+    stage: str = "bbd"
+    case: str = "stacking_angle"
+    responses: tuple = ()
+
+
+def _tool_runs(measure, values, status="ok", error=""):
+    return pd.DataFrame([{"measure": measure, "value": v, "status": status, "error": error, "seed": 11082 + k}
+                         for k, v in enumerate(values)])
+
+
+def test_tool_frame():
+    horiz = {"measure": "horizontal_force_N", "unit": "N", "measured": 304.8, "paper_simulated": 290.0,
+             "paper_difference": 14.8, "measured_sd": 5.0}
+    vert = {"measure": "vertical_force_N", "unit": "N", "measured": None, "note": "only in Figure 12"}
+    conds = [Cond("cutting_resistance", 1, responses=(horiz, vert)),
+             Cond("cutting_resistance", 2, responses=(horiz,)),
+             Cond("cutting_resistance", 3, responses=(horiz,))]
+    runs = {("cutting_resistance", 1): pd.concat([_tool_runs("horizontal_force_N", [310.0, 320.0, 330.0]),
+                                                  _tool_runs("vertical_force_N", [100.0, 110.0])]),
+            ("cutting_resistance", 3): _tool_runs("horizontal_force_N", [np.nan, np.nan], "failed",
+                                                  "SimulationError: blow-up")}
+    df = tool_frame(conds, runs)
+    assert list(df.columns) == TOOL_COLUMNS and len(df) == 4
+    h = df.iloc[0]
+    assert (h["measurement"], h["row"], h["setup"], h["measure"], h["unit"]) == \
+        ("cutting_resistance", 1, "plate-line", "horizontal_force_N", "N")
+    assert h["n"] == 3 and h["seeds"] == "11082 11083 11084"
+    assert h["simulated_mean"] == pytest.approx(320.0) and h["simulated_sd"] == pytest.approx(10.0)
+    assert h["relative_error_percent"] == pytest.approx((320.0 - 304.8) / 304.8 * 100)
+    assert h["paper_relative_error_percent"] == pytest.approx((290.0 - 304.8) / 304.8 * 100)
+    assert h["paper_difference"] == 14.8 and h["measured_sd"] == 5.0 and h["status"] == "ok"
+    v = df.iloc[1]
+    assert np.isnan(v["measured"]) and np.isnan(v["relative_error_percent"])
+    assert v["simulated_mean"] == pytest.approx(105.0) and v["n"] == 2
+    assert v["note"] == "only in Figure 12; measured value not printed"
+    assert df.iloc[2]["status"] == "not run" and df.iloc[2]["n"] == 0 and df.iloc[2]["seeds"] == ""
+    assert df.iloc[3]["status"] == "failed: SimulationError: blow-up" and df.iloc[3]["n"] == 0
+
+
+def test_tool_frame_note_without_printed_note():
+    c = Cond("m", 1, responses=({"measure": "x_N", "measured": None},))
+    df = tool_frame([c], {("m", 1): _tool_runs("x_N", [1.0])})
+    assert df.iloc[0]["note"] == "measured value not printed" and np.isnan(df.iloc[0]["simulated_sd"])
+
+
+# --------------------------------------------------------------------------- summary
+
+
+def test_summary_frame_counts_dem_points():
+    ver = pd.DataFrame([{"stage": "bbd", "case": "c", "response": "y", "target": 1.0, "relative_error_percent": 1.0,
+                         "status": "ok"}])
+    tabs = [pd.DataFrame({"status": ["ok", "failed", "ok"], "wall_s": [1.0, 2.0, 3.5]}),
+            pd.DataFrame({"status": ["ok"], "wall_s": [0.3]})]
+    df = summary_frame({"s": ver}, {"s": tabs})
+    r = df.iloc[0]
+    assert (r["soil"], r["dem_points"], r["dem_failed"], r["dem_wall_s"]) == ("s", 4, 1, pytest.approx(6.8))
+
+
+# --------------------------------------------------------------------------- calibrated levels
+
+
+def test_calibrated_levels_picks_the_calibrated_row(tmp_path):
+    stage = {"id": "bbd", "factors": {"A": {}, "B": {}},
+             "optimise": {"cases": [{"id": "upper"}, {"id": "lower"}]}}
+    optimum = pd.DataFrame({
+        "case": ["upper", "upper", "upper", "lower"],
+        "method": ["desirability", "near_optimal", "near_optimal", "none"],
+        "A": [0.7, 0.734, 0.74, np.nan], "B": [0.08, 0.082, 0.09, np.nan],
+        "calibrated": [False, True, False, False],
+        "note": [np.nan, np.nan, np.nan, "target value not available"],
+    })
+    assert calibrated_levels(stage, optimum, "upper") == {"A": 0.734, "B": 0.082}
+    assert calibrated_levels(stage, optimum) == {"A": 0.734, "B": 0.082}  # the first case
+    # the same after a CSV round trip (calibrated read back as bool or text)
+    p = tmp_path / "optimum.csv"
+    optimum.to_csv(p, index=False)
+    assert calibrated_levels(stage, pd.read_csv(p), "upper") == {"A": 0.734, "B": 0.082}
+    with pytest.raises(InputError, match="case lower") as exc:
+        calibrated_levels(stage, optimum, "lower")
+    assert exc.value.got == "target value not available"
+    with pytest.raises(InputError, match="case nowhere"):
+        calibrated_levels(stage, optimum, "nowhere")
+    # an optimum without a calibrated column has no calibrated set
+    with pytest.raises(InputError, match="case upper"):
+        calibrated_levels(stage, optimum.drop(columns=["calibrated"]), "upper")
+    with pytest.raises(InputError, match="an optimisation case"):
+        calibrated_levels({"id": "p", "factors": {}}, optimum)

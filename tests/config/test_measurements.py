@@ -1,0 +1,344 @@
+"""The soils' `measurements` blocks: measured tool/process tests as data, one condition per row."""
+
+from __future__ import annotations
+
+import shutil
+from pathlib import Path
+
+import pandas as pd
+import pytest
+import yaml
+
+from soilcal.config.load import load_soil, read_yaml
+from soilcal.config.measurements import Condition, conditions, unit_of
+from soilcal.errors import InputError
+
+ROOT = Path(__file__).resolve().parents[2]
+SOILS = sorted(p.stem for p in (ROOT / "config" / "soils").glob("*.yaml"))
+
+
+def _shipped(soil):
+    return load_soil(ROOT / "config" / "soils" / f"{soil}.yaml", ROOT / "resources")
+
+
+@pytest.mark.parametrize("soil", SOILS)
+def test_shipped_soils_load_with_their_measurements(soil):
+    conds = conditions(_shipped(soil))
+    assert all(isinstance(c, Condition) for c in conds)
+    if soil == "xinjiang-vineyard":
+        assert conds == []  # its verification is the calibration's own (per-layer angles)
+    else:
+        assert conds
+
+
+def test_cinnamon_one_condition_per_plate():
+    conds = conditions(_shipped("cinnamon-soil"))
+    table = pd.read_csv(ROOT / "resources/measurements/cinnamon-soil/cutting_resistance.csv")
+    assert len(conds) == 4 == len(table)
+    for c, directrix in zip(conds, table["directrix"]):
+        assert c.scenario == "bulldozing"
+        assert c.setup["name"] == f"plate-{directrix}" and c.setup["shape"] == directrix
+        assert c.label == f"directrix={directrix}"
+        assert (c.covariate, c.covariate_value) == ("directrix", directrix)
+        assert (c.stage, c.case, c.preset, c.replicates) == ("bbd", "stacking_angle", "quick", 3)
+        assert [r["measure"] for r in c.responses] == ["horizontal_force_N", "vertical_force_N"]
+        assert all(r["unit"] == "N" and r["measured"] is not None for r in c.responses)
+    assert [c.row for c in conds] == [1, 2, 3, 4]
+    assert conds[0].responses[0]["measured"] == pytest.approx(321.10)
+    assert conds[3].responses[1]["measured"] == pytest.approx(10.40)
+
+
+def test_black_soil_flatness_and_power_by_rotor_speed():
+    conds = conditions(_shipped("black-soil"))
+    flat = [c for c in conds if c.measurement == "surface_flatness"]
+    power = [c for c in conds if c.measurement == "tillage_power"]
+    speeds = [150, 200, 250, 300, 350]
+    assert [c.setup["name"] for c in flat] == [f"rpm-{n}" for n in speeds]
+    assert [c.setup["rpm"] for c in flat] == [float(n) for n in speeds]
+    assert [c.covariate_value for c in flat] == [str(n) for n in speeds]
+    assert all((c.stage, c.case) == ("soil-65mn", "accumulation_angle_65mn") for c in conds)
+    last = flat[-1].responses[0]
+    assert (last["measure"], last["unit"]) == ("flatness_mm", "mm")
+    assert (last["measured"], last["paper_simulated"], last["paper_difference"]) == (102.1, 105.3, 3.2)
+    assert [c.setup["name"] for c in power] == [f"rpm-{n}" for n in speeds]
+    for c in power:
+        (r,) = c.responses
+        assert r["measure"] == "power_kW" and r["measured"] is None and r["note"]
+        assert 0 < r["paper_difference"] < 0.5
+    # the soil's simulation.params (particle density) come with every condition
+    assert all(c.params["soil_density"] == 1560 for c in conds)
+
+
+def test_guangxi_compression_one_case_per_moisture():
+    conds = conditions(_shipped("guangxi-cohesive"))
+    assert len(conds) == 3
+    assert [c.case for c in conds] == ["mc05", "mc10", "mc15"]
+    assert [c.label for c in conds] == ["moisture_content=5", "moisture_content=10", "moisture_content=15"]
+    assert all(c.scenario == "compression" and c.setup["name"] == "guangxi-cohesive" for c in conds)
+    assert all(c.responses[0]["measured"] is None and "Table 13" in c.responses[0]["note"] for c in conds)
+
+
+def test_yangtze_traction_single_condition():
+    (c,) = conditions(_shipped("yangtze-clay-loam"))
+    assert (c.scenario, c.setup["name"], c.covariate, c.label) == ("furrow", "yangtze-opener", "", "row 1")
+    (r,) = c.responses
+    assert (r["measure"], r["measured"], r["paper_simulated"]) == ("traction_N", 1303.07, 1167.30)
+
+
+def test_unit_suffixes():
+    assert unit_of("horizontal_force_N") == "N"
+    assert unit_of("power_kW") == "kW"
+    assert unit_of("flatness_mm") == "mm"
+    assert unit_of("stress_10_kpa") == "kPa"
+    assert unit_of("area_difference_dm2") == "dm^2"
+    assert unit_of("angle_deg") == "deg"
+    assert unit_of("height_m") == "m"
+    assert unit_of("strain_end") == "-"
+
+
+# --- bad inputs, each in a copy of one soil -------------------------------------------------
+
+
+def _workspace(tmp_path, soil):
+    (tmp_path / "config" / "soils").mkdir(parents=True)
+    shutil.copy(ROOT / f"config/soils/{soil}.yaml", tmp_path / f"config/soils/{soil}.yaml")
+    for kind in ("published", "measurements", "images"):
+        if (ROOT / "resources" / kind / soil).is_dir():
+            shutil.copytree(ROOT / "resources" / kind / soil, tmp_path / "resources" / kind / soil)
+    return tmp_path
+
+
+@pytest.fixture
+def cinnamon(tmp_path):
+    return _workspace(tmp_path, "cinnamon-soil")
+
+
+@pytest.fixture
+def black(tmp_path):
+    return _workspace(tmp_path, "black-soil")
+
+
+@pytest.fixture
+def guangxi(tmp_path):
+    return _workspace(tmp_path, "guangxi-cohesive")
+
+
+def _yaml(ws: Path, soil: str) -> Path:
+    return ws / f"config/soils/{soil}.yaml"
+
+
+def _table(ws: Path, soil: str, name: str) -> Path:
+    return ws / "resources/measurements" / soil / name
+
+
+def _edit(ws: Path, soil: str, fn) -> Path:
+    p = _yaml(ws, soil)
+    d = read_yaml(p)
+    fn(d)
+    p.write_text(yaml.safe_dump(d, sort_keys=False, allow_unicode=True))
+    return p
+
+
+def _fails(ws: Path, soil: str, where: str) -> str:
+    """Loading fails with a message starting '<file>: <field>: expected'."""
+    with pytest.raises(InputError) as e:
+        load_soil(_yaml(ws, soil), ws / "resources")
+    msg = str(e.value)
+    assert f"{where}: expected" in msg, msg
+    assert "\n" not in msg
+    return msg
+
+
+def _entry(d, mid="cutting_resistance"):
+    return d["measurements"][mid]
+
+
+def test_workspace_copy_loads(cinnamon):
+    s = load_soil(_yaml(cinnamon, "cinnamon-soil"), cinnamon / "resources")
+    assert len(conditions(s)) == 4
+
+
+def test_unknown_covariate_column(cinnamon):
+    def fn(d):
+        covs = _entry(d)["covariates"]
+        covs["directriks"] = covs.pop("directrix")
+
+    p = _edit(cinnamon, "cinnamon-soil", fn)
+    msg = _fails(cinnamon, "cinnamon-soil", f"{p}: measurements.cutting_resistance.covariates.directriks")
+    assert "a column of cutting_resistance.csv" in msg
+
+
+def test_empty_measured_value_cell(cinnamon):
+    t = _table(cinnamon, "cinnamon-soil", "cutting_resistance.csv")
+    df = pd.read_csv(t)
+    df["horizontal_measured_N"] = df["horizontal_measured_N"].astype(object)
+    df.loc[1, "horizontal_measured_N"] = None
+    df.to_csv(t, index=False)
+    msg = _fails(cinnamon, "cinnamon-soil", f"{t}: row 2, column horizontal_measured_N")
+    assert "value: null" in msg
+
+
+def test_empty_covariate_cell(cinnamon):
+    t = _table(cinnamon, "cinnamon-soil", "cutting_resistance.csv")
+    df = pd.read_csv(t)
+    df.loc[2, "directrix"] = None
+    df.to_csv(t, index=False)
+    _fails(cinnamon, "cinnamon-soil", f"{t}: row 3, column directrix")
+
+
+def test_unit_mismatch(cinnamon):
+    p = _edit(cinnamon, "cinnamon-soil", lambda d: _entry(d)["responses"][1].update(unit="kN"))
+    msg = _fails(cinnamon, "cinnamon-soil", f"{p}: measurements.cutting_resistance.responses[1].unit")
+    assert "expected N (the unit of vertical_force_N" in msg and "'kN'" in msg
+
+
+def test_covariate_value_not_in_map(black):
+    t = _table(black, "black-soil", "surface_flatness.csv")
+    df = pd.read_csv(t)
+    df.loc[4, "rotor_speed_rpm"] = 400
+    df.to_csv(t, index=False)
+    msg = _fails(black, "black-soil", f"{t}: row 5, column rotor_speed_rpm")
+    assert "measurements.surface_flatness.covariates.rotor_speed_rpm.setup" in msg and "400" in msg
+
+
+def test_case_map_names_an_unknown_case(guangxi):
+    p = _edit(guangxi, "guangxi-cohesive",
+              lambda d: _entry(d, "compression")["covariates"]["moisture_content"]["case"].update({"15": "mc17"}))
+    _fails(guangxi, "guangxi-cohesive", f"{p}: measurements.compression.covariates.moisture_content.case.15")
+
+
+def test_setup_key_that_does_not_exist(cinnamon):
+    p = _edit(cinnamon, "cinnamon-soil", lambda d: _entry(d).update(set={"depht": 0.05}))
+    msg = _fails(cinnamon, "cinnamon-soil", f"{p}: measurements.cutting_resistance.set.depht")
+    assert "depth" in msg
+
+
+def test_set_covariate_key_that_does_not_exist(cinnamon):
+    t = _table(cinnamon, "cinnamon-soil", "cutting_resistance.csv")
+    df = pd.read_csv(t)
+    df["depth_mm"] = 30
+    df.to_csv(t, index=False)
+    p = _edit(cinnamon, "cinnamon-soil",
+              lambda d: _entry(d)["covariates"].update(depth_mm={"set": "cut_depth", "scale": 0.001}))
+    _fails(cinnamon, "cinnamon-soil", f"{p}: measurements.cutting_resistance.covariates.depth_mm.set")
+
+
+def test_set_and_param_covariates(cinnamon):
+    t = _table(cinnamon, "cinnamon-soil", "cutting_resistance.csv")
+    df = pd.read_csv(t)
+    df["depth_mm"] = [30, 35, 40, 45]
+    df["bulk_density"] = [1.3, 1.35, 1.4, 1.45]
+    df.to_csv(t, index=False)
+
+    def fn(d):
+        _entry(d)["covariates"].update(depth_mm={"set": "depth", "scale": 0.001},
+                                       bulk_density={"param": "soil_density", "scale": 1000})
+
+    _edit(cinnamon, "cinnamon-soil", fn)
+    conds = conditions(load_soil(_yaml(cinnamon, "cinnamon-soil"), cinnamon / "resources"))
+    assert [c.setup["depth"] for c in conds] == pytest.approx([0.03, 0.035, 0.04, 0.045])
+    assert [c.params["soil_density"] for c in conds] == pytest.approx([1300, 1350, 1400, 1450])
+    assert conds[1].label == "directrix=parabola, depth_mm=35, bulk_density=1.35"
+    assert conds[1].covariate == "directrix"
+
+
+def test_value_the_scenario_refuses_names_row_and_column(cinnamon):
+    t = _table(cinnamon, "cinnamon-soil", "cutting_resistance.csv")
+    df = pd.read_csv(t)
+    df["depth_mm"] = [30, 30, 500, 30]  # row 3 deeper than the bin
+    df.to_csv(t, index=False)
+    _edit(cinnamon, "cinnamon-soil",
+          lambda d: _entry(d)["covariates"].update(depth_mm={"set": "depth", "scale": 0.001}))
+    msg = _fails(cinnamon, "cinnamon-soil", f"{t}: row 3, column depth_mm")
+    assert "cutting depth" in msg and "got 500" in msg
+
+
+def test_param_that_is_not_a_dem_parameter(cinnamon):
+    t = _table(cinnamon, "cinnamon-soil", "cutting_resistance.csv")
+    df = pd.read_csv(t)
+    df["bulk_density"] = 1394
+    df.to_csv(t, index=False)
+    p = _edit(cinnamon, "cinnamon-soil",
+              lambda d: _entry(d)["covariates"].update(bulk_density={"param": "bulk_density"}))
+    _fails(cinnamon, "cinnamon-soil", f"{p}: measurements.cutting_resistance.covariates.bulk_density.param")
+
+
+def test_unknown_measure(cinnamon):
+    p = _edit(cinnamon, "cinnamon-soil", lambda d: _entry(d)["responses"][0].update(measure="draft_force_N"))
+    msg = _fails(cinnamon, "cinnamon-soil", f"{p}: measurements.cutting_resistance.responses[0].measure")
+    assert "horizontal_force_N" in msg
+
+
+def test_unknown_scenario_and_setup(cinnamon):
+    p = _edit(cinnamon, "cinnamon-soil", lambda d: _entry(d).update(setup="plate-zigzag"))
+    _fails(cinnamon, "cinnamon-soil", f"{p}: measurements.cutting_resistance.setup")
+    p = _edit(cinnamon, "cinnamon-soil", lambda d: _entry(d).update(scenario="bulldozer"))
+    _fails(cinnamon, "cinnamon-soil", f"{p}: measurements.cutting_resistance.scenario")
+
+
+def test_setup_map_names_an_unknown_setup(cinnamon):
+    p = _edit(cinnamon, "cinnamon-soil",
+              lambda d: _entry(d)["covariates"]["directrix"]["setup"].update(arc="plate-circle"))
+    _fails(cinnamon, "cinnamon-soil", f"{p}: measurements.cutting_resistance.covariates.directrix.setup.arc")
+
+
+def test_missing_table_file(cinnamon):
+    _table(cinnamon, "cinnamon-soil", "cutting_resistance.csv").unlink()
+    msg = _fails(cinnamon, "cinnamon-soil",
+                 f"{_yaml(cinnamon, 'cinnamon-soil')}: measurements.cutting_resistance.table")
+    assert "no such file" in msg
+
+
+def test_table_without_rows(cinnamon):
+    t = _table(cinnamon, "cinnamon-soil", "cutting_resistance.csv")
+    t.write_text(t.read_text().splitlines()[0] + "\n")
+    _fails(cinnamon, "cinnamon-soil", f"{t}: rows")
+
+
+def test_undeclared_extra_column(cinnamon):
+    t = _table(cinnamon, "cinnamon-soil", "cutting_resistance.csv")
+    df = pd.read_csv(t)
+    df["speed_m_s"] = 0.16
+    df.to_csv(t, index=False)
+    msg = _fails(cinnamon, "cinnamon-soil", f"{t}: column speed_m_s")
+    assert "ignore_columns" in msg
+
+
+def test_source_column_must_be_declared(cinnamon):
+    t = _table(cinnamon, "cinnamon-soil", "cutting_resistance.csv")
+    _edit(cinnamon, "cinnamon-soil", lambda d: _entry(d).pop("ignore_columns"))
+    _fails(cinnamon, "cinnamon-soil", f"{t}: column source")
+
+
+def test_calibrated_stage_needs_an_optimise_block(cinnamon):
+    p = _edit(cinnamon, "cinnamon-soil", lambda d: _entry(d)["calibrated"].update(stage="pb"))
+    _fails(cinnamon, "cinnamon-soil", f"{p}: measurements.cutting_resistance.calibrated.stage")
+
+
+def test_calibrated_case_must_be_a_case_of_the_stage(cinnamon):
+    p = _edit(cinnamon, "cinnamon-soil", lambda d: _entry(d)["calibrated"].update(case="angle"))
+    _fails(cinnamon, "cinnamon-soil", f"{p}: measurements.cutting_resistance.calibrated.case")
+
+
+def test_calibrated_case_needed_without_a_case_covariate(cinnamon):
+    p = _edit(cinnamon, "cinnamon-soil", lambda d: _entry(d)["calibrated"].pop("case"))
+    _fails(cinnamon, "cinnamon-soil", f"{p}: measurements.cutting_resistance.calibrated.case")
+
+
+def test_unprinted_value_needs_a_note(cinnamon):
+    p = _edit(cinnamon, "cinnamon-soil", lambda d: _entry(d)["responses"][1].update(value=None))
+    _fails(cinnamon, "cinnamon-soil", f"{p}: measurements.cutting_resistance.responses[1].note")
+
+
+def test_covariate_needs_exactly_one_form(cinnamon):
+    p = _edit(cinnamon, "cinnamon-soil",
+              lambda d: _entry(d)["covariates"]["plate"].update(set="depth"))
+    _fails(cinnamon, "cinnamon-soil", f"{p}: measurements.cutting_resistance.covariates.plate")
+
+
+def test_schema_refuses_unknown_field_and_bad_id(cinnamon):
+    p = _edit(cinnamon, "cinnamon-soil", lambda d: _entry(d)["responses"][0].update(valeu="x"))
+    _fails(cinnamon, "cinnamon-soil", f"{p}: measurements.cutting_resistance.responses[0].valeu")
+    shutil.copy(ROOT / "config/soils/cinnamon-soil.yaml", p)
+    p = _edit(cinnamon, "cinnamon-soil", lambda d: d["measurements"].update({"Bad-Id": d["measurements"]["cutting_resistance"]}))
+    _fails(cinnamon, "cinnamon-soil", f"{p}: measurements")

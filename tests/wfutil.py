@@ -1,0 +1,49 @@
+"""A copy of the workflow (Snakefile, rules, config, chosen soils' resources) in a temporary
+directory, and snakemake runs in it."""
+
+from __future__ import annotations
+
+import re
+import shutil
+import subprocess
+import sys
+from pathlib import Path
+
+import yaml
+
+ROOT = Path(__file__).resolve().parents[1]
+SNAKEMAKE = [sys.executable, "-m", "snakemake"]
+
+
+def copy_workflow(tmp: Path, soils: list[str], source: str | None = None) -> Path:
+    shutil.copy(ROOT / "Snakefile", tmp / "Snakefile")
+    shutil.copytree(ROOT / "envs", tmp / "envs")
+    for item in ("workflow", "config", "profiles"):
+        shutil.copytree(ROOT / item, tmp / item, symlinks=True)
+    # the schema symlink points into the package; resolve it for the copy
+    link = tmp / "workflow/schemas/soil.schema.yaml"
+    if link.is_symlink():
+        link.unlink()
+        shutil.copy(ROOT / "src/soilcal/config/soil.schema.yaml", link)
+    for soil in soils:
+        for kind in ("published", "measurements", "images", "geometry"):
+            if (ROOT / "resources" / kind / soil).is_dir():
+                shutil.copytree(ROOT / "resources" / kind / soil, tmp / "resources" / kind / soil)
+    cfg = yaml.safe_load((tmp / "config/config.yaml").read_text())
+    cfg["soils"] = soils
+    if source:
+        cfg["source"] = source
+    (tmp / "config/config.yaml").write_text(yaml.safe_dump(cfg))
+    return tmp
+
+
+def run(tmp: Path, *args, check=True):
+    p = subprocess.run(SNAKEMAKE + list(args), cwd=tmp, capture_output=True, text=True)
+    if check and p.returncode != 0:
+        raise AssertionError(p.stdout[-4000:] + p.stderr[-4000:])
+    return p
+
+
+def planned_jobs(tmp: Path, *args) -> list[str]:
+    out = run(tmp, "-n", "--cores", "2", *args).stdout
+    return re.findall(r"^\s+output: (.+)$", out, flags=re.M)

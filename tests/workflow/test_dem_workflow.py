@@ -1,0 +1,149 @@
+"""The DEM calibration inside the DAG, end to end on a tiny preset.
+
+A copy of the workflow calibrates the cinnamon soil on soilcal's DEM through every stage kind
+(Plackett-Burman screening -> steepest ascent derived from it -> Box-Behnken centred on the
+path), with heaps of 300 spheres (``set: {n_particles: 300}``) so that a design point takes
+seconds, and replays the yangtze soil's printed tables beside it.
+"""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+import pytest
+import yaml
+
+from wfutil import ROOT, copy_workflow, planned_jobs, run
+
+SOILS = ["cinnamon-soil", "yangtze-clay-loam"]
+N_SPHERES = 300
+
+
+def _tiny(tmp: Path) -> None:
+    p = tmp / "config/soils/cinnamon-soil.yaml"
+    d = yaml.safe_load(p.read_text())
+    d["source"] = "both"
+    d["simulation"]["responses"]["stacking_angle"]["set"] = {"n_particles": N_SPHERES}
+    d["simulation"]["verification"] = {"replicates": 2}
+    for m in d.get("measurements", {}).values():
+        m["replicates"] = 1
+    p.write_text(yaml.safe_dump(d, sort_keys=False))
+    y = tmp / "config/soils/yangtze-clay-loam.yaml"
+    y.write_text(y.read_text().replace("source: dem\n", "source: published\n"))
+
+
+@pytest.fixture(scope="module")
+def done(tmp_path_factory):
+    tmp = copy_workflow(tmp_path_factory.mktemp("dem"), SOILS)
+    _tiny(tmp)
+    run(tmp, "--cores", "2")
+    return tmp
+
+
+def _stage_dir(done, source, stage):
+    return done / "results/cinnamon-soil" / source / stage
+
+
+@pytest.mark.parametrize("stage", ["pb", "steepest", "bbd"])
+def test_dem_stages_have_the_published_files_and_columns(done, stage):
+    pub, dem = _stage_dir(done, "published", stage), _stage_dir(done, "dem", stage)
+    pub_files = {p.name for p in pub.iterdir() if p.suffix == ".csv"} - {"design_check.csv"}
+    assert pub_files <= {p.name for p in dem.iterdir()}
+    # the same columns, up to the factor columns (the DEM path may run other factors than the paper's)
+    sym = {src: set(json.loads((d / "stage.json").read_text())["factors"]) for src, d in (("p", pub), ("d", dem))}
+
+    def cols(df, syms):
+        return [c for c in df.columns if c not in syms and c.removesuffix("_coded") not in syms]
+
+    for name in pub_files - {"responses.csv", "design.csv"}:
+        a, b = pd.read_csv(pub / name), pd.read_csv(dem / name)
+        assert cols(a, sym["p"]) == cols(b, sym["d"]), name
+    assert {p.name for p in (pub / "figures").iterdir()} == {p.name for p in (dem / "figures").iterdir()}
+
+
+def test_one_job_per_design_point_with_seed_and_commit(done):
+    for stage in ("pb", "steepest", "bbd"):
+        d = _stage_dir(done, "dem", stage)
+        design = pd.read_csv(d / "design.csv")
+        runs = sorted(int(p.stem) for p in (d / "runs").glob("*.csv"))
+        key = "step" if stage == "steepest" else "run"
+        assert runs == sorted(design[key].astype(int))
+        row = pd.read_csv(d / "runs" / f"{runs[0]}.csv").iloc[0]
+        assert int(row["seed"]) == 1082 and str(row["commit"]) not in ("", "nan")
+        assert int(row["n_particles"] if "n_particles" in row else row["particles"]) <= N_SPHERES + 1
+        assert (done / f"benchmarks/workflow/cinnamon-soil/dem/{stage}/runs/{runs[0]}.tsv").is_file()
+        assert (done / f"logs/cinnamon-soil/dem/{stage}/runs/{runs[0]}.log").is_file()
+        responses = pd.read_csv(d / "responses.csv")
+        assert len(responses) == len(design)
+        assert {"stacking_angle", "stacking_angle_sd", "stacking_angle_n", "status", "error"} <= set(responses)
+
+
+def test_the_path_follows_the_dem_screening_and_the_bbd_its_chosen_step(done):
+    pb = json.loads((_stage_dir(done, "dem", "pb") / "stage.json").read_text())
+    path = json.loads((_stage_dir(done, "dem", "steepest") / "stage.json").read_text())
+    bbd = json.loads((_stage_dir(done, "dem", "bbd") / "stage.json").read_text())
+    sel = pd.DataFrame(path["derivation"]["selection"])
+    chosen = list(sel.loc[sel["selected"], "term"])
+    assert len(chosen) == len(path["factors"]) >= 3
+    # every path factor walks its screening range (range rule), the others sit at the centre
+    for sym, f in path["factors"].items():
+        pbf = pb["factors"][f["screening_symbol"]]
+        assert sorted([f["levels"][0], f["levels"][-1]]) == [pbf["low"], pbf["high"]]
+    for t, f in pb["factors"].items():
+        if t not in chosen:
+            assert path["fixed"][f["parameter"]] == pytest.approx((f["low"] + f["high"]) / 2, abs=1e-12)
+    # the Box-Behnken centre is the step closest to the target in the DEM path runs
+    opt = pd.read_csv(_stage_dir(done, "dem", "steepest") / "optimum.csv")
+    step = int(opt.loc[opt["chosen"].astype(bool), "step"].iloc[0])
+    assert bbd["derivation"]["chosen_step"] == step
+    for sym, f in bbd["factors"].items():
+        assert f["centre"] == pytest.approx(path["factors"][sym]["levels"][step - 1], abs=1e-12)
+
+
+def test_targets_come_from_the_photos(done):
+    t = pd.read_csv(done / "results/cinnamon-soil/dem/targets.csv").set_index("target_id")
+    photo = json.loads((done / "results/cinnamon-soil/images/measurements.json").read_text())
+    assert t.loc["stacking_angle", "source"] == "image"
+    assert t.loc["stacking_angle", "value"] == pytest.approx(photo["stacking"]["angle_deg"])
+    assert t.loc["stacking_angle", "printed_value"] == 27.69
+
+
+def test_verification_and_comparison_tables(done):
+    d = done / "results/cinnamon-soil/dem"
+    v = pd.read_csv(d / "verification.csv")
+    assert list(v["case"]) == ["stacking_angle"]
+    assert int(v["n"].iloc[0]) == 2 and v["paper_simulated"].iloc[0] == 27.62
+    seeds = [int(s) for s in str(v["seeds"].iloc[0]).split()]
+    assert seeds == [1082 + 10000, 1082 + 10001]
+    c = pd.read_csv(d / "calibrated_vs_paper.csv")
+    assert {"parameter", "calibrated", "paper", "pinned"} <= set(c.columns)
+    tools = pd.read_csv(d / "tool_verification.csv")
+    assert len(tools) == 8 and set(tools["measured"]) >= {321.10, 304.80}
+    s = pd.read_csv(done / "results/summary.csv")
+    assert list(s["soil"]) == ["cinnamon-soil"] and np.isfinite(s["dem_points"]).all()
+    assert list((done / "results/figures/summary").glob("*.png"))
+    assert list((d / "figures/verification").glob("*.png"))
+
+
+def test_a_second_run_has_nothing_to_do(done):
+    assert planned_jobs(done) == []
+
+
+def test_changing_a_factor_range_reruns_only_that_soil(done):
+    p = done / "config/soils/cinnamon-soil.yaml"
+    text = p.read_text()
+    d = yaml.safe_load(text)
+    d["stages"][0]["factors"]["X1"]["high"] = 0.8
+    p.write_text(yaml.safe_dump(d, sort_keys=False))
+    try:
+        planned = planned_jobs(done)
+    finally:
+        p.write_text(text)
+    assert planned
+    # that soil's jobs, and the comparison of the soils
+    assert all("results/cinnamon-soil/" in o or o.startswith("results/summary.csv") for o in planned), planned
+    assert any("results/cinnamon-soil/dem/pb/design.csv" in o for o in planned)
+    assert planned_jobs(done) == []

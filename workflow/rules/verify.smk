@@ -1,0 +1,102 @@
+# Verification of the DEM calibration: every optimisation case at its calibrated set with
+# several seeds apart from the design seeds (one job per case and seed; also at the paper preset
+# where simulation.verification.paper_max_particles admits it), the papers' tool and
+# process tests declared in the soil's `measurements` block (one job per distinct measured
+# condition: a tiller speed whose flatness and power are tabled apart is one job),
+# and the calibrated parameters beside the paper's.
+
+
+rule verify_point:
+    input:
+        optimum=lambda w: optimum_of(w.soil, w.stage),
+    output:
+        "results/{soil}/dem/verify/{preset}/{stage}/{case}/{rep}.csv",
+    params:
+        spec=verify_spec,
+    threads: lambda w: dem_threads(w.soil)
+    resources:
+        mem_mb=lambda w: dem_mem_mb(w.soil),
+        runtime=lambda w: dem_runtime(w.soil),
+    conda:
+        "../../envs/soilcal.yaml"
+    log:
+        "logs/{soil}/dem/verify/{preset}/{stage}/{case}/{rep}.log",
+    benchmark:
+        "benchmarks/workflow/{soil}/dem/verify/{preset}/{stage}/{case}/{rep}.tsv"
+    script:
+        "../scripts/verify_point.py"
+
+
+rule verification:
+    input:
+        calibration=calibration_files,
+        targets="results/{soil}/dem/targets.csv",
+        runs=verify_runs,
+    output:
+        report("results/{soil}/dem/verification.csv", caption="../report/verification.rst", category="{soil}",
+               subcategory="dem verification"),
+    params:
+        soil=lambda w: dem_context(soil_cfg(w.soil)),
+        stages=lambda w: optimised_stages(w.soil),
+    conda:
+        "../../envs/soilcal.yaml"
+    log:
+        "logs/{soil}/dem/verification.log",
+    script:
+        "../scripts/verification.py"
+
+
+rule tool_point:
+    input:
+        tool_optima,
+    output:
+        "results/{soil}/dem/tools/{key}.csv",
+    params:
+        job=tool_spec,
+    threads: lambda w: dem_threads(w.soil)
+    resources:
+        mem_mb=lambda w: dem_mem_mb(w.soil),
+        runtime=lambda w: dem_runtime(w.soil),
+    conda:
+        "../../envs/soilcal.yaml"
+    log:
+        "logs/{soil}/dem/tools/{key}.log",
+    benchmark:
+        "benchmarks/workflow/{soil}/dem/tools/{key}.tsv"
+    script:
+        "../scripts/tool_point.py"
+
+
+rule tool_verification:
+    input:
+        tool_runs,
+    output:
+        report("results/{soil}/dem/tool_verification.csv", caption="../report/tools.rst", category="{soil}",
+               subcategory="dem tool tests"),
+    params:
+        soil_path=lambda w: str(SOILS[w.soil].path),
+        resources_root=RES,
+        runs=tool_run_map,
+    conda:
+        "../../envs/soilcal.yaml"
+    log:
+        "logs/{soil}/dem/tool_verification.log",
+    script:
+        "../scripts/tool_verification.py"
+
+
+rule calibrated_vs_paper:
+    input:
+        calibration=lambda w: calibration_files(w, ("stage.json", "optimum.csv", "identifiability.csv")),
+    output:
+        report("results/{soil}/dem/calibrated_vs_paper.csv", caption="../report/calibrated_vs_paper.rst",
+               category="{soil}", subcategory="dem verification"),
+    params:
+        soil=lambda w: soil_cfg(w.soil),
+        stages=lambda w: optimised_stages(w.soil),
+    conda:
+        "../../envs/soilcal.yaml"
+    log:
+        "logs/{soil}/dem/calibrated_vs_paper.log",
+    script:
+        "../scripts/calibrated_vs_paper.py"

@@ -1,0 +1,13 @@
+"""Snakemake adapter: one measured tool/process condition at the calibrated set."""
+
+import numba
+
+from soilcal.chain.verify import run_tool_point
+from soilcal.logs import redirect
+
+with redirect(snakemake.log[0]):  # noqa: F821
+    numba.set_num_threads(snakemake.threads)  # noqa: F821
+    job = snakemake.params.job  # noqa: F821
+    print(job.get("not_run") or f"{', '.join(job['measures'])}: {len(job['specs'])} seeds")
+    df = run_tool_point(job, snakemake.output[0], threads=snakemake.threads)  # noqa: F821
+    print(df[["measure", "seed", "value", "status", "error", "wall_s"]].to_string(index=False))

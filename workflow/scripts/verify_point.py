@@ -1,0 +1,13 @@
+"""Snakemake adapter: one verification seed of one case at its calibrated set."""
+
+import numba
+
+from soilcal.chain.verify import run_verification_point
+from soilcal.logs import redirect
+
+with redirect(snakemake.log[0]):  # noqa: F821
+    numba.set_num_threads(snakemake.threads)  # noqa: F821
+    spec = snakemake.params.spec  # noqa: F821
+    print(spec.get("not_run") or f"{spec['soil']} {spec['stage']} {spec['case']} seed {spec['seed']}: {spec['levels']}")
+    df = run_verification_point(spec, snakemake.output[0], threads=snakemake.threads)  # noqa: F821
+    print(df[["response", "preset", "value", "status", "error", "wall_s"]].to_string(index=False))
