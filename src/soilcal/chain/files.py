@@ -11,13 +11,12 @@ figures.  Used by the Snakemake adapters in ``workflow/scripts/`` and by ``soilc
 from __future__ import annotations
 
 import json
-import os
-import tempfile
 from pathlib import Path
 
 import numpy as np
 import pandas as pd
 
+from soilcal.atomic import write_text
 from soilcal.chain import errata as errata_mod
 from soilcal.chain.stage import (
     design_frame,
@@ -41,30 +40,13 @@ def _mkdirs(*paths) -> None:
 
 
 def write_csv(df: pd.DataFrame, path) -> Path:
-    """Write a frame atomically (temporary file + rename): a killed job leaves no partial table."""
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(prefix=path.name + ".", suffix=".tmp", dir=path.parent)
-    try:
-        with os.fdopen(fd, "w", newline="") as fh:
-            df.to_csv(fh, index=False)
-        os.replace(tmp, path)
-    except BaseException:
-        if os.path.exists(tmp):
-            os.unlink(tmp)
-        raise
-    return path
+    """Write a frame atomically (:func:`soilcal.atomic.write_text`): a killed job leaves no
+    partial table."""
+    return write_text(path, df.to_csv(index=False))
 
 
 def write_json(obj, path) -> Path:
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    text = json.dumps(obj, indent=1, sort_keys=False, default=_json_default) + "\n"
-    fd, tmp = tempfile.mkstemp(prefix=path.name + ".", suffix=".tmp", dir=path.parent)
-    with os.fdopen(fd, "w") as fh:
-        fh.write(text)
-    os.replace(tmp, path)
-    return path
+    return write_text(path, json.dumps(obj, indent=1, sort_keys=False, default=_json_default) + "\n")
 
 
 def _json_default(o):

@@ -99,13 +99,12 @@ from __future__ import annotations
 import csv
 import io
 import math
-import os
-import tempfile
 from dataclasses import asdict, dataclass, field, fields
 from pathlib import Path
 
 import numpy as np
 
+from soilcal.atomic import write_text
 from soilcal.dem.contact import ROLLING
 from soilcal.dem.materials import Material, MaterialTable
 from soilcal.errors import InputError
@@ -514,16 +513,7 @@ def write_row(path, result: Result) -> Path:
     w = csv.DictWriter(buf, fieldnames=list(row), lineterminator="\n")
     w.writeheader()
     w.writerow(row)
-    fd, tmp = tempfile.mkstemp(prefix=path.name + ".", suffix=".tmp", dir=path.parent)
-    try:
-        with os.fdopen(fd, "w", newline="") as fh:
-            fh.write(buf.getvalue())
-        os.replace(tmp, path)
-    except BaseException:
-        if os.path.exists(tmp):
-            os.unlink(tmp)
-        raise
-    return path
+    return write_text(path, buf.getvalue())
 
 
 def run_replicates(module, setup: dict, params: DemParams, preset: str = "quick", seed: int = 0,
