@@ -145,6 +145,11 @@ def main(argv=None) -> int:
             runs.append(dict(utc=utc, commit=rev, run_id=run_id, soils=label, cores=args.cores,
                              kind="restart of the killed run", elapsed_s=round(el2, 1), jobs_done=done2, rc=rc2,
                              note=f"{done1} + {done2} = {done1 + done2} jobs against {total} in one run"))
+        if (wd / "results/summary.csv").is_file():
+            summ = pd.read_csv(wd / "results/summary.csv")
+            summ.insert(0, "commit", rev)
+            summ.insert(0, "utc", utc)
+            summ.to_csv(OUT / "calibration_summary.csv", index=False)
         write_rows(OUT / "calibration_runs.csv", read_rows(OUT / "calibration_runs.csv", RUN_FIELDS) + runs,
                    RUN_FIELDS)
         write_rows(OUT / "calibration.csv", read_rows(OUT / "calibration.csv", RULE_FIELDS) + rules, RULE_FIELDS)
@@ -177,6 +182,22 @@ def report(md_path: Path, argv) -> None:
         for r in sorted(sel, key=lambda r: -float(r["sum_s"])):
             md.append(f"| {r['rule']} | {r['jobs']} | {r['sum_s']} | {100 * float(r['sum_s']) / tot:.0f} % | "
                       f"{r['mean_s']} | {r['max_s']} | {r['max_rss_mb']} |")
+    summ = OUT / "calibration_summary.csv"
+    if summ.is_file():
+        df = pd.read_csv(summ)
+        md += ["", f"Verification at the calibrated sets in the run of {df['utc'].iloc[0]} UTC ({df['commit'].iloc[0]}; "
+               "`results/summary.csv` of that run, copied to `calibration_summary.csv`): target (photo or measured), "
+               "mean and SD of the verification seeds, signed relative error, and the response surface's prediction "
+               "at the calibrated set minus the target:", "",
+               "| soil | stage | case | response | target | source | mean | SD | n | error % | within 2 % | "
+               "surface - target | status |", "|---|---|---|---|---:|---|---:|---:|---:|---:|---|---:|---|"]
+        for r in df.to_dict("records"):
+            def f(x, d=2):
+                return "" if pd.isna(x) else f"{float(x):.{d}f}"
+            md.append(f"| {r['soil']} | {r['stage']} | {r['case']} | {r['response']} | {f(r['target'])} | "
+                      f"{'' if pd.isna(r['target_source']) else r['target_source']} | {f(r['simulated_mean'])} | "
+                      f"{f(r['simulated_sd'])} | {r['n']} | {f(r['relative_error_percent'], 1)} | {r['within_2_percent']} | "
+                      f"{f(r['predicted_minus_target'])} | {str(r['status'])[:60]} |")
     write_page(md_path, md)
 
 

@@ -347,3 +347,48 @@ def test_calibrated_levels_picks_the_calibrated_row(tmp_path):
         calibrated_levels(stage, optimum.drop(columns=["calibrated"]), "upper")
     with pytest.raises(InputError, match="an optimisation case"):
         calibrated_levels({"id": "p", "factors": {}}, optimum)
+
+
+def test_paper_preset_verification_of_the_listed_responses():
+    """``simulation.verification.paper`` lists the responses also verified at the paper
+    preset; a verification spec at that preset keeps only them, each at the paper preset, and
+    the paper-preset rows stand beside the quick ones in the verification table."""
+    from soilcal.chain.verify import paper_responses, verification_frame, verification_spec
+
+    root = Path(__file__).resolve().parents[2]
+    soil = load_soil(root / "config/soils/xinjiang-vineyard.yaml", root / "resources")
+    assert paper_responses(soil, ["static_angle", "dynamic_angle"]) == []
+    soil.data["simulation"]["verification"] = {"paper": ["static_angle"]}
+    assert paper_responses(soil, ["static_angle", "dynamic_angle"]) == ["static_angle"]
+    stage = copy.deepcopy(soil.stage("bbd"))
+    stage.pop("printed", None)
+    opt = pd.DataFrame([{"case": "upper", "method": "near_optimal", "calibrated": True, "B": 0.7, "D": 0.08,
+                         "F": 0.56, "H": 0.1, "static_angle": 30.8, "dynamic_angle": 42.7}])
+    spec = verification_spec(soil, stage, opt, "upper", rep=1, preset="paper")
+    assert list(spec["responses"]) == ["static_angle"]
+    assert spec["responses"]["static_angle"]["preset"] == "paper"
+    assert spec["seed"] == 3 + 10000 + 1
+    quick = verification_spec(soil, stage, opt, "upper", rep=1)
+    assert list(quick["responses"]) == ["static_angle", "dynamic_angle"]
+    # the soil already runs at the paper preset: nothing extra
+    soil.data["simulation"]["preset"] = "paper"
+    assert paper_responses(soil, ["static_angle"]) == []
+    runs = {"upper": _runs([30.0, 31.0], response="static_angle", preset="quick")
+            + _runs([32.0, 33.0], response="static_angle", preset="paper")}
+    st = {"id": "bbd", "optimise": {"cases": [{"id": "upper", "goals": {"static_angle": {"goal": "target",
+                                                                                          "value": 31.0}}}]}}
+    v = verification_frame(soil.data, st, opt, {}, runs)
+    assert list(v["preset"]) == ["quick", "paper"]
+    assert list(v["simulated_mean"]) == [30.5, 32.5]
+
+
+def test_unknown_paper_verification_response_is_refused(tmp_path):
+    import yaml
+
+    root = Path(__file__).resolve().parents[2]
+    d = yaml.safe_load((root / "config/soils/xinjiang-vineyard.yaml").read_text())
+    d["simulation"]["verification"] = {"paper": ["static_angel"]}
+    p = tmp_path / "xinjiang-vineyard.yaml"
+    p.write_text(yaml.safe_dump(d))
+    with pytest.raises(InputError, match=r"simulation.verification.paper\[0\]: expected a response"):
+        load_soil(p, root / "resources")

@@ -149,6 +149,18 @@ def dem_runtime(soil):
     return int((sim_cfg(soil).get("resources") or {}).get("runtime", 30))
 
 
+def stage_priority(soil, stage):
+    """1 plus the priorities of the DEM stages derived from this one: the points of a stage
+    that later stages wait on run first, so that the cores are not left with one soil's long
+    chain at the end."""
+    later = [s for s in source_stages(soil, "dem") if stage in derive.dependencies(soil_cfg(soil), s).values()]
+    return 1 + sum(stage_priority(soil, s) for s in later)
+
+
+def dem_priority(w):
+    return stage_priority(w.soil, w.stage)
+
+
 def dem_design(w):
     """The DEM design of a stage, once its checkpoint has run."""
     return checkpoints.design.get(soil=w.soil, source="dem", stage=w.stage).output.design

@@ -25,6 +25,7 @@ rule dem_point:
     params:
         spec=point_spec,
     threads: lambda w: dem_threads(w.soil)
+    priority: dem_priority
     resources:
         mem_mb=lambda w: dem_mem_mb(w.soil),
         runtime=lambda w: dem_runtime(w.soil),

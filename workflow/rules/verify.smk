@@ -1,6 +1,6 @@
 # Verification of the DEM calibration: every optimisation case at its calibrated set with
 # several seeds apart from the design seeds (one job per case and seed; also at the paper preset
-# where simulation.verification.paper_max_particles admits it), the papers' tool and
+# for the responses listed under simulation.verification.paper), the papers' tool and
 # process tests declared in the soil's `measurements` block (one job per distinct measured
 # condition: a tiller speed whose flatness and power are tabled apart is one job),
 # and the calibrated parameters beside the paper's.

@@ -20,12 +20,12 @@ import pandas as pd
 
 from soilcal.errors import InputError
 
-VERIFY_DEFAULTS = {"replicates": 4, "seed_offset": 10000, "paper_max_particles": 0}
+VERIFY_DEFAULTS = {"replicates": 4, "seed_offset": 10000, "paper": []}
 TOLERANCE_PERCENT = 2.0
 SURFACE_TOLERANCE = 0.5
 VERIFICATION_COLUMNS = ["stage", "case", "response", "target_id", "target", "target_source", "preset", "n",
                         "seeds", "simulated_mean", "simulated_sd", "relative_error_percent",
-                        "within_2_percent", "predicted", "predicted_minus_target", "paper_target",
+                        "within_2_percent", "predicted", "predicted_minus_target", "particles", "paper_target",
                         "paper_simulated", "paper_relative_error_percent", "status", "note"]
 TOOL_COLUMNS = ["measurement", "row", "covariate", "covariate_value", "scenario", "setup", "measure", "unit",
                 "preset", "stage", "case", "n", "seeds", "measured", "measured_sd", "simulated_mean",
@@ -76,40 +76,13 @@ def verification_spec(soil, stage: dict, optimum: pd.DataFrame, case_id: str, re
     return spec
 
 
-def paper_particles(soil, response_id: str) -> int | None:
-    """Particle count of a response's run at the ``paper`` preset, from its scenario's own
-    sizing before any run (None when the scenario does not size itself that way)."""
-    import inspect
-
-    from soilcal.dem.scenarios import get
-    from soilcal.dem.scenarios.base import DemParams
-    from soilcal.dem.scenarios.design import spec
-
-    sp = spec(soil, response_id)
-    mod = get(sp.scenario)
-    if not hasattr(mod, "sizing"):
-        return None
-    params = DemParams.from_mapping(sp.params, str(soil.path))
-    if "params" in inspect.signature(mod.sizing).parameters:
-        sz = mod.sizing(sp.setup, "paper", params)
-    else:
-        sz = mod.sizing(sp.setup, "paper")
-    return int(sz["n"])
-
-
 def paper_responses(soil, response_ids) -> list[str]:
-    """Responses also verified at the ``paper`` preset: those whose paper-preset run has at
-    most ``simulation.verification.paper_max_particles`` particles (none when 0, the default,
-    or when the soil already runs at the paper preset)."""
-    limit = int(verify_settings(soil.data)["paper_max_particles"])
-    if limit <= 0 or (soil.data.get("simulation") or {}).get("preset", "quick") == "paper":
+    """The responses among ``response_ids`` also verified at the ``paper`` preset
+    (``simulation.verification.paper``; none when the soil already runs at that preset)."""
+    wanted = set(verify_settings(soil.data)["paper"] or [])
+    if not wanted or (soil.data.get("simulation") or {}).get("preset", "quick") == "paper":
         return []
-    out = []
-    for rid in response_ids:
-        n = paper_particles(soil, rid)
-        if n is not None and n <= limit:
-            out.append(rid)
-    return out
+    return [r for r in response_ids if r in wanted]
 
 
 def not_run_rows(stage_id: str, case: dict, reason: str) -> pd.DataFrame:
@@ -214,6 +187,8 @@ def _verification_row(stage, case, rid, goal, targets, soil_data, cal, sel, pres
         "simulated_mean": mean, "simulated_sd": sd, "relative_error_percent": rel,
         "within_2_percent": bool(np.isfinite(rel) and abs(rel) <= TOLERANCE_PERCENT),
         "predicted": pred, "predicted_minus_target": pred - target if np.isfinite(target) else np.nan,
+        "particles": float(pd.to_numeric(ok["particles"], errors="coerce").mean())
+        if len(ok) and "particles" in ok else np.nan,
         "paper_target": paper_target, "paper_simulated": paper_sim,
         "paper_relative_error_percent": (paper_sim - paper_target) / paper_target * 100
         if np.isfinite(paper_sim) and np.isfinite(paper_target) and paper_target else np.nan,

@@ -26,12 +26,18 @@ the config's factors, or the steepest-ascent path of ``levels``).  A Plackett-Bu
 of N runs has N - 1 columns, so a stage's ``runs`` fixes N (a 12-run screening of 7
 factors); a printed or generated design whose row count differs from ``runs`` is refused.
 
-Every design point of a soil runs with the soil's ``seed`` (common random numbers: the same
-packing draw at every point, so differences between points are not seed noise), except
-that a repeated point (a Box-Behnken centre point, a row equal to an earlier one) takes the
-next seed at each repetition (:func:`design_seeds`): identical runs of a deterministic
-engine would give a pure error of zero and void the lack-of-fit test.  ``replicates`` adds
-the seeds that follow a point's seed.
+:func:`design_seeds` gives the benchmarks' seeds (``benchmarks/design_budget.py``): every
+design point with the soil's ``seed`` (common random numbers: the same packing draw at every
+point, so differences between points are not seed noise), except that a repeated point (a
+Box-Behnken centre point, a row equal to an earlier one) takes the next seed at each
+repetition: identical runs of a deterministic engine would give a pure error of zero and void
+the lack-of-fit test.  ``replicates`` adds the seeds that follow a point's seed.  The
+calibration workflow draws an independent packing per point instead
+(:func:`soilcal.chain.sources.point_seeds`, where the reason is given).
+
+The rest of the block (``design``, ``stages``, ``screening``, ``path``, ``verification``,
+``threads``, ``resources``) steers the calibration workflow (:mod:`soilcal.chain`) and is
+checked here at start-up (:func:`check_block`).
 """
 
 from __future__ import annotations
@@ -141,6 +147,10 @@ def check_block(soil_path, data: dict) -> None:
             raise InputError(soil_path, f"{BLOCK}.responses.{rid}",
                              "a response id of a stage (" + ", ".join(rids) + ")", rid)
         spec_from(soil_path, data, rid)
+    for i, rid in enumerate((sim.get("verification") or {}).get("paper") or []):
+        if rid not in (sim.get("responses") or {}):
+            raise InputError(soil_path, f"{BLOCK}.verification.paper[{i}]",
+                             "a response of simulation.responses (" + ", ".join(sim.get("responses") or {}) + ")", rid)
     ids = [s["id"] for s in data["stages"]]
     for i, sid in enumerate(sim.get("stages") or []):
         if sid not in ids:
