@@ -16,7 +16,7 @@ import pandas as pd
 import pytest
 import yaml
 
-from wfutil import ROOT, copy_workflow, planned_jobs, run
+from wfutil import copy_workflow, planned_jobs, run
 
 SOILS = ["cinnamon-soil", "yangtze-clay-loam"]
 N_SPHERES = 300
