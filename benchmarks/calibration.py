@@ -8,7 +8,7 @@ config to some soils.  Rows go to ``benchmarks/results/calibration.csv`` (one pe
 and ``calibration_runs.csv`` (one per workflow run); ``calibration.md`` is the page.
 
     python benchmarks/calibration.py                       # the five soils, 2 cores
-    python benchmarks/calibration.py --kill-after 300      # also: kill at 300 s, restart
+    python benchmarks/calibration.py --kill-after 300      # also: kill at 300 s, unlock, restart
     python benchmarks/calibration.py --soils cinnamon-soil --kill-after 60
     python benchmarks/calibration.py --report-only
 """
@@ -135,8 +135,12 @@ def main(argv=None) -> int:
         if args.kill_after:
             wk = copy_workflow(Path(args.workdir + "-kill"), soils)
             rc1, el1, log1, killed = snakemake(wk, args.cores, timeout=args.kill_after)
+            (wk / "killed.log").write_text(log1)
             done1 = jobs_done(log1)
+            # a SIGKILL leaves Snakemake's lock behind: unlock, then the same command again
+            snakemake(wk, args.cores, "--unlock")
             rc2, el2, log2, _ = snakemake(wk, args.cores, "--rerun-incomplete")
+            (wk / "restart.log").write_text(log2)
             done2 = jobs_done(log2)
             total = runs[0]["jobs_done"]
             runs.append(dict(utc=utc, commit=rev, run_id=run_id, soils=label, cores=args.cores,
@@ -145,7 +149,7 @@ def main(argv=None) -> int:
             runs.append(dict(utc=utc, commit=rev, run_id=run_id, soils=label, cores=args.cores,
                              kind="restart of the killed run", elapsed_s=round(el2, 1), jobs_done=done2, rc=rc2,
                              note=f"{done1} + {done2} = {done1 + done2} jobs against {total} in one run"))
-        if (wd / "results/summary.csv").is_file():
+        if (wd / "results/summary.csv").is_file() and not soils:  # the page's table: every soil
             summ = pd.read_csv(wd / "results/summary.csv")
             summ.insert(0, "commit", rev)
             summ.insert(0, "utc", utc)
@@ -172,11 +176,14 @@ def report(md_path: Path, argv) -> None:
         el = f"{float(r['elapsed_s']) / 60:.1f}" if r["elapsed_s"] not in ("", None) else ""
         md.append(f"| {r['utc']} | {r['commit']} | {r['soils']} | {r['cores']} | {r['kind']} | {el} | "
                   f"{r['jobs_done']} | {r['rc']} | {r['note']} |")
-    if rules:
-        last = rules[-1]["run_id"]
-        sel = [r for r in rules if r["run_id"] == last]
+    soils_of = {r["run_id"]: r["soils"] for r in runs if "run_id" in r}
+    latest = {}
+    for r in rules:  # the last run of every set of soils
+        latest[soils_of.get(r["run_id"], "")] = r["run_id"]
+    for soils, run_id in latest.items():
+        sel = [r for r in rules if r["run_id"] == run_id]
         tot = sum(float(r["sum_s"]) for r in sel)
-        md += ["", f"Time per rule in the last run ({last}, from the jobs' benchmark files: each job's own wall "
+        md += ["", f"Time per rule, run {run_id} ({soils}; from the jobs' benchmark files: each job's own wall "
                "time while the other job ran beside it; the sum is CPU-side work, not elapsed time):", "",
                "| rule | jobs | sum s | share | mean s | max s | max RSS MB |", "|---|---:|---:|---:|---:|---:|---:|"]
         for r in sorted(sel, key=lambda r: -float(r["sum_s"])):

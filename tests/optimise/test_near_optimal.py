@@ -240,3 +240,21 @@ def test_bad_inputs_are_named():
         identifiability(sets, ["x1"], [0.0], [20.0], pinned_fraction=1.5)
     with pytest.raises(InputError, match="sets"):
         identifiability(sets.iloc[:0], ["x1"], [0.0], [20.0])
+
+
+def test_a_target_out_of_reach_is_said_in_every_note():
+    """y = 30 + 2 x1 reaches at most 32 in the box; target 33 with limits [29, 35]: below the
+    target d = (y - 29) / (33 - 29) (Derringer-Suich), so the best set is x1 = +1 with
+    d = 3/4, no set meets the goal and every factor's note says so (the sets mark where the
+    surface comes closest, not a calibrated match)."""
+    goal = {"y": {"goal": "target", "value": 33.0, "low": 29.0, "high": 35.0}}
+    sets = near_optimal_sets({"y": _one_factor_model()}, goal, seed=0)
+    assert sets["desirability"].max() == pytest.approx(0.75, abs=1e-6)
+    assert sets["x1"].min() == pytest.approx(20.0, abs=1e-6)  # x1 = +1 coded = 20 actual
+    ident = identifiability(sets, ["x1", "x2", "x3"], LOW3, HIGH3)
+    assert all(n.startswith("the goals are not met inside the design region (best desirability 0.75)")
+               for n in ident["note"])
+    # a goal that is met leaves the notes as they were
+    ok = identifiability(near_optimal_sets({"y": _one_factor_model()}, GOAL_31, seed=0), ["x1", "x2", "x3"],
+                         LOW3, HIGH3)
+    assert not any("not met" in n for n in ok["note"])

@@ -21,6 +21,10 @@ import pandas as pd
 from soilcal.errors import InputError
 from soilcal.optimise.desirability import desirability_optimise
 
+#: overall desirability from which the goals count as met (a target goal's d is 1 at the
+#: target and falls off towards its limits)
+REACHED = 0.99
+
 
 def near_optimal_sets(
     models: Mapping[str, Any],
@@ -185,6 +189,10 @@ def identifiability(
         raise InputError(None, "sets", "at least one near-optimal parameter set", "an empty frame")
 
     n = len(rows_df)
+    best = float(rows_df["desirability"].max()) if "desirability" in rows_df else float("nan")
+    # below 0.99 no set meets every goal: the sets mark where the surface comes closest
+    short = (f"the goals are not met inside the design region (best desirability {best:.2f}); "
+             if best < REACHED else "")
     rows = []
     for j, f in enumerate(factors):
         v = rows_df[f].to_numpy(dtype=float)
@@ -202,7 +210,7 @@ def identifiability(
             pinned = False
             note = f"not pinned down by the data: the near-optimal sets span {pct:.0f} % of the range"
         rows.append({"factor": f, "n_sets": n, "min": vmin, "max": vmax, "spread": spread,
-                     "spread_coded": spread_coded, "pinned": pinned, "note": note})
+                     "spread_coded": spread_coded, "pinned": pinned, "note": short + note})
     out = pd.DataFrame(rows, columns=["factor", "n_sets", "min", "max", "spread", "spread_coded", "pinned", "note"])
     out.attrs["pinned_fraction"] = pf
     return out
