@@ -58,6 +58,8 @@ def rule_of(path: Path) -> str:
     parts = path.parts
     if "runs" in parts:
         return "dem_point"
+    if "refine" in parts:
+        return "refine_point"
     if "verify" in parts:
         return "verify_point"
     if "tools" in parts:

@@ -139,6 +139,17 @@ def test_verification_bars_string_cells_and_status():
     assert any("blew up" in t.get_text() for t in fig.axes[0].texts)
 
 
+def test_verification_bars_name_the_round_and_the_paper_preset():
+    df = vineyard_verification()
+    extra = df.iloc[[0, 0]].copy()
+    extra["round"] = [2, 1]
+    extra["preset"] = ["quick", "paper"]
+    df = pd.concat([df.assign(round=1), extra], ignore_index=True)
+    labels = [t.get_text() for t in dem._verification_figure(df).axes[0].get_xticklabels()]
+    assert labels[0] == "upper\nstatic"
+    assert labels[-2] == "upper\nstatic\nround 2" and labels[-1] == "upper\nstatic\npaper preset"
+
+
 def test_summary_figure(tmp_path):
     df = summary_table()
     _check_files(plots.summary_figure(df, tmp_path / "summary"))

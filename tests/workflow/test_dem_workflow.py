@@ -114,12 +114,28 @@ def test_targets_come_from_the_photos(done):
 def test_verification_and_comparison_tables(done):
     d = done / "results/cinnamon-soil/dem"
     v = pd.read_csv(d / "verification.csv")
-    assert list(v["case"]) == ["stacking_angle"]
-    assert int(v["n"].iloc[0]) == 2 and v["paper_simulated"].iloc[0] == 27.62
-    seeds = [int(s) for s in str(v["seeds"].iloc[0]).split()]
+    first = v[v["round"] == 1]
+    assert list(first["case"]) == ["stacking_angle"]
+    assert int(first["n"].iloc[0]) == 2 and first["paper_simulated"].iloc[0] == 27.62
+    seeds = [int(s) for s in str(first["seeds"].iloc[0]).split()]
     assert seeds == [1082 + 10000, 1082 + 10001]
+    # the second round: refined.csv says whether the case moved; if it did, two fresh seeds
+    # verify the new set and the comparison with the paper uses it
+    ref = pd.read_csv(d / "bbd/refined.csv")
+    assert list(ref["case"]) == ["stacking_angle"] and bool(ref["calibrated"].iloc[0])
+    second = v[v["round"] == 2]
     c = pd.read_csv(d / "calibrated_vs_paper.csv")
-    assert {"parameter", "calibrated", "paper", "pinned"} <= set(c.columns)
+    assert {"parameter", "calibrated", "paper", "pinned", "round"} <= set(c.columns)
+    opt = pd.read_csv(d / "bbd/optimum.csv")
+    opt = opt[opt["calibrated"]].iloc[0]
+    if bool(ref["refined"].iloc[0]):
+        assert [int(s) for s in str(second["seeds"].iloc[0]).split()] == [1082 + 10002, 1082 + 10003]
+        assert set(c["round"]) == {2}
+    else:
+        assert second.empty and set(c["round"]) == {1}
+        assert str(ref["note"].iloc[0])  # why the first set was kept
+        for sym in json.loads((d / "bbd/stage.json").read_text())["factors"]:
+            assert ref[sym].iloc[0] == pytest.approx(opt[sym])
     tools = pd.read_csv(d / "tool_verification.csv")
     assert len(tools) == 8 and set(tools["measured"]) >= {321.10, 304.80}
     s = pd.read_csv(done / "results/summary.csv")

@@ -6,7 +6,7 @@ import os
 
 from snakemake.utils import validate
 
-from soilcal.chain import derive, verify
+from soilcal.chain import derive, refine, verify
 from soilcal.chain.files import read_stage
 from soilcal.config import load_workflow_config
 from soilcal.imaging.manifest import read_manifest
@@ -220,7 +220,8 @@ def stage_inputs(w):
         if "fixed_from" in deps:
             d = stage_dir(w.soil, deps["fixed_from"], "dem")
             out["fixed_stage"] = f"{d}/stage.json"
-            out["fixed_optimum"] = f"{d}/optimum.csv"
+            # the set the upstream stage ends with (its second round where the soil runs one)
+            out["fixed_optimum"] = f"{d}/{set_file(w.soil)}"
     return out
 
 
@@ -242,17 +243,61 @@ def verify_runs(w):
     return out
 
 
+def stage_verify_runs(w):
+    """The first round's verification runs of one stage at the soil's own preset (what the
+    second round corrects from)."""
+    reps = int(verify.verify_settings(soil_cfg(w.soil))["replicates"])
+    preset = sim_cfg(w.soil).get("preset", "quick")
+    return [f"results/{w.soil}/dem/verify/{preset}/{w.stage}/{case}/{k}.csv"
+            for sid, case in verify.verification_cases(soil_cfg(w.soil), [w.stage]) for k in range(reps)]
+
+
+def refine_on(soil):
+    return refine.refine_settings(soil_cfg(soil))
+
+
+def refined_of(soil, stage):
+    return checkpoints.refine.get(soil=soil, stage=stage).output[0]
+
+
+def refined_files(w):
+    return {s: refined_of(w.soil, s) for s in optimised_stages(w.soil)} if refine_on(w.soil) else {}
+
+
+def refined_runs(w):
+    """Second-round runs: the refined cases of every stage at their bias-corrected sets."""
+    if not refine_on(w.soil):
+        return []
+    reps = int(verify.verify_settings(soil_cfg(w.soil))["replicates"])
+    out = []
+    for sid in optimised_stages(w.soil):
+        _, ref = _calibration(w.soil, sid, final=True)
+        for case in ref.loc[ref["refined"].astype(str).str.lower() == "true", "case"].astype(str):
+            out += [f"results/{w.soil}/dem/refine/{sid}/{case}/{k}.csv" for k in range(reps)]
+    return out
+
+
+def refine_spec(w):
+    st, ref = _calibration(w.soil, w.stage, final=True)
+    reps = int(verify.verify_settings(soil_cfg(w.soil))["replicates"])
+    return verify.verification_point(SOILS[w.soil], st, ref, w.case, reps + int(w.rep))
+
+
 _CALIBRATED = {}
 
 
-def _calibration(soil, stage):
+def _calibration(soil, stage, final=False):
     """(stage, optimum) of a DEM stage once its optimum checkpoint has run, read once per file
-    version."""
+    version; with ``final`` the set the soil ends with (refined.csv where the soil runs the
+    second round)."""
     import pandas as pd
 
-    opt = checkpoints.optimum.get(soil=soil, source="dem", stage=stage).output.optimum
+    if final and refine_on(soil):
+        opt = refined_of(soil, stage)
+    else:
+        opt = checkpoints.optimum.get(soil=soil, source="dem", stage=stage).output.optimum
     d = stage_dir(soil, stage, "dem")
-    key = (soil, stage, os.path.getmtime(opt), os.path.getmtime(f"{d}/stage.json"))
+    key = (soil, stage, opt, os.path.getmtime(opt), os.path.getmtime(f"{d}/stage.json"))
     if key not in _CALIBRATED:
         _CALIBRATED[key] = (read_stage(f"{d}/stage.json"), pd.read_csv(opt))
     return _CALIBRATED[key]
@@ -271,7 +316,7 @@ def tool_jobs(soil):
     """The soil's measured conditions as DEM jobs, keyed by what they simulate
     (verify.tool_key): conditions that need the same runs share one job.  Returns
     ({key: job}, {(measurement, row): key})."""
-    cals = {s: _calibration(soil, s) for s in sorted({c.stage for c in conditions(soil)})}
+    cals = {s: _calibration(soil, s, final=True) for s in sorted({c.stage for c in conditions(soil)})}
     stamp = (soil,) + tuple(id(v) for v in cals.values())
     if stamp not in _TOOL_JOBS:
         jobs, keys = {}, {}
@@ -291,8 +336,17 @@ def tool_spec(w):
     return tool_jobs(w.soil)[0][w.key]
 
 
+def final_set_of(soil, stage):
+    return ancient(refined_of(soil, stage)) if refine_on(soil) else optimum_of(soil, stage)
+
+
 def tool_optima(w):
-    return [optimum_of(w.soil, s) for s in sorted({c.stage for c in conditions(w.soil)})]
+    return [final_set_of(w.soil, s) for s in sorted({c.stage for c in conditions(w.soil)})]
+
+
+def set_file(soil):
+    """The file of a stage holding the set the soil ends with."""
+    return "refined.csv" if refine_on(soil) else "optimum.csv"
 
 
 def calibration_files(w, names=("stage.json", "optimum.csv")):

@@ -14,6 +14,8 @@ calibrated parameters are then verified.  The modules:
 * :mod:`~soilcal.chain.targets` - the target values (printed, or measured on the soil's photos);
 * :mod:`~soilcal.chain.verify` - verification at the calibrated set, tool tests, comparison
   with the paper's calibrated parameters;
+* :mod:`~soilcal.chain.refine` - the second round: a bias-corrected set where the first
+  verification missed its target;
 * :mod:`~soilcal.chain.errata` - every printed number the published replay does not reproduce;
 * :mod:`~soilcal.chain.plan` - which sources a soil runs.
 

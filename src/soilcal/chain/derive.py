@@ -22,8 +22,9 @@ from the DEM results of the earlier stage, as the papers derived it from theirs:
   no. 3 and no. 4 were selected as low, medium and high", cinnamon soil;
   :func:`soilcal.doe.steepest.bbd_levels`), shifted inside the parameters' physical ranges.
 * **parameters fixed at an earlier stage's optimum** (``fixed_from``, black soil stage 2):
-  the DEM source fixes them at ITS calibrated set of that stage (``optimum.csv``, the
-  ``calibrated`` row), not at the paper's.
+  the DEM source fixes them at ITS calibrated set of that stage (the ``calibrated`` row of
+  ``optimum.csv``, or of ``refined.csv`` where the soil runs the second verification round,
+  :mod:`soilcal.chain.refine`), not at the paper's.
 
 ``simulation.design: printed`` runs every stage on the paper's own printed levels instead
 (the same for a stage that follows one the DEM source does not run, ``simulation.stages``).

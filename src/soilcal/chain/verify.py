@@ -23,7 +23,7 @@ from soilcal.errors import InputError
 VERIFY_DEFAULTS = {"replicates": 4, "seed_offset": 10000, "paper": []}
 TOLERANCE_PERCENT = 2.0
 SURFACE_TOLERANCE = 0.5
-VERIFICATION_COLUMNS = ["stage", "case", "response", "target_id", "target", "target_source", "preset", "n",
+VERIFICATION_COLUMNS = ["stage", "case", "round", "response", "target_id", "target", "target_source", "preset", "n",
                         "seeds", "simulated_mean", "simulated_sd", "relative_error_percent",
                         "within_2_percent", "predicted", "predicted_minus_target", "particles", "paper_target",
                         "paper_simulated", "paper_relative_error_percent", "status", "note"]
@@ -129,26 +129,42 @@ def diagnose(mean: float, sd: float, n: int, target: float, predicted: float | N
 
 
 def verification_frame(soil_data: dict, stage: dict, optimum: pd.DataFrame, targets: dict,
-                       runs: dict[str, list[pd.DataFrame]]) -> pd.DataFrame:
+                       runs: dict[str, list[pd.DataFrame]], refined: pd.DataFrame | None = None,
+                       refined_runs: dict[str, list[pd.DataFrame]] | None = None) -> pd.DataFrame:
     """Verification rows of one stage (module docstring); ``runs``: case id -> its replicate
-    run frames."""
+    run frames.  With ``refined`` (:mod:`soilcal.chain.refine`) a case refined to a
+    bias-corrected set gets second rows (``round`` 2) from ``refined_runs`` at that set."""
     rows = []
     for case in (stage.get("optimise") or {}).get("cases", []):
-        frames = runs.get(case["id"], [])
-        allruns = pd.concat(frames, ignore_index=True) if frames else pd.DataFrame(columns=["response", "status"])
-        cal = optimum[(optimum["case"].astype(str) == case["id"])]
-        if "calibrated" in cal.columns:
-            cal = cal[cal["calibrated"].astype(str).str.lower() == "true"]
-        else:
-            cal = cal.iloc[0:0]
-        for rid, goal in case["goals"].items():
-            rsel = allruns[allruns["response"] == rid]
-            presets = sorted({str(x) for x in rsel["preset"]} - {"", "nan"}, key=lambda x: x != "quick") \
-                if "preset" in rsel.columns and len(rsel) else []
-            for preset in presets or [""]:
-                sel = rsel[rsel["preset"].astype(str) == preset] if preset else rsel
-                rows.append(_verification_row(stage, case, rid, goal, targets, soil_data, cal, sel, preset))
+        rows += _case_rows(soil_data, stage, case, optimum, targets, runs.get(case["id"], []), 1)
+        if refined is not None and len(refined):
+            sel = refined[(refined["case"].astype(str) == case["id"])
+                          & (refined["refined"].astype(str).str.lower() == "true")]
+            if len(sel):
+                rows += _case_rows(soil_data, stage, case, sel, targets, (refined_runs or {}).get(case["id"], []), 2)
     return pd.DataFrame(rows, columns=VERIFICATION_COLUMNS)
+
+
+def _case_rows(soil_data, stage, case, optimum, targets, frames, rnd) -> list[dict]:
+    allruns = pd.concat(frames, ignore_index=True) if frames else pd.DataFrame(columns=["response", "status"])
+    cal = optimum[(optimum["case"].astype(str) == case["id"])]
+    if "calibrated" in cal.columns:
+        cal = cal[cal["calibrated"].astype(str).str.lower() == "true"]
+    else:
+        cal = cal.iloc[0:0]
+    rows = []
+    for rid, goal in case["goals"].items():
+        rsel = allruns[allruns["response"] == rid]
+        presets = sorted({str(x) for x in rsel["preset"]} - {"", "nan"}, key=lambda x: x != "quick") \
+            if "preset" in rsel.columns and len(rsel) else []
+        for preset in presets or [""]:
+            sel = rsel[rsel["preset"].astype(str) == preset] if preset else rsel
+            row = _verification_row(stage, case, rid, goal, targets, soil_data, cal, sel, preset)
+            row["round"] = rnd
+            if rnd == 2 and "note" in cal.columns and row["status"] == "ok":
+                row["note"] = "; ".join(n for n in (str(cal["note"].iloc[0]), row["note"]) if n)
+            rows.append(row)
+    return rows
 
 
 def _verification_row(stage, case, rid, goal, targets, soil_data, cal, sel, preset) -> dict:
@@ -229,7 +245,9 @@ def calibrated_vs_paper(soil_data: dict, stages: dict[str, tuple[dict, pd.DataFr
                     paper, psrc = float(config_stage["fixed"][pname]), "fixed in the paper's stage"
                 else:
                     paper, psrc = np.nan, "not printed"
-                row = {"stage": sid, "case": case["id"], "parameter": pname, "symbol": sym, "role": role,
+                row = {"stage": sid, "case": case["id"],
+                       "round": int(cal["round"].iloc[0]) if len(cal) and "round" in cal.columns else 1,
+                       "parameter": pname, "symbol": sym, "role": role,
                        "unit": (params.get(pname) or {}).get("unit", ""), "calibrated": ours, "paper": paper,
                        "paper_source": psrc, "difference": ours - paper,
                        "relative_difference_percent": (ours - paper) / paper * 100 if paper else np.nan,
@@ -338,23 +356,33 @@ def run_verification_point(spec: dict, out, threads: int | None = None) -> pd.Da
     return df
 
 
-def write_verification(soil_data: dict, stage_ids, stage_dirs: dict[str, str], targets_csv, run_paths, out) -> pd.DataFrame:
-    """``verification.csv`` of a soil from its replicate runs ``verify/<preset>/<stage>/<case>/<k>.csv``."""
+def write_verification(soil_data: dict, stage_ids, stage_dirs: dict[str, str], targets_csv, run_paths, out,
+                       refined_paths: dict[str, str] | None = None, refined_run_paths=()) -> pd.DataFrame:
+    """``verification.csv`` of a soil from its replicate runs ``verify/<preset>/<stage>/<case>/<k>.csv``
+    and, where the soil runs a second round, its stages' ``refined.csv`` (``refined_paths``)
+    with the runs at the refined sets ``refine/<stage>/<case>/<k>.csv``."""
     from pathlib import Path
 
     from soilcal.chain.files import read_stage, read_targets, write_csv
 
     targets = read_targets(targets_csv)
-    by_case: dict[tuple[str, str], list[pd.DataFrame]] = {}
-    for p in run_paths:
-        p = Path(p)
-        by_case.setdefault((p.parent.parent.name, p.parent.name), []).append(pd.read_csv(p))
+
+    def by_case(paths):
+        out_: dict[tuple[str, str], list[pd.DataFrame]] = {}
+        for p in paths:
+            p = Path(p)
+            out_.setdefault((p.parent.parent.name, p.parent.name), []).append(pd.read_csv(p))
+        return out_
+
+    first, second = by_case(run_paths), by_case(refined_run_paths)
     frames = []
     for sid in stage_ids:
         d = Path(stage_dirs[sid])
         stage = read_stage(d / "stage.json")
-        runs = {case: fr for (s, case), fr in by_case.items() if s == sid}
-        frames.append(verification_frame(soil_data, stage, pd.read_csv(d / "optimum.csv"), targets, runs))
+        runs = {case: fr for (s, case), fr in first.items() if s == sid}
+        ref = pd.read_csv(refined_paths[sid]) if refined_paths and sid in refined_paths else None
+        runs2 = {case: fr for (s, case), fr in second.items() if s == sid}
+        frames.append(verification_frame(soil_data, stage, pd.read_csv(d / "optimum.csv"), targets, runs, ref, runs2))
     df = pd.concat(frames, ignore_index=True) if frames else pd.DataFrame(columns=VERIFICATION_COLUMNS)
     write_csv(df, out)
     return df
@@ -424,7 +452,10 @@ def write_tool_verification(soil_path, resources_root, run_paths, run_map: dict,
     return df
 
 
-def write_calibrated_vs_paper(soil_data: dict, stage_ids, stage_dirs: dict[str, str], out) -> pd.DataFrame:
+def write_calibrated_vs_paper(soil_data: dict, stage_ids, stage_dirs: dict[str, str], out,
+                              set_file: str = "optimum.csv") -> pd.DataFrame:
+    """``calibrated_vs_paper.csv``: the calibrated set of each case read from ``set_file`` in
+    each stage's folder (``refined.csv`` where the soil runs the second round)."""
     from pathlib import Path
 
     from soilcal.chain.files import read_stage, write_csv
@@ -432,23 +463,27 @@ def write_calibrated_vs_paper(soil_data: dict, stage_ids, stage_dirs: dict[str, 
     stages = {}
     for sid in stage_ids:
         d = Path(stage_dirs[sid])
-        stages[sid] = (read_stage(d / "stage.json"), pd.read_csv(d / "optimum.csv"),
+        stages[sid] = (read_stage(d / "stage.json"), pd.read_csv(d / set_file),
                        pd.read_csv(d / "identifiability.csv"))
     df = calibrated_vs_paper(soil_data, stages)
     write_csv(df, out)
     return df
 
 
-SUMMARY_COLUMNS = ["soil", "stage", "case", "response", "target", "target_source", "simulated_mean",
+SUMMARY_COLUMNS = ["soil", "stage", "case", "round", "response", "target", "target_source", "simulated_mean",
                    "simulated_sd", "n", "relative_error_percent", "within_2_percent", "predicted_minus_target",
                    "paper_relative_error_percent", "status", "dem_points", "dem_failed", "dem_wall_s"]
 
 
 def summary_frame(verifications: dict[str, pd.DataFrame], responses: dict[str, list[pd.DataFrame]]) -> pd.DataFrame:
-    """One row per soil, case and response at the calibrated set, with each soil's DEM design
-    points (count, failed, summed wall time)."""
+    """One row per soil, case, response and preset at the set the soil ends with (the last
+    verification round), with each soil's DEM design points (count, failed, summed wall time)."""
     rows = []
     for soil, v in verifications.items():
+        if "round" in v.columns and len(v):
+            key = ["stage", "case", "response", "preset"]
+            last = v.groupby(key, dropna=False)["round"].transform("max")
+            v = v[v["round"] == last]
         tabs = responses.get(soil, [])
         pts = sum(len(t) for t in tabs)
         failed = sum(int((t["status"] != "ok").sum()) for t in tabs if "status" in t)

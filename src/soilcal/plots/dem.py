@@ -155,8 +155,12 @@ def _verification_figure(df: pd.DataFrame, title: str | None = None) -> Figure:
     status = [_text(v) for v in df["status"]] if "status" in df.columns else [""] * len(df)
     stages = [_text(v) for v in df["stage"]] if "stage" in df.columns else [""] * len(df)
     several_stages = len({s for s in stages if s}) > 1
+    rounds = pd.to_numeric(df["round"], errors="coerce").fillna(1).astype(int).tolist() \
+        if "round" in df.columns else [1] * len(df)
+    presets = [_text(v) for v in df["preset"]] if "preset" in df.columns else [""] * len(df)
     labels = [(f"{st}: " if several_stages and st else "") + f"{_text(c)}\n{_text(r)}"
-              for st, c, r in zip(stages, df["case"], df["response"])]
+              + (f"\nround {k}" if k > 1 else "") + (f"\n{p} preset" if p == "paper" else "")
+              for st, c, r, k, p in zip(stages, df["case"], df["response"], rounds, presets)]
 
     n = len(df)
     fig = _figure(max(6.5, 1.25 * n + 2.0), 5.0)

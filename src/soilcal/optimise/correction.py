@@ -1,0 +1,126 @@
+"""Bias correction of a response surface from verification runs at its optimum.
+
+A response surface yhat(x) fitted to the design points predicts the target at the calibrated
+set x0; the mean ybar of n verification runs there may still differ from yhat(x0) by more than
+the run-to-run scatter explains, where the quadratic misrepresents the simulation near x0.
+The bias-corrected surface
+
+    yhat_c(x) = yhat(x) + b,    b = ybar(x0) - yhat(x0),
+
+agrees with the verification mean at x0 and keeps the fitted slopes: the zeroth-order
+correction of space mapping (Bandler et al., IEEE Trans. MTT 52 (2004) 337) and of a
+constant model discrepancy (Kennedy & O'Hagan, JRSS B 63 (2001) 425).  A bias is applied only
+when it exceeds two standard errors of the verification mean (:func:`significant_bias`): a
+smaller one is scatter, and correcting by it would chase noise.
+
+The corrected set (:func:`corrected_set`) is the smallest move from x0 (coded Euclidean
+distance) at which every corrected surface meets its target, within the factor box: the bias
+was measured at x0 and holds best near it.  Solved with scipy's SLSQP (equality constraints
+yhat_c,r(x) = T_r) from x0 and from the corrected surfaces' own desirability optima; when no
+start reaches every target the corrected surfaces cannot meet them inside the design region
+and the result says so, with their least-squares compromise inside the box instead.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping
+from typing import Any
+
+import numpy as np
+from scipy import optimize
+
+from soilcal.errors import InputError
+
+#: a bias counts when |ybar - yhat(x0)| exceeds this many standard errors sd / sqrt(n)
+SIGNIFICANCE = 2.0
+
+
+def significant_bias(mean: float, sd: float, n: int, predicted: float, k: float = SIGNIFICANCE) -> float:
+    """``mean - predicted`` when it exceeds ``k`` standard errors ``sd / sqrt(n)`` of the mean
+    of ``n >= 2`` runs; otherwise 0 (no evidence of a bias).  NaN inputs give 0."""
+    vals = (mean, sd, predicted)
+    if n < 2 or not all(isinstance(v, (int, float)) and math.isfinite(v) for v in vals):
+        return 0.0
+    b = float(mean) - float(predicted)
+    return b if abs(b) > k * float(sd) / math.sqrt(n) else 0.0
+
+
+class Shifted:
+    """A fitted model plus a constant: ``predict(X) = model.predict(X) + bias`` (coded input),
+    ``predict_actual`` likewise; ``observed`` shifted too, so that a goal's default limits
+    (the observed range) keep their place relative to the predictions."""
+
+    def __init__(self, model: Any, bias: float):
+        self.model, self.bias = model, float(bias)
+        self.factors, self.low, self.high = model.factors, model.low, model.high
+        obs = getattr(model, "observed", None)
+        self.observed = None if obs is None else np.asarray(obs, float) + self.bias
+
+    def predict(self, X_coded) -> np.ndarray:
+        return np.asarray(self.model.predict(X_coded), float) + self.bias
+
+    def predict_actual(self, X_actual) -> np.ndarray:
+        return np.asarray(self.model.predict_actual(X_actual), float) + self.bias
+
+
+def corrected_set(models: Mapping[str, Any], targets: Mapping[str, float], bias: Mapping[str, float],
+                  x0_coded, starts=(), tol: float = 1e-6) -> dict:
+    """The smallest coded move from ``x0_coded`` at which ``models[r] + bias[r]`` equals
+    ``targets[r]`` for every r in ``targets``, inside the coded box [-1, 1]^k.
+
+    ``starts``: further starting points (coded), e.g. the corrected surfaces' desirability
+    optima.  Returns dict(success, x_coded, predicted {r: corrected prediction}, move (coded
+    distance from x0), residual (largest |prediction - target|)); when no start meets every
+    target within ``tol`` times max(1, |target|), ``success`` is False and ``x_coded`` is the
+    least-squares compromise of the corrected surfaces (:func:`compromise`; residuals scaled by
+    max(1, |target|)).
+    """
+    if not targets:
+        raise InputError(None, "targets", "at least one response with a target value", targets)
+    missing = [r for r in targets if r not in models]
+    if missing:
+        raise InputError(None, "targets", f"responses among the models {list(models)}", missing)
+    x0 = np.asarray(x0_coded, float).reshape(-1)
+    k = x0.size
+    shifted = {r: Shifted(models[r], bias.get(r, 0.0)) for r in targets}
+    scale = {r: max(1.0, abs(float(t))) for r, t in targets.items()}
+
+    def residuals(x):
+        return np.array([(float(shifted[r].predict(x[None, :])[0]) - float(t)) / scale[r]
+                         for r, t in targets.items()])
+
+    cons = [{"type": "eq", "fun": residuals}]
+    box = [(-1.0, 1.0)] * k
+    best = None
+    for s in [x0, *[np.asarray(p, float).reshape(-1) for p in starts]]:
+        s = np.clip(s, -1.0, 1.0)
+        res = optimize.minimize(lambda x: float(np.sum((x - x0) ** 2)), s, jac=lambda x: 2.0 * (x - x0),
+                                method="SLSQP", bounds=box, constraints=cons,
+                                options={"ftol": 1e-12, "maxiter": 500})
+        x = np.clip(res.x, -1.0, 1.0)
+        worst = float(np.max(np.abs(residuals(x))))
+        key = (worst > tol, float(np.linalg.norm(x - x0)) if worst <= tol else worst)
+        if best is None or key < best[0]:
+            best = (key, x, worst)
+    _, x, worst = best
+    if worst > tol:
+        x = compromise(residuals, x0, [x0, *[np.asarray(p, float).reshape(-1) for p in starts]])
+    pred = {r: float(shifted[r].predict(x[None, :])[0]) for r in targets}
+    return {"success": worst <= tol, "x_coded": x, "predicted": pred,
+            "move": float(np.linalg.norm(x - x0)),
+            "residual": max(abs(pred[r] - float(t)) for r, t in targets.items())}
+
+
+def compromise(residuals, x0, starts, step_weight: float = 1e-6) -> np.ndarray:
+    """Where the targets cannot all be met: the set in the coded box minimising the sum of
+    squared scaled residuals (plus ``step_weight`` |x - x0|^2, which picks the least move among
+    equally good sets), by L-BFGS-B from every start."""
+    x0 = np.asarray(x0, float)
+
+    def f(x):
+        return float(np.sum(residuals(x) ** 2) + step_weight * np.sum((x - x0) ** 2))
+
+    ends = [optimize.minimize(f, np.clip(s, -1.0, 1.0), method="L-BFGS-B", bounds=[(-1.0, 1.0)] * x0.size).x
+            for s in starts]
+    return np.clip(min(ends, key=f), -1.0, 1.0)

@@ -1,0 +1,153 @@
+"""The second calibration round (soilcal.chain.refine) and its verification rows, on a
+Box-Behnken stage whose responses are exactly y = 30 + 2 A (A coded), so that the fitted
+surface and every corrected set are known in closed form."""
+
+from __future__ import annotations
+
+import itertools
+
+import numpy as np
+import pandas as pd
+import pytest
+
+from soilcal.chain.refine import refine_frame, write_refined
+from soilcal.chain.sources import RUN_COLUMNS
+from soilcal.chain.verify import VERIFICATION_COLUMNS, summary_frame, verification_frame
+
+CASES = ("biased", "met", "scatter", "far", "edge", "lost")
+
+
+def _stage():
+    goal = {"y": {"goal": "target", "target": "y"}}
+    return {"id": "bbd", "kind": "box_behnken", "table_coding": "actual",
+            "factors": {"A": {"parameter": "soil_soil_rolling_friction", "low": 0.0, "centre": 0.5, "high": 1.0},
+                        "B": {"parameter": "soil_soil_static_friction", "low": 10.0, "centre": 15.0, "high": 20.0},
+                        "C": {"parameter": "soil_steel_restitution", "low": 100.0, "centre": 200.0, "high": 300.0}},
+            "responses": [{"id": "y", "name": "angle", "unit": "deg"}],
+            "optimise": {"method": "desirability", "model": "full",
+                         "cases": [{"id": c, "goals": dict(goal) if c != "lost" else
+                                    {"y": {"goal": "target", "target": "lost"}}} for c in CASES]}}
+
+
+def _table():
+    # the 12 edge midpoints of a 3-factor Box-Behnken design and 3 centre points
+    pts = []
+    for i, j in itertools.combinations(range(3), 2):
+        for a, b in itertools.product((-1, 1), repeat=2):
+            x = [0, 0, 0]
+            x[i], x[j] = a, b
+            pts.append(x)
+    pts += [[0, 0, 0]] * 3
+    X = np.array(pts, float)
+    y = 30.0 + 2.0 * X[:, 0]
+    y[-3:] += [-0.01, 0.0, 0.01]  # pure error; the centre mean stays 30, so the fit is exactly 30 + 2 A
+    return pd.DataFrame({"run": np.arange(1, 16), "A": 0.5 + 0.5 * X[:, 0], "B": 15 + 5 * X[:, 1],
+                         "C": 200 + 100 * X[:, 2], "y": y})
+
+
+# every case calibrated at A, B, C coded (0.5, 0.3, -0.2), where the surface predicts 31, but
+# "edge" at A coded -1 (the surface's 28)
+X0 = {"A": 0.75, "B": 16.5, "C": 180.0, "A_coded": 0.5, "B_coded": 0.3, "C_coded": -0.2}
+EDGE = dict(X0, A=0.0, A_coded=-1.0)
+OPTIMUM = pd.DataFrame([{"case": c, "method": "near_optimal", **(EDGE if c == "edge" else X0),
+                         "y": 28.0 if c == "edge" else 31.0, "calibrated": c != "lost"} for c in CASES])
+TARGETS = {"y": {"value": 31.0, "source": "image"}, "lost": {"value": None}}
+
+
+def _runs(values, stage="bbd", seed0=11000):
+    rows = [{c: "" for c in RUN_COLUMNS} | {"stage": stage, "run": k, "response": "y", "value": v, "sd": np.nan,
+                                            "n": 1, "status": "ok", "error": "", "seed": seed0 + k,
+                                            "preset": "quick"} for k, v in enumerate(values)]
+    return [pd.DataFrame([r], columns=RUN_COLUMNS) for r in rows]
+
+
+RUNS = {
+    "biased": _runs([32.1, 31.9, 32.0, 32.0]),  # mean 32, sd 0.082: bias +1 >> 2 SE = 0.082
+    "met": _runs([31.2, 31.3, 31.1, 31.2]),     # 0.65 % off: met
+    "scatter": _runs([30.0, 34.0, 31.0, 33.0]),  # mean 32, 3.2 % off, but 2 SE = 1.83 > 1
+    "far": _runs([38.0, 38.1, 37.9, 38.0]),     # bias +7: 37 + 2 A = 31 needs A = -3
+    "edge": _runs([35.0, 35.1, 34.9, 35.0]),    # bias +7 at A = -1 already: nothing closer
+}
+
+
+@pytest.fixture(scope="module")
+def refined():
+    return refine_frame(_stage(), _table(), TARGETS, OPTIMUM, RUNS).set_index("case")
+
+
+def test_a_significant_bias_moves_the_set_by_the_projection(refined):
+    r = refined.loc["biased"]
+    assert (r["round"], bool(r["refined"]), bool(r["calibrated"])) == (2, True, True)
+    # 31 + 2 A = 31: A coded 0 (actual 0.5), B and C have no effect and stay where they were
+    assert r["A_coded"] == pytest.approx(0.0, abs=1e-6) and r["A"] == pytest.approx(0.5, abs=1e-6)
+    assert (r["B_coded"], r["C_coded"]) == pytest.approx((0.3, -0.2), abs=1e-6)
+    assert (r["B"], r["C"]) == pytest.approx((16.5, 180.0), abs=1e-4)
+    assert r["bias_y"] == pytest.approx(1.0) and r["y"] == pytest.approx(31.0, abs=1e-6)
+    assert r["move_coded"] == pytest.approx(0.5, abs=1e-6)
+    assert r["note"].startswith("bias-corrected")
+
+
+def test_other_cases_keep_their_set_and_say_why(refined):
+    for c in ("met", "scatter"):
+        r = refined.loc[c]
+        assert (r["round"], bool(r["refined"]), bool(r["calibrated"])) == (1, False, True)
+        assert r["A_coded"] == pytest.approx(0.5) and r["A"] == pytest.approx(0.75)
+    assert "meets every target within 2 %" in refined.loc["met", "note"]
+    assert "seed scatter" in refined.loc["scatter", "note"]
+    # bias +7 at the box's edge A = -1: the corrected surface's best, 35 + 2 (-1)... is x0 itself
+    edge = refined.loc["edge"]
+    assert (edge["round"], bool(edge["refined"])) == (1, False) and edge["A_coded"] == pytest.approx(-1.0)
+    assert "does not reach" in edge["note"] and edge["bias_y"] == pytest.approx(7.0)
+    assert not bool(refined.loc["lost", "calibrated"]) and "no calibrated set" in refined.loc["lost", "note"]
+
+
+def test_an_unreachable_target_moves_to_the_compromise_when_it_promises_better(refined):
+    # bias +7 at A = 0.5: the corrected surface 37 + 2 A is 38 there (22.6 % off 31) and 35 at
+    # A = -1 (12.9 %), the closest the box allows: verified as a compromise
+    far = refined.loc["far"]
+    assert (far["round"], bool(far["refined"])) == (2, True)
+    assert (far["A_coded"], far["B_coded"], far["C_coded"]) == pytest.approx((-1.0, 0.3, -0.2), abs=1e-4)
+    assert far["y"] == pytest.approx(35.0, abs=1e-3) and far["bias_y"] == pytest.approx(7.0)
+    assert far["note"].startswith("bias-corrected compromise") and "13 % against 23 %" in far["note"]
+
+
+def test_second_round_rows_in_the_verification_and_the_summary(refined, tmp_path):
+    ref = refined.reset_index()
+    soil = {"targets": {"y": {"value": 31.0}, "lost": {"value": None}}}
+    runs2 = {"biased": _runs([31.1, 30.9, 31.0, 31.2], seed0=11004), "far": _runs([34.9, 35.1], seed0=11004)}
+    df = verification_frame(soil, _stage(), OPTIMUM, TARGETS, RUNS, ref, runs2)
+    assert list(df.columns) == VERIFICATION_COLUMNS
+    two = df[df["round"] == 2]
+    assert list(two["case"]) == ["biased", "far"]
+    r = two.iloc[0]
+    assert r["simulated_mean"] == pytest.approx(31.05) and bool(r["within_2_percent"])
+    assert r["predicted"] == pytest.approx(31.0, abs=1e-6) and r["seeds"] == "11004 11005 11006 11007"
+    assert r["note"].startswith("bias-corrected")
+    first = df[(df["round"] == 1) & (df["case"] == "biased")].iloc[0]
+    assert first["simulated_mean"] == pytest.approx(32.0) and not bool(first["within_2_percent"])
+    # the summary keeps the set each case ends with: round 2 for "biased" and "far"
+    s = summary_frame({"soil": df}, {})
+    assert sorted(zip(s["case"], s["round"])) == [("biased", 2), ("edge", 1), ("far", 2), ("lost", 1),
+                                                  ("met", 1), ("scatter", 1)]
+
+
+def test_written_from_files(tmp_path):
+    import json
+
+    (tmp_path / "stage.json").write_text(json.dumps(_stage()))
+    _table().to_csv(tmp_path / "responses.csv", index=False)
+    OPTIMUM.to_csv(tmp_path / "optimum.csv", index=False)
+    pd.DataFrame([{"target_id": "y", "value": 31.0, "source": "image"}]).to_csv(tmp_path / "targets.csv", index=False)
+    paths = []
+    for case, frames in RUNS.items():
+        d = tmp_path / "verify" / "quick" / "bbd" / case
+        d.mkdir(parents=True)
+        for k, f in enumerate(frames):
+            f.to_csv(d / f"{k}.csv", index=False)
+            paths.append(d / f"{k}.csv")
+    out = write_refined(tmp_path / "stage.json", tmp_path / "responses.csv", tmp_path / "targets.csv",
+                        tmp_path / "optimum.csv", paths, tmp_path / "refined.csv")
+    back = pd.read_csv(tmp_path / "refined.csv")
+    assert list(back["case"]) == list(CASES)
+    assert back.loc[back["case"] == "biased", "A_coded"].iloc[0] == pytest.approx(0.0, abs=1e-6)
+    assert len(out) == len(CASES)

@@ -1,0 +1,112 @@
+"""Bias correction of a response surface (soilcal.optimise.correction) on analytic models whose
+corrected sets are known in closed form: for a linear surface y = a + g.x the smallest move
+from x0 that changes y by -b is the projection dx = -b g / |g|^2."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from soilcal.errors import InputError
+from soilcal.optimise.correction import Shifted, corrected_set, significant_bias
+
+
+class Lin:
+    """y = f(X_coded) on three factors with actual bounds [10, 20], [100, 300], [0, 1]."""
+
+    factors = ["x1", "x2", "x3"]
+    low = np.array([10.0, 100.0, 0.0])
+    high = np.array([20.0, 300.0, 1.0])
+    observed = np.array([28.0, 32.0])
+
+    def __init__(self, f):
+        self.f = f
+
+    def predict(self, X):
+        return self.f(np.atleast_2d(np.asarray(X, float)))
+
+    def predict_actual(self, X):
+        X = np.atleast_2d(np.asarray(X, float))
+        return self.predict((X - (self.low + self.high) / 2) / ((self.high - self.low) / 2))
+
+
+def test_significant_bias_two_standard_errors():
+    # mean 32 of 4 runs with sd 0.5: standard error 0.25, two of them 0.5 < |32 - 31| = 1
+    assert significant_bias(32.0, 0.5, 4, 31.0) == pytest.approx(1.0)
+    assert significant_bias(30.0, 0.5, 4, 31.0) == pytest.approx(-1.0)
+    # sd 1.0: two standard errors 1.0, not exceeded by the bias 1.0
+    assert significant_bias(32.0, 1.0, 4, 31.0) == 0.0
+    # one run has no scatter estimate; NaNs are no evidence
+    assert significant_bias(32.0, 0.1, 1, 31.0) == 0.0
+    assert significant_bias(float("nan"), 0.1, 4, 31.0) == 0.0
+    assert significant_bias(32.0, float("nan"), 4, 31.0) == 0.0
+
+
+def test_shifted_model_adds_the_bias_everywhere():
+    m = Lin(lambda X: 30.0 + 2.0 * X[:, 0])
+    s = Shifted(m, 1.5)
+    assert s.predict([[0.5, 0, 0]])[0] == pytest.approx(32.5)
+    assert s.predict_actual([[17.5, 200.0, 0.5]])[0] == pytest.approx(32.5)  # x1 = 17.5 is coded 0.5
+    assert np.allclose(s.observed, [29.5, 33.5])
+    assert (s.factors, list(s.low), list(s.high)) == (m.factors, list(m.low), list(m.high))
+
+
+def test_one_effective_factor_moves_alone():
+    # y = 30 + 2 x1 predicts the target 31 at x0 = (0.5, 0.3, -0.2); the runs there average 32
+    # (bias +1): the corrected surface 31 + 2 x1 meets 31 at x1 = 0, the inert x2, x3 stay put
+    m = Lin(lambda X: 30.0 + 2.0 * X[:, 0])
+    res = corrected_set({"y": m}, {"y": 31.0}, {"y": 1.0}, [0.5, 0.3, -0.2])
+    assert res["success"]
+    assert np.allclose(res["x_coded"], [0.0, 0.3, -0.2], atol=1e-6)
+    assert res["move"] == pytest.approx(0.5, abs=1e-6)
+    assert res["predicted"]["y"] == pytest.approx(31.0, abs=1e-6)
+
+
+def test_the_move_is_the_projection_onto_the_gradient():
+    # y = 30 + 2 x1 + x2, x0 = (0.5, 0, 0) predicts 31; bias +1 asks y to drop by 1:
+    # dx = -1 (2, 1, 0) / 5 = (-0.4, -0.2, 0), |dx| = 1/sqrt(5)
+    m = Lin(lambda X: 30.0 + 2.0 * X[:, 0] + X[:, 1])
+    res = corrected_set({"y": m}, {"y": 31.0}, {"y": 1.0}, [0.5, 0.0, 0.0])
+    assert res["success"]
+    assert np.allclose(res["x_coded"], [0.1, -0.2, 0.0], atol=1e-6)
+    assert res["move"] == pytest.approx(1 / math.sqrt(5), abs=1e-6)
+
+
+def test_two_targets_meet_at_the_intersection_nearest_x0():
+    # static y1 = 30 + 2 x1, dynamic y2 = 40 + 2 x2, both on target at x0 = (0.5, 0.5, 0);
+    # biases +1 and -1: y1 needs x1 = 0, y2 needs x2 = 1; x3 is free and stays at 0
+    models = {"s": Lin(lambda X: 30.0 + 2.0 * X[:, 0]), "d": Lin(lambda X: 40.0 + 2.0 * X[:, 1])}
+    res = corrected_set(models, {"s": 31.0, "d": 41.0}, {"s": 1.0, "d": -1.0}, [0.5, 0.5, 0.0])
+    assert res["success"]
+    assert np.allclose(res["x_coded"], [0.0, 1.0, 0.0], atol=1e-6)
+    assert res["move"] == pytest.approx(math.sqrt(0.5), abs=1e-6)
+
+
+def test_a_target_out_of_reach_is_not_met():
+    # bias +5: 35 + 2 x1 = 31 needs x1 = -2, outside the coded box
+    m = Lin(lambda X: 30.0 + 2.0 * X[:, 0])
+    res = corrected_set({"y": m}, {"y": 31.0}, {"y": 5.0}, [0.5, 0.2, 0.0])
+    assert not res["success"]
+    assert np.allclose(res["x_coded"], [-1.0, 0.2, 0.0], atol=1e-4)  # the closest the box allows
+    assert res["residual"] == pytest.approx(2.0, abs=1e-4)  # 35 - 2 = 33 vs 31
+
+
+def test_two_targets_pulling_apart_meet_in_the_least_squares_compromise():
+    # y1 = 30 + 2 x1 (target 31, bias +1) needs x1 = 0, y2 = 40 + 2 x1 (target 41, bias -1)
+    # needs x1 = 1.  Residuals scaled by the targets: minimise (2 x1 / 31)^2 + ((2 x1 - 2) / 41)^2,
+    # x1 / 31^2 + (x1 - 1) / 41^2 = 0, x1 = 31^2 / (31^2 + 41^2) = 961 / 2642; x2, x3 stay put
+    models = {"s": Lin(lambda X: 30.0 + 2.0 * X[:, 0]), "d": Lin(lambda X: 40.0 + 2.0 * X[:, 0])}
+    res = corrected_set(models, {"s": 31.0, "d": 41.0}, {"s": 1.0, "d": -1.0}, [0.5, 0.3, -0.4])
+    assert not res["success"]
+    assert np.allclose(res["x_coded"], [961 / 2642, 0.3, -0.4], atol=1e-3)
+    assert res["predicted"]["s"] == pytest.approx(31.0 + 2 * 961 / 2642, abs=2e-3)
+
+
+def test_bad_inputs_are_named():
+    m = Lin(lambda X: 30.0 + 2.0 * X[:, 0])
+    with pytest.raises(InputError, match="targets"):
+        corrected_set({"y": m}, {}, {}, [0, 0, 0])
+    with pytest.raises(InputError, match="targets"):
+        corrected_set({"y": m}, {"z": 31.0}, {}, [0, 0, 0])
