@@ -144,6 +144,30 @@ def test_verification_and_comparison_tables(done):
     assert list((d / "figures/verification").glob("*.png"))
 
 
+def test_a_refined_case_plans_its_second_round(done):
+    """The second round's wiring: a refined.csv that moves the case (here to the same set,
+    marked round 2) plans one refine job per verification seed, with the next seeds, and the
+    tables that read the final set; restoring the file leaves nothing to do."""
+    import os
+
+    p = done / "results/cinnamon-soil/dem/bbd/refined.csv"
+    text, st = p.read_text(), p.stat()
+    ref = pd.read_csv(p)
+    ref[["round", "refined"]] = [2, True]
+    try:
+        ref.to_csv(p, index=False)
+        planned = planned_jobs(done)
+    finally:
+        p.write_text(text)
+        os.utime(p, ns=(st.st_atime_ns, st.st_mtime_ns))
+    base = "results/cinnamon-soil/dem/"
+    assert sorted(o for o in planned if "/refine/" in o) == [
+        base + "refine/bbd/stacking_angle/0.csv", base + "refine/bbd/stacking_angle/1.csv"]
+    assert base + "verification.csv" in planned and base + "calibrated_vs_paper.csv" in planned
+    assert not any("/runs/" in o or "/verify/" in o for o in planned), planned  # nothing upstream
+    assert planned_jobs(done) == []
+
+
 def test_a_second_run_has_nothing_to_do(done):
     assert planned_jobs(done) == []
 
