@@ -272,7 +272,7 @@ def refined_runs(w):
     out = []
     for sid in optimised_stages(w.soil):
         _, ref = _calibration(w.soil, sid, final=True)
-        for case in ref.loc[ref["refined"].astype(str).str.lower() == "true", "case"].astype(str):
+        for case in refine.refined_cases(ref):
             out += [f"results/{w.soil}/dem/refine/{sid}/{case}/{k}.csv" for k in range(reps)]
     return out
 

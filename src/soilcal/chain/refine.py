@@ -39,11 +39,15 @@ def refine_settings(soil_data: dict) -> bool:
     return bool(v.get("refine", True))
 
 
-def _stats(frames, rid):
-    if not frames:
+def refined_cases(refined: pd.DataFrame) -> list[str]:
+    """The case ids a ``refined.csv`` frame moves to a second-round set."""
+    return refined.loc[refined["refined"].astype(str).str.lower() == "true", "case"].astype(str).tolist()
+
+
+def _stats(runs: pd.DataFrame, rid):
+    if runs.empty:
         return np.nan, np.nan, 0
-    df = pd.concat(frames, ignore_index=True)
-    ok = df[(df["response"] == rid) & (df["status"].astype(str) == "ok")]
+    ok = runs[(runs["response"] == rid) & (runs["status"].astype(str) == "ok")]
     vals = pd.to_numeric(ok["value"], errors="coerce").to_numpy(float)
     vals = vals[np.isfinite(vals)]
     n = int(vals.size)
@@ -61,7 +65,7 @@ def refine_frame(stage: dict, table: pd.DataFrame, targets: dict, optimum: pd.Da
     """``refined.csv`` of one stage (module docstring).  ``table``: the stage's responses
     (design points), ``runs``: case id -> the first round's verification frames at the soil's
     own preset."""
-    from soilcal.chain.stage import _goal_values, bounds, fit_stage
+    from soilcal.chain.stage import bounds, calibrated_rows, fit_stage, goal_values
     from soilcal.optimise import desirability_optimise
     from soilcal.optimise.correction import Shifted, corrected_set, significant_bias
 
@@ -72,10 +76,8 @@ def refine_frame(stage: dict, table: pd.DataFrame, targets: dict, optimum: pd.Da
     rows = []
     for case in opt.get("cases", []):
         cid = case["id"]
-        cal = optimum[optimum["case"].astype(str) == cid]
-        cal = cal[cal["calibrated"].astype(str).str.lower() == "true"] if "calibrated" in cal.columns \
-            else cal.iloc[0:0]
-        goals = _goal_values(case["goals"], targets)
+        cal = calibrated_rows(optimum, cid)
+        goals = goal_values(case["goals"], targets)
         tgt = {r: float(g["value"]) for r, g in goals.items()
                if g.get("goal") == "target" and g.get("value") is not None}
         columns = [f"{s}_coded" for s in syms] + list(syms) + list(goals)
@@ -85,7 +87,9 @@ def refine_frame(stage: dict, table: pd.DataFrame, targets: dict, optimum: pd.Da
         if not tgt:
             rows.append(_kept(cid, cal, "no target value to correct towards", columns))
             continue
-        stats = {r: _stats(runs.get(cid, []), r) for r in tgt}
+        frames = runs.get(cid, [])
+        done = pd.concat(frames, ignore_index=True) if frames else pd.DataFrame()
+        stats = {r: _stats(done, r) for r in tgt}
         pred = {r: float(cal[r].iloc[0]) for r in tgt}
         missed = [r for r, (m, _, n) in stats.items()
                   if n and abs(m - tgt[r]) / abs(tgt[r]) * 100 > TOLERANCE_PERCENT]

@@ -294,7 +294,8 @@ def regression_frames(stage: dict, table: pd.DataFrame) -> dict[str, pd.DataFram
 # --------------------------------------------------------------------------- optimum
 
 
-def _goal_values(goals: dict, targets: dict) -> dict:
+def goal_values(goals: dict, targets: dict) -> dict:
+    """A case's goals with each ``target`` id replaced by its value (None where unavailable)."""
     out = {}
     for rid, g in goals.items():
         g = dict(g)
@@ -375,7 +376,7 @@ def optimum_frames(stage: dict, table: pd.DataFrame, targets: dict, seed: int) -
     syms, low, high = bounds(stage)
     frames, ident = [], []
     for case in opt["cases"]:
-        goals = _goal_values(case["goals"], targets)
+        goals = goal_values(case["goals"], targets)
         if any(g["goal"] == "target" and g.get("value") is None for g in goals.values()):
             frames.append(pd.DataFrame([{"case": case["id"], "method": "none", "solution": "",
                                          "note": "target value not available"}]))
@@ -442,6 +443,15 @@ def optimum_frame(stage: dict, table: pd.DataFrame, targets: dict, seed: int) ->
     return optimum_frames(stage, table, targets, seed)["optimum"]
 
 
+def calibrated_rows(optimum: pd.DataFrame, case: str) -> pd.DataFrame:
+    """The rows of ``optimum`` (an ``optimum.csv`` or ``refined.csv`` frame) marked
+    ``calibrated`` for one case; empty when the frame has no such column or row."""
+    sel = optimum[optimum["case"].astype(str) == str(case)]
+    if "calibrated" not in sel.columns:
+        return sel.iloc[0:0]
+    return sel[sel["calibrated"].astype(str).str.lower() == "true"]
+
+
 def calibrated_levels(stage: dict, optimum: pd.DataFrame, case: str | None = None) -> dict[str, float]:
     """Actual factor levels of the calibrated set of one optimisation case (the first case
     when ``case`` is None); InputError when the case has none (e.g. its target is missing)."""
@@ -451,11 +461,7 @@ def calibrated_levels(stage: dict, optimum: pd.DataFrame, case: str | None = Non
         if not cases:
             raise InputError(stage.get("id"), "optimise", "an optimisation case", None)
         case = cases[0]
-    sel = optimum[(optimum["case"].astype(str) == str(case))]
-    if "calibrated" in sel.columns:
-        sel = sel[sel["calibrated"].astype(str).str.lower() == "true"]
-    else:
-        sel = sel.iloc[0:0]
+    sel = calibrated_rows(optimum, case)
     if sel.empty:
         note = optimum.loc[optimum["case"].astype(str) == str(case), "note"] if "note" in optimum else []
         raise InputError(f"optimum of stage {stage.get('id')}", f"case {case}",

@@ -134,24 +134,22 @@ def verification_frame(soil_data: dict, stage: dict, optimum: pd.DataFrame, targ
     """Verification rows of one stage (module docstring); ``runs``: case id -> its replicate
     run frames.  With ``refined`` (:mod:`soilcal.chain.refine`) a case refined to a
     bias-corrected set gets second rows (``round`` 2) from ``refined_runs`` at that set."""
+    from soilcal.chain.refine import refined_cases
+
+    moved = refined_cases(refined) if refined is not None else []
     rows = []
     for case in (stage.get("optimise") or {}).get("cases", []):
         rows += _case_rows(soil_data, stage, case, optimum, targets, runs.get(case["id"], []), 1)
-        if refined is not None and len(refined):
-            sel = refined[(refined["case"].astype(str) == case["id"])
-                          & (refined["refined"].astype(str).str.lower() == "true")]
-            if len(sel):
-                rows += _case_rows(soil_data, stage, case, sel, targets, (refined_runs or {}).get(case["id"], []), 2)
+        if case["id"] in moved:
+            rows += _case_rows(soil_data, stage, case, refined, targets, (refined_runs or {}).get(case["id"], []), 2)
     return pd.DataFrame(rows, columns=VERIFICATION_COLUMNS)
 
 
 def _case_rows(soil_data, stage, case, optimum, targets, frames, rnd) -> list[dict]:
+    from soilcal.chain.stage import calibrated_rows
+
     allruns = pd.concat(frames, ignore_index=True) if frames else pd.DataFrame(columns=["response", "status"])
-    cal = optimum[(optimum["case"].astype(str) == case["id"])]
-    if "calibrated" in cal.columns:
-        cal = cal[cal["calibrated"].astype(str).str.lower() == "true"]
-    else:
-        cal = cal.iloc[0:0]
+    cal = calibrated_rows(optimum, case["id"])
     rows = []
     for rid, goal in case["goals"].items():
         rsel = allruns[allruns["response"] == rid]
@@ -218,6 +216,8 @@ def calibrated_vs_paper(soil_data: dict, stages: dict[str, tuple[dict, pd.DataFr
     paper value is the case's ``printed_optimum`` (the paper's symbol of the same parameter);
     a fixed parameter's is the value the config's stage fixes it at.
     """
+    from soilcal.chain.stage import calibrated_rows
+
     params = soil_data.get("parameters", {})
     rows = []
     for sid, (stage, optimum, ident) in stages.items():
@@ -227,9 +227,7 @@ def calibrated_vs_paper(soil_data: dict, stages: dict[str, tuple[dict, pd.DataFr
             cfg_case = next((c for c in (config_stage.get("optimise") or {}).get("cases", [])
                              if c["id"] == case["id"]), {})
             printed = cfg_case.get("printed_optimum") or {}
-            cal = optimum[(optimum["case"].astype(str) == case["id"])]
-            cal = cal[cal["calibrated"].astype(str).str.lower() == "true"] if "calibrated" in cal.columns \
-                else cal.iloc[0:0]
+            cal = calibrated_rows(optimum, case["id"])
             idt = ident[ident["case"].astype(str) == case["id"]] if ident is not None and len(ident) else None
             entries = [(s, f["parameter"], "factor") for s, f in stage["factors"].items()]
             entries += [("", p, "fixed") for p in (stage.get("fixed") or {})]
