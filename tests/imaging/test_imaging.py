@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 from soilcal.errors import InputError
-from soilcal.imaging import measure, render, scenes
+from soilcal.imaging import drum, measure, render, scenes
 from soilcal.imaging.manifest import read_manifest
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -74,11 +74,12 @@ def test_drum_groups_rendered_set():
         groups.setdefault(f.name.rsplit("_f", 1)[0], []).append(f)
     assert len(groups) == 3
     for name, fs in groups.items():
-        summary, res = measure.measure_drum(fs)
+        summary, res = drum.measure_drum(fs)
         truths = [_truth(f) for f in fs]
         mean_truth = truths[0]["frame_mean_deg"]
         assert abs(np.mean([t["angle_deg"] for t in truths]) - mean_truth) < 1e-9
         assert abs(summary["angle_deg"] - mean_truth) <= 0.3, name
+        assert summary["level_reference"] == "plate" and summary["drum_reference"] == "rim"
         for r, t in zip(res, truths):
             assert abs(r.angle_deg - t["angle_deg"]) <= 0.3
 
@@ -90,7 +91,7 @@ def test_adaptive_threshold_pile_and_drum_rejects_it():
     assert abs(r.left_deg - t["left_deg"]) <= 0.3 and abs(r.right_deg - t["right_deg"]) <= 0.3
     frame = IMAGES / "xinjiang-vineyard" / "drum_upper_f01.jpg"
     with pytest.raises(InputError, match="threshold"):
-        measure.measure_drum_frame(frame, threshold="adaptive")
+        drum.measure_drum_frame(frame, threshold="adaptive")
 
 
 def test_multiview_average_black_soil():

@@ -24,9 +24,10 @@ def _pile(args):
 
 
 def _drum(args):
-    from soilcal.imaging import figures, measure
+    from soilcal.imaging import drum, figures
 
-    summary, res = measure.measure_drum(args.frames, args.threshold, keep_stages=bool(args.figures))
+    opts = drum.frame_options({k: getattr(args, k) for k in drum.OPTIONS}, "command line", prefix="--")
+    summary, res = drum.measure_drum(args.frames, args.threshold, keep_stages=bool(args.figures), options=opts)
     if args.figures:
         for r in res:
             figures.angle_figure(r, f"{args.figures}/{r.path.rsplit('/', 1)[-1].rsplit('.', 1)[0]}")
@@ -81,8 +82,18 @@ def register(subparsers) -> None:
     q.add_argument("--channel", choices=("auto", "gray", "chroma"), default="auto")
     common(q)
     q.set_defaults(func=_pile)
-    q = sub.add_parser("drum", help="rotating-drum frames (dynamic angle, averaged)")
+    q = sub.add_parser("drum", help="rotating-drum frames or tester exports (dynamic angle, S-shape, averaged)")
     q.add_argument("frames", nargs="+")
+    q.add_argument("--level", choices=("auto", "plate", "image"), default="auto",
+                   help="level reference: a plate below the drum if found (auto), required (plate), or the image axes")
+    q.add_argument("--roll-deg", dest="roll_deg", type=float,
+                   help="camera roll: angle by which a true horizontal appears rotated counter-clockwise")
+    q.add_argument("--chord-fraction", dest="chord_fraction", type=float, default=0.6,
+                   help="central part of the drum's chord the angle is fitted over (default 0.6)")
+    q.add_argument("--rim-margin", dest="rim_margin", type=float, default=0.05,
+                   help="outer fraction of the drum radius masked as wall (default 0.05)")
+    q.add_argument("--drum-centre-px", dest="drum_centre_px", type=float, nargs=2, metavar=("COL", "ROW"))
+    q.add_argument("--drum-radius-px", dest="drum_radius_px", type=float)
     common(q)
     q.set_defaults(func=_drum)
     q = sub.add_parser("furrow", help="furrow cross-section: profile, polynomial, area")

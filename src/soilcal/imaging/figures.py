@@ -36,8 +36,13 @@ def angle_figure(result, stem, title=""):
     ax[2].set_title("(c) binary")
     ax[3].imshow(st.level, cmap="gray")
     ax[3].contour(st.level, [0.5], colors="r", linewidths=0.8)
-    ax[3].axhline(st.plate_row, color="c", lw=0.8)
-    ax[3].set_title("(d) contour (levelled to plate)")
+    if st.plate_row is not None:
+        ax[3].axhline(st.plate_row, color="c", lw=0.8)
+    if st.circle is not None:
+        cx, cy, r = st.circle
+        a = np.linspace(0, 2 * np.pi, 361)
+        ax[3].plot(cx + r * np.cos(a), cy + r * np.sin(a), "c-", lw=0.8)
+    ax[3].set_title("(d) contour, " + st.reference, fontsize=8)
     for pts in st.points:
         ax[4].plot(pts[:, 0], pts[:, 1], ".", ms=1.5)
     allp = np.vstack(st.points)
@@ -47,8 +52,8 @@ def angle_figure(result, stem, title=""):
         ang = np.degrees(np.arctan2(abs(dv), abs(du)))
         ax[4].plot(u0 + t * du, v0 + t * dv, "-", lw=1, label=f"{lab}: {ang:.2f} deg")
     ax[4].set_aspect("equal")
-    ax[4].set_xlabel("u / px (along plate)")
-    ax[4].set_ylabel("v / px (above plate)")
+    ax[4].set_xlabel("u / px (along the level)")
+    ax[4].set_ylabel("v / px (up)")
     ax[4].legend(fontsize=7)
     ax[4].set_title(f"(e) fitted lines, {result.angle_deg:.2f} deg")
     for a in ax[:4]:

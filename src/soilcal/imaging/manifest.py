@@ -1,8 +1,10 @@
 """Per-soil photo manifest ``resources/images/<soil>/manifest.yaml`` and its measurement.
 
 Fields per photo: ``file``, ``kind`` (pile | drum | furrow), ``view``, ``group`` (photos
-averaged into one value), ``scale_length_mm`` (physical length of the scale reference), and for
-furrows ``beam_datum_mm``.  Only these user-known fields and the pixels are read; the renderer's
+averaged into one value), ``scale_length_mm`` (physical length of the scale reference), for
+furrows ``beam_datum_mm``, and for drum frames the options of :mod:`soilcal.imaging.drum`
+(``level``, ``roll_deg``, ``chord_fraction``, ``rim_margin``, ``drum_centre_px``,
+``drum_radius_px``).  Only these user-known fields and the pixels are read; the renderer's
 ``*.truth.json`` sidecars are never opened here.
 """
 
@@ -33,6 +35,10 @@ def read_manifest(path):
             raise InputError(path, f"photos[{i}].kind", f"one of {KINDS}", p.get("kind"))
         if not (path.parent / str(p["file"])).is_file():
             raise InputError(path, f"photos[{i}].file", f"an existing image file in {path.parent}", p["file"])
+        if p["kind"] == "drum":
+            from soilcal.imaging.drum import frame_options
+
+            frame_options(p, path, prefix=f"photos[{i}].")
         p.setdefault("group", p["kind"])
     return data
 
@@ -51,7 +57,7 @@ def lookup(photo):
 
 def measure_manifest(path, figdir=None, threshold="otsu"):
     """Measure every group of the manifest; returns {group: result dict}."""
-    from soilcal.imaging import figures, measure
+    from soilcal.imaging import drum, figures, measure
 
     path = Path(path)
     data = read_manifest(path)
@@ -67,7 +73,8 @@ def measure_manifest(path, figdir=None, threshold="otsu"):
             summary, res = measure.measure_piles(files, threshold, keep_stages=keep)
             summary["views"] = [e.get("view") for e in entries]
         elif kind == "drum":
-            summary, res = measure.measure_drum(files, threshold, keep_stages=keep)
+            summary, res = drum.measure_drum(files, threshold, keep_stages=keep,
+                                             options=[drum.frame_options(e, path) for e in entries])
         else:
             e = entries[0]
             r = measure.measure_furrow(files[0], e.get("scale_length_mm"), e.get("beam_datum_mm", 0.0),

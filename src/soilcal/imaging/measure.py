@@ -14,9 +14,8 @@ flanks are read.  Each flank is fitted with RANSAC (``skimage.measure.ransac`` w
 Photo value = (alpha_L + alpha_R) / 2; several views are averaged over all flanks, spread =
 sample standard deviation of the flank angles.
 
-Drum (dynamic angle, 003 Sec. 2): the soil segment is the dark component above the base
-plate; its upper boundary in the central 60 % of its width is the free surface, fitted with
-RANSAC; frames are averaged.
+Drum (dynamic angle, 003 Sec. 2): see :mod:`soilcal.imaging.drum` (photos of a drum on its
+stand and frames exported by drum testers, by one method).
 
 Furrow (000 Sec. 2.1/3.1): the profile-meter beam (dark bar of known length L) gives the
 scale s = length_px / L, the horizontal direction and the origin (beam centre, x = 0); the soil
@@ -49,6 +48,9 @@ class Stages:
     level: np.ndarray | None = None  # levelled (roll-corrected) object mask
     lines: list = field(default_factory=list)  # (u0, v0, du, dv, label) in levelled pixel frame
     points: list = field(default_factory=list)
+    plate_row: float | None = None  # row of the plate line in the levelled image
+    circle: tuple | None = None  # (col, row, radius) of the masked drum
+    reference: str = "levelled to plate"
 
 
 @dataclass
@@ -295,61 +297,28 @@ def measure_piles(paths, threshold="otsu", keep_stages=False, channel="auto"):
     return summary, res
 
 
-def measure_drum_frame(path, threshold="otsu", keep_stages=False) -> PileResult:
-    """Free-surface angle of one drum frame relative to the base plate.
+def plate_line_any(path, gray, below=None, required=True):
+    """Strongest long near-horizontal edge below a point: the base plate (or table edge).
 
-    Only the global (Otsu) threshold over the whole frame is offered: a local threshold
-    splits the large uniform soil segment of a drum.
+    ``below`` = (col, row): only lines passing below that point count (default: the image
+    middle at column 0).  The topmost such line is taken (the plate face and table edges lie
+    below the plate top).  Returns (slope, intercept), row = slope * col + intercept; with
+    ``required=False`` None when there is no such line.
     """
-    if threshold != "otsu":
-        raise InputError(path, "threshold", "'otsu' for drum frames", threshold)
-    rgb = read_photo(path)
-    gray = _gray(rgb)
-    slope, intercept = plate_line_any(path, gray)
-    h, w = gray.shape
-    rr, cc = np.mgrid[0:h, 0:w]
-    above_plate = rr < slope * cc + intercept - 3
-    binary = _binary(path, gray, "otsu")
-    above = binary & above_plate
-    lab = measure.label(above)
-    props = sorted(measure.regionprops(lab), key=lambda p: -p.area)
-    if not props or props[0].area < 0.01 * h * w:
-        raise InputError(path, "image", "soil in the drum", "no soil region found")
-    p = props[0]
-    if p.bbox[0] <= 2 or p.bbox[1] <= 2 or p.bbox[3] >= w - 2:
-        raise InputError(path, "image", "the whole drum inside the frame", "soil region cut by the image border")
-    comp = lab == p.label
-    lev, prow, roll = _level(comp, slope, intercept)
-    cols = np.nonzero(lev.max(axis=0) >= 0.5)[0]
-    cu, rv = _top_edge(lev, cols.min(), cols.max() + 1, _level(gray, slope, intercept)[0])
-    v = prow - rv
-    # the chord: RANSAC over the whole top edge (the wall arc is outlier), then refit on the
-    # central 60 % of the chord so the wall corners and any bulge stay symmetric
-    _, (u0, v0, du, dv), inl = _fit(path, cu, v, "free surface", residual=6.0)
-    tproj = (inl[:, 0] - u0) * du + (inl[:, 1] - v0) * dv
-    t_all = (cu - u0) * du + (v - v0) * dv
-    lo, hi = np.min(tproj), np.max(tproj)
-    keep = (t_all > lo + 0.2 * (hi - lo)) & (t_all < hi - 0.2 * (hi - lo))
-    ang, line, pts = _fit(path, cu[keep], v[keep], "free surface")
-    st = Stages(rgb, gray, binary, lev, [line + ("surface",)], [pts]) if keep_stages else None
-    if st is not None:
-        st.plate_row = prow
-    return PileResult(str(path), ang, float("nan"), float("nan"), 0.0, float(roll), st)
-
-
-def plate_line_any(path, gray):
-    """Strongest long near-horizontal edge below the image middle (drum base plate)."""
     edges = feature.canny(gray, sigma=1.5)
     h, w = gray.shape
+    col0, row0 = below if below is not None else (0.0, 0.5 * h)
     thetas = np.radians(np.linspace(84, 96, 241))
     hs, ang, dist = transform.hough_line(edges, theta=thetas)
     _, angs, dists = transform.hough_line_peaks(hs, ang, dist, num_peaks=8, min_distance=4,
                                                 threshold=0.25 * w)
-    cand = [(a, d) for a, d in zip(angs, dists) if d / np.sin(a) > 0.5 * h]
+    at = [(a, d, (d - col0 * np.cos(a)) / np.sin(a)) for a, d in zip(angs, dists)]
+    cand = [t for t in at if t[2] > row0]
     if not cand:
+        if not required:
+            return None
         raise InputError(path, "image", "a straight base plate edge", "none found")
-    # topmost long edge in the lower half = plate top (the plate face and table edges lie below)
-    a, d = min(cand, key=lambda t: t[1] / np.sin(t[0]))
+    a, d, _ = min(cand, key=lambda t: t[2])
     cols = np.arange(w)
     rows = (d - cols * np.cos(a)) / np.sin(a)
     er, ec = np.nonzero(edges)
@@ -359,15 +328,6 @@ def plate_line_any(path, gray):
                               max_trials=200, rng=0)
     (c0, r0), (dc, dr) = model.origin, model.direction
     return dr / dc, r0 - dr / dc * c0
-
-
-def measure_drum(paths, threshold="otsu", keep_stages=False):
-    res = [measure_drum_frame(p, threshold, keep_stages) for p in paths]
-    a = np.array([r.angle_deg for r in res])
-    summary = {"angle_deg": float(a.mean()), "spread_deg": float(a.std(ddof=1)) if a.size > 1 else 0.0,
-               "n_frames": len(res), "frames": [{"path": r.path, "angle_deg": r.angle_deg, "roll_deg": r.roll_deg}
-                                                for r in res]}
-    return summary, res
 
 
 @dataclass

@@ -297,6 +297,85 @@ def render_drum(seed, angle_deg, soil="xinjiang-vineyard", fill=0.25, hard=False
     return img, truth
 
 
+def render_tester_frame(seed, angle_deg, fill=0.35, s_amp=0.0, size=(600, 640), window="crop", blur_px=2.0,
+                        jitter_px=3.0, n_avg=16, powder_dark=True, noise=0.01, chord_fraction=0.6):
+    """A drum tester's exported frame: grey, time-averaged, no plate; ``(image in [0, 1], truth)``.
+
+    Drum of radius R px centred in the frame (``window``: "crop" = cropped to the drum, the
+    corners the dark drum body; "rim" = a thin dark rim circle on the white backlight, off
+    centre; "inside" = the frame lies inside a larger drum, no rim in view).  The free surface
+    in the chord frame (u along the chord at ``angle_deg``, n normal, xi = u / L, L the half
+    chord at fill ``fill``) is
+
+        n(xi) = -d - s_amp L (xi^3 - k xi),   k = 3 w^2 / 5,  w = ``chord_fraction``,
+
+    a cubic S (middle steeper than the ends for s_amp > 0) whose cubic part is orthogonal to a
+    line over the central chord |xi| <= w: the least-squares line over the central
+    ``chord_fraction`` of the chord is at exactly ``angle_deg``, the truth of the central slope.
+    Time averaging: ``n_avg`` frames with the surface shifted normal to itself by a symmetric
+    set of offsets (std ``jitter_px``, median zero), then a Gaussian blur ``blur_px``; static
+    powder texture, a 10 % illumination gradient and sensor noise ``noise``.
+    """
+    rng = np.random.default_rng(seed)
+    h, w = size
+    if window == "crop":
+        R, cx, cy = min(h, w) / 2.0 - 1.0, (w - 1) / 2.0, (h - 1) / 2.0
+    elif window == "rim":
+        R, cx, cy = 0.42 * min(h, w), (w - 1) / 2.0 + 17.0, (h - 1) / 2.0 - 9.0
+    elif window == "inside":
+        R, cx, cy = 0.75 * float(np.hypot(h, w)) / 2.0, (w - 1) / 2.0, (h - 1) / 2.0
+    else:
+        raise ValueError(f"window must be 'crop', 'rim' or 'inside', got {window!r}")
+    rr, cc = np.mgrid[0:h, 0:w].astype(float)
+    x, z = cc - cx, cy - rr
+    th = np.radians(angle_deg)
+    u = x * np.cos(th) + z * np.sin(th)
+    nrm = -x * np.sin(th) + z * np.cos(th)
+    d = segment_fill(R, fill)
+    L = np.sqrt(R ** 2 - d ** 2)
+    xi = u / L
+    k = 3.0 * chord_fraction ** 2 / 5.0
+    n_s = -d - s_amp * L * (xi ** 3 - k * xi)
+    half = rng.normal(0.0, 1.0, n_avg // 2)
+    offs = np.concatenate([half, -half]) * jitter_px
+    cover = np.zeros((h, w))
+    for o in offs:
+        cover += np.clip(0.5 + (n_s + o - nrm), 0.0, 1.0)
+    cover /= len(offs)
+    air, powder = (0.92, 0.22) if powder_dark else (0.12, 0.78)
+    tex = 1.0 + 0.06 * _noise(rng, (h, w), 2.0)
+    img = air + (powder * tex - air) * cover
+    disc = np.clip(0.5 + (R - np.hypot(x, z)), 0.0, 1.0)
+    if window == "crop":
+        img = 0.06 + (img - 0.06) * disc
+    elif window == "rim":
+        ring = np.clip(0.5 + (R + 4.0 - np.hypot(x, z)), 0.0, 1.0) - disc
+        img = img * disc + (1.0 - disc) * air - ring * (air - 0.15)
+    img = ndi.gaussian_filter(img, blur_px) if blur_px > 0 else img
+    img = img * (1.0 + 0.1 * (cc / w - 0.5)) + noise * rng.standard_normal((h, w))
+    truth = {"kind": "drum-tester", "seed": int(seed), "angle_deg": float(angle_deg), "s_amp": float(s_amp),
+             "fill": float(fill), "window": window, "centre_px": [float(cx), float(cy)], "radius_px": float(R),
+             "blur_px": float(blur_px), "jitter_px": float(jitter_px), "n_avg": int(n_avg),
+             "chord_fraction": float(chord_fraction), "powder_dark": bool(powder_dark)}
+    return np.clip(img, 0.0, 1.0), truth
+
+
+def save_frame(path, img, bits=8):
+    """Write a grey frame (values in [0, 1]) as an 8- or 16-bit single-channel image; the format
+    follows the suffix (BMP holds 8 bits only)."""
+    from PIL import Image
+
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    if bits == 8:
+        Image.fromarray(np.round(img * 255).astype(np.uint8), mode=None).save(path)
+    elif bits == 16 and path.suffix.lower() != ".bmp":
+        Image.fromarray(np.round(img * 65535).astype(np.uint16)).save(path)
+    else:
+        raise ValueError(f"{path}: {bits}-bit frames cannot be written in this format")
+    return path
+
+
 def render_furrow(seed, coeffs, span_mm, beam_datum_mm=180.0, soil="yangtze-clay-loam", roll_deg=None):
     """Furrow cross-section in front of a gridded profile board, meter beam above."""
     rng = np.random.default_rng(seed)

@@ -1,0 +1,344 @@
+"""Rotating-drum frames: the dynamic angle of repose, by one method for photos of a drum on its
+stand (003 Sec. 2) and for frames exported by drum testers (GranuDrum-style: cropped to the
+drum window, 8- or 16-bit grey, time-averaged over many frames, no plate in view).
+
+1. Grey level (:func:`soilcal.imaging.io.read_gray`): BMP/PNG/TIFF/JPEG, 8- or 16-bit single
+   channel or colour (luminance), Gaussian-smoothed (sigma 1.2 px).
+2. The drum (``drum_reference``):
+
+   * ``manifest``: ``drum_centre_px`` and ``drum_radius_px`` given by the user;
+   * ``rim``: the innermost of the concentric circles that a Hough transform of the Canny edges
+     finds (on a copy reduced to about 240 px) with edges along at least 40 % of its visible
+     perimeter (the powder hides the rim where it lies against it), refined by a RANSAC circle
+     fit through the full-resolution edge pixels near it;
+   * ``image border``: no such circle, so the frame is cropped to the drum: centre = image
+     centre, radius = half the shorter side.
+
+   The outer ``rim_margin`` (default 5 %) of the radius is masked, as the testers' software
+   masks the drum wall.
+3. Level (``level_reference``): ``manifest roll`` when the user gives ``roll_deg`` (the angle by
+   which a true horizontal appears rotated counter-clockwise in the frame); ``plate`` when a long
+   straight near-horizontal edge lies below the drum (base plate or table, found as for piles)
+   and ``level`` is ``auto`` (default) or ``plate``; otherwise ``image axes`` (testers mount the
+   camera square to the drum).  ``level: image`` skips the plate search, ``level: plate``
+   requires a plate.  The frame is rotated about the drum centre by the roll.
+4. Interface: Otsu's threshold inside the masked drum separates powder from air; the powder is
+   the class at the drum's bottom (dark powder on a white backlight, or the converse).  In every
+   column the powder's top is refined to the half-level crossing: the row where the grey level
+   crosses the mean of the column's air and powder levels (medians over 30 px beyond the
+   interface), linearly interpolated.  A time-averaged frame's soft grey ramp thus gives the
+   median surface position to a fraction of a pixel, whatever its grey levels.  Columns where
+   the powder reaches the masked rim are wall, not surface.
+5. Angle (``angle_deg``): total-least-squares line over the central ``chord_fraction``
+   (default 0.6) of the drum's chord along the surface, centred on the foot of the
+   perpendicular from the drum centre, i.e. the slope of the free surface through the drum
+   centre (window and line iterated until they agree; one pass drops points beyond 4 robust
+   sigma).  S-shape: ``upper_deg`` and ``lower_deg`` are lines over the upper and lower thirds
+   of the measured surface, ``s_shape_deg = angle_deg - (upper_deg + lower_deg) / 2`` is zero
+   for a straight surface and positive when the middle is steeper than the ends (a cascading
+   drum); ``line_rms_pct`` is the RMS distance of the whole surface from one straight line, in
+   % of the drum radius.
+
+The frames of one group are averaged (:func:`measure_drum`).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import asdict, dataclass
+
+import numpy as np
+from scipy import ndimage as ndi
+from skimage import feature, filters, measure, morphology, transform
+
+from soilcal.errors import InputError
+from soilcal.imaging.io import read_gray
+from soilcal.imaging.measure import Stages, plate_line_any
+
+CHORD_FRACTION = 0.6
+RIM_MARGIN = 0.05
+MIN_RIM_SUPPORT = 0.4
+LEVELS = ("auto", "plate", "image")
+_LIMITS = {"roll_deg": (-45.0, 45.0, "an angle between -45 and 45 deg"),
+           "chord_fraction": (0.1, 1.0, "a fraction of the chord in [0.1, 1]"),
+           "rim_margin": (0.0, 0.3, "a fraction of the drum radius in [0, 0.3]"),
+           "drum_radius_px": (8.0, 1e6, "a radius of at least 8 px")}
+OPTIONS = ("level", "roll_deg", "chord_fraction", "rim_margin", "drum_centre_px", "drum_radius_px")
+
+
+def _number(x):
+    return isinstance(x, (int, float)) and not isinstance(x, bool) and math.isfinite(x)
+
+
+def frame_options(entry=None, where=None, prefix=""):
+    """Validated drum options from a manifest entry or CLI arguments (a dict).
+
+    Unknown values raise one InputError naming ``where`` (file) and ``prefix + key`` (field).
+    """
+    entry = entry or {}
+    opts = {"level": "auto", "roll_deg": None, "chord_fraction": CHORD_FRACTION, "rim_margin": RIM_MARGIN,
+            "drum_centre_px": None, "drum_radius_px": None}
+    for k in OPTIONS:
+        v = entry.get(k)
+        if v is None:
+            continue
+        field = prefix + k
+        if k == "level":
+            if v not in LEVELS:
+                raise InputError(where, field, f"one of {LEVELS}", v)
+        elif k == "drum_centre_px":
+            if not (isinstance(v, (list, tuple)) and len(v) == 2 and all(_number(x) for x in v)):
+                raise InputError(where, field, "[column, row] of the drum centre in pixels", v)
+            v = [float(x) for x in v]
+        else:
+            lo, hi, what = _LIMITS[k]
+            if not _number(v) or not lo <= v <= hi:
+                raise InputError(where, field, what, v)
+            v = float(v)
+        opts[k] = v
+    if (opts["drum_centre_px"] is None) != (opts["drum_radius_px"] is None):
+        raise InputError(where, prefix + ("drum_radius_px" if opts["drum_radius_px"] is None else "drum_centre_px"),
+                         "drum_centre_px and drum_radius_px given together", "only one of them")
+    if opts["roll_deg"] is not None and opts["level"] == "plate":
+        raise InputError(where, prefix + "roll_deg", "either roll_deg or level: plate", "both")
+    return opts
+
+
+@dataclass
+class DrumResult:
+    path: str
+    angle_deg: float
+    upper_deg: float
+    lower_deg: float
+    s_shape_deg: float
+    line_rms_pct: float
+    roll_deg: float
+    level_reference: str
+    drum_reference: str
+    drum_centre_px: list
+    drum_radius_px: float
+    chord_fraction: float
+    n_points: int
+    stages: Stages | None = None
+
+    def as_dict(self):
+        d = asdict(self)
+        d.pop("stages")
+        return d
+
+
+def _circle_support(edges, cx, cy, r):
+    """(fraction of the circle's in-image perimeter on edge pixels, in-image fraction)."""
+    h, w = edges.shape
+    a = np.linspace(0, 2 * np.pi, 720, endpoint=False)
+    c, rr = cx + r * np.cos(a), cy + r * np.sin(a)
+    ok = (c >= 1) & (c <= w - 2) & (rr >= 1) & (rr <= h - 2)
+    if not ok.any():
+        return 0.0, 0.0
+    on = edges[np.round(rr[ok]).astype(int), np.round(c[ok]).astype(int)]
+    return float(on.mean()), float(ok.mean())
+
+
+def find_drum(gray):
+    """(cx, cy, radius, reference) of the drum: its rim circle, else the image border."""
+    h, w = gray.shape
+    f = max(1.0, min(h, w) / 240.0)
+    small = transform.rescale(gray, 1.0 / f, anti_aliasing=True) if f > 1 else gray
+    m = min(small.shape)
+    radii = np.arange(int(0.25 * m), int(0.62 * m) + 1)
+    hs = transform.hough_circle(feature.canny(small, sigma=2.0), radii)
+    _, xs, ys, rs = transform.hough_circle_peaks(hs, radii, total_num_peaks=8, min_xdistance=3, min_ydistance=3)
+    edges = feature.canny(gray, sigma=2.0)
+    er, ec = np.nonzero(edges)
+    near_edges = morphology.dilation(edges, morphology.disk(2))
+    found = []
+    for x, y, r in zip(xs * f, ys * f, rs * f):
+        near = np.abs(np.hypot(ec - x, er - y) - r) < 2.5 * f
+        if near.sum() < 30:
+            continue
+        pts = np.column_stack([ec[near], er[near]]).astype(float)
+        model, _ = measure.ransac(pts, measure.CircleModel, min_samples=3, residual_threshold=1.5,
+                                  max_trials=200, rng=0)
+        if model is None:
+            continue
+        (x1, y1), r1 = model.center, float(model.radius)
+        support, visible = _circle_support(near_edges, x1, y1, r1)
+        if visible >= 0.5 and support >= MIN_RIM_SUPPORT:
+            found.append((support, float(x1), float(y1), r1))
+    if not found:
+        return (w - 1) / 2.0, (h - 1) / 2.0, min(h, w) / 2.0, "image border"
+    _, bx, by, br = max(found)
+    inner = [t for t in found if math.hypot(t[1] - bx, t[2] - by) < 0.05 * br]
+    _, cx, cy, r = min(inner, key=lambda t: t[3])
+    return cx, cy, r, "rim"
+
+
+def _tls(u, v):
+    p = np.column_stack([u, v])
+    m = p.mean(axis=0)
+    d = np.linalg.svd(p - m, full_matrices=False)[2][0]
+    if d[0] < 0:
+        d = -d
+    return m, d, (p - m) @ np.array([-d[1], d[0]])
+
+
+def _tls_robust(u, v):
+    """Total-least-squares line; one pass drops points beyond max(4 robust sigma, 1 px)."""
+    m, d, res = _tls(u, v)
+    s = 1.4826 * np.median(np.abs(res - np.median(res)))
+    keep = np.abs(res - np.median(res)) <= max(4.0 * s, 1.0)
+    if keep.sum() >= 10 and not keep.all():
+        m, d, res = _tls(u[keep], v[keep])
+    return m, d
+
+
+def _angle(d, sign=1.0):
+    return float(np.degrees(np.arctan2(sign * d[1], d[0])))
+
+
+def _surface(path, p, inside, cx, cy, rm):
+    """Sub-pixel (column, row) points of the powder's free surface (powder high in ``p``)."""
+    h, w = p.shape
+    vals = p[inside]
+    t = filters.threshold_otsu(vals)
+    lo_m, hi_m = vals[vals < t].mean(), vals[vals >= t].mean()
+    if hi_m - lo_m < 0.1:
+        raise InputError(path, "image", "powder and air of clearly different grey levels in the drum",
+                         f"class means {lo_m:.2f} and {hi_m:.2f}")
+    binary = ndi.binary_fill_holes(morphology.opening((p >= t) & inside, morphology.disk(2)))
+    lab = measure.label(binary)
+    rr = np.arange(h)[:, None]
+    bottom = inside & (rr > cy + 0.8 * rm)
+    hits = np.bincount(lab[bottom], minlength=lab.max() + 1)
+    hits[0] = 0
+    if lab.max() == 0 or hits.max() == 0 or (lab == hits.argmax()).sum() < 0.02 * np.pi * rm ** 2:
+        raise InputError(path, "image", "powder lying in the drum's bottom", "no powder region found")
+    powder = lab == hits.argmax()
+    air_lvl = np.median(p[inside & ~morphology.dilation(powder, morphology.disk(8))])
+    pow_lvl = np.median(p[morphology.erosion(powder, morphology.disk(8)) & inside])
+    cols, rows = [], []
+    for c in range(max(0, int(np.ceil(cx - rm)) + 1), min(w, int(np.floor(cx + rm)))):
+        half = math.sqrt(max(rm ** 2 - (c - cx) ** 2, 0.0))
+        top, bot = cy - half, cy + half
+        idx = np.flatnonzero(powder[:, c])
+        if idx.size == 0:
+            continue
+        i = int(idx[0])
+        if i <= top + 2 or i >= bot - 2:
+            continue  # the powder reaches the rim in this column: wall, not free surface
+        r0, r1 = int(np.ceil(top)) + 1, int(np.floor(bot))
+        a = p[max(r0, i - 38):max(r0, i - 8), c]
+        b = p[min(r1, i + 8):min(r1, i + 38), c]
+        mid = 0.5 * ((np.median(a) if a.size >= 4 else air_lvl) + (np.median(b) if b.size >= 4 else pow_lvl))
+        s0, s1 = max(r0, i - 25), min(r1, i + 25)
+        seg = p[s0:s1 + 1, c]
+        up = seg >= mid
+        js = np.flatnonzero(up[1:] & ~up[:-1]) + 1
+        if js.size == 0:
+            continue
+        j = int(js[np.argmin(np.abs(s0 + js - i))])
+        rows.append(s0 + j - 1 + (mid - seg[j - 1]) / (seg[j] - seg[j - 1]))
+        cols.append(float(c))
+    return np.asarray(cols), np.asarray(rows), binary, powder
+
+
+def measure_drum_frame(path, threshold="otsu", keep_stages=False, options=None) -> DrumResult:
+    """Dynamic angle and S-shape of one drum frame (see the module text for the method)."""
+    if threshold != "otsu":
+        raise InputError(path, "threshold", "'otsu' for drum frames", threshold)
+    opts = frame_options(options, path)
+    raw, rgb = read_gray(path)
+    gray = filters.gaussian(raw, 1.2)
+    h, w = gray.shape
+    if opts["drum_centre_px"] is not None:
+        (cx, cy), R, dref = opts["drum_centre_px"], opts["drum_radius_px"], "manifest"
+    else:
+        cx, cy, R, dref = find_drum(gray)
+    roll, lref = 0.0, "image axes"
+    if opts["roll_deg"] is not None:
+        roll, lref = opts["roll_deg"], "manifest roll"
+    elif opts["level"] != "image":
+        line = plate_line_any(path, gray, below=(cx, cy + R), required=False)
+        if line is not None:
+            roll, lref = -float(np.degrees(np.arctan(line[0]))), "plate"
+        elif opts["level"] == "plate":
+            raise InputError(path, "level", "a straight base plate edge below the drum (level: plate)", "none found")
+    g = transform.rotate(gray, -roll, center=(cx, cy), order=1, mode="edge") if roll else gray
+    rm = R * (1.0 - opts["rim_margin"])
+    rr, cc = np.mgrid[0:h, 0:w]
+    inside = (cc - cx) ** 2 + (rr - cy) ** 2 < rm ** 2
+    bottom = inside & (rr > cy + 0.8 * rm)
+    if bottom.sum() < 20:
+        raise InputError(path, "image", "the drum's bottom inside the frame", f"drum centre ({cx:.0f}, {cy:.0f}) "
+                         f"px, radius {R:.0f} px")
+    t = filters.threshold_otsu(g[inside])
+    p = g if np.median(g[bottom]) >= t else 1.0 - g
+    cols, rows, binary, powder = _surface(path, p, inside, cx, cy, rm)
+    if cols.size < 30:
+        raise InputError(path, "free surface", "a free surface across at least 30 pixel columns", int(cols.size))
+    u, v = cols - cx, cy - rows  # drum centre at the origin, v up
+    m, d = _tls_robust(u, v)
+    sign = 1.0 if d[1] >= 0 else -1.0
+    fr = opts["chord_fraction"]
+    for _ in range(8):
+        n = np.array([-d[1], d[0]])
+        dist = float(-m @ n)  # signed distance of the drum centre from the line
+        foot = float(-m @ d)
+        half = math.sqrt(max(R ** 2 - dist ** 2, 0.0))
+        tt = (np.column_stack([u, v]) - m) @ d
+        sel = np.abs(tt - foot) <= fr * half
+        if sel.sum() < 20:
+            raise InputError(path, "free surface", f"at least 20 surface points in the central {fr:.0%} of the chord",
+                             int(sel.sum()))
+        m1, d1 = _tls_robust(u[sel], v[sel])
+        done = abs(_angle(d1) - _angle(d)) < 1e-5 and abs((m1 - m) @ n) < 1e-4
+        m, d = m1, d1
+        if done:
+            break
+    angle = abs(_angle(d))
+    # S-shape: thirds of the measured surface along the line, one straight line through all of it
+    tt = (np.column_stack([u, v]) - m) @ d
+    t0, t1 = np.percentile(tt, [1, 99])
+    third = (t1 - t0) / 3.0
+    ends, end_lines = {}, []
+    for name, part in (("low_t", tt < t0 + third), ("high_t", tt > t1 - third)):
+        ends[name] = float("nan")
+        if part.sum() >= 10:
+            mk, dk = _tls_robust(u[part], v[part])
+            ends[name] = sign * _angle(dk)
+            end_lines.append((mk[0], mk[1], dk[0], dk[1], "upper third" if (name == "high_t") == (sign > 0)
+                              else "lower third"))
+    upper, lower = (ends["high_t"], ends["low_t"]) if sign > 0 else (ends["low_t"], ends["high_t"])
+    ma, da, res = _tls(u, v)
+    keep = np.abs(res) <= 8.0 * 1.4826 * np.median(np.abs(res)) + 2.0
+    ma, da, res = _tls(u[keep], v[keep])
+    rms = float(np.sqrt(np.mean(res ** 2)) / R * 100.0)
+    st = None
+    if keep_stages:
+        st = Stages(rgb, g, binary, powder.astype(float),
+                    [(m[0], m[1], d[0], d[1], f"central {fr:.0%} of the chord"), *end_lines],
+                    [np.column_stack([u, v])],
+                    circle=(cx, cy, rm), reference=f"level: {lref}, drum: {dref}")
+    return DrumResult(str(path), angle, upper, lower, angle - 0.5 * (upper + lower), rms, float(roll), lref, dref,
+                      [float(cx), float(cy)], float(R), float(fr), int(cols.size), st)
+
+
+def measure_drum(paths, threshold="otsu", keep_stages=False, options=None):
+    """Frames of one group: the mean angle and S-shape measures, the angles' spread.
+
+    ``options`` is one dict of :data:`OPTIONS` for every frame or a list with one per frame.
+    """
+    per = options if isinstance(options, list) else [options] * len(paths)
+    res = [measure_drum_frame(p, threshold, keep_stages, o) for p, o in zip(paths, per)]
+
+    def mean(key):
+        return float(np.nanmean([getattr(r, key) for r in res]))
+
+    a = np.array([r.angle_deg for r in res])
+    summary = {"angle_deg": float(a.mean()), "spread_deg": float(a.std(ddof=1)) if a.size > 1 else 0.0,
+               "n_frames": len(res), "upper_deg": mean("upper_deg"), "lower_deg": mean("lower_deg"),
+               "s_shape_deg": mean("s_shape_deg"), "line_rms_pct": mean("line_rms_pct"),
+               "level_reference": ", ".join(sorted({r.level_reference for r in res})),
+               "drum_reference": ", ".join(sorted({r.drum_reference for r in res})),
+               "frames": [r.as_dict() for r in res]}
+    return summary, res

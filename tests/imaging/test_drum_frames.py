@@ -1,0 +1,196 @@
+"""Drum frames as drum testers export them: cropped to the drum, grey, time-averaged, S-shaped,
+no plate in view.  The truth is the generator's analytic surface (render_tester_frame: the
+least-squares line over the central 60 % of the chord is at exactly ``angle_deg``)."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import numpy as np
+import pytest
+import yaml
+
+from soilcal.errors import InputError
+from soilcal.imaging import drum, render
+from soilcal.imaging.manifest import measure_manifest, read_manifest
+
+ROOT = Path(__file__).resolve().parents[2]
+SHIPPED = ROOT / "resources" / "images" / "xinjiang-vineyard"
+
+# (angle, s_amp, blur_px, jitter_px, fill): slow rolling to fast cascading drums
+SPEEDS = [(32.0, 0.0, 1.5, 1.0, 0.30), (38.0, 0.04, 2.5, 3.0, 0.35),
+          (44.0, 0.08, 3.5, 5.0, 0.40), (50.0, 0.12, 5.0, 8.0, 0.45)]
+
+
+def _frame(tmp_path, name, bits=8, **kw):
+    img, truth = render.render_tester_frame(**({"seed": 3} | kw))
+    return render.save_frame(tmp_path / name, img, bits=bits), truth
+
+
+@pytest.mark.parametrize("window", ["crop", "rim", "inside"])
+@pytest.mark.parametrize("speed", SPEEDS, ids=lambda s: f"{s[0]:.0f}deg-S{s[1]}")
+def test_central_slope_within_half_degree(tmp_path, window, speed):
+    angle, s_amp, blur, jitter, fill = speed
+    p, truth = _frame(tmp_path, "f.png", angle_deg=angle, s_amp=s_amp, blur_px=blur, jitter_px=jitter,
+                      fill=fill, window=window)
+    r = drum.measure_drum_frame(p)
+    assert abs(r.angle_deg - truth["angle_deg"]) <= 0.5
+    assert r.level_reference == "image axes" and r.roll_deg == 0.0
+    assert r.drum_reference == ("image border" if window == "inside" else "rim")
+
+
+def test_rim_circle_found_where_it_is(tmp_path):
+    p, truth = _frame(tmp_path, "rim.png", angle_deg=40.0, window="rim")
+    r = drum.measure_drum_frame(p)
+    assert r.drum_reference == "rim"
+    # the rim is a 4 px wide ring from radius R outwards; the fitted circle lies in it
+    assert np.hypot(*(np.array(r.drum_centre_px) - truth["centre_px"])) < 4.0
+    assert truth["radius_px"] - 1.0 < r.drum_radius_px < truth["radius_px"] + 5.0
+
+
+def test_s_shape_measures_rise_with_the_s(tmp_path):
+    s_shape, rms = [], []
+    for k, s_amp in enumerate((0.0, 0.04, 0.08, 0.12)):
+        p, _ = _frame(tmp_path, f"s{k}.png", angle_deg=40.0, s_amp=s_amp, window="crop")
+        r = drum.measure_drum_frame(p)
+        s_shape.append(r.s_shape_deg)
+        rms.append(r.line_rms_pct)
+    assert abs(s_shape[0]) < 0.3 and rms[0] < 0.1  # a straight surface
+    assert np.all(np.diff(s_shape) > 1.0) and np.all(np.diff(rms) > 0.2)
+
+
+def test_straight_and_s_surface_same_central_slope_different_shape(tmp_path):
+    # the S changes the ends, not the slope through the drum centre
+    a = drum.measure_drum_frame(_frame(tmp_path, "a.png", angle_deg=41.0, s_amp=0.0)[0])
+    b = drum.measure_drum_frame(_frame(tmp_path, "b.png", angle_deg=41.0, s_amp=0.1)[0])
+    assert abs(a.angle_deg - b.angle_deg) < 0.5
+    assert b.upper_deg < b.angle_deg - 2 and b.lower_deg < b.angle_deg - 2  # flatter ends
+
+
+@pytest.mark.parametrize("chord_fraction", [0.4, 0.8])
+def test_chord_fraction_option(tmp_path, chord_fraction):
+    p, truth = _frame(tmp_path, "c.png", angle_deg=37.0, s_amp=0.08, chord_fraction=chord_fraction)
+    r = drum.measure_drum_frame(p, options={"chord_fraction": chord_fraction})
+    assert r.chord_fraction == chord_fraction
+    assert abs(r.angle_deg - truth["angle_deg"]) <= 0.5
+
+
+def test_same_answer_in_bmp_png_tiff_8_and_16_bit(tmp_path):
+    img, truth = render.render_tester_frame(5, 43.0, s_amp=0.06, blur_px=4.0, jitter_px=4.0)
+    files = [render.save_frame(tmp_path / "f.bmp", img, 8), render.save_frame(tmp_path / "f.png", img, 8),
+             render.save_frame(tmp_path / "f16.png", img, 16), render.save_frame(tmp_path / "f.tif", img, 8),
+             render.save_frame(tmp_path / "f16.tif", img, 16)]
+    angles = np.array([drum.measure_drum_frame(f).angle_deg for f in files])
+    assert np.all(np.abs(angles - truth["angle_deg"]) <= 0.5)
+    assert np.ptp(angles[[0, 1, 3]]) < 1e-9  # the same 8-bit pixels in three containers
+    assert np.ptp(angles) < 0.05  # 8 vs 16 bit: quantisation only
+
+
+def test_twelve_bit_camera_in_sixteen_bit_container(tmp_path):
+    from PIL import Image
+
+    img, truth = render.render_tester_frame(6, 36.0, blur_px=3.0)
+    p = tmp_path / "f12.tif"
+    Image.fromarray(np.round(img * 4095).astype(np.uint16)).save(p)
+    assert abs(drum.measure_drum_frame(p).angle_deg - truth["angle_deg"]) <= 0.5
+
+
+def test_bright_powder_on_dark_background(tmp_path):
+    p, truth = _frame(tmp_path, "inv.png", angle_deg=35.0, powder_dark=False, window="crop")
+    assert abs(drum.measure_drum_frame(p).angle_deg - truth["angle_deg"]) <= 0.5
+
+
+@pytest.mark.parametrize("roll", [2.0, -2.5])
+def test_roll_given_by_the_user(tmp_path, roll):
+    # a camera rolled by `roll` shows a 40 deg surface at 40 + roll deg against the image axes
+    p, _ = _frame(tmp_path, "roll.png", angle_deg=40.0 + roll, window="crop")
+    plain = drum.measure_drum_frame(p)
+    given = drum.measure_drum_frame(p, options={"roll_deg": roll})
+    assert plain.level_reference == "image axes" and abs(plain.angle_deg - (40.0 + roll)) <= 0.5
+    assert given.level_reference == "manifest roll" and given.roll_deg == roll
+    assert abs(given.angle_deg - 40.0) <= 0.5
+
+
+def test_drum_given_by_the_user(tmp_path):
+    p, truth = _frame(tmp_path, "in.png", angle_deg=45.0, window="inside")
+    r = drum.measure_drum_frame(p, options={"drum_centre_px": truth["centre_px"],
+                                            "drum_radius_px": truth["radius_px"]})
+    assert r.drum_reference == "manifest"
+    assert abs(r.angle_deg - 45.0) <= 0.5
+
+
+def test_plate_level_on_shipped_frames_and_the_roll_it_removes():
+    frame = SHIPPED / "drum_middle_f04.jpg"
+    truth = json.loads(Path(str(frame) + ".truth.json").read_text())
+    plate = drum.measure_drum_frame(frame)
+    axes = drum.measure_drum_frame(frame, options={"level": "image"})
+    assert plate.level_reference == "plate" and axes.level_reference == "image axes"
+    assert abs(plate.roll_deg - truth["roll_deg"]) < 0.1
+    assert abs(plate.angle_deg - truth["angle_deg"]) <= 0.3
+    # the roll rotates the surface: against the image axes it reads angle + roll
+    assert abs(axes.angle_deg - (plate.angle_deg + truth["roll_deg"])) < 0.15
+
+
+def test_level_plate_required_but_absent(tmp_path):
+    p, _ = _frame(tmp_path, "np.png", angle_deg=40.0)
+    with pytest.raises(InputError, match="level"):
+        drum.measure_drum_frame(p, options={"level": "plate"})
+
+
+@pytest.mark.parametrize("entry,field", [
+    ({"chord_fraction": 2}, "photos[0].chord_fraction"),
+    ({"level": "horizon"}, "photos[0].level"),
+    ({"roll_deg": "two"}, "photos[0].roll_deg"),
+    ({"rim_margin": -0.1}, "photos[0].rim_margin"),
+    ({"drum_centre_px": [10, 20]}, "photos[0].drum_radius_px"),
+    ({"drum_centre_px": [10], "drum_radius_px": 50}, "photos[0].drum_centre_px"),
+    ({"roll_deg": 1.0, "level": "plate"}, "photos[0].roll_deg"),
+])
+def test_bad_manifest_options_name_the_field(tmp_path, entry, field):
+    p, _ = _frame(tmp_path, "f.png", angle_deg=40.0)
+    m = tmp_path / "manifest.yaml"
+    m.write_text(yaml.safe_dump({"photos": [{"file": p.name, "kind": "drum", **entry}]}))
+    with pytest.raises(InputError) as e:
+        read_manifest(m)
+    assert e.value.field == field and str(m) in str(e.value)
+
+
+def test_manifest_group_of_sixteen_bit_tester_frames(tmp_path):
+    photos = []
+    for k, dev in enumerate((-0.3, 0.1, 0.2)):
+        img, _ = render.render_tester_frame(10 + k, 39.0 + dev, s_amp=0.05, blur_px=3.0)
+        render.save_frame(tmp_path / f"f{k}.png", img, bits=16)
+        photos.append({"file": f"f{k}.png", "kind": "drum", "group": "dynamic", "level": "image"})
+    (tmp_path / "manifest.yaml").write_text(yaml.safe_dump({"photos": photos}))
+    out = measure_manifest(tmp_path / "manifest.yaml", figdir=tmp_path / "figs")["dynamic"]
+    assert out["n_frames"] == 3 and abs(out["angle_deg"] - 39.0) <= 0.5
+    assert out["level_reference"] == "image axes" and out["drum_reference"] == "rim"
+    assert out["s_shape_deg"] > 1.0
+    assert (tmp_path / "figs" / "f0.png").is_file()
+
+
+def test_cli_drum_options(tmp_path, capsys):
+    from soilcal.cli import main
+
+    p, _ = _frame(tmp_path, "f.png", angle_deg=42.0)
+    assert main(["image", "drum", str(p), "--roll-deg", "2"]) == 0
+    out = json.loads(capsys.readouterr().out)
+    assert out["level_reference"] == "manifest roll" and abs(out["angle_deg"] - 40.0) <= 0.5
+    assert main(["image", "drum", str(p), "--chord-fraction", "0"]) == 2
+    assert "--chord_fraction" in capsys.readouterr().err
+
+
+def test_frame_without_powder(tmp_path):
+    img, _ = render.render_tester_frame(1, 40.0, window="rim")
+    img[:] = np.where(img > 0.5, img, 0.9)  # the powder removed, the rim too
+    img[::7, ::7] = 0.1  # some texture so it is not blank
+    p = render.save_frame(tmp_path / "empty.png", img)
+    with pytest.raises(InputError):
+        drum.measure_drum_frame(p)
+
+
+def test_blank_frame(tmp_path):
+    p = render.save_frame(tmp_path / "blank.png", np.full((200, 200), 0.5))
+    with pytest.raises(InputError, match="blank"):
+        drum.measure_drum_frame(p)
