@@ -12,7 +12,8 @@ drum window, 8- or 16-bit grey, time-averaged over many frames, no plate in view
      perimeter (the powder hides the rim where it lies against it), refined by a RANSAC circle
      fit through the full-resolution edge pixels near it;
    * ``image border``: no such circle, so the frame is cropped to the drum: centre = image
-     centre, radius = half the shorter side.
+     centre, radius = half the shorter side.  A frame that shows only part of a larger drum
+     and no rim needs the drum given: the central chord is the drum's.
 
    The outer ``rim_margin`` (default 5 %) of the radius is masked, as the testers' software
    masks the drum wall.
@@ -23,7 +24,8 @@ drum window, 8- or 16-bit grey, time-averaged over many frames, no plate in view
    camera square to the drum).  ``level: image`` skips the plate search, ``level: plate``
    requires a plate.  The frame is rotated about the drum centre by the roll.
 4. Interface: Otsu's threshold inside the masked drum separates powder from air; the powder is
-   the class at the drum's bottom (dark powder on a white backlight, or the converse).  In every
+   the class lying lower (its centroid below the air's: dark powder on a white backlight, or
+   the converse), its largest connected region the bed.  In every
    column the powder's top is refined to the half-level crossing: the row where the grey level
    crosses the mean of the column's air and powder levels (medians over 30 px beyond the
    interface), linearly interpolated.  A time-averaged frame's soft grey ramp thus gives the
@@ -162,6 +164,8 @@ def find_drum(gray):
         if model is None:
             continue
         (x1, y1), r1 = model.center, float(model.radius)
+        if abs(r1 - r) > 0.1 * r or math.hypot(x1 - x, y1 - y) > 0.1 * r:
+            continue  # the fit left the Hough circle: not this circle's edge
         support, visible = _circle_support(near_edges, x1, y1, r1)
         if visible >= 0.5 and support >= MIN_RIM_SUPPORT:
             found.append((support, float(x1), float(y1), r1))
@@ -207,13 +211,11 @@ def _surface(path, p, inside, cx, cy, rm):
                          f"class means {lo_m:.2f} and {hi_m:.2f}")
     binary = ndi.binary_fill_holes(morphology.opening((p >= t) & inside, morphology.disk(2)))
     lab = measure.label(binary)
-    rr = np.arange(h)[:, None]
-    bottom = inside & (rr > cy + 0.8 * rm)
-    hits = np.bincount(lab[bottom], minlength=lab.max() + 1)
-    hits[0] = 0
-    if lab.max() == 0 or hits.max() == 0 or (lab == hits.argmax()).sum() < 0.02 * np.pi * rm ** 2:
-        raise InputError(path, "image", "powder lying in the drum's bottom", "no powder region found")
-    powder = lab == hits.argmax()
+    sizes = np.bincount(lab.ravel())
+    sizes[0] = 0
+    if lab.max() == 0 or sizes.max() < 0.02 * np.pi * rm ** 2:
+        raise InputError(path, "image", "powder lying in the drum", "no powder region found")
+    powder = lab == sizes.argmax()
     air_lvl = np.median(p[inside & ~morphology.dilation(powder, morphology.disk(8))])
     pow_lvl = np.median(p[morphology.erosion(powder, morphology.disk(8)) & inside])
     cols, rows = [], []
@@ -267,12 +269,16 @@ def measure_drum_frame(path, threshold="otsu", keep_stages=False, options=None) 
     rm = R * (1.0 - opts["rim_margin"])
     rr, cc = np.mgrid[0:h, 0:w]
     inside = (cc - cx) ** 2 + (rr - cy) ** 2 < rm ** 2
-    bottom = inside & (rr > cy + 0.8 * rm)
-    if bottom.sum() < 20:
-        raise InputError(path, "image", "the drum's bottom inside the frame", f"drum centre ({cx:.0f}, {cy:.0f}) "
-                         f"px, radius {R:.0f} px")
+    if inside.sum() < 400:
+        raise InputError(path, "image", "the drum inside the frame", f"drum centre ({cx:.0f}, {cy:.0f}) px, "
+                         f"radius {R:.0f} px")
+    # the powder is the class lying lower in the drum (its centroid below the air's)
     t = filters.threshold_otsu(g[inside])
-    p = g if np.median(g[bottom]) >= t else 1.0 - g
+    bright = inside & (g >= t)
+    dark = inside & (g < t)
+    if not bright.any() or not dark.any():
+        raise InputError(path, "image", "powder and air in the drum", "one grey level")
+    p = g if rr[bright].mean() > rr[dark].mean() else 1.0 - g
     cols, rows, binary, powder = _surface(path, p, inside, cx, cy, rm)
     if cols.size < 30:
         raise InputError(path, "free surface", "a free surface across at least 30 pixel columns", int(cols.size))

@@ -248,12 +248,13 @@ def render_pile(seed, left_deg, right_deg, front_deg=None, back_deg=None, soil="
 
 
 def segment_fill(radius, fill):
-    """Distance d of the chord from the centre whose segment holds ``fill`` of the disc."""
+    """Signed distance d of the chord below the centre whose segment holds ``fill`` of the disc
+    (d < 0: the chord above the centre, fill > 1/2)."""
     from scipy.optimize import brentq
 
     target = fill * np.pi * radius ** 2
     return brentq(lambda d: radius ** 2 * np.arccos(d / radius) - d * np.sqrt(radius ** 2 - d ** 2) - target,
-                  0.0, radius * (1 - 1e-9))
+                  -radius * (1 - 1e-9), radius * (1 - 1e-9))
 
 
 def render_drum(seed, angle_deg, soil="xinjiang-vineyard", fill=0.25, hard=False, roll_deg=None):
@@ -298,7 +299,8 @@ def render_drum(seed, angle_deg, soil="xinjiang-vineyard", fill=0.25, hard=False
 
 
 def render_tester_frame(seed, angle_deg, fill=0.35, s_amp=0.0, size=(600, 640), window="crop", blur_px=2.0,
-                        jitter_px=3.0, n_avg=16, powder_dark=True, noise=0.01, chord_fraction=0.6):
+                        jitter_px=3.0, n_avg=16, powder_dark=True, noise=0.01, chord_fraction=0.6,
+                        offset_px=(0.0, 0.0), haze=0.0, specks=0, gradient=0.1):
     """A drum tester's exported frame: grey, time-averaged, no plate; ``(image in [0, 1], truth)``.
 
     Drum of radius R px centred in the frame (``window``: "crop" = cropped to the drum, the
@@ -314,7 +316,10 @@ def render_tester_frame(seed, angle_deg, fill=0.35, s_amp=0.0, size=(600, 640), 
     ``chord_fraction`` of the chord is at exactly ``angle_deg``, the truth of the central slope.
     Time averaging: ``n_avg`` frames with the surface shifted normal to itself by a symmetric
     set of offsets (std ``jitter_px``, median zero), then a Gaussian blur ``blur_px``; static
-    powder texture, a 10 % illumination gradient and sensor noise ``noise``.
+    powder texture, an illumination gradient ``gradient`` across the frame and sensor noise
+    ``noise``.  ``offset_px`` moves the drum from the frame centre (a cropped drum then runs
+    past the border); ``haze`` is the grey of particles flying above the surface (decaying
+    over 3 % of the radius), ``specks`` the number of dust specks on the window.
     """
     rng = np.random.default_rng(seed)
     h, w = size
@@ -326,6 +331,7 @@ def render_tester_frame(seed, angle_deg, fill=0.35, s_amp=0.0, size=(600, 640), 
         R, cx, cy = 0.75 * float(np.hypot(h, w)) / 2.0, (w - 1) / 2.0, (h - 1) / 2.0
     else:
         raise ValueError(f"window must be 'crop', 'rim' or 'inside', got {window!r}")
+    cx, cy = cx + offset_px[0], cy + offset_px[1]
     rr, cc = np.mgrid[0:h, 0:w].astype(float)
     x, z = cc - cx, cy - rr
     th = np.radians(angle_deg)
@@ -345,18 +351,26 @@ def render_tester_frame(seed, angle_deg, fill=0.35, s_amp=0.0, size=(600, 640), 
     air, powder = (0.92, 0.22) if powder_dark else (0.12, 0.78)
     tex = 1.0 + 0.06 * _noise(rng, (h, w), 2.0)
     img = air + (powder * tex - air) * cover
+    if haze:
+        above = np.clip(nrm - n_s, 0.0, None)
+        img = img + (powder - air) * haze * np.exp(-above / (0.03 * R)) * (1.0 - cover)
+    for _ in range(int(specks)):
+        sr, sc, sz = rng.uniform(0, h), rng.uniform(0, w), rng.uniform(1.0, 3.0)
+        img = img + (powder - air) * 0.6 * np.exp(-((rr - sr) ** 2 + (cc - sc) ** 2) / (2 * sz ** 2))
     disc = np.clip(0.5 + (R - np.hypot(x, z)), 0.0, 1.0)
     if window == "crop":
         img = 0.06 + (img - 0.06) * disc
     elif window == "rim":
         ring = np.clip(0.5 + (R + 4.0 - np.hypot(x, z)), 0.0, 1.0) - disc
-        img = img * disc + (1.0 - disc) * air - ring * (air - 0.15)
+        rim = 0.15 if powder_dark else 0.85  # a dark rim on the backlight, a bright one on a dark ground
+        img = img * disc + (1.0 - disc) * air + ring * (rim - air)
     img = ndi.gaussian_filter(img, blur_px) if blur_px > 0 else img
-    img = img * (1.0 + 0.1 * (cc / w - 0.5)) + noise * rng.standard_normal((h, w))
+    img = img * (1.0 + gradient * (cc / w - 0.5)) + noise * rng.standard_normal((h, w))
     truth = {"kind": "drum-tester", "seed": int(seed), "angle_deg": float(angle_deg), "s_amp": float(s_amp),
              "fill": float(fill), "window": window, "centre_px": [float(cx), float(cy)], "radius_px": float(R),
              "blur_px": float(blur_px), "jitter_px": float(jitter_px), "n_avg": int(n_avg),
-             "chord_fraction": float(chord_fraction), "powder_dark": bool(powder_dark)}
+             "chord_fraction": float(chord_fraction), "powder_dark": bool(powder_dark), "haze": float(haze),
+             "specks": int(specks), "noise": float(noise), "size": [int(h), int(w)]}
     return np.clip(img, 0.0, 1.0), truth
 
 
