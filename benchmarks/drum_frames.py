@@ -83,7 +83,7 @@ def main(argv=None):
     head = ("| frames | n | measured | within 0.5 deg (of measured) | above 0.5 deg | median abs error | "
             "p90 | p95 | max |")
     groups = [("all", rows), ("stand photos", [r for r in rows if r["kind"] == "stand"])]
-    for w in ("crop", "rim", "inside"):
+    for w in ("crop", "rim", "plain", "inside"):
         groups.append((f"tester, {w}", [r for r in rows if r["kind"] == "tester" and r["window"] == w]))
     groups += [("tester, S-shaped (s_amp > 0.06)", [r for r in rows if float(r["s_amp"]) > 0.06]),
                ("tester, blur > 4 px", [r for r in rows if float(r["blur_px"]) > 4]),

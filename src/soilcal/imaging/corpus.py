@@ -3,7 +3,8 @@
 :func:`drum_frames` mixes photos of a drum on its stand (:func:`render.render_drum`: colour
 JPEG, base plate, camera roll up to 3 deg) and drum testers' exports
 (:func:`render.render_tester_frame`: grey 8/16-bit PNG/TIFF/BMP, cropped to the drum, off
-centre or running past the border, rim rings, frames inside a larger drum, averaged soft
+centre or running past the border, rim rings, drums on a plain surround of any grey, frames
+inside a larger drum, averaged soft
 interfaces, S-shaped surfaces rising to either side, inverted polarity, haze of flying
 particles, dust specks, illumination gradients, noise).  Every parameter is drawn from
 ``numpy.random.default_rng(seed)`` and returned with the frame.
@@ -30,7 +31,7 @@ def drum_frame_params(n, seed=0):
                         "hard": bool(rng.random() < 0.3), "roll_deg": float(rng.uniform(-3.0, 3.0))})
             continue
         h = int(rng.integers(400, 900))
-        window = str(rng.choice(["crop", "crop", "rim", "inside"]))
+        window = str(rng.choice(["crop", "crop", "rim", "plain", "inside"]))
         off = rng.uniform(-0.05, 0.05, 2) * h if window == "crop" else np.zeros(2)
         bits = int(rng.choice([8, 16]))
         out.append({"kind": "tester", "seed": fs, "angle_deg": angle * float(rng.choice([-1.0, 1.0])),
@@ -41,7 +42,8 @@ def drum_frame_params(n, seed=0):
                     "jitter_px": float(rng.uniform(0.0, 8.0)), "powder_dark": bool(rng.random() < 0.8),
                     "noise": float(rng.uniform(0.002, 0.03)),
                     "haze": float(rng.uniform(0.0, 0.3)) if rng.random() < 0.3 else 0.0,
-                    "specks": int(rng.integers(0, 6)), "gradient": float(rng.uniform(0.0, 0.3)), "bits": bits,
+                    "specks": int(rng.integers(0, 6)), "gradient": float(rng.uniform(0.0, 0.3)),
+                    "surround": float(rng.uniform(0.05, 0.85)) if window in ("crop", "plain") else None, "bits": bits,
                     "suffix": str(rng.choice([".png", ".tif"] + ([".bmp"] if bits == 8 else [])))})
     return out
 

@@ -7,10 +7,11 @@ drum window, 8- or 16-bit grey, time-averaged over many frames, no plate in view
 2. The drum (``drum_reference``):
 
    * ``manifest``: ``drum_centre_px`` and ``drum_radius_px`` given by the user;
-   * ``rim``: the innermost of the concentric circles that a Hough transform of the Canny edges
-     finds (on a copy reduced to about 240 px) with edges along at least 40 % of its visible
-     perimeter (the powder hides the rim where it lies against it), refined by a RANSAC circle
-     fit through the full-resolution edge pixels near it;
+   * ``rim``: the innermost of the concentric circles that a Hough transform of the Canny
+     edges (thresholds relative to the frame's strongest gradients, on a copy reduced to about
+     240 px) finds with edges along at least 30 % of its visible perimeter (the powder hides
+     the rim where it lies against it), refined by a RANSAC circle fit through the
+     full-resolution edge pixels near it;
    * ``image border``: no such circle, so the frame is cropped to the drum: centre = image
      centre, radius = half the shorter side.  A frame that shows only part of a larger drum
      and no rim needs the drum given: the central chord is the drum's.
@@ -31,15 +32,16 @@ drum window, 8- or 16-bit grey, time-averaged over many frames, no plate in view
    interface), linearly interpolated.  A time-averaged frame's soft grey ramp thus gives the
    median surface position to a fraction of a pixel, whatever its grey levels.  Columns where
    the powder reaches the masked rim are wall, not surface.
-5. Angle (``angle_deg``): total-least-squares line over the central ``chord_fraction``
-   (default 0.6) of the drum's chord along the surface, centred on the foot of the
-   perpendicular from the drum centre, i.e. the slope of the free surface through the drum
-   centre (window and line iterated until they agree; one pass drops points beyond 4 robust
-   sigma).  S-shape: ``upper_deg`` and ``lower_deg`` are lines over the upper and lower thirds
-   of the measured surface, ``s_shape_deg = angle_deg - (upper_deg + lower_deg) / 2`` is zero
-   for a straight surface and positive when the middle is steeper than the ends (a cascading
-   drum); ``line_rms_pct`` is the RMS distance of the whole surface from one straight line, in
-   % of the drum radius.
+5. Angle (``angle_deg``): least-squares line v = a + b u (u along the level, as ``np.polyfit``
+   fits it) through the surface points in the columns under the central ``chord_fraction``
+   (default 0.6) of the surface's chord, the segment between its wall contacts (each end of the measured
+   surface extended along its tangent across the masked rim to the drum circle), the window
+   centred on the foot of the perpendicular from the drum centre; i.e. the slope of the free surface through the drum centre (one pass drops points
+   beyond 4 robust sigma).  S-shape: ``upper_deg`` and ``lower_deg`` are such lines over the
+   upper and lower thirds of the measured surface, ``s_shape_deg = angle_deg - (upper_deg +
+   lower_deg) / 2`` is zero for a straight surface and positive when the middle is steeper
+   than the ends (a cascading drum); ``line_rms_pct`` is the RMS distance of the whole surface
+   from one straight line, in % of the drum radius.
 
 The frames of one group are averaged (:func:`measure_drum`).
 """
@@ -59,7 +61,7 @@ from soilcal.imaging.measure import Stages, plate_line_any
 
 CHORD_FRACTION = 0.6
 RIM_MARGIN = 0.05
-MIN_RIM_SUPPORT = 0.4
+MIN_RIM_SUPPORT = 0.3
 LEVELS = ("auto", "plate", "image")
 _LIMITS = {"roll_deg": (-45.0, 45.0, "an angle between -45 and 45 deg"),
            "chord_fraction": (0.1, 1.0, "a fraction of the chord in [0.1, 1]"),
@@ -141,6 +143,16 @@ def _circle_support(edges, cx, cy, r):
     return float(on.mean()), float(ok.mean())
 
 
+def _edges(img, sigma=2.0):
+    """Canny edges with hysteresis thresholds of 10 % and 20 % of the frame's strongest
+    gradients (99.9th percentile of the smoothed Sobel magnitude), so a faint, blurred drum
+    edge counts as an edge in a low-contrast frame as in a sharp one."""
+    sm = filters.gaussian(img, sigma)
+    g = np.hypot(ndi.sobel(sm, axis=0), ndi.sobel(sm, axis=1))
+    top = float(np.percentile(g, 99.9))
+    return feature.canny(img, sigma=sigma, low_threshold=0.1 * top, high_threshold=0.2 * top)
+
+
 def find_drum(gray):
     """(cx, cy, radius, reference) of the drum: its rim circle, else the image border."""
     h, w = gray.shape
@@ -148,11 +160,11 @@ def find_drum(gray):
     small = transform.rescale(gray, 1.0 / f, anti_aliasing=True) if f > 1 else gray
     m = min(small.shape)
     radii = np.arange(int(0.25 * m), int(0.62 * m) + 1)
-    hs = transform.hough_circle(feature.canny(small, sigma=2.0), radii)
+    hs = transform.hough_circle(_edges(small), radii)
     _, xs, ys, rs = transform.hough_circle_peaks(hs, radii, total_num_peaks=8, min_xdistance=3, min_ydistance=3)
-    edges = feature.canny(gray, sigma=2.0)
+    edges = _edges(gray)
     er, ec = np.nonzero(edges)
-    near_edges = morphology.dilation(edges, morphology.disk(2))
+    near_edges = morphology.dilation(edges, morphology.disk(1))
     found = []
     for x, y, r in zip(xs * f, ys * f, rs * f):
         near = np.abs(np.hypot(ec - x, er - y) - r) < 2.5 * f
@@ -194,6 +206,19 @@ def _tls_robust(u, v):
     if keep.sum() >= 10 and not keep.all():
         m, d, res = _tls(u[keep], v[keep])
     return m, d
+
+
+def _ols_robust(u, v):
+    """Least-squares line v = a + b u (the level frame's slope, as np.polyfit gives it); one
+    pass drops points beyond max(4 robust sigma, 1 px).  Returns (point, unit direction)."""
+    b, a = np.polyfit(u, v, 1)
+    res = v - (a + b * u)
+    s = 1.4826 * np.median(np.abs(res - np.median(res)))
+    keep = np.abs(res - np.median(res)) <= max(4.0 * s, 1.0)
+    if keep.sum() >= 10 and not keep.all():
+        b, a = np.polyfit(u[keep], v[keep], 1)
+    um = float(np.mean(u))
+    return np.array([um, a + b * um]), np.array([1.0, b]) / math.hypot(1.0, b)
 
 
 def _angle(d, sign=1.0):
@@ -283,24 +308,28 @@ def measure_drum_frame(path, threshold="otsu", keep_stages=False, options=None) 
     if cols.size < 30:
         raise InputError(path, "free surface", "a free surface across at least 30 pixel columns", int(cols.size))
     u, v = cols - cx, cy - rows  # drum centre at the origin, v up
+    pts = np.column_stack([u, v])
     m, d = _tls_robust(u, v)
     sign = 1.0 if d[1] >= 0 else -1.0
     fr = opts["chord_fraction"]
-    for _ in range(8):
-        n = np.array([-d[1], d[0]])
-        dist = float(-m @ n)  # signed distance of the drum centre from the line
-        foot = float(-m @ d)
-        half = math.sqrt(max(R ** 2 - dist ** 2, 0.0))
-        tt = (np.column_stack([u, v]) - m) @ d
-        sel = np.abs(tt - foot) <= fr * half
-        if sel.sum() < 20:
-            raise InputError(path, "free surface", f"at least 20 surface points in the central {fr:.0%} of the chord",
-                             int(sel.sum()))
-        m1, d1 = _tls_robust(u[sel], v[sel])
-        done = abs(_angle(d1) - _angle(d)) < 1e-5 and abs((m1 - m) @ n) < 1e-4
-        m, d = m1, d1
-        if done:
-            break
+    # the surface's chord joins its two wall contacts: each end (its last 10 % of the extent)
+    # is extended along its own tangent line across the masked rim to the drum circle
+    tt = (pts - m) @ d
+    t0, t1 = tt.min(), tt.max()
+    ends = []
+    for part, outward in ((tt <= t0 + 0.1 * (t1 - t0), -1.0), (tt >= t1 - 0.1 * (t1 - t0), 1.0)):
+        me, de = _tls(u[part], v[part])[:2]
+        de = de if de @ d * outward > 0 else -de
+        b = float(me @ de)  # |me + s de| = R, the root ahead of the end
+        ends.append(me + (-b + math.sqrt(max(b * b - float(me @ me) + R ** 2, 0.0))) * de)
+    dc = (ends[1] - ends[0]) / np.linalg.norm(ends[1] - ends[0])
+    foot = ends[0] - (ends[0] @ dc) * dc  # foot of the perpendicular from the drum centre
+    half = 0.5 * float(np.linalg.norm(ends[1] - ends[0]))
+    sel = np.abs(u - foot[0]) <= fr * half * abs(dc[0])  # the columns under the central chord
+    if sel.sum() < 20:
+        raise InputError(path, "free surface", f"at least 20 surface points in the central {fr:.0%} of the chord",
+                         int(sel.sum()))
+    m, d = _ols_robust(u[sel], v[sel])
     angle = abs(_angle(d))
     # S-shape: thirds of the measured surface along the line, one straight line through all of it
     tt = (np.column_stack([u, v]) - m) @ d
@@ -310,7 +339,7 @@ def measure_drum_frame(path, threshold="otsu", keep_stages=False, options=None) 
     for name, part in (("low_t", tt < t0 + third), ("high_t", tt > t1 - third)):
         ends[name] = float("nan")
         if part.sum() >= 10:
-            mk, dk = _tls_robust(u[part], v[part])
+            mk, dk = _ols_robust(u[part], v[part])
             ends[name] = sign * _angle(dk)
             end_lines.append((mk[0], mk[1], dk[0], dk[1], "upper third" if (name == "high_t") == (sign > 0)
                               else "lower third"))

@@ -300,37 +300,43 @@ def render_drum(seed, angle_deg, soil="xinjiang-vineyard", fill=0.25, hard=False
 
 def render_tester_frame(seed, angle_deg, fill=0.35, s_amp=0.0, size=(600, 640), window="crop", blur_px=2.0,
                         jitter_px=3.0, n_avg=16, powder_dark=True, noise=0.01, chord_fraction=0.6,
-                        offset_px=(0.0, 0.0), haze=0.0, specks=0, gradient=0.1):
+                        offset_px=(0.0, 0.0), haze=0.0, specks=0, gradient=0.1, surround=None):
     """A drum tester's exported frame: grey, time-averaged, no plate; ``(image in [0, 1], truth)``.
 
     Drum of radius R px centred in the frame (``window``: "crop" = cropped to the drum, the
     corners the dark drum body; "rim" = a thin dark rim circle on the white backlight, off
-    centre; "inside" = the frame lies inside a larger drum, no rim in view).  The free surface
+    centre; "plain" = the same drum without a rim ring, on a ``surround`` grey; "inside" = the frame lies inside a larger drum, no rim in view).  The free surface
     in the chord frame (u along the chord at ``angle_deg``, n normal, xi = u / L, L the half
     chord at fill ``fill``) is
 
         n(xi) = -d - s_amp L (xi^3 - k xi),   k = 3 w^2 / 5,  w = ``chord_fraction``,
 
     a cubic S (middle steeper than the ends for s_amp > 0) whose cubic part is orthogonal to a
-    line over the central chord |xi| <= w: the least-squares line over the central
-    ``chord_fraction`` of the chord is at exactly ``angle_deg``, the truth of the central slope.
+    line over |xi| <= w.  The truth ``angle_deg`` is the central slope as defined for drums: the
+    least-squares line z = a + b x through the exact curve sampled uniformly in x (one point
+    per image column, as a frame is read), over the columns under the central
+    ``chord_fraction`` of the surface's chord (the segment between the curve's two crossings
+    of the drum circle, centred on the foot of the perpendicular from the drum centre); equal to ``angle_deg`` for s_amp = 0 and
+    computed from the curve otherwise (``param_angle_deg`` keeps the parameter).
     Time averaging: ``n_avg`` frames with the surface shifted normal to itself by a symmetric
     set of offsets (std ``jitter_px``, median zero), then a Gaussian blur ``blur_px``; static
     powder texture, an illumination gradient ``gradient`` across the frame and sensor noise
     ``noise``.  ``offset_px`` moves the drum from the frame centre (a cropped drum then runs
     past the border); ``haze`` is the grey of particles flying above the surface (decaying
-    over 3 % of the radius), ``specks`` the number of dust specks on the window.
+    over 3 % of the radius), ``specks`` the number of dust specks on the window, ``surround``
+    the grey outside the drum (default: the dark drum body for "crop", the backlight for "rim",
+    mid grey for "plain").
     """
     rng = np.random.default_rng(seed)
     h, w = size
     if window == "crop":
         R, cx, cy = min(h, w) / 2.0 - 1.0, (w - 1) / 2.0, (h - 1) / 2.0
-    elif window == "rim":
+    elif window in ("rim", "plain"):
         R, cx, cy = 0.42 * min(h, w), (w - 1) / 2.0 + 17.0, (h - 1) / 2.0 - 9.0
     elif window == "inside":
         R, cx, cy = 0.75 * float(np.hypot(h, w)) / 2.0, (w - 1) / 2.0, (h - 1) / 2.0
     else:
-        raise ValueError(f"window must be 'crop', 'rim' or 'inside', got {window!r}")
+        raise ValueError(f"window must be 'crop', 'rim', 'plain' or 'inside', got {window!r}")
     cx, cy = cx + offset_px[0], cy + offset_px[1]
     rr, cc = np.mgrid[0:h, 0:w].astype(float)
     x, z = cc - cx, cy - rr
@@ -359,19 +365,46 @@ def render_tester_frame(seed, angle_deg, fill=0.35, s_amp=0.0, size=(600, 640), 
         img = img + (powder - air) * 0.6 * np.exp(-((rr - sr) ** 2 + (cc - sc) ** 2) / (2 * sz ** 2))
     disc = np.clip(0.5 + (R - np.hypot(x, z)), 0.0, 1.0)
     if window == "crop":
-        img = 0.06 + (img - 0.06) * disc
+        out = 0.06 if surround is None else surround
+        img = out + (img - out) * disc
     elif window == "rim":
+        out = air if surround is None else surround
         ring = np.clip(0.5 + (R + 4.0 - np.hypot(x, z)), 0.0, 1.0) - disc
         rim = 0.15 if powder_dark else 0.85  # a dark rim on the backlight, a bright one on a dark ground
-        img = img * disc + (1.0 - disc) * air + ring * (rim - air)
+        img = img * disc + (1.0 - disc) * out + ring * (rim - out)
+    elif window == "plain":
+        out = 0.5 if surround is None else surround
+        img = img * disc + (1.0 - disc) * out
     img = ndi.gaussian_filter(img, blur_px) if blur_px > 0 else img
     img = img * (1.0 + gradient * (cc / w - 0.5)) + noise * rng.standard_normal((h, w))
-    truth = {"kind": "drum-tester", "seed": int(seed), "angle_deg": float(angle_deg), "s_amp": float(s_amp),
+    truth = {"kind": "drum-tester", "seed": int(seed), "param_angle_deg": float(angle_deg),
+             "angle_deg": _central_slope(th, d, L, R, s_amp, k, chord_fraction), "s_amp": float(s_amp),
              "fill": float(fill), "window": window, "centre_px": [float(cx), float(cy)], "radius_px": float(R),
              "blur_px": float(blur_px), "jitter_px": float(jitter_px), "n_avg": int(n_avg),
              "chord_fraction": float(chord_fraction), "powder_dark": bool(powder_dark), "haze": float(haze),
-             "specks": int(specks), "noise": float(noise), "size": [int(h), int(w)]}
+             "specks": int(specks), "noise": float(noise), "size": [int(h), int(w)],
+             "surround": None if surround is None else float(surround)}
     return np.clip(img, 0.0, 1.0), truth
+
+
+def _central_slope(th, d, L, R, s_amp, k, fraction):
+    """Central-chord slope (deg, signed) of the curve n(u) = -d - s_amp L (xi^3 - k xi)."""
+    uu = np.linspace(-1.5 * R, 1.5 * R, 60001)
+    xi = uu / L
+    nn = -d - s_amp * L * (xi ** 3 - k * xi)
+    x = uu * np.cos(th) - nn * np.sin(th)
+    z = uu * np.sin(th) + nn * np.cos(th)
+    ins = np.flatnonzero(x ** 2 + z ** 2 <= R ** 2)
+    a = np.array([x[ins[0]], z[ins[0]]])
+    b = np.array([x[ins[-1]], z[ins[-1]]])
+    e = (b - a) / np.linalg.norm(b - a)
+    foot = a - (a @ e) * e
+    half = np.sqrt(R ** 2 - foot @ foot)
+    win = (np.abs(x - foot[0]) <= fraction * half * abs(e[0])) & (x ** 2 + z ** 2 <= R ** 2)
+    order = np.argsort(x[win])
+    xs = np.linspace(x[win].min(), x[win].max(), 4001)
+    zs = np.interp(xs, x[win][order], z[win][order])
+    return float(np.degrees(np.arctan(np.polyfit(xs, zs, 1)[0])))
 
 
 def save_frame(path, img, bits=8):
