@@ -105,7 +105,7 @@ def main(argv=None):
           "",
           "Each frame measured with default options (`soilcal.imaging.drum.measure_drum_frame`; the drum "
           "given for frames inside a larger drum); error = "
-          "measured minus the generator's central-chord slope.  Target (photo-robustness issue): within "
+          "measured minus the generator's central-chord slope.  Target: within "
           "0.5 deg on 95 % of stress frames.",
           "",
           *table,
