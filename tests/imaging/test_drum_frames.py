@@ -62,10 +62,12 @@ def test_rim_circle_found_where_it_is(tmp_path):
     assert truth["radius_px"] - 1.0 < r.drum_radius_px < truth["radius_px"] + 5.0
 
 
-def test_s_shape_measures_rise_with_the_s(tmp_path):
+@pytest.mark.parametrize("angle", [40.0, -40.0])
+def test_s_shape_measures_rise_with_the_s(tmp_path, angle):
+    # a cascading surface (middle steeper than the ends) rising to the right or to the left
     s_shape, rms = [], []
     for k, s_amp in enumerate((0.0, 0.04, 0.08, 0.12)):
-        p, _ = _frame(tmp_path, f"s{k}.png", angle_deg=40.0, s_amp=s_amp, window="crop")
+        p, _ = _frame(tmp_path, f"s{k}.png", angle_deg=angle, s_amp=s_amp, window="crop")
         r = drum.measure_drum_frame(p)
         s_shape.append(r.s_shape_deg)
         rms.append(r.line_rms_pct)

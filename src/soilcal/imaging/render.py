@@ -309,9 +309,9 @@ def render_tester_frame(seed, angle_deg, fill=0.35, s_amp=0.0, size=(600, 640), 
     in the chord frame (u along the chord at ``angle_deg``, n normal, xi = u / L, L the half
     chord at fill ``fill``) is
 
-        n(xi) = -d - s_amp L (xi^3 - k xi),   k = 3 w^2 / 5,  w = ``chord_fraction``,
+        n(xi) = -d - sgn(angle) s_amp L (xi^3 - k xi),   k = 3 w^2 / 5,  w = ``chord_fraction``,
 
-    a cubic S (middle steeper than the ends for s_amp > 0) whose cubic part is orthogonal to a
+    a cubic S (middle steeper than the ends for s_amp > 0, whichever way the surface rises) whose cubic part is orthogonal to a
     line over |xi| <= w.  The truth ``angle_deg`` is the central slope as defined for drums: the
     least-squares line z = a + b x through the exact curve sampled uniformly in x (one point
     per image column, as a frame is read), over the columns under the central
@@ -347,7 +347,8 @@ def render_tester_frame(seed, angle_deg, fill=0.35, s_amp=0.0, size=(600, 640), 
     L = np.sqrt(R ** 2 - d ** 2)
     xi = u / L
     k = 3.0 * chord_fraction ** 2 / 5.0
-    n_s = -d - s_amp * L * (xi ** 3 - k * xi)
+    s_signed = s_amp * (1.0 if angle_deg >= 0 else -1.0)  # cascading whichever way the surface rises
+    n_s = -d - s_signed * L * (xi ** 3 - k * xi)
     half = rng.normal(0.0, 1.0, n_avg // 2)
     offs = np.concatenate([half, -half]) * jitter_px
     cover = np.zeros((h, w))
@@ -378,7 +379,7 @@ def render_tester_frame(seed, angle_deg, fill=0.35, s_amp=0.0, size=(600, 640), 
     img = ndi.gaussian_filter(img, blur_px) if blur_px > 0 else img
     img = img * (1.0 + gradient * (cc / w - 0.5)) + noise * rng.standard_normal((h, w))
     truth = {"kind": "drum-tester", "seed": int(seed), "param_angle_deg": float(angle_deg),
-             "angle_deg": _central_slope(th, d, L, R, s_amp, k, chord_fraction), "s_amp": float(s_amp),
+             "angle_deg": _central_slope(th, d, L, R, s_signed, k, chord_fraction), "s_amp": float(s_amp),
              "fill": float(fill), "window": window, "centre_px": [float(cx), float(cy)], "radius_px": float(R),
              "blur_px": float(blur_px), "jitter_px": float(jitter_px), "n_avg": int(n_avg),
              "chord_fraction": float(chord_fraction), "powder_dark": bool(powder_dark), "haze": float(haze),
