@@ -63,3 +63,53 @@ def write_drum_frame(params, outdir, name):
         path = render.save_frame(outdir / f"{name}{suffix}", img, bits)
     truth = dict(truth, angle_deg=abs(truth["angle_deg"]))
     return path, truth
+
+
+def _hsv(rng, s_range, v_range):
+    from skimage.color import hsv2rgb
+
+    return hsv2rgb(np.array([[[rng.uniform(0, 1), rng.uniform(*s_range), rng.uniform(*v_range)]]]))[0, 0].tolist()
+
+
+SOIL_TONES = [(0.60, 0.45, 0.31), (0.25, 0.21, 0.18), (0.62, 0.55, 0.45), (0.55, 0.34, 0.24), (0.45, 0.36, 0.28),
+              (0.42, 0.40, 0.38), (0.70, 0.50, 0.35)]
+PLATE_TINTS = [(0.97, 0.99, 1.0), (1.0, 0.82, 0.6), (1.0, 1.0, 1.0), (0.9, 0.95, 1.0)]
+
+
+def pile_photo_params(n, seed=0):
+    """Parameter sets of ``n`` stress heap photos: flanks 20-50 deg (left and right up to 8 deg
+    apart), walls of any hue and brightness (plain or cluttered, gradients, texture), cast
+    shadows at any offset, blur and darkness, plates thin or thick, light or dark, with or
+    without a highlight, tables of any colour, camera roll up to 5 deg, heaps off centre,
+    under- and over-exposure, blur, noise, JPEG quality 60-95."""
+    rng = np.random.default_rng(seed)
+    out = []
+    for _ in range(n):
+        left = float(rng.uniform(20.0, 50.0))
+        right = float(np.clip(left + rng.uniform(-8.0, 8.0), 20.0, 50.0))
+        tone = np.array(SOIL_TONES[int(rng.integers(len(SOIL_TONES)))]) * rng.uniform(0.85, 1.15)
+        style = {"wall_rgb": _hsv(rng, (0.0, 0.6), (0.15, 0.95)), "clutter": bool(rng.random() < 0.5),
+                 "wall_gradient": rng.uniform(-0.4, 0.4, 2).tolist(),
+                 "wall_texture": float(rng.uniform(0.0, 0.15)) if rng.random() < 0.4 else 0.0,
+                 "soil_rgb": np.clip(tone, 0, 1).tolist(),
+                 "shadow": {"dx_mm": float(rng.uniform(-30, 30)), "dy_mm": float(rng.uniform(0, 15)),
+                            "blur_px": float(rng.uniform(1.0, 15.0)), "darkness": float(rng.uniform(0.0, 0.6))},
+                 "plate": {"thick_mm": float(rng.uniform(2.0, 12.0)), "grey": float(rng.uniform(0.2, 0.9)),
+                           "rgb": list(PLATE_TINTS[int(rng.integers(len(PLATE_TINTS)))]),
+                           "highlight": bool(rng.random() < 0.5)},
+                 "table_rgb": _hsv(rng, (0.0, 0.7), (0.1, 0.8)),
+                 "offset_frac": float(rng.uniform(-0.15, 0.15)), "scale_bar": bool(rng.random() < 0.7),
+                 "exposure": float(rng.uniform(0.6, 1.4)), "noise": float(rng.uniform(0.005, 0.03)),
+                 "blur_px": float(rng.uniform(0.5, 2.5))}
+        out.append({"seed": int(rng.integers(0, 2 ** 31 - 1)), "left_deg": left, "right_deg": right,
+                    "roll_deg": float(rng.uniform(-5.0, 5.0)), "quality": int(rng.integers(60, 96)), "style": style})
+    return out
+
+
+def write_pile_photo(params, outdir, name):
+    """Render one heap parameter set as a JPEG (with its truth sidecar); returns (path, truth)."""
+    img, truth = render.render_pile(params["seed"], params["left_deg"], params["right_deg"],
+                                    roll_deg=params["roll_deg"], style=params["style"])
+    truth = dict(truth, style=params["style"], quality=params["quality"])
+    path = render.save_photo(Path(outdir) / f"{name}.jpg", img, truth, quality=params["quality"])
+    return path, truth

@@ -61,6 +61,10 @@ class PileResult:
     right_deg: float
     spread_deg: float
     roll_deg: float
+    cue: str = "gray/dark"  # segmentation channel / heap darker or lighter than the wall
+    flank_points_used: float = 1.0  # smaller flank's share of band points on its fitted line
+    flank_rms_px: float = 0.0  # larger flank's RMS distance of those points from the line
+    confidence: str = "ok"  # "low": under 60 % of a flank used, RMS above 2.5 px or flanks > 12 deg apart
     stages: Stages | None = None
 
     def as_dict(self):
@@ -81,7 +85,39 @@ def _gray(rgb, channel="gray"):
         rgb = filters.gaussian(rgb, 1.5, channel_axis=-1)
         c = (rgb[..., 0] - rgb[..., 2]) / (rgb.sum(-1) + 0.05)
         return np.clip(0.5 - 2.0 * c, 0, 1)
+    if channel in ("lab_a", "lab_b"):
+        lab = color.rgb2lab(filters.gaussian(rgb, 1.2, channel_axis=-1))
+        return np.clip((lab[..., 1 if channel == "lab_a" else 2] + 100.0) / 200.0, 0, 1)
+    if channel == "saturation":
+        return filters.gaussian(color.rgb2hsv(rgb)[..., 1], 1.2)
     raise InputError(None, "channel", "'gray', 'chroma' or 'auto'", channel)
+
+
+CUES = ("gray", "chroma", "lab_a", "lab_b", "saturation")
+MIN_CUE_ETA = 0.75
+FLANK_RANGE = (10.0, 75.0)  # flank angles a heap of soil can stand at
+
+
+def _eta(values):
+    """Otsu's separability s_b^2 / s_T^2 of a sample split at its Otsu threshold."""
+    t = filters.threshold_otsu(values)
+    lo, hi = values[values < t], values[values >= t]
+    if not lo.size or not hi.size:
+        return 0.0
+    return float(lo.size * hi.size / values.size ** 2 * (hi.mean() - lo.mean()) ** 2 / (values.var() + 1e-12))
+
+
+def colour_edges(rgb, sigma=1.5):
+    """Canny edges of the L*, a* and b* channels, united: a plate edge that differs from the
+    wall in hue but not in brightness still shows."""
+    lab = color.rgb2lab(rgb)
+    out = np.zeros(rgb.shape[:2], bool)
+    for k in range(3):
+        ch = lab[..., k]
+        lo, hi = np.percentile(ch, [1, 99])
+        if hi - lo > 1e-6:
+            out |= feature.canny(np.clip((ch - lo) / (hi - lo), 0, 1), sigma=sigma)
+    return out
 
 
 def _binary(path, gray, method, classes=2):
@@ -224,38 +260,56 @@ def _components_on_plate(path, binary, slope, intercept, kind):
 def measure_pile(path, threshold="otsu", keep_stages=False, channel="auto") -> PileResult:
     """Left/right flank angles of one heap photo relative to the plate line.
 
-    The plate edge is found first (luminance); the threshold is Otsu's on the band of the
-    image just above the plate (where heap and background meet).  channel "auto" picks, of
-    luminance and chroma, the one that separates that band best (Otsu's eta) and falls back
-    to the other when no single heap is found (e.g. dark soil on a dark background).
+    Plate candidates: the long near-horizontal edges below the image middle, topmost first, of
+    the luminance and then of the united L*a*b* edges (a plate differing from the wall in hue
+    only), at most four; the first on which a heap is found is the plate.  The threshold is
+    Otsu's on the band of the image just above the plate (where heap and background meet).  channel "auto" tries cues in
+    turn until one gives a single heap standing on the plate inside the frame: luminance and
+    chroma with the heap darker than the wall (the better separating one first, Otsu's eta),
+    then every cue of :data:`CUES` that splits the band into two clear classes (eta at least
+    :data:`MIN_CUE_ETA`) with either polarity (a heap lighter than a dark wall, a heap
+    differing in hue only) by decreasing eta; a result must look like a heap (flanks within
+    :data:`FLANK_RANGE`, at least 3 % of the image high).  The cue used is reported, with a
+    confidence ("low" when a flank's points stray from its line, e.g. a cast shadow joined to
+    a flank: read such a photo before using its number).
     """
     rgb = read_photo(path)
     lum = _gray(rgb)
-    # plate edge from the luminance; soil/background threshold from the band above it
-    slope, intercept = plate_line_any(path, lum)
     h, w = lum.shape
+    lines = plate_lines(lum)
+    for ln in plate_lines(lum, edges=colour_edges(rgb)):
+        if all(abs((ln[0] - o[0]) * w / 2 + ln[1] - o[1]) > 3 for o in lines):
+            lines.append(ln)
+    if not lines:
+        raise InputError(path, "image", "a straight base plate edge", "none found")
+    grays = {ch: _gray(rgb, ch) for ch in CUES} if channel == "auto" else {channel: _gray(rgb, channel)}
     rr, cc = np.mgrid[0:h, 0:w]
-    prow = slope * cc + intercept
-    band = (rr < prow - 3) & (rr > prow - 0.35 * h)  # where heap and wall meet
-    if channel == "auto":
-        # the channel separating the band into two classes best (Otsu's eta = s_b^2 / s_T^2)
-        etas = {}
-        for ch in ("gray", "chroma"):
-            g = _gray(rgb, ch)[band]
-            t = filters.threshold_otsu(g)
-            lo, hi = g[g < t], g[g >= t]
-            etas[ch] = lo.size * hi.size / g.size ** 2 * (hi.mean() - lo.mean()) ** 2 / (g.var() + 1e-12)
-        order = sorted(etas, key=lambda k: -etas[k])
-        try:
-            return measure_pile(path, threshold, keep_stages, order[0])
-        except InputError as first:
-            if first.field != "image":
-                raise
+    err = None
+    for slope, intercept in lines[:4]:  # the plate top first; a faint one may hide behind a lower edge
+        prow = slope * cc + intercept
+        band = (rr < prow - 3) & (rr > prow - 0.35 * h)  # where heap and wall meet
+        if channel != "auto":
+            order = [(channel, "dark")]
+        else:
+            etas = {ch: _eta(g[band]) for ch, g in grays.items()}
+            order = [(ch, "dark") for ch in sorted(("gray", "chroma"), key=lambda k: -etas[k])]
+            # further cues only where they split the band into two clear classes (a unimodal
+            # band gives eta = 2/pi = 0.64 at best: noise, not a heap)
+            order += sorted([(ch, pol) for ch in CUES for pol in ("dark", "light")
+                             if (ch, pol) not in order and etas[ch] >= MIN_CUE_ETA], key=lambda t: -etas[t[0]])
+        for ch, pol in order:
+            g = grays[ch] if pol == "dark" else 1.0 - grays[ch]
             try:
-                return measure_pile(path, threshold, keep_stages, order[1])
-            except InputError:
-                raise first from None
-    gray = lum if channel == "gray" else _gray(rgb, channel)
+                return _pile_with(path, rgb, g, ch, pol, band, slope, intercept, threshold, keep_stages)
+            except InputError as e:
+                if e.field not in ("image", "left flank", "right flank"):
+                    raise
+                err = err or e  # the refusal reported is the first cue's on the topmost line
+    raise err
+
+
+def _pile_with(path, rgb, gray, cue, polarity, band, slope, intercept, threshold, keep_stages):
+    """Measure with one cue: the heap is the class below Otsu's threshold of ``gray``."""
     if threshold == "otsu":
         t = filters.threshold_otsu(gray[band])
         binary = ndi.binary_fill_holes(morphology.opening(gray < t, morphology.disk(2)))
@@ -270,14 +324,29 @@ def measure_pile(path, threshold="otsu", keep_stages=False, channel="auto") -> P
     hmax = np.percentile(v, 99.5)
     apex = np.median(cu[v > 0.97 * hmax])
     band = (v > BAND[0] * hmax) & (v < BAND[1] * hmax)
-    left, lline, lp = _fit(path, cu[band & (cu < apex)], v[band & (cu < apex)], "left flank")
-    right, rline, rp = _fit(path, cu[band & (cu > apex)], v[band & (cu > apex)], "right flank")
+    lsel, rsel = band & (cu < apex), band & (cu > apex)
+    left, lline, lp = _fit(path, cu[lsel], v[lsel], "left flank")
+    right, rline, rp = _fit(path, cu[rsel], v[rsel], "right flank")
     ang = np.array([left, right])
+    if not (FLANK_RANGE[0] <= ang.min() and ang.max() <= FLANK_RANGE[1]) or hmax < 0.03 * lev.shape[0]:
+        raise InputError(path, "image", f"a heap with flanks between {FLANK_RANGE[0]:.0f} and {FLANK_RANGE[1]:.0f} "
+                         f"deg and at least 3 % of the image high",
+                         f"flanks {left:.1f} and {right:.1f} deg, {hmax:.0f} px high ({cue}/{polarity})")
+    # confidence: share of each flank's points on its line, their scatter about it
+    used = min(len(lp) / max(lsel.sum(), 1), len(rp) / max(rsel.sum(), 1))
+    rms = max(_line_rms(lp, lline), _line_rms(rp, rline))
+    low = used < 0.6 or rms > 2.5 or abs(left - right) > 12.0
     st = None
     if keep_stages:
         st = Stages(rgb, gray, binary, lev, [lline + ("left",), rline + ("right",)], [lp, rp])
         st.plate_row = prow
-    return PileResult(str(path), float(ang.mean()), left, right, float(ang.std(ddof=1)), float(roll), st)
+    return PileResult(str(path), float(ang.mean()), left, right, float(ang.std(ddof=1)), float(roll),
+                      f"{cue}/{polarity}", float(used), float(rms), "low" if low else "ok", st)
+
+
+def _line_rms(pts, line):
+    u0, v0, du, dv = line
+    return float(np.sqrt(np.mean(((pts[:, 0] - u0) * dv - (pts[:, 1] - v0) * du) ** 2)))
 
 
 def measure_piles(paths, threshold="otsu", keep_stages=False, channel="auto"):
@@ -297,37 +366,46 @@ def measure_piles(paths, threshold="otsu", keep_stages=False, channel="auto"):
     return summary, res
 
 
-def plate_line_any(path, gray, below=None, required=True):
-    """Strongest long near-horizontal edge below a point: the base plate (or table edge).
+def plate_lines(gray, below=None, edges=None):
+    """Long near-horizontal edges below a point, topmost first, each refined by a RANSAC line
+    fit: [(slope, intercept), ...] with row = slope * col + intercept.
 
     ``below`` = (col, row): only lines passing below that point count (default: the image
-    middle at column 0).  The topmost such line is taken (the plate face and table edges lie
-    below the plate top).  Returns (slope, intercept), row = slope * col + intercept; with
-    ``required=False`` None when there is no such line.
+    middle at column 0).  ``edges``: an edge map to use instead of the luminance's Canny edges.
     """
-    edges = feature.canny(gray, sigma=1.5)
+    edges = feature.canny(gray, sigma=1.5) if edges is None else edges
     h, w = gray.shape
     col0, row0 = below if below is not None else (0.0, 0.5 * h)
     thetas = np.radians(np.linspace(84, 96, 241))
     hs, ang, dist = transform.hough_line(edges, theta=thetas)
     _, angs, dists = transform.hough_line_peaks(hs, ang, dist, num_peaks=8, min_distance=4,
                                                 threshold=0.25 * w)
-    at = [(a, d, (d - col0 * np.cos(a)) / np.sin(a)) for a, d in zip(angs, dists)]
-    cand = [t for t in at if t[2] > row0]
-    if not cand:
+    at = sorted(((a, d, (d - col0 * np.cos(a)) / np.sin(a)) for a, d in zip(angs, dists)), key=lambda t: t[2])
+    cols = np.arange(w)
+    er, ec = np.nonzero(edges)
+    out = []
+    for a, d, row in at:
+        if row <= row0:
+            continue
+        rows = (d - cols * np.cos(a)) / np.sin(a)
+        near = np.abs(er - rows[ec]) < 3
+        pts = np.column_stack([ec[near], er[near]]).astype(float)
+        model, _ = measure.ransac(pts, measure.LineModelND, min_samples=2, residual_threshold=1.0,
+                                  max_trials=200, rng=0)
+        (c0, r0), (dc, dr) = model.origin, model.direction
+        out.append((dr / dc, r0 - dr / dc * c0))
+    return out
+
+
+def plate_line_any(path, gray, below=None, required=True, edges=None):
+    """The topmost of :func:`plate_lines` (the plate top: the plate face and table edges lie
+    below it); with ``required=False`` None when there is none."""
+    lines = plate_lines(gray, below, edges)
+    if not lines:
         if not required:
             return None
         raise InputError(path, "image", "a straight base plate edge", "none found")
-    a, d, _ = min(cand, key=lambda t: t[2])
-    cols = np.arange(w)
-    rows = (d - cols * np.cos(a)) / np.sin(a)
-    er, ec = np.nonzero(edges)
-    near = np.abs(er - rows[ec]) < 3
-    pts = np.column_stack([ec[near], er[near]]).astype(float)
-    model, _ = measure.ransac(pts, measure.LineModelND, min_samples=2, residual_threshold=1.0,
-                              max_trials=200, rng=0)
-    (c0, r0), (dc, dr) = model.origin, model.direction
-    return dr / dc, r0 - dr / dc * c0
+    return lines[0]
 
 
 @dataclass

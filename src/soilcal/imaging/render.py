@@ -55,15 +55,25 @@ def _texture(rng, shape):
     return 0.55 * _noise(rng, shape, 1.0) + 0.3 * _noise(rng, shape, 4.0) + 0.25 * _noise(rng, shape, 15.0)
 
 
-def _wall(rng, h, w, hard, avoid=None, floor_row=None):
+def _wall(rng, h, w, hard, avoid=None, floor_row=None, style=None):
     """Back wall with uneven light and clutter; ``avoid`` = (r0, r1, c0, c1) kept free and
-    clutter hangs on the wall (ends 20 px above ``floor_row``, the plate)."""
+    clutter hangs on the wall (ends 20 px above ``floor_row``, the plate).  ``style`` (stress
+    photos) may set ``wall_rgb``, ``wall_gradient`` (relative change across the wall, (x, y)),
+    ``wall_texture`` (amplitude of a mottled texture) and ``clutter`` (False: a plain wall)."""
+    style = style or {}
     base = np.array([0.20, 0.19, 0.18]) if hard else np.array([0.80, 0.78, 0.74])
+    if "wall_rgb" in style:
+        base = np.asarray(style["wall_rgb"], float)
     base = base * (1 + 0.02 * rng.standard_normal(3))
     img = np.ones((h, w, 3)) * base
     img *= (1 + 0.03 * _noise(rng, (h, w), 20.0))[..., None]
     rr, cc = np.mgrid[0:h, 0:w]
-    for _ in range(int(rng.integers(6, 12))):
+    if "wall_gradient" in style:
+        gx, gy = style["wall_gradient"]
+        img *= (1 + gx * (cc / w - 0.5) + gy * (rr / h - 0.5))[..., None]
+    if style.get("wall_texture"):
+        img *= (1 + style["wall_texture"] * _texture(rng, (h, w)))[..., None]
+    for _ in range(int(rng.integers(6, 12)) if style.get("clutter", True) else 0):
         hh, ww = rng.integers(40, 220, size=2)
         r0, c0 = int(rng.integers(0, h - hh)), int(rng.integers(0, w - ww))
         if floor_row is not None and r0 + hh > floor_row - 20:
@@ -88,14 +98,16 @@ def _light_field(rng, h, w, strength):
     return g * (1 - 0.35 * strength * r2)
 
 
-def _plate(img, rng, row, c0, c1, thick_px):
-    """Steel plate seen edge-on: top edge at ``row``, brushed front face."""
+def _plate(img, rng, row, c0, c1, thick_px, grey=0.68, rgb=(0.97, 0.99, 1.0), highlight=True):
+    """Plate seen edge-on: top edge at ``row``, brushed front face of mean ``grey`` tinted
+    ``rgb`` (steel by default), a bright chamfer along the top edge if ``highlight``."""
     h = img.shape[0]
     r1 = min(h, row + thick_px)
-    face = 0.68 + 0.08 * _noise(rng, (r1 - row, c1 - c0), 0.7)[:, :] * 0.3
+    face = grey + 0.08 * _noise(rng, (r1 - row, c1 - c0), 0.7)[:, :] * 0.3
     face += 0.10 * np.linspace(1, -1, r1 - row)[:, None]
-    img[row:r1, c0:c1] = np.clip(face, 0, 1)[..., None] * np.array([0.97, 0.99, 1.0])
-    img[row:row + 2, c0:c1] = 0.92  # bright chamfer highlight along the top edge
+    img[row:r1, c0:c1] = np.clip(face, 0, 1)[..., None] * np.asarray(rgb)
+    if highlight:
+        img[row:row + 2, c0:c1] = 0.92  # bright chamfer highlight along the top edge
 
 
 def _table(img, rng, row):
@@ -115,13 +127,16 @@ def _scale_bar(img, row, col, s, squares=10, size_mm=10.0):
     return squares * size_mm
 
 
-def _finish(rng, canvas, roll_deg, hard):
-    """Camera: roll about the image centre, crop, blur, vignetting, noise."""
+def _finish(rng, canvas, roll_deg, hard, style=None):
+    """Camera: roll about the image centre, crop, blur, vignetting, noise; ``style`` may set
+    ``blur_px``, ``exposure`` (a gain: under < 1 < over, clipped) and ``noise``."""
+    style = style or {}
     rolled = rotate(canvas, roll_deg, order=1, mode="edge")
     img = rolled[MARGIN:MARGIN + H, MARGIN:MARGIN + W]
-    img = ndi.gaussian_filter(img, (0.8, 0.8, 0))
-    img = img * _light_field(rng, H, W, 0.15)[..., None]
-    img = img + rng.normal(0, 0.012 if not hard else 0.02, img.shape)
+    b = style.get("blur_px", 0.8)
+    img = ndi.gaussian_filter(img, (b, b, 0))
+    img = img * _light_field(rng, H, W, 0.15)[..., None] * style.get("exposure", 1.0)
+    img = img + rng.normal(0, style.get("noise", 0.012 if not hard else 0.02), img.shape)
     return (np.clip(img, 0, 1) * 255 + 0.5).astype(np.uint8)
 
 
@@ -160,8 +175,16 @@ def heap_height(x, y, slopes, r0, rng=None, rough=0.15):
 
 
 def render_pile(seed, left_deg, right_deg, front_deg=None, back_deg=None, soil="cinnamon-soil",
-                hard=False, roll_deg=None, n_heaps=1, cut=False):
-    """Render one side-view photo of a heap; returns (uint8 RGB, truth dict)."""
+                hard=False, roll_deg=None, n_heaps=1, cut=False, style=None):
+    """Render one side-view photo of a heap; returns (uint8 RGB, truth dict).
+
+    ``style`` (stress photos, :mod:`soilcal.imaging.corpus`; None = the documented scene):
+    wall keys of :func:`_wall`; ``soil_rgb``; ``shadow`` = {"dx_mm", "dy_mm", "blur_px",
+    "darkness"}; ``plate`` = {"thick_mm", "grey", "rgb", "highlight"}; ``table_rgb``;
+    ``offset_frac`` (heap centre shift, fraction of the width); ``scale_bar`` (False: none);
+    camera keys of :func:`_finish`.
+    """
+    style = style or {}
     rng = np.random.default_rng(seed)
     front_deg = (left_deg + right_deg) / 2 if front_deg is None else front_deg
     back_deg = (left_deg + right_deg) / 2 if back_deg is None else back_deg
@@ -172,7 +195,7 @@ def render_pile(seed, left_deg, right_deg, front_deg=None, back_deg=None, soil="
     r0 = float(rng.uniform(85, 100))
     ch, cw = H + 2 * MARGIN, W + 2 * MARGIN
     row_p = int(MARGIN + rng.uniform(0.68, 0.76) * H)
-    centres = [cw / 2 + rng.uniform(-50, 50)]
+    centres = [cw / 2 + rng.uniform(-50, 50) + style.get("offset_frac", 0.0) * W]
     if n_heaps == 2:
         centres = [cw / 2 - 0.25 * W, cw / 2 + 0.25 * W]
     if cut:
@@ -184,12 +207,14 @@ def render_pile(seed, left_deg, right_deg, front_deg=None, back_deg=None, soil="
     reach = int(1.6 * r0 * s)
     avoid = (int(apex_row - 80), row_p, int(min(centres, default=cw / 2) - reach - 40),
              int(max(centres, default=cw / 2) + reach + 40))
-    canvas = _wall(rng, ch, cw, hard, avoid, row_p)
+    canvas = _wall(rng, ch, cw, hard, avoid, row_p, style)
     light = np.array([-0.55, -0.55, 0.63]) * np.array([rng.uniform(0.7, 1.3), 1, 1])
     light = light / np.linalg.norm(light)
     albedo = np.array(SOIL_COLOURS.get(soil, SOIL_COLOURS["cinnamon-soil"]))
     if hard:
         albedo = np.array(SOIL_COLOURS["black-soil"]) * 0.9
+    if "soil_rgb" in style:
+        albedo = np.asarray(style["soil_rgb"], float)
     sil_all = np.zeros((ch, cw), bool)
     layers = []
     for cx in centres:
@@ -221,9 +246,12 @@ def render_pile(seed, left_deg, right_deg, front_deg=None, back_deg=None, soil="
         sil_all |= lm
     # cast shadow on the wall, then heap(s)
     dx, dy = int(round(-light[0] / light[2] * 25 * s * 0.3)), int(round(8 * s * 0.3))
+    sh = style.get("shadow", {})
+    if sh:
+        dx, dy = int(round(sh["dx_mm"] * s)), int(round(sh["dy_mm"] * s))
     shadow = np.roll(np.roll(sil_all.astype(float), dx, axis=1), dy, axis=0)
-    shadow = ndi.gaussian_filter(shadow, 2.0 if hard else 7.0)
-    canvas *= (1 - (0.55 if hard else 0.25) * shadow)[..., None]
+    shadow = ndi.gaussian_filter(shadow, sh.get("blur_px", 2.0 if hard else 7.0))
+    canvas *= (1 - sh.get("darkness", 0.55 if hard else 0.25) * shadow)[..., None]
     for layer, lm in layers:
         canvas[lm] = layer[lm]
     # crumbs on the plate next to the toe
@@ -234,10 +262,16 @@ def render_pile(seed, left_deg, right_deg, front_deg=None, back_deg=None, soil="
         a, b = rng.uniform(1.0, 3.0) * s, rng.uniform(0.8, 2.0) * s
         m = (((cc - cx) / a) ** 2 + ((rr - row_p) / b) ** 2 <= 1) & (rr < row_p)
         canvas[m] = albedo * rng.uniform(0.6, 1.0)
-    _plate(canvas, rng, row_p, 0, cw, int(6 * s))
-    _table(canvas, rng, row_p + int(6 * s))
-    bar_len = _scale_bar(canvas, row_p + int(12 * s), int(MARGIN + rng.uniform(0.05, 0.6) * W), s)
-    img = _finish(rng, canvas, roll_deg, hard)
+    pl = style.get("plate", {})
+    thick = int(pl.get("thick_mm", 6) * s)
+    _plate(canvas, rng, row_p, 0, cw, thick, pl.get("grey", 0.68), pl.get("rgb", (0.97, 0.99, 1.0)),
+           pl.get("highlight", True))
+    _table(canvas, rng, row_p + thick)
+    if "table_rgb" in style:
+        canvas[row_p + thick:] *= (np.asarray(style["table_rgb"]) / np.array([0.45, 0.33, 0.22]))
+    bar_col = int(MARGIN + rng.uniform(0.05, 0.6) * W)
+    bar_len = _scale_bar(canvas, row_p + int((pl.get("thick_mm", 6) + 6) * s), bar_col, s) if style.get("scale_bar", True) else 0.0
+    img = _finish(rng, canvas, roll_deg, hard, style)
     truth = {
         "kind": "pile", "seed": int(seed), "left_deg": float(left_deg), "right_deg": float(right_deg),
         "front_deg": float(front_deg), "back_deg": float(back_deg),
