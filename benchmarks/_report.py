@@ -14,6 +14,17 @@ HERE = Path(__file__).resolve().parent
 NOTES = "<!-- notes: kept when the table is regenerated -->"
 
 
+def corpus_args(doc, n, argv):
+    """Arguments of a photo-corpus benchmark: --n photos, --seed of the corpus, --out folder."""
+    import argparse
+
+    ap = argparse.ArgumentParser(description=doc.splitlines()[0])
+    ap.add_argument("--n", type=int, default=n)
+    ap.add_argument("--seed", type=int, default=0)
+    ap.add_argument("--out", default=str(HERE / "results"))
+    return ap.parse_args(argv)
+
+
 def commit() -> str:
     """Short id of the checked-out commit, with ``+dirty`` when tracked files outside
     ``benchmarks/results`` differ from it ('' outside a git checkout)."""

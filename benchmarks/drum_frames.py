@@ -14,7 +14,6 @@ notes below its marker are kept).
 
 from __future__ import annotations
 
-import argparse
 import os
 import platform
 import sys
@@ -23,7 +22,7 @@ import time
 from pathlib import Path
 
 import numpy as np
-from _report import commit, write_page, write_rows
+from _report import commit, corpus_args, write_page, write_rows
 
 HERE = Path(__file__).resolve().parent
 FIELDS = ["frame", "kind", "window", "bits", "suffix", "truth_deg", "s_amp", "fill", "blur_px", "jitter_px",
@@ -42,11 +41,7 @@ def _summary(rows, label):
 
 
 def main(argv=None):
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--n", type=int, default=300)
-    ap.add_argument("--seed", type=int, default=0)
-    ap.add_argument("--out", default=str(HERE / "results"))
-    args = ap.parse_args(argv)
+    args = corpus_args(__doc__, 300, argv)
 
     from soilcal.errors import InputError
     from soilcal.imaging import corpus, drum

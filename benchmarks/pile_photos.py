@@ -14,7 +14,6 @@ marker are kept).
 
 from __future__ import annotations
 
-import argparse
 import os
 import platform
 import sys
@@ -24,7 +23,7 @@ from collections import Counter
 from pathlib import Path
 
 import numpy as np
-from _report import commit, write_page, write_rows
+from _report import commit, corpus_args, write_page, write_rows
 
 HERE = Path(__file__).resolve().parent
 FIELDS = ["photo", "truth_deg", "left_truth_deg", "right_truth_deg", "roll_deg", "measured_deg", "error_deg",
@@ -33,11 +32,7 @@ FIELDS = ["photo", "truth_deg", "left_truth_deg", "right_truth_deg", "roll_deg",
 
 
 def main(argv=None):
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--n", type=int, default=200)
-    ap.add_argument("--seed", type=int, default=0)
-    ap.add_argument("--out", default=str(HERE / "results"))
-    args = ap.parse_args(argv)
+    args = corpus_args(__doc__, 200, argv)
 
     from soilcal.errors import InputError
     from soilcal.imaging import corpus, measure
