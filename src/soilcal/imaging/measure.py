@@ -300,7 +300,8 @@ def measure_pile(path, threshold="otsu", keep_stages=False, channel="auto") -> P
         for ch, pol in order:
             g = grays[ch] if pol == "dark" else 1.0 - grays[ch]
             try:
-                return _pile_with(path, rgb, g, ch, pol, band, slope, intercept, threshold, keep_stages)
+                return _pile_with(path, rgb, g, ch, pol, band, slope, intercept, threshold, keep_stages,
+                                  search=channel == "auto")
             except InputError as e:
                 if e.field not in ("image", "left flank", "right flank"):
                     raise
@@ -308,8 +309,10 @@ def measure_pile(path, threshold="otsu", keep_stages=False, channel="auto") -> P
     raise err
 
 
-def _pile_with(path, rgb, gray, cue, polarity, band, slope, intercept, threshold, keep_stages):
-    """Measure with one cue: the heap is the class below Otsu's threshold of ``gray``."""
+def _pile_with(path, rgb, gray, cue, polarity, band, slope, intercept, threshold, keep_stages, search=True):
+    """Measure with one cue: the heap is the class below Otsu's threshold of ``gray``.  In a
+    cue search (``search``) the result must look like a heap; a channel chosen by the caller
+    (e.g. a DEM silhouette, whatever its flanks) is measured as it is."""
     if threshold == "otsu":
         t = filters.threshold_otsu(gray[band])
         binary = ndi.binary_fill_holes(morphology.opening(gray < t, morphology.disk(2)))
@@ -331,7 +334,7 @@ def _pile_with(path, rgb, gray, cue, polarity, band, slope, intercept, threshold
     # confidence: share of each flank's points on its line, their scatter about it
     used = min(len(lp) / max(lsel.sum(), 1), len(rp) / max(rsel.sum(), 1))
     rms = max(_line_rms(lp, lline), _line_rms(rp, rline))
-    if not (FLANK_RANGE[0] <= ang.min() and ang.max() <= FLANK_RANGE[1]) or hmax < 0.03 * lev.shape[0]:
+    if search and (not (FLANK_RANGE[0] <= ang.min() and ang.max() <= FLANK_RANGE[1]) or hmax < 0.03 * lev.shape[0]):
         raise InputError(path, "image", f"a heap: flanks between {FLANK_RANGE[0]:.0f} and "
                          f"{FLANK_RANGE[1]:.0f} deg, at least 3 % of the image high",
                          f"flanks {left:.1f} and {right:.1f} deg ({rms:.1f} px from their lines), {hmax:.0f} px "
