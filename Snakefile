@@ -12,6 +12,7 @@ include: "workflow/rules/sources.smk"
 include: "workflow/rules/rsm.smk"
 include: "workflow/rules/optimise.smk"
 include: "workflow/rules/verify.smk"
+include: "workflow/rules/loop.smk"
 include: "workflow/rules/plots.smk"
 include: "workflow/rules/errata.smk"
 

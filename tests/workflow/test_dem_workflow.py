@@ -9,6 +9,7 @@ seconds, and replays the yangtze soil's printed tables beside it.
 from __future__ import annotations
 
 import json
+import re
 from pathlib import Path
 
 import numpy as np
@@ -30,6 +31,8 @@ def _tiny(tmp: Path) -> None:
     d["simulation"]["verification"] = {"replicates": 2}
     for m in d.get("measurements", {}).values():
         m["replicates"] = 1
+    # the measured-data loop tries the adhesion effect whatever the diagnosis says, at three levels
+    d["loop"] = {"candidates": "all", "effects": ["tool_adhesion"], "design_points": 3}
     p.write_text(yaml.safe_dump(d, sort_keys=False))
     y = tmp / "config/soils/yangtze-clay-loam.yaml"
     y.write_text(y.read_text().replace("source: dem\n", "source: published\n"))
@@ -100,7 +103,11 @@ def test_the_path_follows_the_dem_screening_and_the_bbd_its_chosen_step(done):
     step = int(opt.loc[opt["chosen"].astype(bool), "step"].iloc[0])
     assert bbd["derivation"]["chosen_step"] == step
     for sym, f in bbd["factors"].items():
-        assert f["centre"] == pytest.approx(path["factors"][sym]["levels"][step - 1], abs=1e-12)
+        level = path["factors"][sym]["levels"][step - 1]
+        # a design that would leave the parameter's physical range is shifted inside it, and says so
+        shifted = re.search(r"shifted by ([-+][0-9.eE+-]+) to stay within bounds", bbd["derivation"]["levels"][sym])
+        shift = float(shifted.group(1)) if shifted else 0.0
+        assert f["centre"] == pytest.approx(level + shift, abs=1e-12 if not shifted else 5e-3 * max(abs(shift), 1e-9))
 
 
 def test_targets_come_from_the_photos(done):
@@ -166,6 +173,39 @@ def test_a_refined_case_plans_its_second_round(done):
     assert base + "verification.csv" in planned and base + "calibrated_vs_paper.csv" in planned
     assert not any("/runs/" in o or "/verify/" in o for o in planned), planned  # nothing upstream
     assert planned_jobs(done) == []
+
+
+def test_the_loop_compares_every_measured_plate_and_fits_the_adhesion_effect(done):
+    d = done / "results/cinnamon-soil"
+    tools = pd.read_csv(d / "dem/tool_verification.csv")
+    res = pd.read_csv(d / "loop/residuals.csv")
+    assert len(res) == len(tools) == 8
+    m = res.merge(tools, on=["measurement", "row", "measure"], suffixes=("", "_tool"))
+    assert np.allclose(m["simulated_mean"], m["simulated_mean_tool"])
+    assert np.allclose(m["residual"], m["measured"] - m["simulated_mean"])
+    assert np.allclose(m["relative_residual"], (m["measured"] - m["simulated_mean"]) / m["measured"].abs())
+    assert set(res["cov:directrix"]) == {"arc", "parabola", "bionic", "line"}
+    plan = json.loads((d / "loop/plan.json").read_text())
+    assert plan["candidates"] == ["tool_adhesion"]
+    assert [t["gamma_a"] for t in plan["design"]["tool_adhesion"]] == [0.0, 1.5, 3.0]
+    # one job per plate and switched-on design point; the switched-off point is the tool run itself
+    runs = sorted((d / "loop/runs").glob("*.csv"))
+    assert len(runs) == 8
+    base = pd.concat([pd.read_csv(p) for p in (d / "dem/tools").glob("*.csv")])
+    gamma0 = set(base["p:soil_steel_surface_energy"])
+    assert len(gamma0) == 1
+    got = pd.concat([pd.read_csv(p) for p in runs])
+    assert sorted(set(got["p:soil_steel_surface_energy"] - gamma0.pop())) == pytest.approx([1.5, 3.0])
+    assert set(got["seed"]) == set(base["seed"])
+    sel = pd.read_csv(d / "loop/selection.csv")
+    assert "tool_adhesion" in set(sel["effects"])
+    summary = pd.read_csv(d / "loop/loop_summary.csv")
+    assert len(summary) == 1 and summary["verdict"].iloc[0]
+    assert summary["rmse_before_percent"].iloc[0] == pytest.approx(
+        100 * np.sqrt(np.mean(res["relative_residual"] ** 2)))
+    assert (d / "loop/report.md").read_text().startswith("# Measured-data loop: cinnamon-soil")
+    assert list((d / "loop/figures/residuals").glob("*.png"))
+    assert (done / "logs/cinnamon-soil/loop/select.log").is_file()
 
 
 def test_a_second_run_has_nothing_to_do(done):

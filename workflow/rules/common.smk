@@ -95,6 +95,8 @@ def dem_soil_targets(soil):
            f"{d}/figures/verification"]
     if soil_cfg(soil).get("measurements"):
         out += [f"{d}/tool_verification.csv", f"{d}/figures/tools"]
+        loop = f"results/{soil}/loop"
+        out += [f"{loop}/loop_summary.csv", f"{loop}/report.md", f"{loop}/figures/residuals", f"{loop}/figures/after"]
     return out
 
 
@@ -370,3 +372,67 @@ def tool_runs(w):
 
 def tool_run_map(w):
     return {f"{m}/{r}": k for (m, r), k in tool_jobs(w.soil)[1].items()}
+
+
+def tool_file_map(w):
+    return {k: f"results/{w.soil}/dem/tools/{k}.csv" for k in dict.fromkeys(tool_jobs(w.soil)[1].values())}
+
+
+# ------------------------------------------------------------------ the measured-data loop
+
+
+def loop_plan_file(soil):
+    return checkpoints.loop_diagnose.get(soil=soil).output.plan
+
+
+_LOOP = {}
+
+
+def loop_jobs(soil):
+    """The loop's DEM jobs once the diagnosis has planned them: ({key: job}, {effect: {point:
+    {tool key: run file}}}).  A job is a tool job with the effect switched on, keyed by what it
+    simulates (verify.tool_key): the switched-off point, and a condition the effect does not
+    change, is the tool run itself."""
+    from soilcal.loop.files import loop_job
+
+    plan_path = loop_plan_file(soil)
+    jobs, keys = tool_jobs(soil)
+    stamp = (soil, plan_path, os.path.getmtime(plan_path), id(jobs))
+    if stamp not in _LOOP:
+        with open(plan_path) as fh:
+            plan = json.load(fh)
+        by_key = {}
+        for c in conditions(soil):
+            by_key.setdefault(keys[(c.measurement, c.row)], []).append(c)
+        out, files = {}, {}
+        for name in plan["candidates"]:
+            files[name] = {}
+            for j, theta in enumerate(plan["design"][name]):
+                files[name][j] = {}
+                for key, job in jobs.items():
+                    lj = loop_job(job, by_key.get(key, []), name, theta, plan["reference"])
+                    lk = verify.tool_key(lj)
+                    if lk == key:
+                        files[name][j][key] = f"results/{soil}/dem/tools/{key}.csv"
+                    else:
+                        out[lk] = lj
+                        files[name][j][key] = f"results/{soil}/loop/runs/{lk}.csv"
+        _LOOP[stamp] = (out, files)
+    return _LOOP[stamp]
+
+
+def loop_spec(w):
+    return loop_jobs(w.soil)[0][w.key]
+
+
+def loop_effect_files(w):
+    return loop_jobs(w.soil)[1]
+
+
+def loop_runs(w):
+    files = loop_jobs(w.soil)[1]
+    out = list(tool_file_map(w).values())
+    for per in files.values():
+        for keyed in per.values():
+            out += list(keyed.values())
+    return list(dict.fromkeys(out))

@@ -1,4 +1,4 @@
-"""Snakemake adapter: one measured tool/process condition at the calibrated set."""
+"""Snakemake adapter: one measured tool/process condition at the calibrated set (tool_point), or with an effect of the measured-data loop switched on (loop_point)."""
 
 import numba
 

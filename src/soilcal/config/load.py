@@ -231,6 +231,10 @@ def _semantic_checks(path: Path, d: dict, resources_root: Path) -> None:
         from soilcal.config.measurements import check_measurements
 
         check_measurements(path, d, resources_root)
+    if d.get("loop"):
+        from soilcal.loop.core import settings_from
+
+        settings_from(d, path)
 
 
 def _check_image_targets(path: Path, d: dict, resources_root: Path) -> None:

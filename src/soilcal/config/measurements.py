@@ -32,6 +32,14 @@ Covariate forms (exactly one per column):
 * ``{case: {value: case-id}}``: the row uses the optimum of that case of the calibrated stage;
 * ``{ignore: true}``: an id or label column that does not change the simulation.
 
+Any covariate may also say which physical quantity its column holds (``quantity``, one of
+:data:`QUANTITIES`, with ``unit`` for a numeric one: ``rotor_speed_rpm: {setup: {...},
+quantity: rotor_speed, unit: r/min}``).  The measured-data loop (:mod:`soilcal.loop`) tests the
+residual against every covariate column, and its model extensions act through these
+quantities (a rate effect through ``tool_speed`` or ``rotor_speed``, moisture-dependent
+cohesion through ``moisture_content``), converted to the SI unit of :data:`QUANTITIES`.
+A cell of a numeric quantity must be a number.
+
 Response columns: ``value`` (the measured value; ``null`` when the paper does not print it,
 then a ``note`` is required and the row is simulated and reported without a measured value),
 ``sd``, ``n``, ``paper_simulated`` (the paper's own simulation), ``paper_difference`` (the
@@ -79,6 +87,21 @@ UNIT_SUFFIXES = (
 DIMENSIONLESS = "-"
 
 _FORMS = ("setup", "set", "param", "case", "ignore")
+
+#: quantity -> (SI unit, {accepted unit: factor to SI}); ``None`` for a label quantity
+#: (a tool id, a test day, a group) whose cells are names, not numbers
+QUANTITIES = {
+    "tool_speed": ("m/s", {"m/s": 1.0, "km/h": 1 / 3.6, "mm/s": 1e-3, "cm/s": 1e-2}),
+    "working_depth": ("m", {"m": 1.0, "cm": 1e-2, "mm": 1e-3}),
+    "rotor_speed": ("r/min", {"r/min": 1.0, "rpm": 1.0, "rad/s": 60 / (2 * math.pi)}),
+    "moisture_content": ("%", {"%": 1.0}),
+    "layer_depth": ("m", {"m": 1.0, "cm": 1e-2, "mm": 1e-3}),
+    "bulk_density": ("kg/m^3", {"kg/m^3": 1.0, "g/cm^3": 1e3, "t/m^3": 1e3}),
+    "position": ("m", {"m": 1.0, "cm": 1e-2, "mm": 1e-3}),
+    "tool": None,
+    "day": None,
+    "group": None,
+}
 _RESPONSE_COLUMNS = ("value", "sd", "n", "paper_simulated", "paper_difference")
 
 
@@ -99,6 +122,12 @@ class Condition:
     preset: str
     replicates: int
     responses: tuple
+    #: every covariate column of the row (ignored ones too) -> its cell (numbers as float)
+    covariates: dict = None
+    #: declared quantity -> the row's value in the quantity's SI unit (a label for a tool/day/group)
+    quantities: dict = None
+    #: covariate column -> its declared quantity
+    quantity_columns: dict = None
 
 
 def unit_of(measure: str) -> str:
@@ -245,6 +274,17 @@ def _entry(soil_path, data: dict, mid: str, entry: dict, tpath: Path):
         form = forms[0]
         if form == "ignore" and cv["ignore"] is not True:
             raise InputError(soil_path, f"{cw}.ignore", "true", cv["ignore"])
+        if "quantity" in cv:
+            q = cv["quantity"]
+            if q not in QUANTITIES:
+                raise InputError(soil_path, f"{cw}.quantity", "one of " + ", ".join(QUANTITIES), q)
+            if QUANTITIES[q] is None and "unit" in cv:
+                raise InputError(soil_path, f"{cw}.unit", f"no unit: {q} is a label", cv["unit"])
+            if QUANTITIES[q] is not None and cv.get("unit") not in QUANTITIES[q][1]:
+                raise InputError(soil_path, f"{cw}.unit", f"a unit of {q} ({', '.join(QUANTITIES[q][1])})",
+                                 cv.get("unit"))
+        elif "unit" in cv:
+            raise InputError(soil_path, f"{cw}.quantity", "the quantity the unit belongs to", None)
         if "scale" in cv and form not in ("set", "param"):
             raise InputError(soil_path, f"{cw}.scale", "no scale except with set or param", cv["scale"])
         if form == "setup":
@@ -273,6 +313,11 @@ def _entry(soil_path, data: dict, mid: str, entry: dict, tpath: Path):
                     raise InputError(soil_path, f"{cw}.case.{k}",
                                      f"a case id of stage {stage['id']!r} (" + ", ".join(case_ids) + ")", c)
             case_cols.append(col)
+    quantity_cols = {c: cv["quantity"] for c, cv in covs.items() if "quantity" in cv}
+    twice = [q for q in set(quantity_cols.values()) if list(quantity_cols.values()).count(q) > 1]
+    if twice:
+        raise InputError(soil_path, f"{where}.covariates",
+                         f"each quantity declared by one column ({twice[0]} is declared twice)", sorted(quantity_cols))
     if len(setup_cols) > 1:
         raise InputError(soil_path, f"{where}.covariates", "at most one column that chooses the setup", setup_cols)
     if len(case_cols) > 1:
@@ -433,12 +478,26 @@ def _entry(soil_path, data: dict, mid: str, entry: dict, tpath: Path):
                                   measured_sd=vals["sd"], n=None if n is None else int(round(n)),
                                   paper_simulated=vals["paper_simulated"],
                                   paper_difference=vals["paper_difference"], note=r.get("note", "")))
+        quantities = {}
+        for col, q in quantity_cols.items():
+            cell = rec[col]
+            if _missing(cell):
+                raise InputError(tpath, at(col), f"a value of the covariate {col} ({q})", "empty")
+            if QUANTITIES[q] is None:
+                quantities[q] = _text(cell)
+                continue
+            x = _number(cell)
+            if x is None:
+                raise InputError(tpath, at(col), f"a number ({q} in {covs[col]['unit']})", _plain(cell))
+            quantities[q] = x * QUANTITIES[q][1][covs[col]["unit"]]
         label_parts = [f"{c}={_text(rec[c])}" for c in active]
         conds.append(Condition(
             measurement=mid, row=row, label=", ".join(label_parts) if label_parts else f"row {row}",
             covariate=active[0] if active else "", covariate_value=_text(rec[active[0]]) if active else "",
             scenario=name, setup=setup, params=params, stage=stage["id"], case=case, preset=preset,
-            replicates=replicates, responses=tuple(responses)))
+            replicates=replicates, responses=tuple(responses),
+            covariates={c: (None if _missing(rec[c]) else _plain(rec[c])) for c in covs},
+            quantities=quantities, quantity_columns=dict(quantity_cols)))
     return df, conds
 
 

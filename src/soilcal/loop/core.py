@@ -1,0 +1,397 @@
+"""The measured-data loop of one soil: residual -> diagnosis -> candidate effects -> refit -> verdict.
+
+The steps, each a function of plain tables so that the workflow (one DEM job per condition
+and design point, ``workflow/rules/loop.smk``) and an in-process run (:func:`run_inprocess`,
+for tests, the benchmark and ``soilcal loop synthesize``) share them:
+
+1. :func:`soilcal.loop.residuals.residual_frame`: measured beside simulated at the calibrated
+   parameters;
+2. :func:`soilcal.loop.diagnose.diagnose`: structure in the residual;
+3. :func:`candidates`: the effects whose signature shares a quantity (or ``bias``) with a
+   significant test, and that act on at least one measured condition (``loop.candidates:
+   all`` tries every effect that acts);
+4. :func:`plan`: each candidate's design of parameters (:func:`soilcal.loop.select.theta_design`),
+   every condition simulated at every design point with the seeds of the calibrated runs;
+5. :func:`analyse`: surrogates, forward selection, the verdict and the report tables.
+
+Settings (the soil's optional ``loop`` block, every value written into the outputs)::
+
+    loop:
+      alpha: 0.05            # significance of the diagnosis (Holm) and of the paired test
+      effects: [...]         # library effects considered (default: all)
+      candidates: matched    # or all
+      bounds: {rate_friction: {beta: [-0.3, 0.6]}}   # parameter bounds (default: the library's)
+      reference: {tool_speed: 1.0}   # where the calibrated parameters hold (default: the
+                                     # mean of the measured conditions)
+      design_points: 5       # levels per effect parameter (plus the switched-off value)
+      fold_by: null          # covariate column grouping the held-out folds (default: condition)
+      max_effects: 2
+"""
+
+from __future__ import annotations
+
+import json
+import math
+from dataclasses import asdict, dataclass, field
+
+import numpy as np
+import pandas as pd
+
+from soilcal.errors import InputError
+from soilcal.loop import diagnose as dg
+from soilcal.loop import residuals as rs
+from soilcal.loop import select as sl
+from soilcal.loop.effects import EFFECTS, get
+
+
+@dataclass
+class Settings:
+    alpha: float = 0.05
+    effects: list = field(default_factory=lambda: list(EFFECTS))
+    candidates: str = "matched"
+    bounds: dict = field(default_factory=dict)
+    reference: dict = field(default_factory=dict)
+    design_points: int = 5
+    fold_by: str | None = None
+    max_effects: int = 2
+
+    def effect_bounds(self, name: str) -> dict:
+        return get(name).bounds(self.bounds.get(name))
+
+
+def settings_from(soil_data: dict, source="<soil>") -> Settings:
+    """Settings of a soil's ``loop`` block, checked by field."""
+    block = dict(soil_data.get("loop") or {})
+    s = Settings()
+    known = {f for f in asdict(s)}
+    for k in block:
+        if k not in known:
+            raise InputError(source, f"loop.{k}", "one of " + ", ".join(sorted(known)), k)
+    if "alpha" in block:
+        a = block["alpha"]
+        if not isinstance(a, (int, float)) or not 0 < a < 1:
+            raise InputError(source, "loop.alpha", "a number in (0, 1)", a)
+        s.alpha = float(a)
+    if "effects" in block:
+        for j, name in enumerate(block["effects"] or []):
+            if name not in EFFECTS:
+                raise InputError(source, f"loop.effects[{j}]", "one of " + ", ".join(EFFECTS), name)
+        s.effects = list(block["effects"] or [])
+    if "candidates" in block:
+        if block["candidates"] not in ("matched", "all"):
+            raise InputError(source, "loop.candidates", "matched or all", block["candidates"])
+        s.candidates = block["candidates"]
+    for name, b in (block.get("bounds") or {}).items():
+        eff = EFFECTS.get(name)
+        if eff is None:
+            raise InputError(source, f"loop.bounds.{name}", "an effect of the library (" + ", ".join(EFFECTS) + ")", name)
+        for k, v in (b or {}).items():
+            if k not in eff.params:
+                raise InputError(source, f"loop.bounds.{name}.{k}", "a parameter of the effect ("
+                                 + ", ".join(eff.params) + ")", k)
+            if not (isinstance(v, (list, tuple)) and len(v) == 2 and all(isinstance(x, (int, float)) for x in v)
+                    and v[0] < v[1]):
+                raise InputError(source, f"loop.bounds.{name}.{k}", "[low, high] with low < high", v)
+        s.bounds[name] = {k: [float(v[0]), float(v[1])] for k, v in (b or {}).items()}
+    from soilcal.config.measurements import QUANTITIES
+
+    for q, v in (block.get("reference") or {}).items():
+        if q not in QUANTITIES or QUANTITIES[q] is None:
+            raise InputError(source, f"loop.reference.{q}", "a numeric quantity ("
+                             + ", ".join(k for k, u in QUANTITIES.items() if u) + ")", q)
+        if not isinstance(v, (int, float)) or not math.isfinite(v):
+            raise InputError(source, f"loop.reference.{q}", f"a number in {QUANTITIES[q][0]}", v)
+        s.reference[q] = float(v)
+    if "design_points" in block:
+        v = block["design_points"]
+        if not isinstance(v, int) or v < 3:
+            raise InputError(source, "loop.design_points", "an integer >= 3", v)
+        s.design_points = v
+    if "fold_by" in block:
+        s.fold_by = block["fold_by"]
+    if "max_effects" in block:
+        v = block["max_effects"]
+        if not isinstance(v, int) or v < 1:
+            raise InputError(source, "loop.max_effects", "an integer >= 1", v)
+        s.max_effects = v
+    return s
+
+
+def reference_values(res: pd.DataFrame, settings: Settings) -> dict:
+    """Quantity -> the value at which the calibrated parameters hold: declared, else the
+    mean over the usable rows (recorded in the outputs)."""
+    from soilcal.config.measurements import QUANTITIES
+
+    out = {}
+    u = rs.usable(res)
+    for c in res.columns:
+        if not c.startswith("q:") or QUANTITIES.get(c[2:]) is None:  # a label (tool, day) has no reference
+            continue
+        q = c[2:]
+        if q in settings.reference:
+            out[q] = settings.reference[q]
+            continue
+        x = pd.to_numeric(u[c] if len(u) else res[c], errors="coerce")
+        if x.notna().all() and len(x):
+            out[q] = float(x.mean())
+    return out
+
+
+def quantity_of(conditions) -> dict:
+    out = {}
+    for c in conditions:
+        out.update(c.quantity_columns or {})
+    return out
+
+
+def candidates(diag: pd.DataFrame, conditions, settings: Settings) -> list[str]:
+    """Effects to fit (module docstring, step 3), in library order."""
+    matched = dg.matched_quantities(diag)
+    out = []
+    for name in settings.effects:
+        eff = EFFECTS[name]
+        if not any(eff.applies_to(c.quantities or {}) for c in conditions):
+            continue
+        if settings.candidates == "all" or matched & set(eff.signature):
+            out.append(name)
+    return out
+
+
+def plan(conditions, names, settings: Settings, reference: dict) -> list[dict]:
+    """One entry per candidate, design point and condition the effect changes: the effect,
+    the point's index and parameters, the condition (measurement, row)."""
+    out = []
+    for name in names:
+        eff = EFFECTS[name]
+        for j, theta in enumerate(sl.theta_design(eff, settings.effect_bounds(name), settings.design_points)):
+            for c in conditions:
+                out.append({"effect": name, "point": j, "theta": theta, "measurement": c.measurement, "row": c.row,
+                            "acts": eff.applies_to(c.quantities or {})})
+    return out
+
+
+def effect_params(effect_name: str, theta: dict, params: dict, quantities: dict, reference: dict) -> dict:
+    return EFFECTS[effect_name].apply(params, quantities, theta, reference)
+
+
+# --------------------------------------------------------------------------- analysis
+
+SELECTION_COLUMNS = ["step", "effects", "parameters", "ci95", "heldout_rmse_percent", "reference_heldout_rmse_percent",
+                     "heldout_max_percent", "aicc", "reference_aicc", "p_paired", "accepted", "reason"]
+SUMMARY_COLUMNS = ["soil", "rows", "usable_rows", "verdict", "effects", "parameters", "ci95", "follows",
+                   "rmse_before_percent", "rmse_after_percent", "max_before_percent", "max_after_percent",
+                   "error_reduction_percent", "alpha", "reference"]
+
+
+def _fmt(d: dict) -> str:
+    return json.dumps({k: (round(v, 6) if isinstance(v, float) else v) for k, v in d.items()}, sort_keys=True)
+
+
+def _fmt_ci(d: dict) -> str:
+    return json.dumps({k: [round(a, 6), round(b, 6)] for k, (a, b) in d.items()}, sort_keys=True)
+
+
+@dataclass
+class Outcome:
+    residuals: pd.DataFrame
+    diagnosis: pd.DataFrame
+    ranking: pd.DataFrame
+    candidates: list
+    selection: pd.DataFrame
+    summary: pd.DataFrame
+    predictions: pd.DataFrame
+    verdict: str
+    chosen: list
+    theta: dict
+    diagnosis_after: pd.DataFrame = None
+
+
+def _follows(rank: pd.DataFrame) -> str:
+    """The covariate (or the bias) that explains most of the residual, or the excess
+    scatter where that alone is significant."""
+    if len(rank) == 0:
+        return ""
+    cov = rank[rank["covariate"] != "scatter"]
+    scat = rank[rank["covariate"] == "scatter"]
+    if len(scat) and bool(scat["significant"].iloc[0]) and (len(cov) == 0 or not bool(cov["significant"].iloc[0])):
+        return ("no covariate: it scatters beyond the measured and seed uncertainty "
+                f"(chi-square, Holm p {scat['p_adjusted'].iloc[0]:.3g})")
+    if len(cov) == 0:
+        return ""
+    top = cov.iloc[0]
+    return f"{top['covariate']} (r2 {top['r2']:.2f}, Holm p {top['p_adjusted']:.3g})"
+
+
+def default_fold_by(settings: Settings, quantity_cols: dict) -> str | None:
+    """The held-out groups: ``loop.fold_by``, else the column holding the test ``day`` (or a
+    ``group``): rows measured on one day share its conditions and are not independent, so a
+    day is held out whole; else each measured condition."""
+    if settings.fold_by:
+        return settings.fold_by
+    for q in ("day", "group"):
+        for col, qq in (quantity_cols or {}).items():
+            if qq == q:
+                return col
+    return None
+
+
+def analyse(soil: str, res: pd.DataFrame, diag: pd.DataFrame, cands: list, effect_runs: dict,
+            settings: Settings, reference: dict, quantity_cols: dict | None = None) -> Outcome:
+    """Steps 5 (module docstring): ``effect_runs`` maps each candidate to its runs
+    (measurement, row, measure, value, ``t:<name>``), the switched-off point included."""
+    u = rs.usable(res)
+    rank = dg.ranking(diag)
+    follows = _follows(rank)
+    sel_rows, chosen, theta, ci = [], [], {}, {}
+    pred = u[["measurement", "row", "measure", "measured", "simulated_mean"]].copy()
+    before = u["relative_residual"].to_numpy(float)
+    after_cv = before.copy()
+    n = len(u)
+    structure = bool(diag["significant"].any()) if len(diag) else False
+    verdict = ""
+    provisional = []
+    sel = None
+    data = {}
+    fold_by = default_fold_by(settings, quantity_cols)
+    if n >= 3 and cands:
+        data = {nm: sl.build_effect_data(u, effect_runs[nm], EFFECTS[nm], settings.effect_bounds(nm)) for nm in cands}
+        if fold_by and f"cov:{fold_by}" not in u.columns:
+            raise InputError("<soil>", "loop.fold_by", "a covariate column of the measured tables", fold_by)
+        sel = sl.forward(u, u["simulated_mean"].to_numpy(float), data, fold_by, settings.alpha, settings.max_effects)
+        for step, names, s in sel.steps:
+            sel_rows.append({"step": step, "effects": "+".join(names), "parameters": _fmt(s.theta), "ci95": _fmt_ci(s.ci),
+                             "heldout_rmse_percent": 100 * s.rmse(), "reference_heldout_rmse_percent": 100 * s.rmse(True),
+                             "heldout_max_percent": 100 * s.max_error(), "aicc": s.aicc, "reference_aicc": s.ref_aicc,
+                             "p_paired": s.p, "accepted": s.accepted, "reason": s.reason})
+        provisional = list(sel.forward_chosen)
+    left = ""
+    if sel is not None and sel.chosen:
+        m = sl.Model([data[c] for c in sel.chosen], u["simulated_mean"].to_numpy(float), u["measured"].to_numpy(float))
+        x, _ = m.fit()
+        rest = dg.ranking(dg.diagnose(residual_after(res, m.predict(x)), quantity_cols, settings.alpha))
+        rest = rest[rest["significant"].astype(bool) & (rest["covariate"] != "scatter")]
+        if len(rest):
+            left = _follows(rest)
+    if n == 0:
+        verdict = "no measured value to compare with (nothing to diagnose)"
+    elif n < 3:
+        verdict = f"unexplained: too few measured values to decide ({n})"
+    elif sel is not None and sel.chosen and left:
+        verdict = (f"unexplained: the residual follows {follows}; " + " + ".join(sel.chosen)
+                   + f" lowered the held-out error, but the residual with it still follows {left} (selection.csv)")
+    elif sel is not None and sel.chosen:
+        chosen = sel.chosen
+        s = sel.final
+        theta, ci = s.theta, s.ci
+        m = sl.Model([data[c] for c in chosen], u["simulated_mean"].to_numpy(float), u["measured"].to_numpy(float))
+        x = np.array([theta[k] for k in s.names])
+        pred["with_effects"] = m.predict(x)
+        _, held = sl.cross_validate(m, sl._folds(u, fold_by))
+        meas = u["measured"].to_numpy(float)
+        pred["heldout_prediction"] = meas - held * np.abs(meas)
+        after_cv = held
+        verdict = "explained by " + " + ".join(chosen)
+    elif not structure:
+        rms = float(np.sqrt(np.mean(before ** 2))) * 100
+        judged = len(diag) and (diag["test"] == "scatter").any()
+        if judged:
+            verdict = ("consistent: no significant structure, and the residual lies within the measured and seed "
+                       f"uncertainty (RMS error {rms:.1f} %)")
+        else:
+            verdict = (f"unexplained: RMS error {rms:.1f} % with no significant structure over {n} rows, and no "
+                       "measured uncertainty to judge the scatter against (too few data to decide"
+                       + (f"; largest: {follows})" if follows else ")"))
+        if sel_rows:
+            verdict += "; no candidate effect lowered the held-out error significantly (selection.csv)"
+    elif not cands:
+        verdict = f"unexplained: the residual follows {follows}; no effect of the library acts through it"
+    else:
+        rejected = "; ".join(f"{r['effects']}: {r['reason']}" for r in sel_rows if r["reason"])
+        verdict = f"unexplained: the residual follows {follows}; candidates rejected ({rejected})"
+    ok = np.isfinite(after_cv) & np.isfinite(before)
+    rb = float(np.sqrt(np.mean(before[ok] ** 2))) * 100 if ok.any() else math.nan
+    ra = float(np.sqrt(np.mean(after_cv[ok] ** 2))) * 100 if ok.any() else math.nan
+    mb = float(np.max(np.abs(before[ok]))) * 100 if ok.any() else math.nan
+    ma = float(np.max(np.abs(after_cv[ok]))) * 100 if ok.any() else math.nan
+    summary = pd.DataFrame([{
+        "soil": soil, "rows": len(res), "usable_rows": n, "verdict": verdict, "effects": "+".join(chosen),
+        "parameters": _fmt(theta), "ci95": _fmt_ci(ci), "follows": follows, "rmse_before_percent": rb,
+        "rmse_after_percent": ra, "max_before_percent": mb, "max_after_percent": ma,
+        "error_reduction_percent": (1 - ra / rb) * 100 if rb and np.isfinite(rb) and rb > 0 else math.nan,
+        "alpha": settings.alpha, "reference": _fmt(reference)}], columns=SUMMARY_COLUMNS)
+    after = None
+    if chosen:
+        after = dg.diagnose(residual_after(res, pred["with_effects"].to_numpy(float)), quantity_cols, settings.alpha)
+    elif provisional:  # the forward step's model, before the gate: what it leaves may name a masked effect
+        m = sl.Model([data[c] for c in provisional], u["simulated_mean"].to_numpy(float), u["measured"].to_numpy(float))
+        x, _ = m.fit()
+        after = dg.diagnose(residual_after(res, m.predict(x)), quantity_cols, settings.alpha)
+    return Outcome(res, diag, rank, cands, pd.DataFrame(sel_rows, columns=SELECTION_COLUMNS), summary, pred,
+                   verdict, chosen, theta, after)
+
+
+# --------------------------------------------------------------------------- in process
+
+
+def run_inprocess(soil: str, conditions, base_params, simulate, settings: Settings | None = None,
+                  seeds=(0, 1, 2)) -> Outcome:
+    """The whole loop in one process: ``base_params(cond)`` gives a condition's calibrated
+    DEM parameters (name -> SI value), ``simulate(cond, params, seed)`` one run's measured
+    quantities (measure -> value).  The calibrated runs and every design point use the same
+    ``seeds``."""
+    settings = settings or Settings()
+
+    def runs_at(effect, theta, reference):
+        rows = []
+        for c in conditions:
+            p = base_params(c)
+            if effect:
+                p = effect_params(effect, theta, p, c.quantities or {}, reference)
+            for seed in seeds:
+                vals = simulate(c, p, seed)
+                for r in c.responses:
+                    v = vals.get(r["measure"], math.nan)
+                    rows.append({"measurement": c.measurement, "row": c.row, "measure": r["measure"], "seed": seed,
+                                 "value": v, "status": "ok" if np.isfinite(v) else "failed",
+                                 **{sl.T_PREFIX + k: float(x) for k, x in (theta or {}).items()}})
+        return pd.DataFrame(rows)
+
+    obs = rs.observations(conditions)
+    base = runs_at(None, None, {})
+    res = rs.residual_frame(obs, base)
+    qcols = quantity_of(conditions)
+    diag = dg.diagnose(res, qcols, settings.alpha)
+    reference = reference_values(res, settings)
+    cands = candidates(diag, conditions, settings)
+    effect_runs = {}
+    while True:
+        for name in cands:
+            if name in effect_runs:
+                continue
+            eff = EFFECTS[name]
+            frames = []
+            for th in sl.theta_design(eff, settings.effect_bounds(name), settings.design_points):
+                if all(float(th[k]) == float(eff.null[k]) for k in th):  # switched off: the calibrated runs
+                    frames.append(base.assign(**{sl.T_PREFIX + k: float(v) for k, v in th.items()}))
+                else:
+                    frames.append(runs_at(name, th, reference))
+            effect_runs[name] = pd.concat(frames, ignore_index=True)
+        out = analyse(soil, res, diag, cands, effect_runs, settings, reference, qcols)
+        if out.diagnosis_after is None or len(out.chosen) >= settings.max_effects:
+            return out
+        more = [c for c in candidates(out.diagnosis_after, conditions, settings) if c not in cands]
+        if not more:
+            return out
+        cands = cands + more  # a second effect the first one masked in the first diagnosis
+
+
+def residual_after(res: pd.DataFrame, predicted: np.ndarray) -> pd.DataFrame:
+    """The usable rows' residual table with the simulated means replaced by ``predicted``
+    (the model with its effects), the seed SDs kept."""
+    u = rs.usable(res).copy()
+    m = u["measured"].to_numpy(float)
+    u["simulated_mean"] = predicted
+    u["residual"] = m - predicted
+    u["relative_residual"] = (m - predicted) / np.abs(m)
+    u["standardised_residual"] = u["residual"] / u["residual_se"]
+    return u

@@ -1,0 +1,148 @@
+"""Structure in the residual: which covariate the misfit follows, with p-values.
+
+Tests on the relative residual ``r`` (:mod:`soilcal.loop.residuals`) of the usable rows,
+each an ordinary least-squares fit (statsmodels) against a null of no structure:
+
+* ``bias``: the mean of ``r`` is zero (one-sample t-test); share explained: mean^2 / mean(r^2);
+* ``scatter``: the standardised residuals (residual over the combined measured and seed
+  standard error) are unit normal, so their sum of squares is chi-square on n degrees of
+  freedom (upper tail), over the rows whose uncertainty is known: scatter beyond what the
+  measurement and the seeds explain (a stone, a disturbance the covariates do not carry);
+* ``trend`` of a numeric covariate with at least three distinct values: ``r ~ x``, the
+  slope's t-test;
+* ``curvature`` with at least four distinct values: ``r ~ x + x^2``, the t-test of the
+  square term;
+* ``group`` of a label covariate (a tool, a test day, any column declared as one of
+  :data:`LABEL_QUANTITIES`) or of a numeric one with two levels, and of the measured
+  quantity where a table holds several: one-way ANOVA ``r ~ C(g)``, F-test, where some group
+  has two rows.  A column that groups the rows exactly as an earlier one does is tested once.
+
+The p-values of all tests of a table are corrected together (Holm, statsmodels
+``multipletests``); a test is significant when its corrected p is below ``alpha``.  Each
+test's ``r2`` is the share of the residual variance about its mean that the fit explains
+(for ``bias``, of the sum of squares about zero).  :func:`ranking` orders the covariates by
+the largest share any of their tests explains.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pandas as pd
+
+#: declared quantities whose cells are labels even where they are numbers (a plate number)
+LABEL_QUANTITIES = ("tool", "day", "group")
+
+DIAGNOSIS_COLUMNS = ["test", "covariate", "quantity", "n", "levels", "estimate", "statistic", "p", "p_adjusted",
+                     "r2", "significant"]
+
+
+def _is_numeric(s: pd.Series) -> bool:
+    return bool(len(s)) and pd.to_numeric(s, errors="coerce").notna().all()
+
+
+def _ols(y, X):
+    import statsmodels.api as sm
+
+    return sm.OLS(np.asarray(y, float), np.asarray(X, float)).fit()
+
+
+def _covariate_columns(res: pd.DataFrame) -> list[str]:
+    return [c for c in res.columns if c.startswith("cov:")]
+
+
+def diagnose(res: pd.DataFrame, quantity_of: dict | None = None, alpha: float = 0.05) -> pd.DataFrame:
+    """One row per test (module docstring) on the usable rows of a residual table;
+    ``quantity_of``: covariate column -> its declared quantity."""
+    from scipy import stats
+    from statsmodels.stats.multitest import multipletests
+
+    quantity_of = quantity_of or {}
+    r_all = res["relative_residual"].astype(float)
+    d = res[np.isfinite(r_all)].reset_index(drop=True)
+    r = d["relative_residual"].to_numpy(float)
+    rows = []
+    n = len(r)
+    if n >= 2:
+        t = stats.ttest_1samp(r, 0.0)
+        rows.append(dict(test="bias", covariate="", quantity="bias", n=n, levels=1, estimate=float(r.mean()),
+                         statistic=float(t.statistic), p=float(t.pvalue),
+                         r2=float(r.mean() ** 2 / np.mean(r ** 2)) if np.any(r) else 0.0))
+    z = d["standardised_residual"].astype(float).to_numpy() if "standardised_residual" in d else np.array([])
+    z = z[np.isfinite(z)]
+    if len(z) >= 3:
+        chi = float(np.sum(z ** 2))
+        rows.append(dict(test="scatter", covariate="", quantity="scatter", n=len(z), levels=1,
+                         estimate=float(np.sqrt(chi / len(z))), statistic=chi, p=float(stats.chi2.sf(chi, len(z))),
+                         r2=0.0))
+    groups = [(c[4:], d[c]) for c in _covariate_columns(d)]
+    if "measure" in d and d["measure"].nunique() > 1:
+        groups.append(("measure", d["measure"]))
+    sst = float(np.sum((r - r.mean()) ** 2)) if n else 0.0
+    seen = []
+    for name, col in groups:
+        q = quantity_of.get(name, "")
+        if col.isna().any():
+            continue
+        numeric = _is_numeric(col) and name != "measure" and q not in LABEL_QUANTITIES
+        x = pd.to_numeric(col, errors="coerce").to_numpy(float) if numeric else None
+        distinct = int(col.astype(str).nunique())
+        if distinct < 2:
+            continue
+        if not (numeric and distinct >= 3):
+            partition = tuple(pd.factorize(col.astype(str))[0])
+            if partition in seen:  # the same grouping as an earlier column (a plate number beside its name)
+                continue
+            seen.append(partition)
+        if numeric and distinct >= 3 and n >= 4:
+            xs = (x - x.mean()) / (x.std() or 1.0)
+            f1 = _ols(r, np.column_stack([np.ones(n), xs]))
+            rows.append(dict(test="trend", covariate=name, quantity=q, n=n, levels=distinct,
+                             estimate=float(f1.params[1] / (x.std() or 1.0)), statistic=float(f1.tvalues[1]),
+                             p=float(f1.pvalues[1]), r2=float(f1.rsquared) if sst > 0 else 0.0))
+            if distinct >= 4 and n >= 5:
+                f2 = _ols(r, np.column_stack([np.ones(n), xs, xs ** 2]))
+                rows.append(dict(test="curvature", covariate=name, quantity=q, n=n, levels=distinct,
+                                 estimate=float(f2.params[2] / (x.std() or 1.0) ** 2), statistic=float(f2.tvalues[2]),
+                                 p=float(f2.pvalues[2]), r2=float(f2.rsquared) if sst > 0 else 0.0))
+        elif n > distinct:  # a group with two rows at least: within-group variance exists
+            labels = col.astype(str).to_numpy()
+            levels = sorted(set(labels))
+            X = np.column_stack([np.ones(n)] + [(labels == lv).astype(float) for lv in levels[1:]])
+            f = _ols(r, X)
+            rows.append(dict(test="group", covariate=name, quantity=q or ("measure" if name == "measure" else ""),
+                             n=n, levels=distinct, estimate=float(np.sqrt(max(f.ess, 0.0) / n)),
+                             statistic=float(f.fvalue), p=float(f.f_pvalue), r2=float(f.rsquared) if sst > 0 else 0.0))
+    df = pd.DataFrame(rows, columns=[c for c in DIAGNOSIS_COLUMNS if c not in ("p_adjusted", "significant")])
+    if len(df):
+        p = df["p"].fillna(1.0).to_numpy(float)
+        df["p_adjusted"] = multipletests(p, alpha=alpha, method="holm")[1]
+        df["significant"] = df["p_adjusted"] < alpha
+    else:
+        df["p_adjusted"] = pd.Series(dtype=float)
+        df["significant"] = pd.Series(dtype=bool)
+    return df[DIAGNOSIS_COLUMNS]
+
+
+def ranking(diag: pd.DataFrame) -> pd.DataFrame:
+    """Covariates (and ``bias``) by the largest share of the residual any of their tests
+    explains, with their smallest corrected p and whether any test is significant."""
+    if len(diag) == 0:
+        return pd.DataFrame(columns=["covariate", "quantity", "r2", "p_adjusted", "significant", "tests"])
+    d = diag.assign(covariate=diag["covariate"].where(~diag["test"].isin(["bias", "scatter"]), diag["test"]))
+    out = d.groupby("covariate", sort=False).agg(quantity=("quantity", "first"), r2=("r2", "max"),
+                                                 p_adjusted=("p_adjusted", "min"), significant=("significant", "any"),
+                                                 tests=("test", lambda s: " ".join(s)))
+    return out.sort_values(["significant", "r2"], ascending=[False, False]).reset_index()
+
+
+def matched_quantities(diag: pd.DataFrame) -> set[str]:
+    """The quantities (and ``bias``) whose structure is significant: what an effect's
+    signature must share to become a candidate."""
+    sig = diag[diag["significant"].astype(bool)]
+    out = set()
+    for r in sig.itertuples():
+        if r.test == "bias":
+            out.add("bias")
+        elif r.quantity:
+            out.add(str(r.quantity))
+    return out

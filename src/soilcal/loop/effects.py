@@ -1,0 +1,207 @@
+"""The effect library: physical mechanisms a calibrated soil model lacks, as switchable extensions.
+
+A DEM calibrated on one or two bench tests (a heap, a drum) holds its contact parameters
+constant; field and soil-bin measurements vary tool speed, working depth, moisture and tool,
+and a mechanism the bench test did not exercise shows up as a residual that follows one of
+them.  Each :class:`Effect` here is one such mechanism with one or two parameters
+(``theta``), a formula that maps the calibrated DEM parameters of a measured condition onto
+the parameters the mechanism implies at that condition's covariates, a *signature* (the
+quantities of :data:`soilcal.config.measurements.QUANTITIES` through which it acts, plus
+``bias`` for one that moves every row the same way), the value of ``theta`` at which it is
+switched off (``null``), and a source.
+
+Every effect acts on the :class:`~soilcal.dem.scenarios.base.DemParams` of a run, so that a
+switched-on effect is a DEM run like any other (same scenario, setup and seeds).  A
+covariate an effect needs is taken relative to a *reference*: the value at which the
+calibrated parameters hold (the soil's ``loop.reference`` entry, else the mean of the
+measured conditions, recorded in the loop's outputs).
+
+The formulas (``x`` the condition's value, ``x0`` the reference; clamped to each
+parameter's physical range, :data:`soilcal.dem.scenarios.base._RANGES`):
+
+``moisture_cohesion`` (theta: ``c_w`` in J/m^2 per percentage point)
+    gamma_ss(w) = gamma_ss,cal + c_w (w - w0), at least 0.
+    Capillary liquid bridges hold wet grains together; for a pendular bridge between two
+    equal spheres at contact the force is 2 pi R gamma_lv cos(theta) (Willett, Adams, Johnson
+    & Seville, Langmuir 16 (2000) 9396, Eq. 5 at zero separation) and the share of contacts
+    that carry a bridge grows with the water content.  EDEM soil models carry this as a JKR
+    surface energy re-calibrated per moisture (the Guangxi cohesive soil study calibrates
+    one at each of five moisture contents); the first-order term of that dependence around
+    the calibrated moisture is the effect.  Signature: ``moisture_content``.
+
+``rate_friction`` (theta: ``beta``, per e-fold of speed)
+    mu(v) = mu_cal (1 + beta ln(v / v0)), at least 0, for the soil-soil and the soil-steel
+    sliding friction.  The logarithmic rate term of rate-and-state friction (Dieterich,
+    J. Geophys. Res. 84 (1979) 2161; Ruina, J. Geophys. Res. 88 (1983) 10359), the form in which
+    soils' shear strength rises with the shearing rate (about 10 % per log10 cycle in clays:
+    Graham, Crooks & Bell, Geotechnique 33 (1983) 327).  The field evidence is the speed term
+    of tillage draft (ASABE D497: draft = F_i (A + B S + C S^2) W T).  ``v`` is the tool
+    speed, or the rotor speed of a rotary tool (its blade-tip speed is proportional to it).
+    Signature: ``tool_speed``, ``rotor_speed``.
+
+``depth_compaction`` (theta: ``g``, relative density change per relative depth change)
+    f = 1 + g (d / d0 - 1), at least 0.1; rho(d) = f rho_cal, G(d) = f^2 G_cal.
+    Soil beds are denser at depth (self-weight and traffic compaction); the worked layer's
+    mean bulk density is carried by the particle density (the packing is kept) and the
+    stiffness rises with the square of the density, the exponent of small-strain soil
+    stiffness in the void ratio function of Hardin & Black (J. Soil Mech. Found. Div. 94 (1968)
+    353) over the range of agricultural soils.  ``d`` is the working depth or the layer depth.
+    Signature: ``working_depth``, ``layer_depth``.
+
+``tool_adhesion`` (theta: ``gamma_a`` in J/m^2)
+    gamma_st = gamma_st,cal + gamma_a: JKR adhesion on the soil-steel contact (Johnson,
+    Kendall & Roberts, Proc. R. Soc. A 324 (1971) 301; pull-off 1.5 pi gamma R*), the soil
+    sticking to the tool that a heap on a plate does not exercise.  It moves the tool forces
+    of every condition, more where the contact area is larger.  Signature: ``tool``,
+    ``bias``.
+
+:data:`EFFECTS` maps names to effects; :func:`get` refuses an unknown name with the list.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+from soilcal.errors import InputError
+
+#: DemParams range limits the effects respect (low, high) by parameter kind
+_LIMITS = {"surface_energy": (0.0, 1.0e3), "static_friction": (0.0, 5.0), "density": (1.0, 3.0e4),
+           "shear_modulus": (1.0, 1.0e13)}
+
+
+def _clamp(x: float, kind: str) -> float:
+    lo, hi = _LIMITS[kind]
+    return min(max(float(x), lo), hi)
+
+
+@dataclass(frozen=True)
+class Effect:
+    """One mechanism: its parameters (name -> (unit, default bounds)), null values, signature."""
+
+    name: str
+    title: str
+    params: dict          # theta name -> (unit, (low, high))
+    null: dict            # theta name -> value that switches the effect off
+    signature: tuple      # quantities (and "bias") through which it acts
+    needs: tuple          # quantities a condition must carry for the effect to act on it
+    formula: str
+    source: str
+    changes: tuple = field(default=())  # DemParams names it changes
+
+    def theta_names(self) -> tuple[str, ...]:
+        return tuple(self.params)
+
+    def bounds(self, overrides: dict | None = None) -> dict[str, tuple[float, float]]:
+        out = {k: tuple(map(float, v[1])) for k, v in self.params.items()}
+        for k, v in (overrides or {}).items():
+            out[k] = (float(v[0]), float(v[1]))
+        return out
+
+    def applies_to(self, quantities: dict) -> bool:
+        """Whether a condition carrying these quantities is changed by the effect at all."""
+        return not self.needs or any(q in quantities for q in self.needs)
+
+    def apply(self, params: dict, quantities: dict, theta: dict, reference: dict) -> dict:
+        """The DEM parameters (name -> SI value) of a condition with the effect switched on."""
+        fn = _APPLY[self.name]
+        return fn(dict(params), quantities, {k: float(theta.get(k, self.null[k])) for k in self.params}, reference)
+
+
+def _ref(quantities: dict, reference: dict, names) -> tuple[float, float] | None:
+    for q in names:
+        if q in quantities and q in reference:
+            return float(quantities[q]), float(reference[q])
+    return None
+
+
+def _moisture(params, quantities, theta, reference):
+    xr = _ref(quantities, reference, ("moisture_content",))
+    if xr is None:
+        return params
+    w, w0 = xr
+    params["soil_soil_surface_energy"] = _clamp(params["soil_soil_surface_energy"] + theta["c_w"] * (w - w0),
+                                                "surface_energy")
+    return params
+
+
+def _rate(params, quantities, theta, reference):
+    xr = _ref(quantities, reference, ("tool_speed", "rotor_speed"))
+    if xr is None:
+        return params
+    v, v0 = xr
+    if v <= 0 or v0 <= 0:
+        raise InputError("<loop>", "rate_friction", "a positive speed and reference speed", (v, v0))
+    f = 1.0 + theta["beta"] * math.log(v / v0)
+    for k in ("soil_soil_static_friction", "soil_steel_static_friction"):
+        params[k] = _clamp(params[k] * f, "static_friction")
+    return params
+
+
+def _depth(params, quantities, theta, reference):
+    xr = _ref(quantities, reference, ("working_depth", "layer_depth"))
+    if xr is None:
+        return params
+    d, d0 = xr
+    if d0 <= 0:
+        raise InputError("<loop>", "depth_compaction", "a positive reference depth", d0)
+    f = max(1.0 + theta["g"] * (d / d0 - 1.0), 0.1)
+    params["soil_density"] = _clamp(params["soil_density"] * f, "density")
+    params["soil_shear_modulus"] = _clamp(params["soil_shear_modulus"] * f * f, "shear_modulus")
+    return params
+
+
+def _adhesion(params, quantities, theta, reference):
+    params["soil_steel_surface_energy"] = _clamp(params["soil_steel_surface_energy"] + theta["gamma_a"],
+                                                 "surface_energy")
+    return params
+
+
+_APPLY = {"moisture_cohesion": _moisture, "rate_friction": _rate, "depth_compaction": _depth,
+          "tool_adhesion": _adhesion}
+
+EFFECTS: dict[str, Effect] = {
+    "moisture_cohesion": Effect(
+        name="moisture_cohesion", title="moisture-dependent cohesion (capillary bridges)",
+        params={"c_w": ("J/m^2 per %", (-0.1, 0.1))}, null={"c_w": 0.0},
+        signature=("moisture_content",), needs=("moisture_content",),
+        formula="gamma_ss(w) = gamma_ss,cal + c_w (w - w0)",
+        source="Willett et al., Langmuir 16 (2000) 9396, Eq. 5; surface energy per moisture as in the Guangxi cohesive soil study",
+        changes=("soil_soil_surface_energy",)),
+    "rate_friction": Effect(
+        name="rate_friction", title="rate dependence of soil resistance (log-rate friction)",
+        params={"beta": ("-", (-0.3, 0.6))}, null={"beta": 0.0},
+        signature=("tool_speed", "rotor_speed"), needs=("tool_speed", "rotor_speed"),
+        formula="mu(v) = mu_cal (1 + beta ln(v / v0)), soil-soil and soil-steel",
+        source="Dieterich, JGR 84 (1979) 2161; Ruina, JGR 88 (1983) 10359; Graham et al., Geotechnique 33 (1983) 327; ASABE D497",
+        changes=("soil_soil_static_friction", "soil_steel_static_friction")),
+    "depth_compaction": Effect(
+        name="depth_compaction", title="depth-dependent density and stiffness (compaction gradient)",
+        params={"g": ("-", (-0.5, 1.0))}, null={"g": 0.0},
+        signature=("working_depth", "layer_depth"), needs=("working_depth", "layer_depth"),
+        formula="f = 1 + g (d / d0 - 1); rho = f rho_cal; G = f^2 G_cal",
+        source="Hardin & Black, J. Soil Mech. Found. Div. 94 (1968) 353 (stiffness with density)",
+        changes=("soil_density", "soil_shear_modulus")),
+    "tool_adhesion": Effect(
+        name="tool_adhesion", title="soil-tool adhesion (JKR on the soil-steel contact)",
+        params={"gamma_a": ("J/m^2", (0.0, 3.0))}, null={"gamma_a": 0.0},
+        signature=("tool", "bias"), needs=(),
+        formula="gamma_st = gamma_st,cal + gamma_a",
+        source="Johnson, Kendall & Roberts, Proc. R. Soc. A 324 (1971) 301",
+        changes=("soil_steel_surface_energy",)),
+}
+
+
+def get(name: str, source="<loop>") -> Effect:
+    if name not in EFFECTS:
+        raise InputError(source, "loop.effects", "one of " + ", ".join(EFFECTS), name)
+    return EFFECTS[name]
+
+
+def apply_all(effects: dict, params: dict, quantities: dict, reference: dict) -> dict:
+    """Parameters with several effects on (``effects``: name -> theta), in library order."""
+    out = dict(params)
+    for name in EFFECTS:
+        if name in effects:
+            out = EFFECTS[name].apply(out, quantities, effects[name], reference)
+    return out

@@ -1,0 +1,104 @@
+"""Measured conditions beside the calibrated simulation: the residual table.
+
+One row per measured quantity of every condition of a soil's ``measurements`` block
+(:func:`soilcal.config.measurements.conditions`), with every covariate of the row
+(``cov:<column>``) and every declared quantity (``q:<quantity>``, in its SI unit), the
+measured value with its standard deviation and repeat count, and the simulated mean,
+standard deviation and seed count at the calibrated parameters.
+
+Conventions:
+
+* residual = measured - simulated (positive: the model under-predicts);
+* relative residual = residual / |measured|, the dimensionless residual the diagnosis and
+  the effect fits use, so that one table may hold forces and heights;
+* residual standard error = sqrt(sd_m^2 / n_m + sd_s^2 / n_s) with the measured standard
+  deviation over its repeats (``n_m`` 1 where the table gives no count: the SD is then the
+  value's own uncertainty) and the seed scatter of the simulated mean; the standardised
+  residual is the residual over it, empty (with a note) where neither uncertainty is known.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pandas as pd
+
+KEY = ["measurement", "row", "measure"]
+RESIDUAL_COLUMNS = ["measurement", "row", "measure", "unit", "label", "measured", "measured_sd", "measured_n",
+                    "simulated_mean", "simulated_sd", "simulated_n", "residual", "relative_residual",
+                    "residual_se", "standardised_residual", "note"]
+
+
+def observations(conditions) -> pd.DataFrame:
+    """The measured side: one row per condition and measured quantity with a measured value."""
+    rows = []
+    for c in conditions:
+        for r in c.responses:
+            row = {"measurement": c.measurement, "row": int(c.row), "measure": r["measure"], "unit": r["unit"],
+                   "label": c.label, "measured": np.nan if r["measured"] is None else float(r["measured"]),
+                   "measured_sd": np.nan if r.get("measured_sd") is None else float(r["measured_sd"]),
+                   "measured_n": np.nan if r.get("n") is None else float(r["n"])}
+            for col, v in (c.covariates or {}).items():
+                row[f"cov:{col}"] = v
+            for q, v in (c.quantities or {}).items():
+                row[f"q:{q}"] = v
+            rows.append(row)
+    df = pd.DataFrame(rows)
+    if len(df) == 0:
+        return pd.DataFrame(columns=KEY + ["unit", "label", "measured", "measured_sd", "measured_n"])
+    return df
+
+
+def simulated_stats(runs: pd.DataFrame) -> pd.DataFrame:
+    """Mean, SD (ddof 1) and count of the ``ok`` runs' values per measured quantity
+    (``runs``: measurement, row, measure, value[, status])."""
+    ok = runs
+    if "status" in runs.columns:
+        ok = runs[runs["status"].astype(str) == "ok"]
+    ok = ok[np.isfinite(pd.to_numeric(ok["value"], errors="coerce"))]
+    g = ok.groupby(KEY)["value"]
+    out = pd.DataFrame({"simulated_mean": g.mean(), "simulated_sd": g.std(ddof=1), "simulated_n": g.count()})
+    return out.reset_index()
+
+
+def residual_frame(obs: pd.DataFrame, runs: pd.DataFrame) -> pd.DataFrame:
+    """The residual table (module docstring) from :func:`observations` and the runs at the
+    calibrated parameters."""
+    if len(runs):
+        sim = simulated_stats(runs)
+    else:
+        sim = pd.DataFrame({"measurement": pd.Series(dtype=object), "row": pd.Series(dtype=int),
+                            "measure": pd.Series(dtype=object), "simulated_mean": pd.Series(dtype=float),
+                            "simulated_sd": pd.Series(dtype=float), "simulated_n": pd.Series(dtype=float)})
+    df = obs.merge(sim, on=KEY, how="left")
+    for c in ("simulated_mean", "simulated_sd"):
+        df[c] = df[c].astype(float)
+    df["simulated_n"] = df["simulated_n"].fillna(0).astype(int)
+    m, s = df["measured"].astype(float), df["simulated_mean"].astype(float)
+    df["residual"] = m - s
+    df["relative_residual"] = np.where(np.abs(m) > 0, (m - s) / np.abs(m), np.nan)
+    nm = df["measured_n"].fillna(1.0).clip(lower=1.0)
+    var_m = (df["measured_sd"] ** 2 / nm).fillna(0.0)
+    var_s = (df["simulated_sd"] ** 2 / df["simulated_n"].clip(lower=1)).fillna(0.0)
+    se = np.sqrt(var_m + var_s)
+    df["residual_se"] = np.where(se > 0, se, np.nan)
+    df["standardised_residual"] = df["residual"] / df["residual_se"]
+    notes = []
+    for r in df.itertuples():
+        n = []
+        if not np.isfinite(r.measured):
+            n.append("no measured value")
+        if r.simulated_n == 0:
+            n.append("no simulated value")
+        if not np.isfinite(r.residual_se):
+            n.append("no uncertainty known (no measured SD, one seed)")
+        elif not np.isfinite(r.measured_sd):
+            n.append("seed scatter only (no measured SD)")
+        notes.append("; ".join(n))
+    df["note"] = notes
+    extra = [c for c in df.columns if c.startswith(("cov:", "q:"))]
+    return df[RESIDUAL_COLUMNS[:5] + extra + RESIDUAL_COLUMNS[5:]]
+
+
+def usable(res: pd.DataFrame) -> pd.DataFrame:
+    """Rows with a measured and a simulated value (those the loop can learn from)."""
+    return res[np.isfinite(res["relative_residual"].astype(float))].reset_index(drop=True)

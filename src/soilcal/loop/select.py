@@ -1,0 +1,365 @@
+"""Fit, score and choose the effects that explain a residual.
+
+For each candidate effect the simulation has been run at a small design of its parameters
+(:func:`theta_design`, the switched-off value among them) at every measured condition, with
+the same seeds at every design point (common random numbers).  Per measured quantity ``i`` a
+surrogate ``s_i(theta)`` is fitted to the seed means over the design (:class:`Surrogate`).  The
+prediction of a model with several effects adds their changes to the calibrated mean ``y_i0``
+(first-order superposition: ``y_i0 + sum_E (s_i^E(theta_E) - y_i0)``); effects that change
+different DEM parameters act nearly independently over small changes.
+
+Scoring a model against a reference model (the calibrated one, or the model with the
+effects already chosen), on the relative errors ``e_i = (measured_i - prediction_i) / |measured_i|``:
+
+* **held-out error**: leave-one-group-out folds (a group is a measured condition, or the
+  value of the ``fold_by`` covariate); in each fold the parameters are fitted on the other
+  groups (bounded least squares, scipy ``least_squares``, started from the two design
+  points, or combinations of points for several effects, with the smallest error) and the
+  error of the fold's rows predicted;
+* **paired test** over the folds: one-sided paired t-test (scipy ``ttest_rel``) that the
+  reference's fold RMS error exceeds the model's;
+* **information criterion**: AICc = n ln(SSE/n) + 2k + 2k(k+1)/(n-k-1) of the fit to every
+  row, k the number of effect parameters;
+* **confidence intervals**: from the Jacobian of the full fit, cov = s^2 (J^T J)^-1,
+  s^2 = SSE/(n-k), two-sided 95 % with Student's t on n-k degrees of freedom.
+
+A model is accepted against its reference when the paired test's p is below ``alpha``, its
+pooled held-out RMS error is below the reference's and its AICc is lower; :func:`forward`
+chooses the effects.
+"""
+
+from __future__ import annotations
+
+import itertools
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+import pandas as pd
+
+from soilcal.loop.effects import EFFECTS
+
+T_PREFIX = "t:"
+
+
+def theta_design(effect, bounds: dict, points: int = 5) -> list[dict]:
+    """Design points of an effect's parameters: ``points`` levels evenly over each
+    parameter's bounds plus its switched-off value (a full grid in two parameters)."""
+    axes = []
+    for k in effect.theta_names():
+        lo, hi = bounds[k]
+        lv = set(np.round(np.linspace(lo, hi, int(points)), 12).tolist())
+        null = float(effect.null[k])
+        if lo <= null <= hi:
+            lv.add(null)
+        axes.append(sorted(lv))
+    return [dict(zip(effect.theta_names(), combo)) for combo in itertools.product(*axes)]
+
+
+class Surrogate:
+    """Per-row surrogate of one effect's parameters over its design (module docstring): a
+    monotone cubic through the design points in one parameter (scipy ``PchipInterpolator``,
+    no overshoot where an effect saturates, e.g. a surface energy clamped at zero), a least-
+    squares quadratic in two."""
+
+    def __init__(self, effect, bounds: dict, thetas: np.ndarray, means: np.ndarray):
+        from scipy.interpolate import PchipInterpolator
+
+        self.effect = effect
+        self.names = effect.theta_names()
+        self.lo = np.array([bounds[k][0] for k in self.names], float)
+        self.hi = np.array([bounds[k][1] for k in self.names], float)
+        self.k = len(self.names)
+        self.pchip = None
+        if self.k == 1 and len(thetas) >= 3:
+            order = np.argsort(np.asarray(thetas, float)[:, 0])
+            self.pchip = PchipInterpolator(np.asarray(thetas, float)[order, 0], np.asarray(means)[order], axis=0,
+                                           extrapolate=True)
+            return
+        U = self._u(thetas)
+        B = self._basis(U)
+        if B.shape[0] < B.shape[1]:
+            B = B[:, : 1 + self.k]  # too few points for the square terms: linear
+        self.nb = B.shape[1]
+        self.coef, *_ = np.linalg.lstsq(B, means, rcond=None)  # means: (design, rows) -> (basis, rows)
+
+    def _u(self, thetas):
+        return 2.0 * (np.atleast_2d(thetas) - self.lo) / (self.hi - self.lo) - 1.0
+
+    def _basis(self, U):
+        cols = [np.ones(len(U))] + [U[:, j] for j in range(self.k)]
+        cols += [U[:, j] ** 2 for j in range(self.k)]
+        cols += [U[:, a] * U[:, b] for a, b in itertools.combinations(range(self.k), 2)]
+        return np.column_stack(cols)
+
+    def __call__(self, theta) -> np.ndarray:
+        if self.pchip is not None:
+            return self.pchip(float(np.asarray(theta, float).ravel()[0]))
+        B = self._basis(self._u(np.asarray(theta, float)))[:, : self.nb]
+        return (B @ self.coef)[0]
+
+
+@dataclass
+class EffectData:
+    """One candidate's simulated design: the surrogate over all usable rows."""
+
+    effect: object
+    bounds: dict
+    surrogate: Surrogate
+    design: list = field(default_factory=list)
+
+
+def build_effect_data(obs: pd.DataFrame, runs: pd.DataFrame, effect, bounds: dict) -> EffectData:
+    """Surrogate of ``effect`` from its runs (measurement, row, measure, value, ``t:<name>``)
+    for the rows of ``obs``; a row without a value at some design point gets the calibrated
+    mean there (NaN rows are refused)."""
+    names = effect.theta_names()
+    tcols = [T_PREFIX + k for k in names]
+    r = runs[np.isfinite(pd.to_numeric(runs["value"], errors="coerce"))]
+    if "status" in r.columns:
+        r = r[r["status"].astype(str) == "ok"]
+    means = r.groupby(["measurement", "row", "measure"] + tcols)["value"].mean().reset_index()
+    design = sorted({tuple(float(x) for x in t) for t in means[tcols].itertuples(index=False)})
+    Y = np.full((len(design), len(obs)), np.nan)
+    index = {t: j for j, t in enumerate(design)}
+    keys = {(m, int(rw), ms): i for i, (m, rw, ms) in enumerate(zip(obs["measurement"], obs["row"], obs["measure"]))}
+    for rec in means.itertuples(index=False):
+        i = keys.get((rec[0], int(rec[1]), rec[2]))
+        if i is not None:
+            Y[index[tuple(float(x) for x in rec[3:3 + len(tcols)])], i] = rec[-1]
+    if np.isnan(Y).any():
+        j, i = np.argwhere(np.isnan(Y))[0]
+        raise ValueError(f"effect {effect.name}: no simulated value of {obs['measurement'][i]} row "
+                         f"{obs['row'][i]} {obs['measure'][i]} at {dict(zip(names, design[j]))}")
+    return EffectData(effect, bounds, Surrogate(effect, bounds, np.array(design), Y), [dict(zip(names, t)) for t in design])
+
+
+def _folds(obs: pd.DataFrame, fold_by: str | None) -> list[np.ndarray]:
+    """Index arrays of the held-out groups: the values of ``fold_by`` (a covariate column),
+    else the measured conditions."""
+    if fold_by:
+        col = obs[f"cov:{fold_by}"].astype(str)
+    else:
+        col = obs["measurement"].astype(str) + "/" + obs["row"].astype(str)
+    return [np.flatnonzero(col.to_numpy() == g) for g in dict.fromkeys(col)]
+
+
+@dataclass
+class Model:
+    """Effects with fitted parameters and the calibrated means they modify."""
+
+    effects: list            # EffectData
+    y0: np.ndarray           # calibrated simulated means of the rows
+    measured: np.ndarray
+
+    @property
+    def k(self) -> int:
+        return sum(e.surrogate.k for e in self.effects)
+
+    def predict(self, x: np.ndarray) -> np.ndarray:
+        out = self.y0.copy()
+        j = 0
+        for e in self.effects:
+            out = out + (e.surrogate(x[j:j + e.surrogate.k]) - self.y0)
+            j += e.surrogate.k
+        return out
+
+    def errors(self, x, idx=None) -> np.ndarray:
+        idx = np.arange(len(self.y0)) if idx is None else idx
+        return (self.measured[idx] - self.predict(x)[idx]) / np.abs(self.measured[idx])
+
+    def bounds(self):
+        lo = np.concatenate([e.surrogate.lo for e in self.effects]) if self.effects else np.zeros(0)
+        hi = np.concatenate([e.surrogate.hi for e in self.effects]) if self.effects else np.zeros(0)
+        return lo, hi
+
+    def starts(self) -> list[np.ndarray]:
+        per = [[np.array([d[k] for k in e.effect.theta_names()], float) for d in e.design] for e in self.effects]
+        return [np.concatenate(c) for c in itertools.product(*per)]
+
+    def fit(self, idx=None):
+        """Least-squares parameters on rows ``idx`` (all by default); (x, result or None)."""
+        from scipy.optimize import least_squares
+
+        if not self.effects:
+            return np.zeros(0), None
+        lo, hi = self.bounds()
+        best = None
+        starts = [np.clip(x0, lo, hi) for x0 in self.starts()]
+        cost = [float(np.sum(self.errors(x0, idx) ** 2)) for x0 in starts]
+        for j in np.argsort(cost, kind="stable")[:2]:  # the two best design points start the search
+            x0 = starts[j]
+            res = least_squares(lambda x: self.errors(x, idx), x0, bounds=(lo, hi), method="trf")
+            if best is None or res.cost < best.cost - 1e-15:
+                best = res
+        return best.x, best
+
+
+@dataclass
+class Score:
+    names: list
+    theta: dict
+    ci: dict
+    fold_rms: np.ndarray
+    ref_fold_rms: np.ndarray
+    heldout_errors: np.ndarray
+    ref_heldout_errors: np.ndarray
+    fitted_errors: np.ndarray
+    aicc: float
+    ref_aicc: float
+    p: float
+    accepted: bool
+    reason: str
+
+    def rmse(self, ref=False) -> float:
+        e = self.ref_heldout_errors if ref else self.heldout_errors
+        return float(np.sqrt(np.mean(e ** 2))) if len(e) else math.nan
+
+    def max_error(self, ref=False) -> float:
+        e = self.ref_heldout_errors if ref else self.heldout_errors
+        return float(np.max(np.abs(e))) if len(e) else math.nan
+
+
+def aicc(sse: float, n: int, k: int) -> float:
+    if n - k - 1 <= 0 or sse <= 0:
+        return math.inf if sse > 0 else -math.inf
+    return n * math.log(sse / n) + 2 * k + 2 * k * (k + 1) / (n - k - 1)
+
+
+def cross_validate(model: Model, folds) -> tuple[np.ndarray, np.ndarray]:
+    """(fold RMS errors, held-out relative error of every row) of a model."""
+    n = len(model.y0)
+    held = np.full(n, np.nan)
+    rms = []
+    for f in folds:
+        train = np.setdiff1d(np.arange(n), f)
+        if len(train) < model.k + 1:
+            rms.append(np.nan)
+            continue
+        x, _ = model.fit(train)
+        e = model.errors(x, f)
+        held[f] = e
+        rms.append(float(np.sqrt(np.mean(e ** 2))))
+    return np.array(rms), held
+
+
+def score(model: Model, ref: Model, folds, alpha: float = 0.05) -> Score:
+    """Score ``model`` against ``ref`` (module docstring)."""
+    from scipy import stats
+
+    n = len(model.y0)
+    fold_rms, held = cross_validate(model, folds)
+    ref_rms, ref_held = cross_validate(ref, folds)
+    ok = np.isfinite(fold_rms) & np.isfinite(ref_rms)
+    x, res = model.fit()
+    xr, _ = ref.fit()
+    e = model.errors(x)
+    er = ref.errors(xr)
+    sse, sse_r = float(np.sum(e ** 2)), float(np.sum(er ** 2))
+    k = model.k
+    a, ar = aicc(sse, n, k), aicc(sse_r, n, ref.k)
+    names = [f"{ed.effect.name}.{t}" for ed in model.effects for t in ed.effect.theta_names()]
+    ci = {}
+    if res is not None and n > k:
+        from scipy import stats as st
+
+        J = res.jac
+        s2 = sse / (n - k)
+        try:
+            cov = s2 * np.linalg.pinv(J.T @ J)
+            half = st.t.ppf(0.975, n - k) * np.sqrt(np.clip(np.diag(cov), 0, None))
+        except np.linalg.LinAlgError:
+            half = np.full(k, np.nan)
+        ci = {nm: (float(x[j] - half[j]), float(x[j] + half[j])) for j, nm in enumerate(names)}
+    d = ref_rms[ok] - fold_rms[ok]
+    if ok.sum() < 2:
+        p, reason = math.nan, "fewer than two folds to compare"
+    elif np.allclose(d, d[0]) if len(d) else True:
+        p = 0.0 if len(d) and d[0] > 0 else 1.0
+        reason = ""
+    else:
+        p = float(stats.ttest_rel(ref_rms[ok], fold_rms[ok], alternative="greater").pvalue)
+        reason = ""
+    hm = np.isfinite(held) & np.isfinite(ref_held)
+    rmse = float(np.sqrt(np.mean(held[hm] ** 2))) if hm.any() else math.nan
+    rmse_r = float(np.sqrt(np.mean(ref_held[hm] ** 2))) if hm.any() else math.nan
+    if not reason:
+        fails = []
+        if not (p < alpha):
+            fails.append(f"held-out error not significantly lower (paired t-test p = {p:.3g} >= {alpha:g})")
+        if not (rmse < rmse_r):
+            fails.append("held-out RMS error not lower")
+        if not (a < ar):
+            fails.append(f"AICc not lower ({a:.2f} vs {ar:.2f})")
+        reason = "; ".join(fails)
+    return Score(names=names, theta=dict(zip(names, map(float, x))), ci=ci, fold_rms=fold_rms, ref_fold_rms=ref_rms,
+                 heldout_errors=held[hm], ref_heldout_errors=ref_held[hm], fitted_errors=e, aicc=a, ref_aicc=ar,
+                 p=p, accepted=not reason, reason=reason)
+
+
+@dataclass
+class Selection:
+    chosen: list                  # effect names, in the order added
+    steps: list                   # (step, candidate names, Score) of every model tried
+    final: Score | None
+    baseline: Score | None
+    verdict: str
+    forward_chosen: list = field(default_factory=list)  # before the backward gate
+
+
+def forward(obs: pd.DataFrame, y0: np.ndarray, data: dict, fold_by: str | None = None, alpha: float = 0.05,
+            max_effects: int = 2) -> Selection:
+    """Selection over the candidates ``data`` (name -> :class:`EffectData`):
+
+    1. forward: add, one at a time, the candidate whose model has the lowest held-out RMS
+       error among those that lower both the held-out error and the AICc of the current
+       model (up to ``max_effects``);
+    2. backward gate: every chosen effect must lower the held-out error significantly
+       against the model without it (paired test over the folds, p < ``alpha``); the one with
+       the largest p is dropped until all pass.
+
+    A single effect thus faces the calibrated model; two effects that each leave the other's
+    error in the folds are added together and each is tested against the other alone."""
+    measured = obs["measured"].to_numpy(float)
+    folds = _folds(obs, fold_by)
+    chosen: list[str] = []
+    steps = []
+
+    def model(names):
+        return Model([data[c] for c in names], y0, measured)
+
+    for step in range(1, max_effects + 1):
+        ref = model(chosen)
+        tried = []
+        for name in data:
+            if name in chosen:
+                continue
+            s = score(model(chosen + [name]), ref, folds, alpha)
+            tried.append((name, s))
+            steps.append((step, chosen + [name], s))
+        better = [(nm, s) for nm, s in tried if s.rmse() < s.rmse(True) and s.aicc < s.ref_aicc]
+        if not better:
+            break
+        chosen.append(min(better, key=lambda t: (t[1].rmse(), t[1].aicc))[0])
+    forward_chosen = list(chosen)
+    while chosen:
+        gates = [(nm, score(model(chosen), model([c for c in chosen if c != nm]), folds, alpha)) for nm in chosen]
+        for nm, s in gates:
+            steps.append(("gate", [c for c in chosen], s if s.accepted else _renamed(s, f"without {nm}: " + s.reason)))
+        failing = [(nm, s) for nm, s in gates if not s.accepted]
+        if not failing:
+            break
+        worst = max(failing, key=lambda t: (t[1].p if np.isfinite(t[1].p) else 2.0))[0]
+        chosen.remove(worst)
+    final = score(model(chosen), model([]), folds, alpha) if chosen else None
+    return Selection(chosen=chosen, steps=steps, final=final, baseline=None, verdict="", forward_chosen=forward_chosen)
+
+
+def _renamed(s: Score, reason: str) -> Score:
+    from dataclasses import replace
+
+    return replace(s, reason=reason)
+
+
+def model_names() -> tuple[str, ...]:
+    return tuple(EFFECTS)

@@ -1,0 +1,146 @@
+"""The physical quantity of a measured table's covariate (``quantity``/``unit`` in a soil's
+``measurements`` block): conversion to the SI unit of QUANTITIES, and each bad declaration or
+cell refused with the field (or the table row and column) named."""
+
+from __future__ import annotations
+
+import math
+
+import pandas as pd
+import pytest
+
+from soilcal.config.load import load_soil
+from soilcal.config.measurements import QUANTITIES, conditions
+from test_measurements import _edit, _entry, _fails, _table, _yaml, black, cinnamon  # noqa: F401 (fixtures)
+
+CR = "measurements.cutting_resistance.covariates"
+SF = "measurements.surface_flatness.covariates"
+
+
+
+def _bare(d):
+    """Strip every quantity/unit declaration from the soil, so each test starts from none
+    whatever the shipped file declares."""
+    for entry in (d.get("measurements") or {}).values():
+        for cv in (entry.get("covariates") or {}).values():
+            cv.pop("quantity", None)
+            cv.pop("unit", None)
+    return d
+
+
+def _declare(ws, soil, fn):
+    """Edit the soil from a copy without quantity declarations."""
+    return _edit(ws, soil, lambda d: fn(_bare(d)))
+
+
+def _load(ws, soil):
+    return conditions(load_soil(_yaml(ws, soil), ws / "resources"))
+
+
+def _rotor(d):
+    return _entry(d, "surface_flatness")["covariates"]["rotor_speed_rpm"]
+
+
+def _speed_column(ws, cells):
+    """A tool-speed column ``speed_kmh`` in the cinnamon table, declared as an ignored covariate
+    holding the quantity tool_speed in km/h."""
+    t = _table(ws, "cinnamon-soil", "cutting_resistance.csv")
+    df = pd.read_csv(t)
+    df["speed_kmh"] = cells
+    df.to_csv(t, index=False)
+    _declare(ws, "cinnamon-soil",
+             lambda d: _entry(d)["covariates"].update(speed_kmh={"ignore": True, "quantity": "tool_speed",
+                                                                 "unit": "km/h"}))
+    return t
+
+
+def test_rotor_speed_in_r_per_min(black):
+    _declare(black, "black-soil", lambda d: _rotor(d).update(quantity="rotor_speed", unit="r/min"))
+    flat = [c for c in _load(black, "black-soil") if c.measurement == "surface_flatness"]
+    assert [c.quantities for c in flat] == [{"rotor_speed": float(n)} for n in (150, 200, 250, 300, 350)]
+    assert all(c.quantity_columns == {"rotor_speed_rpm": "rotor_speed"} for c in flat)
+    assert flat[0].covariates == {"rotor_speed_rpm": 150.0}
+    assert flat[0].setup["name"] == "rpm-150"  # the setup map still chooses the setup
+    # the other entry of the soil declares no quantity
+    power = [c for c in _load(black, "black-soil") if c.measurement == "tillage_power"]
+    assert power and all(c.quantities == {} and c.quantity_columns == {} for c in power)
+
+
+def test_rotor_speed_in_rad_per_s(black):
+    _declare(black, "black-soil", lambda d: _rotor(d).update(quantity="rotor_speed", unit="rad/s"))
+    flat = [c for c in _load(black, "black-soil") if c.measurement == "surface_flatness"]
+    # 150 rad/s = 150 * 60 / (2 pi) r/min = 1432.39 r/min
+    assert flat[0].quantities["rotor_speed"] == pytest.approx(150 * 60 / (2 * math.pi))
+
+
+def test_tool_speed_in_km_per_h(cinnamon):
+    _speed_column(cinnamon, [0.576, 3.6, 7.2, 1.8])
+    conds = _load(cinnamon, "cinnamon-soil")
+    # km/h -> m/s: divide by 3.6
+    assert [c.quantities["tool_speed"] for c in conds] == pytest.approx([0.16, 1.0, 2.0, 0.5])
+    assert [c.covariates["speed_kmh"] for c in conds] == pytest.approx([0.576, 3.6, 7.2, 1.8])
+    assert conds[0].label == "directrix=arc"  # an ignored column changes nothing else
+    assert QUANTITIES["tool_speed"][0] == "m/s"
+
+
+def test_label_quantity_keeps_the_cell_text(cinnamon):
+    _declare(cinnamon, "cinnamon-soil", lambda d: _entry(d)["covariates"]["plate"].update(quantity="tool"))
+    conds = _load(cinnamon, "cinnamon-soil")
+    assert [c.quantities for c in conds] == [{"tool": s} for s in ("1", "2", "3", "4")]
+    assert conds[0].quantity_columns == {"plate": "tool"}
+
+
+# --- bad declarations -------------------------------------------------------------------------
+
+
+def test_unknown_quantity(black):
+    p = _declare(black, "black-soil", lambda d: _rotor(d).update(quantity="spin", unit="r/min"))
+    msg = _fails(black, "black-soil", f"{p}: {SF}.rotor_speed_rpm.quantity")
+    assert "'spin'" in msg and "rotor_speed" in msg
+
+
+def test_numeric_quantity_without_unit(black):
+    p = _declare(black, "black-soil", lambda d: _rotor(d).update(quantity="rotor_speed"))
+    msg = _fails(black, "black-soil", f"{p}: {SF}.rotor_speed_rpm.unit")
+    assert "a unit of rotor_speed (r/min" in msg and ", got" not in msg
+
+
+def test_wrong_unit(black):
+    p = _declare(black, "black-soil", lambda d: _rotor(d).update(quantity="rotor_speed", unit="m/s"))
+    msg = _fails(black, "black-soil", f"{p}: {SF}.rotor_speed_rpm.unit")
+    assert "'m/s'" in msg and "a unit of rotor_speed" in msg
+
+
+def test_unit_on_a_label_quantity(cinnamon):
+    p = _declare(cinnamon, "cinnamon-soil",
+              lambda d: _entry(d)["covariates"]["plate"].update(quantity="tool", unit="-"))
+    msg = _fails(cinnamon, "cinnamon-soil", f"{p}: {CR}.plate.unit")
+    assert "tool is a label" in msg
+
+
+def test_unit_without_quantity(black):
+    p = _declare(black, "black-soil", lambda d: _rotor(d).update(unit="r/min"))
+    _fails(black, "black-soil", f"{p}: {SF}.rotor_speed_rpm.quantity")
+
+
+def test_same_quantity_on_two_columns(cinnamon):
+    def fn(d):
+        covs = _entry(d)["covariates"]
+        covs["plate"]["quantity"] = "tool"
+        covs["directrix"]["quantity"] = "tool"
+
+    p = _declare(cinnamon, "cinnamon-soil", fn)
+    msg = _fails(cinnamon, "cinnamon-soil", f"{p}: {CR}")
+    assert "tool is declared twice" in msg
+
+
+def test_non_numeric_cell_of_a_numeric_quantity(cinnamon):
+    t = _speed_column(cinnamon, [0.576, 3.6, "fast", 1.8])
+    msg = _fails(cinnamon, "cinnamon-soil", f"{t}: row 3, column speed_kmh")
+    assert "tool_speed in km/h" in msg and "'fast'" in msg
+
+
+def test_empty_cell_of_a_quantity(cinnamon):
+    t = _speed_column(cinnamon, [0.576, None, 7.2, 1.8])
+    msg = _fails(cinnamon, "cinnamon-soil", f"{t}: row 2, column speed_kmh")
+    assert "empty" in msg

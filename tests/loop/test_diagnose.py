@@ -1,0 +1,184 @@
+"""Residual diagnosis (soilcal.loop.diagnose): hand-built residual tables with a known structure
+(a linear trend, a tool difference, an offset, excess scatter, none at all) and the tests
+that must or must not find it, with Holm-corrected p-values, the ranking and the matched
+quantities."""
+
+from __future__ import annotations
+
+import numpy as np
+import pandas as pd
+import pytest
+from scipy import stats
+
+from soilcal.loop.diagnose import DIAGNOSIS_COLUMNS, diagnose, matched_quantities, ranking
+
+# Thue-Morse signs over x = 0..7: sum s x^k = 0 for k = 0, 1, 2 (Prouhet), so a residual
+# proportional to them has no mean, no linear and no quadratic relation to x = 0..7
+#   k=0: 1-1-1+1-1+1+1-1 = 0
+#   k=1: 0-1-2+3-4+5+6-7 = 0
+#   k=2: 0-1-4+9-16+25+36-49 = 0
+TM = np.array([1, -1, -1, 1, -1, 1, 1, -1], float)
+X = np.arange(8, dtype=float)
+
+
+def _table(r, z=None, **covs):
+    n = len(r)
+    d = {"measurement": ["bin"] * n, "row": list(range(1, n + 1)), "measure": ["F_N"] * n,
+         "relative_residual": list(r), "standardised_residual": list(np.ones(n) if z is None else z)}
+    for k, v in covs.items():
+        d[f"cov:{k}"] = list(v)
+    return pd.DataFrame(d)
+
+
+def _row(diag, test, covariate=""):
+    sel = diag[(diag["test"] == test) & (diag["covariate"] == covariate)]
+    assert len(sel) == 1, (test, covariate, diag)
+    return sel.iloc[0]
+
+
+def _holm(p):
+    """Holm step-down by hand: sort ascending, (m - i) p_(i) cumulative max, capped at 1."""
+    p = np.asarray(p, float)
+    m = len(p)
+    order = np.argsort(p)
+    adj = np.empty(m)
+    run = 0.0
+    for i, j in enumerate(order):
+        run = max(run, min(1.0, (m - i) * p[j]))
+        adj[j] = run
+    return adj
+
+
+def _trend_table():
+    # r = 0.1 (x - 3.5) + 0.002 (-1)^x; the noise's own slope on x is
+    # 0.002 sum (-1)^x (x - 3.5) / sum (x - 3.5)^2 = 0.002 * (-4) / 42 = -1.9e-4 (0.2 % of 0.1)
+    noise = 0.002 * (-1.0) ** X
+    r = 0.1 * (X - X.mean()) + noise
+    # tool by the Thue-Morse pattern: A at x = 0, 3, 5, 6 and B at 1, 2, 4, 7, both summing to 14,
+    # and (-1)^x sums to 0 in each group: no group difference at all
+    tool = np.where(TM > 0, "A", "B")
+    return _table(r, speed=X, tool=tool)
+
+
+def test_linear_trend_is_found():
+    diag = diagnose(_trend_table(), quantity_of={"speed": "tool_speed"})
+    assert list(diag.columns) == DIAGNOSIS_COLUMNS
+    t = _row(diag, "trend", "speed")
+    assert t["significant"]
+    assert t["estimate"] == pytest.approx(0.1, rel=0.05)  # per unit of x
+    assert t["r2"] > 0.99
+    assert t["quantity"] == "tool_speed"
+    assert (t["n"], t["levels"]) == (8, 8)
+    assert not _row(diag, "group", "tool")["significant"]
+    assert _row(diag, "group", "tool")["statistic"] == pytest.approx(0.0, abs=1e-9)
+    assert not _row(diag, "bias")["significant"]
+
+
+def test_no_structure_no_significant_test():
+    # r = +-0.01 in the Thue-Morse pattern: zero mean, zero correlation with x and x^2, and
+    # the tool groups (x = 0..3 and 4..7: +--+ and -++-) both have mean 0
+    r = 0.01 * TM
+    tool = ["A"] * 4 + ["B"] * 4
+    diag = diagnose(_table(r, z=TM, speed=X, tool=tool))
+    assert set(diag["test"]) == {"bias", "scatter", "trend", "curvature", "group"}
+    assert not diag["significant"].any(), diag
+    assert _row(diag, "trend", "speed")["estimate"] == pytest.approx(0.0, abs=1e-12)
+    assert _row(diag, "curvature", "speed")["estimate"] == pytest.approx(0.0, abs=1e-12)
+    assert _row(diag, "bias")["estimate"] == pytest.approx(0.0, abs=1e-15)
+    # z = +-1: chi-square 8 on 8 degrees of freedom
+    sc = _row(diag, "scatter")
+    assert sc["statistic"] == pytest.approx(8.0)
+    assert sc["p"] == pytest.approx(stats.chi2.sf(8.0, 8))
+
+
+def test_group_difference_is_found():
+    spread = np.array([0.01, -0.01, 0.02, -0.02])
+    r = np.concatenate([0.1 + spread, -0.1 + spread])
+    tool = ["A"] * 4 + ["B"] * 4
+    diag = diagnose(_table(r, tool=tool), quantity_of={"tool": "tool"})
+    g = _row(diag, "group", "tool")
+    assert g["significant"] and g["quantity"] == "tool" and g["levels"] == 2
+    # grand mean 0; between SS = 8 * 0.1^2 = 0.08; within SS = 2 (1e-4 + 1e-4 + 4e-4 + 4e-4) = 0.002
+    # F = (0.08 / 1) / (0.002 / 6) = 240 on (1, 6); r2 = 0.08 / 0.082; estimate sqrt(0.08 / 8) = 0.1
+    assert g["statistic"] == pytest.approx(240.0)
+    assert g["p"] == pytest.approx(stats.f.sf(240.0, 1, 6))
+    assert g["r2"] == pytest.approx(0.08 / 0.082)
+    assert g["estimate"] == pytest.approx(0.1)
+    assert not _row(diag, "bias")["significant"]
+
+
+def test_constant_offset_is_a_bias():
+    r = 0.05 + 0.001 * TM
+    diag = diagnose(_table(r, speed=X))
+    b = _row(diag, "bias")
+    assert b["significant"] and b["quantity"] == "bias"
+    assert b["estimate"] == pytest.approx(0.05)
+    # t = mean / (sd / sqrt(n)); sd (ddof 1) = 0.001 sqrt(8 / 7)
+    t = 0.05 / (0.001 * np.sqrt(8 / 7) / np.sqrt(8))
+    assert b["statistic"] == pytest.approx(t)
+    # share of the sum of squares about zero: 0.05^2 / (0.05^2 + 0.001^2)
+    assert b["r2"] == pytest.approx(0.0025 / (0.0025 + 1e-6))
+    assert not _row(diag, "trend", "speed")["significant"]
+    assert matched_quantities(diag) == {"bias"}
+
+
+def test_scatter_beyond_the_uncertainty():
+    n = 8
+    z = 3.0 * TM
+    diag = diagnose(_table(0.01 * TM, z=z))
+    sc = _row(diag, "scatter")
+    assert sc["statistic"] == pytest.approx(9.0 * n)  # sum z^2 = 8 * 9
+    assert sc["p"] == pytest.approx(stats.chi2.sf(9.0 * n, n))
+    assert sc["estimate"] == pytest.approx(3.0)
+    assert sc["significant"]
+    assert not _row(diag, "bias")["significant"]
+
+
+def test_scatter_skips_rows_without_uncertainty():
+    z = np.array([3.0, -3.0, 3.0, np.nan, np.nan])
+    diag = diagnose(_table([0.01, -0.01, 0.01, -0.01, 0.0], z=z))
+    sc = _row(diag, "scatter")
+    assert sc["n"] == 3 and sc["statistic"] == pytest.approx(27.0)
+
+
+@pytest.mark.parametrize("make", [
+    _trend_table,
+    lambda: _table(0.01 * TM, z=3 * TM, speed=X, tool=["A"] * 4 + ["B"] * 4),
+    lambda: _table(0.05 + 0.001 * TM, speed=X),
+])
+def test_holm_adjusted_p(make):
+    diag = diagnose(make())
+    assert len(diag) >= 3
+    assert (diag["p_adjusted"] >= diag["p"] - 1e-15).all()
+    assert diag["p_adjusted"].to_numpy() == pytest.approx(_holm(diag["p"]))
+    assert (diag["significant"] == (diag["p_adjusted"] < 0.05)).all()
+
+
+def test_rows_without_a_residual_are_left_out():
+    t = _trend_table()
+    extra = t.iloc[:2].assign(relative_residual=np.nan, row=[9, 10])
+    diag = diagnose(pd.concat([t, extra], ignore_index=True))
+    assert (diag["n"] == 8).all()
+
+
+def test_ranking_puts_the_significant_covariate_first():
+    diag = diagnose(_trend_table(), quantity_of={"speed": "tool_speed"})
+    rk = ranking(diag)
+    assert rk.iloc[0]["covariate"] == "speed"
+    assert rk.iloc[0]["significant"] and rk.iloc[0]["quantity"] == "tool_speed"
+    assert not rk.set_index("covariate").loc["tool", "significant"]
+    assert set(rk["covariate"]) >= {"speed", "tool", "bias"}
+
+
+def test_matched_quantities():
+    diag = diagnose(_trend_table(), quantity_of={"speed": "tool_speed", "tool": "tool"})
+    assert matched_quantities(diag) == {"tool_speed"}
+    # the same significant trend without a declared quantity matches nothing
+    assert matched_quantities(diagnose(_trend_table())) == set()
+
+
+def test_too_few_rows():
+    diag = diagnose(_table([0.1]))
+    assert len(diag) == 0
+    assert len(ranking(diag)) == 0
+    assert matched_quantities(diag) == set()

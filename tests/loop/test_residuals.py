@@ -1,0 +1,158 @@
+"""The residual table (soilcal.loop.residuals): measured minus simulated mean, its relative and
+standardised forms and standard error, each checked against numbers worked out by hand."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pandas as pd
+import pytest
+
+from soilcal.config.measurements import Condition
+from soilcal.loop.residuals import RESIDUAL_COLUMNS, observations, residual_frame, simulated_stats, usable
+
+
+def _cond(row, responses, covariates=None, quantities=None, measurement="bin"):
+    return Condition(measurement=measurement, row=row, label=f"row {row}", covariate="", covariate_value="",
+                     scenario="standin", setup={}, params={}, stage="bbd", case="c", preset="quick", replicates=3,
+                     responses=tuple(dict(measure=m, unit="N", measured=v, measured_sd=sd, n=n)
+                                     for m, v, sd, n in responses),
+                     covariates=covariates or {}, quantities=quantities or {},
+                     quantity_columns={})
+
+
+def _runs(rows, measurement="bin"):
+    """rows: (row, measure, seed, value, status)."""
+    return pd.DataFrame([dict(measurement=measurement, row=r, measure=m, seed=s, value=v, status=st)
+                         for r, m, s, v, st in rows])
+
+
+def _one(res, row, measure="F_N"):
+    sel = res[(res["row"] == row) & (res["measure"] == measure)]
+    assert len(sel) == 1
+    return sel.iloc[0]
+
+
+SIMS = [(1, "F_N", 0, 90.0, "ok"), (1, "F_N", 1, 92.0, "ok"), (1, "F_N", 2, 94.0, "ok")]
+
+
+def test_residual_se_and_standardised_residual_by_hand():
+    conds = [_cond(1, [("F_N", 100.0, 6.0, 4)])]
+    res = residual_frame(observations(conds), _runs(SIMS))
+    r = _one(res, 1)
+    # simulated: mean (90 + 92 + 94) / 3 = 92; sd sqrt(((-2)^2 + 0 + 2^2) / 2) = 2; n 3
+    assert (r["simulated_mean"], r["simulated_sd"], r["simulated_n"]) == (pytest.approx(92.0), pytest.approx(2.0), 3)
+    assert r["residual"] == pytest.approx(100.0 - 92.0)
+    assert r["relative_residual"] == pytest.approx(8.0 / 100.0)
+    se = math.sqrt(6.0 ** 2 / 4 + 2.0 ** 2 / 3)  # sqrt(9 + 4/3)
+    assert r["residual_se"] == pytest.approx(se)
+    assert r["standardised_residual"] == pytest.approx(8.0 / se)
+    assert r["note"] == ""
+    assert list(res.columns) == RESIDUAL_COLUMNS
+
+
+def test_relative_residual_over_absolute_measured_value():
+    # measured -50, simulated -40: residual -10, relative -10 / |-50| = -0.2
+    conds = [_cond(1, [("F_N", -50.0, 1.0, 1)])]
+    runs = _runs([(1, "F_N", 0, -40.0, "ok"), (1, "F_N", 1, -40.0, "ok")])
+    r = _one(residual_frame(observations(conds), runs), 1)
+    assert r["residual"] == pytest.approx(-10.0)
+    assert r["relative_residual"] == pytest.approx(-0.2)
+    # no seed scatter (sd 0): se = sqrt(1^2 / 1) = 1
+    assert r["residual_se"] == pytest.approx(1.0)
+    assert r["standardised_residual"] == pytest.approx(-10.0)
+
+
+def test_missing_measured_n_counts_as_one():
+    conds = [_cond(1, [("F_N", 100.0, 6.0, None)])]
+    r = _one(residual_frame(observations(conds), _runs(SIMS)), 1)
+    se = math.sqrt(6.0 ** 2 / 1 + 2.0 ** 2 / 3)  # sqrt(36 + 4/3)
+    assert r["residual_se"] == pytest.approx(se)
+    assert r["standardised_residual"] == pytest.approx(8.0 / se)
+
+
+def test_failed_runs_are_ignored():
+    conds = [_cond(1, [("F_N", 100.0, 6.0, 4)])]
+    runs = _runs(SIMS + [(1, "F_N", 3, 1000.0, "failed"), (1, "F_N", 4, -5.0, "diverged")])
+    r = _one(residual_frame(observations(conds), runs), 1)
+    assert (r["simulated_mean"], r["simulated_n"]) == (pytest.approx(92.0), 3)
+    assert r["residual_se"] == pytest.approx(math.sqrt(9 + 4 / 3))
+    stats = simulated_stats(runs)
+    assert stats["simulated_n"].tolist() == [3]
+
+
+def test_row_without_measured_value_gets_nan_and_a_note():
+    conds = [_cond(1, [("F_N", 100.0, 6.0, 4)]), _cond(2, [("F_N", None, None, None)])]
+    runs = _runs(SIMS + [(2, "F_N", 0, 50.0, "ok"), (2, "F_N", 1, 52.0, "ok")])
+    res = residual_frame(observations(conds), runs)
+    r = _one(res, 2)
+    assert np.isnan(r["measured"]) and np.isnan(r["residual"]) and np.isnan(r["relative_residual"])
+    assert np.isnan(r["standardised_residual"])
+    assert r["simulated_mean"] == pytest.approx(51.0)
+    assert "no measured value" in r["note"]
+    assert usable(res)["row"].tolist() == [1]
+
+
+def test_notes_on_missing_uncertainty_and_missing_simulation():
+    conds = [_cond(1, [("F_N", 100.0, None, None)]), _cond(2, [("F_N", 80.0, None, None)]),
+             _cond(3, [("F_N", 60.0, 3.0, None)])]
+    runs = _runs([(1, "F_N", 0, 95.0, "ok"),                          # one seed, no measured SD
+                  (2, "F_N", 0, 78.0, "ok"), (2, "F_N", 1, 82.0, "ok")])  # row 3 never simulated
+    res = residual_frame(observations(conds), runs)
+    r1, r2, r3 = _one(res, 1), _one(res, 2), _one(res, 3)
+    assert r1["residual"] == pytest.approx(5.0)
+    assert np.isnan(r1["residual_se"]) and np.isnan(r1["standardised_residual"])
+    assert "no uncertainty known" in r1["note"]
+    # seeds 78, 82: mean 80, sd sqrt((4 + 4) / 1) = 2 sqrt(2), se = 2 sqrt(2) / sqrt(2) = 2; residual 0
+    assert r2["residual_se"] == pytest.approx(2.0)
+    assert r2["standardised_residual"] == pytest.approx(0.0)
+    assert "seed scatter only" in r2["note"]
+    assert r3["simulated_n"] == 0 and np.isnan(r3["residual"])
+    assert "no simulated value" in r3["note"]
+    assert usable(res)["row"].tolist() == [1, 2]
+
+
+def test_each_measure_matched_separately():
+    conds = [_cond(1, [("F_N", 100.0, None, None), ("V_N", 10.0, None, None)])]
+    runs = _runs([(1, "F_N", 0, 90.0, "ok"), (1, "V_N", 0, 12.0, "ok")])
+    res = residual_frame(observations(conds), runs)
+    assert _one(res, 1, "F_N")["relative_residual"] == pytest.approx(10.0 / 100.0)
+    assert _one(res, 1, "V_N")["relative_residual"] == pytest.approx(-2.0 / 10.0)
+
+
+def test_covariates_and_quantities_carried_over():
+    conds = [_cond(1, [("F_N", 100.0, 6.0, 4)], covariates={"speed_kmh": 3.6, "plate": "A"},
+                   quantities={"tool_speed": 1.0, "tool": "A"}),
+             _cond(2, [("F_N", 80.0, 6.0, 4)], covariates={"speed_kmh": 7.2, "plate": "B"},
+                   quantities={"tool_speed": 2.0, "tool": "B"})]
+    runs = _runs(SIMS + [(2, "F_N", 0, 80.0, "ok")])
+    res = residual_frame(observations(conds), runs)
+    for c in ("cov:speed_kmh", "cov:plate", "q:tool_speed", "q:tool"):
+        assert c in res.columns
+    assert res["cov:speed_kmh"].tolist() == [3.6, 7.2]
+    assert res["cov:plate"].tolist() == ["A", "B"]
+    assert res["q:tool_speed"].tolist() == [1.0, 2.0]
+    assert res["q:tool"].tolist() == ["A", "B"]
+    # key columns first, then the covariates, then the residual columns
+    assert list(res.columns[:3]) == ["measurement", "row", "measure"]
+    assert list(res.columns[-len(RESIDUAL_COLUMNS) + 5:]) == RESIDUAL_COLUMNS[5:]
+
+
+def test_all_runs_failed():
+    conds = [_cond(1, [("F_N", 100.0, 6.0, 4)])]
+    res = residual_frame(observations(conds), _runs([(1, "F_N", 0, 95.0, "failed")]))
+    r = _one(res, 1)
+    assert r["simulated_n"] == 0 and np.isnan(r["residual"])
+    assert "no simulated value" in r["note"]
+    assert len(usable(res)) == 0
+
+
+def test_no_runs_at_all():
+    conds = [_cond(1, [("F_N", 100.0, 6.0, 4)])]
+    res = residual_frame(observations(conds), pd.DataFrame(columns=["measurement", "row", "measure", "seed",
+                                                                    "value", "status"]))
+    r = _one(res, 1)
+    assert r["simulated_n"] == 0 and np.isnan(r["residual"])
+    assert "no simulated value" in r["note"]
+    assert len(usable(res)) == 0

@@ -1,0 +1,74 @@
+"""The soil's optional `loop` block and the `soilcal loop` command line: every bad value stops
+with one line naming the field."""
+
+from __future__ import annotations
+
+import pytest
+
+from soilcal.cli import main
+from soilcal.errors import InputError
+from soilcal.loop import core
+from soilcal.loop.effects import EFFECTS
+
+
+def test_defaults_are_every_effect_matched_at_five_levels():
+    s = core.settings_from({})
+    assert s.effects == list(EFFECTS) and s.candidates == "matched" and s.design_points == 5
+    assert s.alpha == 0.05 and s.max_effects == 2 and s.fold_by is None
+
+
+def test_a_full_block_is_read():
+    s = core.settings_from({"loop": {"alpha": 0.01, "effects": ["rate_friction"], "candidates": "all",
+                                     "bounds": {"rate_friction": {"beta": [0, 0.5]}}, "reference": {"tool_speed": 2},
+                                     "design_points": 4, "fold_by": "day", "max_effects": 1}})
+    assert s.alpha == 0.01 and s.effects == ["rate_friction"] and s.candidates == "all"
+    assert s.effect_bounds("rate_friction") == {"beta": (0.0, 0.5)}
+    assert s.reference == {"tool_speed": 2.0} and s.design_points == 4 and s.max_effects == 1
+
+
+@pytest.mark.parametrize("block, field", [
+    ({"alpha": 1.5}, "loop.alpha"),
+    ({"effects": ["stones"]}, "loop.effects[0]"),
+    ({"candidates": "some"}, "loop.candidates"),
+    ({"bounds": {"nope": {}}}, "loop.bounds.nope"),
+    ({"bounds": {"rate_friction": {"gamma": [0, 1]}}}, "loop.bounds.rate_friction.gamma"),
+    ({"bounds": {"rate_friction": {"beta": [1, 0]}}}, "loop.bounds.rate_friction.beta"),
+    ({"reference": {"tool": 1.0}}, "loop.reference.tool"),
+    ({"reference": {"tool_speed": "fast"}}, "loop.reference.tool_speed"),
+    ({"design_points": 2}, "loop.design_points"),
+    ({"max_effects": 0}, "loop.max_effects"),
+    ({"unknown": 1}, "loop.unknown"),
+])
+def test_bad_settings_name_the_field(block, field):
+    with pytest.raises(InputError) as exc:
+        core.settings_from({"loop": block}, "soil.yaml")
+    assert exc.value.field == field
+    assert "soil.yaml" in str(exc.value)
+
+
+def test_design_holds_the_switched_off_value_and_the_bounds():
+    s = core.Settings()
+    from soilcal.loop.select import theta_design
+
+    d = theta_design(EFFECTS["rate_friction"], s.effect_bounds("rate_friction"), 3)
+    assert [t["beta"] for t in d] == [-0.3, 0.0, 0.15, 0.6]
+
+
+@pytest.mark.parametrize("argv, text", [
+    (["loop", "synthesize", "config/soils/cinnamon-soil.yaml", "--measurement", "cutting_resistance",
+      "--effect", "rate_friction:beta", "--out", "x.csv"], "--effect"),
+    (["loop", "synthesize", "config/soils/cinnamon-soil.yaml", "--measurement", "nope", "--out", "x.csv"],
+     "measurements"),
+    (["loop", "synthesize", "config/soils/cinnamon-soil.yaml", "--measurement", "cutting_resistance",
+      "--effect", "gravity:g=1", "--out", "x.csv"], "one of moisture_cohesion"),
+])
+def test_the_command_line_refuses_bad_arguments_with_exit_2(argv, text, capsys, monkeypatch, tmp_path):
+    from pathlib import Path
+
+    root = Path(__file__).resolve().parents[2]
+    monkeypatch.chdir(root)
+    argv = [a if a != "x.csv" else str(tmp_path / "x.csv") for a in argv]
+    assert main(argv) == 2
+    err = capsys.readouterr().err
+    assert err.startswith("soilcal: error:") and text in err
+    assert not (tmp_path / "x.csv").exists()
