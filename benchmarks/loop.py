@@ -16,8 +16,8 @@ the hidden effect, then ``soilcal.loop.core.run_inprocess`` runs the whole loop 
 Cases: every library effect, two effects at once, a periodic disturbance along the bin,
 stones, a random offset between test days, and no effect.  Written:
 ``benchmarks/results/loop.csv`` (one row per engine, case and campaign seed: chosen effects,
-parameter error, RMS error before/after, false attribution, wall time; earlier rows of other
-engines kept) and ``loop.md``.
+parameter error, RMS error before/after, false attribution, wall time; earlier rows of the
+engines and cases not run kept) and ``loop.md``.
 
     python benchmarks/loop.py [--engines standin,dem] [--cases rate,stones] [--seeds 3] [--n 12]
 """
@@ -47,7 +47,7 @@ STANDIN_CASES = {
     "rate_friction": ({"rate_friction": {"beta": 0.2}}, {}),
     "depth_compaction": ({"depth_compaction": {"g": 0.4}}, {}),
     "tool_adhesion": ({"tool_adhesion": {"gamma_a": 2.5}}, {}),
-    "moisture_cohesion": ({"moisture_cohesion": {"c_w": 0.08}}, {}),
+    "moisture_cohesion": ({"moisture_cohesion": {"c_w": 0.1}}, {}),
     "rate+depth": ({"rate_friction": {"beta": 0.2}, "depth_compaction": {"g": 0.4}}, {}),
     "periodic": ({}, {"periodic": {"amplitude": 0.15, "wavelength": 7.0}}),
     "stones": ({}, {"stones": {"fraction": 0.3, "low": 0.1, "high": 0.3}}),
@@ -56,10 +56,10 @@ STANDIN_CASES = {
 }
 DEM_CASES = {
     "rate_friction": ({"rate_friction": {"beta": 0.4}}, {}),
-    "depth_compaction": ({"depth_compaction": {"g": 0.8}}, {}),
+    "depth_compaction": ({"depth_compaction": {"g": 1.0}}, {}),
     "tool_adhesion": ({"tool_adhesion": {"gamma_a": 2.0}}, {}),
     "moisture_cohesion": ({"moisture_cohesion": {"c_w": 0.08}}, {}),
-    "rate+depth": ({"rate_friction": {"beta": 0.3}, "depth_compaction": {"g": 0.8}}, {}),
+    "rate+depth": ({"rate_friction": {"beta": 0.4}, "depth_compaction": {"g": 1.0}}, {}),
     "periodic": ({}, {"periodic": {"amplitude": 0.2, "wavelength": 7.0}}),
     "stones": ({}, {"stones": {"fraction": 0.3, "low": 0.15, "high": 0.4}}),
     "day_offset": ({}, {"day_offset": {"sd": 0.2}}),
@@ -211,7 +211,7 @@ def main(argv=None):
             ap.error(f"--cases: {c!r} is not one of {', '.join(STANDIN_CASES)}")
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
-    old = [r for r in read_rows(out / "loop.csv", FIELDS) if r["engine"] not in engines]
+    old = [r for r in read_rows(out / "loop.csv", FIELDS) if not (r["engine"] in engines and r["case"] in cases)]
     new = []
     t0 = time.perf_counter()
     if "standin" in engines:
@@ -224,7 +224,7 @@ def main(argv=None):
           f"Machine: {platform.machine()}, {os.cpu_count()} logical CPUs, Python {platform.python_version()}; "
           f"commit {commit()}, {time.strftime('%Y-%m-%d %H:%M', time.gmtime())} UTC; "
           f"`python benchmarks/loop.py {' '.join(sys.argv[1:])}` ({time.perf_counter() - t0:.0f} s for the rows "
-          "of this run; rows of engines not run are kept from earlier runs, each with its commit).", "",
+          "of this run; rows of engines and cases not run are kept from earlier runs, each with its commit).", "",
           "A case's measured values come from the engine with the hidden effect (or disturbance) and 2 % noise per "
           "repeat (three repeats); the loop then runs without it.  correct: the chosen effects are exactly the "
           "hidden ones (none for a disturbance outside the library or no effect); false attribution: a library "

@@ -12,7 +12,9 @@ six test days) is measured with 2 % noise per repeat (three repeats), with a hid
   varies between test days): never a library effect; the verdict says "unexplained";
 * no effect: no effect chosen.
 
-The truths (hidden parameters) are the generator's inputs; three campaigns (seeds) each.
+The truths (hidden parameters) are the generator's inputs; three campaigns (seeds) each.  The
+hidden effects move the measured forces by 5-15 % (RMS), several times the measurements'
+2 % noise, so that a 70 % fall of the held-out error is possible at all.
 """
 
 from __future__ import annotations
@@ -32,7 +34,7 @@ SEEDS = (0, 1, 2)
 def _run(hidden, disturbances, seed):
     conds = S.conditions(S.grid(seed, 18, moisture=True))
     table = sy.synthesize(conds, S.base_params, S.simulate, hidden, REFERENCE, disturbances, noise=0.02,
-                          n_repeats=3, seed=seed + 10)
+                          seed=seed + 10)
     return core.run_inprocess("standin", sy.with_measured(conds, table), S.base_params, S.simulate,
                               core.Settings(reference=REFERENCE))
 
@@ -41,7 +43,7 @@ LIBRARY = {
     "rate_friction": {"beta": 0.2},
     "depth_compaction": {"g": 0.4},
     "tool_adhesion": {"gamma_a": 2.5},
-    "moisture_cohesion": {"c_w": 0.08},
+    "moisture_cohesion": {"c_w": 0.1},
 }
 
 

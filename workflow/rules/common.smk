@@ -375,7 +375,8 @@ def tool_run_map(w):
 
 
 def tool_file_map(w):
-    return {k: f"results/{w.soil}/dem/tools/{k}.csv" for k in dict.fromkeys(tool_jobs(w.soil)[1].values())}
+    """The calibrated runs of every measured condition: {"<measurement>/<row>": tool run file}."""
+    return {f"{m}/{r}": f"results/{w.soil}/dem/tools/{k}.csv" for (m, r), k in tool_jobs(w.soil)[1].items()}
 
 
 # ------------------------------------------------------------------ the measured-data loop
@@ -385,54 +386,52 @@ def loop_plan_file(soil):
     return checkpoints.loop_diagnose.get(soil=soil).output.plan
 
 
+def loop_more_file(soil):
+    return checkpoints.loop_more.get(soil=soil).output[0]
+
+
 _LOOP = {}
 
 
-def loop_jobs(soil):
-    """The loop's DEM jobs once the diagnosis has planned them: ({key: job}, {effect: {point:
-    {tool key: run file}}}).  A job is a tool job with the effect switched on, keyed by what it
-    simulates (verify.tool_key): the switched-off point, and a condition the effect does not
-    change, is the tool run itself."""
-    from soilcal.loop.files import loop_job
+def _loop_round(soil, plan_path):
+    """({key: job}, {effect: {point: {condition: run file}}}) of one round's plan
+    (soilcal.loop.files.loop_jobs), read once per file version."""
+    from soilcal.loop.files import loop_jobs
 
-    plan_path = loop_plan_file(soil)
     jobs, keys = tool_jobs(soil)
     stamp = (soil, plan_path, os.path.getmtime(plan_path), id(jobs))
     if stamp not in _LOOP:
         with open(plan_path) as fh:
             plan = json.load(fh)
-        by_key = {}
-        for c in conditions(soil):
-            by_key.setdefault(keys[(c.measurement, c.row)], []).append(c)
-        out, files = {}, {}
-        for name in plan["candidates"]:
-            files[name] = {}
-            for j, theta in enumerate(plan["design"][name]):
-                files[name][j] = {}
-                for key, job in jobs.items():
-                    lj = loop_job(job, by_key.get(key, []), name, theta, plan["reference"])
-                    lk = verify.tool_key(lj)
-                    if lk == key:
-                        files[name][j][key] = f"results/{soil}/dem/tools/{key}.csv"
-                    else:
-                        out[lk] = lj
-                        files[name][j][key] = f"results/{soil}/loop/runs/{lk}.csv"
-        _LOOP[stamp] = (out, files)
+        _LOOP[stamp] = loop_jobs(conditions(soil), jobs, keys, plan, f"results/{soil}")
     return _LOOP[stamp]
 
 
 def loop_spec(w):
-    return loop_jobs(w.soil)[0][w.key]
+    """A loop job of the first round, else of the second (whose plan exists by then)."""
+    jobs = _loop_round(w.soil, loop_plan_file(w.soil))[0]
+    if w.key in jobs:
+        return jobs[w.key]
+    return _loop_round(w.soil, loop_more_file(w.soil))[0][w.key]
+
+
+def _run_files(files):
+    return [p for per in files.values() for keyed in per.values() for p in keyed.values()]
+
+
+def loop_first_files(w):
+    return _loop_round(w.soil, loop_plan_file(w.soil))[1]
 
 
 def loop_effect_files(w):
-    return loop_jobs(w.soil)[1]
+    files = dict(loop_first_files(w))
+    files.update(_loop_round(w.soil, loop_more_file(w.soil))[1])
+    return files
+
+
+def loop_first_runs(w):
+    return list(dict.fromkeys(list(tool_file_map(w).values()) + _run_files(loop_first_files(w))))
 
 
 def loop_runs(w):
-    files = loop_jobs(w.soil)[1]
-    out = list(tool_file_map(w).values())
-    for per in files.values():
-        for keyed in per.values():
-            out += list(keyed.values())
-    return list(dict.fromkeys(out))
+    return list(dict.fromkeys(list(tool_file_map(w).values()) + _run_files(loop_effect_files(w))))

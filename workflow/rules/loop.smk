@@ -3,7 +3,8 @@
 # the structure in it, and the candidate effects of the library that act through that
 # structure, each simulated at a small design of its parameters (one DEM job per design point
 # and measured condition, with the tool runs' seeds), then fitted, scored on held-out
-# measurements and chosen or rejected.
+# measurements and chosen or rejected.  A second round (checkpoint loop_more) fits the effects
+# that the residual left by the first round's model matches.
 
 
 checkpoint loop_diagnose:
@@ -22,7 +23,6 @@ checkpoint loop_diagnose:
         soil_path=lambda w: str(SOILS[w.soil].path),
         resources_root=RES,
         files=tool_file_map,
-        runs=tool_run_map,
         loop=lambda w: soil_cfg(w.soil).get("loop") or {},
         measurements=lambda w: soil_cfg(w.soil).get("measurements") or {},
     conda:
@@ -55,10 +55,31 @@ rule loop_point:
         "../scripts/tool_point.py"
 
 
+checkpoint loop_more:
+    input:
+        optima=tool_optima,
+        plan=lambda w: loop_plan_file(w.soil),
+        runs=loop_first_runs,
+    output:
+        "results/{soil}/loop/plan_more.json",
+    params:
+        soil_path=lambda w: str(SOILS[w.soil].path),
+        resources_root=RES,
+        tool_files=tool_file_map,
+        effect_files=loop_first_files,
+    conda:
+        "../../envs/soilcal.yaml"
+    log:
+        "logs/{soil}/loop/more.log",
+    script:
+        "../scripts/loop_more.py"
+
+
 rule loop_select:
     input:
         optima=tool_optima,
         plan=lambda w: loop_plan_file(w.soil),
+        more=lambda w: loop_more_file(w.soil),
         runs=loop_runs,
     output:
         selection=report("results/{soil}/loop/selection.csv", caption="../report/loop_selection.rst",
@@ -73,7 +94,6 @@ rule loop_select:
         soil_path=lambda w: str(SOILS[w.soil].path),
         resources_root=RES,
         tool_files=tool_file_map,
-        runs=tool_run_map,
         effect_files=loop_effect_files,
     conda:
         "../../envs/soilcal.yaml"

@@ -7,6 +7,5 @@ from soilcal.loop.files import diagnose_files
 
 with redirect(snakemake.log[0]):  # noqa: F821
     plan = diagnose_files(snakemake.params.soil_path, snakemake.params.resources_root,  # noqa: F821
-                          snakemake.params.files, snakemake.params.runs,  # noqa: F821
-                          Path(snakemake.output.plan).parent)  # noqa: F821
+                          snakemake.params.files, Path(snakemake.output.plan).parent)  # noqa: F821
     print("candidates:", ", ".join(plan["candidates"]) or "none")

@@ -38,7 +38,8 @@ quantity: rotor_speed, unit: r/min}``).  The measured-data loop (:mod:`soilcal.l
 residual against every covariate column, and its model extensions act through these
 quantities (a rate effect through ``tool_speed`` or ``rotor_speed``, moisture-dependent
 cohesion through ``moisture_content``), converted to the SI unit of :data:`QUANTITIES`.
-A cell of a numeric quantity must be a number.
+A cell of a numeric quantity must be a number, and above zero for
+:data:`POSITIVE_QUANTITIES`.
 
 Response columns: ``value`` (the measured value; ``null`` when the paper does not print it,
 then a ``note`` is required and the row is simulated and reported without a measured value),
@@ -102,6 +103,8 @@ QUANTITIES = {
     "day": None,
     "group": None,
 }
+#: quantities that must be above zero (an effect takes their logarithm or a ratio to them)
+POSITIVE_QUANTITIES = ("tool_speed", "working_depth", "rotor_speed", "layer_depth", "bulk_density")
 _RESPONSE_COLUMNS = ("value", "sd", "n", "paper_simulated", "paper_difference")
 
 
@@ -489,6 +492,8 @@ def _entry(soil_path, data: dict, mid: str, entry: dict, tpath: Path):
             x = _number(cell)
             if x is None:
                 raise InputError(tpath, at(col), f"a number ({q} in {covs[col]['unit']})", _plain(cell))
+            if q in POSITIVE_QUANTITIES and not x > 0:
+                raise InputError(tpath, at(col), f"a positive {q} (in {covs[col]['unit']})", _plain(cell))
             quantities[q] = x * QUANTITIES[q][1][covs[col]["unit"]]
         label_parts = [f"{c}={_text(rec[c])}" for c in active]
         conds.append(Condition(

@@ -93,8 +93,7 @@ def _synthesize(args) -> int:
     dist = dict(_kv(d, "--disturbance") for d in args.disturbance or [])
     reference = dict(_kv("r:" + ",".join(args.reference), "--reference")[1]) if args.reference else {}
     table = sy.synthesize(conds, condition_params(_params(args)), dem_simulator(args.threads), hidden, reference, dist,
-                          noise=args.noise, n_repeats=args.repeats, seed=args.seed,
-                          seeds=tuple(range(1000, 1000 + args.sim_seeds)))
+                          noise=args.noise, seed=args.seed, seeds=tuple(range(1000, 1000 + args.repeats)))
     entry = soil.data["measurements"][args.measurement]
     src = measurements_dir(soil.resources_root, soil.name) / entry["table"]
     df = pd.read_csv(src)
@@ -147,9 +146,8 @@ def register(sub) -> None:
                    help="periodic:amplitude=0.1,wavelength=7 | stones:fraction=0.3 | day_offset:sd=0.1")
     s.add_argument("--reference", action="append", help="quantity=value where the hidden effect is off")
     s.add_argument("--param", action="append", help="DEM parameter NAME=VALUE for every condition")
-    s.add_argument("--noise", type=float, default=0.02, help="relative SD of one measured repeat")
-    s.add_argument("--repeats", type=int, default=3)
-    s.add_argument("--sim-seeds", type=int, default=2, help="DEM seeds averaged per condition")
+    s.add_argument("--noise", type=float, default=0.02, help="relative SD of the instrument noise of one repeat")
+    s.add_argument("--repeats", type=int, default=3, help="measured repeats per condition, one DEM seed each")
     s.add_argument("--seed", type=int, default=0, help="seed of the noise and disturbance draws")
     s.add_argument("--threads", type=int, default=None)
     s.add_argument("--resources", default="resources")

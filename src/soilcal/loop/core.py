@@ -12,7 +12,10 @@ for tests, the benchmark and ``soilcal loop synthesize``) share them:
    all`` tries every effect that acts);
 4. :func:`plan`: each candidate's design of parameters (:func:`soilcal.loop.select.theta_design`),
    every condition simulated at every design point with the seeds of the calibrated runs;
-5. :func:`analyse`: surrogates, forward selection, the verdict and the report tables.
+5. :func:`analyse`: surrogates, forward selection, the verdict and the report tables;
+6. :func:`more_candidates`: one second round for an effect the first one masked (the
+   residual left by the first round's model matches it), then :func:`analyse` again over
+   both rounds' candidates.
 
 Settings (the soil's optional ``loop`` block, every value written into the outputs)::
 
@@ -99,8 +102,11 @@ def settings_from(soil_data: dict, source="<soil>") -> Settings:
         if q not in QUANTITIES or QUANTITIES[q] is None:
             raise InputError(source, f"loop.reference.{q}", "a numeric quantity ("
                              + ", ".join(k for k, u in QUANTITIES.items() if u) + ")", q)
-        if not isinstance(v, (int, float)) or not math.isfinite(v):
-            raise InputError(source, f"loop.reference.{q}", f"a number in {QUANTITIES[q][0]}", v)
+        from soilcal.config.measurements import POSITIVE_QUANTITIES
+
+        if not isinstance(v, (int, float)) or not math.isfinite(v) or (q in POSITIVE_QUANTITIES and not v > 0):
+            raise InputError(source, f"loop.reference.{q}",
+                             f"a {'positive ' if q in POSITIVE_QUANTITIES else ''}number in {QUANTITIES[q][0]}", v)
         s.reference[q] = float(v)
     if "design_points" in block:
         v = block["design_points"]
@@ -364,10 +370,9 @@ def run_inprocess(soil: str, conditions, base_params, simulate, settings: Settin
     reference = reference_values(res, settings)
     cands = candidates(diag, conditions, settings)
     effect_runs = {}
-    while True:
-        for name in cands:
-            if name in effect_runs:
-                continue
+
+    def simulate_candidates(names):
+        for name in names:
             eff = EFFECTS[name]
             frames = []
             for th in sl.theta_design(eff, settings.effect_bounds(name), settings.design_points):
@@ -376,13 +381,23 @@ def run_inprocess(soil: str, conditions, base_params, simulate, settings: Settin
                 else:
                     frames.append(runs_at(name, th, reference))
             effect_runs[name] = pd.concat(frames, ignore_index=True)
-        out = analyse(soil, res, diag, cands, effect_runs, settings, reference, qcols)
-        if out.diagnosis_after is None or len(out.chosen) >= settings.max_effects:
-            return out
-        more = [c for c in candidates(out.diagnosis_after, conditions, settings) if c not in cands]
-        if not more:
-            return out
-        cands = cands + more  # a second effect the first one masked in the first diagnosis
+
+    simulate_candidates(cands)
+    out = analyse(soil, res, diag, cands, effect_runs, settings, reference, qcols)
+    more = more_candidates(out, conditions, settings)
+    if not more:
+        return out
+    simulate_candidates(more)  # the second round, as the workflow's loop_more checkpoint
+    return analyse(soil, res, diag, cands + more, effect_runs, settings, reference, qcols)
+
+
+def more_candidates(out: Outcome, conditions, settings: Settings) -> list[str]:
+    """The second round's candidates: effects that the residual left by the first round's
+    model (the chosen effects, or those the forward step added before the gate) matches, and
+    that were not fitted yet; none when the model already holds ``max_effects``."""
+    if out.diagnosis_after is None or len(out.chosen) >= settings.max_effects:
+        return []
+    return [c for c in candidates(out.diagnosis_after, conditions, settings) if c not in out.candidates]
 
 
 def residual_after(res: pd.DataFrame, predicted: np.ndarray) -> pd.DataFrame:

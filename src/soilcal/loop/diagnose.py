@@ -6,7 +6,7 @@ each an ordinary least-squares fit (statsmodels) against a null of no structure:
 * ``bias``: the mean of ``r`` is zero (one-sample t-test); share explained: mean^2 / mean(r^2);
 * ``scatter``: the standardised residuals (residual over the combined measured and seed
   standard error) are unit normal, so their sum of squares is chi-square on n degrees of
-  freedom (upper tail), over the rows whose uncertainty is known: scatter beyond what the
+  freedom (upper tail), over the rows whose measured SD is known: scatter beyond what the
   measurement and the seeds explain (a stone, a disturbance the covariates do not carry);
 * ``trend`` of a numeric covariate with at least three distinct values: ``r ~ x``, the
   slope's t-test;
@@ -50,6 +50,38 @@ def _covariate_columns(res: pd.DataFrame) -> list[str]:
     return [c for c in res.columns if c.startswith("cov:")]
 
 
+def _covariate_tests(name, q, col, r, numeric, distinct) -> list[dict]:
+    """Trend and curvature of a numeric covariate, or the group test of a label one, on the
+    rows that carry it."""
+    n = len(r)
+    sst = float(np.sum((r - r.mean()) ** 2)) if n else 0.0
+    rows = []
+    if numeric and distinct >= 3:
+        if n < 4:
+            return rows
+        x = pd.to_numeric(col, errors="coerce").to_numpy(float)
+        sx = x.std() or 1.0
+        xs = (x - x.mean()) / sx
+        f1 = _ols(r, np.column_stack([np.ones(n), xs]))
+        rows.append(dict(test="trend", covariate=name, quantity=q, n=n, levels=distinct,
+                         estimate=float(f1.params[1] / sx), statistic=float(f1.tvalues[1]),
+                         p=float(f1.pvalues[1]), r2=float(f1.rsquared) if sst > 0 else 0.0))
+        if distinct >= 4 and n >= 5:
+            f2 = _ols(r, np.column_stack([np.ones(n), xs, xs ** 2]))
+            rows.append(dict(test="curvature", covariate=name, quantity=q, n=n, levels=distinct,
+                             estimate=float(f2.params[2] / sx ** 2), statistic=float(f2.tvalues[2]),
+                             p=float(f2.pvalues[2]), r2=float(f2.rsquared) if sst > 0 else 0.0))
+    elif n > distinct:  # a group with two rows at least: within-group variance exists
+        labels = col.astype(str).to_numpy()
+        levels = sorted(set(labels))
+        X = np.column_stack([np.ones(n)] + [(labels == lv).astype(float) for lv in levels[1:]])
+        f = _ols(r, X)
+        rows.append(dict(test="group", covariate=name, quantity=q or ("measure" if name == "measure" else ""),
+                         n=n, levels=distinct, estimate=float(np.sqrt(max(f.ess, 0.0) / n)),
+                         statistic=float(f.fvalue), p=float(f.f_pvalue), r2=float(f.rsquared) if sst > 0 else 0.0))
+    return rows
+
+
 def diagnose(res: pd.DataFrame, quantity_of: dict | None = None, alpha: float = 0.05) -> pd.DataFrame:
     """One row per test (module docstring) on the usable rows of a residual table;
     ``quantity_of``: covariate column -> its declared quantity."""
@@ -68,6 +100,8 @@ def diagnose(res: pd.DataFrame, quantity_of: dict | None = None, alpha: float = 
                          statistic=float(t.statistic), p=float(t.pvalue),
                          r2=float(r.mean() ** 2 / np.mean(r ** 2)) if np.any(r) else 0.0))
     z = d["standardised_residual"].astype(float).to_numpy() if "standardised_residual" in d else np.array([])
+    if "measured_sd" in d:  # only where the measured uncertainty is known: seed scatter alone understates it
+        z = z[np.isfinite(d["measured_sd"].astype(float).to_numpy())]
     z = z[np.isfinite(z)]
     if len(z) >= 3:
         chi = float(np.sum(z ** 2))
@@ -77,41 +111,21 @@ def diagnose(res: pd.DataFrame, quantity_of: dict | None = None, alpha: float = 
     groups = [(c[4:], d[c]) for c in _covariate_columns(d)]
     if "measure" in d and d["measure"].nunique() > 1:
         groups.append(("measure", d["measure"]))
-    sst = float(np.sum((r - r.mean()) ** 2)) if n else 0.0
     seen = []
-    for name, col in groups:
+    for name, col_all in groups:
         q = quantity_of.get(name, "")
-        if col.isna().any():
-            continue
+        has = col_all.notna().to_numpy()  # a covariate missing on some rows is tested on the others
+        col = col_all[has]
         numeric = _is_numeric(col) and name != "measure" and q not in LABEL_QUANTITIES
-        x = pd.to_numeric(col, errors="coerce").to_numpy(float) if numeric else None
         distinct = int(col.astype(str).nunique())
         if distinct < 2:
             continue
         if not (numeric and distinct >= 3):
-            partition = tuple(pd.factorize(col.astype(str))[0])
+            partition = tuple(pd.factorize(col_all.astype(str))[0]) + tuple(~has)
             if partition in seen:  # the same grouping as an earlier column (a plate number beside its name)
                 continue
             seen.append(partition)
-        if numeric and distinct >= 3 and n >= 4:
-            xs = (x - x.mean()) / (x.std() or 1.0)
-            f1 = _ols(r, np.column_stack([np.ones(n), xs]))
-            rows.append(dict(test="trend", covariate=name, quantity=q, n=n, levels=distinct,
-                             estimate=float(f1.params[1] / (x.std() or 1.0)), statistic=float(f1.tvalues[1]),
-                             p=float(f1.pvalues[1]), r2=float(f1.rsquared) if sst > 0 else 0.0))
-            if distinct >= 4 and n >= 5:
-                f2 = _ols(r, np.column_stack([np.ones(n), xs, xs ** 2]))
-                rows.append(dict(test="curvature", covariate=name, quantity=q, n=n, levels=distinct,
-                                 estimate=float(f2.params[2] / (x.std() or 1.0) ** 2), statistic=float(f2.tvalues[2]),
-                                 p=float(f2.pvalues[2]), r2=float(f2.rsquared) if sst > 0 else 0.0))
-        elif n > distinct:  # a group with two rows at least: within-group variance exists
-            labels = col.astype(str).to_numpy()
-            levels = sorted(set(labels))
-            X = np.column_stack([np.ones(n)] + [(labels == lv).astype(float) for lv in levels[1:]])
-            f = _ols(r, X)
-            rows.append(dict(test="group", covariate=name, quantity=q or ("measure" if name == "measure" else ""),
-                             n=n, levels=distinct, estimate=float(np.sqrt(max(f.ess, 0.0) / n)),
-                             statistic=float(f.fvalue), p=float(f.f_pvalue), r2=float(f.rsquared) if sst > 0 else 0.0))
+        rows += _covariate_tests(name, q, col, r[has], numeric, distinct)
     df = pd.DataFrame(rows, columns=[c for c in DIAGNOSIS_COLUMNS if c not in ("p_adjusted", "significant")])
     if len(df):
         p = df["p"].fillna(1.0).to_numpy(float)

@@ -163,7 +163,7 @@ _APPLY = {"moisture_cohesion": _moisture, "rate_friction": _rate, "depth_compact
 EFFECTS: dict[str, Effect] = {
     "moisture_cohesion": Effect(
         name="moisture_cohesion", title="moisture-dependent cohesion (capillary bridges)",
-        params={"c_w": ("J/m^2 per %", (-0.1, 0.1))}, null={"c_w": 0.0},
+        params={"c_w": ("J/m^2 per %", (-0.2, 0.2))}, null={"c_w": 0.0},
         signature=("moisture_content",), needs=("moisture_content",),
         formula="gamma_ss(w) = gamma_ss,cal + c_w (w - w0)",
         source="Willett et al., Langmuir 16 (2000) 9396, Eq. 5; surface energy per moisture as in the Guangxi cohesive soil study",

@@ -39,19 +39,19 @@ def _soil(soil_path, resources_root):
     return load_soil(soil_path, resources_root)
 
 
-def condition_runs(conds, files: dict, run_map: dict, theta: dict | None = None) -> pd.DataFrame:
-    """Run rows of every condition (measurement, row) from the job files its key names
-    (``run_map``: ``"<measurement>/<row>"`` -> key; ``files``: key -> path), tagged with the
-    condition and, for an effect's design point, ``t:<parameter>``."""
+def condition_runs(conds, files: dict, theta: dict | None = None) -> pd.DataFrame:
+    """Run rows of every condition from the job file that simulated it (``files``:
+    ``"<measurement>/<row>"`` -> path), tagged with the condition and, for an effect's design
+    point, ``t:<parameter>``."""
     frames = []
     cache = {}
     for c in conds:
-        key = run_map.get(f"{c.measurement}/{c.row}")
-        if key is None or key not in files:
+        path = files.get(f"{c.measurement}/{c.row}")
+        if path is None:
             continue
-        if key not in cache:
-            cache[key] = pd.read_csv(files[key])
-        df = cache[key]
+        if path not in cache:
+            cache[path] = pd.read_csv(path)
+        df = cache[path]
         measures = [r["measure"] for r in c.responses]
         sel = df[df["measure"].isin(measures)][["measure", "seed", "value", "status"]].copy()
         sel.insert(0, "row", int(c.row))
@@ -64,7 +64,7 @@ def condition_runs(conds, files: dict, run_map: dict, theta: dict | None = None)
     return pd.concat(frames, ignore_index=True)
 
 
-def diagnose_files(soil_path, resources_root, tool_files: dict, run_map: dict, outdir) -> dict:
+def diagnose_files(soil_path, resources_root, tool_files: dict, outdir) -> dict:
     """Residuals, diagnosis, ranking, plan and residual figures of a soil (module docstring)."""
     from soilcal.chain.files import write_csv, write_json
     from soilcal.config.measurements import conditions
@@ -73,17 +73,18 @@ def diagnose_files(soil_path, resources_root, tool_files: dict, run_map: dict, o
     soil = _soil(soil_path, resources_root)
     settings = core.settings_from(soil.data, soil.path)
     conds = conditions(soil)
-    res = rs.residual_frame(rs.observations(conds), condition_runs(conds, tool_files, run_map))
+    res = rs.residual_frame(rs.observations(conds), condition_runs(conds, tool_files))
     qcols = core.quantity_of(conds)
+    if settings.fold_by and settings.fold_by not in {c for cond in conds for c in (cond.covariates or {})}:
+        from soilcal.errors import InputError
+
+        raise InputError(soil.path, "loop.fold_by", "a covariate column of the soil's measured tables ("
+                         + ", ".join(sorted({c for cond in conds for c in (cond.covariates or {})})) + ")",
+                         settings.fold_by)
     diag = dg.diagnose(res, qcols, settings.alpha)
     reference = core.reference_values(res, settings)
     cands = core.candidates(diag, conds, settings) if len(rs.usable(res)) >= 3 else []
-    plan = {"soil": soil.name, "candidates": cands, "reference": reference,
-            "design": {nm: sl.theta_design(EFFECTS[nm], settings.effect_bounds(nm), settings.design_points)
-                       for nm in cands},
-            "null_point": {nm: _null_index(nm, settings) for nm in cands},
-            "fold_by": core.default_fold_by(settings, qcols), "quantity_columns": qcols,
-            "settings": asdict(settings)}
+    plan = _plan(soil.name, cands, reference, settings, qcols)
     out = Path(outdir)
     write_csv(res, out / "residuals.csv")
     write_csv(diag, out / "diagnosis.csv")
@@ -91,6 +92,15 @@ def diagnose_files(soil_path, resources_root, tool_files: dict, run_map: dict, o
     residual_figures(res, None, out / "figures" / "residuals", title=f"{soil.name}: calibrated model")
     write_json(plan, out / "plan.json")
     return plan
+
+
+def _plan(soil_name, cands, reference, settings, qcols) -> dict:
+    return {"soil": soil_name, "candidates": cands, "reference": reference,
+            "design": {nm: sl.theta_design(EFFECTS[nm], settings.effect_bounds(nm), settings.design_points)
+                       for nm in cands},
+            "null_point": {nm: _null_index(nm, settings) for nm in cands},
+            "fold_by": core.default_fold_by(settings, qcols), "quantity_columns": qcols,
+            "settings": asdict(settings)}
 
 
 def _null_index(name: str, settings: core.Settings) -> int:
@@ -102,52 +112,102 @@ def _null_index(name: str, settings: core.Settings) -> int:
     return -1
 
 
-def loop_job(tool_job: dict, conds, effect: str, theta: dict, reference: dict) -> dict:
-    """A tool job (:func:`soilcal.chain.verify.tool_point`) with ``effect`` switched on at
-    ``theta`` for its conditions' quantities (conditions sharing a job share their covariates)."""
+def loop_job(tool_job: dict, cond, effect: str, theta: dict, reference: dict) -> dict:
+    """The tool job (:func:`soilcal.chain.verify.tool_point`) that simulates condition ``cond``,
+    with ``effect`` switched on at ``theta`` for that condition's quantities."""
     if "not_run" in tool_job:
         return dict(tool_job)
-    quantities = {}
-    for c in conds:
-        quantities.update(c.quantities or {})
     specs = []
     for s in tool_job["specs"]:
-        p = EFFECTS[effect].apply(dict(s["params"]), quantities, theta, reference)
+        p = EFFECTS[effect].apply(dict(s["params"]), cond.quantities or {}, theta, reference)
         specs.append(dict(s, params=p))
     return dict(tool_job, specs=specs, effect=effect, theta=dict(theta))
 
 
-def select_files(soil_path, resources_root, outdir, tool_files: dict, run_map: dict,
-                 effect_files: dict) -> core.Outcome:
-    """Selection, predictions, summary, report and figures from the diagnosis outputs in
-    ``outdir`` and the runs: ``effect_files``: effect -> point -> {key: path} (the switched-
-    off point's keys map to the tool runs)."""
-    from soilcal.chain.files import write_csv
+def loop_jobs(conds, tool_jobs: dict, tool_keys: dict, plan: dict, results: str) -> tuple[dict, dict]:
+    """The DEM jobs of a plan's candidates: ({key: job}, {effect: {point: {"<measurement>/<row>":
+    run file}}}).  One job per design point and condition, keyed by what it simulates
+    (:func:`soilcal.chain.verify.tool_key`), so conditions whose parameters the effect sets
+    alike share one; where the effect leaves a condition's parameters as they are (the
+    switched-off point, a condition without the effect's quantity) the file is the tool run
+    itself (``results/<soil>/dem/tools/<key>.csv``; ``results`` is ``results/<soil>``)."""
+    from soilcal.chain.verify import tool_key
+
+    jobs, files = {}, {}
+    for name in plan["candidates"]:
+        files[name] = {}
+        for j, theta in enumerate(plan["design"][name]):
+            files[name][j] = {}
+            for c in conds:
+                key = tool_keys[(c.measurement, c.row)]
+                lj = loop_job(tool_jobs[key], c, name, theta, plan["reference"])
+                lk = tool_key(lj)
+                if lk == key:
+                    files[name][j][f"{c.measurement}/{c.row}"] = f"{results}/dem/tools/{key}.csv"
+                else:
+                    jobs[lk] = lj
+                    files[name][j][f"{c.measurement}/{c.row}"] = f"{results}/loop/runs/{lk}.csv"
+    return jobs, files
+
+
+def _outcome(soil, outdir, tool_files: dict, effect_files: dict, plans: list[dict]):
+    """``analyse`` over the candidates of ``plans`` (the first round, and the second where
+    there is one)."""
     from soilcal.config.measurements import conditions
-    from soilcal.plots.loop import residual_figures
 
     out = Path(outdir)
-    soil = _soil(soil_path, resources_root)
-    plan = json.loads((out / "plan.json").read_text())
     settings = core.settings_from(soil.data, soil.path)
     conds = conditions(soil)
     res = pd.read_csv(out / "residuals.csv")
     diag = pd.read_csv(out / "diagnosis.csv")
+    cands, designs = [], {}
+    for plan in plans:
+        cands += plan["candidates"]
+        designs.update(plan["design"])
     effect_runs = {}
-    for nm in plan["candidates"]:
+    for nm in cands:
         frames = []
-        for j, theta in enumerate(plan["design"][nm]):
-            files = effect_files[nm][str(j)] if str(j) in effect_files[nm] else effect_files[nm][j]
-            frames.append(condition_runs(conds, files, run_map, theta))
+        for j, theta in enumerate(designs[nm]):
+            per = effect_files[nm]
+            frames.append(condition_runs(conds, per[j] if j in per else per[str(j)], theta))
         effect_runs[nm] = pd.concat(frames, ignore_index=True)
-    outcome = core.analyse(soil.name, res, diag, plan["candidates"], effect_runs, settings, plan["reference"],
-                           plan["quantity_columns"])
+    return core.analyse(soil.name, res, diag, cands, effect_runs, settings, plans[0]["reference"],
+                        plans[0]["quantity_columns"]), conds, settings
+
+
+def more_files(soil_path, resources_root, outdir, tool_files: dict, effect_files: dict, out_plan) -> dict:
+    """``plan_more.json``: the second round's candidates (:func:`soilcal.loop.core.more_candidates`)
+    from the first round's runs, with their designs (none: an empty list)."""
+    from soilcal.chain.files import write_json
+
+    soil = _soil(soil_path, resources_root)
+    plan = json.loads((Path(outdir) / "plan.json").read_text())
+    outcome, conds, settings = _outcome(soil, outdir, tool_files, effect_files, [plan])
+    more = core.more_candidates(outcome, conds, settings) if plan["candidates"] else []
+    plan_more = _plan(soil.name, more, plan["reference"], settings, plan["quantity_columns"])
+    write_json(plan_more, out_plan)
+    return plan_more
+
+
+def select_files(soil_path, resources_root, outdir, tool_files: dict, effect_files: dict) -> core.Outcome:
+    """Selection, predictions, summary, report and figures from the diagnosis outputs in
+    ``outdir`` (``plan.json``, ``plan_more.json``) and the runs: ``effect_files``: effect ->
+    point -> {"<measurement>/<row>": run file}; ``tool_files``: the same for the calibrated runs."""
+    from soilcal.chain.files import write_csv
+    from soilcal.plots.loop import residual_figures
+
+    out = Path(outdir)
+    soil = _soil(soil_path, resources_root)
+    plans = [json.loads((out / "plan.json").read_text())]
+    if (out / "plan_more.json").is_file():
+        plans.append(json.loads((out / "plan_more.json").read_text()))
+    outcome, _, _ = _outcome(soil, outdir, tool_files, effect_files, plans)
     write_csv(outcome.selection, out / "selection.csv")
     write_csv(outcome.predictions, out / "predictions.csv")
     write_csv(outcome.summary, out / "loop_summary.csv")
-    residual_figures(res, outcome.predictions if outcome.chosen else None, out / "figures" / "after",
+    residual_figures(outcome.residuals, outcome.predictions if outcome.chosen else None, out / "figures" / "after",
                      title=f"{soil.name}: " + (" + ".join(outcome.chosen) if outcome.chosen else "no effect chosen"))
-    write_text(out / "report.md", report(soil.name, outcome, plan))
+    write_text(out / "report.md", report(soil.name, outcome, plans))
     return outcome
 
 
@@ -166,9 +226,10 @@ def _table(df: pd.DataFrame, cols, fmt=None) -> str:
     return "\n".join(lines)
 
 
-def report(soil: str, o: core.Outcome, plan: dict) -> str:
+def report(soil: str, o: core.Outcome, plans: list) -> str:
     """``report.md``: verdict, error before and after, chosen effects, diagnosis, every
     candidate, settings."""
+    plan = plans[0]
     s = o.summary.iloc[0]
     lines = [f"# Measured-data loop: {soil}", "", f"**Verdict:** {o.verdict}", "",
              "## Error on held-out measurements", "",
@@ -202,6 +263,10 @@ def report(soil: str, o: core.Outcome, plan: dict) -> str:
         lines.append("No candidate effect: " + ("none of the library acts through the significant structure."
                                                  if len(o.diagnosis) and o.diagnosis["significant"].any()
                                                  else "the residual shows no significant structure."))
+    second = plans[1]["candidates"] if len(plans) > 1 else []
+    lines += ["", "Candidates of the first round: " + (", ".join(plan["candidates"]) or "none")
+              + "; of the second (matched by the residual the first round's model left): "
+              + (", ".join(second) or "none") + "."]
     lines += ["", "## Settings", "", f"- reference values (where the calibrated parameters hold): "
               f"{json.dumps(plan.get('reference', {}))}", f"- settings: {json.dumps(plan.get('settings', {}))}",
               "", "Figures: `figures/residuals/` (calibrated model), `figures/after/` (with the chosen effects).", ""]

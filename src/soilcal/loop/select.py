@@ -18,14 +18,15 @@ effects already chosen), on the relative errors ``e_i = (measured_i - prediction
   error of the fold's rows predicted;
 * **paired test** over the folds: one-sided paired t-test (scipy ``ttest_rel``) that the
   reference's fold RMS error exceeds the model's;
-* **information criterion**: AICc = n ln(SSE/n) + 2k + 2k(k+1)/(n-k-1) of the fit to every
-  row, k the number of effect parameters;
+* **information criterion**: AICc = n ln(SSE/n) + 2K + 2K(K+1)/(n-K-1) of the fit to every
+  row, K the number of effect parameters plus one (the residual variance);
 * **confidence intervals**: from the Jacobian of the full fit, cov = s^2 (J^T J)^-1,
   s^2 = SSE/(n-k), two-sided 95 % with Student's t on n-k degrees of freedom.
 
 A model is accepted against its reference when the paired test's p is below ``alpha``, its
-pooled held-out RMS error is below the reference's and its AICc is lower; :func:`forward`
-chooses the effects.
+pooled held-out RMS error is at least :data:`MIN_IMPROVEMENT` (10 %) below the reference's
+(an effect whose gain is within the measurements' precision is not worth its parameter) and
+its AICc is lower; :func:`forward` chooses the effects.
 """
 
 from __future__ import annotations
@@ -107,19 +108,19 @@ class EffectData:
     bounds: dict
     surrogate: Surrogate
     design: list = field(default_factory=list)
+    missing: list = field(default_factory=list)  # rows with a failed run at some design point
 
 
 def build_effect_data(obs: pd.DataFrame, runs: pd.DataFrame, effect, bounds: dict) -> EffectData:
     """Surrogate of ``effect`` from its runs (measurement, row, measure, value, ``t:<name>``)
-    for the rows of ``obs``; a row without a value at some design point gets the calibrated
-    mean there (NaN rows are refused)."""
+    for the rows of ``obs`` (a failed run at a design point: see the comment below)."""
     names = effect.theta_names()
     tcols = [T_PREFIX + k for k in names]
+    design = sorted({tuple(float(x) for x in t) for t in runs[tcols].itertuples(index=False)})  # every point run
     r = runs[np.isfinite(pd.to_numeric(runs["value"], errors="coerce"))]
     if "status" in r.columns:
         r = r[r["status"].astype(str) == "ok"]
     means = r.groupby(["measurement", "row", "measure"] + tcols)["value"].mean().reset_index()
-    design = sorted({tuple(float(x) for x in t) for t in means[tcols].itertuples(index=False)})
     Y = np.full((len(design), len(obs)), np.nan)
     index = {t: j for j, t in enumerate(design)}
     keys = {(m, int(rw), ms): i for i, (m, rw, ms) in enumerate(zip(obs["measurement"], obs["row"], obs["measure"]))}
@@ -127,20 +128,38 @@ def build_effect_data(obs: pd.DataFrame, runs: pd.DataFrame, effect, bounds: dic
         i = keys.get((rec[0], int(rec[1]), rec[2]))
         if i is not None:
             Y[index[tuple(float(x) for x in rec[3:3 + len(tcols)])], i] = rec[-1]
+    missing = []
     if np.isnan(Y).any():
-        j, i = np.argwhere(np.isnan(Y))[0]
-        raise ValueError(f"effect {effect.name}: no simulated value of {obs['measurement'][i]} row "
-                         f"{obs['row'][i]} {obs['measure'][i]} at {dict(zip(names, design[j]))}")
-    return EffectData(effect, bounds, Surrogate(effect, bounds, np.array(design), Y), [dict(zip(names, t)) for t in design])
+        # a run that failed at a design point: the row's value there is interpolated over its
+        # other points (one parameter) or taken from the switched-off point (two); a row with
+        # fewer than two points is refused
+        null = tuple(float(effect.null[k]) for k in names)
+        for i in np.flatnonzero(np.isnan(Y).any(axis=0)):
+            ok = ~np.isnan(Y[:, i])
+            where = f"{obs['measurement'][i]} row {obs['row'][i]} {obs['measure'][i]}"
+            if ok.sum() < 2:
+                raise ValueError(f"effect {effect.name}: fewer than two design points simulated for {where}")
+            missing.append(where)
+            if len(names) == 1:
+                xs = np.array([t[0] for t in design])
+                Y[~ok, i] = np.interp(xs[~ok], xs[ok], Y[ok, i])
+            elif null in index and ok[index[null]]:
+                Y[~ok, i] = Y[index[null], i]
+            else:
+                raise ValueError(f"effect {effect.name}: no simulated value of {where} at the switched-off point")
+    return EffectData(effect, bounds, Surrogate(effect, bounds, np.array(design), Y), [dict(zip(names, t)) for t in design],
+                      missing)
 
 
 def _folds(obs: pd.DataFrame, fold_by: str | None) -> list[np.ndarray]:
     """Index arrays of the held-out groups: the values of ``fold_by`` (a covariate column),
     else the measured conditions."""
+    cond = obs["measurement"].astype(str) + "/" + obs["row"].astype(str)
     if fold_by:
-        col = obs[f"cov:{fold_by}"].astype(str)
+        raw = obs[f"cov:{fold_by}"]
+        col = ("g:" + raw.astype(str)).where(raw.notna(), "c:" + cond)  # a row without the group: its condition
     else:
-        col = obs["measurement"].astype(str) + "/" + obs["row"].astype(str)
+        col = cond
     return [np.flatnonzero(col.to_numpy() == g) for g in dict.fromkeys(col)]
 
 
@@ -187,7 +206,12 @@ class Model:
         best = None
         starts = [np.clip(x0, lo, hi) for x0 in self.starts()]
         cost = [float(np.sum(self.errors(x0, idx) ** 2)) for x0 in starts]
-        for j in np.argsort(cost, kind="stable")[:2]:  # the two best design points start the search
+        null = np.concatenate([[e.effect.null[k] for k in e.effect.theta_names()] for e in self.effects])
+        span = np.where(hi > lo, hi - lo, 1.0)
+        dist = [float(np.sum(((x0 - null) / span) ** 2)) for x0 in starts]
+        # the two best design points start the search; a tie (data that do not move the
+        # result) goes to the switched-off value
+        for j in sorted(range(len(starts)), key=lambda j: (round(cost[j], 12), dist[j]))[:2]:
             x0 = starts[j]
             res = least_squares(lambda x: self.errors(x, idx), x0, bounds=(lo, hi), method="trf")
             if best is None or res.cost < best.cost - 1e-15:
@@ -243,7 +267,11 @@ def cross_validate(model: Model, folds) -> tuple[np.ndarray, np.ndarray]:
     return np.array(rms), held
 
 
-def score(model: Model, ref: Model, folds, alpha: float = 0.05) -> Score:
+#: smallest relative fall of the held-out RMS error for which an effect is worth its parameter
+MIN_IMPROVEMENT = 0.1
+
+
+def score(model: Model, ref: Model, folds, alpha: float = 0.05, min_improvement: float = MIN_IMPROVEMENT) -> Score:
     """Score ``model`` against ``ref`` (module docstring)."""
     from scipy import stats
 
@@ -257,7 +285,7 @@ def score(model: Model, ref: Model, folds, alpha: float = 0.05) -> Score:
     er = ref.errors(xr)
     sse, sse_r = float(np.sum(e ** 2)), float(np.sum(er ** 2))
     k = model.k
-    a, ar = aicc(sse, n, k), aicc(sse_r, n, ref.k)
+    a, ar = aicc(sse, n, k + 1), aicc(sse_r, n, ref.k + 1)  # + 1: the residual variance is estimated too
     names = [f"{ed.effect.name}.{t}" for ed in model.effects for t in ed.effect.theta_names()]
     ci = {}
     if res is not None and n > k:
@@ -265,11 +293,11 @@ def score(model: Model, ref: Model, folds, alpha: float = 0.05) -> Score:
 
         J = res.jac
         s2 = sse / (n - k)
-        try:
+        if np.linalg.matrix_rank(J) < k:  # the data do not pin a parameter down
+            half = np.full(k, np.inf)
+        else:
             cov = s2 * np.linalg.pinv(J.T @ J)
             half = st.t.ppf(0.975, n - k) * np.sqrt(np.clip(np.diag(cov), 0, None))
-        except np.linalg.LinAlgError:
-            half = np.full(k, np.nan)
         ci = {nm: (float(x[j] - half[j]), float(x[j] + half[j])) for j, nm in enumerate(names)}
     d = ref_rms[ok] - fold_rms[ok]
     if ok.sum() < 2:
@@ -289,6 +317,9 @@ def score(model: Model, ref: Model, folds, alpha: float = 0.05) -> Score:
             fails.append(f"held-out error not significantly lower (paired t-test p = {p:.3g} >= {alpha:g})")
         if not (rmse < rmse_r):
             fails.append("held-out RMS error not lower")
+        elif not (rmse <= (1 - min_improvement) * rmse_r):
+            fails.append(f"held-out RMS error lower by less than {min_improvement:.0%} ({100 * rmse:.2f} % vs "
+                         f"{100 * rmse_r:.2f} %)")
         if not (a < ar):
             fails.append(f"AICc not lower ({a:.2f} vs {ar:.2f})")
         reason = "; ".join(fails)
@@ -337,7 +368,8 @@ def forward(obs: pd.DataFrame, y0: np.ndarray, data: dict, fold_by: str | None =
             s = score(model(chosen + [name]), ref, folds, alpha)
             tried.append((name, s))
             steps.append((step, chosen + [name], s))
-        better = [(nm, s) for nm, s in tried if s.rmse() < s.rmse(True) and s.aicc < s.ref_aicc]
+        better = [(nm, s) for nm, s in tried
+                  if s.rmse() <= (1 - MIN_IMPROVEMENT) * s.rmse(True) and s.aicc < s.ref_aicc]
         if not better:
             break
         chosen.append(min(better, key=lambda t: (t[1].rmse(), t[1].aicc))[0])

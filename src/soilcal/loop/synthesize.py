@@ -12,9 +12,10 @@ measurement noise:
   uniformly in [1 + low, 1 + high]: stones met by the tool as rigid inclusions;
 * ``day_offset``: one relative offset per ``day`` label, normal with SD ``sd``: a level that
   varies at random between test days;
-* noise: the value is the mean of ``n`` repeats whose relative SD is ``noise`` (so the
-  value's own relative SD is ``noise / sqrt(n)``); the table's ``sd`` column is ``noise``
-  times the value and its ``n`` column ``n``.
+* repeats: one measured repeat per simulation seed in ``seeds`` (the granular scatter of a
+  real test), each times relative instrument noise, normal with SD ``noise``; the table's
+  value is the repeats' mean, ``sd`` their sample SD and ``n`` their count, as a lab reports
+  a soil-bin test.
 
 Every random draw comes from one generator seeded by ``seed``; the draws are listed in the
 returned table's ``truth`` columns and in the run's manifest.
@@ -44,7 +45,7 @@ def check_hidden(hidden: dict, source="<synthesize>") -> None:
 
 
 def synthesize(conditions, base_params, simulate, hidden: dict | None = None, reference: dict | None = None,
-               disturbances: dict | None = None, noise: float = 0.02, n_repeats: int = 3, seed: int = 0,
+               disturbances: dict | None = None, noise: float = 0.02, seed: int = 0,
                seeds=(100, 101, 102)) -> pd.DataFrame:
     """One row per condition and measured quantity: measurement, row, measure, value, sd, n,
     and the truth (simulated mean with the hidden effects, the disturbance factor)."""
@@ -80,12 +81,11 @@ def synthesize(conditions, base_params, simulate, hidden: dict | None = None, re
         p = apply_all(hidden, base_params(c), c.quantities or {}, reference)
         vals = [simulate(c, p, s) for s in seeds]
         for r in c.responses:
-            m = float(np.mean([v[r["measure"]] for v in vals]))
-            true = m * factor[i]
-            value = true * (1 + noise / math.sqrt(n_repeats) * rng.standard_normal())
-            rows.append({"measurement": c.measurement, "row": c.row, "measure": r["measure"], "value": value,
-                         "sd": abs(value) * noise, "n": n_repeats, "truth_simulated": m,
-                         "truth_disturbance": factor[i]})
+            sims = np.array([v[r["measure"]] for v in vals], float)
+            reps = sims * factor[i] * (1 + noise * rng.standard_normal(len(sims)))
+            rows.append({"measurement": c.measurement, "row": c.row, "measure": r["measure"],
+                         "value": float(np.mean(reps)), "sd": float(np.std(reps, ddof=1)) if len(reps) > 1 else math.nan,
+                         "n": len(reps), "truth_simulated": float(np.mean(sims)), "truth_disturbance": factor[i]})
     return pd.DataFrame(rows)
 
 
