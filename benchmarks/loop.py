@@ -17,7 +17,8 @@ Cases: every library effect, two effects at once, a periodic disturbance along t
 stones, a random offset between test days, and no effect.  Written:
 ``benchmarks/results/loop.csv`` (one row per engine, case and campaign seed: chosen effects,
 parameter error, RMS error before/after, false attribution, wall time; earlier rows of the
-engines and cases not run kept) and ``loop.md``.
+engines and cases not run kept), ``loop.md``, and per DEM case its residuals, diagnosis before
+and after and every model tried (``benchmarks/results/loop_dem/<case>_*.csv``).
 
     python benchmarks/loop.py [--engines standin,dem] [--cases rate,stones] [--seeds 3] [--n 12]
 """
@@ -86,7 +87,7 @@ def _row(engine, case, seed, hidden, dist, out, wall, runs):
                 rmse_after_percent=round(float(s["rmse_after_percent"]), 2),
                 error_reduction_percent=round(float(s["error_reduction_percent"]), 1)
                 if np.isfinite(s["error_reduction_percent"]) else "",
-                verdict=out.verdict.replace("|", "/")[:160], dem_runs=runs, wall_s=round(wall, 1), commit=commit())
+                verdict=out.verdict.replace("|", "/"), dem_runs=runs, wall_s=round(wall, 1), commit=commit())
 
 
 def standin_rows(cases, seeds):
@@ -172,6 +173,12 @@ def dem_rows(cases, n, seed, threads):
             out = core.run_inprocess("dem-campaign", sy.with_measured(conds, table), base, counted, settings,
                                      seeds=tuple(range(DEM_SEEDS)))
             rows.append(_row("dem", case, seed, hidden, dist, out, time.perf_counter() - t0, counter["runs"]))
+            detail = HERE / "results" / "loop_dem"
+            detail.mkdir(parents=True, exist_ok=True)
+            for name, df in (("residuals", out.residuals), ("diagnosis", out.diagnosis), ("selection", out.selection),
+                             ("diagnosis_after", out.diagnosis_after)):
+                if df is not None:
+                    df.to_csv(detail / f"{case}_{name}.csv", index=False)
             print(rows[-1]["case"], rows[-1]["chosen"], rows[-1]["verdict"][:100], rows[-1]["wall_s"], flush=True)
     return rows
 
@@ -230,7 +237,13 @@ def main(argv=None):
           "hidden ones (none for a disturbance outside the library or no effect); false attribution: a library "
           "effect chosen that was not hidden.  Targets: the right effect with its parameter within 25 % and the "
           "held-out RMS error down by 70 %; no false attribution.", "",
-          *_summary(rows), "", "Rows: `loop.csv`.", ""]
+          *_summary(rows), "", "DEM rows (verdicts in full):", "",
+          "| case | chosen | parameter error, % | RMS error before -> after, % | DEM runs | wall s | commit | verdict |",
+          "|---|---|---|---|---|---|---|---|",
+          *(f"| {r['case']} | {r['chosen']} | {r['parameter_error_percent']} | {r['rmse_before_percent']} -> "
+            f"{r['rmse_after_percent']} | {r['dem_runs']} | {r['wall_s']} | {r['commit']} | {r['verdict']} |"
+            for r in rows if r["engine"] == "dem"),
+          "", "Rows: `loop.csv`; per DEM case: `loop_dem/`.", ""]
     write_page(out / "loop.md", md)
     print("\n".join(_summary(rows)))
 

@@ -228,15 +228,21 @@ def _follows(rank: pd.DataFrame) -> str:
     return f"{top['covariate']} (r2 {top['r2']:.2f}, Holm p {top['p_adjusted']:.3g})"
 
 
-def default_fold_by(settings: Settings, quantity_cols: dict) -> str | None:
+def default_fold_by(settings: Settings, quantity_cols: dict, diag: pd.DataFrame | None = None) -> str | None:
     """The held-out groups: ``loop.fold_by``, else the column holding the test ``day`` (or a
-    ``group``): rows measured on one day share its conditions and are not independent, so a
-    day is held out whole; else each measured condition."""
+    ``group``) where the residual differs between its groups (raw p < alpha): rows measured
+    on one day then share that day's level and are not independent, so a day is held out
+    whole; else each measured condition (more folds, a stronger paired test)."""
     if settings.fold_by:
         return settings.fold_by
     for q in ("day", "group"):
         for col, qq in (quantity_cols or {}).items():
-            if qq == q:
+            if qq != q:
+                continue
+            if diag is None:
+                return col
+            t = diag[(diag["covariate"] == col) & (diag["test"] == "group")]
+            if len(t) and float(t["p"].min()) < settings.alpha:
                 return col
     return None
 
@@ -258,7 +264,7 @@ def analyse(soil: str, res: pd.DataFrame, diag: pd.DataFrame, cands: list, effec
     provisional = []
     sel = None
     data = {}
-    fold_by = default_fold_by(settings, quantity_cols)
+    fold_by = default_fold_by(settings, quantity_cols, diag)
     if n >= 3 and cands:
         data = {nm: sl.build_effect_data(u, effect_runs[nm], EFFECTS[nm], settings.effect_bounds(nm)) for nm in cands}
         if fold_by and f"cov:{fold_by}" not in u.columns:
@@ -282,9 +288,6 @@ def analyse(soil: str, res: pd.DataFrame, diag: pd.DataFrame, cands: list, effec
         verdict = "no measured value to compare with (nothing to diagnose)"
     elif n < 3:
         verdict = f"unexplained: too few measured values to decide ({n})"
-    elif sel is not None and sel.chosen and left:
-        verdict = (f"unexplained: the residual follows {follows}; " + " + ".join(sel.chosen)
-                   + f" lowered the held-out error, but the residual with it still follows {left} (selection.csv)")
     elif sel is not None and sel.chosen:
         chosen = sel.chosen
         s = sel.final
@@ -297,6 +300,8 @@ def analyse(soil: str, res: pd.DataFrame, diag: pd.DataFrame, cands: list, effec
         pred["heldout_prediction"] = meas - held * np.abs(meas)
         after_cv = held
         verdict = "explained by " + " + ".join(chosen)
+        if left:  # what the chosen effects leave: structure no effect of the library accounted for
+            verdict += f"; the residual left still follows {left}, which stays unexplained"
     elif not structure:
         rms = float(np.sqrt(np.mean(before ** 2))) * 100
         judged = len(diag) and (diag["test"] == "scatter").any()

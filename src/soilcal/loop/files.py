@@ -84,7 +84,7 @@ def diagnose_files(soil_path, resources_root, tool_files: dict, outdir) -> dict:
     diag = dg.diagnose(res, qcols, settings.alpha)
     reference = core.reference_values(res, settings)
     cands = core.candidates(diag, conds, settings) if len(rs.usable(res)) >= 3 else []
-    plan = _plan(soil.name, cands, reference, settings, qcols)
+    plan = _plan(soil.name, cands, reference, settings, qcols, diag)
     out = Path(outdir)
     write_csv(res, out / "residuals.csv")
     write_csv(diag, out / "diagnosis.csv")
@@ -94,12 +94,12 @@ def diagnose_files(soil_path, resources_root, tool_files: dict, outdir) -> dict:
     return plan
 
 
-def _plan(soil_name, cands, reference, settings, qcols) -> dict:
+def _plan(soil_name, cands, reference, settings, qcols, diag) -> dict:
     return {"soil": soil_name, "candidates": cands, "reference": reference,
             "design": {nm: sl.theta_design(EFFECTS[nm], settings.effect_bounds(nm), settings.design_points)
                        for nm in cands},
             "null_point": {nm: _null_index(nm, settings) for nm in cands},
-            "fold_by": core.default_fold_by(settings, qcols), "quantity_columns": qcols,
+            "fold_by": core.default_fold_by(settings, qcols, diag), "quantity_columns": qcols,
             "settings": asdict(settings)}
 
 
@@ -184,7 +184,8 @@ def more_files(soil_path, resources_root, outdir, tool_files: dict, effect_files
     plan = json.loads((Path(outdir) / "plan.json").read_text())
     outcome, conds, settings = _outcome(soil, outdir, tool_files, effect_files, [plan])
     more = core.more_candidates(outcome, conds, settings) if plan["candidates"] else []
-    plan_more = _plan(soil.name, more, plan["reference"], settings, plan["quantity_columns"])
+    plan_more = _plan(soil.name, more, plan["reference"], settings, plan["quantity_columns"],
+                      pd.read_csv(Path(outdir) / "diagnosis.csv"))
     write_json(plan_more, out_plan)
     return plan_more
 
