@@ -218,13 +218,14 @@ def main(argv=None):
             ap.error(f"--cases: {c!r} is not one of {', '.join(STANDIN_CASES)}")
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
-    old = [r for r in read_rows(out / "loop.csv", FIELDS) if not (r["engine"] in engines and r["case"] in cases)]
     new = []
     t0 = time.perf_counter()
     if "standin" in engines:
         new += standin_rows(cases, args.seeds)
     if "dem" in engines:
         new += dem_rows(cases, args.n, args.seed, args.threads)
+    # earlier rows read only now, so that a run of another engine in the meantime is kept
+    old = [r for r in read_rows(out / "loop.csv", FIELDS) if not (r["engine"] in engines and r["case"] in cases)]
     rows = old + new
     write_rows(out / "loop.csv", rows, FIELDS)
     md = ["# Measured-data loop benchmark", "",

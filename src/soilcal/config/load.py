@@ -232,7 +232,7 @@ def _semantic_checks(path: Path, d: dict, resources_root: Path) -> None:
 
         check_measurements(path, d, resources_root)
     if d.get("loop"):
-        from soilcal.loop.core import settings_from
+        from soilcal.loop.settings import settings_from
 
         settings_from(d, path)
 

@@ -33,7 +33,7 @@ Covariate forms (exactly one per column):
 * ``{ignore: true}``: an id or label column that does not change the simulation.
 
 Any covariate may also say which physical quantity its column holds (``quantity``, one of
-:data:`QUANTITIES`, with ``unit`` for a numeric one: ``rotor_speed_rpm: {setup: {...},
+:data:`soilcal.config.quantities.QUANTITIES`, with ``unit`` for a numeric one: ``rotor_speed_rpm: {setup: {...},
 quantity: rotor_speed, unit: r/min}``).  The measured-data loop (:mod:`soilcal.loop`) tests the
 residual against every covariate column, and its model extensions act through these
 quantities (a rate effect through ``tool_speed`` or ``rotor_speed``, moisture-dependent
@@ -65,6 +65,7 @@ from pathlib import Path
 
 import pandas as pd
 
+from soilcal.config.quantities import POSITIVE_QUANTITIES, QUANTITIES  # noqa: F401 (QUANTITIES re-exported)
 from soilcal.errors import InputError
 
 BLOCK = "measurements"
@@ -88,23 +89,6 @@ UNIT_SUFFIXES = (
 DIMENSIONLESS = "-"
 
 _FORMS = ("setup", "set", "param", "case", "ignore")
-
-#: quantity -> (SI unit, {accepted unit: factor to SI}); ``None`` for a label quantity
-#: (a tool id, a test day, a group) whose cells are names, not numbers
-QUANTITIES = {
-    "tool_speed": ("m/s", {"m/s": 1.0, "km/h": 1 / 3.6, "mm/s": 1e-3, "cm/s": 1e-2}),
-    "working_depth": ("m", {"m": 1.0, "cm": 1e-2, "mm": 1e-3}),
-    "rotor_speed": ("r/min", {"r/min": 1.0, "rpm": 1.0, "rad/s": 60 / (2 * math.pi)}),
-    "moisture_content": ("%", {"%": 1.0}),
-    "layer_depth": ("m", {"m": 1.0, "cm": 1e-2, "mm": 1e-3}),
-    "bulk_density": ("kg/m^3", {"kg/m^3": 1.0, "g/cm^3": 1e3, "t/m^3": 1e3}),
-    "position": ("m", {"m": 1.0, "cm": 1e-2, "mm": 1e-3}),
-    "tool": None,
-    "day": None,
-    "group": None,
-}
-#: quantities that must be above zero (an effect takes their logarithm or a ratio to them)
-POSITIVE_QUANTITIES = ("tool_speed", "working_depth", "rotor_speed", "layer_depth", "bulk_density")
 _RESPONSE_COLUMNS = ("value", "sd", "n", "paper_simulated", "paper_difference")
 
 

@@ -35,7 +35,7 @@ from __future__ import annotations
 
 import json
 import math
-from dataclasses import asdict, dataclass, field
+from dataclasses import dataclass
 
 import numpy as np
 import pandas as pd
@@ -44,89 +44,14 @@ from soilcal.errors import InputError
 from soilcal.loop import diagnose as dg
 from soilcal.loop import residuals as rs
 from soilcal.loop import select as sl
-from soilcal.loop.effects import EFFECTS, get
-
-
-@dataclass
-class Settings:
-    alpha: float = 0.05
-    effects: list = field(default_factory=lambda: list(EFFECTS))
-    candidates: str = "matched"
-    bounds: dict = field(default_factory=dict)
-    reference: dict = field(default_factory=dict)
-    design_points: int = 5
-    fold_by: str | None = None
-    max_effects: int = 2
-
-    def effect_bounds(self, name: str) -> dict:
-        return get(name).bounds(self.bounds.get(name))
-
-
-def settings_from(soil_data: dict, source="<soil>") -> Settings:
-    """Settings of a soil's ``loop`` block, checked by field."""
-    block = dict(soil_data.get("loop") or {})
-    s = Settings()
-    known = {f for f in asdict(s)}
-    for k in block:
-        if k not in known:
-            raise InputError(source, f"loop.{k}", "one of " + ", ".join(sorted(known)), k)
-    if "alpha" in block:
-        a = block["alpha"]
-        if not isinstance(a, (int, float)) or not 0 < a < 1:
-            raise InputError(source, "loop.alpha", "a number in (0, 1)", a)
-        s.alpha = float(a)
-    if "effects" in block:
-        for j, name in enumerate(block["effects"] or []):
-            if name not in EFFECTS:
-                raise InputError(source, f"loop.effects[{j}]", "one of " + ", ".join(EFFECTS), name)
-        s.effects = list(block["effects"] or [])
-    if "candidates" in block:
-        if block["candidates"] not in ("matched", "all"):
-            raise InputError(source, "loop.candidates", "matched or all", block["candidates"])
-        s.candidates = block["candidates"]
-    for name, b in (block.get("bounds") or {}).items():
-        eff = EFFECTS.get(name)
-        if eff is None:
-            raise InputError(source, f"loop.bounds.{name}", "an effect of the library (" + ", ".join(EFFECTS) + ")", name)
-        for k, v in (b or {}).items():
-            if k not in eff.params:
-                raise InputError(source, f"loop.bounds.{name}.{k}", "a parameter of the effect ("
-                                 + ", ".join(eff.params) + ")", k)
-            if not (isinstance(v, (list, tuple)) and len(v) == 2 and all(isinstance(x, (int, float)) for x in v)
-                    and v[0] < v[1]):
-                raise InputError(source, f"loop.bounds.{name}.{k}", "[low, high] with low < high", v)
-        s.bounds[name] = {k: [float(v[0]), float(v[1])] for k, v in (b or {}).items()}
-    from soilcal.config.measurements import QUANTITIES
-
-    for q, v in (block.get("reference") or {}).items():
-        if q not in QUANTITIES or QUANTITIES[q] is None:
-            raise InputError(source, f"loop.reference.{q}", "a numeric quantity ("
-                             + ", ".join(k for k, u in QUANTITIES.items() if u) + ")", q)
-        from soilcal.config.measurements import POSITIVE_QUANTITIES
-
-        if not isinstance(v, (int, float)) or not math.isfinite(v) or (q in POSITIVE_QUANTITIES and not v > 0):
-            raise InputError(source, f"loop.reference.{q}",
-                             f"a {'positive ' if q in POSITIVE_QUANTITIES else ''}number in {QUANTITIES[q][0]}", v)
-        s.reference[q] = float(v)
-    if "design_points" in block:
-        v = block["design_points"]
-        if not isinstance(v, int) or v < 3:
-            raise InputError(source, "loop.design_points", "an integer >= 3", v)
-        s.design_points = v
-    if "fold_by" in block:
-        s.fold_by = block["fold_by"]
-    if "max_effects" in block:
-        v = block["max_effects"]
-        if not isinstance(v, int) or v < 1:
-            raise InputError(source, "loop.max_effects", "an integer >= 1", v)
-        s.max_effects = v
-    return s
+from soilcal.loop.effects import EFFECTS
+from soilcal.loop.settings import Settings, settings_from  # noqa: F401 (settings_from re-exported)
 
 
 def reference_values(res: pd.DataFrame, settings: Settings) -> dict:
     """Quantity -> the value at which the calibrated parameters hold: declared, else the
     mean over the usable rows (recorded in the outputs)."""
-    from soilcal.config.measurements import QUANTITIES
+    from soilcal.config.quantities import QUANTITIES
 
     out = {}
     u = rs.usable(res)

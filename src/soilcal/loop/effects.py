@@ -55,6 +55,10 @@ parameter's physical range, :data:`soilcal.dem.scenarios.base._RANGES`):
     of every condition, more where the contact area is larger.  Signature: ``tool``,
     ``bias``.
 
+Not in the library yet: plastic contact (an elasto-plastic normal model such as EEPA,
+Morrissey 2013, for compression tests) needs a normal contact law with a loading history,
+which :mod:`soilcal.dem.contact` does not have.
+
 :data:`EFFECTS` maps names to effects; :func:`get` refuses an unknown name with the list.
 """
 

@@ -1,0 +1,22 @@
+"""The physical quantities a measured table's covariate may declare (``quantity``, ``unit``):
+their SI unit and accepted units.  Plain data, imported by the measurement loader and by the
+measured-data loop."""
+
+import math
+
+#: quantity -> (SI unit, {accepted unit: factor to SI}); ``None`` for a label quantity
+#: (a tool id, a test day, a group) whose cells are names, not numbers
+QUANTITIES = {
+    "tool_speed": ("m/s", {"m/s": 1.0, "km/h": 1 / 3.6, "mm/s": 1e-3, "cm/s": 1e-2}),
+    "working_depth": ("m", {"m": 1.0, "cm": 1e-2, "mm": 1e-3}),
+    "rotor_speed": ("r/min", {"r/min": 1.0, "rpm": 1.0, "rad/s": 60 / (2 * math.pi)}),
+    "moisture_content": ("%", {"%": 1.0}),
+    "layer_depth": ("m", {"m": 1.0, "cm": 1e-2, "mm": 1e-3}),
+    "bulk_density": ("kg/m^3", {"kg/m^3": 1.0, "g/cm^3": 1e3, "t/m^3": 1e3}),
+    "position": ("m", {"m": 1.0, "cm": 1e-2, "mm": 1e-3}),
+    "tool": None,
+    "day": None,
+    "group": None,
+}
+#: quantities that must be above zero (an effect takes their logarithm or a ratio to them)
+POSITIVE_QUANTITIES = ("tool_speed", "working_depth", "rotor_speed", "layer_depth", "bulk_density")
