@@ -101,10 +101,6 @@ def plan(conditions, names, settings: Settings, reference: dict) -> list[dict]:
     return out
 
 
-def effect_params(effect_name: str, theta: dict, params: dict, quantities: dict, reference: dict) -> dict:
-    return EFFECTS[effect_name].apply(params, quantities, theta, reference)
-
-
 # --------------------------------------------------------------------------- analysis
 
 SELECTION_COLUMNS = ["step", "effects", "parameters", "ci95", "heldout_rmse_percent", "reference_heldout_rmse_percent",
@@ -201,13 +197,18 @@ def analyse(soil: str, res: pd.DataFrame, diag: pd.DataFrame, cands: list, effec
                              "heldout_max_percent": 100 * s.max_error(), "aicc": s.aicc, "reference_aicc": s.ref_aicc,
                              "p_paired": s.p, "accepted": s.accepted, "reason": s.reason})
         provisional = list(sel.forward_chosen)
-    left = ""
-    if sel is not None and sel.chosen:
-        m = sl.Model([data[c] for c in sel.chosen], u["simulated_mean"].to_numpy(float), u["measured"].to_numpy(float))
+    # the residual the chosen effects leave (or, where the gate dropped them all, the forward
+    # step's model: what it leaves may name an effect the first round masked), diagnosed once
+    after, left, fitted = None, "", None
+    names = (sel.chosen or provisional) if sel is not None else []
+    if names:
+        m = sl.Model([data[c] for c in names], u["simulated_mean"].to_numpy(float), u["measured"].to_numpy(float))
         x, _ = m.fit()
-        rest = dg.ranking(dg.diagnose(residual_after(res, m.predict(x)), quantity_cols, settings.alpha))
+        fitted = m.predict(x)
+        after = dg.diagnose(residual_after(res, fitted), quantity_cols, settings.alpha)
+        rest = dg.ranking(after)
         rest = rest[rest["significant"].astype(bool) & (rest["covariate"] != "scatter")]
-        if len(rest):
+        if len(rest) and sel.chosen:
             left = _follows(rest)
     if n == 0:
         verdict = "no measured value to compare with (nothing to diagnose)"
@@ -215,11 +216,8 @@ def analyse(soil: str, res: pd.DataFrame, diag: pd.DataFrame, cands: list, effec
         verdict = f"unexplained: too few measured values to decide ({n})"
     elif sel is not None and sel.chosen:
         chosen = sel.chosen
-        s = sel.final
-        theta, ci = s.theta, s.ci
-        m = sl.Model([data[c] for c in chosen], u["simulated_mean"].to_numpy(float), u["measured"].to_numpy(float))
-        x = np.array([theta[k] for k in s.names])
-        pred["with_effects"] = m.predict(x)
+        theta, ci = sel.final.theta, sel.final.ci
+        pred["with_effects"] = fitted
         _, held = sl.cross_validate(m, sl._folds(u, fold_by))
         meas = u["measured"].to_numpy(float)
         pred["heldout_prediction"] = meas - held * np.abs(meas)
@@ -255,13 +253,6 @@ def analyse(soil: str, res: pd.DataFrame, diag: pd.DataFrame, cands: list, effec
         "rmse_after_percent": ra, "max_before_percent": mb, "max_after_percent": ma,
         "error_reduction_percent": (1 - ra / rb) * 100 if rb and np.isfinite(rb) and rb > 0 else math.nan,
         "alpha": settings.alpha, "reference": _fmt(reference)}], columns=SUMMARY_COLUMNS)
-    after = None
-    if chosen:
-        after = dg.diagnose(residual_after(res, pred["with_effects"].to_numpy(float)), quantity_cols, settings.alpha)
-    elif provisional:  # the forward step's model, before the gate: what it leaves may name a masked effect
-        m = sl.Model([data[c] for c in provisional], u["simulated_mean"].to_numpy(float), u["measured"].to_numpy(float))
-        x, _ = m.fit()
-        after = dg.diagnose(residual_after(res, m.predict(x)), quantity_cols, settings.alpha)
     return Outcome(res, diag, rank, cands, pd.DataFrame(sel_rows, columns=SELECTION_COLUMNS), summary, pred,
                    verdict, chosen, theta, after)
 
@@ -282,7 +273,7 @@ def run_inprocess(soil: str, conditions, base_params, simulate, settings: Settin
         for c in conditions:
             p = base_params(c)
             if effect:
-                p = effect_params(effect, theta, p, c.quantities or {}, reference)
+                p = EFFECTS[effect].apply(p, c.quantities or {}, theta, reference)
             for seed in seeds:
                 vals = simulate(c, p, seed)
                 for r in c.responses:
@@ -306,7 +297,7 @@ def run_inprocess(soil: str, conditions, base_params, simulate, settings: Settin
             eff = EFFECTS[name]
             frames = []
             for th in sl.theta_design(eff, settings.effect_bounds(name), settings.design_points):
-                if all(float(th[k]) == float(eff.null[k]) for k in th):  # switched off: the calibrated runs
+                if eff.is_null(th):  # switched off: the calibrated runs
                     frames.append(base.assign(**{sl.T_PREFIX + k: float(v) for k, v in th.items()}))
                 else:
                     frames.append(runs_at(name, th, reference))

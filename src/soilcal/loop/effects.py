@@ -102,6 +102,10 @@ class Effect:
             out[k] = (float(v[0]), float(v[1]))
         return out
 
+    def is_null(self, theta: dict) -> bool:
+        """Whether ``theta`` switches the effect off."""
+        return all(float(theta[k]) == float(self.null[k]) for k in self.params)
+
     def applies_to(self, quantities: dict) -> bool:
         """Whether a condition carrying these quantities is changed by the effect at all."""
         return not self.needs or any(q in quantities for q in self.needs)

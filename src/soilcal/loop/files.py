@@ -98,18 +98,8 @@ def _plan(soil_name, cands, reference, settings, qcols, diag) -> dict:
     return {"soil": soil_name, "candidates": cands, "reference": reference,
             "design": {nm: sl.theta_design(EFFECTS[nm], settings.effect_bounds(nm), settings.design_points)
                        for nm in cands},
-            "null_point": {nm: _null_index(nm, settings) for nm in cands},
             "fold_by": core.default_fold_by(settings, qcols, diag), "quantity_columns": qcols,
             "settings": asdict(settings)}
-
-
-def _null_index(name: str, settings: core.Settings) -> int:
-    eff = EFFECTS[name]
-    design = sl.theta_design(eff, settings.effect_bounds(name), settings.design_points)
-    for j, th in enumerate(design):
-        if all(float(th[k]) == float(eff.null[k]) for k in eff.theta_names()):
-            return j
-    return -1
 
 
 def loop_job(tool_job: dict, cond, effect: str, theta: dict, reference: dict) -> dict:

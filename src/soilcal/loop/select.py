@@ -38,7 +38,6 @@ from dataclasses import dataclass, field
 import numpy as np
 import pandas as pd
 
-from soilcal.loop.effects import EFFECTS
 
 T_PREFIX = "t:"
 
@@ -333,8 +332,6 @@ class Selection:
     chosen: list                  # effect names, in the order added
     steps: list                   # (step, candidate names, Score) of every model tried
     final: Score | None
-    baseline: Score | None
-    verdict: str
     forward_chosen: list = field(default_factory=list)  # before the backward gate
 
 
@@ -384,14 +381,10 @@ def forward(obs: pd.DataFrame, y0: np.ndarray, data: dict, fold_by: str | None =
         worst = max(failing, key=lambda t: (t[1].p if np.isfinite(t[1].p) else 2.0))[0]
         chosen.remove(worst)
     final = score(model(chosen), model([]), folds, alpha) if chosen else None
-    return Selection(chosen=chosen, steps=steps, final=final, baseline=None, verdict="", forward_chosen=forward_chosen)
+    return Selection(chosen=chosen, steps=steps, final=final, forward_chosen=forward_chosen)
 
 
 def _renamed(s: Score, reason: str) -> Score:
     from dataclasses import replace
 
     return replace(s, reason=reason)
-
-
-def model_names() -> tuple[str, ...]:
-    return tuple(EFFECTS)

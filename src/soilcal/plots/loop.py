@@ -47,10 +47,14 @@ def residual_figures(res: pd.DataFrame, pred: pd.DataFrame | None, outdir, title
         ax = fig.add_subplot(111)
         ax.axhline(0, color="0.6", lw=0.8)
         shift = 0.08 if ticks is not None and after is not None else 0.0
-        ax.plot(xv - shift, u["relative_residual"].astype(float) * 100, "o", color="C3", ms=5,
-                label="calibrated model")
-        if after is not None:
-            ax.plot(xv + shift, after, "s", color="C0", ms=4, mfc="none", label="with the chosen effects (held out)")
+        rel = u["relative_residual"].astype(float).to_numpy() * 100
+        for k, measure in enumerate(dict.fromkeys(u["measure"])):  # one marker per measured quantity
+            sel = (u["measure"] == measure).to_numpy()
+            mk = "osD^v"[k % 5]
+            ax.plot(xv[sel] - shift, rel[sel], mk, color="C3", ms=5, label=f"{measure}: calibrated model")
+            if after is not None:
+                ax.plot(xv[sel] + shift, after[sel], mk, color="C0", ms=5, mfc="none",
+                        label=f"{measure}: with the chosen effects (held out)")
         if ticks is not None:
             ax.set_xticks(range(len(ticks)))
             ax.set_xticklabels(ticks, rotation=30 if len(ticks) > 4 else 0, fontsize=8)
@@ -58,7 +62,7 @@ def residual_figures(res: pd.DataFrame, pred: pd.DataFrame | None, outdir, title
         ax.set_ylabel("(measured - simulated) / measured, %")
         if title:
             ax.set_title(title, fontsize=9)
-        ax.legend(fontsize=7, frameon=False)
+        ax.legend(fontsize=7, frameon=True, framealpha=0.8, loc="best")
         fig.tight_layout()
         png, _ = save_figure(fig, outdir / _slug(name))
         out.append(png)
