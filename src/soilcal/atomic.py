@@ -24,4 +24,22 @@ def write_text(path, text: str) -> Path:
     return path
 
 
-__all__ = ["write_text"]
+def copy_file(src, path) -> Path:
+    """Copy ``src`` to ``path`` byte for byte, atomically (parent folders created)."""
+    import shutil
+
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fd, tmp = tempfile.mkstemp(prefix=path.name + ".", suffix=".tmp", dir=path.parent)
+    os.close(fd)
+    try:
+        shutil.copyfile(src, tmp)
+        os.replace(tmp, path)
+    except BaseException:
+        if os.path.exists(tmp):
+            os.unlink(tmp)
+        raise
+    return path
+
+
+__all__ = ["copy_file", "write_text"]

@@ -1,19 +1,47 @@
-"""Send a job's standard output, standard error and ``logging`` records to its log file."""
+"""Send a job's standard output, standard error and ``logging`` records to its log file.
+
+A bad input found while a job runs (:class:`soilcal.errors.InputError`: a photo that cannot
+be read, a table with a bad cell) reaches the user as the same one line that the start-up
+validation and the ``soilcal`` command give (``<file>: <field>: expected ..., got ...``): it
+is written to the job's log as that line and to the job's real standard error as
+``soilcal: error: <line>``, and the job exits with status 2, without a Python traceback.
+Any other exception is a fault of soilcal, not of the input: it is logged with its
+traceback and re-raised.
+"""
 
 from __future__ import annotations
 
 import contextlib
 import logging
+import sys
 from pathlib import Path
+
+
+def report_input_error(exc, stream=None) -> None:
+    """Print an :class:`~soilcal.errors.InputError` as its one line to ``stream`` (stderr)."""
+    stream = sys.stderr if stream is None else stream
+    print(f"soilcal: error: {exc}", file=stream, flush=True)
 
 
 @contextlib.contextmanager
 def redirect(log_path: str | Path | None):
-    """Redirect stdout/stderr and the root logger to ``log_path`` for the duration."""
+    """Redirect stdout/stderr and the root logger to ``log_path`` for the duration.
+
+    An :class:`~soilcal.errors.InputError` raised inside ends the process with status 2
+    after one line in the log and one line on the real standard error (module docstring).
+    """
+    from soilcal.errors import InputError
+
     if not log_path:
-        yield
+        try:
+            yield
+        except InputError as exc:
+            report_input_error(exc)
+            raise SystemExit(2) from None
         return
     Path(log_path).parent.mkdir(parents=True, exist_ok=True)
+    real_stderr = sys.stderr
+    failed: InputError | None = None
     with open(log_path, "w", encoding="utf-8") as fh:
         handler = logging.StreamHandler(fh)
         handler.setFormatter(logging.Formatter("%(asctime)s %(levelname)s %(name)s: %(message)s"))
@@ -24,8 +52,14 @@ def redirect(log_path: str | Path | None):
             with contextlib.redirect_stdout(fh), contextlib.redirect_stderr(fh):
                 try:
                     yield
+                except InputError as exc:
+                    logging.getLogger("soilcal").error("%s", exc)
+                    failed = exc
                 except Exception:
                     logging.getLogger("soilcal").exception("job failed")
                     raise
         finally:
             root.removeHandler(handler)
+    if failed is not None:
+        report_input_error(failed, real_stderr)
+        raise SystemExit(2)

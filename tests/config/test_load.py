@@ -72,9 +72,17 @@ def test_low_not_below_high(workspace):
 
 
 def test_missing_required_field(workspace):
-    _edit(workspace, lambda d: d.pop("seed"))
-    with pytest.raises(InputError, match=r"seed: expected a required field"):
+    _edit(workspace, lambda d: d.pop("parameters"))
+    with pytest.raises(InputError, match=r"parameters: expected a required field"):
         _load(workspace)
+
+
+def test_left_out_optional_field_takes_its_documented_default(workspace):
+    for kind in ("images", "measurements"):
+        shutil.copytree(ROOT / "resources" / kind / "cinnamon-soil", workspace / "resources" / kind / "cinnamon-soil")
+    _edit(workspace, lambda d: d.pop("seed"))
+    soil = _load(workspace)
+    assert soil.data["seed"] == 0 and soil.defaulted == ("seed",)
 
 
 def test_table_row_count_must_match_design(workspace):

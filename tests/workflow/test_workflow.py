@@ -58,6 +58,24 @@ def test_missing_photo_is_one_clear_error(tmp_path):
     assert "manifest.yaml: photos[1].file: expected an existing image file" in r.stdout + r.stderr
 
 
+def test_bad_photo_found_by_a_job_is_one_line_without_traceback(tmp_path):
+    # the photo exists (start-up passes) but is no image: the job that measures it finds out
+    tmp = _copy(tmp_path)
+    (tmp / "resources/images/cinnamon-soil/stacking_1.jpg").write_text("not a photo\n")
+    out = "results/cinnamon-soil/images/measurements.json"
+    r = _run(tmp, "--cores", "1", out, check=False)
+    text = r.stdout + r.stderr
+    line = ("soilcal: error: resources/images/cinnamon-soil/stacking_1.jpg: file: "
+            "expected a complete, readable image (JPEG/PNG/TIFF)")
+    assert r.returncode != 0
+    assert sum(line in ln for ln in text.splitlines()) == 1, text[-3000:]
+    assert "Traceback" not in text and "returned non-zero exit status 2" in text
+    log = (tmp / "logs/cinnamon-soil/images/image_measure.log").read_text()
+    assert "ERROR soilcal: resources/images/cinnamon-soil/stacking_1.jpg: file: expected" in log
+    assert "Traceback" not in log
+    assert not (tmp / out).exists() and not (tmp / "results/cinnamon-soil/images/figures").exists()
+
+
 def _planned_jobs(tmp: Path) -> list[str]:
     return planned_jobs(tmp)
 

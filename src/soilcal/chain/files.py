@@ -34,11 +34,6 @@ def _table(path) -> pd.DataFrame | None:
     return None if path in (None, "", []) else read_table(Path(path))
 
 
-def _mkdirs(*paths) -> None:
-    for p in paths:
-        Path(p).parent.mkdir(parents=True, exist_ok=True)
-
-
 def write_csv(df: pd.DataFrame, path) -> Path:
     """Write a frame atomically (:func:`soilcal.atomic.write_text`): a killed job leaves no
     partial table."""
@@ -288,8 +283,7 @@ def write_errata(soil: dict, published_dir, stage_dirs: dict[str, str], out) -> 
             entry["fits"] = fitted_models(st, table, opt.get("model", "reduced"))
         stages[sid] = entry
     df = errata_mod.build_errata(soil, published_dir, stages)
-    _mkdirs(out)
-    df.to_csv(out, index=False)
+    write_csv(df, out)
     return df
 
 

@@ -30,7 +30,6 @@ regression then refuses to fit when too few points are left and names them.
 from __future__ import annotations
 
 import copy
-import shutil
 import subprocess
 import time
 from pathlib import Path
@@ -46,11 +45,11 @@ RUN_COLUMNS = ["soil", "stage", "run", "response", "scenario", "setup", "measure
 
 
 def published_responses(table_path, out) -> Path:
-    """The printed table is the published source's response table, byte for byte."""
-    out = Path(out)
-    out.parent.mkdir(parents=True, exist_ok=True)
-    shutil.copyfile(table_path, out)
-    return out
+    """The printed table is the published source's response table, byte for byte (copied
+    whole or not at all)."""
+    from soilcal.atomic import copy_file
+
+    return copy_file(table_path, out)
 
 
 # --------------------------------------------------------------------------- DEM points

@@ -348,6 +348,10 @@ def _steepest_frame(stage: dict, table: pd.DataFrame, targets: dict) -> pd.DataF
     return pd.DataFrame(rows)
 
 
+#: optimum.csv methods whose rows come from a seeded search (their ``seed`` column is set)
+SEEDED_METHODS = ("desirability", "pso", "near_optimal")
+
+
 def optimum_frames(stage: dict, table: pd.DataFrame, targets: dict, seed: int) -> dict[str, pd.DataFrame]:
     """Optimal settings for every optimisation case of the stage, and how well the data pin
     each factor down.
@@ -361,6 +365,7 @@ def optimum_frames(stage: dict, table: pd.DataFrame, targets: dict, seed: int) -
     design centre is the calibrated set (``calibrated = True``,
     :func:`soilcal.optimise.near_optimal.calibrated_choice`).  ``identifiability`` gives, per
     case and factor, the spread of the near-optimal sets and whether the data pin it down.
+    The rows of the seeded searches carry the soil's ``seed`` (column ``seed``).
     """
     from soilcal import optimise
     from soilcal.optimise.near_optimal import calibrated_choice, identifiability, near_optimal_sets
@@ -433,6 +438,8 @@ def optimum_frames(stage: dict, table: pd.DataFrame, targets: dict, seed: int) -
     out = pd.concat(frames, ignore_index=True)
     if "calibrated" in out.columns:
         out["calibrated"] = out["calibrated"].fillna(False).astype(bool)
+    # the soil's seed (schema default 0) on the rows of the seeded multi-start searches
+    out["seed"] = pd.array([int(seed) if m in SEEDED_METHODS else None for m in out["method"]], dtype="Int64")
     return {"optimum": out,
             "identifiability": pd.concat(ident, ignore_index=True) if ident else
             pd.DataFrame(columns=["case", "factor", "n_sets", "min", "max", "spread", "spread_coded", "pinned", "note"])}

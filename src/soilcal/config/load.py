@@ -20,7 +20,26 @@ SOIL_SCHEMA = Path(str(resources.files("soilcal.config") / "soil.schema.yaml"))
 
 
 class _Loader(yaml.SafeLoader):
-    """SafeLoader that also reads ``7.9e10`` (no sign, no dot) as a float, as YAML 1.2 does."""
+    """SafeLoader that also reads ``7.9e10`` (no sign, no dot) as a float, as YAML 1.2 does,
+    and refuses a key given twice in one mapping (plain PyYAML keeps the last silently)."""
+
+    def construct_mapping(self, node, deep=False):
+        if isinstance(node, yaml.MappingNode):
+            seen = {}
+            for key_node, _ in node.value:
+                if not isinstance(key_node, yaml.ScalarNode) or key_node.tag == "tag:yaml.org,2002:merge":
+                    continue
+                key = key_node.value
+                if key in seen:
+                    raise _DuplicateKey(key, key_node.start_mark.line + 1, seen[key])
+                seen[key] = key_node.start_mark.line + 1
+        return super().construct_mapping(node, deep=deep)
+
+
+class _DuplicateKey(Exception):
+    def __init__(self, key, line, first):
+        super().__init__(key)
+        self.key, self.line, self.first = key, line, first
 
 
 _Loader.add_implicit_resolver(
@@ -48,7 +67,18 @@ def read_yaml(path: str | Path) -> Any:
     except yaml.YAMLError as exc:
         mark = getattr(exc, "problem_mark", None)
         where = f"line {mark.line + 1}" if mark is not None else "<document>"
-        raise InputError(path, where, "valid YAML", str(getattr(exc, "problem", exc))) from None
+        got = str(getattr(exc, "problem", None) or exc).replace("\n", " ")
+        ctx, cmark = getattr(exc, "context", None), getattr(exc, "context_mark", None)
+        if ctx and cmark is not None and (mark is None or cmark.line != mark.line):
+            got += f" ({ctx} on line {cmark.line + 1})"
+        raise InputError(path, where, "valid YAML", got) from None
+    except _DuplicateKey as exc:
+        raise InputError(path, f"line {exc.line}", f"each key once per mapping ({exc.key!r} is first given on line {exc.first})",
+                         f"{exc.key!r} again") from None
+    except UnicodeDecodeError as exc:
+        raise InputError(path, "<file>", "a UTF-8 text file", f"a byte that is not UTF-8 at offset {exc.start}") from None
+    except OSError as exc:
+        raise InputError(path, "<file>", "a readable YAML file", exc.strerror or type(exc).__name__) from None
 
 
 def _field_path(parts) -> str:
@@ -76,7 +106,21 @@ def _schema_error(path: Path, schema: dict, data: Any) -> None:
         fld = f"{where}.{missing}" if where != "<root>" else missing
         raise InputError(path, fld, "a required field", "nothing")
     if err.validator == "type":
-        raise InputError(path, where, f"a value of type {err.validator_value}", err.instance)
+        types = err.validator_value if isinstance(err.validator_value, list) else [err.validator_value]
+        raise InputError(path, where, "a value of type " + " or ".join(map(str, types)), err.instance)
+    bounds = {"minimum": ">=", "maximum": "<=", "exclusiveMinimum": ">", "exclusiveMaximum": "<"}
+    if err.validator in bounds:
+        raise InputError(path, where, f"a number {bounds[err.validator]} {err.validator_value}", err.instance)
+    if err.validator in ("minItems", "maxItems"):
+        n = err.validator_value
+        most = "at least" if err.validator == "minItems" else "at most"
+        raise InputError(path, where, f"a list of {most} {n} item{'s' if n != 1 else ''}",
+                         f"{len(err.instance)} item{'s' if len(err.instance) != 1 else ''}")
+    if err.validator in ("minProperties", "maxProperties"):
+        n = err.validator_value
+        most = "at least" if err.validator == "minProperties" else "at most"
+        raise InputError(path, where, f"a mapping of {most} {n} entr{'ies' if n != 1 else 'y'}",
+                         f"{len(err.instance)} entries")
     if err.validator == "enum":
         raise InputError(path, where, "one of " + ", ".join(map(str, err.validator_value)), err.instance)
     if err.validator == "pattern":
@@ -107,6 +151,8 @@ class Soil:
     path: Path
     data: dict
     resources_root: Path = field(default=Path("resources"))
+    #: top-level fields the file left out and the loader filled with the schema's default
+    defaulted: tuple[str, ...] = ()
 
     @property
     def name(self) -> str:
@@ -138,13 +184,21 @@ class Soil:
 
 
 def read_table(path: Path) -> pd.DataFrame:
-    """Read a published CSV table; a missing or unreadable file raises InputError."""
+    """Read a published CSV table; a missing or unreadable file raises InputError (a row with
+    more cells than the header names its line)."""
     if not path.is_file():
         raise InputError(path, "<file>", "an existing CSV table", "no such file")
     try:
         return pd.read_csv(path)
     except Exception as exc:  # pandas raises several types for bad CSV
-        raise InputError(path, "<file>", "a readable CSV table", str(exc)) from None
+        text = " ".join(str(exc).split())
+        m = re.search(r"Expected (\d+) fields in line (\d+), saw (\d+)", text)
+        if m:
+            raise InputError(path, f"line {m.group(2)}", f"{m.group(1)} fields, as many as the header",
+                             f"{m.group(3)} fields") from None
+        if isinstance(exc, UnicodeDecodeError):
+            text = f"a byte that is not UTF-8 at offset {exc.start}"
+        raise InputError(path, "<file>", "a readable CSV table", text or type(exc).__name__) from None
 
 
 def _check_levels(path: Path, where: str, d: dict) -> None:
@@ -261,16 +315,24 @@ def _check_table(path: Path, st: dict, where: str, pub: Path) -> None:
         raise InputError(path, f"{where}.table", f"an existing file {tpath}", "no such file")
     df = read_table(tpath)
     rcols = [r.get("column", r["id"]) for r in st["responses"]]
-    need = list(st["factors"]) + rcols
+    key = "step" if st["kind"] == "steepest_ascent" else None
+    need = ([key] if key else []) + list(st["factors"]) + rcols
     absent = [c for c in need if c not in df.columns]
     if absent:
         raise InputError(tpath, "columns", "columns " + ", ".join(need), f"missing {', '.join(absent)}")
     n = design_runs(st)
     if len(df) != n:
         raise InputError(tpath, "rows", f"{n} rows for the {st['kind']} design of stage {st['id']!r} (from {path.name})", len(df))
-    for c in list(st["factors"]) + rcols:
-        if not pd.api.types.is_numeric_dtype(df[c]) and not df[c].isna().all():
-            raise InputError(tpath, f"column {c}", "numbers", df[c].tolist())
+    ids = [c for c in (key, "run") if c in df.columns]
+    for c in ids + list(st["factors"]) + rcols:
+        if c in rcols and df[c].isna().all():
+            continue  # a response the paper does not print
+        _check_cells(tpath, df, c, required=c not in rcols)
+    for c in ids:
+        dup = df[c][df[c].duplicated()]
+        if len(dup):
+            i = int(dup.index[0])
+            raise InputError(tpath, f"row {i + 1}, column {c}", f"a {c} number used once", _cell(dup.iloc[0]))
     coding = st.get("table_coding", "coded" if st["kind"] != "steepest_ascent" else "actual")
     if coding == "coded":
         allowed = {-1, 1} if st["kind"] == "plackett_burman" else {-1, 0, 1}
@@ -286,16 +348,58 @@ def _check_table(path: Path, st: dict, where: str, pub: Path) -> None:
                 raise InputError(tpath, f"column {c}", f"values within [{lo}, {hi}]", bad.tolist())
 
 
+def schema_defaults(schema: dict | None = None) -> dict[str, Any]:
+    """The top-level fields the soil schema gives a ``default`` (documented in its description)."""
+    schema = read_yaml(SOIL_SCHEMA) if schema is None else schema
+    return {k: v["default"] for k, v in schema["properties"].items() if isinstance(v, dict) and "default" in v}
+
+
+def _cell(v):
+    """A table cell as a plain Python value for a message."""
+    if isinstance(v, float) and v.is_integer():
+        return int(v)
+    return v.item() if hasattr(v, "item") else v
+
+
+def _check_cells(tpath: Path, df: pd.DataFrame, column: str, required: bool) -> None:
+    """Every cell of ``column`` a finite number (empty allowed unless ``required``); the first
+    bad cell raises InputError naming its row (1 = first data row) and column."""
+    col = df[column]
+    for i, v in enumerate(col.tolist()):
+        if v is None or (isinstance(v, float) and math.isnan(v)) or (isinstance(v, str) and not v.strip()):
+            if required:
+                raise InputError(tpath, f"row {i + 1}, column {column}", "a number", "empty")
+            continue
+        try:
+            x = float(v)
+        except (TypeError, ValueError):
+            raise InputError(tpath, f"row {i + 1}, column {column}", "a number", v) from None
+        if not math.isfinite(x):
+            raise InputError(tpath, f"row {i + 1}, column {column}", "a finite number", v)
+
+
 def load_soil(path: str | Path, resources_root: str | Path = "resources") -> Soil:
-    """Read, schema-validate and check one soil file; return a :class:`Soil`."""
+    """Read, schema-validate and check one soil file; return a :class:`Soil`.
+
+    A top-level field the file leaves out that the schema gives a default (``source``,
+    ``seed``, ``properties``, ``targets``) is filled in with that default; the names of the
+    filled fields are in :attr:`Soil.defaulted`.
+    """
+    import copy
+
     path = Path(path)
     data = read_yaml(path)
     if not isinstance(data, dict):
-        raise InputError(path, "<root>", "a mapping of soil fields", type(data).__name__)
+        raise InputError(path, "<root>", "a mapping of soil fields", "an empty file" if data is None else type(data).__name__)
     schema = read_yaml(SOIL_SCHEMA)
     _schema_error(path, schema, data)
+    defaulted = []
+    for key, value in schema_defaults(schema).items():
+        if key not in data:
+            data[key] = copy.deepcopy(value)
+            defaulted.append(key)
     _semantic_checks(path, data, Path(resources_root))
-    return Soil(path=path, data=data, resources_root=Path(resources_root))
+    return Soil(path=path, data=data, resources_root=Path(resources_root), defaulted=tuple(defaulted))
 
 
 WORKFLOW_SCHEMA = {

@@ -26,7 +26,12 @@ def _pile(args):
 def _drum(args):
     from soilcal.imaging import drum, figures
 
-    opts = drum.frame_options({k: getattr(args, k) for k in drum.OPTIONS}, "command line", prefix="--")
+    from soilcal.errors import InputError
+
+    try:
+        opts = drum.frame_options({k: getattr(args, k) for k in drum.OPTIONS}, "<command line>", prefix="--")
+    except InputError as exc:  # name the option as it is typed: --chord-fraction
+        raise InputError(exc.path, exc.field.replace("_", "-"), exc.expected, exc.got) from None
     summary, res = drum.measure_drum(args.frames, args.threshold, keep_stages=bool(args.figures), options=opts)
     if args.figures:
         for r in res:
@@ -39,6 +44,10 @@ def _furrow(args):
     from soilcal.errors import InputError
     from soilcal.imaging import figures, manifest, measure
 
+    manifest.check_degree("<command line>", "--degree", args.degree)
+    if args.scale_length_mm is not None and not args.scale_length_mm > 0:
+        raise InputError("<command line>", "--scale-length-mm", "a positive length of the beam in mm",
+                         args.scale_length_mm)
     length, datum = args.scale_length_mm, args.datum_mm
     if length is None:
         entry = manifest.lookup(args.photo)

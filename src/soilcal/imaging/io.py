@@ -1,14 +1,35 @@
-"""Reading photos: any file PIL can decode completely; anything else is an InputError."""
+"""Reading photos: any file PIL can decode completely; anything else is an InputError.
+
+Every colour mode PIL reads is accepted: RGB, CMYK, palette, with or without alpha (the alpha
+channel is dropped), 1-bit, 8-bit grey, and single-channel 16-bit or 32-bit frames (PIL modes
+``I;16``, ``I``, ``F``), which are scaled by their bit depth and stretched between their 0.5
+and 99.5 percentiles instead of being clipped to 8 bits.  A photo may have at most
+:data:`MAX_PIXELS` pixels (a larger one is refused before it is decoded: scale it down).
+"""
 
 from __future__ import annotations
 
+import warnings
 from pathlib import Path
 
 import numpy as np
 
+#: the largest photo read, in pixels (64 megapixels, e.g. 9600 x 6666): a float RGB copy of
+#: it takes 1.5 GB
+MAX_PIXELS = 64_000_000
 
-def read_photo(path) -> np.ndarray:
-    """RGB float image in [0, 1]; unreadable, truncated or blank files raise InputError."""
+# full scale of PIL's single-channel modes; RGB-like modes go through luminance
+_FULL_SCALE = {"1": 1.0, "L": 255.0, "I;16": 65535.0, "I;16L": 65535.0, "I;16B": 65535.0, "I;16N": 65535.0}
+_HIGH_DEPTH = ("I;16", "I;16L", "I;16B", "I;16N", "I", "F")
+
+
+def _stretch(g: np.ndarray) -> np.ndarray:
+    lo, hi = np.percentile(g, [0.5, 99.5])
+    return np.clip((g - lo) / (hi - lo), 0.0, 1.0) if hi - lo > 0 else np.zeros_like(g)
+
+
+def _decode(path, formats: str):
+    """(PIL mode, grey [0, 1] for single-channel modes else None, RGB [0, 1] else None)."""
     from PIL import Image, UnidentifiedImageError
 
     from soilcal.errors import InputError
@@ -16,21 +37,48 @@ def read_photo(path) -> np.ndarray:
     p = Path(path)
     if not p.is_file():
         raise InputError(p, "file", "an existing image file", "missing")
+    expected = f"a complete, readable image ({formats})"
     try:
-        with Image.open(p) as im:
-            im.load()  # decodes fully: a truncated JPEG raises OSError here
-            rgb = np.asarray(im.convert("RGB"), dtype=float) / 255.0
-    except (UnidentifiedImageError, OSError, SyntaxError, ValueError) as exc:
-        raise InputError(p, "file", "a complete, readable image (JPEG/PNG/TIFF)", str(exc)) from None
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", Image.DecompressionBombWarning)
+            with Image.open(p) as im:
+                w, h = im.size
+                if w * h > MAX_PIXELS:
+                    raise InputError(p, "file", f"an image of at most {MAX_PIXELS // 1_000_000} megapixels "
+                                     "(scale it down)", f"{w} x {h} pixels")
+                im.load()  # decodes fully: a truncated JPEG raises OSError here
+                mode = im.mode
+                if mode in _FULL_SCALE:
+                    return mode, np.asarray(im, dtype=float) / _FULL_SCALE[mode], None
+                if mode in ("I", "F"):
+                    g = np.asarray(im, dtype=float)
+                    top = 65535.0 if mode == "I" and g.min() >= 0 and g.max() <= 65535 else max(float(np.abs(g).max()), 1e-12)
+                    return mode, g / top, None
+                return mode, None, np.asarray(im.convert("RGB"), dtype=float) / 255.0
+    except InputError:
+        raise
+    except Image.DecompressionBombError as exc:
+        raise InputError(p, "file", f"an image of at most {MAX_PIXELS // 1_000_000} megapixels (scale it down)",
+                         str(exc).split(" exceeds")[0]) from None
+    except (UnidentifiedImageError, OSError, SyntaxError, ValueError, EOFError, MemoryError) as exc:
+        raise InputError(p, "file", expected, str(exc) or type(exc).__name__) from None
+
+
+def read_photo(path) -> np.ndarray:
+    """RGB float image in [0, 1]; unreadable, truncated or blank files raise InputError."""
+    from soilcal.errors import InputError
+
+    p = Path(path)
+    mode, g, rgb = _decode(p, "JPEG/PNG/TIFF")
+    if rgb is None:
+        if mode in _HIGH_DEPTH:
+            g = _stretch(g)
+        rgb = np.repeat(g[..., None], 3, axis=-1)
     if rgb.ndim != 3 or min(rgb.shape[:2]) < 64:
-        raise InputError(p, "file", "an image of at least 64 x 64 pixels", rgb.shape)
-    if float(rgb.std()) < 0.01:
+        raise InputError(p, "file", "an image of at least 64 x 64 pixels", f"{rgb.shape[1]} x {rgb.shape[0]} pixels")
+    if float(rgb.reshape(-1, rgb.shape[-1]).std(axis=0).max()) < 0.01:  # no channel varies over the pixels
         raise InputError(p, "image", "a photo with contrast (heap against background)", "a blank image")
     return rgb
-
-
-# full scale of PIL's single-channel modes; RGB-like modes go through luminance
-_FULL_SCALE = {"1": 1.0, "L": 255.0, "I;16": 65535.0, "I;16L": 65535.0, "I;16B": 65535.0, "I;16N": 65535.0}
 
 
 def read_gray(path):
@@ -41,30 +89,16 @@ def read_gray(path):
     images give their luminance.  The grey range is then stretched between its 0.5 and 99.5
     percentiles, so a 12-bit camera in a 16-bit container reads like any other frame.
     """
-    from PIL import Image, UnidentifiedImageError
     from skimage.color import rgb2gray
 
     from soilcal.errors import InputError
 
     p = Path(path)
-    if not p.is_file():
-        raise InputError(p, "file", "an existing image file", "missing")
-    try:
-        with Image.open(p) as im:
-            im.load()
-            mode, rgb = im.mode, None
-            if mode in _FULL_SCALE:
-                g = np.asarray(im, dtype=float) / _FULL_SCALE[mode]
-            elif mode in ("I", "F"):
-                g = np.asarray(im, dtype=float)
-                g = g / (65535.0 if mode == "I" and g.max() <= 65535 else max(float(g.max()), 1e-12))
-            else:
-                rgb = np.asarray(im.convert("RGB"), dtype=float) / 255.0
-                g = rgb2gray(rgb)
-    except (UnidentifiedImageError, OSError, SyntaxError, ValueError) as exc:
-        raise InputError(p, "file", "a complete, readable image (BMP/PNG/TIFF/JPEG)", str(exc)) from None
+    mode, g, rgb = _decode(p, "BMP/PNG/TIFF/JPEG")
+    if g is None:
+        g = rgb2gray(rgb)
     if g.ndim != 2 or min(g.shape) < 64:
-        raise InputError(p, "file", "an image of at least 64 x 64 pixels", g.shape)
+        raise InputError(p, "file", "an image of at least 64 x 64 pixels", f"{g.shape[-1]} x {g.shape[0]} pixels")
     lo, hi = np.percentile(g, [0.5, 99.5])
     if hi - lo < 0.005:
         raise InputError(p, "image", "a frame with contrast (powder against air)", "a blank image")

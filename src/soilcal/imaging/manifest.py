@@ -6,6 +6,14 @@ furrows ``beam_datum_mm``, and for drum frames the options of :mod:`soilcal.imag
 (``level``, ``roll_deg``, ``chord_fraction``, ``rim_margin``, ``drum_centre_px``,
 ``drum_radius_px``).  Only these user-known fields and the pixels are read; the renderer's
 ``*.truth.json`` sidecars are never opened here.
+
+:func:`read_manifest` checks the manifest when the workflow starts: a field it does not know
+(a misspelt ``scale_lenght_mm``), a missing photo, a kind other than pile, drum or furrow, a
+group mixing kinds, a furrow without its beam length or with a second photo in its group, a
+``degree`` outside 1-15 or a ``threshold`` other than otsu or adaptive stops it with one
+line naming the manifest and the field.  Optional fields: ``substrate`` and ``note`` per
+photo (documentation), ``degree`` of a furrow's profile polynomial (default 9), and at the
+top ``soil``, ``note`` and ``threshold`` (default otsu).
 """
 
 from __future__ import annotations
@@ -16,30 +24,81 @@ from pathlib import Path
 from soilcal.errors import InputError
 
 KINDS = ("pile", "drum", "furrow")
+THRESHOLDS = ("otsu", "adaptive")
+#: manifest fields (top level, and per photo besides the drum options of soilcal.imaging.drum)
+TOP_FIELDS = ("soil", "note", "photos", "threshold")
+PHOTO_FIELDS = ("file", "kind", "group", "view", "scale_length_mm", "beam_datum_mm", "degree", "substrate", "note")
+#: polynomial degrees a furrow profile may be fitted with
+DEGREES = (1, 15)
+
+
+def _is_number(v) -> bool:
+    import math
+
+    return isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v)
+
+
+def check_degree(where, field, degree) -> int:
+    """A furrow profile's polynomial degree: an integer of :data:`DEGREES`."""
+    lo, hi = DEGREES
+    if isinstance(degree, bool) or not isinstance(degree, int) or not lo <= degree <= hi:
+        raise InputError(where, field, f"an integer polynomial degree from {lo} to {hi}", degree)
+    return degree
 
 
 def read_manifest(path):
     import yaml
 
+    from soilcal.imaging.drum import OPTIONS
+
     path = Path(path)
     try:
-        data = yaml.safe_load(path.read_text())
-    except (OSError, yaml.YAMLError) as exc:
-        raise InputError(path, "manifest", "a readable YAML file", str(exc)) from None
+        data = yaml.safe_load(path.read_text(encoding="utf-8"))
+    except (OSError, UnicodeDecodeError, yaml.YAMLError) as exc:
+        raise InputError(path, "manifest", "a readable YAML file", str(exc).splitlines()[0] if str(exc) else type(exc).__name__) from None
     if not isinstance(data, dict) or not isinstance(data.get("photos"), list) or not data["photos"]:
         raise InputError(path, "photos", "a non-empty list of photo entries", None)
+    for k in data:
+        if k not in TOP_FIELDS:
+            raise InputError(path, str(k), "one of the known fields " + ", ".join(TOP_FIELDS), f"unknown field {k!r}")
+    if data.get("threshold", "otsu") not in THRESHOLDS:
+        raise InputError(path, "threshold", f"one of {', '.join(THRESHOLDS)}", data.get("threshold"))
+    known = PHOTO_FIELDS + tuple(OPTIONS)
+    kinds: dict[str, str] = {}
     for i, p in enumerate(data["photos"]):
+        at = f"photos[{i}]"
         if not isinstance(p, dict) or "file" not in p:
-            raise InputError(path, f"photos[{i}].file", "a file name", p)
+            raise InputError(path, f"{at}.file", "a file name", p)
+        for k in p:
+            if k not in known:
+                raise InputError(path, f"{at}.{k}", "one of the known fields " + ", ".join(known), f"unknown field {k!r}")
         if p.get("kind") not in KINDS:
-            raise InputError(path, f"photos[{i}].kind", f"one of {KINDS}", p.get("kind"))
-        if not (path.parent / str(p["file"])).is_file():
-            raise InputError(path, f"photos[{i}].file", f"an existing image file in {path.parent}", p["file"])
+            raise InputError(path, f"{at}.kind", f"one of {KINDS}", p.get("kind"))
+        if not isinstance(p["file"], str) or not (path.parent / p["file"]).is_file():
+            raise InputError(path, f"{at}.file", f"an existing image file in {path.parent}", p["file"])
+        for k in ("group", "view"):
+            if k in p and not isinstance(p[k], str):
+                raise InputError(path, f"{at}.{k}", "a name (text)", p[k])
+        if "scale_length_mm" in p and not (_is_number(p["scale_length_mm"]) and p["scale_length_mm"] > 0):
+            raise InputError(path, f"{at}.scale_length_mm", "a positive length of the scale reference in mm",
+                             p["scale_length_mm"])
+        if "beam_datum_mm" in p and not _is_number(p["beam_datum_mm"]):
+            raise InputError(path, f"{at}.beam_datum_mm", "a number (mm)", p["beam_datum_mm"])
+        if p["kind"] == "furrow":
+            if "scale_length_mm" not in p:
+                raise InputError(path, f"{at}.scale_length_mm", "the length of the profile-meter beam in mm", None)
+            check_degree(path, f"{at}.degree", p.get("degree", 9))
         if p["kind"] == "drum":
             from soilcal.imaging.drum import frame_options
 
-            frame_options(p, path, prefix=f"photos[{i}].")
+            frame_options(p, path, prefix=f"{at}.")
         p.setdefault("group", p["kind"])
+        first = kinds.setdefault(p["group"], p["kind"])
+        if first != p["kind"]:
+            raise InputError(path, f"{at}.kind", f"{first}, the kind of the other photos of group {p['group']!r}", p["kind"])
+        if p["kind"] == "furrow" and sum(q.get("group", q.get("kind")) == p["group"] for q in data["photos"][:i]) > 0:
+            raise InputError(path, f"{at}.group", f"a group of its own (a furrow group is one photo), not {p['group']!r}",
+                             p["group"])
     return data
 
 
@@ -65,6 +124,7 @@ def measure_manifest(path, figdir=None, threshold="otsu"):
     for p in data["photos"]:
         groups.setdefault(p["group"], []).append(p)
     out = OrderedDict()
+    figures_of = []  # written once every group is measured: a bad photo leaves no figures
     for g, entries in groups.items():
         kind = entries[0]["kind"]
         files = [path.parent / e["file"] for e in entries]
@@ -82,8 +142,9 @@ def measure_manifest(path, figdir=None, threshold="otsu"):
             summary, res = r.as_dict(), [r]
         summary["kind"] = kind
         out[g] = summary
-        if keep:
-            for r in res:
-                stem = Path(figdir) / Path(r.path).stem
-                (figures.furrow_figure if kind == "furrow" else figures.angle_figure)(r, stem)
+        figures_of += [(kind, r) for r in res]
+    if figdir is not None:
+        for kind, r in figures_of:
+            stem = Path(figdir) / Path(r.path).stem
+            (figures.furrow_figure if kind == "furrow" else figures.angle_figure)(r, stem)
     return out

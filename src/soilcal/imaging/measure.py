@@ -434,8 +434,13 @@ class FurrowResult:
 
 def measure_furrow(path, scale_length_mm, datum_mm=0.0, degree=9, threshold="otsu", keep_stages=False):
     """Furrow profile in mm from the profile-meter beam (scale reference of known length)."""
-    if not scale_length_mm or scale_length_mm <= 0:
+    from soilcal.imaging.manifest import _is_number, check_degree
+
+    if not _is_number(scale_length_mm) or scale_length_mm <= 0:
         raise InputError(path, "scale_length_mm", "a positive length of the scale reference in mm", scale_length_mm)
+    if not _is_number(datum_mm):
+        raise InputError(path, "beam_datum_mm", "a number (mm)", datum_mm)
+    check_degree(path, "degree", degree)
     rgb = read_photo(path)
     gray = _gray(rgb)
     binary = _binary(path, gray, threshold)
