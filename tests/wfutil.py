@@ -47,3 +47,30 @@ def run(tmp: Path, *args, check=True):
 def planned_jobs(tmp: Path, *args) -> list[str]:
     out = run(tmp, "-n", "--cores", "2", *args).stdout
     return re.findall(r"^\s+output: (.+)$", out, flags=re.M)
+
+
+#: The soils of the tiny run: the cinnamon soil calibrated on the DEM, the yangtze soil replayed.
+TINY_SOILS = ["cinnamon-soil", "yangtze-clay-loam"]
+#: Spheres per heap of the tiny run.
+N_SPHERES = 300
+
+
+def make_tiny(tmp: Path, threads: int | None = None) -> Path:
+    """Turn a workflow copy into the tiny run: heaps of ``N_SPHERES`` spheres, two
+    verification seeds, one seed per measured plate, and the measured-data loop trying the
+    adhesion effect at three levels whatever the diagnosis says; ``threads``: the DEM jobs'
+    Numba threads (the soil's ``simulation.threads``)."""
+    p = tmp / "config/soils/cinnamon-soil.yaml"
+    d = yaml.safe_load(p.read_text())
+    d["source"] = "both"
+    d["simulation"]["responses"]["stacking_angle"]["set"] = {"n_particles": N_SPHERES}
+    d["simulation"]["verification"] = {"replicates": 2}
+    if threads is not None:
+        d["simulation"]["threads"] = int(threads)
+    for m in d.get("measurements", {}).values():
+        m["replicates"] = 1
+    d["loop"] = {"candidates": "all", "effects": ["tool_adhesion"], "design_points": 3}
+    p.write_text(yaml.safe_dump(d, sort_keys=False))
+    y = tmp / "config/soils/yangtze-clay-loam.yaml"
+    y.write_text(y.read_text().replace("source: dem\n", "source: published\n"))
+    return tmp

@@ -3,47 +3,26 @@
 A copy of the workflow calibrates the cinnamon soil on soilcal's DEM through every stage kind
 (Plackett-Burman screening -> steepest ascent derived from it -> Box-Behnken centred on the
 path), with heaps of 300 spheres (``set: {n_particles: 300}``) so that a design point takes
-seconds, and replays the yangtze soil's printed tables beside it.
+seconds, and replays the yangtze soil's printed tables beside it (the run is
+``conftest.tiny_dem_run``).
 """
 
 from __future__ import annotations
 
 import json
 import re
-from pathlib import Path
 
 import numpy as np
 import pandas as pd
 import pytest
 import yaml
 
-from wfutil import copy_workflow, planned_jobs, run
-
-SOILS = ["cinnamon-soil", "yangtze-clay-loam"]
-N_SPHERES = 300
-
-
-def _tiny(tmp: Path) -> None:
-    p = tmp / "config/soils/cinnamon-soil.yaml"
-    d = yaml.safe_load(p.read_text())
-    d["source"] = "both"
-    d["simulation"]["responses"]["stacking_angle"]["set"] = {"n_particles": N_SPHERES}
-    d["simulation"]["verification"] = {"replicates": 2}
-    for m in d.get("measurements", {}).values():
-        m["replicates"] = 1
-    # the measured-data loop tries the adhesion effect whatever the diagnosis says, at three levels
-    d["loop"] = {"candidates": "all", "effects": ["tool_adhesion"], "design_points": 3}
-    p.write_text(yaml.safe_dump(d, sort_keys=False))
-    y = tmp / "config/soils/yangtze-clay-loam.yaml"
-    y.write_text(y.read_text().replace("source: dem\n", "source: published\n"))
+from wfutil import N_SPHERES, planned_jobs
 
 
 @pytest.fixture(scope="module")
-def done(tmp_path_factory):
-    tmp = copy_workflow(tmp_path_factory.mktemp("dem"), SOILS)
-    _tiny(tmp)
-    run(tmp, "--cores", "2")
-    return tmp
+def done(tiny_dem_run):
+    return tiny_dem_run
 
 
 def _stage_dir(done, source, stage):

@@ -34,6 +34,13 @@ wildcard_constraints:
     key="[0-9a-f]{12}",
     preset="quick|paper",
 
+# Light rules (designs, regressions, tables, figures) run on the submitting host when a
+# cluster executor sends the DEM jobs away (profiles/slurm); locally this changes nothing.
+localrules:
+    design, errata, image_measure, targets, optimum, figures, verification_figures, tool_figures,
+    summary, regression, published_responses, dem_responses, printed_comparison, refine,
+    verification, tool_verification, calibrated_vs_paper, loop_diagnose, loop_more, loop_select,
+
 
 def soil_cfg(soil):
     return SOILS[soil].data
@@ -143,12 +150,48 @@ def dem_threads(soil):
     return int(sim_cfg(soil).get("threads", 1))
 
 
-def dem_mem_mb(soil):
-    return int((sim_cfg(soil).get("resources") or {}).get("mem_mb", 2000))
+def _job_cost(w, spec_of):
+    """soilcal.dem.cost of the DEM job spec_of(w); None for a job that simulates nothing, or
+    while the checkpoint its spec reads is still to run (the job is planned again, with its
+    size, once the checkpoint has run)."""
+    from snakemake.exceptions import IncompleteCheckpointException
+
+    from soilcal.dem.cost import estimate_job
+
+    try:
+        spec = spec_of(w)
+    except IncompleteCheckpointException:
+        return None
+    return estimate_job(spec)
 
 
-def dem_runtime(soil):
-    return int((sim_cfg(soil).get("resources") or {}).get("runtime", 30))
+def dem_mem_mb(spec_of):
+    """Resource callable: the soil's simulation.resources.mem_mb, else the job's own need."""
+
+    def mem_mb(w):
+        fixed = (sim_cfg(w.soil).get("resources") or {}).get("mem_mb")
+        if fixed is not None:
+            return int(fixed)
+        cost = _job_cost(w, spec_of)
+        return cost.mem_mb if cost is not None else 1000
+
+    return mem_mb
+
+
+def dem_runtime(spec_of):
+    """Resource callable: minutes, the soil's simulation.resources.runtime else the job's own
+    estimate, times the attempt (a job killed at its limit is retried with more time)."""
+
+    def runtime(w, attempt):
+        fixed = (sim_cfg(w.soil).get("resources") or {}).get("runtime")
+        if fixed is not None:
+            base = int(fixed)
+        else:
+            cost = _job_cost(w, spec_of)
+            base = cost.runtime_min(threads=dem_threads(w.soil)) if cost is not None else 5
+        return base * int(attempt)
+
+    return runtime
 
 
 def stage_priority(soil, stage):

@@ -43,8 +43,8 @@ rule loop_point:
         job=loop_spec,
     threads: lambda w: dem_threads(w.soil)
     resources:
-        mem_mb=lambda w: dem_mem_mb(w.soil),
-        runtime=lambda w: dem_runtime(w.soil),
+        mem_mb=dem_mem_mb(loop_spec),
+        runtime=dem_runtime(loop_spec),
     conda:
         "../../envs/soilcal.yaml"
     log:

@@ -27,8 +27,8 @@ rule dem_point:
     threads: lambda w: dem_threads(w.soil)
     priority: dem_priority
     resources:
-        mem_mb=lambda w: dem_mem_mb(w.soil),
-        runtime=lambda w: dem_runtime(w.soil),
+        mem_mb=dem_mem_mb(point_spec),
+        runtime=dem_runtime(point_spec),
     conda:
         "../../envs/soilcal.yaml"
     log:

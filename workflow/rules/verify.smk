@@ -18,8 +18,8 @@ rule verify_point:
         spec=verify_spec,
     threads: lambda w: dem_threads(w.soil)
     resources:
-        mem_mb=lambda w: dem_mem_mb(w.soil),
-        runtime=lambda w: dem_runtime(w.soil),
+        mem_mb=dem_mem_mb(verify_spec),
+        runtime=dem_runtime(verify_spec),
     conda:
         "../../envs/soilcal.yaml"
     log:
@@ -57,8 +57,8 @@ rule refine_point:
         spec=refine_spec,
     threads: lambda w: dem_threads(w.soil)
     resources:
-        mem_mb=lambda w: dem_mem_mb(w.soil),
-        runtime=lambda w: dem_runtime(w.soil),
+        mem_mb=dem_mem_mb(refine_spec),
+        runtime=dem_runtime(refine_spec),
     conda:
         "../../envs/soilcal.yaml"
     log:
@@ -99,8 +99,8 @@ rule tool_point:
         job=tool_spec,
     threads: lambda w: dem_threads(w.soil)
     resources:
-        mem_mb=lambda w: dem_mem_mb(w.soil),
-        runtime=lambda w: dem_runtime(w.soil),
+        mem_mb=dem_mem_mb(tool_spec),
+        runtime=dem_runtime(tool_spec),
     conda:
         "../../envs/soilcal.yaml"
     log:

@@ -1,0 +1,182 @@
+"""One soil's DEM calibration through a real SLURM cluster against the same run on the local
+machine: the same tables (same seeds, same numbers), and a cluster run killed midway that
+resumes with the jobs it left.
+
+Needs a running SLURM (``sudo benchmarks/slurm/single_node.sh`` starts a one-node cluster on
+this machine) and ``pip install snakemake-executor-plugin-slurm``.  Two fresh copies of the
+workflow are made with the tiny run of the workflow tests (``tests/wfutil.make_tiny``: the
+cinnamon soil calibrated on heaps of 300 spheres, the yangtze soil replayed):
+
+1. ``snakemake --cores 2`` in the first (the local run);
+2. ``snakemake --profile profiles/slurm`` in the second, killed with SIGKILL after
+   ``--kill-after`` seconds (its queued SLURM jobs cancelled, as a lost login node would leave
+   them), then ``--unlock`` and the same command again (the resumed run);
+3. ``soilcal compare`` of the two results/ trees.
+
+Rows go to ``benchmarks/results/slurm_runs.csv`` (one per workflow run) and
+``slurm_files.csv`` (file outcomes per comparison); ``slurm.md`` is the page.
+
+    python benchmarks/slurm.py                  # kill the cluster run after 240 s
+    python benchmarks/slurm.py --kill-after 0   # no kill
+"""
+
+from __future__ import annotations
+
+import argparse
+import datetime
+import os
+import platform
+import signal
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+from _report import commit, read_rows, runs_table, write_page, write_rows
+
+HERE = Path(__file__).resolve().parent
+ROOT = HERE.parent
+OUT = HERE / "results"
+sys.path.insert(0, str(ROOT / "tests"))
+from wfutil import TINY_SOILS, copy_workflow, make_tiny  # noqa: E402
+
+from soilcal.chain.compare import compare_trees, same_results, summary  # noqa: E402
+
+SNAKEMAKE = [sys.executable, "-m", "snakemake"]
+RUN_FIELDS = ["utc", "commit", "run_id", "kind", "command", "elapsed_s", "jobs_done", "rc", "note"]
+FILE_FIELDS = ["utc", "commit", "run_id", "outcome", "files", "example"]
+
+
+def jobs_done(log_text: str) -> int:
+    return log_text.count("Finished jobid")
+
+
+def timed(cmd, cwd, log: Path, kill_after: float = 0.0) -> tuple[float, int, str]:
+    """Run ``cmd`` in ``cwd`` (output to ``log``); with ``kill_after`` > 0 send SIGKILL to it
+    (and its children on this host) after that many seconds.  Returns (seconds, rc, output)."""
+    t0 = time.perf_counter()
+    with open(log, "w") as fh:
+        p = subprocess.Popen(cmd, cwd=cwd, stdout=fh, stderr=subprocess.STDOUT, start_new_session=True)
+        try:
+            rc = p.wait(timeout=kill_after if kill_after > 0 else None)
+        except subprocess.TimeoutExpired:
+            os.killpg(p.pid, signal.SIGKILL)
+            rc = p.wait()
+    return time.perf_counter() - t0, rc, log.read_text()
+
+
+def cancel_jobs(workdir: Path) -> int:
+    """Cancel the SLURM jobs a killed run left queued or running: those whose working
+    directory is the run's copy."""
+    out = subprocess.run(["squeue", "-h", "-o", "%i %Z"], capture_output=True, text=True).stdout
+    ids = [line.split()[0] for line in out.splitlines()
+           if len(line.split()) > 1 and Path(line.split()[1]).resolve() == workdir.resolve()]
+    if ids:
+        subprocess.run(["scancel", *ids], check=False)
+    return len(ids)
+
+
+def cluster_ready() -> str:
+    try:
+        p = subprocess.run(["sinfo", "-h", "-o", "%T"], capture_output=True, text=True, timeout=20)
+    except (OSError, subprocess.SubprocessError) as exc:
+        return f"sinfo failed: {exc}"
+    if p.returncode != 0 or not p.stdout.strip():
+        return f"no SLURM cluster answers ({p.stderr.strip() or 'no nodes'})"
+    try:
+        import snakemake_executor_plugin_slurm  # noqa: F401
+    except ImportError:
+        return "snakemake-executor-plugin-slurm is not installed"
+    return ""
+
+
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--kill-after", type=float, default=240.0, help="seconds before the cluster run is killed (0: no kill)")
+    ap.add_argument("--workdir", default=None, help="folder for the two workflow copies (default: a new temporary one)")
+    args = ap.parse_args(argv)
+    why = cluster_ready()
+    if why:
+        print(f"slurm.py: {why}; start one with `sudo benchmarks/slurm/single_node.sh`", file=sys.stderr)
+        return 2
+    base = Path(args.workdir or tempfile.mkdtemp(prefix="soilcal-slurm-"))
+    base.mkdir(parents=True, exist_ok=True)
+    utc = datetime.datetime.now(datetime.timezone.utc).strftime("%Y-%m-%d %H:%M")
+    run_id = datetime.datetime.now(datetime.timezone.utc).strftime("%Y%m%dT%H%M%S")
+    rev = commit()
+    env_note = f"{platform.machine()}, {os.cpu_count()} logical CPUs, Python {platform.python_version()}"
+    runs = []
+
+    def row(kind, command, sec, rc, text, note=""):
+        r = dict(utc=utc, commit=rev, run_id=run_id, kind=kind, command=command, elapsed_s=round(sec, 1),
+                 jobs_done=jobs_done(text), rc=rc, note=note)
+        runs.append(r)
+        print(r, flush=True)
+
+    local = make_tiny(copy_workflow(_fresh(base / "local"), TINY_SOILS))
+    sec, rc, text = timed(SNAKEMAKE + ["--cores", "2"], local, base / "local.log")
+    row("local", "snakemake --cores 2", sec, rc, text)
+
+    cluster = make_tiny(copy_workflow(_fresh(base / "slurm"), TINY_SOILS))
+    cmd = SNAKEMAKE + ["--profile", "profiles/slurm"]
+    if args.kill_after > 0:
+        sec, rc, text = timed(cmd, cluster, base / "slurm_killed.log", args.kill_after)
+        n = cancel_jobs(cluster)
+        row("slurm, killed", "snakemake --profile profiles/slurm", sec, rc, text,
+            f"SIGKILL after {args.kill_after:g} s; {n} SLURM jobs cancelled")
+        subprocess.run(SNAKEMAKE + ["--unlock", "--cores", "1"], cwd=cluster, capture_output=True)
+        sec, rc, text = timed(cmd, cluster, base / "slurm_resumed.log")
+        row("slurm, resumed", "snakemake --unlock; snakemake --profile profiles/slurm", sec, rc, text)
+    else:
+        sec, rc, text = timed(cmd, cluster, base / "slurm.log")
+        row("slurm", "snakemake --profile profiles/slurm", sec, rc, text)
+    dry = subprocess.run(SNAKEMAKE + ["-n", "--profile", "profiles/slurm"], cwd=cluster, capture_output=True,
+                         text=True)
+    left = "Nothing to be done" in dry.stdout + dry.stderr
+    row("slurm, second run (dry)", "snakemake -n --profile profiles/slurm", 0.0, dry.returncode,
+        "", "nothing to do" if left else "jobs left: " + dry.stdout[-300:].replace("\n", " "))
+
+    comps = compare_trees(local / "results", cluster / "results")
+    files = []
+    for outcome, n in summary(comps).items():
+        ex = next(c for c in comps if c.outcome == outcome)
+        files.append(dict(utc=utc, commit=rev, run_id=run_id, outcome=outcome, files=n,
+                          example=f"{ex.path} ({ex.detail})" if ex.detail else ex.path))
+    verdict = "same results" if same_results(comps) else "the results differ"
+    print(f"{len(comps)} files compared: {verdict}", flush=True)
+
+    OUT.mkdir(exist_ok=True)
+    all_runs = read_rows(OUT / "slurm_runs.csv", RUN_FIELDS) + runs
+    all_files = read_rows(OUT / "slurm_files.csv", FILE_FIELDS) + files
+    write_rows(OUT / "slurm_runs.csv", all_runs, RUN_FIELDS)
+    write_rows(OUT / "slurm_files.csv", all_files, FILE_FIELDS)
+    sinfo = subprocess.run(["sinfo", "-h", "-o", "%N %c CPUs %m MB %P"], capture_output=True, text=True).stdout.strip()
+    version = subprocess.run(["sinfo", "--version"], capture_output=True, text=True).stdout.strip()
+    lines = ["# One soil's DEM calibration on a real SLURM cluster against the local run", "",
+             f"Machine: {env_note}.  Cluster: {version}, node `{sinfo}` "
+             "(`benchmarks/slurm/single_node.sh`).  Command: `python benchmarks/slurm.py"
+             + (f" --kill-after {args.kill_after:g}`" if args.kill_after != 240 else "`")
+             + ".  The run: the tiny calibration of the workflow tests (cinnamon soil on heaps of "
+             "300 spheres through screening, path, Box-Behnken, verification, plate tests and the "
+             "measured-data loop; yangtze soil replayed).", "",
+             "Workflow runs (elapsed: wall-clock seconds of the command; jobs: jobs Snakemake "
+             "reports finished):", "", *runs_table(all_runs, RUN_FIELDS), "",
+             "Local results/ against the cluster's, file by file (`soilcal compare`; execution "
+             "columns: a job's wall-clock seconds and thread count):", "",
+             *runs_table(all_files, FILE_FIELDS), ""]
+    write_page(OUT / "slurm.md", lines)
+    return 0 if same_results(comps) and all(r["rc"] == 0 for r in runs if r["kind"] != "slurm, killed") else 1
+
+
+def _fresh(path: Path) -> Path:
+    import shutil
+
+    if path.exists():
+        shutil.rmtree(path)
+    path.mkdir(parents=True)
+    return path
+
+
+if __name__ == "__main__":
+    sys.exit(main())
