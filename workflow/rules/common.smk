@@ -162,7 +162,14 @@ def _job_cost(w, spec_of):
         spec = spec_of(w)
     except IncompleteCheckpointException:
         return None
-    return estimate_job(spec)
+    # mem_mb and runtime of one job ask for the same estimate: made once per spec
+    key = json.dumps(spec, sort_keys=True, default=str)
+    if key not in _JOB_COSTS:
+        _JOB_COSTS[key] = estimate_job(spec)
+    return _JOB_COSTS[key]
+
+
+_JOB_COSTS = {}
 
 
 def dem_mem_mb(spec_of):
