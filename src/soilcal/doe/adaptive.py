@@ -1,0 +1,629 @@
+r"""Sequential, surrogate-guided design for the inverse problem (``design: adaptive``).
+
+A calibration asks for the parameter sets whose simulated responses equal the measured targets
+within a tolerance, not for an optimum.  This design spends its runs where that question is
+still open and stops when a verified candidate answers it.
+
+Space
+-----
+The free factors, coded to [-1, 1] over their ranges (:func:`soilcal.doe.designs.actual_to_coded`);
+fixed factors are not part of the space and never move.
+
+Start
+-----
+The centre of the box with ``centre_replicates`` seeds (the first estimate of the seed
+scatter) and ``n_start - 1`` scrambled Halton points (``scipy.stats.qmc.Halton``, seeded):
+``n_start = 2 d + 1`` points by default.
+
+Surrogates (one per response)
+-----------------------------
+* ``gp``: a Gaussian process (``sklearn.gaussian_process``), constant x Matern 5/2 with one
+  length scale per factor, plus a white-noise term.  Each point's mean of n_i seeds carries the
+  known noise variance s^2 / n_i, s the pooled standard deviation of the replicated points
+  (``alpha``); the white term takes what the replicate spread does not explain (fitted).
+* ``quadratic``: the full second-order polynomial by ordinary least squares
+  (``statsmodels``), a candidate once there are at least two more points than its terms.
+
+Each is scored by its leave-one-out root mean square error on the point means: for the GP the
+closed form of Rasmussen & Williams (2006, Eq. 5.12), r_i = [K^-1 y]_i / [K^-1]_ii; for the
+quadratic the PRESS residuals r_i = e_i / (1 - h_ii).  The smaller score is used; both scores
+and the choice are written to the iteration's record.
+
+Probability of consistency
+--------------------------
+With mu_j(x) and s_j(x) the surrogate's prediction and predictive standard deviation of the
+*mean* response j (seed noise excluded), targets t_j and tolerances tol_j::
+
+    P(x) = prod_j [ Phi((t_j + tol_j - mu_j) / s_j) - Phi((t_j - tol_j - mu_j) / s_j) ]
+
+(responses taken as independent).  P is large where the surrogate is sure of consistency and
+moderate where it is unsure, so maximising it explores the uncertain part of the consistent
+set as well as exploiting its sure part.
+
+Proposals
+---------
+``batch`` points per iteration from ``n_candidates`` scrambled Halton candidates: greedily the
+largest P, each at least ``separation`` (coded distance) from the points already chosen and
+from every evaluated point.
+
+Stopping
+--------
+The candidate of largest P (among the candidates and the evaluated points) becomes the
+*best candidate* once P >= ``p_verify``; it is run with ``verify_seeds`` seeds (its runs join
+the data, so they also inform the surrogate).  The design stops when a verified mean is
+within tolerance of every target (``target met``), when the run ``budget`` is spent
+(``budget spent``), or when the surrogate is sure that no point of the box is consistent:
+P < ``p_unreachable`` everywhere after a batch of proposals aimed at the target has been run,
+while the predicted distance to the target exceeds the tolerance plus twice the predictive
+standard deviation and every run's value lies on one side of the target, beyond the tolerance
+plus twice the replicate SD (``unreachable``), with the closest reachable
+value of each response and where it lies.
+
+The answer is a set: the candidates with P > 1/2 form the consistent region; each factor's
+range and spread over it, and the factors the data do not pin down (spread over more than half
+of their range) are reported with it.
+
+Everything is a pure function of the evaluated runs and the seed, so an interrupted design
+resumes from its run table and proposes exactly what it would have proposed.
+"""
+
+from __future__ import annotations
+
+import math
+import warnings
+from dataclasses import dataclass, field
+
+import numpy as np
+import pandas as pd
+from scipy import optimize, stats
+from scipy.stats import qmc
+
+from soilcal.errors import InputError
+
+#: defaults of a soil's ``simulation.adaptive`` block (documented in the soil schema)
+DEFAULTS = dict(n_start=None, centre_replicates=2, batch=2, budget=60, verify_seeds=4,
+                tolerance_pct=2.0, p_verify=0.5, p_unreachable=0.01, separation=0.15,
+                n_candidates=4096, max_iterations=50)
+#: factors whose spread over the consistent region exceeds this share of their range are
+#: "not pinned down"
+UNPINNED_SHARE = 0.5
+STATUS = ("continue", "target met", "budget spent", "unreachable", "iterations spent")
+
+
+# --------------------------------------------------------------------------- problem
+
+@dataclass(frozen=True)
+class Factor:
+    """A free factor and its range (actual units)."""
+    name: str
+    low: float
+    high: float
+
+    def coded(self, v):
+        return (np.asarray(v, float) - 0.5 * (self.low + self.high)) / (0.5 * (self.high - self.low))
+
+    def actual(self, c):
+        return 0.5 * (self.low + self.high) + np.asarray(c, float) * 0.5 * (self.high - self.low)
+
+
+@dataclass(frozen=True)
+class Target:
+    """A response's target and its tolerance: ``tol`` absolute, or ``tol_pct`` of |value|."""
+    response: str
+    value: float
+    tol: float | None = None
+    tol_pct: float | None = None
+
+    @property
+    def tolerance(self) -> float:
+        if self.tol is not None:
+            return float(self.tol)
+        return abs(self.value) * float(self.tol_pct if self.tol_pct is not None else
+                                       DEFAULTS["tolerance_pct"]) / 100.0
+
+
+@dataclass
+class Problem:
+    factors: list[Factor]
+    targets: list[Target]
+    fixed: dict = field(default_factory=dict)
+    source: str = "<adaptive>"
+
+    def __post_init__(self):
+        if not self.factors:
+            raise InputError(self.source, "factors", "at least one free factor", "none")
+        for f in self.factors:
+            if not (math.isfinite(f.low) and math.isfinite(f.high) and f.high > f.low):
+                raise InputError(self.source, f"factors.{f.name}", "a range with low < high",
+                                 (f.low, f.high))
+            if f.name in self.fixed:
+                raise InputError(self.source, f"fixed.{f.name}", "a factor that is not also free",
+                                 self.fixed[f.name])
+        if not self.targets:
+            raise InputError(self.source, "targets", "at least one response with a target", "none")
+        for t in self.targets:
+            if not math.isfinite(t.value):
+                raise InputError(self.source, f"targets.{t.response}", "a finite target", t.value)
+            if not t.tolerance > 0:
+                raise InputError(self.source, f"targets.{t.response}",
+                                 "a tolerance > 0 (tol, or tol_pct of a non-zero target)", t.tolerance)
+
+    @property
+    def names(self) -> list[str]:
+        return [f.name for f in self.factors]
+
+    @property
+    def responses(self) -> list[str]:
+        return [t.response for t in self.targets]
+
+    def to_actual(self, coded: np.ndarray) -> np.ndarray:
+        coded = np.atleast_2d(coded)
+        return np.column_stack([f.actual(coded[:, i]) for i, f in enumerate(self.factors)])
+
+    def to_coded(self, actual: np.ndarray) -> np.ndarray:
+        actual = np.atleast_2d(actual)
+        return np.column_stack([f.coded(actual[:, i]) for i, f in enumerate(self.factors)])
+
+
+@dataclass
+class Settings:
+    n_start: int | None = DEFAULTS["n_start"]
+    centre_replicates: int = DEFAULTS["centre_replicates"]
+    batch: int = DEFAULTS["batch"]
+    budget: int = DEFAULTS["budget"]
+    verify_seeds: int = DEFAULTS["verify_seeds"]
+    p_verify: float = DEFAULTS["p_verify"]
+    p_unreachable: float = DEFAULTS["p_unreachable"]
+    separation: float = DEFAULTS["separation"]
+    n_candidates: int = DEFAULTS["n_candidates"]
+    max_iterations: int = DEFAULTS["max_iterations"]
+    seed: int = 0
+
+    @classmethod
+    def from_mapping(cls, d: dict | None, seed: int = 0, source: str = "<adaptive>") -> "Settings":
+        d = dict(d or {})
+        d.pop("tolerance_pct", None)  # a target's default, read by the targets
+        unknown = sorted(set(d) - set(cls.__dataclass_fields__))
+        if unknown:
+            raise InputError(source, f"adaptive.{unknown[0]}",
+                             f"one of {', '.join(sorted(cls.__dataclass_fields__))}", d[unknown[0]])
+        s = cls(**{**d, "seed": int(d.get("seed", seed))})
+        for key in ("centre_replicates", "batch", "budget", "verify_seeds", "n_candidates", "max_iterations"):
+            v = getattr(s, key)
+            if not (isinstance(v, (int, np.integer)) and not isinstance(v, bool) and v >= 1):
+                raise InputError(source, f"adaptive.{key}", "an integer >= 1", v)
+        if s.n_start is not None and not (isinstance(s.n_start, int) and s.n_start >= 2):
+            raise InputError(source, "adaptive.n_start", "an integer >= 2 (or null: 2 d + 1)", s.n_start)
+        for key in ("p_verify", "p_unreachable"):
+            v = getattr(s, key)
+            if not (isinstance(v, (int, float)) and 0 < v < 1):
+                raise InputError(source, f"adaptive.{key}", "a probability in (0, 1)", v)
+        if not (isinstance(s.separation, (int, float)) and 0 <= s.separation < 2):
+            raise InputError(source, "adaptive.separation", "a coded distance in [0, 2)", s.separation)
+        return s
+
+
+# --------------------------------------------------------------------------- runs table
+#
+# One row per DEM run: iteration, kind (start | proposal | verification), point (an integer
+# id, shared by the seeds of one point), seed, the factors' actual levels, one column per
+# response.  This table is the design's whole state.
+
+RUN_KEYS = ("iteration", "kind", "point", "seed")
+
+
+def point_table(problem: Problem, runs: pd.DataFrame) -> pd.DataFrame:
+    """Mean, SD and count of every response per point (rows with a NaN response are left out
+    of that response's statistics: a failed run is no evidence)."""
+    if runs.empty:
+        return pd.DataFrame(columns=["point", *problem.names])
+    rows = []
+    for pid, g in runs.groupby("point", sort=True):
+        row = {"point": int(pid), **{n: float(g[n].iloc[0]) for n in problem.names},
+               "kind": str(g["kind"].iloc[0]), "iteration": int(g["iteration"].min())}
+        for r in problem.responses:
+            v = g[r].to_numpy(float)
+            v = v[np.isfinite(v)]
+            row[r] = float(v.mean()) if v.size else np.nan
+            row[f"{r}_sd"] = float(v.std(ddof=1)) if v.size > 1 else np.nan
+            row[f"{r}_n"] = int(v.size)
+        rows.append(row)
+    return pd.DataFrame(rows)
+
+
+def pooled_sd(points: pd.DataFrame, response: str) -> float | None:
+    """Pooled replicate standard deviation over the points with at least two seeds."""
+    n = points[f"{response}_n"].to_numpy(int)
+    sd = points[f"{response}_sd"].to_numpy(float)
+    ok = (n > 1) & np.isfinite(sd)
+    if not ok.any():
+        return None
+    return float(math.sqrt(np.sum((n[ok] - 1) * sd[ok] ** 2) / np.sum(n[ok] - 1)))
+
+
+# --------------------------------------------------------------------------- surrogates
+
+class Surrogate:
+    """Prediction and predictive SD of a response's mean at coded points."""
+    kind = ""
+    loo_rmse = math.inf
+
+    def predict(self, xc: np.ndarray) -> tuple[np.ndarray, np.ndarray]:  # pragma: no cover
+        raise NotImplementedError
+
+
+class GPSurrogate(Surrogate):
+    kind = "gp"
+
+    def __init__(self, xc, y, n, noise_sd, seed):
+        from sklearn.gaussian_process import GaussianProcessRegressor
+        from sklearn.gaussian_process.kernels import ConstantKernel, Matern, WhiteKernel
+
+        d = xc.shape[1]
+        self.mu0, self.scale = float(np.mean(y)), float(np.std(y)) or 1.0
+        yn = (y - self.mu0) / self.scale
+        # the known noise of each point's mean; a floor keeps K well conditioned
+        if noise_sd is not None:
+            alpha = (noise_sd / self.scale) ** 2 / np.maximum(n, 1) + 1e-8
+        else:
+            alpha = np.full(len(y), 1e-8)
+        kernel = (ConstantKernel(1.0, (1e-3, 1e3))
+                  * Matern(length_scale=np.ones(d), length_scale_bounds=(0.05, 50.0), nu=2.5)
+                  + WhiteKernel(1e-3, (1e-8, 1.0)))
+        gp = GaussianProcessRegressor(kernel=kernel, alpha=alpha, normalize_y=False,
+                                      n_restarts_optimizer=3, random_state=seed)
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")  # convergence notes of the kernel's bounds
+            gp.fit(xc, yn)
+        self.gp = gp
+        self.white = float(gp.kernel_.k2.noise_level)
+        self.length_scales = np.atleast_1d(gp.kernel_.k1.k2.length_scale).astype(float)
+        K = gp.kernel_(xc) + np.diag(alpha)
+        Kinv = np.linalg.inv(K)
+        loo = (Kinv @ yn) / np.diag(Kinv)
+        self.loo_rmse = float(np.sqrt(np.mean(loo ** 2)) * self.scale)
+
+    def predict(self, xc):
+        m, s = self.gp.predict(np.atleast_2d(xc), return_std=True)
+        var = np.maximum(s ** 2 - self.white, 1e-12)  # the mean response: no white noise
+        return self.mu0 + self.scale * m, self.scale * np.sqrt(var)
+
+
+def quadratic_terms(xc: np.ndarray) -> np.ndarray:
+    """Columns 1, x_i, x_i x_j (i < j), x_i^2 of the full second-order model."""
+    xc = np.atleast_2d(xc)
+    d = xc.shape[1]
+    cols = [np.ones(len(xc))] + [xc[:, i] for i in range(d)]
+    cols += [xc[:, i] * xc[:, j] for i in range(d) for j in range(i + 1, d)]
+    cols += [xc[:, i] ** 2 for i in range(d)]
+    return np.column_stack(cols)
+
+
+class QuadraticSurrogate(Surrogate):
+    kind = "quadratic"
+
+    def __init__(self, xc, y):
+        import statsmodels.api as sm
+
+        X = quadratic_terms(xc)
+        self.fit = sm.OLS(y, X).fit()
+        h = self.fit.get_influence().hat_matrix_diag
+        press = self.fit.resid / np.maximum(1.0 - h, 1e-12)
+        self.loo_rmse = float(np.sqrt(np.mean(press ** 2)))
+
+    def predict(self, xc):
+        pred = self.fit.get_prediction(quadratic_terms(xc))
+        return np.asarray(pred.predicted_mean, float), np.asarray(pred.se_mean, float)
+
+
+def n_quadratic_terms(d: int) -> int:
+    return 1 + 2 * d + d * (d - 1) // 2
+
+
+def fit_surrogates(problem: Problem, points: pd.DataFrame, seed: int) -> tuple[dict, pd.DataFrame]:
+    """The surrogate used for each response and the table of the candidates' scores."""
+    chosen, rows = {}, []
+    d = len(problem.factors)
+    for k, r in enumerate(problem.responses):
+        ok = np.isfinite(points[r].to_numpy(float))
+        if ok.sum() < 3:
+            raise InputError(problem.source, f"responses.{r}",
+                             "at least 3 points with a finite value to fit a surrogate",
+                             f"{int(ok.sum())}")
+        xc = problem.to_coded(points.loc[ok, problem.names].to_numpy(float))
+        y = points.loc[ok, r].to_numpy(float)
+        n = points.loc[ok, f"{r}_n"].to_numpy(int)
+        sd = pooled_sd(points[ok], r)
+        cands = [GPSurrogate(xc, y, n, sd, seed + k)]
+        p = n_quadratic_terms(d)
+        if ok.sum() >= p + 2:
+            cands.append(QuadraticSurrogate(xc, y))
+        best = min(cands, key=lambda s: s.loo_rmse)
+        chosen[r] = best
+        row = {"response": r, "points": int(ok.sum()), "replicate_sd": sd,
+               "gp_loo_rmse": cands[0].loo_rmse,
+               "quadratic_loo_rmse": cands[1].loo_rmse if len(cands) > 1 else np.nan,
+               "used": best.kind,
+               "note": "" if len(cands) > 1 else f"quadratic needs {p + 2} points ({p} terms + 2)"}
+        rows.append(row)
+    return chosen, pd.DataFrame(rows)
+
+
+def consistency(problem: Problem, surrogates: dict, xc: np.ndarray) -> tuple[np.ndarray, dict]:
+    """P(x) (module docstring) and each response's (mu, s) at coded points ``xc``."""
+    p = np.ones(len(xc))
+    pred = {}
+    for t in problem.targets:
+        mu, s = surrogates[t.response].predict(xc)
+        s = np.maximum(s, 1e-12)
+        tol = t.tolerance
+        p *= np.clip(stats.norm.cdf((t.value + tol - mu) / s) - stats.norm.cdf((t.value - tol - mu) / s),
+                     0.0, 1.0)
+        pred[t.response] = (mu, s)
+    return p, pred
+
+
+# --------------------------------------------------------------------------- proposals
+
+def halton(d: int, n: int, seed: int) -> np.ndarray:
+    """``n`` scrambled Halton points in the coded box [-1, 1]^d."""
+    return 2.0 * qmc.Halton(d=d, scramble=True, seed=np.random.default_rng(seed)).random(n) - 1.0
+
+
+def start_points(problem: Problem, settings: Settings) -> np.ndarray:
+    """Coded start design: the centre, then ``n_start - 1`` Halton points."""
+    d = len(problem.factors)
+    n = settings.n_start or 2 * d + 1
+    return np.vstack([np.zeros((1, d)), halton(d, n - 1, settings.seed)])
+
+
+def pick_batch(xc: np.ndarray, score: np.ndarray, taken: np.ndarray, batch: int,
+               separation: float) -> list[int]:
+    """Greedy: the largest scores, each at least ``separation`` from the picked points and from
+    ``taken`` (coded distances)."""
+    order = np.argsort(-score, kind="stable")
+    picked: list[int] = []
+    ref = np.atleast_2d(taken) if len(taken) else np.empty((0, xc.shape[1]))
+    for i in order:
+        pts = np.vstack([ref, xc[picked]]) if picked else ref
+        if len(pts) and np.min(np.linalg.norm(pts - xc[i], axis=1)) < separation:
+            continue
+        picked.append(int(i))
+        if len(picked) == batch:
+            break
+    return picked
+
+
+def closest_reachable(problem: Problem, surrogates: dict, cand: np.ndarray) -> dict:
+    """The point of the box whose predicted responses are closest to the targets (distance in
+    tolerances) and what each response reaches there."""
+    def dist(xc):
+        _, pred = consistency(problem, surrogates, np.atleast_2d(xc))
+        return float(sum(((pred[t.response][0][0] - t.value) / t.tolerance) ** 2 for t in problem.targets))
+
+    _, pred = consistency(problem, surrogates, cand)
+    d_all = sum(((pred[t.response][0] - t.value) / t.tolerance) ** 2 for t in problem.targets)
+    x0 = cand[int(np.argmin(d_all))]
+    res = optimize.minimize(dist, x0, method="L-BFGS-B", bounds=[(-1.0, 1.0)] * len(x0))
+    xc = res.x if res.fun <= dist(x0) else x0
+    _, pred = consistency(problem, surrogates, np.atleast_2d(xc))
+    return {"coded": xc, "actual": problem.to_actual(xc)[0],
+            "values": {t.response: float(pred[t.response][0][0]) for t in problem.targets},
+            "sd": {t.response: float(pred[t.response][1][0]) for t in problem.targets}}
+
+
+# --------------------------------------------------------------------------- one iteration
+
+@dataclass
+class Step:
+    """What the design does after the runs it has: the next runs (coded and actual levels,
+    kind, point id, seed), or a stop, with the record of the iteration."""
+    iteration: int
+    status: str
+    message: str
+    runs: pd.DataFrame
+    surrogates: pd.DataFrame
+    best: dict | None
+    region: pd.DataFrame
+    verified: dict | None = None
+    models: dict = field(default_factory=dict)  # the fitted surrogates (not written out)
+
+
+def _new_runs(problem, coded, kinds, first_point, iteration, seeds_per_point, first_seed):
+    rows = []
+    seed = first_seed
+    for k, (xc, kind, m) in enumerate(zip(coded, kinds, seeds_per_point)):
+        xa = problem.to_actual(xc)[0]
+        for _ in range(m):
+            rows.append({"iteration": iteration, "kind": kind, "point": first_point + k, "seed": seed,
+                         **{n: float(v) for n, v in zip(problem.names, xa)}})
+            seed += 1
+    return pd.DataFrame(rows, columns=[*RUN_KEYS, *problem.names])
+
+
+def empty_runs(problem: Problem) -> pd.DataFrame:
+    return pd.DataFrame(columns=[*RUN_KEYS, *problem.names, *problem.responses])
+
+
+def consistent_region(problem: Problem, cand: np.ndarray, p: np.ndarray) -> pd.DataFrame:
+    """Per factor: range, mean and SD over the candidates with P > 1/2, and whether the data pin
+    it down (module docstring)."""
+    inside = p > 0.5
+    xa = problem.to_actual(cand[inside]) if inside.any() else np.empty((0, len(problem.factors)))
+    rows = []
+    for i, f in enumerate(problem.factors):
+        v = xa[:, i]
+        span = (f.high - f.low)
+        rows.append({"factor": f.name, "low": f.low, "high": f.high, "candidates": int(inside.sum()),
+                     "share_of_box": float(inside.mean()) if inside.size else 0.0,
+                     "min": float(v.min()) if v.size else np.nan,
+                     "max": float(v.max()) if v.size else np.nan,
+                     "mean": float(v.mean()) if v.size else np.nan,
+                     "sd": float(v.std(ddof=1)) if v.size > 1 else np.nan,
+                     "pinned": bool(v.size and (v.max() - v.min()) <= UNPINNED_SHARE * span)})
+    return pd.DataFrame(rows)
+
+
+def _verified(problem: Problem, runs: pd.DataFrame, settings: Settings) -> dict | None:
+    """The last verified point: its means and whether every one is within tolerance."""
+    ver = runs[runs["kind"] == "verification"]
+    if ver.empty:
+        return None
+    pid = int(ver["point"].max())
+    g = ver[ver["point"] == pid]
+    out = {"point": pid, "iteration": int(g["iteration"].max()),
+           "levels": {n: float(g[n].iloc[0]) for n in problem.names}, "responses": {}, "met": True}
+    for t in problem.targets:
+        v = g[t.response].to_numpy(float)
+        v = v[np.isfinite(v)]
+        mean = float(v.mean()) if v.size else np.nan
+        sd = float(v.std(ddof=1)) if v.size > 1 else np.nan
+        ok = bool(v.size >= settings.verify_seeds and abs(mean - t.value) <= t.tolerance)
+        out["responses"][t.response] = {"target": t.value, "tolerance": t.tolerance, "mean": mean,
+                                        "sd": sd, "n": int(v.size),
+                                        "error_pct": 100 * (mean - t.value) / abs(t.value) if t.value else np.nan,
+                                        "within": ok}
+        out["met"] &= ok
+    return out
+
+
+def step(problem: Problem, runs: pd.DataFrame, settings: Settings, iteration: int) -> Step:
+    """The design's decision after ``runs`` (all runs with their responses; empty before the
+    start): the runs of iteration ``iteration`` or a stop (module docstring)."""
+    d = len(problem.factors)
+    runs = runs if len(runs) else empty_runs(problem)
+    missing = [r for r in problem.responses if r not in runs.columns]
+    if missing:
+        raise InputError(problem.source, f"runs.{missing[0]}", "a column for every response", "missing")
+    next_point = int(runs["point"].max()) + 1 if len(runs) else 0
+    next_seed = settings.seed + (int(runs["seed"].max()) - settings.seed + 1 if len(runs) else 0)
+    empty_region = consistent_region(problem, np.empty((0, d)), np.empty(0))
+    if runs.empty:
+        xc = start_points(problem, settings)
+        kinds = ["start"] * len(xc)
+        reps = [settings.centre_replicates] + [1] * (len(xc) - 1)
+        new = _new_runs(problem, xc, kinds, 0, iteration, reps, settings.seed)
+        return Step(iteration, "continue", f"start: {len(xc)} points, {len(new)} runs", new,
+                    pd.DataFrame(), None, empty_region)
+    verified = _verified(problem, runs, settings)
+    spent = len(runs)
+    points = point_table(problem, runs)
+    surrogates, scores = fit_surrogates(problem, points, settings.seed + iteration)
+    cand = halton(d, settings.n_candidates, settings.seed + 7919 * iteration)
+    p_c, pred_c = consistency(problem, surrogates, cand)
+    xe = problem.to_coded(points[problem.names].to_numpy(float))
+    p_e, _ = consistency(problem, surrogates, xe)
+    best_i = int(np.argmax(p_c))
+    best = {"coded": cand[best_i], "actual": problem.to_actual(cand[best_i])[0], "p": float(p_c[best_i]),
+            "predicted": {r: float(pred_c[r][0][best_i]) for r in problem.responses},
+            "predicted_sd": {r: float(pred_c[r][1][best_i]) for r in problem.responses}}
+    if p_e.max() > best["p"]:  # an evaluated point is the surest
+        j = int(np.argmax(p_e))
+        _, pe = consistency(problem, surrogates, xe[j:j + 1])
+        best = {"coded": xe[j], "actual": problem.to_actual(xe[j])[0], "p": float(p_e[j]),
+                "predicted": {r: float(pe[r][0][0]) for r in problem.responses},
+                "predicted_sd": {r: float(pe[r][1][0]) for r in problem.responses}}
+    region = consistent_region(problem, cand, p_c)
+    if verified and verified["met"]:
+        return Step(iteration, "target met",
+                    f"the verified mean of point {verified['point']} is within tolerance of every target",
+                    _new_runs(problem, [], [], 0, iteration, [], 0), scores, best, region, verified,
+                    surrogates)
+    # unreachable: no point of the box is plausibly consistent, and the closest reachable
+    # prediction lies further from a target than its uncertainty explains
+    if best["p"] < settings.p_unreachable:
+        near = closest_reachable(problem, surrogates, cand)
+        far = [t for t in problem.targets
+               if abs(near["values"][t.response] - t.value) > t.tolerance + 2.0 * near["sd"][t.response]
+               and _beyond_data(runs, points, t)]
+        # only after a batch of proposals aimed at the target has been run
+        if far and (runs["kind"] == "proposal").any():
+            at = ", ".join(f"{n} = {v:.4g}" + _bound(f, v) for n, v, f in
+                           zip(problem.names, near["actual"], problem.factors))
+            msg = "; ".join(f"{t.response}: target {t.value:g} is outside what the factor ranges reach: "
+                            f"the closest reachable value is {near['values'][t.response]:.4g} "
+                            f"(+- {near['sd'][t.response]:.2g})" for t in far)
+            return Step(iteration, "unreachable", f"{msg}, at {at}",
+                        _new_runs(problem, [], [], 0, iteration, [], 0), scores, best, region, verified,
+                        surrogates)
+    if spent >= settings.budget:
+        return Step(iteration, "budget spent", f"{spent} runs spent of a budget of {settings.budget}",
+                    _new_runs(problem, [], [], 0, iteration, [], 0), scores, best, region, verified,
+                    surrogates)
+    if iteration > settings.max_iterations:
+        return Step(iteration, "iterations spent", f"{settings.max_iterations} iterations without a verified set",
+                    _new_runs(problem, [], [], 0, iteration, [], 0), scores, best, region, verified,
+                    surrogates)
+    coded, kinds, reps = [], [], []
+    left = settings.budget - spent
+    ver_pts = problem.to_coded(runs.loc[runs["kind"] == "verification", problem.names].to_numpy(float)) \
+        if (runs["kind"] == "verification").any() else np.empty((0, d))
+    already = len(ver_pts) and np.min(np.linalg.norm(ver_pts - best["coded"], axis=1)) < 1e-9
+    if best["p"] >= settings.p_verify and not already and left >= settings.verify_seeds:
+        coded.append(best["coded"])
+        kinds.append("verification")
+        reps.append(settings.verify_seeds)
+        left -= settings.verify_seeds
+    n_new = max(0, min(settings.batch, left))
+    taken = np.vstack([xe, np.atleast_2d(coded)]) if coded else xe
+    for i in pick_batch(cand, p_c, taken, n_new, settings.separation):
+        coded.append(cand[i])
+        kinds.append("proposal")
+        reps.append(1)
+    new = _new_runs(problem, coded, kinds, next_point, iteration, reps, next_seed)
+    msg = (f"iteration {iteration}: best P = {best['p']:.3f}; {len(new)} runs"
+           + (" (with a verification of the best candidate)" if "verification" in kinds else ""))
+    return Step(iteration, "continue", msg, new, scores, best, region, verified, surrogates)
+
+
+def _beyond_data(runs: pd.DataFrame, points: pd.DataFrame, t: Target) -> bool:
+    """Every run's value lies on one side of the target, further than its tolerance plus twice
+    the replicate SD: the data themselves, not only the surrogate, put the target out of reach
+    (a surrogate that takes the whole signal for noise is flat and would claim it too)."""
+    v = runs[t.response].to_numpy(float)
+    v = v[np.isfinite(v)]
+    if not v.size:
+        return False
+    margin = t.tolerance + 2.0 * (pooled_sd(points, t.response) or 0.0)
+    return bool(v.max() < t.value - margin or v.min() > t.value + margin)
+
+
+def _bound(f: Factor, v: float) -> str:
+    span = f.high - f.low
+    if abs(v - f.low) <= 1e-3 * span:
+        return " (its low bound)"
+    if abs(v - f.high) <= 1e-3 * span:
+        return " (its high bound)"
+    return ""
+
+
+# --------------------------------------------------------------------------- in-process driver
+
+def run(problem: Problem, evaluate, settings: Settings, runs: pd.DataFrame | None = None,
+        on_iteration=None) -> tuple[pd.DataFrame, Step]:
+    """Drive the design in one process: ``evaluate(levels: dict, seed: int) -> {response:
+    value}`` runs one simulation (fixed factors are added to ``levels``).  ``runs``: the runs
+    of an interrupted design (it resumes where they end).  Returns all runs and the final
+    step.  ``on_iteration(step, runs)`` is called after each iteration's runs."""
+    runs = empty_runs(problem) if runs is None else runs.copy()
+    iteration = int(runs["iteration"].max()) + 1 if len(runs) else 0
+    while True:
+        st = step(problem, runs, settings, iteration)
+        if st.status != "continue":
+            return runs, st
+        new = st.runs.copy()
+        for r in problem.responses:
+            new[r] = np.nan
+        for i, row in new.iterrows():
+            levels = {n: float(row[n]) for n in problem.names} | dict(problem.fixed)
+            out = evaluate(levels, int(row["seed"]))
+            for r in problem.responses:
+                new.at[i, r] = float(out.get(r, np.nan))
+        runs = pd.concat([runs, new], ignore_index=True) if len(runs) else new
+        if on_iteration is not None:
+            on_iteration(st, runs)
+        iteration += 1
+
+
+__all__ = ["DEFAULTS", "Factor", "Problem", "Settings", "Step", "Target", "consistency",
+           "consistent_region", "empty_runs", "fit_surrogates", "point_table", "run", "start_points", "step"]

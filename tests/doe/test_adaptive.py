@@ -1,0 +1,222 @@
+"""The adaptive design on analytic stand-ins for the DEM whose consistent sets are known."""
+
+from __future__ import annotations
+
+import math
+import warnings
+
+import numpy as np
+import pandas as pd
+import pytest
+
+from soilcal.doe import adaptive as ad
+from soilcal.errors import InputError
+
+warnings.filterwarnings("ignore", module="sklearn")
+
+
+def noisy(fn, sd):
+    """A stand-in DEM: ``fn(levels)`` plus seeded Gaussian seed scatter of SD ``sd``."""
+    def evaluate(levels, seed):
+        return {k: v + sd * np.random.default_rng(seed).standard_normal() for k, v in fn(levels).items()}
+    return evaluate
+
+
+def linear(lv):
+    return {"y": 10.0 + 3.0 * lv["a"] + 2.0 * lv["b"]}
+
+
+LINEAR = ad.Problem([ad.Factor("a", -1, 1), ad.Factor("b", -1, 1), ad.Factor("c", 0, 5)],
+                    [ad.Target("y", 12.0, tol=0.2)], fixed={"z": 3.0})
+
+
+@pytest.mark.parametrize("seed", range(5))
+def test_linear_target_line_found_and_covered(seed):
+    calls = []
+
+    def evaluate(levels, seed):
+        calls.append(levels)
+        return noisy(linear, 0.05)(levels, seed)
+
+    runs, st = ad.run(LINEAR, evaluate, ad.Settings(seed=seed, budget=40))
+    assert st.status == "target met", st.message
+    assert len(runs) <= 40 and len(calls) == len(runs)
+    v = st.verified
+    assert v["responses"]["y"]["n"] >= 4
+    # the verified point lies on the target line 3a + 2b = 2 within the tolerance (noise-free;
+    # the mean of 4 seeds scatters by 0.025)
+    assert abs(linear(v["levels"])["y"] - 12.0) <= 0.2 + 3 * 0.025
+    # the reported region: points on the true line (inside the box) are judged consistent
+    b = np.linspace(-0.5, 1.0, 40)
+    a = (2.0 - 2.0 * b) / 3.0
+    c = np.linspace(0, 5, 40)
+    p, _ = ad.consistency(LINEAR, st.models, LINEAR.to_coded(np.c_[a, b, c]))
+    assert np.mean(p > 0.5) >= 0.9
+    # and points three tolerances off the line (y = 12.6) are not
+    p_off, _ = ad.consistency(LINEAR, st.models, LINEAR.to_coded(np.c_[a + 0.2, b, c]))
+    assert np.mean(p_off > 0.5) <= 0.1
+    # factor c does not act: the data do not pin it down
+    assert not st.region.set_index("factor").loc["c", "pinned"]
+
+
+def test_quadratic_target_ring():
+    ring = ad.Problem([ad.Factor("a", -1, 1), ad.Factor("b", -1, 1)], [ad.Target("y", 0.5, tol=0.03)])
+    evaluate = noisy(lambda lv: {"y": lv["a"] ** 2 + lv["b"] ** 2}, 0.01)
+    th = np.linspace(0, 2 * np.pi, 100)
+    on_ring = np.c_[np.cos(th), np.sin(th)] * math.sqrt(0.5)
+    cover, used = [], []
+    for seed in range(5):
+        runs, st = ad.run(ring, evaluate, ad.Settings(seed=seed, budget=40))
+        assert st.status == "target met", st.message
+        lv = st.verified["levels"]
+        # a^2 + b^2 = 0.5 +- 0.03 (plus the scatter of a 4-seed mean): radius within 0.03
+        assert abs(math.hypot(lv["a"], lv["b"]) - math.sqrt(0.5)) < 0.03
+        p, _ = ad.consistency(ring, st.models, on_ring)
+        cover.append(np.mean(p > 0.1))
+        used.append(st.surrogates.set_index("response").loc["y", "used"])
+        p_c, _ = ad.consistency(ring, st.models, np.zeros((1, 2)))
+        assert p_c[0] < 0.01  # the centre (y = 0) is not consistent
+    # the design stops once a verified set is found, not when the ring is mapped: most of it
+    # is known by then
+    assert np.median(cover) >= 0.75
+    # a quadratic response: the quadratic surrogate wins the leave-one-out comparison mostly
+    assert used.count("quadratic") >= 3
+
+
+def test_two_responses_crossing_at_one_point():
+    # y1 = a + b/2 = 0.3 and y2 = a - b = -0.3 cross at a = 0.1, b = 0.4 only
+    two = ad.Problem([ad.Factor("a", -1, 1), ad.Factor("b", -1, 1)],
+                     [ad.Target("y1", 0.3, tol=0.03), ad.Target("y2", -0.3, tol=0.03)])
+    evaluate = noisy(lambda lv: {"y1": lv["a"] + 0.5 * lv["b"], "y2": lv["a"] - lv["b"]}, 0.005)
+    runs, st = ad.run(two, evaluate, ad.Settings(seed=5, budget=50))
+    assert st.status == "target met", st.message
+    lv = st.verified["levels"]
+    # within tolerance of both lines: |a + b/2 - 0.3| <= 0.03 and |a - b + 0.3| <= 0.03
+    # confine (a, b) to a small parallelogram around (0.1, 0.4)
+    assert abs(lv["a"] - 0.1) < 0.05 and abs(lv["b"] - 0.4) < 0.05
+    assert all(r["within"] for r in st.verified["responses"].values())
+
+
+def test_deterministic_and_resumes_without_redoing_runs():
+    settings = ad.Settings(seed=11, budget=40)
+    ev = noisy(linear, 0.05)
+    full, st = ad.run(LINEAR, ev, settings)
+    again, _ = ad.run(LINEAR, ev, settings)
+    pd.testing.assert_frame_equal(full, again)
+    # interrupted after its second iteration, then resumed from the run table
+    part = full[full["iteration"] <= 1].reset_index(drop=True)
+    calls = []
+
+    def counting(levels, seed):
+        calls.append(seed)
+        return ev(levels, seed)
+
+    resumed, st2 = ad.run(LINEAR, counting, settings, runs=part)
+    pd.testing.assert_frame_equal(resumed, full, check_dtype=False)
+    assert len(calls) == len(full) - len(part)
+    assert st2.status == st.status
+
+
+def test_ranges_respected_and_fixed_factors_passed_unchanged():
+    seen = []
+
+    def evaluate(levels, seed):
+        seen.append(dict(levels))
+        return noisy(linear, 0.05)(levels, seed)
+
+    ad.run(LINEAR, evaluate, ad.Settings(seed=2, budget=30))
+    for lv in seen:
+        assert -1 <= lv["a"] <= 1 and -1 <= lv["b"] <= 1 and 0 <= lv["c"] <= 5
+        assert lv["z"] == 3.0
+    # seeds never repeat: every run is its own draw
+    runs = ad.run(LINEAR, noisy(linear, 0.05), ad.Settings(seed=2, budget=30))[0]
+    assert runs["seed"].is_unique
+
+
+def test_start_design_is_centre_replicated_plus_halton():
+    st = ad.step(LINEAR, ad.empty_runs(LINEAR), ad.Settings(seed=0), 0)
+    d = len(LINEAR.factors)
+    assert st.runs["point"].nunique() == 2 * d + 1
+    centre = st.runs[st.runs["point"] == 0]
+    assert len(centre) == 2  # replicated: the first estimate of the seed scatter
+    assert np.allclose(centre[["a", "b", "c"]].to_numpy(), [0.0, 0.0, 2.5])
+    assert (st.runs["kind"] == "start").all()
+
+
+def test_unreachable_target_names_the_closest_reachable_value():
+    far = ad.Problem([ad.Factor("a", 0, 1), ad.Factor("b", 0, 1)], [ad.Target("y", 100.0, tol_pct=2.0)])
+    runs, st = ad.run(far, noisy(lambda lv: {"y": 5.0 + lv["a"]}, 0.05), ad.Settings(seed=3, budget=40))
+    assert st.status == "unreachable"
+    assert len(runs) < 40  # it stops before the budget is spent
+    assert "y: target 100 is outside what the factor ranges reach" in st.message
+    reached = float(st.message.split("closest reachable value is ")[1].split()[0])
+    assert reached == pytest.approx(6.0, abs=0.2)  # y = 5 + a at a = 1
+    assert "a = 1 (its high bound)" in st.message
+
+
+def test_budget_spent_is_said():
+    # a tolerance far below the seed scatter: the verified mean rarely lands inside
+    tight = ad.Problem([ad.Factor("a", -1, 1)], [ad.Target("y", 0.2, tol=1e-4)])
+    runs, st = ad.run(tight, noisy(lambda lv: {"y": lv["a"]}, 0.5), ad.Settings(seed=0, budget=12))
+    assert st.status == "budget spent"
+    assert "12" in st.message
+
+
+def test_surrogate_choice_by_leave_one_out_is_recorded():
+    pts = ad.start_points(LINEAR, ad.Settings(seed=0, n_start=15))
+    runs = pd.DataFrame({"iteration": 0, "kind": "start", "point": range(len(pts)), "seed": range(len(pts))})
+    xa = LINEAR.to_actual(pts)
+    for i, n in enumerate(LINEAR.names):
+        runs[n] = xa[:, i]
+    runs["y"] = [linear(dict(zip(LINEAR.names, row)))["y"] for row in xa]
+    models, scores = ad.fit_surrogates(LINEAR, ad.point_table(LINEAR, runs), 0)
+    row = scores.iloc[0]
+    assert row["used"] in ("gp", "quadratic")
+    assert row["used"] == ("gp" if row["gp_loo_rmse"] <= row["quadratic_loo_rmse"] else "quadratic")
+    # a noise-free linear response: the quadratic's leave-one-out error is exactly zero
+    assert row["quadratic_loo_rmse"] < 1e-9
+
+
+def test_quadratic_press_residuals_match_refits():
+    rng = np.random.default_rng(0)
+    xc = rng.uniform(-1, 1, (12, 2))
+    y = 1 + xc[:, 0] - 2 * xc[:, 1] ** 2 + 0.1 * rng.standard_normal(12)
+    q = ad.QuadraticSurrogate(xc, y)
+    loo = []
+    for i in range(len(y)):
+        keep = np.arange(len(y)) != i
+        coef, *_ = np.linalg.lstsq(ad.quadratic_terms(xc[keep]), y[keep], rcond=None)
+        loo.append(y[i] - ad.quadratic_terms(xc[i:i + 1]) @ coef)
+    assert q.loo_rmse == pytest.approx(float(np.sqrt(np.mean(np.square(loo)))), rel=1e-9)
+
+
+def test_gp_closed_form_loo_matches_refits_at_fixed_kernel():
+    from sklearn.gaussian_process import GaussianProcessRegressor
+
+    rng = np.random.default_rng(1)
+    xc = rng.uniform(-1, 1, (10, 2))
+    y = np.sin(2 * xc[:, 0]) + xc[:, 1]
+    g = ad.GPSurrogate(xc, y, np.ones(10), None, 0)
+    yn = (y - g.mu0) / g.scale
+    res = []
+    for i in range(len(y)):
+        keep = np.arange(len(y)) != i
+        m = GaussianProcessRegressor(kernel=g.gp.kernel_, alpha=1e-8, optimizer=None, normalize_y=False)
+        m.fit(xc[keep], yn[keep])
+        res.append(yn[i] - m.predict(xc[i:i + 1])[0])
+    assert g.loo_rmse == pytest.approx(float(np.sqrt(np.mean(np.square(res)))) * g.scale, rel=1e-6)
+
+
+def test_bad_problems_and_settings_are_named():
+    with pytest.raises(InputError, match="factors.a"):
+        ad.Problem([ad.Factor("a", 1, 1)], [ad.Target("y", 1.0)])
+    with pytest.raises(InputError, match="targets.y"):
+        ad.Problem([ad.Factor("a", 0, 1)], [ad.Target("y", 0.0, tol_pct=2)])
+    with pytest.raises(InputError, match="fixed.a"):
+        ad.Problem([ad.Factor("a", 0, 1)], [ad.Target("y", 1.0)], fixed={"a": 0.5})
+    with pytest.raises(InputError, match="adaptive.batch"):
+        ad.Settings.from_mapping({"batch": 0})
+    with pytest.raises(InputError, match="adaptive.bogus"):
+        ad.Settings.from_mapping({"bogus": 1})
+    with pytest.raises(InputError, match="adaptive.p_verify"):
+        ad.Settings.from_mapping({"p_verify": 1.5})
