@@ -6,7 +6,7 @@ import os
 
 from snakemake.utils import validate
 
-from soilcal.chain import derive, refine, verify
+from soilcal.chain import adaptive, derive, refine, verify
 from soilcal.chain.files import read_stage
 from soilcal.config import load_workflow_config
 from soilcal.imaging.manifest import read_manifest
@@ -15,6 +15,10 @@ from soilcal.chain.plan import dem_context, soil_sources
 
 validate(config, "../schemas/config.schema.yaml")
 SOILS = load_workflow_config(config)
+if config.get("design"):  # --config design=...: every soil's DEM design
+    for _s in SOILS.values():
+        if _s.data.get("simulation"):
+            _s.data["simulation"]["design"] = config["design"]
 RES = config.get("resources", "resources")
 SOURCES = {soil: soil_sources(s, config.get("source")) for soil, s in SOILS.items()}
 IMAGE_MANIFESTS = {
@@ -33,6 +37,7 @@ wildcard_constraints:
     case="[A-Za-z0-9_][A-Za-z0-9_.-]*",
     key="[0-9a-f]{12}",
     preset="quick|paper",
+    it=r"\d+",
 
 # Light rules (designs, regressions, tables, figures) run on the submitting host when a
 # cluster executor sends the DEM jobs away (profiles/slurm); locally this changes nothing.
@@ -40,6 +45,7 @@ localrules:
     design, errata, image_measure, targets, optimum, figures, verification_figures, tool_figures,
     summary, regression, published_responses, dem_responses, printed_comparison, refine,
     verification, tool_verification, calibrated_vs_paper, loop_diagnose, loop_more, loop_select,
+    adaptive_step, adaptive_case, adaptive_stage, adaptive_verification,
 
 
 def soil_cfg(soil):
@@ -111,15 +117,18 @@ def all_targets():
     out = []
     for soil, s in SOILS.items():
         for source in SOURCES[soil]:
+            if source == "dem" and adaptive_on(soil):
+                out += adaptive_targets(soil)
+                continue
             for sid in source_stages(soil, source):
                 out += stage_targets(soil, s.stage(sid), source)
         if "published" in SOURCES[soil]:
             out.append(f"results/{soil}/published/errata.csv")
-        if "dem" in SOURCES[soil]:
+        if "dem" in SOURCES[soil] and not adaptive_on(soil):
             out += dem_soil_targets(soil)
         if soil in IMAGE_MANIFESTS:
             out.append(f"results/{soil}/images/measurements.json")
-    if any("dem" in v for v in SOURCES.values()):
+    if any("dem" in v and not adaptive_on(soil) for soil, v in SOURCES.items()):
         out += ["results/summary.csv", "results/figures/summary"]
     return out
 
@@ -485,3 +494,116 @@ def loop_first_runs(w):
 
 def loop_runs(w):
     return list(dict.fromkeys(list(tool_file_map(w).values()) + _run_files(loop_effect_files(w))))
+
+
+# ------------------------------------------------------------------ the adaptive design
+
+
+def adaptive_on(soil):
+    return "dem" in SOURCES[soil] and derive.design_mode(soil_cfg(soil)) == "adaptive"
+
+
+def adaptive_stages(soil):
+    """The optimised DEM stages with at least one case whose goals are all targets."""
+    return [s for s in optimised_stages(soil) if adaptive.adaptive_cases(soil_cfg(soil), [s])]
+
+
+def adaptive_case_ids(soil, stage):
+    return [c for _, c in adaptive.adaptive_cases(soil_cfg(soil), [stage])]
+
+
+def adaptive_dir(soil, stage, case=None):
+    d = f"results/{soil}/dem/adaptive/{stage}"
+    return f"{d}/{case}" if case else d
+
+
+def adaptive_targets(soil):
+    out = [f"results/{soil}/dem/targets.csv", f"results/{soil}/dem/adaptive/verification.csv",
+           f"results/{soil}/dem/adaptive/summary.csv"]
+    for sid in adaptive_stages(soil):
+        out += [f"{adaptive_dir(soil, sid)}/{n}" for n in ("stage.json", "optimum.csv", "identifiability.csv")]
+    return out
+
+
+def adaptive_upstream(soil, stage):
+    """The stage whose adaptive set a stage fixes (fixed_from), or None."""
+    data = dict(soil_cfg(soil), simulation=dict(sim_cfg(soil), design="printed"))
+    return derive.dependencies(data, stage).get("fixed_from")
+
+
+def adaptive_step_file(soil, stage, case, it):
+    return checkpoints.adaptive_step.get(soil=soil, stage=stage, case=case, it=str(it)).output[0]
+
+
+_STEP_RECORDS = {}
+
+
+def _step_record(path):
+    key = (path, os.path.getmtime(path))
+    if key not in _STEP_RECORDS:
+        with open(path) as fh:
+            _STEP_RECORDS[key] = json.load(fh)
+    return _STEP_RECORDS[key]
+
+
+def adaptive_history(soil, stage, case, upto=None):
+    """(iteration records, run files) of the iterations before ``upto``, or of the whole design
+    (until an iteration stops it) when ``upto`` is None; each record is a checkpoint."""
+    steps, runs = [], []
+    it = 0
+    while upto is None or it < upto:
+        p = adaptive_step_file(soil, stage, case, it)
+        rec = _step_record(p)
+        steps.append(p)
+        runs += [f"{adaptive_dir(soil, stage, case)}/runs/{it}/{k}.csv" for k in range(len(rec["runs"]))]
+        if rec["status"] != "continue":
+            break
+        it += 1
+    return steps, runs
+
+
+def _adaptive_common(soil, stage):
+    out = {"targets": f"results/{soil}/dem/targets.csv"}
+    up = adaptive_upstream(soil, stage)
+    if up:
+        out["upstream"] = f"{adaptive_dir(soil, up)}/optimum.csv"
+    return out
+
+
+def adaptive_step_inputs(w):
+    steps, runs = adaptive_history(w.soil, w.stage, w.case, int(w.it))
+    return dict(_adaptive_common(w.soil, w.stage), steps=steps, runs=runs)
+
+
+def adaptive_case_inputs(w):
+    steps, runs = adaptive_history(w.soil, w.stage, w.case)
+    return dict(_adaptive_common(w.soil, w.stage), steps=steps, runs=runs)
+
+
+def adaptive_stage_inputs(w):
+    cases = adaptive_case_ids(w.soil, w.stage)
+    out = {k: v for k, v in _adaptive_common(w.soil, w.stage).items() if k == "upstream"}
+    out["results"] = [f"{adaptive_dir(w.soil, w.stage, c)}/result.json" for c in cases]
+    out["regions"] = [f"{adaptive_dir(w.soil, w.stage, c)}/region.csv" for c in cases]
+    return out
+
+
+def adaptive_verification_inputs(w):
+    out = {"targets": f"results/{w.soil}/dem/targets.csv", "stages": [], "results": [], "verification_runs": []}
+    for sid in adaptive_stages(w.soil):
+        out["stages"] += [f"{adaptive_dir(w.soil, sid)}/{n}" for n in ("stage.json", "optimum.csv")]
+        for c in adaptive_case_ids(w.soil, sid):
+            out["results"].append(f"{adaptive_dir(w.soil, sid, c)}/result.json")
+            out["verification_runs"].append(f"{adaptive_dir(w.soil, sid, c)}/verification_runs.csv")
+    return out
+
+
+def adaptive_spec(w):
+    """The DEM job of run ``run`` of iteration ``it`` (the iteration's record is its params)."""
+    import pandas as pd
+
+    rec = _step_record(adaptive_step_file(w.soil, w.stage, w.case, int(w.it)))
+    up = adaptive_upstream(w.soil, w.stage)
+    opt = pd.read_csv(f"{adaptive_dir(w.soil, up)}/optimum.csv") if up else None
+    st = adaptive.stage_for(soil_cfg(w.soil), w.stage, opt)
+    return adaptive.point_spec(SOILS[w.soil], st, w.case, rec, int(w.run))

@@ -16,6 +16,9 @@ calibrated parameters are then verified.  The modules:
   with the paper's calibrated parameters;
 * :mod:`~soilcal.chain.refine` - the second round: a bias-corrected set where the first
   verification missed its target;
+* :mod:`~soilcal.chain.adaptive` - ``design: adaptive``: the sequential design of
+  :mod:`soilcal.doe.adaptive` per optimisation case, its iteration records, DEM point specs
+  and the recipe's output files;
 * :mod:`~soilcal.chain.errata` - every printed number the published replay does not reproduce;
 * :mod:`~soilcal.chain.plan` - which sources a soil runs.
 

@@ -411,6 +411,7 @@ WORKFLOW_SCHEMA = {
         "soil_dir": {"type": "string"},
         "resources": {"type": "string"},
         "source": {"enum": ["published", "dem", "both"]},
+        "design": {"enum": ["recipe", "printed", "adaptive"]},
     },
 }
 

@@ -1,5 +1,7 @@
-"""soilcal.doe: Plackett-Burman and Box-Behnken designs, coding, row comparison and the
-path of steepest ascent (see :mod:`soilcal.doe.designs` and :mod:`soilcal.doe.steepest`)."""
+"""soilcal.doe: Plackett-Burman and Box-Behnken designs, coding, row comparison, the
+path of steepest ascent and the adaptive design (see :mod:`soilcal.doe.designs`,
+:mod:`soilcal.doe.steepest` and :mod:`soilcal.doe.adaptive`, imported on use: it needs
+scikit-learn)."""
 
 from soilcal.doe.designs import (
     PB_GENERATORS,

@@ -496,7 +496,7 @@ def step(problem: Problem, runs: pd.DataFrame, settings: Settings, iteration: in
     if missing:
         raise InputError(problem.source, f"runs.{missing[0]}", "a column for every response", "missing")
     next_point = int(runs["point"].max()) + 1 if len(runs) else 0
-    next_seed = settings.seed + (int(runs["seed"].max()) - settings.seed + 1 if len(runs) else 0)
+    next_seed = int(runs["seed"].max()) + 1 if len(runs) else settings.seed
     empty_region = consistent_region(problem, np.empty((0, d)), np.empty(0))
     if runs.empty:
         xc = start_points(problem, settings)

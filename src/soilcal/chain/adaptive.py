@@ -1,0 +1,430 @@
+"""The adaptive design (``simulation.design: adaptive``) on a soil's DEM jobs.
+
+One design per optimisation case of each optimised stage the DEM source runs: the space is the
+stage's factors over their ranges in the soil config (``low`` .. ``high``), the stage's fixed
+values stay fixed (and, for a stage fixed from an earlier one, ``fixed_from``, at that stage's
+adaptive result), and the targets are the case's target goals with the values of
+``results/<soil>/dem/targets.csv`` (photo or measurement).  :mod:`soilcal.doe.adaptive` decides
+each iteration; this module turns its decisions into files and DEM point specs:
+
+* ``step/<it>.json`` - iteration ``it``: status, message, the runs it asks for (point, kind,
+  seed, levels), the surrogates' leave-one-out scores, the best candidate, the consistent
+  region and the last verification (written by the workflow's checkpoint ``adaptive_step``);
+* ``runs/<it>/<k>.csv`` - run ``k`` of iteration ``it``: one DEM job, one seed, the
+  :func:`soilcal.chain.sources.run_point` rows;
+* ``runs.csv``, ``surrogates.csv``, ``region.csv``, ``result.json`` - the case's whole design
+  once it has stopped;
+* per stage ``optimum.csv`` (the verified set, or the best candidate, as the ``calibrated``
+  row, in the recipe's columns) and ``identifiability.csv`` (the consistent region), and per
+  soil ``verification.csv`` from the verified point's own runs, all under
+  ``results/<soil>/dem/adaptive/`` with the recipe's file names.
+
+Settings: the soil's ``simulation.adaptive`` block (:data:`soilcal.doe.adaptive.DEFAULTS`;
+``tolerance_pct`` default 2 %, ``tolerances`` per response), the soil's ``seed``.
+"""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+
+from soilcal.doe import adaptive as ad
+from soilcal.errors import InputError
+
+ROOT = "adaptive"
+
+
+def settings_block(soil_data: dict) -> dict:
+    return dict((soil_data.get("simulation") or {}).get("adaptive") or {})
+
+
+def _why_not(soil_data: dict, case: dict) -> str:
+    """Why the adaptive design cannot run a case ('' when it can): it needs a target value for
+    every response it aims at (a printed value or a photo group in the soil's ``targets``)."""
+    for rid, g in case["goals"].items():
+        if g.get("goal") != "target":
+            return f"{rid}: goal {g.get('goal')} has no target value (the adaptive design needs one per response)"
+        if "value" in g:
+            continue
+        t = (soil_data.get("targets") or {}).get(g.get("target"), {})
+        if t.get("value") is None and not t.get("image"):
+            return f"{rid}: target {g.get('target')} has no value and no photo group"
+    return ""
+
+
+def adaptive_cases(soil_data: dict, stage_ids) -> list[tuple[str, str]]:
+    """(stage, case) of every optimisation case of the stages ``stage_ids`` the design can run
+    (:func:`excluded_cases` lists the others with the reason)."""
+    return [(st["id"], c["id"]) for st in soil_data["stages"] if st["id"] in stage_ids
+            for c in (st.get("optimise") or {}).get("cases", []) if not _why_not(soil_data, c)]
+
+
+def excluded_cases(soil_data: dict, stage_ids) -> list[dict]:
+    return [{"stage": st["id"], "case": c["id"], "why": _why_not(soil_data, c)}
+            for st in soil_data["stages"] if st["id"] in stage_ids
+            for c in (st.get("optimise") or {}).get("cases", []) if _why_not(soil_data, c)]
+
+
+def _case(stage: dict, case_id: str) -> dict:
+    for c in (stage.get("optimise") or {}).get("cases", []):
+        if c["id"] == case_id:
+            return c
+    raise InputError(stage.get("id"), "optimise.cases", f"a case {case_id!r}", case_id)
+
+
+def stage_for(soil_data: dict, stage_id: str, upstream_optimum: pd.DataFrame | None = None) -> dict:
+    """The stage the design runs on: the config stage as the DEM source writes it, its fixed
+    values completed from the upstream stage's adaptive optimum where it has ``fixed_from``."""
+    from soilcal.chain.derive import _dem_base, _stage, dependencies, fix_from_optimum
+
+    config_stage = _stage(soil_data, stage_id)
+    st = _dem_base(config_stage)
+    st["derivation"] = {"kind": "adaptive", "text": "the factor ranges in the soil config (design: adaptive)"}
+    deps = dependencies(dict(soil_data, simulation={**(soil_data.get("simulation") or {}), "design": "printed"}),
+                        stage_id)
+    if "fixed_from" in deps:
+        if upstream_optimum is None:
+            raise InputError(stage_id, "fixed_from", f"the adaptive optimum of stage {deps['fixed_from']}", None)
+        up = _dem_base(_stage(soil_data, deps["fixed_from"]))
+        st = fix_from_optimum(st, up, upstream_optimum, (config_stage.get("fixed_from") or {}).get("case"))
+    return st
+
+
+def problem_for(soil_data: dict, stage: dict, case_id: str, targets: dict, source: str = "") -> ad.Problem:
+    """The design's problem for one case: free factors and ranges, fixed values, targets."""
+    where = source or f"{soil_data.get('name', '<soil>')}: stage {stage['id']} case {case_id}"
+    factors = []
+    for sym, f in stage["factors"].items():
+        if "low" not in f or "high" not in f:
+            raise InputError(where, f"stages.{stage['id']}.factors.{sym}", "a range (low, high)",
+                             sorted(f))
+        factors.append(ad.Factor(sym, float(f["low"]), float(f["high"])))
+    block = settings_block(soil_data)
+    default_pct = float(block.get("tolerance_pct", ad.DEFAULTS["tolerance_pct"]))
+    per = block.get("tolerances") or {}
+    tgts = []
+    for rid, goal in _case(stage, case_id)["goals"].items():
+        if goal.get("goal") != "target":
+            raise InputError(where, f"optimise.cases.{case_id}.goals.{rid}", "a target goal", goal.get("goal"))
+        if "value" in goal:
+            value = float(goal["value"])
+        else:
+            t = targets.get(goal["target"]) or {}
+            value = t.get("value")
+            if value is None or not np.isfinite(float(value)):
+                raise InputError(where, f"targets.{goal['target']}", "a target value (photo or measurement)",
+                                 t.get("source", "not available"))
+            value = float(value)
+        tol = per.get(rid, {})
+        tgts.append(ad.Target(rid, value, tol=tol.get("abs"), tol_pct=tol.get("pct", default_pct)))
+    return ad.Problem(factors, tgts, fixed=dict(stage.get("fixed") or {}), source=where)
+
+
+def settings_for(soil_data: dict) -> ad.Settings:
+    block = settings_block(soil_data)
+    block.pop("tolerances", None)
+    return ad.Settings.from_mapping(block, seed=int(soil_data.get("seed", 0)),
+                                    source=f"{soil_data.get('name', '<soil>')}: simulation")
+
+
+# --------------------------------------------------------------------------- runs on disk
+
+def read_runs(problem: ad.Problem, steps: list[dict], run_paths) -> pd.DataFrame:
+    """The design's run table from its step records and run files ``runs/<it>/<k>.csv``."""
+    files = {}
+    for p in run_paths:
+        p = Path(p)
+        try:
+            files[(int(p.parent.name), int(p.stem))] = pd.read_csv(p)
+        except ValueError:
+            raise InputError(p, "<file name>", "runs/<iteration>/<run>.csv", str(p)) from None
+    rows = []
+    for step in steps:
+        it = int(step["iteration"])
+        for k, r in enumerate(step["runs"]):
+            if (it, k) not in files:
+                raise InputError(f"runs/{it}", f"run {k}", "a run file for every run of the iteration", "missing")
+            df = files[(it, k)]
+            row = {"iteration": it, "kind": r["kind"], "point": int(r["point"]), "seed": int(r["seed"]),
+                   **{s: float(r["levels"][s]) for s in problem.names}}
+            for rid in problem.responses:
+                sel = df[(df["response"] == rid) & (df["status"].astype(str) == "ok")]
+                row[rid] = float(sel["value"].iloc[0]) if len(sel) else np.nan
+            rows.append(row)
+    return pd.DataFrame(rows, columns=[*ad.RUN_KEYS, *problem.names, *problem.responses]) if rows \
+        else ad.empty_runs(problem)
+
+
+def _records(df: pd.DataFrame) -> list[dict]:
+    return json.loads(df.to_json(orient="records")) if df is not None and len(df) else []
+
+
+def _plain(obj):
+    if isinstance(obj, dict):
+        return {str(k): _plain(v) for k, v in obj.items()}
+    if isinstance(obj, (list, tuple, np.ndarray)):
+        return [_plain(v) for v in obj]
+    if isinstance(obj, (np.floating, float)):
+        return None if not np.isfinite(obj) else float(obj)
+    if isinstance(obj, (np.integer,)):
+        return int(obj)
+    if isinstance(obj, np.bool_):
+        return bool(obj)
+    return obj
+
+
+def step_record(problem: ad.Problem, settings: ad.Settings, st: ad.Step) -> dict:
+    runs = [{"iteration": int(r["iteration"]), "kind": r["kind"], "point": int(r["point"]),
+             "seed": int(r["seed"]), "levels": {s: float(r[s]) for s in problem.names}}
+            for _, r in st.runs.iterrows()]
+    best = None
+    if st.best:
+        best = {"p": st.best["p"], "levels": dict(zip(problem.names, map(float, st.best["actual"]))),
+                "predicted": st.best["predicted"], "predicted_sd": st.best["predicted_sd"]}
+    return _plain({"iteration": st.iteration, "status": st.status, "message": st.message, "runs": runs,
+                   "surrogates": _records(st.surrogates), "best": best, "region": _records(st.region),
+                   "verified": st.verified,
+                   "problem": {"factors": {f.name: [f.low, f.high] for f in problem.factors},
+                               "fixed": problem.fixed,
+                               "targets": {t.response: {"value": t.value, "tolerance": t.tolerance}
+                                           for t in problem.targets}},
+                   "settings": {k: getattr(settings, k) for k in settings.__dataclass_fields__}})
+
+
+def write_step(soil_data: dict, stage: dict, case_id: str, targets: dict, iteration: int,
+               step_paths, run_paths, out) -> dict:
+    """Decide iteration ``iteration`` from the earlier steps and their runs; write its record."""
+    from soilcal.atomic import write_text
+
+    problem = problem_for(soil_data, stage, case_id, targets)
+    settings = settings_for(soil_data)
+    steps = [json.loads(Path(p).read_text()) for p in step_paths]
+    steps.sort(key=lambda d: d["iteration"])
+    if [d["iteration"] for d in steps] != list(range(iteration)):
+        raise InputError(out, "iteration", f"the records of iterations 0..{iteration - 1}",
+                         [d["iteration"] for d in steps])
+    runs = read_runs(problem, steps, run_paths)
+    st = ad.step(problem, runs, settings, iteration)
+    rec = step_record(problem, settings, st)
+    write_text(out, json.dumps(rec, indent=1) + "\n")
+    return rec
+
+
+def point_spec(soil, stage: dict, case_id: str, step: dict, k: int) -> dict:
+    """The DEM job of run ``k`` of an iteration record: the point's levels, one seed, every
+    response the case aims at."""
+    from soilcal.chain.sources import point_spec as spec
+
+    r = step["runs"][k]
+    rids = list(_case(stage, case_id)["goals"])
+    out = spec(soil, stage, r["levels"], run=int(r["point"]), seed=int(r["seed"]), replicates=1, responses=rids)
+    return dict(out, case=case_id, iteration=int(step["iteration"]), kind=r["kind"])
+
+
+# --------------------------------------------------------------------------- results
+
+def write_case(soil_data: dict, stage: dict, case_id: str, targets: dict, step_paths, run_paths,
+               out_runs, out_surrogates, out_region, out_result, out_verification_runs) -> dict:
+    """The stopped design of one case: its runs, the surrogates of each iteration, the
+    consistent region, the final record and the DEM rows of its last verified point."""
+    from soilcal.atomic import write_text
+    from soilcal.chain.files import write_csv
+
+    problem = problem_for(soil_data, stage, case_id, targets)
+    steps = sorted((json.loads(Path(p).read_text()) for p in step_paths), key=lambda d: d["iteration"])
+    final = steps[-1]
+    if final["status"] == "continue":
+        raise InputError(step_paths[-1], "status", "a stopped design (the last iteration's record)", "continue")
+    runs = read_runs(problem, steps[:-1], run_paths)
+    write_csv(runs, out_runs)
+    sur = pd.DataFrame([dict(iteration=d["iteration"], **s) for d in steps for s in d["surrogates"]])
+    write_csv(sur, out_surrogates)
+    write_csv(pd.DataFrame(final["region"]), out_region)
+    result = {"stage": stage["id"], "case": case_id, "status": final["status"], "message": final["message"],
+              "runs": int(len(runs)), "iterations": int(final["iteration"]), "best": final["best"],
+              "verified": final["verified"], "problem": final["problem"], "settings": final["settings"]}
+    write_text(out_result, json.dumps(_plain(result), indent=1) + "\n")
+    ver = []
+    if final["verified"]:
+        pid = int(final["verified"]["point"])
+        where = {(int(d["iteration"]), k): r for d in steps for k, r in enumerate(d["runs"])}
+        for p in run_paths:
+            p = Path(p)
+            r = where.get((int(p.parent.name), int(p.stem)))
+            if r and r["kind"] == "verification" and int(r["point"]) == pid:
+                ver.append(pd.read_csv(p))
+    write_csv(pd.concat(ver, ignore_index=True) if ver else pd.DataFrame(columns=["response", "status"]),
+              out_verification_runs)
+    return result
+
+
+def optimum_frame(stage: dict, results: list[dict]) -> pd.DataFrame:
+    """``optimum.csv`` in the recipe's columns: per case the verified set (``calibrated``; its
+    predicted responses from the surrogate) or, when none was verified within tolerance, the
+    best candidate with the reason in ``note``."""
+    syms = list(stage["factors"])
+    rows = []
+    for res in results:
+        f = res["problem"]["factors"]
+        src = None
+        if res["verified"] and res["verified"]["met"]:
+            src, levels = "verified", res["verified"]["levels"]
+        elif res["best"]:
+            src, levels = "best candidate", res["best"]["levels"]
+        row = {"case": res["case"], "method": "adaptive", "solution": 1}
+        if src is None:
+            rows.append(row | {"calibrated": False, "status": res["status"], "note": res["message"]})
+            continue
+        for s in syms:
+            lo, hi = f[s]
+            row[f"{s}_coded"] = (levels[s] - 0.5 * (lo + hi)) / (0.5 * (hi - lo))
+            row[s] = levels[s]
+        for rid, v in ((res["best"] or {}).get("predicted") or {}).items():
+            row[rid] = v if src == "best candidate" else np.nan
+        if src == "verified":
+            for rid, v in res["verified"]["responses"].items():
+                row[rid] = v["mean"]
+        row.update(calibrated=True, status=res["status"], runs=res["runs"],
+                   note=("verified within tolerance" if src == "verified" else
+                         f"best candidate, not verified within tolerance: {res['message']}"))
+        rows.append(row)
+    return pd.DataFrame(rows)
+
+
+def region_frame(results: list[dict], regions: list[pd.DataFrame]) -> pd.DataFrame:
+    """``identifiability.csv``: per case and factor, the consistent region's spread."""
+    frames = []
+    for res, reg in zip(results, regions):
+        if reg is None or not len(reg):
+            continue
+        r = reg.copy()
+        r.insert(0, "case", res["case"])
+        r["spread"] = r["max"] - r["min"]
+        r["spread_coded"] = r["spread"] / ((r["high"] - r["low"]) / 2)
+        r["note"] = np.where(r["pinned"], "", "spread over more than half its range: the data do not pin it down")
+        frames.append(r)
+    return pd.concat(frames, ignore_index=True) if frames else pd.DataFrame(
+        columns=["case", "factor", "candidates", "min", "max", "spread", "spread_coded", "pinned", "note"])
+
+
+def write_stage(soil_data: dict, stage: dict, result_paths, region_paths, out_stage, out_optimum,
+                out_identifiability) -> pd.DataFrame:
+    from soilcal.atomic import write_text
+    from soilcal.chain.files import write_csv
+
+    results = [json.loads(Path(p).read_text()) for p in result_paths]
+    regions = [pd.read_csv(p) if Path(p).stat().st_size > 1 else None for p in region_paths]
+    write_text(out_stage, json.dumps(_plain(stage), indent=1) + "\n")
+    opt = optimum_frame(stage, results)
+    write_csv(opt, out_optimum)
+    write_csv(region_frame(results, regions), out_identifiability)
+    return opt
+
+
+def write_verification(soil_data: dict, stage_dirs: dict[str, str], targets_csv, result_paths,
+                       verification_run_paths, out) -> pd.DataFrame:
+    """``verification.csv`` in the recipe's columns, from each case's verified point (its own
+    verification runs: the seeds the design verified it with); ``verification_run_paths``
+    are the cases' ``verification_runs.csv`` beside their ``result.json``."""
+    from soilcal.chain.files import read_stage, read_targets, write_csv
+    from soilcal.chain.verify import VERIFICATION_COLUMNS, verification_frame
+
+    targets = read_targets(targets_csv)
+    results = {(r["stage"], r["case"]): r for r in (json.loads(Path(p).read_text()) for p in result_paths)}
+    runs: dict[tuple[str, str], list[pd.DataFrame]] = {}
+    for p in verification_run_paths:
+        p = Path(p)
+        df = pd.read_csv(p)
+        if len(df):
+            runs[(p.parent.parent.name, p.parent.name)] = [df]
+    frames = []
+    for sid, d in stage_dirs.items():
+        stage = read_stage(Path(d) / "stage.json")
+        opt = pd.read_csv(Path(d) / "optimum.csv")
+        case_runs = {case: fr for (s, case), fr in runs.items() if s == sid}
+        cases = [c for c in (stage.get("optimise") or {}).get("cases", []) if (sid, c["id"]) in results]
+        frames.append(verification_frame(soil_data, dict(stage, optimise={**stage["optimise"], "cases": cases}),
+                                         opt, targets, case_runs))
+    df = pd.concat(frames, ignore_index=True) if frames else pd.DataFrame(columns=VERIFICATION_COLUMNS)
+    for i, row in df.iterrows():
+        res = results[(row["stage"], row["case"])]
+        if row["status"] == "ok":
+            df.at[i, "note"] = "; ".join(x for x in (f"adaptive: {res['status']} after {res['runs']} runs",
+                                                      str(row["note"])) if x and x != "nan")
+        else:
+            df.at[i, "status"] = f"not verified: {res['status']}"
+            df.at[i, "note"] = res["message"]
+    write_csv(df, out)
+    return df
+
+
+# --------------------------------------------------------------------------- file-level entry points
+# (what the workflow's scripts call: paths in, files out)
+
+def _inputs(soil_data, stage_id, targets_csv, upstream_csv):
+    from soilcal.chain.files import read_targets
+
+    up = pd.read_csv(upstream_csv) if upstream_csv else None
+    return stage_for(soil_data, stage_id, up), read_targets(targets_csv)
+
+
+def step_files(soil_data: dict, stage_id: str, case_id: str, iteration: int, targets_csv, step_paths,
+               run_paths, out, upstream_csv=None) -> dict:
+    stage, targets = _inputs(soil_data, stage_id, targets_csv, upstream_csv)
+    return write_step(soil_data, stage, case_id, targets, iteration, step_paths, run_paths, out)
+
+
+def case_files(soil_data: dict, stage_id: str, case_id: str, targets_csv, step_paths, run_paths, outputs,
+               upstream_csv=None) -> dict:
+    """``outputs``: runs, surrogates, region, result, verification_runs paths."""
+    stage, targets = _inputs(soil_data, stage_id, targets_csv, upstream_csv)
+    return write_case(soil_data, stage, case_id, targets, step_paths, run_paths, *outputs)
+
+
+def stage_files(soil_data: dict, stage_id: str, result_paths, region_paths, outputs, upstream_csv=None):
+    """``outputs``: stage.json, optimum.csv, identifiability.csv paths."""
+    up = pd.read_csv(upstream_csv) if upstream_csv else None
+    return write_stage(soil_data, stage_for(soil_data, stage_id, up), result_paths, region_paths, *outputs)
+
+
+SUMMARY_COLUMNS = ["soil", "stage", "case", "response", "target", "tolerance", "method", "runs", "iterations",
+                   "verified_mean", "verified_sd", "verified_n", "verification_rel_error_pct",
+                   "within_tolerance", "stopped_because", "message"]
+
+
+def summary_frame(soil: str, results: list[dict], excluded: list[dict] = ()) -> pd.DataFrame:
+    """One row per case and response: how the design stopped, after how many runs, and the
+    verified relative error; a case the design cannot run is a row saying why."""
+    rows = [{"soil": soil, "stage": e["stage"], "case": e["case"], "method": "adaptive", "runs": 0,
+             "stopped_because": "not run", "message": e["why"]} for e in excluded]
+    for r in results:
+        ver = (r.get("verified") or {}).get("responses") or {}
+        for rid, t in r["problem"]["targets"].items():
+            v = ver.get(rid, {})
+            rows.append({"soil": soil, "stage": r["stage"], "case": r["case"], "response": rid,
+                         "target": t["value"], "tolerance": t["tolerance"], "method": "adaptive",
+                         "runs": r["runs"], "iterations": r["iterations"],
+                         "verified_mean": v.get("mean"), "verified_sd": v.get("sd"), "verified_n": v.get("n"),
+                         "verification_rel_error_pct": v.get("error_pct"),
+                         "within_tolerance": v.get("within"), "stopped_because": r["status"],
+                         "message": r["message"]})
+    return pd.DataFrame(rows, columns=SUMMARY_COLUMNS)
+
+
+def verification_files(soil: str, soil_data: dict, stage_dirs: dict[str, str], targets_csv, result_paths,
+                       verification_run_paths, out, out_summary) -> pd.DataFrame:
+    from soilcal.chain.files import write_csv
+
+    from soilcal.chain.derive import dem_stage_ids
+
+    df = write_verification(soil_data, stage_dirs, targets_csv, result_paths, verification_run_paths, out)
+    results = [json.loads(Path(p).read_text()) for p in result_paths]
+    write_csv(summary_frame(soil, results, excluded_cases(soil_data, dem_stage_ids(soil_data))), out_summary)
+    return df
+
+
+__all__ = ["SUMMARY_COLUMNS", "adaptive_cases", "excluded_cases", "case_files", "stage_files", "step_files", "summary_frame", "verification_files", "optimum_frame", "point_spec", "problem_for", "read_runs", "settings_for",
+           "stage_for", "step_record", "write_case", "write_stage", "write_step", "write_verification"]

@@ -1,0 +1,85 @@
+"""design: adaptive inside the DAG, on the tiny preset: one checkpoint per iteration, one DEM
+job per run, stopped and resumed between iterations without redoing a finished run."""
+
+from __future__ import annotations
+
+import json
+
+import pandas as pd
+import pytest
+import yaml
+
+from wfutil import N_SPHERES, copy_workflow, planned_jobs, run
+
+SOIL = "cinnamon-soil"
+CASE = f"results/{SOIL}/dem/adaptive/bbd/stacking_angle"
+BUDGET = 10  # the start (7 points, the centre twice: 8 runs) and one iteration of two
+
+
+@pytest.fixture(scope="module")
+def wf(tmp_path_factory):
+    tmp = copy_workflow(tmp_path_factory.mktemp("adaptive"), [SOIL])
+    p = tmp / f"config/soils/{SOIL}.yaml"
+    d = yaml.safe_load(p.read_text())
+    d["simulation"]["responses"]["stacking_angle"]["set"] = {"n_particles": N_SPHERES}
+    d["simulation"]["adaptive"] = {"budget": BUDGET}
+    p.write_text(yaml.safe_dump(d, sort_keys=False))
+    # first only up to the decision of iteration 1 (the start's runs are done by then), as a
+    # run killed after its first iteration leaves it
+    run(tmp, "--cores", "2", f"{CASE}/step/1.json", "--config", "design=adaptive")
+    first = {f.name: f.stat().st_mtime_ns for f in (tmp / CASE / "runs/0").glob("*.csv")}
+    run(tmp, "--cores", "2", "--config", "design=adaptive")
+    return tmp, first
+
+
+def test_iterations_and_runs_follow_the_records(wf):
+    tmp, _ = wf
+    steps = [json.loads((tmp / CASE / f"step/{i}.json").read_text()) for i in range(3)]
+    assert [s["status"] for s in steps] == ["continue", "continue", "budget spent"]
+    assert len(steps[0]["runs"]) == 8 and len(steps[1]["runs"]) == 2
+    assert not (tmp / CASE / "step/3.json").exists()
+    runs = pd.read_csv(tmp / CASE / "runs.csv")
+    assert len(runs) == BUDGET and runs["seed"].is_unique
+    # every run file is the DEM job of its record: its levels, its seed
+    for s in steps[:2]:
+        for k, r in enumerate(s["runs"]):
+            df = pd.read_csv(tmp / CASE / f"runs/{s['iteration']}/{k}.csv")
+            assert int(df["seed"].iloc[0]) == r["seed"]
+            for sym, v in r["levels"].items():
+                assert df[f"f:{sym}"].iloc[0] == pytest.approx(v)
+
+
+def test_ranges_respected_and_fixed_parameters_unchanged(wf):
+    tmp, _ = wf
+    soil = yaml.safe_load((tmp / f"config/soils/{SOIL}.yaml").read_text())
+    bbd = next(s for s in soil["stages"] if s["id"] == "bbd")
+    runs = pd.read_csv(tmp / CASE / "runs.csv")
+    for sym, f in bbd["factors"].items():
+        assert runs[sym].between(f["low"], f["high"]).all()
+    for f in (tmp / CASE / "runs").glob("*/*.csv"):
+        df = pd.read_csv(f)
+        for pname, v in bbd["fixed"].items():
+            assert df[f"p:{pname}"].iloc[0] == pytest.approx(v)
+
+
+def test_resumed_without_redoing_finished_runs(wf):
+    tmp, first = wf
+    assert len(first) == 8
+    now = {f.name: f.stat().st_mtime_ns for f in (tmp / CASE / "runs/0").glob("*.csv")}
+    assert now == first
+    assert planned_jobs(tmp, "--config", "design=adaptive") == []
+
+
+def test_outputs_have_the_recipe_file_names_and_say_how_it_stopped(wf):
+    tmp, _ = wf
+    d = tmp / f"results/{SOIL}/dem/adaptive"
+    opt = pd.read_csv(d / "bbd/optimum.csv")
+    assert list(opt["case"]) == ["stacking_angle"] and bool(opt["calibrated"].iloc[0])
+    ver = pd.read_csv(d / "verification.csv")
+    recipe_cols = ["stage", "case", "round", "response", "target", "simulated_mean", "within_2_percent", "status"]
+    assert all(c in ver.columns for c in recipe_cols)
+    summ = pd.read_csv(d / "summary.csv")
+    assert summ["stopped_because"].iloc[0] == "budget spent" and summ["runs"].iloc[0] == BUDGET
+    targets = pd.read_csv(tmp / f"results/{SOIL}/dem/targets.csv").set_index("target_id")
+    assert summ["target"].iloc[0] == pytest.approx(targets.loc["stacking_angle", "value"])
+    assert (d / "bbd/identifiability.csv").exists()
