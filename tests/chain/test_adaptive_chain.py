@@ -74,3 +74,17 @@ def test_a_stage_fixed_from_an_earlier_one_takes_its_adaptive_set():
          "soil_soil_rolling_friction": 0.2}
     with pytest.raises(InputError, match="fixed_from"):
         adaptive.stage_for(s.data, "soil-65mn")
+
+
+def test_progress_figure_is_written_and_refuses_a_missing_response(tmp_path):
+    from soilcal.plots.adaptive import adaptive_progress
+
+    runs = pd.DataFrame({"iteration": [0, 0, 1, 1], "kind": ["start", "start", "proposal", "verification"],
+                         "point": [0, 0, 1, 2], "seed": [0, 1, 2, 3], "A": [0.1, 0.1, 0.2, 0.3],
+                         "y": [30.0, 31.0, 28.0, 27.5]})
+    res = {"stage": "bbd", "case": "c", "status": "budget spent", "runs": 4,
+           "problem": {"targets": {"y": {"value": 27.7, "tolerance": 0.55}}}, "settings": {"p_verify": 0.5}}
+    paths = adaptive_progress(runs, res, [(1, 0.2), (2, 0.7)], tmp_path / "p")
+    assert [p.name for p in paths] == ["p.png", "p.pdf"] and all(p.stat().st_size > 0 for p in paths)
+    with pytest.raises(InputError, match="runs.csv"):
+        adaptive_progress(runs.drop(columns="y"), res, [], tmp_path / "q")

@@ -83,3 +83,4 @@ def test_outputs_have_the_recipe_file_names_and_say_how_it_stopped(wf):
     targets = pd.read_csv(tmp / f"results/{SOIL}/dem/targets.csv").set_index("target_id")
     assert summ["target"].iloc[0] == pytest.approx(targets.loc["stacking_angle", "value"])
     assert (d / "bbd/identifiability.csv").exists()
+    assert (d / "figures/verification.png").exists() and (d / "figures/progress_bbd_stacking_angle.png").exists()

@@ -95,3 +95,25 @@ rule adaptive_verification:
         "logs/{soil}/dem/adaptive/verification.log",
     script:
         "../scripts/adaptive_verification.py"
+
+
+rule adaptive_figures:
+    input:
+        unpack(adaptive_verification_inputs),
+        verification="results/{soil}/dem/adaptive/verification.csv",
+    output:
+        report(
+            directory("results/{soil}/dem/adaptive/figures"),
+            patterns=["{name}.png"],
+            caption="../report/adaptive.rst",
+            category="{soil}",
+            subcategory="dem adaptive",
+        ),
+    params:
+        cases=lambda w: [adaptive_dir(w.soil, s, c) for s in adaptive_stages(w.soil) for c in adaptive_case_ids(w.soil, s)],
+    conda:
+        "../../envs/soilcal.yaml"
+    log:
+        "logs/{soil}/dem/adaptive/figures.log",
+    script:
+        "../scripts/adaptive_figures.py"

@@ -45,7 +45,7 @@ localrules:
     design, errata, image_measure, targets, optimum, figures, verification_figures, tool_figures,
     summary, regression, published_responses, dem_responses, printed_comparison, refine,
     verification, tool_verification, calibrated_vs_paper, loop_diagnose, loop_more, loop_select,
-    adaptive_step, adaptive_case, adaptive_stage, adaptive_verification,
+    adaptive_step, adaptive_case, adaptive_stage, adaptive_verification, adaptive_figures,
 
 
 def soil_cfg(soil):
@@ -519,7 +519,7 @@ def adaptive_dir(soil, stage, case=None):
 
 def adaptive_targets(soil):
     out = [f"results/{soil}/dem/targets.csv", f"results/{soil}/dem/adaptive/verification.csv",
-           f"results/{soil}/dem/adaptive/summary.csv"]
+           f"results/{soil}/dem/adaptive/summary.csv", f"results/{soil}/dem/adaptive/figures"]
     for sid in adaptive_stages(soil):
         out += [f"{adaptive_dir(soil, sid)}/{n}" for n in ("stage.json", "optimum.csv", "identifiability.csv")]
     return out

@@ -426,5 +426,24 @@ def verification_files(soil: str, soil_data: dict, stage_dirs: dict[str, str], t
     return df
 
 
-__all__ = ["SUMMARY_COLUMNS", "adaptive_cases", "excluded_cases", "case_files", "stage_files", "step_files", "summary_frame", "verification_files", "optimum_frame", "point_spec", "problem_for", "read_runs", "settings_for",
+def figure_files(soil: str, verification_csv, case_dirs, out_dir) -> list[Path]:
+    """The verification bars of the soil's adaptive sets and each case's progress figure."""
+    from soilcal import plots
+    from soilcal.plots.adaptive import adaptive_progress
+
+    out_dir = Path(out_dir)
+    out_dir.mkdir(parents=True, exist_ok=True)
+    paths = plots.verification_bars(pd.read_csv(verification_csv), out_dir / "verification",
+                                    title=f"{soil}: verification at the adaptive sets")
+    for d in map(Path, case_dirs):
+        res = json.loads((d / "result.json").read_text())
+        steps = sorted((json.loads(p.read_text()) for p in (d / "step").glob("*.json")),
+                       key=lambda r: r["iteration"])
+        best = [(r["iteration"], r["best"]["p"]) for r in steps if r.get("best")]
+        paths += adaptive_progress(pd.read_csv(d / "runs.csv"), res, best,
+                                   out_dir / f"progress_{res['stage']}_{res['case']}")
+    return paths
+
+
+__all__ = ["SUMMARY_COLUMNS", "figure_files", "adaptive_cases", "excluded_cases", "case_files", "stage_files", "step_files", "summary_frame", "verification_files", "optimum_frame", "point_spec", "problem_for", "read_runs", "settings_for",
            "stage_for", "step_record", "write_case", "write_stage", "write_step", "write_verification"]
