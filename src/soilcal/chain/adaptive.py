@@ -32,6 +32,7 @@ import numpy as np
 import pandas as pd
 
 from soilcal.doe import adaptive as ad
+from soilcal.doe.designs import actual_to_coded
 from soilcal.errors import InputError
 
 ROOT = "adaptive"
@@ -279,8 +280,7 @@ def optimum_frame(stage: dict, results: list[dict]) -> pd.DataFrame:
             rows.append(row | {"calibrated": False, "status": res["status"], "note": res["message"]})
             continue
         for s in syms:
-            lo, hi = f[s]
-            row[f"{s}_coded"] = (levels[s] - 0.5 * (lo + hi)) / (0.5 * (hi - lo))
+            row[f"{s}_coded"] = float(actual_to_coded(levels[s], *f[s]))
             row[s] = levels[s]
         for rid, v in ((res["best"] or {}).get("predicted") or {}).items():
             row[rid] = v if src == "best candidate" else np.nan

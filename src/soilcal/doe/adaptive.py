@@ -78,6 +78,7 @@ import pandas as pd
 from scipy import optimize, stats
 from scipy.stats import qmc
 
+from soilcal.doe.designs import actual_to_coded, coded_to_actual
 from soilcal.errors import InputError
 
 #: defaults of a soil's ``simulation.adaptive`` block (documented in the soil schema)
@@ -99,11 +100,6 @@ class Factor:
     low: float
     high: float
 
-    def coded(self, v):
-        return (np.asarray(v, float) - 0.5 * (self.low + self.high)) / (0.5 * (self.high - self.low))
-
-    def actual(self, c):
-        return 0.5 * (self.low + self.high) + np.asarray(c, float) * 0.5 * (self.high - self.low)
 
 
 @dataclass(frozen=True)
@@ -157,12 +153,10 @@ class Problem:
         return [t.response for t in self.targets]
 
     def to_actual(self, coded: np.ndarray) -> np.ndarray:
-        coded = np.atleast_2d(coded)
-        return np.column_stack([f.actual(coded[:, i]) for i, f in enumerate(self.factors)])
+        return coded_to_actual(np.atleast_2d(coded), [f.low for f in self.factors], [f.high for f in self.factors])
 
     def to_coded(self, actual: np.ndarray) -> np.ndarray:
-        actual = np.atleast_2d(actual)
-        return np.column_stack([f.coded(actual[:, i]) for i, f in enumerate(self.factors)])
+        return actual_to_coded(np.atleast_2d(actual), [f.low for f in self.factors], [f.high for f in self.factors])
 
 
 @dataclass
