@@ -1,19 +1,18 @@
-"""Test distribution over workers (pytest-xdist, ``--dist loadgroup`` in pyproject.toml):
-each test file is one group, so a module-scoped fixture is built once, on one worker; the
-files that use the tiny DEM calibration run (``tiny_dem_run``, a session fixture) form one
-group, so that run is made once."""
+"""Tests run on two workers (pytest-xdist, ``-n 2 --dist loadfile`` in pyproject.toml): a test
+file goes to one worker whole, so its module-scoped fixtures are built once.  The session
+fixture ``tiny_dem_run`` (the tiny DEM calibration, minutes) would be built once per worker that
+runs a test using it: all its users live in one file."""
 
 from __future__ import annotations
 
-import pytest
+import os
 
-TINY = "tiny_dem_run"
+import pytest
 
 
 def pytest_collection_modifyitems(config, items):
-    path = lambda item: item.nodeid.split("::")[0]  # noqa: E731
-    tiny_files = {path(it) for it in items if TINY in getattr(it, "fixturenames", ())}
-    for it in items:
-        if any(m.name == "xdist_group" for m in it.iter_markers()):
-            continue
-        it.add_marker(pytest.mark.xdist_group(TINY if path(it) in tiny_files else path(it)))
+    files = sorted({it.nodeid.split("::")[0] for it in items
+                    if "tiny_dem_run" in getattr(it, "fixturenames", ())})
+    if len(files) > 1 and os.environ.get("PYTEST_XDIST_WORKER"):
+        raise pytest.UsageError(f"tiny_dem_run is used in {', '.join(files)}: on several workers it is "
+                                "built once per worker; keep its users in one file (or run with -n 0)")
