@@ -220,3 +220,11 @@ def test_bad_problems_and_settings_are_named():
         ad.Settings.from_mapping({"bogus": 1})
     with pytest.raises(InputError, match="adaptive.p_verify"):
         ad.Settings.from_mapping({"p_verify": 1.5})
+
+
+def test_shortfall_is_the_standardised_distance_beyond_the_tolerance():
+    pb = ad.Problem([ad.Factor("a", 0, 1)], [ad.Target("y", 10.0, tol=1.0), ad.Target("z", 0.0, tol=0.5)])
+    pred = {"y": (np.array([10.5, 13.0, 6.0]), np.array([1.0, 2.0, 0.5])),
+            "z": (np.array([0.0, 0.0, 1.5]), np.array([1.0, 1.0, 0.25]))}
+    # within both tolerances: 0; y 2 beyond over sd 2: -1; y 3 beyond over 0.5 and z 1 over 0.25
+    assert ad.shortfall(pb, pred) == pytest.approx([0.0, -1.0, -(6.0 ** 2) - 4.0 ** 2])

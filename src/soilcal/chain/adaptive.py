@@ -184,7 +184,8 @@ def step_record(problem: ad.Problem, settings: ad.Settings, st: ad.Step) -> dict
     best = None
     if st.best:
         best = {"p": st.best["p"], "levels": dict(zip(problem.names, map(float, st.best["actual"]))),
-                "predicted": st.best["predicted"], "predicted_sd": st.best["predicted_sd"]}
+                "predicted": st.best["predicted"], "predicted_sd": st.best["predicted_sd"],
+                "closest": bool(st.best.get("closest", False))}
     return _plain({"iteration": st.iteration, "status": st.status, "message": st.message, "runs": runs,
                    "surrogates": _records(st.surrogates), "best": best, "region": _records(st.region),
                    "verified": st.verified,
@@ -289,7 +290,9 @@ def optimum_frame(stage: dict, results: list[dict]) -> pd.DataFrame:
                 row[rid] = v["mean"]
         row.update(calibrated=True, status=res["status"], runs=res["runs"],
                    note=("verified within tolerance" if src == "verified" else
-                         f"best candidate, not verified within tolerance: {res['message']}"))
+                         ("closest reachable point (no point is plausibly within tolerance), "
+                          if res["best"].get("closest") else "best candidate, ")
+                         + f"not verified within tolerance: {res['message']}"))
         rows.append(row)
     return pd.DataFrame(rows)
 

@@ -44,13 +44,17 @@ Proposals
 ---------
 ``batch`` points per iteration from ``n_candidates`` scrambled Halton candidates: greedily the
 largest P, each at least ``separation`` (coded distance) from the points already chosen and
-from every evaluated point.
+from every evaluated point.  Where P vanishes everywhere (all below ``p_unreachable``), the
+candidates are ranked by the standardised shortfall instead,
+-sum_j (max(|mu_j - t_j| - tol_j, 0) / s_j)^2 (the exponent of P's Gaussian tail), so the
+proposals still head for the targets.
 
 Stopping
 --------
-The candidate of largest P (among the candidates and the evaluated points) becomes the
-*best candidate* once P >= ``p_verify``; it is run with ``verify_seeds`` seeds (its runs join
-the data, so they also inform the surrogate).  The design stops when a verified mean is
+The candidate of largest P (among the candidates and the evaluated points) is the best
+candidate (while P < ``p_unreachable`` everywhere, the point whose predictions lie closest to
+the targets, in tolerances, instead); once its P >= ``p_verify`` it is run with
+``verify_seeds`` seeds (its runs join the data, so they also inform the surrogate).  The design stops when a verified mean is
 within tolerance of every target (``target met``), when the run ``budget`` is spent
 (``budget spent``), or when the surrogate is sure that no point of the box is consistent:
 P < ``p_unreachable`` everywhere after a batch of proposals aimed at the target has been run,
@@ -357,6 +361,16 @@ def consistency(problem: Problem, surrogates: dict, xc: np.ndarray) -> tuple[np.
     return p, pred
 
 
+def shortfall(problem: Problem, pred: dict) -> np.ndarray:
+    """-sum_j (max(|mu_j - t_j| - tol_j, 0) / s_j)^2: how far each point's predictions fall
+    short of the targets, in predictive standard deviations (0 where all lie within)."""
+    out = 0.0
+    for t in problem.targets:
+        mu, sd = pred[t.response]
+        out = out - (np.maximum(np.abs(mu - t.value) - t.tolerance, 0.0) / np.maximum(sd, 1e-12)) ** 2
+    return np.asarray(out, float)
+
+
 # --------------------------------------------------------------------------- proposals
 
 def halton(d: int, n: int, seed: int) -> np.ndarray:
@@ -517,6 +531,14 @@ def step(problem: Problem, runs: pd.DataFrame, settings: Settings, iteration: in
         best = {"coded": xe[j], "actual": problem.to_actual(xe[j])[0], "p": float(p_e[j]),
                 "predicted": {r: float(pe[r][0][0]) for r in problem.responses},
                 "predicted_sd": {r: float(pe[r][1][0]) for r in problem.responses}}
+    near = None
+    if best["p"] < settings.p_unreachable:
+        # no candidate is plausibly consistent: the best guess is the point whose predictions
+        # lie closest to the targets (in tolerances), not the argmax of a vanishing P
+        near = closest_reachable(problem, surrogates, cand)
+        p_n, _ = consistency(problem, surrogates, near["coded"][None, :])
+        best = {"coded": near["coded"], "actual": near["actual"], "p": float(p_n[0]),
+                "predicted": near["values"], "predicted_sd": near["sd"], "closest": True}
     region = consistent_region(problem, cand, p_c)
     if verified and verified["met"]:
         return Step(iteration, "target met",
@@ -525,8 +547,7 @@ def step(problem: Problem, runs: pd.DataFrame, settings: Settings, iteration: in
                     surrogates)
     # unreachable: no point of the box is plausibly consistent, and the closest reachable
     # prediction lies further from a target than its uncertainty explains
-    if best["p"] < settings.p_unreachable:
-        near = closest_reachable(problem, surrogates, cand)
+    if near is not None:
         far = [t for t in problem.targets
                if abs(near["values"][t.response] - t.value) > t.tolerance + 2.0 * near["sd"][t.response]
                and _beyond_data(runs, points, t)]
@@ -560,7 +581,8 @@ def step(problem: Problem, runs: pd.DataFrame, settings: Settings, iteration: in
         left -= settings.verify_seeds
     n_new = max(0, min(settings.batch, left))
     taken = np.vstack([xe, np.atleast_2d(coded)]) if coded else xe
-    for i in pick_batch(cand, p_c, taken, n_new, settings.separation):
+    score = p_c if p_c.max() >= settings.p_unreachable else shortfall(problem, pred_c)
+    for i in pick_batch(cand, score, taken, n_new, settings.separation):
         coded.append(cand[i])
         kinds.append("proposal")
         reps.append(1)
