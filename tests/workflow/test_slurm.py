@@ -37,14 +37,20 @@ def _why_not() -> str:
 pytestmark = pytest.mark.skipif(bool(_why_not()), reason=_why_not() or "-")
 
 
-def test_the_cluster_run_gives_the_local_tables(tiny_dem_run, tmp_path):
-    cluster = make_tiny(copy_workflow(tmp_path, TINY_SOILS))
+def test_the_cluster_run_gives_the_local_tables(tmp_path):
+    # the local run made here, not the session's tiny_dem_run: the users of that fixture share
+    # one test file (tests/conftest.py), and this opt-in test stays apart
+    for d in ("local", "cluster"):
+        (tmp_path / d).mkdir()
+    local = make_tiny(copy_workflow(tmp_path / "local", TINY_SOILS))
+    run(local, "--cores", "2")
+    cluster = make_tiny(copy_workflow(tmp_path / "cluster", TINY_SOILS))
     out = run(cluster, "--profile", "profiles/slurm")
     text = out.stdout + out.stderr
     # every DEM job went through SLURM, the light rules ran here
     assert len(re.findall(r"has been submitted with SLURM jobid \d+", text)) > 30
     assert not re.search(r"rule_(design|regression|figures)/", text)
-    comps = compare_trees(tiny_dem_run / "results", cluster / "results")
+    comps = compare_trees(local / "results", cluster / "results")
     assert sum(c.path.startswith("cinnamon-soil/dem/") and "/runs/" in c.path for c in comps) > 30
     bad = [(c.path, c.outcome, c.detail) for c in comps if c.outcome in (DIFFERS, ONLY_A, ONLY_B)]
     assert not bad, bad
