@@ -88,3 +88,22 @@ def test_progress_figure_is_written_and_refuses_a_missing_response(tmp_path):
     assert [p.name for p in paths] == ["p.png", "p.pdf"] and all(p.stat().st_size > 0 for p in paths)
     with pytest.raises(InputError, match="runs.csv"):
         adaptive_progress(runs.drop(columns="y"), res, [], tmp_path / "q")
+
+
+def test_optimum_rows_take_the_verified_set_else_the_best_candidate():
+    stage = {"factors": {"A": {"low": 0.08, "high": 0.14}, "B": {"low": 0.24, "high": 0.52}}}
+    problem = {"factors": {"A": [0.08, 0.14], "B": [0.24, 0.52]},
+               "targets": {"y": {"value": 27.7, "tolerance": 0.554}}}
+    verified = {"problem": problem, "case": "v", "status": "target met", "message": "met", "runs": 20,
+                "best": {"levels": {"A": 0.1, "B": 0.3}, "predicted": {"y": 27.5}, "p": 0.9},
+                "verified": {"met": True, "levels": {"A": 0.11, "B": 0.45},
+                             "responses": {"y": {"mean": 27.9}}}}
+    best = dict(verified, case="b", status="budget spent", message="60 runs spent", verified=None,
+                best={"levels": {"A": 0.14, "B": 0.24}, "predicted": {"y": 30.1}, "p": 0.001, "closest": True})
+    opt = adaptive.optimum_frame(stage, [verified, best]).set_index("case")
+    # coded = (actual - centre) / half range
+    assert opt.loc["v", "A_coded"] == pytest.approx(0.0) and opt.loc["v", "B_coded"] == pytest.approx(0.5)
+    assert opt.loc["v", "y"] == 27.9 and opt.loc["v", "note"] == "verified within tolerance"
+    assert opt.loc["b", "A_coded"] == pytest.approx(1.0) and opt.loc["b", "B_coded"] == pytest.approx(-1.0)
+    assert opt.loc["b", "y"] == 30.1 and opt.loc["b", "note"].startswith("closest reachable point")
+    assert opt["calibrated"].all()

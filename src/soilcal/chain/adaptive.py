@@ -281,7 +281,7 @@ def optimum_frame(stage: dict, results: list[dict]) -> pd.DataFrame:
             rows.append(row | {"calibrated": False, "status": res["status"], "note": res["message"]})
             continue
         for s in syms:
-            row[f"{s}_coded"] = float(actual_to_coded(levels[s], *f[s]))
+            row[f"{s}_coded"] = float(actual_to_coded(np.array([levels[s]]), [f[s][0]], [f[s][1]])[0])
             row[s] = levels[s]
         for rid, v in ((res["best"] or {}).get("predicted") or {}).items():
             row[rid] = v if src == "best candidate" else np.nan
