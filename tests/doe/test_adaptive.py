@@ -228,3 +228,26 @@ def test_shortfall_is_the_standardised_distance_beyond_the_tolerance():
             "z": (np.array([0.0, 0.0, 1.5]), np.array([1.0, 1.0, 0.25]))}
     # within both tolerances: 0; y 2 beyond over sd 2: -1; y 3 beyond over 0.5 and z 1 over 0.25
     assert ad.shortfall(pb, pred) == pytest.approx([0.0, -1.0, -(6.0 ** 2) - 4.0 ** 2])
+
+
+def test_ready_to_verify_when_the_prediction_is_as_sure_as_a_verification():
+    pb = ad.Problem([ad.Factor("a", 0, 1)], [ad.Target("y", 10.0, tol=0.2)])
+    pts = pd.DataFrame({"point": [0, 1], "a": [0.5, 0.6], "y": [10.0, 11.0], "y_sd": [2.0, np.nan],
+                        "y_n": [2, 1]})
+    s = ad.Settings(verify_seeds=4)
+    best = {"p": 0.1, "predicted": {"y": 10.1}, "predicted_sd": {"y": 0.9}}
+    assert ad.ready_to_verify(pb, best, pts, s)  # 0.9 <= 2 / sqrt(4)
+    assert not ad.ready_to_verify(pb, dict(best, predicted_sd={"y": 1.1}), pts, s)
+    assert not ad.ready_to_verify(pb, dict(best, predicted={"y": 10.3}), pts, s)  # outside 0.2
+    assert ad.ready_to_verify(pb, dict(best, p=0.6), pts, s)
+
+
+def test_a_seed_scatter_wider_than_the_tolerance_still_gets_verifications():
+    # SD 1 against a tolerance of 0.2: P stays low everywhere, verifications must still happen
+    runs, st = ad.run(LINEAR, noisy(linear, 1.0), ad.Settings(seed=4, budget=40))
+    ver = runs[runs["kind"] == "verification"]
+    assert len(ver) >= 4 and ver.groupby("point").size().eq(4).all()
+    assert st.verified is not None
+    # the answer is the best of the verifications (smallest error)
+    errs = ver.groupby("point")["y"].mean().sub(12.0).abs()
+    assert st.verified["point"] == int(errs.idxmin())

@@ -53,8 +53,11 @@ Stopping
 --------
 The candidate of largest P (among the candidates and the evaluated points) is the best
 candidate (while P < ``p_unreachable`` everywhere, the point whose predictions lie closest to
-the targets, in tolerances, instead); once its P >= ``p_verify`` it is run with
-``verify_seeds`` seeds (its runs join the data, so they also inform the surrogate).  The design stops when a verified mean is
+the targets, in tolerances, instead); once its P >= ``p_verify``, or once every prediction
+there lies within tolerance and is known as well as a verification would measure it
+(:func:`ready_to_verify`), it is run with ``verify_seeds`` seeds (its runs join the data, so
+they also inform the surrogate); no point within ``separation`` of a verified one is verified
+again.  The best verification (smallest worst error, in tolerances) is the design's answer.  The design stops when a verified mean is
 within tolerance of every target (``target met``), when the run ``budget`` is spent
 (``budget spent``), or when the surrogate is sure that no point of the box is consistent:
 P < ``p_unreachable`` everywhere after a batch of proposals aimed at the target has been run,
@@ -473,11 +476,17 @@ def consistent_region(problem: Problem, cand: np.ndarray, p: np.ndarray) -> pd.D
 
 
 def _verified(problem: Problem, runs: pd.DataFrame, settings: Settings) -> dict | None:
-    """The last verified point: its means and whether every one is within tolerance."""
+    """The best verified point (smallest worst error in tolerances): its means and whether
+    every one is within tolerance."""
     ver = runs[runs["kind"] == "verification"]
     if ver.empty:
         return None
-    pid = int(ver["point"].max())
+
+    def worst(g):
+        e = [abs(np.nanmean(g[t.response].to_numpy(float)) - t.value) / t.tolerance for t in problem.targets]
+        return max(e) if all(np.isfinite(e)) else math.inf
+
+    pid = min(ver["point"].unique(), key=lambda p: (worst(ver[ver["point"] == p]), p))
     g = ver[ver["point"] == pid]
     out = {"point": pid, "iteration": int(g["iteration"].max()),
            "levels": {n: float(g[n].iloc[0]) for n in problem.names}, "responses": {}, "met": True}
@@ -573,8 +582,21 @@ def step(problem: Problem, runs: pd.DataFrame, settings: Settings, iteration: in
     left = settings.budget - spent
     ver_pts = problem.to_coded(runs.loc[runs["kind"] == "verification", problem.names].to_numpy(float)) \
         if (runs["kind"] == "verification").any() else np.empty((0, d))
-    already = len(ver_pts) and np.min(np.linalg.norm(ver_pts - best["coded"], axis=1)) < 1e-9
-    if best["p"] >= settings.p_verify and not already and left >= settings.verify_seeds:
+    # no point within `separation` of a verified one is verified again: the candidate to verify
+    # is the best one away from them
+    cand_v = best
+    if len(ver_pts):
+        far = np.min(np.linalg.norm(cand[:, None, :] - ver_pts[None, :, :], axis=2), axis=1) >= settings.separation
+        near_best = np.min(np.linalg.norm(ver_pts - best["coded"], axis=1)) < max(settings.separation, 1e-9)
+        if near_best:
+            cand_v = None
+            if far.any():
+                i = int(np.flatnonzero(far)[np.argmax(p_c[far])])
+                cand_v = {"coded": cand[i], "p": float(p_c[i]),
+                          "predicted": {r: float(pred_c[r][0][i]) for r in problem.responses},
+                          "predicted_sd": {r: float(pred_c[r][1][i]) for r in problem.responses}}
+    if cand_v is not None and ready_to_verify(problem, cand_v, points, settings) and left >= settings.verify_seeds:
+        best = dict(cand_v, actual=problem.to_actual(cand_v["coded"])[0])
         coded.append(best["coded"])
         kinds.append("verification")
         reps.append(settings.verify_seeds)
@@ -602,6 +624,22 @@ def _beyond_data(runs: pd.DataFrame, points: pd.DataFrame, t: Target) -> bool:
         return False
     margin = t.tolerance + 2.0 * (pooled_sd(points, t.response) or 0.0)
     return bool(v.max() < t.value - margin or v.min() > t.value + margin)
+
+
+def ready_to_verify(problem: Problem, best: dict, points: pd.DataFrame, settings: Settings) -> str:
+    """Why the best candidate is verified now ('' when it is not): P >= ``p_verify``, or every
+    response's prediction lies within tolerance and is known at least as well as a verification
+    measures it (predictive SD <= replicate SD / sqrt(verify_seeds)): where the seed scatter is
+    wide against the tolerance, P cannot reach ``p_verify`` however many runs are added, and
+    only a verification can tell."""
+    if best["p"] >= settings.p_verify:
+        return f"P = {best['p']:.2f} >= {settings.p_verify:g}"
+    for t in problem.targets:
+        sd = pooled_sd(points, t.response)
+        mu, s = best["predicted"][t.response], best["predicted_sd"][t.response]
+        if sd is None or abs(mu - t.value) > t.tolerance or s > sd / math.sqrt(settings.verify_seeds):
+            return ""
+    return "every prediction within tolerance and known as well as a verification measures it"
 
 
 def _bound(f: Factor, v: float) -> str:
