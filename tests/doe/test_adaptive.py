@@ -232,14 +232,22 @@ def test_shortfall_is_the_standardised_distance_beyond_the_tolerance():
 
 def test_ready_to_verify_when_the_prediction_is_as_sure_as_a_verification():
     pb = ad.Problem([ad.Factor("a", 0, 1)], [ad.Target("y", 10.0, tol=0.2)])
-    pts = pd.DataFrame({"point": [0, 1], "a": [0.5, 0.6], "y": [10.0, 11.0], "y_sd": [2.0, np.nan],
-                        "y_n": [2, 1]})
     s = ad.Settings(verify_seeds=4)
+    scatter = {"y": 2.0}
     best = {"p": 0.1, "predicted": {"y": 10.1}, "predicted_sd": {"y": 0.9}}
-    assert ad.ready_to_verify(pb, best, pts, s)  # 0.9 <= 2 / sqrt(4)
-    assert not ad.ready_to_verify(pb, dict(best, predicted_sd={"y": 1.1}), pts, s)
-    assert not ad.ready_to_verify(pb, dict(best, predicted={"y": 10.3}), pts, s)  # outside 0.2
-    assert ad.ready_to_verify(pb, dict(best, p=0.6), pts, s)
+    assert ad.ready_to_verify(pb, best, scatter, s)  # 0.9 <= 2 / sqrt(4)
+    assert not ad.ready_to_verify(pb, dict(best, predicted_sd={"y": 1.1}), scatter, s)
+    assert not ad.ready_to_verify(pb, dict(best, predicted={"y": 10.3}), scatter, s)  # outside 0.2
+    assert ad.ready_to_verify(pb, dict(best, p=0.6), scatter, s)
+    # the seed scatter: the larger of the replicate SD and what the fit leaves
+    pts = pd.DataFrame({"point": [0, 1], "y_sd": [2.0, np.nan], "y_n": [2, 1]})
+
+    class Fit:
+        noise_sd = 3.0
+
+    assert ad.seed_sd(pb, pts, {"y": Fit()}) == {"y": 3.0}
+    Fit.noise_sd = 1.0
+    assert ad.seed_sd(pb, pts, {"y": Fit()}) == {"y": 2.0}
 
 
 def test_a_seed_scatter_wider_than_the_tolerance_still_gets_verifications():

@@ -245,9 +245,11 @@ def pooled_sd(points: pd.DataFrame, response: str) -> float | None:
 # --------------------------------------------------------------------------- surrogates
 
 class Surrogate:
-    """Prediction and predictive SD of a response's mean at coded points."""
+    """Prediction and predictive SD of a response's mean at coded points; ``noise_sd``: the
+    scatter of one seed about that mean as the fit sees it."""
     kind = ""
     loo_rmse = math.inf
+    noise_sd = 0.0
 
     def predict(self, xc: np.ndarray) -> tuple[np.ndarray, np.ndarray]:  # pragma: no cover
         raise NotImplementedError
@@ -278,6 +280,9 @@ class GPSurrogate(Surrogate):
             gp.fit(xc, yn)
         self.gp = gp
         self.white = float(gp.kernel_.k2.noise_level)
+        # one seed's scatter as the fit sees it: the known replicate part and the fitted white term
+        self.noise_sd = float(self.scale * np.sqrt(self.white + (noise_sd / self.scale) ** 2
+                                                   if noise_sd is not None else self.white))
         self.length_scales = np.atleast_1d(gp.kernel_.k1.k2.length_scale).astype(float)
         K = gp.kernel_(xc) + np.diag(alpha)
         Kinv = np.linalg.inv(K)
@@ -308,6 +313,7 @@ class QuadraticSurrogate(Surrogate):
 
         X = quadratic_terms(xc)
         self.fit = sm.OLS(y, X).fit()
+        self.noise_sd = float(np.sqrt(self.fit.mse_resid)) if self.fit.df_resid > 0 else 0.0
         h = self.fit.get_influence().hat_matrix_diag
         press = self.fit.resid / np.maximum(1.0 - h, 1e-12)
         self.loo_rmse = float(np.sqrt(np.mean(press ** 2)))
@@ -595,7 +601,8 @@ def step(problem: Problem, runs: pd.DataFrame, settings: Settings, iteration: in
                 cand_v = {"coded": cand[i], "p": float(p_c[i]),
                           "predicted": {r: float(pred_c[r][0][i]) for r in problem.responses},
                           "predicted_sd": {r: float(pred_c[r][1][i]) for r in problem.responses}}
-    if cand_v is not None and ready_to_verify(problem, cand_v, points, settings) and left >= settings.verify_seeds:
+    scatter = seed_sd(problem, points, surrogates)
+    if cand_v is not None and ready_to_verify(problem, cand_v, scatter, settings) and left >= settings.verify_seeds:
         best = dict(cand_v, actual=problem.to_actual(cand_v["coded"])[0])
         coded.append(best["coded"])
         kinds.append("verification")
@@ -626,18 +633,24 @@ def _beyond_data(runs: pd.DataFrame, points: pd.DataFrame, t: Target) -> bool:
     return bool(v.max() < t.value - margin or v.min() > t.value + margin)
 
 
-def ready_to_verify(problem: Problem, best: dict, points: pd.DataFrame, settings: Settings) -> str:
+def seed_sd(problem: Problem, points: pd.DataFrame, surrogates: dict) -> dict:
+    """One seed's scatter per response: the larger of the pooled replicate SD and the scatter the
+    surrogate's fit leaves (two seeds at the centre can badly understate it)."""
+    return {r: max(pooled_sd(points, r) or 0.0, surrogates[r].noise_sd) for r in problem.responses}
+
+
+def ready_to_verify(problem: Problem, best: dict, scatter: dict, settings: Settings) -> str:
     """Why the best candidate is verified now ('' when it is not): P >= ``p_verify``, or every
     response's prediction lies within tolerance and is known at least as well as a verification
-    measures it (predictive SD <= replicate SD / sqrt(verify_seeds)): where the seed scatter is
-    wide against the tolerance, P cannot reach ``p_verify`` however many runs are added, and
-    only a verification can tell."""
+    measures it (predictive SD <= seed scatter / sqrt(verify_seeds), ``scatter`` from
+    :func:`seed_sd`): where the seed scatter is wide against the tolerance, P cannot reach
+    ``p_verify`` however many runs are added, and only a verification can tell."""
     if best["p"] >= settings.p_verify:
         return f"P = {best['p']:.2f} >= {settings.p_verify:g}"
     for t in problem.targets:
-        sd = pooled_sd(points, t.response)
+        sd = scatter.get(t.response) or 0.0
         mu, s = best["predicted"][t.response], best["predicted_sd"][t.response]
-        if sd is None or abs(mu - t.value) > t.tolerance or s > sd / math.sqrt(settings.verify_seeds):
+        if sd <= 0 or abs(mu - t.value) > t.tolerance or s > sd / math.sqrt(settings.verify_seeds):
             return ""
     return "every prediction within tolerance and known as well as a verification measures it"
 
