@@ -239,6 +239,9 @@ def test_ready_to_verify_when_the_prediction_is_as_sure_as_a_verification():
     assert not ad.ready_to_verify(pb, dict(best, predicted_sd={"y": 1.1}), scatter, s)
     assert not ad.ready_to_verify(pb, dict(best, predicted={"y": 10.3}), scatter, s)  # outside 0.2
     assert ad.ready_to_verify(pb, dict(best, p=0.6), scatter, s)
+    # unsure, but the proposals have stalled: verified if the prediction is within tolerance
+    assert ad.ready_to_verify(pb, dict(best, predicted_sd={"y": 1.1}), scatter, s, stalled=True)
+    assert not ad.ready_to_verify(pb, dict(best, predicted={"y": 10.3}), scatter, s, stalled=True)
     # the seed scatter: the larger of the replicate SD and what the fit leaves
     pts = pd.DataFrame({"point": [0, 1], "y_sd": [2.0, np.nan], "y_n": [2, 1]})
 

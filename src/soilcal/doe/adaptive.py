@@ -53,17 +53,18 @@ Stopping
 --------
 The candidate of largest P (among the candidates and the evaluated points) is the best
 candidate (while P < ``p_unreachable`` everywhere, the point whose predictions lie closest to
-the targets, in tolerances, instead); once its P >= ``p_verify``, or once every prediction
-there lies within tolerance and is known as well as a verification would measure it
-(:func:`ready_to_verify`), it is run with ``verify_seeds`` seeds (its runs join the data, so
-they also inform the surrogate); no point within ``separation`` of a verified one is verified
-again.  The best verification (smallest worst error, in tolerances) is the design's answer.  The design stops when a verified mean is
-within tolerance of every target (``target met``), when the run ``budget`` is spent
-(``budget spent``), or when the surrogate is sure that no point of the box is consistent:
-P < ``p_unreachable`` everywhere after a batch of proposals aimed at the target has been run,
-while the predicted distance to the target exceeds the tolerance plus twice the predictive
-standard deviation and every run's value lies on one side of the target, beyond the tolerance
-plus twice the replicate SD (``unreachable``), with the closest reachable
+the targets, in tolerances, instead).  It is run with ``verify_seeds`` seeds once its
+P >= ``p_verify``, or once every prediction there lies within tolerance and is either known as
+well as a verification would measure it or has had 2 d + 1 proposal runs since the last
+verification (:func:`ready_to_verify`); the verification runs join the data, so they also
+inform the surrogate, and no point within ``separation`` of a verified one is verified again.
+The best verification (smallest worst error, in tolerances) is the design's answer.  The design
+stops when that verified mean is within tolerance of every target (``target met``), when the
+run ``budget`` is spent (``budget spent``), or when the surrogate is sure that no point of the
+box is consistent: P < ``p_unreachable`` everywhere after a batch of proposals aimed at the
+target has been run, while the predicted distance to the target exceeds the tolerance plus
+twice the predictive standard deviation and every run's value lies on one side of the target,
+beyond the tolerance plus twice the replicate SD (``unreachable``), with the closest reachable
 value of each response and where it lies.
 
 The answer is a set: the candidates with P > 1/2 form the consistent region; each factor's
@@ -602,7 +603,10 @@ def step(problem: Problem, runs: pd.DataFrame, settings: Settings, iteration: in
                           "predicted": {r: float(pred_c[r][0][i]) for r in problem.responses},
                           "predicted_sd": {r: float(pred_c[r][1][i]) for r in problem.responses}}
     scatter = seed_sd(problem, points, surrogates)
-    if cand_v is not None and ready_to_verify(problem, cand_v, scatter, settings) and left >= settings.verify_seeds:
+    last_v = int(runs.loc[runs["kind"] == "verification", "point"].max()) if len(ver_pts) else -1
+    stalled = int(((runs["kind"] == "proposal") & (runs["point"] > last_v)).sum()) >= 2 * d + 1
+    if cand_v is not None and ready_to_verify(problem, cand_v, scatter, settings, stalled) \
+            and left >= settings.verify_seeds:
         best = dict(cand_v, actual=problem.to_actual(cand_v["coded"])[0])
         coded.append(best["coded"])
         kinds.append("verification")
@@ -639,20 +643,26 @@ def seed_sd(problem: Problem, points: pd.DataFrame, surrogates: dict) -> dict:
     return {r: max(pooled_sd(points, r) or 0.0, surrogates[r].noise_sd) for r in problem.responses}
 
 
-def ready_to_verify(problem: Problem, best: dict, scatter: dict, settings: Settings) -> str:
-    """Why the best candidate is verified now ('' when it is not): P >= ``p_verify``, or every
-    response's prediction lies within tolerance and is known at least as well as a verification
-    measures it (predictive SD <= seed scatter / sqrt(verify_seeds), ``scatter`` from
-    :func:`seed_sd`): where the seed scatter is wide against the tolerance, P cannot reach
+def ready_to_verify(problem: Problem, best: dict, scatter: dict, settings: Settings,
+                    stalled: bool = False) -> str:
+    """Why the best candidate is verified now ('' when it is not): P >= ``p_verify``; or every
+    response's prediction lies within tolerance and either is known at least as well as a
+    verification measures it (predictive SD <= seed scatter / sqrt(verify_seeds), ``scatter``
+    from :func:`seed_sd`) or the proposals have ``stalled`` (2 d + 1 proposal runs since the last
+    verification).  Where the seed scatter is wide against the tolerance, P cannot reach
     ``p_verify`` however many runs are added, and only a verification can tell."""
     if best["p"] >= settings.p_verify:
         return f"P = {best['p']:.2f} >= {settings.p_verify:g}"
+    sure = True
     for t in problem.targets:
         sd = scatter.get(t.response) or 0.0
         mu, s = best["predicted"][t.response], best["predicted_sd"][t.response]
-        if sd <= 0 or abs(mu - t.value) > t.tolerance or s > sd / math.sqrt(settings.verify_seeds):
+        if abs(mu - t.value) > t.tolerance:
             return ""
-    return "every prediction within tolerance and known as well as a verification measures it"
+        sure &= sd > 0 and s <= sd / math.sqrt(settings.verify_seeds)
+    if sure:
+        return "every prediction within tolerance and known as well as a verification measures it"
+    return "every prediction within tolerance, and 2 d + 1 proposals since the last verification" if stalled else ""
 
 
 def _bound(f: Factor, v: float) -> str:
