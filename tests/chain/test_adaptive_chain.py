@@ -107,3 +107,18 @@ def test_optimum_rows_take_the_verified_set_else_the_best_candidate():
     assert opt.loc["b", "A_coded"] == pytest.approx(1.0) and opt.loc["b", "B_coded"] == pytest.approx(-1.0)
     assert opt.loc["b", "y"] == 30.1 and opt.loc["b", "note"].startswith("closest reachable point")
     assert opt["calibrated"].all()
+
+
+def test_a_broken_run_file_is_named(tmp_path):
+    pb = adaptive.ad.Problem([adaptive.ad.Factor("A", 0, 1)], [adaptive.ad.Target("y", 1.0)])
+    steps = [{"iteration": 0, "runs": [{"kind": "start", "point": 0, "seed": 0, "levels": {"A": 0.5}}]}]
+    d = tmp_path / "runs/0"
+    d.mkdir(parents=True)
+    (d / "0.csv").write_bytes(b"")
+    with pytest.raises(InputError, match="0.csv"):
+        adaptive.read_runs(pb, steps, [d / "0.csv"])
+    (d / "0.csv").write_text("a,b\n1,2\n")
+    with pytest.raises(InputError, match="response"):
+        adaptive.read_runs(pb, steps, [d / "0.csv"])
+    with pytest.raises(InputError, match="file name"):
+        adaptive.read_runs(pb, steps, [tmp_path / "runs/x/0.csv"])

@@ -35,6 +35,14 @@ from soilcal.doe import adaptive as ad
 from soilcal.doe.designs import actual_to_coded
 from soilcal.errors import InputError
 
+
+def read_csv(path) -> pd.DataFrame:
+    """A CSV table, or one InputError naming the file when it cannot be parsed."""
+    try:
+        return pd.read_csv(path)
+    except (pd.errors.ParserError, pd.errors.EmptyDataError, UnicodeDecodeError) as exc:
+        raise InputError(path, "<file>", "a CSV table", str(exc).splitlines()[0][:120]) from None
+
 ROOT = "adaptive"
 
 
@@ -139,9 +147,14 @@ def read_runs(problem: ad.Problem, steps: list[dict], run_paths) -> pd.DataFrame
     for p in run_paths:
         p = Path(p)
         try:
-            files[(int(p.parent.name), int(p.stem))] = pd.read_csv(p)
+            key = (int(p.parent.name), int(p.stem))
         except ValueError:
             raise InputError(p, "<file name>", "runs/<iteration>/<run>.csv", str(p)) from None
+        df = read_csv(p)
+        missing = [c for c in ("response", "status", "value") if c not in df.columns]
+        if missing:
+            raise InputError(p, missing[0], "a DEM run table (soilcal.chain.sources.run_point)", "missing column")
+        files[key] = df
     rows = []
     for step in steps:
         it = int(step["iteration"])
