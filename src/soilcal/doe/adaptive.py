@@ -96,7 +96,6 @@ DEFAULTS = dict(n_start=None, centre_replicates=2, batch=2, budget=60, verify_se
 #: factors whose spread over the consistent region exceeds this share of their range are
 #: "not pinned down"
 UNPINNED_SHARE = 0.5
-STATUS = ("continue", "target met", "budget spent", "unreachable", "iterations spent")
 
 
 # --------------------------------------------------------------------------- problem
@@ -447,6 +446,13 @@ class Step:
     models: dict = field(default_factory=dict)  # the fitted surrogates (not written out)
 
 
+def _candidate(problem: Problem, xc: np.ndarray, p: np.ndarray, pred: dict, i: int) -> dict:
+    """Point ``i`` of coded points ``xc`` with its P and predictions (:func:`consistency`)."""
+    return {"coded": xc[i], "actual": problem.to_actual(xc[i])[0], "p": float(p[i]),
+            "predicted": {r: float(pred[r][0][i]) for r in problem.responses},
+            "predicted_sd": {r: float(pred[r][1][i]) for r in problem.responses}}
+
+
 def _new_runs(problem, coded, kinds, first_point, iteration, seeds_per_point, first_seed):
     rows = []
     seed = first_seed
@@ -536,17 +542,10 @@ def step(problem: Problem, runs: pd.DataFrame, settings: Settings, iteration: in
     cand = halton(d, settings.n_candidates, settings.seed + 7919 * iteration)
     p_c, pred_c = consistency(problem, surrogates, cand)
     xe = problem.to_coded(points[problem.names].to_numpy(float))
-    p_e, _ = consistency(problem, surrogates, xe)
-    best_i = int(np.argmax(p_c))
-    best = {"coded": cand[best_i], "actual": problem.to_actual(cand[best_i])[0], "p": float(p_c[best_i]),
-            "predicted": {r: float(pred_c[r][0][best_i]) for r in problem.responses},
-            "predicted_sd": {r: float(pred_c[r][1][best_i]) for r in problem.responses}}
+    p_e, pred_e = consistency(problem, surrogates, xe)
+    best = _candidate(problem, cand, p_c, pred_c, int(np.argmax(p_c)))
     if p_e.max() > best["p"]:  # an evaluated point is the surest
-        j = int(np.argmax(p_e))
-        _, pe = consistency(problem, surrogates, xe[j:j + 1])
-        best = {"coded": xe[j], "actual": problem.to_actual(xe[j])[0], "p": float(p_e[j]),
-                "predicted": {r: float(pe[r][0][0]) for r in problem.responses},
-                "predicted_sd": {r: float(pe[r][1][0]) for r in problem.responses}}
+        best = _candidate(problem, xe, p_e, pred_e, int(np.argmax(p_e)))
     near = None
     if best["p"] < settings.p_unreachable:
         # no candidate is plausibly consistent: the best guess is the point whose predictions
@@ -556,10 +555,11 @@ def step(problem: Problem, runs: pd.DataFrame, settings: Settings, iteration: in
         best = {"coded": near["coded"], "actual": near["actual"], "p": float(p_n[0]),
                 "predicted": near["values"], "predicted_sd": near["sd"], "closest": True}
     region = consistent_region(problem, cand, p_c)
+    no_runs = empty_runs(problem)[[*RUN_KEYS, *problem.names]]
     if verified and verified["met"]:
         return Step(iteration, "target met",
                     f"the verified mean of point {verified['point']} is within tolerance of every target",
-                    _new_runs(problem, [], [], 0, iteration, [], 0), scores, best, region, verified,
+                    no_runs, scores, best, region, verified,
                     surrogates)
     # unreachable: no point of the box is plausibly consistent, and the closest reachable
     # prediction lies further from a target than its uncertainty explains
@@ -575,15 +575,15 @@ def step(problem: Problem, runs: pd.DataFrame, settings: Settings, iteration: in
                             f"the closest reachable value is {near['values'][t.response]:.4g} "
                             f"(+- {near['sd'][t.response]:.2g})" for t in far)
             return Step(iteration, "unreachable", f"{msg}, at {at}",
-                        _new_runs(problem, [], [], 0, iteration, [], 0), scores, best, region, verified,
+                        no_runs, scores, best, region, verified,
                         surrogates)
     if spent >= settings.budget:
         return Step(iteration, "budget spent", f"{spent} runs spent of a budget of {settings.budget}",
-                    _new_runs(problem, [], [], 0, iteration, [], 0), scores, best, region, verified,
+                    no_runs, scores, best, region, verified,
                     surrogates)
     if iteration > settings.max_iterations:
         return Step(iteration, "iterations spent", f"{settings.max_iterations} iterations without a verified set",
-                    _new_runs(problem, [], [], 0, iteration, [], 0), scores, best, region, verified,
+                    no_runs, scores, best, region, verified,
                     surrogates)
     coded, kinds, reps = [], [], []
     left = settings.budget - spent
@@ -598,16 +598,13 @@ def step(problem: Problem, runs: pd.DataFrame, settings: Settings, iteration: in
         if near_best:
             cand_v = None
             if far.any():
-                i = int(np.flatnonzero(far)[np.argmax(p_c[far])])
-                cand_v = {"coded": cand[i], "p": float(p_c[i]),
-                          "predicted": {r: float(pred_c[r][0][i]) for r in problem.responses},
-                          "predicted_sd": {r: float(pred_c[r][1][i]) for r in problem.responses}}
+                cand_v = _candidate(problem, cand, p_c, pred_c, int(np.flatnonzero(far)[np.argmax(p_c[far])]))
     scatter = seed_sd(problem, points, surrogates)
     last_v = int(runs.loc[runs["kind"] == "verification", "point"].max()) if len(ver_pts) else -1
     stalled = int(((runs["kind"] == "proposal") & (runs["point"] > last_v)).sum()) >= 2 * d + 1
     if cand_v is not None and ready_to_verify(problem, cand_v, scatter, settings, stalled) \
             and left >= settings.verify_seeds:
-        best = dict(cand_v, actual=problem.to_actual(cand_v["coded"])[0])
+        best = cand_v
         coded.append(best["coded"])
         kinds.append("verification")
         reps.append(settings.verify_seeds)
