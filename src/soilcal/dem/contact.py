@@ -28,6 +28,10 @@ tangent plane (xi <- xi - (xi.n) n, as LIGGGHTS ``tangential history``; the leng
 second order in the rotation per step) and incremented by v_t dt.  When the spring force exceeds the Coulomb limit, xi is shortened so that
 |S_t xi| = mu_s |F_n,tot| and F_t = -S_t xi (no damping while sliding), as in LIGGGHTS.
 F_n,tot = F_n + F_n^d (plus 2 F_pulloff with JKR, Thornton & Yin 1991, as LAMMPS ``jkr``).
+The forces of a run's initial state (no time passes: the first evaluation after particles,
+walls or the state changed) use the history as it stands and advance it by nothing (dt = 0
+in the kernel), as LAMMPS and LIGGGHTS compute a run's setup without updating their shear
+history; every step after that adds v_t dt with the step's half-step velocity.
 
 Rolling, ``constant_torque`` (EDEM rolling friction "type A", Zhou et al. 1999, Physica A
 269:536)::
@@ -86,6 +90,37 @@ Conventions for the surface energy gamma given by the user (``jkr_convention``):
   next to it.  The two printed EDEM statements disagree by that factor 2 (errata); select the
   convention explicitly when matching EDEM values.
 
+Conventions of the reference engines
+------------------------------------
+The engines that calibrations are compared with write some terms differently.  Each choice is
+an option of :func:`model_codes` (``rolling_lever``, ``rolling_force``, ``rolling_axis``,
+``tangential_damping``, ``jkr_convention``), and ``conventions`` names a whole set
+(:data:`CONVENTIONS`); EDEM's is the default, as the papers calibrate in EDEM.
+
+* ``rolling_lever`` (``constant_torque``): ``particle`` (EDEM guide, rolling friction: the
+  lever is the distance c_i from the particle's centre to the contact point, each body with its
+  own) or ``effective`` (LIGGGHTS ``rolling_friction cdt``, rolling_model_cdt.h: R* =
+  R_i R_j/(R_i + R_j) for a particle pair, the same torque with opposite signs on both, and
+  R_i against a wall: LIGGGHTS 3.8's wall torque is mu_r k_n delta R_i, checked against
+  its output in tests/reference).  For equal spheres the effective lever is half the
+  particle's, so the same mu_r gives half the torque.
+* ``rolling_force`` (every rolling model): ``total`` (|F_n,tot|, damping included, as the
+  EDEM guide's F_n) or ``elastic`` (the normal force without its damping part: k_n delta =
+  4/3 E* a delta for Hertz, as LIGGGHTS cdt; |F_ne + 2 F_pulloff| with JKR, as the LAMMPS
+  ``pair granular`` rolling limit F_n,crit).
+* ``rolling_axis`` (``constant_torque``): ``full`` (the torque along omega_rel, as the EDEM
+  guide writes it) or ``tangential`` (its component along the contact normal, a twisting
+  torque, removed after it is computed, as LIGGGHTS cdt does: the magnitude is then
+  mu_r F R |omega_rel,t| / |omega_rel|).
+* ``tangential_damping``: ``on`` (EDEM, LIGGGHTS ``tangential_damping on``, the LIGGGHTS
+  default) or ``off`` (the Mindlin spring and the Coulomb limit only).
+* ``jkr_convention``: above.
+
+``liggghts`` = effective lever, elastic force, tangential axis, damping on (LIGGGHTS has no
+JKR law: ``cohesion sjkr`` is a different model, so its JKR entry stays EDEM's);
+``lammps`` = the same with the LAMMPS JKR convention (its ``rolling sds`` is the ``epsd``
+model here, whose lever is R* in every set).
+
 The contact radius a(delta) is a = x^2 with x the largest root of x^4/R* - c x - delta = 0,
 c = sqrt(2 pi w / E*), found by Newton's method from the upper bound
 x0 = (R* max(delta,0))^(1/4) + (R* c)^(1/3) (f is convex, so the iteration decreases
@@ -111,6 +146,23 @@ TANGENTIAL = {"mindlin": 0, "none": 1}
 ROLLING = {"none": 0, "constant_torque": 1, "epsd": 2, "bounded": 3}
 COHESION = {"none": 0, "jkr": 1}
 JKR_CONVENTION = {"edem": 1.0, "lammps": 2.0}  # w = factor * gamma
+# conventions (module docstring, "Conventions of the reference engines"): codes[5:9]
+ROLLING_LEVER = {"particle": 0, "effective": 1}
+ROLLING_FORCE = {"total": 0, "elastic": 1}
+ROLLING_AXIS = {"full": 0, "tangential": 1}
+TANGENTIAL_DAMPING = {"on": 0, "off": 1}
+#: named sets of conventions, each as its engine documents or implements it
+CONVENTIONS = {
+    "edem": dict(rolling_lever="particle", rolling_force="total", rolling_axis="full",
+                 tangential_damping="on", jkr_convention="edem"),
+    "liggghts": dict(rolling_lever="effective", rolling_force="elastic",
+                     rolling_axis="tangential", tangential_damping="on", jkr_convention="edem"),
+    "lammps": dict(rolling_lever="effective", rolling_force="elastic", rolling_axis="tangential",
+                   tangential_damping="on", jkr_convention="lammps"),
+}
+CONVENTION_TABLES = {"rolling_lever": ROLLING_LEVER, "rolling_force": ROLLING_FORCE,
+                     "rolling_axis": ROLLING_AXIS, "tangential_damping": TANGENTIAL_DAMPING,
+                     "jkr_convention": JKR_CONVENTION}
 
 # history slot layout (per particle and contact partner)
 H_XI = 0  # 3 tangential displacement
@@ -127,9 +179,33 @@ def hist_width(codes) -> int:
 SQ56 = math.sqrt(5.0 / 6.0)
 
 
+def resolve_conventions(conventions="edem", source="<input>", **overrides) -> dict:
+    """The named set ``conventions`` (:data:`CONVENTIONS`) with the ``overrides`` that are not
+    None; every value checked against its table (InputError naming the field otherwise)."""
+    if conventions not in CONVENTIONS:
+        raise InputError(source, "contact_model.conventions", f"one of {sorted(CONVENTIONS)}",
+                         conventions)
+    out = dict(CONVENTIONS[conventions])
+    for key, val in overrides.items():
+        if key not in CONVENTION_TABLES:
+            raise InputError(source, f"contact_model.{key}",
+                             f"one of {sorted(CONVENTION_TABLES)}", key)
+        if val is None:
+            continue
+        if val not in CONVENTION_TABLES[key]:
+            raise InputError(source, f"contact_model.{key}",
+                             f"one of {sorted(CONVENTION_TABLES[key])}", val)
+        out[key] = val
+    return out
+
+
 def model_codes(normal="hertz", damping="viscoelastic", tangential="mindlin", rolling="none",
-                cohesion="none", jkr_convention="edem", source="<input>"):
-    """Return (codes int64[5], w_factor) for a model composed by names."""
+                cohesion="none", conventions="edem", source="<input>", **overrides):
+    """Return (codes int64[9], w_factor) for a model composed by names.
+
+    ``conventions`` names a set of :data:`CONVENTIONS` (EDEM's by default); ``overrides``
+    (``rolling_lever``, ``rolling_force``, ``rolling_axis``, ``tangential_damping``,
+    ``jkr_convention``) change single entries of it."""
     out = []
     for key, val, table in (("normal", normal, NORMAL), ("damping", damping, DAMPING),
                             ("tangential", tangential, TANGENTIAL), ("rolling", rolling, ROLLING),
@@ -137,10 +213,10 @@ def model_codes(normal="hertz", damping="viscoelastic", tangential="mindlin", ro
         if val not in table:
             raise InputError(source, f"contact_model.{key}", f"one of {sorted(table)}", val)
         out.append(table[val])
-    if jkr_convention not in JKR_CONVENTION:
-        raise InputError(source, "contact_model.jkr_convention", f"one of {sorted(JKR_CONVENTION)}",
-                         jkr_convention)
-    return np.array(out, dtype=np.int64), JKR_CONVENTION[jkr_convention]
+    conv = resolve_conventions(conventions, source, **overrides)
+    for key in ("rolling_lever", "rolling_force", "rolling_axis", "tangential_damping"):
+        out.append(CONVENTION_TABLES[key][conv[key]])
+    return np.array(out, dtype=np.int64), JKR_CONVENTION[conv["jkr_convention"]]
 
 
 @njit(cache=True, inline="always")
@@ -256,6 +332,8 @@ def contact_force(codes, pair, ma, mb, delta, nx, ny, nz, rvx, rvy, rvz, wrx, wr
         fnd = sq * vn  # beta <= 0: opposes v_n
     fn = fne + fnd
     fnf = abs(fn + fpo2)
+    # the normal force the rolling resistance scales with: total, or without the damping
+    fnr = abs(fne + fpo2) if codes[6] == 1 else fnf
     fx = fn * nx
     fy = fn * ny
     fz = fn * nz
@@ -294,7 +372,7 @@ def contact_force(codes, pair, ma, mb, delta, nx, ny, nz, rvx, rvy, rvz, wrx, wr
             ftx *= r
             fty *= r
             ftz *= r
-        elif codes[1] == 0:
+        elif codes[1] == 0 and codes[8] == 0:
             # sqrt(S_t m*) = sqrt(S_n m*) sqrt(4 G*/E*)
             ct = sq * pair[ma, mb, P_TRATIO]
             ftx += ct * vtx
@@ -319,17 +397,32 @@ def contact_force(codes, pair, ma, mb, delta, nx, ny, nz, rvx, rvy, rvz, wrx, wr
     mur = pair[ma, mb, P_MUR]
     mroll = 0.0
     if codes[3] == 3:
-        mroll = mur * fnf
+        mroll = mur * fnr
     elif codes[3] == 1 and mur > 0.0:
         wn = math.sqrt(wrx * wrx + wry * wry + wrz * wrz)
         if wn > 0.0:
-            m = mur * fnf / wn
-            tix -= m * ci * wrx
-            tiy -= m * ci * wry
-            tiz -= m * ci * wrz
-            tjx += m * cj * wrx
-            tjy += m * cj * wry
-            tjz += m * cj * wrz
+            m = mur * fnr / wn
+            # direction: omega_rel, or its part in the tangent plane (torsion removed)
+            ux = wrx
+            uy = wry
+            uz = wrz
+            if codes[7] == 1:
+                wd = wrx * nx + wry * ny + wrz * nz
+                ux -= wd * nx
+                uy -= wd * ny
+                uz -= wd * nz
+            # lever: each body's own c, or R* on both (a wall's R* is R_i)
+            li = ci
+            lj = cj
+            if codes[5] == 1:
+                li = rstar
+                lj = rstar
+            tix -= m * li * ux
+            tiy -= m * li * uy
+            tiz -= m * li * uz
+            tjx += m * lj * ux
+            tjy += m * lj * uy
+            tjz += m * lj * uz
     elif codes[3] == 2 and mur > 0.0:
         wd = wrx * nx + wry * ny + wrz * nz
         dtx = (wrx - wd * nx) * dt
@@ -354,7 +447,7 @@ def contact_force(codes, pair, ma, mb, delta, nx, ny, nz, rvx, rvy, rvz, wrx, wr
         mx -= kr * dtx
         my -= kr * dty
         mz -= kr * dtz
-        mlim = mur * rstar * fnf
+        mlim = mur * rstar * fnr
         m2 = mx * mx + my * my + mz * mz
         if m2 > mlim * mlim:
             r = mlim / math.sqrt(m2)

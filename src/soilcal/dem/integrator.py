@@ -246,8 +246,8 @@ def gather(x, v, om, r, inv_m, inv_i, mat, f, t, ovr, peak, mroll, dt, kick, max
                     rvz = vzi - vwz - ci * (wxi * ny - wyi * nx)
                     on, cfx, cfy, cfz, ctx, cty, ctz, _, _, _, mr = contact_force(
                         codes, pair, mi, prim_mat[p], delta, nx, ny, nz, rvx, rvy, rvz,
-                        wxi - ox, wyi - oy, wzi - oz, ci, 0.0, ri, 1.0 / imi, dt, touching,
-                        whist, row)
+                        wxi - ox, wyi - oy, wzi - oz, ci, 0.0, ri, 1.0 / imi,
+                        dt if kick else 0.0, touching, whist, row)
                     # the last history slot of a wall row is its touching flag
                     whist[row, H_SIZE - 1] = 1.0 if on else 0.0
                     if on:
@@ -522,8 +522,11 @@ def run_loop(nsteps, step0, resume_mid, need_forces, ke_tol, ke_every, max_ovr, 
             rebuild = False
             wrebuild = False
             fstate[0] = 0.0
+        # the forces of the initial state advance no history (no time passes: LAMMPS and
+        # LIGGGHTS likewise do not update their shear history in a run's setup)
+        dth = 0.0 if first else dt
         for colour in range(3):
-            pair_forces(colour, xr, vw, pair, codes, box, periodic, dt, sc, nc, hc, ac,
+            pair_forces(colour, xr, vw, pair, codes, box, periodic, dth, sc, nc, hc, ac,
                         sorder, sgroup, f, t, ovr, mroll)
         nbad = gather(x, v, om, r, inv_m, inv_i, mat, f, t, ovr, peak, mroll, dt, not first, max_ovr,
                       pair, codes, prim_kind, prim_wall, prim_mat, prim_par, wall_vel,

@@ -72,6 +72,11 @@ of about one step of the full torque, tests/dem/test_motion.py), and the heap ke
 creeping after the rest criterion fires.  The soil-bin scenarios use the default; the drum
 refuses ``bounded``, which resists the rotation of spheres carried round by the drum.
 
+``contact_conventions`` in the same setups chooses how the terms are written: None or
+``edem`` (the default), ``liggghts``, ``lammps``, or a mapping of single choices
+(:func:`conventions_of`; :mod:`soilcal.dem.contact`, "Conventions of the reference
+engines"), so that a run can be set up exactly as a reference engine computes it.
+
 Results
 -------
 :class:`Result` is one run: scenario, preset, seed, particle count, steps, simulated and
@@ -389,22 +394,47 @@ ROLLING_MODELS = tuple(k for k in ROLLING if k != "none")
 DEFAULT_ROLLING = "constant_torque"
 
 
-def contact_model(params: DemParams, rolling: str | None = None) -> dict:
+def contact_model(params: DemParams, rolling: str | None = None, conventions=None) -> dict:
     """Engine contact model: Hertz-Mindlin, rolling resistance (``rolling``, default
-    :data:`DEFAULT_ROLLING`), JKR when any energy > 0.
-
-    EDEM convention for the surface energy (pull-off 1.5 pi gamma R*), as the papers use EDEM.
-    """
+    :data:`DEFAULT_ROLLING`), JKR when any energy > 0, with the ``conventions`` of a setup's
+    ``contact_conventions`` (:func:`conventions_of`; EDEM's when None: the surface energy's
+    pull-off 1.5 pi gamma R*, the rolling torque on the particle's own lever and the total
+    normal force, as the papers use EDEM)."""
     jkr = params.soil_soil_surface_energy > 0 or params.soil_steel_surface_energy > 0
     return dict(rolling=rolling or DEFAULT_ROLLING, cohesion="jkr" if jkr else "none",
-                jkr_convention="edem")
+                **conventions_of(conventions))
+
+
+def conventions_of(value, source: str = "<input>") -> dict:
+    """A setup's ``contact_conventions`` as :func:`soilcal.dem.contact.model_codes` keywords:
+    None (EDEM's), the name of a set (``edem``, ``liggghts``, ``lammps``), or a mapping with an
+    optional ``conventions`` set and single entries (``rolling_lever``, ``rolling_force``,
+    ``rolling_axis``, ``tangential_damping``, ``jkr_convention``) that change it."""
+    from soilcal.dem.contact import resolve_conventions
+
+    named = isinstance(value, str)
+    if value is None or named:
+        value = {"conventions": value or "edem"}
+    check(isinstance(value, dict), source, "setup.contact_conventions",
+          "the name of a set of conventions or a mapping of them", value)
+    value = dict(value)
+    name = value.pop("conventions", "edem")
+    try:
+        out = resolve_conventions(name, source, **value)
+    except InputError as exc:
+        field = ("setup.contact_conventions" if named else
+                 exc.field.replace("contact_model", "setup.contact_conventions"))
+        raise InputError(source, field, exc.expected, exc.got) from None
+    return dict(out, conventions=name)
 
 
 def check_rolling(setup: dict, source: str) -> None:
-    """``setup.rolling_model``: one of :data:`ROLLING_MODELS` or None (the default)."""
+    """``setup.rolling_model``: one of :data:`ROLLING_MODELS` or None (the default);
+    ``setup.contact_conventions``: :func:`conventions_of`."""
     m = setup.get("rolling_model")
     check(m is None or m in ROLLING_MODELS, source, "setup.rolling_model",
           f"one of {', '.join(ROLLING_MODELS)} (or None for {DEFAULT_ROLLING})", m)
+    conventions_of(setup.get("contact_conventions"), source)
 
 
 def check(ok, source, field, expected, got=None) -> None:
@@ -499,6 +529,8 @@ class Result:
         for k, v in self.setup.items():
             if isinstance(v, (bool, int, float, str, np.integer, np.floating)) or v is None:
                 out[f"s:{k}"] = v.item() if isinstance(v, np.generic) else v
+            elif k == "contact_conventions" and isinstance(v, dict):
+                out[f"s:{k}"] = ";".join(f"{a}={b}" for a, b in sorted(v.items()))
         for k, v in self.responses.items():
             out[f"r:{k}"] = v.item() if isinstance(v, np.generic) else v
         return out
@@ -666,7 +698,8 @@ def make_simulation(params: DemParams, setup: dict, preset: str, source: str,
     mats = build_materials(params, scale, source, cohesion)
     dtf = setup.get("dt_fraction") or d["dt_fraction"]
     sim = Simulation(mats, dt_fraction=float(dtf),
-                     contact_model=contact_model(params, setup.get("rolling_model")),
+                     contact_model=contact_model(params, setup.get("rolling_model"),
+                                                 setup.get("contact_conventions")),
                      max_overlap=d["max_overlap"], source=source, **kw)
     return sim, scale
 

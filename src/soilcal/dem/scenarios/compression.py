@@ -77,7 +77,7 @@ def setups() -> dict:
                                  quick_height=0.040, sample_dz=0.0002, jam_overlap=0.15,
                                  rest_speed=0.005, max_settle_time=3.0, n_particles=None,
                                  radius=None, stiffness_scale=None, dt_fraction=None,
-                                 rolling_model=None,
+                                 rolling_model=None, contact_conventions=None,
                                  paper_psd=[[0.00125, 14.0], [0.000625, 14.0],
                                             [0.000315, 22.0], [0.0001575, 50.0]]),
     }

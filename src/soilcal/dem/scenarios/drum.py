@@ -83,7 +83,7 @@ def setups() -> dict:
                                   spin_time=None, transient_time=None, frame_every=0.05,
                                   min_drop=10.0,
                                   n_particles=None, radius=None, stiffness_scale=None,
-                                  dt_fraction=None, rolling_model=None,
+                                  dt_fraction=None, rolling_model=None, contact_conventions=None,
                                   paper_psd=[[0.00125, 33.34], [0.0025, 33.33], [0.005, 33.33]]),
     }
 

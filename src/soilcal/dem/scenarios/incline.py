@@ -60,7 +60,7 @@ G = 9.81
 def setups() -> dict:
     common = dict(start_deg=0.0, max_deg=60.0, step_deg=None, hold_time=None, move_fraction=0.05,
                   stiffness_scale=None, dt_fraction=None, plate_material="steel",
-                  rolling_model=None)
+                  rolling_model=None, contact_conventions=None)
     return {
         # 000 Sec. 2.2.2 (1), Table 1: cylindrical soil block on the 300 x 500 mm 65Mn plate.
         # Block size not printed: 40 mm across, one layer of 4 mm spheres.

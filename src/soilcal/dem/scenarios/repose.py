@@ -121,7 +121,7 @@ def setups() -> dict:
     """Named setups; every number with the section of the paper it comes from."""
     common = dict(rest_speed=0.005, max_settle_time=4.0, image=True, n_particles=None,
                   radius=None, stiffness_scale=None, dt_fraction=None, rolling_model=None,
-                  seed_stream="repose")
+                  contact_conventions=None, seed_stream="repose")
     cyl = dict(common, method="cylinder", wall_material="steel", plate_material="steel")
     fun = dict(common, method="funnel", wall_material="steel", plate_material="steel",
                cover_speed=1.0, max_retained=MAX_RETAINED)

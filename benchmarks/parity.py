@@ -1,0 +1,182 @@
+"""Parity with LIGGGHTS 3.8 on identical cases (``soilcal.reference``).
+
+1. Few-body cases: the trajectories of soilcal (``liggghts`` conventions) and LIGGGHTS from
+   the same spheres and walls, compared particle by particle (largest position, velocity
+   and angular-velocity difference after the run).
+2. The lifted-tube pile (:mod:`soilcal.reference.cases`) at rolling frictions 0.05, 0.1 and
+   0.2, each seed's settled fill run three ways: LIGGGHTS, soilcal with LIGGGHTS's
+   conventions, soilcal with EDEM's (the default); the same angle estimators on every final
+   state.  The mean angles are compared against the combined seed scatter (standard error
+   of the difference of two means).
+
+Rows go to ``benchmarks/results/parity.csv`` (commit and time per row), the page to
+``parity.md``.
+
+Usage: python benchmarks/parity.py [--n 2000] [--seeds 0-4] [--mur 0.05,0.1,0.2]
+       [--ranks 2] [--threads 2] [--skip-few]
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+import os
+import sys
+import time
+from datetime import datetime, timezone
+from pathlib import Path
+
+import numpy as np
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from _report import HERE, commit, read_rows, runs_table, write_page, write_rows  # noqa: E402
+
+OUT = HERE / "results"
+PILE_FIELDS = ["utc", "commit", "engine", "conventions", "n", "seed", "rolling_friction",
+               "tube_diameter", "dt", "steps", "wall_s", "n_on_plate", "angle_bins_deg",
+               "angle_surface_deg", "height_m", "fill_settled", "version"]
+FEW_FIELDS = ["utc", "commit", "case", "rolling", "steps", "max_dx_m", "max_dv_m_s",
+              "max_dw_rad_s", "travel_m", "version"]
+
+
+def seeds_arg(text):
+    out = []
+    for part in text.split(","):
+        a, _, b = part.partition("-")
+        out += list(range(int(a), int(b) + 1)) if b else [int(a)]
+    return out
+
+
+def few_body(version_rows):
+    from soilcal.reference.few import CASES, compare
+
+    rows = []
+    for name in CASES:
+        for rolling in ("none", "constant_torque"):
+            r = compare(name, rolling)
+            rows.append(dict(case=name, rolling=rolling, steps=r["steps"],
+                             max_dx_m=f"{r['dx']:.3g}", max_dv_m_s=f"{r['dv']:.3g}",
+                             max_dw_rad_s=f"{r['dw']:.3g}", travel_m=f"{r['travel']:.3g}",
+                             version=r["version"]))
+            print(name, rolling, rows[-1], flush=True)
+    return rows
+
+
+def pile(n, seeds, murs, ranks, threads):
+    import numba
+
+    from soilcal.reference import cases as C
+    from soilcal.reference import liggghts as L
+
+    numba.set_num_threads(threads)
+    rows = []
+    for mur in murs:
+        for seed in seeds:
+            case = C.TubeCase(n=n, seed=seed, rolling_friction=mur)
+            sim, phases, bounds, info = C.lifted_tube(case, "liggghts")
+            steps = sum(s for s, _ in phases)
+            base = dict(n=n, seed=seed, rolling_friction=mur,
+                        tube_diameter=f"{2 * case.tube_radius():.4f}", dt=f"{info['dt']:.4g}",
+                        steps=steps, fill_settled=info["fill_settled"])
+            t0 = time.perf_counter()
+            res = L.run(C.restart(sim, "liggghts"), phases, bounds, ranks=ranks)
+            wall = time.perf_counter() - t0
+            ang = C.heap_angles(res["x"], res["r"], res["present"])
+            rows.append(dict(base, engine="liggghts", conventions="liggghts",
+                             wall_s=f"{wall:.1f}", version=res["version"], **_fmt(ang)))
+            print(rows[-1], flush=True)
+            for conv in ("liggghts", "edem"):
+                s = C.restart(sim, conv)
+                t0 = time.perf_counter()
+                L.run_phases(s, phases)
+                wall = time.perf_counter() - t0
+                rr = s.index(np.arange(s.n))
+                ang = C.heap_angles(s.x[rr], s.p.r[rr])
+                rows.append(dict(base, engine="soilcal", conventions=conv,
+                                 wall_s=f"{wall:.1f}", version="", **_fmt(ang)))
+                print(rows[-1], flush=True)
+    return rows
+
+
+def _fmt(ang):
+    return {k: (f"{v:.3f}" if isinstance(v, float) else v) for k, v in ang.items()}
+
+
+def summary(rows):
+    """Mean, SD and seeds per (n, rolling friction, engine, conventions); the differences to
+    LIGGGHTS with their combined standard error."""
+    import pandas as pd
+
+    df = pd.DataFrame(rows)
+    if df.empty:
+        return []
+    for c in ("angle_bins_deg", "angle_surface_deg", "rolling_friction", "n", "seed"):
+        df[c] = pd.to_numeric(df[c], errors="coerce")
+    lines = ["| spheres | mu_r | engine (conventions) | seeds | radial bins [deg] | "
+             "surface scan [deg] | bins - LIGGGHTS (SE) | scan - LIGGGHTS (SE) |",
+             "|---:|---:|---|---:|---|---|---|---|"]
+    for (n, mur), g in df.groupby(["n", "rolling_friction"]):
+        ref = g[g.engine == "liggghts"]
+        for (eng, conv), h in g.groupby(["engine", "conventions"], sort=False):
+            cells = []
+            for col in ("angle_bins_deg", "angle_surface_deg"):
+                a = h[col].dropna()
+                cells.append(f"{a.mean():.2f} +- {a.std(ddof=1):.2f}")
+            diffs = []
+            for col in ("angle_bins_deg", "angle_surface_deg"):
+                a, b = h[col].dropna(), ref[col].dropna()
+                if eng == "liggghts" or len(a) < 2 or len(b) < 2:
+                    diffs.append("")
+                    continue
+                se = math.sqrt(a.var(ddof=1) / len(a) + b.var(ddof=1) / len(b))
+                diffs.append(f"{a.mean() - b.mean():+.2f} ({se:.2f})")
+            lines.append(f"| {n} | {mur:g} | {eng} ({conv}) | {h.seed.nunique()} | "
+                         f"{cells[0]} | {cells[1]} | {diffs[0]} | {diffs[1]} |")
+    return lines
+
+
+def main(argv=None):
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--n", type=int, default=2000)
+    ap.add_argument("--seeds", default="0-4")
+    ap.add_argument("--mur", default="0.05,0.1,0.2")
+    ap.add_argument("--ranks", type=int, default=2)
+    ap.add_argument("--threads", type=int, default=2)
+    ap.add_argument("--skip-few", action="store_true")
+    ap.add_argument("--skip-pile", action="store_true")
+    args = ap.parse_args(argv)
+    from soilcal.reference import liggghts as L
+
+    ok, why = L.available()
+    if not ok:
+        sys.exit(f"parity: {why}")
+    stamp = dict(utc=datetime.now(timezone.utc).strftime("%Y-%m-%d %H:%M"), commit=commit())
+    few_path, pile_path = OUT / "parity_few.csv", OUT / "parity.csv"
+    few_rows = read_rows(few_path, FEW_FIELDS)
+    pile_rows = read_rows(pile_path, PILE_FIELDS)
+    if not args.skip_few:
+        few_rows = [dict(stamp, **r) for r in few_body(few_rows)]
+        write_rows(few_path, few_rows, FEW_FIELDS)
+    if not args.skip_pile:
+        new = pile(args.n, seeds_arg(args.seeds), [float(m) for m in args.mur.split(",")],
+                   args.ranks, args.threads)
+        keep = [r for r in pile_rows if not (str(r["n"]) == str(args.n) and float(r["rolling_friction"])
+                                             in [float(m) for m in args.mur.split(",")])]
+        pile_rows = keep + [dict(stamp, **r) for r in new]
+        write_rows(pile_path, pile_rows, PILE_FIELDS)
+    lines = ["# Parity with LIGGGHTS 3.8 on identical cases", "",
+             f"Machine: {os.uname().machine}, {os.cpu_count()} logical CPUs.  Last command: "
+             f"`python benchmarks/parity.py {' '.join(argv or sys.argv[1:])}`.  Rows: "
+             "`parity_few.csv`, `parity.csv`.", "",
+             "## Few-body cases: largest difference after the run (soilcal with the "
+             "`liggghts` conventions)", "",
+             *runs_table(few_rows, ["case", "rolling", "steps", "travel_m", "max_dx_m",
+                                    "max_dv_m_s", "max_dw_rad_s", "commit"]), "",
+             "## Lifted-tube pile (same settled fill for every engine)", "",
+             *summary(pile_rows), "", "Runs:", "",
+             *runs_table(pile_rows, PILE_FIELDS)]
+    write_page(OUT / "parity.md", lines)
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,175 @@
+"""Identical cases for soilcal and a reference engine: the same spheres, walls and phases.
+
+``lifted_tube``: a non-cohesive pile by cylinder lifting.  Spheres (radii uniform by number
+in ``radii``) are placed at random (solid fraction 0.3) in a tube of ``N_SEG`` facets
+standing on the plane z = 0, and settle in soilcal until their mean speed is below 5 mm/s
+(at most ``fill_time`` s).  That state is the initial data of both engines.  The phases: the
+tube rises at ``lift_speed`` until its rim is 2 r_max above the fill's top, then stops, and
+the heap settles for ``settle_time`` s, a fixed time (no rest criterion, which an engine
+would evaluate at its own moments).  The tube's inner diameter is chosen so that the settled
+fill is about as tall as it is wide (solid fraction 0.6), as in the papers' cylinder tests.
+Every sphere, the tube and the plate share one material; the contact law is Hertz-Mindlin
+with viscoelastic damping and constant-torque rolling resistance with the chosen
+``conventions`` (:mod:`soilcal.dem.contact`).
+
+The angle is measured on the final state of each engine by the same estimators
+(:func:`soilcal.dem.measure.repose_angle_bins` and
+:func:`~soilcal.dem.measure.repose_angle_surface`, about the tube's axis).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from soilcal.errors import InputError
+
+N_SEG = 24  # facets around the tube (vertices at R / cos(pi / N_SEG): facet mid-lines on R)
+PHI_SETTLED = 0.6
+PHI_PLACED = 0.3
+#: the engine's overlap check: soft spheres placed at random hit the plate at about 1.4 m/s
+#: in the fill (Hertz: about 14 % of the radius at E = 5 MPa); the phases are gentle
+MAX_OVERLAP = 0.25
+
+
+@dataclass
+class TubeCase:
+    """The lifted-tube pile; every value is written into a comparison's rows."""
+
+    n: int = 2000
+    radii: tuple = (1.8e-3, 2.2e-3)
+    rolling_friction: float = 0.1
+    friction: float = 0.5
+    restitution: float = 0.5
+    youngs: float = 5e6
+    poisson: float = 0.3
+    density: float = 2600.0
+    lift_speed: float = 0.05
+    settle_time: float = 1.0
+    fill_time: float = 1.5
+    dt_fraction: float = 0.15
+    seed: int = 0
+    extra: dict = field(default_factory=dict)
+
+    def check(self, source="<case>") -> None:
+        if isinstance(self.n, bool) or not isinstance(self.n, (int, np.integer)) or self.n < 20:
+            raise InputError(source, "n", "an integer >= 20 spheres", self.n)
+        lo, hi = self.radii
+        if not 0 < lo <= hi:
+            raise InputError(source, "radii", "0 < r_min <= r_max [m]", self.radii)
+        for key in ("youngs", "density", "lift_speed", "settle_time", "fill_time"):
+            v = getattr(self, key)
+            if not (isinstance(v, (int, float)) and math.isfinite(v) and v > 0):
+                raise InputError(source, key, "a number > 0", v)
+
+    def tube_radius(self) -> float:
+        lo, hi = self.radii
+        r3 = (hi ** 4 - lo ** 4) / (4 * (hi - lo)) if hi > lo else lo ** 3  # <r^3>, uniform
+        vol = self.n * 4 / 3 * math.pi * r3 / PHI_SETTLED
+        return 0.5 * (4 * vol / math.pi) ** (1 / 3)
+
+    def row(self) -> dict:
+        out = {k: getattr(self, k) for k in ("n", "rolling_friction", "friction",
+                                              "restitution", "youngs", "poisson", "density",
+                                              "lift_speed", "settle_time", "dt_fraction",
+                                              "seed")}
+        out["r_min"], out["r_max"] = self.radii
+        out["tube_diameter"] = 2 * self.tube_radius()
+        return out
+
+
+def _materials(case: TubeCase):
+    from soilcal.dem.materials import Material, MaterialTable
+
+    mats = MaterialTable()
+    mats.add(Material("soil", case.density, case.poisson, youngs=case.youngs))
+    mats.set_pair("soil", "soil", case.restitution, case.friction, case.rolling_friction)
+    return mats
+
+
+def lifted_tube(case: TubeCase, conventions="liggghts", threads=None):
+    """The filled, settled tube as a soilcal Simulation with the given conventions, and
+    (phases, bounds, info) for :func:`soilcal.reference.liggghts.run` and
+    :func:`~soilcal.reference.liggghts.run_phases`.  The fill is computed once per seed and
+    conventions; a comparison of two conventions starts both from :func:`restart`."""
+    from soilcal.dem.engine import Simulation
+    from soilcal.dem.factories import CylinderRegion, UniformRadius, insert_random
+    from soilcal.dem.geometry import cone_mesh
+    from soilcal.dem.scenarios.base import settle
+
+    case.check()
+    lo, hi = case.radii
+    R = case.tube_radius()
+    dist = UniformRadius(lo, hi)
+    vol = case.n * dist.mean_volume()
+    h_ins = vol / (PHI_PLACED * math.pi * (R - hi) ** 2)
+    tube_h = h_ins + 4 * hi
+    sim = Simulation(_materials(case), dt_fraction=case.dt_fraction,
+                     contact_model=dict(rolling="constant_torque", conventions=conventions),
+                     skin=0.6 * hi, max_overlap=MAX_OVERLAP, source="<lifted tube>")
+    k = 1.0 / math.cos(math.pi / N_SEG)
+    tv, tt = cone_mesh(k * R, k * R, 0.0, tube_h, N_SEG)
+    sim.add_mesh(tv, tt, "soil", name="tube")
+    sim.add_plane((0, 0, 0), (0, 0, 1), "soil", name="plate")
+    gen = np.random.default_rng(case.seed)
+    x, r = insert_random(CylinderRegion(R - 1.001 * hi, 1.001 * hi, h_ins), dist, n=case.n,
+                         rng=gen, max_fraction=0.35, source="<lifted tube>", field="particles")
+    order = np.argsort(x[:, 2], kind="stable")
+    sim.add_particles(x[order], r[order], "soil")
+    settled, t_fill = settle(sim, 0.005, case.fill_time)
+    top = float((sim.x[:, 2] + sim.p.r).max())
+    lift_steps = int(math.ceil((top + 2 * hi) / case.lift_speed / sim.dt))
+    settle_steps = int(math.ceil(case.settle_time / sim.dt))
+    phases = [(lift_steps, {"tube": (0.0, 0.0, case.lift_speed)}), (settle_steps, {})]
+    spread = 0.5 * tube_h + 4 * R  # a heap spreads to about the fill height beyond the tube
+    bounds = (-spread - R, spread + R, -spread - R, spread + R, -0.01, tube_h * 1.1 + top
+              + case.lift_speed * (lift_steps + settle_steps) * sim.dt)
+    info = dict(fill_settled=int(settled), fill_time_s=t_fill, fill_top_m=top, dt=sim.dt,
+                lift_steps=lift_steps, settle_steps=settle_steps, tube_height=tube_h)
+    return sim, phases, bounds, info
+
+
+def restart(sim, conventions):
+    """A copy of ``sim``'s state (spheres by insertion id, walls) under other conventions."""
+    from soilcal.dem.engine import Simulation
+    from soilcal.dem.walls import PLANE, TRIANGLE
+
+    copy = Simulation(sim.materials, dt=sim.dt, gravity=tuple(sim.gravity),
+                           contact_model=dict(rolling="constant_torque",
+                                              conventions=conventions),
+                           skin=sim.skin_user, max_overlap=sim.max_overlap, source=sim.source)
+    rows = sim.index(np.arange(sim.n))
+    mat = sim.p.mat[rows]
+    for k in np.unique(mat):
+        sel = rows[mat == k]
+        copy.add_particles(sim.x[sel], sim.p.r[sel] / sim.coarse_grain, int(k),
+                                v=sim.v[sel], omega=sim.p.omega[sel])
+    a = sim._warr
+    for w, name in enumerate(sim.walls.names):
+        prim = np.flatnonzero(a["prim_wall"] == w)
+        mat_w = int(a["prim_mat"][prim[0]])
+        kinds = set(int(q) for q in a["prim_kind"][prim])
+        if kinds == {TRIANGLE}:
+            tri = a["prim_par"][prim, :9].reshape(-1, 3)
+            copy.add_mesh(tri, np.arange(len(tri)).reshape(-1, 3), mat_w, name=name)
+        elif kinds == {PLANE}:
+            par = a["prim_par"][prim[0]]
+            copy.add_plane(par[:3], par[3:6], mat_w, name=name)
+        else:
+            raise InputError("<restart>", f"walls.{name}", "planes and meshes", None)
+    return copy
+
+
+def heap_angles(x, r, present=None) -> dict:
+    """Radial-bin and surface-scan angles of a final state about the tube's axis."""
+    from soilcal.dem import measure
+
+    if present is not None:
+        x, r = x[present], r[present]
+    keep = x[:, 2] > -0.5 * r  # on the plate
+    b = measure.repose_angle_bins(x[keep], r[keep], 0.0, centre=(0.0, 0.0))
+    s = measure.repose_angle_surface(x[keep], r[keep], 0.0, centre=(0.0, 0.0))
+    return dict(angle_bins_deg=b["angle_deg"], angle_surface_deg=s["angle_deg"],
+                height_m=b["height_m"], n_on_plate=int(keep.sum()))

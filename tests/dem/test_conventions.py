@@ -1,0 +1,184 @@
+"""The reference engines' conventions (contact.py, "Conventions of the reference engines"):
+each option against the torque or force written out by hand from its definition."""
+
+import math
+
+import numpy as np
+import pytest
+
+from conftest import table
+from soilcal.dem.contact import CONVENTIONS, model_codes
+from soilcal.dem.engine import Simulation
+from soilcal.dem.materials import restitution_beta
+from soilcal.dem.scenarios import repose
+from soilcal.dem.scenarios.base import DemParams, conventions_of, make_simulation
+from soilcal.errors import InputError
+
+R = 1e-3
+E, NU, RHO = 1e7, 0.3, 2600.0
+ESTAR = E / (2 * (1 - NU**2))
+GSTAR = E / (2 * (1 + NU)) / (2 * (2 - NU))
+MASS = 4 / 3 * math.pi * R**3 * RHO
+MUR, REST = 0.2, 0.5
+
+
+def pair(conv, omega_i, vz=0.0, ri=R, rj=R, delta=2e-5, rolling="constant_torque", **kw):
+    """Sphere i above sphere j (normal +z from j to i) with overlap delta; i moves at vz and
+    spins at omega_i, j at rest.  Returns (force on i, torque on i, torque on j, R*, m*)."""
+    sim = Simulation(table(e=REST, mu=0.5, mur=MUR, E=E, nu=NU), dt=1e-7, gravity=(0, 0, 0),
+                     contact_model=dict(rolling=rolling, tangential="none", conventions=conv,
+                                        **kw))
+    sim.add_particles([[0, 0, ri + rj - delta], [0, 0, 0]], np.array([ri, rj]), "soil",
+                      v=[[0, 0, vz], [0, 0, 0]])
+    sim.p.omega[0] = omega_i
+    f, t = sim.compute_forces()
+    mi, mj = MASS * (ri / R) ** 3, MASS * (rj / R) ** 3
+    return f[0].copy(), t[0].copy(), t[1].copy(), ri * rj / (ri + rj), mi * mj / (mi + mj)
+
+
+def hertz(delta, rstar):
+    return 4 / 3 * ESTAR * math.sqrt(rstar) * delta**1.5
+
+
+def damping(delta, rstar, mstar, vn):
+    """Viscoelastic normal damping force (positive repulsive) at approach speed -vn."""
+    sn = 2 * ESTAR * math.sqrt(rstar * delta)
+    return 2 * math.sqrt(5 / 6) * restitution_beta(REST) * math.sqrt(sn * mstar) * vn
+
+
+def test_edem_rolling_torque_total_force_own_lever_full_axis():
+    """EDEM: tau_i = -mu_r |F_n,tot| c_i omega_rel/|omega_rel| with c_i = R_i - delta/2, the
+    torsion part kept; the partner takes -(c_j/c_i) of it."""
+    delta, w = 2e-5, np.array([0.0, 3.0, 4.0])
+    f, ti, tj, rstar, mstar = pair("edem", w, vz=-0.01, rj=1.5 * R, delta=delta)
+    ftot = hertz(delta, rstar) + damping(delta, rstar, mstar, -0.01)
+    assert f[2] == pytest.approx(ftot, rel=1e-9)
+    ci, cj = R - delta / 2, 1.5 * R - delta / 2
+    expected = -MUR * abs(ftot) * ci * w / np.linalg.norm(w)
+    np.testing.assert_allclose(ti, expected, rtol=1e-9)
+    np.testing.assert_allclose(tj, -expected * cj / ci, rtol=1e-9)
+
+
+def test_liggghts_rolling_torque_elastic_force_effective_lever_no_torsion():
+    """LIGGGHTS cdt (rolling_model_cdt.h): r_torque = rmu k_n delta R_eff w_rel/|w_rel| with
+    its normal (torsion) part removed; -r_torque on i, +r_torque on j."""
+    delta, w = 2e-5, np.array([0.0, 3.0, 4.0])
+    f, ti, tj, rstar, mstar = pair("liggghts", w, vz=-0.01, rj=1.5 * R, delta=delta)
+    fe = hertz(delta, rstar)
+    assert f[2] == pytest.approx(fe + damping(delta, rstar, mstar, -0.01), rel=1e-9)
+    wt = w - np.array([0.0, 0.0, w[2]])  # normal along z
+    expected = -MUR * fe * rstar * wt / np.linalg.norm(w)
+    np.testing.assert_allclose(ti, expected, rtol=1e-9, atol=1e-25)
+    np.testing.assert_allclose(tj, -expected, rtol=1e-9, atol=1e-25)
+
+
+@pytest.mark.parametrize("option,value", [("rolling_lever", "effective"),
+                                          ("rolling_force", "elastic"),
+                                          ("rolling_axis", "tangential")])
+def test_each_option_alone(option, value):
+    """One entry changed from EDEM's set changes only its own factor."""
+    delta, w = 2e-5, np.array([0.0, 3.0, 4.0])
+    _, base, _, rstar, mstar = pair("edem", w, vz=-0.01, delta=delta)
+    _, ti, _, _, _ = pair("edem", w, vz=-0.01, delta=delta, **{option: value})
+    ftot = hertz(delta, rstar) + damping(delta, rstar, mstar, -0.01)
+    fe = hertz(delta, rstar)
+    ci = R - delta / 2
+    unit = w / np.linalg.norm(w)
+    expected = {"rolling_lever": -MUR * ftot * rstar * unit,
+                "rolling_force": -MUR * fe * ci * unit,
+                "rolling_axis": -MUR * ftot * ci * np.array([0.0, unit[1], 0.0])}[option]
+    np.testing.assert_allclose(ti, expected, rtol=1e-9, atol=1e-25)
+    assert not np.allclose(ti, base)
+
+
+def test_wall_lever():
+    """Against a wall EDEM's lever is c_i = R - delta/2; LIGGGHTS 3.8 takes R_i."""
+    delta, w = 2e-5, np.array([5.0, 0.0, 0.0])
+    out = {}
+    for conv in ("edem", "liggghts"):
+        sim = Simulation(table(e=REST, mu=0.5, mur=MUR, E=E, nu=NU), dt=1e-7,
+                         gravity=(0, 0, 0),
+                         contact_model=dict(rolling="constant_torque", tangential="none",
+                                            conventions=conv))
+        sim.add_particles([[0, 0, R - delta]], R, "soil")
+        sim.add_plane((0, 0, 0), (0, 0, 1), "soil")
+        sim.p.omega[0] = w
+        out[conv] = sim.compute_forces()[1][0].copy()
+    unit = w / np.linalg.norm(w)
+    np.testing.assert_allclose(out["edem"], -MUR * hertz(delta, R) * (R - delta / 2) * unit,
+                               rtol=1e-9)
+    np.testing.assert_allclose(out["liggghts"], -MUR * hertz(delta, R) * R * unit, rtol=1e-9)
+
+
+@pytest.mark.parametrize("damped", ["on", "off"])
+def test_tangential_damping_option(damped):
+    """The initial state's forces of a sliding pair below the Coulomb limit: the new contact
+    has no tangential displacement yet (no time has passed), so F_t is the damping force
+    -2 sqrt(5/6)|beta| sqrt(S_t m*) v_t when it is on and zero when it is off."""
+    delta, vt, dt = 2e-5, 1e-3, 1e-7
+    sim = Simulation(table(e=REST, mu=0.5, E=E, nu=NU), dt=dt, gravity=(0, 0, 0),
+                     contact_model=dict(tangential_damping=damped))
+    sim.add_particles([[0, 0, 2 * R - delta], [0, 0, 0]], R, "soil", v=[[vt, 0, 0], [0, 0, 0]])
+    f = sim.compute_forces()[0][0]
+    rstar, mstar = R / 2, MASS / 2
+    st = 8 * GSTAR * math.sqrt(rstar * delta)
+    expected = 0.0
+    if damped == "on":
+        expected = -2 * math.sqrt(5 / 6) * abs(restitution_beta(REST)) * math.sqrt(st * mstar) * vt
+    assert f[0] == pytest.approx(expected, rel=1e-9, abs=1e-30)
+    # evaluating the same state again advances nothing
+    assert sim.compute_forces()[0][0, 0] == pytest.approx(expected, rel=1e-12, abs=1e-30)
+
+
+def test_tangential_history_after_one_step():
+    """One step of the sliding pair (undamped tangential): xi = v_t(1/2) dt, with the
+    half-step velocity v_t(1/2) = v_t (no tangential force acted at the start), so
+    F_t = -8 G* a(1) v_t dt at the new overlap."""
+    delta, vt, dt = 2e-5, 1e-3, 1e-7
+    sim = Simulation(table(e=REST, mu=0.5, E=E, nu=NU), dt=dt, gravity=(0, 0, 0),
+                     contact_model=dict(tangential_damping="off"))
+    sim.add_particles([[0, 0, 2 * R - delta], [0, 0, 0]], R, "soil", v=[[vt, 0, 0], [0, 0, 0]])
+    sim.run(1)
+    rows = sim.index([0, 1])
+    d = sim.x[rows[0]] - sim.x[rows[1]]
+    dist = float(np.linalg.norm(d))
+    a = math.sqrt(R / 2 * (2 * R - dist))
+    n = d / dist
+    # the relative motion of the centres in the step is vt dt along x (the normal force's
+    # kick along z moves both spheres apart, not sideways)
+    vrel_t = vt - vt * n[0] * n[0]
+    f = sim.p.f[rows[0]]
+    ft = f - np.dot(f, n) * n
+    assert ft[0] == pytest.approx(-8 * GSTAR * a * vrel_t * dt, rel=1e-6)
+
+
+def test_named_sets_and_single_entries():
+    codes, w = model_codes(rolling="constant_torque")
+    assert list(codes[5:]) == [0, 0, 0, 0] and w == 1.0
+    codes, w = model_codes(rolling="constant_torque", conventions="lammps")
+    assert list(codes[5:]) == [1, 1, 1, 0] and w == 2.0
+    codes, _ = model_codes(conventions="liggghts", rolling_force="total")
+    assert list(codes[5:]) == [1, 0, 1, 0]
+    assert set(CONVENTIONS) == {"edem", "liggghts", "lammps"}
+
+
+@pytest.mark.parametrize("value,field", [
+    ("ligghts", "setup.contact_conventions"),
+    ({"rolling_lever": "radius"}, "setup.contact_conventions.rolling_lever"),
+    ({"rolling_arm": "effective"}, "setup.contact_conventions.rolling_arm"),
+    ({"conventions": "edem3"}, "setup.contact_conventions.conventions"),
+    (3, "setup.contact_conventions"),
+])
+def test_bad_conventions_named_before_a_run(value, field):
+    setup = dict(repose.setups()["cinnamon-soil"], contact_conventions=value)
+    with pytest.raises(InputError) as exc:
+        repose.validate(setup, "quick", "soil.yaml")
+    assert exc.value.field == field and exc.value.path == "soil.yaml"
+
+
+def test_setup_conventions_reach_the_engine():
+    setup = dict(repose.setups()["cinnamon-soil"], n_particles=50,
+                 contact_conventions={"conventions": "liggghts", "tangential_damping": "off"})
+    sim, _ = make_simulation(DemParams(), setup, "quick", "t")
+    assert list(sim.codes[5:]) == [1, 1, 1, 1]
+    assert conventions_of(None)["conventions"] == "edem"
