@@ -8,12 +8,14 @@
    conventions, soilcal with EDEM's (the default); the same angle estimators on every final
    state.  The mean angles are compared against the combined seed scatter (standard error
    of the difference of two means).
+3. With ``--drum``: the rotating drum (vineyard dimensions), the same three ways, the mean
+   free-surface angle of its frames per run.
 
 Rows go to ``benchmarks/results/parity.csv`` (commit and time per row), the page to
 ``parity.md``.
 
 Usage: python benchmarks/parity.py [--n 2000] [--seeds 0-4] [--mur 0.05,0.1,0.2]
-       [--ranks 2] [--threads 2] [--skip-few]
+       [--ranks 2] [--threads 2] [--skip-few] [--skip-pile] [--drum] [--drum-spin 2.0]
 """
 
 from __future__ import annotations
@@ -35,8 +37,11 @@ OUT = HERE / "results"
 PILE_FIELDS = ["utc", "commit", "engine", "conventions", "n", "seed", "rolling_friction",
                "tube_diameter", "dt", "steps", "wall_s", "n_on_plate", "angle_bins_deg",
                "angle_surface_deg", "height_m", "fill_settled", "version"]
+DRUM_FIELDS = ["utc", "commit", "engine", "conventions", "n", "seed", "rolling_friction", "rpm",
+               "spin", "transient", "frames", "dt", "steps", "wall_s", "angle_deg",
+               "angle_frames_sd_deg", "fill_settled", "version"]
 FEW_FIELDS = ["utc", "commit", "case", "rolling", "steps", "max_dx_m", "max_dv_m_s",
-              "max_dw_rad_s", "travel_m", "version"]
+              "max_dw_rad_s", "travel_m", "vmax_m_s", "wmax_rad_s", "version"]
 
 
 def seeds_arg(text):
@@ -57,6 +62,7 @@ def few_body(version_rows):
             rows.append(dict(case=name, rolling=rolling, steps=r["steps"],
                              max_dx_m=f"{r['dx']:.3g}", max_dv_m_s=f"{r['dv']:.3g}",
                              max_dw_rad_s=f"{r['dw']:.3g}", travel_m=f"{r['travel']:.3g}",
+                             vmax_m_s=f"{r['vmax']:.3g}", wmax_rad_s=f"{r['wmax']:.3g}",
                              version=r["version"]))
             print(name, rolling, rows[-1], flush=True)
     return rows
@@ -98,11 +104,43 @@ def pile(n, seeds, murs, ranks, threads):
     return rows
 
 
+def drum(n, seeds, mur, spin, ranks, threads):
+    import numba
+
+    from soilcal.reference import cases as C
+    from soilcal.reference import liggghts as L
+
+    numba.set_num_threads(threads)
+    rows = []
+    for seed in seeds:
+        case = C.DrumCase(n=n, seed=seed, rolling_friction=mur, spin=spin)
+        sim, phases, bounds, info = C.rotating_drum(case, "liggghts")
+        base = dict(n=n, seed=seed, rolling_friction=mur, rpm=case.rpm, spin=spin,
+                    transient=case.transient, frames=info["frames"], dt=f"{info['dt']:.4g}",
+                    steps=sum(s for s, _ in phases), fill_settled=info["fill_settled"])
+        t0 = time.perf_counter()
+        res = L.run(C.restart(sim, "liggghts"), phases, bounds, ranks=ranks, snapshots=True)
+        rows.append(dict(base, engine="liggghts", conventions="liggghts",
+                         wall_s=f"{time.perf_counter() - t0:.1f}", version=res["version"],
+                         **_fmt(C.drum_angles(res["states"], case))))
+        print(rows[-1], flush=True)
+        for conv in ("liggghts", "edem"):
+            s = C.restart(sim, conv)
+            t0 = time.perf_counter()
+            states = L.run_phases(s, phases, snapshots=True)
+            rows.append(dict(base, engine="soilcal", conventions=conv,
+                             wall_s=f"{time.perf_counter() - t0:.1f}", version="",
+                             **_fmt(C.drum_angles(states, case))))
+            print(rows[-1], flush=True)
+    return rows
+
+
 def _fmt(ang):
     return {k: (f"{v:.3f}" if isinstance(v, float) else v) for k, v in ang.items()}
 
 
-def summary(rows):
+def summary(rows, cols=("angle_bins_deg", "angle_surface_deg"),
+            names=("radial bins", "surface scan")):
     """Mean, SD and seeds per (n, rolling friction, engine, conventions); the differences to
     LIGGGHTS with their combined standard error."""
     import pandas as pd
@@ -110,20 +148,21 @@ def summary(rows):
     df = pd.DataFrame(rows)
     if df.empty:
         return []
-    for c in ("angle_bins_deg", "angle_surface_deg", "rolling_friction", "n", "seed"):
+    for c in (*cols, "rolling_friction", "n", "seed"):
         df[c] = pd.to_numeric(df[c], errors="coerce")
-    lines = ["| spheres | mu_r | engine (conventions) | seeds | radial bins [deg] | "
-             "surface scan [deg] | bins - LIGGGHTS (SE) | scan - LIGGGHTS (SE) |",
-             "|---:|---:|---|---:|---|---|---|---|"]
+    lines = ["| spheres | mu_r | engine (conventions) | seeds | "
+             + " | ".join(f"{n} [deg]" for n in names) + " | "
+             + " | ".join(f"{n} - LIGGGHTS (SE)" for n in names) + " |",
+             "|---:|---:|---|---:|" + "---|" * (2 * len(cols))]
     for (n, mur), g in df.groupby(["n", "rolling_friction"]):
         ref = g[g.engine == "liggghts"]
         for (eng, conv), h in g.groupby(["engine", "conventions"], sort=False):
             cells = []
-            for col in ("angle_bins_deg", "angle_surface_deg"):
+            for col in cols:
                 a = h[col].dropna()
                 cells.append(f"{a.mean():.2f} +- {a.std(ddof=1):.2f}")
             diffs = []
-            for col in ("angle_bins_deg", "angle_surface_deg"):
+            for col in cols:
                 a, b = h[col].dropna(), ref[col].dropna()
                 if eng == "liggghts" or len(a) < 2 or len(b) < 2:
                     diffs.append("")
@@ -131,7 +170,7 @@ def summary(rows):
                 se = math.sqrt(a.var(ddof=1) / len(a) + b.var(ddof=1) / len(b))
                 diffs.append(f"{a.mean() - b.mean():+.2f} ({se:.2f})")
             lines.append(f"| {n} | {mur:g} | {eng} ({conv}) | {h.seed.nunique()} | "
-                         f"{cells[0]} | {cells[1]} | {diffs[0]} | {diffs[1]} |")
+                         + " | ".join(cells) + " | " + " | ".join(diffs) + " |")
     return lines
 
 
@@ -144,6 +183,10 @@ def main(argv=None):
     ap.add_argument("--threads", type=int, default=2)
     ap.add_argument("--skip-few", action="store_true")
     ap.add_argument("--skip-pile", action="store_true")
+    ap.add_argument("--drum", action="store_true")
+    ap.add_argument("--drum-n", type=int, default=1000)
+    ap.add_argument("--drum-mur", type=float, default=0.1)
+    ap.add_argument("--drum-spin", type=float, default=2.0)
     args = ap.parse_args(argv)
     from soilcal.reference import liggghts as L
 
@@ -153,6 +196,8 @@ def main(argv=None):
     stamp = dict(utc=datetime.now(timezone.utc).strftime("%Y-%m-%d %H:%M"), commit=commit())
     few_path, pile_path = OUT / "parity_few.csv", OUT / "parity.csv"
     few_rows = read_rows(few_path, FEW_FIELDS)
+    drum_path = OUT / "parity_drum.csv"
+    drum_rows = read_rows(drum_path, DRUM_FIELDS)
     pile_rows = read_rows(pile_path, PILE_FIELDS)
     if not args.skip_few:
         few_rows = [dict(stamp, **r) for r in few_body(few_rows)]
@@ -164,17 +209,28 @@ def main(argv=None):
                                              in [float(m) for m in args.mur.split(",")])]
         pile_rows = keep + [dict(stamp, **r) for r in new]
         write_rows(pile_path, pile_rows, PILE_FIELDS)
+    if args.drum:
+        new = drum(args.drum_n, seeds_arg(args.seeds), args.drum_mur, args.drum_spin,
+                   args.ranks, args.threads)
+        keep = [r for r in drum_rows if not (str(r["n"]) == str(args.drum_n) and
+                                             float(r["rolling_friction"]) == args.drum_mur)]
+        drum_rows = keep + [dict(stamp, **r) for r in new]
+        write_rows(drum_path, drum_rows, DRUM_FIELDS)
     lines = ["# Parity with LIGGGHTS 3.8 on identical cases", "",
              f"Machine: {os.uname().machine}, {os.cpu_count()} logical CPUs.  Last command: "
              f"`python benchmarks/parity.py {' '.join(argv or sys.argv[1:])}`.  Rows: "
-             "`parity_few.csv`, `parity.csv`.", "",
+             "`parity_few.csv`, `parity.csv`, `parity_drum.csv`.", "",
              "## Few-body cases: largest difference after the run (soilcal with the "
              "`liggghts` conventions)", "",
              *runs_table(few_rows, ["case", "rolling", "steps", "travel_m", "max_dx_m",
-                                    "max_dv_m_s", "max_dw_rad_s", "commit"]), "",
+                                    "vmax_m_s", "max_dv_m_s", "wmax_rad_s", "max_dw_rad_s",
+                                    "commit"]), "",
              "## Lifted-tube pile (same settled fill for every engine)", "",
              *summary(pile_rows), "", "Runs:", "",
-             *runs_table(pile_rows, PILE_FIELDS)]
+             *runs_table(pile_rows, PILE_FIELDS), "",
+             "## Rotating drum (same settled fill for every engine; mean of the frames)", "",
+             *summary(drum_rows, ("angle_deg",), ("frame mean",)), "", "Runs:", "",
+             *runs_table(drum_rows, DRUM_FIELDS)]
     write_page(OUT / "parity.md", lines)
 
 

@@ -62,12 +62,12 @@ import math
 import os
 import re
 import shutil
-import signal
-import subprocess
 import sys
 import tempfile
 import time
 from pathlib import Path
+
+from soilcal.reference.liggghts import launch
 
 # Case parameters (must equal soilcal.dem.bench.settle_simulation).
 E = 2.6e7
@@ -307,32 +307,15 @@ def run_reference(engine: str, n: int, steps: int, ranks: int, cohesion: str = "
         make = liggghts_deck if engine == "liggghts" else lammps_deck
         deck, law = make("data.settle", steps, cohesion)
         (work / "in.settle").write_text(deck)
-        env = dict(os.environ, OMP_NUM_THREADS="1")
-        cmd = ["/usr/bin/time", "-f", "MAXRSS_KB %M", "-o", "time.txt",
-               "mpirun", "--allow-run-as-root", "--oversubscribe", "--bind-to", "none",
-               "-np", str(ranks), binary, "-in", "in.settle", "-log", "log.settle"]
-        if not Path("/usr/bin/time").exists():
-            cmd = cmd[5:]
+        prefix = (["/usr/bin/time", "-f", "MAXRSS_KB %M", "-o", "time.txt"]
+                  if Path("/usr/bin/time").exists() else [])
         t0 = time.perf_counter()
-        # own process group, so that a timeout ends mpirun and its ranks together
-        proc = subprocess.Popen(cmd, cwd=work, env=env, stdout=subprocess.PIPE,
-                                stderr=subprocess.PIPE, text=True, errors="replace",
-                                start_new_session=True)
-        try:
-            stdout, stderr = proc.communicate(timeout=timeout)
-        except subprocess.TimeoutExpired:
-            os.killpg(proc.pid, signal.SIGTERM)
-            try:
-                proc.communicate(timeout=10)
-            except subprocess.TimeoutExpired:
-                os.killpg(proc.pid, signal.SIGKILL)
-                proc.communicate()
-            raise RuntimeError(f"{engine} timed out after {timeout:.0f} s") from None
+        rc, stdout = launch([binary, "-in", "in.settle", "-log", "log.settle"], work, ranks,
+                            timeout, prefix)
         total_s = time.perf_counter() - t0
-        (work / "stdout.txt").write_text(stdout + stderr)
-        if proc.returncode != 0:
-            tail = "\n".join((stdout + stderr).splitlines()[-15:])
-            raise RuntimeError(f"{engine} failed (rc {proc.returncode}):\n{tail}")
+        if rc != 0:
+            tail = "\n".join(stdout.splitlines()[-15:])
+            raise RuntimeError(f"{engine} failed (rc {rc}):\n{tail}")
         res = parse_log(stdout)
         rank_rss = None
         tf = work / "time.txt"

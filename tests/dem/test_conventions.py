@@ -110,6 +110,24 @@ def test_wall_lever():
     np.testing.assert_allclose(out["liggghts"], -MUR * hertz(delta, R) * R * unit, rtol=1e-9)
 
 
+@pytest.mark.parametrize("mode", ["relative", "absolute"])
+def test_rolling_against_a_rotating_wall(mode):
+    """A sphere turning with its wall: relative to the wall it does not roll (no torque);
+    by its own rotation it is resisted by mu_r F c_i, as LIGGGHTS's wall torque."""
+    delta, w = 2e-5, np.array([0.0, 2.0, 0.0])
+    sim = Simulation(table(e=REST, mu=0.5, mur=MUR, E=E, nu=NU), dt=1e-7, gravity=(0, 0, 0),
+                     contact_model=dict(rolling="constant_torque", tangential="none",
+                                        rolling_wall=mode))
+    sim.add_particles([[0, 0, R - delta]], R, "soil")
+    wall = sim.add_plane((0, 0, 0), (0, 0, 1), "soil")
+    sim.set_wall_motion(wall, omega=w)
+    sim.p.omega[0] = w
+    t = sim.compute_forces()[1][0]
+    expected = np.zeros(3) if mode == "relative" else \
+        -MUR * hertz(delta, R) * (R - delta / 2) * w / np.linalg.norm(w)
+    np.testing.assert_allclose(t, expected, rtol=1e-9, atol=1e-25)
+
+
 @pytest.mark.parametrize("damped", ["on", "off"])
 def test_tangential_damping_option(damped):
     """The initial state's forces of a sliding pair below the Coulomb limit: the new contact
@@ -154,11 +172,11 @@ def test_tangential_history_after_one_step():
 
 def test_named_sets_and_single_entries():
     codes, w = model_codes(rolling="constant_torque")
-    assert list(codes[5:]) == [0, 0, 0, 0] and w == 1.0
+    assert list(codes[5:]) == [0, 0, 0, 0, 0] and w == 1.0
     codes, w = model_codes(rolling="constant_torque", conventions="lammps")
-    assert list(codes[5:]) == [1, 1, 1, 0] and w == 2.0
+    assert list(codes[5:]) == [1, 1, 1, 0, 0] and w == 2.0
     codes, _ = model_codes(conventions="liggghts", rolling_force="total")
-    assert list(codes[5:]) == [1, 0, 1, 0]
+    assert list(codes[5:]) == [1, 0, 1, 0, 1]
     assert set(CONVENTIONS) == {"edem", "liggghts", "lammps"}
 
 
@@ -180,5 +198,5 @@ def test_setup_conventions_reach_the_engine():
     setup = dict(repose.setups()["cinnamon-soil"], n_particles=50,
                  contact_conventions={"conventions": "liggghts", "tangential_damping": "off"})
     sim, _ = make_simulation(DemParams(), setup, "quick", "t")
-    assert list(sim.codes[5:]) == [1, 1, 1, 1]
+    assert list(sim.codes[5:]) == [1, 1, 1, 1, 1]
     assert conventions_of(None)["conventions"] == "edem"

@@ -96,3 +96,22 @@ def test_run_phases_moves_and_stops_walls():
     moved = sim._warr["prim_par"][:, 0] - x0
     np.testing.assert_allclose(moved, 0.01 * 5000 * 1e-6, rtol=1e-9)
     assert not np.any(sim._warr["wall_vel"])
+
+
+def test_turning_mesh_becomes_a_rotate_fix_and_every_phase_is_dumped(tmp_path):
+    import math
+
+    sim, phases = build("drum_turn", "none")
+    L.write_case(sim, tmp_path, phases + [(5, {})], BOUNDS)
+    deck = (tmp_path / "in.case").read_text()
+    line = next(ln for ln in deck.splitlines() if "rotate" in ln)
+    assert line.split("rotate", 1)[1].split() == [
+        "origin", "0.0", "0.0", "0.0", "axis", "0.0", "1.0", "0.0", "period",
+        repr(2 * math.pi / 2.0)]
+    assert "dump phase0 all custom 1 phase0.dump" in deck
+    assert "dump phase1 all custom 1 phase1.dump" in deck
+    with pytest.raises(InputError, match="not both"):
+        L.write_case(sim, tmp_path, [(5, {"drum": {"velocity": (0, 0, 1), "omega": (0, 1, 0)}})],
+                     BOUNDS)
+    with pytest.raises(InputError, match=r"phases\[0\].drum.omega"):
+        L.write_case(sim, tmp_path, [(5, {"drum": {"omega": (0, "x")}})], BOUNDS)

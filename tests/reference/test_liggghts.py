@@ -12,17 +12,18 @@ pytestmark = pytest.mark.skipif(not OK, reason=WHY)
 
 @pytest.mark.parametrize("rolling", ["none", "constant_torque"])
 @pytest.mark.parametrize("name", ["wall_roll", "bounce", "pair_roll", "pair_impact",
-                                  "pair_fall", "stack", "mesh_drag"])
+                                  "pair_fall", "stack", "mesh_drag", "drum_turn"])
 def test_few_body_trajectories_agree_to_rounding(name, rolling):
     """Same spheres, walls and law: positions, velocities and spins after thousands of
-    steps agree to 1e-9 of the distance travelled, the top speed and the top spin."""
+    steps agree to 1e-9 of the distance travelled, the top speed and the top spin (1e-7 in
+    the turning drum, few.py)."""
     from soilcal.reference.few import compare
 
     r = compare(name, rolling)
     assert r["travel"] > 1e-5
-    assert r["dx"] <= 1e-9 * r["travel"]
-    assert r["dv"] <= 1e-9 * r["vmax"]
-    assert r["dw"] <= 1e-9 * r["wmax"]
+    assert r["dx"] <= r["tol"] * r["travel"]
+    assert r["dv"] <= r["tol"] * r["vmax"]
+    assert r["dw"] <= r["tol"] * r["wmax"]
 
 
 def test_edem_conventions_differ_from_liggghts():

@@ -114,10 +114,15 @@ an option of :func:`model_codes` (``rolling_lever``, ``rolling_force``, ``rollin
   mu_r F R |omega_rel,t| / |omega_rel|).
 * ``tangential_damping``: ``on`` (EDEM, LIGGGHTS ``tangential_damping on``, the LIGGGHTS
   default) or ``off`` (the Mindlin spring and the Coulomb limit only).
+* ``rolling_wall`` (``constant_torque`` against a wall): ``relative`` (the sphere's rotation
+  relative to the wall's, so a sphere carried round by a rotating drum without rolling on it
+  is not resisted) or ``absolute`` (the sphere's own omega_i, as LIGGGHTS 3.8's wall torque
+  takes it: a mesh moved by ``fix move/mesh`` carries no angular velocity into it; checked
+  against its output on a rotating drum in tests/reference).
 * ``jkr_convention``: above.
 
-``liggghts`` = effective lever, elastic force, tangential axis, damping on (LIGGGHTS has no
-JKR law: ``cohesion sjkr`` is a different model, so its JKR entry stays EDEM's);
+``liggghts`` = effective lever, elastic force, tangential axis, damping on, absolute wall
+rotation (LIGGGHTS has no JKR law: ``cohesion sjkr`` is a different model, so its JKR entry stays EDEM's);
 ``lammps`` = the same with the LAMMPS JKR convention (its ``rolling sds`` is the ``epsd``
 model here, whose lever is R* in every set).
 
@@ -146,23 +151,25 @@ TANGENTIAL = {"mindlin": 0, "none": 1}
 ROLLING = {"none": 0, "constant_torque": 1, "epsd": 2, "bounded": 3}
 COHESION = {"none": 0, "jkr": 1}
 JKR_CONVENTION = {"edem": 1.0, "lammps": 2.0}  # w = factor * gamma
-# conventions (module docstring, "Conventions of the reference engines"): codes[5:9]
+# conventions (module docstring, "Conventions of the reference engines"): codes[5:10]
 ROLLING_LEVER = {"particle": 0, "effective": 1}
 ROLLING_FORCE = {"total": 0, "elastic": 1}
 ROLLING_AXIS = {"full": 0, "tangential": 1}
 TANGENTIAL_DAMPING = {"on": 0, "off": 1}
+ROLLING_WALL = {"relative": 0, "absolute": 1}
 #: named sets of conventions, each as its engine documents or implements it
 CONVENTIONS = {
     "edem": dict(rolling_lever="particle", rolling_force="total", rolling_axis="full",
-                 tangential_damping="on", jkr_convention="edem"),
+                 tangential_damping="on", jkr_convention="edem", rolling_wall="relative"),
     "liggghts": dict(rolling_lever="effective", rolling_force="elastic",
-                     rolling_axis="tangential", tangential_damping="on", jkr_convention="edem"),
+                     rolling_axis="tangential", tangential_damping="on", jkr_convention="edem",
+                     rolling_wall="absolute"),
     "lammps": dict(rolling_lever="effective", rolling_force="elastic", rolling_axis="tangential",
-                   tangential_damping="on", jkr_convention="lammps"),
+                   tangential_damping="on", jkr_convention="lammps", rolling_wall="relative"),
 }
 CONVENTION_TABLES = {"rolling_lever": ROLLING_LEVER, "rolling_force": ROLLING_FORCE,
                      "rolling_axis": ROLLING_AXIS, "tangential_damping": TANGENTIAL_DAMPING,
-                     "jkr_convention": JKR_CONVENTION}
+                     "jkr_convention": JKR_CONVENTION, "rolling_wall": ROLLING_WALL}
 
 # history slot layout (per particle and contact partner)
 H_XI = 0  # 3 tangential displacement
@@ -201,11 +208,11 @@ def resolve_conventions(conventions="edem", source="<input>", **overrides) -> di
 
 def model_codes(normal="hertz", damping="viscoelastic", tangential="mindlin", rolling="none",
                 cohesion="none", conventions="edem", source="<input>", **overrides):
-    """Return (codes int64[9], w_factor) for a model composed by names.
+    """Return (codes int64[10], w_factor) for a model composed by names.
 
     ``conventions`` names a set of :data:`CONVENTIONS` (EDEM's by default); ``overrides``
     (``rolling_lever``, ``rolling_force``, ``rolling_axis``, ``tangential_damping``,
-    ``jkr_convention``) change single entries of it."""
+    ``rolling_wall``, ``jkr_convention``) change single entries of it."""
     out = []
     for key, val, table in (("normal", normal, NORMAL), ("damping", damping, DAMPING),
                             ("tangential", tangential, TANGENTIAL), ("rolling", rolling, ROLLING),
@@ -214,7 +221,8 @@ def model_codes(normal="hertz", damping="viscoelastic", tangential="mindlin", ro
             raise InputError(source, f"contact_model.{key}", f"one of {sorted(table)}", val)
         out.append(table[val])
     conv = resolve_conventions(conventions, source, **overrides)
-    for key in ("rolling_lever", "rolling_force", "rolling_axis", "tangential_damping"):
+    for key in ("rolling_lever", "rolling_force", "rolling_axis", "tangential_damping",
+                "rolling_wall"):
         out.append(CONVENTION_TABLES[key][conv[key]])
     return np.array(out, dtype=np.int64), JKR_CONVENTION[conv["jkr_convention"]]
 

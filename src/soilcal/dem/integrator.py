@@ -244,9 +244,12 @@ def gather(x, v, om, r, inv_m, inv_i, mat, f, t, ovr, peak, mroll, dt, kick, max
                     rvx = vxi - vwx - ci * (wyi * nz - wzi * ny)
                     rvy = vyi - vwy - ci * (wzi * nx - wxi * nz)
                     rvz = vzi - vwz - ci * (wxi * ny - wyi * nx)
+                    # rolling against the wall: the rotation relative to the wall's, or the
+                    # sphere's own (``rolling_wall``, contact.py)
+                    rw = 0.0 if codes[9] == 1 else 1.0
                     on, cfx, cfy, cfz, ctx, cty, ctz, _, _, _, mr = contact_force(
                         codes, pair, mi, prim_mat[p], delta, nx, ny, nz, rvx, rvy, rvz,
-                        wxi - ox, wyi - oy, wzi - oz, ci, 0.0, ri, 1.0 / imi,
+                        wxi - rw * ox, wyi - rw * oy, wzi - rw * oz, ci, 0.0, ri, 1.0 / imi,
                         dt if kick else 0.0, touching, whist, row)
                     # the last history slot of a wall row is its touching flag
                     whist[row, H_SIZE - 1] = 1.0 if on else 0.0

@@ -1,5 +1,12 @@
 """Identical cases for soilcal and a reference engine: the same spheres, walls and phases.
 
+``rotating_drum``: the vineyard paper's drum (100 mm across, 100 mm long, 25 % fill, 7 r/min)
+as one closed triangle mesh (``N_SEG`` facets around, end caps included) turning about its
+horizontal axis (y).  Spheres placed at random in the drum settle in soilcal (the initial
+data of both engines); the drum then turns for ``transient`` s, and a frame is taken every
+``frame_every`` s up to ``spin`` s; every frame's free-surface angle is measured by
+:func:`soilcal.dem.measure.drum_surface_angle` and the run's angle is their mean.
+
 ``lifted_tube``: a non-cohesive pile by cylinder lifting.  Spheres (radii uniform by number
 in ``radii``) are placed at random (solid fraction 0.3) in a tube of ``N_SEG`` facets
 standing on the plane z = 0, and settle in soilcal until their mean speed is below 5 mm/s
@@ -20,7 +27,7 @@ The angle is measured on the final state of each engine by the same estimators
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -35,10 +42,10 @@ MAX_OVERLAP = 0.25
 
 
 @dataclass
-class TubeCase:
-    """The lifted-tube pile; every value is written into a comparison's rows."""
+class Spheres:
+    """The spheres and the one material of a case (spheres, walls and plate)."""
 
-    n: int = 2000
+    n: int = 1000
     radii: tuple = (1.8e-3, 2.2e-3)
     rolling_friction: float = 0.1
     friction: float = 0.5
@@ -46,12 +53,18 @@ class TubeCase:
     youngs: float = 5e6
     poisson: float = 0.3
     density: float = 2600.0
+    dt_fraction: float = 0.15
+    seed: int = 0
+
+
+@dataclass
+class TubeCase(Spheres):
+    """The lifted-tube pile."""
+
+    n: int = 2000
     lift_speed: float = 0.05
     settle_time: float = 1.0
     fill_time: float = 1.5
-    dt_fraction: float = 0.15
-    seed: int = 0
-    extra: dict = field(default_factory=dict)
 
     def check(self, source="<case>") -> None:
         if isinstance(self.n, bool) or not isinstance(self.n, (int, np.integer)) or self.n < 20:
@@ -69,15 +82,6 @@ class TubeCase:
         r3 = (hi ** 4 - lo ** 4) / (4 * (hi - lo)) if hi > lo else lo ** 3  # <r^3>, uniform
         vol = self.n * 4 / 3 * math.pi * r3 / PHI_SETTLED
         return 0.5 * (4 * vol / math.pi) ** (1 / 3)
-
-    def row(self) -> dict:
-        out = {k: getattr(self, k) for k in ("n", "rolling_friction", "friction",
-                                              "restitution", "youngs", "poisson", "density",
-                                              "lift_speed", "settle_time", "dt_fraction",
-                                              "seed")}
-        out["r_min"], out["r_max"] = self.radii
-        out["tube_diameter"] = 2 * self.tube_radius()
-        return out
 
 
 def _materials(case: TubeCase):
@@ -173,3 +177,71 @@ def heap_angles(x, r, present=None) -> dict:
     s = measure.repose_angle_surface(x[keep], r[keep], 0.0, centre=(0.0, 0.0))
     return dict(angle_bins_deg=b["angle_deg"], angle_surface_deg=s["angle_deg"],
                 height_m=b["height_m"], n_on_plate=int(keep.sum()))
+
+
+@dataclass
+class DrumCase(Spheres):
+    """The rotating drum."""
+
+    diameter: float = 0.1
+    length: float = 0.1
+    rpm: float = 7.0
+    transient: float = 1.0
+    spin: float = 4.0
+    frame_every: float = 0.05
+    fill_time: float = 2.0
+
+
+def rotating_drum(case: DrumCase, conventions="liggghts"):
+    """The settled drum as a soilcal Simulation, and (phases, bounds, info): the transient
+    turn, then one phase per frame (``snapshots`` of :func:`soilcal.reference.liggghts.run`
+    and :func:`~soilcal.reference.liggghts.run_phases` give the frames)."""
+    from soilcal.dem.engine import Simulation
+    from soilcal.dem.factories import CylinderRegion, UniformRadius, insert_random
+    from soilcal.dem.geometry import drum_mesh
+    from soilcal.dem.scenarios.base import settle
+
+    lo, hi = case.radii
+    if not (isinstance(case.n, (int, np.integer)) and case.n >= 20 and 0 < lo <= hi):
+        raise InputError("<drum case>", "n, radii", "n >= 20 and 0 < r_min <= r_max", (case.n, case.radii))
+    R, L = case.diameter / 2, case.length
+    sim = Simulation(_materials(case), dt_fraction=case.dt_fraction,
+                     contact_model=dict(rolling="constant_torque", conventions=conventions),
+                     skin=0.5 * hi, max_overlap=MAX_OVERLAP, source="<rotating drum>")
+    k = 1.0 / math.cos(math.pi / N_SEG)
+    dv, dt_ = drum_mesh(k * R, L, N_SEG, axis_point=(0, 0, 0), axis_dir=(0, 1, 0))
+    sim.add_mesh(dv, dt_, "soil", name="drum", centre=(0, L / 2, 0))
+    gen = np.random.default_rng(case.seed)
+    region = CylinderRegion(R - 1.001 * hi, 1.001 * hi, L - 1.001 * hi, axis_point=(0, 0, 0),
+                            axis_dir=(0, 1, 0))
+    x, r = insert_random(region, UniformRadius(lo, hi), n=case.n, rng=gen, max_fraction=0.35,
+                         source="<rotating drum>", field="particles")
+    order = np.argsort(x[:, 2], kind="stable")
+    sim.add_particles(x[order], r[order], "soil")
+    settled, t_fill = settle(sim, 0.005, case.fill_time)
+    w = (0.0, 2 * math.pi * case.rpm / 60.0, 0.0)
+    turn = {"drum": {"omega": w}}
+    n_frames = int(math.floor((case.spin - case.transient) / case.frame_every + 1e-9)) + 1
+    frame = int(round(case.frame_every / sim.dt))
+    phases = [(int(round(case.transient / sim.dt)), turn)] + [(frame, turn)] * (n_frames - 1)
+    m = 1.5 * max(R, L)
+    bounds = (-m, m, -m + L / 2, m + L / 2, -m, m)
+    return sim, phases, bounds, dict(fill_settled=int(settled), fill_time_s=t_fill, dt=sim.dt,
+                                     frames=n_frames)
+
+
+def drum_angles(states, case: DrumCase) -> dict:
+    """Mean and SD of the frames' free-surface angles (mid-section slab of 3 mean radii or a
+    tenth of the length, as the drum scenario)."""
+    from soilcal.dem import measure
+
+    L = case.length
+    out = []
+    for s in states:
+        keep = s["present"]
+        slab = max(3.0 * float(np.mean(s["r"][keep])), 0.1 * L)
+        out.append(measure.drum_surface_angle(s["x"][keep], s["r"][keep], (0, L / 2, 0),
+                                              (0, 1, 0), slab_half=slab)["angle_deg"])
+    a = np.asarray(out)
+    return dict(angle_deg=float(a.mean()), angle_frames_sd_deg=float(a.std(ddof=1)),
+                frames=int(a.size))

@@ -56,6 +56,14 @@ CASES = {
     # a sphere resting on a triangulated plate that slides away under it
     "mesh_drag": dict(x=[[0, 0, 0.999 * R]], v=[[0, 0, 0]], w=[[0, 0, 0]], r=[R],
                       mat=["soil"], floor=None, plate=(0.01, 0.002, 0.0), steps=5000),
+    # two spheres at the bottom of a closed drum (24 facets, axis along y) turning at
+    # 2 rad/s: carried up the wall, rolling back
+    "drum_turn": dict(x=[[0, 0.005, -0.009 * 0.9995], [0.002227, 0.005, -0.008720]],
+                      v=[[0, 0, 0], [0, 0, 0]], w=[[0, 0, 0], [0, 0, 0]], r=[R, R],
+                      mat=["soil", "soil"], floor=None, drum=(0.01, 0.01, 2.0), steps=50000,
+                      # the turning mesh's nodes are rounded differently by the two engines:
+                      # measured 2e-10 of the travel without rolling, 2e-8 of the spin with it
+                      tol=1e-7),
 }
 
 
@@ -88,6 +96,16 @@ def build(name: str, rolling: str, conventions: str = "liggghts"):
     phases = [(c["steps"], {})]
     if c["floor"]:
         sim.add_plane((0, 0, 0), (0, 0, 1), c["floor"], name="floor")
+    drum = c.get("drum")
+    if drum:
+        from soilcal.dem.geometry import drum_mesh
+
+        radius, length, rate = drum
+        k = 1.0 / np.cos(np.pi / 24)  # facet mid-lines on the radius
+        dv, dtri = drum_mesh(k * radius, length, 24, axis_point=(0, 0, 0), axis_dir=(0, 1, 0))
+        sim.add_mesh(dv, dtri, "steel", name="drum", centre=(0, 0, 0))
+        phases = [(c["steps"], {"drum": {"omega": (0, rate, 0)}})]
+        sim.gravity[:] = (0, 0, -9.81)
     if plate:
         h = 0.01
         verts = [[-h, -h, 0], [h, -h, 0], [h, h, 0], [-h, h, 0]]
@@ -96,7 +114,7 @@ def build(name: str, rolling: str, conventions: str = "liggghts"):
     return sim, phases
 
 
-BOUNDS = (-0.05, 0.05, -0.05, 0.05, -0.01, 0.05)
+BOUNDS = (-0.05, 0.05, -0.05, 0.05, -0.05, 0.05)
 
 
 def compare(name: str, rolling: str, ranks: int = 1) -> dict:
@@ -116,4 +134,4 @@ def compare(name: str, rolling: str, ranks: int = 1) -> dict:
                 dw=float(np.abs(sim.p.omega[rows] - res["omega"]).max()),
                 travel=float(np.abs(res["x"] - x0).max()),
                 vmax=float(np.abs(res["v"]).max()), wmax=float(np.abs(res["omega"]).max()),
-                version=res["version"])
+                tol=CASES[name].get("tol", 1e-9), version=res["version"])

@@ -19,7 +19,10 @@ Translation (LIGGGHTS 3.8 commands)::
     plane walls     fix wall/gran ... primitive type T xplane|yplane|zplane c (axis planes)
     mesh walls      fix mesh/surface file W.stl type T (ASCII STL of the wall's current
                     triangles) + fix wall/gran ... mesh; a phase's velocity: fix move/mesh
-                    mesh W linear vx vy vz
+                    mesh W linear vx vy vz; its rotation omega about the wall's centre c:
+                    fix move/mesh mesh W rotate origin c axis omega/|omega|
+                    period 2 pi/|omega|
+    output          a dump of every sphere at the end of every phase
     integration     fix nve/sphere, fix gravity, timestep = sim.dt, neighbor skin = sim.skin
 
 What LIGGGHTS computes is its own law: Hertz with viscoelastic damping and Mindlin history
@@ -32,8 +35,8 @@ differ by the conventions, which is what a comparison then measures.
 Not translated (an :class:`~soilcal.errors.InputError` names the part): JKR cohesion
 (LIGGGHTS 3.8 has only ``sjkr``, a different law), the ``epsd`` and ``bounded`` rolling
 models, undamped or frictionless laws, periodic boundaries, cylinders, cones, discs,
-rectangles, planes not normal to an axis, rotating walls, moving planes, and fixed or
-rotation-locked spheres.
+rectangles, planes not normal to an axis, moving planes, a wall translating and rotating in
+one phase, coarse graining, and fixed or rotation-locked spheres.
 """
 
 from __future__ import annotations
@@ -54,6 +57,7 @@ from soilcal.errors import InputError
 
 SOURCE = "<liggghts case>"
 _LIGGGHTS_CONV = (1, 1, 1)  # rolling lever, force, axis of the ``liggghts`` set (contact.py)
+_LIGGGHTS_WALL = 1  # rolling against a wall: the sphere's own rotation
 
 
 def binary() -> str | None:
@@ -86,8 +90,31 @@ def _wall_id(sim, wall) -> int:
     return int(wall)
 
 
-def check_phases(sim, phases) -> list[tuple[int, dict[int, np.ndarray]]]:
-    """[(steps, {wall index: velocity})] with whole step counts >= 0."""
+def _motion(value, where):
+    """A phase's motion of one wall: a velocity [m/s], or {"velocity": .., "omega": ..}."""
+    if isinstance(value, dict):
+        bad = set(value) - {"velocity", "omega"}
+        if bad:
+            raise InputError(SOURCE, where, "a mapping of velocity and omega", sorted(bad))
+        v, w = value.get("velocity", (0, 0, 0)), value.get("omega", (0, 0, 0))
+    else:
+        v, w = value, (0, 0, 0)
+    out = []
+    for name, vec in (("velocity", v), ("omega", w)):
+        try:
+            a = np.asarray(vec, dtype=np.float64).reshape(3)
+        except (TypeError, ValueError):
+            raise InputError(SOURCE, f"{where}.{name}", "three numbers", vec) from None
+        if not np.all(np.isfinite(a)):
+            raise InputError(SOURCE, f"{where}.{name}", "finite numbers", tuple(a))
+        out.append(a)
+    return out[0], out[1]
+
+
+def check_phases(sim, phases) -> list[tuple[int, dict[int, tuple[np.ndarray, np.ndarray]]]]:
+    """[(steps, {wall index: (velocity, omega)})] with whole step counts >= 0; a phase names
+    each moving wall with its velocity, or with {"velocity": .., "omega": ..} (rotation about
+    the wall's centre)."""
     out = []
     for k, ph in enumerate(phases):
         try:
@@ -96,29 +123,38 @@ def check_phases(sim, phases) -> list[tuple[int, dict[int, np.ndarray]]]:
             raise InputError(SOURCE, f"phases[{k}]", "(steps, {wall: velocity})", ph) from None
         if isinstance(steps, bool) or not isinstance(steps, (int, np.integer)) or steps < 0:
             raise InputError(SOURCE, f"phases[{k}].steps", "a whole number of steps >= 0", steps)
-        vel = {}
-        for w, v in (motion or {}).items():
-            v = np.asarray(v, dtype=np.float64).reshape(3)
-            if not np.all(np.isfinite(v)):
-                raise InputError(SOURCE, f"phases[{k}].{w}", "a finite velocity [m/s]", tuple(v))
-            vel[_wall_id(sim, w)] = v
-        out.append((int(steps), vel))
+        out.append((int(steps), {_wall_id(sim, w): _motion(v, f"phases[{k}].{w}")
+                                 for w, v in (motion or {}).items()}))
     return out
 
 
-def run_phases(sim, phases) -> None:
-    """Run the phases in soilcal: each phase sets every wall's velocity (those it does not
-    name to rest) and runs its steps; walls end at rest, as in the LIGGGHTS deck."""
+def _state(sim) -> dict:
+    rows = sim.index(np.arange(sim.n))
+    return dict(x=sim.x[rows].copy(), v=sim.v[rows].copy(), omega=sim.p.omega[rows].copy(),
+                r=sim.p.r[rows].copy(), present=np.ones(sim.n, dtype=bool))
+
+
+def run_phases(sim, phases, snapshots: bool = False):
+    """Run the phases in soilcal: each phase sets every wall's velocity and rotation (those
+    it does not name to rest) and runs its steps; walls end at rest, as in the LIGGGHTS deck.
+    With ``snapshots``, returns the state at the end of every phase by insertion id (``x``,
+    ``v``, ``omega``, ``r``), as :func:`run` does."""
     ph = check_phases(sim, phases)
     if sim.dt is None:
         sim.run(0)
     nw = len(sim.walls.names)
-    for steps, vel in ph:
+    states = []
+    zero = (np.zeros(3), np.zeros(3))
+    for steps, motion in ph:
         for w in range(nw):
-            sim.set_wall_motion(w, velocity=vel.get(w, np.zeros(3)))
+            v, om = motion.get(w, zero)
+            sim.set_wall_motion(w, velocity=v, omega=om)
         sim.run(steps)
+        if snapshots:
+            states.append(_state(sim))
     for w in range(nw):
-        sim.set_wall_motion(w, velocity=np.zeros(3))
+        sim.set_wall_motion(w, velocity=np.zeros(3), omega=np.zeros(3))
+    return states if snapshots else None
 
 
 def _law(sim) -> tuple[str, str, bool]:
@@ -144,7 +180,7 @@ def _law(sim) -> tuple[str, str, bool]:
     same = True
     if rolling == "constant_torque":
         law += " rolling_friction cdt"
-        same = tuple(c[5:8]) == _LIGGGHTS_CONV
+        same = tuple(c[5:8]) == _LIGGGHTS_CONV and c[9] == _LIGGGHTS_WALL
     opts = " tangential_damping off" if c[8] == 1 else ""  # after the walls' own arguments
     return law, opts, same
 
@@ -158,9 +194,6 @@ def _walls(sim) -> list[dict]:
     for w, name in enumerate(sim.walls.names):
         rows = np.flatnonzero(a["prim_wall"] == w)
         kinds = set(int(k) for k in a["prim_kind"][rows])
-        if np.any(a["wall_omega"][w] != 0):
-            raise InputError(SOURCE, f"walls.{name}", "a wall that does not rotate",
-                             tuple(a["wall_omega"][w]))
         mat = int(a["prim_mat"][rows[0]])
         if kinds == {PLANE} and len(rows) == 1:
             par = a["prim_par"][rows[0]]
@@ -215,6 +248,9 @@ def write_case(sim, workdir, phases, bounds) -> dict:
     if np.any(sim.periodic):
         raise InputError(SOURCE, "periodic", "fixed boundaries (no periodic axis)",
                          tuple(sim.periodic))
+    if sim.coarse_grain != 1.0:
+        raise InputError(SOURCE, "coarse_grain", "1 (LIGGGHTS's coarse graining is another model)",
+                         sim.coarse_grain)
     p = sim.p
     if np.any(p.inv_m == 0) or np.any(p.inv_i == 0):
         raise InputError(SOURCE, "particles", "free spheres (none fixed or rotation-locked)",
@@ -224,11 +260,15 @@ def write_case(sim, workdir, phases, bounds) -> dict:
         raise InputError(SOURCE, "bounds", "xlo < xhi, ylo < yhi, zlo < zhi", tuple(b))
     law, opts, same = _law(sim)
     walls = _walls(sim)
-    for steps, vel in ph:
-        for w in vel:
-            if walls[w]["kind"] == "plane" and np.any(vel[w] != 0):
-                raise InputError(SOURCE, f"phases.{walls[w]['name']}",
-                                 "a mesh wall to move (LIGGGHTS planes are fixed)", tuple(vel[w]))
+    for steps, motion in ph:
+        for w, (v, om) in motion.items():
+            name = walls[w]["name"]
+            if walls[w]["kind"] == "plane" and (np.any(v != 0) or np.any(om != 0)):
+                raise InputError(SOURCE, f"phases.{name}",
+                                 "a mesh wall to move (LIGGGHTS planes are fixed)", tuple(v))
+            if np.any(v != 0) and np.any(om != 0):
+                raise InputError(SOURCE, f"phases.{name}",
+                                 "a translation or a rotation in one phase, not both", None)
     work = Path(workdir)
     work.mkdir(parents=True, exist_ok=True)
     mats = sim.materials
@@ -253,9 +293,9 @@ def write_case(sim, workdir, phases, bounds) -> dict:
     deck = ["units si", "atom_style sphere", "atom_modify map array", "boundary f f f",
             "newton off", "communicate single vel yes", "read_data data.case",
             f"neighbor {_f(sim.skin)} bin", "neigh_modify delay 0 every 1 check yes",
-            f"fix m1 all property/global youngsModulus peratomtype "
+            "fix m1 all property/global youngsModulus peratomtype "
             + " ".join(f"{_f(e)}" for e in youngs),
-            f"fix m2 all property/global poissonsRatio peratomtype "
+            "fix m2 all property/global poissonsRatio peratomtype "
             + " ".join(f"{_f(m.poisson)}" for m in mats.materials),
             f"fix m3 all property/global coefficientRestitution peratomtypepair {nm} "
             + _pairs(nm, lambda i, j: pair[(i, j)].restitution),
@@ -282,16 +322,29 @@ def write_case(sim, workdir, phases, bounds) -> dict:
         gx, gy, gz = (sim.gravity / g).tolist()
         deck.append(f"fix grav all gravity {_f(g)} vector {_f(gx)} {_f(gy)} {_f(gz)}")
     deck += ["fix integr all nve/sphere", "thermo 1000", "thermo_modify lost ignore norm no"]
-    for n_ph, (steps, vel) in enumerate(ph):
-        moving = [w for w in vel if np.any(vel[w] != 0)]
+    centre = sim._warr["wall_centre"].copy()
+    cols = "id radius x y z vx vy vz omegax omegay omegaz"
+    fmt = "\"%d" + " %.17g" * 10 + "\""
+    for n_ph, (steps, motion) in enumerate(ph):
+        moving = [w for w, (v, om) in motion.items() if np.any(v != 0) or np.any(om != 0)]
         for w in moving:
-            deck.append(f"fix move{n_ph}_{w} all move/mesh mesh wall{w} linear "
-                        + " ".join(f"{_f(c)}" for c in vel[w]))
+            v, om = motion[w]
+            if np.any(v != 0):
+                deck.append(f"fix move{n_ph}_{w} all move/mesh mesh wall{w} linear "
+                            + " ".join(f"{_f(c)}" for c in v))
+            else:
+                rate = float(np.linalg.norm(om))
+                deck.append(f"fix move{n_ph}_{w} all move/mesh mesh wall{w} rotate origin "
+                            + " ".join(f"{_f(c)}" for c in centre[w]) + " axis "
+                            + " ".join(f"{_f(c / rate)}" for c in om)
+                            + f" period {_f(2 * math.pi / rate)}")
+            centre[w] += v * steps * sim.dt
         deck.append(f"run {steps}")
         for w in moving:
             deck.append(f"unfix move{n_ph}_{w}")
-    deck += ["dump final all custom 1 final.dump id radius x y z vx vy vz omegax omegay omegaz",
-             "dump_modify final sort id format \"%d" + " %.17g" * 10 + "\"", "run 0"]
+        deck += [f"dump phase{n_ph} all custom 1 phase{n_ph}.dump {cols}",
+                 f"dump_modify phase{n_ph} sort id format {fmt}", "run 0",
+                 f"undump phase{n_ph}"]
     (work / "in.case").write_text("\n".join(deck) + "\n")
     info = dict(n=int(sim.n), dt=float(sim.dt), skin=float(sim.skin), law=law + opts,
                 conventions_match=bool(same), steps=int(sum(s for s, _ in ph)),
@@ -314,46 +367,66 @@ def read_dump(path) -> dict:
     return {c: data[:, i] for i, c in enumerate(cols)}
 
 
-def run(sim, phases, bounds, ranks: int = 1, workdir=None, timeout: float | None = None) -> dict:
+def launch(args, work, ranks: int = 1, timeout: float | None = None, prefix=()) -> tuple[int, str]:
+    """Run ``prefix + mpirun -np ranks + args`` in ``work`` with one OpenMP thread per rank,
+    in its own process group (a timeout ends mpirun and its ranks together, then raises);
+    returns (exit status, stdout and stderr), the output also kept in ``work/stdout.txt``."""
+    cmd = [*prefix, "mpirun", "--allow-run-as-root", "--oversubscribe", "--bind-to", "none",
+           "-np", str(int(ranks)), *args]
+    env = dict(os.environ, OMP_NUM_THREADS="1")
+    proc = subprocess.Popen(cmd, cwd=work, env=env, stdout=subprocess.PIPE,
+                            stderr=subprocess.STDOUT, text=True, errors="replace",
+                            start_new_session=True)
+    try:
+        out, _ = proc.communicate(timeout=timeout)
+    except subprocess.TimeoutExpired:
+        os.killpg(proc.pid, signal.SIGKILL)
+        proc.communicate()
+        raise RuntimeError(f"{Path(args[0]).name} timed out after {timeout:.0f} s in {work}") \
+            from None
+    Path(work, "stdout.txt").write_text(out)
+    return proc.returncode, out
+
+
+def _read_state(path, n) -> dict:
+    d = read_dump(path)
+    idx = d["id"].astype(np.int64) - 1
+    present = np.zeros(n, dtype=bool)
+    present[idx] = True
+    out = dict(present=present)
+    for key, cols in (("x", ("x", "y", "z")), ("v", ("vx", "vy", "vz")),
+                      ("omega", ("omegax", "omegay", "omegaz"))):
+        arr = np.full((n, 3), np.nan)
+        arr[idx] = np.column_stack([d[c] for c in cols])
+        out[key] = arr
+    rr = np.full(n, np.nan)
+    rr[idx] = d["radius"]
+    out["r"] = rr
+    return out
+
+
+def run(sim, phases, bounds, ranks: int = 1, workdir=None, timeout: float | None = None,
+        snapshots: bool = False) -> dict:
     """Run the case in LIGGGHTS; returns the final state by soilcal insertion id (row k is
     the sphere with id k; ``sim.index(ids)`` gives its row in soilcal) (``x``, ``v``, ``omega``, ``r``, ``present``: False for spheres LIGGGHTS lost through the
-    box), the ``loop_s`` LIGGGHTS reports, its ``version`` and the ``case`` record."""
+    box), the ``loop_s`` LIGGGHTS reports, its ``version`` and the ``case`` record; with
+    ``snapshots``, ``states``: the state at the end of every phase, as
+    :func:`run_phases` returns them."""
     ok, exe = available()
     if not ok:
         raise RuntimeError(exe)
     work = Path(workdir) if workdir else Path(tempfile.mkdtemp(prefix="soilcal-liggghts-"))
     try:
         info = write_case(sim, work, phases, bounds)
-        cmd = ["mpirun", "--allow-run-as-root", "--oversubscribe", "--bind-to", "none",
-               "-np", str(int(ranks)), exe, "-in", "in.case", "-log", "log.case"]
-        env = dict(os.environ, OMP_NUM_THREADS="1")
-        proc = subprocess.Popen(cmd, cwd=work, env=env, stdout=subprocess.PIPE,
-                                stderr=subprocess.STDOUT, text=True, errors="replace",
-                                start_new_session=True)
-        try:
-            out, _ = proc.communicate(timeout=timeout)
-        except subprocess.TimeoutExpired:
-            os.killpg(proc.pid, signal.SIGKILL)
-            proc.communicate()
-            raise RuntimeError(f"LIGGGHTS timed out after {timeout:.0f} s in {work}") from None
-        (work / "stdout.txt").write_text(out)
-        if proc.returncode != 0 or not (work / "final.dump").exists():
+        rc, out = launch([exe, "-in", "in.case", "-log", "log.case"], work, ranks, timeout)
+        last = work / f"phase{len(phases) - 1}.dump"
+        if rc != 0 or not last.exists():
             tail = "\n".join(out.splitlines()[-12:])
-            raise RuntimeError(f"LIGGGHTS failed (rc {proc.returncode}) in {work}:\n{tail}")
-        d = read_dump(work / "final.dump")
-        n = info["n"]
-        idx = d["id"].astype(np.int64) - 1
-        present = np.zeros(n, dtype=bool)
-        present[idx] = True
-        res = dict(present=present, case=info)
-        for key, cols in (("x", ("x", "y", "z")), ("v", ("vx", "vy", "vz")),
-                          ("omega", ("omegax", "omegay", "omegaz"))):
-            arr = np.full((n, 3), np.nan)
-            arr[idx] = np.column_stack([d[c] for c in cols])
-            res[key] = arr
-        rr = np.full(n, np.nan)
-        rr[idx] = d["radius"]
-        res["r"] = rr
+            raise RuntimeError(f"LIGGGHTS failed (rc {rc}) in {work}:\n{tail}")
+        states = [_read_state(work / f"phase{k}.dump", info["n"]) for k in range(len(phases))]
+        res = dict(states[-1], case=info)
+        if snapshots:
+            res["states"] = states
         loops = re.findall(r"Loop time of ([0-9.eE+-]+) on", out)
         res["loop_s"] = float(sum(float(s) for s in loops))
         vm = re.search(r"^(LIGGGHTS \(Version[^)]*\))", out, re.M)

@@ -409,7 +409,8 @@ def conventions_of(value, source: str = "<input>") -> dict:
     """A setup's ``contact_conventions`` as :func:`soilcal.dem.contact.model_codes` keywords:
     None (EDEM's), the name of a set (``edem``, ``liggghts``, ``lammps``), or a mapping with an
     optional ``conventions`` set and single entries (``rolling_lever``, ``rolling_force``,
-    ``rolling_axis``, ``tangential_damping``, ``jkr_convention``) that change it."""
+    ``rolling_axis``, ``tangential_damping``, ``rolling_wall``, ``jkr_convention``) that
+    change it."""
     from soilcal.dem.contact import resolve_conventions
 
     named = isinstance(value, str)
