@@ -852,7 +852,7 @@ case("scenario-negative-particle-count", "scenario", CMD, "setup.n_particles", "
     scenario("repose", "--set", "n_particles=-10"))
 case("scenario-particle-count-text", "scenario", CMD, "setup.n_particles", "an integer >= 20")(
     scenario("repose", "--set", "n_particles=many"))
-case("scenario-unknown-setup-key", "scenario", CMD, "setup.tube_diametre", "one of dt_fraction")(
+case("scenario-unknown-setup-key", "scenario", CMD, "setup.tube_diametre", "one of contact_conventions, dt_fraction")(
     scenario("repose", "--set", "tube_diametre=0.06"))
 case("scenario-set-without-value", "scenario", CMD, "--set", "key=value")(
     scenario("repose", "--set", "tube_diameter"))
