@@ -284,8 +284,9 @@ def test_a_load_held_in_the_funnel_gives_no_angle():
     soil = load_soil(root / "config/soils/black-soil.yaml", root / "resources")
     spec = design.spec(soil, "accumulation_angle")
     p = design.design_params(soil, "soil-soil", dict(x1=0.7, x2=0.6, x3=0.6, x4=0.275), spec)
-    # the load arches at once; 1.5 s after the cover has gone it is as held as after 4 s
-    s = dict(spec.setup, stiffness_scale=1.0, max_settle_time=1.5)
+    # the load arches at once: with settle phases of at most 0.5 s it came to rest 0.38 s
+    # after the cover had gone, 2407 of 2482 spheres held (seed 0, 2026-11-26)
+    s = dict(spec.setup, stiffness_scale=1.0, max_settle_time=0.5)
     r = repose.run(s, p, "quick", seed=0, threads=2).responses
     assert r["retained_fraction"] > s["max_retained"]
     assert np.isnan(r["angle_deg"]) and np.isnan(r["angle_image_deg"])
