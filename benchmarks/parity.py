@@ -52,7 +52,7 @@ def seeds_arg(text):
     return out
 
 
-def few_body(version_rows):
+def few_body():
     from soilcal.reference.few import CASES, compare
 
     rows = []
@@ -200,7 +200,7 @@ def main(argv=None):
     drum_rows = read_rows(drum_path, DRUM_FIELDS)
     pile_rows = read_rows(pile_path, PILE_FIELDS)
     if not args.skip_few:
-        few_rows = [dict(stamp, **r) for r in few_body(few_rows)]
+        few_rows = [dict(stamp, **r) for r in few_body()]
         write_rows(few_path, few_rows, FEW_FIELDS)
     if not args.skip_pile:
         new = pile(args.n, seeds_arg(args.seeds), [float(m) for m in args.mur.split(",")],

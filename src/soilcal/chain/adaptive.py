@@ -31,17 +31,10 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
+from soilcal.config.load import read_table
 from soilcal.doe import adaptive as ad
 from soilcal.doe.designs import actual_to_coded
 from soilcal.errors import InputError
-
-
-def read_csv(path) -> pd.DataFrame:
-    """A CSV table, or one InputError naming the file when it cannot be parsed."""
-    try:
-        return pd.read_csv(path)
-    except (pd.errors.ParserError, pd.errors.EmptyDataError, UnicodeDecodeError) as exc:
-        raise InputError(path, "<file>", "a CSV table", str(exc).splitlines()[0][:120]) from None
 
 ROOT = "adaptive"
 
@@ -150,7 +143,7 @@ def read_runs(problem: ad.Problem, steps: list[dict], run_paths) -> pd.DataFrame
             key = (int(p.parent.name), int(p.stem))
         except ValueError:
             raise InputError(p, "<file name>", "runs/<iteration>/<run>.csv", str(p)) from None
-        df = read_csv(p)
+        df = read_table(p)
         missing = [c for c in ("response", "status", "value") if c not in df.columns]
         if missing:
             raise InputError(p, missing[0], "a DEM run table (soilcal.chain.sources.run_point)", "missing column")

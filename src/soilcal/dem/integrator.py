@@ -170,6 +170,9 @@ def gather(x, v, om, r, inv_m, inv_i, mat, f, t, ovr, peak, mroll, dt, kick, max
     h = 0.5 * dt
     nbad = 0
     bounded = codes[3] == 3
+    # rolling against a wall: the rotation relative to the wall's (rw = 1), or the sphere's
+    # own (rw = 0; ``rolling_wall``, contact.py)
+    rw = 0.0 if codes[9] == 1 else 1.0
     bs = block_size(n)
     nblk = (n + bs - 1) // bs
     for c in prange(NBLK_GROUPS):
@@ -244,9 +247,6 @@ def gather(x, v, om, r, inv_m, inv_i, mat, f, t, ovr, peak, mroll, dt, kick, max
                     rvx = vxi - vwx - ci * (wyi * nz - wzi * ny)
                     rvy = vyi - vwy - ci * (wzi * nx - wxi * nz)
                     rvz = vzi - vwz - ci * (wxi * ny - wyi * nx)
-                    # rolling against the wall: the rotation relative to the wall's, or the
-                    # sphere's own (``rolling_wall``, contact.py)
-                    rw = 0.0 if codes[9] == 1 else 1.0
                     on, cfx, cfy, cfz, ctx, cty, ctz, _, _, _, mr = contact_force(
                         codes, pair, mi, prim_mat[p], delta, nx, ny, nz, rvx, rvy, rvz,
                         wxi - rw * ox, wyi - rw * oy, wzi - rw * oz, ci, 0.0, ri, 1.0 / imi,

@@ -56,6 +56,13 @@ class Spheres:
     dt_fraction: float = 0.15
     seed: int = 0
 
+    def check(self, source="<case>") -> None:
+        if isinstance(self.n, bool) or not isinstance(self.n, (int, np.integer)) or self.n < 20:
+            raise InputError(source, "n", "an integer >= 20 spheres", self.n)
+        lo, hi = self.radii
+        if not 0 < lo <= hi:
+            raise InputError(source, "radii", "0 < r_min <= r_max [m]", self.radii)
+
 
 @dataclass
 class TubeCase(Spheres):
@@ -67,11 +74,7 @@ class TubeCase(Spheres):
     fill_time: float = 1.5
 
     def check(self, source="<case>") -> None:
-        if isinstance(self.n, bool) or not isinstance(self.n, (int, np.integer)) or self.n < 20:
-            raise InputError(source, "n", "an integer >= 20 spheres", self.n)
-        lo, hi = self.radii
-        if not 0 < lo <= hi:
-            raise InputError(source, "radii", "0 < r_min <= r_max [m]", self.radii)
+        super().check(source)
         for key in ("youngs", "density", "lift_speed", "settle_time", "fill_time"):
             v = getattr(self, key)
             if not (isinstance(v, (int, float)) and math.isfinite(v) and v > 0):
@@ -201,9 +204,8 @@ def rotating_drum(case: DrumCase, conventions="liggghts"):
     from soilcal.dem.geometry import drum_mesh
     from soilcal.dem.scenarios.base import settle
 
+    case.check("<drum case>")
     lo, hi = case.radii
-    if not (isinstance(case.n, (int, np.integer)) and case.n >= 20 and 0 < lo <= hi):
-        raise InputError("<drum case>", "n, radii", "n >= 20 and 0 < r_min <= r_max", (case.n, case.radii))
     R, L = case.diameter / 2, case.length
     sim = Simulation(_materials(case), dt_fraction=case.dt_fraction,
                      contact_model=dict(rolling="constant_torque", conventions=conventions),
