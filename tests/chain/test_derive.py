@@ -9,6 +9,7 @@ soil: Conclusions (1); black soil: Sec. 3.1.2).
 from __future__ import annotations
 
 import copy
+import json
 from pathlib import Path
 
 import numpy as np
@@ -235,6 +236,55 @@ def test_bbd_centred_on_the_step_closest_to_the_target(soils):
     case = st["optimise"]["cases"][0]
     assert case["printed_optimum"] == {"A": 0.08, "B": 0.37, "C": 0.64}
     assert st["table"] == "responses.csv" and st["table_coding"] == "actual" and "printed" not in st
+
+
+def test_bbd_centre_follows_the_trend_of_a_noisy_path(soils):
+    """One run per step: a line 45, 41, 37, 33, 29, 25 deg crossing the target 27.69 between
+    steps 5 and 6, with step 2's seed landing on 27.7 by chance (the fitted line then runs at
+    28.49 deg at step 5 and 25.63 at step 6).  The fitted rule (default of
+    a derived path) centres on the step the line puts closest; the papers' rule on the lucky
+    run."""
+    cin = copy.deepcopy(soils["cinnamon-soil"])
+    y = 49.0 - 4.0 * np.arange(1, 7)
+    y[1] = 27.7
+    path = _cinnamon_path(soils, mean=25.0)
+    path["id"] = "steepest"
+    assert path["path_choice"] == "fitted"
+    st = bbd_from_path(cin, "bbd", path, _path_responses(list(y)))
+    # OLS with step 2 off its line by delta: fitted_s = line_s + delta (1/6 + (2 - 3.5)(s - 3.5) / 17.5)
+    delta = 27.7 - 41.0
+    s = np.arange(1, 7)
+    fitted = 49.0 - 4.0 * s + delta * (1 / 6 + (2 - 3.5) * (s - 3.5) / 17.5)
+    assert st["derivation"]["chosen_step"] == int(np.argmin(np.abs(fitted - 27.69))) + 1 == 5
+    assert st["derivation"]["choice"] == "fitted"
+    trend = st["derivation"]["trend"]["stacking_angle"]
+    assert trend["degree"] == 1 and trend["n"] == 6
+    json.dumps(st)  # stage.json: no NaN, no numpy types
+    # the papers' rule, asked for in the soil's simulation block
+    cin["simulation"]["path"] = {"choose": "closest"}
+    path = path_from_screening(cin, "steepest", _stage(cin, "pb"), _effects(P_SIG, B_SIG),
+                               pd.DataFrame({"stacking_angle": [24.0, 26.0, 24.5, 25.5]}), _targets(cin))
+    path["id"] = "steepest"
+    assert path["path_choice"] == "closest"
+    st = bbd_from_path(cin, "bbd", path, _path_responses(list(y)))
+    assert st["derivation"]["chosen_step"] == 2 and st["derivation"]["trend"] == {}
+
+
+def test_steepest_optimum_marks_the_step_the_bbd_is_centred_on(soils):
+    """optimum.csv of a derived path chooses as the Box-Behnken derivation does, with the
+    trend's values beside the runs."""
+    from soilcal.chain.stage import _steepest_frame
+
+    y = 49.0 - 4.0 * np.arange(1, 7)
+    y[1] = 27.7
+    path = _cinnamon_path(soils, mean=25.0)
+    table = pd.DataFrame({"step": np.arange(1, 7), "stacking_angle": y})
+    for s, f in path["factors"].items():
+        table[s] = f["levels"]
+    f = _steepest_frame(path, table, {})
+    assert int(f.loc[f["chosen"], "step"].iloc[0]) == 5 and f["fitted"].notna().all()
+    f = _steepest_frame({**path, "path_choice": "closest"}, table, {})
+    assert int(f.loc[f["chosen"], "step"].iloc[0]) == 2 and f["fitted"].isna().all()
 
 
 def test_bbd_drops_a_printed_optimum_on_other_parameters(soils):

@@ -17,6 +17,7 @@ from soilcal.doe.steepest import (
     chosen_step,
     derive_path,
     path_direction,
+    path_trend,
     select_factors,
     steepest_ascent_path,
 )
@@ -362,6 +363,72 @@ def test_chosen_step_two_responses_combined_error():
     # a step with one failed targeted response counts as failed
     resp["y2"] = [30.0, 20.0, np.nan]
     assert chosen_step(path, resp, {"y1": 12.0, "y2": 10.0})[0] == 2
+
+
+# --------------------------------------------------------------------------- the fitted rule
+STEPS = np.arange(1, 7, dtype=float)
+ALT = 0.1 * np.array([1, -1, 1, -1, 1, -1])  # a small alternating scatter
+
+
+def test_path_trend_of_a_line_is_its_least_squares_line():
+    # y = 60 - 5 s plus the alternating scatter: the OLS line adds the scatter's projection,
+    # slope sum(ALT (s - 3.5)) / sum((s - 3.5)^2) = -0.3 / 17.5, mean(ALT) = 0
+    tr = path_trend(STEPS, 60 - 5 * STEPS + ALT)
+    assert tr["degree"] == 1 and tr["n"] == 6
+    np.testing.assert_allclose(tr["fitted"], 60 - 5 * STEPS - 0.3 / 17.5 * (STEPS - 3.5), rtol=0, atol=1e-9)
+    resid = ALT + 0.3 / 17.5 * (STEPS - 3.5)
+    assert tr["residual_sd"] == pytest.approx(np.sqrt(np.sum(resid ** 2) / 4), rel=1e-9)
+    assert tr["p_quadratic"] > 0.05  # tested (six steps) and not kept
+
+
+def test_path_trend_keeps_a_curvature_the_runs_show():
+    truth = 30 + 2 * (STEPS - 3.5) ** 2
+    tr = path_trend(STEPS, truth + ALT)
+    assert tr["degree"] == 2 and tr["p_quadratic"] < 0.05
+    np.testing.assert_allclose(tr["fitted"], truth, atol=0.1)
+
+
+def test_path_trend_failed_steps_and_short_paths():
+    y = 60 - 5 * STEPS
+    y[2] = np.nan
+    tr = path_trend(STEPS, y)
+    assert tr["n"] == 5 and np.isnan(tr["fitted"][2])
+    np.testing.assert_allclose(np.delete(tr["fitted"], 2), np.delete(60 - 5 * STEPS, 2), atol=1e-9)
+    # two finite steps: no trend, the runs themselves
+    tr = path_trend([1.0, 2.0, 3.0], [np.nan, 5.0, 7.0])
+    assert tr["degree"] is None and np.isnan(tr["residual_sd"])
+    np.testing.assert_array_equal(tr["fitted"], [np.nan, 5.0, 7.0])
+    # four steps: a line only (a quadratic would leave one degree of freedom)
+    tr = path_trend([1.0, 2.0, 3.0, 4.0], [1.0, 4.0, 9.0, 16.0])
+    assert tr["degree"] == 1 and np.isnan(tr["p_quadratic"])
+    with pytest.raises(InputError) as e:
+        path_trend([1.0, 2.0, 3.0], [1.0, 2.0])
+    assert _field(e) == "values"
+
+
+def test_fitted_rule_is_not_pulled_onto_a_lucky_step():
+    """A line 55, 50, ..., 30 crossing the target 27 beyond the last step, with one run at
+    step 2 landing on the target by chance (27 instead of 50)."""
+    path = cinnamon_path()
+    y = 60 - 5 * STEPS
+    delta = 27.0 - y[1]
+    y[1] = 27.0
+    best, tab = chosen_step(path, {"y": y}, {"y": 27.0})
+    assert best == 2  # the papers' rule takes the lucky run
+    best, tab = chosen_step(path, {"y": y}, {"y": 27.0}, rule="fitted")
+    # OLS with one perturbed point: fitted_s = line_s + delta (1/6 + (2 - 3.5)(s - 3.5) / 17.5)
+    line = 60 - 5 * STEPS + delta * (1 / 6 + (2 - 3.5) * (STEPS - 3.5) / 17.5)
+    np.testing.assert_allclose(tab["fitted_y"], line, rtol=1e-12)
+    np.testing.assert_allclose(tab["error_y_percent"], np.abs(line - 27.0) / 27.0 * 100, rtol=1e-12)
+    assert best == 6 and tab["chosen"].tolist() == [False] * 5 + [True]
+    assert tab.columns.tolist() == ["step", "y", "fitted_y", "error_y_percent", "error_percent", "chosen"]
+    # a failed run is never the centre, even where the trend passes the target
+    y[5] = np.nan
+    best, tab = chosen_step(path, {"y": y}, {"y": 27.0}, rule="fitted")
+    assert best == 5 and np.isnan(tab["error_percent"].iloc[5])
+    with pytest.raises(InputError) as e:
+        chosen_step(path, {"y": y}, {"y": 27.0}, rule="nearest")
+    assert _field(e) == "rule"
 
 
 @pytest.mark.parametrize(

@@ -331,3 +331,21 @@ def test_steepest_ascent_reference_none_and_bad(tmp_path):
         plots.steepest_ascent(df, ["A", "B"], "angle", 27.69, tmp_path / "x",
                               reference=pd.DataFrame({"step": [1], "force": [2.0]}))
     assert "angle" in str(e.value)
+
+
+def test_steepest_ascent_trend_line_marks_the_trend_s_step(tmp_path):
+    """With the trend drawn, the error bars and the marked step are the trend's: a run at
+    step 3 on the target by chance (28.0 vs 27.69) is not the one marked when the trend puts
+    step 4 closer."""
+    df = _path()
+    trend = [22.0, 24.0, 26.0, 27.6]
+    fig = figures._steepest_ascent_figure(df, ["A", "B"], "angle", 27.69, trend=trend)
+    lines = {ln.get_label(): ln for ln in fig.axes[0].get_lines()}
+    assert list(lines["trend through the runs"].get_ydata()) == trend
+    bars = [p.get_height() for p in fig.axes[1].patches]
+    np.testing.assert_allclose(bars, np.abs(np.array(trend) - 27.69) / 27.69 * 100, rtol=1e-12)
+    marked = [t for t in fig.axes[0].texts if t.get_text().endswith("%")]
+    assert len(marked) == 1 and marked[0].xy == (4, 27.6)
+    with pytest.raises(InputError, match="trend"):
+        figures._steepest_ascent_figure(df, ["A", "B"], "angle", 27.69, trend=[1.0, 2.0])
+    _check_files(list(plots.steepest_ascent(df, ["A", "B"], "angle", 27.69, tmp_path / "tr", trend=trend)))

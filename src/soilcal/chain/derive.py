@@ -21,6 +21,13 @@ from the DEM results of the earlier stage, as the papers derived it from theirs:
   the targets is the centre, its neighbours the low and high levels ("the levels of no. 2,
   no. 3 and no. 4 were selected as low, medium and high", cinnamon soil;
   :func:`soilcal.doe.steepest.bbd_levels`), shifted inside the parameters' physical ranges.
+  "Closest" is judged on the trend fitted through all the path's runs
+  (``simulation.path.choose: fitted``, the default; :func:`soilcal.doe.steepest.path_trend`):
+  one DEM run per step carries its seed's scatter, and the papers' rule (``closest``: each
+  step's own run) lets one lucky seed pick the centre (README, "Choosing the Box-Behnken
+  centre on a noisy path").  The path stage records
+  the rule (``path_choice``); a path the DEM source runs on printed levels keeps the papers'
+  rule, so its files stay those of the published replay.
 * **parameters fixed at an earlier stage's optimum** (``fixed_from``, black soil stage 2):
   the DEM source fixes them at ITS calibrated set of that stage (the ``calibrated`` row of
   ``optimum.csv``, or of ``refined.csv`` where the soil runs the second verification round,
@@ -222,6 +229,7 @@ def path_from_screening(soil_data: dict, stage_id: str, screening_stage: dict, e
 
     st = _dem_base(config_stage)
     st.pop("chosen_step", None)  # the paper's choice on the paper's path
+    st["path_choice"] = path_cfg.get("choose", "fitted")
     taken: set = set()
     factors = {}
     for t in chosen:
@@ -254,7 +262,7 @@ def path_from_screening(soil_data: dict, stage_id: str, screening_stage: dict, e
 
 def bbd_from_path(soil_data: dict, stage_id: str, path_stage: dict, path_responses: pd.DataFrame) -> dict:
     """A Box-Behnken stage centred on the DEM path step closest to the targets."""
-    from soilcal.doe.steepest import bbd_levels, chosen_step
+    from soilcal.doe.steepest import bbd_levels, chosen_step, path_trend
 
     config_stage = _stage(soil_data, stage_id)
     syms = list(path_stage["factors"])
@@ -264,7 +272,15 @@ def bbd_from_path(soil_data: dict, stage_id: str, path_stage: dict, path_respons
     targets = {r: t["value"] for r, t in (path_stage.get("path_targets") or {}).items()}
     resp = path_responses.sort_values("step")
     ys = {r: resp[r].to_numpy(float) for r in targets if r in resp.columns}
-    step, table = chosen_step(path, ys, targets)
+    choice = path_stage.get("path_choice", "closest")
+    step, table = chosen_step(path, ys, targets, rule=choice)
+    trends = {}
+    if choice == "fitted":
+        for r in targets:
+            if r in ys:
+                t = path_trend(path["step"].to_numpy(float), ys[r])
+                trends[r] = {k: (None if v is None or (isinstance(v, float) and not np.isfinite(v)) else v)
+                             for k, v in t.items() if k != "fitted"}
     bounds = {}
     for s in syms:
         kind = _param_kind(soil_data, path_stage["factors"][s]["parameter"])
@@ -282,8 +298,12 @@ def bbd_from_path(soil_data: dict, stage_id: str, path_stage: dict, path_respons
     st["derivation"] = {
         "kind": "path",
         "from_stage": path_stage["id"],
-        "text": f"Box-Behnken centred on step {step} of the DEM path {path_stage['id']}",
+        "text": (f"Box-Behnken centred on step {step} of the DEM path {path_stage['id']}"
+                 + (" (the step closest to the target on the trend fitted through the path's runs)"
+                    if choice == "fitted" else " (the step whose own run is closest to the target)")),
         "chosen_step": int(step),
+        "choice": choice,
+        "trend": trends,
         "steps": table.to_dict("records"),
         "levels": {s: levels[s].get("note", "") for s in syms},
     }

@@ -197,8 +197,13 @@ def write_figures(kind: str, stage: dict, table_path, targets: dict, outdir, par
                 rcol = response_columns(reference_stage).get(rid)
                 if rcol in ref_table.columns and "step" in ref_table.columns:
                     ref = ref_table[["step", rcol]].rename(columns={rcol: rid})
+            trend = None
+            if stage.get("path_choice") == "fitted" and "step" in df.columns:
+                from soilcal.doe.steepest import path_trend
+
+                trend = path_trend(df["step"].to_numpy(float), df[rid].to_numpy(float))["fitted"]
             written += list(plots.steepest_ascent(df, list(stage["factors"]), rid, tgt, outdir / rid,
-                                                  response_label=rlab, reference=ref))
+                                                  response_label=rlab, reference=ref, trend=trend))
         return written
     data = stage_data(stage, table)
     syms = list(stage["factors"])

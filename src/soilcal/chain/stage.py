@@ -314,32 +314,38 @@ def _steepest_frame(stage: dict, table: pd.DataFrame, targets: dict) -> pd.DataF
     :func:`soilcal.chain.derive.response_targets`) or the target with the response's id.
     With two or more targeted responses, rows ``response = all`` carry the combined error
     sqrt(mean_r ((y_r - t_r)/t_r)^2) that chooses the path step
-    (:func:`soilcal.doe.steepest.chosen_step`).
+    (:func:`soilcal.doe.steepest.chosen_step`).  Under the stage's ``path_choice: fitted``
+    (a path the DEM source derived, :mod:`soilcal.chain.derive`) the errors are those of the
+    trend through the path's runs (column ``fitted``; empty under the papers' rule).
     """
-    from soilcal.doe.steepest import chosen_step
+    from soilcal.doe.steepest import chosen_step, path_trend
 
     path_targets = stage.get("path_targets") or {}
+    choice = stage.get("path_choice", "closest")
     rows, tg, ys = [], {}, {}
     for rid, col in response_columns(stage).items():
         tgt = (path_targets.get(rid) or {}).get("value", targets.get(rid, {}).get("value"))
         tgt = None if tgt is None or not np.isfinite(float(tgt)) else float(tgt)
         y = table[col].to_numpy(float)
-        err = np.abs(y - tgt) / tgt * 100 if tgt else np.full(len(y), np.nan)
+        fitted = (path_trend(table["step"].to_numpy(float), y)["fitted"] if choice == "fitted"
+                  else np.full(len(y), np.nan))
+        judged = fitted if choice == "fitted" else y
+        err = np.abs(judged - tgt) / tgt * 100 if tgt else np.full(len(y), np.nan)
         best = int(np.nanargmin(err)) if tgt and np.isfinite(err).any() else -1
         if tgt:
             tg[rid], ys[rid] = tgt, y
         for i in range(len(y)):
-            r = {"response": rid, "step": int(table["step"].iloc[i]), "value": y[i], "target": tgt,
-                 "relative_error_percent": err[i], "chosen": i == best,
+            r = {"response": rid, "step": int(table["step"].iloc[i]), "value": y[i], "fitted": fitted[i],
+                 "target": tgt, "relative_error_percent": err[i], "chosen": i == best,
                  "printed_choice": int(table["step"].iloc[i]) == stage.get("chosen_step")}
             for s in stage["factors"]:
                 r[s] = table[s].iloc[i]
             rows.append(r)
     if len(tg) >= 2:
         path = table[["step", *stage["factors"]]].reset_index(drop=True)
-        step, comb = chosen_step(path, ys, tg)
+        step, comb = chosen_step(path, ys, tg, rule=choice)
         for i, c in comb.iterrows():
-            r = {"response": "all", "step": int(c["step"]), "value": np.nan, "target": np.nan,
+            r = {"response": "all", "step": int(c["step"]), "value": np.nan, "fitted": np.nan, "target": np.nan,
                  "relative_error_percent": float(c["error_percent"]), "chosen": bool(c["chosen"]),
                  "printed_choice": int(c["step"]) == stage.get("chosen_step")}
             for s in stage["factors"]:

@@ -17,7 +17,10 @@ Deriving the climbing stage from our own screening (instead of copying the paper
    targets (Montgomery sec. 11.2 with the response replaced by that error).
 3. :func:`derive_path` lays the steps out in actual units, either the papers' way (every factor
    walks its whole screening range) or Montgomery's (steps proportional to the coefficients).
-4. :func:`chosen_step` picks the simulated step closest to the targets.
+4. :func:`chosen_step` picks the simulated step closest to the targets: the step whose own
+   run is closest (``closest``, the papers' rule), or the step whose value on the trend
+   fitted through all the path's runs is closest (``fitted``, :func:`path_trend`), which a
+   single seed's scatter cannot pull onto a lucky step.
 5. :func:`bbd_levels` takes that step as the Box-Behnken centre and its neighbours as the low
    and high levels.
 """
@@ -406,16 +409,82 @@ def _path_steps(path) -> np.ndarray:
     return path["step"].to_numpy()
 
 
+#: rules that choose a path step (:func:`chosen_step`)
+PATH_CHOICES = ("closest", "fitted")
+TREND_ALPHA = 0.05  # level of the test that keeps a trend's quadratic term
+
+
+def path_trend(steps, values, alpha: float = TREND_ALPHA) -> dict:
+    """The trend of one response along a climbing path, fitted through every step's run.
+
+    Along a steepest-ascent path the response is expected to change smoothly with the step
+    (first order, bending near an optimum); one DEM run per step adds its seed scatter.  An
+    ordinary least-squares fit (statsmodels) of the finite values on the step,
+
+        y_s = b0 + b1 u_s (+ b2 u_s^2) + e_s,   u_s = (s - mean s) / (half the step range),
+
+    keeps the quadratic term when the path has at least five finite steps and its t-test
+    gives p < ``alpha`` (a curvature the runs show beyond their scatter); otherwise the
+    line.  With fewer than three finite steps no trend is fitted (``degree`` None, the
+    fitted values are the runs themselves).
+
+    Returns ``{"fitted": array per step (NaN where the run failed), "degree", "n",
+    "residual_sd" (the runs' scatter about the trend, NaN without residual degrees of
+    freedom), "p_quadratic" (NaN when not tested), "r2"}``.
+    """
+    import statsmodels.api as sm
+
+    s = np.asarray(steps, dtype=float).reshape(-1)
+    y = np.asarray(values, dtype=float).reshape(-1)
+    if s.size != y.size:
+        raise InputError(None, "values", f"{s.size} values (one per path step)", y.size)
+    ok = np.isfinite(y)
+    n = int(ok.sum())
+    out = {"fitted": np.where(ok, y, np.nan), "degree": None, "n": n, "residual_sd": float("nan"),
+           "p_quadratic": float("nan"), "r2": float("nan")}
+    if n < 3:
+        return out
+    half = (s[ok].max() - s[ok].min()) / 2.0
+    u = (s - s[ok].mean()) / (half if half > 0 else 1.0)
+
+    def fit(deg):
+        X = np.column_stack([u ** k for k in range(deg + 1)])
+        return X, sm.OLS(y[ok], X[ok]).fit()
+
+    X, res = fit(1)
+    deg = 1
+    if n >= 5:
+        X2, res2 = fit(2)
+        p2 = float(res2.pvalues[2])
+        out["p_quadratic"] = p2
+        if np.isfinite(p2) and p2 < alpha:
+            X, res, deg = X2, res2, 2
+    fitted = X @ res.params
+    out["fitted"] = np.where(ok, fitted, np.nan)
+    out["degree"] = deg
+    dof = n - (deg + 1)
+    if dof > 0:
+        out["residual_sd"] = float(np.sqrt(np.sum(res.resid ** 2) / dof))
+    out["r2"] = float(res.rsquared) if np.isfinite(res.rsquared) else float("nan")
+    return out
+
+
 def chosen_step(
     path: pd.DataFrame,
     responses: dict[str, np.ndarray | list],
     targets: dict[str, float],
+    rule: str = "closest",
+    alpha: float = TREND_ALPHA,
 ) -> tuple[int, pd.DataFrame]:
     """Step of the climbing path whose simulated responses are closest to the targets.
 
     responses: response -> simulated value per path step (row order of ``path``; NaN for a
     failed step). targets: response -> measured target; every targeted response must be in
-    ``responses`` (responses without a target are reported but do not count). Combined error
+    ``responses`` (responses without a target are reported but do not count).  ``rule``:
+    ``closest`` (the papers') compares each step's own run with the target; ``fitted``
+    compares the value of the response's trend through all the path's runs
+    (:func:`path_trend`, column ``fitted_<response>``) at each step whose run did not fail.
+    Combined error
 
         E_s = 100 * sqrt(mean_r ((y_rs - t_r) / t_r)^2)   (%),
 
@@ -425,8 +494,11 @@ def chosen_step(
     Box-Behnken centre (see :func:`bbd_levels`).
 
     Returns (chosen step number, frame with columns step, one per response,
+    ``fitted_<response>`` per targeted response under ``fitted``,
     ``error_<response>_percent`` per targeted response, error_percent, chosen).
     """
+    if rule not in PATH_CHOICES:
+        raise InputError(None, "rule", f"one of {', '.join(PATH_CHOICES)}", rule)
     steps = _path_steps(path)
     if not isinstance(responses, Mapping) or not responses:
         raise InputError(None, "responses", "a mapping response -> values per path step", responses)
@@ -445,7 +517,11 @@ def chosen_step(
         t = float(t)
         if not np.isfinite(t) or t == 0.0:
             raise InputError(None, f"targets[{r}]", "a finite non-zero target (errors are relative to it)", t)
-        e = (out[r].to_numpy() - t) / t
+        y = out[r].to_numpy()
+        if rule == "fitted":
+            y = path_trend(out["step"].to_numpy(float), y, alpha)["fitted"]
+            out[f"fitted_{r}"] = y
+        e = (y - t) / t
         out[f"error_{r}_percent"] = np.abs(e) * 100.0
         rel.append(e)
     with np.errstate(invalid="ignore"):
@@ -565,6 +641,8 @@ def _bound_pair(b, f: str) -> tuple[float, float]:
 
 
 __all__ = [
+    "PATH_CHOICES",
+    "path_trend",
     "bbd_levels",
     "chosen_step",
     "derive_path",

@@ -319,18 +319,23 @@ def steepest_ascent(
     response_label: str | None = None,
     reference: pd.DataFrame | None = None,
     reference_label: str = "paper",
+    trend=None,
 ) -> tuple[Path, Path]:
     """Response against step of a steepest-ascent (climbing) path, with the target line and the
     relative error |y - target| / target (%) on a second axis; factor levels under each step.
 
     reference: the published path, columns step and ``response``, drawn as a second line
-    (orange squares, dashed) on the response axis; NaN responses are skipped."""
-    fig = _steepest_ascent_figure(df, factors, response, target, response_label, reference, reference_label)
+    (orange squares, dashed) on the response axis; NaN responses are skipped.
+    trend: the trend through the runs, one value per step, that chooses the Box-Behnken
+    centre (:func:`soilcal.doe.steepest.path_trend`): drawn as a green line, and the error
+    bars and the marked step are the trend's."""
+    fig = _steepest_ascent_figure(df, factors, response, target, response_label, reference, reference_label,
+                                  trend)
     return save_figure(fig, stem)
 
 
 def _steepest_ascent_figure(df, factors, response, target, response_label=None, reference=None,
-                            reference_label: str = "paper") -> Figure:
+                            reference_label: str = "paper", trend=None) -> Figure:
     if not isinstance(df, pd.DataFrame):
         raise InputError(None, "df", "a DataFrame with columns step, factors, response", type(df).__name__)
     missing = [c for c in ["step", *factors, response] if c not in df.columns]
@@ -346,10 +351,17 @@ def _steepest_ascent_figure(df, factors, response, target, response_label=None, 
             raise InputError(None, "reference", f"columns {['step', response]}", f"missing {missing}")
     steps = df["step"].to_numpy()
     y = df[response].to_numpy(float)
+    if trend is not None:
+        trend = np.asarray(trend, dtype=float).reshape(-1)
+        if trend.size != y.size:
+            raise InputError(None, "trend", f"{y.size} values (one per step)", trend.size)
     rlab = response_label or response
     fig = _figure(7.5, 5.0)
     ax = fig.add_subplot(1, 1, 1)
-    ax.plot(steps, y, "o-", color="C0", label=rlab)
+    ax.plot(steps, y, "o-" if trend is None else "o:", color="C0", label=rlab)
+    if trend is not None:
+        ax.plot(steps, trend, "-", color="C2", lw=2, label="trend through the runs")
+    judged = y if trend is None else trend
     if reference is not None:
         rs = pd.to_numeric(reference["step"], errors="coerce").to_numpy(float)
         ry = pd.to_numeric(reference[response], errors="coerce").to_numpy(float)
@@ -359,14 +371,17 @@ def _steepest_ascent_figure(df, factors, response, target, response_label=None, 
     if target is not None and np.isfinite(target):
         ax.axhline(target, color="C3", ls="--", label=f"target = {target:g}")
         if target != 0:
-            err = np.abs(y - target) / abs(target) * 100
+            err = np.abs(judged - target) / abs(target) * 100
+            err = np.where(np.isfinite(y), err, np.nan)
             ax2 = ax.twinx()
-            ax2.bar(steps, err, width=0.35, color="0.6", alpha=0.5, label="relative error")
+            ax2.bar(steps, err, width=0.35, color="0.6", alpha=0.5,
+                    label="relative error" if trend is None else "relative error of the trend")
             ax2.set_ylabel("relative error (%)")
-            ax2.set_ylim(0, max(float(np.nanmax(err)) * 1.3, 1.0))
-            best = int(np.nanargmin(err))
-            ax.annotate(f"{err[best]:.2f} %", (steps[best], y[best]), xytext=(0, 12), textcoords="offset points",
-                        ha="center", color="C3", fontsize=9)
+            ax2.set_ylim(0, max(float(np.nanmax(err)) * 1.3, 1.0) if np.isfinite(err).any() else 1.0)
+            if np.isfinite(err).any():
+                best = int(np.nanargmin(err))
+                ax.annotate(f"{err[best]:.2f} %", (steps[best], judged[best]), xytext=(0, 12),
+                            textcoords="offset points", ha="center", color="C3", fontsize=9)
             ax.set_zorder(ax2.get_zorder() + 1)
             ax.patch.set_visible(False)
             h1, l1 = ax.get_legend_handles_labels()
