@@ -20,14 +20,18 @@ class SoilcalError(Exception):
 class InputError(SoilcalError, ValueError):
     """Bad user input: names the file, the field and what was expected."""
 
-    def __init__(self, path: str | Path | None, field: str, expected: str, got: object = None):
+    def __init__(self, path: str | Path | None, field: str, expected: str, got: object = None,
+                 note: str | None = None):
         self.path = str(path) if path is not None else "<input>"
         self.field = field
         self.expected = expected
         self.got = got
+        self.note = note  # where to look next (e.g. a photo's diagnostic image), after the message
         msg = f"{self.path}: {field}: expected {expected}"
         if got is not None:
             msg += f", got {got!r}"
+        if note:
+            msg += f" ({note})"
         super().__init__(msg)
 
 

@@ -73,6 +73,10 @@ def test_diagnose_seed_scatter():
     note = diagnose(31.0, 1.2, 4, 30.0, 30.2)
     assert note.startswith("seed scatter") and "+1.00" in note and "0.60" in note
     assert "model limit" not in note and "surface bias" not in note
+    # the 2 % band of 30 is 0.6: two standard errors 2 * 1.2 / sqrt(n) <= 0.6 needs n >= 16
+    assert "16 seeds would bring two standard errors within the 2 % band of +-0.60" in note
+    # 2 * 1.25 / 0.6 = 4.17, squared 17.4: 18 seeds
+    assert "18 seeds" in diagnose(31.0, 1.25, 4, 30.0, 30.2)
 
 
 def test_diagnose_surface_bias():

@@ -921,6 +921,11 @@ def _(tmp, p):
     edit_yaml(p, lambda d: d["simulation"].update(replicates=0))
 
 
+@soil_case("simulation-unknown-path-choice", SOIL, "simulation.path.choose", "one of fitted, closest")
+def _(tmp, p):
+    edit_yaml(p, lambda d: d["simulation"].update(path={"choose": "nearest"}))
+
+
 # ================================================================== command-line arguments
 
 

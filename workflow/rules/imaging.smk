@@ -17,6 +17,9 @@ rule image_measure:
     params:
         manifest=lambda w: f"{RES}/images/{w.soil}/manifest.yaml",
         threshold=lambda w: IMAGE_MANIFESTS[w.soil].get("threshold", "otsu"),
+        # a photo that cannot be measured gets a diagnostic image of what was tried here
+        # (named in the job's error; logs are kept when a job fails)
+        refusals=lambda w: f"logs/{w.soil}/images/refused",
     conda:
         "../../envs/soilcal.yaml"
     log:

@@ -12,7 +12,8 @@ with redirect(snakemake.log[0]):  # noqa: F821
     figdir = Path(snakemake.output.figures)  # noqa: F821
     figdir.mkdir(parents=True, exist_ok=True)
     logging.info("measuring %s", snakemake.params.manifest)  # noqa: F821
-    result = measure_manifest(snakemake.params.manifest, figdir, snakemake.params.threshold)  # noqa: F821
+    result = measure_manifest(snakemake.params.manifest, figdir, snakemake.params.threshold,  # noqa: F821
+                              refusals=snakemake.params.refusals)  # noqa: F821
     for group, r in result.items():
         logging.info("%s: %s", group, {k: r[k] for k in ("angle_deg", "spread_deg", "area_mm2") if k in r})
     out.parent.mkdir(parents=True, exist_ok=True)

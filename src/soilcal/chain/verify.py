@@ -101,7 +101,10 @@ def diagnose(mean: float, sd: float, n: int, target: float, predicted: float | N
     * the surface cannot reach the target: the prediction at the optimum is more than 0.5
       from the target (a model limit within the design region);
     * seed scatter: the miss is within two standard errors of the mean (sd / sqrt(n)), so
-      more replicates (or larger heaps) are needed to tell;
+      more replicates (or larger heaps) are needed to tell; the note says how many seeds
+      would make two standard errors as small as the 2 % band,
+      n = ceil((2 sd / (0.02 |target|))^2), so that a user can judge whether seeds or larger
+      heaps are the way;
     * surface bias: the surface predicts the target but the DEM mean differs by more than
       the seed scatter explains (lack of fit of the quadratic at the optimum).
     """
@@ -116,8 +119,12 @@ def diagnose(mean: float, sd: float, n: int, target: float, predicted: float | N
                      f"{predicted - target:+.2f} from the target, within the design region")
     sem = sd / np.sqrt(n) if n > 1 and np.isfinite(sd) else np.nan
     if np.isfinite(sem) and abs(mean - target) <= 2 * sem:
+        band = TOLERANCE_PERCENT / 100 * abs(target)
+        need = int(np.ceil((2 * sd / band) ** 2 - 1e-9))  # an exact square is not rounded up
         notes.append(f"seed scatter: the miss {mean - target:+.2f} is within two standard errors "
-                     f"({sem:.2f}) of the mean of {n} seeds; more seeds or larger heaps would tell")
+                     f"({sem:.2f}) of the mean of {n} seeds; more seeds or larger heaps would tell "
+                     f"(at this seed SD {sd:.2f}, {need} seeds would bring two standard errors within "
+                     f"the {TOLERANCE_PERCENT:g} % band of +-{band:.2f})")
     elif not notes and predicted is not None and np.isfinite(predicted):
         notes.append(f"surface bias: the surface predicts the target but {n} seeds give {mean:.2f} "
                      f"(+-{sem if np.isfinite(sem) else float('nan'):.2f} standard error): the quadratic "

@@ -15,7 +15,7 @@ def _pile(args):
     from soilcal.imaging import figures, measure
 
     summary, res = measure.measure_piles(args.photos, args.threshold, keep_stages=bool(args.figures),
-                                         channel=args.channel)
+                                         channel=args.channel, refusals=args.refusals)
     if args.figures:
         for r in res:
             figures.angle_figure(r, f"{args.figures}/{r.path.rsplit('/', 1)[-1].rsplit('.', 1)[0]}")
@@ -32,7 +32,8 @@ def _drum(args):
         opts = drum.frame_options({k: getattr(args, k) for k in drum.OPTIONS}, "<command line>", prefix="--")
     except InputError as exc:  # name the option as it is typed: --chord-fraction
         raise InputError(exc.path, exc.field.replace("_", "-"), exc.expected, exc.got) from None
-    summary, res = drum.measure_drum(args.frames, args.threshold, keep_stages=bool(args.figures), options=opts)
+    summary, res = drum.measure_drum(args.frames, args.threshold, keep_stages=bool(args.figures), options=opts,
+                                     refusals=args.refusals)
     if args.figures:
         for r in res:
             figures.angle_figure(r, f"{args.figures}/{r.path.rsplit('/', 1)[-1].rsplit('.', 1)[0]}")
@@ -57,7 +58,7 @@ def _furrow(args):
         length = float(entry["scale_length_mm"])
         datum = float(entry.get("beam_datum_mm", 0.0)) if datum is None else datum
     r = measure.measure_furrow(args.photo, length, datum or 0.0, args.degree, args.threshold,
-                               keep_stages=bool(args.figures))
+                               keep_stages=bool(args.figures), refusals=args.refusals)
     if args.figures:
         figures.furrow_figure(r, f"{args.figures}/{r.path.rsplit('/', 1)[-1].rsplit('.', 1)[0]}")
     _print(r.as_dict())
@@ -67,7 +68,7 @@ def _furrow(args):
 def _soil(args):
     from soilcal.imaging.manifest import measure_manifest
 
-    _print(measure_manifest(args.manifest, args.figures, args.threshold))
+    _print(measure_manifest(args.manifest, args.figures, args.threshold, args.refusals))
     return 0
 
 
@@ -85,6 +86,9 @@ def register(subparsers) -> None:
     def common(q):
         q.add_argument("--threshold", choices=("otsu", "adaptive"), default="otsu")
         q.add_argument("--figures", metavar="DIR", help="write original/gray/binary/contour/fit figures")
+        q.add_argument("--refusals", metavar="DIR", default=".",
+                       help="where a photo that cannot be measured gets its diagnostic image, "
+                            "<photo stem>.refused.png (default: the current folder)")
 
     q = sub.add_parser("pile", help="heap photos (several views are averaged)")
     q.add_argument("photos", nargs="+")

@@ -58,6 +58,7 @@ from skimage import feature, filters, measure, morphology, transform
 from soilcal.errors import InputError
 from soilcal.imaging.io import read_gray
 from soilcal.imaging.measure import Stages, plate_line_any
+from soilcal.imaging.refusal import Tried, explained
 
 CHORD_FRACTION = 0.6
 RIM_MARGIN = 0.05
@@ -269,24 +270,37 @@ def _surface(path, p, inside, cx, cy, rm):
     return np.asarray(cols), np.asarray(rows), binary, powder
 
 
-def measure_drum_frame(path, threshold="otsu", keep_stages=False, options=None) -> DrumResult:
-    """Dynamic angle and S-shape of one drum frame (see the module text for the method)."""
+def measure_drum_frame(path, threshold="otsu", keep_stages=False, options=None, refusals=None) -> DrumResult:
+    """Dynamic angle and S-shape of one drum frame (see the module text for the method);
+    ``refusals``: a folder for the diagnostic image of a frame that cannot be measured
+    (:mod:`soilcal.imaging.refusal`)."""
+    tried = Tried()
+    with explained(path, refusals, tried):
+        return _measure_drum_frame(path, threshold, keep_stages, options, tried)
+
+
+def _measure_drum_frame(path, threshold, keep_stages, options, tried: Tried) -> DrumResult:
     if threshold != "otsu":
         raise InputError(path, "threshold", "'otsu' for drum frames", threshold)
     opts = frame_options(options, path)
     raw, rgb = read_gray(path)
     gray = filters.gaussian(raw, 1.2)
+    tried.rgb, tried.gray = rgb, gray
     h, w = gray.shape
     if opts["drum_centre_px"] is not None:
         (cx, cy), R, dref = opts["drum_centre_px"], opts["drum_radius_px"], "manifest"
     else:
+        tried.add("drum circle search")
         cx, cy, R, dref = find_drum(gray)
+        tried.attempts[-1].circle = (cx, cy, R)
+        tried.attempts[-1].outcome = f"drum at ({cx:.0f}, {cy:.0f}) px, radius {R:.0f} px"
     roll, lref = 0.0, "image axes"
     if opts["roll_deg"] is not None:
         roll, lref = opts["roll_deg"], "manifest roll"
     elif opts["level"] != "image":
         line = plate_line_any(path, gray, below=(cx, cy + R), required=False)
         if line is not None:
+            tried.lines = [line]
             roll, lref = -float(np.degrees(np.arctan(line[0]))), "plate"
         elif opts["level"] == "plate":
             raise InputError(path, "level", "a straight base plate edge below the drum (level: plate)", "none found")
@@ -301,6 +315,11 @@ def measure_drum_frame(path, threshold="otsu", keep_stages=False, options=None) 
     t = filters.threshold_otsu(g[inside])
     bright = inside & (g >= t)
     dark = inside & (g < t)
+    if bright.any() and dark.any():
+        tried.add("powder and air split in the drum (Otsu); the lower class is the powder",
+                  bright if rr[bright].mean() > rr[dark].mean() else dark, circle=(cx, cy, rm))
+    else:
+        tried.add("powder and air split in the drum (Otsu)", circle=(cx, cy, rm))
     if not bright.any() or not dark.any():
         raise InputError(path, "image", "powder and air in the drum", "one grey level")
     p = g if rr[bright].mean() > rr[dark].mean() else 1.0 - g
@@ -358,13 +377,13 @@ def measure_drum_frame(path, threshold="otsu", keep_stages=False, options=None) 
                       [float(cx), float(cy)], float(R), float(fr), int(cols.size), st)
 
 
-def measure_drum(paths, threshold="otsu", keep_stages=False, options=None):
+def measure_drum(paths, threshold="otsu", keep_stages=False, options=None, refusals=None):
     """Frames of one group: the mean angle and S-shape measures, the angles' spread.
 
     ``options`` is one dict of :data:`OPTIONS` for every frame or a list with one per frame.
     """
     per = options if isinstance(options, list) else [options] * len(paths)
-    res = [measure_drum_frame(p, threshold, keep_stages, o) for p, o in zip(paths, per)]
+    res = [measure_drum_frame(p, threshold, keep_stages, o, refusals) for p, o in zip(paths, per)]
 
     def mean(key):
         return float(np.nanmean([getattr(r, key) for r in res]))

@@ -114,8 +114,10 @@ def lookup(photo):
     return None
 
 
-def measure_manifest(path, figdir=None, threshold="otsu"):
-    """Measure every group of the manifest; returns {group: result dict}."""
+def measure_manifest(path, figdir=None, threshold="otsu", refusals=None):
+    """Measure every group of the manifest; returns {group: result dict}.  ``refusals``: a
+    folder for the diagnostic image of a photo that cannot be measured
+    (:mod:`soilcal.imaging.refusal`)."""
     from soilcal.imaging import drum, figures, measure
 
     path = Path(path)
@@ -130,15 +132,16 @@ def measure_manifest(path, figdir=None, threshold="otsu"):
         files = [path.parent / e["file"] for e in entries]
         keep = figdir is not None
         if kind == "pile":
-            summary, res = measure.measure_piles(files, threshold, keep_stages=keep)
+            summary, res = measure.measure_piles(files, threshold, keep_stages=keep, refusals=refusals)
             summary["views"] = [e.get("view") for e in entries]
         elif kind == "drum":
             summary, res = drum.measure_drum(files, threshold, keep_stages=keep,
-                                             options=[drum.frame_options(e, path) for e in entries])
+                                             options=[drum.frame_options(e, path) for e in entries],
+                                             refusals=refusals)
         else:
             e = entries[0]
             r = measure.measure_furrow(files[0], e.get("scale_length_mm"), e.get("beam_datum_mm", 0.0),
-                                       int(e.get("degree", 9)), threshold, keep_stages=keep)
+                                       int(e.get("degree", 9)), threshold, keep_stages=keep, refusals=refusals)
             summary, res = r.as_dict(), [r]
         summary["kind"] = kind
         out[g] = summary

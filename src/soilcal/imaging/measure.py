@@ -34,6 +34,7 @@ from skimage import color, feature, filters, measure, morphology, transform
 
 from soilcal.errors import InputError
 from soilcal.imaging.io import read_photo
+from soilcal.imaging.refusal import Tried, explained
 
 BAND = (0.20, 0.75)
 
@@ -257,7 +258,7 @@ def _components_on_plate(path, binary, slope, intercept, kind):
     return comp
 
 
-def measure_pile(path, threshold="otsu", keep_stages=False, channel="auto") -> PileResult:
+def measure_pile(path, threshold="otsu", keep_stages=False, channel="auto", refusals=None) -> PileResult:
     """Left/right flank angles of one heap photo relative to the plate line.
 
     Plate candidates: the long near-horizontal edges below the image middle, topmost first, of
@@ -271,21 +272,33 @@ def measure_pile(path, threshold="otsu", keep_stages=False, channel="auto") -> P
     differing in hue only) by decreasing eta; a result must look like a heap (flanks within
     :data:`FLANK_RANGE`, at least 3 % of the image high).  The cue used is reported, with a
     confidence ("low" when a flank's points stray from its line, e.g. a cast shadow joined to
-    a flank: read such a photo before using its number).
+    a flank: read such a photo before using its number).  With ``refusals`` (a folder), a
+    photo that cannot be measured also gets a diagnostic image of every attempt there
+    (:mod:`soilcal.imaging.refusal`), named in the refusal.
     """
+    tried = Tried()
+    with explained(path, refusals, tried):
+        return _measure_pile(path, threshold, keep_stages, channel, tried)
+
+
+def _measure_pile(path, threshold, keep_stages, channel, tried: Tried) -> PileResult:
     rgb = read_photo(path)
     lum = _gray(rgb)
+    tried.rgb, tried.gray = rgb, lum
     h, w = lum.shape
     lines = plate_lines(lum)
-    for ln in plate_lines(lum, edges=colour_edges(rgb)):
+    cedges = colour_edges(rgb)
+    tried.edges = cedges
+    for ln in plate_lines(lum, edges=cedges):
         if all(abs((ln[0] - o[0]) * w / 2 + ln[1] - o[1]) > 3 for o in lines):
             lines.append(ln)
+    tried.lines = list(lines[:4])
     if not lines:
         raise InputError(path, "image", "a straight base plate edge", "none found")
     grays = {ch: _gray(rgb, ch) for ch in CUES} if channel == "auto" else {channel: _gray(rgb, channel)}
     rr, cc = np.mgrid[0:h, 0:w]
     err = None
-    for slope, intercept in lines[:4]:  # the plate top first; a faint one may hide behind a lower edge
+    for n_line, (slope, intercept) in enumerate(lines[:4], 1):  # the plate top first; a faint one may hide behind a lower edge
         prow = slope * cc + intercept
         band = (rr < prow - 3) & (rr > prow - 0.35 * h)  # where heap and wall meet
         if channel != "auto":
@@ -301,23 +314,28 @@ def measure_pile(path, threshold="otsu", keep_stages=False, channel="auto") -> P
             g = grays[ch] if pol == "dark" else 1.0 - grays[ch]
             try:
                 return _pile_with(path, rgb, g, ch, pol, band, slope, intercept, threshold, keep_stages,
-                                  search=channel == "auto")
+                                  search=channel == "auto", tried=tried, label=f"line {n_line}, {ch}/{pol}")
             except InputError as e:
                 if e.field not in ("image", "left flank", "right flank"):
                     raise
+                tried.refuse_last(e)
                 err = err or e  # the refusal reported is the first cue's on the topmost line
     raise err
 
 
-def _pile_with(path, rgb, gray, cue, polarity, band, slope, intercept, threshold, keep_stages, search=True):
+def _pile_with(path, rgb, gray, cue, polarity, band, slope, intercept, threshold, keep_stages, search=True,
+               tried: Tried | None = None, label: str = ""):
     """Measure with one cue: the heap is the class below Otsu's threshold of ``gray``.  In a
     cue search (``search``) the result must look like a heap; a channel chosen by the caller
-    (e.g. a DEM silhouette, whatever its flanks) is measured as it is."""
+    (e.g. a DEM silhouette, whatever its flanks) is measured as it is.  ``tried`` records the
+    attempt (its segmented class and plate line) for a refusal's diagnostic image."""
     if threshold == "otsu":
         t = filters.threshold_otsu(gray[band])
         binary = ndi.binary_fill_holes(morphology.opening(gray < t, morphology.disk(2)))
     else:
         binary = _binary(path, gray, threshold)
+    if tried is not None:
+        tried.add(label or f"{cue}/{polarity}", binary, (slope, intercept))
     comp = _components_on_plate(path, binary, slope, intercept, "heap")
     lev, prow, roll = _level(comp, slope, intercept)
     glev = _level(gray, slope, intercept)[0]
@@ -353,9 +371,10 @@ def _line_rms(pts, line):
     return float(np.sqrt(np.mean(((pts[:, 0] - u0) * dv - (pts[:, 1] - v0) * du) ** 2)))
 
 
-def measure_piles(paths, threshold="otsu", keep_stages=False, channel="auto"):
-    """Multi-view average: mean of all flank angles, spread = their sample std."""
-    res = [measure_pile(p, threshold, keep_stages, channel) for p in paths]
+def measure_piles(paths, threshold="otsu", keep_stages=False, channel="auto", refusals=None):
+    """Multi-view average: mean of all flank angles, spread = their sample std (``refusals``:
+    :func:`measure_pile`)."""
+    res = [measure_pile(p, threshold, keep_stages, channel, refusals) for p in paths]
     lefts = np.array([r.left_deg for r in res])
     rights = np.array([r.right_deg for r in res])
     allf = np.concatenate([lefts, rights])
@@ -432,8 +451,16 @@ class FurrowResult:
                             "z_mm": np.round(self.z_mm[::10], 2).tolist()}}
 
 
-def measure_furrow(path, scale_length_mm, datum_mm=0.0, degree=9, threshold="otsu", keep_stages=False):
-    """Furrow profile in mm from the profile-meter beam (scale reference of known length)."""
+def measure_furrow(path, scale_length_mm, datum_mm=0.0, degree=9, threshold="otsu", keep_stages=False,
+                   refusals=None):
+    """Furrow profile in mm from the profile-meter beam (scale reference of known length);
+    ``refusals``: a folder for the diagnostic image of a photo that cannot be measured."""
+    tried = Tried()
+    with explained(path, refusals, tried):
+        return _measure_furrow(path, scale_length_mm, datum_mm, degree, threshold, keep_stages, tried)
+
+
+def _measure_furrow(path, scale_length_mm, datum_mm, degree, threshold, keep_stages, tried: Tried):
     from soilcal.imaging.manifest import _is_number, check_degree
 
     if not _is_number(scale_length_mm) or scale_length_mm <= 0:
@@ -443,7 +470,9 @@ def measure_furrow(path, scale_length_mm, datum_mm=0.0, degree=9, threshold="ots
     check_degree(path, "degree", degree)
     rgb = read_photo(path)
     gray = _gray(rgb)
+    tried.rgb, tried.gray = rgb, gray
     binary = _binary(path, gray, threshold)
+    tried.add(f"dark class ({threshold}): beam and soil are sought in it", binary)
     h, w = binary.shape
     lab = measure.label(binary)
     beams = [p for p in measure.regionprops(lab)
@@ -451,6 +480,8 @@ def measure_furrow(path, scale_length_mm, datum_mm=0.0, degree=9, threshold="ots
     if not beams:
         raise InputError(path, "image", "a profile-meter beam (long dark bar)", "none found")
     beam = max(beams, key=lambda p: p.axis_major_length)
+    tried.attempts[-1].outcome = f"{len(beams)} beam-like bar(s); the longest is the beam"
+    tried.add("beam (longest bar)", lab == beam.label)
     br, bc = np.nonzero(lab == beam.label)
     # direction from a line fit through the beam pixels
     A = np.column_stack([bc, np.ones_like(bc)]).astype(float)
@@ -465,7 +496,11 @@ def measure_furrow(path, scale_length_mm, datum_mm=0.0, degree=9, threshold="ots
     vb = bc * uz[0] + br * uz[1]
     beam_lower = vb.min() - 0.5
     # soil: largest component below the beam
-    soil = lab == max((p for p in measure.regionprops(lab) if p.label != beam.label), key=lambda p: p.area).label
+    others = [p for p in measure.regionprops(lab) if p.label != beam.label]
+    if not others:
+        raise InputError(path, "image", "the soil below the profile-meter beam (a dark region besides the beam)",
+                         "none found")
+    soil = lab == max(others, key=lambda p: p.area).label
     lev, _, _ = _level(soil, slope, 0.0)
     # transform beam frame into the levelled image: rotate points about the centre
     ang = np.arctan(slope)
