@@ -274,7 +274,7 @@ def measure_drum_frame(path, threshold="otsu", keep_stages=False, options=None, 
     """Dynamic angle and S-shape of one drum frame (see the module text for the method);
     ``refusals``: a folder for the diagnostic image of a frame that cannot be measured
     (:mod:`soilcal.imaging.refusal`)."""
-    tried = Tried()
+    tried = Tried(keep_masks=refusals is not None)
     with explained(path, refusals, tried):
         return _measure_drum_frame(path, threshold, keep_stages, options, tried)
 

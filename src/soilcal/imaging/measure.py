@@ -276,7 +276,7 @@ def measure_pile(path, threshold="otsu", keep_stages=False, channel="auto", refu
     photo that cannot be measured also gets a diagnostic image of every attempt there
     (:mod:`soilcal.imaging.refusal`), named in the refusal.
     """
-    tried = Tried()
+    tried = Tried(keep_masks=refusals is not None)
     with explained(path, refusals, tried):
         return _measure_pile(path, threshold, keep_stages, channel, tried)
 
@@ -455,7 +455,7 @@ def measure_furrow(path, scale_length_mm, datum_mm=0.0, degree=9, threshold="ots
                    refusals=None):
     """Furrow profile in mm from the profile-meter beam (scale reference of known length);
     ``refusals``: a folder for the diagnostic image of a photo that cannot be measured."""
-    tried = Tried()
+    tried = Tried(keep_masks=refusals is not None)
     with explained(path, refusals, tried):
         return _measure_furrow(path, scale_length_mm, datum_mm, degree, threshold, keep_stages, tried)
 

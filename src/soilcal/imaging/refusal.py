@@ -50,9 +50,11 @@ class Tried:
     edges: np.ndarray | None = None
     lines: list = field(default_factory=list)  # plate-line candidates (slope, intercept)
     attempts: list = field(default_factory=list)
+    keep_masks: bool = True  # False: attempts without their masks (no image will be drawn)
 
     def add(self, label, mask=None, line=None, circle=None) -> Attempt:
-        a = Attempt(label, None if mask is None else np.asarray(mask, bool), line, circle)
+        keep = mask is not None and self.keep_masks
+        a = Attempt(label, np.array(mask, bool) if keep else None, line, circle)
         self.attempts.append(a)
         return a
 
