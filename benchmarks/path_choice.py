@@ -102,9 +102,9 @@ def page(rows: list[dict]) -> list[str]:
              "`python benchmarks/path_choice.py` (rows: `path_choice.csv`, utc and commit per row).  "
              "Each soil's DEM calibration from an empty `results/` under `choose: fitted` and under "
              "`choose: closest`; the same engine, preset and seeds.", "",
-             "| utc | commit | soil | rule | elapsed min | stage | case | response | path step | trend SD | "
+             "| utc | commit | soil | rule | elapsed min | stage | case | round | response | path step | trend SD | "
              "target | mean | SD | n | error % | surface - target |",
-             "|---|---|---|---|---:|---|---|---|---:|---|---:|---:|---:|---:|---:|---:|"]
+             "|---|---|---|---|---:|---|---|---:|---|---:|---|---:|---:|---:|---:|---:|---:|"]
 
     def f(x, fmt):
         try:
@@ -113,8 +113,10 @@ def page(rows: list[dict]) -> list[str]:
             return str(x)
 
     for r in df.to_dict("records"):
-        lines.append(f"| {r['utc']} | {r['commit']} | {r['soil']} | {r['rule']} | {f(r.get('elapsed_s'), '.1f') if r.get('elapsed_s') not in (None, '') else ''} "
-                     f"| {r.get('stage', '')} | {r.get('case', '')} | {r.get('response', '')} | {r.get('chosen_step', '')} "
+        mins = float(r["elapsed_s"]) / 60 if r.get("elapsed_s") not in (None, "") else None
+        lines.append(f"| {r['utc']} | {r['commit']} | {r['soil']} | {r['rule']} | {f(mins, '.1f') if mins else ''} "
+                     f"| {r.get('stage', '')} | {r.get('case', '')} | {r.get('round', '')} | {r.get('response', '')} "
+                     f"| {r.get('chosen_step', '')} "
                      f"| {r.get('trend_residual_sd', '')} | {f(r.get('target'), '.2f')} | {f(r.get('simulated_mean'), '.2f')} "
                      f"| {f(r.get('simulated_sd'), '.2f')} | {r.get('n', '')} | {f(r.get('relative_error_percent'), '.1f')} "
                      f"| {f(r.get('predicted_minus_target'), '.2f')} |")

@@ -105,7 +105,9 @@ def register(subparsers) -> None:
     s.add_argument("--setup", default=None, help="named setup (default: the first)")
     s.add_argument("--preset", default="quick", help="quick (default) or paper")
     s.add_argument("--seed", type=int, default=0)
-    s.add_argument("--threads", type=int, default=None)
+    s.add_argument("--threads", type=int, default=None,
+                   help="Numba threads for the run (default: every core; give 1 to each of several "
+                        "runs started side by side, or their threads share the cores and all slow down)")
     s.add_argument("--set", action="append", metavar="KEY=VALUE", help="override a setup value")
     s.add_argument("--param", action="append", metavar="NAME=VALUE", help="DEM parameter")
     s.add_argument("--out", default=None, help="CSV file for the result row")
