@@ -25,6 +25,33 @@ def corpus_args(doc, n, argv):
     return ap.parse_args(argv)
 
 
+def seed_list(text: str) -> list[int]:
+    """Seeds from a command-line list: ``0-5``, ``0,2,4`` or both (``0-2,7``)."""
+    out = []
+    for part in text.split(","):
+        part = part.strip()
+        if not part:
+            continue
+        a, _, b = part.partition("-")
+        out += list(range(int(a), int(b) + 1)) if b else [int(a)]
+    return out
+
+
+def run_cases(one, cases, rev, csv_path, fields, keyof, jobs, show=()):
+    """Run ``one(*case, rev)`` for every case, ``jobs`` processes at a time, each result a row
+    replacing the kept row of the same ``keyof``; the CSV is rewritten after every row (a
+    stopped run keeps what it finished).  Returns every row, kept and new."""
+    from concurrent.futures import ProcessPoolExecutor
+
+    rows = {keyof(r): r for r in read_rows(csv_path, fields)}
+    with ProcessPoolExecutor(max_workers=max(1, jobs)) as ex:
+        for r in ex.map(one, *zip(*cases), [rev] * len(cases)):
+            rows[keyof(r)] = r
+            print({k: r[k] for k in show} if show else r, flush=True)
+            write_rows(csv_path, list(rows.values()), fields)
+    return list(rows.values())
+
+
 def commit() -> str:
     """Short id of the checked-out commit, with ``+dirty`` when tracked files outside
     ``benchmarks/results`` differ from it ('' outside a git checkout)."""

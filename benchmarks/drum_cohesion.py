@@ -27,11 +27,10 @@ import argparse
 import platform
 import sys
 import time
-from concurrent.futures import ProcessPoolExecutor
 from pathlib import Path
 
 import numpy as np
-from _report import commit, read_rows, runs_table, write_page, write_rows
+from _report import commit, run_cases, runs_table, seed_list, write_page
 
 HERE = Path(__file__).resolve().parent
 ROOT = HERE.parent
@@ -43,12 +42,6 @@ PAPER_EFFECT = 7.3  # 003 Table 5: dynamic angle, H effect over 0.1 -> 0.3 J/m^2
 BASES = ("pb-centre", "pb-centre C-low", "pb-centre C-high", "bbd-centre", "pb-centre lammps-JKR")
 
 
-def _seeds(text):
-    out = []
-    for part in text.split(","):
-        a, _, b = part.partition("-")
-        out += list(range(int(a), int(b) + 1)) if b else [int(a)]
-    return out
 
 
 def levels_of(soil, base: str, h: float) -> tuple[str, dict]:
@@ -93,18 +86,17 @@ def one(base, h, seed, rev):
 
 
 def slope(hs, ys):
-    """OLS slope of y on H in deg per 0.1 J/m^2 and its standard error."""
+    """Least-squares slope of y on H in deg per 0.1 J/m^2 and its standard error
+    (``scipy.stats.linregress``)."""
+    from scipy.stats import linregress
+
     hs, ys = np.asarray(hs, float), np.asarray(ys, float)
     ok = np.isfinite(ys)
     hs, ys = hs[ok], ys[ok]
     if len(set(hs)) < 2 or hs.size < 3:
         return float("nan"), float("nan")
-    X = np.column_stack([np.ones_like(hs), hs])
-    beta, res, *_ = np.linalg.lstsq(X, ys, rcond=None)
-    resid = ys - X @ beta
-    s2 = float(resid @ resid) / (hs.size - 2)
-    se = float(np.sqrt(s2 * np.linalg.inv(X.T @ X)[1, 1]))
-    return float(beta[1]) * 0.1, se * 0.1
+    fit = linregress(hs, ys)
+    return float(fit.slope) * 0.1, float(fit.stderr) * 0.1
 
 
 def page(rows, md, cmd):
@@ -155,16 +147,10 @@ def main(argv=None) -> int:
     unknown = [b for b in bases if b not in BASES]
     if unknown:
         ap.error(f"--bases: expected some of {', '.join(BASES)}, got {unknown}")
-    cases = [(b, float(h), s) for b in bases for h in args.levels.split(",") for s in _seeds(args.seeds)]
-    keyof = (lambda r: (r["base"], float(r["H"]), int(r["seed"])))
-    rows = {keyof(r): r for r in read_rows(csv_path, FIELDS)}
-    rev = commit()
-    with ProcessPoolExecutor(max_workers=max(1, args.jobs)) as ex:
-        for r in ex.map(one, *zip(*cases), [rev] * len(cases)):
-            rows[keyof(r)] = r
-            print({k: r[k] for k in ("base", "H", "seed", "angle_avalanche_deg", "angle_deg", "wall_s")}, flush=True)
-            write_rows(csv_path, list(rows.values()), FIELDS)
-    page(list(rows.values()), md, "python benchmarks/drum_cohesion.py " + " ".join(
+    cases = [(b, float(h), s) for b in bases for h in args.levels.split(",") for s in seed_list(args.seeds)]
+    rows = run_cases(one, cases, commit(), csv_path, FIELDS, lambda r: (r["base"], float(r["H"]), int(r["seed"])),
+                     args.jobs, show=("base", "H", "seed", "angle_avalanche_deg", "angle_deg", "wall_s"))
+    page(rows, md, "python benchmarks/drum_cohesion.py " + " ".join(
         sys.argv[1:] if argv is None else argv))
     return 0
 

@@ -21,11 +21,10 @@ import argparse
 import platform
 import sys
 import time
-from concurrent.futures import ProcessPoolExecutor
 from pathlib import Path
 
 import numpy as np
-from _report import commit, read_rows, runs_table, write_page, write_rows
+from _report import commit, run_cases, runs_table, seed_list, write_page
 
 HERE = Path(__file__).resolve().parent
 ROOT = HERE.parent
@@ -34,12 +33,6 @@ FIELDS = ["utc", "commit", "stage", "run", "levels", "spin_time_s", "seed", "n_f
           "n_avalanches", "n_spikes", "angle_avalanche_deg", "angle_deg", "steps", "wall_s"]
 
 
-def _seeds(text):
-    out = []
-    for part in text.split(","):
-        a, _, b = part.partition("-")
-        out += list(range(int(a), int(b) + 1)) if b else [int(a)]
-    return out
 
 
 def one(stage, run, spin, seed, rev):
@@ -101,17 +94,11 @@ def main(argv=None) -> int:
     out.mkdir(parents=True, exist_ok=True)
     csv_path, md = out / "drum_seeds.csv", out / "drum_seeds.md"
     spins = [float(s) for s in args.spins.split(",") if s]
-    cases = [(args.stage, args.run, sp, sd) for sp in spins for sd in _seeds(args.seeds)]
+    cases = [(args.stage, args.run, sp, sd) for sp in spins for sd in seed_list(args.seeds)]
     keyof = (lambda r: (r["stage"], int(r["run"]), float(r["spin_time_s"]), int(r["seed"])))
-    rows = {keyof(r): r for r in read_rows(csv_path, FIELDS)}
-    rev = commit()
-    with ProcessPoolExecutor(max_workers=max(1, args.jobs)) as ex:
-        for r in ex.map(one, *zip(*cases), [rev] * len(cases)):
-            rows[keyof(r)] = r
-            print({k: r[k] for k in ("spin_time_s", "seed", "n_avalanches", "angle_avalanche_deg",
-                                     "angle_deg", "wall_s")}, flush=True)
-            write_rows(csv_path, list(rows.values()), FIELDS)
-    page(list(rows.values()), md, "python benchmarks/drum_seeds.py " + " ".join(
+    rows = run_cases(one, cases, commit(), csv_path, FIELDS, keyof, args.jobs,
+                     show=("spin_time_s", "seed", "n_avalanches", "angle_avalanche_deg", "angle_deg", "wall_s"))
+    page(rows, md, "python benchmarks/drum_seeds.py " + " ".join(
         sys.argv[1:] if argv is None else argv))
     return 0
 

@@ -31,7 +31,7 @@ from pathlib import Path
 import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from _report import HERE, commit, read_rows, runs_table, write_page, write_rows  # noqa: E402
+from _report import HERE, commit, read_rows, runs_table, seed_list, write_page, write_rows  # noqa: E402
 
 OUT = HERE / "results"
 PILE_FIELDS = ["utc", "commit", "engine", "conventions", "n", "seed", "rolling_friction",
@@ -44,12 +44,6 @@ FEW_FIELDS = ["utc", "commit", "case", "rolling", "steps", "max_dx_m", "max_dv_m
               "max_dw_rad_s", "travel_m", "vmax_m_s", "wmax_rad_s", "version"]
 
 
-def seeds_arg(text):
-    out = []
-    for part in text.split(","):
-        a, _, b = part.partition("-")
-        out += list(range(int(a), int(b) + 1)) if b else [int(a)]
-    return out
 
 
 def few_body():
@@ -203,14 +197,14 @@ def main(argv=None):
         few_rows = [dict(stamp, **r) for r in few_body()]
         write_rows(few_path, few_rows, FEW_FIELDS)
     if not args.skip_pile:
-        new = pile(args.n, seeds_arg(args.seeds), [float(m) for m in args.mur.split(",")],
+        new = pile(args.n, seed_list(args.seeds), [float(m) for m in args.mur.split(",")],
                    args.ranks, args.threads)
         keep = [r for r in pile_rows if not (str(r["n"]) == str(args.n) and float(r["rolling_friction"])
                                              in [float(m) for m in args.mur.split(",")])]
         pile_rows = keep + [dict(stamp, **r) for r in new]
         write_rows(pile_path, pile_rows, PILE_FIELDS)
     if args.drum:
-        new = drum(args.drum_n, seeds_arg(args.seeds), args.drum_mur, args.drum_spin,
+        new = drum(args.drum_n, seed_list(args.seeds), args.drum_mur, args.drum_spin,
                    args.ranks, args.threads)
         keep = [r for r in drum_rows if not (str(r["n"]) == str(args.drum_n) and
                                              float(r["rolling_friction"]) == args.drum_mur)]

@@ -41,7 +41,7 @@ from concurrent.futures import ProcessPoolExecutor
 from pathlib import Path
 
 import numpy as np
-from _report import commit, read_rows, runs_table, write_page, write_rows
+from _report import commit, read_rows, runs_table, seed_list, write_page, write_rows
 
 HERE = Path(__file__).resolve().parent
 ROOT = HERE.parent
@@ -50,15 +50,6 @@ FIELDS = ["utc", "commit", "soil", "stage", "response", "levels", "set", "scale"
           "value", "n_retained", "n_on_plate", "peak_overlap", "settled", "measure_errors"]
 
 
-def _seeds(text):
-    out = []
-    for part in text.split(","):
-        if "-" in part:
-            a, b = part.split("-")
-            out += list(range(int(a), int(b) + 1))
-        elif part:
-            out.append(int(part))
-    return out
 
 
 def centre_levels(stage, overrides):
@@ -190,7 +181,7 @@ def main(argv=None):
             for rule in args.rules.split(","):
                 if s == 1.0 and rule != "paper":
                     continue  # the rules coincide at the printed modulus
-                for seed in _seeds(args.seeds):
+                for seed in seed_list(args.seeds):
                     jobs.append((args.soil, overrides, setup_set, s, rule, seed))
         rev = commit()
         with ProcessPoolExecutor(max_workers=max(1, args.jobs)) as ex:

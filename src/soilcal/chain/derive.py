@@ -262,7 +262,7 @@ def path_from_screening(soil_data: dict, stage_id: str, screening_stage: dict, e
 
 def bbd_from_path(soil_data: dict, stage_id: str, path_stage: dict, path_responses: pd.DataFrame) -> dict:
     """A Box-Behnken stage centred on the DEM path step closest to the targets."""
-    from soilcal.doe.steepest import bbd_levels, chosen_step, path_trend
+    from soilcal.doe.steepest import bbd_levels, chosen_step
 
     config_stage = _stage(soil_data, stage_id)
     syms = list(path_stage["factors"])
@@ -274,13 +274,8 @@ def bbd_from_path(soil_data: dict, stage_id: str, path_stage: dict, path_respons
     ys = {r: resp[r].to_numpy(float) for r in targets if r in resp.columns}
     choice = path_stage.get("path_choice", "closest")
     step, table = chosen_step(path, ys, targets, rule=choice)
-    trends = {}
-    if choice == "fitted":
-        for r in targets:
-            if r in ys:
-                t = path_trend(path["step"].to_numpy(float), ys[r])
-                trends[r] = {k: (None if v is None or (isinstance(v, float) and not np.isfinite(v)) else v)
-                             for k, v in t.items() if k != "fitted"}
+    trends = {r: {k: (None if isinstance(v, float) and not np.isfinite(v) else v) for k, v in t.items()}
+              for r, t in table.attrs.get("trend", {}).items()}  # stage.json: no NaN
     bounds = {}
     for s in syms:
         kind = _param_kind(soil_data, path_stage["factors"][s]["parameter"])

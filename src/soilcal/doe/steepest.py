@@ -495,7 +495,9 @@ def chosen_step(
 
     Returns (chosen step number, frame with columns step, one per response,
     ``fitted_<response>`` per targeted response under ``fitted``,
-    ``error_<response>_percent`` per targeted response, error_percent, chosen).
+    ``error_<response>_percent`` per targeted response, error_percent, chosen); under
+    ``fitted`` the frame's ``attrs["trend"]`` holds each targeted response's trend
+    (:func:`path_trend`'s degree, n, residual_sd, p_quadratic, r2).
     """
     if rule not in PATH_CHOICES:
         raise InputError(None, "rule", f"one of {', '.join(PATH_CHOICES)}", rule)
@@ -510,7 +512,7 @@ def chosen_step(
         if arr.size != len(steps):
             raise InputError(None, f"responses[{r}]", f"{len(steps)} values (one per path step)", arr.size)
         out[r] = arr
-    rel = []
+    rel, trends = [], {}
     for r, t in targets.items():
         if r not in responses:
             raise InputError(None, "targets", f"targets only for given responses {list(responses)}", r)
@@ -519,7 +521,8 @@ def chosen_step(
             raise InputError(None, f"targets[{r}]", "a finite non-zero target (errors are relative to it)", t)
         y = out[r].to_numpy()
         if rule == "fitted":
-            y = path_trend(out["step"].to_numpy(float), y, alpha)["fitted"]
+            trends[r] = path_trend(out["step"].to_numpy(float), y, alpha)
+            y = trends[r]["fitted"]
             out[f"fitted_{r}"] = y
         e = (y - t) / t
         out[f"error_{r}_percent"] = np.abs(e) * 100.0
@@ -533,6 +536,8 @@ def chosen_step(
                          "no finite error")
     i = int(np.nanargmin(err))  # first occurrence on ties
     out["chosen"] = np.arange(len(out)) == i
+    # each targeted response's trend under ``fitted`` (path_trend without the fitted values)
+    out.attrs["trend"] = {r: {k: v for k, v in tr.items() if k != "fitted"} for r, tr in trends.items()}
     best = steps[i]
     return (int(best) if float(best).is_integer() else best), out
 

@@ -315,14 +315,13 @@ def _measure_drum_frame(path, threshold, keep_stages, options, tried: Tried) -> 
     t = filters.threshold_otsu(g[inside])
     bright = inside & (g >= t)
     dark = inside & (g < t)
-    if bright.any() and dark.any():
-        tried.add("powder and air split in the drum (Otsu); the lower class is the powder",
-                  bright if rr[bright].mean() > rr[dark].mean() else dark, circle=(cx, cy, rm))
-    else:
-        tried.add("powder and air split in the drum (Otsu)", circle=(cx, cy, rm))
     if not bright.any() or not dark.any():
+        tried.add("powder and air split in the drum (Otsu)", circle=(cx, cy, rm))
         raise InputError(path, "image", "powder and air in the drum", "one grey level")
-    p = g if rr[bright].mean() > rr[dark].mean() else 1.0 - g
+    bright_powder = rr[bright].mean() > rr[dark].mean()
+    tried.add("powder and air split in the drum (Otsu); the lower class is the powder",
+              bright if bright_powder else dark, circle=(cx, cy, rm))
+    p = g if bright_powder else 1.0 - g
     cols, rows, binary, powder = _surface(path, p, inside, cx, cy, rm)
     if cols.size < 30:
         raise InputError(path, "free surface", "a free surface across at least 30 pixel columns", int(cols.size))

@@ -481,8 +481,9 @@ def _measure_furrow(path, scale_length_mm, datum_mm, degree, threshold, keep_sta
         raise InputError(path, "image", "a profile-meter beam (long dark bar)", "none found")
     beam = max(beams, key=lambda p: p.axis_major_length)
     tried.attempts[-1].outcome = f"{len(beams)} beam-like bar(s); the longest is the beam"
-    tried.add("beam (longest bar)", lab == beam.label)
-    br, bc = np.nonzero(lab == beam.label)
+    beam_mask = lab == beam.label
+    tried.add("beam (longest bar)", beam_mask)
+    br, bc = np.nonzero(beam_mask)
     # direction from a line fit through the beam pixels
     A = np.column_stack([bc, np.ones_like(bc)]).astype(float)
     slope, _ = np.linalg.lstsq(A, br.astype(float), rcond=None)[0]
