@@ -41,10 +41,14 @@ def run_cases(one, cases, rev, csv_path, fields, keyof, jobs, show=()):
     """Run ``one(*case, rev)`` for every case, ``jobs`` processes at a time, each result a row
     replacing the kept row of the same ``keyof``; the CSV is rewritten after every row (a
     stopped run keeps what it finished).  Returns every row, kept and new."""
+    import multiprocessing
     from concurrent.futures import ProcessPoolExecutor
 
     rows = {keyof(r): r for r in read_rows(csv_path, fields)}
-    with ProcessPoolExecutor(max_workers=max(1, jobs)) as ex:
+    # fresh interpreters: a forked child of a process whose Numba kernels already ran on
+    # GNU OpenMP threads aborts
+    ctx = multiprocessing.get_context("spawn")
+    with ProcessPoolExecutor(max_workers=max(1, jobs), mp_context=ctx) as ex:
         for r in ex.map(one, *zip(*cases), [rev] * len(cases)):
             rows[keyof(r)] = r
             print({k: r[k] for k in show} if show else r, flush=True)

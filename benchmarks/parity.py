@@ -1,4 +1,4 @@
-"""Parity with LIGGGHTS 3.8 on identical cases (``soilcal.reference``).
+"""Parity with LIGGGHTS 3.8 and LAMMPS on identical cases (``soilcal.reference``).
 
 1. Few-body cases: the trajectories of soilcal (``liggghts`` conventions) and LIGGGHTS from
    the same spheres and walls, compared particle by particle (largest position, velocity
@@ -10,12 +10,20 @@
    of the difference of two means).
 3. With ``--drum``: the rotating drum (vineyard dimensions), the same three ways, the mean
    free-surface angle of its frames per run.
+4. With ``--lammps-few``: the JKR few-body cases (``soilcal.reference.few.JKR_CASES``) against
+   LAMMPS ``pair granular jkr``, soilcal with the ``lammps`` conventions, and with each of
+   LAMMPS's terms switched back to EDEM's in turn.
+5. With ``--column``: the cohesive column (:func:`soilcal.reference.cases.collapsed_column`)
+   at the surface energies ``--gammas``, each seed's settled fill run three ways: LAMMPS,
+   soilcal with LAMMPS's conventions, soilcal with EDEM's (the same work of adhesion and
+   damping); ``--jobs`` runs at a time, one thread each.
 
 Rows go to ``benchmarks/results/parity.csv`` (commit and time per row), the page to
 ``parity.md``.
 
 Usage: python benchmarks/parity.py [--n 2000] [--seeds 0-4] [--mur 0.05,0.1,0.2]
        [--ranks 2] [--threads 2] [--skip-few] [--skip-pile] [--drum] [--drum-spin 2.0]
+       [--lammps-few] [--column] [--column-n 1000] [--gammas 0.25,0.5,1.0] [--jobs 2]
 """
 
 from __future__ import annotations
@@ -31,7 +39,8 @@ from pathlib import Path
 import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from _report import HERE, commit, read_rows, runs_table, seed_list, write_page, write_rows  # noqa: E402
+from _report import (HERE, commit, read_rows, run_cases, runs_table, seed_list,  # noqa: E402
+                     write_page, write_rows)
 
 OUT = HERE / "results"
 PILE_FIELDS = ["utc", "commit", "engine", "conventions", "n", "seed", "rolling_friction",
@@ -42,6 +51,15 @@ DRUM_FIELDS = ["utc", "commit", "engine", "conventions", "n", "seed", "rolling_f
                "angle_frames_sd_deg", "fill_settled", "version"]
 FEW_FIELDS = ["utc", "commit", "case", "rolling", "steps", "max_dx_m", "max_dv_m_s",
               "max_dw_rad_s", "travel_m", "vmax_m_s", "wmax_rad_s", "version"]
+JKR_FEW_FIELDS = ["utc", "commit", "case", "conventions", "steps", "max_dx_m", "max_dv_m_s",
+                  "max_dw_rad_s", "travel_m", "vmax_m_s", "wmax_rad_s", "version"]
+COLUMN_FIELDS = ["utc", "commit", "engine", "conventions", "n", "seed", "surface_energy",
+                 "damping_eta", "dt", "steps", "wall_s", "n_on_plate", "angle_bins_deg",
+                 "angle_surface_deg", "height_m", "fill_settled", "version"]
+#: LAMMPS's terms (contact.py) switched back to EDEM's one at a time in the JKR few-body table
+LAMMPS_TERMS = (("jkr_break", "displacement"), ("coulomb_force", "total"),
+                ("tangential_slip", "spring"), ("history_rotation", "project"),
+                ("contact_lever", "contact_point"))
 
 
 
@@ -129,27 +147,79 @@ def drum(n, seeds, mur, spin, ranks, threads):
     return rows
 
 
+def jkr_few_body():
+    from soilcal.reference.few import JKR_CASES, compare_lammps
+
+    rows = []
+    for name in JKR_CASES:
+        for option, value in ((None, None), *LAMMPS_TERMS):
+            kw = {option: value} if option else {}
+            r = compare_lammps(name, **kw)
+            label = "lammps" + (f", {option}: {value}" if option else "")
+            rows.append(dict(case=name, conventions=label, steps=r["steps"],
+                             max_dx_m=f"{r['dx']:.3g}", max_dv_m_s=f"{r['dv']:.3g}",
+                             max_dw_rad_s=f"{r['dw']:.3g}", travel_m=f"{r['travel']:.3g}",
+                             vmax_m_s=f"{r['vmax']:.3g}", wmax_rad_s=f"{r['wmax']:.3g}",
+                             version=r["version"]))
+            print(rows[-1], flush=True)
+    return rows
+
+
+def column_one(n, gamma, seed, engine, conventions, rev):
+    """One run of the cohesive column from the fill of (n, gamma, seed): LAMMPS, or soilcal
+    with the named conventions."""
+    import numba
+
+    from soilcal.reference import cases as C
+    from soilcal.reference import lammps as LM
+    from soilcal.reference.deck import run_phases
+
+    numba.set_num_threads(1)
+    case = C.ColumnCase(n=n, seed=seed, surface_energy=gamma)
+    sim, phases, bounds, info = C.collapsed_column(case)
+    model = case.contact_model()
+    row = dict(utc=datetime.now(timezone.utc).strftime("%Y-%m-%d %H:%M"), commit=rev, n=n,
+               seed=seed, surface_energy=gamma, damping_eta=case.damping_eta,
+               dt=f"{info['dt']:.4g}", steps=sum(s for s, _ in phases),
+               fill_settled=info["fill_settled"])
+    t0 = time.perf_counter()
+    if engine == "lammps":
+        res = LM.run(C.restart(sim, "lammps", model), phases, bounds)
+        ang = C.heap_angles(res["x"], res["r"], res["present"])
+        row.update(engine="lammps", conventions="lammps", version=res["version"])
+    else:
+        s = C.restart(sim, conventions, model)
+        run_phases(s, phases)
+        rr = s.index(np.arange(s.n))
+        ang = C.heap_angles(s.x[rr], s.p.r[rr], C.inside(s.x[rr], bounds))
+        row.update(engine="soilcal", conventions=conventions, version="")
+    row["wall_s"] = f"{time.perf_counter() - t0:.1f}"
+    return dict(row, **_fmt(ang))
+
+
 def _fmt(ang):
     return {k: (f"{v:.3f}" if isinstance(v, float) else v) for k, v in ang.items()}
 
 
 def summary(rows, cols=("angle_bins_deg", "angle_surface_deg"),
-            names=("radial bins", "surface scan")):
-    """Mean, SD and seeds per (n, rolling friction, engine, conventions); the differences to
-    LIGGGHTS with their combined standard error."""
+            names=("radial bins", "surface scan"), ref_engine="liggghts",
+            key=("rolling_friction", "mu_r")):
+    """Mean, SD and seeds per (n, key column, engine, conventions); the differences to the
+    reference engine with their combined standard error."""
     import pandas as pd
 
     df = pd.DataFrame(rows)
     if df.empty:
         return []
-    for c in (*cols, "rolling_friction", "n", "seed"):
+    for c in (*cols, key[0], "n", "seed"):
         df[c] = pd.to_numeric(df[c], errors="coerce")
-    lines = ["| spheres | mu_r | engine (conventions) | seeds | "
+    label = {"liggghts": "LIGGGHTS", "lammps": "LAMMPS"}[ref_engine]
+    lines = [f"| spheres | {key[1]} | engine (conventions) | seeds | "
              + " | ".join(f"{n} [deg]" for n in names) + " | "
-             + " | ".join(f"{n} - LIGGGHTS (SE)" for n in names) + " |",
+             + " | ".join(f"{n} - {label} (SE)" for n in names) + " |",
              "|---:|---:|---|---:|" + "---|" * (2 * len(cols))]
-    for (n, mur), g in df.groupby(["n", "rolling_friction"]):
-        ref = g[g.engine == "liggghts"]
+    for (n, mur), g in df.groupby(["n", key[0]]):
+        ref = g[g.engine == ref_engine]
         for (eng, conv), h in g.groupby(["engine", "conventions"], sort=False):
             cells = []
             for col in cols:
@@ -158,7 +228,7 @@ def summary(rows, cols=("angle_bins_deg", "angle_surface_deg"),
             diffs = []
             for col in cols:
                 a, b = h[col].dropna(), ref[col].dropna()
-                if eng == "liggghts" or len(a) < 2 or len(b) < 2:
+                if eng == ref_engine or len(a) < 2 or len(b) < 2:
                     diffs.append("")
                     continue
                 se = math.sqrt(a.var(ddof=1) / len(a) + b.var(ddof=1) / len(b))
@@ -181,18 +251,32 @@ def main(argv=None):
     ap.add_argument("--drum-n", type=int, default=1000)
     ap.add_argument("--drum-mur", type=float, default=0.1)
     ap.add_argument("--drum-spin", type=float, default=2.0)
+    ap.add_argument("--lammps-few", action="store_true")
+    ap.add_argument("--column", action="store_true")
+    ap.add_argument("--column-n", type=int, default=1000)
+    ap.add_argument("--gammas", default="0.25,0.5,1.0")
+    ap.add_argument("--jobs", type=int, default=2)
     args = ap.parse_args(argv)
+    from soilcal.reference import lammps as LM
     from soilcal.reference import liggghts as L
 
-    ok, why = L.available()
-    if not ok:
-        sys.exit(f"parity: {why}")
+    if not (args.skip_few and args.skip_pile) or args.drum:
+        ok, why = L.available()
+        if not ok:
+            sys.exit(f"parity: {why}")
+    if args.lammps_few or args.column:
+        ok, why = LM.available()
+        if not ok:
+            sys.exit(f"parity: {why}")
     stamp = dict(utc=datetime.now(timezone.utc).strftime("%Y-%m-%d %H:%M"), commit=commit())
     few_path, pile_path = OUT / "parity_few.csv", OUT / "parity.csv"
     few_rows = read_rows(few_path, FEW_FIELDS)
     drum_path = OUT / "parity_drum.csv"
     drum_rows = read_rows(drum_path, DRUM_FIELDS)
     pile_rows = read_rows(pile_path, PILE_FIELDS)
+    jkr_path, column_path = OUT / "parity_jkr_few.csv", OUT / "parity_column.csv"
+    jkr_rows = read_rows(jkr_path, JKR_FEW_FIELDS)
+    column_rows = read_rows(column_path, COLUMN_FIELDS)
     if not args.skip_few:
         few_rows = [dict(stamp, **r) for r in few_body()]
         write_rows(few_path, few_rows, FEW_FIELDS)
@@ -210,10 +294,25 @@ def main(argv=None):
                                              float(r["rolling_friction"]) == args.drum_mur)]
         drum_rows = keep + [dict(stamp, **r) for r in new]
         write_rows(drum_path, drum_rows, DRUM_FIELDS)
-    lines = ["# Parity with LIGGGHTS 3.8 on identical cases", "",
+    if args.lammps_few:
+        jkr_rows = [dict(stamp, **r) for r in jkr_few_body()]
+        write_rows(jkr_path, jkr_rows, JKR_FEW_FIELDS)
+    if args.column:
+        cases = [(args.column_n, float(g), seed, engine, conv) for g in args.gammas.split(",")
+                 for seed in seed_list(args.seeds)
+                 for engine, conv in (("lammps", "lammps"), ("soilcal", "lammps"),
+                                      ("soilcal", "edem"))]
+        column_rows = run_cases(
+            column_one, cases, stamp["commit"], column_path, COLUMN_FIELDS,
+            lambda r: (str(r["n"]), float(r["surface_energy"]), str(r["seed"]), r["engine"],
+                       r["conventions"]), args.jobs,
+            show=("engine", "conventions", "surface_energy", "seed", "angle_bins_deg",
+                  "angle_surface_deg", "wall_s"))
+    lines = ["# Parity with LIGGGHTS 3.8 and LAMMPS on identical cases", "",
              f"Machine: {os.uname().machine}, {os.cpu_count()} logical CPUs.  Last command: "
              f"`python benchmarks/parity.py {' '.join(argv or sys.argv[1:])}`.  Rows: "
-             "`parity_few.csv`, `parity.csv`, `parity_drum.csv`.", "",
+             "`parity_few.csv`, `parity.csv`, `parity_drum.csv`, `parity_jkr_few.csv`, "
+             "`parity_column.csv`.", "",
              "## Few-body cases: largest difference after the run (soilcal with the "
              "`liggghts` conventions)", "",
              *runs_table(few_rows, ["case", "rolling", "steps", "travel_m", "max_dx_m",
@@ -224,7 +323,15 @@ def main(argv=None):
              *runs_table(pile_rows, PILE_FIELDS), "",
              "## Rotating drum (same settled fill for every engine; mean of the frames)", "",
              *summary(drum_rows, ("angle_deg",), ("frame mean",)), "", "Runs:", "",
-             *runs_table(drum_rows, DRUM_FIELDS)]
+             *runs_table(drum_rows, DRUM_FIELDS), "",
+             "## JKR few-body cases against LAMMPS: largest difference after the run", "",
+             *runs_table(jkr_rows, ["case", "conventions", "steps", "travel_m", "max_dx_m",
+                                    "vmax_m_s", "max_dv_m_s", "wmax_rad_s", "max_dw_rad_s",
+                                    "version", "commit"]), "",
+             "## Cohesive column against LAMMPS (JKR; same settled fill for every engine)", "",
+             *summary(column_rows, ref_engine="lammps",
+                      key=("surface_energy", "gamma [J/m^2]")), "", "Runs:", "",
+             *runs_table(column_rows, COLUMN_FIELDS)]
     write_page(OUT / "parity.md", lines)
 
 

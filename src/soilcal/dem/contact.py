@@ -19,6 +19,16 @@ Tsuji et al. 1992, Powder Technol. 71:239 for the delta^(1/4) dependence)::
     F_n^d = -2 sqrt(5/6) |beta| sqrt(S_n m*) v_n,   beta = ln e / sqrt(ln^2 e + pi^2)
     F_t^d = -2 sqrt(5/6) |beta| sqrt(S_t m*) v_t
 
+Damping, ``viscous_radius`` (LAMMPS ``pair granular ... damping viscoelastic``, the damping
+its cohesive laws accept: gran_sub_mod_damping.cpp), with a coefficient eta [1/(m s)] given as
+the contact model's ``damping_eta`` instead of a restitution::
+
+    F_n^d = -eta m* a v_n,   F_t^d = -sqrt(4 G*/E*) eta m* a v_t
+
+(the tangential ratio damps the tangential mode at the normal mode's damping ratio, as the
+``viscoelastic`` law does; the LAMMPS translation passes it as x_gamma,t).  The restitution
+this gives depends on the impact speed: it is not a restitution law.
+
 Tangential, ``mindlin`` (Mindlin 1949 no-slip; EDEM guide; LIGGGHTS ``tangential history``)::
 
     S_t = 8 G* a,   F_t = -S_t xi - F_t^d,   |F_t| <= mu_s |F_n,tot|
@@ -120,11 +130,40 @@ an option of :func:`model_codes` (``rolling_lever``, ``rolling_force``, ``rollin
   takes it: a mesh moved by ``fix move/mesh`` carries no angular velocity into it; checked
   against its output on a rotating drum in tests/reference).
 * ``jkr_convention``: above.
+* ``jkr_break``: where a JKR contact pulled apart breaks.  ``displacement`` (JKR's own
+  instability under displacement control, delta_c above, where the force has come back to
+  -5/9 of the pull-off) or ``force`` (at the force minimum, the overlap of the pull-off
+  force: delta_f = a_f^2/R* - sqrt(2 pi w a_f / E*) with a_f = (9 pi w R*^2 / (8 E*))^(1/3),
+  delta_f^3 = -(3/64) pi^2 w^2 R* / E*^2, a ninth of delta_c^3; LAMMPS
+  ``gran_normal_jkr_pulloff_distance`` = (3 pi^2 gamma^2 R* / (16 E*^2))^(1/3) with w = 2
+  gamma).  The force jumps from -F_pulloff to zero there.
+* ``coulomb_force``: the normal force of the Coulomb limit.  ``total`` (mu_s |F_n,tot +
+  2 F_po|, damping included) or ``jkr_elastic`` (a JKR contact's mu_s |F_ne + 2 F_po|
+  without the damping, LAMMPS ``set_fncrit`` of its cohesive laws; a Hertz contact's stays
+  the total, as LAMMPS's).
+* ``tangential_slip``: ``spring`` (the Coulomb test on the spring force S_t xi; while
+  sliding the force is the shortened spring's and carries no damping, as LIGGGHTS) or
+  ``damped`` (the test on spring + dashpot; while sliding the force is that sum scaled to
+  the limit and the spring keeps its elastic part, xi = -(F_t - F_t^d)/S_t; LAMMPS
+  ``gran_tangential_mindlin``).
+* ``history_rotation``: ``project`` (xi <- xi - (xi.n) n every evaluation) or ``rescale``
+  (in a step, not at a run's setup, and when |xi.n| S_t > 1e-10 of the Coulomb limit: xi
+  projected, then scaled back to its length; LAMMPS ``rotate_rescale_vec``).
+* ``contact_lever``: the lever of the spins in the contact point's velocity.
+  ``contact_point`` (c_i = R_i - delta/2 for the velocity and the torques, as LIGGGHTS) or
+  ``radius`` (R_i in the velocity, R_i - delta/2 in a pair's torques and R_i in a wall's,
+  LAMMPS ``GranularModel::calculate_forces``).
 
 ``liggghts`` = effective lever, elastic force, tangential axis, damping on, absolute wall
-rotation (LIGGGHTS has no JKR law: ``cohesion sjkr`` is a different model, so its JKR entry stays EDEM's);
-``lammps`` = the same with the LAMMPS JKR convention (its ``rolling sds`` is the ``epsd``
-model here, whose lever is R* in every set).
+rotation (LIGGGHTS has no JKR law: ``cohesion sjkr`` is a different model, so its JKR entries
+stay EDEM's); ``lammps`` = the same rolling entries (its ``rolling sds`` is the ``epsd`` model
+here, whose lever is R* in every set), the LAMMPS JKR convention, the break at the force
+minimum, the elastic JKR force in the Coulomb limit, the damped slip, the rescaled rotation
+and the radius as lever.  Two LAMMPS terms have no option: its development sources take
+the normal and tangential velocities on the half-step normal (x_ij - v_ij dt/2, normalised;
+granular_model.cpp; the 22 Jul 2025 release the parity cases run does not, they agree to
+rounding), and its ``run`` evaluates the forces anew at every start, where the Coulomb
+rescaling may shorten a sliding spring (a phase boundary of a reference case).
 
 The contact radius a(delta) is a = x^2 with x the largest root of x^4/R* - c x - delta = 0,
 c = sqrt(2 pi w / E*), found by Newton's method from the upper bound
@@ -141,12 +180,12 @@ import math
 import numpy as np
 from numba import njit
 
-from soilcal.dem.materials import (P_BETA, P_ESTAR, P_GSTAR, P_JKRC, P_JKRK, P_MUR, P_MUS,
-                                   P_TRATIO, P_W)
+from soilcal.dem.materials import (P_BETA, P_ESTAR, P_ETA, P_GSTAR, P_JKRC, P_JKRK, P_MUR,
+                                   P_MUS, P_TRATIO, P_W)
 from soilcal.errors import InputError
 
 NORMAL = {"hertz": 0}
-DAMPING = {"viscoelastic": 0, "none": 1}
+DAMPING = {"viscoelastic": 0, "none": 1, "viscous_radius": 2}
 TANGENTIAL = {"mindlin": 0, "none": 1}
 ROLLING = {"none": 0, "constant_torque": 1, "epsd": 2, "bounded": 3}
 COHESION = {"none": 0, "jkr": 1}
@@ -157,19 +196,40 @@ ROLLING_FORCE = {"total": 0, "elastic": 1}
 ROLLING_AXIS = {"full": 0, "tangential": 1}
 TANGENTIAL_DAMPING = {"on": 0, "off": 1}
 ROLLING_WALL = {"relative": 0, "absolute": 1}
+JKR_BREAK = {"displacement": 0, "force": 1}
+COULOMB_FORCE = {"total": 0, "jkr_elastic": 1}
+TANGENTIAL_SLIP = {"spring": 0, "damped": 1}
+HISTORY_ROTATION = {"project": 0, "rescale": 1}
+CONTACT_LEVER = {"contact_point": 0, "radius": 1}
+#: |xi . n| k_t above this share of the Coulomb limit rotates a ``rescale`` history (LAMMPS
+#: GRAN_KERNEL_EPSILON, gran_sub_mod_kernel_defs.h)
+RESCALE_EPS = 1e-10
 #: named sets of conventions, each as its engine documents or implements it
 CONVENTIONS = {
     "edem": dict(rolling_lever="particle", rolling_force="total", rolling_axis="full",
-                 tangential_damping="on", jkr_convention="edem", rolling_wall="relative"),
+                 tangential_damping="on", jkr_convention="edem", rolling_wall="relative",
+                 jkr_break="displacement", coulomb_force="total", tangential_slip="spring",
+                 history_rotation="project", contact_lever="contact_point"),
     "liggghts": dict(rolling_lever="effective", rolling_force="elastic",
                      rolling_axis="tangential", tangential_damping="on", jkr_convention="edem",
-                     rolling_wall="absolute"),
+                     rolling_wall="absolute", jkr_break="displacement", coulomb_force="total",
+                     tangential_slip="spring", history_rotation="project",
+                     contact_lever="contact_point"),
     "lammps": dict(rolling_lever="effective", rolling_force="elastic", rolling_axis="tangential",
-                   tangential_damping="on", jkr_convention="lammps", rolling_wall="relative"),
+                   tangential_damping="on", jkr_convention="lammps", rolling_wall="relative",
+                   jkr_break="force", coulomb_force="jkr_elastic", tangential_slip="damped",
+                   history_rotation="rescale", contact_lever="radius"),
 }
 CONVENTION_TABLES = {"rolling_lever": ROLLING_LEVER, "rolling_force": ROLLING_FORCE,
                      "rolling_axis": ROLLING_AXIS, "tangential_damping": TANGENTIAL_DAMPING,
-                     "jkr_convention": JKR_CONVENTION, "rolling_wall": ROLLING_WALL}
+                     "jkr_convention": JKR_CONVENTION, "rolling_wall": ROLLING_WALL,
+                     "jkr_break": JKR_BREAK, "coulomb_force": COULOMB_FORCE,
+                     "tangential_slip": TANGENTIAL_SLIP, "history_rotation": HISTORY_ROTATION,
+                     "contact_lever": CONTACT_LEVER}
+#: the conventions' entries of the codes array, from codes[5] on (jkr_convention is w_factor)
+CODE_CONVENTIONS = ("rolling_lever", "rolling_force", "rolling_axis", "tangential_damping",
+                    "rolling_wall", "jkr_break", "coulomb_force", "tangential_slip",
+                    "history_rotation", "contact_lever")
 
 # history slot layout (per particle and contact partner)
 H_XI = 0  # 3 tangential displacement
@@ -207,12 +267,24 @@ def resolve_conventions(conventions="edem", source="<input>", **overrides) -> di
 
 
 def model_codes(normal="hertz", damping="viscoelastic", tangential="mindlin", rolling="none",
-                cohesion="none", conventions="edem", source="<input>", **overrides):
-    """Return (codes int64[10], w_factor) for a model composed by names.
+                cohesion="none", conventions="edem", source="<input>", damping_eta=None,
+                **overrides):
+    """Return (codes int64[15], w_factor) for a model composed by names.
 
     ``conventions`` names a set of :data:`CONVENTIONS` (EDEM's by default); ``overrides``
-    (``rolling_lever``, ``rolling_force``, ``rolling_axis``, ``tangential_damping``,
-    ``rolling_wall``, ``jkr_convention``) change single entries of it."""
+    (any key of :data:`CONVENTION_TABLES`) change single entries of it.  ``damping_eta``
+    (1/(m s)) is the coefficient of the ``viscous_radius`` damping, required by it and
+    refused by the other damping models (the engine puts it in the pair table)."""
+    if damping == "viscous_radius":
+        ok = (not isinstance(damping_eta, bool) and isinstance(damping_eta, (int, float))
+              and math.isfinite(damping_eta) and damping_eta >= 0)
+        if not ok:
+            raise InputError(source, "contact_model.damping_eta",
+                             "a damping coefficient eta >= 0 in 1/(m s) for viscous_radius",
+                             damping_eta)
+    elif damping_eta is not None:
+        raise InputError(source, "contact_model.damping_eta",
+                         "no coefficient (only damping: viscous_radius takes one)", damping_eta)
     out = []
     for key, val, table in (("normal", normal, NORMAL), ("damping", damping, DAMPING),
                             ("tangential", tangential, TANGENTIAL), ("rolling", rolling, ROLLING),
@@ -221,8 +293,7 @@ def model_codes(normal="hertz", damping="viscoelastic", tangential="mindlin", ro
             raise InputError(source, f"contact_model.{key}", f"one of {sorted(table)}", val)
         out.append(table[val])
     conv = resolve_conventions(conventions, source, **overrides)
-    for key in ("rolling_lever", "rolling_force", "rolling_axis", "tangential_damping",
-                "rolling_wall"):
+    for key in CODE_CONVENTIONS:
         out.append(CONVENTION_TABLES[key][conv[key]])
     return np.array(out, dtype=np.int64), JKR_CONVENTION[conv["jkr_convention"]]
 
@@ -309,8 +380,10 @@ def contact_force(codes, pair, ma, mb, delta, nx, ny, nz, rvx, rvy, rvz, wrx, wr
     cohesive = codes[4] == 1 and w > 0.0
     if cohesive:
         if delta <= 0.0:
-            # separation: delta < delta_c  <=>  delta^3 < -(27/64) pi^2 w^2 R* / E*^2
-            if not touching or delta * delta * delta < -pair[ma, mb, P_JKRK] * rstar:
+            # separation: delta < delta_c  <=>  delta^3 < -(27/64) pi^2 w^2 R* / E*^2; at
+            # the force minimum (``jkr_break: force``) delta^3 < -(3/64) pi^2 w^2 R* / E*^2
+            kb = pair[ma, mb, P_JKRK] * (1.0 / 9.0 if codes[10] == 1 else 1.0)
+            if not touching or delta * delta * delta < -kb * rstar:
                 if touching:
                     for q in range(hist.shape[1]):
                         hist[hk, q] = 0.0
@@ -333,11 +406,17 @@ def contact_force(codes, pair, ma, mb, delta, nx, ny, nz, rvx, rvy, rvz, wrx, wr
     beta = pair[ma, mb, P_BETA]
     sn = 2.0 * estar * a
     vn = rvx * nx + rvy * ny + rvz * nz
+    # normal dashpot sq <= 0: F_n^d = sq v_n opposes v_n (the product stays inside the
+    # branches, so that F_n = F_ne + F_n^d is rounded twice as the reference engines do,
+    # not fused into one multiply-add)
     fnd = 0.0
     sq = 0.0
     if codes[1] == 0:
         sq = 2.0 * SQ56 * beta * math.sqrt(sn * mstar)
-        fnd = sq * vn  # beta <= 0: opposes v_n
+        fnd = sq * vn
+    elif codes[1] == 2:
+        sq = -pair[ma, mb, P_ETA] * mstar * a
+        fnd = sq * vn
     fn = fne + fnd
     fnf = abs(fn + fpo2)
     # the normal force the rolling resistance scales with: total, or without the damping
@@ -355,37 +434,73 @@ def contact_force(codes, pair, ma, mb, delta, nx, ny, nz, rvx, rvy, rvz, wrx, wr
         vtx = rvx - vn * nx
         vty = rvy - vn * ny
         vtz = rvz - vn * nz
-        # project the history onto the current tangent plane, then add v_t dt
+        st = 8.0 * pair[ma, mb, P_GSTAR] * a
+        # Coulomb limit: mu_s |F_n,tot + 2 F_po|, or with JKR |F_ne + 2 F_po| (jkr_elastic)
+        fmax = pair[ma, mb, P_MUS] * (abs(fne + fpo2) if codes[11] == 1 and cohesive
+                                      else fnf)
+        # bring the history into the current tangent plane, then add v_t dt
         xx = hist[hk, H_XI]
         xy = hist[hk, H_XI + 1]
         xz = hist[hk, H_XI + 2]
         xn = xx * nx + xy * ny + xz * nz
-        xx -= xn * nx
-        xy -= xn * ny
-        xz -= xn * nz
+        if codes[13] == 0:
+            xx -= xn * nx
+            xy -= xn * ny
+            xz -= xn * nz
+        elif dt > 0.0 and abs(xn) * st > RESCALE_EPS * fmax:
+            # rotated, its length kept (LAMMPS rotate_rescale_vec, not at a run's setup)
+            m0 = math.sqrt(xx * xx + xy * xy + xz * xz)
+            xx -= xn * nx
+            xy -= xn * ny
+            xz -= xn * nz
+            m1 = math.sqrt(xx * xx + xy * xy + xz * xz)
+            s1 = m0 / m1 if m1 > 0.0 else 0.0
+            xx *= s1
+            xy *= s1
+            xz *= s1
         xx += vtx * dt
         xy += vty * dt
         xz += vtz * dt
-        st = 8.0 * pair[ma, mb, P_GSTAR] * a
         ftx = -st * xx
         fty = -st * xy
         ftz = -st * xz
-        fs2 = ftx * ftx + fty * fty + ftz * ftz
-        fmax = pair[ma, mb, P_MUS] * fnf
-        if fs2 > fmax * fmax:
-            r = fmax / math.sqrt(fs2)
-            xx *= r
-            xy *= r
-            xz *= r
-            ftx *= r
-            fty *= r
-            ftz *= r
-        elif codes[1] == 0 and codes[8] == 0:
-            # sqrt(S_t m*) = sqrt(S_n m*) sqrt(4 G*/E*)
-            ct = sq * pair[ma, mb, P_TRATIO]
+        # tangential dashpot: sqrt(S_t m*) = sqrt(S_n m*) sqrt(4 G*/E*) (viscoelastic), the
+        # same ratio times eta m* a (viscous_radius)
+        ct = sq * pair[ma, mb, P_TRATIO] if codes[1] != 1 and codes[8] == 0 else 0.0
+        if codes[12] == 1:
+            # ``damped`` slip: the Coulomb test on spring + dashpot; when sliding, the
+            # force is scaled to the limit and the spring keeps its elastic part
             ftx += ct * vtx
             fty += ct * vty
             ftz += ct * vtz
+            fs2 = ftx * ftx + fty * fty + ftz * ftz
+            if fs2 > fmax * fmax:
+                if xx * xx + xy * xy + xz * xz > 0.0:
+                    r = fmax / math.sqrt(fs2)
+                    ftx *= r
+                    fty *= r
+                    ftz *= r
+                    xx = -(ftx - ct * vtx) / st
+                    xy = -(fty - ct * vty) / st
+                    xz = -(ftz - ct * vtz) / st
+                else:
+                    ftx = 0.0
+                    fty = 0.0
+                    ftz = 0.0
+        else:
+            fs2 = ftx * ftx + fty * fty + ftz * ftz
+            if fs2 > fmax * fmax:
+                r = fmax / math.sqrt(fs2)
+                xx *= r
+                xy *= r
+                xz *= r
+                ftx *= r
+                fty *= r
+                ftz *= r
+            else:
+                ftx += ct * vtx
+                fty += ct * vty
+                ftz += ct * vtz
         hist[hk, H_XI] = xx
         hist[hk, H_XI + 1] = xy
         hist[hk, H_XI + 2] = xz

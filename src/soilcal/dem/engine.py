@@ -54,6 +54,7 @@ class Simulation:
         self.source = source
         self.materials = materials
         self.codes, self.w_factor = model_codes(**(contact_model or {}), source=source)
+        self.damping_eta = (contact_model or {}).get("damping_eta")
         self.dt_user = dt
         self.dt_fraction = float(dt_fraction)
         if not (0.0 < self.dt_fraction <= 1.0):
@@ -232,7 +233,7 @@ class Simulation:
         p = self.p
         if p.n == 0:
             raise InputError(self.source, "particles", "at least one particle", 0)
-        self._pair = self.materials.table(self.w_factor)
+        self._pair = self.materials.table(self.w_factor, self.damping_eta)
         rmin = {}
         for k in np.unique(p.mat):
             rmin[int(k)] = float(p.r[p.mat == k].min())

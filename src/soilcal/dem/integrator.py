@@ -76,6 +76,7 @@ def pair_forces(colour, xr, vw, pair, codes, box, periodic, dt, start, nbr, hist
     p0 = periodic[0]
     p1 = periodic[1]
     G = sgroup[SGROUP_LEN - 1]
+    lever_r = codes[14] == 1
     for g in prange(G):
         k = colour * G + g
         for q in range(sgroup[k], sgroup[k + 1]):
@@ -112,11 +113,15 @@ def pair_forces(colour, xr, vw, pair, codes, box, periodic, dt, start, nbr, hist
                 delta = rs - d
                 ci = ri - 0.5 * delta
                 cj = rj - 0.5 * delta
+                # the contact point's velocity from the spins with the levers c (or the
+                # radii: ``contact_lever: radius``, contact.py)
+                li = ri if lever_r else ci
+                lj = rj if lever_r else cj
                 wxi, wyi, wzi = vw[i, 3], vw[i, 4], vw[i, 5]
                 wxj, wyj, wzj = vw[j, 3], vw[j, 4], vw[j, 5]
-                ax = ci * wxi + cj * wxj
-                ay = ci * wyi + cj * wyj
-                az = ci * wzi + cj * wzj
+                ax = li * wxi + lj * wxj
+                ay = li * wyi + lj * wyj
+                az = li * wzi + lj * wzj
                 rvx = vw[i, 0] - vw[j, 0] - (ay * nz - az * ny)
                 rvy = vw[i, 1] - vw[j, 1] - (az * nx - ax * nz)
                 rvz = vw[i, 2] - vw[j, 2] - (ax * ny - ay * nx)
@@ -173,6 +178,7 @@ def gather(x, v, om, r, inv_m, inv_i, mat, f, t, ovr, peak, mroll, dt, kick, max
     # rolling against a wall: the rotation relative to the wall's (rw = 1), or the sphere's
     # own (rw = 0; ``rolling_wall``, contact.py)
     rw = 0.0 if codes[9] == 1 else 1.0
+    lever_r = codes[14] == 1  # a wall contact's lever: the radius (``contact_lever``)
     bs = block_size(n)
     nblk = (n + bs - 1) // bs
     for c in prange(NBLK_GROUPS):
@@ -236,7 +242,7 @@ def gather(x, v, om, r, inv_m, inv_i, mat, f, t, ovr, peak, mroll, dt, kick, max
                                 whist[row, q] = 0.0
                             continue
                     w = prim_wall[p]
-                    ci = ri - 0.5 * delta
+                    ci = ri if lever_r else ri - 0.5 * delta
                     ox, oy, oz = wall_omega[w, 0], wall_omega[w, 1], wall_omega[w, 2]
                     qx = cx - wall_centre[w, 0]
                     qy = cy - wall_centre[w, 1]

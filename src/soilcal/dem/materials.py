@@ -50,6 +50,9 @@ stop), with the smallest sphere of each material, for particle-particle pairs (R
 m* = m/2) and particle-wall pairs with the walls' materials (R* = r, m* = m; a sphere on a
 stiff wall has a tangential mode 2^(1/4) times stiffer than on a sphere), the smallest step
 over the modes is ``damping_dt``; the tangential mode counts only with friction (mu_s > 0).
+With the ``viscous_radius`` damping (contact.py: the dashpot eta m* a, LAMMPS's
+``viscoelastic``) the normal mode's ratio is z_n = eta m* a / (2 sqrt(S_n m*)), largest at the
+largest contact radius, so it is taken at the same overlap.
 In units of the Rayleigh time it does not depend on the shear modulus or the size
 (w dt ~ (delta / r)^(1/4)); at max_overlap 0.3 and Poisson 0.33 it is 0.476 (2 (sqrt(1 +
 z_t^2) - z_t)) T_R: 0.32 T_R for e = 0.45, 0.21 T_R for e = 0.15.  Heavy damping
@@ -83,7 +86,7 @@ import numpy as np
 from soilcal.errors import InputError
 
 # Columns of the per-pair parameter table ``pair[mi, mj, :]``.
-P_ESTAR, P_GSTAR, P_BETA, P_MUS, P_MUR, P_W, P_TRATIO, P_JKRK, P_JKRC, P_NCOL = range(10)
+P_ESTAR, P_GSTAR, P_BETA, P_MUS, P_MUR, P_W, P_TRATIO, P_JKRK, P_JKRC, P_ETA, P_NCOL = range(11)
 
 
 def _num(v, name, src):
@@ -232,13 +235,16 @@ class MaterialTable:
     def effective_shear(self, k: int) -> float:
         return self.shear_mod if self.shear_mod is not None else self.materials[k].shear
 
-    def table(self, jkr_w_factor: float) -> np.ndarray:
+    def table(self, jkr_w_factor: float, damping_eta: float | None = None) -> np.ndarray:
         """pair[M, M, P_NCOL] float64: E*, G*, beta, mu_s, mu_r, w (work of adhesion),
         sqrt(4 G*/E*) (ratio of tangential to normal damping), (27/64) pi^2 w^2 / E*^2 (JKR
-        separation: delta_c^3 = -that * R*), c = sqrt(2 pi w / E*) (JKR, see contact.py).
+        separation: delta_c^3 = -that * R*), c = sqrt(2 pi w / E*) (JKR, see contact.py),
+        eta (the ``viscous_radius`` damping coefficient, 1/(m s); 0 for the others).
 
         ``jkr_w_factor`` converts the input surface energy to the work of adhesion w used by
         the kernel (1 for the EDEM convention, 2 for the LAMMPS convention, see contact.py).
+        ``damping_eta`` is the ``viscous_radius`` coefficient (the same for every pair); with
+        it the restitution's beta is not used and its column is 0.
         With stiffness scaling the surface energy is scaled by (G_mod/G)^(2/5), with G the
         harmonic mean-like pair value 1/G* of the unscaled materials.
         """
@@ -264,11 +270,13 @@ class MaterialTable:
                 if self.shear_mod is not None and gamma > 0:
                     g0 = 1.0 / ((2 - mi.poisson) / mi.shear + (2 - mj.poisson) / mj.shear)
                     gamma = gamma * (gstar / g0) ** 0.4
-                out[i, j] = (estar, gstar, restitution_beta(p.restitution), p.friction,
+                beta = restitution_beta(p.restitution) if damping_eta is None else 0.0
+                out[i, j] = (estar, gstar, beta, p.friction,
                              p.rolling_friction, jkr_w_factor * gamma,
                              math.sqrt(4.0 * gstar / estar),
                              27.0 / 64.0 * math.pi**2 * (jkr_w_factor * gamma / estar) ** 2,
-                             math.sqrt(2.0 * math.pi * jkr_w_factor * gamma / estar))
+                             math.sqrt(2.0 * math.pi * jkr_w_factor * gamma / estar),
+                             float(damping_eta or 0.0))
         return out
 
     def jkr_dt(self, rmin_per_material: dict[int, float], tab: np.ndarray) -> float:
@@ -311,9 +319,13 @@ class MaterialTable:
                     rb = rmin_per_material[b]
                     mb = self.materials[b].density * 4.0 / 3.0 * math.pi * rb**3
                     cases.append((ra * rb / (ra + rb), ma * mb / (ma + mb), min(ra, rb)))
-                z = math.sqrt(5.0 / 6.0) * abs(tab[a, b, P_BETA])
                 for rstar, mstar, r in cases:
                     root = math.sqrt(rstar * max_overlap * r)
+                    # damping ratio of the normal mode: sqrt(5/6) |beta| (viscoelastic), or
+                    # eta m* a / (2 sqrt(S_n m*)) (viscous_radius, contact.py) at a = root
+                    z = (math.sqrt(5.0 / 6.0) * abs(tab[a, b, P_BETA])
+                         + tab[a, b, P_ETA] * mstar * root
+                         / (2.0 * math.sqrt(2.0 * tab[a, b, P_ESTAR] * root * mstar)))
                     t = min(t, damped_critical_dt(2.0 * tab[a, b, P_ESTAR] * root, mstar, z))
                     if tab[a, b, P_MUS] > 0.0:
                         t = min(t, damped_critical_dt(8.0 * tab[a, b, P_GSTAR] * root,

@@ -138,15 +138,20 @@ def lifted_tube(case: TubeCase, conventions="liggghts", threads=None):
     return sim, phases, bounds, info
 
 
-def restart(sim, conventions):
-    """A copy of ``sim``'s state (spheres by insertion id, walls) under other conventions."""
+def restart(sim, conventions, contact_model: dict | None = None, walls=None):
+    """A copy of ``sim``'s state (spheres by insertion id, walls) under other conventions:
+    the contact model ``contact_model`` (default: constant-torque rolling) with the named
+    set ``conventions``, and the walls named in ``walls`` (default: all).  Contact histories
+    are not copied: every contact of the copy starts new, in soilcal as in a reference
+    engine reading the same data."""
     from soilcal.dem.engine import Simulation
     from soilcal.dem.walls import PLANE, TRIANGLE
 
+    model = dict(contact_model if contact_model is not None else dict(rolling="constant_torque"),
+                 conventions=conventions)
     copy = Simulation(sim.materials, dt=sim.dt, gravity=tuple(sim.gravity),
-                           contact_model=dict(rolling="constant_torque",
-                                              conventions=conventions),
-                           skin=sim.skin_user, max_overlap=sim.max_overlap, source=sim.source)
+                      contact_model=model, skin=sim.skin_user, max_overlap=sim.max_overlap,
+                      source=sim.source)
     rows = sim.index(np.arange(sim.n))
     mat = sim.p.mat[rows]
     for k in np.unique(mat):
@@ -155,6 +160,8 @@ def restart(sim, conventions):
                                 v=sim.v[sel], omega=sim.p.omega[sel])
     a = sim._warr
     for w, name in enumerate(sim.walls.names):
+        if walls is not None and name not in walls:
+            continue
         prim = np.flatnonzero(a["prim_wall"] == w)
         mat_w = int(a["prim_mat"][prim[0]])
         kinds = set(int(q) for q in a["prim_kind"][prim])
@@ -167,6 +174,91 @@ def restart(sim, conventions):
         else:
             raise InputError("<restart>", f"walls.{name}", "planes and meshes", None)
     return copy
+
+
+@dataclass
+class ColumnCase(Spheres):
+    """The cohesive column: JKR spheres settled in the tube, the tube then removed."""
+
+    n: int = 1000
+    rolling_friction: float = 0.0
+    #: surface energy [J/m^2] in the LAMMPS convention (pull-off 3 pi gamma R*, w = 2 gamma)
+    surface_energy: float = 0.1
+    #: viscous_radius damping [1/(m s)]: about 0.2 of critical at an overlap of 1 % of R*
+    #: between two 2 mm spheres of E = 5 MPa
+    damping_eta: float = 1.2e7
+    settle_time: float = 1.0
+    fill_time: float = 1.5
+
+    def check(self, source="<case>") -> None:
+        super().check(source)
+        for key in ("surface_energy", "damping_eta", "settle_time", "fill_time"):
+            v = getattr(self, key)
+            if not (isinstance(v, (int, float)) and math.isfinite(v) and v >= 0):
+                raise InputError(source, key, "a number >= 0", v)
+
+    def tube_radius(self) -> float:
+        return TubeCase.tube_radius(self)
+
+    def contact_model(self) -> dict:
+        return dict(cohesion="jkr", damping="viscous_radius", damping_eta=self.damping_eta,
+                    jkr_convention="lammps")
+
+
+def collapsed_column(case: ColumnCase, conventions="lammps"):
+    """The cohesive column of :class:`ColumnCase`: spheres placed at random in the tube (as
+    :func:`lifted_tube`) settle in soilcal under JKR cohesion; the returned Simulation is
+    that state on the plate with the tube removed (the initial data of every engine, no
+    contact carried over), and (phases, bounds, info): the column collapses and settles for
+    ``settle_time`` s.  Without rolling resistance the heap that stays is held by the
+    adhesion and the sliding friction."""
+    from soilcal.dem.engine import Simulation
+    from soilcal.dem.factories import CylinderRegion, UniformRadius, insert_random
+    from soilcal.dem.geometry import cone_mesh
+    from soilcal.dem.materials import Material, MaterialTable
+    from soilcal.dem.scenarios.base import settle
+
+    case.check("<column case>")
+    lo, hi = case.radii
+    R = case.tube_radius()
+    dist = UniformRadius(lo, hi)
+    h_ins = case.n * dist.mean_volume() / (PHI_PLACED * math.pi * (R - hi) ** 2)
+    tube_h = h_ins + 4 * hi
+    mats = MaterialTable()
+    mats.add(Material("soil", case.density, case.poisson, youngs=case.youngs))
+    mats.set_pair("soil", "soil", case.restitution, case.friction, 0.0, case.surface_energy)
+    model = case.contact_model()
+    sim = Simulation(mats, dt_fraction=case.dt_fraction,
+                     contact_model=dict(model, conventions=conventions),
+                     skin=0.6 * hi, max_overlap=MAX_OVERLAP, source="<cohesive column>")
+    k = 1.0 / math.cos(math.pi / N_SEG)
+    tv, tt = cone_mesh(k * R, k * R, 0.0, tube_h, N_SEG)
+    sim.add_mesh(tv, tt, "soil", name="tube")
+    sim.add_plane((0, 0, 0), (0, 0, 1), "soil", name="plate")
+    gen = np.random.default_rng(case.seed)
+    x, r = insert_random(CylinderRegion(R - 1.001 * hi, 1.001 * hi, h_ins), dist, n=case.n,
+                         rng=gen, max_fraction=0.35, source="<cohesive column>",
+                         field="particles")
+    order = np.argsort(x[:, 2], kind="stable")
+    sim.add_particles(x[order], r[order], "soil")
+    settled, t_fill = settle(sim, 0.005, case.fill_time)
+    top = float((sim.x[:, 2] + sim.p.r).max())
+    free = restart(sim, conventions, model, walls=("plate",))
+    free.run(0)
+    steps = int(math.ceil(case.settle_time / free.dt))
+    # spheres rolling off the heap beyond the box are lost in LAMMPS, and are not counted
+    # in soilcal either (:func:`inside`)
+    spread = 0.5 * tube_h + 4 * R + 0.1
+    bounds = (-spread, spread, -spread, spread, -0.01, 2 * top + 0.01)
+    info = dict(fill_settled=int(settled), fill_time_s=t_fill, fill_top_m=top, dt=free.dt,
+                settle_steps=steps, tube_height=tube_h)
+    return free, [(steps, {})], bounds, info
+
+
+def inside(x, bounds) -> np.ndarray:
+    """Which positions lie in the box (xlo, xhi, ylo, yhi, zlo, zhi)."""
+    b = np.asarray(bounds, dtype=float).reshape(3, 2)
+    return np.all((x >= b[:, 0]) & (x <= b[:, 1]), axis=1)
 
 
 def heap_angles(x, r, present=None) -> dict:

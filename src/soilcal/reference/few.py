@@ -21,6 +21,14 @@ of LIGGGHTS do.
 two engines part at step 1,711 of that case (the largest angular-velocity difference grows
 from 5e-13 to 1.5e-12 rad/s in one step, while the pair still touches and the lower sphere
 rests on the floor).  That difference is not traced yet (benchmarks/results/parity.md).
+
+``JKR_CASES``: the same kind of cases with JKR cohesion, for LAMMPS (``pair granular jkr``,
+which LIGGGHTS 3.8 lacks), soilcal with the ``lammps`` conventions and the ``viscous_radius``
+damping (eta = ``JKR_ETA``): a head-on pair caught by adhesion, one that rebounds and tears
+its neck (the break criterion), a sphere dropped onto a floor that holds it, an oblique
+impact with spin (sliding in an adhesive contact) and a spinning sphere rolling on an adhesive
+floor.  Materials as above with surface energies 0.3 (soil-soil) and 0.2 J/m^2
+(soil-steel), the LAMMPS convention (pull-off 3 pi gamma R*), no rolling resistance.
 """
 
 from __future__ import annotations
@@ -135,3 +143,83 @@ def compare(name: str, rolling: str, ranks: int = 1) -> dict:
                 travel=float(np.abs(res["x"] - x0).max()),
                 vmax=float(np.abs(res["v"]).max()), wmax=float(np.abs(res["omega"]).max()),
                 tol=CASES[name].get("tol", 1e-9), version=res["version"])
+
+
+JKR_ETA = 5e7  # viscous_radius damping [1/(m s)]: about 0.15 of critical at these contacts
+JKR_CASES = {
+    # head-on at 2 cm/s, no gravity: caught by adhesion, the pair rings and stays together
+    "jkr_catch": dict(x=[[0, 0, 0], [0, 0, 2.001 * R]], v=[[0, 0, 0], [0, 0, -0.02]],
+                      w=[[0, 0, 0], [0, 0, 0]], r=[R, R], mat=["soil", "soil"], floor=None,
+                      steps=20000),
+    # head-on at 0.5 m/s: rebounds, stretches its neck beyond zero overlap and tears it
+    "jkr_rebound": dict(x=[[0, 0, 0], [0, 0, 2.001 * R]], v=[[0, 0, 0], [0, 0, -0.5]],
+                        w=[[0, 0, 0], [0, 0, 0]], r=[R, R], mat=["soil", "soil"], floor=None,
+                        steps=20000),
+    # dropped onto a steel floor at 0.1 m/s: held by adhesion
+    "jkr_floor": dict(x=[[0, 0, 1.0005 * R]], v=[[0, 0, -0.1]], w=[[0, 0, 0]], r=[R],
+                      mat=["soil"], floor="steel", steps=20000),
+    # oblique impact of a spinning sphere: sliding, then sticking, in an adhesive contact
+    "jkr_oblique": dict(x=[[0, 0, 0], [0.0006, 0.0002, 2.05 * R]],
+                        v=[[0, 0, 0], [0.02, 0, -0.05]], w=[[0, 0, 0], [3, -2, 0]], r=[R, R],
+                        mat=["soil", "soil"], floor=None, steps=20000),
+    # a spinning sphere sliding on an adhesive floor until it rolls
+    "jkr_roll": dict(x=[[0, 0, 0.9995 * R]], v=[[0.05, 0, 0]], w=[[0, 10, 3]], r=[R],
+                     mat=["soil"], floor="steel", steps=20000),
+}
+
+
+def jkr_materials():
+    from soilcal.dem.materials import Material, MaterialTable
+
+    m = MaterialTable()
+    m.add(Material("soil", 2600.0, 0.3, youngs=1e7))
+    m.add(Material("steel", 7800.0, 0.3, youngs=2e7))
+    m.set_pair("soil", "soil", 0.5, 0.5, 0.0, 0.3)
+    m.set_pair("soil", "steel", 0.4, 0.6, 0.0, 0.2)
+    m.set_pair("steel", "steel", 0.5, 0.3, 0.0, 0.0)
+    return m
+
+
+def build_jkr(name: str, conventions="lammps", **overrides):
+    """The JKR case's Simulation (``overrides``: single convention entries) and phases."""
+    from soilcal.dem.engine import Simulation
+
+    c = JKR_CASES[name]
+    gravity = (0, 0, -9.81) if c["floor"] else (0, 0, 0)
+    sim = Simulation(jkr_materials(), dt=DT, gravity=gravity,
+                     contact_model=dict(cohesion="jkr", damping="viscous_radius",
+                                        damping_eta=JKR_ETA, jkr_convention="lammps",
+                                        conventions=conventions, **overrides),
+                     max_overlap=0.5, source=f"<case {name}>")
+    x, v, w = (np.asarray(c[k], dtype=float) for k in ("x", "v", "w"))
+    for i, mat in enumerate(c["mat"]):
+        sim.add_particles(x[i:i + 1], c["r"][i], mat, v=v[i:i + 1], omega=w[i:i + 1])
+    if c["floor"]:
+        sim.add_plane((0, 0, 0), (0, 0, 1), c["floor"], name="floor")
+    return sim, [(c["steps"], {})]
+
+
+def differences(sim, res, x0) -> dict:
+    """Largest differences of position, velocity and spin between soilcal's ``sim`` and a
+    reference run ``res`` (both after the same phases), with the travel and the largest
+    speed and spin of the reference for relative tolerances."""
+    rows = sim.index(np.arange(sim.n))
+    return dict(dx=float(np.abs(sim.x[rows] - res["x"]).max()),
+                dv=float(np.abs(sim.v[rows] - res["v"]).max()),
+                dw=float(np.abs(sim.p.omega[rows] - res["omega"]).max()),
+                travel=float(np.abs(res["x"] - x0).max()),
+                vmax=float(np.abs(res["v"]).max()), wmax=float(np.abs(res["omega"]).max()))
+
+
+def compare_lammps(name: str, conventions="lammps", **overrides) -> dict:
+    """Run the JKR case in LAMMPS and in soilcal (``conventions`` and single entries
+    ``overrides``); :func:`differences` plus the steps and LAMMPS's version."""
+    from soilcal.reference import lammps as LM
+    from soilcal.reference.deck import run_phases
+
+    sim, phases = build_jkr(name, conventions, **overrides)
+    x0 = sim.x.copy()
+    res = LM.run(build_jkr(name)[0], phases, BOUNDS)
+    run_phases(sim, phases)
+    return dict(differences(sim, res, x0), steps=sum(s for s, _ in phases),
+                version=res["version"])

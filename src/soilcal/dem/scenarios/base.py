@@ -408,9 +408,11 @@ def contact_model(params: DemParams, rolling: str | None = None, conventions=Non
 def conventions_of(value, source: str = "<input>") -> dict:
     """A setup's ``contact_conventions`` as :func:`soilcal.dem.contact.model_codes` keywords:
     None (EDEM's), the name of a set (``edem``, ``liggghts``, ``lammps``), or a mapping with an
-    optional ``conventions`` set and single entries (``rolling_lever``, ``rolling_force``,
-    ``rolling_axis``, ``tangential_damping``, ``rolling_wall``, ``jkr_convention``) that
-    change it."""
+    optional ``conventions`` set and single entries (any key of
+    :data:`soilcal.dem.contact.CONVENTION_TABLES`: ``rolling_lever``, ``rolling_force``,
+    ``rolling_axis``, ``tangential_damping``, ``rolling_wall``, ``jkr_convention``,
+    ``jkr_break``, ``coulomb_force``, ``tangential_slip``, ``history_rotation``,
+    ``contact_lever``) that change it."""
     from soilcal.dem.contact import resolve_conventions
 
     named = isinstance(value, str)

