@@ -11,7 +11,14 @@ several seeds per level, at the quick preset:
   screening ends (0.2, 1.16), where the screening's H effect is averaged;
 * ``bbd-centre``: the Box-Behnken centre of the paper (Table 7's other factors);
 * ``pb-centre lammps-JKR``: as ``pb-centre`` with w = 2 gamma (the LAMMPS convention, the
-  force law the EDEM guide prints; ``soilcal.dem.contact``), i.e. twice the adhesion.
+  force law the EDEM guide prints; ``soilcal.dem.contact``), i.e. twice the adhesion;
+* ``pb-centre gap-JKR``: as ``pb-centre`` with ``jkr_approach: gap``: spheres attract across
+  a gap within the JKR separation range before they touch, as the EDEM guide describes its
+  JKR ("the same solution ... for both loading and unloading phases");
+* ``pb-centre paper-PSD``: as ``pb-centre`` with 003's particle sizes (2.5, 5 and 10 mm in
+  equal mass, about 5,500 spheres) instead of the quick preset's 1,000 equal ones, with the
+  quick preset's softened shear modulus (half its time-step fraction, which the smallest
+  spheres need), so the surface energy is not rescaled by the size rule: the particle scale.
 
 Per base and H: mean and SD over the seeds; per base: the least-squares slope of the angle on
 H (deg per 0.1 J/m^2) with its standard error, beside the paper's effect over its range
@@ -36,10 +43,14 @@ HERE = Path(__file__).resolve().parent
 ROOT = HERE.parent
 SOIL = ROOT / "config" / "soils" / "xinjiang-vineyard.yaml"
 FIELDS = ["utc", "commit", "base", "H", "seed", "levels", "conventions", "n_frames", "n_avalanches",
-          "angle_avalanche_deg", "angle_deg", "steps", "wall_s"]
+          "angle_avalanche_deg", "angle_deg", "steps", "wall_s", "particles"]
 H_LEVELS = (0.1, 0.15, 0.2, 0.25, 0.3)
 PAPER_EFFECT = 7.3  # 003 Table 5: dynamic angle, H effect over 0.1 -> 0.3 J/m^2 (SS 160.02, 12 runs)
-BASES = ("pb-centre", "pb-centre C-low", "pb-centre C-high", "bbd-centre", "pb-centre lammps-JKR")
+BASES = ("pb-centre", "pb-centre C-low", "pb-centre C-high", "bbd-centre", "pb-centre lammps-JKR",
+         "pb-centre gap-JKR", "pb-centre paper-PSD")
+#: the conventions a base changes from EDEM's (only the JKR terms)
+BASE_CONVENTIONS = {"pb-centre lammps-JKR": {"jkr_convention": "lammps"},
+                    "pb-centre gap-JKR": {"jkr_approach": "gap"}}
 
 
 
@@ -73,16 +84,26 @@ def one(base, h, seed, rev):
     stage, lev = levels_of(soil, base, h)
     sim = design.spec(soil, "dynamic_angle")
     params = design.design_params(soil, stage, lev, sim)
-    conv = {"jkr_convention": "lammps"} if "lammps" in base else None  # only the JKR term changes
+    conv = BASE_CONVENTIONS.get(base)
     setup = dict(sim.setup, contact_conventions=conv) if conv else dict(sim.setup)
-    res = drum.run(setup, params, "quick", seed, 1)
+    preset = "quick"
+    if "paper-PSD" in base:
+        from soilcal.dem.scenarios.base import PRESET_DEFAULTS, stiffness_scale_for
+
+        # its particle sizes with the quick modulus; half the quick step fraction: at the
+        # quick 0.3 a 2.5 mm sphere under the 10 mm ones overlapped by more than 30 % of its
+        # radius while the fill settled (SimulationError at step 1,384)
+        preset = "paper"
+        setup.update(stiffness_scale=stiffness_scale_for(params, "quick"),
+                     dt_fraction=0.5 * PRESET_DEFAULTS["quick"]["dt_fraction"])
+    res = drum.run(setup, params, preset, seed, 1)
     r = res.responses
     return dict(utc=time.strftime("%Y-%m-%d %H:%M", time.gmtime()), commit=rev, base=base, H=h, seed=seed,
                 levels=" ".join(f"{k}={v:g}" for k, v in lev.items()),
-                conventions="jkr_convention=lammps" if conv else "edem",
+                conventions=" ".join(f"{k}={v}" for k, v in conv.items()) if conv else "edem",
                 n_frames=r["n_frames"], n_avalanches=r["n_avalanches"],
                 angle_avalanche_deg=round(r["angle_avalanche_deg"], 4), angle_deg=round(r["angle_deg"], 4),
-                steps=res.steps, wall_s=round(res.wall_s, 2))
+                steps=res.steps, wall_s=round(res.wall_s, 2), particles=res.n_particles)
 
 
 def slope(hs, ys):

@@ -172,13 +172,15 @@ def test_tangential_history_after_one_step():
 
 def test_named_sets_and_single_entries():
     codes, w = model_codes(rolling="constant_torque")
-    assert list(codes[5:]) == [0, 0, 0, 0, 0, 0, 0, 0, 0, 0] and w == 1.0
+    assert list(codes[5:]) == [0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0] and w == 1.0
     codes, w = model_codes(rolling="constant_torque", conventions="lammps")
-    assert list(codes[5:]) == [1, 1, 1, 0, 0, 1, 1, 1, 1, 1] and w == 2.0
+    assert list(codes[5:]) == [1, 1, 1, 0, 0, 1, 1, 1, 1, 1, 0] and w == 2.0
     codes, _ = model_codes(conventions="liggghts", rolling_force="total")
-    assert list(codes[5:]) == [1, 0, 1, 0, 1, 0, 0, 0, 0, 0]
+    assert list(codes[5:]) == [1, 0, 1, 0, 1, 0, 0, 0, 0, 0, 0]
     codes, _ = model_codes(conventions="lammps", jkr_break="displacement")
-    assert list(codes[10:]) == [0, 1, 1, 1, 1]
+    assert list(codes[10:]) == [0, 1, 1, 1, 1, 0]
+    codes, _ = model_codes(jkr_approach="gap")
+    assert codes[15] == 1
     assert set(CONVENTIONS) == {"edem", "liggghts", "lammps"}
 
 
@@ -200,5 +202,36 @@ def test_setup_conventions_reach_the_engine():
     setup = dict(repose.setups()["cinnamon-soil"], n_particles=50,
                  contact_conventions={"conventions": "liggghts", "tangential_damping": "off"})
     sim, _ = make_simulation(DemParams(), setup, "quick", "t")
-    assert list(sim.codes[5:]) == [1, 1, 1, 1, 1, 0, 0, 0, 0, 0]
+    assert list(sim.codes[5:]) == [1, 1, 1, 1, 1, 0, 0, 0, 0, 0, 0]
     assert conventions_of(None)["conventions"] == "edem"
+
+
+@pytest.mark.parametrize("approach", ["touch", "gap"])
+@pytest.mark.parametrize("wall", [False, True])
+def test_jkr_attraction_across_a_gap(approach, wall):
+    """Surfaces that have never touched, at a gap inside the JKR separation range: no force
+    (``touch``), or the JKR force of that overlap on the stable branch (``gap``, EDEM's JKR:
+    the same force on approach as on separation); beyond the range, none in either."""
+    gamma = 0.3
+    sim = Simulation(table(e=0.5, mu=0.0, gamma=gamma, E=E), dt=1e-7, gravity=(0, 0, 0),
+                     contact_model=dict(cohesion="jkr", tangential="none",
+                                        jkr_approach=approach))
+    if wall:
+        sim.add_particles([[0, 0, R]], R, "soil")
+        sim.add_plane((0, 0, 0), (0, 0, 1), "soil")
+        rstar, k = R, 0
+    else:
+        sim.add_particles([[0, 0, 0], [0, 0, 2 * R]], R, "soil")
+        rstar, k = R / 2, 1
+    w = gamma  # EDEM convention
+    ac = (math.pi * w * rstar**2 / (8 * ESTAR)) ** (1 / 3)
+    dc = ac * ac / rstar - math.sqrt(2 * math.pi * w * ac / ESTAR)
+    a = 1.5 * ac  # a stable-branch radius whose overlap is a gap
+    delta = a * a / rstar - math.sqrt(2 * math.pi * w * a / ESTAR)
+    assert dc < delta < 0
+    force = 4 * ESTAR * a**3 / (3 * rstar) - math.sqrt(8 * math.pi * w * ESTAR * a**3)
+    for d, expected in ((delta, force if approach == "gap" else 0.0), (1.01 * dc, 0.0)):
+        sim.p.x[k, 2] = (R if wall else 2 * R) - d
+        fz = sim.compute_forces()[0][k, 2]
+        assert fz == pytest.approx(expected, rel=1e-9, abs=1e-15)
+    assert force < 0

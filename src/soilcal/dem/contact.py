@@ -149,6 +149,14 @@ an option of :func:`model_codes` (``rolling_lever``, ``rolling_force``, ``rollin
 * ``history_rotation``: ``project`` (xi <- xi - (xi.n) n every evaluation) or ``rescale``
   (in a step, not at a run's setup, and when |xi.n| S_t > 1e-10 of the Coulomb limit: xi
   projected, then scaled back to its length; LAMMPS ``rotate_rescale_vec``).
+* ``jkr_approach``: whether two surfaces that have not touched yet attract across a gap.
+  ``touch`` (a JKR contact forms at zero overlap, the force then jumps to the JKR branch;
+  JKR's hysteresis, LAMMPS, EDEM's "JKR Version 2") or ``gap`` (the same JKR force on
+  approach as on separation, within the separation range of ``jkr_break``: the EDEM guide's
+  Hertz-Mindlin with JKR, whose "normal force follows the same solution ... for both loading
+  and unloading phases" and "provides attractive cohesion forces even if the particles are
+  not in physical contact", where EDEM detects the pair: its contact radius must then
+  exceed the physical one).
 * ``contact_lever``: the lever of the spins in the contact point's velocity.
   ``contact_point`` (c_i = R_i - delta/2 for the velocity and the torques, as LIGGGHTS) or
   ``radius`` (R_i in the velocity, R_i - delta/2 in a pair's torques and R_i in a wall's,
@@ -201,6 +209,7 @@ COULOMB_FORCE = {"total": 0, "jkr_elastic": 1}
 TANGENTIAL_SLIP = {"spring": 0, "damped": 1}
 HISTORY_ROTATION = {"project": 0, "rescale": 1}
 CONTACT_LEVER = {"contact_point": 0, "radius": 1}
+JKR_APPROACH = {"touch": 0, "gap": 1}
 #: |xi . n| k_t above this share of the Coulomb limit rotates a ``rescale`` history (LAMMPS
 #: GRAN_KERNEL_EPSILON, gran_sub_mod_kernel_defs.h)
 RESCALE_EPS = 1e-10
@@ -209,27 +218,27 @@ CONVENTIONS = {
     "edem": dict(rolling_lever="particle", rolling_force="total", rolling_axis="full",
                  tangential_damping="on", jkr_convention="edem", rolling_wall="relative",
                  jkr_break="displacement", coulomb_force="total", tangential_slip="spring",
-                 history_rotation="project", contact_lever="contact_point"),
+                 history_rotation="project", contact_lever="contact_point", jkr_approach="touch"),
     "liggghts": dict(rolling_lever="effective", rolling_force="elastic",
                      rolling_axis="tangential", tangential_damping="on", jkr_convention="edem",
                      rolling_wall="absolute", jkr_break="displacement", coulomb_force="total",
                      tangential_slip="spring", history_rotation="project",
-                     contact_lever="contact_point"),
+                     contact_lever="contact_point", jkr_approach="touch"),
     "lammps": dict(rolling_lever="effective", rolling_force="elastic", rolling_axis="tangential",
                    tangential_damping="on", jkr_convention="lammps", rolling_wall="relative",
                    jkr_break="force", coulomb_force="jkr_elastic", tangential_slip="damped",
-                   history_rotation="rescale", contact_lever="radius"),
+                   history_rotation="rescale", contact_lever="radius", jkr_approach="touch"),
 }
 CONVENTION_TABLES = {"rolling_lever": ROLLING_LEVER, "rolling_force": ROLLING_FORCE,
                      "rolling_axis": ROLLING_AXIS, "tangential_damping": TANGENTIAL_DAMPING,
                      "jkr_convention": JKR_CONVENTION, "rolling_wall": ROLLING_WALL,
                      "jkr_break": JKR_BREAK, "coulomb_force": COULOMB_FORCE,
                      "tangential_slip": TANGENTIAL_SLIP, "history_rotation": HISTORY_ROTATION,
-                     "contact_lever": CONTACT_LEVER}
+                     "contact_lever": CONTACT_LEVER, "jkr_approach": JKR_APPROACH}
 #: the conventions' entries of the codes array, from codes[5] on (jkr_convention is w_factor)
 CODE_CONVENTIONS = ("rolling_lever", "rolling_force", "rolling_axis", "tangential_damping",
                     "rolling_wall", "jkr_break", "coulomb_force", "tangential_slip",
-                    "history_rotation", "contact_lever")
+                    "history_rotation", "contact_lever", "jkr_approach")
 
 # history slot layout (per particle and contact partner)
 H_XI = 0  # 3 tangential displacement
@@ -269,7 +278,7 @@ def resolve_conventions(conventions="edem", source="<input>", **overrides) -> di
 def model_codes(normal="hertz", damping="viscoelastic", tangential="mindlin", rolling="none",
                 cohesion="none", conventions="edem", source="<input>", damping_eta=None,
                 **overrides):
-    """Return (codes int64[15], w_factor) for a model composed by names.
+    """Return (codes int64[16], w_factor) for a model composed by names.
 
     ``conventions`` names a set of :data:`CONVENTIONS` (EDEM's by default); ``overrides``
     (any key of :data:`CONVENTION_TABLES`) change single entries of it.  ``damping_eta``
@@ -382,8 +391,10 @@ def contact_force(codes, pair, ma, mb, delta, nx, ny, nz, rvx, rvy, rvz, wrx, wr
         if delta <= 0.0:
             # separation: delta < delta_c  <=>  delta^3 < -(27/64) pi^2 w^2 R* / E*^2; at
             # the force minimum (``jkr_break: force``) delta^3 < -(3/64) pi^2 w^2 R* / E*^2
+            # a pair not yet touching: no force (``jkr_approach: touch``), or the JKR branch
+            # within the same range on approach (``gap``, EDEM's JKR)
             kb = pair[ma, mb, P_JKRK] * (1.0 / 9.0 if codes[10] == 1 else 1.0)
-            if not touching or delta * delta * delta < -kb * rstar:
+            if (not touching and codes[15] == 0) or delta * delta * delta < -kb * rstar:
                 if touching:
                     for q in range(hist.shape[1]):
                         hist[hk, q] = 0.0

@@ -77,6 +77,8 @@ def pair_forces(colour, xr, vw, pair, codes, box, periodic, dt, start, nbr, hist
     p1 = periodic[1]
     G = sgroup[SGROUP_LEN - 1]
     lever_r = codes[14] == 1
+    # JKR across a gap (``jkr_approach: gap``): separated listed pairs go to the contact law
+    gap = codes[15] == 1 and codes[4] == 1
     for g in prange(G):
         k = colour * G + g
         for q in range(sgroup[k], sgroup[k + 1]):
@@ -99,7 +101,7 @@ def pair_forces(colour, xr, vw, pair, codes, box, periodic, dt, start, nbr, hist
                 rs = ri + rj
                 d2 = dx * dx + dy * dy + dz * dz
                 touching = act[k] != 0
-                if d2 >= rs * rs and not touching:
+                if d2 >= rs * rs and not touching and not gap:
                     continue
                 ims = vw[i, 6] + vw[j, 6]
                 if ims == 0.0:
@@ -179,6 +181,7 @@ def gather(x, v, om, r, inv_m, inv_i, mat, f, t, ovr, peak, mroll, dt, kick, max
     # own (rw = 0; ``rolling_wall``, contact.py)
     rw = 0.0 if codes[9] == 1 else 1.0
     lever_r = codes[14] == 1  # a wall contact's lever: the radius (``contact_lever``)
+    gap = codes[15] == 1 and codes[4] == 1  # JKR across a gap (``jkr_approach``)
     bs = block_size(n)
     nblk = (n + bs - 1) // bs
     for c in prange(NBLK_GROUPS):
@@ -217,7 +220,7 @@ def gather(x, v, om, r, inv_m, inv_i, mat, f, t, ovr, peak, mroll, dt, kick, max
                     delta = ri - dist
                     row = i * KW + k
                     touching = whist[row, H_SIZE - 1] != 0.0
-                    if delta <= 0.0 and not touching:
+                    if delta <= 0.0 and not touching and not gap:
                         continue
                     if imi == 0.0:
                         continue
