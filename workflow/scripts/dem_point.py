@@ -2,6 +2,7 @@
 
 import numba
 
+from soilcal.chain.files import restart_dir
 from soilcal.chain.sources import run_point
 from soilcal.logs import redirect
 
@@ -9,5 +10,6 @@ with redirect(snakemake.log[0]):  # noqa: F821
     numba.set_num_threads(snakemake.threads)  # noqa: F821
     spec = snakemake.params.spec  # noqa: F821
     print(f"{spec['soil']} {spec['stage']} run {spec['run']} seed {spec['seed']}: {spec['levels']}")
-    df = run_point(spec, snakemake.output[0], threads=snakemake.threads)  # noqa: F821
+    df = run_point(spec, snakemake.output[0], threads=snakemake.threads,  # noqa: F821
+                   restart_dir=restart_dir(snakemake.output[0]))  # noqa: F821
     print(df[["response", "value", "sd", "n", "status", "error", "wall_s"]].to_string(index=False))

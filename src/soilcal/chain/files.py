@@ -313,3 +313,16 @@ def replay_soil(soil, out_dir) -> tuple[dict[str, str], pd.DataFrame]:
 
 
 __all__ = ["replay_soil", "write_design", "write_regression", "write_optimum", "write_figures", "write_errata"]
+
+
+def restart_dir(output) -> Path:
+    """Where a DEM job keeps the restart files of its runs (:mod:`soilcal.dem.restart`):
+    ``restart/`` and the path of its output below ``results/`` without the suffix
+    (``results/a/dem/bbd/runs/3.csv`` -> ``restart/a/dem/bbd/runs/3``); an output outside
+    ``results/`` keeps its whole relative path.  Derived from the output, so that it is no
+    rule parameter whose change would make Snakemake rerun the jobs."""
+    p = Path(output).with_suffix("")
+    parts = p.parts[1:] if p.is_absolute() else p.parts
+    if "results" in parts:
+        parts = parts[parts.index("results") + 1:]
+    return Path("restart", *parts)

@@ -128,10 +128,15 @@ def commit() -> str:
         return "unknown"
 
 
-def simulate(spec: dict, threads: int | None = None, rev: str | None = None) -> pd.DataFrame:
+def simulate(spec: dict, threads: int | None = None, rev: str | None = None,
+             restart_dir=None) -> pd.DataFrame:
     """Run every response of a point spec; one row per response (:data:`RUN_COLUMNS`, then
     ``f:<factor>`` levels and ``p:<parameter>`` DEM parameters).  Responses measured by the same
-    scenario and setup (a plate's horizontal and vertical force) share one run per seed."""
+    scenario and setup (a plate's horizontal and vertical force) share one run per seed.
+    ``restart_dir``: where the runs keep their restart files (one folder per scenario and
+    setup; :func:`soilcal.dem.scenarios.base.run_replicates`), so that a killed job resumes."""
+    from pathlib import Path
+
     import json
 
     from soilcal.dem.scenarios import get
@@ -154,9 +159,12 @@ def simulate(spec: dict, threads: int | None = None, rev: str | None = None) -> 
                 "seeds": " ".join(map(str, seeds)), "threads": nthreads, "commit": rev}
         t0 = time.perf_counter()
         try:
+            rdir = (None if restart_dir is None else
+                    Path(restart_dir) / f"{rs['scenario']}-{rs['setup']['name']}-{rs['preset']}")
             res = run_replicates(get(rs["scenario"]), rs["setup"], params, preset=rs["preset"],
                                  seed=int(spec["seed"]), replicates=k, threads=None,
-                                 source=f"{spec['soil']}/{spec['stage']}/run {spec['run']}")
+                                 source=f"{spec['soil']}/{spec['stage']}/run {spec['run']}",
+                                 restart_dir=rdir)
         except (SimulationError, InputError, FloatingPointError) as exc:
             err = f"{type(exc).__name__}: {exc}".replace("\n", " ")[:500]
             for rid in rids:
@@ -192,11 +200,11 @@ def simulate(spec: dict, threads: int | None = None, rev: str | None = None) -> 
     return df
 
 
-def run_point(spec: dict, out, threads: int | None = None) -> pd.DataFrame:
+def run_point(spec: dict, out, threads: int | None = None, restart_dir=None) -> pd.DataFrame:
     """:func:`simulate` a point spec and write its rows atomically to ``out``."""
     from soilcal.chain.files import write_csv
 
-    df = simulate(spec, threads=threads)
+    df = simulate(spec, threads=threads, restart_dir=restart_dir)
     write_csv(df, out)
     return df
 

@@ -347,15 +347,18 @@ def verification_point(soil, stage: dict, optimum: pd.DataFrame, case_id: str, r
     return dict(spec, case=case_id)
 
 
-def run_verification_point(spec: dict, out, threads: int | None = None) -> pd.DataFrame:
-    """Simulate one verification job (:func:`verification_point`) and write its rows."""
+def run_verification_point(spec: dict, out, threads: int | None = None,
+                           restart_dir=None) -> pd.DataFrame:
+    """Simulate one verification job (:func:`verification_point`) and write its rows
+    (``restart_dir``: :func:`soilcal.chain.sources.simulate`)."""
     from soilcal.chain.files import write_csv
     from soilcal.chain.sources import simulate
 
     if "not_run" in spec:
         df = not_run_rows(spec["stage"], {"goals": {r: {} for r in spec["responses"]}}, spec["not_run"])
     else:
-        df = simulate({k: v for k, v in spec.items() if k != "case"}, threads=threads)
+        df = simulate({k: v for k, v in spec.items() if k != "case"}, threads=threads,
+                      restart_dir=restart_dir)
     df.insert(2, "case", spec["case"])
     write_csv(df, out)
     return df

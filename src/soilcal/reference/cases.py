@@ -96,37 +96,47 @@ def _materials(case: TubeCase):
     return mats
 
 
-def lifted_tube(case: TubeCase, conventions="liggghts", threads=None):
-    """The filled, settled tube as a soilcal Simulation with the given conventions, and
-    (phases, bounds, info) for :func:`soilcal.reference.liggghts.run` and
-    :func:`~soilcal.reference.liggghts.run_phases`.  The fill is computed once per seed and
-    conventions; a comparison of two conventions starts both from :func:`restart`."""
+def _filled_tube(case, mats, contact_model: dict, source: str):
+    """Spheres placed at random (solid fraction 0.3) in the tube of ``case`` standing on the
+    plate z = 0, settled in soilcal (mean speed below 5 mm/s, at most ``fill_time`` s):
+    (sim, tube radius, tube height, settled, fill time, top of the fill)."""
     from soilcal.dem.engine import Simulation
     from soilcal.dem.factories import CylinderRegion, UniformRadius, insert_random
     from soilcal.dem.geometry import cone_mesh
     from soilcal.dem.scenarios.base import settle
 
-    case.check()
     lo, hi = case.radii
-    R = case.tube_radius()
+    R = TubeCase.tube_radius(case)
     dist = UniformRadius(lo, hi)
     vol = case.n * dist.mean_volume()
     h_ins = vol / (PHI_PLACED * math.pi * (R - hi) ** 2)
     tube_h = h_ins + 4 * hi
-    sim = Simulation(_materials(case), dt_fraction=case.dt_fraction,
-                     contact_model=dict(rolling="constant_torque", conventions=conventions),
-                     skin=0.6 * hi, max_overlap=MAX_OVERLAP, source="<lifted tube>")
+    sim = Simulation(mats, dt_fraction=case.dt_fraction, contact_model=contact_model,
+                     skin=0.6 * hi, max_overlap=MAX_OVERLAP, source=source)
     k = 1.0 / math.cos(math.pi / N_SEG)
     tv, tt = cone_mesh(k * R, k * R, 0.0, tube_h, N_SEG)
     sim.add_mesh(tv, tt, "soil", name="tube")
     sim.add_plane((0, 0, 0), (0, 0, 1), "soil", name="plate")
     gen = np.random.default_rng(case.seed)
     x, r = insert_random(CylinderRegion(R - 1.001 * hi, 1.001 * hi, h_ins), dist, n=case.n,
-                         rng=gen, max_fraction=0.35, source="<lifted tube>", field="particles")
+                         rng=gen, max_fraction=0.35, source=source, field="particles")
     order = np.argsort(x[:, 2], kind="stable")
     sim.add_particles(x[order], r[order], "soil")
     settled, t_fill = settle(sim, 0.005, case.fill_time)
     top = float((sim.x[:, 2] + sim.p.r).max())
+    return sim, R, tube_h, settled, t_fill, top
+
+
+def lifted_tube(case: TubeCase, conventions="liggghts", threads=None):
+    """The filled, settled tube as a soilcal Simulation with the given conventions, and
+    (phases, bounds, info) for :func:`soilcal.reference.liggghts.run` and
+    :func:`~soilcal.reference.liggghts.run_phases`.  The fill is computed once per seed and
+    conventions; a comparison of two conventions starts both from :func:`restart`."""
+    case.check()
+    hi = case.radii[1]
+    sim, R, tube_h, settled, t_fill, top = _filled_tube(
+        case, _materials(case), dict(rolling="constant_torque", conventions=conventions),
+        "<lifted tube>")
     lift_steps = int(math.ceil((top + 2 * hi) / case.lift_speed / sim.dt))
     settle_steps = int(math.ceil(case.settle_time / sim.dt))
     phases = [(lift_steps, {"tube": (0.0, 0.0, case.lift_speed)}), (settle_steps, {})]
@@ -184,7 +194,7 @@ class ColumnCase(Spheres):
     rolling_friction: float = 0.0
     #: surface energy [J/m^2] in the LAMMPS convention (pull-off 3 pi gamma R*, w = 2 gamma)
     surface_energy: float = 0.1
-    #: viscous_radius damping [1/(m s)]: about 0.2 of critical at an overlap of 1 % of R*
+    #: viscous_radius damping [1/(m s)]: 0.17 of critical at an overlap of 1 % of R*
     #: between two 2 mm spheres of E = 5 MPa
     damping_eta: float = 1.2e7
     settle_time: float = 1.0
@@ -196,9 +206,6 @@ class ColumnCase(Spheres):
             v = getattr(self, key)
             if not (isinstance(v, (int, float)) and math.isfinite(v) and v >= 0):
                 raise InputError(source, key, "a number >= 0", v)
-
-    def tube_radius(self) -> float:
-        return TubeCase.tube_radius(self)
 
     def contact_model(self) -> dict:
         return dict(cohesion="jkr", damping="viscous_radius", damping_eta=self.damping_eta,
@@ -212,37 +219,15 @@ def collapsed_column(case: ColumnCase, conventions="lammps"):
     contact carried over), and (phases, bounds, info): the column collapses and settles for
     ``settle_time`` s.  Without rolling resistance the heap that stays is held by the
     adhesion and the sliding friction."""
-    from soilcal.dem.engine import Simulation
-    from soilcal.dem.factories import CylinderRegion, UniformRadius, insert_random
-    from soilcal.dem.geometry import cone_mesh
     from soilcal.dem.materials import Material, MaterialTable
-    from soilcal.dem.scenarios.base import settle
 
     case.check("<column case>")
-    lo, hi = case.radii
-    R = case.tube_radius()
-    dist = UniformRadius(lo, hi)
-    h_ins = case.n * dist.mean_volume() / (PHI_PLACED * math.pi * (R - hi) ** 2)
-    tube_h = h_ins + 4 * hi
     mats = MaterialTable()
     mats.add(Material("soil", case.density, case.poisson, youngs=case.youngs))
     mats.set_pair("soil", "soil", case.restitution, case.friction, 0.0, case.surface_energy)
     model = case.contact_model()
-    sim = Simulation(mats, dt_fraction=case.dt_fraction,
-                     contact_model=dict(model, conventions=conventions),
-                     skin=0.6 * hi, max_overlap=MAX_OVERLAP, source="<cohesive column>")
-    k = 1.0 / math.cos(math.pi / N_SEG)
-    tv, tt = cone_mesh(k * R, k * R, 0.0, tube_h, N_SEG)
-    sim.add_mesh(tv, tt, "soil", name="tube")
-    sim.add_plane((0, 0, 0), (0, 0, 1), "soil", name="plate")
-    gen = np.random.default_rng(case.seed)
-    x, r = insert_random(CylinderRegion(R - 1.001 * hi, 1.001 * hi, h_ins), dist, n=case.n,
-                         rng=gen, max_fraction=0.35, source="<cohesive column>",
-                         field="particles")
-    order = np.argsort(x[:, 2], kind="stable")
-    sim.add_particles(x[order], r[order], "soil")
-    settled, t_fill = settle(sim, 0.005, case.fill_time)
-    top = float((sim.x[:, 2] + sim.p.r).max())
+    sim, R, tube_h, settled, t_fill, top = _filled_tube(
+        case, mats, dict(model, conventions=conventions), "<cohesive column>")
     free = restart(sim, conventions, model, walls=("plate",))
     free.run(0)
     steps = int(math.ceil(case.settle_time / free.dt))

@@ -12,8 +12,11 @@ from __future__ import annotations
 
 import math
 import os
+import re
+import shutil
 import signal
 import subprocess
+import tempfile
 from pathlib import Path
 
 import numpy as np
@@ -195,3 +198,34 @@ def read_state(path, n) -> dict:
     rr[idx] = d["radius"]
     out["r"] = rr
     return out
+
+
+def run_case(engine: str, write_case, launch, version_pattern: str, sim, phases, bounds,
+             workdir=None, snapshots: bool = False) -> dict:
+    """Write a case with ``write_case(sim, work, phases, bounds)`` (its ``phase<k>.dump`` at
+    the end of every phase), run it with ``launch(work)`` -> (exit status, output) and read
+    it back: the final state by soilcal insertion id (``x``, ``v``, ``omega``, ``r``,
+    ``present``: False for spheres the engine lost through its box), the ``loop_s`` it
+    reports, its ``version`` (``version_pattern``'s first group in its output) and the
+    ``case`` record; with ``snapshots``, ``states``: the state at the end of every phase.
+    Without ``workdir`` the files go to a temporary folder, removed afterwards."""
+    work = Path(workdir) if workdir else Path(tempfile.mkdtemp(prefix=f"soilcal-{engine.lower()}-"))
+    try:
+        info = write_case(sim, work, phases, bounds)
+        rc, out = launch(work)
+        last = work / f"phase{len(phases) - 1}.dump"
+        if rc != 0 or not last.exists():
+            tail = "\n".join(out.splitlines()[-12:])
+            raise RuntimeError(f"{engine} failed (rc {rc}) in {work}:\n{tail}")
+        states = [read_state(work / f"phase{k}.dump", info["n"]) for k in range(len(phases))]
+        res = dict(states[-1], case=info)
+        if snapshots:
+            res["states"] = states
+        loops = re.findall(r"Loop time of ([0-9.eE+-]+) on", out)
+        res["loop_s"] = float(sum(float(t) for t in loops))
+        vm = re.search(version_pattern, out, re.M)
+        res["version"] = vm.group(1) if vm else ""
+        return res
+    finally:
+        if not workdir:
+            shutil.rmtree(work, ignore_errors=True)

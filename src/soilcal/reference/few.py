@@ -145,7 +145,7 @@ def compare(name: str, rolling: str, ranks: int = 1) -> dict:
                 tol=CASES[name].get("tol", 1e-9), version=res["version"])
 
 
-JKR_ETA = 5e7  # viscous_radius damping [1/(m s)]: about 0.15 of critical at these contacts
+JKR_ETA = 5e7  # viscous_radius damping [1/(m s)]: 0.12 of critical at an overlap of 1 % of R*
 JKR_CASES = {
     # head-on at 2 cm/s, no gravity: caught by adhesion, the pair rings and stays together
     "jkr_catch": dict(x=[[0, 0, 0], [0, 0, 2.001 * R]], v=[[0, 0, 0], [0, 0, -0.02]],

@@ -58,8 +58,7 @@ from pathlib import Path
 import numpy as np
 
 from soilcal.errors import InputError
-from soilcal.reference.deck import (check_case, check_phases, num, read_state, run_process,
-                                    write_data)
+from soilcal.reference.deck import check_case, check_phases, num, run_case, run_process, write_data
 
 SOURCE = "<lammps case>"
 #: codes[10:15] of the ``lammps`` conventions (contact.py): break, Coulomb force, slip,
@@ -231,24 +230,8 @@ def run(sim, phases, bounds, workdir=None, timeout: float | None = None,
     ok, exe = available()
     if not ok:
         raise RuntimeError(exe)
-    work = Path(workdir) if workdir else Path(tempfile.mkdtemp(prefix="soilcal-lammps-"))
-    try:
-        info = write_case(sim, work, phases, bounds)
-        rc, out = run_process([exe, "-in", "in.case", "-log", "log.case"], work, timeout, "LAMMPS")
-        last = work / f"phase{len(phases) - 1}.dump"
-        if rc != 0 or not last.exists():
-            tail = "\n".join(out.splitlines()[-12:])
-            raise RuntimeError(f"LAMMPS failed (rc {rc}) in {work}:\n{tail}")
-        states = [read_state(work / f"phase{k}.dump", info["n"]) for k in range(len(phases))]
-        res = dict(states[-1], case=info)
-        if snapshots:
-            res["states"] = states
-        loops = re.findall(r"Loop time of ([0-9.eE+-]+) on", out)
-        res["loop_s"] = float(sum(float(s) for s in loops))
-        vm = re.search(r"^(LAMMPS \([^)]*\))", out, re.M)
-        res["version"] = vm.group(1) if vm else ""
-        return res
-    finally:
-        if not workdir:
-            shutil.rmtree(work, ignore_errors=True)
+    return run_case("LAMMPS", write_case,
+                    lambda work: run_process([exe, "-in", "in.case", "-log", "log.case"], work,
+                                             timeout, "LAMMPS"),
+                    r"^(LAMMPS \([^)]*\))", sim, phases, bounds, workdir, snapshots)
 

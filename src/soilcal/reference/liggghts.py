@@ -43,15 +43,13 @@ from __future__ import annotations
 
 import json
 import math
-import re
 import shutil
-import tempfile
 from pathlib import Path
 
 import numpy as np
 
 from soilcal.errors import InputError
-from soilcal.reference.deck import (check_case, check_phases, num, read_dump, read_state,
+from soilcal.reference.deck import (check_case, check_phases, num, read_dump, run_case,
                                     run_phases, run_process, write_data)
 
 # check_phases, read_dump and run_phases are the shared ones of soilcal.reference.deck
@@ -275,23 +273,7 @@ def run(sim, phases, bounds, ranks: int = 1, workdir=None, timeout: float | None
     ok, exe = available()
     if not ok:
         raise RuntimeError(exe)
-    work = Path(workdir) if workdir else Path(tempfile.mkdtemp(prefix="soilcal-liggghts-"))
-    try:
-        info = write_case(sim, work, phases, bounds)
-        rc, out = launch([exe, "-in", "in.case", "-log", "log.case"], work, ranks, timeout)
-        last = work / f"phase{len(phases) - 1}.dump"
-        if rc != 0 or not last.exists():
-            tail = "\n".join(out.splitlines()[-12:])
-            raise RuntimeError(f"LIGGGHTS failed (rc {rc}) in {work}:\n{tail}")
-        states = [read_state(work / f"phase{k}.dump", info["n"]) for k in range(len(phases))]
-        res = dict(states[-1], case=info)
-        if snapshots:
-            res["states"] = states
-        loops = re.findall(r"Loop time of ([0-9.eE+-]+) on", out)
-        res["loop_s"] = float(sum(float(s) for s in loops))
-        vm = re.search(r"^(LIGGGHTS \(Version[^)]*\))", out, re.M)
-        res["version"] = vm.group(1) if vm else ""
-        return res
-    finally:
-        if not workdir:
-            shutil.rmtree(work, ignore_errors=True)
+    return run_case("LIGGGHTS", write_case,
+                    lambda work: launch([exe, "-in", "in.case", "-log", "log.case"], work, ranks,
+                                        timeout),
+                    r"^(LIGGGHTS \(Version[^)]*\))", sim, phases, bounds, workdir, snapshots)

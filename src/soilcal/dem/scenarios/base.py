@@ -553,21 +553,37 @@ def write_row(path, result: Result) -> Path:
 
 def run_replicates(module, setup: dict, params: DemParams, preset: str = "quick", seed: int = 0,
                    replicates: int = 1, threads=None, vtk_dir=None,
-                   source: str = "<input>") -> Result:
+                   source: str = "<input>", restart_dir=None, restart_every: float = 300.0,
+                   log=print) -> Result:
     """Run a scenario ``replicates`` times with the seeds seed, seed + 1, ... and average.
 
     One run is returned as it is.  Several runs give one :class:`Result` (see
-    :func:`combine_replicates`); VTK frames of each go to ``<vtk_dir>/seed<s>``.
+    :func:`combine_replicates`); VTK frames of each go to ``<vtk_dir>/seed<s>``.  With
+    ``restart_dir``, a scenario that supports restart files (:mod:`soilcal.dem.restart`)
+    keeps one per seed there, ``<name>-seed<s>.restart``, written every ``restart_every``
+    seconds of wall time and resumed from when the run is started again; a scenario that
+    does not runs from its start (``log`` says so).
     """
+    from soilcal.dem import restart as rst
+
     check(isinstance(replicates, (int, np.integer)) and not isinstance(replicates, bool)
           and replicates >= 1, source, "replicates", "an integer >= 1", replicates)
     check(isinstance(seed, (int, np.integer)) and not isinstance(seed, bool) and seed >= 0,
           source, "seed", "an integer >= 0", seed)
+    use = restart_dir is not None and rst.supports(module)
+    if restart_dir is not None and not use:
+        log(f"restart files: the {module.NAME} scenario does not write them; it runs from its start")
     runs = []
     for s in range(int(seed), int(seed) + int(replicates)):
         vdir = vtk_dir if vtk_dir is None or replicates == 1 else Path(vtk_dir) / f"seed{s}"
+        kw = {}
+        if use:
+            ident = dict(scenario=module.NAME, setup=setup, params=params.as_dict(),
+                         preset=preset, seed=s)
+            kw["restart"] = rst.Restart(Path(restart_dir) / f"{module.NAME}-seed{s}.restart",
+                                        ident, restart_every, log=log)
         runs.append(module.run(setup, params, preset=preset, seed=s, threads=threads,
-                               vtk_dir=vdir))
+                               vtk_dir=vdir, **kw))
     return runs[0] if replicates == 1 else combine_replicates(runs)
 
 

@@ -4,12 +4,16 @@
     soilcal scenario setups NAME
     soilcal scenario run NAME --setup S --preset quick|paper --seed N --threads T \\
         --set key=value ... --param name=value ... --out row.csv [--vtk DIR] [--replicates K]
+        [--restart DIR] [--restart-every SECONDS]
 
 ``--set`` overrides a value of the named setup (numbers are parsed as numbers), ``--param``
 sets a :class:`soilcal.dem.scenarios.base.DemParams` field; the run writes one CSV row
 (:func:`soilcal.dem.scenarios.base.write_row`) and prints the responses as JSON.
 ``--replicates K`` runs the seeds N .. N+K-1 and reports the mean of each response with the
 replicates' standard deviation (:func:`soilcal.dem.scenarios.base.run_replicates`).
+``--restart DIR`` keeps a restart file per seed in DIR (scenarios that write them:
+:func:`soilcal.dem.restart.supports`), every ``--restart-every`` seconds (default 300): the
+same command started again after the run was killed resumes from it.
 """
 
 from __future__ import annotations
@@ -80,9 +84,11 @@ def _run(args) -> int:
         raise InputError(src, "--seed", "an integer >= 0", args.seed)
     params = DemParams.from_mapping(_pairs(args.param, "--param"), src)
     mod.validate(setup, args.preset, src, params=params)
+    if args.restart_every < 0:
+        raise InputError(src, "--restart-every", "a number of seconds >= 0", args.restart_every)
     res = run_replicates(mod, setup, params, preset=args.preset, seed=args.seed,
                          replicates=args.replicates, threads=args.threads, vtk_dir=args.vtk,
-                         source=src)
+                         source=src, restart_dir=args.restart, restart_every=args.restart_every)
     if args.out:
         write_row(args.out, res)
     print(json.dumps(dict(scenario=res.scenario, setup=name, preset=res.preset, seed=res.seed,
@@ -114,4 +120,9 @@ def register(subparsers) -> None:
     s.add_argument("--vtk", default=None, help="directory for VTK frames")
     s.add_argument("--replicates", type=int, default=1,
                    help="runs with seeds SEED .. SEED+K-1, responses averaged (default 1)")
+    s.add_argument("--restart", default=None, metavar="DIR",
+                   help="keep restart files in DIR and resume from them when started again "
+                        "(scenarios that write them: repose)")
+    s.add_argument("--restart-every", type=float, default=300.0, metavar="SECONDS",
+                   help="wall time between two restart files (default 300)")
     s.set_defaults(func=_run)

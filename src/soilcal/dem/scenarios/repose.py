@@ -89,10 +89,12 @@ from soilcal.dem.factories import ConeRegion, CylinderRegion, UniformRadius, ins
 from soilcal.dem.geometry import cone_mesh, disk_mesh
 from soilcal.dem.scenarios.base import (DemParams, Frames, Result, Timer, check, check_discretisation,
                                         check_preset, make_simulation, paper_cohesion, paper_psd,
-                                        rng, run_time, settle, setup_number, threads_used)
+                                        rng, run_time, setup_number, threads_used)
 from soilcal.errors import InputError
 
 NAME = "repose"
+#: writes and reads restart files (soilcal.dem.restart)
+RESTARTABLE = True
 #: every response a run reports (``Result.responses``)
 RESPONSES = (
     "angle_deg", "angle_sd_deg", "height_m", "angle_surface_deg", "angle_surface_sd_deg",
@@ -321,71 +323,108 @@ def _fill_funnel(sim, setup, sz, gen, source):
 
 
 def run(setup: dict, params: DemParams, preset: str = "quick", seed: int = 0, threads=None,
-        vtk_dir=None, source: str = "<repose>") -> Result:
+        vtk_dir=None, source: str = "<repose>", restart=None) -> Result:
+    """One heap (module docstring).  ``restart``: a :class:`soilcal.dem.restart.Restart`
+    whose file the run resumes from when it holds this run's state, and writes every few
+    minutes; the run's numbers are the same either way (its phases: ``settle_fill``, then
+    ``lift`` (cylinder) or ``cover`` (funnel), then ``settle_heap``)."""
+    from soilcal.dem import restart as rst
+
     validate(setup, preset, source, params)
     timer = Timer()
     nthreads = threads_used(threads)
     sz = sizing(setup, preset, params)
-    gen = rng(seed, setup.get("seed_stream", NAME))
-    # a neighbour skin of 0.6 r_max: falling spheres would otherwise rebuild the lists every
-    # few steps (the engine default is 0.2 r_max, tuned for packed beds)
     coh = paper_cohesion(setup, sz["dist"], source)
-    sim, scale = make_simulation(params, setup, preset, source, cohesion=coh,
-                                 skin=0.6 * sz["r_max"])
     frames = Frames(vtk_dir, NAME)
     dmax = 2 * sz["r_max"]
-    info = {}
-    if setup["method"] == "cylinder":
-        R = setup["tube_diameter"] / 2
-        vol = sz["n"] * sz["dist"].mean_volume()
-        h_ins = vol / (FILL_FRACTION * math.pi * (R - sz["r_max"]) ** 2)
-        tube_h = max(setup["tube_height"], h_ins + dmax)
-        tube = sim.add_cylinder((0, 0, tube_h / 2), (0, 0, 1), R, tube_h / 2,
-                                setup["wall_material"], inner=True, name="tube")
-        _plate(sim, setup)
-        _insert(sim, CylinderRegion(R - 1.001 * sz["r_max"], 1.001 * sz["r_max"], h_ins), sz["dist"],
-                sz["n"], gen, source)
+    cylinder = setup["method"] == "cylinder"
+    saved = restart.load() if restart is not None else None
+    if saved:
+        sim, st = saved["sim"], saved["vars"]
+        frames.entries = list(st["frames"])
+    else:
+        gen = rng(seed, setup.get("seed_stream", NAME))
+        # a neighbour skin of 0.6 r_max: falling spheres would otherwise rebuild the lists
+        # every few steps (the engine default is 0.2 r_max, tuned for packed beds)
+        sim, scale = make_simulation(params, setup, preset, source, cohesion=coh,
+                                     skin=0.6 * sz["r_max"])
+        st = dict(phase="settle_fill", info={}, scale=scale, wall_s=0.0)
+        if cylinder:
+            R = setup["tube_diameter"] / 2
+            vol = sz["n"] * sz["dist"].mean_volume()
+            h_ins = vol / (FILL_FRACTION * math.pi * (R - sz["r_max"]) ** 2)
+            tube_h = max(setup["tube_height"], h_ins + dmax)
+            sim.add_cylinder((0, 0, tube_h / 2), (0, 0, 1), R, tube_h / 2,
+                             setup["wall_material"], inner=True, name="tube")
+            _plate(sim, setup)
+            _insert(sim, CylinderRegion(R - 1.001 * sz["r_max"], 1.001 * sz["r_max"], h_ins),
+                    sz["dist"], sz["n"], gen, source)
+        else:
+            Rt, Rb = setup["funnel_top_diameter"] / 2, setup["funnel_bottom_diameter"] / 2
+            k = 1.0 / math.cos(math.pi / N_SEG)
+            fv, ft = cone_mesh(k * Rb, k * Rt, setup["outlet_height"],
+                               setup["outlet_height"] + setup["funnel_height"], N_SEG)
+            sim.add_mesh(fv, ft, setup["wall_material"], name="funnel")
+            # the cover is a triangulated disc (triangles are two-sided, a disc wall is not)
+            cv, ct = disk_mesh(1.25 * Rb, 24, centre=(0, 0, setup["outlet_height"]))
+            sim.add_mesh(cv, ct, setup["wall_material"], name="cover")
+            _plate(sim, setup)
+            _fill_funnel(sim, setup, sz, gen, source)
         frames(sim)
-        ok0, t_fill = settle(sim, setup["rest_speed"], setup["max_settle_time"])
+    wall0 = float(st["wall_s"])
+    info = st["info"]
+
+    def checkpoint(phase):
+        st.update(phase=phase, frames=list(frames.entries), wall_s=wall0 + timer.seconds)
+        if restart is not None:
+            restart.save(phase, sim, st)
+
+    def stage(phase):
+        # run from the phase the run stands in (a resumed run skips the ones it has done)
+        return st["phase"] == phase
+
+    if stage("settle_fill"):
+        checkpoint("settle_fill")
+        ok0, _ = rst.settle(sim, setup["rest_speed"], setup["max_settle_time"], restart,
+                            "settle_fill", st, "fill_steps")
         info["fill_settled"] = int(ok0)
-        info["fill_height_m"] = float((sim.x[:, 2] + sim.p.r).max())
+        if cylinder:
+            info["fill_height_m"] = float((sim.x[:, 2] + sim.p.r).max())
         frames(sim)
+        st.update(phase="lift" if cylinder else "cover", move_step0=sim.step, bottom=0.0)
+    if cylinder and stage("lift"):
+        tube = sim.walls.names.index("tube")
         lift = info["fill_height_m"] + dmax
         v = setup["lift_speed"]
         sim.set_wall_motion(tube, velocity=(0, 0, v))
-        step0, bottom = sim.step, 0.0
         chunk = max(sim.dt, min(0.05, 0.5 * sz["r_max"] / v))  # rim moves half a radius
-        while bottom < lift:
-            run_time(sim, min(chunk, (lift - bottom) / v))
-            bottom = v * (sim.step - step0) * sim.dt  # rigid translation of the rim
-            if bottom > float((sim.x[:, 2] + sim.p.r).max()) + sz["r_max"]:
+        while st["bottom"] < lift:
+            checkpoint("lift")
+            run_time(sim, min(chunk, (lift - st["bottom"]) / v))
+            st["bottom"] = v * (sim.step - st["move_step0"]) * sim.dt  # the rim's translation
+            if st["bottom"] > float((sim.x[:, 2] + sim.p.r).max()) + sz["r_max"]:
                 break  # every sphere is below the rim: the rest of the lift touches nothing
-        info["lift_m"] = bottom
+        info["lift_m"] = st["bottom"]
         sim.set_wall_motion(tube, velocity=(0, 0, 0))
         frames(sim)
-        z_out = math.inf
-    else:
-        Rt, Rb = setup["funnel_top_diameter"] / 2, setup["funnel_bottom_diameter"] / 2
-        hf, z_out = setup["funnel_height"], setup["outlet_height"]
-        k = 1.0 / math.cos(math.pi / N_SEG)
-        fv, ft = cone_mesh(k * Rb, k * Rt, z_out, z_out + hf, N_SEG)
-        sim.add_mesh(fv, ft, setup["wall_material"], name="funnel")
-        # the cover is a triangulated disc (triangles are two-sided, a disc wall is not)
-        cv, ct = disk_mesh(1.25 * Rb, 24, centre=(0, 0, z_out))
-        cover = sim.add_mesh(cv, ct, setup["wall_material"], name="cover")
-        _plate(sim, setup)
-        _fill_funnel(sim, setup, sz, gen, source)
-        frames(sim)
-        ok0, t_fill = settle(sim, setup["rest_speed"], setup["max_settle_time"])
-        info["fill_settled"] = int(ok0)
-        frames(sim)
+        st["phase"] = "settle_heap"
+    if not cylinder and stage("cover"):
+        cover = sim.walls.names.index("cover")
+        Rb = setup["funnel_bottom_diameter"] / 2
         sim.set_wall_motion(cover, velocity=(setup["cover_speed"], 0, 0))
-        run_time(sim, (2.5 * Rb + dmax) / setup["cover_speed"])
+        checkpoint("cover")
+        steps = max(1, int(round((2.5 * Rb + dmax) / setup["cover_speed"] / sim.dt)))
+        rst.advance(sim, steps, restart, "cover", st, "cover_steps")  # run_time's steps
         sim.set_wall_motion(cover, velocity=(0, 0, 0))
         frames(sim)
-    ok, t_rest = settle(sim, setup["rest_speed"], setup["max_settle_time"])
+        st["phase"] = "settle_heap"
+    checkpoint("settle_heap")
+    ok, t_rest = rst.settle(sim, setup["rest_speed"], setup["max_settle_time"], restart,
+                            "settle_heap", st, "heap_steps")
     frames(sim)
     frames.close()
+    scale = st["scale"]
+    z_out = math.inf if cylinder else setup["outlet_height"]
     x, r = sim.x.copy(), sim.p.r.copy()
     half = setup["plate_size"] / 2
     inside = (np.abs(x[:, 0]) <= half) & (np.abs(x[:, 1]) <= half)
@@ -437,8 +476,10 @@ def run(setup: dict, params: DemParams, preset: str = "quick", seed: int = 0, th
     setup_out.pop("paper_psd", None)
     setup_out.update(stiffness_scale=scale, cohesion_scale=coh, dt=sim.dt,
                      dt_fraction=sim.dt / sim.rayleigh, r_mean=sz["r_mean"], r_max=sz["r_max"], load_mass=sz["load_mass"], **info)
+    if restart is not None:
+        restart.clear()
     return Result(scenario=NAME, preset=preset, seed=int(seed), n_particles=int(sim.n),
-                  steps=int(sim.step), sim_time_s=float(sim.step * sim.dt), wall_s=timer.seconds,
+                  steps=int(sim.step), sim_time_s=float(sim.step * sim.dt), wall_s=wall0 + timer.seconds,
                   threads=nthreads, params=params.as_dict(), setup=setup_out,
                   responses=responses,
                   series=dict(per_direction_deg=np.asarray(bins["per_direction_deg"]), x=x, r=r))

@@ -1,0 +1,149 @@
+"""Restart files (soilcal.dem.restart): a run killed after writing one resumes from it and
+gives the numbers of the uninterrupted run; a file of another run is not used."""
+
+import pickle
+
+import numpy as np
+import pytest
+
+from soilcal.dem import restart as rst
+from soilcal.dem.scenarios import repose
+from soilcal.dem.scenarios.base import DemParams, run_replicates
+
+SETUP = dict(repose.setups()["cinnamon-soil"], n_particles=300, image=False)
+PARAMS = DemParams()
+SEED = 3
+
+
+class Killed(Exception):
+    pass
+
+
+class KillAfter(rst.Restart):
+    """A restart file that 'kills' the run right after its k-th write."""
+
+    def __init__(self, path, identity, k):
+        super().__init__(path, identity, every_s=0.0, log=lambda *_: None)
+        self.k = k
+
+    def save(self, phase, sim, vars, force=False):
+        wrote = super().save(phase, sim, vars, force)
+        if wrote and self.saves == self.k:
+            raise Killed(phase)
+        return wrote
+
+
+def identity(seed=SEED):
+    return dict(scenario=repose.NAME, setup=SETUP, params=PARAMS.as_dict(), preset="quick",
+                seed=seed)
+
+
+@pytest.fixture(scope="module", autouse=True)
+def short_chunks():
+    """Engine calls of 400 steps between looks at the clock, so that the small heap's rest
+    phases write several files too."""
+    keep = rst.CHUNK_STEPS
+    rst.CHUNK_STEPS = 400
+    yield
+    rst.CHUNK_STEPS = keep
+
+
+@pytest.fixture(scope="module")
+def reference():
+    """The uninterrupted run, the same run through the restart path, and the phase of every
+    file a run writes at every chance (every_s=0)."""
+    plain = repose.run(SETUP, PARAMS, "quick", SEED, threads=1)
+    counter = rst.Restart("/nonexistent/never-written", identity(), every_s=0.0)
+    phases = []
+    counter.save = lambda phase, *a, **k: phases.append(phase) or True
+    counted = repose.run(SETUP, PARAMS, "quick", SEED, threads=1, restart=counter)
+    return plain, counted, phases
+
+
+def same(a, b):
+    assert a.steps == b.steps and a.n_particles == b.n_particles
+    for k, v in a.responses.items():
+        w = b.responses[k]
+        if isinstance(v, float) and np.isnan(v):
+            assert np.isnan(w), k
+        else:
+            assert w == v, k
+
+
+def test_chunked_run_equals_the_plain_one(reference):
+    plain, counted, phases = reference
+    same(plain, counted)
+    for phase in ("settle_fill", "lift", "settle_heap"):
+        assert phases.count(phase) >= 2, phase
+
+
+@pytest.mark.parametrize("phase", ["settle_fill", "lift", "settle_heap"])
+def test_a_killed_run_resumes_to_the_same_numbers(tmp_path, reference, phase):
+    """Killed after the second file written in each phase (inside the fill's rest, between
+    two lift steps, inside the heap's rest)."""
+    plain, _, phases = reference
+    path = tmp_path / "heap.restart"
+    k = [i for i, ph in enumerate(phases) if ph == phase][1] + 1
+    with pytest.raises(Killed) as exc:
+        repose.run(SETUP, PARAMS, "quick", SEED, threads=1,
+                   restart=KillAfter(path, identity(), k))
+    assert path.exists()
+    with open(path, "rb") as fh:
+        assert pickle.load(fh)["phase"] == exc.value.args[0]
+    logs = []
+    again = rst.Restart(path, identity(), every_s=300.0, log=logs.append)
+    resumed = repose.run(SETUP, PARAMS, "quick", SEED, threads=1, restart=again)
+    assert again.resumed_from == exc.value.args[0] and "resuming" in logs[0]
+    same(plain, resumed)
+    assert not path.exists()  # a finished run removes its file
+
+
+def test_a_file_of_another_run_is_not_used(tmp_path, reference):
+    path = tmp_path / "heap.restart"
+    with pytest.raises(Killed):
+        repose.run(SETUP, PARAMS, "quick", SEED + 1, threads=1,
+                   restart=KillAfter(path, identity(SEED + 1), 2))
+    logs = []
+    fresh = repose.run(SETUP, PARAMS, "quick", SEED, threads=1,
+                       restart=rst.Restart(path, identity(), log=logs.append))
+    assert "another run" in logs[0]
+    same(reference[0], fresh)
+
+
+def test_scenarios_without_restart_files_say_so(tmp_path):
+    class Plain:
+        NAME = "plain"
+
+        @staticmethod
+        def run(setup, params, preset, seed, threads, vtk_dir):
+            return repose.run(SETUP, PARAMS, preset, seed, threads=1)
+
+    logs = []
+    run_replicates(Plain, {}, PARAMS, seed=SEED, restart_dir=tmp_path, log=logs.append)
+    assert logs == ["restart files: the plain scenario does not write them; it runs from its start"]
+    assert not rst.supports(Plain) and rst.supports(repose)
+
+
+def test_replicates_keep_one_file_per_seed(tmp_path, reference):
+    res = run_replicates(repose, SETUP, PARAMS, seed=SEED, replicates=1, threads=1,
+                         restart_dir=tmp_path, restart_every=0.0, log=lambda *_: None)
+    same(reference[0], res)
+    assert list(tmp_path.iterdir()) == []  # written while it ran, removed at its end
+
+
+def test_bad_interval_is_named(tmp_path):
+    from soilcal.errors import InputError
+
+    with pytest.raises(InputError) as exc:
+        rst.Restart(tmp_path / "x", identity(), every_s=-1)
+    assert exc.value.field == "restart_every"
+
+
+def test_a_jobs_restart_folder_follows_its_output():
+    from pathlib import Path
+
+    from soilcal.chain.files import restart_dir
+
+    assert restart_dir("results/black-soil/dem/bbd/runs/3.csv") == Path("restart/black-soil/dem/bbd/runs/3")
+    assert restart_dir("/w/results/s/dem/verify/paper/bbd/c/1.csv") == Path("restart/s/dem/verify/paper/bbd/c/1")
+    assert restart_dir("/w/x.csv") == Path("restart/w/x")
