@@ -147,3 +147,40 @@ def test_a_jobs_restart_folder_follows_its_output():
     assert restart_dir("results/black-soil/dem/bbd/runs/3.csv") == Path("restart/black-soil/dem/bbd/runs/3")
     assert restart_dir("/w/results/s/dem/verify/paper/bbd/c/1.csv") == Path("restart/s/dem/verify/paper/bbd/c/1")
     assert restart_dir("/w/x.csv") == Path("restart/w/x")
+
+
+def test_sigkill_then_the_same_command_resumes(tmp_path):
+    """The command line: `soilcal scenario run repose ... --restart DIR --restart-every 0`
+    killed with SIGKILL once it has written a restart file, then started again, writes the row
+    an uninterrupted run writes (every column but the wall time)."""
+    import csv
+    import os
+    import signal
+    import subprocess
+    import sys
+    import time
+
+    base = [sys.executable, "-m", "soilcal.cli", "scenario", "run", "repose", "--setup",
+            "cinnamon-soil", "--set", "n_particles=1200", "--set", "image=false", "--seed", "5",
+            "--threads", "1"]
+    env = dict(os.environ)
+    subprocess.run(base + ["--out", str(tmp_path / "plain.csv")], check=True, env=env,
+                   capture_output=True)
+    rdir = tmp_path / "restart"
+    cmd = base + ["--out", str(tmp_path / "resumed.csv"), "--restart", str(rdir),
+                  "--restart-every", "0"]
+    proc = subprocess.Popen(cmd, env=env, stdout=subprocess.PIPE, stderr=subprocess.STDOUT)
+    t0 = time.monotonic()
+    while not list(rdir.glob("*.restart")) and proc.poll() is None and time.monotonic() - t0 < 120:
+        time.sleep(0.05)
+    assert proc.poll() is None, "the run ended before it wrote a restart file"
+    time.sleep(0.5)
+    proc.send_signal(signal.SIGKILL)
+    proc.wait()
+    assert list(rdir.glob("*.restart")) and not (tmp_path / "resumed.csv").exists()
+    out = subprocess.run(cmd, check=True, env=env, capture_output=True, text=True)
+    assert "resuming from" in out.stdout
+    rows = [list(csv.DictReader(open(tmp_path / f)))[0] for f in ("plain.csv", "resumed.csv")]
+    diff = {k for k in rows[0] if rows[0][k] != rows[1].get(k)}
+    assert diff == {"wall_s"}
+    assert not list(rdir.glob("*.restart"))
