@@ -113,26 +113,28 @@ class Restart:
             p.unlink(missing_ok=True)
 
 
-def advance(sim, steps: int, restart: Restart | None, phase: str, st: dict, key: str) -> int:
-    """Run ``steps`` steps, resumably: ``st[key]`` counts the steps done so far (kept in the
-    restart file with ``phase``); the same steps as one ``sim.run(steps)``.  Returns the steps
-    done in total."""
+def advance(sim, steps: int, st: dict, key: str, checkpoint=None) -> int:
+    """Run ``steps`` steps, resumably: ``st[key]`` counts the steps done so far.  With
+    ``checkpoint`` (a callable that writes the restart file when it is due), the steps go in
+    chunks of :data:`CHUNK_STEPS` with a call between two; the same steps as one
+    ``sim.run(steps)`` either way.  Returns the steps done in total."""
     done = int(st.get(key, 0))
     steps = int(steps)
     while done < steps:
-        n = min(CHUNK_STEPS, steps - done) if restart is not None else steps - done
+        n = min(CHUNK_STEPS, steps - done) if checkpoint is not None else steps - done
         done += sim.run(n)
         st[key] = done
-        if restart is not None and done < steps:
-            restart.save(phase, sim, st)
+        if checkpoint is not None and done < steps:
+            checkpoint()
     return done
 
 
-def settle(sim, rest_speed: float, max_time: float, restart: Restart | None, phase: str, st: dict,
-           key: str, check_every: int = 200) -> tuple[bool, float]:
-    """:func:`soilcal.dem.scenarios.base.settle`, resumably (``st[key]``: steps done): run until
-    the translational kinetic energy is below 1/2 M v_rest^2 (checked every ``check_every``
-    steps) or ``max_time`` seconds have passed; returns (settled, simulated seconds)."""
+def settle(sim, rest_speed: float, max_time: float, st: dict, key: str, checkpoint=None,
+           check_every: int = 200) -> tuple[bool, float]:
+    """:func:`soilcal.dem.scenarios.base.settle`, resumably (``st[key]``: steps done;
+    ``checkpoint`` as in :func:`advance`): run until the translational kinetic energy is below
+    1/2 M v_rest^2 (checked every ``check_every`` steps) or ``max_time`` seconds have passed;
+    returns (settled, simulated seconds)."""
     from soilcal.dem.scenarios.base import rest_tolerance
 
     if sim.dt is None:
@@ -143,7 +145,7 @@ def settle(sim, rest_speed: float, max_time: float, restart: Restart | None, pha
     chunk = max(1, CHUNK_STEPS // check_every) * check_every
     stopped = bool(st.get(key + ".stopped", False))
     while done < total and not stopped:
-        n = min(chunk, total - done) if restart is not None else total - done
+        n = min(chunk, total - done) if checkpoint is not None else total - done
         k = sim.run(n, ke_tol=tol, ke_every=check_every)
         done += k
         # the engine checks the rest at every absolute step that is a multiple of
@@ -151,7 +153,7 @@ def settle(sim, rest_speed: float, max_time: float, restart: Restart | None, pha
         stopped = k < n or (sim.step % check_every == 0 and sim.kinetic_energy() < tol)
         st[key] = done
         st[key + ".stopped"] = stopped
-        if restart is not None and done < total and not stopped:
-            restart.save(phase, sim, st)
+        if checkpoint is not None and done < total and not stopped:
+            checkpoint()
     ok = done < total or sim.kinetic_energy() < tol
     return bool(ok), done * sim.dt

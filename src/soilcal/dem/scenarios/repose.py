@@ -379,14 +379,18 @@ def run(setup: dict, params: DemParams, preset: str = "quick", seed: int = 0, th
         if restart is not None:
             restart.save(phase, sim, st)
 
+    def saver(phase):
+        # inside a long engine stretch: write the file when it is due (no restart: no chunks)
+        return None if restart is None else (lambda: checkpoint(phase))
+
     def stage(phase):
         # run from the phase the run stands in (a resumed run skips the ones it has done)
         return st["phase"] == phase
 
     if stage("settle_fill"):
         checkpoint("settle_fill")
-        ok0, _ = rst.settle(sim, setup["rest_speed"], setup["max_settle_time"], restart,
-                            "settle_fill", st, "fill_steps")
+        ok0, _ = rst.settle(sim, setup["rest_speed"], setup["max_settle_time"], st,
+                            "fill_steps", saver("settle_fill"))
         info["fill_settled"] = int(ok0)
         if cylinder:
             info["fill_height_m"] = float((sim.x[:, 2] + sim.p.r).max())
@@ -414,13 +418,13 @@ def run(setup: dict, params: DemParams, preset: str = "quick", seed: int = 0, th
         sim.set_wall_motion(cover, velocity=(setup["cover_speed"], 0, 0))
         checkpoint("cover")
         steps = max(1, int(round((2.5 * Rb + dmax) / setup["cover_speed"] / sim.dt)))
-        rst.advance(sim, steps, restart, "cover", st, "cover_steps")  # run_time's steps
+        rst.advance(sim, steps, st, "cover_steps", saver("cover"))  # run_time's steps
         sim.set_wall_motion(cover, velocity=(0, 0, 0))
         frames(sim)
         st["phase"] = "settle_heap"
     checkpoint("settle_heap")
-    ok, t_rest = rst.settle(sim, setup["rest_speed"], setup["max_settle_time"], restart,
-                            "settle_heap", st, "heap_steps")
+    ok, t_rest = rst.settle(sim, setup["rest_speed"], setup["max_settle_time"], st,
+                            "heap_steps", saver("settle_heap"))
     frames(sim)
     frames.close()
     scale = st["scale"]
