@@ -10,15 +10,7 @@ import os
 import pytest
 
 
-#: test folders whose files run the workflow end to end (minutes each): collected first, so
-#: that on two workers they start at once and the short files fill the other worker, instead
-#: of one of them starting last and running alone at the end
-FIRST = ("tests/workflow/",)
-
-
 def pytest_collection_modifyitems(config, items):
-    items[:] = ([it for it in items if it.nodeid.startswith(FIRST)]
-                + [it for it in items if not it.nodeid.startswith(FIRST)])
     files = sorted({it.nodeid.split("::")[0] for it in items
                     if "tiny_dem_run" in getattr(it, "fixturenames", ())})
     if len(files) > 1 and os.environ.get("PYTEST_XDIST_WORKER"):
