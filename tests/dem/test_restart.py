@@ -110,6 +110,96 @@ def test_a_file_of_another_run_is_not_used(tmp_path, reference):
     same(reference[0], fresh)
 
 
+# every other scenario, each on a case small enough for CI, killed inside each of its phases
+def _cases():
+    from soilcal.dem.scenarios import bulldozing, compression, drum, furrow, incline, rotary
+
+    dry = DemParams(soil_soil_surface_energy=0.0)
+    return {
+        "drum": (drum, dict(drum.setups()["xinjiang-vineyard"], n_particles=150, spin_time=0.5,
+                            transient_time=0.2, frame_every=0.05), dry, {},
+                 ("settle_fill", "transient", "frames")),
+        "incline": (incline, dict(incline.setups()["yangtze-static"]), PARAMS, {},
+                    ("tilt",)),
+        "compression": (compression, dict(compression.setups()["guangxi-cohesive"],
+                                          n_particles=200, max_strain=0.1), dry, {},
+                        ("settle_fill", "press")),
+        "bulldozing": (bulldozing, dict(bulldozing.setups()["plate-line"], travel=0.05,
+                                        settle_time=0.1, overrides=["travel", "settle_time"]),
+                       bulldozing.paper_params(), dict(use_cache=False), ("bin_0", "pass")),
+        "furrow": (furrow, dict(furrow.setups()["yangtze-opener"], travel=0.55, n_slices=1,
+                                settle_time=0.1, overrides=["travel", "settle_time", "n_slices"]),
+                   furrow.paper_params(), dict(use_cache=False), ("pass",)),
+        "rotary": (rotary, dict(rotary.setups()["rpm-250"], travel=0.15, settle_time=0.1,
+                                lift_time=0.02, rest_time=0.02,
+                                overrides=["travel", "settle_time", "lift_time", "rest_time"]),
+                   rotary.paper_params(), dict(use_cache=False), ("bin_1", "lift")),
+    }
+
+
+CASES = _cases()
+KILLS = [(name, phase) for name, case in CASES.items() for phase in case[4]]
+
+
+@pytest.fixture(scope="module")
+def references():
+    """Per scenario: the uninterrupted run, the same run through the restart path and the
+    phase of every file it writes at every chance (every_s=0)."""
+    out = {}
+
+    def get(name):
+        if name not in out:
+            mod, setup, params, kw, _ = CASES[name]
+            plain = mod.run(setup, params, "quick", SEED, threads=1, **kw)
+            counter = rst.Restart("/nonexistent/never-written", {}, every_s=0.0)
+            phases = []
+            counter.save = lambda phase, *a, **k: phases.append(phase) or True
+            counted = mod.run(setup, params, "quick", SEED, threads=1, restart=counter, **kw)
+            out[name] = plain, counted, phases
+        return out[name]
+
+    return get
+
+
+def _identity(name):
+    mod, setup, params, _, _ = CASES[name]
+    return dict(scenario=mod.NAME, setup=setup, params=params.as_dict(), preset="quick",
+                seed=SEED)
+
+
+@pytest.mark.parametrize("name", list(CASES))
+def test_every_scenario_writes_restart_files(name, references):
+    mod, kills = CASES[name][0], CASES[name][4]
+    plain, counted, phases = references(name)
+    assert rst.supports(mod)
+    same(plain, counted)
+    for phase in kills:
+        assert phases.count(phase) >= 2, (phase, phases)
+    for key, v in plain.series.items():
+        assert np.array_equal(np.asarray(v), np.asarray(counted.series[key]), equal_nan=True), key
+
+
+@pytest.mark.parametrize("name,phase", KILLS)
+def test_every_scenario_resumes_to_the_same_numbers(tmp_path, references, name, phase):
+    """Killed after the second file written in the phase, then started again with the file:
+    the numbers (responses and measured series) of the uninterrupted run."""
+    mod, setup, params, kw, _ = CASES[name]
+    plain, _, phases = references(name)
+    path = tmp_path / "run.restart"
+    k = [i for i, ph in enumerate(phases) if ph == phase][1] + 1
+    with pytest.raises(Killed) as exc:
+        mod.run(setup, params, "quick", SEED, threads=1,
+                restart=KillAfter(path, _identity(name), k), **kw)
+    assert exc.value.args[0] == phase and path.exists()
+    again = rst.Restart(path, _identity(name), every_s=300.0, log=lambda *_: None)
+    resumed = mod.run(setup, params, "quick", SEED, threads=1, restart=again, **kw)
+    assert again.resumed_from == phase
+    same(plain, resumed)
+    for key, v in plain.series.items():
+        assert np.array_equal(np.asarray(v), np.asarray(resumed.series[key]), equal_nan=True), key
+    assert not path.exists()
+
+
 def test_scenarios_without_restart_files_say_so(tmp_path):
     class Plain:
         NAME = "plain"

@@ -1,14 +1,17 @@
 """Restart files of long runs.
 
-A scenario that supports them (``RESTARTABLE = True`` in its module; :func:`supports`) runs its
-long stretches through :func:`advance` and :func:`settle` here, which step the engine in chunks
-and, every ``every_s`` seconds of wall time, write the whole :class:`~soilcal.dem.engine.
-Simulation` and the scenario's own progress (``phase`` and a dict of plain values) to the
-restart file.  Started again with the same file, the scenario takes up the saved state and
-phase instead of building and filling its simulation anew.  The engine's state is saved whole
-(positions, velocities, forces, contact histories, neighbour lists, step count) and its steps
-are deterministic, so a resumed run gives the numbers of one uninterrupted run (checked in
-tests/dem/test_restart.py); only its wall time differs.
+A scenario that supports them (``RESTARTABLE = True`` in its module; :func:`supports`; every
+scenario of :mod:`soilcal.dem.scenarios`) steps through a :class:`Progress`: its run is a
+sequence of named phases (e.g. the drum's ``settle_fill``, ``transient``, ``frames``), its
+long stretches go through :func:`advance`, :func:`settle` and :func:`run_to_rest`, which step
+the engine in chunks, and every ``every_s`` seconds of wall time the whole
+:class:`~soilcal.dem.engine.Simulation` and the scenario's own progress (``phase`` and a dict
+of plain values: counters, the series measured so far) go to the restart file.  Started again
+with the same file, the scenario takes up the saved state and phase instead of building and
+filling its simulation anew.  The engine's state is saved whole (positions, velocities,
+forces, contact histories, neighbour lists, wall motions, step count) and its steps are
+deterministic, so a resumed run gives the numbers of one uninterrupted run (checked for every
+scenario in tests/dem/test_restart.py); only its wall time differs.
 
 File: a pickle of ``{"format", "key", "phase", "vars", "sim", "saved_utc"}``, written to a
 temporary file and renamed, so that a kill while writing leaves the previous file whole.  The
@@ -139,21 +142,123 @@ def settle(sim, rest_speed: float, max_time: float, st: dict, key: str, checkpoi
 
     if sim.dt is None:
         sim.run(0)
-    tol = rest_tolerance(sim, rest_speed)
     total = max(1, int(round(max_time / sim.dt)))
+    done, ok = run_to_rest(sim, total, rest_tolerance(sim, rest_speed), check_every, st, key,
+                           checkpoint)
+    return ok, done * sim.dt
+
+
+def run_to_rest(sim, max_steps: int, ke_tol: float, check_every: int, st: dict, key: str,
+                checkpoint=None) -> tuple[int, bool]:
+    """``sim.run(max_steps, ke_tol=ke_tol, ke_every=check_every)``, resumably (``st[key]``:
+    steps done; ``checkpoint`` as in :func:`advance`): the engine stops once the kinetic
+    energy, checked at every step that is a multiple of ``check_every``, is below ``ke_tol``.
+    Returns (steps done, whether it came to rest)."""
+    total = int(max_steps)
     done = int(st.get(key, 0))
     chunk = max(1, CHUNK_STEPS // check_every) * check_every
     stopped = bool(st.get(key + ".stopped", False))
     while done < total and not stopped:
         n = min(chunk, total - done) if checkpoint is not None else total - done
-        k = sim.run(n, ke_tol=tol, ke_every=check_every)
+        k = sim.run(n, ke_tol=ke_tol, ke_every=check_every)
         done += k
         # the engine checks the rest at every absolute step that is a multiple of
         # check_every, after the step; a chunk ending on such a step may have ended there
-        stopped = k < n or (sim.step % check_every == 0 and sim.kinetic_energy() < tol)
+        stopped = k < n or (sim.step % check_every == 0 and sim.kinetic_energy() < ke_tol)
         st[key] = done
         st[key + ".stopped"] = stopped
         if checkpoint is not None and done < total and not stopped:
             checkpoint()
-    ok = done < total or sim.kinetic_energy() < tol
-    return bool(ok), done * sim.dt
+    return done, bool(done < total or sim.kinetic_energy() < ke_tol)
+
+
+class Progress:
+    """Where a resumable run stands, and the one object its scenario steps through.
+
+    ``phase`` names the stretch the run is in (its scenario's phases, in order); ``vars`` holds
+    the run's own plain values (counters, measured series, flags); ``sim`` is the engine.
+    :meth:`resume` takes all three from the restart file when it holds this run's state;
+    otherwise the scenario builds its simulation and calls :meth:`begin`.  A scenario runs a
+    phase's body only when :meth:`at` says the run stands in it, runs its long stretches
+    through :meth:`advance` and :meth:`settle` (chunked, with a file written when due), calls
+    :meth:`checkpoint` between two short steps of a loop, and :meth:`finish` at its end.
+    ``restart=None``: the same calls, no file (and no chunking), so that one code path runs
+    with and without restart files.  ``frames``: a :class:`soilcal.dem.scenarios.base.Frames`
+    whose list of written frames travels with the file."""
+
+    def __init__(self, restart=None, timer=None, frames=None):
+        import time as _time
+
+        self.restart = restart
+        self._clock = (lambda: timer.seconds) if timer is not None else _time.perf_counter
+        self._t0 = self._clock()
+        self.frames = frames
+        self.sim = None
+        self.vars: dict = {"phase": None, "wall_s": 0.0}
+        self.wall0 = 0.0
+
+    def resume(self) -> bool:
+        """Take the saved state of this run, if there is one; returns whether it did."""
+        saved = self.restart.load() if self.restart is not None else None
+        if not saved:
+            return False
+        self.sim, self.vars = saved["sim"], saved["vars"]
+        self.wall0 = float(self.vars.get("wall_s", 0.0))
+        if self.frames is not None:
+            self.frames.entries = list(self.vars.get("frames", []))
+        return True
+
+    def begin(self, sim, phase: str, **values) -> None:
+        """Start (or hand over to a new simulation) at ``phase`` with ``values``."""
+        self.sim = sim
+        self.vars.update(values)
+        self.vars["phase"] = phase
+
+    @property
+    def phase(self) -> str | None:
+        return self.vars["phase"]
+
+    def at(self, phase: str) -> bool:
+        return self.vars["phase"] == phase
+
+    def next(self, phase: str, **values) -> None:
+        """Move on to ``phase`` (``values``: the run's values that it starts with)."""
+        self.vars.update(values)
+        self.vars["phase"] = phase
+
+    @property
+    def wall_s(self) -> float:
+        """Wall time of the run over every session it took."""
+        return self.wall0 + (self._clock() - self._t0)
+
+    def checkpoint(self) -> None:
+        """Write the restart file if one is due."""
+        if self.restart is None:
+            return
+        self.vars["wall_s"] = self.wall_s
+        if self.frames is not None:
+            self.vars["frames"] = list(self.frames.entries)
+        self.restart.save(self.vars["phase"], self.sim, self.vars)
+
+    def _saver(self):
+        return None if self.restart is None else self.checkpoint
+
+    def advance(self, steps: int, key: str) -> int:
+        """:func:`advance` ``steps`` steps of the current phase (``key``: its step counter)."""
+        return advance(self.sim, steps, self.vars, key, self._saver())
+
+    def settle(self, rest_speed: float, max_time: float, key: str,
+               check_every: int = 200) -> tuple[bool, float]:
+        """:func:`settle` in the current phase."""
+        return settle(self.sim, rest_speed, max_time, self.vars, key, self._saver(), check_every)
+
+    def run_to_rest(self, max_steps: int, ke_tol: float, check_every: int,
+                    key: str) -> tuple[int, bool]:
+        """:func:`run_to_rest` in the current phase."""
+        return run_to_rest(self.sim, max_steps, ke_tol, check_every, self.vars, key,
+                           self._saver())
+
+    def finish(self) -> None:
+        """The run is done: remove its file."""
+        if self.restart is not None:
+            self.restart.clear()

@@ -263,18 +263,19 @@ def test_the_quick_funnel_load_builds_a_heap():
     soil = load_soil(root / "config/soils/black-soil.yaml", root / "resources")
     spec = design.spec(soil, "accumulation_angle_65mn")
     p = design.design_params(soil, "soil-65mn", dict(x5=0.5, x6=0.55, x7=0.55, x8=0.15), spec)
-    r = repose.run(spec.setup, p, "quick", seed=1, threads=2).responses
+    r = repose.run(spec.setup, p, "quick", seed=1, threads=1).responses
     assert r["retained_fraction"] < 0.05 and r["measure_errors"] == ""
     assert 25.0 < r[spec.measure] < 45.0
     assert r["height_m"] > 0.03  # about five sphere diameters (a 1000-sphere layer: 19 mm)
 
 
-@pytest.mark.slow
 def test_a_load_held_in_the_funnel_gives_no_angle():
-    """Black soil, stage-1 centre with surface energy 0.7 J/m^2 at the printed shear modulus
-    (stiffness_scale 1): the quick load stays in the funnel (2422 of 2482 spheres with seed 0;
-    the same point in benchmarks/results/stiffness_rule.md).  Every angle is then NaN and
-    measure_errors names the funnel, whatever the few spheres on the plate look like."""
+    """Black soil, stage-1 centre with a surface energy of 2 J/m^2 (the quick preset's
+    softened modulus, the load in 1000 spheres): the load arches over the outlet and comes to
+    rest in the funnel (977 of 1000 spheres with seed 0, 2026-11-27).  Every angle is then
+    NaN and measure_errors names the funnel and the cohesion, whatever the few spheres on the
+    plate look like.  (The printed modulus holds the full quick load at 0.7 J/m^2,
+    benchmarks/results/stiffness_rule.md, at ten times the cost.)"""
     from pathlib import Path
 
     from soilcal.config.load import load_soil
@@ -283,12 +284,11 @@ def test_a_load_held_in_the_funnel_gives_no_angle():
     root = Path(__file__).resolve().parents[3]
     soil = load_soil(root / "config/soils/black-soil.yaml", root / "resources")
     spec = design.spec(soil, "accumulation_angle")
-    p = design.design_params(soil, "soil-soil", dict(x1=0.7, x2=0.6, x3=0.6, x4=0.275), spec)
-    # the load arches at once: with settle phases of at most 0.5 s it came to rest 0.38 s
-    # after the cover had gone, 2407 of 2482 spheres held (seed 0, 2026-11-26)
-    s = dict(spec.setup, stiffness_scale=1.0, max_settle_time=0.5)
-    r = repose.run(s, p, "quick", seed=0, threads=2).responses
-    assert r["retained_fraction"] > s["max_retained"]
+    p = design.design_params(soil, "soil-soil", dict(x1=2.0, x2=0.6, x3=0.6, x4=0.275), spec)
+    s = dict(spec.setup, n_particles=1000, max_settle_time=0.5)
+    r = repose.run(s, p, "quick", seed=0, threads=1).responses
+    assert r["retained_fraction"] > s["max_retained"] and r["settled"] == 1
     assert np.isnan(r["angle_deg"]) and np.isnan(r["angle_image_deg"])
     assert np.isnan(r["angle_surface_deg"])
     assert "funnel:" in r["measure_errors"] and "stayed in the funnel" in r["measure_errors"]
+    assert "held by cohesion" in r["measure_errors"]

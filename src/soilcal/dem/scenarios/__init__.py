@@ -16,7 +16,11 @@ Every scenario module defines:
   anything runs (``params``, the run's :class:`~soilcal.dem.scenarios.base.DemParams`, for
   checks that depend on them: the funnel load's volume at the soil density);
 * ``run(setup, params, preset="quick", seed=0, threads=None, vtk_dir=None)``: returns a
-  :class:`soilcal.dem.scenarios.base.Result`.
+  :class:`soilcal.dem.scenarios.base.Result`;
+* optionally ``RESTARTABLE = True`` and a ``restart=None`` argument of ``run``: a
+  :class:`soilcal.dem.restart.Restart` that the run resumes from and writes every few
+  minutes, stepping through a :class:`soilcal.dem.restart.Progress` (every scenario here
+  does).
 
 ``SCENARIOS`` maps names to modules; a module that cannot be imported (not present in this
 installation) is skipped so that the others keep working.

@@ -42,7 +42,6 @@ from __future__ import annotations
 
 import csv
 import math
-import time
 from pathlib import Path
 
 import numpy as np
@@ -55,6 +54,8 @@ from soilcal.dem.scenarios.soilbin import (BinSpec, apply_preset, psd_field, ref
                                            settled_bin, tool_pass, validate_bin)
 
 NAME = "bulldozing"
+#: writes and reads restart files (soilcal.dem.restart)
+RESTARTABLE = True
 #: every response a run reports (``Result.responses``)
 RESPONSES = (
     "horizontal_force_N", "horizontal_force_sd_N", "vertical_force_N", "vertical_force_sd_N",
@@ -207,15 +208,22 @@ def _bin(s, source="<bulldozing>") -> BinSpec:
 
 
 def run(setup: dict, params: DemParams, preset: str = "quick", seed: int = 0, threads=None,
-        vtk_dir=None, source: str = "<bulldozing>", use_cache: bool = True) -> Result:
+        vtk_dir=None, source: str = "<bulldozing>", use_cache: bool = True, restart=None) -> Result:
+    """One plate pass (module docstring).  ``restart``: a :class:`soilcal.dem.restart.Restart`
+    that the run resumes from and writes every few minutes (phases ``bin_0``, ``bin_1``,
+    ``pass``: :func:`soilcal.dem.scenarios.soilbin.tool_pass`); the numbers are those of an
+    uninterrupted run."""
+    from soilcal.dem import restart as rst
+
     validate(setup, preset, source)
     s = _settings(setup, preset)
     s["cohesion_scale"] = reference_cohesion(
         _bin(s, source), _bin(_settings(_setup(s["shape"]), "paper"), source), setup, source)
     nthreads = threads_used(threads)
-    t0 = time.perf_counter()
+    prog = rst.Progress(restart)
+    prog.resume()
     spec = _bin(s, source)
-    bed = settled_bin(spec, params, preset, seed, source, use_cache)
+    bed = settled_bin(spec, params, preset, seed, source, use_cache, progress=prog)
     pad = 2.0 * spec.r_max
     breadth = s["slab_width"] + 2 * pad if s["periodic"] else s["plate_breadth"]
     v, t = tools.bulldozing_plate(s["shape"], breadth=breadth, height=s["plate_height"],
@@ -235,7 +243,8 @@ def run(setup: dict, params: DemParams, preset: str = "quick", seed: int = 0, th
 
     out = tool_pass(spec, params, preset, seed, source, v, t, (s["speed"], 0.0, 0.0), duration,
                     trench, vtk_dir=vtk_dir, stem=f"bulldozing_{s['shape']}",
-                    use_cache=use_cache, tool_pose=pose, log_dt=0.01, bed=bed)
+                    use_cache=use_cache, tool_pose=pose, log_dt=0.01, bed=bed, progress=prog)
+    prog.finish()
     scale = s["plate_breadth"] / s["slab_width"] if s["periodic"] else 1.0
     tt, f = out["t"], out["force"] * scale
     ts = s["stable_from"] * duration
@@ -252,6 +261,6 @@ def run(setup: dict, params: DemParams, preset: str = "quick", seed: int = 0, th
                 bin_from_cache=bool(out["from_cache"]))
     return Result(scenario=NAME, preset=preset, seed=int(seed), n_particles=out["n"],
                   steps=int(out["steps"] + out["settle_steps"]),
-                  sim_time_s=out["steps"] * out["dt"], wall_s=time.perf_counter() - t0,
+                  sim_time_s=out["steps"] * out["dt"], wall_s=prog.wall_s,
                   threads=nthreads, params=params.as_dict(), setup=dict(s), responses=resp,
                   series=dict(t=tt, horizontal_N=-f[:, 0], vertical_N=f[:, 2]))

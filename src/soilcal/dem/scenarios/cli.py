@@ -121,8 +121,7 @@ def register(subparsers) -> None:
     s.add_argument("--replicates", type=int, default=1,
                    help="runs with seeds SEED .. SEED+K-1, responses averaged (default 1)")
     s.add_argument("--restart", default=None, metavar="DIR",
-                   help="keep restart files in DIR and resume from them when started again "
-                        "(scenarios that write them: repose)")
+                   help="keep restart files in DIR and resume from them when started again")
     s.add_argument("--restart-every", type=float, default=300.0, metavar="SECONDS",
                    help="wall time between two restart files (default 300)")
     s.set_defaults(func=_run)

@@ -51,9 +51,11 @@ from soilcal.dem import measure
 from soilcal.dem.factories import CylinderRegion, UniformRadius, insert_random
 from soilcal.dem.scenarios.base import (DemParams, Frames, Result, Timer, check, check_discretisation,
                                         check_preset, make_simulation, paper_cohesion, paper_psd,
-                                        rng, settle, setup_number, threads_used)
+                                        rng, setup_number, threads_used)
 
 NAME = "compression"
+#: writes and reads restart files (soilcal.dem.restart)
+RESTARTABLE = True
 #: every response a run reports (``Result.responses``)
 RESPONSES = (
     "h0_m", "fill_settled", "peak_overlap", "stress_max_kpa", "strain_end", "stop_reason",
@@ -137,60 +139,76 @@ def validate(setup, preset="quick", source="<input>", params=None):
 
 
 def run(setup, params: DemParams, preset="quick", seed=0, threads=None, vtk_dir=None,
-        source="<compression>") -> Result:
+        source="<compression>", restart=None) -> Result:
+    """One compression test (module docstring).  ``restart``: a
+    :class:`soilcal.dem.restart.Restart` that the run resumes from and writes every few
+    minutes (phases ``settle_fill``, ``press``); the numbers are those of an uninterrupted
+    run."""
+    from soilcal.dem import restart as rst
+
     validate(setup, preset, source, params)
     timer = Timer()
     nthreads = threads_used(threads)
     sz = sizing(setup, preset, params)
-    gen = rng(seed, NAME)
     R, H = setup["tube_diameter"] / 2, setup["tube_height"]
     Rr = setup["rod_diameter"] / 2
     coh = paper_cohesion(setup, sz["dist"], source)
-    sim, scale = make_simulation(params, setup, preset, source, cohesion=coh,
-                                 skin=0.5 * sz["r_max"])
-    sim.add_plane((0, 0, 0), (0, 0, 1), "steel", name="floor")
-    vol = sz["n"] * sz["dist"].mean_volume()
-    rm = sz["r_max"]
-    h_ins = vol / (0.30 * math.pi * (R - rm) ** 2)
-    tube_h = max(H, h_ins + 4 * rm)
-    sim.add_cylinder((0, 0, tube_h / 2), (0, 0, 1), R, tube_h / 2, "steel", inner=True,
-                     name="tube")
-    x, r = insert_random(CylinderRegion(R - 1.001 * rm, 1.001 * rm, h_ins), sz["dist"],
-                         n=sz["n"], rng=gen, max_fraction=0.35, source=source, field="particles")
-    order = np.argsort(x[:, 2], kind="stable")
-    sim.add_particles(x[order], r[order], "soil")
     frames = Frames(vtk_dir, NAME)
-    frames(sim)
-    ok0, _ = settle(sim, setup["rest_speed"], setup["max_settle_time"])
-    top = float((sim.x[:, 2] + sim.p.r).max())
-    z0 = top + 0.5 * float(sim.p.r.min())
-    rod = sim.add_disk((0, 0, z0), (0, 0, -1), Rr, "steel", name="rod",
-                       velocity=(0, 0, -setup["rod_speed"]))
-    frames(sim)
-    sim.run(0)
-    step0 = sim.step
+    prog = rst.Progress(restart, timer, frames)
+    if not prog.resume():
+        gen = rng(seed, NAME)
+        sim, scale = make_simulation(params, setup, preset, source, cohesion=coh,
+                                     skin=0.5 * sz["r_max"])
+        sim.add_plane((0, 0, 0), (0, 0, 1), "steel", name="floor")
+        vol = sz["n"] * sz["dist"].mean_volume()
+        rm = sz["r_max"]
+        h_ins = vol / (0.30 * math.pi * (R - rm) ** 2)
+        tube_h = max(H, h_ins + 4 * rm)
+        sim.add_cylinder((0, 0, tube_h / 2), (0, 0, 1), R, tube_h / 2, "steel", inner=True,
+                         name="tube")
+        x, r = insert_random(CylinderRegion(R - 1.001 * rm, 1.001 * rm, h_ins), sz["dist"],
+                             n=sz["n"], rng=gen, max_fraction=0.35, source=source,
+                             field="particles")
+        order = np.argsort(x[:, 2], kind="stable")
+        sim.add_particles(x[order], r[order], "soil")
+        frames(sim)
+        prog.begin(sim, "settle_fill", scale=scale)
+    sim, st = prog.sim, prog.vars
+    if prog.at("settle_fill"):
+        prog.checkpoint()
+        ok0, _ = prog.settle(setup["rest_speed"], setup["max_settle_time"], "fill_steps")
+        top = float((sim.x[:, 2] + sim.p.r).max())
+        z0 = top + 0.5 * float(sim.p.r.min())
+        sim.add_disk((0, 0, z0), (0, 0, -1), Rr, "steel", name="rod",
+                     velocity=(0, 0, -setup["rod_speed"]))
+        frames(sim)
+        sim.run(0)
+        prog.next("press", fill_settled=int(ok0), top=top, z0=z0, step0=sim.step, z=z0,
+                  h0=None, stop="max_strain", z_rod=[], fz=[])
+    ok0, scale, top, z0 = st["fill_settled"], st["scale"], st["top"], st["z0"]
+    rod = sim.walls.names.index("rod")
     nsub = max(1, int(round(setup["sample_dz"] / setup["rod_speed"] / sim.dt)))
     dz_step = setup["rod_speed"] * sim.dt
-    z_rod, fz = [], []
-    z = z0
-    h0 = None
-    stop = "max_strain"
     # upper bound of the travel: the whole height above the floor
-    while z > 0.05 * top:
-        sim.run(nsub)
-        z = z0 - setup["rod_speed"] * (sim.step - step0) * sim.dt  # rigid translation
+    while prog.at("press") and st["z"] > 0.05 * top:
+        prog.checkpoint()
+        prog.advance(nsub, "sample_steps")
+        st["sample_steps"] = 0
+        z = st["z"] = z0 - setup["rod_speed"] * (sim.step - st["step0"]) * sim.dt  # rigid translation
         f = float(sim.wall_force[rod, 2])
-        z_rod.append(z)
-        fz.append(f)
-        if h0 is None and f > 0:
-            h0 = z
-        if h0 is not None and (h0 - z) / h0 >= setup["max_strain"]:
+        st["z_rod"].append(z)
+        st["fz"].append(f)
+        if st["h0"] is None and f > 0:
+            st["h0"] = z
+        if st["h0"] is not None and (st["h0"] - z) / st["h0"] >= setup["max_strain"]:
             break
         if float(sim.p.ovr.max()) >= setup["jam_overlap"]:
-            stop = "overlap"  # jammed: further travel only squeezes spheres into each other
+            st["stop"] = "overlap"  # jammed: further travel only squeezes spheres into each other
             break
+    z_rod, fz, h0, stop = st["z_rod"], st["fz"], st["h0"], st["stop"]
     frames(sim)
     frames.close()
+    prog.finish()
     z_rod, fz = np.asarray(z_rod), np.asarray(fz)
     if h0 is None:
         h0 = top
@@ -208,7 +226,7 @@ def run(setup, params: DemParams, preset="quick", seed=0, threads=None, vtk_dir=
                      dt_fraction=sim.dt / sim.rayleigh, r_max=sz["r_max"],
                      load_mass=sz["load_mass"], rod_step_m=dz_step)
     return Result(scenario=NAME, preset=preset, seed=int(seed), n_particles=int(sim.n),
-                  steps=int(sim.step), sim_time_s=float(sim.step * sim.dt), wall_s=timer.seconds,
+                  steps=int(sim.step), sim_time_s=float(sim.step * sim.dt), wall_s=prog.wall_s,
                   threads=nthreads, params=params.as_dict(), setup=setup_out, responses=resp,
                   series=dict(strain=eps, stress_pa=sig, z_rod_m=z_rod, force_n=fz))
 

@@ -57,9 +57,11 @@ from soilcal.dem import measure
 from soilcal.dem.factories import CylinderRegion, UniformRadius, insert_random
 from soilcal.dem.scenarios.base import (DemParams, Frames, Result, Timer, check, check_discretisation,
                                         check_preset, make_simulation, paper_cohesion, paper_psd,
-                                        rng, run_time, settle, setup_number, threads_used)
+                                        rng, setup_number, threads_used)
 
 NAME = "drum"
+#: writes and reads restart files (soilcal.dem.restart)
+RESTARTABLE = True
 #: every response a run reports (``Result.responses``)
 RESPONSES = (
     "angle_deg", "angle_sd_deg", "angle_max_deg", "angle_avalanche_deg", "n_avalanches",
@@ -143,50 +145,71 @@ def validate(setup, preset="quick", source="<input>", params=None):
 
 
 def run(setup, params: DemParams, preset="quick", seed=0, threads=None, vtk_dir=None,
-        source="<drum>") -> Result:
+        source="<drum>", restart=None) -> Result:
+    """One drum (module docstring).  ``restart``: a :class:`soilcal.dem.restart.Restart` that
+    the run resumes from and writes every few minutes (phases ``settle_fill``, ``transient``,
+    ``frames``); the numbers are those of an uninterrupted run."""
+    from soilcal.dem import restart as rst
+
     validate(setup, preset, source)
     timer = Timer()
     nthreads = threads_used(threads)
     sz = sizing(setup, preset)
-    gen = rng(seed, NAME)
     R, L = setup["drum_diameter"] / 2, setup["drum_length"]
     coh = paper_cohesion(setup, sz["dist"], source)
-    sim, scale = make_simulation(params, setup, preset, source, cohesion=coh,
-                                 skin=0.5 * sz["r_max"])
     w = 2 * math.pi * setup["rpm"] / 60.0
-    shell = sim.add_cylinder((0, L / 2, 0), (0, 1, 0), R, L / 2, setup["wall_material"],
-                             inner=True, name="shell", centre=(0, L / 2, 0))
-    e0 = sim.add_disk((0, 0, 0), (0, 1, 0), R, setup["end_material"], name="end0")
-    e1 = sim.add_disk((0, L, 0), (0, -1, 0), R, setup["end_material"], name="end1")
-    rm = sz["r_max"]
-    region = CylinderRegion(R - 1.001 * rm, 1.001 * rm, L - 1.001 * rm, axis_point=(0, 0, 0),
-                            axis_dir=(0, 1, 0))
-    x, r = insert_random(region, sz["dist"], n=sz["n"], rng=gen, max_fraction=0.35,
-                         source=source, field="particles")
-    order = np.argsort(x[:, 2], kind="stable")
-    sim.add_particles(x[order], r[order], "soil")
     frames = Frames(vtk_dir, NAME)
-    frames(sim)
-    ok0, _ = settle(sim, setup["rest_speed"], setup["max_settle_time"])
-    frames(sim)
-    for wall in (shell, e0, e1):
-        sim.set_wall_motion(wall, omega=(0, w, 0))
+    prog = rst.Progress(restart, timer, frames)
+    if not prog.resume():
+        gen = rng(seed, NAME)
+        sim, scale = make_simulation(params, setup, preset, source, cohesion=coh,
+                                     skin=0.5 * sz["r_max"])
+        sim.add_cylinder((0, L / 2, 0), (0, 1, 0), R, L / 2, setup["wall_material"],
+                         inner=True, name="shell", centre=(0, L / 2, 0))
+        sim.add_disk((0, 0, 0), (0, 1, 0), R, setup["end_material"], name="end0")
+        sim.add_disk((0, L, 0), (0, -1, 0), R, setup["end_material"], name="end1")
+        rm = sz["r_max"]
+        region = CylinderRegion(R - 1.001 * rm, 1.001 * rm, L - 1.001 * rm,
+                                axis_point=(0, 0, 0), axis_dir=(0, 1, 0))
+        x, r = insert_random(region, sz["dist"], n=sz["n"], rng=gen, max_fraction=0.35,
+                             source=source, field="particles")
+        order = np.argsort(x[:, 2], kind="stable")
+        sim.add_particles(x[order], r[order], "soil")
+        frames(sim)
+        prog.begin(sim, "settle_fill", scale=scale)
+    sim, st = prog.sim, prog.vars
     spin, trans = PRESET_TIMES[preset]
     spin = setup.get("spin_time") or spin
     trans = setup.get("transient_time") or trans
-    run_time(sim, trans)
-    t_frames, angles = [], []
-    slab = max(3.0 * float(np.mean(sim.p.r)), 0.1 * L)
     n_fr = int(math.floor((spin - trans) / setup["frame_every"] + 1e-9)) + 1
-    for k in range(n_fr):
-        if k:
-            run_time(sim, setup["frame_every"])
+    if prog.at("settle_fill"):
+        prog.checkpoint()
+        ok0, _ = prog.settle(setup["rest_speed"], setup["max_settle_time"], "fill_steps")
+        frames(sim)
+        for name in ("shell", "end0", "end1"):
+            sim.set_wall_motion(sim.walls.names.index(name), omega=(0, w, 0))
+        prog.next("transient", fill_settled=int(ok0))
+    if prog.at("transient"):
+        prog.checkpoint()
+        prog.advance(max(1, int(round(trans / sim.dt))), "transient_steps")  # run_time's steps
+        prog.next("frames", k=0, angles=[], t_frames=[])
+    slab = max(3.0 * float(np.mean(sim.p.r)), 0.1 * L)
+    every = max(1, int(round(setup["frame_every"] / sim.dt)))  # run_time's steps
+    while st["k"] < n_fr:
+        prog.checkpoint()
+        if st["k"]:
+            prog.advance(every, "frame_steps")
         fr = measure.drum_surface_angle(sim.x, sim.p.r, (0, L / 2, 0), (0, 1, 0), slab_half=slab,
                                         source=source)
-        angles.append(fr["angle_deg"])
-        t_frames.append(sim.step * sim.dt)
+        st["angles"].append(fr["angle_deg"])
+        st["t_frames"].append(sim.step * sim.dt)
+        st["k"] += 1
+        st["frame_steps"] = 0
         frames(sim)
+    ok0, scale = st["fill_settled"], st["scale"]
+    angles, t_frames = st["angles"], st["t_frames"]
     frames.close()
+    prog.finish()
     a = np.asarray(angles)
     mean, sd = measure.mean_sd(a)
     av = measure.avalanche_angle(a, setup["min_drop"], source)
@@ -203,7 +226,7 @@ def run(setup, params: DemParams, preset="quick", seed=0, threads=None, vtk_dir=
                      dt_fraction=sim.dt / sim.rayleigh, spin_time=spin, transient_time=trans,
                      r_max=sz["r_max"], omega_rad_s=w, slab_half=slab)
     return Result(scenario=NAME, preset=preset, seed=int(seed), n_particles=int(sim.n),
-                  steps=int(sim.step), sim_time_s=float(sim.step * sim.dt), wall_s=timer.seconds,
+                  steps=int(sim.step), sim_time_s=float(sim.step * sim.dt), wall_s=prog.wall_s,
                   threads=nthreads, params=params.as_dict(), setup=setup_out,
                   responses=responses,
                   series=dict(t=np.asarray(t_frames), angle_deg=a, x=sim.x.copy(), r=sim.p.r.copy()))

@@ -79,7 +79,6 @@ from __future__ import annotations
 
 import csv
 import math
-import time
 from pathlib import Path
 
 import numpy as np
@@ -93,6 +92,8 @@ from soilcal.dem.scenarios.soilbin import (BinSpec, apply_preset, reference_cohe
 from soilcal.errors import InputError
 
 NAME = "furrow"
+#: writes and reads restart files (soilcal.dem.restart)
+RESTARTABLE = True
 #: every response a run reports (``Result.responses``)
 RESPONSES = (
     "area_difference_dm2", "area_difference_sd_dm2", "area_difference_signed_dm2",
@@ -300,13 +301,20 @@ def furrow_area(phi: Polynomial, depth_mm: float, a: float, b: float, n: int = 4
 
 
 def run(setup: dict, params: DemParams, preset: str = "quick", seed: int = 0, threads=None,
-        vtk_dir=None, source: str = "<furrow>", use_cache: bool = True) -> Result:
+        vtk_dir=None, source: str = "<furrow>", use_cache: bool = True, restart=None) -> Result:
+    """One opener pass (module docstring).  ``restart``: a :class:`soilcal.dem.restart.Restart`
+    that the run resumes from and writes every few minutes (phases ``bin_0``, ``bin_1``,
+    ``pass``: :func:`soilcal.dem.scenarios.soilbin.tool_pass`); the numbers are those of an
+    uninterrupted run."""
+    from soilcal.dem import restart as rst
+
     validate(setup, preset, source)
     s = _settings(setup, preset)
     s["cohesion_scale"] = reference_cohesion(
         _bin(s), _bin(_settings(setups()["yangtze-opener"], "paper")), setup, source)
     nthreads = threads_used(threads)
-    t0 = time.perf_counter()
+    prog = rst.Progress(restart)
+    prog.resume()
     spec = _bin(s)
     v, t = tools.furrow_opener(depth=s["depth"], half_width=s["opener_half_width"],
                                bottom_half_width=s["opener_bottom_half_width"],
@@ -315,7 +323,7 @@ def run(setup: dict, params: DemParams, preset: str = "quick", seed: int = 0, th
                                length=s["opener_length"], source=source)
     from soilcal.dem.scenarios.soilbin import settled_bin
 
-    bed = settled_bin(spec, params, preset, seed, source, use_cache)
+    bed = settled_bin(spec, params, preset, seed, source, use_cache, progress=prog)
     surface = bed["surface"]
     yc = 0.5 * s["tank_width"]
     x_start = MARGIN + s["opener_length"]
@@ -334,7 +342,8 @@ def run(setup: dict, params: DemParams, preset: str = "quick", seed: int = 0, th
 
     out = tool_pass(spec, params, preset, seed, source, v, t, (s["speed"], 0.0, 0.0),
                     duration, trench, vtk_dir=vtk_dir, stem="furrow", use_cache=use_cache,
-                    tool_pose=pose, log_dt=0.005, bed=bed)
+                    tool_pose=pose, log_dt=0.005, bed=bed, progress=prog)
+    prog.finish()
     sim = out["sim"]
     tt, force = out["t"], out["force"]
     resist = -force[:, 0]
@@ -370,7 +379,7 @@ def run(setup: dict, params: DemParams, preset: str = "quick", seed: int = 0, th
                     - stable_mean(tt, far, 0.0, tenth)[0])
     except InputError:  # a pass too short for two samples per tenth: no diagnostic
         far_rise = float("nan")
-    wall = time.perf_counter() - t0
+    wall = prog.wall_s
     resp = dict(
         area_difference_dm2=float(np.mean(enclosed)) / 1e4,
         area_difference_sd_dm2=float(np.std(enclosed, ddof=1)) / 1e4 if n > 1 else 0.0,

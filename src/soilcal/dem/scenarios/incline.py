@@ -46,6 +46,8 @@ from soilcal.dem.scenarios.base import (DemParams, Frames, Result, Timer, check,
                                         threads_used)
 
 NAME = "incline"
+#: writes and reads restart files (soilcal.dem.restart)
+RESTARTABLE = True
 #: every response a run reports (``Result.responses``)
 RESPONSES = (
     "onset_deg", "coefficient", "last_stuck_deg", "first_moving_deg", "moved", "peak_overlap",
@@ -127,7 +129,12 @@ def _block(setup):
 
 
 def run(setup, params: DemParams, preset="quick", seed=0, threads=None, vtk_dir=None,
-        source="<incline>") -> Result:
+        source="<incline>", restart=None) -> Result:
+    """One tilting-plate test (module docstring).  ``restart``: a
+    :class:`soilcal.dem.restart.Restart` that the run resumes from and writes every few
+    minutes (phases ``seat``, ``tilt``); the numbers are those of an uninterrupted run."""
+    from soilcal.dem import restart as rst
+
     validate(setup, preset, source)
     timer = Timer()
     nthreads = threads_used(threads)
@@ -135,43 +142,54 @@ def run(setup, params: DemParams, preset="quick", seed=0, threads=None, vtk_dir=
     step_deg, hold = STEPS[(preset, kind)]
     step_deg = setup.get("step_deg") or step_deg
     hold = setup.get("hold_time") or hold
-    gen = rng(seed, NAME)
-    sim, scale = make_simulation(params, setup, preset, source)
-    sim.add_plane((0, 0, 0), (0, 0, 1), setup["plate_material"], name="plate")
-    if kind == "sliding":
-        x, r = _block(setup)
-        # seeded sub-micrometre lateral jitter: the seed changes the contact network only
-        x[:, :2] += gen.uniform(-1e-7, 1e-7, (len(x), 2))
-        sim.add_particles(x, r, "soil", lock_rotation=True)
-    else:
-        rb = setup["ball_radius"]
-        sim.add_particles([[gen.uniform(-1e-7, 1e-7), 0.0, rb]], rb, "soil")
     frames = Frames(vtk_dir, NAME)
-    th = math.radians(setup["start_deg"])
-    sim.gravity[:] = (G * math.sin(th), 0.0, -G * math.cos(th))
-    sim.run(0)
-    sim.run(max(1, int(0.05 / sim.dt)))  # normal contacts settle
-    frames(sim)
+    prog = rst.Progress(restart, timer, frames)
+    if not prog.resume():
+        gen = rng(seed, NAME)
+        sim, scale = make_simulation(params, setup, preset, source)
+        sim.add_plane((0, 0, 0), (0, 0, 1), setup["plate_material"], name="plate")
+        if kind == "sliding":
+            x, r = _block(setup)
+            # seeded sub-micrometre lateral jitter: the seed changes the contact network only
+            x[:, :2] += gen.uniform(-1e-7, 1e-7, (len(x), 2))
+            sim.add_particles(x, r, "soil", lock_rotation=True)
+        else:
+            rb = setup["ball_radius"]
+            sim.add_particles([[gen.uniform(-1e-7, 1e-7), 0.0, rb]], rb, "soil")
+        th = math.radians(setup["start_deg"])
+        sim.gravity[:] = (G * math.sin(th), 0.0, -G * math.cos(th))
+        sim.run(0)
+        prog.begin(sim, "seat", scale=scale)
+    sim, st = prog.sim, prog.vars
+    if prog.at("seat"):
+        prog.checkpoint()
+        prog.advance(max(1, int(0.05 / sim.dt)), "seat_steps")  # normal contacts settle
+        frames(sim)
+        prog.next("tilt", angle=setup["start_deg"], last_stuck=None, first_moving=None,
+                  history=[], x0=None)
+    scale = st["scale"]
     r_ref = float(sim.p.r.min())
     thr = setup["move_fraction"] * r_ref
     nhold = max(1, int(round(hold / sim.dt)))
-    angle = setup["start_deg"]
-    last_stuck, first_moving = None, None
-    history = []
-    while angle <= setup["max_deg"] + 1e-9:
-        th = math.radians(angle)
-        sim.gravity[:] = (G * math.sin(th), 0.0, -G * math.cos(th))
-        x0 = float(sim.x[:, 0].mean())
-        sim.run(nhold)
-        dx = float(sim.x[:, 0].mean()) - x0
-        history.append((angle, dx))
+    while st["angle"] <= setup["max_deg"] + 1e-9:
+        prog.checkpoint()
+        if st["x0"] is None:  # the step's start (a resumed step keeps its own)
+            th = math.radians(st["angle"])
+            sim.gravity[:] = (G * math.sin(th), 0.0, -G * math.cos(th))
+            st["x0"] = float(sim.x[:, 0].mean())
+        prog.advance(nhold, "hold_steps")
+        dx = float(sim.x[:, 0].mean()) - st["x0"]
+        st.update(hold_steps=0, x0=None)
+        st["history"].append((st["angle"], dx))
         if dx > thr:
-            first_moving = angle
+            st["first_moving"] = st["angle"]
             break
-        last_stuck = angle
-        angle = round(angle + step_deg, 10)
+        st["last_stuck"] = st["angle"]
+        st["angle"] = round(st["angle"] + step_deg, 10)
+    last_stuck, first_moving, history = st["last_stuck"], st["first_moving"], st["history"]
     frames(sim)
     frames.close()
+    prog.finish()
     if first_moving is None:
         onset = float("nan")
     elif last_stuck is None:
@@ -186,6 +204,6 @@ def run(setup, params: DemParams, preset="quick", seed=0, threads=None, vtk_dir=
     setup_out = dict(setup)
     setup_out.update(stiffness_scale=scale, dt=sim.dt, step_deg=step_deg, hold_time=hold)
     return Result(scenario=NAME, preset=preset, seed=int(seed), n_particles=int(sim.n),
-                  steps=int(sim.step), sim_time_s=float(sim.step * sim.dt), wall_s=timer.seconds,
+                  steps=int(sim.step), sim_time_s=float(sim.step * sim.dt), wall_s=prog.wall_s,
                   threads=nthreads, params=params.as_dict(), setup=setup_out,
                   responses=responses, series=dict(angle_deg=h[:, 0], dx_m=h[:, 1]))

@@ -338,17 +338,13 @@ def run(setup: dict, params: DemParams, preset: str = "quick", seed: int = 0, th
     frames = Frames(vtk_dir, NAME)
     dmax = 2 * sz["r_max"]
     cylinder = setup["method"] == "cylinder"
-    saved = restart.load() if restart is not None else None
-    if saved:
-        sim, st = saved["sim"], saved["vars"]
-        frames.entries = list(st["frames"])
-    else:
+    prog = rst.Progress(restart, timer, frames)
+    if not prog.resume():
         gen = rng(seed, setup.get("seed_stream", NAME))
         # a neighbour skin of 0.6 r_max: falling spheres would otherwise rebuild the lists
         # every few steps (the engine default is 0.2 r_max, tuned for packed beds)
         sim, scale = make_simulation(params, setup, preset, source, cohesion=coh,
                                      skin=0.6 * sz["r_max"])
-        st = dict(phase="settle_fill", info={}, scale=scale, wall_s=0.0)
         if cylinder:
             R = setup["tube_diameter"] / 2
             vol = sz["n"] * sz["dist"].mean_volume()
@@ -371,39 +367,26 @@ def run(setup: dict, params: DemParams, preset: str = "quick", seed: int = 0, th
             _plate(sim, setup)
             _fill_funnel(sim, setup, sz, gen, source)
         frames(sim)
-    wall0 = float(st["wall_s"])
+        prog.begin(sim, "settle_fill", info={}, scale=scale)
+    sim, st = prog.sim, prog.vars
     info = st["info"]
 
-    def checkpoint(phase):
-        st.update(phase=phase, frames=list(frames.entries), wall_s=wall0 + timer.seconds)
-        if restart is not None:
-            restart.save(phase, sim, st)
-
-    def saver(phase):
-        # inside a long engine stretch: write the file when it is due (no restart: no chunks)
-        return None if restart is None else (lambda: checkpoint(phase))
-
-    def stage(phase):
-        # run from the phase the run stands in (a resumed run skips the ones it has done)
-        return st["phase"] == phase
-
-    if stage("settle_fill"):
-        checkpoint("settle_fill")
-        ok0, _ = rst.settle(sim, setup["rest_speed"], setup["max_settle_time"], st,
-                            "fill_steps", saver("settle_fill"))
+    if prog.at("settle_fill"):
+        prog.checkpoint()
+        ok0, _ = prog.settle(setup["rest_speed"], setup["max_settle_time"], "fill_steps")
         info["fill_settled"] = int(ok0)
         if cylinder:
             info["fill_height_m"] = float((sim.x[:, 2] + sim.p.r).max())
         frames(sim)
-        st.update(phase="lift" if cylinder else "cover", move_step0=sim.step, bottom=0.0)
-    if cylinder and stage("lift"):
+        prog.next("lift" if cylinder else "cover", move_step0=sim.step, bottom=0.0)
+    if cylinder and prog.at("lift"):
         tube = sim.walls.names.index("tube")
         lift = info["fill_height_m"] + dmax
         v = setup["lift_speed"]
         sim.set_wall_motion(tube, velocity=(0, 0, v))
         chunk = max(sim.dt, min(0.05, 0.5 * sz["r_max"] / v))  # rim moves half a radius
         while st["bottom"] < lift:
-            checkpoint("lift")
+            prog.checkpoint()
             run_time(sim, min(chunk, (lift - st["bottom"]) / v))
             st["bottom"] = v * (sim.step - st["move_step0"]) * sim.dt  # the rim's translation
             if st["bottom"] > float((sim.x[:, 2] + sim.p.r).max()) + sz["r_max"]:
@@ -411,20 +394,19 @@ def run(setup: dict, params: DemParams, preset: str = "quick", seed: int = 0, th
         info["lift_m"] = st["bottom"]
         sim.set_wall_motion(tube, velocity=(0, 0, 0))
         frames(sim)
-        st["phase"] = "settle_heap"
-    if not cylinder and stage("cover"):
+        prog.next("settle_heap")
+    if not cylinder and prog.at("cover"):
         cover = sim.walls.names.index("cover")
         Rb = setup["funnel_bottom_diameter"] / 2
         sim.set_wall_motion(cover, velocity=(setup["cover_speed"], 0, 0))
-        checkpoint("cover")
+        prog.checkpoint()
         steps = max(1, int(round((2.5 * Rb + dmax) / setup["cover_speed"] / sim.dt)))
-        rst.advance(sim, steps, st, "cover_steps", saver("cover"))  # run_time's steps
+        prog.advance(steps, "cover_steps")  # run_time's steps
         sim.set_wall_motion(cover, velocity=(0, 0, 0))
         frames(sim)
-        st["phase"] = "settle_heap"
-    checkpoint("settle_heap")
-    ok, t_rest = rst.settle(sim, setup["rest_speed"], setup["max_settle_time"], st,
-                            "heap_steps", saver("settle_heap"))
+        prog.next("settle_heap")
+    prog.checkpoint()
+    ok, t_rest = prog.settle(setup["rest_speed"], setup["max_settle_time"], "heap_steps")
     frames(sim)
     frames.close()
     scale = st["scale"]
@@ -480,10 +462,9 @@ def run(setup: dict, params: DemParams, preset: str = "quick", seed: int = 0, th
     setup_out.pop("paper_psd", None)
     setup_out.update(stiffness_scale=scale, cohesion_scale=coh, dt=sim.dt,
                      dt_fraction=sim.dt / sim.rayleigh, r_mean=sz["r_mean"], r_max=sz["r_max"], load_mass=sz["load_mass"], **info)
-    if restart is not None:
-        restart.clear()
+    prog.finish()
     return Result(scenario=NAME, preset=preset, seed=int(seed), n_particles=int(sim.n),
-                  steps=int(sim.step), sim_time_s=float(sim.step * sim.dt), wall_s=wall0 + timer.seconds,
+                  steps=int(sim.step), sim_time_s=float(sim.step * sim.dt), wall_s=prog.wall_s,
                   threads=nthreads, params=params.as_dict(), setup=setup_out,
                   responses=responses,
                   series=dict(per_direction_deg=np.asarray(bins["per_direction_deg"]), x=x, r=r))

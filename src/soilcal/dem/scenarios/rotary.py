@@ -66,7 +66,6 @@ from __future__ import annotations
 
 import csv
 import math
-import time
 from pathlib import Path
 
 import numpy as np
@@ -78,6 +77,8 @@ from soilcal.dem.scenarios.soilbin import (BinSpec, apply_preset, reference_cohe
                                            tool_pass, validate_bin)
 
 NAME = "rotary"
+#: writes and reads restart files (soilcal.dem.restart)
+RESTARTABLE = True
 #: every response a run reports (``Result.responses``)
 RESPONSES = (
     "power_kW", "power_sd_kW", "torque_Nm", "draft_N", "draft_sd_N", "advance_power_kW",
@@ -272,15 +273,22 @@ def _bin(s) -> BinSpec:
 
 
 def run(setup: dict, params: DemParams, preset: str = "quick", seed: int = 0, threads=None,
-        vtk_dir=None, source: str = "<rotary>", use_cache: bool = True) -> Result:
+        vtk_dir=None, source: str = "<rotary>", use_cache: bool = True, restart=None) -> Result:
+    """One tiller pass (module docstring).  ``restart``: a :class:`soilcal.dem.restart.Restart`
+    that the run resumes from and writes every few minutes (phases ``bin_0``, ``bin_1``,
+    ``pass`` (:func:`soilcal.dem.scenarios.soilbin.tool_pass`), ``lift``, ``rest``); the
+    numbers are those of an uninterrupted run."""
+    from soilcal.dem import restart as rst
+
     validate(setup, preset, source)
     s = _settings(setup, preset)
     s["cohesion_scale"] = reference_cohesion(
         _bin(s), _bin(_settings(_setup(s["rpm"]), "paper")), setup, source)
     nthreads = threads_used(threads)
-    t0 = time.perf_counter()
+    prog = rst.Progress(restart)
+    prog.resume()
     spec = _bin(s)
-    bed = settled_bin(spec, params, preset, seed, source, use_cache)
+    bed = settled_bin(spec, params, preset, seed, source, use_cache, progress=prog)
     omega = 2.0 * math.pi * s["rpm"] / 60.0
     R = s["radius"]
     spacing = s["working_width"] / s["n_flanges"]
@@ -316,7 +324,7 @@ def run(setup: dict, params: DemParams, preset: str = "quick", seed: int = 0, th
     out = tool_pass(spec, params, preset, seed, source, v, t, (vf, 0.0, 0.0), duration, trench,
                     omega=(0.0, omega, 0.0), centre=axis, dt_max=dt_max, log_dt=0.005,
                     vtk_dir=vtk_dir, stem="rotary", use_cache=use_cache, tool_pose=pose,
-                    bed=bed, extra_walls=hood)
+                    bed=bed, extra_walls=hood, progress=prog)
     sim, dt = out["sim"], out["dt"]
     tt = out["t"]
     scale = s["n_flanges"] / nf if s["periodic"] else 1.0
@@ -327,14 +335,23 @@ def run(setup: dict, params: DemParams, preset: str = "quick", seed: int = 0, th
     # lift the rotor out, let the soil come to rest, measure the surface
     wall = out["wall"]
     hood_w = wall + 1
-    sim.set_wall_motion(wall, velocity=(0.0, 0.0, 2.0), omega=(0.0, 0.0, 0.0))
-    sim.set_wall_motion(hood_w, velocity=(0.0, 0.0, 2.0))
     n_lift = int(math.ceil(s["lift_time"] / dt))
-    sim.run(n_lift)
-    sim.set_wall_motion(wall, velocity=(0.0, 0.0, 0.0))
-    sim.set_wall_motion(hood_w, velocity=(0.0, 0.0, 0.0))
     n_rest = int(math.ceil(s["rest_time"] / dt))
-    sim.run(n_rest)
+    if prog.at("pass_done"):
+        sim.set_wall_motion(wall, velocity=(0.0, 0.0, 2.0), omega=(0.0, 0.0, 0.0))
+        sim.set_wall_motion(hood_w, velocity=(0.0, 0.0, 2.0))
+        prog.next("lift")
+    if prog.at("lift"):
+        prog.checkpoint()
+        prog.advance(n_lift, "lift_steps")
+        sim.set_wall_motion(wall, velocity=(0.0, 0.0, 0.0))
+        sim.set_wall_motion(hood_w, velocity=(0.0, 0.0, 0.0))
+        prog.next("rest")
+    if prog.at("rest"):
+        prog.checkpoint()
+        prog.advance(n_rest, "rest_steps")
+        prog.next("done")
+    prog.finish()
     x, r = sim.x, sim.p.r
     yc = 0.5 * s["slab_width"]
     lat = 0.5 * min(s["slab_width"], nf * spacing) - spec.r_max
@@ -356,7 +373,7 @@ def run(setup: dict, params: DemParams, preset: str = "quick", seed: int = 0, th
     steps = out["steps"] + out["settle_steps"] + n_lift + n_rest
     return Result(scenario=NAME, preset=preset, seed=int(seed), n_particles=out["n"],
                   steps=int(steps), sim_time_s=(out["steps"] + n_lift + n_rest) * dt,
-                  wall_s=time.perf_counter() - t0, threads=nthreads, params=params.as_dict(),
+                  wall_s=prog.wall_s, threads=nthreads, params=params.as_dict(),
                   setup=dict(s), responses=resp,
                   series=dict(t=tt, power_W=power, torque_Nm=out["torque"][:, 1] * scale,
                               flatness_points_mm=d))

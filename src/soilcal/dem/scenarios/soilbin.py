@@ -52,7 +52,6 @@ import hashlib
 import json
 import math
 import os
-import time
 from dataclasses import asdict, dataclass
 from pathlib import Path
 
@@ -273,53 +272,73 @@ def column_tops(x, r, cell, xr, yr):
 
 
 def settled_bin(spec: BinSpec, params: DemParams, preset: str, seed: int, source: str,
-                use_cache: bool = True) -> dict:
+                use_cache: bool = True, progress=None) -> dict:
     """Positions and radii of a settled bin (from the cache when the key matches).
 
-    Returns dict(x, r, surface, settle_steps, settle_wall_s, from_cache, n)."""
+    Returns dict(x, r, surface, settle_steps, settle_wall_s, from_cache, n).  ``progress``: the
+    run's :class:`soilcal.dem.restart.Progress`; the two settling rounds are its phases
+    ``bin_0`` and ``bin_1``, and a run resumed past them gets the bin's numbers without
+    ``x`` and ``r`` (None: its simulation holds the particles)."""
+    from soilcal.dem import restart as rst
+
+    prog = progress if progress is not None else rst.Progress()
+    if "bed" in prog.vars:
+        return dict(prog.vars["bed"], x=None, r=None)
     key = cache_key(spec, params, preset, seed)
     text = json.dumps(key, sort_keys=True)
     path = cache_dir() / f"bin-{hashlib.sha1(text.encode()).hexdigest()[:20]}.npz"
-    if use_cache and path.exists():
+    if use_cache and path.exists() and not prog.phase:
         try:
             snap = read_snapshot(path)
         except Exception:  # unreadable cache file: settle afresh
             snap = None
         if snap is not None and snap["metadata"].get("key") == key:
             md = snap["metadata"]
-            return dict(x=snap["positions"], r=snap["radii"], surface=md["surface"],
-                        settle_steps=int(snap["step"]), settle_wall_s=md["settle_wall_s"],
-                        from_cache=True, n=len(snap["radii"]))
-    t0 = time.perf_counter()
-    g = rng(seed, "soil-bin")
-    # fill a taller region, settle, trim to the fill height, settle again
-    x, r = fill_bin(spec, g, source)
+            bed = dict(surface=md["surface"], settle_steps=int(snap["step"]),
+                       settle_wall_s=md["settle_wall_s"], from_cache=True,
+                       n=len(snap["radii"]))
+            prog.vars["bed"] = bed
+            return dict(bed, x=snap["positions"], r=snap["radii"])
     dt = soil_time_step(spec, params)
-    m_mean = float(np.mean(params.soil_density * 4.0 / 3.0 * math.pi * r**3))
-    steps = 0
-    for frac in (0.7, 0.3):
+    if prog.phase not in ("bin_0", "bin_1"):
+        g = rng(seed, "soil-bin")
+        # fill a taller region, settle, trim to the fill height, settle again
+        x, r = fill_bin(spec, g, source)
         sim = new_sim(spec, params, dt, source)
         sim.add_particles(x, r, "soil")
-        ke_tol = len(r) * 0.5 * m_mean * 1e-6
+        prog.begin(sim, "bin_0", bin_steps=0, bin_wall0=prog.wall_s,
+                   bin_m_mean=float(np.mean(params.soil_density * 4.0 / 3.0 * math.pi * r**3)))
+    st = prog.vars
+    for i, frac in enumerate((0.7, 0.3)):
+        if not prog.at(f"bin_{i}"):
+            continue
+        sim = prog.sim
+        ke_tol = int(sim.n) * 0.5 * st["bin_m_mean"] * 1e-6
         max_steps = int(math.ceil(frac * spec.settle_time / dt))
         first = max(1, max_steps // 5)
-        sim.run(first)
+        prog.checkpoint()
+        prog.advance(first, f"bin_{i}_first")
         if max_steps > first:
-            sim.run(max_steps - first, ke_tol=ke_tol, ke_every=50)
-        steps += sim.step
+            prog.run_to_rest(max_steps - first, ke_tol, 50, f"bin_{i}_rest")
+        st["bin_steps"] += int(sim.step)
         x, r = sim.x.copy(), sim.p.r.copy()
-        if frac == 0.7:
+        if i == 0:
             keep = x[:, 2] + r <= spec.height + 0.5 * spec.radius
-            x, r = x[keep], r[keep]
+            nxt = new_sim(spec, params, dt, source)
+            nxt.add_particles(x[keep], r[keep], "soil")
+            prog.begin(nxt, "bin_1")
     xs, rs = x, r
     surf = surface_level(xs, rs, spec)
-    wall = time.perf_counter() - t0
+    wall = prog.wall_s - st["bin_wall0"]
+    steps = st["bin_steps"]
     if use_cache:
         write_snapshot(path, xs, np.zeros_like(xs), rs, np.zeros(len(rs), dtype=np.int32),
                        steps * dt, steps,
                        metadata=dict(key=key, surface=surf, settle_wall_s=wall))
-    return dict(x=xs, r=rs, surface=surf, settle_steps=int(steps), settle_wall_s=wall,
-                from_cache=False, n=len(rs))
+    bed = dict(surface=surf, settle_steps=int(steps), settle_wall_s=wall, from_cache=False,
+               n=len(rs))
+    prog.next("bin_done", bed=bed)
+    return dict(bed, x=xs, r=rs)
 
 
 def dig(x, r, inside) -> np.ndarray:
@@ -340,7 +359,7 @@ def tool_pass(spec: BinSpec, params: DemParams, preset: str, seed: int, source: 
               vertices, triangles, velocity, duration: float, trench, omega=(0.0, 0.0, 0.0),
               centre=None, dt_max: float | None = None, log_dt: float = 0.01,
               vtk_dir=None, stem: str = "tool", n_frames: int = 5, use_cache: bool = True,
-              tool_pose=None, bed=None, extra_walls=None):
+              tool_pose=None, bed=None, extra_walls=None, progress=None):
     """Settled (or cached) bin, trench dug by ``trench(x, r) -> bool``, the tool mesh
     (steel) moved with ``velocity``/``omega`` about ``centre`` for ``duration`` s.
 
@@ -349,47 +368,68 @@ def tool_pass(spec: BinSpec, params: DemParams, preset: str, seed: int, source: 
     force on the tool and its torque about the (moving) tool centre, sampled every
     ``log_every`` steps; ``wall_forces[k, w]`` the particles' force on every wall w (in the
     order of ``sim.walls.names``) at the same samples; ``peak_overlap`` is the largest
-    overlap of the pass as a fraction of a radius."""
+    overlap of the pass as a fraction of a radius.  ``progress``: the run's
+    :class:`soilcal.dem.restart.Progress` (phase ``pass``, then ``pass_done``); with a restart
+    file the pass runs in pieces of about ``CHUNK_STEPS`` steps (whole log intervals), the
+    same samples as one piece."""
+    from soilcal.dem import restart as rst
+
+    prog = progress if progress is not None else rst.Progress()
+    if "pass_out" in prog.vars:
+        return dict(prog.vars["pass_out"], sim=prog.sim)
     if bed is None:
-        bed = settled_bin(spec, params, preset, seed, source, use_cache)
-    keep = dig(bed["x"], bed["r"], trench)
+        bed = settled_bin(spec, params, preset, seed, source, use_cache, progress=prog)
     dt = tool_time_step(spec, params)
     if dt_max is not None:
         dt = min(dt, float(dt_max))
-    sim = new_sim(spec, params, dt, source)
-    sim.add_particles(bed["x"][keep], bed["r"][keep], "soil")
-    wall = sim.add_mesh(vertices, triangles, "steel", name=stem, velocity=velocity,
-                        omega=omega, centre=centre)
-    if extra_walls is not None:
-        extra_walls(sim)
     log_every = max(1, int(round(log_dt / dt)))
     steps = int(math.ceil(duration / dt / log_every)) * log_every
     vtk = VtkWriter(vtk_dir, stem)
     chunks = max(1, int(n_frames) - 1) if vtk.folder else 1
     per = int(math.ceil(steps / log_every / chunks)) * log_every
-    ts, qs, fa = [], [], []
-    step0 = sim.step
-    if vtk.folder:
-        vtk.frame(sim, *(tool_pose(0.0) if tool_pose else (None, None)))
-    done = 0
-    while done < steps:
-        k = min(per, steps - done)
+    if not prog.at("pass"):
+        keep = dig(bed["x"], bed["r"], trench)
+        sim = new_sim(spec, params, dt, source)
+        sim.add_particles(bed["x"][keep], bed["r"][keep], "soil")
+        sim.add_mesh(vertices, triangles, "steel", name=stem, velocity=velocity,
+                     omega=omega, centre=centre)
+        if extra_walls is not None:
+            extra_walls(sim)
+        if vtk.folder:
+            vtk.frame(sim, *(tool_pose(0.0) if tool_pose else (None, None)))
+        prog.begin(sim, "pass", pass_step0=sim.step, pass_done=0, pass_n=int(keep.sum()),
+                   ts=[], qs=[], fa=[], vtk_k=vtk.k)
+    sim, st = prog.sim, prog.vars
+    vtk.k = st["vtk_k"]
+    wall = sim.walls.names.index(stem)
+    step0 = st["pass_step0"]
+    piece = steps if prog.restart is None else max(1, rst.CHUNK_STEPS // log_every) * log_every
+    while st["pass_done"] < steps:
+        prog.checkpoint()
+        frame_end = min(steps, (st["pass_done"] // per + 1) * per)
+        k = min(piece, frame_end - st["pass_done"])
         s0 = sim.step
         sim.run(k, wall_log_every=log_every)  # log rows counted from the start of this call
-        t, _, q = force_series(sim, wall, log_every, 0, dt)
-        ts.append(t + (s0 - step0) * dt)
-        fa.append(sim.wall_log[:, :, 0:3].copy())
-        qs.append(q)
-        done += k
-        if vtk.folder:
+        _, _, q = force_series(sim, wall, log_every, 0, dt)
+        # sample times from whole step counts: the same numbers whatever the pieces
+        st["ts"].append((s0 - step0 + (np.arange(len(q)) + 1) * log_every) * dt)
+        st["fa"].append(sim.wall_log[:, :, 0:3].copy())
+        st["qs"].append(q)
+        st["pass_done"] += k
+        if vtk.folder and st["pass_done"] == frame_end:
             tt = (sim.step - step0) * dt
             vtk.frame(sim, *(tool_pose(tt) if tool_pose else (None, None)))
-    wall_forces = np.concatenate(fa)
-    return dict(sim=sim, t=np.concatenate(ts), force=wall_forces[:, wall].copy(),
-                torque=np.concatenate(qs), dt=dt, steps=steps, settle_steps=bed["settle_steps"],
-                peak_overlap=sim.peak_overlap, wall_forces=wall_forces,
-                n=int(keep.sum()), from_cache=bed["from_cache"], surface=bed["surface"],
-                log_every=log_every, wall=wall)
+            st["vtk_k"] = vtk.k
+    wall_forces = np.concatenate(st["fa"])
+    out = dict(t=np.concatenate(st["ts"]), force=wall_forces[:, wall].copy(),
+               torque=np.concatenate(st["qs"]), dt=dt, steps=steps,
+               settle_steps=bed["settle_steps"], peak_overlap=sim.peak_overlap,
+               wall_forces=wall_forces, n=st["pass_n"], from_cache=bed["from_cache"],
+               surface=bed["surface"], log_every=log_every, wall=wall)
+    for name in ("ts", "qs", "fa"):
+        del st[name]
+    prog.next("pass_done", pass_out=out)
+    return dict(out, sim=sim)
 
 
 class VtkWriter:
