@@ -273,3 +273,25 @@ def test_sigkill_then_the_same_command_resumes(tmp_path):
     diff = {k for k in rows[0] if rows[0][k] != rows[1].get(k)}
     assert diff == {"wall_s"}
     assert not list(rdir.glob("*.restart"))
+
+
+def test_a_tool_job_keeps_one_restart_folder_per_spec(tmp_path, monkeypatch):
+    """The tool and measured-data-loop jobs (tool_point.py) hand each of their specs its own
+    restart folder under the job's, as the design-point jobs do."""
+    import pandas as pd
+
+    from soilcal.chain import sources, verify
+
+    seen = []
+
+    def fake(spec, threads=None, restart_dir=None):
+        seen.append((spec["seed"], restart_dir))
+        return pd.DataFrame([{c: "" for c in sources.RUN_COLUMNS} | {"seed": spec["seed"]}])
+
+    monkeypatch.setattr(sources, "simulate", fake)
+    job = {"stage": "bbd", "measurement": "m", "measures": ["x"],
+           "specs": [{"seed": 7}, {"seed": 8}]}
+    verify.run_tool_point(job, tmp_path / "out.csv", threads=1, restart_dir=tmp_path / "r")
+    assert seen == [(7, tmp_path / "r" / "spec0"), (8, tmp_path / "r" / "spec1")]
+    verify.run_tool_point(job, tmp_path / "out2.csv", threads=1)
+    assert seen[2:] == [(7, None), (8, None)]

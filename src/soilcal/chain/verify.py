@@ -422,9 +422,12 @@ def tool_point(soil, cond, stage: dict, optimum: pd.DataFrame) -> dict:
     return dict(base, specs=specs)
 
 
-def run_tool_point(job: dict, out, threads: int | None = None) -> pd.DataFrame:
+def run_tool_point(job: dict, out, threads: int | None = None, restart_dir=None) -> pd.DataFrame:
     """Simulate one measured condition (:func:`tool_point`) and write one row per measured
-    quantity and seed."""
+    quantity and seed.  ``restart_dir``: where its runs keep their restart files, one folder
+    per spec (``spec<k>``), so that a killed job resumes (:func:`soilcal.chain.sources.simulate`)."""
+    from pathlib import Path
+
     from soilcal.chain.files import write_csv
     from soilcal.chain.sources import RUN_COLUMNS, simulate
 
@@ -434,7 +437,9 @@ def run_tool_point(job: dict, out, threads: int | None = None) -> pd.DataFrame:
                                                             "value": np.nan, "n": 0}
                            for m in job["measures"]], columns=RUN_COLUMNS)
     else:
-        df = pd.concat([simulate(spec, threads=threads) for spec in job["specs"]], ignore_index=True)
+        df = pd.concat([simulate(spec, threads=threads,
+                                 restart_dir=None if restart_dir is None else Path(restart_dir) / f"spec{k}")
+                        for k, spec in enumerate(job["specs"])], ignore_index=True)
     df.insert(2, "measurement", job["measurement"])
     write_csv(df, out)
     return df
