@@ -18,6 +18,12 @@ Rows go to ``benchmarks/results/slurm_runs.csv`` (one per workflow run) and
 
     python benchmarks/slurm.py                  # kill the cluster run after 240 s
     python benchmarks/slurm.py --kill-after 0   # no kill
+    python benchmarks/slurm.py --local          # no cluster: the second run is local too
+
+``--local`` needs no SLURM: the second run is ``snakemake --cores 2`` as well (killed and
+resumed the same way), so the comparison says whether two complete runs of the same inputs
+from an empty results/ give byte-identical tables; its rows go to ``reproducible_runs.csv``,
+``reproducible_files.csv`` and ``reproducible.md``.
 """
 
 from __future__ import annotations
@@ -95,7 +101,10 @@ def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--kill-after", type=float, default=240.0, help="seconds before the cluster run is killed (0: no kill)")
     ap.add_argument("--workdir", default=None, help="folder for the two workflow copies (default: a new temporary one)")
+    ap.add_argument("--local", action="store_true", help="second run on this machine too (no SLURM needed)")
     args = ap.parse_args(argv)
+    if args.local:
+        return local_twice(args)
     why = cluster_ready()
     if why:
         print(f"slurm.py: {why}; start one with `sudo benchmarks/slurm/single_node.sh`", file=sys.stderr)
@@ -167,6 +176,66 @@ def main(argv=None) -> int:
              *runs_table(all_files, FILE_FIELDS), ""]
     write_page(OUT / "slurm.md", lines)
     return 0 if same_results(comps) and all(r["rc"] == 0 for r in runs if r["kind"] != "slurm, killed") else 1
+
+
+def local_twice(args) -> int:
+    """Two complete local runs from an empty results/, the second killed and resumed when
+    ``--kill-after`` > 0, compared file by file (``--local``)."""
+    base = Path(args.workdir or tempfile.mkdtemp(prefix="soilcal-repro-"))
+    base.mkdir(parents=True, exist_ok=True)
+    utc = datetime.datetime.now(datetime.timezone.utc).strftime("%Y-%m-%d %H:%M")
+    run_id = datetime.datetime.now(datetime.timezone.utc).strftime("%Y%m%dT%H%M%S")
+    rev = commit()
+    env_note = f"{platform.machine()}, {os.cpu_count()} logical CPUs, Python {platform.python_version()}"
+    runs = []
+
+    def row(kind, command, sec, rc, text, note=""):
+        r = dict(utc=utc, commit=rev, run_id=run_id, kind=kind, command=command, elapsed_s=round(sec, 1),
+                 jobs_done=jobs_done(text), rc=rc, note=note)
+        runs.append(r)
+        print(r, flush=True)
+
+    cmd = SNAKEMAKE + ["--cores", "2"]
+    first = make_tiny(copy_workflow(_fresh(base / "first"), TINY_SOILS))
+    sec, rc, text = timed(cmd, first, base / "first.log")
+    row("first", "snakemake --cores 2", sec, rc, text)
+    second = make_tiny(copy_workflow(_fresh(base / "second"), TINY_SOILS))
+    if args.kill_after > 0:
+        sec, rc, text = timed(cmd, second, base / "second_killed.log", args.kill_after)
+        row("second, killed", "snakemake --cores 2", sec, rc, text, f"SIGKILL after {args.kill_after:g} s")
+        subprocess.run(SNAKEMAKE + ["--unlock", "--cores", "1"], cwd=second, capture_output=True)
+        sec, rc, text = timed(cmd, second, base / "second_resumed.log")
+        row("second, resumed", "snakemake --unlock; snakemake --cores 2", sec, rc, text)
+    else:
+        sec, rc, text = timed(cmd, second, base / "second.log")
+        row("second", "snakemake --cores 2", sec, rc, text)
+    comps = compare_trees(first / "results", second / "results")
+    files = []
+    for outcome, n in summary(comps).items():
+        ex = next(c for c in comps if c.outcome == outcome)
+        files.append(dict(utc=utc, commit=rev, run_id=run_id, outcome=outcome, files=n,
+                          example=f"{ex.path} ({ex.detail})" if ex.detail else ex.path))
+    identical = all(c.outcome == "identical" for c in comps)
+    print(f"{len(comps)} files compared: {'byte-identical' if identical else 'not all byte-identical'}", flush=True)
+    OUT.mkdir(exist_ok=True)
+    all_runs = read_rows(OUT / "reproducible_runs.csv", RUN_FIELDS) + runs
+    all_files = read_rows(OUT / "reproducible_files.csv", FILE_FIELDS) + files
+    write_rows(OUT / "reproducible_runs.csv", all_runs, RUN_FIELDS)
+    write_rows(OUT / "reproducible_files.csv", all_files, FILE_FIELDS)
+    lines = ["# Two complete runs of the same inputs from an empty results/", "",
+             f"Machine: {env_note}.  Command: `python benchmarks/slurm.py --local"
+             + (f" --kill-after {args.kill_after:g}`" if args.kill_after != 240 else "`")
+             + ".  The run: the tiny calibration of the workflow tests (cinnamon soil on heaps of "
+             "300 spheres through screening, path, Box-Behnken, verification, plate tests and the "
+             "measured-data loop; yangtze soil replayed); the second run is killed with SIGKILL "
+             "and resumed after `snakemake --unlock`.", "",
+             "Workflow runs (elapsed: wall-clock seconds of the command; jobs: jobs Snakemake "
+             "reports finished):", "", *runs_table(all_runs, RUN_FIELDS), "",
+             "The first run's results/ against the second's, file by file (`soilcal compare`; "
+             "`identical` is byte for byte; figures are not compared):", "",
+             *runs_table(all_files, FILE_FIELDS), ""]
+    write_page(OUT / "reproducible.md", lines)
+    return 0 if identical and all(r["rc"] == 0 for r in runs if r["kind"] != "second, killed") else 1
 
 
 def _fresh(path: Path) -> Path:

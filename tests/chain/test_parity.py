@@ -40,7 +40,7 @@ def _printed_runs(stage: dict, design: pd.DataFrame, table: pd.DataFrame, column
         for rid, col in columns.items():
             row = {c: "" for c in RUN_COLUMNS}
             row.update(run=run, response=rid, value=float(table[col].iloc[i]), sd=np.nan, n=1, status="ok",
-                       error="", seed=0, wall_s=0.0)
+                       error="", seed=0)
             rows.append(row)
         runs[run] = pd.DataFrame(rows, columns=RUN_COLUMNS)
     return runs

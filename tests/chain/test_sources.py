@@ -84,8 +84,7 @@ def test_design_points_steepest_and_bbd():
 
 def _run_rows(run: int, rows: list[dict]) -> pd.DataFrame:
     base = {c: "" for c in RUN_COLUMNS} | {"soil": "s", "stage": "st", "run": run, "seed": 100, "replicates": 2,
-                                           "seeds": "100 101", "n": 2, "status": "ok", "error": "",
-                                           "wall_s": 1.5}
+                                           "seeds": "100 101", "n": 2, "status": "ok", "error": ""}
     return pd.DataFrame([base | r for r in rows], columns=RUN_COLUMNS)
 
 
@@ -100,21 +99,21 @@ def test_gather_runs_ok_and_failed_points():
                          {"response": "y2", "value": 40.0, "sd": np.nan, "n": 1}]),
         2: _run_rows(2, [{"response": "y2", "value": np.nan, "sd": np.nan, "n": 0, "status": "failed",
                           "error": "SimulationError: blow-up at step 12", "seed": 100},
-                         {"response": "y1", "value": 31.0, "sd": 0.2, "wall_s": 2.0}]),
+                         {"response": "y1", "value": 31.0, "sd": 0.2}]),
     }
     t = gather_runs(STAGE, DESIGN, runs)
     assert list(t.columns) == ["run", "A", "B", "y1", "y1_sd", "y1_n", "y2", "y2_sd", "y2_n",
-                               "seed", "status", "error", "wall_s"]
+                               "seed", "status", "error"]
     r1, r2 = t.iloc[0], t.iloc[1]
     assert (r1["run"], r1["A"], r1["B"]) == (1, 0.1, 5.0)  # the actual levels, not the coded ones
     assert (r1["y1"], r1["y1_sd"], r1["y1_n"]) == (30.0, 0.4, 2)
     assert r1["y2"] == 40.0 and np.isnan(r1["y2_sd"]) and r1["y2_n"] == 1
-    assert r1["status"] == "ok" and r1["error"] == "" and r1["wall_s"] == 3.0
+    assert r1["status"] == "ok" and r1["error"] == ""
     # the failed response: NaN, n 0, the point failed with its error; the other response kept
     assert np.isnan(r2["y2"]) and np.isnan(r2["y2_sd"]) and r2["y2_n"] == 0
     assert r2["y1"] == 31.0 and r2["y1_n"] == 2
     assert r2["status"] == "failed" and r2["error"] == "y2: SimulationError: blow-up at step 12"
-    assert r2["wall_s"] == 3.5 and r2["seed"] == 100
+    assert r2["seed"] == 100
 
 
 def test_gather_runs_steepest_key_is_step():

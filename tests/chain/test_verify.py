@@ -315,11 +315,11 @@ def test_tool_frame_note_without_printed_note():
 def test_summary_frame_counts_dem_points():
     ver = pd.DataFrame([{"stage": "bbd", "case": "c", "response": "y", "target": 1.0, "relative_error_percent": 1.0,
                          "status": "ok"}])
-    tabs = [pd.DataFrame({"status": ["ok", "failed", "ok"], "wall_s": [1.0, 2.0, 3.5]}),
-            pd.DataFrame({"status": ["ok"], "wall_s": [0.3]})]
+    tabs = [pd.DataFrame({"status": ["ok", "failed", "ok"]}), pd.DataFrame({"status": ["ok"]})]
     df = summary_frame({"s": ver}, {"s": tabs})
     r = df.iloc[0]
-    assert (r["soil"], r["dem_points"], r["dem_failed"], r["dem_wall_s"]) == ("s", 4, 1, pytest.approx(6.8))
+    assert (r["soil"], r["dem_points"], r["dem_failed"]) == ("s", 4, 1)
+    assert "dem_wall_s" not in df  # timings live in the jobs' benchmark files
 
 
 # --------------------------------------------------------------------------- calibrated levels

@@ -1017,6 +1017,22 @@ def _(tmp):
     return ["loop", "run", SOIL, "--param", "soil_density", "--out", "out"]
 
 
+
+@case("cli-bench-negative-count", "cli", CMD, "--n", "a number of spheres >= 1", subprocess=True)
+def _(tmp):
+    return ["bench", "settle", "--n", "-5"]
+
+
+@case("cli-bench-zero-skin", "cli", CMD, "--skin", "a neighbour skin > 0 m")
+def _(tmp):
+    return ["bench", "settle", "--n", "200", "--skin", "0"]
+
+
+@case("cli-scenario-zero-threads", "cli", CMD, "--threads", "an integer in [1, ")
+def _(tmp):
+    return ["scenario", "run", "repose", "--threads", "0", "--out", "out/row.csv"]
+
+
 # ================================================================== workflow config
 
 

@@ -12,4 +12,4 @@ with redirect(snakemake.log[0]):  # noqa: F821
     print(f"{spec['soil']} {spec['stage']} run {spec['run']} seed {spec['seed']}: {spec['levels']}")
     df = run_point(spec, snakemake.output[0], threads=snakemake.threads,  # noqa: F821
                    restart_dir=restart_dir(snakemake.output[0]))  # noqa: F821
-    print(df[["response", "value", "sd", "n", "status", "error", "wall_s"]].to_string(index=False))
+    print(df[["response", "value", "sd", "n", "status", "error"]].to_string(index=False))

@@ -12,4 +12,4 @@ with redirect(snakemake.log[0]):  # noqa: F821
     print(job.get("not_run") or f"{', '.join(job['measures'])}: {len(job['specs'])} seeds")
     df = run_tool_point(job, snakemake.output[0], threads=snakemake.threads,  # noqa: F821
                         restart_dir=restart_dir(snakemake.output[0]))  # noqa: F821
-    print(df[["measure", "seed", "value", "status", "error", "wall_s"]].to_string(index=False))
+    print(df[["measure", "seed", "value", "status", "error"]].to_string(index=False))

@@ -12,4 +12,4 @@ with redirect(snakemake.log[0]):  # noqa: F821
     print(spec.get("not_run") or f"{spec['soil']} {spec['stage']} {spec['case']} seed {spec['seed']}: {spec['levels']}")
     df = run_verification_point(spec, snakemake.output[0], threads=snakemake.threads,  # noqa: F821
                                 restart_dir=restart_dir(snakemake.output[0]))  # noqa: F821
-    print(df[["response", "preset", "value", "status", "error", "wall_s"]].to_string(index=False))
+    print(df[["response", "preset", "value", "status", "error"]].to_string(index=False))

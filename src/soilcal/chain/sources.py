@@ -39,9 +39,12 @@ import pandas as pd
 
 from soilcal.errors import InputError, SimulationError
 
+#: the columns of a DEM job's rows: what was simulated and what it gave, nothing of how long it
+#: took or on how many threads (the job's log and benchmark file say that), so that two runs
+#: of the same inputs write byte-identical tables
 RUN_COLUMNS = ["soil", "stage", "run", "response", "scenario", "setup", "measure", "preset", "seed",
                "replicates", "seeds", "value", "sd", "n", "status", "error", "notes", "particles",
-               "steps", "wall_s", "threads", "commit"]
+               "steps", "commit"]
 
 
 def published_responses(table_path, out) -> Path:
@@ -156,7 +159,7 @@ def simulate(spec: dict, threads: int | None = None, rev: str | None = None,
         rs = spec["responses"][rids[0]]
         base = {"soil": spec["soil"], "stage": spec["stage"], "run": spec["run"], "scenario": rs["scenario"],
                 "setup": rs["setup"]["name"], "preset": rs["preset"], "seed": spec["seed"], "replicates": k,
-                "seeds": " ".join(map(str, seeds)), "threads": nthreads, "commit": rev}
+                "seeds": " ".join(map(str, seeds)), "commit": rev}
         t0 = time.perf_counter()
         try:
             rdir = (None if restart_dir is None else
@@ -169,9 +172,12 @@ def simulate(spec: dict, threads: int | None = None, rev: str | None = None,
             err = f"{type(exc).__name__}: {exc}".replace("\n", " ")[:500]
             for rid in rids:
                 rows.append(base | {"response": rid, "measure": spec["responses"][rid]["measure"], "value": np.nan,
-                                    "sd": np.nan, "n": 0, "status": "failed", "error": err,
-                                    "wall_s": round(time.perf_counter() - t0, 2)})
+                                    "sd": np.nan, "n": 0, "status": "failed", "error": err})
+            print(f"{rs['scenario']} {rs['setup']['name']} ({rs['preset']}): failed after "
+                  f"{time.perf_counter() - t0:.2f} s on {nthreads} thread(s): {err}")
             continue
+        print(f"{rs['scenario']} {rs['setup']['name']} ({rs['preset']}): {res.n_particles} particles, "
+              f"{res.steps} steps, {res.wall_s:.2f} s on {nthreads} thread(s)")
         notes = str(res.responses.get("measure_errors", "") or "").replace("\n", " ")[:500]
         for rid in rids:
             measure = spec["responses"][rid]["measure"]
@@ -182,7 +188,7 @@ def simulate(spec: dict, threads: int | None = None, rev: str | None = None,
                           "value": float(np.mean(vals[ok])) if ok.any() else np.nan,
                           "sd": float(np.std(vals[ok], ddof=1)) if ok.sum() > 1 else np.nan,
                           "n": int(ok.sum()), "particles": res.n_particles, "steps": res.steps,
-                          "wall_s": round(res.wall_s, 2), "notes": notes}
+                          "notes": notes}
             if ok.any():
                 row.update(status="ok", error="")
             else:
@@ -224,7 +230,7 @@ def gather_runs(stage: dict, design: pd.DataFrame, runs: dict[int, pd.DataFrame]
                              "missing")
         df = runs[run]
         row = {key: run, **levels}
-        status, errors, seeds, wall = [], [], [], 0.0
+        status, errors, seeds = [], [], []
         for rid in rids:
             sel = df[df["response"] == rid]
             if sel.empty:
@@ -238,14 +244,12 @@ def gather_runs(stage: dict, design: pd.DataFrame, runs: dict[int, pd.DataFrame]
             if not ok:
                 errors.append(f"{rid}: {r['error']}")
             seeds.append(int(r["seed"]))
-            wall += float(r["wall_s"]) if pd.notna(r["wall_s"]) else 0.0
         row["seed"] = seeds[0]
         row["status"] = "ok" if all(s == "ok" for s in status) else "failed"
         row["error"] = "; ".join(errors)
-        row["wall_s"] = round(wall, 2)
         rows.append(row)
     cols = [key, *syms] + [c for rid in rids for c in (rid, f"{rid}_sd", f"{rid}_n")] + \
-        ["seed", "status", "error", "wall_s"]
+        ["seed", "status", "error"]
     return pd.DataFrame(rows, columns=cols)
 
 

@@ -485,12 +485,13 @@ def write_calibrated_vs_paper(soil_data: dict, stage_ids, stage_dirs: dict[str, 
 
 SUMMARY_COLUMNS = ["soil", "stage", "case", "round", "response", "target", "target_source", "simulated_mean",
                    "simulated_sd", "n", "relative_error_percent", "within_2_percent", "predicted_minus_target",
-                   "paper_relative_error_percent", "status", "dem_points", "dem_failed", "dem_wall_s"]
+                   "paper_relative_error_percent", "status", "dem_points", "dem_failed"]
 
 
 def summary_frame(verifications: dict[str, pd.DataFrame], responses: dict[str, list[pd.DataFrame]]) -> pd.DataFrame:
     """One row per soil, case, response and preset at the set the soil ends with (the last
-    verification round), with each soil's DEM design points (count, failed, summed wall time)."""
+    verification round), with each soil's DEM design points (count, failed; their wall time is in the
+    jobs' benchmark files)."""
     rows = []
     for soil, v in verifications.items():
         if "round" in v.columns and len(v):
@@ -500,10 +501,9 @@ def summary_frame(verifications: dict[str, pd.DataFrame], responses: dict[str, l
         tabs = responses.get(soil, [])
         pts = sum(len(t) for t in tabs)
         failed = sum(int((t["status"] != "ok").sum()) for t in tabs if "status" in t)
-        wall = sum(float(t["wall_s"].sum()) for t in tabs if "wall_s" in t)
         for r in v.to_dict("records"):
             rows.append({"soil": soil, **{k: r.get(k) for k in SUMMARY_COLUMNS if k in r},
-                         "dem_points": pts, "dem_failed": failed, "dem_wall_s": round(wall, 1)})
+                         "dem_points": pts, "dem_failed": failed})
     return pd.DataFrame(rows, columns=SUMMARY_COLUMNS)
 
 

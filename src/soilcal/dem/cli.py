@@ -7,7 +7,17 @@ import json
 
 def _settle(args) -> int:
     from soilcal.dem.bench import run_settle
+    from soilcal.dem.scenarios.base import threads_used
+    from soilcal.errors import InputError
 
+    src = "<command line>"
+    if args.n < 1:
+        raise InputError(src, "--n", "a number of spheres >= 1", args.n)
+    if args.steps < 0:
+        raise InputError(src, "--steps", "a number of steps >= 0", args.steps)
+    if args.skin is not None and not args.skin > 0:
+        raise InputError(src, "--skin", "a neighbour skin > 0 m", args.skin)
+    threads_used(args.threads, src, "--threads")
     res = run_settle(args.n, args.steps, args.threads, args.cohesion, args.seed, args.skin)
     print(json.dumps(res))
     return 0

@@ -652,13 +652,15 @@ def combine_replicates(runs) -> Result:
                   per_run=[dict(seed=int(r.seed), **r.responses) for r in runs])
 
 
-def threads_used(threads) -> int:
-    """Set numba's thread count (None: keep the current one); returns the count in use."""
+def threads_used(threads, source: str = "<input>", field: str = "threads") -> int:
+    """Set numba's thread count (None: keep the current one); returns the count in use.
+    ``source`` and ``field`` name where a bad count came from."""
     import numba
 
     if threads is not None:
-        t = int(threads)
-        check(1 <= t <= numba.config.NUMBA_NUM_THREADS, "<input>", "threads",
+        ok = isinstance(threads, (int, np.integer)) and not isinstance(threads, bool)
+        t = int(threads) if ok else 0
+        check(ok and 1 <= t <= numba.config.NUMBA_NUM_THREADS, source, field,
               f"an integer in [1, {numba.config.NUMBA_NUM_THREADS}]", threads)
         numba.set_num_threads(t)
     return int(numba.get_num_threads())

@@ -69,7 +69,7 @@ def _setups(args) -> int:
 def _run(args) -> int:
     from soilcal.dem.scenarios import get
     from soilcal.dem.scenarios.base import (PRESETS, DemParams, merge_setup, run_replicates,
-                                            write_row)
+                                            threads_used, write_row)
 
     src = "<command line>"
     mod = get(args.name, src)
@@ -86,6 +86,8 @@ def _run(args) -> int:
     mod.validate(setup, args.preset, src, params=params)
     if args.restart_every < 0:
         raise InputError(src, "--restart-every", "a number of seconds >= 0", args.restart_every)
+    if args.threads is not None:
+        threads_used(args.threads, src, "--threads")
     res = run_replicates(mod, setup, params, preset=args.preset, seed=args.seed,
                          replicates=args.replicates, threads=args.threads, vtk_dir=args.vtk,
                          source=src, restart_dir=args.restart, restart_every=args.restart_every)
