@@ -50,6 +50,10 @@ from wfutil import TINY_SOILS, copy_workflow, make_tiny  # noqa: E402
 from soilcal.chain.compare import compare_trees, same_results, summary  # noqa: E402
 
 SNAKEMAKE = [sys.executable, "-m", "snakemake"]
+#: what both comparisons run
+TINY_RUN = ("The run: the tiny calibration of the workflow tests (cinnamon soil on heaps of 300 "
+            "spheres through screening, path, Box-Behnken, verification, plate tests and the "
+            "measured-data loop; yangtze soil replayed)")
 RUN_FIELDS = ["utc", "commit", "run_id", "kind", "command", "elapsed_s", "jobs_done", "rc", "note"]
 FILE_FIELDS = ["utc", "commit", "run_id", "outcome", "files", "example"]
 
@@ -97,6 +101,67 @@ def cluster_ready() -> str:
     return ""
 
 
+class Session:
+    """One benchmark run: its folder, its identity (utc, commit, run id), its workflow-run rows
+    (:meth:`row`) and the saving of the rows and of a comparison's file outcomes."""
+
+    def __init__(self, workdir, prefix):
+        self.base = Path(workdir or tempfile.mkdtemp(prefix=prefix))
+        self.base.mkdir(parents=True, exist_ok=True)
+        now = datetime.datetime.now(datetime.timezone.utc)
+        self.utc, self.run_id = now.strftime("%Y-%m-%d %H:%M"), now.strftime("%Y%m%dT%H%M%S")
+        self.rev = commit()
+        self.env_note = f"{platform.machine()}, {os.cpu_count()} logical CPUs, Python {platform.python_version()}"
+        self.runs = []
+
+    def row(self, kind, command, sec, rc, text, note=""):
+        r = dict(utc=self.utc, commit=self.rev, run_id=self.run_id, kind=kind, command=command,
+                 elapsed_s=round(sec, 1), jobs_done=jobs_done(text), rc=rc, note=note)
+        self.runs.append(r)
+        print(r, flush=True)
+
+    def save(self, stem, comps):
+        """Append this run's rows and the comparison's outcomes to ``<stem>_runs.csv`` and
+        ``<stem>_files.csv``; returns every row of both."""
+        files = []
+        for outcome, n in summary(comps).items():
+            ex = next(c for c in comps if c.outcome == outcome)
+            files.append(dict(utc=self.utc, commit=self.rev, run_id=self.run_id, outcome=outcome, files=n,
+                              example=f"{ex.path} ({ex.detail})" if ex.detail else ex.path))
+        OUT.mkdir(exist_ok=True)
+        all_runs = read_rows(OUT / f"{stem}_runs.csv", RUN_FIELDS) + self.runs
+        all_files = read_rows(OUT / f"{stem}_files.csv", FILE_FIELDS) + files
+        write_rows(OUT / f"{stem}_runs.csv", all_runs, RUN_FIELDS)
+        write_rows(OUT / f"{stem}_files.csv", all_files, FILE_FIELDS)
+        return all_runs, all_files
+
+    def run_killed(self, cmd, cwd, name, command, kill_after, after_kill=None):
+        """``cmd`` in ``cwd`` from its start; with ``kill_after`` > 0 killed with SIGKILL after
+        that many seconds (``after_kill()``: what else the kill needs, said in the row's note),
+        unlocked and run again to its end.  One row per run, kinds ``name``, ``name, killed``
+        and ``name, resumed``."""
+        if kill_after > 0:
+            sec, rc, text = timed(cmd, cwd, self.base / f"{name}_killed.log", kill_after)
+            extra = after_kill() if after_kill else ""
+            self.row(f"{name}, killed", command, sec, rc, text, f"SIGKILL after {kill_after:g} s{extra}")
+            subprocess.run(SNAKEMAKE + ["--unlock", "--cores", "1"], cwd=cwd, capture_output=True)
+            sec, rc, text = timed(cmd, cwd, self.base / f"{name}_resumed.log")
+            self.row(f"{name}, resumed", f"snakemake --unlock; {command}", sec, rc, text)
+        else:
+            sec, rc, text = timed(cmd, cwd, self.base / f"{name}.log")
+            self.row(name, command, sec, rc, text)
+
+    def page(self, stem, title, intro, compared, all_runs, all_files):
+        """``<stem>.md``: the title, the machine and ``intro``, the workflow runs and the file
+        outcomes (``compared`` says what was compared)."""
+        write_page(OUT / f"{stem}.md", [
+            f"# {title}", "", f"Machine: {self.env_note}.  {intro}", "",
+            "Workflow runs (elapsed: wall-clock seconds of the command; jobs: jobs Snakemake "
+            "reports finished):", "", *runs_table(all_runs, RUN_FIELDS), "",
+            f"{compared}:", "", *runs_table(all_files, FILE_FIELDS), ""])
+
+
+
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--kill-after", type=float, default=240.0, help="seconds before the cluster run is killed (0: no kill)")
@@ -109,19 +174,8 @@ def main(argv=None) -> int:
     if why:
         print(f"slurm.py: {why}; start one with `sudo benchmarks/slurm/single_node.sh`", file=sys.stderr)
         return 2
-    base = Path(args.workdir or tempfile.mkdtemp(prefix="soilcal-slurm-"))
-    base.mkdir(parents=True, exist_ok=True)
-    utc = datetime.datetime.now(datetime.timezone.utc).strftime("%Y-%m-%d %H:%M")
-    run_id = datetime.datetime.now(datetime.timezone.utc).strftime("%Y%m%dT%H%M%S")
-    rev = commit()
-    env_note = f"{platform.machine()}, {os.cpu_count()} logical CPUs, Python {platform.python_version()}"
-    runs = []
-
-    def row(kind, command, sec, rc, text, note=""):
-        r = dict(utc=utc, commit=rev, run_id=run_id, kind=kind, command=command, elapsed_s=round(sec, 1),
-                 jobs_done=jobs_done(text), rc=rc, note=note)
-        runs.append(r)
-        print(r, flush=True)
+    ses = Session(args.workdir, "soilcal-slurm-")
+    base, runs, row = ses.base, ses.runs, ses.row
 
     local = make_tiny(copy_workflow(_fresh(base / "local"), TINY_SOILS))
     sec, rc, text = timed(SNAKEMAKE + ["--cores", "2"], local, base / "local.log")
@@ -129,17 +183,8 @@ def main(argv=None) -> int:
 
     cluster = make_tiny(copy_workflow(_fresh(base / "slurm"), TINY_SOILS))
     cmd = SNAKEMAKE + ["--profile", "profiles/slurm"]
-    if args.kill_after > 0:
-        sec, rc, text = timed(cmd, cluster, base / "slurm_killed.log", args.kill_after)
-        n = cancel_jobs(cluster)
-        row("slurm, killed", "snakemake --profile profiles/slurm", sec, rc, text,
-            f"SIGKILL after {args.kill_after:g} s; {n} SLURM jobs cancelled")
-        subprocess.run(SNAKEMAKE + ["--unlock", "--cores", "1"], cwd=cluster, capture_output=True)
-        sec, rc, text = timed(cmd, cluster, base / "slurm_resumed.log")
-        row("slurm, resumed", "snakemake --unlock; snakemake --profile profiles/slurm", sec, rc, text)
-    else:
-        sec, rc, text = timed(cmd, cluster, base / "slurm.log")
-        row("slurm", "snakemake --profile profiles/slurm", sec, rc, text)
+    ses.run_killed(cmd, cluster, "slurm", "snakemake --profile profiles/slurm", args.kill_after,
+                   lambda: f"; {cancel_jobs(cluster)} SLURM jobs cancelled")
     dry = subprocess.run(SNAKEMAKE + ["-n", "--profile", "profiles/slurm"], cwd=cluster, capture_output=True,
                          text=True)
     left = "Nothing to be done" in dry.stdout + dry.stderr
@@ -147,94 +192,43 @@ def main(argv=None) -> int:
         "", "nothing to do" if left else "jobs left: " + dry.stdout[-300:].replace("\n", " "))
 
     comps = compare_trees(local / "results", cluster / "results")
-    files = []
-    for outcome, n in summary(comps).items():
-        ex = next(c for c in comps if c.outcome == outcome)
-        files.append(dict(utc=utc, commit=rev, run_id=run_id, outcome=outcome, files=n,
-                          example=f"{ex.path} ({ex.detail})" if ex.detail else ex.path))
     verdict = "same results" if same_results(comps) else "the results differ"
     print(f"{len(comps)} files compared: {verdict}", flush=True)
-
-    OUT.mkdir(exist_ok=True)
-    all_runs = read_rows(OUT / "slurm_runs.csv", RUN_FIELDS) + runs
-    all_files = read_rows(OUT / "slurm_files.csv", FILE_FIELDS) + files
-    write_rows(OUT / "slurm_runs.csv", all_runs, RUN_FIELDS)
-    write_rows(OUT / "slurm_files.csv", all_files, FILE_FIELDS)
+    all_runs, all_files = ses.save("slurm", comps)
     sinfo = subprocess.run(["sinfo", "-h", "-o", "%N %c CPUs %m MB %P"], capture_output=True, text=True).stdout.strip()
     version = subprocess.run(["sinfo", "--version"], capture_output=True, text=True).stdout.strip()
-    lines = ["# One soil's DEM calibration on a real SLURM cluster against the local run", "",
-             f"Machine: {env_note}.  Cluster: {version}, node `{sinfo}` "
-             "(`benchmarks/slurm/single_node.sh`).  Command: `python benchmarks/slurm.py"
-             + (f" --kill-after {args.kill_after:g}`" if args.kill_after != 240 else "`")
-             + ".  The run: the tiny calibration of the workflow tests (cinnamon soil on heaps of "
-             "300 spheres through screening, path, Box-Behnken, verification, plate tests and the "
-             "measured-data loop; yangtze soil replayed).", "",
-             "Workflow runs (elapsed: wall-clock seconds of the command; jobs: jobs Snakemake "
-             "reports finished):", "", *runs_table(all_runs, RUN_FIELDS), "",
+    kill = f" --kill-after {args.kill_after:g}" if args.kill_after != 240 else ""
+    ses.page("slurm", "One soil's DEM calibration on a real SLURM cluster against the local run",
+             f"Cluster: {version}, node `{sinfo}` (`benchmarks/slurm/single_node.sh`).  Command: "
+             f"`python benchmarks/slurm.py{kill}`.  {TINY_RUN}.",
              "Local results/ against the cluster's, file by file (`soilcal compare`; execution "
-             "columns: a job's wall-clock seconds and thread count):", "",
-             *runs_table(all_files, FILE_FIELDS), ""]
-    write_page(OUT / "slurm.md", lines)
+             "columns: a job's wall-clock seconds and thread count, in tables of earlier versions)",
+             all_runs, all_files)
     return 0 if same_results(comps) and all(r["rc"] == 0 for r in runs if r["kind"] != "slurm, killed") else 1
 
 
 def local_twice(args) -> int:
     """Two complete local runs from an empty results/, the second killed and resumed when
     ``--kill-after`` > 0, compared file by file (``--local``)."""
-    base = Path(args.workdir or tempfile.mkdtemp(prefix="soilcal-repro-"))
-    base.mkdir(parents=True, exist_ok=True)
-    utc = datetime.datetime.now(datetime.timezone.utc).strftime("%Y-%m-%d %H:%M")
-    run_id = datetime.datetime.now(datetime.timezone.utc).strftime("%Y%m%dT%H%M%S")
-    rev = commit()
-    env_note = f"{platform.machine()}, {os.cpu_count()} logical CPUs, Python {platform.python_version()}"
-    runs = []
-
-    def row(kind, command, sec, rc, text, note=""):
-        r = dict(utc=utc, commit=rev, run_id=run_id, kind=kind, command=command, elapsed_s=round(sec, 1),
-                 jobs_done=jobs_done(text), rc=rc, note=note)
-        runs.append(r)
-        print(r, flush=True)
+    ses = Session(args.workdir, "soilcal-repro-")
+    base, runs, row = ses.base, ses.runs, ses.row
 
     cmd = SNAKEMAKE + ["--cores", "2"]
     first = make_tiny(copy_workflow(_fresh(base / "first"), TINY_SOILS))
     sec, rc, text = timed(cmd, first, base / "first.log")
     row("first", "snakemake --cores 2", sec, rc, text)
     second = make_tiny(copy_workflow(_fresh(base / "second"), TINY_SOILS))
-    if args.kill_after > 0:
-        sec, rc, text = timed(cmd, second, base / "second_killed.log", args.kill_after)
-        row("second, killed", "snakemake --cores 2", sec, rc, text, f"SIGKILL after {args.kill_after:g} s")
-        subprocess.run(SNAKEMAKE + ["--unlock", "--cores", "1"], cwd=second, capture_output=True)
-        sec, rc, text = timed(cmd, second, base / "second_resumed.log")
-        row("second, resumed", "snakemake --unlock; snakemake --cores 2", sec, rc, text)
-    else:
-        sec, rc, text = timed(cmd, second, base / "second.log")
-        row("second", "snakemake --cores 2", sec, rc, text)
+    ses.run_killed(cmd, second, "second", "snakemake --cores 2", args.kill_after)
     comps = compare_trees(first / "results", second / "results")
-    files = []
-    for outcome, n in summary(comps).items():
-        ex = next(c for c in comps if c.outcome == outcome)
-        files.append(dict(utc=utc, commit=rev, run_id=run_id, outcome=outcome, files=n,
-                          example=f"{ex.path} ({ex.detail})" if ex.detail else ex.path))
     identical = all(c.outcome == "identical" for c in comps)
     print(f"{len(comps)} files compared: {'byte-identical' if identical else 'not all byte-identical'}", flush=True)
-    OUT.mkdir(exist_ok=True)
-    all_runs = read_rows(OUT / "reproducible_runs.csv", RUN_FIELDS) + runs
-    all_files = read_rows(OUT / "reproducible_files.csv", FILE_FIELDS) + files
-    write_rows(OUT / "reproducible_runs.csv", all_runs, RUN_FIELDS)
-    write_rows(OUT / "reproducible_files.csv", all_files, FILE_FIELDS)
-    lines = ["# Two complete runs of the same inputs from an empty results/", "",
-             f"Machine: {env_note}.  Command: `python benchmarks/slurm.py --local"
-             + (f" --kill-after {args.kill_after:g}`" if args.kill_after != 240 else "`")
-             + ".  The run: the tiny calibration of the workflow tests (cinnamon soil on heaps of "
-             "300 spheres through screening, path, Box-Behnken, verification, plate tests and the "
-             "measured-data loop; yangtze soil replayed); the second run is killed with SIGKILL "
-             "and resumed after `snakemake --unlock`.", "",
-             "Workflow runs (elapsed: wall-clock seconds of the command; jobs: jobs Snakemake "
-             "reports finished):", "", *runs_table(all_runs, RUN_FIELDS), "",
+    all_runs, all_files = ses.save("reproducible", comps)
+    kill = f" --kill-after {args.kill_after:g}" if args.kill_after != 240 else ""
+    ses.page("reproducible", "Two complete runs of the same inputs from an empty results/",
+             f"Command: `python benchmarks/slurm.py --local{kill}`.  {TINY_RUN}; the second run "
+             "is killed with SIGKILL and resumed after `snakemake --unlock`.",
              "The first run's results/ against the second's, file by file (`soilcal compare`; "
-             "`identical` is byte for byte; figures are not compared):", "",
-             *runs_table(all_files, FILE_FIELDS), ""]
-    write_page(OUT / "reproducible.md", lines)
+             "`identical` is byte for byte; figures are not compared)", all_runs, all_files)
     return 0 if identical and all(r["rc"] == 0 for r in runs if r["kind"] != "second, killed") else 1
 
 
