@@ -184,14 +184,12 @@ class Progress:
     :meth:`checkpoint` between two short steps of a loop, and :meth:`finish` at its end.
     ``restart=None``: the same calls, no file (and no chunking), so that one code path runs
     with and without restart files.  ``frames``: a :class:`soilcal.dem.scenarios.base.Frames`
-    whose list of written frames travels with the file."""
+    whose list of written frames travels with the file.  The run's wall time (:attr:`wall_s`)
+    counts from the object's creation, plus that of earlier sessions."""
 
-    def __init__(self, restart=None, timer=None, frames=None):
-        import time as _time
-
+    def __init__(self, restart=None, frames=None):
         self.restart = restart
-        self._clock = (lambda: timer.seconds) if timer is not None else _time.perf_counter
-        self._t0 = self._clock()
+        self._t0 = time.perf_counter()
         self.frames = frames
         self.sim = None
         self.vars: dict = {"phase": None, "wall_s": 0.0}
@@ -229,7 +227,7 @@ class Progress:
     @property
     def wall_s(self) -> float:
         """Wall time of the run over every session it took."""
-        return self.wall0 + (self._clock() - self._t0)
+        return self.wall0 + (time.perf_counter() - self._t0)
 
     def checkpoint(self) -> None:
         """Write the restart file if one is due."""

@@ -733,13 +733,11 @@ def rest_tolerance(sim, rest_speed: float, mask=None) -> float:
 
 def settle(sim, rest_speed: float, max_time: float, check_every: int = 200) -> tuple[bool, float]:
     """Run until the translational kinetic energy is below 1/2 M v_rest^2 or ``max_time``
-    seconds have passed; returns (settled, simulated seconds)."""
-    if sim.dt is None:
-        sim.run(0)
-    t0 = sim.step
-    ok = sim.run_until_settled(rest_tolerance(sim, rest_speed), check_every=check_every,
-                               max_steps=max(1, int(round(max_time / sim.dt))))
-    return bool(ok), (sim.step - t0) * sim.dt
+    seconds have passed; returns (settled, simulated seconds).  The rest loop of the
+    scenarios (:func:`soilcal.dem.restart.settle`), without a restart file."""
+    from soilcal.dem import restart
+
+    return restart.settle(sim, rest_speed, max_time, {}, "steps", None, check_every)
 
 
 def run_time(sim, seconds: float) -> int:
@@ -774,17 +772,3 @@ class Frames:
             from soilcal.dem.io import write_pvd
 
             write_pvd(self.dir / f"{self.name}.pvd", self.entries)
-
-
-class Timer:
-    """Wall-clock timer of a run (time.perf_counter)."""
-
-    def __init__(self):
-        import time
-
-        self._t = time.perf_counter
-        self.t0 = self._t()
-
-    @property
-    def seconds(self) -> float:
-        return self._t() - self.t0

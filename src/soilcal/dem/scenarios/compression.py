@@ -49,7 +49,7 @@ import numpy as np
 
 from soilcal.dem import measure
 from soilcal.dem.factories import CylinderRegion, UniformRadius, insert_random
-from soilcal.dem.scenarios.base import (DemParams, Frames, Result, Timer, check, check_discretisation,
+from soilcal.dem.scenarios.base import (DemParams, Frames, Result, check, check_discretisation,
                                         check_preset, make_simulation, paper_cohesion, paper_psd,
                                         rng, setup_number, threads_used)
 
@@ -147,14 +147,13 @@ def run(setup, params: DemParams, preset="quick", seed=0, threads=None, vtk_dir=
     from soilcal.dem import restart as rst
 
     validate(setup, preset, source, params)
-    timer = Timer()
     nthreads = threads_used(threads)
     sz = sizing(setup, preset, params)
     R, H = setup["tube_diameter"] / 2, setup["tube_height"]
     Rr = setup["rod_diameter"] / 2
     coh = paper_cohesion(setup, sz["dist"], source)
     frames = Frames(vtk_dir, NAME)
-    prog = rst.Progress(restart, timer, frames)
+    prog = rst.Progress(restart, frames)
     if not prog.resume():
         gen = rng(seed, NAME)
         sim, scale = make_simulation(params, setup, preset, source, cohesion=coh,

@@ -41,7 +41,7 @@ import math
 
 import numpy as np
 
-from soilcal.dem.scenarios.base import (DemParams, Frames, Result, Timer, check, check_preset,
+from soilcal.dem.scenarios.base import (DemParams, Frames, Result, check, check_preset,
                                         check_rolling, make_simulation, rng, setup_number,
                                         threads_used)
 
@@ -136,14 +136,13 @@ def run(setup, params: DemParams, preset="quick", seed=0, threads=None, vtk_dir=
     from soilcal.dem import restart as rst
 
     validate(setup, preset, source)
-    timer = Timer()
     nthreads = threads_used(threads)
     kind = setup["kind"]
     step_deg, hold = STEPS[(preset, kind)]
     step_deg = setup.get("step_deg") or step_deg
     hold = setup.get("hold_time") or hold
     frames = Frames(vtk_dir, NAME)
-    prog = rst.Progress(restart, timer, frames)
+    prog = rst.Progress(restart, frames)
     if not prog.resume():
         gen = rng(seed, NAME)
         sim, scale = make_simulation(params, setup, preset, source)

@@ -87,7 +87,7 @@ from scipy.optimize import brentq
 from soilcal.dem import measure
 from soilcal.dem.factories import ConeRegion, CylinderRegion, UniformRadius, insert_random
 from soilcal.dem.geometry import cone_mesh, disk_mesh
-from soilcal.dem.scenarios.base import (DemParams, Frames, Result, Timer, check, check_discretisation,
+from soilcal.dem.scenarios.base import (DemParams, Frames, Result, check, check_discretisation,
                                         check_preset, make_simulation, paper_cohesion, paper_psd,
                                         rng, run_time, setup_number, threads_used)
 from soilcal.errors import InputError
@@ -331,14 +331,13 @@ def run(setup: dict, params: DemParams, preset: str = "quick", seed: int = 0, th
     from soilcal.dem import restart as rst
 
     validate(setup, preset, source, params)
-    timer = Timer()
     nthreads = threads_used(threads)
     sz = sizing(setup, preset, params)
     coh = paper_cohesion(setup, sz["dist"], source)
     frames = Frames(vtk_dir, NAME)
     dmax = 2 * sz["r_max"]
     cylinder = setup["method"] == "cylinder"
-    prog = rst.Progress(restart, timer, frames)
+    prog = rst.Progress(restart, frames)
     if not prog.resume():
         gen = rng(seed, setup.get("seed_stream", NAME))
         # a neighbour skin of 0.6 r_max: falling spheres would otherwise rebuild the lists

@@ -346,12 +346,16 @@ def dig(x, r, inside) -> np.ndarray:
     return ~np.asarray(inside(x, r), dtype=bool)
 
 
-def force_series(sim: Simulation, wall: int, log_every: int, step0: int, dt: float):
-    """(t, force[n, 3], torque[n, 3]) of one wall from the last run's wall log; t is the time
-    since ``step0``."""
+def force_series(sim: Simulation, wall: int, log_every: int, step0: int, dt: float,
+                 start: int | None = None):
+    """(t, force[n, 3], torque[n, 3]) of one wall from the last run's wall log, whose rows
+    are counted from the run call's first step ``start`` (default ``step0``); t is the time
+    since ``step0``, from whole step counts (the same numbers however a pass is split into
+    calls)."""
     wl = sim.wall_log
     n = wl.shape[0]
-    steps = step0 + (np.arange(n) + 1) * log_every
+    start = step0 if start is None else start
+    steps = start + (np.arange(n) + 1) * log_every
     return (steps - step0) * dt, wl[:, wall, 0:3].copy(), wl[:, wall, 3:6].copy()
 
 
@@ -410,9 +414,8 @@ def tool_pass(spec: BinSpec, params: DemParams, preset: str, seed: int, source: 
         k = min(piece, frame_end - st["pass_done"])
         s0 = sim.step
         sim.run(k, wall_log_every=log_every)  # log rows counted from the start of this call
-        _, _, q = force_series(sim, wall, log_every, 0, dt)
-        # sample times from whole step counts: the same numbers whatever the pieces
-        st["ts"].append((s0 - step0 + (np.arange(len(q)) + 1) * log_every) * dt)
+        t, _, q = force_series(sim, wall, log_every, step0, dt, start=s0)
+        st["ts"].append(t)
         st["fa"].append(sim.wall_log[:, :, 0:3].copy())
         st["qs"].append(q)
         st["pass_done"] += k
