@@ -1,7 +1,9 @@
 """Tests run on two workers (pytest-xdist, ``-n 2 --dist loadfile`` in pyproject.toml): a test
 file goes to one worker whole, so its module-scoped fixtures are built once.  The session
 fixture ``tiny_dem_run`` (the tiny DEM calibration, minutes) would be built once per worker that
-runs a test using it: all its users live in one file."""
+runs a test using it: all its users live in one file.  The workflow tests (whole Snakemake
+runs, minutes per file) are collected first, so that the workers start them first and the
+short tests fill in beside them instead of one long file running alone at the end."""
 
 from __future__ import annotations
 
@@ -10,7 +12,11 @@ import os
 import pytest
 
 
+FIRST = ("tests/workflow/",)
+
+
 def pytest_collection_modifyitems(config, items):
+    items.sort(key=lambda it: not it.nodeid.startswith(FIRST))  # stable: the order within each part stays
     files = sorted({it.nodeid.split("::")[0] for it in items
                     if "tiny_dem_run" in getattr(it, "fixturenames", ())})
     if len(files) > 1 and os.environ.get("PYTEST_XDIST_WORKER"):

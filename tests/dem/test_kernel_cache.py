@@ -55,3 +55,19 @@ def test_cache_dir_is_where_numba_caches_the_kernels():
     want = Path(contact.jkr_force._cache._cache_path).resolve()
     assert kc.cache_dir(Path(contact.__file__)).resolve() == want
     assert (want / kc.STAMP).read_text().strip() == kc.source_digest(kc.source_files())
+
+
+def test_a_job_says_whether_it_compiled_or_loaded_its_kernels(tmp_path):
+    """kernel_counts: the first process to call a kernel with an empty cache compiles it, the
+    next one loads it (the line every DEM job of the workflow ends its log with)."""
+    import os
+    import subprocess
+    import sys
+
+    code = ("from soilcal.dem import contact, _kernel_cache as kc; "
+            "contact.jkr_root(1e-6, 1e-3, 0.05, 0.0); print(kc.kernel_line())")
+    env = dict(os.environ, NUMBA_CACHE_DIR=str(tmp_path / "cache"))
+    first, second = (subprocess.run([sys.executable, "-c", code], env=env, capture_output=True,
+                                    text=True, check=True).stdout.strip() for _ in range(2))
+    assert first == "Numba kernels: 0 loaded from the cache, 1 compiled (contact.jkr_root)"
+    assert second == "Numba kernels: 1 loaded from the cache, 0 compiled"

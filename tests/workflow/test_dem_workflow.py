@@ -64,6 +64,23 @@ def test_one_job_per_design_point_with_seed_and_commit(done):
         assert {"stacking_angle", "stacking_angle_sd", "stacking_angle_n", "status", "error"} <= set(responses)
 
 
+def test_the_dem_jobs_load_every_kernel_the_compile_job_built(done):
+    """Rule dem_kernels runs before every DEM job and compiles every kernel they call: each DEM
+    job's log reports its kernels loaded from Numba's cache and none compiled (a kernel the
+    compile cases miss would be compiled by each job again)."""
+    stamp = pd.read_csv(done / "results/cache/dem_kernels.csv")
+    assert {"repose", "drum", "incline", "compression", "bulldozing", "rotary"} <= set(stamp["scenario"])
+    assert stamp["dem_sources_sha256"].nunique() == 1
+    logs = [p for d in ("dem", "loop") for p in (done / "logs/cinnamon-soil" / d).rglob("*.log")
+            if "Numba kernels:" in p.read_text()]
+    kinds = {p.relative_to(done / "logs/cinnamon-soil").parts[1] for p in logs}
+    assert {"pb", "steepest", "bbd", "verify", "tools"} <= kinds
+    for p in logs:
+        line = next(ln for ln in p.read_text().splitlines() if ln.startswith("Numba kernels:"))
+        loaded, compiled = map(int, re.findall(r"(\d+) (?:loaded|compiled)", line))
+        assert loaded > 0 and compiled == 0, (p, line)
+
+
 def test_the_path_follows_the_dem_screening_and_the_bbd_its_chosen_step(done):
     pb = json.loads((_stage_dir(done, "dem", "pb") / "stage.json").read_text())
     path = json.loads((_stage_dir(done, "dem", "steepest") / "stage.json").read_text())

@@ -26,6 +26,7 @@ checkpoint adaptive_step:
 rule adaptive_point:
     input:
         step=lambda w: ancient(adaptive_step_file(w.soil, w.stage, w.case, int(w.it))),
+        kernels=ancient(DEM_KERNELS),
     output:
         "results/{soil}/dem/adaptive/{stage}/{case}/runs/{it}/{run}.csv",
     params:

@@ -27,6 +27,9 @@ IMAGE_MANIFESTS = {
     if os.path.isfile(f"{RES}/images/{soil}/manifest.yaml")
 }
 
+#: the stamp of the Numba kernel cache, written by rule dem_kernels before any DEM job
+DEM_KERNELS = "results/cache/dem_kernels.csv"
+
 wildcard_constraints:
     soil="|".join(SOILS),
     source="published|dem",

@@ -37,6 +37,7 @@ rule loop_point:
     input:
         optima=tool_optima,
         plan=lambda w: ancient(loop_plan_file(w.soil)),
+        kernels=ancient(DEM_KERNELS),
     output:
         "results/{soil}/loop/runs/{key}.csv",
     params:

@@ -4,6 +4,27 @@
 # exactly the points it changes), gathered into a table of the printed table's layout.
 
 
+rule dem_kernels:
+    # compiles the engine's kernels into Numba's cache once, before the DEM jobs start side by
+    # side (each would otherwise compile them, minutes each); they take it as an ancient input,
+    # so a rebuilt cache re-runs no result
+    output:
+        DEM_KERNELS,
+    threads: 1
+    priority: 1000
+    resources:
+        mem_mb=1000,
+        runtime=30,
+    conda:
+        "../../envs/soilcal.yaml"
+    log:
+        "logs/dem_kernels.log",
+    benchmark:
+        "benchmarks/workflow/dem_kernels.tsv"
+    script:
+        "../scripts/dem_kernels.py"
+
+
 rule published_responses:
     input:
         table=lambda w: printed_table(w.soil, w.stage),
@@ -20,6 +41,7 @@ rule published_responses:
 rule dem_point:
     input:
         design=lambda w: ancient(dem_design(w)),
+        kernels=ancient(DEM_KERNELS),
     output:
         "results/{soil}/dem/{stage}/runs/{run}.csv",
     params:

@@ -12,6 +12,7 @@
 rule verify_point:
     input:
         optimum=lambda w: optimum_of(w.soil, w.stage),
+        kernels=ancient(DEM_KERNELS),
     output:
         "results/{soil}/dem/verify/{preset}/{stage}/{case}/{rep}.csv",
     params:
@@ -51,6 +52,7 @@ checkpoint refine:
 rule refine_point:
     input:
         refined=lambda w: ancient(refined_of(w.soil, w.stage)),
+        kernels=ancient(DEM_KERNELS),
     output:
         "results/{soil}/dem/refine/{stage}/{case}/{rep}.csv",
     params:
@@ -92,7 +94,8 @@ rule verification:
 
 rule tool_point:
     input:
-        tool_optima,
+        optima=tool_optima,
+        kernels=ancient(DEM_KERNELS),
     output:
         "results/{soil}/dem/tools/{key}.csv",
     params:

@@ -4,6 +4,7 @@ import numba
 
 from soilcal.chain.files import restart_dir
 from soilcal.chain.verify import run_tool_point
+from soilcal.dem._kernel_cache import kernel_line
 from soilcal.logs import redirect
 
 with redirect(snakemake.log[0]):  # noqa: F821
@@ -13,3 +14,4 @@ with redirect(snakemake.log[0]):  # noqa: F821
     df = run_tool_point(job, snakemake.output[0], threads=snakemake.threads,  # noqa: F821
                         restart_dir=restart_dir(snakemake.output[0]))  # noqa: F821
     print(df[["measure", "seed", "value", "status", "error"]].to_string(index=False))
+    print(kernel_line())

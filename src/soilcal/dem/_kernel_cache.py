@@ -109,3 +109,36 @@ def refresh_package(root: Path = HERE) -> int:
         if d is not None:
             dirs.setdefault(d, []).extend(group)
     return refresh(files, dirs)
+
+
+def kernel_counts() -> dict:
+    """How this process got the kernels of ``soilcal.dem`` it called: ``loaded`` from Numba's
+    cache or ``compiled`` (no usable cache entry), one count per signature, and the names of
+    the compiled ones.  A job that compiled kernels ran before the cache held them (rule
+    dem_kernels, ``soilcal scenario compile``) or on a machine the cache was not built for."""
+    import sys
+
+    from numba.core.registry import CPUDispatcher
+
+    seen, loaded, compiled, names = set(), 0, 0, []
+    for mod_name, mod in list(sys.modules.items()):
+        if not mod_name.startswith("soilcal.dem") or mod is None:
+            continue
+        for obj in list(vars(mod).values()):
+            if not isinstance(obj, CPUDispatcher) or id(obj) in seen:
+                continue
+            seen.add(id(obj))
+            stats = obj.stats
+            loaded += sum(stats.cache_hits.values())
+            missed = sum(stats.cache_misses.values())
+            compiled += missed
+            if missed:
+                names.append(f"{obj.py_func.__module__.rsplit('.', 1)[-1]}.{obj.py_func.__name__}")
+    return dict(loaded=loaded, compiled=compiled, names=sorted(names))
+
+
+def kernel_line() -> str:
+    """:func:`kernel_counts` as the line a DEM job prints at its end."""
+    c = kernel_counts()
+    line = f"Numba kernels: {c['loaded']} loaded from the cache, {c['compiled']} compiled"
+    return line + (f" ({', '.join(c['names'])})" if c["names"] else "")

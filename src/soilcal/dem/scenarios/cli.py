@@ -5,6 +5,7 @@
     soilcal scenario run NAME --setup S --preset quick|paper --seed N --threads T \\
         --set key=value ... --param name=value ... --out row.csv [--vtk DIR] [--replicates K]
         [--restart DIR] [--restart-every SECONDS]
+    soilcal scenario compile [--out kernels.csv]
 
 ``--set`` overrides a value of the named setup (numbers are parsed as numbers), ``--param``
 sets a :class:`soilcal.dem.scenarios.base.DemParams` field; the run writes one CSV row
@@ -14,6 +15,9 @@ replicates' standard deviation (:func:`soilcal.dem.scenarios.base.run_replicates
 ``--restart DIR`` keeps a restart file per seed in DIR (scenarios that write them:
 :func:`soilcal.dem.restart.supports`), every ``--restart-every`` seconds (default 300): the
 same command started again after the run was killed resumes from it.
+``compile`` compiles every engine kernel into Numba's cache once
+(:mod:`soilcal.dem.scenarios.compile`), so that jobs started side by side load it instead of
+each compiling it.
 """
 
 from __future__ import annotations
@@ -100,6 +104,13 @@ def _run(args) -> int:
     return 0
 
 
+def _compile(args) -> int:
+    from soilcal.dem.scenarios.compile import compile_and_record
+
+    compile_and_record(args.out)
+    return 0
+
+
 def register(subparsers) -> None:
     p = subparsers.add_parser("scenario", help="DEM scenarios of the papers' physical tests")
     sub = p.add_subparsers(dest="scenario_cmd", required=True)
@@ -127,3 +138,9 @@ def register(subparsers) -> None:
     s.add_argument("--restart-every", type=float, default=300.0, metavar="SECONDS",
                    help="wall time between two restart files (default 300)")
     s.set_defaults(func=_run)
+    s = sub.add_parser("compile", help="compile the DEM engine's kernels into Numba's cache "
+                                       "(once, before many jobs start side by side)")
+    s.add_argument("--out", default=None, metavar="CSV",
+                   help="write the cases run (spheres, steps) with the Numba version and the "
+                        "digest of the engine's sources")
+    s.set_defaults(func=_compile)
