@@ -56,6 +56,8 @@ def copy_workflow(dest: Path, soils: list[str] | None) -> Path:
 def rule_of(path: Path) -> str:
     """The rule a benchmark file belongs to, from its place under benchmarks/workflow/."""
     parts = path.parts
+    if "loop" in parts and "runs" in parts:
+        return "loop_point"
     if "runs" in parts:
         return "dem_point"
     if "refine" in parts:
