@@ -27,8 +27,8 @@ from _report import commit, corpus_args, write_page, write_rows
 
 HERE = Path(__file__).resolve().parent
 FIELDS = ["photo", "truth_deg", "left_truth_deg", "right_truth_deg", "roll_deg", "measured_deg", "error_deg",
-          "left_error_deg", "right_error_deg", "cue", "confidence", "flank_points_used", "flank_rms_px", "refusal",
-          "seconds"]
+          "left_error_deg", "right_error_deg", "cue", "confidence", "flank_points_used", "flank_rms_px", "cue_check",
+          "cue_check_deg", "refusal", "seconds"]
 
 
 def main(argv=None):
@@ -36,6 +36,7 @@ def main(argv=None):
 
     from soilcal.errors import InputError
     from soilcal.imaging import corpus, measure
+    from soilcal.imaging.measure import CUE_AGREEMENT_DEG
 
     rows = []
     t_all = time.perf_counter()
@@ -51,7 +52,8 @@ def main(argv=None):
                            left_error_deg=round(r.left_deg - truth["left_deg"], 4),
                            right_error_deg=round(r.right_deg - truth["right_deg"], 4), cue=r.cue,
                            confidence=r.confidence, flank_points_used=round(r.flank_points_used, 3),
-                           flank_rms_px=round(r.flank_rms_px, 3))
+                           flank_rms_px=round(r.flank_rms_px, 3), cue_check=r.cue_check,
+                           cue_check_deg=round(r.cue_check_deg, 3))
             except InputError as e:
                 row["refusal"] = str(e).split(": ", 1)[-1].replace("|", "/")
             row["seconds"] = round(time.perf_counter() - t0, 2)
@@ -80,6 +82,8 @@ def main(argv=None):
                      f"{q(e, 100)} |")
     refusals = Counter(r["refusal"] for r in rows if r.get("refusal"))
     cues = Counter(r["cue"] for r in meas)
+    checked = [r for r in meas if r["cue_check"]]
+    disagree = [r for r in checked if r["cue_check_deg"] > CUE_AGREEMENT_DEG]
     md = ["# Heap-photo stress benchmark",
           "",
           f"Machine: {platform.machine()}, {os.cpu_count()} logical CPUs, Python {platform.python_version()}; "
@@ -96,6 +100,10 @@ def main(argv=None):
           + ("; ".join(f"{c} x {m}" for m, c in refusals.most_common()) or "none") + ".",
           "",
           "Cues used: " + ", ".join(f"{k} {v}" for k, v in cues.most_common()) + ".",
+          "",
+          f"Cross-checked by a second cue: {len(checked)} of {len(meas)} measured photos; of those, "
+          f"{len(disagree)} disagree by more than {CUE_AGREEMENT_DEG:g} deg on a flank (flagged low), "
+          f"{sum(abs(r['error_deg']) > 1.0 for r in disagree)} of them wrong by more than 1 deg.",
           ""]
     write_page(out / "pile_photos.md", md)
     print("\n".join(table))

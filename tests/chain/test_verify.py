@@ -396,3 +396,25 @@ def test_unknown_paper_verification_response_is_refused(tmp_path):
     p.write_text(yaml.safe_dump(d))
     with pytest.raises(InputError, match=r"simulation.verification.paper\[0\]: expected a response"):
         load_soil(p, root / "resources")
+
+
+# --------------------------------------------------------------------------- same_as
+
+
+def test_a_case_that_simulates_what_an_earlier_one_does_copies_its_rows(tmp_path):
+    from soilcal.chain.verify import run_verification_point, same_as
+
+    corner = {"levels": {"A": 0.1, "B": 0.2}, "seed": 7, "responses": {"angle": {"preset": "quick"}}}
+    specs = {"mc00": dict(corner, case="mc00"),
+             "mc05": {"not_run": "no target", "case": "mc05"},
+             "mc10": dict(corner, case="mc10"),
+             "mc15": dict(corner, levels={"A": 0.1, "B": 0.3}, case="mc15"),
+             "mc20": dict(corner, case="mc20")}
+    assert [same_as(specs, c) for c in specs] == [None, None, "mc00", None, "mc00"]
+    # the copy is the earlier job's file, cell for cell (commit hashes that look like numbers
+    # included), under the later case's name
+    rows = tmp_path / "mc00.csv"
+    rows.write_text("stage,run,case,response,value,commit\nbbd,0,mc00,angle,38.5801234567891,1e45678\n")
+    out = tmp_path / "mc10.csv"
+    run_verification_point({"case": "mc10"}, out, copy_from=rows)
+    assert out.read_text() == rows.read_text().replace(",mc00,", ",mc10,")

@@ -87,3 +87,20 @@ def test_corpus_is_seeded():
     img2, _ = render.render_pile(a[0]["seed"], a[0]["left_deg"], a[0]["right_deg"], roll_deg=a[0]["roll_deg"],
                                  style=a[0]["style"])
     assert np.array_equal(img1, img2)
+
+
+def test_a_second_cue_flags_a_flank_the_first_one_misreads(tmp_path):
+    """Photo 64 of the seeded corpus: a heap of nearly the wall's hue whose right flank the
+    first cue (luminance, heap lighter) reads 6 deg off its rendered 22.7 deg with a clean line
+    fit (under 1 px RMS), so neither fit check sees it; the second cue disagrees and the result
+    is flagged.  Photo 0: two cues agree within 1 deg, confidence stays ok."""
+    params = corpus.pile_photo_params(65, seed=0)
+    path, truth = corpus.write_pile_photo(params[64], tmp_path, "s64")
+    r = measure.measure_pile(path)
+    assert abs(r.right_deg - truth["right_deg"]) > 1.0 and r.flank_rms_px < 2.5  # wrong, cleanly fitted
+    assert r.cue_check and r.cue_check != r.cue and r.cue_check_deg > measure.CUE_AGREEMENT_DEG
+    assert r.confidence == "low"
+    path, truth = corpus.write_pile_photo(params[0], tmp_path, "s00")
+    r = measure.measure_pile(path)
+    assert r.cue_check and r.cue_check_deg <= measure.CUE_AGREEMENT_DEG and r.confidence == "ok"
+    assert abs(r.angle_deg - truth["angle_deg"]) <= 0.3

@@ -373,7 +373,24 @@ def optimum_of(soil, stage):
 
 def verify_spec(w):
     st, opt = _calibration(w.soil, w.stage)
-    return verify.verification_point(SOILS[w.soil], st, opt, w.case, int(w.rep), w.preset)
+    spec = verify.verification_point(SOILS[w.soil], st, opt, w.case, int(w.rep), w.preset)
+    same = _same_case(w)
+    return dict(spec, same_as=same) if same else spec
+
+
+def _same_case(w):
+    """The earlier case of the stage whose verification job of this seed and preset simulates
+    the same (verify.same_as), or None."""
+    st, opt = _calibration(w.soil, w.stage)
+    specs = {c: verify.verification_point(SOILS[w.soil], st, opt, c, int(w.rep), w.preset)
+             for s, c in verify.verification_cases(soil_cfg(w.soil), [w.stage])}
+    return verify.same_as(specs, w.case)
+
+
+def verify_same_input(w):
+    """The rows a verification job copies (verify.same_as), as its input; none otherwise."""
+    same = _same_case(w)
+    return [f"results/{w.soil}/dem/verify/{w.preset}/{w.stage}/{same}/{w.rep}.csv"] if same else []
 
 
 def tool_jobs(soil):

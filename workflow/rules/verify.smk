@@ -13,6 +13,7 @@ rule verify_point:
     input:
         optimum=lambda w: optimum_of(w.soil, w.stage),
         kernels=ancient(DEM_KERNELS),
+        same=verify_same_input,
     output:
         "results/{soil}/dem/verify/{preset}/{stage}/{case}/{rep}.csv",
     params:

@@ -11,7 +11,11 @@ with redirect(snakemake.log[0]):  # noqa: F821
     numba.set_num_threads(snakemake.threads)  # noqa: F821
     spec = snakemake.params.spec  # noqa: F821
     print(spec.get("not_run") or f"{spec['soil']} {spec['stage']} {spec['case']} seed {spec['seed']}: {spec['levels']}")
-    df = run_verification_point(spec, snakemake.output[0], threads=snakemake.threads,  # noqa: F821
-                                restart_dir=restart_dir(snakemake.output[0]))  # noqa: F821
+    same = list(getattr(snakemake.input, "same", None) or [])  # noqa: F821
+    if same:
+        print(f"case {spec['same_as']} simulates the same set, responses and seed: its rows are copied")
+    df = run_verification_point({k: v for k, v in spec.items() if k != "same_as"}, snakemake.output[0],  # noqa: F821
+                                threads=snakemake.threads, restart_dir=restart_dir(snakemake.output[0]),  # noqa: F821
+                                copy_from=same[0] if same else None)
     print(df[["response", "preset", "value", "status", "error"]].to_string(index=False))
     print(kernel_line())

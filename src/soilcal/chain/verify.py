@@ -347,13 +347,40 @@ def verification_point(soil, stage: dict, optimum: pd.DataFrame, case_id: str, r
     return dict(spec, case=case_id)
 
 
+def same_as(specs: dict[str, dict], case_id: str) -> str | None:
+    """The first case before ``case_id`` (in the order of ``specs``: case -> the
+    :func:`verification_point` of one replicate) whose job simulates exactly what
+    ``case_id``'s does: the same calibrated set, responses, preset and seed.  Two targets
+    that the design region cannot reach both end at the region's same corner, for example; the
+    second case's job then copies the first one's rows instead of running them again."""
+    def key(s):
+        return None if "not_run" in s else {k: v for k, v in s.items() if k != "case"}
+
+    mine = key(specs[case_id])
+    if mine is None:
+        return None
+    for other, spec in specs.items():
+        if other == case_id:
+            return None
+        if key(spec) == mine:
+            return other
+    return None
+
+
 def run_verification_point(spec: dict, out, threads: int | None = None,
-                           restart_dir=None) -> pd.DataFrame:
+                           restart_dir=None, copy_from=None) -> pd.DataFrame:
     """Simulate one verification job (:func:`verification_point`) and write its rows
-    (``restart_dir``: :func:`soilcal.chain.sources.simulate`)."""
+    (``restart_dir``: :func:`soilcal.chain.sources.simulate`); with ``copy_from`` (the rows
+    of the job of an earlier case that simulates the same, :func:`same_as`) those rows under
+    this case's name."""
     from soilcal.chain.files import write_csv
     from soilcal.chain.sources import simulate
 
+    if copy_from is not None:
+        df = pd.read_csv(copy_from, dtype=str, keep_default_na=False)  # every cell as written
+        df["case"] = spec["case"]
+        write_csv(df, out)
+        return df
     if "not_run" in spec:
         df = not_run_rows(spec["stage"], {"goals": {r: {} for r in spec["responses"]}}, spec["not_run"])
     else:

@@ -65,8 +65,11 @@ class PileResult:
     cue: str = "gray/dark"  # segmentation channel / heap darker or lighter than the wall
     flank_points_used: float = 1.0  # smaller flank's share of band points on its fitted line
     flank_rms_px: float = 0.0  # larger flank's RMS distance of those points from the line
-    confidence: str = "ok"  # "low": under 60 % of a flank used, RMS above 2.5 px or flanks > 12 deg apart
+    confidence: str = "ok"  # "low": under 60 % of a flank used, RMS above 2.5 px, flanks > 12 deg apart
+    # or a second cue's flanks more than CUE_AGREEMENT_DEG away
     stages: Stages | None = None
+    cue_check: str = ""  # the second cue that measured the heap (cue search only), "" if none did
+    cue_check_deg: float = float("nan")  # the larger of its two flanks' differences from this result
 
     def as_dict(self):
         d = asdict(self)
@@ -272,7 +275,9 @@ def measure_pile(path, threshold="otsu", keep_stages=False, channel="auto", refu
     differing in hue only) by decreasing eta; a result must look like a heap (flanks within
     :data:`FLANK_RANGE`, at least 3 % of the image high).  The cue used is reported, with a
     confidence ("low" when a flank's points stray from its line, e.g. a cast shadow joined to
-    a flank: read such a photo before using its number).  With ``refusals`` (a folder), a
+    a flank, or when the next cue that also measures the heap, :data:`CUE_CHECKS` at most,
+    gives a flank more than :data:`CUE_AGREEMENT_DEG` away: a cleanly fitted flank can still
+    be the wrong edge; read such a photo before using its number).  With ``refusals`` (a folder), a
     photo that cannot be measured also gets a diagnostic image of every attempt there
     (:mod:`soilcal.imaging.refusal`), named in the refusal.
     """
@@ -298,6 +303,7 @@ def _measure_pile(path, threshold, keep_stages, channel, tried: Tried) -> PileRe
     grays = {ch: _gray(rgb, ch) for ch in CUES} if channel == "auto" else {channel: _gray(rgb, channel)}
     rr, cc = np.mgrid[0:h, 0:w]
     err = None
+    first = None  # the first cue's result, waiting for a second cue to cross-check it
     for n_line, (slope, intercept) in enumerate(lines[:4], 1):  # the plate top first; a faint one may hide behind a lower edge
         prow = slope * cc + intercept
         band = (rr < prow - 3) & (rr > prow - 0.35 * h)  # where heap and wall meet
@@ -310,17 +316,50 @@ def _measure_pile(path, threshold, keep_stages, channel, tried: Tried) -> PileRe
             # band gives eta = 2/pi = 0.64 at best: noise, not a heap)
             order += sorted([(ch, pol) for ch in CUES for pol in ("dark", "light")
                              if (ch, pol) not in order and etas[ch] >= MIN_CUE_ETA], key=lambda t: -etas[t[0]])
+        checks = CUE_CHECKS
         for ch, pol in order:
+            if first is not None and checks == 0:
+                break
             g = grays[ch] if pol == "dark" else 1.0 - grays[ch]
             try:
-                return _pile_with(path, rgb, g, ch, pol, band, slope, intercept, threshold, keep_stages,
-                                  search=channel == "auto", tried=tried, label=f"line {n_line}, {ch}/{pol}")
+                res = _pile_with(path, rgb, g, ch, pol, band, slope, intercept, threshold,
+                                 keep_stages and first is None, search=channel == "auto", tried=tried,
+                                 label=f"line {n_line}, {ch}/{pol}")
             except InputError as e:
                 if e.field not in ("image", "left flank", "right flank"):
                     raise
                 tried.refuse_last(e)
                 err = err or e  # the refusal reported is the first cue's on the topmost line
+                checks -= first is not None
+                continue
+            if channel != "auto":
+                return res
+            if first is None:
+                first = res
+                continue
+            return _cross_checked(first, res)
+        if first is not None:
+            return first  # no second cue measured a heap on this plate line: nothing to compare
     raise err
+
+
+#: a cue search measures the heap with up to this many further cues after the first that
+#: measures it, and takes the first of them that does as a cross-check
+CUE_CHECKS = 3
+#: flank difference (deg) between two cues above which a result's confidence is "low": two
+#: segmentations of one heap that disagree by more than this put one of them (the reported
+#: one, or the check) more than half of it off, e.g. a flank whose shaded side or joined
+#: shadow one cue takes for wall or heap
+CUE_AGREEMENT_DEG = 1.0
+
+
+def _cross_checked(res: PileResult, check: PileResult) -> PileResult:
+    """``res`` with a second cue's measurement of the same heap beside it (module constants)."""
+    d = max(abs(res.left_deg - check.left_deg), abs(res.right_deg - check.right_deg))
+    res.cue_check, res.cue_check_deg = check.cue, float(d)
+    if d > CUE_AGREEMENT_DEG:
+        res.confidence = "low"
+    return res
 
 
 def _pile_with(path, rgb, gray, cue, polarity, band, slope, intercept, threshold, keep_stages, search=True,
