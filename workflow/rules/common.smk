@@ -380,11 +380,17 @@ def verify_spec(w):
 
 def _same_case(w):
     """The earlier case of the stage whose verification job of this seed and preset simulates
-    the same (verify.same_as), or None."""
+    the same (verify.same_as), or None; the stage's specs are built once per seed and preset
+    (its params and its input ask for it)."""
     st, opt = _calibration(w.soil, w.stage)
-    specs = {c: verify.verification_point(SOILS[w.soil], st, opt, c, int(w.rep), w.preset)
-             for s, c in verify.verification_cases(soil_cfg(w.soil), [w.stage])}
-    return verify.same_as(specs, w.case)
+    key = (w.soil, w.stage, int(w.rep), w.preset, id(st), id(opt))
+    if key not in _SAME_SPECS:
+        _SAME_SPECS[key] = {c: verify.verification_point(SOILS[w.soil], st, opt, c, int(w.rep), w.preset)
+                            for s, c in verify.verification_cases(soil_cfg(w.soil), [w.stage])}
+    return verify.same_as(_SAME_SPECS[key], w.case)
+
+
+_SAME_SPECS = {}
 
 
 def verify_same_input(w):
