@@ -38,10 +38,13 @@ def test_edem_conventions_differ_from_liggghts():
 
 
 def test_small_pile_agrees_before_contacts_reform():
-    """A few hundred spheres in the lifted tube: the first 20 steps agree to rounding;
-    after 1,000 steps (contacts reform, which LIGGGHTS 3.8.0 does with stale shear
-    history, few.py) the spheres still agree to a small fraction of a radius while the
-    EDEM conventions move them further (the spheres themselves move about 0.15 r)."""
+    """A few hundred spheres in the lifted tube: until the first sphere pair that did not
+    touch at the start comes into contact, the two engines agree to rounding (a contact that
+    forms is where LIGGGHTS 3.8.0 reuses stale shear history, few.py; when that happens
+    depends on the packing, which the processor's rounding shapes, so the check runs up to
+    that step, at least 5 steps); after 1,000 steps the spheres still agree to a small
+    fraction of a radius while the EDEM conventions move them further (the spheres
+    themselves move about 0.15 r)."""
     from soilcal.reference import cases as C
 
     case = C.TubeCase(n=300, seed=1)
@@ -55,7 +58,17 @@ def test_small_pile_agrees_before_contacts_reform():
         res = L.run(C.restart(sim, "liggghts"), [(steps, lift)], bounds)
         return np.linalg.norm(a.x[rows(a)] - res["x"], axis=1)
 
-    assert both(20, "liggghts").max() < 1e-15
+    def touching(steps):
+        a = C.restart(sim, "liggghts")
+        L.run_phases(a, [(steps, lift)]) if steps else None
+        x, r = a.x[rows(a)], a.p.r[rows(a)]
+        gap = np.linalg.norm(x[:, None] - x[None], axis=2) - r[:, None] - r[None]
+        return set(zip(*np.nonzero(np.triu(gap < 0, 1))))
+
+    start = touching(0)
+    onset = next((k for k in range(1, 21) if touching(k) - start), 20)
+    assert onset >= 5, onset
+    assert both(onset, "liggghts").max() < 1e-15
     d = both(1000, "liggghts")
     d_edem = both(1000, "edem")
     r = case.radii[0]
