@@ -309,10 +309,10 @@ class QuadraticSurrogate(Surrogate):
     kind = "quadratic"
 
     def __init__(self, xc, y):
-        import statsmodels.api as sm
+        from statsmodels.regression.linear_model import OLS
 
         X = quadratic_terms(xc)
-        self.fit = sm.OLS(y, X).fit()
+        self.fit = OLS(y, X).fit()
         self.noise_sd = float(np.sqrt(self.fit.mse_resid)) if self.fit.df_resid > 0 else 0.0
         h = self.fit.get_influence().hat_matrix_diag
         press = self.fit.resid / np.maximum(1.0 - h, 1e-12)

@@ -77,8 +77,20 @@ class PileResult:
         return d
 
 
-def _gray(rgb, channel="gray"):
-    """Smoothed single channel in which soil is darker than its surroundings.
+def _smoothed_lab(rgb):
+    return color.rgb2lab(filters.gaussian(rgb, 1.2, channel_axis=-1))
+
+
+def _grays(rgb, channels, lum=None):
+    """``_gray`` of each channel; the smoothed L*a*b* image is converted once for both of its
+    cues, and ``lum`` (the "gray" channel, already computed) is reused."""
+    lab = _smoothed_lab(rgb) if {"lab_a", "lab_b"} <= set(channels) else None
+    return {ch: lum if ch == "gray" and lum is not None else _gray(rgb, ch, lab) for ch in channels}
+
+
+def _gray(rgb, channel="gray", lab=None):
+    """Smoothed single channel in which soil is darker than its surroundings (``lab``: the
+    smoothed L*a*b* image, where the caller has it).
 
     "gray": luminance (rgb2gray).  "chroma": 1 - (R - B) / (R + G + B) scaled to [0, 1], the
     hue contrast of brown soil against grey/dark backgrounds, independent of shading.
@@ -90,7 +102,8 @@ def _gray(rgb, channel="gray"):
         c = (rgb[..., 0] - rgb[..., 2]) / (rgb.sum(-1) + 0.05)
         return np.clip(0.5 - 2.0 * c, 0, 1)
     if channel in ("lab_a", "lab_b"):
-        lab = color.rgb2lab(filters.gaussian(rgb, 1.2, channel_axis=-1))
+        if lab is None:
+            lab = _smoothed_lab(rgb)
         return np.clip((lab[..., 1 if channel == "lab_a" else 2] + 100.0) / 200.0, 0, 1)
     if channel == "saturation":
         return filters.gaussian(color.rgb2hsv(rgb)[..., 1], 1.2)
@@ -300,7 +313,7 @@ def _measure_pile(path, threshold, keep_stages, channel, tried: Tried) -> PileRe
     tried.lines = list(lines[:4])
     if not lines:
         raise InputError(path, "image", "a straight base plate edge", "none found")
-    grays = {ch: _gray(rgb, ch) for ch in CUES} if channel == "auto" else {channel: _gray(rgb, channel)}
+    grays = _grays(rgb, CUES if channel == "auto" else (channel,), lum)
     rr, cc = np.mgrid[0:h, 0:w]
     err = None
     first = None  # the first cue's result, waiting for a second cue to cross-check it

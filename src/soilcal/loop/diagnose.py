@@ -41,9 +41,9 @@ def _is_numeric(s: pd.Series) -> bool:
 
 
 def _ols(y, X):
-    import statsmodels.api as sm
+    from statsmodels.regression.linear_model import OLS
 
-    return sm.OLS(np.asarray(y, float), np.asarray(X, float)).fit()
+    return OLS(np.asarray(y, float), np.asarray(X, float)).fit()
 
 
 def _covariate_columns(res: pd.DataFrame) -> list[str]:

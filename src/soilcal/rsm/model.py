@@ -39,7 +39,7 @@ from typing import Mapping, Sequence
 
 import numpy as np
 import pandas as pd
-import statsmodels.api as sm
+from statsmodels.regression.linear_model import OLS  # not statsmodels.api: it imports every sub-package (0.4 s per job)
 from scipy import stats
 
 from soilcal.errors import InputError
@@ -193,7 +193,7 @@ class RSMFit:
             raise InputError(None, "data", f"more runs than model parameters ({self.p})", self.n)
         if np.linalg.matrix_rank(self.model_matrix) < self.p:
             raise InputError(None, "terms", "terms estimable from the design (full-rank model matrix)", self.terms)
-        self._res = sm.OLS(self.y_t, self.model_matrix).fit()
+        self._res = OLS(self.y_t, self.model_matrix).fit()
 
     # -- basic quantities
     @property
@@ -279,7 +279,7 @@ class RSMFit:
         out = {}
         for j, t in enumerate(self.terms):
             keep = [i for i in range(self.p) if i != j + 1]
-            red = sm.OLS(self.y_t, self.model_matrix[:, keep]).fit()
+            red = OLS(self.y_t, self.model_matrix[:, keep]).fit()
             out[t] = float(red.ssr) - self.sse
         return out
 
