@@ -28,7 +28,7 @@ from _report import commit, corpus_args, write_page, write_rows
 HERE = Path(__file__).resolve().parent
 FIELDS = ["photo", "truth_deg", "left_truth_deg", "right_truth_deg", "roll_deg", "measured_deg", "error_deg",
           "left_error_deg", "right_error_deg", "cue", "confidence", "flank_points_used", "flank_rms_px", "cue_check",
-          "cue_check_deg", "refusal", "seconds"]
+          "cue_check_deg", "cue_outvoted", "cue_outvoted_deg", "refusal", "seconds"]
 
 
 def main(argv=None):
@@ -53,7 +53,8 @@ def main(argv=None):
                            right_error_deg=round(r.right_deg - truth["right_deg"], 4), cue=r.cue,
                            confidence=r.confidence, flank_points_used=round(r.flank_points_used, 3),
                            flank_rms_px=round(r.flank_rms_px, 3), cue_check=r.cue_check,
-                           cue_check_deg=round(r.cue_check_deg, 3))
+                           cue_check_deg=round(r.cue_check_deg, 3), cue_outvoted=r.cue_outvoted,
+                           cue_outvoted_deg=round(r.cue_outvoted_deg, 3))
             except InputError as e:
                 row["refusal"] = str(e).split(": ", 1)[-1].replace("|", "/")
             row["seconds"] = round(time.perf_counter() - t0, 2)
@@ -84,6 +85,7 @@ def main(argv=None):
     cues = Counter(r["cue"] for r in meas)
     checked = [r for r in meas if r["cue_check"]]
     disagree = [r for r in checked if r["cue_check_deg"] > CUE_AGREEMENT_DEG]
+    outvoted = [r for r in checked if r["cue_outvoted"]]
     md = ["# Heap-photo stress benchmark",
           "",
           f"Machine: {platform.machine()}, {os.cpu_count()} logical CPUs, Python {platform.python_version()}; "
@@ -101,9 +103,11 @@ def main(argv=None):
           "",
           "Cues used: " + ", ".join(f"{k} {v}" for k, v in cues.most_common()) + ".",
           "",
-          f"Cross-checked by a second cue: {len(checked)} of {len(meas)} measured photos; of those, "
+          f"Cross-checked by a further cue: {len(checked)} of {len(meas)} measured photos; of those, "
           f"{len(disagree)} disagree by more than {CUE_AGREEMENT_DEG:g} deg on a flank (flagged low), "
-          f"{sum(abs(r['error_deg']) > 1.0 for r in disagree)} of them wrong by more than 1 deg.",
+          f"{sum(abs(r['error_deg']) > 1.0 for r in disagree)} of them wrong by more than 1 deg; "
+          f"{len(outvoted)} confirmed after a dissenting cue was outvoted, "
+          f"{sum(abs(r['error_deg']) > 0.3 for r in outvoted)} of them off by more than 0.3 deg.",
           ""]
     write_page(out / "pile_photos.md", md)
     print("\n".join(table))

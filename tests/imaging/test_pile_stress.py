@@ -104,3 +104,34 @@ def test_a_second_cue_flags_a_flank_the_first_one_misreads(tmp_path):
     r = measure.measure_pile(path)
     assert r.cue_check and r.cue_check_deg <= measure.CUE_AGREEMENT_DEG and r.confidence == "ok"
     assert abs(r.angle_deg - truth["angle_deg"]) <= 0.3
+
+
+def test_a_third_cue_decides_between_two_that_disagree(tmp_path):
+    """Photos 183 and 192 of the seeded corpus.  183: the first cue reads both flanks within
+    0.3 deg of the rendered ones, a luminance cue reads the left flank 4.6 deg steeper; the
+    next credible cue agrees with the first, so the dissent is outvoted, recorded, and the
+    result stays ok.  192: the first cue reads the left flank 1.3 deg steep; the luminance
+    cue and the next credible cue both read it within 0.2 deg: two against one, flagged low."""
+    params = corpus.pile_photo_params(193, seed=0)
+    path, truth = corpus.write_pile_photo(params[183], tmp_path, "s183")
+    r = measure.measure_pile(path)
+    assert abs(r.left_deg - truth["left_deg"]) <= 0.3 and abs(r.right_deg - truth["right_deg"]) <= 0.3
+    assert r.cue_outvoted and r.cue_outvoted_deg > measure.CUE_AGREEMENT_DEG
+    assert r.cue_check not in ("", r.cue_outvoted) and r.cue_check_deg <= measure.CUE_AGREEMENT_DEG
+    assert r.confidence == "ok"
+    path, truth = corpus.write_pile_photo(params[192], tmp_path, "s192")
+    r = measure.measure_pile(path)
+    assert abs(r.left_deg - truth["left_deg"]) > 1.0  # the first cue's reading, refuted
+    assert r.cue_check_deg > measure.CUE_AGREEMENT_DEG and r.confidence == "low"
+
+
+def test_a_cue_that_does_not_split_the_band_neither_confirms_nor_refutes(tmp_path):
+    """Photo 56 of the seeded corpus: luminance splits the band above the plate poorly
+    (Otsu's eta below MIN_CUE_ETA) and reads a flank 10 deg off; it is not taken as a
+    check, the next clear cue confirms the first, which is within 0.3 deg."""
+    params = corpus.pile_photo_params(57, seed=0)
+    path, truth = corpus.write_pile_photo(params[56], tmp_path, "s56")
+    r = measure.measure_pile(path)
+    assert r.confidence == "ok" and r.cue_check and r.cue_check_deg <= measure.CUE_AGREEMENT_DEG
+    assert r.cue_outvoted == ""
+    assert abs(r.angle_deg - truth["angle_deg"]) <= 0.3

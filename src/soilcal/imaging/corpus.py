@@ -6,8 +6,9 @@ JPEG, base plate, camera roll up to 3 deg) and drum testers' exports
 centre or running past the border, rim rings, drums on a plain surround of any grey, frames
 inside a larger drum, averaged soft
 interfaces, S-shaped surfaces rising to either side, inverted polarity, haze of flying
-particles, dust specks, illumination gradients, noise).  Every parameter is drawn from
-``numpy.random.default_rng(seed)`` and returned with the frame.
+particles, dust specks, illumination gradients, noise).  :func:`pile_photo_params`: heap
+photos; :func:`furrow_photo_params`: furrow cross-sections in front of a profile board.  Every
+parameter is drawn from ``numpy.random.default_rng(seed)`` and returned with the photo.
 """
 
 from __future__ import annotations
@@ -111,5 +112,79 @@ def write_pile_photo(params, outdir, name):
     img, truth = render.render_pile(params["seed"], params["left_deg"], params["right_deg"],
                                     roll_deg=params["roll_deg"], style=params["style"])
     truth = dict(truth, style=params["style"], quality=params["quality"])
+    path = render.save_photo(Path(outdir) / f"{name}.jpg", img, truth, quality=params["quality"])
+    return path, truth
+
+
+def _furrow_coeffs(rng, a, b, datum):
+    """A furrow profile F(x) (mm) on [a, b] as polynomial coefficients (highest power first):
+    a trough 60-150 mm deep of any width, asymmetry and bottom shape (V to flat), with or without
+    ridges of thrown soil at its rims, as a degree-8 polynomial (what a user's degree-9 fit can
+    represent exactly, so that the corpus tests the photo, not the fit), below the beam.  The
+    polynomial is fitted over the span grown by 15 % at each end, so that the span's ends lie
+    inside the fit and carry no end swing of the polynomial (a surface the meter's ends rest
+    on, not a cliff)."""
+    x = np.linspace(a - 0.15 * (b - a), b + 0.15 * (b - a), 801)
+    u = (x - a) / (b - a)
+    on = (x >= a) & (x <= b)
+    for _ in range(100):
+        bottom = rng.uniform(0.0, 30.0)
+        top = bottom + rng.uniform(60.0, min(150.0, datum - 30.0 - bottom))  # 60-150 mm deep
+        c = rng.uniform(0.35, 0.65)
+        wl, wr = rng.uniform(0.15, 0.4, 2)
+        pw = rng.uniform(1.6, 4.0)
+        w = np.where(u < c, wl, wr)
+        f = top - (top - bottom) * np.exp(-(np.abs(u - c) / w) ** pw)
+        for rim, amp in ((c - 1.2 * wl, rng.uniform(0, 25.0)), (c + 1.2 * wr, rng.uniform(0, 25.0))):
+            f += amp * np.exp(-((u - rim) / 0.07) ** 2) if rng.random() < 0.5 else 0.0
+        poly = np.polynomial.Polynomial.fit(x, f, 8)
+        fit = poly(x[on])
+        if fit.max() <= datum - 15.0 and fit.min() >= -20.0:
+            return poly.convert().coef[::-1].tolist()
+    raise RuntimeError("no furrow profile below the beam in 100 draws")
+
+
+def furrow_photo_params(n, seed=0):
+    """Parameter sets of ``n`` stress furrow photos: troughs of any depth, width and shape
+    (:func:`_furrow_coeffs`), meter spans of 300-500 mm with the beam 150-250 mm above the
+    profile's zero, boards of any light colour with or without a grid, beam shadows cast on the
+    board, soils light to dark with shading down the face, walls of any colour around the
+    board, camera roll up to 5 deg, under- and over-exposure, blur, noise, JPEG quality 60-95."""
+    rng = np.random.default_rng(seed)
+    out = []
+    for _ in range(n):
+        half = float(rng.uniform(150.0, 250.0))
+        a, b = -half, half
+        s = render.W * 0.85 / (b - a + 60)
+        room = (render.MARGIN + 0.80 * render.H - render.MARGIN) / s  # mm above F = 0 in the frame
+        beam_mm = float(rng.uniform(8.0, 20.0))
+        datum = float(rng.uniform(150.0, min(250.0, room - beam_mm - 25.0)))
+        tone = np.array(SOIL_TONES[int(rng.integers(len(SOIL_TONES)))]) * rng.uniform(0.8, 1.2)
+        grid = bool(rng.random() < 0.7)
+        style = {"board_rgb": _hsv(rng, (0.0, 0.3), (0.6, 0.97)),
+                 "grid_mm": float(rng.choice([10.0, 20.0, 50.0])) if grid else 0.0,
+                 "grid_rgb": _hsv(rng, (0.0, 0.6), (0.3, 0.75)),
+                 "board_gradient": rng.uniform(-0.3, 0.3, 2).tolist(),
+                 "soil_rgb": np.clip(tone, 0, 1).tolist(), "soil_shading": float(rng.uniform(0.0, 0.4)),
+                 "beam_rgb": (np.ones(3) * rng.uniform(0.02, 0.3)).tolist(), "beam_mm": beam_mm,
+                 "beam_shadow": {"dx_mm": float(rng.uniform(-15, 15)), "dy_mm": float(rng.uniform(5, 30)),
+                                 "blur_px": float(rng.uniform(1.0, 10.0)),
+                                 "darkness": float(rng.uniform(0.0, 0.5)) if rng.random() < 0.6 else 0.0},
+                 "wall_rgb": _hsv(rng, (0.0, 0.6), (0.15, 0.95)), "clutter": bool(rng.random() < 0.5),
+                 "exposure": float(rng.uniform(0.6, 1.4)), "noise": float(rng.uniform(0.005, 0.03)),
+                 "blur_px": float(rng.uniform(0.5, 2.5))}
+        out.append({"seed": int(rng.integers(0, 2 ** 31 - 1)), "span_mm": [a, b], "beam_datum_mm": datum,
+                    "coeffs": _furrow_coeffs(rng, a, b, datum), "roll_deg": float(rng.uniform(-5.0, 5.0)),
+                    "quality": int(rng.integers(60, 96)), "style": style})
+    return out
+
+
+def write_furrow_photo(params, outdir, name):
+    """Render one furrow parameter set as a JPEG (with its truth sidecar); returns (path, truth),
+    truth with the meter's ``scale_length_mm`` (its span) and ``area_mm2``."""
+    a, b = params["span_mm"]
+    img, truth = render.render_furrow(params["seed"], params["coeffs"], (a, b), params["beam_datum_mm"],
+                                      roll_deg=params["roll_deg"], style=params["style"])
+    truth = dict(truth, scale_length_mm=b - a, style=params["style"], quality=params["quality"])
     path = render.save_photo(Path(outdir) / f"{name}.jpg", img, truth, quality=params["quality"])
     return path, truth

@@ -66,10 +66,12 @@ class PileResult:
     flank_points_used: float = 1.0  # smaller flank's share of band points on its fitted line
     flank_rms_px: float = 0.0  # larger flank's RMS distance of those points from the line
     confidence: str = "ok"  # "low": under 60 % of a flank used, RMS above 2.5 px, flanks > 12 deg apart
-    # or a second cue's flanks more than CUE_AGREEMENT_DEG away
+    # or further cues' flanks more than CUE_AGREEMENT_DEG away (CUE_CHECKS)
     stages: Stages | None = None
-    cue_check: str = ""  # the second cue that measured the heap (cue search only), "" if none did
+    cue_check: str = ""  # the further cue that confirms or refutes this result (cue search only), "" if none did
     cue_check_deg: float = float("nan")  # the larger of its two flanks' differences from this result
+    cue_outvoted: str = ""  # a further cue that disagreed but was outvoted by cue and cue_check
+    cue_outvoted_deg: float = float("nan")  # its larger flank difference from this result
 
     def as_dict(self):
         d = asdict(self)
@@ -288,9 +290,11 @@ def measure_pile(path, threshold="otsu", keep_stages=False, channel="auto", refu
     differing in hue only) by decreasing eta; a result must look like a heap (flanks within
     :data:`FLANK_RANGE`, at least 3 % of the image high).  The cue used is reported, with a
     confidence ("low" when a flank's points stray from its line, e.g. a cast shadow joined to
-    a flank, or when the next cue that also measures the heap, :data:`CUE_CHECKS` at most,
-    gives a flank more than :data:`CUE_AGREEMENT_DEG` away: a cleanly fitted flank can still
-    be the wrong edge; read such a photo before using its number).  With ``refusals`` (a folder), a
+    a flank, or when the further cues that also measure the heap, :data:`CUE_CHECKS` at most,
+    give a flank more than :data:`CUE_AGREEMENT_DEG` away: the first credible one (a clear
+    split, its own fits passing) that agrees confirms the result; one that disagrees is
+    outvoted only by a next credible one that agrees: a cleanly fitted flank can still be the
+    wrong edge; read such a photo before using its number).  With ``refusals`` (a folder), a
     photo that cannot be measured also gets a diagnostic image of every attempt there
     (:mod:`soilcal.imaging.refusal`), named in the refusal.
     """
@@ -330,9 +334,12 @@ def _measure_pile(path, threshold, keep_stages, channel, tried: Tried) -> PileRe
             order += sorted([(ch, pol) for ch in CUES for pol in ("dark", "light")
                              if (ch, pol) not in order and etas[ch] >= MIN_CUE_ETA], key=lambda t: -etas[t[0]])
         checks = CUE_CHECKS
+        dissent = None  # a credible cue that disagrees with the first, waiting for a third
         for ch, pol in order:
             if first is not None and checks == 0:
                 break
+            if first is not None and etas[ch] < MIN_CUE_ETA:
+                continue  # no clear split of the band: noise, neither a confirmation nor a refutation
             g = grays[ch] if pol == "dark" else 1.0 - grays[ch]
             try:
                 res = _pile_with(path, rgb, g, ch, pol, band, slope, intercept, threshold,
@@ -350,15 +357,27 @@ def _measure_pile(path, threshold, keep_stages, channel, tried: Tried) -> PileRe
             if first is None:
                 first = res
                 continue
-            return _cross_checked(first, res)
+            checks -= 1
+            if res.confidence != "ok":
+                continue  # its own flank fits fail: it can neither confirm nor refute the first
+            if _flank_difference(first, res) <= CUE_AGREEMENT_DEG:
+                return _cross_checked(first, res, dissent)
+            if dissent is not None:
+                return _cross_checked(first, dissent)  # two credible cues against the first
+            dissent = res  # the next credible cue decides between the two
         if first is not None:
-            return first  # no second cue measured a heap on this plate line: nothing to compare
+            # no further credible cue measured a heap on this plate line: the first stands
+            # alone, or against the one that disagrees
+            return first if dissent is None else _cross_checked(first, dissent)
     raise err
 
 
 #: a cue search measures the heap with up to this many further cues after the first that
-#: measures it, and takes the first of them that does as a cross-check
-CUE_CHECKS = 3
+#: measures it; a further cue is credible when it splits the band clearly (eta at least
+#: MIN_CUE_ETA) and its own flank fits pass.  The first credible one that agrees with the
+#: first cue confirms it; when the first credible one disagrees, the next credible one decides
+#: (it agrees: confirmed, the dissent recorded; it disagrees too, or none comes: "low")
+CUE_CHECKS = 6
 #: flank difference (deg) between two cues above which a result's confidence is "low": two
 #: segmentations of one heap that disagree by more than this put one of them (the reported
 #: one, or the check) more than half of it off, e.g. a flank whose shaded side or joined
@@ -366,10 +385,17 @@ CUE_CHECKS = 3
 CUE_AGREEMENT_DEG = 1.0
 
 
-def _cross_checked(res: PileResult, check: PileResult) -> PileResult:
-    """``res`` with a second cue's measurement of the same heap beside it (module constants)."""
-    d = max(abs(res.left_deg - check.left_deg), abs(res.right_deg - check.right_deg))
-    res.cue_check, res.cue_check_deg = check.cue, float(d)
+def _flank_difference(a: PileResult, b: PileResult) -> float:
+    return float(max(abs(a.left_deg - b.left_deg), abs(a.right_deg - b.right_deg)))
+
+
+def _cross_checked(res: PileResult, check: PileResult, outvoted: PileResult | None = None) -> PileResult:
+    """``res`` with a further cue's measurement of the same heap beside it (module constants);
+    ``outvoted``: a cue that disagreed with both."""
+    d = _flank_difference(res, check)
+    res.cue_check, res.cue_check_deg = check.cue, d
+    if outvoted is not None:
+        res.cue_outvoted, res.cue_outvoted_deg = outvoted.cue, _flank_difference(res, outvoted)
     if d > CUE_AGREEMENT_DEG:
         res.confidence = "low"
     return res
@@ -512,7 +538,72 @@ def measure_furrow(path, scale_length_mm, datum_mm=0.0, degree=9, threshold="ots
         return _measure_furrow(path, scale_length_mm, datum_mm, degree, threshold, keep_stages, tried)
 
 
+#: the beam is sought among dark bars thinner than this share of the image height (black
+#: top-hat of the luminance with a vertical line of that length)
+BEAM_BAR_MAX = 0.12
+#: the least length (share of the image width) and length / thickness of a beam
+BEAM_MIN_LENGTH, BEAM_MIN_ELONGATION = 0.2, 8.0
+#: rows (px) of the board above the beam and of the soil at the frame's bottom that give the
+#: two colours the furrow boundary separates
+FURROW_SEED_ROWS = 12
+
+
+def _edge_peak(profile, lo, hi, sign):
+    """Sub-pixel position of the strongest step of ``sign`` (+1 dark to light, -1 light to
+    dark, along increasing index) of a 1-D profile in [lo, hi) (parabola through the three
+    samples of the gradient around its extremum)."""
+    g = np.gradient(profile) * sign
+    lo, hi = max(1, int(lo)), min(len(profile) - 1, int(hi))
+    if hi - lo < 3:
+        return np.nan
+    i = lo + int(np.argmax(g[lo:hi]))
+    a, b, c = g[i - 1], g[i], g[i + 1]
+    den = a - 2 * b + c
+    return float(i + (0.5 * (a - c) / den if den < 0 else 0.0))
+
+
+def _beam_bar(path, gray, threshold, tried):
+    """The profile-meter beam: the longest dark bar (black top-hat of ``gray`` with a vertical
+    line of BEAM_BAR_MAX of the image height, thresholded by ``threshold``) that is straight,
+    near-horizontal (within 15 deg), at least BEAM_MIN_LENGTH of the width long, BEAM_MIN_ELONGATION
+    times longer than thick and clear of the image border.  Returns its pixel rows and columns."""
+    h, w = gray.shape
+    k = max(15, int(round(BEAM_BAR_MAX * h)))
+    bar = ndi.grey_closing(gray, size=(k, 1)) - gray
+    bar = ndi.grey_opening(bar, size=(5, 5))  # grid lines and specks thinner than 5 px go
+    top = float(bar.max())
+    if top <= 1e-6:
+        raise InputError(path, "image", "a profile-meter beam (long dark bar)", "no dark bar")
+    mask = _binary(path, 1.0 - bar / top, threshold)
+    tried.add(f"dark bars ({threshold} on the black top-hat): the beam is sought among them", mask)
+    lab = measure.label(mask)
+    beams = []
+    for p in measure.regionprops(lab):
+        r0, c0, r1, c1 = p.bbox
+        if r0 == 0 or c0 == 0 or r1 == h or c1 == w or p.axis_minor_length <= 0:
+            continue
+        if (p.axis_major_length >= BEAM_MIN_LENGTH * w
+                and p.axis_major_length / p.axis_minor_length >= BEAM_MIN_ELONGATION
+                and abs(abs(p.orientation) - np.pi / 2) <= np.radians(15.0)):
+            beams.append(p)
+    if not beams:
+        raise InputError(path, "image", "a profile-meter beam (long dark bar)", "none found")
+    beam = max(beams, key=lambda p: p.axis_major_length)
+    tried.attempts[-1].outcome = f"{len(beams)} beam-like bar(s); the longest is the beam"
+    tried.add("beam (longest bar)", lab == beam.label)
+    return beam.coords[:, 0].astype(float), beam.coords[:, 1].astype(float)
+
+
 def _measure_furrow(path, scale_length_mm, datum_mm, degree, threshold, keep_stages, tried: Tried):
+    """Module docstring.  The beam's axis is the straight line through its pixels' column
+    means; the photo is resampled along it (bilinear) so that u runs along the beam and v down,
+    square to it (the roll correction); the beam's ends and edges are the strongest steps of
+    the luminance along and across it (sub-pixel), so its length and lower edge do not depend
+    on a threshold; below it, every column of the resampled strip is split into board above
+    and soil below at the row that best separates the two colours (smoothed L*a*b*: the board
+    just above the beam, the soil at the frame's bottom), refined to where the colour crosses
+    half-way; the profile is fitted with the polynomial after discarding boundary points more
+    than 4 robust SDs (at least 1 mm) off a first fit."""
     from soilcal.imaging.manifest import _is_number, check_degree
 
     if not _is_number(scale_length_mm) or scale_length_mm <= 0:
@@ -520,63 +611,154 @@ def _measure_furrow(path, scale_length_mm, datum_mm, degree, threshold, keep_sta
     if not _is_number(datum_mm):
         raise InputError(path, "beam_datum_mm", "a number (mm)", datum_mm)
     check_degree(path, "degree", degree)
+    if threshold not in ("otsu", "adaptive"):
+        raise InputError(path, "threshold", "'otsu' or 'adaptive'", threshold)
     rgb = read_photo(path)
     gray = _gray(rgb)
     tried.rgb, tried.gray = rgb, gray
-    binary = _binary(path, gray, threshold)
-    tried.add(f"dark class ({threshold}): beam and soil are sought in it", binary)
-    h, w = binary.shape
-    lab = measure.label(binary)
-    beams = [p for p in measure.regionprops(lab)
-             if p.area > 500 and p.axis_minor_length > 0 and p.axis_major_length / p.axis_minor_length > 15]
-    if not beams:
-        raise InputError(path, "image", "a profile-meter beam (long dark bar)", "none found")
-    beam = max(beams, key=lambda p: p.axis_major_length)
-    tried.attempts[-1].outcome = f"{len(beams)} beam-like bar(s); the longest is the beam"
-    beam_mask = lab == beam.label
-    tried.add("beam (longest bar)", beam_mask)
-    br, bc = np.nonzero(beam_mask)
-    # direction from a line fit through the beam pixels
-    A = np.column_stack([bc, np.ones_like(bc)]).astype(float)
-    slope, _ = np.linalg.lstsq(A, br.astype(float), rcond=None)[0]
+    h, w = gray.shape
+    br, bc = _beam_bar(path, gray, threshold, tried)
+    cols = np.unique(bc)
+    rows = np.array([br[bc == c].mean() for c in cols])
+    slope, icpt = np.polyfit(cols, rows, 1)
+    c_mid = 0.5 * (cols.min() + cols.max())
+    o = np.array([c_mid, slope * c_mid + icpt])  # a point on the beam's axis
+    thick = float(len(br)) / max(1.0, cols.max() - cols.min() + 1)
+    half_len = 0.5 * (cols.max() - cols.min() + 1) * np.hypot(1.0, slope)
+    u_mid = np.arange(-0.8 * half_len, 0.8 * half_len + 1)
+    v_x = np.arange(-2.5 * thick - 4, 2.5 * thick + 5)
+    i0 = int(np.searchsorted(v_x, 0.0))
+
+    def sample(img, u, v):
+        cc = o[0] + u[None, :] * ux[0] + v[:, None] * vx[0]
+        rr = o[1] + u[None, :] * ux[1] + v[:, None] * vx[1]
+        return ndi.map_coordinates(img, [rr, cc], order=1, mode="nearest")
+
+    for refine in (True, False):
+        n = np.hypot(1.0, slope)
+        ux = np.array([1.0, slope]) / n  # (col, row) along the beam
+        vx = np.array([-slope, 1.0]) / n  # (col, row) square to it, pointing down the image
+        # the beam's long edges: strongest steps across it, mean over its middle 80 %
+        cut = sample(gray, u_mid, v_x)
+        across = cut.mean(axis=1)
+        top_edge = _edge_peak(across, 0, i0 + 1, -1) + v_x[0]
+        low_edge = _edge_peak(across, i0, len(v_x), +1) + v_x[0]
+        if not (np.isfinite(top_edge) and np.isfinite(low_edge)) or low_edge - top_edge < 2:
+            raise InputError(path, "image", "a profile-meter beam with two clear long edges", "none found")
+        if not refine:
+            break
+        # the direction from the straighter of the two edges, column by column (a shadow
+        # merged into one side of the bar tilts the pixels' column means, not the other edge)
+        fits = []
+        for e, sign in ((top_edge, -1), (low_edge, +1)):
+            j = int(round(e - v_x[0]))
+            lo, hi = max(1, j - 4), min(len(v_x) - 1, j + 5)
+            g = np.gradient(cut, axis=0)[lo:hi] * sign
+            k = np.argmax(g, axis=0)
+            kk = np.clip(k, 1, g.shape[0] - 2)
+            a_, b_, c_ = (g[kk - 1, np.arange(g.shape[1])], g[kk, np.arange(g.shape[1])],
+                          g[kk + 1, np.arange(g.shape[1])])
+            den = a_ - 2 * b_ + c_
+            ve = v_x[lo] + kk + np.where(den < 0, 0.5 * (a_ - c_) / np.where(den < 0, den, -1.0), 0.0)
+            cf = np.polyfit(u_mid, ve, 1)
+            fits.append((float(np.std(ve - np.polyval(cf, u_mid))), cf[0]))
+        beta = min(fits)[1]
+        ang = np.arctan(slope) + np.arctan(beta)
+        slope = float(np.tan(ang))
     roll = -float(np.degrees(np.arctan(slope)))
-    ux = np.array([1.0, slope]) / np.hypot(1.0, slope)  # (col, row) along the beam
-    uz = np.array([slope, -1.0]) / np.hypot(1.0, slope)  # up
-    t = bc * ux[0] + br * ux[1]
-    length_px = t.max() - t.min() + 1.0
+    core = np.linspace(top_edge + 0.25 * (low_edge - top_edge), low_edge - 0.25 * (low_edge - top_edge), 5)
+    reach = min(half_len + 3 * thick + 20, float(w + h))
+    u_x = np.arange(-reach, reach + 1)
+    along = sample(gray, u_x, core).mean(axis=0)
+    j0 = int(np.searchsorted(u_x, 0.0))
+    left = _edge_peak(along, 0, j0, -1) + u_x[0]
+    right = _edge_peak(along, j0, len(u_x), +1) + u_x[0]
+    length_px = right - left
+    if not np.isfinite(length_px) or length_px < BEAM_MIN_LENGTH * w:
+        raise InputError(path, "image", "a profile-meter beam with two clear ends", "none found")
     s = length_px / scale_length_mm
-    mid = (t.max() + t.min()) / 2
-    vb = bc * uz[0] + br * uz[1]
-    beam_lower = vb.min() - 0.5
-    # soil: largest component below the beam
-    others = [p for p in measure.regionprops(lab) if p.label != beam.label]
-    if not others:
-        raise InputError(path, "image", "the soil below the profile-meter beam (a dark region besides the beam)",
-                         "none found")
-    soil = lab == max(others, key=lambda p: p.area).label
-    lev, _, _ = _level(soil, slope, 0.0)
-    # transform beam frame into the levelled image: rotate points about the centre
-    ang = np.arctan(slope)
-    cy, cx = h / 2 - 0.5, w / 2 - 0.5
-    def to_lev(c, r):
-        dc, dr = c - cx, r - cy
-        return cx + dc * np.cos(ang) + dr * np.sin(ang), cy - dc * np.sin(ang) + dr * np.cos(ang)
-    lc, lr = to_lev(bc.astype(float), br.astype(float))
-    c_left, c_right = lc.min() - 0.5, lc.max() + 0.5
-    lower_row = lr.max() + 0.5
-    cu, rv = _top_edge(lev, np.ceil(c_left), np.floor(c_right) + 1, _level(gray, slope, 0.0)[0])
-    x = (cu - (c_left + c_right) / 2) / s
-    z = datum_mm - (rv - lower_row) / s
+    u_c = 0.5 * (left + right)
+    # the strip below the beam, as far down as every one of its columns stays in the frame
+    u = np.arange(np.ceil(left) + 1, np.floor(right))
+    ends = [o + ux * uu for uu in (u[0], u[-1])]
+    v_max = min((h - 1 - e[1]) / vx[1] for e in ends) - 1
+    v0 = top_edge - FURROW_SEED_ROWS - 4
+    if v_max - low_edge < 3 * FURROW_SEED_ROWS:
+        raise InputError(path, "image", "soil below the profile-meter beam", "the beam is at the frame's bottom")
+    v = np.arange(v0, v_max)
+    lab_img = color.rgb2lab(filters.gaussian(rgb, 1.5, channel_axis=-1))
+    strip = np.stack([sample(lab_img[..., k], u, v) for k in range(3)], axis=-1)
+    board = np.median(strip[:FURROW_SEED_ROWS].reshape(-1, 3), axis=0)
+    soil_c = np.median(strip[-FURROW_SEED_ROWS:].reshape(-1, 3), axis=0)
+    if np.linalg.norm(board - soil_c) < 5.0:  # Delta E below 5: no visible difference
+        raise InputError(path, "image", "soil below the profile-meter beam distinct from the board above it",
+                         f"the same colour (Delta E {np.linalg.norm(board - soil_c):.1f})")
+    d_b = np.linalg.norm(strip - board, axis=-1)
+    d_s = np.linalg.norm(strip - soil_c, axis=-1)
+    score = (d_b - d_s) / (d_b + d_s + 1e-9)  # -1 board, +1 soil
+    below = v > low_edge + 1
+    sc = np.where(below[:, None], score, -1.0)  # nothing on or above the beam is soil
+    # the row k splitting each column into board above and soil below with the least disagreement
+    cost_board = np.cumsum(np.maximum(sc, 0), axis=0)  # soil-like rows labelled board
+    cost_soil = np.cumsum(np.maximum(-sc, 0)[::-1], axis=0)[::-1]  # board-like rows labelled soil
+    total = np.vstack([np.zeros((1, sc.shape[1])), cost_board])[:-1] + cost_soil
+    k = np.argmin(total, axis=0)
+    # the edge to a fraction of a pixel: where the photo's own values (linear in the light the
+    # pixel saw, unlike L*a*b*) cross half-way between the board just above and the soil just
+    # below, along the board-to-soil colour direction
+    srgb = np.stack([sample(rgb[..., q], u, v) for q in range(3)], axis=-1)
+    dirn = np.median(srgb[-FURROW_SEED_ROWS:].reshape(-1, 3), axis=0) - np.median(
+        srgb[:FURROW_SEED_ROWS].reshape(-1, 3), axis=0)
+    proj = srgb @ (dirn / max(float(dirn @ dirn), 1e-12))
+    z_row = np.full(k.shape, np.nan)
+    for j, kk in enumerate(k):
+        if kk < 12 or kk > len(v) - 12:
+            continue
+        t = proj[:, j]
+        bg, fg = np.median(t[kk - 12:kk - 4]), np.median(t[kk + 4:kk + 12])
+        if fg - bg < 0.2:  # no clear step at the split: no point here
+            continue
+        mid = 0.5 * (bg + fg)
+        seg = t[kk - 6:kk + 6]
+        cross = np.nonzero((seg[:-1] < mid) & (seg[1:] >= mid))[0]
+        if cross.size:
+            c0 = cross[np.argmin(np.abs(cross - 6))]
+            z_row[j] = v[kk - 6 + c0] + (mid - seg[c0]) / (seg[c0 + 1] - seg[c0])
+    ok = np.isfinite(z_row) & (k > 0)
+    if ok.sum() < 0.5 * len(u):
+        raise InputError(path, "image", "a soil boundary below the beam in most columns of its span",
+                         f"{int(ok.sum())} of {len(u)} columns")
+    x = (u[ok] - u_c) / s
+    z = datum_mm - (z_row[ok] - low_edge) / s
     poly = np.polynomial.Polynomial.fit(x, z, degree)
+    for _ in range(2):
+        res = z - poly(x)
+        mad = 1.4826 * np.median(np.abs(res - np.median(res)))
+        keep = np.abs(res) <= max(4 * mad, 1.0)
+        poly = np.polynomial.Polynomial.fit(x[keep], z[keep], degree)
+    x, z = x[keep], z[keep]
     a, b = -scale_length_mm / 2, scale_length_mm / 2
     P = poly.integ()
     za, zb = poly(a), poly(b)
     area = 0.5 * (za + zb) * (b - a) - (P(b) - P(a))
     coeffs = poly.convert().coef[::-1].tolist()
+    # the soil found, in the photo's own pixels (diagnostics and figures)
+    uu = u[ok][keep]
+    soil_mask = np.zeros((h, w), bool)
+    if uu.size > 2:
+        from skimage.draw import polygon
+
+        vb = z_row[ok][keep]
+        pts = [o + ux * a_ + vx * b_ for a_, b_ in zip(uu, vb)]
+        pts += [o + ux * uu[-1] + vx * v_max, o + ux * uu[0] + vx * v_max]
+        pts = np.array(pts)
+        rr_, cc_ = polygon(pts[:, 1], pts[:, 0], (h, w))
+        soil_mask[rr_, cc_] = True
+    tried.add("soil below the beam (board and soil colours split per column)", soil_mask)
     st = None
     if keep_stages:
-        st = Stages(rgb, gray, binary, lev, [], [np.column_stack([cu, rv])])
+        st = Stages(rgb, gray, soil_mask, None, [], [np.column_stack([uu, z_row[ok][keep]])])
         st.poly = poly
-        st.frame = (c_left, c_right, lower_row, s, datum_mm)
-    del beam_lower, mid, vb
+        st.frame = (left, right, low_edge, s, datum_mm)
+        st.reference = "beam axis"
     return FurrowResult(str(path), x, z, coeffs, degree, float(area), float(s), roll, st)

@@ -458,11 +458,19 @@ def save_frame(path, img, bits=8):
     return path
 
 
-def render_furrow(seed, coeffs, span_mm, beam_datum_mm=180.0, soil="yangtze-clay-loam", roll_deg=None):
-    """Furrow cross-section in front of a gridded profile board, meter beam above."""
+def render_furrow(seed, coeffs, span_mm, beam_datum_mm=180.0, soil="yangtze-clay-loam", roll_deg=None,
+                  style=None):
+    """Furrow cross-section in front of a gridded profile board, meter beam above.  ``style``
+    (stress photos; absent: the shipped photo's look) may set ``board_rgb``, ``grid_rgb``,
+    ``grid_mm`` (0: no grid), ``board_gradient`` (relative change across the board, (x, y)),
+    ``soil_rgb``, ``soil_shading`` (relative darkening of the soil face from top to bottom),
+    ``beam_rgb``, ``beam_mm`` (its height), ``beam_shadow`` ({dx_mm, dy_mm, blur_px,
+    darkness}: the beam's shadow cast on the board), ``wall_rgb`` and ``clutter`` (the wall
+    around the board), and the camera's ``blur_px``, ``exposure`` and ``noise``."""
     rng = np.random.default_rng(seed)
     if roll_deg is None:
         roll_deg = float(rng.uniform(-1.5, 1.5))
+    st = style or {}
     a, b = span_mm
     s = float(W * 0.85 / (b - a + 60))
     ch, cw = H + 2 * MARGIN, W + 2 * MARGIN
@@ -470,26 +478,46 @@ def render_furrow(seed, coeffs, span_mm, beam_datum_mm=180.0, soil="yangtze-clay
     z0_row = MARGIN + 0.80 * H  # row of F = 0
     rr, cc = np.mgrid[0:ch, 0:cw]
     X, Z = (cc - cx) / s, (z0_row - rr) / s
-    board = np.ones((ch, cw, 3)) * np.array([0.93, 0.93, 0.90])
-    grid = (np.abs(((X + 1000) % 20) - 10) > 9.6) | (np.abs(((Z + 1000) % 20) - 10) > 9.6)
-    board[grid] = np.array([0.55, 0.6, 0.7])
+    board = np.ones((ch, cw, 3)) * np.array(st.get("board_rgb", [0.93, 0.93, 0.90]))
+    if "board_gradient" in st:
+        gx, gy = st["board_gradient"]
+        board *= (1 + gx * (cc / cw - 0.5) + gy * (rr / ch - 0.5))[..., None]
+    pitch = float(st.get("grid_mm", 20.0))
+    if pitch > 0:
+        half = pitch / 2
+        grid = (np.abs(((X + 1000) % pitch) - half) > half - 0.4) | (np.abs(((Z + 1000) % pitch) - half) > half - 0.4)
+        board[grid] = np.array(st.get("grid_rgb", [0.55, 0.6, 0.7]))
     board *= (1 + 0.02 * _noise(rng, (ch, cw), 10.0))[..., None]
-    canvas = _wall(rng, ch, cw, False, None)
+    bh = float(st.get("beam_mm", 12.0))
+    sh = st.get("beam_shadow")
+    if sh and sh.get("darkness", 0) > 0:
+        m = ((X >= a + sh["dx_mm"]) & (X <= b + sh["dx_mm"]) & (Z >= beam_datum_mm - sh["dy_mm"])
+             & (Z < beam_datum_mm + bh - sh["dy_mm"])).astype(float)
+        m = ndi.gaussian_filter(m, sh.get("blur_px", 4.0))
+        board *= (1 - sh["darkness"] * m)[..., None]
+    canvas = _wall(rng, ch, cw, False, None,
+                   style={k: st[k] for k in ("wall_rgb", "clutter") if k in st} or None)
     on_board = (X > a - 40) & (X < b + 40) & (Z > -10) & (Z < beam_datum_mm + 60)
     canvas[on_board] = board[on_board]
     xc = np.clip(X[0], a, b)
     prof = np.polyval(coeffs, xc)
     soil_m = Z < prof[None, :] + 0.3 * _noise(rng, (1, cw), 1.5)
-    albedo = np.array(SOIL_COLOURS.get(soil, SOIL_COLOURS["yangtze-clay-loam"]))
-    canvas[soil_m] = albedo * (1 + 0.12 * _texture(rng, (ch, cw)))[soil_m][:, None]
-    beam = (X >= a) & (X <= b) & (Z >= beam_datum_mm) & (Z < beam_datum_mm + 12)
-    canvas[beam] = np.array([0.08, 0.08, 0.09])
-    img = _finish(rng, canvas, roll_deg, False)
-    from soilcal.imaging.scenes import furrow_chord_area
-
+    albedo = np.array(st.get("soil_rgb", SOIL_COLOURS.get(soil, SOIL_COLOURS["yangtze-clay-loam"])))
+    face = albedo * (1 + 0.12 * _texture(rng, (ch, cw)))[soil_m][:, None]
+    if st.get("soil_shading"):
+        depth = np.clip((prof[None, :] - Z) / 150.0, 0, 1)[soil_m]  # 0 at the surface, 1 150 mm below
+        face *= (1 - st["soil_shading"] * depth)[:, None]
+    canvas[soil_m] = face
+    beam = (X >= a) & (X <= b) & (Z >= beam_datum_mm) & (Z < beam_datum_mm + bh)
+    canvas[beam] = np.array(st.get("beam_rgb", [0.08, 0.08, 0.09]))
+    img = _finish(rng, canvas, roll_deg, False, style={k: st[k] for k in ("blur_px", "exposure", "noise")
+                                                        if k in st} or None)
+    p = np.poly1d(coeffs)
+    P = p.integ()
+    area = float(0.5 * (p(a) + p(b)) * (b - a) - (P(b) - P(a)))  # the chord's area above F on [a, b]
     truth = {"kind": "furrow", "seed": int(seed), "roll_deg": float(roll_deg), "px_per_mm": s,
              "span_mm": [a, b], "beam_datum_mm": beam_datum_mm, "coeffs": list(coeffs),
-             "area_mm2": furrow_chord_area(a, b)}
+             "area_mm2": area}
     return img, truth
 
 

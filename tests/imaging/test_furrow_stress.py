@@ -1,0 +1,67 @@
+"""Furrow photos as users take them: boards of any colour, with or without a grid, the beam's
+shadow on the board, light or dark soils, camera roll up to 5 deg.  The truth is the chord
+area of the renderer's profile over the meter's span (analytic, from its polynomial)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from soilcal.errors import InputError
+from soilcal.imaging import corpus, measure
+
+
+def _measure(path, truth):
+    return measure.measure_furrow(path, truth["scale_length_mm"], truth["beam_datum_mm"])
+
+
+def test_stress_subset_within_two_percent(tmp_path):
+    """The first 6 photos of the seeded furrow corpus: every area within 2 % of the truth, the
+    scale from the beam's ends within 0.3 %, the roll within 0.1 deg."""
+    for k, params in enumerate(corpus.furrow_photo_params(6, seed=0)):
+        path, truth = corpus.write_furrow_photo(params, tmp_path, f"f{k}")
+        r = _measure(path, truth)
+        assert abs(r.area_mm2 / truth["area_mm2"] - 1) <= 0.02, (k, r.area_mm2, truth["area_mm2"])
+        assert abs(r.px_per_mm / truth["px_per_mm"] - 1) <= 0.003, k
+        assert abs(r.roll_deg - truth["roll_deg"]) <= 0.1, k
+
+
+def test_light_soil_below_a_dark_board_with_the_beams_shadow(tmp_path):
+    """Polarity and shadow: a soil lighter than a grey board, a dark shadow of the beam just
+    below it, no grid, the camera rolled 4.5 deg."""
+    p = corpus.furrow_photo_params(1, seed=3)[0]
+    p = dict(p, roll_deg=4.5, style=dict(p["style"], board_rgb=[0.45, 0.45, 0.47], grid_mm=0.0,
+                                          soil_rgb=[0.85, 0.72, 0.55], soil_shading=0.1,
+                                          beam_rgb=[0.05, 0.05, 0.05],
+                                          beam_shadow={"dx_mm": 10.0, "dy_mm": 8.0, "blur_px": 3.0,
+                                                       "darkness": 0.5}))
+    path, truth = corpus.write_furrow_photo(p, tmp_path, "light")
+    r = _measure(path, truth)
+    assert abs(r.area_mm2 / truth["area_mm2"] - 1) <= 0.02
+    assert abs(r.roll_deg - 4.5) <= 0.1
+
+
+def test_corpus_is_seeded():
+    a, b = corpus.furrow_photo_params(3, seed=5), corpus.furrow_photo_params(3, seed=5)
+    assert a == b and a != corpus.furrow_photo_params(3, seed=6)
+    for p in a:  # the profile stays below the beam over the span
+        x = np.linspace(*p["span_mm"], 201)
+        assert np.polyval(p["coeffs"], x).max() < p["beam_datum_mm"]
+
+
+@pytest.mark.parametrize("case, field_text", [
+    ("no beam", "a profile-meter beam"),
+    ("soil like the board", "soil below the profile-meter beam distinct from the board"),
+])
+def test_a_photo_it_cannot_read_is_refused_naming_what_is_missing(tmp_path, case, field_text):
+    p = corpus.furrow_photo_params(1, seed=1)[0]
+    board = [0.8, 0.78, 0.7]
+    style = dict(p["style"], board_rgb=board, grid_mm=0.0, board_gradient=[0.0, 0.0], beam_shadow=None)
+    if case == "no beam":
+        style["beam_rgb"] = board
+    else:
+        style.update(soil_rgb=board, soil_shading=0.0)
+    path, truth = corpus.write_furrow_photo(dict(p, style=style), tmp_path, "bad")
+    with pytest.raises(InputError) as e:
+        _measure(path, truth)
+    assert str(path) in str(e.value) and field_text in str(e.value)
