@@ -541,6 +541,8 @@ def measure_furrow(path, scale_length_mm, datum_mm=0.0, degree=9, threshold="ots
 #: the beam is sought among dark bars thinner than this share of the image height (black
 #: top-hat of the luminance with a vertical line of that length)
 BEAM_BAR_MAX = 0.12
+#: dark lines thinner than this share of the image height (a board's grid) are no beam
+BEAM_THIN = 0.006
 #: the least length (share of the image width) and length / thickness of a beam
 BEAM_MIN_LENGTH, BEAM_MIN_ELONGATION = 0.2, 8.0
 #: rows (px) of the board above the beam and of the soil at the frame's bottom that give the
@@ -570,7 +572,8 @@ def _beam_bar(path, gray, threshold, tried):
     h, w = gray.shape
     k = max(15, int(round(BEAM_BAR_MAX * h)))
     bar = ndi.grey_closing(gray, size=(k, 1)) - gray
-    bar = ndi.grey_opening(bar, size=(5, 5))  # grid lines and specks thinner than 5 px go
+    thin = max(5, int(round(BEAM_THIN * h)))
+    bar = ndi.grey_opening(bar, size=(thin, thin))  # grid lines and specks thinner than that go
     top = float(bar.max())
     if top <= 1e-6:
         raise InputError(path, "image", "a profile-meter beam (long dark bar)", "no dark bar")
@@ -588,8 +591,9 @@ def _beam_bar(path, gray, threshold, tried):
             beams.append(p)
     if not beams:
         raise InputError(path, "image", "a profile-meter beam (long dark bar)", "none found")
-    beam = max(beams, key=lambda p: p.axis_major_length)
-    tried.attempts[-1].outcome = f"{len(beams)} beam-like bar(s); the longest is the beam"
+    # the longest and darkest against its surroundings (a faint grid line or board edge is not)
+    beam = max(beams, key=lambda p: p.axis_major_length * float(np.median(bar[p.coords[:, 0], p.coords[:, 1]])))
+    tried.attempts[-1].outcome = f"{len(beams)} beam-like bar(s); the longest and darkest is the beam"
     tried.add("beam (longest bar)", lab == beam.label)
     return beam.coords[:, 0].astype(float), beam.coords[:, 1].astype(float)
 
@@ -667,12 +671,15 @@ def _measure_furrow(path, scale_length_mm, datum_mm, degree, threshold, keep_sta
         slope = float(np.tan(ang))
     roll = -float(np.degrees(np.arctan(slope)))
     core = np.linspace(top_edge + 0.25 * (low_edge - top_edge), low_edge - 0.25 * (low_edge - top_edge), 5)
-    reach = min(half_len + 3 * thick + 20, float(w + h))
-    u_x = np.arange(-reach, reach + 1)
+    # each end searched within 2 thicknesses + 10 px of the bar's own end (not out to the board's
+    # edge, where the wall may step as strongly)
+    ub = (bc - o[0]) * ux[0] + (br - o[1]) * ux[1]
+    win = 2 * thick + 10
+    u_x = np.arange(np.floor(ub.min() - win), np.ceil(ub.max() + win) + 1)
     along = sample(gray, u_x, core).mean(axis=0)
-    j0 = int(np.searchsorted(u_x, 0.0))
-    left = _edge_peak(along, 0, j0, -1) + u_x[0]
-    right = _edge_peak(along, j0, len(u_x), +1) + u_x[0]
+    jl, jr = np.searchsorted(u_x, ub.min() + win), np.searchsorted(u_x, ub.max() - win)
+    left = _edge_peak(along, 0, jl, -1) + u_x[0]
+    right = _edge_peak(along, jr, len(u_x), +1) + u_x[0]
     length_px = right - left
     if not np.isfinite(length_px) or length_px < BEAM_MIN_LENGTH * w:
         raise InputError(path, "image", "a profile-meter beam with two clear ends", "none found")
