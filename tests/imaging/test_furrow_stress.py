@@ -65,3 +65,18 @@ def test_a_photo_it_cannot_read_is_refused_naming_what_is_missing(tmp_path, case
     with pytest.raises(InputError) as e:
         _measure(path, truth)
     assert str(path) in str(e.value) and field_text in str(e.value)
+
+
+@pytest.mark.parametrize("zoom", [0.5, 2.0])
+def test_the_same_photo_at_another_resolution_gives_the_same_area(tmp_path, zoom):
+    """A user's camera may give a quarter or four times the pixels: the scale comes from the
+    beam in pixels, the area in mm^2 stays within 2 % of the truth."""
+    from PIL import Image
+
+    path, truth = corpus.write_furrow_photo(corpus.furrow_photo_params(6, seed=0)[5], tmp_path, "f5")
+    im = Image.open(path)
+    big = tmp_path / f"zoom{zoom}.jpg"
+    im.resize((int(im.width * zoom), int(im.height * zoom)), Image.BILINEAR).save(big, quality=92)
+    r = _measure(big, truth)
+    assert abs(r.area_mm2 / truth["area_mm2"] - 1) <= 0.02
+    assert abs(r.px_per_mm / (zoom * truth["px_per_mm"]) - 1) <= 0.005
