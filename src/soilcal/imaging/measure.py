@@ -565,7 +565,7 @@ def _edge_peak(profile, lo, hi, sign):
 
 
 def _beam_bar(path, gray, threshold, tried):
-    """The profile-meter beam: the longest dark bar (black top-hat of ``gray`` with a vertical
+    """The profile-meter beam: the longest and darkest dark bar (black top-hat of ``gray`` with a vertical
     line of BEAM_BAR_MAX of the image height, thresholded by ``threshold``) that is straight,
     near-horizontal (within 15 deg), at least BEAM_MIN_LENGTH of the width long, BEAM_MIN_ELONGATION
     times longer than thick and clear of the image border.  Returns its pixel rows and columns."""
@@ -599,9 +599,11 @@ def _beam_bar(path, gray, threshold, tried):
 
 
 def _measure_furrow(path, scale_length_mm, datum_mm, degree, threshold, keep_stages, tried: Tried):
-    """Module docstring.  The beam's axis is the straight line through its pixels' column
-    means; the photo is resampled along it (bilinear) so that u runs along the beam and v down,
-    square to it (the roll correction); the beam's ends and edges are the strongest steps of
+    """Module docstring.  The beam's axis is first the straight line through its pixels'
+    column means, then turned to the straighter of its two long edges (a shadow merged into
+    one side of the bar tilts the column means, not the other edge); the photo is resampled
+    along it (bilinear) so that u runs along the beam and v down, square to it (the roll
+    correction); the beam's ends and edges are the strongest steps of
     the luminance along and across it (sub-pixel), so its length and lower edge do not depend
     on a threshold; below it, every column of the resampled strip is split into board above
     and soil below at the row that best separates the two colours (smoothed L*a*b*: the board
