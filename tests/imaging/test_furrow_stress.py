@@ -24,6 +24,7 @@ def test_stress_subset_within_two_percent(tmp_path):
         assert abs(r.area_mm2 / truth["area_mm2"] - 1) <= 0.02, (k, r.area_mm2, truth["area_mm2"])
         assert abs(r.px_per_mm / truth["px_per_mm"] - 1) <= 0.003, k
         assert abs(r.roll_deg - truth["roll_deg"]) <= 0.1, k
+        assert r.confidence == "ok", k
 
 
 def test_light_soil_below_a_dark_board_with_the_beams_shadow(tmp_path):
@@ -80,3 +81,14 @@ def test_the_same_photo_at_another_resolution_gives_the_same_area(tmp_path, zoom
     r = _measure(big, truth)
     assert abs(r.area_mm2 / truth["area_mm2"] - 1) <= 0.02
     assert abs(r.px_per_mm / (zoom * truth["px_per_mm"]) - 1) <= 0.005
+
+
+def test_a_profile_whose_end_is_not_found_is_flagged(tmp_path):
+    """Photo 256 of the seeded corpus: the soil rises into the beam's dark shadow at the left
+    end of the span, whose last 38 mm get no boundary point; the chord's end height is then
+    the polynomial's extrapolation and the area is off by more than 2 %: flagged low."""
+    path, truth = corpus.write_furrow_photo(corpus.furrow_photo_params(257, seed=0)[256], tmp_path, "f256")
+    r = _measure(path, truth)
+    assert abs(r.area_mm2 / truth["area_mm2"] - 1) > 0.02
+    assert r.end_gap_mm > measure.FURROW_LOW_IF["end_gap_above"] * truth["scale_length_mm"]
+    assert r.confidence == "low"

@@ -520,10 +520,16 @@ class FurrowResult:
     px_per_mm: float
     roll_deg: float
     stages: Stages | None = None
+    coverage: float = 1.0  # share of the span's columns with a boundary point kept in the fit
+    end_gap_mm: float = 0.0  # the larger stretch at either end of the span without a point
+    fit_rms_mm: float = 0.0  # RMS distance of the kept points from the fitted profile
+    confidence: str = "ok"  # "low": FURROW_LOW_IF (the area then rests on extrapolation or a poor fit)
 
     def as_dict(self):
         return {"path": self.path, "degree": self.degree, "coeffs": self.coeffs,
                 "area_mm2": self.area_mm2, "area_dm2": self.area_mm2 / 1e4,
+                "confidence": self.confidence, "coverage": self.coverage, "end_gap_mm": self.end_gap_mm,
+                "fit_rms_mm": self.fit_rms_mm,
                 "px_per_mm": self.px_per_mm, "roll_deg": self.roll_deg,
                 "profile": {"x_mm": np.round(self.x_mm[::10], 2).tolist(),
                             "z_mm": np.round(self.z_mm[::10], 2).tolist()}}
@@ -548,6 +554,12 @@ BEAM_MIN_LENGTH, BEAM_MIN_ELONGATION = 0.2, 8.0
 #: rows (px) of the board above the beam and of the soil at the frame's bottom that give the
 #: two colours the furrow boundary separates
 FURROW_SEED_ROWS = 12
+#: weight of L* against a* and b* in the board/soil colour distances
+FURROW_L_WEIGHT = 0.5
+#: a furrow's confidence is "low" when the kept boundary points cover under 85 % of the span's
+#: columns, leave more than 2 % of the span at an end without a point (the chord's end height
+#: is then the polynomial's extrapolation), or stray from the fit by more than 1.5 mm RMS
+FURROW_LOW_IF = {"coverage_below": 0.85, "end_gap_above": 0.02, "rms_mm_above": 1.5}
 
 
 def _edge_peak(profile, lo, hi, sign):
@@ -673,15 +685,28 @@ def _measure_furrow(path, scale_length_mm, datum_mm, degree, threshold, keep_sta
         slope = float(np.tan(ang))
     roll = -float(np.degrees(np.arctan(slope)))
     core = np.linspace(top_edge + 0.25 * (low_edge - top_edge), low_edge - 0.25 * (low_edge - top_edge), 5)
-    # each end searched within 2 thicknesses + 10 px of the bar's own end (not out to the board's
-    # edge, where the wall may step as strongly)
+    # the beam's extent: from its middle outwards, as long as its core is darker than the board
+    # just above it by at least half the beam's own contrast (a bar found only in part, where
+    # the board is darker or a grid crosses it, is followed to its real ends); each end is then
+    # the strongest step within 2 thicknesses + 10 px of where that run stops
     ub = (bc - o[0]) * ux[0] + (br - o[1]) * ux[1]
-    win = 2 * thick + 10
-    u_x = np.arange(np.floor(ub.min() - win), np.ceil(ub.max() + win) + 1)
+    lim = []
+    for k_, n_ in ((0, w), (1, h)):  # u where the axis stays in the frame
+        if abs(ux[k_]) > 1e-9:
+            lim.append(sorted(((0 - o[k_]) / ux[k_], (n_ - 1 - o[k_]) / ux[k_])))
+    u_x = np.arange(np.ceil(max(l_[0] for l_ in lim)), np.floor(min(l_[1] for l_ in lim)) + 1)
     along = sample(gray, u_x, core).mean(axis=0)
-    jl, jr = np.searchsorted(u_x, ub.min() + win), np.searchsorted(u_x, ub.max() - win)
-    left = _edge_peak(along, 0, jl, -1) + u_x[0]
-    right = _edge_peak(along, jr, len(u_x), +1) + u_x[0]
+    above = np.median(sample(gray, u_x, np.arange(top_edge - 12, top_edge - 3)), axis=0)
+    contrast = ndi.uniform_filter1d((above - along) / np.maximum(above, 1e-3), 5)
+    mid_ = (u_x >= np.percentile(ub, 20)) & (u_x <= np.percentile(ub, 80))
+    inside = contrast > 0.5 * np.median(contrast[mid_])
+    j_mid = int(np.searchsorted(u_x, 0.5 * (ub.min() + ub.max())))
+    run = ndi.label(ndi.binary_closing(inside, np.ones(5)))[0]
+    lab_mid = run[j_mid] if run[j_mid] else run[np.nonzero(run)[0][np.argmin(np.abs(np.nonzero(run)[0] - j_mid))]]
+    jj = np.nonzero(run == lab_mid)[0]
+    win = int(2 * thick + 10)
+    left = _edge_peak(along, jj[0] - win, jj[0] + win, -1) + u_x[0]
+    right = _edge_peak(along, jj[-1] - win, jj[-1] + win + 1, +1) + u_x[0]
     length_px = right - left
     if not np.isfinite(length_px) or length_px < BEAM_MIN_LENGTH * w:
         raise InputError(path, "image", "a profile-meter beam with two clear ends", "none found")
@@ -702,8 +727,10 @@ def _measure_furrow(path, scale_length_mm, datum_mm, degree, threshold, keep_sta
     if np.linalg.norm(board - soil_c) < 5.0:  # Delta E below 5: no visible difference
         raise InputError(path, "image", "soil below the profile-meter beam distinct from the board above it",
                          f"the same colour (Delta E {np.linalg.norm(board - soil_c):.1f})")
-    d_b = np.linalg.norm(strip - board, axis=-1)
-    d_s = np.linalg.norm(strip - soil_c, axis=-1)
+    # lightness counts half: a shadow on the board (the beam's, the soil's) changes it most
+    wl = np.array([FURROW_L_WEIGHT, 1.0, 1.0])
+    d_b = np.linalg.norm((strip - board) * wl, axis=-1)
+    d_s = np.linalg.norm((strip - soil_c) * wl, axis=-1)
     score = (d_b - d_s) / (d_b + d_s + 1e-9)  # -1 board, +1 soil
     below = v > low_edge + 1
     sc = np.where(below[:, None], score, -1.0)  # nothing on or above the beam is soil
@@ -770,4 +797,10 @@ def _measure_furrow(path, scale_length_mm, datum_mm, degree, threshold, keep_sta
         st.poly = poly
         st.frame = (left, right, low_edge, s, datum_mm)
         st.reference = "beam axis"
-    return FurrowResult(str(path), x, z, coeffs, degree, float(area), float(s), roll, st)
+    coverage = float(len(x) / max(1, len(u)))
+    end_gap = float(max(x.min() - a, b - x.max(), 0.0))
+    rms = float(np.sqrt(np.mean((z - poly(x)) ** 2)))
+    low = (coverage < FURROW_LOW_IF["coverage_below"] or end_gap > FURROW_LOW_IF["end_gap_above"] * (b - a)
+           or rms > FURROW_LOW_IF["rms_mm_above"])
+    return FurrowResult(str(path), x, z, coeffs, degree, float(area), float(s), roll, st, coverage, end_gap, rms,
+                        "low" if low else "ok")
