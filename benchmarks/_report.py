@@ -25,6 +25,32 @@ def corpus_args(doc, n, argv):
     return ap.parse_args(argv)
 
 
+def corpus_rows(params, write, truth_row, measured_row, stem="photo"):
+    """Render every parameter set of a photo corpus (``write(params, folder, name)`` -> (path,
+    truth)) into a temporary folder and measure it: one row per photo with ``photo``, the
+    truth's fields (``truth_row(truth)``), the measured fields (``measured_row(path, truth)``)
+    or the refusal (the InputError's text after the file name) and the seconds the measurement
+    took.  Returns (rows, wall seconds)."""
+    import time
+
+    from soilcal.errors import InputError
+
+    rows = []
+    t_all = time.perf_counter()
+    with tempfile.TemporaryDirectory() as tmp:
+        for k, p in enumerate(params):
+            path, truth = write(p, tmp, f"{stem}{k:04d}")
+            row = dict(photo=k, **truth_row(truth))
+            t0 = time.perf_counter()
+            try:
+                row.update(measured_row(path, truth))
+            except InputError as e:
+                row["refusal"] = str(e).split(": ", 1)[-1].replace("|", "/")
+            row["seconds"] = round(time.perf_counter() - t0, 2)
+            rows.append(row)
+    return rows, time.perf_counter() - t_all
+
+
 def seed_list(text: str) -> list[int]:
     """Seeds from a command-line list: ``0-5``, ``0,2,4`` or both (``0-2,7``)."""
     out = []

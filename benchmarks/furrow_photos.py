@@ -18,13 +18,12 @@ from __future__ import annotations
 import os
 import platform
 import sys
-import tempfile
 import time
 from collections import Counter
 from pathlib import Path
 
 import numpy as np
-from _report import commit, corpus_args, write_page, write_rows
+from _report import commit, corpus_args, corpus_rows, write_page, write_rows
 
 FIELDS = ["photo", "span_mm", "area_mm2", "measured_mm2", "error_pct", "scale_error_pct", "roll_error_deg",
           "boundary_points", "confidence", "coverage", "end_gap_mm", "fit_rms_mm", "refusal", "seconds"]
@@ -33,29 +32,19 @@ FIELDS = ["photo", "span_mm", "area_mm2", "measured_mm2", "error_pct", "scale_er
 def main(argv=None):
     args = corpus_args(__doc__, 300, argv)
 
-    from soilcal.errors import InputError
     from soilcal.imaging import corpus, measure
 
-    rows = []
-    t_all = time.perf_counter()
-    with tempfile.TemporaryDirectory() as tmp:
-        for k, p in enumerate(corpus.furrow_photo_params(args.n, args.seed)):
-            path, truth = corpus.write_furrow_photo(p, tmp, f"furrow{k:04d}")
-            row = dict(photo=k, span_mm=round(truth["scale_length_mm"], 2), area_mm2=round(truth["area_mm2"], 1))
-            t0 = time.perf_counter()
-            try:
-                r = measure.measure_furrow(path, truth["scale_length_mm"], truth["beam_datum_mm"])
-                row.update(measured_mm2=round(r.area_mm2, 1),
-                           error_pct=round(100 * (r.area_mm2 / truth["area_mm2"] - 1), 3),
-                           scale_error_pct=round(100 * (r.px_per_mm / truth["px_per_mm"] - 1), 3),
-                           roll_error_deg=round(r.roll_deg - truth["roll_deg"], 3), boundary_points=len(r.x_mm),
-                           confidence=r.confidence, coverage=round(r.coverage, 3), end_gap_mm=round(r.end_gap_mm, 2),
-                           fit_rms_mm=round(r.fit_rms_mm, 3))
-            except InputError as e:
-                row["refusal"] = str(e).split(": ", 1)[-1].replace("|", "/")
-            row["seconds"] = round(time.perf_counter() - t0, 2)
-            rows.append(row)
-    wall = time.perf_counter() - t_all
+    def measured(path, truth):
+        r = measure.measure_furrow(path, truth["scale_length_mm"], truth["beam_datum_mm"])
+        return dict(measured_mm2=round(r.area_mm2, 1), error_pct=round(100 * (r.area_mm2 / truth["area_mm2"] - 1), 3),
+                    scale_error_pct=round(100 * (r.px_per_mm / truth["px_per_mm"] - 1), 3),
+                    roll_error_deg=round(r.roll_deg - truth["roll_deg"], 3), boundary_points=len(r.x_mm),
+                    confidence=r.confidence, coverage=round(r.coverage, 3), end_gap_mm=round(r.end_gap_mm, 2),
+                    fit_rms_mm=round(r.fit_rms_mm, 3))
+
+    rows, wall = corpus_rows(corpus.furrow_photo_params(args.n, args.seed), corpus.write_furrow_photo,
+                             lambda t: dict(span_mm=round(t["scale_length_mm"], 2), area_mm2=round(t["area_mm2"], 1)),
+                             measured, stem="furrow")
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
     write_rows(out / "furrow_photos.csv", rows, FIELDS)

@@ -17,13 +17,12 @@ from __future__ import annotations
 import os
 import platform
 import sys
-import tempfile
 import time
 from collections import Counter
 from pathlib import Path
 
 import numpy as np
-from _report import commit, corpus_args, write_page, write_rows
+from _report import commit, corpus_args, corpus_rows, write_page, write_rows
 
 HERE = Path(__file__).resolve().parent
 FIELDS = ["photo", "truth_deg", "left_truth_deg", "right_truth_deg", "roll_deg", "measured_deg", "error_deg",
@@ -34,32 +33,23 @@ FIELDS = ["photo", "truth_deg", "left_truth_deg", "right_truth_deg", "roll_deg",
 def main(argv=None):
     args = corpus_args(__doc__, 200, argv)
 
-    from soilcal.errors import InputError
     from soilcal.imaging import corpus, measure
     from soilcal.imaging.measure import CUE_AGREEMENT_DEG
 
-    rows = []
-    t_all = time.perf_counter()
-    with tempfile.TemporaryDirectory() as tmp:
-        for k, p in enumerate(corpus.pile_photo_params(args.n, args.seed)):
-            path, truth = corpus.write_pile_photo(p, tmp, f"photo{k:04d}")
-            row = dict(photo=k, truth_deg=round(truth["angle_deg"], 4), left_truth_deg=round(truth["left_deg"], 4),
-                       right_truth_deg=round(truth["right_deg"], 4), roll_deg=round(truth["roll_deg"], 3))
-            t0 = time.perf_counter()
-            try:
-                r = measure.measure_pile(path)
-                row.update(measured_deg=round(r.angle_deg, 4), error_deg=round(r.angle_deg - truth["angle_deg"], 4),
-                           left_error_deg=round(r.left_deg - truth["left_deg"], 4),
-                           right_error_deg=round(r.right_deg - truth["right_deg"], 4), cue=r.cue,
-                           confidence=r.confidence, flank_points_used=round(r.flank_points_used, 3),
-                           flank_rms_px=round(r.flank_rms_px, 3), cue_check=r.cue_check,
-                           cue_check_deg=round(r.cue_check_deg, 3), cue_outvoted=r.cue_outvoted,
-                           cue_outvoted_deg=round(r.cue_outvoted_deg, 3))
-            except InputError as e:
-                row["refusal"] = str(e).split(": ", 1)[-1].replace("|", "/")
-            row["seconds"] = round(time.perf_counter() - t0, 2)
-            rows.append(row)
-    wall = time.perf_counter() - t_all
+    def measured(path, truth):
+        r = measure.measure_pile(path)
+        return dict(measured_deg=round(r.angle_deg, 4), error_deg=round(r.angle_deg - truth["angle_deg"], 4),
+                    left_error_deg=round(r.left_deg - truth["left_deg"], 4),
+                    right_error_deg=round(r.right_deg - truth["right_deg"], 4), cue=r.cue,
+                    confidence=r.confidence, flank_points_used=round(r.flank_points_used, 3),
+                    flank_rms_px=round(r.flank_rms_px, 3), cue_check=r.cue_check,
+                    cue_check_deg=round(r.cue_check_deg, 3), cue_outvoted=r.cue_outvoted,
+                    cue_outvoted_deg=round(r.cue_outvoted_deg, 3))
+
+    rows, wall = corpus_rows(corpus.pile_photo_params(args.n, args.seed), corpus.write_pile_photo,
+                             lambda t: dict(truth_deg=round(t["angle_deg"], 4), left_truth_deg=round(t["left_deg"], 4),
+                                            right_truth_deg=round(t["right_deg"], 4), roll_deg=round(t["roll_deg"], 3)),
+                             measured)
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
     write_rows(out / "pile_photos.csv", rows, FIELDS)
