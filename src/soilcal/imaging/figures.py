@@ -69,7 +69,7 @@ def furrow_figure(result, stem, title=""):
     ax[0].imshow(st.rgb)
     ax[0].set_title("(a) original")
     ax[1].imshow(st.binary, cmap="gray")
-    ax[1].set_title("(b) binary")
+    ax[1].set_title("(b) soil found below the beam")
     ax[2].plot(result.x_mm, result.z_mm, ".", ms=1, label="contour")
     x = np.linspace(result.x_mm.min(), result.x_mm.max(), 400)
     ax[2].plot(x, np.polyval(result.coeffs, x), "r-", lw=1, label=f"degree-{result.degree} fit")

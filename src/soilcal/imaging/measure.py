@@ -670,14 +670,7 @@ def _measure_furrow(path, scale_length_mm, datum_mm, degree, threshold, keep_sta
         fits = []
         for e, sign in ((top_edge, -1), (low_edge, +1)):
             j = int(round(e - v_x[0]))
-            lo, hi = max(1, j - 4), min(len(v_x) - 1, j + 5)
-            g = np.gradient(cut, axis=0)[lo:hi] * sign
-            k = np.argmax(g, axis=0)
-            kk = np.clip(k, 1, g.shape[0] - 2)
-            a_, b_, c_ = (g[kk - 1, np.arange(g.shape[1])], g[kk, np.arange(g.shape[1])],
-                          g[kk + 1, np.arange(g.shape[1])])
-            den = a_ - 2 * b_ + c_
-            ve = v_x[lo] + kk + np.where(den < 0, 0.5 * (a_ - c_) / np.where(den < 0, den, -1.0), 0.0)
+            ve = v_x[0] + np.array([_edge_peak(cut[:, i], j - 4, j + 5, sign) for i in range(cut.shape[1])])
             cf = np.polyfit(u_mid, ve, 1)
             fits.append((float(np.std(ve - np.polyval(cf, u_mid))), cf[0]))
         beta = min(fits)[1]
