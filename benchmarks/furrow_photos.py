@@ -10,7 +10,7 @@ Written: ``benchmarks/results/furrow_photos.csv`` (one row per photo of the last
 measured area, scale and roll errors, or the refusal) and ``furrow_photos.md`` (shares
 measured and within 1 and 2 % of the true area; notes below its marker are kept).
 
-    python benchmarks/furrow_photos.py [--n 300] [--seed 0] [--out DIR]
+    python benchmarks/furrow_photos.py [--n 300] [--seed 0] [--out DIR] [--jobs 1]
 """
 
 from __future__ import annotations
@@ -29,22 +29,30 @@ FIELDS = ["photo", "span_mm", "area_mm2", "measured_mm2", "error_pct", "scale_er
           "boundary_points", "confidence", "coverage", "end_gap_mm", "fit_rms_mm", "refusal", "seconds"]
 
 
+def measured(path, truth):
+    """The measured fields of one photo's row."""
+    from soilcal.imaging import measure
+
+    r = measure.measure_furrow(path, truth["scale_length_mm"], truth["beam_datum_mm"])
+    return dict(measured_mm2=round(r.area_mm2, 1), error_pct=round(100 * (r.area_mm2 / truth["area_mm2"] - 1), 3),
+                scale_error_pct=round(100 * (r.px_per_mm / truth["px_per_mm"] - 1), 3),
+                roll_error_deg=round(r.roll_deg - truth["roll_deg"], 3), boundary_points=len(r.x_mm),
+                confidence=r.confidence, coverage=round(r.coverage, 3), end_gap_mm=round(r.end_gap_mm, 2),
+                fit_rms_mm=round(r.fit_rms_mm, 3))
+
+
+def truth_fields(t):
+    """The truth's fields of one photo's row."""
+    return dict(span_mm=round(t["scale_length_mm"], 2), area_mm2=round(t["area_mm2"], 1))
+
+
 def main(argv=None):
     args = corpus_args(__doc__, 300, argv)
 
-    from soilcal.imaging import corpus, measure
-
-    def measured(path, truth):
-        r = measure.measure_furrow(path, truth["scale_length_mm"], truth["beam_datum_mm"])
-        return dict(measured_mm2=round(r.area_mm2, 1), error_pct=round(100 * (r.area_mm2 / truth["area_mm2"] - 1), 3),
-                    scale_error_pct=round(100 * (r.px_per_mm / truth["px_per_mm"] - 1), 3),
-                    roll_error_deg=round(r.roll_deg - truth["roll_deg"], 3), boundary_points=len(r.x_mm),
-                    confidence=r.confidence, coverage=round(r.coverage, 3), end_gap_mm=round(r.end_gap_mm, 2),
-                    fit_rms_mm=round(r.fit_rms_mm, 3))
+    from soilcal.imaging import corpus
 
     rows, wall = corpus_rows(corpus.furrow_photo_params(args.n, args.seed), corpus.write_furrow_photo,
-                             lambda t: dict(span_mm=round(t["scale_length_mm"], 2), area_mm2=round(t["area_mm2"], 1)),
-                             measured, stem="furrow")
+                             truth_fields, measured, stem="furrow", jobs=args.jobs)
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
     write_rows(out / "furrow_photos.csv", rows, FIELDS)

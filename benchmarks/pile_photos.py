@@ -9,7 +9,7 @@ truths, measured angles, cue, confidence, or the refusal) and ``pile_photos.md``
 measured, within 0.3 and 1 deg, silent errors above 1 deg, by confidence; notes below its
 marker are kept).
 
-    python benchmarks/pile_photos.py [--n 200] [--seed 0] [--out DIR]
+    python benchmarks/pile_photos.py [--n 200] [--seed 0] [--out DIR] [--jobs 1]
 """
 
 from __future__ import annotations
@@ -30,26 +30,34 @@ FIELDS = ["photo", "truth_deg", "left_truth_deg", "right_truth_deg", "roll_deg",
           "cue_check_deg", "cue_outvoted", "cue_outvoted_deg", "refusal", "seconds"]
 
 
+def measured(path, truth):
+    """The measured fields of one photo's row."""
+    from soilcal.imaging import measure
+
+    r = measure.measure_pile(path)
+    return dict(measured_deg=round(r.angle_deg, 4), error_deg=round(r.angle_deg - truth["angle_deg"], 4),
+                left_error_deg=round(r.left_deg - truth["left_deg"], 4),
+                right_error_deg=round(r.right_deg - truth["right_deg"], 4), cue=r.cue,
+                confidence=r.confidence, flank_points_used=round(r.flank_points_used, 3),
+                flank_rms_px=round(r.flank_rms_px, 3), cue_check=r.cue_check,
+                cue_check_deg=round(r.cue_check_deg, 3), cue_outvoted=r.cue_outvoted,
+                cue_outvoted_deg=round(r.cue_outvoted_deg, 3))
+
+
+def truth_fields(t):
+    """The truth's fields of one photo's row."""
+    return dict(truth_deg=round(t["angle_deg"], 4), left_truth_deg=round(t["left_deg"], 4),
+                right_truth_deg=round(t["right_deg"], 4), roll_deg=round(t["roll_deg"], 3))
+
+
 def main(argv=None):
     args = corpus_args(__doc__, 200, argv)
 
-    from soilcal.imaging import corpus, measure
+    from soilcal.imaging import corpus
     from soilcal.imaging.measure import CUE_AGREEMENT_DEG
 
-    def measured(path, truth):
-        r = measure.measure_pile(path)
-        return dict(measured_deg=round(r.angle_deg, 4), error_deg=round(r.angle_deg - truth["angle_deg"], 4),
-                    left_error_deg=round(r.left_deg - truth["left_deg"], 4),
-                    right_error_deg=round(r.right_deg - truth["right_deg"], 4), cue=r.cue,
-                    confidence=r.confidence, flank_points_used=round(r.flank_points_used, 3),
-                    flank_rms_px=round(r.flank_rms_px, 3), cue_check=r.cue_check,
-                    cue_check_deg=round(r.cue_check_deg, 3), cue_outvoted=r.cue_outvoted,
-                    cue_outvoted_deg=round(r.cue_outvoted_deg, 3))
-
     rows, wall = corpus_rows(corpus.pile_photo_params(args.n, args.seed), corpus.write_pile_photo,
-                             lambda t: dict(truth_deg=round(t["angle_deg"], 4), left_truth_deg=round(t["left_deg"], 4),
-                                            right_truth_deg=round(t["right_deg"], 4), roll_deg=round(t["roll_deg"], 3)),
-                             measured)
+                             truth_fields, measured, jobs=args.jobs)
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
     write_rows(out / "pile_photos.csv", rows, FIELDS)

@@ -107,21 +107,23 @@ def test_a_second_cue_flags_a_flank_the_first_one_misreads(tmp_path):
 
 
 def test_a_third_cue_decides_between_two_that_disagree(tmp_path):
-    """Photos 183 and 192 of the seeded corpus.  183: the first cue reads both flanks within
+    """Photos 183 and 196 of the seeded corpus.  183: the first cue reads both flanks within
     0.3 deg of the rendered ones, a luminance cue reads the left flank 4.6 deg steeper; the
     next credible cue agrees with the first, so the dissent is outvoted, recorded, and the
-    result stays ok.  192: the first cue reads the left flank 1.3 deg steep; the luminance
-    cue and the next credible cue both read it within 0.2 deg: two against one, flagged low."""
-    params = corpus.pile_photo_params(193, seed=0)
+    result stays ok.  196: the first cue (luminance) reads the right flank 2.4 deg flat, the
+    next credible cue reads it within 0.1 deg, and no third cue measures a heap to decide
+    between the two: flagged low."""
+    params = corpus.pile_photo_params(197, seed=0)
     path, truth = corpus.write_pile_photo(params[183], tmp_path, "s183")
     r = measure.measure_pile(path)
     assert abs(r.left_deg - truth["left_deg"]) <= 0.3 and abs(r.right_deg - truth["right_deg"]) <= 0.3
     assert r.cue_outvoted and r.cue_outvoted_deg > measure.CUE_AGREEMENT_DEG
     assert r.cue_check not in ("", r.cue_outvoted) and r.cue_check_deg <= measure.CUE_AGREEMENT_DEG
     assert r.confidence == "ok"
-    path, truth = corpus.write_pile_photo(params[192], tmp_path, "s192")
+    path, truth = corpus.write_pile_photo(params[196], tmp_path, "s196")
     r = measure.measure_pile(path)
-    assert abs(r.left_deg - truth["left_deg"]) > 1.0  # the first cue's reading, refuted
+    assert abs(r.right_deg - truth["right_deg"]) > 1.0  # the first cue's reading, refuted
+    assert r.cue_check and r.cue_outvoted == ""
     assert r.cue_check_deg > measure.CUE_AGREEMENT_DEG and r.confidence == "low"
 
 
@@ -135,3 +137,29 @@ def test_a_cue_that_does_not_split_the_band_neither_confirms_nor_refutes(tmp_pat
     assert r.confidence == "ok" and r.cue_check and r.cue_check_deg <= measure.CUE_AGREEMENT_DEG
     assert r.cue_outvoted == ""
     assert abs(r.angle_deg - truth["angle_deg"]) <= 0.3
+
+
+def test_a_colour_cue_edge_is_refined_in_luminance(tmp_path, monkeypatch):
+    """A light heap on a dark, browner wall, saved as JPEG at quality 60 (colour subsampled in
+    16 px blocks): the chroma cue segments the heap, and its blocky edge reads the shaded right
+    flank flatter than rendered.  Refined in luminance (full resolution, a clear step at this
+    edge) every flank is within 0.5 deg and the photo's value within 0.3 deg; with the
+    luminance refinement switched off at least one flank is more than 0.5 deg off."""
+    style = PLAIN | {"wall_rgb": [0.26, 0.24, 0.22], "soil_rgb": [0.64, 0.57, 0.47], "noise": 0.01,
+                     "blur_px": 1.4, "scale_bar": False,
+                     "shadow": {"dx_mm": -18.0, "dy_mm": 8.0, "blur_px": 3.0, "darkness": 0.15}}
+    photos = []
+    for seed in (1, 2, 4):
+        img, truth = render.render_pile(seed, 28.5, 26.5, roll_deg=-0.5, style=style)
+        photos.append((render.save_photo(tmp_path / f"lum{seed}.jpg", img, truth, quality=60), truth))
+    for p, truth in photos:
+        r = measure.measure_pile(p)
+        assert r.cue.startswith("chroma")
+        assert abs(r.angle_deg - truth["angle_deg"]) <= 0.3
+        assert abs(r.left_deg - truth["left_deg"]) <= 0.5 and abs(r.right_deg - truth["right_deg"]) <= 0.5
+    monkeypatch.setattr(measure, "LUM_EDGE_SNR", np.inf)
+    worst = 0.0
+    for p, truth in photos:
+        r = measure.measure_pile(p)
+        worst = max(worst, abs(r.left_deg - truth["left_deg"]), abs(r.right_deg - truth["right_deg"]))
+    assert worst > 0.5

@@ -201,13 +201,19 @@ def _level(mask, slope, intercept):
     return lev, plate_row, -roll
 
 
-def _top_edge(lev, c0, c1, glev=None):
+def _top_edge(lev, c0, c1, glev=None, llev=None):
     """Subpixel row of the object's top edge in columns c0..c1.
 
     The first 0.5 crossing of the levelled mask gives the edge to a pixel; with the levelled
     gray image ``glev`` it is refined to the row where the gray level crosses the local
-    mid-level (median of 5 px of background above and of object below), which removes the
-    dependence on a global threshold.
+    mid-level (median of 6 px of background above and of object below), which removes the
+    dependence on a global threshold.  With the levelled luminance ``llev`` as well (a cue
+    other than luminance segmented the heap), a column whose luminance steps across the edge
+    by more than :data:`LUM_EDGE_SNR` times its noise there (and by at least 0.03) is refined
+    in luminance instead: a camera records luminance at full resolution and colour at half or
+    less (Bayer demosaicing, JPEG 4:2:0 subsampling in 16 px blocks), so a colour cue's edge
+    is blurred and blocky where the luminance edge is sharp (:func:`_straighter` decides per
+    flank which of the two edges is fitted).
     """
     cols, rows = [], []
     n = lev.shape[0]
@@ -222,17 +228,33 @@ def _top_edge(lev, c0, c1, glev=None):
         if glev is not None and 12 <= i < n - 12:
             g = glev[:, c]
             bg, fg = np.median(g[i - 12:i - 6]), np.median(g[i + 6:i + 12])
-            mid = 0.5 * (bg + fg)
-            seg = g[i - 6:i + 6]
+            if llev is not None:
+                gl = llev[:, c]
+                above, below = gl[i - 12:i - 6], gl[i + 6:i + 12]
+                bl, fl = np.median(above), np.median(below)
+                noise = 1.4826 * np.median(np.abs(np.concatenate([above - bl, below - fl])))
+                if abs(bl - fl) > max(0.03, LUM_EDGE_SNR * noise):
+                    g, bg, fg = gl, bl, fl
             if abs(bg - fg) > 0.03:
-                sgn = np.sign(bg - fg)
-                k = np.nonzero(sgn * (seg - mid) <= 0)[0]
-                if k.size and k[0] > 0:
-                    j = k[0]
-                    r = i - 6 + j - 1 + (seg[j - 1] - mid) / (seg[j - 1] - seg[j])
+                r = _mid_crossing(g[i - 6:i + 6], 0.5 * (bg + fg), np.sign(bg - fg), i - 6, r)
         rows.append(r)
         cols.append(c)
     return np.asarray(cols, float), np.asarray(rows, float)
+
+
+#: a luminance step across a heap's edge this many times its noise (robust SD of 6 px each
+#: side) refines the edge in luminance when a colour cue segmented the heap (_top_edge)
+LUM_EDGE_SNR = 4.0
+
+
+def _mid_crossing(seg, mid, sgn, start, default):
+    """Row (sub-pixel, ``start`` + index in ``seg``) where ``seg`` first crosses ``mid`` going
+    from the side of sign ``sgn`` to the other; ``default`` when it does not."""
+    k = np.nonzero(sgn * (seg - mid) <= 0)[0]
+    if not k.size or k[0] == 0:
+        return default
+    j = k[0]
+    return start + j - 1 + (seg[j - 1] - mid) / (seg[j - 1] - seg[j])
 
 
 def _fit(path, u, v, label, seed=0, residual=None):
@@ -344,7 +366,7 @@ def _measure_pile(path, threshold, keep_stages, channel, tried: Tried) -> PileRe
             try:
                 res = _pile_with(path, rgb, g, ch, pol, band, slope, intercept, threshold,
                                  keep_stages and first is None, search=channel == "auto", tried=tried,
-                                 label=f"line {n_line}, {ch}/{pol}")
+                                 label=f"line {n_line}, {ch}/{pol}", lum=lum)
             except InputError as e:
                 if e.field not in ("image", "left flank", "right flank"):
                     raise
@@ -402,11 +424,12 @@ def _cross_checked(res: PileResult, check: PileResult, outvoted: PileResult | No
 
 
 def _pile_with(path, rgb, gray, cue, polarity, band, slope, intercept, threshold, keep_stages, search=True,
-               tried: Tried | None = None, label: str = ""):
+               tried: Tried | None = None, label: str = "", lum=None):
     """Measure with one cue: the heap is the class below Otsu's threshold of ``gray``.  In a
     cue search (``search``) the result must look like a heap; a channel chosen by the caller
     (e.g. a DEM silhouette, whatever its flanks) is measured as it is.  ``tried`` records the
-    attempt (its segmented class and plate line) for a refusal's diagnostic image."""
+    attempt (its segmented class and plate line) for a refusal's diagnostic image; ``lum``:
+    the photo's luminance, in which a colour cue's edge is refined (:func:`_top_edge`)."""
     if threshold == "otsu":
         t = filters.threshold_otsu(gray[band])
         binary = ndi.binary_fill_holes(morphology.opening(gray < t, morphology.disk(2)))
@@ -417,6 +440,7 @@ def _pile_with(path, rgb, gray, cue, polarity, band, slope, intercept, threshold
     comp = _components_on_plate(path, binary, slope, intercept, "heap")
     lev, prow, roll = _level(comp, slope, intercept)
     glev = _level(gray, slope, intercept)[0]
+    llev = _level(lum, slope, intercept)[0] if lum is not None and cue != "gray" else None
     cols = np.nonzero(lev.max(axis=0) >= 0.5)[0]
     cu, rv = _top_edge(lev, cols.min(), cols.max() + 1, glev)
     v = prow - rv
@@ -424,8 +448,9 @@ def _pile_with(path, rgb, gray, cue, polarity, band, slope, intercept, threshold
     apex = np.median(cu[v > 0.97 * hmax])
     band = (v > BAND[0] * hmax) & (v < BAND[1] * hmax)
     lsel, rsel = band & (cu < apex), band & (cu > apex)
-    left, lline, lp = _fit(path, cu[lsel], v[lsel], "left flank")
-    right, rline, rp = _fit(path, cu[rsel], v[rsel], "right flank")
+    vs = [v] if llev is None else [v, prow - _top_edge(lev, cols.min(), cols.max() + 1, glev, llev)[1]]
+    left, lline, lp = _straighter(path, cu, vs, lsel, "left flank")
+    right, rline, rp = _straighter(path, cu, vs, rsel, "right flank")
     ang = np.array([left, right])
     # confidence: share of each flank's points on its line, their scatter about it
     used = min(len(lp) / max(lsel.sum(), 1), len(rp) / max(rsel.sum(), 1))
@@ -442,6 +467,24 @@ def _pile_with(path, rgb, gray, cue, polarity, band, slope, intercept, threshold
         st.plate_row = prow
     return PileResult(str(path), float(ang.mean()), left, right, float(ang.std(ddof=1)), float(roll),
                       f"{cue}/{polarity}", float(used), float(rms), "low" if low else "ok", st)
+
+
+def _straighter(path, u, vs, sel, label):
+    """The line fit (:func:`_fit`) of the flank ``sel`` on the cue's own edge ``vs[0]``, or on
+    the edge refined in luminance ``vs[1]`` (where a colour cue segmented the heap,
+    :func:`_top_edge`) when that one's inliers lie clearly closer to their line (RMS below
+    :data:`LUM_EDGE_STRAIGHTER` times the cue's).  A luminance edge is sharper where the
+    luminance steps across the heap's outline, and follows something else where it does not
+    (a textured wall of the heap's brightness, a cast shadow joined to a dark flank): then its
+    line is no straighter than the cue's."""
+    fits = [_fit(path, u[sel], v[sel], label) for v in vs]
+    rms = [_line_rms(f[2], f[1]) for f in fits]
+    return fits[1] if len(fits) > 1 and rms[1] < LUM_EDGE_STRAIGHTER * rms[0] else fits[0]
+
+
+#: a flank's luminance-refined edge replaces the cue's when the RMS of its line fit is below
+#: this share of the cue's (_straighter)
+LUM_EDGE_STRAIGHTER = 0.8
 
 
 def _line_rms(pts, line):
@@ -610,32 +653,36 @@ def _beam_bar(path, gray, threshold, tried):
     return beam.coords[:, 0].astype(float), beam.coords[:, 1].astype(float)
 
 
-def _measure_furrow(path, scale_length_mm, datum_mm, degree, threshold, keep_stages, tried: Tried):
-    """Module docstring.  The beam's axis is first the straight line through its pixels'
-    column means, then turned to the straighter of its two long edges (a shadow merged into
-    one side of the bar tilts the column means, not the other edge); the photo is resampled
-    along it (bilinear) so that u runs along the beam and v down, square to it (the roll
-    correction); the beam's ends and edges are the strongest steps of
-    the luminance along and across it (sub-pixel), so its length and lower edge do not depend
-    on a threshold; below it, every column of the resampled strip is split into board above
-    and soil below at the row that best separates the two colours (smoothed L*a*b*: the board
-    just above the beam, the soil at the frame's bottom), refined to where the colour crosses
-    half-way; the profile is fitted with the polynomial after discarding boundary points more
-    than 4 robust SDs (at least 1 mm) off a first fit."""
-    from soilcal.imaging.manifest import _is_number, check_degree
+@dataclass
+class _Beam:
+    """The profile-meter beam in a photo: a point ``o`` on its axis and the unit vectors ``ux``
+    along it and ``vx`` square to it, pointing down the image, each as (col, row); in those
+    axes (px) its long edges ``top`` and ``low``, its ends ``left`` and ``right``, and its
+    thickness ``thick``."""
 
-    if not _is_number(scale_length_mm) or scale_length_mm <= 0:
-        raise InputError(path, "scale_length_mm", "a positive length of the scale reference in mm", scale_length_mm)
-    if not _is_number(datum_mm):
-        raise InputError(path, "beam_datum_mm", "a number (mm)", datum_mm)
-    check_degree(path, "degree", degree)
-    if threshold not in ("otsu", "adaptive"):
-        raise InputError(path, "threshold", "'otsu' or 'adaptive'", threshold)
-    rgb = read_photo(path)
-    gray = _gray(rgb)
-    tried.rgb, tried.gray = rgb, gray
-    h, w = gray.shape
-    br, bc = _beam_bar(path, gray, threshold, tried)
+    o: np.ndarray
+    ux: np.ndarray
+    vx: np.ndarray
+    top: float
+    low: float
+    thick: float
+    left: float = float("nan")
+    right: float = float("nan")
+
+    def sample(self, img, u, v):
+        """``img`` resampled (bilinear) at the points ``u`` along and ``v`` across the beam:
+        rows v, columns u."""
+        cc = self.o[0] + u[None, :] * self.ux[0] + v[:, None] * self.vx[0]
+        rr = self.o[1] + u[None, :] * self.ux[1] + v[:, None] * self.vx[1]
+        return ndi.map_coordinates(img, [rr, cc], order=1, mode="nearest")
+
+
+def _beam_axis(path, gray, br, bc) -> tuple[_Beam, float]:
+    """The beam's axis and long edges from its pixels (rows ``br``, columns ``bc``): first the
+    straight line through their column means, then turned to the straighter of its two long
+    edges (a shadow merged into one side of the bar tilts the column means, not the other
+    edge); the edges are the strongest steps of the luminance across the beam (sub-pixel, mean
+    over its middle 80 %).  Returns the beam and the axis's slope in the image."""
     cols = np.unique(bc)
     rows = np.array([br[bc == c].mean() for c in cols])
     slope, icpt = np.polyfit(cols, rows, 1)
@@ -646,50 +693,47 @@ def _measure_furrow(path, scale_length_mm, datum_mm, degree, threshold, keep_sta
     u_mid = np.arange(-0.8 * half_len, 0.8 * half_len + 1)
     v_x = np.arange(-2.5 * thick - 4, 2.5 * thick + 5)
     i0 = int(np.searchsorted(v_x, 0.0))
-
-    def sample(img, u, v):
-        cc = o[0] + u[None, :] * ux[0] + v[:, None] * vx[0]
-        rr = o[1] + u[None, :] * ux[1] + v[:, None] * vx[1]
-        return ndi.map_coordinates(img, [rr, cc], order=1, mode="nearest")
-
     for refine in (True, False):
         n = np.hypot(1.0, slope)
-        ux = np.array([1.0, slope]) / n  # (col, row) along the beam
-        vx = np.array([-slope, 1.0]) / n  # (col, row) square to it, pointing down the image
-        # the beam's long edges: strongest steps across it, mean over its middle 80 %
-        cut = sample(gray, u_mid, v_x)
+        beam = _Beam(o, np.array([1.0, slope]) / n, np.array([-slope, 1.0]) / n, np.nan, np.nan, thick)
+        cut = beam.sample(gray, u_mid, v_x)
         across = cut.mean(axis=1)
-        top_edge = _edge_peak(across, 0, i0 + 1, -1) + v_x[0]
-        low_edge = _edge_peak(across, i0, len(v_x), +1) + v_x[0]
-        if not (np.isfinite(top_edge) and np.isfinite(low_edge)) or low_edge - top_edge < 2:
+        beam.top = _edge_peak(across, 0, i0 + 1, -1) + v_x[0]
+        beam.low = _edge_peak(across, i0, len(v_x), +1) + v_x[0]
+        if not (np.isfinite(beam.top) and np.isfinite(beam.low)) or beam.low - beam.top < 2:
             raise InputError(path, "image", "a profile-meter beam with two clear long edges", "none found")
         if not refine:
             break
-        # the direction from the straighter of the two edges, column by column (a shadow
-        # merged into one side of the bar tilts the pixels' column means, not the other edge)
+        # the direction from the straighter of the two edges, column by column
         fits = []
-        for e, sign in ((top_edge, -1), (low_edge, +1)):
+        for e, sign in ((beam.top, -1), (beam.low, +1)):
             j = int(round(e - v_x[0]))
             ve = v_x[0] + np.array([_edge_peak(cut[:, i], j - 4, j + 5, sign) for i in range(cut.shape[1])])
             cf = np.polyfit(u_mid, ve, 1)
             fits.append((float(np.std(ve - np.polyval(cf, u_mid))), cf[0]))
         beta = min(fits)[1]
-        ang = np.arctan(slope) + np.arctan(beta)
-        slope = float(np.tan(ang))
-    roll = -float(np.degrees(np.arctan(slope)))
-    core = np.linspace(top_edge + 0.25 * (low_edge - top_edge), low_edge - 0.25 * (low_edge - top_edge), 5)
-    # the beam's extent: from its middle outwards, as long as its core is darker than the board
-    # just above it by at least half the beam's own contrast (a bar found only in part, where
-    # the board is darker or a grid crosses it, is followed to its real ends); each end is then
-    # the strongest step within 2 thicknesses + 10 px of where that run stops
+        slope = float(np.tan(np.arctan(slope) + np.arctan(beta)))
+    return beam, slope
+
+
+def _beam_ends(path, gray, beam: _Beam, br, bc) -> None:
+    """Set the beam's ends: from its middle outwards, as long as its core is darker than the
+    board just above it by at least half the beam's own contrast (a bar found only in part,
+    where the board is darker or a grid crosses it, is followed to its real ends); each end is
+    then the strongest step of the luminance along the beam within 2 thicknesses + 10 px of
+    where that run stops (sub-pixel)."""
+    h, w = gray.shape
+    o, ux = beam.o, beam.ux
+    top, low = beam.top, beam.low
+    core = np.linspace(top + 0.25 * (low - top), low - 0.25 * (low - top), 5)
     ub = (bc - o[0]) * ux[0] + (br - o[1]) * ux[1]
     lim = []
     for k_, n_ in ((0, w), (1, h)):  # u where the axis stays in the frame
         if abs(ux[k_]) > 1e-9:
             lim.append(sorted(((0 - o[k_]) / ux[k_], (n_ - 1 - o[k_]) / ux[k_])))
     u_x = np.arange(np.ceil(max(l_[0] for l_ in lim)), np.floor(min(l_[1] for l_ in lim)) + 1)
-    along = sample(gray, u_x, core).mean(axis=0)
-    above = np.median(sample(gray, u_x, np.arange(top_edge - 12, top_edge - 3)), axis=0)
+    along = beam.sample(gray, u_x, core).mean(axis=0)
+    above = np.median(beam.sample(gray, u_x, np.arange(top - 12, top - 3)), axis=0)
     contrast = ndi.uniform_filter1d((above - along) / np.maximum(above, 1e-3), 5)
     mid_ = (u_x >= np.percentile(ub, 20)) & (u_x <= np.percentile(ub, 80))
     inside = contrast > 0.5 * np.median(contrast[mid_])
@@ -697,24 +741,35 @@ def _measure_furrow(path, scale_length_mm, datum_mm, degree, threshold, keep_sta
     run = ndi.label(ndi.binary_closing(inside, np.ones(5)))[0]
     lab_mid = run[j_mid] if run[j_mid] else run[np.nonzero(run)[0][np.argmin(np.abs(np.nonzero(run)[0] - j_mid))]]
     jj = np.nonzero(run == lab_mid)[0]
-    win = int(2 * thick + 10)
-    left = _edge_peak(along, jj[0] - win, jj[0] + win, -1) + u_x[0]
-    right = _edge_peak(along, jj[-1] - win, jj[-1] + win + 1, +1) + u_x[0]
-    length_px = right - left
+    win = int(2 * beam.thick + 10)
+    beam.left = _edge_peak(along, jj[0] - win, jj[0] + win, -1) + u_x[0]
+    beam.right = _edge_peak(along, jj[-1] - win, jj[-1] + win + 1, +1) + u_x[0]
+    length_px = beam.right - beam.left
     if not np.isfinite(length_px) or length_px < BEAM_MIN_LENGTH * w:
         raise InputError(path, "image", "a profile-meter beam with two clear ends", "none found")
-    s = length_px / scale_length_mm
-    u_c = 0.5 * (left + right)
+
+
+def _soil_boundary(path, rgb, beam: _Beam):
+    """The board-to-soil boundary below the beam, per column of the strip under its span:
+    returns (u, v, z_row, split) with u the columns along the beam, v the strip's rows across
+    it, z_row the boundary's row in v's units (sub-pixel; NaN where a column has no clear step)
+    and split the row index of each column's board/soil split.
+
+    Each column is split into board above and soil below at the row that best separates the
+    two colours (smoothed L*a*b*, lightness at half weight: the board just above the beam, the
+    soil at the frame's bottom), then refined to where the photo's own values cross half-way
+    between the board just above and the soil just below."""
+    h = rgb.shape[0]
     # the strip below the beam, as far down as every one of its columns stays in the frame
-    u = np.arange(np.ceil(left) + 1, np.floor(right))
-    ends = [o + ux * uu for uu in (u[0], u[-1])]
-    v_max = min((h - 1 - e[1]) / vx[1] for e in ends) - 1
-    v0 = top_edge - FURROW_SEED_ROWS - 4
-    if v_max - low_edge < 3 * FURROW_SEED_ROWS:
+    u = np.arange(np.ceil(beam.left) + 1, np.floor(beam.right))
+    ends = [beam.o + beam.ux * uu for uu in (u[0], u[-1])]
+    v_max = min((h - 1 - e[1]) / beam.vx[1] for e in ends) - 1
+    v0 = beam.top - FURROW_SEED_ROWS - 4
+    if v_max - beam.low < 3 * FURROW_SEED_ROWS:
         raise InputError(path, "image", "soil below the profile-meter beam", "the beam is at the frame's bottom")
     v = np.arange(v0, v_max)
     lab_img = color.rgb2lab(filters.gaussian(rgb, 1.5, channel_axis=-1))
-    strip = np.stack([sample(lab_img[..., k], u, v) for k in range(3)], axis=-1)
+    strip = np.stack([beam.sample(lab_img[..., k], u, v) for k in range(3)], axis=-1)
     board = np.median(strip[:FURROW_SEED_ROWS].reshape(-1, 3), axis=0)
     soil_c = np.median(strip[-FURROW_SEED_ROWS:].reshape(-1, 3), axis=0)
     if np.linalg.norm(board - soil_c) < 5.0:  # Delta E below 5: no visible difference
@@ -725,7 +780,7 @@ def _measure_furrow(path, scale_length_mm, datum_mm, degree, threshold, keep_sta
     d_b = np.linalg.norm((strip - board) * wl, axis=-1)
     d_s = np.linalg.norm((strip - soil_c) * wl, axis=-1)
     score = (d_b - d_s) / (d_b + d_s + 1e-9)  # -1 board, +1 soil
-    below = v > low_edge + 1
+    below = v > beam.low + 1
     sc = np.where(below[:, None], score, -1.0)  # nothing on or above the beam is soil
     # the row k splitting each column into board above and soil below with the least disagreement
     cost_board = np.cumsum(np.maximum(sc, 0), axis=0)  # soil-like rows labelled board
@@ -735,7 +790,7 @@ def _measure_furrow(path, scale_length_mm, datum_mm, degree, threshold, keep_sta
     # the edge to a fraction of a pixel: where the photo's own values (linear in the light the
     # pixel saw, unlike L*a*b*) cross half-way between the board just above and the soil just
     # below, along the board-to-soil colour direction
-    srgb = np.stack([sample(rgb[..., q], u, v) for q in range(3)], axis=-1)
+    srgb = np.stack([beam.sample(rgb[..., q], u, v) for q in range(3)], axis=-1)
     dirn = np.median(srgb[-FURROW_SEED_ROWS:].reshape(-1, 3), axis=0) - np.median(
         srgb[:FURROW_SEED_ROWS].reshape(-1, 3), axis=0)
     proj = srgb @ (dirn / max(float(dirn @ dirn), 1e-12))
@@ -753,18 +808,54 @@ def _measure_furrow(path, scale_length_mm, datum_mm, degree, threshold, keep_sta
         if cross.size:
             c0 = cross[np.argmin(np.abs(cross - 6))]
             z_row[j] = v[kk - 6 + c0] + (mid - seg[c0]) / (seg[c0 + 1] - seg[c0])
-    ok = np.isfinite(z_row) & (k > 0)
-    if ok.sum() < 0.5 * len(u):
-        raise InputError(path, "image", "a soil boundary below the beam in most columns of its span",
-                         f"{int(ok.sum())} of {len(u)} columns")
-    x = (u[ok] - u_c) / s
-    z = datum_mm - (z_row[ok] - low_edge) / s
+    return u, v, z_row, k
+
+
+def _profile_fit(x, z, degree):
+    """The profile polynomial of ``degree`` through (x, z), refitted twice without the points
+    more than 4 robust SDs (at least 1 mm) off the fit before; returns (poly, kept mask)."""
     poly = np.polynomial.Polynomial.fit(x, z, degree)
     for _ in range(2):
         res = z - poly(x)
         mad = 1.4826 * np.median(np.abs(res - np.median(res)))
         keep = np.abs(res) <= max(4 * mad, 1.0)
         poly = np.polynomial.Polynomial.fit(x[keep], z[keep], degree)
+    return poly, keep
+
+
+def _measure_furrow(path, scale_length_mm, datum_mm, degree, threshold, keep_stages, tried: Tried):
+    """Module docstring.  The beam (:func:`_beam_bar`), its axis and long edges
+    (:func:`_beam_axis`; the photo is resampled along it, so that u runs along the beam and v
+    down, square to it: the roll correction) and its ends (:func:`_beam_ends`) give the scale
+    and the datum without a threshold; below it the soil's boundary column by column
+    (:func:`_soil_boundary`), fitted with the polynomial (:func:`_profile_fit`)."""
+    from soilcal.imaging.manifest import _is_number, check_degree
+
+    if not _is_number(scale_length_mm) or scale_length_mm <= 0:
+        raise InputError(path, "scale_length_mm", "a positive length of the scale reference in mm", scale_length_mm)
+    if not _is_number(datum_mm):
+        raise InputError(path, "beam_datum_mm", "a number (mm)", datum_mm)
+    check_degree(path, "degree", degree)
+    if threshold not in ("otsu", "adaptive"):
+        raise InputError(path, "threshold", "'otsu' or 'adaptive'", threshold)
+    rgb = read_photo(path)
+    gray = _gray(rgb)
+    tried.rgb, tried.gray = rgb, gray
+    h, w = gray.shape
+    br, bc = _beam_bar(path, gray, threshold, tried)
+    beam, slope = _beam_axis(path, gray, br, bc)
+    roll = -float(np.degrees(np.arctan(slope)))
+    _beam_ends(path, gray, beam, br, bc)
+    s = (beam.right - beam.left) / scale_length_mm
+    u_c = 0.5 * (beam.left + beam.right)
+    u, v, z_row, k = _soil_boundary(path, rgb, beam)
+    ok = np.isfinite(z_row) & (k > 0)
+    if ok.sum() < 0.5 * len(u):
+        raise InputError(path, "image", "a soil boundary below the beam in most columns of its span",
+                         f"{int(ok.sum())} of {len(u)} columns")
+    x = (u[ok] - u_c) / s
+    z = datum_mm - (z_row[ok] - beam.low) / s
+    poly, keep = _profile_fit(x, z, degree)
     x, z = x[keep], z[keep]
     a, b = -scale_length_mm / 2, scale_length_mm / 2
     P = poly.integ()
@@ -778,8 +869,8 @@ def _measure_furrow(path, scale_length_mm, datum_mm, degree, threshold, keep_sta
         from skimage.draw import polygon
 
         vb = z_row[ok][keep]
-        pts = [o + ux * a_ + vx * b_ for a_, b_ in zip(uu, vb)]
-        pts += [o + ux * uu[-1] + vx * v_max, o + ux * uu[0] + vx * v_max]
+        pts = [beam.o + beam.ux * a_ + beam.vx * b_ for a_, b_ in zip(uu, vb)]
+        pts += [beam.o + beam.ux * uu[-1] + beam.vx * v[-1], beam.o + beam.ux * uu[0] + beam.vx * v[-1]]
         pts = np.array(pts)
         rr_, cc_ = polygon(pts[:, 1], pts[:, 0], (h, w))
         soil_mask[rr_, cc_] = True
@@ -788,7 +879,7 @@ def _measure_furrow(path, scale_length_mm, datum_mm, degree, threshold, keep_sta
     if keep_stages:
         st = Stages(rgb, gray, soil_mask, None, [], [np.column_stack([uu, z_row[ok][keep]])])
         st.poly = poly
-        st.frame = (left, right, low_edge, s, datum_mm)
+        st.frame = (beam.left, beam.right, beam.low, s, datum_mm)
         st.reference = "beam axis"
     coverage = float(len(x) / max(1, len(u)))
     end_gap = float(max(x.min() - a, b - x.max(), 0.0))
