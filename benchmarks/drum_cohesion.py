@@ -47,10 +47,12 @@ FIELDS = ["utc", "commit", "base", "H", "seed", "levels", "conventions", "n_fram
 H_LEVELS = (0.1, 0.15, 0.2, 0.25, 0.3)
 PAPER_EFFECT = 7.3  # 003 Table 5: dynamic angle, H effect over 0.1 -> 0.3 J/m^2 (SS 160.02, 12 runs)
 BASES = ("pb-centre", "pb-centre C-low", "pb-centre C-high", "bbd-centre", "pb-centre lammps-JKR",
-         "pb-centre gap-JKR", "pb-centre paper-PSD")
+         "pb-centre gap-JKR", "pb-centre paper-PSD", "pb-centre stiff", "pb-centre paper-PSD stiff")
 #: the conventions a base changes from EDEM's (only the JKR terms)
 BASE_CONVENTIONS = {"pb-centre lammps-JKR": {"jkr_convention": "lammps"},
                     "pb-centre gap-JKR": {"jkr_approach": "gap"}}
+#: shear-modulus cap of the ``stiff`` bases [Pa]: ten times the quick preset's (base.py)
+STIFF_G = 5.0e6
 
 
 
@@ -87,7 +89,16 @@ def one(base, h, seed, rev):
     conv = BASE_CONVENTIONS.get(base)
     setup = dict(sim.setup, contact_conventions=conv) if conv else dict(sim.setup)
     preset = "quick"
-    if "paper-PSD" in base:
+    if base.endswith(" stiff"):
+        from soilcal.dem.scenarios.base import PRESET_DEFAULTS
+        from soilcal.dem.scenarios.drum import PRESET_TIMES
+
+        spin, trans = PRESET_TIMES["quick"]
+        preset = "paper" if "paper-PSD" in base else "quick"
+        setup.update(stiffness_scale=min(1.0, STIFF_G / params.soil_shear_modulus),
+                     dt_fraction=PRESET_DEFAULTS["quick"]["dt_fraction"], spin_time=spin,
+                     transient_time=trans)
+    elif "paper-PSD" in base:
         from soilcal.dem.scenarios.base import PRESET_DEFAULTS, stiffness_scale_for
 
         # its particle sizes with the quick modulus; half the quick step fraction: at the
