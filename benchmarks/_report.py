@@ -68,6 +68,53 @@ def corpus_rows(params, write, truth_row, measured_row, stem="photo", jobs=1):
     return rows, time.perf_counter() - t_all
 
 
+def corpus_header(script, argv, n, seed, wall):
+    """The first line of a photo-corpus page: machine, commit, time, command, photos, wall time."""
+    import platform
+    import time
+
+    return (f"Machine: {platform.machine()}, {os.cpu_count()} logical CPUs, Python {platform.python_version()}; "
+            f"commit {commit()}, {time.strftime('%Y-%m-%d %H:%M', time.gmtime())} UTC; "
+            f"`python benchmarks/{script} {' '.join(argv)}` ({n} photos, seed {seed}, {wall:.0f} s).")
+
+
+def percentile_text(a, p, digits):
+    """The ``p``-th percentile of ``a`` with ``digits`` decimals, "" for an empty array."""
+    import numpy as np
+
+    return f"{np.percentile(a, p):.{digits}f}" if len(a) else ""
+
+
+def confidence_table(rows, key, tight, loose, pct, digits, header):
+    """Markdown table of a photo-corpus run's accuracy (|``key``| of each measured row) for all
+    measured photos and by confidence: count, share of all photos, shares within ``tight`` and
+    ``loose``, count above ``loose``, median, ``pct``-th percentile and largest error;
+    ``header`` the table's first line."""
+    import numpy as np
+
+    n = len(rows)
+    meas = [r for r in rows if r.get(key, "") != ""]
+    table = [header, "|---|---|---|---|---|---|---|---|---|"]
+    for label, sel in (("measured", meas), ("measured, confidence ok", [r for r in meas if r["confidence"] == "ok"]),
+                       ("measured, confidence low", [r for r in meas if r["confidence"] == "low"])):
+        e = np.array([abs(r[key]) for r in sel])
+        table.append(f"| {label} | {len(sel)} | {len(sel) / n:.1%} | {np.mean(e <= tight) if e.size else 0:.1%} | "
+                     f"{np.mean(e <= loose) if e.size else 0:.1%} | {int(np.sum(e > loose))} | "
+                     f"{percentile_text(e, 50, digits)} | {percentile_text(e, pct, digits)} | "
+                     f"{percentile_text(e, 100, digits)} |")
+    return table
+
+
+def refusal_line(rows, n_measured):
+    """"Refused: k of n (share): <count> x <reason>; ..." of a photo-corpus run."""
+    from collections import Counter
+
+    n = len(rows)
+    refusals = Counter(r["refusal"] for r in rows if r.get("refusal"))
+    return (f"Refused: {n - n_measured} of {n} ({(n - n_measured) / n:.1%}): "
+            + ("; ".join(f"{c} x {m}" for m, c in refusals.most_common()) or "none") + ".")
+
+
 def seed_list(text: str) -> list[int]:
     """Seeds from a command-line list: ``0-5``, ``0,2,4`` or both (``0-2,7``)."""
     out = []

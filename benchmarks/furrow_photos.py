@@ -15,15 +15,12 @@ measured and within 1 and 2 % of the true area; notes below its marker are kept)
 
 from __future__ import annotations
 
-import os
-import platform
 import sys
-import time
-from collections import Counter
 from pathlib import Path
 
 import numpy as np
-from _report import commit, corpus_args, corpus_rows, write_page, write_rows
+from _report import (confidence_table, corpus_args, corpus_header, corpus_rows,
+                     percentile_text, refusal_line, write_page, write_rows)
 
 FIELDS = ["photo", "span_mm", "area_mm2", "measured_mm2", "error_pct", "scale_error_pct", "roll_error_deg",
           "boundary_points", "confidence", "coverage", "end_gap_mm", "fit_rms_mm", "refusal", "seconds"]
@@ -60,25 +57,12 @@ def main(argv=None):
     n = len(rows)
     meas = [r for r in rows if r.get("error_pct", "") != ""]
     scale = np.array([abs(r["scale_error_pct"]) for r in meas])
-
-    def q(a, p):
-        return f"{np.percentile(a, p):.2f}" if a.size else ""
-
-    table = ["| photos | n | share | within 1 % | within 2 % | above 2 % | median abs error % | p95 | max |",
-             "|---|---|---|---|---|---|---|---|---|"]
-    for label, sel in (("measured", meas), ("measured, confidence ok", [r for r in meas if r["confidence"] == "ok"]),
-                       ("measured, confidence low", [r for r in meas if r["confidence"] == "low"])):
-        e = np.array([abs(r["error_pct"]) for r in sel])
-        table.append(f"| {label} | {len(sel)} | {len(sel) / n:.1%} | {np.mean(e <= 1) if e.size else 0:.1%} | "
-                     f"{np.mean(e <= 2) if e.size else 0:.1%} | {int(np.sum(e > 2))} | {q(e, 50)} | {q(e, 95)} | "
-                     f"{q(e, 100)} |")
-    refusals = Counter(r["refusal"] for r in rows if r.get("refusal"))
+    table = confidence_table(rows, "error_pct", 1, 2, 95, 2,
+                             "| photos | n | share | within 1 % | within 2 % | above 2 % | median abs error % "
+                             "| p95 | max |")
     md = ["# Furrow-photo stress benchmark",
           "",
-          f"Machine: {platform.machine()}, {os.cpu_count()} logical CPUs, Python {platform.python_version()}; "
-          f"commit {commit()}, {time.strftime('%Y-%m-%d %H:%M', time.gmtime())} UTC; "
-          f"`python benchmarks/furrow_photos.py {' '.join(sys.argv[1:])}` ({n} photos, seed {args.seed}, "
-          f"{wall:.0f} s).",
+          corpus_header("furrow_photos.py", sys.argv[1:] if argv is None else argv, n, args.seed, wall),
           "",
           "Each photo measured with default arguments (`soilcal.imaging.measure.measure_furrow`, degree 9, "
           "the meter's span and datum as a user's manifest gives them); error = measured chord area over the "
@@ -88,10 +72,10 @@ def main(argv=None):
           "",
           *table,
           "",
-          f"Scale (px per mm from the beam's ends): median abs error {q(scale, 50)} %, max {q(scale, 100)} %.",
+          f"Scale (px per mm from the beam's ends): median abs error {percentile_text(scale, 50, 2)} %, "
+          f"max {percentile_text(scale, 100, 2)} %.",
           "",
-          f"Refused: {n - len(meas)} of {n} ({(n - len(meas)) / n:.1%}): "
-          + ("; ".join(f"{c} x {m}" for m, c in refusals.most_common()) or "none") + ".",
+          refusal_line(rows, len(meas)),
           ""]
     write_page(out / "furrow_photos.md", md)
     print("\n".join(table))

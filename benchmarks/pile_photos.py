@@ -14,15 +14,12 @@ marker are kept).
 
 from __future__ import annotations
 
-import os
-import platform
 import sys
-import time
 from collections import Counter
 from pathlib import Path
 
-import numpy as np
-from _report import commit, corpus_args, corpus_rows, write_page, write_rows
+from _report import (confidence_table, corpus_args, corpus_header, corpus_rows, refusal_line,
+                     write_page, write_rows)
 
 HERE = Path(__file__).resolve().parent
 FIELDS = ["photo", "truth_deg", "left_truth_deg", "right_truth_deg", "roll_deg", "measured_deg", "error_deg",
@@ -64,31 +61,16 @@ def main(argv=None):
 
     n = len(rows)
     meas = [r for r in rows if r.get("error_deg", "") != ""]
-    ok = [r for r in meas if r["confidence"] == "ok"]
-    err = np.array([abs(r["error_deg"]) for r in meas])
-    err_ok = np.array([abs(r["error_deg"]) for r in ok])
-
-    def q(a, p):
-        return f"{np.percentile(a, p):.3f}" if a.size else ""
-
-    table = ["| photos | n | share | within 0.3 deg | within 1 deg | above 1 deg | median abs error | p90 | max |",
-             "|---|---|---|---|---|---|---|---|---|"]
-    for label, sel, e in (("measured", meas, err), ("measured, confidence ok", ok, err_ok),
-                          ("measured, confidence low", [r for r in meas if r["confidence"] == "low"],
-                           np.array([abs(r["error_deg"]) for r in meas if r["confidence"] == "low"]))):
-        table.append(f"| {label} | {len(sel)} | {len(sel) / n:.1%} | {np.mean(e <= 0.3) if e.size else 0:.1%} | "
-                     f"{np.mean(e <= 1.0) if e.size else 0:.1%} | {int(np.sum(e > 1.0))} | {q(e, 50)} | {q(e, 90)} | "
-                     f"{q(e, 100)} |")
-    refusals = Counter(r["refusal"] for r in rows if r.get("refusal"))
+    table = confidence_table(rows, "error_deg", 0.3, 1.0, 90, 3,
+                             "| photos | n | share | within 0.3 deg | within 1 deg | above 1 deg | median abs error "
+                             "| p90 | max |")
     cues = Counter(r["cue"] for r in meas)
     checked = [r for r in meas if r["cue_check"]]
     disagree = [r for r in checked if r["cue_check_deg"] > CUE_AGREEMENT_DEG]
     outvoted = [r for r in checked if r["cue_outvoted"]]
     md = ["# Heap-photo stress benchmark",
           "",
-          f"Machine: {platform.machine()}, {os.cpu_count()} logical CPUs, Python {platform.python_version()}; "
-          f"commit {commit()}, {time.strftime('%Y-%m-%d %H:%M', time.gmtime())} UTC; "
-          f"`python benchmarks/pile_photos.py {' '.join(sys.argv[1:])}` ({n} photos, seed {args.seed}, {wall:.0f} s).",
+          corpus_header("pile_photos.py", sys.argv[1:] if argv is None else argv, n, args.seed, wall),
           "",
           "Each photo measured with default arguments (`soilcal.imaging.measure.measure_pile`); error = measured "
           "mean flank angle minus the renderer's.  Targets: at least 98 % measured; of those 95 % within 0.3 deg "
@@ -96,8 +78,7 @@ def main(argv=None):
           "",
           *table,
           "",
-          f"Refused: {n - len(meas)} of {n} ({(n - len(meas)) / n:.1%}): "
-          + ("; ".join(f"{c} x {m}" for m, c in refusals.most_common()) or "none") + ".",
+          refusal_line(rows, len(meas)),
           "",
           "Cues used: " + ", ".join(f"{k} {v}" for k, v in cues.most_common()) + ".",
           "",

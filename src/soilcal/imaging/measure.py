@@ -35,6 +35,7 @@ from skimage import color, feature, filters, measure, morphology, transform
 from soilcal.errors import InputError
 from soilcal.imaging.io import read_photo
 from soilcal.imaging.refusal import Tried, explained
+from soilcal.imaging.scenes import furrow_chord_area
 
 BAND = (0.20, 0.75)
 
@@ -202,20 +203,22 @@ def _level(mask, slope, intercept):
 
 
 def _top_edge(lev, c0, c1, glev=None, llev=None):
-    """Subpixel row of the object's top edge in columns c0..c1.
+    """Subpixel row of the object's top edge in columns c0..c1: (columns, rows), and with
+    ``llev`` the rows refined in luminance as a third array.
 
     The first 0.5 crossing of the levelled mask gives the edge to a pixel; with the levelled
     gray image ``glev`` it is refined to the row where the gray level crosses the local
     mid-level (median of 6 px of background above and of object below), which removes the
     dependence on a global threshold.  With the levelled luminance ``llev`` as well (a cue
-    other than luminance segmented the heap), a column whose luminance steps across the edge
-    by more than :data:`LUM_EDGE_SNR` times its noise there (and by at least 0.03) is refined
-    in luminance instead: a camera records luminance at full resolution and colour at half or
-    less (Bayer demosaicing, JPEG 4:2:0 subsampling in 16 px blocks), so a colour cue's edge
-    is blurred and blocky where the luminance edge is sharp (:func:`_straighter` decides per
-    flank which of the two edges is fitted).
+    other than luminance segmented the heap), the third array has, in every column whose
+    luminance steps across the edge by more than :data:`LUM_EDGE_SNR` times its noise there
+    (and by at least 0.03), the row refined in luminance instead, else the cue's row: a camera
+    records luminance at full resolution and colour at half or less (Bayer demosaicing, JPEG
+    4:2:0 subsampling in 16 px blocks), so a colour cue's edge is blurred and blocky where the
+    luminance edge is sharp (:func:`_straighter` decides per flank which of the two edges is
+    fitted).
     """
-    cols, rows = [], []
+    cols, rows, rows_l = [], [], []
     n = lev.shape[0]
     for c in range(int(c0), int(c1)):
         col = lev[:, c]
@@ -225,21 +228,26 @@ def _top_edge(lev, c0, c1, glev=None, llev=None):
         i = idx[0]
         a, b = col[i - 1], col[i]
         r = i - 1 + (0.5 - a) / (b - a)
+        rl = r
         if glev is not None and 12 <= i < n - 12:
             g = glev[:, c]
             bg, fg = np.median(g[i - 12:i - 6]), np.median(g[i + 6:i + 12])
+            if abs(bg - fg) > 0.03:
+                r = _mid_crossing(g[i - 6:i + 6], 0.5 * (bg + fg), np.sign(bg - fg), i - 6, r)
+            rl = r
             if llev is not None:
                 gl = llev[:, c]
                 above, below = gl[i - 12:i - 6], gl[i + 6:i + 12]
                 bl, fl = np.median(above), np.median(below)
                 noise = 1.4826 * np.median(np.abs(np.concatenate([above - bl, below - fl])))
                 if abs(bl - fl) > max(0.03, LUM_EDGE_SNR * noise):
-                    g, bg, fg = gl, bl, fl
-            if abs(bg - fg) > 0.03:
-                r = _mid_crossing(g[i - 6:i + 6], 0.5 * (bg + fg), np.sign(bg - fg), i - 6, r)
+                    rl = _mid_crossing(gl[i - 6:i + 6], 0.5 * (bl + fl), np.sign(bl - fl), i - 6,
+                                       i - 1 + (0.5 - a) / (b - a))
         rows.append(r)
+        rows_l.append(rl)
         cols.append(c)
-    return np.asarray(cols, float), np.asarray(rows, float)
+    out = np.asarray(cols, float), np.asarray(rows, float)
+    return out + (np.asarray(rows_l, float),) if llev is not None else out
 
 
 #: a luminance step across a heap's edge this many times its noise (robust SD of 6 px each
@@ -247,13 +255,22 @@ def _top_edge(lev, c0, c1, glev=None, llev=None):
 LUM_EDGE_SNR = 4.0
 
 
-def _mid_crossing(seg, mid, sgn, start, default):
-    """Row (sub-pixel, ``start`` + index in ``seg``) where ``seg`` first crosses ``mid`` going
-    from the side of sign ``sgn`` to the other; ``default`` when it does not."""
-    k = np.nonzero(sgn * (seg - mid) <= 0)[0]
-    if not k.size or k[0] == 0:
-        return default
-    j = k[0]
+def _mid_crossing(seg, mid, sgn, start, default, near=None):
+    """Position (sub-pixel, ``start`` + index in ``seg``) where ``seg`` crosses ``mid`` from the
+    side of sign ``sgn`` to the other: the first sample on the far side, linearly interpolated
+    from the one before (none when ``seg`` starts there), or with ``near`` (an index) the
+    crossing nearest to it; ``default`` when there is none."""
+    far = sgn * (seg - mid) <= 0
+    if near is None:
+        k = np.nonzero(far)[0]
+        if not k.size or k[0] == 0:
+            return default
+        j = k[0]
+    else:
+        k = np.nonzero(~far[:-1] & far[1:])[0] + 1
+        if not k.size:
+            return default
+        j = k[np.argmin(np.abs(k - 1 - near))]
     return start + j - 1 + (seg[j - 1] - mid) / (seg[j - 1] - seg[j])
 
 
@@ -442,13 +459,13 @@ def _pile_with(path, rgb, gray, cue, polarity, band, slope, intercept, threshold
     glev = _level(gray, slope, intercept)[0]
     llev = _level(lum, slope, intercept)[0] if lum is not None and cue != "gray" else None
     cols = np.nonzero(lev.max(axis=0) >= 0.5)[0]
-    cu, rv = _top_edge(lev, cols.min(), cols.max() + 1, glev)
+    cu, rv, *rl = _top_edge(lev, cols.min(), cols.max() + 1, glev, llev)
     v = prow - rv
     hmax = np.percentile(v, 99.5)
     apex = np.median(cu[v > 0.97 * hmax])
     band = (v > BAND[0] * hmax) & (v < BAND[1] * hmax)
     lsel, rsel = band & (cu < apex), band & (cu > apex)
-    vs = [v] if llev is None else [v, prow - _top_edge(lev, cols.min(), cols.max() + 1, glev, llev)[1]]
+    vs = [v] + [prow - r for r in rl]
     left, lline, lp = _straighter(path, cu, vs, lsel, "left flank")
     right, rline, rp = _straighter(path, cu, vs, rsel, "right flank")
     ang = np.array([left, right])
@@ -802,12 +819,7 @@ def _soil_boundary(path, rgb, beam: _Beam):
         bg, fg = np.median(t[kk - 12:kk - 4]), np.median(t[kk + 4:kk + 12])
         if fg - bg < 0.2:  # no clear step at the split: no point here
             continue
-        mid = 0.5 * (bg + fg)
-        seg = t[kk - 6:kk + 6]
-        cross = np.nonzero((seg[:-1] < mid) & (seg[1:] >= mid))[0]
-        if cross.size:
-            c0 = cross[np.argmin(np.abs(cross - 6))]
-            z_row[j] = v[kk - 6 + c0] + (mid - seg[c0]) / (seg[c0 + 1] - seg[c0])
+        z_row[j] = _mid_crossing(t[kk - 6:kk + 6], 0.5 * (bg + fg), -1.0, v[kk - 6], np.nan, near=6)
     return u, v, z_row, k
 
 
@@ -858,10 +870,8 @@ def _measure_furrow(path, scale_length_mm, datum_mm, degree, threshold, keep_sta
     poly, keep = _profile_fit(x, z, degree)
     x, z = x[keep], z[keep]
     a, b = -scale_length_mm / 2, scale_length_mm / 2
-    P = poly.integ()
-    za, zb = poly(a), poly(b)
-    area = 0.5 * (za + zb) * (b - a) - (P(b) - P(a))
     coeffs = poly.convert().coef[::-1].tolist()
+    area = furrow_chord_area(a, b, coeffs)
     # the soil found, in the photo's own pixels (diagnostics and figures)
     uu = u[ok][keep]
     soil_mask = np.zeros((h, w), bool)

@@ -512,9 +512,9 @@ def render_furrow(seed, coeffs, span_mm, beam_datum_mm=180.0, soil="yangtze-clay
     canvas[beam] = np.array(st.get("beam_rgb", [0.08, 0.08, 0.09]))
     img = _finish(rng, canvas, roll_deg, False, style={k: st[k] for k in ("blur_px", "exposure", "noise")
                                                         if k in st} or None)
-    p = np.poly1d(coeffs)
-    P = p.integ()
-    area = float(0.5 * (p(a) + p(b)) * (b - a) - (P(b) - P(a)))  # the chord's area above F on [a, b]
+    from soilcal.imaging.scenes import furrow_chord_area
+
+    area = furrow_chord_area(a, b, coeffs)  # the chord's area above F on [a, b]
     truth = {"kind": "furrow", "seed": int(seed), "roll_deg": float(roll_deg), "px_per_mm": s,
              "span_mm": [a, b], "beam_datum_mm": beam_datum_mm, "coeffs": list(coeffs),
              "area_mm2": area}

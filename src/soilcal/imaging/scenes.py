@@ -66,9 +66,11 @@ def furrow_profile(x_mm: np.ndarray) -> np.ndarray:
     return np.polyval(FURROW_F_COEFFS, np.asarray(x_mm, dtype=float))
 
 
-def furrow_chord_area(a: float = FURROW_SPAN_MM[0], b: float = FURROW_SPAN_MM[1]) -> float:
-    """Analytic area (mm^2) between the chord F(a)-F(b) and F(x) on [a, b]."""
-    p = np.poly1d(FURROW_F_COEFFS)
+def furrow_chord_area(a: float = FURROW_SPAN_MM[0], b: float = FURROW_SPAN_MM[1],
+                      coeffs=FURROW_F_COEFFS) -> float:
+    """Analytic area (mm^2) between the chord F(a)-F(b) and F(x) on [a, b]; F the polynomial
+    of ``coeffs`` (mm, highest power first; default the shipped furrow's)."""
+    p = np.poly1d(coeffs)
     P = p.integ()
     return float(0.5 * (p(a) + p(b)) * (b - a) - (P(b) - P(a)))
 
