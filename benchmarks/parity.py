@@ -17,6 +17,10 @@
    at the surface energies ``--gammas``, each seed's settled fill run three ways: LAMMPS,
    soilcal with LAMMPS's conventions, soilcal with EDEM's (the same work of adhesion and
    damping); ``--jobs`` runs at a time, one thread each.
+6. With ``--jkr-drum``: the rotating drum with JKR cohesion between the spheres
+   (:class:`soilcal.reference.cases.JkrDrumCase`: smooth walls without adhesion, no rolling
+   resistance) at the surface energies ``--drum-gammas``, the same three ways as the column,
+   the mean free-surface angle of its frames per run.
 
 Rows go to ``benchmarks/results/parity.csv`` (commit and time per row), the page to
 ``parity.md``.
@@ -24,6 +28,7 @@ Rows go to ``benchmarks/results/parity.csv`` (commit and time per row), the page
 Usage: python benchmarks/parity.py [--n 2000] [--seeds 0-4] [--mur 0.05,0.1,0.2]
        [--ranks 2] [--threads 2] [--skip-few] [--skip-pile] [--drum] [--drum-spin 2.0]
        [--lammps-few] [--column] [--column-n 1000] [--gammas 0.25,0.5,1.0] [--jobs 2]
+       [--jkr-drum] [--drum-gammas 0,0.5,1.0]
 """
 
 from __future__ import annotations
@@ -56,6 +61,9 @@ JKR_FEW_FIELDS = ["utc", "commit", "case", "conventions", "steps", "max_dx_m", "
 COLUMN_FIELDS = ["utc", "commit", "engine", "conventions", "n", "seed", "surface_energy",
                  "damping_eta", "dt", "steps", "wall_s", "n_on_plate", "angle_bins_deg",
                  "angle_surface_deg", "height_m", "fill_settled", "version"]
+JKR_DRUM_FIELDS = ["utc", "commit", "engine", "conventions", "n", "seed", "surface_energy",
+                   "damping_eta", "rpm", "spin", "transient", "frames", "dt", "steps", "wall_s",
+                   "angle_deg", "angle_frames_sd_deg", "fill_settled", "version"]
 #: LAMMPS's terms (contact.py) switched back to EDEM's one at a time in the JKR few-body table
 LAMMPS_TERMS = (("jkr_break", "displacement"), ("coulomb_force", "total"),
                 ("tangential_slip", "spring"), ("history_rotation", "project"),
@@ -197,6 +205,36 @@ def column_one(n, gamma, seed, engine, conventions, rev):
     return dict(row, **_fmt(ang))
 
 
+def jkr_drum_one(n, gamma, seed, engine, conventions, spin, rev):
+    """One run of the JKR drum from the fill of (n, gamma, seed): LAMMPS, or soilcal with the
+    named conventions; the mean free-surface angle of its frames."""
+    import numba
+
+    from soilcal.reference import cases as C
+    from soilcal.reference import lammps as LM
+    from soilcal.reference.deck import run_phases
+
+    numba.set_num_threads(1)
+    case = C.JkrDrumCase(n=n, seed=seed, surface_energy=gamma, spin=spin)
+    sim, phases, bounds, info = C.rotating_drum(case, "lammps")
+    model = case.contact_model()
+    row = dict(utc=datetime.now(timezone.utc).strftime("%Y-%m-%d %H:%M"), commit=rev, n=n,
+               seed=seed, surface_energy=gamma, damping_eta=case.damping_eta, rpm=case.rpm,
+               spin=spin, transient=case.transient, frames=info["frames"],
+               dt=f"{info['dt']:.4g}", steps=sum(s for s, _ in phases),
+               fill_settled=info["fill_settled"])
+    t0 = time.perf_counter()
+    if engine == "lammps":
+        res = LM.run(C.restart(sim, "lammps", model), phases, bounds, snapshots=True)
+        states = res["states"]
+        row.update(engine="lammps", conventions="lammps", version=res["version"])
+    else:
+        states = run_phases(C.restart(sim, conventions, model), phases, snapshots=True)
+        row.update(engine="soilcal", conventions=conventions, version="")
+    row["wall_s"] = f"{time.perf_counter() - t0:.1f}"
+    return dict(row, **_fmt(C.drum_angles(states, case)))
+
+
 def _fmt(ang):
     return {k: (f"{v:.3f}" if isinstance(v, float) else v) for k, v in ang.items()}
 
@@ -256,6 +294,8 @@ def main(argv=None):
     ap.add_argument("--column-n", type=int, default=1000)
     ap.add_argument("--gammas", default="0.25,0.5,1.0")
     ap.add_argument("--jobs", type=int, default=2)
+    ap.add_argument("--jkr-drum", action="store_true")
+    ap.add_argument("--drum-gammas", default="0,0.5,1.0")
     args = ap.parse_args(argv)
     from soilcal.reference import lammps as LM
     from soilcal.reference import liggghts as L
@@ -264,7 +304,7 @@ def main(argv=None):
         ok, why = L.available()
         if not ok:
             sys.exit(f"parity: {why}")
-    if args.lammps_few or args.column:
+    if args.lammps_few or args.column or args.jkr_drum:
         ok, why = LM.available()
         if not ok:
             sys.exit(f"parity: {why}")
@@ -277,6 +317,8 @@ def main(argv=None):
     jkr_path, column_path = OUT / "parity_jkr_few.csv", OUT / "parity_column.csv"
     jkr_rows = read_rows(jkr_path, JKR_FEW_FIELDS)
     column_rows = read_rows(column_path, COLUMN_FIELDS)
+    jkr_drum_path = OUT / "parity_jkr_drum.csv"
+    jkr_drum_rows = read_rows(jkr_drum_path, JKR_DRUM_FIELDS)
     if not args.skip_few:
         few_rows = [dict(stamp, **r) for r in few_body()]
         write_rows(few_path, few_rows, FEW_FIELDS)
@@ -308,11 +350,21 @@ def main(argv=None):
                        r["conventions"]), args.jobs,
             show=("engine", "conventions", "surface_energy", "seed", "angle_bins_deg",
                   "angle_surface_deg", "wall_s"))
+    if args.jkr_drum:
+        cases = [(args.drum_n, float(g), seed, engine, conv, args.drum_spin)
+                 for g in args.drum_gammas.split(",") for seed in seed_list(args.seeds)
+                 for engine, conv in (("lammps", "lammps"), ("soilcal", "lammps"),
+                                      ("soilcal", "edem"))]
+        jkr_drum_rows = run_cases(
+            jkr_drum_one, cases, stamp["commit"], jkr_drum_path, JKR_DRUM_FIELDS,
+            lambda r: (str(r["n"]), float(r["surface_energy"]), str(r["seed"]), r["engine"],
+                       r["conventions"], float(r["spin"])), args.jobs,
+            show=("engine", "conventions", "surface_energy", "seed", "angle_deg", "wall_s"))
     lines = ["# Parity with LIGGGHTS 3.8 and LAMMPS on identical cases", "",
              f"Machine: {os.uname().machine}, {os.cpu_count()} logical CPUs.  Last command: "
              f"`python benchmarks/parity.py {' '.join(argv or sys.argv[1:])}`.  Rows: "
              "`parity_few.csv`, `parity.csv`, `parity_drum.csv`, `parity_jkr_few.csv`, "
-             "`parity_column.csv`.", "",
+             "`parity_column.csv`, `parity_jkr_drum.csv`.", "",
              "## Few-body cases: largest difference after the run (soilcal with the "
              "`liggghts` conventions)", "",
              *runs_table(few_rows, ["case", "rolling", "steps", "travel_m", "max_dx_m",
@@ -331,7 +383,12 @@ def main(argv=None):
              "## Cohesive column against LAMMPS (JKR; same settled fill for every engine)", "",
              *summary(column_rows, ref_engine="lammps",
                       key=("surface_energy", "gamma [J/m^2]")), "", "Runs:", "",
-             *runs_table(column_rows, COLUMN_FIELDS)]
+             *runs_table(column_rows, COLUMN_FIELDS), "",
+             "## Rotating drum with JKR against LAMMPS (smooth walls without adhesion, no "
+             "rolling resistance; same settled fill for every engine; mean of the frames)", "",
+             *summary(jkr_drum_rows, ("angle_deg",), ("frame mean",), ref_engine="lammps",
+                      key=("surface_energy", "gamma [J/m^2]")), "", "Runs:", "",
+             *runs_table(jkr_drum_rows, JKR_DRUM_FIELDS)]
     write_page(OUT / "parity.md", lines)
 
 

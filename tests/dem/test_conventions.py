@@ -172,15 +172,17 @@ def test_tangential_history_after_one_step():
 
 def test_named_sets_and_single_entries():
     codes, w = model_codes(rolling="constant_torque")
-    assert list(codes[5:]) == [0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0] and w == 1.0
+    assert list(codes[5:]) == [0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0] and w == 1.0
     codes, w = model_codes(rolling="constant_torque", conventions="lammps")
-    assert list(codes[5:]) == [1, 1, 1, 0, 0, 1, 1, 1, 1, 1, 0] and w == 2.0
+    assert list(codes[5:]) == [1, 1, 1, 0, 0, 1, 1, 1, 1, 1, 0, 1] and w == 2.0
     codes, _ = model_codes(conventions="liggghts", rolling_force="total")
-    assert list(codes[5:]) == [1, 0, 1, 0, 1, 0, 0, 0, 0, 0, 0]
+    assert list(codes[5:]) == [1, 0, 1, 0, 1, 0, 0, 0, 0, 0, 0, 0]
     codes, _ = model_codes(conventions="lammps", jkr_break="displacement")
-    assert list(codes[10:]) == [0, 1, 1, 1, 1, 0]
+    assert list(codes[10:]) == [0, 1, 1, 1, 1, 0, 1]
     codes, _ = model_codes(jkr_approach="gap")
     assert codes[15] == 1
+    codes, _ = model_codes(conventions="lammps", wall_curvature="flat")
+    assert codes[16] == 0
     assert set(CONVENTIONS) == {"edem", "liggghts", "lammps"}
 
 
@@ -202,7 +204,7 @@ def test_setup_conventions_reach_the_engine():
     setup = dict(repose.setups()["cinnamon-soil"], n_particles=50,
                  contact_conventions={"conventions": "liggghts", "tangential_damping": "off"})
     sim, _ = make_simulation(DemParams(), setup, "quick", "t")
-    assert list(sim.codes[5:]) == [1, 1, 1, 1, 1, 0, 0, 0, 0, 0, 0]
+    assert list(sim.codes[5:]) == [1, 1, 1, 1, 1, 0, 0, 0, 0, 0, 0, 0]
     assert conventions_of(None)["conventions"] == "edem"
 
 

@@ -108,3 +108,25 @@ def test_wall_log_of_a_continued_run():
     weight = sim.p.m[0] * G
     assert np.allclose(log[:, 0, 2], -weight, rtol=1e-3)
     assert np.allclose(log[:, 0, :2], 0.0, atol=1e-6 * weight)
+
+
+@pytest.mark.parametrize("curvature", ["flat", "cylinder"])
+def test_inner_cylinder_curvature_enters_the_hertz_overlap(curvature):
+    """A sphere at rest at the bottom of a drum carries its weight with the Hertz overlap
+    delta = (3 m g / (4 E* sqrt(R*)))^(2/3): R* = r against the flat wall, and with
+    ``wall_curvature: cylinder`` R* = r R_w / (r + R_w), R_w = -2 R_drum (LAMMPS's region
+    cylinder), 10/9 r here, so the overlap is (9/10)^(1/3) of the flat one."""
+    r, rd = 1e-3, 5e-3
+    sim = Simulation(table(e=0.3, mu=0.5, E=1e7), dt_fraction=0.2,
+                     contact_model=dict(wall_curvature=curvature))
+    sim.add_particles([[0.0, 0.0, -rd + r]], r, "soil")
+    sim.add_cylinder((0, 0, 0), (1, 0, 0), rd, 0.01, "soil", inner=True)
+    sim.run(40000)
+    assert abs(sim.v[0, 2]) < 1e-7
+    delta = r - (rd - math.hypot(sim.x[0, 1], sim.x[0, 2]))
+    nu, e = 0.3, 1e7
+    estar = e / (2 * (1 - nu**2))
+    rstar = r if curvature == "flat" else r * (-2 * rd) / (r - 2 * rd)
+    m = 2600.0 * 4 / 3 * math.pi * r**3
+    expected = (3 * m * G / (4 * estar * math.sqrt(rstar))) ** (2 / 3)
+    assert delta == pytest.approx(expected, rel=1e-6)

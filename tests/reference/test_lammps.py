@@ -73,12 +73,74 @@ def test_laws_lammps_cannot_run_are_named(tmp_path, model, field):
     assert exc.value.field == field
 
 
-def test_walls_lammps_cannot_run_are_named(tmp_path):
+@pytest.mark.parametrize("add,field", [
+    (lambda s: s.add_cylinder((0, 0, 0), (0, 0, 1), 0.05, 0.05, "steel", inner=False),
+     "walls.cylinder0"),
+    (lambda s: s.add_cylinder((0, 0, 0), (1, 1, 0), 0.05, 0.05, "steel"), "walls.cylinder0"),
+    (lambda s: s.add_cone((0, 0, 0), (0, 0, 1), 0.05, 0.02, 0.0, 0.05, "steel"), "walls.cone0"),
+    (lambda s: s.add_cylinder((0, 0, 0), (0, 0, 1), 0.05, 0.05, "steel", centre=(0.01, 0, 0)),
+     "walls.cylinder0.centre"),
+])
+def test_walls_lammps_cannot_run_are_named(tmp_path, add, field):
     sim = Simulation(jkr_materials(), dt=1e-6)
     sim.add_particles([[0, 0, 0.01]], 1e-3, "soil")
-    sim.add_cylinder((0, 0, 0), (0, 0, 1), 0.05, 0.05, "steel")
-    with pytest.raises(InputError, match="walls.cylinder0"):
+    add(sim)
+    with pytest.raises(InputError) as exc:
         LM.write_case(sim, tmp_path, [(10, {})], BOUNDS)
+    assert exc.value.field == field
+
+
+def _drum_sim(conventions="lammps", adhesive=False):
+    from soilcal.reference.cases import add_smooth_drum
+
+    sim = Simulation(jkr_materials(drum=True), dt=1e-6, gravity=(0, 0, -9.81),
+                     contact_model=dict(cohesion="jkr", damping="viscous_radius",
+                                        damping_eta=JKR_ETA, jkr_convention="lammps",
+                                        conventions=conventions))
+    sim.add_particles([[0, 0.003, -0.003]], 1e-3, "soil")
+    add_smooth_drum(sim, 0.005, 0.006, "steel" if adhesive else "drum")
+    return sim
+
+
+def test_drum_deck_is_a_turning_cylinder_region(tmp_path):
+    """The drum is one cylinder region about y through its wall centre, closed at both ends,
+    turned by theta = theta_0 + omega (time - t_0), theta continuing from phase to phase; its
+    non-adhesive wall pair is a Hertz contact (soilcal's law of a pair with w = 0)."""
+    sim = _drum_sim()
+    w = {"drum": {"omega": (0.0, 2.0, 0.0)}}
+    info = LM.write_case(sim, tmp_path, [(1000, w), (500, {}), (200, {"drum": {"omega": (0, -1.0, 0)}})],
+                         BOUNDS)
+    deck = (tmp_path / "in.case").read_text().splitlines()
+    region = [ln for ln in deck if ln.startswith("region w0 ")]
+    assert region == ["region w0 cylinder y 0.0 0.0 0.005 0.0 0.006 side in units box "
+                      "rotate v_th0 0.0 0.003 0.0 0.0 1.0 0.0"]
+    fix = [ln.split() for ln in deck if ln.startswith("fix wall0_1 ")]
+    assert len(fix) == 1 and fix[0][3:6] == ["wall/gran/region", "granular", "hertz/material"]
+    assert fix[0][-2:] == ["region", "w0"]
+    theta = [ln for ln in deck if ln.startswith("variable th0 equal")]
+    # 1000 steps at 2 rad/s, then 500 at rest, then -1 rad/s from t = 1.5 ms
+    assert theta[1:] == ["variable th0 equal 0.0+2.0*(time-0.0)",
+                         f"variable th0 equal {repr(2.0 * 1000 * 1e-6)}+0.0*(time-{repr(1000 * 1e-6)})",
+                         f"variable th0 equal {repr(2.0 * 1000 * 1e-6)}+-1.0*(time-{repr(1500 * 1e-6)})"]
+    assert info["conventions_match"]
+    assert not LM.write_case(_drum_sim("edem"), tmp_path / "e", [(10, {})], BOUNDS)["conventions_match"]
+
+
+@pytest.mark.parametrize("phase,field", [
+    ({"drum": {"omega": (0.0, 0.0, 1.0)}}, "phases[0].drum"),
+    ({"drum": {"velocity": (0.0, 0.01, 0.0)}}, "phases[0].drum"),
+])
+def test_drum_motions_lammps_cannot_run_are_named(tmp_path, phase, field):
+    with pytest.raises(InputError) as exc:
+        LM.write_case(_drum_sim(), tmp_path, [(10, phase)], BOUNDS)
+    assert exc.value.field == field
+
+
+def test_adhesive_drum_wall_is_refused(tmp_path):
+    """LAMMPS's region walls end a JKR neck where the surfaces part, soilcal does not."""
+    with pytest.raises(InputError) as exc:
+        LM.write_case(_drum_sim(adhesive=True), tmp_path, [(10, {})], BOUNDS)
+    assert exc.value.field == "walls.drum" and "w = 0.4 J/m^2" in str(exc.value.got)
 
 
 @needs_lammps
@@ -102,6 +164,7 @@ def test_jkr_few_body_trajectories_agree_to_rounding(name):
     ("jkr_roll", "coulomb_force", "total"),
     ("jkr_roll", "tangential_slip", "spring"),
     ("jkr_roll", "contact_lever", "contact_point"),
+    ("jkr_drum", "wall_curvature", "flat"),
 ])
 def test_each_lammps_term_is_needed(name, option, value):
     """The check can fail: with one of LAMMPS's terms switched back to EDEM's, the

