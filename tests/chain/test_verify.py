@@ -61,6 +61,18 @@ def test_diagnose_model_limit():
     assert "seed scatter" not in note and "surface bias" not in note
 
 
+def test_diagnose_surface_scatter_when_the_confidence_interval_covers_the_target():
+    # the surface's best is 31, 1.0 from the target 30, but its mean there is known only to
+    # 28.5-33.5: not a model limit; with the interval 30.6-31.4 it is one, and says so
+    note = diagnose(33.0, 0.1, 4, 30.0, 31.0, (28.5, 33.5))
+    assert note.startswith("surface scatter") and "28.50 to 33.50" in note
+    assert "model limit" not in note
+    note = diagnose(33.0, 0.1, 4, 30.0, 31.0, (30.6, 31.4))
+    assert note.startswith("model limit") and "30.60 to 31.40" in note
+    # an interval that cannot be computed (NaN) leaves the plain model-limit note
+    assert diagnose(33.0, 0.1, 4, 30.0, 31.0, (np.nan, np.nan)) == diagnose(33.0, 0.1, 4, 30.0, 31.0)
+
+
 def test_diagnose_model_limit_and_seed_scatter_together():
     # surface 1.0 off and the miss 3 within 2 * 4/sqrt(4) = 4: both reasons
     note = diagnose(33.0, 4.0, 4, 30.0, 31.0)

@@ -51,6 +51,34 @@ def test_noise_free_quadratic_exact():
         assert fit.n == 29 and fit.df_resid == 14
 
 
+@pytest.mark.parametrize("transform", ["none", "ln"])
+def test_confidence_interval_of_the_mean_by_hand(transform):
+    """x0' b -+ t(0.975, n - p) sqrt(MSE x0' (X'X)^-1 x0) from the model matrix, on the
+    transformed scale and back-transformed, at a point inside the design region."""
+    from scipy import stats
+
+    df = _data(noise=0.3, seed=4, actual=True)
+    df["y"] = df["y"] + 20.0  # positive for the log
+    fit = fit_response_surface(df, FACTORS, "y", LOW, HIGH, data_coding="actual",
+                               transform=transform)
+    X = fit.model_matrix
+    xa = np.array([[0.1, 0.5, 0.4, 3.0]])
+    # the model row of the point, written out term by term
+    xc = (xa - (np.array(LOW) + HIGH) / 2) / ((np.array(HIGH) - LOW) / 2)
+    a, b, c, d = xc[0]
+    cols = {"Intercept": 1.0, "A": a, "B": b, "C": c, "D": d, "A*B": a * b, "A*C": a * c,
+            "A*D": a * d, "B*C": b * c, "B*D": b * d, "C*D": c * d, "A^2": a * a, "B^2": b * b,
+            "C^2": c * c, "D^2": d * d}
+    x0 = np.array([cols[t] for t in ["Intercept", *fit.terms]])
+    yhat = x0 @ fit.params
+    half = stats.t.ppf(0.975, fit.df_resid) * np.sqrt(fit.mse * x0 @ np.linalg.inv(X.T @ X) @ x0)
+    lo, hi = fit.confidence_actual(xa)
+    inv = (lambda z: z) if transform == "none" else np.exp
+    assert lo[0] == pytest.approx(inv(yhat - half), rel=1e-10)
+    assert hi[0] == pytest.approx(inv(yhat + half), rel=1e-10)
+    assert lo[0] < fit.predict_actual(xa)[0] < hi[0]
+
+
 def test_actual_coefficients_one_factor_by_hand():
     # y = 1 + 2x + 3x^2 with x = (X - 5)/2  =>  y = 1 + (X-5) + 0.75 (X-5)^2
     X = np.array([3.0, 4.0, 5.0, 6.0, 7.0, 5.0])

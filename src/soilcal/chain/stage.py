@@ -444,11 +444,33 @@ def optimum_frames(stage: dict, table: pd.DataFrame, targets: dict, seed: int) -
     out = pd.concat(frames, ignore_index=True)
     if "calibrated" in out.columns:
         out["calibrated"] = out["calibrated"].fillna(False).astype(bool)
+    _confidence_columns(out, fits, syms)
     # the soil's seed (schema default 0) on the rows of the seeded multi-start searches
     out["seed"] = pd.array([int(seed) if m in SEEDED_METHODS else None for m in out["method"]], dtype="Int64")
     return {"optimum": out,
             "identifiability": pd.concat(ident, ignore_index=True) if ident else
             pd.DataFrame(columns=["case", "factor", "n_sets", "min", "max", "spread", "spread_coded", "pinned", "note"])}
+
+
+def _confidence_columns(out: pd.DataFrame, fits: dict, syms: list[str]) -> None:
+    """``<response>_ci_low`` and ``_ci_high`` beside every predicted response of a row with
+    factor levels: the 95 % confidence interval of the surface's mean there
+    (:meth:`soilcal.rsm.model.RSMFit.confidence_actual`), so that a verification can tell a
+    target the surface cannot reach from one its own uncertainty still covers."""
+    if not len(out) or not all(s in out.columns for s in syms):
+        return
+    x = out[syms].apply(pd.to_numeric, errors="coerce").to_numpy(float)
+    ok = np.all(np.isfinite(x), axis=1)
+    for rid, model in fits.items():
+        if rid not in out.columns:
+            continue
+        lo = np.full(len(out), np.nan)
+        hi = np.full(len(out), np.nan)
+        has = ok & out[rid].notna().to_numpy()
+        if has.any():
+            lo[has], hi[has] = model.confidence_actual(x[has])
+        out.insert(out.columns.get_loc(rid) + 1, f"{rid}_ci_low", lo)
+        out.insert(out.columns.get_loc(rid) + 2, f"{rid}_ci_high", hi)
 
 
 def optimum_frame(stage: dict, table: pd.DataFrame, targets: dict, seed: int) -> pd.DataFrame:

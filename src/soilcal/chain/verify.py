@@ -95,11 +95,16 @@ def not_run_rows(stage_id: str, case: dict, reason: str) -> pd.DataFrame:
     return pd.DataFrame(rows, columns=RUN_COLUMNS)
 
 
-def diagnose(mean: float, sd: float, n: int, target: float, predicted: float | None) -> str:
+def diagnose(mean: float, sd: float, n: int, target: float, predicted: float | None,
+             ci: tuple[float, float] | None = None) -> str:
     """Why a verification mean misses its target by more than 2 % (empty when it meets it).
 
     * the surface cannot reach the target: the prediction at the optimum is more than 0.5
-      from the target (a model limit within the design region);
+      from the target (a model limit within the design region) and the 95 % confidence
+      interval of the surface's mean there, ``ci`` where given, excludes the target;
+    * surface scatter: the prediction misses by more than 0.5 but its confidence interval
+      contains the target: the design points' own seed scatter leaves open whether the
+      design region reaches it (replicates per design point would tell);
     * seed scatter: the miss is within two standard errors of the mean (sd / sqrt(n)), so
       more replicates (or larger heaps) are needed to tell; the note says how many seeds
       would make two standard errors as small as the 2 % band,
@@ -115,8 +120,18 @@ def diagnose(mean: float, sd: float, n: int, target: float, predicted: float | N
         return ""
     notes = []
     if predicted is not None and np.isfinite(predicted) and abs(predicted - target) > SURFACE_TOLERANCE:
-        notes.append(f"model limit: the response surface predicts {predicted:.2f} at its best set, "
-                     f"{predicted - target:+.2f} from the target, within the design region")
+        lo, hi = ci if ci is not None else (np.nan, np.nan)
+        known = np.isfinite(lo) and np.isfinite(hi)
+        if known and lo <= target <= hi:
+            notes.append(f"surface scatter: the response surface predicts {predicted:.2f} at its best "
+                         f"set, {predicted - target:+.2f} from the target, but the 95 % confidence "
+                         f"interval of its mean there, {lo:.2f} to {hi:.2f}, contains the target: the "
+                         "design points' seed scatter leaves open whether the design region reaches "
+                         "it (replicates per design point would tell)")
+        else:
+            band = f" (95 % confidence interval {lo:.2f} to {hi:.2f})" if known else ""
+            notes.append(f"model limit: the response surface predicts {predicted:.2f} at its best set, "
+                         f"{predicted - target:+.2f} from the target{band}, within the design region")
     sem = sd / np.sqrt(n) if n > 1 and np.isfinite(sd) else np.nan
     if np.isfinite(sem) and abs(mean - target) <= 2 * sem:
         band = TOLERANCE_PERCENT / 100 * abs(target)
@@ -197,7 +212,9 @@ def _verification_row(stage, case, rid, goal, targets, soil_data, cal, sel, pres
         status = ("failed: " + "; ".join(sel["error"].astype(str).unique())) if len(sel) else "not run"
     else:
         status = "ok"
-    note = diagnose(mean, sd, n, target, pred) if status == "ok" else ""
+    ci = tuple(float(cal[f"{rid}_{k}"].iloc[0]) for k in ("ci_low", "ci_high")) \
+        if len(cal) and f"{rid}_ci_low" in cal.columns else None
+    note = diagnose(mean, sd, n, target, pred, ci) if status == "ok" else ""
     if status == "ok" and goal.get("goal") != "target":
         note = f"goal {goal.get('goal')}: no target value; the paper's verification is beside it"
     return {

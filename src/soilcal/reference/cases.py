@@ -44,6 +44,15 @@ PHI_PLACED = 0.3
 MAX_OVERLAP = 0.25
 
 
+def _numbers(case, keys, source, zero=True) -> None:
+    """Each named field a finite number, >= 0 (``zero``) or > 0; InputError naming it."""
+    for key in keys:
+        v = getattr(case, key)
+        ok = isinstance(v, (int, float)) and math.isfinite(v) and (v >= 0 if zero else v > 0)
+        if not ok:
+            raise InputError(source, key, "a number >= 0" if zero else "a number > 0", v)
+
+
 @dataclass
 class Spheres:
     """The spheres and the one material of a case (spheres, walls and plate)."""
@@ -78,10 +87,8 @@ class TubeCase(Spheres):
 
     def check(self, source="<case>") -> None:
         super().check(source)
-        for key in ("youngs", "density", "lift_speed", "settle_time", "fill_time"):
-            v = getattr(self, key)
-            if not (isinstance(v, (int, float)) and math.isfinite(v) and v > 0):
-                raise InputError(source, key, "a number > 0", v)
+        _numbers(self, ("youngs", "density", "lift_speed", "settle_time", "fill_time"), source,
+                 zero=False)
 
     def tube_radius(self) -> float:
         lo, hi = self.radii
@@ -207,10 +214,7 @@ class ColumnCase(Spheres):
 
     def check(self, source="<case>") -> None:
         super().check(source)
-        for key in ("surface_energy", "damping_eta", "settle_time", "fill_time"):
-            v = getattr(self, key)
-            if not (isinstance(v, (int, float)) and math.isfinite(v) and v >= 0):
-                raise InputError(source, key, "a number >= 0", v)
+        _numbers(self, ("surface_energy", "damping_eta", "settle_time", "fill_time"), source)
 
     def contact_model(self) -> dict:
         return dict(cohesion="jkr", damping="viscous_radius", damping_eta=self.damping_eta,
@@ -303,10 +307,7 @@ class JkrDrumCase(DrumCase):
 
     def check(self, source="<case>") -> None:
         super().check(source)
-        for key in ("surface_energy", "damping_eta"):
-            v = getattr(self, key)
-            if not (isinstance(v, (int, float)) and math.isfinite(v) and v >= 0):
-                raise InputError(source, key, "a number >= 0", v)
+        _numbers(self, ("surface_energy", "damping_eta"), source)
         if self.rolling_friction != 0:
             raise InputError(source, "rolling_friction", "0 (no rolling resistance)",
                              self.rolling_friction)

@@ -261,6 +261,17 @@ class RSMFit:
         xa = self._coded_input(X_actual)
         return self.predict((xa - self.centre) / self.half_range)
 
+    def confidence_actual(self, X_actual, alpha: float = 0.05) -> tuple[np.ndarray, np.ndarray]:
+        """(low, high): the 1 - alpha confidence interval of the fitted mean at actual factor
+        levels, x0' b -+ t(1 - alpha/2, n - p) sqrt(MSE x0' (X'X)^-1 x0) on the transformed
+        scale (statsmodels ``get_prediction``), back-transformed to original units (bounds
+        sorted: a decreasing transform swaps them)."""
+        xa = self._coded_input(X_actual)
+        mm = _model_matrix((xa - self.centre) / self.half_range, self._exps)
+        ci = np.asarray(self._res.get_prediction(mm).conf_int(alpha=alpha))
+        b = inverse_transform(ci, self.transform, self.transform_constant)
+        return np.minimum(b[:, 0], b[:, 1]), np.maximum(b[:, 0], b[:, 1])
+
     # -- ANOVA
     def _pure_error(self) -> tuple[float, int]:
         groups: dict[tuple, list[float]] = defaultdict(list)
