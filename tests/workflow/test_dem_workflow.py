@@ -251,7 +251,14 @@ REPRO_RUNS = [1, 2, 3, 4]
 @pytest.fixture(scope="module")
 def second(tmp_path_factory):
     tmp = make_tiny(copy_workflow(tmp_path_factory.mktemp("again"), TINY_SOILS))
-    run(tmp, "--cores", "2", *(f"{REPRO_STAGE}/runs/{r}.csv" for r in REPRO_RUNS))
+    targets = [f"{REPRO_STAGE}/runs/{r}.csv" for r in REPRO_RUNS]
+    run(tmp, "--cores", "2", *targets)
+    if not all((tmp / t).exists() for t in targets):
+        # Snakemake 9 can drop targets that wait on a checkpoint when the checkpoint's DAG
+        # update coincides with another job's end (seen once in CI: 8 planned steps, then
+        # "4 of 4 steps (100%) done" without the runs; upstream: snakemake issues 727, 3864);
+        # the same command then builds them, as a restarted run does for a user
+        run(tmp, "--cores", "2", *targets)
     return tmp
 
 
