@@ -97,12 +97,22 @@ class TubeCase(Spheres):
         return 0.5 * (4 * vol / math.pi) ** (1 / 3)
 
 
-def _materials(case: TubeCase):
+def _materials(case: Spheres, rolling_friction=None, drum_wall: bool = False):
+    """The one soil of a case: its restitution, friction, rolling friction (``rolling_friction``
+    overrides it) and surface energy (0 for a case without one).  With ``drum_wall`` a second
+    material ``drum``, the soil's without adhesion or rolling resistance (LAMMPS's region walls
+    end a JKR contact where the surfaces part: lammps.py)."""
     from soilcal.dem.materials import Material, MaterialTable
 
+    mu_r = case.rolling_friction if rolling_friction is None else rolling_friction
     mats = MaterialTable()
     mats.add(Material("soil", case.density, case.poisson, youngs=case.youngs))
-    mats.set_pair("soil", "soil", case.restitution, case.friction, case.rolling_friction)
+    mats.set_pair("soil", "soil", case.restitution, case.friction, mu_r,
+                  getattr(case, "surface_energy", 0.0))
+    if drum_wall:
+        mats.add(Material("drum", case.density, case.poisson, youngs=case.youngs))
+        mats.set_pair("soil", "drum", case.restitution, case.friction, 0.0, 0.0)
+        mats.set_pair("drum", "drum", case.restitution, case.friction, 0.0, 0.0)
     return mats
 
 
@@ -165,7 +175,6 @@ def restart(sim, conventions, contact_model: dict | None = None, walls=None):
     are not copied: every contact of the copy starts new, in soilcal as in a reference
     engine reading the same data."""
     from soilcal.dem.engine import Simulation
-    from soilcal.dem.walls import PLANE, TRIANGLE
 
     model = dict(contact_model if contact_model is not None else dict(rolling="constant_torque"),
                  conventions=conventions)
@@ -182,19 +191,11 @@ def restart(sim, conventions, contact_model: dict | None = None, walls=None):
     for w, name in enumerate(sim.walls.names):
         if walls is not None and name not in walls:
             continue
+        # the wall's primitives as they stand, about the same centre
         prim = np.flatnonzero(a["prim_wall"] == w)
-        mat_w = int(a["prim_mat"][prim[0]])
-        kinds = set(int(q) for q in a["prim_kind"][prim])
-        if kinds == {TRIANGLE}:
-            tri = a["prim_par"][prim, :9].reshape(-1, 3)
-            copy.add_mesh(tri, np.arange(len(tri)).reshape(-1, 3), mat_w, name=name)
-        elif kinds == {PLANE}:
-            par = a["prim_par"][prim[0]]
-            copy.add_plane(par[:3], par[3:6], mat_w, name=name)
-        else:  # any other wall: its primitives as they stand, about the same centre
-            copy.add_wall(name, mat_w, [(int(a["prim_kind"][q]), a["prim_par"][q].copy(),
-                                         int(a["prim_pts"][q]), int(a["prim_dirs"][q]))
-                                        for q in prim], centre=a["wall_centre"][w].copy())
+        copy.add_wall(name, int(a["prim_mat"][prim[0]]),
+                      [(int(a["prim_kind"][q]), a["prim_par"][q].copy(), int(a["prim_pts"][q]),
+                        int(a["prim_dirs"][q])) for q in prim], centre=a["wall_centre"][w].copy())
     return copy
 
 
@@ -228,12 +229,8 @@ def collapsed_column(case: ColumnCase, conventions="lammps"):
     contact carried over), and (phases, bounds, info): the column collapses and settles for
     ``settle_time`` s.  Without rolling resistance the heap that stays is held by the
     adhesion and the sliding friction."""
-    from soilcal.dem.materials import Material, MaterialTable
-
     case.check("<column case>")
-    mats = MaterialTable()
-    mats.add(Material("soil", case.density, case.poisson, youngs=case.youngs))
-    mats.set_pair("soil", "soil", case.restitution, case.friction, 0.0, case.surface_energy)
+    mats = _materials(case, rolling_friction=0.0)
     model = case.contact_model()
     sim, R, tube_h, settled, t_fill, top = _filled_tube(
         case, mats, dict(model, conventions=conventions), "<cohesive column>")
@@ -317,22 +314,6 @@ class JkrDrumCase(DrumCase):
                     jkr_convention="lammps")
 
 
-def _drum_materials(case: DrumCase):
-    """The soil; a JKR drum's wall is a second material, the soil's but without adhesion
-    (LAMMPS's region walls end a JKR contact where the surfaces part: lammps.py)."""
-    from soilcal.dem.materials import Material, MaterialTable
-
-    mats = MaterialTable()
-    mats.add(Material("soil", case.density, case.poisson, youngs=case.youngs))
-    gamma = getattr(case, "surface_energy", 0.0)
-    mats.set_pair("soil", "soil", case.restitution, case.friction, case.rolling_friction, gamma)
-    if isinstance(case, JkrDrumCase):
-        mats.add(Material("drum", case.density, case.poisson, youngs=case.youngs))
-        mats.set_pair("soil", "drum", case.restitution, case.friction, 0.0, 0.0)
-        mats.set_pair("drum", "drum", case.restitution, case.friction, 0.0, 0.0)
-    return mats
-
-
 def add_smooth_drum(sim, radius, length, material, name="drum"):
     """A closed drum as one rigid wall: the analytic cylinder of ``radius`` about the y axis
     from y = 0 to ``length`` and two end planes facing inwards; it turns about its axis
@@ -359,7 +340,8 @@ def rotating_drum(case: DrumCase, conventions="liggghts"):
     case.check("<drum case>")
     lo, hi = case.radii
     R, L = case.diameter / 2, case.length
-    sim = Simulation(_drum_materials(case), dt_fraction=case.dt_fraction,
+    sim = Simulation(_materials(case, drum_wall=isinstance(case, JkrDrumCase)),
+                     dt_fraction=case.dt_fraction,
                      contact_model=dict(case.contact_model(), conventions=conventions),
                      skin=0.5 * hi, max_overlap=MAX_OVERLAP, source="<rotating drum>")
     if case.wall == "smooth":

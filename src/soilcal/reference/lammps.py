@@ -244,6 +244,8 @@ def write_case(sim, workdir, phases, bounds) -> dict:
     """Write the LAMMPS input (``in.case``, ``data.case``, ``case.json``) into ``workdir``;
     ``bounds`` = (xlo, xhi, ylo, yhi, zlo, zhi) of the box (fixed boundaries; spheres
     leaving it are lost).  Returns case.json."""
+    from soilcal.dem.materials import P_W
+
     ph = check_phases(sim, phases)
     if sim.dt is None:
         sim.run(0)
@@ -254,8 +256,6 @@ def write_case(sim, workdir, phases, bounds) -> dict:
     drums = [k for k, w in enumerate(walls) if w["kind"] == "drum"]
     if drums:
         same = same and int(sim.codes[16]) == 1
-    from soilcal.dem.materials import P_W
-
     for k in drums:
         for t in sorted(int(q) for q in np.unique(sim.p.mat)):
             if normal == "jkr" and pair[t, walls[k]["mat"], P_W] > 0:

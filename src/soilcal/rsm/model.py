@@ -256,18 +256,19 @@ class RSMFit:
         """Prediction in original units from coded factor levels."""
         return inverse_transform(self.predict_transformed(X_coded), self.transform, self.transform_constant)
 
+    def _coded_from_actual(self, X_actual) -> np.ndarray:
+        return (self._coded_input(X_actual) - self.centre) / self.half_range
+
     def predict_actual(self, X_actual) -> np.ndarray:
         """Prediction in original units from actual factor levels."""
-        xa = self._coded_input(X_actual)
-        return self.predict((xa - self.centre) / self.half_range)
+        return self.predict(self._coded_from_actual(X_actual))
 
     def confidence_actual(self, X_actual, alpha: float = 0.05) -> tuple[np.ndarray, np.ndarray]:
         """(low, high): the 1 - alpha confidence interval of the fitted mean at actual factor
         levels, x0' b -+ t(1 - alpha/2, n - p) sqrt(MSE x0' (X'X)^-1 x0) on the transformed
         scale (statsmodels ``get_prediction``), back-transformed to original units (bounds
         sorted: a decreasing transform swaps them)."""
-        xa = self._coded_input(X_actual)
-        mm = _model_matrix((xa - self.centre) / self.half_range, self._exps)
+        mm = _model_matrix(self._coded_from_actual(X_actual), self._exps)
         ci = np.asarray(self._res.get_prediction(mm).conf_int(alpha=alpha))
         b = inverse_transform(ci, self.transform, self.transform_constant)
         return np.minimum(b[:, 0], b[:, 1]), np.maximum(b[:, 0], b[:, 1])
