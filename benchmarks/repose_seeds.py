@@ -10,10 +10,11 @@ height = diameter) at the quick preset with ``n_particles`` spheres, for two soi
   scaled by the Sauter-radius ratio of the quick to the paper particles (base.py).
 
 Each heap gives the angle by radial bins (``angle_deg``, the papers' EDEMpy method), by the
-surface scan (``angle_surface_deg``) and by side silhouettes (``angle_image_deg``).  Every
-run is a row of ``benchmarks/results/repose_seeds.csv`` (``--rolling`` chooses the
-rolling-resistance model, a column of its own; a rerun of the same case, model, size and seed
-replaces its row); ``repose_seeds.md`` tabulates mean and sample standard deviation over
+surface scan (``angle_surface_deg``) and by side silhouettes (``angle_image_deg``, from
+``--views`` side views: each number given measures the same heap again, one row each; rows
+without the column had 2).  Every run is a row of ``benchmarks/results/repose_seeds.csv``
+(``--rolling`` chooses the rolling-resistance model, a column of its own; a rerun of the same
+case, model, size, views and seed replaces its row); ``repose_seeds.md`` tabulates mean and sample standard deviation over
 the seeds of each case, model and estimator, and the scatter of the mean of ``--group``
 consecutive seeds (the replicate mean of ``soilcal scenario run --replicates``; notes below
 its marker are kept).
@@ -22,6 +23,7 @@ its marker are kept).
     python benchmarks/repose_seeds.py --cases noncohesive:5000 --seeds 0,1,2,3,4,5,6,7
     python benchmarks/repose_seeds.py --cases noncohesive:5000 --rolling bounded
     python benchmarks/repose_seeds.py --cases noncohesive:5000 --seeds 10-39 --group 4
+    python benchmarks/repose_seeds.py --cases cohesive:1000 --seeds 0-11 --views 2,8
 """
 
 from __future__ import annotations
@@ -41,7 +43,7 @@ from soilcal.dem.scenarios.base import DEFAULT_ROLLING, ROLLING_MODELS
 
 HERE = Path(__file__).resolve().parent
 ESTIMATORS = ("angle_deg", "angle_surface_deg", "angle_image_deg")
-FIELDS = ["utc", "commit", "case", "rolling", "n", "seed", "particles", "threads", "steps",
+FIELDS = ["utc", "commit", "case", "rolling", "n", "views", "seed", "particles", "threads", "steps",
           "wall_s",
           "settled", "cohesion_scale", *ESTIMATORS, "height_mm", "load_avg_1min"]
 DEFAULT_CASES = "noncohesive:1000,noncohesive:5000,cohesive:1000,cohesive:5000"
@@ -57,24 +59,35 @@ def params(case):
     raise SystemExit(f"--cases: expected noncohesive:N or cohesive:N, got {case!r}")
 
 
-def run_one(case, n, seed, threads, rev, rolling):
+def run_one(case, n, seed, threads, rev, rolling, views):
+    """One heap, measured with each number of side views in ``views`` (one row each; the
+    scenario's own run measures the first, the others measure its final state again)."""
+    from soilcal.dem import measure
     from soilcal.dem.scenarios import repose
 
     setup = dict(repose.setups()["cinnamon-soil"], name="cinnamon-soil", n_particles=n,
-                 rolling_model=rolling)
+                 rolling_model=rolling, image_views=views[0])
     res = repose.run(setup, params(case), "quick", seed, threads)
     r = res.responses
-    return dict(utc=time.strftime("%Y-%m-%d %H:%M", time.gmtime()), commit=rev, case=case,
+    base = dict(utc=time.strftime("%Y-%m-%d %H:%M", time.gmtime()), commit=rev, case=case,
                 rolling=rolling, n=n, seed=seed, particles=res.n_particles, threads=res.threads,
                 steps=res.steps,
                 wall_s=round(res.wall_s, 2), settled=r["settled"],
                 cohesion_scale=round(res.setup["cohesion_scale"], 4),
                 **{k: round(r[k], 3) for k in ESTIMATORS},
                 height_mm=round(1e3 * r["height_m"], 2), load_avg_1min=round(os.getloadavg()[0], 2))
+    x, rad = res.series["x"], res.series["r"]
+    half = setup["plate_size"] / 2
+    on = (np.abs(x[:, 0]) <= half) & (np.abs(x[:, 1]) <= half)  # the run's spheres on the plate
+    rows = [dict(base, views=views[0])]
+    for v in views[1:]:
+        img = measure.repose_angle_image(x[on], rad[on], 0.0, views=v)
+        rows.append(dict(base, views=v, angle_image_deg=round(img["angle_deg"], 3)))
+    return rows
 
 
 def _key(r):
-    return r["case"], r["rolling"] or DEFAULT_ROLLING, int(r["n"])
+    return r["case"], r["rolling"] or DEFAULT_ROLLING, int(r["n"]), int(r.get("views") or 2)
 
 
 def summary(rows):
@@ -83,7 +96,7 @@ def summary(rows):
     out = []
     for key in sorted({_key(r) for r in rows}):
         sel = [r for r in rows if _key(r) == key]
-        line = dict(case=key[0], rolling=key[1], n=key[2], seeds=len(sel))
+        line = dict(case=key[0], rolling=key[1], n=key[2], views=key[3], seeds=len(sel))
         for k in ESTIMATORS:
             v = np.array([float(r[k]) for r in sel], float)
             v = v[np.isfinite(v)]
@@ -105,7 +118,7 @@ def replicate_means(rows, k):
                   if all(s in by_seed for s in range(g * k, g * k + k))]
         if len(groups) < 5:
             continue
-        line = dict(case=key[0], rolling=key[1], n=key[2], k=k, groups=len(groups))
+        line = dict(case=key[0], rolling=key[1], n=key[2], views=key[3], k=k, groups=len(groups))
         for e in ESTIMATORS:
             means = np.array([np.mean([float(r[e]) for r in g]) for g in groups])
             single = np.array([float(r[e]) for g in groups for r in g])
@@ -123,8 +136,13 @@ def main(argv=None):
                     help="rolling-resistance model (setup.rolling_model)")
     ap.add_argument("--group", type=int, default=4,
                     help="replicates per mean in the replicate-mean table (default 4)")
+    ap.add_argument("--views", default=None,
+                    help="side views of the silhouette angle, comma list (default: the scenario's)")
     ap.add_argument("--out", default=str(HERE / "results"))
     args = ap.parse_args(argv)
+    from soilcal.dem.scenarios.repose import IMAGE_VIEWS
+
+    views = [int(v) for v in args.views.split(",")] if args.views else [IMAGE_VIEWS]
     cases = []
     for item in args.cases.split(","):
         case, _, n = item.partition(":")
@@ -145,10 +163,10 @@ def main(argv=None):
     rev = commit()  # the code this process runs, whatever is committed meanwhile
     for case, n in cases:
         for seed in seeds:
-            row = run_one(case, n, seed, args.threads, rev, args.rolling)
-            print(row, flush=True)
-            rows = [r for r in rows if (*_key(r), int(r["seed"])) != (case, args.rolling, n, seed)]
-            rows.append(row)
+            for row in run_one(case, n, seed, args.threads, rev, args.rolling, views):
+                print(row, flush=True)
+                rows = [r for r in rows if (*_key(r), int(r["seed"])) != (*_key(row), seed)]
+                rows.append(row)
             rows.sort(key=lambda r: (*_key(r), int(r["seed"])))
             write_rows(csv_path, rows, FIELDS)
     md = ["# Seed scatter of the static angle of repose (cinnamon-soil cylinder lift, quick preset)",
@@ -159,11 +177,11 @@ def main(argv=None):
           "",
           "Mean and sample standard deviation over the seeds [deg]:",
           "",
-          "| case | rolling model | spheres | seeds | radial bins | surface scan | silhouette |",
-          "|---|---|---:|---:|---|---|---|"]
+          "| case | rolling model | spheres | views | seeds | radial bins | surface scan | silhouette |",
+          "|---|---|---:|---:|---:|---|---|---|"]
     for s in summary(rows):
         cells = [f"{s[k][0]:.2f} +- {s[k][1]:.2f}" for k in ESTIMATORS]
-        md.append(f"| {s['case']} | {s['rolling']} | {s['n']} | {s['seeds']} | "
+        md.append(f"| {s['case']} | {s['rolling']} | {s['n']} | {s['views']} | {s['seeds']} | "
                   + " | ".join(cells) + " |")
     groups = replicate_means(rows, args.group)
     if groups:
@@ -171,11 +189,11 @@ def main(argv=None):
                f"--replicates {args.group}`): seeds in consecutive groups of {args.group}, sample "
                f"SD of the group means, and beside it the single-seed SD of the same runs over "
                f"sqrt({args.group}) [deg]:", "",
-               "| case | rolling model | spheres | groups | radial bins | surface scan | silhouette |",
-               "|---|---|---:|---:|---|---|---|"]
+               "| case | rolling model | spheres | views | groups | radial bins | surface scan | silhouette |",
+               "|---|---|---:|---:|---:|---|---|---|"]
         for s in groups:
             cells = [f"{s[k][0]:.2f} ({s[k][1]:.2f})" for k in ESTIMATORS]
-            md.append(f"| {s['case']} | {s['rolling']} | {s['n']} | {s['groups']} | "
+            md.append(f"| {s['case']} | {s['rolling']} | {s['n']} | {s['views']} | {s['groups']} | "
                       + " | ".join(cells) + " |")
     md += ["", "Runs:", "",
            "| " + " | ".join(FIELDS) + " |", "|" + "---|" * len(FIELDS),

@@ -22,6 +22,7 @@ from soilcal.chain.sources import (
     point_spec,
     printed_comparison,
     published_responses,
+    simulate,
     soil_with_stage,
 )
 from soilcal.chain.stage import _enough_points, design_frame, fit_stage
@@ -348,3 +349,30 @@ def test_printed_design_of_a_coded_table_is_decoded(cinnamon):
     assert (d.iloc[0]["A_actual"], d.iloc[0]["B_actual"], d.iloc[0]["C_actual"]) == \
         pytest.approx((0.08, 0.24, 0.54), abs=1e-12)
     assert (d.iloc[1]["A_actual"], d.iloc[1]["B_actual"]) == pytest.approx((0.14, 0.24), abs=1e-12)
+
+
+def test_simulate_renders_silhouettes_only_for_a_silhouette_angle(cinnamon, vineyard, monkeypatch):
+    from types import SimpleNamespace
+
+    from soilcal.dem.scenarios import base
+
+    seen = {}
+
+    def fake_run(module, setup, params, **kw):
+        seen[module.NAME, setup["name"]] = setup
+        return SimpleNamespace(n_particles=1, steps=1, wall_s=0.0, per_run=[],
+                               responses={"angle_deg": 30.0, "angle_image_deg": 31.0,
+                                          "angle_avalanche_deg": 40.0})
+
+    monkeypatch.setattr(base, "run_replicates", fake_run)
+    # vineyard: the static angle by radial bins (no silhouettes), the drum as configured
+    spec = point_spec(vineyard, vineyard.stage("bbd"), {"B": 0.63, "D": 0.08, "F": 0.56, "H": 0.14}, run=1, seed=3)
+    df = simulate(spec, rev="test")
+    assert set(df["status"]) == {"ok"}
+    assert seen["repose", "xinjiang-vineyard-100mm"]["image"] is False
+    assert seen["drum", "xinjiang-vineyard"] == spec["responses"]["dynamic_angle"]["setup"]
+    # cinnamon: the stacking angle is the silhouette angle, so the run renders them
+    spec = point_spec(cinnamon, cinnamon.stage("bbd"), {"A": 0.11, "B": 0.38, "C": 0.54}, run=1, seed=3)
+    simulate(spec, rev="test")
+    assert seen["repose", "cinnamon-soil"]["image"] is True
+    assert spec["responses"]["stacking_angle"]["setup"]["image"] is True  # the spec itself is not changed

@@ -142,7 +142,7 @@ def simulate(spec: dict, threads: int | None = None, rev: str | None = None,
 
     import json
 
-    from soilcal.dem.scenarios import get
+    from soilcal.dem.scenarios import get, setup_for_measures
     from soilcal.dem.scenarios.base import DemParams, run_replicates, threads_used
 
     nthreads = threads_used(threads)
@@ -164,7 +164,9 @@ def simulate(spec: dict, threads: int | None = None, rev: str | None = None,
         try:
             rdir = (None if restart_dir is None else
                     Path(restart_dir) / f"{rs['scenario']}-{rs['setup']['name']}-{rs['preset']}")
-            res = run_replicates(get(rs["scenario"]), rs["setup"], params, preset=rs["preset"],
+            mod = get(rs["scenario"])
+            setup = setup_for_measures(mod, rs["setup"], [spec["responses"][rid]["measure"] for rid in rids])
+            res = run_replicates(mod, setup, params, preset=rs["preset"],
                                  seed=int(spec["seed"]), replicates=k, threads=None,
                                  source=f"{spec['soil']}/{spec['stage']}/run {spec['run']}",
                                  restart_dir=rdir)

@@ -122,6 +122,59 @@ def test_side_silhouette_through_the_photo_pipeline(alpha, tmp_path):
     assert res["angle_deg"] == pytest.approx(alpha, abs=0.6)
 
 
+def elliptic_heap(A, B, H, r=0.002, cap=0.25, toe=0.85):
+    """Spheres filling h = H g(s), s = sqrt((x/A)^2 + (y/B)^2): the cone 1 - s with the
+    parabolic cap and exponential toe of :func:`heap`, stretched to an elliptic base.  Seen at
+    azimuth theta its outline is H g(|u| / w), w = sqrt(A^2 cos^2 + B^2 sin^2) the ellipse's
+    support function: a heap of flank angle atan(H / w(theta))."""
+    g = np.arange(-1.4 * A, 1.4 * A, 2 * r)
+    X, Y = np.meshgrid(g, g)
+    s = np.hypot(X / A, Y / B)
+    cone = 1.0 - s
+    capv = 1.0 - cap / 2 - s**2 / (2 * cap)
+    ht = 1.0 - toe
+    toev = ht * np.exp(-(s - toe) / ht)
+    h = H * np.where(s < cap, capv, np.where(s > toe, toev, cone))
+    pts = []
+    for xx, yy, hh in zip(X.ravel(), Y.ravel(), h.ravel()):
+        if hh < 0.5 * r:
+            continue
+        zt = hh - r
+        zs = np.arange(zt, r * 0.99, -2 * r) if zt > r else np.array([max(zt, 0.5 * r)])
+        pts += [(xx, yy, z) for z in zs]
+    x = np.array(pts)
+    return x, np.full(len(x), r)
+
+
+@pytest.mark.parametrize("views", [2, 8])
+def test_silhouette_views_average_the_flanks_over_azimuth(views, tmp_path):
+    # an elliptic heap is 30.3 deg steep seen along y and 41.2 deg along x: the views' mean is
+    # the mean of atan(H / w(theta)) over their azimuths 180 k / n
+    A, B, H = 0.06, 0.04, 0.035
+    x, r = elliptic_heap(A, B, H)
+    az = np.radians(measure.view_azimuths(views))
+    expect = np.degrees(np.arctan(H / np.sqrt(A**2 * np.cos(az) ** 2 + B**2 * np.sin(az) ** 2)))
+    res = measure.repose_angle_image(x, r, 0.0, views=views, workdir=tmp_path)
+    assert len(res["flanks_deg"]) == 2 * views
+    assert res["angle_deg"] == pytest.approx(expect.mean(), abs=0.6)
+    per_view = np.reshape(res["flanks_deg"], (views, 2)).mean(axis=1)
+    assert per_view == pytest.approx(expect, abs=0.8)
+
+
+def test_two_views_are_the_x_and_y_views(tmp_path):
+    x, r = heap(30.0, R=0.04, skew=5.0)
+    assert measure.view_azimuths(2) == [0.0, 90.0]
+    for az, axis in ((0.0, "y"), (90.0, "x")):
+        a, _ = measure.render_side(x, r, 0.0, view=az)
+        b, _ = measure.render_side(x, r, 0.0, view=axis)
+        assert np.array_equal(a, b)
+    assert (measure.repose_angle_image(x, r, 0.0, views=2, workdir=tmp_path)
+            == measure.repose_angle_image(x, r, 0.0, views=("y", "x"), workdir=tmp_path))
+    for bad in (0, -1, 2.0, True):
+        with pytest.raises(InputError, match="image_views"):
+            measure.view_azimuths(bad)
+
+
 def test_render_side_draws_the_heap_above_a_plate(tmp_path):
     x, r = heap(30.0, R=0.04)
     scale = 5000.0  # px per m, given
@@ -134,6 +187,8 @@ def test_render_side_draws_the_heap_above_a_plate(tmp_path):
     assert h_px == pytest.approx((x[:, 2] + r).max() * scale, abs=3)
     with pytest.raises(InputError, match="view"):
         measure.render_side(x, r, view="z")
+    with pytest.raises(InputError, match="view"):
+        measure.render_side(x, r, view=float("nan"))
 
 
 def drum_state(theta_deg, R=0.05, L=0.1, r=0.002, fill=0.25, seed=1):

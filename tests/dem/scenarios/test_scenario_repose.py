@@ -26,6 +26,8 @@ def fun(**kw):
     (cyl(plate_material="glass"), "setup.plate_material"),
     (cyl(n_particles=5), "setup.n_particles"),
     (cyl(rolling_model="type_b"), "setup.rolling_model"),
+    (cyl(image_views=0), "setup.image_views"),
+    (cyl(image_views=4.0), "setup.image_views"),
     (cyl(radius=0.01), "setup.tube_diameter"),                 # 3 diameters across the tube
     (fun(funnel_bottom_diameter=0.2), "setup.funnel_bottom_diameter"),
     (fun(funnel_top_diameter=0.5), "setup.funnel_top_diameter"),
@@ -38,6 +40,19 @@ def test_bad_settings_fail_before_the_run(setup, field):
     with pytest.raises(InputError) as e:
         repose.run(setup, DemParams(), "quick", seed=0, threads=1, source="run.yaml")
     assert e.value.field == field and e.value.path == "run.yaml"
+
+
+def test_silhouettes_only_when_a_silhouette_angle_is_measured():
+    from soilcal.dem.scenarios import setup_for_measures
+
+    assert repose.for_measures(cyl(), ("angle_deg", "height_m"))["image"] is False
+    assert repose.for_measures(cyl(), ("angle_image_deg",))["image"] is True
+    assert repose.for_measures(cyl(), ("angle_deg", "angle_image_sd_deg"))["image"] is True
+    assert "angle_image_deg" not in repose.measures(repose.for_measures(cyl(), ("angle_deg",)))
+    assert setup_for_measures(repose, cyl(), ["angle_surface_deg"])["image"] is False
+    # a scenario without the hook runs its setup as given
+    d = dict(drum.setups()["xinjiang-vineyard"])
+    assert setup_for_measures(drum, d, ["angle_avalanche_deg"]) is d
 
 
 def test_drum_fill_and_preset_validation():

@@ -5,7 +5,9 @@ Every scenario module defines:
 * ``NAME``: the registry name (also the CLI name: ``soilcal scenario run NAME``);
 * ``RESPONSES``: the names of every response a run reports; ``MEASURES``: those a soil's
   ``simulation`` block may measure (numeric results of the test, not diagnostics), and
-  optionally ``measures(setup)``: the ones a given setup yields.  Every scenario reports
+  optionally ``measures(setup)``: the ones a given setup yields, and ``for_measures(setup,
+  measures)``: the setup a run needs to yield ``measures`` (an estimator nobody asked for
+  switched off; the measured numbers are the same).  Every scenario reports
   ``peak_overlap``, the largest overlap as a fraction of a radius: over the tool pass in
   the soil-bin scenarios (furrow, bulldozing, rotary), over the whole run (filling
   included) in the bench-top ones;
@@ -62,6 +64,12 @@ SCENARIOS = _load(_MODULES)
 def measures_of(mod, setup: dict) -> tuple:
     """The responses a run of scenario module ``mod`` with ``setup`` yields to measure."""
     return tuple(mod.measures(setup)) if hasattr(mod, "measures") else tuple(mod.MEASURES)
+
+
+def setup_for_measures(mod, setup: dict, measures) -> dict:
+    """``setup`` as a run of ``mod`` that must yield ``measures`` needs it
+    (``mod.for_measures``; unchanged for a scenario without it)."""
+    return mod.for_measures(setup, tuple(measures)) if hasattr(mod, "for_measures") else setup
 
 
 def get(name: str, source: str = "<input>"):
