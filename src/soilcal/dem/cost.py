@@ -114,9 +114,10 @@ STARTUP_S = 5.0
 #: machine (a process with an empty ``NUMBA_CACHE_DIR`` running a small funnel heap).
 COMPILE_S = 150.0
 #: Per-run work outside the time loop (insertion, measurement, frames): at most 2.0 s
-#: measured on small runs (``throughput.md``: ``wall_s`` less ``engine_s``; the heaps'
-#: silhouette measurement is the largest part).
-RUN_OVERHEAD_S = 3.0
+#: measured on small runs with two silhouette views (``throughput.md``: ``wall_s`` less
+#: ``engine_s``; the heaps' silhouette measurement is the largest part), and a heap's
+#: silhouettes now take 8 views at about 0.4 s each (``repose_seeds.md``).
+RUN_OVERHEAD_S = 5.0
 #: Resident memory of a DEM job process without its particles [MB]: the largest peak RSS
 #: of the workflow's DEM jobs at the quick preset (``dem_point`` 548 MB,
 #: ``benchmarks/results/calibration.md``; their few thousand spheres account for about

@@ -33,13 +33,19 @@ def heap(alpha_deg, R=0.06, r=0.002, cap=0.25, toe=0.85, seed=0, centre=(0.0, 0.
     capv = H0 - rc * t / 2 - t * rho**2 / (2 * rc)
     toev = ht * np.exp(-(rho - rt) * t / ht)
     h = np.where(rho < rc, capv, np.where(rho > rt, toev, cone))
+    return columns(X + centre[0], Y + centre[1], h, r)
+
+
+def columns(X, Y, h, r):
+    """Columns of spheres of radius r at (X, Y) under the surface h, the top sphere of each
+    touching it (none where h < r / 2)."""
     pts = []
     for xx, yy, hh in zip(X.ravel(), Y.ravel(), h.ravel()):
         if hh < 0.5 * r:
             continue
         zt = hh - r
         zs = np.arange(zt, r * 0.99, -2 * r) if zt > r else np.array([max(zt, 0.5 * r)])
-        pts += [(xx + centre[0], yy + centre[1], z) for z in zs]
+        pts += [(xx, yy, z) for z in zs]
     x = np.array(pts)
     return x, np.full(len(x), r)
 
@@ -135,15 +141,7 @@ def elliptic_heap(A, B, H, r=0.002, cap=0.25, toe=0.85):
     ht = 1.0 - toe
     toev = ht * np.exp(-(s - toe) / ht)
     h = H * np.where(s < cap, capv, np.where(s > toe, toev, cone))
-    pts = []
-    for xx, yy, hh in zip(X.ravel(), Y.ravel(), h.ravel()):
-        if hh < 0.5 * r:
-            continue
-        zt = hh - r
-        zs = np.arange(zt, r * 0.99, -2 * r) if zt > r else np.array([max(zt, 0.5 * r)])
-        pts += [(xx, yy, z) for z in zs]
-    x = np.array(pts)
-    return x, np.full(len(x), r)
+    return columns(X, Y, h, r)
 
 
 @pytest.mark.parametrize("views", [2, 8])
