@@ -332,3 +332,37 @@ def test_stress_strain_is_force_over_area():
     assert measure.value_at(eps, sig, 0.06) == pytest.approx(
         (10 + (100 - 10) * (0.04 / 0.08)) / (math.pi * 0.0495**2))
     assert math.isnan(measure.value_at(eps, sig, 0.5))
+
+
+def test_silhouette_views_the_pipeline_cannot_measure_are_left_out_and_named(tmp_path, monkeypatch):
+    import soilcal.imaging.measure as im
+
+    x, r = heap(30.0, R=0.04)
+    real = im.measure_pile
+    calls = []
+
+    def failing(bad):
+        def fake(path, *a, **kw):
+            calls.append(path)
+            if len(calls) - 1 in bad:
+                raise InputError(path, "left flank", "a flank of at least 20 boundary pixels", 11)
+            return real(path, *a, **kw)
+        return fake
+
+    all8 = measure.repose_angle_image(x, r, 0.0, views=8, workdir=tmp_path)
+    assert all8["views_measured"] == 8 and all8["views_failed"] == []
+    calls.clear()
+    monkeypatch.setattr(im, "measure_pile", failing({1, 5, 6}))
+    part = measure.repose_angle_image(x, r, 0.0, views=8, workdir=tmp_path)
+    assert part["views_measured"] == 5 and len(part["flanks_deg"]) == 10
+    assert [v for v, _ in part["views_failed"]] == [22.5, 112.5, 135.0]
+    assert "at least 20 boundary pixels, got 11" in part["views_failed"][0][1]
+    # the mean of the five views measured, flank by flank
+    keep = [k for k in range(8) if k not in (1, 5, 6)]
+    assert part["angle_deg"] == pytest.approx(np.mean([all8["flanks_deg"][2 * k + j] for k in keep for j in (0, 1)]))
+    # half the views is not enough
+    calls.clear()
+    monkeypatch.setattr(im, "measure_pile", failing({0, 2, 4, 6}))
+    with pytest.raises(InputError, match="more than half of 8 views") as e:
+        measure.repose_angle_image(x, r, 0.0, views=8, workdir=tmp_path)
+    assert e.value.field == "views" and "view 0" in str(e.value.expected)

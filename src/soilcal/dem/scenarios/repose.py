@@ -63,12 +63,13 @@ Responses: ``angle_deg`` (radial bins, eight directions, :mod:`soilcal.dem.measu
 of one mean radius, eight directions; scatter over seeds of the three estimators:
 ``benchmarks/repose_seeds.py``), ``angle_image_deg`` (side silhouettes through the photo
 pipeline: ``image_views`` views, default ``IMAGE_VIEWS`` = 8, at azimuths 180 k / n deg, two
-flanks each; ``angle_image_sd_deg`` their spread), ``height_m``, ``n_on_plate``, ``n_lost``,
+flanks each; ``angle_image_sd_deg`` their spread; a view the pipeline cannot measure is left
+out and named in ``measure_errors``, more than half of the views must measure), ``height_m``, ``n_on_plate``, ``n_lost``,
 ``n_retained`` and ``retained_fraction`` (funnel), ``settled``, ``settle_time_s``.  An
 estimator that cannot read the heap (a load spread flat over the plate has no flank the
 silhouette pipeline can find; too few spheres stayed on the plate) reports NaN and its
-reason in ``measure_errors`` (empty when all three read the heap); the run itself does not
-fail.  A cohesive load can arch over the funnel's outlet and stay in the funnel: when more
+reason in ``measure_errors`` (empty when all three read the heap, the silhouettes from every
+view); the run itself does not fail.  A cohesive load can arch over the funnel's outlet and stay in the funnel: when more
 than ``max_retained`` (default 20 %, by sphere count) of the spheres are still above the
 outlet when the run stops, every angle is NaN and ``measure_errors`` says so (the spheres on
 the plate are not the test's heap).  The default: quick black-soil loads of 1000 spheres
@@ -471,6 +472,10 @@ def run(setup: dict, params: DemParams, preset: str = "quick", seed: int = 0, th
         img = measured("image", measure.repose_angle_image, x[on], r[on], 0.0,
                        views=setup.get("image_views", IMAGE_VIEWS))
         responses.update(angle_image_deg=img["angle_deg"], angle_image_sd_deg=img["spread_deg"])
+        lost = img.get("views_failed") or []
+        if lost:  # measured on the other views (more than half): said, not hidden
+            failed.append(f"image: {len(lost)} of {setup.get('image_views', IMAGE_VIEWS)} views not "
+                          f"measured (view {lost[0][0]:g} deg: {lost[0][1]})")
     responses["measure_errors"] = "; ".join(failed)
     responses["peak_overlap"] = sim.peak_overlap
     setup_out = dict(setup)
