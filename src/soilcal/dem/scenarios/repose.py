@@ -64,15 +64,17 @@ of one mean radius, eight directions; scatter over seeds of the three estimators
 ``benchmarks/repose_seeds.py``), ``angle_image_deg`` (side silhouettes through the photo
 pipeline: ``image_views`` views, default ``IMAGE_VIEWS`` = 8, at azimuths 180 k / n deg, two
 flanks each; ``angle_image_sd_deg`` their spread; a view the pipeline cannot measure is left
-out and named in ``measure_errors``, more than half of the views must measure), ``height_m``, ``n_on_plate``, ``n_lost``,
-``n_retained`` and ``retained_fraction`` (funnel), ``settled``, ``settle_time_s``.  An
-estimator that cannot read the heap (a load spread flat over the plate has no flank the
-silhouette pipeline can find; too few spheres stayed on the plate) reports NaN and its
-reason in ``measure_errors`` (empty when all three read the heap, the silhouettes from every
-view); the run itself does not fail.  A cohesive load can arch over the funnel's outlet and stay in the funnel: when more
-than ``max_retained`` (default 20 %, by sphere count) of the spheres are still above the
-outlet when the run stops, every angle is NaN and ``measure_errors`` says so (the spheres on
-the plate are not the test's heap).  The default: quick black-soil loads of 1000 spheres
+out and named in ``measure_errors``, more than half of the views must measure; a soil's
+workflow job renders them only when it measures this angle, :func:`for_measures`),
+``height_m``, ``n_on_plate``, ``n_lost``, ``n_retained`` and ``retained_fraction`` (funnel),
+``settled``, ``settle_time_s``.  An estimator that cannot read the heap (a load spread flat
+over the plate has no flank the silhouette pipeline can find; too few spheres stayed on the
+plate) reports NaN and its reason in ``measure_errors`` (empty when all three read the heap,
+the silhouettes from every view); the run itself does not fail.  A cohesive load can arch
+over the funnel's outlet and stay in the funnel: when more than ``max_retained`` (default
+20 %, by sphere count) of the spheres are still above the outlet when the run stops, every
+angle is NaN and ``measure_errors`` says so (the spheres on the plate are not the test's
+heap).  The default: quick black-soil loads of 1000 spheres
 that discharged kept 0.2-9 % of their spheres on the funnel walls (design points of stage
 1, before commit ff7f5f6), those that arched 60-98 %; full 2482-sphere loads kept
 0.2-3.4 % with the quick preset and 79-99 % when they arched or stopped unsettled (two
