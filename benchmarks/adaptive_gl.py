@@ -33,6 +33,7 @@ Rows (method ``grainlearning``) replace that soil's earlier GrainLearning rows; 
 from __future__ import annotations
 
 import argparse
+import functools
 import json
 import math
 import subprocess
@@ -68,10 +69,12 @@ def gl_python(env: Path) -> Path:
 
 # --------------------------------------------------------------------------- DEM side
 
-def _load(case_file: Path):
+@functools.lru_cache(maxsize=4)
+def _load(case_file: str):
+    """The soil and the case (read once per worker process, not once per run)."""
     from soilcal.config.load import load_soil
 
-    c = json.loads(case_file.read_text())
+    c = json.loads(Path(case_file).read_text())
     soil = load_soil(c["soil_yaml"], c["resources"])
     return soil, c
 
@@ -79,7 +82,7 @@ def _load(case_file: Path):
 def _one(case_file: str, levels: dict, seed: int, run: int) -> pd.DataFrame:
     from soilcal.chain.sources import point_spec, simulate
 
-    soil, c = _load(Path(case_file))
+    soil, c = _load(str(case_file))
     spec = point_spec(soil, c["stage"], levels, run=run, seed=seed, replicates=1, responses=c["responses"])
     return simulate(spec, threads=1)
 

@@ -375,7 +375,8 @@ def view_azimuths(n) -> list[float]:
 
 def repose_angle_image(x, r, plate_z=0.0, views=("y", "x"), workdir=None) -> dict:
     """Repose angle of side silhouettes measured by :func:`soilcal.imaging.measure.measure_pile`:
-    the mean of every flank of every view measured (``spread_deg``: their sample SD).
+    the mean of every flank of every view measured (``spread_deg``: their sample SD;
+    :func:`~soilcal.imaging.measure.pile_summary`).
     ``views``: the views of :func:`render_side`, or a number n of views at the azimuths
     :func:`view_azimuths` (2: the x and y views).
 
@@ -387,29 +388,28 @@ def repose_angle_image(x, r, plate_z=0.0, views=("y", "x"), workdir=None) -> dic
     vertical shows some views a flank of a few boundary pixels) is left out and named in
     ``views_failed`` (azimuth or view, reason); the angle needs more than half of the views,
     else InputError names the first failure."""
-    from soilcal.imaging.measure import measure_pile
+    from soilcal.imaging.measure import measure_pile, pile_summary
 
     if not isinstance(views, (tuple, list)):
         views = view_azimuths(views)
-    flanks, failed = [], []
+    measured, failed = [], []
     with tempfile.TemporaryDirectory(dir=workdir) as tmp:
         for k, v in enumerate(views):
             p = Path(tmp) / f"side_{k}.png"
             render_side(x, r, plate_z, view=v, path=p)
             try:
-                m = measure_pile(p, "otsu", False, "gray")
+                measured.append(measure_pile(p, "otsu", False, "gray"))
             except InputError as exc:
                 failed.append((v, f"{exc.field}: expected {exc.expected}, got {exc.got}"))
-                continue
-            flanks.append((m.left_deg, m.right_deg))
-    if 2 * len(flanks) <= len(views):
+    if 2 * len(measured) <= len(views):
         v, why = failed[0]
         raise InputError("<silhouettes>", "views",
                          f"more than half of {len(views)} views measured (view {v}: {why})",
-                         f"{len(flanks)} measured")
-    f = np.asarray(flanks, float).ravel()
-    return dict(angle_deg=float(f.mean()), spread_deg=float(f.std(ddof=1)) if f.size > 1 else 0.0,
-                flanks_deg=[float(a) for a in f], views_measured=len(flanks), views_failed=failed)
+                         f"{len(measured)} measured")
+    summary = pile_summary(measured)
+    return dict(angle_deg=summary["angle_deg"], spread_deg=summary["spread_deg"],
+                flanks_deg=[float(a) for m in measured for a in (m.left_deg, m.right_deg)],
+                views_measured=len(measured), views_failed=failed)
 
 
 # ---------------------------------------------------------------- drum

@@ -513,10 +513,16 @@ def measure_piles(paths, threshold="otsu", keep_stages=False, channel="auto", re
     """Multi-view average: mean of all flank angles, spread = their sample std (``refusals``:
     :func:`measure_pile`)."""
     res = [measure_pile(p, threshold, keep_stages, channel, refusals) for p in paths]
+    return pile_summary(res), res
+
+
+def pile_summary(res) -> dict:
+    """Mean of every flank of the measured photos ``res`` (:class:`PileResult`), the mean left
+    and right flank, and the flanks' sample std (``spread_deg``)."""
     lefts = np.array([r.left_deg for r in res])
     rights = np.array([r.right_deg for r in res])
     allf = np.concatenate([lefts, rights])
-    summary = {
+    return {
         "angle_deg": float(allf.mean()),
         "left_deg": float(lefts.mean()),
         "right_deg": float(rights.mean()),
@@ -524,7 +530,6 @@ def measure_piles(paths, threshold="otsu", keep_stages=False, channel="auto", re
         "n_photos": len(res),
         "photos": [r.as_dict() for r in res],
     }
-    return summary, res
 
 
 def plate_lines(gray, below=None, edges=None):

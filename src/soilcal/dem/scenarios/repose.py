@@ -471,13 +471,13 @@ def run(setup: dict, params: DemParams, preset: str = "quick", seed: int = 0, th
                     centre=(0.0, 0.0), source=source)
     responses.update(angle_surface_deg=scan["angle_deg"], angle_surface_sd_deg=scan["spread_deg"])
     if setup.get("image", True):
-        img = measured("image", measure.repose_angle_image, x[on], r[on], 0.0,
-                       views=setup.get("image_views", IMAGE_VIEWS))
+        views = setup.get("image_views", IMAGE_VIEWS)
+        img = measured("image", measure.repose_angle_image, x[on], r[on], 0.0, views=views)
         responses.update(angle_image_deg=img["angle_deg"], angle_image_sd_deg=img["spread_deg"])
         lost = img.get("views_failed") or []
         if lost:  # measured on the other views (more than half): said, not hidden
-            failed.append(f"image: {len(lost)} of {setup.get('image_views', IMAGE_VIEWS)} views not "
-                          f"measured (view {lost[0][0]:g} deg: {lost[0][1]})")
+            failed.append(f"image: {len(lost)} of {views} views not measured "
+                          f"(view {lost[0][0]:g} deg: {lost[0][1]})")
     responses["measure_errors"] = "; ".join(failed)
     responses["peak_overlap"] = sim.peak_overlap
     setup_out = dict(setup)
