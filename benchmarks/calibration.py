@@ -19,6 +19,7 @@ import argparse
 import os
 import platform
 import re
+import resource
 import shutil
 import signal
 import subprocess
@@ -34,7 +35,8 @@ HERE = Path(__file__).resolve().parent
 ROOT = HERE.parent
 OUT = HERE / "results"
 RULE_FIELDS = ["utc", "commit", "run_id", "rule", "jobs", "sum_s", "mean_s", "max_s", "max_rss_mb"]
-RUN_FIELDS = ["utc", "commit", "run_id", "soils", "cores", "kind", "elapsed_s", "jobs_done", "rc", "note"]
+RUN_FIELDS = ["utc", "commit", "run_id", "soils", "cores", "kind", "elapsed_s", "jobs_done", "rc",
+              "run_cpu_s", "other_cpu_s", "note"]
 SNAKEMAKE = [sys.executable, "-m", "snakemake"]
 
 
@@ -82,8 +84,27 @@ def rule_times(workdir: Path) -> pd.DataFrame:
     return pd.DataFrame(rows)
 
 
-def snakemake(workdir: Path, cores: int, *extra, timeout=None):
+def machine_busy_s() -> float:
+    """CPU seconds the whole machine has spent busy (every CPU; /proc/stat, Linux)."""
+    try:
+        f = [int(v) for v in Path("/proc/stat").read_text().split("\n")[0].split()[1:]]
+    except (OSError, ValueError):
+        return float("nan")
+    user, nice, system, idle, iowait, irq, softirq, steal = (f + [0] * 8)[:8]
+    return (user + nice + system + irq + softirq + steal) / os.sysconf("SC_CLK_TCK")
+
+
+def children_cpu_s() -> float:
+    ru = resource.getrusage(resource.RUSAGE_CHILDREN)
+    return ru.ru_utime + ru.ru_stime
+
+
+def snakemake(workdir: Path, cores: int, *extra, timeout=None, load=None):
+    """Run Snakemake in ``workdir``; ``load`` (a dict) receives the CPU seconds of the run's
+    process tree (``run_cpu_s``) and of everything else on the machine meanwhile
+    (``other_cpu_s``): a run that shared the machine says so."""
     t0 = time.perf_counter()
+    busy0, own0 = machine_busy_s(), children_cpu_s()
     p = subprocess.Popen(SNAKEMAKE + ["--cores", str(cores), *extra], cwd=workdir, stdout=subprocess.PIPE,
                          stderr=subprocess.STDOUT, text=True, start_new_session=True)
     killed = False
@@ -93,6 +114,9 @@ def snakemake(workdir: Path, cores: int, *extra, timeout=None):
         os.killpg(p.pid, signal.SIGKILL)
         out, _ = p.communicate()
         killed = True
+    if load is not None:
+        own = children_cpu_s() - own0
+        load.update(run_cpu_s=round(own, 1), other_cpu_s=round(max(0.0, machine_busy_s() - busy0 - own), 1))
     return p.returncode, time.perf_counter() - t0, out, killed
 
 
@@ -123,10 +147,11 @@ def main(argv=None) -> int:
         soils = args.soils
         wd = copy_workflow(Path(args.workdir), soils)
         label = " ".join(soils or yaml.safe_load((ROOT / "config/config.yaml").read_text())["soils"])
-        rc, el, log, _ = snakemake(wd, args.cores)
+        load = {}
+        rc, el, log, _ = snakemake(wd, args.cores, load=load)
         (wd / "calibration.log").write_text(log)
         runs = [dict(utc=utc, commit=rev, run_id=run_id, soils=label, cores=args.cores, kind="from empty results/",
-                     elapsed_s=round(el, 1), jobs_done=jobs_done(log), rc=rc, note="")]
+                     elapsed_s=round(el, 1), jobs_done=jobs_done(log), rc=rc, note="", **load)]
         left = planned(wd, args.cores) if rc == 0 else -1
         runs.append(dict(utc=utc, commit=rev, run_id=run_id, soils=label, cores=args.cores, kind="second run (dry)",
                          elapsed_s="", jobs_done=left, rc=0, note="jobs a second run would do"))
@@ -173,13 +198,19 @@ def report(md_path: Path, argv) -> None:
           f"Last command: `python benchmarks/calibration.py {' '.join(argv)}`.  Rows: `calibration_runs.csv`, "
           "`calibration.csv` (utc and commit per row).", "",
           "Workflow runs (a fresh copy of Snakefile, workflow/, config/, resources/ per run; elapsed is the "
-          "wall-clock time of `snakemake --cores N`):", "",
-          "| utc | commit | soils | cores | run | elapsed min | jobs | rc | note |",
-          "|---|---|---|---:|---|---:|---:|---:|---|"]
+          "wall-clock time of `snakemake --cores N`; run CPU min: the CPU time of the run's processes; "
+          "other CPU min: what every other process on the machine used meanwhile (from /proc/stat; recorded "
+          "from 2026-11-27 18:50 UTC on, empty before): a run beside other work is slower than the "
+          "machine allows):", "",
+          "| utc | commit | soils | cores | run | elapsed min | jobs | rc | run CPU min | other CPU min | note |",
+          "|---|---|---|---:|---|---:|---:|---:|---:|---:|---|"]
+
+    def minutes(v):
+        return f"{float(v) / 60:.1f}" if v not in ("", None) else ""
     for r in runs:
-        el = f"{float(r['elapsed_s']) / 60:.1f}" if r["elapsed_s"] not in ("", None) else ""
-        md.append(f"| {r['utc']} | {r['commit']} | {r['soils']} | {r['cores']} | {r['kind']} | {el} | "
-                  f"{r['jobs_done']} | {r['rc']} | {r['note']} |")
+        md.append(f"| {r['utc']} | {r['commit']} | {r['soils']} | {r['cores']} | {r['kind']} | "
+                  f"{minutes(r['elapsed_s'])} | {r['jobs_done']} | {r['rc']} | {minutes(r['run_cpu_s'])} | "
+                  f"{minutes(r['other_cpu_s'])} | {r['note']} |")
     soils_of = {r["run_id"]: r["soils"] for r in runs if "run_id" in r}
     latest = {}
     for r in rules:  # the last run of every set of soils

@@ -316,6 +316,32 @@ def repose_angle_surface(x, r, plate_z=0.0, centre=None, n_dir=8, cell=None, pro
 
 
 # ---------------------------------------------------------------- side silhouette
+@njit(cache=True)
+def _paint_disks(img, rows, cols, rad, value, stop_row):
+    """Set the pixels of the discs (centre rows[k], cols[k], radius rad[k]) above row
+    ``stop_row`` to ``value``: the pixels of ``skimage.draw.disk`` to the last one (its
+    bounding box ceil(c - R) .. floor(c + R) clipped to the image, its test
+    ((i - c_r) / R)^2 + ((j - c_c) / R)^2 < 1 with the centre taken relative to the box's
+    corner), without allocating per disc."""
+    h, w = img.shape
+    for k in range(rows.size):
+        rr, cr, cc = rad[k], rows[k], cols[k]
+        r0 = max(int(math.ceil(cr - rr)), 0)
+        r1 = min(int(math.floor(cr + rr)), h - 1)
+        c0 = max(int(math.ceil(cc - rr)), 0)
+        c1 = min(int(math.floor(cc + rr)), w - 1)
+        sr = cr - r0
+        sc = cc - c0
+        for i in range(r1 - r0 + 1):
+            if i + r0 >= stop_row:
+                break
+            dr = (float(i) - sr) / rr
+            for j in range(c1 - c0 + 1):
+                dc = (float(j) - sc) / rr
+                if dr * dr + dc * dc < 1.0:
+                    img[i + r0, j + c0] = value
+
+
 def render_side(x, r, plate_z=0.0, view="y", px_per_m=None, width_px=1000, path=None,
                 background=0.93, soil=0.22, plate=0.62):
     """Orthographic side view of the particles above the plate as an 8-bit RGB image.
@@ -325,8 +351,6 @@ def render_side(x, r, plate_z=0.0, view="y", px_per_m=None, width_px=1000, path=
     "x"; theta and theta + 180 give mirror images of one silhouette).
     Returns (image uint8[H, W, 3], px_per_m); writes a PNG when ``path`` is given.
     """
-    from skimage.draw import disk
-
     x, r = _xr(x, r)
     above = x[:, 2] + r > plate_z
     x, r = x[above], r[above]
@@ -352,10 +376,8 @@ def render_side(x, r, plate_z=0.0, view="y", px_per_m=None, width_px=1000, path=
     img[plate_row + plate_px:, :] = 0.45
     uc = (u - lo) * s + margin_u
     vc = plate_row - (x[:, 2] - plate_z) * s
-    for ui, vi, ri in zip(uc, vc, r * s):
-        rr, cc = disk((vi, ui), max(ri, 0.7), shape=img.shape)
-        keep = rr < plate_row  # the plate hides what lies behind/below its top edge
-        img[rr[keep], cc[keep]] = soil
+    # the plate hides what lies behind/below its top edge (rows from plate_row on)
+    _paint_disks(img, vc, uc, np.maximum(r * s, 0.7), float(soil), int(plate_row))
     rgb = (np.repeat(img[..., None], 3, axis=2) * 255 + 0.5).astype(np.uint8)
     if path is not None:
         from PIL import Image

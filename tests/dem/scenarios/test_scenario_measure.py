@@ -189,6 +189,28 @@ def test_render_side_draws_the_heap_above_a_plate(tmp_path):
         measure.render_side(x, r, view=float("nan"))
 
 
+def test_painted_discs_are_scikit_image_discs():
+    """The silhouette's disc painter sets exactly the pixels of skimage.draw.disk (clipped to
+    the image, nothing at or below the plate row), including discs cut by the border and
+    sub-pixel discs."""
+    from skimage.draw import disk
+
+    rng = np.random.default_rng(7)
+    h, w, stop = 120, 160, 90
+    rows = rng.uniform(-10, h + 10, 400)
+    cols = rng.uniform(-10, w + 10, 400)
+    rad = np.maximum(rng.uniform(0.2, 12, 400), 0.7)
+    want = np.full((h, w), 0.5)
+    for rc, cc, rr in zip(rows, cols, rad):
+        pr, pc = disk((rc, cc), rr, shape=want.shape)
+        keep = pr < stop
+        want[pr[keep], pc[keep]] = 0.1
+    got = np.full((h, w), 0.5)
+    measure._paint_disks(got, rows, cols, rad, 0.1, stop)
+    assert np.array_equal(got, want)
+    assert (got[stop:] == 0.5).all() and (got == 0.1).sum() > 1000
+
+
 def drum_state(theta_deg, R=0.05, L=0.1, r=0.002, fill=0.25, seed=1):
     """Spheres filling the circular segment below a chord tilted by theta (drum axis along y)
     that holds ``fill`` of the section (A = R^2 acos(d/R) - d sqrt(R^2 - d^2))."""
