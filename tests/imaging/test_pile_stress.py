@@ -107,24 +107,31 @@ def test_a_second_cue_flags_a_flank_the_first_one_misreads(tmp_path):
 
 
 def test_a_third_cue_decides_between_two_that_disagree(tmp_path):
-    """Photos 183 and 196 of the seeded corpus.  183: the first cue reads both flanks within
-    0.3 deg of the rendered ones, a luminance cue reads the left flank 4.6 deg steeper; the
-    next credible cue agrees with the first, so the dissent is outvoted, recorded, and the
-    result stays ok.  196: the first cue (luminance) reads the right flank 2.4 deg flat, the
-    next credible cue reads it within 0.1 deg, and no third cue measures a heap to decide
-    between the two: flagged low."""
+    """Photo 196 of the seeded corpus: the first cue (luminance) reads the right flank 2.4 deg
+    flat, the next credible cue reads it within 0.1 deg, and no third cue measures a heap to
+    decide between the two: flagged low."""
     params = corpus.pile_photo_params(197, seed=0)
-    path, truth = corpus.write_pile_photo(params[183], tmp_path, "s183")
-    r = measure.measure_pile(path)
-    assert abs(r.left_deg - truth["left_deg"]) <= 0.3 and abs(r.right_deg - truth["right_deg"]) <= 0.3
-    assert r.cue_outvoted and r.cue_outvoted_deg > measure.CUE_AGREEMENT_DEG
-    assert r.cue_check not in ("", r.cue_outvoted) and r.cue_check_deg <= measure.CUE_AGREEMENT_DEG
-    assert r.confidence == "ok"
     path, truth = corpus.write_pile_photo(params[196], tmp_path, "s196")
     r = measure.measure_pile(path)
     assert abs(r.right_deg - truth["right_deg"]) > 1.0  # the first cue's reading, refuted
     assert r.cue_check and r.cue_outvoted == ""
     assert r.cue_check_deg > measure.CUE_AGREEMENT_DEG and r.confidence == "low"
+
+
+def test_a_flank_line_inside_the_heap_is_flagged_and_cannot_refute(tmp_path):
+    """Photo 183 of the seeded corpus: luminance alone reads the left flank 4.6 deg steep (its
+    fitted edge runs inside the heap: the strip just outside the line is still more than half
+    way from the wall's level to the heap's), so that reading is low; in the cue search it is
+    then no credible dissent, and the first cue, within 0.3 deg, stands confirmed and ok."""
+    params = corpus.pile_photo_params(184, seed=0)
+    path, truth = corpus.write_pile_photo(params[183], tmp_path, "s183")
+    g = measure.measure_pile(path, channel="gray")
+    assert abs(g.left_deg - truth["left_deg"]) > 4.0
+    assert g.flank_outside_share > measure.FLANK_OUTSIDE_MAX and g.confidence == "low"
+    r = measure.measure_pile(path)
+    assert abs(r.left_deg - truth["left_deg"]) <= 0.3 and abs(r.right_deg - truth["right_deg"]) <= 0.3
+    assert r.cue_outvoted == "" and r.cue_check and r.cue_check_deg <= measure.CUE_AGREEMENT_DEG
+    assert r.flank_outside_share < 0.2 and r.confidence == "ok"
 
 
 def test_a_cue_that_does_not_split_the_band_neither_confirms_nor_refutes(tmp_path):
@@ -163,3 +170,32 @@ def test_a_colour_cue_edge_is_refined_in_luminance(tmp_path, monkeypatch):
         r = measure.measure_pile(p)
         worst = max(worst, abs(r.left_deg - truth["left_deg"]), abs(r.right_deg - truth["right_deg"]))
     assert worst > 0.5
+
+
+
+def _flank_image(side, heap=0.2, wall=0.8, h=300, w=400, prow=250.0, edge=200.0):
+    """A levelled cue image with one 45 deg flank meeting the plate at column ``edge``: the
+    heap (darker) at heights above the plate row of at most side * (edge - u) (side -1: a
+    left flank rising to the right), the wall elsewhere."""
+    rows, cols = np.mgrid[0:h, 0:w].astype(float)
+    return np.where(prow - rows <= side * (edge - cols), heap, wall), prow
+
+
+@pytest.mark.parametrize("side", [-1.0, 1.0])
+@pytest.mark.parametrize("shift, want", [(0.0, 0.0), (12.0, 1.0), (-12.0, float("nan"))])
+def test_outside_share_of_a_straight_flank(side, shift, want):
+    """A line on the edge has the wall right outside it (share 0); a line 12 px inside the
+    heap, along its normal, has heap in its 3-8 px outside strip (share 1); a line 12 px out
+    in the wall has wall in its inside strip as well: no step to judge (NaN)."""
+    glev, prow = _flank_image(side)
+    u0 = 200.0 - side * shift * np.sqrt(2.0)  # shift px along the normal, into the heap
+    share = measure._outside_share(glev, prow, (u0, 0.0, 1.0, -side), side, 20.0, 120.0)
+    if np.isnan(want):
+        assert np.isnan(share)
+    else:
+        assert share == pytest.approx(want, abs=1e-9)
+
+
+def test_outside_share_is_not_judged_on_a_weak_step():
+    glev, prow = _flank_image(-1.0, heap=0.78, wall=0.8)
+    assert np.isnan(measure._outside_share(glev, prow, (200.0, 0.0, 1.0, 1.0), -1.0, 20.0, 120.0))

@@ -26,6 +26,7 @@ degree (``numpy.polynomial.Polynomial.fit``), area = integral over the span of
 
 from __future__ import annotations
 
+import math
 from dataclasses import asdict, dataclass, field
 
 import numpy as np
@@ -66,13 +67,17 @@ class PileResult:
     cue: str = "gray/dark"  # segmentation channel / heap darker or lighter than the wall
     flank_points_used: float = 1.0  # smaller flank's share of band points on its fitted line
     flank_rms_px: float = 0.0  # larger flank's RMS distance of those points from the line
-    confidence: str = "ok"  # "low": under 60 % of a flank used, RMS above 2.5 px, flanks > 12 deg apart
+    confidence: str = "ok"  # "low": under 60 % of a flank used, RMS above 2.5 px, flanks > 12 deg apart,
+    # the heap's level continuing past a flank's line (flank_outside_share above FLANK_OUTSIDE_MAX)
     # or further cues' flanks more than CUE_AGREEMENT_DEG away (CUE_CHECKS)
     stages: Stages | None = None
     cue_check: str = ""  # the further cue that confirms or refutes this result (cue search only), "" if none did
     cue_check_deg: float = float("nan")  # the larger of its two flanks' differences from this result
     cue_outvoted: str = ""  # a further cue that disagreed but was outvoted by cue and cue_check
     cue_outvoted_deg: float = float("nan")  # its larger flank difference from this result
+    # larger flank's share of the heap-to-wall contrast still found just outside its line
+    # (_outside_share; NaN where the flank's contrast is too weak to tell)
+    flank_outside_share: float = float("nan")
 
     def as_dict(self):
         d = asdict(self)
@@ -329,7 +334,9 @@ def measure_pile(path, threshold="otsu", keep_stages=False, channel="auto", refu
     differing in hue only) by decreasing eta; a result must look like a heap (flanks within
     :data:`FLANK_RANGE`, at least 3 % of the image high).  The cue used is reported, with a
     confidence ("low" when a flank's points stray from its line, e.g. a cast shadow joined to
-    a flank, or when the further cues that also measure the heap, :data:`CUE_CHECKS` at most,
+    a flank; when the heap's level continues just outside a flank's line, e.g. a shaded flank
+    as dark as the wall lost to it (:func:`_outside_share`, :data:`FLANK_OUTSIDE_MAX`); or
+    when the further cues that also measure the heap, :data:`CUE_CHECKS` at most,
     give a flank more than :data:`CUE_AGREEMENT_DEG` away: the first credible one (a clear
     split, its own fits passing) that agrees confirms the result; one that disagrees is
     outvoted only by a next credible one that agrees: a cleanly fitted flank can still be the
@@ -477,13 +484,57 @@ def _pile_with(path, rgb, gray, cue, polarity, band, slope, intercept, threshold
                          f"{FLANK_RANGE[1]:.0f} deg, at least 3 % of the image high",
                          f"flanks {left:.1f} and {right:.1f} deg ({rms:.1f} px from their lines), {hmax:.0f} px "
                          f"high ({cue}/{polarity})")
-    low = used < 0.6 or rms > 2.5 or abs(left - right) > 12.0
+    shares = [_outside_share(glev, prow, line, side, BAND[0] * hmax, BAND[1] * hmax)
+              for line, side in ((lline, -1.0), (rline, 1.0))]
+    outside = max(shares) if np.isfinite(shares).any() else float("nan")
+    low = used < 0.6 or rms > 2.5 or abs(left - right) > 12.0 or outside > FLANK_OUTSIDE_MAX
     st = None
     if keep_stages:
         st = Stages(rgb, gray, binary, lev, [lline + ("left",), rline + ("right",)], [lp, rp])
         st.plate_row = prow
     return PileResult(str(path), float(ang.mean()), left, right, float(ang.std(ddof=1)), float(roll),
-                      f"{cue}/{polarity}", float(used), float(rms), "low" if low else "ok", st)
+                      f"{cue}/{polarity}", float(used), float(rms), "low" if low else "ok", st,
+                      flank_outside_share=float(outside))
+
+
+#: strips beside a fitted flank line, in px along its normal (negative: into the heap): the
+#: heap just inside, the edge's near outside, and the wall further out (_outside_share)
+OUTSIDE_STRIPS = {"inside": (-8, -3), "near": (3, 8), "wall": (30, 45)}
+#: a flank whose near outside strip is more than this share of the way from the wall's level
+#: to the heap's is "low": the strip lies nearer the heap's level than the wall's, so the
+#: edge (the mid-level crossing) is further out than the line: the fitted edge runs inside the
+#: heap, e.g. a shaded flank as dark as the wall was lost to it and the flank reads steeper
+FLANK_OUTSIDE_MAX = 0.5
+#: the heap-to-wall step (inside strip minus wall strip, cue units 0-1) below which a flank's
+#: outside share is not judged (NaN): too weak to tell a level from the noise
+OUTSIDE_MIN_STEP = 0.05
+
+
+def _outside_share(glev, prow, line, side, v_lo, v_hi, n=60):
+    """Where the levelled cue image ``glev`` stands just outside a flank's fitted ``line``
+    (u0, v0, du, dv in columns and height above the plate row ``prow``) between heights
+    ``v_lo`` and ``v_hi``: (near - wall) / (inside - wall) with the medians of the
+    :data:`OUTSIDE_STRIPS` (``side`` -1: the left flank, outward is towards smaller columns).
+    0 when the wall begins right outside the line, 1 when the heap continues past it."""
+    u0, v0, du, dv = line
+    d = np.array([du, dv], float) / math.hypot(du, dv)
+    if abs(d[1]) < 1e-6:
+        return float("nan")
+    nrm = np.array([-d[1], d[0]])
+    if np.sign(nrm[0]) != np.sign(side):
+        nrm = -nrm
+    vs = np.linspace(v_lo, v_hi, n)
+    base = np.column_stack([u0 + (vs - v0) / d[1] * d[0], vs])
+
+    def level(lo, hi):
+        pts = np.concatenate([base + k * nrm for k in range(lo, hi + 1)])
+        return float(np.median(ndi.map_coordinates(glev, [prow - pts[:, 1], pts[:, 0]], order=1,
+                                                   mode="nearest")))
+
+    inside, near, wall = (level(*OUTSIDE_STRIPS[k]) for k in ("inside", "near", "wall"))
+    if abs(inside - wall) < OUTSIDE_MIN_STEP:
+        return float("nan")
+    return (near - wall) / (inside - wall)
 
 
 def _straighter(path, u, vs, sel, label):
