@@ -107,10 +107,19 @@ def test_a_second_cue_flags_a_flank_the_first_one_misreads(tmp_path):
 
 
 def test_a_third_cue_decides_between_two_that_disagree(tmp_path):
-    """Photo 196 of the seeded corpus: the first cue (luminance) reads the right flank 2.4 deg
+    """Photos 27 and 196 of the seeded corpus.  27: the first cue (luminance) reads both
+    flanks within 0.3 deg of the rendered ones, the chroma cue reads a flank more than 1 deg
+    away; the next credible cue agrees with the first, so the dissent is outvoted, recorded,
+    and the result stays ok.  196: the first cue (luminance) reads the right flank 2.4 deg
     flat, the next credible cue reads it within 0.1 deg, and no third cue measures a heap to
     decide between the two: flagged low."""
     params = corpus.pile_photo_params(197, seed=0)
+    path, truth = corpus.write_pile_photo(params[27], tmp_path, "s27")
+    r = measure.measure_pile(path)
+    assert abs(r.left_deg - truth["left_deg"]) <= 0.3 and abs(r.right_deg - truth["right_deg"]) <= 0.3
+    assert r.cue_outvoted and r.cue_outvoted_deg > measure.CUE_AGREEMENT_DEG
+    assert r.cue_check not in ("", r.cue_outvoted) and r.cue_check_deg <= measure.CUE_AGREEMENT_DEG
+    assert r.confidence == "ok"
     path, truth = corpus.write_pile_photo(params[196], tmp_path, "s196")
     r = measure.measure_pile(path)
     assert abs(r.right_deg - truth["right_deg"]) > 1.0  # the first cue's reading, refuted
@@ -170,7 +179,6 @@ def test_a_colour_cue_edge_is_refined_in_luminance(tmp_path, monkeypatch):
         r = measure.measure_pile(p)
         worst = max(worst, abs(r.left_deg - truth["left_deg"]), abs(r.right_deg - truth["right_deg"]))
     assert worst > 0.5
-
 
 
 def _flank_image(side, heap=0.2, wall=0.8, h=300, w=400, prow=250.0, edge=200.0):
