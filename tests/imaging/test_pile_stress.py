@@ -207,3 +207,13 @@ def test_outside_share_of_a_straight_flank(side, shift, want):
 def test_outside_share_is_not_judged_on_a_weak_step():
     glev, prow = _flank_image(-1.0, heap=0.78, wall=0.8)
     assert np.isnan(measure._outside_share(glev, prow, (200.0, 0.0, 1.0, 1.0), -1.0, 20.0, 120.0))
+
+
+def test_a_flank_outside_the_heap_is_flagged_when_the_other_is_not_judged(tmp_path, monkeypatch):
+    """The left flank's share not judged (NaN), the right one's 0.7: the photo's share is 0.7
+    and it is low (the larger judged share, whichever flank comes first)."""
+    p, _ = _photo(tmp_path, "nan_first", 33.0, 36.0, PLAIN | {"wall_rgb": [0.8, 0.8, 0.78]})
+    shares = iter([float("nan"), 0.7])
+    monkeypatch.setattr(measure, "_outside_share", lambda *a, **k: next(shares))
+    r = measure.measure_pile(p, channel="gray")
+    assert r.flank_outside_share == 0.7 and r.confidence == "low"

@@ -486,7 +486,8 @@ def _pile_with(path, rgb, gray, cue, polarity, band, slope, intercept, threshold
                          f"high ({cue}/{polarity})")
     shares = [_outside_share(glev, prow, line, side, BAND[0] * hmax, BAND[1] * hmax)
               for line, side in ((lline, -1.0), (rline, 1.0))]
-    outside = max(shares) if np.isfinite(shares).any() else float("nan")
+    # the larger judged share (max() would return a NaN that comes first)
+    outside = float(np.nanmax(shares)) if np.isfinite(shares).any() else float("nan")
     low = used < 0.6 or rms > 2.5 or abs(left - right) > 12.0 or outside > FLANK_OUTSIDE_MAX
     st = None
     if keep_stages:
