@@ -24,7 +24,8 @@ from _report import (confidence_table, corpus_args, corpus_header, corpus_rows, 
 HERE = Path(__file__).resolve().parent
 FIELDS = ["photo", "truth_deg", "left_truth_deg", "right_truth_deg", "roll_deg", "measured_deg", "error_deg",
           "left_error_deg", "right_error_deg", "cue", "confidence", "flank_points_used", "flank_rms_px", "cue_check",
-          "cue_check_deg", "cue_outvoted", "cue_outvoted_deg", "refusal", "seconds"]
+          "cue_check_deg", "cue_outvoted", "cue_outvoted_deg", "flank_outside_share", "texture_flanks", "refusal",
+          "seconds"]
 
 
 def measured(path, truth):
@@ -38,7 +39,8 @@ def measured(path, truth):
                 confidence=r.confidence, flank_points_used=round(r.flank_points_used, 3),
                 flank_rms_px=round(r.flank_rms_px, 3), cue_check=r.cue_check,
                 cue_check_deg=round(r.cue_check_deg, 3), cue_outvoted=r.cue_outvoted,
-                cue_outvoted_deg=round(r.cue_outvoted_deg, 3))
+                cue_outvoted_deg=round(r.cue_outvoted_deg, 3), flank_outside_share=round(r.flank_outside_share, 3),
+                texture_flanks=r.texture_flanks)
 
 
 def truth_fields(t):
@@ -68,6 +70,7 @@ def main(argv=None):
     checked = [r for r in meas if r["cue_check"]]
     disagree = [r for r in checked if r["cue_check_deg"] > CUE_AGREEMENT_DEG]
     outvoted = [r for r in checked if r["cue_outvoted"]]
+    textured = [r for r in meas if r["texture_flanks"]]
     md = ["# Heap-photo stress benchmark",
           "",
           corpus_header("pile_photos.py", sys.argv[1:] if argv is None else argv, n, args.seed, wall),
@@ -87,6 +90,11 @@ def main(argv=None):
           f"{sum(abs(r['error_deg']) > 1.0 for r in disagree)} of them wrong by more than 1 deg; "
           f"{len(outvoted)} confirmed after a dissenting cue was outvoted, "
           f"{sum(abs(r['error_deg']) > 0.3 for r in outvoted)} of them off by more than 0.3 deg.",
+          "",
+          f"A flank located again in the grain of the soil (low-confidence photos only): {len(textured)} photos "
+          f"({Counter(r['texture_flanks'] for r in textured).most_common()}); of those "
+          f"{sum(abs(r['error_deg']) <= 0.3 for r in textured)} within 0.3 deg, "
+          f"{sum(abs(r['error_deg']) > 1.0 for r in textured)} off by more than 1 deg.",
           ""]
     write_page(out / "pile_photos.md", md)
     print("\n".join(table))

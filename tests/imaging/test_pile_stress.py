@@ -89,17 +89,24 @@ def test_corpus_is_seeded():
     assert np.array_equal(img1, img2)
 
 
-def test_a_second_cue_flags_a_flank_the_first_one_misreads(tmp_path):
+def test_a_second_cue_flags_a_flank_the_first_one_misreads(tmp_path, monkeypatch):
     """Photo 64 of the seeded corpus: a heap of nearly the wall's hue whose right flank the
     first cue (luminance, heap lighter) reads 6 deg off its rendered 22.7 deg with a clean line
     fit (under 1 px RMS), so neither fit check sees it; the second cue disagrees and the result
-    is flagged.  Photo 0: two cues agree within 1 deg, confidence stays ok."""
+    is flagged.  The flank is the shaded one, lost to a wall as dark as it: the soil's grain
+    then locates it within 0.5 deg (the result stays low).  Photo 0: two cues agree within
+    1 deg, confidence stays ok."""
     params = corpus.pile_photo_params(65, seed=0)
     path, truth = corpus.write_pile_photo(params[64], tmp_path, "s64")
-    r = measure.measure_pile(path)
+    with monkeypatch.context() as m:
+        m.setattr(measure, "_texture_flanks", lambda res, lum: res)
+        r = measure.measure_pile(path)
     assert abs(r.right_deg - truth["right_deg"]) > 1.0 and r.flank_rms_px < 2.5  # wrong, cleanly fitted
     assert r.cue_check and r.cue_check != r.cue and r.cue_check_deg > measure.CUE_AGREEMENT_DEG
     assert r.confidence == "low"
+    r = measure.measure_pile(path)
+    assert r.texture_flanks == "right" and r.confidence == "low"
+    assert abs(r.right_deg - truth["right_deg"]) <= 0.5 and abs(r.angle_deg - truth["angle_deg"]) <= 0.3
     path, truth = corpus.write_pile_photo(params[0], tmp_path, "s00")
     r = measure.measure_pile(path)
     assert r.cue_check and r.cue_check_deg <= measure.CUE_AGREEMENT_DEG and r.confidence == "ok"
@@ -217,3 +224,64 @@ def test_a_flank_outside_the_heap_is_flagged_when_the_other_is_not_judged(tmp_pa
     monkeypatch.setattr(measure, "_outside_share", lambda *a, **k: next(shares))
     r = measure.measure_pile(p, channel="gray")
     assert r.flank_outside_share == 0.7 and r.confidence == "low"
+
+
+def _texture_map(side, hmax=120.0, heap=1.0, wall=0.1, h=300, w=400, prow=250.0, edge=200.0):
+    """A levelled texture map of a flat-topped heap ``hmax`` px high with one 45 deg flank
+    meeting the plate at column ``edge`` (as :func:`_flank_image`), blurred by a symmetric
+    Gaussian: the mid-level between heap and wall lies on the flank."""
+    from skimage import filters
+
+    rows, cols = np.mgrid[0:h, 0:w].astype(float)
+    v = prow - rows
+    e = np.where((v >= 0) & (v <= side * (edge - cols)) & (v <= hmax), heap, wall)
+    return filters.gaussian(e, 3.0), prow
+
+
+@pytest.mark.parametrize("side", [-1.0, 1.0])
+def test_texture_edge_of_a_straight_flank(side):
+    """The cue's line runs through the apex at 60 deg, inside the heap; the texture edge
+    found outward from it is the 45 deg flank."""
+    hmax = 120.0
+    e, prow = _texture_map(side, hmax)
+    a60 = np.radians(60.0)
+    line = (200.0 - side * hmax, hmax, -side * np.cos(a60), np.sin(a60))
+    ang, tline, used, rms = measure._texture_edge("map", e, prow, line, side, hmax, "flank")
+    assert ang == pytest.approx(45.0, abs=0.1)
+    assert used > 0.95 and rms < 0.3
+
+
+def _shaded_heap(path, left=35.0, right=40.0, grain=0.06, h=600, w=800, prow=420, height=200, seed=0):
+    """A grey heap photo with grain of SD ``grain`` on the heap, lit on the left (0.75) and
+    shaded on the right: each row's luminance falls linearly from 0.75 at the apex column to
+    the wall's 0.30 at the flank's edge, so no brightness threshold sees the flank's edge;
+    plate 0.9 below, the wall with a camera noise of 0.004."""
+    from skimage import io
+
+    rng = np.random.default_rng(seed)
+    rr, cc = np.mgrid[0:h, 0:w].astype(float)
+    apex, v = 380.0, prow - rr
+    tl, tr = np.tan(np.radians(left)), np.tan(np.radians(right))
+    dr = (cc - apex) - (height - v) / tr  # < 0 inside the right flank
+    heap = (v > 0) & (v <= height) & ((apex - cc) - (height - v) / tl < 0) & (dr < 0)
+    f = np.clip(-dr / np.maximum((height - v) / tr, 1e-9), 0.0, 1.0)
+    img = 0.30 + rng.normal(0.0, 0.004, (h, w))
+    img[heap] = np.where(cc <= apex, 0.75, 0.30 + 0.45 * f)[heap] + rng.normal(0.0, grain, int(heap.sum()))
+    img[(rr >= prow) & (rr < prow + 20)] = 0.9
+    img[rr >= prow + 20] = 0.5
+    rgb = (np.repeat(np.clip(img, 0, 1)[..., None], 3, -1) * 255).astype(np.uint8)
+    io.imsave(path, rgb, check_contrast=False)
+    return path
+
+
+def test_a_shaded_flank_lost_to_the_wall_is_found_in_its_grain(tmp_path):
+    """The brightness cue reads the shaded right flank steep (its line inside the heap, low
+    confidence); the grain of the soil locates it again within 1 deg of 40, the lit flank
+    stays as measured, and the result stays low.  A heap without grain keeps its steep
+    flank: the texture has nothing to find."""
+    r = measure.measure_pile(_shaded_heap(tmp_path / "grain.png"))
+    assert r.texture_flanks == "right" and r.confidence == "low"
+    assert abs(r.right_deg - 40.0) < 1.0 and abs(r.left_deg - 35.0) < 0.5
+    assert r.angle_deg == pytest.approx((r.left_deg + r.right_deg) / 2)
+    smooth = measure.measure_pile(_shaded_heap(tmp_path / "smooth.png", grain=0.0))
+    assert smooth.texture_flanks == "" and smooth.confidence == "low" and smooth.right_deg > 50.0

@@ -78,10 +78,17 @@ class PileResult:
     # larger flank's share of the heap-to-wall contrast still found just outside its line
     # (_outside_share; NaN where the flank's contrast is too weak to tell)
     flank_outside_share: float = float("nan")
+    # flanks whose line was located again in the luminance texture ("left", "right", "left right"
+    # or ""; low-confidence results only, _texture_flanks)
+    texture_flanks: str = ""
+    # (plate slope, plate intercept, left line, right line, heap height px): where the flanks
+    # were fitted, for a later refinement; not reported
+    geometry: tuple | None = field(default=None, repr=False)
 
     def as_dict(self):
         d = asdict(self)
         d.pop("stages")
+        d.pop("geometry")
         return d
 
 
@@ -119,6 +126,10 @@ def _gray(rgb, channel="gray", lab=None):
 
 
 CUES = ("gray", "chroma", "lab_a", "lab_b", "saturation")
+#: a flank fit is good enough for an "ok" result when at least this share of its band points
+#: lie on its line and their RMS distance from it is at most FLANK_RMS_MAX px
+FLANK_USED_MIN = 0.6
+FLANK_RMS_MAX = 2.5
 MIN_CUE_ETA = 0.75
 FLANK_RANGE = (10.0, 65.0)  # flank angles a heap of soil can stand at
 
@@ -346,7 +357,10 @@ def measure_pile(path, threshold="otsu", keep_stages=False, channel="auto", refu
     """
     tried = Tried(keep_masks=refusals is not None)
     with explained(path, refusals, tried):
-        return _measure_pile(path, threshold, keep_stages, channel, tried)
+        res = _measure_pile(path, threshold, keep_stages, channel, tried)
+    if channel == "auto" and res.confidence != "ok":
+        res = _texture_flanks(res, tried.gray)
+    return res
 
 
 def _measure_pile(path, threshold, keep_stages, channel, tried: Tried) -> PileResult:
@@ -488,14 +502,15 @@ def _pile_with(path, rgb, gray, cue, polarity, band, slope, intercept, threshold
               for line, side in ((lline, -1.0), (rline, 1.0))]
     # the larger judged share (max() would return a NaN that comes first)
     outside = float(np.nanmax(shares)) if np.isfinite(shares).any() else float("nan")
-    low = used < 0.6 or rms > 2.5 or abs(left - right) > 12.0 or outside > FLANK_OUTSIDE_MAX
+    low = used < FLANK_USED_MIN or rms > FLANK_RMS_MAX or abs(left - right) > 12.0 or outside > FLANK_OUTSIDE_MAX
     st = None
     if keep_stages:
         st = Stages(rgb, gray, binary, lev, [lline + ("left",), rline + ("right",)], [lp, rp])
         st.plate_row = prow
     return PileResult(str(path), float(ang.mean()), left, right, float(ang.std(ddof=1)), float(roll),
                       f"{cue}/{polarity}", float(used), float(rms), "low" if low else "ok", st,
-                      flank_outside_share=float(outside))
+                      flank_outside_share=float(outside),
+                      geometry=(float(slope), float(intercept), lline, rline, float(hmax)))
 
 
 #: strips beside a fitted flank line, in px along its normal (negative: into the heap): the
@@ -559,6 +574,123 @@ LUM_EDGE_STRAIGHTER = 0.8
 def _line_rms(pts, line):
     u0, v0, du, dv = line
     return float(np.sqrt(np.mean(((pts[:, 0] - u0) * dv - (pts[:, 1] - v0) * du) ** 2)))
+
+
+#: texture of the luminance (_texture_maps): the fine detail |L - G(L)| of a Gaussian high-pass
+#: at the first scale (px), averaged by a Gaussian at the second
+TEXTURE_SIGMAS = (1.0, 3.0)
+#: the heap's texture level on a row is read this many px inside the cue's flank line
+TEXTURE_INSIDE = (8, 30)
+#: a row counts when the heap's texture exceeds the wall's by this share of the heap's
+TEXTURE_MIN_CONTRAST = 0.3
+#: the wall's texture level is read above the apex: from 7 averaging sigmas above it (clear of
+#: the apex's own edge), over this many px upward and this many px to each side (or a quarter
+#: and a half of the heap's height, where larger)
+TEXTURE_WALL = (60, 100)
+
+
+def _texture_maps(llev):
+    """Texture energy of a levelled luminance image: ``absolute`` (the averaged fine detail, see
+    :data:`TEXTURE_SIGMAS`) and ``relative`` (the same over the local brightness, floor 0.02):
+    granular soil shows grain down to the pixel, shaded or lit, where a painted or plain wall
+    shows only the camera's noise; relative to the brightness, the grain of a shaded flank is
+    as strong as that of a lit one."""
+    hp, av = TEXTURE_SIGMAS
+    e = filters.gaussian(np.abs(llev - filters.gaussian(llev, hp)), av)
+    return {"absolute": e, "relative": e / (filters.gaussian(llev, av) + 0.02)}
+
+
+def _texture_edge(path, e, prow, line, side, hmax, label):
+    """A flank located in the texture map ``e`` (levelled): on every row of the flank band
+    (:data:`BAND`), the first place outward from :data:`TEXTURE_INSIDE` px inside the cue's
+    ``line`` where the texture falls below the midpoint of the heap's (read inside the line) and
+    the wall's (the median above the apex, :data:`TEXTURE_WALL`); these points fitted as a flank
+    (:func:`_fit`).  Returns (angle, line, share of the points on it, their RMS px) or None
+    when the map does not tell heap from wall."""
+    u0, v0, du, dv = line
+    if abs(dv) < 1e-9:
+        return None
+    h, w = e.shape
+    at = lambda v: u0 + (v - v0) / dv * du  # noqa: E731 - the line's column at height v
+    r1 = int(prow - hmax - 7 * TEXTURE_SIGMAS[1])
+    r0 = int(r1 - max(TEXTURE_WALL[0], hmax / 4))
+    half = max(TEXTURE_WALL[1], hmax / 2)
+    c0, c1 = int(at(hmax) - half), int(at(hmax) + half)
+    r0, c0, c1 = max(r0, 0), max(c0, 0), min(c1, w)
+    if r1 - r0 < 5 or c1 - c0 < 5:
+        return None
+    wall = float(np.median(e[r0:r1, c0:c1]))
+    reach = int(hmax / math.tan(math.radians(FLANK_RANGE[0])))  # the foot of the flattest flank
+    us, vs = [], []
+    for v in np.arange(BAND[0] * hmax, BAND[1] * hmax, 1.0):
+        r = int(round(prow - v))
+        if not 0 <= r < h:
+            continue
+        ul = at(v)
+        ins = np.round(ul - side * np.arange(*TEXTURE_INSIDE)).astype(int)
+        ins = ins[(ins >= 0) & (ins < w)]
+        if ins.size < 5:
+            continue
+        heap = float(np.median(e[r, ins]))
+        if heap - wall < TEXTURE_MIN_CONTRAST * heap:
+            continue
+        mid = 0.5 * (heap + wall)
+        cols = np.round(ul - side * TEXTURE_INSIDE[0] + side * np.arange(reach)).astype(int)
+        cols = cols[(cols >= 0) & (cols < w)]
+        prof = e[r, cols]
+        below = np.nonzero(prof < mid)[0]
+        if not below.size or below[0] == 0:
+            continue
+        j = below[0]
+        us.append(cols[j - 1] + side * (prof[j - 1] - mid) / (prof[j - 1] - prof[j]))
+        vs.append(v)
+    if len(us) < 20:
+        return None
+    ang, tline, pts = _fit(path, np.asarray(us), np.asarray(vs), label)
+    return ang, tline, len(pts) / len(us), _line_rms(pts, tline)
+
+
+def _texture_flanks(res: PileResult, lum) -> PileResult:
+    """A low-confidence heap with a flank located again in the luminance's texture where the cue
+    lost part of it: the failure of a shaded flank as dark as the wall behind it, which no
+    colour or brightness cue separates from the wall (its line then runs inside the heap and
+    reads steep).  A flank takes the texture's line when that line is fitted as well as an
+    "ok" flank must be (:data:`FLANK_USED_MIN`, :data:`FLANK_RMS_MAX`; the better of the two
+    maps of :func:`_texture_maps`) and is flatter than the cue's by more than
+    :data:`CUE_AGREEMENT_DEG`, its foot further out: the heap goes on where the cue saw wall.
+    A steeper texture line (a textured wall, a cast shadow joined to the flank) changes
+    nothing.  The result stays
+    "low" (the texture edge is blurred by its averaging scale and is no check of itself);
+    ``texture_flanks`` names the flanks moved, ``flank_points_used`` and ``flank_rms_px`` stay
+    those of the cue's fits."""
+    if res.geometry is None:
+        return res
+    slope, intercept, lline, rline, hmax = res.geometry
+    llev, prow, _ = _level(lum, slope, intercept)
+    maps = _texture_maps(llev)
+    ang = {"left": res.left_deg, "right": res.right_deg}
+    lines = {"left": lline, "right": rline}
+    moved = []
+    for name, side in (("left", -1.0), ("right", 1.0)):
+        fits = [f for f in (_texture_edge(res.path, e, prow, lines[name], side, hmax, f"{name} flank")
+                            for e in maps.values()) if f is not None]
+        if not fits:
+            continue
+        a, tline, used, rms = min(fits, key=lambda f: f[3])
+        if used < FLANK_USED_MIN or rms > FLANK_RMS_MAX or ang[name] - a <= CUE_AGREEMENT_DEG:
+            continue
+        ang[name], lines[name] = a, tline
+        moved.append(name)
+    if not moved:
+        return res
+    res.left_deg, res.right_deg = float(ang["left"]), float(ang["right"])
+    pair = np.array([res.left_deg, res.right_deg])
+    res.angle_deg, res.spread_deg = float(pair.mean()), float(pair.std(ddof=1))
+    res.texture_flanks = " ".join(moved)
+    res.geometry = (slope, intercept, lines["left"], lines["right"], hmax)
+    if res.stages is not None:
+        res.stages.lines = [lines["left"] + ("left",), lines["right"] + ("right",)]
+    return res
 
 
 def measure_piles(paths, threshold="otsu", keep_stages=False, channel="auto", refusals=None):
