@@ -92,7 +92,8 @@ def main(argv=None):
           f"{sum(abs(r['error_deg']) > 0.3 for r in outvoted)} of them off by more than 0.3 deg.",
           "",
           f"A flank located again in the grain of the soil (low-confidence photos only): {len(textured)} photos "
-          f"({Counter(r['texture_flanks'] for r in textured).most_common()}); of those "
+          f"({', '.join(f'{v} {k}' for k, v in Counter(r['texture_flanks'] for r in textured).most_common())}); "
+          f"of those "
           f"{sum(abs(r['error_deg']) <= 0.3 for r in textured)} within 0.3 deg, "
           f"{sum(abs(r['error_deg']) > 1.0 for r in textured)} off by more than 1 deg.",
           ""]

@@ -67,9 +67,9 @@ class PileResult:
     cue: str = "gray/dark"  # segmentation channel / heap darker or lighter than the wall
     flank_points_used: float = 1.0  # smaller flank's share of band points on its fitted line
     flank_rms_px: float = 0.0  # larger flank's RMS distance of those points from the line
-    confidence: str = "ok"  # "low": under 60 % of a flank used, RMS above 2.5 px, flanks > 12 deg apart,
-    # the heap's level continuing past a flank's line (flank_outside_share above FLANK_OUTSIDE_MAX)
-    # or further cues' flanks more than CUE_AGREEMENT_DEG away (CUE_CHECKS)
+    confidence: str = "ok"  # "low": under FLANK_USED_MIN of a flank used, RMS above FLANK_RMS_MAX px,
+    # flanks > 12 deg apart, the heap's level continuing past a flank's line (flank_outside_share
+    # above FLANK_OUTSIDE_MAX) or further cues' flanks more than CUE_AGREEMENT_DEG away (CUE_CHECKS)
     stages: Stages | None = None
     cue_check: str = ""  # the further cue that confirms or refutes this result (cue search only), "" if none did
     cue_check_deg: float = float("nan")  # the larger of its two flanks' differences from this result
@@ -351,7 +351,10 @@ def measure_pile(path, threshold="otsu", keep_stages=False, channel="auto", refu
     give a flank more than :data:`CUE_AGREEMENT_DEG` away: the first credible one (a clear
     split, its own fits passing) that agrees confirms the result; one that disagrees is
     outvoted only by a next credible one that agrees: a cleanly fitted flank can still be the
-    wrong edge; read such a photo before using its number).  With ``refusals`` (a folder), a
+    wrong edge; read such a photo before using its number).  A low-confidence result of the cue
+    search has its flanks located again in the soil's grain (:func:`_texture_flanks`), which
+    recovers a shaded flank lost to a wall of its brightness and colour; it stays low.  With
+    ``refusals`` (a folder), a
     photo that cannot be measured also gets a diagnostic image of every attempt there
     (:mod:`soilcal.imaging.refusal`), named in the refusal.
     """
