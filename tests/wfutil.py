@@ -57,9 +57,9 @@ N_SPHERES = 300
 
 def make_tiny(tmp: Path, threads: int | None = None) -> Path:
     """Turn a workflow copy into the tiny run: heaps of ``N_SPHERES`` spheres measured in two
-    side views, two verification seeds, one seed per measured plate, and the measured-data loop trying the
-    adhesion effect at three levels whatever the diagnosis says; ``threads``: the DEM jobs'
-    Numba threads (the soil's ``simulation.threads``)."""
+    side views, two verification seeds, one seed per measured plate, and the measured-data
+    loop trying the adhesion effect at three levels whatever the diagnosis says; ``threads``:
+    the DEM jobs' Numba threads (the soil's ``simulation.threads``)."""
     p = tmp / "config/soils/cinnamon-soil.yaml"
     d = yaml.safe_load(p.read_text())
     d["source"] = "both"

@@ -593,7 +593,7 @@ TEXTURE_WALL = (60, 100)
 
 
 def _texture_maps(llev):
-    """Texture energy of a levelled luminance image: ``absolute`` (the averaged fine detail, see
+    """Texture energy of a levelled (smoothed) luminance image: ``absolute`` (the averaged fine detail, see
     :data:`TEXTURE_SIGMAS`) and ``relative`` (the same over the local brightness, floor 0.02):
     granular soil shows grain down to the pixel, shaded or lit, where a painted or plain wall
     shows only the camera's noise; relative to the brightness, the grain of a shaded flank is
@@ -649,7 +649,10 @@ def _texture_edge(path, e, prow, line, side, hmax, label):
         vs.append(v)
     if len(us) < 20:
         return None
-    ang, tline, pts = _fit(path, np.asarray(us), np.asarray(vs), label)
+    try:
+        ang, tline, pts = _fit(path, np.asarray(us), np.asarray(vs), label)
+    except InputError:  # a degenerate point set: no texture line, the cue's stays
+        return None
     return ang, tline, len(pts) / len(us), _line_rms(pts, tline)
 
 
@@ -662,10 +665,10 @@ def _texture_flanks(res: PileResult, lum) -> PileResult:
     maps of :func:`_texture_maps`) and is flatter than the cue's by more than
     :data:`CUE_AGREEMENT_DEG`, its foot further out: the heap goes on where the cue saw wall.
     A steeper texture line (a textured wall, a cast shadow joined to the flank) changes
-    nothing.  The result stays
-    "low" (the texture edge is blurred by its averaging scale and is no check of itself);
-    ``texture_flanks`` names the flanks moved, ``flank_points_used`` and ``flank_rms_px`` stay
-    those of the cue's fits."""
+    nothing.  The result stays "low" (the texture edge is blurred by its averaging scale and
+    is no check of itself); ``texture_flanks`` names the flanks moved, ``flank_points_used``
+    and ``flank_rms_px`` stay those of the cue's fits.  ``lum``: the smoothed luminance the
+    cues were read in (:func:`_gray`)."""
     if res.geometry is None:
         return res
     slope, intercept, lline, rline, hmax = res.geometry
