@@ -285,3 +285,26 @@ def test_a_shaded_flank_lost_to_the_wall_is_found_in_its_grain(tmp_path):
     assert r.angle_deg == pytest.approx((r.left_deg + r.right_deg) / 2)
     smooth = measure.measure_pile(_shaded_heap(tmp_path / "smooth.png", grain=0.0))
     assert smooth.texture_flanks == "" and smooth.confidence == "low" and smooth.right_deg > 50.0
+
+
+@pytest.mark.parametrize("cue_deg, moved", [(30.0, False), (40.0, True), (35.5, False)])
+def test_only_a_texture_line_flatter_than_the_cue_moves_a_flank(tmp_path, cue_deg, moved):
+    """The lit left flank of the grained heap (35 deg) as a cue might have read it, through
+    the apex: a cue line at 40 deg (inside the heap) takes the texture's 35 deg line; one at
+    30 deg (out in the wall, e.g. a cast shadow joined to the flank) is left alone, and so is
+    one within 1 deg of the texture's."""
+    from skimage import io
+
+    path = _shaded_heap(tmp_path / "lit.png")
+    lum = measure._gray(io.imread(path) / 255.0)
+    a = np.radians(cue_deg)
+    lline = (380.0, 200.0, float(np.cos(a)), float(np.sin(a)))
+    rline = (380.0, 200.0, -float(np.cos(np.radians(40.0))), float(np.sin(np.radians(40.0))))
+    res = measure.PileResult(str(path), (cue_deg + 40.0) / 2, cue_deg, 40.0, 0.0, 0.0, cue="gray/light",
+                             confidence="low", geometry=(0.0, 420.0, lline, rline, 200.0))
+    out = measure._texture_flanks(res, lum)
+    if moved:
+        assert out.texture_flanks.startswith("left") and abs(out.left_deg - 35.0) < 0.5
+        assert out.angle_deg == pytest.approx((out.left_deg + out.right_deg) / 2)
+    else:
+        assert "left" not in out.texture_flanks and out.left_deg == cue_deg
