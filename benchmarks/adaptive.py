@@ -95,8 +95,10 @@ def page(rows: list[dict]) -> list[str]:
         err = r["verification_rel_error_pct"]
         err = f"{float(err):.1f}" if str(err) not in ("", "nan", "None") else ""
         el = f"{float(r['elapsed_s']) / 60:.1f}" if str(r["elapsed_s"]) else ""
+        met = r["within_2_percent"]
+        met = "" if str(met) in ("", "nan", "None") else met  # no verified point
         lines.append(f"| {r['soil']} | {r['stage']} | {r['case']} | {r['target']} | {r['method']} | {r['runs']} | "
-                     f"{err} | {r['within_2_percent']} | {r['stopped_because']} | {el} |")
+                     f"{err} | {met} | {r['stopped_because']} | {el} |")
     return lines
 
 
