@@ -1,5 +1,7 @@
 """Bad parameters fail before the run with a clear message; blow-ups name step and particle."""
 
+import re
+
 import pytest
 
 from conftest import table
@@ -58,6 +60,9 @@ def test_blow_up_names_step_and_particle():
     sim.add_particles([[0, 0, 0.05], [0.0, 0.0, 2.1e-3]], 2e-3, "soil",
                       v=[[0, 0, 0], [0, 0, -5.0]])
     sim.add_plane((0, 0, 0), (0, 0, 1), "soil")
-    with pytest.raises(SimulationError, match=r"step \d+: particle 1: overlap above 5 % of its radius"):
+    with pytest.raises(SimulationError, match=r"step \d+: particle 1: overlap above 5 % of its radius") as err:
         sim.run(10000)
     assert 0 < sim.step < 10000
+    # the simulated time of the blow-up: its step times the time step, as the message gives both
+    m = re.search(r"step (\d+):.*dt ([0-9.e+-]+) s, t ([0-9.e+-]+) s\)", str(err.value))
+    assert m and float(m.group(3)) == pytest.approx(int(m.group(1)) * float(m.group(2)), rel=1e-3)

@@ -400,10 +400,12 @@ class Simulation:
                 i = int(status[2])
                 why = ("overlap above %g %% of its radius" % (100 * self.max_overlap)
                        if status[3] == 1 else "non-finite velocity")
+                step = int(status[1])
                 raise SimulationError(
-                    f"step {int(status[1])}: particle {int(p.id[i])}: {why} "
-                    f"(radius {p.r[i]:.4g} m, dt {self.dt:.4g} s); reduce the time step or "
-                    f"check the stiffness")
+                    f"step {step}: particle {int(p.id[i])}: {why} "
+                    f"(radius {p.r[i]:.4g} m, dt {self.dt:.4g} s, t {step * self.dt:.4g} s); reduce the "
+                    f"time step or check the stiffness (a shorter step that fails at the same time t "
+                    f"points to a load the stiffness cannot carry, not to the step)")
             return total
 
     def _cidx(self):
