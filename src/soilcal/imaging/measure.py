@@ -354,9 +354,8 @@ def measure_pile(path, threshold="otsu", keep_stages=False, channel="auto", refu
     wrong edge; read such a photo before using its number).  A low-confidence result of the cue
     search has its flanks located again in the soil's grain (:func:`_texture_flanks`), which
     recovers a shaded flank lost to a wall of its brightness and colour; it stays low.  With
-    ``refusals`` (a folder), a
-    photo that cannot be measured also gets a diagnostic image of every attempt there
-    (:mod:`soilcal.imaging.refusal`), named in the refusal.
+    ``refusals`` (a folder), a photo that cannot be measured also gets a diagnostic image of
+    every attempt there (:mod:`soilcal.imaging.refusal`), named in the refusal.
     """
     tried = Tried(keep_masks=refusals is not None)
     with explained(path, refusals, tried):
@@ -640,12 +639,10 @@ def _texture_edge(path, e, prow, line, side, hmax, label):
         mid = 0.5 * (heap + wall)
         cols = np.round(ul - side * TEXTURE_INSIDE[0] + side * np.arange(reach)).astype(int)
         cols = cols[(cols >= 0) & (cols < w)]
-        prof = e[r, cols]
-        below = np.nonzero(prof < mid)[0]
-        if not below.size or below[0] == 0:
+        k = _mid_crossing(e[r, cols], mid, 1.0, 0, None)  # samples outward from cols[0]
+        if k is None:
             continue
-        j = below[0]
-        us.append(cols[j - 1] + side * (prof[j - 1] - mid) / (prof[j - 1] - prof[j]))
+        us.append(cols[0] + side * k)
         vs.append(v)
     if len(us) < 20:
         return None
