@@ -5,10 +5,10 @@ from soilcal.dem.materials import Material, MaterialTable
 from soilcal.dem.scenarios import SCENARIOS
 
 
-def table(e=0.5, mu=0.5, mur=0.0, gamma=0.0, E=1e7, nu=0.3, rho=2600.0):
+def table(e=0.5, mu=0.5, mur=0.0, gamma=0.0, E=1e7, nu=0.3, rho=2600.0, plasticity=0.0):
     mats = MaterialTable()
     mats.add(Material("soil", rho, nu, youngs=E))
-    mats.set_pair("soil", "soil", e, mu, mur, gamma)
+    mats.set_pair("soil", "soil", e, mu, mur, gamma, plasticity)
     return mats
 
 

@@ -20,14 +20,15 @@ from soilcal.errors import InputError
 R = 2e-3
 
 
-def sphere_on_sphere(rolling="constant_torque", cohesion="none"):
+def sphere_on_sphere(rolling="constant_torque", cohesion="none", normal="hertz"):
     """A free sphere (insertion id 0) launched across the top of a fixed one (id 1) below
     it, with a skin so small that the lists are rebuilt every few steps while they touch.
     A fixed spectator far below (id 2) anchors the cell grid so that a cell boundary lies
     between the two: the sort puts the lower sphere's row first."""
-    mats = table(e=0.5, mu=0.5, mur=0.1, gamma=0.2 if cohesion == "jkr" else 0.0, E=1e7)
+    mats = table(e=0.5, mu=0.5, mur=0.1, gamma=0.2 if cohesion == "jkr" else 0.0, E=1e7,
+                 plasticity=0.5 if normal == "eepa" else 0.0)
     sim = Simulation(mats, dt_fraction=0.2, gravity=(0, 0, -9.81), skin=2e-6, sort_every=0,
-                     contact_model=dict(rolling=rolling, cohesion=cohesion))
+                     contact_model=dict(normal=normal, rolling=rolling, cohesion=cohesion))
     sim.add_particles([[0.0, 0.0, 2 * R - 1e-6]], R, "soil", v=[[0.03, 0.0, 0.0]])
     sim.add_particles([[0.0, 0.0, 0.0]], R, "soil", fixed=True)
     cell = 2 * R + 2e-6  # cell edge 2 R_max + skin (+ the JKR range, far below R here)
@@ -35,14 +36,15 @@ def sphere_on_sphere(rolling="constant_torque", cohesion="none"):
     return sim
 
 
-@pytest.mark.parametrize("rolling,cohesion", [("constant_torque", "none"),
-                                              ("epsd", "none"), ("constant_torque", "jkr")])
-def test_history_follows_a_pair_whose_rows_are_swapped(rolling, cohesion):
+@pytest.mark.parametrize("rolling,cohesion,normal", [
+    ("constant_torque", "none", "hertz"), ("epsd", "none", "hertz"),
+    ("constant_torque", "jkr", "hertz"), ("constant_torque", "none", "eepa")])
+def test_history_follows_a_pair_whose_rows_are_swapped(rolling, cohesion, normal):
     # sorting is switched on (every build) once the spheres touch, so that the first sort
     # finds a contact history to carry over
     runs = {}
     for every in (0, 1):
-        sim = sphere_on_sphere(rolling, cohesion)
+        sim = sphere_on_sphere(rolling, cohesion, normal)
         xs, fx = [], []
         for chunk in range(40):
             if chunk == 4:

@@ -13,6 +13,35 @@ Normal, ``hertz`` (Hertz 1882; EDEM Theory Reference Guide, Hertz-Mindlin (no sl
 
     F_n = 4/3 E* sqrt(R*) delta^(3/2),   a = sqrt(R* delta),   S_n = 2 E* a
 
+Normal, ``eepa`` (plastic Hertz: the non-adhesive form of the Edinburgh Elasto-Plastic Adhesion
+model, Thakur, Morrissey, Sun, Chen & Ooi 2014, Granul. Matter 16:383, Eqs. 1-2, with pull-off
+f_0 = 0, adhesive stiffness k_adh = 0 and the Hertz exponent n = 3/2; Morrissey 2013, PhD
+thesis, Univ. of Edinburgh).  With k_1 = 4/3 E* sqrt(R*) (the Hertz loading stiffness), the
+contact plasticity ratio lambda_p in [0, 1) of the pair (``PairParams.plasticity``),
+k_2 = k_1 / (1 - lambda_p) and delta_max the largest overlap of the contact so far::
+
+    loading (delta >= delta_max):   F_n = k_1 delta^(3/2),  delta_max <- delta
+    unloading and reloading:        F_n = max(k_2 (delta^(3/2) - delta_p^(3/2)), 0)
+    delta_p^(3/2) = lambda_p delta_max^(3/2)      (the unloading branch meets the loading
+                                                   branch at delta_max: k_2 (1 - lambda_p) = k_1)
+
+delta_p is the plastic overlap: the contact carries no load below it.  The contact stays
+one contact while delta > 0 (delta_max kept); it ends, and its delta_max with it, when the
+surfaces part.  The dashpot (``damping``) is the Hertz contact's at the same overlap while
+the contact carries load and zero where it does not (0 < delta <= delta_p: no spring, so no
+viscous tension across a plastic dent).  With ``cohesion: jkr`` the law is added to the JKR
+force as the change it makes to its Hertz part, F_n = F_JKR + (F_eepa - k_1 delta^(3/2)) for
+delta > 0: loading and the adhesion are JKR's, unloading loses the plastic share of the
+repulsion; the contact radius stays the JKR one (EEPA's growth of the adhesion with the
+plastic contact area is not modelled).  lambda_p = 0 is Hertz exactly.  Without damping a
+head-on impact of two spheres rebounds with the restitution (work recovered on unloading
+over work of loading)::
+
+    e^2 = (1 - 5/2 lambda_p + 3/2 lambda_p^(5/3)) / (1 - lambda_p)
+
+independent of the impact speed.  The time step takes the unloading stiffness
+S_n / (1 - lambda_p) (materials.py, "Damping bound").
+
 Damping, ``viscoelastic`` (EDEM guide; LIGGGHTS ``model hertz`` with ``tangential history``;
 Tsuji et al. 1992, Powder Technol. 71:239 for the delta^(1/4) dependence)::
 
@@ -196,10 +225,10 @@ import numpy as np
 from numba import njit
 
 from soilcal.dem.materials import (P_BETA, P_ESTAR, P_ETA, P_GSTAR, P_JKRC, P_JKRK, P_MUR,
-                                   P_MUS, P_TRATIO, P_W)
+                                   P_MUS, P_PLAS, P_TRATIO, P_W)
 from soilcal.errors import InputError
 
-NORMAL = {"hertz": 0}
+NORMAL = {"hertz": 0, "eepa": 1}
 DAMPING = {"viscoelastic": 0, "none": 1, "viscous_radius": 2}
 TANGENTIAL = {"mindlin": 0, "none": 1}
 ROLLING = {"none": 0, "constant_torque": 1, "epsd": 2, "bounded": 3}
@@ -256,13 +285,15 @@ CODE_CONVENTIONS = ("rolling_lever", "rolling_force", "rolling_axis", "tangentia
 H_XI = 0  # 3 tangential displacement
 H_A = 3  # sqrt of the last JKR contact radius (Newton warm start)
 H_MR = 4  # 3 rolling spring moment (epsd); wall rows of "bounded": its resistance mu_r |F_n| c_i
-H_SIZE = 8  # full row (64 bytes; walls keep their touching flag in slot 7)
+H_DP = 7  # largest overlap of the contact so far (``eepa``)
+H_SIZE = 9  # full row (72 bytes; walls keep their touching flag in the last slot, 8)
 H_SHORT = 4  # particle pairs without the EPSD spring: tangential + JKR only (32 bytes)
 
 
 def hist_width(codes) -> int:
-    """History row width of particle pairs: the EPSD rolling spring needs the full row."""
-    return H_SIZE if codes[3] == ROLLING["epsd"] else H_SHORT
+    """History row width of particle pairs: the EPSD rolling spring and the plastic law's
+    largest overlap need the full row."""
+    return H_SIZE if codes[3] == ROLLING["epsd"] or codes[0] == NORMAL["eepa"] else H_SHORT
 
 SQ56 = math.sqrt(5.0 / 6.0)
 
@@ -426,6 +457,20 @@ def contact_force(codes, pair, ma, mb, delta, nx, ny, nz, rvx, rvy, rvz, wrx, wr
         a = math.sqrt(rstar * delta)
         fne = 4.0 / 3.0 * estar * a * delta
         fpo2 = 0.0
+    # plastic Hertz (``eepa``): below the largest overlap, the stiffer unloading branch
+    dashpot = True
+    lam = pair[ma, mb, P_PLAS]
+    if codes[0] == 1 and lam > 0.0 and delta > 0.0:
+        dm = hist[hk, H_DP]
+        if delta >= dm:
+            hist[hk, H_DP] = delta
+        else:
+            k1 = 4.0 / 3.0 * estar * math.sqrt(rstar)
+            fu = k1 / (1.0 - lam) * (delta * math.sqrt(delta) - lam * dm * math.sqrt(dm))
+            if fu <= 0.0:
+                fu = 0.0
+                dashpot = False
+            fne = fne + (fu - k1 * delta * math.sqrt(delta)) if cohesive else fu
     beta = pair[ma, mb, P_BETA]
     sn = 2.0 * estar * a
     vn = rvx * nx + rvy * ny + rvz * nz
@@ -434,7 +479,9 @@ def contact_force(codes, pair, ma, mb, delta, nx, ny, nz, rvx, rvy, rvz, wrx, wr
     # not fused into one multiply-add)
     fnd = 0.0
     sq = 0.0
-    if codes[1] == 0:
+    if not dashpot:
+        pass
+    elif codes[1] == 0:
         sq = 2.0 * SQ56 * beta * math.sqrt(sn * mstar)
         fnd = sq * vn
     elif codes[1] == 2:

@@ -244,7 +244,7 @@ def bytes_per_particle(pair_slots: float = PAIR_SLOTS_MIN, hist: int | None = No
                        wall_slots: int = 4, reallocation: bool = True) -> int:
     """Engine bytes per sphere: the state (:data:`soilcal.dem.state.STATE_BYTES`), the two
     list buffers with ``pair_slots`` pair slots (partner, ``hist`` history columns, touching
-    flag) and ``wall_slots`` wall slots (primitive, 8 history columns) each, the work arrays
+    flag) and ``wall_slots`` wall slots (primitive, 9 history columns) each, the work arrays
     ``_alloc_lists`` allocates beside them, and the cell arrays; with ``reallocation`` the
     lists twice (old and new buffers coexist while the engine widens them), plus
     :data:`SCENARIO_BYTES`.  With the defaults and without ``reallocation`` and the
@@ -581,7 +581,9 @@ def estimate(scenario: str, setup, params=None, preset: str = "quick", replicate
     if scenario in BENCHTOP:
         from soilcal.dem.contact import H_SIZE
 
-        hist = H_SIZE if setup.get("rolling_model") == "epsd" else None
+        # the full row: the EPSD rolling spring, the plastic law's largest overlap
+        hist = (H_SIZE if setup.get("rolling_model") == "epsd" or dem.soil_soil_plasticity > 0
+                else None)
     slots = pair_slots(dist, skin)
     walls = TOOL_WALL_SLOTS if scenario in SOIL_BIN else (
         FUNNEL_WALL_SLOTS if scenario == "repose" and setup.get("method") == "funnel" else 4)

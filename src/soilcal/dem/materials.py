@@ -53,6 +53,9 @@ over the modes is ``damping_dt``; the tangential mode counts only with friction 
 With the ``viscous_radius`` damping (contact.py: the dashpot eta m* a, LAMMPS's
 ``viscoelastic``) the normal mode's ratio is z_n = eta m* a / (2 sqrt(S_n m*)), largest at the
 largest contact radius, so it is taken at the same overlap.
+The ``eepa`` normal law (contact.py) unloads along a spring 1/(1 - lambda_p) times stiffer
+than the Hertz one it loads on, so its normal mode is taken with S_n / (1 - lambda_p) and the
+Hertz damping ratio (conservative: the same dashpot on a stiffer spring damps less).
 In units of the Rayleigh time it does not depend on the shear modulus or the size
 (w dt ~ (delta / r)^(1/4)); at max_overlap 0.3 and Poisson 0.33 it is 0.476 (2 (sqrt(1 +
 z_t^2) - z_t)) T_R: 0.32 T_R for e = 0.45, 0.21 T_R for e = 0.15.  Heavy damping
@@ -86,7 +89,7 @@ import numpy as np
 from soilcal.errors import InputError
 
 # Columns of the per-pair parameter table ``pair[mi, mj, :]``.
-P_ESTAR, P_GSTAR, P_BETA, P_MUS, P_MUR, P_W, P_TRATIO, P_JKRK, P_JKRC, P_ETA, P_NCOL = range(11)
+P_ESTAR, P_GSTAR, P_BETA, P_MUS, P_MUR, P_W, P_TRATIO, P_JKRK, P_JKRC, P_ETA, P_PLAS, P_NCOL = range(12)
 
 
 def _num(v, name, src):
@@ -147,6 +150,7 @@ class PairParams:
     friction: float
     rolling_friction: float = 0.0
     surface_energy: float = 0.0  # J/m^2, meaning set by the JKR convention (contact.py)
+    plasticity: float = 0.0  # contact plasticity ratio lambda_p of the ``eepa`` normal law
 
 
 def restitution_beta(e: float) -> float:
@@ -212,7 +216,8 @@ class MaterialTable:
                 return k
         raise InputError(self.source, "material", f"one of {[m.name for m in self.materials]}", name_or_id)
 
-    def set_pair(self, a, b, restitution, friction, rolling_friction=0.0, surface_energy=0.0):
+    def set_pair(self, a, b, restitution, friction, rolling_friction=0.0, surface_energy=0.0,
+                 plasticity=0.0):
         i, j = self.index(a), self.index(b)
         na, nb = self.materials[i].name, self.materials[j].name
         f = f"interactions.{na}-{nb}"
@@ -228,7 +233,11 @@ class MaterialTable:
         g = _num(surface_energy, f + ".surface_energy", self.source)
         if g < 0:
             raise InputError(self.source, f + ".surface_energy", "surface energy >= 0 J/m^2", g)
-        p = PairParams(e, mu, mur, g)
+        lp = _num(plasticity, f + ".plasticity", self.source)
+        if not 0.0 <= lp < 1.0:
+            raise InputError(self.source, f + ".plasticity", "a contact plasticity ratio in [0, 1)",
+                             lp)
+        p = PairParams(e, mu, mur, g, lp)
         self.pairs[(i, j)] = p
         self.pairs[(j, i)] = p
 
@@ -239,7 +248,8 @@ class MaterialTable:
         """pair[M, M, P_NCOL] float64: E*, G*, beta, mu_s, mu_r, w (work of adhesion),
         sqrt(4 G*/E*) (ratio of tangential to normal damping), (27/64) pi^2 w^2 / E*^2 (JKR
         separation: delta_c^3 = -that * R*), c = sqrt(2 pi w / E*) (JKR, see contact.py),
-        eta (the ``viscous_radius`` damping coefficient, 1/(m s); 0 for the others).
+        eta (the ``viscous_radius`` damping coefficient, 1/(m s); 0 for the others), the
+        contact plasticity ratio lambda_p (the ``eepa`` normal law, contact.py).
 
         ``jkr_w_factor`` converts the input surface energy to the work of adhesion w used by
         the kernel (1 for the EDEM convention, 2 for the LAMMPS convention, see contact.py).
@@ -276,7 +286,7 @@ class MaterialTable:
                              math.sqrt(4.0 * gstar / estar),
                              27.0 / 64.0 * math.pi**2 * (jkr_w_factor * gamma / estar) ** 2,
                              math.sqrt(2.0 * math.pi * jkr_w_factor * gamma / estar),
-                             float(damping_eta or 0.0))
+                             float(damping_eta or 0.0), p.plasticity)
         return out
 
     def jkr_dt(self, rmin_per_material: dict[int, float], tab: np.ndarray) -> float:
@@ -326,7 +336,9 @@ class MaterialTable:
                     z = (math.sqrt(5.0 / 6.0) * abs(tab[a, b, P_BETA])
                          + tab[a, b, P_ETA] * mstar * root
                          / (2.0 * math.sqrt(2.0 * tab[a, b, P_ESTAR] * root * mstar)))
-                    t = min(t, damped_critical_dt(2.0 * tab[a, b, P_ESTAR] * root, mstar, z))
+                    # the ``eepa`` law unloads 1/(1 - lambda_p) times stiffer (contact.py)
+                    t = min(t, damped_critical_dt(2.0 * tab[a, b, P_ESTAR] * root
+                                                  / (1.0 - tab[a, b, P_PLAS]), mstar, z))
                     if tab[a, b, P_MUS] > 0.0:
                         t = min(t, damped_critical_dt(8.0 * tab[a, b, P_GSTAR] * root,
                                                       TANGENTIAL_MASS * mstar,

@@ -40,7 +40,7 @@ import math
 
 from numba import njit, prange
 
-from soilcal.dem.contact import H_A
+from soilcal.dem.contact import H_A, H_DP
 from soilcal.dem.walls import TRIANGLE, prim_closest
 
 
@@ -556,7 +556,7 @@ def _fill_row(q, x, r, cpos, cell_idx, cell_of, box, periodic, cut0, cell_start,
     still use the previous rows, perm[new row] = old row.  Pair (i, j), j > i, is then found
     in the old row of min(perm[i], perm[j]); when that is j's, the pair's orientation is
     reversed and the antisymmetric history (tangential displacement and rolling moment of
-    i relative to j) changes sign; sqrt(a) of JKR is symmetric."""
+    i relative to j) changes sign; sqrt(a) of JKR and the largest overlap are symmetric."""
     H = hist_new.shape[1]
     i = cell_idx[q]
     o0 = start_new[i]
@@ -575,7 +575,7 @@ def _fill_row(q, x, r, cpos, cell_idx, cell_of, box, periodic, cut0, cell_start,
                 act_new[k] = act_old[ko]
                 for h in range(H):
                     v = hist_old[ko, h]
-                    if flip and h != H_A:
+                    if flip and h != H_A and h != H_DP:
                         v = -v
                     hist_new[k, h] = v
             else:

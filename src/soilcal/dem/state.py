@@ -81,8 +81,8 @@ class ParticleState:
 #   run), rolling resistance (``bounded``), material, id
 STATE_BYTES = 8 * (6 * 3 + 9)
 #   two list buffers, each: row offset; 8 pair slots (partner, 4 history columns, int8
-#   touching flag); 4 wall slots (primitive, 8 history columns) and a wall count
-LIST_BYTES = 2 * (8 + 8 * (8 + 4 * 8 + 1) + 4 * (8 + 8 * 8) + 8)
+#   touching flag); 4 wall slots (primitive, 9 history columns) and a wall count
+LIST_BYTES = 2 * (8 + 8 * (8 + 4 * 8 + 1) + 4 * (8 + 9 * 8) + 8)
 #   wall reactions (4 x 6), packed rows (4 + 8), sort work space (1 + 8 + 1), slab order,
 #   cell index, cell of, cell-sorted copy (4)
 WORK_BYTES = 8 * (4 * 6 + 4 + 8 + 1 + 8 + 1 + 1 + 1 + 1 + 4)

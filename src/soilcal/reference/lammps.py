@@ -194,9 +194,12 @@ def _turn(walls, motion, k) -> dict[int, float]:
 def _law(sim):
     """(normal name, damping words, cohesive, rolling check) of the LAMMPS model, and
     whether soilcal's conventions are LAMMPS's."""
-    from soilcal.dem.contact import COHESION, DAMPING, ROLLING, TANGENTIAL
+    from soilcal.dem.contact import COHESION, DAMPING, NORMAL, ROLLING, TANGENTIAL
 
     c = [int(v) for v in sim.codes]
+    if c[0] != NORMAL["hertz"]:
+        raise InputError(SOURCE, "contact_model.normal",
+                         "'hertz' (LAMMPS pair granular has no EEPA law)", "eepa")
     tab = sim.materials.table(sim.w_factor, sim.damping_eta)
     cohesive = c[4] == COHESION["jkr"] and float(np.max(tab[:, :, 5])) > 0
     if c[3] != ROLLING["none"]:

@@ -90,9 +90,11 @@ def available() -> tuple[bool, str]:
 def _law(sim) -> tuple[str, str, bool]:
     """The LIGGGHTS contact model, its options and whether soilcal's conventions are
     LIGGGHTS's."""
-    from soilcal.dem.contact import COHESION, DAMPING, ROLLING, TANGENTIAL
+    from soilcal.dem.contact import COHESION, DAMPING, NORMAL, ROLLING, TANGENTIAL
 
     c = [int(v) for v in sim.codes]
+    if c[0] != NORMAL["hertz"]:
+        raise InputError(SOURCE, "contact_model.normal", "'hertz' (LIGGGHTS model hertz)", "eepa")
     if c[1] != DAMPING["viscoelastic"]:
         raise InputError(SOURCE, "contact_model.damping", "'viscoelastic' (LIGGGHTS hertz)",
                          "none")

@@ -2,7 +2,7 @@
 
 Parameter names
 ---------------
-:class:`DemParams` holds the fourteen inputs of a soil-calibration DEM run under the names
+:class:`DemParams` holds the fifteen inputs of a soil-calibration DEM run under the names
 the soil configs use for their ``(pair, kind)`` entries: pair ``soil-soil`` with kind
 ``rolling_friction`` is ``soil_soil_rolling_friction`` and so on (``static_friction`` maps to
 the engine's sliding friction coefficient mu_s).  SI units throughout (kg/m^3, Pa, J/m^2).
@@ -19,7 +19,10 @@ al., Agriculture 2022, 12, 1082; ``config/soils/cinnamon-soil.yaml``):
   surface energy 0.38 J/m^2 (Box-Behnken centre levels, Sec. 3.3.2 / Table 6),
 * soil-steel restitution 0.45 and rolling friction 0.125 (intermediate level values,
   Sec. 3.3.2), static friction 0.54 (Box-Behnken centre level, Sec. 3.3.2 / Table 6); the
-  paper has no soil-steel surface energy (0).
+  paper has no soil-steel surface energy (0),
+* soil-soil contact plasticity ratio 0 (elastic Hertz, as every paper's EDEM model; a ratio
+  above 0 switches the soil-soil contacts to the plastic Hertz law ``eepa`` of
+  :mod:`soilcal.dem.contact`, the loop's ``plastic_contact`` effect).
 
 Steel (65Mn/Q235 tools, plates, tubes): 7850 kg/m^3, Poisson 0.3, G = 7.9e10 Pa (cinnamon
 soil Sec. 3.1, printed "7.9 x 10^10 MPa", a unit slip for 79 GPa (errata of that soil);
@@ -125,6 +128,7 @@ _RANGES = {
     "density": (0.0, 3.0e4, False, True, "a density in (0, 30000] kg/m^3"),
     "poisson": (-1.0, 0.5, False, False, "a Poisson ratio in (-1, 0.5)"),
     "shear_modulus": (0.0, 1.0e13, False, True, "a shear modulus in (0, 1e13] Pa"),
+    "plasticity": (0.0, 1.0, True, False, "a contact plasticity ratio in [0, 1)"),
 }
 
 
@@ -153,6 +157,9 @@ class DemParams:
     steel_density: float = 7850.0
     steel_poisson: float = 0.3
     steel_shear_modulus: float = 7.9e10
+    #: contact plasticity ratio lambda_p of the soil-soil contacts: 0 is elastic Hertz, > 0
+    #: the plastic Hertz law ``eepa`` (soilcal.dem.contact); soil-steel contacts stay elastic
+    soil_soil_plasticity: float = 0.0
 
     @classmethod
     def names(cls) -> tuple[str, ...]:
@@ -379,7 +386,8 @@ def build_materials(params: DemParams, stiffness_scale: float = 1.0,
     mats.set_pair("soil", "soil", restitution=params.soil_soil_restitution,
                   friction=params.soil_soil_static_friction,
                   rolling_friction=params.soil_soil_rolling_friction,
-                  surface_energy=params.soil_soil_surface_energy * g)
+                  surface_energy=params.soil_soil_surface_energy * g,
+                  plasticity=params.soil_soil_plasticity)
     mats.set_pair("soil", "steel", restitution=params.soil_steel_restitution,
                   friction=params.soil_steel_static_friction,
                   rolling_friction=params.soil_steel_rolling_friction,
@@ -395,13 +403,15 @@ DEFAULT_ROLLING = "constant_torque"
 
 
 def contact_model(params: DemParams, rolling: str | None = None, conventions=None) -> dict:
-    """Engine contact model: Hertz-Mindlin, rolling resistance (``rolling``, default
+    """Engine contact model: Hertz-Mindlin (the plastic ``eepa`` normal law when the
+    soil-soil plasticity ratio is > 0), rolling resistance (``rolling``, default
     :data:`DEFAULT_ROLLING`), JKR when any energy > 0, with the ``conventions`` of a setup's
     ``contact_conventions`` (:func:`conventions_of`; EDEM's when None: the surface energy's
     pull-off 1.5 pi gamma R*, the rolling torque on the particle's own lever and the total
     normal force, as the papers use EDEM)."""
     jkr = params.soil_soil_surface_energy > 0 or params.soil_steel_surface_energy > 0
-    return dict(rolling=rolling or DEFAULT_ROLLING, cohesion="jkr" if jkr else "none",
+    normal = "eepa" if params.soil_soil_plasticity > 0 else "hertz"
+    return dict(normal=normal, rolling=rolling or DEFAULT_ROLLING, cohesion="jkr" if jkr else "none",
                 **conventions_of(conventions))
 
 
