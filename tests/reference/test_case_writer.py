@@ -58,6 +58,14 @@ def test_moving_mesh_becomes_a_move_fix(tmp_path):
     assert stl.count("facet normal") == 2
 
 
+def test_the_plastic_normal_law_is_named(tmp_path):
+    sim = Simulation(materials(False), dt=1e-6, contact_model=dict(normal="eepa"))
+    sim.add_particles([[0, 0, 0.01]], 1e-3, "soil")
+    with pytest.raises(InputError) as exc:
+        L.write_case(sim, tmp_path, [(10, {})], BOUNDS)
+    assert exc.value.field == "contact_model.normal"
+
+
 @pytest.mark.parametrize("change,field", [
     (lambda s: s.add_plane((0, 0, 0), (1, 1, 0), "steel"), "walls.plane"),
     (lambda s: s.add_cylinder((0, 0, 0), (0, 0, 1), 0.05, 0.05, "steel"), "walls.cylinder"),

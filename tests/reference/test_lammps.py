@@ -64,6 +64,7 @@ def test_hertz_deck_uses_the_restitution_and_other_conventions_are_recorded(tmp_
 @pytest.mark.parametrize("model,field", [
     (dict(cohesion="jkr", conventions="lammps"), "contact_model.damping"),
     (dict(rolling="constant_torque"), "contact_model.rolling"),
+    (dict(normal="eepa"), "contact_model.normal"),
 ])
 def test_laws_lammps_cannot_run_are_named(tmp_path, model, field):
     sim = Simulation(jkr_materials(), dt=1e-6, contact_model=model)
