@@ -552,6 +552,21 @@ def stress_strain(z_rod, force_z, rod_radius, h0, tube_floor=0.0):
     return eps, sigma
 
 
+def unloaded_strain(eps_end, sig_end, eps_up, sig_up):
+    """Strain at which the stress of an unloading path first reaches zero: linear
+    interpolation between the last loaded sample (the loading's end, ``eps_end``/``sig_end``,
+    then the unloading samples in order) and the first with zero or negative stress; NaN when
+    the path never unloads fully."""
+    e_prev, s_prev = float(eps_end), float(sig_end)
+    for e, s in zip(np.asarray(eps_up, float), np.asarray(sig_up, float)):
+        if s <= 0.0:
+            if s_prev <= 0.0:
+                return e_prev
+            return e_prev + (e - e_prev) * s_prev / (s_prev - s)
+        e_prev, s_prev = e, s
+    return float("nan")
+
+
 def value_at(x, y, x0):
     """y at x0 by linear interpolation on the increasing part of x (NaN outside the data)."""
     x = np.asarray(x, float)

@@ -67,3 +67,39 @@ def test_paper_sample_too_large_for_memory_fails_before_the_run(monkeypatch):
                        r"state fits in the memory available here \(8 GB") as err:
         compression.run(s, DemParams(), "paper", seed=0, threads=1)
     assert f"{n:,} spheres" in str(err.value)
+
+
+def test_unloaded_strain_is_the_zero_crossing_of_the_unloading_path():
+    m = compression.measure
+    # a straight unloading line from (0.10, 40 Pa) through (0.09, 20 Pa) crosses zero at 0.08
+    assert m.unloaded_strain(0.10, 40.0, [0.095, 0.09, 0.085, 0.075], [30.0, 20.0, 10.0, -10.0]) \
+        == pytest.approx(0.08, abs=1e-12)
+    # the first sample already free: between the loading's end and it
+    assert m.unloaded_strain(0.10, 30.0, [0.09], [-10.0]) == pytest.approx(0.0925, abs=1e-12)
+    assert np.isnan(m.unloaded_strain(0.10, 30.0, [0.09, 0.08], [20.0, 5.0]))
+
+
+def test_plastic_contacts_give_back_less_strain_on_unloading():
+    """Loaded to 8 % and unloaded: an elastic (Hertz) bed recovers part of its strain, the
+    contacts' own compression; with the plastic law each contact gives back only the part
+    above its plastic overlap (an affine packing would keep 1 - lambda_p^(2/3) = 0.29 of the
+    rebound at lambda_p = 0.6), so the same bed recovers less."""
+    s = dict(compression.setups()["guangxi-cohesive"], n_particles=600, max_strain=0.08,
+             quick_height=0.03, unload=True)
+    rec = {}
+    for lam in (0.0, 0.6):
+        p = DemParams(soil_soil_surface_energy=0.0, soil_soil_plasticity=lam)
+        res = compression.run(s, p, "quick", seed=1, threads=1)
+        r, se = res.responses, res.series
+        assert r["strain_end"] >= 0.08
+        # the rod went back up until the bed let go of it
+        assert np.all(np.diff(se["strain_unload"]) < 0) and se["stress_unload_pa"][-1] <= 0.0
+        assert 0.0 < r["recovered_strain"] < r["strain_end"]
+        rec[lam] = r["recovered_strain"]
+    assert rec[0.6] < 0.8 * rec[0.0]
+
+
+def test_unload_must_be_a_boolean():
+    s = dict(compression.setups()["guangxi-cohesive"], unload="yes")
+    with pytest.raises(InputError, match="setup.unload"):
+        compression.validate(s, "quick", "t")

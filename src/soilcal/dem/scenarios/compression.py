@@ -24,6 +24,20 @@ stop is reported (``stop_reason``: ``max_strain`` or ``overlap``, ``strain_end``
 fill's solid fraction under the rod at first contact (``solid_fraction_0``); stresses at
 strains beyond ``strain_end`` are NaN.
 
+Unloading (``unload: true``; the paper's test loads only, so its setup keeps ``false``): after
+the stop the rod moves back up at ``rod_speed``, sampled as on the way down, until the
+particles' force on it has fallen to zero (or it is back at h0).  The strain at which the
+force reaches zero (linear interpolation between the last loaded and the first free sample)
+is the strain the sample keeps; ``recovered_strain`` = ``strain_end`` minus it, the elastic
+rebound of the contacts.  Of the strain a bed takes, only the contacts' own compression comes
+back: the rearrangement of the grains stays.  With the plastic contact law (``eepa``,
+:mod:`soilcal.dem.contact`) each contact gives back only the part above its plastic overlap,
+so the rebound shrinks as the plasticity ratio grows (for an affine packing of Hertz
+contacts by the factor 1 - lambda_p^(2/3)): this is the response that shows plasticity,
+which a loading curve hardly does (every contact of a bed under a rising load is on its
+loading branch, which is Hertz's).  A loading-unloading confined compression test is how
+EEPA parameters are calibrated (Thakur et al. 2014, Powder Technol. 254:28).
+
 Fill: N = phi m / (rho_p <v_p>) spheres for the load mass m at settled solid fraction
 phi = 0.6 of the particle density.  ``quick``: the load is reduced to about 1000 spheres of
 radius r_q sized for a sample about 40 mm high (radii uniform in [0.9, 1.1] r_q), shear
@@ -38,7 +52,9 @@ smaller sample of the quick height.
 
 Responses: ``stress_5_kpa``, ``stress_10_kpa``, ``stress_20_kpa`` (stress at 5, 10, 20 %
 strain, linear interpolation), ``stress_max_kpa``, ``h0_m``, ``strain_end``, ``stop_reason``,
-``solid_fraction_0``; series: strain, stress (Pa), rod height and force.
+``solid_fraction_0``, ``recovered_strain`` (NaN without unloading); series: strain, stress
+(Pa), rod height and force, and with unloading the same four of the way back
+(``strain_unload``, ...).
 """
 
 from __future__ import annotations
@@ -59,12 +75,12 @@ RESTARTABLE = True
 #: every response a run reports (``Result.responses``)
 RESPONSES = (
     "h0_m", "fill_settled", "peak_overlap", "stress_max_kpa", "strain_end", "stop_reason",
-    "solid_fraction_0", "stress_5_kpa", "stress_10_kpa", "stress_20_kpa",
+    "solid_fraction_0", "stress_5_kpa", "stress_10_kpa", "stress_20_kpa", "recovered_strain",
 )
 #: the responses a soil's ``simulation`` block may measure (numbers a design point yields)
 MEASURES = (
     "stress_max_kpa", "strain_end", "solid_fraction_0", "stress_5_kpa", "stress_10_kpa",
-    "stress_20_kpa",
+    "stress_20_kpa", "recovered_strain",
 )
 PHI = 0.6
 
@@ -79,7 +95,7 @@ def setups() -> dict:
                                  quick_height=0.040, sample_dz=0.0002, jam_overlap=0.15,
                                  rest_speed=0.005, max_settle_time=3.0, n_particles=None,
                                  radius=None, stiffness_scale=None, dt_fraction=None,
-                                 rolling_model=None, contact_conventions=None,
+                                 rolling_model=None, contact_conventions=None, unload=False,
                                  paper_psd=[[0.00125, 14.0], [0.000625, 14.0],
                                             [0.000315, 22.0], [0.0001575, 50.0]]),
     }
@@ -125,6 +141,8 @@ def validate(setup, preset="quick", source="<input>", params=None):
           f"an overlap fraction below the engine's blow-up limit {limit}", jam)
     setup_number(setup, "rest_speed", source)
     setup_number(setup, "max_settle_time", source)
+    check(isinstance(setup.get("unload", False), bool), source, "setup.unload",
+          "true or false (move the rod back up after the stop)", setup.get("unload"))
     check_discretisation(setup, source)
     sz = sizing(setup, preset)
     check(D >= 8 * sz["r_max"], source, "setup.tube_diameter",
@@ -142,8 +160,8 @@ def run(setup, params: DemParams, preset="quick", seed=0, threads=None, vtk_dir=
         source="<compression>", restart=None) -> Result:
     """One compression test (module docstring).  ``restart``: a
     :class:`soilcal.dem.restart.Restart` that the run resumes from and writes every few
-    minutes (phases ``settle_fill``, ``press``); the numbers are those of an uninterrupted
-    run."""
+    minutes (phases ``settle_fill``, ``press``, ``unload``); the numbers are those of an
+    uninterrupted run."""
     from soilcal.dem import restart as rst
 
     validate(setup, preset, source, params)
@@ -204,6 +222,20 @@ def run(setup, params: DemParams, preset="quick", seed=0, threads=None, vtk_dir=
         if float(sim.p.ovr.max()) >= setup["jam_overlap"]:
             st["stop"] = "overlap"  # jammed: further travel only squeezes spheres into each other
             break
+    if prog.at("press") and setup.get("unload", False):
+        sim.set_wall_motion(rod, velocity=(0, 0, setup["rod_speed"]))
+        prog.next("unload", step1=sim.step, z1=st["z"], z_up=[], fz_up=[])
+    # upper bound of the way back: h0 (or the first contact's height)
+    while prog.at("unload"):
+        prog.checkpoint()
+        prog.advance(nsub, "sample_steps")
+        st["sample_steps"] = 0
+        z = st["z1"] + setup["rod_speed"] * (sim.step - st["step1"]) * sim.dt
+        f = float(sim.wall_force[rod, 2])
+        st["z_up"].append(z)
+        st["fz_up"].append(f)
+        if f <= 0.0 or z >= (st["h0"] if st["h0"] is not None else top):
+            break
     z_rod, fz, h0, stop = st["z_rod"], st["fz"], st["h0"], st["stop"]
     frames(sim)
     frames.close()
@@ -212,11 +244,21 @@ def run(setup, params: DemParams, preset="quick", seed=0, threads=None, vtk_dir=
     if h0 is None:
         h0 = top
     eps, sig = measure.stress_strain(z_rod, fz, Rr, h0)
+    series = dict(strain=eps, stress_pa=sig, z_rod_m=z_rod, force_n=fz)
+    recovered = float("nan")
+    if "z_up" in st:
+        z_up, f_up = np.asarray(st["z_up"]), np.asarray(st["fz_up"])
+        eps_up, sig_up = measure.stress_strain(z_up, f_up, Rr, h0)
+        series.update(strain_unload=eps_up, stress_unload_pa=sig_up, z_rod_unload_m=z_up,
+                      force_unload_n=f_up)
+        if eps.size:
+            recovered = eps[-1] - measure.unloaded_strain(eps[-1], sig[-1], eps_up, sig_up)
     resp = dict(h0_m=float(h0), fill_settled=int(ok0), peak_overlap=sim.peak_overlap,
                 stress_max_kpa=float(sig.max() / 1e3) if sig.size else float("nan"),
                 strain_end=float(eps[-1]) if eps.size else 0.0, stop_reason=stop,
                 solid_fraction_0=float((4.0 / 3.0 * math.pi * sim.p.r**3).sum()
-                                       / (math.pi * R * R * h0)))
+                                       / (math.pi * R * R * h0)),
+                recovered_strain=recovered)
     for e in (0.05, 0.10, 0.20):
         resp[f"stress_{int(round(e * 100))}_kpa"] = measure.value_at(eps, sig, e) / 1e3
     setup_out = dict(setup)
@@ -227,5 +269,5 @@ def run(setup, params: DemParams, preset="quick", seed=0, threads=None, vtk_dir=
     return Result(scenario=NAME, preset=preset, seed=int(seed), n_particles=int(sim.n),
                   steps=int(sim.step), sim_time_s=float(sim.step * sim.dt), wall_s=prog.wall_s,
                   threads=nthreads, params=params.as_dict(), setup=setup_out, responses=resp,
-                  series=dict(strain=eps, stress_pa=sig, z_rod_m=z_rod, force_n=fz))
+                  series=series)
 
