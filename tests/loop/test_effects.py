@@ -165,6 +165,73 @@ def test_tool_adhesion_adds_to_soil_steel_surface_energy_only():
     assert EFFECTS["tool_adhesion"].applies_to({})
 
 
+# --- plastic_contact: lambda_p,ss = lambda_p,cal + lambda_p in [0, 0.95], compression only ------
+
+
+def test_plastic_contact_adds_to_the_calibrated_ratio():
+    eff = EFFECTS["plastic_contact"]
+    # a parameter set without soil_soil_plasticity is elastic: 0 + 0.3 = 0.3
+    out = eff.apply(PARAMS, {}, {"lambda_p": 0.3}, {}, "compression")
+    assert out == dict(PARAMS, soil_soil_plasticity=0.3)
+    # a calibrated ratio 0.2: 0.2 + 0.35 = 0.55, nothing else changed, whatever the quantities
+    cal = dict(PARAMS, soil_soil_plasticity=0.2)
+    for q in ({}, QUANT):
+        out = eff.apply(cal, q, {"lambda_p": 0.35}, REF, "standin_compression")
+        assert set(out) == set(cal)
+        assert out["soil_soil_plasticity"] == pytest.approx(0.55, rel=1e-12)
+        assert {k: v for k, v in out.items() if k != "soil_soil_plasticity"} == PARAMS
+
+
+def test_plastic_contact_clamped_to_its_range():
+    eff = EFFECTS["plastic_contact"]
+    # 0.6 + 0.9 = 1.5 -> 0.95 (the DEM's law needs lambda_p < 1)
+    out = eff.apply(dict(PARAMS, soil_soil_plasticity=0.6), {}, {"lambda_p": 0.9}, {}, "compression")
+    assert out["soil_soil_plasticity"] == 0.95
+    # 0.2 - 0.5 = -0.3 -> 0 (a value below the default bounds, given directly)
+    out = eff.apply(dict(PARAMS, soil_soil_plasticity=0.2), {}, {"lambda_p": -0.5}, {}, "compression")
+    assert out["soil_soil_plasticity"] == 0.0
+
+
+def test_plastic_contact_switched_off_adds_no_parameter():
+    # lambda_p = 0 on a set without soil_soil_plasticity: the set as it was (same DEM run)
+    eff = EFFECTS["plastic_contact"]
+    assert eff.apply(PARAMS, {}, {"lambda_p": 0.0}, {}, "compression") == PARAMS
+
+
+@pytest.mark.parametrize("scenario", ["bulldozing", "repose", "standin", None])
+def test_plastic_contact_does_not_act_on_other_scenarios(scenario):
+    eff = EFFECTS["plastic_contact"]
+    assert eff.scenarios == ("compression", "standin_compression")
+    assert eff.apply(PARAMS, QUANT, {"lambda_p": 0.5}, REF, scenario) == PARAMS
+    assert not eff.applies_to(QUANT, scenario)
+    assert not eff.applies_to({}, scenario)
+
+
+def test_plastic_contact_acts_on_every_compression_condition():
+    eff = EFFECTS["plastic_contact"]
+    for scenario in ("compression", "standin_compression"):
+        assert eff.applies_to({}, scenario)
+        assert eff.applies_to(QUANT, scenario)
+
+
+def test_unrestricted_effects_act_in_every_scenario():
+    for scenario in ("compression", "bulldozing", None):
+        assert EFFECTS["moisture_cohesion"].applies_to({"moisture_content": 20.0}, scenario)
+        assert not EFFECTS["moisture_cohesion"].applies_to({"tool_speed": 2.0}, scenario)
+        assert EFFECTS["tool_adhesion"].applies_to({}, scenario)
+    # 0.05 + 0.7 = 0.75 on a compression condition too
+    out = EFFECTS["tool_adhesion"].apply(PARAMS, {}, {"gamma_a": 0.7}, REF, "compression")
+    _unchanged_except(out, {"soil_steel_surface_energy": 0.75})
+
+
+def test_apply_all_passes_the_scenario():
+    effects = {"tool_adhesion": {"gamma_a": 0.7}, "plastic_contact": {"lambda_p": 0.4}}
+    # a blade: adhesion only (0.05 + 0.7); a compression test: both (0 + 0.4)
+    assert apply_all(effects, PARAMS, {}, {}, "bulldozing") == dict(PARAMS, soil_steel_surface_energy=0.75)
+    out = apply_all(effects, PARAMS, {}, {}, "compression")
+    assert out == dict(PARAMS, soil_steel_surface_energy=0.75, soil_soil_plasticity=0.4)
+
+
 # --- library helpers ---------------------------------------------------------------------------
 
 

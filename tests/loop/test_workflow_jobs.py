@@ -48,6 +48,44 @@ def test_conditions_sharing_a_tool_job_get_their_own_effect_parameters():
     assert jobs[k1]["specs"][0]["seed"] == job["specs"][0]["seed"]
 
 
+def test_plastic_contact_plans_and_runs_only_the_compression_conditions():
+    from soilcal.dem.scenarios.base import DemParams
+    from soilcal.loop import core
+
+    blade = S.conditions([{"working_depth": 0.1}], measures=("horizontal_force_N",))
+    comp = S.compression_conditions([{"max_strain": 0.2}], measures=("recovered_strain",))
+    conds = blade + comp
+    # a significant difference between a table's measured quantities: plastic_contact's signature
+    diag = pd.DataFrame([{"test": "group", "covariate": "measure", "quantity": "measure", "significant": True}])
+    assert "plastic_contact" not in core.candidates(diag, blade, core.Settings())
+    assert "plastic_contact" in core.candidates(diag, conds, core.Settings())
+    acts = {(e["measurement"], e["row"]): e["acts"] for e in core.plan(conds, ["plastic_contact"], core.Settings(), {})}
+    assert acts == {("plates", 1): False, ("compression", 1): True}
+    # the DEM jobs: a blade tool job, and a compression one with DemParams' full set (elastic, 0)
+    bjob = _tool_job()
+    cspec = {"soil": "s", "stage": "bbd", "run": 1, "levels": {}, "seed": 10, "replicates": 1,
+             "params": DemParams().as_dict(),
+             "responses": {"recovered_strain": {"scenario": "compression", "setup": {"name": "paper", "unload": True},
+                                                "measure": "recovered_strain", "preset": "quick"}}}
+    cjob = {"measurement": "compression", "row": 1, "stage": "bbd", "measures": ["recovered_strain"], "specs": [cspec]}
+    # the stand-in's compression condition, as the DEM's scenario
+    from dataclasses import replace
+
+    conds = [blade[0], replace(comp[0], scenario="compression")]
+    bk, ck = tool_key(bjob), tool_key(cjob)
+    plan = {"candidates": ["plastic_contact"], "reference": {},
+            "design": {"plastic_contact": [{"lambda_p": 0.0}, {"lambda_p": 0.45}]}}
+    jobs, files = loop_jobs(conds, {bk: bjob, ck: cjob}, {("plates", 1): bk, ("compression", 1): ck}, plan, "results/s")
+    at = files["plastic_contact"]
+    # the blade at every point and the switched-off compression test are the tool runs themselves
+    assert at[0] == {"plates/1": f"results/s/dem/tools/{bk}.csv", "compression/1": f"results/s/dem/tools/{ck}.csv"}
+    assert at[1]["plates/1"] == f"results/s/dem/tools/{bk}.csv"
+    # lambda_p = 0 + 0.45 = 0.45 on the compression test: one new job, nothing else changed
+    (key,) = jobs
+    assert at[1]["compression/1"] == f"results/s/loop/runs/{key}.csv"
+    assert jobs[key]["specs"][0]["params"] == dict(DemParams().as_dict(), soil_soil_plasticity=0.45)
+
+
 def _obs(n):
     return pd.DataFrame({"measurement": ["m"] * n, "row": list(range(1, n + 1)), "measure": ["F_N"] * n,
                          "measured": [100.0] * n})

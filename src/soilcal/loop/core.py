@@ -8,8 +8,9 @@ for tests, the benchmark and ``soilcal loop synthesize``) share them:
    parameters;
 2. :func:`soilcal.loop.diagnose.diagnose`: structure in the residual;
 3. :func:`candidates`: the effects whose signature shares a quantity (or ``bias``) with a
-   significant test, and that act on at least one measured condition (``loop.candidates:
-   all`` tries every effect that acts);
+   significant test, and that act on at least one measured condition (its quantities, and
+   its scenario where the effect names some; ``loop.candidates: all`` tries every effect
+   that acts);
 4. :func:`plan`: each candidate's design of parameters (:func:`soilcal.loop.select.theta_design`),
    every condition simulated at every design point with the seeds of the calibrated runs;
 5. :func:`analyse`: surrogates, forward selection, the verdict and the report tables;
@@ -81,7 +82,7 @@ def candidates(diag: pd.DataFrame, conditions, settings: Settings) -> list[str]:
     out = []
     for name in settings.effects:
         eff = EFFECTS[name]
-        if not any(eff.applies_to(c.quantities or {}) for c in conditions):
+        if not any(eff.applies_to(c.quantities or {}, c.scenario) for c in conditions):
             continue
         if settings.candidates == "all" or matched & set(eff.signature):
             out.append(name)
@@ -97,7 +98,7 @@ def plan(conditions, names, settings: Settings, reference: dict) -> list[dict]:
         for j, theta in enumerate(sl.theta_design(eff, settings.effect_bounds(name), settings.design_points)):
             for c in conditions:
                 out.append({"effect": name, "point": j, "theta": theta, "measurement": c.measurement, "row": c.row,
-                            "acts": eff.applies_to(c.quantities or {})})
+                            "acts": eff.applies_to(c.quantities or {}, c.scenario)})
     return out
 
 
@@ -273,7 +274,7 @@ def run_inprocess(soil: str, conditions, base_params, simulate, settings: Settin
         for c in conditions:
             p = base_params(c)
             if effect:
-                p = EFFECTS[effect].apply(p, c.quantities or {}, theta, reference)
+                p = EFFECTS[effect].apply(p, c.quantities or {}, theta, reference, c.scenario)
             for seed in seeds:
                 vals = simulate(c, p, seed)
                 for r in c.responses:

@@ -7,14 +7,17 @@ them.  Each :class:`Effect` here is one such mechanism with one or two parameter
 (``theta``), a formula that maps the calibrated DEM parameters of a measured condition onto
 the parameters the mechanism implies at that condition's covariates, a *signature* (the
 quantities of :data:`soilcal.config.measurements.QUANTITIES` through which it acts, plus
-``bias`` for one that moves every row the same way), the value of ``theta`` at which it is
-switched off (``null``), and a source.
+``bias`` for one that moves every row the same way and ``measure`` for one that moves the
+measured quantities of a table differently), the value of ``theta`` at which it is switched
+off (``null``), and a source.
 
 Every effect acts on the :class:`~soilcal.dem.scenarios.base.DemParams` of a run, so that a
 switched-on effect is a DEM run like any other (same scenario, setup and seeds).  A
 covariate an effect needs is taken relative to a *reference*: the value at which the
 calibrated parameters hold (the soil's ``loop.reference`` entry, else the mean of the
-measured conditions, recorded in the loop's outputs).
+measured conditions, recorded in the loop's outputs).  An effect may act on the conditions
+of some scenarios only (``scenarios``; empty: every scenario): a condition of another
+scenario keeps its calibrated parameters (:meth:`Effect.applies_to`, :meth:`Effect.apply`).
 
 The formulas (``x`` the condition's value, ``x0`` the reference; clamped to each
 parameter's physical range, :data:`soilcal.dem.scenarios.base._RANGES`):
@@ -55,9 +58,25 @@ parameter's physical range, :data:`soilcal.dem.scenarios.base._RANGES`):
     of every condition, more where the contact area is larger.  Signature: ``tool``,
     ``bias``.
 
-Not in the library yet: plastic contact (an elasto-plastic normal model such as EEPA,
-Morrissey 2013, for compression tests) needs a normal contact law with a loading history,
-which :mod:`soilcal.dem.contact` does not have.
+``plastic_contact`` (theta: ``lambda_p``, the contact plasticity ratio; compression tests only)
+    lambda_p,ss = lambda_p,cal + lambda_p, clamped to [0, 0.95] (``soil_soil_plasticity``; a
+    parameter set without it is elastic, 0).  Above 0 the soil-soil contacts follow the
+    plastic Hertz law ``eepa`` of :mod:`soilcal.dem.contact`: a contact loads on Hertz's
+    k1 delta^1.5 and unloads and reloads on k2 (delta^1.5 - lambda_p delta_max^1.5) with
+    k2 = k1 / (1 - lambda_p), the force 0 below the plastic overlap lambda_p^(2/3) delta_max
+    (the Edinburgh elasto-plastic model, EEPA, in its non-adhesive form with the Hertz
+    exponent n = 3/2: Thakur, Morrissey, Sun, Chen & Ooi, Granular Matter 16 (2014) 383,
+    Eqs. 1-2; Morrissey, PhD thesis, University of Edinburgh, 2013): soil aggregates deform
+    plastically at their contacts and give back only part of a compression: the strain a
+    confined compression sample recovers when the rod is withdrawn shows it
+    (``recovered_strain``; smaller by the factor 1 - lambda_p^(2/3) for an affine packing,
+    :mod:`soilcal.loop.standin`), more plainly than the loading stresses, which move
+    through the way the bed settles and rearranges (:mod:`soilcal.dem.scenarios.compression`).
+    So the effect acts on compression tests only (scenarios ``compression`` and the
+    stand-in's ``standin_compression``), where it moves the measured quantities by
+    different amounts.  Signature: ``measure`` (the
+    diagnosis's group test over the measured quantities of a table,
+    :mod:`soilcal.loop.diagnose`), ``bias``.
 
 :data:`EFFECTS` maps names to effects; :func:`get` refuses an unknown name with the list.
 """
@@ -71,7 +90,7 @@ from soilcal.errors import InputError
 
 #: DemParams range limits the effects respect (low, high) by parameter kind
 _LIMITS = {"surface_energy": (0.0, 1.0e3), "static_friction": (0.0, 5.0), "density": (1.0, 3.0e4),
-           "shear_modulus": (1.0, 1.0e13)}
+           "shear_modulus": (1.0, 1.0e13), "plasticity": (0.0, 0.95)}
 
 
 def _clamp(x: float, kind: str) -> float:
@@ -92,6 +111,7 @@ class Effect:
     formula: str
     source: str
     changes: tuple = field(default=())  # DemParams names it changes
+    scenarios: tuple = field(default=())  # scenarios whose conditions it acts on (empty: every scenario)
 
     def theta_names(self) -> tuple[str, ...]:
         return tuple(self.params)
@@ -106,12 +126,22 @@ class Effect:
         """Whether ``theta`` switches the effect off."""
         return all(float(theta[k]) == float(self.null[k]) for k in self.params)
 
-    def applies_to(self, quantities: dict) -> bool:
-        """Whether a condition carrying these quantities is changed by the effect at all."""
-        return not self.needs or any(q in quantities for q in self.needs)
+    def acts_in(self, scenario: str | None) -> bool:
+        """Whether the effect acts on conditions of ``scenario`` (None: a scenario not known,
+        on which an effect restricted to some scenarios does not act)."""
+        return not self.scenarios or scenario in self.scenarios
 
-    def apply(self, params: dict, quantities: dict, theta: dict, reference: dict) -> dict:
-        """The DEM parameters (name -> SI value) of a condition with the effect switched on."""
+    def applies_to(self, quantities: dict, scenario: str | None = None) -> bool:
+        """Whether a condition of ``scenario`` carrying these quantities is changed by the
+        effect at all."""
+        return self.acts_in(scenario) and (not self.needs or any(q in quantities for q in self.needs))
+
+    def apply(self, params: dict, quantities: dict, theta: dict, reference: dict,
+              scenario: str | None = None) -> dict:
+        """The DEM parameters (name -> SI value) of a condition of ``scenario`` with the effect
+        switched on (a copy of ``params`` where the effect does not act on the scenario)."""
+        if not self.acts_in(scenario):
+            return dict(params)
         fn = _APPLY[self.name]
         return fn(dict(params), quantities, {k: float(theta.get(k, self.null[k])) for k in self.params}, reference)
 
@@ -165,8 +195,17 @@ def _adhesion(params, quantities, theta, reference):
     return params
 
 
+def _plastic(params, quantities, theta, reference):
+    key = "soil_soil_plasticity"
+    cal = float(params.get(key, 0.0))  # a parameter set without it: elastic Hertz
+    lp = _clamp(cal + theta["lambda_p"], "plasticity")
+    if key in params or lp != cal:  # left out where it stays at the elastic default
+        params[key] = lp
+    return params
+
+
 _APPLY = {"moisture_cohesion": _moisture, "rate_friction": _rate, "depth_compaction": _depth,
-          "tool_adhesion": _adhesion}
+          "tool_adhesion": _adhesion, "plastic_contact": _plastic}
 
 EFFECTS: dict[str, Effect] = {
     "moisture_cohesion": Effect(
@@ -197,6 +236,14 @@ EFFECTS: dict[str, Effect] = {
         formula="gamma_st = gamma_st,cal + gamma_a",
         source="Johnson, Kendall & Roberts, Proc. R. Soc. A 324 (1971) 301",
         changes=("soil_steel_surface_energy",)),
+    "plastic_contact": Effect(
+        name="plastic_contact", title="plastic soil-soil contacts (elasto-plastic Hertz law, EEPA)",
+        params={"lambda_p": ("-", (0.0, 0.9))}, null={"lambda_p": 0.0},
+        signature=("measure", "bias"), needs=(),
+        formula="lambda_p,ss = lambda_p,cal + lambda_p, in [0, 0.95] (plastic Hertz law eepa)",
+        source="Thakur, Morrissey, Sun, Chen & Ooi, Granular Matter 16 (2014) 383, Eqs. 1-2 (non-adhesive, n = 3/2); "
+               "Morrissey, PhD thesis, University of Edinburgh (2013)",
+        changes=("soil_soil_plasticity",), scenarios=("compression", "standin_compression")),
 }
 
 
@@ -206,10 +253,11 @@ def get(name: str, source="<loop>") -> Effect:
     return EFFECTS[name]
 
 
-def apply_all(effects: dict, params: dict, quantities: dict, reference: dict) -> dict:
-    """Parameters with several effects on (``effects``: name -> theta), in library order."""
+def apply_all(effects: dict, params: dict, quantities: dict, reference: dict, scenario: str | None = None) -> dict:
+    """Parameters of a condition of ``scenario`` with several effects on (``effects``: name ->
+    theta), in library order."""
     out = dict(params)
     for name in EFFECTS:
         if name in effects:
-            out = EFFECTS[name].apply(out, quantities, effects[name], reference)
+            out = EFFECTS[name].apply(out, quantities, effects[name], reference, scenario)
     return out

@@ -104,12 +104,12 @@ def _plan(soil_name, cands, reference, settings, qcols, diag) -> dict:
 
 def loop_job(tool_job: dict, cond, effect: str, theta: dict, reference: dict) -> dict:
     """The tool job (:func:`soilcal.chain.verify.tool_point`) that simulates condition ``cond``,
-    with ``effect`` switched on at ``theta`` for that condition's quantities."""
+    with ``effect`` switched on at ``theta`` for that condition's quantities and scenario."""
     if "not_run" in tool_job:
         return dict(tool_job)
     specs = []
     for s in tool_job["specs"]:
-        p = EFFECTS[effect].apply(dict(s["params"]), cond.quantities or {}, theta, reference)
+        p = EFFECTS[effect].apply(dict(s["params"]), cond.quantities or {}, theta, reference, cond.scenario)
         specs.append(dict(s, params=p))
     return dict(tool_job, specs=specs, effect=effect, theta=dict(theta))
 
@@ -119,8 +119,9 @@ def loop_jobs(conds, tool_jobs: dict, tool_keys: dict, plan: dict, results: str)
     run file}}}).  One job per design point and condition, keyed by what it simulates
     (:func:`soilcal.chain.verify.tool_key`), so conditions whose parameters the effect sets
     alike share one; where the effect leaves a condition's parameters as they are (the
-    switched-off point, a condition without the effect's quantity) the file is the tool run
-    itself (``results/<soil>/dem/tools/<key>.csv``; ``results`` is ``results/<soil>``)."""
+    switched-off point, a condition without the effect's quantity or of a scenario it does
+    not act on) the file is the tool run itself (``results/<soil>/dem/tools/<key>.csv``;
+    ``results`` is ``results/<soil>``)."""
     from soilcal.chain.verify import tool_key
 
     jobs, files = {}, {}

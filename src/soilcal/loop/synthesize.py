@@ -78,7 +78,7 @@ def synthesize(conditions, base_params, simulate, hidden: dict | None = None, re
             factor[i] *= 1 + off[str((c.quantities or {}).get("day", ""))]
     rows = []
     for i, c in enumerate(conditions):
-        p = apply_all(hidden, base_params(c), c.quantities or {}, reference)
+        p = apply_all(hidden, base_params(c), c.quantities or {}, reference, c.scenario)
         vals = [simulate(c, p, s) for s in seeds]
         for r in c.responses:
             sims = np.array([v[r["measure"]] for v in vals], float)
