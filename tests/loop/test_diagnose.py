@@ -182,3 +182,44 @@ def test_too_few_rows():
     assert len(diag) == 0
     assert len(ranking(diag)) == 0
     assert matched_quantities(diag) == set()
+
+
+def test_residual_degrees_of_freedom_are_welch_satterthwaite():
+    from soilcal.loop.residuals import residual_frame
+
+    obs = pd.DataFrame([dict(measurement="m", row=1, measure="F_N", unit="N", label="a", measured=100.0,
+                             measured_sd=2.0, measured_n=3),
+                        dict(measurement="m", row=2, measure="F_N", unit="N", label="b", measured=100.0,
+                             measured_sd=2.0, measured_n=float("nan"))])
+    runs = pd.DataFrame([dict(measurement="m", row=r, measure="F_N", seed=s, value=v, status="ok")
+                         for r in (1, 2) for s, v in enumerate((97.0, 100.0, 103.0))])  # seed SD 3
+    res = residual_frame(obs, runs)
+    # var_m = 4/3, var_s = 9/3 = 3: nu = (13/3)^2 / ((4/3)^2 / 2 + 3^2 / 2) = 18.778 / 5.3889
+    assert res["residual_dof"].iloc[0] == pytest.approx((13 / 3) ** 2 / ((4 / 3) ** 2 / 2 + 9 / 2), rel=1e-12)
+    # a measured SD without a repeat count is taken as known: only the seeds' term, nu = (4 + 3)^2 / (9 / 2)
+    assert res["residual_dof"].iloc[1] == pytest.approx(49 / 4.5, rel=1e-12)
+
+
+def test_scatter_test_holds_its_level_with_sds_from_three_repeats_and_seeds():
+    """Tables with no scatter beyond the measured and seed SDs, each SD from three draws:
+    the t-based scatter test rejects at about its nominal 5 %; taken as unit normal, the
+    standardised residuals reject far more often (heavy tails of t on 2-4 dof)."""
+    from soilcal.loop.residuals import residual_frame
+
+    rng = np.random.default_rng(11)
+    p_t, p_normal = [], []
+    for _ in range(150):
+        obs, runs = [], []
+        for i in range(12):
+            mu = 100.0 + 10 * i
+            reps = rng.normal(mu, 2.0, 3)
+            obs.append(dict(measurement="m", row=i + 1, measure="F_N", unit="N", label=f"r{i}",
+                            measured=reps.mean(), measured_sd=reps.std(ddof=1), measured_n=3))
+            runs += [dict(measurement="m", row=i + 1, measure="F_N", seed=s, value=v, status="ok")
+                     for s, v in enumerate(rng.normal(mu, 3.0, 3))]
+        res = residual_frame(pd.DataFrame(obs), pd.DataFrame(runs))
+        for df, out in ((res, p_t), (res.drop(columns=["residual_dof"]), p_normal)):
+            d = diagnose(df)
+            out.append(float(d.loc[d["test"] == "scatter", "p"].iloc[0]))
+    assert np.mean(np.array(p_t) < 0.05) <= 0.08
+    assert np.mean(np.array(p_normal) < 0.05) > 0.25

@@ -5,9 +5,15 @@ each an ordinary least-squares fit (statsmodels) against a null of no structure:
 
 * ``bias``: the mean of ``r`` is zero (one-sample t-test); share explained: mean^2 / mean(r^2);
 * ``scatter``: the standardised residuals (residual over the combined measured and seed
-  standard error) are unit normal, so their sum of squares is chi-square on n degrees of
-  freedom (upper tail), over the rows whose measured SD is known: scatter beyond what the
-  measurement and the seeds explain (a stone, a disturbance the covariates do not carry);
+  standard error) follow Student's t with each row's Welch-Satterthwaite degrees of freedom
+  (:mod:`soilcal.loop.residuals`: the SDs are estimated from a few repeats and seeds); each
+  is mapped to the unit-normal deviate of the same two-sided tail probability, and the sum
+  of their squares is chi-square on n degrees of freedom (upper tail), over the rows whose
+  measured SD is known: scatter beyond what the measurement and the seeds explain (a stone,
+  a disturbance the covariates do not carry).  Taken as unit normal instead, residuals
+  standardised with SDs of three repeats and three seeds flag scatter where there is none:
+  at alpha 0.05, in 44.5 % of 600 simulated 12-row tables (2.7 % with the t deviates; with
+  ten repeats and seeds 10.3 % against 3.5 %);
 * ``trend`` of a numeric covariate with at least three distinct values: ``r ~ x``, the
   slope's t-test;
 * ``curvature`` with at least four distinct values: ``r ~ x + x^2``, the t-test of the
@@ -82,6 +88,20 @@ def _covariate_tests(name, q, col, r, numeric, distinct) -> list[dict]:
     return rows
 
 
+def normal_equivalent(t, dof):
+    """The unit-normal deviates with the same two-sided tail probabilities as the Student t
+    values ``t`` on ``dof`` degrees of freedom (infinite: ``t`` itself), signs kept."""
+    from scipy import stats
+
+    t = np.asarray(t, float)
+    dof = np.asarray(dof, float)
+    out = t.copy()
+    fin = np.isfinite(dof)
+    if fin.any():
+        out[fin] = np.sign(t[fin]) * stats.norm.isf(stats.t.sf(np.abs(t[fin]), dof[fin]))
+    return out
+
+
 def diagnose(res: pd.DataFrame, quantity_of: dict | None = None, alpha: float = 0.05) -> pd.DataFrame:
     """One row per test (module docstring) on the usable rows of a residual table;
     ``quantity_of``: covariate column -> its declared quantity."""
@@ -100,9 +120,12 @@ def diagnose(res: pd.DataFrame, quantity_of: dict | None = None, alpha: float = 
                          statistic=float(t.statistic), p=float(t.pvalue),
                          r2=float(r.mean() ** 2 / np.mean(r ** 2)) if np.any(r) else 0.0))
     z = d["standardised_residual"].astype(float).to_numpy() if "standardised_residual" in d else np.array([])
+    dof = (d["residual_dof"].astype(float).to_numpy() if "residual_dof" in d else np.full(len(z), np.inf))
     if "measured_sd" in d:  # only where the measured uncertainty is known: seed scatter alone understates it
-        z = z[np.isfinite(d["measured_sd"].astype(float).to_numpy())]
-    z = z[np.isfinite(z)]
+        known = np.isfinite(d["measured_sd"].astype(float).to_numpy())
+        z, dof = z[known], dof[known]
+    keep = np.isfinite(z)
+    z = normal_equivalent(z[keep], dof[keep])
     if len(z) >= 3:
         chi = float(np.sum(z ** 2))
         rows.append(dict(test="scatter", covariate="", quantity="scatter", n=len(z), levels=1,

@@ -14,7 +14,14 @@ Conventions:
 * residual standard error = sqrt(sd_m^2 / n_m + sd_s^2 / n_s) with the measured standard
   deviation over its repeats (``n_m`` 1 where the table gives no count: the SD is then the
   value's own uncertainty) and the seed scatter of the simulated mean; the standardised
-  residual is the residual over it, empty (with a note) where neither uncertainty is known.
+  residual is the residual over it, empty (with a note) where neither uncertainty is known;
+* residual degrees of freedom (Welch 1947; Satterthwaite 1946): both variances are
+  estimated, from n_m repeats and n_s seeds, so the standardised residual follows Student's
+  t rather than the unit normal, with
+  nu = se^4 / ((sd_m^2/n_m)^2 / (n_m - 1) + (sd_s^2/n_s)^2 / (n_s - 1)); a term is left out
+  where its SD is taken as known (a measured SD without a repeat count) or absent, and nu is
+  infinite where both are.  With three repeats and three seeds nu is 2 to 4: a standardised
+  residual of 3 is then as common as one of 1.6 to 2.2 under the normal law.
 """
 
 from __future__ import annotations
@@ -25,7 +32,7 @@ import pandas as pd
 KEY = ["measurement", "row", "measure"]
 RESIDUAL_COLUMNS = ["measurement", "row", "measure", "unit", "label", "measured", "measured_sd", "measured_n",
                     "simulated_mean", "simulated_sd", "simulated_n", "residual", "relative_residual",
-                    "residual_se", "standardised_residual", "note"]
+                    "residual_se", "residual_dof", "standardised_residual", "note"]
 
 
 def observations(conditions) -> pd.DataFrame:
@@ -81,6 +88,13 @@ def residual_frame(obs: pd.DataFrame, runs: pd.DataFrame) -> pd.DataFrame:
     var_s = (df["simulated_sd"] ** 2 / df["simulated_n"].clip(lower=1)).fillna(0.0)
     se = np.sqrt(var_m + var_s)
     df["residual_se"] = np.where(se > 0, se, np.nan)
+    # Welch-Satterthwaite: each estimated variance contributes var^2 / its degrees of freedom
+    n_m, n_s = df["measured_n"].astype(float), df["simulated_n"].astype(float)
+    t_m = np.where(n_m > 1, var_m ** 2 / (n_m - 1).clip(lower=1.0), 0.0)
+    t_s = np.where(n_s > 1, var_s ** 2 / (n_s - 1).clip(lower=1.0), 0.0)
+    den = t_m + t_s
+    with np.errstate(divide="ignore", invalid="ignore"):
+        df["residual_dof"] = np.where(den > 0, se ** 4 / np.where(den > 0, den, 1.0), np.inf)
     df["standardised_residual"] = df["residual"] / df["residual_se"]
     notes = []
     for r in df.itertuples():
