@@ -433,7 +433,7 @@ def tool_optima(w):
 
 def set_file(soil):
     """The file of a stage holding the set the soil ends with."""
-    return "refined.csv" if refine_on(soil) else "optimum.csv"
+    return refine.set_file(soil_cfg(soil))
 
 
 def calibration_files(w, names=("stage.json", "optimum.csv")):

@@ -39,6 +39,13 @@ def refine_settings(soil_data: dict) -> bool:
     return bool(v.get("refine", True))
 
 
+def set_file(soil_data) -> str:
+    """The file of a DEM stage holding the set a soil ends with, which its tool jobs run at:
+    ``refined.csv`` where the soil runs the second verification round (:func:`refine_settings`,
+    the default), else ``optimum.csv``."""
+    return "refined.csv" if refine_settings(soil_data) else "optimum.csv"
+
+
 def refined_cases(refined: pd.DataFrame) -> list[str]:
     """The case ids a ``refined.csv`` frame moves to a second-round set."""
     return refined.loc[refined["refined"].astype(str).str.lower() == "true", "case"].astype(str).tolist()

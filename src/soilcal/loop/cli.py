@@ -8,8 +8,11 @@ one process on the DEM (what the workflow does job by job) and writes the loop's
 Both simulate each condition at its own parameters: the soil's ``simulation.params``, the
 measurement's ``params`` and its ``param`` covariates (:class:`~soilcal.config.measurements.Condition`),
 the DEM defaults for the rest; ``--param NAME=VALUE`` sets a parameter for every condition
-(a calibrated set).  The workflow instead starts from the calibrated optimum of the stage the
-measurement names.
+(a calibrated set).  With ``--results DIR`` each condition starts instead from what the
+workflow's tool job for it runs at (:func:`calibrated_params`): the calibrated set of the
+condition's stage and case in the DEM results under ``DIR``, read as the workflow reads it,
+with ``--param`` still on top.  ``synthesize`` records the parameters of every condition in
+its truth file (``params_source``, ``base:<parameter>``), ``run`` in ``parameters.csv``.
 """
 
 from __future__ import annotations
@@ -60,6 +63,106 @@ def condition_params(overrides: dict):
     return base
 
 
+def _calibration(soil, results: Path, stage_id: str):
+    """(stage, calibrated sets, path of the sets) of one DEM stage under ``results``, read as
+    the workflow reads them (``_calibration(final=True)`` in ``workflow/rules/common.smk``):
+    the stage from ``<soil>/dem/<stage>/stage.json``, the sets from the file the soil ends
+    with (:func:`soilcal.chain.refine.set_file`)."""
+    import json
+
+    import pandas as pd
+
+    from soilcal.chain.files import read_stage
+    from soilcal.chain.refine import set_file
+    from soilcal.errors import InputError
+
+    d = results / soil.name / "dem" / stage_id
+    stage_path, set_name = d / "stage.json", set_file(soil.data)
+    set_path = d / set_name
+    if not stage_path.is_file():
+        raise InputError(stage_path, "<file>", f"the DEM stage {stage_id} as the workflow writes it (stage.json; "
+                         "run the workflow's DEM stage first)", "no such file")
+    why = ("written by the workflow's refine step after the stage's verification; simulation.verification.refine "
+           "is on" if set_name == "refined.csv" else "written by the workflow's optimum step")
+    if not set_path.is_file():
+        raise InputError(set_path, "<file>", f"the calibrated sets of DEM stage {stage_id} that the workflow's tool "
+                         f"jobs use ({set_name}, {why})", "no such file")
+    try:
+        stage = read_stage(stage_path)
+    except (json.JSONDecodeError, UnicodeDecodeError) as exc:
+        raise InputError(stage_path, "<file>", "a stage written by the workflow (JSON)", str(exc)) from None
+    if not isinstance(stage, dict) or not isinstance(stage.get("factors"), dict):
+        raise InputError(stage_path, "factors", "a stage with its factors", None)
+    try:
+        optimum = pd.read_csv(set_path)
+    except (pd.errors.EmptyDataError, pd.errors.ParserError, UnicodeDecodeError) as exc:
+        raise InputError(set_path, "<file>", f"a table of calibrated sets ({set_name})", str(exc)) from None
+    missing = [c for c in ("case", *stage["factors"]) if c not in optimum.columns]
+    if missing:
+        raise InputError(set_path, "columns", "case and a column per factor of the stage ("
+                         + ", ".join(stage["factors"]) + ")", missing)
+    return stage, optimum, set_path
+
+
+def calibrated_params(soil, conds, results) -> dict:
+    """``(measurement, row)`` -> the DEM parameters (name -> SI value) that the workflow's tool
+    job for that condition runs at (:func:`soilcal.chain.verify.tool_point`): the calibrated
+    set of the condition's stage and case (:func:`soilcal.chain.stage.calibrated_levels`) in
+    the DEM results under ``results`` (the workflow's ``results/``), the stage's fixed values
+    and the soil's properties and ``simulation.params`` below it, the condition's parameters
+    over it.  InputError naming the file when a stage has no stage.json or set file, or a
+    condition's case no calibrated set; every condition is checked before any is simulated."""
+    from soilcal.chain.stage import calibrated_levels
+    from soilcal.chain.verify import tool_point
+    from soilcal.errors import InputError
+
+    root = Path(results)
+    if not str(results) or not root.is_dir():
+        raise InputError("<command line>", "--results", "a results folder (holding <soil>/dem/<stage>/)",
+                         str(results))
+    cals, out = {}, {}
+    for c in conds:
+        if c.stage not in cals:
+            cals[c.stage] = _calibration(soil, root, c.stage)
+        stage, optimum, path = cals[c.stage]
+        where = f"measurement {c.measurement} row {c.row}: stage {c.stage}, case {c.case or '(the first)'}"
+        try:
+            calibrated_levels(stage, optimum, c.case or None)
+        except InputError as exc:
+            if exc.field == "optimise":  # the stage names no case
+                raise InputError(path.with_name("stage.json"), exc.field, exc.expected, exc.got, note=where) from None
+            raise InputError(path, exc.field, exc.expected + " (a row with calibrated = True)", exc.got,
+                             note=where) from None
+        job = tool_point(soil, c, stage, optimum)
+        if "not_run" in job or not job["specs"]:
+            raise InputError(path, f"case {c.case}", "a calibrated set", job.get("not_run"), note=where)
+        out[(c.measurement, int(c.row))] = dict(job["specs"][0]["params"])  # the specs differ by seed only
+    return out
+
+
+def base_parameters(soil, conds, overrides: dict, results=None) -> dict:
+    """``(measurement, row)`` -> the DEM parameters each condition is simulated at before any
+    effect: without ``results`` :func:`condition_params`, with it :func:`calibrated_params`;
+    ``overrides`` (``--param``) on top of either."""
+    from soilcal.dem.scenarios.base import DemParams
+
+    if results is None:
+        base = condition_params(overrides)
+        return {(c.measurement, int(c.row)): base(c) for c in conds}
+    return {k: DemParams.from_mapping({**p, **overrides}, f"{k[0]} row {k[1]}").as_dict()
+            for k, p in calibrated_params(soil, conds, results).items()}
+
+
+def params_source(args, overrides: dict) -> str:
+    """Where the base parameters come from, as the outputs record it."""
+    src = f"--results {args.results}" if args.results else "the soil's simulation.params"
+    return src + "".join(f" + --param {k}={v:.12g}" for k, v in overrides.items())
+
+
+def _lookup(table: dict):
+    return lambda cond: dict(table[(cond.measurement, int(cond.row))])
+
+
 def _params(args) -> dict:
     return dict(_kv("p:" + ",".join(args.param or []), "--param")[1]) if args.param else {}
 
@@ -92,8 +195,14 @@ def _synthesize(args) -> int:
     hidden = dict(_kv(e, "--effect") for e in args.effect or [])
     dist = dict(_kv(d, "--disturbance") for d in args.disturbance or [])
     reference = dict(_kv("r:" + ",".join(args.reference), "--reference")[1]) if args.reference else {}
-    table = sy.synthesize(conds, condition_params(_params(args)), dem_simulator(args.threads), hidden, reference, dist,
+    overrides = _params(args)
+    params = base_parameters(soil, conds, overrides, args.results)
+    table = sy.synthesize(conds, _lookup(params), dem_simulator(args.threads), hidden, reference, dist,
                           noise=args.noise, seed=args.seed, seeds=tuple(range(1000, 1000 + args.repeats)))
+    source = params_source(args, overrides)
+    keys = list(zip(table["measurement"], table["row"].astype(int)))
+    table["params_source"] = source
+    table = table.join(pd.DataFrame([params[k] for k in keys], index=table.index).add_prefix("base:"))
     entry = soil.data["measurements"][args.measurement]
     src = measurements_dir(soil.resources_root, soil.name) / entry["table"]
     df = pd.read_csv(src)
@@ -109,8 +218,8 @@ def _synthesize(args) -> int:
     write_text(args.out, df.to_csv(index=False))
     truth = Path(args.out).with_suffix(".truth.csv")
     write_text(truth, table.to_csv(index=False))
-    print(f"{len(df)} rows -> {args.out} (truth: {truth}; hidden {hidden or 'none'}, disturbances {dist or 'none'}, "
-          f"seed {args.seed})")
+    print(f"{len(df)} rows -> {args.out} (truth: {truth}; parameters: {source}; hidden {hidden or 'none'}, "
+          f"disturbances {dist or 'none'}, seed {args.seed})")
     return 0
 
 
@@ -125,14 +234,33 @@ def _run(args) -> int:
     if args.reference:
         settings = replace(settings, reference={**settings.reference,
                                                 **_kv("r:" + ",".join(args.reference), "--reference")[1]})
-    out = core.run_inprocess(soil.name, conds, condition_params(_params(args)), dem_simulator(args.threads), settings,
+    overrides = _params(args)
+    params = base_parameters(soil, conds, overrides, args.results)
+    out = core.run_inprocess(soil.name, conds, _lookup(params), dem_simulator(args.threads), settings,
                              seeds=tuple(range(args.seed, args.seed + args.sim_seeds)))
     d = Path(args.out)
     for name, df in (("residuals", out.residuals), ("diagnosis", out.diagnosis), ("selection", out.selection),
-                     ("predictions", out.predictions), ("loop_summary", out.summary)):
+                     ("predictions", out.predictions), ("loop_summary", out.summary),
+                     ("parameters", parameters_frame(params))):
         write_csv(df, d / f"{name}.csv")
+    print(f"parameters: {params_source(args, overrides)} ({d / 'parameters.csv'})")
     print(out.verdict)
     return 0
+
+
+def parameters_frame(params: dict):
+    """``parameters.csv`` of ``soilcal loop run``: measurement, row and one column per DEM
+    parameter (SI), the base parameters of every condition (:func:`base_parameters`)."""
+    import pandas as pd
+
+    from soilcal.dem.scenarios.base import DemParams
+
+    return pd.DataFrame([{"measurement": m, "row": r, **p} for (m, r), p in params.items()],
+                        columns=["measurement", "row", *DemParams.names()])
+
+
+RESULTS_HELP = ("results folder of the workflow (e.g. results): start every condition from the calibrated set "
+                "of its stage and case there, as the workflow's tool jobs do (--param still on top)")
 
 
 def register(sub) -> None:
@@ -146,6 +274,7 @@ def register(sub) -> None:
                    help="periodic:amplitude=0.1,wavelength=7 | stones:fraction=0.3 | day_offset:sd=0.1")
     s.add_argument("--reference", action="append", help="quantity=value where the hidden effect is off")
     s.add_argument("--param", action="append", help="DEM parameter NAME=VALUE for every condition")
+    s.add_argument("--results", help=RESULTS_HELP)
     s.add_argument("--noise", type=float, default=0.02, help="relative SD of the instrument noise of one repeat")
     s.add_argument("--repeats", type=int, default=3, help="measured repeats per condition, one DEM seed each")
     s.add_argument("--seed", type=int, default=0, help="seed of the noise and disturbance draws")
@@ -158,6 +287,7 @@ def register(sub) -> None:
     r.add_argument("--measurement", help="only this measured table")
     r.add_argument("--reference", action="append", help="quantity=value where the calibrated parameters hold")
     r.add_argument("--param", action="append", help="DEM parameter NAME=VALUE for every condition")
+    r.add_argument("--results", help=RESULTS_HELP)
     r.add_argument("--sim-seeds", type=int, default=2, help="DEM seeds per condition and design point")
     r.add_argument("--seed", type=int, default=0, help="first DEM seed")
     r.add_argument("--threads", type=int, default=None)
