@@ -459,8 +459,8 @@ def contact_force(codes, pair, ma, mb, delta, nx, ny, nz, rvx, rvy, rvz, wrx, wr
         fpo2 = 0.0
     # plastic Hertz (``eepa``): below the largest overlap, the stiffer unloading branch
     dashpot = True
-    lam = pair[ma, mb, P_PLAS]
-    if codes[0] == 1 and lam > 0.0 and delta > 0.0:
+    lam = pair[ma, mb, P_PLAS] if codes[0] == 1 else 0.0
+    if lam > 0.0 and delta > 0.0:
         dm = hist[hk, H_DP]
         if delta >= dm:
             hist[hk, H_DP] = delta
