@@ -5,7 +5,7 @@ import math
 import numpy as np
 import pytest
 
-from conftest import table
+from conftest import head_on, table
 from soilcal.dem.engine import Simulation
 
 R = 1e-3
@@ -15,21 +15,7 @@ MASS = 4 / 3 * math.pi * R**3 * RHO
 
 
 def impact(e, v0, dt=1e-7):
-    sim = Simulation(table(e=e, mu=0.0, E=E), dt=dt, gravity=(0, 0, 0),
-                     contact_model=dict(tangential="none"))
-    sim.add_particles([[0, 0, 0], [2 * R + 1e-7, 0, 0]], R, "soil",
-                      v=[[v0 / 2, 0, 0], [-v0 / 2, 0, 0]])
-    steps_in = 0
-    touched = False
-    for _ in range(200000):
-        sim.run(1)
-        gap = sim.x[1, 0] - sim.x[0, 0] - 2 * R
-        if gap < 0:
-            touched = True
-            steps_in += 1
-        elif touched:
-            break
-    return (sim.v[1, 0] - sim.v[0, 0]) / v0, steps_in * dt
+    return head_on(table(e=e, mu=0.0, E=E), v0, R, dt)
 
 
 @pytest.mark.parametrize("e", [0.1, 0.3, 0.5, 0.7, 0.9])

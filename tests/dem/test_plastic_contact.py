@@ -12,7 +12,7 @@ import math
 import numpy as np
 import pytest
 
-from conftest import table
+from conftest import head_on, table
 from soilcal.dem.engine import Simulation
 from soilcal.dem.materials import Material, MaterialTable, damped_critical_dt
 from soilcal.errors import InputError
@@ -107,19 +107,8 @@ def test_with_jkr_the_plastic_share_leaves_the_adhesion():
 
 
 def impact(lam, v0, dt=2e-8):
-    sim = Simulation(table(e=1.0, mu=0.0, E=E, plasticity=lam), dt=dt, gravity=(0, 0, 0),
-                     contact_model=dict(normal="eepa", tangential="none"))
-    sim.add_particles([[0, 0, 0], [2 * R + 1e-8, 0, 0]], R, "soil",
-                      v=[[v0 / 2, 0, 0], [-v0 / 2, 0, 0]])
-    touched = False
-    for _ in range(400000):
-        sim.run(10)
-        gap = sim.x[1, 0] - sim.x[0, 0] - 2 * R
-        if gap < 0:
-            touched = True
-        elif touched:
-            break
-    return (sim.v[1, 0] - sim.v[0, 0]) / v0
+    return head_on(table(e=1.0, mu=0.0, E=E, plasticity=lam), v0, R, dt, normal="eepa",
+                   gap=1e-8, max_steps=4000000)[0]
 
 
 @pytest.mark.parametrize("lam", [0.2, 0.5, 0.8])
@@ -164,3 +153,35 @@ def test_demparams_switch_the_soil_soil_contacts_to_the_plastic_law():
     assert tab[0, 0, P_PLAS] == 0.4 and tab[0, 1, P_PLAS] == 0.0
     with pytest.raises(InputError, match="params.soil_soil_plasticity"):
         DemParams.from_mapping({"soil_soil_plasticity": 1.0})
+
+
+def test_a_stage_factor_of_kind_plasticity_sets_the_soil_soil_ratio(tmp_path):
+    """A user's soil may vary the contact plasticity ratio like any contact parameter: a
+    factor whose parameter has pair soil-soil and kind plasticity sets soil_soil_plasticity."""
+    import textwrap
+
+    from soilcal.config import load_soil
+    from soilcal.dem.scenarios.base import stage_params
+
+    (tmp_path / "my-soil.yaml").write_text(textwrap.dedent("""\
+        name: my-soil
+        parameters:
+          plastic: {name: Contact plasticity ratio, unit: "-", pair: soil-soil, kind: plasticity}
+          energy: {name: JKR surface energy, unit: J/m^2, pair: soil-soil, kind: surface_energy}
+          steel: {name: Soil-steel static friction, unit: "-", pair: soil-steel, kind: static_friction}
+        stages:
+          - id: bbd
+            kind: box_behnken
+            factors:
+              A: {parameter: plastic, low: 0.2, high: 0.6}
+              B: {parameter: energy, low: 2, high: 6}
+              C: {parameter: steel, low: 0.4, high: 0.8}
+            center_points: 3
+            responses:
+              - {id: recovered, name: Recovered strain, unit: "-"}
+        """))
+    soil = load_soil(tmp_path / "my-soil.yaml", tmp_path / "resources")
+    p = stage_params(soil, "bbd", {"A": 0.0, "B": 0.0, "C": 0.0}, coded=True)
+    assert p.soil_soil_plasticity == pytest.approx(0.4, rel=1e-12)
+    with pytest.raises(InputError, match="stages.bbd.factors.A"):
+        stage_params(soil, "bbd", {"A": 1.0}, coded=False)
