@@ -200,26 +200,35 @@ def test_residual_degrees_of_freedom_are_welch_satterthwaite():
     assert res["residual_dof"].iloc[1] == pytest.approx(49 / 4.5, rel=1e-12)
 
 
-def test_scatter_test_holds_its_level_with_sds_from_three_repeats_and_seeds():
-    """Tables with no scatter beyond the measured and seed SDs, each SD from three draws:
-    the t-based scatter test rejects at about its nominal 5 %; taken as unit normal, the
-    standardised residuals reject far more often (heavy tails of t on 2-4 dof)."""
-    from soilcal.loop.residuals import residual_frame
+def test_t_residuals_mapped_to_normal_deviates_hold_the_chi_square_level():
+    """Standardised residuals that are Student t on 2-4 degrees of freedom (SDs from three
+    repeats and three seeds): their normal deviates make the 12-row chi-square scatter
+    statistic reject at its nominal 5 %; read as unit normal, the t values reject far more
+    often (heavy tails)."""
+    from soilcal.loop.diagnose import normal_equivalent
 
     rng = np.random.default_rng(11)
-    p_t, p_normal = [], []
-    for _ in range(150):
-        obs, runs = [], []
-        for i in range(12):
-            mu = 100.0 + 10 * i
-            reps = rng.normal(mu, 2.0, 3)
-            obs.append(dict(measurement="m", row=i + 1, measure="F_N", unit="N", label=f"r{i}",
-                            measured=reps.mean(), measured_sd=reps.std(ddof=1), measured_n=3))
-            runs += [dict(measurement="m", row=i + 1, measure="F_N", seed=s, value=v, status="ok")
-                     for s, v in enumerate(rng.normal(mu, 3.0, 3))]
-        res = residual_frame(pd.DataFrame(obs), pd.DataFrame(runs))
-        for df, out in ((res, p_t), (res.drop(columns=["residual_dof"]), p_normal)):
-            d = diagnose(df)
-            out.append(float(d.loc[d["test"] == "scatter", "p"].iloc[0]))
-    assert np.mean(np.array(p_t) < 0.05) <= 0.08
-    assert np.mean(np.array(p_normal) < 0.05) > 0.25
+    dof = rng.uniform(2.0, 4.0, (4000, 12))
+    t = rng.standard_t(dof)
+    u = normal_equivalent(t.ravel(), dof.ravel()).reshape(t.shape)
+    assert np.all(np.sign(u) == np.sign(t)) and np.all(np.abs(u) <= np.abs(t))
+    p_t = stats.chi2.sf((u ** 2).sum(axis=1), 12)
+    p_normal = stats.chi2.sf((t ** 2).sum(axis=1), 12)
+    assert 0.04 < np.mean(p_t < 0.05) < 0.06  # binomial SD 0.0034 over 4000 tables
+    assert np.mean(p_normal < 0.05) > 0.25
+
+
+def test_the_scatter_test_reads_each_row_on_its_degrees_of_freedom():
+    """The scatter row of a residual table is the chi-square of the rows' normal deviates
+    with the tail probabilities of t on each row's residual_dof (infinite: the value itself)."""
+    z = np.array([2.5, -1.0, 0.3, 3.0])
+    dof = np.array([3.0, 3.0, np.inf, 2.0])
+    res = pd.DataFrame({"measurement": "m", "row": [1, 2, 3, 4], "measure": "F_N", "relative_residual": 0.01 * z,
+                        "standardised_residual": z, "residual_dof": dof, "measured_sd": 1.0})
+    d = diagnose(res)
+    u = np.where(np.isfinite(dof), stats.norm.isf(stats.t.sf(np.abs(z), np.where(np.isfinite(dof), dof, 1.0))),
+                 np.abs(z))
+    chi = float(np.sum(u ** 2))
+    row = d[d["test"] == "scatter"].iloc[0]
+    assert row["statistic"] == pytest.approx(chi, rel=1e-12)
+    assert row["p"] == pytest.approx(stats.chi2.sf(chi, 4), rel=1e-10)
