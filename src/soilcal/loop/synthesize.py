@@ -18,7 +18,8 @@ measurement noise:
   a soil-bin test.
 
 Every random draw comes from one generator seeded by ``seed``; the draws are listed in the
-returned table's ``truth`` columns and in the run's manifest.
+returned table's ``truth`` columns (``soilcal loop synthesize`` writes them to
+``<out>.truth.csv`` with the parameters each condition ran at).
 """
 
 from __future__ import annotations
