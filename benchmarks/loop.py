@@ -122,17 +122,29 @@ def standin_rows(cases, seeds):
     return rows
 
 
-def _campaign(tmp: Path, n: int, seed: int):
-    """A copy of the cinnamon soil whose measurements block is a soil-bin campaign of the
-    bulldozing plates (module docstring); returns its conditions."""
+def _with_campaign(tmp: Path, name: str, lines: list[str], entry: dict):
+    """A copy of soil ``name`` under ``tmp`` whose measurements block is one table,
+    ``campaign.csv`` (``lines``), declared by ``entry``; returns its conditions."""
     from soilcal.config.load import load_soil
     from soilcal.config.measurements import conditions
 
     for sub in ("published", "images"):
-        src = ROOT / "resources" / sub / "cinnamon-soil"
+        src = ROOT / "resources" / sub / name
         if src.is_dir():
-            shutil.copytree(src, tmp / "resources" / sub / "cinnamon-soil", dirs_exist_ok=True)
-    d = yaml.safe_load((ROOT / "config/soils/cinnamon-soil.yaml").read_text())
+            shutil.copytree(src, tmp / "resources" / sub / name, dirs_exist_ok=True)
+    d = yaml.safe_load((ROOT / f"config/soils/{name}.yaml").read_text())
+    mdir = tmp / "resources/measurements" / name
+    mdir.mkdir(parents=True, exist_ok=True)
+    (mdir / "campaign.csv").write_text("\n".join(lines) + "\n")
+    d["measurements"] = {"campaign": dict(entry, table="campaign.csv")}
+    p = tmp / f"{name}.yaml"
+    p.write_text(yaml.safe_dump(d, sort_keys=False))
+    return conditions(load_soil(p, tmp / "resources"))
+
+
+def _campaign(tmp: Path, n: int, seed: int):
+    """A copy of the cinnamon soil whose measurements block is a soil-bin campaign of the
+    bulldozing plates (module docstring); returns its conditions."""
     rng = np.random.default_rng(seed)
     plates = ["line", "arc", "parabola"]
     lines = ["directrix,speed_m_s,depth_mm,position_m,day,moisture_pct,horizontal_N,horizontal_sd_N,vertical_N,"
@@ -140,11 +152,8 @@ def _campaign(tmp: Path, n: int, seed: int):
     for i in range(n):
         lines.append(f"{plates[i % 3]},{rng.uniform(0.1, 1.0):.3f},{rng.uniform(20, 40):.1f},{rng.uniform(0, 40):.2f},"
                      f"d{i * 4 // n},{rng.uniform(8, 20):.1f},1,0,1,0,3")
-    mdir = tmp / "resources/measurements/cinnamon-soil"
-    mdir.mkdir(parents=True, exist_ok=True)
-    (mdir / "campaign.csv").write_text("\n".join(lines) + "\n")
-    d["measurements"] = {"campaign": {
-        "table": "campaign.csv", "source": "synthetic soil-bin campaign (benchmarks/loop.py)",
+    return _with_campaign(tmp, "cinnamon-soil", lines, {
+        "source": "synthetic soil-bin campaign (benchmarks/loop.py)",
         "scenario": "bulldozing", "setup": "plate-line",
         "covariates": {
             "directrix": {"setup": {p: f"plate-{p}" for p in plates}, "quantity": "tool"},
@@ -156,41 +165,24 @@ def _campaign(tmp: Path, n: int, seed: int):
         "responses": [
             {"measure": "horizontal_force_N", "value": "horizontal_N", "sd": "horizontal_sd_N", "n": "repeats", "unit": "N"}],
         "ignore_columns": ["vertical_N", "vertical_sd_N"],
-        "calibrated": {"stage": "bbd", "case": "stacking_angle"}, "replicates": 2}}
-    p = tmp / "cinnamon-soil.yaml"
-    p.write_text(yaml.safe_dump(d, sort_keys=False))
-    return conditions(load_soil(p, tmp / "resources"))
+        "calibrated": {"stage": "bbd", "case": "stacking_angle"}, "replicates": 2})
 
 
 def _compression_campaign(tmp: Path, n: int, seed: int):
     """A copy of the Guangxi cohesive soil whose measurements block is a campaign of confined
     compression tests with unloading (module docstring); returns its conditions."""
-    from soilcal.config.load import load_soil
-    from soilcal.config.measurements import conditions
-
-    name = "guangxi-cohesive"
-    for sub in ("published", "images"):
-        src = ROOT / "resources" / sub / name
-        if src.is_dir():
-            shutil.copytree(src, tmp / "resources" / sub / name, dirs_exist_ok=True)
-    d = yaml.safe_load((ROOT / f"config/soils/{name}.yaml").read_text())
     rng = np.random.default_rng(seed)
     lines = ["test,max_strain_pct,recovered,recovered_sd,repeats"]
     for i in range(n):
         lines.append(f"t{i + 1},{rng.uniform(6, 12):.2f},1,0,3")
-    mdir = tmp / "resources/measurements" / name
-    mdir.mkdir(parents=True, exist_ok=True)
-    (mdir / "campaign.csv").write_text("\n".join(lines) + "\n")
-    d["measurements"] = {"campaign": {
-        "table": "campaign.csv", "source": "synthetic compression campaign (benchmarks/loop.py)",
+    name = "guangxi-cohesive"
+    return _with_campaign(tmp, name, lines, {
+        "source": "synthetic compression campaign (benchmarks/loop.py)",
         "scenario": "compression", "setup": name, "set": {"unload": True},
         "covariates": {"test": {"ignore": True}, "max_strain_pct": {"set": "max_strain", "scale": 0.01}},
         "responses": [{"measure": "recovered_strain", "value": "recovered", "sd": "recovered_sd", "n": "repeats",
                        "unit": "-"}],
-        "calibrated": {"stage": "bbd", "case": "mc10"}, "replicates": 2}}
-    p = tmp / f"{name}.yaml"
-    p.write_text(yaml.safe_dump(d, sort_keys=False))
-    return conditions(load_soil(p, tmp / "resources"))
+        "calibrated": {"stage": "bbd", "case": "mc10"}, "replicates": 2})
 
 
 def dem_rows(cases, n, seed, threads):

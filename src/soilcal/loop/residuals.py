@@ -93,8 +93,7 @@ def residual_frame(obs: pd.DataFrame, runs: pd.DataFrame) -> pd.DataFrame:
     t_m = np.where(n_m > 1, var_m ** 2 / (n_m - 1).clip(lower=1.0), 0.0)
     t_s = np.where(n_s > 1, var_s ** 2 / (n_s - 1).clip(lower=1.0), 0.0)
     den = t_m + t_s
-    with np.errstate(divide="ignore", invalid="ignore"):
-        df["residual_dof"] = np.where(den > 0, se ** 4 / np.where(den > 0, den, 1.0), np.inf)
+    df["residual_dof"] = np.where(den > 0, se ** 4 / np.where(den > 0, den, 1.0), np.inf)
     df["standardised_residual"] = df["residual"] / df["residual_se"]
     notes = []
     for r in df.itertuples():

@@ -160,6 +160,15 @@ def validate(setup, preset="quick", source="<input>", params=None):
           f"{PHI}) fits the tube ({H} m)", setup["load_mass"])
 
 
+def _sample(prog, nsub: int, rod: int) -> float:
+    """One sample of the rod's travel: ``nsub`` steps (resumably, a restart file when due),
+    then the particles' vertical force on the rod."""
+    prog.checkpoint()
+    prog.advance(nsub, "sample_steps")
+    prog.vars["sample_steps"] = 0
+    return float(prog.sim.wall_force[rod, 2])
+
+
 def run(setup, params: DemParams, preset="quick", seed=0, threads=None, vtk_dir=None,
         source="<compression>", restart=None) -> Result:
     """One compression test (module docstring).  ``restart``: a
@@ -212,11 +221,8 @@ def run(setup, params: DemParams, preset="quick", seed=0, threads=None, vtk_dir=
     dz_step = setup["rod_speed"] * sim.dt
     # upper bound of the travel: the whole height above the floor
     while prog.at("press") and st["z"] > 0.05 * top:
-        prog.checkpoint()
-        prog.advance(nsub, "sample_steps")
-        st["sample_steps"] = 0
+        f = _sample(prog, nsub, rod)
         z = st["z"] = z0 - setup["rod_speed"] * (sim.step - st["step0"]) * sim.dt  # rigid translation
-        f = float(sim.wall_force[rod, 2])
         st["z_rod"].append(z)
         st["fz"].append(f)
         if st["h0"] is None and f > 0:
@@ -231,11 +237,8 @@ def run(setup, params: DemParams, preset="quick", seed=0, threads=None, vtk_dir=
         prog.next("unload", step1=sim.step, z1=st["z"], z_up=[], fz_up=[])
     # upper bound of the way back: h0 (or the first contact's height)
     while prog.at("unload"):
-        prog.checkpoint()
-        prog.advance(nsub, "sample_steps")
-        st["sample_steps"] = 0
+        f = _sample(prog, nsub, rod)
         z = st["z1"] + setup["rod_speed"] * (sim.step - st["step1"]) * sim.dt
-        f = float(sim.wall_force[rod, 2])
         st["z_up"].append(z)
         st["fz_up"].append(f)
         if f <= 0.0 or z >= (st["h0"] if st["h0"] is not None else top):
