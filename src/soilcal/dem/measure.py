@@ -55,10 +55,12 @@ Side silhouette
 The same pile is also rendered as an orthographic side view (each sphere a dark disc of
 radius r on a light background, seen along x or along y, a grey plate whose top edge is the
 plate plane) and measured by :func:`soilcal.imaging.measure.measure_pile`, the pipeline used
-for photos (Otsu threshold, plate line from a Hough transform, RANSAC flank lines between 20
-and 75 % of the heap height).  Two views (along x and along y) give four flanks, averaged as
-the papers average both sides of each photo (002 Sec. 2.4, 003 Sec. static angle, 001 Sec.
-2.2.1 four directions).
+for photos (Otsu threshold, RANSAC flank lines between 20 and 75 % of the heap height), in
+memory and on the plate row the renderer drew (a photo's plate line comes from a Hough
+transform; on a rendered view it finds the same row, to its half-pixel edge locations, for
+more than twice the cost of the rest of the measurement).  Two views (along x and along y) give
+four flanks, averaged as the papers average both sides of each photo (002 Sec. 2.4, 003 Sec.
+static angle, 001 Sec. 2.2.1 four directions); more views average more of a ragged outline.
 
 Drum free surface (003, section "Dynamic angle of repose measurement")
 --------------------------------------------------------------------
@@ -108,8 +110,6 @@ with h0 the height of the sample top (rod face at first contact) above the tube 
 from __future__ import annotations
 
 import math
-import tempfile
-from pathlib import Path
 
 import numpy as np
 from numba import njit
@@ -351,6 +351,18 @@ def render_side(x, r, plate_z=0.0, view="y", px_per_m=None, width_px=1000, path=
     "x"; theta and theta + 180 give mirror images of one silhouette).
     Returns (image uint8[H, W, 3], px_per_m); writes a PNG when ``path`` is given.
     """
+    rgb, s, _ = _render(x, r, plate_z, view, px_per_m, width_px, background, soil, plate)
+    if path is not None:
+        from PIL import Image
+
+        Image.fromarray(rgb).save(path)
+    return rgb, s
+
+
+def _render(x, r, plate_z, view, px_per_m=None, width_px=1000, background=0.93, soil=0.22,
+            plate=0.62):
+    """:func:`render_side`'s image and scale, and the image row of the plate's top edge (the
+    boundary between the last background row and the first plate row, at row centres)."""
     x, r = _xr(x, r)
     above = x[:, 2] + r > plate_z
     x, r = x[above], r[above]
@@ -379,11 +391,7 @@ def render_side(x, r, plate_z=0.0, view="y", px_per_m=None, width_px=1000, path=
     # the plate hides what lies behind/below its top edge (rows from plate_row on)
     _paint_disks(img, vc, uc, np.maximum(r * s, 0.7), float(soil), int(plate_row))
     rgb = (np.repeat(img[..., None], 3, axis=2) * 255 + 0.5).astype(np.uint8)
-    if path is not None:
-        from PIL import Image
-
-        Image.fromarray(rgb).save(path)
-    return rgb, s
+    return rgb, s, plate_row - 0.5
 
 
 def view_azimuths(n) -> list[float]:
@@ -395,7 +403,7 @@ def view_azimuths(n) -> list[float]:
     return [180.0 * k / int(n) for k in range(int(n))]
 
 
-def repose_angle_image(x, r, plate_z=0.0, views=("y", "x"), workdir=None) -> dict:
+def repose_angle_image(x, r, plate_z=0.0, views=("y", "x")) -> dict:
     """Repose angle of side silhouettes measured by :func:`soilcal.imaging.measure.measure_pile`:
     the mean of every flank of every view measured (``spread_deg``: their sample SD;
     :func:`~soilcal.imaging.measure.pile_summary`).
@@ -409,20 +417,23 @@ def repose_angle_image(x, r, plate_z=0.0, views=("y", "x"), workdir=None) -> dic
     whose silhouette the photo pipeline cannot measure (a column of soil standing almost
     vertical shows some views a flank of a few boundary pixels) is left out and named in
     ``views_failed`` (azimuth or view, reason); the angle needs more than half of the views,
-    else InputError names the first failure."""
+    else InputError names the first failure.
+
+    Each view is measured in memory, as the 8-bit image a PNG of it would hold, with the
+    plate's top edge the renderer drew (a levelled camera): the photo's plate search (Hough
+    lines of the luminance and of the L*a*b* edges) would only find that same row again."""
     from soilcal.imaging.measure import measure_pile, pile_summary
 
     if not isinstance(views, (tuple, list)):
         views = view_azimuths(views)
     measured, failed = [], []
-    with tempfile.TemporaryDirectory(dir=workdir) as tmp:
-        for k, v in enumerate(views):
-            p = Path(tmp) / f"side_{k}.png"
-            render_side(x, r, plate_z, view=v, path=p)
-            try:
-                measured.append(measure_pile(p, "otsu", False, "gray"))
-            except InputError as exc:
-                failed.append((v, f"{exc.field}: expected {exc.expected}, got {exc.got}"))
+    for k, v in enumerate(views):
+        rgb, _, plate_row = _render(x, r, plate_z, v)
+        try:
+            measured.append(measure_pile(f"<silhouette {v}>", "otsu", False, "gray",
+                                         image=rgb / 255.0, plate=(0.0, plate_row)))
+        except InputError as exc:
+            failed.append((v, f"{exc.field}: expected {exc.expected}, got {exc.got}"))
     if 2 * len(measured) <= len(views):
         v, why = failed[0]
         raise InputError("<silhouettes>", "views",

@@ -331,7 +331,8 @@ def _components_on_plate(path, binary, slope, intercept, kind):
     return comp
 
 
-def measure_pile(path, threshold="otsu", keep_stages=False, channel="auto", refusals=None) -> PileResult:
+def measure_pile(path, threshold="otsu", keep_stages=False, channel="auto", refusals=None, *,
+                 image=None, plate=None) -> PileResult:
     """Left/right flank angles of one heap photo relative to the plate line.
 
     Plate candidates: the long near-horizontal edges below the image middle, topmost first, of
@@ -356,26 +357,35 @@ def measure_pile(path, threshold="otsu", keep_stages=False, channel="auto", refu
     recovers a shaded flank lost to a wall of its brightness and colour; it stays low.  With
     ``refusals`` (a folder), a photo that cannot be measured also gets a diagnostic image of
     every attempt there (:mod:`soilcal.imaging.refusal`), named in the refusal.
+
+    ``image``: the photo as an RGB float array in [0, 1] (what :func:`read_photo` gives),
+    measured instead of reading ``path``, which then only names it in messages.  ``plate``:
+    the plate's top edge (slope, intercept), row = slope * col + intercept, when it is known
+    (a rendered silhouette): the plate search is skipped.
     """
     tried = Tried(keep_masks=refusals is not None)
     with explained(path, refusals, tried):
-        res = _measure_pile(path, threshold, keep_stages, channel, tried)
+        res = _measure_pile(path, threshold, keep_stages, channel, tried, image, plate)
     if channel == "auto" and res.confidence != "ok":
         res = _texture_flanks(res, tried.gray)
     return res
 
 
-def _measure_pile(path, threshold, keep_stages, channel, tried: Tried) -> PileResult:
-    rgb = read_photo(path)
+def _measure_pile(path, threshold, keep_stages, channel, tried: Tried, image=None,
+                  plate=None) -> PileResult:
+    rgb = read_photo(path) if image is None else image
     lum = _gray(rgb)
     tried.rgb, tried.gray = rgb, lum
     h, w = lum.shape
-    lines = plate_lines(lum)
-    cedges = colour_edges(rgb)
-    tried.edges = cedges
-    for ln in plate_lines(lum, edges=cedges):
-        if all(abs((ln[0] - o[0]) * w / 2 + ln[1] - o[1]) > 3 for o in lines):
-            lines.append(ln)
+    if plate is not None:
+        lines = [(float(plate[0]), float(plate[1]))]
+    else:
+        lines = plate_lines(lum)
+        cedges = colour_edges(rgb)
+        tried.edges = cedges
+        for ln in plate_lines(lum, edges=cedges):
+            if all(abs((ln[0] - o[0]) * w / 2 + ln[1] - o[1]) > 3 for o in lines):
+                lines.append(ln)
     tried.lines = list(lines[:4])
     if not lines:
         raise InputError(path, "image", "a straight base plate edge", "none found")

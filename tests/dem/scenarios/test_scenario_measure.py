@@ -122,7 +122,7 @@ def test_surface_scan_refuses_a_bad_grid():
 @pytest.mark.parametrize("alpha", [25.0, 35.0])
 def test_side_silhouette_through_the_photo_pipeline(alpha, tmp_path):
     x, r = heap(alpha, R=0.05)
-    res = measure.repose_angle_image(x, r, 0.0, workdir=tmp_path)
+    res = measure.repose_angle_image(x, r, 0.0)
     assert len(res["flanks_deg"]) == 4
     # the silhouette of discs on a straight flank is the flank offset by the radius
     assert res["angle_deg"] == pytest.approx(alpha, abs=0.6)
@@ -152,7 +152,7 @@ def test_silhouette_views_average_the_flanks_over_azimuth(views, tmp_path):
     x, r = elliptic_heap(A, B, H)
     az = np.radians(measure.view_azimuths(views))
     expect = np.degrees(np.arctan(H / np.sqrt(A**2 * np.cos(az) ** 2 + B**2 * np.sin(az) ** 2)))
-    res = measure.repose_angle_image(x, r, 0.0, views=views, workdir=tmp_path)
+    res = measure.repose_angle_image(x, r, 0.0, views=views)
     assert len(res["flanks_deg"]) == 2 * views
     assert res["angle_deg"] == pytest.approx(expect.mean(), abs=0.6)
     per_view = np.reshape(res["flanks_deg"], (views, 2)).mean(axis=1)
@@ -166,11 +166,32 @@ def test_two_views_are_the_x_and_y_views(tmp_path):
         a, _ = measure.render_side(x, r, 0.0, view=az)
         b, _ = measure.render_side(x, r, 0.0, view=axis)
         assert np.array_equal(a, b)
-    assert (measure.repose_angle_image(x, r, 0.0, views=2, workdir=tmp_path)
-            == measure.repose_angle_image(x, r, 0.0, views=("y", "x"), workdir=tmp_path))
+    assert (measure.repose_angle_image(x, r, 0.0, views=2)
+            == measure.repose_angle_image(x, r, 0.0, views=("y", "x")))
     for bad in (0, -1, 2.0, True):
         with pytest.raises(InputError, match="image_views"):
             measure.view_azimuths(bad)
+
+
+def test_a_silhouette_is_measured_in_memory_on_the_plate_row_it_was_drawn_with(tmp_path):
+    from soilcal.imaging.measure import measure_pile, plate_lines
+
+    x, r = heap(30.0, R=0.04, skew=5.0)
+    rgb, _ = measure.render_side(x, r, 0.0, view=45.0, path=tmp_path / "v.png")
+    same, _, row = measure._render(x, r, 0.0, 45.0)
+    assert np.array_equal(rgb, same)
+    # the 8-bit image in memory is the PNG read back: the same numbers to the last bit
+    disk = measure_pile(tmp_path / "v.png", "otsu", False, "gray")
+    mem = measure_pile("<view>", "otsu", False, "gray", image=rgb / 255.0)
+    assert (mem.left_deg, mem.right_deg) == (disk.left_deg, disk.right_deg)
+    # the drawn plate row lies between the last wall row and the first plate row, where the
+    # photo's own plate search finds the plate's top edge (to its half-pixel edge locations)
+    assert rgb[int(row - 0.5), 0, 0] > rgb[int(row + 0.5), 0, 0]
+    slope, icpt = plate_lines(rgb[..., 0] / 255.0)[0]
+    assert abs(slope) < 1e-3 and icpt == pytest.approx(row, abs=1.0)
+    given = measure_pile("<view>", "otsu", False, "gray", image=rgb / 255.0, plate=(0.0, row))
+    assert given.geometry[:2] == (0.0, row) and given.roll_deg == 0.0
+    assert (given.left_deg + given.right_deg) / 2 == pytest.approx(30.0, abs=1.0)
 
 
 def test_render_side_draws_the_heap_above_a_plate(tmp_path):
@@ -371,11 +392,11 @@ def test_silhouette_views_the_pipeline_cannot_measure_are_left_out_and_named(tmp
             return real(path, *a, **kw)
         return fake
 
-    all8 = measure.repose_angle_image(x, r, 0.0, views=8, workdir=tmp_path)
+    all8 = measure.repose_angle_image(x, r, 0.0, views=8)
     assert all8["views_measured"] == 8 and all8["views_failed"] == []
     calls.clear()
     monkeypatch.setattr(im, "measure_pile", failing({1, 5, 6}))
-    part = measure.repose_angle_image(x, r, 0.0, views=8, workdir=tmp_path)
+    part = measure.repose_angle_image(x, r, 0.0, views=8)
     assert part["views_measured"] == 5 and len(part["flanks_deg"]) == 10
     assert [v for v, _ in part["views_failed"]] == [22.5, 112.5, 135.0]
     assert "at least 20 boundary pixels, got 11" in part["views_failed"][0][1]
@@ -386,5 +407,5 @@ def test_silhouette_views_the_pipeline_cannot_measure_are_left_out_and_named(tmp
     calls.clear()
     monkeypatch.setattr(im, "measure_pile", failing({0, 2, 4, 6}))
     with pytest.raises(InputError, match="more than half of 8 views") as e:
-        measure.repose_angle_image(x, r, 0.0, views=8, workdir=tmp_path)
+        measure.repose_angle_image(x, r, 0.0, views=8)
     assert e.value.field == "views" and "view 0" in str(e.value.expected)
