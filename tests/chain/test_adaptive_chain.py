@@ -19,16 +19,43 @@ def soil(name):
     return load_soil(ROOT / f"config/soils/{name}.yaml", ROOT / "resources")
 
 
-def test_cinnamon_problem_is_the_box_behnken_ranges_with_its_fixed_values():
+FIXED_332 = {"soil_soil_restitution": 0.45, "soil_soil_static_friction": 0.56,
+             "soil_steel_restitution": 0.45, "soil_steel_rolling_friction": 0.125}
+
+
+def test_cinnamon_problem_is_the_screening_ranges_of_the_box_behnken_factors():
     s = soil("cinnamon-soil")
     st = adaptive.stage_for(s.data, "bbd")
     pb = adaptive.problem_for(s.data, st, "stacking_angle", {"stacking_angle": {"value": 27.7}})
-    # Table 6 levels (low, high) of A, B, C; the four other parameters as fixed in Sec. 3.3.2
-    assert [(f.name, f.low, f.high) for f in pb.factors] == [("A", 0.08, 0.14), ("B", 0.24, 0.52), ("C", 0.42, 0.66)]
-    assert pb.fixed == {"soil_soil_restitution": 0.45, "soil_soil_static_friction": 0.56,
-                        "soil_steel_restitution": 0.45, "soil_steel_rolling_friction": 0.125}
+    # A, B, C are X3, X7, X5 of the screening, at its Table 2 levels (low, high); the four other
+    # parameters as fixed in Sec. 3.3.2
+    assert [(f.name, f.low, f.high) for f in pb.factors] == [("A", 0.05, 0.2), ("B", 0.1, 0.8), ("C", 0.3, 0.9)]
+    assert st["factors"]["B"]["centre"] == pytest.approx(0.45)
+    assert pb.fixed == FIXED_332
+    assert "screening stage pb" in st["derivation"]["text"] and "A (0.08-0.14 -> 0.05-0.2)" in st["derivation"]["text"]
     (t,) = pb.targets
     assert t.value == 27.7 and t.tolerance == pytest.approx(0.02 * 27.7)  # default 2 %
+
+
+def test_cinnamon_problem_on_the_stage_ranges_is_the_box_behnken_levels():
+    s = soil("cinnamon-soil")
+    s.data["simulation"]["adaptive"] = {"ranges": "stage"}
+    st = adaptive.stage_for(s.data, "bbd")
+    pb = adaptive.problem_for(s.data, st, "stacking_angle", {"stacking_angle": {"value": 27.7}})
+    # Table 6 levels (low, high) of A, B, C
+    assert [(f.name, f.low, f.high) for f in pb.factors] == [("A", 0.08, 0.14), ("B", 0.24, 0.52), ("C", 0.42, 0.66)]
+    assert pb.fixed == FIXED_332
+    assert adaptive.settings_for(s.data).budget == 60  # the key is the stage's, not the design's
+    s.data["simulation"]["adaptive"] = {"ranges": "pb"}
+    with pytest.raises(InputError, match="simulation.adaptive.ranges"):
+        adaptive.stage_for(s.data, "bbd")
+
+
+def test_a_stage_without_a_screening_keeps_its_ranges():
+    s = soil("black-soil")  # the single-factor tests of 001 chose its ranges: no screening stage
+    assert adaptive.screening_of(s.data, "soil-soil") is None
+    st = adaptive.stage_for(s.data, "soil-soil")
+    assert (st["factors"]["x3"]["low"], st["factors"]["x3"]["high"]) == (0.2, 1.0)
 
 
 def test_tolerances_per_response():

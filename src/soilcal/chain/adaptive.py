@@ -1,7 +1,8 @@
 """The adaptive design (``simulation.design: adaptive``) on a soil's DEM jobs.
 
 One design per optimisation case of each optimised stage the DEM source runs: the space is the
-stage's factors over their ranges in the soil config (``low`` .. ``high``), the stage's fixed
+stage's factors over their screening ranges, or their own ranges in the soil config (``low`` ..
+``high``; :func:`stage_for`, ``simulation.adaptive.ranges``), the stage's fixed
 values stay fixed (and, for a stage fixed from an earlier one, ``fixed_from``, at that stage's
 adaptive result), and the targets are the case's target goals with the values of
 ``results/<soil>/dem/targets.csv`` (photo or measurement).  :mod:`soilcal.doe.adaptive` decides
@@ -77,14 +78,72 @@ def _case(stage: dict, case_id: str) -> dict:
     raise InputError(stage.get("id"), "optimise.cases", f"a case {case_id!r}", case_id)
 
 
+#: where the design's factor ranges come from (``simulation.adaptive.ranges``)
+RANGES = ("screening", "stage")
+
+
+def ranges_setting(soil_data: dict) -> str:
+    r = settings_block(soil_data).get("ranges", "screening")
+    if r not in RANGES:
+        raise InputError(soil_data.get("name", "<soil>"), "simulation.adaptive.ranges", f"one of {RANGES}", r)
+    return r
+
+
+def screening_of(soil_data: dict, stage_id: str) -> dict | None:
+    """The Plackett-Burman screening stage a stage descends from through its ``from_stage``
+    links (None when it has none)."""
+    from soilcal.chain.derive import _stage
+
+    seen = set()
+    cur = _stage(soil_data, stage_id)
+    while cur.get("from_stage") and cur["id"] not in seen:
+        seen.add(cur["id"])
+        cur = _stage(soil_data, cur["from_stage"])
+        if cur["kind"] == "plackett_burman":
+            return cur
+    return None
+
+
+def _screening_ranges(st: dict, screening: dict) -> list[str]:
+    """Widen the factors of ``st`` in place to the range the screening gave their parameter;
+    returns the factors widened ("A (0.08-0.14 -> 0.05-0.2)")."""
+    by_param = {f["parameter"]: f for f in screening["factors"].values()}
+    moved = []
+    for sym, f in st["factors"].items():
+        sf = by_param.get(f.get("parameter"))
+        if sf is None or "low" not in f or "high" not in f:
+            continue
+        lo, hi = float(sf["low"]), float(sf["high"])
+        if (lo, hi) != (float(f["low"]), float(f["high"])):
+            moved.append(f"{sym} ({f['low']:g}-{f['high']:g} -> {lo:g}-{hi:g})")
+        f["low"], f["high"] = lo, hi
+        if "centre" in f:
+            f["centre"] = (lo + hi) / 2
+    return moved
+
+
 def stage_for(soil_data: dict, stage_id: str, upstream_optimum: pd.DataFrame | None = None) -> dict:
     """The stage the design runs on: the config stage as the DEM source writes it, its fixed
-    values completed from the upstream stage's adaptive optimum where it has ``fixed_from``."""
+    values completed from the upstream stage's adaptive optimum where it has ``fixed_from``.
+
+    Its factors' ranges (``simulation.adaptive.ranges``): ``screening`` (default) widens each
+    factor to the range the stage's own Plackett-Burman screening (:func:`screening_of`) gave
+    its parameter, where the stage has one: the screening says which factors matter and over
+    what range the user expects them, while a Box-Behnken stage's narrower printed levels were
+    centred by the paper's steepest ascent on its own engine's responses, which another
+    engine need not share; ``stage`` keeps the stage's printed ranges.  The non-significant
+    factors stay at the stage's fixed values either way."""
     from soilcal.chain.derive import _dem_base, _stage, dependencies, fix_from_optimum
 
     config_stage = _stage(soil_data, stage_id)
     st = _dem_base(config_stage)
-    st["derivation"] = {"kind": "adaptive", "text": "the factor ranges in the soil config (design: adaptive)"}
+    text = "the factor ranges in the soil config (design: adaptive)"
+    screening = screening_of(soil_data, stage_id) if ranges_setting(soil_data) == "screening" else None
+    if screening is not None:
+        moved = _screening_ranges(st, screening)
+        text = (f"the ranges of screening stage {screening['id']} (design: adaptive, ranges: screening"
+                + (f"; widened: {', '.join(moved)})" if moved else ")"))
+    st["derivation"] = {"kind": "adaptive", "text": text}
     deps = dependencies(dict(soil_data, simulation={**(soil_data.get("simulation") or {}), "design": "printed"}),
                         stage_id)
     if "fixed_from" in deps:
@@ -128,6 +187,7 @@ def problem_for(soil_data: dict, stage: dict, case_id: str, targets: dict, sourc
 def settings_for(soil_data: dict) -> ad.Settings:
     block = settings_block(soil_data)
     block.pop("tolerances", None)
+    block.pop("ranges", None)  # read by stage_for
     return ad.Settings.from_mapping(block, seed=int(soil_data.get("seed", 0)),
                                     source=f"{soil_data.get('name', '<soil>')}: simulation")
 
