@@ -158,8 +158,30 @@ def test_budget_spent_is_said():
     # a tolerance far below the seed scatter: the verified mean rarely lands inside
     tight = ad.Problem([ad.Factor("a", -1, 1)], [ad.Target("y", 0.2, tol=1e-4)])
     runs, st = ad.run(tight, noisy(lambda lv: {"y": lv["a"]}, 0.5), ad.Settings(seed=0, budget=12))
-    assert st.status == "budget spent"
-    assert "12" in st.message
+    assert st.status == "budget spent" and len(runs) == 12  # never more runs than the budget
+    assert st.message.startswith("12 runs spent of a budget of 12; the best candidate (P = ")
+    assert "against the target 0.2 +- 0.0001, at a = " in st.message
+
+
+def test_a_design_with_nothing_new_to_run_stops_and_says_where_its_best_candidate_lies():
+    # y = 10 + a over a in [-1, 1] reaches 9 at best, against a target 8 +- 0.5; with the
+    # unreachable test switched off (p_unreachable 1e-300) the one-factor box fills up at
+    # separation 0.15 before the budget of 40 is spent, and the design stops instead of
+    # iterating without a run; its best candidate is on the low bound, predicting 9
+    far = ad.Problem([ad.Factor("a", -1, 1)], [ad.Target("y", 8.0, tol=0.5)])
+    runs, st = ad.run(far, noisy(lambda lv: {"y": 10.0 + lv["a"]}, 0.05),
+                      ad.Settings(seed=0, budget=40, p_unreachable=1e-300))
+    assert st.status == "box exhausted" and len(runs) < 40
+    assert "within 0.15 (coded) of a run already made" in st.message
+    assert "a = -0.9999 (its low bound)" in st.message or "a = -1 (its low bound)" in st.message
+    assert st.best["predicted"]["y"] == pytest.approx(9.0, abs=0.1)
+    assert "against the target 8 +- 0.5" in st.message
+
+
+def test_a_batch_of_none_picks_none():
+    xc = np.linspace(-1, 1, 21)[:, None]
+    assert ad.pick_batch(xc, -np.abs(xc[:, 0]), np.empty((0, 1)), 0, 0.15) == []
+    assert ad.pick_batch(xc, -np.abs(xc[:, 0]), np.empty((0, 1)), 2, 0.15) == [10, 8]
 
 
 def test_surrogate_choice_by_leave_one_out_is_recorded():

@@ -60,7 +60,9 @@ verification (:func:`ready_to_verify`); the verification runs join the data, so 
 inform the surrogate, and no point within ``separation`` of a verified one is verified again.
 The best verification (smallest worst error, in tolerances) is the design's answer.  The design
 stops when that verified mean is within tolerance of every target (``target met``), when the
-run ``budget`` is spent (``budget spent``), or when the surrogate is sure that no point of the
+run ``budget`` is spent (``budget spent``), when an iteration has nothing new to run (every
+candidate within ``separation`` of a run and no verification due: ``box exhausted``), or when
+the surrogate is sure that no point of the
 box is consistent: P < ``p_unreachable`` everywhere after a batch of proposals aimed at the
 target has been run, while the predicted distance to the target exceeds the tolerance plus
 twice the predictive standard deviation and every run's value lies on one side of the target,
@@ -397,7 +399,10 @@ def start_points(problem: Problem, settings: Settings) -> np.ndarray:
 def pick_batch(xc: np.ndarray, score: np.ndarray, taken: np.ndarray, batch: int,
                separation: float) -> list[int]:
     """Greedy: the largest scores, each at least ``separation`` from the picked points and from
-    ``taken`` (coded distances)."""
+    ``taken`` (coded distances); none for a batch of 0 (the budget left went to a
+    verification)."""
+    if batch <= 0:
+        return []
     order = np.argsort(-score, kind="stable")
     picked: list[int] = []
     ref = np.atleast_2d(taken) if len(taken) else np.empty((0, xc.shape[1]))
@@ -569,8 +574,7 @@ def step(problem: Problem, runs: pd.DataFrame, settings: Settings, iteration: in
                and _beyond_data(runs, points, t)]
         # only after a batch of proposals aimed at the target has been run
         if far and (runs["kind"] == "proposal").any():
-            at = ", ".join(f"{n} = {v:.4g}" + _bound(f, v) for n, v, f in
-                           zip(problem.names, near["actual"], problem.factors))
+            at = _where(problem, near["actual"])
             msg = "; ".join(f"{t.response}: target {t.value:g} is outside what the factor ranges reach: "
                             f"the closest reachable value is {near['values'][t.response]:.4g} "
                             f"(+- {near['sd'][t.response]:.2g})" for t in far)
@@ -578,11 +582,13 @@ def step(problem: Problem, runs: pd.DataFrame, settings: Settings, iteration: in
                         no_runs, scores, best, region, verified,
                         surrogates)
     if spent >= settings.budget:
-        return Step(iteration, "budget spent", f"{spent} runs spent of a budget of {settings.budget}",
+        return Step(iteration, "budget spent",
+                    f"{spent} runs spent of a budget of {settings.budget}; {_best_said(problem, best)}",
                     no_runs, scores, best, region, verified,
                     surrogates)
     if iteration > settings.max_iterations:
-        return Step(iteration, "iterations spent", f"{settings.max_iterations} iterations without a verified set",
+        return Step(iteration, "iterations spent",
+                    f"{settings.max_iterations} iterations without a verified set; {_best_said(problem, best)}",
                     no_runs, scores, best, region, verified,
                     surrogates)
     coded, kinds, reps = [], [], []
@@ -616,6 +622,13 @@ def step(problem: Problem, runs: pd.DataFrame, settings: Settings, iteration: in
         coded.append(cand[i])
         kinds.append("proposal")
         reps.append(1)
+    if not coded:
+        # the same runs would give the next iteration the same surrogates: stop rather than
+        # iterate without running anything
+        return Step(iteration, "box exhausted",
+                    f"every candidate lies within {settings.separation:g} (coded) of a run already made and no "
+                    f"verification is due; {_best_said(problem, best)}",
+                    no_runs, scores, best, region, verified, surrogates)
     new = _new_runs(problem, coded, kinds, next_point, iteration, reps, next_seed)
     msg = (f"iteration {iteration}: best P = {best['p']:.3f}; {len(new)} runs"
            + (" (with a verification of the best candidate)" if "verification" in kinds else ""))
@@ -660,6 +673,20 @@ def ready_to_verify(problem: Problem, best: dict, scatter: dict, settings: Setti
     if sure:
         return "every prediction within tolerance and known as well as a verification measures it"
     return "every prediction within tolerance, and 2 d + 1 proposals since the last verification" if stalled else ""
+
+
+def _where(problem: Problem, actual) -> str:
+    """The levels of a point, each factor on a bound of its range marked as such."""
+    return ", ".join(f"{n} = {v:.4g}" + _bound(f, v) for n, v, f in zip(problem.names, actual, problem.factors))
+
+
+def _best_said(problem: Problem, best: dict) -> str:
+    """Where a design that stopped without meeting its targets left its best candidate: its
+    probability of consistency, each response's prediction against its target, and its levels
+    (a factor on a bound: the target may lie beyond the range)."""
+    pred = "; ".join(f"{t.response} {best['predicted'][t.response]:.4g} (+- {best['predicted_sd'][t.response]:.2g}) "
+                     f"against the target {t.value:g} +- {t.tolerance:.2g}" for t in problem.targets)
+    return f"the best candidate (P = {best['p']:.2g}) predicts {pred}, at {_where(problem, best['actual'])}"
 
 
 def _bound(f: Factor, v: float) -> str:
