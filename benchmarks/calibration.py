@@ -11,6 +11,7 @@ and ``calibration_runs.csv`` (one per workflow run); ``calibration.md`` is the p
     python benchmarks/calibration.py --kill-after 300      # also: kill at 300 s, unlock, restart
     python benchmarks/calibration.py --soils cinnamon-soil --kill-after 60
     python benchmarks/calibration.py --report-only
+    python benchmarks/calibration.py --surfaces-of /tmp/run   # surfaces of a directory that ran
 """
 
 from __future__ import annotations
@@ -37,6 +38,9 @@ OUT = HERE / "results"
 RULE_FIELDS = ["utc", "commit", "run_id", "rule", "jobs", "sum_s", "mean_s", "max_s", "max_rss_mb"]
 RUN_FIELDS = ["utc", "commit", "run_id", "soils", "cores", "kind", "elapsed_s", "jobs_done", "rc",
               "run_cpu_s", "other_cpu_s", "note"]
+SURFACE_FIELDS = ["utc", "commit", "run_id", "soil", "stage", "response", "points", "centre_points", "seed_sd",
+                  "centre_sd", "largest_effect", "largest_effect_factor", "effect_over_centre_sd", "model_p",
+                  "lack_of_fit_p"]
 SNAKEMAKE = [sys.executable, "-m", "snakemake"]
 
 
@@ -120,6 +124,62 @@ def snakemake(workdir: Path, cores: int, *extra, timeout=None, load=None):
     return p.returncode, time.perf_counter() - t0, out, killed
 
 
+def surface_rows(workdir: Path) -> list[dict]:
+    """Per soil, response-surface stage (a design with centre points) and response: the seed
+    scatter beside the factors' effects, and the full quadratic's model and lack-of-fit tests.
+
+    seed_sd: the replicate SD of single seeds pooled over the design points that ran several
+    (``sd`` and ``n`` of the run files; empty with one seed per point); centre_sd: the SD of the
+    centre points' responses (each the mean of its point's seeds), the pure error the
+    lack-of-fit test uses; largest_effect: the largest change of the full quadratic's linear
+    term over its factor's range (2 |b_i| in coded units) and its factor.  A surface whose
+    largest effect is not several centre SDs cannot tell the factors from the seeds."""
+    rows = []
+    for anova_csv in sorted((workdir / "results").glob("*/dem/*/anova.csv")):
+        d = anova_csv.parent
+        soil, stage = d.parent.parent.name, d.name
+        design = pd.read_csv(d / "design.csv")
+        coded = [c for c in design.columns if c != "run" and not c.endswith("_actual")]
+        centre = design.loc[(design[coded] == 0).all(axis=1), "run"].tolist()
+        if not centre:  # a screening design: no centre points, no lack-of-fit test
+            continue
+        anova = pd.read_csv(anova_csv)
+        coef = pd.read_csv(d / "coefficients.csv")
+        resp = pd.read_csv(d / "responses.csv")
+        runs = [pd.read_csv(f) for f in sorted((d / "runs").glob("*.csv"))]
+        runs = pd.concat(runs, ignore_index=True) if runs else pd.DataFrame(columns=["response", "sd", "n"])
+        for rid in anova["response"].unique():
+            a = anova[(anova["response"] == rid) & (anova["model"] == "full")].set_index("source")
+            c = coef[(coef["response"] == rid) & (coef["model"] == "full")].set_index("term")["coded"]
+            lin = {f: 2 * abs(float(c[f])) for f in coded if f in c.index}
+            big = max(lin, key=lin.get) if lin else ""
+            r = runs[(runs["response"] == rid) & (pd.to_numeric(runs["n"], errors="coerce") > 1)]
+            n, sd = pd.to_numeric(r["n"]).to_numpy(float), pd.to_numeric(r["sd"], errors="coerce").to_numpy(float)
+            ok = pd.notna(sd)
+            seed_sd = float((((n - 1) * sd**2)[ok].sum() / (n - 1)[ok].sum()) ** 0.5) if ok.any() else float("nan")
+            cvals = pd.to_numeric(resp.loc[resp["run"].isin(centre), rid], errors="coerce").dropna()
+            centre_sd = float(cvals.std(ddof=1)) if len(cvals) > 1 else float("nan")
+
+            def p(src):
+                return float(a.loc[src, "p"]) if src in a.index else float("nan")
+            made = runs.loc[runs["response"] == rid, "commit"].astype(str).unique() if "commit" in runs else []
+            rows.append(dict(commit=str(made[0])[:7] if len(made) == 1 else "", soil=soil, stage=stage, response=rid, points=len(design), centre_points=len(centre),
+                             seed_sd=round(seed_sd, 3), centre_sd=round(centre_sd, 3),
+                             largest_effect=round(lin.get(big, float("nan")), 3), largest_effect_factor=big,
+                             effect_over_centre_sd=round(lin.get(big, float("nan")) / centre_sd, 2)
+                             if centre_sd > 0 else float("nan"),
+                             model_p=p("Model"), lack_of_fit_p=p("Lack of Fit")))
+    return rows
+
+
+def add_surfaces(workdir: Path, utc: str, run_id: str) -> None:
+    """Append the surfaces of a run's work directory to ``calibration_surfaces.csv`` (the commit
+    of each row is the one its DEM runs name)."""
+    rows = [dict(r, utc=utc, run_id=run_id) for r in surface_rows(workdir)]
+    write_rows(OUT / "calibration_surfaces.csv",
+               read_rows(OUT / "calibration_surfaces.csv", SURFACE_FIELDS) + rows, SURFACE_FIELDS)
+
+
 def jobs_done(log: str) -> int:
     return len(re.findall(r"^Finished jobid: \d+ \(Rule: (?!all\))", log, flags=re.M))
 
@@ -138,12 +198,19 @@ def main(argv=None) -> int:
     ap.add_argument("--kill-after", type=float, default=None,
                     help="also run a second copy, kill it after this many seconds, restart it")
     ap.add_argument("--report-only", action="store_true")
+    ap.add_argument("--surfaces-of", metavar="WORKDIR", default=None,
+                    help="only add the response-surface rows of a workflow directory that has run")
     args = ap.parse_args(argv)
     OUT.mkdir(exist_ok=True)
     rev = commit()
     utc = time.strftime("%Y-%m-%d %H:%M", time.gmtime())
     run_id = time.strftime("%Y%m%dT%H%M%S", time.gmtime())
-    if not args.report_only:
+    if args.surfaces_of:
+        wd = Path(args.surfaces_of)
+        if not (wd / "results").is_dir():
+            sys.exit(f"--surfaces-of {wd}: expected a workflow directory with results/, found none")
+        add_surfaces(wd, utc, f"{run_id} ({wd.name})")
+    elif not args.report_only:
         soils = args.soils
         wd = copy_workflow(Path(args.workdir), soils)
         label = " ".join(soils or yaml.safe_load((ROOT / "config/config.yaml").read_text())["soils"])
@@ -183,6 +250,7 @@ def main(argv=None) -> int:
             summ.insert(0, "commit", rev)
             summ.insert(0, "utc", utc)
             summ.to_csv(OUT / "calibration_summary.csv", index=False)
+        add_surfaces(wd, utc, run_id)
         write_rows(OUT / "calibration_runs.csv", read_rows(OUT / "calibration_runs.csv", RUN_FIELDS) + runs,
                    RUN_FIELDS)
         write_rows(OUT / "calibration.csv", read_rows(OUT / "calibration.csv", RULE_FIELDS) + rules, RULE_FIELDS)
@@ -224,6 +292,29 @@ def report(md_path: Path, argv) -> None:
         for r in sorted(sel, key=lambda r: -float(r["sum_s"])):
             md.append(f"| {r['rule']} | {r['jobs']} | {r['sum_s']} | {100 * float(r['sum_s']) / tot:.0f} % | "
                       f"{r['mean_s']} | {r['max_s']} | {r['max_rss_mb']} |")
+    surfaces = read_rows(OUT / "calibration_surfaces.csv", SURFACE_FIELDS)
+    last = {}
+    for r in surfaces:  # the last run of every soil
+        last[r["soil"]] = r["run_id"]
+    sel = [r for r in surfaces if last[r["soil"]] == r["run_id"]]
+    if sel:
+        md += ["", "Response surfaces of the last run of every soil (`calibration_surfaces.csv`): the seed "
+               "scatter beside the factors' effects (seed SD: single seeds' SD pooled over the points that ran "
+               "several; centre SD: the SD of the centre points, the lack-of-fit test's pure error; largest "
+               "effect: 2 |b| of the full quadratic's largest linear term, coded), the full quadratic's model "
+               "and lack-of-fit p:", "",
+               "| soil | stage | response | commit | points | centre | seed SD | centre SD | largest effect | "
+               "effect / centre SD | model p | lack of fit p |",
+               "|---|---|---|---|---:|---:|---:|---:|---|---:|---:|---:|"]
+
+        def g(x, fmt):
+            return "" if x in ("", None) or pd.isna(float(x)) else format(float(x), fmt)
+        for r in sel:
+            md.append(f"| {r['soil']} | {r['stage']} | {r['response']} | {r['commit']} | {r['points']} | "
+                      f"{r['centre_points']} | {g(r['seed_sd'], '.2f')} | {g(r['centre_sd'], '.2f')} | "
+                      f"{g(r['largest_effect'], '.2f')} ({r['largest_effect_factor']}) | "
+                      f"{g(r['effect_over_centre_sd'], '.1f')} | {g(r['model_p'], '.3g')} | "
+                      f"{g(r['lack_of_fit_p'], '.3g')} |")
     summ = OUT / "calibration_summary.csv"
     if summ.is_file():
         df = pd.read_csv(summ)

@@ -1,0 +1,69 @@
+"""The calibration benchmark's response-surface table reads a stage's files by hand-made numbers:
+pooled seed SD, centre SD, the largest linear effect over its range, the ANOVA's p-values."""
+
+from __future__ import annotations
+
+import importlib.util
+import math
+import sys
+from pathlib import Path
+
+import pandas as pd
+import pytest
+
+BENCH = Path(__file__).resolve().parents[2] / "benchmarks"
+
+
+@pytest.fixture(scope="module")
+def calibration():
+    sys.path.insert(0, str(BENCH))
+    try:
+        spec = importlib.util.spec_from_file_location("calibration_bench", BENCH / "calibration.py")
+        mod = importlib.util.module_from_spec(spec)
+        spec.loader.exec_module(mod)
+        yield mod
+    finally:
+        sys.path.remove(str(BENCH))
+
+
+def _stage(d: Path, centre_values, sds, ns):
+    d.mkdir(parents=True)
+    rows = [(1, -1, 0), (2, 1, 0), (3, 0, -1), (4, 0, 1)] + [(5 + i, 0, 0) for i in range(len(centre_values))]
+    design = pd.DataFrame(rows, columns=["run", "A", "B"])
+    design["A_actual"], design["B_actual"] = design["A"], design["B"]
+    design.to_csv(d / "design.csv", index=False)
+    y = [30.0, 34.0, 31.0, 32.0] + list(centre_values)
+    pd.DataFrame({"run": design["run"], "angle": y}).to_csv(d / "responses.csv", index=False)
+    pd.DataFrame({"response": "angle", "model": ["full"] * 4 + ["reduced"],
+                  "source": ["Model", "A", "Lack of Fit", "Pure Error", "Model"],
+                  "p": [0.012, 0.003, 0.41, float("nan"), 0.5]}).to_csv(d / "anova.csv", index=False)
+    pd.DataFrame({"response": "angle", "model": ["full"] * 3 + ["reduced"] * 2,
+                  "term": ["Intercept", "A", "B", "Intercept", "A"],
+                  "coded": [32.0, 2.0, -0.5, 32.0, 9.0]}).to_csv(d / "coefficients.csv", index=False)
+    (d / "runs").mkdir()
+    for k, (sd, n) in enumerate(zip(sds, ns)):
+        pd.DataFrame({"response": ["angle"], "sd": [sd], "n": [n], "commit": ["abcdef0123"]}).to_csv(
+            d / f"runs/{k}.csv", index=False)
+
+
+def test_surface_rows_from_hand_made_files(tmp_path, calibration):
+    _stage(tmp_path / "results/some-soil/dem/bbd", [31.0, 33.0, 32.0], sds=[1.0, 3.0, float("nan")], ns=[2, 2, 1])
+    rows = calibration.surface_rows(tmp_path)
+    assert len(rows) == 1
+    r = rows[0]
+    assert (r["soil"], r["stage"], r["response"], r["commit"]) == ("some-soil", "bbd", "angle", "abcdef0")
+    assert (r["points"], r["centre_points"]) == (7, 3)
+    assert r["seed_sd"] == pytest.approx(math.sqrt((1.0 + 9.0) / 2), abs=1e-3)  # pooled, one df each
+    assert r["centre_sd"] == pytest.approx(1.0)  # 31, 33, 32
+    assert (r["largest_effect"], r["largest_effect_factor"]) == (4.0, "A")  # full model, 2 |2.0|
+    assert r["effect_over_centre_sd"] == pytest.approx(4.0)
+    assert (r["model_p"], r["lack_of_fit_p"]) == (0.012, 0.41)
+
+
+def test_a_screening_stage_has_no_row(tmp_path, calibration):
+    d = tmp_path / "results/some-soil/dem/pb"
+    d.mkdir(parents=True)
+    pd.DataFrame({"run": [1, 2], "A": [-1, 1], "A_actual": [-1, 1]}).to_csv(d / "design.csv", index=False)
+    pd.DataFrame({"response": ["angle"], "model": ["full"], "source": ["Model"], "p": [0.1]}).to_csv(
+        d / "anova.csv", index=False)
+    assert calibration.surface_rows(tmp_path) == []
