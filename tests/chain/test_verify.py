@@ -69,6 +69,11 @@ def test_diagnose_surface_scatter_when_the_confidence_interval_covers_the_target
     assert "model limit" not in note
     note = diagnose(33.0, 0.1, 4, 30.0, 31.0, (30.6, 31.4))
     assert note.startswith("model limit") and "30.60 to 31.40" in note
+    # with 2 seeds per design point, the half-width 2.5 shrinks to 0.5 at 2 (2.5 / 0.5)^2 = 50
+    note = diagnose(33.0, 0.1, 4, 30.0, 31.0, (28.5, 33.5), replicates=2)
+    assert "about 50 seeds per design point, 2 now" in note
+    # half-width 1.0 with one seed per point: (1.0 / 0.5)^2 = 4 exactly, not rounded up to 5
+    assert "about 4 seeds per design point, 1 now" in diagnose(33.0, 0.1, 4, 30.0, 31.0, (30.0, 32.0), 1)
     # an interval that cannot be computed (NaN) leaves the plain model-limit note
     assert diagnose(33.0, 0.1, 4, 30.0, 31.0, (np.nan, np.nan)) == diagnose(33.0, 0.1, 4, 30.0, 31.0)
 

@@ -96,7 +96,7 @@ def not_run_rows(stage_id: str, case: dict, reason: str) -> pd.DataFrame:
 
 
 def diagnose(mean: float, sd: float, n: int, target: float, predicted: float | None,
-             ci: tuple[float, float] | None = None) -> str:
+             ci: tuple[float, float] | None = None, replicates: int | None = None) -> str:
     """Why a verification mean misses its target by more than 2 % (empty when it meets it).
 
     * the surface cannot reach the target: the prediction at the optimum is more than 0.5
@@ -104,7 +104,11 @@ def diagnose(mean: float, sd: float, n: int, target: float, predicted: float | N
       interval of the surface's mean there, ``ci`` where given, excludes the target;
     * surface scatter: the prediction misses by more than 0.5 but its confidence interval
       contains the target: the design points' own seed scatter leaves open whether the
-      design region reaches it (replicates per design point would tell);
+      design region reaches it (replicates per design point would tell; with ``replicates``,
+      the seeds per design point of the design, the note says how many would narrow the
+      interval to +-0.5: the interval's half-width h shrinks as 1/sqrt(seeds) where the design
+      points scatter by their seeds alone, so about ceil(replicates (h / 0.5)^2); more than
+      the design points' lack of fit allows, so a lower bound);
     * seed scatter: the miss is within two standard errors of the mean (sd / sqrt(n)), so
       more replicates (or larger heaps) are needed to tell; the note says how many seeds
       would make two standard errors as small as the 2 % band,
@@ -127,7 +131,11 @@ def diagnose(mean: float, sd: float, n: int, target: float, predicted: float | N
                          f"set, {predicted - target:+.2f} from the target, but the 95 % confidence "
                          f"interval of its mean there, {lo:.2f} to {hi:.2f}, contains the target: the "
                          "design points' seed scatter leaves open whether the design region reaches "
-                         "it (replicates per design point would tell)")
+                         "it (replicates per design point would tell"
+                         + (f": about {int(np.ceil(replicates * ((hi - lo) / 2 / SURFACE_TOLERANCE) ** 2 - 1e-9))}"
+                            f" seeds per design point, {int(replicates)} now, would narrow the interval "
+                            f"to +-{SURFACE_TOLERANCE:g} if the points scatter by their seeds alone"
+                            if replicates else "") + ")")
         else:
             band = f" (95 % confidence interval {lo:.2f} to {hi:.2f})" if known else ""
             notes.append(f"model limit: the response surface predicts {predicted:.2f} at its best set, "
@@ -214,7 +222,8 @@ def _verification_row(stage, case, rid, goal, targets, soil_data, cal, sel, pres
         status = "ok"
     ci = tuple(float(cal[f"{rid}_{k}"].iloc[0]) for k in ("ci_low", "ci_high")) \
         if len(cal) and f"{rid}_ci_low" in cal.columns else None
-    note = diagnose(mean, sd, n, target, pred, ci) if status == "ok" else ""
+    reps = int((soil_data.get("simulation") or {}).get("replicates", 1))
+    note = diagnose(mean, sd, n, target, pred, ci, reps) if status == "ok" else ""
     if status == "ok" and goal.get("goal") != "target":
         note = f"goal {goal.get('goal')}: no target value; the paper's verification is beside it"
     return {
