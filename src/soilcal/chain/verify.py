@@ -107,8 +107,8 @@ def diagnose(mean: float, sd: float, n: int, target: float, predicted: float | N
       design region reaches it (replicates per design point would tell; with ``replicates``,
       the seeds per design point of the design, the note says how many would narrow the
       interval to +-0.5: the interval's half-width h shrinks as 1/sqrt(seeds) where the design
-      points scatter by their seeds alone, so about ceil(replicates (h / 0.5)^2); more than
-      the design points' lack of fit allows, so a lower bound);
+      points scatter by their seeds alone, so about ceil(replicates (h / 0.5)^2), a lower
+      bound where the quadratic also lacks fit);
     * seed scatter: the miss is within two standard errors of the mean (sd / sqrt(n)), so
       more replicates (or larger heaps) are needed to tell; the note says how many seeds
       would make two standard errors as small as the 2 % band,
