@@ -129,46 +129,47 @@ def surface_rows(workdir: Path) -> list[dict]:
     scatter beside the factors' effects, and the full quadratic's model and lack-of-fit tests.
 
     seed_sd: the replicate SD of single seeds pooled over the design points that ran several
-    (``sd`` and ``n`` of the run files; empty with one seed per point); centre_sd: the SD of the
-    centre points' responses (each the mean of its point's seeds), the pure error the
-    lack-of-fit test uses; largest_effect: the largest change of the full quadratic's linear
-    term over its factor's range (2 |b_i| in coded units) and its factor.  A surface whose
-    largest effect is not several centre SDs cannot tell the factors from the seeds."""
+    (``sd`` and ``n`` of the run files, :func:`soilcal.doe.adaptive.pooled_sd`; empty with one
+    seed per point); centre_sd: the square root of the ANOVA's pure-error mean square, the SD
+    of the centre points' responses (each the mean of its point's seeds) in a Box-Behnken
+    design; largest_effect: the largest change of the full quadratic's linear term over its
+    factor's range (2 |b_i| in coded units) and its factor.  A surface whose largest effect is
+    not several centre SDs cannot tell the factors from the seeds."""
+    from soilcal.doe.adaptive import pooled_sd
+
+    nan = float("nan")
     rows = []
     for anova_csv in sorted((workdir / "results").glob("*/dem/*/anova.csv")):
         d = anova_csv.parent
-        soil, stage = d.parent.parent.name, d.name
         design = pd.read_csv(d / "design.csv")
         coded = [c for c in design.columns if c != "run" and not c.endswith("_actual")]
-        centre = design.loc[(design[coded] == 0).all(axis=1), "run"].tolist()
-        if not centre:  # a screening design: no centre points, no lack-of-fit test
+        n_centre = int((design[coded] == 0).all(axis=1).sum())
+        if not n_centre:  # a screening design: no centre points, no lack-of-fit test
             continue
         anova = pd.read_csv(anova_csv)
+        anova = anova[anova["model"] == "full"]
         coef = pd.read_csv(d / "coefficients.csv")
-        resp = pd.read_csv(d / "responses.csv")
         runs = [pd.read_csv(f) for f in sorted((d / "runs").glob("*.csv"))]
-        runs = pd.concat(runs, ignore_index=True) if runs else pd.DataFrame(columns=["response", "sd", "n"])
+        runs = pd.concat(runs, ignore_index=True) if runs else pd.DataFrame(columns=["response", "sd", "n", "commit"])
         for rid in anova["response"].unique():
-            a = anova[(anova["response"] == rid) & (anova["model"] == "full")].set_index("source")
+            a = anova[anova["response"] == rid].set_index("source")
             c = coef[(coef["response"] == rid) & (coef["model"] == "full")].set_index("term")["coded"]
             lin = {f: 2 * abs(float(c[f])) for f in coded if f in c.index}
             big = max(lin, key=lin.get) if lin else ""
-            r = runs[(runs["response"] == rid) & (pd.to_numeric(runs["n"], errors="coerce") > 1)]
-            n, sd = pd.to_numeric(r["n"]).to_numpy(float), pd.to_numeric(r["sd"], errors="coerce").to_numpy(float)
-            ok = pd.notna(sd)
-            seed_sd = float((((n - 1) * sd**2)[ok].sum() / (n - 1)[ok].sum()) ** 0.5) if ok.any() else float("nan")
-            cvals = pd.to_numeric(resp.loc[resp["run"].isin(centre), rid], errors="coerce").dropna()
-            centre_sd = float(cvals.std(ddof=1)) if len(cvals) > 1 else float("nan")
-
-            def p(src):
-                return float(a.loc[src, "p"]) if src in a.index else float("nan")
-            made = runs.loc[runs["response"] == rid, "commit"].astype(str).unique() if "commit" in runs else []
-            rows.append(dict(commit=str(made[0])[:7] if len(made) == 1 else "", soil=soil, stage=stage, response=rid, points=len(design), centre_points=len(centre),
-                             seed_sd=round(seed_sd, 3), centre_sd=round(centre_sd, 3),
-                             largest_effect=round(lin.get(big, float("nan")), 3), largest_effect_factor=big,
-                             effect_over_centre_sd=round(lin.get(big, float("nan")) / centre_sd, 2)
-                             if centre_sd > 0 else float("nan"),
-                             model_p=p("Model"), lack_of_fit_p=p("Lack of Fit")))
+            r = runs[runs["response"] == rid]
+            seed_sd = pooled_sd(pd.DataFrame({f"{rid}_n": pd.to_numeric(r["n"], errors="coerce").fillna(0),
+                                              f"{rid}_sd": pd.to_numeric(r["sd"], errors="coerce")}), rid)
+            centre_sd = float(a.loc["Pure Error", "mean_sq"]) ** 0.5 if "Pure Error" in a.index else nan
+            effect = lin.get(big, nan)
+            made = r["commit"].astype(str).unique()
+            rows.append(dict(commit=made[0][:7] if len(made) == 1 else "", soil=d.parent.parent.name,
+                             stage=d.name, response=rid, points=len(design), centre_points=n_centre,
+                             seed_sd=round(seed_sd, 3) if seed_sd is not None else nan,
+                             centre_sd=round(centre_sd, 3), largest_effect=round(effect, 3),
+                             largest_effect_factor=big,
+                             effect_over_centre_sd=round(effect / centre_sd, 2) if centre_sd > 0 else nan,
+                             model_p=float(a.loc["Model", "p"]) if "Model" in a.index else nan,
+                             lack_of_fit_p=float(a.loc["Lack of Fit", "p"]) if "Lack of Fit" in a.index else nan))
     return rows
 
 

@@ -34,8 +34,11 @@ def _stage(d: Path, centre_values, sds, ns):
     design.to_csv(d / "design.csv", index=False)
     y = [30.0, 34.0, 31.0, 32.0] + list(centre_values)
     pd.DataFrame({"run": design["run"], "angle": y}).to_csv(d / "responses.csv", index=False)
+    # the pure error of the centre values: their variance, sum of squares over n - 1
+    c = pd.Series(list(centre_values), dtype=float)
     pd.DataFrame({"response": "angle", "model": ["full"] * 4 + ["reduced"],
                   "source": ["Model", "A", "Lack of Fit", "Pure Error", "Model"],
+                  "mean_sq": [9.0, 8.0, 0.5, float(((c - c.mean()) ** 2).sum() / (len(c) - 1)), 9.0],
                   "p": [0.012, 0.003, 0.41, float("nan"), 0.5]}).to_csv(d / "anova.csv", index=False)
     pd.DataFrame({"response": "angle", "model": ["full"] * 3 + ["reduced"] * 2,
                   "term": ["Intercept", "A", "B", "Intercept", "A"],

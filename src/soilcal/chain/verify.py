@@ -127,15 +127,16 @@ def diagnose(mean: float, sd: float, n: int, target: float, predicted: float | N
         lo, hi = ci if ci is not None else (np.nan, np.nan)
         known = np.isfinite(lo) and np.isfinite(hi)
         if known and lo <= target <= hi:
+            how = ""
+            if replicates:
+                seeds = int(np.ceil(replicates * ((hi - lo) / 2 / SURFACE_TOLERANCE) ** 2 - 1e-9))
+                how = (f": about {seeds} seeds per design point, {int(replicates)} now, would narrow the "
+                       f"interval to +-{SURFACE_TOLERANCE:g} if the points scatter by their seeds alone")
             notes.append(f"surface scatter: the response surface predicts {predicted:.2f} at its best "
                          f"set, {predicted - target:+.2f} from the target, but the 95 % confidence "
                          f"interval of its mean there, {lo:.2f} to {hi:.2f}, contains the target: the "
                          "design points' seed scatter leaves open whether the design region reaches "
-                         "it (replicates per design point would tell"
-                         + (f": about {int(np.ceil(replicates * ((hi - lo) / 2 / SURFACE_TOLERANCE) ** 2 - 1e-9))}"
-                            f" seeds per design point, {int(replicates)} now, would narrow the interval "
-                            f"to +-{SURFACE_TOLERANCE:g} if the points scatter by their seeds alone"
-                            if replicates else "") + ")")
+                         f"it (replicates per design point would tell{how})")
         else:
             band = f" (95 % confidence interval {lo:.2f} to {hi:.2f})" if known else ""
             notes.append(f"model limit: the response surface predicts {predicted:.2f} at its best set, "
