@@ -18,7 +18,12 @@ several seeds per level, at the quick preset:
 * ``pb-centre paper-PSD``: as ``pb-centre`` with 003's particle sizes (2.5, 5 and 10 mm in
   equal mass, about 5,500 spheres) instead of the quick preset's 1,000 equal ones, with the
   quick preset's softened shear modulus (half its time-step fraction, which the smallest
-  spheres need), so the surface energy is not rescaled by the size rule: the particle scale.
+  spheres need), so the surface energy is not rescaled by the size rule: the particle scale;
+* ``pb-centre stiff`` / ``pb-centre paper-PSD stiff``: the quick spheres / 003's sizes with
+  the shear modulus capped at ``STIFF_G`` (ten times the quick cap) instead of the quick cap;
+* ``pb-centre paper-G``: the quick spheres at the paper's own shear modulus (no cap, so the
+  surface energy is not weakened by the stiffness rule gamma s^(2/5) of
+  :mod:`soilcal.dem.scenarios.base`; the size rule still applies), the quick step fraction.
 
 Per base and H: mean and SD over the seeds; per base: the least-squares slope of the angle on
 H (deg per 0.1 J/m^2) with its standard error, beside the paper's effect over its range
@@ -31,6 +36,7 @@ page ``drum_cohesion.md`` (notes below its marker are kept).
 from __future__ import annotations
 
 import argparse
+import math
 import platform
 import sys
 import time
@@ -47,7 +53,7 @@ FIELDS = ["utc", "commit", "base", "H", "seed", "levels", "conventions", "n_fram
 H_LEVELS = (0.1, 0.15, 0.2, 0.25, 0.3)
 PAPER_EFFECT = 7.3  # 003 Table 5: dynamic angle, H effect over 0.1 -> 0.3 J/m^2 (SS 160.02, 12 runs)
 BASES = ("pb-centre", "pb-centre C-low", "pb-centre C-high", "bbd-centre", "pb-centre lammps-JKR",
-         "pb-centre gap-JKR", "pb-centre paper-PSD", "pb-centre stiff", "pb-centre paper-PSD stiff")
+         "pb-centre gap-JKR", "pb-centre paper-PSD", "pb-centre stiff", "pb-centre paper-PSD stiff", "pb-centre paper-G")
 #: the conventions a base changes from EDEM's (only the JKR terms)
 BASE_CONVENTIONS = {"pb-centre lammps-JKR": {"jkr_convention": "lammps"},
                     "pb-centre gap-JKR": {"jkr_approach": "gap"}}
@@ -89,13 +95,14 @@ def one(base, h, seed, rev):
     conv = BASE_CONVENTIONS.get(base)
     setup = dict(sim.setup, contact_conventions=conv) if conv else dict(sim.setup)
     preset = "quick"
-    if base.endswith(" stiff"):
+    if base.endswith(" stiff") or base.endswith(" paper-G"):
         from soilcal.dem.scenarios.base import PRESET_DEFAULTS
         from soilcal.dem.scenarios.drum import PRESET_TIMES
 
         spin, trans = PRESET_TIMES["quick"]
         preset = "paper" if "paper-PSD" in base else "quick"
-        setup.update(stiffness_scale=min(1.0, STIFF_G / params.soil_shear_modulus),
+        cap = STIFF_G if base.endswith(" stiff") else math.inf
+        setup.update(stiffness_scale=min(1.0, cap / params.soil_shear_modulus),
                      dt_fraction=PRESET_DEFAULTS["quick"]["dt_fraction"], spin_time=spin,
                      transient_time=trans)
     elif "paper-PSD" in base:
