@@ -59,6 +59,9 @@ BASE_CONVENTIONS = {"pb-centre lammps-JKR": {"jkr_convention": "lammps"},
                     "pb-centre gap-JKR": {"jkr_approach": "gap"}}
 #: shear-modulus cap of the ``stiff`` bases [Pa]: ten times the quick preset's (base.py)
 STIFF_G = 5.0e6
+#: shear-modulus cap [Pa] by a base's last word: ``stiff`` ten times the quick preset's,
+#: ``paper-G`` none (the paper's own modulus)
+MODULUS_CAP = {"stiff": STIFF_G, "paper-G": math.inf}
 
 
 
@@ -95,13 +98,13 @@ def one(base, h, seed, rev):
     conv = BASE_CONVENTIONS.get(base)
     setup = dict(sim.setup, contact_conventions=conv) if conv else dict(sim.setup)
     preset = "quick"
-    if base.endswith(" stiff") or base.endswith(" paper-G"):
+    cap = MODULUS_CAP.get(base.rsplit(" ", 1)[-1])
+    if cap is not None:
         from soilcal.dem.scenarios.base import PRESET_DEFAULTS
         from soilcal.dem.scenarios.drum import PRESET_TIMES
 
         spin, trans = PRESET_TIMES["quick"]
         preset = "paper" if "paper-PSD" in base else "quick"
-        cap = STIFF_G if base.endswith(" stiff") else math.inf
         setup.update(stiffness_scale=min(1.0, cap / params.soil_shear_modulus),
                      dt_fraction=PRESET_DEFAULTS["quick"]["dt_fraction"], spin_time=spin,
                      transient_time=trans)

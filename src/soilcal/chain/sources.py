@@ -94,6 +94,11 @@ def response_specs(soil, response_ids) -> dict[str, dict]:
     return out
 
 
+def design_replicates(soil_data: dict) -> int:
+    """Seeds per design point: the soil's ``simulation.replicates``, 1 where it gives none."""
+    return int((soil_data.get("simulation") or {}).get("replicates", 1))
+
+
 def point_spec(soil, stage: dict, levels: dict, run: int, seed: int, replicates: int | None = None,
                extra_params: dict | None = None, responses=None) -> dict:
     """Everything one DEM job simulates: the point's levels, its DEM parameters (SI), the
@@ -111,7 +116,7 @@ def point_spec(soil, stage: dict, levels: dict, run: int, seed: int, replicates:
     rids = responses if responses is not None else [r["id"] for r in stage["responses"]]
     return {"soil": soil.name, "stage": stage["id"], "run": int(run),
             "levels": {k: float(v) for k, v in levels.items()},
-            "seed": int(seed), "replicates": int(replicates or sim.get("replicates", 1)),
+            "seed": int(seed), "replicates": int(replicates or design_replicates(soil.data)),
             "params": dem.as_dict(), "responses": response_specs(soil, rids)}
 
 

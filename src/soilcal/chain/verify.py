@@ -198,6 +198,8 @@ def _case_rows(soil_data, stage, case, optimum, targets, frames, rnd) -> list[di
 
 def _verification_row(stage, case, rid, goal, targets, soil_data, cal, sel, preset) -> dict:
     """One row of :func:`verification_frame`: one case, response and preset."""
+    from soilcal.chain.sources import design_replicates
+
     tid = goal.get("target", "")
     t = targets.get(tid, {}) if tid else {}
     target = float(goal["value"]) if "value" in goal else (
@@ -223,8 +225,7 @@ def _verification_row(stage, case, rid, goal, targets, soil_data, cal, sel, pres
         status = "ok"
     ci = tuple(float(cal[f"{rid}_{k}"].iloc[0]) for k in ("ci_low", "ci_high")) \
         if len(cal) and f"{rid}_ci_low" in cal.columns else None
-    reps = int((soil_data.get("simulation") or {}).get("replicates", 1))
-    note = diagnose(mean, sd, n, target, pred, ci, reps) if status == "ok" else ""
+    note = diagnose(mean, sd, n, target, pred, ci, design_replicates(soil_data)) if status == "ok" else ""
     if status == "ok" and goal.get("goal") != "target":
         note = f"goal {goal.get('goal')}: no target value; the paper's verification is beside it"
     return {
