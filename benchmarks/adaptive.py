@@ -11,6 +11,10 @@ For every soil given, a fresh copy of the workflow (``benchmarks/calibration.py`
 * adaptive: runs and error from ``results/<soil>/dem/adaptive/summary.csv`` (the verified point's
   mean; no error when no point was verified), and why it stopped.
 
+Both rows also carry the goal and the verified mean and SD: for a response to minimise (the
+yangtze furrow's area difference) there is no target to take an error against, and the
+verified means are what the methods are compared by.
+
 Rows go to ``benchmarks/results/adaptive.csv``
 (``soil,target,method,runs,verification_rel_error_pct,stopped_because`` and context columns);
 ``adaptive.md`` is the page.  A (soil, method) run replaces that pair's earlier rows.
@@ -36,7 +40,7 @@ from _report import commit, read_rows, write_page, write_rows
 HERE = Path(__file__).resolve().parent
 OUT = HERE / "results"
 FIELDS = ["utc", "commit", "soil", "stage", "case", "target", "method", "runs", "verification_rel_error_pct",
-          "within_2_percent", "stopped_because", "elapsed_s", "cores", "note"]
+          "within_2_percent", "stopped_because", "elapsed_s", "cores", "note", "goal", "verified_mean", "verified_sd"]
 SNAKEMAKE = [sys.executable, "-m", "snakemake"]
 sys.path.insert(0, str(HERE))
 
@@ -54,7 +58,11 @@ def recipe_rows(wd: Path, soil: str) -> list[dict]:
     rows = []
     for (stage, case, resp), g in ver.groupby(["stage", "case", "response"], sort=False):
         last = g[g["round"] == g["round"].max()].iloc[0]
+        goal = ((next((c for st in _stages(wd, soil) if st["id"] == stage
+                       for c in (st.get("optimise") or {}).get("cases", []) if c["id"] == case), {})
+                 .get("goals") or {}).get(resp) or {}).get("goal", "target")
         rows.append({"soil": soil, "stage": stage, "case": case, "target": resp, "method": "recipe",
+                     "goal": goal, "verified_mean": last["simulated_mean"], "verified_sd": last["simulated_sd"],
                      "runs": runs, "verification_rel_error_pct": last["relative_error_percent"],
                      "within_2_percent": last["within_2_percent"], "stopped_because": "recipe complete"
                      if str(last["status"]) == "ok" else str(last["status"])[:80],
@@ -62,9 +70,16 @@ def recipe_rows(wd: Path, soil: str) -> list[dict]:
     return rows
 
 
+def _stages(wd: Path, soil: str) -> list[dict]:
+    import yaml
+
+    return yaml.safe_load((wd / "config/soils" / f"{soil}.yaml").read_text())["stages"]
+
+
 def adaptive_rows(wd: Path, soil: str) -> list[dict]:
     s = pd.read_csv(wd / "results" / soil / "dem/adaptive/summary.csv")
     return [{"soil": soil, "stage": r["stage"], "case": r["case"], "target": r["response"], "method": "adaptive",
+             "goal": r.get("goal", "target"), "verified_mean": r["verified_mean"], "verified_sd": r["verified_sd"],
              "runs": int(r["runs"]), "verification_rel_error_pct": r["verification_rel_error_pct"],
              "within_2_percent": r["within_tolerance"], "stopped_because": r["stopped_because"],
              "note": "runs: this case's design" if r["stopped_because"] != "not run" else str(r["message"])[:120]}
@@ -89,16 +104,23 @@ def page(rows: list[dict]) -> list[str]:
              f"Machine: {platform.machine()}, Python {platform.python_version()}.  Rows: `adaptive.csv` "
              "(utc and commit per row).  runs: DEM runs of one seed each; error: the verified mean's signed "
              "relative error, percent.", "",
-             "| soil | stage | case | target | method | runs | error % | within 2 % | stopped because | elapsed min |",
-             "|---|---|---|---|---|---:|---:|---|---|---:|"]
+             "| soil | stage | case | target | method | runs | verified | error % | within 2 % | stopped because "
+             "| elapsed min |",
+             "|---|---|---|---|---|---:|---|---:|---|---|---:|"]
     for r in rows:
         err = r["verification_rel_error_pct"]
         err = f"{float(err):.1f}" if str(err) not in ("", "nan", "None") else ""
         el = f"{float(r['elapsed_s']) / 60:.1f}" if str(r["elapsed_s"]) else ""
         met = r["within_2_percent"]
         met = "" if str(met) in ("", "nan", "None") else met  # no verified point
+        ver = ""
+        if str(r.get("verified_mean", "")) not in ("", "nan", "None"):
+            sd = str(r.get("verified_sd", ""))
+            ver = f"{float(r['verified_mean']):.4g}" + (f" +- {float(sd):.2g}" if sd not in ("", "nan", "None") else "")
+            if str(r.get("goal", "")) in ("minimize", "maximize"):
+                ver += f" ({r['goal']})"
         lines.append(f"| {r['soil']} | {r['stage']} | {r['case']} | {r['target']} | {r['method']} | {r['runs']} | "
-                     f"{err} | {met} | {r['stopped_because']} | {el} |")
+                     f"{ver} | {err} | {met} | {r['stopped_because']} | {el} |")
     return lines
 
 

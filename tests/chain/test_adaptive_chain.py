@@ -83,9 +83,18 @@ def test_cases_without_a_target_are_listed_with_the_reason():
     assert [c for _, c in run] == ["mc00", "mc10", "mc20"]
     assert [e["case"] for e in out] == ["mc05", "mc15"]
     assert all("no value and no photo group" in e["why"] for e in out)
+    # a response to minimise runs with an absolute tolerance and is listed without one
     y = soil("yangtze-clay-loam")
-    (e,) = adaptive.excluded_cases(y.data, [s["id"] for s in y.data["stages"]])
-    assert "goal minimize" in e["why"]
+    stages = [s["id"] for s in y.data["stages"]]
+    assert adaptive.adaptive_cases(y.data, stages) == [("bbd", "area_difference")]
+    (t,) = adaptive.problem_for(y.data, adaptive.stage_for(y.data, "bbd"), "area_difference", {}).targets
+    assert (t.goal, t.tolerance) == ("minimize", 0.1) and t.value != t.value  # its level: set per iteration
+    del y.data["simulation"]["adaptive"]
+    (e,) = adaptive.excluded_cases(y.data, stages)
+    assert "goal minimize needs an absolute tolerance" in e["why"]
+    assert "simulation.adaptive.tolerances.area_difference.abs" in e["why"]
+    with pytest.raises(InputError, match="tolerances.area_difference.abs"):
+        adaptive.problem_for(y.data, adaptive.stage_for(y.data, "bbd"), "area_difference", {})
     summ = adaptive.summary_frame("yangtze-clay-loam", [], [e])
     assert summ["stopped_because"].tolist() == ["not run"] and list(summ.columns) == adaptive.SUMMARY_COLUMNS
 
@@ -149,3 +158,15 @@ def test_a_broken_run_file_is_named(tmp_path):
         adaptive.read_runs(pb, steps, [d / "0.csv"])
     with pytest.raises(InputError, match="file name"):
         adaptive.read_runs(pb, steps, [tmp_path / "runs/x/0.csv"])
+
+
+def test_progress_figure_of_a_minimised_response(tmp_path):
+    from soilcal.plots.adaptive import adaptive_progress
+
+    runs = pd.DataFrame({"iteration": [0, 0, 1], "kind": ["start", "start", "verification"], "point": [0, 0, 1],
+                         "seed": [0, 1, 2], "A": [0.1, 0.1, 0.3], "y": [0.9, 1.0, 0.45]})
+    res = {"stage": "bbd", "case": "c", "status": "optimum verified", "runs": 3,
+           "problem": {"targets": {"y": {"value": 0.4, "tolerance": 0.1, "goal": "minimize"}}},
+           "settings": {"p_verify": 0.5}}
+    paths = adaptive_progress(runs, res, [(1, 0.7)], tmp_path / "m")
+    assert all(p.stat().st_size > 0 for p in paths)

@@ -284,3 +284,93 @@ def test_a_seed_scatter_wider_than_the_tolerance_still_gets_verifications():
     # the answer is the best of the verifications (smallest error)
     errs = ver.groupby("point")["y"].mean().sub(12.0).abs()
     assert st.verified["point"] == int(errs.idxmin())
+
+
+# --------------------------------------------------------------------------- minimise / maximise
+
+def bowl(lv):
+    """Least value 0.3 at a = 0.4, b = -0.3; factor c does not act."""
+    return {"y": 0.3 + 2.0 * (lv["a"] - 0.4) ** 2 + 1.5 * (lv["b"] + 0.3) ** 2}
+
+
+BOWL = ad.Problem([ad.Factor("a", -1, 1), ad.Factor("b", -1, 1), ad.Factor("c", 0, 5)],
+                  [ad.Target("y", float("nan"), tol=0.05, goal="minimize")])
+
+
+@pytest.mark.parametrize("seed", range(3))
+def test_minimised_response_reaches_the_least_value_and_verifies_it(seed):
+    runs, st = ad.run(BOWL, noisy(bowl, 0.03), ad.Settings(seed=seed, budget=60))
+    assert st.status == "optimum verified", st.message
+    v = st.verified
+    assert v["responses"]["y"]["n"] >= 4 and v["responses"]["y"]["goal"] == "minimize"
+    # the verified set's noise-free value is within the tolerance of the least value 0.3 (plus
+    # three standard errors of a 4-seed mean, 0.015)
+    assert bowl(v["levels"])["y"] <= 0.3 + 0.05 + 0.045
+    # the level it was held to is the surrogate's least prediction: near 0.3, not below the
+    # tolerance band around it
+    assert abs(st.problem.targets[0].value - 0.3) <= 0.05 + 0.045
+    assert st.searched <= ad.DEFAULTS["improvement_stop"]
+    assert len(runs) <= 60
+
+
+def test_maximised_response_mirrors_the_minimised_one():
+    prob = ad.Problem([ad.Factor("a", -1, 1), ad.Factor("b", -1, 1)],
+                      [ad.Target("y", float("nan"), tol=0.05, goal="maximize")])
+    runs, st = ad.run(prob, noisy(lambda lv: {"y": -bowl(lv)["y"]}, 0.03), ad.Settings(seed=1, budget=60))
+    assert st.status == "optimum verified", st.message
+    assert -bowl(st.verified["levels"])["y"] >= -0.3 - 0.05 - 0.045
+
+
+def test_minimised_response_under_a_target_finds_the_constrained_least_value():
+    # minimise the bowl on the line a + b = 0.5: Lagrange, 4 (a - 0.4) = 3 (b + 0.3) = l and
+    # a + b = 0.5 give l = 0.4 / (7 / 12), a = 0.4 + l / 4, b = -0.3 + l / 3
+    lam = 0.4 / (7.0 / 12.0)
+    a_star, b_star = 0.4 + lam / 4, -0.3 + lam / 3
+    y_star = bowl({"a": a_star, "b": b_star})["y"]
+    prob = ad.Problem([ad.Factor("a", -1, 1), ad.Factor("b", -1, 1)],
+                      [ad.Target("y", float("nan"), tol=0.05, goal="minimize"), ad.Target("g", 0.5, tol=0.05)])
+    fn = noisy(lambda lv: {"y": bowl(lv)["y"], "g": lv["a"] + lv["b"]}, 0.02)
+    runs, st = ad.run(prob, fn, ad.Settings(seed=2, budget=60))
+    assert st.status == "optimum verified", st.message
+    lv = st.verified["levels"]
+    assert abs(lv["a"] + lv["b"] - 0.5) <= 0.05 + 0.03
+    assert bowl(lv)["y"] <= y_star + 0.05 + 0.03
+
+
+def test_expected_improvement_beyond_the_tolerance_is_the_integral():
+    from scipy import integrate
+
+    t = ad.Target("y", 1.0, tol=0.2, goal="minimize")
+    for mu, s in ((1.0, 0.3), (0.5, 0.1), (2.0, 0.5)):
+        # E[max(y* - tol - f, 0)] for f ~ N(mu, s)
+        num, _ = integrate.quad(lambda f: (0.8 - f) * math.exp(-0.5 * ((f - mu) / s) ** 2) / (s * math.sqrt(2 * math.pi)),
+                                mu - 12 * s, 0.8)
+        assert t.improvement(np.array([mu]), np.array([s]))[0] == pytest.approx(num, rel=1e-7, abs=1e-12)
+    up = ad.Target("y", 1.0, tol=0.2, goal="maximize")
+    assert up.improvement(np.array([1.5]), np.array([0.3]))[0] == pytest.approx(
+        t.improvement(np.array([0.5]), np.array([0.3]))[0])  # the mirror image about 1.0
+    # one-sided probability: P(f <= y* + tol) and P(f >= y* - tol)
+    assert t.probability(np.array([1.2]), np.array([0.1]))[0] == pytest.approx(0.5)
+    assert up.probability(np.array([0.8]), np.array([0.1]))[0] == pytest.approx(0.5)
+    assert float(t.miss(1.3)) == pytest.approx(0.1) and float(up.miss(1.3)) < 0
+    assert ad.Target("y", 1.0, tol=0.2).improvement(np.array([0.0]), np.array([1.0]))[0] == 0
+
+
+def test_an_optimised_goal_without_an_absolute_tolerance_is_named():
+    f = [ad.Factor("a", 0, 1)]
+    with pytest.raises(InputError, match="targets.y.tol"):
+        ad.Problem(f, [ad.Target("y", float("nan"), goal="minimize")])
+    with pytest.raises(InputError, match="targets.y.tol"):
+        ad.Problem(f, [ad.Target("y", float("nan"), tol_pct=5, goal="maximize")])
+    with pytest.raises(InputError, match="targets.y.goal"):
+        ad.Problem(f, [ad.Target("y", 1.0, tol=0.1, goal="smallest")])
+    with pytest.raises(InputError, match="improvement_stop"):
+        ad.Settings.from_mapping({"improvement_stop": 0})
+
+
+def test_a_minimising_design_resumes_where_it_stopped():
+    runs, st = ad.run(BOWL, noisy(bowl, 0.03), ad.Settings(seed=0, budget=60))
+    part = runs[runs["iteration"] <= 2]
+    runs2, st2 = ad.run(BOWL, noisy(bowl, 0.03), ad.Settings(seed=0, budget=60), runs=part)
+    pd.testing.assert_frame_equal(runs.reset_index(drop=True), runs2.reset_index(drop=True), check_dtype=False)
+    assert st2.status == st.status and st2.verified["levels"] == st.verified["levels"]

@@ -46,10 +46,18 @@ def settings_block(soil_data: dict) -> dict:
 
 def _why_not(soil_data: dict, case: dict) -> str:
     """Why the adaptive design cannot run a case ('' when it can): it needs a target value for
-    every response it aims at (a printed value or a photo group in the soil's ``targets``)."""
+    every response it aims at (a printed value or a photo group in the soil's ``targets``), and
+    for every response to be minimised or maximised an absolute tolerance
+    (``simulation.adaptive.tolerances.<response>.abs``)."""
+    tols = settings_block(soil_data).get("tolerances") or {}
     for rid, g in case["goals"].items():
+        if g.get("goal") in ("minimize", "maximize"):
+            if (tols.get(rid) or {}).get("abs") is None:
+                return (f"{rid}: goal {g.get('goal')} needs an absolute tolerance, "
+                        f"simulation.adaptive.tolerances.{rid}.abs (how much worse than the best is acceptable)")
+            continue
         if g.get("goal") != "target":
-            return f"{rid}: goal {g.get('goal')} has no target value (the adaptive design needs one per response)"
+            return f"{rid}: goal {g.get('goal')} is neither a target nor minimize / maximize"
         if "value" in g:
             continue
         t = (soil_data.get("targets") or {}).get(g.get("target"), {})
@@ -168,8 +176,16 @@ def problem_for(soil_data: dict, stage: dict, case_id: str, targets: dict, sourc
     per = block.get("tolerances") or {}
     tgts = []
     for rid, goal in _case(stage, case_id)["goals"].items():
+        if goal.get("goal") in ("minimize", "maximize"):
+            tol = (per.get(rid) or {}).get("abs")
+            if tol is None:
+                raise InputError(where, f"simulation.adaptive.tolerances.{rid}.abs",
+                                 f"an absolute tolerance for the goal {goal['goal']}", "missing")
+            tgts.append(ad.Target(rid, float("nan"), tol=float(tol), goal=goal["goal"]))
+            continue
         if goal.get("goal") != "target":
-            raise InputError(where, f"optimise.cases.{case_id}.goals.{rid}", "a target goal", goal.get("goal"))
+            raise InputError(where, f"optimise.cases.{case_id}.goals.{rid}", "a goal target, minimize or maximize",
+                             goal.get("goal"))
         if "value" in goal:
             value = float(goal["value"])
         else:
@@ -257,8 +273,10 @@ def step_record(problem: ad.Problem, settings: ad.Settings, st: ad.Step) -> dict
                    "verified": st.verified,
                    "problem": {"factors": {f.name: [f.low, f.high] for f in problem.factors},
                                "fixed": problem.fixed,
-                               "targets": {t.response: {"value": t.value, "tolerance": t.tolerance}
-                                           for t in problem.targets}},
+                               # a minimised (maximised) response's value: its best level as decided
+                               "targets": {t.response: {"value": t.value, "tolerance": t.tolerance, "goal": t.goal}
+                                           for t in (st.problem or problem).targets}},
+                   "searched": st.searched,
                    "settings": {k: getattr(settings, k) for k in settings.__dataclass_fields__}})
 
 
@@ -459,7 +477,7 @@ def stage_files(soil_data: dict, stage_id: str, result_paths, region_paths, outp
     return write_stage(soil_data, stage_for(soil_data, stage_id, up), result_paths, region_paths, *outputs)
 
 
-SUMMARY_COLUMNS = ["soil", "stage", "case", "response", "target", "tolerance", "method", "runs", "iterations",
+SUMMARY_COLUMNS = ["soil", "stage", "case", "response", "goal", "target", "tolerance", "method", "runs", "iterations",
                    "verified_mean", "verified_sd", "verified_n", "verification_rel_error_pct",
                    "within_tolerance", "stopped_because", "message"]
 
@@ -474,7 +492,7 @@ def summary_frame(soil: str, results: list[dict], excluded: list[dict] = ()) -> 
         for rid, t in r["problem"]["targets"].items():
             v = ver.get(rid, {})
             rows.append({"soil": soil, "stage": r["stage"], "case": r["case"], "response": rid,
-                         "target": t["value"], "tolerance": t["tolerance"], "method": "adaptive",
+                         "goal": t.get("goal", "target"), "target": t["value"], "tolerance": t["tolerance"], "method": "adaptive",
                          "runs": r["runs"], "iterations": r["iterations"],
                          "verified_mean": v.get("mean"), "verified_sd": v.get("sd"), "verified_n": v.get("n"),
                          "verification_rel_error_pct": v.get("error_pct"),

@@ -73,6 +73,26 @@ The answer is a set: the candidates with P > 1/2 form the consistent region; eac
 range and spread over it, and the factors the data do not pin down (spread over more than half
 of their range) are reported with it.
 
+Goals without a target value (``minimize``, ``maximize``)
+---------------------------------------------------------
+A response whose goal is to be as small (large) as the box allows, such as a discrepancy
+between a simulated and a measured profile, has no target value: it has an absolute
+tolerance ``tol`` (how much worse than the best a user accepts; required, a percentage of a
+moving best has no meaning) and, at every iteration, the level y* it is held to: the lowest
+(highest) predicted mean over the candidates and the evaluated points, among those where the
+target goals are plausibly met (P of the target goals >= 1/2, or their largest P where none
+reaches it).  Its factor in P is one-sided, Phi((y* + tol - mu) / s) (for ``maximize``
+Phi((mu - y* + tol) / s)): the probability that the point lies within tolerance of the best.
+Whether the box has been searched is the expected improvement beyond the tolerance,
+I(x) = E[max(y* - tol - f(x), 0)] = s (phi(z) + z Phi(z)), z = (y* - tol - mu) / s (Jones,
+Schonlau and Welch 1998, Eq. 15, with the incumbent lowered by the tolerance), times P of the
+target goals: while its largest value over the candidates exceeds ``improvement_stop``
+tolerances, the proposals maximise it (summed over the goals in tolerances), the best
+candidate is verified only once 2 d + 1 proposals have passed since the last verification, and
+no verification stops the design; once the box is searched the proposals maximise P and the
+verification rule above applies.  The design then stops ``optimum verified`` when the
+verified mean lies within tolerance of y* (and of every target) and the box is searched.
+
 Everything is a pure function of the evaluated runs and the seed, so an interrupted design
 resumes from its run table and proposes exactly what it would have proposed.
 """
@@ -94,7 +114,9 @@ from soilcal.errors import InputError
 #: defaults of a soil's ``simulation.adaptive`` block (documented in the soil schema)
 DEFAULTS = dict(n_start=None, centre_replicates=2, batch=2, budget=60, verify_seeds=4,
                 tolerance_pct=2.0, p_verify=0.5, p_unreachable=0.01, separation=0.15,
-                n_candidates=4096, max_iterations=50)
+                n_candidates=4096, max_iterations=50, improvement_stop=0.1)
+#: the goals a response can have: a target value, or as small / as large as the box allows
+GOALS = ("target", "minimize", "maximize")
 #: factors whose spread over the consistent region exceeds this share of their range are
 #: "not pinned down"
 UNPINNED_SHARE = 0.5
@@ -113,11 +135,16 @@ class Factor:
 
 @dataclass(frozen=True)
 class Target:
-    """A response's target and its tolerance: ``tol`` absolute, or ``tol_pct`` of |value|."""
+    """A response's goal and its tolerance: ``tol`` absolute, or ``tol_pct`` of |value|.
+
+    ``goal`` ``target`` (default): ``value`` is the target.  ``minimize`` / ``maximize``:
+    ``value`` is the best level the design currently holds the response to (NaN in the
+    problem a user states; :func:`resolve` sets it each iteration) and ``tol`` is required."""
     response: str
     value: float
     tol: float | None = None
     tol_pct: float | None = None
+    goal: str = "target"
 
     @property
     def tolerance(self) -> float:
@@ -125,6 +152,46 @@ class Target:
             return float(self.tol)
         return abs(self.value) * float(self.tol_pct if self.tol_pct is not None else
                                        DEFAULTS["tolerance_pct"]) / 100.0
+
+    @property
+    def optimised(self) -> bool:
+        return self.goal != "target"
+
+    def miss(self, mu):
+        """How far ``mu`` lies outside the tolerance band (<= 0 inside it), in the response's
+        unit: both sides of a target, one side of the best level of a minimised (maximised)
+        response."""
+        mu = np.asarray(mu, float)
+        if self.goal == "minimize":
+            return mu - self.value - self.tolerance
+        if self.goal == "maximize":
+            return self.value - self.tolerance - mu
+        return np.abs(mu - self.value) - self.tolerance
+
+    def probability(self, mu, s):
+        """The probability that the mean response lies within the band, given the prediction
+        ``mu`` and its standard deviation ``s``."""
+        tol = self.tolerance
+        if self.goal == "minimize":
+            return stats.norm.cdf((self.value + tol - mu) / s)
+        if self.goal == "maximize":
+            return stats.norm.cdf((mu - self.value + tol) / s)
+        return np.clip(stats.norm.cdf((self.value + tol - mu) / s) - stats.norm.cdf((self.value - tol - mu) / s),
+                       0.0, 1.0)
+
+    def improvement(self, mu, s):
+        """Expected improvement beyond the tolerance over the best level (module docstring);
+        0 for a target goal."""
+        if not self.optimised:
+            return np.zeros_like(np.asarray(mu, float))
+        gain = (self.value - self.tolerance - mu) if self.goal == "minimize" else (mu - self.value - self.tolerance)
+        z = gain / s
+        return s * (stats.norm.pdf(z) + z * stats.norm.cdf(z))
+
+    def said(self) -> str:
+        if self.optimised:
+            return f"the best predicted level {self.value:g} ({self.goal}, tolerance {self.tolerance:.2g})"
+        return f"the target {self.value:g} +- {self.tolerance:.2g}"
 
 
 @dataclass
@@ -145,8 +212,16 @@ class Problem:
                 raise InputError(self.source, f"fixed.{f.name}", "a factor that is not also free",
                                  self.fixed[f.name])
         if not self.targets:
-            raise InputError(self.source, "targets", "at least one response with a target", "none")
+            raise InputError(self.source, "targets", "at least one response with a goal", "none")
         for t in self.targets:
+            if t.goal not in GOALS:
+                raise InputError(self.source, f"targets.{t.response}.goal", f"one of {', '.join(GOALS)}", t.goal)
+            if t.optimised:
+                if t.tol is None or not (math.isfinite(float(t.tol)) and float(t.tol) > 0):
+                    raise InputError(self.source, f"targets.{t.response}.tol",
+                                     f"an absolute tolerance > 0 for a goal {t.goal} (how much worse than the best "
+                                     "is acceptable, in the response's unit)", t.tol)
+                continue
             if not math.isfinite(t.value):
                 raise InputError(self.source, f"targets.{t.response}", "a finite target", t.value)
             if not t.tolerance > 0:
@@ -180,6 +255,7 @@ class Settings:
     separation: float = DEFAULTS["separation"]
     n_candidates: int = DEFAULTS["n_candidates"]
     max_iterations: int = DEFAULTS["max_iterations"]
+    improvement_stop: float = DEFAULTS["improvement_stop"]
     seed: int = 0
 
     @classmethod
@@ -201,6 +277,9 @@ class Settings:
             v = getattr(s, key)
             if not (isinstance(v, (int, float)) and 0 < v < 1):
                 raise InputError(source, f"adaptive.{key}", "a probability in (0, 1)", v)
+        if not (isinstance(s.improvement_stop, (int, float)) and not isinstance(s.improvement_stop, bool)
+                and s.improvement_stop > 0):
+            raise InputError(source, "adaptive.improvement_stop", "a number > 0 (tolerances)", s.improvement_stop)
         if not (isinstance(s.separation, (int, float)) and 0 <= s.separation < 2):
             raise InputError(source, "adaptive.separation", "a coded distance in [0, 2)", s.separation)
         return s
@@ -365,11 +444,54 @@ def consistency(problem: Problem, surrogates: dict, xc: np.ndarray) -> tuple[np.
     for t in problem.targets:
         mu, s = surrogates[t.response].predict(xc)
         s = np.maximum(s, 1e-12)
-        tol = t.tolerance
-        p *= np.clip(stats.norm.cdf((t.value + tol - mu) / s) - stats.norm.cdf((t.value - tol - mu) / s),
-                     0.0, 1.0)
+        p *= t.probability(mu, s)
         pred[t.response] = (mu, s)
     return p, pred
+
+
+def resolve(problem: Problem, surrogates: dict, xc: np.ndarray) -> Problem:
+    """The problem with every minimised (maximised) response's best level set (module
+    docstring: the lowest (highest) predicted mean over the coded points ``xc`` where the
+    target goals are plausibly met); a problem of targets only is returned as it is."""
+    if not any(t.optimised for t in problem.targets):
+        return problem
+    p_t = np.ones(len(xc))
+    for t in problem.targets:
+        if not t.optimised:
+            mu, s = surrogates[t.response].predict(xc)
+            p_t *= t.probability(mu, np.maximum(s, 1e-12))
+    mask = p_t >= min(0.5, float(p_t.max()))
+    out = []
+    for t in problem.targets:
+        if t.optimised:
+            mu, _ = surrogates[t.response].predict(xc[mask])
+            best = float(mu.min() if t.goal == "minimize" else mu.max())
+            t = Target(t.response, best, tol=t.tol, goal=t.goal)
+        out.append(t)
+    return Problem(problem.factors, out, fixed=dict(problem.fixed), source=problem.source)
+
+
+def improvement(problem: Problem, pred: dict, p_targets: np.ndarray) -> np.ndarray:
+    """The expected improvement beyond tolerance of the optimised responses, in tolerances and
+    summed over them, times the probability that the target goals are met (0 for a problem
+    of targets only)."""
+    out = np.zeros(len(p_targets))
+    for t in problem.targets:
+        if t.optimised:
+            mu, s = pred[t.response]
+            out = out + t.improvement(mu, s) / t.tolerance
+    return out * p_targets
+
+
+def target_probability(problem: Problem, pred: dict) -> np.ndarray:
+    """P of the target goals alone (1 where there are none)."""
+    p = None
+    for t in problem.targets:
+        if not t.optimised:
+            mu, s = pred[t.response]
+            q = t.probability(mu, s)
+            p = q if p is None else p * q
+    return p if p is not None else np.ones(len(next(iter(pred.values()))[0]))
 
 
 def shortfall(problem: Problem, pred: dict) -> np.ndarray:
@@ -378,7 +500,7 @@ def shortfall(problem: Problem, pred: dict) -> np.ndarray:
     out = 0.0
     for t in problem.targets:
         mu, sd = pred[t.response]
-        out = out - (np.maximum(np.abs(mu - t.value) - t.tolerance, 0.0) / np.maximum(sd, 1e-12)) ** 2
+        out = out - (np.maximum(t.miss(mu), 0.0) / np.maximum(sd, 1e-12)) ** 2
     return np.asarray(out, float)
 
 
@@ -419,12 +541,14 @@ def pick_batch(xc: np.ndarray, score: np.ndarray, taken: np.ndarray, batch: int,
 def closest_reachable(problem: Problem, surrogates: dict, cand: np.ndarray) -> dict:
     """The point of the box whose predicted responses are closest to the targets (distance in
     tolerances) and what each response reaches there."""
+    aimed = [t for t in problem.targets if not t.optimised]
+
     def dist(xc):
         _, pred = consistency(problem, surrogates, np.atleast_2d(xc))
-        return float(sum(((pred[t.response][0][0] - t.value) / t.tolerance) ** 2 for t in problem.targets))
+        return float(sum(((pred[t.response][0][0] - t.value) / t.tolerance) ** 2 for t in aimed))
 
     _, pred = consistency(problem, surrogates, cand)
-    d_all = sum(((pred[t.response][0] - t.value) / t.tolerance) ** 2 for t in problem.targets)
+    d_all = sum(((pred[t.response][0] - t.value) / t.tolerance) ** 2 for t in aimed) + np.zeros(len(cand))
     x0 = cand[int(np.argmin(d_all))]
     res = optimize.minimize(dist, x0, method="L-BFGS-B", bounds=[(-1.0, 1.0)] * len(x0))
     xc = res.x if res.fun <= dist(x0) else x0
@@ -449,6 +573,8 @@ class Step:
     region: pd.DataFrame
     verified: dict | None = None
     models: dict = field(default_factory=dict)  # the fitted surrogates (not written out)
+    problem: Problem | None = None  # the problem as decided (the optimised responses' best levels set)
+    searched: float | None = None  # largest expected improvement beyond tolerance (optimised goals)
 
 
 def _candidate(problem: Problem, xc: np.ndarray, p: np.ndarray, pred: dict, i: int) -> dict:
@@ -501,7 +627,8 @@ def _verified(problem: Problem, runs: pd.DataFrame, settings: Settings) -> dict 
         return None
 
     def worst(g):
-        e = [abs(np.nanmean(g[t.response].to_numpy(float)) - t.value) / t.tolerance for t in problem.targets]
+        e = [(float(t.miss(np.nanmean(g[t.response].to_numpy(float)))) + t.tolerance) / t.tolerance
+             for t in problem.targets]
         return max(e) if all(np.isfinite(e)) else math.inf
 
     pid = min(ver["point"].unique(), key=lambda p: (worst(ver[ver["point"] == p]), p))
@@ -513,8 +640,8 @@ def _verified(problem: Problem, runs: pd.DataFrame, settings: Settings) -> dict 
         v = v[np.isfinite(v)]
         mean = float(v.mean()) if v.size else np.nan
         sd = float(v.std(ddof=1)) if v.size > 1 else np.nan
-        ok = bool(v.size >= settings.verify_seeds and abs(mean - t.value) <= t.tolerance)
-        out["responses"][t.response] = {"target": t.value, "tolerance": t.tolerance, "mean": mean,
+        ok = bool(v.size >= settings.verify_seeds and np.isfinite(mean) and t.miss(mean) <= 0)
+        out["responses"][t.response] = {"target": t.value, "goal": t.goal, "tolerance": t.tolerance, "mean": mean,
                                         "sd": sd, "n": int(v.size),
                                         "error_pct": 100 * (mean - t.value) / abs(t.value) if t.value else np.nan,
                                         "within": ok}
@@ -540,14 +667,18 @@ def step(problem: Problem, runs: pd.DataFrame, settings: Settings, iteration: in
         new = _new_runs(problem, xc, kinds, 0, iteration, reps, settings.seed)
         return Step(iteration, "continue", f"start: {len(xc)} points, {len(new)} runs", new,
                     pd.DataFrame(), None, empty_region)
-    verified = _verified(problem, runs, settings)
     spent = len(runs)
     points = point_table(problem, runs)
     surrogates, scores = fit_surrogates(problem, points, settings.seed + iteration)
     cand = halton(d, settings.n_candidates, settings.seed + 7919 * iteration)
-    p_c, pred_c = consistency(problem, surrogates, cand)
     xe = problem.to_coded(points[problem.names].to_numpy(float))
+    problem = resolve(problem, surrogates, np.vstack([cand, xe]))
+    verified = _verified(problem, runs, settings)
+    p_c, pred_c = consistency(problem, surrogates, cand)
     p_e, pred_e = consistency(problem, surrogates, xe)
+    gain = improvement(problem, pred_c, target_probability(problem, pred_c))
+    searched = float(gain.max()) if any(t.optimised for t in problem.targets) else None
+    unsearched = searched is not None and searched > settings.improvement_stop
     best = _candidate(problem, cand, p_c, pred_c, int(np.argmax(p_c)))
     if p_e.max() > best["p"]:  # an evaluated point is the surest
         best = _candidate(problem, xe, p_e, pred_e, int(np.argmax(p_e)))
@@ -561,16 +692,20 @@ def step(problem: Problem, runs: pd.DataFrame, settings: Settings, iteration: in
                 "predicted": near["values"], "predicted_sd": near["sd"], "closest": True}
     region = consistent_region(problem, cand, p_c)
     no_runs = empty_runs(problem)[[*RUN_KEYS, *problem.names]]
-    if verified and verified["met"]:
-        return Step(iteration, "target met",
-                    f"the verified mean of point {verified['point']} is within tolerance of every target",
+    if verified and verified["met"] and not unsearched:
+        optimised = any(t.optimised for t in problem.targets)
+        return Step(iteration, "optimum verified" if optimised else "target met",
+                    f"the verified mean of point {verified['point']} is within tolerance of every target"
+                    + (" and of the best predicted level of every optimised response, and no point of the box "
+                       f"is expected to improve on it by more than its tolerance (largest expected improvement "
+                       f"{searched:.2g} tolerances)" if optimised else ""),
                     no_runs, scores, best, region, verified,
-                    surrogates)
+                    surrogates, problem, searched)
     # unreachable: no point of the box is plausibly consistent, and the closest reachable
     # prediction lies further from a target than its uncertainty explains
     if near is not None:
-        far = [t for t in problem.targets
-               if abs(near["values"][t.response] - t.value) > t.tolerance + 2.0 * near["sd"][t.response]
+        far = [t for t in problem.targets if not t.optimised
+               and abs(near["values"][t.response] - t.value) > t.tolerance + 2.0 * near["sd"][t.response]
                and _beyond_data(runs, points, t)]
         # only after a batch of proposals aimed at the target has been run
         if far and (runs["kind"] == "proposal").any():
@@ -580,17 +715,17 @@ def step(problem: Problem, runs: pd.DataFrame, settings: Settings, iteration: in
                             f"(+- {near['sd'][t.response]:.2g})" for t in far)
             return Step(iteration, "unreachable", f"{msg}, at {at}",
                         no_runs, scores, best, region, verified,
-                        surrogates)
+                        surrogates, problem, searched)
     if spent >= settings.budget:
         return Step(iteration, "budget spent",
                     f"{spent} runs spent of a budget of {settings.budget}; {_best_said(problem, best)}",
                     no_runs, scores, best, region, verified,
-                    surrogates)
+                    surrogates, problem, searched)
     if iteration > settings.max_iterations:
         return Step(iteration, "iterations spent",
                     f"{settings.max_iterations} iterations without a verified set; {_best_said(problem, best)}",
                     no_runs, scores, best, region, verified,
-                    surrogates)
+                    surrogates, problem, searched)
     coded, kinds, reps = [], [], []
     left = settings.budget - spent
     ver_pts = problem.to_coded(runs.loc[runs["kind"] == "verification", problem.names].to_numpy(float)) \
@@ -608,7 +743,7 @@ def step(problem: Problem, runs: pd.DataFrame, settings: Settings, iteration: in
     scatter = seed_sd(problem, points, surrogates)
     last_v = int(runs.loc[runs["kind"] == "verification", "point"].max()) if len(ver_pts) else -1
     stalled = int(((runs["kind"] == "proposal") & (runs["point"] > last_v)).sum()) >= 2 * d + 1
-    if cand_v is not None and ready_to_verify(problem, cand_v, scatter, settings, stalled) \
+    if cand_v is not None and (stalled or not unsearched) and ready_to_verify(problem, cand_v, scatter, settings, stalled) \
             and left >= settings.verify_seeds:
         best = cand_v
         coded.append(best["coded"])
@@ -617,7 +752,7 @@ def step(problem: Problem, runs: pd.DataFrame, settings: Settings, iteration: in
         left -= settings.verify_seeds
     n_new = max(0, min(settings.batch, left))
     taken = np.vstack([xe, np.atleast_2d(coded)]) if coded else xe
-    score = p_c if p_c.max() >= settings.p_unreachable else shortfall(problem, pred_c)
+    score = gain if unsearched else (p_c if p_c.max() >= settings.p_unreachable else shortfall(problem, pred_c))
     for i in pick_batch(cand, score, taken, n_new, settings.separation):
         coded.append(cand[i])
         kinds.append("proposal")
@@ -628,11 +763,12 @@ def step(problem: Problem, runs: pd.DataFrame, settings: Settings, iteration: in
         return Step(iteration, "box exhausted",
                     f"every candidate lies within {settings.separation:g} (coded) of a run already made and no "
                     f"verification is due; {_best_said(problem, best)}",
-                    no_runs, scores, best, region, verified, surrogates)
+                    no_runs, scores, best, region, verified, surrogates, problem, searched)
     new = _new_runs(problem, coded, kinds, next_point, iteration, reps, next_seed)
     msg = (f"iteration {iteration}: best P = {best['p']:.3f}; {len(new)} runs"
-           + (" (with a verification of the best candidate)" if "verification" in kinds else ""))
-    return Step(iteration, "continue", msg, new, scores, best, region, verified, surrogates)
+           + (" (with a verification of the best candidate)" if "verification" in kinds else "")
+           + (f"; searching: largest expected improvement {searched:.2g} tolerances" if unsearched else ""))
+    return Step(iteration, "continue", msg, new, scores, best, region, verified, surrogates, problem, searched)
 
 
 def _beyond_data(runs: pd.DataFrame, points: pd.DataFrame, t: Target) -> bool:
@@ -667,7 +803,7 @@ def ready_to_verify(problem: Problem, best: dict, scatter: dict, settings: Setti
     for t in problem.targets:
         sd = scatter.get(t.response) or 0.0
         mu, s = best["predicted"][t.response], best["predicted_sd"][t.response]
-        if abs(mu - t.value) > t.tolerance:
+        if t.miss(mu) > 0:
             return ""
         sure &= sd > 0 and s <= sd / math.sqrt(settings.verify_seeds)
     if sure:
@@ -685,7 +821,7 @@ def _best_said(problem: Problem, best: dict) -> str:
     probability of consistency, each response's prediction against its target, and its levels
     (a factor on a bound: the target may lie beyond the range)."""
     pred = "; ".join(f"{t.response} {best['predicted'][t.response]:.4g} (+- {best['predicted_sd'][t.response]:.2g}) "
-                     f"against the target {t.value:g} +- {t.tolerance:.2g}" for t in problem.targets)
+                     f"against {t.said()}" for t in problem.targets)
     return f"the best candidate (P = {best['p']:.2g}) predicts {pred}, at {_where(problem, best['actual'])}"
 
 
@@ -726,5 +862,6 @@ def run(problem: Problem, evaluate, settings: Settings, runs: pd.DataFrame | Non
         iteration += 1
 
 
-__all__ = ["DEFAULTS", "Factor", "Problem", "Settings", "Step", "Target", "consistency",
-           "consistent_region", "empty_runs", "fit_surrogates", "point_table", "run", "start_points", "step"]
+__all__ = ["DEFAULTS", "GOALS", "Factor", "Problem", "Settings", "Step", "Target", "consistency",
+           "consistent_region", "empty_runs", "fit_surrogates", "improvement", "point_table", "resolve", "run",
+           "start_points", "step"]

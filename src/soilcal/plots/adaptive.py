@@ -30,8 +30,13 @@ def adaptive_progress(runs: pd.DataFrame, result: dict, best_p: list[tuple[int, 
     axes = [fig.add_subplot(n + 1, 1, i + 1) for i in range(n + 1)]
     x = np.arange(1, len(runs) + 1)
     for ax, (rid, t) in zip(axes, targets.items()):
+        goal = t.get("goal", "target")
         lo, hi = t["value"] - t["tolerance"], t["value"] + t["tolerance"]
-        ax.axhspan(lo, hi, color="0.85", zorder=0, label=f"target {t['value']:.4g} +- {t['tolerance']:.2g}")
+        label = f"target {t['value']:.4g} +- {t['tolerance']:.2g}"
+        if goal != "target":  # the best level the design reached, and how much worse is accepted
+            lo, hi = (t["value"], hi) if goal == "minimize" else (lo, t["value"])
+            label = f"{goal}: best {t['value']:.4g}, tolerance {t['tolerance']:.2g}"
+        ax.axhspan(lo, hi, color="0.85", zorder=0, label=label)
         ax.axhline(t["value"], color="0.4", lw=1, zorder=1)
         for kind, (m, c) in MARKERS.items():
             sel = (runs["kind"] == kind).to_numpy()
