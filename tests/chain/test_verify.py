@@ -74,6 +74,8 @@ def test_diagnose_surface_scatter_when_the_confidence_interval_covers_the_target
     assert "about 50 seeds per design point, 2 now" in note
     # half-width 1.0 with one seed per point: (1.0 / 0.5)^2 = 4 exactly, not rounded up to 5
     assert "about 4 seeds per design point, 1 now" in diagnose(33.0, 0.1, 4, 30.0, 31.0, (30.0, 32.0), 1)
+    # the interval and the count are the stage's optimisation model's, and the note names it
+    assert "response surface (full model) predicts" in diagnose(33.0, 0.1, 4, 30.0, 31.0, (28.5, 33.5), 1, "full")
     # an interval that cannot be computed (NaN) leaves the plain model-limit note
     assert diagnose(33.0, 0.1, 4, 30.0, 31.0, (np.nan, np.nan)) == diagnose(33.0, 0.1, 4, 30.0, 31.0)
 

@@ -96,7 +96,8 @@ def not_run_rows(stage_id: str, case: dict, reason: str) -> pd.DataFrame:
 
 
 def diagnose(mean: float, sd: float, n: int, target: float, predicted: float | None,
-             ci: tuple[float, float] | None = None, replicates: int | None = None) -> str:
+             ci: tuple[float, float] | None = None, replicates: int | None = None,
+             model: str | None = None) -> str:
     """Why a verification mean misses its target by more than 2 % (empty when it meets it).
 
     * the surface cannot reach the target: the prediction at the optimum is more than 0.5
@@ -108,7 +109,9 @@ def diagnose(mean: float, sd: float, n: int, target: float, predicted: float | N
       the seeds per design point of the design, the note says how many would narrow the
       interval to +-0.5: the interval's half-width h shrinks as 1/sqrt(seeds) where the design
       points scatter by their seeds alone, so about ceil(replicates (h / 0.5)^2), a lower
-      bound where the quadratic also lacks fit);
+      bound where the quadratic also lacks fit; ``model``, the stage's optimisation model,
+      ``full`` or ``reduced``, is named, as the interval and the count are that model's: a
+      full quadratic's many terms widen it where the data support fewer);
     * seed scatter: the miss is within two standard errors of the mean (sd / sqrt(n)), so
       more replicates (or larger heaps) are needed to tell; the note says how many seeds
       would make two standard errors as small as the 2 % band,
@@ -132,7 +135,8 @@ def diagnose(mean: float, sd: float, n: int, target: float, predicted: float | N
                 seeds = int(np.ceil(replicates * ((hi - lo) / 2 / SURFACE_TOLERANCE) ** 2 - 1e-9))
                 how = (f": about {seeds} seeds per design point, {int(replicates)} now, would narrow the "
                        f"interval to +-{SURFACE_TOLERANCE:g} if the points scatter by their seeds alone")
-            notes.append(f"surface scatter: the response surface predicts {predicted:.2f} at its best "
+            which = f" ({model} model)" if model else ""
+            notes.append(f"surface scatter: the response surface{which} predicts {predicted:.2f} at its best "
                          f"set, {predicted - target:+.2f} from the target, but the 95 % confidence "
                          f"interval of its mean there, {lo:.2f} to {hi:.2f}, contains the target: the "
                          "design points' seed scatter leaves open whether the design region reaches "
@@ -225,7 +229,8 @@ def _verification_row(stage, case, rid, goal, targets, soil_data, cal, sel, pres
         status = "ok"
     ci = tuple(float(cal[f"{rid}_{k}"].iloc[0]) for k in ("ci_low", "ci_high")) \
         if len(cal) and f"{rid}_ci_low" in cal.columns else None
-    note = diagnose(mean, sd, n, target, pred, ci, design_replicates(soil_data)) if status == "ok" else ""
+    model = (stage.get("optimise") or {}).get("model", "reduced")
+    note = diagnose(mean, sd, n, target, pred, ci, design_replicates(soil_data), model) if status == "ok" else ""
     if status == "ok" and goal.get("goal") != "target":
         note = f"goal {goal.get('goal')}: no target value; the paper's verification is beside it"
     return {
