@@ -170,3 +170,21 @@ def test_progress_figure_of_a_minimised_response(tmp_path):
            "settings": {"p_verify": 0.5}}
     paths = adaptive_progress(runs, res, [(1, 0.7)], tmp_path / "m")
     assert all(p.stat().st_size > 0 for p in paths)
+
+
+def test_tolerance_bands_of_each_goal():
+    from soilcal.plots.adaptive import tolerance_band
+
+    assert tolerance_band({"value": 30.0, "tolerance": 0.6})[:2] == (29.4, 30.6)
+    assert tolerance_band({"value": 0.4, "tolerance": 0.1, "goal": "minimize"})[:2] == (0.4, 0.5)
+    lo, hi, label = tolerance_band({"value": 2.0, "tolerance": 0.5, "goal": "maximize"})
+    assert (lo, hi) == (1.5, 2.0) and label.startswith("maximize: best 2")
+
+
+def test_summary_of_a_minimised_response_has_a_best_level_and_no_target():
+    res = {"stage": "bbd", "case": "c", "status": "optimum verified", "runs": 22, "iterations": 3,
+           "message": "m", "problem": {"targets": {"y": {"value": 0.8, "tolerance": 0.1, "goal": "minimize"}}},
+           "verified": {"responses": {"y": {"mean": 0.83, "sd": 0.07, "n": 4, "error_pct": None, "within": True}}}}
+    (row,) = adaptive.summary_frame("s", [res]).to_dict("records")
+    assert row["goal"] == "minimize" and row["best_level"] == 0.8 and pd.isna(row["target"])
+    assert pd.isna(row["verification_rel_error_pct"]) and row["within_tolerance"]

@@ -477,7 +477,8 @@ def stage_files(soil_data: dict, stage_id: str, result_paths, region_paths, outp
     return write_stage(soil_data, stage_for(soil_data, stage_id, up), result_paths, region_paths, *outputs)
 
 
-SUMMARY_COLUMNS = ["soil", "stage", "case", "response", "goal", "target", "tolerance", "method", "runs", "iterations",
+SUMMARY_COLUMNS = ["soil", "stage", "case", "response", "goal", "target", "best_level", "tolerance", "method", "runs",
+                   "iterations",
                    "verified_mean", "verified_sd", "verified_n", "verification_rel_error_pct",
                    "within_tolerance", "stopped_because", "message"]
 
@@ -492,10 +493,14 @@ def summary_frame(soil: str, results: list[dict], excluded: list[dict] = ()) -> 
         for rid, t in r["problem"]["targets"].items():
             v = ver.get(rid, {})
             rows.append({"soil": soil, "stage": r["stage"], "case": r["case"], "response": rid,
-                         "goal": t.get("goal", "target"), "target": t["value"], "tolerance": t["tolerance"], "method": "adaptive",
+                         # a minimised (maximised) response has no target: the best level it was held to
+                         "goal": t.get("goal", "target"),
+                         "target": t["value"] if t.get("goal", "target") == "target" else None,
+                         "best_level": t["value"] if t.get("goal", "target") != "target" else None, "tolerance": t["tolerance"], "method": "adaptive",
                          "runs": r["runs"], "iterations": r["iterations"],
                          "verified_mean": v.get("mean"), "verified_sd": v.get("sd"), "verified_n": v.get("n"),
-                         "verification_rel_error_pct": v.get("error_pct"),
+                         "verification_rel_error_pct": v.get("error_pct") if t.get("goal", "target") == "target"
+                         else None,
                          "within_tolerance": v.get("within"), "stopped_because": r["status"],
                          "message": r["message"]})
     return pd.DataFrame(rows, columns=SUMMARY_COLUMNS)

@@ -81,7 +81,7 @@ tolerance ``tol`` (how much worse than the best a user accepts; required, a perc
 moving best has no meaning) and, at every iteration, the level y* it is held to: the lowest
 (highest) predicted mean over the candidates and the evaluated points, among those where the
 target goals are plausibly met (P of the target goals >= 1/2, or their largest P where none
-reaches it).  Its factor in P is one-sided, Phi((y* + tol - mu) / s) (for ``maximize``
+reaches it, or, where it underflows everywhere, the points closest to them).  Its factor in P is one-sided, Phi((y* + tol - mu) / s) (for ``maximize``
 Phi((mu - y* + tol) / s)): the probability that the point lies within tolerance of the best.
 Whether the box has been searched is the expected improvement beyond the tolerance,
 I(x) = E[max(y* - tol - f(x), 0)] = s (phi(z) + z Phi(z)), z = (y* - tol - mu) / s (Jones,
@@ -157,20 +157,33 @@ class Target:
     def optimised(self) -> bool:
         return self.goal != "target"
 
+    def _level(self) -> float:
+        if self.optimised and not math.isfinite(self.value):
+            raise InputError(self.response, "value", f"the best level of a goal {self.goal}, set by resolve() "
+                             "from the surrogates before it is used", self.value)
+        return self.value
+
+    def deviation(self, mu):
+        """How far ``mu`` lies from the target (both sides), or beyond the best level of a
+        minimised (maximised) response (negative where it is better)."""
+        mu = np.asarray(mu, float)
+        v = self._level()
+        if self.goal == "minimize":
+            return mu - v
+        if self.goal == "maximize":
+            return v - mu
+        return np.abs(mu - v)
+
     def miss(self, mu):
         """How far ``mu`` lies outside the tolerance band (<= 0 inside it), in the response's
         unit: both sides of a target, one side of the best level of a minimised (maximised)
         response."""
-        mu = np.asarray(mu, float)
-        if self.goal == "minimize":
-            return mu - self.value - self.tolerance
-        if self.goal == "maximize":
-            return self.value - self.tolerance - mu
-        return np.abs(mu - self.value) - self.tolerance
+        return self.deviation(mu) - self.tolerance
 
     def probability(self, mu, s):
         """The probability that the mean response lies within the band, given the prediction
         ``mu`` and its standard deviation ``s``."""
+        self._level()
         tol = self.tolerance
         if self.goal == "minimize":
             return stats.norm.cdf((self.value + tol - mu) / s)
@@ -184,6 +197,7 @@ class Target:
         0 for a target goal."""
         if not self.optimised:
             return np.zeros_like(np.asarray(mu, float))
+        self._level()
         gain = (self.value - self.tolerance - mu) if self.goal == "minimize" else (mu - self.value - self.tolerance)
         z = gain / s
         return s * (stats.norm.pdf(z) + z * stats.norm.cdf(z))
@@ -452,15 +466,21 @@ def consistency(problem: Problem, surrogates: dict, xc: np.ndarray) -> tuple[np.
 def resolve(problem: Problem, surrogates: dict, xc: np.ndarray) -> Problem:
     """The problem with every minimised (maximised) response's best level set (module
     docstring: the lowest (highest) predicted mean over the coded points ``xc`` where the
-    target goals are plausibly met); a problem of targets only is returned as it is."""
+    target goals are plausibly met, or, where their P vanishes everywhere, closest to them); a
+    problem of targets only is returned as it is."""
     if not any(t.optimised for t in problem.targets):
         return problem
     p_t = np.ones(len(xc))
+    short = np.zeros(len(xc))
     for t in problem.targets:
         if not t.optimised:
             mu, s = surrogates[t.response].predict(xc)
-            p_t *= t.probability(mu, np.maximum(s, 1e-12))
-    mask = p_t >= min(0.5, float(p_t.max()))
+            s = np.maximum(s, 1e-12)
+            p_t *= t.probability(mu, s)
+            short -= (np.maximum(t.miss(mu), 0.0) / s) ** 2
+    # where P of the targets underflows everywhere, the points closest to them (in standard
+    # deviations beyond their tolerances) stand in for the plausible ones
+    mask = p_t >= min(0.5, float(p_t.max())) if p_t.max() > 0 else short >= short.max()
     out = []
     for t in problem.targets:
         if t.optimised:
@@ -495,8 +515,9 @@ def target_probability(problem: Problem, pred: dict) -> np.ndarray:
 
 
 def shortfall(problem: Problem, pred: dict) -> np.ndarray:
-    """-sum_j (max(|mu_j - t_j| - tol_j, 0) / s_j)^2: how far each point's predictions fall
-    short of the targets, in predictive standard deviations (0 where all lie within)."""
+    """-sum_j (max(miss_j(mu_j), 0) / s_j)^2 (:meth:`Target.miss`: |mu_j - t_j| - tol_j for a
+    target, mu_j - y*_j - tol_j for a minimised response): how far each point's predictions fall
+    short of their bands, in predictive standard deviations (0 where all lie within)."""
     out = 0.0
     for t in problem.targets:
         mu, sd = pred[t.response]
@@ -627,8 +648,7 @@ def _verified(problem: Problem, runs: pd.DataFrame, settings: Settings) -> dict 
         return None
 
     def worst(g):
-        e = [(float(t.miss(np.nanmean(g[t.response].to_numpy(float)))) + t.tolerance) / t.tolerance
-             for t in problem.targets]
+        e = [float(t.deviation(np.nanmean(g[t.response].to_numpy(float)))) / t.tolerance for t in problem.targets]
         return max(e) if all(np.isfinite(e)) else math.inf
 
     pid = min(ver["point"].unique(), key=lambda p: (worst(ver[ver["point"] == p]), p))
@@ -643,7 +663,9 @@ def _verified(problem: Problem, runs: pd.DataFrame, settings: Settings) -> dict 
         ok = bool(v.size >= settings.verify_seeds and np.isfinite(mean) and t.miss(mean) <= 0)
         out["responses"][t.response] = {"target": t.value, "goal": t.goal, "tolerance": t.tolerance, "mean": mean,
                                         "sd": sd, "n": int(v.size),
-                                        "error_pct": 100 * (mean - t.value) / abs(t.value) if t.value else np.nan,
+                                        # against a target only: a best level is the surrogate's, not a measurement
+                                        "error_pct": 100 * (mean - t.value) / abs(t.value)
+                                        if t.value and not t.optimised else np.nan,
                                         "within": ok}
         out["met"] &= ok
     return out
@@ -696,9 +718,9 @@ def step(problem: Problem, runs: pd.DataFrame, settings: Settings, iteration: in
         optimised = any(t.optimised for t in problem.targets)
         return Step(iteration, "optimum verified" if optimised else "target met",
                     f"the verified mean of point {verified['point']} is within tolerance of every target"
-                    + (" and of the best predicted level of every optimised response, and no point of the box "
-                       f"is expected to improve on it by more than its tolerance (largest expected improvement "
-                       f"{searched:.2g} tolerances)" if optimised else ""),
+                    + (" and of the best predicted level of every optimised response; the largest expected "
+                       f"improvement beyond the tolerance on that level is {searched:.2g} tolerances "
+                       f"(<= {settings.improvement_stop:g})" if optimised else ""),
                     no_runs, scores, best, region, verified,
                     surrogates, problem, searched)
     # unreachable: no point of the box is plausibly consistent, and the closest reachable

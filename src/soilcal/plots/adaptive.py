@@ -20,6 +20,18 @@ from soilcal.plots.figures import _figure, save_figure
 MARKERS = {"start": ("s", "0.45"), "proposal": ("o", "C0"), "verification": ("D", "C3")}
 
 
+def tolerance_band(t: dict) -> tuple[float, float, str]:
+    """The band a response's runs aim at, from a record's ``problem.targets`` entry: target
+    +- tolerance, or from the best level up (``minimize``) or down (``maximize``) by the
+    tolerance; and its legend label."""
+    goal, v, tol = t.get("goal", "target"), float(t["value"]), float(t["tolerance"])
+    if goal == "minimize":
+        return v, v + tol, f"minimize: best {v:.4g}, tolerance {tol:.2g}"
+    if goal == "maximize":
+        return v - tol, v, f"maximize: best {v:.4g}, tolerance {tol:.2g}"
+    return v - tol, v + tol, f"target {v:.4g} +- {tol:.2g}"
+
+
 def adaptive_progress(runs: pd.DataFrame, result: dict, best_p: list[tuple[int, float]], stem) -> list[Path]:
     targets = result["problem"]["targets"]
     missing = [r for r in targets if r not in runs.columns]
@@ -30,12 +42,7 @@ def adaptive_progress(runs: pd.DataFrame, result: dict, best_p: list[tuple[int, 
     axes = [fig.add_subplot(n + 1, 1, i + 1) for i in range(n + 1)]
     x = np.arange(1, len(runs) + 1)
     for ax, (rid, t) in zip(axes, targets.items()):
-        goal = t.get("goal", "target")
-        lo, hi = t["value"] - t["tolerance"], t["value"] + t["tolerance"]
-        label = f"target {t['value']:.4g} +- {t['tolerance']:.2g}"
-        if goal != "target":  # the best level the design reached, and how much worse is accepted
-            lo, hi = (t["value"], hi) if goal == "minimize" else (lo, t["value"])
-            label = f"{goal}: best {t['value']:.4g}, tolerance {t['tolerance']:.2g}"
+        lo, hi, label = tolerance_band(t)
         ax.axhspan(lo, hi, color="0.85", zorder=0, label=label)
         ax.axhline(t["value"], color="0.4", lw=1, zorder=1)
         for kind, (m, c) in MARKERS.items():
