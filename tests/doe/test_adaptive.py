@@ -406,3 +406,56 @@ def test_resolve_holds_the_least_prediction_where_the_targets_are_plausible():
     # a best level used before it is set is an error, not a NaN
     with pytest.raises(InputError, match="best level"):
         prob.targets[0].probability(np.array([1.0]), np.array([0.1]))
+
+
+# --------------------------------------------------------------------------- cases sharing runs
+
+THREE_LINES = {c: ad.Problem(LINEAR.factors, [ad.Target("y", v, tol=0.2)], fixed=LINEAR.fixed)
+               for c, v in (("lo", 9.0), ("mid", 11.0), ("hi", 13.0))}
+
+
+@pytest.mark.parametrize("seed", range(3))
+def test_cases_sharing_their_runs_meet_every_target_with_fewer_runs(seed):
+    # three targets on one linear response: every case verifies a point on its own line
+    # 3a + 2b = t - 10, and the three together spend fewer runs than three separate designs
+    settings = ad.Settings(seed=seed, budget=40)
+    shared = ad.run_shared(THREE_LINES, noisy(linear, 0.05), settings)
+    separate = [ad.run(p, noisy(linear, 0.05), ad.case_settings(settings, i))[0]
+                for i, p in enumerate(THREE_LINES.values())]
+    for c, (runs, st) in shared.items():
+        assert st.status == "target met", (c, st.message)
+        t = THREE_LINES[c].targets[0].value
+        assert abs(linear(st.verified["levels"])["y"] - t) <= 0.2 + 3 * 0.025
+    assert sum(len(r) for r, _ in shared.values()) < sum(len(r) for r in separate)
+    # only the first case ran the start; no seed is used twice
+    assert (shared["lo"][0]["kind"] == "start").sum() == 8
+    assert all((r["kind"] != "start").all() for c, (r, _) in shared.items() if c != "lo")
+    seeds = pd.concat([r["seed"] for r, _ in shared.values()])
+    assert seeds.is_unique
+
+
+def test_shared_rows_are_evidence_under_their_own_points():
+    prob = ad.Problem([ad.Factor("a", 0, 1)], [ad.Target("y", 1.0, tol=0.1), ad.Target("z", 2.0, tol=0.1)])
+    sib = pd.DataFrame({"iteration": [0, 0, 0], "kind": ["start", "start", "verification"], "point": [0, 0, 0],
+                        "seed": [1, 2, 3], "a": [0.5, 0.5, 0.5], "y": [1.0, 1.1, 0.9], "case": ["b", "b", "c"]})
+    rows = ad.shared_rows(prob, sib)
+    # (b, 0) and (c, 0) are two points, neither of them point 0 of this case
+    assert rows["point"].tolist() == [-1, -1, -2] and (rows["kind"] == "shared").all()
+    assert rows["z"].isna().all()  # a response the siblings did not simulate
+
+
+def test_a_case_waits_for_the_first_cases_start_then_fits_to_it():
+    p = THREE_LINES["mid"]
+    s = ad.case_settings(ad.Settings(seed=0), 1)
+    st0 = ad.step(p, ad.empty_runs(p), s, 0, shared=None, wait_for_start=True)
+    assert st0.status == "continue" and st0.runs.empty
+    first = THREE_LINES["lo"]
+    start = ad.step(first, ad.empty_runs(first), ad.Settings(seed=0), 0).runs
+    start = ad._evaluated(first, start, noisy(linear, 0.05)).assign(case="lo")
+    st1 = ad.step(p, ad.empty_runs(p), s, 1, shared=start, wait_for_start=True)
+    assert st1.status == "continue" and (st1.runs["kind"] != "start").all()
+    assert int(st1.surrogates["points"].iloc[0]) == 7  # the first case's 7 start points
+    assert st1.runs["seed"].min() == 100_000  # its own seed stream
+    other = ad.Problem([ad.Factor("a", -1, 1)], [ad.Target("y", 1.0, tol=0.1)])
+    with pytest.raises(InputError, match="factors"):
+        ad.run_shared({"x": first, "y": other}, noisy(linear, 0.05), ad.Settings())

@@ -597,8 +597,17 @@ def _adaptive_common(soil, stage):
 
 
 def adaptive_step_inputs(w):
+    """The case's own earlier iterations and, where the stage's cases share their runs, the
+    sibling cases' iterations before this one (every case decides iteration k from all runs of
+    the iterations before k)."""
     steps, runs = adaptive_history(w.soil, w.stage, w.case, int(w.it))
-    return dict(_adaptive_common(w.soil, w.stage), steps=steps, runs=runs)
+    shared_steps, shared_runs = [], []
+    for c in adaptive.sibling_cases(soil_cfg(w.soil), w.stage, w.case):
+        st, rn = adaptive_history(w.soil, w.stage, c, int(w.it))
+        shared_steps += st
+        shared_runs += rn
+    return dict(_adaptive_common(w.soil, w.stage), steps=steps, runs=runs, shared_steps=shared_steps,
+                shared_runs=shared_runs)
 
 
 def adaptive_case_inputs(w):

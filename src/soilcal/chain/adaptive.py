@@ -20,6 +20,11 @@ each iteration; this module turns its decisions into files and DEM point specs:
   soil ``verification.csv`` from the verified point's own runs, all under
   ``results/<soil>/dem/adaptive/`` with the recipe's file names.
 
+The cases of a stage share their runs (``simulation.adaptive.share_runs``, default true): the
+step of case c at iteration k reads, besides its own, the step records and runs of its sibling
+cases' iterations before k (:func:`shared_runs`), so the cases advance in lockstep and only the
+first runs the start (:mod:`soilcal.doe.adaptive`, "Cases that share their runs").
+
 Settings: the soil's ``simulation.adaptive`` block (:data:`soilcal.doe.adaptive.DEFAULTS`;
 ``tolerance_pct`` default 2 %, ``tolerances`` per response), the soil's ``seed``.
 """
@@ -200,12 +205,43 @@ def problem_for(soil_data: dict, stage: dict, case_id: str, targets: dict, sourc
     return ad.Problem(factors, tgts, fixed=dict(stage.get("fixed") or {}), source=where)
 
 
-def settings_for(soil_data: dict) -> ad.Settings:
+def settings_for(soil_data: dict, stage_id: str | None = None, case_id: str | None = None) -> ad.Settings:
+    """The design's settings; with the stage and case of a stage whose cases share their runs
+    (:func:`shares_runs`), that case's own seed stream (:func:`soilcal.doe.adaptive.case_settings`)."""
     block = settings_block(soil_data)
     block.pop("tolerances", None)
     block.pop("ranges", None)  # read by stage_for
-    return ad.Settings.from_mapping(block, seed=int(soil_data.get("seed", 0)),
-                                    source=f"{soil_data.get('name', '<soil>')}: simulation")
+    block.pop("share_runs", None)  # read by shares_runs
+    s = ad.Settings.from_mapping(block, seed=int(soil_data.get("seed", 0)),
+                                 source=f"{soil_data.get('name', '<soil>')}: simulation")
+    if stage_id is not None and case_id is not None and shares_runs(soil_data):
+        s = ad.case_settings(s, case_index(soil_data, stage_id, case_id))
+    return s
+
+
+def shares_runs(soil_data: dict) -> bool:
+    """Whether the cases of a stage share their runs (``simulation.adaptive.share_runs``,
+    default true; :mod:`soilcal.doe.adaptive`, "Cases that share their runs")."""
+    v = settings_block(soil_data).get("share_runs", True)
+    if not isinstance(v, bool):
+        raise InputError(soil_data.get("name", "<soil>"), "simulation.adaptive.share_runs", "true or false", v)
+    return v
+
+
+def case_index(soil_data: dict, stage_id: str, case_id: str) -> int:
+    """The position of a case among its stage's cases the design runs."""
+    ids = [c for _, c in adaptive_cases(soil_data, [stage_id])]
+    if case_id not in ids:
+        raise InputError(f"{soil_data.get('name', '<soil>')}: stage {stage_id}", "optimise.cases",
+                         f"a case the adaptive design runs ({', '.join(ids)})", case_id)
+    return ids.index(case_id)
+
+
+def sibling_cases(soil_data: dict, stage_id: str, case_id: str) -> list[str]:
+    """The other cases of the stage whose runs this case shares (none when sharing is off)."""
+    if not shares_runs(soil_data):
+        return []
+    return [c for _, c in adaptive_cases(soil_data, [stage_id]) if c != case_id]
 
 
 # --------------------------------------------------------------------------- runs on disk
@@ -280,20 +316,49 @@ def step_record(problem: ad.Problem, settings: ad.Settings, st: ad.Step) -> dict
                    "settings": {k: getattr(settings, k) for k in settings.__dataclass_fields__}})
 
 
+def _case_of(path) -> str:
+    """The case directory a step record or run file of ``<case>/step/<it>.json`` or
+    ``<case>/runs/<it>/<k>.csv`` lies in."""
+    p = Path(path)
+    return p.parent.parent.name if p.parent.name == "step" else p.parent.parent.parent.name
+
+
+def shared_runs(soil_data: dict, stage: dict, targets: dict, step_paths, run_paths) -> pd.DataFrame | None:
+    """The runs of the sibling cases (their step records and run files, any iterations), one
+    frame with a ``case`` column, or None when there are none."""
+    steps: dict[str, list] = {}
+    runs: dict[str, list] = {}
+    for p in step_paths:
+        steps.setdefault(_case_of(p), []).append(json.loads(Path(p).read_text()))
+    for p in run_paths:
+        runs.setdefault(_case_of(p), []).append(p)
+    frames = []
+    for case, recs in steps.items():
+        recs.sort(key=lambda d: d["iteration"])
+        df = read_runs(problem_for(soil_data, stage, case, targets), recs, runs.get(case, []))
+        if len(df):
+            frames.append(df.assign(case=case))
+    return pd.concat(frames, ignore_index=True) if frames else None
+
+
 def write_step(soil_data: dict, stage: dict, case_id: str, targets: dict, iteration: int,
-               step_paths, run_paths, out) -> dict:
-    """Decide iteration ``iteration`` from the earlier steps and their runs; write its record."""
+               step_paths, run_paths, out, shared_step_paths=(), shared_run_paths=()) -> dict:
+    """Decide iteration ``iteration`` from the earlier steps and their runs (and, where the
+    stage's cases share their runs, the sibling cases' steps and runs); write its record."""
     from soilcal.atomic import write_text
 
     problem = problem_for(soil_data, stage, case_id, targets)
-    settings = settings_for(soil_data)
+    settings = settings_for(soil_data, stage["id"], case_id)
     steps = [json.loads(Path(p).read_text()) for p in step_paths]
     steps.sort(key=lambda d: d["iteration"])
     if [d["iteration"] for d in steps] != list(range(iteration)):
         raise InputError(out, "iteration", f"the records of iterations 0..{iteration - 1}",
                          [d["iteration"] for d in steps])
     runs = read_runs(problem, steps, run_paths)
-    st = ad.step(problem, runs, settings, iteration)
+    sharing = shares_runs(soil_data)
+    shared = shared_runs(soil_data, stage, targets, shared_step_paths, shared_run_paths) if sharing else None
+    st = ad.step(problem, runs, settings, iteration, shared=shared,
+                 wait_for_start=sharing and case_index(soil_data, stage["id"], case_id) > 0)
     rec = step_record(problem, settings, st)
     write_text(out, json.dumps(rec, indent=1) + "\n")
     return rec
@@ -459,9 +524,10 @@ def _inputs(soil_data, stage_id, targets_csv, upstream_csv):
 
 
 def step_files(soil_data: dict, stage_id: str, case_id: str, iteration: int, targets_csv, step_paths,
-               run_paths, out, upstream_csv=None) -> dict:
+               run_paths, out, upstream_csv=None, shared_step_paths=(), shared_run_paths=()) -> dict:
     stage, targets = _inputs(soil_data, stage_id, targets_csv, upstream_csv)
-    return write_step(soil_data, stage, case_id, targets, iteration, step_paths, run_paths, out)
+    return write_step(soil_data, stage, case_id, targets, iteration, step_paths, run_paths, out,
+                      shared_step_paths, shared_run_paths)
 
 
 def case_files(soil_data: dict, stage_id: str, case_id: str, targets_csv, step_paths, run_paths, outputs,
@@ -537,5 +603,5 @@ def figure_files(soil: str, verification_csv, case_dirs, out_dir) -> list[Path]:
     return paths
 
 
-__all__ = ["SUMMARY_COLUMNS", "figure_files", "adaptive_cases", "excluded_cases", "case_files", "stage_files", "step_files", "summary_frame", "verification_files", "optimum_frame", "point_spec", "problem_for", "read_runs", "settings_for",
+__all__ = ["case_index", "shares_runs", "shared_runs", "sibling_cases", "SUMMARY_COLUMNS", "figure_files", "adaptive_cases", "excluded_cases", "case_files", "stage_files", "step_files", "summary_frame", "verification_files", "optimum_frame", "point_spec", "problem_for", "read_runs", "settings_for",
            "stage_for", "step_record", "write_case", "write_stage", "write_step", "write_verification"]

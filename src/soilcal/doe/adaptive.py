@@ -73,6 +73,17 @@ The answer is a set: the candidates with P > 1/2 form the consistent region; eac
 range and spread over it, and the factors the data do not pin down (spread over more than half
 of their range) are reported with it.
 
+Cases that share their runs
+--------------------------
+The cases of one stage (the vineyard soil's three layers, the cohesive soil's moistures) aim
+different targets at the same simulated responses over the same factors, so every run of one
+case is evidence for the others: with ``shared`` (:func:`step`; :func:`run_shared` in one
+process) a case's surrogates are fitted to its own runs and those of its sibling cases (kind
+``shared``), and its proposals keep ``separation`` from them too, while its budget, its
+verifications and its stopping rule count its own runs only.  Only the first case runs the
+start design (the others wait for it at iteration 0); each case draws its seeds from its own
+stream (:func:`case_settings`), so no two cases repeat a seed.
+
 Goals without a target value (``minimize``, ``maximize``)
 ---------------------------------------------------------
 A response whose goal is to be as small (large) as the box allows, such as a discrepancy
@@ -671,18 +682,57 @@ def _verified(problem: Problem, runs: pd.DataFrame, settings: Settings) -> dict 
     return out
 
 
-def step(problem: Problem, runs: pd.DataFrame, settings: Settings, iteration: int) -> Step:
+#: seeds of case i of a stage start at ``settings.seed + SEED_STRIDE * i`` (:func:`case_settings`)
+SEED_STRIDE = 100_000
+
+
+def case_settings(settings: Settings, index: int) -> Settings:
+    """The settings of the ``index``-th case of a stage whose cases share their runs: its own
+    seed stream (the first case keeps the stage's)."""
+    from dataclasses import replace
+
+    return replace(settings, seed=int(settings.seed) + SEED_STRIDE * int(index))
+
+
+def shared_rows(problem: Problem, shared: pd.DataFrame | None) -> pd.DataFrame:
+    """The sibling cases' runs as data for this case: kind ``shared``, one negative point id per
+    (case, point) so they never merge with this case's points, NaN for a response a sibling
+    did not simulate."""
+    cols = [*RUN_KEYS, *problem.names, *problem.responses]
+    if shared is None or not len(shared):
+        return pd.DataFrame(columns=cols)
+    df = shared.copy()
+    for r in problem.responses:
+        if r not in df.columns:
+            df[r] = np.nan
+    key = (df["case"].astype(str) if "case" in df.columns else pd.Series("", index=df.index)) \
+        + "/" + df["point"].astype(int).astype(str)
+    ids = {k: -(i + 1) for i, k in enumerate(dict.fromkeys(key))}
+    df["point"] = [ids[k] for k in key]
+    df["kind"] = "shared"
+    return df[cols].reset_index(drop=True)
+
+
+def step(problem: Problem, runs: pd.DataFrame, settings: Settings, iteration: int,
+         shared: pd.DataFrame | None = None, wait_for_start: bool = False) -> Step:
     """The design's decision after ``runs`` (all runs with their responses; empty before the
-    start): the runs of iteration ``iteration`` or a stop (module docstring)."""
+    start): the runs of iteration ``iteration`` or a stop (module docstring).  ``shared``: the
+    runs of the stage's sibling cases (a ``case`` column names each one's case), evidence for
+    the surrogates only; ``wait_for_start``: a case that is not its stage's first runs no start
+    of its own but waits, at iteration 0, for the first case's."""
     d = len(problem.factors)
     runs = runs if len(runs) else empty_runs(problem)
     missing = [r for r in problem.responses if r not in runs.columns]
     if missing:
         raise InputError(problem.source, f"runs.{missing[0]}", "a column for every response", "missing")
+    shared = shared_rows(problem, shared)
     next_point = int(runs["point"].max()) + 1 if len(runs) else 0
     next_seed = int(runs["seed"].max()) + 1 if len(runs) else settings.seed
     empty_region = consistent_region(problem, np.empty((0, d)), np.empty(0))
-    if runs.empty:
+    if runs.empty and shared.empty and wait_for_start:
+        return Step(iteration, "continue", "start: the stage's first case runs it; no runs of its own",
+                    empty_runs(problem)[[*RUN_KEYS, *problem.names]], pd.DataFrame(), None, empty_region)
+    if runs.empty and shared.empty:
         xc = start_points(problem, settings)
         kinds = ["start"] * len(xc)
         reps = [settings.centre_replicates] + [1] * (len(xc) - 1)
@@ -690,7 +740,8 @@ def step(problem: Problem, runs: pd.DataFrame, settings: Settings, iteration: in
         return Step(iteration, "continue", f"start: {len(xc)} points, {len(new)} runs", new,
                     pd.DataFrame(), None, empty_region)
     spent = len(runs)
-    points = point_table(problem, runs)
+    data = pd.concat([runs, shared], ignore_index=True) if len(shared) else runs
+    points = point_table(problem, data)
     surrogates, scores = fit_surrogates(problem, points, settings.seed + iteration)
     cand = halton(d, settings.n_candidates, settings.seed + 7919 * iteration)
     xe = problem.to_coded(points[problem.names].to_numpy(float))
@@ -728,7 +779,7 @@ def step(problem: Problem, runs: pd.DataFrame, settings: Settings, iteration: in
     if near is not None:
         far = [t for t in problem.targets if not t.optimised
                and abs(near["values"][t.response] - t.value) > t.tolerance + 2.0 * near["sd"][t.response]
-               and _beyond_data(runs, points, t)]
+               and _beyond_data(data, points, t)]
         # only after a batch of proposals aimed at the target has been run
         if far and (runs["kind"] == "proposal").any():
             at = _where(problem, near["actual"])
@@ -870,20 +921,60 @@ def run(problem: Problem, evaluate, settings: Settings, runs: pd.DataFrame | Non
         st = step(problem, runs, settings, iteration)
         if st.status != "continue":
             return runs, st
-        new = st.runs.copy()
-        for r in problem.responses:
-            new[r] = np.nan
-        for i, row in new.iterrows():
-            levels = {n: float(row[n]) for n in problem.names} | dict(problem.fixed)
-            out = evaluate(levels, int(row["seed"]))
-            for r in problem.responses:
-                new.at[i, r] = float(out.get(r, np.nan))
+        new = _evaluated(problem, st.runs, evaluate)
         runs = pd.concat([runs, new], ignore_index=True) if len(runs) else new
         if on_iteration is not None:
             on_iteration(st, runs)
         iteration += 1
 
 
+def _evaluated(problem: Problem, new: pd.DataFrame, evaluate) -> pd.DataFrame:
+    """The runs ``new`` with their responses from ``evaluate`` (:func:`run`)."""
+    new = new.copy()
+    for r in problem.responses:
+        new[r] = np.nan
+    for i, row in new.iterrows():
+        levels = {n: float(row[n]) for n in problem.names} | dict(problem.fixed)
+        out = evaluate(levels, int(row["seed"]))
+        for r in problem.responses:
+            new.at[i, r] = float(out.get(r, np.nan))
+    return new
+
+
+def run_shared(problems: dict[str, Problem], evaluate, settings: Settings) -> dict[str, tuple[pd.DataFrame, Step]]:
+    """Drive the cases of one stage in one process, sharing their runs (module docstring), in
+    lockstep as the workflow runs them: every case decides iteration k from all runs of the
+    iterations before k.  ``problems``: case id -> problem, in the stage's order; returns case
+    id -> (its own runs, its final step)."""
+    names = list(problems)
+    first = problems[names[0]]
+    for c in names[1:]:
+        if problems[c].names != first.names or problems[c].fixed != first.fixed:
+            raise InputError(problems[c].source, "factors", "the same factors and fixed values as the stage's "
+                             f"other cases ({', '.join(first.names)})", problems[c].names)
+    own = {c: empty_runs(problems[c]) for c in names}
+    final: dict[str, Step] = {}
+    iteration = 0
+    while len(final) < len(names):
+        decided = {}
+        for i, c in enumerate(names):
+            if c in final:
+                continue
+            others = [own[o].assign(case=o) for o in names if o != c and len(own[o])]
+            shared = pd.concat(others, ignore_index=True) if others else None
+            st = step(problems[c], own[c], case_settings(settings, i), iteration, shared=shared,
+                      wait_for_start=i > 0)
+            decided[c] = st
+        for c, st in decided.items():
+            if st.status != "continue":
+                final[c] = st
+            elif len(st.runs):
+                new = _evaluated(problems[c], st.runs, evaluate)
+                own[c] = pd.concat([own[c], new], ignore_index=True) if len(own[c]) else new
+        iteration += 1
+    return {c: (own[c], final[c]) for c in names}
+
+
 __all__ = ["DEFAULTS", "GOALS", "Factor", "Problem", "Settings", "Step", "Target", "consistency",
-           "consistent_region", "empty_runs", "fit_surrogates", "improvement", "point_table", "resolve", "run",
-           "start_points", "step"]
+           "SEED_STRIDE", "case_settings", "consistent_region", "empty_runs", "fit_surrogates", "improvement",
+           "point_table", "resolve", "run", "run_shared", "shared_rows", "start_points", "step"]
