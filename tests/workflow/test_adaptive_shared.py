@@ -11,7 +11,7 @@ import pandas as pd
 import pytest
 import yaml
 
-from wfutil import copy_workflow, planned_jobs, run
+from wfutil import adaptive_copy, planned_jobs, run
 
 SOIL = "guangxi-cohesive"
 CASES = ["mc00", "mc10", "mc20"]
@@ -25,12 +25,7 @@ N_SPHERES = 1500
 
 @pytest.fixture(scope="module")
 def wf(tmp_path_factory):
-    tmp = copy_workflow(tmp_path_factory.mktemp("adaptive_shared"), [SOIL])
-    p = tmp / f"config/soils/{SOIL}.yaml"
-    d = yaml.safe_load(p.read_text())
-    d["simulation"]["responses"]["angle_of_repose"]["set"] = {"n_particles": N_SPHERES}
-    d["simulation"]["adaptive"] = {"budget": BUDGET}
-    p.write_text(yaml.safe_dump(d, sort_keys=False))
+    tmp = adaptive_copy(tmp_path_factory.mktemp("adaptive_shared"), SOIL, "angle_of_repose", N_SPHERES, BUDGET)
     run(tmp, "--cores", "2", "--config", "design=adaptive")
     return tmp
 

@@ -9,7 +9,7 @@ import pandas as pd
 import pytest
 import yaml
 
-from wfutil import N_SPHERES, copy_workflow, planned_jobs, run
+from wfutil import N_SPHERES, adaptive_copy, planned_jobs, run
 
 SOIL = "cinnamon-soil"
 CASE = f"results/{SOIL}/dem/adaptive/bbd/stacking_angle"
@@ -18,12 +18,7 @@ BUDGET = 10  # the start (7 points, the centre twice: 8 runs) and one iteration 
 
 @pytest.fixture(scope="module")
 def wf(tmp_path_factory):
-    tmp = copy_workflow(tmp_path_factory.mktemp("adaptive"), [SOIL])
-    p = tmp / f"config/soils/{SOIL}.yaml"
-    d = yaml.safe_load(p.read_text())
-    d["simulation"]["responses"]["stacking_angle"]["set"] = {"n_particles": N_SPHERES}
-    d["simulation"]["adaptive"] = {"budget": BUDGET}
-    p.write_text(yaml.safe_dump(d, sort_keys=False))
+    tmp = adaptive_copy(tmp_path_factory.mktemp("adaptive"), SOIL, "stacking_angle", N_SPHERES, BUDGET)
     # first only up to the decision of iteration 1 (the start's runs are done by then), as a
     # run killed after its first iteration leaves it
     run(tmp, "--cores", "2", f"{CASE}/step/1.json", "--config", "design=adaptive")
