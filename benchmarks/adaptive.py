@@ -56,11 +56,11 @@ def recipe_rows(wd: Path, soil: str) -> list[dict]:
     runs += len(list(d.glob("verify/*/*/*/*.csv"))) + len(list(d.glob("refine/*/*/*.csv")))
     ver = pd.read_csv(d / "verification.csv")
     rows = []
+    goals = {(st["id"], c["id"], rid): g.get("goal", "target") for st in _stages(wd, soil)
+             for c in (st.get("optimise") or {}).get("cases", []) for rid, g in c["goals"].items()}
     for (stage, case, resp), g in ver.groupby(["stage", "case", "response"], sort=False):
         last = g[g["round"] == g["round"].max()].iloc[0]
-        goal = ((next((c for st in _stages(wd, soil) if st["id"] == stage
-                       for c in (st.get("optimise") or {}).get("cases", []) if c["id"] == case), {})
-                 .get("goals") or {}).get(resp) or {}).get("goal", "target")
+        goal = goals.get((stage, case, resp), "target")
         rows.append({"soil": soil, "stage": stage, "case": case, "target": resp, "method": "recipe",
                      "goal": goal, "verified_mean": last["simulated_mean"], "verified_sd": last["simulated_sd"],
                      "runs": runs, "verification_rel_error_pct": last["relative_error_percent"],

@@ -56,7 +56,7 @@ def _why_not(soil_data: dict, case: dict) -> str:
     (``simulation.adaptive.tolerances.<response>.abs``)."""
     tols = settings_block(soil_data).get("tolerances") or {}
     for rid, g in case["goals"].items():
-        if g.get("goal") in ("minimize", "maximize"):
+        if g.get("goal") in ad.OPTIMISED_GOALS:
             if (tols.get(rid) or {}).get("abs") is None:
                 return (f"{rid}: goal {g.get('goal')} needs an absolute tolerance, "
                         f"simulation.adaptive.tolerances.{rid}.abs (how much worse than the best is acceptable)")
@@ -181,7 +181,7 @@ def problem_for(soil_data: dict, stage: dict, case_id: str, targets: dict, sourc
     per = block.get("tolerances") or {}
     tgts = []
     for rid, goal in _case(stage, case_id)["goals"].items():
-        if goal.get("goal") in ("minimize", "maximize"):
+        if goal.get("goal") in ad.OPTIMISED_GOALS:
             tol = (per.get(rid) or {}).get("abs")
             if tol is None:
                 raise InputError(where, f"simulation.adaptive.tolerances.{rid}.abs",
@@ -558,15 +558,15 @@ def summary_frame(soil: str, results: list[dict], excluded: list[dict] = ()) -> 
         ver = (r.get("verified") or {}).get("responses") or {}
         for rid, t in r["problem"]["targets"].items():
             v = ver.get(rid, {})
+            # a minimised (maximised) response has no target: the best level it was held to, and
+            # no relative error (records written before the design left it empty carry one)
+            aimed = t.get("goal", "target") == "target"
             rows.append({"soil": soil, "stage": r["stage"], "case": r["case"], "response": rid,
-                         # a minimised (maximised) response has no target: the best level it was held to
-                         "goal": t.get("goal", "target"),
-                         "target": t["value"] if t.get("goal", "target") == "target" else None,
-                         "best_level": t["value"] if t.get("goal", "target") != "target" else None, "tolerance": t["tolerance"], "method": "adaptive",
-                         "runs": r["runs"], "iterations": r["iterations"],
+                         "goal": t.get("goal", "target"), "target": t["value"] if aimed else None,
+                         "best_level": None if aimed else t["value"], "tolerance": t["tolerance"],
+                         "method": "adaptive", "runs": r["runs"], "iterations": r["iterations"],
                          "verified_mean": v.get("mean"), "verified_sd": v.get("sd"), "verified_n": v.get("n"),
-                         "verification_rel_error_pct": v.get("error_pct") if t.get("goal", "target") == "target"
-                         else None,
+                         "verification_rel_error_pct": v.get("error_pct") if aimed else None,
                          "within_tolerance": v.get("within"), "stopped_because": r["status"],
                          "message": r["message"]})
     return pd.DataFrame(rows, columns=SUMMARY_COLUMNS)

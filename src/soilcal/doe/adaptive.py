@@ -128,6 +128,8 @@ DEFAULTS = dict(n_start=None, centre_replicates=2, batch=2, budget=60, verify_se
                 n_candidates=4096, max_iterations=50, improvement_stop=0.1)
 #: the goals a response can have: a target value, or as small / as large as the box allows
 GOALS = ("target", "minimize", "maximize")
+#: the goals without a target value
+OPTIMISED_GOALS = GOALS[1:]
 #: factors whose spread over the consistent region exceeds this share of their range are
 #: "not pinned down"
 UNPINNED_SHARE = 0.5
@@ -166,7 +168,7 @@ class Target:
 
     @property
     def optimised(self) -> bool:
-        return self.goal != "target"
+        return self.goal in OPTIMISED_GOALS
 
     def _level(self) -> float:
         if self.optimised and not math.isfinite(self.value):
