@@ -19,8 +19,17 @@ Rows go to ``benchmarks/results/adaptive.csv``
 (``soil,target,method,runs,verification_rel_error_pct,stopped_because`` and context columns);
 ``adaptive.md`` is the page.  A (soil, method) run replaces that pair's earlier rows.
 
+The adaptive design's best verified set after every iteration against the runs spent
+(``soilcal.chain.adaptive.progress_frame`` of its step records) goes to
+``adaptive_progress.csv``; per soil, stage and case, ``adaptive/<soil>_<stage>_<case>.png``
+draws that curve with the other methods' verified sets as points at their run counts
+(``soilcal.plots.adaptive.error_against_runs``).  ``--progress-from W`` reads the curves of
+the soils given from an earlier run's workdir ``W`` (``W/<soil>-adaptive``), taking the time and
+commit of that soil's adaptive rows.
+
     python benchmarks/adaptive.py --soils cinnamon-soil
     python benchmarks/adaptive.py --soils cinnamon-soil --methods adaptive
+    python benchmarks/adaptive.py --soils yangtze-clay-loam --progress-from /tmp/soilcal-adaptive-bench
     python benchmarks/adaptive.py --report-only
 """
 
@@ -43,6 +52,11 @@ FIELDS = ["utc", "commit", "soil", "stage", "case", "target", "method", "runs", 
           "within_2_percent", "stopped_because", "elapsed_s", "cores", "note", "goal", "verified_mean", "verified_sd"]
 SNAKEMAKE = [sys.executable, "-m", "snakemake"]
 sys.path.insert(0, str(HERE))
+
+from soilcal.chain.adaptive import PROGRESS_COLUMNS  # noqa: E402
+
+PROGRESS_FIELDS = ["utc", "commit", "soil", *PROGRESS_COLUMNS]
+FIGURES = OUT / "adaptive"
 
 from calibration import copy_workflow  # noqa: E402
 
@@ -88,6 +102,52 @@ def adaptive_rows(wd: Path, soil: str) -> list[dict]:
             for _, r in s.iterrows()]
 
 
+def progress_rows(wd: Path, soil: str) -> list[dict]:
+    """The adaptive design's best verified set after every iteration, per case, from the step
+    records of a workdir's run (``soilcal.chain.adaptive.progress_frame``)."""
+    from soilcal.chain.adaptive import case_steps, progress_frame
+
+    rows = []
+    for res_path in sorted((wd / "results" / soil / "dem" / "adaptive").glob("*/*/result.json")):
+        res, steps = case_steps(res_path.parent)
+        rows += [dict(r, soil=soil) for r in progress_frame(res, steps).to_dict("records")]
+    return rows
+
+
+def _point(r: dict) -> dict:
+    """A method's final row of ``adaptive.csv`` as one point of the progress figure."""
+    num = (lambda v: float(v) if str(v) not in ("", "nan", "None") else float("nan"))
+    return {"method": r["method"], "runs": num(r["runs"]), "response": r["target"], "goal": r.get("goal") or "target",
+            "target": float("nan"), "tolerance": float("nan"), "verified_mean": num(r.get("verified_mean", "")),
+            "error_pct": num(r["verification_rel_error_pct"])}
+
+
+def figures(rows: list[dict], progress: list[dict]) -> list[Path]:
+    """Per soil, stage and case: the adaptive curve (or its final row where no curve was kept)
+    and every other method's verified set (``adaptive/<soil>_<stage>_<case>.png``)."""
+    from soilcal.plots.adaptive import error_against_runs
+
+    out = []
+    keys = dict.fromkeys((r["soil"], r["stage"], r["case"]) for r in rows)
+    for soil, stage, case in keys:
+        mine = [r for r in rows if (r["soil"], r["stage"], r["case"]) == (soil, stage, case)]
+        curve = [p for p in progress if (p["soil"], p["stage"], p["case"]) == (soil, stage, case)]
+        pts = [dict(p, method="adaptive") for p in curve]
+        pts += [_point(r) for r in mine if r["method"] != "adaptive" or not curve]
+        df = pd.DataFrame(pts)
+        for c in ("runs", "target", "tolerance", "verified_mean", "error_pct"):
+            df[c] = pd.to_numeric(df[c], errors="coerce")
+        df = df[df["runs"].notna() & (df["error_pct"].notna() | df["verified_mean"].notna())]
+        if df.empty:
+            continue
+        png, pdf = error_against_runs(df, FIGURES / f"{soil}_{stage}_{case}",
+                                      title=f"{soil} {stage} / {case}: best verified set against runs, per method",
+                                      band_pct=2.0)
+        pdf.unlink()
+        out.append(png)
+    return out
+
+
 def run_method(soil: str, method: str, cores: int, workdir: Path) -> tuple[list[dict], float, int]:
     wd = copy_workflow(workdir / f"{soil}-{method}", [soil])
     t0 = time.perf_counter()
@@ -123,6 +183,10 @@ def page(rows: list[dict]) -> list[str]:
                 ver += f" ({r['goal']})"
         lines.append(f"| {r['soil']} | {r['stage']} | {r['case']} | {r['target']} | {r['method']} | {r['runs']} | "
                      f"{ver} | {err} | {met} | {r['stopped_because']} | {el} |")
+    lines += ["", "Figures `adaptive/<soil>_<stage>_<case>.png`: per response, the error of the best verified "
+              "set against the runs spent; the adaptive design as a step curve where its iterations were kept "
+              "(`adaptive_progress.csv`; its own runs, a case that shares its runs counting only its own), every "
+              "other method as one point at its run count (the recipe's: the runs of the soil's whole recipe)."]
     return lines
 
 
@@ -133,10 +197,24 @@ def main(argv=None):
     ap.add_argument("--cores", type=int, default=2)
     ap.add_argument("--workdir", default="/tmp/soilcal-adaptive-bench")
     ap.add_argument("--report-only", action="store_true")
+    ap.add_argument("--progress-from", default=None, help="read the adaptive curves of --soils from this workdir")
     a = ap.parse_args(argv)
     path = OUT / "adaptive.csv"
+    ppath = OUT / "adaptive_progress.csv"
     rows = read_rows(path, FIELDS)
-    if not a.report_only:
+    progress = read_rows(ppath, PROGRESS_FIELDS)
+    if a.progress_from:
+        for soil in a.soils.split(","):
+            mine = [r for r in rows if r["soil"] == soil and r["method"] == "adaptive"]
+            if not mine:
+                raise SystemExit(f"--progress-from: adaptive.csv has no adaptive row of {soil}")
+            new = progress_rows(Path(a.progress_from) / f"{soil}-adaptive", soil)
+            if not new:
+                raise SystemExit(f"--progress-from: no result.json under {a.progress_from}/{soil}-adaptive")
+            progress = [p for p in progress if p["soil"] != soil]
+            progress += [dict(p, utc=mine[0]["utc"], commit=mine[0]["commit"]) for p in new]
+        write_rows(ppath, progress, PROGRESS_FIELDS)
+    elif not a.report_only:
         rev, wd = commit(), Path(a.workdir)
         wd.mkdir(parents=True, exist_ok=True)
         for soil in a.soils.split(","):
@@ -148,6 +226,11 @@ def main(argv=None):
                 rows = [r for r in rows if not (r["soil"] == soil and r["method"] == method)]
                 rows += [dict(r, utc=utc, commit=rev, elapsed_s=round(elapsed, 1), cores=a.cores) for r in new]
                 write_rows(path, rows, FIELDS)
+                if method == "adaptive":
+                    progress = [p for p in progress if p["soil"] != soil]
+                    progress += [dict(p, utc=utc, commit=rev) for p in progress_rows(wd / f"{soil}-adaptive", soil)]
+                    write_rows(ppath, progress, PROGRESS_FIELDS)
+    figures(rows, progress)
     write_page(OUT / "adaptive.md", page(rows))
 
 

@@ -53,7 +53,7 @@ DRIVER = HERE / "adaptive_gl_driver.py"
 GL_VERSION = "2.0.5"
 sys.path.insert(0, str(HERE))
 
-from adaptive import FIELDS, page  # noqa: E402
+from adaptive import FIELDS, PROGRESS_FIELDS, figures, page  # noqa: E402
 from calibration import copy_workflow  # noqa: E402
 
 
@@ -243,6 +243,7 @@ def main(argv=None):
         rows = [r for r in rows if not (r["soil"] == soil and r["method"] == "grainlearning")]
         rows += [dict(r, utc=utc, commit=rev, cores=a.cores) for r in new]
         write_rows(path, rows, FIELDS)
+    figures(rows, read_rows(OUT / "adaptive_progress.csv", PROGRESS_FIELDS))
     write_page(OUT / "adaptive.md", page(rows))
 
 

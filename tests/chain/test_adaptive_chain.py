@@ -5,6 +5,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
+import numpy as np
 import pandas as pd
 import pytest
 
@@ -188,3 +189,57 @@ def test_summary_of_a_minimised_response_has_a_best_level_and_no_target():
     (row,) = adaptive.summary_frame("s", [res]).to_dict("records")
     assert row["goal"] == "minimize" and row["best_level"] == 0.8 and pd.isna(row["target"])
     assert pd.isna(row["verification_rel_error_pct"]) and row["within_tolerance"]
+
+
+def _steps():
+    """Three step records: a start of 3 runs, an iteration of 2 proposals and a verification
+    of 4 seeds, then a stop; the verified set first appears in the stop's record."""
+    ver = {"point": 3, "met": True, "levels": {"A": 0.2},
+           "responses": {"y": {"target": 30.0, "goal": "target", "tolerance": 0.6, "mean": 30.3, "sd": 0.5, "n": 4,
+                               "error_pct": 1.0, "within": True}}}
+    prob = {"factors": {"A": [0.0, 0.5]}, "targets": {"y": {"value": 30.0, "tolerance": 0.6, "goal": "target"}}}
+    run = (lambda k, pt, a: {"kind": k, "point": pt, "seed": 0, "levels": {"A": a}})
+    return [{"iteration": 0, "status": "continue", "runs": [run("start", 0, 0.25)] * 2 + [run("start", 1, 0.1)],
+             "verified": None, "problem": prob, "consistent": []},
+            {"iteration": 1, "status": "continue", "runs": [run("proposal", 2, 0.3)] + [run("verification", 3, 0.2)] * 4,
+             "verified": None, "problem": prob, "consistent": [[0.18], [0.21], [0.24]]},
+            {"iteration": 2, "status": "target met", "runs": [], "verified": ver, "problem": prob,
+             "consistent": [[0.19], [0.22]]}]
+
+
+def test_progress_counts_the_runs_made_before_each_verified_set():
+    res = {"stage": "bbd", "case": "c"}
+    prog = adaptive.progress_frame(res, _steps())
+    # the verified set of the stop's record rests on the 3 + 5 runs of the iterations before it
+    assert prog[["iteration", "runs", "response", "error_pct"]].values.tolist() == [[2, 8, "y", 1.0]]
+    assert list(prog.columns) == adaptive.PROGRESS_COLUMNS
+    assert adaptive.progress_frame(res, _steps()[:2]).empty  # nothing verified yet
+
+
+def test_error_and_region_figures_are_written_and_refuse_missing_columns(tmp_path):
+    from soilcal.plots.adaptive import error_against_runs, proposals_over_region
+
+    prog = adaptive.progress_frame({"stage": "bbd", "case": "c"}, _steps())
+    other = pd.DataFrame([{"method": "recipe", "runs": 29, "response": "y", "goal": "target", "target": np.nan,
+                           "tolerance": np.nan, "verified_mean": 33.0, "error_pct": 10.0}])
+    paths = error_against_runs(pd.concat([prog, other], ignore_index=True), tmp_path / "e")
+    assert [p.name for p in paths] == ["e.png", "e.pdf"] and all(p.stat().st_size > 0 for p in paths)
+    with pytest.raises(InputError, match="runs"):
+        error_against_runs(prog.drop(columns="runs"), tmp_path / "e2")
+    runs = pd.DataFrame({"iteration": [0, 0, 0, 1, 1], "kind": ["start"] * 3 + ["proposal", "verification"],
+                         "point": [0, 0, 1, 2, 3], "seed": range(5), "A": [0.25, 0.25, 0.1, 0.3, 0.2],
+                         "y": [31.0, 31.5, 28.0, 30.9, 30.3]})
+    paths = proposals_over_region(_steps(), runs, tmp_path / "r")
+    assert all(p.stat().st_size > 0 for p in paths)
+    with pytest.raises(InputError, match="runs.csv"):
+        proposals_over_region(_steps(), runs.drop(columns="A"), tmp_path / "r2")
+
+
+def test_factor_pairs_show_every_factor():
+    from soilcal.plots.adaptive import factor_pairs
+
+    assert factor_pairs(1) == [(0, 0)]
+    assert factor_pairs(2) == [(0, 1)]
+    assert factor_pairs(3) == [(0, 1), (1, 2)]
+    assert factor_pairs(4) == [(0, 1), (2, 3)]
+    assert factor_pairs(5) == [(0, 1), (2, 3), (3, 4)]

@@ -57,6 +57,13 @@ def test_linear_target_line_found_and_covered(seed):
     assert np.mean(p_off > 0.5) <= 0.1
     # factor c does not act: the data do not pin it down
     assert not st.region.set_index("factor").loc["c", "pinned"]
+    # the stop's sample of the consistent region: at most REGION_SAMPLE points, inside the box,
+    # near the target line (noise-free value within the tolerance plus a few predictive SDs)
+    cs = st.consistent
+    assert 0 < len(cs) <= ad.REGION_SAMPLE and cs.shape[1] == 3
+    assert (cs[:, :2] >= -1).all() and (cs[:, :2] <= 1).all() and (cs[:, 2] >= 0).all() and (cs[:, 2] <= 5).all()
+    y = 10.0 + 3.0 * cs[:, 0] + 2.0 * cs[:, 1]
+    assert np.median(np.abs(y - 12.0)) <= 0.2
 
 
 def test_quadratic_target_ring():
@@ -459,3 +466,13 @@ def test_a_case_waits_for_the_first_cases_start_then_fits_to_it():
     other = ad.Problem([ad.Factor("a", -1, 1)], [ad.Target("y", 1.0, tol=0.1)])
     with pytest.raises(InputError, match="factors"):
         ad.run_shared({"x": first, "y": other}, noisy(linear, 0.05), ad.Settings())
+
+
+def test_consistent_sample_keeps_the_candidates_above_one_half_in_their_order():
+    pb = ad.Problem([ad.Factor("a", 0, 10)], [ad.Target("y", 1.0, tol=0.1)])
+    cand = np.array([[-1.0], [0.0], [0.5], [1.0]])
+    p = np.array([0.9, 0.4, 0.6, 0.51])
+    # coded -1, 0.5, 1 -> actual 0, 7.5, 10
+    assert ad.consistent_sample(pb, cand, p).ravel().tolist() == [0.0, 7.5, 10.0]
+    assert ad.consistent_sample(pb, cand, p, n=2).ravel().tolist() == [0.0, 7.5]
+    assert ad.consistent_sample(pb, cand, np.zeros(4)).shape == (0, 1)

@@ -85,3 +85,8 @@ def test_outputs_have_the_recipe_file_names_and_say_how_it_stopped(wf):
     assert summ["target"].iloc[0] == pytest.approx(targets.loc["stacking_angle", "value"])
     assert (d / "bbd/identifiability.csv").exists()
     assert (d / "figures/verification.png").exists() and (d / "figures/progress_bbd_stacking_angle.png").exists()
+    assert (d / "figures/region_bbd_stacking_angle.png").exists()
+    # every step record carries its sample of the consistent region, one level per factor
+    for rec in (tmp / CASE / "step").glob("*.json"):
+        r = json.loads(rec.read_text())
+        assert all(len(row) == len(r["problem"]["factors"]) for row in r["consistent"])

@@ -10,7 +10,8 @@ each iteration; this module turns its decisions into files and DEM point specs:
 
 * ``step/<it>.json`` - iteration ``it``: status, message, the runs it asks for (point, kind,
   seed, levels), the surrogates' leave-one-out scores, the best candidate, the consistent
-  region and the last verification (written by the workflow's checkpoint ``adaptive_step``);
+  region (each factor's spread, and a sample of up to 256 of its candidates, ``consistent``)
+  and the last verification (written by the workflow's checkpoint ``adaptive_step``);
 * ``runs/<it>/<k>.csv`` - run ``k`` of iteration ``it``: one DEM job, one seed, the
   :func:`soilcal.chain.sources.run_point` rows;
 * ``runs.csv``, ``surrogates.csv``, ``region.csv``, ``result.json`` - the case's whole design
@@ -18,7 +19,10 @@ each iteration; this module turns its decisions into files and DEM point specs:
 * per stage ``optimum.csv`` (the verified set, or the best candidate, as the ``calibrated``
   row, in the recipe's columns) and ``identifiability.csv`` (the consistent region), and per
   soil ``verification.csv`` from the verified point's own runs, all under
-  ``results/<soil>/dem/adaptive/`` with the recipe's file names.
+  ``results/<soil>/dem/adaptive/`` with the recipe's file names;
+* ``figures/``: the verification bars and per case its progress, the error of its best
+  verified set against the runs spent (:func:`progress_frame`) and its proposals over the
+  consistent region per iteration (:func:`figure_files`).
 
 The cases of a stage share their runs (``simulation.adaptive.share_runs``, default true): the
 step of case c at iteration k reads, besides its own, the step records and runs of its sibling
@@ -313,6 +317,10 @@ def step_record(problem: ad.Problem, settings: ad.Settings, st: ad.Step) -> dict
                                "targets": {t.response: {"value": t.value, "tolerance": t.tolerance, "goal": t.goal}
                                            for t in (st.problem or problem).targets}},
                    "searched": st.searched,
+                   # a sample of the consistent region (P > 1/2) as this iteration saw it, for the
+                   # figure of the proposals over it; one row of factor levels per candidate
+                   "consistent": [[float(f"{v:.6g}") for v in row] for row in
+                                  (st.consistent if st.consistent is not None else [])],
                    "settings": {k: getattr(settings, k) for k in settings.__dataclass_fields__}})
 
 
@@ -584,24 +592,65 @@ def verification_files(soil: str, soil_data: dict, stage_dirs: dict[str, str], t
     return df
 
 
+#: one point of the error of the best verified set against the runs spent
+#: (:func:`progress_frame`; :func:`soilcal.plots.adaptive.error_against_runs`)
+PROGRESS_COLUMNS = ["stage", "case", "method", "iteration", "runs", "response", "goal", "target", "tolerance",
+                    "verified_mean", "verified_n", "error_pct", "within"]
+
+
+def progress_frame(result: dict, steps: list[dict]) -> pd.DataFrame:
+    """The best verified set of a case after every iteration against the runs spent before it
+    (its own runs): one row per iteration that had a verified set and per response.  A step
+    record's ``verified`` is decided from the runs of the iterations before it, so the runs
+    column counts those."""
+    rows, spent = [], 0
+    for rec in sorted(steps, key=lambda r: r["iteration"]):
+        ver = rec.get("verified") or {}
+        targets = (rec.get("problem") or {}).get("targets") or {}
+        for rid, v in (ver.get("responses") or {}).items():
+            t = targets.get(rid, {})
+            rows.append({"stage": result["stage"], "case": result["case"], "method": "adaptive",
+                         "iteration": int(rec["iteration"]), "runs": spent, "response": rid,
+                         "goal": v.get("goal", "target"), "target": v.get("target"),
+                         "tolerance": v.get("tolerance", t.get("tolerance")), "verified_mean": v.get("mean"),
+                         "verified_n": v.get("n"), "error_pct": v.get("error_pct"), "within": v.get("within")})
+        spent += len(rec.get("runs") or [])
+    return pd.DataFrame(rows, columns=PROGRESS_COLUMNS)
+
+
+def case_steps(case_dir) -> tuple[dict, list[dict]]:
+    """A stopped case's ``result.json`` and its ``step/<it>.json`` records, in order."""
+    d = Path(case_dir)
+    res = json.loads((d / "result.json").read_text())
+    steps = sorted((json.loads(p.read_text()) for p in (d / "step").glob("*.json")), key=lambda r: r["iteration"])
+    return res, steps
+
+
 def figure_files(soil: str, verification_csv, case_dirs, out_dir) -> list[Path]:
-    """The verification bars of the soil's adaptive sets and each case's progress figure."""
+    """The verification bars of the soil's adaptive sets and, per case, its progress, the error
+    of its best verified set against the runs spent and its proposals over the consistent
+    region."""
     from soilcal import plots
-    from soilcal.plots.adaptive import adaptive_progress
+    from soilcal.plots.adaptive import adaptive_progress, error_against_runs, proposals_over_region
 
     out_dir = Path(out_dir)
     out_dir.mkdir(parents=True, exist_ok=True)
     paths = plots.verification_bars(pd.read_csv(verification_csv), out_dir / "verification",
                                     title=f"{soil}: verification at the adaptive sets")
     for d in map(Path, case_dirs):
-        res = json.loads((d / "result.json").read_text())
-        steps = sorted((json.loads(p.read_text()) for p in (d / "step").glob("*.json")),
-                       key=lambda r: r["iteration"])
+        res, steps = case_steps(d)
+        runs = pd.read_csv(d / "runs.csv")
         best = [(r["iteration"], r["best"]["p"]) for r in steps if r.get("best")]
-        paths += adaptive_progress(pd.read_csv(d / "runs.csv"), res, best,
-                                   out_dir / f"progress_{res['stage']}_{res['case']}")
+        tag = f"{res['stage']}_{res['case']}"
+        paths += adaptive_progress(runs, res, best, out_dir / f"progress_{tag}")
+        prog = progress_frame(res, steps)
+        if len(prog):
+            paths += error_against_runs(prog, out_dir / f"error_{tag}",
+                                        title=f"{soil} {res['stage']} / {res['case']}: best verified set "
+                                              f"against runs ({res['status']})")
+        paths += proposals_over_region(steps, runs, out_dir / f"region_{tag}")
     return paths
 
 
-__all__ = ["case_index", "shares_runs", "shared_runs", "sibling_cases", "SUMMARY_COLUMNS", "figure_files", "adaptive_cases", "excluded_cases", "case_files", "stage_files", "step_files", "summary_frame", "verification_files", "optimum_frame", "point_spec", "problem_for", "read_runs", "settings_for",
+__all__ = ["PROGRESS_COLUMNS", "case_steps", "progress_frame", "case_index", "shares_runs", "shared_runs", "sibling_cases", "SUMMARY_COLUMNS", "figure_files", "adaptive_cases", "excluded_cases", "case_files", "stage_files", "step_files", "summary_frame", "verification_files", "optimum_frame", "point_spec", "problem_for", "read_runs", "settings_for",
            "stage_for", "step_record", "write_case", "write_stage", "write_step", "write_verification"]

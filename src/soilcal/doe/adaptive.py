@@ -609,6 +609,7 @@ class Step:
     models: dict = field(default_factory=dict)  # the fitted surrogates (not written out)
     problem: Problem | None = None  # the problem as decided (the optimised responses' best levels set)
     searched: float | None = None  # largest expected improvement beyond tolerance (optimised goals)
+    consistent: np.ndarray | None = None  # actual levels of a sample of the consistent region (P > 1/2)
 
 
 def _candidate(problem: Problem, xc: np.ndarray, p: np.ndarray, pred: dict, i: int) -> dict:
@@ -651,6 +652,21 @@ def consistent_region(problem: Problem, cand: np.ndarray, p: np.ndarray) -> pd.D
                      "sd": float(v.std(ddof=1)) if v.size > 1 else np.nan,
                      "pinned": bool(v.size and (v.max() - v.min()) <= UNPINNED_SHARE * span)})
     return pd.DataFrame(rows)
+
+
+#: most candidates of the consistent region a step keeps (:func:`consistent_sample`)
+REGION_SAMPLE = 256
+
+
+def consistent_sample(problem: Problem, cand: np.ndarray, p: np.ndarray, n: int = REGION_SAMPLE) -> np.ndarray:
+    """Actual levels of the first ``n`` candidates with P > 1/2, in the candidates' (Halton)
+    order: a space-filling sample of the consistent region, for figures."""
+    return problem.to_actual(cand[p > 0.5][:n]) if (p > 0.5).any() else np.empty((0, len(problem.factors)))
+
+
+def _sampled(st: "Step", sample: np.ndarray) -> "Step":
+    st.consistent = sample
+    return st
 
 
 def _verified(problem: Problem, runs: pd.DataFrame, settings: Settings) -> dict | None:
@@ -766,16 +782,17 @@ def step(problem: Problem, runs: pd.DataFrame, settings: Settings, iteration: in
         best = {"coded": near["coded"], "actual": near["actual"], "p": float(p_n[0]),
                 "predicted": near["values"], "predicted_sd": near["sd"], "closest": True}
     region = consistent_region(problem, cand, p_c)
+    sample = consistent_sample(problem, cand, p_c)
     no_runs = empty_runs(problem)[[*RUN_KEYS, *problem.names]]
     if verified and verified["met"] and not unsearched:
         optimised = any(t.optimised for t in problem.targets)
-        return Step(iteration, "optimum verified" if optimised else "target met",
+        return _sampled(Step(iteration, "optimum verified" if optimised else "target met",
                     f"the verified mean of point {verified['point']} is within tolerance of every target"
                     + (" and of the best predicted level of every optimised response; the largest expected "
                        f"improvement beyond the tolerance on that level is {searched:.2g} tolerances "
                        f"(<= {settings.improvement_stop:g})" if optimised else ""),
                     no_runs, scores, best, region, verified,
-                    surrogates, problem, searched)
+                    surrogates, problem, searched), sample)
     # unreachable: no point of the box is plausibly consistent, and the closest reachable
     # prediction lies further from a target than its uncertainty explains
     if near is not None:
@@ -788,19 +805,19 @@ def step(problem: Problem, runs: pd.DataFrame, settings: Settings, iteration: in
             msg = "; ".join(f"{t.response}: target {t.value:g} is outside what the factor ranges reach: "
                             f"the closest reachable value is {near['values'][t.response]:.4g} "
                             f"(+- {near['sd'][t.response]:.2g})" for t in far)
-            return Step(iteration, "unreachable", f"{msg}, at {at}",
+            return _sampled(Step(iteration, "unreachable", f"{msg}, at {at}",
                         no_runs, scores, best, region, verified,
-                        surrogates, problem, searched)
+                        surrogates, problem, searched), sample)
     if spent >= settings.budget:
-        return Step(iteration, "budget spent",
+        return _sampled(Step(iteration, "budget spent",
                     f"{spent} runs spent of a budget of {settings.budget}; {_best_said(problem, best)}",
                     no_runs, scores, best, region, verified,
-                    surrogates, problem, searched)
+                    surrogates, problem, searched), sample)
     if iteration > settings.max_iterations:
-        return Step(iteration, "iterations spent",
+        return _sampled(Step(iteration, "iterations spent",
                     f"{settings.max_iterations} iterations without a verified set; {_best_said(problem, best)}",
                     no_runs, scores, best, region, verified,
-                    surrogates, problem, searched)
+                    surrogates, problem, searched), sample)
     coded, kinds, reps = [], [], []
     left = settings.budget - spent
     ver_pts = problem.to_coded(runs.loc[runs["kind"] == "verification", problem.names].to_numpy(float)) \
@@ -835,15 +852,15 @@ def step(problem: Problem, runs: pd.DataFrame, settings: Settings, iteration: in
     if not coded:
         # the same runs would give the next iteration the same surrogates: stop rather than
         # iterate without running anything
-        return Step(iteration, "box exhausted",
+        return _sampled(Step(iteration, "box exhausted",
                     f"every candidate lies within {settings.separation:g} (coded) of a run already made and no "
                     f"verification is due; {_best_said(problem, best)}",
-                    no_runs, scores, best, region, verified, surrogates, problem, searched)
+                    no_runs, scores, best, region, verified, surrogates, problem, searched), sample)
     new = _new_runs(problem, coded, kinds, next_point, iteration, reps, next_seed)
     msg = (f"iteration {iteration}: best P = {best['p']:.3f}; {len(new)} runs"
            + (" (with a verification of the best candidate)" if "verification" in kinds else "")
            + (f"; searching: largest expected improvement {searched:.2g} tolerances" if unsearched else ""))
-    return Step(iteration, "continue", msg, new, scores, best, region, verified, surrogates, problem, searched)
+    return _sampled(Step(iteration, "continue", msg, new, scores, best, region, verified, surrogates, problem, searched), sample)
 
 
 def _beyond_data(runs: pd.DataFrame, points: pd.DataFrame, t: Target) -> bool:
