@@ -28,6 +28,11 @@ engines and cases not run kept), ``loop.md``, and per DEM case its residuals, di
 and after and every model tried (``benchmarks/results/loop_dem/<case>_*.csv``).
 
     python benchmarks/loop.py [--engines standin,dem] [--cases rate,stones] [--seeds 3] [--n 12]
+    python benchmarks/loop.py --engines dem --cases moisture_cohesion --design-points 5
+
+``--design-points``: levels per effect parameter of the DEM cases (default 3, to keep a case
+to minutes; the loop's own default, ``loop.design_points``, is 5); a DEM row records it
+(column ``design_points``; empty in rows written before it existed).
 """
 
 from __future__ import annotations
@@ -49,7 +54,7 @@ HERE = Path(__file__).resolve().parent
 ROOT = HERE.parent
 FIELDS = ["engine", "case", "seed", "hidden", "disturbance", "chosen", "correct", "false_attribution",
           "parameter_error_percent", "rmse_before_percent", "rmse_after_percent", "error_reduction_percent",
-          "verdict", "dem_runs", "wall_s", "commit"]
+          "verdict", "dem_runs", "wall_s", "commit", "design_points"]
 
 STANDIN_CASES = {
     "rate_friction": ({"rate_friction": {"beta": 0.2}}, {}),
@@ -185,7 +190,7 @@ def _compression_campaign(tmp: Path, n: int, seed: int):
         "calibrated": {"stage": "bbd", "case": "mc10"}, "replicates": 2})
 
 
-def dem_rows(cases, n, seed, threads):
+def dem_rows(cases, n, seed, threads, design_points=3):
     from soilcal.loop import core, synthesize as sy
     from soilcal.loop.cli import condition_params, dem_simulator
 
@@ -198,7 +203,7 @@ def dem_rows(cases, n, seed, threads):
         return sim(cond, params, s)
 
     base = condition_params({})
-    settings = core.Settings(reference=DEM_REFERENCE, design_points=3)
+    settings = core.Settings(reference=DEM_REFERENCE, design_points=design_points)
     for case in cases:
         if case not in DEM_CASES:
             print(f"dem: no DEM case {case} (stand-in only)", flush=True)
@@ -212,7 +217,8 @@ def dem_rows(cases, n, seed, threads):
                                   seeds=tuple(range(1000, 1000 + DEM_SEEDS)))
             out = core.run_inprocess("dem-campaign", sy.with_measured(conds, table), base, counted, settings,
                                      seeds=tuple(range(DEM_SEEDS)))
-            rows.append(_row("dem", case, seed, hidden, dist, out, time.perf_counter() - t0, counter["runs"]))
+            rows.append(dict(_row("dem", case, seed, hidden, dist, out, time.perf_counter() - t0, counter["runs"]),
+                             design_points=design_points))
             detail = HERE / "results" / "loop_dem"
             detail.mkdir(parents=True, exist_ok=True)
             for name, df in (("residuals", out.residuals), ("diagnosis", out.diagnosis), ("selection", out.selection),
@@ -249,6 +255,7 @@ def main(argv=None):
     ap.add_argument("--n", type=int, default=18, help="conditions of the DEM campaign")
     ap.add_argument("--seed", type=int, default=0, help="seed of the DEM campaign")
     ap.add_argument("--threads", type=int, default=None)
+    ap.add_argument("--design-points", type=int, default=3, help="levels per effect parameter (dem; default 3)")
     ap.add_argument("--out", default=str(HERE / "results"))
     args = ap.parse_args(argv)
     engines = args.engines.split(",")
@@ -263,7 +270,7 @@ def main(argv=None):
     if "standin" in engines:
         new += standin_rows(cases, args.seeds)
     if "dem" in engines:
-        new += dem_rows(cases, args.n, args.seed, args.threads)
+        new += dem_rows(cases, args.n, args.seed, args.threads, args.design_points)
     # earlier rows read only now, so that a run of another engine in the meantime is kept
     old = [r for r in read_rows(out / "loop.csv", FIELDS) if not (r["engine"] in engines and r["case"] in cases)]
     rows = old + new
@@ -279,10 +286,12 @@ def main(argv=None):
           "effect chosen that was not hidden.  Targets: the right effect with its parameter within 25 % and the "
           "held-out RMS error down by 70 %; no false attribution.", "",
           *_summary(rows), "", "DEM rows (verdicts in full):", "",
-          "| case | chosen | parameter error, % | RMS error before -> after, % | DEM runs | wall s | commit | verdict |",
-          "|---|---|---|---|---|---|---|---|",
+          "| case | chosen | parameter error, % | RMS error before -> after, % | levels | DEM runs | wall s | commit "
+          "| verdict |",
+          "|---|---|---|---|---|---|---|---|---|",
           *(f"| {r['case']} | {r['chosen']} | {r['parameter_error_percent']} | {r['rmse_before_percent']} -> "
-            f"{r['rmse_after_percent']} | {r['dem_runs']} | {r['wall_s']} | {r['commit']} | {r['verdict']} |"
+            f"{r['rmse_after_percent']} | {r.get('design_points') or 3} | {r['dem_runs']} | {r['wall_s']} | "
+            f"{r['commit']} | {r['verdict']} |"
             for r in rows if r["engine"] == "dem"),
           "", "Rows: `loop.csv`; per DEM case: `loop_dem/`.", ""]
     write_page(out / "loop.md", md)

@@ -318,6 +318,21 @@ def test_minimised_response_reaches_the_least_value_and_verifies_it(seed):
     assert abs(st.problem.targets[0].value - 0.3) <= 0.05 + 0.045
     assert np.isnan(v["responses"]["y"]["error_pct"])  # no target to take an error against
     assert len(runs) <= 60
+    # the box is searched only after proposals went where the expected improvement pointed:
+    # the first iteration after the start runs proposals and no verification
+    assert set(runs.loc[runs["iteration"] == 1, "kind"]) == {"proposal"}
+
+
+def test_a_flat_looking_start_does_not_count_as_searched():
+    # a noisy bowl whose start, 9 single seeds of SD 0.05 against a depth of 0.2 inside the
+    # sampled points, can look flat: the first step after the start still searches
+    flat = ad.Problem([ad.Factor("a", -1, 1), ad.Factor("b", -1, 1), ad.Factor("c", 0, 5)],
+                      [ad.Target("y", float("nan"), tol=0.05, goal="minimize")])
+    ev = noisy(lambda lv: {"y": 1.0 + 0.1 * (lv["a"] ** 2 + lv["b"] ** 2)}, 0.05)
+    start = ad._evaluated(flat, ad.step(flat, ad.empty_runs(flat), ad.Settings(seed=3), 0).runs, ev)
+    st = ad.step(flat, start, ad.Settings(seed=3), 1)
+    assert st.status == "continue" and set(st.runs["kind"]) == {"proposal"}
+    assert "no proposal run yet" in st.message or "searching" in st.message
 
 
 def test_maximised_response_mirrors_the_minimised_one():

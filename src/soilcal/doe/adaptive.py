@@ -98,7 +98,8 @@ Whether the box has been searched is the expected improvement beyond the toleran
 I(x) = E[max(y* - tol - f(x), 0)] = s (phi(z) + z Phi(z)), z = (y* - tol - mu) / s (Jones,
 Schonlau and Welch 1998, Eq. 15, with the incumbent lowered by the tolerance), times P of the
 target goals: while its largest value over the candidates exceeds ``improvement_stop``
-tolerances, the proposals maximise it (summed over the goals in tolerances), the best
+tolerances, or while no proposal has been run (a surrogate of the start alone can take a noisy
+response for a flat one), the proposals maximise it (summed over the goals in tolerances), the best
 candidate is verified only once 2 d + 1 proposals have passed since the last verification, and
 no verification stops the design; once the box is searched the proposals maximise P and the
 verification rule above applies.  The design then stops ``optimum verified`` when the
@@ -769,7 +770,11 @@ def step(problem: Problem, runs: pd.DataFrame, settings: Settings, iteration: in
     p_e, pred_e = consistency(problem, surrogates, xe)
     gain = improvement(problem, pred_c, target_probability(problem, pred_c))
     searched = float(gain.max()) if any(t.optimised for t in problem.targets) else None
-    unsearched = searched is not None and searched > settings.improvement_stop
+    # the box counts as searched once the expected improvement is small, and not before one
+    # batch of proposals has gone where it pointed: a surrogate of the start alone can see a
+    # noisy response as flat and call a box searched that nothing has searched
+    proposed = bool((runs["kind"] == "proposal").any())
+    unsearched = searched is not None and (searched > settings.improvement_stop or not proposed)
     best = _candidate(problem, cand, p_c, pred_c, int(np.argmax(p_c)))
     if p_e.max() > best["p"]:  # an evaluated point is the surest
         best = _candidate(problem, xe, p_e, pred_e, int(np.argmax(p_e)))
@@ -859,7 +864,8 @@ def step(problem: Problem, runs: pd.DataFrame, settings: Settings, iteration: in
     new = _new_runs(problem, coded, kinds, next_point, iteration, reps, next_seed)
     msg = (f"iteration {iteration}: best P = {best['p']:.3f}; {len(new)} runs"
            + (" (with a verification of the best candidate)" if "verification" in kinds else "")
-           + (f"; searching: largest expected improvement {searched:.2g} tolerances" if unsearched else ""))
+           + ((f"; searching: largest expected improvement {searched:.2g} tolerances"
+               + ("" if proposed else ", no proposal run yet")) if unsearched else ""))
     return _sampled(Step(iteration, "continue", msg, new, scores, best, region, verified, surrogates, problem, searched), sample)
 
 
