@@ -26,6 +26,8 @@ from soilcal.errors import InputError
 from soilcal.plots.figures import _figure, save_figure
 
 MARKERS = {"start": ("s", "0.45"), "proposal": ("o", "C0"), "verification": ("D", "C3")}
+#: legends beside the axes, where they hide no run
+OUTSIDE = dict(fontsize=7, loc="upper left", bbox_to_anchor=(1.01, 1.0), borderaxespad=0.0, frameon=False)
 
 
 def tolerance_band(t: dict) -> tuple[float, float, str]:
@@ -46,7 +48,7 @@ def adaptive_progress(runs: pd.DataFrame, result: dict, best_p: list[tuple[int, 
     if missing:
         raise InputError("runs.csv", missing[0], "a column for every target response", "missing")
     n = len(targets)
-    fig = _figure(7.0, 2.4 * n + 2.2)
+    fig = _figure(8.6, 2.4 * n + 2.2)
     axes = [fig.add_subplot(n + 1, 1, i + 1) for i in range(n + 1)]
     x = np.arange(1, len(runs) + 1)
     for ax, (rid, t) in zip(axes, targets.items()):
@@ -58,7 +60,7 @@ def adaptive_progress(runs: pd.DataFrame, result: dict, best_p: list[tuple[int, 
             if sel.any():
                 ax.plot(x[sel], runs.loc[sel, rid].to_numpy(float), m, color=c, ms=5, ls="none", label=kind)
         ax.set_ylabel(rid)
-        ax.legend(fontsize=7, loc="best", framealpha=0.6)
+        ax.legend(**OUTSIDE)
     ax = axes[-1]
     if best_p:
         it, p = zip(*best_p)
@@ -67,7 +69,7 @@ def adaptive_progress(runs: pd.DataFrame, result: dict, best_p: list[tuple[int, 
     ax.set_ylim(-0.02, 1.02)
     ax.set_xlabel("iteration (upper panels: run number)")
     ax.set_ylabel("P(all within tolerance)")
-    ax.legend(fontsize=7, loc="best", framealpha=0.6)
+    ax.legend(**OUTSIDE)
     axes[0].set_title(f"{result['stage']} / {result['case']}: {result['status']} after {result['runs']} runs",
                       fontsize=9)
     fig.tight_layout()
@@ -90,7 +92,7 @@ def error_against_runs(df: pd.DataFrame, stem, title: str = "", band_pct: float 
     if missing:
         raise InputError("progress", missing[0], f"columns {', '.join(need)}", "missing")
     responses = list(dict.fromkeys(df["response"]))
-    fig = _figure(6.4, 2.3 * max(len(responses), 1) + 0.8)
+    fig = _figure(8.0, 2.3 * max(len(responses), 1) + 0.8)
     axes = [fig.add_subplot(len(responses), 1, i + 1) for i in range(len(responses))] or [fig.add_subplot(1, 1, 1)]
     for ax, rid in zip(axes, responses):
         g = df[df["response"] == rid]
@@ -124,7 +126,8 @@ def error_against_runs(df: pd.DataFrame, stem, title: str = "", band_pct: float 
                 ax.plot(x, y, mk, color=c, ms=7, ls="none", label=f"{method} ({int(x[0])} runs)")
         ax.set_ylabel("relative error, %" if aimed else "verified mean")
         ax.set_title(rid if aimed else f"{rid} ({g['goal'].iloc[0]})", fontsize=8, loc="left")
-        ax.legend(fontsize=7, loc="best", framealpha=0.6)
+        ax.set_xlim(left=0)  # the run counts against none spent
+        ax.legend(**OUTSIDE)
     axes[-1].set_xlabel("DEM runs spent (one seed each)")
     fig.suptitle(title or "best verified set against runs spent", fontsize=9)
     fig.tight_layout()
