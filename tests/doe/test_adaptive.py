@@ -170,6 +170,20 @@ def test_budget_spent_is_said():
     assert "against the target 0.2 +- 0.0001, at a = " in st.message
 
 
+def test_a_design_that_spends_its_budget_verifies_its_best_candidate_last():
+    # y = a on [-1, 1] against 1.3 +- 0.05 with seed SD 0.5: no prediction ever lies within
+    # tolerance, so no candidate is ever ready to verify, and single seeds above 1.35 keep the
+    # data from proving the target out of reach; the design's last runs verify its best
+    # candidate, the closest reachable point (a = 1), so its answer is measured
+    beyond = ad.Problem([ad.Factor("a", -1, 1)], [ad.Target("y", 1.3, tol=0.05)])
+    runs, st = ad.run(beyond, noisy(lambda lv: {"y": lv["a"]}, 0.5), ad.Settings(seed=1, budget=16))
+    assert st.status == "budget spent" and len(runs) == 16
+    ver = runs[runs["kind"] == "verification"]
+    assert len(ver) == 4 and ver["point"].nunique() == 1 and ver["iteration"].max() == runs["iteration"].max()
+    assert st.verified is not None and st.verified["responses"]["y"]["n"] == 4
+    assert st.verified["levels"]["a"] > 0.5  # towards the bound that comes closest
+
+
 def test_a_design_with_nothing_new_to_run_stops_and_says_where_its_best_candidate_lies():
     # y = 10 + a over a in [-1, 1] reaches 9 at best, against a target 8 +- 0.5; with the
     # unreachable test switched off (p_unreachable 1e-300) the one-factor box fills up at
@@ -183,6 +197,11 @@ def test_a_design_with_nothing_new_to_run_stops_and_says_where_its_best_candidat
     assert "a = -0.9999 (its low bound)" in st.message or "a = -1 (its low bound)" in st.message
     assert st.best["predicted"]["y"] == pytest.approx(9.0, abs=0.1)
     assert "against the target 8 +- 0.5" in st.message
+    # before it stopped, the best candidate was verified: four seeds near the low bound read
+    # about 9 (SD 0.05 / 2)
+    v = st.verified
+    assert v is not None and v["responses"]["y"]["n"] == 4 and v["levels"]["a"] < -0.85
+    assert v["responses"]["y"]["mean"] == pytest.approx(10.0 + v["levels"]["a"], abs=0.1)
 
 
 def test_a_batch_of_none_picks_none():

@@ -56,7 +56,10 @@ candidate (while P < ``p_unreachable`` everywhere, the point whose predictions l
 the targets, in tolerances, instead).  It is run with ``verify_seeds`` seeds once its
 P >= ``p_verify``, or once every prediction there lies within tolerance and is either known as
 well as a verification would measure it or has had 2 d + 1 proposal runs since the last
-verification (:func:`ready_to_verify`); the verification runs join the data, so they also
+verification (:func:`ready_to_verify`), or, ready or not, when the budget left after the
+iteration's proposals could no longer pay for a verification, or when there is nothing new to
+propose, and the best candidate is not one already verified (a design that spends its budget or
+its box ends with a measured answer); the verification runs join the data, so they also
 inform the surrogate, and no point within ``separation`` of a verified one is verified again.
 The best verification (smallest worst error, in tolerances) is the design's answer.  The design
 stops when that verified mean is within tolerance of every target (``target met``), when the
@@ -840,8 +843,12 @@ def step(problem: Problem, runs: pd.DataFrame, settings: Settings, iteration: in
     scatter = seed_sd(problem, points, surrogates)
     last_v = int(runs.loc[runs["kind"] == "verification", "point"].max()) if len(ver_pts) else -1
     stalled = int(((runs["kind"] == "proposal") & (runs["point"] > last_v)).sum()) >= 2 * d + 1
-    if cand_v is not None and (stalled or not unsearched) and ready_to_verify(problem, cand_v, scatter, settings, stalled) \
-            and left >= settings.verify_seeds:
+    # the last chance: after this iteration's proposals the budget could not pay for a
+    # verification, so a best candidate nobody verified is verified now, ready or not (a design
+    # that spends its budget leaves a measured answer, not only a predicted one)
+    last_chance = cand_v is best and left < settings.verify_seeds + settings.batch
+    if cand_v is not None and left >= settings.verify_seeds and (
+            last_chance or (stalled or not unsearched) and ready_to_verify(problem, cand_v, scatter, settings, stalled)):
         best = cand_v
         coded.append(best["coded"])
         kinds.append("verification")
@@ -854,6 +861,12 @@ def step(problem: Problem, runs: pd.DataFrame, settings: Settings, iteration: in
         coded.append(cand[i])
         kinds.append("proposal")
         reps.append(1)
+    if not coded and cand_v is best and left >= settings.verify_seeds:
+        # nothing new to propose: the box is exhausted, but its best candidate was never
+        # verified; verify it before stopping (the next iteration then stops)
+        coded.append(best["coded"])
+        kinds.append("verification")
+        reps.append(settings.verify_seeds)
     if not coded:
         # the same runs would give the next iteration the same surrogates: stop rather than
         # iterate without running anything
