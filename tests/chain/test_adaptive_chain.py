@@ -226,6 +226,9 @@ def test_error_and_region_figures_are_written_and_refuse_missing_columns(tmp_pat
     assert [p.name for p in paths] == ["e.png", "e.pdf"] and all(p.stat().st_size > 0 for p in paths)
     with pytest.raises(InputError, match="runs"):
         error_against_runs(prog.drop(columns="runs"), tmp_path / "e2")
+    # a target of 0 (an absolute tolerance) has no relative band, and no division by it
+    zero = prog.assign(target=0.0, error_pct=np.nan, verified_mean=0.1)
+    assert all(p.stat().st_size > 0 for p in error_against_runs(zero, tmp_path / "e0", band_pct=2.0))
     runs = pd.DataFrame({"iteration": [0, 0, 0, 1, 1], "kind": ["start"] * 3 + ["proposal", "verification"],
                          "point": [0, 0, 1, 2, 3], "seed": range(5), "A": [0.25, 0.25, 0.1, 0.3, 0.2],
                          "y": [31.0, 31.5, 28.0, 30.9, 30.3]})

@@ -351,7 +351,8 @@ def test_a_flat_looking_start_does_not_count_as_searched():
     start = ad._evaluated(flat, ad.step(flat, ad.empty_runs(flat), ad.Settings(seed=3), 0).runs, ev)
     st = ad.step(flat, start, ad.Settings(seed=3), 1)
     assert st.status == "continue" and set(st.runs["kind"]) == {"proposal"}
-    assert "no proposal run yet" in st.message or "searching" in st.message
+    # the expected improvement alone would have called the box searched
+    assert st.searched <= ad.Settings().improvement_stop and "no proposal run yet" in st.message
 
 
 def test_maximised_response_mirrors_the_minimised_one():
@@ -510,3 +511,19 @@ def test_consistent_sample_keeps_the_candidates_above_one_half_in_their_order():
     assert ad.consistent_sample(pb, cand, p).ravel().tolist() == [0.0, 7.5, 10.0]
     assert ad.consistent_sample(pb, cand, p, n=2).ravel().tolist() == [0.0, 7.5]
     assert ad.consistent_sample(pb, cand, np.zeros(4)).shape == (0, 1)
+
+
+@pytest.mark.parametrize("seed", [0, 1])
+def test_an_exhausted_box_verifies_its_best_candidate_once(seed):
+    # a flat response (seed SD 1) against a target out of its reach, with the unreachable test
+    # switched off and a wide separation so the box fills fast: the design verifies its best
+    # candidate before it stops, and never in two verification-only iterations in a row
+    # (the refitted surrogate moves its best candidate after each verification)
+    flat = ad.Problem([ad.Factor("a", -1, 1), ad.Factor("b", -1, 1)], [ad.Target("y", 2.5, tol=0.1)])
+    runs, st = ad.run(flat, noisy(lambda lv: {"y": 1.0 + 0.01 * lv["a"]}, 1.0),
+                      ad.Settings(seed=seed, budget=200, separation=0.5, p_unreachable=1e-300))
+    assert st.status == "box exhausted" and len(runs) < 200
+    assert st.verified is not None and st.verified["responses"]["y"]["n"] == 4
+    kinds = runs.groupby("iteration")["kind"].agg(lambda k: set(k))
+    only_ver = [it for it, k in kinds.items() if k == {"verification"}]
+    assert only_ver and all(b - a > 1 for a, b in zip(only_ver, only_ver[1:]))

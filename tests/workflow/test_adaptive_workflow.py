@@ -89,4 +89,5 @@ def test_outputs_have_the_recipe_file_names_and_say_how_it_stopped(wf):
     # every step record carries its sample of the consistent region, one level per factor
     for rec in (tmp / CASE / "step").glob("*.json"):
         r = json.loads(rec.read_text())
+        assert len(r["consistent"]) <= 256
         assert all(len(row) == len(r["problem"]["factors"]) for row in r["consistent"])

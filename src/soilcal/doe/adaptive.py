@@ -848,7 +848,7 @@ def step(problem: Problem, runs: pd.DataFrame, settings: Settings, iteration: in
     # that spends its budget leaves a measured answer, not only a predicted one)
     last_chance = cand_v is best and left < settings.verify_seeds + settings.batch
     if cand_v is not None and left >= settings.verify_seeds and (
-            last_chance or (stalled or not unsearched) and ready_to_verify(problem, cand_v, scatter, settings, stalled)):
+            last_chance or ((stalled or not unsearched) and ready_to_verify(problem, cand_v, scatter, settings, stalled))):
         best = cand_v
         coded.append(best["coded"])
         kinds.append("verification")
@@ -861,9 +861,12 @@ def step(problem: Problem, runs: pd.DataFrame, settings: Settings, iteration: in
         coded.append(cand[i])
         kinds.append("proposal")
         reps.append(1)
-    if not coded and cand_v is best and left >= settings.verify_seeds:
+    last = runs[runs["iteration"] == runs["iteration"].max()] if len(runs) else runs
+    after_verification = len(last) > 0 and bool((last["kind"] == "verification").all())
+    if not coded and cand_v is best and left >= settings.verify_seeds and not after_verification:
         # nothing new to propose: the box is exhausted, but its best candidate was never
-        # verified; verify it before stopping (the next iteration then stops)
+        # verified; verify it before stopping, once (the refitted surrogate may move its best
+        # candidate again: the iteration after this verification stops whatever it prefers)
         coded.append(best["coded"])
         kinds.append("verification")
         reps.append(settings.verify_seeds)

@@ -99,6 +99,7 @@ def error_against_runs(df: pd.DataFrame, stem, title: str = "", band_pct: float 
         aimed = str(g["goal"].iloc[0]) == "target"
         if aimed:
             t = g.dropna(subset=["target", "tolerance"])
+            t = t[t["target"].astype(float) != 0.0]  # a target of 0 has no relative band
             band = 100.0 * float(t["tolerance"].iloc[-1]) / abs(float(t["target"].iloc[-1])) if len(t) else band_pct
             if band is not None:
                 ax.axhspan(-band, band, color="0.88", zorder=0, label=f"tolerance +- {band:.2g} %")
@@ -172,7 +173,7 @@ def proposals_over_region(steps: list[dict], runs: pd.DataFrame, stem, max_rows:
         for c_i, (i, j) in enumerate(pairs):
             ax = fig.add_subplot(len(shown), len(pairs), r_i * len(pairs) + c_i + 1)
             xi, xj = names[i], names[j]
-            one = i == j  # a single factor: its level against the iteration
+            one = i == j  # a single factor: its levels on one line
             if len(region):
                 ax.plot(region[:, i], region[:, j] if not one else np.zeros(len(region)), ".", color="C2",
                         ms=2, alpha=0.35, label="consistent (P > 1/2)")
