@@ -22,7 +22,9 @@ source, cases with a target value: :func:`soilcal.chain.adaptive.adaptive_cases`
   :func:`~soilcal.chain.sources.simulate`, as the workflow's jobs), ``--cores`` at a time; the
   seeds run on from the soil's seed, one per run, as the adaptive design's do.
 
-Rows (method ``grainlearning``) replace that soil's earlier GrainLearning rows; the page
+A case where GrainLearning stops with an error gets a row saying so, with the runs it spent
+and no verification; the soil's other cases go on.  Rows (method ``grainlearning``) replace
+that soil's earlier GrainLearning rows; the page
 ``adaptive.md`` is rewritten with every method.  Per case the runs, samples and values go to
 ``<workdir>/<soil>-grainlearning/gl/<stage>-<case>/``.
 
@@ -150,8 +152,21 @@ def run_case(wd: Path, soil_name: str, stage_id: str, case_id: str, targets: dic
     p = subprocess.run([str(glpy), str(DRIVER), str(cdir / "problem.json")], capture_output=True, text=True)
     (cdir / "driver.log").write_text(p.stdout + p.stderr)
     if p.returncode != 0:
-        raise SystemExit(f"{soil_name} {stage_id}/{case_id}: GrainLearning exited {p.returncode} "
-                         f"(log: {cdir / 'driver.log'}):\n{p.stderr[-2000:]}")
+        # GrainLearning stopped with an error: the case's row says so, with the runs it spent,
+        # and the soil's other cases go on (a case fixed from this one cannot)
+        lines = [ln for ln in p.stderr.strip().splitlines() if ln.strip()]
+        err = next((ln for ln in reversed(lines) if "Error" in ln.split(":")[0]), lines[-1] if lines else "")
+        runs_csv = cdir / "runs.csv"
+        spent = len(pd.read_csv(runs_csv)["run"].unique()) if runs_csv.exists() else 0
+        print(f"{soil_name} {stage_id}/{case_id}: GrainLearning exited {p.returncode} after {spent} runs "
+              f"(log: {cdir / 'driver.log'}): {err}", flush=True)
+        out = [{"soil": soil_name, "stage": stage_id, "case": case_id, "target": t.response, "method": "grainlearning",
+                "runs": spent, "verification_rel_error_pct": math.nan, "within_2_percent": "",
+                "elapsed_s": round(time.perf_counter() - t0, 1),
+                "stopped_because": f"GrainLearning failed after {spent} runs: {err[:120]}",
+                "note": f"grainlearning {GL_VERSION}: no estimate, nothing verified; log gl/{cdir.name}/driver.log"}
+               for t in problem.targets]
+        return {"rows": out, "optimum": None}
     result = json.loads((cdir / "result.json").read_text())
     runs = sum(len(h["params"]) for h in result["history"])
     best = result["most_probable"]
@@ -206,13 +221,17 @@ def run_soil(soil: str, args, glpy: Path, recipe: dict) -> list[dict]:
     for stage_id, case_id in cases:
         deps = dependencies(dict(data, simulation={**(data.get("simulation") or {}), "design": "printed"}), stage_id)
         up = optima.get(deps["fixed_from"]) if "fixed_from" in deps else None
+        if "fixed_from" in deps and up is None:
+            raise SystemExit(f"{soil} {stage_id}/{case_id}: fixed from stage {deps['fixed_from']}, which has no "
+                             "GrainLearning estimate")
         budget = recipe.get((stage_id, case_id))
         if budget is None:
             raise SystemExit(f"{soil} {stage_id}/{case_id}: no recipe row in {OUT / 'adaptive.csv'}; run "
                              f"python benchmarks/adaptive.py --soils {soil} --methods recipe first")
         res = run_case(wd, soil, stage_id, case_id, targets, int(budget) // len(cases), args, up, glpy)
         rows += res["rows"]
-        optima[stage_id] = pd.concat([optima[stage_id], res["optimum"]]) if stage_id in optima else res["optimum"]
+        if res["optimum"] is not None:
+            optima[stage_id] = pd.concat([optima[stage_id], res["optimum"]]) if stage_id in optima else res["optimum"]
         print(f"{soil} {stage_id}/{case_id}: " + "; ".join(
             f"{r['target']} {r['verification_rel_error_pct']:+.1f} %" for r in res["rows"]), flush=True)
     return rows
