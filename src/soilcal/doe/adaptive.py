@@ -668,11 +668,6 @@ def consistent_sample(problem: Problem, cand: np.ndarray, p: np.ndarray, n: int 
     return problem.to_actual(cand[p > 0.5][:n]) if (p > 0.5).any() else np.empty((0, len(problem.factors)))
 
 
-def _sampled(st: "Step", sample: np.ndarray) -> "Step":
-    st.consistent = sample
-    return st
-
-
 def _verified(problem: Problem, runs: pd.DataFrame, settings: Settings) -> dict | None:
     """The best verified point (smallest worst error in tolerances): its means and whether
     every one is within tolerance."""
@@ -792,15 +787,19 @@ def step(problem: Problem, runs: pd.DataFrame, settings: Settings, iteration: in
     region = consistent_region(problem, cand, p_c)
     sample = consistent_sample(problem, cand, p_c)
     no_runs = empty_runs(problem)[[*RUN_KEYS, *problem.names]]
+
+    def decided(status: str, message: str, new_runs: pd.DataFrame = no_runs) -> Step:
+        # the iteration's record: everything but its status, message and runs is this fit's
+        return Step(iteration, status, message, new_runs, scores, best, region, verified, surrogates, problem,
+                    searched, consistent=sample)
+
     if verified and verified["met"] and not unsearched:
         optimised = any(t.optimised for t in problem.targets)
-        return _sampled(Step(iteration, "optimum verified" if optimised else "target met",
-                    f"the verified mean of point {verified['point']} is within tolerance of every target"
-                    + (" and of the best predicted level of every optimised response; the largest expected "
-                       f"improvement beyond the tolerance on that level is {searched:.2g} tolerances "
-                       f"(<= {settings.improvement_stop:g})" if optimised else ""),
-                    no_runs, scores, best, region, verified,
-                    surrogates, problem, searched), sample)
+        return decided("optimum verified" if optimised else "target met",
+                       f"the verified mean of point {verified['point']} is within tolerance of every target"
+                       + (" and of the best predicted level of every optimised response; the largest expected "
+                          f"improvement beyond the tolerance on that level is {searched:.2g} tolerances "
+                          f"(<= {settings.improvement_stop:g})" if optimised else ""))
     # unreachable: no point of the box is plausibly consistent, and the closest reachable
     # prediction lies further from a target than its uncertainty explains
     if near is not None:
@@ -813,19 +812,13 @@ def step(problem: Problem, runs: pd.DataFrame, settings: Settings, iteration: in
             msg = "; ".join(f"{t.response}: target {t.value:g} is outside what the factor ranges reach: "
                             f"the closest reachable value is {near['values'][t.response]:.4g} "
                             f"(+- {near['sd'][t.response]:.2g})" for t in far)
-            return _sampled(Step(iteration, "unreachable", f"{msg}, at {at}",
-                        no_runs, scores, best, region, verified,
-                        surrogates, problem, searched), sample)
+            return decided("unreachable", f"{msg}, at {at}")
     if spent >= settings.budget:
-        return _sampled(Step(iteration, "budget spent",
-                    f"{spent} runs spent of a budget of {settings.budget}; {_best_said(problem, best)}",
-                    no_runs, scores, best, region, verified,
-                    surrogates, problem, searched), sample)
+        return decided("budget spent",
+                       f"{spent} runs spent of a budget of {settings.budget}; {_best_said(problem, best)}")
     if iteration > settings.max_iterations:
-        return _sampled(Step(iteration, "iterations spent",
-                    f"{settings.max_iterations} iterations without a verified set; {_best_said(problem, best)}",
-                    no_runs, scores, best, region, verified,
-                    surrogates, problem, searched), sample)
+        return decided("iterations spent",
+                       f"{settings.max_iterations} iterations without a verified set; {_best_said(problem, best)}")
     coded, kinds, reps = [], [], []
     left = settings.budget - spent
     ver_pts = problem.to_coded(runs.loc[runs["kind"] == "verification", problem.names].to_numpy(float)) \
@@ -873,16 +866,15 @@ def step(problem: Problem, runs: pd.DataFrame, settings: Settings, iteration: in
     if not coded:
         # the same runs would give the next iteration the same surrogates: stop rather than
         # iterate without running anything
-        return _sampled(Step(iteration, "box exhausted",
-                    f"every candidate lies within {settings.separation:g} (coded) of a run already made and no "
-                    f"verification is due; {_best_said(problem, best)}",
-                    no_runs, scores, best, region, verified, surrogates, problem, searched), sample)
+        return decided("box exhausted",
+                       f"every candidate lies within {settings.separation:g} (coded) of a run already made and no "
+                       f"verification is due; {_best_said(problem, best)}")
     new = _new_runs(problem, coded, kinds, next_point, iteration, reps, next_seed)
     msg = (f"iteration {iteration}: best P = {best['p']:.3f}; {len(new)} runs"
            + (" (with a verification of the best candidate)" if "verification" in kinds else "")
            + ((f"; searching: largest expected improvement {searched:.2g} tolerances"
                + ("" if proposed else ", no proposal run yet")) if unsearched else ""))
-    return _sampled(Step(iteration, "continue", msg, new, scores, best, region, verified, surrogates, problem, searched), sample)
+    return decided("continue", msg, new)
 
 
 def _beyond_data(runs: pd.DataFrame, points: pd.DataFrame, t: Target) -> bool:
