@@ -232,3 +232,59 @@ def test_the_scatter_test_reads_each_row_on_its_degrees_of_freedom():
     row = d[d["test"] == "scatter"].iloc[0]
     assert row["statistic"] == pytest.approx(chi, rel=1e-12)
     assert row["p"] == pytest.approx(stats.chi2.sf(chi, 4), rel=1e-10)
+
+
+def _nested_f_p(r, small, big):
+    """p of the nested F-test by hand: ((SSE_s - SSE_b) / (k_b - k_s)) / (SSE_b / (n - k_b))."""
+    def sse(X):
+        coef, *_ = np.linalg.lstsq(X, r, rcond=None)
+        return float(np.sum((r - X @ coef) ** 2))
+    n, kb, ks = len(r), big.shape[1], small.shape[1]
+    f = ((sse(small) - sse(big)) / (kb - ks)) / (sse(big) / (n - kb))
+    return float(stats.f.sf(f, kb - ks, n - kb))
+
+
+def _confounded_table():
+    # 16 conditions, speed x = 0..15 run in day blocks of four (the first day the slowest):
+    # the residual follows speed alone, r = 0.05 (x - 7.5) + 0.01 t(x), t the Thue-Morse signs
+    # over 16 points (orthogonal to 1, x, x^2 and x^3 by Prouhet), so both the speed trend and
+    # the day grouping are significant, and the day adds nothing once speed is fitted
+    x = np.arange(16, dtype=float)
+    t = np.array([1 - 2 * (bin(i).count("1") % 2) for i in range(16)], float)
+    r = 0.05 * (x - 7.5) + 0.01 * t
+    day = np.array([f"d{i // 4}" for i in range(16)])
+    return _table(r, speed=x, day=day), x, day, r
+
+
+def test_beyond_is_the_nested_f_test_of_the_second_covariates_terms():
+    from soilcal.loop.diagnose import beyond
+
+    d, x, day, r = _confounded_table()
+    q = {"day": "day"}
+    xs = (x - x.mean()) / x.std()
+    one = np.ones((16, 1))
+    dummies = np.column_stack([(day == lv).astype(float) for lv in ("d1", "d2", "d3")])
+    quad = np.column_stack([xs, xs ** 2])
+    # day beyond speed (x and x^2): three day terms added to 1, x, x^2
+    p_day = beyond(d, "day", "speed", q)
+    assert p_day == pytest.approx(_nested_f_p(r, np.column_stack([one, quad]), np.column_stack([one, quad, dummies])),
+                                  rel=1e-9)
+    # speed beyond day: x and x^2 added to the day indicators
+    p_speed = beyond(d, "speed", "day", q)
+    assert p_speed == pytest.approx(_nested_f_p(r, np.column_stack([one, dummies]),
+                                                np.column_stack([one, dummies, quad])), rel=1e-9)
+    assert p_day > 0.05 and p_speed < 1e-6
+    assert np.isnan(beyond(d, "bias", "speed", q)) and np.isnan(beyond(d, "nothing", "speed", q))
+
+
+def test_a_covariate_sharing_the_first_ones_structure_is_named_shared():
+    from soilcal.loop.core import _follows
+
+    d, *_ = _confounded_table()
+    q = {"day": "day"}
+    diag = diagnose(d, q)
+    assert _row(diag, "trend", "speed")["significant"] and _row(diag, "group", "day")["significant"]
+    text = _follows(ranking(diag), d, q)
+    assert text.startswith("speed (r2 ")
+    assert "; also day (r2 " in text and "beyond speed: p" in text and text.endswith(", shared)")
+    assert _follows(ranking(diag)).count("beyond") == 0  # without the residual table: the list alone

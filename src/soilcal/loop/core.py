@@ -134,9 +134,13 @@ class Outcome:
     diagnosis_after: pd.DataFrame = None
 
 
-def _follows(rank: pd.DataFrame) -> str:
+def _follows(rank: pd.DataFrame, res: pd.DataFrame | None = None, quantity_of: dict | None = None,
+             alpha: float = 0.05) -> str:
     """The covariate (or the bias) that explains most of the residual, or the excess
-    scatter where that alone is significant."""
+    scatter where that alone is significant; every other significant covariate after it,
+    with the p of its structure beyond the first's (:func:`soilcal.loop.diagnose.beyond`,
+    where the residual table ``res`` is given): a covariate that adds nothing beyond the
+    first shares its structure (a campaign whose first day ran the faster speeds)."""
     if len(rank) == 0:
         return ""
     cov = rank[rank["covariate"] != "scatter"]
@@ -147,7 +151,20 @@ def _follows(rank: pd.DataFrame) -> str:
     if len(cov) == 0:
         return ""
     top = cov.iloc[0]
-    return f"{top['covariate']} (r2 {top['r2']:.2f}, Holm p {top['p_adjusted']:.3g})"
+    text = f"{top['covariate']} (r2 {top['r2']:.2f}, Holm p {top['p_adjusted']:.3g})"
+    if not bool(top["significant"]):
+        return text
+    also = []
+    for other in cov.iloc[1:].itertuples():
+        if not bool(other.significant):
+            continue
+        part = f"{other.covariate} (r2 {other.r2:.2f}, Holm p {other.p_adjusted:.3g}"
+        if res is not None:
+            p = dg.beyond(res, other.covariate, top["covariate"], quantity_of)
+            if np.isfinite(p):
+                part += f"; beyond {top['covariate']}: p {p:.3g}" + (", shared" if p >= alpha else "")
+        also.append(part + ")")
+    return text + ("; also " + ", ".join(also) if also else "")
 
 
 def default_fold_by(settings: Settings, quantity_cols: dict, diag: pd.DataFrame | None = None) -> str | None:
@@ -175,7 +192,7 @@ def analyse(soil: str, res: pd.DataFrame, diag: pd.DataFrame, cands: list, effec
     (measurement, row, measure, value, ``t:<name>``), the switched-off point included."""
     u = rs.usable(res)
     rank = dg.ranking(diag)
-    follows = _follows(rank)
+    follows = _follows(rank, res, quantity_cols, settings.alpha)
     sel_rows, chosen, theta, ci = [], [], {}, {}
     pred = u[["measurement", "row", "measure", "measured", "simulated_mean"]].copy()
     before = u["relative_residual"].to_numpy(float)
@@ -206,11 +223,12 @@ def analyse(soil: str, res: pd.DataFrame, diag: pd.DataFrame, cands: list, effec
         m = sl.Model([data[c] for c in names], u["simulated_mean"].to_numpy(float), u["measured"].to_numpy(float))
         x, _ = m.fit()
         fitted = m.predict(x)
-        after = dg.diagnose(residual_after(res, fitted), quantity_cols, settings.alpha)
+        res_after = residual_after(res, fitted)
+        after = dg.diagnose(res_after, quantity_cols, settings.alpha)
         rest = dg.ranking(after)
         rest = rest[rest["significant"].astype(bool) & (rest["covariate"] != "scatter")]
         if len(rest) and sel.chosen:
-            left = _follows(rest)
+            left = _follows(rest, res_after, quantity_cols, settings.alpha)
     if n == 0:
         verdict = "no measured value to compare with (nothing to diagnose)"
     elif n < 3:

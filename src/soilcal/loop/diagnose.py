@@ -28,6 +28,12 @@ The p-values of all tests of a table are corrected together (Holm, statsmodels
 test's ``r2`` is the share of the residual variance about its mean that the fit explains
 (for ``bias``, of the sum of squares about zero).  :func:`ranking` orders the covariates by
 the largest share any of their tests explains.
+
+Covariates of a campaign are seldom independent: the tests of one day may happen to run at
+the faster speeds.  :func:`beyond` tells whether a covariate still explains the residual once
+another one's structure is fitted (a nested F-test of its terms, statsmodels
+``compare_f_test``): a second covariate that adds nothing beyond the first shares the first's
+structure rather than having its own.
 """
 
 from __future__ import annotations
@@ -158,6 +164,49 @@ def diagnose(res: pd.DataFrame, quantity_of: dict | None = None, alpha: float = 
         df["p_adjusted"] = pd.Series(dtype=float)
         df["significant"] = pd.Series(dtype=bool)
     return df[DIAGNOSIS_COLUMNS]
+
+
+def _terms(res: pd.DataFrame, name: str, quantity_of: dict) -> np.ndarray | None:
+    """Columns of a covariate's structure as the tests fit it: x and x^2 of a numeric one
+    (standardised; x alone with three distinct values), indicators of a label one (first
+    level dropped); ``bias``: none (the intercept); None for an unknown name."""
+    if name == "bias":
+        return np.empty((len(res), 0))
+    col = res["measure"] if name == "measure" else res.get(f"cov:{name}")
+    if col is None:
+        return None
+    q = quantity_of.get(name, "")
+    distinct = int(col.astype(str).nunique())
+    if _is_numeric(col) and name != "measure" and q not in LABEL_QUANTITIES and distinct >= 3:
+        x = pd.to_numeric(col, errors="coerce").to_numpy(float)
+        xs = (x - x.mean()) / (x.std() or 1.0)
+        return np.column_stack([xs, xs ** 2]) if distinct >= 4 else xs[:, None]
+    labels = col.astype(str).to_numpy()
+    return np.column_stack([(labels == lv).astype(float) for lv in sorted(set(labels))[1:]])
+
+
+def beyond(res: pd.DataFrame, name: str, first: str, quantity_of: dict | None = None) -> float:
+    """p of the nested F-test that covariate ``name`` explains the relative residual beyond
+    covariate ``first`` (module docstring), over the usable rows that carry both; NaN where
+    either is unknown or too few rows are left to tell."""
+    quantity_of = quantity_of or {}
+    r_all = res["relative_residual"].astype(float)
+    d = res[np.isfinite(r_all)]
+    for c in (name, first):
+        col = d["measure"] if c == "measure" else d.get(f"cov:{c}")
+        if c != "bias" and col is not None:
+            d = d[col.notna()]
+    d = d.reset_index(drop=True)
+    a, b = _terms(d, first, quantity_of), _terms(d, name, quantity_of)
+    if a is None or b is None or b.shape[1] == 0:
+        return float("nan")
+    one = np.ones((len(d), 1))
+    small = np.column_stack([one, a])
+    big = np.column_stack([small, b])
+    if len(d) <= big.shape[1] or np.linalg.matrix_rank(big) <= np.linalg.matrix_rank(small):
+        return float("nan")
+    r = d["relative_residual"].to_numpy(float)
+    return float(_ols(r, big).compare_f_test(_ols(r, small))[1])
 
 
 def ranking(diag: pd.DataFrame) -> pd.DataFrame:
