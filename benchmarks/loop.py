@@ -23,12 +23,19 @@ the hidden effect, then ``soilcal.loop.core.run_inprocess`` runs the whole loop 
 Cases: every library effect, two effects at once, a periodic disturbance along the bin,
 stones, a random offset between test days, and no effect.  Written:
 ``benchmarks/results/loop.csv`` (one row per engine, case and campaign seed: chosen effects,
-parameter error, RMS error before/after, false attribution, wall time; earlier rows of the
-engines and cases not run kept), ``loop.md``, and per DEM case its residuals, diagnosis before
-and after and every model tried (``benchmarks/results/loop_dem/<case>_*.csv``).
+parameter error, RMS error before/after, false attribution, wall time; earlier rows kept where
+not rerun: a stand-in case reruns all its seeds, a DEM case the campaign of ``--seed``),
+``loop.md``, and per DEM case and campaign its residuals, diagnosis before and after, every
+model tried and the predictions with the chosen effects
+(``benchmarks/results/loop_dem/<case>_*.csv``, ``<case>_campaign<seed>_*.csv`` for a campaign
+other than 0).  The DEM campaign's seed draws its conditions (and so which speeds fall on
+which test day), the measured side's noise and nothing else; one campaign is one draw of the
+data, so a DEM row is an example, several campaigns a rate.
 
     python benchmarks/loop.py [--engines standin,dem] [--cases rate,stones] [--seeds 3] [--n 12]
     python benchmarks/loop.py --engines dem --cases moisture_cohesion --design-points 5
+    python benchmarks/loop.py --engines dem --seed 1 --out /tmp/loop1    # a second campaign, elsewhere
+    python benchmarks/loop.py --engines none --rows-from /tmp/loop1/loop.csv   # its rows merged here
 
 ``--design-points``: levels per effect parameter of the DEM cases (default 3, to keep a case
 to minutes; the loop's own default, ``loop.design_points``, is 5); a DEM row records it
@@ -71,10 +78,10 @@ STANDIN_CASES = {
 DEM_CASES = {
     "plastic_contact": ({"plastic_contact": {"lambda_p": 0.5}}, {}),
     "rate_friction": ({"rate_friction": {"beta": 0.4}}, {}),
-    "depth_compaction": ({"depth_compaction": {"g": 1.0}}, {}),
+    "depth_compaction": ({"depth_compaction": {"g": 0.6}}, {}),
     "tool_adhesion": ({"tool_adhesion": {"gamma_a": 2.0}}, {}),
     "moisture_cohesion": ({"moisture_cohesion": {"c_w": 0.08}}, {}),
-    "rate+depth": ({"rate_friction": {"beta": 0.4}, "depth_compaction": {"g": 1.0}}, {}),
+    "rate+depth": ({"rate_friction": {"beta": 0.4}, "depth_compaction": {"g": 0.6}}, {}),
     "periodic": ({}, {"periodic": {"amplitude": 0.2, "wavelength": 7.0}}),
     "stones": ({}, {"stones": {"fraction": 0.3, "low": 0.15, "high": 0.4}}),
     "day_offset": ({}, {"day_offset": {"sd": 0.2}}),
@@ -190,7 +197,7 @@ def _compression_campaign(tmp: Path, n: int, seed: int):
         "calibrated": {"stage": "bbd", "case": "mc10"}, "replicates": 2})
 
 
-def dem_rows(cases, n, seed, threads, design_points=3):
+def dem_rows(cases, n, seed, threads, design_points=3, out=HERE / "results"):
     from soilcal.loop import core, synthesize as sy
     from soilcal.loop.cli import condition_params, dem_simulator
 
@@ -219,12 +226,14 @@ def dem_rows(cases, n, seed, threads, design_points=3):
                                      seeds=tuple(range(DEM_SEEDS)))
             rows.append(dict(_row("dem", case, seed, hidden, dist, out, time.perf_counter() - t0, counter["runs"]),
                              design_points=design_points))
-            detail = HERE / "results" / "loop_dem"
+            detail = Path(out) / "loop_dem"
             detail.mkdir(parents=True, exist_ok=True)
             for name, df in (("residuals", out.residuals), ("diagnosis", out.diagnosis), ("selection", out.selection),
-                             ("diagnosis_after", out.diagnosis_after)):
+                             ("diagnosis_after", out.diagnosis_after), ("predictions", out.predictions)):
                 if df is not None:
-                    df.to_csv(detail / f"{case}_{name}.csv", index=False)
+                    # campaign 0 keeps the names it had before other campaigns were run
+                    tag = case if seed == 0 else f"{case}_campaign{seed}"
+                    df.to_csv(detail / f"{tag}_{name}.csv", index=False)
             print(rows[-1]["case"], rows[-1]["chosen"], rows[-1]["verdict"][:100], rows[-1]["wall_s"], flush=True)
     return rows
 
@@ -257,8 +266,13 @@ def main(argv=None):
     ap.add_argument("--threads", type=int, default=None)
     ap.add_argument("--design-points", type=int, default=3, help="levels per effect parameter (dem; default 3)")
     ap.add_argument("--out", default=str(HERE / "results"))
+    ap.add_argument("--rows-from", action="append", default=[], metavar="CSV",
+                    help="also take the rows of another run's loop.csv (a DEM campaign run in a clone)")
     args = ap.parse_args(argv)
     engines = args.engines.split(",")
+    for e in engines:
+        if e not in ("standin", "dem", "none"):
+            ap.error(f"--engines: {e!r} is not one of standin, dem, none")
     cases = args.cases.split(",")
     for c in cases:
         if c not in STANDIN_CASES:
@@ -270,10 +284,17 @@ def main(argv=None):
     if "standin" in engines:
         new += standin_rows(cases, args.seeds)
     if "dem" in engines:
-        new += dem_rows(cases, args.n, args.seed, args.threads, args.design_points)
+        new += dem_rows(cases, args.n, args.seed, args.threads, args.design_points, out)
+    for path in args.rows_from:  # rows of a run elsewhere (a clone), each with its own commit
+        new += [r for r in read_rows(Path(path), FIELDS)]
+
+    def replaced(r):  # a stand-in case reruns all its seeds; a DEM case its campaign
+        return any(r["engine"] == x["engine"] and r["case"] == x["case"]
+                   and (r["engine"] != "dem" or str(r["seed"]) == str(x["seed"])) for x in new)
+
     # earlier rows read only now, so that a run of another engine in the meantime is kept
-    old = [r for r in read_rows(out / "loop.csv", FIELDS) if not (r["engine"] in engines and r["case"] in cases)]
-    rows = old + new
+    old = [r for r in read_rows(out / "loop.csv", FIELDS) if not replaced(r)]
+    rows = sorted(old + new, key=lambda r: (r["engine"], str(r["seed"]) if r["engine"] == "dem" else ""))
     write_rows(out / "loop.csv", rows, FIELDS)
     md = ["# Measured-data loop benchmark", "",
           f"Machine: {platform.machine()}, {os.cpu_count()} logical CPUs, Python {platform.python_version()}; "
@@ -286,14 +307,14 @@ def main(argv=None):
           "effect chosen that was not hidden.  Targets: the right effect with its parameter within 25 % and the "
           "held-out RMS error down by 70 %; no false attribution.", "",
           *_summary(rows), "", "DEM rows (verdicts in full):", "",
-          "| case | chosen | parameter error, % | RMS error before -> after, % | levels | DEM runs | wall s | commit "
-          "| verdict |",
-          "|---|---|---|---|---|---|---|---|---|",
-          *(f"| {r['case']} | {r['chosen']} | {r['parameter_error_percent']} | {r['rmse_before_percent']} -> "
+          "| case | campaign | chosen | parameter error, % | RMS error before -> after, % | levels | DEM runs | wall s "
+          "| commit | verdict |",
+          "|---|---|---|---|---|---|---|---|---|---|",
+          *(f"| {r['case']} | {r['seed']} | {r['chosen']} | {r['parameter_error_percent']} | {r['rmse_before_percent']} -> "
             f"{r['rmse_after_percent']} | {r.get('design_points') or 3} | {r['dem_runs']} | {r['wall_s']} | "
             f"{r['commit']} | {r['verdict']} |"
             for r in rows if r["engine"] == "dem"),
-          "", "Rows: `loop.csv`; per DEM case: `loop_dem/`.", ""]
+          "", "Rows: `loop.csv`; per DEM case and campaign: `loop_dem/`.", ""]
     write_page(out / "loop.md", md)
     print("\n".join(_summary(rows)))
 
