@@ -197,7 +197,7 @@ def _compression_campaign(tmp: Path, n: int, seed: int):
         "calibrated": {"stage": "bbd", "case": "mc10"}, "replicates": 2})
 
 
-def dem_rows(cases, n, seed, threads, design_points=3, out=HERE / "results"):
+def dem_rows(cases, n, seed, threads, design_points=3, outdir=HERE / "results"):
     from soilcal.loop import core, synthesize as sy
     from soilcal.loop.cli import condition_params, dem_simulator
 
@@ -226,7 +226,7 @@ def dem_rows(cases, n, seed, threads, design_points=3, out=HERE / "results"):
                                      seeds=tuple(range(DEM_SEEDS)))
             rows.append(dict(_row("dem", case, seed, hidden, dist, out, time.perf_counter() - t0, counter["runs"]),
                              design_points=design_points))
-            detail = Path(out) / "loop_dem"
+            detail = Path(outdir) / "loop_dem"
             detail.mkdir(parents=True, exist_ok=True)
             for name, df in (("residuals", out.residuals), ("diagnosis", out.diagnosis), ("selection", out.selection),
                              ("diagnosis_after", out.diagnosis_after), ("predictions", out.predictions)):
