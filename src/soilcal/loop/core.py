@@ -30,6 +30,8 @@ Settings (the soil's optional ``loop`` block, every value written into the outpu
       design_points: 5       # levels per effect parameter (plus the switched-off value)
       fold_by: null          # covariate column grouping the held-out folds (default: condition)
       max_effects: 2
+      bootstrap: 200         # refits of the chosen effects' 95 % interval over the seeds and
+                             # the measured values (0: the fit's own interval, seeds ignored)
 """
 
 from __future__ import annotations
@@ -106,7 +108,7 @@ def plan(conditions, names, settings: Settings, reference: dict) -> list[dict]:
 
 SELECTION_COLUMNS = ["step", "effects", "parameters", "ci95", "heldout_rmse_percent", "reference_heldout_rmse_percent",
                      "heldout_max_percent", "aicc", "reference_aicc", "p_paired", "accepted", "reason"]
-SUMMARY_COLUMNS = ["soil", "rows", "usable_rows", "verdict", "effects", "parameters", "ci95", "follows",
+SUMMARY_COLUMNS = ["soil", "rows", "usable_rows", "verdict", "effects", "parameters", "ci95", "ci95_method", "follows",
                    "rmse_before_percent", "rmse_after_percent", "max_before_percent", "max_after_percent",
                    "error_reduction_percent", "alpha", "reference"]
 
@@ -193,7 +195,7 @@ def analyse(soil: str, res: pd.DataFrame, diag: pd.DataFrame, cands: list, effec
     u = rs.usable(res)
     rank = dg.ranking(diag)
     follows = _follows(rank, res, quantity_cols, settings.alpha)
-    sel_rows, chosen, theta, ci = [], [], {}, {}
+    sel_rows, chosen, theta, ci, ci_method = [], [], {}, {}, ""
     pred = u[["measurement", "row", "measure", "measured", "simulated_mean"]].copy()
     before = u["relative_residual"].to_numpy(float)
     after_cv = before.copy()
@@ -236,6 +238,17 @@ def analyse(soil: str, res: pd.DataFrame, diag: pd.DataFrame, cands: list, effec
     elif sel is not None and sel.chosen:
         chosen = sel.chosen
         theta, ci = sel.final.theta, sel.final.ci
+        ci_method = "fit (Jacobian; the seeds' scatter in the surrogates left out)"
+        meas_n = u["measured_n"].to_numpy(float) if "measured_n" in u else np.full(n, np.nan)
+        meas_se = (u["measured_sd"].to_numpy(float) / np.sqrt(np.where(np.isfinite(meas_n) & (meas_n >= 1), meas_n, 1.0))
+                   if "measured_sd" in u else np.full(n, np.nan))
+        boot = sl.bootstrap_ci([data[c] for c in chosen], u["simulated_mean"].to_numpy(float),
+                               u["measured"].to_numpy(float), meas_se, settings.bootstrap,
+                               x0=[theta[nm] for nm in sel.final.names])
+        if boot is not None:
+            ci = boot
+            ci_method = (f"bootstrap: {settings.bootstrap} refits over the seeds and the measured standard errors "
+                         f"(generator seed {sl.BOOTSTRAP_SEED})")
         pred["with_effects"] = fitted
         _, held = sl.cross_validate(m, sl._folds(u, fold_by))
         meas = u["measured"].to_numpy(float)
@@ -268,7 +281,7 @@ def analyse(soil: str, res: pd.DataFrame, diag: pd.DataFrame, cands: list, effec
     ma = float(np.max(np.abs(after_cv[ok]))) * 100 if ok.any() else math.nan
     summary = pd.DataFrame([{
         "soil": soil, "rows": len(res), "usable_rows": n, "verdict": verdict, "effects": "+".join(chosen),
-        "parameters": _fmt(theta), "ci95": _fmt_ci(ci), "follows": follows, "rmse_before_percent": rb,
+        "parameters": _fmt(theta), "ci95": _fmt_ci(ci), "ci95_method": ci_method, "follows": follows, "rmse_before_percent": rb,
         "rmse_after_percent": ra, "max_before_percent": mb, "max_after_percent": ma,
         "error_reduction_percent": (1 - ra / rb) * 100 if rb and np.isfinite(rb) and rb > 0 else math.nan,
         "alpha": settings.alpha, "reference": _fmt(reference)}], columns=SUMMARY_COLUMNS)

@@ -242,7 +242,7 @@ def report(soil: str, o: core.Outcome, plans: list) -> str:
                 lo, hi = ci.get(key, (np.nan, np.nan))
                 lines.append(f"| {name} | {k} | {o.theta[key]:.4g} | {lo:.4g} to {hi:.4g} | {unit} | "
                              f"{eff.formula} | {eff.source} |")
-        lines.append("")
+        lines += ["", f"Interval: {s['ci95_method']}.", ""]
     lines += ["## Diagnosis of the calibrated model's residual", "",
               _table(o.diagnosis, ["test", "covariate", "quantity", "n", "estimate", "statistic", "p", "p_adjusted", "r2",
                                    "significant"]) if len(o.diagnosis) else "(no test: too few usable rows)", "",

@@ -21,7 +21,17 @@ effects already chosen), on the relative errors ``e_i = (measured_i - prediction
 * **information criterion**: AICc = n ln(SSE/n) + 2K + 2K(K+1)/(n-K-1) of the fit to every
   row, K the number of effect parameters plus one (the residual variance);
 * **confidence intervals**: from the Jacobian of the full fit, cov = s^2 (J^T J)^-1,
-  s^2 = SSE/(n-k), two-sided 95 % with Student's t on n-k degrees of freedom.
+  s^2 = SSE/(n-k), two-sided 95 % with Student's t on n-k degrees of freedom (every model
+  tried, ``selection.csv``).  They treat the surrogates as exact, but each design point is
+  the mean of a few seeds: with three seeds of a quick plate (about 14 % scatter per run) the
+  effect's sensitivity itself is uncertain by a fifth, and an interval of the fit alone can
+  miss the parameter by far.  The chosen model's interval (``loop_summary.csv``) is therefore
+  a bootstrap (:func:`bootstrap_ci`): the seeds of each condition resampled (one draw per
+  condition for every design point of every effect, so common random numbers are kept; the
+  deviations from the seed mean scaled by sqrt(n/(n-1)), so that the resampled mean has the
+  variance s^2/n of the sample's), the measured values redrawn within their standard error,
+  the model refitted; the 2.5 and 97.5 percentiles of :data:`BOOTSTRAP` refits, the
+  generator seeded with :data:`BOOTSTRAP_SEED`.
 
 A model is accepted against its reference when the paired test's p is below ``alpha``, its
 pooled held-out RMS error is at least :data:`MIN_IMPROVEMENT` (10 %) below the reference's
@@ -101,18 +111,51 @@ class Surrogate:
 
 @dataclass
 class EffectData:
-    """One candidate's simulated design: the surrogate over all usable rows."""
+    """One candidate's simulated design: the surrogate over all usable rows, and each
+    run's value (``values``: design point x row x seed position, NaN where a run failed or
+    a row has fewer seeds) for the bootstrap."""
 
     effect: object
     bounds: dict
     surrogate: Surrogate
     design: list = field(default_factory=list)
     missing: list = field(default_factory=list)  # rows with a failed run at some design point
+    values: np.ndarray | None = None
+
+    def thetas(self) -> np.ndarray:
+        return np.array([[d[k] for k in self.effect.theta_names()] for d in self.design], float)
+
+
+def _fill_failed(Y: np.ndarray, design: list, effect, obs: pd.DataFrame | None) -> list[str]:
+    """Fill, in place, the NaN cells of the design-point means ``Y`` (design x rows): a run
+    that failed at a design point; the row's value there is interpolated over its other
+    points (one parameter) or taken from the switched-off point (two); a row with fewer than
+    two points is refused.  Returns the rows filled."""
+    names = effect.theta_names()
+    index = {t: j for j, t in enumerate(design)}
+    null = tuple(float(effect.null[k]) for k in names)
+    missing = []
+    for i in np.flatnonzero(np.isnan(Y).any(axis=0)):
+        ok = ~np.isnan(Y[:, i])
+        where = (f"{obs['measurement'].iloc[i]} row {obs['row'].iloc[i]} {obs['measure'].iloc[i]}"
+                 if obs is not None else f"row {i + 1}")
+        if ok.sum() < 2:
+            raise ValueError(f"effect {effect.name}: fewer than two design points simulated for {where}")
+        missing.append(where)
+        if len(names) == 1:
+            xs = np.array([t[0] for t in design])
+            Y[~ok, i] = np.interp(xs[~ok], xs[ok], Y[ok, i])
+        elif null in index and ok[index[null]]:
+            Y[~ok, i] = Y[index[null], i]
+        else:
+            raise ValueError(f"effect {effect.name}: no simulated value of {where} at the switched-off point")
+    return missing
 
 
 def build_effect_data(obs: pd.DataFrame, runs: pd.DataFrame, effect, bounds: dict) -> EffectData:
-    """Surrogate of ``effect`` from its runs (measurement, row, measure, value, ``t:<name>``)
-    for the rows of ``obs`` (a failed run at a design point: see the comment below)."""
+    """Surrogate of ``effect`` from its runs (measurement, row, measure, value, ``t:<name>``,
+    and ``seed`` for the bootstrap) for the rows of ``obs`` (a failed run at a design point:
+    :func:`_fill_failed`)."""
     names = effect.theta_names()
     tcols = [T_PREFIX + k for k in names]
     design = sorted({tuple(float(x) for x in t) for t in runs[tcols].itertuples(index=False)})  # every point run
@@ -127,27 +170,29 @@ def build_effect_data(obs: pd.DataFrame, runs: pd.DataFrame, effect, bounds: dic
         i = keys.get((rec[0], int(rec[1]), rec[2]))
         if i is not None:
             Y[index[tuple(float(x) for x in rec[3:3 + len(tcols)])], i] = rec[-1]
-    missing = []
-    if np.isnan(Y).any():
-        # a run that failed at a design point: the row's value there is interpolated over its
-        # other points (one parameter) or taken from the switched-off point (two); a row with
-        # fewer than two points is refused
-        null = tuple(float(effect.null[k]) for k in names)
-        for i in np.flatnonzero(np.isnan(Y).any(axis=0)):
-            ok = ~np.isnan(Y[:, i])
-            where = f"{obs['measurement'][i]} row {obs['row'][i]} {obs['measure'][i]}"
-            if ok.sum() < 2:
-                raise ValueError(f"effect {effect.name}: fewer than two design points simulated for {where}")
-            missing.append(where)
-            if len(names) == 1:
-                xs = np.array([t[0] for t in design])
-                Y[~ok, i] = np.interp(xs[~ok], xs[ok], Y[ok, i])
-            elif null in index and ok[index[null]]:
-                Y[~ok, i] = Y[index[null], i]
-            else:
-                raise ValueError(f"effect {effect.name}: no simulated value of {where} at the switched-off point")
+    values = _seed_values(r, obs, design, index, keys, tcols)
+    missing = _fill_failed(Y, design, effect, obs.reset_index(drop=True))
     return EffectData(effect, bounds, Surrogate(effect, bounds, np.array(design), Y), [dict(zip(names, t)) for t in design],
-                      missing)
+                      missing, values)
+
+
+def _seed_values(r: pd.DataFrame, obs, design, index, keys, tcols) -> np.ndarray | None:
+    """design x row x seed position: each run's value, a row's seeds in ascending order
+    (the same seed at every design point: common random numbers); None without a seed column."""
+    if "seed" not in r.columns or r.empty:
+        return None
+    seeds = r.groupby(["measurement", "row", "measure"])["seed"].agg(lambda x: sorted(set(x)))
+    ns = max(len(v) for v in seeds)
+    out = np.full((len(design), len(obs), ns), np.nan)
+    pos = {k: {sd: j for j, sd in enumerate(v)} for k, v in seeds.items()}
+    for rec in r[["measurement", "row", "measure", "seed", "value"] + tcols].itertuples(index=False):
+        key = (rec[0], int(rec[1]), rec[2])
+        i = keys.get(key)
+        if i is None:
+            continue
+        d = index[tuple(float(x) for x in rec[5:5 + len(tcols)])]
+        out[d, i, pos[(rec[0], rec[1], rec[2])][rec[3]]] = float(rec[4])
+    return out
 
 
 def _folds(obs: pd.DataFrame, fold_by: str | None) -> list[np.ndarray]:
@@ -195,13 +240,18 @@ class Model:
         per = [[np.array([d[k] for k in e.effect.theta_names()], float) for d in e.design] for e in self.effects]
         return [np.concatenate(c) for c in itertools.product(*per)]
 
-    def fit(self, idx=None):
-        """Least-squares parameters on rows ``idx`` (all by default); (x, result or None)."""
+    def fit(self, idx=None, x0=None):
+        """Least-squares parameters on rows ``idx`` (all by default); (x, result or None).
+        ``x0``: one search from there instead of from the best design points."""
         from scipy.optimize import least_squares
 
         if not self.effects:
             return np.zeros(0), None
         lo, hi = self.bounds()
+        if x0 is not None:
+            res = least_squares(lambda x: self.errors(x, idx), np.clip(np.asarray(x0, float), lo, hi),
+                                bounds=(lo, hi), method="trf")
+            return res.x, res
         best = None
         starts = [np.clip(x0, lo, hi) for x0 in self.starts()]
         cost = [float(np.sum(self.errors(x0, idx) ** 2)) for x0 in starts]
@@ -325,6 +375,60 @@ def score(model: Model, ref: Model, folds, alpha: float = 0.05, min_improvement:
     return Score(names=names, theta=dict(zip(names, map(float, x))), ci=ci, fold_rms=fold_rms, ref_fold_rms=ref_rms,
                  heldout_errors=held[hm], ref_heldout_errors=ref_held[hm], fitted_errors=e, aicc=a, ref_aicc=ar,
                  p=p, accepted=not reason, reason=reason)
+
+
+#: refits of the chosen model's bootstrap interval (module docstring), and its generator's seed
+BOOTSTRAP = 200
+BOOTSTRAP_SEED = 0
+
+
+def bootstrap_ci(effects: list, y0: np.ndarray, measured: np.ndarray, measured_se: np.ndarray,
+                 n_boot: int = BOOTSTRAP, seed: int = BOOTSTRAP_SEED, level: float = 0.95, x0=None) -> dict | None:
+    """Bootstrap interval of the parameters of the model with ``effects``
+    (:class:`EffectData` with their runs' ``values``) over the seeds and the measured
+    values (module docstring): parameter name -> (low, high); each refit searches from
+    ``x0`` (the fitted parameters) where given.  None where nothing can be resampled (no
+    per-seed values, one seed per row, ``n_boot`` 0)."""
+    if n_boot <= 0 or not effects or any(e.values is None for e in effects):
+        return None
+    ns = max(e.values.shape[2] for e in effects)
+    if ns < 2:
+        return None
+    rng = np.random.default_rng(seed)
+    n = len(y0)
+    se = np.where(np.isfinite(measured_se), measured_se, 0.0)
+    resampled = []
+    for e in effects:
+        V = e.values
+        mean = np.nanmean(V, axis=2, keepdims=True) if np.isfinite(V).any() else V[..., :1]
+        count = np.sum(np.isfinite(V), axis=2, keepdims=True)
+        resampled.append((V, mean, np.sqrt(count / np.maximum(count - 1, 1))))
+    names = [f"{e.effect.name}.{t}" for e in effects for t in e.effect.theta_names()]
+    draws = []
+    for _ in range(int(n_boot)):
+        idx = rng.integers(0, ns, size=(n, ns))  # one draw per condition, for every effect and point
+        m = measured + se * rng.standard_normal(n)
+        fitted, yb = [], None
+        try:
+            for e, (V, mean, scale) in zip(effects, resampled):
+                take = np.take_along_axis(V, np.broadcast_to(idx[None] % V.shape[2], V.shape[:2] + (ns,)), axis=2)
+                with np.errstate(invalid="ignore"):
+                    Y = np.nanmean(mean + scale * (take - mean), axis=2) if np.isfinite(take).any() else take[..., 0]
+                design = [tuple(float(d[k]) for k in e.effect.theta_names()) for d in e.design]
+                _fill_failed(Y, design, e.effect, None)
+                null = tuple(float(e.effect.null[k]) for k in e.effect.theta_names())
+                if yb is None and null in design:
+                    yb = Y[design.index(null)]
+                fitted.append(EffectData(e.effect, e.bounds, Surrogate(e.effect, e.bounds, e.thetas(), Y), e.design))
+        except ValueError:  # a row left without two design points in this draw
+            continue
+        x, _ = Model(fitted, y0 if yb is None else yb, m).fit(x0=x0)
+        draws.append(x)
+    if len(draws) < max(20, n_boot // 2):
+        return None
+    tail = 100 * (1 - level) / 2
+    lo, hi = np.percentile(np.array(draws), [tail, 100 - tail], axis=0)
+    return {nm: (float(lo[j]), float(hi[j])) for j, nm in enumerate(names)}
 
 
 @dataclass

@@ -20,6 +20,7 @@ class Settings:
     design_points: int = 5
     fold_by: str | None = None
     max_effects: int = 2
+    bootstrap: int = 200
 
     def effect_bounds(self, name: str) -> dict:
         return get(name).bounds(self.bounds.get(name))
@@ -78,6 +79,11 @@ def settings_from(soil_data: dict, source="<soil>") -> Settings:
         s.design_points = v
     if "fold_by" in block:
         s.fold_by = block["fold_by"]
+    if "bootstrap" in block:
+        v = block["bootstrap"]
+        if not isinstance(v, int) or isinstance(v, bool) or not (v == 0 or v >= 50):
+            raise InputError(source, "loop.bootstrap", "0 (the fit's own interval) or an integer >= 50", v)
+        s.bootstrap = v
     if "max_effects" in block:
         v = block["max_effects"]
         if not isinstance(v, int) or v < 1:
