@@ -87,3 +87,35 @@ def test_the_interval_covers_the_true_parameter_at_its_level():
         assert lo <= x <= hi
         covered += lo <= true <= hi
     assert covered >= 33, covered
+
+
+def test_runs_without_a_seed_number_are_left_out_and_rows_may_have_more_seeds():
+    obs, runs = _campaign(np.random.default_rng(3), 0.3, 0.14)
+    runs = runs.astype({"seed": float})
+    runs.loc[(runs["row"] == 2) & (runs["seed"] == 1), "seed"] = np.nan  # one seed of row 2 unnumbered
+    extra = runs[runs["row"] == 5].assign(seed=lambda d: d["seed"] + 10)  # row 5: six seeds
+    ed = sl.build_effect_data(obs, pd.concat([runs, extra]), EFF, BOUNDS)
+    assert ed.seeds[1] == [0, 2] and ed.seeds[4] == [0, 1, 2, 10, 11, 12] and ed.values.shape[2] == 6
+    assert np.isnan(ed.values[:, 1, 2:]).all() and np.isfinite(ed.values[:, 4]).all()
+    y0 = ed.surrogate([0.0])
+    ci = sl.bootstrap_ci([ed], y0, obs["measured"].to_numpy(float), np.zeros(N), 100, x0=[0.3])
+    assert ci is not None and ci["rate_friction.beta"][0] < 0.3 < ci["rate_friction.beta"][1]
+
+
+def test_a_row_without_its_measured_sd_keeps_the_fits_interval():
+    from soilcal.loop import core
+
+    obs, runs = _campaign(np.random.default_rng(4), 0.3, 0.14)
+    ed = sl.build_effect_data(obs, runs, EFF, BOUNDS)
+    u = obs.assign(simulated_mean=ed.surrogate([0.0]))
+    m = sl.Model([ed], u["simulated_mean"].to_numpy(float), u["measured"].to_numpy(float))
+    final = sl.score(m, sl.Model([], m.y0, m.measured), sl._folds(u, None))
+    ci, how = core._interval(u, [ed], final.theta, final, core.Settings())
+    assert how.startswith("the wider of the fit's (Jacobian) interval and a bootstrap of 200 refits")
+    lo, hi = final.ci["rate_friction.beta"]
+    assert ci["rate_friction.beta"][0] <= lo and ci["rate_friction.beta"][1] >= hi
+    u.loc[3, "measured_sd"] = np.nan
+    ci, how = core._interval(u, [ed], final.theta, final, core.Settings())
+    assert ci == final.ci and "without its SD" in how
+    ci, how = core._interval(u, [ed], final.theta, final, core.Settings(bootstrap=0))
+    assert ci == final.ci and "loop.bootstrap: 0" in how

@@ -288,3 +288,20 @@ def test_a_covariate_sharing_the_first_ones_structure_is_named_shared():
     assert text.startswith("speed (r2 ")
     assert "; also day (r2 " in text and "beyond speed: p" in text and text.endswith(", shared)")
     assert _follows(ranking(diag)).count("beyond") == 0  # without the residual table: the list alone
+
+
+def test_beyond_a_covariate_with_one_level_on_the_shared_rows_is_nan():
+    from soilcal.loop.core import _follows
+    from soilcal.loop.diagnose import beyond
+
+    d, *_ = _confounded_table()
+    d["cov:speed"] = d["cov:speed"].where(d["cov:day"] == "d0")  # speed recorded on the first day only
+    # on the four rows with a speed the day has one level: speed's structure is its own there
+    # (the residual is linear in speed), and the day has none beyond speed
+    assert beyond(d, "speed", "day", {"day": "day"}) < 0.05
+    assert np.isnan(beyond(d, "day", "speed", {"day": "day"}))
+    d["cov:other"] = np.where(d["cov:day"] == "d0", np.nan, 1.0)  # never beside speed
+    assert np.isnan(beyond(d, "other", "speed", {"day": "day"}))
+    diag = diagnose(d, {"day": "day"})
+    text = _follows(ranking(diag), d, {"day": "day"})  # no p beyond speed where it cannot be told
+    assert text.startswith("speed (r2 ") and "; also day (r2 " in text and "beyond" not in text

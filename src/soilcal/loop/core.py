@@ -169,6 +169,32 @@ def _follows(rank: pd.DataFrame, res: pd.DataFrame | None = None, quantity_of: d
     return text + ("; also " + ", ".join(also) if also else "")
 
 
+def _interval(u: pd.DataFrame, effects: list, theta: dict, final, settings: Settings) -> tuple[dict, str]:
+    """The chosen effects' 95 % intervals and how they were found: the wider of the fit's
+    own interval and the bootstrap over the seeds and the measured standard errors
+    (:func:`soilcal.loop.select.bootstrap_ci`; the fit's interval carries a lack of fit
+    beyond the measured scatter, the bootstrap the surrogates' seed scatter); the fit's
+    alone where a row has no measured SD (its value cannot be redrawn) or
+    ``loop.bootstrap`` is 0."""
+    fit_only = "fit (Jacobian): the seeds' scatter in the surrogates left out"
+    if settings.bootstrap <= 0:
+        return final.ci, fit_only + " (loop.bootstrap: 0)"
+    sd = u["measured_sd"].to_numpy(float) if "measured_sd" in u else np.full(len(u), np.nan)
+    if not np.isfinite(sd).all():
+        return final.ci, fit_only + " (a measured row without its SD: the bootstrap cannot redraw it)"
+    n_meas = u["measured_n"].to_numpy(float) if "measured_n" in u else np.full(len(u), np.nan)
+    se = sd / np.sqrt(np.where(np.isfinite(n_meas) & (n_meas >= 1), n_meas, 1.0))
+    cond = (u["measurement"].astype(str) + "/" + u["row"].astype(str)).tolist()
+    boot = sl.bootstrap_ci(effects, u["simulated_mean"].to_numpy(float), u["measured"].to_numpy(float), se,
+                           settings.bootstrap, x0=[theta[nm] for nm in final.names], conditions=cond)
+    if boot is None:
+        return final.ci, fit_only + " (too few seeds per condition to resample)"
+    ci = {nm: (min(lo, final.ci.get(nm, (lo, hi))[0]), max(hi, final.ci.get(nm, (lo, hi))[1]))
+          for nm, (lo, hi) in boot.items()}
+    return ci, (f"the wider of the fit's (Jacobian) interval and a bootstrap of {settings.bootstrap} refits over "
+                f"each condition's seeds and the measured standard errors (generator seed {sl.BOOTSTRAP_SEED})")
+
+
 def default_fold_by(settings: Settings, quantity_cols: dict, diag: pd.DataFrame | None = None) -> str | None:
     """The held-out groups: ``loop.fold_by``, else the column holding the test ``day`` (or a
     ``group``) where the residual differs between its groups (raw p < alpha): rows measured
@@ -238,17 +264,7 @@ def analyse(soil: str, res: pd.DataFrame, diag: pd.DataFrame, cands: list, effec
     elif sel is not None and sel.chosen:
         chosen = sel.chosen
         theta, ci = sel.final.theta, sel.final.ci
-        ci_method = "fit (Jacobian; the seeds' scatter in the surrogates left out)"
-        meas_n = u["measured_n"].to_numpy(float) if "measured_n" in u else np.full(n, np.nan)
-        meas_se = (u["measured_sd"].to_numpy(float) / np.sqrt(np.where(np.isfinite(meas_n) & (meas_n >= 1), meas_n, 1.0))
-                   if "measured_sd" in u else np.full(n, np.nan))
-        boot = sl.bootstrap_ci([data[c] for c in chosen], u["simulated_mean"].to_numpy(float),
-                               u["measured"].to_numpy(float), meas_se, settings.bootstrap,
-                               x0=[theta[nm] for nm in sel.final.names])
-        if boot is not None:
-            ci = boot
-            ci_method = (f"bootstrap: {settings.bootstrap} refits over the seeds and the measured standard errors "
-                         f"(generator seed {sl.BOOTSTRAP_SEED})")
+        ci, ci_method = _interval(u, [data[c] for c in chosen], theta, sel.final, settings)
         pred["with_effects"] = fitted
         _, held = sl.cross_validate(m, sl._folds(u, fold_by))
         meas = u["measured"].to_numpy(float)

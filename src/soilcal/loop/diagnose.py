@@ -182,7 +182,10 @@ def _terms(res: pd.DataFrame, name: str, quantity_of: dict) -> np.ndarray | None
         xs = (x - x.mean()) / (x.std() or 1.0)
         return np.column_stack([xs, xs ** 2]) if distinct >= 4 else xs[:, None]
     labels = col.astype(str).to_numpy()
-    return np.column_stack([(labels == lv).astype(float) for lv in sorted(set(labels))[1:]])
+    levels = sorted(set(labels))[1:]
+    if not levels:  # one level on these rows: no structure of its own
+        return np.empty((len(res), 0))
+    return np.column_stack([(labels == lv).astype(float) for lv in levels])
 
 
 def beyond(res: pd.DataFrame, name: str, first: str, quantity_of: dict | None = None) -> float:
@@ -197,6 +200,8 @@ def beyond(res: pd.DataFrame, name: str, first: str, quantity_of: dict | None = 
         if c != "bias" and col is not None:
             d = d[col.notna()]
     d = d.reset_index(drop=True)
+    if len(d) == 0:
+        return float("nan")
     a, b = _terms(d, first, quantity_of), _terms(d, name, quantity_of)
     if a is None or b is None or b.shape[1] == 0:
         return float("nan")

@@ -25,13 +25,14 @@ effects already chosen), on the relative errors ``e_i = (measured_i - prediction
   tried, ``selection.csv``).  They treat the surrogates as exact, but each design point is
   the mean of a few seeds: with three seeds of a quick plate (about 14 % scatter per run) the
   effect's sensitivity itself is uncertain by a fifth, and an interval of the fit alone can
-  miss the parameter by far.  The chosen model's interval (``loop_summary.csv``) is therefore
-  a bootstrap (:func:`bootstrap_ci`): the seeds of each condition resampled (one draw per
-  condition for every design point of every effect, so common random numbers are kept; the
-  deviations from the seed mean scaled by sqrt(n/(n-1)), so that the resampled mean has the
-  variance s^2/n of the sample's), the measured values redrawn within their standard error,
-  the model refitted; the 2.5 and 97.5 percentiles of :data:`BOOTSTRAP` refits, the
-  generator seeded with :data:`BOOTSTRAP_SEED`.
+  miss the parameter by far.  The chosen model's interval (``loop_summary.csv``) therefore
+  also takes a bootstrap (:func:`bootstrap_ci`): the seeds of each condition resampled (one
+  draw per condition for every design point of every effect and every measured quantity, so
+  common random numbers are kept; the deviations from the seed mean scaled by
+  sqrt(n/(n-1)), so that the resampled mean has the variance s^2/n of the sample's), the
+  measured values redrawn within their standard error, the model refitted; the 2.5 and 97.5
+  percentiles of :data:`BOOTSTRAP` refits, the generator seeded with :data:`BOOTSTRAP_SEED`
+  (:func:`soilcal.loop.core._interval` reports the wider of the two).
 
 A model is accepted against its reference when the paired test's p is below ``alpha``, its
 pooled held-out RMS error is at least :data:`MIN_IMPROVEMENT` (10 %) below the reference's
@@ -121,6 +122,7 @@ class EffectData:
     design: list = field(default_factory=list)
     missing: list = field(default_factory=list)  # rows with a failed run at some design point
     values: np.ndarray | None = None
+    seeds: list | None = None  # per row, the seeds behind values' last axis (ascending)
 
     def thetas(self) -> np.ndarray:
         return np.array([[d[k] for k in self.effect.theta_names()] for d in self.design], float)
@@ -170,29 +172,38 @@ def build_effect_data(obs: pd.DataFrame, runs: pd.DataFrame, effect, bounds: dic
         i = keys.get((rec[0], int(rec[1]), rec[2]))
         if i is not None:
             Y[index[tuple(float(x) for x in rec[3:3 + len(tcols)])], i] = rec[-1]
-    values = _seed_values(r, obs, design, index, keys, tcols)
+    values, seeds = _seed_values(r, obs, design, index, keys, tcols)
     missing = _fill_failed(Y, design, effect, obs.reset_index(drop=True))
     return EffectData(effect, bounds, Surrogate(effect, bounds, np.array(design), Y), [dict(zip(names, t)) for t in design],
-                      missing, values)
+                      missing, values, seeds)
 
 
-def _seed_values(r: pd.DataFrame, obs, design, index, keys, tcols) -> np.ndarray | None:
-    """design x row x seed position: each run's value, a row's seeds in ascending order
-    (the same seed at every design point: common random numbers); None without a seed column."""
-    if "seed" not in r.columns or r.empty:
-        return None
-    seeds = r.groupby(["measurement", "row", "measure"])["seed"].agg(lambda x: sorted(set(x)))
-    ns = max(len(v) for v in seeds)
+def _seed_values(r: pd.DataFrame, obs, design, index, keys, tcols):
+    """(design x row x seed position array of each run's value, per row its seeds in
+    ascending order): NaN where a run failed or a row has fewer seeds; (None, None) without
+    a seed column.  Runs without a seed number are left out (they cannot be paired)."""
+    if "seed" not in r.columns:
+        return None, None
+    r = r[pd.to_numeric(r["seed"], errors="coerce").notna()]
+    if r.empty:
+        return None, None
+    seeds = [[] for _ in range(len(obs))]
+    for (m, rw, ms), sd in r.groupby(["measurement", "row", "measure"])["seed"]:
+        i = keys.get((m, int(rw), ms))
+        if i is not None:
+            seeds[i] = sorted({int(x) for x in sd})
+    ns = max((len(v) for v in seeds), default=0)
+    if ns == 0:
+        return None, None
     out = np.full((len(design), len(obs), ns), np.nan)
-    pos = {k: {sd: j for j, sd in enumerate(v)} for k, v in seeds.items()}
+    pos = [{sd: j for j, sd in enumerate(v)} for v in seeds]
     for rec in r[["measurement", "row", "measure", "seed", "value"] + tcols].itertuples(index=False):
-        key = (rec[0], int(rec[1]), rec[2])
-        i = keys.get(key)
+        i = keys.get((rec[0], int(rec[1]), rec[2]))
         if i is None:
             continue
         d = index[tuple(float(x) for x in rec[5:5 + len(tcols)])]
-        out[d, i, pos[(rec[0], rec[1], rec[2])][rec[3]]] = float(rec[4])
-    return out
+        out[d, i, pos[i][int(rec[3])]] = float(rec[4])
+    return out, seeds
 
 
 def _folds(obs: pd.DataFrame, fold_by: str | None) -> list[np.ndarray]:
@@ -383,37 +394,70 @@ BOOTSTRAP_SEED = 0
 
 
 def bootstrap_ci(effects: list, y0: np.ndarray, measured: np.ndarray, measured_se: np.ndarray,
-                 n_boot: int = BOOTSTRAP, seed: int = BOOTSTRAP_SEED, level: float = 0.95, x0=None) -> dict | None:
+                 n_boot: int = BOOTSTRAP, seed: int = BOOTSTRAP_SEED, level: float = 0.95, x0=None,
+                 conditions=None) -> dict | None:
     """Bootstrap interval of the parameters of the model with ``effects``
-    (:class:`EffectData` with their runs' ``values``) over the seeds and the measured
-    values (module docstring): parameter name -> (low, high); each refit searches from
-    ``x0`` (the fitted parameters) where given.  None where nothing can be resampled (no
-    per-seed values, one seed per row, ``n_boot`` 0)."""
-    if n_boot <= 0 or not effects or any(e.values is None for e in effects):
+    (:class:`EffectData` with their runs' ``values`` and ``seeds``) over the seeds and the
+    measured values (module docstring): parameter name -> (low, high).
+
+    Each draw takes, per measured condition (``conditions``: one label per row, rows of one
+    condition, such as its horizontal and vertical force, share the draw; default: each row
+    its own), as many seeds with replacement as the condition has, from the union of its
+    seeds over the effects, the same seeds for every design point of every effect.  Each
+    refit searches from ``x0`` (the fitted parameters) where given.  None where nothing can
+    be resampled (no per-seed values, fewer than two seeds per row, ``n_boot`` 0) or where
+    fewer than half the draws leave every row two design points."""
+    import warnings
+
+    if n_boot <= 0 or not effects or any(e.values is None or e.seeds is None for e in effects):
         return None
-    ns = max(e.values.shape[2] for e in effects)
-    if ns < 2:
-        return None
-    rng = np.random.default_rng(seed)
     n = len(y0)
+    union = [sorted(set().union(*(e.seeds[i] for e in effects))) for i in range(n)]
+    if max(len(u) for u in union) < 2:
+        return None
+    labels = np.arange(n) if conditions is None else pd.factorize(pd.Series(list(conditions)).astype(str))[0]
+    groups = {}
+    for i, g in enumerate(labels):
+        groups.setdefault(g, set()).update(union[i])
+    order = sorted(groups)
+    gindex = np.array([order.index(g) for g in labels])
+    gseeds = [sorted(groups[g]) for g in order]
+    width = max(len(v) for v in gseeds)
+    # per effect: for each row, where each of its condition's seeds sits on the effect's seed
+    # axis (the padding slot, NaN, where the effect has no run of that seed)
+    prepared = []
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", RuntimeWarning)  # a cell without a seed: NaN, filled below
+        for e in effects:
+            V = e.values
+            pad = V.shape[2]
+            W = np.full((n, width), pad)
+            for i in range(n):
+                at = {sd: j for j, sd in enumerate(e.seeds[i])}
+                cs = gseeds[gindex[i]]
+                W[i, :len(cs)] = [at.get(sd, pad) for sd in cs]
+            Vp = np.concatenate([V, np.full(V.shape[:2] + (1,), np.nan)], axis=2)
+            mean = np.nanmean(V, axis=2)[..., None]
+            count = np.sum(np.isfinite(V), axis=2)[..., None]
+            prepared.append((Vp, W, pad, mean, np.sqrt(count / np.maximum(count - 1, 1))))
+    rng = np.random.default_rng(seed)
     se = np.where(np.isfinite(measured_se), measured_se, 0.0)
-    resampled = []
-    for e in effects:
-        V = e.values
-        mean = np.nanmean(V, axis=2, keepdims=True) if np.isfinite(V).any() else V[..., :1]
-        count = np.sum(np.isfinite(V), axis=2, keepdims=True)
-        resampled.append((V, mean, np.sqrt(count / np.maximum(count - 1, 1))))
     names = [f"{e.effect.name}.{t}" for e in effects for t in e.effect.theta_names()]
     draws = []
     for _ in range(int(n_boot)):
-        idx = rng.integers(0, ns, size=(n, ns))  # one draw per condition, for every effect and point
+        picks = np.full((len(gseeds), width), -1)
+        for g, v in enumerate(gseeds):  # as many seeds as the condition has, with replacement
+            picks[g, :len(v)] = rng.integers(0, len(v), size=len(v))
+        rows = picks[gindex]  # (n, width), -1 beyond a condition's own seed count
         m = measured + se * rng.standard_normal(n)
         fitted, yb = [], None
         try:
-            for e, (V, mean, scale) in zip(effects, resampled):
-                take = np.take_along_axis(V, np.broadcast_to(idx[None] % V.shape[2], V.shape[:2] + (ns,)), axis=2)
-                with np.errstate(invalid="ignore"):
-                    Y = np.nanmean(mean + scale * (take - mean), axis=2) if np.isfinite(take).any() else take[..., 0]
+            for e, (Vp, W, pad, mean, scale) in zip(effects, prepared):
+                at = np.where(rows >= 0, np.take_along_axis(W, np.clip(rows, 0, None), axis=1), pad)
+                take = np.take_along_axis(Vp, np.broadcast_to(at[None], (Vp.shape[0],) + at.shape), axis=2)
+                with warnings.catch_warnings():
+                    warnings.simplefilter("ignore", RuntimeWarning)
+                    Y = np.nanmean(mean + scale * (take - mean), axis=2)
                 design = [tuple(float(d[k]) for k in e.effect.theta_names()) for d in e.design]
                 _fill_failed(Y, design, e.effect, None)
                 null = tuple(float(e.effect.null[k]) for k in e.effect.theta_names())
