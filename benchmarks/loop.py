@@ -61,7 +61,7 @@ HERE = Path(__file__).resolve().parent
 ROOT = HERE.parent
 FIELDS = ["engine", "case", "seed", "hidden", "disturbance", "chosen", "correct", "false_attribution",
           "parameter_error_percent", "rmse_before_percent", "rmse_after_percent", "error_reduction_percent",
-          "verdict", "dem_runs", "wall_s", "commit", "design_points"]
+          "verdict", "dem_runs", "wall_s", "commit", "design_points", "parameters", "ci95"]
 
 STANDIN_CASES = {
     "rate_friction": ({"rate_friction": {"beta": 0.2}}, {}),
@@ -106,6 +106,7 @@ def _row(engine, case, seed, hidden, dist, out, wall, runs):
                 disturbance=yaml.safe_dump(dist, default_flow_style=True).strip(), chosen="+".join(chosen),
                 correct=chosen == sorted(hidden), false_attribution=bool(set(chosen) - set(hidden)),
                 parameter_error_percent=round(max(errs), 1) if errs else "",
+                parameters=s["parameters"] if chosen else "", ci95=s["ci95"] if chosen else "",
                 rmse_before_percent=round(float(s["rmse_before_percent"]), 2),
                 rmse_after_percent=round(float(s["rmse_after_percent"]), 2),
                 error_reduction_percent=round(float(s["error_reduction_percent"]), 1)
@@ -229,13 +230,26 @@ def dem_rows(cases, n, seed, threads, design_points=3, outdir=HERE / "results"):
             detail = Path(outdir) / "loop_dem"
             detail.mkdir(parents=True, exist_ok=True)
             for name, df in (("residuals", out.residuals), ("diagnosis", out.diagnosis), ("selection", out.selection),
-                             ("diagnosis_after", out.diagnosis_after), ("predictions", out.predictions)):
+                             ("diagnosis_after", out.diagnosis_after), ("predictions", out.predictions),
+                             ("summary", out.summary)):
                 if df is not None:
                     # campaign 0 keeps the names it had before other campaigns were run
                     tag = case if seed == 0 else f"{case}_campaign{seed}"
                     df.to_csv(detail / f"{tag}_{name}.csv", index=False)
             print(rows[-1]["case"], rows[-1]["chosen"], rows[-1]["verdict"][:100], rows[-1]["wall_s"], flush=True)
     return rows
+
+
+def _theta_text(r) -> str:
+    """``name = value (low to high)`` of a row's fitted parameters; empty in rows without them."""
+    import json
+
+    try:
+        theta, ci = json.loads(r.get("parameters") or "{}"), json.loads(r.get("ci95") or "{}")
+    except ValueError:
+        return ""
+    return "; ".join(f"{k} = {v:.3g}" + (f" ({ci[k][0]:.3g} to {ci[k][1]:.3g})" if k in ci else "")
+                     for k, v in theta.items())
 
 
 def _summary(rows):
@@ -307,10 +321,10 @@ def main(argv=None):
           "effect chosen that was not hidden.  Targets: the right effect with its parameter within 25 % and the "
           "held-out RMS error down by 70 %; no false attribution.", "",
           *_summary(rows), "", "DEM rows (verdicts in full):", "",
-          "| case | campaign | chosen | parameter error, % | RMS error before -> after, % | levels | DEM runs | wall s "
-          "| commit | verdict |",
-          "|---|---|---|---|---|---|---|---|---|---|",
-          *(f"| {r['case']} | {r['seed']} | {r['chosen']} | {r['parameter_error_percent']} | {r['rmse_before_percent']} -> "
+          "| case | campaign | chosen | parameters (95 % interval) | parameter error, % | RMS error before -> after, % "
+          "| levels | DEM runs | wall s | commit | verdict |",
+          "|---|---|---|---|---|---|---|---|---|---|---|",
+          *(f"| {r['case']} | {r['seed']} | {r['chosen']} | {_theta_text(r)} | {r['parameter_error_percent']} | {r['rmse_before_percent']} -> "
             f"{r['rmse_after_percent']} | {r.get('design_points') or 3} | {r['dem_runs']} | {r['wall_s']} | "
             f"{r['commit']} | {r['verdict']} |"
             for r in rows if r["engine"] == "dem"),
