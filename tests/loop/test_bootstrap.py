@@ -112,6 +112,12 @@ def test_a_row_without_its_measured_sd_keeps_the_fits_interval():
     final = sl.score(m, sl.Model([], m.y0, m.measured), sl._folds(u, None))
     ci, how = core._interval(u, [ed], final.theta, final, core.Settings())
     assert how.startswith("the wider of the fit's (Jacobian) interval and a bootstrap of 200 refits")
+    # a fit that cannot bound the parameter (a rank-deficient Jacobian): the bootstrap's alone
+    from dataclasses import replace
+
+    unbounded = replace(final, ci={"rate_friction.beta": (-np.inf, np.inf)})
+    ci, how = core._interval(u, [ed], final.theta, unbounded, core.Settings())
+    assert np.isfinite(ci["rate_friction.beta"]).all() and how.endswith("alone: the fit does not bound every parameter")
     lo, hi = final.ci["rate_friction.beta"]
     assert ci["rate_friction.beta"][0] <= lo and ci["rate_friction.beta"][1] >= hi
     u.loc[3, "measured_sd"] = np.nan
@@ -119,3 +125,28 @@ def test_a_row_without_its_measured_sd_keeps_the_fits_interval():
     assert ci == final.ci and "without its SD" in how
     ci, how = core._interval(u, [ed], final.theta, final, core.Settings(bootstrap=0))
     assert ci == final.ci and "loop.bootstrap: 0" in how
+
+
+def test_a_row_without_numbered_seeds_keeps_its_means_and_the_rest_is_resampled():
+    obs, runs = _campaign(np.random.default_rng(5), 0.3, 0.14)
+    runs = runs.astype({"seed": float})
+    runs.loc[runs["row"] == 3, "seed"] = np.nan  # row 3's job file had no seed column
+    ed = sl.build_effect_data(obs, runs, EFF, BOUNDS)
+    assert ed.seeds[2] == [] and np.isfinite(ed.means[:, 2]).all()
+    ci = sl.bootstrap_ci([ed], ed.surrogate([0.0]), obs["measured"].to_numpy(float), np.zeros(N), 100, x0=[0.3])
+    assert ci is not None
+
+
+def test_rows_of_one_simulation_share_their_draws():
+    # every row measured twice from the same runs (two tables that one job simulates): drawn
+    # as one simulation per pair, the seed scatter of 18 simulations; drawn as 36 independent
+    # rows, twice the simulations, an interval narrower by sqrt(2) in expectation
+    obs, runs = _campaign(np.random.default_rng(6), 0.3, 0.14)
+    twice = pd.concat([obs, obs.assign(measurement="again")], ignore_index=True)
+    runs2 = pd.concat([runs, runs.assign(measurement="again")], ignore_index=True)
+    ed = sl.build_effect_data(twice, runs2, EFF, BOUNDS)
+    y0, m, se = ed.surrogate([0.0]), twice["measured"].to_numpy(float), np.zeros(2 * N)
+    shared = sl.bootstrap_ci([ed], y0, m, se, 200, x0=[0.3], conditions=[f"job{r}" for r in twice["row"]])
+    apart = sl.bootstrap_ci([ed], y0, m, se, 200, x0=[0.3], conditions=list(range(2 * N)))
+    w = lambda ci: ci["rate_friction.beta"][1] - ci["rate_friction.beta"][0]  # noqa: E731
+    assert w(shared) > 1.2 * w(apart)

@@ -169,14 +169,18 @@ def _follows(rank: pd.DataFrame, res: pd.DataFrame | None = None, quantity_of: d
     return text + ("; also " + ", ".join(also) if also else "")
 
 
-def _interval(u: pd.DataFrame, effects: list, theta: dict, final, settings: Settings) -> tuple[dict, str]:
+def _interval(u: pd.DataFrame, effects: list, theta: dict, final, settings: Settings,
+              simulations: dict | None = None) -> tuple[dict, str]:
     """The chosen effects' 95 % intervals and how they were found: the wider of the fit's
     own interval and the bootstrap over the seeds and the measured standard errors
     (:func:`soilcal.loop.select.bootstrap_ci`; the fit's interval carries a lack of fit
     beyond the measured scatter, the bootstrap the surrogates' seed scatter); the fit's
     alone where a row has no measured SD (its value cannot be redrawn) or
-    ``loop.bootstrap`` is 0."""
+    ``loop.bootstrap`` is 0; the bootstrap's alone where the fit cannot bound a parameter."""
+    fit = {k: v for k, v in (final.ci or {}).items() if np.isfinite(v[0]) and np.isfinite(v[1])}
     fit_only = "fit (Jacobian): the seeds' scatter in the surrogates left out"
+    if not fit:
+        fit_only = "none: the fit does not pin the parameters down and the bootstrap could not run"
     if settings.bootstrap <= 0:
         return final.ci, fit_only + " (loop.bootstrap: 0)"
     sd = u["measured_sd"].to_numpy(float) if "measured_sd" in u else np.full(len(u), np.nan)
@@ -184,15 +188,18 @@ def _interval(u: pd.DataFrame, effects: list, theta: dict, final, settings: Sett
         return final.ci, fit_only + " (a measured row without its SD: the bootstrap cannot redraw it)"
     n_meas = u["measured_n"].to_numpy(float) if "measured_n" in u else np.full(len(u), np.nan)
     se = sd / np.sqrt(np.where(np.isfinite(n_meas) & (n_meas >= 1), n_meas, 1.0))
-    cond = (u["measurement"].astype(str) + "/" + u["row"].astype(str)).tolist()
+    sims = simulations or {}
+    labels = [str(sims.get((m, int(r)), f"{m}/{r}")) for m, r in zip(u["measurement"], u["row"])]
     boot = sl.bootstrap_ci(effects, u["simulated_mean"].to_numpy(float), u["measured"].to_numpy(float), se,
-                           settings.bootstrap, x0=[theta[nm] for nm in final.names], conditions=cond)
+                           settings.bootstrap, x0=[theta[nm] for nm in final.names], conditions=labels)
     if boot is None:
         return final.ci, fit_only + " (too few seeds per condition to resample)"
-    ci = {nm: (min(lo, final.ci.get(nm, (lo, hi))[0]), max(hi, final.ci.get(nm, (lo, hi))[1]))
-          for nm, (lo, hi) in boot.items()}
-    return ci, (f"the wider of the fit's (Jacobian) interval and a bootstrap of {settings.bootstrap} refits over "
-                f"each condition's seeds and the measured standard errors (generator seed {sl.BOOTSTRAP_SEED})")
+    how = (f"a bootstrap of {settings.bootstrap} refits over each simulation's seeds and the measured standard errors "
+           f"(generator seed {sl.BOOTSTRAP_SEED})")
+    if set(fit) != set(boot):
+        return boot, how + ", alone: the fit does not bound every parameter"
+    ci = {nm: (min(lo, fit[nm][0]), max(hi, fit[nm][1])) for nm, (lo, hi) in boot.items()}
+    return ci, "the wider of the fit's (Jacobian) interval and " + how
 
 
 def default_fold_by(settings: Settings, quantity_cols: dict, diag: pd.DataFrame | None = None) -> str | None:
@@ -215,9 +222,12 @@ def default_fold_by(settings: Settings, quantity_cols: dict, diag: pd.DataFrame 
 
 
 def analyse(soil: str, res: pd.DataFrame, diag: pd.DataFrame, cands: list, effect_runs: dict,
-            settings: Settings, reference: dict, quantity_cols: dict | None = None) -> Outcome:
+            settings: Settings, reference: dict, quantity_cols: dict | None = None,
+            simulations: dict | None = None) -> Outcome:
     """Steps 5 (module docstring): ``effect_runs`` maps each candidate to its runs
-    (measurement, row, measure, value, ``t:<name>``), the switched-off point included."""
+    (measurement, row, measure, value, ``t:<name>``), the switched-off point included;
+    ``simulations``: (measurement, row) -> the simulation (job) a condition shares with
+    others, for the bootstrap's draws (default: each condition its own)."""
     u = rs.usable(res)
     rank = dg.ranking(diag)
     follows = _follows(rank, res, quantity_cols, settings.alpha)
@@ -264,7 +274,7 @@ def analyse(soil: str, res: pd.DataFrame, diag: pd.DataFrame, cands: list, effec
     elif sel is not None and sel.chosen:
         chosen = sel.chosen
         theta, ci = sel.final.theta, sel.final.ci
-        ci, ci_method = _interval(u, [data[c] for c in chosen], theta, sel.final, settings)
+        ci, ci_method = _interval(u, [data[c] for c in chosen], theta, sel.final, settings, simulations)
         pred["with_effects"] = fitted
         _, held = sl.cross_validate(m, sl._folds(u, fold_by))
         meas = u["measured"].to_numpy(float)

@@ -123,6 +123,7 @@ class EffectData:
     missing: list = field(default_factory=list)  # rows with a failed run at some design point
     values: np.ndarray | None = None
     seeds: list | None = None  # per row, the seeds behind values' last axis (ascending)
+    means: np.ndarray | None = None  # design x row: the means the surrogate went through
 
     def thetas(self) -> np.ndarray:
         return np.array([[d[k] for k in self.effect.theta_names()] for d in self.design], float)
@@ -175,7 +176,7 @@ def build_effect_data(obs: pd.DataFrame, runs: pd.DataFrame, effect, bounds: dic
     values, seeds = _seed_values(r, obs, design, index, keys, tcols)
     missing = _fill_failed(Y, design, effect, obs.reset_index(drop=True))
     return EffectData(effect, bounds, Surrogate(effect, bounds, np.array(design), Y), [dict(zip(names, t)) for t in design],
-                      missing, values, seeds)
+                      missing, values, seeds, Y.copy())
 
 
 def _seed_values(r: pd.DataFrame, obs, design, index, keys, tcols):
@@ -184,7 +185,8 @@ def _seed_values(r: pd.DataFrame, obs, design, index, keys, tcols):
     a seed column.  Runs without a seed number are left out (they cannot be paired)."""
     if "seed" not in r.columns:
         return None, None
-    r = r[pd.to_numeric(r["seed"], errors="coerce").notna()]
+    sd = pd.to_numeric(r["seed"], errors="coerce")
+    r = r[np.isfinite(sd) & (sd == np.round(sd))]  # a seed is a whole number
     if r.empty:
         return None, None
     seeds = [[] for _ in range(len(obs))]
@@ -400,28 +402,28 @@ def bootstrap_ci(effects: list, y0: np.ndarray, measured: np.ndarray, measured_s
     (:class:`EffectData` with their runs' ``values`` and ``seeds``) over the seeds and the
     measured values (module docstring): parameter name -> (low, high).
 
-    Each draw takes, per measured condition (``conditions``: one label per row, rows of one
-    condition, such as its horizontal and vertical force, share the draw; default: each row
-    its own), as many seeds with replacement as the condition has, from the union of its
-    seeds over the effects, the same seeds for every design point of every effect.  Each
-    refit searches from ``x0`` (the fitted parameters) where given.  None where nothing can
-    be resampled (no per-seed values, fewer than two seeds per row, ``n_boot`` 0) or where
-    fewer than half the draws leave every row two design points."""
+    Each draw takes, per simulation (``conditions``: one label per row; rows with one label
+    and the same seeds, such as a condition's horizontal and vertical force, or two tables'
+    rows that one job simulates, share the draw; default: each row its own), as many seeds
+    with replacement as it has (the union of its seeds over the effects), the same seeds
+    for every design point of every effect.  A row with no run of the drawn seeds at some
+    design point (or no numbered seed at all) keeps the mean the surrogate went through
+    there.  Each refit searches from ``x0`` (the fitted parameters) where given.  None where
+    nothing can be resampled (no per-seed values, fewer than two seeds per row, ``n_boot``
+    0) or where fewer than half the draws leave every row two design points."""
     import warnings
 
-    if n_boot <= 0 or not effects or any(e.values is None or e.seeds is None for e in effects):
+    if n_boot <= 0 or not effects or any(e.values is None or e.seeds is None or e.means is None for e in effects):
         return None
     n = len(y0)
     union = [sorted(set().union(*(e.seeds[i] for e in effects))) for i in range(n)]
     if max(len(u) for u in union) < 2:
         return None
     labels = np.arange(n) if conditions is None else pd.factorize(pd.Series(list(conditions)).astype(str))[0]
-    groups = {}
-    for i, g in enumerate(labels):
-        groups.setdefault(g, set()).update(union[i])
-    order = sorted(groups)
-    gindex = np.array([order.index(g) for g in labels])
-    gseeds = [sorted(groups[g]) for g in order]
+    keys = [(int(g), tuple(union[i])) for i, g in enumerate(labels)]  # one draw per simulation and seed set
+    order = sorted(set(keys))
+    gindex = np.array([order.index(k) for k in keys])
+    gseeds = [list(k[1]) for k in order]
     width = max(len(v) for v in gseeds)
     # per effect: for each row, where each of its condition's seeds sits on the effect's seed
     # axis (the padding slot, NaN, where the effect has no run of that seed)
@@ -450,21 +452,26 @@ def bootstrap_ci(effects: list, y0: np.ndarray, measured: np.ndarray, measured_s
             picks[g, :len(v)] = rng.integers(0, len(v), size=len(v))
         rows = picks[gindex]  # (n, width), -1 beyond a condition's own seed count
         m = measured + se * rng.standard_normal(n)
-        fitted, yb = [], None
-        try:
-            for e, (Vp, W, pad, mean, scale) in zip(effects, prepared):
-                at = np.where(rows >= 0, np.take_along_axis(W, np.clip(rows, 0, None), axis=1), pad)
-                take = np.take_along_axis(Vp, np.broadcast_to(at[None], (Vp.shape[0],) + at.shape), axis=2)
-                with warnings.catch_warnings():
-                    warnings.simplefilter("ignore", RuntimeWarning)
-                    Y = np.nanmean(mean + scale * (take - mean), axis=2)
-                design = [tuple(float(d[k]) for k in e.effect.theta_names()) for d in e.design]
+        fitted, yb, lost = [], None, False
+        for e, (Vp, W, pad, mean, scale) in zip(effects, prepared):
+            at = np.where(rows >= 0, np.take_along_axis(W, np.clip(rows, 0, None), axis=1), pad)
+            take = np.take_along_axis(Vp, np.broadcast_to(at[None], (Vp.shape[0],) + at.shape), axis=2)
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore", RuntimeWarning)
+                Y = np.nanmean(mean + scale * (take - mean), axis=2)
+            none = ~np.isfinite(Y).any(axis=0)  # no run of the drawn seeds: the surrogate's own means
+            Y[:, none] = e.means[:, none]
+            design = [tuple(float(d[k]) for k in e.effect.theta_names()) for d in e.design]
+            try:
                 _fill_failed(Y, design, e.effect, None)
-                null = tuple(float(e.effect.null[k]) for k in e.effect.theta_names())
-                if yb is None and null in design:
-                    yb = Y[design.index(null)]
-                fitted.append(EffectData(e.effect, e.bounds, Surrogate(e.effect, e.bounds, e.thetas(), Y), e.design))
-        except ValueError:  # a row left without two design points in this draw
+            except ValueError:  # a row left without two design points in this draw
+                lost = True
+                break
+            null = tuple(float(e.effect.null[k]) for k in e.effect.theta_names())
+            if yb is None and null in design:
+                yb = Y[design.index(null)]
+            fitted.append(EffectData(e.effect, e.bounds, Surrogate(e.effect, e.bounds, e.thetas(), Y), e.design))
+        if lost:
             continue
         x, _ = Model(fitted, y0 if yb is None else yb, m).fit(x0=x0)
         draws.append(x)
