@@ -229,12 +229,11 @@ def dem_rows(cases, n, seed, threads, design_points=3, outdir=HERE / "results"):
                              design_points=design_points))
             detail = Path(outdir) / "loop_dem"
             detail.mkdir(parents=True, exist_ok=True)
+            tag = case if seed == 0 else f"{case}_campaign{seed}"  # campaign 0 keeps its earlier names
             for name, df in (("residuals", out.residuals), ("diagnosis", out.diagnosis), ("selection", out.selection),
                              ("diagnosis_after", out.diagnosis_after), ("predictions", out.predictions),
                              ("summary", out.summary)):
                 if df is not None:
-                    # campaign 0 keeps the names it had before other campaigns were run
-                    tag = case if seed == 0 else f"{case}_campaign{seed}"
                     df.to_csv(detail / f"{tag}_{name}.csv", index=False)
             print(rows[-1]["case"], rows[-1]["chosen"], rows[-1]["verdict"][:100], rows[-1]["wall_s"], flush=True)
     return rows
@@ -300,7 +299,7 @@ def main(argv=None):
     if "dem" in engines:
         new += dem_rows(cases, args.n, args.seed, args.threads, args.design_points, out)
     for path in args.rows_from:  # rows of a run elsewhere (a clone), each with its own commit
-        new += [r for r in read_rows(Path(path), FIELDS)]
+        new += read_rows(Path(path), FIELDS)
 
     def replaced(r):  # a stand-in case reruns all its seeds; a DEM case its campaign
         return any(r["engine"] == x["engine"] and r["case"] == x["case"]

@@ -110,20 +110,20 @@ def test_a_row_without_its_measured_sd_keeps_the_fits_interval():
     u = obs.assign(simulated_mean=ed.surrogate([0.0]))
     m = sl.Model([ed], u["simulated_mean"].to_numpy(float), u["measured"].to_numpy(float))
     final = sl.score(m, sl.Model([], m.y0, m.measured), sl._folds(u, None))
-    ci, how = core._interval(u, [ed], final.theta, final, core.Settings())
+    ci, how = core._interval(u, [ed], final, core.Settings())
     assert how.startswith("the wider of the fit's (Jacobian) interval and a bootstrap of 200 refits")
     # a fit that cannot bound the parameter (a rank-deficient Jacobian): the bootstrap's alone
     from dataclasses import replace
 
     unbounded = replace(final, ci={"rate_friction.beta": (-np.inf, np.inf)})
-    ci, how = core._interval(u, [ed], final.theta, unbounded, core.Settings())
+    ci, how = core._interval(u, [ed], unbounded, core.Settings())
     assert np.isfinite(ci["rate_friction.beta"]).all() and how.endswith("alone: the fit does not bound every parameter")
     lo, hi = final.ci["rate_friction.beta"]
     assert ci["rate_friction.beta"][0] <= lo and ci["rate_friction.beta"][1] >= hi
     u.loc[3, "measured_sd"] = np.nan
-    ci, how = core._interval(u, [ed], final.theta, final, core.Settings())
+    ci, how = core._interval(u, [ed], final, core.Settings())
     assert ci == final.ci and "without its SD" in how
-    ci, how = core._interval(u, [ed], final.theta, final, core.Settings(bootstrap=0))
+    ci, how = core._interval(u, [ed], final, core.Settings(bootstrap=0))
     assert ci == final.ci and "loop.bootstrap: 0" in how
 
 

@@ -169,7 +169,7 @@ def _follows(rank: pd.DataFrame, res: pd.DataFrame | None = None, quantity_of: d
     return text + ("; also " + ", ".join(also) if also else "")
 
 
-def _interval(u: pd.DataFrame, effects: list, theta: dict, final, settings: Settings,
+def _interval(u: pd.DataFrame, effects: list, final, settings: Settings,
               simulations: dict | None = None) -> tuple[dict, str]:
     """The chosen effects' 95 % intervals and how they were found: the wider of the fit's
     own interval and the bootstrap over the seeds and the measured standard errors
@@ -180,7 +180,7 @@ def _interval(u: pd.DataFrame, effects: list, theta: dict, final, settings: Sett
     fit = {k: v for k, v in (final.ci or {}).items() if np.isfinite(v[0]) and np.isfinite(v[1])}
     fit_only = "fit (Jacobian): the seeds' scatter in the surrogates left out"
     if not fit:
-        fit_only = "none: the fit does not pin the parameters down and the bootstrap could not run"
+        fit_only = "none: the fit does not pin the parameters down"
     if settings.bootstrap <= 0:
         return final.ci, fit_only + " (loop.bootstrap: 0)"
     sd = u["measured_sd"].to_numpy(float) if "measured_sd" in u else np.full(len(u), np.nan)
@@ -191,7 +191,7 @@ def _interval(u: pd.DataFrame, effects: list, theta: dict, final, settings: Sett
     sims = simulations or {}
     labels = [str(sims.get((m, int(r)), f"{m}/{r}")) for m, r in zip(u["measurement"], u["row"])]
     boot = sl.bootstrap_ci(effects, u["simulated_mean"].to_numpy(float), u["measured"].to_numpy(float), se,
-                           settings.bootstrap, x0=[theta[nm] for nm in final.names], conditions=labels)
+                           settings.bootstrap, x0=[final.theta[nm] for nm in final.names], conditions=labels)
     if boot is None:
         return final.ci, fit_only + " (too few seeds per condition to resample)"
     how = (f"a bootstrap of {settings.bootstrap} refits over each simulation's seeds and the measured standard errors "
@@ -273,8 +273,8 @@ def analyse(soil: str, res: pd.DataFrame, diag: pd.DataFrame, cands: list, effec
         verdict = f"unexplained: too few measured values to decide ({n})"
     elif sel is not None and sel.chosen:
         chosen = sel.chosen
-        theta, ci = sel.final.theta, sel.final.ci
-        ci, ci_method = _interval(u, [data[c] for c in chosen], theta, sel.final, settings, simulations)
+        theta = sel.final.theta
+        ci, ci_method = _interval(u, [data[c] for c in chosen], sel.final, settings, simulations)
         pred["with_effects"] = fitted
         _, held = sl.cross_validate(m, sl._folds(u, fold_by))
         meas = u["measured"].to_numpy(float)

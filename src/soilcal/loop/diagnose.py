@@ -58,6 +58,16 @@ def _ols(y, X):
     return OLS(np.asarray(y, float), np.asarray(X, float)).fit()
 
 
+def _numeric(col: pd.Series, name: str, q: str) -> bool:
+    """Whether a covariate is tested as a number (trend, curvature) rather than a label."""
+    return _is_numeric(col) and name != "measure" and q not in LABEL_QUANTITIES
+
+
+def _standardised(col: pd.Series) -> np.ndarray:
+    x = pd.to_numeric(col, errors="coerce").to_numpy(float)
+    return (x - x.mean()) / (x.std() or 1.0)
+
+
 def _covariate_columns(res: pd.DataFrame) -> list[str]:
     return [c for c in res.columns if c.startswith("cov:")]
 
@@ -71,9 +81,8 @@ def _covariate_tests(name, q, col, r, numeric, distinct) -> list[dict]:
     if numeric and distinct >= 3:
         if n < 4:
             return rows
-        x = pd.to_numeric(col, errors="coerce").to_numpy(float)
-        sx = x.std() or 1.0
-        xs = (x - x.mean()) / sx
+        sx = pd.to_numeric(col, errors="coerce").to_numpy(float).std() or 1.0
+        xs = _standardised(col)
         f1 = _ols(r, np.column_stack([np.ones(n), xs]))
         rows.append(dict(test="trend", covariate=name, quantity=q, n=n, levels=distinct,
                          estimate=float(f1.params[1] / sx), statistic=float(f1.tvalues[1]),
@@ -145,7 +154,7 @@ def diagnose(res: pd.DataFrame, quantity_of: dict | None = None, alpha: float = 
         q = quantity_of.get(name, "")
         has = col_all.notna().to_numpy()  # a covariate missing on some rows is tested on the others
         col = col_all[has]
-        numeric = _is_numeric(col) and name != "measure" and q not in LABEL_QUANTITIES
+        numeric = _numeric(col, name, q)
         distinct = int(col.astype(str).nunique())
         if distinct < 2:
             continue
@@ -175,11 +184,9 @@ def _terms(res: pd.DataFrame, name: str, quantity_of: dict) -> np.ndarray | None
     col = res["measure"] if name == "measure" else res.get(f"cov:{name}")
     if col is None:
         return None
-    q = quantity_of.get(name, "")
     distinct = int(col.astype(str).nunique())
-    if _is_numeric(col) and name != "measure" and q not in LABEL_QUANTITIES and distinct >= 3:
-        x = pd.to_numeric(col, errors="coerce").to_numpy(float)
-        xs = (x - x.mean()) / (x.std() or 1.0)
+    if _numeric(col, name, quantity_of.get(name, "")) and distinct >= 3:
+        xs = _standardised(col)
         return np.column_stack([xs, xs ** 2]) if distinct >= 4 else xs[:, None]
     labels = col.astype(str).to_numpy()
     levels = sorted(set(labels))[1:]

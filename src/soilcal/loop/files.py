@@ -163,10 +163,7 @@ def _outcome(soil, outdir, tool_files: dict, effect_files: dict, plans: list[dic
             frames.append(condition_runs(conds, per[j] if j in per else per[str(j)], theta))
         effect_runs[nm] = pd.concat(frames, ignore_index=True)
     # conditions that one tool job simulates share its runs, and so a bootstrap draw
-    sims = {}
-    for key, path in tool_files.items():
-        m, _, r = key.rpartition("/")
-        sims[(m, int(r))] = str(path)
+    sims = {(c.measurement, int(c.row)): str(tool_files.get(f"{c.measurement}/{c.row}")) for c in conds}
     return core.analyse(soil.name, res, diag, cands, effect_runs, settings, plans[0]["reference"],
                         plans[0]["quantity_columns"], simulations=sims), conds, settings
 

@@ -421,8 +421,8 @@ def bootstrap_ci(effects: list, y0: np.ndarray, measured: np.ndarray, measured_s
         return None
     labels = np.arange(n) if conditions is None else pd.factorize(pd.Series(list(conditions)).astype(str))[0]
     keys = [(int(g), tuple(union[i])) for i, g in enumerate(labels)]  # one draw per simulation and seed set
-    order = sorted(set(keys))
-    gindex = np.array([order.index(k) for k in keys])
+    order = {k: j for j, k in enumerate(sorted(set(keys)))}
+    gindex = np.array([order[k] for k in keys])
     gseeds = [list(k[1]) for k in order]
     width = max(len(v) for v in gseeds)
     # per effect: for each row, where each of its condition's seeds sits on the effect's seed
@@ -441,7 +441,10 @@ def bootstrap_ci(effects: list, y0: np.ndarray, measured: np.ndarray, measured_s
             Vp = np.concatenate([V, np.full(V.shape[:2] + (1,), np.nan)], axis=2)
             mean = np.nanmean(V, axis=2)[..., None]
             count = np.sum(np.isfinite(V), axis=2)[..., None]
-            prepared.append((Vp, W, pad, mean, np.sqrt(count / np.maximum(count - 1, 1))))
+            design = [tuple(t) for t in e.thetas()]
+            null = tuple(float(e.effect.null[k]) for k in e.effect.theta_names())
+            prepared.append((Vp, W, pad, mean, np.sqrt(count / np.maximum(count - 1, 1)), design,
+                             design.index(null) if null in design else None))
     rng = np.random.default_rng(seed)
     se = np.where(np.isfinite(measured_se), measured_se, 0.0)
     names = [f"{e.effect.name}.{t}" for e in effects for t in e.effect.theta_names()]
@@ -453,7 +456,7 @@ def bootstrap_ci(effects: list, y0: np.ndarray, measured: np.ndarray, measured_s
         rows = picks[gindex]  # (n, width), -1 beyond a condition's own seed count
         m = measured + se * rng.standard_normal(n)
         fitted, yb, lost = [], None, False
-        for e, (Vp, W, pad, mean, scale) in zip(effects, prepared):
+        for e, (Vp, W, pad, mean, scale, design, j_null) in zip(effects, prepared):
             at = np.where(rows >= 0, np.take_along_axis(W, np.clip(rows, 0, None), axis=1), pad)
             take = np.take_along_axis(Vp, np.broadcast_to(at[None], (Vp.shape[0],) + at.shape), axis=2)
             with warnings.catch_warnings():
@@ -461,15 +464,13 @@ def bootstrap_ci(effects: list, y0: np.ndarray, measured: np.ndarray, measured_s
                 Y = np.nanmean(mean + scale * (take - mean), axis=2)
             none = ~np.isfinite(Y).any(axis=0)  # no run of the drawn seeds: the surrogate's own means
             Y[:, none] = e.means[:, none]
-            design = [tuple(float(d[k]) for k in e.effect.theta_names()) for d in e.design]
             try:
                 _fill_failed(Y, design, e.effect, None)
             except ValueError:  # a row left without two design points in this draw
                 lost = True
                 break
-            null = tuple(float(e.effect.null[k]) for k in e.effect.theta_names())
-            if yb is None and null in design:
-                yb = Y[design.index(null)]
+            if yb is None and j_null is not None:
+                yb = Y[j_null]
             fitted.append(EffectData(e.effect, e.bounds, Surrogate(e.effect, e.bounds, e.thetas(), Y), e.design))
         if lost:
             continue
