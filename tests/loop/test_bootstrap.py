@@ -150,3 +150,40 @@ def test_rows_of_one_simulation_share_their_draws():
     apart = sl.bootstrap_ci([ed], y0, m, se, 200, x0=[0.3], conditions=list(range(2 * N)))
     w = lambda ci: ci["rate_friction.beta"][1] - ci["rate_friction.beta"][0]  # noqa: E731
     assert w(shared) > 1.2 * w(apart)
+
+
+def test_the_draws_centre_on_the_surrogates_means_which_count_unnumbered_runs():
+    # seeded runs without scatter, 100 (1 + a beta), and one run per design point and row
+    # without a seed number, 4 higher: the surrogate goes through 100 (1 + a beta) + 1 and
+    # the measured values lie on it at beta = 0.3, so the fit is 0.3 exactly; the draws, with
+    # nothing to resample and nothing to redraw, must each refit that same surface: the
+    # interval is the point 0.3 (drawn around the seeded runs' own mean, 1 lower, it is not)
+    obs, runs = _campaign(np.random.default_rng(7), 0.3, 0.0)
+    runs = runs.astype({"seed": float})
+    loose = runs[runs["seed"] == 0].assign(seed=np.nan, value=lambda d: d["value"] + 4.0)
+    both = pd.concat([runs, loose], ignore_index=True)
+    obs = obs.assign(measured=100.0 * (1 + A * 0.3) + 1.0)
+    ed = sl.build_effect_data(obs, both, EFF, BOUNDS)
+    j0 = [d["beta"] for d in ed.design].index(0.0)
+    assert ed.means[j0] == pytest.approx(np.full(N, 101.0))
+    y0 = ed.means[j0]
+    x, _ = sl.Model([ed], y0, obs["measured"].to_numpy(float)).fit()
+    assert x[0] == pytest.approx(0.3, abs=1e-6)
+    lo, hi = sl.bootstrap_ci([ed], y0, obs["measured"].to_numpy(float), np.zeros(N), 50, x0=x)["rate_friction.beta"]
+    assert lo == pytest.approx(0.3, abs=1e-6) and hi == pytest.approx(0.3, abs=1e-6)
+
+
+def test_a_refit_from_an_earlier_answer_still_finds_a_lower_minimum():
+    # one row measured at 100; the surrogate through the design points (monotone between
+    # them) meets 100 only at beta = -0.3 and has a second, higher minimum (error 10 %) at the
+    # design point 0.15: a search from 0.15 alone stays there
+    design = sl.theta_design(EFF, BOUNDS, 5)
+    betas = [d["beta"] for d in design]
+    level = {-0.3: 100.0, -0.075: 130.0, 0.0: 125.0, 0.15: 110.0, 0.375: 130.0, 0.6: 140.0}
+    assert sorted(level) == betas
+    runs = pd.DataFrame([{"measurement": "m", "row": 1, "measure": "F_N", "seed": 0, "value": level[b],
+                          "status": "ok", "t:beta": b} for b in betas])
+    obs = pd.DataFrame({"measurement": ["m"], "row": [1], "measure": ["F_N"], "measured": [100.0]})
+    ed = sl.build_effect_data(obs, runs, EFF, BOUNDS)
+    x, _ = sl.Model([ed], np.array([125.0]), np.array([100.0])).fit(x0=[0.15])
+    assert x[0] == pytest.approx(-0.3, abs=1e-9)

@@ -255,27 +255,27 @@ class Model:
 
     def fit(self, idx=None, x0=None):
         """Least-squares parameters on rows ``idx`` (all by default); (x, result or None).
-        ``x0``: one search from there instead of from the best design points."""
+        The search starts from the two best design points and, where given, from ``x0`` as
+        well (a refit near an earlier answer: a second minimum is still found); the lowest
+        cost wins."""
         from scipy.optimize import least_squares
 
         if not self.effects:
             return np.zeros(0), None
         lo, hi = self.bounds()
-        if x0 is not None:
-            res = least_squares(lambda x: self.errors(x, idx), np.clip(np.asarray(x0, float), lo, hi),
-                                bounds=(lo, hi), method="trf")
-            return res.x, res
         best = None
-        starts = [np.clip(x0, lo, hi) for x0 in self.starts()]
-        cost = [float(np.sum(self.errors(x0, idx) ** 2)) for x0 in starts]
+        if x0 is not None:
+            best = least_squares(lambda x: self.errors(x, idx), np.clip(np.asarray(x0, float), lo, hi),
+                                 bounds=(lo, hi), method="trf")
+        starts = [np.clip(s, lo, hi) for s in self.starts()]
+        cost = [float(np.sum(self.errors(s, idx) ** 2)) for s in starts]
         null = np.concatenate([[e.effect.null[k] for k in e.effect.theta_names()] for e in self.effects])
         span = np.where(hi > lo, hi - lo, 1.0)
-        dist = [float(np.sum(((x0 - null) / span) ** 2)) for x0 in starts]
+        dist = [float(np.sum(((s - null) / span) ** 2)) for s in starts]
         # the two best design points start the search; a tie (data that do not move the
         # result) goes to the switched-off value
         for j in sorted(range(len(starts)), key=lambda j: (round(cost[j], 12), dist[j]))[:2]:
-            x0 = starts[j]
-            res = least_squares(lambda x: self.errors(x, idx), x0, bounds=(lo, hi), method="trf")
+            res = least_squares(lambda x: self.errors(x, idx), starts[j], bounds=(lo, hi), method="trf")
             if best is None or res.cost < best.cost - 1e-15:
                 best = res
         return best.x, best
@@ -408,7 +408,10 @@ def bootstrap_ci(effects: list, y0: np.ndarray, measured: np.ndarray, measured_s
     with replacement as it has (the union of its seeds over the effects), the same seeds
     for every design point of every effect.  A row with no run of the drawn seeds at some
     design point (or no numbered seed at all) keeps the mean the surrogate went through
-    there.  Each refit searches from ``x0`` (the fitted parameters) where given.  None where
+    there; the draws' deviations from each design point's seed mean are added to the mean
+    the surrogate went through (which also counts runs without a seed number).  Each refit
+    searches from ``x0`` (the fitted parameters) where given, and from the draw's best design
+    points (:meth:`Model.fit`).  None where
     nothing can be resampled (no per-seed values, fewer than two seeds per row, ``n_boot``
     0) or where fewer than half the draws leave every row two design points."""
     import warnings
@@ -461,7 +464,7 @@ def bootstrap_ci(effects: list, y0: np.ndarray, measured: np.ndarray, measured_s
             take = np.take_along_axis(Vp, np.broadcast_to(at[None], (Vp.shape[0],) + at.shape), axis=2)
             with warnings.catch_warnings():
                 warnings.simplefilter("ignore", RuntimeWarning)
-                Y = np.nanmean(mean + scale * (take - mean), axis=2)
+                Y = e.means + np.nanmean(scale * (take - mean), axis=2)
             none = ~np.isfinite(Y).any(axis=0)  # no run of the drawn seeds: the surrogate's own means
             Y[:, none] = e.means[:, none]
             try:
