@@ -10,7 +10,7 @@ import pandas as pd
 import pytest
 from scipy import stats
 
-from soilcal.loop.diagnose import DIAGNOSIS_COLUMNS, diagnose, matched_quantities, ranking
+from soilcal.loop.diagnose import DIAGNOSIS_COLUMNS, detectable, diagnose, matched_quantities, ranking
 
 # Thue-Morse signs over x = 0..7: sum s x^k = 0 for k = 0, 1, 2 (Prouhet), so a residual
 # proportional to them has no mean, no linear and no quadratic relation to x = 0..7
@@ -305,3 +305,70 @@ def test_beyond_a_covariate_with_one_level_on_the_shared_rows_is_nan():
     diag = diagnose(d, {"day": "day"})
     text = _follows(ranking(diag), d, {"day": "day"})  # no p beyond speed where it cannot be told
     assert text.startswith("speed (r2 ") and "; also day (r2 " in text and "beyond" not in text
+
+
+# What the diagnosis can detect: the reported smallest bias and trend, put back into the data
+# with fresh noise of the stated scatter, must be found at about the stated power (0.8); a
+# binomial count over 400 draws at p = 0.8 leaves 0.74-0.86 with probability 0.998.  For the
+# trend, Holm's later steps make the test a little more powerful than the alpha / tests bound
+# it is computed at, hence the upper limit 0.9 there.
+
+
+def _power_table(r, **covs):
+    return _table(r, **covs).assign(standardised_residual=np.nan, measured=100.0, simulated_sd=6.0, simulated_n=3,
+                                    measured_sd=np.nan, measured_n=np.nan)  # no SD measured: no scatter test
+
+
+@pytest.fixture
+def no_gc(monkeypatch):
+    """statsmodels' ``multipletests`` runs a full garbage collection on every call (70 ms in
+    a small process, more in a test session): left out for the 400 diagnoses of a draw."""
+    import gc
+
+    monkeypatch.setattr(gc, "collect", lambda *a, **k: 0)
+
+
+def test_a_trend_of_the_detectable_size_is_found_at_the_stated_power(no_gc):
+    sigma = 0.05
+    # sigma sqrt(6/8) TM: orthogonal to 1 and x, so its standard error about the line is sigma
+    base = _power_table(sigma * np.sqrt(6 / 8) * TM, speed=X)
+    diag = diagnose(base)
+    assert list(diag["test"]) == ["bias", "trend", "curvature"]
+    det = detectable(base, diag)
+    row = det[det["test"] == "trend"].iloc[0]
+    assert (row["low"], row["high"], row["tests"], row["n"]) == (0.0, 7.0, 3, 8)
+    assert row["scatter_percent"] == pytest.approx(5.0)
+    assert row["seed_se_percent"] == pytest.approx(6.0 / np.sqrt(3))  # 6 / sqrt(3) of 100, in %
+    assert np.isnan(row["measured_se_percent"])
+    slope = row["detectable_percent"] / 100 / 7.0
+    rng = np.random.default_rng(11)
+    found = sum(bool(_row(diagnose(_power_table(slope * (X - X.mean()) + sigma * rng.standard_normal(8), speed=X)),
+                          "trend", "speed")["significant"]) for _ in range(400))
+    assert 0.74 <= found / 400 <= 0.9, found
+
+
+def test_a_bias_of_the_detectable_size_is_found_at_the_stated_power(no_gc):
+    sigma = 0.05
+    base = _power_table(sigma * np.sqrt(7 / 8) * TM)  # mean 0, SD sigma
+    diag = diagnose(base)
+    assert list(diag["test"]) == ["bias"]
+    row = detectable(base, diag).iloc[0]
+    assert row["scatter_percent"] == pytest.approx(5.0)
+    b = row["detectable_percent"] / 100
+    rng = np.random.default_rng(12)
+    found = sum(bool(_row(diagnose(_power_table(b + sigma * rng.standard_normal(8))), "bias")["significant"])
+                for _ in range(400))
+    assert 0.74 <= found / 400 <= 0.86, found
+
+
+def test_the_smallest_shift_tends_to_the_normal_sum_of_quantiles():
+    from soilcal.loop.diagnose import _smallest_shift
+
+    # a two-sided z-test at level 0.05 has power 0.8 at a shift of z_0.975 + z_0.8 = 2.8016
+    # (the opposite tail adds 3e-6)
+    assert _smallest_shift(10 ** 6, stats.norm.isf(0.025), 0.8) == pytest.approx(
+        stats.norm.isf(0.025) + stats.norm.isf(0.2), abs=1e-4)
+
+
+def test_nothing_detectable_without_tests():
+    assert len(detectable(_power_table([0.1, -0.1]), diagnose(_power_table([0.1, -0.1])).iloc[0:0])) == 0

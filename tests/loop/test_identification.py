@@ -172,3 +172,15 @@ def test_hidden_plastic_contact_reaches_only_the_compression_rows():
     assert rec.sum() == 6
     assert ratio[rec].to_numpy() == pytest.approx(0.4571, abs=1e-4)
     assert ratio[~rec].to_numpy() == pytest.approx(1.0, rel=1e-12)
+
+
+def test_the_report_says_what_the_data_could_detect():
+    from soilcal.loop import files
+
+    out = _run({}, {}, 0)
+    det, diag = out.detectable, out.diagnosis
+    assert list(det["test"]) == [t for t in diag["test"] if t in ("bias", "trend")]
+    assert list(det["covariate"]) == [c for t, c in zip(diag["test"], diag["covariate"]) if t in ("bias", "trend")]
+    assert (det["tests"] == len(diag)).all() and (det["detectable_percent"] > 0).all()
+    text = files.report("standin", out, [{"candidates": out.candidates, "reference": {}, "settings": {}}])
+    assert "## What these data can detect" in text and "trend over tool_speed" in " ".join(text.split())

@@ -211,6 +211,11 @@ def test_the_loop_compares_every_measured_plate_and_fits_the_adhesion_effect(don
     assert summary["rmse_before_percent"].iloc[0] == pytest.approx(
         100 * np.sqrt(np.mean(res["relative_residual"] ** 2)))
     assert (d / "loop/report.md").read_text().startswith("# Measured-data loop: cinnamon-soil")
+    from soilcal.loop.diagnose import DETECTABLE_COLUMNS
+
+    det = pd.read_csv(d / "loop/detectable.csv")
+    assert list(det.columns) == DETECTABLE_COLUMNS and len(det) and set(det["test"]) <= {"bias", "trend"}
+    assert "## What these data can detect" in (d / "loop/report.md").read_text()
     assert list((d / "loop/figures/residuals").glob("*.png"))
     assert (done / "logs/cinnamon-soil/loop/select.log").is_file()
 

@@ -89,6 +89,7 @@ rule loop_select:
         summary=report("results/{soil}/loop/loop_summary.csv", caption="../report/loop_summary.rst",
                        category="{soil}", subcategory="measured-data loop"),
         report="results/{soil}/loop/report.md",
+        detectable="results/{soil}/loop/detectable.csv",
         figures=report(directory("results/{soil}/loop/figures/after"), patterns=["{name}.png"],
                        caption="../report/loop_figures.rst", category="{soil}", subcategory="measured-data loop"),
     params:

@@ -240,7 +240,7 @@ def _run(args) -> int:
                              seeds=tuple(range(args.seed, args.seed + args.sim_seeds)))
     d = Path(args.out)
     for name, df in (("residuals", out.residuals), ("diagnosis", out.diagnosis), ("selection", out.selection),
-                     ("predictions", out.predictions), ("loop_summary", out.summary),
+                     ("predictions", out.predictions), ("loop_summary", out.summary), ("detectable", out.detectable),
                      ("parameters", parameters_frame(params))):
         write_csv(df, d / f"{name}.csv")
     print(f"parameters: {params_source(args, overrides)} ({d / 'parameters.csv'})")

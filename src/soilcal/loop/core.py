@@ -134,6 +134,7 @@ class Outcome:
     chosen: list
     theta: dict
     diagnosis_after: pd.DataFrame = None
+    detectable: pd.DataFrame = None  # soilcal.loop.diagnose.detectable of the calibrated model's residual
 
 
 def _follows(rank: pd.DataFrame, res: pd.DataFrame | None = None, quantity_of: dict | None = None,
@@ -312,7 +313,7 @@ def analyse(soil: str, res: pd.DataFrame, diag: pd.DataFrame, cands: list, effec
         "error_reduction_percent": (1 - ra / rb) * 100 if rb and np.isfinite(rb) and rb > 0 else math.nan,
         "alpha": settings.alpha, "reference": _fmt(reference)}], columns=SUMMARY_COLUMNS)
     return Outcome(res, diag, rank, cands, pd.DataFrame(sel_rows, columns=SELECTION_COLUMNS), summary, pred,
-                   verdict, chosen, theta, after)
+                   verdict, chosen, theta, after, dg.detectable(res, diag, quantity_cols, settings.alpha))
 
 
 # --------------------------------------------------------------------------- in process

@@ -244,3 +244,98 @@ def matched_quantities(diag: pd.DataFrame) -> set[str]:
         elif r.quantity:
             out.add(str(r.quantity))
     return out
+
+
+DETECTABLE_COLUMNS = ["test", "covariate", "quantity", "n", "low", "high", "tests", "power", "scatter_percent",
+                      "detectable_percent", "seed_se_percent", "measured_se_percent"]
+
+
+def _smallest_shift(df: int, t_crit: float, power: float) -> float:
+    """The noncentrality at which a two-sided t-test on ``df`` degrees of freedom with the
+    critical value ``t_crit`` rejects with probability ``power`` (scipy's noncentral t)."""
+    from scipy import optimize, stats
+
+    def short(delta):  # the far tail is below 1e-300 where scipy returns NaN for it
+        return float(stats.nct.sf(t_crit, df, delta) + np.nan_to_num(stats.nct.cdf(-t_crit, df, delta))) - power
+
+    hi = t_crit + 5.0
+    while short(hi) < 0:
+        hi *= 2.0
+    return float(optimize.brentq(short, 0.0, hi, xtol=1e-10))
+
+
+def detectable(res: pd.DataFrame, diag: pd.DataFrame, quantity_of: dict | None = None, alpha: float = 0.05,
+               power: float = 0.8) -> pd.DataFrame:
+    """What the diagnosis of ``res`` could have found: per test of a mean bias or of a trend
+    (``diag``'s rows), the smallest structure it detects with probability ``power``, given the
+    residual's own scatter, at the strictest level of its Holm family, ``alpha`` over the
+    number of tests in ``diag`` (Holm's first step; a conservative bound, as Holm's later
+    steps are looser).
+
+    * ``bias``: a mean relative residual of ``detectable_percent``; the scatter is the SD of
+      the relative residual (one-sample t-test on n - 1 degrees of freedom);
+    * ``trend``: a change of the relative residual by ``detectable_percent`` across the
+      covariate's measured range, ``low`` to ``high`` (in the table's unit); the scatter is
+      the residual standard error about the fitted line (the slope's t-test on n - 2 degrees
+      of freedom, standard error scatter / sqrt(sum (x - mean x)^2)).
+
+    The noncentrality comes from the noncentral t (:func:`_smallest_shift`).  Beside it, the
+    median over the rows of the seeds' standard error of the simulated mean
+    (sd_s / sqrt(n_s)) and of the measurement's (sd_m / sqrt(n_m)), as percent of the measured
+    value: where the scatter is about their combination, more seeds or repeats (whichever
+    dominates) shrink what goes unseen as the square root of their number; where it is well
+    above, the rows scatter for a reason neither carries."""
+    from scipy import stats
+
+    quantity_of = quantity_of or {}
+    if diag is None or len(diag) == 0:
+        return pd.DataFrame(columns=DETECTABLE_COLUMNS)
+    tests = len(diag)
+    level = alpha / tests
+    d = res[np.isfinite(res["relative_residual"].astype(float))].reset_index(drop=True)
+    meas = np.abs(d["measured"].to_numpy(float))
+
+    def median_percent(sd, n):
+        v = sd / np.sqrt(np.clip(n, 1.0, None)) / meas
+        v = v[np.isfinite(v)]
+        return float(np.median(v) * 100) if len(v) else float("nan")
+
+    seed_se = median_percent(d["simulated_sd"].to_numpy(float), d["simulated_n"].to_numpy(float))
+    measured_se = (median_percent(d["measured_sd"].to_numpy(float), d["measured_n"].fillna(1.0).to_numpy(float))
+                   if "measured_sd" in d else float("nan"))
+    rows = []
+    for t in diag.itertuples():
+        if t.test == "bias":
+            r = d["relative_residual"].to_numpy(float)
+            n = len(r)
+            if n < 3:
+                continue
+            scatter = float(np.std(r, ddof=1))
+            shift = _smallest_shift(n - 1, float(stats.t.isf(level / 2, n - 1)), power)
+            rows.append(dict(test="bias", covariate="", quantity="bias", n=n, low=np.nan, high=np.nan,
+                             scatter_percent=100 * scatter, detectable_percent=100 * shift * scatter / np.sqrt(n)))
+        elif t.test == "trend":
+            col = d.get(f"cov:{t.covariate}")
+            if col is None:
+                continue
+            has = col.notna().to_numpy()
+            x = pd.to_numeric(col[has], errors="coerce").to_numpy(float)
+            r = d["relative_residual"].to_numpy(float)[has]
+            n = len(r)
+            if n < 4:
+                continue
+            fit = _ols(r, np.column_stack([np.ones(n), x - x.mean()]))
+            scatter = float(np.sqrt(fit.ssr / (n - 2)))
+            sxx = float(np.sum((x - x.mean()) ** 2))
+            shift = _smallest_shift(n - 2, float(stats.t.isf(level / 2, n - 2)), power)
+            lo, hi = float(x.min()), float(x.max())
+            rows.append(dict(test="trend", covariate=t.covariate, quantity=quantity_of.get(t.covariate, ""), n=n,
+                             low=lo, high=hi, scatter_percent=100 * scatter,
+                             detectable_percent=100 * shift * scatter / np.sqrt(sxx) * (hi - lo)))
+    out = pd.DataFrame(rows, columns=[c for c in DETECTABLE_COLUMNS if c not in ("tests", "power", "seed_se_percent",
+                                                                                  "measured_se_percent")])
+    out["tests"] = tests
+    out["power"] = power
+    out["seed_se_percent"] = seed_se
+    out["measured_se_percent"] = measured_se
+    return out[DETECTABLE_COLUMNS]

@@ -13,7 +13,9 @@ Outputs under ``results/<soil>/loop/``:
 * ``selection.csv`` (every model tried: step, effects, parameters with 95 % intervals,
   held-out RMS error against its reference, AICc, paired-test p, accepted, why not),
   ``predictions.csv``, ``loop_summary.csv`` (error before and after on held-out
-  measurements, the verdict), ``report.md`` and ``figures/after/``.
+  measurements, the verdict), ``detectable.csv`` (the smallest bias and trends the diagnosis
+  finds with 80 % power: :func:`soilcal.loop.diagnose.detectable`), ``report.md`` and
+  ``figures/after/``.
 """
 
 from __future__ import annotations
@@ -199,6 +201,7 @@ def select_files(soil_path, resources_root, outdir, tool_files: dict, effect_fil
     write_csv(outcome.selection, out / "selection.csv")
     write_csv(outcome.predictions, out / "predictions.csv")
     write_csv(outcome.summary, out / "loop_summary.csv")
+    write_csv(outcome.detectable, out / "detectable.csv")
     residual_figures(outcome.residuals, outcome.predictions if outcome.chosen else None, out / "figures" / "after",
                      title=f"{soil.name}: " + (" + ".join(outcome.chosen) if outcome.chosen else "no effect chosen"))
     write_text(out / "report.md", report(soil.name, outcome, plans))
@@ -218,6 +221,28 @@ def _table(df: pd.DataFrame, cols, fmt=None) -> str:
                 cells.append(str(v).replace("|", "/"))
         lines.append("| " + " | ".join(cells) + " |")
     return "\n".join(lines)
+
+
+def _detectable_lines(det: pd.DataFrame | None) -> list[str]:
+    """The report's section on what the diagnosis could have found (``detectable.csv``)."""
+    if det is None or len(det) == 0:
+        return []
+    d = det.assign(structure=[("mean bias" if t == "bias" else f"trend over {c} {lo:.4g} to {hi:.4g}")
+                              for t, c, lo, hi in zip(det["test"], det["covariate"], det["low"], det["high"])])
+    r = det.iloc[0]
+    return ["## What these data can detect", "",
+            f"The smallest structure each test finds with probability {r['power']:.2g}, given the residual's "
+            f"own scatter, at alpha / tests ({r['tests']} tests: Holm's strictest step); a trend as the change "
+            "of the relative residual across the covariate's measured range (`detectable.csv`, "
+            "`soilcal.loop.diagnose.detectable`).  Beside it, the median standard errors, in % of the measured "
+            f"value: of the simulated mean over the seeds {r['seed_se_percent']:.3g} %, of the measured value "
+            + ("unknown (no SD measured)" if not np.isfinite(r["measured_se_percent"])
+               else f"{r['measured_se_percent']:.3g} %")
+            + ".  Where the scatter is about their combination, more seeds or repeats (whichever dominates) shrink "
+            "what goes unseen as the square root of their number; where it is well above, the rows scatter for a "
+            "reason neither carries.", "",
+            _table(d, ["structure", "n", "scatter_percent", "detectable_percent"],
+                   {"scatter_percent": "{:.3g}", "detectable_percent": "{:.3g}"}), ""]
 
 
 def report(soil: str, o: core.Outcome, plans: list) -> str:
@@ -248,6 +273,7 @@ def report(soil: str, o: core.Outcome, plans: list) -> str:
     lines += ["## Diagnosis of the calibrated model's residual", "",
               _table(o.diagnosis, ["test", "covariate", "quantity", "n", "estimate", "statistic", "p", "p_adjusted", "r2",
                                    "significant"]) if len(o.diagnosis) else "(no test: too few usable rows)", "",
+              *_detectable_lines(o.detectable),
               "## Candidates", ""]
     if len(o.selection):
         lines.append(_table(o.selection, ["step", "effects", "parameters", "heldout_rmse_percent",
