@@ -372,3 +372,8 @@ def test_the_smallest_shift_tends_to_the_normal_sum_of_quantiles():
 
 def test_nothing_detectable_without_tests():
     assert len(detectable(_power_table([0.1, -0.1]), diagnose(_power_table([0.1, -0.1])).iloc[0:0])) == 0
+
+
+def test_a_table_without_standardised_residuals_has_no_scatter_test():
+    t = _table([0.1, 0.2, -0.1, 0.0, 0.05]).drop(columns="standardised_residual").assign(measured_sd=1.0)
+    assert list(diagnose(t)["test"]) == ["bias"]

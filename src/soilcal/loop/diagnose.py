@@ -134,7 +134,8 @@ def diagnose(res: pd.DataFrame, quantity_of: dict | None = None, alpha: float = 
         rows.append(dict(test="bias", covariate="", quantity="bias", n=n, levels=1, estimate=float(r.mean()),
                          statistic=float(t.statistic), p=float(t.pvalue),
                          r2=float(r.mean() ** 2 / np.mean(r ** 2)) if np.any(r) else 0.0))
-    z = d["standardised_residual"].astype(float).to_numpy() if "standardised_residual" in d else np.array([])
+    z = (d["standardised_residual"].astype(float).to_numpy() if "standardised_residual" in d
+         else np.full(n, np.nan))  # no standardised residual: no scatter test
     dof = (d["residual_dof"].astype(float).to_numpy() if "residual_dof" in d else np.full(len(z), np.inf))
     if "measured_sd" in d:  # only where the measured uncertainty is known: seed scatter alone understates it
         known = np.isfinite(d["measured_sd"].astype(float).to_numpy())
