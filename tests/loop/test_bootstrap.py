@@ -187,3 +187,15 @@ def test_a_refit_from_an_earlier_answer_still_finds_a_lower_minimum():
     ed = sl.build_effect_data(obs, runs, EFF, BOUNDS)
     x, _ = sl.Model([ed], np.array([125.0]), np.array([100.0])).fit(x0=[0.15])
     assert x[0] == pytest.approx(-0.3, abs=1e-9)
+
+
+def test_the_fit_is_relative_to_the_rows_scale():
+    # one row measured at -1 with the scale 10 (a quantity of both signs): the error of the
+    # switched-off model (125 there) is (-1 - 125) / 10
+    obs = pd.DataFrame({"measurement": ["m"], "row": [1], "measure": ["F_N"], "measured": [-1.0]})
+    runs = pd.DataFrame([{"measurement": "m", "row": 1, "measure": "F_N", "seed": 0, "value": v, "status": "ok",
+                          "t:beta": b} for b, v in ((-0.3, 100.0), (0.0, 125.0), (0.6, 140.0))])
+    ed = sl.build_effect_data(obs, runs, EFF, BOUNDS)
+    m = sl.Model([ed], np.array([125.0]), np.array([-1.0]), np.array([10.0]))
+    assert m.errors(np.array([0.0])) == pytest.approx([-12.6])
+    assert sl.Model([ed], np.array([125.0]), np.array([-1.0])).errors(np.array([0.0])) == pytest.approx([-126.0])

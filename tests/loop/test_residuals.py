@@ -156,3 +156,45 @@ def test_no_runs_at_all():
     assert r["simulated_n"] == 0 and np.isnan(r["residual"])
     assert "no simulated value" in r["note"]
     assert len(usable(res)) == 0
+
+
+def _table(values, sims):
+    conds = [_cond(i + 1, [("Fz_N", v, 1.0, 3)]) for i, v in enumerate(values)]
+    runs = _runs([(i + 1, "Fz_N", s, x, "ok") for i, x in enumerate(sims) for s in (0, 1)])
+    return residual_frame(observations(conds), runs)
+
+
+def test_a_quantity_of_both_signs_is_relative_to_its_rms():
+    # measured 3, -4, 0.5 (both signs): RMS sqrt((9 + 16 + 0.25) / 3) = sqrt(8.4167) = 2.9011;
+    # simulated 2 everywhere: residuals 1, -6, -1.5, each over 2.9011
+    res = _table([3.0, -4.0, 0.5], [2.0, 2.0, 2.0])
+    rms = math.sqrt((9 + 16 + 0.25) / 3)
+    assert res["scale"].to_numpy() == pytest.approx([rms] * 3)
+    assert res["relative_residual"].to_numpy() == pytest.approx(np.array([1.0, -6.0, -1.5]) / rms)
+    assert all("relative to the RMS 2.901 of Fz_N" in n for n in res["note"])
+
+
+def test_a_value_near_zero_makes_its_quantity_relative_to_its_rms_and_a_wide_range_does_not():
+    # 0.5 N among 40 and 60 N: below 0.02 of the RMS sqrt((0.25 + 1600 + 3600) / 3) = 41.64
+    res = _table([0.5, 40.0, 60.0], [1.0, 44.0, 57.0])
+    rms = math.sqrt((0.25 + 1600 + 3600) / 3)
+    assert res["relative_residual"].to_numpy() == pytest.approx(np.array([-0.5, -4.0, 3.0]) / rms)
+    # 5 N among 40 and 60 N (0.12 of the RMS): each row its own value
+    res = _table([5.0, 40.0, 60.0], [4.0, 44.0, 57.0])
+    assert res["relative_residual"].to_numpy() == pytest.approx([1 / 5, -4 / 40, 3 / 60])
+    assert (res["note"] == "").all()
+
+
+def test_a_measured_zero_has_no_relative_residual_alone_but_with_others_the_rms():
+    res = _table([0.0], [1.0])
+    assert np.isnan(res["relative_residual"].iloc[0]) and "measured value 0" in res["note"].iloc[0]
+    res = _table([0.0, 10.0], [1.0, 9.0])  # RMS sqrt(100 / 2) = 7.071
+    assert res["relative_residual"].to_numpy() == pytest.approx(np.array([-1.0, 1.0]) / math.sqrt(50))
+
+
+def test_failed_runs_are_counted_and_noted():
+    conds = [_cond(1, [("F_N", 100.0, 6.0, 4)])]
+    runs = _runs(SIMS + [(1, "F_N", 3, float("nan"), "failed"), (1, "F_N", 4, 91.0, "failed")])
+    r = _one(residual_frame(observations(conds), runs), 1)
+    assert (r["simulated_n"], r["failed_runs"]) == (3, 2) and r["note"] == "2 runs failed"
+    assert r["simulated_mean"] == pytest.approx(92.0)

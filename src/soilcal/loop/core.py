@@ -51,6 +51,12 @@ from soilcal.loop.effects import EFFECTS
 from soilcal.loop.settings import Settings, settings_from  # noqa: F401 (settings_from re-exported)
 
 
+def _scale(u: pd.DataFrame) -> np.ndarray:
+    """The relative residual's denominators of the rows (:func:`soilcal.loop.residuals.scales`;
+    |measured| for a table written before the column existed)."""
+    return u["scale"].to_numpy(float) if "scale" in u else np.abs(u["measured"].to_numpy(float))
+
+
 def reference_values(res: pd.DataFrame, settings: Settings) -> dict:
     """Quantity -> the value at which the calibrated parameters hold: declared, else the
     mean over the usable rows (recorded in the outputs)."""
@@ -192,7 +198,8 @@ def _interval(u: pd.DataFrame, effects: list, final, settings: Settings,
     sims = simulations or {}
     labels = [str(sims.get((m, int(r)), f"{m}/{r}")) for m, r in zip(u["measurement"], u["row"])]
     boot = sl.bootstrap_ci(effects, u["simulated_mean"].to_numpy(float), u["measured"].to_numpy(float), se,
-                           settings.bootstrap, x0=[final.theta[nm] for nm in final.names], conditions=labels)
+                           settings.bootstrap, x0=[final.theta[nm] for nm in final.names], conditions=labels,
+                           scale=_scale(u))
     if boot is None:
         return final.ci, fit_only + " (too few seeds per condition to resample)"
     how = (f"a bootstrap of {settings.bootstrap} refits over each simulation's seeds and the measured standard errors "
@@ -259,7 +266,8 @@ def analyse(soil: str, res: pd.DataFrame, diag: pd.DataFrame, cands: list, effec
     after, left, fitted = None, "", None
     names = (sel.chosen or provisional) if sel is not None else []
     if names:
-        m = sl.Model([data[c] for c in names], u["simulated_mean"].to_numpy(float), u["measured"].to_numpy(float))
+        m = sl.Model([data[c] for c in names], u["simulated_mean"].to_numpy(float), u["measured"].to_numpy(float),
+                     _scale(u))
         x, _ = m.fit()
         fitted = m.predict(x)
         res_after = residual_after(res, fitted)
@@ -279,7 +287,7 @@ def analyse(soil: str, res: pd.DataFrame, diag: pd.DataFrame, cands: list, effec
         pred["with_effects"] = fitted
         _, held = sl.cross_validate(m, sl._folds(u, fold_by))
         meas = u["measured"].to_numpy(float)
-        pred["heldout_prediction"] = meas - held * np.abs(meas)
+        pred["heldout_prediction"] = meas - held * _scale(u)
         after_cv = held
         verdict = "explained by " + " + ".join(chosen)
         if left:  # what the chosen effects leave: structure no effect of the library accounted for
@@ -387,6 +395,6 @@ def residual_after(res: pd.DataFrame, predicted: np.ndarray) -> pd.DataFrame:
     m = u["measured"].to_numpy(float)
     u["simulated_mean"] = predicted
     u["residual"] = m - predicted
-    u["relative_residual"] = (m - predicted) / np.abs(m)
+    u["relative_residual"] = (m - predicted) / _scale(u)
     u["standardised_residual"] = u["residual"] / u["residual_se"]
     return u

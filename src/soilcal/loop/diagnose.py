@@ -283,7 +283,7 @@ def detectable(res: pd.DataFrame, diag: pd.DataFrame, quantity_of: dict | None =
     The noncentrality comes from the noncentral t (:func:`_smallest_shift`).  Beside it, the
     median over the rows of the seeds' standard error of the simulated mean
     (sd_s / sqrt(n_s)) and of the measurement's (sd_m / sqrt(n_m)), as percent of the measured
-    value: where the scatter is about their combination, more seeds or repeats (whichever
+    value (of the relative residual's scale, :func:`soilcal.loop.residuals.scales`): where the scatter is about their combination, more seeds or repeats (whichever
     dominates) shrink what goes unseen as the square root of their number; where it is well
     above, the rows scatter for a reason neither carries."""
     from scipy import stats
@@ -294,7 +294,7 @@ def detectable(res: pd.DataFrame, diag: pd.DataFrame, quantity_of: dict | None =
     tests = len(diag)
     level = alpha / tests
     d = res[np.isfinite(res["relative_residual"].astype(float))].reset_index(drop=True)
-    meas = np.abs(d["measured"].to_numpy(float))
+    meas = d["scale"].to_numpy(float) if "scale" in d else np.abs(d["measured"].to_numpy(float))
 
     def median_percent(sd, n):
         v = sd / np.sqrt(np.clip(n, 1.0, None)) / meas

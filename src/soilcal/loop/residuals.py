@@ -9,8 +9,13 @@ standard deviation and seed count at the calibrated parameters.
 Conventions:
 
 * residual = measured - simulated (positive: the model under-predicts);
-* relative residual = residual / |measured|, the dimensionless residual the diagnosis and
-  the effect fits use, so that one table may hold forces and heights;
+* relative residual = residual / scale, the dimensionless residual the diagnosis and the
+  effect fits use, so that one table may hold forces and heights; the scale (column
+  ``scale``) is the row's |measured|, except for a measured quantity of a table whose values
+  change sign or come near zero (one of them below :data:`NEAR_ZERO` times their RMS: a
+  vertical force about zero; an exact 0 counts), where every row of it takes the RMS of its measured values
+  (said in the row's note): a ratio to a value near zero would let one row swamp the rest;
+  a row whose scale is 0 has no relative residual (noted);
 * residual standard error = sqrt(sd_m^2 / n_m + sd_s^2 / n_s) with the measured standard
   deviation over its repeats (``n_m`` 1 where the table gives no count: the SD is then the
   value's own uncertainty) and the seed scatter of the simulated mean; the standardised
@@ -31,8 +36,32 @@ import pandas as pd
 
 KEY = ["measurement", "row", "measure"]
 RESIDUAL_COLUMNS = ["measurement", "row", "measure", "unit", "label", "measured", "measured_sd", "measured_n",
-                    "simulated_mean", "simulated_sd", "simulated_n", "residual", "relative_residual",
-                    "residual_se", "residual_dof", "standardised_residual", "note"]
+                    "simulated_mean", "simulated_sd", "simulated_n", "failed_runs", "residual", "scale",
+                    "relative_residual", "residual_se", "residual_dof", "standardised_residual", "note"]
+
+#: a measured quantity with a value below this share of its RMS (or of both signs) is scaled by its
+#: RMS: a force 50 times smaller than the rest is about zero for a DEM whose scatter is a few
+#: percent of the force, while a soil-bin campaign from shallow and slow to deep and fast spans
+#: a factor of 10-20 (its smallest value 0.05-0.1 of the RMS), which each row's own value scales
+NEAR_ZERO = 0.02
+
+
+def scales(df: pd.DataFrame) -> tuple[np.ndarray, list]:
+    """Per row the scale of the relative residual (module docstring) and the measured
+    quantities (measurement, measure) scaled by their RMS."""
+    m = df["measured"].astype(float).to_numpy()
+    scale = np.abs(m)
+    by_rms = []
+    for key, idx in df.groupby(["measurement", "measure"], sort=False).indices.items():
+        v = m[idx]
+        v = v[np.isfinite(v)]
+        if not len(v):
+            continue
+        rms = float(np.sqrt(np.mean(v ** 2)))
+        if rms > 0 and ((v < 0).any() and (v > 0).any() or np.abs(v).min() < NEAR_ZERO * rms):
+            scale[idx] = rms
+            by_rms.append(key)
+    return np.where(scale > 0, scale, np.nan), by_rms
 
 
 def observations(conditions) -> pd.DataFrame:
@@ -56,14 +85,17 @@ def observations(conditions) -> pd.DataFrame:
 
 
 def simulated_stats(runs: pd.DataFrame) -> pd.DataFrame:
-    """Mean, SD (ddof 1) and count of the ``ok`` runs' values per measured quantity
-    (``runs``: measurement, row, measure, value[, status])."""
-    ok = runs
+    """Mean, SD (ddof 1) and count of the ``ok`` runs' values per measured quantity, and the
+    count of the other runs (``failed_runs``: failed or without a value) (``runs``:
+    measurement, row, measure, value[, status])."""
+    good = np.isfinite(pd.to_numeric(runs["value"], errors="coerce").to_numpy(float))
     if "status" in runs.columns:
-        ok = runs[runs["status"].astype(str) == "ok"]
-    ok = ok[np.isfinite(pd.to_numeric(ok["value"], errors="coerce"))]
-    g = ok.groupby(KEY)["value"]
+        good &= (runs["status"].astype(str) == "ok").to_numpy()
+    g = runs[good].groupby(KEY)["value"]
     out = pd.DataFrame({"simulated_mean": g.mean(), "simulated_sd": g.std(ddof=1), "simulated_n": g.count()})
+    failed = runs[~good].groupby(KEY).size().rename("failed_runs")
+    out = out.join(failed, how="outer")
+    out["failed_runs"] = out["failed_runs"].fillna(0).astype(int)
     return out.reset_index()
 
 
@@ -75,14 +107,18 @@ def residual_frame(obs: pd.DataFrame, runs: pd.DataFrame) -> pd.DataFrame:
     else:
         sim = pd.DataFrame({"measurement": pd.Series(dtype=object), "row": pd.Series(dtype=int),
                             "measure": pd.Series(dtype=object), "simulated_mean": pd.Series(dtype=float),
-                            "simulated_sd": pd.Series(dtype=float), "simulated_n": pd.Series(dtype=float)})
+                            "simulated_sd": pd.Series(dtype=float), "simulated_n": pd.Series(dtype=float),
+                            "failed_runs": pd.Series(dtype=int)})
     df = obs.merge(sim, on=KEY, how="left")
     for c in ("simulated_mean", "simulated_sd"):
         df[c] = df[c].astype(float)
     df["simulated_n"] = df["simulated_n"].fillna(0).astype(int)
+    df["failed_runs"] = df["failed_runs"].fillna(0).astype(int)
     m, s = df["measured"].astype(float), df["simulated_mean"].astype(float)
     df["residual"] = m - s
-    df["relative_residual"] = np.where(np.abs(m) > 0, (m - s) / np.abs(m), np.nan)
+    scale, by_rms = scales(df)
+    df["scale"] = scale
+    df["relative_residual"] = (m - s) / df["scale"]
     nm = df["measured_n"].fillna(1.0).clip(lower=1.0)
     var_m = (df["measured_sd"] ** 2 / nm).fillna(0.0)
     var_s = (df["simulated_sd"] ** 2 / df["simulated_n"].clip(lower=1)).fillna(0.0)
@@ -96,10 +132,17 @@ def residual_frame(obs: pd.DataFrame, runs: pd.DataFrame) -> pd.DataFrame:
     df["residual_dof"] = np.where(den > 0, se ** 4 / np.where(den > 0, den, 1.0), np.inf)
     df["standardised_residual"] = df["residual"] / df["residual_se"]
     notes = []
+    rms_scaled = set(by_rms)
     for r in df.itertuples():
         n = []
         if not np.isfinite(r.measured):
             n.append("no measured value")
+        elif not np.isfinite(r.scale):
+            n.append("measured value 0: no relative residual")
+        elif (r.measurement, r.measure) in rms_scaled:
+            n.append(f"relative to the RMS {r.scale:.4g} of {r.measure} (values near zero or of both signs)")
+        if r.failed_runs:
+            n.append(f"{r.failed_runs} run{'s' if r.failed_runs > 1 else ''} failed")
         if r.simulated_n == 0:
             n.append("no simulated value")
         if not np.isfinite(r.residual_se):

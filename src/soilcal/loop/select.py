@@ -227,6 +227,11 @@ class Model:
     effects: list            # EffectData
     y0: np.ndarray           # calibrated simulated means of the rows
     measured: np.ndarray
+    scale: np.ndarray | None = None  # the relative errors' denominators (residuals.scales); default |measured|
+
+    def __post_init__(self):
+        if self.scale is None:
+            self.scale = np.abs(np.asarray(self.measured, float))
 
     @property
     def k(self) -> int:
@@ -242,7 +247,7 @@ class Model:
 
     def errors(self, x, idx=None) -> np.ndarray:
         idx = np.arange(len(self.y0)) if idx is None else idx
-        return (self.measured[idx] - self.predict(x)[idx]) / np.abs(self.measured[idx])
+        return (self.measured[idx] - self.predict(x)[idx]) / self.scale[idx]
 
     def bounds(self):
         lo = np.concatenate([e.surrogate.lo for e in self.effects]) if self.effects else np.zeros(0)
@@ -397,7 +402,7 @@ BOOTSTRAP_SEED = 0
 
 def bootstrap_ci(effects: list, y0: np.ndarray, measured: np.ndarray, measured_se: np.ndarray,
                  n_boot: int = BOOTSTRAP, seed: int = BOOTSTRAP_SEED, level: float = 0.95, x0=None,
-                 conditions=None) -> dict | None:
+                 conditions=None, scale: np.ndarray | None = None) -> dict | None:
     """Bootstrap interval of the parameters of the model with ``effects``
     (:class:`EffectData` with their runs' ``values`` and ``seeds``) over the seeds and the
     measured values (module docstring): parameter name -> (low, high).
@@ -408,7 +413,8 @@ def bootstrap_ci(effects: list, y0: np.ndarray, measured: np.ndarray, measured_s
     with replacement as it has (the union of its seeds over the effects), the same seeds
     for every design point of every effect.  A row with no run of the drawn seeds at some
     design point (or no numbered seed at all) keeps the mean the surrogate went through
-    there; the draws' deviations from each design point's seed mean are added to the mean
+    there; ``scale``: the rows' relative-error denominators (default |measured|,
+    :func:`soilcal.loop.residuals.scales`); the draws' deviations from each design point's seed mean are added to the mean
     the surrogate went through (which also counts runs without a seed number).  Each refit
     searches from ``x0`` (the fitted parameters) where given, and from the draw's best design
     points (:meth:`Model.fit`).  None where
@@ -418,6 +424,7 @@ def bootstrap_ci(effects: list, y0: np.ndarray, measured: np.ndarray, measured_s
 
     if n_boot <= 0 or not effects or any(e.values is None or e.seeds is None or e.means is None for e in effects):
         return None
+    denominators = scale  # the relative errors' (the name scale is the seed deviations' below)
     n = len(y0)
     union = [sorted(set().union(*(e.seeds[i] for e in effects))) for i in range(n)]
     if max(len(u) for u in union) < 2:
@@ -477,7 +484,7 @@ def bootstrap_ci(effects: list, y0: np.ndarray, measured: np.ndarray, measured_s
             fitted.append(EffectData(e.effect, e.bounds, Surrogate(e.effect, e.bounds, e.thetas(), Y), e.design))
         if lost:
             continue
-        x, _ = Model(fitted, y0 if yb is None else yb, m).fit(x0=x0)
+        x, _ = Model(fitted, y0 if yb is None else yb, m, denominators).fit(x0=x0)
         draws.append(x)
     if len(draws) < max(20, n_boot // 2):
         return None
@@ -508,12 +515,13 @@ def forward(obs: pd.DataFrame, y0: np.ndarray, data: dict, fold_by: str | None =
     A single effect thus faces the calibrated model; two effects that each leave the other's
     error in the folds are added together and each is tested against the other alone."""
     measured = obs["measured"].to_numpy(float)
+    scale = obs["scale"].to_numpy(float) if "scale" in obs else None
     folds = _folds(obs, fold_by)
     chosen: list[str] = []
     steps = []
 
     def model(names):
-        return Model([data[c] for c in names], y0, measured)
+        return Model([data[c] for c in names], y0, measured, scale)
 
     for step in range(1, max_effects + 1):
         ref = model(chosen)
