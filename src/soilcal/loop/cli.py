@@ -183,18 +183,39 @@ def _conditions(args):
     return soil, conds
 
 
+def _named(items, what: str) -> dict:
+    """``--effect`` / ``--disturbance`` values, ``name:key=value,...``, one per name."""
+    from soilcal.errors import InputError
+
+    out = {}
+    for text in items or []:
+        name, kv = _kv(text, what)
+        if name in out:
+            raise InputError("<command line>", what, f"each name once (merge its keys: {name}:k=v,k=v)", text)
+        out[name] = kv
+    return out
+
+
+def _reference(args) -> dict:
+    return dict(_kv("r:" + ",".join(args.reference), "--reference")[1]) if args.reference else {}
+
+
 def _synthesize(args) -> int:
     import numpy as np
     import pandas as pd
 
     from soilcal.atomic import write_text
+    from soilcal.errors import InputError
     from soilcal.config.measurements import measurements_dir
     from soilcal.loop import synthesize as sy
 
     soil, conds = _conditions(args)
-    hidden = dict(_kv(e, "--effect") for e in args.effect or [])
-    dist = dict(_kv(d, "--disturbance") for d in args.disturbance or [])
-    reference = dict(_kv("r:" + ",".join(args.reference), "--reference")[1]) if args.reference else {}
+    hidden = _named(args.effect, "--effect")
+    dist = sy.check_disturbances(_named(args.disturbance, "--disturbance"), conds, "--disturbance")
+    sy.check_hidden(hidden, "--effect")
+    reference = sy.default_reference(conds, _reference(args), "--reference", strict=True)
+    if args.repeats < 1:
+        raise InputError("<command line>", "--repeats", "at least 1 measured repeat", args.repeats)
     overrides = _params(args)
     params = base_parameters(soil, conds, overrides, args.results)
     table = sy.synthesize(conds, _lookup(params), dem_simulator(args.threads), hidden, reference, dist,
@@ -219,7 +240,7 @@ def _synthesize(args) -> int:
     truth = Path(args.out).with_suffix(".truth.csv")
     write_text(truth, table.to_csv(index=False))
     print(f"{len(df)} rows -> {args.out} (truth: {truth}; parameters: {source}; hidden {hidden or 'none'}, "
-          f"disturbances {dist or 'none'}, seed {args.seed})")
+          f"disturbances {dist or 'none'}, seed {args.seed}; reference {reference or 'none'}, SI units)")
     return 0
 
 
@@ -229,15 +250,22 @@ def _run(args) -> int:
     from soilcal.chain.files import write_csv
     from soilcal.loop import core
 
+    from soilcal.errors import InputError
+    from soilcal.loop import synthesize as sy
+
     soil, conds = _conditions(args)
     settings = core.settings_from(soil.data, soil.path)
     if args.reference:
-        settings = replace(settings, reference={**settings.reference,
-                                                **_kv("r:" + ",".join(args.reference), "--reference")[1]})
+        given = _reference(args)
+        sy.default_reference(conds, given, "--reference", strict=True)  # names the conditions carry, values
+        settings = replace(settings, reference={**settings.reference, **given})
+    seeds = args.sim_seeds if args.sim_seeds is not None else max(int(c.replicates) for c in conds)
+    if seeds < 1:
+        raise InputError("<command line>", "--sim-seeds", "at least 1 DEM seed per condition", seeds)
     overrides = _params(args)
     params = base_parameters(soil, conds, overrides, args.results)
     out = core.run_inprocess(soil.name, conds, _lookup(params), dem_simulator(args.threads), settings,
-                             seeds=tuple(range(args.seed, args.seed + args.sim_seeds)))
+                             seeds=tuple(range(args.seed, args.seed + seeds)))
     d = Path(args.out)
     for name, df in (("residuals", out.residuals), ("diagnosis", out.diagnosis), ("selection", out.selection),
                      ("predictions", out.predictions), ("loop_summary", out.summary), ("detectable", out.detectable),
@@ -263,6 +291,15 @@ RESULTS_HELP = ("results folder of the workflow (e.g. results): start every cond
                 "of its stage and case there, as the workflow's tool jobs do (--param still on top)")
 
 
+def _si_units() -> str:
+    from soilcal.config.quantities import QUANTITIES
+
+    return ", ".join(f"{q} {u[0]}" for q, u in QUANTITIES.items() if u).replace("%", "%%")  # argparse formats help
+
+
+SI_UNITS = _si_units()
+
+
 def register(sub) -> None:
     p = sub.add_parser("loop", help="the measured-data loop: synthesize a measured table, run the loop")
     cmds = p.add_subparsers(dest="loop_cmd", required=True)
@@ -272,7 +309,8 @@ def register(sub) -> None:
     s.add_argument("--effect", action="append", help="hidden effect, e.g. rate_friction:beta=0.2 (repeatable)")
     s.add_argument("--disturbance", action="append",
                    help="periodic:amplitude=0.1,wavelength=7 | stones:fraction=0.3 | day_offset:sd=0.1")
-    s.add_argument("--reference", action="append", help="quantity=value where the hidden effect is off")
+    s.add_argument("--reference", action="append", help="quantity=value where the hidden effect is off, in the "
+                   "quantity's SI unit (" + SI_UNITS + "); default: the mean over the measured rows, as the loop takes it")
     s.add_argument("--param", action="append", help="DEM parameter NAME=VALUE for every condition")
     s.add_argument("--results", help=RESULTS_HELP)
     s.add_argument("--noise", type=float, default=0.02, help="relative SD of the instrument noise of one repeat")
@@ -285,10 +323,13 @@ def register(sub) -> None:
     r = cmds.add_parser("run", help="the whole loop of a soil in one process on the DEM")
     r.add_argument("soil", help="soil YAML file")
     r.add_argument("--measurement", help="only this measured table")
-    r.add_argument("--reference", action="append", help="quantity=value where the calibrated parameters hold")
+    r.add_argument("--reference", action="append", help="quantity=value where the calibrated parameters hold, in "
+                   "the quantity's SI unit (" + SI_UNITS + "); default: the soil's loop.reference, else the mean over "
+                   "the measured rows")
     r.add_argument("--param", action="append", help="DEM parameter NAME=VALUE for every condition")
     r.add_argument("--results", help=RESULTS_HELP)
-    r.add_argument("--sim-seeds", type=int, default=2, help="DEM seeds per condition and design point")
+    r.add_argument("--sim-seeds", type=int, default=None, help="DEM seeds per condition and design point "
+                   "(default: the largest `replicates` of the measured tables, 3 where they give none)")
     r.add_argument("--seed", type=int, default=0, help="first DEM seed")
     r.add_argument("--threads", type=int, default=None)
     r.add_argument("--resources", default="resources")

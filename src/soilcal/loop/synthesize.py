@@ -2,11 +2,14 @@
 
 The measured value of each condition is the simulation at the soil's calibrated parameters
 with hidden effects switched on (library effects, :mod:`soilcal.loop.effects`, with their
-parameters), mean over ``seeds``, times disturbances from outside the library, times
+parameters, relative to the reference values: given, else the mean over the measured rows as
+the loop itself takes them, :func:`default_reference`; written in the ``reference:<quantity>``
+columns of the truth), mean over ``seeds``, times disturbances from outside the library, times
 measurement noise:
 
 * ``periodic``: 1 + a sin(2 pi x / wavelength + phase), x the row's ``position`` quantity
-  (m along the soil bin; the row number where the table has none): a periodic
+  (m along the soil bin; the row number where the table has none; the wavelength has no
+  default, in the unit of x): a periodic
   disturbance along the bin (a ridge pattern left by the bed preparation);
 * ``stones``: a share ``fraction`` of the rows, drawn at random, raised by a factor drawn
   uniformly in [1 + low, 1 + high]: stones met by the tool as rigid inclusions;
@@ -32,17 +35,71 @@ import pandas as pd
 from soilcal.errors import InputError
 from soilcal.loop.effects import EFFECTS, apply_all
 
-DISTURBANCES = ("periodic", "stones", "day_offset")
+#: disturbance -> its parameters and their defaults (None: required)
+DISTURBANCES = {"periodic": {"amplitude": 0.1, "wavelength": None, "phase": 0.0},
+                "stones": {"fraction": 0.3, "low": 0.1, "high": 0.3},
+                "day_offset": {"sd": 0.1}}
 
 
 def check_hidden(hidden: dict, source="<synthesize>") -> None:
     for name, theta in hidden.items():
         if name not in EFFECTS:
             raise InputError(source, "effect", "one of " + ", ".join(EFFECTS), name)
+        if not theta:
+            raise InputError(source, f"effect.{name}", "a value of its parameters, e.g. " + name + ":"
+                             + ",".join(f"{k}=..." for k in EFFECTS[name].params), "none")
         for k in theta:
             if k not in EFFECTS[name].params:
                 raise InputError(source, f"effect.{name}", "a parameter of the effect (" + ", ".join(EFFECTS[name].params)
                                  + ")", k)
+
+
+def check_disturbances(disturbances: dict, conditions, source="<synthesize>") -> dict:
+    """The disturbances with their defaults filled in; unknown names and parameters refused,
+    and a periodic disturbance needs its wavelength (in the position's unit, m, or in rows
+    where the table has no ``position`` quantity)."""
+    out = {}
+    for name, given in disturbances.items():
+        if name not in DISTURBANCES:
+            raise InputError(source, "disturbance", "one of " + ", ".join(DISTURBANCES), name)
+        known = DISTURBANCES[name]
+        for k in given:
+            if k not in known:
+                raise InputError(source, f"disturbance.{name}", "a parameter of the disturbance ("
+                                 + ", ".join(known) + ")", k)
+        full = {k: float(given.get(k, v)) if given.get(k, v) is not None else None for k, v in known.items()}
+        missing = [k for k, v in full.items() if v is None]
+        if missing:
+            where = ("m along the soil bin (the position quantity)"
+                     if any("position" in (c.quantities or {}) for c in conditions) else
+                     "rows (the table declares no position quantity, so the row number is the position)")
+            raise InputError(source, f"disturbance.{name}.{missing[0]}", f"a value in {where}", "none")
+        out[name] = full
+    return out
+
+
+def default_reference(conditions, declared: dict | None = None, source="<synthesize>", strict: bool = False) -> dict:
+    """Numeric quantity of the conditions -> the value where the calibrated parameters hold
+    (where an effect is switched off): ``declared`` (checked as a soil's ``loop.reference``;
+    with ``strict``, a quantity no condition carries is refused, as a typo on the command
+    line, else it is left out, as the loop leaves it), else the mean over the measured rows,
+    as the loop takes it (:func:`soilcal.loop.core.reference_values`)."""
+    from soilcal.config.quantities import QUANTITIES
+    from soilcal.loop.residuals import observations
+    from soilcal.loop.settings import settings_from
+
+    declared = settings_from({"loop": {"reference": dict(declared or {})}}, source).reference
+    obs = observations(conditions)
+    carried = [c[2:] for c in obs.columns if c.startswith("q:") and QUANTITIES.get(c[2:]) is not None]
+    for q in declared:
+        if strict and q not in carried:
+            raise InputError(source, f"reference.{q}", "a numeric quantity of the measured conditions ("
+                             + (", ".join(carried) or "none declared") + ")", q)
+    out = {}
+    for q in carried:
+        x = pd.to_numeric(obs[f"q:{q}"], errors="coerce")
+        out[q] = declared[q] if q in declared else float(x.mean())
+    return out
 
 
 def synthesize(conditions, base_params, simulate, hidden: dict | None = None, reference: dict | None = None,
@@ -52,29 +109,27 @@ def synthesize(conditions, base_params, simulate, hidden: dict | None = None, re
     and the truth (simulated mean with the hidden effects, the disturbance factor)."""
     hidden = hidden or {}
     check_hidden(hidden)
-    disturbances = disturbances or {}
-    for name in disturbances:
-        if name not in DISTURBANCES:
-            raise InputError("<synthesize>", "disturbance", "one of " + ", ".join(DISTURBANCES), name)
-    reference = reference or {}
-    rng = np.random.default_rng(seed)
     conditions = list(conditions)
+    if not len(seeds):
+        raise InputError("<synthesize>", "repeats", "at least one measured repeat (one DEM seed each)", 0)
+    disturbances = check_disturbances(disturbances or {}, conditions)
+    reference = default_reference(conditions, reference)
+    rng = np.random.default_rng(seed)
     factor = np.ones(len(conditions))
     if "periodic" in disturbances:
         d = disturbances["periodic"]
         for i, c in enumerate(conditions):
             x = (c.quantities or {}).get("position", float(c.row))
-            factor[i] *= 1 + float(d.get("amplitude", 0.1)) * math.sin(2 * math.pi * float(x) / float(d.get("wavelength", 1.0))
-                                                                    + float(d.get("phase", 0.0)))
+            factor[i] *= 1 + d["amplitude"] * math.sin(2 * math.pi * float(x) / d["wavelength"] + d["phase"])
     if "stones" in disturbances:
         d = disturbances["stones"]
-        hit = rng.random(len(conditions)) < float(d.get("fraction", 0.3))
-        lift = rng.uniform(float(d.get("low", 0.1)), float(d.get("high", 0.3)), len(conditions))
+        hit = rng.random(len(conditions)) < d["fraction"]
+        lift = rng.uniform(d["low"], d["high"], len(conditions))
         factor *= np.where(hit, 1 + lift, 1.0)
     if "day_offset" in disturbances:
         d = disturbances["day_offset"]
         days = sorted({str((c.quantities or {}).get("day", "")) for c in conditions})
-        off = dict(zip(days, rng.normal(0.0, float(d.get("sd", 0.1)), len(days))))
+        off = dict(zip(days, rng.normal(0.0, d["sd"], len(days))))
         for i, c in enumerate(conditions):
             factor[i] *= 1 + off[str((c.quantities or {}).get("day", ""))]
     rows = []
@@ -86,7 +141,8 @@ def synthesize(conditions, base_params, simulate, hidden: dict | None = None, re
             reps = sims * factor[i] * (1 + noise * rng.standard_normal(len(sims)))
             rows.append({"measurement": c.measurement, "row": c.row, "measure": r["measure"],
                          "value": float(np.mean(reps)), "sd": float(np.std(reps, ddof=1)) if len(reps) > 1 else math.nan,
-                         "n": len(reps), "truth_simulated": float(np.mean(sims)), "truth_disturbance": factor[i]})
+                         "n": len(reps), "truth_simulated": float(np.mean(sims)), "truth_disturbance": factor[i],
+                         **{f"reference:{q}": v for q, v in reference.items()}})
     return pd.DataFrame(rows)
 
 

@@ -1,0 +1,64 @@
+"""The generator of measured tables with a hidden effect (soilcal.loop.synthesize) and the
+checks of what ``soilcal loop synthesize`` / ``loop run`` take on the command line."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from soilcal.errors import InputError
+from soilcal.loop import cli
+from soilcal.loop import standin as S
+from soilcal.loop import synthesize as sy
+from soilcal.loop.residuals import observations
+
+
+def _conds():
+    return S.conditions(S.grid(0, 6))
+
+
+def test_without_a_reference_the_hidden_effect_acts_about_the_mean_of_the_rows():
+    conds = _conds()
+    off = sy.synthesize(conds, S.base_params, S.simulate, {}, None, {}, noise=0.0, seed=0)
+    on = sy.synthesize(conds, S.base_params, S.simulate, {"rate_friction": {"beta": 0.2}}, None, {}, noise=0.0, seed=0)
+    speeds = observations(conds)["q:tool_speed"].to_numpy(float)
+    v0 = speeds.mean()
+    assert on["reference:tool_speed"].to_numpy() == pytest.approx(np.full(len(on), v0))
+    # the effect moves the force with ln(v / v0): up above the mean speed, down below it
+    ratio = (on["truth_simulated"] / off["truth_simulated"]).to_numpy()
+    lv = np.log(speeds / v0)
+    far = np.abs(lv) > 0.1
+    assert far.sum() >= 2 and (np.sign(ratio[far] - 1) == np.sign(lv[far])).all()
+
+
+def test_a_declared_reference_is_kept_and_a_command_line_one_must_be_carried():
+    conds = _conds()
+    assert sy.default_reference(conds, {"tool_speed": 1.5})["tool_speed"] == 1.5
+    assert "moisture_content" not in sy.default_reference(conds, {"moisture_content": 12.0})
+    with pytest.raises(InputError, match="reference.moisture_content: expected a numeric quantity of the measured"):
+        sy.default_reference(conds, {"moisture_content": 12.0}, "--reference", strict=True)
+    with pytest.raises(InputError, match="loop.reference.tool_speed: expected a positive number in m/s"):
+        sy.default_reference(conds, {"tool_speed": -1.0}, "--reference", strict=True)
+    with pytest.raises(InputError, match="loop.reference.speed_kmh: expected a numeric quantity"):
+        sy.default_reference(conds, {"speed_kmh": 4.0}, "--reference", strict=True)
+
+
+def test_an_effect_or_disturbance_needs_known_parameters_and_a_periodic_one_its_wavelength():
+    conds = _conds()
+    with pytest.raises(InputError, match="effect.rate_friction: expected a value of its parameters"):
+        sy.check_hidden({"rate_friction": {}})
+    with pytest.raises(InputError, match=r"disturbance.stones: expected a parameter of the disturbance \(fraction"):
+        sy.check_disturbances({"stones": {"amplitude": 0.5}}, conds)
+    with pytest.raises(InputError, match="disturbance.periodic.wavelength: expected a value in"):
+        sy.check_disturbances({"periodic": {"amplitude": 0.2}}, conds)
+    full = sy.check_disturbances({"stones": {"fraction": 0.5}}, conds)
+    assert full == {"stones": {"fraction": 0.5, "low": 0.1, "high": 0.3}}
+    with pytest.raises(InputError, match="repeats: expected at least one measured repeat"):
+        sy.synthesize(conds, S.base_params, S.simulate, {}, None, {}, seeds=())
+
+
+def test_a_name_given_twice_on_the_command_line_is_refused():
+    assert cli._named(["stones:fraction=0.2", "day_offset:sd=0.1"], "--disturbance") == {
+        "stones": {"fraction": 0.2}, "day_offset": {"sd": 0.1}}
+    with pytest.raises(InputError, match="--disturbance: expected each name once"):
+        cli._named(["stones:fraction=0.2", "stones:low=0.2"], "--disturbance")
