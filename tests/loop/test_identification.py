@@ -184,3 +184,56 @@ def test_the_report_says_what_the_data_could_detect():
     assert (det["tests"] == len(diag)).all() and (det["detectable_percent"] > 0).all()
     text = files.report("standin", out, [{"candidates": out.candidates, "reference": {}, "settings": {}}])
     assert "## What these data can detect" in text and "trend over tool_speed" in " ".join(text.split())
+
+
+# --- verdicts at the edges: failed effect runs, too few seeds, a parameter at its bound, few rows
+
+
+def test_an_effect_whose_runs_all_fail_is_listed_not_fitted_and_the_loop_goes_on():
+    conds = S.conditions(S.grid(0, 18))
+    table = sy.synthesize(conds, S.base_params, S.simulate, {"rate_friction": {"beta": 0.3}}, REFERENCE, {},
+                          noise=0.01, seed=5)
+
+    def failing(c, p, seed):  # every run away from the calibrated parameters fails
+        out = S.simulate(c, p, seed)
+        return out if p == S.base_params(c) else {k: math.nan for k in out}
+
+    out = core.run_inprocess("standin", sy.with_measured(conds, table), S.base_params, failing,
+                             core.Settings(reference=REFERENCE))
+    assert out.candidates and out.chosen == []
+    sel = out.selection
+    for name in out.candidates:
+        row = sel[sel["effects"] == name].iloc[0]
+        assert row["reason"].startswith("not fitted: effect " + name + ": fewer than two design points simulated")
+    assert out.verdict.startswith("unexplained") and "not fitted" in out.verdict
+
+
+def test_with_two_seeds_a_residual_within_the_seed_scatter_is_not_called_consistent():
+    conds = S.conditions(S.grid(1, 18))
+    table = sy.synthesize(conds, S.base_params, S.simulate, {}, REFERENCE, {}, noise=0.02, seed=11)
+    settings = core.Settings(reference=REFERENCE)
+    three = core.run_inprocess("standin", sy.with_measured(conds, table), S.base_params, S.simulate, settings)
+    assert three.verdict.startswith("consistent"), three.verdict
+    two = core.run_inprocess("standin", sy.with_measured(conds, table), S.base_params, S.simulate, settings,
+                             seeds=(0, 1))
+    assert two.verdict.startswith("unexplained") and "2 seeds per condition cannot tell" in two.verdict, two.verdict
+
+
+def test_a_parameter_fitted_at_the_end_of_its_design_says_so():
+    # g = 2 hidden, the design spans -0.5 to 1: the fit stops at 1
+    out = _run({"depth_compaction": {"g": 2.0}}, {}, 0)
+    assert out.chosen == ["depth_compaction"], out.verdict
+    assert out.theta["depth_compaction.g"] == pytest.approx(1.0)
+    assert "depth_compaction.g at the upper bound 1 of its design" in out.verdict
+    lo, hi = core.json.loads(out.summary["ci95"].iloc[0])["depth_compaction.g"]
+    assert -0.5 <= lo <= hi <= 1.0
+
+
+def test_three_rows_say_that_no_trend_was_tested():
+    from dataclasses import replace
+
+    conds = [replace(c, responses=c.responses[:1]) for c in S.conditions(S.grid(0, 3))]
+    table = sy.synthesize(conds, S.base_params, S.simulate, {}, REFERENCE, {}, noise=0.02, seed=1)
+    out = core.run_inprocess("standin", sy.with_measured(conds, table), S.base_params, S.simulate,
+                             core.Settings(reference=REFERENCE))
+    assert len(out.residuals) == 3 and out.verdict.endswith("with 3 rows no trend was tested (a trend test needs 4)")

@@ -51,6 +51,29 @@ from soilcal.loop.effects import EFFECTS
 from soilcal.loop.settings import Settings, settings_from  # noqa: F401 (settings_from re-exported)
 
 
+#: seeds per condition below which a residual within the seed scatter is not called consistent:
+#: with two, the seed SD rests on one degree of freedom, and a table 50 % off can pass
+MIN_SEEDS_TO_JUDGE = 3
+
+
+def _at_bounds(theta: dict, effects: list) -> list[str]:
+    """A sentence per fitted parameter that sits on a bound of its design (the surrogates end
+    there: the data may want a value beyond it)."""
+    out = []
+    for e in effects:
+        for j, k in enumerate(e.effect.theta_names()):
+            lo, hi = float(e.surrogate.lo[j]), float(e.surrogate.hi[j])
+            x = theta.get(f"{e.effect.name}.{k}")
+            if x is None:
+                continue
+            tol = 1e-6 * (hi - lo)
+            for side, b in (("lower", lo), ("upper", hi)):
+                if abs(x - b) <= tol and not (side == "lower" and b == float(e.effect.null[k])):
+                    out.append(f"{e.effect.name}.{k} at the {side} bound {b:g} of its design: the data may want a "
+                               f"value beyond it (loop.bounds.{e.effect.name}.{k})")
+    return out
+
+
 def _scale(u: pd.DataFrame) -> np.ndarray:
     """The relative residual's denominators of the rows (:func:`soilcal.loop.residuals.scales`;
     |measured| for a table written before the column existed)."""
@@ -141,6 +164,7 @@ class Outcome:
     theta: dict
     diagnosis_after: pd.DataFrame = None
     detectable: pd.DataFrame = None  # soilcal.loop.diagnose.detectable of the calibrated model's residual
+    filled: dict = None  # effect -> rows whose run failed at a design point (filled from the row's other points)
 
 
 def _follows(rank: pd.DataFrame, res: pd.DataFrame | None = None, quantity_of: dict | None = None,
@@ -250,11 +274,19 @@ def analyse(soil: str, res: pd.DataFrame, diag: pd.DataFrame, cands: list, effec
     sel = None
     data = {}
     fold_by = default_fold_by(settings, quantity_cols, diag)
+    unfit = {}
     if n >= 3 and cands:
-        data = {nm: sl.build_effect_data(u, effect_runs[nm], EFFECTS[nm], settings.effect_bounds(nm)) for nm in cands}
+        for nm in cands:  # an effect whose runs failed at too many design points cannot be fitted
+            try:
+                data[nm] = sl.build_effect_data(u, effect_runs[nm], EFFECTS[nm], settings.effect_bounds(nm))
+            except ValueError as exc:
+                unfit[nm] = str(exc)
         if fold_by and f"cov:{fold_by}" not in u.columns:
             raise InputError("<soil>", "loop.fold_by", "a covariate column of the measured tables", fold_by)
         sel = sl.forward(u, u["simulated_mean"].to_numpy(float), data, fold_by, settings.alpha, settings.max_effects)
+        for nm, why in unfit.items():
+            sel_rows.append({"step": 1, "effects": nm, "parameters": "{}", "ci95": "{}", "accepted": False,
+                             "reason": f"not fitted: {why}"})
         for step, names, s in sel.steps:
             sel_rows.append({"step": step, "effects": "+".join(names), "parameters": _fmt(s.theta), "ci95": _fmt_ci(s.ci),
                              "heldout_rmse_percent": 100 * s.rmse(), "reference_heldout_rmse_percent": 100 * s.rmse(True),
@@ -277,7 +309,9 @@ def analyse(soil: str, res: pd.DataFrame, diag: pd.DataFrame, cands: list, effec
         if len(rest) and sel.chosen:
             left = _follows(rest, res_after, quantity_cols, settings.alpha)
     if n == 0:
-        verdict = "no measured value to compare with (nothing to diagnose)"
+        measured = np.isfinite(res["measured"].astype(float)).any() if len(res) else False
+        verdict = ("no simulated value to compare with: every run of the measured conditions failed or none ran"
+                   if measured else "no measured value to compare with (nothing to diagnose)")
     elif n < 3:
         verdict = f"unexplained: too few measured values to decide ({n})"
     elif sel is not None and sel.chosen:
@@ -290,12 +324,20 @@ def analyse(soil: str, res: pd.DataFrame, diag: pd.DataFrame, cands: list, effec
         pred["heldout_prediction"] = meas - held * _scale(u)
         after_cv = held
         verdict = "explained by " + " + ".join(chosen)
+        edge = _at_bounds(theta, [data[c] for c in chosen])
+        if edge:
+            verdict += "; " + "; ".join(edge)
         if left:  # what the chosen effects leave: structure no effect of the library accounted for
             verdict += f"; the residual left still follows {left}, which stays unexplained"
     elif not structure:
         rms = float(np.sqrt(np.mean(before ** 2))) * 100
         judged = len(diag) and (diag["test"] == "scatter").any()
-        if judged:
+        few = int(u["simulated_n"].min()) if "simulated_n" in u and len(u) else 0
+        if judged and few < MIN_SEEDS_TO_JUDGE:
+            verdict = (f"unexplained: RMS error {rms:.1f} % with no significant structure, but {few} seed"
+                       f"{'s' if few != 1 else ''} per condition cannot tell the seed scatter (at least "
+                       f"{MIN_SEEDS_TO_JUDGE}: the measurement's replicates) from a misfit (too few data to decide)")
+        elif judged:
             verdict = ("consistent: no significant structure, and the residual lies within the measured and seed "
                        f"uncertainty (RMS error {rms:.1f} %)")
         else:
@@ -309,6 +351,8 @@ def analyse(soil: str, res: pd.DataFrame, diag: pd.DataFrame, cands: list, effec
     else:
         rejected = "; ".join(f"{r['effects']}: {r['reason']}" for r in sel_rows if r["reason"])
         verdict = f"unexplained: the residual follows {follows}; candidates rejected ({rejected})"
+    if 0 < n < 4 and not verdict.startswith("no "):
+        verdict += f"; with {n} rows no trend was tested (a trend test needs 4)"
     ok = np.isfinite(after_cv) & np.isfinite(before)
     rb = float(np.sqrt(np.mean(before[ok] ** 2))) * 100 if ok.any() else math.nan
     ra = float(np.sqrt(np.mean(after_cv[ok] ** 2))) * 100 if ok.any() else math.nan
@@ -321,7 +365,8 @@ def analyse(soil: str, res: pd.DataFrame, diag: pd.DataFrame, cands: list, effec
         "error_reduction_percent": (1 - ra / rb) * 100 if rb and np.isfinite(rb) and rb > 0 else math.nan,
         "alpha": settings.alpha, "reference": _fmt(reference)}], columns=SUMMARY_COLUMNS)
     return Outcome(res, diag, rank, cands, pd.DataFrame(sel_rows, columns=SELECTION_COLUMNS), summary, pred,
-                   verdict, chosen, theta, after, dg.detectable(res, diag, quantity_cols, settings.alpha))
+                   verdict, chosen, theta, after, dg.detectable(res, diag, quantity_cols, settings.alpha),
+                   {nm: list(d.missing) for nm, d in data.items() if d.missing})
 
 
 # --------------------------------------------------------------------------- in process

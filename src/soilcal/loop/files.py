@@ -283,6 +283,10 @@ def report(soil: str, o: core.Outcome, plans: list) -> str:
         lines.append("No candidate effect: " + ("none of the library acts through the significant structure."
                                                  if len(o.diagnosis) and o.diagnosis["significant"].any()
                                                  else "the residual shows no significant structure."))
+    for name, rows in (o.filled or {}).items():
+        lines += ["", f"{name}: a run failed at some design point for {len(rows)} row{'s' if len(rows) > 1 else ''} "
+                  f"({'; '.join(rows)}); each was filled from the row's other design points "
+                  "(`soilcal.loop.select._fill_failed`)."]
     second = plans[1]["candidates"] if len(plans) > 1 else []
     lines += ["", "Candidates of the first round: " + (", ".join(plan["candidates"]) or "none")
               + "; of the second (matched by the residual the first round's model left): "

@@ -365,7 +365,11 @@ def score(model: Model, ref: Model, folds, alpha: float = 0.05, min_improvement:
         else:
             cov = s2 * np.linalg.pinv(J.T @ J)
             half = st.t.ppf(0.975, n - k) * np.sqrt(np.clip(np.diag(cov), 0, None))
-        ci = {nm: (float(x[j] - half[j]), float(x[j] + half[j])) for j, nm in enumerate(names)}
+        # the surrogates end at the design's bounds, and so does a finite interval (an infinite
+        # one says the fit does not pin the parameter down, and stays so)
+        lo, hi = model.bounds()
+        ci = {nm: ((float(max(x[j] - half[j], lo[j])), float(min(x[j] + half[j], hi[j]))) if np.isfinite(half[j])
+                   else (-math.inf, math.inf)) for j, nm in enumerate(names)}
     d = ref_rms[ok] - fold_rms[ok]
     if ok.sum() < 2:
         p, reason = math.nan, "fewer than two folds to compare"
