@@ -155,7 +155,9 @@ def base_parameters(soil, conds, overrides: dict, results=None) -> dict:
 
 def params_source(args, overrides: dict) -> str:
     """Where the base parameters come from, as the outputs record it."""
-    src = f"--results {args.results}" if args.results else "the soil's simulation.params"
+    src = (f"--results {args.results}" if args.results else
+           "not a calibrated set (--results reads one): the engine's defaults (soilcal.dem.scenarios.base.DemParams) "
+           "under the soil's simulation.params and the measured table's params")
     return src + "".join(f" + --param {k}={v:.12g}" for k, v in overrides.items())
 
 
