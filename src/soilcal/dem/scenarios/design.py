@@ -184,6 +184,9 @@ def check_block(soil_path, data: dict) -> None:
                 raise InputError(soil_path, where,
                                  f"low and high levels to simulate the stage (or leave {sid!r} out of "
                                  f"{BLOCK}.stages)", f)
+    from soilcal.chain.provenance import check_parameters
+
+    check_parameters(soil_path, data)
 
 
 def _has_target(data: dict, rids) -> bool:

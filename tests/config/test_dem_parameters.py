@@ -1,0 +1,51 @@
+"""A soil calibrated on the DEM sets every soil parameter its runs use
+(soilcal.chain.provenance): the engine's defaults are one soil study's values, so a soil that
+left one out would run with another soil's friction or cohesion."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+import yaml
+
+from soilcal.chain.provenance import GENERIC, given, soil_parameters
+from soilcal.config import load_soil
+from soilcal.dem.scenarios.base import DemParams
+from soilcal.errors import InputError
+
+ROOT = Path(__file__).resolve().parents[2]
+
+
+def _cinnamon(tmp_path, edit):
+    d = yaml.safe_load((ROOT / "config/soils/cinnamon-soil.yaml").read_text())
+    edit(d)
+    p = tmp_path / "cinnamon-soil.yaml"
+    p.write_text(yaml.safe_dump(d, sort_keys=False))
+    return p
+
+
+def test_the_soil_parameters_are_every_field_but_the_generic_ones():
+    assert set(soil_parameters()) | set(GENERIC) == set(DemParams.names())
+    assert "soil_soil_surface_energy" in soil_parameters() and "soil_density" in soil_parameters()
+
+
+def test_a_missing_soil_parameter_is_named_at_start_up(tmp_path):
+    p = _cinnamon(tmp_path, lambda d: d["simulation"].pop("params"))  # its density came from there
+    with pytest.raises(InputError, match="simulation.params: expected a value of every soil parameter the runs of "
+                                         "stage 'pb' use .* missing: soil_density"):
+        load_soil(p, ROOT / "resources")
+
+
+def test_a_derived_stage_counts_the_factors_of_the_stage_it_comes_from(tmp_path):
+    # the cinnamon path and Box-Behnken stages vary fewer parameters than the screening; the
+    # rest are held at the screening's intermediate levels, so they are set
+    soil = load_soil(ROOT / "config/soils/cinnamon-soil.yaml", ROOT / "resources")
+    pb = {soil.data["parameters"][f["parameter"]]["pair"].replace("-", "_") + "_"
+          + soil.data["parameters"][f["parameter"]]["kind"] for f in soil.stage("pb")["factors"].values()}
+    assert pb <= given(soil.data, "bbd")
+
+
+def test_every_shipped_dem_soil_sets_its_parameters():
+    for p in sorted((ROOT / "config/soils").glob("*.yaml")):
+        load_soil(p, ROOT / "resources")  # raises if a simulated stage leaves a soil parameter out
