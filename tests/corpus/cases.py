@@ -652,6 +652,13 @@ def _(tmp, p):
     (tmp / MEAS).write_text(_rows(tmp / MEAS)[0] + "\n")
 
 
+@meas_case("measured-table-decimal-commas", MEAS, "line 2", "5 fields, as many as the header")
+def _(tmp, p):
+    """Every measured force typed with an unquoted decimal comma: one field more per row."""
+    for row, value in enumerate(("321,10", "252,10", "154,50", "304,80"), start=1):
+        _set_cell(tmp / MEAS, row, "horizontal_measured_N", value)
+
+
 @meas_case("measured-covariate-two-forms", SOIL, f"{CUT}.covariates.plate", "exactly one of setup, set, param, case, ignore")
 def _(tmp, p):
     edit_yaml(p, lambda d: d["measurements"]["cutting_resistance"]["covariates"]["plate"].update(param="soil_density"))

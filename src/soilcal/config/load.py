@@ -184,21 +184,47 @@ class Soil:
 
 
 def read_table(path: Path) -> pd.DataFrame:
-    """Read a published CSV table; a missing or unreadable file raises InputError (a row with
-    more cells than the header names its line)."""
+    """Read a published CSV table; a missing or unreadable file raises InputError.
+
+    A row whose number of fields differs from the header's is refused, named by its line (an
+    unquoted decimal comma such as ``155,4`` adds a field, and in every row it would shift
+    each column one to the left).  A row of empty fields only, such as ``,,,,`` at the end of
+    a spreadsheet's export, is read as before (a row of empty cells)."""
+    import csv
+    import io
+
     if not path.is_file():
         raise InputError(path, "<file>", "an existing CSV table", "no such file")
     try:
-        return pd.read_csv(path)
+        text = path.read_bytes().decode("utf-8").removeprefix("\ufeff")
+    except UnicodeDecodeError as exc:
+        raise InputError(path, "<file>", "a readable CSV table",
+                         f"a byte that is not UTF-8 at offset {exc.start}") from None
+    header, line = None, 1
+    reader = csv.reader(io.StringIO(text, newline=""))
+    try:
+        for rec in reader:
+            start, line = line, reader.line_num + 1
+            empty = all(not c.strip() for c in rec)
+            if header is None:
+                if len(rec) <= 1 and empty:
+                    continue  # a blank line before the header (skipped, as pandas does)
+                header = rec
+            elif len(rec) != len(header) and not (empty and len(rec) <= len(header)):
+                raise InputError(path, f"line {start}", f"{len(header)} fields, as many as the header",
+                                 f"{len(rec)} fields")
+    except csv.Error as exc:
+        raise InputError(path, f"line {line}", "a readable CSV row", str(exc)) from None
+    try:
+        df = pd.read_csv(io.StringIO(text))
     except Exception as exc:  # pandas raises several types for bad CSV
         text = " ".join(str(exc).split())
         m = re.search(r"Expected (\d+) fields in line (\d+), saw (\d+)", text)
         if m:
             raise InputError(path, f"line {m.group(2)}", f"{m.group(1)} fields, as many as the header",
                              f"{m.group(3)} fields") from None
-        if isinstance(exc, UnicodeDecodeError):
-            text = f"a byte that is not UTF-8 at offset {exc.start}"
         raise InputError(path, "<file>", "a readable CSV table", text or type(exc).__name__) from None
+    return df
 
 
 def _check_levels(path: Path, where: str, d: dict) -> None:
