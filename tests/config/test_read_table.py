@@ -55,3 +55,26 @@ def test_quoted_commas_and_crlf_are_fields_not_separators(tmp_path):
     p.write_text('a,b\r\n"1,5",x\r\n')
     df = read_table(p)
     assert df.to_dict("records") == [{"a": "1,5", "b": "x"}]
+
+
+def test_header_cells_are_stripped(tmp_path):
+    p = tmp_path / "t.csv"
+    p.write_text("plate , draft_N \n1,155.4\n")
+    df = read_table(p)
+    assert list(df.columns) == ["plate", "draft_N"]
+    assert df["draft_N"].tolist() == [155.4]
+
+
+def test_column_named_twice_is_named_not_renamed(tmp_path):
+    # columns 2 and 4 are both draft_N (the second with a trailing space); pandas alone
+    # would call the second "draft_N.1", a column the user never wrote
+    e = _refused(tmp_path, "plate,draft_N,depth_mm,draft_N \n1,155.4,30,160.2\n")
+    assert (e.field, e.expected, e.got) == ("column draft_N", "a column named once in the header",
+                                            "columns 2 and 4")
+
+
+def test_semicolon_separated_export_is_refused(tmp_path):
+    e = _refused(tmp_path, "plate;draft_N;depth_mm\n1;155,4;30\n2;160,2;30\n")
+    assert e.field == "<file>"
+    assert "t.csv: <file>: expected a comma-separated table with decimal points" in str(e)
+    assert "separated by ';'" in str(e)

@@ -659,6 +659,21 @@ def _(tmp, p):
         _set_cell(tmp / MEAS, row, "horizontal_measured_N", value)
 
 
+@meas_case("measured-table-semicolons", MEAS, "<file>", "a comma-separated table with decimal points")
+def _(tmp, p):
+    """The table exported by a spreadsheet set to a decimal comma: ';' between the fields."""
+    import csv
+
+    rows = list(csv.reader(_rows(tmp / MEAS)))
+    (tmp / MEAS).write_text("\n".join(";".join(c.replace(".", ",") for c in r) for r in rows) + "\n")
+
+
+@meas_case("measured-table-column-twice", MEAS, "column directrix", "a column named once in the header")
+def _(tmp, p):
+    lines = _rows(tmp / MEAS)
+    (tmp / MEAS).write_text("\n".join([lines[0].replace("plate,", "directrix ,", 1)] + lines[1:]) + "\n")
+
+
 @meas_case("measured-covariate-two-forms", SOIL, f"{CUT}.covariates.plate", "exactly one of setup, set, param, case, ignore")
 def _(tmp, p):
     edit_yaml(p, lambda d: d["measurements"]["cutting_resistance"]["covariates"]["plate"].update(param="soil_density"))

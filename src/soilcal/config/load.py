@@ -186,10 +186,13 @@ class Soil:
 def read_table(path: Path) -> pd.DataFrame:
     """Read a published CSV table; a missing or unreadable file raises InputError.
 
-    A row whose number of fields differs from the header's is refused, named by its line (an
-    unquoted decimal comma such as ``155,4`` adds a field, and in every row it would shift
-    each column one to the left).  A row of empty fields only, such as ``,,,,`` at the end of
-    a spreadsheet's export, is read as before (a row of empty cells)."""
+    The header's cells are stripped of surrounding spaces.  Refused, naming the file: a
+    header that names a column twice, a header of one cell holding ``;`` (a
+    semicolon-separated export, whose decimal commas would be split), and a row whose number
+    of fields differs from the header's (named by its line: an unquoted decimal comma such as
+    ``155,4`` adds a field, and in every row it would shift each column one to the left).  A
+    row of empty fields only, such as ``,,,,`` at the end of a spreadsheet's export, is read
+    as before (a row of empty cells)."""
     import csv
     import io
 
@@ -200,7 +203,7 @@ def read_table(path: Path) -> pd.DataFrame:
     except UnicodeDecodeError as exc:
         raise InputError(path, "<file>", "a readable CSV table",
                          f"a byte that is not UTF-8 at offset {exc.start}") from None
-    header, line = None, 1
+    header, names, line = None, [], 1
     reader = csv.reader(io.StringIO(text, newline=""))
     try:
         for rec in reader:
@@ -210,6 +213,14 @@ def read_table(path: Path) -> pd.DataFrame:
                 if len(rec) <= 1 and empty:
                     continue  # a blank line before the header (skipped, as pandas does)
                 header = rec
+                if len(rec) == 1 and ";" in rec[0]:
+                    raise InputError(path, "<file>", "a comma-separated table with decimal points",
+                                     "a table separated by ';'")
+                names = [c.strip() for c in rec]
+                for j, nm in enumerate(names):
+                    if nm and nm in names[:j]:
+                        raise InputError(path, f"column {nm}", "a column named once in the header",
+                                         f"columns {names.index(nm) + 1} and {j + 1}")
             elif len(rec) != len(header) and not (empty and len(rec) <= len(header)):
                 raise InputError(path, f"line {start}", f"{len(header)} fields, as many as the header",
                                  f"{len(rec)} fields")
@@ -224,6 +235,8 @@ def read_table(path: Path) -> pd.DataFrame:
             raise InputError(path, f"line {m.group(2)}", f"{m.group(1)} fields, as many as the header",
                              f"{m.group(3)} fields") from None
         raise InputError(path, "<file>", "a readable CSV table", text or type(exc).__name__) from None
+    if len(df.columns) == len(names):
+        df.columns = [nm or str(c) for nm, c in zip(names, df.columns)]
     return df
 
 
