@@ -684,6 +684,15 @@ def _(tmp, p):
     edit_yaml(p, lambda d: d["measurements"]["cutting_resistance"]["calibrated"].update(case="angle"))
 
 
+@meas_case("measured-sd-negative", MEAS, "row 2, column horizontal_sd_N", "a standard deviation >= 0")
+def _(tmp, p):
+    """An SD column beside the horizontal force, with a minus sign in row 2."""
+    lines = _rows(tmp / MEAS)
+    sds = ["horizontal_sd_N", "12.5", "-8.1", "6.0", "9.4"]
+    (tmp / MEAS).write_text("\n".join(f"{ln},{sd}" for ln, sd in zip(lines, sds)) + "\n")
+    edit_yaml(p, lambda d: d["measurements"]["cutting_resistance"]["responses"][0].update(sd="horizontal_sd_N"))
+
+
 @meas_case("measured-rotor-speed-not-a-number", "resources/measurements/black-soil/surface_flatness.csv",
            "row 2, column rotor_speed_rpm", "a value mapped under", soil="black-soil")
 def _(tmp, p):

@@ -43,12 +43,14 @@ A cell of a numeric quantity must be a number, and above zero for
 
 Response columns: ``value`` (the measured value; ``null`` when the paper does not print it,
 then a ``note`` is required and the row is simulated and reported without a measured value),
-``sd``, ``n``, ``paper_simulated`` (the paper's own simulation), ``paper_difference`` (the
-printed simulated - measured difference).  The measure's unit follows from its name's suffix
-(:data:`UNIT_SUFFIXES`; a name without one is dimensionless, unit ``-``) and ``unit`` must
-say the same.  Every table column must be a covariate, a response column or listed under
-``ignore_columns``, so that a column nobody declared (a second speed, a depth) cannot be
-silently left out of the simulation.
+``sd`` (the measured standard deviation, a number >= 0), ``n`` (the repeats behind the value, a
+whole number >= 1; with ``n`` 1 or a blank ``n`` the SD is the value's own uncertainty, which
+the measured-data loop takes as known), ``paper_simulated`` (the paper's own simulation),
+``paper_difference`` (the printed simulated - measured difference).  The measure's unit
+follows from its name's suffix (:data:`UNIT_SUFFIXES`; a name without one is dimensionless,
+unit ``-``) and ``unit`` must say the same.  Every table column must be a covariate, a
+response column or listed under ``ignore_columns``, so that a column nobody declared (a
+second speed, a depth) cannot be silently left out of the simulation.
 
 :func:`check_measurements` validates the block at start-up (called by the config loader);
 :func:`conditions` returns one :class:`Condition` per table row.  ``Condition.params`` is the
@@ -459,10 +461,16 @@ def _entry(soil_path, data: dict, mid: str, entry: dict, tpath: Path):
                 x = _number(cell)
                 if x is None:
                     raise InputError(tpath, at(col), "a number", _plain(cell))
+                if key == "sd" and x < 0:
+                    raise InputError(tpath, at(col), f"a standard deviation >= 0 (of {r['measure']})",
+                                     _plain(cell))
+                if key == "n" and not (x >= 1 and x == int(x)):
+                    raise InputError(tpath, at(col),
+                                     f"a whole number of repeats >= 1 (behind {r['measure']})", _plain(cell))
                 vals[key] = x
             n = vals["n"]
             responses.append(dict(measure=r["measure"], unit=r["unit"], measured=vals["value"],
-                                  measured_sd=vals["sd"], n=None if n is None else int(round(n)),
+                                  measured_sd=vals["sd"], n=None if n is None else int(n),
                                   paper_simulated=vals["paper_simulated"],
                                   paper_difference=vals["paper_difference"], note=r.get("note", "")))
         quantities = {}

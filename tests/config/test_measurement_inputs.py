@@ -1,0 +1,102 @@
+"""Declarations and cells of a soil's ``measurements`` block that used to be accepted and
+then misread: each is refused with the file and the field (or the table row and column) named.
+
+Each test edits a copy of a shipped soil's parsed YAML and of its measured tables and runs the
+block's start-up check (:func:`soilcal.config.measurements.check_measurements`, which the
+loader calls); the broken-input corpus (tests/corpus) runs some of the same inputs through
+the command line."""
+
+from __future__ import annotations
+
+import copy
+import shutil
+from pathlib import Path
+from types import SimpleNamespace
+
+import pandas as pd
+import pytest
+
+from soilcal.config.load import read_yaml
+from soilcal.config.measurements import check_measurements, conditions
+from soilcal.errors import InputError
+
+ROOT = Path(__file__).resolve().parents[2]
+SOIL = "cinnamon-soil"
+CUT = "measurements.cutting_resistance"
+
+
+@pytest.fixture(scope="module")
+def parsed():
+    return {SOIL: read_yaml(ROOT / f"config/soils/{SOIL}.yaml")}
+
+
+def _workspace(tmp_path, parsed, soil):
+    shutil.copytree(ROOT / "resources/measurements" / soil, tmp_path / "resources/measurements" / soil)
+    return SimpleNamespace(path=ROOT / f"config/soils/{soil}.yaml", data=copy.deepcopy(parsed[soil]),
+                           resources_root=tmp_path / "resources", soil=soil)
+
+
+@pytest.fixture
+def cinnamon(tmp_path, parsed):
+    return _workspace(tmp_path, parsed, SOIL)
+
+
+def _entry(ws, mid="cutting_resistance"):
+    return ws.data["measurements"][mid]
+
+
+def _table(ws, name="cutting_resistance.csv"):
+    return ws.resources_root / "measurements" / ws.soil / name
+
+
+def _column(ws, name, cells, table="cutting_resistance.csv"):
+    t = _table(ws, table)
+    df = pd.read_csv(t)
+    df[name] = cells
+    df.to_csv(t, index=False)
+    return t
+
+
+def _load(ws):
+    return conditions(ws)
+
+
+def _fails(ws, where: str) -> str:
+    """The check fails with one line starting '<where>: expected'."""
+    with pytest.raises(InputError) as e:
+        check_measurements(ws.path, ws.data, ws.resources_root)
+    msg = str(e.value)
+    assert msg.startswith(f"{where}: expected"), msg
+    assert "\n" not in msg
+    return msg
+
+
+# --- sd and n of a response -------------------------------------------------------------------
+
+
+def _spread(ws, sd, n):
+    """SD and repeat-count columns beside the horizontal force, declared as its sd and n."""
+    _column(ws, "horizontal_sd_N", sd)
+    t = _column(ws, "repeats", n)
+    _entry(ws)["responses"][0].update(sd="horizontal_sd_N", n="repeats")
+    return t
+
+
+def test_sd_and_n_are_read(cinnamon):
+    _spread(cinnamon, [5.1, 0.0, 3.0, 4.0], [3, 1, None, 5])
+    got = [(c.responses[0]["measured_sd"], c.responses[0]["n"]) for c in _load(cinnamon)]
+    # n = 1 beside an SD, and a blank n, are accepted (the SD is the value's own uncertainty)
+    assert got == [(5.1, 3), (0.0, 1), (3.0, None), (4.0, 5)]
+
+
+def test_negative_sd_is_refused(cinnamon):
+    t = _spread(cinnamon, [5.1, -2.0, 3.0, 4.0], [3, 3, 3, 3])
+    msg = _fails(cinnamon, f"{t}: row 2, column horizontal_sd_N")
+    assert "a standard deviation >= 0" in msg and "got -2" in msg
+
+
+@pytest.mark.parametrize("bad", [0, -3, 2.6])
+def test_n_not_a_whole_number_of_at_least_one_is_refused(cinnamon, bad):
+    t = _spread(cinnamon, [5.1, 2.0, 3.0, 4.0], [3, 3, bad, 3])
+    msg = _fails(cinnamon, f"{t}: row 3, column repeats")
+    assert "a whole number of repeats >= 1" in msg and f"got {bad}" in msg
