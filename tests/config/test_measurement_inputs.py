@@ -100,3 +100,37 @@ def test_n_not_a_whole_number_of_at_least_one_is_refused(cinnamon, bad):
     t = _spread(cinnamon, [5.1, 2.0, 3.0, 4.0], [3, 3, bad, 3])
     msg = _fails(cinnamon, f"{t}: row 3, column repeats")
     assert "a whole number of repeats >= 1" in msg and f"got {bad}" in msg
+
+
+# --- one column, one role ---------------------------------------------------------------------
+
+
+def test_sd_naming_its_own_value_column(cinnamon):
+    _entry(cinnamon)["responses"][0].update(sd="horizontal_measured_N")
+    msg = _fails(cinnamon, f"{cinnamon.path}: {CUT}.responses[0].sd")
+    assert f"horizontal_measured_N is already the value column of {CUT}.responses[0]" in msg
+
+
+def test_n_naming_the_value_column_of_another_response(cinnamon):
+    _entry(cinnamon)["responses"][1].update(n="horizontal_measured_N")
+    msg = _fails(cinnamon, f"{cinnamon.path}: {CUT}.responses[1].n")
+    assert f"already the value column of {CUT}.responses[0]" in msg
+
+
+def test_covariate_column_also_a_response_value(cinnamon):
+    _entry(cinnamon)["responses"][0].update(value="plate")
+    msg = _fails(cinnamon, f"{cinnamon.path}: {CUT}.responses[0].value")
+    assert f"plate is already the covariate {CUT}.covariates.plate" in msg
+
+
+def test_covariate_also_listed_in_ignore_columns(cinnamon):
+    _entry(cinnamon)["ignore_columns"].append("plate")
+    msg = _fails(cinnamon, f"{cinnamon.path}: {CUT}.ignore_columns[1]")
+    assert f"plate is already the covariate {CUT}.covariates.plate" in msg
+
+
+def test_one_repeat_count_column_for_every_response(cinnamon):
+    _column(cinnamon, "repeats", [3, 3, 4, 3])
+    for r in _entry(cinnamon)["responses"]:
+        r.update(n="repeats")
+    assert [[r["n"] for r in c.responses] for c in _load(cinnamon)] == [[3, 3], [3, 3], [4, 4], [3, 3]]

@@ -693,6 +693,12 @@ def _(tmp, p):
     edit_yaml(p, lambda d: d["measurements"]["cutting_resistance"]["responses"][0].update(sd="horizontal_sd_N"))
 
 
+@meas_case("measured-sd-is-the-value-column", SOIL, f"{CUT}.responses[0].sd",
+           "a column with one role (horizontal_measured_N is already the value column")
+def _(tmp, p):
+    edit_yaml(p, lambda d: d["measurements"]["cutting_resistance"]["responses"][0].update(sd="horizontal_measured_N"))
+
+
 @meas_case("measured-rotor-speed-not-a-number", "resources/measurements/black-soil/surface_flatness.csv",
            "row 2, column rotor_speed_rpm", "a value mapped under", soil="black-soil")
 def _(tmp, p):

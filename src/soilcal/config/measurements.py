@@ -50,7 +50,10 @@ the measured-data loop takes as known), ``paper_simulated`` (the paper's own sim
 follows from its name's suffix (:data:`UNIT_SUFFIXES`; a name without one is dimensionless,
 unit ``-``) and ``unit`` must say the same.  Every table column must be a covariate, a
 response column or listed under ``ignore_columns``, so that a column nobody declared (a
-second speed, a depth) cannot be silently left out of the simulation.
+second speed, a depth) cannot be silently left out of the simulation, and in one role only: a
+response's ``sd`` naming its own ``value`` column, or a covariate that is also a response
+column or listed under ``ignore_columns``, is refused (one ``n`` column may serve several
+responses).
 
 :func:`check_measurements` validates the block at start-up (called by the config loader);
 :func:`conditions` returns one :class:`Condition` per table row.  ``Condition.params`` is the
@@ -330,6 +333,24 @@ def _entry(soil_path, data: dict, mid: str, entry: dict, tpath: Path):
         if r.get("value") is None and not r.get("note"):
             raise InputError(soil_path, f"{rw}.note",
                              "a note saying why the measured value is not printed (value: null)", None)
+
+    # -- one role per column: a covariate, one kind of response column, or ignored.  Only the
+    # repeat count ``n`` may serve several responses (the repeats behind every measure of a row).
+    roles = {col: ("covariate", f"the covariate {where}.covariates.{col}") for col in covs}
+    for j, r in enumerate(resps):
+        for key in _RESPONSE_COLUMNS:
+            col = r.get(key)
+            if col is None:
+                continue
+            kind, role = roles.get(col, (None, None))
+            if kind is not None and not (kind == key == "n"):
+                raise InputError(soil_path, f"{where}.responses[{j}].{key}",
+                                 f"a column with one role ({col} is already {role})", col)
+            roles.setdefault(col, (key, f"the {key} column of {where}.responses[{j}]"))
+    for k, col in enumerate(entry.get("ignore_columns") or []):
+        if col in roles:
+            raise InputError(soil_path, f"{where}.ignore_columns[{k}]",
+                             f"a column with one role ({col} is already {roles[col][1]})", col)
 
     # -- the table: columns
     df = _read(soil_path, where, tpath)
