@@ -134,3 +134,27 @@ def test_one_repeat_count_column_for_every_response(cinnamon):
     for r in _entry(cinnamon)["responses"]:
         r.update(n="repeats")
     assert [[r["n"] for r in c.responses] for c in _load(cinnamon)] == [[3, 3], [3, 3], [4, 4], [3, 3]]
+
+
+# --- the table's path -------------------------------------------------------------------------
+
+
+@pytest.mark.parametrize("escape", ["../../outside.csv", "sub/../../cinnamon-soil-copy.csv", "ABSOLUTE"])
+def test_table_outside_the_soils_measurements_folder(cinnamon, escape):
+    # a real table sits at each place, so only the path itself can be what is refused
+    t = _table(cinnamon)
+    target = (t.parent / escape if escape != "ABSOLUTE" else cinnamon.resources_root.parent / "elsewhere.csv").resolve()
+    target.parent.mkdir(parents=True, exist_ok=True)
+    target.write_text(t.read_text())
+    table = str(target) if escape == "ABSOLUTE" else escape
+    _entry(cinnamon).update(table=table)
+    msg = _fails(cinnamon, f"{cinnamon.path}: {CUT}.table")
+    assert f"a table inside {t.parent}/" in msg and repr(table) in msg
+
+
+def test_table_in_a_subfolder_is_inside(cinnamon):
+    t = _table(cinnamon)
+    (t.parent / "2023").mkdir()
+    t.rename(t.parent / "2023" / t.name)
+    _entry(cinnamon).update(table="2023/./cutting_resistance.csv")
+    assert len(_load(cinnamon)) == 4

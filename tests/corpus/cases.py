@@ -699,6 +699,13 @@ def _(tmp, p):
     edit_yaml(p, lambda d: d["measurements"]["cutting_resistance"]["responses"][0].update(sd="horizontal_measured_N"))
 
 
+@meas_case("measured-table-outside-its-folder", SOIL, f"{CUT}.table", "a table inside resources/measurements/cinnamon-soil/")
+def _(tmp, p):
+    """The table named by a path that climbs out of the soil's measurements folder."""
+    (tmp / "resources/outside.csv").write_text((tmp / MEAS).read_text())
+    edit_yaml(p, lambda d: d["measurements"]["cutting_resistance"].update(table="../../outside.csv"))
+
+
 @meas_case("measured-rotor-speed-not-a-number", "resources/measurements/black-soil/surface_flatness.csv",
            "row 2, column rotor_speed_rpm", "a value mapped under", soil="black-soil")
 def _(tmp, p):

@@ -2,8 +2,9 @@
 
 A calibrated DEM is verified against measured tests the calibration did not use (soil-bin
 forces, rotary tiller power and surface flatness, confined compression).  Each test is one
-CSV table under ``resources/measurements/<soil>/`` and one entry of the soil's
-``measurements`` block, keyed by an id (``^[a-z][a-z0-9_]*$``)::
+CSV table under ``resources/measurements/<soil>/`` (a ``table`` path that leaves that folder is
+refused) and one entry of the soil's ``measurements`` block, keyed by an id
+(``^[a-z][a-z0-9_]*$``)::
 
     measurements:
       cutting_resistance:
@@ -65,6 +66,7 @@ runner (``stage``, ``case``).
 from __future__ import annotations
 
 import math
+import os
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -203,12 +205,23 @@ def _stage_cases(soil_path, data: dict, where: str, entry: dict) -> tuple[dict, 
     return stages[sid], [c["id"] for c in opt["cases"]]
 
 
+def _table_path(soil_path, field: str, folder: Path, table: str) -> Path:
+    """``folder / table``; a ``table`` that leaves the soil's measurements folder (an absolute
+    path, or one that climbs out with ``..``) is refused.  The check is on the path as written:
+    a symbolic link inside the folder is the user's own choice and is followed."""
+    norm = Path(os.path.normpath(table))
+    if Path(table).is_absolute() or norm.is_absolute() or (norm.parts and norm.parts[0] == ".."):
+        raise InputError(soil_path, field, f"a table inside {folder}/ (a path relative to it)", table)
+    return folder / table
+
+
 def _entries(soil_path, data: dict, resources_root) -> list[tuple[str, dict, Path, pd.DataFrame, list[Condition]]]:
     """Validate every entry of the block; return (id, entry, table path, table, conditions)."""
     block = data.get(BLOCK) or {}
     out = []
     for mid, entry in block.items():
-        tpath = measurements_dir(resources_root, data["name"]) / entry["table"]
+        tpath = _table_path(soil_path, f"{BLOCK}.{mid}.table", measurements_dir(resources_root, data["name"]),
+                            entry["table"])
         df, conds = _entry(soil_path, data, mid, entry, tpath)
         out.append((mid, entry, tpath, df, conds))
     return out
