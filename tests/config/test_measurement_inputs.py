@@ -158,3 +158,19 @@ def test_table_in_a_subfolder_is_inside(cinnamon):
     t.rename(t.parent / "2023" / t.name)
     _entry(cinnamon).update(table="2023/./cutting_resistance.csv")
     assert len(_load(cinnamon)) == 4
+
+
+# --- the calibrated stage ---------------------------------------------------------------------
+
+
+@pytest.mark.parametrize("source", ["dem", "both"])
+def test_calibrated_stage_the_dem_does_not_simulate(cinnamon, source):
+    cinnamon.data["source"] = source
+    cinnamon.data["simulation"]["stages"] = ["pb", "steepest"]  # the entry is calibrated on bbd
+    msg = _fails(cinnamon, f"{cinnamon.path}: {CUT}.calibrated.stage")
+    assert msg.endswith("expected a stage the DEM simulates (simulation.stages: pb, steepest), got 'bbd'")
+
+
+def test_calibrated_stage_among_the_simulated_ones(cinnamon):
+    cinnamon.data["simulation"]["stages"] = ["steepest", "bbd"]
+    assert {c.stage for c in _load(cinnamon)} == {"bbd"}

@@ -706,6 +706,12 @@ def _(tmp, p):
     edit_yaml(p, lambda d: d["measurements"]["cutting_resistance"].update(table="../../outside.csv"))
 
 
+@meas_case("measured-stage-not-simulated", SOIL, f"{CUT}.calibrated.stage",
+           "a stage the DEM simulates (simulation.stages: pb, steepest)")
+def _(tmp, p):
+    edit_yaml(p, lambda d: d["simulation"].update(stages=["pb", "steepest"]))
+
+
 @meas_case("measured-rotor-speed-not-a-number", "resources/measurements/black-soil/surface_flatness.csv",
            "row 2, column rotor_speed_rpm", "a value mapped under", soil="black-soil")
 def _(tmp, p):

@@ -197,6 +197,15 @@ def _stage_cases(soil_path, data: dict, where: str, entry: dict) -> tuple[dict, 
     sid = cal["stage"]
     if sid not in stages:
         raise InputError(soil_path, f"{where}.calibrated.stage", "the id of a stage (" + ", ".join(stages) + ")", sid)
+    # the runner takes the stage's optimum from the DEM source's results: a stage that
+    # simulation.stages leaves out would have its DEM jobs started again for this one entry
+    if data.get("source", "published") in ("dem", "both") and (data.get("simulation") or {}).get("stages"):
+        from soilcal.chain.derive import dem_stage_ids
+
+        simulated = dem_stage_ids(data)
+        if sid not in simulated:
+            raise InputError(soil_path, f"{where}.calibrated.stage",
+                             f"a stage the DEM simulates (simulation.stages: {', '.join(simulated)})", sid)
     opt = stages[sid].get("optimise")
     if not opt:
         with_opt = [s for s, st in stages.items() if st.get("optimise")]
