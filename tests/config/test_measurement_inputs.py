@@ -9,6 +9,7 @@ the command line."""
 from __future__ import annotations
 
 import copy
+import math
 import shutil
 from pathlib import Path
 from types import SimpleNamespace
@@ -27,7 +28,7 @@ CUT = "measurements.cutting_resistance"
 
 @pytest.fixture(scope="module")
 def parsed():
-    return {SOIL: read_yaml(ROOT / f"config/soils/{SOIL}.yaml")}
+    return {s: read_yaml(ROOT / f"config/soils/{s}.yaml") for s in (SOIL, "black-soil")}
 
 
 def _workspace(tmp_path, parsed, soil):
@@ -39,6 +40,11 @@ def _workspace(tmp_path, parsed, soil):
 @pytest.fixture
 def cinnamon(tmp_path, parsed):
     return _workspace(tmp_path, parsed, SOIL)
+
+
+@pytest.fixture
+def black(tmp_path, parsed):
+    return _workspace(tmp_path, parsed, "black-soil")
 
 
 def _entry(ws, mid="cutting_resistance"):
@@ -174,3 +180,59 @@ def test_calibrated_stage_the_dem_does_not_simulate(cinnamon, source):
 def test_calibrated_stage_among_the_simulated_ones(cinnamon):
     cinnamon.data["simulation"]["stages"] = ["steepest", "bbd"]
     assert {c.stage for c in _load(cinnamon)} == {"bbd"}
+
+
+# --- scale against the declared unit ----------------------------------------------------------
+
+
+def _speed_kmh(ws, **extra):
+    """A tool-speed column in km/h that sets the bulldozing plate's speed (m/s)."""
+    _column(ws, "speed_kmh", [0.576, 3.6, 7.2, 1.8])
+    _entry(ws)["covariates"]["speed_kmh"] = {"set": "speed", "quantity": "tool_speed", "unit": "km/h", **extra}
+
+
+def test_km_per_h_without_scale_is_refused(cinnamon):
+    _speed_kmh(cinnamon)
+    msg = _fails(cinnamon, f"{cinnamon.path}: {CUT}.covariates.speed_kmh.scale")
+    # 1 km/h = 1/3.6 m/s
+    assert msg.endswith(f"expected {1 / 3.6:.4g} (km/h to m/s, the unit of setup key speed), got 1")
+
+
+@pytest.mark.parametrize("scale", [0.2778, 1 / 3.6])
+def test_km_per_h_with_its_factor_runs_the_dem_in_m_per_s(cinnamon, scale):
+    _speed_kmh(cinnamon, scale=scale)
+    conds = _load(cinnamon)
+    assert [c.setup["speed"] for c in conds] == pytest.approx([0.16, 1.0, 2.0, 0.5], rel=1e-3)
+    assert [c.quantities["tool_speed"] for c in conds] == pytest.approx([0.16, 1.0, 2.0, 0.5])
+
+
+def test_scale_off_by_more_than_the_tolerance_is_refused(cinnamon):
+    _speed_kmh(cinnamon, scale=0.28)  # 0.8 % above 1/3.6
+    _fails(cinnamon, f"{cinnamon.path}: {CUT}.covariates.speed_kmh.scale")
+
+
+def test_depth_in_mm_with_a_centimetre_scale(cinnamon):
+    _column(cinnamon, "depth_mm", [30, 35, 40, 45])
+    _entry(cinnamon)["covariates"]["depth_mm"] = {"set": "depth", "scale": 0.01, "quantity": "working_depth",
+                                                  "unit": "mm"}
+    msg = _fails(cinnamon, f"{cinnamon.path}: {CUT}.covariates.depth_mm.scale")
+    assert msg.endswith("expected 0.001 (mm to m, the unit of setup key depth), got 0.01")
+
+
+def test_density_in_g_per_cm3_sets_a_parameter_in_kg_per_m3(cinnamon):
+    _column(cinnamon, "density_g_cm3", [1.3, 1.35, 1.4, 1.45])
+    _entry(cinnamon)["covariates"]["density_g_cm3"] = {"param": "soil_density", "quantity": "bulk_density",
+                                                       "unit": "g/cm^3"}
+    msg = _fails(cinnamon, f"{cinnamon.path}: {CUT}.covariates.density_g_cm3.scale")
+    assert msg.endswith("expected 1000 (g/cm^3 to kg/m^3, the unit of DEM parameter soil_density), got 1")
+
+
+def test_rotor_speed_in_rad_per_s_sets_a_key_in_r_per_min(black):
+    _column(black, "omega_rad_s", [15.7, 20.9, 26.2, 31.4, 36.7], table="surface_flatness.csv")
+    covs = _entry(black, "surface_flatness")["covariates"]
+    for k in ("quantity", "unit"):  # the quantity is declared by the new column
+        covs["rotor_speed_rpm"].pop(k, None)
+    covs["omega_rad_s"] = {"set": "rpm", "quantity": "rotor_speed", "unit": "rad/s"}
+    msg = _fails(black, f"{black.path}: measurements.surface_flatness.covariates.omega_rad_s.scale")
+    # 1 rad/s = 60 / (2 pi) r/min
+    assert msg.endswith(f"expected {60 / (2 * math.pi):.4g} (rad/s to r/min, the unit of setup key rpm), got 1")

@@ -712,6 +712,17 @@ def _(tmp, p):
     edit_yaml(p, lambda d: d["simulation"].update(stages=["pb", "steepest"]))
 
 
+@meas_case("measured-speed-kmh-without-scale", SOIL, f"{CUT}.covariates.speed_kmh.scale",
+           "0.2778 (km/h to m/s, the unit of setup key speed)")
+def _(tmp, p):
+    """A plate-speed column in km/h whose covariate declares the unit but converts nothing."""
+    lines = _rows(tmp / MEAS)
+    speeds = ["speed_kmh", "0.576", "0.576", "1.8", "3.6"]
+    (tmp / MEAS).write_text("\n".join(f"{ln},{v}" for ln, v in zip(lines, speeds)) + "\n")
+    edit_yaml(p, lambda d: d["measurements"]["cutting_resistance"]["covariates"].update(
+        speed_kmh={"set": "speed", "quantity": "tool_speed", "unit": "km/h"}))
+
+
 @meas_case("measured-rotor-speed-not-a-number", "resources/measurements/black-soil/surface_flatness.csv",
            "row 2, column rotor_speed_rpm", "a value mapped under", soil="black-soil")
 def _(tmp, p):

@@ -40,7 +40,10 @@ residual against every covariate column, and its model extensions act through th
 quantities (a rate effect through ``tool_speed`` or ``rotor_speed``, moisture-dependent
 cohesion through ``moisture_content``), converted to the SI unit of :data:`QUANTITIES`.
 A cell of a numeric quantity must be a number, and above zero for
-:data:`POSITIVE_QUANTITIES`.
+:data:`POSITIVE_QUANTITIES`.  A ``set`` or ``param`` covariate with a ``unit`` must have the
+``scale`` that takes that unit to the unit the setup key (:data:`SETUP_KEY_UNITS`) or DEM
+parameter (:func:`param_unit`) is taken in, where that unit is known and is one of the
+quantity's units (``{set: speed, quantity: tool_speed, unit: km/h}`` needs ``scale: 0.2778``).
 
 Response columns: ``value`` (the measured value; ``null`` when the paper does not print it,
 then a ``note`` is required and the row is simulated and reported without a measured value),
@@ -97,6 +100,36 @@ DIMENSIONLESS = "-"
 
 _FORMS = ("setup", "set", "param", "case", "ignore")
 _RESPONSE_COLUMNS = ("value", "sd", "n", "paper_simulated", "paper_difference")
+
+#: scenario -> setup key -> the unit the scenario takes the key in, for the keys a measured
+#: quantity (:data:`QUANTITIES`) can set and whose unit the scenario module documents: the
+#: speeds and depths of the soil-bin tools (bulldozing and furrow ``setups()``: "0.16 m/s",
+#: "0.72 m/s", depths in m in ``validate``), the rotary tiller's ``rpm`` ("blade shaft speed,
+#: r/min"), ``forward_speed`` ("1 km/h in m/s") and ``depth`` (m, ``validate``), the
+#: compression rod's speed (module docstring, "0.008 m/s"), the repose cylinder's lift and the
+#: funnel cover's speeds ("lifted at 0.05 m/s", "cover_speed (1 m/s)") and the drum's ``rpm``
+#: ("7 r/min", omega = 2 pi rpm / 60).  A key not listed has no documented unit here, and the
+#: ``scale`` of a covariate that sets it is not checked against its declared ``unit``.
+SETUP_KEY_UNITS = {
+    "bulldozing": {"speed": "m/s", "depth": "m"},
+    "furrow": {"speed": "m/s", "depth": "m"},
+    "rotary": {"rpm": "r/min", "forward_speed": "m/s", "depth": "m"},
+    "compression": {"rod_speed": "m/s"},
+    "repose": {"lift_speed": "m/s", "cover_speed": "m/s"},
+    "drum": {"rpm": "r/min"},
+}
+#: relative tolerance of a covariate's ``scale`` against its unit's factor (0.2778 for 1/3.6)
+SCALE_RTOL = 1e-3
+
+
+def param_unit(name: str) -> str:
+    """The unit a DEM parameter is taken in (:class:`~soilcal.dem.scenarios.base.DemParams`:
+    SI throughout, densities in kg/m^3, shear moduli in Pa, surface energies in J/m^2, the
+    coefficients and ratios dimensionless)."""
+    for suffix, unit in (("_density", "kg/m^3"), ("_shear_modulus", "Pa"), ("_surface_energy", "J/m^2")):
+        if name.endswith(suffix):
+            return unit
+    return DIMENSIONLESS
 
 
 @dataclass(frozen=True)
@@ -327,6 +360,8 @@ def _entry(soil_path, data: dict, mid: str, entry: dict, tpath: Path):
                     raise InputError(soil_path, f"{cw}.case.{k}",
                                      f"a case id of stage {stage['id']!r} (" + ", ".join(case_ids) + ")", c)
             case_cols.append(col)
+        if form in ("set", "param"):
+            _check_scale(soil_path, cw, cv, name)
     quantity_cols = {c: cv["quantity"] for c, cv in covs.items() if "quantity" in cv}
     twice = [q for q in set(quantity_cols.values()) if list(quantity_cols.values()).count(q) > 1]
     if twice:
@@ -539,6 +574,30 @@ def _entry(soil_path, data: dict, mid: str, entry: dict, tpath: Path):
             covariates={c: (None if _missing(rec[c]) else _plain(rec[c])) for c in covs},
             quantities=quantities, quantity_columns=dict(quantity_cols)))
     return df, conds
+
+
+def _check_scale(soil_path, cw: str, cv: dict, scenario: str) -> None:
+    """A ``set`` or ``param`` covariate that declares its cells' ``unit``: its ``scale`` must take
+    that unit to the unit the setup key or DEM parameter is taken in, where that unit is known
+    (:data:`SETUP_KEY_UNITS`, :func:`param_unit`) and is one of the quantity's units.  A key
+    whose unit is another quantity's, or not documented, is left unchecked: there is no factor
+    to compare with."""
+    q = cv.get("quantity")
+    if q is None or QUANTITIES.get(q) is None or "unit" not in cv:
+        return
+    if "set" in cv:
+        target, what = SETUP_KEY_UNITS.get(scenario, {}).get(cv["set"]), f"setup key {cv['set']}"
+    else:
+        target, what = param_unit(cv["param"]), f"DEM parameter {cv['param']}"
+    factors = QUANTITIES[q][1]
+    if target not in factors:
+        return
+    unit = cv["unit"]
+    factor = factors[unit] / factors[target]
+    scale = cv.get("scale", 1)
+    if not abs(float(scale) - factor) <= SCALE_RTOL * factor:
+        raise InputError(soil_path, f"{cw}.scale",
+                         f"{factor:.4g} ({unit} to {target}, the unit of {what})", scale)
 
 
 def _renamed(exc: InputError, soil_path, prefix: str, field_prefix: str) -> InputError:
