@@ -652,6 +652,28 @@ def _(tmp, p):
     (tmp / MEAS).write_text(_rows(tmp / MEAS)[0] + "\n")
 
 
+@meas_case("measured-table-decimal-commas", MEAS, "line 2", "5 fields, as many as the header")
+def _(tmp, p):
+    """Every measured force typed with an unquoted decimal comma: one field more per row."""
+    for row, value in enumerate(("321,10", "252,10", "154,50", "304,80"), start=1):
+        _set_cell(tmp / MEAS, row, "horizontal_measured_N", value)
+
+
+@meas_case("measured-table-semicolons", MEAS, "<file>", "a comma-separated table with decimal points")
+def _(tmp, p):
+    """The table exported by a spreadsheet set to a decimal comma: ';' between the fields."""
+    import csv
+
+    rows = list(csv.reader(_rows(tmp / MEAS)))
+    (tmp / MEAS).write_text("\n".join(";".join(c.replace(".", ",") for c in r) for r in rows) + "\n")
+
+
+@meas_case("measured-table-column-twice", MEAS, "column directrix", "a column named once in the header")
+def _(tmp, p):
+    lines = _rows(tmp / MEAS)
+    (tmp / MEAS).write_text("\n".join([lines[0].replace("plate,", "directrix ,", 1)] + lines[1:]) + "\n")
+
+
 @meas_case("measured-covariate-two-forms", SOIL, f"{CUT}.covariates.plate", "exactly one of setup, set, param, case, ignore")
 def _(tmp, p):
     edit_yaml(p, lambda d: d["measurements"]["cutting_resistance"]["covariates"]["plate"].update(param="soil_density"))
@@ -660,6 +682,45 @@ def _(tmp, p):
 @meas_case("measured-calibrated-case-unknown", SOIL, f"{CUT}.calibrated.case", "a case id of stage 'bbd'")
 def _(tmp, p):
     edit_yaml(p, lambda d: d["measurements"]["cutting_resistance"]["calibrated"].update(case="angle"))
+
+
+@meas_case("measured-sd-negative", MEAS, "row 2, column horizontal_sd_N", "a standard deviation >= 0")
+def _(tmp, p):
+    """An SD column beside the horizontal force, with a minus sign in row 2."""
+    lines = _rows(tmp / MEAS)
+    sds = ["horizontal_sd_N", "12.5", "-8.1", "6.0", "9.4"]
+    (tmp / MEAS).write_text("\n".join(f"{ln},{sd}" for ln, sd in zip(lines, sds)) + "\n")
+    edit_yaml(p, lambda d: d["measurements"]["cutting_resistance"]["responses"][0].update(sd="horizontal_sd_N"))
+
+
+@meas_case("measured-sd-is-the-value-column", SOIL, f"{CUT}.responses[0].sd",
+           "a column with one role (horizontal_measured_N is already the value column")
+def _(tmp, p):
+    edit_yaml(p, lambda d: d["measurements"]["cutting_resistance"]["responses"][0].update(sd="horizontal_measured_N"))
+
+
+@meas_case("measured-table-outside-its-folder", SOIL, f"{CUT}.table", "a table inside resources/measurements/cinnamon-soil/")
+def _(tmp, p):
+    """The table named by a path that climbs out of the soil's measurements folder."""
+    (tmp / "resources/outside.csv").write_text((tmp / MEAS).read_text())
+    edit_yaml(p, lambda d: d["measurements"]["cutting_resistance"].update(table="../../outside.csv"))
+
+
+@meas_case("measured-stage-not-simulated", SOIL, f"{CUT}.calibrated.stage",
+           "a stage the DEM simulates (simulation.stages: pb, steepest)")
+def _(tmp, p):
+    edit_yaml(p, lambda d: d["simulation"].update(stages=["pb", "steepest"]))
+
+
+@meas_case("measured-speed-kmh-without-scale", SOIL, f"{CUT}.covariates.speed_kmh.scale",
+           "0.2778 (km/h to m/s, the unit of setup key speed)")
+def _(tmp, p):
+    """A plate-speed column in km/h whose covariate declares the unit but converts nothing."""
+    lines = _rows(tmp / MEAS)
+    speeds = ["speed_kmh", "0.576", "0.576", "1.8", "3.6"]
+    (tmp / MEAS).write_text("\n".join(f"{ln},{v}" for ln, v in zip(lines, speeds)) + "\n")
+    edit_yaml(p, lambda d: d["measurements"]["cutting_resistance"]["covariates"].update(
+        speed_kmh={"set": "speed", "quantity": "tool_speed", "unit": "km/h"}))
 
 
 @meas_case("measured-rotor-speed-not-a-number", "resources/measurements/black-soil/surface_flatness.csv",

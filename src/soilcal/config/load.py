@@ -184,21 +184,60 @@ class Soil:
 
 
 def read_table(path: Path) -> pd.DataFrame:
-    """Read a published CSV table; a missing or unreadable file raises InputError (a row with
-    more cells than the header names its line)."""
+    """Read a published CSV table; a missing or unreadable file raises InputError.
+
+    The header's cells are stripped of surrounding spaces.  Refused, naming the file: a
+    header that names a column twice, a header of one cell holding ``;`` (a
+    semicolon-separated export, whose decimal commas would be split), and a row whose number
+    of fields differs from the header's (named by its line: an unquoted decimal comma such as
+    ``155,4`` adds a field, and in every row it would shift each column one to the left).  A
+    row of empty fields only, such as ``,,,,`` at the end of a spreadsheet's export, is read
+    as before (a row of empty cells)."""
+    import csv
+    import io
+
     if not path.is_file():
         raise InputError(path, "<file>", "an existing CSV table", "no such file")
     try:
-        return pd.read_csv(path)
+        text = path.read_bytes().decode("utf-8").removeprefix("\ufeff")
+    except UnicodeDecodeError as exc:
+        raise InputError(path, "<file>", "a readable CSV table",
+                         f"a byte that is not UTF-8 at offset {exc.start}") from None
+    header, names, line = None, [], 1
+    reader = csv.reader(io.StringIO(text, newline=""))
+    try:
+        for rec in reader:
+            start, line = line, reader.line_num + 1
+            empty = all(not c.strip() for c in rec)
+            if header is None:
+                if len(rec) <= 1 and empty:
+                    continue  # a blank line before the header (skipped, as pandas does)
+                header = rec
+                if len(rec) == 1 and ";" in rec[0]:
+                    raise InputError(path, "<file>", "a comma-separated table with decimal points",
+                                     "a table separated by ';'")
+                names = [c.strip() for c in rec]
+                for j, nm in enumerate(names):
+                    if nm and nm in names[:j]:
+                        raise InputError(path, f"column {nm}", "a column named once in the header",
+                                         f"columns {names.index(nm) + 1} and {j + 1}")
+            elif len(rec) != len(header) and not (empty and len(rec) <= len(header)):
+                raise InputError(path, f"line {start}", f"{len(header)} fields, as many as the header",
+                                 f"{len(rec)} fields")
+    except csv.Error as exc:
+        raise InputError(path, f"line {line}", "a readable CSV row", str(exc)) from None
+    try:
+        df = pd.read_csv(io.StringIO(text))
     except Exception as exc:  # pandas raises several types for bad CSV
         text = " ".join(str(exc).split())
         m = re.search(r"Expected (\d+) fields in line (\d+), saw (\d+)", text)
         if m:
             raise InputError(path, f"line {m.group(2)}", f"{m.group(1)} fields, as many as the header",
                              f"{m.group(3)} fields") from None
-        if isinstance(exc, UnicodeDecodeError):
-            text = f"a byte that is not UTF-8 at offset {exc.start}"
         raise InputError(path, "<file>", "a readable CSV table", text or type(exc).__name__) from None
+    if len(df.columns) == len(names):
+        df.columns = [nm or str(c) for nm, c in zip(names, df.columns)]
+    return df
 
 
 def _check_levels(path: Path, where: str, d: dict) -> None:

@@ -2,8 +2,9 @@
 
 A calibrated DEM is verified against measured tests the calibration did not use (soil-bin
 forces, rotary tiller power and surface flatness, confined compression).  Each test is one
-CSV table under ``resources/measurements/<soil>/`` and one entry of the soil's
-``measurements`` block, keyed by an id (``^[a-z][a-z0-9_]*$``)::
+CSV table under ``resources/measurements/<soil>/`` (a ``table`` path that leaves that folder is
+refused) and one entry of the soil's ``measurements`` block, keyed by an id
+(``^[a-z][a-z0-9_]*$``)::
 
     measurements:
       cutting_resistance:
@@ -39,16 +40,24 @@ residual against every covariate column, and its model extensions act through th
 quantities (a rate effect through ``tool_speed`` or ``rotor_speed``, moisture-dependent
 cohesion through ``moisture_content``), converted to the SI unit of :data:`QUANTITIES`.
 A cell of a numeric quantity must be a number, and above zero for
-:data:`POSITIVE_QUANTITIES`.
+:data:`POSITIVE_QUANTITIES`.  A ``set`` or ``param`` covariate with a ``unit`` must have the
+``scale`` that takes that unit to the unit the setup key (:data:`SETUP_KEY_UNITS`) or DEM
+parameter (:func:`param_unit`) is taken in, where that unit is known and is one of the
+quantity's units (``{set: speed, quantity: tool_speed, unit: km/h}`` needs ``scale: 0.2778``).
 
 Response columns: ``value`` (the measured value; ``null`` when the paper does not print it,
 then a ``note`` is required and the row is simulated and reported without a measured value),
-``sd``, ``n``, ``paper_simulated`` (the paper's own simulation), ``paper_difference`` (the
-printed simulated - measured difference).  The measure's unit follows from its name's suffix
-(:data:`UNIT_SUFFIXES`; a name without one is dimensionless, unit ``-``) and ``unit`` must
-say the same.  Every table column must be a covariate, a response column or listed under
-``ignore_columns``, so that a column nobody declared (a second speed, a depth) cannot be
-silently left out of the simulation.
+``sd`` (the measured standard deviation, a number >= 0), ``n`` (the repeats behind the value, a
+whole number >= 1; with ``n`` 1 or a blank ``n`` the SD is the value's own uncertainty, which
+the measured-data loop takes as known), ``paper_simulated`` (the paper's own simulation),
+``paper_difference`` (the printed simulated - measured difference).  The measure's unit
+follows from its name's suffix (:data:`UNIT_SUFFIXES`; a name without one is dimensionless,
+unit ``-``) and ``unit`` must say the same.  Every table column must be a covariate, a
+response column or listed under ``ignore_columns``, so that a column nobody declared (a
+second speed, a depth) cannot be silently left out of the simulation, and in one role only: a
+response's ``sd`` naming its own ``value`` column, or a covariate that is also a response
+column or listed under ``ignore_columns``, is refused (one ``n`` column may serve several
+responses).
 
 :func:`check_measurements` validates the block at start-up (called by the config loader);
 :func:`conditions` returns one :class:`Condition` per table row.  ``Condition.params`` is the
@@ -60,6 +69,7 @@ runner (``stage``, ``case``).
 from __future__ import annotations
 
 import math
+import os
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -90,6 +100,36 @@ DIMENSIONLESS = "-"
 
 _FORMS = ("setup", "set", "param", "case", "ignore")
 _RESPONSE_COLUMNS = ("value", "sd", "n", "paper_simulated", "paper_difference")
+
+#: scenario -> setup key -> the unit the scenario takes the key in, for the keys a measured
+#: quantity (:data:`QUANTITIES`) can set and whose unit the scenario module documents: the
+#: speeds and depths of the soil-bin tools (bulldozing and furrow ``setups()``: "0.16 m/s",
+#: "0.72 m/s", depths in m in ``validate``), the rotary tiller's ``rpm`` ("blade shaft speed,
+#: r/min"), ``forward_speed`` ("1 km/h in m/s") and ``depth`` (m, ``validate``), the
+#: compression rod's speed (module docstring, "0.008 m/s"), the repose cylinder's lift and the
+#: funnel cover's speeds ("lifted at 0.05 m/s", "cover_speed (1 m/s)") and the drum's ``rpm``
+#: ("7 r/min", omega = 2 pi rpm / 60).  A key not listed has no documented unit here, and the
+#: ``scale`` of a covariate that sets it is not checked against its declared ``unit``.
+SETUP_KEY_UNITS = {
+    "bulldozing": {"speed": "m/s", "depth": "m"},
+    "furrow": {"speed": "m/s", "depth": "m"},
+    "rotary": {"rpm": "r/min", "forward_speed": "m/s", "depth": "m"},
+    "compression": {"rod_speed": "m/s"},
+    "repose": {"lift_speed": "m/s", "cover_speed": "m/s"},
+    "drum": {"rpm": "r/min"},
+}
+#: relative tolerance of a covariate's ``scale`` against its unit's factor (0.2778 for 1/3.6)
+SCALE_RTOL = 1e-3
+
+
+def param_unit(name: str) -> str:
+    """The unit a DEM parameter is taken in (:class:`~soilcal.dem.scenarios.base.DemParams`:
+    SI throughout, densities in kg/m^3, shear moduli in Pa, surface energies in J/m^2, the
+    coefficients and ratios dimensionless)."""
+    for suffix, unit in (("_density", "kg/m^3"), ("_shear_modulus", "Pa"), ("_surface_energy", "J/m^2")):
+        if name.endswith(suffix):
+            return unit
+    return DIMENSIONLESS
 
 
 @dataclass(frozen=True)
@@ -190,6 +230,15 @@ def _stage_cases(soil_path, data: dict, where: str, entry: dict) -> tuple[dict, 
     sid = cal["stage"]
     if sid not in stages:
         raise InputError(soil_path, f"{where}.calibrated.stage", "the id of a stage (" + ", ".join(stages) + ")", sid)
+    # the runner takes the stage's optimum from the DEM source's results: a stage that
+    # simulation.stages leaves out would have its DEM jobs started again for this one entry
+    if data.get("source", "published") in ("dem", "both") and (data.get("simulation") or {}).get("stages"):
+        from soilcal.chain.derive import dem_stage_ids
+
+        simulated = dem_stage_ids(data)
+        if sid not in simulated:
+            raise InputError(soil_path, f"{where}.calibrated.stage",
+                             f"a stage the DEM simulates (simulation.stages: {', '.join(simulated)})", sid)
     opt = stages[sid].get("optimise")
     if not opt:
         with_opt = [s for s, st in stages.items() if st.get("optimise")]
@@ -198,12 +247,23 @@ def _stage_cases(soil_path, data: dict, where: str, entry: dict) -> tuple[dict, 
     return stages[sid], [c["id"] for c in opt["cases"]]
 
 
+def _table_path(soil_path, field: str, folder: Path, table: str) -> Path:
+    """``folder / table``; a ``table`` that leaves the soil's measurements folder (an absolute
+    path, or one that climbs out with ``..``) is refused.  The check is on the path as written:
+    a symbolic link inside the folder is the user's own choice and is followed."""
+    norm = Path(os.path.normpath(table))
+    if Path(table).is_absolute() or norm.is_absolute() or (norm.parts and norm.parts[0] == ".."):
+        raise InputError(soil_path, field, f"a table inside {folder}/ (a path relative to it)", table)
+    return folder / table
+
+
 def _entries(soil_path, data: dict, resources_root) -> list[tuple[str, dict, Path, pd.DataFrame, list[Condition]]]:
     """Validate every entry of the block; return (id, entry, table path, table, conditions)."""
     block = data.get(BLOCK) or {}
     out = []
     for mid, entry in block.items():
-        tpath = measurements_dir(resources_root, data["name"]) / entry["table"]
+        tpath = _table_path(soil_path, f"{BLOCK}.{mid}.table", measurements_dir(resources_root, data["name"]),
+                            entry["table"])
         df, conds = _entry(soil_path, data, mid, entry, tpath)
         out.append((mid, entry, tpath, df, conds))
     return out
@@ -300,6 +360,8 @@ def _entry(soil_path, data: dict, mid: str, entry: dict, tpath: Path):
                     raise InputError(soil_path, f"{cw}.case.{k}",
                                      f"a case id of stage {stage['id']!r} (" + ", ".join(case_ids) + ")", c)
             case_cols.append(col)
+        if form in ("set", "param"):
+            _check_scale(soil_path, cw, cv, name)
     quantity_cols = {c: cv["quantity"] for c, cv in covs.items() if "quantity" in cv}
     twice = [q for q in set(quantity_cols.values()) if list(quantity_cols.values()).count(q) > 1]
     if twice:
@@ -328,6 +390,24 @@ def _entry(soil_path, data: dict, mid: str, entry: dict, tpath: Path):
         if r.get("value") is None and not r.get("note"):
             raise InputError(soil_path, f"{rw}.note",
                              "a note saying why the measured value is not printed (value: null)", None)
+
+    # -- one role per column: a covariate, one kind of response column, or ignored.  Only the
+    # repeat count ``n`` may serve several responses (the repeats behind every measure of a row).
+    roles = {col: ("covariate", f"the covariate {where}.covariates.{col}") for col in covs}
+    for j, r in enumerate(resps):
+        for key in _RESPONSE_COLUMNS:
+            col = r.get(key)
+            if col is None:
+                continue
+            kind, role = roles.get(col, (None, None))
+            if kind is not None and not (kind == key == "n"):
+                raise InputError(soil_path, f"{where}.responses[{j}].{key}",
+                                 f"a column with one role ({col} is already {role})", col)
+            roles.setdefault(col, (key, f"the {key} column of {where}.responses[{j}]"))
+    for k, col in enumerate(entry.get("ignore_columns") or []):
+        if col in roles:
+            raise InputError(soil_path, f"{where}.ignore_columns[{k}]",
+                             f"a column with one role ({col} is already {roles[col][1]})", col)
 
     # -- the table: columns
     df = _read(soil_path, where, tpath)
@@ -459,10 +539,16 @@ def _entry(soil_path, data: dict, mid: str, entry: dict, tpath: Path):
                 x = _number(cell)
                 if x is None:
                     raise InputError(tpath, at(col), "a number", _plain(cell))
+                if key == "sd" and x < 0:
+                    raise InputError(tpath, at(col), f"a standard deviation >= 0 (of {r['measure']})",
+                                     _plain(cell))
+                if key == "n" and not (x >= 1 and x == int(x)):
+                    raise InputError(tpath, at(col),
+                                     f"a whole number of repeats >= 1 (behind {r['measure']})", _plain(cell))
                 vals[key] = x
             n = vals["n"]
             responses.append(dict(measure=r["measure"], unit=r["unit"], measured=vals["value"],
-                                  measured_sd=vals["sd"], n=None if n is None else int(round(n)),
+                                  measured_sd=vals["sd"], n=None if n is None else int(n),
                                   paper_simulated=vals["paper_simulated"],
                                   paper_difference=vals["paper_difference"], note=r.get("note", "")))
         quantities = {}
@@ -488,6 +574,30 @@ def _entry(soil_path, data: dict, mid: str, entry: dict, tpath: Path):
             covariates={c: (None if _missing(rec[c]) else _plain(rec[c])) for c in covs},
             quantities=quantities, quantity_columns=dict(quantity_cols)))
     return df, conds
+
+
+def _check_scale(soil_path, cw: str, cv: dict, scenario: str) -> None:
+    """A ``set`` or ``param`` covariate that declares its cells' ``unit``: its ``scale`` must take
+    that unit to the unit the setup key or DEM parameter is taken in, where that unit is known
+    (:data:`SETUP_KEY_UNITS`, :func:`param_unit`) and is one of the quantity's units.  A key
+    whose unit is another quantity's, or not documented, is left unchecked: there is no factor
+    to compare with."""
+    q = cv.get("quantity")
+    if q is None or QUANTITIES.get(q) is None or "unit" not in cv:
+        return
+    if "set" in cv:
+        target, what = SETUP_KEY_UNITS.get(scenario, {}).get(cv["set"]), f"setup key {cv['set']}"
+    else:
+        target, what = param_unit(cv["param"]), f"DEM parameter {cv['param']}"
+    factors = QUANTITIES[q][1]
+    if target not in factors:
+        return
+    unit = cv["unit"]
+    factor = factors[unit] / factors[target]
+    scale = cv.get("scale", 1)
+    if not abs(float(scale) - factor) <= SCALE_RTOL * factor:
+        raise InputError(soil_path, f"{cw}.scale",
+                         f"{factor:.4g} ({unit} to {target}, the unit of {what})", scale)
 
 
 def _renamed(exc: InputError, soil_path, prefix: str, field_prefix: str) -> InputError:
