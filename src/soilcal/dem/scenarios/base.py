@@ -10,7 +10,10 @@ the engine's sliding friction coefficient mu_s).  SI units throughout (kg/m^3, P
 Defaults
 --------
 Soil intrinsic properties and contact parameters default to the cinnamon-soil study (Qiu et
-al., Agriculture 2022, 12, 1082; ``config/soils/cinnamon-soil.yaml``):
+al., Agriculture 2022, 12, 1082; ``config/soils/cinnamon-soil.yaml``), the values a bare
+:class:`DemParams` (a scenario's own tests, ``soilcal scenario run``) takes; a soil calibrated
+on the DEM must set every one of them itself (:mod:`soilcal.chain.provenance`, checked at
+start-up), so these never stand in for another soil's value:
 
 * density 1394 kg/m^3 (Sec. 2.1; the only density the paper prints, used in its EDEM model),
 * Poisson ratio 0.311 (Sec. 2.2, Eq. 1), shear modulus 3.814 MPa (Sec. 2.3, Eq. 4),
