@@ -255,6 +255,36 @@ def test_gp_closed_form_loo_matches_refits_at_fixed_kernel():
     assert g.loo_rmse == pytest.approx(float(np.sqrt(np.mean(np.square(res)))) * g.scale, rel=1e-6)
 
 
+@pytest.mark.parametrize("seed", range(6))
+def test_the_gp_level_carries_its_own_uncertainty(seed):
+    # eight points of two seeds each, no signal, known seed SD 2: where the fit finds no
+    # signal (its amplitude at the bound), every prediction is the level, whose standard error
+    # is the seed SD over the root of the 16 seeds, 0.5; never less anywhere
+    rng = np.random.default_rng(seed)
+    xc = rng.uniform(-1, 1, (8, 3))
+    y = 30.0 + 2.0 * rng.standard_normal(8) / np.sqrt(2)
+    g = ad.GPSurrogate(xc, y, np.full(8, 2), 2.0, seed)
+    m, s = g.predict(np.vstack([np.zeros(3), xc[:2]]))
+    assert (s >= 0.5 * (1 - 1e-6)).all()
+    if g.gp.kernel_.k1.k1.constant_value <= 1.001e-3:
+        assert s == pytest.approx(np.full(3, 0.5), rel=5e-3)  # the bound leaves a trace of signal
+        assert m == pytest.approx(np.full(3, y.mean()), abs=0.01)
+
+
+def test_gp_predictions_match_sklearn_where_the_level_is_well_known():
+    # a smooth response densely sampled: the kriging mean agrees with the fitted GP's own
+    # prediction (which takes the sample mean as the level) to within its standard error
+    rng = np.random.default_rng(3)
+    xc = rng.uniform(-1, 1, (30, 2))
+    y = 10 + 3 * xc[:, 0] - 2 * xc[:, 1] ** 2
+    g = ad.GPSurrogate(xc, y, np.ones(30), None, 0)
+    x = rng.uniform(-0.8, 0.8, (5, 2))
+    m, s = g.predict(x)
+    assert m == pytest.approx(10 + 3 * x[:, 0] - 2 * x[:, 1] ** 2, abs=0.05)
+    sk = g.mu0 + g.scale * g.gp.predict(x)
+    assert np.all(np.abs(m - sk) <= np.maximum(s, 1e-3))
+
+
 def test_bad_problems_and_settings_are_named():
     with pytest.raises(InputError, match="factors.a"):
         ad.Problem([ad.Factor("a", 1, 1)], [ad.Target("y", 1.0)])

@@ -400,11 +400,30 @@ class GPSurrogate(Surrogate):
         Kinv = np.linalg.inv(K)
         loo = (Kinv @ yn) / np.diag(Kinv)
         self.loo_rmse = float(np.sqrt(np.mean(loo ** 2)) * self.scale)
+        # ordinary kriging: the mean level is estimated (generalised least squares), and its
+        # uncertainty is part of every prediction's; taken as known (the sample mean), a GP
+        # whose signal amplitude fits to its lower bound predicts one level everywhere with
+        # almost no uncertainty although a few noisy runs leave the level itself uncertain
+        self.xc = np.asarray(xc, float)
+        self.Kinv = Kinv
+        ones = np.ones(len(yn))
+        self.kinv_one = Kinv @ ones
+        self.one_kinv_one = float(ones @ self.kinv_one)
+        self.level = float(self.kinv_one @ yn) / self.one_kinv_one
+        self.weights = Kinv @ (yn - self.level)
 
     def predict(self, xc):
-        m, s = self.gp.predict(np.atleast_2d(xc), return_std=True)
-        var = np.maximum(s ** 2 - self.white, 1e-12)  # the mean response: no white noise
-        return self.mu0 + self.scale * m, self.scale * np.sqrt(var)
+        """Mean response and its standard error (no seed scatter) at coded points: the
+        ordinary-kriging predictor, var = k** - k K^-1 k + (1 - 1' K^-1 k)^2 / (1' K^-1 1)
+        with the fitted signal kernel (Rasmussen & Williams 2006, Sec. 2.7, Eq. 2.42 with a
+        constant basis and a vague prior on its coefficient)."""
+        x = np.atleast_2d(xc)
+        signal = self.gp.kernel_.k1
+        k = signal(x, self.xc)
+        m = self.level + k @ self.weights
+        u = 1.0 - k @ self.kinv_one
+        var = signal.diag(x) - np.einsum("ij,jk,ik->i", k, self.Kinv, k) + u ** 2 / self.one_kinv_one
+        return self.mu0 + self.scale * m, self.scale * np.sqrt(np.maximum(var, 1e-12))
 
 
 def quadratic_terms(xc: np.ndarray) -> np.ndarray:
