@@ -276,3 +276,6 @@ def test_run_writes_the_parameters_of_every_condition(tmp_path, monkeypatch, cap
                    ("soil_steel_rolling_friction", 0.2), ("soil_shear_modulus", 3.814e6)):
         assert p[col].tolist() == pytest.approx([v] * 4, rel=1e-12), col
     assert not math.isnan(pd.read_csv(out / "residuals.csv")["simulated_mean"].iloc[0])
+    # the report and the figures, as the workflow writes them
+    assert (out / "report.md").read_text().startswith("# Measured-data loop: cinnamon-soil")
+    assert list((out / "figures/residuals").glob("*.png")) and (out / "ranking.csv").is_file()

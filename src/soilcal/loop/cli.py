@@ -269,13 +269,32 @@ def _run(args) -> int:
     out = core.run_inprocess(soil.name, conds, _lookup(params), dem_simulator(args.threads), settings,
                              seeds=tuple(range(args.seed, args.seed + seeds)))
     d = Path(args.out)
-    for name, df in (("residuals", out.residuals), ("diagnosis", out.diagnosis), ("selection", out.selection),
-                     ("predictions", out.predictions), ("loop_summary", out.summary), ("detectable", out.detectable),
-                     ("parameters", parameters_frame(params))):
+    for name, df in (("residuals", out.residuals), ("diagnosis", out.diagnosis), ("ranking", out.ranking),
+                     ("selection", out.selection), ("predictions", out.predictions), ("loop_summary", out.summary),
+                     ("detectable", out.detectable), ("parameters", parameters_frame(params))):
         write_csv(df, d / f"{name}.csv")
+    _report(soil, conds, settings, out, d)
     print(f"parameters: {params_source(args, overrides)} ({d / 'parameters.csv'})")
     print(out.verdict)
     return 0
+
+
+def _report(soil, conds, settings, out, d: Path) -> None:
+    """``report.md`` and the residual figures of an in-process run, as the workflow writes
+    them (the plan rebuilt from the outcome: its candidates, reference and settings)."""
+    import json
+
+    from soilcal.atomic import write_text
+    from soilcal.loop import core, files
+    from soilcal.plots.loop import residual_figures
+
+    qcols = core.quantity_of(conds)
+    reference = json.loads(out.summary["reference"].iloc[0] or "{}")
+    plan = files._plan(soil.name, out.candidates, reference, settings, qcols, out.diagnosis)
+    residual_figures(out.residuals, None, d / "figures" / "residuals", title=f"{soil.name}: calibrated model")
+    residual_figures(out.residuals, out.predictions if out.chosen else None, d / "figures" / "after",
+                     title=f"{soil.name}: " + (" + ".join(out.chosen) if out.chosen else "no effect chosen"))
+    write_text(d / "report.md", files.report(soil.name, out, [plan]))
 
 
 def parameters_frame(params: dict):
