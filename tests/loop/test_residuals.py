@@ -198,3 +198,14 @@ def test_failed_runs_are_counted_and_noted():
     r = _one(residual_frame(observations(conds), runs), 1)
     assert (r["simulated_n"], r["failed_runs"]) == (3, 2) and r["note"] == "2 runs failed"
     assert r["simulated_mean"] == pytest.approx(92.0)
+
+
+def test_a_test_measured_twice_is_one_simulation_and_one_fold():
+    from soilcal.loop.select import _folds
+
+    twins = [_cond(1, [("F_N", 100.0, 6.0, 4)], quantities={"tool_speed": 1.0, "day": "d1"}),
+             _cond(2, [("F_N", 104.0, 6.0, 4)], quantities={"tool_speed": 1.0, "day": "d2"}),
+             _cond(3, [("F_N", 120.0, 6.0, 4)], quantities={"tool_speed": 2.0, "day": "d2"})]
+    obs = observations(twins)
+    assert obs["simulation"].iloc[0] == obs["simulation"].iloc[1] != obs["simulation"].iloc[2]
+    assert [list(f) for f in _folds(obs, None)] == [[0, 1], [2]]

@@ -379,6 +379,7 @@ def run_inprocess(soil: str, conditions, base_params, simulate, settings: Settin
     quantities (measure -> value).  The calibrated runs and every design point use the same
     ``seeds``."""
     settings = settings or Settings()
+    done = {}  # a test measured twice (rows of one simulation) runs once per design point and seed
 
     def runs_at(effect, theta, reference):
         rows = []
@@ -387,7 +388,10 @@ def run_inprocess(soil: str, conditions, base_params, simulate, settings: Settin
             if effect:
                 p = EFFECTS[effect].apply(p, c.quantities or {}, theta, reference, c.scenario)
             for seed in seeds:
-                vals = simulate(c, p, seed)
+                key = (rs.simulation_key(c), json.dumps(p, sort_keys=True), int(seed))
+                if key not in done:
+                    done[key] = simulate(c, p, seed)
+                vals = done[key]
                 for r in c.responses:
                     v = vals.get(r["measure"], math.nan)
                     rows.append({"measurement": c.measurement, "row": c.row, "measure": r["measure"], "seed": seed,

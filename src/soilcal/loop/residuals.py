@@ -35,7 +35,8 @@ import numpy as np
 import pandas as pd
 
 KEY = ["measurement", "row", "measure"]
-RESIDUAL_COLUMNS = ["measurement", "row", "measure", "unit", "label", "measured", "measured_sd", "measured_n",
+RESIDUAL_COLUMNS = ["measurement", "row", "measure", "unit", "label", "simulation", "measured", "measured_sd",
+                    "measured_n",
                     "simulated_mean", "simulated_sd", "simulated_n", "failed_runs", "residual", "scale",
                     "relative_residual", "residual_se", "residual_dof", "standardised_residual", "note"]
 
@@ -64,13 +65,29 @@ def scales(df: pd.DataFrame) -> tuple[np.ndarray, list]:
     return np.where(scale > 0, scale, np.nan), by_rms
 
 
+def simulation_key(c) -> str:
+    """What a condition simulates (scenario, setup, parameters, calibrated stage and case,
+    preset, and the numeric quantities an effect may act through), as a short digest: two rows that
+    share it are the same test measured twice, held out together by the selection's folds."""
+    import hashlib
+    import json
+
+    from soilcal.config.quantities import QUANTITIES
+
+    numeric = {q: v for q, v in (c.quantities or {}).items() if QUANTITIES.get(q) is not None}  # not a day's label
+    what = [c.scenario, c.setup, c.params, c.stage, c.case, c.preset, numeric]
+    return hashlib.sha1(json.dumps(what, sort_keys=True, default=str).encode()).hexdigest()[:12]
+
+
 def observations(conditions) -> pd.DataFrame:
     """The measured side: one row per condition and measured quantity with a measured value."""
     rows = []
     for c in conditions:
+        sim = simulation_key(c)
         for r in c.responses:
             row = {"measurement": c.measurement, "row": int(c.row), "measure": r["measure"], "unit": r["unit"],
-                   "label": c.label, "measured": np.nan if r["measured"] is None else float(r["measured"]),
+                   "label": c.label, "simulation": sim,
+                   "measured": np.nan if r["measured"] is None else float(r["measured"]),
                    "measured_sd": np.nan if r.get("measured_sd") is None else float(r["measured_sd"]),
                    "measured_n": np.nan if r.get("n") is None else float(r["n"])}
             for col, v in (c.covariates or {}).items():
@@ -80,7 +97,7 @@ def observations(conditions) -> pd.DataFrame:
             rows.append(row)
     df = pd.DataFrame(rows)
     if len(df) == 0:
-        return pd.DataFrame(columns=KEY + ["unit", "label", "measured", "measured_sd", "measured_n"])
+        return pd.DataFrame(columns=KEY + ["unit", "label", "simulation", "measured", "measured_sd", "measured_n"])
     return df
 
 
@@ -110,6 +127,8 @@ def residual_frame(obs: pd.DataFrame, runs: pd.DataFrame) -> pd.DataFrame:
                             "simulated_sd": pd.Series(dtype=float), "simulated_n": pd.Series(dtype=float),
                             "failed_runs": pd.Series(dtype=int)})
     df = obs.merge(sim, on=KEY, how="left")
+    if "simulation" not in df:  # a measured side built without conditions: each row its own test
+        df["simulation"] = df["measurement"].astype(str) + "/" + df["row"].astype(str)
     for c in ("simulated_mean", "simulated_sd"):
         df[c] = df[c].astype(float)
     df["simulated_n"] = df["simulated_n"].fillna(0).astype(int)

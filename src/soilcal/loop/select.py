@@ -210,8 +210,10 @@ def _seed_values(r: pd.DataFrame, obs, design, index, keys, tcols):
 
 def _folds(obs: pd.DataFrame, fold_by: str | None) -> list[np.ndarray]:
     """Index arrays of the held-out groups: the values of ``fold_by`` (a covariate column),
-    else the measured conditions."""
-    cond = obs["measurement"].astype(str) + "/" + obs["row"].astype(str)
+    else the simulated conditions (rows of one test measured twice, as two rows of a table
+    or in two tables, are held out together: :func:`soilcal.loop.residuals.simulation_key`)."""
+    cond = (obs["simulation"].astype(str) if "simulation" in obs
+            else obs["measurement"].astype(str) + "/" + obs["row"].astype(str))
     if fold_by:
         raw = obs[f"cov:{fold_by}"]
         col = ("g:" + raw.astype(str)).where(raw.notna(), "c:" + cond)  # a row without the group: its condition
