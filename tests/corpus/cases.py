@@ -866,7 +866,7 @@ case("scenario-unknown-parameter", "scenario", CMD, "params.soil_friction", "one
     scenario("repose", "--param", "soil_friction=0.5"))
 case("scenario-parameter-text", "scenario", CMD, "params.soil_density", "a number")(
     scenario("repose", "--param", "soil_density=heavy"))
-case("scenario-negative-density", "scenario", CMD, "params.soil_density", "a density in (0, 30000] kg/m^3")(
+case("scenario-negative-density", "scenario", CMD, "params.soil_density", "a density in [100, 25000] kg/m^3")(
     scenario("repose", "--param", "soil_density=-1500"))
 case("scenario-unknown-preset", "scenario", CMD, "--preset", "one of ('quick', 'paper')")(
     scenario("repose", "--preset", "fast"))
@@ -909,6 +909,12 @@ def _(tmp, p):
            kind="scenario")
 def _(tmp, p):
     edit_yaml(p, lambda d: d["simulation"].update(params={"soil_densty": 1394}))
+
+
+@soil_case("simulation-density-in-g-per-cm3", SOIL, "simulation.params.soil_density",
+           "a density in [100, 25000] kg/m^3 (a value in g/cm^3 times 1000)", kind="scenario")
+def _(tmp, p):
+    edit_yaml(p, lambda d: d["simulation"].update(params={"soil_density": 1.394}))
 
 
 @soil_case("simulation-bad-preset", SOIL, "simulation.preset", "one of quick, paper", kind="scenario")
