@@ -917,6 +917,11 @@ def _(tmp, p):
     edit_yaml(p, lambda d: d["simulation"].update(params={"soil_density": 1.394}))
 
 
+@soil_case("loop-bounds-as-a-list", SOIL, "loop.bounds.rate_friction", "a mapping parameter -> [low, high]")
+def _(tmp, p):
+    edit_yaml(p, lambda d: d.update(loop={"bounds": {"rate_friction": [0, 0.2]}}))
+
+
 @soil_case("simulation-bad-preset", SOIL, "simulation.preset", "one of quick, paper", kind="scenario")
 def _(tmp, p):
     edit_yaml(p, lambda d: d["simulation"].update(preset="fast"))

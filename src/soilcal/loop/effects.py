@@ -113,6 +113,9 @@ class Effect:
     source: str
     changes: tuple = field(default=())  # DemParams names it changes
     scenarios: tuple = field(default=())  # scenarios whose conditions it acts on (empty: every scenario)
+    #: theta name -> (low, high): the physical range of a parameter where the library states
+    #: one (a bound of ``loop.bounds`` outside it is refused); a parameter not listed has none
+    ranges: dict = field(default_factory=dict)
 
     def theta_names(self) -> tuple[str, ...]:
         return tuple(self.params)
@@ -244,7 +247,8 @@ EFFECTS: dict[str, Effect] = {
         formula="lambda_p,ss = lambda_p,cal + lambda_p, in [0, 0.95] (plastic Hertz law eepa)",
         source="Thakur, Morrissey, Sun, Chen & Ooi, Granular Matter 16 (2014) 383, Eqs. 1-2 (non-adhesive, n = 3/2); "
                "Morrissey, PhD thesis, University of Edinburgh (2013)",
-        changes=("soil_soil_plasticity",), scenarios=("compression", "standin_compression")),
+        changes=("soil_soil_plasticity",), scenarios=("compression", "standin_compression"),
+        ranges={"lambda_p": _LIMITS["plasticity"]}),
 }
 
 
