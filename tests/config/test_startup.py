@@ -56,3 +56,17 @@ def test_a_density_typed_in_g_per_cm3_is_refused(tmp_path):
     e = refused(p, tmp_path)
     assert e.path == str(p) and e.field == "simulation.params.soil_density" and e.got == 1.394
     assert "[100, 25000] kg/m^3" in e.expected
+
+
+# ------------------------------------------------------------------ loop.fold_by
+
+
+def test_fold_by_names_a_covariate_column_of_the_measured_tables(tmp_path):
+    p = copy_soil(tmp_path)
+    columns = sorted(yaml.safe_load(p.read_text())["measurements"]["cutting_resistance"]["covariates"])
+    edit(p, lambda d: d.update(loop={"fold_by": columns[0]}))
+    load_soil(p, tmp_path / "resources")
+    edit(p, lambda d: d.update(loop={"fold_by": "test_day"}))
+    e = refused(p, tmp_path)
+    assert e.path == str(p) and e.field == "loop.fold_by" and e.got == "test_day"
+    assert e.expected == f"a covariate column of the soil's measured tables ({', '.join(columns)})"

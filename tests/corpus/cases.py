@@ -922,6 +922,12 @@ def _(tmp, p):
     edit_yaml(p, lambda d: d.update(loop={"bounds": {"rate_friction": [0, 0.2]}}))
 
 
+@soil_case("loop-fold-by-not-a-covariate", SOIL, "loop.fold_by",
+           "a covariate column of the soil's measured tables (directrix, plate)")
+def _(tmp, p):
+    edit_yaml(p, lambda d: d.update(loop={"fold_by": "day"}))
+
+
 @soil_case("simulation-bad-preset", SOIL, "simulation.preset", "one of quick, paper", kind="scenario")
 def _(tmp, p):
     edit_yaml(p, lambda d: d["simulation"].update(preset="fast"))

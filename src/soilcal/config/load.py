@@ -288,7 +288,20 @@ def _semantic_checks(path: Path, d: dict, resources_root: Path) -> None:
     if d.get("loop"):
         from soilcal.loop.settings import settings_from
 
-        settings_from(d, path)
+        _check_fold_by(path, d, settings_from(d, path).fold_by)
+
+
+def _check_fold_by(path: Path, d: dict, fold_by) -> None:
+    """``loop.fold_by`` names a covariate column of the soil's measured tables (a column under
+    ``measurements.<id>.covariates``), which the held-out folds of the loop are grouped by."""
+    if fold_by is None:
+        return
+    columns = sorted({c for entry in (d.get("measurements") or {}).values()
+                      for c in (entry.get("covariates") or {})})
+    if not isinstance(fold_by, str) or fold_by not in columns:
+        raise InputError(path, "loop.fold_by", "a covariate column of the soil's measured tables ("
+                         + (", ".join(columns) if columns else "none: no measurements.<id>.covariates") + ")",
+                         fold_by)
 
 
 def _check_image_targets(path: Path, d: dict, resources_root: Path) -> None:
