@@ -70,3 +70,36 @@ def test_fold_by_names_a_covariate_column_of_the_measured_tables(tmp_path):
     e = refused(p, tmp_path)
     assert e.path == str(p) and e.field == "loop.fold_by" and e.got == "test_day"
     assert e.expected == f"a covariate column of the soil's measured tables ({', '.join(columns)})"
+
+
+# ------------------------------------------------------------------ simulation.screening
+
+
+def _pb_factor_count(p: Path) -> int:
+    d = yaml.safe_load(p.read_text())
+    return len(next(s for s in d["stages"] if s["kind"] == "plackett_burman")["factors"])
+
+
+def test_screening_min_factors_above_max_factors_is_refused(tmp_path):
+    p = edit(copy_soil(tmp_path), lambda d: d["simulation"].update(screening={"min_factors": 4, "max_factors": 3}))
+    e = refused(p, tmp_path)
+    assert e.path == str(p) and e.field == "simulation.screening.min_factors" and e.got == 4
+    assert "max_factors (3)" in e.expected
+    # max_factors below the default min_factors names max_factors, the key the file gives
+    edit(p, lambda d: d["simulation"].update(screening={"max_factors": 2}))
+    e = refused(p, tmp_path)
+    assert e.field == "simulation.screening.max_factors" and e.got == 2
+
+
+def test_screening_min_factors_above_the_screenings_factor_count_is_refused(tmp_path):
+    p = copy_soil(tmp_path)
+    k = _pb_factor_count(p)
+    edit(p, lambda d: d["simulation"].update(screening={"min_factors": k}))
+    load_soil(p, tmp_path / "resources")  # every screened factor on the path: allowed
+    edit(p, lambda d: d["simulation"].update(screening={"min_factors": k + 1}))
+    e = refused(p, tmp_path)
+    assert e.path == str(p) and e.field == "simulation.screening.min_factors" and e.got == k + 1
+    assert e.expected.startswith(f"an integer <= {k}, the factor count of screening stage 'pb'")
+    # a path run on the printed levels selects nothing: the count does not matter
+    edit(p, lambda d: d["simulation"].update(design="printed"))
+    load_soil(p, tmp_path / "resources")

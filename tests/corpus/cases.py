@@ -928,6 +928,12 @@ def _(tmp, p):
     edit_yaml(p, lambda d: d.update(loop={"fold_by": "day"}))
 
 
+@soil_case("simulation-screening-more-factors-than-screened", SOIL, "simulation.screening.min_factors",
+           "an integer <= 7, the factor count of screening stage 'pb'", kind="scenario")
+def _(tmp, p):
+    edit_yaml(p, lambda d: d["simulation"].update(screening={"min_factors": 8}))
+
+
 @soil_case("simulation-bad-preset", SOIL, "simulation.preset", "one of quick, paper", kind="scenario")
 def _(tmp, p):
     edit_yaml(p, lambda d: d["simulation"].update(preset="fast"))
