@@ -11,6 +11,7 @@ import pytest
 import yaml
 
 from soilcal.config import load_soil
+from soilcal.doe.adaptive import DEFAULTS
 from soilcal.errors import InputError
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -103,3 +104,72 @@ def test_screening_min_factors_above_the_screenings_factor_count_is_refused(tmp_
     # a path run on the printed levels selects nothing: the count does not matter
     edit(p, lambda d: d["simulation"].update(design="printed"))
     load_soil(p, tmp_path / "resources")
+
+
+# ------------------------------------------------------------------ simulation.adaptive
+
+
+CENTRE, VERIFY = (DEFAULTS[k] for k in ("centre_replicates", "verify_seeds"))
+
+
+def _adaptive(tmp: Path, settings: dict, design: str | None = "adaptive") -> Path:
+    def fn(d):
+        if design:
+            d["simulation"]["design"] = design
+        d["simulation"]["adaptive"] = settings
+    return edit(copy_soil(tmp), fn)
+
+
+def _bbd(p: Path) -> dict:
+    return next(s for s in yaml.safe_load(p.read_text())["stages"] if s["id"] == "bbd")
+
+
+@pytest.mark.parametrize("settings, field, expected", [
+    ({"separation": 2}, "simulation.adaptive.separation", "a number < 2"),
+    ({"tolerances": {"angle": {"pct": 2}}}, "simulation.adaptive.tolerances.angle",
+     "a response of a stage the adaptive design runs (stacking_angle)"),
+    ({"tolerances": {"stacking_angle": {}}}, "simulation.adaptive.tolerances.stacking_angle", "exactly one of"),
+    ({"tolerances": {"stacking_angle": {"pct": 2, "abs": 0.5}}}, "simulation.adaptive.tolerances.stacking_angle",
+     "exactly one of"),
+    # n_start, verify_seeds or batch larger than the budget (the cinnamon Box-Behnken stage has 3 factors)
+    ({"n_start": 40, "budget": 30}, "simulation.adaptive.budget",
+     f"at least {CENTRE + 40 - 1 + VERIFY} runs"),
+    ({"verify_seeds": 40, "budget": 30}, "simulation.adaptive.budget",
+     f"at least {CENTRE + 2 * 3 + 40} runs: the start of stage 'bbd'"),
+    ({"batch": 40, "budget": 30}, "simulation.adaptive.batch",
+     f"at most {30 - (CENTRE + 2 * 3)}, the runs of the budget (30) left after the start of stage 'bbd'"),
+    ({"p_verify": 1.5}, "simulation.adaptive.p_verify", "a number < 1"),
+])
+def test_bad_adaptive_settings_are_refused_at_start_up(tmp_path, settings, field, expected):
+    p = _adaptive(tmp_path, settings)
+    e = refused(p, tmp_path)
+    assert e.path == str(p) and e.field == field and expected in e.expected, str(e)
+
+
+def test_the_budget_holds_the_start_and_one_verification(tmp_path):
+    p = _adaptive(tmp_path, {})
+    d = len(_bbd(p)["factors"])
+    centre, verify = 3, 5
+    need = centre + (2 * d + 1) - 1 + verify  # centre seeds, 2 d Halton points, one verification
+    edit(p, lambda x: x["simulation"].update(adaptive={"centre_replicates": centre, "verify_seeds": verify,
+                                                       "budget": need}))
+    load_soil(p, tmp_path / "resources")
+    edit(p, lambda x: x["simulation"]["adaptive"].update(budget=need - 1))
+    e = refused(p, tmp_path)
+    assert e.field == "simulation.adaptive.budget" and e.got == need - 1
+    assert e.expected.startswith(f"at least {need} runs: the start of stage 'bbd'")
+
+
+def test_adaptive_settings_are_checked_for_the_workflows_design_override(tmp_path):
+    from soilcal.config import load_workflow_config
+
+    p = _adaptive(tmp_path, {"tolerances": {"angle": {"pct": 2}}}, design=None)
+    cfg = {"soils": ["cinnamon-soil"], "soil_dir": str(tmp_path / "config/soils"),
+           "resources": str(tmp_path / "resources")}
+    soils = load_workflow_config(cfg)  # the soil's own design (recipe) does not read the block
+    assert (soils["cinnamon-soil"].data["simulation"].get("design") or "recipe") == "recipe"
+    with pytest.raises(InputError) as exc:
+        load_workflow_config(dict(cfg, design="adaptive"))  # snakemake --config design=adaptive
+    assert exc.value.path == str(p) and exc.value.field == "simulation.adaptive.tolerances.angle"
+    soils = load_workflow_config(dict(cfg, design="printed"))
+    assert soils["cinnamon-soil"].data["simulation"]["design"] == "printed"

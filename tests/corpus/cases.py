@@ -1085,6 +1085,15 @@ def _(tmp):
     return workflow_config(tmp, lambda c: c.update(soils=["Cinnamon soil"]))
 
 
+@case("workflow-design-adaptive-tolerance-of-no-response", "workflow_config", SOIL,
+      "simulation.adaptive.tolerances.angle", "a response of a stage the adaptive design runs (stacking_angle)")
+def _(tmp):
+    # the soil's own design (recipe) does not read the block; the config's design: adaptive does
+    argv = workflow_config(tmp, lambda c: c.update(design="adaptive"))
+    edit_yaml(tmp / SOIL, lambda d: d["simulation"].update(adaptive={"tolerances": {"angle": {"pct": 2}}}))
+    return argv
+
+
 @case("workflow-config-missing", "workflow_config", "config/config.yaml", "<file>", "an existing YAML file")
 def _(tmp):
     return ["config", "check", "--workflow", "config/config.yaml"]

@@ -14,11 +14,7 @@ from soilcal.chain.plan import dem_context, soil_sources
 
 
 validate(config, "../schemas/config.schema.yaml")
-SOILS = load_workflow_config(config)
-if config.get("design"):  # --config design=...: every soil's DEM design
-    for _s in SOILS.values():
-        if _s.data.get("simulation"):
-            _s.data["simulation"]["design"] = config["design"]
+SOILS = load_workflow_config(config)  # --config design=... is every soil's DEM design, checked as such
 RES = config.get("resources", "resources")
 SOURCES = {soil: soil_sources(s, config.get("source")) for soil, s in SOILS.items()}
 IMAGE_MANIFESTS = {
