@@ -1094,6 +1094,14 @@ def _(tmp):
     return argv
 
 
+@case("workflow-photo-of-the-manifest-missing", "workflow_config", MANIFEST, "photos[1].file", "an existing image file")
+def _(tmp):
+    # the workflow's start-up reads every soil's photo manifest; so does the config check
+    argv = workflow_config(tmp, lambda c: None)
+    (tmp / "resources/images/cinnamon-soil/stacking_2.jpg").unlink()
+    return argv
+
+
 @case("workflow-config-missing", "workflow_config", "config/config.yaml", "<file>", "an existing YAML file")
 def _(tmp):
     return ["config", "check", "--workflow", "config/config.yaml"]

@@ -153,6 +153,8 @@ class Soil:
     resources_root: Path = field(default=Path("resources"))
     #: top-level fields the file left out and the loader filled with the schema's default
     defaulted: tuple[str, ...] = ()
+    #: the soil's photo manifest as read and checked at load (None: the soil has none)
+    manifest: dict | None = None
 
     @property
     def name(self) -> str:
@@ -209,7 +211,8 @@ def _check_levels(path: Path, where: str, d: dict) -> None:
         raise InputError(path, f"{where}.centre", f"a number between low ({lo}) and high ({hi})", c)
 
 
-def _semantic_checks(path: Path, d: dict, resources_root: Path) -> None:
+def _semantic_checks(path: Path, d: dict, resources_root: Path) -> dict | None:
+    """The checks a schema cannot state; returns the soil's photo manifest (None without one)."""
     if d["name"] != path.stem:
         raise InputError(path, "name", f"the file name without .yaml ({path.stem!r})", d["name"])
     for k, q in d.get("properties", {}).items():
@@ -276,7 +279,7 @@ def _semantic_checks(path: Path, d: dict, resources_root: Path) -> None:
                 if key in pr and not (resources_root / "published" / d["name"] / pr[key]).is_file():
                     raise InputError(path, f"{where}.printed.{r}.{key}", "an existing file under resources/published/" + d["name"], pr[key])
         seen[sid] = st
-    _check_image_targets(path, d, resources_root)
+    manifest = _check_images(path, d, resources_root)
     if d.get("simulation"):
         from soilcal.dem.scenarios.design import check_block
 
@@ -293,6 +296,7 @@ def _semantic_checks(path: Path, d: dict, resources_root: Path) -> None:
         from soilcal.loop.settings import settings_from
 
         _check_fold_by(path, d, settings_from(d, path).fold_by)
+    return manifest
 
 
 def _check_fold_by(path: Path, d: dict, fold_by) -> None:
@@ -308,20 +312,31 @@ def _check_fold_by(path: Path, d: dict, fold_by) -> None:
                          fold_by)
 
 
-def _check_image_targets(path: Path, d: dict, resources_root: Path) -> None:
-    """A target measured on photos names a photo group of the soil's manifest."""
+def manifest_path(resources_root: Path, name: str) -> Path:
+    """The soil's photo manifest, ``<resources>/images/<soil>/manifest.yaml``."""
+    return Path(resources_root) / "images" / name / "manifest.yaml"
+
+
+def _check_images(path: Path, d: dict, resources_root: Path) -> dict | None:
+    """The soil's photo manifest, where it has one, checked as the workflow reads it
+    (:func:`soilcal.imaging.manifest.read_manifest`: its fields, every photo present); a
+    target measured on photos names a photo group of it.  Returns the manifest (None without
+    one)."""
+    from soilcal.imaging.manifest import read_manifest
+
+    manifest = manifest_path(resources_root, d["name"])
+    m = read_manifest(manifest) if manifest.is_file() else None
     named = {tid: t["image"] for tid, t in d.get("targets", {}).items() if t.get("image")}
     if not named:
-        return
-    manifest = resources_root / "images" / d["name"] / "manifest.yaml"
+        return m
     tid = next(iter(named))
-    if not manifest.is_file():
+    if m is None:
         raise InputError(path, f"targets.{tid}.image", f"a photo group of {manifest}", "no such file")
-    m = read_yaml(manifest) or {}
-    groups = sorted({str(ph.get("group", "")) for ph in m.get("photos") or [] if isinstance(ph, dict)})
+    groups = sorted({ph["group"] for ph in m["photos"]})
     for tid, g in named.items():
         if g not in groups:
             raise InputError(path, f"targets.{tid}.image", f"a photo group of {manifest} ({', '.join(groups)})", g)
+    return m
 
 
 def _check_table(path: Path, st: dict, where: str, pub: Path) -> None:
@@ -419,8 +434,9 @@ def load_soil(path: str | Path, resources_root: str | Path = "resources", design
             defaulted.append(key)
     if design is not None and data.get("simulation"):
         data["simulation"]["design"] = design
-    _semantic_checks(path, data, Path(resources_root))
-    return Soil(path=path, data=data, resources_root=Path(resources_root), defaulted=tuple(defaulted))
+    manifest = _semantic_checks(path, data, Path(resources_root))
+    return Soil(path=path, data=data, resources_root=Path(resources_root), defaulted=tuple(defaulted),
+                manifest=manifest)
 
 
 WORKFLOW_SCHEMA = {
