@@ -173,3 +173,62 @@ def test_adaptive_settings_are_checked_for_the_workflows_design_override(tmp_pat
     assert exc.value.path == str(p) and exc.value.field == "simulation.adaptive.tolerances.angle"
     soils = load_workflow_config(dict(cfg, design="printed"))
     assert soils["cinnamon-soil"].data["simulation"]["design"] == "printed"
+
+
+# ------------------------------------------------------------------ photo measurements, targets
+
+
+def test_the_measures_each_kind_gives_are_those_its_measurement_builds():
+    """``MEASURES`` lists the numbers of each kind's measurement entry (what image_measure may
+    name): the numeric values of the dicts the pile, drum and furrow measurements build."""
+    from types import SimpleNamespace
+
+    import numpy as np
+
+    from soilcal.imaging.drum import DrumResult, drum_summary
+    from soilcal.imaging.manifest import MEASURES
+    from soilcal.imaging.measure import FurrowResult, pile_summary
+
+    pile = [SimpleNamespace(left_deg=30.0 + i, right_deg=31.0, as_dict=dict) for i in range(2)]
+    drum = [DrumResult("f.jpg", 40.0, 41.0, 39.0, 2.0, 1.0, 0.0, "plate", "rim", [1, 2], 3.0, 0.8, 50)]
+    furrow = FurrowResult("u.jpg", np.zeros(20), np.zeros(20), [1.0, 0.0], 1, 300.0, 2.0, 0.0)
+    built = {"pile": pile_summary(pile), "drum": drum_summary(drum), "furrow": furrow.as_dict()}
+    for kind, entry in built.items():
+        numbers = {k for k, v in entry.items() if isinstance(v, (int, float)) and not isinstance(v, bool)}
+        assert numbers == set(MEASURES[kind]), kind
+
+
+def test_an_image_measure_the_groups_kind_does_not_give_is_refused(tmp_path):
+    from soilcal.imaging.manifest import MEASURES
+
+    p = copy_soil(tmp_path)
+    group = yaml.safe_load(p.read_text())["targets"]["stacking_angle"]["image"]
+    kind = next(ph["kind"] for ph in yaml.safe_load((tmp_path / "resources/images/cinnamon-soil/manifest.yaml")
+                                                    .read_text())["photos"] if ph.get("group", ph["kind"]) == group)
+    edit(p, lambda d: d["targets"]["stacking_angle"].update(image_measure="angle"))
+    e = refused(p, tmp_path)
+    assert e.path == str(p) and e.field == "targets.stacking_angle.image_measure" and e.got == "angle"
+    assert e.expected == f"a value the measurement of the {kind} group {group!r} gives ({', '.join(MEASURES[kind])})"
+    edit(p, lambda d: d["targets"]["stacking_angle"].update(image_measure=MEASURES[kind][1]))
+    load_soil(p, tmp_path / "resources")
+    # without a photo group there is nothing to measure
+    edit(p, lambda d: d["targets"]["stacking_angle"].pop("image"))
+    assert refused(p, tmp_path).field == "targets.stacking_angle.image_measure"
+
+
+def test_a_target_table_that_is_not_under_the_soils_measurements_is_refused(tmp_path):
+    p = edit(copy_soil(tmp_path), lambda d: d["targets"]["stacking_angle"].update(table="stacking.csv"))
+    e = refused(p, tmp_path)
+    assert e.path == str(p) and e.field == "targets.stacking_angle.table" and e.got == "stacking.csv"
+    assert str(tmp_path / "resources/measurements/cinnamon-soil") in e.expected
+    (tmp_path / "resources/measurements/cinnamon-soil/stacking.csv").write_text("angle\n27.69\n")
+    load_soil(p, tmp_path / "resources")
+
+
+def test_a_target_in_another_unit_than_its_response_is_refused(tmp_path):
+    p = copy_soil(tmp_path)
+    unit = _bbd(p)["responses"][0]["unit"]
+    edit(p, lambda d: d["targets"]["stacking_angle"].update(unit="rad"))
+    e = refused(p, tmp_path)
+    assert e.path == str(p) and e.field == "targets.stacking_angle.unit" and e.got == "rad"
+    assert e.expected.startswith(f"{unit}, the unit of response 'stacking_angle'")

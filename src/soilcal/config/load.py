@@ -280,6 +280,7 @@ def _semantic_checks(path: Path, d: dict, resources_root: Path) -> dict | None:
                     raise InputError(path, f"{where}.printed.{r}.{key}", "an existing file under resources/published/" + d["name"], pr[key])
         seen[sid] = st
     manifest = _check_images(path, d, resources_root)
+    _check_targets(path, d, resources_root)
     if d.get("simulation"):
         from soilcal.dem.scenarios.design import check_block
 
@@ -322,21 +323,55 @@ def _check_images(path: Path, d: dict, resources_root: Path) -> dict | None:
     (:func:`soilcal.imaging.manifest.read_manifest`: its fields, every photo present); a
     target measured on photos names a photo group of it.  Returns the manifest (None without
     one)."""
-    from soilcal.imaging.manifest import read_manifest
+    from soilcal.imaging.manifest import MEASURES, read_manifest
 
     manifest = manifest_path(resources_root, d["name"])
     m = read_manifest(manifest) if manifest.is_file() else None
-    named = {tid: t["image"] for tid, t in d.get("targets", {}).items() if t.get("image")}
+    targets = d.get("targets", {})
+    for tid, t in targets.items():
+        if "image_measure" in t and not t.get("image"):
+            raise InputError(path, f"targets.{tid}.image_measure",
+                             f"a photo group to measure it on (targets.{tid}.image)", t["image_measure"])
+    named = {tid: t["image"] for tid, t in targets.items() if t.get("image")}
     if not named:
         return m
     tid = next(iter(named))
     if m is None:
         raise InputError(path, f"targets.{tid}.image", f"a photo group of {manifest}", "no such file")
-    groups = sorted({ph["group"] for ph in m["photos"]})
+    kinds = {ph["group"]: ph["kind"] for ph in m["photos"]}
+    groups = sorted(kinds)
     for tid, g in named.items():
         if g not in groups:
             raise InputError(path, f"targets.{tid}.image", f"a photo group of {manifest} ({', '.join(groups)})", g)
+        key = targets[tid].get("image_measure", "angle_deg")
+        if key not in MEASURES[kinds[g]]:
+            raise InputError(path, f"targets.{tid}.image_measure",
+                             f"a value the measurement of the {kinds[g]} group {g!r} gives ({', '.join(MEASURES[kinds[g]])})"
+                             + ("" if "image_measure" in targets[tid] else "; left out, it is angle_deg"), key)
     return m
+
+
+def _check_targets(path: Path, d: dict, resources_root: Path) -> None:
+    """A target's ``table`` is a file under ``<resources>/measurements/<soil>/``, and a target
+    has the unit of every response it is the target of: the response whose id it bears (the
+    steepest-ascent path aims that response at it) and every response an optimisation goal
+    aims at it (``target: <id>``)."""
+    targets = d.get("targets", {})
+    mdir = resources_root / "measurements" / d["name"]
+    for tid, t in targets.items():
+        if t.get("table") is not None and not (mdir / t["table"]).is_file():
+            raise InputError(path, f"targets.{tid}.table", f"an existing file under {mdir}", t["table"])
+    for st in d["stages"]:
+        units = {r["id"]: r["unit"] for r in st["responses"]}
+        links = [(rid, rid, "whose id it bears") for rid in units if rid in targets]
+        for case in (st.get("optimise") or {}).get("cases", []):
+            links += [(rid, g["target"], f"of optimisation case {case['id']!r}")
+                      for rid, g in case["goals"].items() if "target" in g and rid in units]
+        for rid, tid, how in links:
+            got = str(targets[tid]["unit"]).strip()
+            if got != str(units[rid]).strip():
+                raise InputError(path, f"targets.{tid}.unit",
+                                 f"{units[rid]}, the unit of response {rid!r} of stage {st['id']!r} ({how})", got)
 
 
 def _check_table(path: Path, st: dict, where: str, pub: Path) -> None:
