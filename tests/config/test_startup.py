@@ -232,3 +232,23 @@ def test_a_target_in_another_unit_than_its_response_is_refused(tmp_path):
     e = refused(p, tmp_path)
     assert e.path == str(p) and e.field == "targets.stacking_angle.unit" and e.got == "rad"
     assert e.expected.startswith(f"{unit}, the unit of response 'stacking_angle'")
+
+
+# ------------------------------------------------------------------ YAML booleans as table values
+
+
+@pytest.mark.parametrize("word, boolean", [("no", "false"), ("On", "true")])
+def test_a_table_value_yaml_reads_as_a_boolean_key_says_to_quote_it(tmp_path, word, boolean):
+    p = copy_soil(tmp_path)
+    table = tmp_path / "resources/measurements/cinnamon-soil/cutting_resistance.csv"
+    text = p.read_text()
+    old = "directrix: {setup: {arc: plate-arc,"
+    assert old in text
+    p.write_text(text.replace(old, f"directrix: {{setup: {{{word}: plate-arc,"))
+    table.write_text(table.read_text().replace(",arc,", f",{word},"))
+    e = refused(p, tmp_path)
+    assert e.path == str(p) and e.field == "measurements.cutting_resistance.covariates.directrix.setup"
+    assert f"the key quoted, \"{word}\": the table value '{word}'" in e.expected
+    assert f"is read by YAML as the boolean {boolean}" in e.expected
+    p.write_text(text.replace(old, f"directrix: {{setup: {{\"{word}\": plate-arc,"))
+    load_soil(p, tmp_path / "resources")

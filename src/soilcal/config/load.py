@@ -292,12 +292,50 @@ def _semantic_checks(path: Path, d: dict, resources_root: Path) -> dict | None:
     if d.get("measurements"):
         from soilcal.config.measurements import check_measurements
 
+        _check_boolean_keys(path, d)
+
         check_measurements(path, d, resources_root)
     if d.get("loop"):
         from soilcal.loop.settings import settings_from
 
         _check_fold_by(path, d, settings_from(d, path).fold_by)
     return manifest
+
+
+#: unquoted words YAML 1.1 (PyYAML) reads as booleans besides true and false
+_YAML_BOOLEAN_WORDS = ("yes", "no", "on", "off")
+
+
+def _check_boolean_keys(path: Path, d: dict) -> None:
+    """A table value written unquoted as a key of a covariate's ``setup`` or ``case`` map
+    (``no: plate-arc``) that YAML reads as a boolean (yes, no, on, off) is refused, saying so
+    and how to quote it; the table's cell stays the text ``no`` and would match no key."""
+    bad = [(mid, col, form) for mid, e in (d.get("measurements") or {}).items() if isinstance(e, dict)
+           for col, cv in (e.get("covariates") or {}).items() if isinstance(cv, dict)
+           for form in ("setup", "case") if isinstance(cv.get(form), dict)
+           and any(isinstance(k, bool) for k in cv[form])]
+    if not bad:
+        return
+    with open(path, encoding="utf-8") as fh:
+        root = yaml.compose(fh, Loader=_Loader)
+
+    def child(node, key):
+        if isinstance(node, yaml.MappingNode):
+            for k, v in node.value:
+                if isinstance(k, yaml.ScalarNode) and k.value == key:
+                    return v
+        return None
+
+    for mid, col, form in bad:
+        node = root
+        for key in ("measurements", mid, "covariates", col, form):
+            node = child(node, key)
+        for k, _ in node.value if isinstance(node, yaml.MappingNode) else []:
+            if k.tag == "tag:yaml.org,2002:bool" and k.style is None and k.value.lower() in _YAML_BOOLEAN_WORDS:
+                boolean = "true" if k.value.lower() in ("yes", "on") else "false"
+                raise InputError(path, f"measurements.{mid}.covariates.{col}.{form}",
+                                 f'the key quoted, "{k.value}": the table value \'{k.value}\' written unquoted (line '
+                                 f"{k.start_mark.line + 1}) is read by YAML as the boolean {boolean}", k.value)
 
 
 def _check_fold_by(path: Path, d: dict, fold_by) -> None:
