@@ -927,7 +927,7 @@ case("scenario-unknown-parameter", "scenario", CMD, "params.soil_friction", "one
     scenario("repose", "--param", "soil_friction=0.5"))
 case("scenario-parameter-text", "scenario", CMD, "params.soil_density", "a number")(
     scenario("repose", "--param", "soil_density=heavy"))
-case("scenario-negative-density", "scenario", CMD, "params.soil_density", "a density in (0, 30000] kg/m^3")(
+case("scenario-negative-density", "scenario", CMD, "params.soil_density", "a density in [100, 25000] kg/m^3")(
     scenario("repose", "--param", "soil_density=-1500"))
 case("scenario-unknown-preset", "scenario", CMD, "--preset", "one of ('quick', 'paper')")(
     scenario("repose", "--preset", "fast"))
@@ -970,6 +970,29 @@ def _(tmp, p):
            kind="scenario")
 def _(tmp, p):
     edit_yaml(p, lambda d: d["simulation"].update(params={"soil_densty": 1394}))
+
+
+@soil_case("simulation-density-in-g-per-cm3", SOIL, "simulation.params.soil_density",
+           "a density in [100, 25000] kg/m^3 (a value in g/cm^3 times 1000)", kind="scenario")
+def _(tmp, p):
+    edit_yaml(p, lambda d: d["simulation"].update(params={"soil_density": 1.394}))
+
+
+@soil_case("loop-bounds-as-a-list", SOIL, "loop.bounds.rate_friction", "a mapping parameter -> [low, high]")
+def _(tmp, p):
+    edit_yaml(p, lambda d: d.update(loop={"bounds": {"rate_friction": [0, 0.2]}}))
+
+
+@soil_case("loop-fold-by-not-a-covariate", SOIL, "loop.fold_by",
+           "a covariate column of the soil's measured tables (directrix, plate)")
+def _(tmp, p):
+    edit_yaml(p, lambda d: d.update(loop={"fold_by": "day"}))
+
+
+@soil_case("simulation-screening-more-factors-than-screened", SOIL, "simulation.screening.min_factors",
+           "an integer <= 7, the factor count of screening stage 'pb'", kind="scenario")
+def _(tmp, p):
+    edit_yaml(p, lambda d: d["simulation"].update(screening={"min_factors": 8}))
 
 
 @soil_case("simulation-bad-preset", SOIL, "simulation.preset", "one of quick, paper", kind="scenario")
@@ -1121,6 +1144,23 @@ def _(tmp):
 @case("workflow-soil-name-with-spaces", "workflow_config", "config/config.yaml", "soils[0]", "text matching")
 def _(tmp):
     return workflow_config(tmp, lambda c: c.update(soils=["Cinnamon soil"]))
+
+
+@case("workflow-design-adaptive-tolerance-of-no-response", "workflow_config", SOIL,
+      "simulation.adaptive.tolerances.angle", "a response of a stage the adaptive design runs (stacking_angle)")
+def _(tmp):
+    # the soil's own design (recipe) does not read the block; the config's design: adaptive does
+    argv = workflow_config(tmp, lambda c: c.update(design="adaptive"))
+    edit_yaml(tmp / SOIL, lambda d: d["simulation"].update(adaptive={"tolerances": {"angle": {"pct": 2}}}))
+    return argv
+
+
+@case("workflow-photo-of-the-manifest-missing", "workflow_config", MANIFEST, "photos[1].file", "an existing image file")
+def _(tmp):
+    # the workflow's start-up reads every soil's photo manifest; so does the config check
+    argv = workflow_config(tmp, lambda c: None)
+    (tmp / "resources/images/cinnamon-soil/stacking_2.jpg").unlink()
+    return argv
 
 
 @case("workflow-config-missing", "workflow_config", "config/config.yaml", "<file>", "an existing YAML file")

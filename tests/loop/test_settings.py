@@ -34,6 +34,16 @@ def test_a_full_block_is_read():
     ({"bounds": {"nope": {}}}, "loop.bounds.nope"),
     ({"bounds": {"rate_friction": {"gamma": [0, 1]}}}, "loop.bounds.rate_friction.gamma"),
     ({"bounds": {"rate_friction": {"beta": [1, 0]}}}, "loop.bounds.rate_friction.beta"),
+    ({"bounds": {"rate_friction": [0, 0.2]}}, "loop.bounds.rate_friction"),
+    ({"bounds": {"rate_friction": 0.2}}, "loop.bounds.rate_friction"),
+    ({"bounds": {"rate_friction": None}}, "loop.bounds.rate_friction"),
+    ({"bounds": [0, 0.2]}, "loop.bounds"),
+    ({"bounds": {"rate_friction": {"beta": [0, float("inf")]}}}, "loop.bounds.rate_friction.beta"),
+    ({"bounds": {"moisture_cohesion": {"c_w": [float("-inf"), 0.1]}}}, "loop.bounds.moisture_cohesion.c_w"),
+    ({"bounds": {"rate_friction": {"beta": [False, True]}}}, "loop.bounds.rate_friction.beta"),
+    ({"bounds": {"plastic_contact": {"lambda_p": [0.0, 0.99]}}}, "loop.bounds.plastic_contact.lambda_p"),
+    ({"bounds": {"plastic_contact": {"lambda_p": [-0.1, 0.5]}}}, "loop.bounds.plastic_contact.lambda_p"),
+    ({"effects": ["rate_friction", "tool_adhesion", "rate_friction"]}, "loop.effects[2]"),
     ({"reference": {"tool": 1.0}}, "loop.reference.tool"),
     ({"reference": {"tool_speed": "fast"}}, "loop.reference.tool_speed"),
     ({"design_points": 2}, "loop.design_points"),
@@ -47,6 +57,25 @@ def test_bad_settings_name_the_field(block, field):
         core.settings_from({"loop": block}, "soil.yaml")
     assert exc.value.field == field
     assert "soil.yaml" in str(exc.value)
+
+
+def test_bounds_given_as_a_list_say_the_form_a_bound_takes():
+    with pytest.raises(InputError) as exc:
+        core.settings_from({"loop": {"bounds": {"rate_friction": [0, 0.2]}}}, "soil.yaml")
+    assert exc.value.expected.startswith("a mapping parameter -> [low, high]")
+    assert "beta: [-0.3, 0.6]" in exc.value.expected  # the effect's parameter and library bounds
+
+
+def test_bounds_must_lie_in_the_range_the_library_states_and_else_be_finite():
+    # plastic_contact clamps its ratio to [0, 0.95]: its whole range is a valid bound
+    s = core.settings_from({"loop": {"bounds": {"plastic_contact": {"lambda_p": [0.0, 0.95]}}}})
+    assert s.effect_bounds("plastic_contact") == {"lambda_p": (0.0, 0.95)}
+    with pytest.raises(InputError, match=r"within \[0, 0\.95\]"):
+        core.settings_from({"loop": {"bounds": {"plastic_contact": {"lambda_p": [0.0, 0.96]}}}})
+    # an effect that states no range takes any finite interval
+    s = core.settings_from({"loop": {"bounds": {"rate_friction": {"beta": [-5.0, 40.0]}}}})
+    assert s.effect_bounds("rate_friction") == {"beta": (-5.0, 40.0)}
+    assert all(set(e.ranges) <= set(e.params) for e in EFFECTS.values())
 
 
 def test_design_holds_the_switched_off_value_and_the_bounds():

@@ -15,9 +15,11 @@ from wfutil import adaptive_copy, planned_jobs, run
 
 SOIL = "guangxi-cohesive"
 CASES = ["mc00", "mc10", "mc20"]
-#: runs per case: the first case's start (2 d + 1 = 7 points, the centre twice: 8 runs) is over
-#: it, so that case stops at iteration 1; the others run two proposals each and stop at 2
-BUDGET = 2
+#: runs per case: the first case's start (2 d + 1 = 7 points, the centre twice: 8 runs) and one
+#: verification of one seed, the least budget the start-up check admits, so that case verifies
+#: its best candidate at iteration 1 and stops at 2; the others run one proposal (and a
+#: verification where theirs is ready) at iteration 1 and stop at 2, the last iteration
+BUDGET, VERIFY_SEEDS, BATCH, ITERATIONS = 9, 1, 1, 1
 #: the funnel's 0.2 kg load in 1,500 spheres: the fewest whose diameter passes the soil's
 #: check of an outlet five diameters wide
 N_SPHERES = 1500
@@ -25,7 +27,8 @@ N_SPHERES = 1500
 
 @pytest.fixture(scope="module")
 def wf(tmp_path_factory):
-    tmp = adaptive_copy(tmp_path_factory.mktemp("adaptive_shared"), SOIL, "angle_of_repose", N_SPHERES, BUDGET)
+    tmp = adaptive_copy(tmp_path_factory.mktemp("adaptive_shared"), SOIL, "angle_of_repose", N_SPHERES, BUDGET,
+                        verify_seeds=VERIFY_SEEDS, batch=BATCH, max_iterations=ITERATIONS)
     run(tmp, "--cores", "2", "--config", "design=adaptive")
     return tmp
 
@@ -64,7 +67,12 @@ def test_budgets_verifications_and_seeds_are_each_cases_own(wf):
     seeds = []
     for c in CASES:
         runs = pd.read_csv(case_dir(wf, c) / "runs.csv")
-        assert len(runs) == (8 if c == "mc00" else BUDGET)
+        kinds = runs["kind"].value_counts().to_dict()
+        if c == "mc00":  # the start, then the verification the budget leaves room for
+            assert kinds == {"start": 8, "verification": VERIFY_SEEDS} and len(runs) == BUDGET
+        else:  # no start of its own: one iteration of proposals, perhaps with a verification
+            assert kinds.get("proposal") == BATCH and kinds.get("verification", 0) in (0, VERIFY_SEEDS)
+            assert set(kinds) <= {"proposal", "verification"}
         assert steps(wf, c)[-1]["status"] != "continue"
         seeds += runs["seed"].tolist()
         res = json.loads((case_dir(wf, c) / "result.json").read_text())

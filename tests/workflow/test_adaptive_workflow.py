@@ -13,12 +13,17 @@ from wfutil import N_SPHERES, adaptive_copy, planned_jobs, run
 
 SOIL = "cinnamon-soil"
 CASE = f"results/{SOIL}/dem/adaptive/bbd/stacking_angle"
-BUDGET = 10  # the start (7 points, the centre twice: 8 runs) and one iteration of two
+#: the start (7 points, the centre twice: 8 runs) and one verification of two seeds: the least
+#: budget the start-up check admits, spent at iteration 1 on verifying the best candidate
+BUDGET, VERIFY_SEEDS = 10, 2
+#: how the design stops once the budget is spent: the verification met the target or not
+STOPPED = ("budget spent", "target met")
 
 
 @pytest.fixture(scope="module")
 def wf(tmp_path_factory):
-    tmp = adaptive_copy(tmp_path_factory.mktemp("adaptive"), SOIL, "stacking_angle", N_SPHERES, BUDGET)
+    tmp = adaptive_copy(tmp_path_factory.mktemp("adaptive"), SOIL, "stacking_angle", N_SPHERES, BUDGET,
+                        verify_seeds=VERIFY_SEEDS)
     # first only up to the decision of iteration 1 (the start's runs are done by then), as a
     # run killed after its first iteration leaves it
     run(tmp, "--cores", "2", f"{CASE}/step/1.json", "--config", "design=adaptive")
@@ -30,8 +35,10 @@ def wf(tmp_path_factory):
 def test_iterations_and_runs_follow_the_records(wf):
     tmp, _ = wf
     steps = [json.loads((tmp / CASE / f"step/{i}.json").read_text()) for i in range(3)]
-    assert [s["status"] for s in steps] == ["continue", "continue", "budget spent"]
-    assert len(steps[0]["runs"]) == 8 and len(steps[1]["runs"]) == 2
+    assert [s["status"] for s in steps[:2]] == ["continue", "continue"] and steps[2]["status"] in STOPPED
+    assert len(steps[0]["runs"]) == 8 and len(steps[1]["runs"]) == VERIFY_SEEDS
+    # the budget left after the start pays for one verification, so it is run, ready or not
+    assert {r["kind"] for r in steps[1]["runs"]} == {"verification"}
     assert not (tmp / CASE / "step/3.json").exists()
     runs = pd.read_csv(tmp / CASE / "runs.csv")
     assert len(runs) == BUDGET and runs["seed"].is_unique
@@ -80,7 +87,7 @@ def test_outputs_have_the_recipe_file_names_and_say_how_it_stopped(wf):
     recipe_cols = ["stage", "case", "round", "response", "target", "simulated_mean", "within_2_percent", "status"]
     assert all(c in ver.columns for c in recipe_cols)
     summ = pd.read_csv(d / "summary.csv")
-    assert summ["stopped_because"].iloc[0] == "budget spent" and summ["runs"].iloc[0] == BUDGET
+    assert summ["stopped_because"].iloc[0] in STOPPED and summ["runs"].iloc[0] == BUDGET
     targets = pd.read_csv(tmp / f"results/{SOIL}/dem/targets.csv").set_index("target_id")
     assert summ["target"].iloc[0] == pytest.approx(targets.loc["stacking_angle", "value"])
     assert (d / "bbd/identifiability.csv").exists()

@@ -9,23 +9,15 @@ from snakemake.utils import validate
 from soilcal.chain import adaptive, derive, refine, verify
 from soilcal.chain.files import read_stage
 from soilcal.config import load_workflow_config
-from soilcal.imaging.manifest import read_manifest
 from soilcal.chain.plan import dem_context, soil_sources
 
 
 validate(config, "../schemas/config.schema.yaml")
-SOILS = load_workflow_config(config)
-if config.get("design"):  # --config design=...: every soil's DEM design
-    for _s in SOILS.values():
-        if _s.data.get("simulation"):
-            _s.data["simulation"]["design"] = config["design"]
+SOILS = load_workflow_config(config)  # --config design=... is every soil's DEM design, checked as such
 RES = config.get("resources", "resources")
 SOURCES = {soil: soil_sources(s, config.get("source")) for soil, s in SOILS.items()}
-IMAGE_MANIFESTS = {
-    soil: read_manifest(f"{RES}/images/{soil}/manifest.yaml")
-    for soil in SOILS
-    if os.path.isfile(f"{RES}/images/{soil}/manifest.yaml")
-}
+# every soil's photo manifest, read and checked with the soil (soilcal config check does the same)
+IMAGE_MANIFESTS = {soil: s.manifest for soil, s in SOILS.items() if s.manifest is not None}
 
 #: the stamp of the Numba kernel cache, written by rule dem_kernels before any DEM job
 DEM_KERNELS = "results/cache/dem_kernels.csv"

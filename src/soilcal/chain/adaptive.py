@@ -223,6 +223,88 @@ def settings_for(soil_data: dict, stage_id: str | None = None, case_id: str | No
     return s
 
 
+def adaptive_stage_ids(soil_data: dict) -> list[str]:
+    """The stages the adaptive design runs: the optimised stages the DEM source runs with at
+    least one case it can run (:func:`adaptive_cases`)."""
+    from soilcal.chain.derive import dem_stage_ids
+
+    ids = [sid for sid in dem_stage_ids(soil_data)
+           if (next(s for s in soil_data["stages"] if s["id"] == sid).get("optimise"))]
+    return [sid for sid in ids if adaptive_cases(soil_data, [sid])]
+
+
+def start_runs(settings: ad.Settings, d: int) -> int:
+    """DEM runs of the start over ``d`` free factors: the centre with ``centre_replicates``
+    seeds and ``n_start - 1`` Halton points, one seed each (:func:`soilcal.doe.adaptive.step`)."""
+    n = settings.n_start or 2 * d + 1
+    return settings.centre_replicates + n - 1
+
+
+def check_settings(soil_path, soil_data: dict) -> ad.Settings:
+    """Start-up check of a soil's ``simulation.adaptive`` block for ``design: adaptive``; every
+    error names the soil file and ``simulation.adaptive.<key>``.
+
+    Besides each setting's own range (:meth:`soilcal.doe.adaptive.Settings.from_mapping`):
+    ``tolerances`` name responses of the stages the design runs, each with exactly one of
+    ``pct`` or ``abs``; and the ``budget`` of a case (the runs it may spend, the start
+    included: the design stops once its own runs reach it) holds the start and one
+    verification, budget >= centre_replicates + n_start - 1 + verify_seeds for every stage the
+    design runs (n_start default 2 d + 1 over the stage's d factors), and ``batch`` is no
+    larger than what the budget leaves after the start (a larger batch can never be proposed
+    whole)."""
+    where = "simulation.adaptive"
+    block = settings_block(soil_data)
+    if not isinstance((soil_data.get("simulation") or {}).get("adaptive") or {}, dict):
+        raise InputError(soil_path, where, "a mapping of settings", soil_data["simulation"]["adaptive"])
+    if block.get("ranges", "screening") not in RANGES:
+        raise InputError(soil_path, f"{where}.ranges", f"one of {', '.join(RANGES)}", block["ranges"])
+    if not isinstance(block.get("share_runs", True), bool):
+        raise InputError(soil_path, f"{where}.share_runs", "true or false", block["share_runs"])
+    pct = block.get("tolerance_pct", ad.DEFAULTS["tolerance_pct"])
+    if isinstance(pct, bool) or not isinstance(pct, (int, float)) or not (np.isfinite(pct) and pct > 0):
+        raise InputError(soil_path, f"{where}.tolerance_pct", "a percentage > 0", pct)
+    rest = {k: v for k, v in block.items() if k not in ("tolerances", "ranges", "share_runs")}
+    try:
+        settings = ad.Settings.from_mapping(rest, seed=int(soil_data.get("seed", 0)), source=str(soil_path))
+    except InputError as exc:
+        fld = exc.field[len("adaptive."):] if exc.field.startswith("adaptive.") else exc.field
+        raise InputError(soil_path, f"{where}.{fld}", exc.expected, exc.got) from None
+    stages = adaptive_stage_ids(soil_data)
+    by_id = {st["id"]: st for st in soil_data["stages"]}
+    rids = list(dict.fromkeys(r["id"] for sid in stages for r in by_id[sid]["responses"]))
+    tols = block.get("tolerances")
+    if tols is not None and not isinstance(tols, dict):
+        raise InputError(soil_path, f"{where}.tolerances", "a mapping response -> {pct: ..} or {abs: ..}", tols)
+    for rid, tol in (tols or {}).items():
+        if rid not in rids:
+            raise InputError(soil_path, f"{where}.tolerances.{rid}", "a response of a stage the adaptive design runs ("
+                             + (", ".join(rids) if rids else "none") + ")", rid)
+        given = sorted(set(tol or {}) & {"pct", "abs"}) if isinstance(tol, dict) else []
+        if not isinstance(tol, dict) or len(given) != 1 or len(tol) != 1:
+            raise InputError(soil_path, f"{where}.tolerances.{rid}",
+                             "exactly one of {pct: percent of the target} or {abs: value in the response's unit}",
+                             tol)
+        v = tol[given[0]]
+        if isinstance(v, bool) or not isinstance(v, (int, float)) or not (np.isfinite(v) and v > 0):
+            raise InputError(soil_path, f"{where}.tolerances.{rid}.{given[0]}", "a number > 0", v)
+    for sid in stages:
+        d = len(by_id[sid]["factors"])
+        start = start_runs(settings, d)
+        n_start = settings.n_start or 2 * d + 1
+        how = (f"the start of stage {sid!r} ({settings.centre_replicates} seeds at the centre and {n_start - 1} "
+               f"Halton points{'' if settings.n_start else f', n_start = 2 d + 1 for its {d} factors'}: {start} runs)")
+        need = start + settings.verify_seeds
+        if settings.budget < need:
+            raise InputError(soil_path, f"{where}.budget",
+                             f"at least {need} runs: {how} and one verification (verify_seeds = {settings.verify_seeds})",
+                             settings.budget)
+        if settings.batch > settings.budget - start:
+            raise InputError(soil_path, f"{where}.batch",
+                             f"at most {settings.budget - start}, the runs of the budget ({settings.budget}) left after "
+                             + how, settings.batch)
+    return settings
+
+
 def shares_runs(soil_data: dict) -> bool:
     """Whether the cases of a stage share their runs (``simulation.adaptive.share_runs``,
     default true; :mod:`soilcal.doe.adaptive`, "Cases that share their runs")."""

@@ -153,6 +153,8 @@ class Soil:
     resources_root: Path = field(default=Path("resources"))
     #: top-level fields the file left out and the loader filled with the schema's default
     defaulted: tuple[str, ...] = ()
+    #: the soil's photo manifest as read and checked at load (None: the soil has none)
+    manifest: dict | None = None
 
     @property
     def name(self) -> str:
@@ -248,7 +250,8 @@ def _check_levels(path: Path, where: str, d: dict) -> None:
         raise InputError(path, f"{where}.centre", f"a number between low ({lo}) and high ({hi})", c)
 
 
-def _semantic_checks(path: Path, d: dict, resources_root: Path) -> None:
+def _semantic_checks(path: Path, d: dict, resources_root: Path) -> dict | None:
+    """The checks a schema cannot state; returns the soil's photo manifest (None without one)."""
     if d["name"] != path.stem:
         raise InputError(path, "name", f"the file name without .yaml ({path.stem!r})", d["name"])
     for k, q in d.get("properties", {}).items():
@@ -315,35 +318,137 @@ def _semantic_checks(path: Path, d: dict, resources_root: Path) -> None:
                 if key in pr and not (resources_root / "published" / d["name"] / pr[key]).is_file():
                     raise InputError(path, f"{where}.printed.{r}.{key}", "an existing file under resources/published/" + d["name"], pr[key])
         seen[sid] = st
-    _check_image_targets(path, d, resources_root)
+    manifest = _check_images(path, d, resources_root)
+    _check_targets(path, d, resources_root)
     if d.get("simulation"):
         from soilcal.dem.scenarios.design import check_block
 
         check_block(path, d)
+        if d["simulation"].get("design") == "adaptive":
+            from soilcal.chain.adaptive import check_settings
+
+            check_settings(path, d)
     if d.get("measurements"):
         from soilcal.config.measurements import check_measurements
+
+        _check_boolean_keys(path, d)
 
         check_measurements(path, d, resources_root)
     if d.get("loop"):
         from soilcal.loop.settings import settings_from
 
-        settings_from(d, path)
+        _check_fold_by(path, d, settings_from(d, path).fold_by)
+    return manifest
 
 
-def _check_image_targets(path: Path, d: dict, resources_root: Path) -> None:
-    """A target measured on photos names a photo group of the soil's manifest."""
-    named = {tid: t["image"] for tid, t in d.get("targets", {}).items() if t.get("image")}
-    if not named:
+#: unquoted words YAML 1.1 (PyYAML) reads as booleans besides true and false
+_YAML_BOOLEAN_WORDS = ("yes", "no", "on", "off")
+
+
+def _check_boolean_keys(path: Path, d: dict) -> None:
+    """A table value written unquoted as a key of a covariate's ``setup`` or ``case`` map
+    (``no: plate-arc``) that YAML reads as a boolean (yes, no, on, off) is refused, saying so
+    and how to quote it; the table's cell stays the text ``no`` and would match no key."""
+    bad = [(mid, col, form) for mid, e in (d.get("measurements") or {}).items() if isinstance(e, dict)
+           for col, cv in (e.get("covariates") or {}).items() if isinstance(cv, dict)
+           for form in ("setup", "case") if isinstance(cv.get(form), dict)
+           and any(isinstance(k, bool) for k in cv[form])]
+    if not bad:
         return
-    manifest = resources_root / "images" / d["name"] / "manifest.yaml"
+    with open(path, encoding="utf-8") as fh:
+        root = yaml.compose(fh, Loader=_Loader)
+
+    def child(node, key):
+        if isinstance(node, yaml.MappingNode):
+            for k, v in node.value:
+                if isinstance(k, yaml.ScalarNode) and k.value == key:
+                    return v
+        return None
+
+    for mid, col, form in bad:
+        node = root
+        for key in ("measurements", mid, "covariates", col, form):
+            node = child(node, key)
+        for k, _ in node.value if isinstance(node, yaml.MappingNode) else []:
+            if k.tag == "tag:yaml.org,2002:bool" and k.style is None and k.value.lower() in _YAML_BOOLEAN_WORDS:
+                boolean = "true" if k.value.lower() in ("yes", "on") else "false"
+                raise InputError(path, f"measurements.{mid}.covariates.{col}.{form}",
+                                 f'the key quoted, "{k.value}": the table value \'{k.value}\' written unquoted (line '
+                                 f"{k.start_mark.line + 1}) is read by YAML as the boolean {boolean}", k.value)
+
+
+def _check_fold_by(path: Path, d: dict, fold_by) -> None:
+    """``loop.fold_by`` names a covariate column of the soil's measured tables (a column under
+    ``measurements.<id>.covariates``), which the held-out folds of the loop are grouped by."""
+    if fold_by is None:
+        return
+    columns = sorted({c for entry in (d.get("measurements") or {}).values()
+                      for c in (entry.get("covariates") or {})})
+    if not isinstance(fold_by, str) or fold_by not in columns:
+        raise InputError(path, "loop.fold_by", "a covariate column of the soil's measured tables ("
+                         + (", ".join(columns) if columns else "none: no measurements.<id>.covariates") + ")",
+                         fold_by)
+
+
+def manifest_path(resources_root: Path, name: str) -> Path:
+    """The soil's photo manifest, ``<resources>/images/<soil>/manifest.yaml``."""
+    return Path(resources_root) / "images" / name / "manifest.yaml"
+
+
+def _check_images(path: Path, d: dict, resources_root: Path) -> dict | None:
+    """The soil's photo manifest, where it has one, checked as the workflow reads it
+    (:func:`soilcal.imaging.manifest.read_manifest`: its fields, every photo present); a
+    target measured on photos names a photo group of it.  Returns the manifest (None without
+    one)."""
+    from soilcal.imaging.manifest import MEASURES, read_manifest
+
+    manifest = manifest_path(resources_root, d["name"])
+    m = read_manifest(manifest) if manifest.is_file() else None
+    targets = d.get("targets", {})
+    for tid, t in targets.items():
+        if "image_measure" in t and not t.get("image"):
+            raise InputError(path, f"targets.{tid}.image_measure",
+                             f"a photo group to measure it on (targets.{tid}.image)", t["image_measure"])
+    named = {tid: t["image"] for tid, t in targets.items() if t.get("image")}
+    if not named:
+        return m
     tid = next(iter(named))
-    if not manifest.is_file():
+    if m is None:
         raise InputError(path, f"targets.{tid}.image", f"a photo group of {manifest}", "no such file")
-    m = read_yaml(manifest) or {}
-    groups = sorted({str(ph.get("group", "")) for ph in m.get("photos") or [] if isinstance(ph, dict)})
+    kinds = {ph["group"]: ph["kind"] for ph in m["photos"]}
+    groups = sorted(kinds)
     for tid, g in named.items():
         if g not in groups:
             raise InputError(path, f"targets.{tid}.image", f"a photo group of {manifest} ({', '.join(groups)})", g)
+        key = targets[tid].get("image_measure", "angle_deg")
+        if key not in MEASURES[kinds[g]]:
+            raise InputError(path, f"targets.{tid}.image_measure",
+                             f"a value the measurement of the {kinds[g]} group {g!r} gives ({', '.join(MEASURES[kinds[g]])})"
+                             + ("" if "image_measure" in targets[tid] else "; left out, it is angle_deg"), key)
+    return m
+
+
+def _check_targets(path: Path, d: dict, resources_root: Path) -> None:
+    """A target's ``table`` is a file under ``<resources>/measurements/<soil>/``, and a target
+    has the unit of every response it is the target of: the response whose id it bears (the
+    steepest-ascent path aims that response at it) and every response an optimisation goal
+    aims at it (``target: <id>``)."""
+    targets = d.get("targets", {})
+    mdir = resources_root / "measurements" / d["name"]
+    for tid, t in targets.items():
+        if t.get("table") is not None and not (mdir / t["table"]).is_file():
+            raise InputError(path, f"targets.{tid}.table", f"an existing file under {mdir}", t["table"])
+    for st in d["stages"]:
+        units = {r["id"]: r["unit"] for r in st["responses"]}
+        links = [(rid, rid, "whose id it bears") for rid in units if rid in targets]
+        for case in (st.get("optimise") or {}).get("cases", []):
+            links += [(rid, g["target"], f"of optimisation case {case['id']!r}")
+                      for rid, g in case["goals"].items() if "target" in g and rid in units]
+        for rid, tid, how in links:
+            got = str(targets[tid]["unit"]).strip()
+            if got != str(units[rid]).strip():
+                raise InputError(path, f"targets.{tid}.unit",
+                                 f"{units[rid]}, the unit of response {rid!r} of stage {st['id']!r} ({how})", got)
 
 
 def _check_table(path: Path, st: dict, where: str, pub: Path) -> None:
@@ -417,12 +522,14 @@ def _check_cells(tpath: Path, df: pd.DataFrame, column: str, required: bool) -> 
             raise InputError(tpath, f"row {i + 1}, column {column}", "a finite number", v)
 
 
-def load_soil(path: str | Path, resources_root: str | Path = "resources") -> Soil:
+def load_soil(path: str | Path, resources_root: str | Path = "resources", design: str | None = None) -> Soil:
     """Read, schema-validate and check one soil file; return a :class:`Soil`.
 
     A top-level field the file leaves out that the schema gives a default (``source``,
     ``seed``, ``properties``, ``targets``) is filled in with that default; the names of the
-    filled fields are in :attr:`Soil.defaulted`.
+    filled fields are in :attr:`Soil.defaulted`.  ``design`` (the workflow config's
+    ``design``, ``--config design=...``) replaces ``simulation.design`` of a soil with a
+    simulation block before the checks, so the soil is checked as the workflow runs it.
     """
     import copy
 
@@ -437,8 +544,11 @@ def load_soil(path: str | Path, resources_root: str | Path = "resources") -> Soi
         if key not in data:
             data[key] = copy.deepcopy(value)
             defaulted.append(key)
-    _semantic_checks(path, data, Path(resources_root))
-    return Soil(path=path, data=data, resources_root=Path(resources_root), defaulted=tuple(defaulted))
+    if design is not None and data.get("simulation"):
+        data["simulation"]["design"] = design
+    manifest = _semantic_checks(path, data, Path(resources_root))
+    return Soil(path=path, data=data, resources_root=Path(resources_root), defaulted=tuple(defaulted),
+                manifest=manifest)
 
 
 WORKFLOW_SCHEMA = {
@@ -456,7 +566,8 @@ WORKFLOW_SCHEMA = {
 
 
 def load_workflow_config(cfg: dict, origin: str | Path = "config/config.yaml") -> dict[str, Soil]:
-    """Validate the workflow config and every soil it lists; return soils by name."""
+    """Validate the workflow config and every soil it lists; return soils by name (the
+    config's ``design``, where given, as every soil's ``simulation.design``)."""
     _schema_error(Path(origin), WORKFLOW_SCHEMA, cfg)
     soil_dir = Path(cfg.get("soil_dir", "config/soils"))
     res = Path(cfg.get("resources", "resources"))
@@ -465,5 +576,5 @@ def load_workflow_config(cfg: dict, origin: str | Path = "config/config.yaml") -
         p = soil_dir / f"{name}.yaml"
         if not p.is_file():
             raise InputError(origin, "soils", f"a soil file {p}", "no such file")
-        out[name] = load_soil(p, res)
+        out[name] = load_soil(p, res, design=cfg.get("design"))
     return out

@@ -383,15 +383,20 @@ def measure_drum(paths, threshold="otsu", keep_stages=False, options=None, refus
     """
     per = options if isinstance(options, list) else [options] * len(paths)
     res = [measure_drum_frame(p, threshold, keep_stages, o, refusals) for p, o in zip(paths, per)]
+    return drum_summary(res), res
+
+
+def drum_summary(res) -> dict:
+    """The mean angle and S-shape measures of the measured frames ``res`` (:class:`DrumResult`),
+    the angles' spread and the references they were measured against."""
 
     def mean(key):
         return float(np.nanmean([getattr(r, key) for r in res]))
 
     a = np.array([r.angle_deg for r in res])
-    summary = {"angle_deg": float(a.mean()), "spread_deg": float(a.std(ddof=1)) if a.size > 1 else 0.0,
-               "n_frames": len(res), "upper_deg": mean("upper_deg"), "lower_deg": mean("lower_deg"),
-               "s_shape_deg": mean("s_shape_deg"), "line_rms_pct": mean("line_rms_pct"),
-               "level_reference": ", ".join(sorted({r.level_reference for r in res})),
-               "drum_reference": ", ".join(sorted({r.drum_reference for r in res})),
-               "frames": [r.as_dict() for r in res]}
-    return summary, res
+    return {"angle_deg": float(a.mean()), "spread_deg": float(a.std(ddof=1)) if a.size > 1 else 0.0,
+            "n_frames": len(res), "upper_deg": mean("upper_deg"), "lower_deg": mean("lower_deg"),
+            "s_shape_deg": mean("s_shape_deg"), "line_rms_pct": mean("line_rms_pct"),
+            "level_reference": ", ".join(sorted({r.level_reference for r in res})),
+            "drum_reference": ", ".join(sorted({r.drum_reference for r in res})),
+            "frames": [r.as_dict() for r in res]}

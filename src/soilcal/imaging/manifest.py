@@ -30,6 +30,15 @@ TOP_FIELDS = ("soil", "note", "photos", "threshold")
 PHOTO_FIELDS = ("file", "kind", "group", "view", "scale_length_mm", "beam_datum_mm", "degree", "substrate", "note")
 #: polynomial degrees a furrow profile may be fitted with
 DEGREES = (1, 15)
+#: the numbers the measurement of a photo group of each kind gives (its entry in
+#: ``measurements.json``), which a target measured on the group may name (``image_measure``,
+#: default ``angle_deg``): the numeric entries of :func:`soilcal.imaging.measure.pile_summary`,
+#: :func:`soilcal.imaging.drum.drum_summary` and :meth:`soilcal.imaging.measure.FurrowResult.as_dict`
+MEASURES = {
+    "pile": ("angle_deg", "left_deg", "right_deg", "spread_deg", "n_photos"),
+    "drum": ("angle_deg", "spread_deg", "n_frames", "upper_deg", "lower_deg", "s_shape_deg", "line_rms_pct"),
+    "furrow": ("area_mm2", "area_dm2", "degree", "coverage", "end_gap_mm", "fit_rms_mm", "px_per_mm", "roll_deg"),
+}
 
 
 def _is_number(v) -> bool:

@@ -88,8 +88,9 @@ from dataclasses import dataclass, field
 
 from soilcal.errors import InputError
 
-#: DemParams range limits the effects respect (low, high) by parameter kind
-_LIMITS = {"surface_energy": (0.0, 1.0e3), "static_friction": (0.0, 5.0), "density": (1.0, 3.0e4),
+#: DemParams range limits the effects respect (low, high) by parameter kind (the density's:
+#: soilcal.dem.scenarios.base.DENSITY_MIN, DENSITY_MAX)
+_LIMITS = {"surface_energy": (0.0, 1.0e3), "static_friction": (0.0, 5.0), "density": (100.0, 2.5e4),
            "shear_modulus": (1.0, 1.0e13), "plasticity": (0.0, 0.95)}
 
 
@@ -112,6 +113,9 @@ class Effect:
     source: str
     changes: tuple = field(default=())  # DemParams names it changes
     scenarios: tuple = field(default=())  # scenarios whose conditions it acts on (empty: every scenario)
+    #: theta name -> (low, high): the physical range of a parameter where the library states
+    #: one (a bound of ``loop.bounds`` outside it is refused); a parameter not listed has none
+    ranges: dict = field(default_factory=dict)
 
     def theta_names(self) -> tuple[str, ...]:
         return tuple(self.params)
@@ -243,7 +247,8 @@ EFFECTS: dict[str, Effect] = {
         formula="lambda_p,ss = lambda_p,cal + lambda_p, in [0, 0.95] (plastic Hertz law eepa)",
         source="Thakur, Morrissey, Sun, Chen & Ooi, Granular Matter 16 (2014) 383, Eqs. 1-2 (non-adhesive, n = 3/2); "
                "Morrissey, PhD thesis, University of Edinburgh (2013)",
-        changes=("soil_soil_plasticity",), scenarios=("compression", "standin_compression")),
+        changes=("soil_soil_plasticity",), scenarios=("compression", "standin_compression"),
+        ranges={"lambda_p": _LIMITS["plasticity"]}),
 }
 
 

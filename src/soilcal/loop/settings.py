@@ -26,6 +26,29 @@ class Settings:
         return get(name).bounds(self.bounds.get(name))
 
 
+def _number(x) -> bool:
+    return isinstance(x, (int, float)) and not isinstance(x, bool)
+
+
+def _bound(source, where: str, eff, k: str, v) -> list[float]:
+    """One ``[low, high]`` of ``loop.bounds``: finite numbers, low < high, inside the
+    parameter's physical range where the library states one (:attr:`Effect.ranges`)."""
+    if k not in eff.params:
+        raise InputError(source, where, "a parameter of the effect (" + ", ".join(eff.params) + ")", k)
+    if not (isinstance(v, (list, tuple)) and len(v) == 2 and all(_number(x) for x in v)):
+        raise InputError(source, where, "[low, high], two numbers", v)
+    if not all(math.isfinite(x) for x in v):
+        raise InputError(source, where, "[low, high], two finite numbers", v)
+    if not v[0] < v[1]:
+        raise InputError(source, where, "[low, high] with low < high", v)
+    if k in eff.ranges:
+        lo, hi = eff.ranges[k]
+        if v[0] < lo or v[1] > hi:
+            raise InputError(source, where, f"[low, high] within [{lo:g}, {hi:g}], the physical range of "
+                             f"{k} of {eff.name}", v)
+    return [float(v[0]), float(v[1])]
+
+
 def settings_from(soil_data: dict, source="<soil>") -> Settings:
     """Settings of a soil's ``loop`` block, checked by field."""
     block = dict(soil_data.get("loop") or {})
@@ -40,26 +63,34 @@ def settings_from(soil_data: dict, source="<soil>") -> Settings:
             raise InputError(source, "loop.alpha", "a number in (0, 1)", a)
         s.alpha = float(a)
     if "effects" in block:
+        if not isinstance(block["effects"] or [], list):
+            raise InputError(source, "loop.effects", "a list of effects of the library (" + ", ".join(EFFECTS) + ")",
+                             block["effects"])
+        seen = set()
         for j, name in enumerate(block["effects"] or []):
             if name not in EFFECTS:
                 raise InputError(source, f"loop.effects[{j}]", "one of " + ", ".join(EFFECTS), name)
+            if name in seen:
+                first = block["effects"].index(name)
+                raise InputError(source, f"loop.effects[{j}]", f"each effect named once ({name} is loop.effects[{first}])",
+                                 name)
+            seen.add(name)
         s.effects = list(block["effects"] or [])
     if "candidates" in block:
         if block["candidates"] not in ("matched", "all"):
             raise InputError(source, "loop.candidates", "matched or all", block["candidates"])
         s.candidates = block["candidates"]
-    for name, b in (block.get("bounds") or {}).items():
+    bounds = block.get("bounds") or {}
+    if not isinstance(bounds, dict):
+        raise InputError(source, "loop.bounds", "a mapping effect -> parameter -> [low, high]", bounds)
+    for name, b in bounds.items():
         eff = EFFECTS.get(name)
         if eff is None:
             raise InputError(source, f"loop.bounds.{name}", "an effect of the library (" + ", ".join(EFFECTS) + ")", name)
-        for k, v in (b or {}).items():
-            if k not in eff.params:
-                raise InputError(source, f"loop.bounds.{name}.{k}", "a parameter of the effect ("
-                                 + ", ".join(eff.params) + ")", k)
-            if not (isinstance(v, (list, tuple)) and len(v) == 2 and all(isinstance(x, (int, float)) for x in v)
-                    and v[0] < v[1]):
-                raise InputError(source, f"loop.bounds.{name}.{k}", "[low, high] with low < high", v)
-        s.bounds[name] = {k: [float(v[0]), float(v[1])] for k, v in (b or {}).items()}
+        if not isinstance(b, dict):
+            raise InputError(source, f"loop.bounds.{name}", "a mapping parameter -> [low, high] (e.g. "
+                             + ", ".join(f"{k}: [{lo:g}, {hi:g}]" for k, (_, (lo, hi)) in eff.params.items()) + ")", b)
+        s.bounds[name] = {k: _bound(source, f"loop.bounds.{name}.{k}", eff, k, v) for k, v in b.items()}
     from soilcal.config.quantities import QUANTITIES
 
     for q, v in (block.get("reference") or {}).items():

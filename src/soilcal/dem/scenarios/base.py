@@ -122,13 +122,17 @@ from soilcal.errors import InputError
 
 PRESETS = ("quick", "paper")
 
+#: the densities a soil, a particle model or a tool material can have, kg/m^3 (DemParams)
+DENSITY_MIN, DENSITY_MAX = 100.0, 25000.0
+
 # name -> (low, high, low_inclusive, high_inclusive, unit/meaning) of the accepted range
 _RANGES = {
     "restitution": (0.0, 1.0, False, True, "a coefficient of restitution in (0, 1]"),
     "static_friction": (0.0, 5.0, True, True, "a sliding friction coefficient in [0, 5]"),
     "rolling_friction": (0.0, 1.0, True, True, "a rolling friction coefficient in [0, 1]"),
     "surface_energy": (0.0, 1.0e3, True, True, "a JKR surface energy in [0, 1000] J/m^2"),
-    "density": (0.0, 3.0e4, False, True, "a density in (0, 30000] kg/m^3"),
+    "density": (DENSITY_MIN, DENSITY_MAX, True, True,
+                f"a density in [{DENSITY_MIN:g}, {DENSITY_MAX:g}] kg/m^3 (a value in g/cm^3 times 1000)"),
     "poisson": (-1.0, 0.5, False, False, "a Poisson ratio in (-1, 0.5)"),
     "shear_modulus": (0.0, 1.0e13, False, True, "a shear modulus in (0, 1e13] Pa"),
     "plasticity": (0.0, 1.0, True, False, "a contact plasticity ratio in [0, 1)"),
@@ -144,7 +148,20 @@ def _kind(name: str) -> str:
 
 @dataclass
 class DemParams:
-    """Inputs of a soil DEM run (SI units); defaults: cinnamon soil, see module docstring."""
+    """Inputs of a soil DEM run (SI units); defaults: cinnamon soil, see module docstring.
+
+    Every value is checked against the physical range of its kind (``_RANGES``).  Densities
+    (``soil_density``, ``steel_density``) lie in [100, 25000] kg/m^3
+    (:data:`DENSITY_MIN`, :data:`DENSITY_MAX`): the lightest soils are peats with a bulk density
+    of about 100-200 kg/m^3 and mineral soils lie at 1000-2700 kg/m^3 (bulk to particle
+    density); tool materials range from polymers (about 900-1400) over steel (7850) to tungsten
+    carbide (about 15600) and tungsten (19300), and no element is denser than 22600 (osmium).
+    A density typed in g/cm^3 or t/m^3 (1.394 for 1394 kg/m^3) falls below 100 for every
+    material up to 100 g/cm^3 and is refused instead of simulating a particle a thousand times
+    too light.  The lower bound still admits the vineyard soil's printed particle density
+    (175.76 kg/m^3, ten times too low, kept as printed in its properties and replaced by
+    ``simulation.params.soil_density`` 1757.567).
+    """
 
     soil_soil_restitution: float = 0.45
     soil_soil_static_friction: float = 0.56

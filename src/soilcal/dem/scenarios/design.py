@@ -137,7 +137,9 @@ def check_block(soil_path, data: dict) -> None:
     """Start-up check of a soil's ``simulation`` block (called by the config loader): every
     response mapped to a scenario it can be measured with, every stage the DEM source runs
     (``stages``) known and simulable - its levels given, or derived from an earlier DEM stage
-    (:mod:`soilcal.chain.derive`) - and every response of those stages simulated."""
+    (:mod:`soilcal.chain.derive`) - and every response of those stages simulated; the
+    ``screening`` block consistent (min_factors <= max_factors, and no more than the factors of
+    a Plackett-Burman screening a steepest-ascent path selects from)."""
     sim = data.get(BLOCK)
     if not sim:
         return
@@ -157,6 +159,7 @@ def check_block(soil_path, data: dict) -> None:
             raise InputError(soil_path, f"{BLOCK}.stages[{i}]", "a stage id (" + ", ".join(ids) + ")", sid)
     from soilcal.chain.derive import dem_stage_ids, dependencies, design_mode
 
+    min_factors = _check_screening(soil_path, sim)
     for sid in dem_stage_ids(data):
         st = next(s for s in data["stages"] if s["id"] == sid)
         for r in st["responses"]:
@@ -171,6 +174,13 @@ def check_block(soil_path, data: dict) -> None:
                                  "a target for at least one response (a target id equal to the response id, or an "
                                  "optimisation case aiming at it) to lay the steepest-ascent path towards",
                                  [r["id"] for r in st["responses"]])
+            up = next(s for s in data["stages"] if s["id"] == deps["from"])
+            if st["kind"] == "steepest_ascent" and up["kind"] == "plackett_burman" and min_factors > len(up["factors"]):
+                given = "min_factors" in (sim.get("screening") or {})
+                raise InputError(soil_path, f"{BLOCK}.screening.min_factors",
+                                 f"an integer <= {len(up['factors'])}, the factor count of screening stage "
+                                 f"{up['id']!r} whose factors stage {sid!r} selects from"
+                                 + ("" if given else " (min_factors is left at its default)"), min_factors)
             continue
         if design_mode(data) == "printed" and st.get("table"):
             continue
@@ -187,6 +197,26 @@ def check_block(soil_path, data: dict) -> None:
     from soilcal.chain.provenance import check_parameters
 
     check_parameters(soil_path, data)
+
+
+def _check_screening(soil_path, sim: dict) -> int:
+    """``simulation.screening``: min_factors <= max_factors (either left at its default); returns
+    min_factors (:data:`soilcal.chain.derive.SCREENING_DEFAULTS`)."""
+    from soilcal.chain.derive import SCREENING_DEFAULTS
+
+    scr = sim.get("screening") or {}
+    lo, hi = scr.get("min_factors", SCREENING_DEFAULTS["min_factors"]), scr.get("max_factors")
+    for key in ("min_factors", "max_factors"):  # the schema says so; kept for direct callers
+        v = scr.get(key)
+        if v is not None and (isinstance(v, bool) or not isinstance(v, int) or v < 1):
+            raise InputError(soil_path, f"{BLOCK}.screening.{key}", "an integer >= 1", v)
+    if hi is not None and lo > hi:
+        if "min_factors" in scr:
+            raise InputError(soil_path, f"{BLOCK}.screening.min_factors",
+                             f"an integer <= {BLOCK}.screening.max_factors ({hi})", lo)
+        raise InputError(soil_path, f"{BLOCK}.screening.max_factors",
+                         f"an integer >= min_factors ({lo}, its default: what a Box-Behnken design needs)", hi)
+    return lo
 
 
 def _has_target(data: dict, rids) -> bool:
