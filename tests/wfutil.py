@@ -15,6 +15,18 @@ ROOT = Path(__file__).resolve().parents[1]
 SNAKEMAKE = [sys.executable, "-m", "snakemake"]
 
 
+def copy_soil(tmp: Path, soil: str = "cinnamon-soil") -> Path:
+    """A shipped soil's YAML and its resources under ``tmp``; returns the YAML path."""
+    (tmp / "config/soils").mkdir(parents=True, exist_ok=True)
+    dst = tmp / "config/soils" / f"{soil}.yaml"
+    shutil.copy(ROOT / "config/soils" / f"{soil}.yaml", dst)
+    for kind in ("published", "measurements", "images", "geometry"):
+        src = ROOT / "resources" / kind / soil
+        if src.is_dir():
+            shutil.copytree(src, tmp / "resources" / kind / soil)
+    return dst
+
+
 def copy_workflow(tmp: Path, soils: list[str], source: str | None = None) -> Path:
     shutil.copy(ROOT / "Snakefile", tmp / "Snakefile")
     shutil.copytree(ROOT / "envs", tmp / "envs")

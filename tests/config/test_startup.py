@@ -4,7 +4,6 @@ the field, before any job runs."""
 
 from __future__ import annotations
 
-import shutil
 from pathlib import Path
 
 import pytest
@@ -13,20 +12,9 @@ import yaml
 from soilcal.config import load_soil
 from soilcal.doe.adaptive import DEFAULTS
 from soilcal.errors import InputError
+from wfutil import copy_soil
 
 ROOT = Path(__file__).resolve().parents[2]
-
-
-def copy_soil(tmp: Path, soil: str = "cinnamon-soil") -> Path:
-    """A shipped soil's YAML and its resources under ``tmp``; returns the YAML path."""
-    (tmp / "config/soils").mkdir(parents=True, exist_ok=True)
-    dst = tmp / "config/soils" / f"{soil}.yaml"
-    shutil.copy(ROOT / "config/soils" / f"{soil}.yaml", dst)
-    for kind in ("published", "measurements", "images", "geometry"):
-        src = ROOT / "resources" / kind / soil
-        if src.is_dir():
-            shutil.copytree(src, tmp / "resources" / kind / soil)
-    return dst
 
 
 def edit(path: Path, fn) -> Path:

@@ -24,6 +24,7 @@ from pathlib import Path
 from typing import Callable
 
 import yaml
+from wfutil import copy_soil
 
 ROOT = Path(__file__).resolve().parents[2]
 CMD = "<command line>"
@@ -62,18 +63,6 @@ def case(id, kind, file, field, expected, out="out", subprocess=False, snakemake
 
 
 # ------------------------------------------------------------------ helpers
-
-
-def copy_soil(tmp: Path, soil: str = "cinnamon-soil") -> Path:
-    """The shipped soil's YAML and its resources under ``tmp``; returns the YAML path."""
-    (tmp / "config/soils").mkdir(parents=True, exist_ok=True)
-    dst = tmp / "config/soils" / f"{soil}.yaml"
-    shutil.copy(ROOT / "config/soils" / f"{soil}.yaml", dst)
-    for kind in ("published", "measurements", "images", "geometry"):
-        src = ROOT / "resources" / kind / soil
-        if src.is_dir():
-            shutil.copytree(src, tmp / "resources" / kind / soil)
-    return dst
 
 
 def edit_yaml(path: Path, fn) -> None:
