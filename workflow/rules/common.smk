@@ -19,6 +19,7 @@ if config.get("design"):  # --config design=...: every soil's DEM design
     for _s in SOILS.values():
         if _s.data.get("simulation"):
             _s.data["simulation"]["design"] = config["design"]
+            derive.check_dem_stages(_s.path, _s.data)  # the stages this design derives
 RES = config.get("resources", "resources")
 SOURCES = {soil: soil_sources(s, config.get("source")) for soil, s in SOILS.items()}
 IMAGE_MANIFESTS = {

@@ -137,7 +137,9 @@ def check_block(soil_path, data: dict) -> None:
     """Start-up check of a soil's ``simulation`` block (called by the config loader): every
     response mapped to a scenario it can be measured with, every stage the DEM source runs
     (``stages``) known and simulable - its levels given, or derived from an earlier DEM stage
-    (:mod:`soilcal.chain.derive`) - and every response of those stages simulated."""
+    (:mod:`soilcal.chain.derive`) - and every response of those stages simulated; the
+    chain's own checks of those stages follow (:func:`soilcal.chain.derive.check_dem_stages`:
+    derivable kinds, every factor and fixed value a DEM parameter, Plackett-Burman runs)."""
     sim = data.get(BLOCK)
     if not sim:
         return
@@ -155,7 +157,7 @@ def check_block(soil_path, data: dict) -> None:
     for i, sid in enumerate(sim.get("stages") or []):
         if sid not in ids:
             raise InputError(soil_path, f"{BLOCK}.stages[{i}]", "a stage id (" + ", ".join(ids) + ")", sid)
-    from soilcal.chain.derive import dem_stage_ids, dependencies, design_mode
+    from soilcal.chain.derive import check_dem_stages, dem_stage_ids, dependencies, design_mode
 
     for sid in dem_stage_ids(data):
         st = next(s for s in data["stages"] if s["id"] == sid)
@@ -184,6 +186,7 @@ def check_block(soil_path, data: dict) -> None:
                 raise InputError(soil_path, where,
                                  f"low and high levels to simulate the stage (or leave {sid!r} out of "
                                  f"{BLOCK}.stages)", f)
+    check_dem_stages(soil_path, data)
 
 
 def _has_target(data: dict, rids) -> bool:
