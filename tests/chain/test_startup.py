@@ -1,20 +1,27 @@
 """Start-up checks of the stages the DEM source runs (soilcal.chain.derive.check_dem_stages,
-called by the soil loader through the simulation block's check).
+called by the soil loader through the simulation block's check) and the Plackett-Burman run
+count a stage asks for.
 
-A user's own DEM-only soil (no printed table): a 6-factor screening of 8 runs, then a
+A user's own DEM-only soil (no printed table): a 6-factor screening of 12 runs, then a
 Box-Behnken design on three of its parameters.  No DEM run: only loading and designs.
 """
 
 from __future__ import annotations
 
 import copy
+import json
 from pathlib import Path
 
+import numpy as np
+import pandas as pd
 import pytest
 import yaml
 
-from soilcal.chain.derive import check_dem_stages
+from soilcal.chain.derive import check_dem_stages, dem_stage
+from soilcal.chain.files import write_stage_design
+from soilcal.chain.stage import generated_design
 from soilcal.config.load import load_soil
+from soilcal.doe import plackett_burman
 from soilcal.errors import InputError
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -34,7 +41,7 @@ SOIL = {
         "gamma": {"name": "JKR surface energy", "unit": "J/m^2", "pair": "soil-soil", "kind": "surface_energy"},
     },
     "stages": [
-        {"id": "screen", "kind": "plackett_burman", "runs": 8,
+        {"id": "screen", "kind": "plackett_burman", "runs": 12,
          "factors": {"A": {"parameter": "e_ss", "low": 0.2, "high": 0.7},
                      "B": {"parameter": "mu_ss", "low": 0.2, "high": 0.9},
                      "C": {"parameter": "mur_ss", "low": 0.02, "high": 0.25},
@@ -154,3 +161,53 @@ def test_a_value_outside_the_physical_range_is_refused_at_load(tmp_path, edit, f
         _load(p)
     assert (e.value.path, e.value.field) == (str(p), field)
     assert "DEM parameter soil_" in e.value.expected
+
+
+# --------------------------------------------------------------------------- Plackett-Burman runs
+
+
+def test_twelve_runs_of_six_factors_are_generated_as_asked(tmp_path):
+    """An N-run Plackett-Burman design has N - 1 orthogonal columns: 12 runs of 6 factors are
+    the first 6 columns of the 12-run design, the design 6 factors and 5 dummies give."""
+    soil = _load(_write(tmp_path))
+    st = soil.stage("screen")
+    x = generated_design(st)
+    assert x.shape == (12, 6)
+    assert np.array_equal(x.T @ x, 12 * np.eye(6))  # orthogonal two-level columns
+    dummies = dict(st, dummies=["G", "H", "I", "J", "K"])
+    assert np.array_equal(generated_design(dummies)[:, :6], x)
+    assert np.array_equal(x, plackett_burman(11)[:, :6])
+    # without runs: the smallest design for 6 columns, 8 runs
+    assert generated_design({k: v for k, v in st.items() if k != "runs"}).shape == (8, 6)
+
+
+def test_design_csv_of_the_dem_screening_has_the_runs_of_stage_json(tmp_path):
+    soil = _load(_write(tmp_path))
+    targets = {"repose": {"value": 36.0, "source": "measurement"}}
+    tcsv = tmp_path / "targets.csv"
+    pd.DataFrame([{"target_id": "repose", "value": 36.0, "unit": "deg", "source": "measurement"}]).to_csv(tcsv,
+                                                                                                      index=False)
+    out = {"stage": tmp_path / "stage.json", "design": tmp_path / "design.csv", "check": tmp_path / "check.csv"}
+    write_stage_design("dem", soil.stage("screen"), soil.data, {"targets": tcsv}, out)
+    stage = json.loads(out["stage"].read_text())
+    design = pd.read_csv(out["design"])
+    assert stage["runs"] == 12 == len(design)
+    assert stage == dem_stage(soil.data, "screen", targets)
+    # the DEM jobs run the rows of design.csv: the generated design in actual units
+    lo = np.array([0.2, 0.2, 0.02, 0.2, 0.3, 0.0])
+    hi = np.array([0.7, 0.9, 0.25, 0.7, 0.9, 0.8])
+    actual = design[[f"{s}_actual" for s in "ABCDEF"]].to_numpy(float)
+    assert np.allclose(actual, (lo + hi) / 2 + plackett_burman(11)[:, :6] * (hi - lo) / 2, atol=1e-12)
+
+
+@pytest.mark.parametrize("runs, dummies", [(10, []), (8, ["G", "H"]), (4, [])])
+def test_a_run_count_no_plackett_burman_design_has_is_refused_at_load(tmp_path, runs, dummies):
+    def edit(d):
+        _stage(d, "screen").update(runs=runs, **({"dummies": dummies} if dummies else {}))
+
+    p = _write(tmp_path, edit)
+    with pytest.raises(InputError) as e:
+        _load(p)
+    cols = 6 + len(dummies)
+    assert (e.value.path, e.value.field, e.value.got) == (str(p), "stages.screen.runs", runs)
+    assert f"a multiple of 4 above the {cols} factors and dummies" in e.value.expected

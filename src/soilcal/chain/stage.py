@@ -66,11 +66,32 @@ def stage_data(stage: dict, table: pd.DataFrame, snap: bool = True) -> pd.DataFr
 # --------------------------------------------------------------------------- design
 
 
+def pb_columns(stage: dict) -> int:
+    """Generator columns of a Plackett-Burman stage's design: its factors and dummies, or
+    ``runs - 1`` where the stage asks for more runs than they need (an N-run design has N - 1
+    columns: 12 runs of 6 factors are the 12-run design's first 6 columns, its other 5 the
+    error estimate, as 5 dummies would be).  A ``runs`` that is not a multiple of 4 above the
+    factors and dummies raises InputError naming the field and how to get it."""
+    cols = len(stage["factors"]) + len(stage.get("dummies") or [])
+    runs = stage.get("runs")
+    if runs is None:
+        return cols
+    runs = int(runs)
+    if runs % 4 or runs <= cols:
+        raise InputError(f"stage {stage.get('id')}", "runs",
+                         f"a multiple of 4 above the {cols} factors and dummies of the Plackett-Burman "
+                         f"design ({', '.join(str(4 * (cols // 4 + 1) + 4 * i) for i in range(3))}, ...)", runs)
+    return max(cols, runs - 1)
+
+
 def generated_design(stage: dict) -> np.ndarray:
-    """Coded design generated for the stage (pyDOE3 / Plackett-Burman generators)."""
+    """Coded design generated for the stage (pyDOE3 / Plackett-Burman generators); a
+    Plackett-Burman stage has the ``runs`` it asks for (:func:`pb_columns`), its factors and
+    dummies in the first columns."""
     k = len(stage["factors"])
     if stage["kind"] == "plackett_burman":
-        return doe.plackett_burman(k + len(stage.get("dummies", [])))
+        cols = k + len(stage.get("dummies") or [])
+        return doe.plackett_burman(pb_columns(stage))[:, :cols]
     if stage["kind"] == "box_behnken":
         return doe.box_behnken(k, int(stage.get("center_points", 0)))
     raise ValueError(stage["kind"])
