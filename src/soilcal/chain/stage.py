@@ -266,8 +266,40 @@ def _enough_points(stage: dict, table: pd.DataFrame, rid: str, n: int, k: int) -
                      f"{n}; without a response: " + ("; ".join(why) or "none"))
 
 
+def _point_labels(table: pd.DataFrame, data: pd.DataFrame, rid: str) -> list:
+    """Run numbers of the points a response's fit uses (:func:`fit_stage`), in its order."""
+    idx = data.dropna(subset=[rid]).index
+    if "run" in table.columns:
+        return [int(v) if float(v).is_integer() else v for v in table.loc[idx, "run"]]
+    return [int(i) + 1 for i in idx]
+
+
+def _finite_row(row: dict, notes: list[str]) -> dict:
+    """A fit.csv row with no infinite number: an undefined statistic is empty and the row's
+    ``note`` says why (``notes``: the model's and the Box-Cox analysis's reasons; an infinity
+    neither explains is named)."""
+    out = dict(row)
+    named = []
+    for k, v in row.items():
+        if isinstance(v, (float, np.floating)) and np.isinf(v):
+            out[k] = np.nan
+            named.append(k)
+    explained = {"pred_R2", "PRESS"} if notes and notes[0] else set()
+    if notes[1:] and notes[1]:
+        explained |= {"boxcox_ci_low", "boxcox_ci_high"}
+    rest = [k for k in named if k not in explained]
+    if rest:
+        notes = notes + [f"{', '.join(rest)} infinite (written empty)"]
+    out["note"] = "; ".join(n for n in notes if n)
+    return out
+
+
 def regression_frames(stage: dict, table: pd.DataFrame) -> dict[str, pd.DataFrame]:
-    """anova, fit, coefficients and effects frames for a PB/BBD stage (all responses)."""
+    """anova, fit, coefficients and effects frames for a PB/BBD stage (all responses).
+
+    fit: one row per response and model; a statistic the data leave undefined (PRESS and
+    pred R2 where a point has leverage 1, a Box-Cox interval reaching past the searched
+    lambda range, any other infinity) is empty and the row's ``note`` says why."""
     anova, fit, coef, effects = [], [], [], []
     data = stage_data(stage, table)
     syms = list(stage["factors"])
@@ -284,13 +316,15 @@ def regression_frames(stage: dict, table: pd.DataFrame) -> dict[str, pd.DataFram
             row = {"response": sf.response, "model": label, "transform": sf.transform, **st,
                    "max_min_ratio": sugg.get("ratio"), "transform_suggested": sugg.get("recommend"),
                    "reduction": sf.reduction if label == "reduced" else ""}
+            notes = [m.statistics_note(_point_labels(table, data, sf.response))]
             try:
                 bc = rsm.boxcox(m)
                 row.update({"boxcox_lambda": bc.get("lambda_best"), "boxcox_ci_low": bc.get("ci_low"),
                             "boxcox_ci_high": bc.get("ci_high"), "boxcox_recommended": bc.get("recommended_transform")})
+                notes.append(f"Box-Cox: {bc['ci_note']}" if bc.get("ci_note") else "")
             except (ValueError, np.linalg.LinAlgError) as exc:  # non-positive responses
                 row["boxcox_recommended"] = f"n/a ({exc})"
-            fit.append(row)
+            fit.append(_finite_row(row, notes))
             c = m.coefficients().copy()
             c.insert(0, "model", label)
             c.insert(0, "response", sf.response)
