@@ -165,7 +165,26 @@ def test_verification_frame_statistics(cinnamon):
     assert r["paper_target"] == 27.69 and r["paper_simulated"] == 27.62
     assert r["paper_relative_error_percent"] == pytest.approx((27.62 - 27.69) / 27.69 * 100)
     assert round(abs(r["paper_relative_error_percent"]), 3) == 0.253
-    assert r["status"] == "ok" and r["note"] == ""
+    # the failed seed is counted and named with its reason; the status is not a bare "ok"
+    assert r["failed_seeds"] == 1 and r["status"] == "1 of 5 seeds failed"
+    assert r["note"] == "seed 11086 failed (SimulationError: blow-up): the statistics are of the other 4"
+
+
+def test_verification_row_of_one_seed_left_by_a_failed_one(cinnamon):
+    """Two verification seeds, the second failed: n = 1, no SD, and the row says that a seed
+    failed and why, beside the diagnosis of the miss."""
+    targets = {"stacking_angle": {"value": 28.0, "source": "image"}}
+    runs = {"stacking_angle": _runs([30.0]) + _runs([np.nan], status="failed", seed0=11083,
+                                                       error="InputError: pile too small for the bins")}
+    r = verification_frame(cinnamon, _stage(), OPTIMUM, targets, runs).iloc[0]
+    assert r["n"] == 1 and np.isnan(r["simulated_sd"]) and r["seeds"] == "11082"
+    assert r["failed_seeds"] == 1 and r["status"] == "1 of 2 seeds failed"
+    assert r["note"].startswith("seed 11083 failed (InputError: pile too small for the bins): the statistics "
+                                "are of the other 1; ")
+    assert "surface bias" in r["note"]  # 30 vs the 28.1 the surface predicts
+    # every seed ok: no failed seed, status ok
+    r = verification_frame(cinnamon, _stage(), OPTIMUM, targets, {"stacking_angle": _runs([28.1, 28.2])}).iloc[0]
+    assert r["failed_seeds"] == 0 and r["status"] == "ok"
 
 
 def test_verification_frame_not_run_and_misses(cinnamon):
@@ -200,7 +219,7 @@ def test_verification_frame_failed_replicates_and_inline_goals(cinnamon):
     r = df[df["case"] == "stacking_angle"].set_index("response")
     assert list(r.index) == ["stacking_angle", "bulk", "flow"]
     assert r.loc["stacking_angle", "status"] == "failed: SimulationError: blow-up"
-    assert r.loc["stacking_angle", "n"] == 0
+    assert r.loc["stacking_angle", "n"] == 0 and r.loc["stacking_angle", "failed_seeds"] == 2
     # a maximize goal has no target; the row says so
     assert r.loc["bulk", "status"] == "ok" and r.loc["bulk", "note"].startswith("goal maximize")
     assert r.loc["bulk", "target_id"] == "maximize" and np.isnan(r.loc["bulk", "target"])

@@ -7,7 +7,9 @@ the papers' tool and process tests, and the calibrated set beside the paper's.
   SD, signed relative error, whether the mean meets the target within 2 %, the response
   surface's prediction at the optimum (and its distance from the target) and the paper's own
   verification numbers (``printed_verification`` of the case) beside them.  A row that misses
-  says why (:func:`diagnose`).
+  says why (:func:`diagnose`).  A seed whose run failed is counted (``failed_seeds``); where
+  others succeeded the status says how many of the seeds failed (never ``ok``) and the note
+  names them with the reason, the statistics being those of the others.
 * :func:`tool_frame` - the soil's ``measurements`` (:mod:`soilcal.config.measurements`)
   simulated at the calibrated set of the case each row names.
 * :func:`calibrated_vs_paper` - every calibrated parameter beside the paper's calibrated value.
@@ -24,7 +26,7 @@ VERIFY_DEFAULTS = {"replicates": 4, "seed_offset": 10000, "paper": []}
 TOLERANCE_PERCENT = 2.0
 SURFACE_TOLERANCE = 0.5
 VERIFICATION_COLUMNS = ["stage", "case", "round", "response", "target_id", "target", "target_source", "preset", "n",
-                        "seeds", "simulated_mean", "simulated_sd", "relative_error_percent",
+                        "seeds", "failed_seeds", "simulated_mean", "simulated_sd", "relative_error_percent",
                         "within_2_percent", "predicted", "predicted_minus_target", "particles", "paper_target",
                         "paper_simulated", "paper_relative_error_percent", "status", "note"]
 TOOL_COLUMNS = ["measurement", "row", "covariate", "covariate_value", "scenario", "setup", "measure", "unit",
@@ -194,7 +196,7 @@ def _case_rows(soil_data, stage, case, optimum, targets, frames, rnd) -> list[di
             sel = rsel[rsel["preset"].astype(str) == preset] if preset else rsel
             row = _verification_row(stage, case, rid, goal, targets, soil_data, cal, sel, preset)
             row["round"] = rnd
-            if rnd == 2 and "note" in cal.columns and row["status"] == "ok":
+            if rnd == 2 and "note" in cal.columns and row["n"] > 0:
                 row["note"] = "; ".join(n for n in (str(cal["note"].iloc[0]), row["note"]) if n)
             rows.append(row)
     return rows
@@ -214,6 +216,7 @@ def _verification_row(stage, case, rid, goal, targets, soil_data, cal, sel, pres
     ok = sel[sel["status"].astype(str) == "ok"]
     vals = ok["value"].to_numpy(float) if len(ok) else np.array([])
     n = int(np.isfinite(vals).sum())
+    failed, failed_note = _failed_seeds(sel)
     mean = float(np.nanmean(vals)) if n else np.nan
     sd = float(np.nanstd(vals, ddof=1)) if n > 1 else np.nan
     pred = float(cal[rid].iloc[0]) if len(cal) and rid in cal.columns else np.nan
@@ -225,19 +228,23 @@ def _verification_row(stage, case, rid, goal, targets, soil_data, cal, sel, pres
         status = "not run: " + ("; ".join(r for r in reasons if r) or "no calibrated set")
     elif n == 0:
         status = ("failed: " + "; ".join(sel["error"].astype(str).unique())) if len(sel) else "not run"
+    elif failed:
+        status = f"{failed} of {failed + n} seeds failed"
     else:
         status = "ok"
     ci = tuple(float(cal[f"{rid}_{k}"].iloc[0]) for k in ("ci_low", "ci_high")) \
         if len(cal) and f"{rid}_ci_low" in cal.columns else None
     model = (stage.get("optimise") or {}).get("model", "reduced")
-    note = diagnose(mean, sd, n, target, pred, ci, design_replicates(soil_data), model) if status == "ok" else ""
-    if status == "ok" and goal.get("goal") != "target":
+    note = diagnose(mean, sd, n, target, pred, ci, design_replicates(soil_data), model) if len(cal) and n else ""
+    if len(cal) and n and goal.get("goal") != "target":
         note = f"goal {goal.get('goal')}: no target value; the paper's verification is beside it"
+    if n and failed:
+        note = "; ".join(x for x in (failed_note + f": the statistics are of the other {n}", note) if x)
     return {
         "stage": stage["id"], "case": case["id"], "response": rid, "target_id": tid or goal.get("goal"),
         "target": target, "target_source": t.get("source", "config" if "value" in goal else ""),
         "preset": preset or (ok["preset"].iloc[0] if len(ok) else ""), "n": n,
-        "seeds": " ".join(str(int(s)) for s in ok["seed"]) if len(ok) else "",
+        "seeds": " ".join(str(int(s)) for s in ok["seed"]) if len(ok) else "", "failed_seeds": failed,
         "simulated_mean": mean, "simulated_sd": sd, "relative_error_percent": rel,
         "within_2_percent": bool(np.isfinite(rel) and abs(rel) <= TOLERANCE_PERCENT),
         "predicted": pred, "predicted_minus_target": pred - target if np.isfinite(target) else np.nan,
@@ -247,6 +254,23 @@ def _verification_row(stage, case, rid, goal, targets, soil_data, cal, sel, pres
         "paper_relative_error_percent": (paper_sim - paper_target) / paper_target * 100
         if np.isfinite(paper_sim) and np.isfinite(paper_target) and paper_target else np.nan,
         "status": status, "note": note}
+
+
+def _failed_seeds(sel: pd.DataFrame) -> tuple[int, str]:
+    """(count, note) of the verification seeds of one response that ran and failed (not the
+    rows of a replicate that could not run), the note naming the seeds and the reasons."""
+    if not len(sel):
+        return 0, ""
+    st = sel["status"].astype(str)
+    vals = pd.to_numeric(sel["value"], errors="coerce")
+    bad = sel[((st != "ok") | vals.isna()) & ~st.str.startswith("not run")]
+    if not len(bad):
+        return 0, ""
+    seeds = [str(int(s)) for s in pd.to_numeric(bad["seed"], errors="coerce").dropna()] if "seed" in bad else []
+    reasons = [r for r in dict.fromkeys(bad["error"].astype(str)) if r and r != "nan"] if "error" in bad else []
+    who = (f"seed {seeds[0]}" if len(seeds) == 1 else f"seeds {', '.join(seeds)}") if seeds else \
+        f"{len(bad)} seed{'s' if len(bad) > 1 else ''}"
+    return len(bad), f"{who} failed ({'; '.join(reasons) or 'no reason recorded'})"
 
 
 def calibrated_vs_paper(soil_data: dict, stages: dict[str, tuple[dict, pd.DataFrame, pd.DataFrame]]) -> pd.DataFrame:
