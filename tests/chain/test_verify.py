@@ -61,6 +61,27 @@ def test_diagnose_model_limit():
     assert "seed scatter" not in note and "surface bias" not in note
 
 
+def test_diagnose_model_limit_names_the_factors_on_bounds_of_the_region():
+    # the surface's best set has A and C on bounds of the design region: the target lies
+    # outside it, not "within the design region"
+    note = diagnose(53.76, 4.31, 2, 70.0, 52.54, (41.01, 64.07),
+                    on_bounds=["A at its low bound 0.3", "C at its high bound 0.6"])
+    assert note == ("model limit: the response surface predicts 52.54 at its best set, -17.46 from the target "
+                    "(95 % confidence interval 41.01 to 64.07); A at its low bound 0.3, C at its high bound 0.6: "
+                    "the target lies outside the design region")
+    assert diagnose(33.0, 0.1, 4, 30.0, 31.0, on_bounds=[]).endswith("within the design region")
+
+
+def test_verification_row_names_the_bounds_of_the_calibrated_set(cinnamon):
+    stage = _stage()
+    stage["factors"]["A"].update(low=0.05, high=0.2)
+    opt = OPTIMUM.assign(A_coded=[0.0, -1.0, 0.0, np.nan], A=[0.125, 0.05, 0.125, np.nan])
+    targets = {"stacking_angle": {"value": 31.0, "source": "image"}}
+    # the surface's 28.1 at A's low bound, 2.9 below the target; four seeds of mean 28
+    r = verification_frame(cinnamon, stage, opt, targets, {"stacking_angle": _runs([27.9, 28.1, 28.0, 28.0])}).iloc[0]
+    assert "from the target; A at its low bound 0.05: the target lies outside the design region" in r["note"]
+
+
 def test_diagnose_surface_scatter_when_the_confidence_interval_covers_the_target():
     # the surface's best is 31, 1.0 from the target 30, but its mean there is known only to
     # 28.5-33.5: not a model limit; with the interval 30.6-31.4 it is one, and says so
@@ -277,6 +298,11 @@ def test_calibrated_vs_paper(cinnamon):
     se = df.loc["soil_steel_surface_energy"]
     assert np.isnan(se["paper"]) and se["paper_source"] == "not printed"
     assert len(df) == 8
+    # identifiability.csv read back: a factor a bound of the region holds is "at bound", not pinned
+    ident = pd.DataFrame({"case": ["stacking_angle"] * 3, "factor": ["A", "B", "X1"],
+                          "pinned": ["at bound", "False", "True"], "min": [0.05, 0.3, 0.49], "max": [0.05, 0.5, 0.51]})
+    df = calibrated_vs_paper(cinnamon, {"bbd": (stage, optimum, ident)}).set_index("symbol")
+    assert list(df.loc[["A", "B", "X1"], "pinned"]) == ["at bound", False, True]
 
 
 def test_calibrated_vs_paper_without_a_calibrated_set(cinnamon):

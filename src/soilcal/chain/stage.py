@@ -542,6 +542,33 @@ def calibrated_rows(optimum: pd.DataFrame, case: str) -> pd.DataFrame:
     return sel[sel["calibrated"].astype(str).str.lower() == "true"]
 
 
+#: a coded level within this of -1 or +1 lies on a bound of the design region
+ON_BOUND = 1e-6
+
+
+def factors_on_bounds(stage: dict, row) -> list[str]:
+    """The factors of a set (a row of ``optimum.csv`` or ``refined.csv``: ``<factor>_coded``
+    or the actual levels) that lie on a bound of the stage's design region, as text:
+    ``["A at its low bound 0.3", "C at its high bound 0.6"]`` (empty when none does or the
+    stage has no low and high levels)."""
+    out = []
+    for s, f in (stage.get("factors") or {}).items():
+        if f.get("low") is None or f.get("high") is None:
+            continue
+        lo, hi = float(f["low"]), float(f["high"])
+        if f"{s}_coded" in row and pd.notna(row[f"{s}_coded"]):
+            x = float(row[f"{s}_coded"])
+        elif s in row and pd.notna(row[s]):
+            x = float(doe.actual_to_coded(np.array([float(row[s])]), lo, hi)[0])
+        else:
+            continue
+        if x <= -1.0 + ON_BOUND:
+            out.append(f"{s} at its low bound {lo:g}")
+        elif x >= 1.0 - ON_BOUND:
+            out.append(f"{s} at its high bound {hi:g}")
+    return out
+
+
 def calibrated_levels(stage: dict, optimum: pd.DataFrame, case: str | None = None) -> dict[str, float]:
     """Actual factor levels of the calibrated set of one optimisation case (the first case
     when ``case`` is None); InputError when the case has none (e.g. its target is missing)."""

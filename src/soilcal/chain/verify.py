@@ -99,12 +99,15 @@ def not_run_rows(stage_id: str, case: dict, reason: str) -> pd.DataFrame:
 
 def diagnose(mean: float, sd: float, n: int, target: float, predicted: float | None,
              ci: tuple[float, float] | None = None, replicates: int | None = None,
-             model: str | None = None) -> str:
+             model: str | None = None, on_bounds=None) -> str:
     """Why a verification mean misses its target by more than 2 % (empty when it meets it).
 
     * the surface cannot reach the target: the prediction at the optimum is more than 0.5
-      from the target (a model limit within the design region) and the 95 % confidence
-      interval of the surface's mean there, ``ci`` where given, excludes the target;
+      from the target (a model limit) and the 95 % confidence interval of the surface's mean
+      there, ``ci`` where given, excludes the target; where the set has factors on a bound of
+      the design region (``on_bounds``, :func:`soilcal.chain.stage.factors_on_bounds`) the
+      note names them: the surface comes closest on the region's boundary, so the target lies
+      outside the region; otherwise the limit is the surface's within the region;
     * surface scatter: the prediction misses by more than 0.5 but its confidence interval
       contains the target: the design points' own seed scatter leaves open whether the
       design region reaches it (replicates per design point would tell; with ``replicates``,
@@ -145,8 +148,10 @@ def diagnose(mean: float, sd: float, n: int, target: float, predicted: float | N
                          f"it (replicates per design point would tell{how})")
         else:
             band = f" (95 % confidence interval {lo:.2f} to {hi:.2f})" if known else ""
+            where = (f"; {', '.join(on_bounds)}: the target lies outside the design region" if on_bounds
+                     else ", within the design region")
             notes.append(f"model limit: the response surface predicts {predicted:.2f} at its best set, "
-                         f"{predicted - target:+.2f} from the target{band}, within the design region")
+                         f"{predicted - target:+.2f} from the target{band}{where}")
     sem = sd / np.sqrt(n) if n > 1 and np.isfinite(sd) else np.nan
     if np.isfinite(sem) and abs(mean - target) <= 2 * sem:
         band = TOLERANCE_PERCENT / 100 * abs(target)
@@ -205,6 +210,7 @@ def _case_rows(soil_data, stage, case, optimum, targets, frames, rnd) -> list[di
 def _verification_row(stage, case, rid, goal, targets, soil_data, cal, sel, preset) -> dict:
     """One row of :func:`verification_frame`: one case, response and preset."""
     from soilcal.chain.sources import design_replicates
+    from soilcal.chain.stage import factors_on_bounds
 
     tid = goal.get("target", "")
     t = targets.get(tid, {}) if tid else {}
@@ -235,7 +241,9 @@ def _verification_row(stage, case, rid, goal, targets, soil_data, cal, sel, pres
     ci = tuple(float(cal[f"{rid}_{k}"].iloc[0]) for k in ("ci_low", "ci_high")) \
         if len(cal) and f"{rid}_ci_low" in cal.columns else None
     model = (stage.get("optimise") or {}).get("model", "reduced")
-    note = diagnose(mean, sd, n, target, pred, ci, design_replicates(soil_data), model) if len(cal) and n else ""
+    bounds = factors_on_bounds(stage, cal.iloc[0]) if len(cal) else []
+    note = diagnose(mean, sd, n, target, pred, ci, design_replicates(soil_data), model, bounds) \
+        if len(cal) and n else ""
     if len(cal) and n and goal.get("goal") != "target":
         note = f"goal {goal.get('goal')}: no target value; the paper's verification is beside it"
     if n and failed:
@@ -254,6 +262,19 @@ def _verification_row(stage, case, rid, goal, targets, soil_data, cal, sel, pres
         "paper_relative_error_percent": (paper_sim - paper_target) / paper_target * 100
         if np.isfinite(paper_sim) and np.isfinite(paper_target) and paper_target else np.nan,
         "status": status, "note": note}
+
+
+def _pinned(v):
+    """An identifiability row's ``pinned`` as read back from its CSV: True, False or
+    ``"at bound"`` (:func:`soilcal.optimise.near_optimal.identifiability`)."""
+    if isinstance(v, (bool, np.bool_)):
+        return bool(v)
+    text = str(v).strip()
+    if text in ("True", "False"):
+        return text == "True"
+    if text == "at bound":
+        return text
+    raise InputError("identifiability.csv", "pinned", "True, False or 'at bound'", v)
 
 
 def _failed_seeds(sel: pd.DataFrame) -> tuple[int, str]:
@@ -278,7 +299,9 @@ def calibrated_vs_paper(soil_data: dict, stages: dict[str, tuple[dict, pd.DataFr
 
     ``stages``: stage id -> (DEM stage, optimum frame, identifiability frame).  A factor's
     paper value is the case's ``printed_optimum`` (the paper's symbol of the same parameter);
-    a fixed parameter's is the value the config's stage fixes it at.
+    a fixed parameter's is the value the config's stage fixes it at.  ``pinned``: whether the
+    near-optimal sets pin a factor down (True, False, ``at bound`` where a bound of the design
+    region holds it rather than the data), ``fixed`` for a fixed parameter.
     """
     from soilcal.chain.stage import calibrated_rows
 
@@ -317,7 +340,7 @@ def calibrated_vs_paper(soil_data: dict, stages: dict[str, tuple[dict, pd.DataFr
                 if role == "factor" and idt is not None:
                     r = idt[idt["factor"] == sym]
                     if len(r):
-                        row.update(pinned=bool(r["pinned"].iloc[0]), near_optimal_min=float(r["min"].iloc[0]),
+                        row.update(pinned=_pinned(r["pinned"].iloc[0]), near_optimal_min=float(r["min"].iloc[0]),
                                    near_optimal_max=float(r["max"].iloc[0]))
                 if role == "fixed":
                     row["pinned"] = "fixed"
