@@ -435,3 +435,31 @@ def test_bbd_after_a_path_on_config_levels(soils):
                    {"from": {"stage": path, "responses": _path_responses([22.0, 24.5, 27.5, 29.0, 31.0, 33.0])}})
     assert {s: (f["low"], f["centre"], f["high"]) for s, f in st["factors"].items()} == \
         {s: pytest.approx(v, abs=1e-12) for s, v in TABLE6.items()}
+
+
+def _refuse_constant(name):
+    raise ValueError(f"{name} is not JSON")
+
+
+def test_stage_json_of_a_path_with_failed_steps_is_strict_json(soils, tmp_path):
+    """Steps 4 and 5 of the path failed (no response): their errors are unknown, written as
+    null, never as the bare NaN that strict JSON readers refuse."""
+    from soilcal.chain.files import read_stage, write_json, write_stage
+
+    cin = soils["cinnamon-soil"]
+    path = _cinnamon_path(soils, mean=25.0)
+    path["id"] = "steepest"
+    st = bbd_from_path(cin, "bbd", path, _path_responses([22.0, 24.5, 27.5, np.nan, np.nan, 33.0]))
+    steps = st["derivation"]["steps"]
+    assert any(isinstance(v, float) and not np.isfinite(v) for r in steps for v in r.values())
+    out = write_stage(st, tmp_path / "stage.json")
+    text = out.read_text()
+    back = json.loads(text, parse_constant=_refuse_constant)
+    assert back == read_stage(out)
+    failed = [r for r in back["derivation"]["steps"] if r["step"] in (4, 5)]
+    assert len(failed) >= 2 and all(r["stacking_angle"] is None for r in failed)
+    # the shared writer: infinities and NumPy NaN too, at any depth
+    write_json({"a": [np.float64(np.inf), -np.inf, {"b": np.nan}], "c": np.float32(1.5), "d": (1, np.nan)},
+               tmp_path / "x.json")
+    assert json.loads((tmp_path / "x.json").read_text(), parse_constant=_refuse_constant) == \
+        {"a": [None, None, {"b": None}], "c": 1.5, "d": [1, None]}

@@ -151,3 +151,29 @@ def test_written_from_files(tmp_path):
     assert list(back["case"]) == list(CASES)
     assert back.loc[back["case"] == "biased", "A_coded"].iloc[0] == pytest.approx(0.0, abs=1e-6)
     assert len(out) == len(CASES)
+
+
+def test_a_miss_larger_than_the_seed_scatter_is_not_called_seed_scatter():
+    """No bias (the seeds agree with the surface's prediction) does not make every miss seed
+    scatter: at A's low bound the surface predicts 28 for the target 31, and four seeds of mean
+    28 and SD sqrt(2/3) (two standard errors 0.816) miss by 3, far beyond their scatter: the
+    note names the bound instead.  One seed has no standard error to tell anything."""
+    stage = _stage()
+    goal = {"y": {"goal": "target", "target": "y"}}
+    stage["optimise"]["cases"] = [{"id": c, "goals": dict(goal)} for c in ("limit", "one", "scatter")]
+    optimum = pd.DataFrame([{"case": "limit", "method": "near_optimal", **EDGE, "y": 28.0, "calibrated": True},
+                            {"case": "one", "method": "near_optimal", **X0, "y": 31.0, "calibrated": True},
+                            {"case": "scatter", "method": "near_optimal", **X0, "y": 31.0, "calibrated": True}])
+    runs = {"limit": _runs([27.0, 28.0, 29.0, 28.0]), "one": _runs([29.0]), "scatter": RUNS["scatter"]}
+    df = refine_frame(stage, _table(), TARGETS, optimum, runs).set_index("case")
+    assert not df["refined"].astype(bool).any()
+    limit = df.loc["limit", "note"]
+    assert "seed scatter)" not in limit and "no bias to correct" in limit
+    two_se = 2 * np.sqrt(2 / 3) / 2
+    assert f"the miss -3 is more than seed scatter (two standard errors {two_se:.3g} of 4 seeds)" in limit
+    assert "the surface itself predicts 28 at this set, -3 from the target; A at its low bound 0: the target " \
+           "lies outside the design region" in limit
+    assert "1 verification seed, no standard error" in df.loc["one", "note"]
+    # mean 32, 1 from the target, two standard errors 1.83: seed scatter
+    assert "the miss +1 is within two standard errors (1.83) of the mean of 4 seeds (seed scatter)" in \
+        df.loc["scatter", "note"]

@@ -61,6 +61,27 @@ def test_diagnose_model_limit():
     assert "seed scatter" not in note and "surface bias" not in note
 
 
+def test_diagnose_model_limit_names_the_factors_on_bounds_of_the_region():
+    # the surface's best set has A and C on bounds of the design region: the target lies
+    # outside it, not "within the design region"
+    note = diagnose(53.76, 4.31, 2, 70.0, 52.54, (41.01, 64.07),
+                    on_bounds=["A at its low bound 0.3", "C at its high bound 0.6"])
+    assert note == ("model limit: the response surface predicts 52.54 at its best set, -17.46 from the target "
+                    "(95 % confidence interval 41.01 to 64.07); A at its low bound 0.3, C at its high bound 0.6: "
+                    "the target lies outside the design region")
+    assert diagnose(33.0, 0.1, 4, 30.0, 31.0, on_bounds=[]).endswith("within the design region")
+
+
+def test_verification_row_names_the_bounds_of_the_calibrated_set(cinnamon):
+    stage = _stage()
+    stage["factors"]["A"].update(low=0.05, high=0.2)
+    opt = OPTIMUM.assign(A_coded=[0.0, -1.0, 0.0, np.nan], A=[0.125, 0.05, 0.125, np.nan])
+    targets = {"stacking_angle": {"value": 31.0, "source": "image"}}
+    # the surface's 28.1 at A's low bound, 2.9 below the target; four seeds of mean 28
+    r = verification_frame(cinnamon, stage, opt, targets, {"stacking_angle": _runs([27.9, 28.1, 28.0, 28.0])}).iloc[0]
+    assert "from the target; A at its low bound 0.05: the target lies outside the design region" in r["note"]
+
+
 def test_diagnose_surface_scatter_when_the_confidence_interval_covers_the_target():
     # the surface's best is 31, 1.0 from the target 30, but its mean there is known only to
     # 28.5-33.5: not a model limit; with the interval 30.6-31.4 it is one, and says so
@@ -165,7 +186,26 @@ def test_verification_frame_statistics(cinnamon):
     assert r["paper_target"] == 27.69 and r["paper_simulated"] == 27.62
     assert r["paper_relative_error_percent"] == pytest.approx((27.62 - 27.69) / 27.69 * 100)
     assert round(abs(r["paper_relative_error_percent"]), 3) == 0.253
-    assert r["status"] == "ok" and r["note"] == ""
+    # the failed seed is counted and named with its reason; the status is not a bare "ok"
+    assert r["failed_seeds"] == 1 and r["status"] == "1 of 5 seeds failed"
+    assert r["note"] == "seed 11086 failed (SimulationError: blow-up): the statistics are of the other 4"
+
+
+def test_verification_row_of_one_seed_left_by_a_failed_one(cinnamon):
+    """Two verification seeds, the second failed: n = 1, no SD, and the row says that a seed
+    failed and why, beside the diagnosis of the miss."""
+    targets = {"stacking_angle": {"value": 28.0, "source": "image"}}
+    runs = {"stacking_angle": _runs([30.0]) + _runs([np.nan], status="failed", seed0=11083,
+                                                       error="InputError: pile too small for the bins")}
+    r = verification_frame(cinnamon, _stage(), OPTIMUM, targets, runs).iloc[0]
+    assert r["n"] == 1 and np.isnan(r["simulated_sd"]) and r["seeds"] == "11082"
+    assert r["failed_seeds"] == 1 and r["status"] == "1 of 2 seeds failed"
+    assert r["note"].startswith("seed 11083 failed (InputError: pile too small for the bins): the statistics "
+                                "are of the other 1; ")
+    assert "surface bias" in r["note"]  # 30 vs the 28.1 the surface predicts
+    # every seed ok: no failed seed, status ok
+    r = verification_frame(cinnamon, _stage(), OPTIMUM, targets, {"stacking_angle": _runs([28.1, 28.2])}).iloc[0]
+    assert r["failed_seeds"] == 0 and r["status"] == "ok"
 
 
 def test_verification_frame_not_run_and_misses(cinnamon):
@@ -200,7 +240,7 @@ def test_verification_frame_failed_replicates_and_inline_goals(cinnamon):
     r = df[df["case"] == "stacking_angle"].set_index("response")
     assert list(r.index) == ["stacking_angle", "bulk", "flow"]
     assert r.loc["stacking_angle", "status"] == "failed: SimulationError: blow-up"
-    assert r.loc["stacking_angle", "n"] == 0
+    assert r.loc["stacking_angle", "n"] == 0 and r.loc["stacking_angle", "failed_seeds"] == 2
     # a maximize goal has no target; the row says so
     assert r.loc["bulk", "status"] == "ok" and r.loc["bulk", "note"].startswith("goal maximize")
     assert r.loc["bulk", "target_id"] == "maximize" and np.isnan(r.loc["bulk", "target"])
@@ -258,6 +298,11 @@ def test_calibrated_vs_paper(cinnamon):
     se = df.loc["soil_steel_surface_energy"]
     assert np.isnan(se["paper"]) and se["paper_source"] == "not printed"
     assert len(df) == 8
+    # identifiability.csv read back: a factor a bound of the region holds is "at bound", not pinned
+    ident = pd.DataFrame({"case": ["stacking_angle"] * 3, "factor": ["A", "B", "X1"],
+                          "pinned": ["at bound", "False", "True"], "min": [0.05, 0.3, 0.49], "max": [0.05, 0.5, 0.51]})
+    df = calibrated_vs_paper(cinnamon, {"bbd": (stage, optimum, ident)}).set_index("symbol")
+    assert list(df.loc[["A", "B", "X1"], "pinned"]) == ["at bound", False, True]
 
 
 def test_calibrated_vs_paper_without_a_calibrated_set(cinnamon):

@@ -258,3 +258,30 @@ def test_a_target_out_of_reach_is_said_in_every_note():
     ok = identifiability(near_optimal_sets({"y": _one_factor_model()}, GOAL_31, seed=0), ["x1", "x2", "x3"],
                          LOW3, HIGH3)
     assert not any("not met" in n for n in ok["note"])
+
+
+def test_a_factor_held_by_a_bound_of_the_region_is_at_bound_not_pinned():
+    """y = 30 + 2 x1 cannot reach 35 inside the region (its best is 32 at x1 = +1): every
+    near-optimal set has x1 on its high bound 20, where the region stops the search, not the
+    data; x2 and x3 do nothing and spread."""
+    goal = {"y": {"goal": "target", "value": 35.0, "low": 29.0, "high": 36.0}}
+    sets = near_optimal_sets({"y": _one_factor_model()}, goal, seed=0)
+    assert len(sets) > 1 and np.allclose(sets["x1"], 20.0)
+    ident = identifiability(sets, ["x1", "x2", "x3"], LOW3, HIGH3).set_index("factor")
+    assert ident.loc["x1", "pinned"] == "at bound"
+    assert ident.loc["x1", "note"].endswith("at bound: every near-optimal set has it at its high bound 20: held "
+                                            "there by the design region, not pinned down by the data")
+    assert ident.loc["x1", "note"].startswith("the goals are not met inside the design region")
+    assert ident.loc["x2", "pinned"] == False  # noqa: E712  (object column: bools beside "at bound")
+
+
+def test_sets_piled_against_a_bound_are_at_bound_and_sets_inside_are_pinned():
+    # x1 on [10, 20]: 10 and 10.5 are coded -1 and -0.9, within 10 % of the range of the low
+    # bound and one on it; 10.5 and 11 (coded -0.9, -0.8) are pinned inside the region
+    on = pd.DataFrame({"x1": [10.0, 10.5], "near_optimal": [True, True], "desirability": [1.0, 1.0]})
+    row = identifiability(on, ["x1"], [10.0], [20.0]).iloc[0]
+    assert row["pinned"] == "at bound"
+    assert row["note"] == ("at bound: the near-optimal sets lie within 5 % of the range of its low bound 10, some on "
+                           "it: held there by the design region, not pinned down by the data")
+    inside = pd.DataFrame({"x1": [10.5, 11.0], "near_optimal": [True, True], "desirability": [1.0, 1.0]})
+    assert identifiability(inside, ["x1"], [10.0], [20.0])["pinned"].iloc[0] == True  # noqa: E712

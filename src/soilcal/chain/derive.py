@@ -60,6 +60,10 @@ _BOUNDS = {
 }
 DEFAULT_STEPS = 6
 SCREENING_DEFAULTS = {"alpha": 0.05, "min_factors": 3}
+#: (earlier stage's kind, this stage's kind) of the stages the DEM source derives (module docstring)
+DERIVED_KINDS = {("plackett_burman", "steepest_ascent"), ("steepest_ascent", "box_behnken")}
+DERIVED_EXPECTED = ("a steepest ascent after a Plackett-Burman screening, or a Box-Behnken design after a "
+                    "steepest ascent")
 
 
 def sim_block(soil_data: dict) -> dict:
@@ -339,9 +343,7 @@ def dem_stage(soil_data: dict, stage_id: str, targets: dict, upstream: dict | No
         elif up["stage"]["kind"] == "steepest_ascent" and config_stage["kind"] == "box_behnken":
             st = bbd_from_path(soil_data, stage_id, up["stage"], up["responses"])
         else:
-            raise InputError(soil_data.get("name"), f"stages.{stage_id}.from_stage",
-                             "a steepest ascent after a Plackett-Burman screening, or a Box-Behnken "
-                             "design after a steepest ascent",
+            raise InputError(soil_data.get("name"), f"stages.{stage_id}.from_stage", DERIVED_EXPECTED,
                              f"{config_stage['kind']} after {up['stage']['kind']}")
     else:
         st = _dem_base(config_stage)
@@ -358,5 +360,68 @@ def dem_stage(soil_data: dict, stage_id: str, targets: dict, upstream: dict | No
     return st
 
 
-__all__ = ["bbd_from_path", "dem_stage", "dem_stage_ids", "dependencies", "design_mode",
+def check_dem_stages(soil_path, soil_data: dict) -> None:
+    """Start-up check of the stages the DEM source runs (:func:`dem_stage_ids`), so that a
+    config the chain cannot run fails before any DEM job, naming the soil file and field:
+
+    * a stage derived from an earlier DEM stage (``from_stage``, :func:`dependencies`) is a
+      steepest ascent after a Plackett-Burman screening or a Box-Behnken design after a
+      steepest ascent (:func:`dem_stage` knows no other derivation);
+    * every factor's parameter and every fixed parameter maps to a DEM parameter
+      (:func:`soilcal.dem.scenarios.base.dem_field`, the mapping the DEM jobs use), and the
+      fixed values and the levels of a stage that runs its config's levels lie in that
+      parameter's physical range;
+    * a Plackett-Burman stage's ``runs`` is a design's run count: a multiple of 4 above its
+      factors and dummies (:func:`soilcal.chain.stage.pb_columns`).
+    """
+    from soilcal.chain.stage import pb_columns
+    from soilcal.dem.scenarios.base import DemParams, dem_field
+
+    def in_range(name, value, scale, where):
+        try:
+            DemParams.from_mapping({name: float(value) * scale}, str(soil_path))
+        except InputError as exc:
+            raise InputError(soil_path, where, f"{exc.expected} (DEM parameter {name})", value) from None
+
+    def mapped(pname, where):
+        try:
+            return dem_field(soil_path, soil_data, pname, where)
+        except InputError as exc:
+            if exc.field == where:
+                raise
+            raise InputError(soil_path, exc.field, exc.expected, exc.got, note=f"used by {where}") from None
+
+    for sid in dem_stage_ids(soil_data):
+        st = _stage(soil_data, sid)
+        deps = dependencies(soil_data, sid)
+        if "from" in deps:
+            up = _stage(soil_data, deps["from"])
+            if (up["kind"], st["kind"]) not in DERIVED_KINDS:
+                raise InputError(soil_path, f"stages.{sid}.from_stage", DERIVED_EXPECTED,
+                                 f"{st['kind']} after {up['kind']}",
+                                 note=f"stage {up['id']!r}; the DEM source derives a stage from the DEM results "
+                                      "of the one it follows: give the stage in between, or run the config's "
+                                      "levels with simulation.design: printed")
+        for sym, f in st["factors"].items():
+            where = f"stages.{sid}.factors.{sym}"
+            name, scale = mapped(f["parameter"], f"{where}.parameter")
+            if "from" in deps:
+                continue  # levels derived from the earlier stage's DEM results
+            for key in ("low", "centre", "high"):
+                if f.get(key) is not None:
+                    in_range(name, f[key], scale, f"{where}.{key}")
+            for i, v in enumerate(f.get("levels") or []):
+                in_range(name, v, scale, f"{where}.levels[{i}]")
+        for pname, v in (st.get("fixed") or {}).items():
+            where = f"stages.{sid}.fixed.{pname}"
+            name, scale = mapped(pname, where)
+            in_range(name, v, scale, where)
+        if st["kind"] == "plackett_burman":
+            try:
+                pb_columns(st)
+            except InputError as exc:
+                raise InputError(soil_path, f"stages.{sid}.runs", exc.expected, exc.got) from None
+
+
+__all__ = ["bbd_from_path", "check_dem_stages", "dem_stage", "dem_stage_ids", "dependencies", "design_mode",
            "path_from_screening", "published_stage", "response_targets"]

@@ -41,7 +41,35 @@ def write_csv(df: pd.DataFrame, path) -> Path:
 
 
 def write_json(obj, path) -> Path:
-    return write_text(path, json.dumps(obj, indent=1, sort_keys=False, default=_json_default) + "\n")
+    """Write ``obj`` as JSON atomically; a NaN or infinite number (a step whose runs failed,
+    an undefined statistic) is written as ``null``: the bare ``NaN`` / ``Infinity`` that
+    Python's json module writes by default are not JSON, and strict readers refuse them."""
+    return write_text(path, json_text(obj))
+
+
+def json_text(obj) -> str:
+    """``obj`` as indented JSON text, every non-finite number ``null`` (:func:`write_json`)."""
+    return json.dumps(_finite(obj), indent=1, sort_keys=False, allow_nan=False, default=_json_default) + "\n"
+
+
+def _finite(o):
+    """``o`` with every NaN or infinite float (Python or NumPy, also pandas' missing value) as
+    None, NumPy scalars as Python ones, tuples as lists, recursively."""
+    if isinstance(o, dict):
+        return {k: _finite(v) for k, v in o.items()}
+    if isinstance(o, (list, tuple)):
+        return [_finite(v) for v in o]
+    if isinstance(o, np.ndarray):
+        return [_finite(v) for v in o.tolist()]
+    if isinstance(o, (bool, np.bool_)):
+        return bool(o)
+    if isinstance(o, (np.integer,)):
+        return int(o)
+    if isinstance(o, (float, np.floating)):
+        return float(o) if np.isfinite(o) else None
+    if o is pd.NA or o is pd.NaT:
+        return None
+    return o
 
 
 def _json_default(o):

@@ -61,6 +61,38 @@ def _stats(runs: pd.DataFrame, rid):
     return (float(vals.mean()) if n else np.nan, float(vals.std(ddof=1)) if n > 1 else np.nan, n)
 
 
+def _unbiased_miss(stage: dict, cal: pd.DataFrame, tgt: dict, stats: dict, pred: dict, missed) -> str:
+    """Why a case that missed keeps its set though no response shows a bias, per missed
+    response: seed scatter only where the miss is within two standard errors of the mean
+    (sd / sqrt(n)); where it is larger the surface's own prediction misses and the seeds agree
+    with it (a limit of the design region where the set has factors on its bounds,
+    :func:`soilcal.chain.stage.factors_on_bounds`); with fewer than two seeds there is no
+    standard error to tell."""
+    from soilcal.chain.stage import factors_on_bounds
+
+    parts = []
+    for r in missed:
+        m, sd, n = stats[r]
+        t, p = tgt[r], pred[r]
+        if n < 2 or not np.isfinite(sd):
+            parts.append(f"{r}: {n} verification seed{'' if n == 1 else 's'}, no standard error: seed scatter "
+                         "and bias cannot be told apart")
+            continue
+        two_se = 2.0 * sd / np.sqrt(n)
+        if abs(m - t) <= two_se:
+            parts.append(f"{r}: the miss {m - t:+.3g} is within two standard errors ({two_se:.3g}) of the mean "
+                         f"of {n} seeds (seed scatter)")
+            continue
+        bounds = factors_on_bounds(stage, cal.iloc[0])
+        where = (f"; {', '.join(bounds)}: the target lies outside the design region" if bounds
+                 else ": the surface does not reach the target there")
+        parts.append(f"{r}: the miss {m - t:+.3g} is more than seed scatter (two standard errors {two_se:.3g} of "
+                     f"{n} seeds): the surface itself predicts {p:.4g} at this set, {p - t:+.3g} from the "
+                     f"target{where}")
+    return ("missed, but the verification means differ from the surface's prediction by no more than two "
+            "standard errors (no bias to correct); " + "; ".join(parts))
+
+
 def _kept(case_id, cal: pd.DataFrame, note: str, columns) -> dict:
     row = {c: cal[c].iloc[0] for c in columns if c in cal.columns} if len(cal) else {}
     return row | {"case": case_id, "round": 1, "refined": False, "calibrated": bool(len(cal)),
@@ -108,8 +140,7 @@ def refine_frame(stage: dict, table: pd.DataFrame, targets: dict, optimum: pd.Da
             continue
         bias = {r: significant_bias(m, sd, n, pred[r]) for r, (m, sd, n) in stats.items()}
         if not any(bias.values()):
-            rows.append(_kept(cid, cal, "missed, but the verification means differ from the surface's "
-                              "prediction by no more than two standard errors (seed scatter, not bias)", columns))
+            rows.append(_kept(cid, cal, _unbiased_miss(stage, cal, tgt, stats, pred, missed), columns))
             continue
         if fits is None:
             fits = {sf.response: (sf.reduced if opt.get("model", "reduced") == "reduced" else sf.full)

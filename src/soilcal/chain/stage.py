@@ -66,11 +66,32 @@ def stage_data(stage: dict, table: pd.DataFrame, snap: bool = True) -> pd.DataFr
 # --------------------------------------------------------------------------- design
 
 
+def pb_columns(stage: dict) -> int:
+    """Generator columns of a Plackett-Burman stage's design: its factors and dummies, or
+    ``runs - 1`` where the stage asks for more runs than they need (an N-run design has N - 1
+    columns: 12 runs of 6 factors are the 12-run design's first 6 columns, its other 5 the
+    error estimate, as 5 dummies would be).  A ``runs`` that is not a multiple of 4 above the
+    factors and dummies raises InputError naming the field and how to get it."""
+    cols = len(stage["factors"]) + len(stage.get("dummies") or [])
+    runs = stage.get("runs")
+    if runs is None:
+        return cols
+    runs = int(runs)
+    if runs % 4 or runs <= cols:
+        raise InputError(f"stage {stage.get('id')}", "runs",
+                         f"a multiple of 4 above the {cols} factors and dummies of the Plackett-Burman "
+                         f"design ({', '.join(str(4 * (cols // 4 + 1) + 4 * i) for i in range(3))}, ...)", runs)
+    return max(cols, runs - 1)
+
+
 def generated_design(stage: dict) -> np.ndarray:
-    """Coded design generated for the stage (pyDOE3 / Plackett-Burman generators)."""
+    """Coded design generated for the stage (pyDOE3 / Plackett-Burman generators); a
+    Plackett-Burman stage has the ``runs`` it asks for (:func:`pb_columns`), its factors and
+    dummies in the first columns."""
     k = len(stage["factors"])
     if stage["kind"] == "plackett_burman":
-        return doe.plackett_burman(k + len(stage.get("dummies", [])))
+        cols = k + len(stage.get("dummies") or [])
+        return doe.plackett_burman(pb_columns(stage))[:, :cols]
     if stage["kind"] == "box_behnken":
         return doe.box_behnken(k, int(stage.get("center_points", 0)))
     raise ValueError(stage["kind"])
@@ -245,8 +266,40 @@ def _enough_points(stage: dict, table: pd.DataFrame, rid: str, n: int, k: int) -
                      f"{n}; without a response: " + ("; ".join(why) or "none"))
 
 
+def _point_labels(table: pd.DataFrame, data: pd.DataFrame, rid: str) -> list:
+    """Run numbers of the points a response's fit uses (:func:`fit_stage`), in its order."""
+    idx = data.dropna(subset=[rid]).index
+    if "run" in table.columns:
+        return [int(v) if float(v).is_integer() else v for v in table.loc[idx, "run"]]
+    return [int(i) + 1 for i in idx]
+
+
+def _finite_row(row: dict, notes: list[str]) -> dict:
+    """A fit.csv row with no infinite number: an undefined statistic is empty and the row's
+    ``note`` says why (``notes``: the model's and the Box-Cox analysis's reasons; an infinity
+    neither explains is named)."""
+    out = dict(row)
+    named = []
+    for k, v in row.items():
+        if isinstance(v, (float, np.floating)) and np.isinf(v):
+            out[k] = np.nan
+            named.append(k)
+    explained = {"pred_R2", "PRESS"} if notes and notes[0] else set()
+    if notes[1:] and notes[1]:
+        explained |= {"boxcox_ci_low", "boxcox_ci_high"}
+    rest = [k for k in named if k not in explained]
+    if rest:
+        notes = notes + [f"{', '.join(rest)} infinite (written empty)"]
+    out["note"] = "; ".join(n for n in notes if n)
+    return out
+
+
 def regression_frames(stage: dict, table: pd.DataFrame) -> dict[str, pd.DataFrame]:
-    """anova, fit, coefficients and effects frames for a PB/BBD stage (all responses)."""
+    """anova, fit, coefficients and effects frames for a PB/BBD stage (all responses).
+
+    fit: one row per response and model; a statistic the data leave undefined (PRESS and
+    pred R2 where a point has leverage 1, a Box-Cox interval reaching past the searched
+    lambda range, any other infinity) is empty and the row's ``note`` says why."""
     anova, fit, coef, effects = [], [], [], []
     data = stage_data(stage, table)
     syms = list(stage["factors"])
@@ -263,13 +316,15 @@ def regression_frames(stage: dict, table: pd.DataFrame) -> dict[str, pd.DataFram
             row = {"response": sf.response, "model": label, "transform": sf.transform, **st,
                    "max_min_ratio": sugg.get("ratio"), "transform_suggested": sugg.get("recommend"),
                    "reduction": sf.reduction if label == "reduced" else ""}
+            notes = [m.statistics_note(_point_labels(table, data, sf.response))]
             try:
                 bc = rsm.boxcox(m)
                 row.update({"boxcox_lambda": bc.get("lambda_best"), "boxcox_ci_low": bc.get("ci_low"),
                             "boxcox_ci_high": bc.get("ci_high"), "boxcox_recommended": bc.get("recommended_transform")})
+                notes.append(f"Box-Cox: {bc['ci_note']}" if bc.get("ci_note") else "")
             except (ValueError, np.linalg.LinAlgError) as exc:  # non-positive responses
                 row["boxcox_recommended"] = f"n/a ({exc})"
-            fit.append(row)
+            fit.append(_finite_row(row, notes))
             c = m.coefficients().copy()
             c.insert(0, "model", label)
             c.insert(0, "response", sf.response)
@@ -485,6 +540,33 @@ def calibrated_rows(optimum: pd.DataFrame, case: str) -> pd.DataFrame:
     if "calibrated" not in sel.columns:
         return sel.iloc[0:0]
     return sel[sel["calibrated"].astype(str).str.lower() == "true"]
+
+
+#: a coded level within this of -1 or +1 lies on a bound of the design region
+ON_BOUND = 1e-6
+
+
+def factors_on_bounds(stage: dict, row) -> list[str]:
+    """The factors of a set (a row of ``optimum.csv`` or ``refined.csv``: ``<factor>_coded``
+    or the actual levels) that lie on a bound of the stage's design region, as text:
+    ``["A at its low bound 0.3", "C at its high bound 0.6"]`` (empty when none does or the
+    stage has no low and high levels)."""
+    out = []
+    for s, f in (stage.get("factors") or {}).items():
+        if f.get("low") is None or f.get("high") is None:
+            continue
+        lo, hi = float(f["low"]), float(f["high"])
+        if f"{s}_coded" in row and pd.notna(row[f"{s}_coded"]):
+            x = float(row[f"{s}_coded"])
+        elif s in row and pd.notna(row[s]):
+            x = float(doe.actual_to_coded(np.array([float(row[s])]), lo, hi)[0])
+        else:
+            continue
+        if x <= -1.0 + ON_BOUND:
+            out.append(f"{s} at its low bound {lo:g}")
+        elif x >= 1.0 - ON_BOUND:
+            out.append(f"{s} at its high bound {hi:g}")
+    return out
 
 
 def calibrated_levels(stage: dict, optimum: pd.DataFrame, case: str | None = None) -> dict[str, float]:

@@ -7,7 +7,9 @@ the papers' tool and process tests, and the calibrated set beside the paper's.
   SD, signed relative error, whether the mean meets the target within 2 %, the response
   surface's prediction at the optimum (and its distance from the target) and the paper's own
   verification numbers (``printed_verification`` of the case) beside them.  A row that misses
-  says why (:func:`diagnose`).
+  says why (:func:`diagnose`).  A seed whose run failed is counted (``failed_seeds``); where
+  others succeeded the status says how many of the seeds failed (never ``ok``) and the note
+  names them with the reason, the statistics being those of the others.
 * :func:`tool_frame` - the soil's ``measurements`` (:mod:`soilcal.config.measurements`)
   simulated at the calibrated set of the case each row names.
 * :func:`calibrated_vs_paper` - every calibrated parameter beside the paper's calibrated value.
@@ -24,7 +26,7 @@ VERIFY_DEFAULTS = {"replicates": 4, "seed_offset": 10000, "paper": []}
 TOLERANCE_PERCENT = 2.0
 SURFACE_TOLERANCE = 0.5
 VERIFICATION_COLUMNS = ["stage", "case", "round", "response", "target_id", "target", "target_source", "preset", "n",
-                        "seeds", "simulated_mean", "simulated_sd", "relative_error_percent",
+                        "seeds", "failed_seeds", "simulated_mean", "simulated_sd", "relative_error_percent",
                         "within_2_percent", "predicted", "predicted_minus_target", "particles", "paper_target",
                         "paper_simulated", "paper_relative_error_percent", "status", "note"]
 TOOL_COLUMNS = ["measurement", "row", "covariate", "covariate_value", "scenario", "setup", "measure", "unit",
@@ -97,12 +99,15 @@ def not_run_rows(stage_id: str, case: dict, reason: str) -> pd.DataFrame:
 
 def diagnose(mean: float, sd: float, n: int, target: float, predicted: float | None,
              ci: tuple[float, float] | None = None, replicates: int | None = None,
-             model: str | None = None) -> str:
+             model: str | None = None, on_bounds=None) -> str:
     """Why a verification mean misses its target by more than 2 % (empty when it meets it).
 
     * the surface cannot reach the target: the prediction at the optimum is more than 0.5
-      from the target (a model limit within the design region) and the 95 % confidence
-      interval of the surface's mean there, ``ci`` where given, excludes the target;
+      from the target (a model limit) and the 95 % confidence interval of the surface's mean
+      there, ``ci`` where given, excludes the target; where the set has factors on a bound of
+      the design region (``on_bounds``, :func:`soilcal.chain.stage.factors_on_bounds`) the
+      note names them: the surface comes closest on the region's boundary, so the target lies
+      outside the region; otherwise the limit is the surface's within the region;
     * surface scatter: the prediction misses by more than 0.5 but its confidence interval
       contains the target: the design points' own seed scatter leaves open whether the
       design region reaches it (replicates per design point would tell; with ``replicates``,
@@ -143,8 +148,10 @@ def diagnose(mean: float, sd: float, n: int, target: float, predicted: float | N
                          f"it (replicates per design point would tell{how})")
         else:
             band = f" (95 % confidence interval {lo:.2f} to {hi:.2f})" if known else ""
+            where = (f"; {', '.join(on_bounds)}: the target lies outside the design region" if on_bounds
+                     else ", within the design region")
             notes.append(f"model limit: the response surface predicts {predicted:.2f} at its best set, "
-                         f"{predicted - target:+.2f} from the target{band}, within the design region")
+                         f"{predicted - target:+.2f} from the target{band}{where}")
     sem = sd / np.sqrt(n) if n > 1 and np.isfinite(sd) else np.nan
     if np.isfinite(sem) and abs(mean - target) <= 2 * sem:
         band = TOLERANCE_PERCENT / 100 * abs(target)
@@ -194,7 +201,7 @@ def _case_rows(soil_data, stage, case, optimum, targets, frames, rnd) -> list[di
             sel = rsel[rsel["preset"].astype(str) == preset] if preset else rsel
             row = _verification_row(stage, case, rid, goal, targets, soil_data, cal, sel, preset)
             row["round"] = rnd
-            if rnd == 2 and "note" in cal.columns and row["status"] == "ok":
+            if rnd == 2 and "note" in cal.columns and row["n"] > 0:
                 row["note"] = "; ".join(n for n in (str(cal["note"].iloc[0]), row["note"]) if n)
             rows.append(row)
     return rows
@@ -203,6 +210,7 @@ def _case_rows(soil_data, stage, case, optimum, targets, frames, rnd) -> list[di
 def _verification_row(stage, case, rid, goal, targets, soil_data, cal, sel, preset) -> dict:
     """One row of :func:`verification_frame`: one case, response and preset."""
     from soilcal.chain.sources import design_replicates
+    from soilcal.chain.stage import factors_on_bounds
 
     tid = goal.get("target", "")
     t = targets.get(tid, {}) if tid else {}
@@ -214,6 +222,7 @@ def _verification_row(stage, case, rid, goal, targets, soil_data, cal, sel, pres
     ok = sel[sel["status"].astype(str) == "ok"]
     vals = ok["value"].to_numpy(float) if len(ok) else np.array([])
     n = int(np.isfinite(vals).sum())
+    failed, failed_note = _failed_seeds(sel)
     mean = float(np.nanmean(vals)) if n else np.nan
     sd = float(np.nanstd(vals, ddof=1)) if n > 1 else np.nan
     pred = float(cal[rid].iloc[0]) if len(cal) and rid in cal.columns else np.nan
@@ -225,19 +234,25 @@ def _verification_row(stage, case, rid, goal, targets, soil_data, cal, sel, pres
         status = "not run: " + ("; ".join(r for r in reasons if r) or "no calibrated set")
     elif n == 0:
         status = ("failed: " + "; ".join(sel["error"].astype(str).unique())) if len(sel) else "not run"
+    elif failed:
+        status = f"{failed} of {failed + n} seeds failed"
     else:
         status = "ok"
     ci = tuple(float(cal[f"{rid}_{k}"].iloc[0]) for k in ("ci_low", "ci_high")) \
         if len(cal) and f"{rid}_ci_low" in cal.columns else None
     model = (stage.get("optimise") or {}).get("model", "reduced")
-    note = diagnose(mean, sd, n, target, pred, ci, design_replicates(soil_data), model) if status == "ok" else ""
-    if status == "ok" and goal.get("goal") != "target":
+    bounds = factors_on_bounds(stage, cal.iloc[0]) if len(cal) else []
+    note = diagnose(mean, sd, n, target, pred, ci, design_replicates(soil_data), model, bounds) \
+        if len(cal) and n else ""
+    if len(cal) and n and goal.get("goal") != "target":
         note = f"goal {goal.get('goal')}: no target value; the paper's verification is beside it"
+    if n and failed:
+        note = "; ".join(x for x in (failed_note + f": the statistics are of the other {n}", note) if x)
     return {
         "stage": stage["id"], "case": case["id"], "response": rid, "target_id": tid or goal.get("goal"),
         "target": target, "target_source": t.get("source", "config" if "value" in goal else ""),
         "preset": preset or (ok["preset"].iloc[0] if len(ok) else ""), "n": n,
-        "seeds": " ".join(str(int(s)) for s in ok["seed"]) if len(ok) else "",
+        "seeds": " ".join(str(int(s)) for s in ok["seed"]) if len(ok) else "", "failed_seeds": failed,
         "simulated_mean": mean, "simulated_sd": sd, "relative_error_percent": rel,
         "within_2_percent": bool(np.isfinite(rel) and abs(rel) <= TOLERANCE_PERCENT),
         "predicted": pred, "predicted_minus_target": pred - target if np.isfinite(target) else np.nan,
@@ -249,12 +264,44 @@ def _verification_row(stage, case, rid, goal, targets, soil_data, cal, sel, pres
         "status": status, "note": note}
 
 
+def _pinned(v):
+    """An identifiability row's ``pinned`` as read back from its CSV: True, False or
+    ``"at bound"`` (:func:`soilcal.optimise.near_optimal.identifiability`)."""
+    if isinstance(v, (bool, np.bool_)):
+        return bool(v)
+    text = str(v).strip()
+    if text in ("True", "False"):
+        return text == "True"
+    if text == "at bound":
+        return text
+    raise InputError("identifiability.csv", "pinned", "True, False or 'at bound'", v)
+
+
+def _failed_seeds(sel: pd.DataFrame) -> tuple[int, str]:
+    """(count, note) of the verification seeds of one response that ran and failed (not the
+    rows of a replicate that could not run), the note naming the seeds and the reasons."""
+    if not len(sel):
+        return 0, ""
+    st = sel["status"].astype(str)
+    vals = pd.to_numeric(sel["value"], errors="coerce")
+    bad = sel[((st != "ok") | vals.isna()) & ~st.str.startswith("not run")]
+    if not len(bad):
+        return 0, ""
+    seeds = [str(int(s)) for s in pd.to_numeric(bad["seed"], errors="coerce").dropna()] if "seed" in bad else []
+    reasons = [r for r in dict.fromkeys(bad["error"].astype(str)) if r and r != "nan"] if "error" in bad else []
+    who = (f"seed {seeds[0]}" if len(seeds) == 1 else f"seeds {', '.join(seeds)}") if seeds else \
+        f"{len(bad)} seed{'s' if len(bad) > 1 else ''}"
+    return len(bad), f"{who} failed ({'; '.join(reasons) or 'no reason recorded'})"
+
+
 def calibrated_vs_paper(soil_data: dict, stages: dict[str, tuple[dict, pd.DataFrame, pd.DataFrame]]) -> pd.DataFrame:
     """Every calibrated parameter of every case beside the paper's calibrated value.
 
     ``stages``: stage id -> (DEM stage, optimum frame, identifiability frame).  A factor's
     paper value is the case's ``printed_optimum`` (the paper's symbol of the same parameter);
-    a fixed parameter's is the value the config's stage fixes it at.
+    a fixed parameter's is the value the config's stage fixes it at.  ``pinned``: whether the
+    near-optimal sets pin a factor down (True, False, ``at bound`` where a bound of the design
+    region holds it rather than the data), ``fixed`` for a fixed parameter.
     """
     from soilcal.chain.stage import calibrated_rows
 
@@ -293,7 +340,7 @@ def calibrated_vs_paper(soil_data: dict, stages: dict[str, tuple[dict, pd.DataFr
                 if role == "factor" and idt is not None:
                     r = idt[idt["factor"] == sym]
                     if len(r):
-                        row.update(pinned=bool(r["pinned"].iloc[0]), near_optimal_min=float(r["min"].iloc[0]),
+                        row.update(pinned=_pinned(r["pinned"].iloc[0]), near_optimal_min=float(r["min"].iloc[0]),
                                    near_optimal_max=float(r["max"].iloc[0]))
                 if role == "fixed":
                     row["pinned"] = "fixed"

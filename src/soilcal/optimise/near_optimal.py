@@ -7,7 +7,9 @@ search (:func:`soilcal.optimise.desirability_optimise`) whose overall desirabili
 ``window`` of the best one; :func:`calibrated_choice` picks the one the workflow adopts (the
 one nearest the design centre); :func:`identifiability` tells, factor by factor, whether the
 near-optimal sets agree on its value (pinned) or spread over much of its range (not pinned
-down by the data).
+down by the data), or whether a bound of the design region holds them (at bound: the sets
+pile up against the bound, where the search stops, so the region and not the data fixes the
+value; beyond it the surface is not known).
 """
 
 from __future__ import annotations
@@ -24,6 +26,8 @@ from soilcal.optimise.desirability import desirability_optimise
 #: overall desirability from which the goals count as met (a target goal's d is 1 at the
 #: target and falls off towards its limits)
 REACHED = 0.99
+#: a coded level within this of -1 or +1 lies on a bound of the design region
+ON_BOUND = 1e-6
 
 
 def near_optimal_sets(
@@ -164,7 +168,10 @@ def identifiability(
     One row per factor: factor, n_sets, min, max, spread (max - min, actual units),
     spread_coded (spread / half range), pinned (spread_coded <= 2 * pinned_fraction, i.e. the
     near-optimal sets span at most ``pinned_fraction`` of the full range) and a note. With a
-    single near-optimal set every factor is pinned and the note says so.
+    single near-optimal set every factor is pinned and the note says so.  A factor that would
+    be pinned but whose sets all lie within that band of one bound, at least one of them on
+    it (coded distance :data:`ON_BOUND`), is ``"at bound"`` instead of True: the region's bound
+    holds it, not the data.
     """
     if not isinstance(sets, pd.DataFrame):
         raise InputError(None, "sets", "a DataFrame from near_optimal_sets", type(sets).__name__)
@@ -200,7 +207,23 @@ def identifiability(
         spread = vmax - vmin
         spread_coded = spread / ((hi[j] - lo[j]) / 2.0)
         pct = 100.0 * spread_coded / 2.0
-        if n == 1:
+        coded = (v - (lo[j] + hi[j]) / 2.0) / ((hi[j] - lo[j]) / 2.0)
+        bound = None
+        if coded.min() <= -1.0 + ON_BOUND and coded.max() <= -1.0 + 2.0 * pf:
+            bound = ("low", lo[j])
+        elif coded.max() >= 1.0 - ON_BOUND and coded.min() >= 1.0 - 2.0 * pf:
+            bound = ("high", hi[j])
+        if bound is not None:
+            pinned = "at bound"
+            where = f"its {bound[0]} bound {bound[1]:g}"
+            if spread_coded <= ON_BOUND:
+                sets = "the near-optimal set has" if n == 1 else "every near-optimal set has"
+                note = f"at bound: {sets} it at {where}"
+            else:
+                far = 100.0 * float(np.max(np.abs(np.abs(coded) - 1.0))) / 2.0
+                note = f"at bound: the near-optimal sets lie within {far:.0f} % of the range of {where}, some on it"
+            note += ": held there by the design region, not pinned down by the data"
+        elif n == 1:
             pinned = True
             note = "pinned: only one near-optimal set was found, so the spread is not assessed"
         elif spread_coded <= 2.0 * pf:

@@ -17,7 +17,11 @@ ANOVA as printed by Design-Expert for response surfaces:
 
 Fit statistics (Design-Expert "Fit Statistics" panel, on the transformed scale):
 - Std. Dev. = sqrt(MS_res), C.V.% = 100 Std.Dev / mean(y').
-- PRESS = sum (e_i / (1 - h_ii))^2, Pred R^2 = 1 - PRESS / SS_total.
+- PRESS = sum (e_i / (1 - h_ii))^2, Pred R^2 = 1 - PRESS / SS_total.  A point of leverage 1
+  (h_ii >= 1 - 1e-8: the model passes through it whatever its value, e.g. the one point left
+  of a Box-Behnken square whose partner failed) has no leave-one-out prediction: PRESS and
+  Pred R^2 are then undefined, NaN, and :meth:`RSMFit.statistics_note` says why (the formula
+  would give 0/0 or e/(tiny), a NaN or an infinite PRESS).
 - Adeq Precision = (max yhat - min yhat) / sqrt(mean V(yhat)), with
   mean V(yhat) = p sigma^2 / n (the average of x_i^T (X^T X)^-1 x_i sigma^2 over the design
   points equals p sigma^2 / n).
@@ -45,6 +49,9 @@ from scipy import stats
 from soilcal.errors import InputError
 
 # --------------------------------------------------------------------------- terms
+
+#: leverage at or above 1 - LEVERAGE_ONE_TOL counts as 1 (module docstring, PRESS)
+LEVERAGE_ONE_TOL = 1e-8
 
 _TERM_PIECE = re.compile(r"^\s*([^\^\s]+)\s*(?:\^\s*(\d+))?\s*$")
 
@@ -329,11 +336,32 @@ class RSMFit:
         return np.einsum("ij,ji->i", X, np.linalg.solve(X.T @ X, X.T))
 
     @property
+    def leverage_one(self) -> np.ndarray:
+        """Positions (0-based, in the fit's row order) of the points with leverage 1 (module
+        docstring): their residual is zero whatever their value."""
+        return np.flatnonzero(self.leverage >= 1.0 - LEVERAGE_ONE_TOL)
+
+    @property
     def press(self) -> float:
+        """PRESS, NaN where a point has leverage 1 (module docstring)."""
+        if self.leverage_one.size:
+            return float("nan")
         return float(((self.residuals / (1.0 - self.leverage)) ** 2).sum())
 
+    def statistics_note(self, labels: Sequence | None = None) -> str:
+        """Why :meth:`fit_statistics` leaves PRESS and Pred R^2 undefined (empty when it does
+        not); ``labels`` name the fit's points in order (run numbers), default 1, 2, ..."""
+        idx = self.leverage_one
+        if not idx.size:
+            return ""
+        names = [str(labels[i]) if labels is not None else str(i + 1) for i in idx]
+        which = (f"point {names[0]} has" if len(names) == 1 else f"points {', '.join(names)} have")
+        return (f"{which} leverage 1 (a model term rests on {'it' if len(names) == 1 else 'them'} alone, so the "
+                "model passes through it whatever the response): PRESS and pred R2 undefined")
+
     def fit_statistics(self) -> dict[str, float]:
-        """Std. Dev., Mean, C.V.%, R2, adj R2, pred R2, PRESS, Adeq Precision."""
+        """Std. Dev., Mean, C.V.%, R2, adj R2, pred R2, PRESS, Adeq Precision (PRESS and pred R2
+        NaN where a point has leverage 1: :meth:`statistics_note`)."""
         sst = float(((self.y_t - self.y_t.mean()) ** 2).sum())
         sd = float(np.sqrt(self.mse))
         mean = float(self.y_t.mean())

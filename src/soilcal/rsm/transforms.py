@@ -61,7 +61,9 @@ def boxcox(fit_or_X, y=None, alpha: float = 0.05, lambdas=None) -> dict:
     or of an explicit model matrix ``X`` (with intercept column) and response ``y``.
 
     Returns lambda_best, ci_low, ci_high, recommended_transform, the lambda grid and
-    ln SS_E on it (for the plot), and the threshold line.
+    ln SS_E on it (for the plot), the threshold line and ``ci_note``: where the 95 % interval
+    reaches past an end of the searched lambda range its limit is -inf or inf and the note
+    says so (empty otherwise).
     """
     if y is None:
         X = np.asarray(fit_or_X.model_matrix, dtype=float)
@@ -94,6 +96,15 @@ def boxcox(fit_or_X, y=None, alpha: float = 0.05, lambdas=None) -> dict:
             return float("nan")
     ci_low = edge(grid[0], lam_best) if f(grid[0]) > 0 else float("-inf")
     ci_high = edge(lam_best, grid[-1]) if f(grid[-1]) > 0 else float("inf")
+    open_ends = [side for side, v in (("below", ci_low), ("above", ci_high)) if np.isinf(v)]
+    if len(open_ends) == 2:
+        ci_note = (f"the 95 % interval of lambda covers the whole searched range {grid[0]:g} to {grid[-1]:g}: "
+                   "the data do not tell a transform apart")
+    elif open_ends:
+        end = grid[0] if open_ends[0] == "below" else grid[-1]
+        ci_note = f"the 95 % interval of lambda reaches past {end:g}, the end of the searched range"
+    else:
+        ci_note = ""
     inside = [l for l in STANDARD_LAMBDAS if ci_low <= l <= ci_high]
     if 1.0 in inside:
         rec = "none"
@@ -110,6 +121,7 @@ def boxcox(fit_or_X, y=None, alpha: float = 0.05, lambdas=None) -> dict:
         "ln_sse": np.log(sse),
         "ln_sse_threshold": float(np.log(thresh)),
         "alpha": alpha,
+        "ci_note": ci_note,
     }
 
 

@@ -224,6 +224,31 @@ _UNIT_SCALE = {"-": 1.0, "Pa": 1.0, "kPa": 1e3, "MPa": 1e6, "GPa": 1e9, "J/m^2":
                "mJ/m^2": 1e-3, "kg/m^3": 1.0, "g/cm^3": 1e3}
 
 
+def unit_scale(path, entry: dict, where: str) -> float:
+    """Factor to SI of a config entry's printed ``unit`` (``_UNIT_SCALE``); another unit raises
+    InputError naming ``<where>.unit``."""
+    unit = entry.get("unit", "-")
+    if unit not in _UNIT_SCALE:
+        raise InputError(path, f"{where}.unit", f"one of {', '.join(_UNIT_SCALE)}", unit)
+    return _UNIT_SCALE[unit]
+
+
+def dem_field(path, soil_data: dict, pname: str, where: str) -> tuple[str, float]:
+    """The DEM parameter a soil config parameter sets and the factor to SI of its unit:
+    ``<pair>_<kind>`` (``soil-steel`` + ``static_friction`` -> ``soil_steel_static_friction``).
+    A parameter without pair and kind raises InputError naming ``where`` (the stage's factor or
+    fixed entry that uses it); one that names no DEM parameter, or a unit without a factor to
+    SI, names ``parameters.<pname>``."""
+    entry = soil_data.get("parameters", {}).get(pname)
+    if entry is None or "pair" not in entry or "kind" not in entry:
+        raise InputError(path, where, "a parameter with pair and kind under `parameters`", pname)
+    known = DemParams.names()
+    name = f"{entry['pair'].replace('-', '_')}_{entry['kind']}"
+    if name not in known:
+        raise InputError(path, f"parameters.{pname}", f"a DEM parameter ({', '.join(known)})", name)
+    return name, unit_scale(path, entry, f"parameters.{pname}")
+
+
 def stage_params(soil, stage_id: str, levels: dict, base: "DemParams | None" = None,
                  coded: bool = False, params: dict | None = None,
                  params_field: str = "simulation.params") -> DemParams:
@@ -250,10 +275,7 @@ def stage_params(soil, stage_id: str, levels: dict, base: "DemParams | None" = N
     values = {}
 
     def scale_of(entry, where):
-        unit = entry.get("unit", "-")
-        if unit not in _UNIT_SCALE:
-            raise InputError(path, f"{where}.unit", f"one of {', '.join(_UNIT_SCALE)}", unit)
-        return _UNIT_SCALE[unit]
+        return unit_scale(path, entry, where)
 
     def put(name, value, where):
         try:
@@ -265,15 +287,7 @@ def stage_params(soil, stage_id: str, levels: dict, base: "DemParams | None" = N
         values[name] = x
 
     def field_of(pname, where):
-        entry = soil.data.get("parameters", {}).get(pname)
-        if entry is None or "pair" not in entry or "kind" not in entry:
-            raise InputError(path, where, "a parameter with pair and kind under `parameters`",
-                             pname)
-        name = f"{entry['pair'].replace('-', '_')}_{entry['kind']}"
-        if name not in known:
-            raise InputError(path, f"parameters.{pname}", f"a DEM parameter ({', '.join(known)})",
-                             name)
-        return name, scale_of(entry, f"parameters.{pname}")
+        return dem_field(path, soil.data, pname, where)
 
     props = soil.data.get("properties", {})
     for prop, name in (("poisson_ratio", "soil_poisson"), ("particle_density", "soil_density"),

@@ -139,7 +139,10 @@ def check_block(soil_path, data: dict) -> None:
     (``stages``) known and simulable - its levels given, or derived from an earlier DEM stage
     (:mod:`soilcal.chain.derive`) - and every response of those stages simulated; the
     ``screening`` block consistent (min_factors <= max_factors, and no more than the factors of
-    a Plackett-Burman screening a steepest-ascent path selects from)."""
+    a Plackett-Burman screening a steepest-ascent path selects from); the chain's own checks of
+    those stages follow (:func:`soilcal.chain.derive.check_dem_stages`: derivable kinds, every
+    factor and fixed value a DEM parameter, Plackett-Burman runs), and every soil parameter of
+    their runs set by the soil (:func:`soilcal.chain.provenance.check_parameters`)."""
     sim = data.get(BLOCK)
     if not sim:
         return
@@ -157,7 +160,7 @@ def check_block(soil_path, data: dict) -> None:
     for i, sid in enumerate(sim.get("stages") or []):
         if sid not in ids:
             raise InputError(soil_path, f"{BLOCK}.stages[{i}]", "a stage id (" + ", ".join(ids) + ")", sid)
-    from soilcal.chain.derive import dem_stage_ids, dependencies, design_mode
+    from soilcal.chain.derive import check_dem_stages, dem_stage_ids, dependencies, design_mode
 
     min_factors = _check_screening(soil_path, sim)
     for sid in dem_stage_ids(data):
@@ -194,6 +197,7 @@ def check_block(soil_path, data: dict) -> None:
                 raise InputError(soil_path, where,
                                  f"low and high levels to simulate the stage (or leave {sid!r} out of "
                                  f"{BLOCK}.stages)", f)
+    check_dem_stages(soil_path, data)
     from soilcal.chain.provenance import check_parameters
 
     check_parameters(soil_path, data)

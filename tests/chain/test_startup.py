@@ -1,0 +1,213 @@
+"""Start-up checks of the stages the DEM source runs (soilcal.chain.derive.check_dem_stages,
+called by the soil loader through the simulation block's check) and the Plackett-Burman run
+count a stage asks for.
+
+A user's own DEM-only soil (no printed table): a 6-factor screening of 12 runs, then a
+Box-Behnken design on three of its parameters.  No DEM run: only loading and designs.
+"""
+
+from __future__ import annotations
+
+import copy
+import json
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+import pytest
+import yaml
+
+from soilcal.chain.derive import check_dem_stages, dem_stage
+from soilcal.chain.files import write_stage_design
+from soilcal.chain.stage import generated_design
+from soilcal.config.load import load_soil
+from soilcal.doe import plackett_burman
+from soilcal.errors import InputError
+
+ROOT = Path(__file__).resolve().parents[2]
+
+SOIL = {
+    "name": "my-loam",
+    "source": "dem",
+    "seed": 7,
+    "parameters": {
+        "e_ss": {"name": "soil-soil restitution", "unit": "-", "pair": "soil-soil", "kind": "restitution"},
+        "mu_ss": {"name": "soil-soil static friction", "unit": "-", "pair": "soil-soil", "kind": "static_friction"},
+        "mur_ss": {"name": "soil-soil rolling friction", "unit": "-", "pair": "soil-soil",
+                   "kind": "rolling_friction"},
+        "e_st": {"name": "soil-steel restitution", "unit": "-", "pair": "soil-steel", "kind": "restitution"},
+        "mu_st": {"name": "soil-steel static friction", "unit": "-", "pair": "soil-steel",
+                  "kind": "static_friction"},
+        "gamma": {"name": "JKR surface energy", "unit": "J/m^2", "pair": "soil-soil", "kind": "surface_energy"},
+    },
+    "stages": [
+        {"id": "screen", "kind": "plackett_burman", "runs": 12,
+         "factors": {"A": {"parameter": "e_ss", "low": 0.2, "high": 0.7},
+                     "B": {"parameter": "mu_ss", "low": 0.2, "high": 0.9},
+                     "C": {"parameter": "mur_ss", "low": 0.02, "high": 0.25},
+                     "D": {"parameter": "e_st", "low": 0.2, "high": 0.7},
+                     "E": {"parameter": "mu_st", "low": 0.3, "high": 0.9},
+                     "F": {"parameter": "gamma", "low": 0.0, "high": 0.8}},
+         "responses": [{"id": "repose", "name": "Repose angle", "unit": "deg"}]},
+        {"id": "rsm", "kind": "box_behnken", "center_points": 3,
+         "factors": {"A": {"parameter": "mu_ss", "low": 0.3, "high": 0.8},
+                     "B": {"parameter": "mur_ss", "low": 0.05, "high": 0.2},
+                     "C": {"parameter": "gamma", "low": 0.1, "high": 0.6}},
+         "fixed": {"e_ss": 0.45, "e_st": 0.45, "mu_st": 0.6},
+         "responses": [{"id": "repose", "name": "Repose angle", "unit": "deg"}],
+         "optimise": {"method": "desirability",
+                      "cases": [{"id": "repose", "goals": {"repose": {"goal": "target", "target": "repose"}}}]}},
+    ],
+    "targets": {"repose": {"value": 36.0, "unit": "deg"}},
+    "simulation": {"responses": {"repose": {"scenario": "repose", "setup": "cinnamon-soil", "measure": "angle_deg",
+                                            "set": {"n_particles": 300}}}},
+}
+
+
+def _write(tmp_path: Path, edit=None) -> Path:
+    d = copy.deepcopy(SOIL)
+    if edit:
+        edit(d)
+    p = tmp_path / "my-loam.yaml"
+    p.write_text(yaml.safe_dump(d, sort_keys=False))
+    return p
+
+
+def _load(path: Path):
+    return load_soil(path, ROOT / "resources")
+
+
+def _stage(d: dict, sid: str) -> dict:
+    return next(s for s in d["stages"] if s["id"] == sid)
+
+
+def test_the_soil_loads(tmp_path):
+    soil = _load(_write(tmp_path))
+    assert [s["id"] for s in soil.stages] == ["screen", "rsm"]
+
+
+# --------------------------------------------------------------------------- from_stage
+
+
+def _bbd_after_screen(d):
+    _stage(d, "rsm")["from_stage"] = "screen"
+
+
+def test_a_box_behnken_after_a_screening_is_refused_at_load_naming_the_file(tmp_path):
+    p = _write(tmp_path, _bbd_after_screen)
+    with pytest.raises(InputError) as e:
+        _load(p)
+    assert e.value.path == str(p) and e.value.field == "stages.rsm.from_stage"
+    assert e.value.got == "box_behnken after plackett_burman"
+    assert "steepest ascent after a Plackett-Burman screening" in e.value.expected
+    assert len(str(e.value).splitlines()) == 1
+
+
+@pytest.mark.parametrize("other", [
+    lambda d: d["simulation"].update(stages=["rsm"]),      # the screening is not simulated
+    lambda d: d["simulation"].update(design="printed"),    # every stage on its config levels
+], ids=["screening-not-simulated", "printed-levels"])
+def test_a_box_behnken_after_a_screening_that_is_not_derived_from_loads(tmp_path, other):
+    _load(_write(tmp_path, lambda d: (_bbd_after_screen(d), other(d))))
+
+
+def test_a_design_override_to_the_recipe_is_checked_again():
+    """The workflow's --config design=recipe reaches a soil after it loaded: the same check."""
+    d = copy.deepcopy(SOIL)
+    _bbd_after_screen(d)
+    d["simulation"]["design"] = "printed"
+    check_dem_stages("my-loam.yaml", d)
+    d["simulation"]["design"] = "recipe"
+    with pytest.raises(InputError, match="stages.rsm.from_stage"):
+        check_dem_stages("my-loam.yaml", d)
+
+
+# --------------------------------------------------------------------------- DEM parameters
+
+
+@pytest.mark.parametrize("edit, field, got, used_by", [
+    (lambda d: d["parameters"]["mu_ss"].update(pair="soil"), "parameters.mu_ss", "soil_static_friction",
+     "stages.screen.factors.B.parameter"),
+    (lambda d: d["parameters"]["e_ss"].update(kind="other"), "parameters.e_ss", "soil_soil_other",
+     "stages.screen.factors.A.parameter"),
+    # a parameter only the Box-Behnken stage fixes
+    (lambda d: (d["parameters"].update(nu={"name": "Poisson ratio", "unit": "-", "pair": "soil",
+                                           "kind": "poisson_ratio"}),
+                _stage(d, "rsm")["fixed"].update(nu=0.3)), "parameters.nu", "soil_poisson_ratio",
+     "stages.rsm.fixed.nu"),
+], ids=["pair", "kind", "fixed"])
+def test_a_parameter_that_sets_no_dem_parameter_is_refused_at_load(tmp_path, edit, field, got, used_by):
+    p = _write(tmp_path, edit)
+    with pytest.raises(InputError) as e:
+        _load(p)
+    assert (e.value.path, e.value.field, e.value.got) == (str(p), field, got)
+    assert e.value.expected.startswith("a DEM parameter (") and used_by in str(e.value)
+
+
+def test_a_parameter_without_a_pair_names_the_factor(tmp_path):
+    p = _write(tmp_path, lambda d: d["parameters"]["gamma"].pop("pair"))
+    with pytest.raises(InputError) as e:
+        _load(p)
+    assert (e.value.field, e.value.got) == ("stages.screen.factors.F.parameter", "gamma")
+
+
+@pytest.mark.parametrize("edit, field", [
+    (lambda d: _stage(d, "rsm")["fixed"].update(e_st=1.5), "stages.rsm.fixed.e_st"),
+    (lambda d: _stage(d, "screen")["factors"]["B"].update(low=-0.1), "stages.screen.factors.B.low"),
+], ids=["fixed", "level"])
+def test_a_value_outside_the_physical_range_is_refused_at_load(tmp_path, edit, field):
+    p = _write(tmp_path, edit)
+    with pytest.raises(InputError) as e:
+        _load(p)
+    assert (e.value.path, e.value.field) == (str(p), field)
+    assert "DEM parameter soil_" in e.value.expected
+
+
+# --------------------------------------------------------------------------- Plackett-Burman runs
+
+
+def test_twelve_runs_of_six_factors_are_generated_as_asked(tmp_path):
+    """An N-run Plackett-Burman design has N - 1 orthogonal columns: 12 runs of 6 factors are
+    the first 6 columns of the 12-run design, the design 6 factors and 5 dummies give."""
+    soil = _load(_write(tmp_path))
+    st = soil.stage("screen")
+    x = generated_design(st)
+    assert x.shape == (12, 6)
+    assert np.array_equal(x.T @ x, 12 * np.eye(6))  # orthogonal two-level columns
+    dummies = dict(st, dummies=["G", "H", "I", "J", "K"])
+    assert np.array_equal(generated_design(dummies)[:, :6], x)
+    assert np.array_equal(x, plackett_burman(11)[:, :6])
+    # without runs: the smallest design for 6 columns, 8 runs
+    assert generated_design({k: v for k, v in st.items() if k != "runs"}).shape == (8, 6)
+
+
+def test_design_csv_of_the_dem_screening_has_the_runs_of_stage_json(tmp_path):
+    soil = _load(_write(tmp_path))
+    targets = {"repose": {"value": 36.0, "source": "measurement"}}
+    tcsv = tmp_path / "targets.csv"
+    pd.DataFrame([{"target_id": "repose", "value": 36.0, "unit": "deg", "source": "measurement"}]).to_csv(tcsv,
+                                                                                                      index=False)
+    out = {"stage": tmp_path / "stage.json", "design": tmp_path / "design.csv", "check": tmp_path / "check.csv"}
+    write_stage_design("dem", soil.stage("screen"), soil.data, {"targets": tcsv}, out)
+    stage = json.loads(out["stage"].read_text())
+    design = pd.read_csv(out["design"])
+    assert stage["runs"] == 12 == len(design)
+    assert stage == dem_stage(soil.data, "screen", targets)
+    # the DEM jobs run the rows of design.csv: the generated design in actual units
+    lo = np.array([0.2, 0.2, 0.02, 0.2, 0.3, 0.0])
+    hi = np.array([0.7, 0.9, 0.25, 0.7, 0.9, 0.8])
+    actual = design[[f"{s}_actual" for s in "ABCDEF"]].to_numpy(float)
+    assert np.allclose(actual, (lo + hi) / 2 + plackett_burman(11)[:, :6] * (hi - lo) / 2, atol=1e-12)
+
+
+@pytest.mark.parametrize("runs, dummies", [(10, []), (8, ["G", "H"]), (4, [])])
+def test_a_run_count_no_plackett_burman_design_has_is_refused_at_load(tmp_path, runs, dummies):
+    def edit(d):
+        _stage(d, "screen").update(runs=runs, **({"dummies": dummies} if dummies else {}))
+
+    p = _write(tmp_path, edit)
+    with pytest.raises(InputError) as e:
+        _load(p)
+    cols = 6 + len(dummies)
+    assert (e.value.path, e.value.field, e.value.got) == (str(p), "stages.screen.runs", runs)
+    assert f"a multiple of 4 above the {cols} factors and dummies" in e.value.expected
