@@ -60,7 +60,10 @@ SOIL = {
     ],
     "targets": {"repose": {"value": 36.0, "unit": "deg"}},
     "simulation": {"responses": {"repose": {"scenario": "repose", "setup": "cinnamon-soil", "measure": "angle_deg",
-                                            "set": {"n_particles": 300}}}},
+                                            "set": {"n_particles": 300}}},
+                   # the soil parameters no stage varies or fixes (soilcal.chain.provenance)
+                   "params": {"soil_steel_rolling_friction": 0.1, "soil_density": 1500.0, "soil_poisson": 0.3,
+                              "soil_shear_modulus": 1.0e6}},
 }
 
 
