@@ -123,7 +123,9 @@ def diagnose(mean: float, sd: float, n: int, target: float, predicted: float | N
       n = ceil((2 sd / (0.02 |target|))^2), so that a user can judge whether seeds or larger
       heaps are the way;
     * surface bias: the surface predicts the target but the DEM mean differs by more than
-      the seed scatter explains (lack of fit of the quadratic at the optimum).
+      the seed scatter explains (lack of fit of the quadratic at the optimum);
+    * undecided: fewer than two seeds (failed seeds can leave one): no scatter to tell seed
+      scatter from a surface bias.
     """
     if not np.isfinite(target) or target == 0 or not np.isfinite(mean):
         return ""
@@ -160,9 +162,13 @@ def diagnose(mean: float, sd: float, n: int, target: float, predicted: float | N
                      f"({sem:.2f}) of the mean of {n} seeds; more seeds or larger heaps would tell "
                      f"(at this seed SD {sd:.2f}, {need} seeds would bring two standard errors within "
                      f"the {TOLERANCE_PERCENT:g} % band of +-{band:.2f})")
+    elif not notes and not np.isfinite(sem):
+        notes.append(f"undecided: {n} seed{'s' if n != 1 else ''} gave {mean:.2f} with no scatter to judge the miss "
+                     f"{mean - target:+.2f} by (it takes two seeds), so seed scatter and a surface bias cannot be "
+                     "told apart; more seeds would tell")
     elif not notes and predicted is not None and np.isfinite(predicted):
         notes.append(f"surface bias: the surface predicts the target but {n} seeds give {mean:.2f} "
-                     f"(+-{sem if np.isfinite(sem) else float('nan'):.2f} standard error): the quadratic "
+                     f"(+-{sem:.2f} standard error): the quadratic "
                      "misrepresents the DEM at the optimum (see the lack-of-fit test)")
     elif not notes:
         notes.append(f"the mean of {n} seeds, {mean:.2f}, misses the target by more than the seed scatter "
