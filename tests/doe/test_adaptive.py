@@ -557,3 +557,20 @@ def test_an_exhausted_box_verifies_its_best_candidate_once(seed):
     kinds = runs.groupby("iteration")["kind"].agg(lambda k: set(k))
     only_ver = [it for it, k in kinds.items() if k == {"verification"}]
     assert only_ver and all(b - a > 1 for a, b in zip(only_ver, only_ver[1:]))
+
+
+def test_a_consistent_region_held_by_a_bound_is_at_bound_not_pinned():
+    # one factor on [0, 1]: the candidates with P > 1/2 span a in [0, 0.1] (coded -1 to -0.8),
+    # then [0.45, 0.55], then [0.2, 0.9]
+    prob = ad.Problem([ad.Factor("a", 0.0, 1.0)], [ad.Target("y", 1.0)])
+    cand = np.linspace(-1, 1, 201)[:, None]
+    a = prob.to_actual(cand)[:, 0]
+
+    def region(lo, hi):
+        p = np.where((a >= lo - 1e-12) & (a <= hi + 1e-12), 0.9, 0.1)
+        return ad.consistent_region(prob, cand, p).iloc[0]["pinned"]
+
+    assert region(0.0, 0.1) == "at bound"
+    assert region(0.9, 1.0) == "at bound"
+    assert region(0.45, 0.55) == True  # noqa: E712  (a bool column: numpy's True)
+    assert region(0.2, 0.9) == False  # noqa: E712

@@ -137,6 +137,10 @@ OPTIMISED_GOALS = GOALS[1:]
 #: factors whose spread over the consistent region exceeds this share of their range are
 #: "not pinned down"
 UNPINNED_SHARE = 0.5
+#: a pinned factor whose consistent candidates reach this share of its range from a bound is
+#: "at bound": the box, not the data, holds it there (the candidates are a Halton sample, so
+#: the region's edge on a bound shows within about a fiftieth of the range)
+NEAR_BOUND = 0.02
 
 
 # --------------------------------------------------------------------------- problem
@@ -667,13 +671,16 @@ def consistent_region(problem: Problem, cand: np.ndarray, p: np.ndarray) -> pd.D
     for i, f in enumerate(problem.factors):
         v = xa[:, i]
         span = (f.high - f.low)
+        pinned = bool(v.size and (v.max() - v.min()) <= UNPINNED_SHARE * span)
+        if pinned and span > 0 and (v.min() - f.low <= NEAR_BOUND * span or f.high - v.max() <= NEAR_BOUND * span):
+            pinned = "at bound"  # held by the box: the consistent set may go on beyond it
         rows.append({"factor": f.name, "low": f.low, "high": f.high, "candidates": int(inside.sum()),
                      "share_of_box": float(inside.mean()) if inside.size else 0.0,
                      "min": float(v.min()) if v.size else np.nan,
                      "max": float(v.max()) if v.size else np.nan,
                      "mean": float(v.mean()) if v.size else np.nan,
                      "sd": float(v.std(ddof=1)) if v.size > 1 else np.nan,
-                     "pinned": bool(v.size and (v.max() - v.min()) <= UNPINNED_SHARE * span)})
+                     "pinned": pinned})
     return pd.DataFrame(rows)
 
 
