@@ -174,6 +174,7 @@ def test_a_miss_larger_than_the_seed_scatter_is_not_called_seed_scatter():
     assert "the surface itself predicts 28 at this set, -3 from the target; A at its low bound 0: the target " \
            "lies outside the design region" in limit
     assert "1 verification seed, no standard error" in df.loc["one", "note"]
-    # mean 32, 1 from the target, two standard errors 1.83: seed scatter
-    assert "the miss +1 is within two standard errors (1.83) of the mean of 4 seeds (seed scatter)" in \
+    # mean 32, 1 from the target, two standard errors 2 sd / 2 = sd of 30, 34, 31, 33 = 1.83: seed scatter
+    two_se = np.std([30.0, 34.0, 31.0, 33.0], ddof=1)
+    assert f"the miss +1 is within two standard errors ({two_se:.3g}) of the mean of 4 seeds (seed scatter)" in \
         df.loc["scatter", "note"]

@@ -266,7 +266,9 @@ def test_the_gp_level_carries_its_own_uncertainty(seed):
     g = ad.GPSurrogate(xc, y, np.full(8, 2), 2.0, seed)
     m, s = g.predict(np.vstack([np.zeros(3), xc[:2]]))
     assert (s >= 0.5 * (1 - 1e-6)).all()
-    if g.gp.kernel_.k1.k1.constant_value <= 1.001e-3:
+    at_bound = g.gp.kernel_.k1.k1.constant_value <= 1.001e-3
+    assert at_bound or seed not in (0, 3, 5)  # these draws find no signal: the exact case below is checked
+    if at_bound:
         assert s == pytest.approx(np.full(3, 0.5), rel=5e-3)  # the bound leaves a trace of signal
         assert m == pytest.approx(np.full(3, y.mean()), abs=0.01)
 

@@ -276,7 +276,7 @@ def test_a_factor_held_by_a_bound_of_the_region_is_at_bound_not_pinned():
 
 
 def test_sets_piled_against_a_bound_are_at_bound_and_sets_inside_are_pinned():
-    # x1 on [10, 20]: 10 and 10.5 are coded -1 and -0.9, within 10 % of the range of the low
+    # x1 on [10, 20]: 10 and 10.5 are coded -1 and -0.9, within 5 % of the range of the low
     # bound and one on it; 10.5 and 11 (coded -0.9, -0.8) are pinned inside the region
     on = pd.DataFrame({"x1": [10.0, 10.5], "near_optimal": [True, True], "desirability": [1.0, 1.0]})
     row = identifiability(on, ["x1"], [10.0], [20.0]).iloc[0]

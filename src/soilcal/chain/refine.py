@@ -71,6 +71,7 @@ def _unbiased_miss(stage: dict, cal: pd.DataFrame, tgt: dict, stats: dict, pred:
     from soilcal.chain.stage import factors_on_bounds
 
     parts = []
+    bounds = factors_on_bounds(stage, cal.iloc[0])  # the set's, the same for every response
     for r in missed:
         m, sd, n = stats[r]
         t, p = tgt[r], pred[r]
@@ -83,7 +84,6 @@ def _unbiased_miss(stage: dict, cal: pd.DataFrame, tgt: dict, stats: dict, pred:
             parts.append(f"{r}: the miss {m - t:+.3g} is within two standard errors ({two_se:.3g}) of the mean "
                          f"of {n} seeds (seed scatter)")
             continue
-        bounds = factors_on_bounds(stage, cal.iloc[0])
         where = (f"; {', '.join(bounds)}: the target lies outside the design region" if bounds
                  else ": the surface does not reach the target there")
         parts.append(f"{r}: the miss {m - t:+.3g} is more than seed scatter (two standard errors {two_se:.3g} of "

@@ -74,12 +74,6 @@ def _at_bounds(theta: dict, effects: list) -> list[str]:
     return out
 
 
-def _scale(u: pd.DataFrame) -> np.ndarray:
-    """The relative residual's denominators of the rows (:func:`soilcal.loop.residuals.scales`;
-    |measured| for a table written before the column existed)."""
-    return u["scale"].to_numpy(float) if "scale" in u else np.abs(u["measured"].to_numpy(float))
-
-
 def reference_values(res: pd.DataFrame, settings: Settings) -> dict:
     """Quantity -> the value at which the calibrated parameters hold: declared, else the
     mean over the usable rows (recorded in the outputs)."""
@@ -200,8 +194,7 @@ def _follows(rank: pd.DataFrame, res: pd.DataFrame | None = None, quantity_of: d
     return text + ("; also " + ", ".join(also) if also else "")
 
 
-def _interval(u: pd.DataFrame, effects: list, final, settings: Settings,
-              simulations: dict | None = None) -> tuple[dict, str]:
+def _interval(u: pd.DataFrame, effects: list, final, settings: Settings) -> tuple[dict, str]:
     """The chosen effects' 95 % intervals and how they were found: the wider of the fit's
     own interval and the bootstrap over the seeds and the measured standard errors
     (:func:`soilcal.loop.select.bootstrap_ci`; the fit's interval carries a lack of fit
@@ -219,11 +212,12 @@ def _interval(u: pd.DataFrame, effects: list, final, settings: Settings,
         return final.ci, fit_only + " (a measured row without its SD: the bootstrap cannot redraw it)"
     n_meas = u["measured_n"].to_numpy(float) if "measured_n" in u else np.full(len(u), np.nan)
     se = sd / np.sqrt(np.where(np.isfinite(n_meas) & (n_meas >= 1), n_meas, 1.0))
-    sims = simulations or {}
-    labels = [str(sims.get((m, int(r)), f"{m}/{r}")) for m, r in zip(u["measurement"], u["row"])]
+    # rows of one simulation (a test measured twice, a job two tables share) share a draw
+    labels = (u["simulation"].astype(str).tolist() if "simulation" in u
+              else [f"{m}/{r}" for m, r in zip(u["measurement"], u["row"])])
     boot = sl.bootstrap_ci(effects, u["simulated_mean"].to_numpy(float), u["measured"].to_numpy(float), se,
                            settings.bootstrap, x0=[final.theta[nm] for nm in final.names], conditions=labels,
-                           scale=_scale(u))
+                           scale=rs.scale_of(u))
     if boot is None:
         return final.ci, fit_only + " (too few seeds per condition to resample)"
     how = (f"a bootstrap of {settings.bootstrap} refits over each simulation's seeds and the measured standard errors "
@@ -254,12 +248,10 @@ def default_fold_by(settings: Settings, quantity_cols: dict, diag: pd.DataFrame 
 
 
 def analyse(soil: str, res: pd.DataFrame, diag: pd.DataFrame, cands: list, effect_runs: dict,
-            settings: Settings, reference: dict, quantity_cols: dict | None = None,
-            simulations: dict | None = None) -> Outcome:
+            settings: Settings, reference: dict, quantity_cols: dict | None = None) -> Outcome:
     """Steps 5 (module docstring): ``effect_runs`` maps each candidate to its runs
-    (measurement, row, measure, value, ``t:<name>``), the switched-off point included;
-    ``simulations``: (measurement, row) -> the simulation (job) a condition shares with
-    others, for the bootstrap's draws (default: each condition its own)."""
+    (measurement, row, measure, value, ``t:<name>``), the switched-off point included; rows of
+    one simulation (the residual table's ``simulation`` key) share the bootstrap's draws."""
     u = rs.usable(res)
     rank = dg.ranking(diag)
     follows = _follows(rank, res, quantity_cols, settings.alpha)
@@ -299,7 +291,7 @@ def analyse(soil: str, res: pd.DataFrame, diag: pd.DataFrame, cands: list, effec
     names = (sel.chosen or provisional) if sel is not None else []
     if names:
         m = sl.Model([data[c] for c in names], u["simulated_mean"].to_numpy(float), u["measured"].to_numpy(float),
-                     _scale(u))
+                     rs.scale_of(u))
         x, _ = m.fit()
         fitted = m.predict(x)
         res_after = residual_after(res, fitted)
@@ -317,11 +309,11 @@ def analyse(soil: str, res: pd.DataFrame, diag: pd.DataFrame, cands: list, effec
     elif sel is not None and sel.chosen:
         chosen = sel.chosen
         theta = sel.final.theta
-        ci, ci_method = _interval(u, [data[c] for c in chosen], sel.final, settings, simulations)
+        ci, ci_method = _interval(u, [data[c] for c in chosen], sel.final, settings)
         pred["with_effects"] = fitted
         _, held = sl.cross_validate(m, sl._folds(u, fold_by))
         meas = u["measured"].to_numpy(float)
-        pred["heldout_prediction"] = meas - held * _scale(u)
+        pred["heldout_prediction"] = meas - held * rs.scale_of(u)
         after_cv = held
         verdict = "explained by " + " + ".join(chosen)
         edge = _at_bounds(theta, [data[c] for c in chosen])
@@ -444,6 +436,6 @@ def residual_after(res: pd.DataFrame, predicted: np.ndarray) -> pd.DataFrame:
     m = u["measured"].to_numpy(float)
     u["simulated_mean"] = predicted
     u["residual"] = m - predicted
-    u["relative_residual"] = (m - predicted) / _scale(u)
+    u["relative_residual"] = (m - predicted) / rs.scale_of(u)
     u["standardised_residual"] = u["residual"] / u["residual_se"]
     return u

@@ -294,7 +294,9 @@ def detectable(res: pd.DataFrame, diag: pd.DataFrame, quantity_of: dict | None =
     tests = len(diag)
     level = alpha / tests
     d = res[np.isfinite(res["relative_residual"].astype(float))].reset_index(drop=True)
-    meas = d["scale"].to_numpy(float) if "scale" in d else np.abs(d["measured"].to_numpy(float))
+    from soilcal.loop.residuals import scale_of
+
+    meas = scale_of(d)
 
     def median_percent(sd, n):
         v = sd / np.sqrt(np.clip(n, 1.0, None)) / meas

@@ -86,11 +86,12 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, field
 
+from soilcal.dem.scenarios.base import DENSITY_MAX, DENSITY_MIN
 from soilcal.errors import InputError
 
 #: DemParams range limits the effects respect (low, high) by parameter kind (the density's:
 #: soilcal.dem.scenarios.base.DENSITY_MIN, DENSITY_MAX)
-_LIMITS = {"surface_energy": (0.0, 1.0e3), "static_friction": (0.0, 5.0), "density": (100.0, 2.5e4),
+_LIMITS = {"surface_energy": (0.0, 1.0e3), "static_friction": (0.0, 5.0), "density": (DENSITY_MIN, DENSITY_MAX),
            "shear_modulus": (1.0, 1.0e13), "plasticity": (0.0, 0.95)}
 
 

@@ -164,10 +164,8 @@ def _outcome(soil, outdir, tool_files: dict, effect_files: dict, plans: list[dic
             per = effect_files[nm]
             frames.append(condition_runs(conds, per[j] if j in per else per[str(j)], theta))
         effect_runs[nm] = pd.concat(frames, ignore_index=True)
-    # conditions that one tool job simulates share its runs, and so a bootstrap draw
-    sims = {(c.measurement, int(c.row)): str(tool_files.get(f"{c.measurement}/{c.row}")) for c in conds}
     return core.analyse(soil.name, res, diag, cands, effect_runs, settings, plans[0]["reference"],
-                        plans[0]["quantity_columns"], simulations=sims), conds, settings
+                        plans[0]["quantity_columns"]), conds, settings
 
 
 def more_files(soil_path, resources_root, outdir, tool_files: dict, effect_files: dict, out_plan) -> dict:
@@ -252,7 +250,8 @@ def report(soil: str, o: core.Outcome, plans: list) -> str:
     s = o.summary.iloc[0]
     lines = [f"# Measured-data loop: {soil}", "", f"**Verdict:** {o.verdict}", "",
              "## Error on held-out measurements", "",
-             "Relative error (measured - simulated) / measured over the usable rows; after = each row "
+             "Relative error (measured - simulated) / |measured| over the usable rows (over the quantity's RMS "
+             "where residuals.csv's note says so); after = each row "
              "predicted with the effect parameters fitted without its group "
              f"(groups: {plan.get('fold_by') or 'measured conditions'}).", "",
              "| | RMS error, % | largest error, % |", "|---|---|---|",

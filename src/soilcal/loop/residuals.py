@@ -174,6 +174,12 @@ def residual_frame(obs: pd.DataFrame, runs: pd.DataFrame) -> pd.DataFrame:
     return df[RESIDUAL_COLUMNS[:5] + extra + RESIDUAL_COLUMNS[5:]]
 
 
+def scale_of(df: pd.DataFrame) -> np.ndarray:
+    """The relative residual's denominators of the rows (:func:`scales`, the ``scale`` column;
+    |measured| for a table written before the column existed)."""
+    return df["scale"].to_numpy(float) if "scale" in df else np.abs(df["measured"].to_numpy(float))
+
+
 def usable(res: pd.DataFrame) -> pd.DataFrame:
     """Rows with a measured and a simulated value (those the loop can learn from)."""
     return res[np.isfinite(res["relative_residual"].astype(float))].reset_index(drop=True)

@@ -430,7 +430,6 @@ def bootstrap_ci(effects: list, y0: np.ndarray, measured: np.ndarray, measured_s
 
     if n_boot <= 0 or not effects or any(e.values is None or e.seeds is None or e.means is None for e in effects):
         return None
-    denominators = scale  # the relative errors' (the name scale is the seed deviations' below)
     n = len(y0)
     union = [sorted(set().union(*(e.seeds[i] for e in effects))) for i in range(n)]
     if max(len(u) for u in union) < 2:
@@ -472,12 +471,12 @@ def bootstrap_ci(effects: list, y0: np.ndarray, measured: np.ndarray, measured_s
         rows = picks[gindex]  # (n, width), -1 beyond a condition's own seed count
         m = measured + se * rng.standard_normal(n)
         fitted, yb, lost = [], None, False
-        for e, (Vp, W, pad, mean, scale, design, j_null) in zip(effects, prepared):
+        for e, (Vp, W, pad, mean, widen, design, j_null) in zip(effects, prepared):
             at = np.where(rows >= 0, np.take_along_axis(W, np.clip(rows, 0, None), axis=1), pad)
             take = np.take_along_axis(Vp, np.broadcast_to(at[None], (Vp.shape[0],) + at.shape), axis=2)
             with warnings.catch_warnings():
                 warnings.simplefilter("ignore", RuntimeWarning)
-                Y = e.means + np.nanmean(scale * (take - mean), axis=2)
+                Y = e.means + np.nanmean(widen * (take - mean), axis=2)
             none = ~np.isfinite(Y).any(axis=0)  # no run of the drawn seeds: the surrogate's own means
             Y[:, none] = e.means[:, none]
             try:
@@ -490,7 +489,7 @@ def bootstrap_ci(effects: list, y0: np.ndarray, measured: np.ndarray, measured_s
             fitted.append(EffectData(e.effect, e.bounds, Surrogate(e.effect, e.bounds, e.thetas(), Y), e.design))
         if lost:
             continue
-        x, _ = Model(fitted, y0 if yb is None else yb, m, denominators).fit(x0=x0)
+        x, _ = Model(fitted, y0 if yb is None else yb, m, scale).fit(x0=x0)
         draws.append(x)
     if len(draws) < max(20, n_boot // 2):
         return None
@@ -521,7 +520,9 @@ def forward(obs: pd.DataFrame, y0: np.ndarray, data: dict, fold_by: str | None =
     A single effect thus faces the calibrated model; two effects that each leave the other's
     error in the folds are added together and each is tested against the other alone."""
     measured = obs["measured"].to_numpy(float)
-    scale = obs["scale"].to_numpy(float) if "scale" in obs else None
+    from soilcal.loop.residuals import scale_of
+
+    scale = scale_of(obs) if "measured" in obs else None
     folds = _folds(obs, fold_by)
     chosen: list[str] = []
     steps = []

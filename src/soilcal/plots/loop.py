@@ -9,6 +9,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
+from soilcal.loop.residuals import scale_of
 from soilcal.plots.figures import _figure, save_figure
 
 
@@ -29,8 +30,7 @@ def residual_figures(res: pd.DataFrame, pred: pd.DataFrame | None, outdir, title
         m = u.merge(pred[["measurement", "row", "measure", "heldout_prediction"]],
                     on=["measurement", "row", "measure"], how="left")
         meas = m["measured"].astype(float)
-        scale = m["scale"].astype(float) if "scale" in m else meas.abs()
-        after = ((meas - m["heldout_prediction"].astype(float)) / scale * 100).to_numpy()
+        after = ((meas - m["heldout_prediction"].astype(float)) / scale_of(m) * 100).to_numpy()
     out = []
     cols = [c for c in u.columns if c.startswith("cov:")] + (["measure"] if u["measure"].nunique() > 1 else [])
     for col in cols:
@@ -60,8 +60,8 @@ def residual_figures(res: pd.DataFrame, pred: pd.DataFrame | None, outdir, title
             ax.set_xticks(range(len(ticks)))
             ax.set_xticklabels(ticks, rotation=30 if len(ticks) > 4 else 0, fontsize=8)
         ax.set_xlabel(name)
-        ax.set_ylabel("(measured - simulated) / |measured|, %" if not u.get("note", pd.Series(dtype=str)).astype(str)
-                      .str.contains("relative to the RMS").any() else "(measured - simulated) / scale, %")
+        by_rms = not np.allclose(scale_of(u), u["measured"].abs().to_numpy(float))  # a quantity near zero
+        ax.set_ylabel("(measured - simulated) / scale, %" if by_rms else "(measured - simulated) / |measured|, %")
         if title:
             ax.set_title(title, fontsize=9)
         ax.legend(fontsize=7, frameon=True, framealpha=0.8, loc="best")

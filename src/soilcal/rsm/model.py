@@ -344,9 +344,10 @@ class RSMFit:
     @property
     def press(self) -> float:
         """PRESS, NaN where a point has leverage 1 (module docstring)."""
-        if self.leverage_one.size:
+        h = self.leverage  # one solve for both the test and the sum
+        if np.any(h >= 1.0 - LEVERAGE_ONE_TOL):
             return float("nan")
-        return float(((self.residuals / (1.0 - self.leverage)) ** 2).sum())
+        return float(((self.residuals / (1.0 - h)) ** 2).sum())
 
     def statistics_note(self, labels: Sequence | None = None) -> str:
         """Why :meth:`fit_statistics` leaves PRESS and Pred R^2 undefined (empty when it does
