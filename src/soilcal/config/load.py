@@ -435,8 +435,10 @@ def _check_targets(path: Path, d: dict, resources_root: Path) -> None:
     aims at it (``target: <id>``)."""
     targets = d.get("targets", {})
     mdir = resources_root / "measurements" / d["name"]
+    from soilcal.config.measurements import table_inside
+
     for tid, t in targets.items():
-        if t.get("table") is not None and not (mdir / t["table"]).is_file():
+        if t.get("table") is not None and not table_inside(path, f"targets.{tid}.table", mdir, t["table"]).is_file():
             raise InputError(path, f"targets.{tid}.table", f"an existing file under {mdir}", t["table"])
     for st in d["stages"]:
         units = {r["id"]: r["unit"] for r in st["responses"]}
@@ -454,7 +456,9 @@ def _check_targets(path: Path, d: dict, resources_root: Path) -> None:
 def _check_table(path: Path, st: dict, where: str, pub: Path) -> None:
     if st.get("table") is None:
         return
-    tpath = pub / st["table"]
+    from soilcal.config.measurements import table_inside
+
+    tpath = table_inside(path, f"{where}.table", pub, st["table"])
     if not tpath.is_file():
         raise InputError(path, f"{where}.table", f"an existing file {tpath}", "no such file")
     df = read_table(tpath)

@@ -247,10 +247,11 @@ def _stage_cases(soil_path, data: dict, where: str, entry: dict) -> tuple[dict, 
     return stages[sid], [c["id"] for c in opt["cases"]]
 
 
-def _table_path(soil_path, field: str, folder: Path, table: str) -> Path:
-    """``folder / table``; a ``table`` that leaves the soil's measurements folder (an absolute
-    path, or one that climbs out with ``..``) is refused.  The check is on the path as written:
-    a symbolic link inside the folder is the user's own choice and is followed."""
+def table_inside(soil_path, field: str, folder: Path, table: str) -> Path:
+    """``folder / table``; a ``table`` that leaves its folder (the soil's measurements or
+    published folder: an absolute path, or one that climbs out with ``..``) is refused.  The
+    check is on the path as written: a symbolic link inside the folder is the user's own
+    choice and is followed."""
     norm = Path(os.path.normpath(table))
     if Path(table).is_absolute() or norm.is_absolute() or (norm.parts and norm.parts[0] == ".."):
         raise InputError(soil_path, field, f"a table inside {folder}/ (a path relative to it)", table)
@@ -262,7 +263,7 @@ def _entries(soil_path, data: dict, resources_root) -> list[tuple[str, dict, Pat
     block = data.get(BLOCK) or {}
     out = []
     for mid, entry in block.items():
-        tpath = _table_path(soil_path, f"{BLOCK}.{mid}.table", measurements_dir(resources_root, data["name"]),
+        tpath = table_inside(soil_path, f"{BLOCK}.{mid}.table", measurements_dir(resources_root, data["name"]),
                             entry["table"])
         df, conds = _entry(soil_path, data, mid, entry, tpath)
         out.append((mid, entry, tpath, df, conds))
