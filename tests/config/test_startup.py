@@ -163,6 +163,28 @@ def test_adaptive_settings_are_checked_for_the_workflows_design_override(tmp_pat
     assert soils["cinnamon-soil"].data["simulation"]["design"] == "printed"
 
 
+
+def test_measurement_checks_follow_the_workflows_source_override(tmp_path):
+    """A soil replayed from its printed tables whose measured table is calibrated on a stage
+    its simulation block does not simulate loads as published; --config source=dem runs it on
+    the DEM, so start-up refuses it there, as it would the soil's own source: dem."""
+    from soilcal.config import load_workflow_config
+
+    def published_pb_only(d):
+        d["source"] = "published"
+        d["simulation"]["stages"] = ["pb", "steepest"]  # the measured table is calibrated on bbd
+
+    p = edit(copy_soil(tmp_path), published_pb_only)
+    cfg = {"soils": ["cinnamon-soil"], "soil_dir": str(tmp_path / "config/soils"),
+           "resources": str(tmp_path / "resources")}
+    assert load_workflow_config(cfg)["cinnamon-soil"].data["source"] == "published"
+    for source in ("dem", "both"):
+        with pytest.raises(InputError) as exc:
+            load_workflow_config(dict(cfg, source=source))
+        assert exc.value.path == str(p) and exc.value.field == "measurements.cutting_resistance.calibrated.stage"
+        assert exc.value.got == "bbd"
+
+
 # ------------------------------------------------------------------ photo measurements, targets
 
 

@@ -526,14 +526,16 @@ def _check_cells(tpath: Path, df: pd.DataFrame, column: str, required: bool) -> 
             raise InputError(tpath, f"row {i + 1}, column {column}", "a finite number", v)
 
 
-def load_soil(path: str | Path, resources_root: str | Path = "resources", design: str | None = None) -> Soil:
+def load_soil(path: str | Path, resources_root: str | Path = "resources", design: str | None = None,
+              source: str | None = None) -> Soil:
     """Read, schema-validate and check one soil file; return a :class:`Soil`.
 
     A top-level field the file leaves out that the schema gives a default (``source``,
     ``seed``, ``properties``, ``targets``) is filled in with that default; the names of the
     filled fields are in :attr:`Soil.defaulted`.  ``design`` (the workflow config's
     ``design``, ``--config design=...``) replaces ``simulation.design`` of a soil with a
-    simulation block before the checks, so the soil is checked as the workflow runs it.
+    simulation block before the checks, and ``source`` (``--config source=...``) its
+    ``source``, so the soil is checked as the workflow runs it.
     """
     import copy
 
@@ -550,6 +552,8 @@ def load_soil(path: str | Path, resources_root: str | Path = "resources", design
             defaulted.append(key)
     if design is not None and data.get("simulation"):
         data["simulation"]["design"] = design
+    if source is not None:
+        data["source"] = source
     manifest = _semantic_checks(path, data, Path(resources_root))
     return Soil(path=path, data=data, resources_root=Path(resources_root), defaulted=tuple(defaulted),
                 manifest=manifest)
@@ -571,7 +575,8 @@ WORKFLOW_SCHEMA = {
 
 def load_workflow_config(cfg: dict, origin: str | Path = "config/config.yaml") -> dict[str, Soil]:
     """Validate the workflow config and every soil it lists; return soils by name (the
-    config's ``design``, where given, as every soil's ``simulation.design``)."""
+    config's ``design`` and ``source``, where given, as every soil's ``simulation.design`` and
+    ``source``)."""
     _schema_error(Path(origin), WORKFLOW_SCHEMA, cfg)
     soil_dir = Path(cfg.get("soil_dir", "config/soils"))
     res = Path(cfg.get("resources", "resources"))
@@ -580,5 +585,5 @@ def load_workflow_config(cfg: dict, origin: str | Path = "config/config.yaml") -
         p = soil_dir / f"{name}.yaml"
         if not p.is_file():
             raise InputError(origin, "soils", f"a soil file {p}", "no such file")
-        out[name] = load_soil(p, res, design=cfg.get("design"))
+        out[name] = load_soil(p, res, design=cfg.get("design"), source=cfg.get("source"))
     return out
