@@ -71,7 +71,8 @@ def test_workflow_dry_run_stops_with_the_same_line(case, tmp_path):
     _workflow_copy(tmp_path)
     r = snakemake(tmp_path, "-n", "--cores", "1", check=False)
     text = r.stdout + r.stderr
-    assert r.returncode != 0
-    assert f"{case.file}: {case.field}: expected " in text and case.expected in text, text[-3000:]
-    assert "Traceback" not in text
+    assert r.returncode == 2
+    lines = [ln for ln in text.splitlines() if f"{case.file}: {case.field}: expected " in ln]
+    assert len(lines) == 1 and lines[0].startswith("soilcal: error: ") and case.expected in lines[0], text[-3000:]
+    assert "Traceback" not in text and 'File "' not in text
     assert not (tmp_path / "results").exists()

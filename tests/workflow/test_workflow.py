@@ -106,5 +106,8 @@ def test_bad_soil_file_stops_before_any_job(tmp_path):
     p.write_text(p.read_text().replace("center_points: 5", "centre_points: 5"))
     r = _run(tmp, "--cores", "2", check=False)
     assert r.returncode != 0
-    assert "cinnamon-soil.yaml: stages[2].centre_points" in r.stdout + r.stderr
+    text = r.stdout + r.stderr
+    lines = [ln for ln in text.splitlines() if "cinnamon-soil.yaml: stages[2].centre_points" in ln]
+    assert len(lines) == 1 and lines[0].startswith("soilcal: error: ") and r.returncode == 2, text
+    assert "Traceback" not in text and 'File "' not in text, text
     assert not (tmp / "results").exists()

@@ -3,19 +3,27 @@
 # simulation block against the DEM scenarios.  Paths and target lists of the calibration chain.
 import json
 import os
+import sys
 
 from snakemake.utils import validate
 
 from soilcal.chain import adaptive, derive, refine, verify
 from soilcal.chain.files import read_stage
 from soilcal.config import load_workflow_config
+from soilcal.errors import InputError
 from soilcal.chain.plan import dem_context, soil_sources
 
 
 validate(config, "../schemas/config.schema.yaml")
-SOILS = load_workflow_config(config)  # --config design=... is every soil's DEM design, checked as such
+try:
+    # --config design=... (source=...) is every soil's DEM design (source), checked as such
+    SOILS = load_workflow_config(config)
+    SOURCES = {soil: soil_sources(s, config.get("source")) for soil, s in SOILS.items()}
+except InputError as e:
+    # one line naming file, field and what was expected, status 2 as the soilcal commands; no traceback
+    print(f"soilcal: error: {e}", file=sys.stderr)
+    sys.exit(2)
 RES = config.get("resources", "resources")
-SOURCES = {soil: soil_sources(s, config.get("source")) for soil, s in SOILS.items()}
 # every soil's photo manifest, read and checked with the soil (soilcal config check does the same)
 IMAGE_MANIFESTS = {soil: s.manifest for soil, s in SOILS.items() if s.manifest is not None}
 
