@@ -32,11 +32,12 @@ def copy_workflow(tmp: Path, soils: list[str], source: str | None = None) -> Pat
     shutil.copytree(ROOT / "envs", tmp / "envs")
     for item in ("workflow", "config", "profiles"):
         shutil.copytree(ROOT / item, tmp / item, symlinks=True)
-    # the schema symlink points into the package; resolve it for the copy
-    link = tmp / "workflow/schemas/soil.schema.yaml"
-    if link.is_symlink():
-        link.unlink()
-        shutil.copy(ROOT / "src/soilcal/config/soil.schema.yaml", link)
+    # the schema symlinks point into the package; resolve them for the copy
+    for name, target in (("soil", "soil"), ("config", "workflow")):
+        link = tmp / f"workflow/schemas/{name}.schema.yaml"
+        if link.is_symlink():
+            link.unlink()
+            shutil.copy(ROOT / f"src/soilcal/config/{target}.schema.yaml", link)
     for soil in soils:
         for kind in ("published", "measurements", "images", "geometry"):
             if (ROOT / "resources" / kind / soil).is_dir():

@@ -98,6 +98,23 @@ def test_lint_is_clean(done):
     assert p.returncode == 0, p.stdout + p.stderr
 
 
+
+@pytest.mark.parametrize("setting, field, expected", [
+    ("soils=oops", "soils", "a value of type array"),
+    ("design=adaptiv", "design", "one of recipe, printed, adaptive"),
+    ("soils=[nosuch]", "soils", "a soil file config/soils/nosuch.yaml"),
+])
+def test_a_bad_workflow_setting_is_one_line(tmp_path, setting, field, expected):
+    """--config reaches the workflow schema (the package's, linked from workflow/schemas)."""
+    tmp = _copy(tmp_path)
+    r = _run(tmp, "-n", "--cores", "1", "--config", setting, check=False)
+    text = r.stdout + r.stderr
+    lines = [ln for ln in text.splitlines() if ln.startswith("soilcal: error: ")]
+    assert r.returncode == 2 and len(lines) == 1, text
+    assert lines[0].startswith(f"soilcal: error: config/config.yaml: {field}: expected {expected}"), lines
+    assert 'File "' not in text and not (tmp / "results").exists()
+
+
 def test_bad_soil_file_stops_before_any_job(tmp_path):
     if not all((ROOT / "config/soils" / f"{s}.yaml").is_file() for s in SOILS):
         pytest.skip("soil entries not present")

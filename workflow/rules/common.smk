@@ -5,8 +5,6 @@ import json
 import os
 import sys
 
-from snakemake.utils import validate
-
 from soilcal.chain import adaptive, derive, refine, verify
 from soilcal.chain.files import read_stage
 from soilcal.config import load_workflow_config
@@ -14,8 +12,8 @@ from soilcal.errors import InputError
 from soilcal.chain.plan import dem_context, soil_sources
 
 
-validate(config, "../schemas/config.schema.yaml")
 try:
+    # the config against ../schemas/config.schema.yaml (the package's workflow schema), then every soil;
     # --config design=... (source=...) is every soil's DEM design (source), checked as such
     SOILS = load_workflow_config(config)
     SOURCES = {soil: soil_sources(s, config.get("source")) for soil, s in SOILS.items()}

@@ -17,6 +17,8 @@ import yaml
 from soilcal.errors import InputError
 
 SOIL_SCHEMA = Path(str(resources.files("soilcal.config") / "soil.schema.yaml"))
+#: the workflow config's schema (config/config.yaml and --config; workflow/schemas links to it)
+WORKFLOW_SCHEMA = Path(str(resources.files("soilcal.config") / "workflow.schema.yaml"))
 
 
 class _Loader(yaml.SafeLoader):
@@ -559,25 +561,11 @@ def load_soil(path: str | Path, resources_root: str | Path = "resources", design
                 manifest=manifest)
 
 
-WORKFLOW_SCHEMA = {
-    "type": "object",
-    "additionalProperties": False,
-    "required": ["soils"],
-    "properties": {
-        "soils": {"type": "array", "minItems": 1, "items": {"type": "string", "pattern": "^[a-z0-9][a-z0-9-]*$"}},
-        "soil_dir": {"type": "string"},
-        "resources": {"type": "string"},
-        "source": {"enum": ["published", "dem", "both"]},
-        "design": {"enum": ["recipe", "printed", "adaptive"]},
-    },
-}
-
-
 def load_workflow_config(cfg: dict, origin: str | Path = "config/config.yaml") -> dict[str, Soil]:
     """Validate the workflow config and every soil it lists; return soils by name (the
     config's ``design`` and ``source``, where given, as every soil's ``simulation.design`` and
     ``source``)."""
-    _schema_error(Path(origin), WORKFLOW_SCHEMA, cfg)
+    _schema_error(Path(origin), read_yaml(WORKFLOW_SCHEMA), cfg)
     soil_dir = Path(cfg.get("soil_dir", "config/soils"))
     res = Path(cfg.get("resources", "resources"))
     out = {}
