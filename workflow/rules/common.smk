@@ -12,8 +12,24 @@ from soilcal.config import load_workflow_config
 from soilcal.chain.plan import dem_context, soil_sources
 
 
+def config_origins():
+    """Where each top-level key of the config was given when not in config/config.yaml: the
+    --configfile that sets it, or --config on the command line (named in a start-up error)."""
+    from soilcal.config import read_yaml
+
+    out = {}
+    for f in workflow.overwrite_configfiles:
+        for key in read_yaml(f) or {}:
+            out[key] = os.path.relpath(f)
+    for key in workflow.config_settings.config:
+        out[key] = "<command line: --config>"
+    return out
+
+
+# the soilcal check first, whose error is one line naming the file and the field; Snakemake's
+# own validation then only fills in the defaults
+SOILS = load_workflow_config(config, origins=config_origins())  # --config design=... is every soil's DEM design, checked as such
 validate(config, "../schemas/config.schema.yaml")
-SOILS = load_workflow_config(config)  # --config design=... is every soil's DEM design, checked as such
 RES = config.get("resources", "resources")
 SOURCES = {soil: soil_sources(s, config.get("source")) for soil, s in SOILS.items()}
 # every soil's photo manifest, read and checked with the soil (soilcal config check does the same)

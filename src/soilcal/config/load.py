@@ -88,6 +88,13 @@ def _field_path(parts) -> str:
     return out or "<root>"
 
 
+#: the schemas' patterns in words, for the message of a value that does not match one
+_PATTERN_WORDS = {
+    "^[a-z0-9][a-z0-9-]*$": "an id of lower-case letters, digits and hyphens, starting with a letter or digit",
+    "^[a-z][a-z0-9_]*$": "an id of lower-case letters, digits and underscores, starting with a letter",
+}
+
+
 def _schema_error(path: Path, schema: dict, data: Any) -> None:
     validator = jsonschema.Draft202012Validator(schema)
     errors = list(validator.iter_errors(data))
@@ -124,7 +131,9 @@ def _schema_error(path: Path, schema: dict, data: Any) -> None:
     if err.validator == "enum":
         raise InputError(path, where, "one of " + ", ".join(map(str, err.validator_value)), err.instance)
     if err.validator == "pattern":
-        raise InputError(path, where, f"text matching {err.validator_value}", err.instance)
+        what = _PATTERN_WORDS.get(err.validator_value)
+        expected = f"{what} (text matching {err.validator_value})" if what else f"text matching {err.validator_value}"
+        raise InputError(path, where, expected, err.instance)
     raise InputError(path, where, err.message)
 
 
@@ -573,17 +582,35 @@ WORKFLOW_SCHEMA = {
 }
 
 
-def load_workflow_config(cfg: dict, origin: str | Path = "config/config.yaml") -> dict[str, Soil]:
+def load_workflow_config(cfg: dict, origin: str | Path = "config/config.yaml",
+                         origins: dict[str, str] | None = None) -> dict[str, Soil]:
     """Validate the workflow config and every soil it lists; return soils by name (the
     config's ``design`` and ``source``, where given, as every soil's ``simulation.design`` and
-    ``source``)."""
-    _schema_error(Path(origin), WORKFLOW_SCHEMA, cfg)
+    ``source``).
+
+    An error names ``origin``, the config file, or for a top-level key given elsewhere (a
+    ``--configfile``, ``--config`` on the command line) where ``origins`` says it was given.
+    A soil listed without its file names the list entry (``soils[i]``) and the file looked for.
+    """
+    origins = origins or {}
+
+    def where(key: str) -> str | Path:
+        return origins.get(key, origin)
+
+    try:
+        _schema_error(Path(origin), WORKFLOW_SCHEMA, cfg)
+    except InputError as exc:
+        top = re.split(r"[.\[]", exc.field, maxsplit=1)[0]
+        if top in origins:
+            raise InputError(origins[top], exc.field, exc.expected, exc.got) from None
+        raise
     soil_dir = Path(cfg.get("soil_dir", "config/soils"))
     res = Path(cfg.get("resources", "resources"))
     out = {}
-    for name in cfg["soils"]:
+    for i, name in enumerate(cfg["soils"]):
         p = soil_dir / f"{name}.yaml"
         if not p.is_file():
-            raise InputError(origin, "soils", f"a soil file {p}", "no such file")
+            raise InputError(where("soils"), f"soils[{i}]", f"a soil file {p} (the soil's YAML, named after the soil)",
+                             "no such file")
         out[name] = load_soil(p, res, design=cfg.get("design"), source=cfg.get("source"))
     return out
