@@ -112,6 +112,18 @@ def test_unknown_parameter_reference(workspace):
         _load(workspace)
 
 
+@pytest.mark.parametrize("runs", [10, 8])
+def test_plackett_burman_runs_not_a_design_size_is_refused_at_load(workspace, runs):
+    """runs of a Plackett-Burman stage: a multiple of 4 above its factors and dummies (the
+    cinnamon screening has 7 factors and 4 dummies), refused when the soil loads rather than
+    by the design job."""
+    p = _edit(workspace, lambda d: d["stages"][0].update(runs=runs))
+    with pytest.raises(InputError) as e:
+        _load(workspace)
+    assert e.value.path == str(p) and e.value.field == "stages[0].runs" and e.value.got == runs
+    assert e.value.expected.startswith("a multiple of 4 above the 11 factors and dummies")
+
+
 def test_name_must_match_file(workspace):
     _edit(workspace, lambda d: d.update({"name": "other-soil"}))
     with pytest.raises(InputError, match=r"name: expected the file name"):

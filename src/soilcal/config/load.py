@@ -285,6 +285,12 @@ def _semantic_checks(path: Path, d: dict, resources_root: Path) -> dict | None:
                 raise InputError(path, fw, "low and high levels for a two/three-level design", f)
             if st["kind"] == "steepest_ascent" and not f.get("levels"):
                 raise InputError(path, f"{fw}.levels", "the actual value of every step", None)
+        if st["kind"] == "plackett_burman" and st.get("runs") is not None:
+            cols = len(st["factors"]) + len(st.get("dummies") or [])
+            if st["runs"] % 4 or st["runs"] <= cols:
+                raise InputError(path, f"{where}.runs", f"a multiple of 4 above the {cols} factors and dummies of the "
+                                 f"Plackett-Burman design ({', '.join(str(4 * (cols // 4 + 1) + 4 * i) for i in range(3))}, ...)",
+                                 st["runs"])
         if st["kind"] == "steepest_ascent" and st.get("table") is not None:
             lengths = {len(f["levels"]) for f in st["factors"].values()}
             if len(lengths) != 1:
