@@ -112,6 +112,18 @@ def test_unknown_parameter_reference(workspace):
         _load(workspace)
 
 
+@pytest.mark.parametrize("runs", [10, 8])
+def test_plackett_burman_runs_not_a_design_size_is_refused_at_load(workspace, runs):
+    """runs of a Plackett-Burman stage: a multiple of 4 above its factors and dummies (the
+    cinnamon screening has 7 factors and 4 dummies), refused when the soil loads rather than
+    by the design job."""
+    p = _edit(workspace, lambda d: d["stages"][0].update(runs=runs))
+    with pytest.raises(InputError) as e:
+        _load(workspace)
+    assert e.value.path == str(p) and e.value.field == "stages[0].runs" and e.value.got == runs
+    assert e.value.expected.startswith("a multiple of 4 above the 11 factors and dummies")
+
+
 def test_name_must_match_file(workspace):
     _edit(workspace, lambda d: d.update({"name": "other-soil"}))
     with pytest.raises(InputError, match=r"name: expected the file name"):
@@ -127,8 +139,29 @@ def test_unparsable_yaml(workspace):
 
 def test_workflow_config_unknown_soil(workspace):
     cfg = {"soils": ["no-such-soil"], "soil_dir": str(workspace / "config/soils")}
-    with pytest.raises(InputError, match=r"soils: expected a soil file .*no-such-soil\.yaml"):
+    with pytest.raises(InputError, match=r"^config/config\.yaml: soils\[0\]: expected a soil file .*no-such-soil\.yaml"):
         load_workflow_config(cfg, "config/config.yaml")
+
+
+@pytest.mark.parametrize("name", ["My-Soil", "my_soil", "-my-soil"])
+def test_workflow_config_soil_name_in_words(name):
+    with pytest.raises(InputError) as e:
+        load_workflow_config({"soils": [name]}, "config/config.yaml")
+    assert e.value.path == "config/config.yaml" and e.value.field == "soils[0]" and e.value.got == name
+    assert e.value.expected.startswith("an id of lower-case letters, digits and hyphens")
+
+
+def test_workflow_config_error_names_where_the_key_was_given(workspace):
+    """A key given by a --configfile or by --config on the command line (Snakemake), not by
+    config/config.yaml, is named where it was given."""
+    cfg = {"soils": ["no-such-soil"], "soil_dir": str(workspace / "config/soils")}
+    with pytest.raises(InputError) as e:
+        load_workflow_config(cfg, "config/config.yaml", origins={"soils": "mine.yaml"})
+    assert e.value.path == "mine.yaml" and e.value.field == "soils[0]"
+    with pytest.raises(InputError) as e:
+        load_workflow_config(dict(cfg, design="adaptve"), "config/config.yaml",
+                             origins={"design": "<command line: --config>"})
+    assert e.value.path == "<command line: --config>" and e.value.field == "design"
 
 
 def test_yaml_exponent_without_sign_is_a_number(workspace):

@@ -1109,7 +1109,7 @@ def _(tmp):
 # ================================================================== workflow config
 
 
-@case("workflow-unknown-soil", "workflow_config", "config/config.yaml", "soils",
+@case("workflow-unknown-soil", "workflow_config", "config/config.yaml", "soils[0]",
       "a soil file config/soils/cinnamon.yaml", subprocess=True, snakemake=True)
 def _(tmp):
     return workflow_config(tmp, lambda c: c.update(soils=["cinnamon"]))
@@ -1133,6 +1133,28 @@ def _(tmp):
 @case("workflow-soil-name-with-spaces", "workflow_config", "config/config.yaml", "soils[0]", "text matching")
 def _(tmp):
     return workflow_config(tmp, lambda c: c.update(soils=["Cinnamon soil"]))
+
+
+@case("workflow-soil-name-with-capitals-and-underscores", "workflow_config", "config/config.yaml", "soils[0]",
+      "an id of lower-case letters, digits and hyphens", snakemake=True)
+def _(tmp):
+    return workflow_config(tmp, lambda c: c.update(soils=["Cinnamon_Soil"]))
+
+
+@case("soil-name-with-capitals-and-underscores", "soil_yaml", "config/soils/My_Soil.yaml", "name",
+      "an id of lower-case letters, digits and hyphens")
+def _(tmp):
+    p = minimal_soil(tmp, lambda d: d.update(name="My_Soil"))
+    p.rename(tmp / "config/soils/My_Soil.yaml")
+    return ["config", "check", "config/soils/My_Soil.yaml"]
+
+
+@case("soil-name-not-the-file-name", "workflow_config", "config/soils/cinnamon-soil.yaml", "name",
+      "the file name without .yaml ('cinnamon-soil')", snakemake=True)
+def _(tmp):
+    argv = workflow_config(tmp, lambda c: None)
+    edit_yaml(tmp / SOIL, lambda d: d.update(name="cinnamon"))
+    return argv
 
 
 @case("workflow-design-adaptive-tolerance-of-no-response", "workflow_config", SOIL,

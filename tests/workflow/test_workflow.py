@@ -102,7 +102,7 @@ def test_lint_is_clean(done):
 @pytest.mark.parametrize("setting, field, expected", [
     ("soils=oops", "soils", "a value of type array"),
     ("design=adaptiv", "design", "one of recipe, printed, adaptive"),
-    ("soils=[nosuch]", "soils", "a soil file config/soils/nosuch.yaml"),
+    ("soils=[nosuch]", "soils[0]", "a soil file config/soils/nosuch.yaml"),
 ])
 def test_a_bad_workflow_setting_is_one_line(tmp_path, setting, field, expected):
     """--config reaches the workflow schema (the package's, linked from workflow/schemas)."""
@@ -111,7 +111,7 @@ def test_a_bad_workflow_setting_is_one_line(tmp_path, setting, field, expected):
     text = r.stdout + r.stderr
     lines = [ln for ln in text.splitlines() if ln.startswith("soilcal: error: ")]
     assert r.returncode == 2 and len(lines) == 1, text
-    assert lines[0].startswith(f"soilcal: error: config/config.yaml: {field}: expected {expected}"), lines
+    assert lines[0].startswith(f"soilcal: error: <command line: --config>: {field}: expected {expected}"), lines
     assert 'File "' not in text and not (tmp / "results").exists()
 
 

@@ -12,10 +12,24 @@ from soilcal.errors import InputError
 from soilcal.chain.plan import dem_context, soil_sources
 
 
+def config_origins():
+    """Where each top-level key of the config was given when not in config/config.yaml: the
+    --configfile that sets it, or --config on the command line (named in a start-up error)."""
+    from soilcal.config import read_yaml
+
+    out = {}
+    for f in workflow.overwrite_configfiles:
+        for key in read_yaml(f) or {}:
+            out[key] = os.path.relpath(f)
+    for key in workflow.config_settings.config:
+        out[key] = "<command line: --config>"
+    return out
+
+
 try:
     # the config against ../schemas/config.schema.yaml (the package's workflow schema), then every soil;
     # --config design=... (source=...) is every soil's DEM design (source), checked as such
-    SOILS = load_workflow_config(config)
+    SOILS = load_workflow_config(config, origins=config_origins())
     SOURCES = {soil: soil_sources(s, config.get("source")) for soil, s in SOILS.items()}
 except InputError as e:
     # one line naming file, field and what was expected, status 2 as the soilcal commands; no traceback

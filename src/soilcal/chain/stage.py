@@ -464,7 +464,8 @@ def optimum_frames(stage: dict, table: pd.DataFrame, targets: dict, seed: int) -
 
                 res = optimise.pso_optimise(objective, np.column_stack([low, high]),
                                             particles=p.get("particles", 50),
-                                            iterations=p.get("iterations", 200), seed=seed)
+                                            iterations=p.get("iterations", 200), repeats=p.get("repeats", 1),
+                                            seed=seed)
                 row = {"case": case["id"], "method": "pso", "solution": 1}
                 xa = np.asarray(res["x"], float)
                 xc = doe.actual_to_coded(xa, low, high)

@@ -90,6 +90,13 @@ def _field_path(parts) -> str:
     return out or "<root>"
 
 
+#: the schemas' patterns in words, for the message of a value that does not match one
+_PATTERN_WORDS = {
+    "^[a-z0-9][a-z0-9-]*$": "an id of lower-case letters, digits and hyphens, starting with a letter or digit",
+    "^[a-z][a-z0-9_]*$": "an id of lower-case letters, digits and underscores, starting with a letter",
+}
+
+
 def _schema_error(path: Path, schema: dict, data: Any) -> None:
     validator = jsonschema.Draft202012Validator(schema)
     errors = list(validator.iter_errors(data))
@@ -126,7 +133,9 @@ def _schema_error(path: Path, schema: dict, data: Any) -> None:
     if err.validator == "enum":
         raise InputError(path, where, "one of " + ", ".join(map(str, err.validator_value)), err.instance)
     if err.validator == "pattern":
-        raise InputError(path, where, f"text matching {err.validator_value}", err.instance)
+        what = _PATTERN_WORDS.get(err.validator_value)
+        expected = f"{what} (text matching {err.validator_value})" if what else f"text matching {err.validator_value}"
+        raise InputError(path, where, expected, err.instance)
     raise InputError(path, where, err.message)
 
 
@@ -278,6 +287,12 @@ def _semantic_checks(path: Path, d: dict, resources_root: Path) -> dict | None:
                 raise InputError(path, fw, "low and high levels for a two/three-level design", f)
             if st["kind"] == "steepest_ascent" and not f.get("levels"):
                 raise InputError(path, f"{fw}.levels", "the actual value of every step", None)
+        if st["kind"] == "plackett_burman" and st.get("runs") is not None:
+            cols = len(st["factors"]) + len(st.get("dummies") or [])
+            if st["runs"] % 4 or st["runs"] <= cols:
+                raise InputError(path, f"{where}.runs", f"a multiple of 4 above the {cols} factors and dummies of the "
+                                 f"Plackett-Burman design ({', '.join(str(4 * (cols // 4 + 1) + 4 * i) for i in range(3))}, ...)",
+                                 st["runs"])
         if st["kind"] == "steepest_ascent" and st.get("table") is not None:
             lengths = {len(f["levels"]) for f in st["factors"].values()}
             if len(lengths) != 1:
@@ -561,17 +576,35 @@ def load_soil(path: str | Path, resources_root: str | Path = "resources", design
                 manifest=manifest)
 
 
-def load_workflow_config(cfg: dict, origin: str | Path = "config/config.yaml") -> dict[str, Soil]:
+def load_workflow_config(cfg: dict, origin: str | Path = "config/config.yaml",
+                         origins: dict[str, str] | None = None) -> dict[str, Soil]:
     """Validate the workflow config and every soil it lists; return soils by name (the
     config's ``design`` and ``source``, where given, as every soil's ``simulation.design`` and
-    ``source``)."""
-    _schema_error(Path(origin), read_yaml(WORKFLOW_SCHEMA), cfg)
+    ``source``).
+
+    An error names ``origin``, the config file, or for a top-level key given elsewhere (a
+    ``--configfile``, ``--config`` on the command line) where ``origins`` says it was given.
+    A soil listed without its file names the list entry (``soils[i]``) and the file looked for.
+    """
+    origins = origins or {}
+
+    def where(key: str) -> str | Path:
+        return origins.get(key, origin)
+
+    try:
+        _schema_error(Path(origin), read_yaml(WORKFLOW_SCHEMA), cfg)
+    except InputError as exc:
+        top = re.split(r"[.\[]", exc.field, maxsplit=1)[0]
+        if top in origins:
+            raise InputError(origins[top], exc.field, exc.expected, exc.got) from None
+        raise
     soil_dir = Path(cfg.get("soil_dir", "config/soils"))
     res = Path(cfg.get("resources", "resources"))
     out = {}
-    for name in cfg["soils"]:
+    for i, name in enumerate(cfg["soils"]):
         p = soil_dir / f"{name}.yaml"
         if not p.is_file():
-            raise InputError(origin, "soils", f"a soil file {p}", "no such file")
+            raise InputError(where("soils"), f"soils[{i}]", f"a soil file {p} (the soil's YAML, named after the soil)",
+                             "no such file")
         out[name] = load_soil(p, res, design=cfg.get("design"), source=cfg.get("source"))
     return out

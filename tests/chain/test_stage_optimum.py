@@ -1,0 +1,67 @@
+"""The optimisation settings of a stage's ``optimise`` block reach the search: the particle
+swarm of ``method: pso`` runs with the block's particles, iterations and repeats (the best of
+``repeats`` seeded swarms), and each left-out setting takes the default the schema states."""
+
+from __future__ import annotations
+
+import itertools
+
+import numpy as np
+import pandas as pd
+import pytest
+
+from soilcal import optimise
+from soilcal.chain.stage import optimum_frames
+
+
+def _stage(pso: dict | None) -> dict:
+    opt = {"method": "pso", "model": "full", "cases": [{"id": "angle", "goals": {"angle": {"goal": "target", "value": 31.0}}}]}
+    if pso is not None:
+        opt["pso"] = pso
+    return {"id": "bbd", "kind": "box_behnken", "center_points": 3,
+            "factors": {"A": {"parameter": "a", "low": 0.1, "high": 0.3},
+                        "B": {"parameter": "b", "low": 2.0, "high": 6.0},
+                        "C": {"parameter": "c", "low": 0.4, "high": 0.8}},
+            "responses": [{"id": "angle", "name": "Repose angle", "unit": "deg"}], "optimise": opt}
+
+
+def _table() -> pd.DataFrame:
+    rows = []
+    for i, j in itertools.combinations(range(3), 2):
+        for a, b in itertools.product((-1, 1), repeat=2):
+            x = [0, 0, 0]
+            x[i], x[j] = a, b
+            rows.append(x)
+    rows += [[0, 0, 0]] * 3
+    x = np.array(rows, float)
+    a, b, c = x.T
+    scatter = np.linspace(-0.2, 0.2, len(x))[np.argsort(np.arange(len(x)) * 7 % len(x))]
+    df = pd.DataFrame(x.astype(int), columns=["A", "B", "C"])
+    df.insert(0, "run", np.arange(1, len(df) + 1))
+    df["angle"] = 30 + 1.5 * a + 0.8 * b - 1.1 * c + 0.6 * a * b + 0.9 * a * a - 0.5 * c * c + scatter
+    return df
+
+
+@pytest.fixture
+def calls(monkeypatch):
+    seen = []
+    real = optimise.pso_optimise
+
+    def recording(objective, bounds, **kw):
+        seen.append(kw)
+        return real(objective, bounds, **kw)
+
+    monkeypatch.setattr(optimise, "pso_optimise", recording)
+    return seen
+
+
+def test_pso_runs_with_the_blocks_repeats(calls):
+    out = optimum_frames(_stage({"particles": 12, "iterations": 15, "repeats": 3}), _table(), {}, seed=5)["optimum"]
+    assert calls == [{"particles": 12, "iterations": 15, "repeats": 3, "seed": 5}]
+    pso = out[out["method"] == "pso"]
+    assert len(pso) == 1 and np.isfinite(float(pso["objective"].iloc[0]))
+
+
+def test_pso_settings_left_out_take_the_documented_defaults(calls):
+    optimum_frames(_stage(None), _table(), {}, seed=0)
+    assert calls == [{"particles": 50, "iterations": 200, "repeats": 1, "seed": 0}]
