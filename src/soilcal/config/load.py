@@ -205,7 +205,7 @@ def read_table(path: Path) -> pd.DataFrame:
     except UnicodeDecodeError as exc:
         raise InputError(path, "<file>", "a readable CSV table",
                          f"a byte that is not UTF-8 at offset {exc.start}") from None
-    header, names, line = None, [], 1
+    header, names, line, first = None, [], 1, 1
     reader = csv.reader(io.StringIO(text, newline=""))
     try:
         for rec in reader:
@@ -213,8 +213,8 @@ def read_table(path: Path) -> pd.DataFrame:
             empty = all(not c.strip() for c in rec)
             if header is None:
                 if len(rec) <= 1 and empty:
-                    continue  # a blank line before the header (skipped, as pandas does)
-                header = rec
+                    continue  # a blank line before the header, or one empty cell: skipped
+                header, first = rec, start
                 if len(rec) == 1 and ";" in rec[0]:
                     raise InputError(path, "<file>", "a comma-separated table with decimal points",
                                      "a table separated by ';'")
@@ -228,14 +228,13 @@ def read_table(path: Path) -> pd.DataFrame:
                                  f"{len(rec)} fields")
     except csv.Error as exc:
         raise InputError(path, f"line {line}", "a readable CSV row", str(exc)) from None
+    # pandas reads from the header line found above (it would take a line of one empty quoted
+    # cell, "", for the header); every row's field count is checked above
+    body = "".join(io.StringIO(text, newline="").readlines()[first - 1:])
     try:
-        df = pd.read_csv(io.StringIO(text))
+        df = pd.read_csv(io.StringIO(body))
     except Exception as exc:  # pandas raises several types for bad CSV
         text = " ".join(str(exc).split())
-        m = re.search(r"Expected (\d+) fields in line (\d+), saw (\d+)", text)
-        if m:
-            raise InputError(path, f"line {m.group(2)}", f"{m.group(1)} fields, as many as the header",
-                             f"{m.group(3)} fields") from None
         raise InputError(path, "<file>", "a readable CSV table", text or type(exc).__name__) from None
     if len(df.columns) == len(names):
         df.columns = [nm or str(c) for nm, c in zip(names, df.columns)]
