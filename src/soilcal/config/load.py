@@ -155,6 +155,9 @@ class Soil:
     defaulted: tuple[str, ...] = ()
     #: the soil's photo manifest as read and checked at load (None: the soil has none)
     manifest: dict | None = None
+    #: the conditions of its measured tables as read and checked at load
+    #: (:func:`soilcal.config.measurements.conditions`; None: read on use)
+    measured: tuple | None = None
 
     @property
     def name(self) -> str:
@@ -249,8 +252,9 @@ def _check_levels(path: Path, where: str, d: dict) -> None:
         raise InputError(path, f"{where}.centre", f"a number between low ({lo}) and high ({hi})", c)
 
 
-def _semantic_checks(path: Path, d: dict, resources_root: Path) -> dict | None:
-    """The checks a schema cannot state; returns the soil's photo manifest (None without one)."""
+def _semantic_checks(path: Path, d: dict, resources_root: Path) -> tuple[dict | None, tuple]:
+    """The checks a schema cannot state; returns the soil's photo manifest (None without one)
+    and the conditions of its measured tables (empty without any)."""
     if d["name"] != path.stem:
         raise InputError(path, "name", f"the file name without .yaml ({path.stem!r})", d["name"])
     for k, q in d.get("properties", {}).items():
@@ -327,17 +331,18 @@ def _semantic_checks(path: Path, d: dict, resources_root: Path) -> dict | None:
             from soilcal.chain.adaptive import check_settings
 
             check_settings(path, d)
+    measured = ()
     if d.get("measurements"):
         from soilcal.config.measurements import check_measurements
 
         _check_boolean_keys(path, d)
 
-        check_measurements(path, d, resources_root)
+        measured = tuple(check_measurements(path, d, resources_root))
     if d.get("loop"):
         from soilcal.loop.settings import settings_from
 
         _check_fold_by(path, d, settings_from(d, path).fold_by)
-    return manifest
+    return manifest, measured
 
 
 #: unquoted words YAML 1.1 (PyYAML) reads as booleans besides true and false
@@ -545,9 +550,9 @@ def load_soil(path: str | Path, resources_root: str | Path = "resources", design
             defaulted.append(key)
     if design is not None and data.get("simulation"):
         data["simulation"]["design"] = design
-    manifest = _semantic_checks(path, data, Path(resources_root))
+    manifest, measured = _semantic_checks(path, data, Path(resources_root))
     return Soil(path=path, data=data, resources_root=Path(resources_root), defaulted=tuple(defaulted),
-                manifest=manifest)
+                manifest=manifest, measured=measured)
 
 
 WORKFLOW_SCHEMA = {
