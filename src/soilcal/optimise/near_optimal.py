@@ -169,8 +169,8 @@ def identifiability(
     near-optimal sets span at most ``pinned_fraction`` of the full range) and a note. With a
     single near-optimal set every factor is pinned and the note says so.  A factor that would
     be pinned but whose sets all lie within that band of one bound, at least one of them on
-    it (:func:`soilcal.doe.at_bound`, coded distance :data:`soilcal.doe.ON_BOUND`), is ``"at bound"`` instead of True: the region's bound
-    holds it, not the data.
+    it (:func:`soilcal.doe.at_bound`, coded distance :data:`soilcal.doe.ON_BOUND`), is
+    ``"at bound"`` instead of True: the region's bound holds it, not the data.
     """
     if not isinstance(sets, pd.DataFrame):
         raise InputError(None, "sets", "a DataFrame from near_optimal_sets", type(sets).__name__)
