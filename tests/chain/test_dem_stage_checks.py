@@ -21,7 +21,6 @@ from soilcal.chain.derive import check_dem_stages, dem_stage
 from soilcal.chain.files import write_stage_design
 from soilcal.chain.stage import generated_design
 from soilcal.config.load import load_soil
-from soilcal.doe import plackett_burman
 from soilcal.errors import InputError
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -168,6 +167,18 @@ def test_a_value_outside_the_physical_range_is_refused_at_load(tmp_path, edit, f
 
 # --------------------------------------------------------------------------- Plackett-Burman runs
 
+# Plackett & Burman (1946): the 12-run design's printed first row; row i (i = 0..10) is that
+# row shifted i places to the right, so entry (i, j) is the printed sign j - i (mod 11) places
+# along; row 12 is all minus.
+PB12_PRINTED = "+ + - + + + - - - + -".split()
+
+
+def _pb12_first_columns(k: int) -> np.ndarray:
+    g = [1.0 if c == "+" else -1.0 for c in PB12_PRINTED]
+    rows = [[g[(j - i) % 11] for j in range(11)] for i in range(11)] + [[-1.0] * 11]
+    return np.array(rows)[:, :k]
+
+
 
 def test_twelve_runs_of_six_factors_are_generated_as_asked(tmp_path):
     """An N-run Plackett-Burman design has N - 1 orthogonal columns: 12 runs of 6 factors are
@@ -179,7 +190,8 @@ def test_twelve_runs_of_six_factors_are_generated_as_asked(tmp_path):
     assert np.array_equal(x.T @ x, 12 * np.eye(6))  # orthogonal two-level columns
     dummies = dict(st, dummies=["G", "H", "I", "J", "K"])
     assert np.array_equal(generated_design(dummies)[:, :6], x)
-    assert np.array_equal(x, plackett_burman(11)[:, :6])
+    assert np.array_equal(x, _pb12_first_columns(6))
+    assert (x == 1).sum(axis=0).tolist() == [6] * 6  # balanced: six runs at each level
     # without runs: the smallest design for 6 columns, 8 runs
     assert generated_design({k: v for k, v in st.items() if k != "runs"}).shape == (8, 6)
 
@@ -200,7 +212,7 @@ def test_design_csv_of_the_dem_screening_has_the_runs_of_stage_json(tmp_path):
     lo = np.array([0.2, 0.2, 0.02, 0.2, 0.3, 0.0])
     hi = np.array([0.7, 0.9, 0.25, 0.7, 0.9, 0.8])
     actual = design[[f"{s}_actual" for s in "ABCDEF"]].to_numpy(float)
-    assert np.allclose(actual, (lo + hi) / 2 + plackett_burman(11)[:, :6] * (hi - lo) / 2, atol=1e-12)
+    assert np.allclose(actual, (lo + hi) / 2 + _pb12_first_columns(6) * (hi - lo) / 2, atol=1e-12)
 
 
 @pytest.mark.parametrize("runs, dummies", [(10, []), (8, ["G", "H"]), (4, [])])

@@ -178,3 +178,28 @@ def test_a_miss_larger_than_the_seed_scatter_is_not_called_seed_scatter():
     two_se = np.std([30.0, 34.0, 31.0, 33.0], ddof=1)
     assert f"the miss +1 is within two standard errors ({two_se:.3g}) of the mean of 4 seeds (seed scatter)" in \
         df.loc["scatter", "note"]
+
+
+def test_unbiased_miss_note_by_hand():
+    """Each missed response's reason, computed by hand: y1 four seeds of SD 1 miss by 1, two
+    standard errors 2 * 1 / sqrt(4) = 1 exactly (seed scatter); y2 four seeds of SD 2 miss by
+    3, beyond two standard errors 2 (the surface's own 32.5 is 2.5 off); y3 one seed."""
+    from soilcal.chain.refine import _unbiased_miss
+
+    stage = {"factors": {"A": {"low": 0.3, "high": 0.8}, "B": {"low": 10.0, "high": 20.0}}}
+    tgt = {"y1": 30.0, "y2": 30.0, "y3": 30.0}
+    stats = {"y1": (31.0, 1.0, 4), "y2": (33.0, 2.0, 4), "y3": (40.0, np.nan, 1)}
+    pred = {"y1": 31.0, "y2": 32.5, "y3": 40.0}
+    head = ("missed, but the verification means differ from the surface's prediction by no more than two "
+            "standard errors (no bias to correct); ")
+    y1 = "y1: the miss +1 is within two standard errors (1) of the mean of 4 seeds (seed scatter)"
+    y2 = ("y2: the miss +3 is more than seed scatter (two standard errors 2 of 4 seeds): the surface itself "
+          "predicts 32.5 at this set, +2.5 from the target")
+    y3 = "y3: 1 verification seed, no standard error: seed scatter and bias cannot be told apart"
+    on_bound = pd.DataFrame([{"A_coded": -1.0, "B_coded": 0.2}])
+    inside = pd.DataFrame([{"A_coded": 0.5, "B_coded": 0.2}])
+    note = _unbiased_miss(stage, on_bound, tgt, stats, pred, ["y1", "y2", "y3"])
+    assert note == head + "; ".join([y1, y2 + "; A at its low bound 0.3: the target lies outside the design "
+                                     "region", y3])
+    note = _unbiased_miss(stage, inside, tgt, stats, pred, ["y2"])
+    assert note == head + y2 + ": the surface does not reach the target there"

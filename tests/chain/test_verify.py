@@ -24,6 +24,8 @@ from soilcal.chain.verify import (
     calibrated_vs_paper,
     diagnose,
     not_run_rows,
+    region_limit,
+    seed_scatter,
     summary_frame,
     tool_frame,
     verification_cases,
@@ -117,6 +119,19 @@ def test_diagnose_seed_scatter():
     assert "16 seeds would bring two standard errors within the 2 % band of +-0.60" in note
     # 2 * 1.25 / 0.6 = 4.17, squared 17.4: 18 seeds
     assert "18 seeds" in diagnose(31.0, 1.25, 4, 30.0, 30.2)
+
+
+def test_seed_scatter_by_hand():
+    # SD 1.2 over 4 seeds: standard error 0.6, two of them 1.2
+    assert seed_scatter(31.2, 1.2, 4, 30.0) == (pytest.approx(0.6), True)  # the miss 1.2 at 2 SE
+    assert seed_scatter(28.8, 1.2, 4, 30.0)[1] is True
+    assert seed_scatter(31.3, 1.2, 4, 30.0)[1] is False
+    for n, sd in ((1, 0.5), (0, np.nan), (4, np.nan)):
+        sem, within = seed_scatter(31.0, sd, n, 30.0)
+        assert np.isnan(sem) and within is None
+    assert region_limit([], ", within") == ", within"
+    assert region_limit(["A at its low bound 0.3", "C at its high bound 0.6"], "") == \
+        "; A at its low bound 0.3, C at its high bound 0.6: the target lies outside the design region"
 
 
 def test_diagnose_surface_bias():

@@ -49,3 +49,19 @@ def test_a_derived_stage_counts_the_factors_of_the_stage_it_comes_from(tmp_path)
 def test_every_shipped_dem_soil_sets_its_parameters():
     for p in sorted((ROOT / "config/soils").glob("*.yaml")):
         load_soil(p, ROOT / "resources")  # raises if a simulated stage leaves a soil parameter out
+
+
+def test_a_stage_parameter_maps_to_its_field_as_the_dem_jobs_map_it():
+    import copy
+
+    soil = load_soil(ROOT / "config/soils/cinnamon-soil.yaml", ROOT / "resources")
+    sym, f = next(iter(soil.stage("pb")["factors"].items()))
+    entry = soil.data["parameters"][f["parameter"]]
+    assert f"{entry['pair'].replace('-', '_')}_{entry['kind']}" in given(soil.data, "pb")
+    # a parameter without pair and kind maps to none: named, not left out silently
+    data = copy.deepcopy(soil.data)
+    del data["parameters"][f["parameter"]]["pair"]
+    with pytest.raises(InputError) as e:
+        given(data, "pb", soil_path="soil.yaml")
+    assert (e.value.path, e.value.field, e.value.got) == ("soil.yaml", f"stages.pb.factors.{sym}.parameter",
+                                                         f["parameter"])

@@ -31,6 +31,25 @@ def test_shipped_soils_load_with_their_measurements(soil):
         assert conds
 
 
+def test_each_measured_table_is_read_once_at_load_and_its_conditions_kept(monkeypatch):
+    import types
+
+    import soilcal.config.load as load
+
+    reads = []
+    real = load.read_table
+    monkeypatch.setattr(load, "read_table", lambda p: reads.append(Path(p).name) or real(p))
+    soil = _shipped("cinnamon-soil")
+    tables = [e["table"] for e in soil.data["measurements"].values()]
+    assert sorted(n for n in reads if n in tables) == sorted(tables)  # once each
+    reads.clear()
+    conds = conditions(soil)
+    assert reads == [] and len(conds) == 4
+    # the same conditions as the tables read anew (a soil the loader did not make)
+    fresh = types.SimpleNamespace(path=soil.path, data=soil.data, resources_root=soil.resources_root)
+    assert conditions(fresh) == conds and sorted(reads) == sorted(tables)
+
+
 def test_cinnamon_one_condition_per_plate():
     conds = conditions(_shipped("cinnamon-soil"))
     table = pd.read_csv(ROOT / "resources/measurements/cinnamon-soil/cutting_resistance.csv")

@@ -78,3 +78,19 @@ def test_semicolon_separated_export_is_refused(tmp_path):
     assert e.field == "<file>"
     assert "t.csv: <file>: expected a comma-separated table with decimal points" in str(e)
     assert "separated by ';'" in str(e)
+
+
+@pytest.mark.parametrize("before", ['""\n', '""\n""\n', ' \n""\r\n', '"\n"\n'])
+def test_empty_lines_before_the_header_are_skipped_whatever_their_quotes(tmp_path, before):
+    # a line of one empty quoted cell is no header: pandas alone would take it for one
+    # (a table of one unnamed column, or a field-count error two lines on)
+    p = tmp_path / "t.csv"
+    p.write_text(before + "a,b,c\n1,2,3\n4,5,6\n", newline="")
+    df = read_table(p)
+    assert list(df.columns) == ["a", "b", "c"]
+    assert df.to_numpy().tolist() == [[1, 2, 3], [4, 5, 6]]
+
+
+def test_a_row_too_long_after_skipped_lines_is_named_by_its_line(tmp_path):
+    e = _refused(tmp_path, '""\n\na,b,c\n1,2,3\n4,5,6,7\n')
+    assert (e.field, e.got) == ("line 5", "4 fields")

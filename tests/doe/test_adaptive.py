@@ -576,3 +576,16 @@ def test_a_consistent_region_held_by_a_bound_is_at_bound_not_pinned():
     assert region(0.9, 1.0) == "at bound"
     assert region(0.45, 0.55) == True  # noqa: E712  (a bool column: numpy's True)
     assert region(0.2, 0.9) == False  # noqa: E712
+
+
+def test_near_a_bound_is_within_a_fiftieth_of_the_range():
+    # range 10 to 20: NEAR_BOUND of it is 0.2
+    assert ad.NEAR_BOUND == 0.02
+    eps = 1e-9
+    assert ad.near_a_bound(10.2, 12.0, 10.0, 20.0) == "low"  # at the tolerance
+    assert ad.near_a_bound(10.2 - eps, 12.0, 10.0, 20.0) == "low"  # just inside
+    assert ad.near_a_bound(10.2 + 1e-6, 12.0, 10.0, 20.0) is None  # just outside
+    assert ad.near_a_bound(18.0, 19.8, 10.0, 20.0) == "high"
+    assert ad.near_a_bound(18.0, 19.8 + eps, 10.0, 20.0) == "high"
+    assert ad.near_a_bound(18.0, 19.8 - 1e-6, 10.0, 20.0) is None
+    assert ad.near_a_bound(10.0, 20.0, 10.0, 20.0) == "low"  # both: the low one

@@ -14,8 +14,10 @@ import pyDOE3
 import pytest
 
 from soilcal.doe import (
+    ON_BOUND,
     PB_GENERATORS,
     actual_to_coded,
+    at_bound,
     box_behnken,
     coded_to_actual,
     is_orthogonal,
@@ -179,3 +181,27 @@ def test_steepest_ascent_montgomery_example():
 def test_steepest_ascent_bad_base():
     with pytest.raises(InputError):
         steepest_ascent_path({"A": 1.0}, [0], [1], base="B", base_step_actual=0.1, n_steps=3)
+
+
+@pytest.mark.parametrize("tol", [ON_BOUND, 0.04, 0.5])
+def test_a_coded_level_is_at_a_bound_within_the_tolerance_and_not_beyond_it(tol):
+    eps = 1e-9
+    # at the tolerance, just inside it, on the bound and past it: at the bound
+    for x in (-1.0 + tol, -1.0 + tol - eps, -1.0, -1.2):
+        assert at_bound(x, "low", tol) is True and at_bound(-x, "high", tol) is True
+    # just outside the tolerance: not
+    assert at_bound(-1.0 + tol + eps, "low", tol) is False
+    assert at_bound(1.0 - tol - eps, "high", tol) is False
+    # the far bound is not this one
+    assert at_bound(1.0, "low", tol) is False and at_bound(-1.0, "high", tol) is False
+    # arrays element-wise
+    x = np.array([-1.0, -1.0 + tol, -1.0 + tol + eps, 0.0, 1.0])
+    assert at_bound(x, "low", tol).tolist() == [True, True, False, False, False]
+
+
+def test_at_bound_default_tolerance_and_side_check():
+    assert ON_BOUND == 1e-6
+    assert at_bound(-1.0 + 0.9e-6, "low") and not at_bound(-1.0 + 1.1e-6, "low")
+    assert at_bound(1.0 - 0.9e-6, "high") and not at_bound(1.0 - 1.1e-6, "high")
+    with pytest.raises(InputError):
+        at_bound(0.0, "middle")

@@ -11,6 +11,7 @@ from __future__ import annotations
 import numpy as np
 import pandas as pd
 import pytest
+from scipy import optimize, stats
 
 from soilcal import doe, rsm
 from soilcal.chain.stage import regression_frames
@@ -73,19 +74,73 @@ def test_fit_csv_has_no_infinity_and_says_why_a_statistic_is_empty():
     run = int(t.dropna(subset=["angle"])["run"].iloc[int(_fit(t).leverage_one[0])])
     assert np.isnan(full["PRESS"]) and np.isnan(full["pred_R2"])
     assert f"point {run} has leverage 1" in full["note"]
-    # a Box-Cox interval reaching past the searched lambda range: the open end empty, the note says so
-    for _, r in fit.iterrows():
-        for key in ("boxcox_ci_low", "boxcox_ci_high"):
-            if pd.isna(r[key]):
-                assert "Box-Cox: the 95 % interval of lambda" in r["note"]
-    bc = rsm.boxcox(_fit(t))
-    if np.isinf(bc["ci_low"]) or np.isinf(bc["ci_high"]):
-        assert pd.isna(full["boxcox_ci_low"]) or pd.isna(full["boxcox_ci_high"])
-        assert bc["ci_note"] and f"Box-Cox: {bc['ci_note']}" in full["note"]
     # every point present: nothing undefined for the model
     whole = regression_frames(STAGE, _table(missing=()))["fit"]
     assert np.isfinite(whole["PRESS"]).all()
     assert not whole["note"].str.contains("leverage").any()
+
+
+def _two_level(table: pd.DataFrame, c: float) -> pd.DataFrame:
+    """The table's observed responses replaced by c and 1/c alternately (as many of each)."""
+    t = table.copy()
+    seen = t["angle"].notna()
+    t.loc[seen, "angle"] = np.where(np.arange(int(seen.sum())) % 2 == 0, c, 1.0 / c)
+    return t
+
+
+def _two_level_half_width(L: float, nu: int, alpha: float = 0.05) -> float:
+    """Box-Cox interval half-width for a response taking c and 1/c equally often, L = ln c.
+
+    The geometric mean is 1, so every transform of the response is a + b(lambda) * indicator
+    with b(lambda) = 2 sinh(lambda L) / lambda: SS_E(lambda) = b(lambda)^2 * SS_E of the
+    indicator, least at lambda = 0 (b = 2L), and SS_E <= SS*(1 + t^2/nu) exactly where
+    sinh(lambda L) / (lambda L) <= sqrt(1 + t^2/nu), i.e. |lambda| <= u / L.
+    """
+    k = np.sqrt(1.0 + stats.t.ppf(1 - alpha / 2, nu) ** 2 / nu)
+    return optimize.brentq(lambda u: np.sinh(u) / u - k, 1e-9, 50.0) / L
+
+
+def test_box_cox_of_a_two_level_response_has_the_analytic_optimum_and_interval():
+    x = np.arange(8.0)
+    X = np.column_stack([np.ones(8), x])
+    L = 2.0
+    y = np.exp(L * np.array([1, -1, -1, 1, 1, -1, -1, 1.0]))
+    bc = rsm.boxcox(X, y)
+    w = _two_level_half_width(L, nu=8 - 2)
+    assert 0.5 < w < 1.0  # inside the searched range: both ends finite
+    assert bc["lambda_best"] == pytest.approx(0.0, abs=1e-4)
+    assert bc["ci_low"] == pytest.approx(-w, abs=1e-6) and bc["ci_high"] == pytest.approx(w, abs=1e-6)
+    assert bc["ci_note"] == ""
+    # 0.5, 0 and -0.5 lie inside, 1 does not: the standard lambda nearest the best, ln
+    assert bc["recommended_transform"] == "ln"
+
+
+@pytest.mark.parametrize("make_y, lam", [
+    (lambda x: (3.0 + x) ** 2, 0.5),   # sqrt(y) exactly linear in x
+    (lambda x: np.exp(0.3 * x), 0.0),  # ln(y) exactly linear in x
+    (lambda x: 1.0 / (2.0 + x), -1.0),  # 1/y exactly linear in x
+])
+def test_box_cox_finds_the_power_that_makes_the_response_exactly_linear(make_y, lam):
+    x = np.arange(8.0)
+    X = np.column_stack([np.ones(8), x])
+    bc = rsm.boxcox(X, make_y(x))
+    assert bc["lambda_best"] == pytest.approx(lam, abs=1e-3)
+
+
+def test_fit_csv_leaves_an_open_box_cox_end_empty_and_names_it():
+    """Responses 1.1 and 1/1.1: the interval is |lambda| <= u / ln 1.1, over 3 for every
+    model the stage fits, so it covers the searched range -3 to 3 at both ends."""
+    c = 1.1
+    fit = regression_frames(STAGE, _two_level(_table(), c))["fit"]
+    assert list(fit["model"]) == ["full", "reduced"]
+    # the narrowest of these intervals is the one of most residual df, 13 of 14 runs
+    assert _two_level_half_width(np.log(c), nu=13) > 3.0
+    for _, r in fit.iterrows():
+        assert r["boxcox_lambda"] == pytest.approx(0.0, abs=1e-3)
+        assert pd.isna(r["boxcox_ci_low"]) and pd.isna(r["boxcox_ci_high"])
+        assert ("Box-Cox: the 95 % interval of lambda covers the whole searched range -3 to 3"
+                in r["note"])
+    assert not np.isinf(fit.select_dtypes("number").to_numpy(float)).any()
 
 
 @pytest.mark.parametrize("lams, expected", [

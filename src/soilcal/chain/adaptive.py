@@ -546,7 +546,7 @@ def region_frame(results: list[dict], regions: list[pd.DataFrame]) -> pd.DataFra
         r.insert(0, "case", res["case"])
         r["spread"] = r["max"] - r["min"]
         r["spread_coded"] = r["spread"] / ((r["high"] - r["low"]) / 2)
-        r["note"] = ["at bound: the consistent region reaches the " + ("low" if lo - f_lo <= f_hi - hi else "high")
+        r["note"] = ["at bound: the consistent region reaches the " + ad.near_a_bound(lo, hi, f_lo, f_hi)
                      + " bound of the box, which holds it there, not the data: the consistent set may go on beyond it"
                      if pin == "at bound" else
                      "" if pin else "spread over more than half its range: the data do not pin it down"

@@ -37,17 +37,13 @@ def soil_parameters() -> list[str]:
     return [n for n in DemParams.names() if n not in GENERIC]
 
 
-def _dem_name(data: dict, pname: str) -> str | None:
-    entry = (data.get("parameters") or {}).get(pname) or {}
-    if "pair" not in entry or "kind" not in entry:
-        return None
-    return f"{entry['pair'].replace('-', '_')}_{entry['kind']}"
-
-
-def given(data: dict, stage_id: str, _seen=None) -> set[str]:
+def given(data: dict, stage_id: str, _seen=None, soil_path=None) -> set[str]:
     """DemParams fields that the soil sets for the runs of a simulated stage (module
-    docstring)."""
+    docstring).  A stage's factor or fixed parameter maps to its field as the DEM jobs map it
+    (:func:`soilcal.dem.scenarios.base.dem_field`; one that maps to none is an InputError
+    naming ``soil_path`` and the entry)."""
     from soilcal.chain.derive import _stage, dependencies
+    from soilcal.dem.scenarios.base import dem_field
 
     seen = set() if _seen is None else _seen
     if stage_id in seen:
@@ -60,12 +56,11 @@ def given(data: dict, stage_id: str, _seen=None) -> set[str]:
     out |= set(((data.get("simulation") or {}).get("params") or {}))
     st = _stage(data, stage_id)
     for pname in st.get("fixed") or {}:
-        out.add(_dem_name(data, pname))
-    for f in (st.get("factors") or {}).values():
-        out.add(_dem_name(data, f.get("parameter")))
+        out.add(dem_field(soil_path, data, pname, f"stages.{stage_id}.fixed.{pname}")[0])
+    for sym, f in (st.get("factors") or {}).items():
+        out.add(dem_field(soil_path, data, f.get("parameter"), f"stages.{stage_id}.factors.{sym}.parameter")[0])
     for earlier in dependencies(data, stage_id).values():
-        out |= given(data, earlier, seen)
-    out.discard(None)
+        out |= given(data, earlier, seen, soil_path)
     return out
 
 
@@ -78,7 +73,7 @@ def check_parameters(soil_path, data: dict) -> None:
         return
     need = soil_parameters()
     for sid in dem_stage_ids(data):
-        missing = [n for n in need if n not in given(data, sid)]
+        missing = [n for n in need if n not in given(data, sid, soil_path=soil_path)]
         if missing:
             raise InputError(soil_path, "simulation.params",
                              f"a value of every soil parameter the runs of stage {sid!r} use (SI units, in "

@@ -69,23 +69,24 @@ def _unbiased_miss(stage: dict, cal: pd.DataFrame, tgt: dict, stats: dict, pred:
     :func:`soilcal.chain.stage.factors_on_bounds`); with fewer than two seeds there is no
     standard error to tell."""
     from soilcal.chain.stage import factors_on_bounds
+    from soilcal.chain.verify import region_limit, seed_scatter
 
     parts = []
     bounds = factors_on_bounds(stage, cal.iloc[0])  # the set's, the same for every response
     for r in missed:
         m, sd, n = stats[r]
         t, p = tgt[r], pred[r]
-        if n < 2 or not np.isfinite(sd):
+        sem, scatter = seed_scatter(m, sd, n, t)
+        if scatter is None:
             parts.append(f"{r}: {n} verification seed{'' if n == 1 else 's'}, no standard error: seed scatter "
                          "and bias cannot be told apart")
             continue
-        two_se = 2.0 * sd / np.sqrt(n)
-        if abs(m - t) <= two_se:
+        two_se = 2.0 * sem
+        if scatter:
             parts.append(f"{r}: the miss {m - t:+.3g} is within two standard errors ({two_se:.3g}) of the mean "
                          f"of {n} seeds (seed scatter)")
             continue
-        where = (f"; {', '.join(bounds)}: the target lies outside the design region" if bounds
-                 else ": the surface does not reach the target there")
+        where = region_limit(bounds, ": the surface does not reach the target there")
         parts.append(f"{r}: the miss {m - t:+.3g} is more than seed scatter (two standard errors {two_se:.3g} of "
                      f"{n} seeds): the surface itself predicts {p:.4g} at this set, {p - t:+.3g} from the "
                      f"target{where}")

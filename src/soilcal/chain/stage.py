@@ -543,10 +543,6 @@ def calibrated_rows(optimum: pd.DataFrame, case: str) -> pd.DataFrame:
     return sel[sel["calibrated"].astype(str).str.lower() == "true"]
 
 
-#: a coded level within this of -1 or +1 lies on a bound of the design region
-ON_BOUND = 1e-6
-
-
 def factors_on_bounds(stage: dict, row) -> list[str]:
     """The factors of a set (a row of ``optimum.csv`` or ``refined.csv``: ``<factor>_coded``
     or the actual levels) that lie on a bound of the stage's design region, as text:
@@ -563,9 +559,9 @@ def factors_on_bounds(stage: dict, row) -> list[str]:
             x = float(doe.actual_to_coded(np.array([float(row[s])]), lo, hi)[0])
         else:
             continue
-        if x <= -1.0 + ON_BOUND:
+        if doe.at_bound(x, "low"):
             out.append(f"{s} at its low bound {lo:g}")
-        elif x >= 1.0 - ON_BOUND:
+        elif doe.at_bound(x, "high"):
             out.append(f"{s} at its high bound {hi:g}")
     return out
 

@@ -97,6 +97,23 @@ def not_run_rows(stage_id: str, case: dict, reason: str) -> pd.DataFrame:
     return pd.DataFrame(rows, columns=RUN_COLUMNS)
 
 
+def seed_scatter(mean: float, sd: float, n: int, target: float) -> tuple[float, bool | None]:
+    """The standard error of a mean of ``n`` seeds of SD ``sd`` (sd / sqrt(n)) and whether the
+    miss ``mean - target`` lies within two of them (seed scatter alone may explain it); NaN
+    and None with fewer than two seeds or no finite SD: no scatter to judge the miss by."""
+    if n < 2 or not np.isfinite(sd):
+        return float("nan"), None
+    sem = sd / np.sqrt(n)
+    return float(sem), bool(abs(mean - target) <= 2 * sem)
+
+
+def region_limit(on_bounds, otherwise: str) -> str:
+    """The end of a note on a surface that misses its target: the set's factors on a bound of
+    the design region (:func:`soilcal.chain.stage.factors_on_bounds`) and that the target lies
+    outside it, or ``otherwise`` where none is on a bound."""
+    return f"; {', '.join(on_bounds)}: the target lies outside the design region" if on_bounds else otherwise
+
+
 def diagnose(mean: float, sd: float, n: int, target: float, predicted: float | None,
              ci: tuple[float, float] | None = None, replicates: int | None = None,
              model: str | None = None, on_bounds=None) -> str:
@@ -150,19 +167,18 @@ def diagnose(mean: float, sd: float, n: int, target: float, predicted: float | N
                          f"it (replicates per design point would tell{how})")
         else:
             band = f" (95 % confidence interval {lo:.2f} to {hi:.2f})" if known else ""
-            where = (f"; {', '.join(on_bounds)}: the target lies outside the design region" if on_bounds
-                     else ", within the design region")
+            where = region_limit(on_bounds, ", within the design region")
             notes.append(f"model limit: the response surface predicts {predicted:.2f} at its best set, "
                          f"{predicted - target:+.2f} from the target{band}{where}")
-    sem = sd / np.sqrt(n) if n > 1 and np.isfinite(sd) else np.nan
-    if np.isfinite(sem) and abs(mean - target) <= 2 * sem:
+    sem, scatter = seed_scatter(mean, sd, n, target)
+    if scatter:
         band = TOLERANCE_PERCENT / 100 * abs(target)
         need = int(np.ceil((2 * sd / band) ** 2 - 1e-9))  # an exact square is not rounded up
         notes.append(f"seed scatter: the miss {mean - target:+.2f} is within two standard errors "
                      f"({sem:.2f}) of the mean of {n} seeds; more seeds or larger heaps would tell "
                      f"(at this seed SD {sd:.2f}, {need} seeds would bring two standard errors within "
                      f"the {TOLERANCE_PERCENT:g} % band of +-{band:.2f})")
-    elif not notes and not np.isfinite(sem):
+    elif not notes and scatter is None:
         notes.append(f"undecided: {n} seed{'s' if n != 1 else ''} gave {mean:.2f} with no scatter to judge the miss "
                      f"{mean - target:+.2f} by (it takes two seeds), so seed scatter and a surface bias cannot be "
                      "told apart; more seeds would tell")

@@ -166,6 +166,9 @@ class Soil:
     defaulted: tuple[str, ...] = ()
     #: the soil's photo manifest as read and checked at load (None: the soil has none)
     manifest: dict | None = None
+    #: the conditions of its measured tables as read and checked at load
+    #: (:func:`soilcal.config.measurements.conditions`; None: read on use)
+    measured: tuple | None = None
 
     @property
     def name(self) -> str:
@@ -216,7 +219,7 @@ def read_table(path: Path) -> pd.DataFrame:
     except UnicodeDecodeError as exc:
         raise InputError(path, "<file>", "a readable CSV table",
                          f"a byte that is not UTF-8 at offset {exc.start}") from None
-    header, names, line = None, [], 1
+    header, names, line, first = None, [], 1, 1
     reader = csv.reader(io.StringIO(text, newline=""))
     try:
         for rec in reader:
@@ -224,8 +227,8 @@ def read_table(path: Path) -> pd.DataFrame:
             empty = all(not c.strip() for c in rec)
             if header is None:
                 if len(rec) <= 1 and empty:
-                    continue  # a blank line before the header (skipped, as pandas does)
-                header = rec
+                    continue  # a blank line before the header, or one empty cell: skipped
+                header, first = rec, start
                 if len(rec) == 1 and ";" in rec[0]:
                     raise InputError(path, "<file>", "a comma-separated table with decimal points",
                                      "a table separated by ';'")
@@ -239,14 +242,13 @@ def read_table(path: Path) -> pd.DataFrame:
                                  f"{len(rec)} fields")
     except csv.Error as exc:
         raise InputError(path, f"line {line}", "a readable CSV row", str(exc)) from None
+    # pandas reads from the header line found above (it would take a line of one empty quoted
+    # cell, "", for the header); every row's field count is checked above
+    body = "".join(io.StringIO(text, newline="").readlines()[first - 1:])
     try:
-        df = pd.read_csv(io.StringIO(text))
+        df = pd.read_csv(io.StringIO(body))
     except Exception as exc:  # pandas raises several types for bad CSV
         text = " ".join(str(exc).split())
-        m = re.search(r"Expected (\d+) fields in line (\d+), saw (\d+)", text)
-        if m:
-            raise InputError(path, f"line {m.group(2)}", f"{m.group(1)} fields, as many as the header",
-                             f"{m.group(3)} fields") from None
         raise InputError(path, "<file>", "a readable CSV table", text or type(exc).__name__) from None
     if len(df.columns) == len(names):
         df.columns = [nm or str(c) for nm, c in zip(names, df.columns)]
@@ -261,8 +263,9 @@ def _check_levels(path: Path, where: str, d: dict) -> None:
         raise InputError(path, f"{where}.centre", f"a number between low ({lo}) and high ({hi})", c)
 
 
-def _semantic_checks(path: Path, d: dict, resources_root: Path) -> dict | None:
-    """The checks a schema cannot state; returns the soil's photo manifest (None without one)."""
+def _semantic_checks(path: Path, d: dict, resources_root: Path) -> tuple[dict | None, tuple]:
+    """The checks a schema cannot state; returns the soil's photo manifest (None without one)
+    and the conditions of its measured tables (empty without any)."""
     if d["name"] != path.stem:
         raise InputError(path, "name", f"the file name without .yaml ({path.stem!r})", d["name"])
     for k, q in d.get("properties", {}).items():
@@ -345,17 +348,18 @@ def _semantic_checks(path: Path, d: dict, resources_root: Path) -> dict | None:
             from soilcal.chain.adaptive import check_settings
 
             check_settings(path, d)
+    measured = ()
     if d.get("measurements"):
         from soilcal.config.measurements import check_measurements
 
         _check_boolean_keys(path, d)
 
-        check_measurements(path, d, resources_root)
+        measured = tuple(check_measurements(path, d, resources_root))
     if d.get("loop"):
         from soilcal.loop.settings import settings_from
 
         _check_fold_by(path, d, settings_from(d, path).fold_by)
-    return manifest
+    return manifest, measured
 
 
 #: unquoted words YAML 1.1 (PyYAML) reads as booleans besides true and false
@@ -571,9 +575,9 @@ def load_soil(path: str | Path, resources_root: str | Path = "resources", design
         data["simulation"]["design"] = design
     if source is not None:
         data["source"] = source
-    manifest = _semantic_checks(path, data, Path(resources_root))
+    manifest, measured = _semantic_checks(path, data, Path(resources_root))
     return Soil(path=path, data=data, resources_root=Path(resources_root), defaulted=tuple(defaulted),
-                manifest=manifest)
+                manifest=manifest, measured=measured)
 
 
 def load_workflow_config(cfg: dict, origin: str | Path = "config/config.yaml",

@@ -606,15 +606,22 @@ def _renamed(exc: InputError, soil_path, prefix: str, field_prefix: str) -> Inpu
     return InputError(soil_path, field_prefix + fld, exc.expected, exc.got)
 
 
-def check_measurements(soil_path, data: dict, resources_root) -> None:
-    """Start-up check of a soil's ``measurements`` block (called by the config loader)."""
-    if data.get(BLOCK):
-        _entries(soil_path, data, resources_root)
+def check_measurements(soil_path, data: dict, resources_root) -> list[Condition]:
+    """Start-up check of a soil's ``measurements`` block (called by the config loader); returns
+    the conditions of its tables, as :func:`conditions` gives them."""
+    out = []
+    for _mid, _entry, _tpath, _df, conds in _entries(soil_path, data, resources_root) if data.get(BLOCK) else []:
+        out.extend(conds)
+    return out
 
 
 def conditions(soil) -> list[Condition]:
     """One :class:`Condition` per row of every measured table of a loaded
-    :class:`~soilcal.config.load.Soil`, in block and table order."""
+    :class:`~soilcal.config.load.Soil`, in block and table order: those the loader read and
+    checked (:attr:`Soil.measured`), or read now for a soil it did not load."""
+    measured = getattr(soil, "measured", None)
+    if measured is not None:
+        return list(measured)
     out = []
     for _mid, _entry, _tpath, _df, conds in _entries(soil.path, soil.data, soil.resources_root):
         out.extend(conds)

@@ -4,10 +4,12 @@ path of steepest ascent and the adaptive design (see :mod:`soilcal.doe.designs`,
 scikit-learn)."""
 
 from soilcal.doe.designs import (
+    ON_BOUND,
     PB_GENERATORS,
     ColumnMatch,
     RowComparison,
     actual_to_coded,
+    at_bound,
     box_behnken,
     coded_to_actual,
     is_orthogonal,
@@ -20,10 +22,12 @@ from soilcal.doe.designs import (
 from soilcal.doe.steepest import steepest_ascent_path
 
 __all__ = [
+    "ON_BOUND",
     "PB_GENERATORS",
     "ColumnMatch",
     "RowComparison",
     "actual_to_coded",
+    "at_bound",
     "box_behnken",
     "coded_to_actual",
     "is_orthogonal",

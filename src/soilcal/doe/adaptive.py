@@ -123,7 +123,7 @@ import pandas as pd
 from scipy import optimize, stats
 from scipy.stats import qmc
 
-from soilcal.doe.designs import actual_to_coded, coded_to_actual
+from soilcal.doe.designs import actual_to_coded, at_bound, coded_to_actual
 from soilcal.errors import InputError
 
 #: defaults of a soil's ``simulation.adaptive`` block (documented in the soil schema)
@@ -139,7 +139,8 @@ OPTIMISED_GOALS = GOALS[1:]
 UNPINNED_SHARE = 0.5
 #: a pinned factor whose consistent candidates reach this share of its range from a bound is
 #: "at bound": the box, not the data, holds it there (the candidates are a Halton sample, so
-#: the region's edge on a bound shows within about a fiftieth of the range)
+#: the region's edge on a bound shows within about a fiftieth of the range; in coded units,
+#: :func:`soilcal.doe.at_bound`'s tolerance is twice this)
 NEAR_BOUND = 0.02
 
 
@@ -662,6 +663,16 @@ def empty_runs(problem: Problem) -> pd.DataFrame:
     return pd.DataFrame(columns=[*RUN_KEYS, *problem.names, *problem.responses])
 
 
+def near_a_bound(vmin: float, vmax: float, low: float, high: float) -> str | None:
+    """Which bound of a factor's range ``low`` to ``high`` ("low", "high" or None) a consistent
+    region spanning ``vmin`` to ``vmax`` (actual units) reaches, to within :data:`NEAR_BOUND`
+    of the range; the low one when it reaches both."""
+    lo, hi = actual_to_coded(np.array([vmin, vmax]), low, high)
+    if at_bound(lo, "low", tol=2.0 * NEAR_BOUND):
+        return "low"
+    return "high" if at_bound(hi, "high", tol=2.0 * NEAR_BOUND) else None
+
+
 def consistent_region(problem: Problem, cand: np.ndarray, p: np.ndarray) -> pd.DataFrame:
     """Per factor: range, mean and SD over the candidates with P > 1/2, and whether the data pin
     it down (module docstring)."""
@@ -672,7 +683,7 @@ def consistent_region(problem: Problem, cand: np.ndarray, p: np.ndarray) -> pd.D
         v = xa[:, i]
         span = (f.high - f.low)
         pinned = bool(v.size and (v.max() - v.min()) <= UNPINNED_SHARE * span)
-        if pinned and span > 0 and (v.min() - f.low <= NEAR_BOUND * span or f.high - v.max() <= NEAR_BOUND * span):
+        if pinned and span > 0 and near_a_bound(v.min(), v.max(), f.low, f.high) is not None:
             pinned = "at bound"  # held by the box: the consistent set may go on beyond it
         rows.append({"factor": f.name, "low": f.low, "high": f.high, "candidates": int(inside.sum()),
                      "share_of_box": float(inside.mean()) if inside.size else 0.0,

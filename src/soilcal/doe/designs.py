@@ -133,6 +133,34 @@ def actual_to_coded(actual, low, high) -> np.ndarray:
     return (x - (lo + hi) / 2.0) / ((hi - lo) / 2.0)
 
 
+#: a coded level within this of -1 or +1 lies on a bound of the design region: the default
+#: tolerance of :func:`at_bound`, for levels a search over the region stops at
+ON_BOUND = 1e-6
+
+
+def at_bound(coded, side: str, tol: float = ON_BOUND):
+    """Whether coded levels lie at the ``side`` ("low" or "high") bound of the design region:
+    within ``tol`` coded units (the half range is 1) of -1 or +1, or beyond it.
+
+    The package's one definition of a level at a bound; its users differ only in ``tol``:
+    :data:`ON_BOUND` for optimised sets, which stop on the bound exactly
+    (:func:`soilcal.chain.stage.factors_on_bounds`,
+    :func:`soilcal.optimise.near_optimal.identifiability`); ``2 * pinned_fraction`` for the
+    band of the range near-optimal sets must lie in to be held by a bound (the same);
+    ``2 * NEAR_BOUND`` (a fiftieth of the range) for the adaptive design's consistent region,
+    a Halton sample whose edge on a bound shows only within about that
+    (:func:`soilcal.doe.adaptive.consistent_region`).  A bool for a scalar, else an array.
+    """
+    x = np.asarray(coded, dtype=float)
+    if side == "low":
+        out = x <= -1.0 + tol
+    elif side == "high":
+        out = x >= 1.0 - tol
+    else:
+        raise InputError(None, "side", "'low' or 'high'", side)
+    return bool(out) if out.ndim == 0 else out
+
+
 @dataclass
 class RowComparison:
     """Result of a multiset comparison of design rows."""

@@ -20,14 +20,13 @@ from typing import Any, Mapping, Sequence
 import numpy as np
 import pandas as pd
 
+from soilcal.doe.designs import ON_BOUND, at_bound
 from soilcal.errors import InputError
 from soilcal.optimise.desirability import desirability_optimise
 
 #: overall desirability from which the goals count as met (a target goal's d is 1 at the
 #: target and falls off towards its limits)
 REACHED = 0.99
-#: a coded level within this of -1 or +1 lies on a bound of the design region
-ON_BOUND = 1e-6
 
 
 def near_optimal_sets(
@@ -170,8 +169,8 @@ def identifiability(
     near-optimal sets span at most ``pinned_fraction`` of the full range) and a note. With a
     single near-optimal set every factor is pinned and the note says so.  A factor that would
     be pinned but whose sets all lie within that band of one bound, at least one of them on
-    it (coded distance :data:`ON_BOUND`), is ``"at bound"`` instead of True: the region's bound
-    holds it, not the data.
+    it (:func:`soilcal.doe.at_bound`, coded distance :data:`soilcal.doe.ON_BOUND`), is
+    ``"at bound"`` instead of True: the region's bound holds it, not the data.
     """
     if not isinstance(sets, pd.DataFrame):
         raise InputError(None, "sets", "a DataFrame from near_optimal_sets", type(sets).__name__)
@@ -209,9 +208,9 @@ def identifiability(
         pct = 100.0 * spread_coded / 2.0
         coded = (v - (lo[j] + hi[j]) / 2.0) / ((hi[j] - lo[j]) / 2.0)
         bound = None
-        if coded.min() <= -1.0 + ON_BOUND and coded.max() <= -1.0 + 2.0 * pf:
+        if at_bound(coded.min(), "low") and at_bound(coded.max(), "low", tol=2.0 * pf):
             bound = ("low", lo[j])
-        elif coded.max() >= 1.0 - ON_BOUND and coded.min() >= 1.0 - 2.0 * pf:
+        elif at_bound(coded.max(), "high") and at_bound(coded.min(), "high", tol=2.0 * pf):
             bound = ("high", hi[j])
         if bound is not None:
             pinned = "at bound"
