@@ -224,5 +224,5 @@ def test_a_run_count_no_plackett_burman_design_has_is_refused_at_load(tmp_path, 
     with pytest.raises(InputError) as e:
         _load(p)
     cols = 6 + len(dummies)
-    assert (e.value.path, e.value.field, e.value.got) == (str(p), "stages.screen.runs", runs)
+    assert (e.value.path, e.value.field, e.value.got) == (str(p), "stages[0].runs", runs)
     assert f"a multiple of 4 above the {cols} factors and dummies" in e.value.expected

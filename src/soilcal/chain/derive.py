@@ -370,11 +370,10 @@ def check_dem_stages(soil_path, soil_data: dict) -> None:
     * every factor's parameter and every fixed parameter maps to a DEM parameter
       (:func:`soilcal.dem.scenarios.base.dem_field`, the mapping the DEM jobs use), and the
       fixed values and the levels of a stage that runs its config's levels lie in that
-      parameter's physical range;
-    * a Plackett-Burman stage's ``runs`` is a design's run count: a multiple of 4 above its
-      factors and dummies (:func:`soilcal.chain.stage.pb_columns`).
+      parameter's physical range.
+
+    (A Plackett-Burman stage's ``runs`` is checked for every soil as it loads.)
     """
-    from soilcal.chain.stage import pb_columns
     from soilcal.dem.scenarios.base import DemParams, dem_field
 
     def in_range(name, value, scale, where):
@@ -416,11 +415,6 @@ def check_dem_stages(soil_path, soil_data: dict) -> None:
             where = f"stages.{sid}.fixed.{pname}"
             name, scale = mapped(pname, where)
             in_range(name, v, scale, where)
-        if st["kind"] == "plackett_burman":
-            try:
-                pb_columns(st)
-            except InputError as exc:
-                raise InputError(soil_path, f"stages.{sid}.runs", exc.expected, exc.got) from None
 
 
 __all__ = ["bbd_from_path", "check_dem_stages", "dem_stage", "dem_stage_ids", "dependencies", "design_mode",

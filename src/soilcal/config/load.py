@@ -291,11 +291,12 @@ def _semantic_checks(path: Path, d: dict, resources_root: Path) -> tuple[dict | 
             if st["kind"] == "steepest_ascent" and not f.get("levels"):
                 raise InputError(path, f"{fw}.levels", "the actual value of every step", None)
         if st["kind"] == "plackett_burman" and st.get("runs") is not None:
-            cols = len(st["factors"]) + len(st.get("dummies") or [])
-            if st["runs"] % 4 or st["runs"] <= cols:
-                raise InputError(path, f"{where}.runs", f"a multiple of 4 above the {cols} factors and dummies of the "
-                                 f"Plackett-Burman design ({', '.join(str(4 * (cols // 4 + 1) + 4 * i) for i in range(3))}, ...)",
-                                 st["runs"])
+            from soilcal.chain.stage import pb_columns
+
+            try:
+                pb_columns(st)  # a design's run count: a multiple of 4 above the factors and dummies
+            except InputError as exc:
+                raise InputError(path, f"{where}.runs", exc.expected, exc.got) from None
         if st["kind"] == "steepest_ascent" and st.get("table") is not None:
             lengths = {len(f["levels"]) for f in st["factors"].values()}
             if len(lengths) != 1:
