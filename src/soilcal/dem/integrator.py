@@ -551,9 +551,11 @@ def run_loop(nsteps, step0, resume_mid, need_forces, ke_tol, ke_every, max_ovr, 
                       wall_omega, wall_centre, wnc, wcc, whc, wslot)
         reduce_wall_forces(wcc, wnc, wslot, prim_wall, wall_force, wall_torque)
         if first:
-            # the state as given already overlaps beyond the limit (or is not finite):
-            # reported before any step (reasons 3 and 4), not as a blow-up of step 1
-            if nbad > 0:
+            # the state as given already overlaps beyond the limit (or is not finite): a
+            # run that is to step from it stops before its first step (reasons 3 and 4),
+            # rather than reporting a blow-up of step 1; the forces of such a state alone
+            # (no steps) are evaluated as they are
+            if nbad > 0 and nsteps > 0:
                 for i in range(n):
                     if not (ovr[i] <= max_ovr):
                         status[0] = BLOWUP
