@@ -207,7 +207,9 @@ the radius as lever and the curved cylinder wall.  Two LAMMPS terms have no opti
 the normal and tangential velocities on the half-step normal (x_ij - v_ij dt/2, normalised;
 granular_model.cpp; the 22 Jul 2025 release the parity cases run does not, they agree to
 rounding), and its ``run`` evaluates the forces anew at every start, where the Coulomb
-rescaling may shorten a sliding spring (a phase boundary of a reference case).
+rescaling may shorten a sliding spring (a phase boundary of a reference case;
+``soilcal.reference.deck.run_phases`` starts every phase with that evaluation, walls at
+rest, as LAMMPS and LIGGGHTS do).
 
 The contact radius a(delta) is a = x^2 with x the largest root of x^4/R* - c x - delta = 0,
 c = sqrt(2 pi w / E*), found by Newton's method from the upper bound

