@@ -66,3 +66,112 @@ def test_blow_up_names_step_and_particle():
     # the simulated time of the blow-up: its step times the time step, as the message gives both
     m = re.search(r"step (\d+):.*dt ([0-9.e+-]+) s, t ([0-9.e+-]+) s\)", str(err.value))
     assert m and float(m.group(3)) == pytest.approx(int(m.group(1)) * float(m.group(2)), rel=1e-3)
+
+
+def _two(dist, max_overlap=0.05, **kw):
+    sim = Simulation(table(), dt=1e-6, gravity=(0, 0, 0), max_overlap=max_overlap, **kw)
+    sim.add_particles([[0, 0, 0], [0, 0, dist]], 1e-3, "soil")
+    return sim
+
+
+@pytest.mark.parametrize("dist,pct", [(1e-3, "100"), (0.0, "200"), (1.9e-3, "10")])
+def test_initial_overlap_is_named_before_any_step(dist, pct):
+    """Spheres placed overlapping beyond max_overlap (2 r - d over r) are an input error of the
+    starting state, naming both spheres, not a blow-up of step 1 that asks for a shorter
+    step; the coincident pair (no normal) is caught the same way."""
+    sim = _two(dist)
+    with pytest.raises(InputError) as exc:
+        sim.run(10)
+    assert exc.value.field == "particles" and sim.step == 0
+    assert "max_overlap = 5 %" in exc.value.expected
+    assert re.search(rf"particle [01] overlaps particle [01] by {pct} % of its radius", exc.value.got)
+    # within the limit (4 %) it runs, and the pair pushes apart
+    sim = _two(1.96e-3)
+    assert sim.run(10) == 10 and sim.x[sim.index([1])[0], 2] > 1.96e-3
+
+
+def test_sphere_through_a_wall_at_the_start_is_named():
+    sim = Simulation(table(), dt=1e-6, gravity=(0, 0, 0))
+    sim.add_particles([[0, 0, -0.5e-3]], 1e-3, "soil")
+    sim.add_plane((0, 0, 0), (0, 0, 1), "soil")
+    with pytest.raises(InputError, match=r"particle 0 overlaps a wall by 150 % of its radius"):
+        sim.run(1)
+    assert sim.step == 0
+
+
+@pytest.mark.parametrize("kw,field", [
+    (dict(x=[[0, 0, float("nan")]]), "particles.x"),
+    (dict(x=[[0, 0]]), "particles.x"),
+    (dict(x="origin"), "particles.x"),
+    (dict(x=[[0, 0, 0], [0, 0, 0.01]], r=[1e-3, 1e-3, 1e-3]), "particles.radius"),
+    (dict(r=float("inf")), "particles.radius"),
+    (dict(x=[[0, 0, 0], [0, 0, 0.01]], v=[[0, 0, 1], [0, 0, 1], [0, 0, 1]]), "particles.v"),
+    (dict(v=[[0, 0, float("inf")]]), "particles.v"),
+    (dict(omega=[1.0, 2.0]), "particles.omega"),
+])
+def test_bad_particle_inputs_are_named(kw, field):
+    args = dict(x=[[0, 0, 0.01]], r=1e-3, v=None, omega=None) | kw
+    sim = Simulation(table(), dt=1e-6)
+    with pytest.raises(InputError) as exc:
+        sim.add_particles(args["x"], args["r"], "soil", v=args["v"], omega=args["omega"])
+    assert exc.value.field == field and sim.n == 0
+
+
+def test_one_velocity_row_is_every_particles():
+    sim = Simulation(table(), dt=1e-6)
+    sim.add_particles([[0, 0, 0.01], [0, 0, 0.02]], 1e-3, "soil", v=[0, 0, -1])
+    assert sim.v.tolist() == [[0, 0, -1], [0, 0, -1]]
+
+
+@pytest.mark.parametrize("kw,field", [
+    (dict(gravity=(0, -9.81)), "gravity"),
+    (dict(gravity=(0, 0, float("nan"))), "gravity"),
+    (dict(box=(0, 1, 0)), "box"),
+    (dict(max_overlap=-0.1), "max_overlap"),
+    (dict(max_overlap="5 %"), "max_overlap"),
+    (dict(coarse_grain="2"), "coarse_grain"),
+    (dict(dt="1e-6"), "dt"),
+    (dict(dt=0.0), "dt"),
+    (dict(skin=float("nan")), "skin"),
+    (dict(dt_fraction="0.2"), "dt_fraction"),
+    (dict(contact_model=["hertz"]), "contact_model"),
+    (dict(contact_model=dict(conventions=["lammps"])), "contact_model.conventions"),
+    (dict(contact_model=dict(conventions={"conventions": "lammps"})), "contact_model.conventions"),
+    (dict(contact_model=dict(rolling=["constant_torque"])), "contact_model.rolling"),
+])
+def test_bad_simulation_arguments_are_named(kw, field):
+    with pytest.raises(InputError) as exc:
+        Simulation(table(), **kw)
+    assert exc.value.field == field
+
+
+def test_misspelt_model_entry_lists_every_entry():
+    """A misspelt model entry is not taken for a convention: the error lists the model's own
+    entries (rolling, cohesion, ...) with the conventions."""
+    with pytest.raises(InputError) as exc:
+        Simulation(table(), contact_model=dict(rollin="constant_torque"))
+    assert exc.value.field == "contact_model.rollin"
+    for key in ("rolling", "cohesion", "damping_eta", "conventions", "rolling_lever"):
+        assert f"'{key}'" in exc.value.expected
+
+
+def test_yaml_boolean_for_on_off_gets_a_hint():
+    with pytest.raises(InputError, match=r"tangential_damping: expected one of \['off', 'on'\], "
+                                         r"got False \(YAML reads unquoted on/off"):
+        Simulation(table(), contact_model=dict(tangential_damping=False))
+
+
+@pytest.mark.parametrize("add,field", [
+    (lambda s: s.add_disk((0, 0, 0), (0, 0, 1), -0.01, "soil"), "walls.disk.radius"),
+    (lambda s: s.add_rectangle((0, 0, 0), (0, 0, 1), (1, 0, 0), 0.01, 0.0, "soil"),
+     "walls.rectangle.half_v"),
+    (lambda s: s.add_plane((0, 0, float("nan")), (0, 0, 1), "soil"), "walls.plane.point"),
+    (lambda s: s.add_plane((0, 0, 0), (0, 0), "soil"), "walls.plane.normal"),
+    (lambda s: s.add_mesh([[0, 0, float("inf")], [1, 0, 0], [0, 1, 0]], [[0, 1, 2]], "soil"),
+     "walls.mesh.vertices"),
+])
+def test_bad_walls_are_named(add, field):
+    sim = Simulation(table(), dt=1e-6)
+    with pytest.raises(InputError) as exc:
+        add(sim)
+    assert exc.value.field == field and not sim.walls.names

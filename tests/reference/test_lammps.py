@@ -174,3 +174,87 @@ def test_each_lammps_term_is_needed(name, option, value):
 
     r = compare_lammps(name, **{option: value})
     assert r["dx"] > 1e-6 * r["travel"]
+
+
+def _undamped(model):
+    """Two unequal spheres of two materials meeting obliquely between a floor and a ceiling,
+    no damping: a Hertz (or JKR) law that keeps the energy."""
+    sim = Simulation(jkr_materials(), dt=1e-6, gravity=(0, 0, 0),
+                     contact_model=dict(damping="none", conventions="lammps", **model))
+    sim.add_particles([[0, 0, 1.5e-3]], 1.4e-3, "steel", v=[[0.01, 0, 0.02]], omega=[[0, 0, 5]])
+    sim.add_particles([[0.0005, 0.0002, 3.9e-3 + 2e-6]], 1e-3, "soil", v=[[-0.01, 0.005, -0.08]])
+    sim.add_plane((0, 0, 0), (0, 0, 1), "steel", name="floor")
+    sim.add_plane((0, 0, 0.0062), (0, 0, -1), "steel", name="ceiling")
+    return sim
+
+
+def test_undamped_law_is_written_as_a_zero_velocity_damping(tmp_path):
+    """LAMMPS refuses ``damping none`` ("Must specify damping granular model"); soilcal's
+    ``damping: none`` is its velocity damping with a zero coefficient, on pairs and walls."""
+    LM.write_case(_undamped({}), tmp_path, [(10, {})], BOUNDS)
+    deck = (tmp_path / "in.case").read_text().splitlines()
+    laws = [ln for ln in deck if ln.startswith(("pair_coeff", "fix wall"))]
+    assert len(laws) == 3 + 4 and all(" damping velocity " in ln for ln in laws)
+    assert all(ln.split()[5] == "0.0" for ln in laws if ln.startswith("pair_coeff"))
+    assert not any("damping none" in ln for ln in deck)
+
+
+@needs_lammps
+@pytest.mark.parametrize("model", [{}, dict(tangential="none"),
+                                   dict(cohesion="jkr", jkr_convention="lammps")])
+def test_undamped_trajectories_agree_and_keep_the_energy(model):
+    """Without damping both engines follow the same trajectories, and the spheres' kinetic
+    energy after the bounces is the initial one (Hertz, and JKR whose necks have not torn;
+    to the contacts still loaded at the end and the Coulomb slip)."""
+    from soilcal.reference.deck import run_phases
+    from soilcal.reference.few import differences
+
+    sim = _undamped(model)
+    x0 = sim.x.copy()
+    e0 = sim.kinetic_energy() + sim.rotational_energy()
+    phases = [(8000, {})]
+    res = LM.run(_undamped(model), phases, BOUNDS)
+    run_phases(sim, phases)
+    d = differences(sim, res, x0)
+    assert res["present"].all() and d["travel"] > 1e-4
+    assert d["dx"] <= 1e-9 * d["travel"] and d["dv"] <= 1e-9 * d["vmax"]
+    assert d["dw"] <= 1e-9 * max(d["wmax"], 1.0)
+    if model.get("tangential") == "none":
+        assert sim.kinetic_energy() + sim.rotational_energy() == pytest.approx(e0, rel=1e-6)
+
+
+
+def _drum_pair():
+    """Two spheres of two sizes and materials in a closed smooth drum along y, one at the
+    bottom touching the curved face and an end plane, one thrown across."""
+    from soilcal.reference.cases import add_smooth_drum
+
+    sim = Simulation(jkr_materials(drum=True), dt=1e-6, gravity=(0, 0, -9.81),
+                     contact_model=dict(conventions="lammps"), max_overlap=0.5)
+    add_smooth_drum(sim, 0.005, 0.006, "drum")
+    sim.add_particles([[0, 1.0005e-3, -(0.005 - 1.0005e-3)]], 1e-3, "soil", v=[[0.01, 0, 0]])
+    sim.add_particles([[0.002, 0.004, 0]], 0.8e-3, "steel", v=[[0.05, 0.03, -0.02]],
+                      omega=[[3, 2, 1]])
+    return sim
+
+
+@needs_lammps
+def test_a_drum_that_turns_then_stops_agrees_to_rounding():
+    """The drum turns at 8 rad/s, stops, turns back: LAMMPS starts each ``run`` with the
+    region's velocity zero, and soilcal's phases evaluate their first forces with the walls
+    at rest as well (deck.run_phases); before, the spheres parted by 2e-6 of their travel
+    after the drum stopped."""
+    from soilcal.reference.deck import run_phases
+
+    phases = [(15000, {"drum": {"omega": (0, 8.0, 0)}}), (5000, {}),
+              (5000, {"drum": {"omega": (0, -4.0, 0)}})]
+    sim = _drum_pair()
+    x0 = sim.x.copy()
+    res = LM.run(_drum_pair(), phases, BOUNDS, snapshots=True)
+    states = run_phases(sim, phases, snapshots=True)
+    for mine, ref in zip(states, res["states"]):
+        travel = np.abs(ref["x"] - x0).max()
+        assert ref["present"].all() and travel > 1e-4
+        assert np.abs(mine["x"] - ref["x"]).max() <= 1e-9 * travel
+        assert np.abs(mine["v"] - ref["v"]).max() <= 1e-9 * np.abs(ref["v"]).max()
+        assert np.abs(mine["omega"] - ref["omega"]).max() <= 1e-9 * max(np.abs(ref["omega"]).max(), 1.0)

