@@ -6,6 +6,7 @@ the heap was drawn with."""
 from __future__ import annotations
 
 import numpy as np
+import pytest
 from PIL import Image
 from skimage import filters, transform
 
@@ -44,6 +45,22 @@ def _u8(img):
 
 def _assert_flanks(r, left, right, tol=0.5):
     assert abs(r.left_deg - left) <= tol and abs(r.right_deg - right) <= tol, (r.left_deg, r.right_deg)
+
+
+@pytest.mark.parametrize("orientation,stored", [
+    (6, Image.Transpose.ROTATE_90),    # phone upright: shown turned 90 deg clockwise
+    (8, Image.Transpose.ROTATE_270),   # phone upright the other way
+    (3, Image.Transpose.ROTATE_180),   # phone upside down
+])
+def test_phone_photo_is_measured_as_shown(tmp_path, orientation, stored):
+    # the pixels are stored in the sensor's orientation, the EXIF tag says how to show them
+    p = tmp_path / f"phone{orientation}.jpg"
+    exif = Image.Exif()
+    exif[0x0112] = orientation
+    _u8(heap_photo()).transpose(stored).save(p, quality=90, exif=exif)
+    r = measure.measure_pile(p)
+    _assert_flanks(r, 32.0, 35.0)
+    assert abs(r.roll_deg) <= 0.2
 
 
 def test_plate_edge_on_a_pixel_boundary(tmp_path):
