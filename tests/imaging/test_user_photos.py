@@ -91,3 +91,15 @@ def test_coarse_grained_heap_lines_up_no_false_plate(tmp_path):
     r = measure.measure_pile(p)
     _assert_flanks(r, 32.0, 35.0)
     assert abs(r.roll_deg) <= 0.2
+
+
+def test_large_photo_is_measured_at_the_working_size(tmp_path, monkeypatch):
+    # a phone's 12 megapixels stand in here as four times the working size: the heap is
+    # measured on the photo reduced to it, at the angles it was drawn with
+    monkeypatch.setattr(measure, "PILE_WORK_PIXELS", 30_000)
+    p = tmp_path / "large.jpg"
+    _u8(heap_photo(h=300, w=400)).save(p, quality=90)
+    r = measure.measure_pile(p, keep_stages=True)
+    assert r.stages.rgb.shape[0] * r.stages.rgb.shape[1] <= 30_000
+    assert r.stages.rgb.shape[1] == pytest.approx(200, abs=1)
+    _assert_flanks(r, 32.0, 35.0)

@@ -359,6 +359,7 @@ def measure_pile(path, threshold="otsu", keep_stages=False, channel="auto", refu
     ``refusals`` (a folder), a photo that cannot be measured also gets a diagnostic image of
     every attempt there (:mod:`soilcal.imaging.refusal`), named in the refusal.
 
+    A photo of more than :data:`PILE_WORK_PIXELS` pixels is measured reduced to that size.
     ``image``: the photo as an RGB float array in [0, 1] (what :func:`read_photo` gives),
     measured instead of reading ``path``, which then only names it in messages.  ``plate``:
     the plate's top edge (slope, intercept), row = slope * col + intercept, when it is known
@@ -375,6 +376,11 @@ def measure_pile(path, threshold="otsu", keep_stages=False, channel="auto", refu
 def _measure_pile(path, threshold, keep_stages, channel, tried: Tried, image=None,
                   plate=None) -> PileResult:
     rgb = read_photo(path) if image is None else image
+    if plate is None and rgb.shape[0] * rgb.shape[1] > PILE_WORK_PIXELS:
+        # a phone's 12 or 48 megapixels: measured at a working size (the angles do not depend
+        # on it), which takes seconds and some hundred MB instead of minutes and many GB
+        rgb = transform.rescale(rgb, math.sqrt(PILE_WORK_PIXELS / (rgb.shape[0] * rgb.shape[1])),
+                                channel_axis=-1, anti_aliasing=True)
     lum = _gray(rgb)
     tried.rgb, tried.gray = rgb, lum
     h, w = lum.shape
@@ -446,6 +452,10 @@ def _measure_pile(path, threshold, keep_stages, channel, tried: Tried, image=Non
             return first if dissent is None else _cross_checked(first, dissent)
     raise err
 
+
+#: a heap photo larger than this (pixels) is measured reduced to it (the flank fits need no
+#: more: 1630 x 1220 px, a heap some 800 px across)
+PILE_WORK_PIXELS = 2_000_000
 
 #: a cue search measures the heap with up to this many further cues after the first that
 #: measures it; a further cue is credible when it splits the band clearly (eta at least
