@@ -3,7 +3,8 @@
 Every colour mode PIL reads is accepted: RGB, CMYK, palette, with or without alpha (the alpha
 channel is dropped), 1-bit, 8-bit grey, and single-channel 16-bit or 32-bit frames (PIL modes
 ``I;16``, ``I``, ``F``), which are scaled by their bit depth and stretched between their 0.5
-and 99.5 percentiles instead of being clipped to 8 bits.  A photo may have at most
+and 99.5 percentiles instead of being clipped to 8 bits.  A photo with an EXIF Orientation
+tag (a phone held upright or upside down) is turned as a viewer shows it before it is measured.  A photo may have at most
 :data:`MAX_PIXELS` pixels (a larger one is refused before it is decoded: scale it down).
 """
 
@@ -30,7 +31,7 @@ def _stretch(g: np.ndarray) -> np.ndarray:
 
 def _decode(path, formats: str):
     """(PIL mode, grey [0, 1] for single-channel modes else None, RGB [0, 1] else None)."""
-    from PIL import Image, UnidentifiedImageError
+    from PIL import Image, ImageOps, UnidentifiedImageError
 
     from soilcal.errors import InputError
 
@@ -47,6 +48,9 @@ def _decode(path, formats: str):
                     raise InputError(p, "file", f"an image of at most {MAX_PIXELS // 1_000_000} megapixels "
                                      "(scale it down)", f"{w} x {h} pixels")
                 im.load()  # decodes fully: a truncated JPEG raises OSError here
+                # a phone stores a portrait (or upside-down) photo in the sensor's orientation
+                # and says how to turn it in its EXIF Orientation tag: turned as it is shown
+                im = ImageOps.exif_transpose(im)
                 mode = im.mode
                 if mode in _FULL_SCALE:
                     return mode, np.asarray(im, dtype=float) / _FULL_SCALE[mode], None

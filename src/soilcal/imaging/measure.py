@@ -337,7 +337,8 @@ def measure_pile(path, threshold="otsu", keep_stages=False, channel="auto", refu
 
     Plate candidates: the long near-horizontal edges below the image middle, topmost first, of
     the luminance and then of the united L*a*b* edges (a plate differing from the wall in hue
-    only), at most four; the first on which a heap is found is the plate.  The threshold is
+    only), at most :data:`PLATE_CANDIDATES`; the first on which a heap is found, the line running on
+    beside it as an edge (:func:`_plate_beside_heap`), is the plate.  The threshold is
     Otsu's on the band of the image just above the plate (where heap and background meet).  channel "auto" tries cues in
     turn until one gives a single heap standing on the plate inside the frame: luminance and
     chroma with the heap darker than the wall (the better separating one first, Otsu's eta),
@@ -358,6 +359,7 @@ def measure_pile(path, threshold="otsu", keep_stages=False, channel="auto", refu
     ``refusals`` (a folder), a photo that cannot be measured also gets a diagnostic image of
     every attempt there (:mod:`soilcal.imaging.refusal`), named in the refusal.
 
+    A photo of more than :data:`PILE_WORK_PIXELS` pixels is measured reduced to that size.
     ``image``: the photo as an RGB float array in [0, 1] (what :func:`read_photo` gives),
     measured instead of reading ``path``, which then only names it in messages.  ``plate``:
     the plate's top edge (slope, intercept), row = slope * col + intercept, when it is known
@@ -374,26 +376,33 @@ def measure_pile(path, threshold="otsu", keep_stages=False, channel="auto", refu
 def _measure_pile(path, threshold, keep_stages, channel, tried: Tried, image=None,
                   plate=None) -> PileResult:
     rgb = read_photo(path) if image is None else image
+    if plate is None and rgb.shape[0] * rgb.shape[1] > PILE_WORK_PIXELS:
+        # a phone's 12 or 48 megapixels: measured at a working size (the angles do not depend
+        # on it), which takes seconds and some hundred MB instead of minutes and many GB
+        rgb = transform.rescale(rgb, math.sqrt(PILE_WORK_PIXELS / (rgb.shape[0] * rgb.shape[1])),
+                                channel_axis=-1, anti_aliasing=True)
     lum = _gray(rgb)
     tried.rgb, tried.gray = rgb, lum
     h, w = lum.shape
+    plate_edges = None  # the edges a plate candidate must follow beside the heap
     if plate is not None:
         lines = [(float(plate[0]), float(plate[1]))]
     else:
         lines = plate_lines(lum)
         cedges = colour_edges(rgb)
         tried.edges = cedges
+        plate_edges = feature.canny(lum, sigma=1.5) | cedges
         for ln in plate_lines(lum, edges=cedges):
             if all(abs((ln[0] - o[0]) * w / 2 + ln[1] - o[1]) > 3 for o in lines):
                 lines.append(ln)
-    tried.lines = list(lines[:4])
+    tried.lines = list(lines[:PLATE_CANDIDATES])
     if not lines:
         raise InputError(path, "image", "a straight base plate edge", "none found")
     grays = _grays(rgb, CUES if channel == "auto" else (channel,), lum)
     rr, cc = np.mgrid[0:h, 0:w]
     err = None
     first = None  # the first cue's result, waiting for a second cue to cross-check it
-    for n_line, (slope, intercept) in enumerate(lines[:4], 1):  # the plate top first; a faint one may hide behind a lower edge
+    for n_line, (slope, intercept) in enumerate(lines[:PLATE_CANDIDATES], 1):  # the plate top first; a faint one may hide behind a lower edge
         prow = slope * cc + intercept
         band = (rr < prow - 3) & (rr > prow - 0.35 * h)  # where heap and wall meet
         if channel != "auto":
@@ -416,7 +425,7 @@ def _measure_pile(path, threshold, keep_stages, channel, tried: Tried, image=Non
             try:
                 res = _pile_with(path, rgb, g, ch, pol, band, slope, intercept, threshold,
                                  keep_stages and first is None, search=channel == "auto", tried=tried,
-                                 label=f"line {n_line}, {ch}/{pol}", lum=lum)
+                                 label=f"line {n_line}, {ch}/{pol}", lum=lum, plate_edges=plate_edges)
             except InputError as e:
                 if e.field not in ("image", "left flank", "right flank"):
                     raise
@@ -443,6 +452,10 @@ def _measure_pile(path, threshold, keep_stages, channel, tried: Tried, image=Non
             return first if dissent is None else _cross_checked(first, dissent)
     raise err
 
+
+#: a heap photo larger than this (pixels) is measured reduced to it (the flank fits need no
+#: more: 1630 x 1220 px, a heap some 800 px across)
+PILE_WORK_PIXELS = 2_000_000
 
 #: a cue search measures the heap with up to this many further cues after the first that
 #: measures it; a further cue is credible when it splits the band clearly (eta at least
@@ -474,12 +487,14 @@ def _cross_checked(res: PileResult, check: PileResult, outvoted: PileResult | No
 
 
 def _pile_with(path, rgb, gray, cue, polarity, band, slope, intercept, threshold, keep_stages, search=True,
-               tried: Tried | None = None, label: str = "", lum=None):
+               tried: Tried | None = None, label: str = "", lum=None, plate_edges=None):
     """Measure with one cue: the heap is the class below Otsu's threshold of ``gray``.  In a
     cue search (``search``) the result must look like a heap; a channel chosen by the caller
     (e.g. a DEM silhouette, whatever its flanks) is measured as it is.  ``tried`` records the
     attempt (its segmented class and plate line) for a refusal's diagnostic image; ``lum``:
-    the photo's luminance, in which a colour cue's edge is refined (:func:`_top_edge`)."""
+    the photo's luminance, in which a colour cue's edge is refined (:func:`_top_edge`);
+    ``plate_edges``: the photo's edge map, in which a plate line found by the search must run
+    on beside the heap (:func:`_plate_beside_heap`)."""
     if threshold == "otsu":
         t = filters.threshold_otsu(gray[band])
         binary = ndi.binary_fill_holes(morphology.opening(gray < t, morphology.disk(2)))
@@ -488,6 +503,8 @@ def _pile_with(path, rgb, gray, cue, polarity, band, slope, intercept, threshold
     if tried is not None:
         tried.add(label or f"{cue}/{polarity}", binary, (slope, intercept))
     comp = _components_on_plate(path, binary, slope, intercept, "heap")
+    if plate_edges is not None:
+        _plate_beside_heap(path, plate_edges, comp, slope, intercept)
     lev, prow, roll = _level(comp, slope, intercept)
     glev = _level(gray, slope, intercept)[0]
     llev = _level(lum, slope, intercept)[0] if lum is not None and cue != "gray" else None
@@ -523,6 +540,38 @@ def _pile_with(path, rgb, gray, cue, polarity, band, slope, intercept, threshold
                       f"{cue}/{polarity}", float(used), float(rms), "low" if low else "ok", st,
                       flank_outside_share=float(outside),
                       geometry=(float(slope), float(intercept), lline, rline, float(hmax)))
+
+
+#: plate lines tried, topmost first (the luminance's, then the colour edges'): a wide textured
+#: heap lines up near-horizontal edges of its grain above the plate, which are refused
+PLATE_CANDIDATES = 8
+#: a plate line found by the search must be an edge along at least this share of the columns
+#: on either side of the heap (:func:`_plate_beside_heap`): a faint plate edge (a light plate
+#: before a light wall) is one along a third of them, a line of the heap's grain along none
+PLATE_BESIDE_MIN = 0.15
+
+
+def _plate_beside_heap(path, edges, comp, slope, intercept):
+    """Refuse a plate candidate that is no edge beside the heap ``comp`` standing on it: a
+    plate's top edge runs on to either side of the heap (to the frame's border), whereas a line
+    of the heap's own grain or clods (near-horizontal edges that a wide, textured heap lines up
+    by chance) ends with it and cuts the heap above its foot, so the heap's lower part is lost
+    and its flanks read at the line's tilt.  On either side, the share of the columns beside
+    the heap (more than 5 px from it) where ``edges`` has a pixel within 1 px of the line must
+    be at least :data:`PLATE_BESIDE_MIN`; a side with fewer than 10 such columns is not judged."""
+    h, w = edges.shape
+    cols_heap = np.nonzero(comp.any(axis=0))[0]
+    cols = np.arange(w)
+    near = ndi.binary_dilation(edges, np.ones((3, 1), bool))
+    rows = np.round(slope * cols + intercept).astype(int)
+    for side, beside in (("left", cols < cols_heap.min() - 5), ("right", cols > cols_heap.max() + 5)):
+        if beside.sum() < 10:
+            continue
+        ok = beside & (rows >= 0) & (rows < h)
+        share = float(near[rows[ok], cols[ok]].sum()) / float(beside.sum())
+        if share < PLATE_BESIDE_MIN:
+            raise InputError(path, "image", "a heap standing on a plate edge that runs on beside it",
+                             f"a line through the heap, an edge along {share:.0%} of the columns {side} of it")
 
 
 #: strips beside a fitted flank line, in px along its normal (negative: into the heap): the
@@ -741,8 +790,18 @@ def plate_lines(gray, below=None, edges=None):
     col0, row0 = below if below is not None else (0.0, 0.5 * h)
     thetas = np.radians(np.linspace(84, 96, 241))
     hs, ang, dist = transform.hough_line(edges, theta=thetas)
-    _, angs, dists = transform.hough_line_peaks(hs, ang, dist, num_peaks=8, min_distance=4,
-                                                threshold=0.25 * w)
+    # a line's support is its own bin's votes and those of the larger of its two neighbours:
+    # an edge lying on a pixel boundary comes out of Canny alternating between two rows,
+    # which splits its votes between two neighbouring distance bins (a line crossing edges at
+    # a slant spreads its votes over more bins and gains less)
+    hs = hs.astype(float)
+    up, down = np.zeros_like(hs), np.zeros_like(hs)
+    up[:-1], down[1:] = hs[1:], hs[:-1]
+    pair = hs + np.maximum(up, down)
+    _, angs, dists = transform.hough_line_peaks(hs, ang, dist, num_peaks=16, min_distance=4,
+                                                threshold=0.1 * w)
+    keep = [pair[np.argmin(np.abs(dist - d)), np.argmin(np.abs(ang - a))] >= 0.25 * w for a, d in zip(angs, dists)]
+    angs, dists = angs[keep][:8], dists[keep][:8]
     at = sorted(((a, d, (d - col0 * np.cos(a)) / np.sin(a)) for a, d in zip(angs, dists)), key=lambda t: t[2])
     cols = np.arange(w)
     er, ec = np.nonzero(edges)
