@@ -175,3 +175,35 @@ def test_bad_walls_are_named(add, field):
     with pytest.raises(InputError) as exc:
         add(sim)
     assert exc.value.field == field and not sim.walls.names
+
+
+@pytest.mark.parametrize("corners", [[[0, 0, 0], [1, 0, 0], [2, 0, 0]],      # on one line
+                                     [[0, 0, 0], [1, 0, 0], [1, 0, 0]]])     # two corners one point
+def test_a_mesh_triangle_without_area_is_named(corners):
+    sim = Simulation(table(), dt=1e-6)
+    v = [[0, 0, 0], [1, 0, 0], [0, 1, 0]] + corners
+    with pytest.raises(InputError) as exc:
+        sim.add_mesh(v, [[0, 1, 2], [3, 4, 5]], "soil")
+    assert exc.value.field == "walls.mesh.triangles[1]" and not sim.walls.names
+
+
+def test_stl_facets_without_area_are_left_out():
+    from soilcal.dem.stl import weld
+
+    good = [[0, 0, 0], [1, 0, 0], [0, 1, 0]]
+    sliver = [[0, 0, 0], [0.5, 0, 0], [1, 0, 0]]  # three corners on one line
+    v, t = weld(__import__("numpy").array([good, sliver], float))
+    assert t.shape == (1, 3) and sorted(map(tuple, v[t[0]].tolist())) == sorted(map(tuple, good))
+
+
+@pytest.mark.parametrize("steps", [10.5, -1, float("nan"), "10", True])
+def test_a_step_count_that_is_not_a_whole_number_is_named(steps):
+    sim = _two(3e-3)
+    with pytest.raises(InputError) as exc:
+        sim.run(steps)
+    assert exc.value.field == "steps" and sim.step == 0
+
+
+def test_a_whole_step_count_given_as_a_float_runs():
+    sim = _two(3e-3)
+    assert sim.run(1e1) == 10 and sim.step == 10

@@ -272,6 +272,16 @@ class Simulation:
             raise InputError(self.source, "walls.mesh.triangles",
                              f"vertex indices in [0, {len(v)})", None)
         rows = v[t].reshape(-1, 9)
+        # a triangle without area (collinear or repeated corners) has no normal to push along
+        e1, e2 = rows[:, 3:6] - rows[:, 0:3], rows[:, 6:9] - rows[:, 0:3]
+        area2 = np.linalg.norm(np.cross(e1, e2), axis=1)
+        edge2 = np.maximum((e1 ** 2).sum(axis=1), (e2 ** 2).sum(axis=1))
+        flat = np.flatnonzero(~(area2 > 1e-12 * edge2))
+        if flat.size:
+            k = int(flat[0])
+            raise InputError(self.source, f"walls.mesh.triangles[{k}]",
+                             "a triangle with area (three corners not on one line)",
+                             f"corners {t[k].tolist()} at {rows[k].reshape(3, 3).tolist()}")
         c = v.mean(axis=0) if centre is None else centre
         return self.add_wall(name or f"mesh{len(self.walls.names)}", material,
                              [(TRIANGLE, row, 0b111, 0) for row in rows], velocity, omega, c)
@@ -396,9 +406,10 @@ class Simulation:
         Raises SimulationError on blow-up (non-finite state or overlap above max_overlap of a
         particle's radius), naming the step and the particle (its insertion id).
         """
+        if (isinstance(steps, bool) or not isinstance(steps, (int, float, np.integer, np.floating))
+                or not (math.isfinite(steps) and steps >= 0 and float(steps) == int(steps))):
+            raise InputError(self.source, "steps", "a whole number of steps >= 0", steps)
         steps = int(steps)
-        if steps < 0:
-            raise InputError(self.source, "steps", "a number of steps >= 0", steps)
         if self._pair is None or self._need_forces:
             self._prepare()
         p, wa = self.p, self._warr

@@ -146,13 +146,18 @@ def read_stl_soup(path):
 
 def weld(soup, weld_tol=0.0):
     """Indexed mesh from a triangle soup; vertices within ``weld_tol``
-    (rounded to a grid of that size) or identical (``weld_tol=0``) merge."""
+    (rounded to a grid of that size) or identical (``weld_tol=0``) merge.  Facets without area
+    (two corners merged, or three on one line, as CAD exports write slivers) are left out:
+    they bound nothing."""
     pts = soup.reshape(-1, 3)
     key = np.round(pts / weld_tol) if weld_tol > 0 else pts
     _, first, inv = np.unique(key, axis=0, return_index=True, return_inverse=True)
     verts = pts[first]
     tris = inv.reshape(-1, 3).astype(np.int64)
     keep = (tris[:, 0] != tris[:, 1]) & (tris[:, 1] != tris[:, 2]) & (tris[:, 0] != tris[:, 2])
+    e1, e2 = verts[tris[:, 1]] - verts[tris[:, 0]], verts[tris[:, 2]] - verts[tris[:, 0]]
+    area2 = np.linalg.norm(np.cross(e1, e2), axis=1)
+    keep &= area2 > 1e-12 * np.maximum((e1 ** 2).sum(axis=1), (e2 ** 2).sum(axis=1))
     return verts, tris[keep]
 
 
