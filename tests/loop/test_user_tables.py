@@ -41,3 +41,133 @@ def test_a_label_shared_by_rows_of_one_condition_only_is_still_no_group():
     res = _two_measure_table(per_row, ids=[f"d{i}" for i in range(1, 7)], tools=["T1", "T2", "T3"] * 2)
     diag = diagnose(res, {"run_id": "day", "tool": "tool"})
     assert "run_id" not in set(diag["covariate"])
+
+
+# --------------------------------------------------------------------------- a user's own soil
+
+import shutil  # noqa: E402
+from pathlib import Path  # noqa: E402
+
+import pytest  # noqa: E402
+
+from soilcal.cli import main  # noqa: E402
+from soilcal.loop import cli as lc  # noqa: E402
+
+ROOT = Path(__file__).resolve().parents[2]
+
+#: a soil of its own (not a shipped one): one Box-Behnken stage on the cinnamon soil's printed
+#: coded table, other factor ranges, and two soil-bin tables, one with a test day and one without
+USER_SOIL = """\
+name: loess-test
+source: published
+parameters:
+  soil_soil_rolling_friction: {name: rolling, unit: "-", pair: soil-soil, kind: rolling_friction}
+  jkr_surface_energy: {name: JKR, unit: J/m^2, pair: soil-soil, kind: surface_energy}
+  soil_steel_static_friction: {name: steel friction, unit: "-", pair: soil-steel, kind: static_friction}
+stages:
+  - id: bbd
+    kind: box_behnken
+    factors:
+      A: {parameter: soil_soil_rolling_friction, low: 0.06, high: 0.18}
+      B: {parameter: jkr_surface_energy, low: 0.1, high: 0.5}
+      C: {parameter: soil_steel_static_friction, low: 0.35, high: 0.75}
+    runs: 17
+    center_points: 5
+    table: bbd.csv
+    table_coding: coded
+    responses:
+      - {id: stacking_angle, name: Stacking angle, unit: deg}
+    optimise:
+      method: desirability
+      cases:
+        - id: stacking_angle
+          goals: {stacking_angle: {goal: target, target: stacking_angle}}
+targets:
+  stacking_angle: {value: 33.0, unit: deg}
+simulation:
+  params: {soil_density: 1450, soil_soil_restitution: 0.4, soil_soil_static_friction: 0.5,
+           soil_steel_restitution: 0.4, soil_steel_rolling_friction: 0.1, soil_poisson: 0.3,
+           soil_shear_modulus: 2.0e6}
+  responses:
+    stacking_angle: {scenario: repose, setup: cinnamon-soil, measure: angle_image_deg}
+LOOP
+measurements:
+  bin_forces:
+    table: bin_forces.csv
+    scenario: bulldozing
+    setup: plate-line
+    covariates:
+      tool: {setup: {straight: plate-line, curved: plate-arc, winged: plate-bionic}, quantity: tool}
+      speed_kmh: {set: speed, scale: 0.2778, quantity: tool_speed, unit: km/h}
+      depth_cm: {set: depth, scale: 0.01, quantity: working_depth, unit: cm}
+      day: {ignore: true, quantity: day}
+    responses:
+      - {measure: horizontal_force_N, value: draft_N, sd: draft_sd_N, n: reps, unit: N}
+    calibrated: {stage: bbd, case: stacking_angle}
+  small4:
+    table: small4.csv
+    scenario: bulldozing
+    setup: plate-line
+    covariates:
+      speed_ms: {set: speed, quantity: tool_speed, unit: m/s}
+      depth_m: {set: depth, quantity: working_depth, unit: m}
+    responses:
+      - {measure: horizontal_force_N, value: force_N, unit: N}
+    calibrated: {stage: bbd, case: stacking_angle}
+"""
+
+BIN_FORCES = """\
+tool,speed_kmh,depth_cm,day,draft_N,draft_sd_N,reps
+straight,0.4,2.0,d1,10.0,0.5,3
+straight,0.8,3.0,d2,12.0,0.5,3
+curved,1.2,4.0,d1,15.0,0.5,3
+curved,0.6,4.0,d2,14.0,0.5,3
+winged,0.4,2.0,d1,11.0,0.5,3
+winged,0.8,3.0,d2,13.0,0.5,3
+"""
+
+SMALL4 = "speed_ms,depth_m,force_N\n0.1,0.03,10\n0.2,0.03,11\n0.3,0.03,12\n0.4,0.03,13\n"
+
+
+def user_soil(tmp_path: Path, loop: str = "") -> tuple[Path, Path]:
+    """(soil YAML, resources folder) of the user's soil under ``tmp_path``; ``loop``: the
+    soil's ``loop:`` block as a line of YAML, or nothing."""
+    res = tmp_path / "res"
+    pub = res / "published/loess-test"
+    pub.mkdir(parents=True)
+    for f in (ROOT / "resources/published/cinnamon-soil").glob("bbd*.csv"):
+        shutil.copy(f, pub / f.name)
+    meas = res / "measurements/loess-test"
+    meas.mkdir(parents=True)
+    (meas / "bin_forces.csv").write_text(BIN_FORCES)
+    (meas / "small4.csv").write_text(SMALL4)
+    soil = tmp_path / "loess-test.yaml"
+    soil.write_text(USER_SOIL.replace("LOOP\n", loop + "\n" if loop else ""))
+    return soil, res
+
+
+def _counting_simulator(calls: list):
+    def factory(threads=None):
+        def run(cond, params, seed):
+            calls.append((cond.measurement, cond.row, seed))
+            return {"horizontal_force_N": 10.0 + cond.row}
+        return run
+    return factory
+
+
+def test_a_fold_column_the_chosen_table_lacks_stops_the_run_before_any_simulation(tmp_path, monkeypatch, capsys):
+    # loop.fold_by names the test day of bin_forces: valid for the soil, but small4, the one
+    # table --measurement runs, has no day column; the folds could not be formed after the runs
+    soil, res = user_soil(tmp_path, "loop: {fold_by: day}")
+    calls = []
+    monkeypatch.setattr(lc, "dem_simulator", _counting_simulator(calls))
+    code = main(["loop", "run", str(soil), "--resources", str(res), "--measurement", "small4", "--sim-seeds", "1",
+                 "--out", str(tmp_path / "out")])
+    err = [ln for ln in capsys.readouterr().err.splitlines() if ln.strip()]
+    assert code == 2 and len(err) == 1, err
+    assert err[0].startswith(f"soilcal: error: {soil}: loop.fold_by: expected ")
+    assert "small4" in err[0] and "speed_ms" in err[0] and err[0].endswith("got 'day'")
+    assert calls == []
+    # the whole soil, bin_forces included, holds the column: the run goes ahead
+    assert main(["loop", "run", str(soil), "--resources", str(res), "--sim-seeds", "1",
+                 "--out", str(tmp_path / "out")]) == 0

@@ -257,6 +257,7 @@ def _run(args) -> int:
 
     soil, conds = _conditions(args)
     settings = core.settings_from(soil.data, soil.path)
+    check_fold_by(soil, conds, settings, args.measurement)
     if args.reference:
         given = _reference(args)
         sy.default_reference(conds, given, "--reference", strict=True)  # names the conditions carry, values
@@ -277,6 +278,24 @@ def _run(args) -> int:
     print(f"parameters: {params_source(args, overrides)} ({d / 'parameters.csv'})")
     print(out.verdict)
     return 0
+
+
+def check_fold_by(soil, conds, settings, measurement=None) -> None:
+    """``loop.fold_by`` names a covariate column of the conditions that run: the soil's
+    loader checks it against all of its tables, but ``--measurement`` may pick one without
+    it, and the held-out folds are formed only after every run (InputError naming the soil
+    file, before any simulation)."""
+    from soilcal.errors import InputError
+
+    if not settings.fold_by:
+        return
+    cols = sorted({k for c in conds for k in (c.covariates or {})})
+    if settings.fold_by not in cols:
+        tables = sorted({c.measurement for c in conds})
+        which = (f"the table --measurement {measurement} runs" if measurement else
+                 "the measured tables (" + ", ".join(tables) + ")")
+        raise InputError(soil.path, "loop.fold_by", f"a covariate column of {which}: "
+                         + (", ".join(cols) or "none"), settings.fold_by)
 
 
 def _report(soil, conds, settings, out, d: Path) -> None:
