@@ -171,3 +171,52 @@ def test_a_fold_column_the_chosen_table_lacks_stops_the_run_before_any_simulatio
     # the whole soil, bin_forces included, holds the column: the run goes ahead
     assert main(["loop", "run", str(soil), "--resources", str(res), "--sim-seeds", "1",
                  "--out", str(tmp_path / "out")]) == 0
+
+
+def _synthesize(tmp_path, soil, res, *extra):
+    out = tmp_path / "synthetic.csv"
+    return main(["loop", "synthesize", str(soil), "--resources", str(res), *extra, "--out", str(out)]), out
+
+
+@pytest.mark.parametrize("measurement, hidden, words", [
+    # bin_forces declares tool, tool speed, working depth and a day, but no moisture
+    ("bin_forces", ["--effect", "moisture_cohesion:c_w=0.03"], ["moisture_content", "tool_speed, working_depth"]),
+    # plastic contacts act in a compression test, and bin_forces is a bulldozing plate
+    ("bin_forces", ["--effect", "plastic_contact:lambda_p=0.3"], ["compression", "bulldozing"]),
+    # small4 has no test day: one offset would be a bias of the whole table
+    ("small4", ["--disturbance", "day_offset:sd=0.1"], ["two test days", "no day column"]),
+])
+def test_a_hidden_effect_that_changes_no_row_is_refused_before_any_run(tmp_path, monkeypatch, capsys, measurement,
+                                                                       hidden, words):
+    soil, res = user_soil(tmp_path)
+    calls = []
+    monkeypatch.setattr(lc, "dem_simulator", _counting_simulator(calls))
+    code, out = _synthesize(tmp_path, soil, res, "--measurement", measurement, *hidden)
+    err = [ln for ln in capsys.readouterr().err.splitlines() if ln.strip()]
+    assert code == 2 and len(err) == 1, err
+    assert err[0].startswith(f"soilcal: error: {hidden[0]}: ")
+    for w in words:
+        assert w in err[0], (w, err[0])
+    assert calls == [] and not out.exists()
+
+
+def test_a_rate_effect_on_rows_all_at_the_reference_speed_is_refused_unless_another_reference_is_given(
+        tmp_path, monkeypatch, capsys):
+    soil, res = user_soil(tmp_path)
+    # every row at 0.2 m/s: the default reference is their mean, 0.2 m/s, where ln(v / v0) = 0
+    (res / "measurements/loess-test/small4.csv").write_text(
+        "speed_ms,depth_m,force_N\n0.2,0.03,10\n0.2,0.03,11\n0.2,0.03,12\n0.2,0.03,13\n")
+    calls = []
+    monkeypatch.setattr(lc, "dem_simulator", _counting_simulator(calls))
+    code, out = _synthesize(tmp_path, soil, res, "--measurement", "small4", "--effect", "rate_friction:beta=0.3")
+    err = [ln for ln in capsys.readouterr().err.splitlines() if ln.strip()]
+    assert code == 2 and len(err) == 1, err
+    assert "tool_speed = 0.2 m/s" in err[0] and "--reference" in err[0]
+    assert calls == [] and not out.exists()
+    # calibrated at 0.1 m/s, the rows at 0.2 m/s are changed: the table is written
+    code, out = _synthesize(tmp_path, soil, res, "--measurement", "small4", "--effect", "rate_friction:beta=0.3",
+                            "--reference", "tool_speed=0.1")
+    assert code == 0 and out.exists() and calls
+    # a hidden effect switched off on purpose (beta = 0) is a table without an effect
+    code, _ = _synthesize(tmp_path, soil, res, "--measurement", "small4", "--effect", "rate_friction:beta=0")
+    assert code == 0

@@ -220,6 +220,7 @@ def _synthesize(args) -> int:
         raise InputError("<command line>", "--repeats", "at least 1 measured repeat", args.repeats)
     overrides = _params(args)
     params = base_parameters(soil, conds, overrides, args.results)
+    sy.check_acts(hidden, dist, conds, _lookup(params), reference, "--effect", "--disturbance")
     table = sy.synthesize(conds, _lookup(params), dem_simulator(args.threads), hidden, reference, dist,
                           noise=args.noise, seed=args.seed, seeds=tuple(range(1000, 1000 + args.repeats)))
     source = params_source(args, overrides)

@@ -78,6 +78,54 @@ def check_disturbances(disturbances: dict, conditions, source="<synthesize>") ->
     return out
 
 
+def check_acts(hidden: dict, disturbances: dict, conditions, base_params, reference: dict,
+               source="<synthesize>", disturbance_source=None) -> None:
+    """Every hidden effect and disturbance changes some row of the table, else the table
+    would carry none of what the truth file records: an effect that acts through a quantity
+    no row declares (moisture cohesion on a table without moisture), only in another
+    scenario (plastic contacts in a compression test), or whose rows all sit at the
+    reference where it is off; a day offset without two test days (one day's offset is a
+    bias of the whole table).  InputError naming the effect and what the rows carry."""
+    from soilcal.config.quantities import QUANTITIES
+
+    conditions = list(conditions)
+    carried = sorted({q for c in conditions for q in (c.quantities or {})})
+    tables = ", ".join(sorted({c.measurement for c in conditions}))
+    for name, given in hidden.items():
+        eff = EFFECTS[name]
+        theta = {k: float(given.get(k, eff.null[k])) for k in eff.params}
+        if eff.is_null(theta):
+            continue  # switched off on purpose
+        scenarios = sorted({c.scenario for c in conditions})
+        if not any(eff.acts_in(c.scenario) for c in conditions):
+            raise InputError(source, f"effect.{name}", f"an effect that acts on the rows of {tables}: {name} acts "
+                             "only in the " + ", ".join(x for x in eff.scenarios if not x.startswith("standin"))
+                             + f" scenario, not in {', '.join(scenarios)}",
+                             "no row changed")
+        if not any(eff.applies_to(c.quantities or {}, c.scenario) for c in conditions):
+            raise InputError(source, f"effect.{name}", f"an effect that acts on the rows of {tables}: {name} acts "
+                             f"through {' or '.join(eff.needs)}, a quantity no covariate of the table declares "
+                             f"(its quantities: {', '.join(carried) or 'none'})", "no row changed")
+        changed = False
+        for c in conditions:
+            p = base_params(c)
+            if eff.apply(p, c.quantities or {}, theta, reference, c.scenario) != p:
+                changed = True
+                break
+        if not changed:
+            at = ", ".join(f"{q} = {reference[q]:.6g} {QUANTITIES[q][0]}" for q in eff.needs if q in reference)
+            raise InputError(source, f"effect.{name}", f"an effect that changes some row of {tables}: every row "
+                             f"is at the reference ({at}), where {name} is off (--reference sets another)",
+                             "no row changed")
+    if "day_offset" in disturbances:
+        days = {str(c.quantities["day"]) for c in conditions if "day" in (c.quantities or {})}
+        if len(days) < 2:
+            raise InputError(disturbance_source or source, "disturbance.day_offset", f"a table with two test days at least (a covariate "
+                             f"with quantity: day); {tables} has " + (f"one day ({days.pop()})" if days else
+                                                                     "no day column"),
+                             "one offset for every row")
+
+
 def default_reference(conditions, declared: dict | None = None, source="<synthesize>", strict: bool = False) -> dict:
     """Numeric quantity of the conditions -> the value where the calibrated parameters hold
     (where an effect is switched off): ``declared`` (checked as a soil's ``loop.reference``;
