@@ -220,3 +220,51 @@ def test_a_rate_effect_on_rows_all_at_the_reference_speed_is_refused_unless_anot
     # a hidden effect switched off on purpose (beta = 0) is a table without an effect
     code, _ = _synthesize(tmp_path, soil, res, "--measurement", "small4", "--effect", "rate_friction:beta=0")
     assert code == 0
+
+
+# --------------------------------------------------------------------------- a run that fails
+
+REASON = "SimulationError: step 35: particle 524: overlap above 50 % of its radius"
+
+
+def _failing_simulator(fail_rows: set, calls: list | None = None):
+    """Force 10 + row N; the rows in ``fail_rows`` fail in every seed with ``REASON`` (as the
+    DEM's plate driven at 30 km/h into the bin does), reported as the DEM simulator reports it."""
+    def factory(threads=None):
+        def run(cond, params, seed):
+            if calls is not None:
+                calls.append(cond.row)
+            if cond.row in fail_rows:
+                return {"horizontal_force_N": float("nan"), lc.ERROR_KEY: REASON}
+            return {"horizontal_force_N": 10.0 + cond.row}
+        return run
+    return factory
+
+
+def test_a_failed_run_says_why_in_the_residual_table_and_the_verdict_counts_it(tmp_path, monkeypatch, capsys):
+    soil, res = user_soil(tmp_path)
+    monkeypatch.setattr(lc, "dem_simulator", _failing_simulator({1, 2, 3}))
+    out = tmp_path / "out"
+    assert main(["loop", "run", str(soil), "--resources", str(res), "--measurement", "bin_forces",
+                 "--sim-seeds", "2", "--out", str(out)]) == 0
+    r = pd.read_csv(out / "residuals.csv")
+    failed = r[r["row"].isin([1, 2, 3])]
+    assert (failed["failed_runs"] == 2).all()
+    assert all(REASON in n for n in failed["note"]), failed["note"].tolist()
+    assert not any(REASON in str(n) for n in r[~r["row"].isin([1, 2, 3])]["note"])
+    verdict = pd.read_csv(out / "loop_summary.csv")["verdict"].iloc[0]
+    # three of the six rows have a simulated value: the verdict says the other three failed
+    assert "3 of 6" in verdict and "failed" in verdict, verdict
+
+
+def test_synthesize_refuses_a_row_whose_runs_all_failed_naming_the_row_and_the_reason(tmp_path, monkeypatch,
+                                                                                        capsys):
+    soil, res = user_soil(tmp_path)
+    monkeypatch.setattr(lc, "dem_simulator", _failing_simulator({2}))
+    code, out = _synthesize(tmp_path, soil, res, "--measurement", "bin_forces")
+    err = [ln for ln in capsys.readouterr().err.splitlines() if ln.strip()]
+    assert code == 2 and len(err) == 1, err
+    table = res / "measurements/loess-test/bin_forces.csv"
+    assert err[0].startswith(f"soilcal: error: {table}: row 2: ")
+    assert REASON in err[0]
+    assert not out.exists()

@@ -20,6 +20,10 @@ from __future__ import annotations
 import math
 from pathlib import Path
 
+#: key of a simulator's answer holding why a run failed (soilcal.loop.residuals.ERROR_KEY; not
+#: imported, so that the command line starts without pandas)
+ERROR_KEY = "error"
+
 
 def _kv(text: str, what: str) -> tuple[str, dict]:
     """``name:k=v,k=v`` -> (name, {k: float(v)})."""
@@ -49,7 +53,11 @@ def dem_simulator(threads=None):
                 "responses": {r["measure"]: {"scenario": cond.scenario, "setup": dict(cond.setup),
                                              "measure": r["measure"], "preset": cond.preset} for r in cond.responses}}
         df = simulate(spec, threads=threads)
-        return {r["measure"]: (float(r["value"]) if r["status"] == "ok" else math.nan) for r in df.to_dict("records")}
+        out = {r["measure"]: (float(r["value"]) if r["status"] == "ok" else math.nan) for r in df.to_dict("records")}
+        why = [str(r.get("error") or "") for r in df.to_dict("records") if r["status"] != "ok"]
+        if any(why):
+            out[ERROR_KEY] = next(w for w in why if w)
+        return out
 
     return run
 
@@ -221,8 +229,10 @@ def _synthesize(args) -> int:
     overrides = _params(args)
     params = base_parameters(soil, conds, overrides, args.results)
     sy.check_acts(hidden, dist, conds, _lookup(params), reference, "--effect", "--disturbance")
+    folder = measurements_dir(soil.resources_root, soil.name)
     table = sy.synthesize(conds, _lookup(params), dem_simulator(args.threads), hidden, reference, dist,
-                          noise=args.noise, seed=args.seed, seeds=tuple(range(1000, 1000 + args.repeats)))
+                          noise=args.noise, seed=args.seed, seeds=tuple(range(1000, 1000 + args.repeats)),
+                          table_of=lambda m: folder / soil.data["measurements"][m]["table"])
     source = params_source(args, overrides)
     keys = list(zip(table["measurement"], table["row"].astype(int)))
     table["params_source"] = source

@@ -345,6 +345,12 @@ def analyse(soil: str, res: pd.DataFrame, diag: pd.DataFrame, cands: list, effec
         verdict = f"unexplained: the residual follows {follows}; candidates rejected ({rejected})"
     if 0 < n < 4 and not verdict.startswith("no "):
         verdict += f"; with {n} rows no trend was tested (a trend test needs 4)"
+    if n > 0 and len(res):
+        measured = np.isfinite(res["measured"].astype(float).to_numpy())
+        unsimulated = int((measured & ~np.isfinite(res["simulated_mean"].astype(float).to_numpy())).sum())
+        if unsimulated:
+            verdict += (f"; {int(measured.sum()) - unsimulated} of {int(measured.sum())} measured values have a "
+                        f"simulated value: the runs of the other {unsimulated} failed (residuals.csv says why)")
     ok = np.isfinite(after_cv) & np.isfinite(before)
     rb = float(np.sqrt(np.mean(before[ok] ** 2))) * 100 if ok.any() else math.nan
     ra = float(np.sqrt(np.mean(after_cv[ok] ** 2))) * 100 if ok.any() else math.nan
@@ -386,8 +392,10 @@ def run_inprocess(soil: str, conditions, base_params, simulate, settings: Settin
                 vals = done[key]
                 for r in c.responses:
                     v = vals.get(r["measure"], math.nan)
+                    ok = np.isfinite(v)
                     rows.append({"measurement": c.measurement, "row": c.row, "measure": r["measure"], "seed": seed,
-                                 "value": v, "status": "ok" if np.isfinite(v) else "failed",
+                                 "value": v, "status": "ok" if ok else "failed",
+                                 rs.ERROR_KEY: "" if ok else str(vals.get(rs.ERROR_KEY) or ""),
                                  **{sl.T_PREFIX + k: float(x) for k, x in (theta or {}).items()}})
         return pd.DataFrame(rows)
 

@@ -152,9 +152,12 @@ def default_reference(conditions, declared: dict | None = None, source="<synthes
 
 def synthesize(conditions, base_params, simulate, hidden: dict | None = None, reference: dict | None = None,
                disturbances: dict | None = None, noise: float = 0.02, seed: int = 0,
-               seeds=(100, 101, 102)) -> pd.DataFrame:
+               seeds=(100, 101, 102), table_of=None) -> pd.DataFrame:
     """One row per condition and measured quantity: measurement, row, measure, value, sd, n,
-    and the truth (simulated mean with the hidden effects, the disturbance factor)."""
+    and the truth (simulated mean with the hidden effects, the disturbance factor).  A seed
+    whose run failed is a repeat not made (``n`` counts the others); a condition whose runs
+    all failed is refused (InputError naming its table, ``table_of(measurement)``, its row and
+    the simulator's reason), not written as an empty measured value."""
     hidden = hidden or {}
     check_hidden(hidden)
     conditions = list(conditions)
@@ -185,8 +188,18 @@ def synthesize(conditions, base_params, simulate, hidden: dict | None = None, re
         p = apply_all(hidden, base_params(c), c.quantities or {}, reference, c.scenario)
         vals = [simulate(c, p, s) for s in seeds]
         for r in c.responses:
-            sims = np.array([v[r["measure"]] for v in vals], float)
-            reps = sims * factor[i] * (1 + noise * rng.standard_normal(len(sims)))
+            sims = np.array([v.get(r["measure"], math.nan) for v in vals], float)
+            draws = noise * rng.standard_normal(len(sims))  # one per seed: a failed one leaves the others' draws
+            ok = np.isfinite(sims)
+            if not ok.any():
+                from soilcal.loop.residuals import ERROR_KEY
+
+                why = next((str(v[ERROR_KEY]) for v in vals if v.get(ERROR_KEY)), "no value (NaN)")
+                raise InputError(table_of(c.measurement) if table_of else f"measurement {c.measurement}",
+                                 f"row {c.row}", f"a condition the simulation runs (every one of the {len(sims)} "
+                                 f"runs of {r['measure']} failed; its measured value would be empty)", why)
+            sims = sims[ok]
+            reps = sims * factor[i] * (1 + draws[ok])
             rows.append({"measurement": c.measurement, "row": c.row, "measure": r["measure"],
                          "value": float(np.mean(reps)), "sd": float(np.std(reps, ddof=1)) if len(reps) > 1 else math.nan,
                          "n": len(reps), "truth_simulated": float(np.mean(sims)), "truth_disturbance": factor[i],
