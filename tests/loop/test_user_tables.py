@@ -268,3 +268,22 @@ def test_synthesize_refuses_a_row_whose_runs_all_failed_naming_the_row_and_the_r
     assert err[0].startswith(f"soilcal: error: {table}: row 2: ")
     assert REASON in err[0]
     assert not out.exists()
+
+
+def test_scatter_alone_significant_still_names_the_covariate_that_explains_most_of_it():
+    # four rows at 0.1-0.4 m/s, each measured to 1 %: the residual rises with the speed
+    # (-27 % to +8 %), far beyond the 1 % uncertainty (scatter significant), but a slope on
+    # two degrees of freedom is not significant after Holm: the verdict says the residual
+    # follows no covariate, and should still name the speed as the largest share
+    from soilcal.loop import core
+
+    r = np.array([-0.27, -0.06, 0.05, 0.08])
+    res = pd.DataFrame({"measurement": "small4", "row": [1, 2, 3, 4], "measure": "horizontal_force_N",
+                        "relative_residual": r, "standardised_residual": r / 0.01, "measured_sd": 0.01,
+                        "residual_dof": np.inf, "cov:speed_ms": [0.1, 0.2, 0.3, 0.4]})
+    diag = diagnose(res, {"speed_ms": "tool_speed"})
+    sig = diag[diag["significant"]]
+    assert list(sig["test"]) == ["scatter"]
+    text = core._follows(ranking(diag), res, {"speed_ms": "tool_speed"})
+    assert text.startswith("no covariate: it scatters beyond the measured and seed uncertainty")
+    assert "speed_ms" in text and "not significant" in text

@@ -173,8 +173,13 @@ def _follows(rank: pd.DataFrame, res: pd.DataFrame | None = None, quantity_of: d
     cov = rank[rank["covariate"] != "scatter"]
     scat = rank[rank["covariate"] == "scatter"]
     if len(scat) and bool(scat["significant"].iloc[0]) and (len(cov) == 0 or not bool(cov["significant"].iloc[0])):
-        return ("no covariate: it scatters beyond the measured and seed uncertainty "
+        text = ("no covariate: it scatters beyond the measured and seed uncertainty "
                 f"(chi-square, Holm p {scat['p_adjusted'].iloc[0]:.3g})")
+        if len(cov) and float(cov["r2"].iloc[0]) > 0:  # the largest share, though not significant (few rows)
+            top = cov.iloc[0]
+            text += (f"; the largest share, not significant: {top['covariate']} (r2 {top['r2']:.2f}, "
+                     f"Holm p {top['p_adjusted']:.3g})")
+        return text
     if len(cov) == 0:
         return ""
     top = cov.iloc[0]
