@@ -287,3 +287,20 @@ def test_scatter_alone_significant_still_names_the_covariate_that_explains_most_
     text = core._follows(ranking(diag), res, {"speed_ms": "tool_speed"})
     assert text.startswith("no covariate: it scatters beyond the measured and seed uncertainty")
     assert "speed_ms" in text and "not significant" in text
+
+
+def test_rows_that_repeat_one_condition_say_why_no_effect_can_be_compared():
+    # five rows of one soil-bin condition (the same tool, speed and depth: a table of
+    # repeats), each 10 % above the stand-in: a bias, but one held-out group only
+    from soilcal.loop import core
+    from soilcal.loop import standin as S
+    from soilcal.loop import synthesize as sy
+
+    rows = [{"tool": "A", "tool_speed": 1.0, "working_depth": 0.1}] * 5
+    conds = S.conditions(rows, measures=("horizontal_force_N",))
+    table = sy.synthesize(conds, S.base_params, S.simulate, {}, {}, {"stones": {"fraction": 1.0, "low": 0.1,
+                                                                              "high": 0.1}}, noise=0.01, seed=3)
+    out = core.run_inprocess("user", sy.with_measured(conds, table), S.base_params, S.simulate,
+                             core.Settings(bootstrap=0))
+    assert out.chosen == []
+    assert "fewer than two folds to compare (1 held-out group: the rows of one measured condition" in out.verdict
