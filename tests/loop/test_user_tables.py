@@ -304,3 +304,19 @@ def test_rows_that_repeat_one_condition_say_why_no_effect_can_be_compared():
                              core.Settings(bootstrap=0))
     assert out.chosen == []
     assert "fewer than two folds to compare (1 held-out group: the rows of one measured condition" in out.verdict
+
+
+def test_two_seeds_per_condition_say_which_setting_gives_more():
+    # no effect, twelve conditions, two seeds each: the SD of two seeds is too uncertain to
+    # call the residual consistent, and the verdict names where the seed count is set
+    from soilcal.loop import core
+    from soilcal.loop import standin as S
+    from soilcal.loop import synthesize as sy
+
+    conds = S.conditions(S.grid(seed=2, n=12))
+    table = sy.synthesize(conds, S.base_params, S.simulate, {}, {}, {}, noise=0.01, seed=2)
+    out = core.run_inprocess("user", sy.with_measured(conds, table), S.base_params, S.simulate,
+                             core.Settings(bootstrap=0), seeds=(0, 1))
+    assert out.chosen == []
+    assert "2 seeds per condition" in out.verdict
+    assert "`replicates`" in out.verdict and "--sim-seeds" in out.verdict

@@ -333,7 +333,8 @@ def analyse(soil: str, res: pd.DataFrame, diag: pd.DataFrame, cands: list, effec
         if judged and few < MIN_SEEDS_TO_JUDGE:
             verdict = (f"unexplained: RMS error {rms:.1f} % with no significant structure, but {few} seed"
                        f"{'s' if few != 1 else ''} per condition cannot tell the seed scatter (at least "
-                       f"{MIN_SEEDS_TO_JUDGE}: the measurement's replicates) from a misfit (too few data to decide)")
+                       f"{MIN_SEEDS_TO_JUDGE}: the measured table's `replicates`, or soilcal loop run --sim-seeds) "
+                       "from a misfit (too few data to decide)")
         elif judged:
             verdict = ("consistent: no significant structure, and the residual lies within the measured and seed "
                        f"uncertainty (RMS error {rms:.1f} %)")
