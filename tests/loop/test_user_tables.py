@@ -203,12 +203,13 @@ def test_a_hidden_effect_that_changes_no_row_is_refused_before_any_run(tmp_path,
 def test_a_rate_effect_on_rows_all_at_the_reference_speed_is_refused_unless_another_reference_is_given(
         tmp_path, monkeypatch, capsys):
     soil, res = user_soil(tmp_path)
-    # every row at 0.2 m/s: the default reference is their mean, 0.2 m/s, where ln(v / v0) = 0
+    # every row at 0.2 m/s, the reference where the calibrated parameters hold: ln(v / v0) = 0
     (res / "measurements/loess-test/small4.csv").write_text(
         "speed_ms,depth_m,force_N\n0.2,0.03,10\n0.2,0.03,11\n0.2,0.03,12\n0.2,0.03,13\n")
     calls = []
     monkeypatch.setattr(lc, "dem_simulator", _counting_simulator(calls))
-    code, out = _synthesize(tmp_path, soil, res, "--measurement", "small4", "--effect", "rate_friction:beta=0.3")
+    code, out = _synthesize(tmp_path, soil, res, "--measurement", "small4", "--effect", "rate_friction:beta=0.3",
+                            "--reference", "tool_speed=0.2")
     err = [ln for ln in capsys.readouterr().err.splitlines() if ln.strip()]
     assert code == 2 and len(err) == 1, err
     assert "tool_speed = 0.2 m/s" in err[0] and "--reference" in err[0]
@@ -320,3 +321,35 @@ def test_two_seeds_per_condition_say_which_setting_gives_more():
     assert out.chosen == []
     assert "2 seeds per condition" in out.verdict
     assert "`replicates`" in out.verdict and "--sim-seeds" in out.verdict
+
+
+def test_one_table_of_a_soil_takes_the_reference_of_the_whole_soils_loop(tmp_path, monkeypatch, capsys):
+    # where the calibrated parameters hold is the soil's, not a table's: bin_forces runs at
+    # 0.4, 0.8, 1.2, 0.6, 0.4, 0.8 km/h (4.2 km/h in all; the quantity in SI, / 3.6 = 1.16667
+    # m/s) and 2, 3, 4, 4, 2, 3 cm (0.18 m), small4 at 0.1-0.4 m/s (1.0 m/s) and 0.03 m
+    # (0.12 m): over the ten rows of the soil 0.216667 m/s and 0.03 m.  Synthesized one table at a time, each table
+    # took its own mean before, and a rate effect hidden in both then left a step between the
+    # tables that the loop of the whole soil could not fit
+    soil, res = user_soil(tmp_path)
+    monkeypatch.setattr(lc, "dem_simulator", _counting_simulator([]))
+    speed, depth = (4.2 / 3.6 + 1.0) / 10, 0.30 / 10
+    code, out = _synthesize(tmp_path, soil, res, "--measurement", "small4", "--effect", "rate_friction:beta=0.2")
+    assert code == 0
+    truth = pd.read_csv(out.with_suffix(".truth.csv"))
+    assert truth["reference:tool_speed"].tolist() == pytest.approx([speed] * 4, rel=1e-9)
+    assert truth["reference:working_depth"].tolist() == pytest.approx([depth] * 4, rel=1e-9)
+    # soilcal loop run of the one table takes the same reference
+    d = tmp_path / "run"
+    assert main(["loop", "run", str(soil), "--resources", str(res), "--measurement", "small4", "--sim-seeds", "1",
+                 "--out", str(d)]) == 0
+    import json
+
+    ref = json.loads(pd.read_csv(d / "loop_summary.csv")["reference"].iloc[0])
+    assert ref == pytest.approx({"tool_speed": speed, "working_depth": depth}, rel=1e-5)
+    # a declared reference still wins, on the command line and in the soil's loop block
+    code, out = _synthesize(tmp_path, soil, res, "--measurement", "small4", "--effect", "rate_friction:beta=0.2",
+                            "--reference", "tool_speed=0.25")
+    assert pd.read_csv(out.with_suffix(".truth.csv"))["reference:tool_speed"].iloc[0] == pytest.approx(0.25)
+    soil2, res2 = user_soil(tmp_path / "declared", "loop: {reference: {tool_speed: 0.3}}")
+    code, out = _synthesize(tmp_path, soil2, res2, "--measurement", "small4", "--effect", "rate_friction:beta=0.2")
+    assert pd.read_csv(out.with_suffix(".truth.csv"))["reference:tool_speed"].iloc[0] == pytest.approx(0.3)

@@ -126,12 +126,16 @@ def check_acts(hidden: dict, disturbances: dict, conditions, base_params, refere
                              "one offset for every row")
 
 
-def default_reference(conditions, declared: dict | None = None, source="<synthesize>", strict: bool = False) -> dict:
+def default_reference(conditions, declared: dict | None = None, source="<synthesize>", strict: bool = False,
+                      over=None) -> dict:
     """Numeric quantity of the conditions -> the value where the calibrated parameters hold
     (where an effect is switched off): ``declared`` (checked as a soil's ``loop.reference``;
     with ``strict``, a quantity no condition carries is refused, as a typo on the command
     line, else it is left out, as the loop leaves it), else the mean over the measured rows,
-    as the loop takes it (:func:`soilcal.loop.core.reference_values`)."""
+    as the loop takes it (:func:`soilcal.loop.core.reference_values`): over the conditions
+    ``over`` where given (every measured table of the soil, as the workflow's loop runs them,
+    where ``conditions`` are one table's), else over ``conditions``; the rows of ``over`` without
+    a measured value are left out, as the loop leaves them."""
     from soilcal.config.quantities import QUANTITIES
     from soilcal.loop.residuals import observations
     from soilcal.loop.settings import settings_from
@@ -143,9 +147,13 @@ def default_reference(conditions, declared: dict | None = None, source="<synthes
         if strict and q not in carried:
             raise InputError(source, f"reference.{q}", "a numeric quantity of the measured conditions ("
                              + (", ".join(carried) or "none declared") + ")", q)
+    pool = obs
+    if over is not None:
+        pool = observations(list(over))
+        pool = pool[np.isfinite(pool["measured"].astype(float))] if len(pool) else pool
     out = {}
     for q in carried:
-        x = pd.to_numeric(obs[f"q:{q}"], errors="coerce")
+        x = pd.to_numeric(pool[f"q:{q}"] if f"q:{q}" in pool and len(pool) else obs[f"q:{q}"], errors="coerce")
         out[q] = declared[q] if q in declared else float(x.mean())
     return out
 
