@@ -20,6 +20,10 @@ from __future__ import annotations
 import math
 from pathlib import Path
 
+#: key of a simulator's answer holding why a run failed (soilcal.loop.residuals.ERROR_KEY; not
+#: imported, so that the command line starts without pandas)
+ERROR_KEY = "error"
+
 
 def _kv(text: str, what: str) -> tuple[str, dict]:
     """``name:k=v,k=v`` -> (name, {k: float(v)})."""
@@ -49,7 +53,11 @@ def dem_simulator(threads=None):
                 "responses": {r["measure"]: {"scenario": cond.scenario, "setup": dict(cond.setup),
                                              "measure": r["measure"], "preset": cond.preset} for r in cond.responses}}
         df = simulate(spec, threads=threads)
-        return {r["measure"]: (float(r["value"]) if r["status"] == "ok" else math.nan) for r in df.to_dict("records")}
+        out = {r["measure"]: (float(r["value"]) if r["status"] == "ok" else math.nan) for r in df.to_dict("records")}
+        why = [str(r.get("error") or "") for r in df.to_dict("records") if r["status"] != "ok"]
+        if any(why):
+            out[ERROR_KEY] = next(w for w in why if w)
+        return out
 
     return run
 
@@ -169,20 +177,21 @@ def _params(args) -> dict:
     return dict(_kv("p:" + ",".join(args.param or []), "--param")[1]) if args.param else {}
 
 
-def _conditions(args):
+def _conditions(args, every: bool = False):
+    """(soil, the conditions of --measurement or of every table[, every table's conditions])."""
     from soilcal.config.load import load_soil
     from soilcal.config.measurements import conditions
     from soilcal.errors import InputError
 
     soil = load_soil(args.soil, args.resources)
-    conds = conditions(soil)
+    conds = all_conds = conditions(soil)
     if getattr(args, "measurement", None):
         known = sorted({c.measurement for c in conds})
         conds = [c for c in conds if c.measurement == args.measurement]
         if not conds:
             raise InputError(args.soil, "measurements", "the id of a measured table (" + ", ".join(known) + ")",
                              args.measurement)
-    return soil, conds
+    return (soil, conds, all_conds) if every else (soil, conds)
 
 
 def _named(items, what: str) -> dict:
@@ -211,17 +220,24 @@ def _synthesize(args) -> int:
     from soilcal.config.measurements import measurements_dir
     from soilcal.loop import synthesize as sy
 
-    soil, conds = _conditions(args)
+    soil, conds, every = _conditions(args, every=True)
     hidden = _named(args.effect, "--effect")
     dist = sy.check_disturbances(_named(args.disturbance, "--disturbance"), conds, "--disturbance")
     sy.check_hidden(hidden, "--effect")
-    reference = sy.default_reference(conds, _reference(args), "--reference", strict=True)
+    # where the calibrated parameters hold: the soil's loop.reference, --reference over it, else
+    # the mean over every measured table of the soil, as the loop of the whole soil takes it
+    declared = {**core_settings(soil).reference, **_reference(args)}
+    sy.default_reference(conds, _reference(args), "--reference", strict=True)  # a name no row carries: refused
+    reference = sy.default_reference(conds, declared, "--reference", over=every)
     if args.repeats < 1:
         raise InputError("<command line>", "--repeats", "at least 1 measured repeat", args.repeats)
     overrides = _params(args)
     params = base_parameters(soil, conds, overrides, args.results)
+    sy.check_acts(hidden, dist, conds, _lookup(params), reference, "--effect", "--disturbance")
+    folder = measurements_dir(soil.resources_root, soil.name)
     table = sy.synthesize(conds, _lookup(params), dem_simulator(args.threads), hidden, reference, dist,
-                          noise=args.noise, seed=args.seed, seeds=tuple(range(1000, 1000 + args.repeats)))
+                          noise=args.noise, seed=args.seed, seeds=tuple(range(1000, 1000 + args.repeats)),
+                          table_of=lambda m: folder / soil.data["measurements"][m]["table"])
     source = params_source(args, overrides)
     keys = list(zip(table["measurement"], table["row"].astype(int)))
     table["params_source"] = source
@@ -255,12 +271,16 @@ def _run(args) -> int:
     from soilcal.errors import InputError
     from soilcal.loop import synthesize as sy
 
-    soil, conds = _conditions(args)
+    soil, conds, every = _conditions(args, every=True)
     settings = core.settings_from(soil.data, soil.path)
+    check_fold_by(soil, conds, settings, args.measurement)
     if args.reference:
         given = _reference(args)
         sy.default_reference(conds, given, "--reference", strict=True)  # names the conditions carry, values
         settings = replace(settings, reference={**settings.reference, **given})
+    if args.measurement:  # one table: the reference of the whole soil's loop, not of this table's rows
+        settings = replace(settings, reference=sy.default_reference(conds, settings.reference, "--reference",
+                                                                    over=every))
     seeds = args.sim_seeds if args.sim_seeds is not None else max(int(c.replicates) for c in conds)
     if seeds < 1:
         raise InputError("<command line>", "--sim-seeds", "at least 1 DEM seed per condition", seeds)
@@ -277,6 +297,30 @@ def _run(args) -> int:
     print(f"parameters: {params_source(args, overrides)} ({d / 'parameters.csv'})")
     print(out.verdict)
     return 0
+
+
+def check_fold_by(soil, conds, settings, measurement=None) -> None:
+    """``loop.fold_by`` names a covariate column of the conditions that run: the soil's
+    loader checks it against all of its tables, but ``--measurement`` may pick one without
+    it, and the held-out folds are formed only after every run (InputError naming the soil
+    file, before any simulation)."""
+    from soilcal.errors import InputError
+
+    if not settings.fold_by:
+        return
+    cols = sorted({k for c in conds for k in (c.covariates or {})})
+    if settings.fold_by not in cols:
+        tables = sorted({c.measurement for c in conds})
+        which = (f"the table --measurement {measurement} runs" if measurement else
+                 "the measured tables (" + ", ".join(tables) + ")")
+        raise InputError(soil.path, "loop.fold_by", f"a covariate column of {which}: "
+                         + (", ".join(cols) or "none"), settings.fold_by)
+
+
+def core_settings(soil):
+    from soilcal.loop.settings import settings_from
+
+    return settings_from(soil.data, soil.path)
 
 
 def _report(soil, conds, settings, out, d: Path) -> None:
@@ -331,7 +375,8 @@ def register(sub) -> None:
     s.add_argument("--disturbance", action="append",
                    help="periodic:amplitude=0.1,wavelength=7 | stones:fraction=0.3 | day_offset:sd=0.1")
     s.add_argument("--reference", action="append", help="quantity=value where the hidden effect is off, in the "
-                   "quantity's SI unit (" + SI_UNITS + "); default: the mean over the measured rows, as the loop takes it")
+                   "quantity's SI unit (" + SI_UNITS + "); default: the soil's loop.reference, else the mean over the "
+                   "measured rows of every table of the soil, as the loop takes it")
     s.add_argument("--param", action="append", help="DEM parameter NAME=VALUE for every condition")
     s.add_argument("--results", help=RESULTS_HELP)
     s.add_argument("--noise", type=float, default=0.02, help="relative SD of the instrument noise of one repeat")
@@ -346,7 +391,7 @@ def register(sub) -> None:
     r.add_argument("--measurement", help="only this measured table")
     r.add_argument("--reference", action="append", help="quantity=value where the calibrated parameters hold, in "
                    "the quantity's SI unit (" + SI_UNITS + "); default: the soil's loop.reference, else the mean over "
-                   "the measured rows")
+                   "the measured rows of every table of the soil")
     r.add_argument("--param", action="append", help="DEM parameter NAME=VALUE for every condition")
     r.add_argument("--results", help=RESULTS_HELP)
     r.add_argument("--sim-seeds", type=int, default=None, help="DEM seeds per condition and design point "

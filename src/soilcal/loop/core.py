@@ -173,8 +173,13 @@ def _follows(rank: pd.DataFrame, res: pd.DataFrame | None = None, quantity_of: d
     cov = rank[rank["covariate"] != "scatter"]
     scat = rank[rank["covariate"] == "scatter"]
     if len(scat) and bool(scat["significant"].iloc[0]) and (len(cov) == 0 or not bool(cov["significant"].iloc[0])):
-        return ("no covariate: it scatters beyond the measured and seed uncertainty "
+        text = ("no covariate: it scatters beyond the measured and seed uncertainty "
                 f"(chi-square, Holm p {scat['p_adjusted'].iloc[0]:.3g})")
+        if len(cov) and float(cov["r2"].iloc[0]) > 0:  # the largest share, though not significant (few rows)
+            top = cov.iloc[0]
+            text += (f"; the largest share, not significant: {top['covariate']} (r2 {top['r2']:.2f}, "
+                     f"Holm p {top['p_adjusted']:.3g})")
+        return text
     if len(cov) == 0:
         return ""
     top = cov.iloc[0]
@@ -328,7 +333,8 @@ def analyse(soil: str, res: pd.DataFrame, diag: pd.DataFrame, cands: list, effec
         if judged and few < MIN_SEEDS_TO_JUDGE:
             verdict = (f"unexplained: RMS error {rms:.1f} % with no significant structure, but {few} seed"
                        f"{'s' if few != 1 else ''} per condition cannot tell the seed scatter (at least "
-                       f"{MIN_SEEDS_TO_JUDGE}: the measurement's replicates) from a misfit (too few data to decide)")
+                       f"{MIN_SEEDS_TO_JUDGE}: the measured table's `replicates`, or soilcal loop run --sim-seeds) "
+                       "from a misfit (too few data to decide)")
         elif judged:
             verdict = ("consistent: no significant structure, and the residual lies within the measured and seed "
                        f"uncertainty (RMS error {rms:.1f} %)")
@@ -345,6 +351,12 @@ def analyse(soil: str, res: pd.DataFrame, diag: pd.DataFrame, cands: list, effec
         verdict = f"unexplained: the residual follows {follows}; candidates rejected ({rejected})"
     if 0 < n < 4 and not verdict.startswith("no "):
         verdict += f"; with {n} rows no trend was tested (a trend test needs 4)"
+    if n > 0 and len(res):
+        measured = np.isfinite(res["measured"].astype(float).to_numpy())
+        unsimulated = int((measured & ~np.isfinite(res["simulated_mean"].astype(float).to_numpy())).sum())
+        if unsimulated:
+            verdict += (f"; {int(measured.sum()) - unsimulated} of {int(measured.sum())} measured values have a "
+                        f"simulated value: the runs of the other {unsimulated} failed (residuals.csv says why)")
     ok = np.isfinite(after_cv) & np.isfinite(before)
     rb = float(np.sqrt(np.mean(before[ok] ** 2))) * 100 if ok.any() else math.nan
     ra = float(np.sqrt(np.mean(after_cv[ok] ** 2))) * 100 if ok.any() else math.nan
@@ -386,8 +398,10 @@ def run_inprocess(soil: str, conditions, base_params, simulate, settings: Settin
                 vals = done[key]
                 for r in c.responses:
                     v = vals.get(r["measure"], math.nan)
+                    ok = np.isfinite(v)
                     rows.append({"measurement": c.measurement, "row": c.row, "measure": r["measure"], "seed": seed,
-                                 "value": v, "status": "ok" if np.isfinite(v) else "failed",
+                                 "value": v, "status": "ok" if ok else "failed",
+                                 rs.ERROR_KEY: "" if ok else str(vals.get(rs.ERROR_KEY) or ""),
                                  **{sl.T_PREFIX + k: float(x) for k, x in (theta or {}).items()}})
         return pd.DataFrame(rows)
 

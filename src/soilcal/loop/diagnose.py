@@ -21,7 +21,9 @@ each an ordinary least-squares fit (statsmodels) against a null of no structure:
 * ``group`` of a label covariate (a tool, a test day, any column declared as one of
   :data:`LABEL_QUANTITIES`) or of a numeric one with two levels, and of the measured
   quantity where a table holds several: one-way ANOVA ``r ~ C(g)``, F-test, where some group
-  has two rows.  A column that groups the rows exactly as an earlier one does is tested once.
+  has two rows.  A column that groups the rows exactly as an earlier one does is tested once,
+  and one that groups them by measured condition (a run number, a label per row) not at all:
+  it would only compare the rows with each other, the scatter test's question.
 
 The p-values of all tests of a table are corrected together (Holm, statsmodels
 ``multipletests``); a test is significant when its corrected p is below ``alpha``.  Each
@@ -151,6 +153,11 @@ def diagnose(res: pd.DataFrame, quantity_of: dict | None = None, alpha: float = 
     if "measure" in d and d["measure"].nunique() > 1:
         groups.append(("measure", d["measure"]))
     seen = []
+    # each measured condition (a table row); a label that groups the rows exactly by it is a
+    # row id (a run number, one day per row): its group test would only compare the rows
+    # with each other, which is the scatter test's question, and name the id as the cause
+    condition = (pd.Series(list(zip(d["measurement"].astype(str), d["row"].astype(str))), index=d.index)
+                 if "measurement" in d and "row" in d else None)
     for name, col_all in groups:
         q = quantity_of.get(name, "")
         has = col_all.notna().to_numpy()  # a covariate missing on some rows is tested on the others
@@ -164,6 +171,9 @@ def diagnose(res: pd.DataFrame, quantity_of: dict | None = None, alpha: float = 
             if partition in seen:  # the same grouping as an earlier column (a plate number beside its name)
                 continue
             seen.append(partition)
+            if (name != "measure" and condition is not None
+                    and tuple(pd.factorize(col.astype(str))[0]) == tuple(pd.factorize(condition[has])[0])):
+                continue  # one level per condition: a row id (see above)
         rows += _covariate_tests(name, q, col, r[has], numeric, distinct)
     df = pd.DataFrame(rows, columns=[c for c in DIAGNOSIS_COLUMNS if c not in ("p_adjusted", "significant")])
     if len(df):

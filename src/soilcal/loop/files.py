@@ -55,7 +55,8 @@ def condition_runs(conds, files: dict, theta: dict | None = None) -> pd.DataFram
             cache[path] = pd.read_csv(path)
         df = cache[path]
         measures = [r["measure"] for r in c.responses]
-        sel = df[df["measure"].isin(measures)][["measure", "seed", "value", "status"]].copy()
+        keep = ["measure", "seed", "value", "status"] + (["error"] if "error" in df.columns else [])
+        sel = df[df["measure"].isin(measures)][keep].copy()
         sel.insert(0, "row", int(c.row))
         sel.insert(0, "measurement", c.measurement)
         for k, v in (theta or {}).items():

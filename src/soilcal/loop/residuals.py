@@ -79,6 +79,16 @@ def simulation_key(c) -> str:
     return hashlib.sha1(json.dumps(what, sort_keys=True, default=str).encode()).hexdigest()[:12]
 
 
+#: key of a simulator's answer (``simulate(cond, params, seed)``) and column of a run table
+#: holding why a run failed (the DEM's error), written into the residual table's note
+ERROR_KEY = "error"
+
+
+def _short(reason: str, width: int = 240) -> str:
+    text = " ".join(str(reason).split())
+    return text if len(text) <= width else text[: width - 3] + "..."
+
+
 def observations(conditions) -> pd.DataFrame:
     """The measured side: one row per condition and measured quantity with a measured value."""
     rows = []
@@ -113,6 +123,9 @@ def simulated_stats(runs: pd.DataFrame) -> pd.DataFrame:
     failed = runs[~good].groupby(KEY).size().rename("failed_runs")
     out = out.join(failed, how="outer")
     out["failed_runs"] = out["failed_runs"].fillna(0).astype(int)
+    if ERROR_KEY in runs.columns:  # the first reason given for each quantity's failed runs
+        why = runs[~good & runs[ERROR_KEY].fillna("").astype(str).str.strip().ne("").to_numpy()]
+        out = out.join(why.groupby(KEY)[ERROR_KEY].first().rename("failed_reason"), how="left")
     return out.reset_index()
 
 
@@ -161,7 +174,9 @@ def residual_frame(obs: pd.DataFrame, runs: pd.DataFrame) -> pd.DataFrame:
         elif (r.measurement, r.measure) in rms_scaled:
             n.append(f"relative to the RMS {r.scale:.4g} of {r.measure} (values near zero or of both signs)")
         if r.failed_runs:
-            n.append(f"{r.failed_runs} run{'s' if r.failed_runs > 1 else ''} failed")
+            why = getattr(r, "failed_reason", None)
+            n.append(f"{r.failed_runs} run{'s' if r.failed_runs > 1 else ''} failed"
+                     + (f" ({_short(why)})" if isinstance(why, str) and why else ""))
         if r.simulated_n == 0:
             n.append("no simulated value")
         if not np.isfinite(r.residual_se):
@@ -170,6 +185,7 @@ def residual_frame(obs: pd.DataFrame, runs: pd.DataFrame) -> pd.DataFrame:
             n.append("seed scatter only (no measured SD)")
         notes.append("; ".join(n))
     df["note"] = notes
+    df = df.drop(columns=["failed_reason"], errors="ignore")
     extra = [c for c in df.columns if c.startswith(("cov:", "q:"))]
     return df[RESIDUAL_COLUMNS[:5] + extra + RESIDUAL_COLUMNS[5:]]
 

@@ -374,7 +374,13 @@ def score(model: Model, ref: Model, folds, alpha: float = 0.05, min_improvement:
                    else (-math.inf, math.inf)) for j, nm in enumerate(names)}
     d = ref_rms[ok] - fold_rms[ok]
     if ok.sum() < 2:
-        p, reason = math.nan, "fewer than two folds to compare"
+        p = math.nan
+        if len(folds) < 2:
+            reason = (f"fewer than two folds to compare ({len(folds)} held-out group: the rows of one measured "
+                      "condition, or of one loop.fold_by group, are held out together; more conditions decide)")
+        else:
+            reason = (f"fewer than two folds to compare (of {len(folds)} held-out groups, {int(ok.sum())} could be "
+                      "predicted from a fit without their rows)")
     elif np.allclose(d, d[0]) if len(d) else True:
         p = 0.0 if len(d) and d[0] > 0 else 1.0
         reason = ""

@@ -78,12 +78,64 @@ def check_disturbances(disturbances: dict, conditions, source="<synthesize>") ->
     return out
 
 
-def default_reference(conditions, declared: dict | None = None, source="<synthesize>", strict: bool = False) -> dict:
+def check_acts(hidden: dict, disturbances: dict, conditions, base_params, reference: dict,
+               source="<synthesize>", disturbance_source=None) -> None:
+    """Every hidden effect and disturbance changes some row of the table, else the table
+    would carry none of what the truth file records: an effect that acts through a quantity
+    no row declares (moisture cohesion on a table without moisture), only in another
+    scenario (plastic contacts in a compression test), or whose rows all sit at the
+    reference where it is off; a day offset without two test days (one day's offset is a
+    bias of the whole table).  InputError naming the effect and what the rows carry."""
+    from soilcal.config.quantities import QUANTITIES
+
+    conditions = list(conditions)
+    carried = sorted({q for c in conditions for q in (c.quantities or {})})
+    tables = ", ".join(sorted({c.measurement for c in conditions}))
+    for name, given in hidden.items():
+        eff = EFFECTS[name]
+        theta = {k: float(given.get(k, eff.null[k])) for k in eff.params}
+        if eff.is_null(theta):
+            continue  # switched off on purpose
+        scenarios = sorted({c.scenario for c in conditions})
+        if not any(eff.acts_in(c.scenario) for c in conditions):
+            raise InputError(source, f"effect.{name}", f"an effect that acts on the rows of {tables}: {name} acts "
+                             "only in the " + ", ".join(x for x in eff.scenarios if not x.startswith("standin"))
+                             + f" scenario, not in {', '.join(scenarios)}",
+                             "no row changed")
+        if not any(eff.applies_to(c.quantities or {}, c.scenario) for c in conditions):
+            raise InputError(source, f"effect.{name}", f"an effect that acts on the rows of {tables}: {name} acts "
+                             f"through {' or '.join(eff.needs)}, a quantity no covariate of the table declares "
+                             f"(its quantities: {', '.join(carried) or 'none'})", "no row changed")
+        changed = False
+        for c in conditions:
+            p = base_params(c)
+            if eff.apply(p, c.quantities or {}, theta, reference, c.scenario) != p:
+                changed = True
+                break
+        if not changed:
+            at = ", ".join(f"{q} = {reference[q]:.6g} {QUANTITIES[q][0]}" for q in eff.needs if q in reference)
+            raise InputError(source, f"effect.{name}", f"an effect that changes some row of {tables}: every row "
+                             f"is at the reference ({at}), where {name} is off (--reference sets another)",
+                             "no row changed")
+    if "day_offset" in disturbances:
+        days = {str(c.quantities["day"]) for c in conditions if "day" in (c.quantities or {})}
+        if len(days) < 2:
+            raise InputError(disturbance_source or source, "disturbance.day_offset", f"a table with two test days at least (a covariate "
+                             f"with quantity: day); {tables} has " + (f"one day ({days.pop()})" if days else
+                                                                     "no day column"),
+                             "one offset for every row")
+
+
+def default_reference(conditions, declared: dict | None = None, source="<synthesize>", strict: bool = False,
+                      over=None) -> dict:
     """Numeric quantity of the conditions -> the value where the calibrated parameters hold
     (where an effect is switched off): ``declared`` (checked as a soil's ``loop.reference``;
     with ``strict``, a quantity no condition carries is refused, as a typo on the command
     line, else it is left out, as the loop leaves it), else the mean over the measured rows,
-    as the loop takes it (:func:`soilcal.loop.core.reference_values`)."""
+    as the loop takes it (:func:`soilcal.loop.core.reference_values`): over the conditions
+    ``over`` where given (every measured table of the soil, as the workflow's loop runs them,
+    where ``conditions`` are one table's), else over ``conditions``; the rows of ``over`` without
+    a measured value are left out, as the loop leaves them."""
     from soilcal.config.quantities import QUANTITIES
     from soilcal.loop.residuals import observations
     from soilcal.loop.settings import settings_from
@@ -95,18 +147,25 @@ def default_reference(conditions, declared: dict | None = None, source="<synthes
         if strict and q not in carried:
             raise InputError(source, f"reference.{q}", "a numeric quantity of the measured conditions ("
                              + (", ".join(carried) or "none declared") + ")", q)
+    pool = obs
+    if over is not None:
+        pool = observations(list(over))
+        pool = pool[np.isfinite(pool["measured"].astype(float))] if len(pool) else pool
     out = {}
     for q in carried:
-        x = pd.to_numeric(obs[f"q:{q}"], errors="coerce")
+        x = pd.to_numeric(pool[f"q:{q}"] if f"q:{q}" in pool and len(pool) else obs[f"q:{q}"], errors="coerce")
         out[q] = declared[q] if q in declared else float(x.mean())
     return out
 
 
 def synthesize(conditions, base_params, simulate, hidden: dict | None = None, reference: dict | None = None,
                disturbances: dict | None = None, noise: float = 0.02, seed: int = 0,
-               seeds=(100, 101, 102)) -> pd.DataFrame:
+               seeds=(100, 101, 102), table_of=None) -> pd.DataFrame:
     """One row per condition and measured quantity: measurement, row, measure, value, sd, n,
-    and the truth (simulated mean with the hidden effects, the disturbance factor)."""
+    and the truth (simulated mean with the hidden effects, the disturbance factor).  A seed
+    whose run failed is a repeat not made (``n`` counts the others); a condition whose runs
+    all failed is refused (InputError naming its table, ``table_of(measurement)``, its row and
+    the simulator's reason), not written as an empty measured value."""
     hidden = hidden or {}
     check_hidden(hidden)
     conditions = list(conditions)
@@ -137,8 +196,18 @@ def synthesize(conditions, base_params, simulate, hidden: dict | None = None, re
         p = apply_all(hidden, base_params(c), c.quantities or {}, reference, c.scenario)
         vals = [simulate(c, p, s) for s in seeds]
         for r in c.responses:
-            sims = np.array([v[r["measure"]] for v in vals], float)
-            reps = sims * factor[i] * (1 + noise * rng.standard_normal(len(sims)))
+            sims = np.array([v.get(r["measure"], math.nan) for v in vals], float)
+            draws = noise * rng.standard_normal(len(sims))  # one per seed: a failed one leaves the others' draws
+            ok = np.isfinite(sims)
+            if not ok.any():
+                from soilcal.loop.residuals import ERROR_KEY
+
+                why = next((str(v[ERROR_KEY]) for v in vals if v.get(ERROR_KEY)), "no value (NaN)")
+                raise InputError(table_of(c.measurement) if table_of else f"measurement {c.measurement}",
+                                 f"row {c.row}", f"a condition the simulation runs (every one of the {len(sims)} "
+                                 f"runs of {r['measure']} failed; its measured value would be empty)", why)
+            sims = sims[ok]
+            reps = sims * factor[i] * (1 + draws[ok])
             rows.append({"measurement": c.measurement, "row": c.row, "measure": r["measure"],
                          "value": float(np.mean(reps)), "sd": float(np.std(reps, ddof=1)) if len(reps) > 1 else math.nan,
                          "n": len(reps), "truth_simulated": float(np.mean(sims)), "truth_disturbance": factor[i],

@@ -1,0 +1,355 @@
+"""Measured tables as a user writes them (an id column per row, two measured quantities per
+row, few rows): the loop's diagnosis and verdict on residual tables built by hand, each
+expected value following from the construction written here."""
+
+from __future__ import annotations
+
+import numpy as np
+import pandas as pd
+
+from soilcal.loop.diagnose import diagnose, ranking
+
+
+def _two_measure_table(per_row, ids, tools):
+    """Six conditions, each measured twice (horizontal and vertical force) with the same
+    relative residual ``per_row[i]`` for both: a per-row disturbance (a stone, a ridge)."""
+    rows = []
+    for i, (r, rid, tool) in enumerate(zip(per_row, ids, tools), start=1):
+        for m in ("horizontal_force_N", "vertical_force_N"):
+            rows.append({"measurement": "draft", "row": i, "measure": m, "relative_residual": r,
+                         "standardised_residual": 1.0, "cov:run_id": rid, "cov:tool": tool})
+    return pd.DataFrame(rows)
+
+
+def test_a_column_naming_each_row_is_not_a_group_the_residual_follows():
+    # the rows differ (0.2, -0.1, ...) and both measures of a row agree: grouped by a label
+    # that is unique per row, a one-way ANOVA would explain all of the residual (r2 = 1),
+    # which says only that the rows differ from each other, not what they differ by
+    per_row = [0.2, -0.1, 0.05, -0.15, 0.1, -0.1]
+    res = _two_measure_table(per_row, ids=[f"r{i}" for i in range(1, 7)], tools=["T1", "T2", "T3"] * 2)
+    diag = diagnose(res, {"run_id": "", "tool": "tool"})
+    assert "run_id" not in set(diag["covariate"])
+    # the tool, three rows a level in two conditions each, is still tested
+    assert len(diag[(diag["covariate"] == "tool") & (diag["test"] == "group")]) == 1
+    assert "run_id" not in set(ranking(diag)["covariate"])
+
+
+def test_a_label_shared_by_rows_of_one_condition_only_is_still_no_group():
+    # a numbered day per row written as text ("d1".."d6"), declared as the test day: each
+    # day holds one condition, so its group test is the same row-by-row comparison
+    per_row = [0.2, -0.1, 0.05, -0.15, 0.1, -0.1]
+    res = _two_measure_table(per_row, ids=[f"d{i}" for i in range(1, 7)], tools=["T1", "T2", "T3"] * 2)
+    diag = diagnose(res, {"run_id": "day", "tool": "tool"})
+    assert "run_id" not in set(diag["covariate"])
+
+
+# --------------------------------------------------------------------------- a user's own soil
+
+import shutil  # noqa: E402
+from pathlib import Path  # noqa: E402
+
+import pytest  # noqa: E402
+
+from soilcal.cli import main  # noqa: E402
+from soilcal.loop import cli as lc  # noqa: E402
+
+ROOT = Path(__file__).resolve().parents[2]
+
+#: a soil of its own (not a shipped one): one Box-Behnken stage on the cinnamon soil's printed
+#: coded table, other factor ranges, and two soil-bin tables, one with a test day and one without
+USER_SOIL = """\
+name: loess-test
+source: published
+parameters:
+  soil_soil_rolling_friction: {name: rolling, unit: "-", pair: soil-soil, kind: rolling_friction}
+  jkr_surface_energy: {name: JKR, unit: J/m^2, pair: soil-soil, kind: surface_energy}
+  soil_steel_static_friction: {name: steel friction, unit: "-", pair: soil-steel, kind: static_friction}
+stages:
+  - id: bbd
+    kind: box_behnken
+    factors:
+      A: {parameter: soil_soil_rolling_friction, low: 0.06, high: 0.18}
+      B: {parameter: jkr_surface_energy, low: 0.1, high: 0.5}
+      C: {parameter: soil_steel_static_friction, low: 0.35, high: 0.75}
+    runs: 17
+    center_points: 5
+    table: bbd.csv
+    table_coding: coded
+    responses:
+      - {id: stacking_angle, name: Stacking angle, unit: deg}
+    optimise:
+      method: desirability
+      cases:
+        - id: stacking_angle
+          goals: {stacking_angle: {goal: target, target: stacking_angle}}
+targets:
+  stacking_angle: {value: 33.0, unit: deg}
+simulation:
+  params: {soil_density: 1450, soil_soil_restitution: 0.4, soil_soil_static_friction: 0.5,
+           soil_steel_restitution: 0.4, soil_steel_rolling_friction: 0.1, soil_poisson: 0.3,
+           soil_shear_modulus: 2.0e6}
+  responses:
+    stacking_angle: {scenario: repose, setup: cinnamon-soil, measure: angle_image_deg}
+LOOP
+measurements:
+  bin_forces:
+    table: bin_forces.csv
+    scenario: bulldozing
+    setup: plate-line
+    covariates:
+      tool: {setup: {straight: plate-line, curved: plate-arc, winged: plate-bionic}, quantity: tool}
+      speed_kmh: {set: speed, scale: 0.2778, quantity: tool_speed, unit: km/h}
+      depth_cm: {set: depth, scale: 0.01, quantity: working_depth, unit: cm}
+      day: {ignore: true, quantity: day}
+    responses:
+      - {measure: horizontal_force_N, value: draft_N, sd: draft_sd_N, n: reps, unit: N}
+    calibrated: {stage: bbd, case: stacking_angle}
+  small4:
+    table: small4.csv
+    scenario: bulldozing
+    setup: plate-line
+    covariates:
+      speed_ms: {set: speed, quantity: tool_speed, unit: m/s}
+      depth_m: {set: depth, quantity: working_depth, unit: m}
+    responses:
+      - {measure: horizontal_force_N, value: force_N, unit: N}
+    calibrated: {stage: bbd, case: stacking_angle}
+"""
+
+BIN_FORCES = """\
+tool,speed_kmh,depth_cm,day,draft_N,draft_sd_N,reps
+straight,0.4,2.0,d1,10.0,0.5,3
+straight,0.8,3.0,d2,12.0,0.5,3
+curved,1.2,4.0,d1,15.0,0.5,3
+curved,0.6,4.0,d2,14.0,0.5,3
+winged,0.4,2.0,d1,11.0,0.5,3
+winged,0.8,3.0,d2,13.0,0.5,3
+"""
+
+SMALL4 = "speed_ms,depth_m,force_N\n0.1,0.03,10\n0.2,0.03,11\n0.3,0.03,12\n0.4,0.03,13\n"
+
+
+def user_soil(tmp_path: Path, loop: str = "") -> tuple[Path, Path]:
+    """(soil YAML, resources folder) of the user's soil under ``tmp_path``; ``loop``: the
+    soil's ``loop:`` block as a line of YAML, or nothing."""
+    res = tmp_path / "res"
+    pub = res / "published/loess-test"
+    pub.mkdir(parents=True)
+    for f in (ROOT / "resources/published/cinnamon-soil").glob("bbd*.csv"):
+        shutil.copy(f, pub / f.name)
+    meas = res / "measurements/loess-test"
+    meas.mkdir(parents=True)
+    (meas / "bin_forces.csv").write_text(BIN_FORCES)
+    (meas / "small4.csv").write_text(SMALL4)
+    soil = tmp_path / "loess-test.yaml"
+    soil.write_text(USER_SOIL.replace("LOOP\n", loop + "\n" if loop else ""))
+    return soil, res
+
+
+def _counting_simulator(calls: list):
+    def factory(threads=None):
+        def run(cond, params, seed):
+            calls.append((cond.measurement, cond.row, seed))
+            return {"horizontal_force_N": 10.0 + cond.row}
+        return run
+    return factory
+
+
+def test_a_fold_column_the_chosen_table_lacks_stops_the_run_before_any_simulation(tmp_path, monkeypatch, capsys):
+    # loop.fold_by names the test day of bin_forces: valid for the soil, but small4, the one
+    # table --measurement runs, has no day column; the folds could not be formed after the runs
+    soil, res = user_soil(tmp_path, "loop: {fold_by: day}")
+    calls = []
+    monkeypatch.setattr(lc, "dem_simulator", _counting_simulator(calls))
+    code = main(["loop", "run", str(soil), "--resources", str(res), "--measurement", "small4", "--sim-seeds", "1",
+                 "--out", str(tmp_path / "out")])
+    err = [ln for ln in capsys.readouterr().err.splitlines() if ln.strip()]
+    assert code == 2 and len(err) == 1, err
+    assert err[0].startswith(f"soilcal: error: {soil}: loop.fold_by: expected ")
+    assert "small4" in err[0] and "speed_ms" in err[0] and err[0].endswith("got 'day'")
+    assert calls == []
+    # the whole soil, bin_forces included, holds the column: the run goes ahead
+    assert main(["loop", "run", str(soil), "--resources", str(res), "--sim-seeds", "1",
+                 "--out", str(tmp_path / "out")]) == 0
+
+
+def _synthesize(tmp_path, soil, res, *extra):
+    out = tmp_path / "synthetic.csv"
+    return main(["loop", "synthesize", str(soil), "--resources", str(res), *extra, "--out", str(out)]), out
+
+
+@pytest.mark.parametrize("measurement, hidden, words", [
+    # bin_forces declares tool, tool speed, working depth and a day, but no moisture
+    ("bin_forces", ["--effect", "moisture_cohesion:c_w=0.03"], ["moisture_content", "tool_speed, working_depth"]),
+    # plastic contacts act in a compression test, and bin_forces is a bulldozing plate
+    ("bin_forces", ["--effect", "plastic_contact:lambda_p=0.3"], ["compression", "bulldozing"]),
+    # small4 has no test day: one offset would be a bias of the whole table
+    ("small4", ["--disturbance", "day_offset:sd=0.1"], ["two test days", "no day column"]),
+])
+def test_a_hidden_effect_that_changes_no_row_is_refused_before_any_run(tmp_path, monkeypatch, capsys, measurement,
+                                                                       hidden, words):
+    soil, res = user_soil(tmp_path)
+    calls = []
+    monkeypatch.setattr(lc, "dem_simulator", _counting_simulator(calls))
+    code, out = _synthesize(tmp_path, soil, res, "--measurement", measurement, *hidden)
+    err = [ln for ln in capsys.readouterr().err.splitlines() if ln.strip()]
+    assert code == 2 and len(err) == 1, err
+    assert err[0].startswith(f"soilcal: error: {hidden[0]}: ")
+    for w in words:
+        assert w in err[0], (w, err[0])
+    assert calls == [] and not out.exists()
+
+
+def test_a_rate_effect_on_rows_all_at_the_reference_speed_is_refused_unless_another_reference_is_given(
+        tmp_path, monkeypatch, capsys):
+    soil, res = user_soil(tmp_path)
+    # every row at 0.2 m/s, the reference where the calibrated parameters hold: ln(v / v0) = 0
+    (res / "measurements/loess-test/small4.csv").write_text(
+        "speed_ms,depth_m,force_N\n0.2,0.03,10\n0.2,0.03,11\n0.2,0.03,12\n0.2,0.03,13\n")
+    calls = []
+    monkeypatch.setattr(lc, "dem_simulator", _counting_simulator(calls))
+    code, out = _synthesize(tmp_path, soil, res, "--measurement", "small4", "--effect", "rate_friction:beta=0.3",
+                            "--reference", "tool_speed=0.2")
+    err = [ln for ln in capsys.readouterr().err.splitlines() if ln.strip()]
+    assert code == 2 and len(err) == 1, err
+    assert "tool_speed = 0.2 m/s" in err[0] and "--reference" in err[0]
+    assert calls == [] and not out.exists()
+    # calibrated at 0.1 m/s, the rows at 0.2 m/s are changed: the table is written
+    code, out = _synthesize(tmp_path, soil, res, "--measurement", "small4", "--effect", "rate_friction:beta=0.3",
+                            "--reference", "tool_speed=0.1")
+    assert code == 0 and out.exists() and calls
+    # a hidden effect switched off on purpose (beta = 0) is a table without an effect
+    code, _ = _synthesize(tmp_path, soil, res, "--measurement", "small4", "--effect", "rate_friction:beta=0")
+    assert code == 0
+
+
+# --------------------------------------------------------------------------- a run that fails
+
+REASON = "SimulationError: step 35: particle 524: overlap above 50 % of its radius"
+
+
+def _failing_simulator(fail_rows: set, calls: list | None = None):
+    """Force 10 + row N; the rows in ``fail_rows`` fail in every seed with ``REASON`` (as the
+    DEM's plate driven at 30 km/h into the bin does), reported as the DEM simulator reports it."""
+    def factory(threads=None):
+        def run(cond, params, seed):
+            if calls is not None:
+                calls.append(cond.row)
+            if cond.row in fail_rows:
+                return {"horizontal_force_N": float("nan"), lc.ERROR_KEY: REASON}
+            return {"horizontal_force_N": 10.0 + cond.row}
+        return run
+    return factory
+
+
+def test_a_failed_run_says_why_in_the_residual_table_and_the_verdict_counts_it(tmp_path, monkeypatch, capsys):
+    soil, res = user_soil(tmp_path)
+    monkeypatch.setattr(lc, "dem_simulator", _failing_simulator({1, 2, 3}))
+    out = tmp_path / "out"
+    assert main(["loop", "run", str(soil), "--resources", str(res), "--measurement", "bin_forces",
+                 "--sim-seeds", "2", "--out", str(out)]) == 0
+    r = pd.read_csv(out / "residuals.csv")
+    failed = r[r["row"].isin([1, 2, 3])]
+    assert (failed["failed_runs"] == 2).all()
+    assert all(REASON in n for n in failed["note"]), failed["note"].tolist()
+    assert not any(REASON in str(n) for n in r[~r["row"].isin([1, 2, 3])]["note"])
+    verdict = pd.read_csv(out / "loop_summary.csv")["verdict"].iloc[0]
+    # three of the six rows have a simulated value: the verdict says the other three failed
+    assert "3 of 6" in verdict and "failed" in verdict, verdict
+
+
+def test_synthesize_refuses_a_row_whose_runs_all_failed_naming_the_row_and_the_reason(tmp_path, monkeypatch,
+                                                                                        capsys):
+    soil, res = user_soil(tmp_path)
+    monkeypatch.setattr(lc, "dem_simulator", _failing_simulator({2}))
+    code, out = _synthesize(tmp_path, soil, res, "--measurement", "bin_forces")
+    err = [ln for ln in capsys.readouterr().err.splitlines() if ln.strip()]
+    assert code == 2 and len(err) == 1, err
+    table = res / "measurements/loess-test/bin_forces.csv"
+    assert err[0].startswith(f"soilcal: error: {table}: row 2: ")
+    assert REASON in err[0]
+    assert not out.exists()
+
+
+def test_scatter_alone_significant_still_names_the_covariate_that_explains_most_of_it():
+    # four rows at 0.1-0.4 m/s, each measured to 1 %: the residual rises with the speed
+    # (-27 % to +8 %), far beyond the 1 % uncertainty (scatter significant), but a slope on
+    # two degrees of freedom is not significant after Holm: the verdict says the residual
+    # follows no covariate, and should still name the speed as the largest share
+    from soilcal.loop import core
+
+    r = np.array([-0.27, -0.06, 0.05, 0.08])
+    res = pd.DataFrame({"measurement": "small4", "row": [1, 2, 3, 4], "measure": "horizontal_force_N",
+                        "relative_residual": r, "standardised_residual": r / 0.01, "measured_sd": 0.01,
+                        "residual_dof": np.inf, "cov:speed_ms": [0.1, 0.2, 0.3, 0.4]})
+    diag = diagnose(res, {"speed_ms": "tool_speed"})
+    sig = diag[diag["significant"]]
+    assert list(sig["test"]) == ["scatter"]
+    text = core._follows(ranking(diag), res, {"speed_ms": "tool_speed"})
+    assert text.startswith("no covariate: it scatters beyond the measured and seed uncertainty")
+    assert "speed_ms" in text and "not significant" in text
+
+
+def test_rows_that_repeat_one_condition_say_why_no_effect_can_be_compared():
+    # five rows of one soil-bin condition (the same tool, speed and depth: a table of
+    # repeats), each 10 % above the stand-in: a bias, but one held-out group only
+    from soilcal.loop import core
+    from soilcal.loop import standin as S
+    from soilcal.loop import synthesize as sy
+
+    rows = [{"tool": "A", "tool_speed": 1.0, "working_depth": 0.1}] * 5
+    conds = S.conditions(rows, measures=("horizontal_force_N",))
+    table = sy.synthesize(conds, S.base_params, S.simulate, {}, {}, {"stones": {"fraction": 1.0, "low": 0.1,
+                                                                              "high": 0.1}}, noise=0.01, seed=3)
+    out = core.run_inprocess("user", sy.with_measured(conds, table), S.base_params, S.simulate,
+                             core.Settings(bootstrap=0))
+    assert out.chosen == []
+    assert "fewer than two folds to compare (1 held-out group: the rows of one measured condition" in out.verdict
+
+
+def test_two_seeds_per_condition_say_which_setting_gives_more():
+    # no effect, twelve conditions, two seeds each: the SD of two seeds is too uncertain to
+    # call the residual consistent, and the verdict names where the seed count is set
+    from soilcal.loop import core
+    from soilcal.loop import standin as S
+    from soilcal.loop import synthesize as sy
+
+    conds = S.conditions(S.grid(seed=2, n=12))
+    table = sy.synthesize(conds, S.base_params, S.simulate, {}, {}, {}, noise=0.01, seed=2)
+    out = core.run_inprocess("user", sy.with_measured(conds, table), S.base_params, S.simulate,
+                             core.Settings(bootstrap=0), seeds=(0, 1))
+    assert out.chosen == []
+    assert "2 seeds per condition" in out.verdict
+    assert "`replicates`" in out.verdict and "--sim-seeds" in out.verdict
+
+
+def test_one_table_of_a_soil_takes_the_reference_of_the_whole_soils_loop(tmp_path, monkeypatch, capsys):
+    # where the calibrated parameters hold is the soil's, not a table's: bin_forces runs at
+    # 0.4, 0.8, 1.2, 0.6, 0.4, 0.8 km/h (4.2 km/h in all; the quantity in SI, / 3.6 = 1.16667
+    # m/s) and 2, 3, 4, 4, 2, 3 cm (0.18 m), small4 at 0.1-0.4 m/s (1.0 m/s) and 0.03 m
+    # (0.12 m): over the ten rows of the soil 0.216667 m/s and 0.03 m.  Synthesized one table at a time, each table
+    # took its own mean before, and a rate effect hidden in both then left a step between the
+    # tables that the loop of the whole soil could not fit
+    soil, res = user_soil(tmp_path)
+    monkeypatch.setattr(lc, "dem_simulator", _counting_simulator([]))
+    speed, depth = (4.2 / 3.6 + 1.0) / 10, 0.30 / 10
+    code, out = _synthesize(tmp_path, soil, res, "--measurement", "small4", "--effect", "rate_friction:beta=0.2")
+    assert code == 0
+    truth = pd.read_csv(out.with_suffix(".truth.csv"))
+    assert truth["reference:tool_speed"].tolist() == pytest.approx([speed] * 4, rel=1e-9)
+    assert truth["reference:working_depth"].tolist() == pytest.approx([depth] * 4, rel=1e-9)
+    # soilcal loop run of the one table takes the same reference
+    d = tmp_path / "run"
+    assert main(["loop", "run", str(soil), "--resources", str(res), "--measurement", "small4", "--sim-seeds", "1",
+                 "--out", str(d)]) == 0
+    import json
+
+    ref = json.loads(pd.read_csv(d / "loop_summary.csv")["reference"].iloc[0])
+    assert ref == pytest.approx({"tool_speed": speed, "working_depth": depth}, rel=1e-5)
+    # a declared reference still wins, on the command line and in the soil's loop block
+    code, out = _synthesize(tmp_path, soil, res, "--measurement", "small4", "--effect", "rate_friction:beta=0.2",
+                            "--reference", "tool_speed=0.25")
+    assert pd.read_csv(out.with_suffix(".truth.csv"))["reference:tool_speed"].iloc[0] == pytest.approx(0.25)
+    soil2, res2 = user_soil(tmp_path / "declared", "loop: {reference: {tool_speed: 0.3}}")
+    code, out = _synthesize(tmp_path, soil2, res2, "--measurement", "small4", "--effect", "rate_friction:beta=0.2")
+    assert pd.read_csv(out.with_suffix(".truth.csv"))["reference:tool_speed"].iloc[0] == pytest.approx(0.3)
