@@ -236,3 +236,10 @@ def test_rotor_speed_in_rad_per_s_sets_a_key_in_r_per_min(black):
     msg = _fails(black, f"{black.path}: measurements.surface_flatness.covariates.omega_rad_s.scale")
     # 1 rad/s = 60 / (2 pi) r/min
     assert msg.endswith(f"expected {60 / (2 * math.pi):.4g} (rad/s to r/min, the unit of setup key rpm), got 1")
+
+
+def test_a_spreadsheet_export_with_empty_rows_after_the_data_loads_its_rows(cinnamon):
+    t = _table(cinnamon)
+    cols = t.read_text().splitlines()[0].count(",")
+    t.write_text(t.read_text().rstrip("\n") + "\n" + ("," * cols + "\n") * 3)
+    assert len(_load(cinnamon)) == 4

@@ -41,13 +41,19 @@ def test_line_counts_blank_lines_and_quoted_line_breaks(tmp_path):
     assert e.field == "line 5"
 
 
-def test_trailing_empty_spreadsheet_rows_are_read_as_empty_rows(tmp_path):
+def test_trailing_empty_spreadsheet_rows_are_not_rows_of_the_table(tmp_path):
     p = tmp_path / "t.csv"
-    p.write_text("a,b,c\n1,2,3\n,,\n,\n\n")
+    p.write_text("a,b,c\n1,2,3\n4,5,6\n,,\n,\n\n,,\n")
     df = read_table(p)
-    assert list(df.columns) == ["a", "b", "c"]
-    assert df.iloc[0].tolist() == [1, 2, 3]
-    assert len(df) == 3 and all(math.isnan(x) for x in df.iloc[1:].to_numpy().ravel())
+    assert list(df.columns) == ["a", "b", "c"] and df.to_numpy().tolist() == [[1, 2, 3], [4, 5, 6]]
+
+
+def test_an_empty_row_between_data_rows_stays_a_row_of_empty_cells(tmp_path):
+    p = tmp_path / "t.csv"
+    p.write_text("a,b,c\n1,2,3\n,,\n4,5,6\n,,\n")
+    df = read_table(p)
+    assert len(df) == 3 and all(math.isnan(x) for x in df.iloc[1].to_numpy())
+    assert df.iloc[2].tolist() == [4, 5, 6]
 
 
 def test_quoted_commas_and_crlf_are_fields_not_separators(tmp_path):

@@ -11,6 +11,7 @@ from pathlib import Path
 from typing import Any
 
 import jsonschema
+import numpy as np
 import pandas as pd
 import yaml
 
@@ -206,9 +207,10 @@ def read_table(path: Path) -> pd.DataFrame:
     header that names a column twice, a header of one cell holding ``;`` (a
     semicolon-separated export, whose decimal commas would be split), and a row whose number
     of fields differs from the header's (named by its line: an unquoted decimal comma such as
-    ``155,4`` adds a field, and in every row it would shift each column one to the left).  A
-    row of empty fields only, such as ``,,,,`` at the end of a spreadsheet's export, is read
-    as before (a row of empty cells)."""
+    ``155,4`` adds a field, and in every row it would shift each column one to the left).
+    Rows of empty fields only at the end of the table, such as the ``,,,,`` lines a
+    spreadsheet's export leaves after the data, are not rows of the table; such a row between
+    data rows is read as a row of empty cells (and refused where a value is required)."""
     import csv
     import io
 
@@ -252,7 +254,8 @@ def read_table(path: Path) -> pd.DataFrame:
         raise InputError(path, "<file>", "a readable CSV table", text or type(exc).__name__) from None
     if len(df.columns) == len(names):
         df.columns = [nm or str(c) for nm, c in zip(names, df.columns)]
-    return df
+    filled = np.flatnonzero(df.notna().any(axis=1).to_numpy())
+    return df.iloc[:filled[-1] + 1 if filled.size else 0]
 
 
 def _check_levels(path: Path, where: str, d: dict) -> None:
