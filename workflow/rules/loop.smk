@@ -66,7 +66,6 @@ checkpoint loop_more:
     params:
         soil_path=lambda w: str(SOILS[w.soil].path),
         resources_root=RES,
-        tool_files=tool_file_map,
         effect_files=loop_first_files,
     conda:
         "../../envs/soilcal.yaml"
@@ -95,7 +94,6 @@ rule loop_select:
     params:
         soil_path=lambda w: str(SOILS[w.soil].path),
         resources_root=RES,
-        tool_files=tool_file_map,
         effect_files=loop_effect_files,
     conda:
         "../../envs/soilcal.yaml"

@@ -144,7 +144,7 @@ def loop_jobs(conds, tool_jobs: dict, tool_keys: dict, plan: dict, results: str)
     return jobs, files
 
 
-def _outcome(soil, outdir, tool_files: dict, effect_files: dict, plans: list[dict]):
+def _outcome(soil, outdir, effect_files: dict, plans: list[dict]):
     """``analyse`` over the candidates of ``plans`` (the first round, and the second where
     there is one)."""
     from soilcal.config.measurements import conditions
@@ -169,14 +169,14 @@ def _outcome(soil, outdir, tool_files: dict, effect_files: dict, plans: list[dic
                         plans[0]["quantity_columns"]), conds, settings
 
 
-def more_files(soil_path, resources_root, outdir, tool_files: dict, effect_files: dict, out_plan) -> dict:
+def more_files(soil_path, resources_root, outdir, effect_files: dict, out_plan) -> dict:
     """``plan_more.json``: the second round's candidates (:func:`soilcal.loop.core.more_candidates`)
     from the first round's runs, with their designs (none: an empty list)."""
     from soilcal.chain.files import write_json
 
     soil = _soil(soil_path, resources_root)
     plan = json.loads((Path(outdir) / "plan.json").read_text())
-    outcome, conds, settings = _outcome(soil, outdir, tool_files, effect_files, [plan])
+    outcome, conds, settings = _outcome(soil, outdir, effect_files, [plan])
     more = core.more_candidates(outcome, conds, settings) if plan["candidates"] else []
     plan_more = _plan(soil.name, more, plan["reference"], settings, plan["quantity_columns"],
                       pd.read_csv(Path(outdir) / "diagnosis.csv"))
@@ -184,10 +184,10 @@ def more_files(soil_path, resources_root, outdir, tool_files: dict, effect_files
     return plan_more
 
 
-def select_files(soil_path, resources_root, outdir, tool_files: dict, effect_files: dict) -> core.Outcome:
+def select_files(soil_path, resources_root, outdir, effect_files: dict) -> core.Outcome:
     """Selection, predictions, summary, report and figures from the diagnosis outputs in
     ``outdir`` (``plan.json``, ``plan_more.json``) and the runs: ``effect_files``: effect ->
-    point -> {"<measurement>/<row>": run file}; ``tool_files``: the same for the calibrated runs."""
+    point -> {"<measurement>/<row>": run file} (the calibrated runs are in ``residuals.csv``)."""
     from soilcal.chain.files import write_csv
     from soilcal.plots.loop import residual_figures
 
@@ -196,7 +196,7 @@ def select_files(soil_path, resources_root, outdir, tool_files: dict, effect_fil
     plans = [json.loads((out / "plan.json").read_text())]
     if (out / "plan_more.json").is_file():
         plans.append(json.loads((out / "plan_more.json").read_text()))
-    outcome, _, _ = _outcome(soil, outdir, tool_files, effect_files, plans)
+    outcome, _, _ = _outcome(soil, outdir, effect_files, plans)
     write_csv(outcome.selection, out / "selection.csv")
     write_csv(outcome.predictions, out / "predictions.csv")
     write_csv(outcome.summary, out / "loop_summary.csv")
