@@ -4,12 +4,11 @@ swarm of ``method: pso`` runs with the block's particles, iterations and repeats
 
 from __future__ import annotations
 
-import itertools
-
 import numpy as np
 import pandas as pd
 import pytest
 
+from bbd_stand_in import box_behnken_3
 from soilcal import optimise
 from soilcal.chain.stage import optimum_frames
 
@@ -26,18 +25,9 @@ def _stage(pso: dict | None) -> dict:
 
 
 def _table() -> pd.DataFrame:
-    rows = []
-    for i, j in itertools.combinations(range(3), 2):
-        for a, b in itertools.product((-1, 1), repeat=2):
-            x = [0, 0, 0]
-            x[i], x[j] = a, b
-            rows.append(x)
-    rows += [[0, 0, 0]] * 3
-    x = np.array(rows, float)
+    df, x = box_behnken_3()
     a, b, c = x.T
     scatter = np.linspace(-0.2, 0.2, len(x))[np.argsort(np.arange(len(x)) * 7 % len(x))]
-    df = pd.DataFrame(x.astype(int), columns=["A", "B", "C"])
-    df.insert(0, "run", np.arange(1, len(df) + 1))
     df["angle"] = 30 + 1.5 * a + 0.8 * b - 1.1 * c + 0.6 * a * b + 0.9 * a * a - 0.5 * c * c + scatter
     return df
 

@@ -7,7 +7,6 @@ equals an independent least-squares fit of the table written here."""
 
 from __future__ import annotations
 
-import itertools
 import textwrap
 from pathlib import Path
 
@@ -15,6 +14,7 @@ import numpy as np
 import pandas as pd
 import pytest
 
+from bbd_stand_in import box_behnken_3
 from soilcal.config import load_soil
 from soilcal.config.load import schema_defaults
 from wfutil import copy_workflow, run
@@ -52,19 +52,10 @@ HIGH = np.array([0.3, 6.0, 0.8])
 def _table() -> pd.DataFrame:
     """The 15-run Box-Behnken design (three factors, three centre points), coded, with a
     response from a known quadratic plus fixed scatter."""
-    rows = []
-    for i, j in itertools.combinations(range(3), 2):
-        for a, b in itertools.product((-1, 1), repeat=2):
-            x = [0, 0, 0]
-            x[i], x[j] = a, b
-            rows.append(x)
-    rows += [[0, 0, 0]] * 3
-    x = np.array(rows, float)
+    df, x = box_behnken_3()
     a, b, c = x.T
     scatter = np.array([0.21, -0.13, 0.05, -0.27, 0.16, 0.02, -0.09, 0.24, -0.18, 0.11, -0.04, 0.07, 0.12, -0.06, -0.08])
     y = 30 + 1.5 * a + 0.8 * b - 1.1 * c + 0.6 * a * b - 0.4 * b * c + 0.9 * a * a - 0.5 * c * c + scatter
-    df = pd.DataFrame(x.astype(int), columns=["A", "B", "C"])
-    df.insert(0, "run", np.arange(1, len(df) + 1))
     df["angle"] = np.round(y, 3)
     return df
 
