@@ -419,6 +419,25 @@ def kinetic_translational(v, m, inv_m):
 
 
 @njit(cache=True)
+def _blown_up(n, ovr, max_ovr, v, status, why_overlap, why_state):
+    """The first particle whose overlap exceeds ``max_ovr`` of its radius or whose velocity is
+    not finite: stop code BLOWUP with that particle and reason (``why_overlap`` or
+    ``why_state``) in ``status``; False when there is none."""
+    for i in range(n):
+        if not (ovr[i] <= max_ovr):
+            status[0] = BLOWUP
+            status[2] = i
+            status[3] = why_overlap
+            return True
+        if not (abs(v[i, 0]) + abs(v[i, 1]) + abs(v[i, 2]) < math.inf):
+            status[0] = BLOWUP
+            status[2] = i
+            status[3] = why_state
+            return True
+    return False
+
+
+@njit(cache=True)
 def run_loop(nsteps, step0, resume_mid, need_forces, ke_tol, ke_every, max_ovr, wlog_every,
              log0, x, v, om, f, t, r, m, inv_m, inv_i, mat, disp, ovr, peak, mroll, pid, xr, vw,
              gravity, box, periodic, dt, skin, extra, pair, codes, sort_every, perm, fbuf, ibuf,
@@ -555,20 +574,8 @@ def run_loop(nsteps, step0, resume_mid, need_forces, ke_tol, ke_every, max_ovr, 
             # run that is to step from it stops before its first step (reasons 3 and 4),
             # rather than reporting a blow-up of step 1; the forces of such a state alone
             # (no steps) are evaluated as they are
-            if nbad > 0 and nsteps > 0:
-                for i in range(n):
-                    if not (ovr[i] <= max_ovr):
-                        status[0] = BLOWUP
-                        status[2] = i
-                        status[3] = 3
-                        break
-                    if not (abs(v[i, 0]) + abs(v[i, 1]) + abs(v[i, 2]) < math.inf):
-                        status[0] = BLOWUP
-                        status[2] = i
-                        status[3] = 4
-                        break
-                if status[0] == BLOWUP:
-                    break
+            if nbad > 0 and nsteps > 0 and _blown_up(n, ovr, max_ovr, v, status, 3, 4):
+                break
             continue
         done = s + 1
         fstate[3] += 1.0
@@ -581,17 +588,7 @@ def run_loop(nsteps, step0, resume_mid, need_forces, ke_tol, ke_every, max_ovr, 
                         wlog[row, w, q] = wall_force[w, q]
                         wlog[row, w, 3 + q] = wall_torque[w, q]
         if nbad > 0:
-            for i in range(n):
-                if not (ovr[i] <= max_ovr):
-                    status[0] = BLOWUP
-                    status[2] = i
-                    status[3] = 1
-                    break
-                if not (abs(v[i, 0]) + abs(v[i, 1]) + abs(v[i, 2]) < math.inf):
-                    status[0] = BLOWUP
-                    status[2] = i
-                    status[3] = 2
-                    break
+            _blown_up(n, ovr, max_ovr, v, status, 1, 2)
             break
         if ke_every > 0 and (step0 + done) % ke_every == 0:
             if kinetic_translational(v, m, inv_m) < ke_tol:
