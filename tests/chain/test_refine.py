@@ -4,12 +4,12 @@ surface and every corrected set are known in closed form."""
 
 from __future__ import annotations
 
-import itertools
 
 import numpy as np
 import pandas as pd
 import pytest
 
+from bbd_stand_in import box_behnken_3
 from soilcal.chain.refine import refine_frame, write_refined
 from soilcal.chain.sources import RUN_COLUMNS
 from soilcal.chain.verify import VERIFICATION_COLUMNS, summary_frame, verification_frame
@@ -31,14 +31,7 @@ def _stage():
 
 def _table():
     # the 12 edge midpoints of a 3-factor Box-Behnken design and 3 centre points
-    pts = []
-    for i, j in itertools.combinations(range(3), 2):
-        for a, b in itertools.product((-1, 1), repeat=2):
-            x = [0, 0, 0]
-            x[i], x[j] = a, b
-            pts.append(x)
-    pts += [[0, 0, 0]] * 3
-    X = np.array(pts, float)
+    X = box_behnken_3()[1]
     y = 30.0 + 2.0 * X[:, 0]
     y[-3:] += [-0.01, 0.0, 0.01]  # pure error; the centre mean stays 30, so the fit is exactly 30 + 2 A
     return pd.DataFrame({"run": np.arange(1, 16), "A": 0.5 + 0.5 * X[:, 0], "B": 15 + 5 * X[:, 1],
