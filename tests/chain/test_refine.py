@@ -4,7 +4,6 @@ surface and every corrected set are known in closed form."""
 
 from __future__ import annotations
 
-
 import numpy as np
 import pandas as pd
 import pytest
