@@ -103,3 +103,24 @@ def test_large_photo_is_measured_at_the_working_size(tmp_path, monkeypatch):
     assert r.stages.rgb.shape[0] * r.stages.rgb.shape[1] <= 30_000
     assert r.stages.rgb.shape[1] == pytest.approx(200, abs=1)
     _assert_flanks(r, 32.0, 35.0)
+
+
+def test_a_plate_hardly_wider_than_its_heap_is_still_the_plate(tmp_path):
+    """A plate that reaches only a few pixels beyond the heap's foot shows almost no edge beside
+    it: no line passes the beside check, so the first line that gave a heap is the plate, and
+    the result says so (plate_beside)."""
+    light = (0.6, 0.6, 0.62)  # a plate lighter than the soil: its edge under the heap shows
+    img = heap_photo(seed=5, plate=light)
+    h, w = img.shape[:2]
+    prow = 0.72 * h
+    rr, cc = np.mgrid[0:h, 0:w]
+    # the heap (apex 90 px above the plate at column 200) has its foot at columns 56 and 328;
+    # the plate spans columns 50-334, the wall continues below it beside the plate
+    clean = heap_photo(seed=5, grain=0.0, noise=0.0, plate=light)
+    img[(rr >= prow) & ((cc < 50) | (cc > 334))] = clean[0, 0]
+    p = tmp_path / "narrow_plate.png"
+    _u8(img).save(p)
+    r = measure.measure_pile(p)
+    _assert_flanks(r, 32.0, 35.0)
+    assert r.plate_beside.startswith("line 1: a line through the heap"), r.plate_beside
+    assert abs(r.geometry[1] - prow) < 1.5  # measured on the plate's top edge

@@ -81,6 +81,12 @@ class PileResult:
     # flanks whose line was located again in the luminance texture ("left", "right", "left right"
     # or ""; low-confidence results only, _texture_flanks)
     texture_flanks: str = ""
+    # where the plate line does not run on as an edge beside the heap (a plate hardly wider than
+    # the heap, or one whose edge is faint there) and no other line gave a heap: what was found
+    plate_beside: str = ""
+    # the measured image's size over the photo's (below 1 for a photo reduced to
+    # PILE_WORK_PIXELS): flank_rms_px and the plate line are in the measured image's pixels
+    work_scale: float = 1.0
     # (plate slope, plate intercept, left line, right line, heap height px): where the flanks
     # were fitted, for a later refinement; not reported
     geometry: tuple | None = field(default=None, repr=False)
@@ -376,11 +382,19 @@ def measure_pile(path, threshold="otsu", keep_stages=False, channel="auto", refu
 def _measure_pile(path, threshold, keep_stages, channel, tried: Tried, image=None,
                   plate=None) -> PileResult:
     rgb = read_photo(path) if image is None else image
+    scale = 1.0
     if plate is None and rgb.shape[0] * rgb.shape[1] > PILE_WORK_PIXELS:
         # a phone's 12 or 48 megapixels: measured at a working size (the angles do not depend
-        # on it), which takes seconds and some hundred MB instead of minutes and many GB
-        rgb = transform.rescale(rgb, math.sqrt(PILE_WORK_PIXELS / (rgb.shape[0] * rgb.shape[1])),
-                                channel_axis=-1, anti_aliasing=True)
+        # on it); the search then takes seconds instead of minutes, and its own arrays a
+        # fraction of the memory (the decoded photo itself is still held at full size)
+        scale = math.sqrt(PILE_WORK_PIXELS / (rgb.shape[0] * rgb.shape[1]))
+        rgb = transform.rescale(rgb, scale, channel_axis=-1, anti_aliasing=True)
+    res = _pile_on_lines(path, rgb, threshold, keep_stages, channel, tried, plate)
+    res.work_scale = scale
+    return res
+
+
+def _pile_on_lines(path, rgb, threshold, keep_stages, channel, tried: Tried, plate=None) -> PileResult:
     lum = _gray(rgb)
     tried.rgb, tried.gray = rgb, lum
     h, w = lum.shape
@@ -388,21 +402,51 @@ def _measure_pile(path, threshold, keep_stages, channel, tried: Tried, image=Non
     if plate is not None:
         lines = [(float(plate[0]), float(plate[1]))]
     else:
-        lines = plate_lines(lum)
+        lines = plate_lines(lum, paired=True)
         cedges = colour_edges(rgb)
         tried.edges = cedges
         plate_edges = feature.canny(lum, sigma=1.5) | cedges
-        for ln in plate_lines(lum, edges=cedges):
+        for ln in plate_lines(lum, edges=cedges, paired=True):
             if all(abs((ln[0] - o[0]) * w / 2 + ln[1] - o[1]) > 3 for o in lines):
                 lines.append(ln)
     tried.lines = list(lines[:PLATE_CANDIDATES])
     if not lines:
         raise InputError(path, "image", "a straight base plate edge", "none found")
     grays = _grays(rgb, CUES if channel == "auto" else (channel,), lum)
+    beside = []  # lines on which a heap was measured but which do not run on beside it
+    try:
+        return _on_plate_lines(path, rgb, lum, grays, lines[:PLATE_CANDIDATES], 1, channel, threshold, keep_stages,
+                               tried, plate_edges, beside)
+    except InputError as refused:
+        if not beside:
+            raise
+        # no line both runs on beside the heap and gives a heap: the first line that gave one is
+        # the plate (a plate hardly wider than the heap shows little edge beside it), said so
+        n_line, slope, intercept, why = beside[0]
+        try:
+            res = _on_plate_lines(path, rgb, lum, grays, [(slope, intercept)], n_line, channel, threshold,
+                                  keep_stages, tried, None, [])
+        except InputError:
+            raise refused from None
+        res.plate_beside = why
+        return res
+
+
+def _on_plate_lines(path, rgb, lum, grays, lines, n_first, channel, threshold, keep_stages, tried, plate_edges,
+                    beside):
+    """The heap measured on the first of ``lines`` (numbered from ``n_first``) on which a cue
+    finds one (module text); a line refused only because it does not run on beside the heap
+    (:func:`_plate_beside_heap`) is added to ``beside`` with the reason."""
+    h, w = lum.shape
     rr, cc = np.mgrid[0:h, 0:w]
     err = None
     first = None  # the first cue's result, waiting for a second cue to cross-check it
-    for n_line, (slope, intercept) in enumerate(lines[:PLATE_CANDIDATES], 1):  # the plate top first; a faint one may hide behind a lower edge
+    for n_line, (slope, intercept) in enumerate(lines, n_first):  # the plate top first; a faint one may hide behind a lower edge
+        if beside and slope * w / 2 + intercept <= min(b[1] * w / 2 + b[2] for b in beside) + 3:
+            # a heap stood on a line above this one already, which ran on too little beside it
+            # (a plate hardly wider than the heap): a line of its grain, above its plate, is
+            # no better; only a lower line can be the plate the other one was not
+            continue
         prow = slope * cc + intercept
         band = (rr < prow - 3) & (rr > prow - 0.35 * h)  # where heap and wall meet
         if channel != "auto":
@@ -427,8 +471,10 @@ def _measure_pile(path, threshold, keep_stages, channel, tried: Tried, image=Non
                                  keep_stages and first is None, search=channel == "auto", tried=tried,
                                  label=f"line {n_line}, {ch}/{pol}", lum=lum, plate_edges=plate_edges)
             except InputError as e:
-                if e.field not in ("image", "left flank", "right flank"):
+                if e.field not in ("image", "left flank", "right flank", "plate line"):
                     raise
+                if e.field == "plate line" and not any(b[0] == n_line for b in beside):
+                    beside.append((n_line, slope, intercept, f"line {n_line}: {e.got}"))
                 tried.refuse_last(e)
                 err = err or e  # the refusal reported is the first cue's on the topmost line
                 checks -= first is not None
@@ -570,7 +616,7 @@ def _plate_beside_heap(path, edges, comp, slope, intercept):
         ok = beside & (rows >= 0) & (rows < h)
         share = float(near[rows[ok], cols[ok]].sum()) / float(beside.sum())
         if share < PLATE_BESIDE_MIN:
-            raise InputError(path, "image", "a heap standing on a plate edge that runs on beside it",
+            raise InputError(path, "plate line", "a heap standing on a plate edge that runs on beside it",
                              f"a line through the heap, an edge along {share:.0%} of the columns {side} of it")
 
 
@@ -778,12 +824,15 @@ def pile_summary(res) -> dict:
     }
 
 
-def plate_lines(gray, below=None, edges=None):
+def plate_lines(gray, below=None, edges=None, paired=False):
     """Long near-horizontal edges below a point, topmost first, each refined by a RANSAC line
     fit: [(slope, intercept), ...] with row = slope * col + intercept.
 
     ``below`` = (col, row): only lines passing below that point count (default: the image
     middle at column 0).  ``edges``: an edge map to use instead of the luminance's Canny edges.
+    ``paired``: a line's support also counts the votes of the larger of its two neighbouring
+    distance bins (the heap search, whose candidates must also run on beside the heap,
+    :func:`_plate_beside_heap`; the drum's level keeps a line's own votes).
     """
     edges = feature.canny(gray, sigma=1.5) if edges is None else edges
     h, w = gray.shape
@@ -800,7 +849,8 @@ def plate_lines(gray, below=None, edges=None):
     pair = hs + np.maximum(up, down)
     _, angs, dists = transform.hough_line_peaks(hs, ang, dist, num_peaks=16, min_distance=4,
                                                 threshold=0.1 * w)
-    keep = [pair[np.argmin(np.abs(dist - d)), np.argmin(np.abs(ang - a))] >= 0.25 * w for a, d in zip(angs, dists)]
+    support = pair if paired else hs
+    keep = [support[np.argmin(np.abs(dist - d)), np.argmin(np.abs(ang - a))] >= 0.25 * w for a, d in zip(angs, dists)]
     angs, dists = angs[keep][:8], dists[keep][:8]
     at = sorted(((a, d, (d - col0 * np.cos(a)) / np.sin(a)) for a, d in zip(angs, dists)), key=lambda t: t[2])
     cols = np.arange(w)
