@@ -2,6 +2,7 @@
 
 import re
 
+import numpy as np
 import pytest
 
 from conftest import table
@@ -192,7 +193,7 @@ def test_stl_facets_without_area_are_left_out():
 
     good = [[0, 0, 0], [1, 0, 0], [0, 1, 0]]
     sliver = [[0, 0, 0], [0.5, 0, 0], [1, 0, 0]]  # three corners on one line
-    v, t = weld(__import__("numpy").array([good, sliver], float))
+    v, t = weld(np.array([good, sliver], float))
     assert t.shape == (1, 3) and sorted(map(tuple, v[t[0]].tolist())) == sorted(map(tuple, good))
 
 
@@ -207,3 +208,19 @@ def test_a_step_count_that_is_not_a_whole_number_is_named(steps):
 def test_a_whole_step_count_given_as_a_float_runs():
     sim = _two(3e-3)
     assert sim.run(1e1) == 10 and sim.step == 10
+
+
+@pytest.mark.parametrize("add,field", [
+    (lambda s: s.add_rectangle((0, 0, 0), (0, 0, 1), (1, 0), 0.01, 0.01, "soil"), "walls.rectangle.u_axis"),
+    (lambda s: s.add_cylinder((0, 0), (0, 0, 1), 0.1, 0.1, "soil"), "walls.cylinder.axis_point"),
+    (lambda s: s.add_cone((0, 0, float("nan")), (0, 0, 1), 0.1, 0.05, 0.0, 0.1, "soil"), "walls.cone.axis_point"),
+    (lambda s: s.add_plane((0, 0, 0), (0, 0, 1), "soil", velocity=(1, 0)), "walls.velocity"),
+    (lambda s: s.add_plane((0, 0, 0), (0, 0, 1), "soil", omega=(0, 0, float("inf"))), "walls.omega"),
+    (lambda s: s.add_mesh([[0, 0, 0], [1, 0, 0], [0, 1, 0]], [[0, 1]], "soil"), "walls.mesh.triangles"),
+    (lambda s: s.add_mesh([[0, 0, 0], [1, 0, 0], [0, 1, 0]], [[0.0, 1.5, 2.0]], "soil"), "walls.mesh.triangles"),
+])
+def test_bad_wall_geometry_and_motion_are_named(add, field):
+    sim = Simulation(table(), dt=1e-6)
+    with pytest.raises(InputError) as exc:
+        add(sim)
+    assert exc.value.field == field and not sim.walls.names

@@ -39,6 +39,7 @@ from soilcal.dem.contact import H_SIZE, hist_width, jkr_separation, model_codes
 from soilcal.dem.materials import DAMPING_DT_SAFETY, P_ESTAR, P_W, MaterialTable
 from soilcal.dem.neighbour import GROUPS_MAX, SCRATCH_LEN, SGROUP_LEN
 from soilcal.dem.state import ParticleState
+from soilcal.dem.stl import without_area
 from soilcal.dem.walls import CONE, CYLINDER, DISK, NPAR, PLANE, RECTANGLE, TRIANGLE, WallSet
 from soilcal.errors import InputError, SimulationError
 
@@ -182,6 +183,9 @@ class Simulation:
                  centre=(0, 0, 0)) -> int:
         """Add a rigid wall made of primitives [(kind, values, point_rows, dir_rows), ...]."""
         k = self.materials.index(material)
+        velocity = _vector(self.source, "walls.velocity", velocity)
+        omega = _vector(self.source, "walls.omega", omega)
+        centre = _vector(self.source, "walls.centre", centre)
         ws = self.walls
         # keep moved primitives: rebuild the python lists from the current arrays
         a = self._warr
@@ -222,7 +226,7 @@ class Simulation:
         if not radius > 0 or not half_length > 0:
             raise InputError(self.source, "walls.cylinder", "radius > 0 and half_length > 0",
                              (radius, half_length))
-        a = np.asarray(axis_point, dtype=np.float64).reshape(3)
+        a = _vector(self.source, "walls.cylinder.axis_point", axis_point)
         vals = np.concatenate([a, self._unit(axis_dir, "walls.cylinder.axis_dir"),
                                [radius, half_length, 1.0 if inner else 0.0]])
         return self.add_wall(name or f"cylinder{len(self.walls.names)}", material,
@@ -235,7 +239,7 @@ class Simulation:
         if not z1 > z0 or min(r0, r1) < 0 or max(r0, r1) <= 0:
             raise InputError(self.source, "walls.cone", "z1 > z0, radii >= 0, one > 0",
                              (r0, r1, z0, z1))
-        a = np.asarray(axis_point, dtype=np.float64).reshape(3)
+        a = _vector(self.source, "walls.cone.axis_point", axis_point)
         vals = np.concatenate([a, self._unit(axis_dir, "walls.cone.axis_dir"),
                                [r0, r1, z0, z1, 1.0 if inner else 0.0]])
         return self.add_wall(name or f"cone{len(self.walls.names)}", material,
@@ -249,7 +253,7 @@ class Simulation:
         for nm, h in (("half_u", half_u), ("half_v", half_v)):
             _number(self.source, f"walls.rectangle.{nm}", h, "a half size > 0 m", lambda q: q > 0)
         nrm = self._unit(normal, "walls.rectangle.normal")
-        u = np.asarray(u_axis, dtype=np.float64).reshape(3)
+        u = _vector(self.source, "walls.rectangle.u_axis", u_axis)
         u = self._unit(u - np.dot(u, nrm) * nrm, "walls.rectangle.u_axis")
         vals = np.concatenate([c, nrm, u, [half_u, half_v]])
         return self.add_wall(name or f"rectangle{len(self.walls.names)}", material,
@@ -267,16 +271,16 @@ class Simulation:
                  omega=(0, 0, 0), centre=None) -> int:
         """Triangle mesh wall (boxes, STL tools); one primitive per triangle."""
         v = _rows(self.source, "walls.mesh.vertices", vertices, None, "vertices [m]")
-        t = np.asarray(triangles, dtype=np.int64).reshape(-1, 3)
-        if t.size == 0 or t.min() < 0 or t.max() >= len(v):
+        t = np.asarray(triangles)
+        if (t.ndim != 2 or t.shape[1] != 3 or t.size == 0 or not np.issubdtype(t.dtype, np.integer)
+                or t.min() < 0 or t.max() >= len(v)):
             raise InputError(self.source, "walls.mesh.triangles",
-                             f"vertex indices in [0, {len(v)})", None)
+                             f"rows of three whole vertex indices in [0, {len(v)})",
+                             f"an array of shape {t.shape} and type {t.dtype}")
+        t = t.astype(np.int64)
         rows = v[t].reshape(-1, 9)
         # a triangle without area (collinear or repeated corners) has no normal to push along
-        e1, e2 = rows[:, 3:6] - rows[:, 0:3], rows[:, 6:9] - rows[:, 0:3]
-        area2 = np.linalg.norm(np.cross(e1, e2), axis=1)
-        edge2 = np.maximum((e1 ** 2).sum(axis=1), (e2 ** 2).sum(axis=1))
-        flat = np.flatnonzero(~(area2 > 1e-12 * edge2))
+        flat = np.flatnonzero(without_area(rows.reshape(-1, 3, 3)))
         if flat.size:
             k = int(flat[0])
             raise InputError(self.source, f"walls.mesh.triangles[{k}]",
@@ -404,7 +408,9 @@ class Simulation:
         """Advance ``steps`` steps (stop early when settled if ke_tol >= 0); returns steps done.
 
         Raises SimulationError on blow-up (non-finite state or overlap above max_overlap of a
-        particle's radius), naming the step and the particle (its insertion id).
+        particle's radius), naming the step and the particle (its insertion id); InputError
+        when the state the run starts from already overlaps beyond max_overlap or is not
+        finite (spheres placed into one another or into a wall), before any step.
         """
         if (isinstance(steps, bool) or not isinstance(steps, (int, float, np.integer, np.floating))
                 or not (math.isfinite(steps) and steps >= 0 and float(steps) == int(steps))):
@@ -511,12 +517,14 @@ class Simulation:
             what = (f"particle {pid} overlaps particle {int(p.id[j])} by {100 * ov[j] / p.r[i]:.3g} "
                     f"% of its radius (centres {d[j]:.4g} m apart, radii {p.r[i]:.4g} and "
                     f"{p.r[j]:.4g} m)")
-        else:
+        elif np.isfinite(frac):
             what = f"particle {pid} overlaps a wall by {100 * frac:.3g} % of its radius"
+        else:
+            what = f"particle {pid}: its overlap with a wall is not a finite number (position {p.x[i].tolist()})"
         return InputError(self.source, "particles",
                           f"a starting state whose overlaps are at most max_overlap = "
-                          f"{100 * self.max_overlap:g} % of a radius (separate the spheres, or "
-                          f"raise max_overlap)", what)
+                          f"{100 * self.max_overlap:g} % of a radius (separate the spheres or move "
+                          f"the wall or tool placed into them, or raise max_overlap)", what)
 
     def _cidx(self):
         if getattr(self, "_cidx_arr", None) is None or self._cidx_arr.shape[0] != self.p.n:

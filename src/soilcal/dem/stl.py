@@ -154,11 +154,17 @@ def weld(soup, weld_tol=0.0):
     _, first, inv = np.unique(key, axis=0, return_index=True, return_inverse=True)
     verts = pts[first]
     tris = inv.reshape(-1, 3).astype(np.int64)
-    keep = (tris[:, 0] != tris[:, 1]) & (tris[:, 1] != tris[:, 2]) & (tris[:, 0] != tris[:, 2])
-    e1, e2 = verts[tris[:, 1]] - verts[tris[:, 0]], verts[tris[:, 2]] - verts[tris[:, 0]]
+    return verts, tris[~without_area(verts[tris])]
+
+
+def without_area(corners) -> np.ndarray:
+    """Which triangles (``corners`` [n, 3, 3]) have no area: two corners in one point, or
+    three on one line (twice the area under 1e-12 of the longer edge from the first corner,
+    squared)."""
+    c = np.asarray(corners, dtype=np.float64).reshape(-1, 3, 3)
+    e1, e2 = c[:, 1] - c[:, 0], c[:, 2] - c[:, 0]
     area2 = np.linalg.norm(np.cross(e1, e2), axis=1)
-    keep &= area2 > 1e-12 * np.maximum((e1 ** 2).sum(axis=1), (e2 ** 2).sum(axis=1))
-    return verts, tris[keep]
+    return ~(area2 > 1e-12 * np.maximum((e1 ** 2).sum(axis=1), (e2 ** 2).sum(axis=1)))
 
 
 def read_stl(path, scale=1.0, weld_tol=0.0):
