@@ -4,9 +4,15 @@ expected value following from the construction written here."""
 
 from __future__ import annotations
 
+import shutil
+from pathlib import Path
+
 import numpy as np
 import pandas as pd
+import pytest
 
+from soilcal.cli import main
+from soilcal.loop import cli as lc
 from soilcal.loop.diagnose import diagnose, ranking
 
 
@@ -44,14 +50,6 @@ def test_a_label_shared_by_rows_of_one_condition_only_is_still_no_group():
 
 
 # --------------------------------------------------------------------------- a user's own soil
-
-import shutil  # noqa: E402
-from pathlib import Path  # noqa: E402
-
-import pytest  # noqa: E402
-
-from soilcal.cli import main  # noqa: E402
-from soilcal.loop import cli as lc  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[2]
 
@@ -353,3 +351,19 @@ def test_one_table_of_a_soil_takes_the_reference_of_the_whole_soils_loop(tmp_pat
     soil2, res2 = user_soil(tmp_path / "declared", "loop: {reference: {tool_speed: 0.3}}")
     code, out = _synthesize(tmp_path, soil2, res2, "--measurement", "small4", "--effect", "rate_friction:beta=0.2")
     assert pd.read_csv(out.with_suffix(".truth.csv"))["reference:tool_speed"].iloc[0] == pytest.approx(0.3)
+
+
+def test_one_reference_rule_for_the_loop_and_synthesize():
+    """The reference is the mean over the rows with a measured value, whatever the
+    simulations gave, and a quantity one of those rows lacks has none (core.mean_reference,
+    which reference_values and default_reference both call)."""
+    from soilcal.loop.core import mean_reference
+
+    frame = pd.DataFrame({"measured": [10.0, 20.0, np.nan, 30.0], "simulated": [11.0, np.nan, 5.0, 29.0],
+                          "q:tool_speed": [1.0, 2.0, 9.0, 3.0], "q:moisture_content": [12.0, np.nan, 14.0, 16.0],
+                          "q:tool": [1.0, 2.0, 3.0, 4.0]})
+    # the row without a measured value (speed 9) is left out; the one whose run failed is kept
+    assert mean_reference(frame, {}) == {"tool_speed": 2.0}
+    assert mean_reference(frame, {"moisture_content": 15.0}) == {"tool_speed": 2.0, "moisture_content": 15.0}
+    # a table still to be synthesized (no measured value yet): every row
+    assert mean_reference(frame.assign(measured=np.nan), {}) == {"tool_speed": 3.75}

@@ -11,3 +11,7 @@
 * :mod:`soilcal.loop.synthesize`: measurement tables with a hidden effect;
 * :mod:`soilcal.loop.files`: the workflow's file-level functions and the report.
 """
+
+#: the key of a run's answer (and the column of a run table) holding why it failed; here, so
+#: that the command line reads it without importing pandas
+ERROR_KEY = "error"

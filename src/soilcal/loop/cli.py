@@ -20,9 +20,7 @@ from __future__ import annotations
 import math
 from pathlib import Path
 
-#: key of a simulator's answer holding why a run failed (soilcal.loop.residuals.ERROR_KEY; not
-#: imported, so that the command line starts without pandas)
-ERROR_KEY = "error"
+from soilcal.loop import ERROR_KEY
 
 
 def _kv(text: str, what: str) -> tuple[str, dict]:
@@ -54,9 +52,10 @@ def dem_simulator(threads=None):
                                              "measure": r["measure"], "preset": cond.preset} for r in cond.responses}}
         df = simulate(spec, threads=threads)
         out = {r["measure"]: (float(r["value"]) if r["status"] == "ok" else math.nan) for r in df.to_dict("records")}
-        why = [str(r.get("error") or "") for r in df.to_dict("records") if r["status"] != "ok"]
+        why = [str(r.get(ERROR_KEY) or "") for r in df.to_dict("records") if r["status"] != "ok"]
         if any(why):
-            out[ERROR_KEY] = next(w for w in why if w)
+            # every failed measure's reason (each names its measure where only some failed)
+            out[ERROR_KEY] = "; ".join(dict.fromkeys(w for w in why if w))
         return out
 
     return run
@@ -226,7 +225,9 @@ def _synthesize(args) -> int:
     sy.check_hidden(hidden, "--effect")
     # where the calibrated parameters hold: the soil's loop.reference, --reference over it, else
     # the mean over every measured table of the soil, as the loop of the whole soil takes it
-    declared = {**core_settings(soil).reference, **_reference(args)}
+    from soilcal.loop import core
+
+    declared = {**core.settings_from(soil.data, soil.path).reference, **_reference(args)}
     sy.default_reference(conds, _reference(args), "--reference", strict=True)  # a name no row carries: refused
     reference = sy.default_reference(conds, declared, "--reference", over=every)
     if args.repeats < 1:
@@ -273,7 +274,7 @@ def _run(args) -> int:
 
     soil, conds, every = _conditions(args, every=True)
     settings = core.settings_from(soil.data, soil.path)
-    check_fold_by(soil, conds, settings, args.measurement)
+    core.check_fold_by(soil, conds, settings, args.measurement)
     if args.reference:
         given = _reference(args)
         sy.default_reference(conds, given, "--reference", strict=True)  # names the conditions carry, values
@@ -297,30 +298,6 @@ def _run(args) -> int:
     print(f"parameters: {params_source(args, overrides)} ({d / 'parameters.csv'})")
     print(out.verdict)
     return 0
-
-
-def check_fold_by(soil, conds, settings, measurement=None) -> None:
-    """``loop.fold_by`` names a covariate column of the conditions that run: the soil's
-    loader checks it against all of its tables, but ``--measurement`` may pick one without
-    it, and the held-out folds are formed only after every run (InputError naming the soil
-    file, before any simulation)."""
-    from soilcal.errors import InputError
-
-    if not settings.fold_by:
-        return
-    cols = sorted({k for c in conds for k in (c.covariates or {})})
-    if settings.fold_by not in cols:
-        tables = sorted({c.measurement for c in conds})
-        which = (f"the table --measurement {measurement} runs" if measurement else
-                 "the measured tables (" + ", ".join(tables) + ")")
-        raise InputError(soil.path, "loop.fold_by", f"a covariate column of {which}: "
-                         + (", ".join(cols) or "none"), settings.fold_by)
-
-
-def core_settings(soil):
-    from soilcal.loop.settings import settings_from
-
-    return settings_from(soil.data, soil.path)
 
 
 def _report(soil, conds, settings, out, d: Path) -> None:

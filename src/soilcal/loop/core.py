@@ -74,24 +74,53 @@ def _at_bounds(theta: dict, effects: list) -> list[str]:
     return out
 
 
-def reference_values(res: pd.DataFrame, settings: Settings) -> dict:
-    """Quantity -> the value at which the calibrated parameters hold: declared, else the
-    mean over the usable rows (recorded in the outputs)."""
+def check_fold_by(soil, conds, settings, measurement=None) -> None:
+    """``loop.fold_by`` names a covariate column of the conditions that run: the soil's
+    loader checks it against all of its tables, but ``--measurement`` may pick one without
+    it, and the held-out folds are formed only after every run (InputError naming the soil
+    file, before any simulation)."""
+    if not settings.fold_by:
+        return
+    cols = sorted({k for c in conds for k in (c.covariates or {})})
+    if settings.fold_by not in cols:
+        tables = sorted({c.measurement for c in conds})
+        which = (f"the table --measurement {measurement} runs" if measurement else
+                 "the measured tables (" + ", ".join(tables) + ")")
+        raise InputError(soil.path, "loop.fold_by", f"a covariate column of {which}: "
+                         + (", ".join(cols) or "none"), settings.fold_by)
+
+
+def mean_reference(frame: pd.DataFrame, declared: dict) -> dict:
+    """Quantity (a ``q:<quantity>`` column of ``frame``, a residual or observation table) ->
+    the value at which the calibrated parameters hold: ``declared``, else the mean over the
+    rows with a measured value (so the reference does not move with the simulations that
+    failed; every row of a table that has none yet, one to synthesize); a quantity that one of
+    those rows lacks has no reference.  Labels (tool, day)
+    have none.  The one rule of the loop, ``soilcal loop run`` and ``soilcal loop synthesize``."""
     from soilcal.config.quantities import QUANTITIES
 
+    rows = frame
+    if "measured" in frame.columns and len(frame):
+        with_value = frame[np.isfinite(pd.to_numeric(frame["measured"], errors="coerce").to_numpy(float))]
+        rows = with_value if len(with_value) else frame  # a table still to be synthesized: its rows
     out = {}
-    u = rs.usable(res)
-    for c in res.columns:
-        if not c.startswith("q:") or QUANTITIES.get(c[2:]) is None:  # a label (tool, day) has no reference
+    for c in frame.columns:
+        if not c.startswith("q:") or QUANTITIES.get(c[2:]) is None:
             continue
         q = c[2:]
-        if q in settings.reference:
-            out[q] = settings.reference[q]
+        if q in declared:
+            out[q] = declared[q]
             continue
-        x = pd.to_numeric(u[c] if len(u) else res[c], errors="coerce")
-        if x.notna().all() and len(x):
+        x = pd.to_numeric(rows[c], errors="coerce")
+        if len(x) and x.notna().all():
             out[q] = float(x.mean())
     return out
+
+
+def reference_values(res: pd.DataFrame, settings: Settings) -> dict:
+    """Quantity -> the value at which the calibrated parameters hold (:func:`mean_reference`;
+    recorded in the outputs)."""
+    return mean_reference(res, settings.reference)
 
 
 def quantity_of(conditions) -> dict:

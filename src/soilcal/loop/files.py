@@ -55,7 +55,7 @@ def condition_runs(conds, files: dict, theta: dict | None = None) -> pd.DataFram
             cache[path] = pd.read_csv(path)
         df = cache[path]
         measures = [r["measure"] for r in c.responses]
-        keep = ["measure", "seed", "value", "status"] + (["error"] if "error" in df.columns else [])
+        keep = ["measure", "seed", "value", "status"] + ([rs.ERROR_KEY] if rs.ERROR_KEY in df.columns else [])
         sel = df[df["measure"].isin(measures)][keep].copy()
         sel.insert(0, "row", int(c.row))
         sel.insert(0, "measurement", c.measurement)
@@ -78,12 +78,7 @@ def diagnose_files(soil_path, resources_root, tool_files: dict, outdir) -> dict:
     conds = conditions(soil)
     res = rs.residual_frame(rs.observations(conds), condition_runs(conds, tool_files))
     qcols = core.quantity_of(conds)
-    if settings.fold_by and settings.fold_by not in {c for cond in conds for c in (cond.covariates or {})}:
-        from soilcal.errors import InputError
-
-        raise InputError(soil.path, "loop.fold_by", "a covariate column of the soil's measured tables ("
-                         + ", ".join(sorted({c for cond in conds for c in (cond.covariates or {})})) + ")",
-                         settings.fold_by)
+    core.check_fold_by(soil, conds, settings)
     diag = dg.diagnose(res, qcols, settings.alpha)
     reference = core.reference_values(res, settings)
     cands = core.candidates(diag, conds, settings) if len(rs.usable(res)) >= 3 else []

@@ -34,6 +34,10 @@ from __future__ import annotations
 import numpy as np
 import pandas as pd
 
+# key of a simulator's answer (``simulate(cond, params, seed)``) and column of a run table
+# holding why a run failed (the DEM's error), written into the residual table's note
+from soilcal.loop import ERROR_KEY  # noqa: F401 (re-exported)
+
 KEY = ["measurement", "row", "measure"]
 RESIDUAL_COLUMNS = ["measurement", "row", "measure", "unit", "label", "simulation", "measured", "measured_sd",
                     "measured_n",
@@ -77,11 +81,6 @@ def simulation_key(c) -> str:
     numeric = {q: v for q, v in (c.quantities or {}).items() if QUANTITIES.get(q) is not None}  # not a day's label
     what = [c.scenario, c.setup, c.params, c.stage, c.case, c.preset, numeric]
     return hashlib.sha1(json.dumps(what, sort_keys=True, default=str).encode()).hexdigest()[:12]
-
-
-#: key of a simulator's answer (``simulate(cond, params, seed)``) and column of a run table
-#: holding why a run failed (the DEM's error), written into the residual table's note
-ERROR_KEY = "error"
 
 
 def _short(reason: str, width: int = 240) -> str:

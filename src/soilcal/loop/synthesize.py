@@ -118,12 +118,18 @@ def check_acts(hidden: dict, disturbances: dict, conditions, base_params, refere
                              f"is at the reference ({at}), where {name} is off (--reference sets another)",
                              "no row changed")
     if "day_offset" in disturbances:
-        days = {str(c.quantities["day"]) for c in conditions if "day" in (c.quantities or {})}
+        days = set(test_days(conditions))
         if len(days) < 2:
             raise InputError(disturbance_source or source, "disturbance.day_offset", f"a table with two test days at least (a covariate "
-                             f"with quantity: day); {tables} has " + (f"one day ({days.pop()})" if days else
+                             f"with quantity: day); {tables} has " + (f"one day ({days.pop()})" if days - {""} else
                                                                      "no day column"),
                              "one offset for every row")
+
+
+def test_days(conditions) -> list[str]:
+    """The test day of every condition (its ``day`` quantity; "" for a row without one, a day
+    of its own): the groups a day offset shifts together."""
+    return [str((c.quantities or {}).get("day", "")) for c in conditions]
 
 
 def default_reference(conditions, declared: dict | None = None, source="<synthesize>", strict: bool = False,
@@ -132,10 +138,9 @@ def default_reference(conditions, declared: dict | None = None, source="<synthes
     (where an effect is switched off): ``declared`` (checked as a soil's ``loop.reference``;
     with ``strict``, a quantity no condition carries is refused, as a typo on the command
     line, else it is left out, as the loop leaves it), else the mean over the measured rows,
-    as the loop takes it (:func:`soilcal.loop.core.reference_values`): over the conditions
+    by the loop's own rule (:func:`soilcal.loop.core.mean_reference`): over the conditions
     ``over`` where given (every measured table of the soil, as the workflow's loop runs them,
-    where ``conditions`` are one table's), else over ``conditions``; the rows of ``over`` without
-    a measured value are left out, as the loop leaves them."""
+    where ``conditions`` are one table's), else over ``conditions``."""
     from soilcal.config.quantities import QUANTITIES
     from soilcal.loop.residuals import observations
     from soilcal.loop.settings import settings_from
@@ -147,15 +152,10 @@ def default_reference(conditions, declared: dict | None = None, source="<synthes
         if strict and q not in carried:
             raise InputError(source, f"reference.{q}", "a numeric quantity of the measured conditions ("
                              + (", ".join(carried) or "none declared") + ")", q)
-    pool = obs
-    if over is not None:
-        pool = observations(list(over))
-        pool = pool[np.isfinite(pool["measured"].astype(float))] if len(pool) else pool
-    out = {}
-    for q in carried:
-        x = pd.to_numeric(pool[f"q:{q}"] if f"q:{q}" in pool and len(pool) else obs[f"q:{q}"], errors="coerce")
-        out[q] = declared[q] if q in declared else float(x.mean())
-    return out
+    from soilcal.loop.core import mean_reference
+
+    ref = mean_reference(observations(list(over)) if over is not None else obs, declared)
+    return {q: ref[q] for q in carried if q in ref}
 
 
 def synthesize(conditions, base_params, simulate, hidden: dict | None = None, reference: dict | None = None,
@@ -187,10 +187,11 @@ def synthesize(conditions, base_params, simulate, hidden: dict | None = None, re
         factor *= np.where(hit, 1 + lift, 1.0)
     if "day_offset" in disturbances:
         d = disturbances["day_offset"]
-        days = sorted({str((c.quantities or {}).get("day", "")) for c in conditions})
+        per_row = test_days(conditions)
+        days = sorted(set(per_row))
         off = dict(zip(days, rng.normal(0.0, d["sd"], len(days))))
-        for i, c in enumerate(conditions):
-            factor[i] *= 1 + off[str((c.quantities or {}).get("day", ""))]
+        for i, day in enumerate(per_row):
+            factor[i] *= 1 + off[day]
     rows = []
     for i, c in enumerate(conditions):
         p = apply_all(hidden, base_params(c), c.quantities or {}, reference, c.scenario)
