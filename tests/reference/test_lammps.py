@@ -203,9 +203,9 @@ def test_undamped_law_is_written_as_a_zero_velocity_damping(tmp_path):
 @pytest.mark.parametrize("model", [{}, dict(tangential="none"),
                                    dict(cohesion="jkr", jkr_convention="lammps")])
 def test_undamped_trajectories_agree_and_keep_the_energy(model):
-    """Without damping both engines follow the same trajectories, and the spheres' kinetic
-    energy after the bounces is the initial one (Hertz, and JKR whose necks have not torn;
-    to the contacts still loaded at the end and the Coulomb slip)."""
+    """Without damping both engines follow the same trajectories (Hertz with and without
+    friction, and JKR); without friction (tangential none) the spheres' kinetic energy after
+    the bounces is also the initial one (with it, the Coulomb slip takes some)."""
     from soilcal.reference.deck import run_phases
     from soilcal.reference.few import differences
 
@@ -221,7 +221,6 @@ def test_undamped_trajectories_agree_and_keep_the_energy(model):
     assert d["dw"] <= 1e-9 * max(d["wmax"], 1.0)
     if model.get("tangential") == "none":
         assert sim.kinetic_energy() + sim.rotational_energy() == pytest.approx(e0, rel=1e-6)
-
 
 
 def _drum_pair():
