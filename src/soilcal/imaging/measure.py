@@ -405,7 +405,9 @@ def _pile_on_lines(path, rgb, threshold, keep_stages, channel, tried: Tried, pla
         lines = plate_lines(lum, paired=True)
         cedges = colour_edges(rgb)
         tried.edges = cedges
-        plate_edges = feature.canny(lum, sigma=1.5) | cedges
+        # the photo's edges, each widened by a row: a plate line that runs on beside the heap
+        # has one within 1 px (_plate_beside_heap, once per photo rather than per cue)
+        plate_edges = ndi.binary_dilation(feature.canny(lum, sigma=1.5) | cedges, np.ones((3, 1), bool))
         for ln in plate_lines(lum, edges=cedges, paired=True):
             if all(abs((ln[0] - o[0]) * w / 2 + ln[1] - o[1]) > 3 for o in lines):
                 lines.append(ln)
@@ -603,18 +605,17 @@ def _plate_beside_heap(path, edges, comp, slope, intercept):
     of the heap's own grain or clods (near-horizontal edges that a wide, textured heap lines up
     by chance) ends with it and cuts the heap above its foot, so the heap's lower part is lost
     and its flanks read at the line's tilt.  On either side, the share of the columns beside
-    the heap (more than 5 px from it) where ``edges`` has a pixel within 1 px of the line must
+    the heap (more than 5 px from it) where ``edges`` (widened by a row on either side) meet the line must
     be at least :data:`PLATE_BESIDE_MIN`; a side with fewer than 10 such columns is not judged."""
     h, w = edges.shape
     cols_heap = np.nonzero(comp.any(axis=0))[0]
     cols = np.arange(w)
-    near = ndi.binary_dilation(edges, np.ones((3, 1), bool))
     rows = np.round(slope * cols + intercept).astype(int)
     for side, beside in (("left", cols < cols_heap.min() - 5), ("right", cols > cols_heap.max() + 5)):
         if beside.sum() < 10:
             continue
         ok = beside & (rows >= 0) & (rows < h)
-        share = float(near[rows[ok], cols[ok]].sum()) / float(beside.sum())
+        share = float(edges[rows[ok], cols[ok]].sum()) / float(beside.sum())
         if share < PLATE_BESIDE_MIN:
             raise InputError(path, "plate line", "a heap standing on a plate edge that runs on beside it",
                              f"a line through the heap, an edge along {share:.0%} of the columns {side} of it")
