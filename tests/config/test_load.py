@@ -112,6 +112,33 @@ def test_unknown_parameter_reference(workspace):
         _load(workspace)
 
 
+def _second_restitution(d):
+    """A second parameter id for the soil-soil restitution (same pair and kind as X1's)."""
+    d["parameters"]["restitution_b"] = {"name": "Restitution again", "unit": "-", "pair": "soil-soil",
+                                        "kind": "restitution"}
+
+
+@pytest.mark.parametrize("edit, field, got, says", [
+    # two factors on one parameter: the runs would set it twice, the first factor's levels lost
+    (lambda d: d["stages"][0]["factors"]["X2"].update(parameter="soil_soil_restitution"),
+     "stages[0].factors.X2.parameter", "soil_soil_restitution", "factor X1 varies 'soil_soil_restitution'"),
+    # a factor and a fixed value of one parameter: one of the two would be ignored
+    (lambda d: d["stages"][1]["fixed"].update(soil_soil_rolling_friction=0.1),
+     "stages[1].fixed.soil_soil_rolling_friction", "soil_soil_rolling_friction", "factor A varies"),
+    # two ids of one DEM parameter count as one
+    (lambda d: (_second_restitution(d), d["stages"][0].setdefault("fixed", {}).update(restitution_b=0.5)),
+     "stages[0].fixed.restitution_b", "restitution_b", "(DEM parameter soil_soil_restitution)"),
+    # a dummy column bearing a factor's symbol
+    (lambda d: d["stages"][0].update(dummies=["X8", "X9", "X10", "X1"]), "stages[0].dummies", "X1", "by no factor"),
+])
+def test_a_stage_sets_each_parameter_once(workspace, edit, field, got, says):
+    p = _edit(workspace, edit)
+    with pytest.raises(InputError) as e:
+        _load(workspace)
+    assert (e.value.path, e.value.field, e.value.got) == (str(p), field, got)
+    assert says in e.value.expected
+
+
 @pytest.mark.parametrize("runs", [10, 8])
 def test_plackett_burman_runs_not_a_design_size_is_refused_at_load(workspace, runs):
     """runs of a Plackett-Burman stage: a multiple of 4 above its factors and dummies (the

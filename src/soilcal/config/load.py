@@ -266,6 +266,41 @@ def _check_levels(path: Path, where: str, d: dict) -> None:
         raise InputError(path, f"{where}.centre", f"a number between low ({lo}) and high ({hi})", c)
 
 
+def _check_stage_sets_each_parameter_once(path: Path, where: str, st: dict, params: dict) -> None:
+    """A stage varies or fixes each parameter once: two factors on one parameter, or a factor
+    and a fixed value of it, would leave one of the two without any effect on the runs (the
+    last one set wins), and a dummy column must not bear a factor's symbol.  Two parameter
+    ids with the same ``pair`` and ``kind`` are the same DEM parameter and count as one."""
+
+    def key(pid):
+        p = params.get(pid) or {}
+        return (p["pair"], p["kind"]) if "pair" in p and "kind" in p else pid
+
+    def named(pid):
+        k = key(pid)
+        return repr(pid) if k == pid else f"{pid!r} (DEM parameter {k[0].replace('-', '_')}_{k[1]})"
+
+    setters: dict = {}
+    for sym, f in st["factors"].items():
+        k = key(f["parameter"])
+        if k in setters:
+            raise InputError(path, f"{where}.factors.{sym}.parameter",
+                             f"a parameter no other factor of the stage varies ({setters[k]})", f["parameter"])
+        setters[k] = f"factor {sym} varies {named(f['parameter'])}"
+    for p in st.get("fixed", {}):
+        k = key(p)
+        if k in setters:
+            raise InputError(path, f"{where}.fixed.{p}",
+                             f"a parameter the stage does not vary ({setters[k]}; give it as a factor "
+                             "or as a fixed value, not both)", p)
+        setters[k] = f"fixed.{p} sets {named(p)}"
+    dummies = list(st.get("dummies") or [])
+    for name in dummies:
+        if name in st["factors"] or dummies.count(name) > 1:
+            raise InputError(path, f"{where}.dummies",
+                             "dummy column names used once and by no factor (" + ", ".join(st["factors"]) + ")", name)
+
+
 def _semantic_checks(path: Path, d: dict, resources_root: Path) -> tuple[dict | None, tuple]:
     """The checks a schema cannot state; returns the soil's photo manifest (None without one)
     and the conditions of its measured tables (empty without any)."""
@@ -309,6 +344,7 @@ def _semantic_checks(path: Path, d: dict, resources_root: Path) -> tuple[dict | 
         for p in st.get("fixed", {}):
             if p not in params:
                 raise InputError(path, f"{where}.fixed.{p}", "an id listed under parameters", p)
+        _check_stage_sets_each_parameter_once(path, where, st, params)
         for key in ("from_stage",):
             if key in st and st[key] not in seen:
                 raise InputError(path, f"{where}.{key}", "the id of an earlier stage", st[key])
