@@ -226,3 +226,34 @@ def test_a_run_count_no_plackett_burman_design_has_is_refused_at_load(tmp_path, 
     cols = 6 + len(dummies)
     assert (e.value.path, e.value.field, e.value.got) == (str(p), "stages[0].runs", runs)
     assert f"a multiple of 4 above the {cols} factors and dummies" in e.value.expected
+
+
+# --------------------------------------------------------------------------- a path's target
+
+
+def _path_between(d):
+    """A steepest-ascent stage between the screening and the Box-Behnken design, derived from
+    the screening (the DEM lays it out towards the target)."""
+    path = {"id": "climb", "kind": "steepest_ascent", "from_stage": "screen",
+            "factors": {"A": {"parameter": "mu_ss"}, "B": {"parameter": "mur_ss"}, "C": {"parameter": "gamma"}},
+            "fixed": {"e_ss": 0.45, "e_st": 0.45, "mu_st": 0.6},
+            "responses": [{"id": "repose", "name": "Repose angle", "unit": "deg"}]}
+    d["stages"].insert(1, path)
+
+
+@pytest.mark.parametrize("target, loads", [
+    ({"value": 36.0, "unit": "deg"}, True),
+    ({"value": None, "unit": "deg", "note": "not measured yet"}, False),   # listed, but nothing to aim at
+    ({"unit": "deg"}, False),
+], ids=["value", "value-null", "no-value"])
+def test_a_path_whose_target_has_no_value_is_refused_at_load(tmp_path, target, loads):
+    """The path's direction needs a target value (or a photo group to measure it on); without
+    one the screening's DEM runs would all be spent before the path job stopped."""
+    p = _write(tmp_path, lambda d: (_path_between(d), d["targets"].update(repose=target)))
+    if loads:
+        _load(p)
+        return
+    with pytest.raises(InputError) as e:
+        _load(p)
+    assert e.value.path == str(p) and e.value.field == "stages.climb.responses" and e.value.got == ["repose"]
+    assert "a target with a value or a photo group" in e.value.expected

@@ -174,8 +174,9 @@ def check_block(soil_path, data: dict) -> None:
         if "from" in deps:
             if st["kind"] == "steepest_ascent" and not _has_target(data, [r["id"] for r in st["responses"]]):
                 raise InputError(soil_path, f"stages.{sid}.responses",
-                                 "a target for at least one response (a target id equal to the response id, or an "
-                                 "optimisation case aiming at it) to lay the steepest-ascent path towards",
+                                 "a target with a value or a photo group (image) for at least one response (a target id "
+                                 "equal to the response id, or an optimisation case aiming at it) to lay the "
+                                 "steepest-ascent path towards",
                                  [r["id"] for r in st["responses"]])
             up = next(s for s in data["stages"] if s["id"] == deps["from"])
             if st["kind"] == "steepest_ascent" and up["kind"] == "plackett_burman" and min_factors > len(up["factors"]):
@@ -224,13 +225,24 @@ def _check_screening(soil_path, sim: dict) -> int:
 
 
 def _has_target(data: dict, rids) -> bool:
+    """Whether a path over responses ``rids`` has a value to aim at once the photos are measured
+    (:func:`soilcal.chain.derive.response_targets`): a response's own target, or a target an
+    optimisation case aims it at, with a ``value`` or a photo group (``image``), or a case's
+    own goal ``value``.  A target listed without either gives the path no direction."""
     targets = data.get("targets") or {}
-    if any(r in targets for r in rids):
+
+    def valued(tid):
+        t = targets.get(tid) or {}
+        return t.get("value") is not None or bool(t.get("image"))
+
+    if any(valued(r) for r in rids):
         return True
     for st in data["stages"]:
         for case in (st.get("optimise") or {}).get("cases", []):
-            if any(r in case["goals"] and case["goals"][r].get("goal") == "target" for r in rids):
-                return True
+            for r in rids:
+                g = case["goals"].get(r) or {}
+                if g.get("goal") == "target" and (g.get("value") is not None or valued(g.get("target"))):
+                    return True
     return False
 
 
