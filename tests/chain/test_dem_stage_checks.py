@@ -257,3 +257,37 @@ def test_a_path_whose_target_has_no_value_is_refused_at_load(tmp_path, target, l
         _load(p)
     assert e.value.path == str(p) and e.value.field == "stages.climb.responses" and e.value.got == ["repose"]
     assert "a target with a value or a photo group" in e.value.expected
+
+
+# --------------------------------------------------------------------------- design: adaptive on a recipe soil
+
+
+def _recipe_chain(d):
+    """screen -> climb -> rsm, the path and the Box-Behnken levels left to the recipe."""
+    _path_between(d)
+    rsm = _stage(d, "rsm")
+    rsm["from_stage"] = "climb"
+    rsm["factors"] = {s: {"parameter": f["parameter"]} for s, f in rsm["factors"].items()}
+
+
+def test_design_adaptive_on_a_soil_whose_later_stages_have_no_levels_takes_the_screening_ranges(tmp_path):
+    """With design: adaptive the screening and the path are not run, and the optimised stage's
+    factors range over the screening's levels (ranges: screening): the levels the recipe would
+    derive are not asked for."""
+    from soilcal.chain.adaptive import stage_for
+
+    p = _write(tmp_path, lambda d: (_recipe_chain(d), d["simulation"].update(design="adaptive")))
+    soil = _load(p)
+    st = stage_for(soil.data, "rsm")
+    got = {s: (f["parameter"], f["low"], f["high"]) for s, f in st["factors"].items()}
+    # the screening stage's own levels of these parameters (SOIL above)
+    assert got == {"A": ("mu_ss", 0.2, 0.9), "B": ("mur_ss", 0.02, 0.25), "C": ("gamma", 0.0, 0.8)}
+
+
+def test_design_adaptive_with_the_stage_ranges_needs_the_stage_levels(tmp_path):
+    p = _write(tmp_path, lambda d: (_recipe_chain(d), d["simulation"].update(design="adaptive",
+                                                                              adaptive={"ranges": "stage"})))
+    with pytest.raises(InputError) as e:
+        _load(p)
+    assert e.value.path == str(p) and e.value.field == "stages.rsm.factors.A"
+    assert e.value.expected.startswith("low and high levels to simulate the stage (or simulation.adaptive.ranges")

@@ -128,10 +128,13 @@ def _screening_ranges(st: dict, screening: dict) -> list[str]:
     moved = []
     for sym, f in st["factors"].items():
         sf = by_param.get(f.get("parameter"))
-        if sf is None or "low" not in f or "high" not in f:
+        if sf is None or sf.get("low") is None or sf.get("high") is None:
             continue
         lo, hi = float(sf["low"]), float(sf["high"])
-        if (lo, hi) != (float(f["low"]), float(f["high"])):
+        if f.get("low") is None or f.get("high") is None:
+            # a stage whose levels the recipe derives (no levels of its own): the screening's
+            moved.append(f"{sym} (no levels -> {lo:g}-{hi:g})")
+        elif (lo, hi) != (float(f["low"]), float(f["high"])):
             moved.append(f"{sym} ({f['low']:g}-{f['high']:g} -> {lo:g}-{hi:g})")
         f["low"], f["high"] = lo, hi
         if "centre" in f:

@@ -81,6 +81,18 @@ def design_mode(soil_data: dict) -> str:
     return sim_block(soil_data).get("design", "recipe")
 
 
+def simulated_stage_ids(soil_data: dict) -> list[str]:
+    """Stage ids whose runs the DEM source makes, the ones the start-up checks cover:
+    :func:`dem_stage_ids`, or with ``design: adaptive`` the stages the adaptive design runs
+    (:func:`soilcal.chain.adaptive.adaptive_stage_ids`; the recipe's screening and path are
+    then not run, and need no levels or parameters of their own)."""
+    if design_mode(soil_data) == "adaptive":
+        from soilcal.chain.adaptive import adaptive_stage_ids
+
+        return adaptive_stage_ids(soil_data)
+    return dem_stage_ids(soil_data)
+
+
 def _stage(soil_data: dict, stage_id: str) -> dict:
     for s in soil_data["stages"]:
         if s["id"] == stage_id:
@@ -390,7 +402,7 @@ def check_dem_stages(soil_path, soil_data: dict) -> None:
                 raise
             raise InputError(soil_path, exc.field, exc.expected, exc.got, note=f"used by {where}") from None
 
-    for sid in dem_stage_ids(soil_data):
+    for sid in simulated_stage_ids(soil_data):
         st = _stage(soil_data, sid)
         deps = dependencies(soil_data, sid)
         if "from" in deps:
@@ -417,5 +429,5 @@ def check_dem_stages(soil_path, soil_data: dict) -> None:
             in_range(name, v, scale, where)
 
 
-__all__ = ["bbd_from_path", "check_dem_stages", "dem_stage", "dem_stage_ids", "dependencies", "design_mode",
+__all__ = ["bbd_from_path", "check_dem_stages", "dem_stage", "dem_stage_ids", "simulated_stage_ids", "dependencies", "design_mode",
            "path_from_screening", "published_stage", "response_targets"]

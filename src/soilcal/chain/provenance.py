@@ -67,12 +67,12 @@ def given(data: dict, stage_id: str, _seen=None, soil_path=None) -> set[str]:
 def check_parameters(soil_path, data: dict) -> None:
     """Every soil parameter of every stage the DEM source simulates is set by the soil
     (module docstring): otherwise one error naming the stage and the missing parameters."""
-    from soilcal.chain.derive import dem_stage_ids
+    from soilcal.chain.derive import simulated_stage_ids
 
     if not data.get("simulation"):
         return
     need = soil_parameters()
-    for sid in dem_stage_ids(data):
+    for sid in simulated_stage_ids(data):
         missing = [n for n in need if n not in given(data, sid, soil_path=soil_path)]
         if missing:
             raise InputError(soil_path, "simulation.params",
