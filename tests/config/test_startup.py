@@ -262,3 +262,16 @@ def test_a_table_value_yaml_reads_as_a_boolean_key_says_to_quote_it(tmp_path, wo
     assert f"is read by YAML as the boolean {boolean}" in e.expected
     p.write_text(text.replace(old, f"directrix: {{setup: {{\"{word}\": plate-arc,"))
     load_soil(p, tmp_path / "resources")
+
+
+def test_a_photo_folder_copied_from_another_soil_is_refused(tmp_path):
+    """A second soil whose photo folder is a copy of another soil's: the manifest still names
+    that soil, and its photos would be taken for this soil's measurement."""
+    p = copy_soil(tmp_path)
+    manifest = tmp_path / "resources/images/cinnamon-soil/manifest.yaml"
+    other = yaml.safe_load(manifest.read_text())
+    other["soil"] = "black-soil"
+    manifest.write_text(yaml.safe_dump(other, sort_keys=False))
+    e = refused(p, tmp_path)
+    assert (e.path, e.field, e.got) == (str(manifest), "soil", "black-soil")
+    assert e.expected.startswith("'cinnamon-soil', the soil whose photo folder this is")

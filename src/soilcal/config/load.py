@@ -465,6 +465,10 @@ def _check_images(path: Path, d: dict, resources_root: Path) -> dict | None:
 
     manifest = manifest_path(resources_root, d["name"])
     m = read_manifest(manifest) if manifest.is_file() else None
+    if m is not None and m.get("soil") is not None and m["soil"] != d["name"]:
+        # a folder copied (or linked) from another soil: its photos would calibrate this one
+        raise InputError(manifest, "soil", f"{d['name']!r}, the soil whose photo folder this is (a manifest "
+                         "copied from another soil's folder names that soil; the field may be left out)", m["soil"])
     targets = d.get("targets", {})
     for tid, t in targets.items():
         if "image_measure" in t and not t.get("image"):
