@@ -37,6 +37,21 @@ def test_a_missing_soil_parameter_is_named_at_start_up(tmp_path):
         load_soil(p, ROOT / "resources")
 
 
+def test_a_missing_soil_property_names_the_property_that_would_give_it(tmp_path):
+    """The soil's density, Poisson ratio and shear modulus may come from its printed
+    properties: the error names them, so that a soil listing only its bulk density learns
+    where its particle density goes."""
+    def no_density(d):
+        d["simulation"].pop("params")
+        d["properties"].pop("poisson_ratio")
+
+    p = _cinnamon(tmp_path, no_density)
+    with pytest.raises(InputError) as e:
+        load_soil(p, ROOT / "resources")
+    assert e.value.expected.endswith("missing: soil_density (or properties.particle_density with its unit), "
+                                     "soil_poisson (or properties.poisson_ratio with its unit)")
+
+
 def test_a_derived_stage_counts_the_factors_of_the_stage_it_comes_from(tmp_path):
     # the cinnamon path and Box-Behnken stages vary fewer parameters than the screening; the
     # rest are held at the screening's intermediate levels, so they are set

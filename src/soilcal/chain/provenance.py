@@ -75,7 +75,9 @@ def check_parameters(soil_path, data: dict) -> None:
     for sid in simulated_stage_ids(data):
         missing = [n for n in need if n not in given(data, sid, soil_path=soil_path)]
         if missing:
+            props = {name: prop for prop, name in _PROPERTIES.items()}
+            named = [n + (f" (or properties.{props[n]} with its unit)" if n in props else "") for n in missing]
             raise InputError(soil_path, "simulation.params",
                              f"a value of every soil parameter the runs of stage {sid!r} use (SI units, in "
-                             f"simulation.params or the stage's fixed values); missing: {', '.join(missing)}",
+                             f"simulation.params or the stage's fixed values); missing: {', '.join(named)}",
                              "none")
