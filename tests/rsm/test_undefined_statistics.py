@@ -153,3 +153,18 @@ def test_box_cox_interval_beyond_the_searched_range_is_named(lams, expected):
     bc = rsm.boxcox(fit, lambdas=lams)
     assert np.isinf(bc["ci_low"]) and np.isinf(bc["ci_high"])
     assert expected in bc["ci_note"]
+
+
+def test_centre_points_printed_alike_leave_the_lack_of_fit_untested_and_say_why():
+    """Three centre points with one printed response (a table rounded to 0.1): the pure error
+    is 0, so the lack of fit's F (its mean square over the pure error's) is undefined; the sums
+    of squares still partition the residual."""
+    t = _table(missing=())
+    centre = (t[list("ABC")] == 0).all(axis=1)
+    t.loc[centre, "angle"] = 30.0
+    tab = _fit(t).anova().set_index("source")
+    assert tab.loc["Pure Error", "sum_sq"] == 0.0 and tab.loc["Pure Error", "df"] == 2
+    assert tab.loc["Lack of Fit", "sum_sq"] == pytest.approx(tab.loc["Residual", "sum_sq"])
+    assert np.isnan(tab.loc["Lack of Fit", "F"]) and np.isnan(tab.loc["Lack of Fit", "p"])
+    fit = regression_frames(STAGE, t)["fit"]
+    assert fit["note"].str.contains("identical responses: no pure error").all()

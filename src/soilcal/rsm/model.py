@@ -323,8 +323,13 @@ class RSMFit:
             sslof, dflof = self.sse - sspe, dfr - dfpe
             if dflof > 0:
                 mslof, mspe = sslof / dflof, sspe / dfpe
-                flof = mslof / mspe
-                rows.append(("Lack of Fit", sslof, dflof, mslof, flof, float(stats.f.sf(flof, dflof, dfpe))))
+                if mspe > 0:
+                    flof = mslof / mspe
+                    rows.append(("Lack of Fit", sslof, dflof, mslof, flof, float(stats.f.sf(flof, dflof, dfpe))))
+                else:
+                    # replicates that agree exactly (centre points printed alike): no pure error to
+                    # test the lack of fit against, so no F and no p
+                    rows.append(("Lack of Fit", sslof, dflof, mslof, np.nan, np.nan))
             rows.append(("Pure Error", sspe, dfpe, sspe / dfpe, np.nan, np.nan))
         rows.append(("Cor Total", sst, self.n - 1, np.nan, np.nan, np.nan))
         return pd.DataFrame(rows, columns=["source", "sum_sq", "df", "mean_sq", "F", "p"])
@@ -352,13 +357,18 @@ class RSMFit:
     def statistics_note(self, labels: Sequence | None = None) -> str:
         """Why :meth:`fit_statistics` leaves PRESS and Pred R^2 undefined (empty when it does
         not); ``labels`` name the fit's points in order (run numbers), default 1, 2, ..."""
+        notes = []
         idx = self.leverage_one
-        if not idx.size:
-            return ""
-        names = [str(labels[i]) if labels is not None else str(i + 1) for i in idx]
-        which = (f"point {names[0]} has" if len(names) == 1 else f"points {', '.join(names)} have")
-        return (f"{which} leverage 1 (a model term rests on {'it' if len(names) == 1 else 'them'} alone, so the "
-                "model passes through it whatever the response): PRESS and pred R2 undefined")
+        if idx.size:
+            names = [str(labels[i]) if labels is not None else str(i + 1) for i in idx]
+            which = (f"point {names[0]} has" if len(names) == 1 else f"points {', '.join(names)} have")
+            notes.append(f"{which} leverage 1 (a model term rests on {'it' if len(names) == 1 else 'them'} alone, "
+                         "so the model passes through it whatever the response): PRESS and pred R2 undefined")
+        sspe, dfpe = self._pure_error()
+        if dfpe > 0 and sspe == 0.0 and self.df_resid - dfpe > 0:
+            notes.append("the replicated points (centre points) have identical responses: no pure error, so the "
+                         "lack of fit has no F and no p")
+        return "; ".join(notes)
 
     def fit_statistics(self) -> dict[str, float]:
         """Std. Dev., Mean, C.V.%, R2, adj R2, pred R2, PRESS, Adeq Precision (PRESS and pred R2
