@@ -275,3 +275,17 @@ def test_a_photo_folder_copied_from_another_soil_is_refused(tmp_path):
     e = refused(p, tmp_path)
     assert (e.path, e.field, e.got) == (str(manifest), "soil", "black-soil")
     assert e.expected.startswith("'cinnamon-soil', the soil whose photo folder this is")
+
+
+@pytest.mark.parametrize("source", ["dem", "both"])
+def test_a_dem_soil_without_a_simulation_block_is_refused_by_the_check_of_its_file(tmp_path, source):
+    """`soilcal config check FILE` gives the workflow's start-up check: a soil whose own source
+    runs the DEM needs the block that says how each response is simulated."""
+    def no_block(d):
+        d["source"] = source
+        d.pop("simulation")
+
+    p = edit(copy_soil(tmp_path), no_block)
+    e = refused(p, tmp_path)
+    assert (e.path, e.field, e.got) == (str(p), "simulation", None)
+    assert e.expected.startswith("a simulation block naming the scenario of each response")

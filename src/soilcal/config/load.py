@@ -380,6 +380,11 @@ def _semantic_checks(path: Path, d: dict, resources_root: Path) -> tuple[dict | 
         seen[sid] = st
     manifest = _check_images(path, d, resources_root)
     _check_targets(path, d, resources_root)
+    if d.get("source") in ("dem", "both") and not d.get("simulation"):
+        # what the workflow's start-up refuses (soilcal.chain.plan.soil_sources), also for a check of the file alone
+        raise InputError(path, "simulation",
+                         f"a simulation block naming the scenario of each response (source {d['source']} runs the "
+                         "DEM; or source: published)", None)
     if d.get("simulation"):
         from soilcal.dem.scenarios.design import check_block
 
