@@ -164,6 +164,16 @@ def test_unparsable_yaml(workspace):
         _load(workspace)
 
 
+def test_workflow_config_soil_listed_twice(workspace):
+    """A soil listed twice would be calibrated once under the name of both entries: the second
+    entry is named, before its file is read."""
+    cfg = {"soils": ["cinnamon-soil", "other-soil", "cinnamon-soil"], "soil_dir": str(workspace / "config/soils")}
+    with pytest.raises(InputError) as e:
+        load_workflow_config(cfg, "config/config.yaml")
+    assert (e.value.path, e.value.field, e.value.got) == ("config/config.yaml", "soils[2]", "cinnamon-soil")
+    assert e.value.expected == "each soil listed once (soils[0] lists it)"
+
+
 def test_workflow_config_unknown_soil(workspace):
     cfg = {"soils": ["no-such-soil"], "soil_dir": str(workspace / "config/soils")}
     with pytest.raises(InputError, match=r"^config/config\.yaml: soils\[0\]: expected a soil file .*no-such-soil\.yaml"):

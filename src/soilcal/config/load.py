@@ -653,6 +653,10 @@ def load_workflow_config(cfg: dict, origin: str | Path = "config/config.yaml",
         raise
     soil_dir = Path(cfg.get("soil_dir", "config/soils"))
     res = Path(cfg.get("resources", "resources"))
+    for i, name in enumerate(cfg["soils"]):
+        if name in cfg["soils"][:i]:
+            raise InputError(where("soils"), f"soils[{i}]",
+                             f"each soil listed once (soils[{cfg['soils'].index(name)}] lists it)", name)
     out = {}
     for i, name in enumerate(cfg["soils"]):
         p = soil_dir / f"{name}.yaml"
