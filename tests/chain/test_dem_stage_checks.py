@@ -291,3 +291,29 @@ def test_design_adaptive_with_the_stage_ranges_needs_the_stage_levels(tmp_path):
         _load(p)
     assert e.value.path == str(p) and e.value.field == "stages.rsm.factors.A"
     assert e.value.expected.startswith("low and high levels to simulate the stage (or simulation.adaptive.ranges")
+
+
+# --------------------------------------------------------------------------- units of a simulated response
+
+
+@pytest.mark.parametrize("unit, measure, loads", [
+    ("deg", "angle_deg", True),
+    ("rad", "angle_deg", False),      # the DEM gives degrees; a target of 0.63 rad would be aimed at as 0.63 deg
+    ("mm", "height_m", False),
+    ("m", "height_m", True),
+])
+def test_a_response_in_another_unit_than_its_measure_is_refused_at_load(tmp_path, unit, measure, loads):
+    def edit(d):
+        for st in d["stages"]:
+            st["responses"][0]["unit"] = unit
+        d["targets"]["repose"]["unit"] = unit
+        d["simulation"]["responses"]["repose"]["measure"] = measure
+
+    p = _write(tmp_path, edit)
+    if loads:
+        _load(p)
+        return
+    with pytest.raises(InputError) as e:
+        _load(p)
+    assert (e.value.path, e.value.field, e.value.got) == (str(p), "stages[0].responses[0].unit", unit)
+    assert e.value.expected.startswith(f"{measure.rsplit('_', 1)[1]}, the unit of simulation.responses.repose.measure")

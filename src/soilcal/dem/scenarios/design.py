@@ -146,12 +146,23 @@ def check_block(soil_path, data: dict) -> None:
     sim = data.get(BLOCK)
     if not sim:
         return
+    from soilcal.config.measurements import unit_of
+
     rids = response_ids(data)
     for rid in sim.get("responses") or {}:
         if rid not in rids:
             raise InputError(soil_path, f"{BLOCK}.responses.{rid}",
                              "a response id of a stage (" + ", ".join(rids) + ")", rid)
-        spec_from(soil_path, data, rid)
+        measure = spec_from(soil_path, data, rid).measure
+        # the DEM gives the measure in the unit its name ends in; the stage's response (and so
+        # its target) must be in that unit, or the calibration aims at a number in another one
+        want = unit_of(measure)
+        for i, st in enumerate(data["stages"]):
+            for j, r in enumerate(st["responses"]):
+                if r["id"] == rid and r["unit"] != want:
+                    raise InputError(soil_path, f"stages[{i}].responses[{j}].unit",
+                                     f"{want}, the unit of {BLOCK}.responses.{rid}.measure {measure!r} (from its "
+                                     "name), which the DEM runs give", r["unit"])
     for i, rid in enumerate((sim.get("verification") or {}).get("paper") or []):
         if rid not in (sim.get("responses") or {}):
             raise InputError(soil_path, f"{BLOCK}.verification.paper[{i}]",
