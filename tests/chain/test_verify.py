@@ -103,6 +103,13 @@ def test_diagnose_surface_scatter_when_the_confidence_interval_covers_the_target
     assert diagnose(33.0, 0.1, 4, 30.0, 31.0, (np.nan, np.nan)) == diagnose(33.0, 0.1, 4, 30.0, 31.0)
 
 
+def test_diagnose_seed_scatter_gives_the_two_standard_errors_it_compares_the_miss_with():
+    # four seeds of SD 4: one standard error 4/sqrt(4) = 2, two of them 4, and the miss 3 lies
+    # within those 4 (as refined.csv's note of the same case says)
+    note = diagnose(33.0, 4.0, 4, 30.0, 30.0)
+    assert note.startswith("seed scatter: the miss +3.00 is within two standard errors (4.00) of the mean of 4 seeds")
+
+
 def test_diagnose_model_limit_and_seed_scatter_together():
     # surface 1.0 off and the miss 3 within 2 * 4/sqrt(4) = 4: both reasons
     note = diagnose(33.0, 4.0, 4, 30.0, 31.0)

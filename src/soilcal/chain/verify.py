@@ -175,7 +175,7 @@ def diagnose(mean: float, sd: float, n: int, target: float, predicted: float | N
         band = TOLERANCE_PERCENT / 100 * abs(target)
         need = int(np.ceil((2 * sd / band) ** 2 - 1e-9))  # an exact square is not rounded up
         notes.append(f"seed scatter: the miss {mean - target:+.2f} is within two standard errors "
-                     f"({sem:.2f}) of the mean of {n} seeds; more seeds or larger heaps would tell "
+                     f"({2 * sem:.2f}) of the mean of {n} seeds; more seeds or larger heaps would tell "
                      f"(at this seed SD {sd:.2f}, {need} seeds would bring two standard errors within "
                      f"the {TOLERANCE_PERCENT:g} % band of +-{band:.2f})")
     elif not notes and scatter is None:
