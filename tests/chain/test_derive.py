@@ -316,6 +316,24 @@ def test_bbd_at_the_first_step_mirrors_and_shifts_inside_the_physical_range(soil
     assert (b["low"], b["centre"], b["high"]) == pytest.approx((0.0, 0.14, 0.28), abs=1e-12)
 
 
+def test_bbd_bounds_a_surface_energy_in_the_unit_its_levels_are_written_in(soils):
+    """The JKR surface energy's physical range is [0, 1000] J/m^2; a soil that writes it in
+    mJ/m^2 has levels up to 1e6.  A path at 800, 1200 and 1600 mJ/m^2 (0.8-1.6 J/m^2) centred
+    on 1200: the Box-Behnken levels are the path's, not shifted below 1000 mJ/m^2 as if it
+    were J/m^2."""
+    cin = copy.deepcopy(soils["cinnamon-soil"])
+    cin["parameters"]["jkr_surface_energy"]["unit"] = "mJ/m^2"
+    path = {"id": "steepest", "kind": "steepest_ascent",
+            "factors": {"A": {"parameter": "soil_soil_rolling_friction", "levels": [0.05, 0.08, 0.11]},
+                        "B": {"parameter": "jkr_surface_energy", "levels": [800.0, 1200.0, 1600.0]},
+                        "C": {"parameter": "soil_steel_static_friction", "levels": [0.3, 0.42, 0.54]}},
+            "fixed": {}, "path_targets": {"stacking_angle": {"value": CINNAMON_TARGET}}}
+    st = bbd_from_path(cin, "bbd", path, _path_responses([20.0, 27.7, 35.0]))
+    b = st["factors"]["B"]
+    assert st["derivation"]["chosen_step"] == 2
+    assert (b["low"], b["centre"], b["high"]) == pytest.approx((800.0, 1200.0, 1600.0), abs=1e-9)
+
+
 # --------------------------------------------------------------------------- dem_stage
 
 

@@ -167,6 +167,17 @@ def _g12(v) -> float:
     return float(f"{float(v):.12g}")
 
 
+def _bounds_in_config_units(soil_data: dict, pname: str, kind: str) -> tuple[float, float]:
+    """:data:`_BOUNDS` of a parameter kind (SI: a surface energy in J/m^2) in the unit its levels
+    are written in (``parameters.<pname>.unit``, e.g. mJ/m^2: up to 1e6 mJ/m^2)."""
+    from soilcal.dem.scenarios.base import _UNIT_SCALE
+
+    unit = (soil_data.get("parameters", {}).get(pname) or {}).get("unit", "-")
+    scale = _UNIT_SCALE.get(unit, 1.0)
+    lo, hi = _BOUNDS[kind]
+    return lo / scale, hi / scale
+
+
 def _param_kind(soil_data: dict, pname: str) -> str | None:
     return (soil_data.get("parameters", {}).get(pname) or {}).get("kind")
 
@@ -294,9 +305,10 @@ def bbd_from_path(soil_data: dict, stage_id: str, path_stage: dict, path_respons
               for r, t in table.attrs.get("trend", {}).items()}  # stage.json: no NaN
     bounds = {}
     for s in syms:
-        kind = _param_kind(soil_data, path_stage["factors"][s]["parameter"])
+        pname = path_stage["factors"][s]["parameter"]
+        kind = _param_kind(soil_data, pname)
         if kind in _BOUNDS:
-            bounds[s] = _BOUNDS[kind]
+            bounds[s] = _bounds_in_config_units(soil_data, pname, kind)
     levels = bbd_levels(path, step, syms, bounds)
     st = _dem_base(config_stage)
     st["factors"] = {s: {"parameter": path_stage["factors"][s]["parameter"],
