@@ -317,3 +317,32 @@ def test_a_response_in_another_unit_than_its_measure_is_refused_at_load(tmp_path
         _load(p)
     assert (e.value.path, e.value.field, e.value.got) == (str(p), "stages[0].responses[0].unit", unit)
     assert e.value.expected.startswith(f"{measure.rsplit('_', 1)[1]}, the unit of simulation.responses.repose.measure")
+
+
+# --------------------------------------------------------------------------- a Box-Behnken design needs three factors
+
+
+def test_a_box_behnken_stage_of_two_factors_is_refused_at_load(tmp_path):
+    """The Box-Behnken design exists for three factors and more: a stage of two would stop its
+    design job, with no file named."""
+    def two(d):
+        rsm = _stage(d, "rsm")
+        rsm["factors"].pop("C")
+        rsm["fixed"]["gamma"] = 0.3
+
+    p = _write(tmp_path, two)
+    with pytest.raises(InputError) as e:
+        _load(p)
+    assert (e.value.path, e.value.field, e.value.got) == (str(p), "stages[1].factors", "2 (A, B)")
+    assert e.value.expected.startswith("at least 3 factors for a Box-Behnken design")
+
+
+@pytest.mark.parametrize("screening", [{"min_factors": 2}, {"min_factors": 2, "max_factors": 5}])
+def test_a_path_before_a_box_behnken_design_takes_at_least_three_factors(tmp_path, screening):
+    """With min_factors 2 the path keeps two factors when only two are significant, and the
+    Box-Behnken design derived from it would stop after the screening's and the path's runs."""
+    p = _write(tmp_path, lambda d: (_recipe_chain(d), d["simulation"].update(screening=screening)))
+    with pytest.raises(InputError) as e:
+        _load(p)
+    assert (e.value.path, e.value.field, e.value.got) == (str(p), "simulation.screening.min_factors", 2)
+    assert "Box-Behnken stage 'rsm', which needs three" in e.value.expected

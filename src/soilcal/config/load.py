@@ -358,6 +358,10 @@ def _semantic_checks(path: Path, d: dict, resources_root: Path) -> tuple[dict | 
             if p not in params:
                 raise InputError(path, f"{where}.fixed.{p}", "an id listed under parameters", p)
         _check_stage_sets_each_parameter_once(path, where, st, params)
+        if st["kind"] == "box_behnken" and len(st["factors"]) < 3:
+            # the design exists for three factors and more (its design job would stop)
+            raise InputError(path, f"{where}.factors", "at least 3 factors for a Box-Behnken design "
+                             "(fix the others in fixed)", f"{len(st['factors'])} ({', '.join(st['factors'])})")
         for key in ("from_stage",):
             if key in st and st[key] not in seen:
                 raise InputError(path, f"{where}.{key}", "the id of an earlier stage", st[key])

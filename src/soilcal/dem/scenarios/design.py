@@ -190,6 +190,13 @@ def check_block(soil_path, data: dict) -> None:
                                  "steepest-ascent path towards",
                                  [r["id"] for r in st["responses"]])
             up = next(s for s in data["stages"] if s["id"] == deps["from"])
+            top = dependencies(data, up["id"]).get("from")
+            if st["kind"] == "box_behnken" and up["kind"] == "steepest_ascent" and top is not None and min_factors < 3:
+                # the path takes as few as min_factors from the screening (those found significant,
+                # when fewer are), and its factors are the Box-Behnken design's, which needs three
+                raise InputError(soil_path, f"{BLOCK}.screening.min_factors",
+                                 f"at least 3: the factors path {up['id']!r} takes from the screening are those of "
+                                 f"Box-Behnken stage {sid!r}, which needs three", min_factors)
             if st["kind"] == "steepest_ascent" and up["kind"] == "plackett_burman" and min_factors > len(up["factors"]):
                 given = "min_factors" in (sim.get("screening") or {})
                 raise InputError(soil_path, f"{BLOCK}.screening.min_factors",
