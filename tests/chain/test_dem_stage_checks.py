@@ -346,3 +346,21 @@ def test_a_path_before_a_box_behnken_design_takes_at_least_three_factors(tmp_pat
         _load(p)
     assert (e.value.path, e.value.field, e.value.got) == (str(p), "simulation.screening.min_factors", 2)
     assert "Box-Behnken stage 'rsm', which needs three" in e.value.expected
+
+
+# --------------------------------------------------------------------------- a simulated Box-Behnken centre
+
+
+@pytest.mark.parametrize("centre, refused", [(0.55, False), (0.559, False), (0.562, True), (0.4, True)])
+def test_a_simulated_box_behnken_centre_off_the_midpoint_is_refused(tmp_path, centre, refused):
+    """Factor A of the Box-Behnken stage runs 0.3-0.8: its runs' coded 0 is 0.55 whatever
+    centre says; a centre off it by more than 2 % of the range (0.01) would be dropped without a
+    word, a printed rounding within it is kept."""
+    p = _write(tmp_path, lambda d: _stage(d, "rsm")["factors"]["A"].update(centre=centre))
+    if not refused:
+        _load(p)
+        return
+    with pytest.raises(InputError) as e:
+        _load(p)
+    assert (e.value.path, e.value.field, e.value.got) == (str(p), "stages.rsm.factors.A.centre", centre)
+    assert e.value.expected.startswith("the midpoint of low and high (0.55)")

@@ -384,6 +384,19 @@ def dem_stage(soil_data: dict, stage_id: str, targets: dict, upstream: dict | No
     return st
 
 
+#: how far a simulated Box-Behnken factor's ``centre`` may lie from the midpoint of its low and
+#: high levels, as a fraction of the range (the black soil's printed 0.28 for 0.275 over
+#: 0.05-0.50: 1.1 %)
+BBD_CENTRE_RTOL = 0.02
+
+
+def _adaptive_screening(soil_data: dict, stage_id: str) -> bool:
+    """Whether the adaptive design replaces the stage's ranges by its screening's."""
+    from soilcal.chain import adaptive
+
+    return adaptive.ranges_setting(soil_data) == "screening" and adaptive.screening_of(soil_data, stage_id) is not None
+
+
 def check_dem_stages(soil_path, soil_data: dict) -> None:
     """Start-up check of the stages the DEM source runs (:func:`dem_stage_ids`), so that a
     config the chain cannot run fails before any DEM job, naming the soil file and field:
@@ -425,11 +438,21 @@ def check_dem_stages(soil_path, soil_data: dict) -> None:
                                  note=f"stage {up['id']!r}; the DEM source derives a stage from the DEM results "
                                       "of the one it follows: give the stage in between, or run the config's "
                                       "levels with simulation.design: printed")
+        screened = design_mode(soil_data) == "adaptive" and _adaptive_screening(soil_data, sid)
         for sym, f in st["factors"].items():
             where = f"stages.{sid}.factors.{sym}"
             name, scale = mapped(f["parameter"], f"{where}.parameter")
             if "from" in deps:
                 continue  # levels derived from the earlier stage's DEM results
+            if st["kind"] == "box_behnken" and not screened \
+                    and None not in (f.get("low"), f.get("centre"), f.get("high")):
+                mid = (f["low"] + f["high"]) / 2
+                if abs(f["centre"] - mid) > BBD_CENTRE_RTOL * (f["high"] - f["low"]):
+                    # the runs' coded 0 lies midway: another centre would be dropped without a word
+                    raise InputError(soil_path, f"{where}.centre",
+                                     f"the midpoint of low and high ({mid:g}), where the simulated Box-Behnken "
+                                     f"design's coded level 0 lies (within {BBD_CENTRE_RTOL:.0%} of the range, a "
+                                     "printed rounding; or leave centre out)", f["centre"])
             for key in ("low", "centre", "high"):
                 if f.get(key) is not None:
                     in_range(name, f[key], scale, f"{where}.{key}")

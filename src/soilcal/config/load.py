@@ -258,11 +258,6 @@ def read_table(path: Path) -> pd.DataFrame:
     return df.iloc[:filled[-1] + 1 if filled.size else 0]
 
 
-#: how far a Box-Behnken factor's printed ``centre`` may lie from the midpoint of its low and
-#: high levels, as a fraction of the range (the black soil's 0.28 for 0.275 over 0.05-0.50: 1.1 %)
-BBD_CENTRE_RTOL = 0.02
-
-
 def _check_levels(path: Path, where: str, d: dict) -> None:
     lo, hi, c = d.get("low"), d.get("high"), d.get("centre")
     if lo is not None and hi is not None and not lo < hi:
@@ -327,14 +322,6 @@ def _semantic_checks(path: Path, d: dict, resources_root: Path) -> tuple[dict | 
             if f["parameter"] not in params:
                 raise InputError(path, f"{fw}.parameter", "an id listed under parameters", f["parameter"])
             _check_levels(path, fw, f)
-            if st["kind"] == "box_behnken" and None not in (f.get("low"), f.get("centre"), f.get("high")):
-                mid = (f["low"] + f["high"]) / 2
-                if abs(f["centre"] - mid) > BBD_CENTRE_RTOL * (f["high"] - f["low"]):
-                    # the design's coded 0 lies midway: another centre would be dropped without a word
-                    raise InputError(path, f"{fw}.centre",
-                                     f"the midpoint of low and high ({mid:g}), where a Box-Behnken design's "
-                                     f"coded level 0 lies (within {BBD_CENTRE_RTOL:.0%} of the range, a printed "
-                                     "rounding; or leave centre out)", f["centre"])
             if st.get("table") is None:
                 continue  # a stage whose table the paper does not print: levels may be missing too
             if st["kind"] in ("plackett_burman", "box_behnken") and ("low" not in f or "high" not in f):
