@@ -71,6 +71,16 @@ def test_low_not_below_high(workspace):
         _load(workspace)
 
 
+def test_a_factor_with_low_equal_to_high_points_to_the_fixed_values(workspace):
+    """low == high is a factor held at one value: the error says where such a value goes."""
+    _edit(workspace, lambda d: d["stages"][2]["factors"]["A"].update({"low": 0.14}))
+    with pytest.raises(InputError) as e:
+        _load(workspace)
+    assert e.value.field == "stages[2].factors.A.low" and e.value.got == 0.14
+    assert e.value.expected == ("a number below high (0.14) (a parameter held at one value goes under the "
+                                "stage's fixed values)")
+
+
 def test_missing_required_field(workspace):
     _edit(workspace, lambda d: d.pop("parameters"))
     with pytest.raises(InputError, match=r"parameters: expected a required field"):

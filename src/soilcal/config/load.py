@@ -261,7 +261,9 @@ def read_table(path: Path) -> pd.DataFrame:
 def _check_levels(path: Path, where: str, d: dict) -> None:
     lo, hi, c = d.get("low"), d.get("high"), d.get("centre")
     if lo is not None and hi is not None and not lo < hi:
-        raise InputError(path, f"{where}.low", f"a number below high ({hi})", lo)
+        held = (lo == hi and where.startswith("stages") and ".factors." in where)
+        raise InputError(path, f"{where}.low", f"a number below high ({hi})"
+                         + (" (a parameter held at one value goes under the stage's fixed values)" if held else ""), lo)
     if c is not None and lo is not None and hi is not None and not lo <= c <= hi:
         raise InputError(path, f"{where}.centre", f"a number between low ({lo}) and high ({hi})", c)
 
