@@ -364,3 +364,22 @@ def test_a_simulated_box_behnken_centre_off_the_midpoint_is_refused(tmp_path, ce
         _load(p)
     assert (e.value.path, e.value.field, e.value.got) == (str(p), "stages.rsm.factors.A.centre", centre)
     assert e.value.expected.startswith("the midpoint of low and high (0.55)")
+
+
+def test_a_path_on_its_own_levels_with_uneven_steps_is_refused_at_load(tmp_path):
+    """A steepest-ascent stage the DEM runs on the soil's own levels (no printed table): a factor
+    of two steps beside factors of three would stop its design job (a table of three rows
+    cannot take two values)."""
+    def uneven(d):
+        _path_between(d)
+        d["simulation"]["design"] = "printed"
+        climb = _stage(d, "climb")
+        climb["factors"] = {"A": {"parameter": "mu_ss", "levels": [0.3, 0.4, 0.5]},
+                            "B": {"parameter": "mur_ss", "levels": [0.05, 0.1]},
+                            "C": {"parameter": "gamma", "levels": [0.1, 0.2, 0.3]}}
+
+    p = _write(tmp_path, uneven)
+    with pytest.raises(InputError) as e:
+        _load(p)
+    assert (e.value.path, e.value.field, e.value.got) == (str(p), "stages[1].factors", [2, 3])
+    assert e.value.expected == "the same number of levels for every factor"
