@@ -367,3 +367,48 @@ def test_one_reference_rule_for_the_loop_and_synthesize():
     assert mean_reference(frame, {"moisture_content": 15.0}) == {"tool_speed": 2.0, "moisture_content": 15.0}
     # a table still to be synthesized (no measured value yet): every row
     assert mean_reference(frame.assign(measured=np.nan), {}) == {"tool_speed": 3.75}
+
+
+# --------------------------------------------------------------------------- a reference far from every row
+
+@pytest.mark.parametrize("block, field, words", [
+    # the speeds of the soil's rows span 0.1 to 0.4 m/s (bin_forces 0.4-1.2 km/h = 0.111-0.333 m/s,
+    # small4 0.1-0.4 m/s): 1.2 is the table's own km/h (0.333 m/s); widened by the 0.3 m/s width
+    # of the range on each side, up to 0.7 m/s is taken
+    ("{tool_speed: 1.2}", "loop.reference.tool_speed", ["-0.2 to 0.7 m/s", "0.1 to 0.4 m/s", "0.3333 m/s read as km/h"]),
+    # the depths span 0.02 to 0.04 m (bin_forces 2-4 cm, small4 0.03 m): 3 is the cm of the table
+    ("{working_depth: 3}", "loop.reference.working_depth", ["0 to 0.06 m", "0.03 m read as cm"]),
+])
+def test_a_reference_far_from_every_measured_row_is_refused_naming_the_unit_it_fits(tmp_path, block, field, words):
+    from soilcal.config.load import load_soil
+    from soilcal.errors import InputError
+
+    soil, res = user_soil(tmp_path, f"loop: {{reference: {block}}}")
+    with pytest.raises(InputError) as exc:
+        load_soil(soil, res)
+    msg = str(exc.value)
+    assert msg.startswith(f"{soil}: {field}: expected ") and "\n" not in msg, msg
+    for w in words:
+        assert w in msg, (w, msg)
+
+
+def test_a_reference_beyond_the_rows_but_within_their_ranges_width_is_taken(tmp_path):
+    from soilcal.config.load import load_soil
+
+    # 0.5 m/s, beyond the fastest row (0.4 m/s) by less than the range's width (0.3 m/s)
+    soil, res = user_soil(tmp_path, "loop: {reference: {tool_speed: 0.5, working_depth: 0.05}}")
+    assert load_soil(soil, res).name == "loess-test"
+
+
+def test_a_command_line_reference_far_from_every_row_stops_the_run_before_any_simulation(tmp_path, monkeypatch,
+                                                                                         capsys):
+    soil, res = user_soil(tmp_path)
+    calls = []
+    monkeypatch.setattr(lc, "dem_simulator", _counting_simulator(calls))
+    for cmd in (["run", "--sim-seeds", "1"], ["synthesize", "--measurement", "small4"]):
+        code = main(["loop", cmd[0], str(soil), "--resources", str(res), *cmd[1:], "--reference", "tool_speed=0.9",
+                     "--out", str(tmp_path / "out")])
+        err = [ln for ln in capsys.readouterr().err.splitlines() if ln.strip()]
+        assert code == 2 and len(err) == 1, err
+        assert err[0].startswith("soilcal: error: --reference: reference.tool_speed: expected ") and "-0.2 to 0.7" in err[0]
+        assert calls == []

@@ -229,6 +229,7 @@ def _synthesize(args) -> int:
 
     declared = {**core.settings_from(soil.data, soil.path).reference, **_reference(args)}
     sy.default_reference(conds, _reference(args), "--reference", strict=True)  # a name no row carries: refused
+    core.check_reference(every, _reference(args), "--reference", "reference")  # a value far from every row
     reference = sy.default_reference(conds, declared, "--reference", over=every)
     if args.repeats < 1:
         raise InputError("<command line>", "--repeats", "at least 1 measured repeat", args.repeats)
@@ -278,6 +279,7 @@ def _run(args) -> int:
     if args.reference:
         given = _reference(args)
         sy.default_reference(conds, given, "--reference", strict=True)  # names the conditions carry, values
+        core.check_reference(every, given, "--reference", "reference")  # a value far from every row
         settings = replace(settings, reference={**settings.reference, **given})
     if args.measurement:  # one table: the reference of the whole soil's loop, not of this table's rows
         settings = replace(settings, reference=sy.default_reference(conds, settings.reference, "--reference",

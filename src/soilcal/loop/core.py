@@ -99,10 +99,7 @@ def mean_reference(frame: pd.DataFrame, declared: dict) -> dict:
     have none.  The one rule of the loop, ``soilcal loop run`` and ``soilcal loop synthesize``."""
     from soilcal.config.quantities import QUANTITIES
 
-    rows = frame
-    if "measured" in frame.columns and len(frame):
-        with_value = frame[np.isfinite(pd.to_numeric(frame["measured"], errors="coerce").to_numpy(float))]
-        rows = with_value if len(with_value) else frame  # a table still to be synthesized: its rows
+    rows = _measured_rows(frame)
     out = {}
     for c in frame.columns:
         if not c.startswith("q:") or QUANTITIES.get(c[2:]) is None:
@@ -115,6 +112,49 @@ def mean_reference(frame: pd.DataFrame, declared: dict) -> dict:
         if len(x) and x.notna().all():
             out[q] = float(x.mean())
     return out
+
+
+def _measured_rows(frame: pd.DataFrame) -> pd.DataFrame:
+    """The rows with a measured value (every row of a table that has none yet, one to
+    synthesize): those the reference is taken over and checked against."""
+    if "measured" in frame.columns and len(frame):
+        with_value = frame[np.isfinite(pd.to_numeric(frame["measured"], errors="coerce").to_numpy(float))]
+        return with_value if len(with_value) else frame
+    return frame
+
+
+def check_reference(conditions, declared: dict, source, field: str = "loop.reference") -> None:
+    """A declared reference (``loop.reference``, ``--reference``: SI units) of a quantity that
+    varies over the measured rows (of every table given) lies within their range widened by
+    its width on each side; farther out, the effects would take the calibrated parameters to
+    hold where no row was measured, and a value given in the table's own unit (km/h, cm)
+    rather than the SI one lands there.  InputError naming the field, the rows' range in the
+    SI unit and any unit in which the value would lie among the rows.  A quantity constant
+    over the rows is not checked: there is no range to judge by."""
+    from soilcal.config.quantities import QUANTITIES
+
+    if not declared:
+        return
+    rows = _measured_rows(rs.observations(list(conditions)))
+    for q, v in declared.items():
+        col = f"q:{q}"
+        if QUANTITIES.get(q) is None or col not in rows.columns:
+            continue
+        x = pd.to_numeric(rows[col], errors="coerce").dropna().to_numpy(float)
+        if not len(x):
+            continue
+        lo, hi = float(x.min()), float(x.max())
+        span = hi - lo
+        if span <= 0 or lo - span <= float(v) <= hi + span:
+            continue
+        si, units = QUANTITIES[q]
+        read_as = [f"{float(v) * f:.4g} {si} read as {u}" for u, f in units.items()
+                   if f != 1.0 and lo <= float(v) * f <= hi]
+        raise InputError(source, f"{field}.{q}", f"{q} in {si} (the SI unit) within the measured rows' range widened "
+                         f"by its width, {lo - span:.4g} to {hi + span:.4g} {si} (the rows span {lo:.4g} to {hi:.4g} "
+                         f"{si}): the calibrated parameters would hold where nothing was measured"
+                         + (f"; the value lies among the rows as {', '.join(read_as)}, a unit other than {si}"
+                            if read_as else ""), v)
 
 
 def reference_values(res: pd.DataFrame, settings: Settings) -> dict:
