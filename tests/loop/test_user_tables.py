@@ -412,3 +412,29 @@ def test_a_command_line_reference_far_from_every_row_stops_the_run_before_any_si
         assert code == 2 and len(err) == 1, err
         assert err[0].startswith("soilcal: error: --reference: reference.tool_speed: expected ") and "-0.2 to 0.7" in err[0]
         assert calls == []
+
+
+# --------------------------------------------------------------------------- a covariate with one value
+
+def test_an_effect_through_a_quantity_with_one_value_on_every_row_is_not_tried_and_the_verdict_says_so():
+    # twelve blade rows, all at 1 m/s, every measured value 10 % above the stand-in (a bias no
+    # effect carries); calibrated at 0.5 m/s by the soil's word, the rate effect would shift
+    # every row by beta ln 2 alike and fit the bias as a "rate dependence" (with candidates:
+    # all it was tried, and chosen with beta 0.10) though the speed never varied
+    from soilcal.loop import core, files
+    from soilcal.loop import standin as S
+    from soilcal.loop import synthesize as sy
+
+    rows = [dict(r, tool_speed=1.0) for r in S.grid(seed=1, n=12)]
+    conds = S.conditions(rows)
+    table = sy.synthesize(conds, S.base_params, S.simulate, {}, {}, {"stones": {"fraction": 1.0, "low": 0.1,
+                                                                              "high": 0.1}}, noise=0.01, seed=1)
+    conds = sy.with_measured(conds, table)
+    settings = core.Settings(bootstrap=0, candidates="all", effects=["rate_friction"], reference={"tool_speed": 0.5})
+    out = core.run_inprocess("user", conds, S.base_params, S.simulate, settings)
+    assert out.candidates == [] and out.chosen == []
+    assert out.verdict.startswith("unexplained: the residual follows bias")
+    assert "rate_friction not tried: tool_speed is 1 m/s on every measured row" in out.verdict
+    text = files.report("user", out, [{"candidates": out.candidates, "reference": {}, "settings": {}}])
+    assert "Not tested, one value on every usable row (no information on the residual): tool_speed (1.0)" in text
+    assert core.constant_quantities(conds) == {"tool_speed": 1.0}

@@ -170,13 +170,54 @@ def quantity_of(conditions) -> dict:
     return out
 
 
-def candidates(diag: pd.DataFrame, conditions, settings: Settings) -> list[str]:
-    """Effects to fit (module docstring, step 3), in library order."""
-    matched = dg.matched_quantities(diag)
-    out = []
+def constant_quantities(conditions) -> dict:
+    """Numeric quantity -> its value, for each quantity that has one value on every measured
+    row carrying it (the rows with a measured value, :func:`_measured_rows`)."""
+    from soilcal.config.quantities import QUANTITIES
+
+    rows = _measured_rows(rs.observations(list(conditions)))
+    out = {}
+    for col in rows.columns:
+        q = col[2:]
+        if not col.startswith("q:") or QUANTITIES.get(q) is None:
+            continue
+        x = pd.to_numeric(rows[col], errors="coerce").dropna().to_numpy(float)
+        if len(x) and np.all(x == x[0]):
+            out[q] = float(x[0])
+    return out
+
+
+def skipped(conditions, settings: Settings) -> dict:
+    """Effect -> why it is not tried: every quantity it acts through that the measured rows
+    carry has one value on all of them (a table at one speed), so the effect could only shift
+    every row alike, which says nothing of that quantity (the bias is tested on its own);
+    with ``loop.candidates: all`` too."""
+    from soilcal.config.quantities import QUANTITIES
+
+    const = constant_quantities(conditions)
+    carried = {q for c in conditions for q in (c.quantities or {})}
+    out = {}
     for name in settings.effects:
         eff = EFFECTS[name]
-        if not any(eff.applies_to(c.quantities or {}, c.scenario) for c in conditions):
+        needs = [q for q in eff.needs if q in carried]
+        if not needs or not any(eff.applies_to(c.quantities or {}, c.scenario) for c in conditions):
+            continue
+        if all(q in const for q in needs):
+            out[name] = ("not tried: " + ", ".join(f"{q} is {const[q]:.4g} {QUANTITIES[q][0]}" for q in needs)
+                         + " on every measured row, so the effect could only shift every row alike and carries "
+                         "no information")
+    return out
+
+
+def candidates(diag: pd.DataFrame, conditions, settings: Settings) -> list[str]:
+    """Effects to fit (module docstring, step 3), in library order; none that :func:`skipped`
+    names."""
+    matched = dg.matched_quantities(diag)
+    out = []
+    skip = skipped(conditions, settings)
+    for name in settings.effects:
+        eff = EFFECTS[name]
+        if name in skip or not any(eff.applies_to(c.quantities or {}, c.scenario) for c in conditions):
             continue
         if settings.candidates == "all" or matched & set(eff.signature):
             out.append(name)
@@ -228,6 +269,7 @@ class Outcome:
     diagnosis_after: pd.DataFrame = None
     detectable: pd.DataFrame = None  # soilcal.loop.diagnose.detectable of the calibrated model's residual
     filled: dict = None  # effect -> rows whose run failed at a design point (filled from the row's other points)
+    skipped: dict = None  # effect -> why it was not tried (:func:`skipped`)
 
 
 def _follows(rank: pd.DataFrame, res: pd.DataFrame | None = None, quantity_of: dict | None = None,
@@ -322,10 +364,13 @@ def default_fold_by(settings: Settings, quantity_cols: dict, diag: pd.DataFrame 
 
 
 def analyse(soil: str, res: pd.DataFrame, diag: pd.DataFrame, cands: list, effect_runs: dict,
-            settings: Settings, reference: dict, quantity_cols: dict | None = None) -> Outcome:
+            settings: Settings, reference: dict, quantity_cols: dict | None = None,
+            skipped_effects: dict | None = None) -> Outcome:
     """Steps 5 (module docstring): ``effect_runs`` maps each candidate to its runs
     (measurement, row, measure, value, ``t:<name>``), the switched-off point included; rows of
-    one simulation (the residual table's ``simulation`` key) share the bootstrap's draws."""
+    one simulation (the residual table's ``simulation`` key) share the bootstrap's draws;
+    ``skipped_effects`` (:func:`skipped`) are named in the verdict where the structure (or
+    ``loop.candidates: all``) would have tried them."""
     u = rs.usable(res)
     rank = dg.ranking(diag)
     follows = _follows(rank, res, quantity_cols, settings.alpha)
@@ -418,6 +463,10 @@ def analyse(soil: str, res: pd.DataFrame, diag: pd.DataFrame, cands: list, effec
     else:
         rejected = "; ".join(f"{r['effects']}: {r['reason']}" for r in sel_rows if r["reason"])
         verdict = f"unexplained: the residual follows {follows}; candidates rejected ({rejected})"
+    matched = dg.matched_quantities(diag) if len(diag) else set()
+    for nm, why in (skipped_effects or {}).items():  # those the structure (or candidates: all) would have tried
+        if settings.candidates == "all" or matched & set(EFFECTS[nm].signature):
+            verdict += f"; {nm} {why}"
     if 0 < n < 4 and not verdict.startswith("no "):
         verdict += f"; with {n} rows no trend was tested (a trend test needs 4)"
     if n > 0 and len(res):
@@ -439,7 +488,7 @@ def analyse(soil: str, res: pd.DataFrame, diag: pd.DataFrame, cands: list, effec
         "alpha": settings.alpha, "reference": _fmt(reference)}], columns=SUMMARY_COLUMNS)
     return Outcome(res, diag, rank, cands, pd.DataFrame(sel_rows, columns=SELECTION_COLUMNS), summary, pred,
                    verdict, chosen, theta, after, dg.detectable(res, diag, quantity_cols, settings.alpha),
-                   {nm: list(d.missing) for nm, d in data.items() if d.missing})
+                   {nm: list(d.missing) for nm, d in data.items() if d.missing}, dict(skipped_effects or {}))
 
 
 # --------------------------------------------------------------------------- in process
@@ -495,12 +544,13 @@ def run_inprocess(soil: str, conditions, base_params, simulate, settings: Settin
             effect_runs[name] = pd.concat(frames, ignore_index=True)
 
     simulate_candidates(cands)
-    out = analyse(soil, res, diag, cands, effect_runs, settings, reference, qcols)
+    skip = skipped(conditions, settings)
+    out = analyse(soil, res, diag, cands, effect_runs, settings, reference, qcols, skip)
     more = more_candidates(out, conditions, settings)
     if not more:
         return out
     simulate_candidates(more)  # the second round, as the workflow's loop_more checkpoint
-    return analyse(soil, res, diag, cands + more, effect_runs, settings, reference, qcols)
+    return analyse(soil, res, diag, cands + more, effect_runs, settings, reference, qcols, skip)
 
 
 def more_candidates(out: Outcome, conditions, settings: Settings) -> list[str]:
