@@ -438,3 +438,18 @@ def test_an_effect_through_a_quantity_with_one_value_on_every_row_is_not_tried_a
     text = files.report("user", out, [{"candidates": out.candidates, "reference": {}, "settings": {}}])
     assert "Not tested, one value on every usable row (no information on the residual): tool_speed (1.0)" in text
     assert core.constant_quantities(conds) == {"tool_speed": 1.0}
+
+
+def test_three_rows_of_two_forces_each_say_that_no_trend_was_tested():
+    # three soil-bin tests, each measuring the horizontal and the vertical force: six residual
+    # rows, but three tests, and a trend test needs four (the diagnosis takes one value per test)
+    from soilcal.loop import core
+    from soilcal.loop import standin as S
+    from soilcal.loop import synthesize as sy
+
+    conds = S.conditions(S.grid(0, 3))
+    table = sy.synthesize(conds, S.base_params, S.simulate, {}, {}, {}, noise=0.02, seed=1)
+    out = core.run_inprocess("user", sy.with_measured(conds, table), S.base_params, S.simulate,
+                             core.Settings(bootstrap=0))
+    assert len(out.residuals) == 6 and "trend" not in set(out.diagnosis["test"])
+    assert out.verdict.endswith("with 3 rows no trend was tested (a trend test needs 4)"), out.verdict

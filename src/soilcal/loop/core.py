@@ -467,8 +467,9 @@ def analyse(soil: str, res: pd.DataFrame, diag: pd.DataFrame, cands: list, effec
     for nm, why in (skipped_effects or {}).items():  # those the structure (or candidates: all) would have tried
         if settings.candidates == "all" or matched & set(EFFECTS[nm].signature):
             verdict += f"; {nm} {why}"
-    if 0 < n < 4 and not verdict.startswith("no "):
-        verdict += f"; with {n} rows no trend was tested (a trend test needs 4)"
+    tests = len(dg.per_test(u))  # table rows: the trend tests take one value per measured test
+    if 0 < tests < 4 and not verdict.startswith("no "):
+        verdict += f"; with {tests} rows no trend was tested (a trend test needs 4)"
     if n > 0 and len(res):
         measured = np.isfinite(res["measured"].astype(float).to_numpy())
         unsimulated = int((measured & ~np.isfinite(res["simulated_mean"].astype(float).to_numpy())).sum())
