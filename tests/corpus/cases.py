@@ -673,7 +673,7 @@ def _(tmp, p):
     edit_yaml(p, lambda d: d["measurements"]["cutting_resistance"]["calibrated"].update(case="angle"))
 
 
-@meas_case("measured-sd-negative", MEAS, "row 2, column horizontal_sd_N", "a standard deviation >= 0")
+@meas_case("measured-sd-negative", MEAS, "row 2, column horizontal_sd_N", "a standard deviation > 0")
 def _(tmp, p):
     """An SD column beside the horizontal force, with a minus sign in row 2."""
     lines = _rows(tmp / MEAS)
