@@ -453,3 +453,28 @@ def test_three_rows_of_two_forces_each_say_that_no_trend_was_tested():
                              core.Settings(bootstrap=0))
     assert len(out.residuals) == 6 and "trend" not in set(out.diagnosis["test"])
     assert out.verdict.endswith("with 3 rows no trend was tested (a trend test needs 4)"), out.verdict
+
+
+def test_a_table_in_kilonewtons_under_a_name_in_newtons_is_pointed_out():
+    # eight blade tests whose forces were written in kN into columns named in N: every measured
+    # value is the stand-in's / 1000 (times 2 % noise), a bias of -99.9 % no effect explains
+    from dataclasses import replace
+
+    from soilcal.loop import core
+    from soilcal.loop import standin as S
+    from soilcal.loop import synthesize as sy
+
+    conds = S.conditions(S.grid(seed=4, n=8))
+    table = sy.synthesize(conds, S.base_params, S.simulate, {}, {}, {}, noise=0.02, seed=2)
+    good = sy.with_measured(conds, table)
+    kn = [replace(c, responses=tuple(dict(r, measured=r["measured"] / 1000, measured_sd=r["measured_sd"] / 1000)
+                                     for r in c.responses)) for c in good]
+    none = core.Settings(bootstrap=0, effects=[])  # no effect to fit: the verdict on the residual alone
+    out = core.run_inprocess("user", kn, S.base_params, S.simulate, none)
+    for m in ("horizontal_force_N", "vertical_force_N"):
+        assert (f"the measured {m} of plates is about 1/1000 times the simulated (median ratio 0.00" in out.verdict
+                and "another unit than the N of its name" in out.verdict), out.verdict
+    # the same table in N, 10 % above the stand-in: no word of a unit
+    ten = [replace(c, responses=tuple(dict(r, measured=r["measured"] * 1.1) for r in c.responses)) for c in good]
+    assert "another unit" not in core.run_inprocess("user", ten, S.base_params, S.simulate,
+                                                    none).verdict

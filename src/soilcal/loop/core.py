@@ -363,6 +363,36 @@ def default_fold_by(settings: Settings, quantity_cols: dict, diag: pd.DataFrame 
     return None
 
 
+#: a measured quantity whose median ratio to the simulated mean lies within this many decades of a
+#: power of ten other than 1 (a factor within 26 % of 10, 100, 1000, ...) is said to look like a
+#: value in another unit than its name's
+UNIT_DECADES = 0.1
+
+
+def unit_hints(u: pd.DataFrame) -> list[str]:
+    """A sentence per measured quantity of a table (``u``: usable residual rows) whose measured
+    values are about a power of ten (10 to 10^6, or its inverse) times the simulated ones, the
+    median ratio within :data:`UNIT_DECADES` of it: a table in kN under a name in N, or in mm
+    under a name in m, reads as a bias of -99.9 % that no effect of the library can explain."""
+    out = []
+    if not len(u):
+        return out
+    for (m, q), g in u.groupby(["measurement", "measure"], sort=False):
+        ratio = g["measured"].to_numpy(float) / g["simulated_mean"].to_numpy(float)
+        ratio = ratio[np.isfinite(ratio) & (ratio > 0)]
+        if len(ratio) == 0:
+            continue
+        lg = float(np.log10(np.median(ratio)))
+        k = int(round(lg))
+        if k == 0 or abs(k) > 6 or abs(lg - k) > UNIT_DECADES:
+            continue
+        unit = str(g["unit"].iloc[0]) if "unit" in g else ""
+        factor = f"{10 ** k:g}" if k > 0 else f"1/{10 ** -k:g}"
+        out.append(f"the measured {q} of {m} is about {factor} times the simulated (median ratio "
+                   f"{np.median(ratio):.3g}): is the table's column in another unit than the {unit} of its name?")
+    return out
+
+
 def analyse(soil: str, res: pd.DataFrame, diag: pd.DataFrame, cands: list, effect_runs: dict,
             settings: Settings, reference: dict, quantity_cols: dict | None = None,
             skipped_effects: dict | None = None) -> Outcome:
@@ -467,6 +497,8 @@ def analyse(soil: str, res: pd.DataFrame, diag: pd.DataFrame, cands: list, effec
     for nm, why in (skipped_effects or {}).items():  # those the structure (or candidates: all) would have tried
         if settings.candidates == "all" or matched & set(EFFECTS[nm].signature):
             verdict += f"; {nm} {why}"
+    for hint in unit_hints(u):
+        verdict += f"; {hint}"
     tests = len(dg.per_test(u))  # table rows: the trend tests take one value per measured test
     if 0 < tests < 4 and not verdict.startswith("no "):
         verdict += f"; with {tests} rows no trend was tested (a trend test needs 4)"
