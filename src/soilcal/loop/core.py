@@ -453,6 +453,10 @@ def analyse(soil: str, res: pd.DataFrame, diag: pd.DataFrame, cands: list, effec
         measured = np.isfinite(res["measured"].astype(float)).any() if len(res) else False
         verdict = ("no simulated value to compare with: every run of the measured conditions failed or none ran"
                    if measured else "no measured value to compare with (nothing to diagnose)")
+    elif bool(np.all(np.abs(before) <= rs.EXACT)):
+        verdict = (f"consistent: every measured value equals the simulated mean (largest relative residual "
+                   f"{float(np.max(np.abs(before))):.2g}): there is no residual to explain (is the table the "
+                   "model's own values?)")
     elif n < 3:
         verdict = f"unexplained: too few measured values to decide ({n})"
     elif sel is not None and sel.chosen:

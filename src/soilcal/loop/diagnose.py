@@ -155,8 +155,12 @@ def diagnose(res: pd.DataFrame, quantity_of: dict | None = None, alpha: float = 
     from statsmodels.stats.multitest import multipletests
 
     quantity_of = quantity_of or {}
+    from soilcal.loop.residuals import EXACT
+
     r_all = res["relative_residual"].astype(float)
     d = res[np.isfinite(r_all)].reset_index(drop=True)
+    rel = d["relative_residual"].astype(float)
+    d["relative_residual"] = rel.where(rel.abs() > EXACT, 0.0)  # round-off is no residual
     dt = per_test(d)
     r = dt["relative_residual"].to_numpy(float)
     rows = []
