@@ -403,3 +403,21 @@ def test_the_quantities_of_one_measured_test_count_once_in_the_bias_and_trend_te
     assert bias["n"] == 8 and bias["p"] == pytest.approx(stats.ttest_1samp(r, 0.0).pvalue, rel=1e-9)
     # the two forces are still compared with each other over all sixteen rows
     assert diag[(diag["test"] == "group") & (diag["covariate"] == "measure")]["n"].iloc[0] == 16
+
+
+def test_a_periodic_disturbance_along_the_bin_is_found_with_its_wavelength():
+    # sixteen tests at positions drawn along a 40 m bin; a ridge pattern of wavelength 8 m raises
+    # and lowers the residual by 10 % (plus 0.5 % noise): neither a trend nor a curvature in the
+    # position follows it, a sine of the position does
+    rng = np.random.default_rng(5)
+    x = np.sort(rng.uniform(0.0, 40.0, 16))
+    r = 0.1 * np.sin(2 * np.pi * x / 8.0 + 0.4) + rng.normal(0.0, 0.005, 16)
+    res = pd.DataFrame({"measurement": "bin", "row": np.arange(1, 17), "measure": "F_N", "relative_residual": r,
+                        "standardised_residual": np.nan, "cov:position_m": x})
+    diag = diagnose(res, {"position_m": "position"})
+    per = diag[diag["test"] == "periodic"].iloc[0]
+    assert bool(per["significant"]) and per["r2"] > 0.95
+    # the scan's frequency step near 1/8 per m is 3.6 % of it
+    assert per["estimate"] == pytest.approx(8.0, rel=0.04)
+    assert not diag[diag["test"].isin(["trend", "curvature"])]["significant"].any()
+    assert ranking(diag).iloc[0]["covariate"] == "position_m"
