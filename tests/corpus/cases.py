@@ -1084,7 +1084,7 @@ def _(tmp):
     return ["loop", "run", SOIL, "--measurement", "cutting_force", "--out", "out"]
 
 
-@case("cli-loop-parameter-without-value", "cli", CMD, "--param", "name:key=number")
+@case("cli-loop-parameter-without-value", "cli", CMD, "--param", "NAME=NUMBER, a DEM parameter and its SI value")
 def _(tmp):
     copy_soil(tmp)
     return ["loop", "run", SOIL, "--param", "soil_density", "--out", "out"]
