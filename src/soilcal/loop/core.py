@@ -8,9 +8,10 @@ for tests, the benchmark and ``soilcal loop synthesize``) share them:
    parameters;
 2. :func:`soilcal.loop.diagnose.diagnose`: structure in the residual;
 3. :func:`candidates`: the effects whose signature shares a quantity (or ``bias``) with a
-   significant test, and that act on at least one measured condition (its quantities, and
-   its scenario where the effect names some; ``loop.candidates: all`` tries every effect
-   that acts);
+   significant test (:func:`soilcal.loop.diagnose.matched_quantities`), and that act on at
+   least one measured condition (its quantities, and its scenario where the effect names
+   some; ``loop.candidates: all`` tries every effect that acts); never one whose quantities
+   have one value on every measured row (:func:`skipped`);
 4. :func:`plan`: each candidate's design of parameters (:func:`soilcal.loop.select.theta_design`),
    every condition simulated at every design point with the seeds of the calibrated runs;
 5. :func:`analyse`: surrogates, forward selection, the verdict and the report tables;
