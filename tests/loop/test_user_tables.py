@@ -438,7 +438,7 @@ def test_an_effect_through_a_quantity_with_one_value_on_every_row_is_not_tried_a
     assert "rate_friction not tried: tool_speed is 1 m/s on every measured row" in out.verdict
     text = files.report("user", out, [{"candidates": out.candidates, "reference": {}, "settings": {}}])
     assert "Not tested, one value on every usable row (no information on the residual): tool_speed (1.0)" in text
-    assert core.constant_quantities(conds) == {"tool_speed": 1.0}
+    assert core.per_table_quantities(conds) == {"tool_speed": {"plates": 1.0}}
 
 
 def test_three_rows_of_two_forces_each_say_that_no_trend_was_tested():
@@ -540,3 +540,28 @@ def test_six_speeds_of_a_rate_effect_name_it_though_no_single_trend_test_is_sign
     assert out.chosen == ["rate_friction"], out.verdict
     lo, hi = json.loads(out.summary["ci95"].iloc[0])["rate_friction.beta"]
     assert lo < 0.3 < hi and hi - lo < 0.1
+
+
+def test_a_quantity_with_one_value_in_each_table_is_not_taken_for_an_effect():
+    # two tables of eight blade tests, one measuring the horizontal force at 1 m/s, the other
+    # the vertical force at 2 m/s, the second read 10 % high (its own instrument): the speed
+    # differs only between the tables, and the rate effect fitted the tables' offset as
+    # beta 0.16, "explained by rate_friction"
+    from dataclasses import replace
+
+    from soilcal.loop import core
+    from soilcal.loop import standin as S
+    from soilcal.loop import synthesize as sy
+
+    a = [replace(c, measurement="a") for c in S.conditions([dict(r, tool_speed=1.0) for r in S.grid(seed=1, n=8)],
+                                                            measures=("horizontal_force_N",))]
+    b = [replace(c, measurement="b") for c in S.conditions([dict(r, tool_speed=2.0) for r in S.grid(seed=2, n=8)],
+                                                            measures=("vertical_force_N",))]
+    table = sy.synthesize(a + b, S.base_params, S.simulate, {}, {}, {}, noise=0.02, seed=1)
+    table.loc[table["measurement"] == "b", "value"] *= 1.10
+    conds = sy.with_measured(a + b, table)
+    out = core.run_inprocess("user", conds, S.base_params, S.simulate, core.Settings(bootstrap=0))
+    assert "rate_friction" not in out.candidates and out.chosen == [], out.verdict
+    assert ("rate_friction not tried: tool_speed has one value in each measured table (a: 1 m/s, b: 2 m/s), so "
+            "the effect cannot be told from a difference between the tables") in out.verdict
+    assert core.per_table_quantities(conds)["tool_speed"] == {"a": 1.0, "b": 2.0}

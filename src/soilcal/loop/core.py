@@ -171,9 +171,10 @@ def quantity_of(conditions) -> dict:
     return out
 
 
-def constant_quantities(conditions) -> dict:
-    """Numeric quantity -> its value, for each quantity that has one value on every measured
-    row carrying it (the rows with a measured value, :func:`_measured_rows`)."""
+def per_table_quantities(conditions) -> dict:
+    """Numeric quantity -> {measured table: its value}, for each quantity that has one value on
+    every measured row of each table carrying it (:func:`_measured_rows`), though it may differ
+    between the tables."""
     from soilcal.config.quantities import QUANTITIES
 
     rows = _measured_rows(rs.observations(list(conditions)))
@@ -182,20 +183,29 @@ def constant_quantities(conditions) -> dict:
         q = col[2:]
         if not col.startswith("q:") or QUANTITIES.get(q) is None:
             continue
-        x = pd.to_numeric(rows[col], errors="coerce").dropna().to_numpy(float)
-        if len(x) and np.all(x == x[0]):
-            out[q] = float(x[0])
+        per = {}
+        for m, g in rows.groupby("measurement", sort=False):
+            x = pd.to_numeric(g[col], errors="coerce").dropna().to_numpy(float)
+            if len(x) and not np.all(x == x[0]):
+                per = None
+                break
+            if len(x):
+                per[str(m)] = float(x[0])
+        if per:
+            out[q] = per
     return out
 
 
 def skipped(conditions, settings: Settings) -> dict:
     """Effect -> why it is not tried: every quantity it acts through that the measured rows
     carry has one value on all of them (a table at one speed), so the effect could only shift
-    every row alike, which says nothing of that quantity (the bias is tested on its own);
-    with ``loop.candidates: all`` too."""
+    every row alike, which says nothing of that quantity (the bias is tested on its own); or
+    one value in each table (a table at 1 m/s, another at 2 m/s), so its structure is a
+    difference between the tables, which a table's own offset (another instrument, setup or
+    measured quantity) makes as well; with ``loop.candidates: all`` too."""
     from soilcal.config.quantities import QUANTITIES
 
-    const = constant_quantities(conditions)
+    per = per_table_quantities(conditions)
     carried = {q for c in conditions for q in (c.quantities or {})}
     out = {}
     for name in settings.effects:
@@ -203,10 +213,18 @@ def skipped(conditions, settings: Settings) -> dict:
         needs = [q for q in eff.needs if q in carried]
         if not needs or not any(eff.applies_to(c.quantities or {}, c.scenario) for c in conditions):
             continue
-        if all(q in const for q in needs):
-            out[name] = ("not tried: " + ", ".join(f"{q} is {const[q]:.4g} {QUANTITIES[q][0]}" for q in needs)
+        if not all(q in per for q in needs):
+            continue
+        if all(len(set(per[q].values())) == 1 for q in needs):
+            out[name] = ("not tried: " + ", ".join(f"{q} is {next(iter(per[q].values())):.4g} {QUANTITIES[q][0]}"
+                                                     for q in needs)
                          + " on every measured row, so the effect could only shift every row alike and carries "
                          "no information")
+        else:
+            out[name] = ("not tried: " + "; ".join(
+                f"{q} has one value in each measured table (" + ", ".join(
+                    f"{m}: {v:.4g} {QUANTITIES[q][0]}" for m, v in per[q].items()) + ")" for q in needs)
+                + ", so the effect cannot be told from a difference between the tables")
     return out
 
 
