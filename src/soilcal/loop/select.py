@@ -240,12 +240,18 @@ class Model:
         return sum(e.surrogate.k for e in self.effects)
 
     def predict(self, x: np.ndarray) -> np.ndarray:
+        """The calibrated means plus each effect's change; a uniform scale (:func:`scale_data`)
+        multiplies the sum, as a bias of the whole model does."""
         out = self.y0.copy()
+        factor = 1.0
         j = 0
         for e in self.effects:
-            out = out + (e.surrogate(x[j:j + e.surrogate.k]) - self.y0)
+            if isinstance(e.surrogate, _ScaleSurrogate):
+                factor = 1.0 + float(x[j])
+            else:
+                out = out + (e.surrogate(x[j:j + e.surrogate.k]) - self.y0)
             j += e.surrogate.k
-        return out
+        return out * factor
 
     def errors(self, x, idx=None) -> np.ndarray:
         idx = np.arange(len(self.y0)) if idx is None else idx
@@ -505,9 +511,9 @@ def bootstrap_ci(effects: list, y0: np.ndarray, measured: np.ndarray, measured_s
 
 
 class _ScaleEffect:
-    """A uniform relative change of every simulated value (prediction y0 (1 + s)): no
-    mechanism, the nuisance against which the backward gate tests each effect
-    (:func:`forward`)."""
+    """A uniform relative change of every simulated value (the prediction, the effects'
+    changes included, times 1 + s: :meth:`Model.predict`): no mechanism, the nuisance against
+    which the backward gate tests each effect (:func:`forward`)."""
 
     name = "uniform_scale"
     null = {"s": 0.0}
