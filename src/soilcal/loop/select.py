@@ -566,7 +566,8 @@ def forward(obs: pd.DataFrame, y0: np.ndarray, data: dict, fold_by: str | None =
     every row (a soil-tool adhesion, which adds to every force) and one that only bends that
     shift into the shape of a uniform one (a rate term beside it) fit a table 10 % above the
     model throughout as well as the scale does, and neither is named for it; the bias is left
-    to the verdict as unexplained.  The chosen model itself carries no scale."""
+    to the verdict as unexplained.  The chosen model carries the scale only where it leaves a
+    bias none of its effects can carry (:func:`soilcal.loop.core.analyse`)."""
     measured = obs["measured"].to_numpy(float)
     from soilcal.loop.residuals import scale_of
 
