@@ -89,16 +89,18 @@ def _spread(ws, sd, n):
 
 
 def test_sd_and_n_are_read(cinnamon):
-    _spread(cinnamon, [5.1, 0.0, 3.0, 4.0], [3, 1, None, 5])
+    _spread(cinnamon, [5.1, 0.5, 3.0, 4.0], [3, 1, None, 5])
     got = [(c.responses[0]["measured_sd"], c.responses[0]["n"]) for c in _load(cinnamon)]
     # n = 1 beside an SD, and a blank n, are accepted (the SD is the value's own uncertainty)
-    assert got == [(5.1, 3), (0.0, 1), (3.0, None), (4.0, 5)]
+    assert got == [(5.1, 3), (0.5, 1), (3.0, None), (4.0, 5)]
 
 
-def test_negative_sd_is_refused(cinnamon):
-    t = _spread(cinnamon, [5.1, -2.0, 3.0, 4.0], [3, 3, 3, 3])
+@pytest.mark.parametrize("bad, n", [(-2, 3), (0, 3), (0, 1)])
+def test_a_negative_or_zero_sd_is_refused(cinnamon, bad, n):
+    # an SD of 0, behind three repeats or as the value's own uncertainty, calls the value exact
+    t = _spread(cinnamon, [5.1, bad, 3.0, 4.0], [3, n, 3, 3])
     msg = _fails(cinnamon, f"{t}: row 2, column horizontal_sd_N")
-    assert "a standard deviation >= 0" in msg and "got -2" in msg
+    assert "a standard deviation > 0" in msg and f"got {bad}" in msg and "blank cell" in msg
 
 
 @pytest.mark.parametrize("bad", [0, -3, 2.6])

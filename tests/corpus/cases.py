@@ -673,7 +673,7 @@ def _(tmp, p):
     edit_yaml(p, lambda d: d["measurements"]["cutting_resistance"]["calibrated"].update(case="angle"))
 
 
-@meas_case("measured-sd-negative", MEAS, "row 2, column horizontal_sd_N", "a standard deviation >= 0")
+@meas_case("measured-sd-negative", MEAS, "row 2, column horizontal_sd_N", "a standard deviation > 0")
 def _(tmp, p):
     """An SD column beside the horizontal force, with a minus sign in row 2."""
     lines = _rows(tmp / MEAS)
@@ -1084,7 +1084,7 @@ def _(tmp):
     return ["loop", "run", SOIL, "--measurement", "cutting_force", "--out", "out"]
 
 
-@case("cli-loop-parameter-without-value", "cli", CMD, "--param", "name:key=number")
+@case("cli-loop-parameter-without-value", "cli", CMD, "--param", "NAME=NUMBER, a DEM parameter and its SI value")
 def _(tmp):
     copy_soil(tmp)
     return ["loop", "run", SOIL, "--param", "soil_density", "--out", "out"]

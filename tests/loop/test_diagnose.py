@@ -377,3 +377,47 @@ def test_nothing_detectable_without_tests():
 def test_a_table_without_standardised_residuals_has_no_scatter_test():
     t = _table([0.1, 0.2, -0.1, 0.0, 0.05]).drop(columns="standardised_residual").assign(measured_sd=1.0)
     assert list(diagnose(t)["test"]) == ["bias"]
+
+
+def test_the_quantities_of_one_measured_test_count_once_in_the_bias_and_trend_tests():
+    # eight soil-bin tests at speeds 1..8, each measuring the horizontal and the vertical force;
+    # a disturbance of the test (a stone, a ridge) moves both forces alike: relative residuals
+    # r_i + e_i and r_i - e_i.  The trend over the tests is the regression of their means r_i
+    # on eight points (scipy's linregress), not on sixteen independent rows, which would have
+    # cut its p by three quarters (here 0.21 against 0.052)
+    from scipy import stats
+
+    x = np.arange(1.0, 9.0)
+    r = np.array([0.0, -0.03, 0.05, 0.0, 0.06, 0.01, 0.08, 0.02])
+    e = np.array([0.01, -0.005, 0.0, 0.004, -0.01, 0.002, 0.0, 0.006])
+    rows = []
+    for i in range(8):
+        for m, sign in (("horizontal_force_N", 1), ("vertical_force_N", -1)):
+            rows.append({"measurement": "bin", "row": i + 1, "measure": m, "relative_residual": r[i] + sign * e[i],
+                         "standardised_residual": np.nan, "cov:speed": x[i]})
+    diag = diagnose(pd.DataFrame(rows), {"speed": "tool_speed"})
+    trend = diag[diag["test"] == "trend"].iloc[0]
+    assert trend["n"] == 8
+    assert trend["p"] == pytest.approx(stats.linregress(x, r).pvalue, rel=1e-9)
+    bias = diag[diag["test"] == "bias"].iloc[0]
+    assert bias["n"] == 8 and bias["p"] == pytest.approx(stats.ttest_1samp(r, 0.0).pvalue, rel=1e-9)
+    # the two forces are still compared with each other over all sixteen rows
+    assert diag[(diag["test"] == "group") & (diag["covariate"] == "measure")]["n"].iloc[0] == 16
+
+
+def test_a_periodic_disturbance_along_the_bin_is_found_with_its_wavelength():
+    # sixteen tests at positions drawn along a 40 m bin; a ridge pattern of wavelength 8 m raises
+    # and lowers the residual by 10 % (plus 0.5 % noise): neither a trend nor a curvature in the
+    # position follows it, a sine of the position does
+    rng = np.random.default_rng(5)
+    x = np.sort(rng.uniform(0.0, 40.0, 16))
+    r = 0.1 * np.sin(2 * np.pi * x / 8.0 + 0.4) + rng.normal(0.0, 0.005, 16)
+    res = pd.DataFrame({"measurement": "bin", "row": np.arange(1, 17), "measure": "F_N", "relative_residual": r,
+                        "standardised_residual": np.nan, "cov:position_m": x})
+    diag = diagnose(res, {"position_m": "position"})
+    per = diag[diag["test"] == "periodic"].iloc[0]
+    assert bool(per["significant"]) and per["r2"] > 0.95
+    # the scan's frequency step near 1/8 per m is 3.6 % of it
+    assert per["estimate"] == pytest.approx(8.0, rel=0.04)
+    assert not diag[diag["test"].isin(["trend", "curvature"])]["significant"].any()
+    assert ranking(diag).iloc[0]["covariate"] == "position_m"

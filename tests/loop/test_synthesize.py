@@ -62,3 +62,40 @@ def test_a_name_given_twice_on_the_command_line_is_refused():
         "stones": {"fraction": 0.2}, "day_offset": {"sd": 0.1}}
     with pytest.raises(InputError, match="--disturbance: expected each name once"):
         cli._named(["stones:fraction=0.2", "stones:low=0.2"], "--disturbance")
+
+
+@pytest.mark.parametrize("given, field, words", [
+    # a share of rows above 1, a rise range upside down, an amplitude that turns the factor
+    # 1 + a sin negative, a wavelength of 0 (a division by zero before), a negative SD
+    ({"stones": {"fraction": 2.0}}, "disturbance.stones.fraction", "a share of the rows in [0, 1]"),
+    ({"stones": {"low": 0.3, "high": 0.1}}, "disturbance.stones.high", "a relative rise >= low"),
+    ({"periodic": {"amplitude": 1.5, "wavelength": 3.0}}, "disturbance.periodic.amplitude", "in [0, 1)"),
+    ({"periodic": {"wavelength": 0.0}}, "disturbance.periodic.wavelength", "a wavelength > 0 in m along"),
+    ({"day_offset": {"sd": -0.1}}, "disturbance.day_offset.sd", "a relative SD >= 0"),
+])
+def test_a_disturbance_outside_its_range_is_refused_naming_the_parameter(given, field, words):
+    with pytest.raises(InputError) as exc:
+        sy.check_disturbances(given, _conds(), "--disturbance")
+    assert str(exc.value).startswith(f"--disturbance: {field}: expected ") and words in str(exc.value)
+
+
+@pytest.mark.parametrize("argv, field, expected, got", [
+    (["--reference", "tool_speed=fast"], "--reference", "QUANTITY=NUMBER", "'tool_speed=fast'"),
+    (["--param", "soil_density"], "--param", "NAME=NUMBER", "'soil_density'"),
+    (["--noise", "-0.02"], "--noise", "a relative SD >= 0", "-0.02"),
+])
+def test_the_command_line_values_are_refused_as_typed(tmp_path, monkeypatch, capsys, argv, field, expected, got):
+    from soilcal.cli import main
+
+    from test_user_tables import _counting_simulator, user_soil
+
+    soil, res = user_soil(tmp_path)
+    calls = []
+    monkeypatch.setattr(cli, "dem_simulator", _counting_simulator(calls))
+    code = main(["loop", "synthesize", str(soil), "--resources", str(res), "--measurement", "small4", *argv,
+                 "--out", str(tmp_path / "o.csv")])
+    err = [ln for ln in capsys.readouterr().err.splitlines() if ln.strip()]
+    assert code == 2 and len(err) == 1, err
+    assert err[0].startswith(f"soilcal: error: <command line>: {field}: expected {expected}") and err[0].endswith(
+        f"got {got}"), err[0]
+    assert not (tmp_path / "o.csv").exists() and calls == []

@@ -411,7 +411,12 @@ def _semantic_checks(path: Path, d: dict, resources_root: Path) -> tuple[dict | 
     if d.get("loop"):
         from soilcal.loop.settings import settings_from
 
-        _check_fold_by(path, d, settings_from(d, path).fold_by)
+        settings = settings_from(d, path)
+        _check_fold_by(path, d, settings.fold_by)
+        if measured:
+            from soilcal.loop.core import check_reference
+
+            check_reference(measured, settings.reference, path)
     return manifest, measured
 
 

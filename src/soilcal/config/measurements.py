@@ -47,7 +47,7 @@ quantity's units (``{set: speed, quantity: tool_speed, unit: km/h}`` needs ``sca
 
 Response columns: ``value`` (the measured value; ``null`` when the paper does not print it,
 then a ``note`` is required and the row is simulated and reported without a measured value),
-``sd`` (the measured standard deviation, a number >= 0), ``n`` (the repeats behind the value, a
+``sd`` (the measured standard deviation, a number > 0; a blank cell where it is not known), ``n`` (the repeats behind the value, a
 whole number >= 1; with ``n`` 1 or a blank ``n`` the SD is the value's own uncertainty, which
 the measured-data loop takes as known), ``paper_simulated`` (the paper's own simulation),
 ``paper_difference`` (the printed simulated - measured difference).  The measure's unit
@@ -540,8 +540,10 @@ def _entry(soil_path, data: dict, mid: str, entry: dict, tpath: Path):
                 x = _number(cell)
                 if x is None:
                     raise InputError(tpath, at(col), "a number", _plain(cell))
-                if key == "sd" and x < 0:
-                    raise InputError(tpath, at(col), f"a standard deviation >= 0 (of {r['measure']})",
+                if key == "sd" and not x > 0:
+                    raise InputError(tpath, at(col), f"a standard deviation > 0 (of {r['measure']}; a blank cell "
+                                     "where it is not known: an SD of 0 calls the value exact, and the measured-data "
+                                     "loop would take every residual beyond the seed scatter as structure)",
                                      _plain(cell))
                 if key == "n" and not (x >= 1 and x == int(x)):
                     raise InputError(tpath, at(col),

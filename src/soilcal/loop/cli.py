@@ -23,8 +23,10 @@ from pathlib import Path
 from soilcal.loop import ERROR_KEY
 
 
-def _kv(text: str, what: str) -> tuple[str, dict]:
-    """``name:k=v,k=v`` -> (name, {k: float(v)})."""
+def _kv(text: str, what: str, form: str = "name:key=number[,key=number]", shown: str | None = None
+        ) -> tuple[str, dict]:
+    """``name:k=v,k=v`` -> (name, {k: float(v)}); an InputError shows ``form`` and the value
+    as typed (``shown``, default ``text``)."""
     from soilcal.errors import InputError
 
     name, _, rest = text.partition(":")
@@ -34,10 +36,18 @@ def _kv(text: str, what: str) -> tuple[str, dict]:
         try:
             out[k.strip()] = float(v)
         except ValueError:
-            raise InputError("<command line>", what, "name:key=number[,key=number]", text) from None
+            raise InputError("<command line>", what, form, text if shown is None else shown) from None
         if not eq:
-            raise InputError("<command line>", what, "name:key=number[,key=number]", text)
+            raise InputError("<command line>", what, form, text if shown is None else shown)
     return name.strip(), out
+
+
+def _pairs(values, what: str, form: str) -> dict:
+    """``NAME=VALUE`` options (``--param``, ``--reference``), each checked as typed."""
+    out = {}
+    for v in values or []:
+        out.update(_kv("x:" + v, what, form, v)[1])
+    return out
 
 
 def dem_simulator(threads=None):
@@ -173,7 +183,7 @@ def _lookup(table: dict):
 
 
 def _params(args) -> dict:
-    return dict(_kv("p:" + ",".join(args.param or []), "--param")[1]) if args.param else {}
+    return _pairs(args.param, "--param", "NAME=NUMBER, a DEM parameter and its SI value")
 
 
 def _conditions(args, every: bool = False):
@@ -207,7 +217,7 @@ def _named(items, what: str) -> dict:
 
 
 def _reference(args) -> dict:
-    return dict(_kv("r:" + ",".join(args.reference), "--reference")[1]) if args.reference else {}
+    return _pairs(args.reference, "--reference", "QUANTITY=NUMBER, a quantity and its value in its SI unit")
 
 
 def _synthesize(args) -> int:
@@ -229,7 +239,11 @@ def _synthesize(args) -> int:
 
     declared = {**core.settings_from(soil.data, soil.path).reference, **_reference(args)}
     sy.default_reference(conds, _reference(args), "--reference", strict=True)  # a name no row carries: refused
+    core.check_reference(every, _reference(args), "--reference", "reference")  # a value far from every row
     reference = sy.default_reference(conds, declared, "--reference", over=every)
+    if not (math.isfinite(args.noise) and args.noise >= 0):
+        raise InputError("<command line>", "--noise", "a relative SD >= 0 of the instrument noise (0.02: 2 %)",
+                         args.noise)
     if args.repeats < 1:
         raise InputError("<command line>", "--repeats", "at least 1 measured repeat", args.repeats)
     overrides = _params(args)
@@ -278,6 +292,7 @@ def _run(args) -> int:
     if args.reference:
         given = _reference(args)
         sy.default_reference(conds, given, "--reference", strict=True)  # names the conditions carry, values
+        core.check_reference(every, given, "--reference", "reference")  # a value far from every row
         settings = replace(settings, reference={**settings.reference, **given})
     if args.measurement:  # one table: the reference of the whole soil's loop, not of this table's rows
         settings = replace(settings, reference=sy.default_reference(conds, settings.reference, "--reference",
@@ -311,7 +326,7 @@ def _report(soil, conds, settings, out, d: Path) -> None:
 
     qcols = core.quantity_of(conds)
     reference = json.loads(out.summary["reference"].iloc[0] or "{}")
-    plan = files._plan(soil.name, out.candidates, reference, settings, qcols, out.diagnosis)
+    plan = files._plan(soil.name, out.candidates, reference, settings, qcols, out.diagnosis, out.skipped)
     residual_figures(out.residuals, None, d / "figures" / "residuals", title=f"{soil.name}: calibrated model")
     residual_figures(out.residuals, out.predictions if out.chosen else None, d / "figures" / "after",
                      title=f"{soil.name}: " + (" + ".join(out.chosen) if out.chosen else "no effect chosen"))

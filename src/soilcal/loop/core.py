@@ -8,9 +8,10 @@ for tests, the benchmark and ``soilcal loop synthesize``) share them:
    parameters;
 2. :func:`soilcal.loop.diagnose.diagnose`: structure in the residual;
 3. :func:`candidates`: the effects whose signature shares a quantity (or ``bias``) with a
-   significant test, and that act on at least one measured condition (its quantities, and
-   its scenario where the effect names some; ``loop.candidates: all`` tries every effect
-   that acts);
+   significant test (:func:`soilcal.loop.diagnose.matched_quantities`), and that act on at
+   least one measured condition (its quantities, and its scenario where the effect names
+   some; ``loop.candidates: all`` tries every effect that acts); never one whose quantities
+   have one value on every measured row (:func:`skipped`);
 4. :func:`plan`: each candidate's design of parameters (:func:`soilcal.loop.select.theta_design`),
    every condition simulated at every design point with the seeds of the calibrated runs;
 5. :func:`analyse`: surrogates, forward selection, the verdict and the report tables;
@@ -99,10 +100,7 @@ def mean_reference(frame: pd.DataFrame, declared: dict) -> dict:
     have none.  The one rule of the loop, ``soilcal loop run`` and ``soilcal loop synthesize``."""
     from soilcal.config.quantities import QUANTITIES
 
-    rows = frame
-    if "measured" in frame.columns and len(frame):
-        with_value = frame[np.isfinite(pd.to_numeric(frame["measured"], errors="coerce").to_numpy(float))]
-        rows = with_value if len(with_value) else frame  # a table still to be synthesized: its rows
+    rows = _measured_rows(frame)
     out = {}
     for c in frame.columns:
         if not c.startswith("q:") or QUANTITIES.get(c[2:]) is None:
@@ -115,6 +113,49 @@ def mean_reference(frame: pd.DataFrame, declared: dict) -> dict:
         if len(x) and x.notna().all():
             out[q] = float(x.mean())
     return out
+
+
+def _measured_rows(frame: pd.DataFrame) -> pd.DataFrame:
+    """The rows with a measured value (every row of a table that has none yet, one to
+    synthesize): those the reference is taken over and checked against."""
+    if "measured" in frame.columns and len(frame):
+        with_value = frame[np.isfinite(pd.to_numeric(frame["measured"], errors="coerce").to_numpy(float))]
+        return with_value if len(with_value) else frame
+    return frame
+
+
+def check_reference(conditions, declared: dict, source, field: str = "loop.reference") -> None:
+    """A declared reference (``loop.reference``, ``--reference``: SI units) of a quantity that
+    varies over the measured rows (of every table given) lies within their range widened by
+    its width on each side; farther out, the effects would take the calibrated parameters to
+    hold where no row was measured, and a value given in the table's own unit (km/h, cm)
+    rather than the SI one lands there.  InputError naming the field, the rows' range in the
+    SI unit and any unit in which the value would lie among the rows.  A quantity constant
+    over the rows is not checked: there is no range to judge by."""
+    from soilcal.config.quantities import QUANTITIES
+
+    if not declared:
+        return
+    rows = _measured_rows(rs.observations(list(conditions)))
+    for q, v in declared.items():
+        col = f"q:{q}"
+        if QUANTITIES.get(q) is None or col not in rows.columns:
+            continue
+        x = pd.to_numeric(rows[col], errors="coerce").dropna().to_numpy(float)
+        if not len(x):
+            continue
+        lo, hi = float(x.min()), float(x.max())
+        span = hi - lo
+        if span <= 0 or lo - span <= float(v) <= hi + span:
+            continue
+        si, units = QUANTITIES[q]
+        read_as = [f"{float(v) * f:.4g} {si} read as {u}" for u, f in units.items()
+                   if f != 1.0 and lo <= float(v) * f <= hi]
+        raise InputError(source, f"{field}.{q}", f"{q} in {si} (the SI unit) within the measured rows' range widened "
+                         f"by its width, {lo - span:.4g} to {hi + span:.4g} {si} (the rows span {lo:.4g} to {hi:.4g} "
+                         f"{si}): the calibrated parameters would hold where nothing was measured"
+                         + (f"; the value lies among the rows as {', '.join(read_as)}, a unit other than {si}"
+                            if read_as else ""), v)
 
 
 def reference_values(res: pd.DataFrame, settings: Settings) -> dict:
@@ -130,13 +171,72 @@ def quantity_of(conditions) -> dict:
     return out
 
 
-def candidates(diag: pd.DataFrame, conditions, settings: Settings) -> list[str]:
-    """Effects to fit (module docstring, step 3), in library order."""
-    matched = dg.matched_quantities(diag)
-    out = []
+def per_table_quantities(conditions) -> dict:
+    """Numeric quantity -> {measured table: its value}, for each quantity that has one value on
+    every measured row of each table carrying it (:func:`_measured_rows`), though it may differ
+    between the tables."""
+    from soilcal.config.quantities import QUANTITIES
+
+    rows = _measured_rows(rs.observations(list(conditions)))
+    out = {}
+    for col in rows.columns:
+        q = col[2:]
+        if not col.startswith("q:") or QUANTITIES.get(q) is None:
+            continue
+        per = {}
+        for m, g in rows.groupby("measurement", sort=False):
+            x = pd.to_numeric(g[col], errors="coerce").dropna().to_numpy(float)
+            if len(x) and not np.all(x == x[0]):
+                per = None
+                break
+            if len(x):
+                per[str(m)] = float(x[0])
+        if per:
+            out[q] = per
+    return out
+
+
+def skipped(conditions, settings: Settings) -> dict:
+    """Effect -> why it is not tried: every quantity it acts through that the measured rows
+    carry has one value on all of them (a table at one speed), so the effect could only shift
+    every row alike, which says nothing of that quantity (the bias is tested on its own); or
+    one value in each table (a table at 1 m/s, another at 2 m/s), so its structure is a
+    difference between the tables, which a table's own offset (another instrument, setup or
+    measured quantity) makes as well; with ``loop.candidates: all`` too."""
+    from soilcal.config.quantities import QUANTITIES
+
+    per = per_table_quantities(conditions)
+    carried = {q for c in conditions for q in (c.quantities or {})}
+    out = {}
     for name in settings.effects:
         eff = EFFECTS[name]
-        if not any(eff.applies_to(c.quantities or {}, c.scenario) for c in conditions):
+        needs = [q for q in eff.needs if q in carried]
+        if not needs or not any(eff.applies_to(c.quantities or {}, c.scenario) for c in conditions):
+            continue
+        if not all(q in per for q in needs):
+            continue
+        if all(len(set(per[q].values())) == 1 for q in needs):
+            out[name] = ("not tried: " + ", ".join(f"{q} is {next(iter(per[q].values())):.4g} {QUANTITIES[q][0]}"
+                                                     for q in needs)
+                         + " on every measured row, so the effect could only shift every row alike and carries "
+                         "no information")
+        else:
+            out[name] = ("not tried: " + "; ".join(
+                f"{q} has one value in each measured table (" + ", ".join(
+                    f"{m}: {v:.4g} {QUANTITIES[q][0]}" for m, v in per[q].items()) + ")" for q in needs)
+                + ", so the effect cannot be told from a difference between the tables")
+    return out
+
+
+def candidates(diag: pd.DataFrame, conditions, settings: Settings) -> list[str]:
+    """Effects to fit (module docstring, step 3), in library order; none that :func:`skipped`
+    names."""
+    matched = dg.matched_quantities(diag)
+    out = []
+    skip = skipped(conditions, settings)
+    for name in settings.effects:
+        eff = EFFECTS[name]
+        if name in skip or not any(eff.applies_to(c.quantities or {}, c.scenario) for c in conditions):
             continue
         if settings.candidates == "all" or matched & set(eff.signature):
             out.append(name)
@@ -188,6 +288,7 @@ class Outcome:
     diagnosis_after: pd.DataFrame = None
     detectable: pd.DataFrame = None  # soilcal.loop.diagnose.detectable of the calibrated model's residual
     filled: dict = None  # effect -> rows whose run failed at a design point (filled from the row's other points)
+    skipped: dict = None  # effect -> why it was not tried (:func:`skipped`)
 
 
 def _follows(rank: pd.DataFrame, res: pd.DataFrame | None = None, quantity_of: dict | None = None,
@@ -281,11 +382,44 @@ def default_fold_by(settings: Settings, quantity_cols: dict, diag: pd.DataFrame 
     return None
 
 
+#: a measured quantity whose median ratio to the simulated mean lies within this many decades of a
+#: power of ten other than 1 (a factor within 26 % of 10, 100, 1000, ...) is said to look like a
+#: value in another unit than its name's
+UNIT_DECADES = 0.1
+
+
+def unit_hints(u: pd.DataFrame) -> list[str]:
+    """A sentence per measured quantity of a table (``u``: usable residual rows) whose measured
+    values are about a power of ten (10 to 10^6, or its inverse) times the simulated ones, the
+    median ratio within :data:`UNIT_DECADES` of it: a table in kN under a name in N, or in mm
+    under a name in m, reads as a bias of -99.9 % that no effect of the library can explain."""
+    out = []
+    if not len(u):
+        return out
+    for (m, q), g in u.groupby(["measurement", "measure"], sort=False):
+        ratio = g["measured"].to_numpy(float) / g["simulated_mean"].to_numpy(float)
+        ratio = ratio[np.isfinite(ratio) & (ratio > 0)]
+        if len(ratio) == 0:
+            continue
+        lg = float(np.log10(np.median(ratio)))
+        k = int(round(lg))
+        if k == 0 or abs(k) > 6 or abs(lg - k) > UNIT_DECADES:
+            continue
+        unit = str(g["unit"].iloc[0]) if "unit" in g else ""
+        factor = f"{10 ** k:g}" if k > 0 else f"1/{10 ** -k:g}"
+        out.append(f"the measured {q} of {m} is about {factor} times the simulated (median ratio "
+                   f"{np.median(ratio):.3g}): is the table's column in another unit than the {unit} of its name?")
+    return out
+
+
 def analyse(soil: str, res: pd.DataFrame, diag: pd.DataFrame, cands: list, effect_runs: dict,
-            settings: Settings, reference: dict, quantity_cols: dict | None = None) -> Outcome:
+            settings: Settings, reference: dict, quantity_cols: dict | None = None,
+            skipped_effects: dict | None = None) -> Outcome:
     """Steps 5 (module docstring): ``effect_runs`` maps each candidate to its runs
     (measurement, row, measure, value, ``t:<name>``), the switched-off point included; rows of
-    one simulation (the residual table's ``simulation`` key) share the bootstrap's draws."""
+    one simulation (the residual table's ``simulation`` key) share the bootstrap's draws;
+    ``skipped_effects`` (:func:`skipped`) are named in the verdict where the structure (or
+    ``loop.candidates: all``) would have tried them."""
     u = rs.usable(res)
     rank = dg.ranking(diag)
     follows = _follows(rank, res, quantity_cols, settings.alpha)
@@ -323,13 +457,25 @@ def analyse(soil: str, res: pd.DataFrame, diag: pd.DataFrame, cands: list, effec
     # step's model: what it leaves may name an effect the first round masked), diagnosed once
     after, left, fitted = None, "", None
     names = (sel.chosen or provisional) if sel is not None else []
+    uniform = None  # the chosen effects' fit beside a free uniform scale (Score), where a bias is left
     if names:
-        m = sl.Model([data[c] for c in names], u["simulated_mean"].to_numpy(float), u["measured"].to_numpy(float),
-                     rs.scale_of(u))
+        y0, meas = u["simulated_mean"].to_numpy(float), u["measured"].to_numpy(float)
+        m = sl.Model([data[c] for c in names], y0, meas, rs.scale_of(u))
         x, _ = m.fit()
         fitted = m.predict(x)
         res_after = residual_after(res, fitted)
         after = dg.diagnose(res_after, quantity_cols, settings.alpha)
+        bias_left = bool(((after["test"] == "bias") & after["significant"].astype(bool)).any())
+        if sel.chosen and bias_left and not any("bias" in EFFECTS[c].signature for c in sel.chosen):
+            # a bias no chosen effect can carry pulls their parameters to make up for it: refit
+            # them beside a free uniform scale of the model (the gate's nuisance), and say it
+            ref = sl.Model([sl.scale_data(y0)], y0, meas, rs.scale_of(u))
+            m = sl.Model([data[c] for c in names] + [sl.scale_data(y0)], y0, meas, rs.scale_of(u))
+            uniform = sl.score(m, ref, sl._folds(u, fold_by), settings.alpha)
+            x = np.array([uniform.theta[k] for k in uniform.names], float)
+            fitted = m.predict(x)
+            res_after = residual_after(res, fitted)
+            after = dg.diagnose(res_after, quantity_cols, settings.alpha)
         rest = dg.ranking(after)
         rest = rest[rest["significant"].astype(bool) & (rest["covariate"] != "scatter")]
         if len(rest) and sel.chosen:
@@ -338,18 +484,34 @@ def analyse(soil: str, res: pd.DataFrame, diag: pd.DataFrame, cands: list, effec
         measured = np.isfinite(res["measured"].astype(float)).any() if len(res) else False
         verdict = ("no simulated value to compare with: every run of the measured conditions failed or none ran"
                    if measured else "no measured value to compare with (nothing to diagnose)")
+    elif bool(np.all(np.abs(before) <= rs.EXACT)):
+        verdict = (f"consistent: every measured value equals the simulated mean (largest relative residual "
+                   f"{float(np.max(np.abs(before))):.2g}): there is no residual to explain (is the table the "
+                   "model's own values?)")
     elif n < 3:
         verdict = f"unexplained: too few measured values to decide ({n})"
     elif sel is not None and sel.chosen:
         chosen = sel.chosen
         theta = sel.final.theta
         ci, ci_method = _interval(u, [data[c] for c in chosen], sel.final, settings)
+        if uniform is not None:
+            key = "uniform_scale.s"
+            theta = {k: v for k, v in uniform.theta.items() if k != key}
+            ci = {k: v for k, v in uniform.ci.items() if k != key}
+            ci_method = ("fit (Jacobian) beside a free uniform scale of the model, which the bootstrap does not "
+                         "refit: the seeds' scatter in the surrogates left out")
         pred["with_effects"] = fitted
         _, held = sl.cross_validate(m, sl._folds(u, fold_by))
         meas = u["measured"].to_numpy(float)
         pred["heldout_prediction"] = meas - held * rs.scale_of(u)
         after_cv = held
         verdict = "explained by " + " + ".join(chosen)
+        if uniform is not None:
+            sv = uniform.theta["uniform_scale.s"]
+            lo, hi = uniform.ci.get("uniform_scale.s", (math.nan, math.nan))
+            verdict += (f", beside a uniform bias that no effect of the library carries (the measured values "
+                        f"{abs(100 * sv):.1f} % {'above' if sv > 0 else 'below'} the model throughout; 95 %: "
+                        f"{100 * lo:+.1f} to {100 * hi:+.1f} %), fitted with them")
         edge = _at_bounds(theta, [data[c] for c in chosen])
         if edge:
             verdict += "; " + "; ".join(edge)
@@ -378,8 +540,15 @@ def analyse(soil: str, res: pd.DataFrame, diag: pd.DataFrame, cands: list, effec
     else:
         rejected = "; ".join(f"{r['effects']}: {r['reason']}" for r in sel_rows if r["reason"])
         verdict = f"unexplained: the residual follows {follows}; candidates rejected ({rejected})"
-    if 0 < n < 4 and not verdict.startswith("no "):
-        verdict += f"; with {n} rows no trend was tested (a trend test needs 4)"
+    matched = dg.matched_quantities(diag) if len(diag) else set()
+    for nm, why in (skipped_effects or {}).items():  # those the structure (or candidates: all) would have tried
+        if settings.candidates == "all" or matched & set(EFFECTS[nm].signature):
+            verdict += f"; {nm} {why}"
+    for hint in unit_hints(u):
+        verdict += f"; {hint}"
+    tests = len(dg.per_test(u))  # table rows: the trend tests take one value per measured test
+    if 0 < tests < 4 and not verdict.startswith("no "):
+        verdict += f"; with {tests} rows no trend was tested (a trend test needs 4)"
     if n > 0 and len(res):
         measured = np.isfinite(res["measured"].astype(float).to_numpy())
         unsimulated = int((measured & ~np.isfinite(res["simulated_mean"].astype(float).to_numpy())).sum())
@@ -399,7 +568,7 @@ def analyse(soil: str, res: pd.DataFrame, diag: pd.DataFrame, cands: list, effec
         "alpha": settings.alpha, "reference": _fmt(reference)}], columns=SUMMARY_COLUMNS)
     return Outcome(res, diag, rank, cands, pd.DataFrame(sel_rows, columns=SELECTION_COLUMNS), summary, pred,
                    verdict, chosen, theta, after, dg.detectable(res, diag, quantity_cols, settings.alpha),
-                   {nm: list(d.missing) for nm, d in data.items() if d.missing})
+                   {nm: list(d.missing) for nm, d in data.items() if d.missing}, dict(skipped_effects or {}))
 
 
 # --------------------------------------------------------------------------- in process
@@ -455,12 +624,13 @@ def run_inprocess(soil: str, conditions, base_params, simulate, settings: Settin
             effect_runs[name] = pd.concat(frames, ignore_index=True)
 
     simulate_candidates(cands)
-    out = analyse(soil, res, diag, cands, effect_runs, settings, reference, qcols)
+    skip = skipped(conditions, settings)
+    out = analyse(soil, res, diag, cands, effect_runs, settings, reference, qcols, skip)
     more = more_candidates(out, conditions, settings)
     if not more:
         return out
     simulate_candidates(more)  # the second round, as the workflow's loop_more checkpoint
-    return analyse(soil, res, diag, cands + more, effect_runs, settings, reference, qcols)
+    return analyse(soil, res, diag, cands + more, effect_runs, settings, reference, qcols, skip)
 
 
 def more_candidates(out: Outcome, conditions, settings: Settings) -> list[str]:

@@ -82,7 +82,7 @@ def diagnose_files(soil_path, resources_root, tool_files: dict, outdir) -> dict:
     diag = dg.diagnose(res, qcols, settings.alpha)
     reference = core.reference_values(res, settings)
     cands = core.candidates(diag, conds, settings) if len(rs.usable(res)) >= 3 else []
-    plan = _plan(soil.name, cands, reference, settings, qcols, diag)
+    plan = _plan(soil.name, cands, reference, settings, qcols, diag, core.skipped(conds, settings))
     out = Path(outdir)
     write_csv(res, out / "residuals.csv")
     write_csv(diag, out / "diagnosis.csv")
@@ -92,8 +92,8 @@ def diagnose_files(soil_path, resources_root, tool_files: dict, outdir) -> dict:
     return plan
 
 
-def _plan(soil_name, cands, reference, settings, qcols, diag) -> dict:
-    return {"soil": soil_name, "candidates": cands, "reference": reference,
+def _plan(soil_name, cands, reference, settings, qcols, diag, skipped: dict | None = None) -> dict:
+    return {"soil": soil_name, "candidates": cands, "skipped": dict(skipped or {}), "reference": reference,
             "design": {nm: sl.theta_design(EFFECTS[nm], settings.effect_bounds(nm), settings.design_points)
                        for nm in cands},
             "fold_by": core.default_fold_by(settings, qcols, diag), "quantity_columns": qcols,
@@ -161,7 +161,7 @@ def _outcome(soil, outdir, effect_files: dict, plans: list[dict]):
             frames.append(condition_runs(conds, per[j] if j in per else per[str(j)], theta))
         effect_runs[nm] = pd.concat(frames, ignore_index=True)
     return core.analyse(soil.name, res, diag, cands, effect_runs, settings, plans[0]["reference"],
-                        plans[0]["quantity_columns"]), conds, settings
+                        plans[0]["quantity_columns"], core.skipped(conds, settings)), conds, settings
 
 
 def more_files(soil_path, resources_root, outdir, effect_files: dict, out_plan) -> dict:
@@ -239,6 +239,20 @@ def _detectable_lines(det: pd.DataFrame | None) -> list[str]:
                    {"scatter_percent": "{:.3g}", "detectable_percent": "{:.3g}"}), ""]
 
 
+def _constant_lines(res: pd.DataFrame | None) -> list[str]:
+    """The report's sentence on the covariate columns with one value over the usable rows:
+    they carry no information and are not tested."""
+    if res is None or len(res) == 0:
+        return []
+    u = rs.usable(res)
+    const = [(c[4:], u[c].dropna().iloc[0]) for c in u.columns
+             if c.startswith("cov:") and u[c].notna().any() and u[c].dropna().astype(str).nunique() == 1]
+    if not len(u) or not const:
+        return []
+    return ["Not tested, one value on every usable row (no information on the residual): "
+            + ", ".join(f"{c} ({v})" for c, v in const) + ".", ""]
+
+
 def report(soil: str, o: core.Outcome, plans: list) -> str:
     """``report.md``: verdict, error before and after, chosen effects, diagnosis, every
     candidate, settings."""
@@ -268,6 +282,7 @@ def report(soil: str, o: core.Outcome, plans: list) -> str:
     lines += ["## Diagnosis of the calibrated model's residual", "",
               _table(o.diagnosis, ["test", "covariate", "quantity", "n", "estimate", "statistic", "p", "p_adjusted", "r2",
                                    "significant"]) if len(o.diagnosis) else "(no test: too few usable rows)", "",
+              *_constant_lines(o.residuals),
               *_detectable_lines(o.detectable),
               "## Candidates", ""]
     if len(o.selection):
@@ -278,6 +293,8 @@ def report(soil: str, o: core.Outcome, plans: list) -> str:
         lines.append("No candidate effect: " + ("none of the library acts through the significant structure."
                                                  if len(o.diagnosis) and o.diagnosis["significant"].any()
                                                  else "the residual shows no significant structure."))
+    for name, why in (o.skipped or {}).items():
+        lines += ["", f"{name}: {why}."]
     for name, rows in (o.filled or {}).items():
         lines += ["", f"{name}: a run failed at some design point for {len(rows)} row{'s' if len(rows) > 1 else ''} "
                   f"({'; '.join(rows)}); each was filled from the row's other design points "

@@ -44,6 +44,11 @@ RESIDUAL_COLUMNS = ["measurement", "row", "measure", "unit", "label", "simulatio
                     "simulated_mean", "simulated_sd", "simulated_n", "failed_runs", "residual", "scale",
                     "relative_residual", "residual_se", "residual_dof", "standardised_residual", "note"]
 
+#: a relative residual at most this large is zero: the measured value equals the simulated mean
+#: to the round-off of the arithmetic (a table of the model's own values), and the tests would
+#: otherwise find "structure" in the last bits of the doubles
+EXACT = 1e-9
+
 #: a measured quantity with a value below this share of its RMS (or of both signs) is scaled by its
 #: RMS: a force 50 times smaller than the rest is about zero for a DEM whose scatter is a few
 #: percent of the force, while a soil-bin campaign from shallow and slow to deep and fast spans

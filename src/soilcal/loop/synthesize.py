@@ -41,6 +41,19 @@ DISTURBANCES = {"periodic": {"amplitude": 0.1, "wavelength": None, "phase": 0.0}
                 "day_offset": {"sd": 0.1}}
 
 
+#: (disturbance, parameter) -> (test of the value given the disturbance's values, what is expected)
+_RANGES = {
+    ("periodic", "amplitude"): (lambda v, d: 0 <= v < 1, "a relative amplitude in [0, 1) (the factor 1 + a sin "
+                                                          "stays positive)"),
+    ("periodic", "wavelength"): (lambda v, d: v > 0, "a wavelength > 0 in {where}"),
+    ("periodic", "phase"): (lambda v, d: True, "a phase in radians"),
+    ("stones", "fraction"): (lambda v, d: 0 <= v <= 1, "a share of the rows in [0, 1]"),
+    ("stones", "low"): (lambda v, d: v > -1, "a relative rise > -1 (the factor 1 + low stays positive)"),
+    ("stones", "high"): (lambda v, d: v >= d["low"], "a relative rise >= low (the rise is drawn in [low, high])"),
+    ("day_offset", "sd"): (lambda v, d: v >= 0, "a relative SD >= 0 of the offset of a test day"),
+}
+
+
 def check_hidden(hidden: dict, source="<synthesize>") -> None:
     for name, theta in hidden.items():
         if name not in EFFECTS:
@@ -69,11 +82,15 @@ def check_disturbances(disturbances: dict, conditions, source="<synthesize>") ->
                                  + ", ".join(known) + ")", k)
         full = {k: float(given.get(k, v)) if given.get(k, v) is not None else None for k, v in known.items()}
         missing = [k for k, v in full.items() if v is None]
+        where = ("m along the soil bin (the position quantity)"
+                 if any("position" in (c.quantities or {}) for c in conditions) else
+                 "rows (the table declares no position quantity, so the row number is the position)")
         if missing:
-            where = ("m along the soil bin (the position quantity)"
-                     if any("position" in (c.quantities or {}) for c in conditions) else
-                     "rows (the table declares no position quantity, so the row number is the position)")
             raise InputError(source, f"disturbance.{name}.{missing[0]}", f"a value in {where}", "none")
+        for k, v in full.items():
+            ok, want = _RANGES[(name, k)]
+            if not (math.isfinite(v) and ok(v, full)):
+                raise InputError(source, f"disturbance.{name}.{k}", want.format(where=where), v)
         out[name] = full
     return out
 
