@@ -468,7 +468,7 @@ def analyse(soil: str, res: pd.DataFrame, diag: pd.DataFrame, cands: list, effec
         bias_left = bool(((after["test"] == "bias") & after["significant"].astype(bool)).any())
         if sel.chosen and bias_left and not any("bias" in EFFECTS[c].signature for c in sel.chosen):
             # a bias no chosen effect can carry pulls their parameters to make up for it: refit
-            # them beside a free uniform scale of the model (the gate's nuisance), and say it
+            # them beside a free uniform scale of the model (select.scale_data), and say it
             ref = sl.Model([sl.scale_data(y0)], y0, meas, rs.scale_of(u))
             m = sl.Model([data[c] for c in names] + [sl.scale_data(y0)], y0, meas, rs.scale_of(u))
             uniform = sl.score(m, ref, sl._folds(u, fold_by), settings.alpha)
@@ -512,6 +512,15 @@ def analyse(soil: str, res: pd.DataFrame, diag: pd.DataFrame, cands: list, effec
             verdict += (f", beside a uniform bias that no effect of the library carries (the measured values "
                         f"{abs(100 * sv):.1f} % {'above' if sv > 0 else 'below'} the model throughout; 95 %: "
                         f"{100 * lo:+.1f} to {100 * hi:+.1f} %), fitted with them")
+        if sel.uniform is not None and not sel.uniform.accepted and uniform is None:
+            sv = sel.uniform_s
+            how = "as well or better" if sel.uniform.rmse(True) <= sel.uniform.rmse() else "nearly as well"
+            verdict += (f"; a uniform bias fits the held-out rows {how} (the measured values "
+                        f"{abs(100 * sv):.1f} % {'above' if sv > 0 else 'below'} the model throughout: held-out "
+                        f"RMS {100 * sel.uniform.rmse(True):.2f} % against {100 * sel.uniform.rmse():.2f} % "
+                        f"with the effect{'s' if len(chosen) > 1 else ''}, paired p {sel.uniform.p:.2g}), "
+                        "so these rows cannot tell "
+                        + ("it" if len(chosen) == 1 else "them") + " from a bias no mechanism carries")
         edge = _at_bounds(theta, [data[c] for c in chosen])
         if edge:
             verdict += "; " + "; ".join(edge)
