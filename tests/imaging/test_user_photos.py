@@ -105,6 +105,38 @@ def test_large_photo_is_measured_at_the_working_size(tmp_path, monkeypatch):
     _assert_flanks(r, 32.0, 35.0)
 
 
+@pytest.mark.parametrize("suffix", [".jpg", ".png"])
+def test_large_photo_is_decoded_reduced(tmp_path, monkeypatch, suffix):
+    # a phone's portrait photo four times the working size: a JPEG is decoded at half size by
+    # its decoder, a PNG box-averaged before it becomes floats; neither is held at full size,
+    # and both are measured as shown, at the angles drawn
+    from PIL import ImageFile
+
+    from soilcal.imaging import io
+
+    monkeypatch.setattr(measure, "PILE_WORK_PIXELS", 30_000)
+    decoded = []
+    load = ImageFile.ImageFile.load
+
+    def spy(im):
+        out = load(im)
+        decoded.append(im.size)
+        return out
+
+    monkeypatch.setattr(ImageFile.ImageFile, "load", spy)
+    p = tmp_path / f"large{suffix}"
+    exif = Image.Exif()
+    exif[0x0112] = 6
+    _u8(heap_photo(h=300, w=400)).transpose(Image.Transpose.ROTATE_90).save(p, exif=exif)
+    rgb, shown = io.read_photo_reduced(p, 30_000)
+    assert shown == (400, 300) and rgb.shape == (150, 200, 3)
+    if suffix == ".jpg":
+        assert decoded and max(w * h for w, h in decoded) == 150 * 200
+    r = measure.measure_pile(p)
+    assert r.work_scale == pytest.approx(0.5)
+    _assert_flanks(r, 32.0, 35.0)
+
+
 def test_a_plate_hardly_wider_than_its_heap_is_still_the_plate(tmp_path):
     """A plate that reaches only a few pixels beyond the heap's foot shows almost no edge beside
     it: no line passes the beside check, so the first line that gave a heap is the plate, and

@@ -34,7 +34,7 @@ from scipy import ndimage as ndi
 from skimage import color, feature, filters, measure, morphology, transform
 
 from soilcal.errors import InputError
-from soilcal.imaging.io import read_photo
+from soilcal.imaging.io import read_photo, read_photo_reduced
 from soilcal.imaging.refusal import Tried, explained
 from soilcal.imaging.scenes import furrow_chord_area
 
@@ -381,14 +381,19 @@ def measure_pile(path, threshold="otsu", keep_stages=False, channel="auto", refu
 
 def _measure_pile(path, threshold, keep_stages, channel, tried: Tried, image=None,
                   plate=None) -> PileResult:
-    rgb = read_photo(path) if image is None else image
+    if image is None:
+        # a phone's 12 or 48 megapixels are measured at a working size (the angles do not depend
+        # on it): decoded reduced by a whole factor where the format allows (a JPEG by 2, 4 or
+        # 8 in its decoder), then scaled to the working size; the search then takes seconds
+        # instead of minutes, and the photo is never held at full size as floats
+        rgb, (w0, h0) = read_photo_reduced(path, PILE_WORK_PIXELS if plate is None else None)
+    else:
+        rgb, (h0, w0) = image, image.shape[:2]
     scale = 1.0
-    if plate is None and rgb.shape[0] * rgb.shape[1] > PILE_WORK_PIXELS:
-        # a phone's 12 or 48 megapixels: measured at a working size (the angles do not depend
-        # on it); the search then takes seconds instead of minutes, and its own arrays a
-        # fraction of the memory (the decoded photo itself is still held at full size)
-        scale = math.sqrt(PILE_WORK_PIXELS / (rgb.shape[0] * rgb.shape[1]))
-        rgb = transform.rescale(rgb, scale, channel_axis=-1, anti_aliasing=True)
+    if plate is None and h0 * w0 > PILE_WORK_PIXELS:
+        scale = math.sqrt(PILE_WORK_PIXELS / (h0 * w0))
+        rgb = transform.rescale(rgb, math.sqrt(PILE_WORK_PIXELS / (rgb.shape[0] * rgb.shape[1])), channel_axis=-1,
+                                anti_aliasing=True)
     res = _pile_on_lines(path, rgb, threshold, keep_stages, channel, tried, plate)
     res.work_scale = scale
     return res
