@@ -156,3 +156,35 @@ def test_a_plate_hardly_wider_than_its_heap_is_still_the_plate(tmp_path):
     _assert_flanks(r, 32.0, 35.0)
     assert r.plate_beside.startswith("line 1: a line through the heap"), r.plate_beside
     assert abs(r.geometry[1] - prow) < 1.5  # measured on the plate's top edge
+
+
+@pytest.mark.parametrize("gain,clip", [(0.5, False), (1 / 8, False), (1 / 0.3, True)])
+def test_exposure_a_heap_can_be_read_at_else_refused(tmp_path, gain, clip):
+    # a dim photo spanning half the grey range is measured at the angles drawn; one
+    # under-exposed into an eighth of it, or over-exposed until the wall, the plate and most
+    # of the heap are white, leaves too few grey levels to find the plate and flanks: refused
+    from soilcal.errors import InputError
+
+    p = tmp_path / "exposed.jpg"
+    _u8(np.clip(heap_photo() * gain, 0.0, 1.0)).save(p, quality=90)
+    if gain == 0.5:
+        _assert_flanks(measure.measure_pile(p), 32.0, 35.0)
+        return
+    with pytest.raises(InputError) as e:
+        measure.measure_pile(p)
+    assert e.value.path == str(p) and e.value.field == "image"
+    assert "at least 32 of its 256 grey levels" in e.value.expected
+
+
+def test_sixteen_bit_colour_photo_using_its_low_bits_is_refused(tmp_path):
+    # a 12-bit colour camera's values in a 16-bit TIFF: PIL reads the upper 8 bits of each
+    # channel, 16 levels here, which gave flanks 4 deg off; refused, saying why
+    import tifffile
+
+    from soilcal.errors import InputError
+
+    p = tmp_path / "rgb12.tif"
+    tifffile.imwrite(p, np.round(heap_photo() * 4095).astype(np.uint16), photometric="rgb")
+    with pytest.raises(InputError, match="16-bit colour photo whose values use only its low bits") as e:
+        measure.measure_pile(p)
+    assert e.value.path == str(p) and e.value.field == "image"

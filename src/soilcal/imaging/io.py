@@ -6,7 +6,8 @@ channel is dropped), 1-bit, 8-bit grey, and single-channel 16-bit or 32-bit fram
 and 99.5 percentiles instead of being clipped to 8 bits.  A photo with an EXIF Orientation
 tag (a phone held upright or upside down) is turned as a viewer shows it before it is measured.
 :func:`read_photo_reduced` decodes a large photo reduced by a whole factor (a JPEG in its
-decoder), so it is never held at full size as floats.  A photo may have at most
+decoder), so it is never held at full size as floats.  A photo of 8 bits per channel must span
+:data:`MIN_GREY_LEVELS` grey levels.  A photo may have at most
 :data:`MAX_PIXELS` pixels (a larger one is refused before it is decoded: scale it down).
 """
 
@@ -21,6 +22,12 @@ import numpy as np
 #: the largest photo read, in pixels (64 megapixels, e.g. 9600 x 6666): a float RGB copy of
 #: it takes 1.5 GB
 MAX_PIXELS = 64_000_000
+
+#: the fewest grey levels (of 256) a photo's luminance must span between its 0.5 and 99.5
+#: percentiles: one spanning an eighth of the range or less (under- or over-exposed, or a 16-bit
+#: colour photo using its low bits only, of which PIL reads the upper 8) gave heap angles
+#: 3 to 7 deg off as if they were sound
+MIN_GREY_LEVELS = 32
 
 # full scale of PIL's single-channel modes; RGB-like modes go through luminance
 _FULL_SCALE = {"1": 1.0, "L": 255.0, "I;16": 65535.0, "I;16L": 65535.0, "I;16B": 65535.0, "I;16N": 65535.0}
@@ -61,6 +68,9 @@ def _decode(path, formats: str, min_pixels=None):
                 if w * h > MAX_PIXELS:
                     raise InputError(p, "file", f"an image of at most {MAX_PIXELS // 1_000_000} megapixels "
                                      "(scale it down)", f"{w} x {h} pixels")
+                # a colour photo of 16 bits per channel: PIL keeps the upper 8 of them
+                deep = im.mode not in _FULL_SCALE and im.mode not in ("I", "F") and any(
+                    ";16" in str(t.args) for t in im.tile)
                 f = _reduction(w, h, min_pixels)
                 if f >= 2 and im.format == "JPEG":
                     im.draft(None, (-(-w // f), -(-h // f)))  # decoded at 1/2, 1/4 or 1/8 size
@@ -83,7 +93,7 @@ def _decode(path, formats: str, min_pixels=None):
                 if mode in _FULL_SCALE:
                     top = 255.0 if im.mode == "L" else _FULL_SCALE[mode]
                     return mode, np.asarray(im, dtype=float) / top, None, shown
-                return mode, None, np.asarray(im, dtype=float) / 255.0, shown
+                return ("RGB;16" if deep else mode), None, np.asarray(im, dtype=float) / 255.0, shown
     except InputError:
         raise
     except Image.DecompressionBombError as exc:
@@ -101,7 +111,12 @@ def read_photo(path) -> np.ndarray:
 def read_photo_reduced(path, min_pixels=None) -> tuple[np.ndarray, tuple[int, int]]:
     """(:func:`read_photo`'s image, (width, height) of the photo as shown); with ``min_pixels``
     a larger photo comes reduced by the largest whole factor keeping at least that many pixels
-    (decoded reduced where the format allows: :func:`_decode`)."""
+    (decoded reduced where the format allows: :func:`_decode`).  A photo of 8 bits per channel
+    whose luminance spans fewer than :data:`MIN_GREY_LEVELS` levels (between its 0.5 and 99.5
+    percentiles) is refused: its edges are quantisation steps, which the plate and flank
+    searches take for lines."""
+    from skimage.color import rgb2gray
+
     from soilcal.errors import InputError
 
     p = Path(path)
@@ -114,6 +129,14 @@ def read_photo_reduced(path, min_pixels=None) -> tuple[np.ndarray, tuple[int, in
         raise InputError(p, "file", "an image of at least 64 x 64 pixels", f"{rgb.shape[1]} x {rgb.shape[0]} pixels")
     if float(rgb.reshape(-1, rgb.shape[-1]).std(axis=0).max()) < 0.01:  # no channel varies over the pixels
         raise InputError(p, "image", "a photo with contrast (heap against background)", "a blank image")
+    if mode not in _HIGH_DEPTH:
+        lo, hi = np.percentile(rgb2gray(rgb), [0.5, 99.5])
+        levels = (hi - lo) * 255.0
+        if levels < MIN_GREY_LEVELS:
+            why = ("a 16-bit colour photo whose values use only its low bits (read at 8 bits per channel: "
+                   "save it scaled to its full range)" if mode == "RGB;16" else "an under- or over-exposed photo")
+            raise InputError(p, "image", f"a photo whose brightness spans at least {MIN_GREY_LEVELS} of its 256 grey "
+                             "levels (heap, plate and wall exposed)", f"{levels:.0f} levels: {why}")
     return rgb, shown
 
 
