@@ -319,6 +319,8 @@ def _fit(path, u, v, label, seed=0, residual=None):
 
 #: what a photo with no heap on its plate is refused with
 NONE_FOUND = "none found"
+#: what a heap cut by the image border is refused with
+CUT = "the whole heap inside the frame"
 
 
 def _components_on_plate(path, binary, slope, intercept, kind):
@@ -344,7 +346,10 @@ def _components_on_plate(path, binary, slope, intercept, kind):
         # (a heap wider than the frame rises from it)
         raise InputError(path, "image", f"one {kind} standing on the plate", NONE_FOUND)
     if r0 <= 2 or c0 <= 2 or c1 >= w - 2:
-        raise InputError(path, "image", f"the whole {kind} inside the frame", "it is cut by the image border")
+        cut = InputError(path, "image", CUT if kind == "heap" else f"the whole {kind} inside the frame",
+                         "it is cut by the image border")
+        cut.heap_beside = not (c0 <= 2 and c1 >= w - 2)  # a heap with wall beside it on one side at least
+        raise cut
     return comp
 
 
@@ -477,6 +482,7 @@ def _on_plate_lines(path, rgb, lum, grays, lines, n_first, channel, threshold, k
             order += sorted([(ch, pol) for ch in CUES for pol in ("dark", "light")
                              if (ch, pol) not in order and etas[ch] >= MIN_CUE_ETA], key=lambda t: -etas[t[0]])
         checks = CUE_CHECKS
+        line_refusals = []  # this line's
         dissent = None  # a credible cue that disagrees with the first, waiting for a third
         for ch, pol in order:
             if first is not None and checks == 0:
@@ -495,6 +501,13 @@ def _on_plate_lines(path, rgb, lum, grays, lines, n_first, channel, threshold, k
                     beside.append((n_line, slope, intercept, f"line {n_line}: {e.got}"))
                 tried.refuse_last(e)
                 refusals.append(e)
+                line_refusals.append(e)
+                if n_line == n_first and first is None and len(line_refusals) == 2 and all(
+                        r.expected == CUT and getattr(r, "heap_beside", False) for r in line_refusals):
+                    # the first two cues see a heap on the topmost line cut by the image border
+                    # on one side, the wall beside it on the other: no lower line makes it whole
+                    # (one slanting up across its flank would give it a foot)
+                    raise line_refusals[0]
                 checks -= first is not None
                 continue
             if channel != "auto":
