@@ -236,3 +236,29 @@ def test_blank_frame(tmp_path):
     p = render.save_frame(tmp_path / "blank.png", np.full((200, 200), 0.5))
     with pytest.raises(InputError, match="blank"):
         drum.measure_drum_frame(p)
+
+
+def _no_drum(path):
+    """A wall above a darker table, no drum: the only boundary is level."""
+    rng = np.random.default_rng(2)
+    img = np.full((240, 320), 0.75)
+    img[150:] = 0.3
+    return render.save_frame(path, np.clip(img + 0.01 * rng.standard_normal(img.shape), 0, 1))
+
+
+@pytest.mark.parametrize("case", ["no drum", "drum at rest", "no surface"])
+def test_frame_without_a_turning_drum_is_refused(tmp_path, case):
+    # a level boundary is no dynamic angle (a frame of something else, a drum not turning), nor
+    # is a boundary that wanders over the frame: each gets the one drum-frame refusal
+    if case == "no drum":
+        p = _no_drum(tmp_path / "table.png")
+    elif case == "drum at rest":
+        p, _ = _frame(tmp_path, "rest.png", angle_deg=0.0, window="rim", size=(240, 320))
+    else:
+        rng = np.random.default_rng(5)
+        noise = 0.5 + 0.225 * render._noise(rng, (180, 240), 10.0)
+        p = render.save_frame(tmp_path / "mottled.png", np.clip(noise, 0, 1))
+    with pytest.raises(InputError) as e:
+        drum.measure_drum_frame(p)
+    assert e.value.path == str(p) and e.value.field == "image" and e.value.expected == drum.DRUM_EXPECTED
+    assert "\n" not in str(e.value)

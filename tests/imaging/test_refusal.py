@@ -122,3 +122,21 @@ def test_command_line_refusal_is_one_line_naming_the_image(tmp_path):
     lines = [ln for ln in p.stderr.splitlines() if ln.strip()]
     assert len(lines) == 1 and "what was tried: why/no_heap.refused.png" in lines[0]
     assert (tmp_path / "why" / "no_heap.refused.png").is_file()
+
+
+@pytest.mark.parametrize("wall,plate", [
+    ((0.75, 0.72, 0.65), (0.35, 0.35, 0.38)),  # a light wall over a dark plate
+    ((0.2, 0.2, 0.22), (0.6, 0.6, 0.62)),  # a dark wall over a light plate
+    ((0.8, 0.8, 0.8), (0.55, 0.45, 0.4)),  # a white wall over a brown board
+])
+def test_an_empty_plate_always_gets_the_same_refusal(tmp_path, wall, plate):
+    # no heap: the cues segment the wall's noise into different shapes (blobs, a strip along
+    # the plate), none of which is a heap; the refusal says so, the same for every photo
+    from test_user_photos import _u8, heap_photo
+
+    p = tmp_path / "empty.jpg"
+    _u8(heap_photo(height=0.0, wall=wall, plate=plate, grain=0.1)).save(p, quality=90)
+    with pytest.raises(InputError) as e:
+        measure.measure_pile(p)
+    assert (e.value.path, e.value.field, e.value.expected, e.value.got) == (
+        str(p), "image", "one heap standing on the plate", "none found")

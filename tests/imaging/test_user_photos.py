@@ -105,6 +105,38 @@ def test_large_photo_is_measured_at_the_working_size(tmp_path, monkeypatch):
     _assert_flanks(r, 32.0, 35.0)
 
 
+@pytest.mark.parametrize("suffix", [".jpg", ".png"])
+def test_large_photo_is_decoded_reduced(tmp_path, monkeypatch, suffix):
+    # a phone's portrait photo four times the working size: a JPEG is decoded at half size by
+    # its decoder, a PNG box-averaged before it becomes floats; neither is held at full size,
+    # and both are measured as shown, at the angles drawn
+    from PIL import ImageFile
+
+    from soilcal.imaging import io
+
+    monkeypatch.setattr(measure, "PILE_WORK_PIXELS", 30_000)
+    decoded = []
+    load = ImageFile.ImageFile.load
+
+    def spy(im):
+        out = load(im)
+        decoded.append(im.size)
+        return out
+
+    monkeypatch.setattr(ImageFile.ImageFile, "load", spy)
+    p = tmp_path / f"large{suffix}"
+    exif = Image.Exif()
+    exif[0x0112] = 6
+    _u8(heap_photo(h=300, w=400)).transpose(Image.Transpose.ROTATE_90).save(p, exif=exif)
+    rgb, shown = io.read_photo_reduced(p, 30_000)
+    assert shown == (400, 300) and rgb.shape == (150, 200, 3)
+    if suffix == ".jpg":
+        assert decoded and max(w * h for w, h in decoded) == 150 * 200
+    r = measure.measure_pile(p)
+    assert r.work_scale == pytest.approx(0.5)
+    _assert_flanks(r, 32.0, 35.0)
+
+
 def test_a_plate_hardly_wider_than_its_heap_is_still_the_plate(tmp_path):
     """A plate that reaches only a few pixels beyond the heap's foot shows almost no edge beside
     it: no line passes the beside check, so the first line that gave a heap is the plate, and
@@ -124,3 +156,50 @@ def test_a_plate_hardly_wider_than_its_heap_is_still_the_plate(tmp_path):
     _assert_flanks(r, 32.0, 35.0)
     assert r.plate_beside.startswith("line 1: a line through the heap"), r.plate_beside
     assert abs(r.geometry[1] - prow) < 1.5  # measured on the plate's top edge
+
+
+@pytest.mark.parametrize("gain,clip", [(0.5, False), (1 / 8, False), (1 / 0.3, True)])
+def test_exposure_a_heap_can_be_read_at_else_refused(tmp_path, gain, clip):
+    # a dim photo spanning half the grey range is measured at the angles drawn; one
+    # under-exposed into an eighth of it, or over-exposed until the wall, the plate and most
+    # of the heap are white, leaves too few grey levels to find the plate and flanks: refused
+    from soilcal.errors import InputError
+
+    p = tmp_path / "exposed.jpg"
+    _u8(np.clip(heap_photo() * gain, 0.0, 1.0)).save(p, quality=90)
+    if gain == 0.5:
+        _assert_flanks(measure.measure_pile(p), 32.0, 35.0)
+        return
+    with pytest.raises(InputError) as e:
+        measure.measure_pile(p)
+    assert e.value.path == str(p) and e.value.field == "image"
+    assert "at least 32 of its 256 grey levels" in e.value.expected
+
+
+def test_sixteen_bit_colour_photo_using_its_low_bits_is_refused(tmp_path):
+    # a 12-bit colour camera's values in a 16-bit TIFF: PIL reads the upper 8 bits of each
+    # channel, 16 levels here, which gave flanks 4 deg off; refused, saying why
+    import tifffile
+
+    from soilcal.errors import InputError
+
+    p = tmp_path / "rgb12.tif"
+    tifffile.imwrite(p, np.round(heap_photo() * 4095).astype(np.uint16), photometric="rgb")
+    with pytest.raises(InputError, match="16-bit colour photo whose values use only its low bits") as e:
+        measure.measure_pile(p)
+    assert e.value.path == str(p) and e.value.field == "image"
+
+
+@pytest.mark.parametrize("apex_col", [110.0])
+def test_heap_whose_foot_runs_out_of_the_frame_is_refused(tmp_path, apex_col):
+    # the heap's foot on one side lies beyond the image border (the flank reaches the border
+    # above the plate): a line slanting up from the plate across that flank gave the heap a
+    # foot, read both flanks 4 deg off as sound; the heap is cut, and said to be
+    from soilcal.errors import InputError
+
+    p = tmp_path / "cut.jpg"
+    _u8(heap_photo(apex_col=apex_col)).save(p, quality=90)
+    with pytest.raises(InputError) as e:
+        measure.measure_pile(p)
+    assert (e.value.path, e.value.field, e.value.expected, e.value.got) == (
+        str(p), "image", "the whole heap inside the frame", "it is cut by the image border")

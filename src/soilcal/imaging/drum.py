@@ -42,6 +42,10 @@ drum window, 8- or 16-bit grey, time-averaged over many frames, no plate in view
    lower_deg) / 2`` is zero for a straight surface and positive when the middle is steeper
    than the ends (a cascading drum); ``line_rms_pct`` is the RMS distance of the whole surface
    from one straight line, in % of the drum radius.
+6. A frame is refused, with one message (:data:`DRUM_EXPECTED`, what was found instead), when it
+   shows no powder against air in the drum, a surface outside :data:`DRUM_ANGLE_RANGE` (a level
+   boundary is a drum at rest or a frame with no drum in it, e.g. a table edge) or one straying
+   more than :data:`MAX_LINE_RMS_PCT` % of the radius from a line (no powder surface).
 
 The frames of one group are averaged (:func:`measure_drum`).
 """
@@ -63,6 +67,15 @@ from soilcal.imaging.refusal import Tried, explained
 CHORD_FRACTION = 0.6
 RIM_MARGIN = 0.05
 MIN_RIM_SUPPORT = 0.3
+#: the dynamic angles a turning drum's powder surface can stand at: a level surface is a drum at
+#: rest or a frame with no drum in it (a heap photo's plate, a wall's edge), never a dynamic angle
+DRUM_ANGLE_RANGE = (10.0, 80.0)
+#: the most a free surface may stray from one straight line (RMS, % of the drum radius): a
+#: cascading drum's S stays within a few %, a boundary that wanders further is no powder surface
+MAX_LINE_RMS_PCT = 10.0
+#: what every frame refused for showing no measurable drum is expected to show
+DRUM_EXPECTED = (f"a drum frame: powder lying in a drum, clearly darker or lighter than the air above it, its "
+                 f"free surface one line at {DRUM_ANGLE_RANGE[0]:.0f} to {DRUM_ANGLE_RANGE[1]:.0f} deg")
 LEVELS = ("auto", "plate", "image")
 _LIMITS = {"roll_deg": (-45.0, 45.0, "an angle between -45 and 45 deg"),
            "chord_fraction": (0.1, 1.0, "a fraction of the chord in [0.1, 1]"),
@@ -233,14 +246,14 @@ def _surface(path, p, inside, cx, cy, rm):
     t = filters.threshold_otsu(vals)
     lo_m, hi_m = vals[vals < t].mean(), vals[vals >= t].mean()
     if hi_m - lo_m < 0.1:
-        raise InputError(path, "image", "powder and air of clearly different grey levels in the drum",
-                         f"class means {lo_m:.2f} and {hi_m:.2f}")
+        raise InputError(path, "image", DRUM_EXPECTED, f"no powder against air: the grey classes inside the drum "
+                         f"differ by {hi_m - lo_m:.2f} of the frame's range (at least 0.10 needed)")
     binary = ndi.binary_fill_holes(morphology.opening((p >= t) & inside, morphology.disk(2)))
     lab = measure.label(binary)
     sizes = np.bincount(lab.ravel())
     sizes[0] = 0
     if lab.max() == 0 or sizes.max() < 0.02 * np.pi * rm ** 2:
-        raise InputError(path, "image", "powder lying in the drum", "no powder region found")
+        raise InputError(path, "image", DRUM_EXPECTED, "no powder region in the drum")
     powder = lab == sizes.argmax()
     air_lvl = np.median(p[inside & ~morphology.dilation(powder, morphology.disk(8))])
     pow_lvl = np.median(p[morphology.erosion(powder, morphology.disk(8)) & inside])
@@ -317,14 +330,15 @@ def _measure_drum_frame(path, threshold, keep_stages, options, tried: Tried) -> 
     dark = inside & (g < t)
     if not bright.any() or not dark.any():
         tried.add("powder and air split in the drum (Otsu)", circle=(cx, cy, rm))
-        raise InputError(path, "image", "powder and air in the drum", "one grey level")
+        raise InputError(path, "image", DRUM_EXPECTED, "one grey level in the drum")
     bright_powder = rr[bright].mean() > rr[dark].mean()
     tried.add("powder and air split in the drum (Otsu); the lower class is the powder",
               bright if bright_powder else dark, circle=(cx, cy, rm))
     p = g if bright_powder else 1.0 - g
     cols, rows, binary, powder = _surface(path, p, inside, cx, cy, rm)
     if cols.size < 30:
-        raise InputError(path, "free surface", "a free surface across at least 30 pixel columns", int(cols.size))
+        raise InputError(path, "image", DRUM_EXPECTED, f"a free surface across {cols.size} pixel columns "
+                         "(at least 30 needed)")
     u, v = cols - cx, cy - rows  # drum centre at the origin, v up
     pts = np.column_stack([u, v])
     m, d = _tls_robust(u, v)
@@ -345,8 +359,8 @@ def _measure_drum_frame(path, threshold, keep_stages, options, tried: Tried) -> 
     half = 0.5 * float(np.linalg.norm(ends[1] - ends[0]))
     sel = np.abs(u - foot[0]) <= fr * half * abs(dc[0])  # the columns under the central chord
     if sel.sum() < 20:
-        raise InputError(path, "free surface", f"at least 20 surface points in the central {fr:.0%} of the chord",
-                         int(sel.sum()))
+        raise InputError(path, "image", DRUM_EXPECTED, f"{int(sel.sum())} surface points in the central {fr:.0%} "
+                         "of the chord (at least 20 needed)")
     m, d = _ols_robust(u[sel], v[sel])
     angle = abs(_angle(d))
     # S-shape: thirds of the measured surface along the line, one straight line through all of it
@@ -366,6 +380,13 @@ def _measure_drum_frame(path, threshold, keep_stages, options, tried: Tried) -> 
     keep = np.abs(res) <= 8.0 * 1.4826 * np.median(np.abs(res)) + 2.0
     ma, da, res = _tls(u[keep], v[keep])
     rms = float(np.sqrt(np.mean(res ** 2)) / R * 100.0)
+    where = {"image border": "no drum rim found", "rim": "drum rim found", "manifest": "drum as given"}[dref]
+    if not DRUM_ANGLE_RANGE[0] <= angle <= DRUM_ANGLE_RANGE[1]:
+        raise InputError(path, "image", DRUM_EXPECTED, f"a surface at {angle:.1f} deg ({where}): a drum at rest "
+                         "or no drum in the frame")
+    if rms > MAX_LINE_RMS_PCT:
+        raise InputError(path, "image", DRUM_EXPECTED, f"a powder boundary straying {rms:.0f} % of the drum radius "
+                         f"(RMS) from a line, at most {MAX_LINE_RMS_PCT:.0f} % ({where})")
     st = None
     if keep_stages:
         st = Stages(rgb, g, binary, powder.astype(float),

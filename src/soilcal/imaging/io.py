@@ -4,12 +4,16 @@ Every colour mode PIL reads is accepted: RGB, CMYK, palette, with or without alp
 channel is dropped), 1-bit, 8-bit grey, and single-channel 16-bit or 32-bit frames (PIL modes
 ``I;16``, ``I``, ``F``), which are scaled by their bit depth and stretched between their 0.5
 and 99.5 percentiles instead of being clipped to 8 bits.  A photo with an EXIF Orientation
-tag (a phone held upright or upside down) is turned as a viewer shows it before it is measured.  A photo may have at most
+tag (a phone held upright or upside down) is turned as a viewer shows it before it is measured.
+:func:`read_photo_reduced` decodes a large photo reduced by a whole factor (a JPEG in its
+decoder), so it is never held at full size as floats.  A photo of 8 bits per channel must span
+:data:`MIN_GREY_LEVELS` grey levels.  A photo may have at most
 :data:`MAX_PIXELS` pixels (a larger one is refused before it is decoded: scale it down).
 """
 
 from __future__ import annotations
 
+import math
 import warnings
 from pathlib import Path
 
@@ -18,6 +22,12 @@ import numpy as np
 #: the largest photo read, in pixels (64 megapixels, e.g. 9600 x 6666): a float RGB copy of
 #: it takes 1.5 GB
 MAX_PIXELS = 64_000_000
+
+#: the fewest grey levels (of 256) a photo's luminance must span between its 0.5 and 99.5
+#: percentiles: one spanning an eighth of the range or less (under- or over-exposed, or a 16-bit
+#: colour photo using its low bits only, of which PIL reads the upper 8) gave heap angles
+#: 3 to 7 deg off as if they were sound
+MIN_GREY_LEVELS = 32
 
 # full scale of PIL's single-channel modes; RGB-like modes go through luminance
 _FULL_SCALE = {"1": 1.0, "L": 255.0, "I;16": 65535.0, "I;16L": 65535.0, "I;16B": 65535.0, "I;16N": 65535.0}
@@ -29,8 +39,19 @@ def _stretch(g: np.ndarray) -> np.ndarray:
     return np.clip((g - lo) / (hi - lo), 0.0, 1.0) if hi - lo > 0 else np.zeros_like(g)
 
 
-def _decode(path, formats: str):
-    """(PIL mode, grey [0, 1] for single-channel modes else None, RGB [0, 1] else None)."""
+def _reduction(w: int, h: int, min_pixels) -> int:
+    """The largest whole factor a ``w`` x ``h`` photo can be reduced by keeping at least
+    ``min_pixels`` (1: none, or no ``min_pixels``)."""
+    return max(1, math.isqrt(w * h // min_pixels)) if min_pixels else 1
+
+
+def _decode(path, formats: str, min_pixels=None):
+    """(PIL mode, grey [0, 1] for single-channel modes else None, RGB [0, 1] else None, (width,
+    height) as shown).  With ``min_pixels``, a photo of more pixels is decoded reduced by a whole
+    factor that keeps at least that many: a JPEG in its decoder (DCT scaling, by 2, 4 or 8,
+    :meth:`PIL.Image.Image.draft`), any photo by box averaging (:meth:`PIL.Image.Image.reduce`)
+    before it is turned into floats, so a phone's 12 or 48 megapixels are never held at full
+    size as floats."""
     from PIL import Image, ImageOps, UnidentifiedImageError
 
     from soilcal.errors import InputError
@@ -47,18 +68,32 @@ def _decode(path, formats: str):
                 if w * h > MAX_PIXELS:
                     raise InputError(p, "file", f"an image of at most {MAX_PIXELS // 1_000_000} megapixels "
                                      "(scale it down)", f"{w} x {h} pixels")
+                # a colour photo of 16 bits per channel: PIL keeps the upper 8 of them
+                deep = im.mode not in _FULL_SCALE and im.mode not in ("I", "F") and any(
+                    ";16" in str(t.args) for t in im.tile)
+                f = _reduction(w, h, min_pixels)
+                if f >= 2 and im.format == "JPEG":
+                    im.draft(None, (-(-w // f), -(-h // f)))  # decoded at 1/2, 1/4 or 1/8 size
                 im.load()  # decodes fully: a truncated JPEG raises OSError here
                 # a phone stores a portrait (or upside-down) photo in the sensor's orientation
                 # and says how to turn it in its EXIF Orientation tag: turned as it is shown
                 im = ImageOps.exif_transpose(im)
+                shown = (w, h) if (im.size[0] > im.size[1]) == (w > h) else (h, w)
                 mode = im.mode
-                if mode in _FULL_SCALE:
-                    return mode, np.asarray(im, dtype=float) / _FULL_SCALE[mode], None
+                if mode not in _FULL_SCALE and mode not in ("I", "F"):
+                    im = im.convert("RGB")
+                f = _reduction(*im.size, min_pixels)
+                if f >= 2:
+                    # 1-bit as 0 or 255 and 16-bit as 32-bit integers, which reduce averages
+                    im = (im.convert("L") if mode == "1" else im.convert("I") if mode.startswith("I;16") else im).reduce(f)
                 if mode in ("I", "F"):
                     g = np.asarray(im, dtype=float)
                     top = 65535.0 if mode == "I" and g.min() >= 0 and g.max() <= 65535 else max(float(np.abs(g).max()), 1e-12)
-                    return mode, g / top, None
-                return mode, None, np.asarray(im.convert("RGB"), dtype=float) / 255.0
+                    return mode, g / top, None, shown
+                if mode in _FULL_SCALE:
+                    top = 255.0 if im.mode == "L" else _FULL_SCALE[mode]
+                    return mode, np.asarray(im, dtype=float) / top, None, shown
+                return ("RGB;16" if deep else mode), None, np.asarray(im, dtype=float) / 255.0, shown
     except InputError:
         raise
     except Image.DecompressionBombError as exc:
@@ -70,10 +105,22 @@ def _decode(path, formats: str):
 
 def read_photo(path) -> np.ndarray:
     """RGB float image in [0, 1]; unreadable, truncated or blank files raise InputError."""
+    return read_photo_reduced(path)[0]
+
+
+def read_photo_reduced(path, min_pixels=None) -> tuple[np.ndarray, tuple[int, int]]:
+    """(:func:`read_photo`'s image, (width, height) of the photo as shown); with ``min_pixels``
+    a larger photo comes reduced by the largest whole factor keeping at least that many pixels
+    (decoded reduced where the format allows: :func:`_decode`).  A photo of 8 bits per channel
+    whose luminance spans fewer than :data:`MIN_GREY_LEVELS` levels (between its 0.5 and 99.5
+    percentiles) is refused: its edges are quantisation steps, which the plate and flank
+    searches take for lines."""
+    from skimage.color import rgb2gray
+
     from soilcal.errors import InputError
 
     p = Path(path)
-    mode, g, rgb = _decode(p, "JPEG/PNG/TIFF")
+    mode, g, rgb, shown = _decode(p, "JPEG/PNG/TIFF", min_pixels)
     if rgb is None:
         if mode in _HIGH_DEPTH:
             g = _stretch(g)
@@ -82,7 +129,15 @@ def read_photo(path) -> np.ndarray:
         raise InputError(p, "file", "an image of at least 64 x 64 pixels", f"{rgb.shape[1]} x {rgb.shape[0]} pixels")
     if float(rgb.reshape(-1, rgb.shape[-1]).std(axis=0).max()) < 0.01:  # no channel varies over the pixels
         raise InputError(p, "image", "a photo with contrast (heap against background)", "a blank image")
-    return rgb
+    if mode not in _HIGH_DEPTH:
+        lo, hi = np.percentile(rgb2gray(rgb), [0.5, 99.5])
+        levels = (hi - lo) * 255.0
+        if levels < MIN_GREY_LEVELS:
+            why = ("a 16-bit colour photo whose values use only its low bits (read at 8 bits per channel: "
+                   "save it scaled to its full range)" if mode == "RGB;16" else "an under- or over-exposed photo")
+            raise InputError(p, "image", f"a photo whose brightness spans at least {MIN_GREY_LEVELS} of its 256 grey "
+                             "levels (heap, plate and wall exposed)", f"{levels:.0f} levels: {why}")
+    return rgb, shown
 
 
 def read_gray(path):
@@ -98,7 +153,7 @@ def read_gray(path):
     from soilcal.errors import InputError
 
     p = Path(path)
-    mode, g, rgb = _decode(p, "BMP/PNG/TIFF/JPEG")
+    mode, g, rgb, _ = _decode(p, "BMP/PNG/TIFF/JPEG")
     if g is None:
         g = rgb2gray(rgb)
     if g.ndim != 2 or min(g.shape) < 64:

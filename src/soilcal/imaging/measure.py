@@ -34,7 +34,7 @@ from scipy import ndimage as ndi
 from skimage import color, feature, filters, measure, morphology, transform
 
 from soilcal.errors import InputError
-from soilcal.imaging.io import read_photo
+from soilcal.imaging.io import read_photo, read_photo_reduced
 from soilcal.imaging.refusal import Tried, explained
 from soilcal.imaging.scenes import furrow_chord_area
 
@@ -138,6 +138,7 @@ FLANK_USED_MIN = 0.6
 FLANK_RMS_MAX = 2.5
 MIN_CUE_ETA = 0.75
 FLANK_RANGE = (10.0, 65.0)  # flank angles a heap of soil can stand at
+MIN_RISE = 0.03  # the least height of a heap above the plate, as a share of the image height
 
 
 def _eta(values):
@@ -316,6 +317,12 @@ def _fit(path, u, v, label, seed=0, residual=None):
     return float(np.degrees(np.arctan2(abs(dv), abs(du)))), (u0, v0, du, dv), pts[inl]
 
 
+#: what a photo with no heap on its plate is refused with
+NONE_FOUND = "none found"
+#: what a heap cut by the image border is refused with
+CUT = "the whole heap inside the frame"
+
+
 def _components_on_plate(path, binary, slope, intercept, kind):
     h, w = binary.shape
     rr, cc = np.mgrid[0:h, 0:w]
@@ -327,13 +334,22 @@ def _components_on_plate(path, binary, slope, intercept, kind):
     props = {p.label: p for p in measure.regionprops(lab)}
     cands = sorted((props[t] for t in touching if props[t].area > 0.004 * h * w), key=lambda p: -p.area)
     if not cands:
-        raise InputError(path, "image", f"one {kind} standing on the plate", "none found")
+        raise InputError(path, "image", f"one {kind} standing on the plate", NONE_FOUND)
     if len(cands) > 1 and cands[1].area > 0.25 * cands[0].area:
         raise InputError(path, "image", f"one {kind}", f"{len(cands)} separate {kind}s on the plate")
     comp = lab == cands[0].label
     r0, c0, r1, c1 = cands[0].bbox
+    on = comp.any(axis=0)
+    if c0 <= 2 and c1 >= w - 2 and np.median(plate_rows[0, on] - comp[:, on].argmax(axis=0)) < MIN_RISE * h:
+        # a low class running along the plate from one side of the frame to the other is a
+        # strip of the plate's own edge or of the wall's noise on an empty plate, not a heap
+        # (a heap wider than the frame rises from it)
+        raise InputError(path, "image", f"one {kind} standing on the plate", NONE_FOUND)
     if r0 <= 2 or c0 <= 2 or c1 >= w - 2:
-        raise InputError(path, "image", f"the whole {kind} inside the frame", "it is cut by the image border")
+        cut = InputError(path, "image", CUT if kind == "heap" else f"the whole {kind} inside the frame",
+                         "it is cut by the image border")
+        cut.heap_beside = not (c0 <= 2 and c1 >= w - 2)  # a heap with wall beside it on one side at least
+        raise cut
     return comp
 
 
@@ -381,14 +397,19 @@ def measure_pile(path, threshold="otsu", keep_stages=False, channel="auto", refu
 
 def _measure_pile(path, threshold, keep_stages, channel, tried: Tried, image=None,
                   plate=None) -> PileResult:
-    rgb = read_photo(path) if image is None else image
+    if image is None:
+        # a phone's 12 or 48 megapixels are measured at a working size (the angles do not depend
+        # on it): decoded reduced by a whole factor where the format allows (a JPEG by 2, 4 or
+        # 8 in its decoder), then scaled to the working size; the search then takes seconds
+        # instead of minutes, and the photo is never held at full size as floats
+        rgb, (w0, h0) = read_photo_reduced(path, PILE_WORK_PIXELS if plate is None else None)
+    else:
+        rgb, (h0, w0) = image, image.shape[:2]
     scale = 1.0
-    if plate is None and rgb.shape[0] * rgb.shape[1] > PILE_WORK_PIXELS:
-        # a phone's 12 or 48 megapixels: measured at a working size (the angles do not depend
-        # on it); the search then takes seconds instead of minutes, and its own arrays a
-        # fraction of the memory (the decoded photo itself is still held at full size)
-        scale = math.sqrt(PILE_WORK_PIXELS / (rgb.shape[0] * rgb.shape[1]))
-        rgb = transform.rescale(rgb, scale, channel_axis=-1, anti_aliasing=True)
+    if plate is None and h0 * w0 > PILE_WORK_PIXELS:
+        scale = math.sqrt(PILE_WORK_PIXELS / (h0 * w0))
+        rgb = transform.rescale(rgb, math.sqrt(PILE_WORK_PIXELS / (rgb.shape[0] * rgb.shape[1])), channel_axis=-1,
+                                anti_aliasing=True)
     res = _pile_on_lines(path, rgb, threshold, keep_stages, channel, tried, plate)
     res.work_scale = scale
     return res
@@ -441,7 +462,7 @@ def _on_plate_lines(path, rgb, lum, grays, lines, n_first, channel, threshold, k
     (:func:`_plate_beside_heap`) is added to ``beside`` with the reason."""
     h, w = lum.shape
     rr, cc = np.mgrid[0:h, 0:w]
-    err = None
+    refusals = []  # every cue's refusal, the topmost line's first
     first = None  # the first cue's result, waiting for a second cue to cross-check it
     for n_line, (slope, intercept) in enumerate(lines, n_first):  # the plate top first; a faint one may hide behind a lower edge
         if beside and slope * w / 2 + intercept <= min(b[1] * w / 2 + b[2] for b in beside) + 3:
@@ -461,6 +482,7 @@ def _on_plate_lines(path, rgb, lum, grays, lines, n_first, channel, threshold, k
             order += sorted([(ch, pol) for ch in CUES for pol in ("dark", "light")
                              if (ch, pol) not in order and etas[ch] >= MIN_CUE_ETA], key=lambda t: -etas[t[0]])
         checks = CUE_CHECKS
+        line_refusals = []  # this line's
         dissent = None  # a credible cue that disagrees with the first, waiting for a third
         for ch, pol in order:
             if first is not None and checks == 0:
@@ -478,7 +500,14 @@ def _on_plate_lines(path, rgb, lum, grays, lines, n_first, channel, threshold, k
                 if e.field == "plate line" and not any(b[0] == n_line for b in beside):
                     beside.append((n_line, slope, intercept, f"line {n_line}: {e.got}"))
                 tried.refuse_last(e)
-                err = err or e  # the refusal reported is the first cue's on the topmost line
+                refusals.append(e)
+                line_refusals.append(e)
+                if n_line == n_first and first is None and len(line_refusals) == 2 and all(
+                        r.expected == CUT and getattr(r, "heap_beside", False) for r in line_refusals):
+                    # the first two cues see a heap on the topmost line cut by the image border
+                    # on one side, the wall beside it on the other: no lower line makes it whole
+                    # (one slanting up across its flank would give it a foot)
+                    raise line_refusals[0]
                 checks -= first is not None
                 continue
             if channel != "auto":
@@ -498,7 +527,24 @@ def _on_plate_lines(path, rgb, lum, grays, lines, n_first, channel, threshold, k
             # no further credible cue measured a heap on this plate line: the first stands
             # alone, or against the one that disagrees
             return first if dissent is None else _cross_checked(first, dissent)
-    raise err
+    raise _refusal(path, refusals, channel == "auto")
+
+
+def _refusal(path, refusals, search) -> InputError:
+    """The refusal of a photo on whose plate lines no cue measured a heap: the first cue's on
+    the topmost line when the second cue there was turned down the same way (two segmentations
+    see the same thing: as many heaps, a heap cut by the border, a shape no heap has), else
+    the one refusal of a plate with no heap on it: the first two cues disagreeing is what an
+    empty plate gives, each segmenting the wall's own noise into different shapes."""
+    if not search or len(refusals) < 2:
+        return refusals[0]
+
+    def same(e):  # the kind of refusal, and for several heaps how many
+        return e.field, e.expected, e.got if e.expected == "one heap" else None
+
+    if same(refusals[0]) == same(refusals[1]):
+        return refusals[0]
+    return InputError(path, "image", "one heap standing on the plate", NONE_FOUND)
 
 
 #: a heap photo larger than this (pixels) is measured reduced to it (the flank fits need no
@@ -570,7 +616,7 @@ def _pile_with(path, rgb, gray, cue, polarity, band, slope, intercept, threshold
     # confidence: share of each flank's points on its line, their scatter about it
     used = min(len(lp) / max(lsel.sum(), 1), len(rp) / max(rsel.sum(), 1))
     rms = max(_line_rms(lp, lline), _line_rms(rp, rline))
-    if search and (not (FLANK_RANGE[0] <= ang.min() and ang.max() <= FLANK_RANGE[1]) or hmax < 0.03 * lev.shape[0]):
+    if search and (not (FLANK_RANGE[0] <= ang.min() and ang.max() <= FLANK_RANGE[1]) or hmax < MIN_RISE * lev.shape[0]):
         raise InputError(path, "image", f"a heap: flanks between {FLANK_RANGE[0]:.0f} and "
                          f"{FLANK_RANGE[1]:.0f} deg, at least 3 % of the image high",
                          f"flanks {left:.1f} and {right:.1f} deg ({rms:.1f} px from their lines), {hmax:.0f} px "
