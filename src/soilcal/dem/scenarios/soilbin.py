@@ -200,6 +200,25 @@ def tool_time_step(spec: BinSpec, params: DemParams) -> float:
                DAMPING_DT_SAFETY * mats.damping_dt(rmin, tab, spec.max_overlap))
 
 
+#: Most steps one tool pass may take: 6 times the longest pass of the papers' presets (the
+#: bulldozing plate's 4.5 s at 5.3 us, 849,000 steps).  A slower tool takes proportionally
+#: more steps (a speed typed in km/h as m/s/1000 or so would grind for hours).
+MAX_PASS_STEPS = 5_000_000
+
+
+def check_pass(spec: BinSpec, params: DemParams, source: str, field: str, speed: float,
+               travel: float, dt: float, pushes: bool = True) -> None:
+    """Refuse, before the bin is settled, a tool pass the run could not finish: one of more
+    than :data:`MAX_PASS_STEPS` steps of ``dt`` (``travel`` at ``speed``).  ``field`` names
+    the speed's setting."""
+    steps = math.ceil(travel / speed / dt)
+    check(steps <= MAX_PASS_STEPS, source, field,
+          f"a speed whose pass of setup.travel = {travel:.4g} m takes at most "
+          f"{MAX_PASS_STEPS:,} steps (>= {travel / (MAX_PASS_STEPS * dt):.3g} m/s at the "
+          f"pass's time step of {dt:.4g} s)",
+          f"{speed:.4g} m/s: {travel / speed:.4g} s of pass, {steps:,} steps")
+
+
 def reference_cohesion(spec: BinSpec, reference: BinSpec, setup: dict, source: str) -> float:
     """Surface-energy factor of a bin against the paper preset's bin (base.py)."""
     return cohesion_scale(spec.dist, reference.dist, setup, source)
