@@ -251,3 +251,28 @@ def test_a_wall_moving_further_per_step_than_the_overlap_limit_is_named():
                      centre=(0, 0.5, 0))
     sim.add_plane((0, 0, -0.05), (0, 0, 1), "soil", omega=(0, 0, 3000.0))
     sim.run(10)
+
+
+def test_a_material_too_soft_to_carry_its_weight_is_named_before_the_run():
+    """A 1 cm sphere of 10 kPa on a floor of its material: Hertz's resting overlap
+    (3 m g / (4 E* sqrt(R)))^(2/3) is 27.6 % of its radius, over max_overlap (5 %).  The
+    run stopped at its second step with an overlap blow-up whose advice was to shorten
+    the step; it is refused before any step, naming the material and the E* it needs
+    (pi rho g R / 0.05^1.5); a stiffer one runs."""
+    E, nu, rho, R, g = 1e4, 0.3, 2600.0, 0.01, 9.81
+    estar = E / (2 * (1 - nu**2))
+    m = 4 / 3 * np.pi * R**3 * rho
+    assert (3 * m * g / (4 * estar * np.sqrt(R))) ** (2 / 3) / R > 0.27
+
+    def sim_of(youngs):
+        sim = Simulation(table(E=youngs, nu=nu, rho=rho), gravity=(0, 0, -g))
+        sim.add_particles([[0, 0, R]], R, "soil")
+        sim.add_plane((0, 0, 0), (0, 0, 1), "soil")
+        return sim
+
+    sim = sim_of(E)
+    with pytest.raises(InputError, match="materials.soil") as e:
+        sim.run(2000)
+    assert f"{np.pi * rho * g * R / 0.05 ** 1.5:.4g} Pa" in str(e.value)
+    assert sim.step == 0
+    sim_of(1e6).run(10)

@@ -320,6 +320,7 @@ class Simulation:
         self.rayleigh = self.materials.rayleigh_dt(rmin)
         self.jkr_dt = (self.materials.jkr_dt(rmin, self._pair) if self.codes[4] == 1
                        else math.inf)
+        self._check_weight()
         self.damping_dt = self.materials.damping_dt(rmin, self._pair, self.max_overlap,
                                                     wall_materials=set(self.walls.mat))
         dt = self.dt_user if self.dt_user is not None else min(
@@ -495,6 +496,38 @@ class Simulation:
                     f"time step or check the stiffness (a shorter step that fails at the same time t "
                     f"points to a load the stiffness cannot carry, not to the step)")
             return total
+
+    def _check_weight(self) -> None:
+        """InputError when the weight of a sphere alone presses it deeper into a wall of the
+        run than ``max_overlap`` of its radius: the Hertz overlap of a sphere resting on a
+        flat face, delta = (3 m g / (4 E* sqrt(R)))^(2/3), is delta / R = (pi rho g R /
+        E*)^(2/3), largest for the largest sphere of each material (a softer wall, a weaker
+        contact law or a larger sphere only adds to it); such a run would stop at the first
+        sphere that comes to rest on the wall."""
+        g = float(np.linalg.norm(self.gravity))
+        if g == 0.0 or not self.walls.mat:
+            return
+        p = self.p
+        for k in np.unique(p.mat):
+            mat = self.materials.materials[int(k)]
+            if not np.any((p.mat == k) & (p.inv_m > 0)):
+                continue
+            rmax = float(p.r[(p.mat == k) & (p.inv_m > 0)].max())
+            for wm in sorted(set(self.walls.mat)):
+                estar = float(self._pair[int(k), wm, P_ESTAR])
+                frac = (math.pi * mat.density * g * rmax / estar) ** (2.0 / 3.0)
+                if frac > self.max_overlap:
+                    wall = self.materials.materials[wm].name
+                    need = math.pi * mat.density * g * rmax / self.max_overlap ** 1.5
+                    raise InputError(
+                        self.source, f"materials.{mat.name}",
+                        f"a material stiff enough to carry a sphere's own weight on a "
+                        f"'{wall}' wall within max_overlap = {100 * self.max_overlap:g} % of "
+                        f"its radius (Hertz: E* >= pi rho g R / max_overlap^1.5 = "
+                        f"{need:.4g} Pa for the largest sphere, R = {rmax:.4g} m), or a larger "
+                        f"max_overlap",
+                        f"E* = {estar:.4g} Pa: a resting sphere would overlap the wall by "
+                        f"{100 * frac:.3g} % of its radius")
 
     def _check_wall_steps(self, reach) -> None:
         """InputError naming the wall whose surface moves more than ``max_overlap`` of the
