@@ -247,3 +247,40 @@ def test_moving_mesh_renews_wall_lists_alone_and_misses_no_contact():
                     assert p in got
     assert sim.n_wall_rebuilds > 0
     assert sim.wall_force[0, 2] < 0.0  # the spheres press on the floor
+
+
+def test_spheres_far_from_the_rest_keep_the_grid_small_and_their_contacts(rng):
+    """Spheres that left the others far behind (thrown off, falling past the floor's edge)
+    would stretch the cell grid over their bounding box (here 40 m x 60 m x 30 m of 5.5 mm
+    cells, 10^13 cells): the grid stays within its cap, the lists still hold every pair
+    within the cutoff, and the far spheres still meet each other and a far triangle with the
+    Hertz force 4/3 E* sqrt(R*) delta^(3/2)."""
+    E, nu, R = 1e8, 0.3, 1e-3
+    sim = Simulation(table(E=E, nu=nu), dt=1e-6, gravity=(0, 0, 0))
+    x = rng.uniform(0, 0.03, (400, 3))
+    sim.add_particles(x, rng.uniform(0.5e-3, 2.5e-3, 400), "soil")
+    d_pair, d_wall = 2e-5, 3e-5
+    far = np.array([40.0, 60.0, -30.0])
+    sim.add_particles([far, far + [2 * R - d_pair, 0, 0]], R, "soil")
+    low = far + [0.0, 0.1, 0.0]
+    sim.add_particles([low], R, "soil")
+    z = low[2] - R + d_wall
+    sim.add_mesh([[low[0] - 0.01, low[1] - 0.01, z], [low[0] + 0.01, low[1] - 0.01, z],
+                  [low[0], low[1] + 0.01, z]], [[0, 1, 2]], "soil", name="far")
+    f, _ = sim.compute_forces()
+    assert sim._cells.shape[0] <= 2 * (nb.cell_cap(sim.n) + 1)
+    estar = E / (2 * (1 - nu**2))
+    rows = sim.index([400, 401, 402])
+    hertz = lambda rs, e, d: 4 / 3 * e * np.sqrt(rs) * d**1.5  # noqa: E731
+    assert np.allclose(f[rows[0]], [-hertz(R / 2, estar, d_pair), 0, 0], rtol=1e-9)
+    assert np.allclose(f[rows[1]], [hertz(R / 2, estar, d_pair), 0, 0], rtol=1e-9)
+    assert np.allclose(f[rows[2]], [0, 0, hertz(R, estar, d_wall)], rtol=1e-9)
+    assert np.allclose(sim.wall_force[0], [0, 0, -hertz(R, estar, d_wall)], rtol=1e-9)
+    # every pair within the cutoff is listed
+    xs, r = sim.x, sim.p.r
+    dist = np.linalg.norm(xs[:, None] - xs[None], axis=2)
+    want = (dist < r[:, None] + r[None] + sim.skin + sim.extra) & ~np.eye(sim.n, dtype=bool)
+    start, nbr = sim._lists["start_a"], sim._lists["nbr_a"]
+    for i in range(sim.n):
+        assert nbr[start[i]:start[i + 1]].tolist() == [j for j in np.nonzero(want[i])[0]
+                                                       if j > i]

@@ -224,3 +224,55 @@ def test_bad_wall_geometry_and_motion_are_named(add, field):
     with pytest.raises(InputError) as exc:
         add(sim)
     assert exc.value.field == field and not sim.walls.names
+
+
+def test_a_wall_moving_further_per_step_than_the_overlap_limit_is_named():
+    """A thin plate at 500 m/s moves 5 mm per 10 us step, 2.5 diameters of the 1 mm sphere
+    in its way: it passed through the sphere and left it at rest.  The run is refused
+    before its first step, naming the wall, the step and the surface speed it allows
+    (max_overlap r_min / dt = 0.05 x 1 mm / 10 us = 5 m/s)."""
+
+    def sim_with(**wall):
+        sim = Simulation(table(E=1e7), dt=1e-5, gravity=(0, 0, 0))
+        sim.add_particles([[0.0, 0, 0]], 1e-3, "soil")
+        return sim, sim.add_rectangle((-0.0011, 0, 0), (1, 0, 0), (0, 1, 0), 0.01, 0.01,
+                                      "soil", name="blade", **wall)
+
+    sim, _ = sim_with(velocity=(500.0, 0, 0))
+    with pytest.raises(InputError, match="walls.blade") as e:
+        sim.run(10)
+    assert "surface speed <= 5 m/s" in str(e.value) and "dt <= 1e-07 s" in str(e.value)
+    assert sim.step == 0
+    # a drum spinning about its own axis and a floor spinning about its normal leave their
+    # surfaces in place: not refused, however fast
+    sim = Simulation(table(E=1e7), dt=1e-5, gravity=(0, 0, -9.81))
+    sim.add_particles([[0.0, 0, -0.049]], 1e-3, "soil")
+    sim.add_cylinder((0, -0.01, 0), (0, 1, 0), 0.05, 0.01, "soil", omega=(0, 2000.0, 0),
+                     centre=(0, 0.5, 0))
+    sim.add_plane((0, 0, -0.05), (0, 0, 1), "soil", omega=(0, 0, 3000.0))
+    sim.run(10)
+
+
+def test_a_material_too_soft_to_carry_its_weight_is_named_before_the_run():
+    """A 1 cm sphere of 10 kPa on a floor of its material: Hertz's resting overlap
+    (3 m g / (4 E* sqrt(R)))^(2/3) is 27.6 % of its radius, over max_overlap (5 %).  The
+    run stopped at its second step with an overlap blow-up whose advice was to shorten
+    the step; it is refused before any step, naming the material and the E* it needs
+    (pi rho g R / 0.05^1.5); a stiffer one runs."""
+    E, nu, rho, R, g = 1e4, 0.3, 2600.0, 0.01, 9.81
+    estar = E / (2 * (1 - nu**2))
+    m = 4 / 3 * np.pi * R**3 * rho
+    assert (3 * m * g / (4 * estar * np.sqrt(R))) ** (2 / 3) / R > 0.27
+
+    def sim_of(youngs):
+        sim = Simulation(table(E=youngs, nu=nu, rho=rho), gravity=(0, 0, -g))
+        sim.add_particles([[0, 0, R]], R, "soil")
+        sim.add_plane((0, 0, 0), (0, 0, 1), "soil")
+        return sim
+
+    sim = sim_of(E)
+    with pytest.raises(InputError, match="materials.soil") as e:
+        sim.run(2000)
+    assert f"{np.pi * rho * g * R / 0.05 ** 1.5:.4g} Pa" in str(e.value)
+    assert sim.step == 0
+    sim_of(1e6).run(10)

@@ -320,6 +320,7 @@ class Simulation:
         self.rayleigh = self.materials.rayleigh_dt(rmin)
         self.jkr_dt = (self.materials.jkr_dt(rmin, self._pair) if self.codes[4] == 1
                        else math.inf)
+        self._check_weight()
         self.damping_dt = self.materials.damping_dt(rmin, self._pair, self.max_overlap,
                                                     wall_materials=set(self.walls.mat))
         dt = self.dt_user if self.dt_user is not None else min(
@@ -428,6 +429,8 @@ class Simulation:
         # half of it, for the particles' own motion) and on the wall's own extent
         reach = np.array([min(1.5 * float(np.linalg.norm(np.maximum(abs(lo - c), abs(hi - c)))),
                               e) for c, e in zip(wa["wall_centre"], self._wall_extent())])
+        if steps > 0:
+            self._check_wall_steps(reach)
         status = np.zeros(5, dtype=np.int64)
         threads = numba.get_num_threads()
         if p.n < itg.PARALLEL_MIN:
@@ -493,6 +496,77 @@ class Simulation:
                     f"time step or check the stiffness (a shorter step that fails at the same time t "
                     f"points to a load the stiffness cannot carry, not to the step)")
             return total
+
+    def _check_weight(self) -> None:
+        """InputError when the weight of a sphere alone presses it deeper into a wall of the
+        run than ``max_overlap`` of its radius: the Hertz overlap of a sphere resting on a
+        flat face, delta = (3 m g / (4 E* sqrt(R)))^(2/3), is delta / R = (pi rho g R /
+        E*)^(2/3), largest for the largest sphere of each material (a softer wall, a weaker
+        contact law or a larger sphere only adds to it); such a run would stop at the first
+        sphere that comes to rest on the wall."""
+        g = float(np.linalg.norm(self.gravity))
+        if g == 0.0 or not self.walls.mat:
+            return
+        p = self.p
+        for k in np.unique(p.mat):
+            mat = self.materials.materials[int(k)]
+            if not np.any((p.mat == k) & (p.inv_m > 0)):
+                continue
+            rmax = float(p.r[(p.mat == k) & (p.inv_m > 0)].max())
+            for wm in sorted(set(self.walls.mat)):
+                estar = float(self._pair[int(k), wm, P_ESTAR])
+                frac = (math.pi * mat.density * g * rmax / estar) ** (2.0 / 3.0)
+                if frac > self.max_overlap:
+                    wall = self.materials.materials[wm].name
+                    need = math.pi * mat.density * g * rmax / self.max_overlap ** 1.5
+                    raise InputError(
+                        self.source, f"materials.{mat.name}",
+                        f"a material stiff enough to carry a sphere's own weight on a "
+                        f"'{wall}' wall within max_overlap = {100 * self.max_overlap:g} % of "
+                        f"its radius (Hertz: E* >= pi rho g R / max_overlap^1.5 = "
+                        f"{need:.4g} Pa for the largest sphere, R = {rmax:.4g} m), or a larger "
+                        f"max_overlap",
+                        f"E* = {estar:.4g} Pa: a resting sphere would overlap the wall by "
+                        f"{100 * frac:.3g} % of its radius")
+
+    def _check_wall_steps(self, reach) -> None:
+        """InputError naming the wall whose surface moves more than ``max_overlap`` of the
+        smallest radius in one step: a contact it makes would start deeper than the run
+        accepts (a blow-up at its first step), and a thin wall moving more than a diameter
+        per step passes through a sphere without touching it.  The speed of a primitive's
+        surface: the wall's velocity (its normal part for a plane) plus its spin (less the
+        part about a plane's normal or a cylinder's, cone's or disk's axis, which leaves the
+        surface in place, while that part still carries an axis off the wall's centre
+        round it) times ``reach`` (:meth:`run`)."""
+        wa = self._warr
+        limit = self.max_overlap * float(self.p.r.min())
+        for k, (kind, w) in enumerate(zip(wa["prim_kind"], wa["prim_wall"])):
+            v, om, par = wa["wall_vel"][w], wa["wall_omega"][w], wa["prim_par"][k]
+            if not (np.any(v != 0) or np.any(om != 0)):
+                continue
+            speed = float(np.linalg.norm(v))
+            spin = float(np.linalg.norm(om))
+            if kind in (PLANE, CYLINDER, CONE, DISK):
+                a = par[3:6]
+                along = float(np.dot(om, a)) * a
+                spin = float(np.linalg.norm(om - along))
+                if kind == PLANE:
+                    speed = abs(float(np.dot(v, a)))
+                else:
+                    speed += float(np.linalg.norm(np.cross(along, par[0:3] - wa["wall_centre"][w])))
+            step = (speed + spin * float(reach[w])) * self.dt
+            if step > limit:
+                name = self.walls.names[w]
+                raise InputError(
+                    self.source, f"walls.{name}",
+                    f"a wall whose surface moves at most max_overlap = "
+                    f"{100 * self.max_overlap:g} % of the smallest radius ({limit:.4g} m) per "
+                    f"step (a contact would start deeper than the run accepts, and a thin wall "
+                    f"can pass through a sphere unseen): a step dt <= {self.dt * limit / step:.4g} s "
+                    f"at this motion, or a surface speed <= {limit / self.dt:.4g} m/s at dt = "
+                    f"{self.dt:.4g} s",
+                    f"{step / self.dt:.4g} m/s (velocity {v.tolist()} m/s, omega {om.tolist()} "
+                    f"rad/s): {step:.4g} m per step")
 
     def _initial_state_error(self, i: int, overlap: bool) -> InputError:
         """The error of a state that a run cannot start from: row ``i`` overlaps a sphere or

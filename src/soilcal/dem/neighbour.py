@@ -91,8 +91,10 @@ def _range(c, nc, per):
 
 
 @njit(cache=True, inline="always")
-def _tri_cells(prim_par, p, q, cut, lo, cs, nc, per):
-    """Cell range [c0, c1] along axis q covered by triangle p grown by cut (c0 > c1: none)."""
+def _tri_cells(prim_par, p, q, cut, lo, cs, nc, per, clamp):
+    """Cell range [c0, c1] along axis q covered by triangle p grown by cut (c0 > c1: none);
+    ``clamp``: a triangle beyond the grid goes to its edge cells, where the particles beyond
+    it are (:func:`_grid`)."""
     mn = min(prim_par[p, q], prim_par[p, 3 + q], prim_par[p, 6 + q]) - cut
     mx = max(prim_par[p, q], prim_par[p, 3 + q], prim_par[p, 6 + q]) + cut
     c0 = int(math.floor((mn - lo) / cs))
@@ -101,14 +103,14 @@ def _tri_cells(prim_par, p, q, cut, lo, cs, nc, per):
         if c1 - c0 + 1 >= nc:
             return 0, nc - 1
         return c0, c1
-    if c1 < 0 or c0 > nc - 1:
+    if not clamp and (c1 < 0 or c0 > nc - 1):
         return 1, 0
-    return max(c0, 0), min(c1, nc - 1)
+    return min(max(c0, 0), nc - 1), max(min(c1, nc - 1), 0)
 
 
 @njit(cache=True)
 def _bin_triangles(prim_kind, prim_par, cut, lo0, cs0, n0, per0, lo1, cs1, n1, per1,
-                   lo2, cs2, n2, wcell_start, wcell_idx, glob):
+                   lo2, cs2, n2, wcell_start, wcell_idx, glob, clamp):
     """Bin triangle primitives by cell (counting sort); other kinds go to ``glob``.
 
     Returns (n_global, status, need): status 0 ok, 5 bin buffer too short (need entries).
@@ -125,9 +127,9 @@ def _bin_triangles(prim_kind, prim_par, cut, lo0, cs0, n0, per0, lo1, cs1, n1, p
                     glob[ng] = p
                     ng += 1
                 continue
-            ax, bx = _tri_cells(prim_par, p, 0, cut, lo0, cs0, n0, per0)
-            ay, by = _tri_cells(prim_par, p, 1, cut, lo1, cs1, n1, per1)
-            az, bz = _tri_cells(prim_par, p, 2, cut, lo2, cs2, n2, False)
+            ax, bx = _tri_cells(prim_par, p, 0, cut, lo0, cs0, n0, per0, clamp)
+            ay, by = _tri_cells(prim_par, p, 1, cut, lo1, cs1, n1, per1, clamp)
+            az, bz = _tri_cells(prim_par, p, 2, cut, lo2, cs2, n2, False, clamp)
             for zz in range(az, bz + 1):
                 for yy0 in range(ay, by + 1):
                     yy = yy0 % n1
@@ -230,12 +232,73 @@ def _row(q, cpos, cell_idx, cell_of, box, periodic, cut0, cell_start, n0, n1, n2
     return cnt
 
 
+#: cells a grid may have per particle, and at least (:func:`_grid`)
+CELLS_PER_PARTICLE = 128
+CELLS_MIN = 1 << 16
+#: the bulk of a narrowed grid leaves out at most one particle in this many at either end
+BULK_TRIM = 1000
+HIST_BINS = 1024  # histogram bins of :func:`_bulk_range` (in cell_start, >= 1024 long)
+
+
+@njit(cache=True, inline="always")
+def cell_cap(n):
+    """Most cells of the grid of n particles (:func:`_grid`)."""
+    return max(CELLS_MIN, CELLS_PER_PARTICLE * n)
+
+
+@njit(cache=True)
+def _bulk_range(x, q, k, mn, mx, hist):
+    """[a, b] in [mn, mx] holding every coordinate x[:, q] but at most k below a and k
+    above b: three rounds of a histogram of HIST_BINS bins (in hist) each narrowing the
+    range to the bins where the k-th smallest and largest coordinates fall."""
+    n = x.shape[0]
+    a = mn
+    b = mx
+    below = 0
+    above = 0
+    for _ in range(3):
+        w = (b - a) / HIST_BINS
+        if not w > 0.0:
+            break
+        for h in range(HIST_BINS):
+            hist[h] = 0
+        for i in range(n):
+            v = x[i, q]
+            if v < a or v > b:
+                continue
+            hist[min(int((v - a) / w), HIST_BINS - 1)] += 1
+        h0 = 0
+        c = below
+        while h0 < HIST_BINS - 1 and c + hist[h0] <= k:
+            c += hist[h0]
+            h0 += 1
+        below = c
+        h1 = HIST_BINS - 1
+        c = above
+        while h1 > h0 and c + hist[h1] <= k:
+            c += hist[h1]
+            h1 -= 1
+        above = c
+        a, b = a + h0 * w, min(b, a + (h1 + 1) * w)
+    return a, b
+
+
 @njit(cache=True)
 def _grid(x, r, box, periodic, skin, extra, cell_start, cell_idx, cell_of, cpos):
     """Cell grid over the particles' bounding box, particles counting-sorted by cell
     (cell_idx; cpos holds their x, y, z, R in the same order).
 
-    Returns (ok, rmax, lo0, cs0, n0, lo1, cs1, n1, lo2, cs2, n2); ok is False when
+    The grid has at most :func:`cell_cap` cells: a bounding box that would need more (a
+    sphere that left the others far behind: thrown off a tool, falling past the floor's
+    edge) is first narrowed, along each non-periodic axis, to the bulk of the particles
+    (:func:`_bulk_range`: all but at most n // BULK_TRIM beyond either end, which go to
+    the edge cells, and the triangles beyond the grid with them: ``clamp``), then the
+    cells of the longest axis are doubled until the grid fits.  Cells at least the cutoff
+    wide, with the outlying particles clamped into the edge cells, still put every pair
+    within the cutoff into the same or adjacent cells (clamping keeps the cell order), so
+    the lists are the same; only their cost changes.
+
+    Returns (ok, rmax, lo0, cs0, n0, lo1, cs1, n1, lo2, cs2, n2, clamp); ok is False when
     cell_start is too short (n0 * n1 * n2 + 1 needed).
     """
     n = x.shape[0]
@@ -254,9 +317,35 @@ def _grid(x, r, box, periodic, skin, extra, cell_start, cell_idx, cell_of, cpos)
     lo0, cs0, n0 = _grid_dim(box[0], box[1], periodic[0], mn0, mx0, cell)
     lo1, cs1, n1 = _grid_dim(box[2], box[3], periodic[1], mn1, mx1, cell)
     lo2, cs2, n2 = _grid_dim(0.0, 0.0, False, mn2, mx2, cell)
+    cap = cell_cap(n)
+    clamp = False
+    if n0 * n1 * n2 > cap:
+        clamp = True
+        k = n // BULK_TRIM
+        if not periodic[0]:
+            a, b = _bulk_range(x, 0, k, mn0, mx0, cell_start)
+            lo0, cs0, n0 = _grid_dim(0.0, 0.0, False, a, b, cell)
+        if not periodic[1]:
+            a, b = _bulk_range(x, 1, k, mn1, mx1, cell_start)
+            lo1, cs1, n1 = _grid_dim(0.0, 0.0, False, a, b, cell)
+        a, b = _bulk_range(x, 2, k, mn2, mx2, cell_start)
+        lo2, cs2, n2 = _grid_dim(0.0, 0.0, False, a, b, cell)
+        while n0 * n1 * n2 > cap:
+            # double the cells of the non-periodic axis with the most
+            if not periodic[0] and n0 >= n2 and (periodic[1] or n0 >= n1):
+                n0 = (n0 + 1) // 2
+                cs0 *= 2.0
+            elif not periodic[1] and n1 >= n2:
+                n1 = (n1 + 1) // 2
+                cs1 *= 2.0
+            elif n2 > 1:
+                n2 = (n2 + 1) // 2
+                cs2 *= 2.0
+            else:
+                break
     ncell = n0 * n1 * n2
     if ncell + 1 > cell_start.shape[0]:
-        return False, rmax, lo0, cs0, n0, lo1, cs1, n1, lo2, cs2, n2
+        return False, rmax, lo0, cs0, n0, lo1, cs1, n1, lo2, cs2, n2, clamp
     for c in range(ncell + 1):
         cell_start[c] = 0
     for i in range(n):
@@ -279,7 +368,7 @@ def _grid(x, r, box, periodic, skin, extra, cell_start, cell_idx, cell_of, cpos)
         cpos[q, 2] = x[i, 2]
         cpos[q, 3] = r[i]
         cell_start[c + 1] = q + 1
-    return True, rmax, lo0, cs0, n0, lo1, cs1, n1, lo2, cs2, n2
+    return True, rmax, lo0, cs0, n0, lo1, cs1, n1, lo2, cs2, n2, clamp
 
 
 @njit(cache=True, inline="always")
@@ -330,13 +419,13 @@ def _grid_and_bins(x, r, box, periodic, skin, extra, cell_start, cell_idx, cell_
                    prim_kind, prim_par, wcell_start, wcell_idx, glob):
     """Cell grid (:func:`_grid`) and triangle bins (:func:`_bin_triangles`) of a list build.
     Returns (status, need, ng, n0, n1, n2) with the status codes of :func:`build_lists`."""
-    ok, rmax, lo0, cs0, n0, lo1, cs1, n1, lo2, cs2, n2 = _grid(
+    ok, rmax, lo0, cs0, n0, lo1, cs1, n1, lo2, cs2, n2, clamp = _grid(
         x, r, box, periodic, skin, extra, cell_start, cell_idx, cell_of, cpos)
     if not ok or n0 * n1 * n2 + 1 > wcell_start.shape[0]:
         return 3, n0 * n1 * n2 + 1, 0, n0, n1, n2
     ng, code, wneed = _bin_triangles(prim_kind, prim_par, rmax + skin + extra, lo0, cs0, n0,
                                      periodic[0], lo1, cs1, n1, periodic[1], lo2, cs2, n2,
-                                     wcell_start, wcell_idx, glob)
+                                     wcell_start, wcell_idx, glob, clamp)
     return code, wneed, ng, n0, n1, n2
 
 
@@ -706,7 +795,7 @@ def sort_particles(inverse, x, v, om, f, t, r, m, inv_m, inv_i, mat, disp, ovr, 
     """
     n = x.shape[0]
     if not inverse:
-        ok, rmax, lo0, cs0, n0, lo1, cs1, n1, lo2, cs2, n2 = _grid(
+        ok, rmax, lo0, cs0, n0, lo1, cs1, n1, lo2, cs2, n2, _ = _grid(
             x, r, box, periodic, skin, extra, cell_start, cell_idx, cell_of, cpos)
         if not ok:
             return False, n0 * n1 * n2 + 1

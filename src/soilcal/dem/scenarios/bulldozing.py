@@ -50,8 +50,9 @@ from soilcal.dem import tools
 from soilcal.dem.factories import PSD
 from soilcal.dem.scenarios.base import (PRESETS, DemParams, Result, check, stable_mean,
                                         threads_used)
-from soilcal.dem.scenarios.soilbin import (BinSpec, apply_preset, psd_field, reference_cohesion,
-                                           settled_bin, tool_pass, validate_bin)
+from soilcal.dem.scenarios.soilbin import (BinSpec, apply_preset, check_pass, psd_field,
+                                           reference_cohesion, settled_bin, tool_pass,
+                                           tool_time_step, validate_bin)
 
 NAME = "bulldozing"
 #: writes and reads restart files (soilcal.dem.restart)
@@ -163,7 +164,8 @@ def _num(s, k, source):
 
 def validate(setup: dict, preset: str = "quick", source: str = "<bulldozing>",
              params=None) -> None:
-    """Bad settings raise InputError before the run (``params``: no check needs them)."""
+    """Bad settings raise InputError before the run; with ``params``, also a pass the run
+    could not finish (:func:`soilcal.dem.scenarios.soilbin.check_pass`)."""
     check(preset in PRESETS, source, "preset", f"one of {PRESETS}", preset)
     check(setup.get("shape") in tools.SHAPES, source, "setup.shape",
           f"one of {', '.join(tools.SHAPES)} (Table 9)", setup.get("shape"))
@@ -196,6 +198,12 @@ def validate(setup: dict, preset: str = "quick", source: str = "<bulldozing>",
     # directrix itself (raises InputError naming the field if the angles cannot be met)
     tools.directrix(s["shape"], height=s["plate_height"], source=source)
     validate_bin(_bin(s, source), source, "setup")
+    if params is not None:
+        s["cohesion_scale"] = reference_cohesion(
+            _bin(s, source), _bin(_settings(_setup(s["shape"]), "paper"), source), setup, source)
+        spec = _bin(s, source)
+        check_pass(spec, params, source, "setup.speed", s["speed"], s["travel"],
+                   tool_time_step(spec, params))
 
 
 def _bin(s, source="<bulldozing>") -> BinSpec:
@@ -215,7 +223,7 @@ def run(setup: dict, params: DemParams, preset: str = "quick", seed: int = 0, th
     uninterrupted run."""
     from soilcal.dem import restart as rst
 
-    validate(setup, preset, source)
+    validate(setup, preset, source, params=params)
     s = _settings(setup, preset)
     s["cohesion_scale"] = reference_cohesion(
         _bin(s, source), _bin(_settings(_setup(s["shape"]), "paper"), source), setup, source)

@@ -87,8 +87,8 @@ from numpy.polynomial import Polynomial
 from soilcal.dem import tools
 from soilcal.dem.scenarios.base import (PRESETS, DemParams, Result, check, stable_mean,
                                         threads_used)
-from soilcal.dem.scenarios.soilbin import (BinSpec, apply_preset, reference_cohesion, tool_pass,
-                                           validate_bin)
+from soilcal.dem.scenarios.soilbin import (BinSpec, apply_preset, check_pass, reference_cohesion,
+                                           tool_pass, tool_time_step, validate_bin)
 from soilcal.errors import InputError
 
 NAME = "furrow"
@@ -183,7 +183,8 @@ def _settings(setup: dict, preset: str) -> dict:
 
 def validate(setup: dict, preset: str = "quick", source: str = "<furrow>",
              params=None) -> None:
-    """Bad settings raise InputError before the run (``params``: no check needs them)."""
+    """Bad settings raise InputError before the run; with ``params``, also a pass the run
+    could not finish (:func:`soilcal.dem.scenarios.soilbin.check_pass`)."""
     check(preset in PRESETS, source, "preset", f"one of {PRESETS}", preset)
     s = _settings(setup, preset)
     for k in ("depth", "speed", "tank_length", "tank_width", "tank_height", "particle_radius",
@@ -236,6 +237,12 @@ def validate(setup: dict, preset: str = "quick", source: str = "<furrow>",
     check(s["max_overlap"] < 1, source, "setup.max_overlap", "a fraction of a radius in (0, 1)",
           s["max_overlap"])
     validate_bin(_bin(s), source, "setup")
+    if params is not None:
+        s["cohesion_scale"] = reference_cohesion(
+            _bin(s), _bin(_settings(setups()["yangtze-opener"], "paper")), setup, source)
+        spec = _bin(s)
+        check_pass(spec, params, source, "setup.speed", s["speed"], s["travel"],
+                   tool_time_step(spec, params))
 
 
 def _bin(s) -> BinSpec:
@@ -308,7 +315,7 @@ def run(setup: dict, params: DemParams, preset: str = "quick", seed: int = 0, th
     uninterrupted run."""
     from soilcal.dem import restart as rst
 
-    validate(setup, preset, source)
+    validate(setup, preset, source, params=params)
     s = _settings(setup, preset)
     s["cohesion_scale"] = reference_cohesion(
         _bin(s), _bin(_settings(setups()["yangtze-opener"], "paper")), setup, source)

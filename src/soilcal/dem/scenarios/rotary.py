@@ -73,8 +73,8 @@ import numpy as np
 from soilcal.dem import tools
 from soilcal.dem.scenarios.base import (PRESETS, DemParams, Result, check, stable_mean,
                                         threads_used)
-from soilcal.dem.scenarios.soilbin import (BinSpec, apply_preset, reference_cohesion, settled_bin,
-                                           tool_pass, validate_bin)
+from soilcal.dem.scenarios.soilbin import (BinSpec, apply_preset, check_pass, reference_cohesion,
+                                           settled_bin, tool_pass, tool_time_step, validate_bin)
 
 NAME = "rotary"
 #: writes and reads restart files (soilcal.dem.restart)
@@ -228,7 +228,8 @@ def _settings(setup, preset):
 
 def validate(setup: dict, preset: str = "quick", source: str = "<rotary>",
              params=None) -> None:
-    """Bad settings raise InputError before the run (``params``: no check needs them)."""
+    """Bad settings raise InputError before the run; with ``params``, also a pass the run
+    could not finish (:func:`soilcal.dem.scenarios.soilbin.check_pass`)."""
     check(preset in PRESETS, source, "preset", f"one of {PRESETS}", preset)
     s = _settings(setup, preset)
     for k in ("rpm", "forward_speed", "depth", "working_width", "radius", "hub_radius",
@@ -262,6 +263,21 @@ def validate(setup: dict, preset: str = "quick", source: str = "<rotary>",
           f"starting trench (|x - x0| <= R + 2 r_max = {th:.3g} m) is {xb - xa:.3g} m, "
           f"needs >= {need:.3g} m for {s['flatness_points']} points one particle diameter "
           "apart", s["travel"])
+    if params is not None:
+        # the blades slice the soil rather than push it: only the pass's step count
+        s["cohesion_scale"] = reference_cohesion(
+            spec, _bin(_settings(_setup(s["rpm"]), "paper")), setup, source)
+        spec = _bin(s)
+        check_pass(spec, params, source, "setup.forward_speed", s["forward_speed"],
+                   s["travel"], pass_time_step(s, spec, params), pushes=False)
+
+
+def pass_time_step(s, spec: BinSpec, params: DemParams) -> float:
+    """Time step of the pass: the tool step, capped so the blade tip (speed omega R + v)
+    moves at most a tenth of the smallest radius per step."""
+    omega = 2.0 * math.pi * s["rpm"] / 60.0
+    return min(tool_time_step(spec, params),
+               0.1 * spec.r_min / (omega * s["radius"] + s["forward_speed"]))
 
 
 def _bin(s) -> BinSpec:
@@ -280,7 +296,7 @@ def run(setup: dict, params: DemParams, preset: str = "quick", seed: int = 0, th
     numbers are those of an uninterrupted run."""
     from soilcal.dem import restart as rst
 
-    validate(setup, preset, source)
+    validate(setup, preset, source, params=params)
     s = _settings(setup, preset)
     s["cohesion_scale"] = reference_cohesion(
         _bin(s), _bin(_settings(_setup(s["rpm"]), "paper")), setup, source)

@@ -39,6 +39,14 @@ the opener" (Zeng et al. 2023, Sec. 2.1.2), particles inside the tool's starting
 (plus one particle diameter) are removed before the tool moves, so the tool never starts
 overlapping particles.
 
+Passes refused
+--------------
+:func:`check_pass` refuses before anything is settled a pass of more than
+:data:`MAX_PASS_STEPS` steps and a pushing tool (plate, opener) faster than the speed at
+which the soil it pushes reaches the run's ``max_overlap`` (:func:`push_overlap`; 6.2 m/s
+for the cinnamon soil of the bulldozing quick preset, whose bed failed at 8.3 m/s (30
+km/h) at the same simulated time with the step halved and quartered).
+
 Forces
 ------
 The engine reports, for each wall, the force of the particles on the wall and the torque
@@ -198,6 +206,62 @@ def tool_time_step(spec: BinSpec, params: DemParams) -> float:
     rmin, tab = {mats.index("soil"): spec.r_min}, mats.table(model_codes(**model)[1])
     return min(soil_time_step(spec, params),
                DAMPING_DT_SAFETY * mats.damping_dt(rmin, tab, spec.max_overlap))
+
+
+#: Peak overlap of a line of touching Hertz spheres (mass m, pair law F = k delta^(3/2), no
+#: damping) that a rigid wall pushes at a constant speed v, in units of (m v^2 / k)^(2/5):
+#: the wave the wall starts overshoots the steady compression (m v^2 / k)^(2/5) of mass and
+#: momentum balance; integrating the dimensionless chain gives 1.73, 1.75 and 1.76 for 60,
+#: 120 and 200 spheres (tests/dem/scenarios/test_tool_limits.py integrates it again).
+CHAIN_PEAK = 1.76
+#: Most steps one tool pass may take: 6 times the longest pass of the papers' presets (the
+#: bulldozing plate's 4.5 s at 5.3 us, 849,000 steps).  A slower tool takes proportionally
+#: more steps (a speed typed in km/h as m/s/1000 or so would grind for hours).
+MAX_PASS_STEPS = 5_000_000
+
+
+def push_overlap(params: DemParams, stiffness_scale: float, speed: float) -> float:
+    """Peak soil-soil overlap, as a fraction of the radius, of a bed a tool pushes at
+    ``speed`` [m/s]: :data:`CHAIN_PEAK` (m v^2 / k)^(2/5) / r for two equal spheres
+    (m = 4/3 pi r^3 rho, k = 4/3 E* sqrt(r/2)), i.e. CHAIN_PEAK (sqrt(2) pi rho v^2 /
+    E*)^(2/5), the same for every radius (E* = E / (2 (1 - nu^2)) of the soil, its shear
+    modulus scaled by ``stiffness_scale``).  The quick bulldozing bed pushed at 1, 4, 6 and
+    7 m/s peaked at 1.0, 0.93, 0.89 and 0.87 times this value (restitution 0.45)."""
+    g = params.soil_shear_modulus * stiffness_scale
+    nu = params.soil_poisson
+    estar = 2.0 * g * (1.0 + nu) / (2.0 * (1.0 - nu * nu))
+    return CHAIN_PEAK * (math.sqrt(2.0) * math.pi * params.soil_density * speed ** 2
+                         / estar) ** 0.4
+
+
+def push_speed_limit(params: DemParams, stiffness_scale: float, max_overlap: float) -> float:
+    """Tool speed [m/s] at which :func:`push_overlap` reaches ``max_overlap``."""
+    return math.sqrt((max_overlap / push_overlap(params, stiffness_scale, 1.0)) ** 2.5)
+
+
+def check_pass(spec: BinSpec, params: DemParams, source: str, field: str, speed: float,
+               travel: float, dt: float, pushes: bool = True) -> None:
+    """Refuse, before the bin is settled, a tool pass the run could not finish: one of more
+    than :data:`MAX_PASS_STEPS` steps of ``dt`` (``travel`` at ``speed``), or (``pushes``: a
+    tool that pushes the soil ahead of it) a speed at which the pushed bed's overlaps reach
+    the run's ``max_overlap`` (:func:`push_overlap`: the run would stop with a blow-up
+    whatever its time step).  ``field`` names the speed's setting."""
+    steps = math.ceil(travel / speed / dt)
+    check(steps <= MAX_PASS_STEPS, source, field,
+          f"a speed whose pass of setup.travel = {travel:.4g} m takes at most "
+          f"{MAX_PASS_STEPS:,} steps (>= {travel / (MAX_PASS_STEPS * dt):.3g} m/s at the "
+          f"pass's time step of {dt:.4g} s)",
+          f"{speed:.4g} m/s: {travel / speed:.4g} s of pass, {steps:,} steps")
+    if pushes:
+        vmax = push_speed_limit(params, spec.stiffness_scale, spec.max_overlap)
+        check(speed <= vmax, source, field,
+              f"a speed <= {vmax:.3g} m/s, where the soil the tool pushes reaches overlaps of "
+              f"max_overlap = {100 * spec.max_overlap:g} % of a radius (soil density "
+              f"{params.soil_density:g} kg/m^3, shear modulus "
+              f"{params.soil_shear_modulus * spec.stiffness_scale:.4g} Pa; a stiffer soil "
+              "carries a faster tool)",
+              f"{speed:.4g} m/s ({3.6 * speed:.3g} km/h): overlaps of about "
+              f"{100 * push_overlap(params, spec.stiffness_scale, speed):.3g} %")
 
 
 def reference_cohesion(spec: BinSpec, reference: BinSpec, setup: dict, source: str) -> float:
