@@ -44,7 +44,7 @@ drum window, 8- or 16-bit grey, time-averaged over many frames, no plate in view
    from one straight line, in % of the drum radius.
 6. A frame is refused, with one message (:data:`DRUM_EXPECTED`, what was found instead), when it
    shows no powder against air in the drum, a surface outside :data:`DRUM_ANGLE_RANGE` (a level
-   boundary is a drum at rest or a frame with no drum in it, e.g. a table edge) or one straying
+   boundary is a frame with no turning drum in it, e.g. a table edge) or one straying
    more than :data:`MAX_LINE_RMS_PCT` % of the radius from a line (no powder surface).
 
 The frames of one group are averaged (:func:`measure_drum`).
@@ -67,9 +67,12 @@ from soilcal.imaging.refusal import Tried, explained
 CHORD_FRACTION = 0.6
 RIM_MARGIN = 0.05
 MIN_RIM_SUPPORT = 0.3
-#: the dynamic angles a turning drum's powder surface can stand at: a level surface is a drum at
-#: rest or a frame with no drum in it (a heap photo's plate, a wall's edge), never a dynamic angle
-DRUM_ANGLE_RANGE = (10.0, 80.0)
+#: the angles a measured free surface may stand at: a boundary within 3 deg of level is the
+#: edge of a table, a plate or a wall in a frame with no drum in it (their edges read 0.0 to
+#: 1.8 deg on the heap photos), which a turning drum's powder, even a free-flowing one at a
+#: low speed (5 deg), does not show; a drum stopped after turning keeps a sloping surface, so a
+#: frame cannot tell a drum at rest from a turning one
+DRUM_ANGLE_RANGE = (3.0, 80.0)
 #: the most a free surface may stray from one straight line (RMS, % of the drum radius): a
 #: cascading drum's S stays within a few %, a boundary that wanders further is no powder surface
 MAX_LINE_RMS_PCT = 10.0
@@ -382,8 +385,8 @@ def _measure_drum_frame(path, threshold, keep_stages, options, tried: Tried) -> 
     rms = float(np.sqrt(np.mean(res ** 2)) / R * 100.0)
     where = {"image border": "no drum rim found", "rim": "drum rim found", "manifest": "drum as given"}[dref]
     if not DRUM_ANGLE_RANGE[0] <= angle <= DRUM_ANGLE_RANGE[1]:
-        raise InputError(path, "image", DRUM_EXPECTED, f"a surface at {angle:.1f} deg ({where}): a drum at rest "
-                         "or no drum in the frame")
+        raise InputError(path, "image", DRUM_EXPECTED, f"a surface at {angle:.1f} deg ({where}): a level edge, "
+                         "no turning drum in the frame")
     if rms > MAX_LINE_RMS_PCT:
         raise InputError(path, "image", DRUM_EXPECTED, f"a powder boundary straying {rms:.0f} % of the drum radius "
                          f"(RMS) from a line, at most {MAX_LINE_RMS_PCT:.0f} % ({where})")

@@ -72,7 +72,7 @@ def _decode(path, formats: str, min_pixels=None):
                 deep = im.mode not in _FULL_SCALE and im.mode not in ("I", "F") and any(
                     ";16" in str(t.args) for t in im.tile)
                 f = _reduction(w, h, min_pixels)
-                if f >= 2 and im.format == "JPEG":
+                if f >= 2 and im.format in ("JPEG", "MPO"):  # MPO: a phone's JPEG with a multi-picture block
                     im.draft(None, (-(-w // f), -(-h // f)))  # decoded at 1/2, 1/4 or 1/8 size
                 im.load()  # decodes fully: a truncated JPEG raises OSError here
                 # a phone stores a portrait (or upside-down) photo in the sensor's orientation
@@ -134,7 +134,9 @@ def read_photo_reduced(path, min_pixels=None) -> tuple[np.ndarray, tuple[int, in
         levels = (hi - lo) * 255.0
         if levels < MIN_GREY_LEVELS:
             why = ("a 16-bit colour photo whose values use only its low bits (read at 8 bits per channel: "
-                   "save it scaled to its full range)" if mode == "RGB;16" else "an under- or over-exposed photo")
+                   "save it scaled to its full range)" if mode == "RGB;16" else
+                   "too little brightness contrast between heap, plate and wall: an under- or over-exposed photo, "
+                   "or a heap and a wall alike in brightness")
             raise InputError(p, "image", f"a photo whose brightness spans at least {MIN_GREY_LEVELS} of its 256 grey "
                              "levels (heap, plate and wall exposed)", f"{levels:.0f} levels: {why}")
     return rgb, shown
