@@ -421,3 +421,22 @@ def test_a_periodic_disturbance_along_the_bin_is_found_with_its_wavelength():
     assert per["estimate"] == pytest.approx(8.0, rel=0.04)
     assert not diag[diag["test"].isin(["trend", "curvature"])]["significant"].any()
     assert ranking(diag).iloc[0]["covariate"] == "position_m"
+
+
+def test_beyond_the_measured_quantity_takes_every_row():
+    # two forces per test, both following the speed (+2 % per m/s from 1 m/s), the horizontal
+    # one 10 % above the vertical throughout: the force explains the residual beyond the speed
+    # (a nested F-test over all 16 rows), though one value per test would leave it one level
+    import pandas as pd
+    from soilcal.loop import diagnose as dg
+
+    rng = np.random.default_rng(4)
+    rows = []
+    for i, v in enumerate(np.linspace(1.0, 4.5, 8)):
+        for m, offset in (("horizontal_force_N", 0.10), ("vertical_force_N", 0.0)):
+            rows.append({"measurement": "t", "row": i, "measure": m, "cov:tool_speed": v,
+                         "relative_residual": offset + 0.02 * (v - 1.0) + 0.002 * rng.standard_normal()})
+    res = pd.DataFrame(rows)
+    p = dg.beyond(res, "measure", "tool_speed")
+    assert np.isfinite(p) and p < 1e-6, p
+    assert dg.beyond(res, "tool_speed", "measure") < 1e-6

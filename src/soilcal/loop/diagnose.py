@@ -308,7 +308,9 @@ def beyond(res: pd.DataFrame, name: str, first: str, quantity_of: dict | None = 
     either is unknown or too few rows are left to tell."""
     quantity_of = quantity_of or {}
     r_all = res["relative_residual"].astype(float)
-    d = per_test(res[np.isfinite(r_all)].reset_index(drop=True))
+    d = res[np.isfinite(r_all)].reset_index(drop=True)
+    if "measure" not in (name, first):  # the measured quantity varies within a test: every row
+        d = per_test(d)
     for c in (name, first):
         col = d["measure"] if c == "measure" else d.get(f"cov:{c}")
         if c != "bias" and col is not None:
