@@ -99,3 +99,28 @@ def test_the_command_line_values_are_refused_as_typed(tmp_path, monkeypatch, cap
     assert err[0].startswith(f"soilcal: error: <command line>: {field}: expected {expected}") and err[0].endswith(
         f"got {got}"), err[0]
     assert not (tmp_path / "o.csv").exists() and calls == []
+
+
+def test_a_table_written_without_scatter_has_blank_sds_and_its_values_in_full(tmp_path, monkeypatch):
+    # a simulator without seed scatter (10 N + the table row, from 1) and --noise 0: every SD is 0,
+    # which a measured table may not state (the value would be exact); the written table
+    # leaves those cells blank, loads again as the soil's own table, and keeps the values
+    import pandas as pd
+
+    from soilcal.cli import main
+    from soilcal.config.load import load_soil
+
+    from test_user_tables import _counting_simulator, user_soil
+
+    soil, res = user_soil(tmp_path)
+    monkeypatch.setattr(cli, "dem_simulator", _counting_simulator([]))
+    out = tmp_path / "bin.csv"
+    assert main(["loop", "synthesize", str(soil), "--resources", str(res), "--measurement", "bin_forces",
+                 "--noise", "0", "--out", str(out)]) == 0
+    df = pd.read_csv(out)
+    assert df["draft_sd_N"].isna().all()
+    target = next((res / "measurements").glob("*/bin_forces.csv"))
+    rows = pd.read_csv(target)
+    assert list(df["draft_N"]) == [10.0 + r for r in range(1, len(rows) + 1)]  # rows numbered from 1
+    out.replace(target)
+    load_soil(soil, res)  # the written table is a valid measured table of the soil

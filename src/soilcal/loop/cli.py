@@ -264,9 +264,12 @@ def _synthesize(args) -> int:
         t = table[table["measure"] == r["measure"]].sort_values("row")
         if r.get("value") is None:
             continue
-        df[r["value"]] = np.round(t["value"].to_numpy(float), 6)
+        df[r["value"]] = _significant(t["value"].to_numpy(float))
         if r.get("sd"):
-            df[r["sd"]] = np.round(t["sd"].to_numpy(float), 6)
+            # an SD of 0 (one repeat, or a run without seed scatter) is not known: a blank cell,
+            # as a measured table gives it (an SD of 0 would call the value exact)
+            sd = _significant(t["sd"].to_numpy(float))
+            df[r["sd"]] = np.where(sd > 0, sd, np.nan)
         if r.get("n"):
             df[r["n"]] = t["n"].to_numpy(int)
     write_text(args.out, df.to_csv(index=False))
@@ -275,6 +278,13 @@ def _synthesize(args) -> int:
     print(f"{len(df)} rows -> {args.out} (truth: {truth}; parameters: {source}; hidden {hidden or 'none'}, "
           f"disturbances {dist or 'none'}, seed {args.seed}; reference {reference or 'none'}, SI units)")
     return 0
+
+
+def _significant(x, digits: int = 8):
+    """``x`` to ``digits`` significant digits (a force in N and an area in m^2 alike)."""
+    import numpy as np
+
+    return np.array([float(f"{v:.{digits}g}") if np.isfinite(v) else np.nan for v in x], float)
 
 
 def _run(args) -> int:
