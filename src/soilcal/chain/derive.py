@@ -390,13 +390,6 @@ def dem_stage(soil_data: dict, stage_id: str, targets: dict, upstream: dict | No
 BBD_CENTRE_RTOL = 0.02
 
 
-def _adaptive_screening(soil_data: dict, stage_id: str) -> bool:
-    """Whether the adaptive design replaces the stage's ranges by its screening's."""
-    from soilcal.chain import adaptive
-
-    return adaptive.ranges_setting(soil_data) == "screening" and adaptive.screening_of(soil_data, stage_id) is not None
-
-
 def check_dem_stages(soil_path, soil_data: dict) -> None:
     """Start-up check of the stages the DEM source runs (:func:`dem_stage_ids`), so that a
     config the chain cannot run fails before any DEM job, naming the soil file and field:
@@ -411,6 +404,7 @@ def check_dem_stages(soil_path, soil_data: dict) -> None:
 
     (A Plackett-Burman stage's ``runs`` is checked for every soil as it loads.)
     """
+    from soilcal.chain import adaptive
     from soilcal.dem.scenarios.base import DemParams, dem_field
 
     def in_range(name, value, scale, where):
@@ -438,8 +432,9 @@ def check_dem_stages(soil_path, soil_data: dict) -> None:
                                  note=f"stage {up['id']!r}; the DEM source derives a stage from the DEM results "
                                       "of the one it follows: give the stage in between, or run the config's "
                                       "levels with simulation.design: printed")
-        screened = design_mode(soil_data) == "adaptive" and _adaptive_screening(soil_data, sid)
         for sym, f in st["factors"].items():
+            screened = design_mode(soil_data) == "adaptive" and adaptive.screening_range(
+                soil_data, sid, f["parameter"]) is not None
             where = f"stages.{sid}.factors.{sym}"
             name, scale = mapped(f["parameter"], f"{where}.parameter")
             if "from" in deps:

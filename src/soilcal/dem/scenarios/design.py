@@ -171,6 +171,7 @@ def check_block(soil_path, data: dict) -> None:
     for i, sid in enumerate(sim.get("stages") or []):
         if sid not in ids:
             raise InputError(soil_path, f"{BLOCK}.stages[{i}]", "a stage id (" + ", ".join(ids) + ")", sid)
+    from soilcal.chain import adaptive
     from soilcal.chain.derive import check_dem_stages, dependencies, design_mode, simulated_stage_ids
 
     min_factors = _check_screening(soil_path, sim)
@@ -213,7 +214,8 @@ def check_block(soil_path, data: dict) -> None:
                                  f"the level of every step to simulate the stage (or leave {sid!r} out of "
                                  f"{BLOCK}.stages)", None)
             if st["kind"] != "steepest_ascent" and (f.get("low") is None or f.get("high") is None) \
-                    and not _screened_range(data, sid, f.get("parameter")):
+                    and not (design_mode(data) == "adaptive"
+                             and adaptive.screening_range(data, sid, f.get("parameter")) is not None):
                 how = (f"simulation.adaptive.ranges: screening, with a screening stage {sid!r} descends from that "
                        "varies the parameter" if design_mode(data) == "adaptive"
                        else f"leave {sid!r} out of {BLOCK}.stages")
@@ -242,20 +244,6 @@ def _check_screening(soil_path, sim: dict) -> int:
         raise InputError(soil_path, f"{BLOCK}.screening.max_factors",
                          f"an integer >= min_factors ({lo}, its default: what a Box-Behnken design needs)", hi)
     return lo
-
-
-def _screened_range(data: dict, stage_id: str, parameter) -> bool:
-    """Whether ``design: adaptive`` takes the range of ``parameter`` in ``stage_id`` from the
-    Plackett-Burman screening the stage descends from (``simulation.adaptive.ranges:
-    screening``, the default; :func:`soilcal.chain.adaptive.stage_for`)."""
-    from soilcal.chain import adaptive
-    from soilcal.chain.derive import design_mode
-
-    if design_mode(data) != "adaptive" or adaptive.ranges_setting(data) != "screening":
-        return False
-    screening = adaptive.screening_of(data, stage_id)
-    f = next((f for f in (screening or {}).get("factors", {}).values() if f.get("parameter") == parameter), None)
-    return f is not None and f.get("low") is not None and f.get("high") is not None
 
 
 def _has_target(data: dict, rids) -> bool:
