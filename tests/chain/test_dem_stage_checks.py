@@ -405,3 +405,25 @@ def test_the_adaptive_designs_stage_and_its_start_up_check_take_the_screening_ra
     with pytest.raises(InputError) as e:
         _load(p)
     assert (e.value.path, e.value.field) == (str(p), "stages.rsm.factors.B")
+
+
+@pytest.mark.parametrize("target, aimed", [
+    ({"value": 36.0, "unit": "deg"}, True),
+    ({"value": None, "unit": "deg", "image": "heap"}, True),   # a photo group gives it
+    ({"value": None, "unit": "deg"}, False),
+], ids=["value", "photo-group", "nothing"])
+def test_a_goal_has_a_value_to_aim_at_by_one_rule_for_the_path_and_the_adaptive_design(target, aimed):
+    """A goal with ``value: null`` beside ``target: <id>`` (as a soil built in code may carry it)
+    aims at the target: the path's start-up check and the adaptive design's case selection
+    read it alike (soilcal.chain.targets.goal_has_value)."""
+    from soilcal.chain.adaptive import _why_not
+    from soilcal.chain.targets import goal_has_value
+    from soilcal.dem.scenarios.design import _has_target
+
+    d = copy.deepcopy(SOIL)
+    d["targets"] = {"t": target}
+    case = {"id": "c", "goals": {"repose": {"goal": "target", "value": None, "target": "t"}}}
+    _stage(d, "rsm")["optimise"]["cases"] = [case]
+    assert goal_has_value(d, case["goals"]["repose"]) is aimed
+    assert _has_target(d, ["repose"]) is aimed
+    assert (_why_not(d, case) == "") is aimed

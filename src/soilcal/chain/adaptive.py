@@ -41,6 +41,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
+from soilcal.chain.targets import goal_has_value
 from soilcal.config.load import read_table
 from soilcal.doe import adaptive as ad
 from soilcal.doe.designs import actual_to_coded
@@ -67,10 +68,7 @@ def _why_not(soil_data: dict, case: dict) -> str:
             continue
         if g.get("goal") != "target":
             return f"{rid}: goal {g.get('goal')} is neither a target nor minimize / maximize"
-        if "value" in g:
-            continue
-        t = (soil_data.get("targets") or {}).get(g.get("target"), {})
-        if t.get("value") is None and not t.get("image"):
+        if not goal_has_value(soil_data, g):
             return f"{rid}: target {g.get('target')} has no value and no photo group"
     return ""
 
@@ -223,7 +221,7 @@ def problem_for(soil_data: dict, stage: dict, case_id: str, targets: dict, sourc
         if goal.get("goal") != "target":
             raise InputError(where, f"optimise.cases.{case_id}.goals.{rid}", "a goal target, minimize or maximize",
                              goal.get("goal"))
-        if "value" in goal:
+        if goal.get("value") is not None:
             value = float(goal["value"])
         else:
             t = targets.get(goal["target"]) or {}

@@ -251,19 +251,15 @@ def _has_target(data: dict, rids) -> bool:
     (:func:`soilcal.chain.derive.response_targets`): a response's own target, or a target an
     optimisation case aims it at, with a ``value`` or a photo group (``image``), or a case's
     own goal ``value``.  A target listed without either gives the path no direction."""
-    targets = data.get("targets") or {}
+    from soilcal.chain.targets import goal_has_value, target_has_value
 
-    def valued(tid):
-        t = targets.get(tid) or {}
-        return t.get("value") is not None or bool(t.get("image"))
-
-    if any(valued(r) for r in rids):
+    if any(target_has_value(data, r) for r in rids):
         return True
     for st in data["stages"]:
         for case in (st.get("optimise") or {}).get("cases", []):
             for r in rids:
                 g = case["goals"].get(r) or {}
-                if g.get("goal") == "target" and (g.get("value") is not None or valued(g.get("target"))):
+                if g.get("goal") == "target" and goal_has_value(data, g):
                     return True
     return False
 
