@@ -427,3 +427,29 @@ def test_a_goal_has_a_value_to_aim_at_by_one_rule_for_the_path_and_the_adaptive_
     assert goal_has_value(d, case["goals"]["repose"]) is aimed
     assert _has_target(d, ["repose"]) is aimed
     assert (_why_not(d, case) == "") is aimed
+
+
+@pytest.mark.parametrize("recipe_chain", [False, True], ids=["stage-levels", "recipe-levels"])
+def test_design_adaptive_checks_the_screening_range_its_stage_takes(tmp_path, recipe_chain):
+    """With design: adaptive (ranges: screening) the screening is not run, but the optimised
+    stage that descends from it ranges mu_ss over the screening's B levels: a high of 7.0,
+    beyond a sliding friction coefficient's [0, 5], is refused at load naming the screening's
+    field (the stage's own levels of mu_ss, 0.3-0.8, or none, are not the ones run)."""
+    def edit(d):
+        if recipe_chain:
+            _recipe_chain(d)
+        else:
+            _bbd_after_screen(d)
+        d["simulation"]["design"] = "adaptive"
+        _stage(d, "screen")["factors"]["B"]["high"] = 7.0
+
+    p = _write(tmp_path, edit)
+    with pytest.raises(InputError) as e:
+        _load(p)
+    assert (e.value.path, e.value.field, e.value.got) == (str(p), "stages.screen.factors.B.high", 7.0)
+    assert e.value.expected.startswith("a sliding friction coefficient in [0, 5]")
+    # with ranges: stage the stage keeps its own levels (0.3-0.8), and the screening is not used;
+    # neither is it by a stage that does not descend from it
+    if not recipe_chain:
+        _load(_write(tmp_path, lambda d: (edit(d), d["simulation"].update(adaptive={"ranges": "stage"}))))
+        _load(_write(tmp_path, lambda d: (edit(d), _stage(d, "rsm").pop("from_stage"))))

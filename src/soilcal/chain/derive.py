@@ -391,7 +391,7 @@ BBD_CENTRE_RTOL = 0.02
 
 
 def check_dem_stages(soil_path, soil_data: dict) -> None:
-    """Start-up check of the stages the DEM source runs (:func:`dem_stage_ids`), so that a
+    """Start-up check of the stages the DEM source runs (:func:`simulated_stage_ids`), so that a
     config the chain cannot run fails before any DEM job, naming the soil file and field:
 
     * a stage derived from an earlier DEM stage (``from_stage``, :func:`dependencies`) is a
@@ -400,7 +400,10 @@ def check_dem_stages(soil_path, soil_data: dict) -> None:
     * every factor's parameter and every fixed parameter maps to a DEM parameter
       (:func:`soilcal.dem.scenarios.base.dem_field`, the mapping the DEM jobs use), and the
       fixed values and the levels of a stage that runs its config's levels lie in that
-      parameter's physical range.
+      parameter's physical range; with ``design: adaptive`` a factor's levels are the range it
+      takes from its screening where it takes one
+      (:func:`soilcal.chain.adaptive.screening_factor`), named as the screening's
+      ``stages.<screening>.factors.<symbol>.low`` / ``.high``.
 
     (A Plackett-Burman stage's ``runs`` is checked for every soil as it loads.)
     """
@@ -439,7 +442,16 @@ def check_dem_stages(soil_path, soil_data: dict) -> None:
             name, scale = mapped(f["parameter"], f"{where}.parameter")
             if "from" in deps:
                 continue  # levels derived from the earlier stage's DEM results
-            if st["kind"] == "box_behnken" and not screened \
+            screened = (adaptive.screening_factor(soil_data, sid, f["parameter"])
+                        if design_mode(soil_data) == "adaptive" else None)
+            if screened is not None:
+                # the adaptive design ranges the factor over its screening's levels (ranges:
+                # screening), which it runs in place of the stage's own
+                scr, ssym, sf = screened
+                for key in ("low", "high"):
+                    in_range(name, sf[key], scale, f"stages.{scr['id']}.factors.{ssym}.{key}")
+                continue
+            if st["kind"] == "box_behnken" \
                     and None not in (f.get("low"), f.get("centre"), f.get("high")):
                 mid = (f["low"] + f["high"]) / 2
                 if abs(f["centre"] - mid) > BBD_CENTRE_RTOL * (f["high"] - f["low"]):
