@@ -453,3 +453,38 @@ def test_design_adaptive_checks_the_screening_range_its_stage_takes(tmp_path, re
     if not recipe_chain:
         _load(_write(tmp_path, lambda d: (edit(d), d["simulation"].update(adaptive={"ranges": "stage"}))))
         _load(_write(tmp_path, lambda d: (edit(d), _stage(d, "rsm").pop("from_stage"))))
+
+
+def test_a_box_behnken_centre_no_run_is_decoded_from_is_not_checked(tmp_path):
+    """The centre check guards the runs decoded from low and high (coded 0 at 0.55 for A's
+    0.3-0.8); with design: adaptive on the stage's own ranges (ranges: stage) the runs range
+    over low .. high and no design is decoded, so a centre of 0.4 is not refused; the recipe
+    runs the generated design and refuses it."""
+    def off(d):
+        _stage(d, "rsm")["factors"]["A"]["centre"] = 0.4
+        d["simulation"]["adaptive"] = {"ranges": "stage"}
+
+    _load(_write(tmp_path, lambda d: (off(d), d["simulation"].update(design="adaptive"))))
+    with pytest.raises(InputError) as e:
+        _load(_write(tmp_path, off))
+    assert e.value.field == "stages.rsm.factors.A.centre"
+
+
+@pytest.mark.parametrize("design, refused", [("printed", False), ("recipe", True)])
+def test_a_box_behnken_centre_of_a_table_printed_in_actual_units_is_checked_only_where_decoded(
+        tmp_path, design, refused):
+    """The black soil's soil-soil Box-Behnken table is printed in actual units: design: printed
+    runs its rows as printed, so a centre of x4 off the midpoint of 0.05-0.50 (0.275) by more
+    than 2 % of the range is not used and loads; the recipe decodes its generated design from
+    low and high and refuses it."""
+    d = yaml.safe_load((ROOT / "config/soils/black-soil.yaml").read_text())
+    d["stages"][0]["factors"]["x4"]["centre"] = 0.33
+    p = tmp_path / "black-soil.yaml"
+    p.write_text(yaml.safe_dump(d, sort_keys=False))
+    if not refused:
+        load_soil(p, ROOT / "resources", design=design)
+        return
+    with pytest.raises(InputError) as e:
+        load_soil(p, ROOT / "resources", design=design)
+    assert (e.value.field, e.value.got) == ("stages.soil-soil.factors.x4.centre", 0.33)
+    assert e.value.expected.startswith("the midpoint of low and high (0.275)")

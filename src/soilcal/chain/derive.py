@@ -93,6 +93,33 @@ def simulated_stage_ids(soil_data: dict) -> list[str]:
     return dem_stage_ids(soil_data)
 
 
+def runs_own_levels(soil_data: dict, stage_id: str) -> bool:
+    """Whether the DEM source runs the levels the soil config gives the stage (a
+    Plackett-Burman or Box-Behnken design generated from ``low`` / ``high``, a path's
+    ``levels``): a stage it runs under ``design: recipe`` or ``printed`` (:func:`dem_stage_ids`)
+    that is not derived from an earlier DEM stage (:func:`dependencies`) and not, with
+    ``design: printed``, run on its printed table's rows.  ``design: adaptive`` runs no design
+    of the config's levels (its optimised stages range over ``low`` .. ``high``)."""
+    if design_mode(soil_data) == "adaptive" or stage_id not in dem_stage_ids(soil_data):
+        return False
+    if "from" in dependencies(soil_data, stage_id):
+        return False
+    return not (design_mode(soil_data) == "printed" and _stage(soil_data, stage_id).get("table"))
+
+
+def decodes_low_high(soil_data: dict, stage_id: str) -> bool:
+    """Whether the DEM runs of a two- or three-level stage are decoded from its ``low`` and
+    ``high`` (coded 0 at their midpoint): its generated design (:func:`runs_own_levels`), or
+    with ``design: printed`` a table printed in coded levels.  A table printed in actual
+    units is run as printed."""
+    if runs_own_levels(soil_data, stage_id):
+        return True
+    st = _stage(soil_data, stage_id)
+    return (design_mode(soil_data) == "printed" and stage_id in dem_stage_ids(soil_data)
+            and "from" not in dependencies(soil_data, stage_id) and bool(st.get("table"))
+            and st.get("table_coding", "coded") == "coded")
+
+
 def _stage(soil_data: dict, stage_id: str) -> dict:
     for s in soil_data["stages"]:
         if s["id"] == stage_id:
@@ -400,7 +427,9 @@ def check_dem_stages(soil_path, soil_data: dict) -> None:
     * every factor's parameter and every fixed parameter maps to a DEM parameter
       (:func:`soilcal.dem.scenarios.base.dem_field`, the mapping the DEM jobs use), and the
       fixed values and the levels of a stage that runs its config's levels lie in that
-      parameter's physical range; with ``design: adaptive`` a factor's levels are the range it
+      parameter's physical range, and a Box-Behnken factor's ``centre`` is the midpoint of
+      its ``low`` and ``high`` where the runs are decoded from them (:func:`decodes_low_high`);
+      with ``design: adaptive`` a factor's levels are the range it
       takes from its screening where it takes one
       (:func:`soilcal.chain.adaptive.screening_factor`), named as the screening's
       ``stages.<screening>.factors.<symbol>.low`` / ``.high``.
@@ -451,7 +480,7 @@ def check_dem_stages(soil_path, soil_data: dict) -> None:
                 for key in ("low", "high"):
                     in_range(name, sf[key], scale, f"stages.{scr['id']}.factors.{ssym}.{key}")
                 continue
-            if st["kind"] == "box_behnken" \
+            if st["kind"] == "box_behnken" and decodes_low_high(soil_data, sid) \
                     and None not in (f.get("low"), f.get("centre"), f.get("high")):
                 mid = (f["low"] + f["high"]) / 2
                 if abs(f["centre"] - mid) > BBD_CENTRE_RTOL * (f["high"] - f["low"]):
@@ -472,4 +501,4 @@ def check_dem_stages(soil_path, soil_data: dict) -> None:
 
 
 __all__ = ["bbd_from_path", "check_dem_stages", "dem_stage", "dem_stage_ids", "simulated_stage_ids", "dependencies", "design_mode",
-           "path_from_screening", "published_stage", "response_targets"]
+           "path_from_screening", "published_stage", "response_targets", "decodes_low_high", "runs_own_levels"]
