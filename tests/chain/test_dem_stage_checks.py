@@ -345,7 +345,7 @@ def test_a_path_before_a_box_behnken_design_takes_at_least_three_factors(tmp_pat
     with pytest.raises(InputError) as e:
         _load(p)
     assert (e.value.path, e.value.field, e.value.got) == (str(p), "simulation.screening.min_factors", 2)
-    assert "Box-Behnken stage 'rsm', which needs three" in e.value.expected
+    assert "Box-Behnken stage 'rsm', which needs at least 3" in e.value.expected
 
 
 # --------------------------------------------------------------------------- a simulated Box-Behnken centre
@@ -488,3 +488,31 @@ def test_a_box_behnken_centre_of_a_table_printed_in_actual_units_is_checked_only
         load_soil(p, ROOT / "resources", design=design)
     assert (e.value.field, e.value.got) == ("stages.soil-soil.factors.x4.centre", 0.33)
     assert e.value.expected.startswith("the midpoint of low and high (0.275)")
+
+
+def test_a_box_behnken_design_derived_from_a_path_of_two_factors_on_its_own_levels_is_refused(tmp_path):
+    """The recipe derives the Box-Behnken design from the path's factors: a path the DEM runs on
+    its own levels (no screening before it) over two factors would give a design of two, which
+    does not exist, and stop its design job after the path's runs, naming no file."""
+    def two_factor_path(d):
+        _recipe_chain(d)
+        climb = _stage(d, "climb")
+        climb.pop("from_stage")
+        climb["factors"] = {"A": {"parameter": "mu_ss", "levels": [0.3, 0.4, 0.5]},
+                            "B": {"parameter": "mur_ss", "levels": [0.05, 0.1, 0.15]}}
+        climb["fixed"]["gamma"] = 0.3
+
+    p = _write(tmp_path, two_factor_path)
+    with pytest.raises(InputError) as e:
+        _load(p)
+    assert (e.value.path, e.value.field, e.value.got) == (str(p), "stages.climb.factors", "2 (A, B)")
+    assert e.value.expected.startswith("at least 3 factors: Box-Behnken stage 'rsm' is derived from this path")
+    from soilcal.doe.designs import BBD_MIN_FACTORS, box_behnken
+
+    assert BBD_MIN_FACTORS == 3
+    with pytest.raises(InputError):
+        box_behnken(2, 3)
+    # a third factor on the path: the design of three
+    _load(_write(tmp_path, lambda d: (two_factor_path(d), _stage(d, "climb")["fixed"].pop("gamma"),
+                                      _stage(d, "climb")["factors"].update(
+                                          C={"parameter": "gamma", "levels": [0.1, 0.2, 0.3]}))))

@@ -49,6 +49,7 @@ import copy
 import numpy as np
 import pandas as pd
 
+from soilcal.doe.designs import BBD_MIN_FACTORS
 from soilcal.errors import InputError
 
 #: physical range of a parameter kind, in the config's units where they are unit-free
@@ -59,7 +60,8 @@ _BOUNDS = {
     "surface_energy": (0.0, 1.0e3),
 }
 DEFAULT_STEPS = 6
-SCREENING_DEFAULTS = {"alpha": 0.05, "min_factors": 3}
+#: the screening's defaults: alpha as the papers, min_factors what a Box-Behnken design needs
+SCREENING_DEFAULTS = {"alpha": 0.05, "min_factors": BBD_MIN_FACTORS}
 #: (earlier stage's kind, this stage's kind) of the stages the DEM source derives (module docstring)
 DERIVED_KINDS = {("plackett_burman", "steepest_ascent"), ("steepest_ascent", "box_behnken")}
 DERIVED_EXPECTED = ("a steepest ascent after a Plackett-Burman screening, or a Box-Behnken design after a "

@@ -306,6 +306,8 @@ def _check_stage_sets_each_parameter_once(path: Path, where: str, st: dict, para
 def _semantic_checks(path: Path, d: dict, resources_root: Path) -> tuple[dict | None, tuple]:
     """The checks a schema cannot state; returns the soil's photo manifest (None without one)
     and the conditions of its measured tables (empty without any)."""
+    from soilcal.doe.designs import BBD_MIN_FACTORS
+
     if d["name"] != path.stem:
         raise InputError(path, "name", f"the file name without .yaml ({path.stem!r})", d["name"])
     for k, q in d.get("properties", {}).items():
@@ -349,9 +351,9 @@ def _semantic_checks(path: Path, d: dict, resources_root: Path) -> tuple[dict | 
             if p not in params:
                 raise InputError(path, f"{where}.fixed.{p}", "an id listed under parameters", p)
         _check_stage_sets_each_parameter_once(path, where, st, params)
-        if st["kind"] == "box_behnken" and len(st["factors"]) < 3:
+        if st["kind"] == "box_behnken" and len(st["factors"]) < BBD_MIN_FACTORS:
             # the design exists for three factors and more (its design job would stop)
-            raise InputError(path, f"{where}.factors", "at least 3 factors for a Box-Behnken design "
+            raise InputError(path, f"{where}.factors", f"at least {BBD_MIN_FACTORS} factors for a Box-Behnken design "
                              "(fix the others in fixed)", f"{len(st['factors'])} ({', '.join(st['factors'])})")
         for key in ("from_stage",):
             if key in st and st[key] not in seen:

@@ -173,6 +173,7 @@ def check_block(soil_path, data: dict) -> None:
             raise InputError(soil_path, f"{BLOCK}.stages[{i}]", "a stage id (" + ", ".join(ids) + ")", sid)
     from soilcal.chain import adaptive
     from soilcal.chain.derive import check_dem_stages, dependencies, design_mode, simulated_stage_ids
+    from soilcal.doe.designs import BBD_MIN_FACTORS
 
     min_factors = _check_screening(soil_path, sim)
     for sid in simulated_stage_ids(data):
@@ -192,12 +193,22 @@ def check_block(soil_path, data: dict) -> None:
                                  [r["id"] for r in st["responses"]])
             up = next(s for s in data["stages"] if s["id"] == deps["from"])
             top = dependencies(data, up["id"]).get("from")
-            if st["kind"] == "box_behnken" and up["kind"] == "steepest_ascent" and top is not None and min_factors < 3:
-                # the path takes as few as min_factors from the screening (those found significant,
-                # when fewer are), and its factors are the Box-Behnken design's, which needs three
-                raise InputError(soil_path, f"{BLOCK}.screening.min_factors",
-                                 f"at least 3: the factors path {up['id']!r} takes from the screening are those of "
-                                 f"Box-Behnken stage {sid!r}, which needs three", min_factors)
+            if st["kind"] == "box_behnken" and up["kind"] == "steepest_ascent":
+                # the path's factors are the Box-Behnken design's, which needs BBD_MIN_FACTORS
+                if top is not None and min_factors < BBD_MIN_FACTORS:
+                    # the path takes as few as min_factors from the screening (those found
+                    # significant, when fewer are)
+                    raise InputError(soil_path, f"{BLOCK}.screening.min_factors",
+                                     f"at least {BBD_MIN_FACTORS}: the factors path {up['id']!r} takes from the "
+                                     f"screening are those of Box-Behnken stage {sid!r}, which needs at least "
+                                     f"{BBD_MIN_FACTORS}", min_factors)
+                if top is None and len(up["factors"]) < BBD_MIN_FACTORS:
+                    # the path runs on its own levels: its factors are the design's
+                    raise InputError(soil_path, f"stages.{up['id']}.factors",
+                                     f"at least {BBD_MIN_FACTORS} factors: Box-Behnken stage {sid!r} is derived "
+                                     f"from this path on its factors (or give the Box-Behnken stage its levels "
+                                     f"with simulation.design: printed)",
+                                     f"{len(up['factors'])} ({', '.join(up['factors'])})")
             if st["kind"] == "steepest_ascent" and up["kind"] == "plackett_burman" and min_factors > len(up["factors"]):
                 given = "min_factors" in (sim.get("screening") or {})
                 raise InputError(soil_path, f"{BLOCK}.screening.min_factors",
