@@ -381,7 +381,7 @@ def test_a_path_on_its_own_levels_with_uneven_steps_is_refused_at_load(tmp_path)
     p = _write(tmp_path, uneven)
     with pytest.raises(InputError) as e:
         _load(p)
-    assert (e.value.path, e.value.field, e.value.got) == (str(p), "stages[1].factors", [2, 3])
+    assert (e.value.path, e.value.field, e.value.got) == (str(p), "stages.climb.factors", [2, 3])
     assert e.value.expected == "the same number of levels for every factor"
 
 
@@ -516,3 +516,23 @@ def test_a_box_behnken_design_derived_from_a_path_of_two_factors_on_its_own_leve
     _load(_write(tmp_path, lambda d: (two_factor_path(d), _stage(d, "climb")["fixed"].pop("gamma"),
                                       _stage(d, "climb")["factors"].update(
                                           C={"parameter": "gamma", "levels": [0.1, 0.2, 0.3]}))))
+
+
+@pytest.mark.parametrize("setting", ["recipe-path", "published-only"])
+def test_uneven_path_levels_no_run_takes_load(tmp_path, setting):
+    """A path's config levels with two steps for one factor and three for the others are
+    refused only where the DEM runs them: a path the recipe lays out from the screening takes
+    its steps from there, and a soil replayed from its printed tables (source: published) does
+    not run a stage whose table is not printed."""
+    def uneven(d):
+        _path_between(d)
+        climb = _stage(d, "climb")
+        climb["factors"]["A"]["levels"] = [0.3, 0.4, 0.5]
+        climb["factors"]["B"]["levels"] = [0.05, 0.1]
+        climb["factors"]["C"]["levels"] = [0.1, 0.2, 0.3]
+        if setting == "published-only":
+            d["source"] = "published"
+            d.pop("simulation")
+
+    soil = _load(_write(tmp_path, uneven))
+    assert [len(f["levels"]) for f in soil.stage("climb")["factors"].values()] == [3, 2, 3]

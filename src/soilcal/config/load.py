@@ -339,13 +339,12 @@ def _semantic_checks(path: Path, d: dict, resources_root: Path) -> tuple[dict | 
                 pb_columns(st)  # a design's run count: a multiple of 4 above the factors and dummies
             except InputError as exc:
                 raise InputError(path, f"{where}.runs", exc.expected, exc.got) from None
-        if st["kind"] == "steepest_ascent":
-            # every factor given its steps (a table's, or the levels a DEM run takes) has as many
-            lengths = {len(f["levels"]) for f in st["factors"].values() if f.get("levels")}
-            if len(lengths) > 1:
-                raise InputError(path, f"{where}.factors", "the same number of levels for every factor", sorted(lengths))
         if st["kind"] == "steepest_ascent" and st.get("table") is not None:
-            if "chosen_step" in st and not 1 <= st["chosen_step"] <= lengths.pop():
+            # the printed path's steps (a path the DEM runs on its own levels: check_block)
+            from soilcal.dem.scenarios.design import path_steps
+
+            n_steps = path_steps(path, where, st)
+            if "chosen_step" in st and not 1 <= st["chosen_step"] <= n_steps:
                 raise InputError(path, f"{where}.chosen_step", "a step number of the path", st["chosen_step"])
         for p in st.get("fixed", {}):
             if p not in params:

@@ -172,7 +172,7 @@ def check_block(soil_path, data: dict) -> None:
         if sid not in ids:
             raise InputError(soil_path, f"{BLOCK}.stages[{i}]", "a stage id (" + ", ".join(ids) + ")", sid)
     from soilcal.chain import adaptive
-    from soilcal.chain.derive import check_dem_stages, dependencies, design_mode, simulated_stage_ids
+    from soilcal.chain.derive import check_dem_stages, dependencies, design_mode, runs_own_levels, simulated_stage_ids
     from soilcal.doe.designs import BBD_MIN_FACTORS
 
     min_factors = _check_screening(soil_path, sim)
@@ -231,6 +231,8 @@ def check_block(soil_path, data: dict) -> None:
                        "varies the parameter" if design_mode(data) == "adaptive"
                        else f"leave {sid!r} out of {BLOCK}.stages")
                 raise InputError(soil_path, where, f"low and high levels to simulate the stage (or {how})", f)
+        if st["kind"] == "steepest_ascent" and runs_own_levels(data, sid):
+            path_steps(soil_path, f"stages.{sid}", st)  # the design job's rows, one per step
     check_dem_stages(soil_path, data)
     from soilcal.chain.provenance import check_parameters
 
@@ -275,6 +277,17 @@ def _has_target(data: dict, rids) -> bool:
     return False
 
 
+def path_steps(soil_path, where: str, stage: dict) -> int:
+    """The number of steps of a steepest-ascent stage's ``levels`` in the soil config: as many
+    for every factor that gives them (a printed table's rows, or the steps the DEM runs on the
+    stage's own levels, :func:`soilcal.chain.derive.runs_own_levels`), else InputError naming
+    ``<where>.factors`` (0 when no factor gives levels)."""
+    lengths = sorted({len(f["levels"]) for f in stage["factors"].values() if f.get("levels")})
+    if len(lengths) > 1:
+        raise InputError(soil_path, f"{where}.factors", "the same number of levels for every factor", lengths)
+    return lengths[0] if lengths else 0
+
+
 def spec(soil, response_id: str) -> SimulationSpec:
     """:func:`spec_from` for a loaded :class:`~soilcal.config.load.Soil`."""
     return spec_from(soil.path, soil.data, response_id)
@@ -308,10 +321,7 @@ def design_levels(soil, stage_id: str) -> pd.DataFrame:
                 raise InputError(soil.path, f"{where}.factors.{c}.levels",
                                  "the actual value of every step (no printed table to take them from)", None)
             levels[c] = [float(v) for v in lv]
-        n = {len(v) for v in levels.values()}
-        if len(n) != 1:
-            raise InputError(soil.path, f"{where}.factors", "the same number of levels for every factor",
-                             sorted(n))
+        path_steps(soil.path, where, stage)
         df = pd.DataFrame(levels)
     else:
         lo, hi = [], []
