@@ -303,9 +303,11 @@ def _check_stage_sets_each_parameter_once(path: Path, where: str, st: dict, para
                              "dummy column names used once and by no factor (" + ", ".join(st["factors"]) + ")", name)
 
 
-def _semantic_checks(path: Path, d: dict, resources_root: Path) -> tuple[dict | None, tuple]:
+def _semantic_checks(path: Path, d: dict, resources_root: Path,
+                     source_override: bool = False) -> tuple[dict | None, tuple]:
     """The checks a schema cannot state; returns the soil's photo manifest (None without one)
-    and the conditions of its measured tables (empty without any)."""
+    and the conditions of its measured tables (empty without any).  ``source_override``: the
+    soil's ``source`` is the workflow's (``--config source=...``), not the file's."""
     from soilcal.doe.designs import BBD_MIN_FACTORS
 
     if d["name"] != path.stem:
@@ -390,10 +392,12 @@ def _semantic_checks(path: Path, d: dict, resources_root: Path) -> tuple[dict | 
     manifest = _check_images(path, d, resources_root)
     _check_targets(path, d, resources_root)
     if d.get("source") in ("dem", "both") and not d.get("simulation"):
-        # what the workflow's start-up refuses (soilcal.chain.plan.soil_sources), also for a check of the file alone
-        raise InputError(path, "simulation",
-                         f"a simulation block naming the scenario of each response (source {d['source']} runs the "
-                         "DEM; or source: published)", None)
+        # the DEM source needs to know how each response is simulated; the source is the soil's
+        # own, or the workflow's (--config source=...) for every soil
+        how = (f"the workflow's source {d['source']} (--config source={d['source']}) runs the DEM for every soil; "
+               "or run the workflow with source=published" if source_override
+               else f"source {d['source']} runs the DEM; or source: published")
+        raise InputError(path, "simulation", f"a simulation block naming the scenario of each response ({how})", None)
     if d.get("simulation"):
         from soilcal.dem.scenarios.design import check_block
 
@@ -638,7 +642,7 @@ def load_soil(path: str | Path, resources_root: str | Path = "resources", design
         data["simulation"]["design"] = design
     if source is not None:
         data["source"] = source
-    manifest, measured = _semantic_checks(path, data, Path(resources_root))
+    manifest, measured = _semantic_checks(path, data, Path(resources_root), source_override=source is not None)
     return Soil(path=path, data=data, resources_root=Path(resources_root), defaulted=tuple(defaulted),
                 manifest=manifest, measured=measured)
 
