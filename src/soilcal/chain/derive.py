@@ -52,13 +52,9 @@ import pandas as pd
 from soilcal.doe.designs import BBD_MIN_FACTORS
 from soilcal.errors import InputError
 
-#: physical range of a parameter kind, in the config's units where they are unit-free
-_BOUNDS = {
-    "restitution": (0.01, 1.0),
-    "static_friction": (0.0, 5.0),
-    "rolling_friction": (0.0, 1.0),
-    "surface_energy": (0.0, 1.0e3),
-}
+#: a Box-Behnken level is kept this fraction of the physical range inside an open end of it
+#: (a restitution above 0), where a level may not lie (:func:`_bounds_in_config_units`)
+OPEN_END_MARGIN = 1e-9
 DEFAULT_STEPS = 6
 #: the screening's defaults: alpha as the papers, min_factors what a Box-Behnken design needs
 SCREENING_DEFAULTS = {"alpha": 0.05, "min_factors": BBD_MIN_FACTORS}
@@ -196,19 +192,20 @@ def _g12(v) -> float:
     return float(f"{float(v):.12g}")
 
 
-def _bounds_in_config_units(soil_data: dict, pname: str, kind: str) -> tuple[float, float]:
-    """:data:`_BOUNDS` of a parameter kind (SI: a surface energy in J/m^2) in the unit its levels
-    are written in (``parameters.<pname>.unit``, e.g. mJ/m^2: up to 1e6 mJ/m^2)."""
-    from soilcal.dem.scenarios.base import _UNIT_SCALE
+def _bounds_in_config_units(soil_data: dict, pname: str) -> tuple[float, float]:
+    """The physical range of the DEM parameter a config parameter sets (the range its values
+    are checked against, :class:`soilcal.dem.scenarios.base.DemParams`, in SI: a surface
+    energy in [0, 1000] J/m^2) in the unit its levels are written in
+    (``parameters.<pname>.unit``, e.g. mJ/m^2: up to 1e6 mJ/m^2), an open end moved inside by
+    :data:`OPEN_END_MARGIN` of the range.  A parameter that sets no DEM parameter, or a unit
+    without a factor to SI, raises InputError naming ``parameters.<pname>``
+    (:func:`soilcal.dem.scenarios.base.dem_field`)."""
+    from soilcal.dem.scenarios.base import _RANGES, _kind, dem_field
 
-    unit = (soil_data.get("parameters", {}).get(pname) or {}).get("unit", "-")
-    scale = _UNIT_SCALE.get(unit, 1.0)
-    lo, hi = _BOUNDS[kind]
-    return lo / scale, hi / scale
-
-
-def _param_kind(soil_data: dict, pname: str) -> str | None:
-    return (soil_data.get("parameters", {}).get(pname) or {}).get("kind")
+    name, scale = dem_field(soil_data.get("name", "<soil>"), soil_data, pname, f"parameters.{pname}")
+    lo, hi, lo_in, hi_in, _ = _RANGES[_kind(name)]
+    margin = OPEN_END_MARGIN * (hi - lo)
+    return (lo if lo_in else lo + margin) / scale, (hi if hi_in else hi - margin) / scale
 
 
 def _centre(f: dict) -> float:
@@ -332,12 +329,7 @@ def bbd_from_path(soil_data: dict, stage_id: str, path_stage: dict, path_respons
     step, table = chosen_step(path, ys, targets, rule=choice)
     trends = {r: {k: (None if isinstance(v, float) and not np.isfinite(v) else v) for k, v in t.items()}
               for r, t in table.attrs.get("trend", {}).items()}  # stage.json: no NaN
-    bounds = {}
-    for s in syms:
-        pname = path_stage["factors"][s]["parameter"]
-        kind = _param_kind(soil_data, pname)
-        if kind in _BOUNDS:
-            bounds[s] = _bounds_in_config_units(soil_data, pname, kind)
+    bounds = {s: _bounds_in_config_units(soil_data, path_stage["factors"][s]["parameter"]) for s in syms}
     levels = bbd_levels(path, step, syms, bounds)
     st = _dem_base(config_stage)
     st["factors"] = {s: {"parameter": path_stage["factors"][s]["parameter"],
