@@ -272,15 +272,18 @@ def _check_stage_sets_each_parameter_once(path: Path, where: str, st: dict, para
     """A stage varies or fixes each parameter once: two factors on one parameter, or a factor
     and a fixed value of it, would leave one of the two without any effect on the runs (the
     last one set wins), and a dummy column must not bear a factor's symbol.  Two parameter
-    ids with the same ``pair`` and ``kind`` are the same DEM parameter and count as one."""
+    ids that set the same DEM parameter (:func:`soilcal.config.parameters.dem_field_name`, the
+    name :func:`soilcal.dem.scenarios.base.dem_field` maps them to) count as one."""
+
+    from soilcal.config.parameters import dem_field_name
 
     def key(pid):
-        p = params.get(pid) or {}
-        return (p["pair"], p["kind"]) if "pair" in p and "kind" in p else pid
+        name = dem_field_name(params.get(pid))
+        return ("dem", name) if name is not None else ("id", pid)
 
     def named(pid):
-        k = key(pid)
-        return repr(pid) if k == pid else f"{pid!r} (DEM parameter {k[0].replace('-', '_')}_{k[1]})"
+        name = dem_field_name(params.get(pid))
+        return repr(pid) if name is None else f"{pid!r} (DEM parameter {name})"
 
     setters: dict = {}
     for sym, f in st["factors"].items():
