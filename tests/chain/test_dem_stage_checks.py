@@ -536,3 +536,21 @@ def test_uneven_path_levels_no_run_takes_load(tmp_path, setting):
 
     soil = _load(_write(tmp_path, uneven))
     assert [len(f["levels"]) for f in soil.stage("climb")["factors"].values()] == [3, 2, 3]
+
+
+@pytest.mark.parametrize("unit, loads", [(" deg", True), ("deg ", True), ("rad ", False)])
+def test_a_response_unit_is_compared_without_surrounding_spaces(tmp_path, unit, loads):
+    """The response's unit is compared with its measure's as a target's unit is compared with
+    its response's (surrounding spaces dropped): 'deg ' is deg, and 'rad ' is still refused."""
+    def edit(d):
+        for st in d["stages"]:
+            st["responses"][0]["unit"] = unit
+        d["targets"]["repose"]["unit"] = unit.strip()
+
+    p = _write(tmp_path, edit)
+    if loads:
+        _load(p)
+        return
+    with pytest.raises(InputError) as e:
+        _load(p)
+    assert (e.value.field, e.value.got) == ("stages[0].responses[0].unit", unit)

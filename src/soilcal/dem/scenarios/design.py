@@ -159,7 +159,7 @@ def check_block(soil_path, data: dict) -> None:
         want = unit_of(measure)
         for i, st in enumerate(data["stages"]):
             for j, r in enumerate(st["responses"]):
-                if r["id"] == rid and r["unit"] != want:
+                if r["id"] == rid and str(r["unit"]).strip() != want:  # as the targets' units are compared
                     raise InputError(soil_path, f"stages[{i}].responses[{j}].unit",
                                      f"{want}, the unit of {BLOCK}.responses.{rid}.measure {measure!r} (from its "
                                      "name), which the DEM runs give", r["unit"])
