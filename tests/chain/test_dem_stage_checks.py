@@ -554,3 +554,29 @@ def test_a_response_unit_is_compared_without_surrounding_spaces(tmp_path, unit, 
     with pytest.raises(InputError) as e:
         _load(p)
     assert (e.value.field, e.value.got) == ("stages[0].responses[0].unit", unit)
+
+
+def test_design_adaptive_takes_the_other_parameters_where_the_readme_says(tmp_path):
+    """README, the adaptive design: with the screening and the path not run, the other soil
+    parameters come from the stage's fixed values, simulation.params or the printed properties
+    (not the skipped stages' fixed values).  The soil density given only as
+    properties.particle_density loads; given nowhere, start-up names it."""
+    readme = " ".join((ROOT / "README.md").read_text().split())
+    assert ("every other soil parameter the runs use comes from the stage's `fixed` values, "
+            "`simulation.params` or the printed `properties`") in readme
+
+    def adaptive_recipe(d):
+        _recipe_chain(d)
+        d["simulation"]["design"] = "adaptive"
+        d["simulation"]["params"].pop("soil_density")
+
+    _load(_write(tmp_path, lambda d: (adaptive_recipe(d), d.update(
+        properties={"particle_density": {"value": 2650.0, "unit": "kg/m^3"}}))))
+    # in the skipped path's fixed values only: not a value the adaptive runs take
+    p = _write(tmp_path, lambda d: (adaptive_recipe(d), d["parameters"].update(
+        rho={"name": "particle density", "unit": "kg/m^3", "pair": "soil", "kind": "density"}),
+        _stage(d, "climb")["fixed"].update(rho=2650.0)))
+    with pytest.raises(InputError) as e:
+        _load(p)
+    assert (e.value.path, e.value.field) == (str(p), "simulation.params")
+    assert "missing: soil_density (or properties.particle_density with its unit)" in e.value.expected
