@@ -345,7 +345,7 @@ def test_a_path_before_a_box_behnken_design_takes_at_least_three_factors(tmp_pat
     with pytest.raises(InputError) as e:
         _load(p)
     assert (e.value.path, e.value.field, e.value.got) == (str(p), "simulation.screening.min_factors", 2)
-    assert "Box-Behnken stage 'rsm', which needs three" in e.value.expected
+    assert "Box-Behnken stage 'rsm', which needs at least 3" in e.value.expected
 
 
 # --------------------------------------------------------------------------- a simulated Box-Behnken centre
@@ -381,5 +381,202 @@ def test_a_path_on_its_own_levels_with_uneven_steps_is_refused_at_load(tmp_path)
     p = _write(tmp_path, uneven)
     with pytest.raises(InputError) as e:
         _load(p)
-    assert (e.value.path, e.value.field, e.value.got) == (str(p), "stages[1].factors", [2, 3])
+    assert (e.value.path, e.value.field, e.value.got) == (str(p), "stages.climb.factors", [2, 3])
     assert e.value.expected == "the same number of levels for every factor"
+
+
+def test_the_adaptive_designs_stage_and_its_start_up_check_take_the_screening_range_from_one_rule(
+        tmp_path, monkeypatch):
+    """Which range design: adaptive takes from the screening is one rule
+    (soilcal.chain.adaptive.screening_range) for the stage it runs and for the start-up check
+    that the stage has a range: a rule that gives mu_ss 0.25-0.85 and nothing else reaches both."""
+    from soilcal.chain import adaptive
+
+    p = _write(tmp_path, lambda d: (_recipe_chain(d), d["simulation"].update(design="adaptive")))
+    soil = _load(p)
+    assert adaptive.screening_range(soil.data, "rsm", "mu_ss") == (0.2, 0.9)  # the screening's B
+    assert adaptive.screening_range(soil.data, "rsm", "e_ss") == (0.2, 0.7)   # the screening's A
+    assert adaptive.screening_range(soil.data, "screen", "mu_ss") is None    # no screening above it
+    only_mu = {"mu_ss": (0.25, 0.85)}
+    monkeypatch.setattr(adaptive, "screening_range", lambda data, sid, par: only_mu.get(par))
+    st = adaptive.stage_for(soil.data, "rsm")
+    assert (st["factors"]["A"]["low"], st["factors"]["A"]["high"]) == (0.25, 0.85)
+    assert st["factors"]["B"].get("low") is None  # mur_ss: no range from the rule
+    with pytest.raises(InputError) as e:
+        _load(p)
+    assert (e.value.path, e.value.field) == (str(p), "stages.rsm.factors.B")
+
+
+@pytest.mark.parametrize("target, aimed", [
+    ({"value": 36.0, "unit": "deg"}, True),
+    ({"value": None, "unit": "deg", "image": "heap"}, True),   # a photo group gives it
+    ({"value": None, "unit": "deg"}, False),
+], ids=["value", "photo-group", "nothing"])
+def test_a_goal_has_a_value_to_aim_at_by_one_rule_for_the_path_and_the_adaptive_design(target, aimed):
+    """A goal with ``value: null`` beside ``target: <id>`` (as a soil built in code may carry it)
+    aims at the target: the path's start-up check and the adaptive design's case selection
+    read it alike (soilcal.chain.targets.goal_has_value)."""
+    from soilcal.chain.adaptive import _why_not
+    from soilcal.chain.targets import goal_has_value
+    from soilcal.dem.scenarios.design import _has_target
+
+    d = copy.deepcopy(SOIL)
+    d["targets"] = {"t": target}
+    case = {"id": "c", "goals": {"repose": {"goal": "target", "value": None, "target": "t"}}}
+    _stage(d, "rsm")["optimise"]["cases"] = [case]
+    assert goal_has_value(d, case["goals"]["repose"]) is aimed
+    assert _has_target(d, ["repose"]) is aimed
+    assert (_why_not(d, case) == "") is aimed
+
+
+@pytest.mark.parametrize("recipe_chain", [False, True], ids=["stage-levels", "recipe-levels"])
+def test_design_adaptive_checks_the_screening_range_its_stage_takes(tmp_path, recipe_chain):
+    """With design: adaptive (ranges: screening) the screening is not run, but the optimised
+    stage that descends from it ranges mu_ss over the screening's B levels: a high of 7.0,
+    beyond a sliding friction coefficient's [0, 5], is refused at load naming the screening's
+    field (the stage's own levels of mu_ss, 0.3-0.8, or none, are not the ones run)."""
+    def edit(d):
+        if recipe_chain:
+            _recipe_chain(d)
+        else:
+            _bbd_after_screen(d)
+        d["simulation"]["design"] = "adaptive"
+        _stage(d, "screen")["factors"]["B"]["high"] = 7.0
+
+    p = _write(tmp_path, edit)
+    with pytest.raises(InputError) as e:
+        _load(p)
+    assert (e.value.path, e.value.field, e.value.got) == (str(p), "stages.screen.factors.B.high", 7.0)
+    assert e.value.expected.startswith("a sliding friction coefficient in [0, 5]")
+    # with ranges: stage the stage keeps its own levels (0.3-0.8), and the screening is not used;
+    # neither is it by a stage that does not descend from it
+    if not recipe_chain:
+        _load(_write(tmp_path, lambda d: (edit(d), d["simulation"].update(adaptive={"ranges": "stage"}))))
+        _load(_write(tmp_path, lambda d: (edit(d), _stage(d, "rsm").pop("from_stage"))))
+
+
+def test_a_box_behnken_centre_no_run_is_decoded_from_is_not_checked(tmp_path):
+    """The centre check guards the runs decoded from low and high (coded 0 at 0.55 for A's
+    0.3-0.8); with design: adaptive on the stage's own ranges (ranges: stage) the runs range
+    over low .. high and no design is decoded, so a centre of 0.4 is not refused; the recipe
+    runs the generated design and refuses it."""
+    def off(d):
+        _stage(d, "rsm")["factors"]["A"]["centre"] = 0.4
+        d["simulation"]["adaptive"] = {"ranges": "stage"}
+
+    _load(_write(tmp_path, lambda d: (off(d), d["simulation"].update(design="adaptive"))))
+    with pytest.raises(InputError) as e:
+        _load(_write(tmp_path, off))
+    assert e.value.field == "stages.rsm.factors.A.centre"
+
+
+@pytest.mark.parametrize("design, refused", [("printed", False), ("recipe", True)])
+def test_a_box_behnken_centre_of_a_table_printed_in_actual_units_is_checked_only_where_decoded(
+        tmp_path, design, refused):
+    """The black soil's soil-soil Box-Behnken table is printed in actual units: design: printed
+    runs its rows as printed, so a centre of x4 off the midpoint of 0.05-0.50 (0.275) by more
+    than 2 % of the range is not used and loads; the recipe decodes its generated design from
+    low and high and refuses it."""
+    d = yaml.safe_load((ROOT / "config/soils/black-soil.yaml").read_text())
+    d["stages"][0]["factors"]["x4"]["centre"] = 0.33
+    p = tmp_path / "black-soil.yaml"
+    p.write_text(yaml.safe_dump(d, sort_keys=False))
+    if not refused:
+        load_soil(p, ROOT / "resources", design=design)
+        return
+    with pytest.raises(InputError) as e:
+        load_soil(p, ROOT / "resources", design=design)
+    assert (e.value.field, e.value.got) == ("stages.soil-soil.factors.x4.centre", 0.33)
+    assert e.value.expected.startswith("the midpoint of low and high (0.275)")
+
+
+def test_a_box_behnken_design_derived_from_a_path_of_two_factors_on_its_own_levels_is_refused(tmp_path):
+    """The recipe derives the Box-Behnken design from the path's factors: a path the DEM runs on
+    its own levels (no screening before it) over two factors would give a design of two, which
+    does not exist, and stop its design job after the path's runs, naming no file."""
+    def two_factor_path(d):
+        _recipe_chain(d)
+        climb = _stage(d, "climb")
+        climb.pop("from_stage")
+        climb["factors"] = {"A": {"parameter": "mu_ss", "levels": [0.3, 0.4, 0.5]},
+                            "B": {"parameter": "mur_ss", "levels": [0.05, 0.1, 0.15]}}
+        climb["fixed"]["gamma"] = 0.3
+
+    p = _write(tmp_path, two_factor_path)
+    with pytest.raises(InputError) as e:
+        _load(p)
+    assert (e.value.path, e.value.field, e.value.got) == (str(p), "stages.climb.factors", "2 (A, B)")
+    assert e.value.expected.startswith("at least 3 factors: Box-Behnken stage 'rsm' is derived from this path")
+    from soilcal.doe.designs import BBD_MIN_FACTORS, box_behnken
+
+    assert BBD_MIN_FACTORS == 3
+    with pytest.raises(InputError):
+        box_behnken(2, 3)
+    # a third factor on the path: the design of three
+    _load(_write(tmp_path, lambda d: (two_factor_path(d), _stage(d, "climb")["fixed"].pop("gamma"),
+                                      _stage(d, "climb")["factors"].update(
+                                          C={"parameter": "gamma", "levels": [0.1, 0.2, 0.3]}))))
+
+
+@pytest.mark.parametrize("setting", ["recipe-path", "published-only"])
+def test_uneven_path_levels_no_run_takes_load(tmp_path, setting):
+    """A path's config levels with two steps for one factor and three for the others are
+    refused only where the DEM runs them: a path the recipe lays out from the screening takes
+    its steps from there, and a soil replayed from its printed tables (source: published) does
+    not run a stage whose table is not printed."""
+    def uneven(d):
+        _path_between(d)
+        climb = _stage(d, "climb")
+        climb["factors"]["A"]["levels"] = [0.3, 0.4, 0.5]
+        climb["factors"]["B"]["levels"] = [0.05, 0.1]
+        climb["factors"]["C"]["levels"] = [0.1, 0.2, 0.3]
+        if setting == "published-only":
+            d["source"] = "published"
+            d.pop("simulation")
+
+    soil = _load(_write(tmp_path, uneven))
+    assert [len(f["levels"]) for f in soil.stage("climb")["factors"].values()] == [3, 2, 3]
+
+
+@pytest.mark.parametrize("unit, loads", [(" deg", True), ("deg ", True), ("rad ", False)])
+def test_a_response_unit_is_compared_without_surrounding_spaces(tmp_path, unit, loads):
+    """The response's unit is compared with its measure's as a target's unit is compared with
+    its response's (surrounding spaces dropped): 'deg ' is deg, and 'rad ' is still refused."""
+    def edit(d):
+        for st in d["stages"]:
+            st["responses"][0]["unit"] = unit
+        d["targets"]["repose"]["unit"] = unit.strip()
+
+    p = _write(tmp_path, edit)
+    if loads:
+        _load(p)
+        return
+    with pytest.raises(InputError) as e:
+        _load(p)
+    assert (e.value.field, e.value.got) == ("stages[0].responses[0].unit", unit)
+
+
+def test_design_adaptive_takes_the_other_parameters_where_the_readme_says(tmp_path):
+    """README, the adaptive design: with the screening and the path not run, the other soil
+    parameters come from the stage's fixed values, simulation.params or the printed properties
+    (not the skipped stages' fixed values).  The soil density given only as
+    properties.particle_density loads; given nowhere, start-up names it."""
+    readme = " ".join((ROOT / "README.md").read_text().split())
+    assert ("every other soil parameter the runs use comes from the stage's `fixed` values, "
+            "`simulation.params` or the printed `properties`") in readme
+
+    def adaptive_recipe(d):
+        _recipe_chain(d)
+        d["simulation"]["design"] = "adaptive"
+        d["simulation"]["params"].pop("soil_density")
+
+    _load(_write(tmp_path, lambda d: (adaptive_recipe(d), d.update(
+        properties={"particle_density": {"value": 2650.0, "unit": "kg/m^3"}}))))
+    # in the skipped path's fixed values only: not a value the adaptive runs take
+    p = _write(tmp_path, lambda d: (adaptive_recipe(d), d["parameters"].update(
+        rho={"name": "particle density", "unit": "kg/m^3", "pair": "soil", "kind": "density"}),
+        _stage(d, "climb")["fixed"].update(rho=2650.0)))
+    with pytest.raises(InputError) as e:
+        _load(p)
+    assert (e.value.path, e.value.field) == (str(p), "simulation.params")
+    assert "missing: soil_density (or properties.particle_density with its unit)" in e.value.expected

@@ -334,6 +334,42 @@ def test_bbd_bounds_a_surface_energy_in_the_unit_its_levels_are_written_in(soils
     assert (b["low"], b["centre"], b["high"]) == pytest.approx((800.0, 1200.0, 1600.0), abs=1e-9)
 
 
+def _plastic_path(cin: dict) -> dict:
+    cin["parameters"]["lam"] = {"name": "soil-soil contact plasticity ratio", "unit": "-", "pair": "soil-soil",
+                                "kind": "plasticity"}
+    return {"id": "steepest", "kind": "steepest_ascent",
+            "factors": {"A": {"parameter": "soil_soil_rolling_friction", "levels": [0.05, 0.08, 0.11]},
+                        "B": {"parameter": "jkr_surface_energy", "levels": [0.24, 0.38, 0.52]},
+                        "C": {"parameter": "lam", "levels": [0.8, 0.9, 0.96]}},
+            "fixed": {}, "path_targets": {"stacking_angle": {"value": CINNAMON_TARGET}}}
+
+
+def test_bbd_keeps_every_dem_parameter_inside_its_physical_range(soils):
+    """The Box-Behnken levels stay inside the range the DEM runs accept for every parameter
+    kind, a contact plasticity ratio's [0, 1) too.  A path whose last step (0.96) is closest to
+    the target mirrors the high level to 2 * 0.96 - 0.9 = 1.02, beyond 1: the triple 0.9 / 0.96
+    / 1.02 is shifted down as a whole until its high lies just inside 1, by 0.02 and the open
+    end's margin (1e-9 of the range 1): 0.88 / 0.94 / 1 - 1e-9."""
+    cin = copy.deepcopy(soils["cinnamon-soil"])
+    path = _plastic_path(cin)
+    st = bbd_from_path(cin, "bbd", path, _path_responses([20.0, 24.0, 27.7]))
+    assert st["derivation"]["chosen_step"] == 3
+    c = st["factors"]["C"]
+    assert (c["low"], c["centre"], c["high"]) == pytest.approx((0.88, 0.94, 1.0), abs=1e-8)
+    assert c["high"] == pytest.approx(1.0 - 1e-9, abs=1e-12) and c["high"] < 1.0
+
+
+def test_bbd_bounds_refuse_a_unit_without_a_factor_to_si(soils):
+    """A level's physical range is converted to the unit its parameter is written in; a unit
+    the DEM does not know (mN/m for a surface energy) is refused naming it, not taken as SI."""
+    cin = copy.deepcopy(soils["cinnamon-soil"])
+    cin["parameters"]["jkr_surface_energy"]["unit"] = "mN/m"
+    path = _plastic_path(cin)
+    with pytest.raises(InputError) as e:
+        bbd_from_path(cin, "bbd", path, _path_responses([20.0, 24.0, 27.7]))
+    assert (e.value.field, e.value.got) == ("parameters.jkr_surface_energy.unit", "mN/m")
+
+
 # --------------------------------------------------------------------------- dem_stage
 
 

@@ -224,3 +224,23 @@ def test_bbd_run_counts():
     four = {"kind": "box_behnken", "factors": dict.fromkeys("ABCD", {}), "center_points": 5}
     three = {"kind": "box_behnken", "factors": dict.fromkeys("ABC", {}), "center_points": 5}
     assert design_runs(four) == 29 and design_runs(three) == 17
+
+
+def test_the_once_check_counts_two_ids_as_one_where_the_dem_maps_them_to_one_field():
+    """Two parameter ids are one DEM parameter where the DEM's mapping (dem_field) gives them
+    one field: a pair written soil_soil (as a soil built in code may write it) and soil-soil,
+    both restitution, are soil_soil_restitution, so a factor on one and a fixed value of the
+    other set it twice."""
+    from soilcal.config.load import _check_stage_sets_each_parameter_once
+    from soilcal.dem.scenarios.base import dem_field
+
+    params = {"e_a": {"unit": "-", "pair": "soil-soil", "kind": "restitution"},
+              "e_b": {"unit": "-", "pair": "soil_soil", "kind": "restitution"}}
+    data = {"parameters": params}
+    assert dem_field("s.yaml", data, "e_a", "x")[0] == dem_field("s.yaml", data, "e_b", "x")[0] \
+        == "soil_soil_restitution"
+    st = {"factors": {"A": {"parameter": "e_a", "low": 0.2, "high": 0.6}}, "fixed": {"e_b": 0.4}}
+    with pytest.raises(InputError) as e:
+        _check_stage_sets_each_parameter_once(Path("s.yaml"), "stages[0]", st, params)
+    assert (e.value.field, e.value.got) == ("stages[0].fixed.e_b", "e_b")
+    assert "(DEM parameter soil_soil_restitution)" in e.value.expected

@@ -289,3 +289,28 @@ def test_a_dem_soil_without_a_simulation_block_is_refused_by_the_check_of_its_fi
     e = refused(p, tmp_path)
     assert (e.path, e.field, e.got) == (str(p), "simulation", None)
     assert e.expected.startswith("a simulation block naming the scenario of each response")
+
+
+@pytest.mark.parametrize("source", ["dem", "both"])
+def test_a_published_soil_without_a_simulation_block_run_on_the_dem_by_the_workflow_is_told_so(tmp_path, source):
+    """A soil whose own source is published, without a simulation block, loads; the workflow's
+    --config source=dem (both) runs it on the DEM: start-up refuses it naming the workflow's
+    source, not the soil file's source key (which says published)."""
+    from soilcal.chain.plan import soil_sources
+    from soilcal.config import load_workflow_config
+
+    def published(d):
+        d["source"] = "published"
+        d.pop("simulation")
+
+    p = edit(copy_soil(tmp_path), published)
+    cfg = {"soils": ["cinnamon-soil"], "soil_dir": str(tmp_path / "config/soils"),
+           "resources": str(tmp_path / "resources")}
+    soil = load_workflow_config(cfg)["cinnamon-soil"]
+    assert soil_sources(soil) == ["published"]
+    with pytest.raises(InputError) as exc:
+        load_workflow_config(dict(cfg, source=source))
+    e = exc.value
+    assert (e.path, e.field, e.got) == (str(p), "simulation", None)
+    assert f"the workflow's source {source} (--config source={source})" in e.expected
+    assert "source: published" not in e.expected

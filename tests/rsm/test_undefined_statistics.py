@@ -168,3 +168,31 @@ def test_centre_points_printed_alike_leave_the_lack_of_fit_untested_and_say_why(
     assert np.isnan(tab.loc["Lack of Fit", "F"]) and np.isnan(tab.loc["Lack of Fit", "p"])
     fit = regression_frames(STAGE, t)["fit"]
     assert fit["note"].str.contains("identical responses: no pure error").all()
+
+
+def test_six_centre_points_printed_alike_leave_the_lack_of_fit_untested_though_their_mean_rounds():
+    """Six centre points printed 35.2: their mean is not exactly 35.2 in floating point, so the
+    pure error's sum of squares is a rounding remainder, not 0; still no replicate scatter, so
+    the lack of fit has no F and no p, and fit.csv's note says why."""
+    x = doe.box_behnken(3, 6)
+    t = pd.DataFrame(x.astype(int), columns=list("ABC"))
+    t.insert(0, "run", np.arange(1, len(t) + 1))
+    a, b, c = x.T
+    t["angle"] = 30 + a + 2 * b - c + 0.5 * a * b + a * a + np.resize(SCATTER, len(t))
+    centre = (t[list("ABC")] == 0).all(axis=1)
+    assert centre.sum() == 6
+    t.loc[centre, "angle"] = 35.2
+    fit = _fit(t)
+    assert fit.pure_error_negligible()
+    tab = fit.anova().set_index("source")
+    assert tab.loc["Pure Error", "df"] == 5
+    assert tab.loc["Pure Error", "sum_sq"] == pytest.approx(0.0, abs=1e-20)
+    assert np.isnan(tab.loc["Lack of Fit", "F"]) and np.isnan(tab.loc["Lack of Fit", "p"])
+    assert "identical responses: no pure error" in fit.statistics_note()
+    stage = dict(STAGE, center_points=6)
+    assert regression_frames(stage, t)["fit"]["note"].str.contains("identical responses: no pure error").all()
+    # one centre point moved by 0.1: pure error, an F and a p
+    t.loc[centre[centre].index[0], "angle"] = 35.3
+    moved = _fit(t)
+    assert not moved.pure_error_negligible()
+    assert np.isfinite(moved.anova().set_index("source").loc["Lack of Fit", "F"])

@@ -41,6 +41,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
+from soilcal.chain.targets import goal_has_value
 from soilcal.config.load import read_table
 from soilcal.doe import adaptive as ad
 from soilcal.doe.designs import actual_to_coded
@@ -67,10 +68,7 @@ def _why_not(soil_data: dict, case: dict) -> str:
             continue
         if g.get("goal") != "target":
             return f"{rid}: goal {g.get('goal')} is neither a target nor minimize / maximize"
-        if "value" in g:
-            continue
-        t = (soil_data.get("targets") or {}).get(g.get("target"), {})
-        if t.get("value") is None and not t.get("image"):
+        if not goal_has_value(soil_data, g):
             return f"{rid}: target {g.get('target')} has no value and no photo group"
     return ""
 
@@ -121,16 +119,41 @@ def screening_of(soil_data: dict, stage_id: str) -> dict | None:
     return None
 
 
-def _screening_ranges(st: dict, screening: dict) -> list[str]:
-    """Widen the factors of ``st`` in place to the range the screening gave their parameter;
-    returns the factors widened ("A (0.08-0.14 -> 0.05-0.2)")."""
-    by_param = {f["parameter"]: f for f in screening["factors"].values()}
+def screening_factor(soil_data: dict, stage_id: str, parameter) -> tuple[dict, str, dict] | None:
+    """The factor of the Plackett-Burman screening whose range ``design: adaptive`` gives
+    ``parameter`` in stage ``stage_id``: ``(screening stage, its symbol, its factor)``, or None
+    where the stage keeps its own range (``simulation.adaptive.ranges: stage``, no screening
+    the stage descends from (:func:`screening_of`), or a screening that does not vary the
+    parameter between a low and a high level).  The one rule :func:`stage_for` and the
+    start-up checks of the adaptive design follow."""
+    if ranges_setting(soil_data) != "screening":
+        return None
+    screening = screening_of(soil_data, stage_id)
+    for sym, f in ((screening or {}).get("factors") or {}).items():
+        if f.get("parameter") == parameter and f.get("low") is not None and f.get("high") is not None:
+            return screening, sym, f
+    return None
+
+
+def screening_range(soil_data: dict, stage_id: str, parameter) -> tuple[float, float] | None:
+    """``(low, high)`` the adaptive design takes for ``parameter`` in ``stage_id`` from its
+    screening (:func:`screening_factor`), None where the stage keeps its own range."""
+    found = screening_factor(soil_data, stage_id, parameter)
+    if found is None:
+        return None
+    f = found[2]
+    return float(f["low"]), float(f["high"])
+
+
+def _screening_ranges(soil_data: dict, st: dict) -> list[str]:
+    """Widen the factors of ``st`` in place to the range the screening gave their parameter
+    (:func:`screening_range`); returns the factors widened ("A (0.08-0.14 -> 0.05-0.2)")."""
     moved = []
     for sym, f in st["factors"].items():
-        sf = by_param.get(f.get("parameter"))
-        if sf is None or sf.get("low") is None or sf.get("high") is None:
+        found = screening_range(soil_data, st["id"], f.get("parameter"))
+        if found is None:
             continue
-        lo, hi = float(sf["low"]), float(sf["high"])
+        lo, hi = found
         if f.get("low") is None or f.get("high") is None:
             # a stage whose levels the recipe derives (no levels of its own): the screening's
             moved.append(f"{sym} (no levels -> {lo:g}-{hi:g})")
@@ -160,7 +183,7 @@ def stage_for(soil_data: dict, stage_id: str, upstream_optimum: pd.DataFrame | N
     text = "the factor ranges in the soil config (design: adaptive)"
     screening = screening_of(soil_data, stage_id) if ranges_setting(soil_data) == "screening" else None
     if screening is not None:
-        moved = _screening_ranges(st, screening)
+        moved = _screening_ranges(soil_data, st)
         text = (f"the ranges of screening stage {screening['id']} (design: adaptive, ranges: screening"
                 + (f"; widened: {', '.join(moved)})" if moved else ")"))
     st["derivation"] = {"kind": "adaptive", "text": text}
@@ -198,7 +221,7 @@ def problem_for(soil_data: dict, stage: dict, case_id: str, targets: dict, sourc
         if goal.get("goal") != "target":
             raise InputError(where, f"optimise.cases.{case_id}.goals.{rid}", "a goal target, minimize or maximize",
                              goal.get("goal"))
-        if "value" in goal:
+        if goal.get("value") is not None:
             value = float(goal["value"])
         else:
             t = targets.get(goal["target"]) or {}

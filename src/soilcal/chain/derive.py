@@ -49,17 +49,15 @@ import copy
 import numpy as np
 import pandas as pd
 
+from soilcal.doe.designs import BBD_MIN_FACTORS
 from soilcal.errors import InputError
 
-#: physical range of a parameter kind, in the config's units where they are unit-free
-_BOUNDS = {
-    "restitution": (0.01, 1.0),
-    "static_friction": (0.0, 5.0),
-    "rolling_friction": (0.0, 1.0),
-    "surface_energy": (0.0, 1.0e3),
-}
+#: a Box-Behnken level is kept this fraction of the physical range inside an open end of it
+#: (a restitution above 0), where a level may not lie (:func:`_bounds_in_config_units`)
+OPEN_END_MARGIN = 1e-9
 DEFAULT_STEPS = 6
-SCREENING_DEFAULTS = {"alpha": 0.05, "min_factors": 3}
+#: the screening's defaults: alpha as the papers, min_factors what a Box-Behnken design needs
+SCREENING_DEFAULTS = {"alpha": 0.05, "min_factors": BBD_MIN_FACTORS}
 #: (earlier stage's kind, this stage's kind) of the stages the DEM source derives (module docstring)
 DERIVED_KINDS = {("plackett_burman", "steepest_ascent"), ("steepest_ascent", "box_behnken")}
 DERIVED_EXPECTED = ("a steepest ascent after a Plackett-Burman screening, or a Box-Behnken design after a "
@@ -91,6 +89,33 @@ def simulated_stage_ids(soil_data: dict) -> list[str]:
 
         return adaptive_stage_ids(soil_data)
     return dem_stage_ids(soil_data)
+
+
+def runs_own_levels(soil_data: dict, stage_id: str) -> bool:
+    """Whether the DEM source runs the levels the soil config gives the stage (a
+    Plackett-Burman or Box-Behnken design generated from ``low`` / ``high``, a path's
+    ``levels``): a stage it runs under ``design: recipe`` or ``printed`` (:func:`dem_stage_ids`)
+    that is not derived from an earlier DEM stage (:func:`dependencies`) and not, with
+    ``design: printed``, run on its printed table's rows.  ``design: adaptive`` runs no design
+    of the config's levels (its optimised stages range over ``low`` .. ``high``)."""
+    if design_mode(soil_data) == "adaptive" or stage_id not in dem_stage_ids(soil_data):
+        return False
+    if "from" in dependencies(soil_data, stage_id):
+        return False
+    return not (design_mode(soil_data) == "printed" and _stage(soil_data, stage_id).get("table"))
+
+
+def decodes_low_high(soil_data: dict, stage_id: str) -> bool:
+    """Whether the DEM runs of a two- or three-level stage are decoded from its ``low`` and
+    ``high`` (coded 0 at their midpoint): its generated design (:func:`runs_own_levels`), or
+    with ``design: printed`` a table printed in coded levels.  A table printed in actual
+    units is run as printed."""
+    if runs_own_levels(soil_data, stage_id):
+        return True
+    st = _stage(soil_data, stage_id)
+    return (design_mode(soil_data) == "printed" and stage_id in dem_stage_ids(soil_data)
+            and "from" not in dependencies(soil_data, stage_id) and bool(st.get("table"))
+            and st.get("table_coding", "coded") == "coded")
 
 
 def _stage(soil_data: dict, stage_id: str) -> dict:
@@ -167,19 +192,20 @@ def _g12(v) -> float:
     return float(f"{float(v):.12g}")
 
 
-def _bounds_in_config_units(soil_data: dict, pname: str, kind: str) -> tuple[float, float]:
-    """:data:`_BOUNDS` of a parameter kind (SI: a surface energy in J/m^2) in the unit its levels
-    are written in (``parameters.<pname>.unit``, e.g. mJ/m^2: up to 1e6 mJ/m^2)."""
-    from soilcal.dem.scenarios.base import _UNIT_SCALE
+def _bounds_in_config_units(soil_data: dict, pname: str) -> tuple[float, float]:
+    """The physical range of the DEM parameter a config parameter sets (the range its values
+    are checked against, :class:`soilcal.dem.scenarios.base.DemParams`, in SI: a surface
+    energy in [0, 1000] J/m^2) in the unit its levels are written in
+    (``parameters.<pname>.unit``, e.g. mJ/m^2: up to 1e6 mJ/m^2), an open end moved inside by
+    :data:`OPEN_END_MARGIN` of the range.  A parameter that sets no DEM parameter, or a unit
+    without a factor to SI, raises InputError naming ``parameters.<pname>``
+    (:func:`soilcal.dem.scenarios.base.dem_field`)."""
+    from soilcal.dem.scenarios.base import _RANGES, _kind, dem_field
 
-    unit = (soil_data.get("parameters", {}).get(pname) or {}).get("unit", "-")
-    scale = _UNIT_SCALE.get(unit, 1.0)
-    lo, hi = _BOUNDS[kind]
-    return lo / scale, hi / scale
-
-
-def _param_kind(soil_data: dict, pname: str) -> str | None:
-    return (soil_data.get("parameters", {}).get(pname) or {}).get("kind")
+    name, scale = dem_field(soil_data.get("name", "<soil>"), soil_data, pname, f"parameters.{pname}")
+    lo, hi, lo_in, hi_in, _ = _RANGES[_kind(name)]
+    margin = OPEN_END_MARGIN * (hi - lo)
+    return (lo if lo_in else lo + margin) / scale, (hi if hi_in else hi - margin) / scale
 
 
 def _centre(f: dict) -> float:
@@ -303,12 +329,7 @@ def bbd_from_path(soil_data: dict, stage_id: str, path_stage: dict, path_respons
     step, table = chosen_step(path, ys, targets, rule=choice)
     trends = {r: {k: (None if isinstance(v, float) and not np.isfinite(v) else v) for k, v in t.items()}
               for r, t in table.attrs.get("trend", {}).items()}  # stage.json: no NaN
-    bounds = {}
-    for s in syms:
-        pname = path_stage["factors"][s]["parameter"]
-        kind = _param_kind(soil_data, pname)
-        if kind in _BOUNDS:
-            bounds[s] = _bounds_in_config_units(soil_data, pname, kind)
+    bounds = {s: _bounds_in_config_units(soil_data, path_stage["factors"][s]["parameter"]) for s in syms}
     levels = bbd_levels(path, step, syms, bounds)
     st = _dem_base(config_stage)
     st["factors"] = {s: {"parameter": path_stage["factors"][s]["parameter"],
@@ -390,15 +411,8 @@ def dem_stage(soil_data: dict, stage_id: str, targets: dict, upstream: dict | No
 BBD_CENTRE_RTOL = 0.02
 
 
-def _adaptive_screening(soil_data: dict, stage_id: str) -> bool:
-    """Whether the adaptive design replaces the stage's ranges by its screening's."""
-    from soilcal.chain import adaptive
-
-    return adaptive.ranges_setting(soil_data) == "screening" and adaptive.screening_of(soil_data, stage_id) is not None
-
-
 def check_dem_stages(soil_path, soil_data: dict) -> None:
-    """Start-up check of the stages the DEM source runs (:func:`dem_stage_ids`), so that a
+    """Start-up check of the stages the DEM source runs (:func:`simulated_stage_ids`), so that a
     config the chain cannot run fails before any DEM job, naming the soil file and field:
 
     * a stage derived from an earlier DEM stage (``from_stage``, :func:`dependencies`) is a
@@ -407,10 +421,16 @@ def check_dem_stages(soil_path, soil_data: dict) -> None:
     * every factor's parameter and every fixed parameter maps to a DEM parameter
       (:func:`soilcal.dem.scenarios.base.dem_field`, the mapping the DEM jobs use), and the
       fixed values and the levels of a stage that runs its config's levels lie in that
-      parameter's physical range.
+      parameter's physical range, and a Box-Behnken factor's ``centre`` is the midpoint of
+      its ``low`` and ``high`` where the runs are decoded from them (:func:`decodes_low_high`);
+      with ``design: adaptive`` a factor's levels are the range it
+      takes from its screening where it takes one
+      (:func:`soilcal.chain.adaptive.screening_factor`), named as the screening's
+      ``stages.<screening>.factors.<symbol>.low`` / ``.high``.
 
     (A Plackett-Burman stage's ``runs`` is checked for every soil as it loads.)
     """
+    from soilcal.chain import adaptive
     from soilcal.dem.scenarios.base import DemParams, dem_field
 
     def in_range(name, value, scale, where):
@@ -438,13 +458,23 @@ def check_dem_stages(soil_path, soil_data: dict) -> None:
                                  note=f"stage {up['id']!r}; the DEM source derives a stage from the DEM results "
                                       "of the one it follows: give the stage in between, or run the config's "
                                       "levels with simulation.design: printed")
-        screened = design_mode(soil_data) == "adaptive" and _adaptive_screening(soil_data, sid)
         for sym, f in st["factors"].items():
+            screened = design_mode(soil_data) == "adaptive" and adaptive.screening_range(
+                soil_data, sid, f["parameter"]) is not None
             where = f"stages.{sid}.factors.{sym}"
             name, scale = mapped(f["parameter"], f"{where}.parameter")
             if "from" in deps:
                 continue  # levels derived from the earlier stage's DEM results
-            if st["kind"] == "box_behnken" and not screened \
+            screened = (adaptive.screening_factor(soil_data, sid, f["parameter"])
+                        if design_mode(soil_data) == "adaptive" else None)
+            if screened is not None:
+                # the adaptive design ranges the factor over its screening's levels (ranges:
+                # screening), which it runs in place of the stage's own
+                scr, ssym, sf = screened
+                for key in ("low", "high"):
+                    in_range(name, sf[key], scale, f"stages.{scr['id']}.factors.{ssym}.{key}")
+                continue
+            if st["kind"] == "box_behnken" and decodes_low_high(soil_data, sid) \
                     and None not in (f.get("low"), f.get("centre"), f.get("high")):
                 mid = (f["low"] + f["high"]) / 2
                 if abs(f["centre"] - mid) > BBD_CENTRE_RTOL * (f["high"] - f["low"]):
@@ -465,4 +495,4 @@ def check_dem_stages(soil_path, soil_data: dict) -> None:
 
 
 __all__ = ["bbd_from_path", "check_dem_stages", "dem_stage", "dem_stage_ids", "simulated_stage_ids", "dependencies", "design_mode",
-           "path_from_screening", "published_stage", "response_targets"]
+           "path_from_screening", "published_stage", "response_targets", "decodes_low_high", "runs_own_levels"]

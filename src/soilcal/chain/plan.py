@@ -17,12 +17,9 @@ def soil_sources(soil, override: str | None = None) -> list[str]:
     s = override or soil.data.get("source", "published")
     if s not in SOURCES:
         raise InputError("config/config.yaml", "source", f"one of {', '.join(SOURCES)}", s)
-    out = ["published", "dem"] if s == "both" else [s]
-    if "dem" in out and not soil.data.get("simulation"):
-        raise InputError(soil.path, "simulation",
-                         "a simulation block naming the scenario of each response (the DEM source needs it; "
-                         "or run the published source: --config source=published)", None)
-    return out
+    # a DEM source without a simulation block was refused as the soil loaded
+    # (soilcal.config.load, with the workflow's source as the soil's)
+    return ["published", "dem"] if s == "both" else [s]
 
 
 def _strip_notes(obj):

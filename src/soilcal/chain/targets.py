@@ -30,6 +30,21 @@ COLUMNS = ["target_id", "value", "unit", "source", "image_group", "image_value",
            "printed_value", "layer", "moisture_content", "note"]
 
 
+def target_has_value(soil_data: dict, target_id) -> bool:
+    """Whether a target of the soil will have a value to aim at: a printed or measured
+    ``value``, or a photo group (``image``) whose measurement gives it (module docstring)."""
+    t = (soil_data.get("targets") or {}).get(target_id) or {}
+    return t.get("value") is not None or bool(t.get("image"))
+
+
+def goal_has_value(soil_data: dict, goal: dict) -> bool:
+    """Whether an optimisation goal ``target`` has a value to aim at: its own ``value``, or a
+    target (``target: <id>``) with one (:func:`target_has_value`)."""
+    if goal.get("value") is not None:
+        return True
+    return goal.get("target") is not None and target_has_value(soil_data, goal["target"])
+
+
 def targets_frame(soil_data: dict, source: str, measurements: dict | None = None,
                   measurements_path: str | Path = "measurements.json") -> pd.DataFrame:
     """The targets table of a soil for ``source`` (module docstring)."""
@@ -75,4 +90,4 @@ def write_targets(soil_data: dict, source: str, out, measurements_json=None) -> 
     return df
 
 
-__all__ = ["COLUMNS", "targets_frame", "write_targets"]
+__all__ = ["COLUMNS", "goal_has_value", "target_has_value", "targets_frame", "write_targets"]

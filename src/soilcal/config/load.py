@@ -272,15 +272,18 @@ def _check_stage_sets_each_parameter_once(path: Path, where: str, st: dict, para
     """A stage varies or fixes each parameter once: two factors on one parameter, or a factor
     and a fixed value of it, would leave one of the two without any effect on the runs (the
     last one set wins), and a dummy column must not bear a factor's symbol.  Two parameter
-    ids with the same ``pair`` and ``kind`` are the same DEM parameter and count as one."""
+    ids that set the same DEM parameter (:func:`soilcal.config.parameters.dem_field_name`, the
+    name :func:`soilcal.dem.scenarios.base.dem_field` maps them to) count as one."""
+
+    from soilcal.config.parameters import dem_field_name
 
     def key(pid):
-        p = params.get(pid) or {}
-        return (p["pair"], p["kind"]) if "pair" in p and "kind" in p else pid
+        name = dem_field_name(params.get(pid))
+        return ("dem", name) if name is not None else ("id", pid)
 
     def named(pid):
-        k = key(pid)
-        return repr(pid) if k == pid else f"{pid!r} (DEM parameter {k[0].replace('-', '_')}_{k[1]})"
+        name = dem_field_name(params.get(pid))
+        return repr(pid) if name is None else f"{pid!r} (DEM parameter {name})"
 
     setters: dict = {}
     for sym, f in st["factors"].items():
@@ -303,9 +306,13 @@ def _check_stage_sets_each_parameter_once(path: Path, where: str, st: dict, para
                              "dummy column names used once and by no factor (" + ", ".join(st["factors"]) + ")", name)
 
 
-def _semantic_checks(path: Path, d: dict, resources_root: Path) -> tuple[dict | None, tuple]:
+def _semantic_checks(path: Path, d: dict, resources_root: Path,
+                     source_override: bool = False) -> tuple[dict | None, tuple]:
     """The checks a schema cannot state; returns the soil's photo manifest (None without one)
-    and the conditions of its measured tables (empty without any)."""
+    and the conditions of its measured tables (empty without any).  ``source_override``: the
+    soil's ``source`` is the workflow's (``--config source=...``), not the file's."""
+    from soilcal.doe.designs import BBD_MIN_FACTORS
+
     if d["name"] != path.stem:
         raise InputError(path, "name", f"the file name without .yaml ({path.stem!r})", d["name"])
     for k, q in d.get("properties", {}).items():
@@ -337,21 +344,20 @@ def _semantic_checks(path: Path, d: dict, resources_root: Path) -> tuple[dict | 
                 pb_columns(st)  # a design's run count: a multiple of 4 above the factors and dummies
             except InputError as exc:
                 raise InputError(path, f"{where}.runs", exc.expected, exc.got) from None
-        if st["kind"] == "steepest_ascent":
-            # every factor given its steps (a table's, or the levels a DEM run takes) has as many
-            lengths = {len(f["levels"]) for f in st["factors"].values() if f.get("levels")}
-            if len(lengths) > 1:
-                raise InputError(path, f"{where}.factors", "the same number of levels for every factor", sorted(lengths))
         if st["kind"] == "steepest_ascent" and st.get("table") is not None:
-            if "chosen_step" in st and not 1 <= st["chosen_step"] <= lengths.pop():
+            # the printed path's steps (a path the DEM runs on its own levels: check_block)
+            from soilcal.dem.scenarios.design import path_steps
+
+            n_steps = path_steps(path, where, st)
+            if "chosen_step" in st and not 1 <= st["chosen_step"] <= n_steps:
                 raise InputError(path, f"{where}.chosen_step", "a step number of the path", st["chosen_step"])
         for p in st.get("fixed", {}):
             if p not in params:
                 raise InputError(path, f"{where}.fixed.{p}", "an id listed under parameters", p)
         _check_stage_sets_each_parameter_once(path, where, st, params)
-        if st["kind"] == "box_behnken" and len(st["factors"]) < 3:
+        if st["kind"] == "box_behnken" and len(st["factors"]) < BBD_MIN_FACTORS:
             # the design exists for three factors and more (its design job would stop)
-            raise InputError(path, f"{where}.factors", "at least 3 factors for a Box-Behnken design "
+            raise InputError(path, f"{where}.factors", f"at least {BBD_MIN_FACTORS} factors for a Box-Behnken design "
                              "(fix the others in fixed)", f"{len(st['factors'])} ({', '.join(st['factors'])})")
         for key in ("from_stage",):
             if key in st and st[key] not in seen:
@@ -389,10 +395,12 @@ def _semantic_checks(path: Path, d: dict, resources_root: Path) -> tuple[dict | 
     manifest = _check_images(path, d, resources_root)
     _check_targets(path, d, resources_root)
     if d.get("source") in ("dem", "both") and not d.get("simulation"):
-        # what the workflow's start-up refuses (soilcal.chain.plan.soil_sources), also for a check of the file alone
-        raise InputError(path, "simulation",
-                         f"a simulation block naming the scenario of each response (source {d['source']} runs the "
-                         "DEM; or source: published)", None)
+        # the DEM source needs to know how each response is simulated; the source is the soil's
+        # own, or the workflow's (--config source=...) for every soil
+        how = (f"the workflow's source {d['source']} (--config source={d['source']}) runs the DEM for every soil; "
+               "or run the workflow with source=published" if source_override
+               else f"source {d['source']} runs the DEM; or source: published")
+        raise InputError(path, "simulation", f"a simulation block naming the scenario of each response ({how})", None)
     if d.get("simulation"):
         from soilcal.dem.scenarios.design import check_block
 
@@ -637,7 +645,7 @@ def load_soil(path: str | Path, resources_root: str | Path = "resources", design
         data["simulation"]["design"] = design
     if source is not None:
         data["source"] = source
-    manifest, measured = _semantic_checks(path, data, Path(resources_root))
+    manifest, measured = _semantic_checks(path, data, Path(resources_root), source_override=source is not None)
     return Soil(path=path, data=data, resources_root=Path(resources_root), defaulted=tuple(defaulted),
                 manifest=manifest, measured=measured)
 

@@ -94,10 +94,14 @@ def plackett_burman(n_columns: int) -> np.ndarray:
     return design[:, : int(n_columns)].astype(float)
 
 
+#: the fewest factors a Box-Behnken design has (Box & Behnken 1960; pyDOE3.bbdesign)
+BBD_MIN_FACTORS = 3
+
+
 def box_behnken(k: int, center_points: int) -> np.ndarray:
-    """Box-Behnken design in coded units via pyDOE3.bbdesign (k >= 3)."""
-    if int(k) != k or k < 3:
-        raise InputError(None, "k", "an integer number of factors >= 3", k)
+    """Box-Behnken design in coded units via pyDOE3.bbdesign (k >= :data:`BBD_MIN_FACTORS`)."""
+    if int(k) != k or k < BBD_MIN_FACTORS:
+        raise InputError(None, "k", f"an integer number of factors >= {BBD_MIN_FACTORS}", k)
     if int(center_points) != center_points or center_points < 0:
         raise InputError(None, "center_points", "a non-negative integer", center_points)
     return np.asarray(pyDOE3.bbdesign(int(k), center=int(center_points)), dtype=float)

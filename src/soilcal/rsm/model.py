@@ -293,6 +293,28 @@ class RSMFit:
                 df += len(v) - 1
         return ss, df
 
+    #: a pure error this small beside the total sum of squares is rounding of identical
+    #: responses (six centre points printed 35.2 leave ~1e-28, not 0), not replicate scatter
+    PURE_ERROR_RTOL = 1e-12
+
+    def pure_error_negligible(self) -> bool:
+        """Whether the replicated points (the centre points) carry no pure error: every group of
+        identical design rows has identical responses, or the pure error's sum of squares is at
+        most :data:`PURE_ERROR_RTOL` of the total (what a mean of equal floats leaves).  Then
+        the lack of fit has nothing to be tested against: :meth:`anova` leaves its F and p
+        empty and :meth:`statistics_note` says why."""
+        groups: dict[tuple, list[float]] = defaultdict(list)
+        for row, y in zip(np.round(self.X_coded, 9), self.y_t):
+            groups[tuple(row)].append(y)
+        reps = [np.asarray(v) for v in groups.values() if len(v) > 1]
+        if not reps:
+            return False
+        if all(np.ptp(v) == 0 for v in reps):
+            return True
+        sspe, _ = self._pure_error()
+        sst = float(((self.y_t - self.y_t.mean()) ** 2).sum())
+        return sspe <= self.PURE_ERROR_RTOL * sst
+
     def term_sum_sq(self) -> dict[str, float]:
         """Partial (Type III) sum of squares of each term."""
         out = {}
@@ -323,12 +345,12 @@ class RSMFit:
             sslof, dflof = self.sse - sspe, dfr - dfpe
             if dflof > 0:
                 mslof, mspe = sslof / dflof, sspe / dfpe
-                if mspe > 0:
+                if not self.pure_error_negligible():
                     flof = mslof / mspe
                     rows.append(("Lack of Fit", sslof, dflof, mslof, flof, float(stats.f.sf(flof, dflof, dfpe))))
                 else:
-                    # replicates that agree exactly (centre points printed alike): no pure error to
-                    # test the lack of fit against, so no F and no p
+                    # replicates that agree (centre points printed alike, to rounding): no pure
+                    # error to test the lack of fit against, so no F and no p
                     rows.append(("Lack of Fit", sslof, dflof, mslof, np.nan, np.nan))
             rows.append(("Pure Error", sspe, dfpe, sspe / dfpe, np.nan, np.nan))
         rows.append(("Cor Total", sst, self.n - 1, np.nan, np.nan, np.nan))
@@ -364,8 +386,8 @@ class RSMFit:
             which = (f"point {names[0]} has" if len(names) == 1 else f"points {', '.join(names)} have")
             notes.append(f"{which} leverage 1 (a model term rests on {'it' if len(names) == 1 else 'them'} alone, "
                          "so the model passes through it whatever the response): PRESS and pred R2 undefined")
-        sspe, dfpe = self._pure_error()
-        if dfpe > 0 and sspe == 0.0 and self.df_resid - dfpe > 0:
+        _, dfpe = self._pure_error()
+        if dfpe > 0 and self.df_resid - dfpe > 0 and self.pure_error_negligible():
             notes.append("the replicated points (centre points) have identical responses: no pure error, so the "
                          "lack of fit has no F and no p")
         return "; ".join(notes)

@@ -116,6 +116,7 @@ from pathlib import Path
 import numpy as np
 
 from soilcal.atomic import write_text
+from soilcal.config.parameters import dem_field_name
 from soilcal.dem.contact import ROLLING
 from soilcal.dem.materials import Material, MaterialTable
 from soilcal.errors import InputError
@@ -240,10 +241,10 @@ def dem_field(path, soil_data: dict, pname: str, where: str) -> tuple[str, float
     fixed entry that uses it); one that names no DEM parameter, or a unit without a factor to
     SI, names ``parameters.<pname>``."""
     entry = soil_data.get("parameters", {}).get(pname)
-    if entry is None or "pair" not in entry or "kind" not in entry:
+    name = dem_field_name(entry)
+    if name is None:
         raise InputError(path, where, "a parameter with pair and kind under `parameters`", pname)
     known = DemParams.names()
-    name = f"{entry['pair'].replace('-', '_')}_{entry['kind']}"
     if name not in known:
         raise InputError(path, f"parameters.{pname}", f"a DEM parameter ({', '.join(known)})", name)
     return name, unit_scale(path, entry, f"parameters.{pname}")

@@ -159,7 +159,7 @@ def check_block(soil_path, data: dict) -> None:
         want = unit_of(measure)
         for i, st in enumerate(data["stages"]):
             for j, r in enumerate(st["responses"]):
-                if r["id"] == rid and r["unit"] != want:
+                if r["id"] == rid and str(r["unit"]).strip() != want:  # as the targets' units are compared
                     raise InputError(soil_path, f"stages[{i}].responses[{j}].unit",
                                      f"{want}, the unit of {BLOCK}.responses.{rid}.measure {measure!r} (from its "
                                      "name), which the DEM runs give", r["unit"])
@@ -171,7 +171,9 @@ def check_block(soil_path, data: dict) -> None:
     for i, sid in enumerate(sim.get("stages") or []):
         if sid not in ids:
             raise InputError(soil_path, f"{BLOCK}.stages[{i}]", "a stage id (" + ", ".join(ids) + ")", sid)
-    from soilcal.chain.derive import check_dem_stages, dependencies, design_mode, simulated_stage_ids
+    from soilcal.chain import adaptive
+    from soilcal.chain.derive import check_dem_stages, dependencies, design_mode, runs_own_levels, simulated_stage_ids
+    from soilcal.doe.designs import BBD_MIN_FACTORS
 
     min_factors = _check_screening(soil_path, sim)
     for sid in simulated_stage_ids(data):
@@ -191,12 +193,22 @@ def check_block(soil_path, data: dict) -> None:
                                  [r["id"] for r in st["responses"]])
             up = next(s for s in data["stages"] if s["id"] == deps["from"])
             top = dependencies(data, up["id"]).get("from")
-            if st["kind"] == "box_behnken" and up["kind"] == "steepest_ascent" and top is not None and min_factors < 3:
-                # the path takes as few as min_factors from the screening (those found significant,
-                # when fewer are), and its factors are the Box-Behnken design's, which needs three
-                raise InputError(soil_path, f"{BLOCK}.screening.min_factors",
-                                 f"at least 3: the factors path {up['id']!r} takes from the screening are those of "
-                                 f"Box-Behnken stage {sid!r}, which needs three", min_factors)
+            if st["kind"] == "box_behnken" and up["kind"] == "steepest_ascent":
+                # the path's factors are the Box-Behnken design's, which needs BBD_MIN_FACTORS
+                if top is not None and min_factors < BBD_MIN_FACTORS:
+                    # the path takes as few as min_factors from the screening (those found
+                    # significant, when fewer are)
+                    raise InputError(soil_path, f"{BLOCK}.screening.min_factors",
+                                     f"at least {BBD_MIN_FACTORS}: the factors path {up['id']!r} takes from the "
+                                     f"screening are those of Box-Behnken stage {sid!r}, which needs at least "
+                                     f"{BBD_MIN_FACTORS}", min_factors)
+                if top is None and len(up["factors"]) < BBD_MIN_FACTORS:
+                    # the path runs on its own levels: its factors are the design's
+                    raise InputError(soil_path, f"stages.{up['id']}.factors",
+                                     f"at least {BBD_MIN_FACTORS} factors: Box-Behnken stage {sid!r} is derived "
+                                     f"from this path on its factors (or give the Box-Behnken stage its levels "
+                                     f"with simulation.design: printed)",
+                                     f"{len(up['factors'])} ({', '.join(up['factors'])})")
             if st["kind"] == "steepest_ascent" and up["kind"] == "plackett_burman" and min_factors > len(up["factors"]):
                 given = "min_factors" in (sim.get("screening") or {})
                 raise InputError(soil_path, f"{BLOCK}.screening.min_factors",
@@ -213,11 +225,14 @@ def check_block(soil_path, data: dict) -> None:
                                  f"the level of every step to simulate the stage (or leave {sid!r} out of "
                                  f"{BLOCK}.stages)", None)
             if st["kind"] != "steepest_ascent" and (f.get("low") is None or f.get("high") is None) \
-                    and not _screened_range(data, sid, f.get("parameter")):
+                    and not (design_mode(data) == "adaptive"
+                             and adaptive.screening_range(data, sid, f.get("parameter")) is not None):
                 how = (f"simulation.adaptive.ranges: screening, with a screening stage {sid!r} descends from that "
                        "varies the parameter" if design_mode(data) == "adaptive"
                        else f"leave {sid!r} out of {BLOCK}.stages")
                 raise InputError(soil_path, where, f"low and high levels to simulate the stage (or {how})", f)
+        if st["kind"] == "steepest_ascent" and runs_own_levels(data, sid):
+            path_steps(soil_path, f"stages.{sid}", st)  # the design job's rows, one per step
     check_dem_stages(soil_path, data)
     from soilcal.chain.provenance import check_parameters
 
@@ -244,40 +259,33 @@ def _check_screening(soil_path, sim: dict) -> int:
     return lo
 
 
-def _screened_range(data: dict, stage_id: str, parameter) -> bool:
-    """Whether ``design: adaptive`` takes the range of ``parameter`` in ``stage_id`` from the
-    Plackett-Burman screening the stage descends from (``simulation.adaptive.ranges:
-    screening``, the default; :func:`soilcal.chain.adaptive.stage_for`)."""
-    from soilcal.chain import adaptive
-    from soilcal.chain.derive import design_mode
-
-    if design_mode(data) != "adaptive" or adaptive.ranges_setting(data) != "screening":
-        return False
-    screening = adaptive.screening_of(data, stage_id)
-    f = next((f for f in (screening or {}).get("factors", {}).values() if f.get("parameter") == parameter), None)
-    return f is not None and f.get("low") is not None and f.get("high") is not None
-
-
 def _has_target(data: dict, rids) -> bool:
     """Whether a path over responses ``rids`` has a value to aim at once the photos are measured
     (:func:`soilcal.chain.derive.response_targets`): a response's own target, or a target an
     optimisation case aims it at, with a ``value`` or a photo group (``image``), or a case's
     own goal ``value``.  A target listed without either gives the path no direction."""
-    targets = data.get("targets") or {}
+    from soilcal.chain.targets import goal_has_value, target_has_value
 
-    def valued(tid):
-        t = targets.get(tid) or {}
-        return t.get("value") is not None or bool(t.get("image"))
-
-    if any(valued(r) for r in rids):
+    if any(target_has_value(data, r) for r in rids):
         return True
     for st in data["stages"]:
         for case in (st.get("optimise") or {}).get("cases", []):
             for r in rids:
                 g = case["goals"].get(r) or {}
-                if g.get("goal") == "target" and (g.get("value") is not None or valued(g.get("target"))):
+                if g.get("goal") == "target" and goal_has_value(data, g):
                     return True
     return False
+
+
+def path_steps(soil_path, where: str, stage: dict) -> int:
+    """The number of steps of a steepest-ascent stage's ``levels`` in the soil config: as many
+    for every factor that gives them (a printed table's rows, or the steps the DEM runs on the
+    stage's own levels, :func:`soilcal.chain.derive.runs_own_levels`), else InputError naming
+    ``<where>.factors`` (0 when no factor gives levels)."""
+    lengths = sorted({len(f["levels"]) for f in stage["factors"].values() if f.get("levels")})
+    if len(lengths) > 1:
+        raise InputError(soil_path, f"{where}.factors", "the same number of levels for every factor", lengths)
+    return lengths[0] if lengths else 0
 
 
 def spec(soil, response_id: str) -> SimulationSpec:
@@ -313,10 +321,7 @@ def design_levels(soil, stage_id: str) -> pd.DataFrame:
                 raise InputError(soil.path, f"{where}.factors.{c}.levels",
                                  "the actual value of every step (no printed table to take them from)", None)
             levels[c] = [float(v) for v in lv]
-        n = {len(v) for v in levels.values()}
-        if len(n) != 1:
-            raise InputError(soil.path, f"{where}.factors", "the same number of levels for every factor",
-                             sorted(n))
+        path_steps(soil.path, where, stage)
         df = pd.DataFrame(levels)
     else:
         lo, hi = [], []
