@@ -37,6 +37,23 @@ def test_lists_contain_every_pair_within_cutoff(rng, periodic):
         assert row == sorted(j for j in np.nonzero(want[i])[0].tolist() if j > i)
 
 
+
+def test_a_periodic_axis_alone_above_the_cap_ends_the_grid_search():
+    """Ten spheres in a line along a periodic x of 200 m (1 mm spheres: more cells along x
+    than the cap, one cell across y and z): no axis can be halved, and the grid is built at
+    once with the periodic cells as they are; the two touching spheres meet with the Hertz
+    force 4/3 E* sqrt(R*) delta^(3/2)."""
+    E, nu, R, d = 1e8, 0.3, 1e-3, 2e-5
+    L = 200.0
+    sim = Simulation(table(E=E, nu=nu), dt=1e-6, gravity=(0, 0, 0), box=(0, L, 0, 0.01), periodic=(True, False))
+    x = [[1.0 + 20.0 * k, 0.005, 0.0] for k in range(9)] + [[1.0 + 2 * R - d, 0.005, 0.0]]
+    sim.add_particles(x, R, "soil")
+    f, _ = sim.compute_forces()
+    estar = E / (2 * (1 - nu**2))
+    rows = sim.index([0, 9])
+    hz = 4 / 3 * estar * np.sqrt(R / 2) * d**1.5
+    assert np.allclose(f[rows[0]], [-hz, 0, 0], rtol=1e-9) and np.allclose(f[rows[1]], [hz, 0, 0], rtol=1e-9)
+
 def slab_groups(sim, groups, act=None):
     """The slab groups of the pair pass (neighbour._slabs) for the current lists, dealt to
     ``groups`` groups per colour (the engine uses one per thread); act: touching flags of

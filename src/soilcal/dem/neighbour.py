@@ -332,10 +332,12 @@ def _grid(x, r, box, periodic, skin, extra, cell_start, cell_idx, cell_of, cpos)
         lo2, cs2, n2 = _grid_dim(0.0, 0.0, False, a, b, cell)
         while n0 * n1 * n2 > cap:
             # double the cells of the non-periodic axis with the most
-            if not periodic[0] and n0 >= n2 and (periodic[1] or n0 >= n1):
+            # (an axis of one cell is never halved: a periodic axis alone above the cap ends
+            # the loop with the others at one cell each)
+            if not periodic[0] and n0 > 1 and n0 >= n2 and (periodic[1] or n0 >= n1):
                 n0 = (n0 + 1) // 2
                 cs0 *= 2.0
-            elif not periodic[1] and n1 >= n2:
+            elif not periodic[1] and n1 > 1 and n1 >= n2:
                 n1 = (n1 + 1) // 2
                 cs1 *= 2.0
             elif n2 > 1:

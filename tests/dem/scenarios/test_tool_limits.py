@@ -92,3 +92,19 @@ def test_tool_speed_in_the_wrong_unit_is_refused_with_its_step_count(monkeypatch
     f = merge_setup(furrow.setups(), "yangtze-opener", {"speed": 0.001 / 3.6}, "<t>")
     with pytest.raises(InputError, match="setup.speed"):
         furrow.validate(f, "quick", "<t>", params=p)
+
+
+def test_a_pass_whose_travel_follows_from_its_duration_names_the_duration():
+    # at the paper preset the plate travels its speed times setup.duration: the step count is
+    # the duration over the time step whatever the speed, so a pass too long is the duration's
+    p = _params()
+    setup = merge_setup(bulldozing.setups(), "plate-line", {"speed": 0.02, "duration": 30.0, "bin_length": 2.0},
+                        "<t>")
+    s = bulldozing._settings(setup, "paper")
+    s["cohesion_scale"] = soilbin.reference_cohesion(
+        bulldozing._bin(s), bulldozing._bin(bulldozing._settings(bulldozing._setup("line"), "paper")), setup, "<t>")
+    dt = soilbin.tool_time_step(bulldozing._bin(s), p)
+    assert 30.0 / dt > soilbin.MAX_PASS_STEPS  # the case is one the rule refuses
+    with pytest.raises(InputError, match="setup.duration") as e:
+        bulldozing.validate(setup, "paper", "<t>", params=p)
+    assert f"a duration <= {soilbin.MAX_PASS_STEPS * dt:.4g} s" in str(e.value)

@@ -123,6 +123,12 @@ def measured() -> dict:
                                  float(r["vertical_measured_N"])) for r in csv.DictReader(fh)}
 
 
+def _given_travel(setup, preset) -> bool:
+    """Whether the pass's travel is set (the setup, its named setup or the preset), not the
+    speed times the duration."""
+    return apply_preset(setup, _setup(setup.get("shape")), PRESET_SETTINGS[preset]).get("travel") is not None
+
+
 def _settings(setup, preset):
     s = apply_preset(setup, _setup(setup.get("shape")), PRESET_SETTINGS[preset])
     if s.get("travel") is None:
@@ -203,7 +209,8 @@ def validate(setup: dict, preset: str = "quick", source: str = "<bulldozing>",
             _bin(s, source), _bin(_settings(_setup(s["shape"]), "paper"), source), setup, source)
         spec = _bin(s, source)
         check_pass(spec, params, source, "setup.speed", s["speed"], s["travel"],
-                   tool_time_step(spec, params))
+                   tool_time_step(spec, params),
+                   duration_field=None if _given_travel(setup, preset) else "setup.duration")
 
 
 def _bin(s, source="<bulldozing>") -> BinSpec:

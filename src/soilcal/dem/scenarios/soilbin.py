@@ -240,13 +240,20 @@ def push_speed_limit(params: DemParams, stiffness_scale: float, max_overlap: flo
 
 
 def check_pass(spec: BinSpec, params: DemParams, source: str, field: str, speed: float,
-               travel: float, dt: float, pushes: bool = True) -> None:
+               travel: float, dt: float, pushes: bool = True, duration_field: str | None = None) -> None:
     """Refuse, before the bin is settled, a tool pass the run could not finish: one of more
     than :data:`MAX_PASS_STEPS` steps of ``dt`` (``travel`` at ``speed``), or (``pushes``: a
     tool that pushes the soil ahead of it) a speed at which the pushed bed's overlaps reach
     the run's ``max_overlap`` (:func:`push_overlap`: the run would stop with a blow-up
-    whatever its time step).  ``field`` names the speed's setting."""
+    whatever its time step).  ``field`` names the speed's setting; ``duration_field`` the
+    duration's, where the travel is the speed times that duration (the step count is then
+    the duration's, whatever the speed)."""
     steps = math.ceil(travel / speed / dt)
+    if duration_field is not None:
+        check(steps <= MAX_PASS_STEPS, source, duration_field,
+              f"a pass of at most {MAX_PASS_STEPS:,} steps: a duration <= {MAX_PASS_STEPS * dt:.4g} s at the "
+              f"pass's time step of {dt:.4g} s (or a setup.travel of its own)",
+              f"{travel / speed:.4g} s of pass, {steps:,} steps")
     check(steps <= MAX_PASS_STEPS, source, field,
           f"a speed whose pass of setup.travel = {travel:.4g} m takes at most "
           f"{MAX_PASS_STEPS:,} steps (>= {travel / (MAX_PASS_STEPS * dt):.3g} m/s at the "
