@@ -50,14 +50,15 @@ def copy_workflow(tmp: Path, soils: list[str], source: str | None = None) -> Pat
     return tmp
 
 
-def adaptive_copy(tmp: Path, soil: str, response: str, n_spheres: int, budget: int, **settings) -> Path:
+def adaptive_copy(tmp: Path, soil: str, response: str, n_spheres: int, budget: int, setup: dict | None = None,
+                  **settings) -> Path:
     """A workflow copy of one soil for design: adaptive: its ``response`` simulated with
-    ``n_spheres`` spheres and a ``budget`` of runs per case (and further
-    ``simulation.adaptive`` settings)."""
+    ``n_spheres`` spheres (and further ``setup`` values) and a ``budget`` of runs per case (and
+    further ``simulation.adaptive`` settings)."""
     copy_workflow(tmp, [soil])
     p = tmp / f"config/soils/{soil}.yaml"
     d = yaml.safe_load(p.read_text())
-    d["simulation"]["responses"][response]["set"] = {"n_particles": n_spheres}
+    d["simulation"]["responses"][response]["set"] = {"n_particles": n_spheres, **(setup or {})}
     d["simulation"]["adaptive"] = {"budget": budget, **settings}
     p.write_text(yaml.safe_dump(d, sort_keys=False))
     return tmp
