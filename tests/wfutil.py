@@ -50,14 +50,15 @@ def copy_workflow(tmp: Path, soils: list[str], source: str | None = None) -> Pat
     return tmp
 
 
-def adaptive_copy(tmp: Path, soil: str, response: str, n_spheres: int, budget: int, **settings) -> Path:
+def adaptive_copy(tmp: Path, soil: str, response: str, n_spheres: int, budget: int, setup: dict | None = None,
+                  **settings) -> Path:
     """A workflow copy of one soil for design: adaptive: its ``response`` simulated with
-    ``n_spheres`` spheres and a ``budget`` of runs per case (and further
-    ``simulation.adaptive`` settings)."""
+    ``n_spheres`` spheres (and further ``setup`` values) and a ``budget`` of runs per case (and
+    further ``simulation.adaptive`` settings)."""
     copy_workflow(tmp, [soil])
     p = tmp / f"config/soils/{soil}.yaml"
     d = yaml.safe_load(p.read_text())
-    d["simulation"]["responses"][response]["set"] = {"n_particles": n_spheres}
+    d["simulation"]["responses"][response]["set"] = {"n_particles": n_spheres, **(setup or {})}
     d["simulation"]["adaptive"] = {"budget": budget, **settings}
     p.write_text(yaml.safe_dump(d, sort_keys=False))
     return tmp
@@ -79,13 +80,18 @@ def planned_jobs(tmp: Path, *args) -> list[str]:
 TINY_SOILS = ["cinnamon-soil", "yangtze-clay-loam"]
 #: Spheres per heap of the tiny run.
 N_SPHERES = 300
+#: Plate speed (m/s) of the tiny run's soil-bin passes: four times the paper's 0.16 m/s, so that
+#: the preset's 0.2 m pass takes a quarter of the steps.
+TOOL_SPEED = 0.64
 
 
 def make_tiny(tmp: Path, threads: int | None = None) -> Path:
     """Turn a workflow copy into the tiny run: heaps of ``N_SPHERES`` spheres measured in two
-    side views, two verification seeds, one seed per measured plate, and the measured-data
-    loop trying the adhesion effect at three levels whatever the diagnosis says; ``threads``:
-    the DEM jobs' Numba threads (the soil's ``simulation.threads``)."""
+    side views, two verification seeds, one seed per measured plate driven at ``TOOL_SPEED``
+    (its pass a quarter of the quick preset's steps; the tests read the forces' rows, seeds and
+    residuals, not their values), and the measured-data loop trying the adhesion effect at three
+    levels whatever the diagnosis says; ``threads``: the DEM jobs' Numba threads (the soil's
+    ``simulation.threads``)."""
     p = tmp / "config/soils/cinnamon-soil.yaml"
     d = yaml.safe_load(p.read_text())
     d["source"] = "both"
@@ -95,6 +101,7 @@ def make_tiny(tmp: Path, threads: int | None = None) -> Path:
         d["simulation"]["threads"] = int(threads)
     for m in d.get("measurements", {}).values():
         m["replicates"] = 1
+    d["measurements"]["cutting_resistance"]["set"] = {"speed": TOOL_SPEED}
     d["loop"] = {"candidates": "all", "effects": ["tool_adhesion"], "design_points": 3}
     p.write_text(yaml.safe_dump(d, sort_keys=False))
     y = tmp / "config/soils/yangtze-clay-loam.yaml"

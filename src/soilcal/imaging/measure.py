@@ -325,8 +325,10 @@ CUT = "the whole heap inside the frame"
 
 def _components_on_plate(path, binary, slope, intercept, kind):
     h, w = binary.shape
-    rr, cc = np.mgrid[0:h, 0:w]
-    plate_rows = slope * cc + intercept
+    # a column of row numbers against a row of plate rows (broadcast, not two full grids: the
+    # cue search calls this for every cue on every plate line)
+    rr = np.arange(h)[:, None]
+    plate_rows = slope * np.arange(w)[None, :] + intercept
     above = binary & (rr < plate_rows - 1)
     lab = measure.label(above)
     touching = np.unique(lab[(rr > plate_rows - 8) & (rr < plate_rows - 1) & above])

@@ -167,10 +167,21 @@ def _bounds(values, factors: Sequence[str], name: str) -> np.ndarray:
 
 
 def _model_matrix(xc: np.ndarray, exps: Sequence[tuple[int, ...]]) -> np.ndarray:
-    cols = [np.ones(xc.shape[0])]
-    for e in exps:
-        cols.append(np.prod(xc ** np.array(e, dtype=float), axis=1))
-    return np.column_stack(cols)
+    """[1, prod(x ** e) for each term e]: with two or more factors all terms in one array
+    operation (the optimisers call this for one point at a time, a hundred thousand times per
+    stage; the values are those of the term-by-term loop, bit for bit).  With one factor the
+    term-by-term loop: numpy squares an array against a one-element exponent array exactly,
+    and the broadcast power may differ from that in the last bit."""
+    if xc.shape[1] < 2:
+        cols = [np.ones(xc.shape[0])]
+        for e in exps:
+            cols.append(np.prod(xc ** np.array(e, dtype=float), axis=1))
+        return np.column_stack(cols)
+    e = np.asarray(exps, dtype=float).reshape(-1, xc.shape[1])
+    out = np.empty((xc.shape[0], e.shape[0] + 1))
+    out[:, 0] = 1.0
+    out[:, 1:] = np.prod(xc[:, None, :] ** e, axis=2)
+    return out
 
 
 @dataclass
