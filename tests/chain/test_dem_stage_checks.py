@@ -79,6 +79,14 @@ def _load(path: Path):
     return load_soil(path, ROOT / "resources")
 
 
+def _refused(tmp_path: Path, edit) -> tuple[Path, InputError]:
+    """The soil file written with ``edit`` and the InputError its loading raises."""
+    p = _write(tmp_path, edit)
+    with pytest.raises(InputError) as e:
+        _load(p)
+    return p, e.value
+
+
 def _stage(d: dict, sid: str) -> dict:
     return next(s for s in d["stages"] if s["id"] == sid)
 
@@ -96,13 +104,11 @@ def _bbd_after_screen(d):
 
 
 def test_a_box_behnken_after_a_screening_is_refused_at_load_naming_the_file(tmp_path):
-    p = _write(tmp_path, _bbd_after_screen)
-    with pytest.raises(InputError) as e:
-        _load(p)
-    assert e.value.path == str(p) and e.value.field == "stages.rsm.from_stage"
-    assert e.value.got == "box_behnken after plackett_burman"
-    assert "steepest ascent after a Plackett-Burman screening" in e.value.expected
-    assert len(str(e.value).splitlines()) == 1
+    p, err = _refused(tmp_path, _bbd_after_screen)
+    assert err.path == str(p) and err.field == "stages.rsm.from_stage"
+    assert err.got == "box_behnken after plackett_burman"
+    assert "steepest ascent after a Plackett-Burman screening" in err.expected
+    assert len(str(err).splitlines()) == 1
 
 
 @pytest.mark.parametrize("other", [
@@ -139,18 +145,14 @@ def test_a_design_override_to_the_recipe_is_checked_again():
      "stages.rsm.fixed.nu"),
 ], ids=["pair", "kind", "fixed"])
 def test_a_parameter_that_sets_no_dem_parameter_is_refused_at_load(tmp_path, edit, field, got, used_by):
-    p = _write(tmp_path, edit)
-    with pytest.raises(InputError) as e:
-        _load(p)
-    assert (e.value.path, e.value.field, e.value.got) == (str(p), field, got)
-    assert e.value.expected.startswith("a DEM parameter (") and used_by in str(e.value)
+    p, err = _refused(tmp_path, edit)
+    assert (err.path, err.field, err.got) == (str(p), field, got)
+    assert err.expected.startswith("a DEM parameter (") and used_by in str(err)
 
 
 def test_a_parameter_without_a_pair_names_the_factor(tmp_path):
-    p = _write(tmp_path, lambda d: d["parameters"]["gamma"].pop("pair"))
-    with pytest.raises(InputError) as e:
-        _load(p)
-    assert (e.value.field, e.value.got) == ("stages.screen.factors.F.parameter", "gamma")
+    p, err = _refused(tmp_path, lambda d: d["parameters"]["gamma"].pop("pair"))
+    assert (err.field, err.got) == ("stages.screen.factors.F.parameter", "gamma")
 
 
 @pytest.mark.parametrize("edit, field", [
@@ -158,11 +160,9 @@ def test_a_parameter_without_a_pair_names_the_factor(tmp_path):
     (lambda d: _stage(d, "screen")["factors"]["B"].update(low=-0.1), "stages.screen.factors.B.low"),
 ], ids=["fixed", "level"])
 def test_a_value_outside_the_physical_range_is_refused_at_load(tmp_path, edit, field):
-    p = _write(tmp_path, edit)
-    with pytest.raises(InputError) as e:
-        _load(p)
-    assert (e.value.path, e.value.field) == (str(p), field)
-    assert "DEM parameter soil_" in e.value.expected
+    p, err = _refused(tmp_path, edit)
+    assert (err.path, err.field) == (str(p), field)
+    assert "DEM parameter soil_" in err.expected
 
 
 # --------------------------------------------------------------------------- Plackett-Burman runs
@@ -220,12 +220,10 @@ def test_a_run_count_no_plackett_burman_design_has_is_refused_at_load(tmp_path, 
     def edit(d):
         _stage(d, "screen").update(runs=runs, **({"dummies": dummies} if dummies else {}))
 
-    p = _write(tmp_path, edit)
-    with pytest.raises(InputError) as e:
-        _load(p)
+    p, err = _refused(tmp_path, edit)
     cols = 6 + len(dummies)
-    assert (e.value.path, e.value.field, e.value.got) == (str(p), "stages[0].runs", runs)
-    assert f"a multiple of 4 above the {cols} factors and dummies" in e.value.expected
+    assert (err.path, err.field, err.got) == (str(p), "stages[0].runs", runs)
+    assert f"a multiple of 4 above the {cols} factors and dummies" in err.expected
 
 
 # --------------------------------------------------------------------------- a path's target
@@ -330,22 +328,18 @@ def test_a_box_behnken_stage_of_two_factors_is_refused_at_load(tmp_path):
         rsm["factors"].pop("C")
         rsm["fixed"]["gamma"] = 0.3
 
-    p = _write(tmp_path, two)
-    with pytest.raises(InputError) as e:
-        _load(p)
-    assert (e.value.path, e.value.field, e.value.got) == (str(p), "stages[1].factors", "2 (A, B)")
-    assert e.value.expected.startswith("at least 3 factors for a Box-Behnken design")
+    p, err = _refused(tmp_path, two)
+    assert (err.path, err.field, err.got) == (str(p), "stages[1].factors", "2 (A, B)")
+    assert err.expected.startswith("at least 3 factors for a Box-Behnken design")
 
 
 @pytest.mark.parametrize("screening", [{"min_factors": 2}, {"min_factors": 2, "max_factors": 5}])
 def test_a_path_before_a_box_behnken_design_takes_at_least_three_factors(tmp_path, screening):
     """With min_factors 2 the path keeps two factors when only two are significant, and the
     Box-Behnken design derived from it would stop after the screening's and the path's runs."""
-    p = _write(tmp_path, lambda d: (_recipe_chain(d), d["simulation"].update(screening=screening)))
-    with pytest.raises(InputError) as e:
-        _load(p)
-    assert (e.value.path, e.value.field, e.value.got) == (str(p), "simulation.screening.min_factors", 2)
-    assert "Box-Behnken stage 'rsm', which needs at least 3" in e.value.expected
+    p, err = _refused(tmp_path, lambda d: (_recipe_chain(d), d["simulation"].update(screening=screening)))
+    assert (err.path, err.field, err.got) == (str(p), "simulation.screening.min_factors", 2)
+    assert "Box-Behnken stage 'rsm', which needs at least 3" in err.expected
 
 
 # --------------------------------------------------------------------------- a simulated Box-Behnken centre
@@ -378,11 +372,9 @@ def test_a_path_on_its_own_levels_with_uneven_steps_is_refused_at_load(tmp_path)
                             "B": {"parameter": "mur_ss", "levels": [0.05, 0.1]},
                             "C": {"parameter": "gamma", "levels": [0.1, 0.2, 0.3]}}
 
-    p = _write(tmp_path, uneven)
-    with pytest.raises(InputError) as e:
-        _load(p)
-    assert (e.value.path, e.value.field, e.value.got) == (str(p), "stages.climb.factors", [2, 3])
-    assert e.value.expected == "the same number of levels for every factor"
+    p, err = _refused(tmp_path, uneven)
+    assert (err.path, err.field, err.got) == (str(p), "stages.climb.factors", [2, 3])
+    assert err.expected == "the same number of levels for every factor"
 
 
 def test_the_adaptive_designs_stage_and_its_start_up_check_take_the_screening_range_from_one_rule(
@@ -443,11 +435,9 @@ def test_design_adaptive_checks_the_screening_range_its_stage_takes(tmp_path, re
         d["simulation"]["design"] = "adaptive"
         _stage(d, "screen")["factors"]["B"]["high"] = 7.0
 
-    p = _write(tmp_path, edit)
-    with pytest.raises(InputError) as e:
-        _load(p)
-    assert (e.value.path, e.value.field, e.value.got) == (str(p), "stages.screen.factors.B.high", 7.0)
-    assert e.value.expected.startswith("a sliding friction coefficient in [0, 5]")
+    p, err = _refused(tmp_path, edit)
+    assert (err.path, err.field, err.got) == (str(p), "stages.screen.factors.B.high", 7.0)
+    assert err.expected.startswith("a sliding friction coefficient in [0, 5]")
     # with ranges: stage the stage keeps its own levels (0.3-0.8), and the screening is not used;
     # neither is it by a stage that does not descend from it
     if not recipe_chain:
@@ -502,11 +492,9 @@ def test_a_box_behnken_design_derived_from_a_path_of_two_factors_on_its_own_leve
                             "B": {"parameter": "mur_ss", "levels": [0.05, 0.1, 0.15]}}
         climb["fixed"]["gamma"] = 0.3
 
-    p = _write(tmp_path, two_factor_path)
-    with pytest.raises(InputError) as e:
-        _load(p)
-    assert (e.value.path, e.value.field, e.value.got) == (str(p), "stages.climb.factors", "2 (A, B)")
-    assert e.value.expected.startswith("at least 3 factors: Box-Behnken stage 'rsm' is derived from this path")
+    p, err = _refused(tmp_path, two_factor_path)
+    assert (err.path, err.field, err.got) == (str(p), "stages.climb.factors", "2 (A, B)")
+    assert err.expected.startswith("at least 3 factors: Box-Behnken stage 'rsm' is derived from this path")
     from soilcal.doe.designs import BBD_MIN_FACTORS, box_behnken
 
     assert BBD_MIN_FACTORS == 3
