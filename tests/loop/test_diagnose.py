@@ -440,3 +440,21 @@ def test_beyond_the_measured_quantity_takes_every_row():
     p = dg.beyond(res, "measure", "tool_speed")
     assert np.isfinite(p) and p < 1e-6, p
     assert dg.beyond(res, "tool_speed", "measure") < 1e-6
+
+
+def test_scatter_alone_points_to_the_test_most_sure_of_a_structure():
+    # the scatter test alone is significant; a group test of many levels explains the larger
+    # share (r2 0.6 at p 0.2: the share noise gives so many parameters) and a speed trend the
+    # smaller one at p 0.01: the candidates are sought through the speed
+    import pandas as pd
+    from soilcal.loop import diagnose as dg
+
+    diag = pd.DataFrame([
+        {"test": "scatter", "covariate": "", "quantity": "", "r2": 0.0, "p": 1e-6, "p_adjusted": 1e-6,
+         "significant": True},
+        {"test": "group", "covariate": "tool", "quantity": "tool_id", "r2": 0.6, "p": 0.2, "p_adjusted": 0.6,
+         "significant": False},
+        {"test": "trend", "covariate": "tool_speed", "quantity": "speed", "r2": 0.5, "p": 0.01, "p_adjusted": 0.06,
+         "significant": False},
+    ])
+    assert dg.matched_quantities(diag) == {"speed"}

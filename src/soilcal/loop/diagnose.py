@@ -346,7 +346,9 @@ def matched_quantities(diag: pd.DataFrame) -> set[str]:
     """The quantities (and ``bias``) whose structure is significant: what an effect's
     signature must share to become a candidate.  Where the residual scatters significantly
     beyond the measured and seed uncertainty and no covariate's test is significant, also the
-    quantity of the test that explains the largest share of it: six speeds of a rate effect
+    quantity of the test most sure of a structure (the smallest uncorrected p, not the largest
+    share: a group of k levels, a parabola or a periodic scan of many wavelengths explains a
+    larger share of pure noise than a line does): six speeds of a rate effect
     (the residual -36 % to +4 %, 54 standard errors at the slowest) follow ln v, which a
     straight line and a parabola in v each fit to r2 0.70 and 0.93 but at p 0.037 and 0.049,
     not significant after Holm; the scatter test says there is structure and the share says
@@ -362,9 +364,9 @@ def matched_quantities(diag: pd.DataFrame) -> set[str]:
             out.add(str(r.quantity))
     scatter = flags & (diag["test"] == "scatter")
     if scatter.any() and not (flags & (diag["test"] != "scatter")).any():
-        rest = diag[(diag["test"] != "scatter") & (diag["r2"].astype(float) > 0)]
+        rest = diag[(diag["test"] != "scatter") & (diag["r2"].astype(float) > 0) & diag["p"].astype(float).notna()]
         if len(rest):
-            top = rest.loc[rest["r2"].astype(float).idxmax()]
+            top = rest.loc[rest["p"].astype(float).idxmin()]
             out.add("bias" if top["test"] == "bias" else str(top["quantity"] or ""))
     out.discard("")
     return out
