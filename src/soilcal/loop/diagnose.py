@@ -130,8 +130,8 @@ PERIODIC_SEED = 0
 
 def _periodic(name, q, x, r, distinct, sst) -> dict:
     """The ``periodic`` test of a position along the bin: r ~ a sin(2 pi x / L) + b cos(2 pi x / L)
-    + c, scanned over the frequencies 1 / L from one period over the positions' span to n / 2
-    periods (the mean Nyquist frequency of n irregular positions), :data:`PERIODIC_OVERSAMPLE`
+    + c, scanned over the frequencies 1 / L from one period over the positions' span to m / 2
+    periods (the mean Nyquist frequency of m distinct irregular positions), :data:`PERIODIC_OVERSAMPLE`
     per step; the statistic is the largest share of the residual variance a sine explains over
     the scan, and its p the share of :data:`PERIODIC_PERMUTATIONS` permutations of the residuals
     over the positions (generator seed :data:`PERIODIC_SEED`) whose largest share is as large,
@@ -140,8 +140,9 @@ def _periodic(name, q, x, r, distinct, sst) -> dict:
     residuals without structure at alpha 0.05.  ``estimate``: the best wavelength, in the
     covariate's unit; ``statistic``: its F."""
     n = len(r)
+    m = int(distinct)  # distinct positions: repeats at one position add no frequency to tell
     span = float(np.max(x) - np.min(x))
-    freqs = np.linspace(1.0 / span, (n / 2.0) / span, PERIODIC_OVERSAMPLE * max(n // 2, 1))
+    freqs = np.linspace(1.0 / span, (m / 2.0) / span, PERIODIC_OVERSAMPLE * max(m // 2, 1))
     w = 2 * np.pi * freqs[:, None] * (x - x.min())[None, :]
     basis = []
     keep = []
@@ -157,17 +158,23 @@ def _periodic(name, q, x, r, distinct, sst) -> dict:
     if not basis or ss <= 0 or n < 4:
         return dict(test="periodic", covariate=name, quantity=q, n=n, levels=distinct, estimate=np.nan,
                     statistic=np.nan, p=np.nan, r2=0.0)
-    Q = np.stack(basis)  # frequencies x n x 2
+    F = len(basis)
+    Q = np.ascontiguousarray(np.stack(basis).transpose(1, 0, 2).reshape(n, 2 * F))  # n x (frequency, sin/cos)
 
     def largest(R):  # R: (..., n) centred residuals -> the largest share over the scan, and where
-        share = np.sum(np.einsum("fnk,...n->...fk", Q, R) ** 2, axis=-1) / np.sum(R ** 2, axis=-1)[..., None]
+        proj = (R @ Q).reshape(*R.shape[:-1], F, 2)  # one matrix product (BLAS) for every frequency
+        share = np.sum(proj ** 2, axis=-1) / np.sum(R ** 2, axis=-1)[..., None]
         return share.max(axis=-1), share.argmax(axis=-1)
 
     r2, at = largest(rc)
     rng = np.random.default_rng(PERIODIC_SEED)
-    perm = np.stack([rc[rng.permutation(n)] for _ in range(PERIODIC_PERMUTATIONS)])
-    null, _ = largest(perm)
-    p = (1.0 + float(np.sum(null >= r2 - 1e-12))) / (1.0 + PERIODIC_PERMUTATIONS)
+    count, done = 0, 0
+    while done < PERIODIC_PERMUTATIONS:  # in blocks, so a long table's scan stays small in memory
+        k = min(500, PERIODIC_PERMUTATIONS - done)
+        null, _ = largest(np.stack([rc[rng.permutation(n)] for _ in range(k)]))
+        count += int(np.sum(null >= r2 - 1e-12))
+        done += k
+    p = (1.0 + count) / (1.0 + PERIODIC_PERMUTATIONS)
     r2 = float(r2)
     f = r2 / 2.0 / ((1.0 - r2) / (n - 3)) if r2 < 1 and n > 3 else np.inf
     return dict(test="periodic", covariate=name, quantity=q, n=n, levels=distinct,
