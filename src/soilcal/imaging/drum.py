@@ -209,15 +209,12 @@ def _hspace_peaks(img, dist):
         y, x = cen_r[k], cen_c[k]
         accum = img_max[y, x]
         if accum > threshold:
-            ylo, yhi = y - dist, y + dist
-            for yy in range(max(ylo, 1), min(yhi, rows - 1) + 1):
-                for xx in range(x - dist, x + dist + 1):
-                    if xx < 0:
-                        img_max[rows - yy, xx + cols] = 0
-                    elif xx >= cols:
-                        img_max[rows - yy, xx - cols] = 0
-                    else:
-                        img_max[yy, xx] = 0
+            y0, y1 = max(y - dist, 1), min(y + dist, rows - 1)  # rows 1 to rows - 1, not reflected
+            x0, x1 = x - dist, x + dist
+            img_max[y0:y1 + 1, max(x0, 0):min(x1, cols - 1) + 1] = 0
+            if x0 < 0 or x1 >= cols:  # columns beyond a side wrap round, mirrored in rows
+                for xx in [c for c in range(x0, x1 + 1) if c < 0 or c >= cols]:
+                    img_max[rows - np.arange(y0, y1 + 1), xx % cols] = 0
             vals.append(accum)
             ys.append(y)
             xs.append(x)
