@@ -271,3 +271,70 @@ def test_a_drum_at_a_low_dynamic_angle_is_measured(tmp_path, angle):
     p, truth = _frame(tmp_path, "low.png", angle_deg=angle, window="rim", size=(240, 320))
     r = drum.measure_drum_frame(p)
     assert abs(r.angle_deg - angle) < 0.5, r.angle_deg
+
+
+def _spy_decoder(monkeypatch):
+    """The sizes PIL decodes images at, as a list filled while the test runs."""
+    from PIL import ImageFile
+
+    decoded, load = [], ImageFile.ImageFile.load
+
+    def spy(im):
+        out = load(im)
+        decoded.append(im.size)
+        return out
+
+    monkeypatch.setattr(ImageFile.ImageFile, "load", spy)
+    return decoded
+
+
+def test_large_drum_photo_is_decoded_reduced_to_the_working_size(tmp_path, monkeypatch):
+    # a phone's 12 megapixel drum photo stands in here as four times the working size: the JPEG
+    # is decoded at half size by its decoder, measured there at the angle drawn, and its drum
+    # reported in the photo's own pixels where it was drawn
+    from PIL import Image
+
+    monkeypatch.setattr(drum, "DRUM_WORK_PIXELS", 240 * 320)
+    decoded = _spy_decoder(monkeypatch)
+    img, truth = render.render_tester_frame(seed=3, angle_deg=40.0, window="rim", size=(480, 640))
+    p = tmp_path / "phone.jpg"
+    Image.fromarray(np.round(img * 255).astype(np.uint8)).save(p, quality=92)
+    r = drum.measure_drum_frame(p, keep_stages=True)
+    assert decoded and max(w * h for w, h in decoded) == 240 * 320
+    assert r.stages.gray.shape == (240, 320) and r.work_scale == pytest.approx(0.5) and r.pixels == "frame"
+    assert abs(r.angle_deg - truth["angle_deg"]) <= 0.5
+    assert r.drum_reference == "rim"
+    # the rim, a ring from radius R outwards 4 photo px (2 measured px) wide, is found in the
+    # photo's pixels where it was drawn, as closely as the rim search finds it in a frame of the
+    # measured size (some 3 measured px, the bed lying against the rim)
+    assert np.hypot(*(np.array(r.drum_centre_px) - truth["centre_px"])) < 0.06 * truth["radius_px"]
+    assert abs(r.drum_radius_px - truth["radius_px"]) < 0.03 * truth["radius_px"]
+
+
+def test_drum_given_in_the_photo_pixels_of_a_reduced_photo(tmp_path, monkeypatch):
+    # drum_centre_px and drum_radius_px are the photo's pixels, as the user reads them off the
+    # photo; the reduced image is measured with them scaled to it
+    monkeypatch.setattr(drum, "DRUM_WORK_PIXELS", 240 * 320)
+    p, truth = _frame(tmp_path, "given.png", angle_deg=36.0, window="inside", size=(480, 640))
+    opts = {"drum_centre_px": [319.5, 239.5], "drum_radius_px": 0.75 * float(np.hypot(480, 640)) / 2.0}
+    r = drum.measure_drum_frame(p, options=opts)
+    assert r.drum_reference == "manifest" and r.work_scale == pytest.approx(0.5)
+    assert r.drum_centre_px == pytest.approx(opts["drum_centre_px"]) and r.drum_radius_px == pytest.approx(
+        opts["drum_radius_px"])
+    assert abs(r.angle_deg - truth["angle_deg"]) <= 0.5
+
+
+def test_drum_circle_peaks_are_skimages(tmp_path):
+    # the circle search's peaks are those of skimage's hough_circle_peaks, found without one
+    # region object per candidate (a mottled frame's noisy Hough spaces hold thousands)
+    from skimage import transform
+
+    rng = np.random.default_rng(5)
+    noise = np.clip(0.5 + 0.225 * render._noise(rng, (120, 160), 10.0), 0, 1)
+    radii = np.arange(30, 75)
+    hs = transform.hough_circle(drum._edges(noise), radii)
+    want = transform.hough_circle_peaks(hs, radii, total_num_peaks=8, min_xdistance=3, min_ydistance=3)
+    got = drum._circle_peaks(hs, radii, dist=3, total=8)
+    assert len(want[0]) == 8
+    for a, b in zip(want, got):
+        np.testing.assert_array_equal(a, b)

@@ -203,3 +203,14 @@ def test_heap_whose_foot_runs_out_of_the_frame_is_refused(tmp_path, apex_col):
         measure.measure_pile(p)
     assert (e.value.path, e.value.field, e.value.expected, e.value.got) == (
         str(p), "image", "the whole heap inside the frame", "it is cut by the image border")
+
+
+@pytest.mark.parametrize("tilt", [-8.0, 12.0])
+def test_a_hand_held_camera_rolled_beyond_six_degrees(tmp_path, tilt):
+    # a phone held by hand rolls by several degrees: the plate line drawn tilted by 8 or 12 deg
+    # is found within the plate search's range, the roll taken out, the flanks read as drawn
+    p = tmp_path / "rolled.jpg"
+    _u8(heap_photo(tilt=tilt)).save(p, quality=90)
+    r = measure.measure_pile(p)
+    _assert_flanks(r, 32.0, 35.0)
+    assert abs(r.roll_deg - tilt) <= 0.2 and r.confidence == "ok"

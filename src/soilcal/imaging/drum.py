@@ -2,8 +2,10 @@
 stand (003 Sec. 2) and for frames exported by drum testers (GranuDrum-style: cropped to the
 drum window, 8- or 16-bit grey, time-averaged over many frames, no plate in view).
 
-1. Grey level (:func:`soilcal.imaging.io.read_gray`): BMP/PNG/TIFF/JPEG, 8- or 16-bit single
-   channel or colour (luminance), Gaussian-smoothed (sigma 1.2 px).
+1. Grey level (:func:`soilcal.imaging.io.read_gray_reduced`): BMP/PNG/TIFF/JPEG, 8- or 16-bit
+   single channel or colour (luminance), Gaussian-smoothed (sigma 1.2 px).  A frame of more than
+   :data:`DRUM_WORK_PIXELS` pixels (a phone's photo) is measured reduced to that size, as a heap
+   photo is; the drum's centre and radius, given or found, are in the frame's own pixels.
 2. The drum (``drum_reference``):
 
    * ``manifest``: ``drum_centre_px`` and ``drum_radius_px`` given by the user;
@@ -60,8 +62,8 @@ from scipy import ndimage as ndi
 from skimage import feature, filters, measure, morphology, transform
 
 from soilcal.errors import InputError
-from soilcal.imaging.io import read_gray
-from soilcal.imaging.measure import Stages, plate_line_any
+from soilcal.imaging.io import read_gray_reduced
+from soilcal.imaging.measure import PILE_WORK_PIXELS, Stages, plate_line_any
 from soilcal.imaging.refusal import Tried, explained
 
 CHORD_FRACTION = 0.6
@@ -85,6 +87,9 @@ _LIMITS = {"roll_deg": (-45.0, 45.0, "an angle between -45 and 45 deg"),
            "rim_margin": (0.0, 0.3, "a fraction of the drum radius in [0, 0.3]"),
            "drum_radius_px": (8.0, 1e6, "a radius of at least 8 px")}
 OPTIONS = ("level", "roll_deg", "chord_fraction", "rim_margin", "drum_centre_px", "drum_radius_px")
+#: a frame larger than this (pixels) is measured reduced to it, as a heap photo is: a phone's 12
+#: megapixels are decoded reduced (a JPEG by 2, 4 or 8 in its decoder) and scaled to it
+DRUM_WORK_PIXELS = PILE_WORK_PIXELS
 
 
 def _number(x):
@@ -141,6 +146,11 @@ class DrumResult:
     chord_fraction: float
     n_points: int
     stages: Stages | None = None
+    # the measured image's size over the frame's (below 1 for a frame reduced to
+    # DRUM_WORK_PIXELS); drum_centre_px and drum_radius_px are in the frame's own pixels (as
+    # shown, as the options give them), n_points counts the measured image's columns
+    work_scale: float = 1.0
+    pixels: str = "frame"
 
     def as_dict(self):
         d = asdict(self)
@@ -170,6 +180,68 @@ def _edges(img, sigma=2.0):
     return feature.canny(img, sigma=sigma, low_threshold=0.1 * top, high_threshold=0.2 * top)
 
 
+def _hspace_peaks(img, dist):
+    """The peaks of one radius's Hough space as :func:`skimage.transform.hough_circle_peaks`
+    finds them (skimage 0.26 ``_prominent_peaks``: local maxima over (2 ``dist`` + 1)^2 above
+    half the space's maximum, strongest region first, each suppressing its neighbourhood), with
+    the regions' centroids and maxima taken in one pass instead of one region object each: a
+    mottled frame's noisy spaces hold hundreds of regions per radius, which took seconds.
+    Returns (values, columns, rows)."""
+    rows, cols = img.shape
+    threshold = 0.5 * float(np.max(img))
+    size = 2 * dist + 1
+    img_max = ndi.maximum_filter1d(img, size=size, axis=0, mode="constant", cval=0)
+    img_max = ndi.maximum_filter1d(img_max, size=size, axis=1, mode="constant", cval=0)
+    peaks = img * (img == img_max)
+    labels, n = ndi.label(peaks > threshold, structure=np.ones((3, 3)))
+    if n == 0:
+        return np.array([]), np.array([], int), np.array([], int)
+    idx = np.arange(1, n + 1)
+    r_idx, c_idx = np.nonzero(labels)
+    lab = labels[r_idx, c_idx]
+    count = np.bincount(lab, minlength=n + 1)[1:]
+    cen_r = np.round(np.bincount(lab, r_idx, minlength=n + 1)[1:] / count).astype(int)
+    cen_c = np.round(np.bincount(lab, c_idx, minlength=n + 1)[1:] / count).astype(int)
+    top = ndi.maximum(img_max, labels, idx)
+    order = sorted(range(n), key=lambda k: top[k])[::-1]  # as sorted(props)[::-1]: stable, then reversed
+    vals, xs, ys = [], [], []
+    for k in order:
+        y, x = cen_r[k], cen_c[k]
+        accum = img_max[y, x]
+        if accum > threshold:
+            y0, y1 = max(y - dist, 1), min(y + dist, rows - 1)  # rows 1 to rows - 1, not reflected
+            x0, x1 = x - dist, x + dist
+            img_max[y0:y1 + 1, max(x0, 0):min(x1, cols - 1) + 1] = 0
+            if x0 < 0 or x1 >= cols:  # columns beyond a side wrap round, mirrored in rows
+                for xx in [c for c in range(x0, x1 + 1) if c < 0 or c >= cols]:
+                    img_max[rows - np.arange(y0, y1 + 1), xx % cols] = 0
+            vals.append(accum)
+            ys.append(y)
+            xs.append(x)
+    return np.array(vals), np.array(xs, int), np.array(ys, int)
+
+
+def _circle_peaks(hspaces, radii, dist, total):
+    """:func:`skimage.transform.hough_circle_peaks` (``min_xdistance = min_ydistance = dist``,
+    ``total_num_peaks = total``) with its per-radius peak search done by :func:`_hspace_peaks`."""
+    from skimage.transform.hough_transform import label_distant_points
+
+    r, cx, cy, accum = [], [], [], []
+    for rad, hp in zip(radii, hspaces):
+        h_p, x_p, y_p = _hspace_peaks(hp, dist)
+        r.extend((rad,) * len(h_p))
+        cx.extend(x_p)
+        cy.extend(y_p)
+        accum.extend(h_p)
+    r, cx, cy, accum = np.array(r), np.array(cx), np.array(cy), np.array(accum)
+    s = np.argsort(accum)
+    accum, cx, cy, r = accum[s][::-1], cx[s][::-1], cy[s][::-1], r[s][::-1]
+    if len(accum) == 0:
+        return accum, cx, cy, r
+    keep = label_distant_points(cx, cy, dist, dist, total)
+    return accum[keep], cx[keep], cy[keep], r[keep]
+
+
 def find_drum(gray):
     """(cx, cy, radius, reference) of the drum: its rim circle, else the image border."""
     h, w = gray.shape
@@ -178,7 +250,7 @@ def find_drum(gray):
     m = min(small.shape)
     radii = np.arange(int(0.25 * m), int(0.62 * m) + 1)
     hs = transform.hough_circle(_edges(small), radii)
-    _, xs, ys, rs = transform.hough_circle_peaks(hs, radii, total_num_peaks=8, min_xdistance=3, min_ydistance=3)
+    _, xs, ys, rs = _circle_peaks(hs, radii, dist=3, total=8)
     edges = _edges(gray)
     er, ec = np.nonzero(edges)
     near_edges = morphology.dilation(edges, morphology.disk(1))
@@ -299,17 +371,29 @@ def _measure_drum_frame(path, threshold, keep_stages, options, tried: Tried) -> 
     if threshold != "otsu":
         raise InputError(path, "threshold", "'otsu' for drum frames", threshold)
     opts = frame_options(options, path)
-    raw, rgb = read_gray(path)
+    # a phone's 12 megapixels are measured at the heap photos' working size: decoded reduced by
+    # a whole factor (a JPEG in its decoder), then scaled to DRUM_WORK_PIXELS
+    raw, rgb, (w0, h0) = read_gray_reduced(path, DRUM_WORK_PIXELS)
+    if w0 * h0 > DRUM_WORK_PIXELS:
+        f = math.sqrt(DRUM_WORK_PIXELS / raw.size)
+        raw = transform.rescale(raw, f, anti_aliasing=True)
+        rgb = transform.rescale(rgb, f, channel_axis=-1, anti_aliasing=True)
     gray = filters.gaussian(raw, 1.2)
     tried.rgb, tried.gray = rgb, gray
     h, w = gray.shape
+    sx, sy = w / w0, h / h0  # the measured image's pixels per frame pixel
+
+    def frame_px(x, y, r):  # measured-image pixels to the frame's (pixel centres at i + 0.5)
+        return (x + 0.5) / sx - 0.5, (y + 0.5) / sy - 0.5, r / math.sqrt(sx * sy)
+
     if opts["drum_centre_px"] is not None:
         (cx, cy), R, dref = opts["drum_centre_px"], opts["drum_radius_px"], "manifest"
+        cx, cy, R = (cx + 0.5) * sx - 0.5, (cy + 0.5) * sy - 0.5, R * math.sqrt(sx * sy)
     else:
         tried.add("drum circle search")
         cx, cy, R, dref = find_drum(gray)
         tried.attempts[-1].circle = (cx, cy, R)
-        tried.attempts[-1].outcome = f"drum at ({cx:.0f}, {cy:.0f}) px, radius {R:.0f} px"
+        tried.attempts[-1].outcome = "drum at ({:.0f}, {:.0f}) px, radius {:.0f} px".format(*frame_px(cx, cy, R))
     roll, lref = 0.0, "image axes"
     if opts["roll_deg"] is not None:
         roll, lref = opts["roll_deg"], "manifest roll"
@@ -325,8 +409,8 @@ def _measure_drum_frame(path, threshold, keep_stages, options, tried: Tried) -> 
     rr, cc = np.mgrid[0:h, 0:w]
     inside = (cc - cx) ** 2 + (rr - cy) ** 2 < rm ** 2
     if inside.sum() < 400:
-        raise InputError(path, "image", "the drum inside the frame", f"drum centre ({cx:.0f}, {cy:.0f}) px, "
-                         f"radius {R:.0f} px")
+        raise InputError(path, "image", "the drum inside the frame", "drum centre ({:.0f}, {:.0f}) px, "
+                         "radius {:.0f} px".format(*frame_px(cx, cy, R)))
     # the powder is the class lying lower in the drum (its centroid below the air's)
     t = filters.threshold_otsu(g[inside])
     bright = inside & (g >= t)
@@ -396,8 +480,10 @@ def _measure_drum_frame(path, threshold, keep_stages, options, tried: Tried) -> 
                     [(m[0], m[1], d[0], d[1], f"central {fr:.0%} of the chord"), *end_lines],
                     [np.column_stack([u, v])],
                     circle=(cx, cy, rm), reference=f"level: {lref}, drum: {dref}")
+    fcx, fcy, fR = frame_px(cx, cy, R) if (sx, sy) != (1.0, 1.0) else (cx, cy, R)
     return DrumResult(str(path), angle, upper, lower, angle - 0.5 * (upper + lower), rms, float(roll), lref, dref,
-                      [float(cx), float(cy)], float(R), float(fr), int(cols.size), st)
+                      [float(fcx), float(fcy)], float(fR), float(fr), int(cols.size), st,
+                      work_scale=float(math.sqrt(sx * sy)))
 
 
 def measure_drum(paths, threshold="otsu", keep_stages=False, options=None, refusals=None):

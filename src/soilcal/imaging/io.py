@@ -5,8 +5,8 @@ channel is dropped), 1-bit, 8-bit grey, and single-channel 16-bit or 32-bit fram
 ``I;16``, ``I``, ``F``), which are scaled by their bit depth and stretched between their 0.5
 and 99.5 percentiles instead of being clipped to 8 bits.  A photo with an EXIF Orientation
 tag (a phone held upright or upside down) is turned as a viewer shows it before it is measured.
-:func:`read_photo_reduced` decodes a large photo reduced by a whole factor (a JPEG in its
-decoder), so it is never held at full size as floats.  A photo of 8 bits per channel must span
+:func:`read_photo_reduced` and :func:`read_gray_reduced` decode a large photo reduced by a whole
+factor (a JPEG in its decoder), so it is never held at full size as floats.  A photo of 8 bits per channel must span
 :data:`MIN_GREY_LEVELS` grey levels.  A photo may have at most
 :data:`MAX_PIXELS` pixels (a larger one is refused before it is decoded: scale it down).
 """
@@ -143,19 +143,27 @@ def read_photo_reduced(path, min_pixels=None) -> tuple[np.ndarray, tuple[int, in
 
 
 def read_gray(path):
-    """(grey image in [0, 1], RGB view for figures) of any PIL-readable frame.
+    """(grey image in [0, 1], RGB view for figures) of any PIL-readable frame
+    (:func:`read_gray_reduced` at full size).
 
     Single-channel 8-bit and 16-bit frames (BMP/PNG/TIFF, PIL modes L, I;16, I) are scaled
     by their bit depth and not converted through RGB (which would clip 16-bit data); colour
     images give their luminance.  The grey range is then stretched between its 0.5 and 99.5
     percentiles, so a 12-bit camera in a 16-bit container reads like any other frame.
     """
+    return read_gray_reduced(path)[:2]
+
+
+def read_gray_reduced(path, min_pixels=None):
+    """(:func:`read_gray`'s grey image and RGB view, (width, height) of the frame as shown); with
+    ``min_pixels`` a larger frame comes reduced by the largest whole factor keeping at least
+    that many pixels (a JPEG decoded reduced: :func:`_decode`)."""
     from skimage.color import rgb2gray
 
     from soilcal.errors import InputError
 
     p = Path(path)
-    mode, g, rgb, _ = _decode(p, "BMP/PNG/TIFF/JPEG")
+    mode, g, rgb, shown = _decode(p, "BMP/PNG/TIFF/JPEG", min_pixels)
     if g is None:
         g = rgb2gray(rgb)
     if g.ndim != 2 or min(g.shape) < 64:
@@ -164,4 +172,4 @@ def read_gray(path):
     if hi - lo < 0.005:
         raise InputError(p, "image", "a frame with contrast (powder against air)", "a blank image")
     g = np.clip((g - lo) / (hi - lo), 0.0, 1.0)
-    return g, (rgb if rgb is not None else np.repeat(g[..., None], 3, axis=-1))
+    return g, (rgb if rgb is not None else np.repeat(g[..., None], 3, axis=-1)), shown

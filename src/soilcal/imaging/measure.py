@@ -4,7 +4,7 @@ Pile (stacking / repose angle), as in 001 Sec. 2.2.1 and 002 Sec. 2.4: grayscale
 threshold (global Otsu or adaptive ``threshold_local``) -> morphological opening, hole filling
 -> the connected component standing on the plate -> boundary -> straight-line fit of each
 flank -> angle = atan(slope).  Here the reference is the plate line itself, found by a Hough
-transform of the Canny edges (near-horizontal lines) and refined by a RANSAC line fit, so a
+transform of the Canny edges (lines within :data:`PLATE_MAX_ROLL_DEG` of horizontal) and refined by a RANSAC line fit, so a
 rolled camera does not bias the angle: the image is rotated by the plate's tilt before the
 flanks are read.  Each flank is fitted with RANSAC (``skimage.measure.ransac`` with
 ``LineModelND``) between 20 % and 75 % of the heap height (top cap and toe excluded):
@@ -873,6 +873,11 @@ def pile_summary(res) -> dict:
     }
 
 
+#: the most a plate line may be tilted in the photo (deg either way): the camera's roll the plate
+#: search takes out (a hand-held phone rolls by several degrees)
+PLATE_MAX_ROLL_DEG = 15.0
+
+
 def plate_lines(gray, below=None, edges=None, paired=False):
     """Long near-horizontal edges below a point, topmost first, each refined by a RANSAC line
     fit: [(slope, intercept), ...] with row = slope * col + intercept.
@@ -886,7 +891,9 @@ def plate_lines(gray, below=None, edges=None, paired=False):
     edges = feature.canny(gray, sigma=1.5) if edges is None else edges
     h, w = gray.shape
     col0, row0 = below if below is not None else (0.0, 0.5 * h)
-    thetas = np.radians(np.linspace(84, 96, 241))
+    # 0.05 deg steps over +-PLATE_MAX_ROLL_DEG of horizontal
+    thetas = np.radians(np.linspace(90.0 - PLATE_MAX_ROLL_DEG, 90.0 + PLATE_MAX_ROLL_DEG,
+                                    int(round(40 * PLATE_MAX_ROLL_DEG)) + 1))
     hs, ang, dist = transform.hough_line(edges, theta=thetas)
     # a line's support is its own bin's votes and those of the larger of its two neighbours:
     # an edge lying on a pixel boundary comes out of Canny alternating between two rows,
