@@ -237,9 +237,10 @@ def _synthesize(args) -> int:
     # the mean over every measured table of the soil, as the loop of the whole soil takes it
     from soilcal.loop import core
 
-    declared = {**core.settings_from(soil.data, soil.path).reference, **_reference(args)}
-    sy.default_reference(conds, _reference(args), "--reference", strict=True)  # a name no row carries: refused
-    core.check_reference(every, _reference(args), "--reference", "reference")  # a value far from every row
+    given = _reference(args)
+    declared = {**core.settings_from(soil.data, soil.path).reference, **given}
+    sy.default_reference(conds, given, "--reference", strict=True)  # a name no row carries: refused
+    core.check_reference(every, given, "--reference", "reference")  # a value far from every row
     reference = sy.default_reference(conds, declared, "--reference", over=every)
     if not (math.isfinite(args.noise) and args.noise >= 0):
         raise InputError("<command line>", "--noise", "a relative SD >= 0 of the instrument noise (0.02: 2 %)",

@@ -469,8 +469,9 @@ def analyse(soil: str, res: pd.DataFrame, diag: pd.DataFrame, cands: list, effec
         if sel.chosen and bias_left and not any("bias" in EFFECTS[c].signature for c in sel.chosen):
             # a bias no chosen effect can carry pulls their parameters to make up for it: refit
             # them beside a free uniform scale of the model (select.scale_data), and say it
-            ref = sl.Model([sl.scale_data(y0)], y0, meas, rs.scale_of(u))
-            m = sl.Model([data[c] for c in names] + [sl.scale_data(y0)], y0, meas, rs.scale_of(u))
+            bias, sc = sl.scale_data(y0), rs.scale_of(u)
+            ref = sl.Model([bias], y0, meas, sc)
+            m = sl.Model([data[c] for c in names] + [bias], y0, meas, sc)
             uniform = sl.score(m, ref, sl._folds(u, fold_by), settings.alpha)
             x = np.array([uniform.theta[k] for k in uniform.names], float)
             fitted = m.predict(x)

@@ -314,8 +314,9 @@ def beyond(res: pd.DataFrame, name: str, first: str, quantity_of: dict | None = 
     covariate ``first`` (module docstring), over the usable rows that carry both; NaN where
     either is unknown or too few rows are left to tell."""
     quantity_of = quantity_of or {}
-    r_all = res["relative_residual"].astype(float)
-    d = res[np.isfinite(r_all)].reset_index(drop=True)
+    from soilcal.loop.residuals import usable
+
+    d = usable(res)
     if "measure" not in (name, first):  # the measured quantity varies within a test: every row
         d = per_test(d)
     for c in (name, first):

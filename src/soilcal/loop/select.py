@@ -524,20 +524,18 @@ class _ScaleEffect:
 
 
 class _ScaleSurrogate:
-    def __init__(self, y0: np.ndarray):
-        self.y0 = np.asarray(y0, float)
+    """The scale's bounds and size; :meth:`Model.predict` applies it (it multiplies the sum)."""
+
+    def __init__(self):
         self.lo = np.array([_ScaleEffect.bounds["s"][0]])
         self.hi = np.array([_ScaleEffect.bounds["s"][1]])
         self.k = 1
-
-    def __call__(self, theta) -> np.ndarray:
-        return self.y0 * (1.0 + float(np.asarray(theta, float).ravel()[0]))
 
 
 def scale_data(y0: np.ndarray) -> EffectData:
     """The uniform scale (:class:`_ScaleEffect`) as an effect of a :class:`Model`."""
     eff = _ScaleEffect()
-    return EffectData(eff, dict(eff.bounds), _ScaleSurrogate(y0), design=[{"s": -0.5}, {"s": 0.0}, {"s": 0.5}])
+    return EffectData(eff, dict(eff.bounds), _ScaleSurrogate(), design=[{"s": -0.5}, {"s": 0.0}, {"s": 0.5}])
 
 
 @dataclass
@@ -626,9 +624,9 @@ def forward(obs: pd.DataFrame, y0: np.ndarray, data: dict, fold_by: str | None =
     final = score(model(chosen), model([]), folds, alpha) if chosen else None
     uniform, uniform_s = None, math.nan
     if chosen:
-        bias = Model([scale_data(y0)], y0, measured, scale)
-        uniform = score(model(chosen), bias, folds, alpha)
-        uniform_s = float(np.asarray(bias.fit()[0], float).ravel()[0])
+        alone = Model([bias], y0, measured, scale)
+        uniform = score(model(chosen), alone, folds, alpha)
+        uniform_s = float(np.asarray(alone.fit()[0], float).ravel()[0])
     return Selection(chosen=chosen, steps=steps, final=final, forward_chosen=forward_chosen, uniform=uniform,
                      uniform_s=uniform_s)
 
