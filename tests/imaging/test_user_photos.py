@@ -190,15 +190,14 @@ def test_sixteen_bit_colour_photo_using_its_low_bits_is_refused(tmp_path):
     assert e.value.path == str(p) and e.value.field == "image"
 
 
-@pytest.mark.parametrize("apex_col", [110.0])
-def test_heap_whose_foot_runs_out_of_the_frame_is_refused(tmp_path, apex_col):
+def test_heap_whose_foot_runs_out_of_the_frame_is_refused(tmp_path):
     # the heap's foot on one side lies beyond the image border (the flank reaches the border
     # above the plate): a line slanting up from the plate across that flank gave the heap a
     # foot, read both flanks 4 deg off as sound; the heap is cut, and said to be
     from soilcal.errors import InputError
 
     p = tmp_path / "cut.jpg"
-    _u8(heap_photo(apex_col=apex_col)).save(p, quality=90)
+    _u8(heap_photo(apex_col=110.0)).save(p, quality=90)
     with pytest.raises(InputError) as e:
         measure.measure_pile(p)
     assert (e.value.path, e.value.field, e.value.expected, e.value.got) == (

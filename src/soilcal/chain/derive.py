@@ -459,8 +459,6 @@ def check_dem_stages(soil_path, soil_data: dict) -> None:
                                       "of the one it follows: give the stage in between, or run the config's "
                                       "levels with simulation.design: printed")
         for sym, f in st["factors"].items():
-            screened = design_mode(soil_data) == "adaptive" and adaptive.screening_range(
-                soil_data, sid, f["parameter"]) is not None
             where = f"stages.{sid}.factors.{sym}"
             name, scale = mapped(f["parameter"], f"{where}.parameter")
             if "from" in deps:

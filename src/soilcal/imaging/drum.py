@@ -480,6 +480,7 @@ def _measure_drum_frame(path, threshold, keep_stages, options, tried: Tried) -> 
                     [(m[0], m[1], d[0], d[1], f"central {fr:.0%} of the chord"), *end_lines],
                     [np.column_stack([u, v])],
                     circle=(cx, cy, rm), reference=f"level: {lref}, drum: {dref}")
+    # a frame measured at its own size keeps its numbers to the last bit ((x + 0.5) - 0.5 != x)
     fcx, fcy, fR = frame_px(cx, cy, R) if (sx, sy) != (1.0, 1.0) else (cx, cy, R)
     return DrumResult(str(path), angle, upper, lower, angle - 0.5 * (upper + lower), rms, float(roll), lref, dref,
                       [float(fcx), float(fcy)], float(fR), float(fr), int(cols.size), st,

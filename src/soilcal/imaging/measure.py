@@ -348,7 +348,7 @@ def _components_on_plate(path, binary, slope, intercept, kind):
         # (a heap wider than the frame rises from it)
         raise InputError(path, "image", f"one {kind} standing on the plate", NONE_FOUND)
     if r0 <= 2 or c0 <= 2 or c1 >= w - 2:
-        cut = InputError(path, "image", CUT if kind == "heap" else f"the whole {kind} inside the frame",
+        cut = InputError(path, "image", f"the whole {kind} inside the frame",
                          "it is cut by the image border")
         cut.heap_beside = not (c0 <= 2 and c1 >= w - 2)  # a heap with wall beside it on one side at least
         raise cut

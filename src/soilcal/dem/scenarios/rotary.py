@@ -329,7 +329,7 @@ def run(setup: dict, params: DemParams, preset: str = "quick", seed: int = 0, th
 
     vf = s["forward_speed"]
     duration = s["travel"] / vf
-    dt_max = 0.1 * spec.r_min / (omega * R + vf)
+    dt_max = pass_time_step(s, spec, params)  # the step validate() counted the pass in
     from soilcal.dem.geometry import rotation_matrix
 
     def pose(tt):

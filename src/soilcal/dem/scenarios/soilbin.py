@@ -254,11 +254,12 @@ def check_pass(spec: BinSpec, params: DemParams, source: str, field: str, speed:
               f"a pass of at most {MAX_PASS_STEPS:,} steps: a duration <= {MAX_PASS_STEPS * dt:.4g} s at the "
               f"pass's time step of {dt:.4g} s (or a setup.travel of its own)",
               f"{travel / speed:.4g} s of pass, {steps:,} steps")
-    check(steps <= MAX_PASS_STEPS, source, field,
-          f"a speed whose pass of setup.travel = {travel:.4g} m takes at most "
-          f"{MAX_PASS_STEPS:,} steps (>= {travel / (MAX_PASS_STEPS * dt):.3g} m/s at the "
-          f"pass's time step of {dt:.4g} s)",
-          f"{speed:.4g} m/s: {travel / speed:.4g} s of pass, {steps:,} steps")
+    else:
+        check(steps <= MAX_PASS_STEPS, source, field,
+              f"a speed whose pass of setup.travel = {travel:.4g} m takes at most "
+              f"{MAX_PASS_STEPS:,} steps (>= {travel / (MAX_PASS_STEPS * dt):.3g} m/s at the "
+              f"pass's time step of {dt:.4g} s)",
+              f"{speed:.4g} m/s: {travel / speed:.4g} s of pass, {steps:,} steps")
     if pushes:
         vmax = push_speed_limit(params, spec.stiffness_scale, spec.max_overlap)
         check(speed <= vmax, source, field,
