@@ -188,8 +188,10 @@ def run_case(wd: Path, soil_name: str, stage_id: str, case_id: str, targets: dic
         out.append({"soil": soil_name, "stage": stage_id, "case": case_id, "target": t.response,
                     "method": "grainlearning", "runs": runs + k, "verification_rel_error_pct": e,
                     "within_2_percent": bool(abs(e) <= 2.0), "elapsed_s": round(elapsed, 1),
-                    "stopped_because": f"{result['iterations_run']} iterations of {samples} samples spent "
-                                       f"(budget {budget}: the recipe's runs per case)" + ("; target met" if met else ""),
+                    "stopped_because": (f"{result['iterations_run']} iterations of {samples} samples spent "
+                                        f"(budget {budget}: the recipe's runs per case)"
+                                        + (f"; {result['collapsed']}" if result.get("collapsed") else "")
+                                        + ("; target met" if met else "")),
                     "note": f"grainlearning {GL_VERSION}: most probable sample "
                             + ", ".join(f"{n}={best[n]:.4g}" for n in problem.names)
                             + f"; {v.size} of {k} seeds {np.mean(v) if v.size else math.nan:.2f} +- "

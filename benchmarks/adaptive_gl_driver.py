@@ -15,7 +15,8 @@ and ``targets`` (one observation per response), ``samples`` (per iteration), ``i
 file appended), ``workdir``.  Iteration k writes ``batch_<k>.json`` (parameter samples and
 their seeds) and reads ``sims_<k>.json`` (one value per sample and response); at the end
 ``result.json`` holds every iteration's samples and responses, the last iteration's posterior and the most probable
-sample of the last iteration (GrainLearning's estimate, ``get_most_prob_params``).
+sample of the last iteration (GrainLearning's estimate, ``get_most_prob_params``); ``collapsed``
+says when a posterior on a single sample ended the calibration early (empty otherwise).
 """
 
 from __future__ import annotations
@@ -91,7 +92,23 @@ def main(path: str) -> None:
         },
         "save_fig": -1,
     })
-    calib.run()
+    collapsed = ""
+    try:
+        calib.run()
+    except ValueError:
+        # GrainLearning resamples from its posterior by fitting a Gaussian mixture to the
+        # samples drawn with the posterior's weights, normalised by their range; when the
+        # posterior holds (nearly) all its weight on one sample, every drawn sample is that
+        # one, the range is 0 and the normalisation gives NaN (scikit-learn then refuses the
+        # fit).  The iteration's inference is complete by then: its most probable sample is
+        # the estimate, as after a last iteration; any other error is re-raised.
+        s = calib.inference.sampling
+        hi, lo = getattr(s, "max_params", None), getattr(s, "min_params", None)
+        if not history or hi is None or not np.any(np.asarray(hi) == np.asarray(lo)):
+            raise
+        collapsed = (f"posterior of iteration {len(history) - 1} on one sample "
+                     f"(GrainLearning cannot resample from it): estimate taken there")
+        print(f"GrainLearning stopped: {collapsed}", flush=True)
     last = np.asarray(calib.inference.posterior).ravel()
     best = int(np.argmax(last))
     (wd / "result.json").write_text(json.dumps({
@@ -100,6 +117,7 @@ def main(path: str) -> None:
         "most_probable_index": best,
         "last_posterior": last.tolist(),
         "sigma_max": float(calib.system.sigma_max),
+        "collapsed": collapsed,
         "history": history,
     }))
 
