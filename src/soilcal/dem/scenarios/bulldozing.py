@@ -169,9 +169,10 @@ def _num(s, k, source):
 
 
 def validate(setup: dict, preset: str = "quick", source: str = "<bulldozing>",
-             params=None) -> None:
+             params=None) -> dict:
     """Bad settings raise InputError before the run; with ``params``, also a pass the run
-    could not finish (:func:`soilcal.dem.scenarios.soilbin.check_pass`)."""
+    could not finish (:func:`soilcal.dem.scenarios.soilbin.check_pass`).  Returns the run's
+    settings (with ``params``, with the surface-energy factor ``cohesion_scale``)."""
     check(preset in PRESETS, source, "preset", f"one of {PRESETS}", preset)
     check(setup.get("shape") in tools.SHAPES, source, "setup.shape",
           f"one of {', '.join(tools.SHAPES)} (Table 9)", setup.get("shape"))
@@ -211,6 +212,7 @@ def validate(setup: dict, preset: str = "quick", source: str = "<bulldozing>",
         check_pass(spec, params, source, "setup.speed", s["speed"], s["travel"],
                    tool_time_step(spec, params),
                    duration_field=None if _given_travel(setup, preset) else "setup.duration")
+    return s
 
 
 def _bin(s, source="<bulldozing>") -> BinSpec:
@@ -230,10 +232,7 @@ def run(setup: dict, params: DemParams, preset: str = "quick", seed: int = 0, th
     uninterrupted run."""
     from soilcal.dem import restart as rst
 
-    validate(setup, preset, source, params=params)
-    s = _settings(setup, preset)
-    s["cohesion_scale"] = reference_cohesion(
-        _bin(s, source), _bin(_settings(_setup(s["shape"]), "paper"), source), setup, source)
+    s = validate(setup, preset, source, params=params)
     nthreads = threads_used(threads)
     prog = rst.Progress(restart)
     prog.resume()

@@ -182,9 +182,10 @@ def _settings(setup: dict, preset: str) -> dict:
 
 
 def validate(setup: dict, preset: str = "quick", source: str = "<furrow>",
-             params=None) -> None:
+             params=None) -> dict:
     """Bad settings raise InputError before the run; with ``params``, also a pass the run
-    could not finish (:func:`soilcal.dem.scenarios.soilbin.check_pass`)."""
+    could not finish (:func:`soilcal.dem.scenarios.soilbin.check_pass`).  Returns the run's
+    settings (with ``params``, with the surface-energy factor ``cohesion_scale``)."""
     check(preset in PRESETS, source, "preset", f"one of {PRESETS}", preset)
     s = _settings(setup, preset)
     for k in ("depth", "speed", "tank_length", "tank_width", "tank_height", "particle_radius",
@@ -243,6 +244,7 @@ def validate(setup: dict, preset: str = "quick", source: str = "<furrow>",
         spec = _bin(s)
         check_pass(spec, params, source, "setup.speed", s["speed"], s["travel"],
                    tool_time_step(spec, params))
+    return s
 
 
 def _bin(s) -> BinSpec:
@@ -315,10 +317,7 @@ def run(setup: dict, params: DemParams, preset: str = "quick", seed: int = 0, th
     uninterrupted run."""
     from soilcal.dem import restart as rst
 
-    validate(setup, preset, source, params=params)
-    s = _settings(setup, preset)
-    s["cohesion_scale"] = reference_cohesion(
-        _bin(s), _bin(_settings(setups()["yangtze-opener"], "paper")), setup, source)
+    s = validate(setup, preset, source, params=params)
     nthreads = threads_used(threads)
     prog = rst.Progress(restart)
     prog.resume()

@@ -227,9 +227,10 @@ def _settings(setup, preset):
 
 
 def validate(setup: dict, preset: str = "quick", source: str = "<rotary>",
-             params=None) -> None:
+             params=None) -> dict:
     """Bad settings raise InputError before the run; with ``params``, also a pass the run
-    could not finish (:func:`soilcal.dem.scenarios.soilbin.check_pass`)."""
+    could not finish (:func:`soilcal.dem.scenarios.soilbin.check_pass`).  Returns the run's
+    settings (with ``params``, with the surface-energy factor ``cohesion_scale``)."""
     check(preset in PRESETS, source, "preset", f"one of {PRESETS}", preset)
     s = _settings(setup, preset)
     for k in ("rpm", "forward_speed", "depth", "working_width", "radius", "hub_radius",
@@ -270,6 +271,7 @@ def validate(setup: dict, preset: str = "quick", source: str = "<rotary>",
         spec = _bin(s)
         check_pass(spec, params, source, "setup.forward_speed", s["forward_speed"],
                    s["travel"], pass_time_step(s, spec, params), pushes=False)
+    return s
 
 
 def pass_time_step(s, spec: BinSpec, params: DemParams) -> float:
@@ -296,10 +298,7 @@ def run(setup: dict, params: DemParams, preset: str = "quick", seed: int = 0, th
     numbers are those of an uninterrupted run."""
     from soilcal.dem import restart as rst
 
-    validate(setup, preset, source, params=params)
-    s = _settings(setup, preset)
-    s["cohesion_scale"] = reference_cohesion(
-        _bin(s), _bin(_settings(_setup(s["rpm"]), "paper")), setup, source)
+    s = validate(setup, preset, source, params=params)
     nthreads = threads_used(threads)
     prog = rst.Progress(restart)
     prog.resume()
