@@ -337,6 +337,28 @@ def test_calibrated_vs_paper_without_a_calibrated_set(cinnamon):
     assert list(f.loc[["A", "B", "C"], "paper"]) == [0.08, 0.37, 0.64]
 
 
+def test_calibrated_vs_paper_of_an_own_soil_has_no_paper_values():
+    # a soil of one's own (no citation, no printed optimum): its stage's fixed value 0.3 and its
+    # calibrated factors are its own, and no column calls them a paper's
+    soil = {"name": "own", "parameters": {"rr": {"name": "rolling", "unit": "-"},
+                                          "ss": {"name": "steel friction", "unit": "-"}},
+            "stages": [{"id": "bbd", "factors": {"A": {"parameter": "rr", "low": 0.1, "high": 0.3}},
+                        "fixed": {"ss": 0.3},
+                        "optimise": {"cases": [{"id": "angle", "goals": {}}]}}]}
+    stage = {"id": "bbd", "factors": {"A": {"parameter": "rr"}}, "fixed": {"ss": 0.3},
+             "optimise": {"cases": [{"id": "angle", "goals": {}}]}}
+    optimum = pd.DataFrame({"case": ["angle"], "method": ["near_optimal"], "A": [0.2], "calibrated": [True]})
+    df = calibrated_vs_paper(soil, {"bbd": (stage, optimum, None)}).set_index("parameter")
+    assert list(df["calibrated"]) == [0.2, 0.3]
+    assert df["paper"].isna().all() and df["difference"].isna().all()
+    assert list(df["paper_source"]) == ["no published value"] * 2
+    # the same soil citing a paper: the fixed value is the paper's stage's
+    soil["citation"] = {"title": "A paper"}
+    df = calibrated_vs_paper(soil, {"bbd": (stage, optimum, None)}).set_index("parameter")
+    assert (df.loc["ss", "paper"], df.loc["ss", "paper_source"]) == (0.3, "fixed in the paper's stage")
+    assert np.isnan(df.loc["rr", "paper"]) and df.loc["rr", "paper_source"] == "not printed"
+
+
 # --------------------------------------------------------------------------- tool verification
 
 
