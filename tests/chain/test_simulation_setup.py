@@ -84,3 +84,7 @@ def test_the_workflow_design_is_named_as_the_workflow_config_s(tmp_path):
 def test_the_tool_tests_say_their_defaults(own):
     assert row(own, "measurements.cutting_resistance.replicates") == ("3", "default")
     assert row(own, "measurements.cutting_resistance.preset") == ("quick", "default")
+    # its setup plate-line (the directrix column chooses the plate per row)
+    assert row(own, "measurements.cutting_resistance.setup.shape") == ("line", "named setup")
+    assert json.loads(own.loc["measurements.cutting_resistance.covariates", "value"]) == ["directrix"]
+    assert own.loc["measurements.cutting_resistance.cohesion_scale[quick]", "origin"] == "computed"

@@ -301,8 +301,14 @@ def simulation_setup(soil, design_override: str | None = None) -> "pd.DataFrame"
         add(f"{where}.scenario", entry["scenario"], "soil", f"{where}.scenario")
         add(f"{where}.setup", entry["setup"], "soil", f"{where}.setup (named setup; a setup covariate may choose "
             "another per row)")
-        for key, value in (entry.get("set") or {}).items():
-            add(f"{where}.setup.{key}", value, "soil", f"{where}.set.{key}")
+        mpreset = entry.get("preset", DEFAULT_PRESET)
+        varied = sorted(c for c, cv in (entry.get("covariates") or {}).items()
+                        if "setup" in cv or "set" in cv)
+        if varied:
+            add(f"{where}.covariates", varied, "soil", "table columns that choose the setup or set a setup "
+                "value per row, over the values below")
+        _setup_rows(add, where, entry["scenario"], entry["setup"], dict(entry.get("set") or {}), mpreset,
+                    params, soil.path)
         add(f"{where}.replicates", entry.get("replicates", DEFAULT_REPLICATES),
             "soil" if "replicates" in entry else "default", f"{where}.replicates" if "replicates" in entry
             else "seeds per measured condition")
