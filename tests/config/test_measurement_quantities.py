@@ -83,6 +83,19 @@ def test_tool_speed_in_km_per_h(cinnamon):
     assert QUANTITIES["tool_speed"][0] == "m/s"
 
 
+def test_moisture_content_as_a_fraction(cinnamon):
+    # a moisture column tabled as mass fractions (unit "-"): 0.172 is 17.2 %
+    t = _table(cinnamon, "cinnamon-soil", "cutting_resistance.csv")
+    df = pd.read_csv(t)
+    df["moisture"] = [0.05, 0.1, 0.172, 0.2]
+    df.to_csv(t, index=False)
+    _declare(cinnamon, "cinnamon-soil",
+             lambda d: _entry(d)["covariates"].update(moisture={"ignore": True, "quantity": "moisture_content",
+                                                                "unit": "-"}))
+    conds = _load(cinnamon, "cinnamon-soil")
+    assert [c.quantities["moisture_content"] for c in conds] == pytest.approx([5.0, 10.0, 17.2, 20.0])
+
+
 def test_label_quantity_keeps_the_cell_text(cinnamon):
     _declare(cinnamon, "cinnamon-soil", lambda d: _entry(d)["covariates"]["plate"].update(quantity="tool"))
     conds = _load(cinnamon, "cinnamon-soil")

@@ -643,7 +643,7 @@ def _check_scale(soil_path, cw: str, cv: dict, scenario: str) -> None:
     else:
         target, what = param_unit(cv["param"]), f"DEM parameter {cv['param']}"
     factors = QUANTITIES[q][1]
-    if target not in factors:
+    if target not in factors or target == DIMENSIONLESS:  # a dimensionless DEM parameter is no moisture
         return
     unit = cv["unit"]
     factor = factors[unit] / factors[target]
