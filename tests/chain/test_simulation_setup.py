@@ -88,3 +88,13 @@ def test_the_tool_tests_say_their_defaults(own):
     assert row(own, "measurements.cutting_resistance.setup.shape") == ("line", "named setup")
     assert json.loads(own.loc["measurements.cutting_resistance.covariates", "value"]) == ["directrix"]
     assert own.loc["measurements.cutting_resistance.cohesion_scale[quick]", "origin"] == "computed"
+
+
+def test_a_parameter_a_stage_sets_says_the_stage_replaces_it():
+    # the black soil's simulation.params give the soil-steel friction 0.55; its stage soil-65mn varies it
+    soil = load_soil(ROOT / "config/soils/black-soil.yaml", ROOT / "resources")
+    df = simulation_setup(soil).set_index("item")
+    assert row(df, "dem.soil_steel_static_friction") == ("0.55", "soil")
+    assert df.loc["dem.soil_steel_static_friction", "note"].endswith("replaced by the fixed value or factor of stage(s) "
+                                                                     "soil-65mn")
+    assert "replaced" not in df.loc["dem.soil_density", "note"]

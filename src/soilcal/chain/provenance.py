@@ -265,15 +265,31 @@ def simulation_setup(soil, design_override: str | None = None) -> "pd.DataFrame"
     props = data.get("properties") or {}
     from soilcal.dem.scenarios.base import unit_scale
 
+    from soilcal.dem.scenarios.base import dem_field
+
+    stages = simulated_stage_ids(data) if sim else []
+
+    def own_fields(sid):
+        st = next(s for s in data["stages"] if s["id"] == sid)
+        used = [(p, f"stages.{sid}.fixed.{p}") for p in st.get("fixed") or {}]
+        used += [(f.get("parameter"), f"stages.{sid}.factors.{k}") for k, f in (st.get("factors") or {}).items()]
+        return {dem_field(soil.path, data, p, w)[0] for p, w in used}
+
+    stage_set = {sid: own_fields(sid) for sid in stages}
+
+    def over(name):
+        hit = [sid for sid in stages if name in stage_set[sid]]
+        return f"; replaced by the fixed value or factor of stage(s) {', '.join(hit)}" if hit else ""
+
     for prop, name in _PROPERTIES.items():
         entry = props.get(prop) or {}
         if entry.get("value") is not None:
             later = name in (sim.get("params") or {})
             add(f"dem.{name}", float(entry["value"]) * unit_scale(soil.path, entry, f"properties.{prop}"), "soil",
-                f"properties.{prop}, in SI" + (f"; replaced by simulation.params.{name}" if later else ""))
+                f"properties.{prop}, in SI" + (f"; replaced by simulation.params.{name}" if later else "")
+                + over(name))
     for name, v in (sim.get("params") or {}).items():
-        add(f"dem.{name}", v, "soil", f"simulation.params.{name} (SI)")
-    stages = simulated_stage_ids(data) if sim else []
+        add(f"dem.{name}", v, "soil", f"simulation.params.{name} (SI)" + over(name))
     defaults = DemParams()
     for name, meaning in GENERIC.items():
         left = [sid for sid in stages if name not in given(data, sid, soil_path=soil.path)]
