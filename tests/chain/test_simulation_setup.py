@@ -98,3 +98,18 @@ def test_a_parameter_a_stage_sets_says_the_stage_replaces_it():
     assert df.loc["dem.soil_steel_static_friction", "note"].endswith("replaced by the fixed value or factor of stage(s) "
                                                                      "soil-65mn")
     assert "replaced" not in df.loc["dem.soil_density", "note"]
+
+
+def test_an_adaptive_soil_lists_its_design_s_settings_and_no_tool_tests(tmp_path):
+    d = yaml.safe_load((ROOT / "config/soils/cinnamon-soil.yaml").read_text())
+    d["simulation"]["design"] = "adaptive"
+    d["simulation"]["adaptive"] = {"budget": 30}
+    p = tmp_path / "cinnamon-soil.yaml"
+    p.write_text(yaml.safe_dump(d, sort_keys=False))
+    df = simulation_setup(load_soil(p, ROOT / "resources")).set_index("item")
+    assert row(df, "simulation.design") == ("adaptive", "soil")
+    assert row(df, "simulation.adaptive.budget") == ("30", "soil")
+    assert row(df, "simulation.adaptive.verify_seeds") == ("4", "default")
+    assert row(df, "measurements") == ("not run", "workflow")
+    assert not any(i.startswith(("measurements.", "simulation.verification.", "simulation.path."))
+                   for i in df.index)

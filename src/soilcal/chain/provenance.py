@@ -91,10 +91,10 @@ SETUP_COLUMNS = ["item", "value", "origin", "note"]
 #: the simulation block's options with a default, as the chain applies them (the soil schema
 #: documents each): key -> (default, what the default is)
 BLOCK_DEFAULTS = {
-    "preset": ("quick", "scenario preset"),
-    "replicates": (1, "seeds per design point"),
-    "design": ("recipe", "the papers' recipe on the DEM's own results"),
-    "threads": (1, "Numba threads per DEM job"),
+    "preset": ("quick", "scenario preset (default quick)"),
+    "replicates": (1, "seeds per design point (default 1)"),
+    "design": ("recipe", "the design the DEM runs (default recipe: the papers' recipe on the DEM's own results)"),
+    "threads": (1, "Numba threads per DEM job (default 1)"),
 }
 
 
@@ -243,7 +243,7 @@ def simulation_setup(soil, design_override: str | None = None) -> "pd.DataFrame"
         add(f"simulation.path.{key}", path.get(key, default), "soil" if key in path else "default",
             f"simulation.path.{key}" if key in path else "steepest-ascent path")
     ver = sim.get("verification") or {}
-    for key, default in list(VERIFY_DEFAULTS.items()) + [("refine", True)]:
+    for key, default in list(VERIFY_DEFAULTS.items()) + [("refine", True)] if design != "adaptive" else ():
         add(f"simulation.verification.{key}", ver.get(key, default), "soil" if key in ver else "default",
             f"simulation.verification.{key}" if key in ver else "verification at the calibrated set")
     if design == "adaptive":
@@ -311,8 +311,11 @@ def simulation_setup(soil, design_override: str | None = None) -> "pd.DataFrame"
             _setup_rows(add, where if pr == preset else f"{where}[{pr}]", entry["scenario"], entry["setup"],
                         dict(entry.get("set") or {}), pr, params, soil.path)
 
-    # the measured tool tests
-    for mid, entry in (data.get("measurements") or {}).items():
+    # the measured tool tests (the recipe's and the printed design's; the adaptive design runs none)
+    if design == "adaptive" and data.get("measurements"):
+        add("measurements", "not run", "workflow", "design: adaptive runs no tool tests and no measured-data "
+            "loop (soilcal loop run runs them from a parameter set)")
+    for mid, entry in (data.get("measurements") or {}).items() if design != "adaptive" else ():
         where = f"measurements.{mid}"
         add(f"{where}.scenario", entry["scenario"], "soil", f"{where}.scenario")
         add(f"{where}.setup", entry["setup"], "soil", f"{where}.setup (named setup; a setup covariate may choose "
