@@ -187,7 +187,7 @@ def simulation_setup(soil, design_override: str | None = None) -> "pd.DataFrame"
     soil leaves it out and the documented default holds: the schema's for the block's options,
     :data:`GENERIC` for the DEM parameters), ``named setup`` (a value of the named scenario
     setup, the apparatus of a shipped soil, that the soil's ``set`` does not replace),
-    ``preset`` (the preset's discretisation), ``workflow config`` (``--config design=...``)
+    ``preset`` (the preset's discretisation), ``workflow config`` (``--config design=...``), ``workflow`` (what the workflow does not run)
     or ``computed`` (the surface-energy factor of the particle-size rule).  Every other DEM
     parameter value of a run is in the ``p:<name>`` columns of its ``runs/*.csv``.
     ``soil``: a loaded :class:`soilcal.config.load.Soil` (its ``defaulted`` fields count as
