@@ -71,6 +71,20 @@ def check_parameters(soil_path, data: dict) -> None:
 
     if not data.get("simulation"):
         return
+    # a printed property the runs take: its unit converts to SI and its value is physical
+    from soilcal.dem.scenarios.base import DemParams, unit_scale
+
+    for prop, name in _PROPERTIES.items():
+        entry = (data.get("properties") or {}).get(prop) or {}
+        if entry.get("value") is None:
+            continue
+        x = float(entry["value"]) * unit_scale(soil_path, entry, f"properties.{prop}")
+        try:
+            DemParams.from_mapping({name: x}, str(soil_path))
+        except InputError as exc:
+            raise InputError(soil_path, f"properties.{prop}.value",
+                             f"{exc.expected} (DEM parameter {name}, from the value in {entry.get('unit', '-')})",
+                             entry["value"]) from None
     need = soil_parameters()
     for sid in simulated_stage_ids(data):
         missing = [n for n in need if n not in given(data, sid, soil_path=soil_path)]
