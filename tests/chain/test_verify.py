@@ -274,6 +274,22 @@ def test_verification_frame_failed_replicates_and_inline_goals(cinnamon):
     assert r.loc["flow", "paper_target"] == 10.0
 
 
+def test_verification_of_an_own_soil_has_no_paper_target(cinnamon):
+    # the same case, the soil citing no paper and printing no verification: its 27.69 deg is its
+    # own measured target, not a paper's
+    soil = {k: v for k, v in cinnamon.items() if k != "citation"}
+    stage = _stage()
+    stage["optimise"]["cases"][0].pop("printed_verification", None)
+    stage["optimise"]["cases"][0]["goals"]["bulk"] = {"goal": "maximize"}
+    runs = {"stacking_angle": _runs([28.2, 28.4]) + _runs([5.0, 7.0], response="bulk")}
+    df = verification_frame(soil, stage, OPTIMUM, {"stacking_angle": {"value": 27.69}}, runs)
+    r = df[df["case"] == "stacking_angle"].set_index("response")
+    assert r.loc["stacking_angle", "target"] == 27.69
+    assert df["paper_target"].isna().all() and df["paper_simulated"].isna().all()
+    assert df["paper_relative_error_percent"].isna().all()
+    assert r.loc["bulk", "note"] == "goal maximize: no target value"
+
+
 def test_verification_cases(cinnamon):
     assert verification_cases(cinnamon, ["bbd"]) == [("bbd", "stacking_angle")]
     assert verification_cases(cinnamon, ["pb", "steepest"]) == []

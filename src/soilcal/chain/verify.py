@@ -239,8 +239,10 @@ def _verification_row(stage, case, rid, goal, targets, soil_data, cal, sel, pres
     target = float(goal["value"]) if "value" in goal else (
         t.get("value") if t.get("value") is not None else np.nan)
     target = float(target) if target is not None else np.nan
+    # the value the paper calibrated to: only a soil that cites a paper has one (a soil of one's
+    # own aims at its own measurements, which are no paper's)
     paper_target = (soil_data.get("targets", {}).get(tid) or {}).get("value") if tid else goal.get("value")
-    paper_target = float(paper_target) if paper_target is not None else np.nan
+    paper_target = float(paper_target) if paper_target is not None and soil_data.get("citation") else np.nan
     ok = sel[sel["status"].astype(str) == "ok"]
     vals = ok["value"].to_numpy(float) if len(ok) else np.array([])
     n = int(np.isfinite(vals).sum())
@@ -267,7 +269,8 @@ def _verification_row(stage, case, rid, goal, targets, soil_data, cal, sel, pres
     note = diagnose(mean, sd, n, target, pred, ci, design_replicates(soil_data), model, bounds) \
         if len(cal) and n else ""
     if len(cal) and n and goal.get("goal") != "target":
-        note = f"goal {goal.get('goal')}: no target value; the paper's verification is beside it"
+        note = f"goal {goal.get('goal')}: no target value" + (
+            "; the paper's verification is beside it" if np.isfinite(paper_sim) else "")
     if n and failed:
         note = "; ".join(x for x in (failed_note + f": the statistics are of the other {n}", note) if x)
     return {
