@@ -157,3 +157,18 @@ def test_empty_cell_of_a_quantity(cinnamon):
     t = _speed_column(cinnamon, [0.576, None, 7.2, 1.8])
     msg = _fails(cinnamon, "cinnamon-soil", f"{t}: row 2, column speed_kmh")
     assert "empty" in msg
+
+
+def test_a_set_column_named_in_another_unit_needs_its_unit(cinnamon):
+    """A column speed_kmh that sets the plate's speed (m/s) with no unit and no scale would run
+    3.6 km/h as 3.6 m/s: refused, with the declaration it needs; scale 1 says the cells are m/s."""
+    t = _table(cinnamon, "cinnamon-soil", "cutting_resistance.csv")
+    df = pd.read_csv(t)
+    df["speed_kmh"] = [0.576, 0.576, 0.576, 0.576]
+    df.to_csv(t, index=False)
+    p = _declare(cinnamon, "cinnamon-soil", lambda d: _entry(d)["covariates"].update(speed_kmh={"set": "speed"}))
+    msg = _fails(cinnamon, "cinnamon-soil", f"{p}: {CR}.speed_kmh")
+    assert "quantity: tool_speed, unit: km/h, scale: 0.2778" in msg
+    _declare(cinnamon, "cinnamon-soil",
+             lambda d: _entry(d)["covariates"].update(speed_kmh={"set": "speed", "scale": 0.2778}))
+    assert [c.setup["speed"] for c in _load(cinnamon, "cinnamon-soil")] == pytest.approx([0.16] * 4, rel=1e-3)

@@ -403,6 +403,7 @@ def _entry(soil_path, data: dict, mid: str, entry: dict, tpath: Path):
             case_cols.append(col)
         if form in ("set", "param"):
             _check_scale(soil_path, cw, cv, name)
+            _check_column_unit(soil_path, cw, col, cv, name)
     quantity_cols = {c: cv["quantity"] for c, cv in covs.items() if "quantity" in cv}
     twice = [q for q in set(quantity_cols.values()) if list(quantity_cols.values()).count(q) > 1]
     if twice:
@@ -651,6 +652,36 @@ def _check_scale(soil_path, cw: str, cv: dict, scenario: str) -> None:
     if not abs(float(scale) - factor) <= SCALE_RTOL * factor:
         raise InputError(soil_path, f"{cw}.scale",
                          f"{factor:.4g} ({unit} to {target}, the unit of {what})", scale)
+
+
+#: column-name endings that name a unit (``speed_kmh``, ``depth_mm``): unit
+COLUMN_UNIT_SUFFIXES = {"kmh": "km/h", "km_h": "km/h", "mm_s": "mm/s", "cm_s": "cm/s", "m_s": "m/s", "mm": "mm",
+                        "cm": "cm", "m": "m"}
+
+
+def _check_column_unit(soil_path, cw: str, col: str, cv: dict, scenario: str) -> None:
+    """A ``set`` covariate that declares no ``unit`` and no ``scale`` takes its cells in the
+    unit of the setup key (:data:`SETUP_KEY_UNITS`); a column whose name ends in another unit
+    of that key (``speed_kmh`` for a speed in m/s, ``depth_mm`` for a depth in m) would be read
+    1000 mm as 1000 m without a word, so it is refused, asking for the unit and its scale."""
+    if "set" not in cv or "unit" in cv or "scale" in cv:
+        return
+    target = SETUP_KEY_UNITS.get(scenario, {}).get(cv["set"])
+    if target is None:
+        return
+    low = col.lower()
+    named = next((u for suf, u in sorted(COLUMN_UNIT_SUFFIXES.items(), key=lambda kv: -len(kv[0]))
+                  if low.endswith("_" + suf)), None)
+    if named is None or named == target:
+        return
+    q = next((q for q, spec in QUANTITIES.items() if spec and target in spec[1] and named in spec[1]), None)
+    if q is None:
+        return
+    family = QUANTITIES[q][1]
+    raise InputError(soil_path, cw, f"the unit of the cells, which the column's name says are in {named} "
+                     f"(quantity: {q}, unit: {named}, scale: {family[named] / family[target]:.4g}, {named} to "
+                     f"{target}, the unit of setup key {cv['set']}; or scale: 1 if they are in {target})",
+                     "no unit and no scale")
 
 
 def _renamed(exc: InputError, soil_path, prefix: str, field_prefix: str) -> InputError:
