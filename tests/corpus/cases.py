@@ -612,7 +612,8 @@ def _(tmp, p):
 
 @meas_case("measured-response-unit-wrong", SOIL, f"{CUT}.responses[0].unit", "N (the unit of horizontal_force_N")
 def _(tmp, p):
-    edit_yaml(p, lambda d: d["measurements"]["cutting_resistance"]["responses"][0].update(unit="kN"))
+    # a length for a force (kN would be converted to N)
+    edit_yaml(p, lambda d: d["measurements"]["cutting_resistance"]["responses"][0].update(unit="mm"))
 
 
 @meas_case("measured-quantity-unit-unknown", "config/soils/black-soil.yaml",
