@@ -60,8 +60,14 @@ def test_every_setup_value_names_the_soil_or_the_named_setup(own):
     # not replaced: the shipped soil's apparatus, said as such
     assert row(own, f"{base}.setup.lift_speed") == ("0.05", "named setup")
     assert row(own, f"{base}.setup.wall_material") == ("steel", "named setup")
-    # left to the preset
+    # left to the preset, with the value the quick run takes: spheres of the soil's 4 mm radius
+    # filling its 80 mm tube, the engine's rolling model, the quick preset's time-step fraction
     assert own.loc[f"{base}.setup.n_particles", "origin"] == "preset"
+    assert int(own.loc[f"{base}.setup.n_particles", "value"]) > 20
+    assert row(own, f"{base}.setup.rolling_model") == ("constant_torque", "preset")
+    assert row(own, f"{base}.setup.dt_fraction") == ("0.3", "preset")
+    # the quick preset caps the shear modulus at 5e5 Pa: cinnamon's printed 3.814e6 Pa is scaled by 5e5 / 3.814e6
+    assert float(own.loc[f"{base}.setup.stiffness_scale", "value"]) == pytest.approx(5e5 / 3.814e6, rel=1e-5)
 
 
 def test_the_cohesion_factor_is_the_sauter_radius_ratio_of_the_soil_s_own_sizes(own):

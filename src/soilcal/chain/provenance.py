@@ -162,6 +162,41 @@ def cohesion_factor(scenario: str, setup: dict, preset: str, params, source: str
         "Sauter radius of the run's particles over that of the setup's paper_psd"
 
 
+def _preset_value(scenario: str, key: str, setup: dict, preset: str, params, soil_path):
+    """What a bench-top run takes for a setup value the named setup leaves to the preset
+    (None), and how (:func:`soilcal.dem.scenarios.base.make_simulation`, the scenario's
+    ``sizing``); (None, "") where this does not say."""
+    from soilcal.dem import cost
+    from soilcal.dem.scenarios import get
+    from soilcal.dem.scenarios.base import DEFAULT_ROLLING, PRESET_DEFAULTS, stiffness_scale_for
+
+    if scenario not in cost.BENCHTOP:
+        return None, ""
+    d = PRESET_DEFAULTS[preset]
+    if key == "rolling_model":
+        return DEFAULT_ROLLING, "the engine's default rolling model"
+    if key == "contact_conventions":
+        return "edem", "EDEM's (JKR pull-off 1.5 pi gamma R*, rolling torque on the particle's own lever)"
+    if key == "dt_fraction":
+        return d["dt_fraction"], "fraction of the Rayleigh time step"
+    if key == "stiffness_scale":
+        g = params.soil_shear_modulus
+        return round(stiffness_scale_for(params, preset), 6), (
+            f"the preset's cap {d['g_max']:g} Pa over the soil's shear modulus {g:g} Pa (at most 1; a stage that "
+            "varies the modulus changes it)" if d["g_max"] is not None else "the soil's own modulus")
+    if key in ("n_particles", "radius") and scenario != "incline":
+        mod = get(scenario, str(soil_path))
+        try:
+            sz = mod.sizing(setup, preset, str(soil_path)) if scenario == "drum" else mod.sizing(setup, preset, params)
+        except Exception:  # noqa: BLE001 - documentation only
+            return None, ""
+        if key == "n_particles":
+            return int(sz["n"]), "spheres of the run"
+        dist = sz["dist"]
+        return [round(float(dist.r_min), 9), round(float(dist.r_max), 9)], "smallest and largest sphere radius, m"
+    return None, ""
+
+
 def _setup_rows(add, where: str, scenario: str, setup_name: str, overrides: dict, preset: str,
                 params, soil_path) -> None:
     """Rows of one simulated setup: every value the run takes, from the soil's ``set`` or the
@@ -182,7 +217,9 @@ def _setup_rows(add, where: str, scenario: str, setup_name: str, overrides: dict
             add(f"{where}.setup.{key}", effective[key], "preset",
                 f"the {preset} preset's value (the named setup {setup_name!r} has {_text(setup[key])})")
         elif setup[key] is None:
-            add(f"{where}.setup.{key}", None, "preset", f"left to the {preset} preset by the named setup {setup_name!r}")
+            value, what = _preset_value(scenario, key, setup, preset, params, soil_path)
+            add(f"{where}.setup.{key}", value, "preset",
+                f"left to the {preset} preset by the named setup {setup_name!r}" + (f": {what}" if what else ""))
         else:
             add(f"{where}.setup.{key}", setup[key], "named setup", f"{setup_name!r} (a shipped soil's apparatus)")
     try:
