@@ -17,6 +17,7 @@ from soilcal.errors import InputError
 ROOT = Path(__file__).resolve().parents[2]
 
 SOIL = {
+    "citation": {"title": "the papers the targets below come from"},
     "targets": {
         # a photo group and a printed value (cinnamon soil, Sec. 2.4: 27.69 deg)
         "stacking_angle": {"value": 27.69, "unit": "deg", "image": "stacking", "source": "Sec. 2.4"},
@@ -103,3 +104,16 @@ def test_write_targets_reads_the_measurements_json(tmp_path):
     df = pd.read_csv(out)
     assert list(df.columns) == COLUMNS
     assert df.set_index("target_id").loc["stacking_angle", "value"] == 28.4
+
+
+def test_a_soil_without_a_citation_has_no_printed_values():
+    # a soil of one's own: its 33.5 deg is its own measurement, and no column calls it printed
+    own = {"targets": {"angle": {"value": 33.5, "unit": "deg"},
+                       "pile": {"value": 30.0, "unit": "deg", "image": "stacking"}}}
+    for source in ("published", "dem"):
+        r = _by_id(targets_frame(own, source, MEAS))
+        assert np.isnan(r["angle"]["printed_value"]) and np.isnan(r["pile"]["printed_value"])
+        assert (r["angle"]["value"], r["angle"]["source"]) == (33.5, "measurement")
+    r = _by_id(targets_frame(own, "dem", MEAS))
+    assert (r["pile"]["value"], r["pile"]["source"]) == (28.4, "image")
+    assert r["pile"]["note"] == "photo group stacking (angle_deg); the soil's own value 30"

@@ -274,6 +274,22 @@ def test_verification_frame_failed_replicates_and_inline_goals(cinnamon):
     assert r.loc["flow", "paper_target"] == 10.0
 
 
+def test_verification_of_an_own_soil_has_no_paper_target(cinnamon):
+    # the same case, the soil citing no paper and printing no verification: its 27.69 deg is its
+    # own measured target, not a paper's
+    soil = {k: v for k, v in cinnamon.items() if k != "citation"}
+    stage = _stage()
+    stage["optimise"]["cases"][0].pop("printed_verification", None)
+    stage["optimise"]["cases"][0]["goals"]["bulk"] = {"goal": "maximize"}
+    runs = {"stacking_angle": _runs([28.2, 28.4]) + _runs([5.0, 7.0], response="bulk")}
+    df = verification_frame(soil, stage, OPTIMUM, {"stacking_angle": {"value": 27.69}}, runs)
+    r = df[df["case"] == "stacking_angle"].set_index("response")
+    assert r.loc["stacking_angle", "target"] == 27.69
+    assert df["paper_target"].isna().all() and df["paper_simulated"].isna().all()
+    assert df["paper_relative_error_percent"].isna().all()
+    assert r.loc["bulk", "note"] == "goal maximize: no target value"
+
+
 def test_verification_cases(cinnamon):
     assert verification_cases(cinnamon, ["bbd"]) == [("bbd", "stacking_angle")]
     assert verification_cases(cinnamon, ["pb", "steepest"]) == []
@@ -335,6 +351,28 @@ def test_calibrated_vs_paper_without_a_calibrated_set(cinnamon):
     f = df[df["role"] == "factor"].set_index("symbol")
     assert f["calibrated"].isna().all()
     assert list(f.loc[["A", "B", "C"], "paper"]) == [0.08, 0.37, 0.64]
+
+
+def test_calibrated_vs_paper_of_an_own_soil_has_no_paper_values():
+    # a soil of one's own (no citation, no printed optimum): its stage's fixed value 0.3 and its
+    # calibrated factors are its own, and no column calls them a paper's
+    soil = {"name": "own", "parameters": {"rr": {"name": "rolling", "unit": "-"},
+                                          "ss": {"name": "steel friction", "unit": "-"}},
+            "stages": [{"id": "bbd", "factors": {"A": {"parameter": "rr", "low": 0.1, "high": 0.3}},
+                        "fixed": {"ss": 0.3},
+                        "optimise": {"cases": [{"id": "angle", "goals": {}}]}}]}
+    stage = {"id": "bbd", "factors": {"A": {"parameter": "rr"}}, "fixed": {"ss": 0.3},
+             "optimise": {"cases": [{"id": "angle", "goals": {}}]}}
+    optimum = pd.DataFrame({"case": ["angle"], "method": ["near_optimal"], "A": [0.2], "calibrated": [True]})
+    df = calibrated_vs_paper(soil, {"bbd": (stage, optimum, None)}).set_index("parameter")
+    assert list(df["calibrated"]) == [0.2, 0.3]
+    assert df["paper"].isna().all() and df["difference"].isna().all()
+    assert list(df["paper_source"]) == ["no published value"] * 2
+    # the same soil citing a paper: the fixed value is the paper's stage's
+    soil["citation"] = {"title": "A paper"}
+    df = calibrated_vs_paper(soil, {"bbd": (stage, optimum, None)}).set_index("parameter")
+    assert (df.loc["ss", "paper"], df.loc["ss", "paper_source"]) == (0.3, "fixed in the paper's stage")
+    assert np.isnan(df.loc["rr", "paper"]) and df.loc["rr", "paper_source"] == "not printed"
 
 
 # --------------------------------------------------------------------------- tool verification

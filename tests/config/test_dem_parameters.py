@@ -80,3 +80,29 @@ def test_a_stage_parameter_maps_to_its_field_as_the_dem_jobs_map_it():
         given(data, "pb", soil_path="soil.yaml")
     assert (e.value.path, e.value.field, e.value.got) == ("soil.yaml", f"stages.pb.factors.{sym}.parameter",
                                                          f["parameter"])
+
+
+def test_a_property_the_runs_take_is_checked_at_start_up(tmp_path):
+    """The printed Poisson ratio, particle density and shear modulus go into every run: a unit
+    without a factor to SI, or a value outside the physical range, stops the load naming the
+    property, not a DEM job later."""
+    p = _cinnamon(tmp_path, lambda d: d["properties"]["poisson_ratio"].update(value=31.1, unit="%"))
+    with pytest.raises(InputError, match=r"properties\.poisson_ratio\.unit: expected one of -, Pa"):
+        load_soil(p, ROOT / "resources")
+    p = _cinnamon(tmp_path, lambda d: d["properties"]["poisson_ratio"].update(value=0.7))
+    with pytest.raises(InputError, match=r"properties\.poisson_ratio\.value: expected .*soil_poisson.*got 0\.7"):
+        load_soil(p, ROOT / "resources")
+
+
+def test_own_particle_sizes_in_millimetres_are_refused(tmp_path):
+    """paper_psd radii are metres: radii of 1 and 0.5 (mm meant) would fill the 60 mm tube
+    with no particle under the paper preset and shrink the quick preset's surface energy by
+    their Sauter radius without a word."""
+    def psd(rows):
+        return lambda d: d["simulation"]["responses"]["stacking_angle"].update(set={"paper_psd": rows})
+
+    p = _cinnamon(tmp_path, psd([[1.0, 40], [0.5, 60]]))
+    with pytest.raises(InputError, match=r"simulation\.responses\.stacking_angle\.set\.paper_psd: expected particle "
+                                         r"radii in metres"):
+        load_soil(p, ROOT / "resources")
+    load_soil(_cinnamon(tmp_path, psd([[0.001, 40], [0.0005, 60]])), ROOT / "resources")

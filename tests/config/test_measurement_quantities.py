@@ -83,6 +83,19 @@ def test_tool_speed_in_km_per_h(cinnamon):
     assert QUANTITIES["tool_speed"][0] == "m/s"
 
 
+def test_moisture_content_as_a_fraction(cinnamon):
+    # a moisture column tabled as mass fractions (unit "-"): 0.172 is 17.2 %
+    t = _table(cinnamon, "cinnamon-soil", "cutting_resistance.csv")
+    df = pd.read_csv(t)
+    df["moisture"] = [0.05, 0.1, 0.172, 0.2]
+    df.to_csv(t, index=False)
+    _declare(cinnamon, "cinnamon-soil",
+             lambda d: _entry(d)["covariates"].update(moisture={"ignore": True, "quantity": "moisture_content",
+                                                                "unit": "-"}))
+    conds = _load(cinnamon, "cinnamon-soil")
+    assert [c.quantities["moisture_content"] for c in conds] == pytest.approx([5.0, 10.0, 17.2, 20.0])
+
+
 def test_label_quantity_keeps_the_cell_text(cinnamon):
     _declare(cinnamon, "cinnamon-soil", lambda d: _entry(d)["covariates"]["plate"].update(quantity="tool"))
     conds = _load(cinnamon, "cinnamon-soil")
@@ -144,3 +157,18 @@ def test_empty_cell_of_a_quantity(cinnamon):
     t = _speed_column(cinnamon, [0.576, None, 7.2, 1.8])
     msg = _fails(cinnamon, "cinnamon-soil", f"{t}: row 2, column speed_kmh")
     assert "empty" in msg
+
+
+def test_a_set_column_named_in_another_unit_needs_its_unit(cinnamon):
+    """A column speed_kmh that sets the plate's speed (m/s) with no unit and no scale would run
+    3.6 km/h as 3.6 m/s: refused, with the declaration it needs; scale 1 says the cells are m/s."""
+    t = _table(cinnamon, "cinnamon-soil", "cutting_resistance.csv")
+    df = pd.read_csv(t)
+    df["speed_kmh"] = [0.576, 0.576, 0.576, 0.576]
+    df.to_csv(t, index=False)
+    p = _declare(cinnamon, "cinnamon-soil", lambda d: _entry(d)["covariates"].update(speed_kmh={"set": "speed"}))
+    msg = _fails(cinnamon, "cinnamon-soil", f"{p}: {CR}.speed_kmh")
+    assert "quantity: tool_speed, unit: km/h, scale: 0.2778" in msg
+    _declare(cinnamon, "cinnamon-soil",
+             lambda d: _entry(d)["covariates"].update(speed_kmh={"set": "speed", "scale": 0.2778}))
+    assert [c.setup["speed"] for c in _load(cinnamon, "cinnamon-soil")] == pytest.approx([0.16] * 4, rel=1e-3)

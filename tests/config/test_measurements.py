@@ -206,9 +206,40 @@ def test_empty_covariate_cell(cinnamon):
 
 
 def test_unit_mismatch(cinnamon):
-    p = _edit(cinnamon, "cinnamon-soil", lambda d: _entry(d)["responses"][1].update(unit="kN"))
+    # a length for a force: no conversion, an error naming the field and the units it takes
+    p = _edit(cinnamon, "cinnamon-soil", lambda d: _entry(d)["responses"][1].update(unit="mm"))
     msg = _fails(cinnamon, "cinnamon-soil", f"{p}: measurements.cutting_resistance.responses[1].unit")
-    assert "expected N (the unit of vertical_force_N" in msg and "'kN'" in msg
+    assert "expected N (the unit of vertical_force_N" in msg and "'mm'" in msg
+    assert "cutting_resistance.csv" in msg and "N, kN, mN" in msg
+
+
+def test_a_table_in_kN_is_read_in_N(cinnamon):
+    """The plates' forces tabled in kN (0.3211 kN = 321.1 N): the conditions hold them in N, the
+    unit the DEM gives horizontal_force_N in, and say so."""
+    t = _table(cinnamon, "cinnamon-soil", "cutting_resistance.csv")
+    df = pd.read_csv(t)
+    df["horizontal_measured_N"] = [0.3211, 0.2521, 0.1545, 0.3048]
+    df.to_csv(t, index=False)
+    p = _edit(cinnamon, "cinnamon-soil", lambda d: _entry(d)["responses"][0].update(unit="kN"))
+    conds = conditions(load_soil(p, cinnamon / "resources"))
+    h = [next(r for r in c.responses if r["measure"] == "horizontal_force_N") for c in conds]
+    assert [r["measured"] for r in h] == pytest.approx([321.1, 252.1, 154.5, 304.8])
+    assert {r["unit"] for r in h} == {"N"}
+    assert "gives kN, converted to N (x 1000)" in h[0]["note"]
+    # the other force stays as tabled
+    v = [next(r for r in c.responses if r["measure"] == "vertical_force_N") for c in conds]
+    assert [r["measured"] for r in v] == pytest.approx([48.80, 13.98, 15.50, 10.40]) and v[0]["note"] == ""
+
+
+def test_a_flatness_in_cm_and_a_strain_in_percent_are_converted():
+    from soilcal.config.measurements import unit_factor
+
+    assert unit_factor("cm", "flatness_mm") == pytest.approx(10.0)
+    assert unit_factor("m", "flatness_mm") == pytest.approx(1000.0)
+    assert unit_factor("%", "recovered_strain") == pytest.approx(0.01)
+    assert unit_factor("MPa", "stress_10_kpa") == pytest.approx(1000.0)
+    assert unit_factor("Nm", "torque_Nm") == 1.0 and unit_factor("m^2", "area_difference_dm2") == pytest.approx(100.0)
+    assert unit_factor("N", "flatness_mm") is None and unit_factor("%", "angle_deg") is None
 
 
 def test_covariate_value_not_in_map(black):

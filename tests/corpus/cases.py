@@ -612,7 +612,18 @@ def _(tmp, p):
 
 @meas_case("measured-response-unit-wrong", SOIL, f"{CUT}.responses[0].unit", "N (the unit of horizontal_force_N")
 def _(tmp, p):
-    edit_yaml(p, lambda d: d["measurements"]["cutting_resistance"]["responses"][0].update(unit="kN"))
+    # a length for a force (kN would be converted to N)
+    edit_yaml(p, lambda d: d["measurements"]["cutting_resistance"]["responses"][0].update(unit="mm"))
+
+
+@meas_case("measured-set-column-named-in-km-h", SOIL, f"{CUT}.covariates.speed_kmh",
+           "the unit of the cells, which the column's name says are in km/h")
+def _(tmp, p):
+    """A speed column in km/h set as the plate's speed (m/s) with no unit and no scale."""
+    lines = _rows(tmp / MEAS)
+    lines = [lines[0] + ",speed_kmh"] + [ln + ",0.576" for ln in lines[1:]]
+    (tmp / MEAS).write_text("\n".join(lines) + "\n")
+    edit_yaml(p, lambda d: d["measurements"]["cutting_resistance"]["covariates"].update(speed_kmh={"set": "speed"}))
 
 
 @meas_case("measured-quantity-unit-unknown", "config/soils/black-soil.yaml",
@@ -965,6 +976,18 @@ def _(tmp, p):
            "a density in [100, 25000] kg/m^3 (a value in g/cm^3 times 1000)", kind="scenario")
 def _(tmp, p):
     edit_yaml(p, lambda d: d["simulation"].update(params={"soil_density": 1.394}))
+
+
+@soil_case("simulation-paper-psd-in-millimetres", SOIL, "simulation.responses.stacking_angle.set.paper_psd",
+           "particle radii in metres", kind="scenario")
+def _(tmp, p):
+    edit_yaml(p, lambda d: d["simulation"]["responses"]["stacking_angle"].update(
+        set={"paper_psd": [[1.5, 8.85], [1.0, 8.2], [0.5, 82.95]]}))
+
+
+@soil_case("property-poisson-ratio-in-percent", SOIL, "properties.poisson_ratio.unit", "one of -, Pa, kPa")
+def _(tmp, p):
+    edit_yaml(p, lambda d: d["properties"]["poisson_ratio"].update(value=31.1, unit="%"))
 
 
 @soil_case("loop-bounds-as-a-list", SOIL, "loop.bounds.rate_friction", "a mapping parameter -> [low, high]")

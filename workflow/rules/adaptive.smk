@@ -88,7 +88,8 @@ rule adaptive_verification:
         verification="results/{soil}/dem/adaptive/verification.csv",
         summary="results/{soil}/dem/adaptive/summary.csv",
     params:
-        soil=lambda w: dem_context(soil_cfg(w.soil)),
+        # citation: whether the soil has a paper whose targets and verification to set beside
+        soil=lambda w: dict(dem_context(soil_cfg(w.soil)), citation=bool(soil_cfg(w.soil).get("citation"))),
         stage_dirs=lambda w: {s: f"results/{w.soil}/dem/adaptive/{s}" for s in adaptive_stages(w.soil)},
     conda:
         "../../envs/soilcal.yaml"

@@ -58,7 +58,7 @@ wildcard_constraints:
 # cluster executor sends the DEM jobs away (profiles/slurm); locally this changes nothing.
 localrules:
     design, errata, image_measure, targets, optimum, figures, verification_figures, tool_figures,
-    summary, regression, published_responses, dem_responses, printed_comparison, refine,
+    summary, regression, published_responses, dem_responses, simulation_setup, printed_comparison, refine,
     verification, tool_verification, calibrated_vs_paper, loop_diagnose, loop_more, loop_select,
     adaptive_step, adaptive_case, adaptive_stage, adaptive_verification, adaptive_figures,
 
@@ -119,7 +119,7 @@ def optimised_stages(soil):
 
 def dem_soil_targets(soil):
     d = f"results/{soil}/dem"
-    out = [f"{d}/targets.csv", f"{d}/verification.csv", f"{d}/calibrated_vs_paper.csv",
+    out = [f"{d}/targets.csv", f"{d}/simulation.csv", f"{d}/verification.csv", f"{d}/calibrated_vs_paper.csv",
            f"{d}/figures/verification"]
     if soil_cfg(soil).get("measurements"):
         out += [f"{d}/tool_verification.csv", f"{d}/figures/tools"]
@@ -556,7 +556,8 @@ def adaptive_dir(soil, stage, case=None):
 
 
 def adaptive_targets(soil):
-    out = [f"results/{soil}/dem/targets.csv", f"results/{soil}/dem/adaptive/verification.csv",
+    out = [f"results/{soil}/dem/targets.csv", f"results/{soil}/dem/simulation.csv",
+           f"results/{soil}/dem/adaptive/verification.csv",
            f"results/{soil}/dem/adaptive/summary.csv", f"results/{soil}/dem/adaptive/figures"]
     for sid in adaptive_stages(soil):
         out += [f"{adaptive_dir(soil, sid)}/{n}" for n in ("stage.json", "optimum.csv", "identifiability.csv")]

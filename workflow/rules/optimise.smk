@@ -13,7 +13,8 @@ rule targets:
     output:
         "results/{soil}/{source}/targets.csv",
     params:
-        soil=lambda w: {"targets": soil_cfg(w.soil)["targets"]},
+        # citation: whether the soil has a paper to have printed values (its text changes nothing here)
+        soil=lambda w: {"targets": soil_cfg(w.soil)["targets"], "citation": bool(soil_cfg(w.soil).get("citation"))},
     conda:
         "../../envs/soilcal.yaml"
     log:

@@ -93,3 +93,23 @@ rule printed_comparison:
         "logs/{soil}/dem/{stage}/printed_comparison.log",
     script:
         "../scripts/printed_comparison.py"
+
+
+rule simulation_setup:
+    # what the soil's DEM runs are set up with and where each value comes from (the soil, a
+    # documented default, the named setup, the preset): results/<soil>/dem/simulation.csv
+    output:
+        report("results/{soil}/dem/simulation.csv", caption="../report/simulation.rst", category="{soil}",
+               subcategory="dem setup"),
+    params:
+        soil=lambda w: soil_cfg(w.soil),
+        path=lambda w: str(SOILS[w.soil].path),
+        resources_root=RES,
+        defaulted=lambda w: list(SOILS[w.soil].defaulted),
+        design=config.get("design"),
+    conda:
+        "../../envs/soilcal.yaml"
+    log:
+        "logs/{soil}/dem/simulation.log",
+    script:
+        "../scripts/simulation_setup.py"

@@ -83,7 +83,8 @@ rule verification:
         report("results/{soil}/dem/verification.csv", caption="../report/verification.rst", category="{soil}",
                subcategory="dem verification"),
     params:
-        soil=lambda w: dem_context(soil_cfg(w.soil)),
+        # citation: whether the soil has a paper whose targets and verification to set beside
+        soil=lambda w: dict(dem_context(soil_cfg(w.soil)), citation=bool(soil_cfg(w.soil).get("citation"))),
         stages=lambda w: optimised_stages(w.soil),
     conda:
         "../../envs/soilcal.yaml"

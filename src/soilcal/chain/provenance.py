@@ -71,6 +71,20 @@ def check_parameters(soil_path, data: dict) -> None:
 
     if not data.get("simulation"):
         return
+    # a printed property the runs take: its unit converts to SI and its value is physical
+    from soilcal.dem.scenarios.base import DemParams, unit_scale
+
+    for prop, name in _PROPERTIES.items():
+        entry = (data.get("properties") or {}).get(prop) or {}
+        if entry.get("value") is None:
+            continue
+        x = float(entry["value"]) * unit_scale(soil_path, entry, f"properties.{prop}")
+        try:
+            DemParams.from_mapping({name: x}, str(soil_path))
+        except InputError as exc:
+            raise InputError(soil_path, f"properties.{prop}.value",
+                             f"{exc.expected} (DEM parameter {name}, from the value in {entry.get('unit', '-')})",
+                             entry["value"]) from None
     need = soil_parameters()
     for sid in simulated_stage_ids(data):
         missing = [n for n in need if n not in given(data, sid, soil_path=soil_path)]
@@ -81,3 +95,302 @@ def check_parameters(soil_path, data: dict) -> None:
                              f"a value of every soil parameter the runs of stage {sid!r} use (SI units, in "
                              f"simulation.params or the stage's fixed values); missing: {', '.join(named)}",
                              "none")
+
+
+# --------------------------------------------------------------------------- simulation.csv
+
+#: columns of ``results/<soil>/dem/simulation.csv`` (:func:`simulation_setup`)
+SETUP_COLUMNS = ["item", "value", "origin", "note"]
+
+#: the simulation block's options with a default, as the chain applies them (the soil schema
+#: documents each): key -> (default, what the default is)
+BLOCK_DEFAULTS = {
+    "preset": ("quick", "scenario preset (default quick)"),
+    "replicates": (1, "seeds per design point (default 1)"),
+    "design": ("recipe", "the design the DEM runs (default recipe: the papers' recipe on the DEM's own results)"),
+    "threads": (1, "Numba threads per DEM job (default 1)"),
+}
+
+
+def _text(v) -> str:
+    """A value as the file writes it: text as it is, numbers and lists as JSON."""
+    import json
+
+    if isinstance(v, str):
+        return v
+    return json.dumps(v, default=str)
+
+
+def _base_params(soil):
+    """DemParams from the soil's printed properties and ``simulation.params`` alone (the base
+    every run starts from before its stage's fixed values and factor levels)."""
+    from soilcal.dem.scenarios.base import DemParams
+
+    values = {}
+    props = soil.data.get("properties") or {}
+    from soilcal.dem.scenarios.base import unit_scale
+
+    for prop, name in _PROPERTIES.items():
+        entry = props.get(prop) or {}
+        if entry.get("value") is not None:
+            values[name] = float(entry["value"]) * unit_scale(soil.path, entry, f"properties.{prop}")
+    values.update({k: float(v) for k, v in ((soil.data.get("simulation") or {}).get("params") or {}).items()})
+    return DemParams.from_mapping(values, str(soil.path))
+
+
+def cohesion_factor(scenario: str, setup: dict, preset: str, params, source: str = "<setup>") -> tuple[float, str]:
+    """The surface-energy factor a run of ``scenario`` with ``setup`` and ``preset`` applies
+    (``cohesion_scale``, :mod:`soilcal.dem.scenarios.base`), and what it is taken against:
+    a bench-top test's particles against the setup's ``paper_psd``, a soil bin against the
+    paper preset's bin of the scenario's named setup."""
+    from soilcal.dem import cost
+    from soilcal.dem.scenarios import get
+    from soilcal.dem.scenarios.base import paper_cohesion
+
+    mod = get(scenario, source)
+    if scenario in cost.SOIL_BIN:
+        return float(cost.soil_bin(scenario, setup, preset, source)[1].cohesion_scale), \
+            "Sauter radius of the run's bin over that of the paper preset's bin of the scenario's named setup"
+    if scenario == "incline":
+        return 1.0, "no particle-size scaling (one block or ball)"
+    sz = mod.sizing(setup, preset, source) if scenario == "drum" else mod.sizing(setup, preset, params)
+    if not setup.get("scale_cohesion", True):
+        return 1.0, "scale_cohesion: false"
+    if not setup.get("paper_psd"):
+        return 1.0, "no paper_psd to scale against"
+    return float(paper_cohesion(setup, sz["dist"], source)), \
+        "Sauter radius of the run's particles over that of the setup's paper_psd"
+
+
+def _preset_value(scenario: str, key: str, setup: dict, preset: str, params, soil_path):
+    """What a bench-top run takes for a setup value the named setup leaves to the preset
+    (None), and how (:func:`soilcal.dem.scenarios.base.make_simulation`, the scenario's
+    ``sizing``); (None, "") where this does not say."""
+    from soilcal.dem import cost
+    from soilcal.dem.scenarios import get
+    from soilcal.dem.scenarios.base import DEFAULT_ROLLING, PRESET_DEFAULTS, stiffness_scale_for
+
+    if scenario not in cost.BENCHTOP:
+        return None, ""
+    d = PRESET_DEFAULTS[preset]
+    if key == "rolling_model":
+        return DEFAULT_ROLLING, "the engine's default rolling model"
+    if key == "contact_conventions":
+        return "edem", "EDEM's (JKR pull-off 1.5 pi gamma R*, rolling torque on the particle's own lever)"
+    if key == "dt_fraction":
+        return d["dt_fraction"], "fraction of the Rayleigh time step"
+    if key == "stiffness_scale":
+        g = params.soil_shear_modulus
+        return round(stiffness_scale_for(params, preset), 6), (
+            f"the preset's cap {d['g_max']:g} Pa over the soil's shear modulus {g:g} Pa (at most 1; a stage that "
+            "varies the modulus changes it)" if d["g_max"] is not None else "the soil's own modulus")
+    if key in ("n_particles", "radius") and scenario != "incline":
+        mod = get(scenario, str(soil_path))
+        try:
+            sz = mod.sizing(setup, preset, str(soil_path)) if scenario == "drum" else mod.sizing(setup, preset, params)
+        except Exception:  # noqa: BLE001 - documentation only
+            return None, ""
+        if key == "n_particles":
+            return int(sz["n"]), "spheres of the run"
+        dist = sz["dist"]
+        return [round(float(dist.r_min), 9), round(float(dist.r_max), 9)], "smallest and largest sphere radius, m"
+    return None, ""
+
+
+def _setup_rows(add, where: str, scenario: str, setup_name: str, overrides: dict, preset: str,
+                params, soil_path) -> None:
+    """Rows of one simulated setup: every value the run takes, from the soil's ``set`` or the
+    named setup; a soil bin's preset values; the cohesion factor."""
+    from soilcal.dem import cost
+    from soilcal.dem.scenarios import get
+    from soilcal.dem.scenarios.base import merge_setup
+
+    mod = get(scenario, str(soil_path))
+    named = mod.setups()[setup_name]
+    setup = merge_setup(mod.setups(), setup_name, overrides, str(soil_path))
+    effective = cost.soil_bin(scenario, setup, preset, str(soil_path))[0] if scenario in cost.SOIL_BIN else setup
+    for key in sorted(k for k in setup if k not in ("name", "overrides")):
+        if key in overrides:
+            add(f"{where}.setup.{key}", overrides[key], "soil", f"{where}.set.{key}, in place of the named "
+                f"setup's {_text(named.get(key))}")
+        elif effective.get(key) != setup[key]:
+            add(f"{where}.setup.{key}", effective[key], "preset",
+                f"the {preset} preset's value (the named setup {setup_name!r} has {_text(setup[key])})")
+        elif setup[key] is None:
+            value, what = _preset_value(scenario, key, setup, preset, params, soil_path)
+            add(f"{where}.setup.{key}", value, "preset",
+                f"left to the {preset} preset by the named setup {setup_name!r}" + (f": {what}" if what else ""))
+        else:
+            add(f"{where}.setup.{key}", setup[key], "named setup", f"{setup_name!r} (a shipped soil's apparatus)")
+    try:
+        factor, how = cohesion_factor(scenario, setup, preset, params, str(soil_path))
+        add(f"{where}.cohesion_scale[{preset}]", round(factor, 6), "computed",
+            f"surface energies times this factor: {how}")
+    except Exception as exc:  # noqa: BLE001 - the file documents the runs, it never stops them
+        add(f"{where}.cohesion_scale[{preset}]", None, "computed", f"not computed here ({exc}); see the run's log")
+
+
+def simulation_setup(soil, design_override: str | None = None) -> "pd.DataFrame":
+    """Everything a soil's DEM runs are set up with, and where each value comes from:
+    ``results/<soil>/dem/simulation.csv`` (:data:`SETUP_COLUMNS`).
+
+    ``origin``: ``soil`` (the soil file gives it; ``note`` names the field), ``default`` (the
+    soil leaves it out and the documented default holds: the schema's for the block's options,
+    :data:`GENERIC` for the DEM parameters), ``named setup`` (a value of the named scenario
+    setup, the apparatus of a shipped soil, that the soil's ``set`` does not replace),
+    ``preset`` (the preset's discretisation), ``workflow config`` (``--config design=...``), ``workflow`` (what the workflow does not run)
+    or ``computed`` (the surface-energy factor of the particle-size rule).  Every other DEM
+    parameter value of a run is in the ``p:<name>`` columns of its ``runs/*.csv``.
+    ``soil``: a loaded :class:`soilcal.config.load.Soil` (its ``defaulted`` fields count as
+    defaults); ``design_override``: the workflow config's ``design``, where given."""
+    import pandas as pd
+
+    from soilcal.chain.adaptive import adaptive_stage_ids
+    from soilcal.chain.derive import SCREENING_DEFAULTS, dem_stage_ids, simulated_stage_ids
+    from soilcal.chain.verify import VERIFY_DEFAULTS
+    from soilcal.config.measurements import DEFAULT_PRESET, DEFAULT_REPLICATES
+    from soilcal.dem.scenarios.base import DemParams
+    from soilcal.doe.adaptive import DEFAULTS as ADAPTIVE_DEFAULTS
+
+    data = soil.data
+    sim = data.get("simulation") or {}
+    rows = []
+
+    def add(item, value, origin, note=""):
+        rows.append({"item": item, "value": "" if value is None else _text(value), "origin": origin, "note": note})
+
+    defaulted = set(getattr(soil, "defaulted", ()) or ())
+    add("seed", data.get("seed", 0), "default" if "seed" in defaulted or "seed" not in data else "soil",
+        "master seed of every random choice (default 0)" if "seed" in defaulted or "seed" not in data else "seed")
+    for key, (default, what) in BLOCK_DEFAULTS.items():
+        if key == "design" and design_override is not None:
+            add(f"simulation.{key}", design_override, "workflow config", f"--config design={design_override}, "
+                "for every soil")
+        elif key in sim:
+            add(f"simulation.{key}", sim[key], "soil", f"simulation.{key} ({what})")
+        else:
+            add(f"simulation.{key}", default, "default", what)
+    design = sim.get("design", "recipe")
+    if "stages" in sim:
+        add("simulation.stages", dem_stage_ids(data), "soil", "simulation.stages")
+    else:
+        add("simulation.stages", dem_stage_ids(data), "default", "every stage")
+    if design == "adaptive":
+        add("simulation.adaptive.stages", adaptive_stage_ids(data), "computed", "the optimised stages the design runs")
+    # the screening and path options act where the recipe lays a steepest-ascent path
+    path_run = design != "adaptive" and any(s["kind"] == "steepest_ascent" for s in data["stages"]
+                                            if s["id"] in dem_stage_ids(data))
+    scr = sim.get("screening") or {} if path_run else {}
+    for key, default in SCREENING_DEFAULTS.items() if path_run else ():
+        add(f"simulation.screening.{key}", scr.get(key, default), "soil" if key in scr else "default",
+            f"simulation.screening.{key}" if key in scr else "screening of the path's factors")
+    if path_run:
+        add("simulation.screening.max_factors", scr.get("max_factors", "the stage's factor count"),
+            "soil" if "max_factors" in scr else "default", "simulation.screening.max_factors"
+            if "max_factors" in scr else "as many as the path stage's factors")
+    path = sim.get("path") or {}
+    for key, default in (("rule", "range"), ("steps", "the path stage's printed levels, else 6"),
+                         ("choose", "fitted")) if path_run else ():
+        add(f"simulation.path.{key}", path.get(key, default), "soil" if key in path else "default",
+            f"simulation.path.{key}" if key in path else "steepest-ascent path")
+    ver = sim.get("verification") or {}
+    for key, default in list(VERIFY_DEFAULTS.items()) + [("refine", True)] if design != "adaptive" else ():
+        add(f"simulation.verification.{key}", ver.get(key, default), "soil" if key in ver else "default",
+            f"simulation.verification.{key}" if key in ver else "verification at the calibrated set")
+    if design == "adaptive":
+        ad = sim.get("adaptive") or {}
+        for key, default in list(ADAPTIVE_DEFAULTS.items()) + [("share_runs", True), ("ranges", "screening")]:
+            if key == "n_start" and key not in ad:
+                default = "2 d + 1 for d free factors"
+            add(f"simulation.adaptive.{key}", ad.get(key, default), "soil" if key in ad else "default",
+                f"simulation.adaptive.{key}" if key in ad else "adaptive design")
+        if "tolerances" in ad:
+            add("simulation.adaptive.tolerances", ad["tolerances"], "soil", "simulation.adaptive.tolerances")
+    res = sim.get("resources") or {}
+    for key in ("mem_mb", "runtime"):
+        add(f"simulation.resources.{key}", res.get(key, "from each job's size (soilcal.dem.cost)"),
+            "soil" if key in res else "default", f"simulation.resources.{key}" if key in res
+            else "declared to the scheduler per DEM job")
+
+    # DEM parameters: the soil's own, and the generic defaults the runs of a stage take
+    props = data.get("properties") or {}
+    from soilcal.dem.scenarios.base import unit_scale
+
+    from soilcal.dem.scenarios.base import dem_field
+
+    stages = simulated_stage_ids(data) if sim else []
+
+    def own_fields(sid):
+        st = next(s for s in data["stages"] if s["id"] == sid)
+        used = [(p, f"stages.{sid}.fixed.{p}") for p in st.get("fixed") or {}]
+        used += [(f.get("parameter"), f"stages.{sid}.factors.{k}") for k, f in (st.get("factors") or {}).items()]
+        return {dem_field(soil.path, data, p, w)[0] for p, w in used}
+
+    stage_set = {sid: own_fields(sid) for sid in stages}
+
+    def over(name):
+        hit = [sid for sid in stages if name in stage_set[sid]]
+        return f"; replaced by the fixed value or factor of stage(s) {', '.join(hit)}" if hit else ""
+
+    for prop, name in _PROPERTIES.items():
+        entry = props.get(prop) or {}
+        if entry.get("value") is not None:
+            later = name in (sim.get("params") or {})
+            add(f"dem.{name}", float(entry["value"]) * unit_scale(soil.path, entry, f"properties.{prop}"), "soil",
+                f"properties.{prop}, in SI" + (f"; replaced by simulation.params.{name}" if later else "")
+                + over(name))
+    for name, v in (sim.get("params") or {}).items():
+        add(f"dem.{name}", v, "soil", f"simulation.params.{name} (SI)" + over(name))
+    defaults = DemParams()
+    for name, meaning in GENERIC.items():
+        left = [sid for sid in stages if name not in given(data, sid, soil_path=soil.path)]
+        if left:
+            add(f"dem.{name}", getattr(defaults, name), "default",
+                f"generic: {meaning}; in the runs of stage(s) {', '.join(left)}")
+    params = _base_params(soil)
+
+    # the scenario setup of every simulated response, at the soil's preset and the paper
+    # preset where the verification also runs it
+    preset = sim.get("preset", "quick")
+    paper = set(ver.get("paper") or [])
+    for rid, entry in (sim.get("responses") or {}).items():
+        where = f"simulation.responses.{rid}"
+        add(f"{where}.scenario", entry["scenario"], "soil", f"{where}.scenario")
+        add(f"{where}.setup", entry["setup"], "soil", f"{where}.setup (named setup)")
+        add(f"{where}.measure", entry["measure"], "soil", f"{where}.measure")
+        for pr in [preset] + (["paper"] if rid in paper and preset != "paper" else []):
+            _setup_rows(add, where if pr == preset else f"{where}[{pr}]", entry["scenario"], entry["setup"],
+                        dict(entry.get("set") or {}), pr, params, soil.path)
+
+    # the measured tool tests (the recipe's and the printed design's; the adaptive design runs none)
+    if design == "adaptive" and data.get("measurements"):
+        add("measurements", "not run", "workflow", "design: adaptive runs no tool tests and no measured-data "
+            "loop (soilcal loop run runs them from a parameter set)")
+    for mid, entry in (data.get("measurements") or {}).items() if design != "adaptive" else ():
+        where = f"measurements.{mid}"
+        add(f"{where}.scenario", entry["scenario"], "soil", f"{where}.scenario")
+        add(f"{where}.setup", entry["setup"], "soil", f"{where}.setup (named setup; a setup covariate may choose "
+            "another per row)")
+        mpreset = entry.get("preset", DEFAULT_PRESET)
+        varied = sorted(c for c, cv in (entry.get("covariates") or {}).items()
+                        if "setup" in cv or "set" in cv)
+        if varied:
+            add(f"{where}.covariates", varied, "soil", "table columns that choose the setup or set a setup "
+                "value per row, over the values below")
+        _setup_rows(add, where, entry["scenario"], entry["setup"], dict(entry.get("set") or {}), mpreset,
+                    params, soil.path)
+        add(f"{where}.replicates", entry.get("replicates", DEFAULT_REPLICATES),
+            "soil" if "replicates" in entry else "default", f"{where}.replicates" if "replicates" in entry
+            else "seeds per measured condition")
+        add(f"{where}.preset", entry.get("preset", DEFAULT_PRESET), "soil" if "preset" in entry else "default",
+            f"{where}.preset" if "preset" in entry else "scenario preset of the tool tests")
+    return pd.DataFrame(rows, columns=SETUP_COLUMNS)
+
+
+def write_simulation_setup(soil, out, design_override: str | None = None) -> "pd.DataFrame":
+    """:func:`simulation_setup` written to ``out`` (``results/<soil>/dem/simulation.csv``)."""
+    from soilcal.chain.files import write_csv
+
+    df = simulation_setup(soil, design_override)
+    write_csv(df, out)
+    return df

@@ -10,6 +10,10 @@ of the soil config with the value the chain calibrates to:
   ``source = image``), otherwise the measured value the config holds (the paper's
   measurement, also under ``resources/measurements/<soil>/``; ``source = measurement``).
 
+A soil without a ``citation`` (a soil of one's own, no paper) has no printed values: its
+targets' values are its own measurements, ``printed_value`` is empty and a photo target's note
+names the value the soil gives beside the photo measurement.
+
 A target whose value is neither measured on a photo nor printed is kept with an empty value
 and says so (``source = not available``); the optimisation cases that aim at it say why they
 have no optimum.  Columns: target_id, value, unit, source, image_group, image_value,
@@ -49,10 +53,11 @@ def targets_frame(soil_data: dict, source: str, measurements: dict | None = None
                   measurements_path: str | Path = "measurements.json") -> pd.DataFrame:
     """The targets table of a soil for ``source`` (module docstring)."""
     rows = []
+    cited = bool(soil_data.get("citation"))
     for tid, t in (soil_data.get("targets") or {}).items():
         printed = t.get("value")
         printed = float(printed) if printed is not None else np.nan
-        row = {"target_id": tid, "unit": t.get("unit", ""), "printed_value": printed,
+        row = {"target_id": tid, "unit": t.get("unit", ""), "printed_value": printed if cited else np.nan,
                "layer": t.get("layer", ""), "moisture_content": t.get("moisture_content", np.nan),
                "image_group": t.get("image", ""), "image_value": np.nan, "image_spread": np.nan,
                "image_n": np.nan}
@@ -67,14 +72,16 @@ def targets_frame(soil_data: dict, source: str, measurements: dict | None = None
             row.update(value=val, source="image", image_value=val,
                        image_spread=float(entry.get("spread_deg", np.nan)),
                        image_n=int(entry.get("n_photos", entry.get("n_frames", 1))),
-                       note=f"photo group {group} ({key}); printed {printed:g}"
+                       note=f"photo group {group} ({key}); " + (f"printed {printed:g}" if cited else
+                                                                  f"the soil's own value {printed:g}")
                        if np.isfinite(printed) else f"photo group {group} ({key})")
         elif np.isfinite(printed):
-            row.update(value=printed, source="printed" if source == "published" else "measurement",
+            row.update(value=printed, source="printed" if source == "published" and cited else "measurement",
                        note=t.get("source", ""))
         else:
             row.update(value=np.nan, source="not available",
-                       note="no photo group and no printed value: " + str(t.get("note", t.get("source", ""))))
+                       note=("no photo group and no printed value: " if cited else "no photo group and no value: ")
+                       + str(t.get("note", t.get("source", ""))))
         rows.append(row)
     return pd.DataFrame(rows, columns=COLUMNS)
 

@@ -239,8 +239,10 @@ def _verification_row(stage, case, rid, goal, targets, soil_data, cal, sel, pres
     target = float(goal["value"]) if "value" in goal else (
         t.get("value") if t.get("value") is not None else np.nan)
     target = float(target) if target is not None else np.nan
+    # the value the paper calibrated to: only a soil that cites a paper has one (a soil of one's
+    # own aims at its own measurements, which are no paper's)
     paper_target = (soil_data.get("targets", {}).get(tid) or {}).get("value") if tid else goal.get("value")
-    paper_target = float(paper_target) if paper_target is not None else np.nan
+    paper_target = float(paper_target) if paper_target is not None and soil_data.get("citation") else np.nan
     ok = sel[sel["status"].astype(str) == "ok"]
     vals = ok["value"].to_numpy(float) if len(ok) else np.array([])
     n = int(np.isfinite(vals).sum())
@@ -267,7 +269,8 @@ def _verification_row(stage, case, rid, goal, targets, soil_data, cal, sel, pres
     note = diagnose(mean, sd, n, target, pred, ci, design_replicates(soil_data), model, bounds) \
         if len(cal) and n else ""
     if len(cal) and n and goal.get("goal") != "target":
-        note = f"goal {goal.get('goal')}: no target value; the paper's verification is beside it"
+        note = f"goal {goal.get('goal')}: no target value" + (
+            "; the paper's verification is beside it" if np.isfinite(paper_sim) else "")
     if n and failed:
         note = "; ".join(x for x in (failed_note + f": the statistics are of the other {n}", note) if x)
     return {
@@ -316,18 +319,27 @@ def _failed_seeds(sel: pd.DataFrame) -> tuple[int, str]:
     return len(bad), f"{who} failed ({'; '.join(reasons) or 'no reason recorded'})"
 
 
+#: ``paper_source`` of a parameter of a soil that cites no paper and prints no optimum
+NO_PUBLISHED_VALUE = "no published value"
+
+
 def calibrated_vs_paper(soil_data: dict, stages: dict[str, tuple[dict, pd.DataFrame, pd.DataFrame]]) -> pd.DataFrame:
     """Every calibrated parameter of every case beside the paper's calibrated value.
 
     ``stages``: stage id -> (DEM stage, optimum frame, identifiability frame).  A factor's
     paper value is the case's ``printed_optimum`` (the paper's symbol of the same parameter);
-    a fixed parameter's is the value the config's stage fixes it at.  ``pinned``: whether the
-    near-optimal sets pin a factor down (True, False, ``at bound`` where a bound of the design
-    region holds it rather than the data), ``fixed`` for a fixed parameter.
+    a fixed parameter's is the value the config's stage fixes it at, where the soil cites a
+    paper (``citation``): a soil of one's own fixes its stages at values of its own, which are
+    no paper's.  A parameter without a published value has an empty ``paper`` and
+    ``paper_source`` "no published value" (a soil without a citation) or "not printed" (one
+    with).  ``pinned``: whether the near-optimal sets pin a factor down (True, False, ``at
+    bound`` where a bound of the design region holds it rather than the data), ``fixed`` for
+    a fixed parameter.
     """
     from soilcal.chain.stage import calibrated_rows
 
     params = soil_data.get("parameters", {})
+    cited = bool(soil_data.get("citation"))
     rows = []
     for sid, (stage, optimum, ident) in stages.items():
         config_stage = next(s for s in soil_data["stages"] if s["id"] == sid)
@@ -348,10 +360,12 @@ def calibrated_vs_paper(soil_data: dict, stages: dict[str, tuple[dict, pd.DataFr
                 ps = paper_sym.get(pname)
                 if ps is not None and ps in printed:
                     paper, psrc = float(printed[ps]), f"printed optimum ({ps})"
-                elif pname in (config_stage.get("fixed") or {}):
+                elif cited and pname in (config_stage.get("fixed") or {}):
                     paper, psrc = float(config_stage["fixed"][pname]), "fixed in the paper's stage"
-                else:
+                elif cited:
                     paper, psrc = np.nan, "not printed"
+                else:
+                    paper, psrc = np.nan, NO_PUBLISHED_VALUE
                 row = {"stage": sid, "case": case["id"],
                        "round": int(cal["round"].iloc[0]) if len(cal) and "round" in cal.columns else 1,
                        "parameter": pname, "symbol": sym, "role": role,

@@ -409,6 +409,7 @@ def _semantic_checks(path: Path, d: dict, resources_root: Path,
             from soilcal.chain.adaptive import check_settings
 
             check_settings(path, d)
+    _check_paper_psd(path, d)
     measured = ()
     if d.get("measurements"):
         from soilcal.config.measurements import check_measurements
@@ -615,6 +616,31 @@ def _check_cells(tpath: Path, df: pd.DataFrame, column: str, required: bool) -> 
             raise InputError(tpath, f"row {i + 1}, column {column}", "a number", v) from None
         if not math.isfinite(x):
             raise InputError(tpath, f"row {i + 1}, column {column}", "a finite number", v)
+
+
+def _check_paper_psd(path: Path, d: dict) -> None:
+    """A soil's own particle sizes (``set: {paper_psd: ...}`` of a simulated response or a
+    measured test) are the paper preset's particles, and the quick preset scales the surface
+    energy by their Sauter radius: so the setup must hold them under the paper preset too, or
+    a slip (millimetres for metres) would scale the cohesion of every quick run without a word.
+    An error names the entry's ``set.paper_psd``."""
+    from soilcal.dem.scenarios import SCENARIOS
+    from soilcal.dem.scenarios.base import merge_setup
+
+    entries = [(f"simulation.responses.{rid}", e, (d.get("simulation") or {}).get("preset", "quick"))
+               for rid, e in ((d.get("simulation") or {}).get("responses") or {}).items()]
+    entries += [(f"measurements.{mid}", e, e.get("preset", "quick")) for mid, e in (d.get("measurements") or {}).items()]
+    for where, entry, preset in entries:
+        given = entry.get("set") or {}
+        if "paper_psd" not in given or preset == "paper" or entry.get("scenario") not in SCENARIOS:
+            continue
+        mod = SCENARIOS[entry["scenario"]]
+        try:
+            mod.validate(merge_setup(mod.setups(), entry["setup"], given, str(path)), "paper", str(path))
+        except InputError as exc:
+            raise InputError(path, f"{where}.set.paper_psd",
+                             "particle radii in metres that the setup holds as the paper preset's particles "
+                             f"({exc.field}: {exc.expected}, got {exc.got})", given["paper_psd"]) from None
 
 
 def load_soil(path: str | Path, resources_root: str | Path = "resources", design: str | None = None,

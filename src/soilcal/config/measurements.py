@@ -52,7 +52,11 @@ whole number >= 1; with ``n`` 1 or a blank ``n`` the SD is the value's own uncer
 the measured-data loop takes as known), ``paper_simulated`` (the paper's own simulation),
 ``paper_difference`` (the printed simulated - measured difference).  The measure's unit
 follows from its name's suffix (:data:`UNIT_SUFFIXES`; a name without one is dimensionless,
-unit ``-``) and ``unit`` must say the same.  Every table column must be a covariate, a
+unit ``-``); ``unit`` is the unit of the table's columns: the measure's own, or another unit of
+its quantity (:data:`RESPONSE_UNITS`: kN for a force in N, cm for a flatness in mm, % for a
+dimensionless strain), whose value, SD, paper's simulated value and difference are converted
+to the measure's unit as the table is read (the row's note says so); a unit of another
+quantity is refused.  Every table column must be a covariate, a
 response column or listed under ``ignore_columns``, so that a column nobody declared (a
 second speed, a depth) cannot be silently left out of the simulation, and in one role only: a
 response's ``sd`` naming its own ``value`` column, or a covariate that is also a response
@@ -97,6 +101,25 @@ UNIT_SUFFIXES = (
     ("_m", "m"),
 )
 DIMENSIONLESS = "-"
+
+#: the units a measured response may be given in, per quantity, with their factor to the
+#: first: a table in another unit of its measure's quantity (kN for ``horizontal_force_N``, cm
+#: for ``flatness_mm``, % for a dimensionless strain) is converted to the measure's unit as it
+#: is read; a unit of another quantity is refused
+RESPONSE_UNITS = (
+    {"N": 1.0, "kN": 1e3, "mN": 1e-3},
+    {"m": 1.0, "cm": 1e-2, "mm": 1e-3},
+    {"m^2": 1.0, "dm^2": 1e-2, "cm^2": 1e-4, "mm^2": 1e-6},
+    {"deg": 1.0, "rad": 180.0 / math.pi},
+    {"Pa": 1.0, "kPa": 1e3, "MPa": 1e6},
+    {"W": 1.0, "kW": 1e3},
+    {"N m": 1.0, "kN m": 1e3},
+    {DIMENSIONLESS: 1.0, "%": 1e-2},
+)
+#: other spellings of those units
+UNIT_ALIASES = {"dm2": "dm^2", "m2": "m^2", "cm2": "cm^2", "mm2": "mm^2", "Nm": "N m", "N*m": "N m",
+                "N.m": "N m", "N·m": "N m", "kNm": "kN m", "kN*m": "kN m", "kN.m": "kN m", "kN·m": "kN m",
+                "°": "deg", "degree": "deg", "degrees": "deg"}
 
 _FORMS = ("setup", "set", "param", "case", "ignore")
 _RESPONSE_COLUMNS = ("value", "sd", "n", "paper_simulated", "paper_difference")
@@ -164,6 +187,23 @@ def unit_of(measure: str) -> str:
         if low.endswith(suffix.lower()):
             return unit
     return DIMENSIONLESS
+
+
+def response_units(measure: str) -> dict:
+    """The units a measured ``measure`` may be given in, with their factor to its own unit
+    (:func:`unit_of`, :data:`RESPONSE_UNITS`)."""
+    want = unit_of(measure)
+    for family in RESPONSE_UNITS:
+        if want in family:
+            return {u: f / family[want] for u, f in family.items()}
+    return {want: 1.0}
+
+
+def unit_factor(unit, measure: str) -> float | None:
+    """Factor from ``unit`` to the unit of ``measure`` (:func:`response_units`; a spelling of
+    :data:`UNIT_ALIASES` as its unit), or None when ``unit`` is not a unit of its quantity."""
+    u = str(unit).strip()
+    return response_units(measure).get(UNIT_ALIASES.get(u, u))
 
 
 def measurements_dir(resources_root, soil_name: str) -> Path:
@@ -363,6 +403,7 @@ def _entry(soil_path, data: dict, mid: str, entry: dict, tpath: Path):
             case_cols.append(col)
         if form in ("set", "param"):
             _check_scale(soil_path, cw, cv, name)
+            _check_column_unit(soil_path, cw, col, cv, name)
     quantity_cols = {c: cv["quantity"] for c, cv in covs.items() if "quantity" in cv}
     twice = [q for q in set(quantity_cols.values()) if list(quantity_cols.values()).count(q) > 1]
     if twice:
@@ -497,10 +538,12 @@ def _entry(soil_path, data: dict, mid: str, entry: dict, tpath: Path):
                 raise InputError(soil_path, f"{where}.responses[{j}].measure",
                                  f"a measured response of {name} with setup {sname!r} ({', '.join(allowed)})",
                                  r["measure"])
-            want = unit_of(r["measure"])
-            if r["unit"] != want:
+            if unit_factor(r["unit"], r["measure"]) is None:
+                want = unit_of(r["measure"])
                 raise InputError(soil_path, f"{where}.responses[{j}].unit",
-                                 f"{want} (the unit of {r['measure']}, from its name)", r["unit"])
+                                 f"{want} (the unit of {r['measure']}, from its name) or another unit of its "
+                                 f"quantity, converted to {want} as {tpath.name} is read: "
+                                 + ", ".join(response_units(r["measure"])), r["unit"])
         try:
             dem = DemParams.from_mapping(params, src)
         except InputError as exc:  # a soil-wide simulation.params value: reported by its own check
@@ -550,10 +593,18 @@ def _entry(soil_path, data: dict, mid: str, entry: dict, tpath: Path):
                                      f"a whole number of repeats >= 1 (behind {r['measure']})", _plain(cell))
                 vals[key] = x
             n = vals["n"]
-            responses.append(dict(measure=r["measure"], unit=r["unit"], measured=vals["value"],
+            # a table in another unit of the measure's quantity: every value in the measure's unit
+            want, factor = unit_of(r["measure"]), unit_factor(r["unit"], r["measure"])
+            for key in ("value", "sd", "paper_simulated", "paper_difference"):
+                if vals[key] is not None:
+                    vals[key] = vals[key] * factor
+            note = r.get("note", "")
+            if str(r["unit"]).strip() != want:
+                note = (note + "; " if note else "") + f"{tpath.name} gives {r['unit']}, converted to {want} (x {factor:g})"
+            responses.append(dict(measure=r["measure"], unit=want, measured=vals["value"],
                                   measured_sd=vals["sd"], n=None if n is None else int(n),
                                   paper_simulated=vals["paper_simulated"],
-                                  paper_difference=vals["paper_difference"], note=r.get("note", "")))
+                                  paper_difference=vals["paper_difference"], note=note))
         quantities = {}
         for col, q in quantity_cols.items():
             cell = rec[col]
@@ -593,7 +644,7 @@ def _check_scale(soil_path, cw: str, cv: dict, scenario: str) -> None:
     else:
         target, what = param_unit(cv["param"]), f"DEM parameter {cv['param']}"
     factors = QUANTITIES[q][1]
-    if target not in factors:
+    if target not in factors or target == DIMENSIONLESS:  # a dimensionless DEM parameter is no moisture
         return
     unit = cv["unit"]
     factor = factors[unit] / factors[target]
@@ -601,6 +652,36 @@ def _check_scale(soil_path, cw: str, cv: dict, scenario: str) -> None:
     if not abs(float(scale) - factor) <= SCALE_RTOL * factor:
         raise InputError(soil_path, f"{cw}.scale",
                          f"{factor:.4g} ({unit} to {target}, the unit of {what})", scale)
+
+
+#: column-name endings that name a unit (``speed_kmh``, ``depth_mm``): unit
+COLUMN_UNIT_SUFFIXES = {"kmh": "km/h", "km_h": "km/h", "mm_s": "mm/s", "cm_s": "cm/s", "m_s": "m/s", "mm": "mm",
+                        "cm": "cm", "m": "m"}
+
+
+def _check_column_unit(soil_path, cw: str, col: str, cv: dict, scenario: str) -> None:
+    """A ``set`` covariate that declares no ``unit`` and no ``scale`` takes its cells in the
+    unit of the setup key (:data:`SETUP_KEY_UNITS`); a column whose name ends in another unit
+    of that key (``speed_kmh`` for a speed in m/s, ``depth_mm`` for a depth in m) would be read
+    1000 mm as 1000 m without a word, so it is refused, asking for the unit and its scale."""
+    if "set" not in cv or "unit" in cv or "scale" in cv:
+        return
+    target = SETUP_KEY_UNITS.get(scenario, {}).get(cv["set"])
+    if target is None:
+        return
+    low = col.lower()
+    named = next((u for suf, u in sorted(COLUMN_UNIT_SUFFIXES.items(), key=lambda kv: -len(kv[0]))
+                  if low.endswith("_" + suf)), None)
+    if named is None or named == target:
+        return
+    q = next((q for q, spec in QUANTITIES.items() if spec and target in spec[1] and named in spec[1]), None)
+    if q is None:
+        return
+    family = QUANTITIES[q][1]
+    raise InputError(soil_path, cw, f"the unit of the cells, which the column's name says are in {named} "
+                     f"(quantity: {q}, unit: {named}, scale: {family[named] / family[target]:.4g}, {named} to "
+                     f"{target}, the unit of setup key {cv['set']}; or scale: 1 if they are in {target})",
+                     "no unit and no scale")
 
 
 def _renamed(exc: InputError, soil_path, prefix: str, field_prefix: str) -> InputError:

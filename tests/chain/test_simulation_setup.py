@@ -1,0 +1,121 @@
+"""results/<soil>/dem/simulation.csv: every value a soil's DEM runs are set up with, and
+where it comes from (the soil, a documented default, the named setup, the preset)
+(soilcal.chain.provenance.simulation_setup)."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import pytest
+import yaml
+
+from soilcal.chain.provenance import SETUP_COLUMNS, simulation_setup
+from soilcal.config import load_soil
+
+ROOT = Path(__file__).resolve().parents[2]
+
+
+@pytest.fixture(scope="module")
+def own(tmp_path_factory):
+    """The cinnamon soil as a user's own: no seed, two replicates, its own tube, particle
+    sizes and sphere radius, a verification seed offset of its own."""
+    d = yaml.safe_load((ROOT / "config/soils/cinnamon-soil.yaml").read_text())
+    d.pop("seed")
+    d["simulation"]["replicates"] = 2
+    d["simulation"]["verification"] = {"seed_offset": 500}
+    d["simulation"]["responses"]["stacking_angle"]["set"] = {
+        "tube_diameter": 0.08, "radius": 0.004, "paper_psd": [[0.001, 40], [0.0005, 60]]}
+    p = tmp_path_factory.mktemp("own") / "cinnamon-soil.yaml"
+    p.write_text(yaml.safe_dump(d, sort_keys=False))
+    soil = load_soil(p, ROOT / "resources")
+    return simulation_setup(soil).set_index("item")
+
+
+def row(df, item):
+    r = df.loc[item]
+    return r["value"], r["origin"]
+
+
+def test_the_block_options_say_whether_the_soil_or_the_default_set_them(own):
+    assert list(own.reset_index().columns) == SETUP_COLUMNS
+    assert row(own, "seed") == ("0", "default")
+    assert row(own, "simulation.replicates") == ("2", "soil")
+    assert row(own, "simulation.preset") == ("quick", "default")
+    assert row(own, "simulation.design") == ("recipe", "default")
+    assert row(own, "simulation.verification.seed_offset") == ("500", "soil")
+    assert row(own, "simulation.verification.replicates") == ("4", "default")
+    assert row(own, "dem.soil_density") == ("1394", "soil")
+    assert row(own, "dem.steel_density") == ("7850.0", "default")
+    assert "carbon steel" in own.loc["dem.steel_density", "note"]
+
+
+def test_every_setup_value_names_the_soil_or_the_named_setup(own):
+    base = "simulation.responses.stacking_angle"
+    assert row(own, f"{base}.setup") == ("cinnamon-soil", "soil")
+    assert row(own, f"{base}.setup.tube_diameter") == ("0.08", "soil")
+    assert "0.06" in own.loc[f"{base}.setup.tube_diameter", "note"]  # the named setup's value it replaces
+    assert json.loads(own.loc[f"{base}.setup.paper_psd", "value"]) == [[0.001, 40], [0.0005, 60]]
+    assert own.loc[f"{base}.setup.paper_psd", "origin"] == "soil"
+    # not replaced: the shipped soil's apparatus, said as such
+    assert row(own, f"{base}.setup.lift_speed") == ("0.05", "named setup")
+    assert row(own, f"{base}.setup.wall_material") == ("steel", "named setup")
+    # left to the preset, with the value the quick run takes: spheres of the soil's 4 mm radius
+    # filling its 80 mm tube, the engine's rolling model, the quick preset's time-step fraction
+    assert own.loc[f"{base}.setup.n_particles", "origin"] == "preset"
+    assert int(own.loc[f"{base}.setup.n_particles", "value"]) > 20
+    assert row(own, f"{base}.setup.rolling_model") == ("constant_torque", "preset")
+    assert row(own, f"{base}.setup.dt_fraction") == ("0.3", "preset")
+    # the quick preset caps the shear modulus at 5e5 Pa: cinnamon's printed 3.814e6 Pa is scaled by 5e5 / 3.814e6
+    assert float(own.loc[f"{base}.setup.stiffness_scale", "value"]) == pytest.approx(5e5 / 3.814e6, rel=1e-5)
+
+
+def test_the_cohesion_factor_is_the_sauter_radius_ratio_of_the_soil_s_own_sizes(own):
+    # spheres of radius 0.004 m +/- 10 %: r32 = 3/4 (b^4 - a^4) / (b^3 - a^3); the soil's
+    # paper_psd (1 mm 40 %, 0.5 mm 60 % by mass): r32 = 1 / (0.4 / 0.001 + 0.6 / 0.0005) = 0.625 mm
+    a, b = 0.0036, 0.0044
+    want = 0.75 * (b**4 - a**4) / (b**3 - a**3) / 0.000625
+    value, origin = row(own, "simulation.responses.stacking_angle.cohesion_scale[quick]")
+    assert origin == "computed" and float(value) == pytest.approx(want, rel=1e-5)
+    assert want == pytest.approx(6.4425, rel=1e-4)
+
+
+def test_the_workflow_design_is_named_as_the_workflow_config_s(tmp_path):
+    soil = load_soil(ROOT / "config/soils/cinnamon-soil.yaml", ROOT / "resources", design="printed")
+    df = simulation_setup(soil, design_override="printed").set_index("item")
+    assert row(df, "simulation.design") == ("printed", "workflow config")
+    assert row(df, "seed") == ("1082", "soil")
+
+
+def test_the_tool_tests_say_their_defaults(own):
+    assert row(own, "measurements.cutting_resistance.replicates") == ("3", "default")
+    assert row(own, "measurements.cutting_resistance.preset") == ("quick", "default")
+    # its setup plate-line (the directrix column chooses the plate per row)
+    assert row(own, "measurements.cutting_resistance.setup.shape") == ("line", "named setup")
+    assert json.loads(own.loc["measurements.cutting_resistance.covariates", "value"]) == ["directrix"]
+    assert own.loc["measurements.cutting_resistance.cohesion_scale[quick]", "origin"] == "computed"
+
+
+def test_a_parameter_a_stage_sets_says_the_stage_replaces_it():
+    # the black soil's simulation.params give the soil-steel friction 0.55; its stage soil-65mn varies it
+    soil = load_soil(ROOT / "config/soils/black-soil.yaml", ROOT / "resources")
+    df = simulation_setup(soil).set_index("item")
+    assert row(df, "dem.soil_steel_static_friction") == ("0.55", "soil")
+    assert df.loc["dem.soil_steel_static_friction", "note"].endswith("replaced by the fixed value or factor of stage(s) "
+                                                                     "soil-65mn")
+    assert "replaced" not in df.loc["dem.soil_density", "note"]
+
+
+def test_an_adaptive_soil_lists_its_design_s_settings_and_no_tool_tests(tmp_path):
+    d = yaml.safe_load((ROOT / "config/soils/cinnamon-soil.yaml").read_text())
+    d["simulation"]["design"] = "adaptive"
+    d["simulation"]["adaptive"] = {"budget": 30}
+    p = tmp_path / "cinnamon-soil.yaml"
+    p.write_text(yaml.safe_dump(d, sort_keys=False))
+    df = simulation_setup(load_soil(p, ROOT / "resources")).set_index("item")
+    assert row(df, "simulation.design") == ("adaptive", "soil")
+    assert row(df, "simulation.adaptive.budget") == ("30", "soil")
+    assert row(df, "simulation.adaptive.verify_seeds") == ("4", "default")
+    assert row(df, "measurements") == ("not run", "workflow")
+    assert not any(i.startswith(("measurements.", "simulation.verification.", "simulation.path."))
+                   for i in df.index)
