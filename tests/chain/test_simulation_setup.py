@@ -94,6 +94,11 @@ def test_the_tool_tests_say_their_defaults(own):
     assert row(own, "measurements.cutting_resistance.setup.shape") == ("line", "named setup")
     assert json.loads(own.loc["measurements.cutting_resistance.covariates", "value"]) == ["directrix"]
     assert own.loc["measurements.cutting_resistance.cohesion_scale[quick]", "origin"] == "computed"
+    # the quick preset's bin, which the named setup does not hold: a periodic slab of 7 mm
+    # spheres and a 0.2 m pass (bulldozing.py, PRESET_SETTINGS)
+    assert row(own, "measurements.cutting_resistance.setup.travel") == ("0.2", "preset")
+    assert row(own, "measurements.cutting_resistance.setup.particle_radius") == ("0.007", "preset")
+    assert row(own, "measurements.cutting_resistance.setup.periodic") == ("true", "preset")
 
 
 def test_a_parameter_a_stage_sets_says_the_stage_replaces_it():

@@ -17,10 +17,10 @@ from soilcal.errors import InputError
 ROOT = Path(__file__).resolve().parents[2]
 
 
-def _cinnamon(tmp_path, edit):
-    d = yaml.safe_load((ROOT / "config/soils/cinnamon-soil.yaml").read_text())
+def _cinnamon(tmp_path, edit, soil="cinnamon-soil"):
+    d = yaml.safe_load((ROOT / f"config/soils/{soil}.yaml").read_text())
     edit(d)
-    p = tmp_path / "cinnamon-soil.yaml"
+    p = tmp_path / f"{soil}.yaml"
     p.write_text(yaml.safe_dump(d, sort_keys=False))
     return p
 
@@ -106,3 +106,27 @@ def test_own_particle_sizes_in_millimetres_are_refused(tmp_path):
                                          r"radii in metres"):
         load_soil(p, ROOT / "resources")
     load_soil(_cinnamon(tmp_path, psd([[0.001, 40], [0.0005, 60]])), ROOT / "resources")
+
+
+@pytest.mark.parametrize("size", [{"radius": 0.004}, {"n_particles": 500}])
+def test_millimetre_sizes_are_refused_beside_a_radius_or_a_sphere_count(tmp_path, size):
+    """A radius or a sphere count of the soil's own takes the place of paper_psd under the
+    paper preset, while the quick runs still scale the surface energy by paper_psd's Sauter
+    radius: the radii are checked all the same."""
+    def psd(rows):
+        return lambda d: d["simulation"]["responses"]["stacking_angle"].update(set={**size, "paper_psd": rows})
+
+    with pytest.raises(InputError, match=r"stacking_angle\.set\.paper_psd: expected particle radii in metres"):
+        load_soil(_cinnamon(tmp_path, psd([[1.0, 40], [0.5, 60]])), ROOT / "resources")
+    load_soil(_cinnamon(tmp_path, psd([[0.001, 40], [0.0005, 60]])), ROOT / "resources")
+
+
+def test_own_sizes_are_checked_with_the_soil_s_own_density(tmp_path):
+    """The black soil's funnel holds a 3.1 kg load at the soil's 1560 kg/m^3 but not at the
+    engine's default density: the named setup's own sizes given as the soil's (0.5 kg of 1
+    and 2 mm particles, 001 Sec. 2.2.1) load, as the same file without them does."""
+    def edit(d):
+        d["simulation"]["responses"]["accumulation_angle"]["set"] = {
+            "load_mass": 3.1, "paper_psd": [[0.001, 50.0], [0.002, 50.0]]}
+
+    load_soil(_cinnamon(tmp_path, edit, soil="black-soil"), ROOT / "resources")

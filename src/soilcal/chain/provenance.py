@@ -121,21 +121,20 @@ def _text(v) -> str:
     return json.dumps(v, default=str)
 
 
-def _base_params(soil):
-    """DemParams from the soil's printed properties and ``simulation.params`` alone (the base
-    every run starts from before its stage's fixed values and factor levels)."""
-    from soilcal.dem.scenarios.base import DemParams
+def base_params(data: dict, path):
+    """DemParams from a soil's printed properties and ``simulation.params`` alone (the base
+    every run starts from before its stage's fixed values and factor levels); ``data`` is the
+    soil file's content, ``path`` its name in errors."""
+    from soilcal.dem.scenarios.base import DemParams, unit_scale
 
     values = {}
-    props = soil.data.get("properties") or {}
-    from soilcal.dem.scenarios.base import unit_scale
-
+    props = data.get("properties") or {}
     for prop, name in _PROPERTIES.items():
         entry = props.get(prop) or {}
         if entry.get("value") is not None:
-            values[name] = float(entry["value"]) * unit_scale(soil.path, entry, f"properties.{prop}")
-    values.update({k: float(v) for k, v in ((soil.data.get("simulation") or {}).get("params") or {}).items()})
-    return DemParams.from_mapping(values, str(soil.path))
+            values[name] = float(entry["value"]) * unit_scale(path, entry, f"properties.{prop}")
+    values.update({k: float(v) for k, v in ((data.get("simulation") or {}).get("params") or {}).items()})
+    return DemParams.from_mapping(values, str(path))
 
 
 def cohesion_factor(scenario: str, setup: dict, preset: str, params, source: str = "<setup>") -> tuple[float, str]:
@@ -209,8 +208,11 @@ def _setup_rows(add, where: str, scenario: str, setup_name: str, overrides: dict
     named = mod.setups()[setup_name]
     setup = merge_setup(mod.setups(), setup_name, overrides, str(soil_path))
     effective = cost.soil_bin(scenario, setup, preset, str(soil_path))[0] if scenario in cost.SOIL_BIN else setup
-    for key in sorted(k for k in setup if k not in ("name", "overrides")):
-        if key in overrides:
+    for key in sorted(k for k in set(setup) | set(effective) if k not in ("name", "overrides", "cohesion_scale")):
+        if key not in setup:
+            add(f"{where}.setup.{key}", effective[key], "preset",
+                f"the {preset} preset's value (not a value of the named setup {setup_name!r})")
+        elif key in overrides:
             add(f"{where}.setup.{key}", overrides[key], "soil", f"{where}.set.{key}, in place of the named "
                 f"setup's {_text(named.get(key))}")
         elif effective.get(key) != setup[key]:
@@ -347,7 +349,7 @@ def simulation_setup(soil, design_override: str | None = None) -> "pd.DataFrame"
         if left:
             add(f"dem.{name}", getattr(defaults, name), "default",
                 f"generic: {meaning}; in the runs of stage(s) {', '.join(left)}")
-    params = _base_params(soil)
+    params = base_params(soil.data, soil.path)
 
     # the scenario setup of every simulated response, at the soil's preset and the paper
     # preset where the verification also runs it

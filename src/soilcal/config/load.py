@@ -623,20 +623,36 @@ def _check_paper_psd(path: Path, d: dict) -> None:
     measured test) are the paper preset's particles, and the quick preset scales the surface
     energy by their Sauter radius: so the setup must hold them under the paper preset too, or
     a slip (millimetres for metres) would scale the cohesion of every quick run without a word.
-    An error names the entry's ``set.paper_psd``."""
+    The setup is validated under the paper preset with the soil's own density and moduli and
+    without its ``radius`` and ``n_particles`` (either would take the place of ``paper_psd``
+    there, while the quick runs still scale by it); the error names the entry's
+    ``set.paper_psd`` only when the same setup holds the named setup's own sizes."""
+    from soilcal.chain.provenance import base_params
     from soilcal.dem.scenarios import SCENARIOS
     from soilcal.dem.scenarios.base import merge_setup
 
     entries = [(f"simulation.responses.{rid}", e, (d.get("simulation") or {}).get("preset", "quick"))
                for rid, e in ((d.get("simulation") or {}).get("responses") or {}).items()]
     entries += [(f"measurements.{mid}", e, e.get("preset", "quick")) for mid, e in (d.get("measurements") or {}).items()]
+    params = None
     for where, entry, preset in entries:
         given = entry.get("set") or {}
         if "paper_psd" not in given or preset == "paper" or entry.get("scenario") not in SCENARIOS:
             continue
         mod = SCENARIOS[entry["scenario"]]
+        params = params or base_params(d, path)
+        sizes = {k: None for k in ("radius", "n_particles") if k in mod.setups()[entry["setup"]]}
         try:
-            mod.validate(merge_setup(mod.setups(), entry["setup"], given, str(path)), "paper", str(path))
+            # the named setup's own sizes first: a setup the paper preset cannot hold at all
+            # is not the particle sizes' fault (the quick runs' own checks report it)
+            own = {k: v for k, v in given.items() if k != "paper_psd"}
+            mod.validate(dict(merge_setup(mod.setups(), entry["setup"], own, str(path)), **sizes), "paper",
+                         str(path), params)
+        except InputError:
+            continue
+        try:
+            mod.validate(dict(merge_setup(mod.setups(), entry["setup"], given, str(path)), **sizes), "paper",
+                         str(path), params)
         except InputError as exc:
             raise InputError(path, f"{where}.set.paper_psd",
                              "particle radii in metres that the setup holds as the paper preset's particles "
