@@ -176,18 +176,78 @@ def test_exposure_a_heap_can_be_read_at_else_refused(tmp_path, gain, clip):
     assert "at least 32 of its 256 grey levels" in e.value.expected
 
 
-def test_sixteen_bit_colour_photo_using_its_low_bits_is_refused(tmp_path):
-    # a 12-bit colour camera's values in a 16-bit TIFF: PIL reads the upper 8 bits of each
-    # channel, 16 levels here, which gave flanks 4 deg off; refused, saying why
+def png16(path, a):
+    """A PNG of 16 bits per channel of the uint16 image ``a`` (rows x columns x 3), as libpng
+    writes one: its rows filtered in turn by each of the five PNG filters (none, sub, up,
+    average, Paeth), which reach back one whole 6-byte pixel (PIL cannot write such a PNG)."""
+    import struct
+    import zlib
+
+    h, w, c = a.shape
+    raw = a.astype(">u2").view(np.uint8).reshape(h, w * c * 2).astype(np.int32)
+    bpp = 2 * c
+    rows, prev = [], np.zeros(raw.shape[1], np.int32)
+    for y, x in enumerate(raw):
+        left = np.concatenate([np.zeros(bpp, np.int32), x[:-bpp]])
+        up_left = np.concatenate([np.zeros(bpp, np.int32), prev[:-bpp]])
+        p = left + prev - up_left
+        paeth = np.where((abs(p - left) <= abs(p - prev)) & (abs(p - left) <= abs(p - up_left)), left,
+                         np.where(abs(p - prev) <= abs(p - up_left), prev, up_left))
+        pred = (0, left, prev, (left + prev) // 2, paeth)[y % 5]
+        rows.append(bytes([y % 5]) + ((x - pred) % 256).astype(np.uint8).tobytes())
+        prev = x
+
+    def chunk(kind, data):
+        return struct.pack(">I", len(data)) + kind + data + struct.pack(">I", zlib.crc32(kind + data))
+
+    path.write_bytes(b"\x89PNG\r\n\x1a\n" + chunk(b"IHDR", struct.pack(">IIBBBBB", w, h, 16, {3: 2, 4: 6}[c], 0, 0, 0))
+                     + chunk(b"IDAT", zlib.compress(b"".join(rows))) + chunk(b"IEND", b""))
+
+
+def _save16(path, a):
     import tifffile
 
+    if path.suffix == ".png":
+        png16(path, a)
+    else:  # as an editor exports one: deflate-compressed, with the horizontal predictor
+        tifffile.imwrite(path, a, photometric="rgb", compression="zlib", predictor=True)
+
+
+@pytest.mark.parametrize("suffix", [".png", ".tif"])
+@pytest.mark.parametrize("bits,gain", [(16, 1.0), (12, 1.0), (16, 1 / 8)])
+def test_sixteen_bit_colour_photo_is_read_at_its_depth(tmp_path, suffix, bits, gain):
+    # 16 bits per channel: full range, a 12-bit camera's values in a 16-bit file, and a dim
+    # photo spanning an eighth of the range; PIL decodes the upper 8 bits only, which left
+    # the 12-bit and the dim photo 7 and 14 levels (refused) and rounded the full-range one
+    # to 8 bits.  Each is read at its 16 bits, scaled by the bit depth its values use, and
+    # measured at the angles drawn, as its 8-bit version is
+    from soilcal.imaging.io import read_photo
+
+    img = heap_photo()
+    a = np.round(img * gain * (2 ** bits - 1)).astype(np.uint16)
+    p = tmp_path / f"rgb{bits}{suffix}"
+    _save16(p, a)
+    top = 2.0 ** int(np.ceil(np.log2(a.max() + 1.0))) - 1.0
+    assert np.abs(read_photo(p) - a / top).max() < 1e-9
+    r = measure.measure_pile(p)
+    _assert_flanks(r, 32.0, 35.0)
+    p8 = tmp_path / "rgb8.png"
+    _u8(img).save(p8)
+    r8 = measure.measure_pile(p8)
+    assert abs(r.left_deg - r8.left_deg) <= 0.1 and abs(r.right_deg - r8.right_deg) <= 0.1
+
+
+def test_sixteen_bit_colour_photo_over_exposed_is_refused(tmp_path):
+    # over-exposed until the wall, the plate and most of the heap are white: its 16 bits give it
+    # no more contrast than the 8-bit photo has, refused as that one is, counting its own levels
     from soilcal.errors import InputError
 
-    p = tmp_path / "rgb12.tif"
-    tifffile.imwrite(p, np.round(heap_photo() * 4095).astype(np.uint16), photometric="rgb")
-    with pytest.raises(InputError, match="16-bit colour photo whose values use only its low bits") as e:
+    p = tmp_path / "over16.png"
+    png16(p, np.round(np.clip(heap_photo() / 0.3, 0.0, 1.0) * 65535).astype(np.uint16))
+    with pytest.raises(InputError) as e:
         measure.measure_pile(p)
     assert e.value.path == str(p) and e.value.field == "image"
+    assert "at least 8192 of its 65536 grey levels" in e.value.expected
 
 
 def test_heap_whose_foot_runs_out_of_the_frame_is_refused(tmp_path):
