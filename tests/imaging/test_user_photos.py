@@ -5,6 +5,8 @@ the heap was drawn with."""
 
 from __future__ import annotations
 
+import re
+
 import numpy as np
 import pytest
 from PIL import Image
@@ -273,3 +275,36 @@ def test_a_hand_held_camera_rolled_beyond_six_degrees(tmp_path, tilt):
     r = measure.measure_pile(p)
     _assert_flanks(r, 32.0, 35.0)
     assert abs(r.roll_deg - tilt) <= 0.2 and r.confidence == "ok"
+
+
+@pytest.mark.parametrize("tilt", [16.0, 20.0, -25.0])
+def test_a_camera_rolled_beyond_the_plate_search_is_refused(tmp_path, tilt):
+    # the plate line drawn tilted by more than the plate search's 15 deg: its candidates were
+    # chords of the plate or lines through the heap, which gave flanks 4 to 10 deg off (at 20
+    # deg as "ok"), or a refusal saying nothing of the roll; refused, naming the tilt
+    from soilcal.errors import InputError
+
+    p = tmp_path / "rolled.jpg"
+    _u8(heap_photo(tilt=tilt)).save(p, quality=90)
+    with pytest.raises(InputError) as e:
+        measure.measure_pile(p)
+    assert (e.value.path, e.value.field) == (str(p), "image")
+    assert e.value.expected.startswith("a plate edge within 15 deg of horizontal")
+    found = re.search(r"tilted (-?[0-9.]+) deg", e.value.got)
+    assert found and abs(float(found[1]) - tilt) <= 0.2, e.value.got
+    assert ("clockwise" if tilt > 0 else "counter-clockwise") + " to level it" in e.value.got
+
+
+def test_a_rendered_photo_rolled_beyond_the_plate_search_is_refused(tmp_path):
+    # a rendered heap on its plate, before a cluttered wall, the camera rolled 16 deg: the old
+    # search measured it on a line at 14.75 deg, both flanks 1 deg off, as "ok"
+    from soilcal.errors import InputError
+    from soilcal.imaging import render
+
+    img, truth = render.render_pile(11, 33.0, 36.0, roll_deg=16.0)
+    p = render.save_photo(tmp_path / "rolled16.jpg", img, truth, quality=85)
+    with pytest.raises(InputError) as e:
+        measure.measure_pile(p)
+    assert e.value.path == str(p) and e.value.field == "image"
+    found = re.search(r"tilted (-?[0-9.]+) deg", e.value.got)
+    assert found and abs(float(found[1]) - truth["roll_deg"]) <= 0.2, e.value.got
