@@ -178,6 +178,29 @@ def test_exposure_a_heap_can_be_read_at_else_refused(tmp_path, gain, clip):
     assert "at least 32 of its 256 grey levels" in e.value.expected
 
 
+@pytest.mark.parametrize("gain,seed", [(1 / 6, 1), (1 / 6, 2), (1 / 12, 2), (1.0, 2)])
+def test_a_heap_exposed_into_few_levels_beside_a_bright_window(tmp_path, gain, seed):
+    # the heap, its plate and wall under-exposed into a sixth or a twelfth of the range while a
+    # window (white) and a dark object in the top corners give the photo as a whole its 256
+    # levels: the photo's own grey-level check let it through and the heap read 1.1 to 1.3 deg
+    # off as "ok" (seed 2); the levels are counted around the heap, and it is refused.  Exposed
+    # for the heap, the same scene is measured at the angles drawn
+    from soilcal.errors import InputError
+
+    img = heap_photo(seed=seed) * gain
+    img[10:60, 20:120] = 1.0
+    img[10:60, 300:380] = 0.0
+    p = tmp_path / "window.jpg"
+    _u8(img).save(p, quality=90)
+    if gain == 1.0:
+        _assert_flanks(measure.measure_pile(p), 32.0, 35.0)
+        return
+    with pytest.raises(InputError) as e:
+        measure.measure_pile(p)
+    assert (e.value.path, e.value.field) == (str(p), "image")
+    assert e.value.expected.startswith("heap, plate and wall around the heap spanning at least 32 of 256 grey levels")
+
+
 def png16(path, a):
     """A PNG of 16 bits per channel of the uint16 image ``a`` (rows x columns x 3), as libpng
     writes one: its rows filtered in turn by each of the five PNG filters (none, sub, up,

@@ -413,8 +413,42 @@ def _measure_pile(path, threshold, keep_stages, channel, tried: Tried, image=Non
         rgb = transform.rescale(rgb, math.sqrt(PILE_WORK_PIXELS / (rgb.shape[0] * rgb.shape[1])), channel_axis=-1,
                                 anti_aliasing=True)
     res = _pile_on_lines(path, rgb, threshold, keep_stages, channel, tried, plate)
+    if image is None:
+        _check_levels_around(path, rgb, res)
     res.work_scale = scale
     return res
+
+
+def _levels_around(rgb, res: PileResult) -> float:
+    """The grey levels (of 256) the region measured spans: the band from the plate line
+    (following its tilt) up to 1.25 times the heap's height above it and a tenth of it (5 px
+    at least) below, across the photo; the largest span, between the 0.5 and 99.5 percentiles,
+    of its luminance and of each colour channel (a heap differing from the wall in hue only
+    spans its levels in a channel)."""
+    slope, intercept, _, _, hmax = res.geometry
+    h, w = rgb.shape[:2]
+    rr, cc = np.mgrid[0:h, 0:w]
+    above = slope * cc + intercept - rr  # height above the plate line
+    region = (above <= 1.25 * hmax) & (above >= -max(0.1 * hmax, 5.0))
+    values = np.concatenate([color.rgb2gray(rgb)[region][:, None], rgb[region]], axis=1)
+    lo, hi = np.percentile(values, [0.5, 99.5], axis=0)
+    return float((hi - lo).max() * 255.0)
+
+
+def _check_levels_around(path, rgb, res: PileResult) -> None:
+    """Refuse a heap measured in a region spanning fewer than
+    :data:`~soilcal.imaging.io.MIN_GREY_LEVELS` grey levels (:func:`_levels_around`): the photo
+    as a whole spans enough of them (a window, a lamp or a dark corner in view) while heap,
+    plate and wall are under- or over-exposed, their edges quantisation steps (flanks 1 deg
+    off or more, as "ok")."""
+    from soilcal.imaging.io import MIN_GREY_LEVELS
+
+    levels = _levels_around(rgb, res)
+    if levels < MIN_GREY_LEVELS:
+        raise InputError(path, "image", f"heap, plate and wall around the heap spanning at least {MIN_GREY_LEVELS} of "
+                         "256 grey levels (an eighth of the range; exposed for the heap)",
+                         f"{levels:.0f} levels around the heap (the photo is exposed for a brighter or darker part "
+                         "of the scene)")
 
 
 def _pile_on_lines(path, rgb, threshold, keep_stages, channel, tried: Tried, plate=None) -> PileResult:
