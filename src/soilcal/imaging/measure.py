@@ -995,13 +995,14 @@ def _across(edges, slope, intercept):
     return float(min(hit[:n].mean(), hit[-n:].mean()))
 
 
-def _plate_beyond_search(edges, edges_wide, lines):
+def _plate_beyond_search(edges, edges_wide, lines, below=None):
     """A straight edge across the photo (:func:`_across`, at least :data:`ACROSS_MIN`) tilted
     beyond the plate search's :data:`PLATE_MAX_ROLL_DEG` (up to :data:`ROLL_CHECK_MAX_DEG`) and
     running across it further than every plate candidate in ``lines`` does: the plate of a photo
     taken with the camera rolled beyond the search, whose candidates are chords of it or lines
     of the heap that gave flanks several degrees off, or none.  ``edges``: the edge map the
-    candidates came from; ``edges_wide``: it widened by a row either side.  Returns (slope,
+    candidates came from; ``edges_wide``: it widened by a row either side; ``below`` = (col,
+    row): only a line passing below that point counts (a drum's plate).  Returns (slope,
     intercept) or None."""
     h, w = edges.shape
     t = np.arange(PLATE_MAX_ROLL_DEG + 0.1, ROLL_CHECK_MAX_DEG + 1e-9, 0.1)
@@ -1014,6 +1015,8 @@ def _plate_beyond_search(edges, edges_wide, lines):
     beyond = []
     for a, d in zip(angs, dists):
         slope, b = _refined_line(er, ec, w, a, d)
+        if below is not None and slope * below[0] + b <= below[1]:
+            continue
         if abs(np.degrees(np.arctan(slope))) > PLATE_MAX_ROLL_DEG:
             beyond.append((_across(edges_wide, slope, b), slope, b))
     if not beyond:
