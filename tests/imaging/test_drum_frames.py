@@ -174,6 +174,24 @@ def test_plate_level_on_shipped_frames_and_the_roll_it_removes():
     assert abs(axes.angle_deg - (plate.angle_deg + truth["roll_deg"])) < 0.15
 
 
+@pytest.mark.parametrize("roll", [18.0, -22.0])
+def test_drum_photo_rolled_beyond_the_plate_search(tmp_path, roll):
+    # a drum on its stand photographed with the camera rolled 18 or 22 deg: the plate search
+    # (15 deg) found no plate and levelled the frame to the image axes, which read the 35 deg
+    # surface 18 to 22 deg off; refused, naming the roll to give, which then measures it
+    import re
+
+    img, truth = render.render_drum(3, 35.0, roll_deg=roll)
+    p = render.save_photo(tmp_path / "rolled.jpg", img, truth, quality=90)
+    with pytest.raises(InputError) as e:
+        drum.measure_drum_frame(p)
+    assert (e.value.path, e.value.field) == (str(p), "image")
+    given = re.search(r"give roll_deg: (-?[0-9.]+) in the manifest", e.value.got)
+    assert given and abs(float(given[1]) - roll) <= 0.2, e.value.got
+    r = drum.measure_drum_frame(p, options={"roll_deg": float(given[1])})
+    assert r.level_reference == "manifest roll" and abs(r.angle_deg - 35.0) <= 0.3
+
+
 def test_level_plate_required_but_absent(tmp_path):
     p, _ = _frame(tmp_path, "np.png", angle_deg=40.0)
     with pytest.raises(InputError, match="level"):

@@ -5,6 +5,8 @@ the heap was drawn with."""
 
 from __future__ import annotations
 
+import re
+
 import numpy as np
 import pytest
 from PIL import Image
@@ -176,18 +178,101 @@ def test_exposure_a_heap_can_be_read_at_else_refused(tmp_path, gain, clip):
     assert "at least 32 of its 256 grey levels" in e.value.expected
 
 
-def test_sixteen_bit_colour_photo_using_its_low_bits_is_refused(tmp_path):
-    # a 12-bit colour camera's values in a 16-bit TIFF: PIL reads the upper 8 bits of each
-    # channel, 16 levels here, which gave flanks 4 deg off; refused, saying why
-    import tifffile
-
+@pytest.mark.parametrize("gain,seed", [(1 / 6, 1), (1 / 6, 2), (1 / 12, 2), (1.0, 2)])
+def test_a_heap_exposed_into_few_levels_beside_a_bright_window(tmp_path, gain, seed):
+    # the heap, its plate and wall under-exposed into a sixth or a twelfth of the range while a
+    # window (white) and a dark object in the top corners give the photo as a whole its 256
+    # levels: the photo's own grey-level check let it through and the heap read 1.1 to 1.3 deg
+    # off as "ok" (seed 2); the levels are counted around the heap, and it is refused.  Exposed
+    # for the heap, the same scene is measured at the angles drawn
     from soilcal.errors import InputError
 
-    p = tmp_path / "rgb12.tif"
-    tifffile.imwrite(p, np.round(heap_photo() * 4095).astype(np.uint16), photometric="rgb")
-    with pytest.raises(InputError, match="16-bit colour photo whose values use only its low bits") as e:
+    img = heap_photo(seed=seed) * gain
+    img[10:60, 20:120] = 1.0
+    img[10:60, 300:380] = 0.0
+    p = tmp_path / "window.jpg"
+    _u8(img).save(p, quality=90)
+    if gain == 1.0:
+        _assert_flanks(measure.measure_pile(p), 32.0, 35.0)
+        return
+    with pytest.raises(InputError) as e:
+        measure.measure_pile(p)
+    assert (e.value.path, e.value.field) == (str(p), "image")
+    assert e.value.expected.startswith("heap, plate and wall around the heap spanning at least 32 of 256 grey levels")
+
+
+def png16(path, a):
+    """A PNG of 16 bits per channel of the uint16 image ``a`` (rows x columns x 3), as libpng
+    writes one: its rows filtered in turn by each of the five PNG filters (none, sub, up,
+    average, Paeth), which reach back one whole 6-byte pixel (PIL cannot write such a PNG)."""
+    import struct
+    import zlib
+
+    h, w, c = a.shape
+    raw = a.astype(">u2").view(np.uint8).reshape(h, w * c * 2).astype(np.int32)
+    bpp = 2 * c
+    rows, prev = [], np.zeros(raw.shape[1], np.int32)
+    for y, x in enumerate(raw):
+        left = np.concatenate([np.zeros(bpp, np.int32), x[:-bpp]])
+        up_left = np.concatenate([np.zeros(bpp, np.int32), prev[:-bpp]])
+        p = left + prev - up_left
+        paeth = np.where((abs(p - left) <= abs(p - prev)) & (abs(p - left) <= abs(p - up_left)), left,
+                         np.where(abs(p - prev) <= abs(p - up_left), prev, up_left))
+        pred = (0, left, prev, (left + prev) // 2, paeth)[y % 5]
+        rows.append(bytes([y % 5]) + ((x - pred) % 256).astype(np.uint8).tobytes())
+        prev = x
+
+    def chunk(kind, data):
+        return struct.pack(">I", len(data)) + kind + data + struct.pack(">I", zlib.crc32(kind + data))
+
+    path.write_bytes(b"\x89PNG\r\n\x1a\n" + chunk(b"IHDR", struct.pack(">IIBBBBB", w, h, 16, {3: 2, 4: 6}[c], 0, 0, 0))
+                     + chunk(b"IDAT", zlib.compress(b"".join(rows))) + chunk(b"IEND", b""))
+
+
+def _save16(path, a):
+    import tifffile
+
+    if path.suffix == ".png":
+        png16(path, a)
+    else:  # as an editor exports one: deflate-compressed, with the horizontal predictor
+        tifffile.imwrite(path, a, photometric="rgb", compression="zlib", predictor=True)
+
+
+@pytest.mark.parametrize("suffix", [".png", ".tif"])
+@pytest.mark.parametrize("bits,gain", [(16, 1.0), (12, 1.0), (16, 1 / 8)])
+def test_sixteen_bit_colour_photo_is_read_at_its_depth(tmp_path, suffix, bits, gain):
+    # 16 bits per channel: full range, a 12-bit camera's values in a 16-bit file, and a dim
+    # photo spanning an eighth of the range; PIL decodes the upper 8 bits only, which left
+    # the 12-bit and the dim photo 7 and 14 levels (refused) and rounded the full-range one
+    # to 8 bits.  Each is read at its 16 bits, scaled by the bit depth its values use, and
+    # measured at the angles drawn, as its 8-bit version is
+    from soilcal.imaging.io import read_photo
+
+    img = heap_photo()
+    a = np.round(img * gain * (2 ** bits - 1)).astype(np.uint16)
+    p = tmp_path / f"rgb{bits}{suffix}"
+    _save16(p, a)
+    top = 2.0 ** int(np.ceil(np.log2(a.max() + 1.0))) - 1.0
+    assert np.abs(read_photo(p) - a / top).max() < 1e-9
+    r = measure.measure_pile(p)
+    _assert_flanks(r, 32.0, 35.0)
+    p8 = tmp_path / "rgb8.png"
+    _u8(img).save(p8)
+    r8 = measure.measure_pile(p8)
+    assert abs(r.left_deg - r8.left_deg) <= 0.1 and abs(r.right_deg - r8.right_deg) <= 0.1
+
+
+def test_sixteen_bit_colour_photo_over_exposed_is_refused(tmp_path):
+    # over-exposed until the wall, the plate and most of the heap are white: its 16 bits give it
+    # no more contrast than the 8-bit photo has, refused as that one is, counting its own levels
+    from soilcal.errors import InputError
+
+    p = tmp_path / "over16.png"
+    png16(p, np.round(np.clip(heap_photo() / 0.3, 0.0, 1.0) * 65535).astype(np.uint16))
+    with pytest.raises(InputError) as e:
         measure.measure_pile(p)
     assert e.value.path == str(p) and e.value.field == "image"
+    assert "at least 8192 of its 65536 grey levels" in e.value.expected
 
 
 def test_heap_whose_foot_runs_out_of_the_frame_is_refused(tmp_path):
@@ -213,3 +298,36 @@ def test_a_hand_held_camera_rolled_beyond_six_degrees(tmp_path, tilt):
     r = measure.measure_pile(p)
     _assert_flanks(r, 32.0, 35.0)
     assert abs(r.roll_deg - tilt) <= 0.2 and r.confidence == "ok"
+
+
+@pytest.mark.parametrize("tilt", [16.0, 20.0, -25.0])
+def test_a_camera_rolled_beyond_the_plate_search_is_refused(tmp_path, tilt):
+    # the plate line drawn tilted by more than the plate search's 15 deg: its candidates were
+    # chords of the plate or lines through the heap, which gave flanks 4 to 10 deg off (at 20
+    # deg as "ok"), or a refusal saying nothing of the roll; refused, naming the tilt
+    from soilcal.errors import InputError
+
+    p = tmp_path / "rolled.jpg"
+    _u8(heap_photo(tilt=tilt)).save(p, quality=90)
+    with pytest.raises(InputError) as e:
+        measure.measure_pile(p)
+    assert (e.value.path, e.value.field) == (str(p), "image")
+    assert e.value.expected.startswith("a plate edge within 15 deg of horizontal")
+    found = re.search(r"tilted (-?[0-9.]+) deg", e.value.got)
+    assert found and abs(float(found[1]) - tilt) <= 0.2, e.value.got
+    assert ("clockwise" if tilt > 0 else "counter-clockwise") + " to level it" in e.value.got
+
+
+def test_a_rendered_photo_rolled_beyond_the_plate_search_is_refused(tmp_path):
+    # a rendered heap on its plate, before a cluttered wall, the camera rolled 16 deg: the old
+    # search measured it on a line at 14.75 deg, both flanks 1 deg off, as "ok"
+    from soilcal.errors import InputError
+    from soilcal.imaging import render
+
+    img, truth = render.render_pile(11, 33.0, 36.0, roll_deg=16.0)
+    p = render.save_photo(tmp_path / "rolled16.jpg", img, truth, quality=85)
+    with pytest.raises(InputError) as e:
+        measure.measure_pile(p)
+    assert e.value.path == str(p) and e.value.field == "image"
+    found = re.search(r"tilted (-?[0-9.]+) deg", e.value.got)
+    assert found and abs(float(found[1]) - truth["roll_deg"]) <= 0.2, e.value.got

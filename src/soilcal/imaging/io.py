@@ -3,11 +3,14 @@
 Every colour mode PIL reads is accepted: RGB, CMYK, palette, with or without alpha (the alpha
 channel is dropped), 1-bit, 8-bit grey, and single-channel 16-bit or 32-bit frames (PIL modes
 ``I;16``, ``I``, ``F``), which are scaled by their bit depth and stretched between their 0.5
-and 99.5 percentiles instead of being clipped to 8 bits.  A photo with an EXIF Orientation
+and 99.5 percentiles instead of being clipped to 8 bits.  A colour photo of 16 bits per channel
+(PNG or TIFF) is read at its 16 bits (PIL keeps only the upper 8 of them: :func:`_deep_rgb`) and
+scaled by the bit depth its values use (65535 for a full-range photo, 4095 for a 12-bit camera's
+values in a 16-bit file), so it reads like its 8-bit version.  A photo with an EXIF Orientation
 tag (a phone held upright or upside down) is turned as a viewer shows it before it is measured.
 :func:`read_photo_reduced` and :func:`read_gray_reduced` decode a large photo reduced by a whole
-factor (a JPEG in its decoder), so it is never held at full size as floats.  A photo of 8 bits per channel must span
-:data:`MIN_GREY_LEVELS` grey levels.  A photo may have at most
+factor (a JPEG in its decoder), so it is never held at full size as floats.  A colour photo
+must span an eighth of its grey levels (:data:`MIN_GREY_LEVELS` of 256 at 8 bits).  A photo may have at most
 :data:`MAX_PIXELS` pixels (a larger one is refused before it is decoded: scale it down).
 """
 
@@ -24,9 +27,10 @@ import numpy as np
 MAX_PIXELS = 64_000_000
 
 #: the fewest grey levels (of 256) a photo's luminance must span between its 0.5 and 99.5
-#: percentiles: one spanning an eighth of the range or less (under- or over-exposed, or a 16-bit
-#: colour photo using its low bits only, of which PIL reads the upper 8) gave heap angles
-#: 3 to 7 deg off as if they were sound
+#: percentiles: one spanning an eighth of the range or less (under- or over-exposed) gave heap
+#: angles 3 to 7 deg off as if they were sound.  A 16-bit colour photo must span as large a
+#: share of the levels its bit depth has (an eighth): its levels are fine, but a plate edge
+#: and flanks of an eighth of the contrast are as faint as in the 8-bit photo
 MIN_GREY_LEVELS = 32
 
 # full scale of PIL's single-channel modes; RGB-like modes go through luminance
@@ -39,6 +43,59 @@ def _stretch(g: np.ndarray) -> np.ndarray:
     return np.clip((g - lo) / (hi - lo), 0.0, 1.0) if hi - lo > 0 else np.zeros_like(g)
 
 
+def _other_bytes(tile):
+    """``tile`` decoding the other byte of each 16-bit sample: its raw mode's byte order
+    swapped (big- for little-endian, native for the other one), so PIL's unpacker, which keeps
+    one byte of each sample, keeps the low byte instead of the high one; None when its raw
+    mode is not a 16-bit RGB(A) one PIL can unpack either way."""
+    import sys
+
+    args = tile.args
+    raw = args if isinstance(args, str) else args[0] if isinstance(args, tuple) and args else None
+    if not isinstance(raw, str) or not raw.startswith(("RGB;16", "RGBA;16", "RGBX;16")) or raw[-1] not in "BLN":
+        return None
+    order = raw[-1] if raw[-1] != "N" else ("L" if sys.byteorder == "little" else "B")
+    swapped = raw[:-1] + ("B" if order == "L" else "L")
+    return tile._replace(args=swapped if isinstance(args, str) else (swapped,) + tuple(args[1:]))
+
+
+def _deep_rgb(p: Path, hi):
+    """The 16-bit RGB values (uint16, rows x columns x 3) of the colour photo ``p`` of 16 bits
+    per channel, of which PIL decoded the upper bytes into ``hi`` (loaded, turned as shown);
+    None when its low bytes cannot be decoded (then it is read at 8 bits).  The photo is decoded
+    a second time with each sample's bytes swapped (:func:`_other_bytes`): PIL's own decoders
+    (PNG filters, TIFF compressions) keep the low bytes then."""
+    from PIL import Image, ImageOps
+
+    with Image.open(p) as im:
+        tiles = [_other_bytes(t) for t in im.tile]
+        if not tiles or any(t is None for t in tiles):
+            return None
+        im.tile = tiles
+        im.load()
+        lo = ImageOps.exif_transpose(im)
+        if lo.size != hi.size or lo.mode != hi.mode:
+            return None
+        out = np.empty((hi.size[1], hi.size[0], 3), np.uint16)
+        for k in range(3):
+            out[..., k] = np.asarray(hi.getchannel(k), np.uint16) << 8 | np.asarray(lo.getchannel(k), np.uint16)
+        return out
+
+
+def _bit_depth_scaled(v: np.ndarray, f: int):
+    """16-bit values ``v`` reduced by ``f`` (box averages, as :meth:`PIL.Image.Image.reduce`)
+    and scaled to [0, 1] by the bit depth they use: the smallest of 8 to 16 bits holding their
+    largest value (a 12-bit camera's values in a 16-bit file by 4095).  Returns (image, levels
+    of that depth)."""
+    from PIL import Image
+
+    if f >= 2:
+        v = np.stack([np.asarray(Image.fromarray(v[..., k].astype(np.int32), "I").reduce(f), float)
+                      for k in range(v.shape[-1])], axis=-1)
+    bits = max(8, int(np.ceil(np.log2(float(v.max()) + 1.0))))
+    return np.asarray(v, float) / (2.0 ** bits - 1.0), 2 ** bits
+
+
 def _reduction(w: int, h: int, min_pixels) -> int:
     """The largest whole factor a ``w`` x ``h`` photo can be reduced by keeping at least
     ``min_pixels`` (1: none, or no ``min_pixels``)."""
@@ -47,8 +104,11 @@ def _reduction(w: int, h: int, min_pixels) -> int:
 
 def _decode(path, formats: str, min_pixels=None):
     """(PIL mode, grey [0, 1] for single-channel modes else None, RGB [0, 1] else None, (width,
-    height) as shown).  With ``min_pixels``, a photo of more pixels is decoded reduced by a whole
-    factor that keeps at least that many: a JPEG in its decoder (DCT scaling, by 2, 4 or 8,
+    height) as shown, grey levels of the photo's depth: 256 for 8 bits per channel).  A colour
+    photo of 16 bits per channel has mode "RGB;16" and is read at its 16 bits where PIL can
+    decode its low bytes (:func:`_deep_rgb`, scaled by :func:`_bit_depth_scaled`).  With
+    ``min_pixels``, a photo of more pixels is decoded reduced by a whole factor that keeps at
+    least that many: a JPEG in its decoder (DCT scaling, by 2, 4 or 8,
     :meth:`PIL.Image.Image.draft`), any photo by box averaging (:meth:`PIL.Image.Image.reduce`)
     before it is turned into floats, so a phone's 12 or 48 megapixels are never held at full
     size as floats."""
@@ -68,7 +128,8 @@ def _decode(path, formats: str, min_pixels=None):
                 if w * h > MAX_PIXELS:
                     raise InputError(p, "file", f"an image of at most {MAX_PIXELS // 1_000_000} megapixels "
                                      "(scale it down)", f"{w} x {h} pixels")
-                # a colour photo of 16 bits per channel: PIL keeps the upper 8 of them
+                # a colour photo of 16 bits per channel: PIL keeps the upper 8 of them (the
+                # lower 8 are decoded apart, _deep_rgb)
                 deep = im.mode not in _FULL_SCALE and im.mode not in ("I", "F") and any(
                     ";16" in str(t.args) for t in im.tile)
                 f = _reduction(w, h, min_pixels)
@@ -80,20 +141,24 @@ def _decode(path, formats: str, min_pixels=None):
                 im = ImageOps.exif_transpose(im)
                 shown = (w, h) if (im.size[0] > im.size[1]) == (w > h) else (h, w)
                 mode = im.mode
+                f = _reduction(*im.size, min_pixels)
+                v = _deep_rgb(p, im) if deep and mode in ("RGB", "RGBA") else None
+                if v is not None:
+                    rgb, depth = _bit_depth_scaled(v, f)
+                    return "RGB;16", None, rgb, shown, depth
                 if mode not in _FULL_SCALE and mode not in ("I", "F"):
                     im = im.convert("RGB")
-                f = _reduction(*im.size, min_pixels)
                 if f >= 2:
                     # 1-bit as 0 or 255 and 16-bit as 32-bit integers, which reduce averages
                     im = (im.convert("L") if mode == "1" else im.convert("I") if mode.startswith("I;16") else im).reduce(f)
                 if mode in ("I", "F"):
                     g = np.asarray(im, dtype=float)
                     top = 65535.0 if mode == "I" and g.min() >= 0 and g.max() <= 65535 else max(float(np.abs(g).max()), 1e-12)
-                    return mode, g / top, None, shown
+                    return mode, g / top, None, shown, 65536
                 if mode in _FULL_SCALE:
                     top = 255.0 if im.mode == "L" else _FULL_SCALE[mode]
-                    return mode, np.asarray(im, dtype=float) / top, None, shown
-                return ("RGB;16" if deep else mode), None, np.asarray(im, dtype=float) / 255.0, shown
+                    return mode, np.asarray(im, dtype=float) / top, None, shown, 256
+                return ("RGB;16" if deep else mode), None, np.asarray(im, dtype=float) / 255.0, shown, 256
     except InputError:
         raise
     except Image.DecompressionBombError as exc:
@@ -111,16 +176,16 @@ def read_photo(path) -> np.ndarray:
 def read_photo_reduced(path, min_pixels=None) -> tuple[np.ndarray, tuple[int, int]]:
     """(:func:`read_photo`'s image, (width, height) of the photo as shown); with ``min_pixels``
     a larger photo comes reduced by the largest whole factor keeping at least that many pixels
-    (decoded reduced where the format allows: :func:`_decode`).  A photo of 8 bits per channel
-    whose luminance spans fewer than :data:`MIN_GREY_LEVELS` levels (between its 0.5 and 99.5
-    percentiles) is refused: its edges are quantisation steps, which the plate and flank
-    searches take for lines."""
+    (decoded reduced where the format allows: :func:`_decode`).  A colour photo whose luminance
+    spans less than an eighth of its grey levels (between its 0.5 and 99.5 percentiles; fewer
+    than :data:`MIN_GREY_LEVELS` of 256 at 8 bits per channel) is refused: its edges are
+    quantisation steps, or too faint, which the plate and flank searches take for lines or miss."""
     from skimage.color import rgb2gray
 
     from soilcal.errors import InputError
 
     p = Path(path)
-    mode, g, rgb, shown = _decode(p, "JPEG/PNG/TIFF", min_pixels)
+    mode, g, rgb, shown, depth = _decode(p, "JPEG/PNG/TIFF", min_pixels)
     if rgb is None:
         if mode in _HIGH_DEPTH:
             g = _stretch(g)
@@ -131,14 +196,14 @@ def read_photo_reduced(path, min_pixels=None) -> tuple[np.ndarray, tuple[int, in
         raise InputError(p, "image", "a photo with contrast (heap against background)", "a blank image")
     if mode not in _HIGH_DEPTH:
         lo, hi = np.percentile(rgb2gray(rgb), [0.5, 99.5])
-        levels = (hi - lo) * 255.0
-        if levels < MIN_GREY_LEVELS:
-            why = ("a 16-bit colour photo whose values use only its low bits (read at 8 bits per channel: "
-                   "save it scaled to its full range)" if mode == "RGB;16" else
+        levels = (hi - lo) * (depth - 1)
+        if levels < MIN_GREY_LEVELS * depth / 256:
+            why = ("a 16-bit colour photo read at 8 bits per channel (save it as 8- or 16-bit RGB)"
+                   if mode == "RGB;16" and depth == 256 else
                    "too little brightness contrast between heap, plate and wall: an under- or over-exposed photo, "
                    "or a heap and a wall alike in brightness")
-            raise InputError(p, "image", f"a photo whose brightness spans at least {MIN_GREY_LEVELS} of its 256 grey "
-                             "levels (heap, plate and wall exposed)", f"{levels:.0f} levels: {why}")
+            raise InputError(p, "image", f"a photo whose brightness spans at least {MIN_GREY_LEVELS * depth // 256} of "
+                             f"its {depth} grey levels (heap, plate and wall exposed)", f"{levels:.0f} levels: {why}")
     return rgb, shown
 
 
@@ -163,7 +228,7 @@ def read_gray_reduced(path, min_pixels=None):
     from soilcal.errors import InputError
 
     p = Path(path)
-    mode, g, rgb, shown = _decode(p, "BMP/PNG/TIFF/JPEG", min_pixels)
+    mode, g, rgb, shown, _ = _decode(p, "BMP/PNG/TIFF/JPEG", min_pixels)
     if g is None:
         g = rgb2gray(rgb)
     if g.ndim != 2 or min(g.shape) < 64:

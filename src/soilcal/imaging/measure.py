@@ -6,7 +6,7 @@ threshold (global Otsu or adaptive ``threshold_local``) -> morphological opening
 flank -> angle = atan(slope).  Here the reference is the plate line itself, found by a Hough
 transform of the Canny edges (lines within :data:`PLATE_MAX_ROLL_DEG` of horizontal) and refined by a RANSAC line fit, so a
 rolled camera does not bias the angle: the image is rotated by the plate's tilt before the
-flanks are read.  Each flank is fitted with RANSAC (``skimage.measure.ransac`` with
+flanks are read.  A camera rolled further is refused (:func:`_plate_beyond_search`).  Each flank is fitted with RANSAC (``skimage.measure.ransac`` with
 ``LineModelND``) between 20 % and 75 % of the heap height (top cap and toe excluded):
 
     alpha = atan(|d_v| / |d_u|)     (d = fitted line direction in the plate frame)
@@ -413,8 +413,42 @@ def _measure_pile(path, threshold, keep_stages, channel, tried: Tried, image=Non
         rgb = transform.rescale(rgb, math.sqrt(PILE_WORK_PIXELS / (rgb.shape[0] * rgb.shape[1])), channel_axis=-1,
                                 anti_aliasing=True)
     res = _pile_on_lines(path, rgb, threshold, keep_stages, channel, tried, plate)
+    if image is None:
+        _check_levels_around(path, rgb, res)
     res.work_scale = scale
     return res
+
+
+def _levels_around(rgb, res: PileResult) -> float:
+    """The grey levels (of 256) the region measured spans: the band from the plate line
+    (following its tilt) up to 1.25 times the heap's height above it and a tenth of it (5 px
+    at least) below, across the photo; the largest span, between the 0.5 and 99.5 percentiles,
+    of its luminance and of each colour channel (a heap differing from the wall in hue only
+    spans its levels in a channel)."""
+    slope, intercept, _, _, hmax = res.geometry
+    h, w = rgb.shape[:2]
+    rr, cc = np.mgrid[0:h, 0:w]
+    above = slope * cc + intercept - rr  # height above the plate line
+    region = (above <= 1.25 * hmax) & (above >= -max(0.1 * hmax, 5.0))
+    values = np.concatenate([color.rgb2gray(rgb)[region][:, None], rgb[region]], axis=1)
+    lo, hi = np.percentile(values, [0.5, 99.5], axis=0)
+    return float((hi - lo).max() * 255.0)
+
+
+def _check_levels_around(path, rgb, res: PileResult) -> None:
+    """Refuse a heap measured in a region spanning fewer than
+    :data:`~soilcal.imaging.io.MIN_GREY_LEVELS` grey levels (:func:`_levels_around`): the photo
+    as a whole spans enough of them (a window, a lamp or a dark corner in view) while heap,
+    plate and wall are under- or over-exposed, their edges quantisation steps (flanks 1 deg
+    off or more, as "ok")."""
+    from soilcal.imaging.io import MIN_GREY_LEVELS
+
+    levels = _levels_around(rgb, res)
+    if levels < MIN_GREY_LEVELS:
+        raise InputError(path, "image", f"heap, plate and wall around the heap spanning at least {MIN_GREY_LEVELS} of "
+                         "256 grey levels (an eighth of the range; exposed for the heap)",
+                         f"{levels:.0f} levels around the heap (the photo is exposed for a brighter or darker part "
+                         "of the scene)")
 
 
 def _pile_on_lines(path, rgb, threshold, keep_stages, channel, tried: Tried, plate=None) -> PileResult:
@@ -430,10 +464,21 @@ def _pile_on_lines(path, rgb, threshold, keep_stages, channel, tried: Tried, pla
         tried.edges = cedges
         # the photo's edges, each widened by a row: a plate line that runs on beside the heap
         # has one within 1 px (_plate_beside_heap, once per photo rather than per cue)
-        plate_edges = ndi.binary_dilation(feature.canny(lum, sigma=1.5) | cedges, np.ones((3, 1), bool))
+        all_edges = feature.canny(lum, sigma=1.5) | cedges
+        plate_edges = ndi.binary_dilation(all_edges, np.ones((3, 1), bool))
         for ln in plate_lines(lum, edges=cedges, paired=True):
             if all(abs((ln[0] - o[0]) * w / 2 + ln[1] - o[1]) > 3 for o in lines):
                 lines.append(ln)
+        tilted = _plate_beyond_search(all_edges, plate_edges, lines[:PLATE_CANDIDATES])
+        if tilted is not None:
+            tried.lines = list(lines[:PLATE_CANDIDATES])
+            tried.add("a straight edge across the photo, beyond the plate search", line=tilted)
+            roll = -float(np.degrees(np.arctan(tilted[0])))
+            raise InputError(path, "image", f"a plate edge within {PLATE_MAX_ROLL_DEG:.0f} deg of horizontal (the camera "
+                             f"held within {PLATE_MAX_ROLL_DEG:.0f} deg of level: the plate search looks no further)",
+                             f"a straight edge across the photo, as a plate's is, tilted {roll:.1f} deg: rotate the photo "
+                             f"{abs(roll):.0f} deg {'clockwise' if roll > 0 else 'counter-clockwise'} to level it, or "
+                             "take it again with the camera level")
     tried.lines = list(lines[:PLATE_CANDIDATES])
     if not lines:
         raise InputError(path, "image", "a straight base plate edge", "none found")
@@ -909,20 +954,77 @@ def plate_lines(gray, below=None, edges=None, paired=False):
     keep = [support[np.argmin(np.abs(dist - d)), np.argmin(np.abs(ang - a))] >= 0.25 * w for a, d in zip(angs, dists)]
     angs, dists = angs[keep][:8], dists[keep][:8]
     at = sorted(((a, d, (d - col0 * np.cos(a)) / np.sin(a)) for a, d in zip(angs, dists)), key=lambda t: t[2])
-    cols = np.arange(w)
     er, ec = np.nonzero(edges)
-    out = []
-    for a, d, row in at:
-        if row <= row0:
+    return [_refined_line(er, ec, w, a, d) for a, d, row in at if row > row0]
+
+
+def _refined_line(er, ec, w, a, d):
+    """The Hough line (angle ``a``, distance ``d``) refined by a RANSAC line fit through the
+    edge pixels (rows ``er``, columns ``ec``) within 3 px of it: (slope, intercept)."""
+    cols = np.arange(w)
+    rows = (d - cols * np.cos(a)) / np.sin(a)
+    near = np.abs(er - rows[ec]) < 3
+    pts = np.column_stack([ec[near], er[near]]).astype(float)
+    model, _ = measure.ransac(pts, measure.LineModelND, min_samples=2, residual_threshold=1.0,
+                              max_trials=200, rng=0)
+    (c0, r0), (dc, dr) = model.origin, model.direction
+    return dr / dc, r0 - dr / dc * c0
+
+
+#: the steepest tilt (deg) at which a straight edge across the photo is looked for beyond the
+#: plate search (:func:`_plate_beyond_search`): a camera rolled further is no hand-held slip
+ROLL_CHECK_MAX_DEG = 45.0
+#: a line runs across the photo when an edge meets it along at least this share of the columns
+#: of each outer quarter of its extent in the frame (:func:`_across`)
+ACROSS_MIN = 0.8
+
+
+def _across(edges, slope, intercept):
+    """The smaller of the shares of the columns of the first and of the last quarter of the
+    line's extent in the frame (at least half the width) where ``edges`` meet it; 0 for a line
+    inside the frame along less than half its width.  A plate's top edge runs across the photo
+    to both sides of the heap; a flank, a line of the heap's grain or a wall's clutter does not."""
+    h, w = edges.shape
+    cols = np.arange(w)
+    rows = np.round(slope * cols + intercept).astype(int)
+    inside = (rows >= 0) & (rows < h)
+    if inside.sum() < 0.5 * w:
+        return 0.0
+    hit = edges[rows[inside], cols[inside]]
+    n = max(hit.size // 4, 1)
+    return float(min(hit[:n].mean(), hit[-n:].mean()))
+
+
+def _plate_beyond_search(edges, edges_wide, lines, below=None):
+    """A straight edge across the photo (:func:`_across`, at least :data:`ACROSS_MIN`) tilted
+    beyond the plate search's :data:`PLATE_MAX_ROLL_DEG` (up to :data:`ROLL_CHECK_MAX_DEG`) and
+    running across it further than every plate candidate in ``lines`` does: the plate of a photo
+    taken with the camera rolled beyond the search, whose candidates are chords of it or lines
+    of the heap that gave flanks several degrees off, or none.  ``edges``: the edge map the
+    candidates came from; ``edges_wide``: it widened by a row either side; ``below`` = (col,
+    row): only a line passing below that point counts (a drum's plate).  Returns (slope,
+    intercept) or None."""
+    h, w = edges.shape
+    t = np.arange(PLATE_MAX_ROLL_DEG + 0.1, ROLL_CHECK_MAX_DEG + 1e-9, 0.1)
+    thetas = np.radians(np.concatenate([90.0 - t[::-1], 90.0 + t]))
+    hs, ang, dist = transform.hough_line(edges, theta=thetas)
+    _, angs, dists = transform.hough_line_peaks(hs, ang, dist, num_peaks=8, min_distance=4, threshold=0.25 * w)
+    if not len(angs):
+        return None
+    er, ec = np.nonzero(edges)
+    beyond = []
+    for a, d in zip(angs, dists):
+        slope, b = _refined_line(er, ec, w, a, d)
+        if below is not None and slope * below[0] + b <= below[1]:
             continue
-        rows = (d - cols * np.cos(a)) / np.sin(a)
-        near = np.abs(er - rows[ec]) < 3
-        pts = np.column_stack([ec[near], er[near]]).astype(float)
-        model, _ = measure.ransac(pts, measure.LineModelND, min_samples=2, residual_threshold=1.0,
-                                  max_trials=200, rng=0)
-        (c0, r0), (dc, dr) = model.origin, model.direction
-        out.append((dr / dc, r0 - dr / dc * c0))
-    return out
+        if abs(np.degrees(np.arctan(slope))) > PLATE_MAX_ROLL_DEG:
+            beyond.append((_across(edges_wide, slope, b), slope, b))
+    if not beyond:
+        return None
+    score, slope, b = max(beyond)
+    if score < ACROSS_MIN or score <= max((_across(edges_wide, *ln) for ln in lines), default=0.0) + 0.03:
+        return None
+    return slope, b
 
 
 def plate_line_any(path, gray, below=None, required=True, edges=None):
