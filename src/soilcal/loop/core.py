@@ -29,7 +29,8 @@ Settings (the soil's optional ``loop`` block, every value written into the outpu
       reference: {tool_speed: 1.0}   # where the calibrated parameters hold (default: the
                                      # mean of the measured conditions)
       design_points: 5       # levels per effect parameter (plus the switched-off value)
-      fold_by: null          # covariate column grouping the held-out folds (default: condition)
+      fold_by: null          # covariate column grouping the held-out folds (default: a test-day,
+                             # session or group column, else each condition: fold_grouping)
       max_effects: 2
       bootstrap: 200         # refits of the chosen effects' 95 % interval over the seeds and
                              # the measured values (0: the fit's own interval, seeds ignored)
@@ -39,6 +40,7 @@ from __future__ import annotations
 
 import json
 import math
+import re
 from dataclasses import dataclass
 
 import numpy as np
@@ -196,16 +198,54 @@ def per_table_quantities(conditions) -> dict:
     return out
 
 
+def per_group_quantities(conditions, settings: Settings) -> tuple[str | None, dict]:
+    """(the column grouping the held-out folds, :func:`fold_grouping`; numeric quantity ->
+    {group: its value}) for each quantity that has one value within every group of that
+    column, where some group holds two measured conditions at least (a grouping coarser than
+    the conditions): a moisture prepared once per test day.  (None, {}) without such a
+    column."""
+    from soilcal.config.quantities import QUANTITIES
+
+    rows = _measured_rows(rs.observations(list(conditions)))
+    col, _ = fold_grouping(settings, quantity_of(conditions), rows)
+    key = f"cov:{col}" if col else None
+    if key is None or key not in rows:
+        return None, {}
+    g = rows[rows[key].notna()]
+    if not len(g) or not (g.groupby(g[key].astype(str))["simulation"].nunique() >= 2).any():
+        return None, {}
+    out = {}
+    for c in g.columns:
+        q = c[2:]
+        if not c.startswith("q:") or QUANTITIES.get(q) is None:
+            continue
+        per = {}
+        for lv, gg in g.groupby(g[key].astype(str), sort=True):
+            x = pd.to_numeric(gg[c], errors="coerce").dropna().to_numpy(float)
+            if len(x) and not np.all(x == x[0]):
+                per = None
+                break
+            if len(x):
+                per[lv] = float(x[0])
+        if per and len(set(per.values())) > 1:
+            out[q] = per
+    return col, out
+
+
 def skipped(conditions, settings: Settings) -> dict:
     """Effect -> why it is not tried: every quantity it acts through that the measured rows
     carry has one value on all of them (a table at one speed), so the effect could only shift
     every row alike, which says nothing of that quantity (the bias is tested on its own); or
     one value in each table (a table at 1 m/s, another at 2 m/s), so its structure is a
     difference between the tables, which a table's own offset (another instrument, setup or
-    measured quantity) makes as well; with ``loop.candidates: all`` too."""
+    measured quantity) makes as well; or one value in each group of the column that groups the
+    held-out folds (a moisture prepared once per test day, :func:`per_group_quantities`), so
+    its structure is a difference between the groups, which a day's own level makes as well;
+    with ``loop.candidates: all`` too."""
     from soilcal.config.quantities import QUANTITIES
 
     per = per_table_quantities(conditions)
+    col, per_group = per_group_quantities(conditions, settings)
     carried = {q for c in conditions for q in (c.quantities or {})}
     out = {}
     for name in settings.effects:
@@ -214,6 +254,13 @@ def skipped(conditions, settings: Settings) -> dict:
         if not needs or not any(eff.applies_to(c.quantities or {}, c.scenario) for c in conditions):
             continue
         if not all(q in per for q in needs):
+            if col and all(q in per_group for q in needs):
+                out[name] = ("not tried: " + "; ".join(
+                    f"{q} has one value on each `{col}` group (" + ", ".join(
+                        f"{g}: {v:.4g} {QUANTITIES[q][0]}" for g, v in list(per_group[q].items())[:6])
+                    + (", ..." if len(per_group[q]) > 6 else "") + ")" for q in needs)
+                    + f", the held-out groups, so the effect cannot be told from an offset that varies between "
+                    f"the `{col}` groups (measure two levels of it within a group to tell them apart)")
             continue
         if all(len(set(per[q].values())) == 1 for q in needs):
             out[name] = ("not tried: " + ", ".join(f"{q} is {next(iter(per[q].values())):.4g} {QUANTITIES[q][0]}"
@@ -262,7 +309,7 @@ SELECTION_COLUMNS = ["step", "effects", "parameters", "ci95", "heldout_rmse_perc
                      "heldout_max_percent", "aicc", "reference_aicc", "p_paired", "accepted", "reason"]
 SUMMARY_COLUMNS = ["soil", "rows", "usable_rows", "verdict", "effects", "parameters", "ci95", "ci95_method", "follows",
                    "rmse_before_percent", "rmse_after_percent", "max_before_percent", "max_after_percent",
-                   "error_reduction_percent", "alpha", "reference"]
+                   "error_reduction_percent", "alpha", "reference", "folds"]
 
 
 def _fmt(d: dict) -> str:
@@ -289,6 +336,8 @@ class Outcome:
     detectable: pd.DataFrame = None  # soilcal.loop.diagnose.detectable of the calibrated model's residual
     filled: dict = None  # effect -> rows whose run failed at a design point (filled from the row's other points)
     skipped: dict = None  # effect -> why it was not tried (:func:`skipped`)
+    fold_by: str | None = None  # the covariate column grouping the held-out folds (:func:`fold_grouping`)
+    folds: str = ""  # which grouping the held-out folds used, and why (:func:`fold_grouping`)
 
 
 def _follows(rank: pd.DataFrame, res: pd.DataFrame | None = None, quantity_of: dict | None = None,
@@ -363,23 +412,65 @@ def _interval(u: pd.DataFrame, effects: list, final, settings: Settings) -> tupl
     return ci, "the wider of the fit's (Jacobian) interval and " + how
 
 
-def default_fold_by(settings: Settings, quantity_cols: dict, diag: pd.DataFrame | None = None) -> str | None:
-    """The held-out groups: ``loop.fold_by``, else the column holding the test ``day`` (or a
-    ``group``) where the residual differs between its groups (raw p < alpha): rows measured
-    on one day then share that day's level and are not independent, so a day is held out
-    whole; else each measured condition (more folds, a stronger paired test)."""
+#: covariate column names that identify a test day, session or group of replicates (compared in
+#: lower case, with spaces, hyphens and dots read as underscores): the held-out folds keep
+#: the rows of one such group together, declared or not (:func:`fold_grouping`)
+GROUPING_NAMES = ("day", "date", "test_day", "test_date", "day_id", "day_no", "session", "test_session",
+                  "session_id", "session_no", "batch", "batch_id", "block", "group", "test_group",
+                  "replicate_group", "rep_group", "series")
+#: declared quantities whose column groups the held-out folds
+GROUPING_QUANTITIES = ("day", "group")
+
+
+def _grouping_name(col: str) -> bool:
+    return re.sub(r"[\s.\-]+", "_", str(col).strip().lower()) in GROUPING_NAMES
+
+
+def fold_grouping(settings: Settings, quantity_cols: dict, res: pd.DataFrame | None) -> tuple[str | None, str]:
+    """(covariate column grouping the held-out folds or None for each measured condition, the
+    sentence saying which and why, for the report).  The rule, in order:
+
+    1. ``loop.fold_by``, where set;
+    2. else a column that identifies test days, sessions or groups of replicates: one declared
+       with ``quantity: day`` or ``quantity: group``, or one whose name is in
+       :data:`GROUPING_NAMES` (``day``, ``date``, ``session``, ``batch``, ``block``, ...) and that
+       declares no other quantity; with two values at least on the usable rows (one test day
+       leaves nothing to leak between folds).  Rows measured on one day share that day's
+       level (the bed's preparation, the weather, the instrument's zero): held out one
+       condition at a time, an offset that varies between days leaks from the fitted rows of
+       the day into the held-out one, and an effect that follows the days' levels through a
+       covariate (moisture measured per day) passes a paired test it should fail.  Of several
+       such columns the one with the fewest groups (the coarsest) is taken;
+    3. else each measured condition (rows of one simulated test held out together)."""
+    u = None
+    if res is not None and len(res):
+        u = rs.usable(res) if "relative_residual" in res else res
     if settings.fold_by:
-        return settings.fold_by
-    for q in ("day", "group"):
-        for col, qq in (quantity_cols or {}).items():
-            if qq != q:
-                continue
-            if diag is None:
-                return col
-            t = diag[(diag["covariate"] == col) & (diag["test"] == "group")]
-            if len(t) and float(t["p"].min()) < settings.alpha:
-                return col
-    return None
+        n = int(u[f"cov:{settings.fold_by}"].dropna().astype(str).nunique()) if (
+            u is not None and f"cov:{settings.fold_by}" in u) else 0
+        return settings.fold_by, (f"one fold per value of `{settings.fold_by}` ({n} groups), as loop.fold_by sets")
+    cols = [c[4:] for c in (u.columns if u is not None else []) if c.startswith("cov:")]
+    found = []
+    for j, col in enumerate(cols):
+        q = (quantity_cols or {}).get(col)
+        if q in GROUPING_QUANTITIES:
+            why = f"declared quantity: {q}"
+        elif q is None and _grouping_name(col):
+            why = "named as a test-day, session or replicate-group column"
+        else:
+            continue
+        n = int(u[f"cov:{col}"].dropna().astype(str).nunique())
+        found.append((n, j, col, why))
+    many = [f for f in found if f[0] >= 2]
+    if many:
+        n, _, col, why = min(many)
+        return col, (f"one fold per value of `{col}` ({n} groups; {why}): rows of one group share its level, and "
+                     "are held out together (loop.fold_by sets another column)")
+    one = ", ".join(f"`{col}`" for _, _, col, _ in found)
+    return None, ("one fold per measured condition" + (f" ({one} has one value on every usable row: nothing to "
+                                                        "leak between groups)" if one else
+                                                        " (no test-day, session or group column; loop.fold_by "
+                                                        "names one)"))
 
 
 #: a measured quantity whose median ratio to the simulated mean lies within this many decades of a
@@ -433,7 +524,7 @@ def analyse(soil: str, res: pd.DataFrame, diag: pd.DataFrame, cands: list, effec
     provisional = []
     sel = None
     data = {}
-    fold_by = default_fold_by(settings, quantity_cols, diag)
+    fold_by, fold_text = fold_grouping(settings, quantity_cols, res)
     unfit = {}
     if n >= 3 and cands:
         for nm in cands:  # an effect whose runs failed at too many design points cannot be fitted
@@ -575,10 +666,11 @@ def analyse(soil: str, res: pd.DataFrame, diag: pd.DataFrame, cands: list, effec
         "parameters": _fmt(theta), "ci95": _fmt_ci(ci), "ci95_method": ci_method, "follows": follows, "rmse_before_percent": rb,
         "rmse_after_percent": ra, "max_before_percent": mb, "max_after_percent": ma,
         "error_reduction_percent": (1 - ra / rb) * 100 if rb and np.isfinite(rb) and rb > 0 else math.nan,
-        "alpha": settings.alpha, "reference": _fmt(reference)}], columns=SUMMARY_COLUMNS)
+        "alpha": settings.alpha, "reference": _fmt(reference), "folds": fold_text}], columns=SUMMARY_COLUMNS)
     return Outcome(res, diag, rank, cands, pd.DataFrame(sel_rows, columns=SELECTION_COLUMNS), summary, pred,
                    verdict, chosen, theta, after, dg.detectable(res, diag, quantity_cols, settings.alpha),
-                   {nm: list(d.missing) for nm, d in data.items() if d.missing}, dict(skipped_effects or {}))
+                   {nm: list(d.missing) for nm, d in data.items() if d.missing}, dict(skipped_effects or {}),
+                   fold_by, fold_text)
 
 
 # --------------------------------------------------------------------------- in process
