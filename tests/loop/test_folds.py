@@ -90,3 +90,23 @@ def test_a_single_test_day_or_no_day_column_folds_by_condition_and_says_why():
     res = _frame({"block": [1.0, 2.0, 3.0, 1.0, 2.0, 3.0]})
     col, text = core.fold_grouping(core.Settings(), {"block": "position"}, res)
     assert col is None and "no test-day, session or group column" in text
+
+
+def test_numbered_test_days_are_tested_as_groups_not_as_a_trend():
+    # six test days numbered 1-6, three tests a day, each day's level off by its own amount
+    # (+8, -6, +3, -9, +5, -1 %): a group structure; read as a number, the day got a trend and
+    # a curvature test (a drift over the days) and no group test, which is a different question
+    from soilcal.loop.diagnose import diagnose
+
+    level = {1: 0.08, 2: -0.06, 3: 0.03, 4: -0.09, 5: 0.05, 6: -0.01}
+    days = [d for d in level for _ in range(3)]
+    noise = np.tile([0.004, -0.003, -0.001], 6)
+    res = pd.DataFrame({"measurement": "bin", "row": np.arange(1, 19), "measure": "f",
+                        "relative_residual": [level[d] for d in days] + noise, "cov:day": days})
+    diag = diagnose(res, {})
+    tests = diag[diag["covariate"] == "day"]
+    assert list(tests["test"]) == ["group"], tests
+    assert tests["significant"].iloc[0] and tests["r2"].iloc[0] > 0.99
+    # declared as a number of its own (a position along the bin), a column named day keeps its trend
+    diag = diagnose(res, {"day": "position"})
+    assert "trend" in set(diag[diag["covariate"] == "day"]["test"])

@@ -40,7 +40,6 @@ from __future__ import annotations
 
 import json
 import math
-import re
 from dataclasses import dataclass
 
 import numpy as np
@@ -412,18 +411,12 @@ def _interval(u: pd.DataFrame, effects: list, final, settings: Settings) -> tupl
     return ci, "the wider of the fit's (Jacobian) interval and " + how
 
 
-#: covariate column names that identify a test day, session or group of replicates (compared in
-#: lower case, with spaces, hyphens and dots read as underscores): the held-out folds keep
-#: the rows of one such group together, declared or not (:func:`fold_grouping`)
-GROUPING_NAMES = ("day", "date", "test_day", "test_date", "day_id", "day_no", "session", "test_session",
-                  "session_id", "session_no", "batch", "batch_id", "block", "group", "test_group",
-                  "replicate_group", "rep_group", "series")
+#: covariate column names that identify a test day, session or group of replicates: the held-out
+#: folds keep the rows of one such group together, declared or not (:func:`fold_grouping`)
+GROUPING_NAMES = dg.GROUPING_NAMES
 #: declared quantities whose column groups the held-out folds
 GROUPING_QUANTITIES = ("day", "group")
-
-
-def _grouping_name(col: str) -> bool:
-    return re.sub(r"[\s.\-]+", "_", str(col).strip().lower()) in GROUPING_NAMES
+_grouping_name = dg.grouping_name
 
 
 def fold_grouping(settings: Settings, quantity_cols: dict, res: pd.DataFrame | None) -> tuple[str | None, str]:

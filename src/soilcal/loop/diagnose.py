@@ -72,9 +72,29 @@ def _ols(y, X):
     return OLS(np.asarray(y, float), np.asarray(X, float)).fit()
 
 
+#: covariate column names that identify a test day, session or group of replicates (compared in
+#: lower case, with spaces, hyphens and dots read as underscores): tested as labels where they
+#: declare no quantity, even with numbered cells, and grouping the held-out folds
+#: (:func:`soilcal.loop.core.fold_grouping`)
+GROUPING_NAMES = ("day", "date", "test_day", "test_date", "day_id", "day_no", "session", "test_session",
+                  "session_id", "session_no", "batch", "batch_id", "block", "group", "test_group",
+                  "replicate_group", "rep_group", "series")
+
+
+def grouping_name(col: str) -> bool:
+    """Whether a column's name is one of :data:`GROUPING_NAMES`."""
+    import re
+
+    return re.sub(r"[\s.\-]+", "_", str(col).strip().lower()) in GROUPING_NAMES
+
+
 def _numeric(col: pd.Series, name: str, q: str) -> bool:
-    """Whether a covariate is tested as a number (trend, curvature) rather than a label."""
-    return _is_numeric(col) and name != "measure" and q not in LABEL_QUANTITIES
+    """Whether a covariate is tested as a number (trend, curvature) rather than a label: a
+    column of numbers that is not the measured quantity, not declared as a label quantity and,
+    declaring none, not named as a test day or session (:data:`GROUPING_NAMES`: day 1, 2, 3 are
+    days, not a scale)."""
+    return (_is_numeric(col) and name != "measure" and q not in LABEL_QUANTITIES
+            and not (not q and grouping_name(name)))
 
 
 def _standardised(col: pd.Series) -> np.ndarray:
