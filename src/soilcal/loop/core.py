@@ -337,6 +337,8 @@ class Outcome:
     skipped: dict = None  # effect -> why it was not tried (:func:`skipped`)
     fold_by: str | None = None  # the covariate column grouping the held-out folds (:func:`fold_grouping`)
     folds: str = ""  # which grouping the held-out folds used, and why (:func:`fold_grouping`)
+    effect_data: dict = None  # effect -> its select.EffectData (surrogates), for a refit with joint runs
+    uniform_scale: bool = False  # whether the chosen effects were fitted beside a free uniform scale
 
 
 def _follows(rank: pd.DataFrame, res: pd.DataFrame | None = None, quantity_of: dict | None = None,
@@ -377,7 +379,7 @@ def _follows(rank: pd.DataFrame, res: pd.DataFrame | None = None, quantity_of: d
     return text + ("; also " + ", ".join(also) if also else "")
 
 
-def _interval(u: pd.DataFrame, effects: list, final, settings: Settings) -> tuple[dict, str]:
+def _interval(u: pd.DataFrame, effects: list, final, settings: Settings, joint=None) -> tuple[dict, str]:
     """The chosen effects' 95 % intervals and how they were found: the wider of the fit's
     own interval and the bootstrap over the seeds and the measured standard errors
     (:func:`soilcal.loop.select.bootstrap_ci`; the fit's interval carries a lack of fit
@@ -400,11 +402,12 @@ def _interval(u: pd.DataFrame, effects: list, final, settings: Settings) -> tupl
               else [f"{m}/{r}" for m, r in zip(u["measurement"], u["row"])])
     boot = sl.bootstrap_ci(effects, u["simulated_mean"].to_numpy(float), u["measured"].to_numpy(float), se,
                            settings.bootstrap, x0=[final.theta[nm] for nm in final.names], conditions=labels,
-                           scale=rs.scale_of(u))
+                           scale=rs.scale_of(u), joint=joint)
     if boot is None:
         return final.ci, fit_only + " (too few seeds per condition to resample)"
     how = (f"a bootstrap of {settings.bootstrap} refits over each simulation's seeds and the measured standard errors "
-           f"(generator seed {sl.BOOTSTRAP_SEED})")
+           f"(generator seed {sl.BOOTSTRAP_SEED}" + ("; the effects' interaction held at its joint runs' value"
+                                                      if joint is not None else "") + ")")
     if set(fit) != set(boot):
         return boot, how + ", alone: the fit does not bound every parameter"
     ci = {nm: (min(lo, fit[nm][0]), max(hi, fit[nm][1])) for nm, (lo, hi) in boot.items()}
@@ -496,14 +499,42 @@ def unit_hints(u: pd.DataFrame) -> list[str]:
     return out
 
 
+def joint_interaction(u: pd.DataFrame, data: dict, names: list, joint: dict | None) -> sl.Joint | None:
+    """The interaction (:class:`soilcal.loop.select.Joint`) of the chosen effects ``names`` from
+    ``joint``: {"effects": their names, "theta": {"<effect>.<parameter>": value} where all were
+    switched on together, "runs": those runs (measurement, row, measure, seed, value,
+    status)}; None where ``joint`` is of other effects, an effect has more than one parameter
+    or sits at its switched-off value there (no interaction to scale)."""
+    if not joint or sorted(joint.get("effects") or []) != sorted(names) or any(data[c].surrogate.k != 1 for c in names):
+        return None
+    keys = [f"{c}.{k}" for c in names for k in EFFECTS[c].theta_names()]
+    centre = np.array([float(joint["theta"][k]) for k in keys])
+    null = np.array([float(EFFECTS[c].null[k]) for c in names for k in EFFECTS[c].theta_names()])
+    if np.any(centre == null):
+        return None
+    stats = rs.simulated_stats(joint["runs"])
+    means = u[rs.KEY].merge(stats, on=rs.KEY, how="left")["simulated_mean"].to_numpy(float)
+    y0 = u["simulated_mean"].to_numpy(float)
+    return sl.Joint(sl.joint_gap([data[c] for c in names], y0, centre, means), centre, null)
+
+
+#: rounds of joint runs at most (each at the parameters the last round fitted), and the change of
+#: every parameter, as a share of its design's span, below which the fit has settled
+JOINT_ROUNDS = 3
+JOINT_SETTLED = 0.01
+
+
 def analyse(soil: str, res: pd.DataFrame, diag: pd.DataFrame, cands: list, effect_runs: dict,
             settings: Settings, reference: dict, quantity_cols: dict | None = None,
-            skipped_effects: dict | None = None) -> Outcome:
+            skipped_effects: dict | None = None, joint: dict | None = None) -> Outcome:
     """Steps 5 (module docstring): ``effect_runs`` maps each candidate to its runs
     (measurement, row, measure, value, ``t:<name>``), the switched-off point included; rows of
     one simulation (the residual table's ``simulation`` key) share the bootstrap's draws;
     ``skipped_effects`` (:func:`skipped`) are named in the verdict where the structure (or
-    ``loop.candidates: all``) would have tried them."""
+    ``loop.candidates: all``) would have tried them; ``joint``: runs with the chosen effects
+    switched on together (:func:`joint_interaction`), with which two or more chosen effects
+    are fitted with their interaction, else as the sum of their separate changes (the verdict
+    says so)."""
     u = rs.usable(res)
     rank = dg.ranking(diag)
     follows = _follows(rank, res, quantity_cols, settings.alpha)
@@ -542,9 +573,10 @@ def analyse(soil: str, res: pd.DataFrame, diag: pd.DataFrame, cands: list, effec
     after, left, fitted = None, "", None
     names = (sel.chosen or provisional) if sel is not None else []
     uniform = None  # the chosen effects' fit beside a free uniform scale (Score), where a bias is left
+    jt = joint_interaction(u, data, sel.chosen, joint) if sel is not None and len(sel.chosen) > 1 else None
     if names:
         y0, meas = u["simulated_mean"].to_numpy(float), u["measured"].to_numpy(float)
-        m = sl.Model([data[c] for c in names], y0, meas, rs.scale_of(u))
+        m = sl.Model([data[c] for c in names], y0, meas, rs.scale_of(u), jt)
         x, _ = m.fit()
         fitted = m.predict(x)
         res_after = residual_after(res, fitted)
@@ -555,7 +587,7 @@ def analyse(soil: str, res: pd.DataFrame, diag: pd.DataFrame, cands: list, effec
             # them beside a free uniform scale of the model (select.scale_data), and say it
             bias, sc = sl.scale_data(y0), rs.scale_of(u)
             ref = sl.Model([bias], y0, meas, sc)
-            m = sl.Model([data[c] for c in names] + [bias], y0, meas, sc)
+            m = sl.Model([data[c] for c in names] + [bias], y0, meas, sc, jt)
             uniform = sl.score(m, ref, sl._folds(u, fold_by), settings.alpha)
             x = np.array([uniform.theta[k] for k in uniform.names], float)
             fitted = m.predict(x)
@@ -577,8 +609,14 @@ def analyse(soil: str, res: pd.DataFrame, diag: pd.DataFrame, cands: list, effec
         verdict = f"unexplained: too few measured values to decide ({n})"
     elif sel is not None and sel.chosen:
         chosen = sel.chosen
-        theta = sel.final.theta
-        ci, ci_method = _interval(u, [data[c] for c in chosen], sel.final, settings)
+        final = sel.final
+        if jt is not None:  # the chosen effects with their interaction, against the calibrated model
+            y0 = u["simulated_mean"].to_numpy(float)
+            final = sl.score(sl.Model([data[c] for c in chosen], y0, u["measured"].to_numpy(float), rs.scale_of(u), jt),
+                             sl.Model([], y0, u["measured"].to_numpy(float), rs.scale_of(u)), sl._folds(u, fold_by),
+                             settings.alpha)
+        theta = final.theta
+        ci, ci_method = _interval(u, [data[c] for c in chosen], final, settings, jt)
         if uniform is not None:
             key = "uniform_scale.s"
             theta = {k: v for k, v in uniform.theta.items() if k != key}
@@ -606,6 +644,17 @@ def analyse(soil: str, res: pd.DataFrame, diag: pd.DataFrame, cands: list, effec
                         f"with the effect{'s' if len(chosen) > 1 else ''}, paired p {sel.uniform.p:.2g}), "
                         "so these rows cannot tell "
                         + ("it" if len(chosen) == 1 else "them") + " from a bias no mechanism carries")
+        if len(chosen) > 1:
+            if jt is not None:
+                verdict += ("; fitted with their interaction, from runs with " + " and ".join(chosen)
+                            + " switched on together at " + ", ".join(f"{k} {v:.4g}" for k, v in joint["theta"].items())
+                            + f" (the joint runs differ from the sum of the separate changes by "
+                            f"{100 * float(np.sqrt(np.mean((jt.gap / rs.scale_of(u)) ** 2))):.2g} % RMS)")
+            else:
+                verdict += ("; fitted as the sum of each effect's separate change (first order), which leaves out "
+                            "their interaction: where they interact (a friction and a density that both scale the "
+                            "passive pressure) the parameters carry a bias their intervals do not cover "
+                            "(soilcal loop run simulates them together and refits)")
         edge = _at_bounds(theta, [data[c] for c in chosen])
         if edge:
             verdict += "; " + "; ".join(edge)
@@ -663,7 +712,7 @@ def analyse(soil: str, res: pd.DataFrame, diag: pd.DataFrame, cands: list, effec
     return Outcome(res, diag, rank, cands, pd.DataFrame(sel_rows, columns=SELECTION_COLUMNS), summary, pred,
                    verdict, chosen, theta, after, dg.detectable(res, diag, quantity_cols, settings.alpha),
                    {nm: list(d.missing) for nm, d in data.items() if d.missing}, dict(skipped_effects or {}),
-                   fold_by, fold_text)
+                   fold_by, fold_text, data, uniform is not None)
 
 
 # --------------------------------------------------------------------------- in process
@@ -678,12 +727,16 @@ def run_inprocess(soil: str, conditions, base_params, simulate, settings: Settin
     settings = settings or Settings()
     done = {}  # a test measured twice (rows of one simulation) runs once per design point and seed
 
-    def runs_at(effect, theta, reference):
+    def runs_at(effect, theta, reference, together: dict | None = None):
         rows = []
         for c in conditions:
             p = base_params(c)
             if effect:
                 p = EFFECTS[effect].apply(p, c.quantities or {}, theta, reference, c.scenario)
+            if together:  # several effects switched on at once (name -> theta), in library order
+                from soilcal.loop.effects import apply_all
+
+                p = apply_all(together, p, c.quantities or {}, reference, c.scenario)
             for seed in seeds:
                 key = (rs.simulation_key(c), json.dumps(p, sort_keys=True), int(seed))
                 if key not in done:
@@ -722,10 +775,40 @@ def run_inprocess(soil: str, conditions, base_params, simulate, settings: Settin
     skip = skipped(conditions, settings)
     out = analyse(soil, res, diag, cands, effect_runs, settings, reference, qcols, skip)
     more = more_candidates(out, conditions, settings)
-    if not more:
+    if more:
+        simulate_candidates(more)  # the second round, as the workflow's loop_more checkpoint
+        cands = cands + more
+        out = analyse(soil, res, diag, cands, effect_runs, settings, reference, qcols, skip)
+    # two effects or more: simulated together at the fitted parameters and refitted with their
+    # interaction (select.Joint), the runs repeated at the refitted values until they settle
+    if len(out.chosen) < 2 or any(len(EFFECTS[c].params) != 1 for c in out.chosen):
         return out
-    simulate_candidates(more)  # the second round, as the workflow's loop_more checkpoint
-    return analyse(soil, res, diag, cands + more, effect_runs, settings, reference, qcols, skip)
+    keys = [f"{c}.{k}" for c in out.chosen for k in EFFECTS[c].theta_names()]
+    span = np.array([float(np.subtract(*settings.effect_bounds(c)[k][::-1])) for c in out.chosen
+                     for k in EFFECTS[c].theta_names()])
+    null = np.array([float(EFFECTS[c].null[k]) for c in out.chosen for k in EFFECTS[c].theta_names()])
+    u = rs.usable(res)
+    y0, meas, sc = u["simulated_mean"].to_numpy(float), u["measured"].to_numpy(float), rs.scale_of(u)
+    effects = [out.effect_data[c] for c in out.chosen] + ([sl.scale_data(y0)] if out.uniform_scale else [])
+    x, joint = np.array([out.theta[k] for k in keys], float), None
+    for _ in range(JOINT_ROUNDS):
+        if np.any(x == null):
+            break
+        together = {c: {k: float(x[keys.index(f"{c}.{k}")]) for k in EFFECTS[c].theta_names()} for c in out.chosen}
+        joint = {"effects": list(out.chosen), "theta": dict(zip(keys, map(float, x))),
+                 "runs": runs_at(None, None, reference, together)}
+        jt = joint_interaction(u, out.effect_data, out.chosen, joint)
+        start = np.concatenate([x, [0.0]]) if out.uniform_scale else x
+        new = sl.Model(effects, y0, meas, sc, jt).fit(x0=start)[0][:len(keys)]
+        settled = bool(np.all(np.abs(new - x) <= JOINT_SETTLED * span))
+        x = new
+        if settled:
+            break
+    if joint is None:
+        return out
+    final = analyse(soil, res, diag, cands, effect_runs, settings, reference, qcols, skip, joint)
+    return final if sorted(final.chosen) == sorted(out.chosen) else out
+    return out
 
 
 def more_candidates(out: Outcome, conditions, settings: Settings) -> list[str]:
