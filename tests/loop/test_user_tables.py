@@ -671,3 +671,34 @@ def test_moisture_in_percent_or_declared_as_a_fraction_is_read_in_percent(tmp_pa
     soil, res, _ = _moisture_soil(tmp_path, cells, unit, prop)
     conds = [c for c in conditions(load_soil(soil, res)) if c.measurement == "bin_forces"]
     assert [c.quantities["moisture_content"] for c in conds] == pytest.approx(PERCENT)
+
+
+def test_rows_entered_twice_tell_the_diagnosis_nothing_new():
+    # twelve blade tests with a hidden rate effect (beta 0.3, 2 % noise); the same table with
+    # three of its rows entered a second time (every cell the same): a row that runs the same
+    # simulation with the same covariates is the same test, so the bias and covariate tests
+    # must read the twelve tests either way (counted twice, the three rows made the residual
+    # left by the rate effect "follow" the moisture at Holm p 0.004 in a table of this kind)
+    from dataclasses import replace
+
+    from soilcal.loop import core
+    from soilcal.loop import standin as S
+    from soilcal.loop import synthesize as sy
+
+    conds = S.conditions(S.grid(seed=3, n=12, moisture=True))
+    table = sy.synthesize(conds, S.base_params, S.simulate, {"rate_friction": {"beta": 0.3}}, {}, {}, noise=0.02,
+                          seed=4)
+    once = sy.with_measured(conds, table)
+    twice = once + [replace(once[i], row=13 + j) for j, i in enumerate((1, 4, 7))]
+    settings = core.Settings(bootstrap=0)
+    a = core.run_inprocess("user", once, S.base_params, S.simulate, settings)
+    b = core.run_inprocess("user", twice, S.base_params, S.simulate, settings)
+    assert len(b.residuals) == len(a.residuals) + 6
+    # the scatter and the measured quantities' group test take every row, the others one per test
+    da = a.diagnosis[(a.diagnosis["test"] != "scatter") & (a.diagnosis["covariate"] != "measure")]
+    db = b.diagnosis[(b.diagnosis["test"] != "scatter") & (b.diagnosis["covariate"] != "measure")]
+    da, db = da.reset_index(drop=True), db.reset_index(drop=True)
+    assert list(da["test"] + da["covariate"]) == list(db["test"] + db["covariate"])
+    assert (da["n"] == 12).all() and (db["n"] == 12).all()
+    assert db["p"].to_numpy() == pytest.approx(da["p"].to_numpy(), rel=1e-9)
+

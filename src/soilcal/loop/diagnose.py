@@ -216,16 +216,30 @@ def normal_equivalent(t, dof):
 
 
 def per_test(d: pd.DataFrame) -> pd.DataFrame:
-    """One row per measured test (a row of a measured table) of the residual rows ``d``: the
-    relative residuals of the quantities one test measures (its horizontal and vertical
-    force) averaged, the other columns (its covariates) kept.  A stone, a ridge or a day's
-    level moves every quantity of a test alike, so they are not independent observations of
-    a covariate's structure: counted as such, a table of two quantities per test halves the
-    p-values of its trend tests (module docstring).  ``d`` itself where each test has one row
-    or no test is named (no ``measurement``, ``row`` columns)."""
+    """One row per measured test of the residual rows ``d``: the relative residuals of the
+    quantities one test measures (its horizontal and vertical force) averaged, the other
+    columns (its covariates) kept.  A stone, a ridge or a day's level moves every quantity of a
+    test alike, so they are not independent observations of a covariate's structure: counted
+    as such, a table of two quantities per test halves the p-values of its trend tests (module
+    docstring).  A test is a row of a measured table; table rows entered twice (the same
+    simulation, the same value in every covariate column and the same measured values, SDs and
+    repeat counts) are one test: a row copied into a table tells a covariate's structure no
+    more than once (three rows of twelve entered twice made the residual "follow" the
+    moisture at Holm p 0.004).  ``d`` itself where each test has one row or no test is named
+    (no ``measurement``, ``row`` columns)."""
     if "measurement" not in d.columns or "row" not in d.columns or len(d) == 0:
         return d
     key = d["measurement"].astype(str) + "/" + d["row"].astype(str)
+    if "simulation" in d.columns:
+        same = [c for c in ["simulation", *sorted(c for c in d.columns if c.startswith("cov:"))] if c in d.columns]
+        cells = d[same].astype(str).agg("|".join, axis=1)
+        what = d["measure"].astype(str) if "measure" in d.columns else pd.Series("", index=d.index)
+        for c in ("measured", "measured_sd", "measured_n"):
+            if c in d.columns:
+                what = what + "=" + d[c].astype(str)
+        # per table row: its simulation and covariates, and every measured value it holds
+        sig = (cells + "#" + what).groupby(key.to_numpy()).transform(lambda x: "&".join(sorted(x)))
+        key = pd.Series(np.asarray(sig), index=d.index)
     if key.is_unique:
         return d
     g = d.assign(_test=key.to_numpy()).groupby("_test", sort=False)
