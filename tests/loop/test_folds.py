@@ -53,6 +53,7 @@ def test_an_offset_between_test_days_is_not_named_as_a_moisture_effect_with_an_u
                              core.Settings(reference=REFERENCE, bootstrap=0))
     assert out.chosen == [], out.verdict
     assert out.verdict.startswith("unexplained: the residual follows day"), out.verdict
+    assert "no effect of the library could be tried through it" in out.verdict
     assert "moisture_cohesion not tried: moisture_content has one value on each `day` group" in out.verdict
     assert out.fold_by == "day"
     folds = out.summary["folds"].iloc[0]

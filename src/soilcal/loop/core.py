@@ -679,7 +679,11 @@ def analyse(soil: str, res: pd.DataFrame, diag: pd.DataFrame, cands: list, effec
         if sel_rows:
             verdict += "; no candidate effect lowered the held-out error significantly (selection.csv)"
     elif not cands:
-        verdict = f"unexplained: the residual follows {follows}; no effect of the library acts through it"
+        sig = dg.matched_quantities(diag) if len(diag) else set()
+        held = [nm for nm in (skipped_effects or {}) if sig & set(EFFECTS[nm].signature)]
+        verdict = (f"unexplained: the residual follows {follows}; "
+                   + ("no effect of the library could be tried through it" if held
+                      else "no effect of the library acts through it"))
     else:
         rejected = "; ".join(f"{r['effects']}: {r['reason']}" for r in sel_rows if r["reason"])
         verdict = f"unexplained: the residual follows {follows}; candidates rejected ({rejected})"
