@@ -702,3 +702,15 @@ def test_rows_entered_twice_tell_the_diagnosis_nothing_new():
     assert (da["n"] == 12).all() and (db["n"] == 12).all()
     assert db["p"].to_numpy() == pytest.approx(da["p"].to_numpy(), rel=1e-9)
 
+
+def test_a_day_offset_falls_on_an_undeclared_day_column_as_the_loop_reads_it(tmp_path, monkeypatch):
+    # bin_forces's day column without quantity: day (a plain label, ignore: true): the loop
+    # groups its folds by it, and a synthesized day offset must fall on the same two days
+    # (d1: rows 1, 3, 5; d2: rows 2, 4, 6); it was refused as "no day column"
+    soil, res = user_soil(tmp_path)
+    soil.write_text(soil.read_text().replace("day: {ignore: true, quantity: day}", "day: {ignore: true}"))
+    monkeypatch.setattr(lc, "dem_simulator", _counting_simulator([]))
+    code, out = _synthesize(tmp_path, soil, res, "--measurement", "bin_forces", "--disturbance", "day_offset:sd=0.2")
+    assert code == 0
+    f = pd.read_csv(out.with_suffix(".truth.csv")).sort_values("row")["truth_disturbance"].to_numpy()
+    assert f[0] == f[2] == f[4] and f[1] == f[3] == f[5] and f[0] != f[1]
