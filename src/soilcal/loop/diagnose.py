@@ -232,14 +232,15 @@ def per_test(d: pd.DataFrame) -> pd.DataFrame:
     key = d["measurement"].astype(str) + "/" + d["row"].astype(str)
     if "simulation" in d.columns:
         same = [c for c in ["simulation", *sorted(c for c in d.columns if c.startswith("cov:"))] if c in d.columns]
-        cells = d[same].astype(str).agg("|".join, axis=1)
-        what = d["measure"].astype(str) if "measure" in d.columns else pd.Series("", index=d.index)
-        for c in ("measured", "measured_sd", "measured_n"):
-            if c in d.columns:
-                what = what + "=" + d[c].astype(str)
+        what = [c for c in ("measure", "measured", "measured_sd", "measured_n") if c in d.columns]
+        cells = ["|".join(map(str, a)) + "#" + "=".join(map(str, b))
+                 for a, b in zip(d[same].itertuples(index=False), d[what].itertuples(index=False))]
         # per table row: its simulation and covariates, and every measured value it holds
-        sig = (cells + "#" + what).groupby(key.to_numpy()).transform(lambda x: "&".join(sorted(x)))
-        key = pd.Series(np.asarray(sig), index=d.index)
+        rows = {}
+        for k, c in zip(key, cells):
+            rows.setdefault(k, []).append(c)
+        sig = {k: "&".join(sorted(v)) for k, v in rows.items()}
+        key = pd.Series([sig[k] for k in key], index=d.index)
     if key.is_unique:
         return d
     g = d.assign(_test=key.to_numpy()).groupby("_test", sort=False)
