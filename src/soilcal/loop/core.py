@@ -444,7 +444,8 @@ def fold_grouping(settings: Settings, quantity_cols: dict, res: pd.DataFrame | N
     if settings.fold_by:
         n = int(u[f"cov:{settings.fold_by}"].dropna().astype(str).nunique()) if (
             u is not None and f"cov:{settings.fold_by}" in u) else 0
-        return settings.fold_by, (f"one fold per value of `{settings.fold_by}` ({n} groups), as loop.fold_by sets")
+        return settings.fold_by, (f"one fold per value of `{settings.fold_by}` ({n} group{'s' if n != 1 else ''}), "
+                                  "as loop.fold_by sets")
     cols = [c[4:] for c in (u.columns if u is not None else []) if c.startswith("cov:")]
     found = []
     for j, col in enumerate(cols):
@@ -695,7 +696,7 @@ def analyse(soil: str, res: pd.DataFrame, diag: pd.DataFrame, cands: list, effec
         verdict += f"; {hint}"
     tests = len(dg.per_test(u))  # table rows: the trend tests take one value per measured test
     if 0 < tests < 4 and not verdict.startswith("no "):
-        verdict += f"; with {tests} rows no trend was tested (a trend test needs 4)"
+        verdict += f"; with {tests} row{'s' if tests != 1 else ''} no trend was tested (a trend test needs 4)"
     if n > 0 and len(res):
         measured = np.isfinite(res["measured"].astype(float).to_numpy())
         unsimulated = int((measured & ~np.isfinite(res["simulated_mean"].astype(float).to_numpy())).sum())
