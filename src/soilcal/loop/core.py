@@ -574,7 +574,7 @@ def analyse(soil: str, res: pd.DataFrame, diag: pd.DataFrame, cands: list, effec
     after, left, fitted = None, "", None
     names = (sel.chosen or provisional) if sel is not None else []
     uniform = None  # the chosen effects' fit beside a free uniform scale (Score), where a bias is left
-    jt = joint_interaction(u, data, sel.chosen, joint) if sel is not None and len(sel.chosen) > 1 else None
+    jt = joint_interaction(u, data, sel.chosen, joint) if sel is not None and sel.chosen else None
     if names:
         y0, meas = u["simulated_mean"].to_numpy(float), u["measured"].to_numpy(float)
         m = sl.Model([data[c] for c in names], y0, meas, rs.scale_of(u), jt)
@@ -645,6 +645,11 @@ def analyse(soil: str, res: pd.DataFrame, diag: pd.DataFrame, cands: list, effec
                         f"with the effect{'s' if len(chosen) > 1 else ''}, paired p {sel.uniform.p:.2g}), "
                         "so these rows cannot tell "
                         + ("it" if len(chosen) == 1 else "them") + " from a bias no mechanism carries")
+        if jt is not None and len(chosen) == 1:  # said with the interval (summary ci95_method, report)
+            ci_method += ("; the parameter refitted with runs at " + ", ".join(f"{k} {v:.4g}" for k, v in
+                                                                             joint["theta"].items())
+                          + " (they differ from the surrogate through the design points by "
+                          f"{100 * float(np.sqrt(np.mean((jt.gap / rs.scale_of(u)) ** 2))):.2g} % RMS there)")
         if len(chosen) > 1:
             if jt is not None:
                 verdict += ("; fitted with their interaction, from runs with " + " and ".join(chosen)
@@ -784,9 +789,11 @@ def run_inprocess(soil: str, conditions, base_params, simulate, settings: Settin
         simulate_candidates(more)  # the second round, as the workflow's loop_more checkpoint
         cands = cands + more
         out = analyse(soil, res, diag, cands, effect_runs, settings, reference, qcols, skip)
-    # two effects or more: simulated together at the fitted parameters and refitted with their
-    # interaction (select.Joint), the runs repeated at the refitted values until they settle
-    if len(out.chosen) < 2 or any(len(EFFECTS[c].params) != 1 for c in out.chosen):
+    # the chosen effects simulated (together, where there are several) at the fitted parameters and
+    # refitted with the difference between those runs and the model's prediction there as a
+    # mixed term (select.Joint): the interaction of several effects, and the error of the
+    # surrogates between their design points; repeated at the refitted values until they settle
+    if not out.chosen or any(len(EFFECTS[c].params) != 1 for c in out.chosen):
         return out
     keys = [f"{c}.{k}" for c in out.chosen for k in EFFECTS[c].theta_names()]
     span = np.array([float(np.subtract(*settings.effect_bounds(c)[k][::-1])) for c in out.chosen

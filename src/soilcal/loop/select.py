@@ -9,7 +9,8 @@ prediction of a model with several effects adds their changes to the calibrated 
 different DEM parameters act nearly independently over small changes, but not exactly (a
 friction and a density both scale the passive pressure): where runs with the chosen effects
 switched on together exist, their difference from that sum enters as a mixed term
-(:class:`Joint`, :func:`soilcal.loop.core.run_inprocess`).
+(:class:`Joint`, :func:`soilcal.loop.core.run_inprocess`), as runs of a single effect at its
+fitted value correct its surrogate there.
 
 Scoring a model against a reference model (the calibrated one, or the model with the
 effects already chosen), on the relative errors ``e_i = (measured_i - prediction_i) / |measured_i|``:
@@ -232,7 +233,9 @@ class Joint:
     per row ``gap`` = the joint runs' mean - the first-order sum of the effects' separate changes
     there (:func:`joint_gap`).  :meth:`Model.predict` adds ``gap`` times the product over the
     effects of (theta - null) / (centre - null): the mixed term of a second-order expansion
-    about the switched-off point, zero where any effect is off and exact at ``centre``."""
+    about the switched-off point, zero where any effect is off and exact at ``centre`` (for a
+    single effect, the surrogate's error at ``centre``, brought in linearly from the
+    switched-off value, where the surrogate is exact)."""
 
     gap: np.ndarray
     centre: np.ndarray
