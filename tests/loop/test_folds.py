@@ -111,3 +111,19 @@ def test_numbered_test_days_are_tested_as_groups_not_as_a_trend():
     # declared as a number of its own (a position along the bin), a column named day keeps its trend
     diag = diagnose(res, {"day": "position"})
     assert "trend" in set(diag[diag["covariate"] == "day"]["test"])
+
+
+def test_candidates_rejected_over_few_day_groups_say_how_few_they_are():
+    # twelve blade tests on three test days with a weak rate effect (beta 0.1) under 4 % noise:
+    # held out a day at a time, the paired test over three groups has two degrees of freedom,
+    # and the verdict says so beside the rejected candidate
+    reference = {"tool_speed": 1.75, "working_depth": 0.1}
+    conds = S.conditions(S.grid(3, 12, days=3))
+    table = sy.synthesize(conds, S.base_params, S.simulate, {"rate_friction": {"beta": 0.1}}, reference, {},
+                          noise=0.04, seed=13)
+    out = core.run_inprocess("user", sy.with_measured(conds, table), S.base_params, S.simulate,
+                             core.Settings(reference=reference, bootstrap=0))
+    assert out.chosen == [] and "candidates rejected" in out.verdict, out.verdict
+    assert out.verdict.endswith("the rows were held out by `day`, 3 groups, so the paired test has 2 degrees of "
+                                "freedom and passes only a large gain alike in every group (more groups decide; "
+                                "loop.fold_by sets the grouping)"), out.verdict

@@ -519,6 +519,9 @@ def joint_interaction(u: pd.DataFrame, data: dict, names: list, joint: dict | No
     return sl.Joint(sl.joint_gap([data[c] for c in names], y0, centre, means), centre, null)
 
 
+#: held-out groups below which the verdict of rejected candidates says how few they are
+FEW_FOLDS = 5
+
 #: rounds of joint runs at most (each at the parameters the last round fitted), and the change of
 #: every parameter, as a share of its design's span, below which the fit has settled
 JOINT_ROUNDS = 3
@@ -693,6 +696,11 @@ def analyse(soil: str, res: pd.DataFrame, diag: pd.DataFrame, cands: list, effec
     else:
         rejected = "; ".join(f"{r['effects']}: {r['reason']}" for r in sel_rows if r["reason"])
         verdict = f"unexplained: the residual follows {follows}; candidates rejected ({rejected})"
+        groups = len(sl._folds(u, fold_by)) if fold_by else 0
+        if 2 <= groups < FEW_FOLDS:
+            verdict += (f"; the rows were held out by `{fold_by}`, {groups} groups, so the paired test has "
+                        f"{groups - 1} degree{'s' if groups > 2 else ''} of freedom and passes only a large gain "
+                        "alike in every group (more groups decide; loop.fold_by sets the grouping)")
     matched = dg.matched_quantities(diag) if len(diag) else set()
     for nm, why in (skipped_effects or {}).items():  # those the structure (or candidates: all) would have tried
         if settings.candidates == "all" or matched & set(EFFECTS[nm].signature):
