@@ -607,3 +607,110 @@ def test_a_true_tool_adhesion_on_twelve_tests_is_named():
                              core.Settings(bootstrap=0))
     assert out.chosen == ["tool_adhesion"], out.verdict
     assert out.verdict.startswith("explained by tool_adhesion"), out.verdict
+
+
+# --------------------------------------------------------------------------- moisture as a fraction or in %
+
+def _moisture_soil(tmp_path, cells, unit="%", prop=None):
+    """The user's soil with a moisture column in bin_forces (``cells``, declared in ``unit``)
+    and, where given, the soil's own ``properties.moisture_content`` (``prop``, a line of YAML)."""
+    soil, res = user_soil(tmp_path)
+    table = res / "measurements/loess-test/bin_forces.csv"
+    lines = BIN_FORCES.strip().splitlines()
+    table.write_text("\n".join([lines[0] + ",moisture"] + [f"{ln},{c}" for ln, c in zip(lines[1:], cells)]) + "\n")
+    text = soil.read_text().replace(
+        "      day: {ignore: true, quantity: day}\n",
+        f"      day: {{ignore: true, quantity: day}}\n      moisture: {{ignore: true, quantity: moisture_content, "
+        f"unit: \"{unit}\"}}\n")
+    if prop:
+        text = text.replace("parameters:\n", f"properties:\n  moisture_content: {prop}\nparameters:\n", 1)
+    soil.write_text(text)
+    return soil, res, table
+
+
+FRACTIONS = [0.12, 0.15, 0.18, 0.12, 0.15, 0.18]
+PERCENT = [12.0, 15.0, 18.0, 12.0, 15.0, 18.0]
+
+
+@pytest.mark.parametrize("cells, unit, prop, words", [
+    # fractions under %, and the soil says it is 15 % wet: a hundred times smaller
+    (FRACTIONS, "%", "{value: 15.0, unit: \"%\"}", ["the column's median, 0.15 %, is about 100 times smaller",
+                                                    "declare unit: fraction"]),
+    # fractions under %, no moisture of the soil's own: no value above 1 %
+    (FRACTIONS, "%", None, ["every value is at most 1 %", "declare unit: fraction"]),
+    # percentages declared as a fraction: 12-18 read as 1200-1800 %
+    (PERCENT, "fraction", None, ["a moisture content as a fraction of 1 (unit: fraction", "18 reads as a percentage"]),
+    # the table in %, the soil's own moisture written as a fraction under %
+    (PERCENT, "%", "{value: 0.15, unit: \"%\"}", ["15 %, is about 100 times larger",
+                                                  "is the soil's properties.moisture_content a fraction under unit %"]),
+])
+def test_moisture_in_the_wrong_unit_is_refused_naming_the_table_and_column(tmp_path, cells, unit, prop, words):
+    from soilcal.config.load import load_soil
+    from soilcal.errors import InputError
+
+    soil, res, table = _moisture_soil(tmp_path, cells, unit, prop)
+    with pytest.raises(InputError) as exc:
+        load_soil(soil, res)
+    msg = str(exc.value)
+    assert msg.startswith(f"{table}: column moisture: expected ") and "\n" not in msg, msg
+    for w in words:
+        assert w in msg, (w, msg)
+
+
+@pytest.mark.parametrize("cells, unit, prop", [
+    (PERCENT, "%", "{value: 15.0, unit: \"%\"}"),
+    (PERCENT, "%", None),
+    (FRACTIONS, "fraction", "{value: 15.0, unit: \"%\"}"),
+    (FRACTIONS, "g/g", None),
+    (PERCENT, "%", "{value: 0.15, unit: \"-\"}"),  # the soil's own as a fraction, unit "-"
+])
+def test_moisture_in_percent_or_declared_as_a_fraction_is_read_in_percent(tmp_path, cells, unit, prop):
+    from soilcal.config.load import load_soil
+    from soilcal.config.measurements import conditions
+
+    soil, res, _ = _moisture_soil(tmp_path, cells, unit, prop)
+    conds = [c for c in conditions(load_soil(soil, res)) if c.measurement == "bin_forces"]
+    assert [c.quantities["moisture_content"] for c in conds] == pytest.approx(PERCENT)
+
+
+def test_rows_entered_twice_tell_the_diagnosis_nothing_new():
+    # twelve blade tests with a hidden rate effect (beta 0.3, 2 % noise); the same table with
+    # three of its rows entered a second time (every cell the same): a row that runs the same
+    # simulation with the same covariates is the same test, so the bias and covariate tests
+    # must read the twelve tests either way (counted twice, the three rows made the residual
+    # left by the rate effect "follow" the moisture at Holm p 0.004 in a table of this kind)
+    from dataclasses import replace
+
+    from soilcal.loop import core
+    from soilcal.loop import standin as S
+    from soilcal.loop import synthesize as sy
+
+    conds = S.conditions(S.grid(seed=3, n=12, moisture=True))
+    table = sy.synthesize(conds, S.base_params, S.simulate, {"rate_friction": {"beta": 0.3}}, {}, {}, noise=0.02,
+                          seed=4)
+    once = sy.with_measured(conds, table)
+    twice = once + [replace(once[i], row=13 + j) for j, i in enumerate((1, 4, 7))]
+    settings = core.Settings(bootstrap=0)
+    a = core.run_inprocess("user", once, S.base_params, S.simulate, settings)
+    b = core.run_inprocess("user", twice, S.base_params, S.simulate, settings)
+    assert len(b.residuals) == len(a.residuals) + 6
+    # the scatter and the measured quantities' group test take every row, the others one per test
+    da = a.diagnosis[(a.diagnosis["test"] != "scatter") & (a.diagnosis["covariate"] != "measure")]
+    db = b.diagnosis[(b.diagnosis["test"] != "scatter") & (b.diagnosis["covariate"] != "measure")]
+    da, db = da.reset_index(drop=True), db.reset_index(drop=True)
+    assert list(da["test"] + da["covariate"]) == list(db["test"] + db["covariate"])
+    assert (da["n"] == 12).all() and (db["n"] == 12).all()
+    assert db["p"].to_numpy() == pytest.approx(da["p"].to_numpy(), rel=1e-9)
+
+
+def test_a_day_offset_falls_on_an_undeclared_day_column_as_the_loop_reads_it(tmp_path, monkeypatch):
+    # bin_forces's day column without quantity: day (a plain label, ignore: true): the loop
+    # groups its folds by it, and a synthesized day offset must fall on the same two days
+    # (d1: rows 1, 3, 5; d2: rows 2, 4, 6); it was refused as "no day column"
+    soil, res = user_soil(tmp_path)
+    soil.write_text(soil.read_text().replace("day: {ignore: true, quantity: day}", "day: {ignore: true}"))
+    monkeypatch.setattr(lc, "dem_simulator", _counting_simulator([]))
+    code, out = _synthesize(tmp_path, soil, res, "--measurement", "bin_forces", "--disturbance", "day_offset:sd=0.2")
+    assert code == 0
+    f = pd.read_csv(out.with_suffix(".truth.csv")).sort_values("row")["truth_disturbance"].to_numpy()
+    assert f[0] == f[2] == f[4] and f[1] == f[3] == f[5] and f[0] != f[1]

@@ -627,7 +627,75 @@ def _entry(soil_path, data: dict, mid: str, entry: dict, tpath: Path):
             replicates=replicates, responses=tuple(responses),
             covariates={c: (None if _missing(rec[c]) else _plain(rec[c])) for c in covs},
             quantities=quantities, quantity_columns=dict(quantity_cols)))
+    _check_moisture(data, tpath, df, covs, quantity_cols)
     return df, conds
+
+
+#: a moisture table whose median is this many decades from the soil's own moisture (or, where the
+#: soil gives none, in % with every value at most 1) holds fractions under a percent unit, or the reverse
+MOISTURE_DECADES = (1.5, 2.5)
+
+
+def _soil_moisture(data: dict) -> tuple[list, str] | None:
+    """The soil's own moisture contents in % (``properties.moisture_content``: its ``value`` or
+    ``values``, in ``%`` or as a fraction, unit ``-``, ``fraction``, ``g/g`` or ``kg/kg``), and
+    how the soil file gives them; None where it gives none."""
+    prop = (data.get("properties") or {}).get("moisture_content")
+    if not isinstance(prop, dict):
+        return None
+    vals = prop.get("values") if prop.get("values") is not None else [prop.get("value")]
+    x = [float(v) for v in (vals or []) if _number(v) is not None]
+    factor = {"%": 1.0, "-": 100.0, "fraction": 100.0, "g/g": 100.0, "kg/kg": 100.0}.get(str(prop.get("unit", "%")))
+    if not x or factor is None:
+        return None
+    return [v * factor for v in x], ", ".join(f"{v:g}" for v in x) + f" {prop.get('unit', '%')}"
+
+
+def _check_moisture(data: dict, tpath: Path, df: pd.DataFrame, covs: dict, quantity_cols: dict) -> None:
+    """A moisture column whose numbers are fractions under a percent unit (0.15 for 15 %), or
+    percentages under a fraction unit: the moisture effect would take a change of 0.1 % for one
+    of 10 %.  Refused naming the table and column, where (1) a column declared as a fraction
+    (``-``, ``fraction``, ``g/g``, ``kg/kg``) holds a value above 1; (2) its median, in %, lies 1.5 to 2.5
+    decades below or above the median of the soil's own ``properties.moisture_content`` (in %
+    or as a fraction, as the soil file says); (3) without that property, a column in % holds
+    no value above 1 (a soil at most 1 % wet throughout; the soil's property says so where it
+    is)."""
+    import numpy as np
+
+    for col, q in quantity_cols.items():
+        if q != "moisture_content":
+            continue
+        unit = covs[col]["unit"]
+        x = np.array([v for v in (_number(c) for c in df[col]) if v is not None], float)
+        if not len(x):
+            continue
+        factor = QUANTITIES[q][1][unit]
+        where = f"column {col}"
+        if factor != 1.0 and x.max() > 1.0:
+            raise InputError(tpath, where, f"a moisture content as a fraction of 1 (unit: {unit}, as declared): "
+                             f"{x.max():g} reads as a percentage (declare unit: \"%\")", float(x.max()))
+        pct = x * factor
+        soil = _soil_moisture(data)
+        med = float(np.median(pct))
+        if soil is not None:
+            ref = float(np.median(soil[0]))
+            if med > 0 and ref > 0:
+                lg = float(np.log10(med / ref))
+                if MOISTURE_DECADES[0] <= abs(lg) <= MOISTURE_DECADES[1]:
+                    times = f"{10 ** round(abs(lg)):g}"
+                    if lg < 0:
+                        hint = (f"fractions of 1 under unit {unit}? declare unit: fraction under the covariate to "
+                                "have them read as such")
+                    else:
+                        hint = (f"is the soil's properties.moisture_content a fraction under unit "
+                                f"{data['properties']['moisture_content'].get('unit', '%')}?")
+                    raise InputError(tpath, where, f"moisture contents near the soil's own ({soil[1]}, "
+                                     f"properties.moisture_content): the column's median, {med:.4g} %, is about "
+                                     f"{times} times {'smaller' if lg < 0 else 'larger'} ({hint})", float(x[0]))
+        elif unit == "%" and x.max() <= 1.0 and x.max() > 0:
+            raise InputError(tpath, where, "a moisture content in % (every value is at most 1 %: fractions of 1? "
+                             "declare unit: fraction under the covariate to have them read as such, or give the "
+                             "soil's properties.moisture_content if it is that dry)", float(x[0]))
 
 
 def _check_scale(soil_path, cw: str, cv: dict, scenario: str) -> None:

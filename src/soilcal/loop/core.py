@@ -29,7 +29,8 @@ Settings (the soil's optional ``loop`` block, every value written into the outpu
       reference: {tool_speed: 1.0}   # where the calibrated parameters hold (default: the
                                      # mean of the measured conditions)
       design_points: 5       # levels per effect parameter (plus the switched-off value)
-      fold_by: null          # covariate column grouping the held-out folds (default: condition)
+      fold_by: null          # covariate column grouping the held-out folds (default: a test-day,
+                             # session or group column, else each condition: fold_grouping)
       max_effects: 2
       bootstrap: 200         # refits of the chosen effects' 95 % interval over the seeds and
                              # the measured values (0: the fit's own interval, seeds ignored)
@@ -196,16 +197,54 @@ def per_table_quantities(conditions) -> dict:
     return out
 
 
+def per_group_quantities(conditions, settings: Settings) -> tuple[str | None, dict]:
+    """(the column grouping the held-out folds, :func:`fold_grouping`; numeric quantity ->
+    {group: its value}) for each quantity that has one value within every group of that
+    column, where some group holds two measured conditions at least (a grouping coarser than
+    the conditions): a moisture prepared once per test day.  (None, {}) without such a
+    column."""
+    from soilcal.config.quantities import QUANTITIES
+
+    rows = _measured_rows(rs.observations(list(conditions)))
+    col, _ = fold_grouping(settings, quantity_of(conditions), rows)
+    key = f"cov:{col}" if col else None
+    if key is None or key not in rows:
+        return None, {}
+    g = rows[rows[key].notna()]
+    if not len(g) or not (g.groupby(g[key].astype(str))["simulation"].nunique() >= 2).any():
+        return None, {}
+    out = {}
+    for c in g.columns:
+        q = c[2:]
+        if not c.startswith("q:") or QUANTITIES.get(q) is None:
+            continue
+        per = {}
+        for lv, gg in g.groupby(g[key].astype(str), sort=True):
+            x = pd.to_numeric(gg[c], errors="coerce").dropna().to_numpy(float)
+            if len(x) and not np.all(x == x[0]):
+                per = None
+                break
+            if len(x):
+                per[lv] = float(x[0])
+        if per and len(set(per.values())) > 1:
+            out[q] = per
+    return col, out
+
+
 def skipped(conditions, settings: Settings) -> dict:
     """Effect -> why it is not tried: every quantity it acts through that the measured rows
     carry has one value on all of them (a table at one speed), so the effect could only shift
     every row alike, which says nothing of that quantity (the bias is tested on its own); or
     one value in each table (a table at 1 m/s, another at 2 m/s), so its structure is a
     difference between the tables, which a table's own offset (another instrument, setup or
-    measured quantity) makes as well; with ``loop.candidates: all`` too."""
+    measured quantity) makes as well; or one value in each group of the column that groups the
+    held-out folds (a moisture prepared once per test day, :func:`per_group_quantities`), so
+    its structure is a difference between the groups, which a day's own level makes as well;
+    with ``loop.candidates: all`` too."""
     from soilcal.config.quantities import QUANTITIES
 
     per = per_table_quantities(conditions)
+    col, per_group = per_group_quantities(conditions, settings)
     carried = {q for c in conditions for q in (c.quantities or {})}
     out = {}
     for name in settings.effects:
@@ -214,6 +253,13 @@ def skipped(conditions, settings: Settings) -> dict:
         if not needs or not any(eff.applies_to(c.quantities or {}, c.scenario) for c in conditions):
             continue
         if not all(q in per for q in needs):
+            if col and all(q in per_group for q in needs):
+                out[name] = ("not tried: " + "; ".join(
+                    f"{q} has one value on each `{col}` group (" + ", ".join(
+                        f"{g}: {v:.4g} {QUANTITIES[q][0]}" for g, v in list(per_group[q].items())[:6])
+                    + (", ..." if len(per_group[q]) > 6 else "") + ")" for q in needs)
+                    + f", the held-out groups, so the effect cannot be told from an offset that varies between "
+                    f"the `{col}` groups (measure two levels of it within a group to tell them apart)")
             continue
         if all(len(set(per[q].values())) == 1 for q in needs):
             out[name] = ("not tried: " + ", ".join(f"{q} is {next(iter(per[q].values())):.4g} {QUANTITIES[q][0]}"
@@ -262,7 +308,7 @@ SELECTION_COLUMNS = ["step", "effects", "parameters", "ci95", "heldout_rmse_perc
                      "heldout_max_percent", "aicc", "reference_aicc", "p_paired", "accepted", "reason"]
 SUMMARY_COLUMNS = ["soil", "rows", "usable_rows", "verdict", "effects", "parameters", "ci95", "ci95_method", "follows",
                    "rmse_before_percent", "rmse_after_percent", "max_before_percent", "max_after_percent",
-                   "error_reduction_percent", "alpha", "reference"]
+                   "error_reduction_percent", "alpha", "reference", "folds"]
 
 
 def _fmt(d: dict) -> str:
@@ -289,6 +335,10 @@ class Outcome:
     detectable: pd.DataFrame = None  # soilcal.loop.diagnose.detectable of the calibrated model's residual
     filled: dict = None  # effect -> rows whose run failed at a design point (filled from the row's other points)
     skipped: dict = None  # effect -> why it was not tried (:func:`skipped`)
+    fold_by: str | None = None  # the covariate column grouping the held-out folds (:func:`fold_grouping`)
+    folds: str = ""  # which grouping the held-out folds used, and why (:func:`fold_grouping`)
+    effect_data: dict = None  # effect -> its select.EffectData (surrogates), for a refit with joint runs
+    uniform_scale: bool = False  # whether the chosen effects were fitted beside a free uniform scale
 
 
 def _follows(rank: pd.DataFrame, res: pd.DataFrame | None = None, quantity_of: dict | None = None,
@@ -329,7 +379,7 @@ def _follows(rank: pd.DataFrame, res: pd.DataFrame | None = None, quantity_of: d
     return text + ("; also " + ", ".join(also) if also else "")
 
 
-def _interval(u: pd.DataFrame, effects: list, final, settings: Settings) -> tuple[dict, str]:
+def _interval(u: pd.DataFrame, effects: list, final, settings: Settings, joint=None) -> tuple[dict, str]:
     """The chosen effects' 95 % intervals and how they were found: the wider of the fit's
     own interval and the bootstrap over the seeds and the measured standard errors
     (:func:`soilcal.loop.select.bootstrap_ci`; the fit's interval carries a lack of fit
@@ -352,34 +402,72 @@ def _interval(u: pd.DataFrame, effects: list, final, settings: Settings) -> tupl
               else [f"{m}/{r}" for m, r in zip(u["measurement"], u["row"])])
     boot = sl.bootstrap_ci(effects, u["simulated_mean"].to_numpy(float), u["measured"].to_numpy(float), se,
                            settings.bootstrap, x0=[final.theta[nm] for nm in final.names], conditions=labels,
-                           scale=rs.scale_of(u))
+                           scale=rs.scale_of(u), joint=joint)
     if boot is None:
         return final.ci, fit_only + " (too few seeds per condition to resample)"
     how = (f"a bootstrap of {settings.bootstrap} refits over each simulation's seeds and the measured standard errors "
-           f"(generator seed {sl.BOOTSTRAP_SEED})")
+           f"(generator seed {sl.BOOTSTRAP_SEED}" + ("; the effects' interaction held at its joint runs' value"
+                                                      if joint is not None else "") + ")")
     if set(fit) != set(boot):
         return boot, how + ", alone: the fit does not bound every parameter"
     ci = {nm: (min(lo, fit[nm][0]), max(hi, fit[nm][1])) for nm, (lo, hi) in boot.items()}
     return ci, "the wider of the fit's (Jacobian) interval and " + how
 
 
-def default_fold_by(settings: Settings, quantity_cols: dict, diag: pd.DataFrame | None = None) -> str | None:
-    """The held-out groups: ``loop.fold_by``, else the column holding the test ``day`` (or a
-    ``group``) where the residual differs between its groups (raw p < alpha): rows measured
-    on one day then share that day's level and are not independent, so a day is held out
-    whole; else each measured condition (more folds, a stronger paired test)."""
+#: covariate column names that identify a test day, session or group of replicates: the held-out
+#: folds keep the rows of one such group together, declared or not (:func:`fold_grouping`)
+GROUPING_NAMES = dg.GROUPING_NAMES
+#: declared quantities whose column groups the held-out folds
+GROUPING_QUANTITIES = ("day", "group")
+_grouping_name = dg.grouping_name
+
+
+def fold_grouping(settings: Settings, quantity_cols: dict, res: pd.DataFrame | None) -> tuple[str | None, str]:
+    """(covariate column grouping the held-out folds or None for each measured condition, the
+    sentence saying which and why, for the report).  The rule, in order:
+
+    1. ``loop.fold_by``, where set;
+    2. else a column that identifies test days, sessions or groups of replicates: one declared
+       with ``quantity: day`` or ``quantity: group``, or one whose name is in
+       :data:`GROUPING_NAMES` (``day``, ``date``, ``session``, ``batch``, ``block``, ...) and that
+       declares no other quantity; with two values at least on the usable rows (one test day
+       leaves nothing to leak between folds).  Rows measured on one day share that day's
+       level (the bed's preparation, the weather, the instrument's zero): held out one
+       condition at a time, an offset that varies between days leaks from the fitted rows of
+       the day into the held-out one, and an effect that follows the days' levels through a
+       covariate (moisture measured per day) passes a paired test it should fail.  Of several
+       such columns the one with the fewest groups (the coarsest) is taken;
+    3. else each measured condition (rows of one simulated test held out together)."""
+    u = None
+    if res is not None and len(res):
+        u = rs.usable(res) if "relative_residual" in res else res
     if settings.fold_by:
-        return settings.fold_by
-    for q in ("day", "group"):
-        for col, qq in (quantity_cols or {}).items():
-            if qq != q:
-                continue
-            if diag is None:
-                return col
-            t = diag[(diag["covariate"] == col) & (diag["test"] == "group")]
-            if len(t) and float(t["p"].min()) < settings.alpha:
-                return col
-    return None
+        n = int(u[f"cov:{settings.fold_by}"].dropna().astype(str).nunique()) if (
+            u is not None and f"cov:{settings.fold_by}" in u) else 0
+        return settings.fold_by, (f"one fold per value of `{settings.fold_by}` ({n} group{'s' if n != 1 else ''}), "
+                                  "as loop.fold_by sets")
+    cols = [c[4:] for c in (u.columns if u is not None else []) if c.startswith("cov:")]
+    found = []
+    for j, col in enumerate(cols):
+        q = (quantity_cols or {}).get(col)
+        if q in GROUPING_QUANTITIES:
+            why = f"declared quantity: {q}"
+        elif q is None and _grouping_name(col):
+            why = "named as a test-day, session or replicate-group column"
+        else:
+            continue
+        n = int(u[f"cov:{col}"].dropna().astype(str).nunique())
+        found.append((n, j, col, why))
+    many = [f for f in found if f[0] >= 2]
+    if many:
+        n, _, col, why = min(many)
+        return col, (f"one fold per value of `{col}` ({n} groups; {why}): rows of one group share its level, and "
+                     "are held out together (loop.fold_by sets another column)")
+    one = ", ".join(f"`{col}`" for _, _, col, _ in found)
+    return None, ("one fold per measured condition" + (f" ({one} has one value on every usable row: nothing to "
+                                                        "leak between groups)" if one else
+                                                        " (no test-day, session or group column; loop.fold_by "
+                                                        "names one)"))
 
 
 #: a measured quantity whose median ratio to the simulated mean lies within this many decades of a
@@ -412,14 +500,45 @@ def unit_hints(u: pd.DataFrame) -> list[str]:
     return out
 
 
+def joint_interaction(u: pd.DataFrame, data: dict, names: list, joint: dict | None) -> sl.Joint | None:
+    """The interaction (:class:`soilcal.loop.select.Joint`) of the chosen effects ``names`` from
+    ``joint``: {"effects": their names, "theta": {"<effect>.<parameter>": value} where all were
+    switched on together, "runs": those runs (measurement, row, measure, seed, value,
+    status)}; None where ``joint`` is of other effects, an effect has more than one parameter
+    or sits at its switched-off value there (no interaction to scale)."""
+    if not joint or sorted(joint.get("effects") or []) != sorted(names) or any(data[c].surrogate.k != 1 for c in names):
+        return None
+    keys = [f"{c}.{k}" for c in names for k in EFFECTS[c].theta_names()]
+    centre = np.array([float(joint["theta"][k]) for k in keys])
+    null = np.array([float(EFFECTS[c].null[k]) for c in names for k in EFFECTS[c].theta_names()])
+    if np.any(centre == null):
+        return None
+    stats = rs.simulated_stats(joint["runs"])
+    means = u[rs.KEY].merge(stats, on=rs.KEY, how="left")["simulated_mean"].to_numpy(float)
+    y0 = u["simulated_mean"].to_numpy(float)
+    return sl.Joint(sl.joint_gap([data[c] for c in names], y0, centre, means), centre, null)
+
+
+#: held-out groups below which the verdict of rejected candidates says how few they are
+FEW_FOLDS = 5
+
+#: rounds of joint runs at most (each at the parameters the last round fitted), and the change of
+#: every parameter, as a share of its design's span, below which the fit has settled
+JOINT_ROUNDS = 3
+JOINT_SETTLED = 0.01
+
+
 def analyse(soil: str, res: pd.DataFrame, diag: pd.DataFrame, cands: list, effect_runs: dict,
             settings: Settings, reference: dict, quantity_cols: dict | None = None,
-            skipped_effects: dict | None = None) -> Outcome:
+            skipped_effects: dict | None = None, joint: dict | None = None) -> Outcome:
     """Steps 5 (module docstring): ``effect_runs`` maps each candidate to its runs
     (measurement, row, measure, value, ``t:<name>``), the switched-off point included; rows of
     one simulation (the residual table's ``simulation`` key) share the bootstrap's draws;
     ``skipped_effects`` (:func:`skipped`) are named in the verdict where the structure (or
-    ``loop.candidates: all``) would have tried them."""
+    ``loop.candidates: all``) would have tried them; ``joint``: runs with the chosen effects
+    switched on together (:func:`joint_interaction`), with which two or more chosen effects
+    are fitted with their interaction, else as the sum of their separate changes (the verdict
+    says so)."""
     u = rs.usable(res)
     rank = dg.ranking(diag)
     follows = _follows(rank, res, quantity_cols, settings.alpha)
@@ -433,7 +552,7 @@ def analyse(soil: str, res: pd.DataFrame, diag: pd.DataFrame, cands: list, effec
     provisional = []
     sel = None
     data = {}
-    fold_by = default_fold_by(settings, quantity_cols, diag)
+    fold_by, fold_text = fold_grouping(settings, quantity_cols, res)
     unfit = {}
     if n >= 3 and cands:
         for nm in cands:  # an effect whose runs failed at too many design points cannot be fitted
@@ -458,9 +577,10 @@ def analyse(soil: str, res: pd.DataFrame, diag: pd.DataFrame, cands: list, effec
     after, left, fitted = None, "", None
     names = (sel.chosen or provisional) if sel is not None else []
     uniform = None  # the chosen effects' fit beside a free uniform scale (Score), where a bias is left
+    jt = joint_interaction(u, data, sel.chosen, joint) if sel is not None and sel.chosen else None
     if names:
         y0, meas = u["simulated_mean"].to_numpy(float), u["measured"].to_numpy(float)
-        m = sl.Model([data[c] for c in names], y0, meas, rs.scale_of(u))
+        m = sl.Model([data[c] for c in names], y0, meas, rs.scale_of(u), jt)
         x, _ = m.fit()
         fitted = m.predict(x)
         res_after = residual_after(res, fitted)
@@ -471,7 +591,7 @@ def analyse(soil: str, res: pd.DataFrame, diag: pd.DataFrame, cands: list, effec
             # them beside a free uniform scale of the model (select.scale_data), and say it
             bias, sc = sl.scale_data(y0), rs.scale_of(u)
             ref = sl.Model([bias], y0, meas, sc)
-            m = sl.Model([data[c] for c in names] + [bias], y0, meas, sc)
+            m = sl.Model([data[c] for c in names] + [bias], y0, meas, sc, jt)
             uniform = sl.score(m, ref, sl._folds(u, fold_by), settings.alpha)
             x = np.array([uniform.theta[k] for k in uniform.names], float)
             fitted = m.predict(x)
@@ -493,8 +613,14 @@ def analyse(soil: str, res: pd.DataFrame, diag: pd.DataFrame, cands: list, effec
         verdict = f"unexplained: too few measured values to decide ({n})"
     elif sel is not None and sel.chosen:
         chosen = sel.chosen
-        theta = sel.final.theta
-        ci, ci_method = _interval(u, [data[c] for c in chosen], sel.final, settings)
+        final = sel.final
+        if jt is not None:  # the chosen effects with their interaction, against the calibrated model
+            y0 = u["simulated_mean"].to_numpy(float)
+            final = sl.score(sl.Model([data[c] for c in chosen], y0, u["measured"].to_numpy(float), rs.scale_of(u), jt),
+                             sl.Model([], y0, u["measured"].to_numpy(float), rs.scale_of(u)), sl._folds(u, fold_by),
+                             settings.alpha)
+        theta = final.theta
+        ci, ci_method = _interval(u, [data[c] for c in chosen], final, settings, jt)
         if uniform is not None:
             key = "uniform_scale.s"
             theta = {k: v for k, v in uniform.theta.items() if k != key}
@@ -522,6 +648,22 @@ def analyse(soil: str, res: pd.DataFrame, diag: pd.DataFrame, cands: list, effec
                         f"with the effect{'s' if len(chosen) > 1 else ''}, paired p {sel.uniform.p:.2g}), "
                         "so these rows cannot tell "
                         + ("it" if len(chosen) == 1 else "them") + " from a bias no mechanism carries")
+        if jt is not None and len(chosen) == 1:  # said with the interval (summary ci95_method, report)
+            ci_method += ("; the parameter refitted with runs at " + ", ".join(f"{k} {v:.4g}" for k, v in
+                                                                             joint["theta"].items())
+                          + " (they differ from the surrogate through the design points by "
+                          f"{100 * float(np.sqrt(np.mean((jt.gap / rs.scale_of(u)) ** 2))):.2g} % RMS there)")
+        if len(chosen) > 1:
+            if jt is not None:
+                verdict += ("; fitted with their interaction, from runs with " + " and ".join(chosen)
+                            + " switched on together at " + ", ".join(f"{k} {v:.4g}" for k, v in joint["theta"].items())
+                            + f" (the joint runs differ from the sum of the separate changes by "
+                            f"{100 * float(np.sqrt(np.mean((jt.gap / rs.scale_of(u)) ** 2))):.2g} % RMS)")
+            else:
+                verdict += ("; fitted as the sum of each effect's separate change (first order), which leaves out "
+                            "their interaction: where they interact (a friction and a density that both scale the "
+                            "passive pressure) the parameters carry a bias their intervals do not cover "
+                            "(soilcal loop run simulates them together and refits)")
         edge = _at_bounds(theta, [data[c] for c in chosen])
         if edge:
             verdict += "; " + "; ".join(edge)
@@ -546,10 +688,19 @@ def analyse(soil: str, res: pd.DataFrame, diag: pd.DataFrame, cands: list, effec
         if sel_rows:
             verdict += "; no candidate effect lowered the held-out error significantly (selection.csv)"
     elif not cands:
-        verdict = f"unexplained: the residual follows {follows}; no effect of the library acts through it"
+        sig = dg.matched_quantities(diag) if len(diag) else set()
+        held = [nm for nm in (skipped_effects or {}) if sig & set(EFFECTS[nm].signature)]
+        verdict = (f"unexplained: the residual follows {follows}; "
+                   + ("no effect of the library could be tried through it" if held
+                      else "no effect of the library acts through it"))
     else:
         rejected = "; ".join(f"{r['effects']}: {r['reason']}" for r in sel_rows if r["reason"])
         verdict = f"unexplained: the residual follows {follows}; candidates rejected ({rejected})"
+        groups = len(sl._folds(u, fold_by)) if fold_by else 0
+        if 2 <= groups < FEW_FOLDS:
+            verdict += (f"; the rows were held out by `{fold_by}`, {groups} groups, so the paired test has "
+                        f"{groups - 1} degree{'s' if groups > 2 else ''} of freedom and passes only a large gain "
+                        "alike in every group (more groups decide; loop.fold_by sets the grouping)")
     matched = dg.matched_quantities(diag) if len(diag) else set()
     for nm, why in (skipped_effects or {}).items():  # those the structure (or candidates: all) would have tried
         if settings.candidates == "all" or matched & set(EFFECTS[nm].signature):
@@ -558,7 +709,7 @@ def analyse(soil: str, res: pd.DataFrame, diag: pd.DataFrame, cands: list, effec
         verdict += f"; {hint}"
     tests = len(dg.per_test(u))  # table rows: the trend tests take one value per measured test
     if 0 < tests < 4 and not verdict.startswith("no "):
-        verdict += f"; with {tests} rows no trend was tested (a trend test needs 4)"
+        verdict += f"; with {tests} row{'s' if tests != 1 else ''} no trend was tested (a trend test needs 4)"
     if n > 0 and len(res):
         measured = np.isfinite(res["measured"].astype(float).to_numpy())
         unsimulated = int((measured & ~np.isfinite(res["simulated_mean"].astype(float).to_numpy())).sum())
@@ -575,10 +726,11 @@ def analyse(soil: str, res: pd.DataFrame, diag: pd.DataFrame, cands: list, effec
         "parameters": _fmt(theta), "ci95": _fmt_ci(ci), "ci95_method": ci_method, "follows": follows, "rmse_before_percent": rb,
         "rmse_after_percent": ra, "max_before_percent": mb, "max_after_percent": ma,
         "error_reduction_percent": (1 - ra / rb) * 100 if rb and np.isfinite(rb) and rb > 0 else math.nan,
-        "alpha": settings.alpha, "reference": _fmt(reference)}], columns=SUMMARY_COLUMNS)
+        "alpha": settings.alpha, "reference": _fmt(reference), "folds": fold_text}], columns=SUMMARY_COLUMNS)
     return Outcome(res, diag, rank, cands, pd.DataFrame(sel_rows, columns=SELECTION_COLUMNS), summary, pred,
                    verdict, chosen, theta, after, dg.detectable(res, diag, quantity_cols, settings.alpha),
-                   {nm: list(d.missing) for nm, d in data.items() if d.missing}, dict(skipped_effects or {}))
+                   {nm: list(d.missing) for nm, d in data.items() if d.missing}, dict(skipped_effects or {}),
+                   fold_by, fold_text, data, uniform is not None)
 
 
 # --------------------------------------------------------------------------- in process
@@ -593,12 +745,16 @@ def run_inprocess(soil: str, conditions, base_params, simulate, settings: Settin
     settings = settings or Settings()
     done = {}  # a test measured twice (rows of one simulation) runs once per design point and seed
 
-    def runs_at(effect, theta, reference):
+    def runs_at(effect, theta, reference, together: dict | None = None):
         rows = []
         for c in conditions:
             p = base_params(c)
             if effect:
                 p = EFFECTS[effect].apply(p, c.quantities or {}, theta, reference, c.scenario)
+            if together:  # several effects switched on at once (name -> theta), in library order
+                from soilcal.loop.effects import apply_all
+
+                p = apply_all(together, p, c.quantities or {}, reference, c.scenario)
             for seed in seeds:
                 key = (rs.simulation_key(c), json.dumps(p, sort_keys=True), int(seed))
                 if key not in done:
@@ -637,10 +793,42 @@ def run_inprocess(soil: str, conditions, base_params, simulate, settings: Settin
     skip = skipped(conditions, settings)
     out = analyse(soil, res, diag, cands, effect_runs, settings, reference, qcols, skip)
     more = more_candidates(out, conditions, settings)
-    if not more:
+    if more:
+        simulate_candidates(more)  # the second round, as the workflow's loop_more checkpoint
+        cands = cands + more
+        out = analyse(soil, res, diag, cands, effect_runs, settings, reference, qcols, skip)
+    # the chosen effects simulated (together, where there are several) at the fitted parameters and
+    # refitted with the difference between those runs and the model's prediction there as a
+    # mixed term (select.Joint): the interaction of several effects, and the error of the
+    # surrogates between their design points; repeated at the refitted values until they settle
+    if not out.chosen or any(len(EFFECTS[c].params) != 1 for c in out.chosen):
         return out
-    simulate_candidates(more)  # the second round, as the workflow's loop_more checkpoint
-    return analyse(soil, res, diag, cands + more, effect_runs, settings, reference, qcols, skip)
+    keys = [f"{c}.{k}" for c in out.chosen for k in EFFECTS[c].theta_names()]
+    span = np.array([float(np.subtract(*settings.effect_bounds(c)[k][::-1])) for c in out.chosen
+                     for k in EFFECTS[c].theta_names()])
+    null = np.array([float(EFFECTS[c].null[k]) for c in out.chosen for k in EFFECTS[c].theta_names()])
+    u = rs.usable(res)
+    y0, meas, sc = u["simulated_mean"].to_numpy(float), u["measured"].to_numpy(float), rs.scale_of(u)
+    effects = [out.effect_data[c] for c in out.chosen] + ([sl.scale_data(y0)] if out.uniform_scale else [])
+    x, joint = np.array([out.theta[k] for k in keys], float), None
+    for _ in range(JOINT_ROUNDS):
+        if np.any(x == null):
+            break
+        together = {c: {k: float(x[keys.index(f"{c}.{k}")]) for k in EFFECTS[c].theta_names()} for c in out.chosen}
+        joint = {"effects": list(out.chosen), "theta": dict(zip(keys, map(float, x))),
+                 "runs": runs_at(None, None, reference, together)}
+        jt = joint_interaction(u, out.effect_data, out.chosen, joint)
+        start = np.concatenate([x, [0.0]]) if out.uniform_scale else x
+        new = sl.Model(effects, y0, meas, sc, jt).fit(x0=start)[0][:len(keys)]
+        settled = bool(np.all(np.abs(new - x) <= JOINT_SETTLED * span))
+        x = new
+        if settled:
+            break
+    if joint is None:
+        return out
+    final = analyse(soil, res, diag, cands, effect_runs, settings, reference, qcols, skip, joint)
+    return final if sorted(final.chosen) == sorted(out.chosen) else out
+    return out
 
 
 def more_candidates(out: Outcome, conditions, settings: Settings) -> list[str]:

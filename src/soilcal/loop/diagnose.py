@@ -72,9 +72,29 @@ def _ols(y, X):
     return OLS(np.asarray(y, float), np.asarray(X, float)).fit()
 
 
+#: covariate column names that identify a test day, session or group of replicates (compared in
+#: lower case, with spaces, hyphens and dots read as underscores): tested as labels where they
+#: declare no quantity, even with numbered cells, and grouping the held-out folds
+#: (:func:`soilcal.loop.core.fold_grouping`)
+GROUPING_NAMES = ("day", "date", "test_day", "test_date", "day_id", "day_no", "session", "test_session",
+                  "session_id", "session_no", "batch", "batch_id", "block", "group", "test_group",
+                  "replicate_group", "rep_group", "series")
+
+
+def grouping_name(col: str) -> bool:
+    """Whether a column's name is one of :data:`GROUPING_NAMES`."""
+    import re
+
+    return re.sub(r"[\s.\-]+", "_", str(col).strip().lower()) in GROUPING_NAMES
+
+
 def _numeric(col: pd.Series, name: str, q: str) -> bool:
-    """Whether a covariate is tested as a number (trend, curvature) rather than a label."""
-    return _is_numeric(col) and name != "measure" and q not in LABEL_QUANTITIES
+    """Whether a covariate is tested as a number (trend, curvature) rather than a label: a
+    column of numbers that is not the measured quantity, not declared as a label quantity and,
+    declaring none, not named as a test day or session (:data:`GROUPING_NAMES`: day 1, 2, 3 are
+    days, not a scale)."""
+    return (_is_numeric(col) and name != "measure" and q not in LABEL_QUANTITIES
+            and not (not q and grouping_name(name)))
 
 
 def _standardised(col: pd.Series) -> np.ndarray:
@@ -196,16 +216,31 @@ def normal_equivalent(t, dof):
 
 
 def per_test(d: pd.DataFrame) -> pd.DataFrame:
-    """One row per measured test (a row of a measured table) of the residual rows ``d``: the
-    relative residuals of the quantities one test measures (its horizontal and vertical
-    force) averaged, the other columns (its covariates) kept.  A stone, a ridge or a day's
-    level moves every quantity of a test alike, so they are not independent observations of
-    a covariate's structure: counted as such, a table of two quantities per test halves the
-    p-values of its trend tests (module docstring).  ``d`` itself where each test has one row
-    or no test is named (no ``measurement``, ``row`` columns)."""
+    """One row per measured test of the residual rows ``d``: the relative residuals of the
+    quantities one test measures (its horizontal and vertical force) averaged, the other
+    columns (its covariates) kept.  A stone, a ridge or a day's level moves every quantity of a
+    test alike, so they are not independent observations of a covariate's structure: counted
+    as such, a table of two quantities per test halves the p-values of its trend tests (module
+    docstring).  A test is a row of a measured table; table rows entered twice (the same
+    simulation, the same value in every covariate column and the same measured values, SDs and
+    repeat counts) are one test: a row copied into a table tells a covariate's structure no
+    more than once (three rows of twelve entered twice made the residual "follow" the
+    moisture at Holm p 0.004).  ``d`` itself where each test has one row or no test is named
+    (no ``measurement``, ``row`` columns)."""
     if "measurement" not in d.columns or "row" not in d.columns or len(d) == 0:
         return d
     key = d["measurement"].astype(str) + "/" + d["row"].astype(str)
+    if "simulation" in d.columns:
+        same = [c for c in ["simulation", *sorted(c for c in d.columns if c.startswith("cov:"))] if c in d.columns]
+        what = [c for c in ("measure", "measured", "measured_sd", "measured_n") if c in d.columns]
+        cells = ["|".join(map(str, a)) + "#" + "=".join(map(str, b))
+                 for a, b in zip(d[same].itertuples(index=False), d[what].itertuples(index=False))]
+        # per table row: its simulation and covariates, and every measured value it holds
+        rows = {}
+        for k, c in zip(key, cells):
+            rows.setdefault(k, []).append(c)
+        sig = {k: "&".join(sorted(v)) for k, v in rows.items()}
+        key = pd.Series([sig[k] for k in key], index=d.index)
     if key.is_unique:
         return d
     g = d.assign(_test=key.to_numpy()).groupby("_test", sort=False)

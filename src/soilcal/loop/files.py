@@ -82,7 +82,7 @@ def diagnose_files(soil_path, resources_root, tool_files: dict, outdir) -> dict:
     diag = dg.diagnose(res, qcols, settings.alpha)
     reference = core.reference_values(res, settings)
     cands = core.candidates(diag, conds, settings) if len(rs.usable(res)) >= 3 else []
-    plan = _plan(soil.name, cands, reference, settings, qcols, diag, core.skipped(conds, settings))
+    plan = _plan(soil.name, cands, reference, settings, qcols, diag, core.skipped(conds, settings), res)
     out = Path(outdir)
     write_csv(res, out / "residuals.csv")
     write_csv(diag, out / "diagnosis.csv")
@@ -92,11 +92,12 @@ def diagnose_files(soil_path, resources_root, tool_files: dict, outdir) -> dict:
     return plan
 
 
-def _plan(soil_name, cands, reference, settings, qcols, diag, skipped: dict | None = None) -> dict:
+def _plan(soil_name, cands, reference, settings, qcols, diag, skipped: dict | None = None, res=None) -> dict:
+    fold_by, folds = core.fold_grouping(settings, qcols, res)
     return {"soil": soil_name, "candidates": cands, "skipped": dict(skipped or {}), "reference": reference,
             "design": {nm: sl.theta_design(EFFECTS[nm], settings.effect_bounds(nm), settings.design_points)
                        for nm in cands},
-            "fold_by": core.default_fold_by(settings, qcols, diag), "quantity_columns": qcols,
+            "fold_by": fold_by, "folds": folds, "quantity_columns": qcols,
             "settings": asdict(settings)}
 
 
@@ -174,7 +175,7 @@ def more_files(soil_path, resources_root, outdir, effect_files: dict, out_plan) 
     outcome, conds, settings = _outcome(soil, outdir, effect_files, [plan])
     more = core.more_candidates(outcome, conds, settings) if plan["candidates"] else []
     plan_more = _plan(soil.name, more, plan["reference"], settings, plan["quantity_columns"],
-                      pd.read_csv(Path(outdir) / "diagnosis.csv"))
+                      pd.read_csv(Path(outdir) / "diagnosis.csv"), res=pd.read_csv(Path(outdir) / "residuals.csv"))
     write_json(plan_more, out_plan)
     return plan_more
 
@@ -262,8 +263,8 @@ def report(soil: str, o: core.Outcome, plans: list) -> str:
              "## Error on held-out measurements", "",
              "Relative error (measured - simulated) / |measured| over the usable rows (over the quantity's RMS "
              "where residuals.csv's note says so); after = each row "
-             "predicted with the effect parameters fitted without its group "
-             f"(groups: {plan.get('fold_by') or 'measured conditions'}).", "",
+             "predicted with the effect parameters fitted without its group.", "",
+             f"Held-out groups: {o.folds or plan.get('folds') or 'one fold per measured condition'}.", "",
              "| | RMS error, % | largest error, % |", "|---|---|---|",
              f"| calibrated model | {s['rmse_before_percent']:.2f} | {s['max_before_percent']:.2f} |",
              f"| with the chosen effects | {s['rmse_after_percent']:.2f} | {s['max_after_percent']:.2f} |", ""]

@@ -6,7 +6,11 @@ the same seeds at every design point (common random numbers).  Per measured quan
 surrogate ``s_i(theta)`` is fitted to the seed means over the design (:class:`Surrogate`).  The
 prediction of a model with several effects adds their changes to the calibrated mean ``y_i0``
 (first-order superposition: ``y_i0 + sum_E (s_i^E(theta_E) - y_i0)``); effects that change
-different DEM parameters act nearly independently over small changes.
+different DEM parameters act nearly independently over small changes, but not exactly (a
+friction and a density both scale the passive pressure): where runs with the chosen effects
+switched on together exist, their difference from that sum enters as a mixed term
+(:class:`Joint`, :func:`soilcal.loop.core.run_inprocess`), as runs of a single effect at its
+fitted value correct its surrogate there.
 
 Scoring a model against a reference model (the calibrated one, or the model with the
 effects already chosen), on the relative errors ``e_i = (measured_i - prediction_i) / |measured_i|``:
@@ -223,6 +227,33 @@ def _folds(obs: pd.DataFrame, fold_by: str | None) -> list[np.ndarray]:
 
 
 @dataclass
+class Joint:
+    """The interaction of a model's effects, from runs with all of them switched on together at
+    ``centre`` (one value per parameter, in the model's order; every effect of one parameter):
+    per row ``gap`` = the joint runs' mean - the first-order sum of the effects' separate changes
+    there (:func:`joint_gap`).  :meth:`Model.predict` adds ``gap`` times the product over the
+    effects of (theta - null) / (centre - null): the mixed term of a second-order expansion
+    about the switched-off point, zero where any effect is off and exact at ``centre`` (for a
+    single effect, the surrogate's error at ``centre``, brought in linearly from the
+    switched-off value, where the surrogate is exact)."""
+
+    gap: np.ndarray
+    centre: np.ndarray
+    null: np.ndarray
+
+    def weight(self, x) -> float:
+        return float(np.prod((np.asarray(x, float) - self.null) / (self.centre - self.null)))
+
+
+def joint_gap(effects: list, y0: np.ndarray, centre: np.ndarray, joint_means: np.ndarray) -> np.ndarray:
+    """Per row the joint runs' mean at ``centre`` less the first-order prediction there (the
+    calibrated mean plus each effect's change from its own surrogate); 0 where a row has no
+    joint run."""
+    first = Model(effects, y0, np.ones_like(y0)).predict(np.asarray(centre, float))
+    return np.where(np.isfinite(joint_means), joint_means - first, 0.0)
+
+
+@dataclass
 class Model:
     """Effects with fitted parameters and the calibrated means they modify."""
 
@@ -230,6 +261,7 @@ class Model:
     y0: np.ndarray           # calibrated simulated means of the rows
     measured: np.ndarray
     scale: np.ndarray | None = None  # the relative errors' denominators (residuals.scales); default |measured|
+    joint: Joint | None = None  # the effects' interaction from runs with all of them on (:class:`Joint`)
 
     def __post_init__(self):
         if self.scale is None:
@@ -251,6 +283,8 @@ class Model:
             else:
                 out = out + (e.surrogate(x[j:j + e.surrogate.k]) - self.y0)
             j += e.surrogate.k
+        if self.joint is not None:
+            out = out + self.joint.gap * self.joint.weight(np.asarray(x, float)[:len(self.joint.centre)])
         return out * factor
 
     def errors(self, x, idx=None) -> np.ndarray:
@@ -420,7 +454,7 @@ BOOTSTRAP_SEED = 0
 
 def bootstrap_ci(effects: list, y0: np.ndarray, measured: np.ndarray, measured_se: np.ndarray,
                  n_boot: int = BOOTSTRAP, seed: int = BOOTSTRAP_SEED, level: float = 0.95, x0=None,
-                 conditions=None, scale: np.ndarray | None = None) -> dict | None:
+                 conditions=None, scale: np.ndarray | None = None, joint: Joint | None = None) -> dict | None:
     """Bootstrap interval of the parameters of the model with ``effects``
     (:class:`EffectData` with their runs' ``values`` and ``seeds``) over the seeds and the
     measured values (module docstring): parameter name -> (low, high).
@@ -501,7 +535,7 @@ def bootstrap_ci(effects: list, y0: np.ndarray, measured: np.ndarray, measured_s
             fitted.append(EffectData(e.effect, e.bounds, Surrogate(e.effect, e.bounds, e.thetas(), Y), e.design))
         if lost:
             continue
-        x, _ = Model(fitted, y0 if yb is None else yb, m, scale).fit(x0=x0)
+        x, _ = Model(fitted, y0 if yb is None else yb, m, scale, joint).fit(x0=x0)
         draws.append(x)
     if len(draws) < max(20, n_boot // 2):
         return None

@@ -138,15 +138,32 @@ def check_acts(hidden: dict, disturbances: dict, conditions, base_params, refere
         days = set(test_days(conditions))
         if len(days) < 2:
             raise InputError(disturbance_source or source, "disturbance.day_offset", f"a table with two test days at least (a covariate "
-                             f"with quantity: day); {tables} has " + (f"one day ({days.pop()})" if days - {""} else
+                             f"with quantity: day, or named day, session, ...); {tables} has " + (f"one day ({days.pop()})" if days - {""} else
                                                                      "no day column"),
                              "one offset for every row")
 
 
 def test_days(conditions) -> list[str]:
     """The test day of every condition (its ``day`` quantity; "" for a row without one, a day
-    of its own): the groups a day offset shifts together."""
-    return [str((c.quantities or {}).get("day", "")) for c in conditions]
+    of its own): the groups a day offset shifts together.  Where no condition declares one,
+    the column the loop groups its held-out folds by (:func:`soilcal.loop.core.fold_grouping`:
+    a ``group`` quantity, or a column named ``day``, ``session``, ...), so that a day offset
+    falls on the days the loop reads."""
+    conditions = list(conditions)
+    if any("day" in (c.quantities or {}) for c in conditions):
+        return [str((c.quantities or {}).get("day", "")) for c in conditions]
+    from soilcal.loop import core
+    from soilcal.loop.residuals import observations
+
+    qcols = core.quantity_of(conditions)
+    col, _ = core.fold_grouping(core.Settings(), qcols, observations(conditions))
+    if col is None:  # one value on every row: that one day
+        col = next((k for c in conditions for k in (c.covariates or {})
+                    if qcols.get(k) == "group" or (k not in qcols and core._grouping_name(k))), None)
+    if col is None:
+        return ["" for _ in conditions]
+    return [("" if (c.covariates or {}).get(col) is None else str((c.covariates or {}).get(col)))
+            for c in conditions]
 
 
 def default_reference(conditions, declared: dict | None = None, source="<synthesize>", strict: bool = False,
