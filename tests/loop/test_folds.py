@@ -69,12 +69,12 @@ def _frame(cols: dict, quantity_cols=None):
     return pd.DataFrame({**base, **{f"cov:{k}": v for k, v in cols.items()}})
 
 
-@pytest.mark.parametrize("name", ["day", "Day", "test day", "Test-Day", "session", "batch", "block", "date"])
+@pytest.mark.parametrize("name", ["day", "Day", "test day", "Test-Day", "session", "batch", "date"])
 def test_a_column_named_as_a_test_day_or_session_groups_the_folds(name):
     res = _frame({name: ["a", "a", "b", "b", "c", "c"], "speed": [1, 2, 3, 4, 5, 6]})
     col, text = core.fold_grouping(core.Settings(), {}, res)
     assert col == name and "(3 groups; named as a test-day, session or replicate-group column)" in text
-    # four folds by a declared group column: coarser than three? no: the fewest groups wins
+    # a declared group column comes before a named one, with two groups
     res2 = res.assign(**{"cov:plot": ["p1", "p1", "p1", "p2", "p2", "p2"]})
     col, text = core.fold_grouping(core.Settings(), {"plot": "group"}, res2)
     assert col == "plot" and "(2 groups; declared quantity: group)" in text
@@ -127,3 +127,35 @@ def test_candidates_rejected_over_few_day_groups_say_how_few_they_are():
     assert out.verdict.endswith("the rows were held out by `day`, 3 groups, so the paired test has 2 degrees of "
                                 "freedom and passes only a large gain alike in every group (more groups decide; "
                                 "loop.fold_by sets the grouping)"), out.verdict
+
+
+def test_a_declared_day_column_comes_before_a_column_named_like_one_and_two_named_groups_are_none():
+    res = _frame({"day": ["a", "a", "b", "b", "c", "c"], "batch": ["x", "y", "x", "y", "x", "y"]})
+    # declared days (3 groups) before the named batch column (2 groups)
+    col, text = core.fold_grouping(core.Settings(), {"day": "day"}, res)
+    assert col == "day" and "declared quantity: day" in text
+    # undeclared, the two-valued batch column is no grouping (a paired test over two folds has
+    # one degree of freedom); the three-valued day column is
+    col, _ = core.fold_grouping(core.Settings(), {}, res)
+    assert col == "day"
+    col, text = core.fold_grouping(core.Settings(), {}, res.drop(columns="cov:day"))
+    assert col is None and "one fold per measured condition" in text
+
+
+@pytest.mark.parametrize("name", ["group", "block", "series"])
+def test_a_moisture_set_per_treatment_group_is_tried(name):
+    # a true moisture effect (c_w 0.03, 2 % noise, no offset between groups), the moisture set
+    # once per level of a column named `group`: the experiment's own treatment, not a test
+    # session with a level of its own, so the effect is tried and named
+    rows = S.grid(4, 18, moisture=True)
+    rng = np.random.default_rng(104)
+    per = {f"d{k}": float(rng.uniform(8, 24)) for k in range(6)}
+    for r in rows:
+        r["moisture_content"] = per[r["day"]]
+    conds = S.conditions(rows)
+    table = sy.synthesize(conds, S.base_params, S.simulate, {"moisture_cohesion": {"c_w": 0.03}}, REFERENCE, {},
+                          noise=0.02, seed=14)
+    out = core.run_inprocess("user", sy.with_measured(_undeclared(conds, name), table), S.base_params, S.simulate,
+                             core.Settings(reference=REFERENCE, bootstrap=0))
+    assert out.chosen == ["moisture_cohesion"], out.verdict
+    assert out.theta["moisture_cohesion.c_w"] == pytest.approx(0.03, rel=0.25)

@@ -663,6 +663,7 @@ def test_moisture_in_the_wrong_unit_is_refused_naming_the_table_and_column(tmp_p
     (FRACTIONS, "fraction", "{value: 15.0, unit: \"%\"}"),
     (FRACTIONS, "g/g", None),
     (PERCENT, "%", "{value: 0.15, unit: \"-\"}"),  # the soil's own as a fraction, unit "-"
+    (PERCENT, "%", "{value: 15, unit: percent}"),  # the unit spelled out
 ])
 def test_moisture_in_percent_or_declared_as_a_fraction_is_read_in_percent(tmp_path, cells, unit, prop):
     from soilcal.config.load import load_soil
@@ -671,6 +672,30 @@ def test_moisture_in_percent_or_declared_as_a_fraction_is_read_in_percent(tmp_pa
     soil, res, _ = _moisture_soil(tmp_path, cells, unit, prop)
     conds = [c for c in conditions(load_soil(soil, res)) if c.measurement == "bin_forces"]
     assert [c.quantities["moisture_content"] for c in conds] == pytest.approx(PERCENT)
+
+
+AIR_DRY = [0.3, 0.5, 0.9, 0.3, 0.5, 0.9]
+
+
+@pytest.mark.parametrize("prop", ["{value: 20.0, unit: \"%\"}", "{low: 0.3, high: 0.9, unit: \"%\"}"])
+def test_air_dry_tests_in_percent_are_read_as_such(tmp_path, prop):
+    # tests at 0.3-0.9 % moisture: beside a soil held at 20 % they are not fractions of 1 (30-90 %
+    # read so); a soil that gives its own range of 0.3-0.9 % says they are that dry
+    from soilcal.config.load import load_soil
+    from soilcal.config.measurements import conditions
+
+    soil, res, _ = _moisture_soil(tmp_path, AIR_DRY, "%", prop)
+    conds = [c for c in conditions(load_soil(soil, res)) if c.measurement == "bin_forces"]
+    assert [c.quantities["moisture_content"] for c in conds] == pytest.approx(AIR_DRY)
+
+
+def test_fractions_beside_a_moisture_in_percent_spelled_out_are_refused(tmp_path):
+    from soilcal.config.load import load_soil
+    from soilcal.errors import InputError
+
+    soil, res, _ = _moisture_soil(tmp_path, FRACTIONS, "%", "{value: 15, unit: percent}")
+    with pytest.raises(InputError, match="about 100 times smaller"):
+        load_soil(soil, res)
 
 
 def test_rows_entered_twice_tell_the_diagnosis_nothing_new():

@@ -74,6 +74,7 @@ from __future__ import annotations
 
 import math
 import os
+import re
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -637,18 +638,26 @@ MOISTURE_DECADES = (1.5, 2.5)
 
 
 def _soil_moisture(data: dict) -> tuple[list, str] | None:
-    """The soil's own moisture contents in % (``properties.moisture_content``: its ``value`` or
-    ``values``, in ``%`` or as a fraction, unit ``-``, ``fraction``, ``g/g`` or ``kg/kg``), and
-    how the soil file gives them; None where it gives none."""
+    """The soil's own moisture contents in % (``properties.moisture_content``: its ``values``,
+    ``value``, ``low`` and ``high``, in ``%`` (``percent``, ``wt%``) or as a fraction, unit ``-``,
+    ``fraction``, ``g/g`` or ``kg/kg``), and how the soil file gives them; None where it gives
+    none, or in a unit not one of these."""
     prop = (data.get("properties") or {}).get("moisture_content")
     if not isinstance(prop, dict):
         return None
-    vals = prop.get("values") if prop.get("values") is not None else [prop.get("value")]
-    x = [float(v) for v in (vals or []) if _number(v) is not None]
-    factor = {"%": 1.0, "-": 100.0, "fraction": 100.0, "g/g": 100.0, "kg/kg": 100.0}.get(str(prop.get("unit", "%")))
+    vals = list(prop.get("values") or []) + [prop.get(k) for k in ("value", "low", "high")]
+    x = [float(v) for v in vals if _number(v) is not None]
+    unit = re.sub(r"[\s.()]+", "", str(prop.get("unit", "%")).lower())
+    factor = {"%": 1.0, "percent": 1.0, "wt%": 1.0, "%w/w": 1.0, "-": 100.0, "fraction": 100.0,
+              "g/g": 100.0, "kg/kg": 100.0}.get(unit)
     if not x or factor is None:
         return None
     return [v * factor for v in x], ", ".join(f"{v:g}" for v in x) + f" {prop.get('unit', '%')}"
+
+
+#: how near (decades) the other reading of a suspect moisture column (x 100 or / 100) must come to
+#: the soil's own moisture for the column to be refused as in the wrong form
+MOISTURE_MATCH = 0.3
 
 
 def _check_moisture(data: dict, tpath: Path, df: pd.DataFrame, covs: dict, quantity_cols: dict) -> None:
@@ -657,7 +666,8 @@ def _check_moisture(data: dict, tpath: Path, df: pd.DataFrame, covs: dict, quant
     of 10 %.  Refused naming the table and column, where (1) a column declared as a fraction
     (``-``, ``fraction``, ``g/g``, ``kg/kg``) holds a value above 1; (2) its median, in %, lies 1.5 to 2.5
     decades below or above the median of the soil's own ``properties.moisture_content`` (in %
-    or as a fraction, as the soil file says); (3) without that property, a column in % holds
+    or as a fraction, as the soil file says) and, read the other way (times or over 100),
+    within :data:`MOISTURE_MATCH` decades of it; (3) without that property, a column in % holds
     no value above 1 (a soil at most 1 % wet throughout; the soil's property says so where it
     is)."""
     import numpy as np
@@ -681,7 +691,10 @@ def _check_moisture(data: dict, tpath: Path, df: pd.DataFrame, covs: dict, quant
             ref = float(np.median(soil[0]))
             if med > 0 and ref > 0:
                 lg = float(np.log10(med / ref))
-                if MOISTURE_DECADES[0] <= abs(lg) <= MOISTURE_DECADES[1]:
+                # read the other way (x 100 or / 100) the column must match the soil's own moisture:
+                # air-dry tests (0.5 %) of a soil held at 20 % are not fractions of 1 (50 %)
+                other = abs(lg - 2.0 * np.sign(lg))
+                if MOISTURE_DECADES[0] <= abs(lg) <= MOISTURE_DECADES[1] and other <= MOISTURE_MATCH:
                     times = f"{10 ** round(abs(lg)):g}"
                     if lg < 0:
                         hint = (f"fractions of 1 under unit {unit}? declare unit: fraction under the covariate to "

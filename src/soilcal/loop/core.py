@@ -419,6 +419,8 @@ def _interval(u: pd.DataFrame, effects: list, final, settings: Settings, joint=N
 GROUPING_NAMES = dg.GROUPING_NAMES
 #: declared quantities whose column groups the held-out folds
 GROUPING_QUANTITIES = ("day", "group")
+#: values a column grouping the folds by its name alone (not declared) needs
+NAMED_MIN_GROUPS = 3
 _grouping_name = dg.grouping_name
 
 
@@ -429,14 +431,15 @@ def fold_grouping(settings: Settings, quantity_cols: dict, res: pd.DataFrame | N
     1. ``loop.fold_by``, where set;
     2. else a column that identifies test days, sessions or groups of replicates: one declared
        with ``quantity: day`` or ``quantity: group``, or one whose name is in
-       :data:`GROUPING_NAMES` (``day``, ``date``, ``session``, ``batch``, ``block``, ...) and that
+       :data:`GROUPING_NAMES` (``day``, ``date``, ``session``, ``batch``, ...) and that
        declares no other quantity; with two values at least on the usable rows (one test day
        leaves nothing to leak between folds).  Rows measured on one day share that day's
        level (the bed's preparation, the weather, the instrument's zero): held out one
        condition at a time, an offset that varies between days leaks from the fitted rows of
        the day into the held-out one, and an effect that follows the days' levels through a
-       covariate (moisture measured per day) passes a paired test it should fail.  Of several
-       such columns the one with the fewest groups (the coarsest) is taken;
+       covariate (moisture measured per day) passes a paired test it should fail.  A declared
+       column comes before a named one, and a named one needs :data:`NAMED_MIN_GROUPS` values;
+       of several such columns the one with the fewest groups (the coarsest) is taken;
     3. else each measured condition (rows of one simulated test held out together)."""
     u = None
     if res is not None and len(res):
@@ -457,13 +460,16 @@ def fold_grouping(settings: Settings, quantity_cols: dict, res: pd.DataFrame | N
         else:
             continue
         n = int(u[f"cov:{col}"].dropna().astype(str).nunique())
-        found.append((n, j, col, why))
-    many = [f for f in found if f[0] >= 2]
+        found.append((q is None, n, j, col, why))
+    # a declared column with two groups at least, else a column grouping by its name alone with
+    # NAMED_MIN_GROUPS (a name is a weaker sign than a declaration, and two folds leave the
+    # paired test one degree of freedom)
+    many = [f for f in found if f[1] >= (NAMED_MIN_GROUPS if f[0] else 2)]
     if many:
-        n, _, col, why = min(many)
+        _, n, _, col, why = min(many)
         return col, (f"one fold per value of `{col}` ({n} groups; {why}): rows of one group share its level, and "
                      "are held out together (loop.fold_by sets another column)")
-    one = ", ".join(f"`{col}`" for _, _, col, _ in found)
+    one = ", ".join(f"`{col}`" for *_, col, _ in found)
     return None, ("one fold per measured condition" + (f" ({one} has one value on every usable row: nothing to "
                                                         "leak between groups)" if one else
                                                         " (no test-day, session or group column; loop.fold_by "
@@ -516,7 +522,27 @@ def joint_interaction(u: pd.DataFrame, data: dict, names: list, joint: dict | No
     stats = rs.simulated_stats(joint["runs"])
     means = u[rs.KEY].merge(stats, on=rs.KEY, how="left")["simulated_mean"].to_numpy(float)
     y0 = u["simulated_mean"].to_numpy(float)
-    return sl.Joint(sl.joint_gap([data[c] for c in names], y0, centre, means), centre, null)
+    gap = sl.joint_gap([data[c] for c in names], y0, centre, means)
+    if joint.get("base") is None:
+        return sl.Joint(gap, centre, null)
+    # a gap within JOINT_GAP_SE standard errors of the joint runs' change from the calibrated runs
+    # (seed by seed) is their seeds' scatter, not an interaction: kept out (else, scaled towards
+    # the switched-off value, one draw of a chaotic run's scatter acts as a slope beside the
+    # effect's own); runs that share their random numbers (the same scatter at every parameter)
+    # have a paired change without scatter and keep their gap
+    se = u[rs.KEY].merge(paired_se(joint["runs"], joint["base"]), on=rs.KEY, how="left")["se"].to_numpy(float)
+    return sl.Joint(np.where(np.abs(gap) > JOINT_GAP_SE * np.nan_to_num(se, nan=np.inf), gap, 0.0), centre, null)
+
+
+def paired_se(runs: pd.DataFrame, base: pd.DataFrame) -> pd.DataFrame:
+    """Per measured quantity (:data:`soilcal.loop.residuals.KEY`) the standard error of the mean
+    change from ``base`` to ``runs`` over the seeds both ran (``se``; NaN below two seeds)."""
+    cols = [*rs.KEY, "seed", "value"]
+    ok = [f[cols][np.isfinite(pd.to_numeric(f["value"], errors="coerce").to_numpy(float))] for f in (runs, base)]
+    d = ok[0].merge(ok[1], on=[*rs.KEY, "seed"], suffixes=("", "_base"))
+    d["change"] = d["value"] - d["value_base"]
+    g = d.groupby(rs.KEY)["change"]
+    return (g.std(ddof=1) / np.sqrt(g.count())).rename("se").reset_index()
 
 
 #: held-out groups below which the verdict of rejected candidates says how few they are
@@ -526,6 +552,9 @@ FEW_FOLDS = 5
 #: every parameter, as a share of its design's span, below which the fit has settled
 JOINT_ROUNDS = 3
 JOINT_SETTLED = 0.01
+#: standard errors of the paired change a row's joint gap must exceed to count as an interaction
+#: (:func:`joint_interaction`)
+JOINT_GAP_SE = 2.0
 
 
 def analyse(soil: str, res: pd.DataFrame, diag: pd.DataFrame, cands: list, effect_runs: dict,
@@ -816,7 +845,7 @@ def run_inprocess(soil: str, conditions, base_params, simulate, settings: Settin
             break
         together = {c: {k: float(x[keys.index(f"{c}.{k}")]) for k in EFFECTS[c].theta_names()} for c in out.chosen}
         joint = {"effects": list(out.chosen), "theta": dict(zip(keys, map(float, x))),
-                 "runs": runs_at(None, None, reference, together)}
+                 "runs": runs_at(None, None, reference, together), "base": base}
         jt = joint_interaction(u, out.effect_data, out.chosen, joint)
         start = np.concatenate([x, [0.0]]) if out.uniform_scale else x
         new = sl.Model(effects, y0, meas, sc, jt).fit(x0=start)[0][:len(keys)]
@@ -828,7 +857,6 @@ def run_inprocess(soil: str, conditions, base_params, simulate, settings: Settin
         return out
     final = analyse(soil, res, diag, cands, effect_runs, settings, reference, qcols, skip, joint)
     return final if sorted(final.chosen) == sorted(out.chosen) else out
-    return out
 
 
 def more_candidates(out: Outcome, conditions, settings: Settings) -> list[str]:

@@ -76,9 +76,11 @@ def _ols(y, X):
 #: lower case, with spaces, hyphens and dots read as underscores): tested as labels where they
 #: declare no quantity, even with numbered cells, and grouping the held-out folds
 #: (:func:`soilcal.loop.core.fold_grouping`)
+#: (not ``group``, ``block`` or ``series``: as often the experiment's own treatment levels, a
+#: moisture set per group, as sessions with a level of their own; declared ``quantity: group``
+#: they group the folds)
 GROUPING_NAMES = ("day", "date", "test_day", "test_date", "day_id", "day_no", "session", "test_session",
-                  "session_id", "session_no", "batch", "batch_id", "block", "group", "test_group",
-                  "replicate_group", "rep_group", "series")
+                  "session_id", "session_no", "batch", "batch_id", "test_group", "replicate_group", "rep_group")
 
 
 def grouping_name(col: str) -> bool:
