@@ -382,14 +382,19 @@ def test_one_reference_rule_for_the_loop_and_synthesize():
     ("{working_depth: 3}", "loop.reference.working_depth", ["0 to 0.06 m", "0.03 m read as cm"]),
 ])
 def test_a_reference_far_from_every_measured_row_is_refused_naming_the_unit_it_fits(tmp_path, block, field, words):
+    soil, res = user_soil(tmp_path, f"loop: {{reference: {block}}}")
+    _refused(soil, res, f"{soil}: {field}: expected ", words)
+
+
+def _refused(soil, res, start, words):
+    """Loading ``soil`` stops with one line starting ``start`` and holding every one of ``words``."""
     from soilcal.config.load import load_soil
     from soilcal.errors import InputError
 
-    soil, res = user_soil(tmp_path, f"loop: {{reference: {block}}}")
     with pytest.raises(InputError) as exc:
         load_soil(soil, res)
     msg = str(exc.value)
-    assert msg.startswith(f"{soil}: {field}: expected ") and "\n" not in msg, msg
+    assert msg.startswith(start) and "\n" not in msg, msg
     for w in words:
         assert w in msg, (w, msg)
 
@@ -645,16 +650,8 @@ PERCENT = [12.0, 15.0, 18.0, 12.0, 15.0, 18.0]
                                                   "is the soil's properties.moisture_content a fraction under unit %"]),
 ])
 def test_moisture_in_the_wrong_unit_is_refused_naming_the_table_and_column(tmp_path, cells, unit, prop, words):
-    from soilcal.config.load import load_soil
-    from soilcal.errors import InputError
-
     soil, res, table = _moisture_soil(tmp_path, cells, unit, prop)
-    with pytest.raises(InputError) as exc:
-        load_soil(soil, res)
-    msg = str(exc.value)
-    assert msg.startswith(f"{table}: column moisture: expected ") and "\n" not in msg, msg
-    for w in words:
-        assert w in msg, (w, msg)
+    _refused(soil, res, f"{table}: column moisture: expected ", words)
 
 
 @pytest.mark.parametrize("cells, unit, prop", [

@@ -176,22 +176,28 @@ def per_table_quantities(conditions) -> dict:
     """Numeric quantity -> {measured table: its value}, for each quantity that has one value on
     every measured row of each table carrying it (:func:`_measured_rows`), though it may differ
     between the tables."""
+    rows = _measured_rows(rs.observations(list(conditions)))
+    return _one_value_per(rows, "measurement")
+
+
+def _one_value_per(rows: pd.DataFrame, by, sort: bool = False) -> dict:
+    """Numeric quantity -> {level of ``by`` (a column or a series to group ``rows`` by): its
+    value}, for each quantity that has one value on every row of each level carrying it."""
     from soilcal.config.quantities import QUANTITIES
 
-    rows = _measured_rows(rs.observations(list(conditions)))
     out = {}
     for col in rows.columns:
         q = col[2:]
         if not col.startswith("q:") or QUANTITIES.get(q) is None:
             continue
         per = {}
-        for m, g in rows.groupby("measurement", sort=False):
+        for lv, g in rows.groupby(by, sort=sort):
             x = pd.to_numeric(g[col], errors="coerce").dropna().to_numpy(float)
             if len(x) and not np.all(x == x[0]):
                 per = None
                 break
             if len(x):
-                per[str(m)] = float(x[0])
+                per[str(lv)] = float(x[0])
         if per:
             out[q] = per
     return out
@@ -203,8 +209,6 @@ def per_group_quantities(conditions, settings: Settings) -> tuple[str | None, di
     column, where some group holds two measured conditions at least (a grouping coarser than
     the conditions): a moisture prepared once per test day.  (None, {}) without such a
     column."""
-    from soilcal.config.quantities import QUANTITIES
-
     rows = _measured_rows(rs.observations(list(conditions)))
     col, _ = fold_grouping(settings, quantity_of(conditions), rows)
     key = f"cov:{col}" if col else None
@@ -213,22 +217,8 @@ def per_group_quantities(conditions, settings: Settings) -> tuple[str | None, di
     g = rows[rows[key].notna()]
     if not len(g) or not (g.groupby(g[key].astype(str))["simulation"].nunique() >= 2).any():
         return None, {}
-    out = {}
-    for c in g.columns:
-        q = c[2:]
-        if not c.startswith("q:") or QUANTITIES.get(q) is None:
-            continue
-        per = {}
-        for lv, gg in g.groupby(g[key].astype(str), sort=True):
-            x = pd.to_numeric(gg[c], errors="coerce").dropna().to_numpy(float)
-            if len(x) and not np.all(x == x[0]):
-                per = None
-                break
-            if len(x):
-                per[lv] = float(x[0])
-        if per and len(set(per.values())) > 1:
-            out[q] = per
-    return col, out
+    return col, {q: per for q, per in _one_value_per(g, g[key].astype(str), sort=True).items()
+                 if len(set(per.values())) > 1}
 
 
 def skipped(conditions, settings: Settings) -> dict:
