@@ -61,6 +61,37 @@ PARALLEL_MIN = 1024
 CONTACT_MATH = {"contract"}
 
 
+@njit(cache=True, inline="always")
+def _covered(i, k, nwc, p, feat, cx, cy, cz, ri, xi, yi, zi, face_mask, wnbr, prim_kind,
+             prim_wall, prim_par):
+    """Whether the contact of particle i with triangle p (its k-th wall slot; closest point
+    c, feature ``feat``) is another triangle's contact of the same wall, counted there
+    (walls.py, "Triangle meshes"): an edge or vertex contact where the wall has a face
+    contact; or a contact whose point c lies on another triangle q of the wall that the
+    sphere overlaps, when q's own closest point does not lie on p (q is then strictly
+    closer: a vertex of a flat or convex mesh next to an edge or face that holds it), or
+    lies on p too (the same point: the earlier slot counts it)."""
+    w = prim_wall[p]
+    faced = (face_mask >> min(w, 62)) & 1 == 1
+    if feat != 0 and faced:
+        return True
+    tol = 1e-9 * ri
+    for kk in range(nwc):
+        pp = wnbr[i, kk]
+        if kk == k:
+            continue
+        if prim_wall[pp] != w or prim_kind[pp] != TRIANGLE:
+            continue
+        o8 = prim_closest(prim_kind[pp], prim_par, pp, xi, yi, zi)
+        if not o8[0] < ri or (o8[7] != 0 and faced):
+            continue  # q is not a contact, or not counted
+        if prim_closest(TRIANGLE, prim_par, pp, cx, cy, cz)[0] > tol:
+            continue  # c is not on q
+        if prim_closest(TRIANGLE, prim_par, p, o8[4], o8[5], o8[6])[0] > tol or kk < k:
+            return True
+    return False
+
+
 @njit(cache=True, parallel=True, fastmath=CONTACT_MATH)
 def pair_forces(colour, xr, vw, pair, codes, box, periodic, dt, start, nbr, hist, act,
                 sorder, sgroup, f, t, ovr, mroll):
@@ -226,23 +257,9 @@ def gather(x, v, om, r, inv_m, inv_i, mat, f, t, ovr, peak, mroll, dt, kick, max
                         continue
                     if imi == 0.0:
                         continue
-                    if has_tri and feat != 0:
-                        w = prim_wall[p]
-                        dup = (face_mask >> min(w, 62)) & 1 == 1
-                        if not dup:
-                            for kk in range(k):
-                                pp = wnbr[i, kk]
-                                if prim_wall[pp] != w or prim_kind[pp] != TRIANGLE:
-                                    continue
-                                o8 = prim_closest(prim_kind[pp], prim_par, pp, xi, yi, zi)
-                                if o8[7] != 0 and o8[0] < ri:
-                                    ex = o8[4] - cx
-                                    ey = o8[5] - cy
-                                    ez = o8[6] - cz
-                                    if ex * ex + ey * ey + ez * ez < (1e-9 * ri) ** 2:
-                                        dup = True
-                                        break
-                        if dup:
+                    if prim_kind[p] == TRIANGLE and (feat != 0 or face_mask != 0):
+                        if _covered(i, k, nwc, p, feat, cx, cy, cz, ri, xi, yi, zi,
+                                    face_mask, wnbr, prim_kind, prim_wall, prim_par):
                             for q in range(H_SIZE):
                                 whist[row, q] = 0.0
                             continue

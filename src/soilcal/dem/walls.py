@@ -36,9 +36,14 @@ Parameter layouts (rows of prim_par):
     TRIANGLE   v0(0:3) v1(3:6) v2(6:9)   (boxes and any STL surface are triangle meshes)
 
 Triangle meshes: a sphere touching a mesh at a shared edge or vertex would be reported by
-every triangle sharing it.  Per particle and wall, edge/vertex contacts are ignored when the
-same wall has a face contact with the particle, and among edge/vertex contacts with the same
-contact point (within 1e-9 of the radius) only the first is kept.
+every triangle sharing it, and a triangle that meets the edge a sphere touches only at one end
+reports that vertex as a second, farther contact.  Per particle and wall, edge/vertex contacts
+are ignored when the same wall has a face contact with the particle; a contact whose point
+lies (within 1e-9 of the radius) on another triangle of the wall that the sphere overlaps is
+ignored when that triangle's own closest point is not on the first one (that triangle is
+closer and counts the contact), and among contacts with the same point only the first is
+kept (integrator ``_covered``).  So a sphere over a flat or convex mesh feels one contact
+wherever it touches, as on the plane or the solid the mesh describes.
 """
 
 from __future__ import annotations
