@@ -136,6 +136,39 @@ def test_oblique_impact_on_a_mesh_vertex_equals_the_plane():
     assert out[1][1] == pytest.approx(out[0][1], rel=1e-9, abs=1e-12)
 
 
+def test_a_sphere_hanging_from_a_moving_mesh_crosses_its_triangles_as_under_a_plane():
+    """A JKR contact passes from triangle to triangle with its history: a sphere hanging
+    with 0.95 of its pull-off force as weight (its neck in tension, overlap < 0) under a
+    ceiling mesh moving sideways rolls at 2/7 of the ceiling's speed, as under a plane. The
+    triangle it moved onto started without the neck, so the edge of the one it left held it
+    alone: after 1.25 s it was 0.40 mm ahead of the sphere under the plane and 0.14 mm
+    aside."""
+    r, rho, g, u = 2e-3, 2600.0, 9.81, 0.02
+    m = rho * 4 / 3 * math.pi * r**3
+    gamma = m * g / (0.95 * 1.5 * math.pi * r)  # pull-off 1.5 pi gamma R (EDEM convention)
+    out = []
+    for mesh in (False, True):
+        sim = Simulation(table(e=0.2, mu=0.5, gamma=gamma, E=1e7, rho=rho), gravity=(0, 0, 0),
+                         contact_model=dict(cohesion="jkr"))
+        if mesh:
+            v, t = _grid(L=0.05, n=20)
+            w = sim.add_mesh(v, t, "soil")
+        else:
+            w = sim.add_plane((0, 0, 0), (0, 0, -1), "soil")
+        sim.add_particles([[0.001, 0.0013, -0.9999 * r]], r, "soil")
+        sim.run(10000)
+        for k in range(1, 11):  # the weight put on slowly: the neck does not tear
+            sim.gravity[:] = (0, 0, -g * k / 10)
+            sim.run(3000)
+        sim.set_wall_motion(w, velocity=(u, 0, 0))
+        sim.run(30000)  # the sphere moves 18 mm along the ceiling, over 4 of its cells
+        out.append((sim.x[0].copy(), sim.v[0].copy()))
+    assert out[0][0][2] == pytest.approx(-r, rel=1e-3)  # still hanging
+    assert out[0][1][0] == pytest.approx(2 / 7 * u, rel=1e-3)
+    assert out[1][0] == pytest.approx(out[0][0], rel=1e-8)
+    assert out[1][1] == pytest.approx(out[0][1], rel=1e-6, abs=1e-12)
+
+
 def test_moving_plane_lifts_particle_and_reports_force():
     sim = Simulation(table(e=0.3, mu=0.5, E=1e8), dt_fraction=0.2)
     sim.add_particles([[0.0, 0.0, R]], R, "soil")

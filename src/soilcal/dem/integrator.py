@@ -62,34 +62,35 @@ CONTACT_MATH = {"contract"}
 
 
 @njit(cache=True, inline="always")
-def _covered(i, k, nwc, p, feat, cx, cy, cz, ri, xi, yi, zi, face_mask, wnbr, prim_kind,
-             prim_wall, prim_par):
-    """Whether the contact of particle i with triangle p (its k-th wall slot; closest point
-    c, feature ``feat``) is another triangle's contact of the same wall, counted there
-    (walls.py, "Triangle meshes"): an edge or vertex contact where the wall has a face
-    contact; or a contact whose point c lies on another triangle q of the wall that the
-    sphere overlaps, when q's own closest point does not lie on p (q is then strictly
-    closer: a vertex of a flat or convex mesh next to an edge or face that holds it), or
-    lies on p too (the same point: the earlier slot counts it)."""
+def _cover(i, k, nwc, p, feat, cx, cy, cz, ri, xi, yi, zi, face_mask, wnbr, prim_kind,
+           prim_wall, prim_par):
+    """The wall slot whose triangle counts the contact of particle i with triangle p (its
+    k-th wall slot; closest point c, feature ``feat``), or -1 when p counts it itself
+    (walls.py, "Triangle meshes"): for an edge or vertex contact where the wall has a face
+    contact, that face's slot; else the slot of another triangle q of the wall on which c
+    lies, when q's own closest point does not lie on p (q is then strictly closer: a vertex
+    of a flat or convex mesh next to an edge or face that holds it, or the edge of a
+    triangle the sphere has moved off), or lies on p too at an earlier slot (the same
+    point)."""
     w = prim_wall[p]
     faced = (face_mask >> min(w, 62)) & 1 == 1
-    if feat != 0 and faced:
-        return True
     tol = 1e-9 * ri
     for kk in range(nwc):
         pp = wnbr[i, kk]
-        if kk == k:
-            continue
-        if prim_wall[pp] != w or prim_kind[pp] != TRIANGLE:
+        if kk == k or prim_wall[pp] != w or prim_kind[pp] != TRIANGLE:
             continue
         o8 = prim_closest(prim_kind[pp], prim_par, pp, xi, yi, zi)
-        if not o8[0] < ri or (o8[7] != 0 and faced):
-            continue  # q is not a contact, or not counted
+        if feat != 0 and faced:
+            if o8[7] == 0 and o8[0] < ri:
+                return kk
+            continue
+        if o8[7] != 0 and faced:
+            continue  # q's contact is not counted either
         if prim_closest(TRIANGLE, prim_par, pp, cx, cy, cz)[0] > tol:
             continue  # c is not on q
         if prim_closest(TRIANGLE, prim_par, p, o8[4], o8[5], o8[6])[0] > tol or kk < k:
-            return True
-    return False
+            return kk
+    return -1
 
 
 @njit(cache=True, parallel=True, fastmath=CONTACT_MATH)
@@ -237,6 +238,7 @@ def gather(x, v, om, r, inv_m, inv_i, mat, f, t, ovr, peak, mroll, dt, kick, max
                 face_mask = 0
                 nwc = wcnt[i]
                 has_tri = False
+                moved = False  # a contact that has touched is on an edge or vertex
                 for k in range(nwc):
                     p = wnbr[i, k]
                     if prim_kind[p] == TRIANGLE:
@@ -244,6 +246,30 @@ def gather(x, v, om, r, inv_m, inv_i, mat, f, t, ovr, peak, mroll, dt, kick, max
                         r8 = prim_closest(prim_kind[p], prim_par, p, xi, yi, zi)
                         if r8[7] == 0 and r8[0] < ri:
                             face_mask |= 1 << min(prim_wall[p], 62)
+                        if r8[7] != 0 and whist[i * KW + k, H_SIZE - 1] != 0.0:
+                            moved = True
+                # a contact that passes from one triangle of a mesh to the next (over their
+                # edge or vertex) is one contact: its history (the tangential spring, the JKR
+                # neck, ...) passes to the triangle that counts it now, if that one has none
+                for _ in range(nwc if moved and imi != 0.0 else 0):
+                    moved = False
+                    for k in range(nwc):
+                        p = wnbr[i, k]
+                        row = i * KW + k
+                        if prim_kind[p] != TRIANGLE or whist[row, H_SIZE - 1] == 0.0:
+                            continue
+                        r8 = prim_closest(prim_kind[p], prim_par, p, xi, yi, zi)
+                        if r8[7] == 0 and face_mask == 0:
+                            continue
+                        kk = _cover(i, k, nwc, p, r8[7], r8[4], r8[5], r8[6], ri, xi, yi, zi,
+                                    face_mask, wnbr, prim_kind, prim_wall, prim_par)
+                        if kk >= 0 and whist[i * KW + kk, H_SIZE - 1] == 0.0:
+                            for q in range(H_SIZE):
+                                whist[i * KW + kk, q] = whist[row, q]
+                                whist[row, q] = 0.0
+                            moved = True
+                    if not moved:
+                        break
                 for k in range(nwc):
                     p = wnbr[i, k]
                     for q in range(6):
@@ -258,8 +284,8 @@ def gather(x, v, om, r, inv_m, inv_i, mat, f, t, ovr, peak, mroll, dt, kick, max
                     if imi == 0.0:
                         continue
                     if prim_kind[p] == TRIANGLE and (feat != 0 or face_mask != 0):
-                        if _covered(i, k, nwc, p, feat, cx, cy, cz, ri, xi, yi, zi,
-                                    face_mask, wnbr, prim_kind, prim_wall, prim_par):
+                        if _cover(i, k, nwc, p, feat, cx, cy, cz, ri, xi, yi, zi,
+                                  face_mask, wnbr, prim_kind, prim_wall, prim_par) >= 0:
                             for q in range(H_SIZE):
                                 whist[row, q] = 0.0
                             continue

@@ -42,8 +42,12 @@ are ignored when the same wall has a face contact with the particle; a contact w
 lies (within 1e-9 of the radius) on another triangle of the wall that the sphere overlaps is
 ignored when that triangle's own closest point is not on the first one (that triangle is
 closer and counts the contact), and among contacts with the same point only the first is
-kept (integrator ``_covered``).  So a sphere over a flat or convex mesh feels one contact
-wherever it touches, as on the plane or the solid the mesh describes.
+kept (integrator ``_cover``).  So a sphere over a flat or convex mesh feels one contact
+wherever it touches, as on the plane or the solid the mesh describes.  A contact that passes
+over an edge or vertex from one triangle to the next stays one contact: when the triangle that
+counts it has no history yet, the history of the one it leaves (tangential spring, JKR neck,
+rolling spring, largest plastic overlap, touching flag) passes to it, so a JKR neck in tension
+(overlap < 0) or a sticking tangential spring carries on as on a plane.
 """
 
 from __future__ import annotations
