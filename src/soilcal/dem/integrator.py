@@ -239,6 +239,7 @@ def gather(x, v, om, r, inv_m, inv_i, mat, f, t, ovr, peak, mroll, dt, kick, max
                 nwc = wcnt[i]
                 has_tri = False
                 moved = False  # a contact that has touched is on an edge or vertex
+                nface = 0  # face contacts (two of them may be one, on a shared edge)
                 for k in range(nwc):
                     p = wnbr[i, k]
                     if prim_kind[p] == TRIANGLE:
@@ -246,6 +247,7 @@ def gather(x, v, om, r, inv_m, inv_i, mat, f, t, ovr, peak, mroll, dt, kick, max
                         r8 = prim_closest(prim_kind[p], prim_par, p, xi, yi, zi)
                         if r8[7] == 0 and r8[0] < ri:
                             face_mask |= 1 << min(prim_wall[p], 62)
+                            nface += 1
                         if r8[7] != 0 and whist[i * KW + k, H_SIZE - 1] != 0.0:
                             moved = True
                 # a contact that passes from one triangle of a mesh to the next (over their
@@ -259,7 +261,7 @@ def gather(x, v, om, r, inv_m, inv_i, mat, f, t, ovr, peak, mroll, dt, kick, max
                         if prim_kind[p] != TRIANGLE or whist[row, H_SIZE - 1] == 0.0:
                             continue
                         r8 = prim_closest(prim_kind[p], prim_par, p, xi, yi, zi)
-                        if r8[7] == 0 and face_mask == 0:
+                        if r8[7] == 0 and nface < 2:
                             continue
                         kk = _cover(i, k, nwc, p, r8[7], r8[4], r8[5], r8[6], ri, xi, yi, zi,
                                     face_mask, wnbr, prim_kind, prim_wall, prim_par)
@@ -283,7 +285,7 @@ def gather(x, v, om, r, inv_m, inv_i, mat, f, t, ovr, peak, mroll, dt, kick, max
                         continue
                     if imi == 0.0:
                         continue
-                    if prim_kind[p] == TRIANGLE and (feat != 0 or face_mask != 0):
+                    if prim_kind[p] == TRIANGLE and (feat != 0 or nface > 1):
                         if _cover(i, k, nwc, p, feat, cx, cy, cz, ri, xi, yi, zi,
                                   face_mask, wnbr, prim_kind, prim_wall, prim_par) >= 0:
                             for q in range(H_SIZE):
