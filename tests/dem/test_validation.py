@@ -364,3 +364,27 @@ def test_wall_motion_by_name():
     sim.add_plane((0, 0, 0), (0, 0, 1), "soil", name="floor")
     sim.set_wall_motion("floor", velocity=(0.1, 0, 0))
     assert sim._warr["wall_vel"].tolist() == [[0.1, 0, 0]]
+
+
+@pytest.mark.parametrize("wall", [True, False])
+def test_a_radius_typed_in_millimetres_is_named_with_its_unit(wall):
+    """A radius of 1 meant as 1 mm, with the positions in metres: the start overlaps a wall or
+    the neighbour by most of a radius, and the error says radii are in metres."""
+    sim = Simulation(table(E=1e8))
+    if wall:
+        sim.add_plane((0, 0, 0), (0, 0, 1), "soil")
+        sim.add_particles([[0, 0, 0.001]], 1.0, "soil")
+    else:
+        sim.add_particles([[0, 0, 0.001], [0.003, 0, 0.001]], 1.0, "soil")
+    with pytest.raises(InputError) as exc:
+        sim.run(10)
+    assert exc.value.field == "particles"
+    assert exc.value.note == "radii are in metres: a radius of 1 is 1 m, 1 mm is 0.001"
+
+
+def test_a_metre_sphere_placed_right_gets_no_unit_note():
+    sim = Simulation(table(E=1e8))
+    sim.add_particles([[0, 0, 0], [1.9, 0, 0]], 1.0, "soil")
+    with pytest.raises(InputError) as exc:
+        sim.run(10)
+    assert exc.value.note is None  # 10 % overlap: a placement, not a unit

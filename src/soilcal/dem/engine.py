@@ -632,10 +632,15 @@ class Simulation:
             what = f"particle {pid} overlaps a wall by {100 * frac:.3g} % of its radius"
         else:
             what = f"particle {pid}: its overlap with a wall is not a finite number (position {p.x[i].tolist()})"
+        # a radius of a metre or so, placed a few millimetres from its neighbour or wall: a
+        # size typed in millimetres
+        units = (f"radii are in metres: a radius of {p.r[i]:g} is {p.r[i]:g} m, 1 mm is 0.001"
+                 if p.r[i] >= 0.1 and (ov[j] > 0.5 * p.r[i] or frac > 0.5) else None)
         return InputError(self.source, "particles",
                           f"a starting state whose overlaps are at most max_overlap = "
                           f"{100 * self.max_overlap:g} % of a radius (separate the spheres or move "
-                          f"the wall or tool placed into them, or raise max_overlap)", what)
+                          f"the wall or tool placed into them, or raise max_overlap)", what,
+                          note=units)
 
     def _cidx(self):
         if getattr(self, "_cidx_arr", None) is None or self._cidx_arr.shape[0] != self.p.n:
