@@ -292,7 +292,9 @@ class Simulation:
 
     def add_mesh(self, vertices, triangles, material, name=None, velocity=(0, 0, 0),
                  omega=(0, 0, 0), centre=None) -> int:
-        """Triangle mesh wall (boxes, STL tools); one primitive per triangle."""
+        """Triangle mesh wall (boxes, STL tools); one primitive per triangle.  ``omega``
+        turns it about ``centre``, by default the mean of its vertices (the axis of a drum,
+        the middle of a box; give the shaft of a paddle or blade explicitly)."""
         v = _rows(self.source, "walls.mesh.vertices", vertices, None, "vertices [m]")
         t = np.asarray(triangles)
         if (t.ndim != 2 or t.shape[1] != 3 or t.size == 0 or not np.issubdtype(t.dtype, np.integer)
