@@ -146,6 +146,29 @@ def test_spheres_over_vertices_and_edges_of_a_turned_mesh_feel_the_plane():
     assert np.abs(f - fn * n).max() < 1e-9 * fn
 
 
+def test_a_ledge_of_the_same_mesh_pushes_a_sphere_resting_on_its_floor():
+    """A floor and a low ledge (0.3 R high) in one mesh: a sphere on the floor against the
+    ledge's top edge is pushed by the floor and by the edge, as when they are two meshes.
+    The edge contact was dropped because the same mesh had a face contact (the floor), so
+    the sphere felt the floor alone and would pass into the ledge."""
+    r = 2e-3
+    h = 0.3 * r
+    mats = table(e=0.5, mu=0.2, E=1e8)
+    v = [[-0.02, -0.02, 0], [0.01, -0.02, 0], [0.01, 0.02, 0], [-0.02, 0.02, 0],
+         [0.01, -0.02, h], [0.01, 0.02, h], [0.03, -0.02, h], [0.03, 0.02, h]]
+    t = [[0, 1, 2], [0, 2, 3], [1, 4, 5], [1, 5, 2], [4, 6, 7], [4, 7, 5]]
+    x = np.array([0.01 - 0.5 * r, 0, 0.999 * r])
+    sim = Simulation(mats, gravity=(0, 0, 0))
+    sim.add_mesh(v, t, "soil")
+    sim.add_particles([x], r, "soil")
+    f, _ = sim.compute_forces()
+    floor = _hertz_wall_force(mats, r, 0.001 * r) * np.array([0, 0, 1.0])
+    d = x - np.array([0.01, 0, h])  # from the ledge's edge to the centre
+    dist = np.linalg.norm(d)
+    edge = _hertz_wall_force(mats, r, r - dist) * d / dist
+    assert f[0] == pytest.approx(floor + edge, rel=1e-9, abs=1e-12)
+
+
 def test_oblique_impact_on_a_mesh_vertex_equals_the_plane():
     """A sphere sliding off a mesh vertex along an edge during an oblique impact rebounds as
     from a plane (a 2 mm sphere rebounded at 0.450 of its normal speed instead of 0.493: a

@@ -62,33 +62,33 @@ CONTACT_MATH = {"contract"}
 
 
 @njit(cache=True, inline="always")
-def _cover(i, k, nwc, p, feat, cx, cy, cz, ri, xi, yi, zi, face_mask, wnbr, prim_kind,
-           prim_wall, prim_par):
+def _cover(i, k, nwc, p, feat, cx, cy, cz, ri, xi, yi, zi, fk, wnbr, prim_kind, prim_wall,
+           prim_par):
     """The wall slot whose triangle counts the contact of particle i with triangle p (its
     k-th wall slot; closest point c, feature ``feat``), or -1 when p counts it itself
-    (walls.py, "Triangle meshes"): for an edge or vertex contact where the wall has a face
-    contact, that face's slot; else the slot of another triangle q of the wall on which c
-    lies, when q's own closest point does not lie on p (q is then strictly closer: a vertex
-    of a flat or convex mesh next to an edge or face that holds it, or the edge of a
-    triangle the sphere has moved off), or lies on p too at an earlier slot (the same
-    point)."""
+    (walls.py, "Triangle meshes"): the slot of another triangle q of the same wall on which c
+    lies, when q's own closest point does not lie on p (q is then strictly closer: the edge
+    or vertex of a flat or convex mesh next to the face or edge that holds it, or the edge of
+    a triangle the sphere has moved off), or lies on p too (the same point, to rounding) and
+    q's is a face where p's is not, or an edge where p's is a vertex, or the same feature at
+    an earlier slot.  ``fk``:
+    the slot of the particle's first face contact (-1: none), tried first (a sphere on a
+    face: its neighbours' edges lie on it)."""
     w = prim_wall[p]
-    faced = (face_mask >> min(w, 62)) & 1 == 1
     tol = 1e-9 * ri
-    for kk in range(nwc):
+    for step in range(nwc + 1):
+        kk = fk if step == 0 else step - 1
+        if kk < 0 or kk == k or (step > 0 and kk == fk):
+            continue
         pp = wnbr[i, kk]
-        if kk == k or prim_wall[pp] != w or prim_kind[pp] != TRIANGLE:
+        if prim_wall[pp] != w or prim_kind[pp] != TRIANGLE:
             continue
-        o8 = prim_closest(prim_kind[pp], prim_par, pp, xi, yi, zi)
-        if feat != 0 and faced:
-            if o8[7] == 0 and o8[0] < ri:
-                return kk
-            continue
-        if o8[7] != 0 and faced:
-            continue  # q's contact is not counted either
         if prim_closest(TRIANGLE, prim_par, pp, cx, cy, cz)[0] > tol:
             continue  # c is not on q
-        if prim_closest(TRIANGLE, prim_par, p, o8[4], o8[5], o8[6])[0] > tol or kk < k:
+        o8 = prim_closest(TRIANGLE, prim_par, pp, xi, yi, zi)
+        if prim_closest(TRIANGLE, prim_par, p, o8[4], o8[5], o8[6])[0] > tol:
+            return kk
+        if o8[7] < feat or (o8[7] == feat and kk < k):
             return kk
     return -1
 
@@ -234,8 +234,7 @@ def gather(x, v, om, r, inv_m, inv_i, mat, f, t, ovr, peak, mroll, dt, kick, max
                 tz = t[i, 2]
                 mo = ovr[i] / ri
                 mres = mroll[i]
-                # walls with a face contact (bit w): their edge/vertex contacts are dropped
-                face_mask = 0
+                fk = -1  # the slot of the first face contact
                 nwc = wcnt[i]
                 has_tri = False
                 moved = False  # a contact that has touched is on an edge or vertex
@@ -246,7 +245,8 @@ def gather(x, v, om, r, inv_m, inv_i, mat, f, t, ovr, peak, mroll, dt, kick, max
                         has_tri = True
                         r8 = prim_closest(prim_kind[p], prim_par, p, xi, yi, zi)
                         if r8[7] == 0 and r8[0] < ri:
-                            face_mask |= 1 << min(prim_wall[p], 62)
+                            if fk < 0:
+                                fk = k
                             nface += 1
                         if r8[7] != 0 and whist[i * KW + k, H_SIZE - 1] != 0.0:
                             moved = True
@@ -263,8 +263,8 @@ def gather(x, v, om, r, inv_m, inv_i, mat, f, t, ovr, peak, mroll, dt, kick, max
                         r8 = prim_closest(prim_kind[p], prim_par, p, xi, yi, zi)
                         if r8[7] == 0 and nface < 2:
                             continue
-                        kk = _cover(i, k, nwc, p, r8[7], r8[4], r8[5], r8[6], ri, xi, yi, zi,
-                                    face_mask, wnbr, prim_kind, prim_wall, prim_par)
+                        kk = _cover(i, k, nwc, p, r8[7], r8[4], r8[5], r8[6], ri, xi, yi, zi, fk,
+                                    wnbr, prim_kind, prim_wall, prim_par)
                         if kk >= 0 and whist[i * KW + kk, H_SIZE - 1] == 0.0:
                             for q in range(H_SIZE):
                                 whist[i * KW + kk, q] = whist[row, q]
@@ -286,8 +286,8 @@ def gather(x, v, om, r, inv_m, inv_i, mat, f, t, ovr, peak, mroll, dt, kick, max
                     if imi == 0.0:
                         continue
                     if prim_kind[p] == TRIANGLE and (feat != 0 or nface > 1):
-                        if _cover(i, k, nwc, p, feat, cx, cy, cz, ri, xi, yi, zi,
-                                  face_mask, wnbr, prim_kind, prim_wall, prim_par) >= 0:
+                        if _cover(i, k, nwc, p, feat, cx, cy, cz, ri, xi, yi, zi, fk, wnbr,
+                                  prim_kind, prim_wall, prim_par) >= 0:
                             for q in range(H_SIZE):
                                 whist[row, q] = 0.0
                             continue
