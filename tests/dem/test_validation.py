@@ -276,3 +276,115 @@ def test_a_material_too_soft_to_carry_its_weight_is_named_before_the_run():
     assert f"{np.pi * rho * g * R / 0.05 ** 1.5:.4g} Pa" in str(e.value)
     assert sim.step == 0
     sim_of(1e6).run(10)
+
+
+@pytest.mark.parametrize("periodic", [True, (True,), (True, False, True), "no", (1, 0),
+                                      ("yes", "no")])
+def test_periodic_flags_other_than_two_booleans_are_named(periodic):
+    """periodic=True failed with a TypeError, (True,) with an IndexError; a third flag (z)
+    was dropped without a word, and the string "no" made both axes periodic."""
+    with pytest.raises(InputError) as exc:
+        Simulation(table(), box=(0, 1, 0, 1), periodic=periodic)
+    assert exc.value.field == "periodic" and "two booleans" in exc.value.expected
+
+
+@pytest.mark.parametrize("value", [2.0, 1.5])
+def test_an_overlap_limit_beyond_a_radius_is_named(value):
+    """max_overlap is a fraction of a radius: 2 (centres inside each other) was taken."""
+    with pytest.raises(InputError) as exc:
+        Simulation(table(), max_overlap=value)
+    assert exc.value.field == "max_overlap" and "(0, 1]" in exc.value.expected
+
+
+def test_fixed_and_locked_rotation_per_particle():
+    """fixed=[True, False] was taken as one truth value and fixed both spheres: the free one
+    now falls at g, the fixed one stays; lock_rotation likewise per particle."""
+    sim = Simulation(table(), dt=1e-6)
+    sim.add_particles([[0, 0, 0.01], [0.01, 0, 0.01]], 1e-3, "soil", fixed=[True, False],
+                      omega=[0, 0, 1.0])
+    sim.add_particles([[0.03, 0, 0.01], [0.05, 0, 0.01]], 1e-3, "soil",
+                      lock_rotation=np.array([False, True]), omega=[0, 0, 1.0])
+    sim.run(1000)
+    t = 1000 * 1e-6
+    v = sim.v[sim.index([0, 1, 2, 3]), 2]
+    assert v == pytest.approx([0.0, -9.81 * t, -9.81 * t, -9.81 * t], rel=1e-12)
+    assert sim.p.inv_m[sim.index([0, 1])].tolist()[0] == 0.0
+    assert (sim.p.inv_i[sim.index([0, 1, 2, 3])] == 0).tolist() == [True, False, False, True]
+
+
+@pytest.mark.parametrize("kw,field", [(dict(fixed=[True, False, True]), "particles.fixed"),
+                                      (dict(fixed="yes"), "particles.fixed"),
+                                      (dict(lock_rotation=[1, 0]), "particles.lock_rotation")])
+def test_bad_particle_flags_are_named(kw, field):
+    sim = Simulation(table(), dt=1e-6)
+    with pytest.raises(InputError) as exc:
+        sim.add_particles([[0, 0, 0.01], [0.01, 0, 0.01]], 1e-3, "soil", **kw)
+    assert exc.value.field == field and sim.n == 0
+
+
+@pytest.mark.parametrize("add,field", [
+    (lambda s: s.add_cylinder((0, 0, 0), (0, 0, 1), "0.1", 0.1, "soil"), "walls.cylinder.radius"),
+    (lambda s: s.add_cylinder((0, 0, 0), (0, 0, 1), 0.1, float("inf"), "soil"),
+     "walls.cylinder.half_length"),
+    (lambda s: s.add_cone((0, 0, 0), (0, 0, 1), float("nan"), 0.1, 0.0, 1.0, "soil"),
+     "walls.cone.r0"),
+    (lambda s: s.add_cone((0, 0, 0), (0, 0, 1), 0.1, 0.1, 0.0, float("nan"), "soil"),
+     "walls.cone.z1"),
+    (lambda s: s.add_box((0, 0, 0), (-1, 1, 1), "soil"), "walls.box"),
+    (lambda s: s.add_box((0, 0, 0), (1, 1, 0), "soil"), "walls.box"),
+    (lambda s: s.add_box((0, 0), (1, 1, 1), "soil"), "walls.box.lo"),
+])
+def test_bad_cylinder_cone_and_box_sizes_are_named(add, field):
+    """A cone radius NaN was accepted (min/max pass over NaN), a cylinder radius given as
+    text failed with a TypeError, a box upside down with a ValueError naming no field."""
+    sim = Simulation(table(), dt=1e-6)
+    with pytest.raises(InputError) as exc:
+        add(sim)
+    assert exc.value.field == field and not sim.walls.names
+
+
+@pytest.mark.parametrize("wall,kw,field", [(3, dict(velocity=(0, 0, 1)), "wall"),
+                                           (True, dict(velocity=(0, 0, 1)), "wall"),
+                                           ("lid", dict(velocity=(0, 0, 1)), "wall"),
+                                           (0, dict(velocity=(0, 1)), "walls.velocity"),
+                                           (0, dict(omega=(0, 0, float("nan"))), "walls.omega")])
+def test_bad_wall_motion_changes_are_named(wall, kw, field):
+    """set_wall_motion on a wall that does not exist failed with an IndexError; a velocity of
+    two numbers with a numpy broadcast error."""
+    sim = Simulation(table(), dt=1e-6)
+    sim.add_plane((0, 0, 0), (0, 0, 1), "soil", name="floor")
+    with pytest.raises(InputError) as exc:
+        sim.set_wall_motion(wall, **kw)
+    assert exc.value.field == field
+    assert sim._warr["wall_vel"].tolist() == [[0, 0, 0]]
+
+
+def test_wall_motion_by_name():
+    sim = Simulation(table(), dt=1e-6)
+    sim.add_plane((0, 0, 0), (0, 0, 1), "soil", name="floor")
+    sim.set_wall_motion("floor", velocity=(0.1, 0, 0))
+    assert sim._warr["wall_vel"].tolist() == [[0.1, 0, 0]]
+
+
+@pytest.mark.parametrize("wall", [True, False])
+def test_a_radius_typed_in_millimetres_is_named_with_its_unit(wall):
+    """A radius of 1 meant as 1 mm, with the positions in metres: the start overlaps a wall or
+    the neighbour by most of a radius, and the error says radii are in metres."""
+    sim = Simulation(table(E=1e8))
+    if wall:
+        sim.add_plane((0, 0, 0), (0, 0, 1), "soil")
+        sim.add_particles([[0, 0, 0.001]], 1.0, "soil")
+    else:
+        sim.add_particles([[0, 0, 0.001], [0.003, 0, 0.001]], 1.0, "soil")
+    with pytest.raises(InputError) as exc:
+        sim.run(10)
+    assert exc.value.field == "particles"
+    assert exc.value.note == "radii are in metres: a radius of 1 is 1 m, 1 mm is 0.001"
+
+
+def test_a_metre_sphere_placed_right_gets_no_unit_note():
+    sim = Simulation(table(E=1e8))
+    sim.add_particles([[0, 0, 0], [1.9, 0, 0]], 1.0, "soil")
+    with pytest.raises(InputError) as exc:
+        sim.run(10)
+    assert exc.value.note is None  # 10 % overlap: a placement, not a unit

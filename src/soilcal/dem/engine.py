@@ -75,6 +75,17 @@ def _vector(source, field, value, size=3) -> np.ndarray:
     return a.reshape(size).copy()
 
 
+def _flags(source, field, value, n) -> np.ndarray:
+    """``value`` (one boolean, or one per particle) as n booleans; InputError naming
+    ``field`` otherwise (a list taken as one truth value would fix every particle)."""
+    a = np.asarray(value, dtype=object)
+    if a.ndim > 1 or a.size not in (1, n) or not all(
+            isinstance(q, (bool, np.bool_)) for q in a.reshape(-1)):
+        raise InputError(source, field, f"true or false, or one of them per particle ({n})",
+                         value)
+    return np.broadcast_to(a.reshape(-1).astype(np.bool_), (n,)).copy()
+
+
 def _number(source, field, value, expected, ok) -> float:
     """``value`` as a finite float for which ``ok`` holds; InputError naming ``field``."""
     if isinstance(value, bool) or not isinstance(value, (int, float, np.integer, np.floating)):
@@ -108,6 +119,11 @@ class Simulation:
                                    "a fraction of the Rayleigh time in (0, 1]",
                                    lambda f: 0.0 < f <= 1.0)
         self.gravity = _vector(source, "gravity", gravity)
+        if (not isinstance(periodic, (tuple, list, np.ndarray)) or len(periodic) != 2
+                or not all(isinstance(q, (bool, np.bool_)) for q in periodic)):
+            raise InputError(source, "periodic",
+                             "two booleans (periodic in x, periodic in y; z is never periodic)",
+                             periodic)
         self.periodic = np.array([bool(periodic[0]), bool(periodic[1])], dtype=np.bool_)
         if box is None:
             if self.periodic.any():
@@ -123,7 +139,7 @@ class Simulation:
                                     lambda c: c > 0)
         self.max_overlap = _number(source, "max_overlap", max_overlap,
                                    "the largest overlap a run accepts, as a fraction of a "
-                                   "radius > 0", lambda c: c > 0)
+                                   "radius in (0, 1]", lambda c: 0 < c <= 1)
         if (isinstance(sort_every, bool) or not isinstance(sort_every, (int, np.integer))
                 or sort_every < 0):
             raise InputError(source, "sort_every",
@@ -171,6 +187,8 @@ class Simulation:
             raise InputError(self.source, "particles.radius", "radii > 0 m",
                              float(bad[0] / self.coarse_grain))
         v = None if v is None else _rows(self.source, "particles.v", v, n, "velocities [m/s]")
+        fixed = _flags(self.source, "particles.fixed", fixed, n)
+        lock_rotation = _flags(self.source, "particles.lock_rotation", lock_rotation, n)
         omega = (None if omega is None
                  else _rows(self.source, "particles.omega", omega, n, "angular velocities [rad/s]"))
         ids = self.p.append(x, r, self.materials.materials[k].density, k, v, omega, fixed,
@@ -223,9 +241,10 @@ class Simulation:
     def add_cylinder(self, axis_point, axis_dir, radius, half_length, material, inner=True,
                      name=None, velocity=(0, 0, 0), omega=(0, 0, 0), centre=None) -> int:
         """Cylindrical shell about an axis (inner=True: particles inside, e.g. a drum)."""
-        if not radius > 0 or not half_length > 0:
-            raise InputError(self.source, "walls.cylinder", "radius > 0 and half_length > 0",
-                             (radius, half_length))
+        radius = _number(self.source, "walls.cylinder.radius", radius, "a radius > 0 m",
+                         lambda q: q > 0)
+        half_length = _number(self.source, "walls.cylinder.half_length", half_length,
+                              "a half length > 0 m", lambda q: q > 0)
         a = _vector(self.source, "walls.cylinder.axis_point", axis_point)
         vals = np.concatenate([a, self._unit(axis_dir, "walls.cylinder.axis_dir"),
                                [radius, half_length, 1.0 if inner else 0.0]])
@@ -236,7 +255,11 @@ class Simulation:
     def add_cone(self, axis_point, axis_dir, r0, r1, z0, z1, material, inner=True, name=None,
                  velocity=(0, 0, 0), omega=(0, 0, 0), centre=None) -> int:
         """Cone frustum shell: radius r0 at axial coordinate z0 to r1 at z1 (z1 > z0)."""
-        if not z1 > z0 or min(r0, r1) < 0 or max(r0, r1) <= 0:
+        r0, r1 = (_number(self.source, f"walls.cone.{nm}", q, "a radius >= 0 m",
+                          lambda c: c >= 0) for nm, q in (("r0", r0), ("r1", r1)))
+        z0, z1 = (_number(self.source, f"walls.cone.{nm}", q, "an axial coordinate [m]",
+                          lambda c: True) for nm, q in (("z0", z0), ("z1", z1)))
+        if not z1 > z0 or max(r0, r1) <= 0:
             raise InputError(self.source, "walls.cone", "z1 > z0, radii >= 0, one > 0",
                              (r0, r1, z0, z1))
         a = _vector(self.source, "walls.cone.axis_point", axis_point)
@@ -269,7 +292,9 @@ class Simulation:
 
     def add_mesh(self, vertices, triangles, material, name=None, velocity=(0, 0, 0),
                  omega=(0, 0, 0), centre=None) -> int:
-        """Triangle mesh wall (boxes, STL tools); one primitive per triangle."""
+        """Triangle mesh wall (boxes, STL tools); one primitive per triangle.  ``omega``
+        turns it about ``centre``, by default the mean of its vertices (the axis of a drum,
+        the middle of a box; give the shaft of a paddle or blade explicitly)."""
         v = _rows(self.source, "walls.mesh.vertices", vertices, None, "vertices [m]")
         t = np.asarray(triangles)
         if (t.ndim != 2 or t.shape[1] != 3 or t.size == 0 or not np.issubdtype(t.dtype, np.integer)
@@ -294,15 +319,29 @@ class Simulation:
         """Closed box surface as a triangle mesh (particles outside or inside)."""
         from soilcal.dem.geometry import box_mesh
 
+        lo = _vector(self.source, "walls.box.lo", lo)
+        hi = _vector(self.source, "walls.box.hi", hi)
+        if not np.all(lo < hi):
+            raise InputError(self.source, "walls.box", "corners lo < hi in x, y and z",
+                             f"lo {lo.tolist()}, hi {hi.tolist()}")
         v, t = box_mesh(lo, hi)
         return self.add_mesh(v, t, material, name or f"box{len(self.walls.names)}", velocity,
                              omega)
 
     def set_wall_motion(self, wall, velocity=None, omega=None):
+        """Set a wall's translation velocity [m/s] and angular velocity [rad/s] about its
+        centre (``wall``: the id ``add_*`` returned, or the wall's name)."""
+        names = self.walls.names
+        if isinstance(wall, str) and wall in names:
+            wall = names.index(wall)
+        if (isinstance(wall, bool) or not isinstance(wall, (int, np.integer))
+                or not 0 <= wall < len(names)):
+            raise InputError(self.source, "wall", f"a wall id in [0, {len(names)}) or one of "
+                             f"the wall names {names}", wall)
         if velocity is not None:
-            self._warr["wall_vel"][wall] = velocity
+            self._warr["wall_vel"][wall] = _vector(self.source, "walls.velocity", velocity)
         if omega is not None:
-            self._warr["wall_omega"][wall] = omega
+            self._warr["wall_omega"][wall] = _vector(self.source, "walls.omega", omega)
 
     def _invalidate(self):
         self._need_forces = True
@@ -595,10 +634,15 @@ class Simulation:
             what = f"particle {pid} overlaps a wall by {100 * frac:.3g} % of its radius"
         else:
             what = f"particle {pid}: its overlap with a wall is not a finite number (position {p.x[i].tolist()})"
+        # a radius of a metre or so, placed a few millimetres from its neighbour or wall: a
+        # size typed in millimetres
+        units = (f"radii are in metres: a radius of {p.r[i]:g} is {p.r[i]:g} m, 1 mm is 0.001"
+                 if p.r[i] >= 0.1 and (ov[j] > 0.5 * p.r[i] or frac > 0.5) else None)
         return InputError(self.source, "particles",
                           f"a starting state whose overlaps are at most max_overlap = "
                           f"{100 * self.max_overlap:g} % of a radius (separate the spheres or move "
-                          f"the wall or tool placed into them, or raise max_overlap)", what)
+                          f"the wall or tool placed into them, or raise max_overlap)", what,
+                          note=units)
 
     def _cidx(self):
         if getattr(self, "_cidx_arr", None) is None or self._cidx_arr.shape[0] != self.p.n:

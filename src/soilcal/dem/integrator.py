@@ -61,6 +61,38 @@ PARALLEL_MIN = 1024
 CONTACT_MATH = {"contract"}
 
 
+@njit(cache=True, inline="always")
+def _cover(i, k, nwc, p, feat, cx, cy, cz, ri, xi, yi, zi, fk, wnbr, prim_kind, prim_wall,
+           prim_par):
+    """The wall slot whose triangle counts the contact of particle i with triangle p (its
+    k-th wall slot; closest point c, feature ``feat``), or -1 when p counts it itself
+    (walls.py, "Triangle meshes"): the slot of another triangle q of the same wall on which c
+    lies, when q's own closest point does not lie on p (q is then strictly closer: the edge
+    or vertex of a flat or convex mesh next to the face or edge that holds it, or the edge of
+    a triangle the sphere has moved off), or lies on p too (the same point, to rounding) and
+    q's is a face where p's is not, or an edge where p's is a vertex, or the same feature at
+    an earlier slot.  ``fk``:
+    the slot of the particle's first face contact (-1: none), tried first (a sphere on a
+    face: its neighbours' edges lie on it)."""
+    w = prim_wall[p]
+    tol = 1e-9 * ri
+    for step in range(nwc + 1):
+        kk = fk if step == 0 else step - 1
+        if kk < 0 or kk == k or (step > 0 and kk == fk):
+            continue
+        pp = wnbr[i, kk]
+        if prim_wall[pp] != w or prim_kind[pp] != TRIANGLE:
+            continue
+        if prim_closest(TRIANGLE, prim_par, pp, cx, cy, cz)[0] > tol:
+            continue  # c is not on q
+        o8 = prim_closest(TRIANGLE, prim_par, pp, xi, yi, zi)
+        if prim_closest(TRIANGLE, prim_par, p, o8[4], o8[5], o8[6])[0] > tol:
+            return kk
+        if o8[7] < feat or (o8[7] == feat and kk < k):
+            return kk
+    return -1
+
+
 @njit(cache=True, parallel=True, fastmath=CONTACT_MATH)
 def pair_forces(colour, xr, vw, pair, codes, box, periodic, dt, start, nbr, hist, act,
                 sorder, sgroup, f, t, ovr, mroll):
@@ -202,17 +234,44 @@ def gather(x, v, om, r, inv_m, inv_i, mat, f, t, ovr, peak, mroll, dt, kick, max
                 tz = t[i, 2]
                 mo = ovr[i] / ri
                 mres = mroll[i]
-                # walls with a face contact (bit w): their edge/vertex contacts are dropped
-                face_mask = 0
+                fk = -1  # the slot of the first face contact
                 nwc = wcnt[i]
                 has_tri = False
+                moved = False  # a contact that has touched is on an edge or vertex
+                nface = 0  # face contacts (two of them may be one, on a shared edge)
                 for k in range(nwc):
                     p = wnbr[i, k]
                     if prim_kind[p] == TRIANGLE:
                         has_tri = True
                         r8 = prim_closest(prim_kind[p], prim_par, p, xi, yi, zi)
                         if r8[7] == 0 and r8[0] < ri:
-                            face_mask |= 1 << min(prim_wall[p], 62)
+                            if fk < 0:
+                                fk = k
+                            nface += 1
+                        if r8[7] != 0 and whist[i * KW + k, H_SIZE - 1] != 0.0:
+                            moved = True
+                # a contact that passes from one triangle of a mesh to the next (over their
+                # edge or vertex) is one contact: its history (the tangential spring, the JKR
+                # neck, ...) passes to the triangle that counts it now, if that one has none
+                for _ in range(nwc if moved and imi != 0.0 else 0):
+                    moved = False
+                    for k in range(nwc):
+                        p = wnbr[i, k]
+                        row = i * KW + k
+                        if prim_kind[p] != TRIANGLE or whist[row, H_SIZE - 1] == 0.0:
+                            continue
+                        r8 = prim_closest(prim_kind[p], prim_par, p, xi, yi, zi)
+                        if r8[7] == 0 and nface < 2:
+                            continue
+                        kk = _cover(i, k, nwc, p, r8[7], r8[4], r8[5], r8[6], ri, xi, yi, zi, fk,
+                                    wnbr, prim_kind, prim_wall, prim_par)
+                        if kk >= 0 and whist[i * KW + kk, H_SIZE - 1] == 0.0:
+                            for q in range(H_SIZE):
+                                whist[i * KW + kk, q] = whist[row, q]
+                                whist[row, q] = 0.0
+                            moved = True
+                    if not moved:
+                        break
                 for k in range(nwc):
                     p = wnbr[i, k]
                     for q in range(6):
@@ -226,23 +285,9 @@ def gather(x, v, om, r, inv_m, inv_i, mat, f, t, ovr, peak, mroll, dt, kick, max
                         continue
                     if imi == 0.0:
                         continue
-                    if has_tri and feat != 0:
-                        w = prim_wall[p]
-                        dup = (face_mask >> min(w, 62)) & 1 == 1
-                        if not dup:
-                            for kk in range(k):
-                                pp = wnbr[i, kk]
-                                if prim_wall[pp] != w or prim_kind[pp] != TRIANGLE:
-                                    continue
-                                o8 = prim_closest(prim_kind[pp], prim_par, pp, xi, yi, zi)
-                                if o8[7] != 0 and o8[0] < ri:
-                                    ex = o8[4] - cx
-                                    ey = o8[5] - cy
-                                    ez = o8[6] - cz
-                                    if ex * ex + ey * ey + ez * ez < (1e-9 * ri) ** 2:
-                                        dup = True
-                                        break
-                        if dup:
+                    if prim_kind[p] == TRIANGLE and (feat != 0 or nface > 1):
+                        if _cover(i, k, nwc, p, feat, cx, cy, cz, ri, xi, yi, zi, fk, wnbr,
+                                  prim_kind, prim_wall, prim_par) >= 0:
                             for q in range(H_SIZE):
                                 whist[row, q] = 0.0
                             continue

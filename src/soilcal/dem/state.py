@@ -53,8 +53,11 @@ class ParticleState:
         v = np.zeros((k, 3)) if v is None else np.broadcast_to(np.asarray(v, float), (k, 3))
         om = np.zeros((k, 3)) if omega is None else np.broadcast_to(np.asarray(omega, float), (k, 3))
         m = 4.0 / 3.0 * math.pi * r**3 * density
-        inv_m = np.zeros(k) if fixed else 1.0 / m
-        inv_i = np.zeros(k) if (fixed or lock_rotation) else 1.0 / (0.4 * m * r**2)
+        # fixed, lock_rotation: one flag or one per particle
+        fixed = np.broadcast_to(np.asarray(fixed, dtype=np.bool_), (k,))
+        still = fixed | np.broadcast_to(np.asarray(lock_rotation, dtype=np.bool_), (k,))
+        inv_m = np.where(fixed, 0.0, 1.0 / m)
+        inv_i = np.where(still, 0.0, 1.0 / (0.4 * m * r**2))
         cat = np.concatenate
         self.x = np.ascontiguousarray(cat([self.x, x]))
         self.v = np.ascontiguousarray(cat([self.v, v]))

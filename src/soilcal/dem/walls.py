@@ -36,9 +36,18 @@ Parameter layouts (rows of prim_par):
     TRIANGLE   v0(0:3) v1(3:6) v2(6:9)   (boxes and any STL surface are triangle meshes)
 
 Triangle meshes: a sphere touching a mesh at a shared edge or vertex would be reported by
-every triangle sharing it.  Per particle and wall, edge/vertex contacts are ignored when the
-same wall has a face contact with the particle, and among edge/vertex contacts with the same
-contact point (within 1e-9 of the radius) only the first is kept.
+every triangle sharing it, and a triangle that meets the edge or face a sphere touches only at
+one vertex reports that vertex as a second, farther contact.  Per particle and wall, a contact
+whose point lies (within 1e-9 of the radius) on another triangle of the wall is ignored when
+that triangle's own closest point is not on the first one (that triangle is closer and counts
+the contact), and among contacts with the same point only the first is kept (integrator
+``_cover``).  Contacts elsewhere on the same mesh stay: a sphere on a floor against the edge of
+a ledge of the same mesh feels both.  So a sphere over a flat or convex mesh feels one contact
+wherever it touches, as on the plane or the solid the mesh describes.  A contact that passes
+over an edge or vertex from one triangle to the next stays one contact: when the triangle that
+counts it has no history yet, the history of the one it leaves (tangential spring, JKR neck,
+rolling spring, largest plastic overlap, touching flag) passes to it, so a JKR neck in tension
+(overlap < 0) or a sticking tangential spring carries on as on a plane.
 """
 
 from __future__ import annotations
