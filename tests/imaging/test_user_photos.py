@@ -331,3 +331,43 @@ def test_a_rendered_photo_rolled_beyond_the_plate_search_is_refused(tmp_path):
     assert e.value.path == str(p) and e.value.field == "image"
     found = re.search(r"tilted (-?[0-9.]+) deg", e.value.got)
     assert found and abs(float(found[1]) - truth["roll_deg"]) <= 0.2, e.value.got
+
+
+@pytest.mark.parametrize("kind", ["ruler", "shadow"])
+def test_level_photo_with_a_diagonal_edge_on_the_wall_is_measured(tmp_path, kind):
+    # a level photo of a heap on a plate hardly wider than it, a ruler leaning at 20 deg or a
+    # lamp's shadow edge at 20 deg across the wall behind it: a straight edge across the photo
+    # beyond the plate search, but no heap stands on it (the ruler's was taken for a rolled
+    # plate and refused, "rotate the photo 20 deg"); measured on the plate as drawn
+    h, w = 300, 400
+    rr, cc = np.mgrid[0:h, 0:w]
+    prow = 0.72 * h
+    light = (0.6, 0.6, 0.62)
+    img = heap_photo(seed=5, plate=light)
+    clean = heap_photo(seed=5, grain=0.0, noise=0.0, plate=light)
+    img[(rr >= prow) & ((cc < 50) | (cc > 334))] = clean[0, 0]  # the plate ends 6 px beyond the heap's feet
+    edge = 5 + np.tan(np.radians(20.0)) * cc
+    top = np.maximum(prow - 90 + (200 - cc) * np.tan(np.radians(32.0)), prow - 90 + (cc - 200) * np.tan(np.radians(35.0)))
+    wall = (rr < prow) & ~((rr >= top) & (rr < prow))
+    if kind == "ruler":
+        img[wall & (np.abs(rr - edge) < 4)] = (0.2, 0.2, 0.2)
+    else:
+        img[wall & (rr > edge)] *= 0.7
+    p = tmp_path / f"{kind}.png"
+    _u8(img).save(p)
+    r = measure.measure_pile(p)
+    _assert_flanks(r, 32.0, 35.0)
+    assert abs(r.roll_deg) <= 0.2
+
+
+def test_no_heap_found_beside_a_tilted_edge_says_what_it_could_be(tmp_path):
+    # a camera rolled 40 deg: no heap is measured on the plate search's lines nor on the tilted
+    # plate edge; the refusal names the tilt, conditionally (it may be a shadow's edge)
+    from soilcal.errors import InputError
+
+    p = tmp_path / "rolled40.jpg"
+    _u8(heap_photo(tilt=40.0)).save(p, quality=90)
+    with pytest.raises(InputError) as e:
+        measure.measure_pile(p)
+    assert "if it is the plate's (the camera rolled" in e.value.got, e.value.got
+    assert re.search(r"tilted 40\.[0-9] deg", e.value.got), e.value.got
