@@ -411,6 +411,20 @@ def test_sixteen_bit_png_depth_from_its_sbit_chunk(tmp_path, shifted):
     _assert_flanks(measure.measure_pile(p), 32.0, 35.0)
 
 
+@pytest.mark.parametrize("gain", [1 / 6, 1 / 12])
+def test_sixteen_bit_photo_exposed_for_a_window_counts_its_own_levels(tmp_path, gain):
+    # a 16-bit photo exposed for a bright window in view: the heap, plate and wall take a sixth
+    # or a twelfth of its range, 22 or 11 of 256 levels at 8 bits (refused as an 8-bit photo
+    # would be, with edges of quantisation steps), but thousands of its 65536; the levels are
+    # counted at its 16 bits, an eighth of those its values there use, and it is measured
+    img = heap_photo(seed=2) * gain
+    img[10:60, 20:120] = 1.0
+    img[10:60, 300:380] = 0.0
+    p = tmp_path / "window16.png"
+    png16(p, np.round(img * 65535).astype(np.uint16))
+    _assert_flanks(measure.measure_pile(p), 32.0, 35.0)
+
+
 def test_eight_bit_values_in_a_sixteen_bit_file_refused_for_their_contrast(tmp_path):
     # a dim photo's 8-bit values (up to 32) in a 16-bit PNG: read at its 16 bits, its values use
     # 8 of them, and it spans too few of those; the refusal says so, not that it was read at 8

@@ -224,8 +224,10 @@ def read_photo(path) -> np.ndarray:
     return read_photo_reduced(path)[0]
 
 
-def read_photo_reduced(path, min_pixels=None) -> tuple[np.ndarray, tuple[int, int]]:
-    """(:func:`read_photo`'s image, (width, height) of the photo as shown); with ``min_pixels``
+def read_photo_reduced(path, min_pixels=None, with_depth=False):
+    """(:func:`read_photo`'s image, (width, height) of the photo as shown), and with
+    ``with_depth`` the grey levels of the depth it was read at (256 at 8 bits per channel, 4096
+    for a 12-bit camera's values in a 16-bit file) as a third item; with ``min_pixels``
     a larger photo comes reduced by the largest whole factor keeping at least that many pixels
     (decoded reduced where the format allows: :func:`_decode`).  A colour photo whose luminance
     spans less than an eighth of its grey levels (between its 0.5 and 99.5 percentiles; fewer
@@ -255,7 +257,7 @@ def read_photo_reduced(path, min_pixels=None) -> tuple[np.ndarray, tuple[int, in
                    "or a heap and a wall alike in brightness")
             raise InputError(p, "image", f"a photo whose brightness spans at least {MIN_GREY_LEVELS * depth // 256} of "
                              f"its {depth} grey levels (heap, plate and wall exposed)", f"{levels:.0f} levels: {why}")
-    return rgb, shown
+    return (rgb, shown, depth) if with_depth else (rgb, shown)
 
 
 def read_gray(path):

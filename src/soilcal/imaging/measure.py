@@ -405,7 +405,7 @@ def _measure_pile(path, threshold, keep_stages, channel, tried: Tried, image=Non
         # on it): decoded reduced by a whole factor where the format allows (a JPEG by 2, 4 or
         # 8 in its decoder), then scaled to the working size; the search then takes seconds
         # instead of minutes, and the photo is never held at full size as floats
-        rgb, (w0, h0) = read_photo_reduced(path, PILE_WORK_PIXELS if plate is None else None)
+        rgb, (w0, h0), depth = read_photo_reduced(path, PILE_WORK_PIXELS if plate is None else None, with_depth=True)
     else:
         rgb, (h0, w0) = image, image.shape[:2]
     scale = 1.0
@@ -415,17 +415,23 @@ def _measure_pile(path, threshold, keep_stages, channel, tried: Tried, image=Non
                                 anti_aliasing=True)
     res = _pile_on_lines(path, rgb, threshold, keep_stages, channel, tried, plate)
     if image is None:
-        _check_levels_around(path, rgb, res)
+        _check_levels_around(path, rgb, res, depth)
     res.work_scale = scale
     return res
 
 
-def _levels_around(rgb, res: PileResult) -> float:
-    """The grey levels (of 256) the region measured spans: the band from the plate line
-    (following its tilt) up to 1.25 times the heap's height above it and a tenth of it (5 px
-    at least) below, across the photo; the largest span, between the 0.5 and 99.5 percentiles,
-    of its luminance and of each colour channel (a heap differing from the wall in hue only
-    spans its levels in a channel)."""
+def _levels_around(rgb, res: PileResult, depth: int = 256) -> tuple[float, int]:
+    """The grey levels the region measured spans, counted at the photo's ``depth`` (its grey
+    levels: 256 at 8 bits), and the levels of the depth its own values use: the band from the
+    plate line (following its tilt) up to 1.25 times the heap's height above it and a tenth of
+    it (5 px at least) below, across the photo; the largest span, between the 0.5 and 99.5
+    percentiles, of its luminance and of each colour channel (a heap differing from the wall in
+    hue only spans its levels in a channel).  The depth its values use is, as for a 16-bit
+    photo as a whole (:func:`soilcal.imaging.io._bit_depth_scaled`), the smallest of 8 bits to
+    the photo's holding their :data:`~soilcal.imaging.io.DEPTH_PERCENTILE` percentile: 256 for
+    any 8-bit photo."""
+    from soilcal.imaging.io import DEPTH_PERCENTILE
+
     slope, intercept, _, _, hmax = res.geometry
     h, w = rgb.shape[:2]
     rr, cc = np.mgrid[0:h, 0:w]
@@ -433,21 +439,27 @@ def _levels_around(rgb, res: PileResult) -> float:
     region = (above <= 1.25 * hmax) & (above >= -max(0.1 * hmax, 5.0))
     values = np.concatenate([color.rgb2gray(rgb)[region][:, None], rgb[region]], axis=1)
     lo, hi = np.percentile(values, [0.5, 99.5], axis=0)
-    return float((hi - lo).max() * 255.0)
+    top = float(np.percentile(values, DEPTH_PERCENTILE)) * (depth - 1)
+    used = min(depth, 2 ** max(8, int(np.ceil(np.log2(top + 1.0)))))
+    return float((hi - lo).max() * (depth - 1)), used
 
 
-def _check_levels_around(path, rgb, res: PileResult) -> None:
-    """Refuse a heap measured in a region spanning fewer than
-    :data:`~soilcal.imaging.io.MIN_GREY_LEVELS` grey levels (:func:`_levels_around`): the photo
-    as a whole spans enough of them (a window, a lamp or a dark corner in view) while heap,
-    plate and wall are under- or over-exposed, their edges quantisation steps (flanks 1 deg
-    off or more, as "ok")."""
+def _check_levels_around(path, rgb, res: PileResult, depth: int = 256) -> None:
+    """Refuse a heap measured in a region spanning fewer than an eighth of the grey levels its
+    values use (:func:`_levels_around`; :data:`~soilcal.imaging.io.MIN_GREY_LEVELS` of 256 in
+    an 8-bit photo), as a photo as a whole must (:func:`soilcal.imaging.io.read_photo_reduced`):
+    the photo as a whole spans enough of them (a window, a lamp or a dark corner in view) while
+    heap, plate and wall are under- or over-exposed, their edges quantisation steps (flanks 1
+    deg off or more, as "ok").  ``depth``: the photo's grey levels (256 at 8 bits; a 16-bit
+    photo's levels are counted at its 16 bits, where a band spanning a tenth of the range
+    holds thousands of them)."""
     from soilcal.imaging.io import MIN_GREY_LEVELS
 
-    levels = _levels_around(rgb, res)
-    if levels < MIN_GREY_LEVELS:
-        raise InputError(path, "image", f"heap, plate and wall around the heap spanning at least {MIN_GREY_LEVELS} of "
-                         "256 grey levels (an eighth of the range; exposed for the heap)",
+    levels, used = _levels_around(rgb, res, depth)
+    need = MIN_GREY_LEVELS * used // 256
+    if levels < need:
+        raise InputError(path, "image", f"heap, plate and wall around the heap spanning at least {need} of "
+                         f"{used} grey levels (an eighth of the range; exposed for the heap)",
                          f"{levels:.0f} levels around the heap (the photo is exposed for a brighter or darker part "
                          "of the scene)")
 
