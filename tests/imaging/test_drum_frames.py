@@ -186,10 +186,30 @@ def test_drum_photo_rolled_beyond_the_plate_search(tmp_path, roll):
     with pytest.raises(InputError) as e:
         drum.measure_drum_frame(p)
     assert (e.value.path, e.value.field) == (str(p), "image")
-    given = re.search(r"give roll_deg: (-?[0-9.]+) in the manifest", e.value.got)
+    given = re.search(r"if that edge is the plate's \(the camera rolled\), roll_deg: (-?[0-9.]+) in the manifest",
+                      e.value.got)
     assert given and abs(float(given[1]) - roll) <= 0.2, e.value.got
+    assert "level: image" in e.value.got
     r = drum.measure_drum_frame(p, options={"roll_deg": float(given[1])})
     assert r.level_reference == "manifest roll" and abs(r.angle_deg - 35.0) <= 0.3
+
+
+@pytest.mark.parametrize("tilt", [20.0, -25.0])
+def test_drum_photo_level_with_a_diagonal_shadow_below_the_drum(tmp_path, tilt):
+    # a drum on its stand photographed with the camera level, a straight shadow edge across the
+    # wall and table below the drum at 20 or -25 deg: the plate below the drum is found within
+    # the plate search, so the shadow is no roll (it was refused as one, and the roll it named
+    # read the 35 deg surface at 54.9 or 9.9 deg); measured on the plate
+    img, truth = render.render_drum(3, 35.0, roll_deg=0.0)
+    h, w = img.shape[:2]
+    rr, cc = np.mgrid[0:h, 0:w]
+    cx, cy, r_ = 572.0, 402.0, 292.0  # the drum in the rendered photo
+    edge = (cy + r_ + 40) + np.tan(np.radians(tilt)) * (cc - cx)
+    shaded = img.astype(float)
+    shaded[(rr > edge) & (np.hypot(rr - cy, cc - cx) > r_ + 25)] *= 0.6
+    p = render.save_photo(tmp_path / "shadow.jpg", shaded.astype(np.uint8), truth, quality=90)
+    r = drum.measure_drum_frame(p)
+    assert r.level_reference == "plate" and abs(r.roll_deg) <= 0.2 and abs(r.angle_deg - 35.0) <= 0.5, r.angle_deg
 
 
 def test_level_plate_required_but_absent(tmp_path):

@@ -201,10 +201,11 @@ def test_a_heap_exposed_into_few_levels_beside_a_bright_window(tmp_path, gain, s
     assert e.value.expected.startswith("heap, plate and wall around the heap spanning at least 32 of 256 grey levels")
 
 
-def png16(path, a):
+def png16(path, a, sbit=None):
     """A PNG of 16 bits per channel of the uint16 image ``a`` (rows x columns x 3), as libpng
     writes one: its rows filtered in turn by each of the five PNG filters (none, sub, up,
-    average, Paeth), which reach back one whole 6-byte pixel (PIL cannot write such a PNG)."""
+    average, Paeth), which reach back one whole 6-byte pixel (PIL cannot write such a PNG);
+    ``sbit``: the significant bits per channel, written as an sBIT chunk."""
     import struct
     import zlib
 
@@ -225,8 +226,9 @@ def png16(path, a):
     def chunk(kind, data):
         return struct.pack(">I", len(data)) + kind + data + struct.pack(">I", zlib.crc32(kind + data))
 
+    sig = chunk(b"sBIT", bytes([sbit] * c)) if sbit else b""
     path.write_bytes(b"\x89PNG\r\n\x1a\n" + chunk(b"IHDR", struct.pack(">IIBBBBB", w, h, 16, {3: 2, 4: 6}[c], 0, 0, 0))
-                     + chunk(b"IDAT", zlib.compress(b"".join(rows))) + chunk(b"IEND", b""))
+                     + sig + chunk(b"IDAT", zlib.compress(b"".join(rows))) + chunk(b"IEND", b""))
 
 
 def _save16(path, a):
@@ -239,8 +241,8 @@ def _save16(path, a):
 
 
 @pytest.mark.parametrize("suffix", [".png", ".tif"])
-@pytest.mark.parametrize("bits,gain", [(16, 1.0), (12, 1.0), (16, 1 / 8)])
-def test_sixteen_bit_colour_photo_is_read_at_its_depth(tmp_path, suffix, bits, gain):
+@pytest.mark.parametrize("bits,gain,used", [(16, 1.0, 16), (12, 1.0, 12), (16, 1 / 8, 13)])
+def test_sixteen_bit_colour_photo_is_read_at_its_depth(tmp_path, suffix, bits, gain, used):
     # 16 bits per channel: full range, a 12-bit camera's values in a 16-bit file, and a dim
     # photo spanning an eighth of the range; PIL decodes the upper 8 bits only, which left
     # the 12-bit and the dim photo 7 and 14 levels (refused) and rounded the full-range one
@@ -252,8 +254,8 @@ def test_sixteen_bit_colour_photo_is_read_at_its_depth(tmp_path, suffix, bits, g
     a = np.round(img * gain * (2 ** bits - 1)).astype(np.uint16)
     p = tmp_path / f"rgb{bits}{suffix}"
     _save16(p, a)
-    top = 2.0 ** int(np.ceil(np.log2(a.max() + 1.0))) - 1.0
-    assert np.abs(read_photo(p) - a / top).max() < 1e-9
+    # the depth its values use: the depth drawn with, less 3 bits for the photo dimmed 8 times
+    assert np.abs(read_photo(p) - a / (2.0 ** used - 1.0)).max() < 1e-9
     r = measure.measure_pile(p)
     _assert_flanks(r, 32.0, 35.0)
     p8 = tmp_path / "rgb8.png"
@@ -331,3 +333,106 @@ def test_a_rendered_photo_rolled_beyond_the_plate_search_is_refused(tmp_path):
     assert e.value.path == str(p) and e.value.field == "image"
     found = re.search(r"tilted (-?[0-9.]+) deg", e.value.got)
     assert found and abs(float(found[1]) - truth["roll_deg"]) <= 0.2, e.value.got
+
+
+@pytest.mark.parametrize("kind", ["ruler", "shadow"])
+def test_level_photo_with_a_diagonal_edge_on_the_wall_is_measured(tmp_path, kind):
+    # a level photo of a heap on a plate hardly wider than it, a ruler leaning at 20 deg or a
+    # lamp's shadow edge at 20 deg across the wall behind it: a straight edge across the photo
+    # beyond the plate search, but no heap stands on it (the ruler's was taken for a rolled
+    # plate and refused, "rotate the photo 20 deg"); measured on the plate as drawn
+    h, w = 300, 400
+    rr, cc = np.mgrid[0:h, 0:w]
+    prow = 0.72 * h
+    light = (0.6, 0.6, 0.62)
+    img = heap_photo(seed=5, plate=light)
+    clean = heap_photo(seed=5, grain=0.0, noise=0.0, plate=light)
+    img[(rr >= prow) & ((cc < 50) | (cc > 334))] = clean[0, 0]  # the plate ends 6 px beyond the heap's feet
+    edge = 5 + np.tan(np.radians(20.0)) * cc
+    top = np.maximum(prow - 90 + (200 - cc) * np.tan(np.radians(32.0)), prow - 90 + (cc - 200) * np.tan(np.radians(35.0)))
+    wall = (rr < prow) & ~((rr >= top) & (rr < prow))
+    if kind == "ruler":
+        img[wall & (np.abs(rr - edge) < 4)] = (0.2, 0.2, 0.2)
+    else:
+        img[wall & (rr > edge)] *= 0.7
+    p = tmp_path / f"{kind}.png"
+    _u8(img).save(p)
+    r = measure.measure_pile(p)
+    _assert_flanks(r, 32.0, 35.0)
+    assert abs(r.roll_deg) <= 0.2
+
+
+def test_no_heap_found_beside_a_tilted_edge_says_what_it_could_be(tmp_path):
+    # a camera rolled 40 deg: no heap is measured on the plate search's lines nor on the tilted
+    # plate edge; the refusal names the tilt, conditionally (it may be a shadow's edge)
+    from soilcal.errors import InputError
+
+    p = tmp_path / "rolled40.jpg"
+    _u8(heap_photo(tilt=40.0)).save(p, quality=90)
+    with pytest.raises(InputError) as e:
+        measure.measure_pile(p)
+    assert "if it is the plate's (the camera rolled" in e.value.got, e.value.got
+    assert re.search(r"tilted 40\.[0-9] deg", e.value.got), e.value.got
+
+
+@pytest.mark.parametrize("hot", [4096, 65535])
+def test_a_hot_pixel_does_not_set_the_bit_depth(tmp_path, hot):
+    # a 12-bit camera's values in a 16-bit PNG with one hot pixel (or a glint) at 4096 or
+    # 65535: the depth was that of the largest value, which scaled the photo by 8191 or 65535
+    # and refused the second (32 of 8192 levels, "under-exposed"); it is read at 12 bits (the
+    # hot pixel clipped) and measured as without it
+    from soilcal.imaging.io import read_photo
+
+    a = np.round(heap_photo() * 4095).astype(np.uint16)
+    a[3, 3] = hot
+    p = tmp_path / "hot.png"
+    png16(p, a)
+    img = read_photo(p)
+    keep = np.ones(a.shape[:2], bool)
+    keep[3, 3] = False
+    assert np.abs(img[keep] - a[keep] / 4095.0).max() < 1e-9 and img[3, 3].max() == 1.0
+    _assert_flanks(measure.measure_pile(p), 32.0, 35.0)
+
+
+@pytest.mark.parametrize("shifted", [False, True])
+def test_sixteen_bit_png_depth_from_its_sbit_chunk(tmp_path, shifted):
+    # a 12-bit photo in a 16-bit PNG saying so (sBIT 12): its values as the camera gave them
+    # (a dim photo whose values reach 2048 only, read by 4095, not 2047 as their spread would
+    # say), or scaled to 16 bits as the PNG standard has them (read by 65535)
+    from soilcal.imaging.io import read_photo
+
+    img = heap_photo()
+    a = np.round(img * (0.6 if not shifted else 1.0) * 4095).astype(np.uint16)
+    if shifted:
+        a = a << 4
+    p = tmp_path / "sbit.png"
+    png16(p, a, sbit=12)
+    assert np.abs(read_photo(p) - a / (65535.0 if shifted else 4095.0)).max() < 1e-9
+    _assert_flanks(measure.measure_pile(p), 32.0, 35.0)
+
+
+@pytest.mark.parametrize("gain", [1 / 6, 1 / 12])
+def test_sixteen_bit_photo_exposed_for_a_window_counts_its_own_levels(tmp_path, gain):
+    # a 16-bit photo exposed for a bright window in view: the heap, plate and wall take a sixth
+    # or a twelfth of its range, 22 or 11 of 256 levels at 8 bits (refused as an 8-bit photo
+    # would be, with edges of quantisation steps), but thousands of its 65536; the levels are
+    # counted at its 16 bits, an eighth of those its values there use, and it is measured
+    img = heap_photo(seed=2) * gain
+    img[10:60, 20:120] = 1.0
+    img[10:60, 300:380] = 0.0
+    p = tmp_path / "window16.png"
+    png16(p, np.round(img * 65535).astype(np.uint16))
+    _assert_flanks(measure.measure_pile(p), 32.0, 35.0)
+
+
+def test_eight_bit_values_in_a_sixteen_bit_file_refused_for_their_contrast(tmp_path):
+    # a dim photo's 8-bit values (up to 32) in a 16-bit PNG: read at its 16 bits, its values use
+    # 8 of them, and it spans too few of those; the refusal says so, not that it was read at 8
+    # bits
+    from soilcal.errors import InputError
+
+    p = tmp_path / "dim8in16.png"
+    png16(p, np.round(heap_photo() * 255 / 8).astype(np.uint16))
+    with pytest.raises(InputError) as e:
+        measure.measure_pile(p)
+    assert "too little brightness contrast" in e.value.got and "read at 8 bits" not in e.value.got, e.value.got

@@ -24,9 +24,11 @@ drum window, 8- or 16-bit grey, time-averaged over many frames, no plate in view
    which a true horizontal appears rotated counter-clockwise in the frame); ``plate`` when a long
    straight near-horizontal edge lies below the drum (base plate or table, found as for piles)
    and ``level`` is ``auto`` (default) or ``plate``; otherwise ``image axes`` (testers mount the
-   camera square to the drum).  A frame with a straight edge across it below the drum tilted
-   beyond the plate search (:func:`soilcal.imaging.measure._plate_beyond_search`) is refused
-   naming the tilt, to be given as ``roll_deg``.  ``level: image`` skips the plate search, ``level: plate``
+   camera square to the drum).  A frame with no plate edge below the drum within the plate
+   search but a straight edge across it below the drum tilted beyond it
+   (:func:`soilcal.imaging.measure._plate_beyond_search`) is refused naming the tilt: the
+   ``roll_deg`` to give if that edge is the plate's (a camera rolled further), ``level: image``
+   if it is not (a shadow, a table's edge).  With a plate found, a tilted edge is no roll.  ``level: image`` skips the plate search, ``level: plate``
    requires a plate.  The frame is rotated about the drum centre by the roll.
 4. Interface: Otsu's threshold inside the masked drum separates powder from air; the powder is
    the class lying lower (its centroid below the air's: dark powder on a white backlight, or
@@ -401,18 +403,25 @@ def _measure_drum_frame(path, threshold, keep_stages, options, tried: Tried) -> 
         roll, lref = opts["roll_deg"], "manifest roll"
     elif opts["level"] != "image":
         line = plate_line_any(path, gray, below=(cx, cy + R), required=False)
-        # a plate below the drum tilted beyond the plate search (a camera rolled further) gave
-        # a level off by the roll, or none (the image axes), and the angle as far off
-        edges = feature.canny(gray, sigma=1.5)
-        tilted = _plate_beyond_search(edges, ndi.binary_dilation(edges, np.ones((3, 1), bool)),
-                                      [] if line is None else [line], below=(cx, cy + R))
+        # no plate below the drum within the plate search: a plate tilted beyond it (a camera
+        # rolled further) would have given the image axes, and the angle off by the roll.  Only
+        # then is a straight edge beyond the search looked for: with a plate found, a tilted
+        # edge is a shadow or a table's edge, not a roll.  What it is cannot be told from the
+        # photo, so both readings are offered
+        tilted = None
+        if line is None:
+            edges = feature.canny(gray, sigma=1.5)
+            tilted = _plate_beyond_search(edges, ndi.binary_dilation(edges, np.ones((3, 1), bool)), [],
+                                          below=(cx, cy + R))
         if tilted is not None:
             tried.lines = [tilted]
             tilt = -float(np.degrees(np.arctan(tilted[0])))
             raise InputError(path, "image", f"a plate edge below the drum within {PLATE_MAX_ROLL_DEG:.0f} deg of "
                              "horizontal (the plate search looks no further), or the frame's roll given",
-                             f"a straight edge across the photo below the drum tilted {tilt:.1f} deg: give roll_deg: "
-                             f"{tilt:.1f} in the manifest (or rotate the photo level)")
+                             f"no plate edge within {PLATE_MAX_ROLL_DEG:.0f} deg of horizontal below the drum, and a "
+                             f"straight edge across the photo below it tilted {tilt:.1f} deg: if that edge is the "
+                             f"plate's (the camera rolled), roll_deg: {tilt:.1f} in the manifest levels the frame; if "
+                             "it is not (a shadow, a table's edge) and the camera was level, level: image")
         if line is not None:
             tried.lines = [line]
             roll, lref = -float(np.degrees(np.arctan(line[0]))), "plate"

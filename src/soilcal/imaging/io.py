@@ -6,7 +6,8 @@ channel is dropped), 1-bit, 8-bit grey, and single-channel 16-bit or 32-bit fram
 and 99.5 percentiles instead of being clipped to 8 bits.  A colour photo of 16 bits per channel
 (PNG or TIFF) is read at its 16 bits (PIL keeps only the upper 8 of them: :func:`_deep_rgb`) and
 scaled by the bit depth its values use (65535 for a full-range photo, 4095 for a 12-bit camera's
-values in a 16-bit file), so it reads like its 8-bit version.  A photo with an EXIF Orientation
+values in a 16-bit file: a PNG's sBIT chunk where it says it, else the depth holding 99.9 % of
+its values, so that a hot pixel does not set it), so it reads like its 8-bit version.  A photo with an EXIF Orientation
 tag (a phone held upright or upside down) is turned as a viewer shows it before it is measured.
 :func:`read_photo_reduced` and :func:`read_gray_reduced` decode a large photo reduced by a whole
 factor (a JPEG in its decoder), so it is never held at full size as floats.  A colour photo
@@ -36,6 +37,9 @@ MIN_GREY_LEVELS = 32
 # full scale of PIL's single-channel modes; RGB-like modes go through luminance
 _FULL_SCALE = {"1": 1.0, "L": 255.0, "I;16": 65535.0, "I;16L": 65535.0, "I;16B": 65535.0, "I;16N": 65535.0}
 _HIGH_DEPTH = ("I;16", "I;16L", "I;16B", "I;16N", "I", "F")
+#: the mode :func:`_decode` gives a colour photo of 16 bits per channel read at 8 bits (its
+#: low bytes not decodable), as against one read at 16 bits whose values use 8 bits ("RGB;16")
+_DEEP_AT_8 = "RGB;16 read at 8 bits"
 
 
 def _stretch(g: np.ndarray) -> np.ndarray:
@@ -82,18 +86,62 @@ def _deep_rgb(p: Path, hi):
         return out
 
 
-def _bit_depth_scaled(v: np.ndarray, f: int):
+#: the share of a 16-bit photo's values (per channel sample) that its bit depth is estimated
+#: from where the file does not say it: the depth holding this percentile of them, so that a
+#: hot pixel or a specular glint (a few samples at the top of the range) does not set it
+DEPTH_PERCENTILE = 99.9
+
+
+def _png_significant_bits(p: Path):
+    """The bits per colour channel a PNG's sBIT chunk says its samples hold (the largest of its
+    colour channels'), or None: no PNG, or none given."""
+    import struct
+
+    try:
+        with open(p, "rb") as fh:
+            if fh.read(8) != b"\x89PNG\r\n\x1a\n":
+                return None
+            colour_type = None
+            while True:
+                head = fh.read(8)
+                if len(head) < 8:
+                    return None
+                n, kind = struct.unpack(">I4s", head)
+                if kind in (b"IDAT", b"IEND"):
+                    return None
+                data = fh.read(n)
+                fh.read(4)  # CRC
+                if kind == b"IHDR" and n >= 10:
+                    colour_type = data[9]
+                elif kind == b"sBIT" and data:
+                    colour = data[:3] if colour_type in (2, 3, 6) else data[:1]
+                    bits = max(colour)
+                    return bits if 1 <= bits <= 16 else None
+    except OSError:
+        return None
+
+
+def _bit_depth_scaled(v: np.ndarray, f: int, bits=None):
     """16-bit values ``v`` reduced by ``f`` (box averages, as :meth:`PIL.Image.Image.reduce`)
-    and scaled to [0, 1] by the bit depth they use: the smallest of 8 to 16 bits holding their
-    largest value (a 12-bit camera's values in a 16-bit file by 4095).  Returns (image, levels
-    of that depth)."""
+    and scaled to [0, 1] by the bit depth they use: ``bits`` where the file says it (a PNG's
+    sBIT chunk; by 65535 where the values are scaled to the file's 16 bits, as the standard
+    has them, and exceed that depth), else the smallest of 8 to 16 bits holding their
+    :data:`DEPTH_PERCENTILE` percentile (a 12-bit camera's values in a 16-bit file by 4095,
+    whatever a hot pixel holds); values above it are clipped.  Returns (image, levels of that
+    depth)."""
     from PIL import Image
 
     if f >= 2:
         v = np.stack([np.asarray(Image.fromarray(v[..., k].astype(np.int32), "I").reduce(f), float)
                       for k in range(v.shape[-1])], axis=-1)
-    bits = max(8, int(np.ceil(np.log2(float(v.max()) + 1.0))))
-    return np.asarray(v, float) / (2.0 ** bits - 1.0), 2 ** bits
+    top = float(np.percentile(v, DEPTH_PERCENTILE))
+    if bits is None:
+        bits = max(8, int(np.ceil(np.log2(top + 1.0))))
+    elif top > 2.0 ** bits - 1.0:
+        # the values scaled to the file's 16 bits, as the PNG standard has them (the low bits
+        # padding): scaled by 65535, their levels those of the significant bits
+        return np.asarray(v, float) / 65535.0, 2 ** bits
+    return np.minimum(np.asarray(v, float) / (2.0 ** bits - 1.0), 1.0), 2 ** bits
 
 
 def _reduction(w: int, h: int, min_pixels) -> int:
@@ -106,7 +154,8 @@ def _decode(path, formats: str, min_pixels=None):
     """(PIL mode, grey [0, 1] for single-channel modes else None, RGB [0, 1] else None, (width,
     height) as shown, grey levels of the photo's depth: 256 for 8 bits per channel).  A colour
     photo of 16 bits per channel has mode "RGB;16" and is read at its 16 bits where PIL can
-    decode its low bytes (:func:`_deep_rgb`, scaled by :func:`_bit_depth_scaled`).  With
+    decode its low bytes (:func:`_deep_rgb`, scaled by :func:`_bit_depth_scaled`; else mode
+    :data:`_DEEP_AT_8`, at 8 bits).  With
     ``min_pixels``, a photo of more pixels is decoded reduced by a whole factor that keeps at
     least that many: a JPEG in its decoder (DCT scaling, by 2, 4 or 8,
     :meth:`PIL.Image.Image.draft`), any photo by box averaging (:meth:`PIL.Image.Image.reduce`)
@@ -144,7 +193,8 @@ def _decode(path, formats: str, min_pixels=None):
                 f = _reduction(*im.size, min_pixels)
                 v = _deep_rgb(p, im) if deep and mode in ("RGB", "RGBA") else None
                 if v is not None:
-                    rgb, depth = _bit_depth_scaled(v, f)
+                    sbit = _png_significant_bits(p)  # None but for a PNG saying it
+                    rgb, depth = _bit_depth_scaled(v, f, sbit)
                     return "RGB;16", None, rgb, shown, depth
                 if mode not in _FULL_SCALE and mode not in ("I", "F"):
                     im = im.convert("RGB")
@@ -158,7 +208,8 @@ def _decode(path, formats: str, min_pixels=None):
                 if mode in _FULL_SCALE:
                     top = 255.0 if im.mode == "L" else _FULL_SCALE[mode]
                     return mode, np.asarray(im, dtype=float) / top, None, shown, 256
-                return ("RGB;16" if deep else mode), None, np.asarray(im, dtype=float) / 255.0, shown, 256
+                # a 16-bit colour photo whose low bytes could not be decoded: read at 8 bits
+                return (_DEEP_AT_8 if deep else mode), None, np.asarray(im, dtype=float) / 255.0, shown, 256
     except InputError:
         raise
     except Image.DecompressionBombError as exc:
@@ -173,8 +224,10 @@ def read_photo(path) -> np.ndarray:
     return read_photo_reduced(path)[0]
 
 
-def read_photo_reduced(path, min_pixels=None) -> tuple[np.ndarray, tuple[int, int]]:
-    """(:func:`read_photo`'s image, (width, height) of the photo as shown); with ``min_pixels``
+def read_photo_reduced(path, min_pixels=None, with_depth=False):
+    """(:func:`read_photo`'s image, (width, height) of the photo as shown), and with
+    ``with_depth`` the grey levels of the depth it was read at (256 at 8 bits per channel, 4096
+    for a 12-bit camera's values in a 16-bit file) as a third item; with ``min_pixels``
     a larger photo comes reduced by the largest whole factor keeping at least that many pixels
     (decoded reduced where the format allows: :func:`_decode`).  A colour photo whose luminance
     spans less than an eighth of its grey levels (between its 0.5 and 99.5 percentiles; fewer
@@ -199,12 +252,12 @@ def read_photo_reduced(path, min_pixels=None) -> tuple[np.ndarray, tuple[int, in
         levels = (hi - lo) * (depth - 1)
         if levels < MIN_GREY_LEVELS * depth / 256:
             why = ("a 16-bit colour photo read at 8 bits per channel (save it as 8- or 16-bit RGB)"
-                   if mode == "RGB;16" and depth == 256 else
+                   if mode == _DEEP_AT_8 else
                    "too little brightness contrast between heap, plate and wall: an under- or over-exposed photo, "
                    "or a heap and a wall alike in brightness")
             raise InputError(p, "image", f"a photo whose brightness spans at least {MIN_GREY_LEVELS * depth // 256} of "
                              f"its {depth} grey levels (heap, plate and wall exposed)", f"{levels:.0f} levels: {why}")
-    return rgb, shown
+    return (rgb, shown, depth) if with_depth else (rgb, shown)
 
 
 def read_gray(path):

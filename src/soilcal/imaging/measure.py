@@ -6,7 +6,8 @@ threshold (global Otsu or adaptive ``threshold_local``) -> morphological opening
 flank -> angle = atan(slope).  Here the reference is the plate line itself, found by a Hough
 transform of the Canny edges (lines within :data:`PLATE_MAX_ROLL_DEG` of horizontal) and refined by a RANSAC line fit, so a
 rolled camera does not bias the angle: the image is rotated by the plate's tilt before the
-flanks are read.  A camera rolled further is refused (:func:`_plate_beyond_search`).  Each flank is fitted with RANSAC (``skimage.measure.ransac`` with
+flanks are read.  A camera rolled further is refused (:func:`_plate_beyond_search`) when a heap
+stands on the tilted edge (:func:`_heap_stands_on`; a shadow's edge across the wall is no roll).  Each flank is fitted with RANSAC (``skimage.measure.ransac`` with
 ``LineModelND``) between 20 % and 75 % of the heap height (top cap and toe excluded):
 
     alpha = atan(|d_v| / |d_u|)     (d = fitted line direction in the plate frame)
@@ -404,7 +405,7 @@ def _measure_pile(path, threshold, keep_stages, channel, tried: Tried, image=Non
         # on it): decoded reduced by a whole factor where the format allows (a JPEG by 2, 4 or
         # 8 in its decoder), then scaled to the working size; the search then takes seconds
         # instead of minutes, and the photo is never held at full size as floats
-        rgb, (w0, h0) = read_photo_reduced(path, PILE_WORK_PIXELS if plate is None else None)
+        rgb, (w0, h0), depth = read_photo_reduced(path, PILE_WORK_PIXELS if plate is None else None, with_depth=True)
     else:
         rgb, (h0, w0) = image, image.shape[:2]
     scale = 1.0
@@ -414,17 +415,23 @@ def _measure_pile(path, threshold, keep_stages, channel, tried: Tried, image=Non
                                 anti_aliasing=True)
     res = _pile_on_lines(path, rgb, threshold, keep_stages, channel, tried, plate)
     if image is None:
-        _check_levels_around(path, rgb, res)
+        _check_levels_around(path, rgb, res, depth)
     res.work_scale = scale
     return res
 
 
-def _levels_around(rgb, res: PileResult) -> float:
-    """The grey levels (of 256) the region measured spans: the band from the plate line
-    (following its tilt) up to 1.25 times the heap's height above it and a tenth of it (5 px
-    at least) below, across the photo; the largest span, between the 0.5 and 99.5 percentiles,
-    of its luminance and of each colour channel (a heap differing from the wall in hue only
-    spans its levels in a channel)."""
+def _levels_around(rgb, res: PileResult, depth: int = 256) -> tuple[float, int]:
+    """The grey levels the region measured spans, counted at the photo's ``depth`` (its grey
+    levels: 256 at 8 bits), and the levels of the depth its own values use: the band from the
+    plate line (following its tilt) up to 1.25 times the heap's height above it and a tenth of
+    it (5 px at least) below, across the photo; the largest span, between the 0.5 and 99.5
+    percentiles, of its luminance and of each colour channel (a heap differing from the wall in
+    hue only spans its levels in a channel).  The depth its values use is, as for a 16-bit
+    photo as a whole (:func:`soilcal.imaging.io._bit_depth_scaled`), the smallest of 8 bits to
+    the photo's holding their :data:`~soilcal.imaging.io.DEPTH_PERCENTILE` percentile: 256 for
+    any 8-bit photo."""
+    from soilcal.imaging.io import DEPTH_PERCENTILE
+
     slope, intercept, _, _, hmax = res.geometry
     h, w = rgb.shape[:2]
     rr, cc = np.mgrid[0:h, 0:w]
@@ -432,21 +439,27 @@ def _levels_around(rgb, res: PileResult) -> float:
     region = (above <= 1.25 * hmax) & (above >= -max(0.1 * hmax, 5.0))
     values = np.concatenate([color.rgb2gray(rgb)[region][:, None], rgb[region]], axis=1)
     lo, hi = np.percentile(values, [0.5, 99.5], axis=0)
-    return float((hi - lo).max() * 255.0)
+    top = float(np.percentile(values, DEPTH_PERCENTILE)) * (depth - 1)
+    used = min(depth, 2 ** max(8, int(np.ceil(np.log2(top + 1.0)))))
+    return float((hi - lo).max() * (depth - 1)), used
 
 
-def _check_levels_around(path, rgb, res: PileResult) -> None:
-    """Refuse a heap measured in a region spanning fewer than
-    :data:`~soilcal.imaging.io.MIN_GREY_LEVELS` grey levels (:func:`_levels_around`): the photo
-    as a whole spans enough of them (a window, a lamp or a dark corner in view) while heap,
-    plate and wall are under- or over-exposed, their edges quantisation steps (flanks 1 deg
-    off or more, as "ok")."""
+def _check_levels_around(path, rgb, res: PileResult, depth: int = 256) -> None:
+    """Refuse a heap measured in a region spanning fewer than an eighth of the grey levels its
+    values use (:func:`_levels_around`; :data:`~soilcal.imaging.io.MIN_GREY_LEVELS` of 256 in
+    an 8-bit photo), as a photo as a whole must (:func:`soilcal.imaging.io.read_photo_reduced`):
+    the photo as a whole spans enough of them (a window, a lamp or a dark corner in view) while
+    heap, plate and wall are under- or over-exposed, their edges quantisation steps (flanks 1
+    deg off or more, as "ok").  ``depth``: the photo's grey levels (256 at 8 bits; a 16-bit
+    photo's levels are counted at its 16 bits, where a band spanning a tenth of the range
+    holds thousands of them)."""
     from soilcal.imaging.io import MIN_GREY_LEVELS
 
-    levels = _levels_around(rgb, res)
-    if levels < MIN_GREY_LEVELS:
-        raise InputError(path, "image", f"heap, plate and wall around the heap spanning at least {MIN_GREY_LEVELS} of "
-                         "256 grey levels (an eighth of the range; exposed for the heap)",
+    levels, used = _levels_around(rgb, res, depth)
+    need = MIN_GREY_LEVELS * used // 256
+    if levels < need:
+        raise InputError(path, "image", f"heap, plate and wall around the heap spanning at least {need} of "
+                         f"{used} grey levels (an eighth of the range; exposed for the heap)",
                          f"{levels:.0f} levels around the heap (the photo is exposed for a brighter or darker part "
                          "of the scene)")
 
@@ -456,6 +469,7 @@ def _pile_on_lines(path, rgb, threshold, keep_stages, channel, tried: Tried, pla
     tried.rgb, tried.gray = rgb, lum
     h, w = lum.shape
     plate_edges = None  # the edges a plate candidate must follow beside the heap
+    tilted = None  # a straight edge across the photo tilted beyond the plate search
     if plate is not None:
         lines = [(float(plate[0]), float(plate[1]))]
     else:
@@ -469,27 +483,44 @@ def _pile_on_lines(path, rgb, threshold, keep_stages, channel, tried: Tried, pla
         for ln in plate_lines(lum, edges=cedges, paired=True):
             if all(abs((ln[0] - o[0]) * w / 2 + ln[1] - o[1]) > 3 for o in lines):
                 lines.append(ln)
-        tilted = _plate_beyond_search(all_edges, plate_edges, lines[:PLATE_CANDIDATES])
-        if tilted is not None:
-            tried.lines = list(lines[:PLATE_CANDIDATES])
-            tried.add("a straight edge across the photo, beyond the plate search", line=tilted)
-            roll = -float(np.degrees(np.arctan(tilted[0])))
-            raise InputError(path, "image", f"a plate edge within {PLATE_MAX_ROLL_DEG:.0f} deg of horizontal (the camera "
-                             f"held within {PLATE_MAX_ROLL_DEG:.0f} deg of level: the plate search looks no further)",
-                             f"a straight edge across the photo, as a plate's is, tilted {roll:.1f} deg: rotate the photo "
-                             f"{abs(roll):.0f} deg {'clockwise' if roll > 0 else 'counter-clockwise'} to level it, or "
-                             "take it again with the camera level")
+        beyond = _plate_beyond_search(all_edges, plate_edges, lines[:PLATE_CANDIDATES], every=True)
     tried.lines = list(lines[:PLATE_CANDIDATES])
+    grays = _grays(rgb, CUES if channel == "auto" else (channel,), lum)
+    if beyond:
+        # the first on which a heap stands (each with the lines parallel to it just above: a
+        # plate's top edge, fainter than its face's lower edge), else the one running furthest
+        # across
+        near = [(b, ln) for b in beyond for ln in _parallel_lines(all_edges, *b)]
+        tilted = next((b for b, ln in near[:PLATE_CANDIDATES] if _heap_stands_on(path, rgb, lum, grays, ln, channel,
+                                                                                 threshold, plate_edges)), None)
+        standing = tilted is not None
+        tilted = tilted if standing else beyond[0]  # the tilt of the edge running furthest across
+        roll = -float(np.degrees(np.arctan(tilted[0])))
+        turn = f"rotate the photo {abs(roll):.0f} deg {'clockwise' if roll > 0 else 'counter-clockwise'} to level it"
+        expected = (f"a plate edge within {PLATE_MAX_ROLL_DEG:.0f} deg of horizontal (the camera held within "
+                    f"{PLATE_MAX_ROLL_DEG:.0f} deg of level: the plate search looks no further)")
+        if standing:
+            # a heap stands on the tilted edge, its flanks those of a heap in its frame: the
+            # plate of a camera rolled beyond the search (a shadow's edge or a leaning ruler
+            # across the wall of a level photo carries none, and the search measures that photo)
+            tried.add("a straight edge across the photo, beyond the plate search, a heap standing on it",
+                      line=tilted)
+            raise InputError(path, "image", expected,
+                             f"a straight edge across the photo, as a plate's is, tilted {roll:.1f} deg, a heap "
+                             f"standing on it: {turn}, or take it again with the camera level")
+        if not lines:
+            raise InputError(path, "image", expected, f"none found; a straight edge across the photo is tilted "
+                             f"{roll:.1f} deg, on which no heap was measured: if it is the plate's (the camera "
+                             f"rolled), {turn}")
     if not lines:
         raise InputError(path, "image", "a straight base plate edge", "none found")
-    grays = _grays(rgb, CUES if channel == "auto" else (channel,), lum)
     beside = []  # lines on which a heap was measured but which do not run on beside it
     try:
         return _on_plate_lines(path, rgb, lum, grays, lines[:PLATE_CANDIDATES], 1, channel, threshold, keep_stages,
                                tried, plate_edges, beside)
     except InputError as refused:
         if not beside:
-            raise
+            raise _noting_tilt(refused, tilted) from None
         # no line both runs on beside the heap and gives a heap: the first line that gave one is
         # the plate (a plate hardly wider than the heap shows little edge beside it), said so
         n_line, slope, intercept, why = beside[0]
@@ -497,9 +528,36 @@ def _pile_on_lines(path, rgb, threshold, keep_stages, channel, tried: Tried, pla
             res = _on_plate_lines(path, rgb, lum, grays, [(slope, intercept)], n_line, channel, threshold,
                                   keep_stages, tried, None, [])
         except InputError:
-            raise refused from None
+            raise _noting_tilt(refused, tilted) from None
         res.plate_beside = why
         return res
+
+
+def _heap_stands_on(path, rgb, lum, grays, line, channel, threshold, plate_edges) -> bool:
+    """Whether a heap is measured on ``line`` (slope, intercept) as on a plate candidate (its
+    foot on the line, the line running on beside it as an edge, its flanks in that frame within
+    :data:`FLANK_RANGE`): a straight edge tilted beyond the plate search is the plate of a
+    rolled camera only then; a shadow's edge or a leaning ruler across the wall of a level photo
+    carries no heap."""
+    try:
+        _on_plate_lines(path, rgb, lum, grays, [line], 1, channel, threshold, False,
+                        Tried(keep_masks=False), plate_edges, [])
+    except InputError:
+        return False
+    return True
+
+
+def _noting_tilt(refused: InputError, tilted) -> InputError:
+    """``refused`` with a straight edge tilted beyond the plate search noted, where there is one:
+    no heap was measured on it, so it may be a shadow's edge as well as a rolled plate."""
+    if tilted is None or refused.field != "image":
+        return refused
+    roll = -float(np.degrees(np.arctan(tilted[0])))
+    return InputError(refused.path, refused.field, refused.expected,
+                      f"{refused.got}; a straight edge across the photo is tilted {roll:.1f} deg, on which no heap "
+                      f"was measured: if it is the plate's (the camera rolled beyond {PLATE_MAX_ROLL_DEG:.0f} deg), "
+                      f"rotate the photo {abs(roll):.0f} deg {'clockwise' if roll > 0 else 'counter-clockwise'} "
+                      "to level it", refused.note)
 
 
 def _on_plate_lines(path, rgb, lum, grays, lines, n_first, channel, threshold, keep_stages, tried, plate_edges,
@@ -995,7 +1053,7 @@ def _across(edges, slope, intercept):
     return float(min(hit[:n].mean(), hit[-n:].mean()))
 
 
-def _plate_beyond_search(edges, edges_wide, lines, below=None):
+def _plate_beyond_search(edges, edges_wide, lines, below=None, every=False):
     """A straight edge across the photo (:func:`_across`, at least :data:`ACROSS_MIN`) tilted
     beyond the plate search's :data:`PLATE_MAX_ROLL_DEG` (up to :data:`ROLL_CHECK_MAX_DEG`) and
     running across it further than every plate candidate in ``lines`` does: the plate of a photo
@@ -1003,14 +1061,14 @@ def _plate_beyond_search(edges, edges_wide, lines, below=None):
     of the heap that gave flanks several degrees off, or none.  ``edges``: the edge map the
     candidates came from; ``edges_wide``: it widened by a row either side; ``below`` = (col,
     row): only a line passing below that point counts (a drum's plate).  Returns (slope,
-    intercept) or None."""
+    intercept) or None; with ``every``, all such lines, best first."""
     h, w = edges.shape
     t = np.arange(PLATE_MAX_ROLL_DEG + 0.1, ROLL_CHECK_MAX_DEG + 1e-9, 0.1)
     thetas = np.radians(np.concatenate([90.0 - t[::-1], 90.0 + t]))
     hs, ang, dist = transform.hough_line(edges, theta=thetas)
     _, angs, dists = transform.hough_line_peaks(hs, ang, dist, num_peaks=8, min_distance=4, threshold=0.25 * w)
     if not len(angs):
-        return None
+        return [] if every else None
     er, ec = np.nonzero(edges)
     beyond = []
     for a, d in zip(angs, dists):
@@ -1019,12 +1077,36 @@ def _plate_beyond_search(edges, edges_wide, lines, below=None):
             continue
         if abs(np.degrees(np.arctan(slope))) > PLATE_MAX_ROLL_DEG:
             beyond.append((_across(edges_wide, slope, b), slope, b))
-    if not beyond:
-        return None
-    score, slope, b = max(beyond)
-    if score < ACROSS_MIN or score <= max((_across(edges_wide, *ln) for ln in lines), default=0.0) + 0.03:
-        return None
-    return slope, b
+    found = _lines_beyond(beyond, edges_wide, lines)
+    return found if every else found[0] if found else None
+
+
+def _parallel_lines(edges, slope, intercept):
+    """The straight edges of ``edges`` within half a degree of parallel to the line (slope, intercept)
+    and from a tenth of the image height above it to 3 px below it, topmost first, the line
+    itself among them: [(slope, intercept), ...] (as :func:`plate_lines` finds them, support at
+    least a quarter of the width)."""
+    h, w = edges.shape
+    t0 = 90.0 + float(np.degrees(np.arctan(slope)))
+    thetas = np.radians(np.linspace(t0 - 0.5, t0 + 0.5, 21))
+    hs, ang, dist = transform.hough_line(edges, theta=thetas)
+    _, angs, dists = transform.hough_line_peaks(hs, ang, dist, num_peaks=16, min_distance=2, threshold=0.25 * w)
+    er, ec = np.nonzero(edges)
+    out = [(0.0, slope, intercept)]
+    for a, d in zip(angs, dists):
+        s_, b_ = _refined_line(er, ec, w, a, d)
+        off = (s_ - slope) * w / 2 + b_ - intercept  # rows below the line at the middle column
+        if -0.1 * h <= off <= 3.0 and all(abs((s_ - o[1]) * w / 2 + b_ - o[2]) > 1.5 for o in out):
+            out.append((off, s_, b_))
+    return [(s_, b_) for _, s_, b_ in sorted(out)]
+
+
+def _lines_beyond(beyond, edges_wide, lines):
+    """Of ``beyond`` [(across score, slope, intercept), ...], the lines running across the photo
+    (at least :data:`ACROSS_MIN`) further than every line of ``lines``, best first: [(slope,
+    intercept), ...]."""
+    best = max((_across(edges_wide, *ln) for ln in lines), default=0.0) + 0.03
+    return [(slope, b) for score, slope, b in sorted(beyond, reverse=True) if score >= ACROSS_MIN and score > best]
 
 
 def plate_line_any(path, gray, below=None, required=True, edges=None):
