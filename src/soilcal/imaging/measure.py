@@ -470,6 +470,7 @@ def _pile_on_lines(path, rgb, threshold, keep_stages, channel, tried: Tried, pla
     h, w = lum.shape
     plate_edges = None  # the edges a plate candidate must follow beside the heap
     tilted = None  # a straight edge across the photo tilted beyond the plate search
+    beyond = []  # the straight edges tilted beyond the search (none looked for on a given plate)
     if plate is not None:
         lines = [(float(plate[0]), float(plate[1]))]
     else:
