@@ -648,8 +648,7 @@ def _soil_moisture(data: dict) -> tuple[list, str] | None:
     vals = list(prop.get("values") or []) + [prop.get(k) for k in ("value", "low", "high")]
     x = [float(v) for v in vals if _number(v) is not None]
     unit = re.sub(r"[\s.()]+", "", str(prop.get("unit", "%")).lower())
-    factor = {"%": 1.0, "percent": 1.0, "wt%": 1.0, "%w/w": 1.0, "-": 100.0, "fraction": 100.0,
-              "g/g": 100.0, "kg/kg": 100.0}.get(unit)
+    factor = {**QUANTITIES["moisture_content"][1], "percent": 1.0, "wt%": 1.0, "%w/w": 1.0}.get(unit)
     if not x or factor is None:
         return None
     return [v * factor for v in x], ", ".join(f"{v:g}" for v in x) + f" {prop.get('unit', '%')}"
@@ -672,6 +671,7 @@ def _check_moisture(data: dict, tpath: Path, df: pd.DataFrame, covs: dict, quant
     is)."""
     import numpy as np
 
+    soil = _soil_moisture(data)
     for col, q in quantity_cols.items():
         if q != "moisture_content":
             continue
@@ -685,7 +685,6 @@ def _check_moisture(data: dict, tpath: Path, df: pd.DataFrame, covs: dict, quant
             raise InputError(tpath, where, f"a moisture content as a fraction of 1 (unit: {unit}, as declared): "
                              f"{x.max():g} reads as a percentage (declare unit: \"%\")", float(x.max()))
         pct = x * factor
-        soil = _soil_moisture(data)
         med = float(np.median(pct))
         if soil is not None:
             ref = float(np.median(soil[0]))

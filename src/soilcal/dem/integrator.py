@@ -236,13 +236,11 @@ def gather(x, v, om, r, inv_m, inv_i, mat, f, t, ovr, peak, mroll, dt, kick, max
                 mres = mroll[i]
                 fk = -1  # the slot of the first face contact
                 nwc = wcnt[i]
-                has_tri = False
                 moved = False  # a contact that has touched is on an edge or vertex
                 nface = 0  # face contacts (two of them may be one, on a shared edge)
                 for k in range(nwc):
                     p = wnbr[i, k]
                     if prim_kind[p] == TRIANGLE:
-                        has_tri = True
                         r8 = prim_closest(prim_kind[p], prim_par, p, xi, yi, zi)
                         if r8[7] == 0 and r8[0] < ri:
                             if fk < 0:

@@ -402,7 +402,8 @@ def _measure_drum_frame(path, threshold, keep_stages, options, tried: Tried) -> 
     if opts["roll_deg"] is not None:
         roll, lref = opts["roll_deg"], "manifest roll"
     elif opts["level"] != "image":
-        line = plate_line_any(path, gray, below=(cx, cy + R), required=False)
+        edges = feature.canny(gray, sigma=1.5)  # plate_lines' own edge map, kept for the tilted-edge search
+        line = plate_line_any(path, gray, below=(cx, cy + R), required=False, edges=edges)
         # no plate below the drum within the plate search: a plate tilted beyond it (a camera
         # rolled further) would have given the image axes, and the angle off by the roll.  Only
         # then is a straight edge beyond the search looked for: with a plate found, a tilted
@@ -410,7 +411,6 @@ def _measure_drum_frame(path, threshold, keep_stages, options, tried: Tried) -> 
         # photo, so both readings are offered
         tilted = None
         if line is None:
-            edges = feature.canny(gray, sigma=1.5)
             tilted = _plate_beyond_search(edges, ndi.binary_dilation(edges, np.ones((3, 1), bool)), [],
                                           below=(cx, cy + R))
         if tilted is not None:

@@ -337,7 +337,7 @@ def _report(soil, conds, settings, out, d: Path) -> None:
 
     qcols = core.quantity_of(conds)
     reference = json.loads(out.summary["reference"].iloc[0] or "{}")
-    plan = files._plan(soil.name, out.candidates, reference, settings, qcols, out.diagnosis, out.skipped,
+    plan = files._plan(soil.name, out.candidates, reference, settings, qcols, out.skipped,
                        out.residuals)
     residual_figures(out.residuals, None, d / "figures" / "residuals", title=f"{soil.name}: calibrated model")
     residual_figures(out.residuals, out.predictions if out.chosen else None, d / "figures" / "after",

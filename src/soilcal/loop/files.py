@@ -82,7 +82,7 @@ def diagnose_files(soil_path, resources_root, tool_files: dict, outdir) -> dict:
     diag = dg.diagnose(res, qcols, settings.alpha)
     reference = core.reference_values(res, settings)
     cands = core.candidates(diag, conds, settings) if len(rs.usable(res)) >= 3 else []
-    plan = _plan(soil.name, cands, reference, settings, qcols, diag, core.skipped(conds, settings), res)
+    plan = _plan(soil.name, cands, reference, settings, qcols, core.skipped(conds, settings), res)
     out = Path(outdir)
     write_csv(res, out / "residuals.csv")
     write_csv(diag, out / "diagnosis.csv")
@@ -92,7 +92,7 @@ def diagnose_files(soil_path, resources_root, tool_files: dict, outdir) -> dict:
     return plan
 
 
-def _plan(soil_name, cands, reference, settings, qcols, diag, skipped: dict | None = None, res=None) -> dict:
+def _plan(soil_name, cands, reference, settings, qcols, skipped: dict | None = None, res=None) -> dict:
     fold_by, folds = core.fold_grouping(settings, qcols, res)
     return {"soil": soil_name, "candidates": cands, "skipped": dict(skipped or {}), "reference": reference,
             "design": {nm: sl.theta_design(EFFECTS[nm], settings.effect_bounds(nm), settings.design_points)
@@ -175,7 +175,7 @@ def more_files(soil_path, resources_root, outdir, effect_files: dict, out_plan) 
     outcome, conds, settings = _outcome(soil, outdir, effect_files, [plan])
     more = core.more_candidates(outcome, conds, settings) if plan["candidates"] else []
     plan_more = _plan(soil.name, more, plan["reference"], settings, plan["quantity_columns"],
-                      pd.read_csv(Path(outdir) / "diagnosis.csv"), res=pd.read_csv(Path(outdir) / "residuals.csv"))
+                      res=pd.read_csv(Path(outdir) / "residuals.csv"))
     write_json(plan_more, out_plan)
     return plan_more
 
