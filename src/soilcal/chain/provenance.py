@@ -137,28 +137,40 @@ def base_params(data: dict, path):
     return DemParams.from_mapping(values, str(path))
 
 
+def _sizing(scenario: str, setup: dict, preset: str, params, source: str) -> dict:
+    """A bench-top scenario's ``sizing`` of a run (the drum's takes the source, the others the
+    parameters)."""
+    from soilcal.dem.scenarios import get
+
+    mod = get(scenario, source)
+    return mod.sizing(setup, preset, source) if scenario == "drum" else mod.sizing(setup, preset, params)
+
+
 def cohesion_factor(scenario: str, setup: dict, preset: str, params, source: str = "<setup>") -> tuple[float, str]:
     """The surface-energy factor a run of ``scenario`` with ``setup`` and ``preset`` applies
     (``cohesion_scale``, :mod:`soilcal.dem.scenarios.base`), and what it is taken against:
-    a bench-top test's particles against the setup's ``paper_psd``, a soil bin against the
-    paper preset's bin of the scenario's named setup."""
+    the run's particles against the setup's ``paper_psd``, or a soil bin whose setup leaves
+    it at None against the paper preset's bin of the scenario's named setup."""
     from soilcal.dem import cost
-    from soilcal.dem.scenarios import get
     from soilcal.dem.scenarios.base import paper_cohesion
 
-    mod = get(scenario, source)
-    if scenario in cost.SOIL_BIN:
-        return float(cost.soil_bin(scenario, setup, preset, source)[1].cohesion_scale), \
-            "Sauter radius of the run's bin over that of the paper preset's bin of the scenario's named setup"
     if scenario == "incline":
         return 1.0, "no particle-size scaling (one block or ball)"
-    sz = mod.sizing(setup, preset, source) if scenario == "drum" else mod.sizing(setup, preset, params)
+    if scenario in cost.SOIL_BIN:
+        factor = float(cost.soil_bin(scenario, setup, preset, source)[0]["cohesion_scale"])
+        dist = None
+    else:
+        dist = _sizing(scenario, setup, preset, params, source)["dist"]
     if not setup.get("scale_cohesion", True):
-        return 1.0, "scale_cohesion: false"
-    if not setup.get("paper_psd"):
-        return 1.0, "no paper_psd to scale against"
-    return float(paper_cohesion(setup, sz["dist"], source)), \
-        "Sauter radius of the run's particles over that of the setup's paper_psd"
+        return 1.0, "scale_cohesion: false (the soil's surface energies as given)"
+    if dist is not None:
+        if not setup.get("paper_psd"):
+            return 1.0, "no paper_psd to scale against"
+        factor = paper_cohesion(setup, dist, source)
+    if setup.get("paper_psd"):
+        return float(factor), "Sauter radius of the run's particles over that of the setup's paper_psd"
+    return float(factor), ("Sauter radius of the run's bin over that of the paper preset's bin of the scenario's "
+                           "named setup (the setup's paper_psd is None)")
 
 
 def _preset_value(scenario: str, key: str, setup: dict, preset: str, params, soil_path):
@@ -166,7 +178,6 @@ def _preset_value(scenario: str, key: str, setup: dict, preset: str, params, soi
     (None), and how (:func:`soilcal.dem.scenarios.base.make_simulation`, the scenario's
     ``sizing``); (None, "") where this does not say."""
     from soilcal.dem import cost
-    from soilcal.dem.scenarios import get
     from soilcal.dem.scenarios.base import DEFAULT_ROLLING, PRESET_DEFAULTS, stiffness_scale_for
 
     if scenario not in cost.BENCHTOP:
@@ -184,9 +195,8 @@ def _preset_value(scenario: str, key: str, setup: dict, preset: str, params, soi
             f"the preset's cap {d['g_max']:g} Pa over the soil's shear modulus {g:g} Pa (at most 1; a stage that "
             "varies the modulus changes it)" if d["g_max"] is not None else "the soil's own modulus")
     if key in ("n_particles", "radius") and scenario != "incline":
-        mod = get(scenario, str(soil_path))
         try:
-            sz = mod.sizing(setup, preset, str(soil_path)) if scenario == "drum" else mod.sizing(setup, preset, params)
+            sz = _sizing(scenario, setup, preset, params, str(soil_path))
         except Exception:  # noqa: BLE001 - documentation only
             return None, ""
         if key == "n_particles":
@@ -207,7 +217,12 @@ def _setup_rows(add, where: str, scenario: str, setup_name: str, overrides: dict
     mod = get(scenario, str(soil_path))
     named = mod.setups()[setup_name]
     setup = merge_setup(mod.setups(), setup_name, overrides, str(soil_path))
-    effective = cost.soil_bin(scenario, setup, preset, str(soil_path))[0] if scenario in cost.SOIL_BIN else setup
+    effective = setup
+    if scenario in cost.SOIL_BIN:
+        try:
+            effective = cost.soil_bin(scenario, setup, preset, str(soil_path))[0]
+        except InputError:  # a setup this preset cannot run: its rows say the setup's values
+            pass
     for key in sorted(k for k in set(setup) | set(effective) if k not in ("name", "overrides", "cohesion_scale")):
         if key not in setup:
             add(f"{where}.setup.{key}", effective[key], "preset",
@@ -218,6 +233,10 @@ def _setup_rows(add, where: str, scenario: str, setup_name: str, overrides: dict
         elif effective.get(key) != setup[key]:
             add(f"{where}.setup.{key}", effective[key], "preset",
                 f"the {preset} preset's value (the named setup {setup_name!r} has {_text(setup[key])})")
+        elif key == "paper_psd" and setup[key] is None and scenario in cost.SOIL_BIN:
+            add(f"{where}.setup.{key}", None, "named setup",
+                f"None in {setup_name!r}: the surface energy is for the particles of the paper preset's bin of "
+                f"{setup_name!r} (a shipped soil's; set.paper_psd gives the soil's own)")
         elif setup[key] is None:
             value, what = _preset_value(scenario, key, setup, preset, params, soil_path)
             add(f"{where}.setup.{key}", value, "preset",

@@ -61,9 +61,12 @@ particle size, the rule Thakur, Ooi & Ahmadian (Powder Technol. 293 (2016) 130-1
 keep the bulk response of a coarse-grained cohesive solid; equivalently the bulk cohesive
 stress, pull-off force over the area per contact, ~ gamma / r, stays the same.  Without it a
 heap of spheres five times the paper's size carries a fifth of the cohesion per unit area and
-the response depends on the particle count.  The reference is the paper preset's size
-distribution of the same setup; ``scale_cohesion: false`` in a setup turns the rule off.
-The factor is recorded in the run's setup as ``cohesion_scale``.
+the response depends on the particle count.  The reference is the setup's ``paper_psd``
+(the particle sizes the surface energy is for: a named setup's are its paper's, a soil of
+one's own gives its own), or, for a soil bin whose setup leaves ``paper_psd`` at None, the
+paper preset's bin of the named setup; ``scale_cohesion: false`` in a setup (every named
+setup of a scenario that scales has it, true) turns the rule off.  The factor is recorded in
+the run's setup as ``cohesion_scale``.
 
 Rolling model
 -------------
@@ -349,9 +352,8 @@ def cohesion_scale(model, reference, setup: dict | None = None,
                    source: str = "<input>") -> float:
     """Surface-energy factor r32(model) / r32(reference) (module docstring), or 1 when the
     setup sets ``scale_cohesion`` to false or there is no reference."""
-    flag = (setup or {}).get("scale_cohesion", True)
-    check(isinstance(flag, bool), source, "setup.scale_cohesion", "true or false", flag)
-    if not flag or reference is None:
+    check_scale_cohesion(setup or {}, source)
+    if not (setup or {}).get("scale_cohesion", SCALE_COHESION) or reference is None:
         return 1.0
     return sauter_radius(model) / sauter_radius(reference)
 
@@ -394,7 +396,18 @@ def check_discretisation(setup: dict, source: str) -> None:
     f = setup_number(setup, "dt_fraction", source, allow_none=True)
     if f is not None:
         check(f <= 1.0, source, "setup.dt_fraction", "a fraction of the Rayleigh time in (0, 1]", f)
+    check_scale_cohesion(setup, source)
     check_rolling(setup, source)
+
+
+#: the named setups' value of ``scale_cohesion`` (module docstring, "Cohesion scaling")
+SCALE_COHESION = True
+
+
+def check_scale_cohesion(setup: dict, source: str) -> None:
+    """``setup.scale_cohesion``: true (the particle-size rule, the default) or false."""
+    flag = setup.get("scale_cohesion", SCALE_COHESION)
+    check(isinstance(flag, (bool, np.bool_)), source, "setup.scale_cohesion", "true or false", flag)
 
 
 def build_materials(params: DemParams, stiffness_scale: float = 1.0,
