@@ -4,6 +4,7 @@ left one out would run with another soil's friction or cohesion."""
 
 from __future__ import annotations
 
+import re
 from pathlib import Path
 
 import pytest
@@ -130,3 +131,32 @@ def test_own_sizes_are_checked_with_the_soil_s_own_density(tmp_path):
             "load_mass": 3.1, "paper_psd": [[0.001, 50.0], [0.002, 50.0]]}
 
     load_soil(_cinnamon(tmp_path, edit, soil="black-soil"), ROOT / "resources")
+
+
+@pytest.mark.parametrize("edit, field, got, expected", [
+    # 2 MPa typed as 2 with unit Pa: below the softest soil's modulus (base.SOIL_RANGES)
+    (lambda d: d["properties"]["shear_modulus"].update(value=2, unit="Pa"), "properties.shear_modulus.value", "2",
+     r"a soil shear modulus in \[1e4, 5e10\] Pa"),
+    # 0.05 GPa typed with unit Pa: E = 2 (1 + nu) G over the plausible G, [2e4, 1.5e11] Pa
+    (lambda d: d["properties"]["youngs_modulus"].update(value=0.05, unit="Pa"), "properties.youngs_modulus.value",
+     "0.05", r"a soil Young's modulus in \[20000, 1.5e\+11\] Pa"),
+    # 1.6 g/cm^3 typed as 16000 kg/m^3 (a slip of ten): above any soil's particle density
+    (lambda d: d["simulation"]["params"].update(soil_density=16000), "simulation.params.soil_density", "16000",
+     r"a soil particle density in \[100, 4000\] kg/m\^3"),
+    (lambda d: d["simulation"]["params"].update(soil_soil_static_friction=3.0),
+     "simulation.params.soil_soil_static_friction", "3.0", r"a soil-soil sliding friction coefficient in \[0, 2\]"),
+    (lambda d: d["simulation"]["params"].update(soil_soil_restitution=1.2),
+     "simulation.params.soil_soil_restitution", "1.2", r"a coefficient of restitution in \(0, 1\]"),
+    # 0.38 mJ/m^2... typed as 380 J/m^2
+    (lambda d: d["simulation"]["params"].update(soil_soil_surface_energy=380.0),
+     "simulation.params.soil_soil_surface_energy", "380.0", r"a soil-soil JKR surface energy in \[0, 100\] J/m\^2"),
+])
+def test_a_material_property_in_another_unit_is_refused_with_its_plausible_range(tmp_path, edit, field, got, expected):
+    """A unit slip in a soil's material properties stops the load before any DEM job, naming
+    the file, the field, the value and the plausible range (base.SOIL_RANGES)."""
+    p = _cinnamon(tmp_path, edit)
+    with pytest.raises(InputError) as e:
+        load_soil(p, ROOT / "resources")
+    assert (Path(e.value.path), e.value.field, str(e.value.got)) == (p, field, got)
+    assert re.search(expected, e.value.expected), e.value.expected
+    assert str(e.value).count("\n") == 0

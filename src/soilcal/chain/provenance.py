@@ -27,7 +27,10 @@ GENERIC = {
     "soil_soil_plasticity": "0, elastic (Hertz) soil-soil contacts",
 }
 
-_PROPERTIES = {"poisson_ratio": "soil_poisson", "particle_density": "soil_density", "shear_modulus": "soil_shear_modulus"}
+#: a printed Young's modulus, which no run takes (the runs take the shear modulus), is checked
+#: all the same where the soil is simulated: its plausible range in Pa follows from the shear
+#: modulus's and the Poisson ratio's, E = 2 (1 + nu) G (soilcal.dem.scenarios.base.SOIL_RANGES)
+YOUNGS_RANGE = (2.0e4, 1.5e11)
 
 
 def soil_parameters() -> list[str]:
@@ -43,16 +46,15 @@ def given(data: dict, stage_id: str, _seen=None, soil_path=None) -> set[str]:
     (:func:`soilcal.dem.scenarios.base.dem_field`; one that maps to none is an InputError
     naming ``soil_path`` and the entry)."""
     from soilcal.chain.derive import _stage, dependencies
-    from soilcal.dem.scenarios.base import dem_field
+    from soilcal.dem.scenarios.base import PROPERTY_FIELDS, dem_field
 
     seen = set() if _seen is None else _seen
     if stage_id in seen:
         return set()
     seen.add(stage_id)
     out = set()
-    for prop, name in _PROPERTIES.items():
-        if ((data.get("properties") or {}).get(prop) or {}).get("value") is not None:
-            out.add(name)
+    out |= {name for prop, name in PROPERTY_FIELDS.items()
+            if ((data.get("properties") or {}).get(prop) or {}).get("value") is not None}
     out |= set(((data.get("simulation") or {}).get("params") or {}))
     st = _stage(data, stage_id)
     for pname in st.get("fixed") or {}:
@@ -71,26 +73,34 @@ def check_parameters(soil_path, data: dict) -> None:
 
     if not data.get("simulation"):
         return
-    # a printed property the runs take: its unit converts to SI and its value is physical
-    from soilcal.dem.scenarios.base import DemParams, unit_scale
+    # a printed property the runs take: its unit converts to SI and its value is physical and
+    # plausible for a soil (soilcal.dem.scenarios.base.SOIL_RANGES)
+    from soilcal.dem.scenarios.base import PROPERTY_FIELDS, DemParams, property_values, unit_scale
 
-    for prop, name in _PROPERTIES.items():
-        entry = (data.get("properties") or {}).get(prop) or {}
-        if entry.get("value") is None:
-            continue
-        x = float(entry["value"]) * unit_scale(soil_path, entry, f"properties.{prop}")
+    props = data.get("properties") or {}
+    for name, (x, prop) in property_values(soil_path, data).items():
         try:
             DemParams.from_mapping({name: x}, str(soil_path))
         except InputError as exc:
             raise InputError(soil_path, f"properties.{prop}.value",
-                             f"{exc.expected} (DEM parameter {name}, from the value in {entry.get('unit', '-')})",
-                             entry["value"]) from None
+                             f"{exc.expected} (DEM parameter {name}, from the value in {props[prop].get('unit', '-')})",
+                             props[prop]["value"]) from None
+    entry = props.get("youngs_modulus")
+    if isinstance(entry, dict):
+        scale = unit_scale(soil_path, entry, "properties.youngs_modulus")
+        lo, hi = YOUNGS_RANGE
+        for key in ("value", "low", "high", "values"):
+            for i, v in enumerate((entry.get(key) or []) if key == "values" else [entry.get(key)]):
+                if v is not None and not lo <= float(v) * scale <= hi:
+                    raise InputError(soil_path, f"properties.youngs_modulus.{key}" + (f"[{i}]" if key == "values" else ""),
+                                     f"a soil Young's modulus in [{lo:g}, {hi:g}] Pa (2 (1 + nu) G over the plausible "
+                                     f"shear moduli; in {entry.get('unit', '-')}: [{lo / scale:g}, {hi / scale:g}])", v)
     need = soil_parameters()
     for sid in simulated_stage_ids(data):
         missing = [n for n in need if n not in given(data, sid, soil_path=soil_path)]
         if missing:
-            props = {name: prop for prop, name in _PROPERTIES.items()}
-            named = [n + (f" (or properties.{props[n]} with its unit)" if n in props else "") for n in missing]
+            prop_of = {name: prop for prop, name in PROPERTY_FIELDS.items()}
+            named = [n + (f" (or properties.{prop_of[n]} with its unit)" if n in prop_of else "") for n in missing]
             raise InputError(soil_path, "simulation.params",
                              f"a value of every soil parameter the runs of stage {sid!r} use (SI units, in "
                              f"simulation.params or the stage's fixed values); missing: {', '.join(named)}",
@@ -125,14 +135,9 @@ def base_params(data: dict, path):
     """DemParams from a soil's printed properties and ``simulation.params`` alone (the base
     every run starts from before its stage's fixed values and factor levels); ``data`` is the
     soil file's content, ``path`` its name in errors."""
-    from soilcal.dem.scenarios.base import DemParams, unit_scale
+    from soilcal.dem.scenarios.base import DemParams, property_values
 
-    values = {}
-    props = data.get("properties") or {}
-    for prop, name in _PROPERTIES.items():
-        entry = props.get(prop) or {}
-        if entry.get("value") is not None:
-            values[name] = float(entry["value"]) * unit_scale(path, entry, f"properties.{prop}")
+    values = {name: x for name, (x, _) in property_values(path, data).items()}
     values.update({k: float(v) for k, v in ((data.get("simulation") or {}).get("params") or {}).items()})
     return DemParams.from_mapping(values, str(path))
 
@@ -267,7 +272,7 @@ def simulation_setup(soil, design_override: str | None = None) -> "pd.DataFrame"
     import pandas as pd
 
     from soilcal.chain.adaptive import adaptive_stage_ids
-    from soilcal.chain.derive import SCREENING_DEFAULTS, dem_stage_ids, simulated_stage_ids
+    from soilcal.chain.derive import SCREENING_DEFAULTS, dem_stage_ids, design_mode, simulated_stage_ids
     from soilcal.chain.verify import VERIFY_DEFAULTS
     from soilcal.config.measurements import DEFAULT_PRESET, DEFAULT_REPLICATES
     from soilcal.dem.scenarios.base import DemParams
@@ -291,7 +296,7 @@ def simulation_setup(soil, design_override: str | None = None) -> "pd.DataFrame"
             add(f"simulation.{key}", sim[key], "soil", f"simulation.{key} ({what})")
         else:
             add(f"simulation.{key}", default, "default", what)
-    design = sim.get("design", "recipe")
+    design = design_mode(data)
     if "stages" in sim:
         add("simulation.stages", dem_stage_ids(data), "soil", "simulation.stages")
     else:
@@ -334,10 +339,7 @@ def simulation_setup(soil, design_override: str | None = None) -> "pd.DataFrame"
             else "declared to the scheduler per DEM job")
 
     # DEM parameters: the soil's own, and the generic defaults the runs of a stage take
-    props = data.get("properties") or {}
-    from soilcal.dem.scenarios.base import unit_scale
-
-    from soilcal.dem.scenarios.base import dem_field
+    from soilcal.dem.scenarios.base import dem_field, property_values
 
     stages = simulated_stage_ids(data) if sim else []
 
@@ -353,13 +355,10 @@ def simulation_setup(soil, design_override: str | None = None) -> "pd.DataFrame"
         hit = [sid for sid in stages if name in stage_set[sid]]
         return f"; replaced by the fixed value or factor of stage(s) {', '.join(hit)}" if hit else ""
 
-    for prop, name in _PROPERTIES.items():
-        entry = props.get(prop) or {}
-        if entry.get("value") is not None:
-            later = name in (sim.get("params") or {})
-            add(f"dem.{name}", float(entry["value"]) * unit_scale(soil.path, entry, f"properties.{prop}"), "soil",
-                f"properties.{prop}, in SI" + (f"; replaced by simulation.params.{name}" if later else "")
-                + over(name))
+    for name, (x, prop) in property_values(soil.path, data).items():
+        later = name in (sim.get("params") or {})
+        add(f"dem.{name}", x, "soil", f"properties.{prop}, in SI"
+            + (f"; replaced by simulation.params.{name}" if later else "") + over(name))
     for name, v in (sim.get("params") or {}).items():
         add(f"dem.{name}", v, "soil", f"simulation.params.{name} (SI)" + over(name))
     defaults = DemParams()
