@@ -182,3 +182,37 @@ def test_an_adaptive_soil_lists_its_design_s_settings_and_no_tool_tests(tmp_path
     assert row(df, "measurements") == ("not run", "workflow")
     assert not any(i.startswith(("measurements.", "simulation.verification.", "simulation.path."))
                    for i in df.index)
+
+
+@pytest.mark.parametrize("soil,design", [(p.stem, None) for p in sorted((ROOT / "config/soils").glob("*.yaml"))]
+                         + [("cinnamon-soil", "adaptive")])
+def test_the_rule_s_params_hold_everything_the_file_reads_and_no_documentation(soil, design):
+    """The workflow rule takes setup_inputs(data) as its params: simulation.csv from them is the
+    file from the whole soil, and an edit of the soil's citation, notes, errata, a stage's or a
+    measurement's note, a property the runs do not take or (recipe) a target's value leaves them
+    as they were, so it does not rerun the rule."""
+    import copy
+
+    from soilcal.chain.provenance import setup_inputs
+    from soilcal.config.load import Soil
+
+    full = load_soil(ROOT / f"config/soils/{soil}.yaml", ROOT / "resources", design=design)
+    part = Soil(path=full.path, data=setup_inputs(full.data), resources_root=full.resources_root,
+                defaulted=full.defaulted)
+    assert simulation_setup(part, design).equals(simulation_setup(full, design))
+    d = copy.deepcopy(full.data)
+    d["notes"] = "edited"
+    d["citation"] = {"title": "another"}
+    d.setdefault("errata", []).append({"where": "x", "printed": 1, "note": "y"})
+    d["stages"][0]["note"] = "edited"
+    d["properties"]["moisture_content"] = {"value": 30.0, "unit": "%"}
+    for m in (d.get("measurements") or {}).values():
+        m["note"] = "edited"
+    if design is None:
+        for t in d["targets"].values():
+            if t.get("value") is not None:
+                t["value"] = t["value"] + 1
+    assert setup_inputs(d) == setup_inputs(full.data)
+    # what it reads does change them
+    d["simulation"]["replicates"] = 7
+    assert setup_inputs(d) != setup_inputs(full.data)

@@ -407,6 +407,38 @@ def simulation_setup(soil, design_override: str | None = None) -> "pd.DataFrame"
     return pd.DataFrame(rows, columns=SETUP_COLUMNS)
 
 
+#: text fields that document a soil and change no value of simulation.csv
+_DOC_KEYS = ("note", "notes", "source", "title")
+
+
+def setup_inputs(data: dict) -> dict:
+    """The part of a soil file's content that :func:`simulation_setup` reads: ``name``,
+    ``seed``, ``simulation``, ``stages``, ``parameters``, ``measurements``, the printed
+    properties the runs take (:data:`soilcal.dem.scenarios.base.PROPERTY_FIELDS`) and, for
+    ``design: adaptive`` (whose stages are those with a case to aim at), whether each target has
+    a value or a photo group; the text that documents them (``note``, ``source``, ``title``) is
+    left out.  The workflow's rule passes this as its params, so an edit elsewhere in the soil
+    file (its citation, notes, errata, a target's value) does not rerun it."""
+    from soilcal.chain.derive import design_mode
+    from soilcal.dem.scenarios.base import PROPERTY_FIELDS
+
+    def bare(v):
+        if isinstance(v, dict):
+            return {k: bare(x) for k, x in v.items() if not (k in _DOC_KEYS and isinstance(x, str))}
+        if isinstance(v, list):
+            return [bare(x) for x in v]
+        return v
+
+    out = {k: bare(data[k]) for k in ("name", "seed", "simulation", "stages", "parameters", "measurements")
+           if k in data}
+    props = data.get("properties") or {}
+    out["properties"] = {p: bare(props[p]) for p in PROPERTY_FIELDS if p in props}
+    if data.get("simulation") and design_mode(data) == "adaptive":
+        out["targets"] = {tid: {k: t[k] for k in ("value", "image") if k in t}
+                          for tid, t in (data.get("targets") or {}).items() if isinstance(t, dict)}
+    return out
+
+
 def write_simulation_setup(soil, out, design_override: str | None = None) -> "pd.DataFrame":
     """:func:`simulation_setup` written to ``out`` (``results/<soil>/dem/simulation.csv``)."""
     from soilcal.chain.files import write_csv
