@@ -126,11 +126,23 @@ def test_own_sizes_are_checked_with_the_soil_s_own_density(tmp_path):
     """The black soil's funnel holds a 3.1 kg load at the soil's 1560 kg/m^3 but not at the
     engine's default density: the named setup's own sizes given as the soil's (0.5 kg of 1
     and 2 mm particles, 001 Sec. 2.2.1) load, as the same file without them does."""
-    def edit(d):
-        d["simulation"]["responses"]["accumulation_angle"]["set"] = {
-            "load_mass": 3.1, "paper_psd": [[0.001, 50.0], [0.002, 50.0]]}
+    # the funnel (001 Sec. 2.2.1: 192 and 50 mm across, 274 mm high) holds
+    # pi 0.274 / 3 (0.096^2 + 0.096 x 0.025 + 0.025^2) m^3 = 3.512 L; 3.1 kg at a solid fraction
+    # of 0.6 fills 3.1 / (0.6 x 1560) m^3 = 3.312 L of it at the soil's density, but
+    # 3.1 / (0.6 x 1394) m^3 = 3.706 L at the engine's default density 1394 kg/m^3
+    def edit(rho=None):
+        def apply(d):
+            d["simulation"]["responses"]["accumulation_angle"]["set"] = {
+                "load_mass": 3.1, "paper_psd": [[0.001, 50.0], [0.002, 50.0]]}
+            if rho is not None:
+                d["simulation"]["params"]["soil_density"] = rho
+        return apply
 
-    load_soil(_cinnamon(tmp_path, edit, soil="black-soil"), ROOT / "resources")
+    load_soil(_cinnamon(tmp_path, edit(), soil="black-soil"), ROOT / "resources")
+    with pytest.raises(InputError) as e:
+        load_soil(_cinnamon(tmp_path, edit(1394.0), soil="black-soil"), ROOT / "resources")
+    assert e.value.field == "simulation.responses.accumulation_angle.set.load_mass"
+    assert "3.51 L at 1394 kg/m^3" in e.value.expected
 
 
 @pytest.mark.parametrize("edit, field, got, expected", [
