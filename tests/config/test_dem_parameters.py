@@ -172,3 +172,22 @@ def test_a_material_property_in_another_unit_is_refused_with_its_plausible_range
     assert (Path(e.value.path), e.value.field, str(e.value.got)) == (p, field, got)
     assert re.search(expected, e.value.expected), e.value.expected
     assert str(e.value).count("\n") == 0
+
+
+def test_a_setup_is_checked_at_the_density_the_soil_prints_as_a_property(tmp_path):
+    """A soil giving its particle density as a printed property (1.56 g/cm^3) rather than in
+    simulation.params: its 3.1 kg funnel load fills 3.1 / (0.6 x 1560) m^3 = 3.31 L of the
+    3.51 L funnel and loads; at 1.30 g/cm^3 it would fill 3.97 L, and the error names that
+    density, not the engine's default 1394 kg/m^3."""
+    def own(rho):
+        def edit(d):
+            d["simulation"]["params"].pop("soil_density")
+            d["properties"]["particle_density"] = {"value": rho, "unit": "g/cm^3"}
+            d["simulation"]["responses"]["accumulation_angle"]["set"] = {"load_mass": 3.1}
+        return edit
+
+    load_soil(_cinnamon(tmp_path, own(1.56), soil="black-soil"), ROOT / "resources")
+    with pytest.raises(InputError) as e:
+        load_soil(_cinnamon(tmp_path, own(1.30), soil="black-soil"), ROOT / "resources")
+    assert e.value.field == "simulation.responses.accumulation_angle.set.load_mass"
+    assert "at 1300 kg/m^3" in e.value.expected

@@ -66,16 +66,12 @@ def given(data: dict, stage_id: str, _seen=None, soil_path=None) -> set[str]:
     return out
 
 
-def check_parameters(soil_path, data: dict) -> None:
-    """Every soil parameter of every stage the DEM source simulates is set by the soil
-    (module docstring): otherwise one error naming the stage and the missing parameters."""
-    from soilcal.chain.derive import simulated_stage_ids
-
-    if not data.get("simulation"):
-        return
-    # a printed property the runs take: its unit converts to SI and its value is physical and
-    # plausible for a soil (soilcal.dem.scenarios.base.SOIL_RANGES)
-    from soilcal.dem.scenarios.base import PROPERTY_FIELDS, DemParams, property_values, unit_scale
+def check_properties(soil_path, data: dict) -> None:
+    """The printed properties the runs take (:data:`soilcal.dem.scenarios.base.PROPERTY_FIELDS`):
+    a unit with a factor to SI and a value physical and plausible for a soil
+    (:data:`soilcal.dem.scenarios.base.SOIL_RANGES`); a printed ``youngs_modulus`` within
+    :data:`YOUNGS_RANGE`.  Otherwise one error naming the property."""
+    from soilcal.dem.scenarios.base import DemParams, property_values, unit_scale
 
     props = data.get("properties") or {}
     for name, (x, prop) in property_values(soil_path, data).items():
@@ -95,6 +91,28 @@ def check_parameters(soil_path, data: dict) -> None:
                     raise InputError(soil_path, f"properties.youngs_modulus.{key}" + (f"[{i}]" if key == "values" else ""),
                                      f"a soil Young's modulus in [{lo:g}, {hi:g}] Pa (2 (1 + nu) G over the plausible "
                                      f"shear moduli; in {entry.get('unit', '-')}: [{lo / scale:g}, {hi / scale:g}])", v)
+
+
+def property_base(soil_path, data: dict):
+    """:class:`~soilcal.dem.scenarios.base.DemParams` with the soil's printed properties the runs
+    take over the engine's defaults (checked, :func:`check_properties`): the base on which the
+    start-up checks of a setup lay ``simulation.params`` and a measured row's values, as the runs
+    lay them (:func:`soilcal.dem.scenarios.base.stage_params`)."""
+    from soilcal.dem.scenarios.base import DemParams, property_values
+
+    check_properties(soil_path, data)
+    return DemParams.from_mapping({n: x for n, (x, _) in property_values(soil_path, data).items()}, str(soil_path))
+
+
+def check_parameters(soil_path, data: dict) -> None:
+    """Every soil parameter of every stage the DEM source simulates is set by the soil
+    (module docstring): otherwise one error naming the stage and the missing parameters."""
+    from soilcal.chain.derive import simulated_stage_ids
+    from soilcal.dem.scenarios.base import PROPERTY_FIELDS
+
+    if not data.get("simulation"):
+        return
+    check_properties(soil_path, data)
     need = soil_parameters()
     for sid in simulated_stage_ids(data):
         missing = [n for n in need if n not in given(data, sid, soil_path=soil_path)]
