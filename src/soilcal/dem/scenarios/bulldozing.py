@@ -42,6 +42,7 @@ from __future__ import annotations
 
 import csv
 import math
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -210,7 +211,7 @@ def validate(setup: dict, preset: str = "quick", source: str = "<bulldozing>",
     validate_bin(spec, source, "setup")
     s["cohesion_scale"] = reference_cohesion(spec, _bin(_settings(_setup(s["shape"]), "paper"), source),
                                              setup, source)
-    spec = _bin(s, source)
+    spec = replace(spec, cohesion_scale=s["cohesion_scale"])
     if params is not None:
         check_pass(spec, params, source, "setup.speed", s["speed"], s["travel"],
                    tool_time_step(spec, params),

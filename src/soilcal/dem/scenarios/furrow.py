@@ -79,6 +79,7 @@ from __future__ import annotations
 
 import csv
 import math
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -244,7 +245,7 @@ def validate(setup: dict, preset: str = "quick", source: str = "<furrow>",
     s["cohesion_scale"] = reference_cohesion(spec, _bin(_settings(setups()["yangtze-opener"], "paper")),
                                              setup, source)
     if params is not None:
-        spec = _bin(s)
+        spec = replace(spec, cohesion_scale=s["cohesion_scale"])
         check_pass(spec, params, source, "setup.speed", s["speed"], s["travel"],
                    tool_time_step(spec, params))
     return s

@@ -66,6 +66,7 @@ from __future__ import annotations
 
 import csv
 import math
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -270,7 +271,7 @@ def validate(setup: dict, preset: str = "quick", source: str = "<rotary>",
     s["cohesion_scale"] = reference_cohesion(spec, _bin(_settings(_setup(s["rpm"]), "paper")), setup, source)
     if params is not None:
         # the blades slice the soil rather than push it: only the pass's step count
-        spec = _bin(s)
+        spec = replace(spec, cohesion_scale=s["cohesion_scale"])
         check_pass(spec, params, source, "setup.forward_speed", s["forward_speed"],
                    s["travel"], pass_time_step(s, spec, params), pushes=False)
     return s
