@@ -84,3 +84,18 @@ def test_implausible_modulus_and_copied_column():
     err = Errata()
     duplicated_sequences(err, {"s1": ("T1", a, ["y"]), "s2": ("T2", b, ["y"])})
     assert len(err.frame()) == 1
+
+
+def test_a_moisture_content_is_judged_in_its_declared_unit():
+    """0.9 as a mass fraction (unit -) is 90 %, plausible; 15 with unit - (15 % meant, typed as
+    a fraction) is 1500 %, beyond the 0-100 % a moisture content can take; 15 % is plausible."""
+    def rows(q):
+        err = Errata()
+        plausibility(err, {"properties": {"moisture_content": q}, "parameters": {}, "stages": []})
+        return list(err.frame().itertuples())
+
+    assert rows({"value": 0.9, "unit": "-"}) == []
+    assert rows({"value": 15, "unit": "%"}) == []
+    (row,) = rows({"values": [0.12, 15], "unit": "-"})
+    assert row.where.startswith("properties.moisture_content") and row.recomputed == "1500 %"
+    assert "implausible moisture content" in row.note

@@ -4,6 +4,7 @@ left one out would run with another soil's friction or cohesion."""
 
 from __future__ import annotations
 
+import re
 from pathlib import Path
 
 import pytest
@@ -125,8 +126,68 @@ def test_own_sizes_are_checked_with_the_soil_s_own_density(tmp_path):
     """The black soil's funnel holds a 3.1 kg load at the soil's 1560 kg/m^3 but not at the
     engine's default density: the named setup's own sizes given as the soil's (0.5 kg of 1
     and 2 mm particles, 001 Sec. 2.2.1) load, as the same file without them does."""
-    def edit(d):
-        d["simulation"]["responses"]["accumulation_angle"]["set"] = {
-            "load_mass": 3.1, "paper_psd": [[0.001, 50.0], [0.002, 50.0]]}
+    # the funnel (001 Sec. 2.2.1: 192 and 50 mm across, 274 mm high) holds
+    # pi 0.274 / 3 (0.096^2 + 0.096 x 0.025 + 0.025^2) m^3 = 3.512 L; 3.1 kg at a solid fraction
+    # of 0.6 fills 3.1 / (0.6 x 1560) m^3 = 3.312 L of it at the soil's density, but
+    # 3.1 / (0.6 x 1394) m^3 = 3.706 L at the engine's default density 1394 kg/m^3
+    def edit(rho=None):
+        def apply(d):
+            d["simulation"]["responses"]["accumulation_angle"]["set"] = {
+                "load_mass": 3.1, "paper_psd": [[0.001, 50.0], [0.002, 50.0]]}
+            if rho is not None:
+                d["simulation"]["params"]["soil_density"] = rho
+        return apply
 
-    load_soil(_cinnamon(tmp_path, edit, soil="black-soil"), ROOT / "resources")
+    load_soil(_cinnamon(tmp_path, edit(), soil="black-soil"), ROOT / "resources")
+    with pytest.raises(InputError) as e:
+        load_soil(_cinnamon(tmp_path, edit(1394.0), soil="black-soil"), ROOT / "resources")
+    assert e.value.field == "simulation.responses.accumulation_angle.set.load_mass"
+    assert "3.51 L at 1394 kg/m^3" in e.value.expected
+
+
+@pytest.mark.parametrize("edit, field, got, expected", [
+    # 2 MPa typed as 2 with unit Pa: below the softest soil's modulus (base.SOIL_RANGES)
+    (lambda d: d["properties"]["shear_modulus"].update(value=2, unit="Pa"), "properties.shear_modulus.value", "2",
+     r"a soil shear modulus in \[1e4, 5e10\] Pa"),
+    # 0.05 GPa typed with unit Pa: E = 2 (1 + nu) G over the plausible G, [2e4, 1.5e11] Pa
+    (lambda d: d["properties"]["youngs_modulus"].update(value=0.05, unit="Pa"), "properties.youngs_modulus.value",
+     "0.05", r"a soil Young's modulus in \[20000, 1.5e\+11\] Pa"),
+    # 1.6 g/cm^3 typed as 16000 kg/m^3 (a slip of ten): above any soil's particle density
+    (lambda d: d["simulation"]["params"].update(soil_density=16000), "simulation.params.soil_density", "16000",
+     r"a soil particle density in \[100, 4000\] kg/m\^3"),
+    (lambda d: d["simulation"]["params"].update(soil_soil_static_friction=3.0),
+     "simulation.params.soil_soil_static_friction", "3.0", r"a soil-soil sliding friction coefficient in \[0, 2\]"),
+    (lambda d: d["simulation"]["params"].update(soil_soil_restitution=1.2),
+     "simulation.params.soil_soil_restitution", "1.2", r"a coefficient of restitution in \(0, 1\]"),
+    # 0.38 mJ/m^2... typed as 380 J/m^2
+    (lambda d: d["simulation"]["params"].update(soil_soil_surface_energy=380.0),
+     "simulation.params.soil_soil_surface_energy", "380.0", r"a soil-soil JKR surface energy in \[0, 100\] J/m\^2"),
+])
+def test_a_material_property_in_another_unit_is_refused_with_its_plausible_range(tmp_path, edit, field, got, expected):
+    """A unit slip in a soil's material properties stops the load before any DEM job, naming
+    the file, the field, the value and the plausible range (base.SOIL_RANGES)."""
+    p = _cinnamon(tmp_path, edit)
+    with pytest.raises(InputError) as e:
+        load_soil(p, ROOT / "resources")
+    assert (Path(e.value.path), e.value.field, str(e.value.got)) == (p, field, got)
+    assert re.search(expected, e.value.expected), e.value.expected
+    assert str(e.value).count("\n") == 0
+
+
+def test_a_setup_is_checked_at_the_density_the_soil_prints_as_a_property(tmp_path):
+    """A soil giving its particle density as a printed property (1.56 g/cm^3) rather than in
+    simulation.params: its 3.1 kg funnel load fills 3.1 / (0.6 x 1560) m^3 = 3.31 L of the
+    3.51 L funnel and loads; at 1.30 g/cm^3 it would fill 3.97 L, and the error names that
+    density, not the engine's default 1394 kg/m^3."""
+    def own(rho):
+        def edit(d):
+            d["simulation"]["params"].pop("soil_density")
+            d["properties"]["particle_density"] = {"value": rho, "unit": "g/cm^3"}
+            d["simulation"]["responses"]["accumulation_angle"]["set"] = {"load_mass": 3.1}
+        return edit
+
+    load_soil(_cinnamon(tmp_path, own(1.56), soil="black-soil"), ROOT / "resources")
+    with pytest.raises(InputError) as e:
+        load_soil(_cinnamon(tmp_path, own(1.30), soil="black-soil"), ROOT / "resources")
+    assert e.value.field == "simulation.responses.accumulation_angle.set.load_mass"
+    assert "at 1300 kg/m^3" in e.value.expected

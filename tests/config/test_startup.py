@@ -37,7 +37,12 @@ def refused(path: Path, tmp: Path) -> InputError:
 def test_densities_of_soils_and_tool_materials_pass(rho):
     from soilcal.dem.scenarios.base import DemParams
 
-    assert DemParams.from_mapping({"soil_density": rho, "steel_density": rho}).steel_density == rho
+    assert DemParams.from_mapping({"steel_density": rho}).steel_density == rho
+    if rho <= 4000.0:  # a soil's: peat to iron-rich mineral soil (base.SOIL_RANGES)
+        assert DemParams.from_mapping({"soil_density": rho}).soil_density == rho
+    else:  # a steel or tungsten density is no soil's
+        with pytest.raises(InputError, match=r"params\.soil_density: expected a soil particle density in \[100, 4000\]"):
+            DemParams.from_mapping({"soil_density": rho})
 
 
 def test_a_density_typed_in_g_per_cm3_is_refused(tmp_path):

@@ -91,9 +91,9 @@ def test_rate_friction_clamped_at_zero():
 
 
 def test_rate_friction_clamped_at_the_upper_friction_limit():
-    # f = 1 + 0.6 * 20 = 13: 0.6 * 13 = 7.8 -> 5.0 (the DemParams limit); 0.5 * 13 = 6.5 -> 5.0
+    # f = 1 + 0.6 * 20 = 13: 0.6 * 13 = 7.8 -> 2.0 (a soil's plausible limit, base.SOIL_RANGES); 0.5 * 13 = 6.5 -> 2.0
     out = EFFECTS["rate_friction"].apply(PARAMS, {"tool_speed": E ** 20}, {"beta": 0.6}, {"tool_speed": 1.0})
-    _unchanged_except(out, {"soil_soil_static_friction": 5.0, "soil_steel_static_friction": 5.0})
+    _unchanged_except(out, {"soil_soil_static_friction": 2.0, "soil_steel_static_friction": 2.0})
 
 
 @pytest.mark.parametrize("v, v0", [(0.0, 1.0), (-1.0, 1.0), (1.0, 0.0), (1.0, -2.0)])

@@ -10,6 +10,7 @@ from soilcal.chain.files import read_stage
 from soilcal.config import load_workflow_config
 from soilcal.errors import InputError
 from soilcal.chain.plan import dem_context, soil_sources
+from soilcal.chain.provenance import setup_inputs
 
 
 def config_origins():

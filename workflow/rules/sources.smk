@@ -102,10 +102,11 @@ rule simulation_setup:
         report("results/{soil}/dem/simulation.csv", caption="../report/simulation.rst", category="{soil}",
                subcategory="dem setup"),
     params:
-        soil=lambda w: soil_cfg(w.soil),
+        # only what simulation.csv reads: an edit elsewhere in the soil file reruns nothing here
+        soil=lambda w: setup_inputs(soil_cfg(w.soil)),
         path=lambda w: str(SOILS[w.soil].path),
         resources_root=RES,
-        defaulted=lambda w: list(SOILS[w.soil].defaulted),
+        defaulted=lambda w: [k for k in SOILS[w.soil].defaulted if k == "seed"],  # the one default it reads
         design=config.get("design"),
     conda:
         "../../envs/soilcal.yaml"

@@ -280,6 +280,19 @@ def _si(value: float, unit: str) -> float | None:
     return None if f is None else value * f
 
 
+def _moisture_percent(value: float, unit) -> float | None:
+    """A moisture content in percent from its declared unit (a mass fraction in ``-``,
+    ``fraction``, ``g/g`` or ``kg/kg`` times 100: soilcal.config.quantities.QUANTITIES); None for
+    a unit without a factor (as :func:`_si`).  A value without a unit is taken as printed, in
+    percent."""
+    from soilcal.config.quantities import QUANTITIES
+
+    if unit is None:
+        return value
+    f = QUANTITIES["moisture_content"][1].get(str(unit).strip())
+    return None if f is None else value * f
+
+
 def plausibility(err: Errata, soil: dict) -> None:
     def check(where, name, q):
         kind = name if name in _PLAUSIBLE else None
@@ -290,7 +303,8 @@ def plausibility(err: Errata, soil: dict) -> None:
         for v in vals:
             if v is None:
                 continue
-            x = v if kind == "moisture_content" else _si(float(v), str(q.get("unit", "")))
+            x = _moisture_percent(float(v), q.get("unit")) if kind == "moisture_content" \
+                else _si(float(v), str(q.get("unit", "")))
             if x is None:
                 continue
             if not lo <= x <= hi:

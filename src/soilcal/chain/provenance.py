@@ -27,7 +27,10 @@ GENERIC = {
     "soil_soil_plasticity": "0, elastic (Hertz) soil-soil contacts",
 }
 
-_PROPERTIES = {"poisson_ratio": "soil_poisson", "particle_density": "soil_density", "shear_modulus": "soil_shear_modulus"}
+#: a printed Young's modulus, which no run takes (the runs take the shear modulus), is checked
+#: all the same where the soil is simulated: its plausible range in Pa follows from the shear
+#: modulus's and the Poisson ratio's, E = 2 (1 + nu) G (soilcal.dem.scenarios.base.SOIL_RANGES)
+YOUNGS_RANGE = (2.0e4, 1.5e11)
 
 
 def soil_parameters() -> list[str]:
@@ -43,16 +46,15 @@ def given(data: dict, stage_id: str, _seen=None, soil_path=None) -> set[str]:
     (:func:`soilcal.dem.scenarios.base.dem_field`; one that maps to none is an InputError
     naming ``soil_path`` and the entry)."""
     from soilcal.chain.derive import _stage, dependencies
-    from soilcal.dem.scenarios.base import dem_field
+    from soilcal.dem.scenarios.base import PROPERTY_FIELDS, dem_field
 
     seen = set() if _seen is None else _seen
     if stage_id in seen:
         return set()
     seen.add(stage_id)
     out = set()
-    for prop, name in _PROPERTIES.items():
-        if ((data.get("properties") or {}).get(prop) or {}).get("value") is not None:
-            out.add(name)
+    out |= {name for prop, name in PROPERTY_FIELDS.items()
+            if ((data.get("properties") or {}).get(prop) or {}).get("value") is not None}
     out |= set(((data.get("simulation") or {}).get("params") or {}))
     st = _stage(data, stage_id)
     for pname in st.get("fixed") or {}:
@@ -64,33 +66,59 @@ def given(data: dict, stage_id: str, _seen=None, soil_path=None) -> set[str]:
     return out
 
 
-def check_parameters(soil_path, data: dict) -> None:
-    """Every soil parameter of every stage the DEM source simulates is set by the soil
-    (module docstring): otherwise one error naming the stage and the missing parameters."""
-    from soilcal.chain.derive import simulated_stage_ids
+def check_properties(soil_path, data: dict) -> None:
+    """The printed properties the runs take (:data:`soilcal.dem.scenarios.base.PROPERTY_FIELDS`):
+    a unit with a factor to SI and a value physical and plausible for a soil
+    (:data:`soilcal.dem.scenarios.base.SOIL_RANGES`); a printed ``youngs_modulus`` within
+    :data:`YOUNGS_RANGE`.  Otherwise one error naming the property."""
+    from soilcal.dem.scenarios.base import DemParams, property_values, unit_scale
 
-    if not data.get("simulation"):
-        return
-    # a printed property the runs take: its unit converts to SI and its value is physical
-    from soilcal.dem.scenarios.base import DemParams, unit_scale
-
-    for prop, name in _PROPERTIES.items():
-        entry = (data.get("properties") or {}).get(prop) or {}
-        if entry.get("value") is None:
-            continue
-        x = float(entry["value"]) * unit_scale(soil_path, entry, f"properties.{prop}")
+    props = data.get("properties") or {}
+    for name, (x, prop) in property_values(soil_path, data).items():
         try:
             DemParams.from_mapping({name: x}, str(soil_path))
         except InputError as exc:
             raise InputError(soil_path, f"properties.{prop}.value",
-                             f"{exc.expected} (DEM parameter {name}, from the value in {entry.get('unit', '-')})",
-                             entry["value"]) from None
+                             f"{exc.expected} (DEM parameter {name}, from the value in {props[prop].get('unit', '-')})",
+                             props[prop]["value"]) from None
+    entry = props.get("youngs_modulus")
+    if isinstance(entry, dict):
+        scale = unit_scale(soil_path, entry, "properties.youngs_modulus")
+        lo, hi = YOUNGS_RANGE
+        for key in ("value", "low", "high", "values"):
+            for i, v in enumerate((entry.get(key) or []) if key == "values" else [entry.get(key)]):
+                if v is not None and not lo <= float(v) * scale <= hi:
+                    raise InputError(soil_path, f"properties.youngs_modulus.{key}" + (f"[{i}]" if key == "values" else ""),
+                                     f"a soil Young's modulus in [{lo:g}, {hi:g}] Pa (2 (1 + nu) G over the plausible "
+                                     f"shear moduli; in {entry.get('unit', '-')}: [{lo / scale:g}, {hi / scale:g}])", v)
+
+
+def property_base(soil_path, data: dict):
+    """:class:`~soilcal.dem.scenarios.base.DemParams` with the soil's printed properties the runs
+    take over the engine's defaults (checked, :func:`check_properties`): the base on which the
+    start-up checks of a setup lay ``simulation.params`` and a measured row's values, as the runs
+    lay them (:func:`soilcal.dem.scenarios.base.stage_params`)."""
+    from soilcal.dem.scenarios.base import DemParams, property_values
+
+    check_properties(soil_path, data)
+    return DemParams.from_mapping({n: x for n, (x, _) in property_values(soil_path, data).items()}, str(soil_path))
+
+
+def check_parameters(soil_path, data: dict) -> None:
+    """Every soil parameter of every stage the DEM source simulates is set by the soil
+    (module docstring): otherwise one error naming the stage and the missing parameters."""
+    from soilcal.chain.derive import simulated_stage_ids
+    from soilcal.dem.scenarios.base import PROPERTY_FIELDS
+
+    if not data.get("simulation"):
+        return
+    check_properties(soil_path, data)
     need = soil_parameters()
     for sid in simulated_stage_ids(data):
         missing = [n for n in need if n not in given(data, sid, soil_path=soil_path)]
         if missing:
-            props = {name: prop for prop, name in _PROPERTIES.items()}
-            named = [n + (f" (or properties.{props[n]} with its unit)" if n in props else "") for n in missing]
+            prop_of = {name: prop for prop, name in PROPERTY_FIELDS.items()}
+            named = [n + (f" (or properties.{prop_of[n]} with its unit)" if n in prop_of else "") for n in missing]
             raise InputError(soil_path, "simulation.params",
                              f"a value of every soil parameter the runs of stage {sid!r} use (SI units, in "
                              f"simulation.params or the stage's fixed values); missing: {', '.join(named)}",
@@ -125,40 +153,47 @@ def base_params(data: dict, path):
     """DemParams from a soil's printed properties and ``simulation.params`` alone (the base
     every run starts from before its stage's fixed values and factor levels); ``data`` is the
     soil file's content, ``path`` its name in errors."""
-    from soilcal.dem.scenarios.base import DemParams, unit_scale
+    from soilcal.dem.scenarios.base import DemParams, property_values
 
-    values = {}
-    props = data.get("properties") or {}
-    for prop, name in _PROPERTIES.items():
-        entry = props.get(prop) or {}
-        if entry.get("value") is not None:
-            values[name] = float(entry["value"]) * unit_scale(path, entry, f"properties.{prop}")
+    values = {name: x for name, (x, _) in property_values(path, data).items()}
     values.update({k: float(v) for k, v in ((data.get("simulation") or {}).get("params") or {}).items()})
     return DemParams.from_mapping(values, str(path))
+
+
+def _sizing(scenario: str, setup: dict, preset: str, params, source: str) -> dict:
+    """A bench-top scenario's ``sizing`` of a run (the drum's takes the source, the others the
+    parameters)."""
+    from soilcal.dem.scenarios import get
+
+    mod = get(scenario, source)
+    return mod.sizing(setup, preset, source) if scenario == "drum" else mod.sizing(setup, preset, params)
 
 
 def cohesion_factor(scenario: str, setup: dict, preset: str, params, source: str = "<setup>") -> tuple[float, str]:
     """The surface-energy factor a run of ``scenario`` with ``setup`` and ``preset`` applies
     (``cohesion_scale``, :mod:`soilcal.dem.scenarios.base`), and what it is taken against:
-    a bench-top test's particles against the setup's ``paper_psd``, a soil bin against the
-    paper preset's bin of the scenario's named setup."""
+    the run's particles against the setup's ``paper_psd``, or a soil bin whose setup leaves
+    it at None against the paper preset's bin of the scenario's named setup."""
     from soilcal.dem import cost
-    from soilcal.dem.scenarios import get
     from soilcal.dem.scenarios.base import paper_cohesion
 
-    mod = get(scenario, source)
-    if scenario in cost.SOIL_BIN:
-        return float(cost.soil_bin(scenario, setup, preset, source)[1].cohesion_scale), \
-            "Sauter radius of the run's bin over that of the paper preset's bin of the scenario's named setup"
     if scenario == "incline":
         return 1.0, "no particle-size scaling (one block or ball)"
-    sz = mod.sizing(setup, preset, source) if scenario == "drum" else mod.sizing(setup, preset, params)
+    if scenario in cost.SOIL_BIN:
+        factor = float(cost.soil_bin(scenario, setup, preset, source)[0]["cohesion_scale"])
+        dist = None
+    else:
+        dist = _sizing(scenario, setup, preset, params, source)["dist"]
     if not setup.get("scale_cohesion", True):
-        return 1.0, "scale_cohesion: false"
-    if not setup.get("paper_psd"):
-        return 1.0, "no paper_psd to scale against"
-    return float(paper_cohesion(setup, sz["dist"], source)), \
-        "Sauter radius of the run's particles over that of the setup's paper_psd"
+        return 1.0, "scale_cohesion: false (the soil's surface energies as given)"
+    if dist is not None:
+        if not setup.get("paper_psd"):
+            return 1.0, "no paper_psd to scale against"
+        factor = paper_cohesion(setup, dist, source)
+    if setup.get("paper_psd"):
+        return float(factor), "Sauter radius of the run's particles over that of the setup's paper_psd"
+    return float(factor), ("Sauter radius of the run's bin over that of the paper preset's bin of the scenario's "
+                           "named setup (the setup's paper_psd is None)")
 
 
 def _preset_value(scenario: str, key: str, setup: dict, preset: str, params, soil_path):
@@ -166,7 +201,6 @@ def _preset_value(scenario: str, key: str, setup: dict, preset: str, params, soi
     (None), and how (:func:`soilcal.dem.scenarios.base.make_simulation`, the scenario's
     ``sizing``); (None, "") where this does not say."""
     from soilcal.dem import cost
-    from soilcal.dem.scenarios import get
     from soilcal.dem.scenarios.base import DEFAULT_ROLLING, PRESET_DEFAULTS, stiffness_scale_for
 
     if scenario not in cost.BENCHTOP:
@@ -184,9 +218,8 @@ def _preset_value(scenario: str, key: str, setup: dict, preset: str, params, soi
             f"the preset's cap {d['g_max']:g} Pa over the soil's shear modulus {g:g} Pa (at most 1; a stage that "
             "varies the modulus changes it)" if d["g_max"] is not None else "the soil's own modulus")
     if key in ("n_particles", "radius") and scenario != "incline":
-        mod = get(scenario, str(soil_path))
         try:
-            sz = mod.sizing(setup, preset, str(soil_path)) if scenario == "drum" else mod.sizing(setup, preset, params)
+            sz = _sizing(scenario, setup, preset, params, str(soil_path))
         except Exception:  # noqa: BLE001 - documentation only
             return None, ""
         if key == "n_particles":
@@ -207,7 +240,12 @@ def _setup_rows(add, where: str, scenario: str, setup_name: str, overrides: dict
     mod = get(scenario, str(soil_path))
     named = mod.setups()[setup_name]
     setup = merge_setup(mod.setups(), setup_name, overrides, str(soil_path))
-    effective = cost.soil_bin(scenario, setup, preset, str(soil_path))[0] if scenario in cost.SOIL_BIN else setup
+    effective = setup
+    if scenario in cost.SOIL_BIN:
+        try:
+            effective = cost.soil_bin(scenario, setup, preset, str(soil_path))[0]
+        except InputError:  # a setup this preset cannot run: its rows say the setup's values
+            pass
     for key in sorted(k for k in set(setup) | set(effective) if k not in ("name", "overrides", "cohesion_scale")):
         if key not in setup:
             add(f"{where}.setup.{key}", effective[key], "preset",
@@ -218,6 +256,10 @@ def _setup_rows(add, where: str, scenario: str, setup_name: str, overrides: dict
         elif effective.get(key) != setup[key]:
             add(f"{where}.setup.{key}", effective[key], "preset",
                 f"the {preset} preset's value (the named setup {setup_name!r} has {_text(setup[key])})")
+        elif key == "paper_psd" and setup[key] is None and scenario in cost.SOIL_BIN:
+            add(f"{where}.setup.{key}", None, "named setup",
+                f"None in {setup_name!r}: the surface energy is for the particles of the paper preset's bin of "
+                f"{setup_name!r} (a shipped soil's; set.paper_psd gives the soil's own)")
         elif setup[key] is None:
             value, what = _preset_value(scenario, key, setup, preset, params, soil_path)
             add(f"{where}.setup.{key}", value, "preset",
@@ -248,7 +290,7 @@ def simulation_setup(soil, design_override: str | None = None) -> "pd.DataFrame"
     import pandas as pd
 
     from soilcal.chain.adaptive import adaptive_stage_ids
-    from soilcal.chain.derive import SCREENING_DEFAULTS, dem_stage_ids, simulated_stage_ids
+    from soilcal.chain.derive import SCREENING_DEFAULTS, dem_stage_ids, design_mode, simulated_stage_ids
     from soilcal.chain.verify import VERIFY_DEFAULTS
     from soilcal.config.measurements import DEFAULT_PRESET, DEFAULT_REPLICATES
     from soilcal.dem.scenarios.base import DemParams
@@ -272,7 +314,7 @@ def simulation_setup(soil, design_override: str | None = None) -> "pd.DataFrame"
             add(f"simulation.{key}", sim[key], "soil", f"simulation.{key} ({what})")
         else:
             add(f"simulation.{key}", default, "default", what)
-    design = sim.get("design", "recipe")
+    design = design_mode(data)
     if "stages" in sim:
         add("simulation.stages", dem_stage_ids(data), "soil", "simulation.stages")
     else:
@@ -315,10 +357,7 @@ def simulation_setup(soil, design_override: str | None = None) -> "pd.DataFrame"
             else "declared to the scheduler per DEM job")
 
     # DEM parameters: the soil's own, and the generic defaults the runs of a stage take
-    props = data.get("properties") or {}
-    from soilcal.dem.scenarios.base import unit_scale
-
-    from soilcal.dem.scenarios.base import dem_field
+    from soilcal.dem.scenarios.base import dem_field, property_values
 
     stages = simulated_stage_ids(data) if sim else []
 
@@ -334,13 +373,10 @@ def simulation_setup(soil, design_override: str | None = None) -> "pd.DataFrame"
         hit = [sid for sid in stages if name in stage_set[sid]]
         return f"; replaced by the fixed value or factor of stage(s) {', '.join(hit)}" if hit else ""
 
-    for prop, name in _PROPERTIES.items():
-        entry = props.get(prop) or {}
-        if entry.get("value") is not None:
-            later = name in (sim.get("params") or {})
-            add(f"dem.{name}", float(entry["value"]) * unit_scale(soil.path, entry, f"properties.{prop}"), "soil",
-                f"properties.{prop}, in SI" + (f"; replaced by simulation.params.{name}" if later else "")
-                + over(name))
+    for name, (x, prop) in property_values(soil.path, data).items():
+        later = name in (sim.get("params") or {})
+        add(f"dem.{name}", x, "soil", f"properties.{prop}, in SI"
+            + (f"; replaced by simulation.params.{name}" if later else "") + over(name))
     for name, v in (sim.get("params") or {}).items():
         add(f"dem.{name}", v, "soil", f"simulation.params.{name} (SI)" + over(name))
     defaults = DemParams()
@@ -387,6 +423,38 @@ def simulation_setup(soil, design_override: str | None = None) -> "pd.DataFrame"
         add(f"{where}.preset", entry.get("preset", DEFAULT_PRESET), "soil" if "preset" in entry else "default",
             f"{where}.preset" if "preset" in entry else "scenario preset of the tool tests")
     return pd.DataFrame(rows, columns=SETUP_COLUMNS)
+
+
+#: text fields that document a soil and change no value of simulation.csv
+_DOC_KEYS = ("note", "notes", "source", "title")
+
+
+def setup_inputs(data: dict) -> dict:
+    """The part of a soil file's content that :func:`simulation_setup` reads: ``name``,
+    ``seed``, ``simulation``, ``stages``, ``parameters``, ``measurements``, the printed
+    properties the runs take (:data:`soilcal.dem.scenarios.base.PROPERTY_FIELDS`) and, for
+    ``design: adaptive`` (whose stages are those with a case to aim at), whether each target has
+    a value or a photo group; the text that documents them (``note``, ``source``, ``title``) is
+    left out.  The workflow's rule passes this as its params, so an edit elsewhere in the soil
+    file (its citation, notes, errata, a target's value) does not rerun it."""
+    from soilcal.chain.derive import design_mode
+    from soilcal.dem.scenarios.base import PROPERTY_FIELDS
+
+    def bare(v):
+        if isinstance(v, dict):
+            return {k: bare(x) for k, x in v.items() if not (k in _DOC_KEYS and isinstance(x, str))}
+        if isinstance(v, list):
+            return [bare(x) for x in v]
+        return v
+
+    out = {k: bare(data[k]) for k in ("name", "seed", "simulation", "stages", "parameters", "measurements")
+           if k in data}
+    props = data.get("properties") or {}
+    out["properties"] = {p: bare(props[p]) for p in PROPERTY_FIELDS if p in props}
+    if data.get("simulation") and design_mode(data) == "adaptive":
+        out["targets"] = {tid: {k: t[k] for k in ("value", "image") if k in t}
+                          for tid, t in (data.get("targets") or {}).items() if isinstance(t, dict)}
+    return out
 
 
 def write_simulation_setup(soil, out, design_override: str | None = None) -> "pd.DataFrame":

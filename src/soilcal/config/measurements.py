@@ -343,6 +343,10 @@ def _entry(soil_path, data: dict, mid: str, entry: dict, tpath: Path):
     except InputError as exc:
         raise _renamed(exc, soil_path, "params.", f"{where}.params.") from None
     base_params = {**sim_params, **{k: float(v) for k, v in entry_params.items()}}
+    # under them the soil's printed properties, as the runs take them
+    from soilcal.chain.provenance import property_base
+
+    soil_base = property_base(soil_path, data)
 
     # -- calibrated stage and case
     stage, case_ids = _stage_cases(soil_path, data, where, entry)
@@ -546,7 +550,7 @@ def _entry(soil_path, data: dict, mid: str, entry: dict, tpath: Path):
                                  f"quantity, converted to {want} as {tpath.name} is read: "
                                  + ", ".join(response_units(r["measure"])), r["unit"])
         try:
-            dem = DemParams.from_mapping(params, src)
+            dem = DemParams.from_mapping(params, src, base=soil_base)
         except InputError as exc:  # a soil-wide simulation.params value: reported by its own check
             raise _renamed(exc, soil_path, "params.", "simulation.params.") from None
         try:

@@ -454,25 +454,16 @@ def _box_overlap(lo, hi, blo, bhi) -> float:
 
 
 def soil_bin(scenario: str, setup: dict, preset: str, source: str = "<cost>"):
-    """``(settings, BinSpec)`` of a soil-bin scenario's run: the setup with the preset's
-    discretisation and the bin, with the surface-energy factor against the paper preset's
-    bin, as the scenario's ``run`` forms them."""
-    from soilcal.dem.scenarios import soilbin
-
+    """``(settings, BinSpec)`` of a soil-bin scenario's run: the settings its ``validate``
+    returns (the setup with the preset's discretisation and the surface-energy factor
+    ``cohesion_scale``, :func:`soilcal.dem.scenarios.soilbin.reference_cohesion`) and the bin,
+    as the scenario's ``run`` forms them."""
     mod = _module(scenario, source)
     if scenario not in SOIL_BIN:
         raise InputError(source, "scenario", f"a soil-bin scenario ({', '.join(SOIL_BIN)})",
                          scenario)
-    s = mod._settings(setup, preset)
-    binf = (lambda q: mod._bin(q, source)) if scenario == "bulldozing" else mod._bin
-    if scenario == "furrow":
-        ref = mod._settings(mod.setups()["yangtze-opener"], "paper")
-    elif scenario == "bulldozing":
-        ref = mod._settings(mod._setup(s["shape"]), "paper")
-    else:
-        ref = mod._settings(mod._setup(s["rpm"]), "paper")
-    s["cohesion_scale"] = soilbin.reference_cohesion(binf(s), binf(ref), setup, source)
-    return s, binf(s)
+    s = mod.validate(setup, preset, source)
+    return s, (mod._bin(s, source) if scenario == "bulldozing" else mod._bin(s))
 
 
 def _soil_bin(mod, name, setup, params, preset, source):

@@ -20,7 +20,7 @@ of some scenarios only (``scenarios``; empty: every scenario): a condition of an
 scenario keeps its calibrated parameters (:meth:`Effect.applies_to`, :meth:`Effect.apply`).
 
 The formulas (``x`` the condition's value, ``x0`` the reference; clamped to each
-parameter's physical range, :data:`soilcal.dem.scenarios.base._RANGES`):
+parameter's plausible range for a soil, :data:`soilcal.dem.scenarios.base.SOIL_RANGES`):
 
 ``moisture_cohesion`` (theta: ``c_w`` in J/m^2 per percentage point)
     gamma_ss(w) = gamma_ss,cal + c_w (w - w0), at least 0.
@@ -86,13 +86,15 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, field
 
-from soilcal.dem.scenarios.base import DENSITY_MAX, DENSITY_MIN
+from soilcal.dem.scenarios.base import SOIL_RANGES
 from soilcal.errors import InputError
 
-#: DemParams range limits the effects respect (low, high) by parameter kind (the density's:
-#: soilcal.dem.scenarios.base.DENSITY_MIN, DENSITY_MAX)
-_LIMITS = {"surface_energy": (0.0, 1.0e3), "static_friction": (0.0, 5.0), "density": (DENSITY_MIN, DENSITY_MAX),
-           "shear_modulus": (1.0, 1.0e13), "plasticity": (0.0, 0.95)}
+#: DemParams limits the effects respect (low, high) by parameter kind: the plausibility bounds of
+#: a soil's material parameters (soilcal.dem.scenarios.base.SOIL_RANGES)
+_LIMITS = {"surface_energy": SOIL_RANGES["soil_soil_surface_energy"][:2],
+           "static_friction": SOIL_RANGES["soil_soil_static_friction"][:2],
+           "density": SOIL_RANGES["soil_density"][:2], "shear_modulus": SOIL_RANGES["soil_shear_modulus"][:2],
+           "plasticity": (0.0, 0.95)}
 
 
 def _clamp(x: float, kind: str) -> float:

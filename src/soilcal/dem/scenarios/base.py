@@ -61,9 +61,12 @@ particle size, the rule Thakur, Ooi & Ahmadian (Powder Technol. 293 (2016) 130-1
 keep the bulk response of a coarse-grained cohesive solid; equivalently the bulk cohesive
 stress, pull-off force over the area per contact, ~ gamma / r, stays the same.  Without it a
 heap of spheres five times the paper's size carries a fifth of the cohesion per unit area and
-the response depends on the particle count.  The reference is the paper preset's size
-distribution of the same setup; ``scale_cohesion: false`` in a setup turns the rule off.
-The factor is recorded in the run's setup as ``cohesion_scale``.
+the response depends on the particle count.  The reference is the setup's ``paper_psd``
+(the particle sizes the surface energy is for: a named setup's are its paper's, a soil of
+one's own gives its own), or, for a soil bin whose setup leaves ``paper_psd`` at None, the
+paper preset's bin of the named setup; ``scale_cohesion: false`` in a setup (every named
+setup of a scenario that scales has it, true) turns the rule off.  The factor is recorded in
+the run's setup as ``cohesion_scale``.
 
 Rolling model
 -------------
@@ -140,6 +143,50 @@ _RANGES = {
 }
 
 
+#: Plausibility bounds of a soil's own material parameters (name -> as ``_RANGES``), on top of
+#: the physical range of their kind: wide enough for any soil a DEM model is calibrated for, and
+#: narrow enough to stop a value typed in another unit (a modulus in MPa or GPa written with unit
+#: Pa, a density in g/cm^3 written in kg/m^3, a surface energy in mJ/m^2 written in J/m^2):
+#:
+#: * density 100-4000 kg/m^3: peats have bulk densities down to about 100 kg/m^3 (Boelter,
+#:   Soil Sci. Soc. Am. Proc. 32 (1968) 250-254), the solids of mineral soils 2600-2750 kg/m^3
+#:   and iron-rich ones a little over 3000 (Blake & Hartge, "Particle density", Methods of Soil
+#:   Analysis Part 1, 2nd ed., ASA/SSSA 1986); 1.6 (g/cm^3 meant) and 16000 are refused;
+#: * shear modulus 1e4-5e10 Pa: the softest soils (peats, soft clays) have small-strain shear
+#:   moduli of about 1e5-1e7 Pa, dense gravels up to about 1e9 Pa (Kramer, Geotechnical
+#:   Earthquake Engineering, 1996, Ch. 6), and no soil grain is stiffer than quartz,
+#:   G = 44 GPa (Mavko, Mukerji & Dvorkin, The Rock Physics Handbook, 2009); the DEM papers'
+#:   soils use 1e6-1e8 Pa; 2 Pa (2 MPa meant) is refused;
+#: * Poisson ratio 0-0.5: soils lie at 0.1-0.5 (Bowles, Foundation Analysis and Design, 5th ed.,
+#:   1996, Table 2-7); a negative ratio (an auxetic solid) is no soil's;
+#: * sliding friction 0-2 (soil-soil and soil-steel): soils' friction angles reach about 50 deg
+#:   (mu = 1.2) on soil and less on steel; 2 is 63 deg;
+#: * JKR surface energy 0-100 J/m^2: the calibrated soils of the DEM papers lie at 0-40 J/m^2 (the
+#:   shipped soils 0.1-5); a value in mJ/m^2 written in J/m^2 (380 for 0.38) is refused.
+SOIL_RANGES = {
+    "soil_density": (100.0, 4000.0, True, True,
+                     "a soil particle density in [100, 4000] kg/m^3 (peat to iron-rich mineral soil; "
+                     "a value in g/cm^3 times 1000)"),
+    "soil_shear_modulus": (1.0e4, 5.0e10, True, True,
+                           "a soil shear modulus in [1e4, 5e10] Pa (soft peat to quartz; a value in MPa "
+                           "times 1e6, in GPa times 1e9)"),
+    "soil_poisson": (0.0, 0.5, True, False, "a soil Poisson ratio in [0, 0.5)"),
+    "soil_soil_static_friction": (0.0, 2.0, True, True, "a soil-soil sliding friction coefficient in [0, 2]"),
+    "soil_steel_static_friction": (0.0, 2.0, True, True, "a soil-steel sliding friction coefficient in [0, 2]"),
+    "soil_soil_surface_energy": (0.0, 100.0, True, True,
+                                 "a soil-soil JKR surface energy in [0, 100] J/m^2 (a value in mJ/m^2 "
+                                 "times 0.001)"),
+    "soil_steel_surface_energy": (0.0, 100.0, True, True,
+                                  "a soil-steel JKR surface energy in [0, 100] J/m^2 (a value in mJ/m^2 "
+                                  "times 0.001)"),
+}
+
+
+def _in(x: float, rng: tuple) -> bool:
+    lo, hi, lo_in, hi_in = rng[:4]
+    return math.isfinite(x) and (x >= lo if lo_in else x > lo) and (x <= hi if hi_in else x < hi)
+
+
 def _kind(name: str) -> str:
     for k in _RANGES:
         if name.endswith(k):
@@ -151,7 +198,8 @@ def _kind(name: str) -> str:
 class DemParams:
     """Inputs of a soil DEM run (SI units); defaults: cinnamon soil, see module docstring.
 
-    Every value is checked against the physical range of its kind (``_RANGES``).  Densities
+    Every value is checked against the physical range of its kind (``_RANGES``) and a soil's
+    own material parameters also against their plausibility bounds (:data:`SOIL_RANGES`).  Densities
     (``soil_density``, ``steel_density``) lie in [100, 25000] kg/m^3
     (:data:`DENSITY_MIN`, :data:`DENSITY_MAX`): the lightest soils are peats with a bulk density
     of about 100-200 kg/m^3 and mineral soils lie at 1000-2700 kg/m^3 (bulk to particle
@@ -206,10 +254,9 @@ class DemParams:
                 x = float(val)
             except (TypeError, ValueError):
                 raise InputError(source, f"params.{key}", "a number", val) from None
-            lo, hi, lo_in, hi_in, what = _RANGES[_kind(key)]
-            ok = math.isfinite(x) and (x >= lo if lo_in else x > lo) and (x <= hi if hi_in else x < hi)
-            if not ok:
-                raise InputError(source, f"params.{key}", what, val)
+            for rng in (_RANGES[_kind(key)], SOIL_RANGES.get(key)):
+                if rng is not None and not _in(x, rng):
+                    raise InputError(source, f"params.{key}", rng[4], val)
             values[key] = x
         return cls(**values)
 
@@ -232,6 +279,24 @@ def unit_scale(path, entry: dict, where: str) -> float:
     if unit not in _UNIT_SCALE:
         raise InputError(path, f"{where}.unit", f"one of {', '.join(_UNIT_SCALE)}", unit)
     return _UNIT_SCALE[unit]
+
+
+#: the printed soil properties every run takes (each with a single ``value``) -> DemParams field
+PROPERTY_FIELDS = {"poisson_ratio": "soil_poisson", "particle_density": "soil_density",
+                   "shear_modulus": "soil_shear_modulus"}
+
+
+def property_values(path, soil_data: dict) -> dict:
+    """DemParams field -> (SI value, property name) of the soil's printed properties that the
+    runs take (:data:`PROPERTY_FIELDS`, each where it has a single ``value``), converted from
+    its unit (:func:`unit_scale`: another unit raises InputError naming
+    ``properties.<name>.unit``)."""
+    out = {}
+    for prop, name in PROPERTY_FIELDS.items():
+        entry = (soil_data.get("properties") or {}).get(prop) or {}
+        if entry.get("value") is not None:
+            out[name] = (float(entry["value"]) * unit_scale(path, entry, f"properties.{prop}"), prop)
+    return out
 
 
 def dem_field(path, soil_data: dict, pname: str, where: str) -> tuple[str, float]:
@@ -275,9 +340,6 @@ def stage_params(soil, stage_id: str, levels: dict, base: "DemParams | None" = N
     known = DemParams.names()
     values = {}
 
-    def scale_of(entry, where):
-        return unit_scale(path, entry, where)
-
     def put(name, value, where):
         try:
             x = float(value)
@@ -290,13 +352,8 @@ def stage_params(soil, stage_id: str, levels: dict, base: "DemParams | None" = N
     def field_of(pname, where):
         return dem_field(path, soil.data, pname, where)
 
-    props = soil.data.get("properties", {})
-    for prop, name in (("poisson_ratio", "soil_poisson"), ("particle_density", "soil_density"),
-                       ("shear_modulus", "soil_shear_modulus")):
-        entry = props.get(prop) or {}
-        if entry.get("value") is not None:
-            put(name, float(entry["value"]) * scale_of(entry, f"properties.{prop}"),
-                f"properties.{prop}.value")
+    for name, (x, prop) in property_values(path, soil.data).items():
+        put(name, x, f"properties.{prop}.value")
     for name, v in (params or {}).items():
         if name not in known:
             raise InputError(path, f"{params_field}.{name}", f"a DEM parameter ({', '.join(known)})", name)
@@ -349,9 +406,8 @@ def cohesion_scale(model, reference, setup: dict | None = None,
                    source: str = "<input>") -> float:
     """Surface-energy factor r32(model) / r32(reference) (module docstring), or 1 when the
     setup sets ``scale_cohesion`` to false or there is no reference."""
-    flag = (setup or {}).get("scale_cohesion", True)
-    check(isinstance(flag, bool), source, "setup.scale_cohesion", "true or false", flag)
-    if not flag or reference is None:
+    check_scale_cohesion(setup or {}, source)
+    if not (setup or {}).get("scale_cohesion", SCALE_COHESION) or reference is None:
         return 1.0
     return sauter_radius(model) / sauter_radius(reference)
 
@@ -394,7 +450,18 @@ def check_discretisation(setup: dict, source: str) -> None:
     f = setup_number(setup, "dt_fraction", source, allow_none=True)
     if f is not None:
         check(f <= 1.0, source, "setup.dt_fraction", "a fraction of the Rayleigh time in (0, 1]", f)
+    check_scale_cohesion(setup, source)
     check_rolling(setup, source)
+
+
+#: the named setups' value of ``scale_cohesion`` (module docstring, "Cohesion scaling")
+SCALE_COHESION = True
+
+
+def check_scale_cohesion(setup: dict, source: str) -> None:
+    """``setup.scale_cohesion``: true (the particle-size rule, the default) or false."""
+    flag = setup.get("scale_cohesion", SCALE_COHESION)
+    check(isinstance(flag, (bool, np.bool_)), source, "setup.scale_cohesion", "true or false", flag)
 
 
 def build_materials(params: DemParams, stiffness_scale: float = 1.0,

@@ -42,6 +42,7 @@ from __future__ import annotations
 
 import csv
 import math
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -50,8 +51,8 @@ from soilcal.dem import tools
 from soilcal.dem.factories import PSD
 from soilcal.dem.scenarios.base import (PRESETS, DemParams, Result, check, stable_mean,
                                         threads_used)
-from soilcal.dem.scenarios.soilbin import (BinSpec, apply_preset, check_pass, psd_field,
-                                           reference_cohesion, settled_bin, tool_pass,
+from soilcal.dem.scenarios.soilbin import (COHESION_KEYS, BinSpec, apply_preset, check_pass,
+                                           psd_field, reference_cohesion, settled_bin, tool_pass,
                                            tool_time_step, validate_bin)
 
 NAME = "bulldozing"
@@ -83,6 +84,7 @@ def _setup(shape):
         plate_height=tools.PLATE["height"],    # Sec. 4.2.1: 150 mm
         plate_breadth=tools.PLATE["breadth"],  # Sec. 4.2.1: 300 mm
         stable_from=0.5,           # stable stage: second half of the pass
+        **COHESION_KEYS,           # surface energy for the paper preset's particles (base.py)
     )
 
 
@@ -172,7 +174,8 @@ def validate(setup: dict, preset: str = "quick", source: str = "<bulldozing>",
              params=None) -> dict:
     """Bad settings raise InputError before the run; with ``params``, also a pass the run
     could not finish (:func:`soilcal.dem.scenarios.soilbin.check_pass`).  Returns the run's
-    settings (with ``params``, with the surface-energy factor ``cohesion_scale``)."""
+    settings, with the surface-energy factor ``cohesion_scale``
+    (:func:`soilcal.dem.scenarios.soilbin.reference_cohesion`)."""
     check(preset in PRESETS, source, "preset", f"one of {PRESETS}", preset)
     check(setup.get("shape") in tools.SHAPES, source, "setup.shape",
           f"one of {', '.join(tools.SHAPES)} (Table 9)", setup.get("shape"))
@@ -189,7 +192,8 @@ def validate(setup: dict, preset: str = "quick", source: str = "<bulldozing>",
     check(isinstance(spread, (int, float)) and not isinstance(spread, bool)
           and 0.0 <= spread < 1.0, source, "setup.radius_spread", "a radius spread in [0, 1)",
           spread)
-    r_max = _bin(s, source).r_max
+    spec = _bin(s, source)
+    r_max = spec.r_max
     check(s["depth"] >= 2.0 * r_max, source, "setup.depth",
           f">= 2 r_max = {2.0 * r_max:.4g} m (a cut at least one largest particle diameter "
           "deep)", s["depth"])
@@ -204,11 +208,11 @@ def validate(setup: dict, preset: str = "quick", source: str = "<bulldozing>",
           "a fraction of the pass in [0, 1)", s["stable_from"])
     # directrix itself (raises InputError naming the field if the angles cannot be met)
     tools.directrix(s["shape"], height=s["plate_height"], source=source)
-    validate_bin(_bin(s, source), source, "setup")
+    validate_bin(spec, source, "setup")
+    s["cohesion_scale"] = reference_cohesion(spec, _bin(_settings(_setup(s["shape"]), "paper"), source),
+                                             setup, source)
+    spec = replace(spec, cohesion_scale=s["cohesion_scale"])
     if params is not None:
-        s["cohesion_scale"] = reference_cohesion(
-            _bin(s, source), _bin(_settings(_setup(s["shape"]), "paper"), source), setup, source)
-        spec = _bin(s, source)
         check_pass(spec, params, source, "setup.speed", s["speed"], s["travel"],
                    tool_time_step(spec, params),
                    duration_field=None if _given_travel(setup, preset) else "setup.duration")

@@ -100,6 +100,7 @@ def setups() -> dict:
                                  rest_speed=0.005, max_settle_time=3.0, n_particles=None,
                                  radius=None, stiffness_scale=None, dt_fraction=None,
                                  rolling_model=None, contact_conventions=None, unload=False,
+                                 scale_cohesion=True,
                                  paper_psd=[[0.00125, 14.0], [0.000625, 14.0],
                                             [0.000315, 22.0], [0.0001575, 50.0]]),
     }

@@ -92,6 +92,7 @@ def response_ids(data: dict) -> list[str]:
 def spec_from(soil_path, data: dict, response_id: str) -> SimulationSpec:
     """The validated :class:`SimulationSpec` of one response; errors name the config field."""
     from soilcal.dem.scenarios import SCENARIOS, measures_of
+    from soilcal.chain.provenance import property_base
     from soilcal.dem.scenarios.base import PRESETS, DemParams, merge_setup
 
     sim = _block(soil_path, data)
@@ -121,8 +122,9 @@ def spec_from(soil_path, data: dict, response_id: str) -> SimulationSpec:
     if preset not in PRESETS:  # the schema already refuses this; kept for direct callers
         raise InputError(soil_path, f"{BLOCK}.preset", f"one of {', '.join(PRESETS)}", preset)
     params = dict(sim.get("params") or {})
+    base = property_base(soil_path, data)  # the printed properties under the params, as the runs take them
     try:
-        dem_params = DemParams.from_mapping(params, str(soil_path))
+        dem_params = DemParams.from_mapping(params, str(soil_path), base=base)
     except InputError as exc:
         raise _renamed(exc, soil_path, "params.", f"{BLOCK}.params.") from None
     try:

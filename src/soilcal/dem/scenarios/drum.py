@@ -86,7 +86,7 @@ def setups() -> dict:
                                   min_drop=10.0,
                                   n_particles=None, radius=None, stiffness_scale=None,
                                   dt_fraction=None, rolling_model=None, contact_conventions=None,
-                                  paper_psd=[[0.00125, 33.34], [0.0025, 33.33], [0.005, 33.33]]),
+                                  scale_cohesion=True, paper_psd=[[0.00125, 33.34], [0.0025, 33.33], [0.005, 33.33]]),
     }
 
 

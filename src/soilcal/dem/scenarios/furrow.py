@@ -79,6 +79,7 @@ from __future__ import annotations
 
 import csv
 import math
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -87,8 +88,8 @@ from numpy.polynomial import Polynomial
 from soilcal.dem import tools
 from soilcal.dem.scenarios.base import (PRESETS, DemParams, Result, check, stable_mean,
                                         threads_used)
-from soilcal.dem.scenarios.soilbin import (BinSpec, apply_preset, check_pass, reference_cohesion,
-                                           tool_pass, tool_time_step, validate_bin)
+from soilcal.dem.scenarios.soilbin import (COHESION_KEYS, BinSpec, apply_preset, check_pass,
+                                           reference_cohesion, tool_pass, tool_time_step, validate_bin)
 from soilcal.errors import InputError
 
 NAME = "furrow"
@@ -135,6 +136,7 @@ def setups() -> dict:
             opener_upper_half_width=tools.OPENER["upper_half_width"],
             opener_upper_height=tools.OPENER["upper_height"],
             opener_bottom_half_width=tools.OPENER["bottom_half_width"],
+            **COHESION_KEYS,         # surface energy for the paper preset's particles (base.py)
         ),
     }
 
@@ -185,7 +187,8 @@ def validate(setup: dict, preset: str = "quick", source: str = "<furrow>",
              params=None) -> dict:
     """Bad settings raise InputError before the run; with ``params``, also a pass the run
     could not finish (:func:`soilcal.dem.scenarios.soilbin.check_pass`).  Returns the run's
-    settings (with ``params``, with the surface-energy factor ``cohesion_scale``)."""
+    settings, with the surface-energy factor ``cohesion_scale``
+    (:func:`soilcal.dem.scenarios.soilbin.reference_cohesion`)."""
     check(preset in PRESETS, source, "preset", f"one of {PRESETS}", preset)
     s = _settings(setup, preset)
     for k in ("depth", "speed", "tank_length", "tank_width", "tank_height", "particle_radius",
@@ -237,11 +240,12 @@ def validate(setup: dict, preset: str = "quick", source: str = "<furrow>",
           s["dt_fraction"])
     check(s["max_overlap"] < 1, source, "setup.max_overlap", "a fraction of a radius in (0, 1)",
           s["max_overlap"])
-    validate_bin(_bin(s), source, "setup")
+    spec = _bin(s)
+    validate_bin(spec, source, "setup")
+    s["cohesion_scale"] = reference_cohesion(spec, _bin(_settings(setups()["yangtze-opener"], "paper")),
+                                             setup, source)
     if params is not None:
-        s["cohesion_scale"] = reference_cohesion(
-            _bin(s), _bin(_settings(setups()["yangtze-opener"], "paper")), setup, source)
-        spec = _bin(s)
+        spec = replace(spec, cohesion_scale=s["cohesion_scale"])
         check_pass(spec, params, source, "setup.speed", s["speed"], s["travel"],
                    tool_time_step(spec, params))
     return s

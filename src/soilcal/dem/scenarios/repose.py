@@ -138,7 +138,7 @@ def setups() -> dict:
     common = dict(rest_speed=0.005, max_settle_time=4.0, image=True, image_views=IMAGE_VIEWS,
                   n_particles=None,
                   radius=None, stiffness_scale=None, dt_fraction=None, rolling_model=None,
-                  contact_conventions=None, seed_stream="repose")
+                  contact_conventions=None, seed_stream="repose", scale_cohesion=True)
     cyl = dict(common, method="cylinder", wall_material="steel", plate_material="steel")
     fun = dict(common, method="funnel", wall_material="steel", plate_material="steel",
                cover_speed=1.0, max_retained=MAX_RETAINED)

@@ -66,6 +66,7 @@ from __future__ import annotations
 
 import csv
 import math
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -73,8 +74,9 @@ import numpy as np
 from soilcal.dem import tools
 from soilcal.dem.scenarios.base import (PRESETS, DemParams, Result, check, stable_mean,
                                         threads_used)
-from soilcal.dem.scenarios.soilbin import (BinSpec, apply_preset, check_pass, reference_cohesion,
-                                           settled_bin, tool_pass, tool_time_step, validate_bin)
+from soilcal.dem.scenarios.soilbin import (COHESION_KEYS, BinSpec, apply_preset, check_pass,
+                                           reference_cohesion, settled_bin, tool_pass, tool_time_step,
+                                           validate_bin)
 
 NAME = "rotary"
 #: writes and reads restart files (soilcal.dem.restart)
@@ -111,6 +113,7 @@ def _setup(rpm):
         lift_time=0.08,
         hood_clearance=0.05,              # assumption: hood 50 mm above the blade tips
         rest_time=0.05,
+        **COHESION_KEYS,                  # surface energy for the paper preset's particles (base.py)
     )
 
 
@@ -230,7 +233,8 @@ def validate(setup: dict, preset: str = "quick", source: str = "<rotary>",
              params=None) -> dict:
     """Bad settings raise InputError before the run; with ``params``, also a pass the run
     could not finish (:func:`soilcal.dem.scenarios.soilbin.check_pass`).  Returns the run's
-    settings (with ``params``, with the surface-energy factor ``cohesion_scale``)."""
+    settings, with the surface-energy factor ``cohesion_scale``
+    (:func:`soilcal.dem.scenarios.soilbin.reference_cohesion`)."""
     check(preset in PRESETS, source, "preset", f"one of {PRESETS}", preset)
     s = _settings(setup, preset)
     for k in ("rpm", "forward_speed", "depth", "working_width", "radius", "hub_radius",
@@ -264,11 +268,10 @@ def validate(setup: dict, preset: str = "quick", source: str = "<rotary>",
           f"starting trench (|x - x0| <= R + 2 r_max = {th:.3g} m) is {xb - xa:.3g} m, "
           f"needs >= {need:.3g} m for {s['flatness_points']} points one particle diameter "
           "apart", s["travel"])
+    s["cohesion_scale"] = reference_cohesion(spec, _bin(_settings(_setup(s["rpm"]), "paper")), setup, source)
     if params is not None:
         # the blades slice the soil rather than push it: only the pass's step count
-        s["cohesion_scale"] = reference_cohesion(
-            spec, _bin(_settings(_setup(s["rpm"]), "paper")), setup, source)
-        spec = _bin(s)
+        spec = replace(spec, cohesion_scale=s["cohesion_scale"])
         check_pass(spec, params, source, "setup.forward_speed", s["forward_speed"],
                    s["travel"], pass_time_step(s, spec, params), pushes=False)
     return s

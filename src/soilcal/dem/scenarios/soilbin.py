@@ -71,7 +71,7 @@ from soilcal.dem.factories import PSD, BoxRegion, UniformRadius, insert_random, 
 from soilcal.dem.io import read_snapshot, write_particles_vtu, write_mesh_vtp, write_snapshot
 from soilcal.dem.materials import DAMPING_DT_SAFETY, rayleigh_time
 from soilcal.dem.scenarios.base import (DemParams, build_materials, check, cohesion_scale,
-                                        contact_model, rng)
+                                        contact_model, paper_psd, rng)
 
 CACHE_VERSION = 2  # 2: settling step capped by the damped-contact bound
 FILL_FACTOR = 1.3  # lattice region height / fill height (the bed compacts when it settles)
@@ -272,9 +272,32 @@ def check_pass(spec: BinSpec, params: DemParams, source: str, field: str, speed:
               f"{100 * push_overlap(params, spec.stiffness_scale, speed):.3g} %")
 
 
+#: the soil-bin keys of every named setup: the particle sizes the surface energy is for
+#: (None: the paper preset's bin of the named setup) and the particle-size rule's switch
+COHESION_KEYS = dict(paper_psd=None, scale_cohesion=True)
+
+
+def reference_dist(spec: BinSpec, reference: BinSpec, setup: dict, source: str):
+    """The particle sizes a bin's surface energy is for: the setup's ``paper_psd`` rows
+    ``[radius_m, mass_percent]`` (:func:`soilcal.dem.scenarios.base.paper_psd`), radii the
+    run's bin ``spec`` holds as it holds its own spheres (every side at least three diameters,
+    :func:`validate_bin`), or, where the setup leaves it at None, the distribution of
+    ``reference``, the paper preset's bin of the named setup."""
+    if setup.get("paper_psd") is None:
+        return reference.dist
+    ref = paper_psd(setup, source)
+    side = min(spec.length, spec.width, spec.height)
+    lim = side / (3.0 * 2.02)
+    check(max(ref.upper) <= lim, source, "setup.paper_psd",
+          f"particle radii in metres that the bin holds (at most {lim:.4g} m: three diameters across its "
+          f"{side:g} m side)", setup.get("paper_psd"))
+    return ref
+
+
 def reference_cohesion(spec: BinSpec, reference: BinSpec, setup: dict, source: str) -> float:
-    """Surface-energy factor of a bin against the paper preset's bin (base.py)."""
-    return cohesion_scale(spec.dist, reference.dist, setup, source)
+    """Surface-energy factor of a bin against the particle sizes its surface energy is for
+    (:func:`reference_dist`; base.py, "Cohesion scaling"): 1 with ``scale_cohesion: false``."""
+    return cohesion_scale(spec.dist, reference_dist(spec, reference, setup, source), setup, source)
 
 
 def new_sim(spec: BinSpec, params: DemParams, dt: float, source: str) -> Simulation:
