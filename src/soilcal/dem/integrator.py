@@ -238,7 +238,7 @@ def gather(x, v, om, r, inv_m, inv_i, mat, f, t, ovr, peak, mroll, dt, kick, max
                 # edge, or on coplanar faces of two walls)
                 nface = 0
                 touched = False
-                for k in range(nwc):
+                for k in range(nwc if nwc > 1 else 0):  # one primitive: nothing to share
                     p = wnbr[i, k]
                     r8 = prim_closest(prim_kind[p], prim_par, p, xi, yi, zi)
                     if r8[7] == 0 and r8[0] < ri:
