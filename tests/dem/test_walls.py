@@ -298,6 +298,40 @@ def test_a_sphere_hanging_from_a_moving_mesh_crosses_its_triangles_as_under_a_pl
     assert out[1][1] == pytest.approx(out[0][1], rel=1e-6, abs=1e-12)
 
 
+def test_a_jkr_neck_under_a_ceiling_of_two_walls_crosses_their_seam_as_under_a_plane():
+    """A sphere hanging with 0.95 of its pull-off force as weight under a ceiling of two mesh
+    tiles moving sideways rolls at 2/7 of the ceiling's speed, as under a plane, while its
+    contact passes the seam.  The tile it moved onto started without the neck, so the edge
+    of the one it left held it alone: after 0.21 s it was 0.22 mm ahead of the sphere under
+    the plane."""
+    r, rho, g, u = 2e-3, 2600.0, 9.81, 0.02
+    m = rho * 4 / 3 * math.pi * r**3
+    gamma = m * g / (0.95 * 1.5 * math.pi * r)  # pull-off 1.5 pi gamma R (EDEM convention)
+    out = []
+    for tiles in (False, True):
+        sim = Simulation(table(e=0.2, mu=0.5, gamma=gamma, E=1e7, rho=rho), gravity=(0, 0, 0),
+                         contact_model=dict(cohesion="jkr"))
+        if tiles:  # facing down, seam at x = 0 (the sphere starts under the second)
+            ws = [sim.add_mesh([[a, -0.05, 0], [a, 0.05, 0], [b, 0.05, 0], [b, -0.05, 0]],
+                               [[0, 1, 2], [0, 2, 3]], "soil") for a, b in ((-0.05, 0), (0, 0.05))]
+        else:
+            ws = [sim.add_plane((0, 0, 0), (0, 0, -1), "soil")]
+        sim.add_particles([[0.001, 0.0013, -0.9999 * r]], r, "soil")
+        sim.run(10000)
+        for k in range(1, 11):  # the weight put on slowly: the neck does not tear
+            sim.gravity[:] = (0, 0, -g * k / 10)
+            sim.run(3000)
+        for w in ws:
+            sim.set_wall_motion(w, velocity=(u, 0, 0))
+        sim.run(6000)  # the sphere moves 3 mm back along the ceiling, over the seam
+        out.append((sim.x[0].copy(), sim.v[0].copy(), sim.wall_force.sum(axis=0)))
+    seam = u * 6000 * sim.dt  # where the seam is now
+    assert out[1][0][0] < seam - 1e-3 and out[1][2][2] < 0.0  # past it, still hanging
+    assert out[0][1][0] == pytest.approx(2 / 7 * u, rel=1e-3)
+    for a, b in zip(*out):
+        assert b == pytest.approx(a, rel=1e-8, abs=1e-12)
+
+
 def test_moving_plane_lifts_particle_and_reports_force():
     sim = Simulation(table(e=0.3, mu=0.5, E=1e8), dt_fraction=0.2)
     sim.add_particles([[0.0, 0.0, R]], R, "soil")
