@@ -169,6 +169,83 @@ def test_a_ledge_of_the_same_mesh_pushes_a_sphere_resting_on_its_floor():
     assert f[0] == pytest.approx(floor + edge, rel=1e-9, abs=1e-12)
 
 
+def _tile(x0, x1, h=0.02):
+    """A flat rectangle x0 <= x <= x1, |y| <= h in z = 0, facing up, as a two-triangle mesh."""
+    return [[x0, -h, 0], [x1, -h, 0], [x1, h, 0], [x0, h, 0]], [[0, 1, 2], [0, 2, 3]]
+
+
+_FLOORS = {  # floors z = 0 made of several walls that meet or overlap
+    "two_meshes": lambda s: (s.add_mesh(*_tile(-0.02, 0.0), "soil"),
+                             s.add_mesh(*_tile(0.0, 0.02), "soil")),
+    "two_boxes": lambda s: (s.add_box((-0.02, -0.02, -0.01), (0.0, 0.02, 0.0), "soil"),
+                            s.add_box((0.0, -0.02, -0.01), (0.02, 0.02, 0.0), "soil")),
+    "plane_then_mesh": lambda s: (s.add_plane((0, 0, 0), (0, 0, 1), "soil"),
+                                  s.add_mesh(*_tile(-0.02, 0.0), "soil")),
+    "mesh_then_plane": lambda s: (s.add_mesh(*_tile(0.0, 0.02), "soil"),
+                                  s.add_plane((0, 0, 0), (0, 0, 1), "soil")),
+    "rectangle_and_mesh": lambda s: (s.add_rectangle((0.01, 0, 0), (0, 0, 1), (1, 0, 0), 0.01,
+                                                     0.02, "soil"),
+                                     s.add_mesh(*_tile(-0.02, 0.0), "soil")),
+}
+
+
+@pytest.mark.parametrize("floor", sorted(_FLOORS))
+@pytest.mark.parametrize("x", [0.0, 1e-9, -1e-9, 0.002])
+def test_a_sphere_on_a_floor_of_several_walls_is_one_contact(floor, x):
+    """A floor of two STL tiles (two walls), of two boxes side by side, or a mesh lying on a
+    plane or a rectangle is one surface: a sphere on the seam, or on the mesh over the plane,
+    was pushed by both walls with twice the Hertz force of the plane."""
+    mats = table(e=0.5, mu=0.3, E=1e8)
+    sim = Simulation(mats, gravity=(0, 0, 0))
+    _FLOORS[floor](sim)
+    delta = 0.01 * R
+    sim.add_particles([[x, 0.0, R - delta]], R, "soil")
+    f, _ = sim.compute_forces()
+    assert f[0] == pytest.approx([0, 0, _hertz_wall_force(mats, R, delta)], rel=1e-9, abs=1e-12)
+
+
+@pytest.mark.parametrize("y", [0.0, 0.005])
+def test_a_convex_edge_made_of_two_walls_is_one_contact(y):
+    """A blade's top and its side as two meshes meeting at a convex 90 deg edge: a sphere
+    45 deg beyond the edge was pushed by both edges, with twice the Hertz force of the edge;
+    in the concave corner of a floor and a wall of two walls it still feels both."""
+    mats = table(e=0.5, mu=0.3, E=1e8)
+    top = [[-0.02, -0.02, 0], [0, -0.02, 0], [0, 0.02, 0], [-0.02, 0.02, 0]]
+    side = [[0, -0.02, 0], [0, -0.02, -0.02], [0, 0.02, -0.02], [0, 0.02, 0]]
+    delta = 0.01 * R
+    fn = _hertz_wall_force(mats, R, delta)
+    d = (R - delta) / math.sqrt(2)
+    for x, expected in (([d, y, d], [fn / math.sqrt(2), 0, fn / math.sqrt(2)]),
+                        ([-(R - delta), y, -(R - delta)], [-fn, 0, -fn])):
+        sim = Simulation(mats, gravity=(0, 0, 0))
+        sim.add_mesh(top, [[0, 1, 2], [0, 2, 3]], "soil")
+        sim.add_mesh(side, [[0, 1, 2], [0, 2, 3]], "soil")
+        sim.add_particles([x], R, "soil")
+        f, _ = sim.compute_forces()
+        assert f[0] == pytest.approx(expected, rel=1e-9, abs=1e-12)
+
+
+@pytest.mark.parametrize("floor", ["two_meshes", "mesh_then_plane"])
+def test_oblique_impact_across_the_seam_of_two_walls_equals_the_plane(floor):
+    """A sphere that hits a floor of two walls beside their seam and slides across it
+    rebounds as from one plane: the contact and its tangential spring pass from one wall
+    to the other, and the walls together carry the plane's reaction."""
+    out = []
+    for add in (lambda s: s.add_plane((0, 0, 0), (0, 0, 1), "soil"), _FLOORS[floor]):
+        sim = Simulation(table(e=0.5, mu=0.3, E=1e8), gravity=(0, 0, 0), dt=1e-6)
+        add(sim)
+        # in contact for 0.74 ms, sliding over the seam x = 0 after 0.28 ms
+        sim.add_particles([[-1.5e-4, 0, R + 1e-6]], R, "soil", v=[[0.6, 0, -0.2]])
+        sim.run(400)  # still in contact, past the seam: both walls have held it
+        out.append((sim.wall_force.sum(axis=0), sim.p.f[0].copy()))
+        sim.run(1000)
+        out.append((sim.v[0].copy(), sim.omega[0].copy()))
+    assert out[0][1][2] > 0.0 and out[0][1][0] < 0.0  # pressed and rubbed mid-way
+    for a, b in zip(out[:2], out[2:]):
+        assert b[0] == pytest.approx(a[0], rel=1e-9, abs=1e-12)
+        assert b[1] == pytest.approx(a[1], rel=1e-9, abs=1e-12)
+
+
 def test_oblique_impact_on_a_mesh_vertex_equals_the_plane():
     """A sphere sliding off a mesh vertex along an edge during an oblique impact rebounds as
     from a plane (a 2 mm sphere rebounded at 0.450 of its normal speed instead of 0.493: a
@@ -219,6 +296,40 @@ def test_a_sphere_hanging_from_a_moving_mesh_crosses_its_triangles_as_under_a_pl
     assert out[0][1][0] == pytest.approx(2 / 7 * u, rel=1e-3)
     assert out[1][0] == pytest.approx(out[0][0], rel=1e-8)
     assert out[1][1] == pytest.approx(out[0][1], rel=1e-6, abs=1e-12)
+
+
+def test_a_jkr_neck_under_a_ceiling_of_two_walls_crosses_their_seam_as_under_a_plane():
+    """A sphere hanging with 0.95 of its pull-off force as weight under a ceiling of two mesh
+    tiles moving sideways rolls at 2/7 of the ceiling's speed, as under a plane, while its
+    contact passes the seam.  The tile it moved onto started without the neck, so the edge
+    of the one it left held it alone: after 0.21 s it was 0.22 mm ahead of the sphere under
+    the plane."""
+    r, rho, g, u = 2e-3, 2600.0, 9.81, 0.02
+    m = rho * 4 / 3 * math.pi * r**3
+    gamma = m * g / (0.95 * 1.5 * math.pi * r)  # pull-off 1.5 pi gamma R (EDEM convention)
+    out = []
+    for tiles in (False, True):
+        sim = Simulation(table(e=0.2, mu=0.5, gamma=gamma, E=1e7, rho=rho), gravity=(0, 0, 0),
+                         contact_model=dict(cohesion="jkr"))
+        if tiles:  # facing down, seam at x = 0 (the sphere starts under the second)
+            ws = [sim.add_mesh([[a, -0.05, 0], [a, 0.05, 0], [b, 0.05, 0], [b, -0.05, 0]],
+                               [[0, 1, 2], [0, 2, 3]], "soil") for a, b in ((-0.05, 0), (0, 0.05))]
+        else:
+            ws = [sim.add_plane((0, 0, 0), (0, 0, -1), "soil")]
+        sim.add_particles([[0.001, 0.0013, -0.9999 * r]], r, "soil")
+        sim.run(10000)
+        for k in range(1, 11):  # the weight put on slowly: the neck does not tear
+            sim.gravity[:] = (0, 0, -g * k / 10)
+            sim.run(3000)
+        for w in ws:
+            sim.set_wall_motion(w, velocity=(u, 0, 0))
+        sim.run(6000)  # the sphere moves 3 mm back along the ceiling, over the seam
+        out.append((sim.x[0].copy(), sim.v[0].copy(), sim.wall_force.sum(axis=0)))
+    seam = u * 6000 * sim.dt  # where the seam is now
+    assert out[1][0][0] < seam - 1e-3 and out[1][2][2] < 0.0  # past it, still hanging
+    assert out[0][1][0] == pytest.approx(2 / 7 * u, rel=1e-3)
+    for a, b in zip(*out):
+        assert b == pytest.approx(a, rel=1e-8, abs=1e-12)
 
 
 def test_moving_plane_lifts_particle_and_reports_force():

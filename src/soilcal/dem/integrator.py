@@ -62,31 +62,28 @@ CONTACT_MATH = {"contract"}
 
 
 @njit(cache=True, inline="always")
-def _cover(i, k, nwc, p, feat, cx, cy, cz, ri, xi, yi, zi, fk, wnbr, prim_kind, prim_wall,
-           prim_par):
-    """The wall slot whose triangle counts the contact of particle i with triangle p (its
+def _cover(i, k, nwc, p, feat, cx, cy, cz, ri, xi, yi, zi, fk, wnbr, prim_kind, prim_par):
+    """The wall slot whose primitive counts the contact of particle i with primitive p (its
     k-th wall slot; closest point c, feature ``feat``), or -1 when p counts it itself
-    (walls.py, "Triangle meshes"): the slot of another triangle q of the same wall on which c
-    lies, when q's own closest point does not lie on p (q is then strictly closer: the edge
-    or vertex of a flat or convex mesh next to the face or edge that holds it, or the edge of
-    a triangle the sphere has moved off), or lies on p too (the same point, to rounding) and
-    q's is a face where p's is not, or an edge where p's is a vertex, or the same feature at
-    an earlier slot.  ``fk``:
-    the slot of the particle's first face contact (-1: none), tried first (a sphere on a
-    face: its neighbours' edges lie on it)."""
-    w = prim_wall[p]
+    (walls.py, "One contact per touch"): the slot of another primitive q, of any wall, on
+    which c lies, when q's own closest point does not lie on p (q is then strictly closer:
+    the edge or vertex of a flat or convex surface next to the face or edge that holds it, or
+    the edge of a triangle the sphere has moved off), or lies on p too (the same point, to
+    rounding) and q's is a face where p's is not, or an edge where p's is a vertex, or the
+    same feature at an earlier slot.  ``fk``: the slot of the particle's first face contact
+    (-1: none), tried first (a sphere on a face: its neighbours' edges lie on it)."""
     tol = 1e-9 * ri
+    kp = prim_kind[p]
     for step in range(nwc + 1):
         kk = fk if step == 0 else step - 1
         if kk < 0 or kk == k or (step > 0 and kk == fk):
             continue
         pp = wnbr[i, kk]
-        if prim_wall[pp] != w or prim_kind[pp] != TRIANGLE:
-            continue
-        if prim_closest(TRIANGLE, prim_par, pp, cx, cy, cz)[0] > tol:
+        kq = prim_kind[pp]
+        if abs(prim_closest(kq, prim_par, pp, cx, cy, cz)[0]) > tol:
             continue  # c is not on q
-        o8 = prim_closest(TRIANGLE, prim_par, pp, xi, yi, zi)
-        if prim_closest(TRIANGLE, prim_par, p, o8[4], o8[5], o8[6])[0] > tol:
+        o8 = prim_closest(kq, prim_par, pp, xi, yi, zi)
+        if abs(prim_closest(kp, prim_par, p, o8[4], o8[5], o8[6])[0]) > tol:
             return kk
         if o8[7] < feat or (o8[7] == feat and kk < k):
             return kk
@@ -237,32 +234,38 @@ def gather(x, v, om, r, inv_m, inv_i, mat, f, t, ovr, peak, mroll, dt, kick, max
                 fk = -1  # the slot of the first face contact
                 nwc = wcnt[i]
                 moved = False  # a contact that has touched is on an edge or vertex
-                nface = 0  # face contacts (two of them may be one, on a shared edge)
-                for k in range(nwc):
+                # face contacts, of every wall and kind (two of them may be one: on a shared
+                # edge, or on coplanar faces of two walls)
+                nface = 0
+                touched = False
+                for k in range(nwc if nwc > 1 else 0):  # one primitive: nothing to share
                     p = wnbr[i, k]
-                    if prim_kind[p] == TRIANGLE:
-                        r8 = prim_closest(prim_kind[p], prim_par, p, xi, yi, zi)
-                        if r8[7] == 0 and r8[0] < ri:
-                            if fk < 0:
-                                fk = k
-                            nface += 1
-                        if r8[7] != 0 and whist[i * KW + k, H_SIZE - 1] != 0.0:
+                    r8 = prim_closest(prim_kind[p], prim_par, p, xi, yi, zi)
+                    if r8[7] == 0 and r8[0] < ri:
+                        if fk < 0:
+                            fk = k
+                        nface += 1
+                    if whist[i * KW + k, H_SIZE - 1] != 0.0:
+                        touched = True
+                        if r8[7] != 0:
                             moved = True
-                # a contact that passes from one triangle of a mesh to the next (over their
-                # edge or vertex) is one contact: its history (the tangential spring, the JKR
-                # neck, ...) passes to the triangle that counts it now, if that one has none
+                moved = moved or (touched and nface > 1)
+                # a contact that passes from one primitive to the next (over the edge or
+                # vertex shared by two triangles, or from a face onto a coplanar face of
+                # another wall) is one contact: its history (the tangential spring, the JKR
+                # neck, ...) passes to the primitive that counts it now, if that one has none
                 for _ in range(nwc if moved and imi != 0.0 else 0):
                     moved = False
                     for k in range(nwc):
                         p = wnbr[i, k]
                         row = i * KW + k
-                        if prim_kind[p] != TRIANGLE or whist[row, H_SIZE - 1] == 0.0:
+                        if whist[row, H_SIZE - 1] == 0.0:
                             continue
                         r8 = prim_closest(prim_kind[p], prim_par, p, xi, yi, zi)
                         if r8[7] == 0 and nface < 2:
                             continue
                         kk = _cover(i, k, nwc, p, r8[7], r8[4], r8[5], r8[6], ri, xi, yi, zi, fk,
-                                    wnbr, prim_kind, prim_wall, prim_par)
+                                    wnbr, prim_kind, prim_par)
                         if kk >= 0 and whist[i * KW + kk, H_SIZE - 1] == 0.0:
                             for q in range(H_SIZE):
                                 whist[i * KW + kk, q] = whist[row, q]
@@ -283,9 +286,9 @@ def gather(x, v, om, r, inv_m, inv_i, mat, f, t, ovr, peak, mroll, dt, kick, max
                         continue
                     if imi == 0.0:
                         continue
-                    if prim_kind[p] == TRIANGLE and (feat != 0 or nface > 1):
+                    if (prim_kind[p] == TRIANGLE and feat != 0) or nface > 1:
                         if _cover(i, k, nwc, p, feat, cx, cy, cz, ri, xi, yi, zi, fk, wnbr,
-                                  prim_kind, prim_wall, prim_par) >= 0:
+                                  prim_kind, prim_par) >= 0:
                             for q in range(H_SIZE):
                                 whist[row, q] = 0.0
                             continue

@@ -35,19 +35,35 @@ Parameter layouts (rows of prim_par):
     DISK       centre(0:3) unit normal(3:6) radius(6)
     TRIANGLE   v0(0:3) v1(3:6) v2(6:9)   (boxes and any STL surface are triangle meshes)
 
-Triangle meshes: a sphere touching a mesh at a shared edge or vertex would be reported by
-every triangle sharing it, and a triangle that meets the edge or face a sphere touches only at
-one vertex reports that vertex as a second, farther contact.  Per particle and wall, a contact
-whose point lies (within 1e-9 of the radius) on another triangle of the wall is ignored when
-that triangle's own closest point is not on the first one (that triangle is closer and counts
-the contact), and among contacts with the same point only the first is kept (integrator
-``_cover``).  Contacts elsewhere on the same mesh stay: a sphere on a floor against the edge of
-a ledge of the same mesh feels both.  So a sphere over a flat or convex mesh feels one contact
-wherever it touches, as on the plane or the solid the mesh describes.  A contact that passes
-over an edge or vertex from one triangle to the next stays one contact: when the triangle that
-counts it has no history yet, the history of the one it leaves (tangential spring, JKR neck,
-rolling spring, largest plastic overlap, touching flag) passes to it, so a JKR neck in tension
-(overlap < 0) or a sticking tangential spring carries on as on a plane.
+One contact per touch: a sphere touching a mesh at a shared edge or vertex would be reported
+by every triangle sharing it, and a triangle that meets the edge or face a sphere touches only
+at one vertex reports that vertex as a second, farther contact.  The same holds across walls:
+a floor made of two STL tiles, a tool whose blade and shank are separate meshes, or a mesh
+lying on a plane or rectangle is one surface where the walls meet or overlap.  Per particle, a
+contact whose point lies (within 1e-9 of the radius) on another primitive, of the same or any
+other wall, is ignored when that primitive's own closest point is not on the first one (that
+primitive is closer and counts the contact), and among contacts with the same point the face
+before the edge before the vertex, then the first, is kept (integrator ``_cover``).  Contacts
+elsewhere stay: a sphere on a floor against the edge of a ledge of the same mesh feels both.
+So a sphere over a flat or convex surface feels one contact wherever it touches, as on the
+plane or the solid the surface describes, however the surface is split into walls (LIGGGHTS
+de-duplicates within one mesh only: its ``fix wall/gran`` treats every mesh with its own
+contact history and edge flags, so a sphere on the seam of two meshes is pushed twice).  A
+contact that passes over an edge or vertex from one triangle to the next, or from a face onto
+a coplanar face of another wall, stays one contact: when the primitive that counts it has no
+history yet, the history of the one it leaves (tangential spring, JKR neck, rolling spring,
+largest plastic overlap, touching flag) passes to it, so a JKR neck in tension (overlap < 0)
+or a sticking tangential spring carries on as on a plane.  Walls that touch this way may move
+differently (a belt flush with a floor): the contact then moves with the wall that counts it.
+
+Limits.  At a concave crease (a valley between two faces, of one wall or two) both faces count
+where the sphere centre lies over both (a wedge of width ``h tan(alpha)`` for a crease of
+angle alpha at centre height h), and neither face's edge counts outside it; with an overlap
+above ``R (1 - cos alpha)`` the second face's contact starts, and the first one's ends, with a
+force step (a 5 mm sphere, centre 0.98 R above the first face, crossing a 5.6 deg crease:
+2.35 to 1.36 times the Hertz force of a 0.02 R overlap where the first face's contact ends).  LIGGGHTS keeps such an edge active on one of the two triangles
+(by triangle id), so it has one of the two steps.  Wall contacts do not see periodic images: a
+sphere near a periodic boundary does not feel a wall primitive across it.
 """
 
 from __future__ import annotations
