@@ -17,16 +17,6 @@ import numpy as np
 import pandas as pd
 
 from soilcal.atomic import write_text
-from soilcal.chain import errata as errata_mod
-from soilcal.chain.stage import (
-    design_frame,
-    fit_stage,
-    optimum_frames,
-    printed_design,
-    regression_frames,
-    response_columns,
-    stage_data,
-)
 from soilcal.config.load import read_table
 
 
@@ -98,6 +88,8 @@ def write_design(stage: dict, table_path, out_design, out_check, printed: bool =
     ``printed``: the design is the printed table's own rows (the DEM source's
     ``simulation.design: printed``) rather than the generated design matched to them.
     """
+    from soilcal.chain.stage import design_frame, printed_design
+
     table = _table(table_path)
     if printed and table is not None:
         df, info = printed_design(stage, table, printed_coding), {"equal": True, "only_generated": [], "only_printed": []}
@@ -146,6 +138,8 @@ def write_stage_design(source: str, config_stage: dict, soil_data: dict | None, 
 
 
 def write_regression(stage: dict, table_path, out: dict) -> None:
+    from soilcal.chain.stage import regression_frames
+
     frames = regression_frames(stage, _table(table_path))
     for key in ("anova", "fit", "coefficients", "effects"):
         write_csv(frames[key], out[key])
@@ -162,6 +156,8 @@ def read_targets(path) -> dict:
 
 
 def write_optimum(stage: dict, table_path, targets: dict, seed: int, out, out_identifiability=None) -> None:
+    from soilcal.chain.stage import optimum_frames
+
     frames = optimum_frames(stage, _table(table_path), targets, seed)
     write_csv(frames["optimum"], out)
     if out_identifiability is not None:
@@ -175,6 +171,7 @@ def write_optimum(stage: dict, table_path, targets: dict, seed: int, out, out_id
 def _reference_effects(ref_stage: dict, ref_table: pd.DataFrame, rid: str, syms: list[str]) -> pd.DataFrame | None:
     """Standardized effects of the paper's printed screening table, on the DEM stage's symbols."""
     from soilcal import plots, rsm
+    from soilcal.chain.stage import response_columns, stage_data
 
     col = response_columns(ref_stage).get(rid)
     if col is None or col not in ref_table.columns:
@@ -208,6 +205,7 @@ def write_figures(kind: str, stage: dict, table_path, targets: dict, outdir, par
     steepest-ascent plot (the same path: same parameters, same levels).
     """
     from soilcal import plots, rsm
+    from soilcal.chain.stage import fit_stage, response_columns, stage_data
 
     outdir = Path(outdir)
     outdir.mkdir(parents=True, exist_ok=True)
@@ -291,11 +289,15 @@ def plots_label(sym: str, p: dict | None) -> str:
 
 
 def fitted_models(stage: dict, table: pd.DataFrame, which: str = "reduced") -> dict:
+    from soilcal.chain.stage import fit_stage
+
     return {sf.response: (sf.reduced if which == "reduced" else sf.full) for sf in fit_stage(stage, table)}
 
 
 def write_errata(soil: dict, published_dir, stage_dirs: dict[str, str], out) -> pd.DataFrame:
     """Collect the stage outputs of one soil and write its errata table."""
+    from soilcal.chain import errata as errata_mod
+
     stages = {}
     for st in soil["stages"]:
         sid = st["id"]

@@ -255,15 +255,15 @@ def _top_edge(lev, c0, c1, glev=None, llev=None):
         rl = r
         if glev is not None and 12 <= i < n - 12:
             g = glev[:, c]
-            bg, fg = np.median(g[i - 12:i - 6]), np.median(g[i + 6:i + 12])
+            bg, fg = _median(g[i - 12:i - 6]), _median(g[i + 6:i + 12])
             if abs(bg - fg) > 0.03:
                 r = _mid_crossing(g[i - 6:i + 6], 0.5 * (bg + fg), np.sign(bg - fg), i - 6, r)
             rl = r
             if llev is not None:
                 gl = llev[:, c]
                 above, below = gl[i - 12:i - 6], gl[i + 6:i + 12]
-                bl, fl = np.median(above), np.median(below)
-                noise = 1.4826 * np.median(np.abs(np.concatenate([above - bl, below - fl])))
+                bl, fl = _median(above), _median(below)
+                noise = 1.4826 * _median(np.abs(np.concatenate([above - bl, below - fl])))
                 if abs(bl - fl) > max(0.03, LUM_EDGE_SNR * noise):
                     rl = _mid_crossing(gl[i - 6:i + 6], 0.5 * (bl + fl), np.sign(bl - fl), i - 6,
                                        i - 1 + (0.5 - a) / (b - a))
@@ -272,6 +272,17 @@ def _top_edge(lev, c0, c1, glev=None, llev=None):
         cols.append(c)
     out = np.asarray(cols, float), np.asarray(rows, float)
     return out + (np.asarray(rows_l, float),) if llev is not None else out
+
+
+def _median(a) -> float:
+    """``np.median`` of a short 1-D array, the same number without NumPy's per-call cost
+    (:func:`_top_edge` takes four per image column: about 40 us each through NumPy, 1 us
+    here): the middle value of the sorted values, or the mean of the middle two."""
+    s = sorted(a.tolist())
+    n = len(s)
+    if n == 0 or any(v != v for v in s):  # empty or NaN: NumPy's own answer
+        return float(np.median(a))
+    return s[n // 2] if n % 2 else (s[n // 2 - 1] + s[n // 2]) / 2
 
 
 #: a luminance step across a heap's edge this many times its noise (robust SD of 6 px each
