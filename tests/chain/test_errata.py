@@ -99,3 +99,7 @@ def test_a_moisture_content_is_judged_in_its_declared_unit():
     (row,) = rows({"values": [0.12, 15], "unit": "-"})
     assert row.where.startswith("properties.moisture_content") and row.recomputed == "1500 %"
     assert "implausible moisture content" in row.note
+    # the units the measurement tables take for a percentage are judged as percent too
+    for unit in ("wt%", "percent", "% w/w"):
+        (row,) = rows({"value": 150, "unit": unit})
+        assert row.recomputed == "150 %", unit

@@ -7,6 +7,7 @@ from __future__ import annotations
 import re
 from pathlib import Path
 
+import numpy as np
 import pytest
 import yaml
 
@@ -191,3 +192,51 @@ def test_a_setup_is_checked_at_the_density_the_soil_prints_as_a_property(tmp_pat
         load_soil(_cinnamon(tmp_path, own(1.30), soil="black-soil"), ROOT / "resources")
     assert e.value.field == "simulation.responses.accumulation_angle.set.load_mass"
     assert "at 1300 kg/m^3" in e.value.expected
+
+
+def test_a_printed_property_that_simulation_params_replaces_is_asked_only_its_physical_range(tmp_path):
+    """The vineyard soil keeps its printed particle density as printed and replaces it in
+    simulation.params: a print ten times too high (17575.67 kg/m^3, beyond a soil's plausible
+    4000) is no run's value and loads, as a print ten times too low (175.76) does; the same value
+    not replaced is refused (base.SOIL_RANGES)."""
+    def misprint(d):
+        d["properties"]["particle_density"]["value"] = 17575.67
+
+    load_soil(_cinnamon(tmp_path, misprint, soil="xinjiang-vineyard"), ROOT / "resources")
+
+    def unreplaced(d):
+        misprint(d)
+        d["simulation"]["params"].pop("soil_density")
+
+    with pytest.raises(InputError) as e:
+        load_soil(_cinnamon(tmp_path, unreplaced, soil="xinjiang-vineyard"), ROOT / "resources")
+    assert e.value.field == "properties.particle_density.value"
+
+
+def test_a_printed_young_s_modulus_in_a_unit_without_a_factor_loads(tmp_path):
+    """No run takes a printed Young's modulus: one in N/mm^2 loads (the errata note its unit)."""
+    def edit(d):
+        d["properties"]["youngs_modulus"] = {"value": 10, "unit": "N/mm^2", "source": "Sec. 2.3"}
+
+    load_soil(_cinnamon(tmp_path, edit), ROOT / "resources")
+
+
+@pytest.mark.parametrize("kind, unit, expected", [
+    ("static_friction", "-", (0.0, 2.0)),          # base.SOIL_RANGES soil-soil friction [0, 2]
+    ("surface_energy", "mJ/m^2", (0.0, 1.0e5)),     # [0, 100] J/m^2 in mJ/m^2
+])
+def test_a_derived_box_behnken_stays_within_a_soil_s_plausible_range(kind, unit, expected):
+    """The levels a Box-Behnken laid around a path step may take (derive._bounds_in_config_units)
+    are the ones a DEM point of the soil accepts: a path ending at friction 1.9 no longer mirrors
+    a level to 2.175, which every run of the stage would refuse after the path had run."""
+    from soilcal.chain.derive import _bounds_in_config_units
+    from soilcal.doe.steepest import bbd_levels
+
+    soil = {"name": "own", "parameters": {"x": {"unit": unit, "pair": "soil-soil", "kind": kind}}}
+    lo, hi = _bounds_in_config_units(soil, "x")
+    assert (lo, hi) == pytest.approx(expected)
+    import pandas as pd
+    top = 0.95 * expected[1]
+    path = pd.DataFrame({"step": [1, 2, 3, 4, 5], "A": list(np.linspace(0.4 * top, top, 5))})
+    lv = bbd_levels(path, 5, ["A"], {"A": (lo, hi)})
+    assert lv["A"]["high"] <= hi + 1e-12

@@ -91,9 +91,25 @@ def test_rate_friction_clamped_at_zero():
 
 
 def test_rate_friction_clamped_at_the_upper_friction_limit():
-    # f = 1 + 0.6 * 20 = 13: 0.6 * 13 = 7.8 -> 2.0 (a soil's plausible limit, base.SOIL_RANGES); 0.5 * 13 = 6.5 -> 2.0
+    # f = 1 + 0.6 * 20 = 13: 0.6 * 13 = 7.8 -> 5.0 (the physical limit, base._RANGES); 0.5 * 13 = 6.5 -> 5.0
     out = EFFECTS["rate_friction"].apply(PARAMS, {"tool_speed": E ** 20}, {"beta": 0.6}, {"tool_speed": 1.0})
-    _unchanged_except(out, {"soil_soil_static_friction": 2.0, "soil_steel_static_friction": 2.0})
+    _unchanged_except(out, {"soil_soil_static_friction": 5.0, "soil_steel_static_friction": 5.0})
+
+
+def test_rate_friction_rises_past_a_soil_s_plausible_friction_and_the_run_takes_it():
+    """A calibrated friction of 1.9 (within a soil's plausible 0-2, base.SOIL_RANGES) at four
+    times the reference speed with beta 0.3: 1.9 (1 + 0.3 ln 4) = 2.6901, not held at 2 (the
+    prediction would go flat in beta), and the point spec of the run takes it."""
+    from soilcal.dem.scenarios.base import DemParams
+    from soilcal.errors import InputError
+
+    p = {**PARAMS, "soil_soil_static_friction": 1.9, "soil_steel_static_friction": 1.9}
+    out = EFFECTS["rate_friction"].apply(p, {"tool_speed": 2.0}, {"beta": 0.3}, {"tool_speed": 0.5})
+    mu = 1.9 * (1 + 0.3 * math.log(4.0))
+    assert out["soil_soil_static_friction"] == pytest.approx(mu, rel=1e-12)
+    assert DemParams.from_mapping(out, "<point spec>", plausible=False).soil_soil_static_friction == pytest.approx(mu)
+    with pytest.raises(InputError):
+        DemParams.from_mapping(out, "<typed>")
 
 
 @pytest.mark.parametrize("v, v0", [(0.0, 1.0), (-1.0, 1.0), (1.0, 0.0), (1.0, -2.0)])

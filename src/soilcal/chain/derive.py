@@ -193,19 +193,24 @@ def _g12(v) -> float:
 
 
 def _bounds_in_config_units(soil_data: dict, pname: str) -> tuple[float, float]:
-    """The physical range of the DEM parameter a config parameter sets (the range its values
-    are checked against, :class:`soilcal.dem.scenarios.base.DemParams`, in SI: a surface
-    energy in [0, 1000] J/m^2) in the unit its levels are written in
-    (``parameters.<pname>.unit``, e.g. mJ/m^2: up to 1e6 mJ/m^2), an open end moved inside by
+    """The range of the DEM parameter a config parameter sets (the range its values are
+    checked against, :class:`soilcal.dem.scenarios.base.DemParams`: its physical range and, for
+    a soil's material parameter, its plausibility bound, in SI: a soil-soil surface energy in
+    [0, 100] J/m^2) in the unit its levels are written in
+    (``parameters.<pname>.unit``, e.g. mJ/m^2: up to 1e5 mJ/m^2), an open end moved inside by
     :data:`OPEN_END_MARGIN` of the range.  A parameter that sets no DEM parameter, or a unit
     without a factor to SI, raises InputError naming ``parameters.<pname>``
     (:func:`soilcal.dem.scenarios.base.dem_field`)."""
-    from soilcal.dem.scenarios.base import _RANGES, _kind, dem_field
+    from soilcal.dem.scenarios.base import _RANGES, SOIL_RANGES, _kind, dem_field
 
     name, scale = dem_field(soil_data.get("name", "<soil>"), soil_data, pname, f"parameters.{pname}")
-    lo, hi, lo_in, hi_in, _ = _RANGES[_kind(name)]
-    margin = OPEN_END_MARGIN * (hi - lo)
-    return (lo if lo_in else lo + margin) / scale, (hi if hi_in else hi - margin) / scale
+    ends = []
+    for rng in (_RANGES[_kind(name)], SOIL_RANGES.get(name)):
+        if rng is not None:
+            lo, hi, lo_in, hi_in, _ = rng
+            margin = OPEN_END_MARGIN * (hi - lo)
+            ends.append(((lo if lo_in else lo + margin), (hi if hi_in else hi - margin)))
+    return max(e[0] for e in ends) / scale, min(e[1] for e in ends) / scale
 
 
 def _centre(f: dict) -> float:

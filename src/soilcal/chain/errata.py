@@ -281,15 +281,15 @@ def _si(value: float, unit: str) -> float | None:
 
 
 def _moisture_percent(value: float, unit) -> float | None:
-    """A moisture content in percent from its declared unit (a mass fraction in ``-``,
-    ``fraction``, ``g/g`` or ``kg/kg`` times 100: soilcal.config.quantities.QUANTITIES); None for
-    a unit without a factor (as :func:`_si`).  A value without a unit is taken as printed, in
-    percent."""
-    from soilcal.config.quantities import QUANTITIES
+    """A moisture content in percent from its declared unit
+    (:func:`soilcal.config.quantities.moisture_factor`: a mass fraction in ``-``, ``fraction``,
+    ``g/g`` or ``kg/kg`` times 100; ``%``, ``percent``, ``wt%``); None for a unit without a
+    factor (as :func:`_si`).  A value without a unit is taken as printed, in percent."""
+    from soilcal.config.quantities import moisture_factor
 
     if unit is None:
         return value
-    f = QUANTITIES["moisture_content"][1].get(str(unit).strip())
+    f = moisture_factor(unit)
     return None if f is None else value * f
 
 

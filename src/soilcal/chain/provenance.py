@@ -71,18 +71,22 @@ def check_properties(soil_path, data: dict) -> None:
     a unit with a factor to SI and a value physical and plausible for a soil
     (:data:`soilcal.dem.scenarios.base.SOIL_RANGES`); a printed ``youngs_modulus`` within
     :data:`YOUNGS_RANGE`.  Otherwise one error naming the property."""
-    from soilcal.dem.scenarios.base import DemParams, property_values, unit_scale
+    from soilcal.dem.scenarios.base import _UNIT_SCALE, DemParams, property_values, unit_scale
 
     props = data.get("properties") or {}
+    replaced = set(((data.get("simulation") or {}).get("params") or {}))
     for name, (x, prop) in property_values(soil_path, data).items():
         try:
-            DemParams.from_mapping({name: x}, str(soil_path))
+            # a printed value that simulation.params replaces is no run's (a misprint kept as
+            # printed, as the vineyard soil's density): only its physical range is asked of it
+            DemParams.from_mapping({name: x}, str(soil_path), plausible=name not in replaced)
         except InputError as exc:
             raise InputError(soil_path, f"properties.{prop}.value",
                              f"{exc.expected} (DEM parameter {name}, from the value in {props[prop].get('unit', '-')})",
                              props[prop]["value"]) from None
     entry = props.get("youngs_modulus")
-    if isinstance(entry, dict):
+    if isinstance(entry, dict) and entry.get("unit", "-") in _UNIT_SCALE:
+        # no run takes it: a unit without a factor here (N/mm^2) is left to the errata's note
         scale = unit_scale(soil_path, entry, "properties.youngs_modulus")
         lo, hi = YOUNGS_RANGE
         for key in ("value", "low", "high", "values"):
@@ -101,7 +105,9 @@ def property_base(soil_path, data: dict):
     from soilcal.dem.scenarios.base import DemParams, property_values
 
     check_properties(soil_path, data)
-    return DemParams.from_mapping({n: x for n, (x, _) in property_values(soil_path, data).items()}, str(soil_path))
+    replaced = set(((data.get("simulation") or {}).get("params") or {}))
+    return DemParams.from_mapping({n: x for n, (x, _) in property_values(soil_path, data).items() if n not in replaced},
+                                  str(soil_path))
 
 
 def check_parameters(soil_path, data: dict) -> None:

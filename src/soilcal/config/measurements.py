@@ -80,7 +80,7 @@ from pathlib import Path
 
 import pandas as pd
 
-from soilcal.config.quantities import POSITIVE_QUANTITIES, QUANTITIES  # noqa: F401 (QUANTITIES re-exported)
+from soilcal.config.quantities import POSITIVE_QUANTITIES, QUANTITIES, moisture_factor  # noqa: F401 (QUANTITIES re-exported)
 from soilcal.errors import InputError
 
 BLOCK = "measurements"
@@ -651,8 +651,7 @@ def _soil_moisture(data: dict) -> tuple[list, str] | None:
         return None
     vals = list(prop.get("values") or []) + [prop.get(k) for k in ("value", "low", "high")]
     x = [float(v) for v in vals if _number(v) is not None]
-    unit = re.sub(r"[\s.()]+", "", str(prop.get("unit", "%")).lower())
-    factor = {**QUANTITIES["moisture_content"][1], "percent": 1.0, "wt%": 1.0, "%w/w": 1.0}.get(unit)
+    factor = moisture_factor(prop.get("unit", "%"))
     if not x or factor is None:
         return None
     return [v * factor for v in x], ", ".join(f"{v:g}" for v in x) + f" {prop.get('unit', '%')}"

@@ -18,5 +18,17 @@ QUANTITIES = {
     "day": None,
     "group": None,
 }
+
+
+def moisture_factor(unit) -> float | None:
+    """Factor to % of a moisture content's declared unit: ``%`` (also written ``percent``,
+    ``wt%``, ``% w/w``) or a mass fraction (``-``, ``fraction``, ``g/g``, ``kg/kg``) times 100;
+    case, spaces, dots and brackets ignored.  None for any other unit."""
+    import re
+
+    key = re.sub(r"[\s.()]+", "", str(unit).lower())
+    return {**QUANTITIES["moisture_content"][1], "percent": 1.0, "wt%": 1.0, "%w/w": 1.0}.get(key)
+
+
 #: quantities that must be above zero (an effect takes their logarithm or a ratio to them)
 POSITIVE_QUANTITIES = ("tool_speed", "working_depth", "rotor_speed", "layer_depth", "bulk_density")

@@ -20,7 +20,7 @@ of some scenarios only (``scenarios``; empty: every scenario): a condition of an
 scenario keeps its calibrated parameters (:meth:`Effect.applies_to`, :meth:`Effect.apply`).
 
 The formulas (``x`` the condition's value, ``x0`` the reference; clamped to each
-parameter's plausible range for a soil, :data:`soilcal.dem.scenarios.base.SOIL_RANGES`):
+parameter's physical range, :data:`soilcal.dem.scenarios.base._RANGES`):
 
 ``moisture_cohesion`` (theta: ``c_w`` in J/m^2 per percentage point)
     gamma_ss(w) = gamma_ss,cal + c_w (w - w0), at least 0.
@@ -86,14 +86,14 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, field
 
-from soilcal.dem.scenarios.base import SOIL_RANGES
+from soilcal.dem.scenarios.base import _RANGES
 from soilcal.errors import InputError
 
-#: DemParams limits the effects respect (low, high) by parameter kind: the plausibility bounds of
-#: a soil's material parameters (soilcal.dem.scenarios.base.SOIL_RANGES)
-_LIMITS = {"surface_energy": SOIL_RANGES["soil_soil_surface_energy"][:2],
-           "static_friction": SOIL_RANGES["soil_soil_static_friction"][:2],
-           "density": SOIL_RANGES["soil_density"][:2], "shear_modulus": SOIL_RANGES["soil_shear_modulus"][:2],
+#: DemParams limits the effects respect (low, high) by parameter kind: the physical range of each
+#: kind (soilcal.dem.scenarios.base._RANGES), not a soil's plausibility bounds (SOIL_RANGES), which
+#: judge the values a user types: an effect may take a calibrated friction of 1.9 past 2 at speed
+_LIMITS = {"surface_energy": _RANGES["surface_energy"][:2], "static_friction": _RANGES["static_friction"][:2],
+           "density": _RANGES["density"][:2], "shear_modulus": (1.0, _RANGES["shear_modulus"][1]),
            "plasticity": (0.0, 0.95)}
 
 

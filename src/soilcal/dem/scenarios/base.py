@@ -235,10 +235,15 @@ class DemParams:
         return tuple(f.name for f in fields(cls))
 
     @classmethod
-    def from_mapping(cls, mapping, source="<input>", base: "DemParams | None" = None) -> "DemParams":
+    def from_mapping(cls, mapping, source="<input>", base: "DemParams | None" = None,
+                     plausible: bool = True) -> "DemParams":
         """Parameters from a name -> value mapping (others from ``base`` or the defaults).
 
-        Unknown names and values outside the physical range raise :class:`InputError`.
+        Unknown names and values outside the physical range raise :class:`InputError`, and with
+        ``plausible`` (values a user typed) so do a soil's material parameters outside
+        :data:`SOIL_RANGES`.  ``plausible=False`` is for values the workflow derived from checked
+        ones: a design level laid out beyond a factor range, a measured condition with an
+        effect of the loop switched on (a friction rising with speed past 2).
         """
         if mapping is None:
             mapping = {}
@@ -254,7 +259,7 @@ class DemParams:
                 x = float(val)
             except (TypeError, ValueError):
                 raise InputError(source, f"params.{key}", "a number", val) from None
-            for rng in (_RANGES[_kind(key)], SOIL_RANGES.get(key)):
+            for rng in (_RANGES[_kind(key)], SOIL_RANGES.get(key) if plausible else None):
                 if rng is not None and not _in(x, rng):
                     raise InputError(source, f"params.{key}", rng[4], val)
             values[key] = x
