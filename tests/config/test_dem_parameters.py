@@ -160,7 +160,7 @@ def test_own_sizes_are_checked_with_the_soil_s_own_density(tmp_path):
      "simulation.params.soil_soil_static_friction", "3.0", r"a soil-soil sliding friction coefficient in \[0, 2\]"),
     (lambda d: d["simulation"]["params"].update(soil_soil_restitution=1.2),
      "simulation.params.soil_soil_restitution", "1.2", r"a coefficient of restitution in \(0, 1\]"),
-    # 0.38 mJ/m^2... typed as 380 J/m^2
+    # 380 mJ/m^2 (0.38 J/m^2) typed as 380 J/m^2
     (lambda d: d["simulation"]["params"].update(soil_soil_surface_energy=380.0),
      "simulation.params.soil_soil_surface_energy", "380.0", r"a soil-soil JKR surface energy in \[0, 100\] J/m\^2"),
 ])

@@ -148,8 +148,9 @@ _RANGES = {
 #: narrow enough to stop a value typed in another unit (a modulus in MPa or GPa written with unit
 #: Pa, a density in g/cm^3 written in kg/m^3, a surface energy in mJ/m^2 written in J/m^2):
 #:
-#: * density 100-4000 kg/m^3: peats have bulk densities down to about 100 kg/m^3 (Boelter,
-#:   Soil Sci. Soc. Am. Proc. 32 (1968) 250-254), the solids of mineral soils 2600-2750 kg/m^3
+#: * density 100-4000 kg/m^3: a DEM model's particle density is often a bulk density (the
+#:   vineyard and scaled models), and peats have bulk densities down to about 100 kg/m^3 (Boelter,
+#:   Soil Sci. Soc. Am. Proc. 32 (1968) 250-254; their solids about 1300-1500), the solids of mineral soils 2600-2750 kg/m^3
 #:   and iron-rich ones a little over 3000 (Blake & Hartge, "Particle density", Methods of Soil
 #:   Analysis Part 1, 2nd ed., ASA/SSSA 1986); 1.6 (g/cm^3 meant) and 16000 are refused;
 #: * shear modulus 1e4-5e10 Pa: the softest soils (peats, soft clays) have small-strain shear
@@ -159,10 +160,11 @@ _RANGES = {
 #:   soils use 1e6-1e8 Pa; 2 Pa (2 MPa meant) is refused;
 #: * Poisson ratio 0-0.5: soils lie at 0.1-0.5 (Bowles, Foundation Analysis and Design, 5th ed.,
 #:   1996, Table 2-7); a negative ratio (an auxetic solid) is no soil's;
-#: * sliding friction 0-2 (soil-soil and soil-steel): soils' friction angles reach about 50 deg
-#:   (mu = 1.2) on soil and less on steel; 2 is 63 deg;
+#: * sliding friction 0-2 (soil-soil and soil-steel): a contact coefficient, not the bulk
+#:   friction angle's tangent; the DEM soil calibrations calibrate it at about 0.2-1.2 (the
+#:   shipped soils screen 0.2-1.1), and 2 leaves room for angular-grain models;
 #: * JKR surface energy 0-100 J/m^2: the calibrated soils of the DEM papers lie at 0-40 J/m^2 (the
-#:   shipped soils 0.1-5); a value in mJ/m^2 written in J/m^2 (380 for 0.38) is refused.
+#:   shipped soils screen 0-10); a value in mJ/m^2 written in J/m^2 (380 for 0.38) is refused.
 SOIL_RANGES = {
     "soil_density": (100.0, 4000.0, True, True,
                      "a soil particle density in [100, 4000] kg/m^3 (peat to iron-rich mineral soil; "
