@@ -706,6 +706,10 @@ def analyse(soil: str, res: pd.DataFrame, diag: pd.DataFrame, cands: list, effec
                        + (f"; largest: {follows})" if follows else ")"))
         if sel_rows:
             verdict += "; no candidate effect lowered the held-out error significantly (selection.csv)"
+    elif not cands and len(dg.per_condition(dg.per_test(u))) == 1:
+        verdict = (f"unexplained: the residual follows {follows}; the {n} rows repeat one measured condition, "
+                   "which cannot tell a bias of the model from that condition's own deviation, nor fit an effect "
+                   "(measure two conditions at least)")
     elif not cands:
         sig = dg.matched_quantities(diag) if len(diag) else set()
         held = [nm for nm in (skipped_effects or {}) if sig & set(EFFECTS[nm].signature)]
@@ -726,9 +730,12 @@ def analyse(soil: str, res: pd.DataFrame, diag: pd.DataFrame, cands: list, effec
             verdict += f"; {nm} {why}"
     for hint in unit_hints(u):
         verdict += f"; {hint}"
-    tests = len(dg.per_test(u))  # table rows: the trend tests take one value per measured test
-    if 0 < tests < 4 and not verdict.startswith("no "):
-        verdict += f"; with {tests} row{'s' if tests != 1 else ''} no trend was tested (a trend test needs 4)"
+    per_test = dg.per_test(u)  # table rows; the trend tests take one value per measured condition
+    tests, conds = len(per_test), len(dg.per_condition(per_test))
+    if 0 < conds < 4 and not verdict.startswith("no "):
+        verdict += (f"; with {tests} row{'s' if tests != 1 else ''} no trend was tested (a trend test needs 4)"
+                    if conds == tests else f"; with {conds} measured condition{'s' if conds != 1 else ''} "
+                    f"({tests} rows, repeats of them) no trend was tested (a trend test needs 4 conditions)")
     if n > 0 and len(res):
         measured = np.isfinite(res["measured"].astype(float).to_numpy())
         unsimulated = int((measured & ~np.isfinite(res["simulated_mean"].astype(float).to_numpy())).sum())
