@@ -672,6 +672,10 @@ def analyse(soil: str, res: pd.DataFrame, diag: pd.DataFrame, cands: list, effec
                                                                              joint["theta"].items())
                           + " (they differ from the surrogate through the design points by "
                           f"{100 * float(np.sqrt(np.mean((jt.gap / rs.scale_of(u)) ** 2))):.2g} % RMS there)")
+        if jt is None and len(chosen) == 1:  # the workflow's selection: no runs at the fitted value
+            ci_method += ("; the parameter read from the surrogate through the design points, not refitted with "
+                          "runs at its fitted value, so the surrogate's error between the design points stays in "
+                          "it (soilcal loop run simulates the fitted value and refits)")
         if len(chosen) > 1:
             if jt is not None:
                 verdict += ("; fitted with their interaction, from runs with " + " and ".join(chosen)
