@@ -630,6 +630,17 @@ def analyse(soil: str, res: pd.DataFrame, diag: pd.DataFrame, cands: list, effec
                    "model's own values?)")
     elif n < 3:
         verdict = f"unexplained: too few measured values to decide ({n})"
+    elif sel is not None and sel.chosen and sl.like_a_constant(sel):
+        # the chosen effects add nothing beside a free uniform scale: the rows show a uniform
+        # offset (an instrument's calibration), not the effects' signature
+        sv, b, k = sel.uniform_s, sel.beside_uniform, len(sel.chosen)
+        verdict = (f"unexplained: the measured values are {abs(100 * sv):.1f} % {'above' if sv > 0 else 'below'} "
+                   "the model throughout, a uniform bias (an instrument's calibration, a zero offset) that no "
+                   "mechanism of the library carries; " + " + ".join(sel.chosen) + f" fit{'s' if k == 1 else ''} it "
+                   f"(held-out RMS {100 * sel.uniform.rmse():.2f} % against {100 * sel.uniform.rmse(True):.2f} % for "
+                   f"the uniform bias alone) but add{'s' if k == 1 else ''} nothing beside a free uniform scale (AICc "
+                   f"{b.aicc:.1f} against {b.ref_aicc:.1f} for the scale alone): on these rows "
+                   f"{'its' if k == 1 else 'their'} signature cannot be told from a constant")
     elif sel is not None and sel.chosen:
         chosen = sel.chosen
         final = sel.final
