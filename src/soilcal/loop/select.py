@@ -566,7 +566,7 @@ class _ScaleSurrogate:
         self.k = 1
 
 
-def scale_data(y0: np.ndarray) -> EffectData:
+def scale_data() -> EffectData:
     """The uniform scale (:class:`_ScaleEffect`) as an effect of a :class:`Model`."""
     eff = _ScaleEffect()
     return EffectData(eff, dict(eff.bounds), _ScaleSurrogate(), design=[{"s": -0.5}, {"s": 0.0}, {"s": 0.5}])
@@ -634,7 +634,7 @@ def forward(obs: pd.DataFrame, y0: np.ndarray, data: dict, fold_by: str | None =
             break
         chosen.append(min(better, key=lambda t: (t[1].rmse(), t[1].aicc))[0])
     forward_chosen = list(chosen)
-    bias = scale_data(y0)
+    bias = scale_data()
 
     def gate(names, nm):
         """The effect ``nm`` against the model without it; where that fails, both with a free
