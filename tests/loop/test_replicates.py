@@ -10,6 +10,7 @@ from dataclasses import replace
 
 import numpy as np
 import pandas as pd
+import pytest
 
 from soilcal.loop import core
 from soilcal.loop import standin as S
@@ -113,3 +114,26 @@ def test_a_rate_effect_measured_in_repeats_is_found_with_its_parameter():
                              S.base_params, S.simulate, core.Settings(bootstrap=0))
     assert out.chosen == ["rate_friction"], out.verdict
     assert abs(out.theta["rate_friction.beta"] - 0.2) <= 0.25 * 0.2
+
+
+def test_the_fit_interval_of_replicate_rows_is_that_of_their_condition_means():
+    # a uniform scale s of the model (prediction 100 (1 + s)) fitted to 8 conditions x 3
+    # repeats, each condition 10 % above with a deviation of its own (SD 5 %) shared by its
+    # repeats (0.5 % apart): the repeats tell the condition's level, not s, so the interval is
+    # that of the 8 condition means (Student t, 7 degrees of freedom), about twice as wide as
+    # one that takes the 24 rows for independent observations
+    from scipy import stats
+
+    from soilcal.loop import select as sl
+
+    rng = np.random.default_rng(7)
+    dev = rng.normal(0.0, 0.05, 8)
+    meas = np.array([100 * 1.1 * (1 + d + rng.normal(0.0, 0.005)) for d in dev for _ in range(3)])
+    y0 = np.full(len(meas), 100.0)
+    folds = [np.arange(3 * i, 3 * i + 3) for i in range(8)]
+    m = sl.Model([sl.scale_data()], y0, meas)
+    s = sl.score(m, sl.Model([], y0, meas), folds)
+    lo, hi = s.ci["uniform_scale.s"]
+    ratio = meas.reshape(8, 3).mean(axis=1) / 100 - 1  # each condition's own s
+    tlo, thi = stats.t.interval(0.95, 7, loc=ratio.mean(), scale=stats.sem(ratio))
+    assert (hi - lo) == pytest.approx(thi - tlo, rel=0.15), ((lo, hi), (tlo, thi))

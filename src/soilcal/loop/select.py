@@ -25,8 +25,12 @@ effects already chosen), on the relative errors ``e_i = (measured_i - prediction
 * **information criterion**: AICc = n ln(SSE/n) + 2K + 2K(K+1)/(n-K-1) of the fit to every
   row, K the number of effect parameters plus one (the residual variance);
 * **confidence intervals**: from the Jacobian of the full fit, cov = s^2 (J^T J)^-1,
-  s^2 = SSE/(n-k), two-sided 95 % with Student's t on n-k degrees of freedom (every model
-  tried, ``selection.csv``).  They treat the surrogates as exact, but each design point is
+  s^2 = SSE/(n-k), two-sided 95 % with Student's t on n-k degrees of freedom, or, where it is
+  wider, clustered by held-out group (G of them, more than k + 1): cov = G/(G-1) A B A with
+  A = (J^T J)^-1 and B the sum over the groups of (J_g^T e_g)(J_g^T e_g)^T, Student's t on G-1
+  (replicate rows of one condition share its deviation: taken as independent rows, 8
+  conditions x 3 repeats gave half the width of their condition means' t-interval) (every
+  model tried, ``selection.csv``).  They treat the surrogates as exact, but each design point is
   the mean of a few seeds: with three seeds of a quick plate (about 14 % scatter per run) the
   effect's sensitivity itself is uncertain by a fifth, and an interval of the fit alone can
   miss the parameter by far.  The chosen model's interval (``loop_summary.csv``) therefore
@@ -405,8 +409,14 @@ def score(model: Model, ref: Model, folds, alpha: float = 0.05, min_improvement:
         if np.linalg.matrix_rank(J) < k:  # the data do not pin a parameter down
             half = np.full(k, np.inf)
         else:
-            cov = s2 * np.linalg.pinv(J.T @ J)
-            half = st.t.ppf(0.975, n - k) * np.sqrt(np.clip(np.diag(cov), 0, None))
+            A = np.linalg.pinv(J.T @ J)
+            half = st.t.ppf(0.975, n - k) * np.sqrt(np.clip(np.diag(s2 * A), 0, None))
+            groups = [f for f in folds if len(f)]
+            if len(groups) > k + 1:  # the wider of it and the interval clustered by held-out group
+                g = len(groups)
+                meat = sum(np.outer(J[f].T @ e[f], J[f].T @ e[f]) for f in groups)
+                cr = g / (g - 1) * A @ meat @ A
+                half = np.maximum(half, st.t.ppf(0.975, g - 1) * np.sqrt(np.clip(np.diag(cr), 0, None)))
         # the surrogates end at the design's bounds, and so does a finite interval (an infinite
         # one says the fit does not pin the parameter down, and stays so)
         lo, hi = model.bounds()
