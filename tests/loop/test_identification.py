@@ -286,6 +286,23 @@ def test_a_single_effect_is_refitted_with_runs_at_its_fitted_value():
     assert "; the parameter refitted with runs at moisture_cohesion.c_w 0.03" in out.summary["ci95_method"].iloc[0]
 
 
+def test_a_single_effect_fitted_without_runs_at_its_value_says_so(monkeypatch):
+    # the workflow's selection fits the effect on the surrogate through the design points and
+    # runs nothing at the fitted value: the moisture cohesion above comes out 0.0325 for 0.03,
+    # and the interval's method says which refit it did not make
+    conds = S.conditions(S.grid(0, 18, moisture=True))
+    hidden = {"moisture_cohesion": {"c_w": 0.03}}
+    table = sy.synthesize(conds, S.base_params, S.simulate, hidden, REFERENCE, {}, noise=0.0, seed=10, seeds=SEEDS)
+    monkeypatch.setattr(core, "JOINT_ROUNDS", 0)
+    out = core.run_inprocess("standin", sy.with_measured(conds, table), S.base_params, S.simulate,
+                             core.Settings(reference=REFERENCE, bootstrap=0), seeds=SEEDS)
+    assert out.chosen == ["moisture_cohesion"], out.verdict
+    assert abs(out.theta["moisture_cohesion.c_w"] - 0.03) > 0.05 * 0.03  # the surrogate's error between its points
+    method = out.summary["ci95_method"].iloc[0]
+    assert "not refitted with runs at its fitted value" in method and "refitted with runs at" not in \
+        method.replace("not refitted with runs at", "")
+
+
 def test_a_refit_on_runs_whose_noise_changes_with_the_parameters_keeps_to_the_effect():
     # DEM runs draw their seeds' scatter anew at every parameter value (no common random numbers):
     # here 4 % per run, hashed from the parameters, with a weak rate effect beta = 0.06.  The

@@ -411,7 +411,16 @@ GROUPING_NAMES = dg.GROUPING_NAMES
 GROUPING_QUANTITIES = ("day", "group")
 #: values a column grouping the folds by its name alone (not declared) needs
 NAMED_MIN_GROUPS = 3
-_grouping_name = dg.grouping_name
+
+
+def grouping_reason(col: str, q: str | None) -> str | None:
+    """Why covariate column ``col`` (declaring quantity ``q``, or None) identifies test days,
+    sessions or groups of replicates (:func:`fold_grouping`, rule 2), or None where it does not."""
+    if q in GROUPING_QUANTITIES:
+        return f"declared quantity: {q}"
+    if q is None and dg.grouping_name(col):
+        return "named as a test-day, session or replicate-group column"
+    return None
 
 
 def fold_grouping(settings: Settings, quantity_cols: dict, res: pd.DataFrame | None) -> tuple[str | None, str]:
@@ -443,11 +452,8 @@ def fold_grouping(settings: Settings, quantity_cols: dict, res: pd.DataFrame | N
     found = []
     for j, col in enumerate(cols):
         q = (quantity_cols or {}).get(col)
-        if q in GROUPING_QUANTITIES:
-            why = f"declared quantity: {q}"
-        elif q is None and _grouping_name(col):
-            why = "named as a test-day, session or replicate-group column"
-        else:
+        why = grouping_reason(col, q)
+        if why is None:
             continue
         n = int(u[f"cov:{col}"].dropna().astype(str).nunique())
         found.append((q is None, n, j, col, why))
@@ -496,6 +502,14 @@ def unit_hints(u: pd.DataFrame) -> list[str]:
     return out
 
 
+def _theta_keys(names: list) -> tuple[list[str], np.ndarray]:
+    """The parameters of the effects ``names`` (``<effect>.<parameter>``, in their order) and
+    their switched-off values."""
+    keys = [f"{c}.{k}" for c in names for k in EFFECTS[c].theta_names()]
+    null = np.array([float(EFFECTS[c].null[k]) for c in names for k in EFFECTS[c].theta_names()])
+    return keys, null
+
+
 def joint_interaction(u: pd.DataFrame, data: dict, names: list, joint: dict | None) -> sl.Joint | None:
     """The interaction (:class:`soilcal.loop.select.Joint`) of the chosen effects ``names`` from
     ``joint``: {"effects": their names, "theta": {"<effect>.<parameter>": value} where all were
@@ -504,9 +518,8 @@ def joint_interaction(u: pd.DataFrame, data: dict, names: list, joint: dict | No
     or sits at its switched-off value there (no interaction to scale)."""
     if not joint or sorted(joint.get("effects") or []) != sorted(names) or any(data[c].surrogate.k != 1 for c in names):
         return None
-    keys = [f"{c}.{k}" for c in names for k in EFFECTS[c].theta_names()]
+    keys, null = _theta_keys(names)
     centre = np.array([float(joint["theta"][k]) for k in keys])
-    null = np.array([float(EFFECTS[c].null[k]) for c in names for k in EFFECTS[c].theta_names()])
     if np.any(centre == null):
         return None
     stats = rs.simulated_stats(joint["runs"])
@@ -608,7 +621,7 @@ def analyse(soil: str, res: pd.DataFrame, diag: pd.DataFrame, cands: list, effec
         if sel.chosen and bias_left and not any("bias" in EFFECTS[c].signature for c in sel.chosen):
             # a bias no chosen effect can carry pulls their parameters to make up for it: refit
             # them beside a free uniform scale of the model (select.scale_data), and say it
-            bias, sc = sl.scale_data(y0), rs.scale_of(u)
+            bias, sc = sl.scale_data(), rs.scale_of(u)
             ref = sl.Model([bias], y0, meas, sc)
             m = sl.Model([data[c] for c in names] + [bias], y0, meas, sc, jt)
             uniform = sl.score(m, ref, sl._folds(u, fold_by), settings.alpha)
@@ -630,6 +643,17 @@ def analyse(soil: str, res: pd.DataFrame, diag: pd.DataFrame, cands: list, effec
                    "model's own values?)")
     elif n < 3:
         verdict = f"unexplained: too few measured values to decide ({n})"
+    elif sel is not None and sel.chosen and sl.like_a_constant(sel):
+        # the chosen effects add nothing beside a free uniform scale: the rows show a uniform
+        # offset (an instrument's calibration), not the effects' signature
+        sv, b, k = sel.uniform_s, sel.beside_uniform, len(sel.chosen)
+        verdict = (f"unexplained: the measured values are {abs(100 * sv):.1f} % {'above' if sv > 0 else 'below'} "
+                   "the model throughout, a uniform bias (an instrument's calibration, a zero offset) that no "
+                   "mechanism of the library carries; " + " + ".join(sel.chosen) + f" fit{'s' if k == 1 else ''} it "
+                   f"(held-out RMS {100 * sel.uniform.rmse():.2f} % against {100 * sel.uniform.rmse(True):.2f} % for "
+                   f"the uniform bias alone) but add{'s' if k == 1 else ''} nothing beside a free uniform scale (AICc "
+                   f"{b.aicc:.1f} against {b.ref_aicc:.1f} for the scale alone): on these rows "
+                   f"{'its' if k == 1 else 'their'} signature cannot be told from a constant")
     elif sel is not None and sel.chosen:
         chosen = sel.chosen
         final = sel.final
@@ -667,17 +691,20 @@ def analyse(soil: str, res: pd.DataFrame, diag: pd.DataFrame, cands: list, effec
                         f"with the effect{'s' if len(chosen) > 1 else ''}, paired p {sel.uniform.p:.2g}), "
                         "so these rows cannot tell "
                         + ("it" if len(chosen) == 1 else "them") + " from a bias no mechanism carries")
+        gap = f"{100 * float(np.sqrt(np.mean((jt.gap / rs.scale_of(u)) ** 2))):.2g} % RMS" if jt is not None else ""
+        at = ", ".join(f"{k} {v:.4g}" for k, v in joint["theta"].items()) if jt is not None else ""
         if jt is not None and len(chosen) == 1:  # said with the interval (summary ci95_method, report)
-            ci_method += ("; the parameter refitted with runs at " + ", ".join(f"{k} {v:.4g}" for k, v in
-                                                                             joint["theta"].items())
-                          + " (they differ from the surrogate through the design points by "
-                          f"{100 * float(np.sqrt(np.mean((jt.gap / rs.scale_of(u)) ** 2))):.2g} % RMS there)")
+            ci_method += (f"; the parameter refitted with runs at {at} (they differ from the surrogate through the "
+                          f"design points by {gap} there)")
+        if jt is None and len(chosen) == 1:  # the workflow's selection: no runs at the fitted value
+            ci_method += ("; the parameter read from the surrogate through the design points, not refitted with "
+                          "runs at its fitted value, so the surrogate's error between the design points stays in "
+                          "it (soilcal loop run simulates the fitted value and refits)")
         if len(chosen) > 1:
             if jt is not None:
                 verdict += ("; fitted with their interaction, from runs with " + " and ".join(chosen)
-                            + " switched on together at " + ", ".join(f"{k} {v:.4g}" for k, v in joint["theta"].items())
-                            + f" (the joint runs differ from the sum of the separate changes by "
-                            f"{100 * float(np.sqrt(np.mean((jt.gap / rs.scale_of(u)) ** 2))):.2g} % RMS)")
+                            + f" switched on together at {at} (the joint runs differ from the sum of the separate "
+                            f"changes by {gap})")
             else:
                 verdict += ("; fitted as the sum of each effect's separate change (first order), which leaves out "
                             "their interaction: where they interact (a friction and a density that both scale the "
@@ -706,6 +733,10 @@ def analyse(soil: str, res: pd.DataFrame, diag: pd.DataFrame, cands: list, effec
                        + (f"; largest: {follows})" if follows else ")"))
         if sel_rows:
             verdict += "; no candidate effect lowered the held-out error significantly (selection.csv)"
+    elif not cands and len(dg.per_condition(dg.per_test(u))) == 1:
+        verdict = (f"unexplained: the residual follows {follows}; the {n} rows repeat one measured condition, "
+                   "which cannot tell a bias of the model from that condition's own deviation, nor fit an effect "
+                   "(measure two conditions at least)")
     elif not cands:
         sig = dg.matched_quantities(diag) if len(diag) else set()
         held = [nm for nm in (skipped_effects or {}) if sig & set(EFFECTS[nm].signature)]
@@ -726,9 +757,12 @@ def analyse(soil: str, res: pd.DataFrame, diag: pd.DataFrame, cands: list, effec
             verdict += f"; {nm} {why}"
     for hint in unit_hints(u):
         verdict += f"; {hint}"
-    tests = len(dg.per_test(u))  # table rows: the trend tests take one value per measured test
-    if 0 < tests < 4 and not verdict.startswith("no "):
-        verdict += f"; with {tests} row{'s' if tests != 1 else ''} no trend was tested (a trend test needs 4)"
+    per_test = dg.per_test(u)  # table rows; the trend tests take one value per measured condition
+    tests, conds = len(per_test), len(dg.per_condition(per_test))
+    if 0 < conds < 4 and not verdict.startswith("no "):
+        verdict += (f"; with {tests} row{'s' if tests != 1 else ''} no trend was tested (a trend test needs 4)"
+                    if conds == tests else f"; with {conds} measured condition{'s' if conds != 1 else ''} "
+                    f"({tests} rows, repeats of them) no trend was tested (a trend test needs 4 conditions)")
     if n > 0 and len(res):
         measured = np.isfinite(res["measured"].astype(float).to_numpy())
         unsimulated = int((measured & ~np.isfinite(res["simulated_mean"].astype(float).to_numpy())).sum())
@@ -822,13 +856,12 @@ def run_inprocess(soil: str, conditions, base_params, simulate, settings: Settin
     # surrogates between their design points; repeated at the refitted values until they settle
     if not out.chosen or any(len(EFFECTS[c].params) != 1 for c in out.chosen):
         return out
-    keys = [f"{c}.{k}" for c in out.chosen for k in EFFECTS[c].theta_names()]
+    keys, null = _theta_keys(out.chosen)
     span = np.array([float(np.subtract(*settings.effect_bounds(c)[k][::-1])) for c in out.chosen
                      for k in EFFECTS[c].theta_names()])
-    null = np.array([float(EFFECTS[c].null[k]) for c in out.chosen for k in EFFECTS[c].theta_names()])
     u = rs.usable(res)
     y0, meas, sc = u["simulated_mean"].to_numpy(float), u["measured"].to_numpy(float), rs.scale_of(u)
-    effects = [out.effect_data[c] for c in out.chosen] + ([sl.scale_data(y0)] if out.uniform_scale else [])
+    effects = [out.effect_data[c] for c in out.chosen] + ([sl.scale_data()] if out.uniform_scale else [])
     x, joint = np.array([out.theta[k] for k in keys], float), None
     for _ in range(JOINT_ROUNDS):
         if np.any(x == null):

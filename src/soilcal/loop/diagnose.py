@@ -10,7 +10,9 @@ each an ordinary least-squares fit (statsmodels) against a null of no structure:
   is mapped to the unit-normal deviate of the same two-sided tail probability, and the sum
   of their squares is chi-square on n degrees of freedom (upper tail), over the rows whose
   measured SD is known: scatter beyond what the measurement and the seeds explain (a stone,
-  a disturbance the covariates do not carry).  Taken as unit normal instead, residuals
+  a disturbance the covariates do not carry); a condition measured as replicate rows without
+  an SD enters with the residual of their mean over their own scatter
+  (:func:`replicate_residuals`).  Taken as unit normal instead, residuals
   standardised with SDs of three repeats and three seeds flag scatter where there is none:
   at alpha 0.05, in 44.5 % of 600 simulated 12-row tables (2.7 % with the t deviates; with
   ten repeats and seeds 10.3 % against 3.5 %);
@@ -35,7 +37,11 @@ stone, a ridge or a day's level moves the horizontal and the vertical force of o
 alike, and counted as two independent observations they make a trend look twice as well
 supported as it is: a periodic disturbance along the bin (amplitude 10 %, 15 tests of two
 forces) gave a curvature in the working depth at Holm p 0.0007 over 30 rows, 0.07 over the
-15 tests.  The scatter test and the group test of the measured quantities take every row.
+15 tests.  Replicates of one condition (table rows of one simulation: a speed run three
+times) share the simulated mean and whatever the condition carries beyond the model, so the
+bias and the covariates' tests take the mean over them (:func:`per_condition`), except for a
+covariate that varies among the replicates (a test day, a replicate number), tested on the
+measured tests.  The scatter test and the group test of the measured quantities take every row.
 
 The p-values of all tests of a table are corrected together (Holm, statsmodels
 ``multipletests``); a test is significant when its corrected p is below ``alpha``.  Each
@@ -251,11 +257,84 @@ def per_test(d: pd.DataFrame) -> pd.DataFrame:
     return out.reset_index(drop=True)
 
 
+
+def _condition_key(dt: pd.DataFrame) -> pd.Series | None:
+    """Per measured test (a row of :func:`per_test`) its measured condition: the simulation it
+    shares with its replicates (:func:`soilcal.loop.residuals.simulation_key`); None where the
+    table names no simulation."""
+    return dt["simulation"].astype(str) if "simulation" in dt.columns else None
+
+
+def per_condition(dt: pd.DataFrame) -> pd.DataFrame:
+    """One row per measured condition of the measured tests ``dt`` (:func:`per_test`): the
+    relative residuals of a condition's replicates (table rows of one simulation, as a soil-bin
+    table repeats each speed three times) averaged, the other columns taken from its first
+    test.  Replicates share the simulated mean (and its seeds' error) and whatever the
+    condition carries beyond the model (the bed prepared for it), so they are not independent
+    observations of a covariate's structure: counted as such, three repeats per speed of a
+    residual without structure (a deviation of SD 5 % per condition, 3 % per repeat; 8
+    conditions) gave a significant trend, curvature or bias in 42 % of 100 tables, six repeats
+    in 85 %, one row per condition in 1 %.  ``dt`` itself where each condition has one test."""
+    key = _condition_key(dt)
+    if key is None or key.is_unique:
+        return dt
+    g = dt.groupby(key.to_numpy(), sort=False)
+    out = g.first()
+    out["relative_residual"] = g["relative_residual"].mean()
+    return out.reset_index(drop=True)
+
+
+def varies_within(dt: pd.DataFrame) -> set[str]:
+    """The covariate columns (``cov:``) whose value differs among the replicates of one
+    condition (:func:`per_condition`): a test day when a speed was run on several days, a
+    replicate number.  Their tests compare the replicates and take the measured tests."""
+    key = _condition_key(dt)
+    if key is None or key.is_unique:
+        return set()
+    out = set()
+    for c in _covariate_columns(dt):
+        if (dt[c].astype(str).groupby(key.to_numpy()).nunique() > 1).any():
+            out.add(c)
+    return out
+
+
+def replicate_residuals(d: pd.DataFrame) -> tuple[np.ndarray, np.ndarray]:
+    """Standardised residuals (and their Welch-Satterthwaite degrees of freedom) of the
+    conditions measured as replicate rows without an SD: per condition and measured quantity
+    with two distinct measured values at least, the residual of their mean, over
+    sqrt(s^2 / n + sd_s^2 / n_s) with s the replicates' sample SD (n of them) and sd_s the seed
+    SD of the simulated mean (n_s seeds) (:mod:`soilcal.loop.residuals`): the replicates are the
+    measured uncertainty a table of one row per condition states in its ``sd`` and ``n``
+    columns.  Rows entered twice (the same measured value) count once."""
+    need = {"simulation", "measure", "measured", "simulated_mean", "simulated_sd", "simulated_n"}
+    if not need <= set(d.columns) or not len(d):
+        return np.empty(0), np.empty(0)
+    rows = d if "measured_sd" not in d else d[~np.isfinite(d["measured_sd"].astype(float).to_numpy())]
+    z, dof = [], []
+    for _, g in rows.groupby([rows["simulation"].astype(str), rows["measure"].astype(str)], sort=False):
+        m = np.unique(g["measured"].to_numpy(float))  # a row entered twice is one repeat
+        m = m[np.isfinite(m)]
+        n = len(m)
+        if n < 2:
+            continue
+        sd = float(np.std(m, ddof=1))
+        sim, sd_s, n_s = (float(g["simulated_mean"].iloc[0]), float(g["simulated_sd"].iloc[0]),
+                          float(g["simulated_n"].iloc[0]))
+        var_m = sd ** 2 / n
+        var_s = sd_s ** 2 / n_s if np.isfinite(sd_s) and n_s >= 1 else 0.0
+        se = np.sqrt(var_m + var_s)
+        if not (np.isfinite(sim) and se > 0):
+            continue
+        den = var_m ** 2 / (n - 1) + (var_s ** 2 / (n_s - 1) if n_s > 1 else 0.0)
+        z.append((float(np.mean(m)) - sim) / se)
+        dof.append(se ** 4 / den if den > 0 else np.inf)
+    return np.array(z, float), np.array(dof, float)
+
 def diagnose(res: pd.DataFrame, quantity_of: dict | None = None, alpha: float = 0.05) -> pd.DataFrame:
     """One row per test (module docstring) on the usable rows of a residual table;
     ``quantity_of``: covariate column -> its declared quantity.  The bias and the covariates'
-    tests take one value per measured test (:func:`per_test`), the scatter and the measured
-    quantities' group test every row."""
+    tests take one value per measured condition (:func:`per_test`, :func:`per_condition`), the
+    scatter and the measured quantities' group test every row."""
     from scipy import stats
     from statsmodels.stats.multitest import multipletests
 
@@ -267,7 +346,9 @@ def diagnose(res: pd.DataFrame, quantity_of: dict | None = None, alpha: float = 
     rel = d["relative_residual"].astype(float)
     d["relative_residual"] = rel.where(rel.abs() > EXACT, 0.0)  # round-off is no residual
     dt = per_test(d)
-    r = dt["relative_residual"].to_numpy(float)
+    dc = per_condition(dt)
+    within = varies_within(dt)
+    r = dc["relative_residual"].to_numpy(float)
     rows = []
     n = len(r)
     if n >= 2:
@@ -283,12 +364,16 @@ def diagnose(res: pd.DataFrame, quantity_of: dict | None = None, alpha: float = 
         z, dof = z[known], dof[known]
     keep = np.isfinite(z)
     z = normal_equivalent(z[keep], dof[keep])
+    zr, dofr = replicate_residuals(d)  # replicate rows without an SD: their mean against their own scatter
+    z = np.concatenate([z, normal_equivalent(zr, dofr)])
     if len(z) >= 3:
         chi = float(np.sum(z ** 2))
         rows.append(dict(test="scatter", covariate="", quantity="scatter", n=len(z), levels=1,
                          estimate=float(np.sqrt(chi / len(z))), statistic=chi, p=float(stats.chi2.sf(chi, len(z))),
                          r2=0.0))
-    groups = [(c[4:], dt[c], dt) for c in _covariate_columns(dt)]
+    # a covariate constant over each condition's replicates is tested on the condition means; one
+    # that varies among them (a test day, a replicate number) on the measured tests
+    groups = [(c[4:], dt[c], dt) if c in within else (c[4:], dc[c], dc) for c in _covariate_columns(dt)]
     if "measure" in d and d["measure"].nunique() > 1:
         groups.append(("measure", d["measure"], d))
     seen = []
@@ -356,6 +441,8 @@ def beyond(res: pd.DataFrame, name: str, first: str, quantity_of: dict | None = 
     d = usable(res)
     if "measure" not in (name, first):  # the measured quantity varies within a test: every row
         d = per_test(d)
+        if not {f"cov:{name}", f"cov:{first}"} & varies_within(d):  # condition means, as diagnose tests them
+            d = per_condition(d)
     for c in (name, first):
         col = d["measure"] if c == "measure" else d.get(f"cov:{c}")
         if c != "bias" and col is not None:
@@ -467,7 +554,8 @@ def detectable(res: pd.DataFrame, diag: pd.DataFrame, quantity_of: dict | None =
     from soilcal.loop.residuals import scale_of
 
     meas = scale_of(d)
-    dt = per_test(d)  # the bias and trends are tested on one value per measured test
+    dt = per_test(d)  # the bias and trends are tested on one value per measured condition
+    dc, within = per_condition(dt), varies_within(dt)
 
     def median_percent(sd, n):
         v = sd / np.sqrt(np.clip(n, 1.0, None)) / meas
@@ -480,7 +568,7 @@ def detectable(res: pd.DataFrame, diag: pd.DataFrame, quantity_of: dict | None =
     rows = []
     for t in diag.itertuples():
         if t.test == "bias":
-            r = dt["relative_residual"].to_numpy(float)
+            r = dc["relative_residual"].to_numpy(float)
             n = len(r)
             if n < 3:
                 continue
@@ -489,12 +577,13 @@ def detectable(res: pd.DataFrame, diag: pd.DataFrame, quantity_of: dict | None =
             rows.append(dict(test="bias", covariate="", quantity="bias", n=n, low=np.nan, high=np.nan,
                              scatter_percent=100 * scatter, detectable_percent=100 * shift * scatter / np.sqrt(n)))
         elif t.test == "trend":
-            col = dt.get(f"cov:{t.covariate}")
+            frame = dt if f"cov:{t.covariate}" in within else dc
+            col = frame.get(f"cov:{t.covariate}")
             if col is None:
                 continue
             has = col.notna().to_numpy()
             x = pd.to_numeric(col[has], errors="coerce").to_numpy(float)
-            r = dt["relative_residual"].to_numpy(float)[has]
+            r = frame["relative_residual"].to_numpy(float)[has]
             n = len(r)
             if n < 4:
                 continue

@@ -159,7 +159,7 @@ def test_days(conditions) -> list[str]:
     col, _ = core.fold_grouping(core.Settings(), qcols, observations(conditions))
     if col is None:  # one value on every row: that one day
         col = next((k for c in conditions for k in (c.covariates or {})
-                    if qcols.get(k) == "group" or (k not in qcols and core._grouping_name(k))), None)
+                    if core.grouping_reason(k, qcols.get(k)) is not None), None)
     if col is None:
         return ["" for _ in conditions]
     return [("" if (c.covariates or {}).get(col) is None else str((c.covariates or {}).get(col)))
