@@ -67,7 +67,8 @@ from skimage import feature, filters, measure, morphology, transform
 
 from soilcal.errors import InputError
 from soilcal.imaging.io import read_gray_reduced
-from soilcal.imaging.measure import PILE_WORK_PIXELS, PLATE_MAX_ROLL_DEG, Stages, _plate_beyond_search, plate_line_any
+from soilcal.imaging.measure import (PILE_WORK_PIXELS, PLATE_MAX_ROLL_DEG, Stages, _plate_beyond_search, plate_line_any,
+                                     roll_of)
 from soilcal.imaging.refusal import Tried, explained
 
 CHORD_FRACTION = 0.6
@@ -415,7 +416,7 @@ def _measure_drum_frame(path, threshold, keep_stages, options, tried: Tried) -> 
                                           below=(cx, cy + R))
         if tilted is not None:
             tried.lines = [tilted]
-            tilt = -float(np.degrees(np.arctan(tilted[0])))
+            tilt = roll_of(tilted[0])
             raise InputError(path, "image", f"a plate edge below the drum within {PLATE_MAX_ROLL_DEG:.0f} deg of "
                              "horizontal (the plate search looks no further), or the frame's roll given",
                              f"no plate edge within {PLATE_MAX_ROLL_DEG:.0f} deg of horizontal below the drum, and a "
@@ -424,7 +425,7 @@ def _measure_drum_frame(path, threshold, keep_stages, options, tried: Tried) -> 
                              "it is not (a shadow, a table's edge) and the camera was level, level: image")
         if line is not None:
             tried.lines = [line]
-            roll, lref = -float(np.degrees(np.arctan(line[0]))), "plate"
+            roll, lref = roll_of(line[0]), "plate"
         elif opts["level"] == "plate":
             raise InputError(path, "level", "a straight base plate edge below the drum (level: plate)", "none found")
     g = transform.rotate(gray, -roll, center=(cx, cy), order=1, mode="edge") if roll else gray

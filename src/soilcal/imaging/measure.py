@@ -496,8 +496,8 @@ def _pile_on_lines(path, rgb, threshold, keep_stages, channel, tried: Tried, pla
                                                                                  threshold, plate_edges)), None)
         standing = tilted is not None
         tilted = tilted if standing else beyond[0]  # the tilt of the edge running furthest across
-        roll = -float(np.degrees(np.arctan(tilted[0])))
-        turn = f"rotate the photo {abs(roll):.0f} deg {'clockwise' if roll > 0 else 'counter-clockwise'} to level it"
+        roll = roll_of(tilted[0])
+        turn = level_it(roll)
         expected = (f"a plate edge within {PLATE_MAX_ROLL_DEG:.0f} deg of horizontal (the camera held within "
                     f"{PLATE_MAX_ROLL_DEG:.0f} deg of level: the plate search looks no further)")
         if standing:
@@ -553,12 +553,11 @@ def _noting_tilt(refused: InputError, tilted) -> InputError:
     no heap was measured on it, so it may be a shadow's edge as well as a rolled plate."""
     if tilted is None or refused.field != "image":
         return refused
-    roll = -float(np.degrees(np.arctan(tilted[0])))
+    roll = roll_of(tilted[0])
     return InputError(refused.path, refused.field, refused.expected,
                       f"{refused.got}; a straight edge across the photo is tilted {roll:.1f} deg, on which no heap "
                       f"was measured: if it is the plate's (the camera rolled beyond {PLATE_MAX_ROLL_DEG:.0f} deg), "
-                      f"rotate the photo {abs(roll):.0f} deg {'clockwise' if roll > 0 else 'counter-clockwise'} "
-                      "to level it", refused.note)
+                      f"{level_it(roll)}", refused.note)
 
 
 def _on_plate_lines(path, rgb, lum, grays, lines, n_first, channel, threshold, keep_stages, tried, plate_edges,
@@ -1043,6 +1042,18 @@ def pile_summary(res) -> dict:
 PLATE_MAX_ROLL_DEG = 15.0
 
 
+def roll_of(slope) -> float:
+    """The camera roll (deg, counter-clockwise positive) that shows a level line at ``slope``
+    (rows per column, rows down the image)."""
+    return -float(np.degrees(np.arctan(slope)))
+
+
+def level_it(roll) -> str:
+    """What levels a photo taken with the camera rolled ``roll`` deg (:func:`roll_of`): the
+    one wording of every refusal that names a roll."""
+    return f"rotate the photo {abs(roll):.0f} deg {'clockwise' if roll > 0 else 'counter-clockwise'} to level it"
+
+
 def plate_lines(gray, below=None, edges=None, paired=False):
     """Long near-horizontal edges below a point, topmost first, each refined by a RANSAC line
     fit: [(slope, intercept), ...] with row = slope * col + intercept.
@@ -1222,6 +1233,10 @@ def measure_furrow(path, scale_length_mm, datum_mm=0.0, degree=9, threshold="ots
 BEAM_BAR_MAX = 0.12
 #: dark lines thinner than this share of the image height (a board's grid) are no beam
 BEAM_THIN = 0.006
+#: the most the beam may be tilted in the photo (deg either way): the camera roll the furrow
+#: measurement takes out; a beam-like bar tilted further (up to ROLL_CHECK_MAX_DEG) is named in
+#: the refusal with the roll that levels it
+BEAM_MAX_ROLL_DEG = 15.0
 #: the least length (share of the image width) and length / thickness of a beam
 BEAM_MIN_LENGTH, BEAM_MIN_ELONGATION = 0.2, 8.0
 #: rows (px) of the board above the beam and of the soil at the frame's bottom that give the
@@ -1265,15 +1280,27 @@ def _beam_bar(path, gray, threshold, tried):
     mask = _binary(path, 1.0 - bar / top, threshold)
     tried.add(f"dark bars ({threshold} on the black top-hat): the beam is sought among them", mask)
     lab = measure.label(mask)
-    beams = []
+    beams, tilted = [], []
     for p in measure.regionprops(lab):
         r0, c0, r1, c1 = p.bbox
         if r0 == 0 or c0 == 0 or r1 == h or c1 == w or p.axis_minor_length <= 0:
             continue
         if (p.axis_major_length >= BEAM_MIN_LENGTH * w
-                and p.axis_major_length / p.axis_minor_length >= BEAM_MIN_ELONGATION
-                and abs(abs(p.orientation) - np.pi / 2) <= np.radians(15.0)):
-            beams.append(p)
+                and p.axis_major_length / p.axis_minor_length >= BEAM_MIN_ELONGATION):
+            tilt = abs(abs(p.orientation) - np.pi / 2)  # from horizontal
+            if tilt <= np.radians(BEAM_MAX_ROLL_DEG):
+                beams.append(p)
+            elif tilt <= np.radians(ROLL_CHECK_MAX_DEG):
+                tilted.append(p)
+    if not beams and tilted:
+        # a beam-like bar tilted beyond the search: the beam of a camera rolled further
+        bar_ = max(tilted, key=lambda p: p.axis_major_length)
+        roll = roll_of(np.cos(bar_.orientation) / np.sin(bar_.orientation))  # major axis: (row, col) = (cos, sin)
+        raise InputError(path, "image", f"a profile-meter beam (long dark bar) within {BEAM_MAX_ROLL_DEG:.0f} deg "
+                         f"of horizontal (the camera held within {BEAM_MAX_ROLL_DEG:.0f} deg of level: the beam "
+                         "search looks no further)",
+                         f"none found; a long dark bar as the beam's is tilted {roll:.1f} deg: if it is the beam (the "
+                         f"camera rolled), {level_it(roll)}, or take it again with the camera level")
     if not beams:
         raise InputError(path, "image", "a profile-meter beam (long dark bar)", "none found")
     # the longest and darkest against its surroundings (a faint grid line or board edge is not)
@@ -1469,7 +1496,7 @@ def _measure_furrow(path, scale_length_mm, datum_mm, degree, threshold, keep_sta
     h, w = gray.shape
     br, bc = _beam_bar(path, gray, threshold, tried)
     beam, slope = _beam_axis(path, gray, br, bc)
-    roll = -float(np.degrees(np.arctan(slope)))
+    roll = roll_of(slope)
     _beam_ends(path, gray, beam, br, bc)
     s = (beam.right - beam.left) / scale_length_mm
     u_c = 0.5 * (beam.left + beam.right)
