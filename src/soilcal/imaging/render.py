@@ -351,8 +351,15 @@ def render_drum(seed, angle_deg, soil="xinjiang-vineyard", fill=0.25, hard=False
     _table(canvas, rng, row_p + int(6 * s))
     _scale_bar(canvas, row_p + int(10 * s), int(MARGIN + 0.05 * W), s)
     img = _finish(rng, canvas, roll_deg, hard)
+    # the drum's centre in the photo: turned with the canvas about its centre (counter-clockwise
+    # by the roll, as skimage's rotate), then cropped by the margin
+    c0, r0 = cw / 2 - 0.5, ch / 2 - 0.5
+    t = np.radians(roll_deg)
+    px = c0 + (cx - c0) * np.cos(t) + (cz - r0) * np.sin(t) - MARGIN
+    py = r0 - (cx - c0) * np.sin(t) + (cz - r0) * np.cos(t) - MARGIN
     truth = {"kind": "drum", "seed": int(seed), "angle_deg": float(angle_deg), "roll_deg": float(roll_deg),
-             "px_per_mm": s, "fill": fill, "drum_radius_mm": R}
+             "px_per_mm": s, "fill": fill, "drum_radius_mm": R, "centre_px": [float(px), float(py)],
+             "radius_px": float(R * s)}
     return img, truth
 
 
