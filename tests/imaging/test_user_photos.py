@@ -486,3 +486,20 @@ def test_a_rendered_heap_with_a_scale_card_at_the_plate_end(tmp_path):
     p = render.save_photo(tmp_path / "card.jpg", img, truth)
     r = measure.measure_pile(p)
     _assert_flanks(r, truth["left_deg"], truth["right_deg"])
+
+
+@pytest.mark.parametrize("bits", [16, 12])
+def test_planar_sixteen_bit_tiff_is_read_at_its_depth(tmp_path, bits):
+    # a 16-bit RGB TIFF with its colour planes stored apart (planar configuration 2, as
+    # scientific cameras and editors write them): PIL decoded each plane's bytes as 8-bit
+    # samples and the photo read as noise without a complaint (max error 0.86 of the range);
+    # it is read at its depth (12-bit values by 4095) and measured as drawn
+    import tifffile
+
+    from soilcal.imaging.io import read_photo
+
+    a = np.round(heap_photo() * (2 ** bits - 1)).astype(np.uint16)
+    p = tmp_path / "planar.tif"
+    tifffile.imwrite(p, np.moveaxis(a, -1, 0), planarconfig="separate", photometric="rgb")
+    assert np.abs(read_photo(p) - a / (2.0 ** bits - 1)).max() < 1e-9
+    _assert_flanks(measure.measure_pile(p), 32.0, 35.0)
