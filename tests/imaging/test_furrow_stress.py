@@ -92,3 +92,30 @@ def test_a_profile_whose_end_is_not_found_is_flagged(tmp_path):
     assert abs(r.area_mm2 / truth["area_mm2"] - 1) > 0.02
     assert r.end_gap_mm > measure.FURROW_LOW_IF["end_gap_above"] * truth["scale_length_mm"]
     assert r.confidence == "low"
+
+
+@pytest.mark.parametrize("roll", [18.0, -25.0])
+def test_furrow_photo_rolled_beyond_the_beam_search_names_the_roll(tmp_path, roll):
+    # a furrow photo taken with the camera rolled 18 or 25 deg: the beam search (15 deg) finds
+    # no beam, and the refusal said only "none found"; it names the beam-like bar's tilt and the
+    # turn that levels the photo, and the photo turned so is measured (chord area within 2 %)
+    import re
+
+    from PIL import Image
+
+    from soilcal.imaging import render
+    from soilcal.imaging.scenes import FURROW_F_COEFFS
+
+    img, truth = render.render_furrow(7, FURROW_F_COEFFS, (-200.0, 200.0), roll_deg=roll)
+    p = render.save_photo(tmp_path / "rolled.jpg", img, truth, quality=90)
+    with pytest.raises(InputError) as e:
+        measure.measure_furrow(p, 400.0, truth["beam_datum_mm"])
+    assert (e.value.path, e.value.field) == (str(p), "image")
+    said = re.search(r"tilted (-?[0-9.]+) deg: .*rotate the photo ([0-9]+) deg (clockwise|counter-clockwise) to level it",
+                     e.value.got)
+    assert said and abs(float(said[1]) - roll) <= 0.5, e.value.got
+    turn = float(said[2]) * (-1.0 if said[3] == "clockwise" else 1.0)  # PIL turns counter-clockwise
+    q = tmp_path / "levelled.png"
+    Image.open(p).rotate(turn, resample=Image.Resampling.BILINEAR, expand=True, fillcolor=(128, 128, 128)).save(q)
+    r = measure.measure_furrow(q, 400.0, truth["beam_datum_mm"])
+    assert abs(r.area_mm2 / truth["area_mm2"] - 1) <= 0.02, (r.area_mm2, truth["area_mm2"])

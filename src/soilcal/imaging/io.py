@@ -7,7 +7,9 @@ and 99.5 percentiles instead of being clipped to 8 bits.  A colour photo of 16 b
 (PNG or TIFF) is read at its 16 bits (PIL keeps only the upper 8 of them: :func:`_deep_rgb`) and
 scaled by the bit depth its values use (65535 for a full-range photo, 4095 for a 12-bit camera's
 values in a 16-bit file: a PNG's sBIT chunk where it says it, else the depth holding 99.9 % of
-its values, so that a hot pixel does not set it), so it reads like its 8-bit version.  A photo with an EXIF Orientation
+its values, so that a hot pixel does not set it), so it reads like its 8-bit version.  A TIFF
+of more than 8 bits per sample with its planes stored apart (planar configuration), which PIL
+decodes as 8-bit samples, is read at its depth with ``tifffile`` (:func:`_tiff_decode`).  A photo with an EXIF Orientation
 tag (a phone held upright or upside down) is turned as a viewer shows it before it is measured.
 :func:`read_photo_reduced` and :func:`read_gray_reduced` decode a large photo reduced by a whole
 factor (a JPEG in its decoder), so it is never held at full size as floats.  A colour photo
@@ -177,6 +179,17 @@ def _decode(path, formats: str, min_pixels=None):
                 if w * h > MAX_PIXELS:
                     raise InputError(p, "file", f"an image of at most {MAX_PIXELS // 1_000_000} megapixels "
                                      "(scale it down)", f"{w} x {h} pixels")
+                if im.format == "TIFF" and im.tag_v2.get(284) == 2:
+                    bits = im.tag_v2.get(258, (8,))
+                    if max(bits if isinstance(bits, tuple) else (bits,)) > 8:
+                        # planes stored apart at more than 8 bits: PIL decodes the bytes of
+                        # each plane as 8-bit samples (a photo of noise, read without a
+                        # complaint); read at its depth by tifffile
+                        tiff = _tiff_decode(p, min_pixels)
+                        if tiff is None:
+                            raise InputError(p, "file", expected + ", its planes of more than 8 bits readable",
+                                             "a planar TIFF that could not be decoded")
+                        return tiff
                 # a colour photo of 16 bits per channel: PIL keeps the upper 8 of them (the
                 # lower 8 are decoded apart, _deep_rgb)
                 deep = im.mode not in _FULL_SCALE and im.mode not in ("I", "F") and any(
@@ -215,8 +228,63 @@ def _decode(path, formats: str, min_pixels=None):
     except Image.DecompressionBombError as exc:
         raise InputError(p, "file", f"an image of at most {MAX_PIXELS // 1_000_000} megapixels (scale it down)",
                          str(exc).split(" exceeds")[0]) from None
-    except (UnidentifiedImageError, OSError, SyntaxError, ValueError, EOFError, MemoryError) as exc:
+    except UnidentifiedImageError as exc:
+        tiff = _tiff_decode(p, min_pixels)  # a TIFF PIL cannot open (its planes stored apart)
+        if tiff is not None:
+            return tiff
         raise InputError(p, "file", expected, str(exc) or type(exc).__name__) from None
+    except (OSError, SyntaxError, ValueError, EOFError, MemoryError) as exc:
+        raise InputError(p, "file", expected, str(exc) or type(exc).__name__) from None
+
+
+def _tiff_decode(p: Path, min_pixels=None):
+    """:func:`_decode`'s tuple for a TIFF that PIL cannot open, read with ``tifffile``: a
+    planar-configuration TIFF (each colour plane stored apart, as scientific cameras and image
+    editors write them) of 8 or 16 bits per sample, grey or RGB (an alpha sample dropped), read
+    at its own depth as PIL's own TIFFs are; None when the file is no TIFF or tifffile cannot
+    read it either.  One with an EXIF orientation other than upright is refused (its turn is
+    not applied here)."""
+    from soilcal.errors import InputError
+
+    try:
+        with open(p, "rb") as fh:
+            if fh.read(4) not in (b"II*\x00", b"MM\x00*"):
+                return None
+        import tifffile
+
+        with tifffile.TiffFile(p) as tf:
+            page = tf.pages[0]
+            orient = page.tags.get(274)
+            a = page.asarray()
+            axes = tf.series[0].axes
+    except Exception:  # noqa: BLE001 - any failure of the second reader: the first one's refusal stands
+        return None
+    if orient is not None and orient.value != 1:
+        raise InputError(p, "file", "a TIFF stored upright (EXIF orientation 1), or saved upright by an editor",
+                         f"orientation {orient.value}")
+    if a.ndim == 3 and axes.startswith("S"):
+        a = np.moveaxis(a, 0, -1)
+    if a.dtype not in (np.uint8, np.uint16) or not (a.ndim == 2 or (a.ndim == 3 and a.shape[-1] in (1, 2, 3, 4))):
+        raise InputError(p, "file", "a TIFF of 8 or 16 bits per sample, grey or RGB (with or without alpha)",
+                         f"{a.dtype} samples, shape {a.shape}")
+    if a.ndim == 3:
+        a = a[..., :1] if a.shape[-1] <= 2 else a[..., :3]  # alpha dropped
+        a = a[..., 0] if a.shape[-1] == 1 else a
+    h, w = a.shape[:2]
+    if w * h > MAX_PIXELS:
+        raise InputError(p, "file", f"an image of at most {MAX_PIXELS // 1_000_000} megapixels (scale it down)",
+                         f"{w} x {h} pixels")
+    f = _reduction(w, h, min_pixels)
+    if a.ndim == 3 and a.dtype == np.uint16:
+        rgb, depth = _bit_depth_scaled(a, f)
+        return "RGB;16", None, rgb, (w, h), depth
+    v = np.asarray(a, float)
+    if f >= 2:
+        hh, ww = h // f * f, w // f * f
+        v = v[:hh, :ww].reshape(hh // f, f, ww // f, f, *v.shape[2:]).mean(axis=(1, 3))
+    if a.ndim == 2:
+        return ("L", v / 255.0, None, (w, h), 256) if a.dtype == np.uint8 else ("I;16", v / 65535.0, None, (w, h), 65536)
+    return "RGB", None, v / 255.0, (w, h), 256
 
 
 def read_photo(path) -> np.ndarray:
