@@ -137,3 +137,33 @@ def test_the_fit_interval_of_replicate_rows_is_that_of_their_condition_means():
     ratio = meas.reshape(8, 3).mean(axis=1) / 100 - 1  # each condition's own s
     tlo, thi = stats.t.interval(0.95, 7, loc=ratio.mean(), scale=stats.sem(ratio))
     assert (hi - lo) == pytest.approx(thi - tlo, rel=0.15), ((lo, hi), (tlo, thi))
+
+
+def test_repeats_that_repeat_a_value_all_count_in_the_scatter_test():
+    # three repeats of one force, rounded to whole newtons: 250, 250, 256 N against a
+    # simulated 240 N (seed SD 3 N over 3 seeds).  Welch: mean 252, s^2 = (4 + 4 + 16) / 2 = 12,
+    # se = sqrt(12 / 3 + 9 / 3) = sqrt(7), z = 12 / sqrt(7) = 4.5356; dof = 49 / (16 / 2 + 9 / 2)
+    from soilcal.loop.diagnose import replicate_residuals
+
+    d = pd.DataFrame({"simulation": ["k"] * 3, "measure": ["force"] * 3, "measured": [250.0, 250.0, 256.0],
+                      "simulated_mean": [240.0] * 3, "simulated_sd": [3.0] * 3, "simulated_n": [3] * 3})
+    z, dof = replicate_residuals(d)
+    assert z == pytest.approx([12 / np.sqrt(7)], rel=1e-12)
+    assert dof == pytest.approx([49 / (16 / 2 + 9 / 2)], rel=1e-12)
+
+
+def test_three_tools_at_the_same_speeds_are_three_tests_not_repeats_of_one():
+    # tools A, B, C (the stand-in's blade widths) each at 4 speeds x 2 depths, the model's own
+    # values without noise: 24 conditions, each simulated with its own tool; taken as repeats of
+    # 8 (the tool left out of the condition's key) B and C were run as A and read ~28 % off
+    from soilcal.loop import synthesize as sy
+    from soilcal.loop.residuals import simulation_key
+
+    rows = [{"tool": t, "tool_speed": v, "working_depth": d} for t in "ABC" for v in (0.5, 1.0, 2.0, 3.0)
+            for d in (0.06, 0.12)]
+    conds = S.conditions(rows)
+    assert len({simulation_key(c) for c in conds}) == 24
+    table = sy.synthesize(conds, S.base_params, S.simulate, {}, {}, {}, noise=0.0, seed=1)
+    out = core.run_inprocess("user", sy.with_measured(conds, table), S.base_params, S.simulate,
+                             core.Settings(bootstrap=0))
+    assert out.verdict.startswith("consistent"), out.verdict

@@ -651,8 +651,8 @@ def analyse(soil: str, res: pd.DataFrame, diag: pd.DataFrame, cands: list, effec
                    "the model throughout, a uniform bias (an instrument's calibration, a zero offset) that no "
                    "mechanism of the library carries; " + " + ".join(sel.chosen) + f" fit{'s' if k == 1 else ''} it "
                    f"(held-out RMS {100 * sel.uniform.rmse():.2f} % against {100 * sel.uniform.rmse(True):.2f} % for "
-                   f"the uniform bias alone) but add{'s' if k == 1 else ''} nothing beside a free uniform scale (AICc "
-                   f"{b.aicc:.1f} against {b.ref_aicc:.1f} for the scale alone): on these rows "
+                   f"the uniform bias alone) but add{'s' if k == 1 else ''} nothing beside a free uniform scale ("
+                   f"{b.reason}; AICc {b.aicc:.1f} against {b.ref_aicc:.1f} for the scale alone): on these rows "
                    f"{'its' if k == 1 else 'their'} signature cannot be told from a constant")
     elif sel is not None and sel.chosen:
         chosen = sel.chosen

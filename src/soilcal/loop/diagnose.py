@@ -305,14 +305,16 @@ def replicate_residuals(d: pd.DataFrame) -> tuple[np.ndarray, np.ndarray]:
     sqrt(s^2 / n + sd_s^2 / n_s) with s the replicates' sample SD (n of them) and sd_s the seed
     SD of the simulated mean (n_s seeds) (:mod:`soilcal.loop.residuals`): the replicates are the
     measured uncertainty a table of one row per condition states in its ``sd`` and ``n``
-    columns.  Rows entered twice (the same measured value) count once."""
+    columns.  Every repeat counts, equal values too: repeats rounded to whole newtons or half
+    degrees often repeat a value, and counting them once shrank the test's degrees of freedom
+    (250, 250, 256 N read as two repeats)."""
     need = {"simulation", "measure", "measured", "simulated_mean", "simulated_sd", "simulated_n"}
     if not need <= set(d.columns) or not len(d):
         return np.empty(0), np.empty(0)
     rows = d if "measured_sd" not in d else d[~np.isfinite(d["measured_sd"].astype(float).to_numpy())]
     z, dof = [], []
     for _, g in rows.groupby([rows["simulation"].astype(str), rows["measure"].astype(str)], sort=False):
-        m = np.unique(g["measured"].to_numpy(float))  # a row entered twice is one repeat
+        m = g["measured"].to_numpy(float)  # every repeat: rounded forces repeat a value
         m = m[np.isfinite(m)]
         n = len(m)
         if n < 2:

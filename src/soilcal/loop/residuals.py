@@ -76,15 +76,16 @@ def scales(df: pd.DataFrame) -> tuple[np.ndarray, list]:
 
 def simulation_key(c) -> str:
     """What a condition simulates (scenario, setup, parameters, calibrated stage and case,
-    preset, and the numeric quantities an effect may act through), as a short digest: two rows that
+    preset, the numeric quantities an effect may act through and the tool), as a short digest: two rows that
     share it are the same test measured twice, held out together by the selection's folds."""
     import hashlib
     import json
 
     from soilcal.config.quantities import QUANTITIES
 
-    numeric = {q: v for q, v in (c.quantities or {}).items() if QUANTITIES.get(q) is not None}  # not a day's label
-    what = [c.scenario, c.setup, c.params, c.stage, c.case, c.preset, numeric]
+    # every quantity but a test day's or group's label: a tool id is a different test
+    physical = {q: v for q, v in (c.quantities or {}).items() if QUANTITIES.get(q) is not None or q == "tool"}
+    what = [c.scenario, c.setup, c.params, c.stage, c.case, c.preset, physical]
     return hashlib.sha1(json.dumps(what, sort_keys=True, default=str).encode()).hexdigest()[:12]
 
 
