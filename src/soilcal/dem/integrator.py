@@ -270,6 +270,12 @@ def gather(x, v, om, r, inv_m, inv_i, mat, f, t, ovr, peak, mroll, dt, kick, max
                 for k in range(nwc if nwc > 1 else 0):  # one primitive: nothing to share
                     p = wnbr[i, k]
                     r8 = prim_closest(prim_kind[p], prim_par, p, xi, yi, zi)
+                    # kept for the force loop below (the slot's reaction is written after)
+                    wslot[i, k, 0] = r8[0]
+                    wslot[i, k, 1] = r8[1]
+                    wslot[i, k, 2] = r8[2]
+                    wslot[i, k, 3] = r8[3]
+                    wslot[i, k, 4] = r8[7]
                     if r8[7] == 0 and r8[0] < ri:
                         if fk < 0:
                             fk = k
@@ -315,10 +321,16 @@ def gather(x, v, om, r, inv_m, inv_i, mat, f, t, ovr, peak, mroll, dt, kick, max
                         break
                 for k in range(nwc):
                     p = wnbr[i, k]
+                    if nwc > 1:  # the closest point of the first loop: c = x - dist n
+                        dist = wslot[i, k, 0]
+                        nx, ny, nz = wslot[i, k, 1], wslot[i, k, 2], wslot[i, k, 3]
+                        feat = int(wslot[i, k, 4])
+                        cx, cy, cz = xi - dist * nx, yi - dist * ny, zi - dist * nz
+                    else:
+                        dist, nx, ny, nz, cx, cy, cz, feat = prim_closest(
+                            prim_kind[p], prim_par, p, xi, yi, zi)
                     for q in range(6):
                         wslot[i, k, q] = 0.0
-                    dist, nx, ny, nz, cx, cy, cz, feat = prim_closest(prim_kind[p], prim_par, p,
-                                                                      xi, yi, zi)
                     delta = ri - dist
                     row = i * KW + k
                     touching = whist[row, H_SIZE - 1] != 0.0
