@@ -190,11 +190,12 @@ _FLOORS = {  # floors z = 0 made of several walls that meet or overlap
 
 
 @pytest.mark.parametrize("floor", sorted(_FLOORS))
-@pytest.mark.parametrize("x", [0.0, 1e-9, -1e-9, 0.002])
+@pytest.mark.parametrize("x", [0.0, 1e-9, -1e-9, 3e-4, -3e-4])
 def test_a_sphere_on_a_floor_of_several_walls_is_one_contact(floor, x):
     """A floor of two STL tiles (two walls), of two boxes side by side, or a mesh lying on a
     plane or a rectangle is one surface: a sphere on the seam, or on the mesh over the plane,
-    was pushed by both walls with twice the Hertz force of the plane."""
+    was pushed by both walls with twice the Hertz force of the plane (x = +-3e-4 m: the
+    neighbour's edge touches within sqrt(2 R delta) = 0.71 mm of the seam)."""
     mats = table(e=0.5, mu=0.3, E=1e8)
     sim = Simulation(mats, gravity=(0, 0, 0))
     _FLOORS[floor](sim)
@@ -202,6 +203,70 @@ def test_a_sphere_on_a_floor_of_several_walls_is_one_contact(floor, x):
     sim.add_particles([[x, 0.0, R - delta]], R, "soil")
     f, _ = sim.compute_forces()
     assert f[0] == pytest.approx([0, 0, _hertz_wall_force(mats, R, delta)], rel=1e-9, abs=1e-12)
+
+
+@pytest.mark.parametrize("x", [0.0, 3e-4, -3e-4])
+@pytest.mark.parametrize("gap, step", [(1e-8, 0.0), (5e-7, 0.0), (-5e-7, 0.0), (0.0, 1e-7),
+                                       (0.0, 1e-9)])
+def test_tiles_a_rounding_error_apart_are_one_contact(gap, step, x):
+    """Two mesh tiles meeting with a gap (or overlap) of up to 5e-7 m or a step of up to
+    1e-7 m, as CAD exports leave them, are one surface: a sphere on the seam was pushed 2.0
+    times, near it 1.74 times the Hertz force of one plane (the points were compared within
+    1e-9 R).  Over the raised tile the force is that of its overlap delta + step."""
+    mats = table(e=0.5, mu=0.3, E=1e8)
+    sim = Simulation(mats, gravity=(0, 0, 0))
+    v, t = _tile(-0.02, -0.5 * gap)
+    sim.add_mesh(v, t, "soil")
+    v, t = _tile(0.5 * gap, 0.02)
+    sim.add_mesh([[a, b, step] for a, b, _ in v], t, "soil")
+    delta = 0.01 * R
+    sim.add_particles([[x, 0.0, R - delta]], R, "soil")
+    f, _ = sim.compute_forces()
+    d = delta + step if x >= 0 else delta  # at x = 0 the raised edge is the closer
+    assert f[0][2] == pytest.approx(_hertz_wall_force(mats, R, d), rel=3e-3)
+    assert abs(f[0][0]) < 1e-3 * f[0][2] and f[0][1] == 0.0
+
+
+@pytest.mark.parametrize("x", [0.0, 0.01])
+def test_an_stl_tile_on_a_plane_is_one_contact(x):
+    """An STL tile (float32 vertices) lying on a plane at z = -0.3 m is 1.2e-8 m off it: the
+    sphere was pushed 2.0 times the Hertz force of the plane everywhere over the tile."""
+    mats = table(e=0.5, mu=0.3, E=1e8)
+    sim = Simulation(mats, gravity=(0, 0, 0))
+    z0 = -0.3
+    sim.add_plane((0, 0, z0), (0, 0, 1), "soil")
+    v, t = _tile(-0.005, 0.005)
+    sim.add_mesh(np.array([[a, b, z0] for a, b, _ in v], dtype=np.float32), t, "soil")
+    delta = 0.01 * R
+    sim.add_particles([[x, 0.0, z0 + R - delta]], R, "soil")
+    f, _ = sim.compute_forces()
+    assert f[0][2] == pytest.approx(_hertz_wall_force(mats, R, delta), rel=1e-5)
+
+
+@pytest.mark.parametrize("kind", ["rectangle", "disk"])
+@pytest.mark.parametrize("moving_first", [True, False])
+def test_a_belt_set_into_a_floor_carries_a_sphere_whichever_wall_came_first(kind, moving_first):
+    """A belt (rectangle) or a turntable-like disk moving at u, lying in a fixed floor plane:
+    a sphere resting on it rolls at 2/7 u once it stops sliding (a sphere on a plane moving
+    at u: friction takes v from 0 to 2/7 u).  With the plane added first the plane counted
+    the contact and the sphere stayed at rest."""
+    u = 0.1
+    sim = Simulation(table(e=0.5, mu=0.3, E=1e8), dt=2e-6)
+
+    def moving():
+        if kind == "rectangle":
+            sim.add_rectangle((0, 0, 0), (0, 0, 1), (1, 0, 0), 0.05, 0.02, "soil",
+                              velocity=(u, 0, 0))
+        else:
+            sim.add_disk((0, 0, 0), (0, 0, 1), 0.05, "soil", velocity=(u, 0, 0))
+
+    def floor():
+        sim.add_plane((0, 0, 0), (0, 0, 1), "soil")
+
+    (moving(), floor()) if moving_first else (floor(), moving())
+    sim.add_particles([[0.0, 0.0, 0.9999 * R]], R, "soil")
+    sim.run(10000)  # 0.02 s; sliding ends after 2/7 u / (mu g) = 0.0097 s
+    assert sim.v[0][0] == pytest.approx(2 / 7 * u, rel=1e-3)
 
 
 @pytest.mark.parametrize("y", [0.0, 0.005])
@@ -308,12 +373,17 @@ def test_a_jkr_neck_under_a_ceiling_of_two_walls_crosses_their_seam_as_under_a_p
     m = rho * 4 / 3 * math.pi * r**3
     gamma = m * g / (0.95 * 1.5 * math.pi * r)  # pull-off 1.5 pi gamma R (EDEM convention)
     out = []
-    for tiles in (False, True):
+    for tiles in (False, "meshes", "rectangle_to_mesh"):
         sim = Simulation(table(e=0.2, mu=0.5, gamma=gamma, E=1e7, rho=rho), gravity=(0, 0, 0),
                          contact_model=dict(cohesion="jkr"))
-        if tiles:  # facing down, seam at x = 0 (the sphere starts under the second)
+        if tiles == "meshes":  # facing down, seam at x = 0 (the sphere starts under the second)
             ws = [sim.add_mesh([[a, -0.05, 0], [a, 0.05, 0], [b, 0.05, 0], [b, -0.05, 0]],
                                [[0, 1, 2], [0, 2, 3]], "soil") for a, b in ((-0.05, 0), (0, 0.05))]
+        elif tiles:  # from under a rectangle onto a mesh: the rectangle's edge, reported as
+            # its face, held the neck alone (v_x 5.88e-3 m/s, 3 % above the plane's)
+            ws = [sim.add_mesh([[-0.05, -0.05, 0], [-0.05, 0.05, 0], [0, 0.05, 0], [0, -0.05, 0]],
+                               [[0, 1, 2], [0, 2, 3]], "soil"),
+                  sim.add_rectangle((0.025, 0, 0), (0, 0, -1), (1, 0, 0), 0.025, 0.05, "soil")]
         else:
             ws = [sim.add_plane((0, 0, 0), (0, 0, -1), "soil")]
         sim.add_particles([[0.001, 0.0013, -0.9999 * r]], r, "soil")
@@ -326,10 +396,11 @@ def test_a_jkr_neck_under_a_ceiling_of_two_walls_crosses_their_seam_as_under_a_p
         sim.run(6000)  # the sphere moves 3 mm back along the ceiling, over the seam
         out.append((sim.x[0].copy(), sim.v[0].copy(), sim.wall_force.sum(axis=0)))
     seam = u * 6000 * sim.dt  # where the seam is now
-    assert out[1][0][0] < seam - 1e-3 and out[1][2][2] < 0.0  # past it, still hanging
     assert out[0][1][0] == pytest.approx(2 / 7 * u, rel=1e-3)
-    for a, b in zip(*out):
-        assert b == pytest.approx(a, rel=1e-8, abs=1e-12)
+    for tiled in out[1:]:
+        assert tiled[0][0] < seam - 1e-3 and tiled[2][2] < 0.0  # past it, still hanging
+        for a, b in zip(out[0], tiled):
+            assert b == pytest.approx(a, rel=1e-8, abs=1e-12)
 
 
 def test_moving_plane_lifts_particle_and_reports_force():

@@ -44,7 +44,7 @@ from numba import njit, prange
 from soilcal.dem.contact import H_MR, H_SIZE, contact_force
 from soilcal.dem.neighbour import (NBLK_GROUPS, SGROUP_LEN, block_size, build_lists,
                                    build_wall_lists, min_image, sort_particles)
-from soilcal.dem.walls import CYLINDER, TRIANGLE, move_walls, prim_closest
+from soilcal.dem.walls import CYLINDER, PLANE, move_walls, prim_closest
 
 DONE, NEED_PAIRS, NEED_KW, NEED_CELLS, BLOWUP, SETTLED, NEED_WBINS = 0, 1, 2, 3, 4, 5, 6
 
@@ -62,7 +62,8 @@ CONTACT_MATH = {"contract"}
 
 
 @njit(cache=True, inline="always")
-def _cover(i, k, nwc, p, feat, cx, cy, cz, ri, xi, yi, zi, fk, wnbr, prim_kind, prim_par):
+def _cover(i, k, nwc, p, feat, cx, cy, cz, tol, ri, xi, yi, zi, fk, wnbr, prim_kind,
+           prim_wall, prim_par):
     """The wall slot whose primitive counts the contact of particle i with primitive p (its
     k-th wall slot; closest point c, feature ``feat``), or -1 when p counts it itself
     (walls.py, "One contact per touch"): the slot of another primitive q, of any wall, on
@@ -70,24 +71,48 @@ def _cover(i, k, nwc, p, feat, cx, cy, cz, ri, xi, yi, zi, fk, wnbr, prim_kind, 
     the edge or vertex of a flat or convex surface next to the face or edge that holds it, or
     the edge of a triangle the sphere has moved off), or lies on p too (the same point, to
     rounding) and q's is a face where p's is not, or an edge where p's is a vertex, or the
-    same feature at an earlier slot.  ``fk``: the slot of the particle's first face contact
-    (-1: none), tried first (a sphere on a face: its neighbours' edges lie on it)."""
-    tol = 1e-9 * ri
+    same feature and q ranks higher: a bounded primitive above an infinite plane, then the
+    later primitive (walls.py, "Which wall counts").  ``tol``: :func:`_same_tol`, for a q of
+    another wall (the primitives of one wall share their vertices exactly: 1e-9 R).  ``fk``: the
+    slot of the particle's first face contact (-1: none), tried first (a sphere on a face: its
+    neighbours' edges lie on it)."""
     kp = prim_kind[p]
+    wp = prim_wall[p]
+    tol0 = min(tol, 1e-9 * ri)
     for step in range(nwc + 1):
         kk = fk if step == 0 else step - 1
         if kk < 0 or kk == k or (step > 0 and kk == fk):
             continue
         pp = wnbr[i, kk]
         kq = prim_kind[pp]
-        if abs(prim_closest(kq, prim_par, pp, cx, cy, cz)[0]) > tol:
+        tq = tol if prim_wall[pp] != wp else tol0
+        if abs(prim_closest(kq, prim_par, pp, cx, cy, cz)[0]) > tq:
             continue  # c is not on q
         o8 = prim_closest(kq, prim_par, pp, xi, yi, zi)
-        if abs(prim_closest(kp, prim_par, p, o8[4], o8[5], o8[6])[0]) > tol:
+        if abs(prim_closest(kp, prim_par, p, o8[4], o8[5], o8[6])[0]) > tq:
             return kk
-        if o8[7] < feat or (o8[7] == feat and kk < k):
+        if o8[7] < feat:
             return kk
+        if o8[7] == feat:
+            if kq != PLANE and kp == PLANE:
+                return kk
+            if (kq == PLANE) == (kp == PLANE) and pp > p:
+                return kk
     return -1
+
+
+# two face contacts whose normals agree this closely (cos, 0.008 deg) may be one surface
+# (coplanar walls); a 0.1 deg crease is two
+PARALLEL_COS = 1.0 - 1e-8
+
+
+@njit(cache=True, inline="always")
+def _same_tol(ri, xi, yi, zi):
+    """Distance within which a point counts as lying on a primitive (``_cover``): 2e-4 of the
+    radius (a gap or step between two walls' surfaces that changes the overlap by far less
+    than a contact's, and what CAD exports leave between tiles), or 4 float32 ulps of the
+    coordinates (4 * 2^-23 |x|: STL vertices are float32) if that is more."""
+    return max(2e-4 * ri, 4.8e-7 * max(abs(xi), abs(yi), abs(zi)))
 
 
 @njit(cache=True, parallel=True, fastmath=CONTACT_MATH)
@@ -233,23 +258,44 @@ def gather(x, v, om, r, inv_m, inv_i, mat, f, t, ovr, peak, mroll, dt, kick, max
                 mres = mroll[i]
                 fk = -1  # the slot of the first face contact
                 nwc = wcnt[i]
-                moved = False  # a contact that has touched is on an edge or vertex
-                # face contacts, of every wall and kind (two of them may be one: on a shared
-                # edge, or on coplanar faces of two walls)
-                nface = 0
+                moved = False  # a contact that has touched is on an edge, vertex or rim
+                # face contacts, of every wall and kind: two of them may be one (coplanar
+                # faces of two walls) only if their normals are parallel; the first two
+                # directions are kept, a fourth face counts as parallel (the full check)
+                tol = _same_tol(ri, xi, yi, zi)
+                coplanar = False
+                nref = 0
+                ax = ay = az = bx = by = bz = 0.0
                 touched = False
                 for k in range(nwc if nwc > 1 else 0):  # one primitive: nothing to share
                     p = wnbr[i, k]
                     r8 = prim_closest(prim_kind[p], prim_par, p, xi, yi, zi)
+                    # kept for the force loop below (the slot's reaction is written after)
+                    wslot[i, k, 0] = r8[0]
+                    wslot[i, k, 1] = r8[1]
+                    wslot[i, k, 2] = r8[2]
+                    wslot[i, k, 3] = r8[3]
+                    wslot[i, k, 4] = r8[7]
                     if r8[7] == 0 and r8[0] < ri:
                         if fk < 0:
                             fk = k
-                        nface += 1
+                        n1, n2, n3 = r8[1], r8[2], r8[3]
+                        if nref > 0 and n1 * ax + n2 * ay + n3 * az > PARALLEL_COS:
+                            coplanar = True
+                        elif nref > 1 and n1 * bx + n2 * by + n3 * bz > PARALLEL_COS:
+                            coplanar = True
+                        elif nref > 2:
+                            coplanar = True
+                        elif nref == 0:
+                            ax, ay, az = n1, n2, n3
+                        elif nref == 1:
+                            bx, by, bz = n1, n2, n3
+                        nref += 1
                     if whist[i * KW + k, H_SIZE - 1] != 0.0:
                         touched = True
                         if r8[7] != 0:
                             moved = True
-                moved = moved or (touched and nface > 1)
+                moved = moved or (touched and coplanar)
                 # a contact that passes from one primitive to the next (over the edge or
                 # vertex shared by two triangles, or from a face onto a coplanar face of
                 # another wall) is one contact: its history (the tangential spring, the JKR
@@ -262,10 +308,10 @@ def gather(x, v, om, r, inv_m, inv_i, mat, f, t, ovr, peak, mroll, dt, kick, max
                         if whist[row, H_SIZE - 1] == 0.0:
                             continue
                         r8 = prim_closest(prim_kind[p], prim_par, p, xi, yi, zi)
-                        if r8[7] == 0 and nface < 2:
+                        if r8[7] == 0 and not coplanar:
                             continue
-                        kk = _cover(i, k, nwc, p, r8[7], r8[4], r8[5], r8[6], ri, xi, yi, zi, fk,
-                                    wnbr, prim_kind, prim_par)
+                        kk = _cover(i, k, nwc, p, r8[7], r8[4], r8[5], r8[6], tol, ri, xi, yi,
+                                    zi, fk, wnbr, prim_kind, prim_wall, prim_par)
                         if kk >= 0 and whist[i * KW + kk, H_SIZE - 1] == 0.0:
                             for q in range(H_SIZE):
                                 whist[i * KW + kk, q] = whist[row, q]
@@ -275,10 +321,16 @@ def gather(x, v, om, r, inv_m, inv_i, mat, f, t, ovr, peak, mroll, dt, kick, max
                         break
                 for k in range(nwc):
                     p = wnbr[i, k]
+                    if nwc > 1:  # the closest point of the first loop: c = x - dist n
+                        dist = wslot[i, k, 0]
+                        nx, ny, nz = wslot[i, k, 1], wslot[i, k, 2], wslot[i, k, 3]
+                        feat = int(wslot[i, k, 4])
+                        cx, cy, cz = xi - dist * nx, yi - dist * ny, zi - dist * nz
+                    else:
+                        dist, nx, ny, nz, cx, cy, cz, feat = prim_closest(
+                            prim_kind[p], prim_par, p, xi, yi, zi)
                     for q in range(6):
                         wslot[i, k, q] = 0.0
-                    dist, nx, ny, nz, cx, cy, cz, feat = prim_closest(prim_kind[p], prim_par, p,
-                                                                      xi, yi, zi)
                     delta = ri - dist
                     row = i * KW + k
                     touching = whist[row, H_SIZE - 1] != 0.0
@@ -286,9 +338,9 @@ def gather(x, v, om, r, inv_m, inv_i, mat, f, t, ovr, peak, mroll, dt, kick, max
                         continue
                     if imi == 0.0:
                         continue
-                    if (prim_kind[p] == TRIANGLE and feat != 0) or nface > 1:
-                        if _cover(i, k, nwc, p, feat, cx, cy, cz, ri, xi, yi, zi, fk, wnbr,
-                                  prim_kind, prim_par) >= 0:
+                    if feat != 0 or coplanar:
+                        if _cover(i, k, nwc, p, feat, cx, cy, cz, tol, ri, xi, yi, zi, fk,
+                                  wnbr, prim_kind, prim_wall, prim_par) >= 0:
                             for q in range(H_SIZE):
                                 whist[row, q] = 0.0
                             continue

@@ -20,8 +20,9 @@ axis omega through the wall centre c)::
 
 Closest point: every kind returns (dist, nx, ny, nz, cx, cy, cz, feature), the signed
 distance from the sphere centre to the surface along the outward unit normal n (pointing from
-the wall to the sphere centre), the closest surface point c and, for triangles, the feature
-of c (0 face, 1 edge, 2 vertex); overlap = radius - dist.  Plane::
+the wall to the sphere centre), the closest surface point c and its feature: 0 face, 1 edge,
+2 vertex of a triangle; 1 where the closest point of a rectangle, disk, cylinder or cone is
+clamped to its rim (2 at a rectangle's corner), 0 for planes; overlap = radius - dist.  Plane::
 
     dist = (p - p0) . n0,   c = p - dist n0
 
@@ -40,10 +41,16 @@ by every triangle sharing it, and a triangle that meets the edge or face a spher
 at one vertex reports that vertex as a second, farther contact.  The same holds across walls:
 a floor made of two STL tiles, a tool whose blade and shank are separate meshes, or a mesh
 lying on a plane or rectangle is one surface where the walls meet or overlap.  Per particle, a
-contact whose point lies (within 1e-9 of the radius) on another primitive, of the same or any
-other wall, is ignored when that primitive's own closest point is not on the first one (that
-primitive is closer and counts the contact), and among contacts with the same point the face
-before the edge before the vertex, then the first, is kept (integrator ``_cover``).  Contacts
+contact whose point lies on another primitive, of the same or any other wall, is ignored when
+that primitive's own closest point is not on the first one (that primitive is closer and
+counts the contact), and among contacts with the same point the face before the edge or rim
+before the vertex or corner is kept, then the one of the wall that counts (below; integrator
+``_cover``).  "On" means within 1e-9 R for two triangles of one mesh (they share their
+vertices exactly) and within max(2e-4 R, 4 float32 ulps of the coordinates) across walls:
+tiles exported with a gap, an overlap or a step of up to 5e-7 m (1e-4 of a 5 mm radius, a
+change of the overlap far below a contact's) or an STL tile (float32 vertices) on a float64
+plane are one surface.  Face contacts are compared only where two of them have parallel
+normals (within 0.008 deg; a 0.1 deg crease is two faces).  Contacts
 elsewhere stay: a sphere on a floor against the edge of a ledge of the same mesh feels both.
 So a sphere over a flat or convex surface feels one contact wherever it touches, as on the
 plane or the solid the surface describes, however the surface is split into walls (LIGGGHTS
@@ -53,16 +60,25 @@ contact that passes over an edge or vertex from one triangle to the next, or fro
 a coplanar face of another wall, stays one contact: when the primitive that counts it has no
 history yet, the history of the one it leaves (tangential spring, JKR neck, rolling spring,
 largest plastic overlap, touching flag) passes to it, so a JKR neck in tension (overlap < 0)
-or a sticking tangential spring carries on as on a plane.  Walls that touch this way may move
-differently (a belt flush with a floor): the contact then moves with the wall that counts it.
+or a sticking tangential spring carries on as on a plane.  Between walls of different
+materials the history is carried over as it is: the spring and the JKR neck built on one
+surface act on the next with that surface's stiffness and surface energy from then on.
+
+Which wall counts where two lie on one surface (a belt or a turntable disk flush with a floor
+plane, a liner tile on a plate): a bounded primitive (mesh, rectangle, disk, cylinder, cone)
+before an infinite plane, and among two of the same kind the one added later, as it lies on
+top (a liner added to a plate).  The choice does not depend on which wall was added first
+where a bounded wall lies in a plane, and the contact moves with the wall that counts it: a
+sphere on a belt set into a floor rolls at 2/7 of the belt speed either way.
 
 Limits.  At a concave crease (a valley between two faces, of one wall or two) both faces count
 where the sphere centre lies over both (a wedge of width ``h tan(alpha)`` for a crease of
 angle alpha at centre height h), and neither face's edge counts outside it; with an overlap
 above ``R (1 - cos alpha)`` the second face's contact starts, and the first one's ends, with a
 force step (a 5 mm sphere, centre 0.98 R above the first face, crossing a 5.6 deg crease:
-2.35 to 1.36 times the Hertz force of a 0.02 R overlap where the first face's contact ends).  LIGGGHTS keeps such an edge active on one of the two triangles
-(by triangle id), so it has one of the two steps.  Wall contacts do not see periodic images: a
+2.368 to 1.371 times the Hertz force of a 0.02 R overlap where the first face's contact
+ends).  LIGGGHTS keeps such an edge active on one of the two triangles (by triangle id), so it
+has one of the two steps.  Wall contacts do not see periodic images: a
 sphere near a periodic boundary does not feel a wall primitive across it.
 """
 
@@ -96,17 +112,41 @@ def prim_closest(kind, par, p, px, py, pz):
     if kind == TRIANGLE:
         r = triangle_closest_par(px, py, pz, par, p)
         return r[0], r[1], r[2], r[3], r[4], r[5], r[6], int(r[7])
-    if kind == CYLINDER:
-        r = cylinder_closest_par(px, py, pz, par, p)
-    elif kind == CONE:
-        r = cone_closest_par(px, py, pz, par, p)
+    wx, wy, wz = px - par[p, 0], py - par[p, 1], pz - par[p, 2]
+    ax, ay, az = par[p, 3], par[p, 4], par[p, 5]
+    feat = 0
+    if kind == CYLINDER or kind == CONE:
+        if kind == CYLINDER:
+            r = cylinder_closest_par(px, py, pz, par, p)
+            z0, z1, r0, r1 = -par[p, 7], par[p, 7], par[p, 6], par[p, 6]
+        else:
+            r = cone_closest_par(px, py, pz, par, p)
+            z0, z1, r0, r1 = par[p, 8], par[p, 9], par[p, 6], par[p, 7]
+        # the rim: the closest point clamped to an end circle (cone_closest's t outside 0..1)
+        z = wx * ax + wy * ay + wz * az
+        qx, qy, qz = wx - z * ax, wy - z * ay, wz - z * az
+        rr = math.sqrt(qx * qx + qy * qy + qz * qz)
+        t = (z - z0) * (z1 - z0) + (rr - r0) * (r1 - r0)
+        if t < 0.0 or t > (z1 - z0) ** 2 + (r1 - r0) ** 2:
+            feat = 1
     elif kind == RECTANGLE:
         r = rectangle_closest_par(px, py, pz, par, p)
+        ux, uy, uz = par[p, 6], par[p, 7], par[p, 8]
+        vx = ay * uz - az * uy
+        vy = az * ux - ax * uz
+        vz = ax * uy - ay * ux
+        # an edge (1) or corner (2): the closest point clamped to the rim
+        feat = (int(abs(wx * ux + wy * uy + wz * uz) > par[p, 9])
+                + int(abs(wx * vx + wy * vy + wz * vz) > par[p, 10]))
     elif kind == DISK:
         r = disk_closest_par(px, py, pz, par, p)
+        h = wx * ax + wy * ay + wz * az
+        qx, qy, qz = wx - h * ax, wy - h * ay, wz - h * az
+        if qx * qx + qy * qy + qz * qz > par[p, 6] * par[p, 6]:
+            feat = 1
     else:
         return math.inf, 0.0, 0.0, 1.0, px, py, pz, 0
-    return r[0], r[1], r[2], r[3], r[4], r[5], r[6], 0
+    return r[0], r[1], r[2], r[3], r[4], r[5], r[6], feat
 
 
 @njit(cache=True)
