@@ -378,28 +378,6 @@ def test_drum_circle_peaks_are_skimages(tmp_path):
         np.testing.assert_array_equal(a, b)
 
 
-@pytest.mark.parametrize("tilt,kind", [(20.0, "shadow"), (-25.0, "ruler")])
-def test_level_frame_without_a_plate_and_a_diagonal_edge_below_the_drum(tmp_path, tilt, kind):
-    # a level tester frame (no plate) with a straight shadow edge or a ruler across the ground
-    # below the drum at 20 or -25 deg: refused as a camera rolled beyond the plate search
-    # ("roll_deg: -20.0 in the manifest ... or level: image"); nothing joins the drum to that
-    # edge, as a stand joins a drum to its plate, so it is no plate the drum stands on: the
-    # frame is measured against the image axes (35 deg drawn)
-    img, truth = render.render_tester_frame(4, 35.0, size=(800, 640), window="plain")
-    h, w = img.shape
-    rr, cc = np.mgrid[0:h, 0:w]
-    (cx, cy), r_ = truth["centre_px"], truth["radius_px"]
-    edge = (cy + r_ + 70) + np.tan(np.radians(tilt)) * (cc - cx)
-    outside = np.hypot(rr - cy, cc - cx) > r_ + 3
-    if kind == "shadow":
-        img = np.where((rr > edge) & outside, 0.6 * img, img)
-    else:
-        img = np.where((np.abs(rr - edge) < 6) & outside, 0.15, img)
-    p = render.save_frame(tmp_path / f"{kind}.png", np.clip(img, 0, 1))
-    r = drum.measure_drum_frame(p)
-    assert r.level_reference == "image axes" and abs(r.angle_deg - truth["angle_deg"]) <= 0.3, r.angle_deg
-
-
 @pytest.mark.parametrize("roll", [0.0, 10.0, -7.0])
 def test_rendered_drum_truth_gives_the_drum_in_the_photo(roll):
     # the renderer's truth places the drum in the photo (turned with the camera's roll and

@@ -28,9 +28,7 @@ drum window, 8- or 16-bit grey, time-averaged over many frames, no plate in view
    search but a straight edge across it below the drum tilted beyond it
    (:func:`soilcal.imaging.measure._plate_beyond_search`) is refused naming the tilt: the
    ``roll_deg`` to give if that edge is the plate's (a camera rolled further), ``level: image``
-   if it is not (a shadow, a table's edge).  With a plate found, a tilted edge is no roll; nor is
-   one crossing the drum or with nothing joining it to the drum (:func:`_stands_on`: a stand
-   joins a drum to its plate, rolled or not), and the frame is taken against the image axes.  ``level: image`` skips the plate search, ``level: plate``
+   if it is not (a shadow, a table's edge).  With a plate found, a tilted edge is no roll.  ``level: image`` skips the plate search, ``level: plate``
    requires a plate.  The frame is rotated about the drum centre by the roll.
 4. Interface: Otsu's threshold inside the masked drum separates powder from air; the powder is
    the class lying lower (its centroid below the air's: dark powder on a white backlight, or
@@ -285,43 +283,6 @@ def find_drum(gray):
     return cx, cy, r, "rim"
 
 
-#: the least share of the gap between the drum and a tilted edge below it that a straight edge
-#: square to that edge must span for the drum to stand on it (a stand's leg, a support)
-SUPPORT_MIN_SPAN = 0.6
-
-
-def _stands_on(edges, line, cx, cy, r):
-    """Whether anything joins the drum (centre ``cx``, ``cy``, radius ``r``) to the straight
-    edge ``line`` (slope, intercept) below it, as a stand joins a drum to the plate it stands
-    on: in the gap between the drum and the line, within the drum's width along the line, an
-    edge of ``edges`` square to the line spanning at least :data:`SUPPORT_MIN_SPAN` of the gap
-    in one column (widened by a pixel).  A camera rolled beyond the plate search tilts the plate
-    and the stand alike, and the stand still joins them; a shadow's edge, a ruler or a table's
-    edge across a level photo below a drum on a bare ground or a tester's backlight has none.
-    A line crossing the drum is none it stands on; a drum closer to the line than about 10 px
-    beyond its rim is taken to stand on it."""
-    slope, b = line
-    a = math.atan(slope)
-    u = np.array([math.cos(a), math.sin(a)])  # along the line, (col, row)
-    n = np.array([-math.sin(a), math.cos(a)])  # square to it, down the photo
-    d = (slope * cx + b - cy) * math.cos(a)  # from the drum centre to the line, along n
-    if d < r:
-        return False  # the line crosses the drum: nothing the drum stands on
-    s = np.arange(1.03 * r + 8.0, d - 4.0)
-    if s.size < 10:
-        return True
-    t = np.arange(-r, r + 1.0)
-    cc = cx + t[None, :] * u[0] + s[:, None] * n[0]
-    rr = cy + t[None, :] * u[1] + s[:, None] * n[1]
-    wide = ndi.binary_dilation(edges, np.ones((3, 3), bool))
-    h, w = edges.shape
-    ri, ci = np.round(rr).astype(int), np.round(cc).astype(int)
-    inside = (ri >= 0) & (ri < h) & (ci >= 0) & (ci < w)
-    hit = np.zeros(ri.shape, bool)
-    hit[inside] = wide[ri[inside], ci[inside]]
-    return bool(hit.mean(axis=0).max() >= SUPPORT_MIN_SPAN)
-
-
 def _tls(u, v):
     p = np.column_stack([u, v])
     m = p.mean(axis=0)
@@ -447,18 +408,12 @@ def _measure_drum_frame(path, threshold, keep_stages, options, tried: Tried) -> 
         # no plate below the drum within the plate search: a plate tilted beyond it (a camera
         # rolled further) would have given the image axes, and the angle off by the roll.  Only
         # then is a straight edge beyond the search looked for: with a plate found, a tilted
-        # edge is a shadow or a table's edge, not a roll.  An edge with nothing between it and
-        # the drum is no plate the drum stands on (_stands_on); for one with something between
-        # them, what it is cannot be told from the photo, so both readings are offered
+        # edge is a shadow or a table's edge, not a roll.  What it is cannot be told from the
+        # photo, so both readings are offered
         tilted = None
         if line is None:
             tilted = _plate_beyond_search(edges, ndi.binary_dilation(edges, np.ones((3, 1), bool)), [],
                                           below=(cx, cy + R))
-            if tilted is not None and not _stands_on(edges, tilted, cx, cy, R):
-                tried.add("a straight edge below the drum, tilted beyond the plate search, with nothing "
-                          "between it and the drum: no plate the drum stands on, the frame taken as level",
-                          line=tilted)
-                tilted = None
         if tilted is not None:
             tried.lines = [tilted]
             tilt = roll_of(tilted[0])
