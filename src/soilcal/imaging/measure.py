@@ -581,9 +581,8 @@ def _on_plate_lines(path, rgb, lum, grays, lines, n_first, channel, threshold, k
     refusals = []  # every cue's refusal, the topmost line's first
     first = None  # the first cue's result, waiting for a second cue to cross-check it
     for n_line, (slope, intercept) in enumerate(lines, n_first):  # the plate top first; a faint one may hide behind a lower edge
-        if beside and any(all(slope * c + intercept <= b[1] * c + b[2] + 3 for c in (0, w - 1)) for b in beside):
-            # a heap stood on a line below this one already (across the whole frame: a line
-            # crossing it, at a tilt, is lower on one side), which ran on too little beside it
+        if beside and slope * w / 2 + intercept <= min(b[1] * w / 2 + b[2] for b in beside) + 3:
+            # a heap stood on a line above this one already, which ran on too little beside it
             # (a plate hardly wider than the heap): a line of its grain, above its plate, is
             # no better; only a lower line can be the plate the other one was not
             continue
@@ -614,8 +613,7 @@ def _on_plate_lines(path, rgb, lum, grays, lines, n_first, channel, threshold, k
             except InputError as e:
                 if e.field not in ("image", "left flank", "right flank", "plate line"):
                     raise
-                if (e.field == "plate line" and not getattr(e, "cuts_heap", False)
-                        and not any(b[0] == n_line for b in beside)):
+                if e.field == "plate line" and not any(b[0] == n_line for b in beside):
                     beside.append((n_line, slope, intercept, f"line {n_line}: {e.got}"))
                 tried.refuse_last(e)
                 refusals.append(e)
@@ -626,11 +624,6 @@ def _on_plate_lines(path, rgb, lum, grays, lines, n_first, channel, threshold, k
                     # on one side, the wall beside it on the other: no lower line makes it whole
                     # (one slanting up across its flank would give it a foot)
                     raise line_refusals[0]
-                if getattr(e, "cuts_heap", False) and first is None:
-                    # one segmentation sees the heap go on below the line: the line crosses the
-                    # heap (a cue that puts plate and heap in one class cannot tell), whatever
-                    # the further cues find on it
-                    break
                 checks -= first is not None
                 continue
             if channel != "auto":
@@ -722,7 +715,6 @@ def _pile_with(path, rgb, gray, cue, polarity, band, slope, intercept, threshold
     comp = _components_on_plate(path, binary, slope, intercept, "heap")
     if plate_edges is not None:
         _plate_beside_heap(path, plate_edges, comp, slope, intercept)
-        _heap_ends_on(path, binary, comp, slope, intercept)
     lev, prow, roll = _level(comp, slope, intercept)
     glev = _level(gray, slope, intercept)[0]
     llev = _level(lum, slope, intercept)[0] if lum is not None and cue != "gray" else None
@@ -789,59 +781,6 @@ def _plate_beside_heap(path, edges, comp, slope, intercept):
         if share < PLATE_BESIDE_MIN:
             raise InputError(path, "plate line", "a heap standing on a plate edge that runs on beside it",
                              f"a line through the heap, an edge along {share:.0%} of the columns {side} of it")
-
-
-#: rows (px) below a plate line in which the heap's class is counted (_heap_ends_on)
-LINE_STRIP = (3, 8)
-#: a plate candidate is refused when the share of the heap's class below it under one of the
-#: heap's feet exceeds that below it beside the heap by more than this (_heap_ends_on)
-HEAP_BELOW_MAX = 0.5
-
-
-def _heap_ends_on(path, binary, comp, slope, intercept):
-    """Refuse a plate candidate that cuts through the heap ``comp`` standing on it instead of
-    running along its foot: a line of something beside the heap (the top edge of a scale card,
-    box or label standing on the plate, a row of a card's checker, a line of the heap's grain)
-    crossing the heap above its foot gives the heap's upper part a foot on it, the flanks read
-    at the line's tilt, as "ok".  Below a plate's top edge lies plate (its face, the table)
-    under the heap as beside it, whatever its class in the segmentation ``binary`` (a dark
-    plate under a dark heap is heap class in both places); below a line through the heap lies
-    more heap.  The share of the heap's class in the strip :data:`LINE_STRIP` px below the line
-    under each end quarter of the heap's base (the columns where ``comp`` reaches the line) is
-    compared with that below the line beside the heap (the columns within a quarter of the
-    heap's width of either side, from 5 px off it): a difference above :data:`HEAP_BELOW_MAX`
-    refuses the line.  A heap filling the frame's width is not judged."""
-    h, w = binary.shape
-    cols = np.arange(w)
-    rows = slope * cols + intercept
-    on = np.nonzero(comp.any(axis=0))[0]
-    c0, c1 = int(on[0]), int(on[-1])
-    rr = np.arange(h)[:, None]
-    base = np.nonzero((comp & (rr > rows[None, :] - 8)).any(axis=0))[0]
-    reach = max(10, int(0.25 * (c1 - c0 + 1)))
-    beside = cols[((cols < c0 - 5) & (cols >= c0 - 5 - reach)) | ((cols > c1 + 5) & (cols <= c1 + 5 + reach))]
-    if base.size < 40 or beside.size < 10:
-        return
-    offs = np.arange(LINE_STRIP[0], LINE_STRIP[1] + 1)
-
-    def share(cs):
-        r = np.round(rows[cs][None, :] + offs[:, None]).astype(int)
-        c = np.broadcast_to(cs[None, :], r.shape)
-        ok = (r >= 0) & (r < h)
-        return float(binary[r[ok], c[ok]].mean()) if ok.sum() >= 10 * len(offs) else None
-
-    by = share(beside)
-    if by is None:
-        return
-    q = max(10, base.size // 4)
-    for k, cs in enumerate((base[:q], base[-q:])):
-        under = share(cs)
-        if under is not None and under - by > HEAP_BELOW_MAX:
-            e = InputError(path, "plate line", "a heap standing on a plate edge, its foot on the line",
-                           f"a line through the heap: below it the heap's class fills {under:.0%} under the heap's "
-                           f"{('left', 'right')[k]} foot and {by:.0%} beside the heap")
-            e.cuts_heap = True
-            raise e
 
 
 #: strips beside a fitted flank line, in px along its normal (negative: into the heap): the

@@ -110,27 +110,6 @@ def _plate(img, rng, row, c0, c1, thick_px, grey=0.68, rgb=(0.97, 0.99, 1.0), hi
         img[row:row + 2, c0:c1] = 0.92  # bright chamfer highlight along the top edge
 
 
-def _standing(img, obj, row, centre, s, free):
-    """An object standing on the plate (its foot on the plate's top edge, row ``row``), drawn
-    where ``free`` (not before the heap): ``obj`` = {"x_mm": its left side from the heap's
-    centre, "width_mm", "height_mm", "rgb", "checker_mm" (a checker of that square size in
-    black and white instead of ``rgb``: a scale card)}.  A card, a ruler lying on the plate
-    (a few mm high), a coin or a label box."""
-    h, w = img.shape[:2]
-    c0 = int(round(centre + obj["x_mm"] * s))
-    c1 = int(round(centre + (obj["x_mm"] + obj["width_mm"]) * s))
-    r0 = int(round(row - obj["height_mm"] * s))
-    rr, cc = np.mgrid[r0:row, max(c0, 0):min(c1, w)]
-    q = obj.get("checker_mm")
-    if q:
-        k = ((rr - r0) // int(round(q * s)) + (cc - c0) // int(round(q * s))) % 2
-        patch = np.where(k[..., None] == 0, 0.05, 0.95) * np.ones(3)
-    else:
-        patch = np.broadcast_to(np.asarray(obj.get("rgb", (0.95, 0.95, 0.92)), float), rr.shape + (3,))
-    sel = free[rr, cc]
-    img[rr[sel], cc[sel]] = patch[sel]
-
-
 def _table(img, rng, row):
     h, w, _ = img.shape
     grain = _noise(rng, (h - row, w), (1.0, 25.0))
@@ -203,7 +182,6 @@ def render_pile(seed, left_deg, right_deg, front_deg=None, back_deg=None, soil="
     wall keys of :func:`_wall`; ``soil_rgb``; ``shadow`` = {"dx_mm", "dy_mm", "blur_px",
     "darkness"}; ``plate`` = {"thick_mm", "grey", "rgb", "highlight"}; ``table_rgb``;
     ``offset_frac`` (heap centre shift, fraction of the width); ``scale_bar`` (False: none);
-    ``on_plate`` (objects standing or lying on the plate beside the heap: :func:`_standing`);
     camera keys of :func:`_finish`.
     """
     style = style or {}
@@ -284,8 +262,6 @@ def render_pile(seed, left_deg, right_deg, front_deg=None, back_deg=None, soil="
         a, b = rng.uniform(1.0, 3.0) * s, rng.uniform(0.8, 2.0) * s
         m = (((cc - cx) / a) ** 2 + ((rr - row_p) / b) ** 2 <= 1) & (rr < row_p)
         canvas[m] = albedo * rng.uniform(0.6, 1.0)
-    for obj in style.get("on_plate", ()):
-        _standing(canvas, obj, row_p, centres[0] if centres else cw / 2, s, ~sil_all)
     pl = style.get("plate", {})
     thick = int(pl.get("thick_mm", 6) * s)
     _plate(canvas, rng, row_p, 0, cw, thick, pl.get("grey", 0.68), pl.get("rgb", (0.97, 0.99, 1.0)),
