@@ -202,7 +202,13 @@ def test_a_printed_property_that_simulation_params_replaces_is_asked_only_its_ph
     def misprint(d):
         d["properties"]["particle_density"]["value"] = 17575.67
 
-    load_soil(_cinnamon(tmp_path, misprint, soil="xinjiang-vineyard"), ROOT / "resources")
+    soil = load_soil(_cinnamon(tmp_path, misprint, soil="xinjiang-vineyard"), ROOT / "resources")
+    # and its runs take the replacing value, as the commit of the printed one says
+    from soilcal.dem.scenarios.base import stage_params
+
+    params = soil.data["simulation"]["params"]
+    for st in soil.data["stages"]:
+        assert stage_params(soil, st["id"], {}, params=params).soil_density == pytest.approx(1757.567)
 
     def unreplaced(d):
         misprint(d)

@@ -1,5 +1,6 @@
 """The cost model of a DEM job (soilcal.dem.cost) against the runs it sizes."""
 
+import math
 import time
 
 import numpy as np
@@ -223,3 +224,12 @@ def test_estimates_are_fast():
     big = cost.estimate("rotary", "rpm-250", rotary.paper_params(), "paper")
     assert big.peak_particles > 10_000_000 and big.mem_mb > 100_000
     assert soilbin.FILL_FACTOR > 1
+
+
+def test_a_point_whose_loop_effect_takes_friction_past_two_is_costed():
+    # a rate effect on a calibrated friction of 1.9 (beta 0.2, 7 m/s against 1.75 m/s) gives
+    # 1.9 (1 + 0.2 ln 4) = 2.427, past a soil's plausible 2 (base.SOIL_RANGES) but physical: the
+    # job's memory and runtime are estimated while the workflow plans it, as the run takes it
+    mu = 1.9 * (1 + 0.2 * math.log(4.0))
+    c = cost.estimate("repose", "cinnamon-soil", {"soil_soil_static_friction": mu}, "quick")
+    assert c.n_particles > 0

@@ -167,3 +167,17 @@ def test_three_tools_at_the_same_speeds_are_three_tests_not_repeats_of_one():
     out = core.run_inprocess("user", sy.with_measured(conds, table), S.base_params, S.simulate,
                              core.Settings(bootstrap=0))
     assert out.verdict.startswith("consistent"), out.verdict
+
+
+def test_repeats_that_all_read_one_value_state_no_scatter():
+    # two repeats rounded to whole newtons that read the same, 250 / 250 N against a simulated
+    # 248.5 N: their sample SD is 0, no measured scatter, so no z of (250 - 248.5) / (seed SE
+    # alone) flags a model 0.6 % off as scattering beyond the uncertainty
+    from soilcal.loop.diagnose import replicate_residuals
+
+    d = pd.DataFrame({"simulation": ["a", "a", "b", "b", "b"], "measure": ["force"] * 5,
+                      "measured": [250.0, 250.0, 250.0, 250.0, 256.0],
+                      "simulated_mean": [248.5, 248.5, 240.0, 240.0, 240.0], "simulated_sd": [0.6] * 2 + [3.0] * 3,
+                      "simulated_n": [3] * 5})
+    z, _ = replicate_residuals(d)
+    assert z == pytest.approx([12 / np.sqrt(7)], rel=1e-12)  # only b's repeats (as the test above)

@@ -549,7 +549,9 @@ def estimate(scenario: str, setup, params=None, preset: str = "quick", replicate
     if isinstance(params, DemParams):
         dem = params
     else:
-        dem = DemParams.from_mapping(params or {}, source)
+        # a point spec's values, checked at start-up or derived from checked ones (a loop
+        # effect may take a friction past a soil's plausible 2): only their physical range here
+        dem = DemParams.from_mapping(params or {}, source, plausible=False)
     if isinstance(setup, str):
         setup = merge_setup(mod.setups(), setup, None, source)
     check(isinstance(setup, dict), source, "setup", "a setup mapping or a setup name", setup)

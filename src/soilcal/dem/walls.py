@@ -47,9 +47,13 @@ counts the contact), and among contacts with the same point the face before the 
 before the vertex or corner is kept, then the one of the wall that counts (below; integrator
 ``_cover``).  "On" means within 1e-9 R for two triangles of one mesh (they share their
 vertices exactly) and within max(2e-4 R, 4 float32 ulps of the coordinates) across walls:
-tiles exported with a gap, an overlap or a step of up to 5e-7 m (1e-4 of a 5 mm radius, a
+tiles exported with a gap, an overlap or a step of up to 2e-4 R (1e-6 m for a 5 mm radius, a
 change of the overlap far below a contact's) or an STL tile (float32 vertices) on a float64
-plane are one surface.  Face contacts are compared only where two of them have parallel
+plane are one surface.  The overlap is the counting wall's own: where it lies that little below
+the other, the force is that of the overlap less the step (0.99964 of it for an STL tile
+1.19e-8 m below a plane at an overlap of 0.01 R).  Tiles within one mesh whose vertices are not
+shared (unwelded patches of one STL file) are held to 1e-9 R and count twice at their seam;
+load them as separate meshes.  Face contacts are compared only where two of them have parallel
 normals (within 0.008 deg; a 0.1 deg crease is two faces).  Contacts
 elsewhere stay: a sphere on a floor against the edge of a ledge of the same mesh feels both.
 So a sphere over a flat or convex surface feels one contact wherever it touches, as on the
@@ -66,10 +70,10 @@ surface act on the next with that surface's stiffness and surface energy from th
 
 Which wall counts where two lie on one surface (a belt or a turntable disk flush with a floor
 plane, a liner tile on a plate): a bounded primitive (mesh, rectangle, disk, cylinder, cone)
-before an infinite plane, and among two of the same kind the one added later, as it lies on
-top (a liner added to a plate).  The choice does not depend on which wall was added first
-where a bounded wall lies in a plane, and the contact moves with the wall that counts it: a
-sphere on a belt set into a floor rolls at 2/7 of the belt speed either way.
+before an infinite plane, and among two bounded ones the one added later, as it lies on top (a
+liner added to a plate).  The contact moves with the wall that counts it: a sphere on a belt
+set into a floor plane rolls at 2/7 of the belt speed whichever was added first; on a floor
+that is itself a mesh or a rectangle the belt must be added after the floor.
 
 Limits.  At a concave crease (a valley between two faces, of one wall or two) both faces count
 where the sphere centre lies over both (a wedge of width ``h tan(alpha)`` for a crease of

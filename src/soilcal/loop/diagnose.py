@@ -301,7 +301,7 @@ def varies_within(dt: pd.DataFrame) -> set[str]:
 def replicate_residuals(d: pd.DataFrame) -> tuple[np.ndarray, np.ndarray]:
     """Standardised residuals (and their Welch-Satterthwaite degrees of freedom) of the
     conditions measured as replicate rows without an SD: per condition and measured quantity
-    with two distinct measured values at least, the residual of their mean, over
+    with two measured values at least, not all equal, the residual of their mean, over
     sqrt(s^2 / n + sd_s^2 / n_s) with s the replicates' sample SD (n of them) and sd_s the seed
     SD of the simulated mean (n_s seeds) (:mod:`soilcal.loop.residuals`): the replicates are the
     measured uncertainty a table of one row per condition states in its ``sd`` and ``n``
@@ -320,6 +320,8 @@ def replicate_residuals(d: pd.DataFrame) -> tuple[np.ndarray, np.ndarray]:
         if n < 2:
             continue
         sd = float(np.std(m, ddof=1))
+        if sd == 0.0:
+            continue  # repeats that all read one value (rounded) state no scatter to judge against
         sim, sd_s, n_s = (float(g["simulated_mean"].iloc[0]), float(g["simulated_sd"].iloc[0]),
                           float(g["simulated_n"].iloc[0]))
         var_m = sd ** 2 / n

@@ -360,7 +360,8 @@ def stage_params(soil, stage_id: str, levels: dict, base: "DemParams | None" = N
         return dem_field(path, soil.data, pname, where)
 
     for name, (x, prop) in property_values(path, soil.data).items():
-        put(name, x, f"properties.{prop}.value")
+        if name not in (params or {}):  # a printed value params replaces is no run's (a misprint kept)
+            put(name, x, f"properties.{prop}.value")
     for name, v in (params or {}).items():
         if name not in known:
             raise InputError(path, f"{params_field}.{name}", f"a DEM parameter ({', '.join(known)})", name)
