@@ -173,14 +173,11 @@ SOIL_RANGES = {
                            "a soil shear modulus in [1e4, 5e10] Pa (soft peat to quartz; a value in MPa "
                            "times 1e6, in GPa times 1e9)"),
     "soil_poisson": (0.0, 0.5, True, False, "a soil Poisson ratio in [0, 0.5)"),
-    "soil_soil_static_friction": (0.0, 2.0, True, True, "a soil-soil sliding friction coefficient in [0, 2]"),
-    "soil_steel_static_friction": (0.0, 2.0, True, True, "a soil-steel sliding friction coefficient in [0, 2]"),
-    "soil_soil_surface_energy": (0.0, 100.0, True, True,
-                                 "a soil-soil JKR surface energy in [0, 100] J/m^2 (a value in mJ/m^2 "
-                                 "times 0.001)"),
-    "soil_steel_surface_energy": (0.0, 100.0, True, True,
-                                  "a soil-steel JKR surface energy in [0, 100] J/m^2 (a value in mJ/m^2 "
-                                  "times 0.001)"),
+    **{f"{pair}_static_friction": (0.0, 2.0, True, True, f"a {label} sliding friction coefficient in [0, 2]")
+       for pair, label in (("soil_soil", "soil-soil"), ("soil_steel", "soil-steel"))},
+    **{f"{pair}_surface_energy": (0.0, 100.0, True, True,
+                                  f"a {label} JKR surface energy in [0, 100] J/m^2 (a value in mJ/m^2 times 0.001)")
+       for pair, label in (("soil_soil", "soil-soil"), ("soil_steel", "soil-steel"))},
 }
 
 
