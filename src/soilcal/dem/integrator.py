@@ -63,7 +63,7 @@ CONTACT_MATH = {"contract"}
 
 @njit(cache=True, inline="always")
 def _cover(i, k, nwc, p, feat, cx, cy, cz, tol, ri, xi, yi, zi, fk, wnbr, prim_kind,
-           prim_wall, prim_par):
+           prim_wall, prim_par, wall_vel, wall_omega):
     """The wall slot whose primitive counts the contact of particle i with primitive p (its
     k-th wall slot; closest point c, feature ``feat``), or -1 when p counts it itself
     (walls.py, "One contact per touch"): the slot of another primitive q, of any wall, on
@@ -71,8 +71,8 @@ def _cover(i, k, nwc, p, feat, cx, cy, cz, tol, ri, xi, yi, zi, fk, wnbr, prim_k
     the edge or vertex of a flat or convex surface next to the face or edge that holds it, or
     the edge of a triangle the sphere has moved off), or lies on p too (the same point, to
     rounding) and q's is a face where p's is not, or an edge where p's is a vertex, or the
-    same feature and q ranks higher: a bounded primitive above an infinite plane, then the
-    later primitive (walls.py, "Which wall counts").  ``tol``: :func:`_same_tol`, for a q of
+    same feature and q ranks higher: a moving wall above a fixed one, then a bounded primitive
+    above an infinite plane, then the later primitive (walls.py, "Which wall counts").  ``tol``: :func:`_same_tol`, for a q of
     another wall (the primitives of one wall share their vertices exactly: 1e-9 R).  ``fk``: the
     slot of the particle's first face contact (-1: none), tried first (a sphere on a face: its
     neighbours' edges lie on it)."""
@@ -94,11 +94,27 @@ def _cover(i, k, nwc, p, feat, cx, cy, cz, tol, ri, xi, yi, zi, fk, wnbr, prim_k
         if o8[7] < feat:
             return kk
         if o8[7] == feat:
+            mq = _moving(prim_wall[pp], wall_vel, wall_omega)
+            mp = _moving(wp, wall_vel, wall_omega)
+            if mq != mp:
+                if mq:
+                    return kk
+                continue
             if kq != PLANE and kp == PLANE:
                 return kk
             if (kq == PLANE) == (kp == PLANE) and pp > p:
                 return kk
     return -1
+
+
+@njit(cache=True, inline="always")
+def _moving(w, wall_vel, wall_omega):
+    """Whether wall ``w`` moves (a velocity or an angular velocity set): a belt or turntable
+    lying on a fixed floor carries what rests on it, whichever was added first."""
+    for d in range(3):
+        if wall_vel[w, d] != 0.0 or wall_omega[w, d] != 0.0:
+            return True
+    return False
 
 
 # two face contacts whose normals agree this closely (cos, 0.008 deg) may be one surface
@@ -311,7 +327,7 @@ def gather(x, v, om, r, inv_m, inv_i, mat, f, t, ovr, peak, mroll, dt, kick, max
                         if r8[7] == 0 and not coplanar:
                             continue
                         kk = _cover(i, k, nwc, p, r8[7], r8[4], r8[5], r8[6], tol, ri, xi, yi,
-                                    zi, fk, wnbr, prim_kind, prim_wall, prim_par)
+                                    zi, fk, wnbr, prim_kind, prim_wall, prim_par, wall_vel, wall_omega)
                         if kk >= 0 and whist[i * KW + kk, H_SIZE - 1] == 0.0:
                             for q in range(H_SIZE):
                                 whist[i * KW + kk, q] = whist[row, q]
@@ -340,7 +356,7 @@ def gather(x, v, om, r, inv_m, inv_i, mat, f, t, ovr, peak, mroll, dt, kick, max
                         continue
                     if feat != 0 or coplanar:
                         if _cover(i, k, nwc, p, feat, cx, cy, cz, tol, ri, xi, yi, zi, fk,
-                                  wnbr, prim_kind, prim_wall, prim_par) >= 0:
+                                  wnbr, prim_kind, prim_wall, prim_par, wall_vel, wall_omega) >= 0:
                             for q in range(H_SIZE):
                                 whist[row, q] = 0.0
                             continue

@@ -69,11 +69,11 @@ materials the history is carried over as it is: the spring and the JKR neck buil
 surface act on the next with that surface's stiffness and surface energy from then on.
 
 Which wall counts where two lie on one surface (a belt or a turntable disk flush with a floor
-plane, a liner tile on a plate): a bounded primitive (mesh, rectangle, disk, cylinder, cone)
-before an infinite plane, and among two bounded ones the one added later, as it lies on top (a
-liner added to a plate).  The contact moves with the wall that counts it: a sphere on a belt
-set into a floor plane rolls at 2/7 of the belt speed whichever was added first; on a floor
-that is itself a mesh or a rectangle the belt must be added after the floor.
+plane, a liner tile on a plate): a moving wall before a fixed one, then a bounded primitive
+(mesh, rectangle, disk, cylinder, cone) before an infinite plane, then the one added later, as
+it lies on top (a liner added to a plate).  The contact moves with the wall that counts it: a
+sphere on a belt set into a floor (a plane, a mesh or a rectangle) rolls at 2/7 of the belt
+speed whichever was added first.
 
 Limits.  At a concave crease (a valley between two faces, of one wall or two) both faces count
 where the sphere centre lies over both (a wedge of width ``h tan(alpha)`` for a crease of
