@@ -412,8 +412,9 @@ def _measure_drum_frame(path, threshold, keep_stages, options, tried: Tried) -> 
         # photo, so both readings are offered
         tilted = None
         if line is None:
-            tilted = _plate_beyond_search(edges, ndi.binary_dilation(edges, np.ones((3, 1), bool)), [],
-                                          below=(cx, cy + R))
+            found = _plate_beyond_search(edges, ndi.binary_dilation(edges, np.ones((3, 1), bool)), [],
+                                         below=(cx, cy + R))
+            tilted = found[0] if found else None
         if tilted is not None:
             tried.lines = [tilted]
             tilt = roll_of(tilted[0])

@@ -27,6 +27,7 @@ degree (``numpy.polynomial.Polynomial.fit``), area = integral over the span of
 
 from __future__ import annotations
 
+import itertools
 import math
 from dataclasses import asdict, dataclass, field
 
@@ -485,25 +486,26 @@ def _pile_on_lines(path, rgb, threshold, keep_stages, channel, tried: Tried, pla
     if plate is not None:
         lines = [(float(plate[0]), float(plate[1]))]
     else:
-        lines = plate_lines(lum, paired=True)
+        ledges = feature.canny(lum, sigma=1.5)
+        lines = plate_lines(lum, edges=ledges, paired=True)
         cedges = colour_edges(rgb)
         tried.edges = cedges
         # the photo's edges, each widened by a row: a plate line that runs on beside the heap
         # has one within 1 px (_plate_beside_heap, once per photo rather than per cue)
-        all_edges = feature.canny(lum, sigma=1.5) | cedges
+        all_edges = ledges | cedges
         plate_edges = ndi.binary_dilation(all_edges, np.ones((3, 1), bool))
         for ln in plate_lines(lum, edges=cedges, paired=True):
             if all(abs((ln[0] - o[0]) * w / 2 + ln[1] - o[1]) > 3 for o in lines):
                 lines.append(ln)
-        beyond = _plate_beyond_search(all_edges, plate_edges, lines[:PLATE_CANDIDATES], every=True)
+        beyond = _plate_beyond_search(all_edges, plate_edges, lines[:PLATE_CANDIDATES])
     tried.lines = list(lines[:PLATE_CANDIDATES])
     grays = _grays(rgb, CUES if channel == "auto" else (channel,), lum)
     if beyond:
         # the first on which a heap stands (each with the lines parallel to it just above: a
         # plate's top edge, fainter than its face's lower edge), else the one running furthest
         # across
-        near = [(b, ln) for b in beyond for ln in _parallel_lines(all_edges, *b)]
-        tilted = next((b for b, ln in near[:PLATE_CANDIDATES] if _heap_stands_on(path, rgb, lum, grays, ln, channel,
+        near = itertools.islice(((b, ln) for b in beyond for ln in _parallel_lines(all_edges, *b)), PLATE_CANDIDATES)
+        tilted = next((b for b, ln in near if _heap_stands_on(path, rgb, lum, grays, ln, channel,
                                                                                  threshold, plate_edges)), None)
         standing = tilted is not None
         tilted = tilted if standing else beyond[0]  # the tilt of the edge running furthest across
@@ -1076,22 +1078,22 @@ def _across(edges, slope, intercept):
     return float(min(hit[:n].mean(), hit[-n:].mean()))
 
 
-def _plate_beyond_search(edges, edges_wide, lines, below=None, every=False):
+def _plate_beyond_search(edges, edges_wide, lines, below=None):
     """A straight edge across the photo (:func:`_across`, at least :data:`ACROSS_MIN`) tilted
     beyond the plate search's :data:`PLATE_MAX_ROLL_DEG` (up to :data:`ROLL_CHECK_MAX_DEG`) and
     running across it further than every plate candidate in ``lines`` does: the plate of a photo
     taken with the camera rolled beyond the search, whose candidates are chords of it or lines
     of the heap that gave flanks several degrees off, or none.  ``edges``: the edge map the
     candidates came from; ``edges_wide``: it widened by a row either side; ``below`` = (col,
-    row): only a line passing below that point counts (a drum's plate).  Returns (slope,
-    intercept) or None; with ``every``, all such lines, best first."""
+    row): only a line passing below that point counts (a drum's plate).  Returns every such
+    (slope, intercept), best first."""
     h, w = edges.shape
     t = np.arange(PLATE_MAX_ROLL_DEG + 0.1, ROLL_CHECK_MAX_DEG + 1e-9, 0.1)
     thetas = np.radians(np.concatenate([90.0 - t[::-1], 90.0 + t]))
     hs, ang, dist = transform.hough_line(edges, theta=thetas)
     _, angs, dists = transform.hough_line_peaks(hs, ang, dist, num_peaks=8, min_distance=4, threshold=0.25 * w)
     if not len(angs):
-        return [] if every else None
+        return []
     er, ec = np.nonzero(edges)
     beyond = []
     for a, d in zip(angs, dists):
@@ -1100,8 +1102,7 @@ def _plate_beyond_search(edges, edges_wide, lines, below=None, every=False):
             continue
         if abs(np.degrees(np.arctan(slope))) > PLATE_MAX_ROLL_DEG:
             beyond.append((_across(edges_wide, slope, b), slope, b))
-    found = _lines_beyond(beyond, edges_wide, lines)
-    return found if every else found[0] if found else None
+    return _lines_beyond(beyond, edges_wide, lines)
 
 
 def _parallel_lines(edges, slope, intercept):
