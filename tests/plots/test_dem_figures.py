@@ -219,6 +219,16 @@ def test_tool_bar_figure_bars_and_errors():
     assert ax.get_ylabel() == "draft (N)"
 
 
+def test_tool_bar_figure_labels_the_papers_error():
+    # the paper's simulated 121 N against the measured 120 N is +0.83 %; 99 N against 98 N +1.02 %
+    g = plate_tool().assign(paper_relative_error_percent=[0.83, np.nan, 1.02, np.nan])
+    ax = dem._tool_bar_figure(g, "bulldozing", "draft").axes[0]
+    texts = [t.get_text() for t in ax.texts]
+    assert texts == ["-1.67 %", "0.83 %", "2.17 %", "3.06 %", "1.02 %", "-2.31 %"]
+    paper_labels = [t for t in ax.texts if t.get_text() in ("0.83 %", "1.02 %")]
+    assert all(t.get_color() == dem.C_PAPER for t in paper_labels)
+
+
 def test_tool_stem_sanitised(tmp_path):
     df = rotary_tool().assign(measurement="rotary tiller", measure="torque/N")
     paths = plots.tool_curves(df, tmp_path / "t")

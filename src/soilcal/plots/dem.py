@@ -237,12 +237,13 @@ def _tool_bar_figure(g: pd.DataFrame, measurement: str, measure: str) -> Figure:
     meas, meas_sd = _num(g, "measured"), _num(g, "measured_sd")
     sim, sd = _num(g, "simulated_mean"), _num(g, "simulated_sd")
     paper, err = _num(g, "paper_simulated"), _num(g, "relative_error_percent")
+    paper_err = _num(g, "paper_relative_error_percent") if "paper_relative_error_percent" in g.columns else None
     status = [_text(v) for v in g["status"]] if "status" in g.columns else [""] * len(g)
 
     n = len(g)
     fig = _figure(max(6.0, 1.2 * n + 2.0), 4.8)
     ax = fig.add_subplot(1, 1, 1)
-    seen = _three_bars(ax, meas, meas_sd, "measured", sim, sd, err, paper, None, status)
+    seen = _three_bars(ax, meas, meas_sd, "measured", sim, sd, err, paper, paper_err, status)
     ax.set_xticklabels(cats, fontsize=8)
     ax.set_xlabel(_first(g, "covariate") or "covariate")
     ax.set_ylabel(_ylabel(measure, _first(g, "unit")))
@@ -277,7 +278,8 @@ def tool_bars(df: pd.DataFrame, stem_prefix="tool") -> list[Path]:
     """One figure ``<stem_prefix>_<measurement>_<measure>`` per (measurement, measure) group
     whose covariate values are not all numeric (e.g. plate shapes): grouped bars per covariate
     value of measured (± measured_sd), soilcal's simulated ± SD with its relative error above,
-    and the paper's simulated where printed. Numeric groups are left to :func:`tool_curves`."""
+    and the paper's simulated where printed, with its relative error to the measured value above
+    it where the table gives one (``paper_relative_error_percent``). Numeric groups are left to :func:`tool_curves`."""
     _require(df, TOOL_BAR_COLUMNS)
     out: list[Path] = []
     for measurement, measure, g in _tool_groups(df):
