@@ -22,8 +22,9 @@ the printed size distribution (Sec. 3.1): particle sizes 3, 2 and 1 mm with mass
 8.85, 8.2 and 82.95 %, read as diameters (assumption: the paper does not say whether the
 sizes are diameters or radii), i.e. radii 1.5, 1.0 and 0.5 mm
 (:class:`soilcal.dem.factories.PSD`, fields ``psd_sizes`` and ``psd_mass_percent``; a
-setup that sets ``psd_mass_percent`` to None uses ``particle_radius`` and
-``radius_spread`` instead).  ``quick`` cuts a
+setup that gives its own ``particle_radius`` and ``radius_spread`` runs those uniform radii
+instead, and one that gives its own ``psd_sizes`` and ``psd_mass_percent`` runs that
+distribution under either preset, :data:`SIZE_KEYS`).  ``quick`` cuts a
 periodic slab of width ``slab_width`` (70 mm) out of the bin across the plate: the plate
 spans the slab (no plate ends, so no side spill), the bed is 60 mm deep (twice the cut),
 particles of 7 mm radius (0.9-1.1), the paper's shear modulus unscaled, 30 % of the
