@@ -147,6 +147,13 @@ def published_stage(soil_data: dict, stage_id: str) -> dict:
     return st
 
 
+def own_fixed(config_stage: dict, decided: set) -> dict:
+    """The fixed values a derived stage's config gives for parameters the recipe does not set
+    (``decided``: the parameters the earlier stages vary): they hold in the stage's runs, over
+    any value an earlier stage fixes, as they hold where the stage runs its config's levels."""
+    return {k: v for k, v in (config_stage.get("fixed") or {}).items() if k not in decided}
+
+
 def _dem_base(stage: dict) -> dict:
     """A config stage as the DEM source writes it: responses by id, no printed analysis."""
     st = copy.deepcopy(stage)
@@ -296,9 +303,10 @@ def path_from_screening(soil_data: dict, stage_id: str, screening_stage: dict, e
         taken.add(sym)
         factors[sym] = {"parameter": pname, "levels": [_g12(v) for v in path[t]], "screening_symbol": t}
     st["factors"] = factors
-    fixed = {k: v for k, v in (config_stage.get("fixed") or {}).items()
-             if k not in {f["parameter"] for f in sf.values()}}
-    fixed.update({k: v for k, v in (screening_stage.get("fixed") or {}).items()})
+    # the screening's fixed values carry on; the stage's own fixed values hold for the
+    # parameters the screening does not vary (those it varies the recipe sets, below)
+    fixed = dict(screening_stage.get("fixed") or {})
+    fixed.update(own_fixed(config_stage, {f["parameter"] for f in sf.values()}))
     for t, f in sf.items():
         if t not in chosen:
             fixed[f["parameter"]] = _g12(_centre(f))
@@ -340,7 +348,13 @@ def bbd_from_path(soil_data: dict, stage_id: str, path_stage: dict, path_respons
     st["factors"] = {s: {"parameter": path_stage["factors"][s]["parameter"],
                          "low": _g12(levels[s]["low"]), "centre": _g12(levels[s]["centre"]),
                          "high": _g12(levels[s]["high"])} for s in syms}
-    st["fixed"] = dict(path_stage.get("fixed") or {})
+    # the path's fixed values carry on; the stage's own hold for the parameters that neither
+    # the path nor the screening it comes from varies
+    decided = {f["parameter"] for f in path_stage["factors"].values()}
+    scr_id = _stage(soil_data, path_stage["id"]).get("from_stage")
+    if scr_id:
+        decided |= {f["parameter"] for f in _stage(soil_data, scr_id)["factors"].values()}
+    st["fixed"] = {**dict(path_stage.get("fixed") or {}), **own_fixed(config_stage, decided)}
     k = len(syms)
     st["runs"] = 2 * k * (k - 1) + int(st.get("center_points", 0))
     _keep_printed_optimum(st, config_stage)

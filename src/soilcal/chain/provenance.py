@@ -236,9 +236,10 @@ def _preset_value(scenario: str, key: str, setup: dict, preset: str, params, soi
 
 
 def _setup_rows(add, where: str, scenario: str, setup_name: str, overrides: dict, preset: str,
-                params, soil_path) -> None:
+                params, soil_path, taken: dict | None = None) -> None:
     """Rows of one simulated setup: every value the run takes, from the soil's ``set`` or the
-    named setup; a soil bin's preset values; the cohesion factor."""
+    named setup; a soil bin's preset values; the cohesion factor.  ``taken``: override key ->
+    the soil field it comes from, for a value the entry takes from elsewhere in the soil."""
     from soilcal.dem import cost
     from soilcal.dem.scenarios import get
     from soilcal.dem.scenarios.base import merge_setup
@@ -256,6 +257,9 @@ def _setup_rows(add, where: str, scenario: str, setup_name: str, overrides: dict
         if key not in setup:
             add(f"{where}.setup.{key}", effective[key], "preset",
                 f"the {preset} preset's value (not a value of the named setup {setup_name!r})")
+        elif key in (taken or {}):
+            add(f"{where}.setup.{key}", overrides[key], "soil", f"{taken[key]} (the soil's own; {where} leaves "
+                f"set.{key} out), in place of the named setup's {_text(named.get(key))}")
         elif key in overrides:
             add(f"{where}.setup.{key}", overrides[key], "soil", f"{where}.set.{key}, in place of the named "
                 f"setup's {_text(named.get(key))}")
@@ -298,7 +302,7 @@ def simulation_setup(soil, design_override: str | None = None) -> "pd.DataFrame"
     from soilcal.chain.adaptive import adaptive_stage_ids
     from soilcal.chain.derive import SCREENING_DEFAULTS, dem_stage_ids, design_mode, simulated_stage_ids
     from soilcal.chain.verify import VERIFY_DEFAULTS
-    from soilcal.config.measurements import DEFAULT_PRESET, DEFAULT_REPLICATES
+    from soilcal.config.measurements import DEFAULT_PRESET, DEFAULT_REPLICATES, entry_set_of
     from soilcal.dem.scenarios.base import DemParams
     from soilcal.doe.adaptive import DEFAULTS as ADAPTIVE_DEFAULTS
 
@@ -421,8 +425,8 @@ def simulation_setup(soil, design_override: str | None = None) -> "pd.DataFrame"
         if varied:
             add(f"{where}.covariates", varied, "soil", "table columns that choose the setup or set a setup "
                 "value per row, over the values below")
-        _setup_rows(add, where, entry["scenario"], entry["setup"], dict(entry.get("set") or {}), mpreset,
-                    params, soil.path)
+        mset, taken = entry_set_of(soil.path, data, mid, entry)
+        _setup_rows(add, where, entry["scenario"], entry["setup"], mset, mpreset, params, soil.path, taken)
         add(f"{where}.replicates", entry.get("replicates", DEFAULT_REPLICATES),
             "soil" if "replicates" in entry else "default", f"{where}.replicates" if "replicates" in entry
             else "seeds per measured condition")

@@ -628,15 +628,17 @@ def _check_paper_psd(path: Path, d: dict) -> None:
     there, while the quick runs still scale by it); the error names the entry's
     ``set.paper_psd`` only when the same setup holds the named setup's own sizes."""
     from soilcal.chain.provenance import base_params
+    from soilcal.config.measurements import entry_set_of
     from soilcal.dem.scenarios import SCENARIOS
     from soilcal.dem.scenarios.base import merge_setup
 
-    entries = [(f"simulation.responses.{rid}", e, (d.get("simulation") or {}).get("preset", "quick"))
+    preset_of = (d.get("simulation") or {}).get("preset", "quick")
+    entries = [(f"simulation.responses.{rid}", e, preset_of, e.get("set") or {}, {})
                for rid, e in ((d.get("simulation") or {}).get("responses") or {}).items()]
-    entries += [(f"measurements.{mid}", e, e.get("preset", "quick")) for mid, e in (d.get("measurements") or {}).items()]
+    for mid, e in (d.get("measurements") or {}).items():
+        entries.append((f"measurements.{mid}", e, e.get("preset", "quick"), *entry_set_of(path, d, mid, e)))
     params = None
-    for where, entry, preset in entries:
-        given = entry.get("set") or {}
+    for where, entry, preset, given, taken in entries:
         if "paper_psd" not in given or preset == "paper" or entry.get("scenario") not in SCENARIOS:
             continue
         mod = SCENARIOS[entry["scenario"]]
@@ -656,7 +658,9 @@ def _check_paper_psd(path: Path, d: dict) -> None:
         except InputError as exc:
             raise InputError(path, f"{where}.set.paper_psd",
                              "particle radii in metres that the setup holds as the paper preset's particles "
-                             f"({exc.field}: {exc.expected}, got {exc.got})", given["paper_psd"]) from None
+                             f"({exc.field}: {exc.expected}, got {exc.got})"
+                             + (f"; this test takes {taken['paper_psd']}, the soil's own: give the test its own "
+                                "paper_psd" if "paper_psd" in taken else ""), given["paper_psd"]) from None
 
 
 def load_soil(path: str | Path, resources_root: str | Path = "resources", design: str | None = None,

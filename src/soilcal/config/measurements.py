@@ -311,6 +311,42 @@ def _entries(soil_path, data: dict, resources_root) -> list[tuple[str, dict, Pat
     return out
 
 
+def entry_set_of(soil_path, data: dict, mid: str, entry: dict) -> tuple[dict, dict]:
+    """The setup values every row of measurement ``mid`` takes (its ``set``), and for each
+    value that the entry does not give itself the field it comes from.
+
+    The particle sizes a soil's surface energy is for are the soil's: where its simulated
+    responses give their own (``simulation.responses.<id>.set.paper_psd``, all the same), a
+    tool test that leaves ``paper_psd`` out takes them, so that its runs scale the calibrated
+    surface energy against the particles it was calibrated for rather than against the named
+    setup's (a shipped soil's).  Responses that give different ones leave the test to say
+    which: it is refused naming ``measurements.<id>.set.paper_psd``."""
+    from soilcal.dem.scenarios import SCENARIOS
+
+    given = dict(entry.get("set") or {})
+    mod = SCENARIOS.get(entry.get("scenario"))
+    per_row = any(isinstance(cv, dict) and cv.get("set") == "paper_psd"
+                  for cv in (entry.get("covariates") or {}).values())
+    named = mod.setups().get(entry.get("setup")) if mod is not None else None
+    if "paper_psd" in given or per_row or named is None or "paper_psd" not in named:
+        return given, {}
+    own = {}
+    for rid, resp in ((data.get("simulation") or {}).get("responses") or {}).items():
+        rows = (resp.get("set") or {}).get("paper_psd") if isinstance(resp, dict) else None
+        if rows is not None:
+            own.setdefault(repr(rows), []).append(rid)
+    if not own:
+        return given, {}
+    if len(own) > 1:
+        raise InputError(soil_path, f"{BLOCK}.{mid}.set.paper_psd",
+                         "the particle sizes this test's surface energy is for: the soil's simulated "
+                         "responses give different ones (" + "; ".join(
+                             f"{', '.join(rids)}: {rows}" for rows, rids in own.items()) + ")", None)
+    rid = next(iter(own.values()))[0]
+    given["paper_psd"] = data["simulation"]["responses"][rid]["set"]["paper_psd"]
+    return given, {"paper_psd": f"simulation.responses.{rid}.set.paper_psd"}
+
+
 def _entry(soil_path, data: dict, mid: str, entry: dict, tpath: Path):
     from soilcal.dem.scenarios import SCENARIOS, measures_of
     from soilcal.dem.scenarios.base import PRESETS, DemParams, merge_setup
@@ -329,7 +365,7 @@ def _entry(soil_path, data: dict, mid: str, entry: dict, tpath: Path):
     preset = entry.get("preset", DEFAULT_PRESET)
     if preset not in PRESETS:  # the schema refuses this already; kept for direct callers
         raise InputError(soil_path, f"{where}.preset", f"one of {', '.join(PRESETS)}", preset)
-    entry_set = dict(entry.get("set") or {})
+    entry_set, taken = entry_set_of(soil_path, data, mid, entry)
     try:
         merge_setup(setups, entry["setup"], entry_set, src)
     except InputError as exc:
@@ -562,6 +598,10 @@ def _entry(soil_path, data: dict, mid: str, entry: dict, tpath: Path):
                 scale = float(covs[col].get("scale", 1.0))
                 raise InputError(tpath, at(col), f"{exc.expected} (setup.{key} = value * {scale:g})",
                                  _plain(rec[col])) from None
+            if key in taken:
+                raise InputError(soil_path, f"{where}.set.{key}", f"{exc.expected} (this test takes "
+                                 f"{taken[key]}, the soil's own; give the test its own {key})",
+                                 exc.got) from None
             if key in entry_set:
                 raise InputError(soil_path, f"{where}.set.{key}", exc.expected, exc.got) from None
             if setup_cols:

@@ -22,8 +22,9 @@ the printed size distribution (Sec. 3.1): particle sizes 3, 2 and 1 mm with mass
 8.85, 8.2 and 82.95 %, read as diameters (assumption: the paper does not say whether the
 sizes are diameters or radii), i.e. radii 1.5, 1.0 and 0.5 mm
 (:class:`soilcal.dem.factories.PSD`, fields ``psd_sizes`` and ``psd_mass_percent``; a
-setup that sets ``psd_mass_percent`` to None uses ``particle_radius`` and
-``radius_spread`` instead).  ``quick`` cuts a
+setup that gives its own ``particle_radius`` and ``radius_spread`` runs those uniform radii
+instead, and one that gives its own ``psd_sizes`` and ``psd_mass_percent`` runs that
+distribution under either preset, :data:`SIZE_KEYS`).  ``quick`` cuts a
 periodic slab of width ``slab_width`` (70 mm) out of the bin across the plate: the plate
 spans the slab (no plate ends, so no side spill), the bed is 60 mm deep (twice the cut),
 particles of 7 mm radius (0.9-1.1), the paper's shear modulus unscaled, 30 % of the
@@ -72,6 +73,15 @@ MEASURED = (Path(__file__).resolve().parents[4] / "resources" / "measurements"
             / "cinnamon-soil" / "cutting_resistance.csv")
 
 
+#: the bin's spheres: uniform radii (``particle_radius`` and ``radius_spread``) or a
+#: mass-fraction size distribution (``psd_sizes``, diameters in m, and ``psd_mass_percent``);
+#: None in a named setup means the preset's (``PRESET_SETTINGS``), a soil's ``set:`` gives
+#: its own, one kind or the other
+RADIUS_KEYS = ("particle_radius", "radius_spread")
+PSD_KEYS = ("psd_sizes", "psd_mass_percent")
+SIZE_KEYS = dict.fromkeys(RADIUS_KEYS + PSD_KEYS)
+
+
 def _setup(shape):
     return dict(
         shape=shape,               # Table 9 directrix (line: the ruled surface plate)
@@ -84,6 +94,7 @@ def _setup(shape):
         plate_height=tools.PLATE["height"],    # Sec. 4.2.1: 150 mm
         plate_breadth=tools.PLATE["breadth"],  # Sec. 4.2.1: 300 mm
         stable_from=0.5,           # stable stage: second half of the pass
+        **SIZE_KEYS,               # the preset's spheres unless the soil sets its own
         **COHESION_KEYS,           # surface energy for the paper preset's particles (base.py)
     )
 
@@ -131,8 +142,26 @@ def _given_travel(setup, preset) -> bool:
     return apply_preset(setup, _setup(setup.get("shape")), PRESET_SETTINGS[preset]).get("travel") is not None
 
 
-def _settings(setup, preset):
+def _settings(setup, preset, source="<bulldozing>"):
     s = apply_preset(setup, _setup(setup.get("shape")), PRESET_SETTINGS[preset])
+    radii = [k for k in RADIUS_KEYS if setup.get(k) is not None]
+    dist = [k for k in PSD_KEYS if setup.get(k) is not None]
+    if radii and dist:
+        check(False, source, f"setup.{radii[0]}", "either uniform radii (particle_radius, "
+              "radius_spread) or a size distribution (psd_sizes, psd_mass_percent), not both",
+              {k: setup[k] for k in radii + dist})
+    if radii:
+        # the soil's own uniform radii take the place of the preset's size distribution
+        s["psd_sizes"] = s["psd_mass_percent"] = None
+        for k in RADIUS_KEYS:
+            check(s.get(k) is not None, source, f"setup.{k}",
+                  f"a value beside setup.{radii[0]} (the {preset} preset's particles are a size "
+                  "distribution, psd_sizes and psd_mass_percent)", None)
+    if dist:
+        for k in PSD_KEYS:
+            check(s.get(k) is not None, source, f"setup.{k}",
+                  f"a list beside setup.{dist[0]} (the {preset} preset's particles have uniform "
+                  "radii, particle_radius and radius_spread)", None)
     if s.get("travel") is None:
         s["travel"] = s["speed"] * s["duration"]
     if not s.get("periodic"):
@@ -179,7 +208,7 @@ def validate(setup: dict, preset: str = "quick", source: str = "<bulldozing>",
     check(preset in PRESETS, source, "preset", f"one of {PRESETS}", preset)
     check(setup.get("shape") in tools.SHAPES, source, "setup.shape",
           f"one of {', '.join(tools.SHAPES)} (Table 9)", setup.get("shape"))
-    s = _settings(setup, preset)
+    s = _settings(setup, preset, source)
     for k in ("depth", "speed", "duration", "bin_length", "bin_width", "bin_height",
               "plate_height", "plate_breadth", "travel", "slab_width"):
         _num(s, k, source)

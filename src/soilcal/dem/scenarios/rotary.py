@@ -113,6 +113,8 @@ def _setup(rpm):
         lift_time=0.08,
         hood_clearance=0.05,              # assumption: hood 50 mm above the blade tips
         rest_time=0.05,
+        particle_radius=None,             # the bin's spheres: None, the preset's; a soil's
+        radius_spread=None,               # set: gives its own (radius_spread beside it)
         **COHESION_KEYS,                  # surface energy for the paper preset's particles (base.py)
     )
 
@@ -257,6 +259,11 @@ def validate(setup: dict, preset: str = "quick", source: str = "<rotary>",
           f">= rotor diameter + pass + margin = {need:.3g} m", s["bin_length"])
     check(0.0 <= s["stable_from"] < 1.0, source, "setup.stable_from",
           "a fraction of the pass in [0, 1)", s["stable_from"])
+    r, spread = s.get("particle_radius"), s.get("radius_spread")
+    check(isinstance(r, (int, float)) and not isinstance(r, bool) and math.isfinite(r) and r > 0,
+          source, "setup.particle_radius", "a sphere radius > 0 m", r)
+    check(isinstance(spread, (int, float)) and not isinstance(spread, bool) and 0.0 <= spread < 1.0,
+          source, "setup.radius_spread", "a radius spread in [0, 1)", spread)
     spec = _bin(s)
     validate_bin(spec, source, "setup")
     # flatness points outside the starting trench, at least a particle diameter apart

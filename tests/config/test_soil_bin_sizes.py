@@ -1,0 +1,125 @@
+"""A soil's own sphere sizes in the bulldozing and rotary soil bins.
+
+The named setups of these tool tests are a shipped soil's apparatus; the bin's spheres are the
+preset's unless the soil's ``set:`` gives its own, as the furrow's ``particle_radius`` and the
+bench-top tests' ``radius`` allow.  The expected radii are the ones written here, and the
+surface-energy factor is the ratio of Sauter radii r32 = <r^3>/<r^2> worked out by hand: for
+radii uniform by number on [a, b], r32 = 3 (b^4 - a^4) / (4 (b^3 - a^3)); for discrete sizes of
+mass fractions f_k, r32 = 1 / sum f_k / r_k."""
+
+from __future__ import annotations
+
+import textwrap
+
+import pytest
+
+from soilcal.config import load_soil
+from soilcal.dem.scenarios import bulldozing, rotary
+from soilcal.dem.scenarios.base import merge_setup
+from soilcal.errors import InputError
+
+
+def r32_uniform(a, b):
+    return 0.75 * (b**4 - a**4) / (b**3 - a**3)
+
+
+# bulldozing, paper preset's bin: diameters 3, 2, 1 mm, mass 8.85, 8.2, 82.95 %
+R32_PLATE_PAPER = 1.0 / (0.0885 / 0.0015 + 0.082 / 0.001 + 0.8295 / 0.0005)
+# rotary, paper preset's bin: radius 1.5 mm +- 1/3, i.e. uniform on [1, 2] mm
+R32_ROTOR_PAPER = r32_uniform(0.001, 0.002)
+
+
+@pytest.mark.parametrize("preset", ["quick", "paper"])
+@pytest.mark.parametrize("mod,name,ref", [(bulldozing, "plate-line", R32_PLATE_PAPER),
+                                          (rotary, "rpm-250", R32_ROTOR_PAPER)])
+def test_own_uniform_radii_are_the_bins_spheres(mod, name, ref, preset):
+    setup = merge_setup(mod.setups(), name, {"particle_radius": 0.004, "radius_spread": 0.05}, "own.yaml")
+    s = mod.validate(setup, preset, "own.yaml")
+    spec = mod._bin(s) if mod is rotary else mod._bin(s, "own.yaml")
+    assert spec.r_min == pytest.approx(0.0038) and spec.r_max == pytest.approx(0.0042)
+    assert spec.psd is None
+    assert s["cohesion_scale"] == pytest.approx(r32_uniform(0.0038, 0.0042) / ref, rel=1e-9)
+
+
+def test_own_size_distribution_of_the_plate_bin():
+    # diameters 8 and 6 mm, 40 and 60 % by mass: the bin holds them, the quick preset's
+    # uniform 7 mm radii do not take their place
+    setup = merge_setup(bulldozing.setups(), "plate-line",
+                        {"psd_sizes": [0.008, 0.006], "psd_mass_percent": [40, 60]}, "own.yaml")
+    s = bulldozing.validate(setup, "quick", "own.yaml")
+    spec = bulldozing._bin(s, "own.yaml")
+    assert spec.r_min == pytest.approx(0.003) and spec.r_max == pytest.approx(0.004)
+    assert s["cohesion_scale"] == pytest.approx(1.0 / (0.4 / 0.004 + 0.6 / 0.003) / R32_PLATE_PAPER)
+
+
+@pytest.mark.parametrize("given,preset,field", [
+    ({"particle_radius": 0.004, "psd_sizes": [0.006], "psd_mass_percent": [100]}, "quick", "setup.particle_radius"),
+    ({"particle_radius": 0.004}, "paper", "setup.radius_spread"),     # the paper preset's are a distribution
+    ({"psd_sizes": [0.006, 0.004]}, "quick", "setup.psd_mass_percent"),  # the quick preset's are uniform
+])
+def test_incomplete_or_mixed_sizes_are_refused_naming_the_field(given, preset, field):
+    setup = merge_setup(bulldozing.setups(), "plate-line", given, "own.yaml")
+    with pytest.raises(InputError) as exc:
+        bulldozing.validate(setup, preset, "own.yaml")
+    assert exc.value.field == field and "own.yaml" in str(exc.value)
+
+
+def test_rotary_particle_radius_error_names_the_particle_radius():
+    setup = merge_setup(rotary.setups(), "rpm-250", {"particle_radius": -0.002}, "own.yaml")
+    with pytest.raises(InputError) as exc:
+        rotary.validate(setup, "quick", "own.yaml")
+    assert exc.value.field == "setup.particle_radius"
+
+
+SOIL = textwrap.dedent("""\
+    name: own-bin
+    parameters:
+      rolling: {name: Soil-soil rolling friction, unit: "-", pair: soil-soil, kind: rolling_friction}
+      energy: {name: JKR surface energy, unit: J/m^2, pair: soil-soil, kind: surface_energy}
+      steel: {name: Soil-steel static friction, unit: "-", pair: soil-steel, kind: static_friction}
+    stages:
+      - id: bbd
+        kind: box_behnken
+        factors:
+          A: {parameter: rolling, low: 0.1, high: 0.3}
+          B: {parameter: energy, low: 0.2, high: 0.6}
+          C: {parameter: steel, low: 0.4, high: 0.8}
+        center_points: 3
+        table: null
+        responses:
+          - {id: angle, name: Repose angle, unit: deg}
+        optimise:
+          method: desirability
+          cases:
+            - id: angle
+              goals: {angle: {goal: target, target: angle}}
+    targets:
+      angle: {value: 35.0, unit: deg}
+    measurements:
+      plate:
+        table: plate.csv
+        scenario: bulldozing
+        setup: plate-line
+        set: {particle_radius: 0.004, radius_spread: 0.05, paper_psd: [[0.0008, 100]]}
+        responses:
+          - {measure: horizontal_force_N, value: horizontal_N, unit: N}
+        calibrated: {stage: bbd, case: angle}
+      tiller:
+        table: tiller.csv
+        scenario: rotary
+        setup: rpm-250
+        set: {particle_radius: 0.006, radius_spread: 0.1}
+        responses:
+          - {measure: flatness_mm, value: flatness_mm, unit: mm}
+        calibrated: {stage: bbd, case: angle}
+    """)
+
+
+def test_a_soil_sets_its_own_bin_spheres_in_its_measurements_block(tmp_path):
+    (tmp_path / "measurements/own-bin").mkdir(parents=True)
+    (tmp_path / "measurements/own-bin/plate.csv").write_text("horizontal_N\n120.5\n")
+    (tmp_path / "measurements/own-bin/tiller.csv").write_text("flatness_mm\n14.0\n")
+    path = tmp_path / "own-bin.yaml"
+    path.write_text(SOIL)
+    soil = load_soil(path, tmp_path)
+    assert soil.data["measurements"]["plate"]["set"]["particle_radius"] == 0.004
