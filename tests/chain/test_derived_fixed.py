@@ -40,6 +40,10 @@ def test_a_derived_stage_keeps_its_own_fixed_values():
     _stage(d, "pb").setdefault("fixed", {})["adhesion"] = 0.1
     _stage(d, "steepest")["fixed"]["adhesion"] = 0.2
     _stage(d, "bbd")["fixed"].update(adhesion=0.3, plastic=0.25)
+    # a screened parameter's printed value in the derived stages, off the screening range's
+    # centre (0.45): the recipe's centre must hold, not these
+    _stage(d, "steepest")["fixed"]["soil_soil_restitution"] = 0.6
+    _stage(d, "bbd")["fixed"]["soil_soil_restitution"] = 0.7
 
     effects = pd.DataFrame([{"response": "stacking_angle", "term": t, "effect": 2 * B_SIG[t],
                              "coefficient": B_SIG[t], "p": P_SIG[t]} for t in P_SIG])
@@ -55,7 +59,7 @@ def test_a_derived_stage_keeps_its_own_fixed_values():
     bbd = bbd_from_path(d, "bbd", path, steps)
     assert bbd["fixed"]["adhesion"] == 0.3           # the stage's own, not the path's 0.2
     assert bbd["fixed"]["plastic"] == 0.25           # fixed by this stage only: not dropped
-    # a screened parameter's value stays the recipe's: the config's printed 0.45 for the
-    # restitution is the centre too, and the path factors are factors, not fixed values
-    assert bbd["fixed"]["soil_soil_restitution"] == path["fixed"]["soil_soil_restitution"]
+    # a screened parameter's value stays the recipe's (the centre, not the stage's 0.7), and
+    # the path factors are factors, not fixed values
+    assert bbd["fixed"]["soil_soil_restitution"] == (0.15 + 0.75) / 2
     assert not set(bbd["fixed"]) & {f["parameter"] for f in bbd["factors"].values()}

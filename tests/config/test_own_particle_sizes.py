@@ -110,3 +110,27 @@ def test_responses_with_different_particle_sizes_leave_the_test_to_say_which(tmp
         _soil(tmp_path, edit)
     assert exc.value.field == "measurements.tiller.set.paper_psd"
     assert "own-psd.yaml" in str(exc.value) and "different" in exc.value.expected
+
+
+def test_particle_sizes_equal_in_value_are_one_set(tmp_path):
+    # [[0.001, 30], ...] and [[0.001, 30.0], ...] are the same particles
+    def edit(d):
+        d["stages"][0]["responses"].append({"id": "angle2", "name": "Drum angle", "unit": "deg"})
+        d["simulation"]["responses"]["angle2"] = {"scenario": "repose", "setup": "cinnamon-soil",
+                                                  "measure": "angle_deg",
+                                                  "set": {"paper_psd": [[0.001, 30.0], [0.0005, 70.0]]}}
+    soil = _soil(tmp_path, edit)
+    assert [c.setup["paper_psd"] for c in conditions(soil)] == [OWN_PSD]
+
+
+def test_a_response_on_its_setup_s_particles_beside_own_ones_leaves_the_test_to_say_which(tmp_path):
+    # the second response leaves paper_psd to its named setup (black-soil-stage1: radii 1 and
+    # 2 mm, 50 % each): the soil's surface energy is calibrated on two sets of particles
+    def edit(d):
+        d["stages"][0]["responses"].append({"id": "angle2", "name": "Funnel angle", "unit": "deg"})
+        d["simulation"]["responses"]["angle2"] = {"scenario": "repose", "setup": "black-soil-stage1",
+                                                  "measure": "angle_deg"}
+    with pytest.raises(InputError) as exc:
+        _soil(tmp_path, edit)
+    assert exc.value.field == "measurements.tiller.set.paper_psd"
+    assert "angle2 (its setup's)" in exc.value.expected

@@ -54,8 +54,13 @@ def test_own_size_distribution_of_the_plate_bin():
 
 @pytest.mark.parametrize("given,preset,field", [
     ({"particle_radius": 0.004, "psd_sizes": [0.006], "psd_mass_percent": [100]}, "quick", "setup.particle_radius"),
-    ({"particle_radius": 0.004}, "paper", "setup.radius_spread"),     # the paper preset's are a distribution
-    ({"psd_sizes": [0.006, 0.004]}, "quick", "setup.psd_mass_percent"),  # the quick preset's are uniform
+    ({"particle_radius": 0.004}, "paper", "setup.particle_radius"),   # the paper preset's are a distribution
+    ({"particle_radius": 0.004}, "quick", "setup.particle_radius"),   # not at the quick preset's spread
+    ({"psd_sizes": [0.006, 0.004]}, "quick", "setup.psd_sizes"),      # the quick preset's are uniform
+    # half a distribution under the paper preset: the soil's sizes would run at the paper's
+    # mass fractions (or the paper's sizes at the soil's)
+    ({"psd_sizes": [0.006, 0.004, 0.002]}, "paper", "setup.psd_sizes"),
+    ({"psd_mass_percent": [50, 30, 20]}, "paper", "setup.psd_mass_percent"),
 ])
 def test_incomplete_or_mixed_sizes_are_refused_naming_the_field(given, preset, field):
     setup = merge_setup(bulldozing.setups(), "plate-line", given, "own.yaml")
@@ -64,8 +69,26 @@ def test_incomplete_or_mixed_sizes_are_refused_naming_the_field(given, preset, f
     assert exc.value.field == field and "own.yaml" in str(exc.value)
 
 
+def test_own_distribution_leaves_no_preset_radius_in_the_settings():
+    # the quick preset's uniform 7 mm +- 10 % are not the run's spheres: the settings a run
+    # and simulation.csv record must not list them
+    setup = merge_setup(bulldozing.setups(), "plate-line",
+                        {"psd_sizes": [0.008, 0.004], "psd_mass_percent": [50, 50]}, "own.yaml")
+    s = bulldozing.validate(setup, "quick", "own.yaml")
+    assert s["particle_radius"] is None and s["radius_spread"] is None
+    assert s["psd_sizes"] == [0.008, 0.004]
+
+
+@pytest.mark.parametrize("given", [{"particle_radius": 0.004}, {"radius_spread": 0.1}])
+def test_rotary_half_of_the_own_radii_is_refused(given):
+    setup = merge_setup(rotary.setups(), "rpm-250", given, "own.yaml")
+    with pytest.raises(InputError) as exc:
+        rotary.validate(setup, "paper", "own.yaml")
+    assert exc.value.field == f"setup.{next(iter(given))}"
+
+
 def test_rotary_particle_radius_error_names_the_particle_radius():
-    setup = merge_setup(rotary.setups(), "rpm-250", {"particle_radius": -0.002}, "own.yaml")
+    setup = merge_setup(rotary.setups(), "rpm-250", {"particle_radius": -0.002, "radius_spread": 0.1}, "own.yaml")
     with pytest.raises(InputError) as exc:
         rotary.validate(setup, "quick", "own.yaml")
     assert exc.value.field == "setup.particle_radius"
@@ -123,3 +146,15 @@ def test_a_soil_sets_its_own_bin_spheres_in_its_measurements_block(tmp_path):
     path.write_text(SOIL)
     soil = load_soil(path, tmp_path)
     assert soil.data["measurements"]["plate"]["set"]["particle_radius"] == 0.004
+
+
+def test_half_a_distribution_in_the_soil_file_names_the_soils_key(tmp_path):
+    (tmp_path / "measurements/own-bin").mkdir(parents=True)
+    (tmp_path / "measurements/own-bin/plate.csv").write_text("horizontal_N\n120.5\n")
+    (tmp_path / "measurements/own-bin/tiller.csv").write_text("flatness_mm\n14.0\n")
+    path = tmp_path / "own-bin.yaml"
+    path.write_text(SOIL.replace("set: {particle_radius: 0.004, radius_spread: 0.05, paper_psd: [[0.0008, 100]]}",
+                                 "preset: paper\n    set: {psd_sizes: [0.006, 0.004, 0.002]}"))
+    with pytest.raises(InputError) as exc:
+        load_soil(path, tmp_path)
+    assert exc.value.field == "measurements.plate.set.psd_sizes" and str(path) in str(exc.value)

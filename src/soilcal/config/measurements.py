@@ -330,18 +330,36 @@ def entry_set_of(soil_path, data: dict, mid: str, entry: dict) -> tuple[dict, di
     named = mod.setups().get(entry.get("setup")) if mod is not None else None
     if "paper_psd" in given or per_row or named is None or "paper_psd" not in named:
         return given, {}
-    own = {}
+    def key(rows):
+        try:
+            return tuple(tuple(float(v) for v in row) for row in rows)
+        except (TypeError, ValueError):
+            return repr(rows)
+
+    own, named_of = {}, {}
     for rid, resp in ((data.get("simulation") or {}).get("responses") or {}).items():
-        rows = (resp.get("set") or {}).get("paper_psd") if isinstance(resp, dict) else None
+        if not isinstance(resp, dict):
+            continue
+        rows = (resp.get("set") or {}).get("paper_psd")
         if rows is not None:
-            own.setdefault(repr(rows), []).append(rid)
+            own.setdefault(key(rows), []).append(rid)
+            continue
+        rmod = SCENARIOS.get(resp.get("scenario"))
+        rnamed = rmod.setups().get(resp.get("setup")) if rmod is not None else None
+        if rnamed is not None and rnamed.get("paper_psd") is not None:
+            named_of[rid] = rnamed["paper_psd"]
     if not own:
         return given, {}
+    # beside responses that give their own sizes, one that leaves them to its named setup is
+    # calibrated for that setup's particles: the soil's responses then disagree
+    for rid, rows in named_of.items():
+        own.setdefault(key(rows), []).append(f"{rid} (its setup's)")
     if len(own) > 1:
         raise InputError(soil_path, f"{BLOCK}.{mid}.set.paper_psd",
                          "the particle sizes this test's surface energy is for: the soil's simulated "
                          "responses give different ones (" + "; ".join(
-                             f"{', '.join(rids)}: {rows}" for rows, rids in own.items()) + ")", None)
+                             f"{', '.join(rids)}: {[list(r) for r in rows] if isinstance(rows, tuple) else rows}"
+                             for rows, rids in own.items()) + ")", None)
     rid = next(iter(own.values()))[0]
     given["paper_psd"] = data["simulation"]["responses"][rid]["set"]["paper_psd"]
     return given, {"paper_psd": f"simulation.responses.{rid}.set.paper_psd"}

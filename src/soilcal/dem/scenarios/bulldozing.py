@@ -150,18 +150,20 @@ def _settings(setup, preset, source="<bulldozing>"):
         check(False, source, f"setup.{radii[0]}", "either uniform radii (particle_radius, "
               "radius_spread) or a size distribution (psd_sizes, psd_mass_percent), not both",
               {k: setup[k] for k in radii + dist})
+    # a soil gives one kind of sphere size whole: half of one would run beside the preset's
+    # other half (a soil's sizes at the paper's mass fractions), so it is refused, naming the
+    # key the soil gave
+    for given, kind in ((radii, RADIUS_KEYS), (dist, PSD_KEYS)):
+        if given and len(given) < len(kind):
+            other = next(k for k in kind if k not in given)
+            check(False, source, f"setup.{given[0]}", f"setup.{other} beside it (a soil's own sphere sizes "
+                  f"are given whole: {' and '.join(kind)})", setup[given[0]])
     if radii:
         # the soil's own uniform radii take the place of the preset's size distribution
         s["psd_sizes"] = s["psd_mass_percent"] = None
-        for k in RADIUS_KEYS:
-            check(s.get(k) is not None, source, f"setup.{k}",
-                  f"a value beside setup.{radii[0]} (the {preset} preset's particles are a size "
-                  "distribution, psd_sizes and psd_mass_percent)", None)
     if dist:
-        for k in PSD_KEYS:
-            check(s.get(k) is not None, source, f"setup.{k}",
-                  f"a list beside setup.{dist[0]} (the {preset} preset's particles have uniform "
-                  "radii, particle_radius and radius_spread)", None)
+        # the soil's own size distribution takes the place of the preset's uniform radii
+        s["particle_radius"] = s["radius_spread"] = None
     if s.get("travel") is None:
         s["travel"] = s["speed"] * s["duration"]
     if not s.get("periodic"):

@@ -221,7 +221,13 @@ def _trench_half(s, spec) -> float:
     return s["radius"] + 2.0 * spec.r_max
 
 
-def _settings(setup, preset):
+def _settings(setup, preset, source="<rotary>"):
+    # a soil gives its own sphere sizes whole: a radius alone would run at the preset's spread
+    given = [k for k in ("particle_radius", "radius_spread") if setup.get(k) is not None]
+    if len(given) == 1:
+        other = "radius_spread" if given[0] == "particle_radius" else "particle_radius"
+        check(False, source, f"setup.{given[0]}", f"setup.{other} beside it (a soil's own sphere sizes "
+              "are given whole: particle_radius and radius_spread)", setup[given[0]])
     s = apply_preset(setup, _setup(setup.get("rpm", 250)), PRESET_SETTINGS[preset])
     if s.get("flanges_simulated") is None:
         s["flanges_simulated"] = s["n_flanges"]
@@ -238,7 +244,7 @@ def validate(setup: dict, preset: str = "quick", source: str = "<rotary>",
     settings, with the surface-energy factor ``cohesion_scale``
     (:func:`soilcal.dem.scenarios.soilbin.reference_cohesion`)."""
     check(preset in PRESETS, source, "preset", f"one of {PRESETS}", preset)
-    s = _settings(setup, preset)
+    s = _settings(setup, preset, source)
     for k in ("rpm", "forward_speed", "depth", "working_width", "radius", "hub_radius",
               "bin_length", "bin_height", "travel", "lift_time", "rest_time",
               "hood_clearance"):
