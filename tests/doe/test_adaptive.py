@@ -8,6 +8,7 @@ import warnings
 import numpy as np
 import pandas as pd
 import pytest
+from scipy import stats
 
 from soilcal.doe import adaptive as ad
 from soilcal.errors import InputError
@@ -342,6 +343,46 @@ def test_a_seed_scatter_wider_than_the_tolerance_still_gets_verifications():
     # the answer is the best of the verifications (smallest error)
     errs = ver.groupby("point")["y"].mean().sub(12.0).abs()
     assert st.verified["point"] == int(errs.idxmin())
+
+
+def test_seeds_to_tell_a_band_are_the_normal_quantile_squared():
+    # a mean of n seeds, SD s, at a point on the target lies within +- tol with probability
+    # 2 Phi(tol sqrt(n) / s) - 1; (1.96 s / tol)^2 seeds make it 95 %
+    assert ad.seeds_to_tell(0.5, 0.05) == 385  # (1.96 * 10)^2 = 384.1
+    assert ad.seeds_to_tell(0.05, 0.2) == 1
+    n = ad.seeds_to_tell(4.4, 0.5544)  # a heap angle's seed scatter against 2 % of 27.72 deg
+    assert 2 * stats.norm.cdf(0.5544 * math.sqrt(n) / 4.4) - 1 >= 0.95
+    assert 2 * stats.norm.cdf(0.5544 * math.sqrt(n - 1) / 4.4) - 1 < 0.95
+
+
+def _heap_like(seed):
+    """A heap angle's stand-in: y = 27.72 (1 + 0.15 a + 0.10 b + 0.08 c) over a coded box, one
+    seed scattering by 16 % of the target (4.44) against a 2 % band (+- 0.554)."""
+    pb = ad.Problem([ad.Factor(n, -1, 1) for n in "abc"], [ad.Target("y", 27.72, tol_pct=2.0)])
+    fn = lambda lv: {"y": 27.72 * (1 + 0.15 * lv["a"] + 0.10 * lv["b"] + 0.08 * lv["c"])}
+    return pb, noisy(fn, 0.16 * 27.72)
+
+
+@pytest.mark.parametrize("seed, status", [(6, "target met"), (0, "budget spent")])
+def test_a_stop_says_when_its_verification_cannot_tell_the_band(seed, status):
+    # seed 6 stops "target met" on a four-seed mean in the band, seed 0 spends its budget; four
+    # seeds' standard error (about 2.2) is four times the band, so both say so and name the
+    # seeds a point would need: (1.96 * s / 0.554)^2, about 240 at s = 4.4
+    pb, ev = _heap_like(seed)
+    runs, st = ad.run(pb, ev, ad.Settings(seed=seed, budget=40))
+    assert st.status == status
+    assert "the band cannot be verified at this seed scatter with the seeds given" in st.message
+    y = st.verified["responses"]["y"]
+    assert y["seeds_to_tell"] == ad.seeds_to_tell(y["scatter"], 0.16 * 27.72 / 8)
+    assert 100 < y["seeds_to_tell"] < 600 and y["standard_error"] == pytest.approx(y["scatter"] / 2)
+    assert f"a point on the target would read within the band 95 % of the time with about {y['seeds_to_tell']} " \
+           "seeds" in st.message
+
+
+def test_a_verification_that_can_tell_the_band_says_nothing_of_it():
+    runs, st = ad.run(LINEAR, noisy(linear, 0.05), ad.Settings(seed=0, budget=40))
+    assert st.status == "target met" and st.verified["responses"]["y"]["seeds_to_tell"] <= 4
+    assert "cannot be verified" not in st.message
 
 
 # --------------------------------------------------------------------------- minimise / maximise

@@ -70,7 +70,11 @@ box is consistent: P < ``p_unreachable`` everywhere after a batch of proposals a
 target has been run, while the predicted distance to the target exceeds the tolerance plus
 twice the predictive standard deviation and every run's value lies on one side of the target,
 beyond the tolerance plus twice the replicate SD (``unreachable``), with the closest reachable
-value of each response and where it lies.
+value of each response and where it lies.  Every stop with a verification says, per response
+whose verification seeds cannot tell the band at the seed scatter s (:func:`seed_sd`), how many
+seeds at one point would: (1.96 s / tol)^2 (:func:`seeds_to_tell`; at fewer, a four-seed mean
+lands in a band narrower than the scatter about as often off the target as on it, so a ``target
+met`` there is partly the draw).
 
 The answer is a set: the candidates with P > 1/2 form the consistent region; each factor's
 range and spread over it, and the factors the data do not pin down (spread over more than half
@@ -705,9 +709,24 @@ def consistent_sample(problem: Problem, cand: np.ndarray, p: np.ndarray, n: int 
     return problem.to_actual(cand[p > 0.5][:n]) if (p > 0.5).any() else np.empty((0, len(problem.factors)))
 
 
-def _verified(problem: Problem, runs: pd.DataFrame, settings: Settings) -> dict | None:
+#: a point on the target reads within its band in this share of verifications at the seeds
+#: :func:`seeds_to_tell` names (two-sided normal quantile)
+TELL_QUANTILE = stats.norm.ppf(0.975)
+
+
+def seeds_to_tell(scatter: float, tolerance: float) -> int:
+    """Seeds whose mean at a point exactly on the target lies within +- ``tolerance`` 95 % of
+    the time, one seed scattering by ``scatter``: (1.96 scatter / tolerance)^2, rounded up."""
+    if not (scatter > 0 and tolerance > 0):
+        return 1
+    return max(1, math.ceil((TELL_QUANTILE * scatter / tolerance) ** 2))
+
+
+def _verified(problem: Problem, runs: pd.DataFrame, settings: Settings, scatter: dict | None = None) -> dict | None:
     """The best verified point (smallest worst error in tolerances): its means and whether
-    every one is within tolerance."""
+    every one is within tolerance; with the design's seed scatter ``scatter`` (:func:`seed_sd`),
+    each response also carries the standard error of its verified mean and the seeds it would
+    take to tell the band (:func:`seeds_to_tell`)."""
     ver = runs[runs["kind"] == "verification"]
     if ver.empty:
         return None
@@ -726,14 +745,33 @@ def _verified(problem: Problem, runs: pd.DataFrame, settings: Settings) -> dict 
         mean = float(v.mean()) if v.size else np.nan
         sd = float(v.std(ddof=1)) if v.size > 1 else np.nan
         ok = bool(v.size >= settings.verify_seeds and np.isfinite(mean) and t.miss(mean) <= 0)
-        out["responses"][t.response] = {"target": t.value, "goal": t.goal, "tolerance": t.tolerance, "mean": mean,
-                                        "sd": sd, "n": int(v.size),
-                                        # against a target only: a best level is the surrogate's, not a measurement
-                                        "error_pct": 100 * (mean - t.value) / abs(t.value)
-                                        if t.value and not t.optimised else np.nan,
-                                        "within": ok}
+        rec = {"target": t.value, "goal": t.goal, "tolerance": t.tolerance, "mean": mean, "sd": sd, "n": int(v.size),
+               # against a target only: a best level is the surrogate's, not a measurement
+               "error_pct": 100 * (mean - t.value) / abs(t.value) if t.value and not t.optimised else np.nan,
+               "within": ok}
+        if scatter and (scatter.get(t.response) or 0) > 0 and v.size:
+            rec["scatter"] = float(scatter[t.response])
+            rec["standard_error"] = float(scatter[t.response]) / math.sqrt(v.size)
+            rec["seeds_to_tell"] = seeds_to_tell(float(scatter[t.response]), t.tolerance)
+        out["responses"][t.response] = rec
         out["met"] &= ok
     return out
+
+
+def _untellable(verified: dict | None) -> str:
+    """What a verification cannot tell at the design's seed scatter ('' when its seeds can):
+    per response whose verified mean's standard error exceeds the band over 1.96."""
+    if not verified:
+        return ""
+    said = []
+    for r, v in verified["responses"].items():
+        need = v.get("seeds_to_tell")
+        if need and need > v["n"]:
+            said.append(f"{r}: one seed scatters by {v['scatter']:.3g}, so the mean of {v['n']} seeds has a standard "
+                        f"error of {v['standard_error']:.2g} against a band of +- {v['tolerance']:.2g}; a point on the "
+                        f"target would read within the band 95 % of the time with about {need} seeds")
+    return ("; the band cannot be verified at this seed scatter with the seeds given (" + "; ".join(said) + ")"
+            if said else "")
 
 
 #: seeds of case i of a stage start at ``settings.seed + SEED_STRIDE * i`` (:func:`case_settings`)
@@ -800,7 +838,8 @@ def step(problem: Problem, runs: pd.DataFrame, settings: Settings, iteration: in
     cand = halton(d, settings.n_candidates, settings.seed + 7919 * iteration)
     xe = problem.to_coded(points[problem.names].to_numpy(float))
     problem = resolve(problem, surrogates, np.vstack([cand, xe]))
-    verified = _verified(problem, runs, settings)
+    scatter = seed_sd(problem, points, surrogates)
+    verified = _verified(problem, runs, settings, scatter)
     p_c, pred_c = consistency(problem, surrogates, cand)
     p_e, pred_e = consistency(problem, surrogates, xe)
     gain = improvement(problem, pred_c, target_probability(problem, pred_c))
@@ -836,7 +875,8 @@ def step(problem: Problem, runs: pd.DataFrame, settings: Settings, iteration: in
                        f"the verified mean of point {verified['point']} is within tolerance of every target"
                        + (" and of the best predicted level of every optimised response; the largest expected "
                           f"improvement beyond the tolerance on that level is {searched:.2g} tolerances "
-                          f"(<= {settings.improvement_stop:g})" if optimised else ""))
+                          f"(<= {settings.improvement_stop:g})" if optimised else "")
+                       + _untellable(verified))
     # unreachable: no point of the box is plausibly consistent, and the closest reachable
     # prediction lies further from a target than its uncertainty explains
     if near is not None:
@@ -852,10 +892,12 @@ def step(problem: Problem, runs: pd.DataFrame, settings: Settings, iteration: in
             return decided("unreachable", f"{msg}, at {at}")
     if spent >= settings.budget:
         return decided("budget spent",
-                       f"{spent} runs spent of a budget of {settings.budget}; {_best_said(problem, best)}")
+                       f"{spent} runs spent of a budget of {settings.budget}; {_best_said(problem, best)}"
+                       + _untellable(verified))
     if iteration > settings.max_iterations:
         return decided("iterations spent",
-                       f"{settings.max_iterations} iterations without a verified set; {_best_said(problem, best)}")
+                       f"{settings.max_iterations} iterations without a verified set; {_best_said(problem, best)}"
+                       + _untellable(verified))
     coded, kinds, reps = [], [], []
     left = settings.budget - spent
     ver_pts = problem.to_coded(runs.loc[runs["kind"] == "verification", problem.names].to_numpy(float)) \
@@ -870,7 +912,6 @@ def step(problem: Problem, runs: pd.DataFrame, settings: Settings, iteration: in
             cand_v = None
             if far.any():
                 cand_v = _candidate(problem, cand, p_c, pred_c, int(np.flatnonzero(far)[np.argmax(p_c[far])]))
-    scatter = seed_sd(problem, points, surrogates)
     last_v = int(runs.loc[runs["kind"] == "verification", "point"].max()) if len(ver_pts) else -1
     stalled = int(((runs["kind"] == "proposal") & (runs["point"] > last_v)).sum()) >= 2 * d + 1
     # the last chance: after this iteration's proposals the budget could not pay for a
@@ -905,7 +946,7 @@ def step(problem: Problem, runs: pd.DataFrame, settings: Settings, iteration: in
         # iterate without running anything
         return decided("box exhausted",
                        f"every candidate lies within {settings.separation:g} (coded) of a run already made and no "
-                       f"verification is due; {_best_said(problem, best)}")
+                       f"verification is due; {_best_said(problem, best)}" + _untellable(verified))
     new = _new_runs(problem, coded, kinds, next_point, iteration, reps, next_seed)
     msg = (f"iteration {iteration}: best P = {best['p']:.3f}; {len(new)} runs"
            + (" (with a verification of the best candidate)" if "verification" in kinds else "")
