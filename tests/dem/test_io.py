@@ -122,6 +122,31 @@ def test_stl_round_trip(tmp_path, binary):
     assert np.abs(v3).max() == pytest.approx(0.2e-3, rel=1e-6)
 
 
+def test_stl_weld_merges_corners_closer_than_the_tolerance_wherever_they_lie(tmp_path):
+    """A square plate of two facets exported with float noise on the copies of the shared
+    corners: the copies 2e-12 m apart straddle x = 0.5e-6 m, a line of the rounding grid of
+    weld_tol = 1e-6 m, and were kept as two vertices (5 vertices, the seam open); the plate has
+    4 corners and its two facets share an edge."""
+    e = 1e-12
+    a = [0.5e-6 - e, 0.0, 0.0]  # the shared corner (0.5e-6, 0, 0) as exported by facet 1
+    b = [0.5e-6 + e, 0.0, 0.0]  # ... and by facet 2
+    c, d = [1.0, 1.0, 0.0], [0.0, 1.0, 0.0]
+    soup = np.array([[a, [1.0, 0.0, 0.0], c], [b, c, d]])
+    f = tmp_path / "plate.stl"
+    facets = ["facet normal 0 0 1\nouter loop\n"
+              + "".join("vertex %r %r %r\n" % tuple(map(float, q)) for q in tri)
+              + "endloop\nendfacet\n" for tri in soup]
+    f.write_text("solid plate\n" + "".join(facets) + "endsolid plate\n")
+    v, t = read_stl(f, weld_tol=1e-6)
+    assert len(v) == 4 and len(t) == 2
+    shared = set(t[0].tolist()) & set(t[1].tolist())
+    assert len(shared) == 2  # the diagonal edge, one edge of both facets
+    v0, _ = read_stl(f)  # exact welding keeps the noisy copies apart
+    assert len(v0) == 5
+    with pytest.raises(InputError, match="weld_tol"):
+        read_stl(f, weld_tol=-1e-6)
+
+
 def test_stl_truncated_and_invalid(tmp_path):
     v, t = g.box_mesh([0, 0, 0], [1, 1, 1])
     f = tmp_path / "box.stl"

@@ -7,6 +7,7 @@ import pytest
 
 from conftest import table
 from soilcal.dem.engine import Simulation
+from soilcal.errors import InputError
 
 R = 5e-3
 G = 9.81
@@ -225,6 +226,29 @@ def test_tiles_a_rounding_error_apart_are_one_contact(gap, step, x):
     d = delta + step if x >= 0 else delta  # at x = 0 the raised edge is the closer
     assert f[0][2] == pytest.approx(_hertz_wall_force(mats, R, d), rel=3e-3)
     assert abs(f[0][0]) < 1e-3 * f[0][2] and f[0][1] == 0.0
+
+
+@pytest.mark.parametrize("x", [0.0, 1e-4, 3e-4, -3e-4])
+@pytest.mark.parametrize("noise", [2e-9, 1e-8, -5e-7])
+def test_unwelded_patches_of_one_mesh_are_one_contact(noise, x):
+    """One mesh (one STL file, one wall) of two patches whose seam vertices are not shared:
+    patch B's copies of the seam corners lie ``noise`` off patch A's (float32 rounding of a
+    CAD export, 1.9e-9 m at 0.02 m, or a slight overlap).  A sphere pressed delta = 0.01 R
+    into the plate on or beside the seam was pushed by both patches: 2.0 times the Hertz force
+    of the plate on the seam, 1.97 at 0.1 mm, 1.74 at 0.3 mm; it is one surface, as the same
+    two patches welded or loaded as two walls."""
+    mats = table(e=0.5, mu=0.3, E=1e8)
+    sim = Simulation(mats, gravity=(0, 0, 0))
+    va, ta = _tile(-0.02, 0.0)
+    vb, tb = _tile(noise, 0.02)
+    sim.add_mesh(np.vstack([va, vb]), np.vstack([ta, np.asarray(tb) + len(va)]), "soil")
+    delta = 0.01 * R
+    sim.add_particles([[x, 0.0, R - delta]], R, "soil")
+    f, _ = sim.compute_forces()
+    fh = _hertz_wall_force(mats, R, delta)
+    assert f[0][2] == pytest.approx(fh, rel=1e-6)
+    # on the seam the normal may come from either side's edge: tilted by at most noise / R
+    assert abs(f[0][0]) <= 2 * abs(noise) / R * fh and f[0][1] == 0.0
 
 
 @pytest.mark.parametrize("x, y", [(0.0, 0.0), (0.002, 0.001), (0.01, 0.0)])
@@ -475,3 +499,94 @@ def test_inner_cylinder_curvature_enters_the_hertz_overlap(curvature):
     m = 2600.0 * 4 / 3 * math.pi * r**3
     expected = (3 * m * G / (4 * estar * math.sqrt(rstar))) ** (2 / 3)
     assert delta == pytest.approx(expected, rel=1e-6)
+
+
+_L = 0.04  # a box periodic in x and y, 0 .. _L
+
+
+def _periodic_sim():
+    return Simulation(table(e=0.5, mu=0.3, E=1e8), gravity=(0, 0, 0), box=(0, _L, 0, _L),
+                      periodic=(True, True))
+
+
+_UNSEEN = {  # walls a sphere could touch across a periodic boundary, without seeing it
+    # a plate (normal +x) 1 mm inside x = L: a sphere beside x = 0 presses it across x = L
+    "plate_by_boundary": lambda s: s.add_rectangle((_L - 1e-3, _L / 2, 0.01), (1, 0, 0),
+                                                   (0, 1, 0), 0.01, 0.01, "soil", name="w"),
+    # a floor laid from -L/2 to L/2: its half outside the box is never touched
+    "floor_half_outside": lambda s: s.add_mesh(
+        [[-_L / 2, 0, 0], [_L / 2, 0, 0], [_L / 2, _L, 0], [-_L / 2, _L, 0]],
+        [[0, 1, 2], [0, 2, 3]], "soil", name="w"),
+    # a floor tilted along x: a sphere crossing x = L lands at another height above it
+    "tilted_plane": lambda s: s.add_plane((0, 0, 0), (0.1, 0, 1), "soil", name="w"),
+    # a mesh bump (a box) across the boundary x = 0
+    "bump_across": lambda s: s.add_box((-2e-3, 0.01, 0), (2e-3, 0.02, 2e-3), "soil", name="w"),
+}
+
+
+@pytest.mark.parametrize("case", sorted(_UNSEEN))
+def test_a_wall_a_sphere_could_touch_across_a_periodic_boundary_is_refused(case):
+    """Wall contacts do not see periodic images.  A sphere beside x = 0 whose image across
+    x = L presses the plate 1 mm inside x = L by delta = 0.01 R felt no force (Hertz: 4/3 E*
+    sqrt(R) delta^1.5 on the image), and a floor laid half outside the box let a sphere over
+    its missing half fall through: such set-ups are refused, naming the wall."""
+    sim = _periodic_sim()
+    _UNSEEN[case](sim)
+    sim.add_particles([[R - 0.01 * R - 1e-3, _L / 2, 0.01]], R, "soil")
+    with pytest.raises(InputError, match=r"walls\.w.*periodic in x"):
+        sim.compute_forces()
+
+
+def test_the_image_contact_of_the_refused_plate_is_a_hertz_contact():
+    """The contact the plate set-up above would miss: the same sphere at its image position
+    x + L, in a box without periodic boundaries, is pushed with the Hertz force."""
+    mats = table(e=0.5, mu=0.3, E=1e8)
+    sim = Simulation(mats, gravity=(0, 0, 0))
+    _UNSEEN["plate_by_boundary"](sim)
+    delta = 0.01 * R
+    sim.add_particles([[_L - 1e-3 + R - delta, _L / 2, 0.01]], R, "soil")
+    f, _ = sim.compute_forces()
+    assert f[0] == pytest.approx([_hertz_wall_force(mats, R, delta), 0, 0], rel=1e-9, abs=1e-12)
+
+
+_D = 0.01 * R  # the overlap pressed into the walls below
+_SEEN = {  # (wall, lower corner of the periodic box, sphere centre, normal of the face)
+    "floor_mesh_spanning": (lambda s: s.add_mesh(*_grid(L=_L / 2, n=4), "soil"), -_L / 2,
+                            (1e-4 - _L / 2, 0.0, R - _D), (0, 0, 1)),
+    "plate_wider_than_box": (lambda s: s.add_rectangle((_L / 2, _L / 2, 0.01), (0, 1, 0),
+                                                       (1, 0, 0), _L, 0.01, "soil"), 0.0,
+                             (1e-4, _L / 2 + R - _D, 0.01), (0, 1, 0)),
+    "plate_clear": (lambda s: s.add_rectangle((_L / 2, _L / 2, 0.01), (0, 1, 0), (1, 0, 0),
+                                              0.005, 0.005, "soil"), 0.0,
+                    (_L / 2, _L / 2 + R - _D, 0.01), (0, 1, 0)),
+    "floor_plane": (lambda s: s.add_plane((0, 0, 0), (0, 0, 1), "soil"), 0.0,
+                    (1e-4, _L / 2, R - _D), (0, 0, 1)),
+}
+
+
+@pytest.mark.parametrize("case", sorted(_SEEN))
+def test_walls_spanning_or_clear_of_a_periodic_boundary_push_with_the_hertz_force(case):
+    """A floor or plate spanning the period (or wider than it), or a wall clear of the
+    boundaries, is accepted: a sphere pressed delta = 0.01 R into it beside a boundary feels
+    the Hertz force of the face."""
+    mats = table(e=0.5, mu=0.3, E=1e8)
+    add, lo, x, n = _SEEN[case]
+    sim = Simulation(mats, gravity=(0, 0, 0), box=(lo, lo + _L, lo, lo + _L),
+                     periodic=(True, True))
+    add(sim)
+    sim.add_particles([x], R, "soil")
+    f, _ = sim.compute_forces()
+    fh = _hertz_wall_force(mats, R, _D)
+    assert f[0] == pytest.approx(fh * np.array(n, float), rel=1e-9, abs=1e-12)
+
+
+def test_a_plate_moving_across_a_periodic_boundary_during_a_run_is_refused():
+    """A plate clear of the boundaries at the start that the run carries across x = L."""
+    sim = _periodic_sim()
+    sim.add_rectangle((_L / 2, _L / 2, 0.01), (1, 0, 0), (0, 1, 0), 0.005, 0.005, "soil",
+                      name="w", velocity=(0.1, 0, 0))
+    sim.add_particles([[0.01, 0.01, 0.01]], R, "soil")
+    sim.compute_forces()  # at rest in place: nothing to refuse
+    sim.run(10)  # 10 steps carry it far less than to the boundary
+    with pytest.raises(InputError, match=r"walls\.w.*over the run"):
+        sim.run(int(0.02 / (0.1 * sim.dt)))  # 20 mm: past x = L - R

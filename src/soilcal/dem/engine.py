@@ -96,6 +96,31 @@ def _number(source, field, value, expected, ok) -> float:
     return x
 
 
+def _extent_along(kind, par, q):
+    """``(lo, hi, parallel)``: the extent of a bounded primitive's surface along axis q, and
+    whether that surface is unchanged along q (a flat face whose normal is perpendicular to q,
+    a cylinder about q)."""
+    if kind == TRIANGLE:
+        c = par[[q, 3 + q, 6 + q]]
+        n = np.cross(par[3:6] - par[0:3], par[6:9] - par[0:3])
+        return float(c.min()), float(c.max()), abs(n[q]) <= 2e-4 * float(np.linalg.norm(n))
+    n = par[3:6]
+    side = math.sqrt(max(0.0, 1.0 - float(n[q]) ** 2))
+    if kind == RECTANGLE:
+        v = np.cross(n, par[6:9])
+        h = abs(par[6 + q]) * par[9] + abs(v[q]) * par[10]
+        return float(par[q] - h), float(par[q] + h), abs(n[q]) <= 2e-4
+    if kind == DISK:
+        return float(par[q] - par[6] * side), float(par[q] + par[6] * side), False
+    if kind == CYLINDER:
+        h = abs(n[q]) * par[7] + par[6] * side
+        return float(par[q] - h), float(par[q] + h), side <= 2e-4
+    # CONE: the end circles at z0 (radius r0) and z1 (r1)
+    e0, e1 = par[q] + par[8] * n[q], par[q] + par[9] * n[q]
+    return (float(min(e0 - par[6] * side, e1 - par[7] * side)),
+            float(max(e0 + par[6] * side, e1 + par[7] * side)), False)
+
+
 class Simulation:
     """Spheres, walls and a contact model advanced by velocity Verlet in compiled loops."""
 
@@ -468,6 +493,7 @@ class Simulation:
         # half of it, for the particles' own motion) and on the wall's own extent
         reach = np.array([min(1.5 * float(np.linalg.norm(np.maximum(abs(lo - c), abs(hi - c)))),
                               e) for c, e in zip(wa["wall_centre"], self._wall_extent())])
+        self._check_periodic_walls(steps)
         if steps > 0:
             self._check_wall_steps(reach)
         status = np.zeros(5, dtype=np.int64)
@@ -567,6 +593,82 @@ class Simulation:
                         f"max_overlap",
                         f"E* = {estar:.4g} Pa: a resting sphere would overlap the wall by "
                         f"{100 * frac:.3g} % of its radius")
+
+    def _check_periodic_walls(self, steps) -> None:
+        """InputError naming the wall that a sphere could touch across a periodic boundary:
+        wall contacts do not see periodic images (walls.py), so a wall within reach R_max (the
+        largest radius) of a boundary x = lo or hi that neither continues past both boundaries
+        by R_max (a plate wider than the slab: the spheres at either boundary touch its own
+        surface there) nor is a surface parallel to x spanning the period (a floor, a plate
+        across the slab: a sphere anywhere meets the same face) would miss the contacts of
+        the spheres beside the other boundary, or, outside the box, every contact.  A plane
+        must be parallel to the periodic axes.  A moving wall is checked over the ``steps``
+        of the run: its extent swept by its velocity, and the sphere of its reach about its
+        centre when it turns about any axis but x."""
+        wa = self._warr
+        if not self.periodic.any() or wa["prim_kind"].shape[0] == 0:
+            return
+        rho = float(self.p.r.max())
+        span = steps * self.dt
+        names = ("x", "y")
+        ext = None
+        for q in range(2):
+            if not self.periodic[q]:
+                continue
+            lo, hi = float(self.box[2 * q]), float(self.box[2 * q + 1])
+            eps = max(2e-4 * rho, 4.8e-7 * max(abs(lo), abs(hi)))
+            nw = wa["wall_vel"].shape[0]
+            a_w, b_w = np.full(nw, np.inf), np.full(nw, -np.inf)
+            bad = np.zeros(nw, dtype=bool)  # a primitive near a boundary that is not parallel
+            has = np.zeros(nw, dtype=bool)  # a bounded primitive
+            for k, (kind, w) in enumerate(zip(wa["prim_kind"], wa["prim_wall"])):
+                par = wa["prim_par"][k]
+                vel, om = wa["wall_vel"][w], wa["wall_omega"][w]
+                if kind == PLANE:
+                    if abs(par[3 + q]) > 2e-4:
+                        name = self.walls.names[w]
+                        raise InputError(
+                            self.source, f"walls.{name}",
+                            f"a plane parallel to {names[q]} in a box periodic in {names[q]} "
+                            f"(a sphere crossing the boundary would land on the other side of "
+                            f"it; wall contacts do not see periodic images)",
+                            f"normal {par[3:6].tolist()}")
+                    continue
+                a, b, flat = _extent_along(kind, par, q)
+                turn = om - om[q] * np.eye(3)[q]
+                if np.any(turn != 0):
+                    if ext is None:
+                        ext = self._wall_extent()
+                    c = float(wa["wall_centre"][w][q])
+                    a, b, flat = c - ext[w], c + ext[w], False
+                if vel[q] != 0:
+                    a, b = min(a, a + vel[q] * span), max(b, b + vel[q] * span)
+                has[w] = True
+                a_w[w], b_w[w] = min(a_w[w], a), max(b_w[w], b)
+                if (a < lo + rho - eps or b > hi - rho + eps) and not flat:
+                    bad[w] = True
+            for w in range(nw):
+                if not has[w]:
+                    continue
+                A, B = a_w[w], b_w[w]
+                clear = A >= lo + rho - eps and B <= hi - rho + eps
+                through = A <= lo - rho + eps and B >= hi + rho - eps
+                spans = A <= lo + eps and B >= hi - eps and not bad[w]
+                if clear or through or spans:
+                    continue
+                name = self.walls.names[w]
+                ax = names[q]
+                moving = " over the run" if np.any(wa["wall_vel"][w] != 0) or np.any(
+                    wa["wall_omega"][w] != 0) else ""
+                raise InputError(
+                    self.source, f"walls.{name}",
+                    f"in a box periodic in {ax} ({lo:.6g} .. {hi:.6g} m; wall contacts do not "
+                    f"see periodic images): a wall kept {rho:.4g} m (the largest radius) "
+                    f"inside the boundaries, continued past both by that much (its surface "
+                    f"there the periodic continuation), or a surface parallel to {ax} spanning "
+                    f"the period (a floor, a plate across the slab)",
+                    f"a wall reaching {ax} = {A:.6g} .. {B:.6g} m{moving}: a sphere beside "
+                    f"the other boundary would not touch it")
 
     def _check_wall_steps(self, reach) -> None:
         """InputError naming the wall whose surface moves more than ``max_overlap`` of the

@@ -71,21 +71,22 @@ def _cover(i, k, nwc, p, feat, cx, cy, cz, tol, ri, xi, yi, zi, fk, wnbr, prim_k
     the edge or vertex of a flat or convex surface next to the face or edge that holds it, or
     the edge of a triangle the sphere has moved off), or lies on p too (the same point, to
     rounding) and q's is a face where p's is not, or an edge where p's is a vertex, or the
-    same feature and q ranks higher: a moving wall above a fixed one, then a bounded primitive
-    above an infinite plane, then the later primitive (walls.py, "Which wall counts").  ``tol``: :func:`_same_tol`, for a q of
-    another wall (the primitives of one wall share their vertices exactly: 1e-9 R).  ``fk``: the
+    same feature and q ranks higher: of one wall the closer one, then the later; of two walls
+    a moving wall above a fixed one, then a bounded primitive above an infinite plane, then
+    the later primitive (walls.py, "Which wall counts").  ``tol``: :func:`_same_tol`, for a q
+    of the same wall as for one of another (the patches of one STL file need not share their
+    vertices: a seam whose two sides differ by float noise is one surface).  ``fk``: the
     slot of the particle's first face contact (-1: none), tried first (a sphere on a face: its
     neighbours' edges lie on it)."""
     kp = prim_kind[p]
     wp = prim_wall[p]
-    tol0 = min(tol, 1e-9 * ri)
     for step in range(nwc + 1):
         kk = fk if step == 0 else step - 1
         if kk < 0 or kk == k or (step > 0 and kk == fk):
             continue
         pp = wnbr[i, kk]
         kq = prim_kind[pp]
-        tq = tol if prim_wall[pp] != wp else tol0
+        tq = tol
         if abs(prim_closest(kq, prim_par, pp, cx, cy, cz)[0]) > tq:
             continue  # c is not on q
         o8 = prim_closest(kq, prim_par, pp, xi, yi, zi)
@@ -94,6 +95,14 @@ def _cover(i, k, nwc, p, feat, cx, cy, cz, tol, ri, xi, yi, zi, fk, wnbr, prim_k
         if o8[7] < feat:
             return kk
         if o8[7] == feat:
+            if prim_wall[pp] == wp:
+                # one mesh: the closer of the two counts (the true closest point of the
+                # surface, to rounding), the later one where they are as close
+                dp = prim_closest(kp, prim_par, p, xi, yi, zi)[0]
+                if o8[0] < dp:
+                    return kk
+                if o8[0] > dp:
+                    continue
             mq = _moving(prim_wall[pp], wall_vel, wall_omega)
             mp = _moving(wp, wall_vel, wall_omega)
             if mq != mp:

@@ -13,7 +13,8 @@ Format (3D Systems StereoLithography interface specification, 1988/1989):
 STL stores a triangle soup; :func:`read_stl` welds vertices with identical
 coordinates (exact match, or within ``weld_tol`` when given) into an indexed
 mesh ``(vertices float64[nv, 3], triangles int64[nt, 3])`` and drops
-triangles that collapse to a line or point after welding.  Any truncated,
+triangles that collapse to a line or point after welding (vertices closer than
+``weld_tol`` merge, however they fall on any grid).  Any truncated,
 malformed or non-finite file raises :class:`soilcal.errors.InputError`
 naming the file.  Units are whatever the file uses; scale on read if the
 tool drawing is in millimetres (``scale=1e-3``).
@@ -21,11 +22,15 @@ tool drawing is in millimetres (``scale=1e-3``).
 
 from __future__ import annotations
 
+import math
 import re
 import struct
 from pathlib import Path
 
 import numpy as np
+from scipy.sparse import coo_matrix
+from scipy.sparse.csgraph import connected_components
+from scipy.spatial import cKDTree
 
 from soilcal.errors import InputError
 
@@ -145,13 +150,20 @@ def read_stl_soup(path):
 
 
 def weld(soup, weld_tol=0.0):
-    """Indexed mesh from a triangle soup; vertices within ``weld_tol``
-    (rounded to a grid of that size) or identical (``weld_tol=0``) merge.  Facets without area
-    (two corners merged, or three on one line, as CAD exports write slivers) are left out:
-    they bound nothing."""
+    """Indexed mesh from a triangle soup; vertices within ``weld_tol`` of each other (and
+    so chains of such vertices) or identical (``weld_tol=0``) merge into the first of them,
+    wherever they lie (two copies of a corner a float-noise apart are one vertex, as on no
+    grid of rounding).  Facets without area (two corners merged, or three on one line, as
+    CAD exports write slivers) are left out: they bound nothing."""
     pts = soup.reshape(-1, 3)
-    key = np.round(pts / weld_tol) if weld_tol > 0 else pts
-    _, first, inv = np.unique(key, axis=0, return_index=True, return_inverse=True)
+    if weld_tol > 0:
+        n = pts.shape[0]
+        pairs = cKDTree(pts).query_pairs(float(weld_tol), output_type="ndarray")
+        graph = coo_matrix((np.ones(len(pairs)), (pairs[:, 0], pairs[:, 1])), shape=(n, n))
+        _, key = connected_components(graph, directed=False)
+        _, first, inv = np.unique(key, return_index=True, return_inverse=True)
+    else:
+        _, first, inv = np.unique(pts, axis=0, return_index=True, return_inverse=True)
     verts = pts[first]
     tris = inv.reshape(-1, 3).astype(np.int64)
     return verts, tris[~without_area(verts[tris])]
@@ -170,8 +182,15 @@ def without_area(corners) -> np.ndarray:
 def read_stl(path, scale=1.0, weld_tol=0.0):
     """Read an STL file into ``(vertices float64[nv, 3], triangles int64[nt, 3])``,
     coordinates multiplied by ``scale``."""
+    try:
+        tol = float(weld_tol)
+    except (TypeError, ValueError):
+        tol = math.nan
+    if not (math.isfinite(tol) and tol >= 0):
+        raise InputError(path, "weld_tol", "a welding distance >= 0 (0: identical corners only)",
+                         weld_tol)
     soup = read_stl_soup(path) * float(scale)
-    v, t = weld(soup, weld_tol)
+    v, t = weld(soup, tol)
     if t.shape[0] == 0:
         raise InputError(path, "triangles", "at least one non-degenerate triangle", 0)
     return v, t

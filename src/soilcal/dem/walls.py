@@ -44,18 +44,18 @@ lying on a plane or rectangle is one surface where the walls meet or overlap.  P
 contact whose point lies on another primitive, of the same or any other wall, is ignored when
 that primitive's own closest point is not on the first one (that primitive is closer and
 counts the contact), and among contacts with the same point the face before the edge or rim
-before the vertex or corner is kept, then the one of the wall that counts (below; integrator
-``_cover``).  "On" means within 1e-9 R for two triangles of one mesh (they share their
-vertices exactly) and within max(2e-4 R, 4 float32 ulps of the coordinates) across walls:
-tiles exported with a gap, an overlap or a step of up to 2e-4 R (1e-6 m for a 5 mm radius, a
-change of the overlap far below a contact's) or an STL tile (float32 vertices) on a float64
-plane are one surface.  The overlap is the counting wall's own: where it lies that little below
-the other, the force is that of the overlap less the step (0.99964 of it for an STL tile
-1.19e-8 m below a plane at an overlap of 0.01 R).  Tiles within one mesh whose vertices are not
-shared (unwelded patches of one STL file) are held to 1e-9 R and count twice at their seam;
-load them as separate meshes.  Face contacts are compared only where two of them have parallel
-normals (within 0.008 deg; a 0.1 deg crease is two faces).  Contacts
-elsewhere stay: a sphere on a floor against the edge of a ledge of the same mesh feels both.
+before the vertex or corner is kept, then within one mesh the closer one (the surface's
+true closest point, to rounding), then the one of the wall that counts (below; integrator
+``_cover``).  "On" means within max(2e-4 R, 4 float32 ulps of the coordinates), within one
+mesh as across walls: tiles exported with a gap, an overlap or a step of up to 2e-4 R (1e-6 m
+for a 5 mm radius, a change of the overlap far below a contact's), patches of one STL file
+whose copies of the seam vertices differ by float noise (not welded), or an STL tile (float32
+vertices) on a float64 plane are one surface.  The overlap is the counting wall's own: where
+it lies that little below the other, the force is that of the overlap less the step (0.99964
+of it for an STL tile 1.19e-8 m below a plane at an overlap of 0.01 R).  Face contacts are
+compared only where two of them have parallel normals (within 0.008 deg; a 0.1 deg crease is
+two faces).  Contacts elsewhere stay: a sphere on a floor against the edge of a ledge of the
+same mesh feels both.
 So a sphere over a flat or convex surface feels one contact wherever it touches, as on the
 plane or the solid the surface describes, however the surface is split into walls (LIGGGHTS
 de-duplicates within one mesh only: its ``fix wall/gran`` treats every mesh with its own
@@ -83,7 +83,12 @@ force step (a 5 mm sphere, centre 0.98 R above the first face, crossing a 5.6 de
 2.368 to 1.371 times the Hertz force of a 0.02 R overlap where the first face's contact
 ends).  LIGGGHTS keeps such an edge active on one of the two triangles (by triangle id), so it
 has one of the two steps.  Wall contacts do not see periodic images: a
-sphere near a periodic boundary does not feel a wall primitive across it.
+sphere near a periodic boundary does not feel a wall primitive across it.  So in a periodic box
+a wall keeps the largest radius clear of the periodic boundaries, continues past both by that
+much (a plate wider than the slab), or is a surface parallel to the axis spanning the period
+(a floor, a plate across the slab), and a plane is parallel to the periodic axes; a run
+refuses any other wall by name (``Simulation._check_periodic_walls``), a moving one over the
+extent it sweeps in the run (LIGGGHTS copies mesh elements across periodic boundaries).
 """
 
 from __future__ import annotations
