@@ -146,6 +146,22 @@ def test_optimum_rows_take_the_verified_set_else_the_best_candidate():
     assert opt["calibrated"].all()
 
 
+def test_optimum_row_without_a_met_verification_is_the_best_verified_point():
+    # verified at A = 0.11, B = 0.45 (mean 29.0, off the band); the surrogate's best candidate
+    # at A = 0.14, B = 0.24 was never run: optimum.csv gives the measured point, so that
+    # verification.csv compares that point with its own runs
+    stage = {"factors": {"A": {"low": 0.08, "high": 0.14}, "B": {"low": 0.24, "high": 0.52}}}
+    problem = {"factors": {"A": [0.08, 0.14], "B": [0.24, 0.52]},
+               "targets": {"y": {"value": 27.7, "tolerance": 0.554}}}
+    res = {"problem": problem, "case": "c", "status": "budget spent", "message": "60 runs spent", "runs": 60,
+           "best": {"levels": {"A": 0.14, "B": 0.24}, "predicted": {"y": 27.6}, "p": 0.4},
+           "verified": {"met": False, "levels": {"A": 0.11, "B": 0.45}, "responses": {"y": {"mean": 29.0}}}}
+    row = adaptive.optimum_frame(stage, [res]).set_index("case").loc["c"]
+    assert (row["A"], row["B"]) == (0.11, 0.45) and row["y"] == 29.0
+    assert row["A_coded"] == pytest.approx(0.0) and row["B_coded"] == pytest.approx(0.5)
+    assert row["note"].startswith("the best verified point") and "60 runs spent" in row["note"]
+
+
 def test_a_broken_run_file_is_named(tmp_path):
     pb = adaptive.ad.Problem([adaptive.ad.Factor("A", 0, 1)], [adaptive.ad.Target("y", 1.0)])
     steps = [{"iteration": 0, "runs": [{"kind": "start", "point": 0, "seed": 0, "levels": {"A": 0.5}}]}]

@@ -355,6 +355,16 @@ def test_seeds_to_tell_a_band_are_the_normal_quantile_squared():
     assert 2 * stats.norm.cdf(0.5544 * math.sqrt(n - 1) / 4.4) - 1 < 0.95
 
 
+def test_seeds_to_tell_a_one_sided_band():
+    # a minimised response's band reaches tol beyond its best level on one side: a mean of n
+    # seeds on that level lies within it with probability Phi(tol sqrt(n) / s); 95 % at
+    # (1.645 s / tol)^2 seeds.  s = 0.0949, tol = 0.05: 9.75 -> 10 (two-sided 13.8 -> 14)
+    assert ad.seeds_to_tell(0.0949, 0.05, one_sided=True) == 10
+    assert ad.seeds_to_tell(0.0949, 0.05) == 14
+    n = ad.seeds_to_tell(0.0949, 0.05, one_sided=True)
+    assert stats.norm.cdf(0.05 * math.sqrt(n) / 0.0949) >= 0.95 > stats.norm.cdf(0.05 * math.sqrt(n - 1) / 0.0949)
+
+
 def _heap_like(seed):
     """A heap angle's stand-in: y = 27.72 (1 + 0.15 a + 0.10 b + 0.08 c) over a coded box, one
     seed scattering by 16 % of the target (4.44) against a 2 % band (+- 0.554)."""
@@ -373,8 +383,15 @@ def test_a_stop_says_when_its_verification_cannot_tell_the_band(seed, status):
     assert st.status == status
     assert "the band cannot be verified at this seed scatter with the seeds given" in st.message
     y = st.verified["responses"]["y"]
-    assert y["seeds_to_tell"] == ad.seeds_to_tell(y["scatter"], 0.16 * 27.72 / 8)
-    assert 100 < y["seeds_to_tell"] < 600 and y["standard_error"] == pytest.approx(y["scatter"] / 2)
+    # one seed's scatter: the replicates' pooled SD, worked out here from the runs themselves
+    g = runs.groupby("point")["y"]
+    n, sd = g.count(), g.std(ddof=1)
+    rep = n > 1
+    pooled = math.sqrt(float(((n[rep] - 1) * sd[rep] ** 2).sum() / (n[rep] - 1).sum()))
+    assert y["scatter"] == pytest.approx(pooled, rel=1e-9)
+    assert 0.6 * 4.4352 < pooled < 1.4 * 4.4352  # the stand-in's 16 % of 27.72
+    assert y["seeds_to_tell"] == math.ceil((1.959964 * pooled / (0.02 * 27.72)) ** 2)
+    assert y["standard_error"] == pytest.approx(pooled / 2)
     assert f"a point on the target would read within the band 95 % of the time with about {y['seeds_to_tell']} " \
            "seeds" in st.message
 

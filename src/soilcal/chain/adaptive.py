@@ -530,8 +530,10 @@ def write_case(soil_data: dict, stage: dict, case_id: str, targets: dict, step_p
 
 def optimum_frame(stage: dict, results: list[dict]) -> pd.DataFrame:
     """``optimum.csv`` in the recipe's columns: per case the verified set (``calibrated``; its
-    predicted responses from the surrogate) or, when none was verified within tolerance, the
-    best candidate with the reason in ``note``."""
+    responses the verified means); when none was verified within tolerance, the best verified
+    point (measured: its verification runs are the ones verification.csv compares it with), or,
+    with no verification at all, the best candidate (its responses the surrogate's predictions),
+    with the reason in ``note``."""
     syms = list(stage["factors"])
     rows = []
     for res in results:
@@ -539,6 +541,10 @@ def optimum_frame(stage: dict, results: list[dict]) -> pd.DataFrame:
         src = None
         if res["verified"] and res["verified"]["met"]:
             src, levels = "verified", res["verified"]["levels"]
+        elif res["verified"]:
+            # a measured answer, not the surrogate's unrun best guess: the point verification.csv
+            # compares with its own runs
+            src, levels = "verified point", res["verified"]["levels"]
         elif res["best"]:
             src, levels = "best candidate", res["best"]["levels"]
         row = {"case": res["case"], "method": "adaptive", "solution": 1}
@@ -550,11 +556,13 @@ def optimum_frame(stage: dict, results: list[dict]) -> pd.DataFrame:
             row[s] = levels[s]
         for rid, v in ((res["best"] or {}).get("predicted") or {}).items():
             row[rid] = v if src == "best candidate" else np.nan
-        if src == "verified":
+        if src in ("verified", "verified point"):
             for rid, v in res["verified"]["responses"].items():
                 row[rid] = v["mean"]
         row.update(calibrated=True, status=res["status"], runs=res["runs"],
                    note=("verified within tolerance" if src == "verified" else
+                         "the best verified point (its verified means), not within tolerance; the surrogate's "
+                         f"best candidate, not run, is named here: {res['message']}" if src == "verified point" else
                          ("closest reachable point (no point is plausibly within tolerance), "
                           if res["best"].get("closest") else "best candidate, ")
                          + f"not verified within tolerance: {res['message']}"))

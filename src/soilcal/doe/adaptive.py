@@ -70,11 +70,13 @@ box is consistent: P < ``p_unreachable`` everywhere after a batch of proposals a
 target has been run, while the predicted distance to the target exceeds the tolerance plus
 twice the predictive standard deviation and every run's value lies on one side of the target,
 beyond the tolerance plus twice the replicate SD (``unreachable``), with the closest reachable
-value of each response and where it lies.  Every stop with a verification says, per response
-whose verification seeds cannot tell the band at the seed scatter s (:func:`seed_sd`), how many
-seeds at one point would: (1.96 s / tol)^2 (:func:`seeds_to_tell`; at fewer, a four-seed mean
-lands in a band narrower than the scatter about as often off the target as on it, so a ``target
-met`` there is partly the draw).
+value of each response and where it lies.  A stop by target, budget, iterations or box with a
+verification says, per response whose verification seeds cannot tell the band at one seed's
+scatter s (the pooled replicate SD), how many seeds at one point would: (1.96 s / tol)^2, or
+(1.645 s / tol)^2 for an optimised response's one-sided band (:func:`seeds_to_tell`; at fewer, a
+point on the target reads outside the band more than 5 % of the time and one off it inside more
+often, and the best of several verifications more often still, so a ``target met`` there is
+partly the draw).
 
 The answer is a set: the candidates with P > 1/2 form the consistent region; each factor's
 range and spread over it, and the factors the data do not pin down (spread over more than half
@@ -710,23 +712,27 @@ def consistent_sample(problem: Problem, cand: np.ndarray, p: np.ndarray, n: int 
 
 
 #: a point on the target reads within its band in this share of verifications at the seeds
-#: :func:`seeds_to_tell` names (two-sided normal quantile)
-TELL_QUANTILE = stats.norm.ppf(0.975)
+#: :func:`seeds_to_tell` names
+TELL_SHARE = 0.95
 
 
-def seeds_to_tell(scatter: float, tolerance: float) -> int:
+def seeds_to_tell(scatter: float, tolerance: float, one_sided: bool = False) -> int:
     """Seeds whose mean at a point exactly on the target lies within +- ``tolerance`` 95 % of
-    the time, one seed scattering by ``scatter``: (1.96 scatter / tolerance)^2, rounded up."""
+    the time, one seed scattering by ``scatter``: (1.96 scatter / tolerance)^2, rounded up.
+    ``one_sided``: a minimised (maximised) response's band reaches ``tolerance`` beyond its best
+    level on one side only, so a point on that level reads within it 95 % of the time at
+    (1.645 scatter / tolerance)^2 seeds."""
     if not (scatter > 0 and tolerance > 0):
         return 1
-    return max(1, math.ceil((TELL_QUANTILE * scatter / tolerance) ** 2))
+    z = stats.norm.ppf(TELL_SHARE if one_sided else 0.5 + TELL_SHARE / 2)
+    return max(1, math.ceil((z * scatter / tolerance) ** 2))
 
 
 def _verified(problem: Problem, runs: pd.DataFrame, settings: Settings, scatter: dict | None = None) -> dict | None:
     """The best verified point (smallest worst error in tolerances): its means and whether
-    every one is within tolerance; with the design's seed scatter ``scatter`` (:func:`seed_sd`),
-    each response also carries the standard error of its verified mean and the seeds it would
-    take to tell the band (:func:`seeds_to_tell`)."""
+    every one is within tolerance; with one seed's scatter ``scatter`` (the pooled replicate
+    SD, :func:`pooled_sd`), each response also carries the standard error of its verified mean
+    and the seeds it would take to tell the band (:func:`seeds_to_tell`)."""
     ver = runs[runs["kind"] == "verification"]
     if ver.empty:
         return None
@@ -752,7 +758,7 @@ def _verified(problem: Problem, runs: pd.DataFrame, settings: Settings, scatter:
         if scatter and (scatter.get(t.response) or 0) > 0 and v.size:
             rec["scatter"] = float(scatter[t.response])
             rec["standard_error"] = float(scatter[t.response]) / math.sqrt(v.size)
-            rec["seeds_to_tell"] = seeds_to_tell(float(scatter[t.response]), t.tolerance)
+            rec["seeds_to_tell"] = seeds_to_tell(float(scatter[t.response]), t.tolerance, t.optimised)
         out["responses"][t.response] = rec
         out["met"] &= ok
     return out
@@ -768,8 +774,11 @@ def _untellable(verified: dict | None) -> str:
         need = v.get("seeds_to_tell")
         if need and need > v["n"]:
             said.append(f"{r}: one seed scatters by {v['scatter']:.3g}, so the mean of {v['n']} seeds has a standard "
-                        f"error of {v['standard_error']:.2g} against a band of +- {v['tolerance']:.2g}; a point on the "
-                        f"target would read within the band 95 % of the time with about {need} seeds")
+                        f"error of {v['standard_error']:.2g} against a band of "
+                        + (f"{v['tolerance']:.2g} beyond the best level; a point on that level"
+                           if v.get("goal", "target") != "target" else
+                           f"+- {v['tolerance']:.2g}; a point on the target")
+                        + f" would read within the band 95 % of the time with about {need} seeds")
     return ("; the band cannot be verified at this seed scatter with the seeds given (" + "; ".join(said) + ")"
             if said else "")
 
@@ -839,7 +848,9 @@ def step(problem: Problem, runs: pd.DataFrame, settings: Settings, iteration: in
     xe = problem.to_coded(points[problem.names].to_numpy(float))
     problem = resolve(problem, surrogates, np.vstack([cand, xe]))
     scatter = seed_sd(problem, points, surrogates)
-    verified = _verified(problem, runs, settings, scatter)
+    # one seed's scatter, as a verification's mean at one point meets it: the replicates'
+    # pooled SD (seed_sd's larger value may hold the surrogate's lack of fit too)
+    verified = _verified(problem, runs, settings, {r: pooled_sd(points, r) for r in problem.responses})
     p_c, pred_c = consistency(problem, surrogates, cand)
     p_e, pred_e = consistency(problem, surrogates, xe)
     gain = improvement(problem, pred_c, target_probability(problem, pred_c))
