@@ -147,6 +147,25 @@ def test_stl_weld_merges_corners_closer_than_the_tolerance_wherever_they_lie(tmp
         read_stl(f, weld_tol=-1e-6)
 
 
+def test_stl_weld_refuses_a_tolerance_that_chains_a_fine_mesh_together(tmp_path):
+    """A strip 10 mm long with corners every 0.5 mm, welded with weld_tol = 0.6 mm: each corner
+    lies within the tolerance of the next, so merging by chains collapsed each row of corners
+    into its first, up to 10 mm away, and the strip vanished (1 of 41 facets kept).  Refused,
+    naming weld_tol; a tolerance below the edges welds nothing away."""
+    xs = np.arange(21) * 0.5e-3
+    tris = []
+    for x0, x1 in zip(xs[:-1], xs[1:]):
+        tris += [[[x0, 0, 0], [x1, 0, 0], [x1, 5e-3, 0]], [[x0, 0, 0], [x1, 5e-3, 0], [x0, 5e-3, 0]]]
+    f = tmp_path / "strip.stl"
+    f.write_text("solid s\n" + "".join("facet normal 0 0 1\nouter loop\n" + "".join(
+        "vertex %r %r %r\n" % tuple(map(float, q)) for q in tri) + "endloop\nendfacet\n" for tri in tris)
+        + "endsolid s\n")
+    with pytest.raises(InputError, match="weld_tol"):
+        read_stl(f, weld_tol=0.6e-3)
+    v, t = read_stl(f, weld_tol=0.1e-3)
+    assert len(v) == 42 and len(t) == 40
+
+
 def test_stl_truncated_and_invalid(tmp_path):
     v, t = g.box_mesh([0, 0, 0], [1, 1, 1])
     f = tmp_path / "box.stl"

@@ -561,6 +561,14 @@ _SEEN = {  # (wall, lower corner of the periodic box, sphere centre, normal of t
                     (_L / 2, _L / 2 + R - _D, 0.01), (0, 1, 0)),
     "floor_plane": (lambda s: s.add_plane((0, 0, 0), (0, 0, 1), "soil"), 0.0,
                     (1e-4, _L / 2, R - _D), (0, 0, 1)),
+    # a closed solid exactly spanning the period in y (a periodic slab of a wide blade): its
+    # end faces lie on the boundaries y = 0 and y = L, touched at their rims only
+    "closed_box_spanning": (lambda s: s.add_box((0.018, 0.0, 0.005), (0.022, _L, 0.015), "soil"), 0.0,
+                            (0.018 - R + _D, 1e-4, 0.01), (-1, 0, 0)),
+    # a floor of two meshes, each half of the period in x: together they span it
+    "floor_two_tiles": (lambda s: [s.add_mesh([[x0, 0, 0], [x0 + _L / 2, 0, 0], [x0 + _L / 2, _L, 0], [x0, _L, 0]],
+                                              [[0, 1, 2], [0, 2, 3]], "soil") for x0 in (0.0, _L / 2)], 0.0,
+                        (1e-4, _L / 2, R - _D), (0, 0, 1)),
 }
 
 
@@ -590,3 +598,13 @@ def test_a_plate_moving_across_a_periodic_boundary_during_a_run_is_refused():
     sim.run(10)  # 10 steps carry it far less than to the boundary
     with pytest.raises(InputError, match=r"walls\.w.*over the run"):
         sim.run(int(0.02 / (0.1 * sim.dt)))  # 20 mm: past x = L - R
+
+
+def test_a_settling_run_judges_a_moving_wall_where_it_stands():
+    """run_until_settled runs up to 10 million steps but stops once settled: a paddle clear of
+    the boundaries moving at 1 mm/s was refused as sweeping 10 m over that horizon."""
+    sim = _periodic_sim()
+    sim.add_rectangle((_L / 2, _L / 2, 0.01), (0, 1, 0), (1, 0, 0), 0.005, 0.005, "soil", name="w",
+                      velocity=(1e-3, 0, 0))
+    sim.add_particles([[_L / 2, _L / 4, 0.01]], R, "soil")
+    assert sim.run_until_settled(ke_tol=1.0, check_every=10)

@@ -493,7 +493,9 @@ class Simulation:
         # half of it, for the particles' own motion) and on the wall's own extent
         reach = np.array([min(1.5 * float(np.linalg.norm(np.maximum(abs(lo - c), abs(hi - c)))),
                               e) for c, e in zip(wa["wall_centre"], self._wall_extent())])
-        self._check_periodic_walls(steps)
+        # a run that stops once settled has no known length: its moving walls are judged where
+        # they stand (a settling run's walls seldom move far)
+        self._check_periodic_walls(steps if ke_tol < 0 else 0)
         if steps > 0:
             self._check_wall_steps(reach)
         status = np.zeros(5, dtype=np.int64)
@@ -635,6 +637,10 @@ class Simulation:
                             f"normal {par[3:6].tolist()}")
                     continue
                 a, b, flat = _extent_along(kind, par, q)
+                # an end face lying on a boundary, across the axis (the cap of a closed solid
+                # exactly spanning the period): a sphere meets it at its rim only, where the
+                # faces along the axis have it
+                cap = b - a <= eps and (abs(a - lo) <= eps or abs(b - hi) <= eps)
                 turn = om - om[q] * np.eye(3)[q]
                 if np.any(turn != 0):
                     if ext is None:
@@ -645,15 +651,27 @@ class Simulation:
                     a, b = min(a, a + vel[q] * span), max(b, b + vel[q] * span)
                 has[w] = True
                 a_w[w], b_w[w] = min(a_w[w], a), max(b_w[w], b)
-                if (a < lo + rho - eps or b > hi - rho + eps) and not flat:
+                if (a < lo + rho - eps or b > hi - rho + eps) and not flat and not (cap and not np.any(turn != 0)
+                                                                               and vel[q] == 0):
                     bad[w] = True
+            # surfaces along the axis split into walls (tiles of a floor) span the period
+            # together: the union of their extents, gaps within the rounding tolerance closed
+            parts = sorted((a_w[w], b_w[w], w) for w in range(nw) if has[w] and not bad[w])
+            joined, run_lo, run_hi, members = set(), None, None, []
+            for a, b, w in parts + [(np.inf, np.inf, -1)]:
+                if run_lo is not None and a <= run_hi + eps:
+                    run_hi, members = max(run_hi, b), members + [w]
+                    continue
+                if run_lo is not None and run_lo <= lo + eps and run_hi >= hi - eps:
+                    joined.update(members)
+                run_lo, run_hi, members = a, b, [w]
             for w in range(nw):
                 if not has[w]:
                     continue
                 A, B = a_w[w], b_w[w]
                 clear = A >= lo + rho - eps and B <= hi - rho + eps
                 through = A <= lo - rho + eps and B >= hi + rho - eps
-                spans = A <= lo + eps and B >= hi - eps and not bad[w]
+                spans = w in joined
                 if clear or through or spans:
                     continue
                 name = self.walls.names[w]

@@ -150,8 +150,9 @@ def read_stl_soup(path):
 
 
 def weld(soup, weld_tol=0.0):
-    """Indexed mesh from a triangle soup; vertices within ``weld_tol`` of each other (and
-    so chains of such vertices) or identical (``weld_tol=0``) merge into the first of them,
+    """Indexed mesh from a triangle soup; vertices within ``weld_tol`` of each other or
+    identical (``weld_tol=0``) merge into the first of them (ValueError where a chain of such
+    vertices would merge two more than 2 ``weld_tol`` apart: a mesh finer than ``weld_tol``),
     wherever they lie (two copies of a corner a float-noise apart are one vertex, as on no
     grid of rounding).  Facets without area (two corners merged, or three on one line, as
     CAD exports write slivers) are left out: they bound nothing."""
@@ -162,6 +163,12 @@ def weld(soup, weld_tol=0.0):
         graph = coo_matrix((np.ones(len(pairs)), (pairs[:, 0], pairs[:, 1])), shape=(n, n))
         _, key = connected_components(graph, directed=False)
         _, first, inv = np.unique(key, return_index=True, return_inverse=True)
+        # a chain of corners each within weld_tol of the next would merge corners far apart
+        # (a mesh finer than weld_tol collapses): refused, not welded
+        far = np.linalg.norm(pts - pts[first][inv], axis=1)
+        if far.size and far.max() > 2.0 * weld_tol:
+            raise ValueError(f"corners {far.max():.3g} apart would merge through a chain of corners each within "
+                             f"weld_tol = {weld_tol:g} of the next: a weld_tol below the mesh's shortest edge")
     else:
         _, first, inv = np.unique(pts, axis=0, return_index=True, return_inverse=True)
     verts = pts[first]
@@ -190,7 +197,11 @@ def read_stl(path, scale=1.0, weld_tol=0.0):
         raise InputError(path, "weld_tol", "a welding distance >= 0 (0: identical corners only)",
                          weld_tol)
     soup = read_stl_soup(path) * float(scale)
-    v, t = weld(soup, tol)
+    try:
+        v, t = weld(soup, tol)
+    except ValueError as exc:
+        raise InputError(path, "weld_tol", "a welding distance below the mesh's shortest edge", f"{tol:g}: {exc}") \
+            from None
     if t.shape[0] == 0:
         raise InputError(path, "triangles", "at least one non-degenerate triangle", 0)
     return v, t
