@@ -624,7 +624,7 @@ def analyse(soil: str, res: pd.DataFrame, diag: pd.DataFrame, cands: list, effec
             bias, sc = sl.scale_data(), rs.scale_of(u)
             ref = sl.Model([bias], y0, meas, sc)
             m = sl.Model([data[c] for c in names] + [bias], y0, meas, sc, jt)
-            uniform = sl.score(m, ref, sl._folds(u, fold_by), settings.alpha)
+            uniform = sl.score(m, ref, sl._folds(u, fold_by), settings.alpha, groups=sl.replicate_groups(u))
             x = np.array([uniform.theta[k] for k in uniform.names], float)
             fitted = m.predict(x)
             res_after = residual_after(res, fitted)
@@ -661,7 +661,7 @@ def analyse(soil: str, res: pd.DataFrame, diag: pd.DataFrame, cands: list, effec
             y0 = u["simulated_mean"].to_numpy(float)
             final = sl.score(sl.Model([data[c] for c in chosen], y0, u["measured"].to_numpy(float), rs.scale_of(u), jt),
                              sl.Model([], y0, u["measured"].to_numpy(float), rs.scale_of(u)), sl._folds(u, fold_by),
-                             settings.alpha)
+                             settings.alpha, groups=sl.replicate_groups(u))
         theta = final.theta
         ci, ci_method = _interval(u, [data[c] for c in chosen], final, settings, jt)
         if uniform is not None:

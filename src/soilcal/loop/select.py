@@ -22,8 +22,13 @@ effects already chosen), on the relative errors ``e_i = (measured_i - prediction
   error of the fold's rows predicted;
 * **paired test** over the folds: one-sided paired t-test (scipy ``ttest_rel``) that the
   reference's fold RMS error exceeds the model's;
-* **information criterion**: AICc = n ln(SSE/n) + 2K + 2K(K+1)/(n-K-1) of the fit to every
-  row, K the number of effect parameters plus one (the residual variance);
+* **information criterion**: AICc = n ln(SSE/n) + 2K + 2K(K+1)/(n-K-1) of the fit, K the
+  number of effect parameters plus one (the residual variance), n the measured observations:
+  replicate rows of one condition and measured quantity (one simulation, so one prediction:
+  :func:`replicate_groups`) are one observation, their mean relative error, as the diagnosis
+  takes them (counted as rows, three repeats tripled the log-likelihood's gain against the
+  same penalty: a parameter without effect lowered the AICc in 46 % of tables of 8
+  conditions x 3 repeats, 11 % on their condition means, the rate an extra parameter has);
 * **confidence intervals**: from the Jacobian of the full fit, cov = s^2 (J^T J)^-1,
   s^2 = SSE/(n-k), two-sided 95 % with Student's t on n-k degrees of freedom, or, where it is
   wider, clustered by held-out group (G of them, more than k + 1): cov = G/(G-1) A B A with
@@ -357,6 +362,26 @@ class Score:
         return float(np.max(np.abs(e))) if len(e) else math.nan
 
 
+def replicate_groups(obs: pd.DataFrame) -> np.ndarray | None:
+    """Per row the label of its observation for the information criterion: rows of one
+    simulation (:func:`soilcal.loop.residuals.simulation_key`: replicate rows of a condition, a
+    test entered in two tables) and one measured quantity share one prediction and are one
+    observation; None (every row its own) without a ``simulation`` column."""
+    if "simulation" not in obs.columns or "measure" not in obs.columns:
+        return None
+    return (obs["simulation"].astype(str) + "|" + obs["measure"].astype(str)).to_numpy()
+
+
+def sse_of(e: np.ndarray, groups: np.ndarray | None) -> tuple[float, int]:
+    """(sum of squares, observations) of the relative errors ``e``: over the rows, or over the
+    mean error of each replicate group (:func:`replicate_groups`)."""
+    e = np.asarray(e, float)
+    if groups is None:
+        return float(np.sum(e ** 2)), len(e)
+    means = pd.Series(e).groupby(np.asarray(groups), sort=False).mean().to_numpy(float)
+    return float(np.sum(means ** 2)), len(means)
+
+
 def aicc(sse: float, n: int, k: int) -> float:
     if n - k - 1 <= 0 or sse <= 0:
         return math.inf if sse > 0 else -math.inf
@@ -384,8 +409,10 @@ def cross_validate(model: Model, folds) -> tuple[np.ndarray, np.ndarray]:
 MIN_IMPROVEMENT = 0.1
 
 
-def score(model: Model, ref: Model, folds, alpha: float = 0.05, min_improvement: float = MIN_IMPROVEMENT) -> Score:
-    """Score ``model`` against ``ref`` (module docstring)."""
+def score(model: Model, ref: Model, folds, alpha: float = 0.05, min_improvement: float = MIN_IMPROVEMENT,
+          groups: np.ndarray | None = None) -> Score:
+    """Score ``model`` against ``ref`` (module docstring); ``groups``: each row's observation
+    for the AICc (:func:`replicate_groups`; default every row its own)."""
     from scipy import stats
 
     n = len(model.y0)
@@ -398,7 +425,8 @@ def score(model: Model, ref: Model, folds, alpha: float = 0.05, min_improvement:
     er = ref.errors(xr)
     sse, sse_r = float(np.sum(e ** 2)), float(np.sum(er ** 2))
     k = model.k
-    a, ar = aicc(sse, n, k + 1), aicc(sse_r, n, ref.k + 1)  # + 1: the residual variance is estimated too
+    # + 1: the residual variance is estimated too; replicate rows are one observation
+    a, ar = aicc(*sse_of(e, groups), k + 1), aicc(*sse_of(er, groups), ref.k + 1)
     names = [f"{ed.effect.name}.{t}" for ed in model.effects for t in ed.effect.theta_names()]
     ci = {}
     if res is not None and n > k:
@@ -623,6 +651,7 @@ def forward(obs: pd.DataFrame, y0: np.ndarray, data: dict, fold_by: str | None =
 
     scale = scale_of(obs) if "measured" in obs else None
     folds = _folds(obs, fold_by)
+    groups = replicate_groups(obs)
     chosen: list[str] = []
     steps = []
 
@@ -635,7 +664,7 @@ def forward(obs: pd.DataFrame, y0: np.ndarray, data: dict, fold_by: str | None =
         for name in data:
             if name in chosen:
                 continue
-            s = score(model(chosen + [name]), ref, folds, alpha)
+            s = score(model(chosen + [name]), ref, folds, alpha, groups=groups)
             tried.append((name, s))
             steps.append((step, chosen + [name], s))
         better = [(nm, s) for nm, s in tried
@@ -651,11 +680,12 @@ def forward(obs: pd.DataFrame, y0: np.ndarray, data: dict, fold_by: str | None =
         uniform scale (the nuisance a calibration offset needs: a rate effect on six speeds
         under an offset passes only there)."""
         rest = [c for c in names if c != nm]
-        s = score(model(names), model(rest), folds, alpha)
+        s = score(model(names), model(rest), folds, alpha, groups=groups)
         if s.accepted:
             return s
         s2 = score(Model([data[c] for c in names] + [bias], y0, measured, scale),
-                   Model([data[c] for c in rest] + [bias], y0, measured, scale), folds, alpha)
+                   Model([data[c] for c in rest] + [bias], y0, measured, scale), folds, alpha,
+                   groups=groups)
         return s2 if s2.accepted else _renamed(s, f"without {nm}, as is and with a free uniform scale on both "
                                                   f"(p {s2.p:.3g}): " + s.reason)
 
@@ -668,13 +698,14 @@ def forward(obs: pd.DataFrame, y0: np.ndarray, data: dict, fold_by: str | None =
             break
         worst = max(failing, key=lambda t: (t[1].p if np.isfinite(t[1].p) else 2.0))[0]
         chosen.remove(worst)
-    final = score(model(chosen), model([]), folds, alpha) if chosen else None
+    final = score(model(chosen), model([]), folds, alpha, groups=groups) if chosen else None
     uniform, uniform_s, beside = None, math.nan, None
     if chosen:
         alone = Model([bias], y0, measured, scale)
-        uniform = score(model(chosen), alone, folds, alpha)
+        uniform = score(model(chosen), alone, folds, alpha, groups=groups)
         uniform_s = float(np.asarray(alone.fit()[0], float).ravel()[0])
-        beside = score(Model([data[c] for c in chosen] + [bias], y0, measured, scale), alone, folds, alpha)
+        beside = score(Model([data[c] for c in chosen] + [bias], y0, measured, scale), alone, folds, alpha,
+                       groups=groups)
     return Selection(chosen=chosen, steps=steps, final=final, forward_chosen=forward_chosen, uniform=uniform,
                      uniform_s=uniform_s, beside_uniform=beside)
 
