@@ -761,3 +761,55 @@ def test_a_day_offset_falls_on_an_undeclared_day_column_as_the_loop_reads_it(tmp
     assert code == 0
     f = pd.read_csv(out.with_suffix(".truth.csv")).sort_values("row")["truth_disturbance"].to_numpy()
     assert f[0] == f[2] == f[4] and f[1] == f[3] == f[5] and f[0] != f[1]
+
+
+def _scale_fitted(out):
+    """(value, 95 % interval, how) of the uniform scale s the summary reports, and the report's
+    table row of it."""
+    from soilcal.loop import files
+
+    s = out.summary.iloc[0]
+    v = json.loads(s["nuisance"])["uniform_scale.s"]
+    lo, hi = json.loads(s["nuisance_ci95"])["uniform_scale.s"]
+    text = files.report("user", out, [{"candidates": out.candidates}])
+    return v, (lo, hi), s["nuisance_method"], text
+
+
+def test_the_uniform_scale_fitted_beside_an_effect_is_reported():
+    # the rate effect beta 0.3 with every value 8 % high (the construction of the test above):
+    # the scale fitted beside the effect is the 8 % the table was made with, and loop_summary.csv
+    # and report.md give it with its interval, not only the verdict's sentence
+    from soilcal.loop import core
+    from soilcal.loop import standin as S
+    from soilcal.loop import synthesize as sy
+
+    conds = S.conditions(S.grid(seed=11, n=18, moisture=True))
+    table = sy.synthesize(conds, S.base_params, S.simulate, {"rate_friction": {"beta": 0.3}}, {},
+                          {"stones": {"fraction": 1.0, "low": 0.08, "high": 0.08}}, noise=0.02, seed=2)
+    out = core.run_inprocess("user", sy.with_measured(conds, table), S.base_params, S.simulate,
+                             core.Settings(bootstrap=0))
+    assert out.chosen == ["rate_friction"], out.verdict
+    v, (lo, hi), how, text = _scale_fitted(out)
+    assert abs(v - 0.08) < 0.02 and lo < 0.08 < hi, (v, lo, hi)
+    assert how.startswith("fitted with the chosen effects"), how
+    assert "## Uniform scale of the model" in text and f"| uniform_scale.s | {v:.4g} |" in text
+    steps = out.selection["step"].astype(str).tolist()
+    assert "refit beside uniform scale" in steps and "beside uniform scale" in steps
+
+
+def test_the_uniform_bias_of_an_unexplained_offset_is_reported_with_its_interval():
+    # twelve blade tests 10 % above the stand-in throughout (2 % noise): unexplained, a uniform
+    # bias; its value and interval are in loop_summary.csv and report.md
+    from soilcal.loop import core
+    from soilcal.loop import standin as S
+    from soilcal.loop import synthesize as sy
+
+    conds = S.conditions(S.grid(seed=1, n=12))
+    table = sy.synthesize(conds, S.base_params, S.simulate, {}, {}, {"stones": {"fraction": 1.0, "low": 0.1,
+                                                                              "high": 0.1}}, noise=0.02, seed=3)
+    out = core.run_inprocess("user", sy.with_measured(conds, table), S.base_params, S.simulate,
+                             core.Settings(bootstrap=0))
+    assert out.verdict.startswith("unexplained: the measured values are"), out.verdict
+    v, (lo, hi), how, text = _scale_fitted(out)
+    assert abs(v - 0.10) < 0.02 and lo < 0.10 < hi and hi - lo < 0.05, (v, lo, hi)
+    assert how.startswith("fitted alone") and "## Uniform scale of the model" in text

@@ -618,6 +618,7 @@ class Selection:
     forward_chosen: list = field(default_factory=list)  # before the backward gate
     uniform: Score | None = None  # the chosen effects against a free uniform scale alone
     uniform_s: float = math.nan   # that scale's fitted s (prediction y0 (1 + s))
+    uniform_ci: tuple = (math.nan, math.nan)  # its 95 % interval (the scale alone against the calibrated model)
     beside_uniform: Score | None = None  # the chosen effects beside a free uniform scale against the scale alone
 
 
@@ -699,15 +700,17 @@ def forward(obs: pd.DataFrame, y0: np.ndarray, data: dict, fold_by: str | None =
         worst = max(failing, key=lambda t: (t[1].p if np.isfinite(t[1].p) else 2.0))[0]
         chosen.remove(worst)
     final = score(model(chosen), model([]), folds, alpha, groups=groups) if chosen else None
-    uniform, uniform_s, beside = None, math.nan, None
+    uniform, uniform_s, uniform_ci, beside = None, math.nan, (math.nan, math.nan), None
     if chosen:
         alone = Model([bias], y0, measured, scale)
         uniform = score(model(chosen), alone, folds, alpha, groups=groups)
-        uniform_s = float(np.asarray(alone.fit()[0], float).ravel()[0])
+        own = score(alone, model([]), folds, alpha, groups=groups)  # the scale alone: its value and interval
+        uniform_s = float(own.theta["uniform_scale.s"])
+        uniform_ci = tuple(own.ci.get("uniform_scale.s", (math.nan, math.nan)))
         beside = score(Model([data[c] for c in chosen] + [bias], y0, measured, scale), alone, folds, alpha,
                        groups=groups)
     return Selection(chosen=chosen, steps=steps, final=final, forward_chosen=forward_chosen, uniform=uniform,
-                     uniform_s=uniform_s, beside_uniform=beside)
+                     uniform_s=uniform_s, uniform_ci=uniform_ci, beside_uniform=beside)
 
 
 #: AICc units by which the chosen effects beside a free uniform scale must beat the scale alone
