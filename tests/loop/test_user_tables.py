@@ -813,3 +813,29 @@ def test_the_uniform_bias_of_an_unexplained_offset_is_reported_with_its_interval
     v, (lo, hi), how, text = _scale_fitted(out)
     assert abs(v - 0.10) < 0.02 and lo < 0.10 < hi and hi - lo < 0.05, (v, lo, hi)
     assert how.startswith("fitted alone") and "## Uniform scale of the model" in text
+
+
+@pytest.mark.parametrize("offset", [-0.08, 0.08])
+def test_a_tool_adhesion_under_a_calibration_offset_is_named_beside_it(offset):
+    # eighteen blade tests with a hidden soil-tool adhesion (gamma_a 2.5, about +9 % of the
+    # force: b d c_a beside a passive pressure growing with d^2 and a momentum flux with v^2)
+    # read by a load cell 8 % low or high throughout (2 % noise).  At -8 % the offset cancels the
+    # adhesion's mean: the residual follows the speed and depth, where the adhesion's share
+    # falls, and a rate effect (beta -0.07) was named in 20 of 20 campaigns; at +8 % the
+    # adhesion alone ran to its bound (3.0) to take the offset.  The adhesion is named, its
+    # parameter within 25 %, beside a uniform scale of the offset the table was made with
+    from soilcal.loop import core
+    from soilcal.loop import standin as S
+    from soilcal.loop import synthesize as sy
+
+    ref = {"tool_speed": 1.75, "working_depth": 0.1, "moisture_content": 16.0}
+    conds = S.conditions(S.grid(0, 18, moisture=True))
+    table = sy.synthesize(conds, S.base_params, S.simulate, {"tool_adhesion": {"gamma_a": 2.5}}, ref,
+                          {"stones": {"fraction": 1.0, "low": offset, "high": offset}}, noise=0.02, seed=10)
+    out = core.run_inprocess("user", sy.with_measured(conds, table), S.base_params, S.simulate,
+                             core.Settings(reference=ref, bootstrap=0))
+    assert out.chosen == ["tool_adhesion"], out.verdict
+    assert abs(out.theta["tool_adhesion.gamma_a"] - 2.5) <= 0.25 * 2.5, out.theta
+    assert "at the upper bound" not in out.verdict, out.verdict
+    v = json.loads(out.summary["nuisance"].iloc[0])["uniform_scale.s"]
+    assert abs(v - offset) < 0.02, v

@@ -306,6 +306,15 @@ SUMMARY_COLUMNS = ["soil", "rows", "usable_rows", "verdict", "effects", "paramet
 SCALE_KEY = "uniform_scale.s"
 
 
+def _scale_beside(sel) -> bool:
+    """Whether the free uniform scale fitted beside the chosen effects (``beside_uniform``, the
+    test against a constant) is significant: its 95 % interval leaves out 0, so the effects
+    fitted without it take up an offset of the model (a calibration's) in their parameters."""
+    b = sel.beside_uniform
+    lo, hi = (b.ci.get(SCALE_KEY, (math.nan, math.nan)) if b is not None else (math.nan, math.nan))
+    return bool(np.isfinite(lo) and np.isfinite(hi) and (lo > 0.0 or hi < 0.0))
+
+
 def _selection_row(step, s, names=None) -> dict:
     """A row of ``selection.csv``: a model tried (:class:`soilcal.loop.select.Score`)."""
     names = names if names is not None else list(dict.fromkeys(k.split(".")[0] for k in s.names))
@@ -616,6 +625,7 @@ def analyse(soil: str, res: pd.DataFrame, diag: pd.DataFrame, cands: list, effec
         for step, names, s in sel.steps:
             sel_rows.append(_selection_row(step, s, names))
         for step, s in (("against uniform scale", sel.uniform), ("beside uniform scale", sel.beside_uniform)):
+            # (the effects judged there: the chosen, else those the forward step took)
             if s is not None:  # the chosen effects against a free uniform scale alone, and beside it
                 sel_rows.append(_selection_row(step, s))
         provisional = list(sel.forward_chosen)
@@ -633,9 +643,12 @@ def analyse(soil: str, res: pd.DataFrame, diag: pd.DataFrame, cands: list, effec
         res_after = residual_after(res, fitted)
         after = dg.diagnose(res_after, quantity_cols, settings.alpha)
         bias_left = bool(((after["test"] == "bias") & after["significant"].astype(bool)).any())
-        if sel.chosen and bias_left and not any("bias" in EFFECTS[c].signature for c in sel.chosen):
-            # a bias no chosen effect can carry pulls their parameters to make up for it: refit
-            # them beside a free uniform scale of the model (select.scale_data), and say it
+        if sel.chosen and ((bias_left and not any("bias" in EFFECTS[c].signature for c in sel.chosen))
+                           or sel.with_scale or _scale_beside(sel)):
+            # a bias no chosen effect can carry pulls their parameters to make up for it, and so
+            # does an offset beside an effect that carries a bias (an adhesion fitted alone under
+            # an 8 % offset ran to its bound): refit them beside a free uniform scale of the
+            # model (select.scale_data), and say it
             bias, sc = sl.scale_data(), rs.scale_of(u)
             ref = sl.Model([bias], y0, meas, sc)
             m = sl.Model([data[c] for c in names] + [bias], y0, meas, sc, jt)
@@ -659,15 +672,16 @@ def analyse(soil: str, res: pd.DataFrame, diag: pd.DataFrame, cands: list, effec
                    "model's own values?)")
     elif n < 3:
         verdict = f"unexplained: too few measured values to decide ({n})"
-    elif sel is not None and sel.chosen and sl.like_a_constant(sel):
-        # the chosen effects add nothing beside a free uniform scale: the rows show a uniform
+    elif sel is not None and sel.judged and sl.like_a_constant(sel):
+        # the chosen effects (or, where the gates beside a free uniform scale dropped them all,
+        # those the forward step took) add nothing beside that scale: the rows show a uniform
         # offset (an instrument's calibration), not the effects' signature
-        sv, b, k = sel.uniform_s, sel.beside_uniform, len(sel.chosen)
+        sv, b, k = sel.uniform_s, sel.beside_uniform, len(sel.judged)
         nuisance = ({SCALE_KEY: sv}, {SCALE_KEY: sel.uniform_ci},
                     "fitted alone: the uniform bias the verdict names, the calibrated model times (1 + s)")
         verdict = (f"unexplained: the measured values are {abs(100 * sv):.1f} % {'above' if sv > 0 else 'below'} "
                    "the model throughout, a uniform bias (an instrument's calibration, a zero offset) that no "
-                   "mechanism of the library carries; " + " + ".join(sel.chosen) + f" fit{'s' if k == 1 else ''} it "
+                   "mechanism of the library carries; " + " + ".join(sel.judged) + f" fit{'s' if k == 1 else ''} it "
                    f"(held-out RMS {100 * sel.uniform.rmse():.2f} % against {100 * sel.uniform.rmse(True):.2f} % for "
                    f"the uniform bias alone) but add{'s' if k == 1 else ''} nothing beside a free uniform scale ("
                    f"{b.reason}; AICc {b.aicc:.1f} against {b.ref_aicc:.1f} for the scale alone): on these rows "

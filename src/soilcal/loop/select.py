@@ -620,6 +620,8 @@ class Selection:
     uniform_s: float = math.nan   # that scale's fitted s (prediction y0 (1 + s))
     uniform_ci: tuple = (math.nan, math.nan)  # its 95 % interval (the scale alone against the calibrated model)
     beside_uniform: Score | None = None  # the chosen effects beside a free uniform scale against the scale alone
+    with_scale: bool = False      # an effect was taken beside a free uniform scale (forward), so the scale stays
+    judged: list = field(default_factory=list)  # the effects uniform and beside_uniform score
 
 
 def forward(obs: pd.DataFrame, y0: np.ndarray, data: dict, fold_by: str | None = None, alpha: float = 0.05,
@@ -659,34 +661,67 @@ def forward(obs: pd.DataFrame, y0: np.ndarray, data: dict, fold_by: str | None =
     def model(names):
         return Model([data[c] for c in names], y0, measured, scale)
 
+    bias = scale_data()
+
+    def scaled(names):
+        return Model([data[c] for c in names] + [bias], y0, measured, scale)
+
+    def gains(s):
+        return s.rmse() <= (1 - MIN_IMPROVEMENT) * s.rmse(True) and s.aicc < s.ref_aicc
+
+    with_scale = False  # whether an effect was added beside the free uniform scale: the scale stays in the model
     for step in range(1, max_effects + 1):
-        ref = model(chosen)
-        tried = []
+        ref, ref_scaled = model(chosen), scaled(chosen)
+        better = []
         for name in data:
             if name in chosen:
                 continue
-            s = score(model(chosen + [name]), ref, folds, alpha, groups=groups)
-            tried.append((name, s))
-            steps.append((step, chosen + [name], s))
-        better = [(nm, s) for nm, s in tried
-                  if s.rmse() <= (1 - MIN_IMPROVEMENT) * s.rmse(True) and s.aicc < s.ref_aicc]
+            # as is, else (the first effect) with a free uniform scale on both models: a
+            # calibration offset beside the effect, which an adhesion alone cannot take where
+            # the offset cancels the adhesion's mean (the gate below admits an effect either
+            # way).  Once an effect came in beside the scale, the next only so; the scale is not
+            # brought in later, where with two effects it would fit what a third leaves (an
+            # adhesion and a scale took up a moisture cohesion beside a rate effect).  Where both
+            # forms gain, the scale is taken where it lowers the AICc by more than CONSTANT_AICC
+            forms = []
+            for sc in ((True,) if with_scale else (False, True) if not chosen else (False,)):
+                s = score((scaled if sc else model)(chosen + [name]), ref_scaled if sc else ref, folds, alpha,
+                          groups=groups)
+                steps.append((step, chosen + [name] + ([bias.effect.name] if sc else []), s))
+                if gains(s):
+                    forms.append((name, s, sc))
+            if len(forms) == 2 and not forms[1][1].aicc < forms[0][1].aicc - CONSTANT_AICC:
+                forms = forms[:1]
+            better += forms[-1:]
         if not better:
             break
-        chosen.append(min(better, key=lambda t: (t[1].rmse(), t[1].aicc))[0])
+        # the lowest held-out error; where some carry the scale, the lowest AICc (the held-out
+        # error favours the scale's extra parameter: a rate effect beside it beat a true weak
+        # adhesion taken as is)
+        mixed = any(t[2] for t in better) and not all(t[2] for t in better)
+        name, _, sc = min(better, key=lambda t: (t[1].aicc, t[1].rmse()) if mixed else (t[1].rmse(), t[1].aicc))
+        chosen.append(name)
+        with_scale = with_scale or sc
     forward_chosen = list(chosen)
-    bias = scale_data()
+    if chosen and not with_scale:
+        # an offset beside the effects taken as is (its 95 % interval leaves out 0): without the
+        # scale, any effect that takes up part of it passes its gate (an adhesion run to its
+        # bound under an 8 % offset let a rate effect of beta 0.01 in), so the gates take it
+        lo, hi = score(scaled(chosen), Model([bias], y0, measured, scale), folds, alpha,
+                       groups=groups).ci.get("uniform_scale.s", (math.nan, math.nan))
+        with_scale = bool(np.isfinite(lo) and np.isfinite(hi) and (lo > 0.0 or hi < 0.0))
 
     def gate(names, nm):
         """The effect ``nm`` against the model without it; where that fails, both with a free
         uniform scale (the nuisance a calibration offset needs: a rate effect on six speeds
         under an offset passes only there)."""
         rest = [c for c in names if c != nm]
+        s2 = score(scaled(names), scaled(rest), folds, alpha, groups=groups)
+        if with_scale:  # an effect the forward step took beside the scale is tested beside it only
+            return s2 if s2.accepted else _renamed(s2, f"without {nm}, with a free uniform scale on both: " + s2.reason)
         s = score(model(names), model(rest), folds, alpha, groups=groups)
         if s.accepted:
             return s
-        s2 = score(Model([data[c] for c in names] + [bias], y0, measured, scale),
-                   Model([data[c] for c in rest] + [bias], y0, measured, scale), folds, alpha,
-                   groups=groups)
         return s2 if s2.accepted else _renamed(s, f"without {nm}, as is and with a free uniform scale on both "
                                                   f"(p {s2.p:.3g}): " + s.reason)
 
@@ -701,16 +736,20 @@ def forward(obs: pd.DataFrame, y0: np.ndarray, data: dict, fold_by: str | None =
         chosen.remove(worst)
     final = score(model(chosen), model([]), folds, alpha, groups=groups) if chosen else None
     uniform, uniform_s, uniform_ci, beside = None, math.nan, (math.nan, math.nan), None
-    if chosen:
+    # the effects judged against a uniform scale: those chosen, or, where the gates beside the
+    # scale dropped them all, those the forward step took (they fit an offset the scale fits)
+    judged = chosen or (forward_chosen if with_scale else [])
+    if judged:
         alone = Model([bias], y0, measured, scale)
-        uniform = score(model(chosen), alone, folds, alpha, groups=groups)
+        uniform = score(model(judged), alone, folds, alpha, groups=groups)
         own = score(alone, model([]), folds, alpha, groups=groups)  # the scale alone: its value and interval
         uniform_s = float(own.theta["uniform_scale.s"])
         uniform_ci = tuple(own.ci.get("uniform_scale.s", (math.nan, math.nan)))
-        beside = score(Model([data[c] for c in chosen] + [bias], y0, measured, scale), alone, folds, alpha,
+        beside = score(Model([data[c] for c in judged] + [bias], y0, measured, scale), alone, folds, alpha,
                        groups=groups)
     return Selection(chosen=chosen, steps=steps, final=final, forward_chosen=forward_chosen, uniform=uniform,
-                     uniform_s=uniform_s, uniform_ci=uniform_ci, beside_uniform=beside)
+                     uniform_s=uniform_s, uniform_ci=uniform_ci, beside_uniform=beside, with_scale=with_scale,
+                     judged=judged)
 
 
 #: AICc units by which the chosen effects beside a free uniform scale must beat the scale alone
