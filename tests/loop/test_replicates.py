@@ -181,3 +181,73 @@ def test_repeats_that_all_read_one_value_state_no_scatter():
                       "simulated_n": [3] * 5})
     z, _ = replicate_residuals(d)
     assert z == pytest.approx([12 / np.sqrt(7)], rel=1e-12)  # only b's repeats (as the test above)
+
+
+def _trend_effect(x):
+    """A one-parameter effect whose change is linear in it: the prediction 100 (1 + t x) at a
+    row with covariate x (a trend in x; t in [-1, 1], off at 0)."""
+    from soilcal.loop import select as sl
+
+    class Trend:
+        name = "trend"
+        null = {"t": 0.0}
+
+        def theta_names(self):
+            return ("t",)
+
+    eff, bounds = Trend(), {"t": (-1.0, 1.0)}
+    ts = np.array([[-1.0], [0.0], [1.0]])
+    means = np.array([100.0 * (1.0 + t * x) for t in ts[:, 0]])
+    return sl.EffectData(eff, bounds, sl.Surrogate(eff, bounds, ts, means), [{"t": t} for t in ts[:, 0]])
+
+
+def test_replicate_rows_are_one_observation_in_the_information_criterion():
+    # 8 conditions x 3 repeats with no trend: each condition deviates from the model by its own
+    # 5 % (shared by its repeats, 0.5 % apart).  A trend parameter without effect lowers the
+    # AICc of n = 8 condition means when n ln(SSE0/SSE1) > 3.733 (the penalty of K 1 -> 2 at
+    # n = 8), i.e. when the F statistic on 1 and 6 degrees of freedom exceeds
+    # 6 (exp(3.733/8) - 1) = 3.57: P = 0.108.  Taking the 24 rows for 24 observations the gain
+    # is tripled against a smaller penalty (2.389 at n = 24): P(F > 0.63) = 0.46
+    from scipy import stats
+
+    from soilcal.loop import select as sl
+
+    rng = np.random.default_rng(11)
+    n_c, reps, hits, tables = 8, 3, 0, 120
+    x = np.repeat(np.linspace(-0.5, 0.5, n_c), reps)
+    y0 = np.full(n_c * reps, 100.0)
+    obs = pd.DataFrame({"simulation": np.repeat([f"s{i}" for i in range(n_c)], reps), "measure": "F_N"})
+    groups = sl.replicate_groups(obs)
+    folds = [np.arange(reps * i, reps * i + reps) for i in range(n_c)]
+    ed = _trend_effect(x)
+    for _ in range(tables):
+        meas = 100.0 * (1.0 + np.repeat(rng.normal(0.0, 0.05, n_c), reps) + rng.normal(0.0, 0.005, n_c * reps))
+        sc = np.full(len(meas), 100.0)  # absolute errors over 100: linear least squares
+        s = sl.score(sl.Model([ed], y0, meas, sc), sl.Model([], y0, meas, sc), folds, groups=groups)
+        hits += s.aicc < s.ref_aicc
+    expected = stats.f.sf(6 * (np.exp((sl.aicc(1, 8, 2) - sl.aicc(1, 8, 1)) / 8) - 1), 1, 6)
+    assert expected == pytest.approx(0.108, abs=0.005)
+    assert abs(hits / tables - expected) < 3 * np.sqrt(expected * (1 - expected) / tables), hits / tables
+
+
+def test_the_information_criterion_of_replicate_rows_is_that_of_their_means():
+    # the same 8 conditions given as 3 repeat rows each or as one row of their mean: the same
+    # AICc for both models (errors over a fixed scale, so a condition's mean error is the error
+    # of its mean)
+    from soilcal.loop import select as sl
+
+    rng = np.random.default_rng(3)
+    n_c, reps = 8, 3
+    xc = np.linspace(-0.5, 0.5, n_c)
+    meas = 100.0 * (1.0 + 0.2 * np.repeat(xc, reps) + rng.normal(0.0, 0.03, n_c * reps))
+    obs = pd.DataFrame({"simulation": np.repeat([f"s{i}" for i in range(n_c)], reps), "measure": "F_N"})
+    folds = [np.arange(reps * i, reps * i + reps) for i in range(n_c)]
+    rows = sl.score(sl.Model([_trend_effect(np.repeat(xc, reps))], np.full(n_c * reps, 100.0), meas,
+                             np.full(n_c * reps, 100.0)),
+                    sl.Model([], np.full(n_c * reps, 100.0), meas, np.full(n_c * reps, 100.0)), folds,
+                    groups=sl.replicate_groups(obs))
+    mean = meas.reshape(n_c, reps).mean(axis=1)
+    one = sl.score(sl.Model([_trend_effect(xc)], np.full(n_c, 100.0), mean, np.full(n_c, 100.0)),
+                   sl.Model([], np.full(n_c, 100.0), mean, np.full(n_c, 100.0)), [np.array([i]) for i in range(n_c)])
+    assert rows.aicc == pytest.approx(one.aicc, rel=1e-6) and rows.ref_aicc == pytest.approx(one.ref_aicc, rel=1e-6)
+    assert rows.theta["trend.t"] == pytest.approx(0.2, abs=0.03)

@@ -298,7 +298,30 @@ SELECTION_COLUMNS = ["step", "effects", "parameters", "ci95", "heldout_rmse_perc
                      "heldout_max_percent", "aicc", "reference_aicc", "p_paired", "accepted", "reason"]
 SUMMARY_COLUMNS = ["soil", "rows", "usable_rows", "verdict", "effects", "parameters", "ci95", "ci95_method", "follows",
                    "rmse_before_percent", "rmse_after_percent", "max_before_percent", "max_after_percent",
-                   "error_reduction_percent", "alpha", "reference", "folds"]
+                   "error_reduction_percent", "alpha", "reference", "folds", "nuisance", "nuisance_ci95",
+                   "nuisance_method"]
+
+
+#: the parameter of the free uniform scale of the model (:func:`soilcal.loop.select.scale_data`)
+SCALE_KEY = "uniform_scale.s"
+
+
+def _scale_beside(sel) -> bool:
+    """Whether the free uniform scale fitted beside the chosen effects (``beside_uniform``, the
+    test against a constant) is significant: its 95 % interval leaves out 0, so the effects
+    fitted without it take up an offset of the model (a calibration's) in their parameters."""
+    b = sel.beside_uniform
+    lo, hi = (b.ci.get(SCALE_KEY, (math.nan, math.nan)) if b is not None else (math.nan, math.nan))
+    return bool(np.isfinite(lo) and np.isfinite(hi) and (lo > 0.0 or hi < 0.0))
+
+
+def _selection_row(step, s, names=None) -> dict:
+    """A row of ``selection.csv``: a model tried (:class:`soilcal.loop.select.Score`)."""
+    names = names if names is not None else list(dict.fromkeys(k.split(".")[0] for k in s.names))
+    return {"step": step, "effects": "+".join(names), "parameters": _fmt(s.theta), "ci95": _fmt_ci(s.ci),
+            "heldout_rmse_percent": 100 * s.rmse(), "reference_heldout_rmse_percent": 100 * s.rmse(True),
+            "heldout_max_percent": 100 * s.max_error(), "aicc": s.aicc, "reference_aicc": s.ref_aicc,
+            "p_paired": s.p, "accepted": s.accepted, "reason": s.reason}
 
 
 def _fmt(d: dict) -> str:
@@ -581,6 +604,7 @@ def analyse(soil: str, res: pd.DataFrame, diag: pd.DataFrame, cands: list, effec
     n = len(u)
     structure = bool(diag["significant"].any()) if len(diag) else False
     verdict = ""
+    nuisance = ({}, {}, "")  # a free uniform scale fitted beside (or instead of) the effects: value, interval, how
     provisional = []
     sel = None
     data = {}
@@ -599,10 +623,11 @@ def analyse(soil: str, res: pd.DataFrame, diag: pd.DataFrame, cands: list, effec
             sel_rows.append({"step": 1, "effects": nm, "parameters": "{}", "ci95": "{}", "accepted": False,
                              "reason": f"not fitted: {why}"})
         for step, names, s in sel.steps:
-            sel_rows.append({"step": step, "effects": "+".join(names), "parameters": _fmt(s.theta), "ci95": _fmt_ci(s.ci),
-                             "heldout_rmse_percent": 100 * s.rmse(), "reference_heldout_rmse_percent": 100 * s.rmse(True),
-                             "heldout_max_percent": 100 * s.max_error(), "aicc": s.aicc, "reference_aicc": s.ref_aicc,
-                             "p_paired": s.p, "accepted": s.accepted, "reason": s.reason})
+            sel_rows.append(_selection_row(step, s, names))
+        for step, s in (("against uniform scale", sel.uniform), ("beside uniform scale", sel.beside_uniform)):
+            # (the effects judged there: the chosen, else those the forward step took)
+            if s is not None:  # the chosen effects against a free uniform scale alone, and beside it
+                sel_rows.append(_selection_row(step, s))
         provisional = list(sel.forward_chosen)
     # the residual the chosen effects leave (or, where the gate dropped them all, the forward
     # step's model: what it leaves may name an effect the first round masked), diagnosed once
@@ -618,13 +643,17 @@ def analyse(soil: str, res: pd.DataFrame, diag: pd.DataFrame, cands: list, effec
         res_after = residual_after(res, fitted)
         after = dg.diagnose(res_after, quantity_cols, settings.alpha)
         bias_left = bool(((after["test"] == "bias") & after["significant"].astype(bool)).any())
-        if sel.chosen and bias_left and not any("bias" in EFFECTS[c].signature for c in sel.chosen):
-            # a bias no chosen effect can carry pulls their parameters to make up for it: refit
-            # them beside a free uniform scale of the model (select.scale_data), and say it
+        if sel.chosen and ((bias_left and not any("bias" in EFFECTS[c].signature for c in sel.chosen))
+                           or sel.with_scale or _scale_beside(sel)):
+            # a bias no chosen effect can carry pulls their parameters to make up for it, and so
+            # does an offset beside an effect that carries a bias (an adhesion fitted alone under
+            # an 8 % offset ran to its bound): refit them beside a free uniform scale of the
+            # model (select.scale_data), and say it
             bias, sc = sl.scale_data(), rs.scale_of(u)
             ref = sl.Model([bias], y0, meas, sc)
             m = sl.Model([data[c] for c in names] + [bias], y0, meas, sc, jt)
-            uniform = sl.score(m, ref, sl._folds(u, fold_by), settings.alpha)
+            uniform = sl.score(m, ref, sl._folds(u, fold_by), settings.alpha, groups=sl.replicate_groups(u))
+            sel_rows.append(_selection_row("refit beside uniform scale", uniform))
             x = np.array([uniform.theta[k] for k in uniform.names], float)
             fitted = m.predict(x)
             res_after = residual_after(res, fitted)
@@ -643,13 +672,16 @@ def analyse(soil: str, res: pd.DataFrame, diag: pd.DataFrame, cands: list, effec
                    "model's own values?)")
     elif n < 3:
         verdict = f"unexplained: too few measured values to decide ({n})"
-    elif sel is not None and sel.chosen and sl.like_a_constant(sel):
-        # the chosen effects add nothing beside a free uniform scale: the rows show a uniform
+    elif sel is not None and sel.judged and sl.like_a_constant(sel):
+        # the chosen effects (or, where the gates beside a free uniform scale dropped them all,
+        # those the forward step took) add nothing beside that scale: the rows show a uniform
         # offset (an instrument's calibration), not the effects' signature
-        sv, b, k = sel.uniform_s, sel.beside_uniform, len(sel.chosen)
+        sv, b, k = sel.uniform_s, sel.beside_uniform, len(sel.judged)
+        nuisance = ({SCALE_KEY: sv}, {SCALE_KEY: sel.uniform_ci},
+                    "fitted alone: the uniform bias the verdict names, the calibrated model times (1 + s)")
         verdict = (f"unexplained: the measured values are {abs(100 * sv):.1f} % {'above' if sv > 0 else 'below'} "
                    "the model throughout, a uniform bias (an instrument's calibration, a zero offset) that no "
-                   "mechanism of the library carries; " + " + ".join(sel.chosen) + f" fit{'s' if k == 1 else ''} it "
+                   "mechanism of the library carries; " + " + ".join(sel.judged) + f" fit{'s' if k == 1 else ''} it "
                    f"(held-out RMS {100 * sel.uniform.rmse():.2f} % against {100 * sel.uniform.rmse(True):.2f} % for "
                    f"the uniform bias alone) but add{'s' if k == 1 else ''} nothing beside a free uniform scale ("
                    f"{b.reason}; AICc {b.aicc:.1f} against {b.ref_aicc:.1f} for the scale alone): on these rows "
@@ -661,11 +693,13 @@ def analyse(soil: str, res: pd.DataFrame, diag: pd.DataFrame, cands: list, effec
             y0 = u["simulated_mean"].to_numpy(float)
             final = sl.score(sl.Model([data[c] for c in chosen], y0, u["measured"].to_numpy(float), rs.scale_of(u), jt),
                              sl.Model([], y0, u["measured"].to_numpy(float), rs.scale_of(u)), sl._folds(u, fold_by),
-                             settings.alpha)
+                             settings.alpha, groups=sl.replicate_groups(u))
         theta = final.theta
         ci, ci_method = _interval(u, [data[c] for c in chosen], final, settings, jt)
         if uniform is not None:
-            key = "uniform_scale.s"
+            key = SCALE_KEY
+            nuisance = ({key: uniform.theta[key]}, {key: uniform.ci.get(key, (math.nan, math.nan))},
+                        "fitted with the chosen effects (a bias none of them carries): their prediction times (1 + s)")
             theta = {k: v for k, v in uniform.theta.items() if k != key}
             ci = {k: v for k, v in uniform.ci.items() if k != key}
             ci_method = ("fit (Jacobian) beside a free uniform scale of the model, which the bootstrap does not "
@@ -676,6 +710,12 @@ def analyse(soil: str, res: pd.DataFrame, diag: pd.DataFrame, cands: list, effec
         pred["heldout_prediction"] = meas - held * rs.scale_of(u)
         after_cv = held
         verdict = "explained by " + " + ".join(chosen)
+        b = sel.beside_uniform
+        if uniform is None and b is not None and SCALE_KEY in b.theta:
+            others = ", ".join(f"{k} {v:.4g}" for k, v in b.theta.items() if k != SCALE_KEY)
+            nuisance = ({SCALE_KEY: b.theta[SCALE_KEY]}, {SCALE_KEY: b.ci.get(SCALE_KEY, (math.nan, math.nan))},
+                        f"fitted beside the chosen effects ({others} there) in the test against a constant; the "
+                        "parameters reported are fitted without it")
         if uniform is not None:
             sv = uniform.theta["uniform_scale.s"]
             lo, hi = uniform.ci.get("uniform_scale.s", (math.nan, math.nan))
@@ -779,7 +819,8 @@ def analyse(soil: str, res: pd.DataFrame, diag: pd.DataFrame, cands: list, effec
         "parameters": _fmt(theta), "ci95": _fmt_ci(ci), "ci95_method": ci_method, "follows": follows, "rmse_before_percent": rb,
         "rmse_after_percent": ra, "max_before_percent": mb, "max_after_percent": ma,
         "error_reduction_percent": (1 - ra / rb) * 100 if rb and np.isfinite(rb) and rb > 0 else math.nan,
-        "alpha": settings.alpha, "reference": _fmt(reference), "folds": fold_text}], columns=SUMMARY_COLUMNS)
+        "alpha": settings.alpha, "reference": _fmt(reference), "folds": fold_text, "nuisance": _fmt(nuisance[0]),
+        "nuisance_ci95": _fmt_ci(nuisance[1]), "nuisance_method": nuisance[2]}], columns=SUMMARY_COLUMNS)
     return Outcome(res, diag, rank, cands, pd.DataFrame(sel_rows, columns=SELECTION_COLUMNS), summary, pred,
                    verdict, chosen, theta, after, dg.detectable(res, diag, quantity_cols, settings.alpha),
                    {nm: list(d.missing) for nm, d in data.items() if d.missing}, dict(skipped_effects or {}),

@@ -56,7 +56,12 @@ parameter's physical range, :data:`soilcal.dem.scenarios.base._RANGES`):
     Kendall & Roberts, Proc. R. Soc. A 324 (1971) 301; pull-off 1.5 pi gamma R*), the soil
     sticking to the tool that a heap on a plate does not exercise.  It moves the tool forces
     of every condition, more where the contact area is larger.  Signature: ``tool``,
-    ``bias``.
+    ``bias``, and the working (layer) depth and the tool (rotor) speed: the adhesion adds a
+    force in proportion to the contact area, b d c_a on a blade, while the soil's own
+    resistance grows faster with depth (its weight, ~d^2) and with speed (the soil
+    accelerated, ~v^2), so its share of the force falls with both; under a calibration
+    offset that cancels its mean (a load cell reading 8 % low) that fall is all of its
+    structure the diagnosis sees.
 
 ``plastic_contact`` (theta: ``lambda_p``, the contact plasticity ratio; compression tests only)
     lambda_p,ss = lambda_p,cal + lambda_p, clamped to [0, 0.95] (``soil_soil_plasticity``; a
@@ -239,7 +244,7 @@ EFFECTS: dict[str, Effect] = {
     "tool_adhesion": Effect(
         name="tool_adhesion", title="soil-tool adhesion (JKR on the soil-steel contact)",
         params={"gamma_a": ("J/m^2", (0.0, 3.0))}, null={"gamma_a": 0.0},
-        signature=("tool", "bias"), needs=(),
+        signature=("tool", "bias", "working_depth", "layer_depth", "tool_speed", "rotor_speed"), needs=(),
         formula="gamma_st = gamma_st,cal + gamma_a",
         source="Johnson, Kendall & Roberts, Proc. R. Soc. A 324 (1971) 301",
         changes=("soil_steel_surface_energy",)),

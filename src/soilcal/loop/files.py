@@ -254,6 +254,21 @@ def _constant_lines(res: pd.DataFrame | None) -> list[str]:
             + ", ".join(f"{c} ({v})" for c, v in const) + ".", ""]
 
 
+def _nuisance_lines(s) -> list[str]:
+    """The report's section on a free uniform scale of the model fitted beside (or instead of)
+    the effects (``loop_summary.csv``: ``nuisance``, ``nuisance_ci95``, ``nuisance_method``)."""
+    value = json.loads(s.get("nuisance") or "{}") if isinstance(s.get("nuisance"), str) else {}
+    if core.SCALE_KEY not in value:
+        return []
+    lo, hi = json.loads(s.get("nuisance_ci95") or "{}").get(core.SCALE_KEY, (np.nan, np.nan))
+    v = float(value[core.SCALE_KEY])
+    return ["## Uniform scale of the model", "",
+            "| parameter | value | 95 % interval | meaning |", "|---|---|---|---|",
+            f"| uniform_scale.s | {v:.4g} | {lo:.4g} to {hi:.4g} | the model's values times (1 + s): "
+            f"{abs(100 * v):.1f} % {'above' if v > 0 else 'below'} throughout |", "",
+            f"How: {s['nuisance_method']}.", ""]
+
+
 def report(soil: str, o: core.Outcome, plans: list) -> str:
     """``report.md``: verdict, error before and after, chosen effects, diagnosis, every
     candidate, settings."""
@@ -280,6 +295,7 @@ def report(soil: str, o: core.Outcome, plans: list) -> str:
                 lines.append(f"| {name} | {k} | {o.theta[key]:.4g} | {lo:.4g} to {hi:.4g} | {unit} | "
                              f"{eff.formula} | {eff.source} |")
         lines += ["", f"Interval: {s['ci95_method']}.", ""]
+    lines += _nuisance_lines(s)
     lines += ["## Diagnosis of the calibrated model's residual", "",
               _table(o.diagnosis, ["test", "covariate", "quantity", "n", "estimate", "statistic", "p", "p_adjusted", "r2",
                                    "significant"]) if len(o.diagnosis) else "(no test: too few usable rows)", "",
