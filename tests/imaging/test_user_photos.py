@@ -455,67 +455,6 @@ def test_a_dark_plate_ending_just_past_the_heap_s_feet_is_the_plate(tmp_path, pl
     _assert_flanks(measure.measure_pile(p), 32.0, 35.0)
 
 
-def _standing_card(img, side, width, height, checker, plate_end):
-    """A scale card standing on the plate (its foot on the plate's top edge, row 0.72 h) at the
-    ``side`` end of the frame: ``width`` x ``height`` px, a black and white checker of 10 px
-    squares (``checker``) or plain white; with ``plate_end`` the plate stops 20 px short of the
-    frame on that side (the wall goes on below its end) and the card stands 2 px from its end,
-    else 4 px from the frame's border."""
-    h, w = img.shape[:2]
-    prow = 0.72 * h
-    rr, cc = np.mgrid[0:h, 0:w]
-    if plate_end:
-        img[(rr >= prow) & ((cc < 20) if side == "left" else (cc >= w - 20))] = (0.75, 0.72, 0.65)
-    gap = 22 if plate_end else 4
-    c0 = gap if side == "left" else w - gap - width
-    m = (cc >= c0) & (cc < c0 + width) & (rr >= prow - height) & (rr < prow)
-    if checker:
-        dark = ((cc - c0) // 10 + (rr - int(prow - height)) // 10) % 2 == 0
-        img[m] = np.where(dark[m], 0.05, 0.95)[:, None]
-    else:
-        img[m] = 0.95
-    return np.clip(img, 0, 1)
-
-
-@pytest.mark.parametrize("side,width,height,checker,plate_end", [
-    ("left", 40, 30, True, False),    # old: 33.64 / 33.27 deg, "ok"
-    ("left", 60, 30, True, True),     # old: 35.80 / 31.32 deg, "ok"
-    ("left", 100, 30, False, False),  # a plain white card, old: 31.37 / 35.54 deg
-    ("right", 100, 60, True, False),  # behind the heap's right foot, old: 31.50 / 35.77 deg
-])
-def test_a_card_standing_on_the_plate_is_not_taken_for_the_plate(tmp_path, side, width, height, checker,
-                                                                 plate_end):
-    # a scale card standing on the plate beside the drawn heap (32 / 35 deg): a line along its
-    # top edge or through its checker, lined up with a stretch of the plate's edge, ran on
-    # beside the heap as the plate's does and crossed the heap above its foot, tilted; the heap's
-    # upper part stood on it and its flanks read at that tilt, "ok".  Below such a line the
-    # heap's colour goes on, below the plate's edge the plate's face shows: the heap is measured
-    # on the plate line
-    p = tmp_path / "card.png"
-    _u8(_standing_card(heap_photo(), side, width, height, checker, plate_end)).save(p)
-    r = measure.measure_pile(p)
-    _assert_flanks(r, 32.0, 35.0)
-    assert abs(r.roll_deg) <= 0.2
-
-
-def test_a_card_on_a_plate_of_the_soil_s_colour_is_refused(tmp_path):
-    # the same card (40 x 30 px, checker) beside a heap on a plate of the soil's own colour: no
-    # line shows where the heap ends, the card's line and the plate's read the heap 1.6 deg
-    # apart, and the photo is refused naming both readings (old: 33.59 / 33.33 deg, "ok")
-    from soilcal.errors import InputError
-
-    p = tmp_path / "soil_plate_card.png"
-    _u8(_standing_card(heap_photo(plate=(0.45, 0.33, 0.22)), "left", 40, 30, True, False)).save(p)
-    with pytest.raises(InputError) as e:
-        measure.measure_pile(p)
-    assert e.value.path == str(p) and e.value.field == "image"
-    assert "none showing the foot" in e.value.got and "crop the photo or cover" in e.value.got, e.value.got
-    # without the card the heap on that plate is measured: no other line reads it otherwise
-    p2 = tmp_path / "soil_plate.png"
-    _u8(heap_photo(plate=(0.45, 0.33, 0.22))).save(p2)
-    _assert_flanks(measure.measure_pile(p2), 32.0, 35.0)
-
-
 @pytest.mark.parametrize("bits", [16, 12])
 def test_planar_sixteen_bit_tiff_is_read_at_its_depth(tmp_path, bits):
     # a 16-bit RGB TIFF with its colour planes stored apart (planar configuration 2, as

@@ -92,15 +92,11 @@ class PileResult:
     # (plate slope, plate intercept, left line, right line, heap height px): where the flanks
     # were fitted, for a later refinement; not reported
     geometry: tuple | None = field(default=None, repr=False)
-    # the plate line's foot step (_foot_step; NaN: not judged), for the check against the other
-    # plate candidates (_foot_checked); not reported
-    foot_step: float = field(default=float("nan"), repr=False)
 
     def as_dict(self):
         d = asdict(self)
         d.pop("stages")
         d.pop("geometry")
-        d.pop("foot_step")
         return d
 
 
@@ -379,8 +375,7 @@ def measure_pile(path, threshold="otsu", keep_stages=False, channel="auto", refu
     Plate candidates: the long near-horizontal edges below the image middle, topmost first, of
     the luminance and then of the united L*a*b* edges (a plate differing from the wall in hue
     only), at most :data:`PLATE_CANDIDATES`; the first on which a heap is found, the line running on
-    beside it as an edge (:func:`_plate_beside_heap`), is the plate, unless it shows no foot under
-    the heap and other candidates read the heap otherwise (:func:`_foot_checked`).  The threshold is
+    beside it as an edge (:func:`_plate_beside_heap`), is the plate.  The threshold is
     Otsu's on the band of the image just above the plate (where heap and background meet).  channel "auto" tries cues in
     turn until one gives a single heap standing on the plate inside the frame: luminance and
     chroma with the heap darker than the wall (the better separating one first, Otsu's eta),
@@ -535,8 +530,8 @@ def _pile_on_lines(path, rgb, threshold, keep_stages, channel, tried: Tried, pla
         raise InputError(path, "image", "a straight base plate edge", "none found")
     beside = []  # lines on which a heap was measured but which do not run on beside it
     try:
-        res = _on_plate_lines(path, rgb, lum, grays, lines[:PLATE_CANDIDATES], 1, channel, threshold, keep_stages,
-                              tried, plate_edges, beside)
+        return _on_plate_lines(path, rgb, lum, grays, lines[:PLATE_CANDIDATES], 1, channel, threshold, keep_stages,
+                               tried, plate_edges, beside)
     except InputError as refused:
         if not beside:
             raise _noting_tilt(refused, tilted) from None
@@ -549,141 +544,7 @@ def _pile_on_lines(path, rgb, threshold, keep_stages, channel, tried: Tried, pla
         except InputError:
             raise _noting_tilt(refused, tilted) from None
         res.plate_beside = why
-    if plate is not None:
         return res
-    return _foot_checked(path, rgb, lum, grays, lines[:PLATE_CANDIDATES], res, channel, threshold, keep_stages,
-                         tried, plate_edges)
-
-
-#: a plate line's foot step (:func:`_foot_step`): in each column of the heap's base, the colour
-#: difference (CIE76 delta E of the smoothed L*a*b* image) between the heap's pixels 1 to
-#: FOOT_ROWS px above the line and what lies 1 to FOOT_ROWS px below it, against that between
-#: the heap's pixels 1 to FOOT_ROWS and FOOT_ROWS + 1 to 2 FOOT_ROWS px above it (the heap's own
-#: grain and noise, from strip to strip): the lower quartile of the first over the median of the
-#: second
-FOOT_ROWS = 3
-#: a foot step of at least this shows the heap ending on the line along its base (the plate's
-#: face below it); below it the heap's material may go on under the line, which then cuts the
-#: heap above its foot (a line along a scale card's top or checker lined up with a stretch of
-#: the plate's edge), and the other plate candidates are measured (:func:`_foot_checked`).
-#: Drawn heaps on their plate: 3.5 (a dim JPEG) to 10; lines cutting a heap: 1.5 at most
-FOOT_STEP_MIN = 2.5
-#: plate candidates whose heaps' flanks differ by more than this (deg) are two readings of the
-#: photo, not one (:func:`_foot_checked`)
-LINE_AGREEMENT_DEG = 0.5
-#: plate candidates tilted less than this apart (deg) are parallel edges (the plate's top and
-#: face, the table), whose heaps differ by what lies between them, not by the roll
-LINE_PARALLEL_DEG = 0.2
-
-
-def _foot_step(rgb, comp, slope, intercept) -> float:
-    """The foot step of the heap ``comp`` standing on the line (slope, intercept) (see
-    :data:`FOOT_ROWS`); NaN where fewer than half of the base's columns (those where ``comp``
-    comes within 8 px of the line) have the heap's pixels just above the line (a heap standing
-    on the plate's top surface a little behind its front edge), or fewer than 10 of them.  The
-    heap's own variation is floored at 0.5 delta E (a heap without grain or noise)."""
-    h, w = comp.shape
-    cols = np.arange(w)
-    rows = slope * cols + intercept
-    rr = np.arange(h)[:, None]
-    base = np.nonzero((comp & (rr > rows[None, :] - 8)).any(axis=0))[0]
-    if base.size < 10:
-        return float("nan")
-    m = 3 * FOOT_ROWS + 4  # the strips and the smoothing's reach
-    r0, r1 = max(int(np.floor(rows[base].min())) - m, 0), min(int(np.ceil(rows[base].max())) + m + 1, h)
-    c0, c1 = max(int(base.min()) - m, 0), min(int(base.max()) + m + 1, w)
-    lab = _smoothed_lab(rgb[r0:r1, c0:c1])
-
-    def strip(k0):  # mean colour of the rows k0 .. k0 + FOOT_ROWS - 1 below the line (k0 < 0: above),
-        # of the heap's pixels where above it; (colours, pixel counts)
-        k = np.arange(k0, k0 + FOOT_ROWS)[:, None]
-        r = np.round(rows[base][None, :] + k).astype(int)
-        cb = np.broadcast_to(base[None, :], r.shape)
-        use = (r >= r0) & (r < r1)
-        if k0 < 0:
-            use &= comp[np.clip(r, 0, h - 1), cb]
-        px = lab[np.clip(r - r0, 0, r1 - r0 - 1), cb - c0] * use[..., None]
-        n = use.sum(axis=0)
-        return px.sum(axis=0) / np.maximum(n, 1)[:, None], n
-
-    (below, nb), (above, na), (inner, ni) = strip(1), strip(-FOOT_ROWS), strip(-2 * FOOT_ROWS)
-    judged = (na > 0) & (nb > 0)
-    if judged.sum() < max(10, 0.5 * base.size):
-        return float("nan")
-    step = np.linalg.norm(above - below, axis=1)[judged]
-    grain = np.linalg.norm(above - inner, axis=1)[(na > 0) & (ni > 0)]
-    noise = max(float(np.median(grain)) if grain.size else 0.0, 0.5)
-    return float(np.percentile(step, 25)) / noise
-
-
-def _foot_checked(path, rgb, lum, grays, lines, res, channel, threshold, keep_stages, tried, plate_edges):
-    """``res`` (the heap on the first plate candidate that gave one) checked against the other
-    candidates where its line shows no foot (:func:`_foot_step` below :data:`FOOT_STEP_MIN`: the
-    heap's material may go on under it).  A line along the top edge or checker of a scale card,
-    box or label standing on the plate that lines up with a stretch of the plate's own edge runs
-    on beside the heap as a plate's edge does and crosses the heap above its foot, tilted: the
-    heap's upper part stands on it and its flanks read at that tilt, both fits clean.  The heap
-    is measured on every other candidate.  A candidate that shows the foot and reads the same
-    heap's outline (its flanks those of ``res`` turned by the two lines' tilt, within
-    :data:`CUE_AGREEMENT_DEG`) confirms a plate; of those, the ones whose foot is at least half
-    as clear as the clearest count, and the first of them is the plate when they agree within
-    :data:`LINE_AGREEMENT_DEG`.  A lower edge of the plate's face or stand (a plate of the
-    soil's colour) shows a foot but reads another outline, the face taken for part of the heap,
-    and is not taken.  Where none confirms, a candidate tilted more than
-    :data:`LINE_PARALLEL_DEG` from the first (parallel lines give the roll alike) whose flanks
-    are more than :data:`LINE_AGREEMENT_DEG` away is a second reading of the photo, and the
-    photo is refused naming the readings; so it is where the confirming ones disagree.  A line
-    showing a foot is never second-guessed (a dark plate ending just past the heap's feet, the
-    table's edge below it), nor one whose foot is not judged."""
-    slope, intercept = res.geometry[:2]
-    step = res.foot_step
-    if not step < FOOT_STEP_MIN:  # a clear foot, or not judged
-        return res
-    tilt = np.degrees(np.arctan(slope))
-    others = []  # (line number, result) of the other candidates that give a heap
-    for n_line, ln in enumerate(lines, 1):
-        if ln == (slope, intercept):
-            continue
-        try:
-            others.append((n_line, _on_plate_lines(path, rgb, lum, grays, [ln], n_line, channel, threshold,
-                                                   keep_stages, tried, plate_edges, [])))
-        except InputError:
-            continue
-
-    def turn(r):  # the tilt (deg) from the first line's frame to that of result r
-        return float(np.degrees(np.arctan(r.geometry[0]))) - tilt
-
-    def consistent(r):  # r's flanks those of res in r's frame: the same heap's outline, as two cues agree on it
-        return max(abs(res.left_deg + turn(r) - r.left_deg), abs(res.right_deg - turn(r) - r.right_deg)) \
-            <= CUE_AGREEMENT_DEG
-
-    confirming = [o for o in others if o[1].foot_step >= FOOT_STEP_MIN and consistent(o[1])]
-    # of these, the ones whose foot is at least half as clear as the clearest (a line crossing
-    # the plate's edge at a slant has a part of the foot just below it)
-    confirming = [o for o in confirming if o[1].foot_step >= 0.5 * max(c[1].foot_step for c in confirming)]
-    if confirming:
-        if all(_flank_difference(confirming[0][1], o[1]) <= LINE_AGREEMENT_DEG for o in confirming[1:]):
-            return confirming[0][1]
-        others, what = confirming, "several showing its foot"
-    else:
-        others = [o for o in others if abs(turn(o[1])) > LINE_PARALLEL_DEG
-                  and _flank_difference(res, o[1]) > LINE_AGREEMENT_DEG]
-        if not others:
-            return res
-        what = "none showing the foot of the same heap"
-
-    def reading(r, n, foot):
-        return (f"line {n} (roll {roll_of(r.geometry[0]):.2f} deg, foot step {foot:.1f}): "
-                f"flanks {r.left_deg:.1f} / {r.right_deg:.1f} deg")
-
-    n0 = 1 + next((i for i, ln in enumerate(lines) if ln == (slope, intercept)), 0)
-    readings = "; ".join([reading(res, n0, step)] + [reading(o[1], o[0], o[1].foot_step) for o in others])
-    raise InputError(path, "image", "one plate line the heap stands on: its foot showing on the line (a colour step "
-                     f"under the heap's base at least {FOOT_STEP_MIN:g} times the heap's own), or every candidate "
-                     f"line giving the same flanks within {LINE_AGREEMENT_DEG:g} deg",
-                     f"plate lines that read the heap differently, {what}: {readings} (a scale card, "
-                     "box or label standing on the plate lines up with the plate's edge): crop the photo or cover "
-                     "what stands on the plate beside the heap, so that the plate's edge runs clear on both sides")
 
 
 def _heap_stands_on(path, rgb, lum, grays, line, channel, threshold, plate_edges) -> bool:
@@ -854,10 +715,8 @@ def _pile_with(path, rgb, gray, cue, polarity, band, slope, intercept, threshold
     if tried is not None:
         tried.add(label or f"{cue}/{polarity}", binary, (slope, intercept))
     comp = _components_on_plate(path, binary, slope, intercept, "heap")
-    foot = float("nan")
     if plate_edges is not None:
         _plate_beside_heap(path, plate_edges, comp, slope, intercept)
-        foot = _foot_step(rgb, comp, slope, intercept)
     lev, prow, roll = _level(comp, slope, intercept)
     glev = _level(gray, slope, intercept)[0]
     llev = _level(lum, slope, intercept)[0] if lum is not None and cue != "gray" else None
@@ -892,7 +751,7 @@ def _pile_with(path, rgb, gray, cue, polarity, band, slope, intercept, threshold
     return PileResult(str(path), float(ang.mean()), left, right, float(ang.std(ddof=1)), float(roll),
                       f"{cue}/{polarity}", float(used), float(rms), "low" if low else "ok", st,
                       flank_outside_share=float(outside),
-                      geometry=(float(slope), float(intercept), lline, rline, float(hmax)), foot_step=foot)
+                      geometry=(float(slope), float(intercept), lline, rline, float(hmax)))
 
 
 #: plate lines tried, topmost first (the luminance's, then the colour edges'): a wide textured
