@@ -719,9 +719,16 @@ def analyse(soil: str, res: pd.DataFrame, diag: pd.DataFrame, cands: list, effec
         if uniform is not None:
             sv = uniform.theta["uniform_scale.s"]
             lo, hi = uniform.ci.get("uniform_scale.s", (math.nan, math.nan))
-            verdict += (f", beside a uniform bias that no effect of the library carries (the measured values "
-                        f"{abs(100 * sv):.1f} % {'above' if sv > 0 else 'below'} the model throughout; 95 %: "
-                        f"{100 * lo:+.1f} to {100 * hi:+.1f} %), fitted with them")
+            if lo <= 0 <= hi or not (np.isfinite(lo) and np.isfinite(hi)):
+                # the scale fitted with them shows no bias: its interval holds 0
+                verdict += (f", fitted beside a free uniform scale of the model, which shows no bias beyond the "
+                            f"scatter (s {100 * sv:+.1f} %; 95 %: {100 * lo:+.1f} to {100 * hi:+.1f} %)")
+                nuisance = (nuisance[0], nuisance[1], "fitted with the chosen effects, their prediction times "
+                            "(1 + s); its interval holds 0: no bias shown")
+            else:
+                verdict += (f", beside a uniform bias that no effect of the library carries (the measured values "
+                            f"{abs(100 * sv):.1f} % {'above' if sv > 0 else 'below'} the model throughout; 95 %: "
+                            f"{100 * lo:+.1f} to {100 * hi:+.1f} %), fitted with them")
         if sel.uniform is not None and not sel.uniform.accepted and uniform is None:
             sv = sel.uniform_s
             how = "as well or better" if sel.uniform.rmse(True) <= sel.uniform.rmse() else "nearly as well"
@@ -791,6 +798,16 @@ def analyse(soil: str, res: pd.DataFrame, diag: pd.DataFrame, cands: list, effec
             verdict += (f"; the rows were held out by `{fold_by}`, {groups} groups, so the paired test has "
                         f"{groups - 1} degree{'s' if groups > 2 else ''} of freedom and passes only a large gain "
                         "alike in every group (more groups decide; loop.fold_by sets the grouping)")
+    if (not nuisance[0] and n >= 3 and len(diag) and verdict.startswith("unexplained")
+            and bool(((diag["test"] == "bias") & diag["significant"].astype(bool)).any())):
+        # the residual follows a bias no effect explained: the uniform scale alone, its value and
+        # interval, so that the report gives the offset whichever sign it has
+        y0, meas, sc = u["simulated_mean"].to_numpy(float), u["measured"].to_numpy(float), rs.scale_of(u)
+        alone = sl.Model([sl.scale_data()], y0, meas, sc)
+        own = sl.score(alone, sl.Model([], y0, meas, sc), sl._folds(u, fold_by), settings.alpha,
+                       groups=sl.replicate_groups(u))
+        nuisance = ({SCALE_KEY: own.theta[SCALE_KEY]}, {SCALE_KEY: own.ci.get(SCALE_KEY, (math.nan, math.nan))},
+                    "fitted alone: the uniform bias the residual follows, the calibrated model times (1 + s)")
     matched = dg.matched_quantities(diag) if len(diag) else set()
     for nm, why in (skipped_effects or {}).items():  # those the structure (or candidates: all) would have tried
         if settings.candidates == "all" or matched & set(EFFECTS[nm].signature):
