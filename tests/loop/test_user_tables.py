@@ -618,6 +618,12 @@ def test_a_rate_effect_beside_a_uniform_bias_keeps_its_parameter_and_names_the_b
     lo, hi = json.loads(out.summary["ci95"].iloc[0])["rate_friction.beta"]
     assert lo < 0.3 < hi, (lo, hi)
     assert "beside a uniform bias that no effect of the library carries (the measured values 8." in out.verdict
+    # the scale fitted beside the effect is the 8 % the table was made with, and loop_summary.csv
+    # and report.md give it with its interval, not only the verdict's sentence
+    v, (lo, hi), how, text = _scale_fitted(out)
+    assert abs(v - 0.08) < 0.02 and lo < 0.08 < hi, (v, lo, hi)
+    assert how.startswith("fitted with the chosen effects"), how
+    assert "## Uniform scale of the model" in text and f"| uniform_scale.s | {v:.4g} |" in text
     assert "above the model throughout" in out.verdict
 
 
@@ -773,28 +779,6 @@ def _scale_fitted(out):
     lo, hi = json.loads(s["nuisance_ci95"])["uniform_scale.s"]
     text = files.report("user", out, [{"candidates": out.candidates}])
     return v, (lo, hi), s["nuisance_method"], text
-
-
-def test_the_uniform_scale_fitted_beside_an_effect_is_reported():
-    # the rate effect beta 0.3 with every value 8 % high (the construction of the test above):
-    # the scale fitted beside the effect is the 8 % the table was made with, and loop_summary.csv
-    # and report.md give it with its interval, not only the verdict's sentence
-    from soilcal.loop import core
-    from soilcal.loop import standin as S
-    from soilcal.loop import synthesize as sy
-
-    conds = S.conditions(S.grid(seed=11, n=18, moisture=True))
-    table = sy.synthesize(conds, S.base_params, S.simulate, {"rate_friction": {"beta": 0.3}}, {},
-                          {"stones": {"fraction": 1.0, "low": 0.08, "high": 0.08}}, noise=0.02, seed=2)
-    out = core.run_inprocess("user", sy.with_measured(conds, table), S.base_params, S.simulate,
-                             core.Settings(bootstrap=0))
-    assert out.chosen == ["rate_friction"], out.verdict
-    v, (lo, hi), how, text = _scale_fitted(out)
-    assert abs(v - 0.08) < 0.02 and lo < 0.08 < hi, (v, lo, hi)
-    assert how.startswith("fitted with the chosen effects"), how
-    assert "## Uniform scale of the model" in text and f"| uniform_scale.s | {v:.4g} |" in text
-    steps = out.selection["step"].astype(str).tolist()
-    assert "refit beside uniform scale" in steps and "beside uniform scale" in steps
 
 
 @pytest.mark.parametrize("offset", [0.10, -0.08])
