@@ -166,6 +166,19 @@ def test_stl_weld_refuses_a_tolerance_that_chains_a_fine_mesh_together(tmp_path)
     assert len(v) == 42 and len(t) == 40
 
 
+def test_stl_weld_judges_a_chain_across_its_whole_length():
+    """Five corners 0.95 weld_tol apart in a row, centred on the first: each is within 1.9
+    weld_tol of the first, but the row is 3.8 weld_tol long; refused as a chain."""
+    from soilcal.dem.stl import weld
+
+    tol = 1e-3
+    xs = [0.0, -0.95e-3, 0.95e-3, -1.9e-3, 1.9e-3]
+    soup = np.array([[[x, 0, 0], [x + 0.1 * (i + 1), 1.0, 0], [x - 0.1 * (i + 1), 1.0, 1.0]]
+                     for i, x in enumerate(xs)])
+    with pytest.raises(ValueError, match="weld_tol"):
+        weld(soup, tol)
+
+
 def test_stl_truncated_and_invalid(tmp_path):
     v, t = g.box_mesh([0, 0, 0], [1, 1, 1])
     f = tmp_path / "box.stl"

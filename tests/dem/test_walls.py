@@ -521,6 +521,14 @@ _UNSEEN = {  # walls a sphere could touch across a periodic boundary, without se
     "tilted_plane": lambda s: s.add_plane((0, 0, 0), (0.1, 0, 1), "soil", name="w"),
     # a mesh bump (a box) across the boundary x = 0
     "bump_across": lambda s: s.add_box((-2e-3, 0.01, 0), (2e-3, 0.02, 2e-3), "soil", name="w"),
+    # a bar ending on the boundary x = 0 beside a floor spanning the period: a sphere beside
+    # x = L presses its end across the boundary (the floor spanning is no licence for the bar)
+    "bar_ending_on_boundary_beside_a_floor": lambda s: (
+        s.add_mesh([[0, 0, 0], [_L, 0, 0], [_L, _L, 0], [0, _L, 0]], [[0, 1, 2], [0, 2, 3]], "soil", name="floor"),
+        s.add_box((0.0, 0.006, 0.02), (0.02, 0.014, 0.03), "soil", name="w")),
+    # a plate lying in the boundary plane x = 0 (a bulkhead): its face is touched across it
+    "bulkhead_on_boundary": lambda s: s.add_rectangle((0.0, _L / 2, 0.01), (1, 0, 0), (0, 1, 0), 0.005, 0.005,
+                                                      "soil", name="w"),
 }
 
 
@@ -565,10 +573,6 @@ _SEEN = {  # (wall, lower corner of the periodic box, sphere centre, normal of t
     # end faces lie on the boundaries y = 0 and y = L, touched at their rims only
     "closed_box_spanning": (lambda s: s.add_box((0.018, 0.0, 0.005), (0.022, _L, 0.015), "soil"), 0.0,
                             (0.018 - R + _D, 1e-4, 0.01), (-1, 0, 0)),
-    # a floor of two meshes, each half of the period in x: together they span it
-    "floor_two_tiles": (lambda s: [s.add_mesh([[x0, 0, 0], [x0 + _L / 2, 0, 0], [x0 + _L / 2, _L, 0], [x0, _L, 0]],
-                                              [[0, 1, 2], [0, 2, 3]], "soil") for x0 in (0.0, _L / 2)], 0.0,
-                        (1e-4, _L / 2, R - _D), (0, 0, 1)),
 }
 
 
@@ -598,6 +602,19 @@ def test_a_plate_moving_across_a_periodic_boundary_during_a_run_is_refused():
     sim.run(10)  # 10 steps carry it far less than to the boundary
     with pytest.raises(InputError, match=r"walls\.w.*over the run"):
         sim.run(int(0.02 / (0.1 * sim.dt)))  # 20 mm: past x = L - R
+
+
+def test_a_run_that_may_stop_early_is_checked_over_its_steps():
+    """run(n, ke_tol) of a plate clear of the boundaries at the start that the n steps would
+    carry across x = L: judged over the n steps, as run(n) is."""
+    sim = _periodic_sim()
+    sim.add_rectangle((_L / 2, _L / 2, 0.01), (0, 1, 0), (1, 0, 0), 0.005, 0.005, "soil", name="w",
+                      velocity=(0.5, 0, 0))
+    sim.add_particles([[_L / 2, _L / 4, 0.01]], R, "soil")
+    sim.compute_forces()
+    steps = int(0.05 / sim.dt) + 1  # 25 mm of travel: past x = L
+    with pytest.raises(InputError, match=r"walls\.w.*over the run"):
+        sim.run(steps, ke_tol=1e-30, ke_every=10)
 
 
 def test_a_settling_run_judges_a_moving_wall_where_it_stands():

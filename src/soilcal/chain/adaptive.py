@@ -531,7 +531,8 @@ def write_case(soil_data: dict, stage: dict, case_id: str, targets: dict, step_p
 def optimum_frame(stage: dict, results: list[dict]) -> pd.DataFrame:
     """``optimum.csv`` in the recipe's columns: per case the verified set (``calibrated``; its
     responses the verified means); when none was verified within tolerance, the best verified
-    point (measured: its verification runs are the ones verification.csv compares it with), or,
+    point (measured: its verification runs are the ones verification.csv compares it with; its
+    responses empty, as there is no surface prediction at it), or,
     with no verification at all, the best candidate (its responses the surrogate's predictions),
     with the reason in ``note``."""
     syms = list(stage["factors"])
@@ -556,12 +557,18 @@ def optimum_frame(stage: dict, results: list[dict]) -> pd.DataFrame:
             row[s] = levels[s]
         for rid, v in ((res["best"] or {}).get("predicted") or {}).items():
             row[rid] = v if src == "best candidate" else np.nan
-        if src in ("verified", "verified point"):
+        if src == "verified":
             for rid, v in res["verified"]["responses"].items():
                 row[rid] = v["mean"]
+        elif src == "verified point":
+            # no surface prediction there (verification.csv reads these columns as one; the
+            # point's verified means are its own rows there)
+            for rid in res["verified"]["responses"]:
+                row[rid] = np.nan
         row.update(calibrated=True, status=res["status"], runs=res["runs"],
                    note=("verified within tolerance" if src == "verified" else
-                         "the best verified point (its verified means), not within tolerance; the surrogate's "
+                         "the best verified point (its verified means in verification.csv), not within tolerance; "
+                         "the surrogate's "
                          f"best candidate, not run, is named here: {res['message']}" if src == "verified point" else
                          ("closest reachable point (no point is plausibly within tolerance), "
                           if res["best"].get("closest") else "best candidate, ")

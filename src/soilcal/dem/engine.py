@@ -493,9 +493,9 @@ class Simulation:
         # half of it, for the particles' own motion) and on the wall's own extent
         reach = np.array([min(1.5 * float(np.linalg.norm(np.maximum(abs(lo - c), abs(hi - c)))),
                               e) for c, e in zip(wa["wall_centre"], self._wall_extent())])
-        # a run that stops once settled has no known length: its moving walls are judged where
-        # they stand (a settling run's walls seldom move far)
-        self._check_periodic_walls(steps if ke_tol < 0 else 0)
+        # run_until_settled has no known length (its cap is 10 million steps): its moving walls
+        # are judged where they stand; any other run over the steps it is given
+        self._check_periodic_walls(0 if getattr(self, "_open_ended", False) else steps)
         if steps > 0:
             self._check_wall_steps(reach)
         status = np.zeros(5, dtype=np.int64)
@@ -601,8 +601,9 @@ class Simulation:
         wall contacts do not see periodic images (walls.py), so a wall within reach R_max (the
         largest radius) of a boundary x = lo or hi that neither continues past both boundaries
         by R_max (a plate wider than the slab: the spheres at either boundary touch its own
-        surface there) nor is a surface parallel to x spanning the period (a floor, a plate
-        across the slab: a sphere anywhere meets the same face) would miss the contacts of
+        surface there) nor is one wall with a surface parallel to x spanning the period (a
+        floor, a plate across the slab: a sphere anywhere meets the same face; its end faces
+        on the boundaries, a closed solid's caps, are met at their rims) would miss the contacts of
         the spheres beside the other boundary, or, outside the box, every contact.  A plane
         must be parallel to the periodic axes.  A moving wall is checked over the ``steps``
         of the run: its extent swept by its velocity, and the sphere of its reach about its
@@ -613,7 +614,6 @@ class Simulation:
         rho = float(self.p.r.max())
         span = steps * self.dt
         names = ("x", "y")
-        ext = None
         for q in range(2):
             if not self.periodic[q]:
                 continue
@@ -623,55 +623,66 @@ class Simulation:
             a_w, b_w = np.full(nw, np.inf), np.full(nw, -np.inf)
             bad = np.zeros(nw, dtype=bool)  # a primitive near a boundary that is not parallel
             has = np.zeros(nw, dtype=bool)  # a bounded primitive
-            for k, (kind, w) in enumerate(zip(wa["prim_kind"], wa["prim_wall"])):
-                par = wa["prim_par"][k]
-                vel, om = wa["wall_vel"][w], wa["wall_omega"][w]
-                if kind == PLANE:
-                    if abs(par[3 + q]) > 2e-4:
-                        name = self.walls.names[w]
-                        raise InputError(
-                            self.source, f"walls.{name}",
-                            f"a plane parallel to {names[q]} in a box periodic in {names[q]} "
-                            f"(a sphere crossing the boundary would land on the other side of "
-                            f"it; wall contacts do not see periodic images)",
-                            f"normal {par[3:6].tolist()}")
-                    continue
-                a, b, flat = _extent_along(kind, par, q)
-                # an end face lying on a boundary, across the axis (the cap of a closed solid
-                # exactly spanning the period): a sphere meets it at its rim only, where the
-                # faces along the axis have it
-                cap = b - a <= eps and (abs(a - lo) <= eps or abs(b - hi) <= eps)
-                turn = om - om[q] * np.eye(3)[q]
-                if np.any(turn != 0):
-                    if ext is None:
-                        ext = self._wall_extent()
-                    c = float(wa["wall_centre"][w][q])
-                    a, b, flat = c - ext[w], c + ext[w], False
-                if vel[q] != 0:
-                    a, b = min(a, a + vel[q] * span), max(b, b + vel[q] * span)
-                has[w] = True
-                a_w[w], b_w[w] = min(a_w[w], a), max(b_w[w], b)
-                if (a < lo + rho - eps or b > hi - rho + eps) and not flat and not (cap and not np.any(turn != 0)
-                                                                               and vel[q] == 0):
-                    bad[w] = True
-            # surfaces along the axis split into walls (tiles of a floor) span the period
-            # together: the union of their extents, gaps within the rounding tolerance closed
-            parts = sorted((a_w[w], b_w[w], w) for w in range(nw) if has[w] and not bad[w])
-            joined, run_lo, run_hi, members = set(), None, None, []
-            for a, b, w in parts + [(np.inf, np.inf, -1)]:
-                if run_lo is not None and a <= run_hi + eps:
-                    run_hi, members = max(run_hi, b), members + [w]
-                    continue
-                if run_lo is not None and run_lo <= lo + eps and run_hi >= hi - eps:
-                    joined.update(members)
-                run_lo, run_hi, members = a, b, [w]
+            kinds, walls_of, par_all = wa["prim_kind"], wa["prim_wall"], wa["prim_par"]
+            planes = np.flatnonzero(kinds == PLANE)
+            for k in planes:
+                par = par_all[k]
+                if abs(par[3 + q]) > 2e-4:
+                    name = self.walls.names[walls_of[k]]
+                    raise InputError(
+                        self.source, f"walls.{name}",
+                        f"a plane parallel to {names[q]} in a box periodic in {names[q]} "
+                        f"(a sphere crossing the boundary would land on the other side of "
+                        f"it; wall contacts do not see periodic images)",
+                        f"normal {par[3:6].tolist()}")
+            ks = np.flatnonzero(kinds != PLANE)
+            if ks.size == 0:
+                continue
+            # each bounded primitive's extent along q and whether its surface is unchanged along
+            # q: triangles (a mesh's thousands) at once, the few other primitives one by one
+            a, b = np.empty(ks.size), np.empty(ks.size)
+            flat = np.zeros(ks.size, dtype=bool)
+            tri = kinds[ks] == TRIANGLE
+            if tri.any():
+                par = par_all[ks[tri]]
+                c = par[:, [q, 3 + q, 6 + q]]
+                n = np.cross(par[:, 3:6] - par[:, 0:3], par[:, 6:9] - par[:, 0:3])
+                a[tri], b[tri] = c.min(axis=1), c.max(axis=1)
+                flat[tri] = np.abs(n[:, q]) <= 2e-4 * np.linalg.norm(n, axis=1)
+            for i in np.flatnonzero(~tri):
+                a[i], b[i], flat[i] = _extent_along(kinds[ks[i]], par_all[ks[i]], q)
+            # an end face lying on a boundary, across the axis (the cap of a closed solid
+            # exactly spanning the period): a sphere meets it at its rim only, where the faces
+            # along the axis have it
+            cap = (b - a <= eps) & ((np.abs(a - lo) <= eps) | (np.abs(b - hi) <= eps))
+            w = walls_of[ks]
+            om, vq = wa["wall_omega"][w], wa["wall_vel"][w][:, q]
+            turn = np.any(np.delete(om, q, axis=1) != 0, axis=1)
+            if turn.any():
+                # a wall turning about any axis but q: the sphere of its reach about its centre
+                ext = self._wall_extent()
+                c = wa["wall_centre"][w[turn]][:, q]
+                a[turn], b[turn], flat[turn] = c - ext[w[turn]], c + ext[w[turn]], False
+            moves = vq != 0
+            a = np.where(moves, np.minimum(a, a + vq * span), a)
+            b = np.where(moves, np.maximum(b, b + vq * span), b)
+            has[w] = True
+            np.minimum.at(a_w, w, a)
+            np.maximum.at(b_w, w, b)
+            near = (a < lo + rho - eps) | (b > hi - rho + eps)
+            bad[w[near & ~flat & ~(cap & ~turn & ~moves)]] = True
+            # a wall of caps and nothing along the axis (a bulkhead on the boundary) spans nothing
+            along = np.zeros(nw, dtype=bool)
+            along[w[flat & ~cap]] = True
             for w in range(nw):
                 if not has[w]:
                     continue
                 A, B = a_w[w], b_w[w]
                 clear = A >= lo + rho - eps and B <= hi - rho + eps
                 through = A <= lo - rho + eps and B >= hi + rho - eps
-                spans = w in joined
+                # a surface along the axis spanning the period by itself; an end face on a
+                # boundary is exempt only in such a wall (a closed solid's cap)
+                spans = A <= lo + eps and B >= hi - eps and not bad[w] and along[w]
                 if clear or through or spans:
                     continue
                 name = self.walls.names[w]
@@ -776,11 +787,16 @@ class Simulation:
         motion keeps it."""
         wa = self._warr
         ext = np.zeros(wa["wall_centre"].shape[0])
-        for p, (kind, w) in enumerate(zip(wa["prim_kind"], wa["prim_wall"])):
+        tri = wa["prim_kind"] == TRIANGLE
+        if tri.any():  # a mesh's triangles at once: the farthest corner from their wall's centre
+            w = wa["prim_wall"][tri]
+            corners = wa["prim_par"][tri][:, :9].reshape(-1, 3, 3)
+            e = np.linalg.norm(corners - wa["wall_centre"][w][:, None, :], axis=2).max(axis=1)
+            np.maximum.at(ext, w, e)
+        for p in np.flatnonzero(~tri):
+            kind, w = wa["prim_kind"][p], wa["prim_wall"][p]
             par, c = wa["prim_par"][p], wa["wall_centre"][w]
-            if kind == TRIANGLE:
-                e = max(float(np.linalg.norm(par[3 * k:3 * k + 3] - c)) for k in range(3))
-            elif kind == RECTANGLE:
+            if kind == RECTANGLE:
                 e = float(np.linalg.norm(par[0:3] - c) + math.hypot(par[9], par[10]))
             elif kind == DISK:
                 e = float(np.linalg.norm(par[0:3] - c) + par[6])
@@ -816,7 +832,11 @@ class Simulation:
         if ke_tol < 0:
             raise InputError(self.source, "ke_tol", "a kinetic energy threshold >= 0 J", ke_tol)
         start = self.step
-        self.run(max_steps, ke_tol=ke_tol, ke_every=check_every)
+        self._open_ended = True
+        try:
+            self.run(max_steps, ke_tol=ke_tol, ke_every=check_every)
+        finally:
+            self._open_ended = False
         return self.step - start < max_steps or self.kinetic_energy() < ke_tol
 
     # ------------------------------------------------------------------ results

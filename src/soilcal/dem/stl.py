@@ -165,7 +165,12 @@ def weld(soup, weld_tol=0.0):
         _, first, inv = np.unique(key, return_index=True, return_inverse=True)
         # a chain of corners each within weld_tol of the next would merge corners far apart
         # (a mesh finer than weld_tol collapses): refused, not welded
-        far = np.linalg.norm(pts - pts[first][inv], axis=1)
+        # each merged group's extent: the diagonal of the box holding its corners
+        lo_g = np.full((first.size, 3), np.inf)
+        hi_g = np.full((first.size, 3), -np.inf)
+        np.minimum.at(lo_g, inv, pts)
+        np.maximum.at(hi_g, inv, pts)
+        far = np.linalg.norm(hi_g - lo_g, axis=1)
         if far.size and far.max() > 2.0 * weld_tol:
             raise ValueError(f"corners {far.max():.3g} apart would merge through a chain of corners each within "
                              f"weld_tol = {weld_tol:g} of the next: a weld_tol below the mesh's shortest edge")

@@ -719,7 +719,12 @@ def analyse(soil: str, res: pd.DataFrame, diag: pd.DataFrame, cands: list, effec
         if uniform is not None:
             sv = uniform.theta["uniform_scale.s"]
             lo, hi = uniform.ci.get("uniform_scale.s", (math.nan, math.nan))
-            if lo <= 0 <= hi or not (np.isfinite(lo) and np.isfinite(hi)):
+            if not (np.isfinite(lo) and np.isfinite(hi)):
+                verdict += (f", fitted beside a free uniform scale of the model (s {100 * sv:+.1f} %) that these rows "
+                            "do not pin down (no finite interval)")
+                nuisance = (nuisance[0], nuisance[1], "fitted with the chosen effects, their prediction times "
+                            "(1 + s); not pinned down: no finite interval")
+            elif lo <= 0 <= hi:
                 # the scale fitted with them shows no bias: its interval holds 0
                 verdict += (f", fitted beside a free uniform scale of the model, which shows no bias beyond the "
                             f"scatter (s {100 * sv:+.1f} %; 95 %: {100 * lo:+.1f} to {100 * hi:+.1f} %)")
