@@ -97,13 +97,10 @@ def _number(source, field, value, expected, ok) -> float:
 
 
 def _extent_along(kind, par, q):
-    """``(lo, hi, parallel)``: the extent of a bounded primitive's surface along axis q, and
-    whether that surface is unchanged along q (a flat face whose normal is perpendicular to q,
-    a cylinder about q)."""
-    if kind == TRIANGLE:
-        c = par[[q, 3 + q, 6 + q]]
-        n = np.cross(par[3:6] - par[0:3], par[6:9] - par[0:3])
-        return float(c.min()), float(c.max()), abs(n[q]) <= 2e-4 * float(np.linalg.norm(n))
+    """``(lo, hi, parallel)``: the extent of a bounded primitive other than a triangle (those
+    are taken at once in :meth:`Simulation._check_periodic_walls`) along axis q, and whether
+    its surface is unchanged along q (a flat face whose normal is perpendicular to q, a
+    cylinder about q)."""
     n = par[3:6]
     side = math.sqrt(max(0.0, 1.0 - float(n[q]) ** 2))
     if kind == RECTANGLE:

@@ -86,11 +86,10 @@ def _cover(i, k, nwc, p, feat, cx, cy, cz, tol, ri, xi, yi, zi, fk, wnbr, prim_k
             continue
         pp = wnbr[i, kk]
         kq = prim_kind[pp]
-        tq = tol
-        if abs(prim_closest(kq, prim_par, pp, cx, cy, cz)[0]) > tq:
+        if abs(prim_closest(kq, prim_par, pp, cx, cy, cz)[0]) > tol:
             continue  # c is not on q
         o8 = prim_closest(kq, prim_par, pp, xi, yi, zi)
-        if abs(prim_closest(kp, prim_par, p, o8[4], o8[5], o8[6])[0]) > tq:
+        if abs(prim_closest(kp, prim_par, p, o8[4], o8[5], o8[6])[0]) > tol:
             return kk
         if o8[7] < feat:
             return kk

@@ -306,13 +306,23 @@ SUMMARY_COLUMNS = ["soil", "rows", "usable_rows", "verdict", "effects", "paramet
 SCALE_KEY = "uniform_scale.s"
 
 
+def _scale_fit(s) -> tuple[float, float, float]:
+    """The free uniform scale's value and 95 % interval in a fit (:class:`select.Score`)."""
+    lo, hi = s.ci.get(SCALE_KEY, (math.nan, math.nan))
+    return s.theta[SCALE_KEY], lo, hi
+
+
+def _excludes_zero(lo, hi) -> bool:
+    """A finite 95 % interval that leaves out 0: a bias the data show."""
+    return bool(np.isfinite(lo) and np.isfinite(hi) and (lo > 0.0 or hi < 0.0))
+
+
 def _scale_beside(sel) -> bool:
     """Whether the free uniform scale fitted beside the chosen effects (``beside_uniform``, the
     test against a constant) is significant: its 95 % interval leaves out 0, so the effects
     fitted without it take up an offset of the model (a calibration's) in their parameters."""
     b = sel.beside_uniform
-    lo, hi = (b.ci.get(SCALE_KEY, (math.nan, math.nan)) if b is not None else (math.nan, math.nan))
-    return bool(np.isfinite(lo) and np.isfinite(hi) and (lo > 0.0 or hi < 0.0))
+    return b is not None and SCALE_KEY in b.theta and _excludes_zero(*_scale_fit(b)[1:])
 
 
 def _selection_row(step, s, names=None) -> dict:
@@ -697,11 +707,11 @@ def analyse(soil: str, res: pd.DataFrame, diag: pd.DataFrame, cands: list, effec
         theta = final.theta
         ci, ci_method = _interval(u, [data[c] for c in chosen], final, settings, jt)
         if uniform is not None:
-            key = SCALE_KEY
-            nuisance = ({key: uniform.theta[key]}, {key: uniform.ci.get(key, (math.nan, math.nan))},
+            sv, lo, hi = _scale_fit(uniform)
+            nuisance = ({SCALE_KEY: sv}, {SCALE_KEY: (lo, hi)},
                         "fitted with the chosen effects (a bias none of them carries): their prediction times (1 + s)")
-            theta = {k: v for k, v in uniform.theta.items() if k != key}
-            ci = {k: v for k, v in uniform.ci.items() if k != key}
+            theta = {k: v for k, v in uniform.theta.items() if k != SCALE_KEY}
+            ci = {k: v for k, v in uniform.ci.items() if k != SCALE_KEY}
             ci_method = ("fit (Jacobian) beside a free uniform scale of the model, which the bootstrap does not "
                          "refit: the seeds' scatter in the surrogates left out")
         pred["with_effects"] = fitted
@@ -713,18 +723,18 @@ def analyse(soil: str, res: pd.DataFrame, diag: pd.DataFrame, cands: list, effec
         b = sel.beside_uniform
         if uniform is None and b is not None and SCALE_KEY in b.theta:
             others = ", ".join(f"{k} {v:.4g}" for k, v in b.theta.items() if k != SCALE_KEY)
-            nuisance = ({SCALE_KEY: b.theta[SCALE_KEY]}, {SCALE_KEY: b.ci.get(SCALE_KEY, (math.nan, math.nan))},
+            sv, lo, hi = _scale_fit(b)
+            nuisance = ({SCALE_KEY: sv}, {SCALE_KEY: (lo, hi)},
                         f"fitted beside the chosen effects ({others} there) in the test against a constant; the "
                         "parameters reported are fitted without it")
         if uniform is not None:
-            sv = uniform.theta["uniform_scale.s"]
-            lo, hi = uniform.ci.get("uniform_scale.s", (math.nan, math.nan))
+            sv, lo, hi = _scale_fit(uniform)
             if not (np.isfinite(lo) and np.isfinite(hi)):
                 verdict += (f", fitted beside a free uniform scale of the model (s {100 * sv:+.1f} %) that these rows "
                             "do not pin down (no finite interval)")
                 nuisance = (nuisance[0], nuisance[1], "fitted with the chosen effects, their prediction times "
                             "(1 + s); not pinned down: no finite interval")
-            elif lo <= 0 <= hi:
+            elif not _excludes_zero(lo, hi):
                 # the scale fitted with them shows no bias: its interval holds 0
                 verdict += (f", fitted beside a free uniform scale of the model, which shows no bias beyond the "
                             f"scatter (s {100 * sv:+.1f} %; 95 %: {100 * lo:+.1f} to {100 * hi:+.1f} %)")
@@ -806,12 +816,16 @@ def analyse(soil: str, res: pd.DataFrame, diag: pd.DataFrame, cands: list, effec
     if (not nuisance[0] and n >= 3 and len(diag) and verdict.startswith("unexplained")
             and bool(((diag["test"] == "bias") & diag["significant"].astype(bool)).any())):
         # the residual follows a bias no effect explained: the uniform scale alone, its value and
-        # interval, so that the report gives the offset whichever sign it has
-        y0, meas, sc = u["simulated_mean"].to_numpy(float), u["measured"].to_numpy(float), rs.scale_of(u)
-        alone = sl.Model([sl.scale_data()], y0, meas, sc)
-        own = sl.score(alone, sl.Model([], y0, meas, sc), sl._folds(u, fold_by), settings.alpha,
-                       groups=sl.replicate_groups(u))
-        nuisance = ({SCALE_KEY: own.theta[SCALE_KEY]}, {SCALE_KEY: own.ci.get(SCALE_KEY, (math.nan, math.nan))},
+        # interval, so that the report gives the offset whichever sign it has (the selection
+        # fitted it where it judged effects against it)
+        if sel is not None and np.isfinite(sel.uniform_s):
+            sv, (lo, hi) = sel.uniform_s, sel.uniform_ci
+        else:
+            y0, meas, sc = u["simulated_mean"].to_numpy(float), u["measured"].to_numpy(float), rs.scale_of(u)
+            alone = sl.Model([sl.scale_data()], y0, meas, sc)
+            sv, lo, hi = _scale_fit(sl.score(alone, sl.Model([], y0, meas, sc), sl._folds(u, fold_by),
+                                             settings.alpha, groups=sl.replicate_groups(u)))
+        nuisance = ({SCALE_KEY: sv}, {SCALE_KEY: (lo, hi)},
                     "fitted alone: the uniform bias the residual follows, the calibrated model times (1 + s)")
     matched = dg.matched_quantities(diag) if len(diag) else set()
     for nm, why in (skipped_effects or {}).items():  # those the structure (or candidates: all) would have tried
