@@ -229,6 +229,34 @@ def test_tool_bar_figure_labels_the_papers_error():
     assert all(t.get_color() == dem.C_PAPER for t in paper_labels)
 
 
+def _overlapping_labels(fig) -> list[tuple[str, str]]:
+    fig.canvas.draw()
+    r = fig.canvas.get_renderer()
+    boxes = [(t.get_text(), t.get_window_extent(r)) for ax in fig.axes for t in ax.texts]
+    boxes += [("legend", ax.get_legend().get_window_extent(r)) for ax in fig.axes if ax.get_legend()]
+    boxes += [("title", ax.title.get_window_extent(r)) for ax in fig.axes]
+    page = fig.bbox
+    outside = [name for name, b in boxes if b.x0 < page.x0 or b.x1 > page.x1 or b.y0 < page.y0 or b.y1 > page.y1]
+    assert outside == []
+    return [(a, b) for i, (a, ba) in enumerate(boxes) for b, bb in boxes[i + 1:] if ba.overlaps(bb)]
+
+
+@pytest.mark.parametrize("rows", [4, 12])
+def test_bar_labels_of_neighbouring_bars_do_not_overlap(rows):
+    # soilcal's and the paper's bars of equal height side by side: the labels' drawn boxes must
+    # not touch each other, the legend or the title (they read "-1.67 %0.83 %" when written
+    # level across bars 0.26 wide) and must stay on the page
+    g = pd.concat([plate_tool()] * (rows // 4), ignore_index=True)
+    g = g.assign(covariate_value=[f"plate {i}" for i in range(len(g))],
+                 simulated_mean=g["measured"], paper_simulated=g["measured"],
+                 relative_error_percent=-11.67, paper_relative_error_percent=-10.83)
+    assert _overlapping_labels(dem._tool_bar_figure(g, "bulldozing", "draft")) == []
+    v = vineyard_verification()
+    v = v.assign(simulated_mean=v["target"], paper_simulated=v["target"], simulated_sd=0.0,
+                 relative_error_percent=-12.25, paper_relative_error_percent=-10.5)
+    assert _overlapping_labels(dem._verification_figure(v)) == []
+
+
 def test_tool_stem_sanitised(tmp_path):
     df = rotary_tool().assign(measurement="rotary tiller", measure="torque/N")
     paths = plots.tool_curves(df, tmp_path / "t")

@@ -99,8 +99,10 @@ def _fmt_err(v: float) -> str:
 
 
 def _bar_label(ax, x: float, top: float, text: str, colour="k", size: float = 7) -> None:
+    """A label standing upright over its bar: written level, a label is wider than a bar and
+    runs into its neighbour's when the two bars are of about the same height."""
     ax.annotate(text, (x, top), xytext=(0, 3), textcoords="offset points", ha="center", va="bottom",
-                fontsize=size, color=colour, rotation=90 if len(text) > 9 else 0)
+                fontsize=size, color=colour, rotation=90)
 
 
 def _three_bars(ax, first, first_sd, first_label, sim, sd, err, paper, paper_err, status) -> set:
@@ -139,8 +141,15 @@ def _three_bars(ax, first, first_sd, first_label, sim, sd, err, paper, paper_err
                 _bar_label(ax, xs[i] + w, paper[i], _fmt_err(paper_err[i]), C_PAPER)
     ax.set_xticks(xs)
     ax.set_xlim(-0.6, n - 0.4)
-    ax.margins(y=0.15)
+    ax.margins(y=0.25)
     return seen
+
+
+def _legend_above(ax, title: str) -> None:
+    """The bars' legend in one row between the title and the axes, where no bar label can be
+    under it (``loc='best'`` places it on the labels, which it does not see)."""
+    ax.legend(loc="lower center", bbox_to_anchor=(0.5, 1.0), ncol=3, fontsize=8, frameon=False)
+    ax.set_title(title, pad=22)
 
 
 # --------------------------------------------------------------------------- verification
@@ -174,9 +183,10 @@ def _verification_figure(df: pd.DataFrame, title: str | None = None) -> Figure:
         stage = {s for s in stages if s}
         if len(stage) == 1:
             title += f" ({stage.pop()})"
-    ax.set_title(title)
     if seen:
-        ax.legend(loc="best", fontsize=8)
+        _legend_above(ax, title)
+    else:
+        ax.set_title(title)
     ax.grid(axis="y", alpha=0.3)
     fig.tight_layout()
     return fig
@@ -247,9 +257,10 @@ def _tool_bar_figure(g: pd.DataFrame, measurement: str, measure: str) -> Figure:
     ax.set_xticklabels(cats, fontsize=8)
     ax.set_xlabel(_first(g, "covariate") or "covariate")
     ax.set_ylabel(_ylabel(measure, _first(g, "unit")))
-    ax.set_title(_tool_title(measurement, measure, g))
     if seen:
-        ax.legend(loc="best", fontsize=8)
+        _legend_above(ax, _tool_title(measurement, measure, g))
+    else:
+        ax.set_title(_tool_title(measurement, measure, g))
     ax.grid(axis="y", alpha=0.3)
     fig.tight_layout()
     return fig
