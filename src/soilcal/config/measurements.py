@@ -288,6 +288,54 @@ def _stage_cases(soil_path, data: dict, where: str, entry: dict) -> tuple[dict, 
     return stages[sid], [c["id"] for c in opt["cases"]]
 
 
+def _check_case_moisture(soil_path, data: dict, stage: dict, cw: str, cv: dict) -> None:
+    """A moisture column that chooses the case (``case: {moisture: case id}``) maps each moisture
+    to a case calibrated at that moisture: the targets its goals aim at, where they give a
+    ``moisture_content`` (in the unit of ``properties.moisture_content``), were measured at it,
+    and otherwise the soil declares it (``properties.moisture_content``).  Rows at one moisture
+    would otherwise be simulated with the parameters calibrated at another."""
+    import math
+
+    from soilcal.config.load import MOISTURE_RTOL, declared_moistures
+
+    prop = (data.get("properties") or {}).get("moisture_content") or {}
+    soil_factor = moisture_factor(prop.get("unit", "%")) if isinstance(prop, dict) else None
+    col_factor = QUANTITIES["moisture_content"][1][cv["unit"]]
+    cases = {c["id"]: c for c in (stage.get("optimise") or {}).get("cases", [])}
+    targets = data.get("targets") or {}
+    declared = declared_moistures(data)
+    for k, cid in cv["case"].items():
+        x = _number(k)
+        if x is None:
+            raise InputError(soil_path, f"{cw}.case.{k}", f"a moisture content in {cv['unit']} (quantity: "
+                             "moisture_content)", k)
+        pct = x * col_factor
+
+        def same(a_pct, b_pct):
+            return math.isclose(a_pct, b_pct, rel_tol=MOISTURE_RTOL, abs_tol=MOISTURE_RTOL)
+
+        aimed = [(tid, targets[tid]["moisture_content"]) for g in cases[cid]["goals"].values()
+                 if (tid := g.get("target")) in targets and targets[tid].get("moisture_content") is not None]
+        if aimed and soil_factor is not None:
+            off = [(tid, m) for tid, m in aimed if not same(pct, float(m) * soil_factor)]
+            if off:
+                raise InputError(soil_path, f"{cw}.case.{k}",
+                                 f"the moisture content of the targets case {cid!r} aims at ("
+                                 + ", ".join(f"targets.{tid}.moisture_content = {m:g} {prop.get('unit', '%')}"
+                                             for tid, m in aimed)
+                                 + f"), in {cv['unit']}: rows at {k} {cv['unit']} would be simulated with the "
+                                   "parameters calibrated at another moisture", k)
+            continue
+        if declared is None or soil_factor is None:
+            raise InputError(soil_path, f"{cw}.case.{k}", "a moisture content the soil declares "
+                             "(properties.moisture_content, in % or as a fraction: none given)", k)
+        points, ranges, text = declared
+        if not (any(same(pct, v * soil_factor) for v in points)
+                or any(lo * soil_factor <= pct <= hi * soil_factor for lo, hi in ranges)):
+            raise InputError(soil_path, f"{cw}.case.{k}", f"a moisture content the soil declares in "
+                             f"properties.moisture_content ({text}), in {cv['unit']}", k)
+
+
 def table_inside(soil_path, field: str, folder: Path, table: str) -> Path:
     """``folder / table``; a ``table`` that leaves its folder (the soil's measurements or
     published folder: an absolute path, or one that climbs out with ``..``) is refused.  The
@@ -459,6 +507,8 @@ def _entry(soil_path, data: dict, mid: str, entry: dict, tpath: Path):
                 if c not in case_ids:
                     raise InputError(soil_path, f"{cw}.case.{k}",
                                      f"a case id of stage {stage['id']!r} (" + ", ".join(case_ids) + ")", c)
+            if cv.get("quantity") == "moisture_content":
+                _check_case_moisture(soil_path, data, stage, cw, cv)
             case_cols.append(col)
         if form in ("set", "param"):
             _check_scale(soil_path, cw, cv, name)
