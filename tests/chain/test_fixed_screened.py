@@ -93,3 +93,17 @@ def test_a_fixed_value_of_a_factor_the_screening_selects_is_reported_not_used(vi
     assert "soil_shear_modulus" in varied and "soil_shear_modulus" not in path["fixed"]
     nu = path["derivation"]["fixed_not_used"]["soil_shear_modulus"]
     assert nu["value"] == 10 and "stages.steepest.fixed.soil_shear_modulus" in nu["why"]
+
+
+def test_a_fixed_value_outside_the_screening_range_is_refused_at_start_up(vineyard, tmp_path):
+    from soilcal.chain.derive import check_dem_stages
+    from soilcal.errors import InputError
+
+    d = copy.deepcopy(vineyard)
+    check_dem_stages(tmp_path / "v.yaml", d)  # the paper's 10 MPa: the low end of 10-100 MPa
+    # 5 MPa: the screening judged the shear modulus over 10-100 MPa only
+    _stage(d, "bbd")["fixed"]["soil_shear_modulus"] = 5
+    with pytest.raises(InputError) as ei:
+        check_dem_stages(tmp_path / "v.yaml", d)
+    assert ei.value.field == "stages.bbd.fixed.soil_shear_modulus" and ei.value.got == 5
+    assert "10-100" in ei.value.expected

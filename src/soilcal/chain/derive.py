@@ -475,6 +475,23 @@ def dem_stage(soil_data: dict, stage_id: str, targets: dict, upstream: dict | No
     return st
 
 
+def _screened_upstream(soil_data: dict, stage_id: str) -> dict:
+    """``{parameter: (screening id, symbol, factor)}`` of the Plackett-Burman screening a DEM
+    stage is derived from, through its chain of ``from_stage`` (:func:`dependencies`)."""
+    out, sid, seen = {}, stage_id, set()
+    while sid not in seen:
+        seen.add(sid)
+        up = dependencies(soil_data, sid).get("from")
+        if up is None:
+            break
+        st = _stage(soil_data, up)
+        if st["kind"] == "plackett_burman":
+            for sym, f in st["factors"].items():
+                out.setdefault(f["parameter"], (up, sym, f))
+        sid = up
+    return out
+
+
 #: how far a simulated Box-Behnken factor's ``centre`` may lie from the midpoint of its low and
 #: high levels, as a fraction of the range (the black soil's printed 0.28 for 0.275 over
 #: 0.05-0.50: 1.1 %)
@@ -556,10 +573,22 @@ def check_dem_stages(soil_path, soil_data: dict) -> None:
                     in_range(name, f[key], scale, f"{where}.{key}")
             for i, v in enumerate(f.get("levels") or []):
                 in_range(name, v, scale, f"{where}.levels[{i}]")
+        screened = _screened_upstream(soil_data, sid) if "from" in deps else {}
         for pname, v in (st.get("fixed") or {}).items():
             where = f"stages.{sid}.fixed.{pname}"
             name, scale = mapped(pname, where)
             in_range(name, v, scale, where)
+            if pname in screened:
+                scr_id, ssym, sf = screened[pname]
+                lo, hi = float(sf["low"]), float(sf["high"])
+                if not lo <= float(v) <= hi:
+                    # the derived stage holds the factor there because the screening found it
+                    # non-significant, which it found only over its range
+                    raise InputError(soil_path, where,
+                                     f"a value inside {lo:g}-{hi:g}, the range over which the DEM screening "
+                                     f"(stage {scr_id}, factor {ssym}) judges {pname}: a factor it finds not "
+                                     "significant is held at this value (or, left out, at the centre "
+                                     f"{(lo + hi) / 2:g}); widen the screening range to hold it outside", v)
 
 
 __all__ = ["bbd_from_path", "check_dem_stages", "dem_stage", "dem_stage_ids", "simulated_stage_ids", "dependencies", "design_mode",
