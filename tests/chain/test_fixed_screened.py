@@ -107,3 +107,16 @@ def test_a_fixed_value_outside_the_screening_range_is_refused_at_start_up(vineya
         check_dem_stages(tmp_path / "v.yaml", d)
     assert ei.value.field == "stages.bbd.fixed.soil_shear_modulus" and ei.value.got == 5
     assert "10-100" in ei.value.expected
+
+
+def test_a_box_behnken_value_over_the_path_s_names_the_value_it_replaces(vineyard):
+    d = copy.deepcopy(vineyard)
+    _stage(d, "bbd")["fixed"]["soil_shear_modulus"] = 20  # the path holds 10 MPa
+    path = path_from_screening(d, "steepest", _stage(d, "pb"), _effects("BDFH"), PB_RUNS, _targets(d))
+    path["id"] = "steepest"
+    steps = pd.DataFrame({"step": np.arange(1, 7), "static_angle": [26.0, 29.0, 31.0, 33.0, 35.0, 37.0],
+                          "dynamic_angle": [38.0, 41.0, 43.0, 45.0, 47.0, 49.0]})
+    bbd = bbd_from_path(d, "bbd", path, steps)
+    assert bbd["fixed"]["soil_shear_modulus"] == 20
+    origin = bbd["derivation"]["fixed"]["soil_shear_modulus"]["origin"]
+    assert "stages.bbd.fixed.soil_shear_modulus" in origin and "over 10" in origin

@@ -151,21 +151,19 @@ def published_stage(soil_data: dict, stage_id: str) -> dict:
     return st
 
 
-def apply_own_fixed(st: dict, config_stage: dict, fixed: dict, origin: dict, varied: set,
-                    held: dict | None = None) -> None:
+def apply_own_fixed(st: dict, config_stage: dict, fixed: dict, origin: dict, varied: set) -> None:
     """Set ``st["fixed"]`` to ``fixed`` with the stage's own ``fixed`` values over it, and record
     where each value comes from (``st["derivation"]["fixed"]``: ``{parameter: {"value",
     "origin"}}``, ``origin`` filled in beforehand for the values ``fixed`` brings in).
 
     A value the soil config fixes for the stage holds in its runs, over the one an earlier stage
     fixes and over the intermediate level at which the recipe would hold a screened factor the
-    screening did not select (``held``: ``{parameter: centre}``): the config says so
+    screening did not select (the value it replaces is named in its origin): the config says so
     explicitly, as the papers fixed such factors (vineyard soil: the shear modulus at 10 MPa,
     the low end of its 10-100 MPa screening range).  Only a parameter the stage's derived design
     varies (``varied``: a path factor the DEM screening selected, a Box-Behnken factor) cannot
     hold a fixed value; its config value is listed in ``derivation.fixed_not_used`` with why,
     never dropped without a word."""
-    held = held or {}
     fixed, origin = dict(fixed), dict(origin)
     not_used = {}
     where = f"stages.{config_stage['id']}.fixed"
@@ -174,11 +172,11 @@ def apply_own_fixed(st: dict, config_stage: dict, fixed: dict, origin: dict, var
             not_used[k] = {"value": v, "why": (f"{where}.{k} is not used: the derived design of stage "
                                                f"{config_stage['id']} varies {k} (a factor the DEM results chose)")}
             continue
-        fixed[k] = v
         note = ""
-        if k in held and abs(float(v) - float(held[k])) > 1e-12 * max(1.0, abs(float(held[k]))):
-            note = (f" (over {held[k]:g}, the centre of its screening range, where the recipe holds a "
-                    "non-significant factor the stage does not fix)")
+        prev = fixed.get(k)
+        if prev is not None and abs(float(v) - float(prev)) > 1e-12 * max(1.0, abs(float(prev))):
+            note = f" (over {float(prev):g}, {origin.get(k, 'an earlier value')})"
+        fixed[k] = v
         origin[k] = f"{where}.{k} (soil config){note}"
     st["fixed"] = fixed
     st.setdefault("derivation", {})
@@ -341,10 +339,9 @@ def path_from_screening(soil_data: dict, stage_id: str, screening_stage: dict, e
     # their range; the stage's own fixed values hold over both (apply_own_fixed)
     fixed = dict(screening_stage.get("fixed") or {})
     origin = {k: _upstream_origin(screening_stage, k, "the screening's fixed value") for k in fixed}
-    held = {}
     for t, f in sf.items():
         if t not in chosen:
-            held[f["parameter"]] = fixed[f["parameter"]] = _g12(_centre(f))
+            fixed[f["parameter"]] = _g12(_centre(f))
             origin[f["parameter"]] = (f"centre of the range {f['low']:g}-{f['high']:g} of screening factor {t} "
                                       f"(stage {screening_stage['id']}: not significant, held at its intermediate level)")
     st["path_targets"] = ptargets
@@ -360,7 +357,7 @@ def path_from_screening(soil_data: dict, stage_id: str, screening_stage: dict, e
         "screening": scr,
         "paper_factors": {s: f["parameter"] for s, f in config_stage["factors"].items()},
     }
-    apply_own_fixed(st, config_stage, fixed, origin, {f["parameter"] for f in factors.values()}, held)
+    apply_own_fixed(st, config_stage, fixed, origin, {f["parameter"] for f in factors.values()})
     return st
 
 
