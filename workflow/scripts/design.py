@@ -13,5 +13,5 @@ with redirect(snakemake.log[0]):  # noqa: F821
     print("stage:", info.get("derivation", ""))
     for line in info.get("fixed", []):
         print("fixed:", line)
-    for line in info.get("fixed_not_used", []):
+    for line in info.get("fixed_warnings", []) + info.get("fixed_not_used", []):
         print("warning:", line)

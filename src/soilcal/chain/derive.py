@@ -151,7 +151,8 @@ def published_stage(soil_data: dict, stage_id: str) -> dict:
     return st
 
 
-def apply_own_fixed(st: dict, config_stage: dict, fixed: dict, origin: dict, varied: set) -> None:
+def apply_own_fixed(st: dict, config_stage: dict, fixed: dict, origin: dict, varied: set,
+                    soil_data: dict) -> None:
     """Set ``st["fixed"]`` to ``fixed`` with the stage's own ``fixed`` values over it, and record
     where each value comes from (``st["derivation"]["fixed"]``: ``{parameter: {"value",
     "origin"}}``, ``origin`` filled in beforehand for the values ``fixed`` brings in).
@@ -163,27 +164,99 @@ def apply_own_fixed(st: dict, config_stage: dict, fixed: dict, origin: dict, var
     the low end of its 10-100 MPa screening range).  Only a parameter the stage's derived design
     varies (``varied``: a path factor the DEM screening selected, a Box-Behnken factor) cannot
     hold a fixed value; its config value is listed in ``derivation.fixed_not_used`` with why,
-    never dropped without a word."""
+    never dropped without a word.
+
+    Parameters are told apart by the DEM parameter they set
+    (:func:`soilcal.config.parameters.dem_key`, as the loader tells them apart): a stage's own
+    value of ``soil_G_pa`` (Pa) replaces an earlier ``soil_shear_modulus`` (MPa) and is not used
+    where the design varies ``soil_shear_modulus``, so each DEM parameter is set once and the
+    record names the value the runs take.  An own value of a factor of the screening the stage
+    descends from (:func:`soilcal.chain.adaptive.screening_of`) that lies outside that factor's
+    ``low`` .. ``high`` runs as given; its origin says so (the screening did not judge the factor
+    there) and ``derivation.fixed[<parameter>].warning`` repeats it for the design job's log."""
+    from soilcal.config.parameters import dem_key
+
+    params = soil_data.get("parameters") or {}
     fixed, origin = dict(fixed), dict(origin)
-    not_used = {}
+    varied_by = {dem_key(params, p): p for p in varied}
+    screened = _screened_factors(soil_data, config_stage["id"])
+    not_used, warnings = {}, {}
     where = f"stages.{config_stage['id']}.fixed"
     for k, v in (config_stage.get("fixed") or {}).items():
-        if k in varied:
+        key = dem_key(params, k)
+        if key in varied_by:
+            vp = varied_by[key]
+            sets = f" (both set the DEM parameter {key[1]})" if vp != k else ""
             not_used[k] = {"value": v, "why": (f"{where}.{k} is not used: the derived design of stage "
-                                               f"{config_stage['id']} varies {k} (a factor the DEM results chose)")}
+                                               f"{config_stage['id']} varies {vp}{sets} (a factor the DEM results chose)")}
             continue
-        note = ""
-        prev = fixed.get(k)
-        if prev is not None and abs(float(v) - float(prev)) > 1e-12 * max(1.0, abs(float(prev))):
-            note = f" (over {float(prev):g}, {origin.get(k, 'an earlier value')})"
+        notes = []
+        for p in [p for p in fixed if dem_key(params, p) == key]:
+            prev, prev_origin = fixed.pop(p), origin.pop(p, "an earlier value")
+            if p != k:
+                notes.append(f"over {p} = {float(prev):g} {params.get(p, {}).get('unit', '')}, "
+                             f"{prev_origin}; both set the DEM parameter {key[1]}")
+            elif abs(float(v) - float(prev)) > 1e-12 * max(1.0, abs(float(prev))):
+                notes.append(f"over {float(prev):g}, {prev_origin}")
         fixed[k] = v
-        origin[k] = f"{where}.{k} (soil config){note}"
+        origin[k] = f"{where}.{k} (soil config)" + "".join(f" ({n})" for n in notes)
+        if key in screened:
+            warn = _outside_screening(soil_data, k, v, *screened[key])
+            if warn:
+                warnings[k] = f"{where}.{k} = {float(v):g} {warn}"
+                origin[k] += f"; {warn}"
     st["fixed"] = fixed
     st.setdefault("derivation", {})
-    st["derivation"]["fixed"] = {k: {"value": fixed[k], "origin": origin.get(k, f"{where}.{k} (soil config)")}
-                                 for k in fixed}
+    rec = {}
+    for k in fixed:
+        rec[k] = {"value": fixed[k], "origin": origin.get(k, f"{where}.{k} (soil config)")}
+        if k in warnings:
+            rec[k]["warning"] = warnings[k]
+    st["derivation"]["fixed"] = rec
     if not_used:
         st["derivation"]["fixed_not_used"] = not_used
+
+
+def _screened_factors(soil_data: dict, stage_id: str) -> dict:
+    """``{dem_key: (screening id, symbol, factor)}`` of the Plackett-Burman screening a stage
+    descends from through its ``from_stage`` links (:func:`soilcal.chain.adaptive.screening_of`,
+    the same in every design mode), keyed by the DEM parameter each factor sets
+    (:func:`soilcal.config.parameters.dem_key`)."""
+    from soilcal.chain.adaptive import screening_of
+    from soilcal.config.parameters import dem_key
+
+    scr = screening_of(soil_data, stage_id)
+    if scr is None:
+        return {}
+    params = soil_data.get("parameters") or {}
+    return {dem_key(params, f["parameter"]): (scr["id"], sym, f) for sym, f in scr["factors"].items()
+            if f.get("low") is not None and f.get("high") is not None}
+
+
+#: how far (relative to the screening range) a fixed value may lie past a range end and still
+#: count as inside it: a number written twice, or converted between units
+SCREENING_RANGE_RTOL = 1e-9
+
+
+def _outside_screening(soil_data: dict, pname: str, value, scr_id: str, sym: str, f: dict) -> str:
+    """Why ``value`` of ``pname`` lies outside the range ``low`` .. ``high`` of screening factor
+    ``sym`` (stage ``scr_id``) on the DEM parameter both set, in ``pname``'s unit; empty where
+    it lies inside."""
+    from soilcal.dem.scenarios.base import unit_scale
+
+    params = soil_data.get("parameters") or {}
+    src = soil_data.get("name", "<soil>")
+    own = unit_scale(src, params.get(pname) or {}, f"parameters.{pname}")
+    theirs = unit_scale(src, params.get(f["parameter"]) or {}, f"parameters.{f['parameter']}")
+    lo, hi = float(f["low"]) * theirs / own, float(f["high"]) * theirs / own
+    tol = SCREENING_RANGE_RTOL * (hi - lo)
+    if lo - tol <= float(value) <= hi + tol:
+        return ""
+    unit = (params.get(pname) or {}).get("unit", "")
+    factor = f"factor {sym}" + (f" ({f['parameter']})" if f["parameter"] != pname else "")
+    return (f"lies outside the screening range {lo:g}..{hi:g} {unit} of {factor} of stage {scr_id}: "
+            "the screening did not judge the parameter there (its finding that the factor is not "
+            "significant holds over that range only); the value runs as given")
 
 
 def _dem_base(stage: dict) -> dict:
@@ -357,7 +430,7 @@ def path_from_screening(soil_data: dict, stage_id: str, screening_stage: dict, e
         "screening": scr,
         "paper_factors": {s: f["parameter"] for s, f in config_stage["factors"].items()},
     }
-    apply_own_fixed(st, config_stage, fixed, origin, {f["parameter"] for f in factors.values()})
+    apply_own_fixed(st, config_stage, fixed, origin, {f["parameter"] for f in factors.values()}, soil_data)
     return st
 
 
@@ -410,29 +483,45 @@ def bbd_from_path(soil_data: dict, stage_id: str, path_stage: dict, path_respons
         "steps": table.to_dict("records"),
         "levels": {s: levels[s].get("note", "") for s in syms},
     }
-    apply_own_fixed(st, config_stage, path_fixed, origin, {f["parameter"] for f in st["factors"].values()})
+    apply_own_fixed(st, config_stage, path_fixed, origin, {f["parameter"] for f in st["factors"].values()},
+                    soil_data)
     return st
 
 
-def fix_from_optimum(st: dict, upstream_stage: dict, optimum: pd.DataFrame, case: str | None) -> dict:
-    """``st`` with the parameters of ``upstream_stage``'s factors fixed at its calibrated set."""
+def fix_from_optimum(st: dict, upstream_stage: dict, optimum: pd.DataFrame, case: str | None,
+                     params: dict | None = None) -> dict:
+    """``st`` with the parameters of ``upstream_stage``'s factors fixed at its calibrated set;
+    a fixed value of the stage that sets the same DEM parameter under another id (``params``:
+    the soil's ``parameters``, :func:`soilcal.config.parameters.dem_key`) is replaced, and
+    named in the origin, so the DEM parameter is set once."""
     from soilcal.chain.stage import calibrated_levels
+
+    from soilcal.config.parameters import dem_key
 
     levels = calibrated_levels(upstream_stage, optimum, case)
     fixed = dict(st.get("fixed") or {})
-    paper = {}
+    params = params or {}
+    st.setdefault("derivation", {})
+    rec = st["derivation"].setdefault("fixed", {})
+    paper, replaced = {}, {}
     for sym, v in levels.items():
         pname = upstream_stage["factors"][sym]["parameter"]
         paper[pname] = fixed.get(pname)
+        # a value the stage gives under another id that sets the same DEM parameter goes too
+        for p in [p for p in fixed if p != pname and dem_key(params, p) == dem_key(params, pname)]:
+            replaced[pname] = (p, fixed.pop(p))
+            rec.pop(p, None)
         fixed[pname] = float(v)
     st["fixed"] = fixed
-    st.setdefault("derivation", {})
-    rec = st["derivation"].setdefault("fixed", {})
     for pname in paper:
+        over = ""
+        if paper[pname] is not None:
+            over = f", over the stage's own {paper[pname]:g}"
+        elif pname in replaced:
+            over = f", over the stage's own {replaced[pname][0]} = {float(replaced[pname][1]):g}"
         rec[pname] = {"value": fixed[pname],
                       "origin": (f"calibrated set of stage {upstream_stage['id']}"
-                                 + (f" (case {case})" if case else "") + " (fixed_from)"
-                                 + (f", over the stage's own {paper[pname]:g}" if paper[pname] is not None else ""))}
+                                 + (f" (case {case})" if case else "") + " (fixed_from)" + over)}
     st["derivation"]["fixed_from"] = {"stage": upstream_stage["id"], "case": case,
                                       "values": {k: fixed[k] for k in paper}, "paper": paper}
     return st
@@ -463,30 +552,14 @@ def dem_stage(soil_data: dict, stage_id: str, targets: dict, upstream: dict | No
         if config_stage.get("from_stage") and config_stage["from_stage"] not in dem_stage_ids(soil_data):
             why += f" (stage {config_stage['from_stage']} is not simulated: simulation.stages)"
         st["derivation"] = {"kind": "config", "text": why}
-        apply_own_fixed(st, config_stage, {}, {}, set())
+        apply_own_fixed(st, config_stage, {}, {}, set(), soil_data)
         if st["kind"] == "steepest_ascent":
             st["path_targets"] = response_targets(soil_data, [r["id"] for r in st["responses"]], targets)
     if "fixed_from" in deps:
         up = upstream["fixed_from"]
-        st = fix_from_optimum(st, up["stage"], up["optimum"], (config_stage.get("fixed_from") or {}).get("case"))
+        st = fix_from_optimum(st, up["stage"], up["optimum"], (config_stage.get("fixed_from") or {}).get("case"),
+                              soil_data.get("parameters"))
     return st
-
-
-def _screened_upstream(soil_data: dict, stage_id: str) -> dict:
-    """``{parameter: (screening id, symbol, factor)}`` of the Plackett-Burman screening a DEM
-    stage is derived from, through its chain of ``from_stage`` (:func:`dependencies`)."""
-    out, sid, seen = {}, stage_id, set()
-    while sid not in seen:
-        seen.add(sid)
-        up = dependencies(soil_data, sid).get("from")
-        if up is None:
-            break
-        st = _stage(soil_data, up)
-        if st["kind"] == "plackett_burman":
-            for sym, f in st["factors"].items():
-                out.setdefault(f["parameter"], (up, sym, f))
-        sid = up
-    return out
 
 
 #: how far a simulated Box-Behnken factor's ``centre`` may lie from the midpoint of its low and
@@ -570,22 +643,10 @@ def check_dem_stages(soil_path, soil_data: dict) -> None:
                     in_range(name, f[key], scale, f"{where}.{key}")
             for i, v in enumerate(f.get("levels") or []):
                 in_range(name, v, scale, f"{where}.levels[{i}]")
-        screened = _screened_upstream(soil_data, sid) if "from" in deps else {}
         for pname, v in (st.get("fixed") or {}).items():
             where = f"stages.{sid}.fixed.{pname}"
             name, scale = mapped(pname, where)
             in_range(name, v, scale, where)
-            if pname in screened:
-                scr_id, ssym, sf = screened[pname]
-                lo, hi = float(sf["low"]), float(sf["high"])
-                if not lo <= float(v) <= hi:
-                    # the derived stage holds the factor there because the screening found it
-                    # non-significant, which it found only over its range
-                    raise InputError(soil_path, where,
-                                     f"a value inside {lo:g}-{hi:g}, the range over which the DEM screening "
-                                     f"(stage {scr_id}, factor {ssym}) judges {pname}: a factor it finds not "
-                                     "significant is held at this value (or, left out, at the centre "
-                                     f"{(lo + hi) / 2:g}); widen the screening range to hold it outside", v)
 
 
 __all__ = ["bbd_from_path", "check_dem_stages", "dem_stage", "dem_stage_ids", "simulated_stage_ids", "dependencies", "design_mode",

@@ -136,6 +136,7 @@ def write_stage_design(source: str, config_stage: dict, soil_data: dict | None, 
     info["derivation"] = stage["derivation"]["text"]
     info["fixed"] = [f"{k} = {r['value']:g}: {r['origin']}" for k, r in (stage["derivation"].get("fixed") or {}).items()]
     info["fixed_not_used"] = [r["why"] for r in (stage["derivation"].get("fixed_not_used") or {}).values()]
+    info["fixed_warnings"] = [r["warning"] for r in (stage["derivation"].get("fixed") or {}).values() if r.get("warning")]
     return info
 
 

@@ -275,11 +275,10 @@ def _check_stage_sets_each_parameter_once(path: Path, where: str, st: dict, para
     ids that set the same DEM parameter (:func:`soilcal.config.parameters.dem_field_name`, the
     name :func:`soilcal.dem.scenarios.base.dem_field` maps them to) count as one."""
 
-    from soilcal.config.parameters import dem_field_name
+    from soilcal.config.parameters import dem_field_name, dem_key
 
     def key(pid):
-        name = dem_field_name(params.get(pid))
-        return ("dem", name) if name is not None else ("id", pid)
+        return dem_key(params, pid)
 
     def named(pid):
         name = dem_field_name(params.get(pid))
