@@ -90,3 +90,36 @@ def test_a_moisture_column_in_another_unit_maps_to_the_same_moisture(tmp_path, p
 
     st = next(s for s in d["stages"] if s["id"] == "bbd")
     _check_case_moisture("x.yaml", d, st, "measurements.compression.covariates.moisture_content", cv)
+
+
+def test_a_soil_moisture_unit_soilcal_does_not_know_is_refused_naming_the_unit(tmp_path, parsed):
+    d = copy.deepcopy(parsed)
+    d["properties"]["moisture_content"]["unit"] = "g/100g"  # values 0, 5, 10, 15, 20 given
+    with pytest.raises(InputError) as ei:
+        _load(tmp_path, d)
+    e = ei.value
+    assert e.field == "properties.moisture_content.unit" and e.got == "g/100g"
+    assert "'g/100g' is not one of them" in e.expected
+    for unit in ("%", "percent", "wt%", "fraction", "g/g", "kg/kg"):
+        assert unit in e.expected
+
+
+def test_a_case_moisture_the_soil_does_not_declare_names_the_fix(tmp_path, parsed):
+    d = copy.deepcopy(parsed)
+    for tid in ("angle_mc00", "angle_mc05", "angle_mc10", "angle_mc15", "angle_mc20"):
+        d["targets"][tid].pop("moisture_content")
+    d["measurements"]["compression"]["covariates"]["moisture_content"]["case"] = {"5": "mc05", "12": "mc10",
+                                                                                "15": "mc15"}
+    with pytest.raises(InputError) as ei:
+        _load(tmp_path, d)
+    e = ei.value
+    assert e.field == "measurements.compression.covariates.moisture_content.case.12"
+    assert "add it to properties.moisture_content.values" in e.expected
+
+
+def test_a_target_moisture_the_soil_does_not_declare_names_the_fix(tmp_path, parsed):
+    d = copy.deepcopy(parsed)
+    d["targets"]["angle_mc10"]["moisture_content"] = 10.2
+    with pytest.raises(InputError) as ei:
+        _load(tmp_path, d)
+    assert "add it to properties.moisture_content.values" in ei.value.expected

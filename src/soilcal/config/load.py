@@ -551,25 +551,6 @@ def _check_targets(path: Path, d: dict, resources_root: Path) -> None:
 MOISTURE_RTOL = 1e-9
 
 
-def declared_moistures(d: dict) -> tuple[list[float], list[tuple[float, float]], str] | None:
-    """The moisture contents a soil declares (``properties.moisture_content``: its ``value``
-    and ``values``, and the range ``low`` .. ``high``), in the unit it gives them, and how the
-    soil file writes them; None where it declares none."""
-    prop = (d.get("properties") or {}).get("moisture_content")
-    if not isinstance(prop, dict):
-        return None
-    points = [float(v) for v in list(prop.get("values") or []) + [prop.get("value")]
-              if isinstance(v, (int, float)) and not isinstance(v, bool)]
-    ranges = []
-    if isinstance(prop.get("low"), (int, float)) and isinstance(prop.get("high"), (int, float)):
-        ranges.append((float(prop["low"]), float(prop["high"])))
-    if not points and not ranges:
-        return None
-    unit = prop.get("unit", "%")
-    text = ", ".join([f"{v:g}" for v in points] + [f"{lo:g}-{hi:g}" for lo, hi in ranges]) + f" {unit}"
-    return points, ranges, text
-
-
 def _check_target_moisture(path: Path, d: dict, tid: str, mc) -> None:
     """A target recorded at a moisture content (``targets.<id>.moisture_content``, in the unit
     of ``properties.moisture_content``) is a target of this soil only at a moisture the soil
@@ -578,19 +559,20 @@ def _check_target_moisture(path: Path, d: dict, tid: str, mc) -> None:
     parameters calibrated to it would be filed under the soil's own moisture without a word."""
     import math
 
+    from soilcal.config.quantities import soil_moisture
+
     where = f"targets.{tid}.moisture_content"
-    declared = declared_moistures(d)
+    declared = soil_moisture(path, d)
     if declared is None:
         raise InputError(path, where, "a moisture content the soil declares (properties.moisture_content: "
                                       "value, values or low/high, none given)", mc)
-    points, ranges, text = declared
     x = float(mc)
-    if any(math.isclose(x, v, rel_tol=MOISTURE_RTOL, abs_tol=MOISTURE_RTOL) for v in points) \
-            or any(lo <= x <= hi for lo, hi in ranges):
+    if any(math.isclose(x, v, rel_tol=MOISTURE_RTOL, abs_tol=MOISTURE_RTOL) for v in declared["points"]) \
+            or any(lo <= x <= hi for lo, hi in declared["ranges"]):
         return
-    raise InputError(path, where, f"a moisture content the soil declares in properties.moisture_content ({text}; "
-                                  "the target's moisture is in that unit): add it there if the soil was measured "
-                                  "at it", mc)
+    raise InputError(path, where, f"a moisture content the soil declares in properties.moisture_content "
+                                  f"({declared['text']}; the target's moisture is in that unit, the same number): "
+                                  "add it to properties.moisture_content.values if the soil was measured at it", mc)
 
 
 def _check_table(path: Path, st: dict, where: str, pub: Path) -> None:
