@@ -227,3 +227,20 @@ def test_the_adaptive_stage_job_logs_each_fixed_value_and_the_range_warning(vine
         ln for ln in lines if ln.startswith("warning: stages.bbd.fixed.soil_shear_modulus = 5 lies outside "
                                             "the screening range 10..100 MPa")]
     assert sum(ln.startswith("warning:") for ln in lines) == 1
+
+
+def test_the_design_job_reports_the_range_warning(vineyard, tmp_path):
+    """write_stage_design's report, which the design job's log prints line by line."""
+    from soilcal.chain.files import write_stage_design
+
+    d = copy.deepcopy(vineyard)
+    d["simulation"]["design"] = "printed"
+    _stage(d, "bbd")["fixed"]["soil_shear_modulus"] = 5
+    tcsv = tmp_path / "targets.csv"
+    pd.DataFrame([{"target_id": tid, "value": t.get("value"), "unit": t.get("unit"), "source": "printed"}
+                  for tid, t in d["targets"].items()]).to_csv(tcsv, index=False)
+    out = {"stage": tmp_path / "stage.json", "design": tmp_path / "design.csv", "check": tmp_path / "check.csv"}
+    info = write_stage_design("dem", _stage(d, "bbd"), d, {"targets": tcsv}, out)
+    assert len(info["fixed_warnings"]) == 1
+    assert info["fixed_warnings"][0].startswith("stages.bbd.fixed.soil_shear_modulus = 5 lies outside the "
+                                                "screening range 10..100 MPa")
