@@ -80,7 +80,7 @@ from pathlib import Path
 
 import pandas as pd
 
-from soilcal.config.quantities import POSITIVE_QUANTITIES, QUANTITIES, moisture_factor  # noqa: F401 (QUANTITIES re-exported)
+from soilcal.config.quantities import POSITIVE_QUANTITIES, QUANTITIES  # noqa: F401 (QUANTITIES re-exported)
 from soilcal.errors import InputError
 
 BLOCK = "measurements"
