@@ -94,14 +94,32 @@ def test_a_moisture_column_in_another_unit_maps_to_the_same_moisture(tmp_path, p
 
 def test_a_soil_moisture_unit_soilcal_does_not_know_is_refused_naming_the_unit(tmp_path, parsed):
     d = copy.deepcopy(parsed)
-    d["properties"]["moisture_content"]["unit"] = "g/100g"  # values 0, 5, 10, 15, 20 given
+    # a volumetric water content is another quantity: it cannot be compared with the targets' %
+    d["properties"]["moisture_content"]["unit"] = "vol%"  # values 0, 5, 10, 15, 20 given
     with pytest.raises(InputError) as ei:
         _load(tmp_path, d)
     e = ei.value
-    assert e.field == "properties.moisture_content.unit" and e.got == "g/100g"
-    assert "'g/100g' is not one of them" in e.expected
-    for unit in ("%", "percent", "wt%", "fraction", "g/g", "kg/kg"):
+    assert e.field == "properties.moisture_content.unit" and e.got == "vol%"
+    assert "'vol%' is not one of them" in e.expected
+    for unit in ("%", "percent", "wt%", "g/100g", "fraction", "g/g", "kg/kg"):
         assert unit in e.expected
+
+
+def test_grams_per_hundred_grams_is_a_percentage(tmp_path, parsed):
+    d = copy.deepcopy(parsed)
+    d["properties"]["moisture_content"]["unit"] = "g/100g"  # 10 g of water per 100 g: 10 %
+    _load(tmp_path, d)
+
+
+@pytest.mark.parametrize("soil", ["black-soil", "cinnamon-soil", "yangtze-clay-loam"])
+def test_an_unknown_moisture_unit_loads_where_nothing_compares_with_it(tmp_path, soil):
+    # these soils have measured tables but no moisture target, case or column: the soil's
+    # moisture is only described, so its unit is not judged
+    d = read_yaml(ROOT / f"config/soils/{soil}.yaml")
+    d.setdefault("properties", {})["moisture_content"] = {"value": 17.2, "unit": "vol%"}
+    p = tmp_path / f"{soil}.yaml"
+    p.write_text(yaml.safe_dump(d, sort_keys=False))
+    load_soil(p, ROOT / "resources")
 
 
 def test_a_case_moisture_the_soil_does_not_declare_names_the_fix(tmp_path, parsed):

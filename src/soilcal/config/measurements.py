@@ -770,13 +770,15 @@ def _check_moisture(soil_path, data: dict, tpath: Path, df: pd.DataFrame, covs: 
 
     from soilcal.config.quantities import soil_moisture
 
-    declared = soil_moisture(soil_path, data)  # an unknown unit is refused here
-    soil = None if declared is None else (
-        [v * declared["factor"] for v in declared["points"] + [x for r in declared["ranges"] for x in r]],
-        declared["text"])
+    soil = declared = None
     for col, q in quantity_cols.items():
         if q != "moisture_content":
             continue
+        if declared is None:  # read only where a moisture column compares with it: an unknown unit is refused here
+            declared = soil_moisture(soil_path, data) or {}
+            soil = (None if not declared else
+                    ([v * declared["factor"] for v in declared["points"] + [x for r in declared["ranges"] for x in r]],
+                     declared["text"]))
         unit = covs[col]["unit"]
         x = np.array([v for v in (_number(c) for c in df[col]) if v is not None], float)
         if not len(x):

@@ -22,16 +22,16 @@ QUANTITIES = {
 
 def moisture_factor(unit) -> float | None:
     """Factor to % of a moisture content's declared unit: ``%`` (also written ``percent``,
-    ``wt%``, ``% w/w``) or a mass fraction (``-``, ``fraction``, ``g/g``, ``kg/kg``) times 100;
+    ``wt%``, ``% w/w``, ``g/100g``) or a mass fraction (``-``, ``fraction``, ``g/g``, ``kg/kg``) times 100;
     case, spaces, dots and brackets ignored.  None for any other unit."""
     import re
 
     key = re.sub(r"[\s.()]+", "", str(unit).lower())
-    return {**QUANTITIES["moisture_content"][1], "percent": 1.0, "wt%": 1.0, "%w/w": 1.0}.get(key)
+    return {**QUANTITIES["moisture_content"][1], "percent": 1.0, "wt%": 1.0, "%w/w": 1.0, "g/100g": 1.0}.get(key)
 
 
 #: the units of a moisture content :func:`moisture_factor` knows, as the messages name them
-MOISTURE_UNITS = "% (also percent, wt%, % w/w) or a mass fraction (-, fraction, g/g, kg/kg)"
+MOISTURE_UNITS = "% (also percent, wt%, % w/w, g/100g) or a mass fraction (-, fraction, g/g, kg/kg)"
 
 
 def soil_moisture(path, data: dict) -> dict | None:
