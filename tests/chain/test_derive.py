@@ -301,7 +301,11 @@ def test_bbd_drops_a_printed_optimum_on_other_parameters(soils):
     assert (st["factors"]["A"]["low"], st["factors"]["A"]["centre"], st["factors"]["A"]["high"]) == \
         pytest.approx((0.05, 0.08, 0.11), abs=1e-12)
     assert "printed_optimum" not in st["optimise"]["cases"][0]
-    assert st["fixed"] == {"soil_steel_static_friction": 0.6}
+    # the path's fixed value carries on; the stage's own fixed values hold for what it does not
+    # vary; its fixed soil-steel rolling friction is a factor here (X6), so it is not used, and said so
+    assert st["fixed"] == {"soil_steel_static_friction": 0.6, "soil_soil_restitution": 0.45,
+                           "soil_soil_static_friction": 0.56, "soil_steel_restitution": 0.45}
+    assert set(st["derivation"]["fixed_not_used"]) == {"soil_steel_rolling_friction"}
 
 
 def test_bbd_at_the_first_step_mirrors_and_shifts_inside_the_physical_range(soils):

@@ -1,8 +1,8 @@
 """A derived stage's own fixed values hold in the runs the DEM recipe lays out for it.
 
-The recipe decides the parameters the screening and the path vary (a path factor, or a
-screened factor held at the centre of its range); a parameter none of them varies is the
-soil's to fix, stage by stage, as the stage's config says.  Before, the path took the
+The recipe decides the parameters the path and the Box-Behnken design vary; every other
+parameter is the soil's to fix, stage by stage, as the stage's config says (a screened factor
+the stage does not fix is held at the centre of its screening range).  Before, the path took the
 screening's fixed value over its own and the Box-Behnken stage dropped its own fixed block,
 so its runs took the path's value, or the engine's base value (another soil's) for a
 parameter only it fixed.  No DEM run here: the screening effects and path responses are
@@ -15,6 +15,7 @@ from pathlib import Path
 
 import numpy as np
 import pandas as pd
+import pytest
 
 from soilcal.chain.derive import bbd_from_path, path_from_screening
 from soilcal.config.load import load_soil
@@ -40,8 +41,9 @@ def test_a_derived_stage_keeps_its_own_fixed_values():
     _stage(d, "pb").setdefault("fixed", {})["adhesion"] = 0.1
     _stage(d, "steepest")["fixed"]["adhesion"] = 0.2
     _stage(d, "bbd")["fixed"].update(adhesion=0.3, plastic=0.25)
-    # a screened parameter's printed value in the derived stages, off the screening range's
-    # centre (0.45): the recipe's centre must hold, not these
+    # a screened parameter's value in the derived stages, off the screening range's centre
+    # (0.45): the stage's explicit value holds, as the papers held such factors
+    # (tests/chain/test_fixed_screened.py)
     _stage(d, "steepest")["fixed"]["soil_soil_restitution"] = 0.6
     _stage(d, "bbd")["fixed"]["soil_soil_restitution"] = 0.7
 
@@ -52,14 +54,16 @@ def test_a_derived_stage_keeps_its_own_fixed_values():
     path = path_from_screening(d, "steepest", _stage(d, "pb"), effects, pb_runs, targets)
     path["id"] = "steepest"
     assert path["fixed"]["adhesion"] == 0.2          # the path's own, not the screening's 0.1
-    # the screened factors off the path at the centres of their ranges (the recipe's)
-    assert path["fixed"]["soil_soil_restitution"] == (0.15 + 0.75) / 2
+    # a screened factor off the path at the value the stage fixes, the others at the centres
+    # of their ranges (the recipe's intermediate levels)
+    assert path["fixed"]["soil_soil_restitution"] == 0.6
+    assert path["fixed"]["soil_soil_static_friction"] == pytest.approx((0.2 + 0.92) / 2, abs=1e-12)
 
     steps = pd.DataFrame({"step": np.arange(1, 7), "stacking_angle": [22.0, 24.5, 27.5, 29.0, 31.0, 33.0]})
     bbd = bbd_from_path(d, "bbd", path, steps)
     assert bbd["fixed"]["adhesion"] == 0.3           # the stage's own, not the path's 0.2
     assert bbd["fixed"]["plastic"] == 0.25           # fixed by this stage only: not dropped
-    # a screened parameter's value stays the recipe's (the centre, not the stage's 0.7), and
-    # the path factors are factors, not fixed values
-    assert bbd["fixed"]["soil_soil_restitution"] == (0.15 + 0.75) / 2
+    # a screened parameter off the path at the stage's own value (0.7, over the path's 0.6),
+    # and the path factors are factors, not fixed values
+    assert bbd["fixed"]["soil_soil_restitution"] == 0.7
     assert not set(bbd["fixed"]) & {f["parameter"] for f in bbd["factors"].values()}

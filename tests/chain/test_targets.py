@@ -117,3 +117,15 @@ def test_a_soil_without_a_citation_has_no_printed_values():
     r = _by_id(targets_frame(own, "dem", MEAS))
     assert (r["pile"]["value"], r["pile"]["source"]) == (28.4, "image")
     assert r["pile"]["note"] == "photo group stacking (angle_deg); the soil's own value 30"
+
+
+def test_a_measured_target_s_sd_is_written_beside_its_value():
+    # the soil's own drum angle, measured as 38.4 +/- 0.9 deg; a photo target's scatter is the
+    # photos' own (image_spread), not the sd the soil gives beside another value
+    own = {"targets": {"drum": {"value": 38.4, "sd": 0.9, "unit": "deg", "moisture_content": 0.12},
+                       "bare": {"value": 40.0, "unit": "deg"},
+                       "pile": {"value": 30.0, "sd": 2.0, "unit": "deg", "image": "stacking"}}}
+    r = _by_id(targets_frame(own, "dem", MEAS))
+    assert r["drum"]["sd"] == 0.9 and r["drum"]["value"] == 38.4
+    assert np.isnan(r["bare"]["sd"])
+    assert np.isnan(r["pile"]["sd"]) and r["pile"]["image_spread"] == 0.7

@@ -1,6 +1,6 @@
 """Snakemake adapter: optimum.csv and identifiability.csv of a stage's adaptive designs."""
 
-from soilcal.chain.adaptive import stage_files
+from soilcal.chain.adaptive import stage_files, stage_log_lines
 from soilcal.logs import redirect
 
 with redirect(snakemake.log[0]):  # noqa: F821
@@ -9,3 +9,5 @@ with redirect(snakemake.log[0]):  # noqa: F821
                       [o.stage, o.optimum, o.identifiability],
                       upstream_csv=i.upstream if hasattr(i, "upstream") else None)
     print(opt.to_string(index=False))
+    for line in stage_log_lines(o.stage):
+        print(line)

@@ -11,3 +11,7 @@ with redirect(snakemake.log[0]):  # noqa: F821
     if info.get("generator_columns"):
         print("factor -> generator column, as printed:", info["generator_columns"])
     print("stage:", info.get("derivation", ""))
+    for line in info.get("fixed", []):
+        print("fixed:", line)
+    for line in info.get("fixed_warnings", []) + info.get("fixed_not_used", []):
+        print("warning:", line)

@@ -176,7 +176,7 @@ def stage_for(soil_data: dict, stage_id: str, upstream_optimum: pd.DataFrame | N
     centred by the paper's steepest ascent on its own engine's responses, which another
     engine need not share; ``stage`` keeps the stage's printed ranges.  The non-significant
     factors stay at the stage's fixed values either way."""
-    from soilcal.chain.derive import _dem_base, _stage, dependencies, fix_from_optimum
+    from soilcal.chain.derive import _dem_base, _stage, apply_own_fixed, dependencies, fix_from_optimum
 
     config_stage = _stage(soil_data, stage_id)
     st = _dem_base(config_stage)
@@ -187,13 +187,16 @@ def stage_for(soil_data: dict, stage_id: str, upstream_optimum: pd.DataFrame | N
         text = (f"the ranges of screening stage {screening['id']} (design: adaptive, ranges: screening"
                 + (f"; widened: {', '.join(moved)})" if moved else ")"))
     st["derivation"] = {"kind": "adaptive", "text": text}
+    # every fixed value with its origin (derivation.fixed), as the DEM source's stages record it
+    apply_own_fixed(st, config_stage, {}, {}, set(), soil_data)
     deps = dependencies(dict(soil_data, simulation={**(soil_data.get("simulation") or {}), "design": "printed"}),
                         stage_id)
     if "fixed_from" in deps:
         if upstream_optimum is None:
             raise InputError(stage_id, "fixed_from", f"the adaptive optimum of stage {deps['fixed_from']}", None)
         up = _dem_base(_stage(soil_data, deps["fixed_from"]))
-        st = fix_from_optimum(st, up, upstream_optimum, (config_stage.get("fixed_from") or {}).get("case"))
+        st = fix_from_optimum(st, up, upstream_optimum, (config_stage.get("fixed_from") or {}).get("case"),
+                              soil_data.get("parameters"))
     return st
 
 
@@ -676,6 +679,15 @@ def stage_files(soil_data: dict, stage_id: str, result_paths, region_paths, outp
     """``outputs``: stage.json, optimum.csv, identifiability.csv paths."""
     up = pd.read_csv(upstream_csv) if upstream_csv else None
     return write_stage(soil_data, stage_for(soil_data, stage_id, up), result_paths, region_paths, *outputs)
+
+
+def stage_log_lines(stage_json) -> list[str]:
+    """The lines the stage job's log gives on the stage's fixed values: each with its origin
+    (``fixed: ...``), and a warning for each that lies outside its screening range
+    (``warning: ...``, :func:`soilcal.chain.derive.apply_own_fixed`)."""
+    rec = (json.loads(Path(stage_json).read_text()).get("derivation") or {}).get("fixed") or {}
+    return ([f"fixed: {k} = {r['value']:g}: {r['origin']}" for k, r in rec.items()]
+            + [f"warning: {r['warning']}" for r in rec.values() if r.get("warning")])
 
 
 SUMMARY_COLUMNS = ["soil", "stage", "case", "response", "goal", "target", "best_level", "tolerance", "method", "runs",

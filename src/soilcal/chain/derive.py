@@ -16,7 +16,11 @@ from the DEM results of the earlier stage, as the papers derived it from theirs:
   ratio of the effects (``proportional``, Montgomery 11.2); the other screened factors are
   held at their intermediate levels (the centre of their screening range: "the parameters
   with insignificant influence were taken as intermediate level values", cinnamon soil
-  Sec. 3.3.2).
+  Sec. 3.3.2), or at the value the path stage's own ``fixed`` gives them (the vineyard soil's
+  paper held its shear modulus at 10 MPa, the low end of its screening range); a fixed value
+  of a factor the DEM screening selects is not used and is listed in
+  ``derivation.fixed_not_used`` (:func:`apply_own_fixed`).  Every fixed value a derived stage
+  runs is recorded with its origin in ``derivation.fixed``.
 * **Box-Behnken after a steepest ascent**: the path step whose DEM responses are closest to
   the targets is the centre, its neighbours the low and high levels ("the levels of no. 2,
   no. 3 and no. 4 were selected as low, medium and high", cinnamon soil;
@@ -147,11 +151,112 @@ def published_stage(soil_data: dict, stage_id: str) -> dict:
     return st
 
 
-def own_fixed(config_stage: dict, decided: set) -> dict:
-    """The fixed values a derived stage's config gives for parameters the recipe does not set
-    (``decided``: the parameters the earlier stages vary): they hold in the stage's runs, over
-    any value an earlier stage fixes, as they hold where the stage runs its config's levels."""
-    return {k: v for k, v in (config_stage.get("fixed") or {}).items() if k not in decided}
+def apply_own_fixed(st: dict, config_stage: dict, fixed: dict, origin: dict, varied: set,
+                    soil_data: dict) -> None:
+    """Set ``st["fixed"]`` to ``fixed`` with the stage's own ``fixed`` values over it, and record
+    where each value comes from (``st["derivation"]["fixed"]``: ``{parameter: {"value",
+    "origin"}}``, ``origin`` filled in beforehand for the values ``fixed`` brings in).
+
+    A value the soil config fixes for the stage holds in its runs, over the one an earlier stage
+    fixes and over the intermediate level at which the recipe would hold a screened factor the
+    screening did not select (the value it replaces is named in its origin): the config says so
+    explicitly, as the papers fixed such factors (vineyard soil: the shear modulus at 10 MPa,
+    the low end of its 10-100 MPa screening range).  Only a parameter the stage's derived design
+    varies (``varied``: a path factor the DEM screening selected, a Box-Behnken factor) cannot
+    hold a fixed value; its config value is listed in ``derivation.fixed_not_used`` with why,
+    never dropped without a word.
+
+    Parameters are told apart by the DEM parameter they set
+    (:func:`soilcal.config.parameters.dem_key`, as the loader tells them apart): a stage's own
+    value of ``soil_G_pa`` (Pa) replaces an earlier ``soil_shear_modulus`` (MPa) and is not used
+    where the design varies ``soil_shear_modulus``, so each DEM parameter is set once and the
+    record names the value the runs take.  An own value of a factor of the screening the stage
+    descends from (:func:`soilcal.chain.adaptive.screening_of`) that lies outside that factor's
+    ``low`` .. ``high`` runs as given; its origin says so (the screening did not judge the factor
+    there) and ``derivation.fixed[<parameter>].warning`` repeats it for the design job's log."""
+    from soilcal.config.parameters import dem_key
+
+    params = soil_data.get("parameters") or {}
+    fixed, origin = dict(fixed), dict(origin)
+    varied_by = {dem_key(params, p): p for p in varied}
+    screened = _screened_factors(soil_data, config_stage["id"])
+    not_used, warnings = {}, {}
+    where = f"stages.{config_stage['id']}.fixed"
+    for k, v in (config_stage.get("fixed") or {}).items():
+        key = dem_key(params, k)
+        if key in varied_by:
+            vp = varied_by[key]
+            sets = f" (both set the DEM parameter {key[1]})" if vp != k else ""
+            not_used[k] = {"value": v, "why": (f"{where}.{k} is not used: the derived design of stage "
+                                               f"{config_stage['id']} varies {vp}{sets} (a factor the DEM results chose)")}
+            continue
+        notes = []
+        for p in [p for p in fixed if dem_key(params, p) == key]:
+            prev, prev_origin = fixed.pop(p), origin.pop(p, "an earlier value")
+            if p != k:
+                notes.append(f"over {p} = {float(prev):g} {params.get(p, {}).get('unit', '')}, "
+                             f"{prev_origin}; both set the DEM parameter {key[1]}")
+            elif abs(float(v) - float(prev)) > 1e-12 * max(1.0, abs(float(prev))):
+                notes.append(f"over {float(prev):g}, {prev_origin}")
+        fixed[k] = v
+        origin[k] = f"{where}.{k} (soil config)" + "".join(f" ({n})" for n in notes)
+        if key in screened:
+            warn = _outside_screening(soil_data, k, v, *screened[key])
+            if warn:
+                warnings[k] = f"{where}.{k} = {float(v):g} {warn}"
+                origin[k] += f"; {warn}"
+    st["fixed"] = fixed
+    st.setdefault("derivation", {})
+    rec = {}
+    for k in fixed:
+        rec[k] = {"value": fixed[k], "origin": origin.get(k, f"{where}.{k} (soil config)")}
+        if k in warnings:
+            rec[k]["warning"] = warnings[k]
+    st["derivation"]["fixed"] = rec
+    if not_used:
+        st["derivation"]["fixed_not_used"] = not_used
+
+
+def _screened_factors(soil_data: dict, stage_id: str) -> dict:
+    """``{dem_key: (screening id, symbol, factor)}`` of the Plackett-Burman screening a stage
+    descends from through its ``from_stage`` links (:func:`soilcal.chain.adaptive.screening_of`,
+    the same in every design mode), keyed by the DEM parameter each factor sets
+    (:func:`soilcal.config.parameters.dem_key`)."""
+    from soilcal.chain.adaptive import screening_of
+    from soilcal.config.parameters import dem_key
+
+    scr = screening_of(soil_data, stage_id)
+    if scr is None:
+        return {}
+    params = soil_data.get("parameters") or {}
+    return {dem_key(params, f["parameter"]): (scr["id"], sym, f) for sym, f in scr["factors"].items()
+            if f.get("low") is not None and f.get("high") is not None}
+
+
+#: how far (relative to the screening range) a fixed value may lie past a range end and still
+#: count as inside it: a number written twice, or converted between units
+SCREENING_RANGE_RTOL = 1e-9
+
+
+def _outside_screening(soil_data: dict, pname: str, value, scr_id: str, sym: str, f: dict) -> str:
+    """Why ``value`` of ``pname`` lies outside the range ``low`` .. ``high`` of screening factor
+    ``sym`` (stage ``scr_id``) on the DEM parameter both set, in ``pname``'s unit; empty where
+    it lies inside."""
+    from soilcal.dem.scenarios.base import unit_scale
+
+    params = soil_data.get("parameters") or {}
+    src = soil_data.get("name", "<soil>")
+    own = unit_scale(src, params.get(pname) or {}, f"parameters.{pname}")
+    theirs = unit_scale(src, params.get(f["parameter"]) or {}, f"parameters.{f['parameter']}")
+    lo, hi = float(f["low"]) * theirs / own, float(f["high"]) * theirs / own
+    tol = SCREENING_RANGE_RTOL * (hi - lo)
+    if lo - tol <= float(value) <= hi + tol:
+        return ""
+    unit = (params.get(pname) or {}).get("unit", "")
+    factor = f"factor {sym}" + (f" ({f['parameter']})" if f["parameter"] != pname else "")
+    return (f"lies outside the screening range {lo:g}..{hi:g} {unit} of {factor} of stage {scr_id}: "
+            "the screening did not judge the parameter there (its finding that the factor is not "
+            "significant holds over that range only); the value runs as given")
 
 
 def _dem_base(stage: dict) -> dict:
@@ -303,27 +408,39 @@ def path_from_screening(soil_data: dict, stage_id: str, screening_stage: dict, e
         taken.add(sym)
         factors[sym] = {"parameter": pname, "levels": [_g12(v) for v in path[t]], "screening_symbol": t}
     st["factors"] = factors
-    # the screening's fixed values carry on; the stage's own fixed values hold for the
-    # parameters the screening does not vary (those it varies the recipe sets, below)
+    # the screening's fixed values carry on, the screened factors off the path at the centre of
+    # their range; the stage's own fixed values hold over both (apply_own_fixed)
     fixed = dict(screening_stage.get("fixed") or {})
-    fixed.update(own_fixed(config_stage, {f["parameter"] for f in sf.values()}))
+    origin = {k: _upstream_origin(screening_stage, k, "the screening's fixed value") for k in fixed}
     for t, f in sf.items():
         if t not in chosen:
             fixed[f["parameter"]] = _g12(_centre(f))
-    st["fixed"] = fixed
+            origin[f["parameter"]] = (f"centre of the range {f['low']:g}-{f['high']:g} of screening factor {t} "
+                                      f"(stage {screening_stage['id']}: not significant, held at its intermediate level)")
     st["path_targets"] = ptargets
     st["derivation"] = {
         "kind": "screening",
         "from_stage": screening_stage["id"],
         "text": (f"path over {', '.join(chosen)} of the DEM screening {screening_stage['id']} "
-                 f"({rule} rule, {n_steps} steps); other screened factors at the centre of their range"),
+                 f"({rule} rule, {n_steps} steps); other screened factors at the centre of their range "
+                 "unless the stage fixes them (derivation.fixed: each fixed value and where it comes from)"),
         "selection": sel.to_dict("records"),
         "direction": {t: float(v) for t, v in direction.items()},
         "rule": rule,
         "screening": scr,
         "paper_factors": {s: f["parameter"] for s, f in config_stage["factors"].items()},
     }
+    apply_own_fixed(st, config_stage, fixed, origin, {f["parameter"] for f in factors.values()}, soil_data)
     return st
+
+
+def _upstream_origin(stage: dict, pname: str, what: str) -> str:
+    """Where an earlier stage's fixed value came from: its own record (``derivation.fixed``),
+    else its config's ``fixed`` entry."""
+    rec = ((stage.get("derivation") or {}).get("fixed") or {}).get(pname)
+    if rec and rec.get("origin"):
+        return f"{rec['origin']}, carried on from stage {stage['id']}"
+    return f"stages.{stage['id']}.fixed.{pname} ({what})"
 
 
 def bbd_from_path(soil_data: dict, stage_id: str, path_stage: dict, path_responses: pd.DataFrame) -> dict:
@@ -348,13 +465,9 @@ def bbd_from_path(soil_data: dict, stage_id: str, path_stage: dict, path_respons
     st["factors"] = {s: {"parameter": path_stage["factors"][s]["parameter"],
                          "low": _g12(levels[s]["low"]), "centre": _g12(levels[s]["centre"]),
                          "high": _g12(levels[s]["high"])} for s in syms}
-    # the path's fixed values carry on; the stage's own hold for the parameters that neither
-    # the path nor the screening it comes from varies
-    decided = {f["parameter"] for f in path_stage["factors"].values()}
-    scr_id = _stage(soil_data, path_stage["id"]).get("from_stage")
-    if scr_id:
-        decided |= {f["parameter"] for f in _stage(soil_data, scr_id)["factors"].values()}
-    st["fixed"] = {**dict(path_stage.get("fixed") or {}), **own_fixed(config_stage, decided)}
+    # the path's fixed values carry on; the stage's own hold for every parameter it does not vary
+    path_fixed = dict(path_stage.get("fixed") or {})
+    origin = {k: _upstream_origin(path_stage, k, "the path's fixed value") for k in path_fixed}
     k = len(syms)
     st["runs"] = 2 * k * (k - 1) + int(st.get("center_points", 0))
     _keep_printed_optimum(st, config_stage)
@@ -370,22 +483,45 @@ def bbd_from_path(soil_data: dict, stage_id: str, path_stage: dict, path_respons
         "steps": table.to_dict("records"),
         "levels": {s: levels[s].get("note", "") for s in syms},
     }
+    apply_own_fixed(st, config_stage, path_fixed, origin, {f["parameter"] for f in st["factors"].values()},
+                    soil_data)
     return st
 
 
-def fix_from_optimum(st: dict, upstream_stage: dict, optimum: pd.DataFrame, case: str | None) -> dict:
-    """``st`` with the parameters of ``upstream_stage``'s factors fixed at its calibrated set."""
+def fix_from_optimum(st: dict, upstream_stage: dict, optimum: pd.DataFrame, case: str | None,
+                     params: dict | None = None) -> dict:
+    """``st`` with the parameters of ``upstream_stage``'s factors fixed at its calibrated set;
+    a fixed value of the stage that sets the same DEM parameter under another id (``params``:
+    the soil's ``parameters``, :func:`soilcal.config.parameters.dem_key`) is replaced, and
+    named in the origin, so the DEM parameter is set once."""
     from soilcal.chain.stage import calibrated_levels
+
+    from soilcal.config.parameters import dem_key
 
     levels = calibrated_levels(upstream_stage, optimum, case)
     fixed = dict(st.get("fixed") or {})
-    paper = {}
+    params = params or {}
+    st.setdefault("derivation", {})
+    rec = st["derivation"].setdefault("fixed", {})
+    paper, replaced = {}, {}
     for sym, v in levels.items():
         pname = upstream_stage["factors"][sym]["parameter"]
         paper[pname] = fixed.get(pname)
+        # a value the stage gives under another id that sets the same DEM parameter goes too
+        for p in [p for p in fixed if p != pname and dem_key(params, p) == dem_key(params, pname)]:
+            replaced[pname] = (p, fixed.pop(p))
+            rec.pop(p, None)
         fixed[pname] = float(v)
     st["fixed"] = fixed
-    st.setdefault("derivation", {})
+    for pname in paper:
+        over = ""
+        if paper[pname] is not None:
+            over = f", over the stage's own {paper[pname]:g}"
+        elif pname in replaced:
+            over = f", over the stage's own {replaced[pname][0]} = {float(replaced[pname][1]):g}"
+        rec[pname] = {"value": fixed[pname],
+                      "origin": (f"calibrated set of stage {upstream_stage['id']}"
+                                 + (f" (case {case})" if case else "") + " (fixed_from)" + over)}
     st["derivation"]["fixed_from"] = {"stage": upstream_stage["id"], "case": case,
                                       "values": {k: fixed[k] for k in paper}, "paper": paper}
     return st
@@ -416,11 +552,13 @@ def dem_stage(soil_data: dict, stage_id: str, targets: dict, upstream: dict | No
         if config_stage.get("from_stage") and config_stage["from_stage"] not in dem_stage_ids(soil_data):
             why += f" (stage {config_stage['from_stage']} is not simulated: simulation.stages)"
         st["derivation"] = {"kind": "config", "text": why}
+        apply_own_fixed(st, config_stage, {}, {}, set(), soil_data)
         if st["kind"] == "steepest_ascent":
             st["path_targets"] = response_targets(soil_data, [r["id"] for r in st["responses"]], targets)
     if "fixed_from" in deps:
         up = upstream["fixed_from"]
-        st = fix_from_optimum(st, up["stage"], up["optimum"], (config_stage.get("fixed_from") or {}).get("case"))
+        st = fix_from_optimum(st, up["stage"], up["optimum"], (config_stage.get("fixed_from") or {}).get("case"),
+                              soil_data.get("parameters"))
     return st
 
 

@@ -134,6 +134,9 @@ def write_stage_design(source: str, config_stage: dict, soil_data: dict | None, 
                                                             else "coded"))
     write_stage(stage, outputs["stage"])
     info["derivation"] = stage["derivation"]["text"]
+    info["fixed"] = [f"{k} = {r['value']:g}: {r['origin']}" for k, r in (stage["derivation"].get("fixed") or {}).items()]
+    info["fixed_not_used"] = [r["why"] for r in (stage["derivation"].get("fixed_not_used") or {}).values()]
+    info["fixed_warnings"] = [r["warning"] for r in (stage["derivation"].get("fixed") or {}).values() if r.get("warning")]
     return info
 
 

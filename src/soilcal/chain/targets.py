@@ -16,8 +16,10 @@ names the value the soil gives beside the photo measurement.
 
 A target whose value is neither measured on a photo nor printed is kept with an empty value
 and says so (``source = not available``); the optimisation cases that aim at it say why they
-have no optimum.  Columns: target_id, value, unit, source, image_group, image_value,
-image_spread, image_n, printed_value, layer, moisture_content, note.
+have no optimum.  Columns: target_id, value, sd (the standard deviation the soil gives with
+the value, ``targets.<id>.sd``; empty for a photo measurement, whose scatter is image_spread),
+unit, source, image_group, image_value, image_spread, image_n, printed_value, layer,
+moisture_content (in the unit of ``properties.moisture_content``), note.
 """
 
 from __future__ import annotations
@@ -30,7 +32,7 @@ import pandas as pd
 
 from soilcal.errors import InputError
 
-COLUMNS = ["target_id", "value", "unit", "source", "image_group", "image_value", "image_spread", "image_n",
+COLUMNS = ["target_id", "value", "sd", "unit", "source", "image_group", "image_value", "image_spread", "image_n",
            "printed_value", "layer", "moisture_content", "note"]
 
 
@@ -77,7 +79,7 @@ def targets_frame(soil_data: dict, source: str, measurements: dict | None = None
                        if np.isfinite(printed) else f"photo group {group} ({key})")
         elif np.isfinite(printed):
             row.update(value=printed, source="printed" if source == "published" and cited else "measurement",
-                       note=t.get("source", ""))
+                       sd=float(t["sd"]) if t.get("sd") is not None else np.nan, note=t.get("source", ""))
         else:
             row.update(value=np.nan, source="not available",
                        note=("no photo group and no printed value: " if cited else "no photo group and no value: ")

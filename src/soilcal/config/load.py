@@ -275,11 +275,10 @@ def _check_stage_sets_each_parameter_once(path: Path, where: str, st: dict, para
     ids that set the same DEM parameter (:func:`soilcal.config.parameters.dem_field_name`, the
     name :func:`soilcal.dem.scenarios.base.dem_field` maps them to) count as one."""
 
-    from soilcal.config.parameters import dem_field_name
+    from soilcal.config.parameters import dem_field_name, dem_key
 
     def key(pid):
-        name = dem_field_name(params.get(pid))
-        return ("dem", name) if name is not None else ("id", pid)
+        return dem_key(params, pid)
 
     def named(pid):
         name = dem_field_name(params.get(pid))
@@ -532,6 +531,8 @@ def _check_targets(path: Path, d: dict, resources_root: Path) -> None:
     for tid, t in targets.items():
         if t.get("table") is not None and not table_inside(path, f"targets.{tid}.table", mdir, t["table"]).is_file():
             raise InputError(path, f"targets.{tid}.table", f"an existing file under {mdir}", t["table"])
+        if t.get("moisture_content") is not None:
+            _check_target_moisture(path, d, tid, t["moisture_content"])
     for st in d["stages"]:
         units = {r["id"]: r["unit"] for r in st["responses"]}
         links = [(rid, rid, "whose id it bears") for rid in units if rid in targets]
@@ -543,6 +544,35 @@ def _check_targets(path: Path, d: dict, resources_root: Path) -> None:
             if got != str(units[rid]).strip():
                 raise InputError(path, f"targets.{tid}.unit",
                                  f"{units[rid]}, the unit of response {rid!r} of stage {st['id']!r} ({how})", got)
+
+
+#: how near a target's moisture content must lie to one the soil declares (relative, and
+#: absolute in the declared unit): the same number written twice, not a neighbouring moisture
+MOISTURE_RTOL = 1e-9
+
+
+def _check_target_moisture(path: Path, d: dict, tid: str, mc) -> None:
+    """A target recorded at a moisture content (``targets.<id>.moisture_content``, in the unit
+    of ``properties.moisture_content``) is a target of this soil only at a moisture the soil
+    declares: one of its ``properties.moisture_content`` values, or inside its ``low`` ..
+    ``high``.  A measurement or photo at another moisture is of another soil state: the DEM
+    parameters calibrated to it would be filed under the soil's own moisture without a word."""
+    import math
+
+    from soilcal.config.quantities import soil_moisture
+
+    where = f"targets.{tid}.moisture_content"
+    declared = soil_moisture(path, d)
+    if declared is None:
+        raise InputError(path, where, "a moisture content the soil declares (properties.moisture_content: "
+                                      "value, values or low/high, none given)", mc)
+    x = float(mc)
+    if any(math.isclose(x, v, rel_tol=MOISTURE_RTOL, abs_tol=MOISTURE_RTOL) for v in declared["points"]) \
+            or any(lo <= x <= hi for lo, hi in declared["ranges"]):
+        return
+    raise InputError(path, where, f"a moisture content the soil declares in properties.moisture_content "
+                                  f"({declared['text']}; the target's moisture is in that unit, the same number): "
+                                  "add it to properties.moisture_content.values if the soil was measured at it", mc)
 
 
 def _check_table(path: Path, st: dict, where: str, pub: Path) -> None:

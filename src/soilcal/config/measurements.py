@@ -80,7 +80,7 @@ from pathlib import Path
 
 import pandas as pd
 
-from soilcal.config.quantities import POSITIVE_QUANTITIES, QUANTITIES, moisture_factor  # noqa: F401 (QUANTITIES re-exported)
+from soilcal.config.quantities import POSITIVE_QUANTITIES, QUANTITIES  # noqa: F401 (QUANTITIES re-exported)
 from soilcal.errors import InputError
 
 BLOCK = "measurements"
@@ -288,6 +288,56 @@ def _stage_cases(soil_path, data: dict, where: str, entry: dict) -> tuple[dict, 
     return stages[sid], [c["id"] for c in opt["cases"]]
 
 
+def _check_case_moisture(soil_path, data: dict, stage: dict, cw: str, cv: dict) -> None:
+    """A moisture column that chooses the case (``case: {moisture: case id}``) maps each moisture
+    to a case calibrated at that moisture: the targets its goals aim at, where they give a
+    ``moisture_content`` (in the unit of ``properties.moisture_content``), were measured at it,
+    and otherwise the soil declares it (``properties.moisture_content``).  Rows at one moisture
+    would otherwise be simulated with the parameters calibrated at another."""
+    import math
+
+    from soilcal.config.load import MOISTURE_RTOL
+    from soilcal.config.quantities import soil_moisture
+
+    declared = soil_moisture(soil_path, data)  # an unknown unit is refused here
+    soil_factor = declared["factor"] if declared else None
+    soil_unit = declared["unit"] if declared else "%"
+    col_factor = QUANTITIES["moisture_content"][1][cv["unit"]]
+    cases = {c["id"]: c for c in (stage.get("optimise") or {}).get("cases", [])}
+    targets = data.get("targets") or {}
+    for k, cid in cv["case"].items():
+        x = _number(k)
+        if x is None:
+            raise InputError(soil_path, f"{cw}.case.{k}", f"a moisture content in {cv['unit']} (quantity: "
+                             "moisture_content)", k)
+        pct = x * col_factor
+
+        def same(a_pct, b_pct):
+            return math.isclose(a_pct, b_pct, rel_tol=MOISTURE_RTOL, abs_tol=MOISTURE_RTOL)
+
+        aimed = [(tid, targets[tid]["moisture_content"]) for g in cases[cid]["goals"].values()
+                 if (tid := g.get("target")) in targets and targets[tid].get("moisture_content") is not None]
+        if aimed and declared is not None:
+            off = [(tid, m) for tid, m in aimed if not same(pct, float(m) * soil_factor)]
+            if off:
+                raise InputError(soil_path, f"{cw}.case.{k}",
+                                 f"the moisture content of the targets case {cid!r} aims at ("
+                                 + ", ".join(f"targets.{tid}.moisture_content = {m:g} {soil_unit}"
+                                             for tid, m in aimed)
+                                 + f"), in {cv['unit']}: rows at {k} {cv['unit']} would be simulated with the "
+                                   "parameters calibrated at another moisture", k)
+            continue
+        if declared is None:
+            raise InputError(soil_path, f"{cw}.case.{k}", "a moisture content the soil declares "
+                             "(properties.moisture_content: value, values or low/high, none given)", k)
+        if not (any(same(pct, v * soil_factor) for v in declared["points"])
+                or any(lo * soil_factor <= pct <= hi * soil_factor for lo, hi in declared["ranges"])):
+            raise InputError(soil_path, f"{cw}.case.{k}", f"a moisture content the soil declares in "
+                             f"properties.moisture_content ({declared['text']}), in {cv['unit']}, the same "
+                             "number: add it to properties.moisture_content.values if the soil was measured at it",
+                             k)
+
+
 def table_inside(soil_path, field: str, folder: Path, table: str) -> Path:
     """``folder / table``; a ``table`` that leaves its folder (the soil's measurements or
     published folder: an absolute path, or one that climbs out with ``..``) is refused.  The
@@ -459,6 +509,8 @@ def _entry(soil_path, data: dict, mid: str, entry: dict, tpath: Path):
                 if c not in case_ids:
                     raise InputError(soil_path, f"{cw}.case.{k}",
                                      f"a case id of stage {stage['id']!r} (" + ", ".join(case_ids) + ")", c)
+            if cv.get("quantity") == "moisture_content":
+                _check_case_moisture(soil_path, data, stage, cw, cv)
             case_cols.append(col)
         if form in ("set", "param"):
             _check_scale(soil_path, cw, cv, name)
@@ -690,7 +742,7 @@ def _entry(soil_path, data: dict, mid: str, entry: dict, tpath: Path):
             replicates=replicates, responses=tuple(responses),
             covariates={c: (None if _missing(rec[c]) else _plain(rec[c])) for c in covs},
             quantities=quantities, quantity_columns=dict(quantity_cols)))
-    _check_moisture(data, tpath, df, covs, quantity_cols)
+    _check_moisture(soil_path, data, tpath, df, covs, quantity_cols)
     return df, conds
 
 
@@ -699,28 +751,12 @@ def _entry(soil_path, data: dict, mid: str, entry: dict, tpath: Path):
 MOISTURE_DECADES = (1.5, 2.5)
 
 
-def _soil_moisture(data: dict) -> tuple[list, str] | None:
-    """The soil's own moisture contents in % (``properties.moisture_content``: its ``values``,
-    ``value``, ``low`` and ``high``, in ``%`` (``percent``, ``wt%``) or as a fraction, unit ``-``,
-    ``fraction``, ``g/g`` or ``kg/kg``), and how the soil file gives them; None where it gives
-    none, or in a unit not one of these."""
-    prop = (data.get("properties") or {}).get("moisture_content")
-    if not isinstance(prop, dict):
-        return None
-    vals = list(prop.get("values") or []) + [prop.get(k) for k in ("value", "low", "high")]
-    x = [float(v) for v in vals if _number(v) is not None]
-    factor = moisture_factor(prop.get("unit", "%"))
-    if not x or factor is None:
-        return None
-    return [v * factor for v in x], ", ".join(f"{v:g}" for v in x) + f" {prop.get('unit', '%')}"
-
-
 #: how near (decades) the other reading of a suspect moisture column (x 100 or / 100) must come to
 #: the soil's own moisture for the column to be refused as in the wrong form
 MOISTURE_MATCH = 0.3
 
 
-def _check_moisture(data: dict, tpath: Path, df: pd.DataFrame, covs: dict, quantity_cols: dict) -> None:
+def _check_moisture(soil_path, data: dict, tpath: Path, df: pd.DataFrame, covs: dict, quantity_cols: dict) -> None:
     """A moisture column whose numbers are fractions under a percent unit (0.15 for 15 %), or
     percentages under a fraction unit: the moisture effect would take a change of 0.1 % for one
     of 10 %.  Refused naming the table and column, where (1) a column declared as a fraction
@@ -732,10 +768,17 @@ def _check_moisture(data: dict, tpath: Path, df: pd.DataFrame, covs: dict, quant
     is)."""
     import numpy as np
 
-    soil = _soil_moisture(data)
+    from soilcal.config.quantities import soil_moisture
+
+    soil = declared = None
     for col, q in quantity_cols.items():
         if q != "moisture_content":
             continue
+        if declared is None:  # read only where a moisture column compares with it: an unknown unit is refused here
+            declared = soil_moisture(soil_path, data) or {}
+            soil = (None if not declared else
+                    ([v * declared["factor"] for v in declared["points"] + [x for r in declared["ranges"] for x in r]],
+                     declared["text"]))
         unit = covs[col]["unit"]
         x = np.array([v for v in (_number(c) for c in df[col]) if v is not None], float)
         if not len(x):

@@ -16,4 +16,13 @@ def dem_field_name(entry: dict | None) -> str | None:
     return f"{entry['pair'].replace('-', '_')}_{entry['kind']}"
 
 
-__all__ = ["dem_field_name"]
+def dem_key(params: dict, pid: str) -> tuple[str, str]:
+    """What a parameter id sets, for telling whether two ids set the same thing:
+    ``("dem", <DEM parameter name>)`` (:func:`dem_field_name`) where its entry in ``params``
+    (a soil's ``parameters``) gives one, else ``("id", pid)``.  Two ids with one key (the
+    shear modulus once in MPa, once in Pa) set one DEM parameter."""
+    name = dem_field_name((params or {}).get(pid))
+    return ("dem", name) if name is not None else ("id", pid)
+
+
+__all__ = ["dem_field_name", "dem_key"]

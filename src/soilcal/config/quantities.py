@@ -22,12 +22,47 @@ QUANTITIES = {
 
 def moisture_factor(unit) -> float | None:
     """Factor to % of a moisture content's declared unit: ``%`` (also written ``percent``,
-    ``wt%``, ``% w/w``) or a mass fraction (``-``, ``fraction``, ``g/g``, ``kg/kg``) times 100;
+    ``wt%``, ``% w/w``, ``g/100g``) or a mass fraction (``-``, ``fraction``, ``g/g``, ``kg/kg``) times 100;
     case, spaces, dots and brackets ignored.  None for any other unit."""
     import re
 
     key = re.sub(r"[\s.()]+", "", str(unit).lower())
-    return {**QUANTITIES["moisture_content"][1], "percent": 1.0, "wt%": 1.0, "%w/w": 1.0}.get(key)
+    return {**QUANTITIES["moisture_content"][1], "percent": 1.0, "wt%": 1.0, "%w/w": 1.0, "g/100g": 1.0}.get(key)
+
+
+#: the units of a moisture content :func:`moisture_factor` knows, as the messages name them
+MOISTURE_UNITS = "% (also percent, wt%, % w/w, g/100g) or a mass fraction (-, fraction, g/g, kg/kg)"
+
+
+def soil_moisture(path, data: dict) -> dict | None:
+    """The moisture contents a soil declares (``properties.moisture_content``): ``points`` (its
+    ``values`` and ``value``) and ``ranges`` (its ``low`` .. ``high``), in the unit the soil
+    gives them; ``unit``; ``factor`` to % (:func:`moisture_factor`); ``text``, how the soil
+    file writes them.  None where it declares none.  The one reader of that property: a unit
+    :func:`moisture_factor` does not know raises InputError naming ``path`` and
+    ``properties.moisture_content.unit`` with the units it knows (its values cannot be
+    compared with any moisture)."""
+    from soilcal.errors import InputError
+
+    prop = (data.get("properties") or {}).get("moisture_content")
+    if not isinstance(prop, dict):
+        return None
+
+    def num(v):
+        return isinstance(v, (int, float)) and not isinstance(v, bool)
+
+    points = [float(v) for v in list(prop.get("values") or []) + [prop.get("value")] if num(v)]
+    ranges = [(float(prop["low"]), float(prop["high"]))] if num(prop.get("low")) and num(prop.get("high")) else []
+    if not points and not ranges:
+        return None
+    unit = prop.get("unit", "%")
+    factor = moisture_factor(unit)
+    if factor is None:
+        raise InputError(path, "properties.moisture_content.unit",
+                         f"a moisture content unit soilcal knows, {MOISTURE_UNITS} ({unit!r} is not one of them: "
+                         "give the values in % or as a fraction)", unit)
+    text = ", ".join([f"{v:g}" for v in points] + [f"{lo:g}-{hi:g}" for lo, hi in ranges]) + f" {unit}"
+    return {"points": points, "ranges": ranges, "unit": unit, "factor": factor, "text": text}
 
 
 #: quantities that must be above zero (an effect takes their logarithm or a ratio to them)
