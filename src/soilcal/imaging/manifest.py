@@ -12,12 +12,15 @@ furrows ``beam_datum_mm``, and for drum frames the options of :mod:`soilcal.imag
 group mixing kinds, a furrow without its beam length or with a second photo in its group, a
 ``degree`` outside 1-15 or a ``threshold`` other than otsu or adaptive stops it with one
 line naming the manifest and the field.  Optional fields: ``substrate`` and ``note`` per
-photo (documentation), ``degree`` of a furrow's profile polynomial (default 9), and at the
+photo (documentation), ``degree`` of a furrow's profile polynomial (default 9), ``plate_line_px`` of a heap photo
+(two points [column, row] on the plate's top edge, the photo's pixels as shown: the plate line
+given, not searched; :func:`check_plate_line`), and at the
 top ``soil``, ``note`` and ``threshold`` (default otsu).
 """
 
 from __future__ import annotations
 
+import math
 from collections import OrderedDict
 from pathlib import Path
 
@@ -27,7 +30,10 @@ KINDS = ("pile", "drum", "furrow")
 THRESHOLDS = ("otsu", "adaptive")
 #: manifest fields (top level, and per photo besides the drum options of soilcal.imaging.drum)
 TOP_FIELDS = ("soil", "note", "photos", "threshold")
-PHOTO_FIELDS = ("file", "kind", "group", "view", "scale_length_mm", "beam_datum_mm", "degree", "substrate", "note")
+PHOTO_FIELDS = ("file", "kind", "group", "view", "scale_length_mm", "beam_datum_mm", "degree", "substrate", "note",
+                "plate_line_px")
+#: the steepest plate line a heap photo's ``plate_line_px`` may give (deg from the image rows)
+PLATE_LINE_MAX_DEG = 45.0
 #: polynomial degrees a furrow profile may be fitted with
 DEGREES = (1, 15)
 #: the numbers the measurement of a photo group of each kind gives (its entry in
@@ -53,6 +59,47 @@ def check_degree(where, field, degree) -> int:
     if isinstance(degree, bool) or not isinstance(degree, int) or not lo <= degree <= hi:
         raise InputError(where, field, f"an integer polynomial degree from {lo} to {hi}", degree)
     return degree
+
+
+def _shown_size(photo):
+    """(width, height) of ``photo`` as a viewer shows it (its EXIF orientation applied), read
+    from its header; None when PIL cannot open it (the photo's own refusal comes when it is
+    measured)."""
+    from PIL import Image
+
+    try:
+        with Image.open(photo) as im:
+            w, h = im.size
+            orient = im.getexif().get(0x0112, 1)
+    except Exception:  # noqa: BLE001 - the measurement names an unreadable photo
+        return None
+    return (h, w) if orient in (5, 6, 7, 8) else (w, h)
+
+
+def check_plate_line(where, field, entry, photo):
+    """A heap photo's ``plate_line_px``: two points [column, row] on the plate's top edge, in
+    the photo's pixels as shown (its EXIF orientation applied), inside the photo, at least 10
+    px apart across it and the line within :data:`PLATE_LINE_MAX_DEG` of the image rows.
+    Returns ((c0, r0), (c1, r1)) as floats, the left point first."""
+    pts = entry["plate_line_px"]
+    expected = ("two points [column, row] on the plate's top edge, in the photo's pixels as shown, "
+                f"e.g. [[40, 612.5], [1580, 618]] (photo {entry.get('file')})")
+    if entry.get("kind") != "pile":
+        raise InputError(where, field, f"no plate line: it is given for heap photos (kind pile) only "
+                         f"(photo {entry.get('file')}, kind {entry.get('kind')})", pts)
+    if (not isinstance(pts, (list, tuple)) or len(pts) != 2
+            or not all(isinstance(q, (list, tuple)) and len(q) == 2 and all(_is_number(v) for v in q) for q in pts)):
+        raise InputError(where, field, expected, pts)
+    (c0, r0), (c1, r1) = sorted((float(q[0]), float(q[1])) for q in pts)
+    if c1 - c0 < 10.0 or abs(r1 - r0) > (c1 - c0) * math.tan(math.radians(PLATE_LINE_MAX_DEG)):
+        raise InputError(where, field, expected + f", at least 10 px apart across the photo and the line within "
+                         f"{PLATE_LINE_MAX_DEG:.0f} deg of horizontal", pts)
+    size = _shown_size(photo)
+    if size is not None:
+        w, h = size
+        if not all(-0.5 <= c <= w - 0.5 and -0.5 <= r <= h - 0.5 for c, r in ((c0, r0), (c1, r1))):
+            raise InputError(where, field, expected + f", inside the photo's {w} x {h} pixels", pts)
+    return (c0, r0), (c1, r1)
 
 
 def read_manifest(path):
@@ -97,6 +144,8 @@ def read_manifest(path):
             if "scale_length_mm" not in p:
                 raise InputError(path, f"{at}.scale_length_mm", "the length of the profile-meter beam in mm", None)
             check_degree(path, f"{at}.degree", p.get("degree", 9))
+        if "plate_line_px" in p:
+            check_plate_line(path, f"{at}.plate_line_px", p, path.parent / p["file"])
         if p["kind"] == "drum":
             from soilcal.imaging.drum import frame_options
 
@@ -141,7 +190,10 @@ def measure_manifest(path, figdir=None, threshold="otsu", refusals=None):
         files = [path.parent / e["file"] for e in entries]
         keep = figdir is not None
         if kind == "pile":
-            summary, res = measure.measure_piles(files, threshold, keep_stages=keep, refusals=refusals)
+            lines = [check_plate_line(path, f"photos[{data['photos'].index(e)}].plate_line_px", e, f)
+                     if "plate_line_px" in e else None for e, f in zip(entries, files)]
+            summary, res = measure.measure_piles(files, threshold, keep_stages=keep, refusals=refusals,
+                                                 plate_px=lines)
             summary["views"] = [e.get("view") for e in entries]
         elif kind == "drum":
             summary, res = drum.measure_drum(files, threshold, keep_stages=keep,

@@ -1,0 +1,124 @@
+"""A heap photo's plate line given by hand in its manifest (``plate_line_px``): drawn heaps of
+known flank angles, measured on the line given instead of the one the plate search finds.  The
+expected values are the angles the heaps were drawn with; the line given is the plate's top
+edge as drawn (row 0.72 h, between pixel rows 215 and 216 of a 300 px photo)."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+import yaml
+from PIL import Image
+
+from soilcal.errors import InputError
+from soilcal.imaging.manifest import measure_manifest, read_manifest
+
+from test_user_photos import _u8, heap_photo
+
+PLATE_EDGE = 215.5  # heap_photo(h=300): plate from row 216 on, its top edge between rows 215 and 216
+
+
+def card_on_plate(h=300, w=400):
+    """heap_photo (flanks 32 and 35 deg) with a black-and-white checked scale card 100 px wide
+    and high standing on the plate at its left end: the card's foot is the plate's edge cut
+    short, its squares' edges are further near-horizontal lines."""
+    img = heap_photo(h=h, w=w)
+    rr, cc = np.mgrid[0:h, 0:w]
+    prow, c0, cw, ch = 0.72 * h, 4, 100, 100
+    m = (cc >= c0) & (cc < c0 + cw) & (rr >= prow - ch) & (rr < prow)
+    img[m] = np.where((((cc - c0) // 10 + (rr - int(prow - ch)) // 10) % 2 == 0)[m], 0.05, 0.95)[:, None]
+    return np.clip(img, 0.0, 1.0)
+
+
+def _manifest(tmp_path, entry, **photos):
+    for name, img in photos.items():
+        img.save(tmp_path / name) if isinstance(img, Image.Image) else _u8(img).save(tmp_path / name)
+    m = tmp_path / "manifest.yaml"
+    m.write_text(yaml.safe_dump({"photos": [dict({"kind": "pile", "group": "heap"}, **entry)]}))
+    return m
+
+
+def _photo(out):
+    return out["heap"]["photos"][0]
+
+
+def test_plate_line_given_measures_a_heap_beside_a_card_on_the_plate(tmp_path):
+    # the plate search takes a line of the card for the plate: flanks 0.7 and 0.9 deg off, "ok"
+    m = _manifest(tmp_path, {"file": "card.png", "plate_line_px": [[10, PLATE_EDGE], [390, PLATE_EDGE]]},
+                  **{"card.png": card_on_plate()})
+    r = _photo(measure_manifest(m))
+    assert abs(r["left_deg"] - 32.0) <= 0.4 and abs(r["right_deg"] - 35.0) <= 0.4, (r["left_deg"], r["right_deg"])
+    assert r["plate_line"] == "manifest" and r["plate_line_px"] == [[10.0, PLATE_EDGE], [390.0, PLATE_EDGE]]
+    assert abs(r["roll_deg"]) < 1e-9
+
+
+def test_plate_line_given_agrees_with_the_line_found(tmp_path):
+    # a plain heap, whose plate the search finds: the line given gives the same flanks
+    found = _photo(measure_manifest(_manifest(tmp_path, {"file": "plain.png"}, **{"plain.png": heap_photo()})))
+    given = _photo(measure_manifest(_manifest(tmp_path, {"file": "plain.png", "plate_line_px": [[0, PLATE_EDGE],
+                                                                                              [399, PLATE_EDGE]]})))
+    for r in (found, given):
+        assert abs(r["left_deg"] - 32.0) <= 0.5 and abs(r["right_deg"] - 35.0) <= 0.5
+    assert abs(found["left_deg"] - given["left_deg"]) <= 0.2 and abs(found["right_deg"] - given["right_deg"]) <= 0.2
+    assert found["plate_line"] == "found" and given["plate_line"] == "manifest"
+    # the line found is reported in the photo's pixels: the drawn plate edge
+    assert all(abs(row - PLATE_EDGE) <= 1.0 for _, row in found["plate_line_px"])
+
+
+def test_plate_line_given_on_a_rolled_phone_photo_stored_sideways(tmp_path):
+    # the camera rolled 6 deg (counter-clockwise) and the photo stored sideways with an EXIF
+    # orientation: the line is given in the photo as shown, through the drawn plate edge turned
+    # by the roll about the image centre
+    tilt, h, w = 6.0, 300, 400
+    cx, cy = w / 2 - 0.5, h / 2 - 0.5
+    t = math.radians(tilt)
+
+    def turned(x, y):
+        return [cx + (x - cx) * math.cos(t) + (y - cy) * math.sin(t), cy - (x - cx) * math.sin(t) + (y - cy) * math.cos(t)]
+
+    exif = Image.Exif()
+    exif[0x0112] = 6  # shown turned 90 deg clockwise from how it is stored
+    stored = _u8(heap_photo(tilt=tilt)).transpose(Image.Transpose.ROTATE_90)
+    p = tmp_path / "phone.jpg"
+    stored.save(p, quality=92, exif=exif)
+    m = _manifest(tmp_path, {"file": "phone.jpg", "plate_line_px": [turned(60, PLATE_EDGE), turned(340, PLATE_EDGE)]})
+    r = _photo(measure_manifest(m))
+    assert abs(r["left_deg"] - 32.0) <= 0.5 and abs(r["right_deg"] - 35.0) <= 0.5, (r["left_deg"], r["right_deg"])
+    assert abs(r["roll_deg"] - tilt) <= 0.01 and r["plate_line"] == "manifest"
+
+
+def test_plate_line_given_on_a_photo_measured_reduced(tmp_path):
+    # 1800 x 1200 px (2.16 megapixels) is measured reduced to 2: the line given in the photo's pixels
+    h, w = 1200, 1800
+    img = heap_photo(h=h, w=w, noise=0.005)
+    edge = 0.72 * h - 0.5
+    m = _manifest(tmp_path, {"file": "big.png", "plate_line_px": [[50, edge], [1750, edge]]}, **{"big.png": img})
+    r = _photo(measure_manifest(m))
+    assert r["work_scale"] < 0.97
+    assert abs(r["left_deg"] - 32.0) <= 0.5 and abs(r["right_deg"] - 35.0) <= 0.5, (r["left_deg"], r["right_deg"])
+
+
+@pytest.mark.parametrize("line,why", [
+    ([[10, 215.5]], "two points"),
+    ([[10, 215.5], [390, "x"]], "two points"),
+    ([[10, 215.5], [390, float("nan")]], "two points"),
+    ([200, 215.5, 390, 215.5], "two points"),
+    ([[200, 100], [204, 250]], "within 45 deg"),
+    ([[10, 215.5], [390, 300]], "inside the photo's 400 x 300 pixels"),
+    ([[-5, 215.5], [390, 215.5]], "inside the photo's 400 x 300 pixels"),
+])
+def test_bad_plate_line_names_manifest_photo_and_field(tmp_path, line, why):
+    m = _manifest(tmp_path, {"file": "plain.png", "plate_line_px": line}, **{"plain.png": heap_photo()})
+    with pytest.raises(InputError) as e:
+        read_manifest(m)
+    msg = str(e.value)
+    assert str(m) in msg and "photos[0].plate_line_px" in msg and "plain.png" in msg and why in msg, msg
+
+
+def test_plate_line_is_for_heap_photos_only(tmp_path):
+    m = _manifest(tmp_path, {"file": "plain.png", "kind": "drum", "plate_line_px": [[10, 215.5], [390, 215.5]]},
+                  **{"plain.png": heap_photo()})
+    with pytest.raises(InputError, match=r"photos\[0\]\.plate_line_px: expected no plate line.*plain\.png, kind drum"):
+        read_manifest(m)
