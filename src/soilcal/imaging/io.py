@@ -2,7 +2,8 @@
 
 Every colour mode PIL reads is accepted: RGB, CMYK, palette, with or without alpha (the alpha
 channel is dropped), 1-bit, 8-bit grey, and single-channel 16-bit or 32-bit frames (PIL modes
-``I;16``, ``I``, ``F``), which are scaled by their bit depth and stretched between their 0.5
+``I;16``, ``I``, ``F``; a grey + alpha PNG of 16 bits per sample, which PIL reads at 8 bits, is
+read at its 16 bits, :func:`_grey_alpha16`), which are scaled by their bit depth and stretched between their 0.5
 and 99.5 percentiles instead of being clipped to 8 bits.  A colour photo of 16 bits per channel
 (PNG or TIFF) is read at its 16 bits (PIL keeps only the upper 8 of them: :func:`_deep_rgb`) and
 scaled by the bit depth its values use (65535 for a full-range photo, 4095 for a 12-bit camera's
@@ -86,6 +87,27 @@ def _deep_rgb(p: Path, hi):
         for k in range(3):
             out[..., k] = np.asarray(hi.getchannel(k), np.uint16) << 8 | np.asarray(lo.getchannel(k), np.uint16)
         return out
+
+
+def _raw_mode(tile):
+    """The raw mode a PIL decoder tile unpacks (None if it names none)."""
+    args = tile.args
+    raw = args if isinstance(args, str) else args[0] if isinstance(args, tuple) and args else None
+    return raw if isinstance(raw, str) else None
+
+
+def _grey_alpha16(im):
+    """The 16-bit grey values (uint16, rows x columns, turned as shown) of the grey + alpha PNG
+    of 16 bits per sample opened as ``im`` (not loaded), whose grey PIL reads at its upper 8
+    bits: decoded as raw 4-byte pixels (raw mode RGBA, the 4 bytes per pixel the PNG's filters
+    work on), the grey's big-endian bytes are its first two."""
+    from PIL import ImageOps
+
+    im.tile = [t._replace(args="RGBA" if isinstance(t.args, str) else ("RGBA",) + tuple(t.args[1:]))
+               for t in im.tile]
+    im.load()
+    a = np.asarray(ImageOps.exif_transpose(im))
+    return a[..., 0].astype(np.uint16) << 8 | a[..., 1].astype(np.uint16)
 
 
 #: the share of a 16-bit photo's values (per channel sample) that its bit depth is estimated
@@ -190,6 +212,16 @@ def _decode(path, formats: str, min_pixels=None):
                             raise InputError(p, "file", expected + ", its planes of more than 8 bits readable",
                                              "a planar TIFF that could not be decoded")
                         return tiff
+                if im.format == "PNG" and im.tile and all(_raw_mode(t) == "LA;16B" for t in im.tile):
+                    # grey + alpha of 16 bits per sample: PIL opens it as RGBA of the grey's
+                    # upper 8 bits, which a 12-bit camera's values hardly use (refused as a
+                    # blank or flat photo that read without the alpha is measured)
+                    g16 = _grey_alpha16(im)
+                    shown = (w, h) if (g16.shape[1] > g16.shape[0]) == (w > h) else (h, w)
+                    f = _reduction(g16.shape[1], g16.shape[0], min_pixels)
+                    g16 = Image.fromarray(g16.astype(np.int32), "I")
+                    g16 = g16.reduce(f) if f >= 2 else g16
+                    return "I;16", np.asarray(g16, float) / 65535.0, None, shown, 65536
                 # a colour photo of 16 bits per channel: PIL keeps the upper 8 of them (the
                 # lower 8 are decoded apart, _deep_rgb)
                 deep = im.mode not in _FULL_SCALE and im.mode not in ("I", "F") and any(
