@@ -67,11 +67,12 @@ def test_plate_line_given_agrees_with_the_line_found(tmp_path):
     assert all(abs(row - PLATE_EDGE) <= 1.0 for _, row in found["plate_line_px"])
 
 
-def test_plate_line_given_on_a_rolled_phone_photo_stored_sideways(tmp_path):
-    # the camera rolled 6 deg (counter-clockwise) and the photo stored sideways with an EXIF
+@pytest.mark.parametrize("tilt", [6.0, 25.0])  # within the plate search's 15 deg, and beyond it
+def test_plate_line_given_on_a_rolled_phone_photo_stored_sideways(tmp_path, tilt):
+    # the camera rolled (counter-clockwise) and the photo stored sideways with an EXIF
     # orientation: the line is given in the photo as shown, through the drawn plate edge turned
     # by the roll about the image centre
-    tilt, h, w = 6.0, 300, 400
+    h, w = 300, 400
     cx, cy = w / 2 - 0.5, h / 2 - 0.5
     t = math.radians(tilt)
 
@@ -80,7 +81,7 @@ def test_plate_line_given_on_a_rolled_phone_photo_stored_sideways(tmp_path):
 
     exif = Image.Exif()
     exif[0x0112] = 6  # shown turned 90 deg clockwise from how it is stored
-    stored = _u8(heap_photo(tilt=tilt)).transpose(Image.Transpose.ROTATE_90)
+    stored = _u8(heap_photo(tilt=tilt, height=0.25)).transpose(Image.Transpose.ROTATE_90)
     p = tmp_path / "phone.jpg"
     stored.save(p, quality=92, exif=exif)
     m = _manifest(tmp_path, {"file": "phone.jpg", "plate_line_px": [turned(60, PLATE_EDGE), turned(340, PLATE_EDGE)]})
