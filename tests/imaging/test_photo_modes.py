@@ -120,3 +120,21 @@ def test_grey_alpha_16_bit_png_is_turned_as_shown(tmp_path):
     _grey_alpha16_png(p, np.ascontiguousarray(np.rot90(grey, 1)), orientation=6)
     mode, g, _, shown, _ = _decode(p, "PNG")
     assert shown == (400, 300) and np.array_equal(np.round(g * 65535), grey)
+
+
+def test_grey_alpha_16_bit_png_is_read_with_tiles_as_plain_tuples(tmp_path, monkeypatch):
+    # Pillow before 11 (pillow>=10.0 is required) keeps a decoder tile as a plain 4-tuple, not
+    # the ImageFile._Tile NamedTuple: the tile is read by position, not by attribute
+    from PIL import ImageFile
+    from test_user_photos import heap_photo
+
+    from soilcal.imaging.io import _decode
+
+    monkeypatch.setattr(ImageFile, "_Tile", lambda *a: tuple(a), raising=False)
+    grey = np.round(heap_photo().mean(axis=-1) * 4095).astype(np.uint16)
+    p = tmp_path / "grey_alpha16.png"
+    _grey_alpha16_png(p, grey)
+    with Image.open(p) as im:
+        assert all(type(t) is tuple for t in im.tile)
+    mode, g, _, shown, _ = _decode(p, "PNG")
+    assert mode == "I;16" and shown == (400, 300) and np.array_equal(np.round(g * 65535), grey)

@@ -50,6 +50,16 @@ def _stretch(g: np.ndarray) -> np.ndarray:
     return np.clip((g - lo) / (hi - lo), 0.0, 1.0) if hi - lo > 0 else np.zeros_like(g)
 
 
+def _with_args(tile, args):
+    """PIL decoder ``tile`` (decoder, extents, offset, args) with other decoder ``args``: a
+    tile is a plain 4-tuple before Pillow 11 and a NamedTuple (``ImageFile._Tile``) from it on,
+    so it is read by position and rebuilt as the type Pillow uses."""
+    from PIL import ImageFile
+
+    make = getattr(ImageFile, "_Tile", None)
+    return make(tile[0], tile[1], tile[2], args) if make is not None else (tile[0], tile[1], tile[2], args)
+
+
 def _other_bytes(tile):
     """``tile`` decoding the other byte of each 16-bit sample: its raw mode's byte order
     swapped (big- for little-endian, native for the other one), so PIL's unpacker, which keeps
@@ -57,13 +67,13 @@ def _other_bytes(tile):
     mode is not a 16-bit RGB(A) one PIL can unpack either way."""
     import sys
 
-    args = tile.args
+    args = tile[3]
     raw = args if isinstance(args, str) else args[0] if isinstance(args, tuple) and args else None
     if not isinstance(raw, str) or not raw.startswith(("RGB;16", "RGBA;16", "RGBX;16")) or raw[-1] not in "BLN":
         return None
     order = raw[-1] if raw[-1] != "N" else ("L" if sys.byteorder == "little" else "B")
     swapped = raw[:-1] + ("B" if order == "L" else "L")
-    return tile._replace(args=swapped if isinstance(args, str) else (swapped,) + tuple(args[1:]))
+    return _with_args(tile, swapped if isinstance(args, str) else (swapped,) + tuple(args[1:]))
 
 
 def _deep_rgb(p: Path, hi):
@@ -90,8 +100,9 @@ def _deep_rgb(p: Path, hi):
 
 
 def _raw_mode(tile):
-    """The raw mode a PIL decoder tile unpacks (None if it names none)."""
-    args = tile.args
+    """The raw mode a PIL decoder tile (decoder, extents, offset, args) unpacks (None if it
+    names none)."""
+    args = tile[3]
     raw = args if isinstance(args, str) else args[0] if isinstance(args, tuple) and args else None
     return raw if isinstance(raw, str) else None
 
@@ -103,8 +114,7 @@ def _grey_alpha16(im):
     work on), the grey's big-endian bytes are its first two."""
     from PIL import ImageOps
 
-    im.tile = [t._replace(args="RGBA" if isinstance(t.args, str) else ("RGBA",) + tuple(t.args[1:]))
-               for t in im.tile]
+    im.tile = [_with_args(t, "RGBA" if isinstance(t[3], str) else ("RGBA",) + tuple(t[3][1:])) for t in im.tile]
     im.load()
     a = np.asarray(ImageOps.exif_transpose(im))
     return a[..., 0].astype(np.uint16) << 8 | a[..., 1].astype(np.uint16)
@@ -225,7 +235,7 @@ def _decode(path, formats: str, min_pixels=None):
                 # a colour photo of 16 bits per channel: PIL keeps the upper 8 of them (the
                 # lower 8 are decoded apart, _deep_rgb)
                 deep = im.mode not in _FULL_SCALE and im.mode not in ("I", "F") and any(
-                    ";16" in str(t.args) for t in im.tile)
+                    ";16" in str(t[3]) for t in im.tile)
                 f = _reduction(w, h, min_pixels)
                 if f >= 2 and im.format in ("JPEG", "MPO"):  # MPO: a phone's JPEG with a multi-picture block
                     im.draft(None, (-(-w // f), -(-h // f)))  # decoded at 1/2, 1/4 or 1/8 size
