@@ -34,6 +34,10 @@ PHOTO_FIELDS = ("file", "kind", "group", "view", "scale_length_mm", "beam_datum_
                 "plate_line_px")
 #: the steepest plate line a heap photo's ``plate_line_px`` may give (deg from the image rows)
 PLATE_LINE_MAX_DEG = 45.0
+#: the shortest distance between a heap photo's two ``plate_line_px`` points, as a share of the
+#: photo's width: a point 1 px off tilts the line by atan(1 / distance), which turns both flanks
+#: by as much (0.57 deg over 100 px of a 400 px photo, 0.06 deg over 1000 px of a 4000 px one)
+PLATE_LINE_MIN_SPAN = 0.25
 #: polynomial degrees a furrow profile may be fitted with
 DEGREES = (1, 15)
 #: the numbers the measurement of a photo group of each kind gives (its entry in
@@ -79,8 +83,9 @@ def _shown_size(photo):
 def check_plate_line(where, field, entry, photo):
     """A heap photo's ``plate_line_px``: two points [column, row] on the plate's top edge, in
     the photo's pixels as shown (its EXIF orientation applied), inside the photo, at least 10
-    px apart across it and the line within :data:`PLATE_LINE_MAX_DEG` of the image rows.
-    Returns ((c0, r0), (c1, r1)) as floats, the left point first."""
+    px apart across it, at least :data:`PLATE_LINE_MIN_SPAN` of the photo's width apart and
+    the line within :data:`PLATE_LINE_MAX_DEG` of the image rows.  Returns ((c0, r0), (c1,
+    r1)) as floats, in the order given."""
     pts = entry["plate_line_px"]
     expected = ("two points [column, row] on the plate's top edge, in the photo's pixels as shown, "
                 f"e.g. [[40, 612.5], [1580, 618]] (photo {entry.get('file')})")
@@ -90,7 +95,8 @@ def check_plate_line(where, field, entry, photo):
     if (not isinstance(pts, (list, tuple)) or len(pts) != 2
             or not all(isinstance(q, (list, tuple)) and len(q) == 2 and all(_is_number(v) for v in q) for q in pts)):
         raise InputError(where, field, expected, pts)
-    (c0, r0), (c1, r1) = sorted((float(q[0]), float(q[1])) for q in pts)
+    given = tuple((float(q[0]), float(q[1])) for q in pts)
+    (c0, r0), (c1, r1) = sorted(given)
     if c1 - c0 < 10.0 or abs(r1 - r0) > (c1 - c0) * math.tan(math.radians(PLATE_LINE_MAX_DEG)):
         raise InputError(where, field, expected + f", at least 10 px apart across the photo and the line within "
                          f"{PLATE_LINE_MAX_DEG:.0f} deg of horizontal", pts)
@@ -99,7 +105,11 @@ def check_plate_line(where, field, entry, photo):
         w, h = size
         if not all(-0.5 <= c <= w - 0.5 and -0.5 <= r <= h - 0.5 for c, r in ((c0, r0), (c1, r1))):
             raise InputError(where, field, expected + f", inside the photo's {w} x {h} pixels", pts)
-    return (c0, r0), (c1, r1)
+        if math.hypot(c1 - c0, r1 - r0) < PLATE_LINE_MIN_SPAN * w:
+            raise InputError(where, field, expected + f", at least {PLATE_LINE_MIN_SPAN:.2f} of the photo's width "
+                             f"({PLATE_LINE_MIN_SPAN * w:.0f} of {w} px) apart: the line's tilt is taken as the "
+                             "camera's roll, and a point 1 px off over 10 px tilts it 5.7 deg", pts)
+    return given
 
 
 def read_manifest(path):
@@ -150,6 +160,11 @@ def read_manifest(path):
             from soilcal.imaging.drum import frame_options
 
             frame_options(p, path, prefix=f"{at}.")
+        else:
+            for k in OPTIONS:
+                if k in p:
+                    raise InputError(path, f"{at}.{k}", f"no {k}: it is an option of drum frames (kind drum) only "
+                                     f"(photo {p['file']}, kind {p['kind']})", p[k])
         p.setdefault("group", p["kind"])
         first = kinds.setdefault(p["group"], p["kind"])
         if first != p["kind"]:
@@ -190,10 +205,19 @@ def measure_manifest(path, figdir=None, threshold="otsu", refusals=None):
         files = [path.parent / e["file"] for e in entries]
         keep = figdir is not None
         if kind == "pile":
-            lines = [check_plate_line(path, f"photos[{data['photos'].index(e)}].plate_line_px", e, f)
-                     if "plate_line_px" in e else None for e, f in zip(entries, files)]
-            summary, res = measure.measure_piles(files, threshold, keep_stages=keep, refusals=refusals,
-                                                 plate_px=lines)
+            # the points read_manifest checked, as given
+            lines = [tuple((float(c), float(r)) for c, r in e["plate_line_px"]) if "plate_line_px" in e else None
+                     for e in entries]
+            try:
+                summary, res = measure.measure_piles(files, threshold, keep_stages=keep, refusals=refusals,
+                                                     plate_px=lines)
+            except InputError as e:
+                given = {str(f): i for f, q, i in zip(files, lines, range(len(files))) if q is not None}
+                if e.path not in given or e.field not in ("image", "left flank", "right flank", "plate line"):
+                    raise
+                at = f"photos[{data['photos'].index(entries[given[e.path]])}].plate_line_px"
+                raise InputError(e.path, e.field, e.expected, f"{e.got} on the plate line given in {path} {at} "
+                                 f"{entries[given[e.path]]['plate_line_px']}", e.note) from None
             summary["views"] = [e.get("view") for e in entries]
         elif kind == "drum":
             summary, res = drum.measure_drum(files, threshold, keep_stages=keep,
