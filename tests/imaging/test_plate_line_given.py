@@ -191,3 +191,52 @@ def test_plate_line_given_where_the_photo_shows_no_plate_edge_is_not_judged(tmp_
     r = _photo(measure_manifest(m))
     assert math.isnan(r["plate_line_edge_deg"]) and r["plate_line_check"] == "", r
     assert abs(r["left_deg"] - 32.0) <= 0.5 and abs(r["right_deg"] - 35.0) <= 0.5, (r["left_deg"], r["right_deg"])
+
+
+def _edge_row(img, cols=40):
+    """Subpixel row where the mean of the first ``cols`` columns crosses halfway from the wall's
+    level to the plate's (the drawn plate edge beside the heap)."""
+    prof = img[..., :3].mean(axis=-1)[:, :cols].mean(axis=1)
+    n = prof.size
+    a, b = prof[int(0.5 * n)], prof[int(0.86 * n)]
+    mid = 0.5 * (a + b)
+    i = int(np.nonzero(np.diff(np.sign(prof[int(0.5 * n):int(0.86 * n)] - mid)))[0][0]) + int(0.5 * n)
+    return i + (mid - prof[i]) / (prof[i + 1] - prof[i])
+
+
+@pytest.mark.parametrize("name,orientation,tol", [
+    ("odd.png", 1, 0.05),   # reduced by 4 after turning: 301 x 401, the last row and column partial
+    ("odd.png", 3, 0.05),
+    ("odd.jpg", 3, 0.4),    # decoded at half size, turned (the partial row first), reduced by 2; the
+    ("odd.jpg", 8, 0.4),    # decoder's block-wise scaling moves an edge by up to a third of a px
+])
+def test_reduced_photo_maps_onto_the_photos_pixels(tmp_path, name, orientation, tol):
+    # 1203 x 1603 px, the plate edge drawn at row 865.5 as shown: read reduced by 4, the edge
+    # found in the reduced image maps back onto it (a side not divisible by 4 ends in a partial
+    # pixel: the scale is 1/4, not 301/1203, which put it 0.7 px off)
+    from soilcal.imaging.io import read_photo_reduced
+
+    turn = {1: None, 3: Image.Transpose.ROTATE_180, 8: Image.Transpose.ROTATE_270}[orientation]
+    img = _u8(heap_photo(h=1203, w=1603, plate_row=866, noise=0.0))
+    exif = Image.Exif()
+    exif[0x0112] = orientation
+    p = tmp_path / name
+    kw = {"quality": 95} if name.endswith("jpg") else {}
+    (img if turn is None else img.transpose(turn)).save(p, exif=exif, **kw)
+    rgb, shown, _, (factor, (ox, oy)) = read_photo_reduced(p, 120_000, with_depth=True, with_map=True)
+    assert shown == (1603, 1203) and factor == 4 and rgb.shape[:2] == (301, 401)
+    row = (_edge_row(rgb) + 0.5 - oy) * factor - 0.5
+    assert abs(row - 865.5) <= tol, row
+
+
+def test_found_plate_line_is_reported_in_the_photos_pixels(tmp_path, monkeypatch):
+    # the same photo measured at 120000 px: the line found is reported within 1.5 px of the
+    # drawn edge (1.85 px off before, by the partial pixel's scale; the rest is the search's
+    # precision at a quarter of the size)
+    from soilcal.imaging import measure
+
+    monkeypatch.setattr(measure, "PILE_WORK_PIXELS", 120_000)
+    p = tmp_path / "odd.png"
+    _u8(heap_photo(h=1203, w=1603, plate_row=866, noise=0.005)).save(p)
+    r = measure.measure_pile(p)
+    assert all(abs(row - 865.5) <= 1.5 for _, row in r.plate_line_px), r.plate_line_px

@@ -184,7 +184,13 @@ def _reduction(w: int, h: int, min_pixels) -> int:
     return max(1, math.isqrt(w * h // min_pixels)) if min_pixels else 1
 
 
-def _decode(path, formats: str, min_pixels=None):
+#: the shown axes (x, y) an EXIF orientation's turn reverses against the stored ones (a stored
+#: axis's last pixel, which a whole-factor reduction leaves partial, comes first on those)
+_REVERSED = {2: (True, False), 3: (True, True), 4: (False, True), 6: (True, False), 7: (True, True),
+             8: (False, True)}
+
+
+def _decode(path, formats: str, min_pixels=None, geometry=None):
     """(PIL mode, grey [0, 1] for single-channel modes else None, RGB [0, 1] else None, (width,
     height) as shown, grey levels of the photo's depth: 256 for 8 bits per channel).  A colour
     photo of 16 bits per channel has mode "RGB;16" and is read at its 16 bits where PIL can
@@ -240,12 +246,24 @@ def _decode(path, formats: str, min_pixels=None):
                 if f >= 2 and im.format in ("JPEG", "MPO"):  # MPO: a phone's JPEG with a multi-picture block
                     im.draft(None, (-(-w // f), -(-h // f)))  # decoded at 1/2, 1/4 or 1/8 size
                 im.load()  # decodes fully: a truncated JPEG raises OSError here
+                # the JPEG decoder's factor d (1, 2, 4 or 8): ceil(n / d) pixels a side, the last
+                # one partial where d does not divide n
+                dw, dh = im.size
+                d = next((k for k in (1, 2, 4, 8) if (-(-w // k), -(-h // k)) == (dw, dh)), 1)
+                orient = im.getexif().get(0x0112, 1)
                 # a phone stores a portrait (or upside-down) photo in the sensor's orientation
                 # and says how to turn it in its EXIF Orientation tag: turned as it is shown
                 im = ImageOps.exif_transpose(im)
                 shown = (w, h) if (im.size[0] > im.size[1]) == (w > h) else (h, w)
                 mode = im.mode
                 f = _reduction(*im.size, min_pixels)
+                if geometry is not None:
+                    # a shown axis reversed from a stored one has the decoder's partial pixel
+                    # first: its pixels start (ceil(n / d) - n / d) of one later
+                    stored = (h, w) if orient in (5, 6, 7, 8) else (w, h)
+                    rev = _REVERSED.get(orient, (False, False))
+                    geometry["factor"] = d * f
+                    geometry["offset"] = tuple((-(-n // d) - n / d) / f if r else 0.0 for n, r in zip(stored, rev))
                 v = _deep_rgb(p, im) if deep and mode in ("RGB", "RGBA") else None
                 if v is not None:
                     sbit = _png_significant_bits(p)  # None but for a PNG saying it
@@ -334,10 +352,14 @@ def read_photo(path) -> np.ndarray:
     return read_photo_reduced(path)[0]
 
 
-def read_photo_reduced(path, min_pixels=None, with_depth=False):
+def read_photo_reduced(path, min_pixels=None, with_depth=False, with_map=False):
     """(:func:`read_photo`'s image, (width, height) of the photo as shown), and with
     ``with_depth`` the grey levels of the depth it was read at (256 at 8 bits per channel, 4096
-    for a 12-bit camera's values in a 16-bit file) as a third item; with ``min_pixels``
+    for a 12-bit camera's values in a 16-bit file) as a third item, and with ``with_map`` too
+    (factor, (offset x, offset y)) as a fourth: the image's pixel at column (c + 0.5) / factor
+    - 0.5 + offset x (rows alike) is the photo's at c as shown (a side not divisible by the
+    factor ends in a partial pixel, first on an axis the EXIF orientation reverses after a JPEG
+    was decoded reduced); with ``min_pixels``
     a larger photo comes reduced by the largest whole factor keeping at least that many pixels
     (decoded reduced where the format allows: :func:`_decode`).  A colour photo whose luminance
     spans less than an eighth of its grey levels (between its 0.5 and 99.5 percentiles; fewer
@@ -348,7 +370,8 @@ def read_photo_reduced(path, min_pixels=None, with_depth=False):
     from soilcal.errors import InputError
 
     p = Path(path)
-    mode, g, rgb, shown, depth = _decode(p, "JPEG/PNG/TIFF", min_pixels)
+    geometry = {}
+    mode, g, rgb, shown, depth = _decode(p, "JPEG/PNG/TIFF", min_pixels, geometry)
     if rgb is None:
         if mode in _HIGH_DEPTH:
             g = _stretch(g)
@@ -367,7 +390,13 @@ def read_photo_reduced(path, min_pixels=None, with_depth=False):
                    "or a heap and a wall alike in brightness")
             raise InputError(p, "image", f"a photo whose brightness spans at least {MIN_GREY_LEVELS * depth // 256} of "
                              f"its {depth} grey levels (heap, plate and wall exposed)", f"{levels:.0f} levels: {why}")
-    return (rgb, shown, depth) if with_depth else (rgb, shown)
+    if not with_depth:
+        return rgb, shown
+    if with_map:
+        # every reader but the JPEG decoder's reduces as shown: a whole factor, no offset
+        factor = geometry.get("factor", max(1, round(shown[0] / rgb.shape[1])))
+        return rgb, shown, depth, (factor, geometry.get("offset", (0.0, 0.0)))
+    return rgb, shown, depth
 
 
 def read_gray(path):

@@ -435,22 +435,31 @@ def _measure_pile(path, threshold, keep_stages, channel, tried: Tried, image=Non
         # on it): decoded reduced by a whole factor where the format allows (a JPEG by 2, 4 or
         # 8 in its decoder), then scaled to the working size; the search then takes seconds
         # instead of minutes, and the photo is never held at full size as floats
-        rgb, (w0, h0), depth = read_photo_reduced(path, PILE_WORK_PIXELS if plate is None else None, with_depth=True)
+        rgb, (w0, h0), depth, (factor, (ox, oy)) = read_photo_reduced(path, PILE_WORK_PIXELS if plate is None else None,
+                                                                      with_depth=True, with_map=True)
     else:
         rgb, (h0, w0) = image, image.shape[:2]
+        factor, ox, oy = 1, 0.0, 0.0
+    read_w, read_h = rgb.shape[1], rgb.shape[0]
     scale = 1.0
     if plate is None and h0 * w0 > PILE_WORK_PIXELS:
         scale = math.sqrt(PILE_WORK_PIXELS / (h0 * w0))
         rgb = transform.rescale(rgb, math.sqrt(PILE_WORK_PIXELS / (rgb.shape[0] * rgb.shape[1])), channel_axis=-1,
                                 anti_aliasing=True)
-    # the measured image's pixels per photo pixel, across and down, pixel centres onto pixel
-    # centres: approximate where the photo was reduced by a whole factor f, whose last pixel on
-    # a side not divisible by f is partial (ceil(n / f) pixels, the true scale 1 / f), so a
-    # point maps up to f - 1 photo px off there
-    sx, sy = rgb.shape[1] / w0, rgb.shape[0] / h0
+    # photo pixels (as shown) to the measured image's, pixel centres onto pixel centres: the
+    # whole factor the photo was read reduced by (its partial pixel at the end of a side it does
+    # not divide, or at the start: read_photo_reduced), then the rescale to the working size
+    kx, ky = rgb.shape[1] / read_w, rgb.shape[0] / read_h
+
+    def to_work(c, r):
+        return ((c + 0.5) / factor + ox) * kx - 0.5, ((r + 0.5) / factor + oy) * ky - 0.5
+
+    def to_photo(c, r):
+        return ((c + 0.5) / kx - ox) * factor - 0.5, ((r + 0.5) / ky - oy) * factor - 0.5
+
     work = None
     if plate_px is not None:
-        (c0, r0), (c1, r1) = ((sx * (c + 0.5) - 0.5, sy * (r + 0.5) - 0.5) for c, r in plate_px)
+        (c0, r0), (c1, r1) = (to_work(c, r) for c, r in plate_px)
         work = ((r1 - r0) / (c1 - c0), r0 - (r1 - r0) / (c1 - c0) * c0)
     res = _pile_on_lines(path, rgb, threshold, keep_stages, channel, tried, plate if work is None else work)
     if image is None:
@@ -458,8 +467,7 @@ def _measure_pile(path, threshold, keep_stages, channel, tried: Tried, image=Non
     res.work_scale = scale
     if plate_px is not None:
         res.plate_line, res.plate_line_px = "manifest", [[float(c), float(r)] for c, r in plate_px]
-        mid = (0.5 * (sx * (plate_px[0][0] + 0.5) + sx * (plate_px[1][0] + 0.5)) - 0.5,
-               0.5 * (sy * (plate_px[0][1] + 0.5) + sy * (plate_px[1][1] + 0.5)) - 0.5)
+        mid = (0.5 * (c0 + c1), 0.5 * (r0 + r1))
         res.plate_line_edge_deg = _given_line_check(rgb, tried.gray, res, mid)
         if abs(res.plate_line_edge_deg) > PLATE_LINE_AGREEMENT_DEG:  # NaN: no edge found, nothing to compare
             res.plate_line_check = (f"plate_line_px is tilted {res.plate_line_edge_deg:+.2f} deg from the plate edge "
@@ -469,8 +477,7 @@ def _measure_pile(path, threshold, keep_stages, channel, tried: Tried, image=Non
         slope, intercept = res.geometry[:2]
         ends = (0.0, rgb.shape[1] - 1.0)
         res.plate_line = "found" if plate is None else "given"
-        res.plate_line_px = [[round((c + 0.5) / sx - 0.5, 2), round((slope * c + intercept + 0.5) / sy - 0.5, 2)]
-                             for c in ends]
+        res.plate_line_px = [[round(v, 2) for v in to_photo(c, slope * c + intercept)] for c in ends]
     return res
 
 
