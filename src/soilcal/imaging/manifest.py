@@ -34,10 +34,11 @@ PHOTO_FIELDS = ("file", "kind", "group", "view", "scale_length_mm", "beam_datum_
                 "plate_line_px")
 #: the steepest plate line a heap photo's ``plate_line_px`` may give (deg from the image rows)
 PLATE_LINE_MAX_DEG = 45.0
-#: the shortest distance between a heap photo's two ``plate_line_px`` points, as a share of the
-#: photo's width: a point 1 px off tilts the line by atan(1 / distance), which turns both flanks
-#: by as much (0.57 deg over 100 px of a 400 px photo, 0.06 deg over 1000 px of a 4000 px one)
-PLATE_LINE_MIN_SPAN = 0.25
+#: the shortest distance (px) between a heap photo's two ``plate_line_px`` points: the line's
+#: tilt is taken as the camera's roll, and a point 1 px off tilts it by atan(1 / distance), which
+#: turns both flanks by as much, opposite ways: at most 0.5 deg at this distance (5.7 deg over
+#: 10 px). The points may lie on the edge's extension beyond a short plate.
+PLATE_LINE_MIN_SPAN_PX = 115.0
 #: polynomial degrees a furrow profile may be fitted with
 DEGREES = (1, 15)
 #: the numbers the measurement of a photo group of each kind gives (its entry in
@@ -83,7 +84,7 @@ def _shown_size(photo):
 def check_plate_line(where, field, entry, photo):
     """A heap photo's ``plate_line_px``: two points [column, row] on the plate's top edge, in
     the photo's pixels as shown (its EXIF orientation applied), inside the photo, at least 10
-    px apart across it, at least :data:`PLATE_LINE_MIN_SPAN` of the photo's width apart and
+    px apart across it, at least :data:`PLATE_LINE_MIN_SPAN_PX` apart and
     the line within :data:`PLATE_LINE_MAX_DEG` of the image rows.  Returns ((c0, r0), (c1,
     r1)) as floats, in the order given."""
     pts = entry["plate_line_px"]
@@ -105,10 +106,11 @@ def check_plate_line(where, field, entry, photo):
         w, h = size
         if not all(-0.5 <= c <= w - 0.5 and -0.5 <= r <= h - 0.5 for c, r in ((c0, r0), (c1, r1))):
             raise InputError(where, field, expected + f", inside the photo's {w} x {h} pixels", pts)
-        if math.hypot(c1 - c0, r1 - r0) < PLATE_LINE_MIN_SPAN * w:
-            raise InputError(where, field, expected + f", at least {PLATE_LINE_MIN_SPAN:.2f} of the photo's width "
-                             f"({PLATE_LINE_MIN_SPAN * w:.0f} of {w} px) apart: the line's tilt is taken as the "
-                             "camera's roll, and a point 1 px off over 10 px tilts it 5.7 deg", pts)
+    if math.hypot(c1 - c0, r1 - r0) < PLATE_LINE_MIN_SPAN_PX:
+        raise InputError(where, field, expected + f", at least {PLATE_LINE_MIN_SPAN_PX:.0f} px apart (on the "
+                         "plate's edge or its extension): the line's tilt is taken as the camera's roll, and a "
+                         f"point 1 px off tilts it by {math.degrees(math.atan(1 / PLATE_LINE_MIN_SPAN_PX)):.1f} "
+                         "deg at that distance (5.7 deg over 10 px)", pts)
     return given
 
 

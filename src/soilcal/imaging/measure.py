@@ -95,12 +95,6 @@ class PileResult:
     # two points [column, row] of the plate line in the photo's pixels as shown: the manifest's
     # as given, else the line measured on, at the measured image's first and last columns
     plate_line_px: list | None = None
-    # a plate line given by hand (plate_line): its tilt (deg) from the plate edge the photo shows
-    # beside the heap through the line's points (_given_line_check; NaN where no edge is found
-    # there, e.g. a plate of the soil's colour), and why the result is "low" when they disagree
-    # by more than PLATE_LINE_AGREEMENT_DEG ("" when they agree or nothing was compared)
-    plate_line_edge_deg: float = float("nan")
-    plate_line_check: str = ""
     # (plate slope, plate intercept, left line, right line, heap height px): where the flanks
     # were fitted, for a later refinement; not reported
     geometry: tuple | None = field(default=None, repr=False)
@@ -423,8 +417,6 @@ def measure_pile(path, threshold="otsu", keep_stages=False, channel="auto", refu
         res = _measure_pile(path, threshold, keep_stages, channel, tried, image, plate, plate_px)
     if channel == "auto" and res.confidence != "ok":
         res = _texture_flanks(res, tried.gray)
-    if res.plate_line_check:
-        res.confidence = "low"
     return res
 
 
@@ -467,100 +459,12 @@ def _measure_pile(path, threshold, keep_stages, channel, tried: Tried, image=Non
     res.work_scale = scale
     if plate_px is not None:
         res.plate_line, res.plate_line_px = "manifest", [[float(c), float(r)] for c, r in plate_px]
-        mid = (0.5 * (c0 + c1), 0.5 * (r0 + r1))
-        res.plate_line_edge_deg = _given_line_check(rgb, tried.gray, res, mid)
-        if abs(res.plate_line_edge_deg) > PLATE_LINE_AGREEMENT_DEG:  # NaN: no edge found, nothing to compare
-            res.plate_line_check = (f"plate_line_px is tilted {res.plate_line_edge_deg:+.2f} deg from the plate edge "
-                                    "the photo shows beside the heap through its points (a point misplaced: the "
-                                    "tilt is taken as the camera's roll and turns both flanks by it)")
     else:
         slope, intercept = res.geometry[:2]
         ends = (0.0, rgb.shape[1] - 1.0)
         res.plate_line = "found" if plate is None else "given"
         res.plate_line_px = [[round(v, 2) for v in to_photo(c, slope * c + intercept)] for c in ends]
     return res
-
-
-#: a plate line given by hand whose tilt differs from the plate edge the photo shows beside the
-#: heap by more than this (deg) makes the result "low" (_given_line_check): a point clicked 1 px
-#: off over 100 px tilts the line by 0.57 deg, which moves each flank by as much, opposite ways
-PLATE_LINE_AGREEMENT_DEG = 0.5
-#: the tilts (deg either side of the given line's) and offsets (px either side of its points'
-#: middle) over which the plate edge beside the heap is looked for (_given_line_check)
-PLATE_LINE_TILTS = 15.0
-PLATE_LINE_OFFSETS = 3.0
-#: the colour step (CIELAB units, averaged along the line beside the heap) across the line
-#: that counts as a plate edge there (_given_line_check): a light plate before a light wall
-#: steps by several units, the noise of a plain surface averages to a fraction of one
-PLATE_LINE_MIN_STEP = 3.0
-
-
-def _heap_feet(res: PileResult, w: int, h: int):
-    """Columns (in the measured image) of the heap's two feet: where its flank lines meet the
-    plate line, turned back from the levelled frame (:func:`_level`)."""
-    slope, intercept, lline, rline = res.geometry[:4]
-    t = math.atan(slope)
-    cx, cy = w / 2 - 0.5, h / 2 - 0.5
-    prow = cy + (slope * cx + intercept - cy) * math.cos(t)
-    cols = []
-    for u0, v0, du, dv in (lline, rline):
-        u = u0 - v0 * du / dv if dv else u0
-        # the levelled image is the photo turned by atan(slope) counter-clockwise (as shown)
-        cols.append(cx + (u - cx) * math.cos(t) - (prow - cy) * math.sin(t))
-    return min(cols), max(cols)
-
-
-def _given_line_check(rgb, lum, res: PileResult, mid) -> float:
-    """The tilt (deg) of the plate line measured on (a hand-given one, ``res.geometry``) from
-    the plate edge the photo shows beside the heap, or NaN where none is found there.
-
-    The edge is looked for among the lines through the given points' middle ``mid`` (column,
-    row in the measured image; within :data:`PLATE_LINE_OFFSETS` px of it: a misplaced point
-    moves the middle by half its error) tilted up to :data:`PLATE_LINE_TILTS` deg from the
-    given line: the one across which the photo's colour (CIELAB, smoothed) steps the most, on
-    average over the columns beside the heap (more than 5 px from its feet; 3 px above the line
-    against 3 px below it).  A step of the same sign along the line is what a plate's top edge
-    gives; the noise of a plain surface (edges the Canny detector finds in any direction)
-    averages out.  It counts as found when that step is at least
-    :data:`PLATE_LINE_MIN_STEP`; its tilt is then fitted to the Canny edge pixels within 1.5 px
-    of it beside the heap."""
-    h, w = lum.shape
-    slope = res.geometry[0]
-    lo, hi = _heap_feet(res, w, h)
-    cols = np.arange(w)
-    cols = cols[(cols < lo - 5) | (cols > hi + 5)]
-    if cols.size < 20:
-        return float("nan")
-    lab = _smoothed_lab(rgb)
-    a0 = math.degrees(math.atan(slope))
-    tans = np.tan(np.radians(a0 + np.arange(-PLATE_LINE_TILTS, PLATE_LINE_TILTS + 1e-9, 0.05)))
-    cb = np.broadcast_to(cols, (tans.size, cols.size))
-    best, best_step = None, 0.0
-    for off in np.arange(-PLATE_LINE_OFFSETS, PLATE_LINE_OFFSETS + 1e-9, 0.5):
-        rows = np.round(mid[1] + off + np.outer(tans, cols - mid[0])).astype(int)
-        ok = (rows >= 3) & (rows < h - 3)
-        n = ok.sum(axis=1)
-        step = np.zeros((tans.size, 3))
-        for k in range(3):
-            d = np.where(ok, lab[np.clip(rows - 3, 0, h - 1), cb, k] - lab[np.clip(rows + 3, 0, h - 1), cb, k], 0.0)
-            step[:, k] = d.sum(axis=1) / np.maximum(n, 1)
-        mag = np.linalg.norm(step, axis=1) * (n >= 0.5 * cols.size)
-        k = int(np.argmax(mag))
-        if mag[k] > best_step:
-            best, best_step = (tans[k], mid[1] + off), float(mag[k])
-    if best is None or best_step < PLATE_LINE_MIN_STEP:
-        return float("nan")
-    tn, r_mid = best
-    er, ec = np.nonzero(feature.canny(lum, sigma=1.5))
-    near = ((ec < lo - 5) | (ec > hi + 5)) & (np.abs(er - (r_mid + tn * (ec - mid[0]))) <= 1.5)
-    if near.sum() < 10 or np.ptp(ec[near]) < 10:
-        return float("nan")
-    x, y = ec[near].astype(float), er[near].astype(float)
-    fit = np.polyfit(x, y, 1)
-    keep = np.abs(np.polyval(fit, x) - y) <= 1.0
-    if keep.sum() >= 10:
-        fit = np.polyfit(x[keep], y[keep], 1)
-    return float(a0 - math.degrees(math.atan(fit[0])))
 
 
 def _levels_around(rgb, res: PileResult, depth: int = 256) -> tuple[float, int]:
