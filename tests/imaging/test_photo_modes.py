@@ -70,3 +70,71 @@ def test_edge_median_is_numpys_median():
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         assert np.isnan(measure._median(np.array([])))
+
+
+def _grey_alpha16_png(path, grey: np.ndarray, orientation: int | None = None) -> None:
+    """A PNG of colour type 4 (grey + alpha) at 16 bits per sample, as a scientific camera or an
+    editor writes one (PIL cannot write it): ``grey`` uint16, the alpha opaque; ``orientation``:
+    an EXIF orientation in an eXIf chunk."""
+    import struct
+    import zlib
+
+    h, w = grey.shape
+    pix = np.stack([grey, np.full_like(grey, 65535)], axis=-1).astype(">u2").reshape(h, -1)
+    raw = b"".join(b"\x00" + row.tobytes() for row in pix)
+
+    def chunk(kind, data):
+        return struct.pack(">I", len(data)) + kind + data + struct.pack(">I", zlib.crc32(kind + data))
+
+    exif = b""
+    if orientation is not None:  # a big-endian TIFF header and one IFD entry: Orientation (SHORT)
+        exif = chunk(b"eXIf", b"MM\x00\x2a\x00\x00\x00\x08\x00\x01" + struct.pack(">HHIHH", 0x0112, 3, 1, orientation, 0)
+                     + b"\x00\x00\x00\x00")
+    Path(path).write_bytes(b"\x89PNG\r\n\x1a\n" + chunk(b"IHDR", struct.pack(">IIBBBBB", w, h, 16, 4, 0, 0, 0)) + exif
+                           + chunk(b"IDAT", zlib.compress(raw)) + chunk(b"IEND", b""))
+
+
+@pytest.mark.parametrize("top", [65535, 4095, 3932])  # full range, a 12-bit camera's, 6 % of the range
+def test_grey_alpha_16_bit_png_is_read_at_16_bits(tmp_path, top):
+    # a heap of flanks 32 and 35 deg: PIL reads the grey of such a PNG at its upper 8 bits, which
+    # a 12-bit camera's values fill to 16 of 256 (refused as flat), a dim one's to none (blank)
+    from test_user_photos import heap_photo
+
+    from soilcal.imaging.io import _decode
+
+    grey = np.round(heap_photo().mean(axis=-1) * top).astype(np.uint16)
+    p = tmp_path / "grey_alpha16.png"
+    _grey_alpha16_png(p, grey)
+    mode, g, rgb, shown, _ = _decode(p, "PNG")
+    assert mode == "I;16" and shown == (400, 300) and np.array_equal(np.round(g * 65535), grey)
+    r = measure.measure_pile(p)
+    assert abs(r.left_deg - 32.0) <= 0.5 and abs(r.right_deg - 35.0) <= 0.5, (r.left_deg, r.right_deg)
+
+
+def test_grey_alpha_16_bit_png_is_turned_as_shown(tmp_path):
+    # stored sideways, its eXIf orientation 6 (shown turned 90 deg clockwise)
+    from soilcal.imaging.io import _decode
+
+    grey = (np.arange(300)[:, None] * 100 + np.arange(400)[None, :]).astype(np.uint16)
+    p = tmp_path / "sideways.png"
+    _grey_alpha16_png(p, np.ascontiguousarray(np.rot90(grey, 1)), orientation=6)
+    mode, g, _, shown, _ = _decode(p, "PNG")
+    assert shown == (400, 300) and np.array_equal(np.round(g * 65535), grey)
+
+
+def test_grey_alpha_16_bit_png_is_read_with_tiles_as_plain_tuples(tmp_path, monkeypatch):
+    # Pillow before 11 (pillow>=10.0 is required) keeps a decoder tile as a plain 4-tuple, not
+    # the ImageFile._Tile NamedTuple: the tile is read by position, not by attribute
+    from PIL import ImageFile
+    from test_user_photos import heap_photo
+
+    from soilcal.imaging.io import _decode
+
+    monkeypatch.setattr(ImageFile, "_Tile", lambda *a: tuple(a), raising=False)
+    grey = np.round(heap_photo().mean(axis=-1) * 4095).astype(np.uint16)
+    p = tmp_path / "grey_alpha16.png"
+    _grey_alpha16_png(p, grey)
+    with Image.open(p) as im:
+        assert all(type(t) is tuple for t in im.tile)
+    mode, g, _, shown, _ = _decode(p, "PNG")
+    assert mode == "I;16" and shown == (400, 300) and np.array_equal(np.round(g * 65535), grey)

@@ -2,7 +2,8 @@
 
 Every colour mode PIL reads is accepted: RGB, CMYK, palette, with or without alpha (the alpha
 channel is dropped), 1-bit, 8-bit grey, and single-channel 16-bit or 32-bit frames (PIL modes
-``I;16``, ``I``, ``F``), which are scaled by their bit depth and stretched between their 0.5
+``I;16``, ``I``, ``F``; a grey + alpha PNG of 16 bits per sample, which PIL reads at 8 bits, is
+read at its 16 bits, :func:`_grey_alpha16`), which are scaled by their bit depth and stretched between their 0.5
 and 99.5 percentiles instead of being clipped to 8 bits.  A colour photo of 16 bits per channel
 (PNG or TIFF) is read at its 16 bits (PIL keeps only the upper 8 of them: :func:`_deep_rgb`) and
 scaled by the bit depth its values use (65535 for a full-range photo, 4095 for a 12-bit camera's
@@ -49,6 +50,16 @@ def _stretch(g: np.ndarray) -> np.ndarray:
     return np.clip((g - lo) / (hi - lo), 0.0, 1.0) if hi - lo > 0 else np.zeros_like(g)
 
 
+def _with_args(tile, args):
+    """PIL decoder ``tile`` (decoder, extents, offset, args) with other decoder ``args``: a
+    tile is a plain 4-tuple before Pillow 11 and a NamedTuple (``ImageFile._Tile``) from it on,
+    so it is read by position and rebuilt as the type Pillow uses."""
+    from PIL import ImageFile
+
+    make = getattr(ImageFile, "_Tile", None)
+    return make(tile[0], tile[1], tile[2], args) if make is not None else (tile[0], tile[1], tile[2], args)
+
+
 def _other_bytes(tile):
     """``tile`` decoding the other byte of each 16-bit sample: its raw mode's byte order
     swapped (big- for little-endian, native for the other one), so PIL's unpacker, which keeps
@@ -56,13 +67,13 @@ def _other_bytes(tile):
     mode is not a 16-bit RGB(A) one PIL can unpack either way."""
     import sys
 
-    args = tile.args
+    args = tile[3]
     raw = args if isinstance(args, str) else args[0] if isinstance(args, tuple) and args else None
     if not isinstance(raw, str) or not raw.startswith(("RGB;16", "RGBA;16", "RGBX;16")) or raw[-1] not in "BLN":
         return None
     order = raw[-1] if raw[-1] != "N" else ("L" if sys.byteorder == "little" else "B")
     swapped = raw[:-1] + ("B" if order == "L" else "L")
-    return tile._replace(args=swapped if isinstance(args, str) else (swapped,) + tuple(args[1:]))
+    return _with_args(tile, swapped if isinstance(args, str) else (swapped,) + tuple(args[1:]))
 
 
 def _deep_rgb(p: Path, hi):
@@ -86,6 +97,27 @@ def _deep_rgb(p: Path, hi):
         for k in range(3):
             out[..., k] = np.asarray(hi.getchannel(k), np.uint16) << 8 | np.asarray(lo.getchannel(k), np.uint16)
         return out
+
+
+def _raw_mode(tile):
+    """The raw mode a PIL decoder tile (decoder, extents, offset, args) unpacks (None if it
+    names none)."""
+    args = tile[3]
+    raw = args if isinstance(args, str) else args[0] if isinstance(args, tuple) and args else None
+    return raw if isinstance(raw, str) else None
+
+
+def _grey_alpha16(im):
+    """The 16-bit grey values (uint16, rows x columns, turned as shown) of the grey + alpha PNG
+    of 16 bits per sample opened as ``im`` (not loaded), whose grey PIL reads at its upper 8
+    bits: decoded as raw 4-byte pixels (raw mode RGBA, the 4 bytes per pixel the PNG's filters
+    work on), the grey's big-endian bytes are its first two."""
+    from PIL import ImageOps
+
+    im.tile = [_with_args(t, "RGBA" if isinstance(t[3], str) else ("RGBA",) + tuple(t[3][1:])) for t in im.tile]
+    im.load()
+    a = np.asarray(ImageOps.exif_transpose(im))
+    return a[..., 0].astype(np.uint16) << 8 | a[..., 1].astype(np.uint16)
 
 
 #: the share of a 16-bit photo's values (per channel sample) that its bit depth is estimated
@@ -152,7 +184,13 @@ def _reduction(w: int, h: int, min_pixels) -> int:
     return max(1, math.isqrt(w * h // min_pixels)) if min_pixels else 1
 
 
-def _decode(path, formats: str, min_pixels=None):
+#: the shown axes (x, y) an EXIF orientation's turn reverses against the stored ones (a stored
+#: axis's last pixel, which a whole-factor reduction leaves partial, comes first on those)
+_REVERSED = {2: (True, False), 3: (True, True), 4: (False, True), 6: (True, False), 7: (True, True),
+             8: (False, True)}
+
+
+def _decode(path, formats: str, min_pixels=None, geometry=None):
     """(PIL mode, grey [0, 1] for single-channel modes else None, RGB [0, 1] else None, (width,
     height) as shown, grey levels of the photo's depth: 256 for 8 bits per channel).  A colour
     photo of 16 bits per channel has mode "RGB;16" and is read at its 16 bits where PIL can
@@ -190,20 +228,42 @@ def _decode(path, formats: str, min_pixels=None):
                             raise InputError(p, "file", expected + ", its planes of more than 8 bits readable",
                                              "a planar TIFF that could not be decoded")
                         return tiff
+                if im.format == "PNG" and im.tile and all(_raw_mode(t) == "LA;16B" for t in im.tile):
+                    # grey + alpha of 16 bits per sample: PIL opens it as RGBA of the grey's
+                    # upper 8 bits, which a 12-bit camera's values hardly use (refused as a
+                    # blank or flat photo that read without the alpha is measured)
+                    g16 = _grey_alpha16(im)
+                    shown = (w, h) if (g16.shape[1] > g16.shape[0]) == (w > h) else (h, w)
+                    f = _reduction(g16.shape[1], g16.shape[0], min_pixels)
+                    g16 = Image.fromarray(g16.astype(np.int32), "I")
+                    g16 = g16.reduce(f) if f >= 2 else g16
+                    return "I;16", np.asarray(g16, float) / 65535.0, None, shown, 65536
                 # a colour photo of 16 bits per channel: PIL keeps the upper 8 of them (the
                 # lower 8 are decoded apart, _deep_rgb)
                 deep = im.mode not in _FULL_SCALE and im.mode not in ("I", "F") and any(
-                    ";16" in str(t.args) for t in im.tile)
+                    ";16" in str(t[3]) for t in im.tile)
                 f = _reduction(w, h, min_pixels)
                 if f >= 2 and im.format in ("JPEG", "MPO"):  # MPO: a phone's JPEG with a multi-picture block
                     im.draft(None, (-(-w // f), -(-h // f)))  # decoded at 1/2, 1/4 or 1/8 size
                 im.load()  # decodes fully: a truncated JPEG raises OSError here
+                # the JPEG decoder's factor d (1, 2, 4 or 8): ceil(n / d) pixels a side, the last
+                # one partial where d does not divide n
+                dw, dh = im.size
+                d = next((k for k in (1, 2, 4, 8) if (-(-w // k), -(-h // k)) == (dw, dh)), 1)
+                orient = im.getexif().get(0x0112, 1)
                 # a phone stores a portrait (or upside-down) photo in the sensor's orientation
                 # and says how to turn it in its EXIF Orientation tag: turned as it is shown
                 im = ImageOps.exif_transpose(im)
                 shown = (w, h) if (im.size[0] > im.size[1]) == (w > h) else (h, w)
                 mode = im.mode
                 f = _reduction(*im.size, min_pixels)
+                if geometry is not None:
+                    # a shown axis reversed from a stored one has the decoder's partial pixel
+                    # first: its pixels start (ceil(n / d) - n / d) of one later
+                    stored = (h, w) if orient in (5, 6, 7, 8) else (w, h)
+                    rev = _REVERSED.get(orient, (False, False))
+                    geometry["factor"] = d * f
+                    geometry["offset"] = tuple((-(-n // d) - n / d) / f if r else 0.0 for n, r in zip(stored, rev))
                 v = _deep_rgb(p, im) if deep and mode in ("RGB", "RGBA") else None
                 if v is not None:
                     sbit = _png_significant_bits(p)  # None but for a PNG saying it
@@ -292,10 +352,14 @@ def read_photo(path) -> np.ndarray:
     return read_photo_reduced(path)[0]
 
 
-def read_photo_reduced(path, min_pixels=None, with_depth=False):
+def read_photo_reduced(path, min_pixels=None, with_depth=False, with_map=False):
     """(:func:`read_photo`'s image, (width, height) of the photo as shown), and with
     ``with_depth`` the grey levels of the depth it was read at (256 at 8 bits per channel, 4096
-    for a 12-bit camera's values in a 16-bit file) as a third item; with ``min_pixels``
+    for a 12-bit camera's values in a 16-bit file) as a third item, and with ``with_map`` too
+    (factor, (offset x, offset y)) as a fourth: the image's pixel at column (c + 0.5) / factor
+    - 0.5 + offset x (rows alike) is the photo's at c as shown (a side not divisible by the
+    factor ends in a partial pixel, first on an axis the EXIF orientation reverses after a JPEG
+    was decoded reduced); with ``min_pixels``
     a larger photo comes reduced by the largest whole factor keeping at least that many pixels
     (decoded reduced where the format allows: :func:`_decode`).  A colour photo whose luminance
     spans less than an eighth of its grey levels (between its 0.5 and 99.5 percentiles; fewer
@@ -306,7 +370,8 @@ def read_photo_reduced(path, min_pixels=None, with_depth=False):
     from soilcal.errors import InputError
 
     p = Path(path)
-    mode, g, rgb, shown, depth = _decode(p, "JPEG/PNG/TIFF", min_pixels)
+    geometry = {}
+    mode, g, rgb, shown, depth = _decode(p, "JPEG/PNG/TIFF", min_pixels, geometry)
     if rgb is None:
         if mode in _HIGH_DEPTH:
             g = _stretch(g)
@@ -325,7 +390,13 @@ def read_photo_reduced(path, min_pixels=None, with_depth=False):
                    "or a heap and a wall alike in brightness")
             raise InputError(p, "image", f"a photo whose brightness spans at least {MIN_GREY_LEVELS * depth // 256} of "
                              f"its {depth} grey levels (heap, plate and wall exposed)", f"{levels:.0f} levels: {why}")
-    return (rgb, shown, depth) if with_depth else (rgb, shown)
+    if not with_depth:
+        return rgb, shown
+    if with_map:
+        # every reader but the JPEG decoder's reduces as shown: a whole factor, no offset
+        factor = geometry.get("factor", max(1, round(shown[0] / rgb.shape[1])))
+        return rgb, shown, depth, (factor, geometry.get("offset", (0.0, 0.0)))
+    return rgb, shown, depth
 
 
 def read_gray(path):

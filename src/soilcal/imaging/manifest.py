@@ -12,12 +12,15 @@ furrows ``beam_datum_mm``, and for drum frames the options of :mod:`soilcal.imag
 group mixing kinds, a furrow without its beam length or with a second photo in its group, a
 ``degree`` outside 1-15 or a ``threshold`` other than otsu or adaptive stops it with one
 line naming the manifest and the field.  Optional fields: ``substrate`` and ``note`` per
-photo (documentation), ``degree`` of a furrow's profile polynomial (default 9), and at the
+photo (documentation), ``degree`` of a furrow's profile polynomial (default 9), ``plate_line_px`` of a heap photo
+(two points [column, row] on the plate's top edge, the photo's pixels as shown: the plate line
+given, not searched; :func:`check_plate_line`), and at the
 top ``soil``, ``note`` and ``threshold`` (default otsu).
 """
 
 from __future__ import annotations
 
+import math
 from collections import OrderedDict
 from pathlib import Path
 
@@ -27,7 +30,15 @@ KINDS = ("pile", "drum", "furrow")
 THRESHOLDS = ("otsu", "adaptive")
 #: manifest fields (top level, and per photo besides the drum options of soilcal.imaging.drum)
 TOP_FIELDS = ("soil", "note", "photos", "threshold")
-PHOTO_FIELDS = ("file", "kind", "group", "view", "scale_length_mm", "beam_datum_mm", "degree", "substrate", "note")
+PHOTO_FIELDS = ("file", "kind", "group", "view", "scale_length_mm", "beam_datum_mm", "degree", "substrate", "note",
+                "plate_line_px")
+#: the steepest plate line a heap photo's ``plate_line_px`` may give (deg from the image rows)
+PLATE_LINE_MAX_DEG = 45.0
+#: the shortest distance (px) between a heap photo's two ``plate_line_px`` points: the line's
+#: tilt is taken as the camera's roll, and a point 1 px off tilts it by atan(1 / distance), which
+#: turns both flanks by as much, opposite ways: at most 0.5 deg at this distance (5.7 deg over
+#: 10 px). The points may lie on the edge's extension beyond a short plate.
+PLATE_LINE_MIN_SPAN_PX = 115.0
 #: polynomial degrees a furrow profile may be fitted with
 DEGREES = (1, 15)
 #: the numbers the measurement of a photo group of each kind gives (its entry in
@@ -53,6 +64,54 @@ def check_degree(where, field, degree) -> int:
     if isinstance(degree, bool) or not isinstance(degree, int) or not lo <= degree <= hi:
         raise InputError(where, field, f"an integer polynomial degree from {lo} to {hi}", degree)
     return degree
+
+
+def _shown_size(photo):
+    """(width, height) of ``photo`` as a viewer shows it (its EXIF orientation applied), read
+    from its header; None when PIL cannot open it (the photo's own refusal comes when it is
+    measured)."""
+    from PIL import Image
+
+    try:
+        with Image.open(photo) as im:
+            w, h = im.size
+            orient = im.getexif().get(0x0112, 1)
+    except Exception:  # noqa: BLE001 - the measurement names an unreadable photo
+        return None
+    return (h, w) if orient in (5, 6, 7, 8) else (w, h)
+
+
+def check_plate_line(where, field, entry, photo):
+    """A heap photo's ``plate_line_px``: two points [column, row] on the plate's top edge, in
+    the photo's pixels as shown (its EXIF orientation applied), inside the photo, at least 10
+    px apart across it, at least :data:`PLATE_LINE_MIN_SPAN_PX` apart and
+    the line within :data:`PLATE_LINE_MAX_DEG` of the image rows.  Returns ((c0, r0), (c1,
+    r1)) as floats, in the order given."""
+    pts = entry["plate_line_px"]
+    expected = ("two points [column, row] on the plate's top edge, in the photo's pixels as shown, "
+                f"e.g. [[40, 612.5], [1580, 618]] (photo {entry.get('file')})")
+    if entry.get("kind") != "pile":
+        raise InputError(where, field, f"no plate line: it is given for heap photos (kind pile) only "
+                         f"(photo {entry.get('file')}, kind {entry.get('kind')})", pts)
+    if (not isinstance(pts, (list, tuple)) or len(pts) != 2
+            or not all(isinstance(q, (list, tuple)) and len(q) == 2 and all(_is_number(v) for v in q) for q in pts)):
+        raise InputError(where, field, expected, pts)
+    given = tuple((float(q[0]), float(q[1])) for q in pts)
+    (c0, r0), (c1, r1) = sorted(given)
+    if c1 - c0 < 10.0 or abs(r1 - r0) > (c1 - c0) * math.tan(math.radians(PLATE_LINE_MAX_DEG)):
+        raise InputError(where, field, expected + f", at least 10 px apart across the photo and the line within "
+                         f"{PLATE_LINE_MAX_DEG:.0f} deg of horizontal", pts)
+    size = _shown_size(photo)
+    if size is not None:
+        w, h = size
+        if not all(-0.5 <= c <= w - 0.5 and -0.5 <= r <= h - 0.5 for c, r in ((c0, r0), (c1, r1))):
+            raise InputError(where, field, expected + f", inside the photo's {w} x {h} pixels", pts)
+    if math.hypot(c1 - c0, r1 - r0) < PLATE_LINE_MIN_SPAN_PX:
+        raise InputError(where, field, expected + f", at least {PLATE_LINE_MIN_SPAN_PX:.0f} px apart (on the "
+                         "plate's edge or its extension): the line's tilt is taken as the camera's roll, and a "
+                         f"point 1 px off tilts it by {math.degrees(math.atan(1 / PLATE_LINE_MIN_SPAN_PX)):.1f} "
+                         "deg at that distance (5.7 deg over 10 px)", pts)
+    return given
 
 
 def read_manifest(path):
@@ -97,10 +156,17 @@ def read_manifest(path):
             if "scale_length_mm" not in p:
                 raise InputError(path, f"{at}.scale_length_mm", "the length of the profile-meter beam in mm", None)
             check_degree(path, f"{at}.degree", p.get("degree", 9))
+        if "plate_line_px" in p:
+            check_plate_line(path, f"{at}.plate_line_px", p, path.parent / p["file"])
         if p["kind"] == "drum":
             from soilcal.imaging.drum import frame_options
 
             frame_options(p, path, prefix=f"{at}.")
+        else:
+            for k in OPTIONS:
+                if k in p:
+                    raise InputError(path, f"{at}.{k}", f"no {k}: it is an option of drum frames (kind drum) only "
+                                     f"(photo {p['file']}, kind {p['kind']})", p[k])
         p.setdefault("group", p["kind"])
         first = kinds.setdefault(p["group"], p["kind"])
         if first != p["kind"]:
@@ -141,7 +207,19 @@ def measure_manifest(path, figdir=None, threshold="otsu", refusals=None):
         files = [path.parent / e["file"] for e in entries]
         keep = figdir is not None
         if kind == "pile":
-            summary, res = measure.measure_piles(files, threshold, keep_stages=keep, refusals=refusals)
+            # the points read_manifest checked, as given
+            lines = [tuple((float(c), float(r)) for c, r in e["plate_line_px"]) if "plate_line_px" in e else None
+                     for e in entries]
+            try:
+                summary, res = measure.measure_piles(files, threshold, keep_stages=keep, refusals=refusals,
+                                                     plate_px=lines)
+            except InputError as e:
+                given = {str(f): i for f, q, i in zip(files, lines, range(len(files))) if q is not None}
+                if e.path not in given or e.field not in ("image", "left flank", "right flank", "plate line"):
+                    raise
+                at = f"photos[{data['photos'].index(entries[given[e.path]])}].plate_line_px"
+                raise InputError(e.path, e.field, e.expected, f"{e.got} on the plate line given in {path} {at} "
+                                 f"{entries[given[e.path]]['plate_line_px']}", e.note) from None
             summary["views"] = [e.get("view") for e in entries]
         elif kind == "drum":
             summary, res = drum.measure_drum(files, threshold, keep_stages=keep,

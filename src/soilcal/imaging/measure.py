@@ -89,6 +89,12 @@ class PileResult:
     # the measured image's size over the photo's (below 1 for a photo reduced to
     # PILE_WORK_PIXELS): flank_rms_px and the plate line are in the measured image's pixels
     work_scale: float = 1.0
+    # where the plate line came from: "found" by the plate search, "manifest" (the photo's
+    # plate_line_px) or "given" (a caller's, e.g. a rendered silhouette's)
+    plate_line: str = "found"
+    # two points [column, row] of the plate line in the photo's pixels as shown: the manifest's
+    # as given, else the line measured on, at the measured image's first and last columns
+    plate_line_px: list | None = None
     # (plate slope, plate intercept, left line, right line, heap height px): where the flanks
     # were fitted, for a later refinement; not reported
     geometry: tuple | None = field(default=None, repr=False)
@@ -369,7 +375,7 @@ def _components_on_plate(path, binary, slope, intercept, kind):
 
 
 def measure_pile(path, threshold="otsu", keep_stages=False, channel="auto", refusals=None, *,
-                 image=None, plate=None) -> PileResult:
+                 image=None, plate=None, plate_px=None) -> PileResult:
     """Left/right flank angles of one heap photo relative to the plate line.
 
     Plate candidates: the long near-horizontal edges below the image middle, topmost first, of
@@ -400,35 +406,64 @@ def measure_pile(path, threshold="otsu", keep_stages=False, channel="auto", refu
     ``image``: the photo as an RGB float array in [0, 1] (what :func:`read_photo` gives),
     measured instead of reading ``path``, which then only names it in messages.  ``plate``:
     the plate's top edge (slope, intercept), row = slope * col + intercept, when it is known
-    (a rendered silhouette): the plate search is skipped.
+    (a rendered silhouette): the plate search is skipped.  ``plate_px``: two points ((column,
+    row), (column, row)) on the plate's top edge in the photo's pixels as shown (a manifest's
+    ``plate_line_px``), the plate line measured on instead of the one the search would find
+    (a card standing on the plate, a plate of the soil's colour); ``plate_line`` reports
+    "manifest".
     """
     tried = Tried(keep_masks=refusals is not None)
     with explained(path, refusals, tried):
-        res = _measure_pile(path, threshold, keep_stages, channel, tried, image, plate)
+        res = _measure_pile(path, threshold, keep_stages, channel, tried, image, plate, plate_px)
     if channel == "auto" and res.confidence != "ok":
         res = _texture_flanks(res, tried.gray)
     return res
 
 
 def _measure_pile(path, threshold, keep_stages, channel, tried: Tried, image=None,
-                  plate=None) -> PileResult:
+                  plate=None, plate_px=None) -> PileResult:
     if image is None:
         # a phone's 12 or 48 megapixels are measured at a working size (the angles do not depend
         # on it): decoded reduced by a whole factor where the format allows (a JPEG by 2, 4 or
         # 8 in its decoder), then scaled to the working size; the search then takes seconds
         # instead of minutes, and the photo is never held at full size as floats
-        rgb, (w0, h0), depth = read_photo_reduced(path, PILE_WORK_PIXELS if plate is None else None, with_depth=True)
+        rgb, (w0, h0), depth, (factor, (ox, oy)) = read_photo_reduced(path, PILE_WORK_PIXELS if plate is None else None,
+                                                                      with_depth=True, with_map=True)
     else:
         rgb, (h0, w0) = image, image.shape[:2]
+        factor, ox, oy = 1, 0.0, 0.0
+    read_w, read_h = rgb.shape[1], rgb.shape[0]
     scale = 1.0
     if plate is None and h0 * w0 > PILE_WORK_PIXELS:
         scale = math.sqrt(PILE_WORK_PIXELS / (h0 * w0))
         rgb = transform.rescale(rgb, math.sqrt(PILE_WORK_PIXELS / (rgb.shape[0] * rgb.shape[1])), channel_axis=-1,
                                 anti_aliasing=True)
-    res = _pile_on_lines(path, rgb, threshold, keep_stages, channel, tried, plate)
+    # photo pixels (as shown) to the measured image's, pixel centres onto pixel centres: the
+    # whole factor the photo was read reduced by (its partial pixel at the end of a side it does
+    # not divide, or at the start: read_photo_reduced), then the rescale to the working size
+    kx, ky = rgb.shape[1] / read_w, rgb.shape[0] / read_h
+
+    def to_work(c, r):
+        return ((c + 0.5) / factor + ox) * kx - 0.5, ((r + 0.5) / factor + oy) * ky - 0.5
+
+    def to_photo(c, r):
+        return ((c + 0.5) / kx - ox) * factor - 0.5, ((r + 0.5) / ky - oy) * factor - 0.5
+
+    work = None
+    if plate_px is not None:
+        (c0, r0), (c1, r1) = (to_work(c, r) for c, r in plate_px)
+        work = ((r1 - r0) / (c1 - c0), r0 - (r1 - r0) / (c1 - c0) * c0)
+    res = _pile_on_lines(path, rgb, threshold, keep_stages, channel, tried, plate if work is None else work)
     if image is None:
         _check_levels_around(path, rgb, res, depth)
     res.work_scale = scale
+    if plate_px is not None:
+        res.plate_line, res.plate_line_px = "manifest", [[float(c), float(r)] for c, r in plate_px]
+    else:
+        slope, intercept = res.geometry[:2]
+        ends = (0.0, rgb.shape[1] - 1.0)
+        res.plate_line = "found" if plate is None else "given"
+        res.plate_line_px = [[round(v, 2) for v in to_photo(c, slope * c + intercept)] for c in ends]
     return res
 
 
@@ -966,10 +1001,12 @@ def _texture_flanks(res: PileResult, lum) -> PileResult:
     return res
 
 
-def measure_piles(paths, threshold="otsu", keep_stages=False, channel="auto", refusals=None):
+def measure_piles(paths, threshold="otsu", keep_stages=False, channel="auto", refusals=None, plate_px=None):
     """Multi-view average: mean of all flank angles, spread = their sample std (``refusals``:
-    :func:`measure_pile`)."""
-    res = [measure_pile(p, threshold, keep_stages, channel, refusals) for p in paths]
+    :func:`measure_pile`; ``plate_px``: one given plate line or None per photo, as
+    :func:`measure_pile` takes it)."""
+    per = plate_px if plate_px is not None else [None] * len(paths)
+    res = [measure_pile(p, threshold, keep_stages, channel, refusals, plate_px=q) for p, q in zip(paths, per)]
     return pile_summary(res), res
 
 
