@@ -593,6 +593,26 @@ JOINT_SETTLED = 0.01
 JOINT_GAP_SE = 2.0
 
 
+def _unscored(sel, u: pd.DataFrame) -> str:
+    """The verdict's clause on the models the selection could not score: too few observations
+    for their parameters to define an AICc (:func:`soilcal.loop.select.aicc`), so they were not
+    taken whatever their held-out error; empty where every model was scored."""
+    groups = sl.replicate_groups(u)
+    seen = {}
+    for step, names, s in sel.steps:
+        if step == "gate" or not math.isnan(s.aicc) or s.accepted:
+            continue
+        n_obs = sl.sse_of(s.fitted_errors, groups)[1]
+        seen.setdefault((len(s.names) + 1, n_obs), []).append("+".join(names))
+    out = ""
+    for (k, n_obs), models in sorted(seen.items()):
+        need = sl.aicc_needs(k)
+        out += (f"; {', '.join(dict.fromkeys(models))} could not be scored: on {n_obs} observations (measured "
+                f"conditions and quantities, replicates as one) the AICc of {k} estimated parameters (the residual "
+                f"variance among them) is undefined; it needs {need}, {need - n_obs} more (selection.csv)")
+    return out
+
+
 def analyse(soil: str, res: pd.DataFrame, diag: pd.DataFrame, cands: list, effect_runs: dict,
             settings: Settings, reference: dict, quantity_cols: dict | None = None,
             skipped_effects: dict | None = None, joint: dict | None = None) -> Outcome:
@@ -827,6 +847,8 @@ def analyse(soil: str, res: pd.DataFrame, diag: pd.DataFrame, cands: list, effec
                                              settings.alpha, groups=sl.replicate_groups(u)))
         nuisance = ({SCALE_KEY: sv}, {SCALE_KEY: (lo, hi)},
                     "fitted alone: the uniform bias the residual follows, the calibrated model times (1 + s)")
+    if sel is not None:
+        verdict += _unscored(sel, u)
     matched = dg.matched_quantities(diag) if len(diag) else set()
     for nm, why in (skipped_effects or {}).items():  # those the structure (or candidates: all) would have tried
         if settings.candidates == "all" or matched & set(EFFECTS[nm].signature):
