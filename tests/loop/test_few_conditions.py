@@ -68,3 +68,19 @@ def core_clause(obs, sel):
     from soilcal.loop import core
 
     return core._unscored(sel, obs)
+
+
+def test_a_model_the_held_out_test_refused_is_not_said_to_need_more_observations():
+    # four conditions 8 % low with no trend in them (100 (1 - 0.08) times 0.2 % noise): the
+    # trend beside the scale cannot lower the held-out error of the scale alone by 10 % (there
+    # is no trend to find), so its undefined AICc is not what kept it out, and one more
+    # condition would not name it
+    rng = np.random.default_rng(3)
+    x = np.linspace(-0.5, 0.5, 4)
+    measured = 100.0 * (1 - 0.08) * (1 + rng.normal(0.0, 0.002, 4))
+    obs = pd.DataFrame({"simulation": [f"s{i}" for i in range(4)], "measure": "F", "measured": measured})
+    sel = sl.forward(obs, np.full(4, 100.0), {"trend": _trend_effect(x)})
+    scaled = _beside_scale(sel)
+    assert math.isnan(scaled.aicc) and not scaled.accepted and sel.chosen == []
+    assert scaled.rmse() > (1 - sl.MIN_IMPROVEMENT) * scaled.rmse(True)  # the held-out test refused it too
+    assert core_clause(obs, sel) == ""

@@ -33,10 +33,14 @@ def test_a_second_effect_under_an_offset_is_tried_beside_the_uniform_scale():
     assert s == pytest.approx(-0.08, abs=0.02)
 
 
-def test_a_second_effect_the_gate_drops_is_named_as_not_separated():
-    # on this campaign's six test days the adhesion beside the scale halves the held-out error
-    # (3.7 -> 1.8 %) but its paired test over the days misses alpha (p 0.059): the verdict says so
+def test_an_effect_in_the_data_left_out_is_named_and_none_absent_from_it():
+    # both effects are in the data: the rate effect is named, and the adhesion either with it or,
+    # where these rows cannot separate it, as not separated, with the parameters fitted without it;
+    # no other effect of the library is in the data, so no clause names one
     out = _run(6)
-    assert out.chosen == ["rate_friction"], out.verdict
-    assert "tool_adhesion was not separated from rate_friction beside a free uniform scale" in out.verdict
-    assert "these rows can neither name nor rule it out" in out.verdict
+    assert "rate_friction" in out.chosen, out.verdict
+    named = [p.split(" was not separated")[0] for p in out.verdict.split("; ") if " was not separated" in p]
+    assert set(named) <= set(HIDDEN) - set(out.chosen), out.verdict
+    assert "tool_adhesion" in out.chosen or named == ["tool_adhesion"], out.verdict
+    if named:
+        assert "the parameters and any uniform scale reported are fitted without it" in out.verdict

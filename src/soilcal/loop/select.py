@@ -428,6 +428,13 @@ def cross_validate(model: Model, folds) -> tuple[np.ndarray, np.ndarray]:
 MIN_IMPROVEMENT = 0.1
 
 
+def short_of_p(s, alpha: float) -> bool:
+    """Whether a :class:`Score`'s model lowers its reference's held-out RMS error by at least
+    :data:`MIN_IMPROVEMENT` and its AICc, and fails only on the paired test (p >= ``alpha``)."""
+    return (s.rmse() <= (1 - MIN_IMPROVEMENT) * s.rmse(True) and aicc_lower(s)
+            and not (np.isfinite(s.p) and s.p < alpha))
+
+
 def score(model: Model, ref: Model, folds, alpha: float = 0.05, min_improvement: float = MIN_IMPROVEMENT,
           groups: np.ndarray | None = None) -> Score:
     """Score ``model`` against ``ref`` (module docstring); ``groups``: each row's observation
