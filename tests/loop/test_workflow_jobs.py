@@ -132,4 +132,4 @@ def test_a_flat_design_does_not_pin_the_parameter_down():
 def test_aicc_counts_the_residual_variance():
     # n ln(SSE/n) + 2K + 2K(K+1)/(n-K-1) with K = 2 (one parameter + the variance), n = 6, SSE = 6
     assert sl.aicc(6.0, 6, 2) == pytest.approx(0 + 4 + 12 / 3)
-    assert math.isinf(sl.aicc(1.0, 3, 2))
+    assert math.isnan(sl.aicc(1.0, 3, 2))  # undefined: n <= K + 1

@@ -383,9 +383,28 @@ def sse_of(e: np.ndarray, groups: np.ndarray | None) -> tuple[float, int]:
 
 
 def aicc(sse: float, n: int, k: int) -> float:
-    if n - k - 1 <= 0 or sse <= 0:
-        return math.inf if sse > 0 else -math.inf
+    """AICc of ``n`` observations with ``k`` estimated parameters (the residual variance
+    among them); NaN where it is undefined, ``n <= k + 1`` (the small-sample term
+    2k(k+1)/(n-k-1) has no finite value: a criterion that cannot score the model, not one
+    that scores it infinitely badly, :func:`aicc_needs`); -inf for an exact fit."""
+    if n - k - 1 <= 0:
+        return math.nan
+    if sse <= 0:
+        return -math.inf
     return n * math.log(sse / n) + 2 * k + 2 * k * (k + 1) / (n - k - 1)
+
+
+def aicc_needs(k: int) -> int:
+    """The fewest observations for which the AICc of ``k`` estimated parameters is defined."""
+    return int(k) + 2
+
+
+def aicc_lower(s) -> bool:
+    """Whether a :class:`Score`'s model lowers the AICc of its reference; False where either's
+    AICc is undefined (too few observations, :func:`aicc`): the model cannot be scored."""
+    if math.isnan(s.aicc) or math.isnan(s.ref_aicc):
+        return False
+    return s.aicc < s.ref_aicc
 
 
 def cross_validate(model: Model, folds) -> tuple[np.ndarray, np.ndarray]:
@@ -409,6 +428,13 @@ def cross_validate(model: Model, folds) -> tuple[np.ndarray, np.ndarray]:
 MIN_IMPROVEMENT = 0.1
 
 
+def short_of_p(s, alpha: float) -> bool:
+    """Whether a :class:`Score`'s model lowers its reference's held-out RMS error by at least
+    :data:`MIN_IMPROVEMENT` and its AICc, and fails only on the paired test (p >= ``alpha``)."""
+    return (s.rmse() <= (1 - MIN_IMPROVEMENT) * s.rmse(True) and aicc_lower(s)
+            and not (np.isfinite(s.p) and s.p < alpha))
+
+
 def score(model: Model, ref: Model, folds, alpha: float = 0.05, min_improvement: float = MIN_IMPROVEMENT,
           groups: np.ndarray | None = None) -> Score:
     """Score ``model`` against ``ref`` (module docstring); ``groups``: each row's observation
@@ -426,7 +452,8 @@ def score(model: Model, ref: Model, folds, alpha: float = 0.05, min_improvement:
     sse, sse_r = float(np.sum(e ** 2)), float(np.sum(er ** 2))
     k = model.k
     # + 1: the residual variance is estimated too; replicate rows are one observation
-    a, ar = aicc(*sse_of(e, groups), k + 1), aicc(*sse_of(er, groups), ref.k + 1)
+    obs_m, obs_r = sse_of(e, groups), sse_of(er, groups)
+    a, ar = aicc(*obs_m, k + 1), aicc(*obs_r, ref.k + 1)
     names = [f"{ed.effect.name}.{t}" for ed in model.effects for t in ed.effect.theta_names()]
     ci = {}
     if res is not None and n > k:
@@ -468,6 +495,7 @@ def score(model: Model, ref: Model, folds, alpha: float = 0.05, min_improvement:
     hm = np.isfinite(held) & np.isfinite(ref_held)
     rmse = float(np.sqrt(np.mean(held[hm] ** 2))) if hm.any() else math.nan
     rmse_r = float(np.sqrt(np.mean(ref_held[hm] ** 2))) if hm.any() else math.nan
+    accepted = False
     if not reason:
         fails = []
         if not (p < alpha):
@@ -477,12 +505,19 @@ def score(model: Model, ref: Model, folds, alpha: float = 0.05, min_improvement:
         elif not (rmse <= (1 - min_improvement) * rmse_r):
             fails.append(f"held-out RMS error lower by less than {min_improvement:.0%} ({100 * rmse:.2f} % vs "
                          f"{100 * rmse_r:.2f} %)")
-        if not (a < ar):
+        undefined = [(nm, kk, o[1]) for nm, kk, v, o in (("the model", k + 1, a, obs_m),
+                                                            ("its reference", ref.k + 1, ar, obs_r)) if math.isnan(v)]
+        if undefined:  # not scored (judged by the held-out test alone, 2 of 12 tables of 4 offset rows named an effect)
+            fails.append("; ".join(
+                f"AICc of {nm} undefined: {n_} observations for {k_} estimated parameters (the residual variance "
+                f"among them), which need {aicc_needs(k_)} at least, so it cannot be scored" for nm, k_, n_ in undefined))
+        elif not (a < ar):
             fails.append(f"AICc not lower ({a:.2f} vs {ar:.2f})")
         reason = "; ".join(fails)
+        accepted = not fails
     return Score(names=names, theta=dict(zip(names, map(float, x))), ci=ci, fold_rms=fold_rms, ref_fold_rms=ref_rms,
                  heldout_errors=held[hm], ref_heldout_errors=ref_held[hm], fitted_errors=e, aicc=a, ref_aicc=ar,
-                 p=p, accepted=not reason, reason=reason)
+                 p=p, accepted=accepted, reason=reason)
 
 
 #: refits of the chosen model's bootstrap interval (module docstring), and its generator's seed
@@ -622,6 +657,7 @@ class Selection:
     beside_uniform: Score | None = None  # the chosen effects beside a free uniform scale against the scale alone
     with_scale: bool = False      # an effect was taken beside a free uniform scale (forward), so the scale stays
     judged: list = field(default_factory=list)  # the effects uniform and beside_uniform score
+    held_back: list = field(default_factory=list)  # (effect, Score) a forward step tried beside the scale (forward)
 
 
 def forward(obs: pd.DataFrame, y0: np.ndarray, data: dict, fold_by: str | None = None, alpha: float = 0.05,
@@ -667,27 +703,42 @@ def forward(obs: pd.DataFrame, y0: np.ndarray, data: dict, fold_by: str | None =
         return Model([data[c] for c in names] + [bias], y0, measured, scale)
 
     def gains(s):
-        return s.rmse() <= (1 - MIN_IMPROVEMENT) * s.rmse(True) and s.aicc < s.ref_aicc
+        return s.rmse() <= (1 - MIN_IMPROVEMENT) * s.rmse(True) and aicc_lower(s)
 
     with_scale = False  # whether an effect was added beside the free uniform scale: the scale stays in the model
+    held_back = []  # (effect, Score): beside the scale it gained, against the model held without the scale it did not
     for step in range(1, max_effects + 1):
         ref, ref_scaled = model(chosen), scaled(chosen)
         better = []
         for name in data:
             if name in chosen:
                 continue
-            # as is, else (the first effect) with a free uniform scale on both models: a
-            # calibration offset beside the effect, which an adhesion alone cannot take where
-            # the offset cancels the adhesion's mean (the gate below admits an effect either
-            # way).  Once an effect came in beside the scale, the next only so; the scale is not
-            # brought in later, where with two effects it would fit what a third leaves (an
-            # adhesion and a scale took up a moisture cohesion beside a rate effect).  Where both
-            # forms gain, the scale is taken where it lowers the AICc by more than CONSTANT_AICC
+            # as is, else with a free uniform scale on both models: a calibration offset beside
+            # the effect, which an adhesion alone cannot take where the offset cancels the
+            # adhesion's mean (the gate below admits an effect either way).  Once an effect came
+            # in beside the scale, the next only so; a next effect after one taken as is is also
+            # tried beside the scale (an adhesion under a load cell 8 % low beside a rate effect
+            # taken as is fitted gamma_a 0.1 for 2.5 and was left out in 16 of 16 campaigns,
+            # beside the scale named in 14, the other two said not separated: held_back, the
+            # gate).  Where both forms gain, the scale is taken where it lowers the AICc by more
+            # than CONSTANT_AICC
             forms = []
-            for sc in ((True,) if with_scale else (False, True) if not chosen else (False,)):
+            for sc in ((True,) if with_scale else (False, True)):
                 s = score((scaled if sc else model)(chosen + [name]), ref_scaled if sc else ref, folds, alpha,
                           groups=groups)
                 steps.append((step, chosen + [name] + ([bias.effect.name] if sc else []), s))
+                if gains(s) and sc and chosen and not with_scale:
+                    # the scale is not in the model held so far: the effect and the scale together
+                    # must pass the gate against that model as well (an adhesion and a scale took
+                    # up a moisture cohesion beside a rate effect: 2.5 % held-out error down to
+                    # 2.1 % against the rate effect with the scale, paired p 0.13 against it as is)
+                    held = score(scaled(chosen + [name]), ref, folds, alpha,
+                                 groups=groups)
+                    steps.append((f"{step}, against " + "+".join(chosen) + " as is", chosen + [name]
+                                  + [bias.effect.name], held))
+                    if not held.accepted:
+                        held_back.append((name, held))
+                        continue
                 if gains(s):
                     forms.append((name, s, sc))
             if len(forms) == 2 and not forms[1][1].aicc < forms[0][1].aicc - CONSTANT_AICC:
@@ -749,7 +800,7 @@ def forward(obs: pd.DataFrame, y0: np.ndarray, data: dict, fold_by: str | None =
                        groups=groups)
     return Selection(chosen=chosen, steps=steps, final=final, forward_chosen=forward_chosen, uniform=uniform,
                      uniform_s=uniform_s, uniform_ci=uniform_ci, beside_uniform=beside, with_scale=with_scale,
-                     judged=judged)
+                     judged=judged, held_back=held_back)
 
 
 #: AICc units by which the chosen effects beside a free uniform scale must beat the scale alone

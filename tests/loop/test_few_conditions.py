@@ -1,0 +1,86 @@
+"""Few measured conditions: the AICc of n observations and K estimated parameters (the residual
+variance among them) is undefined where n <= K + 1 (its small-sample term 2K(K+1)/(n-K-1) has
+no finite value).  A table of four conditions, one measured quantity each, cannot give an
+effect beside a free uniform scale (K = 3) an AICc: such a candidate is not scored, and
+``selection.csv`` and the verdict say so and how many observations it needs, where an infinite
+AICc used to reject it as if it fitted infinitely badly."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pandas as pd
+import pytest
+
+from soilcal.loop import select as sl
+
+from test_replicates import _trend_effect
+
+
+def test_aicc_is_undefined_where_the_observations_do_not_exceed_the_parameters_by_two():
+    # n ln(SSE/n) + 2K + 2K(K+1)/(n-K-1): n = 5, K = 3 -> 5 ln(1) + 6 + 24 / 1 = 30
+    assert sl.aicc(5.0, 5, 3) == pytest.approx(30.0)
+    assert math.isnan(sl.aicc(4.0, 4, 3)) and math.isnan(sl.aicc(1.0, 3, 3))
+    assert sl.aicc_needs(3) == 5
+
+
+def _campaign(n):
+    # n conditions, one measured value each, from a model 8 % low (a load cell's calibration)
+    # with a trend 0.3 x in the covariate x: the measured values 100 (1 - 0.08)(1 + 0.3 x),
+    # times (1 + 0.2 % noise)
+    x = np.linspace(-0.5, 0.5, n)
+    rng = np.random.default_rng(3)
+    measured = 100.0 * (1 - 0.08) * (1 + 0.3 * x) * (1 + rng.normal(0.0, 0.002, n))
+    obs = pd.DataFrame({"simulation": [f"s{i}" for i in range(n)], "measure": "F", "measured": measured})
+    return obs, sl.forward(obs, np.full(n, 100.0), {"trend": _trend_effect(x)})
+
+
+def _beside_scale(sel):
+    return [s for step, names, s in sel.steps if step == 1 and names == ["trend", "uniform_scale"]][0]
+
+
+def test_an_effect_beside_a_uniform_scale_on_four_conditions_is_not_scored_and_the_verdict_says_why():
+    from soilcal.loop import core
+
+    obs, sel = _campaign(4)
+    scaled = _beside_scale(sel)
+    assert math.isnan(scaled.aicc) and math.isfinite(scaled.ref_aicc)
+    assert ("AICc of the model undefined: 4 observations for 3 estimated parameters (the residual variance among "
+            "them), which need 5 at least, so it cannot be scored") in scaled.reason
+    assert not scaled.accepted and sel.chosen == []
+    clause = core._unscored(sel, obs)
+    assert "trend+uniform_scale could not be scored: on 4 observations" in clause and "it needs 5, 1 more" in clause
+
+
+def test_the_same_campaign_on_five_conditions_is_scored():
+    # one more condition defines the AICc (K = 3, n = 5): the trend and the offset are found
+    obs, sel = _campaign(5)
+    scaled = _beside_scale(sel)
+    assert math.isfinite(scaled.aicc) and scaled.accepted
+    assert sel.chosen == ["trend"] and sel.with_scale
+    assert scaled.theta["trend.t"] == pytest.approx(0.3, abs=0.02)
+    assert scaled.theta["uniform_scale.s"] == pytest.approx(-0.08, abs=0.01)
+    assert core_clause(obs, sel) == ""
+
+
+def core_clause(obs, sel):
+    from soilcal.loop import core
+
+    return core._unscored(sel, obs)
+
+
+def test_a_model_the_held_out_test_refused_is_not_said_to_need_more_observations():
+    # four conditions 8 % low with no trend in them (100 (1 - 0.08) times 0.2 % noise): the
+    # trend beside the scale cannot lower the held-out error of the scale alone by 10 % (there
+    # is no trend to find), so its undefined AICc is not what kept it out, and one more
+    # condition would not name it
+    rng = np.random.default_rng(3)
+    x = np.linspace(-0.5, 0.5, 4)
+    measured = 100.0 * (1 - 0.08) * (1 + rng.normal(0.0, 0.002, 4))
+    obs = pd.DataFrame({"simulation": [f"s{i}" for i in range(4)], "measure": "F", "measured": measured})
+    sel = sl.forward(obs, np.full(4, 100.0), {"trend": _trend_effect(x)})
+    scaled = _beside_scale(sel)
+    assert math.isnan(scaled.aicc) and not scaled.accepted and sel.chosen == []
+    assert scaled.rmse() > (1 - sl.MIN_IMPROVEMENT) * scaled.rmse(True)  # the held-out test refused it too
+    assert core_clause(obs, sel) == ""
