@@ -625,3 +625,124 @@ def test_a_settling_run_judges_a_moving_wall_where_it_stands():
                       velocity=(1e-3, 0, 0))
     sim.add_particles([[_L / 2, _L / 4, 0.01]], R, "soil")
     assert sim.run_until_settled(ke_tol=1.0, check_every=10)
+
+
+_H = 4 * R  # the height of a terrace's step
+
+
+def _terrace(s):
+    """One mesh spanning the period in x: a floor z = 0 for x < L/2, a riser, z = _H beyond."""
+    v = [[0, 0, 0], [_L / 2, 0, 0], [_L / 2, _L, 0], [0, _L, 0],
+         [_L / 2, 0, _H], [_L, 0, _H], [_L, _L, _H], [_L / 2, _L, _H]]
+    s.add_mesh(v, [[0, 1, 2], [0, 2, 3], [4, 5, 6], [4, 6, 7], [1, 2, 7], [1, 7, 4]], "soil",
+               name="w")
+
+
+@pytest.mark.parametrize("where", ["riser", "edge"])
+def test_a_floor_at_another_height_at_each_end_of_the_period_is_refused(where):
+    """A terraced floor spanning x = 0 .. L in one mesh, low at x = 0 and high at x = L: its
+    periodic continuation steps down at x = 0.  A sphere beside x = 0 pressed delta = 0.01 R
+    into that riser, or onto the edge of the high floor across the boundary, is pushed by the
+    Hertz force of the overlap (computed below on the continued mesh in a box that is not
+    periodic), where it felt no force at all: such a floor is refused, naming it."""
+    mats = table(e=0.5, mu=0.3, E=1e8)
+    a = 0.6 * R
+    x = {"riser": (R - _D, _L / 2, _H / 2), "edge": (a, _L / 2, _H + math.sqrt((R - _D) ** 2 - a**2))}[where]
+    # the contact the periodic box would have: the same sphere one period on, by the mesh
+    # continued by one period
+    sim = Simulation(mats, gravity=(0, 0, 0))
+    _terrace(sim)
+    sim.add_mesh([[_L, 0, 0], [1.5 * _L, 0, 0], [1.5 * _L, _L, 0], [_L, _L, 0], [_L, 0, _H], [_L, _L, _H]],
+                 [[0, 1, 2], [0, 2, 3], [0, 3, 5], [0, 5, 4]], "soil", name="next")
+    sim.add_particles([[x[0] + _L, x[1], x[2]]], R, "soil")
+    f, _ = sim.compute_forces()
+    n = {"riser": np.array([1.0, 0, 0]), "edge": np.array([a, 0, x[2] - _H]) / (R - _D)}[where]
+    assert f[0] == pytest.approx(_hertz_wall_force(mats, R, _D) * n, rel=1e-9, abs=1e-12)
+    sim = _periodic_sim()
+    _terrace(sim)
+    sim.add_particles([x], R, "soil")
+    with pytest.raises(InputError, match=r"walls\.w.*periodic in x.*at x = 0 m \(y 0 \.\. 0\.04, z 0 m\)"):
+        sim.compute_forces()
+
+
+def _floor_tile(s, x0, x1, y0, y1, z=0.0, name=None, mesh=True):
+    if mesh:
+        s.add_mesh([[x0, y0, z], [x1, y0, z], [x1, y1, z], [x0, y1, z]], [[0, 1, 2], [0, 2, 3]], "soil",
+                   name=name)
+    else:
+        s.add_rectangle(((x0 + x1) / 2, (y0 + y1) / 2, z), (0, 0, 1), (1, 0, 0), (x1 - x0) / 2,
+                        (y1 - y0) / 2, "soil", name=name)
+
+
+@pytest.mark.parametrize("mesh", [True, False])
+@pytest.mark.parametrize("x", [(1e-4, 1e-4), (0.0, _L / 2), (_L - 1e-4, _L - 1e-4), (_L / 2, _L / 2)])
+def test_a_floor_of_tiles_meeting_at_both_boundaries_pushes_with_the_hertz_force(mesh, x):
+    """A floor given as four tiles (STL meshes or rectangles, each its own wall) covering the
+    period in x and y: a tile on a boundary meets one at the same height on the other, so the
+    floor continues periodically, and a sphere pressed 0.01 R into it beside a boundary, at a
+    corner of the box or on the tiles' seams feels the Hertz force of one face (it was
+    refused, naming the first tile)."""
+    mats = table(e=0.5, mu=0.3, E=1e8)
+    sim = Simulation(mats, gravity=(0, 0, 0), box=(0, _L, 0, _L), periodic=(True, True))
+    h = _L / 2
+    for i, j in ((0, 0), (1, 0), (0, 1), (1, 1)):
+        _floor_tile(sim, i * h, (i + 1) * h, j * h, (j + 1) * h, mesh=mesh)
+    sim.add_particles([[x[0], x[1], R - _D]], R, "soil")
+    f, _ = sim.compute_forces()
+    assert f[0] == pytest.approx([0, 0, _hertz_wall_force(mats, R, _D)], rel=1e-9, abs=1e-12)
+
+
+_UNMATCHED_TILES = {
+    # the second tile a step higher: the floor steps at x = 0 = L
+    "step": lambda s: (_floor_tile(s, 0, _L / 2, 0, _L, name="w"), _floor_tile(s, _L / 2, _L, 0, _L, z=_H)),
+    # the second tile narrower in y: a gap at x = L, y > L/2
+    "narrower": lambda s: (_floor_tile(s, 0, _L / 2, 0, _L, name="w"), _floor_tile(s, _L / 2, _L, 0, _L / 2)),
+    # the second tile moving: it is not the same surface over the run
+    "moving": lambda s: (_floor_tile(s, 0, _L / 2, 0, _L, name="w"),
+                         s.add_rectangle((3 * _L / 4, _L / 2, 0), (0, 0, 1), (1, 0, 0), _L / 4, _L / 2, "soil",
+                                         velocity=(0, 0.01, 0))),
+}
+
+
+@pytest.mark.parametrize("case", sorted(_UNMATCHED_TILES))
+def test_tiles_that_do_not_meet_alike_at_both_boundaries_are_refused(case):
+    sim = _periodic_sim()
+    _UNMATCHED_TILES[case](sim)
+    sim.add_particles([[1e-4, _L / 4, R - _D]], R, "soil")
+    with pytest.raises(InputError, match=r"walls\.w.*periodic in x"):
+        sim.compute_forces()
+
+
+def test_a_floor_spanning_the_period_exactly_may_not_slide_along_it():
+    """A floor mesh from x = 0 to L moving along x at 0.1 m/s (a belt) leaves x = 0 .. v t
+    bare: a frictionless sphere resting on it at x = 2 mm fell through it (z 3.5 mm, 1.5 mm
+    below its resting height, after 5 mm of travel).  Refused over the run; a belt wider than
+    the box by its travel plus the largest radius is accepted."""
+    def run(x0, x1, steps):
+        sim = Simulation(table(e=0.5, mu=0.0, E=1e8), box=(0, _L, 0, _L), periodic=(True, True))
+        sim.add_mesh([[x0, 0, 0], [x1, 0, 0], [x1, _L, 0], [x0, _L, 0]], [[0, 1, 2], [0, 2, 3]], "soil",
+                     name="w", velocity=(0.1, 0, 0))
+        sim.add_particles([[2e-3, _L / 2, R]], R, "soil")
+        sim.compute_forces()
+        sim.run(steps(sim.dt))
+        return sim
+
+    with pytest.raises(InputError, match=r"walls\.w.*over the run"):
+        run(0.0, _L, lambda dt: int(0.05 / dt))
+    sim = run(-0.011, _L + 0.011, lambda dt: int(0.05 / dt))  # 5 mm of travel, 11 mm wider
+    assert sim.x[0, 2] > R - 0.01 * R
+
+
+def test_a_settling_run_stops_where_a_moving_wall_would_need_its_image():
+    """run_until_settled of a sphere that never settles (it coasts along y without gravity)
+    beside a paddle moving along x at 0.5 m/s: the paddle's edge, 25 mm from x = 0, may come
+    to x = L - R = 35 mm (within 2e-4 R), which it does after (0.01 + 2e-4 R) / (0.5 dt)
+    steps; the run stops there, refused, where it carried the paddle through the boundary
+    for all of max_steps (to x = 0.3 m)."""
+    sim = _periodic_sim()
+    sim.add_rectangle((_L / 2, _L / 2, 0.01), (0, 1, 0), (1, 0, 0), 0.005, 0.005, "soil", name="w",
+                      velocity=(0.5, 0, 0))
+    sim.add_particles([[_L / 2, _L / 4, 0.03]], R, "soil", v=[(0, 0.1, 0)])
+    with pytest.raises(InputError, match=r"walls\.w.*not settled after"):
+        sim.run_until_settled(1e-30, check_every=10, max_steps=20000)
+    assert sim.step == math.floor((0.01 + 2e-4 * R) / (0.5 * sim.dt))

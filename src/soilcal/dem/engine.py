@@ -118,6 +118,186 @@ def _extent_along(kind, par, q):
             float(max(e0 + par[6] * side, e1 + par[7] * side)), False)
 
 
+# ------------------------------------------------------------------ periodic sections
+_ACROSS = ((1, 2), (2, 0))  # the coordinates across periodic axis x (y, z) and y (z, x)
+
+
+def _flat_pieces(kinds, par, q):
+    """The flat-along-q primitives ``par`` (rows of kinds ``kinds``) as triangles
+    [n, 3, 3] (a rectangle as two) with the row each came from, and cylinders about q as
+    circles [m, 3] (the axis across q, radius) with their extents along q [m, 2]."""
+    tri, trow, circ, crow, cext = [], [], [], [], []
+    for i, (kind, p) in enumerate(zip(kinds, par)):
+        if kind == TRIANGLE:
+            tri.append(p[:9].reshape(3, 3))
+            trow += [i]
+        elif kind == RECTANGLE:
+            c, n, u = p[0:3], p[3:6], p[6:9]
+            du, dv = u * p[9], np.cross(n, u) * p[10]
+            k = [c - du - dv, c + du - dv, c + du + dv, c - du + dv]
+            tri += [np.array([k[0], k[1], k[2]]), np.array([k[0], k[2], k[3]])]
+            trow += [i, i]
+        elif kind == CYLINDER:
+            circ.append([p[_ACROSS[q][0]], p[_ACROSS[q][1]], p[6]])
+            cext.append([p[q] - p[7], p[q] + p[7]])
+            crow.append(i)
+    return (np.array(tri).reshape(-1, 3, 3), np.array(trow, dtype=np.int64),
+            np.array(circ).reshape(-1, 3), np.array(crow, dtype=np.int64),
+            np.array(cext).reshape(-1, 2))
+
+
+def _section_lines(tri, q, c, eps):
+    """Where the plane q = c cuts triangles ``tri`` lying along q (their normals across
+    q): one segment [k, 2, 2] in the coordinates across q per triangle reaching c (within
+    ``eps``; a triangle ending less than ``eps`` short of c is cut at its end), with the
+    index of its triangle."""
+    s = tri[:, :, q]
+    smin, smax = s.min(axis=1), s.max(axis=1)
+    use = np.flatnonzero((smin <= c + eps) & (smax >= c - eps))
+    if use.size == 0:
+        return np.zeros((0, 2, 2)), use
+    t, s = tri[use], s[use]
+    cc = np.clip(c, smin[use], smax[use])
+    p = t[:, :, list(_ACROSS[q])]
+    pts, ok = [], []
+    for i, j in ((0, 1), (1, 2), (2, 0)):
+        ds = s[:, j] - s[:, i]
+        with np.errstate(divide="ignore", invalid="ignore"):
+            w = (cc - s[:, i]) / ds
+        cut = (ds != 0) & (w >= 0) & (w <= 1)
+        w = np.where(cut, w, 0.0)
+        on = (ds == 0) & (s[:, i] == cc)  # an edge lying in the plane
+        pts += [p[:, i] + w[:, None] * (p[:, j] - p[:, i]), p[:, i], p[:, j]]
+        ok += [cut, on, on]
+    pts, ok = np.stack(pts, axis=1), np.stack(ok, axis=1)
+    # the cut of a triangle along q is a segment along the line (its plane) x (q axis)
+    n = np.cross(t[:, 1] - t[:, 0], t[:, 2] - t[:, 0])
+    eq = np.zeros(3)
+    eq[q] = 1.0
+    d = np.cross(eq, n)[:, list(_ACROSS[q])]
+    d /= np.linalg.norm(d, axis=1)[:, None]
+    h = np.einsum("kij,kj->ki", pts, d)
+    i0 = np.argmin(np.where(ok, h, np.inf), axis=1)
+    i1 = np.argmax(np.where(ok, h, -np.inf), axis=1)
+    k = np.arange(use.size)
+    seg = np.stack([pts[k, i0], pts[k, i1]], axis=1)
+    return seg, use
+
+
+def _merge_lines(seg, tol):
+    """The union of segments ``seg`` [k, 2, 2] as maximal pieces: segments on one line
+    (within ``tol``) that overlap or leave gaps up to ``tol`` joined, each line taken along
+    the longest segment left; points (corners touching the plane) off every line shorter
+    than ``tol`` are left out (the faces around such a corner are cut beside it)."""
+    out = []
+    rest = seg
+    while rest.shape[0]:
+        ln = np.linalg.norm(rest[:, 1] - rest[:, 0], axis=1)
+        k = int(np.argmax(ln))
+        if ln[k] <= tol:
+            break
+        p0, p1 = rest[k]
+        u = (p1 - p0) / ln[k]
+        nrm = np.array([-u[1], u[0]])
+        on = ((np.abs((rest[:, 0] - p0) @ nrm) <= tol) & (np.abs((rest[:, 1] - p0) @ nrm) <= tol))
+        ta, tb = (rest[on, 0] - p0) @ u, (rest[on, 1] - p0) @ u
+        order = np.argsort(np.minimum(ta, tb))
+        a, b = np.minimum(ta, tb)[order], np.maximum(ta, tb)[order]
+        reach = np.maximum.accumulate(b)
+        start = np.concatenate([[True], a[1:] > reach[:-1] + tol])  # a gap before it
+        first = np.flatnonzero(start)
+        last = np.concatenate([first[1:], [a.size]]) - 1
+        out += [[p0 + a[i] * u, p0 + reach[j] * u] for i, j in zip(first, last)]
+        rest = rest[~on]
+    return np.array(out).reshape(-1, 2, 2)
+
+
+def _lines_within(x, y, tol) -> bool:
+    """Whether every piece of ``x`` lies on one piece of ``y`` (both ends within ``tol``)."""
+    if x.shape[0] == 0:
+        return True
+    if y.shape[0] == 0:
+        return False
+    a, d = y[:, 0], y[:, 1] - y[:, 0]
+    dd = np.einsum("ij,ij->i", d, d)
+    near = np.ones((x.shape[0], y.shape[0]), dtype=bool)
+    for e in (0, 1):
+        w = x[:, e][:, None, :] - a[None]
+        t = np.clip(np.einsum("kij,ij->ki", w, d) / dd, 0.0, 1.0)
+        near &= np.linalg.norm(w - t[:, :, None] * d[None], axis=2) <= tol
+    return bool(near.any(axis=1).all())
+
+
+class _Sections:
+    """Sections across axis q of the flat primitives of a set of walls, by material:
+    ``at(c)`` maps each material to (merged segments, circles) where the plane q = c cuts
+    them; ``same(s1, s2)`` compares two sections within ``tol``."""
+
+    def __init__(self, kinds, par, mats, q, eps, tol, windows):
+        self.q, self.eps, self.tol = q, eps, tol
+        tri, trow, circ, crow, cext = _flat_pieces(kinds, par, q)
+        # the pieces reaching the windows along q where sections are taken
+        s = tri[:, :, q]
+        t = np.zeros(trow.size, dtype=bool)
+        c = np.zeros(crow.size, dtype=bool)
+        for a, b in windows:
+            t |= (s.min(axis=1) <= b + eps) & (s.max(axis=1) >= a - eps)
+            c |= (cext[:, 0] <= b + eps) & (cext[:, 1] >= a - eps)
+        self.tri, self.circ, self.cext = tri[t], circ[c], cext[c]
+        self.tmat, self.cmat = mats[trow[t]], mats[crow[c]]
+
+    def breaks(self):
+        """The coordinates along q where a section may change: corners, cylinder ends."""
+        return np.concatenate([self.tri[:, :, self.q].ravel(), self.cext.ravel()])
+
+    def at(self, c):
+        out = {}
+        seg, it = _section_lines(self.tri, self.q, c, self.eps)
+        ic = np.flatnonzero((self.cext[:, 0] <= c + self.eps) & (self.cext[:, 1] >= c - self.eps))
+        for m in set(self.tmat[it].tolist()) | set(self.cmat[ic].tolist()):
+            out[m] = (_merge_lines(seg[self.tmat[it] == m], self.tol),
+                      self.circ[ic[self.cmat[ic] == m]])
+        return out
+
+    def describe(self, s) -> str:
+        """Where a section lies across q, in words."""
+        pts = [v[0].reshape(-1, 2) for v in s.values()]
+        pts += [np.concatenate([v[1][:, :2] - v[1][:, 2:], v[1][:, :2] + v[1][:, 2:]])
+                for v in s.values()]
+        pts = np.concatenate(pts) if pts else np.zeros((0, 2))
+        if pts.shape[0] == 0:
+            return "no face"
+        lo, hi = pts.min(axis=0), pts.max(axis=0)
+        return ", ".join(f"{'xyz'[k]} {a:.4g}" + (f" .. {b:.4g}" if b - a > self.tol else "")
+                         for k, a, b in zip(_ACROSS[self.q], lo, hi)) + " m"
+
+    def same(self, s1, s2) -> bool:
+        if set(s1) != set(s2):
+            return False
+        for m in s1:
+            (l1, c1), (l2, c2) = s1[m], s2[m]
+            if not (_lines_within(l1, l2, self.tol) and _lines_within(l2, l1, self.tol)):
+                return False
+            for x, y in ((c1, c2), (c2, c1)):
+                if x.shape[0] and (y.shape[0] == 0 or not np.all(
+                        (np.abs(x[:, None, :] - y[None]).max(axis=2) <= self.tol).any(axis=1))):
+                    return False
+        return True
+
+def _inside(p, lines) -> bool:
+    """Whether point ``p`` (2) lies inside the closed outline ``lines`` [k, 2, 2] (even-odd
+    count of the outline's crossings of a ray from p)."""
+    if lines.shape[0] == 0:
+        return False
+    r = np.array([math.cos(0.3183), math.sin(0.3183)])  # a ray along no mesh line
+    a, d = lines[:, 0] - p, lines[:, 1] - lines[:, 0]
+    den = r[0] * d[:, 1] - r[1] * d[:, 0]
+    with np.errstate(divide="ignore", invalid="ignore"):
+        t = (a[:, 0] * r[1] - a[:, 1] * r[0]) / den  # along the line
+        s = (a[:, 0] * d[:, 1] - a[:, 1] * d[:, 0]) / den  # along the ray
+    return bool(np.count_nonzero((den != 0) & (t >= 0) & (t < 1) & (s > 0)) % 2)
+
+
 class Simulation:
     """Spheres, walls and a contact model advanced by velocity Verlet in compiled loops."""
 
@@ -490,9 +670,14 @@ class Simulation:
         # half of it, for the particles' own motion) and on the wall's own extent
         reach = np.array([min(1.5 * float(np.linalg.norm(np.maximum(abs(lo - c), abs(hi - c)))),
                               e) for c, e in zip(wa["wall_centre"], self._wall_extent())])
-        # run_until_settled has no known length (its cap is 10 million steps): its moving walls
-        # are judged where they stand; any other run over the steps it is given
-        self._check_periodic_walls(0 if getattr(self, "_open_ended", False) else steps)
+        # run_until_settled has no known length (its cap is 10 million steps): it runs as far as
+        # its moving walls stay acceptable (below) and is refused there if not settled; any
+        # other run is judged over the steps it is given
+        limit = steps
+        if getattr(self, "_open_ended", False):
+            limit = self._periodic_steps(steps)
+        else:
+            self._check_periodic_walls(steps)
         if steps > 0:
             self._check_wall_steps(reach)
         status = np.zeros(5, dtype=np.int64)
@@ -500,9 +685,43 @@ class Simulation:
         if p.n < itg.PARALLEL_MIN:
             numba.set_num_threads(1)
         try:
-            return self._run(steps, ke_tol, ke_every, wall_log_every, reach, status)
+            done = self._run(limit, ke_tol, ke_every, wall_log_every, reach, status)
         finally:
             numba.set_num_threads(threads)
+        if done == limit < steps and not self.kinetic_energy() < ke_tol:
+            try:
+                self._check_periodic_walls(limit + 1)
+            except InputError as exc:
+                raise InputError(
+                    exc.path, exc.field, exc.expected,
+                    f"not settled after {limit} steps ({limit * self.dt:.4g} s), where a moving "
+                    f"wall reaches the end of the path it may take: {exc.got}") from None
+        return done
+
+    def _periodic_steps(self, steps) -> int:
+        """The most steps up to ``steps`` over which the walls pass
+        :meth:`_check_periodic_walls` (raising its error if they fail where they stand): the
+        extent a wall sweeps grows with the steps, so the steps that pass are those below a
+        limit, found by bisection."""
+        self._check_periodic_walls(0)
+        wa = self._warr
+        if not self.periodic.any() or not (np.any(wa["wall_vel"] != 0)
+                                           or np.any(wa["wall_omega"] != 0)):
+            return steps
+        try:
+            self._check_periodic_walls(steps)
+            return steps
+        except InputError:
+            pass
+        ok, bad = 0, steps
+        while bad - ok > 1:
+            mid = (ok + bad) // 2
+            try:
+                self._check_periodic_walls(mid)
+                ok = mid
+            except InputError:
+                bad = mid
+        return ok
 
     def _run(self, steps, ke_tol, ke_every, wall_log_every, reach, status):
         p, wa = self.p, self._warr
@@ -596,15 +815,16 @@ class Simulation:
     def _check_periodic_walls(self, steps) -> None:
         """InputError naming the wall that a sphere could touch across a periodic boundary:
         wall contacts do not see periodic images (walls.py), so a wall within reach R_max (the
-        largest radius) of a boundary x = lo or hi that neither continues past both boundaries
-        by R_max (a plate wider than the slab: the spheres at either boundary touch its own
-        surface there) nor is one wall with a surface parallel to x spanning the period (a
-        floor, a plate across the slab: a sphere anywhere meets the same face; its end faces
-        on the boundaries, a closed solid's caps, are met at their rims) would miss the contacts of
-        the spheres beside the other boundary, or, outside the box, every contact.  A plane
-        must be parallel to the periodic axes.  A moving wall is checked over the ``steps``
-        of the run: its extent swept by its velocity, and the sphere of its reach about its
-        centre when it turns about any axis but x."""
+        largest radius) of a boundary x = lo or hi is accepted only where its surface there
+        runs along x and continues periodically (:meth:`_periodic_fault`: the planes x = lo
+        and x = hi cut it in the same section, a floor, a plate across the slab or wider than
+        it, a closed solid whose caps lie on the boundaries); walls moving together (floor
+        tiles) that fail alone are judged as one surface.  Otherwise a sphere beside one
+        boundary would miss the contacts across it, or, outside the box, every contact.  A
+        plane must be parallel to the periodic axes.  A moving wall is checked over the
+        ``steps`` of the run: its extent swept by its velocity, its sections over the planes
+        its motion along x carries past, and the sphere of its reach about its centre when it
+        turns about any axis but x."""
         wa = self._warr
         if not self.periodic.any() or wa["prim_kind"].shape[0] == 0:
             return
@@ -666,21 +886,33 @@ class Simulation:
             has[w] = True
             np.minimum.at(a_w, w, a)
             np.maximum.at(b_w, w, b)
-            near = (a < lo + rho - eps) | (b > hi - rho + eps)
+            # within reach of a sphere in the box beside a boundary (farther out, unreachable)
+            near = (((a < lo + rho - eps) & (b > lo - rho + eps))
+                    | ((a < hi + rho - eps) & (b > hi - rho + eps)))
             bad[w[near & ~flat & ~(cap & ~turn & ~moves)]] = True
-            # a wall of caps and nothing along the axis (a bulkhead on the boundary) spans nothing
-            along = np.zeros(nw, dtype=bool)
-            along[w[flat & ~cap]] = True
+            cap &= ~turn & ~moves  # a cap of a wall at rest, met at its rim (below)
             for w in range(nw):
                 if not has[w]:
                     continue
                 A, B = a_w[w], b_w[w]
-                clear = A >= lo + rho - eps and B <= hi - rho + eps
-                through = A <= lo - rho + eps and B >= hi + rho - eps
-                # a surface along the axis spanning the period by itself; an end face on a
-                # boundary is exempt only in such a wall (a closed solid's cap)
-                spans = A <= lo + eps and B >= hi - eps and not bad[w] and along[w]
-                if clear or through or spans:
+                if A >= lo + rho - eps and B <= hi - rho + eps:
+                    continue  # clear of both boundaries
+                why = ("a face within the largest radius of a boundary that does not run "
+                       f"along {names[q]}" if bad[w] else None)
+                if why is None:
+                    why = self._periodic_fault(q, [w], ks, flat, cap, rho, eps, span)
+                if why is not None and not bad[w]:
+                    # tiles: the walls moving with this one, judged as one surface
+                    mates = [g for g in range(nw) if has[g] and not bad[g]
+                             and not (a_w[g] >= lo + rho - eps and b_w[g] <= hi - rho + eps)
+                             and np.array_equal(wa["wall_vel"][g], wa["wall_vel"][w])
+                             and np.array_equal(wa["wall_omega"][g], wa["wall_omega"][w])
+                             and (not np.any(wa["wall_omega"][w] != 0)
+                                  or np.array_equal(wa["wall_centre"][g], wa["wall_centre"][w]))]
+                    if len(mates) > 1 and self._periodic_fault(q, mates, ks, flat, cap, rho, eps,
+                                                               span) is None:
+                        continue
+                if why is None:
                     continue
                 name = self.walls.names[w]
                 ax = names[q]
@@ -690,11 +922,85 @@ class Simulation:
                     self.source, f"walls.{name}",
                     f"in a box periodic in {ax} ({lo:.6g} .. {hi:.6g} m; wall contacts do not "
                     f"see periodic images): a wall kept {rho:.4g} m (the largest radius) "
-                    f"inside the boundaries, continued past both by that much (its surface "
-                    f"there the periodic continuation), or a surface parallel to {ax} spanning "
-                    f"the period (a floor, a plate across the slab)",
-                    f"a wall reaching {ax} = {A:.6g} .. {B:.6g} m{moving}: a sphere beside "
-                    f"the other boundary would not touch it")
+                    f"inside the boundaries, or one whose surface within that of each boundary "
+                    f"runs along {ax} and is cut by the planes {ax} = {lo:.6g} and {hi:.6g} m in "
+                    f"the same section (a floor, a plate across the slab, a wider plate, a "
+                    f"closed solid with its end faces on the boundaries; walls moving together, "
+                    f"such as floor tiles, are taken as one surface), past a boundary that "
+                    f"section or nothing",
+                    f"a wall reaching {ax} = {A:.6g} .. {B:.6g} m{moving}: {why}; a sphere "
+                    f"beside one boundary would miss the surface across it")
+
+    def _periodic_fault(self, q, walls, ks, flat, cap, rho, eps, span):
+        """None when the surface of ``walls`` (moving together) continues periodically across
+        axis q over a run of ``span`` seconds, else what breaks it.  In the walls' own frame
+        at the start (a shift s = v_q span along q sweeps the planes the spheres meet), the
+        spheres in the box within the largest radius rho of a boundary meet the faces between
+        q = lo - max(s, 0) and lo + rho - min(s, 0) (and at hi likewise), and the plane q = c
+        cuts all of them in one section, the one at q = lo: where their faces run along q
+        (their normals across q, the primitives that are not were refused) and the sections
+        at both ends agree, a sphere's closest point on the periodic continuation is on the
+        faces in the box, so the contacts it misses across the boundary are ones it has.
+        Past a boundary (within rho) the section is that one or empty (a plate wider than
+        the slab, a floor ending on the boundary).  A section changes only at a corner or a
+        cylinder's end along q: it is taken there and halfway between.  An end face lying on
+        a boundary (the cap of a closed solid spanning the period) is met at its rim only when
+        it lies inside the section there.  Sections are compared per material within
+        max(2e-4 rho, 4 float32 ulps of the coordinates), as walls.py joins tiles."""
+        wa = self._warr
+        lo, hi = float(self.box[2 * q]), float(self.box[2 * q + 1])
+        sel = np.isin(wa["prim_wall"][ks], walls)
+        prims = ks[sel & flat]
+        par = wa["prim_par"][prims]
+        shift = float(wa["wall_vel"][walls[0], q]) * span
+        key = (q, tuple(walls), rho, eps, shift, lo, hi, hash(par.tobytes()))
+        cache = self.__dict__.setdefault("_periodic_cache", {})
+        if key in cache:
+            return cache[key]
+        scale = float(np.abs(par[:, :9]).max()) if par.size else 0.0
+        tol = max(2e-4 * rho, 4.8e-7 * scale)
+        sp, sn = max(shift, 0.0), min(shift, 0.0)
+        sec = _Sections(wa["prim_kind"][prims], par, wa["prim_mat"][prims], q, eps, tol,
+                        [(lo - rho - sp, lo + rho - sn), (hi - rho - sp, hi + rho - sn)])
+        br = sec.breaks()
+        ax = ("x", "y")[q]
+
+        def samples(a, b):
+            c = np.unique(np.concatenate([[a, b], br[(br > a) & (br < b)]]))
+            return np.sort(np.concatenate([c, 0.5 * (c[1:] + c[:-1])]))
+
+        ref = sec.at(lo - sp)
+        why = None
+        for a, b, inside in ((lo - sp, lo + rho - sn, True), (hi - rho - sp, hi - sn, True),
+                             (lo - rho - sp, lo - sp, False), (hi - sn, hi + rho - sn, False)):
+            for c in samples(a, b):
+                s = sec.at(c)
+                if sec.same(s, ref) or (not inside and not s):
+                    continue
+                where = "past the boundary " if not inside else ""
+                why = (f"its faces {where}at {ax} = {c:.6g} m ({sec.describe(s)}) are not "
+                       f"those at {ax} = {lo - sp:.6g} m ({sec.describe(ref)})"
+                       + (", as it stands at the start, moving by "
+                          f"{shift:.4g} m along {ax} over the run" if shift else ""))
+                break
+            if why is not None:
+                break
+        if why is None:
+            # the caps on a boundary: inside the section there
+            cp = ks[sel & cap]
+            for k in cp:
+                p = wa["prim_par"][k]
+                kind = wa["prim_kind"][k]
+                ctr = p[:9].reshape(3, 3).mean(axis=0) if kind == TRIANGLE else p[0:3]
+                c = lo if abs(ctr[q] - lo) <= abs(ctr[q] - hi) else hi
+                pieces = [v[0] for v in sec.at(c).values()]
+                lines = np.concatenate(pieces) if pieces else np.zeros((0, 2, 2))
+                if not _inside(ctr[list(_ACROSS[q])], lines):
+                    why = (f"an end face on the boundary {ax} = {c:.6g} m that no section of "
+                           f"its faces along {ax} encloses (a sphere meets its face)")
+                    break
+        cache[key] = why
+        return why
 
     def _check_wall_steps(self, reach) -> None:
         """InputError naming the wall whose surface moves more than ``max_overlap`` of the
@@ -825,7 +1131,10 @@ class Simulation:
 
     def run_until_settled(self, ke_tol: float, check_every: int = 100,
                           max_steps: int = 10_000_000) -> bool:
-        """Run until the translational kinetic energy (J) falls below ke_tol; True if settled."""
+        """Run until the translational kinetic energy (J) falls below ke_tol; True if settled.
+        In a periodic box the run goes as far as its moving walls stay acceptable to
+        :meth:`_check_periodic_walls` (at most ``max_steps``); not settled there, it stops
+        with that check's InputError, naming the wall."""
         if ke_tol < 0:
             raise InputError(self.source, "ke_tol", "a kinetic energy threshold >= 0 J", ke_tol)
         start = self.step
