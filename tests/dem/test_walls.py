@@ -746,3 +746,28 @@ def test_a_settling_run_stops_where_a_moving_wall_would_need_its_image():
     with pytest.raises(InputError, match=r"walls\.w.*not settled after"):
         sim.run_until_settled(1e-30, check_every=10, max_steps=20000)
     assert sim.step == math.floor((0.01 + 2e-4 * R) / (0.5 * sim.dt))
+
+
+@pytest.mark.parametrize("axis, refused", [((0, 0, 5.0), True), ((0, 5.0, 0), False)])
+def test_a_blade_spanning_a_slab_may_turn_only_about_the_periodic_axis(axis, refused):
+    """A closed blade (a box mesh) exactly as wide as a slab periodic in y, turning at 5 rad/s
+    about its centre: about y its ends stay on the boundaries, and a sphere pressed 0.01 R
+    into its face beside y = L feels the Hertz force along the normal; about z its ends swing off the
+    boundaries (a sphere beside one boundary would miss the end across it), and it was
+    accepted, its sweep counted as reaching past both boundaries."""
+    from soilcal.dem.geometry import box_mesh
+
+    mats = table(e=0.5, mu=0.3, E=1e8)
+    sim = Simulation(mats, gravity=(0, 0, 0), box=(0, _L, 0, _L), periodic=(False, True))
+    v, t = box_mesh(np.array([0.015, 0.0, 0.0]), np.array([0.018, _L, 0.03]))
+    sim.add_mesh(v, t, "soil", name="w", omega=axis, centre=(0.0165, _L / 2, 0.015))
+    sim.add_particles([[0.015 - R + _D, _L - 1e-4, 0.015]], R, "soil")
+    if refused:
+        with pytest.raises(InputError, match=r"walls\.w.*periodic in y.*over the run"):
+            sim.run(10)
+    else:
+        f, _ = sim.compute_forces()
+        # along the normal the Hertz force (the face slides past the sphere along z: a
+        # tangential force besides)
+        assert f[0][:2] == pytest.approx([-_hertz_wall_force(mats, R, _D), 0], rel=1e-9, abs=1e-12)
+        sim.run(10)
