@@ -954,7 +954,9 @@ class Simulation:
         par = wa["prim_par"][prims]
         shift = float(wa["wall_vel"][walls[0], q]) * span
         key = (q, tuple(walls), rho, eps, shift, lo, hi, hash(par.tobytes()))
-        cache = self.__dict__.setdefault("_periodic_cache", {})
+        # walls at rest keep their answer (a moving wall is elsewhere at the next run)
+        still = not (np.any(wa["wall_vel"][walls] != 0) or np.any(wa["wall_omega"][walls] != 0))
+        cache = self.__dict__.setdefault("_periodic_cache", {}) if still else {}
         if key in cache:
             return cache[key]
         scale = float(np.abs(par[:, :9]).max()) if par.size else 0.0
