@@ -526,6 +526,11 @@ _UNSEEN = {  # walls a sphere could touch across a periodic boundary, without se
     "bar_ending_on_boundary_beside_a_floor": lambda s: (
         s.add_mesh([[0, 0, 0], [_L, 0, 0], [_L, _L, 0], [0, _L, 0]], [[0, 1, 2], [0, 2, 3]], "soil", name="floor"),
         s.add_box((0.0, 0.006, 0.02), (0.02, 0.014, 0.03), "soil", name="w")),
+    # a floor mesh tilted along x, wider than the box: past x = L it is 1 mm higher than its
+    # continuation from x = 0 (it was accepted as continued past both boundaries)
+    "tilted_mesh_wider_than_box": lambda s: s.add_mesh(
+        [[-0.01, 0, 0], [_L + 0.01, 0, 0.0015], [_L + 0.01, _L, 0.0015], [-0.01, _L, 0]],
+        [[0, 1, 2], [0, 2, 3]], "soil", name="w"),
     # a plate lying in the boundary plane x = 0 (a bulkhead): its face is touched across it
     "bulkhead_on_boundary": lambda s: s.add_rectangle((0.0, _L / 2, 0.01), (1, 0, 0), (0, 1, 0), 0.005, 0.005,
                                                       "soil", name="w"),
