@@ -776,3 +776,64 @@ def test_a_blade_spanning_a_slab_may_turn_only_about_the_periodic_axis(axis, ref
         # tangential force besides)
         assert f[0][:2] == pytest.approx([-_hertz_wall_force(mats, R, _D), 0], rel=1e-9, abs=1e-12)
         sim.run(10)
+
+
+def test_a_closed_rod_with_disk_caps_on_the_boundaries_pushes_with_the_hertz_force():
+    """A cylinder rod (radius 10 mm) along x spanning the period, closed by disks lying on
+    x = 0 and x = L: its caps are met at their rims only, and a sphere pressed 0.01 R into
+    the rod's top beside x = 0 feels the Hertz force.  It was refused (the caps' centres
+    were looked for inside the straight pieces of the section only, never its circles)."""
+    from soilcal.dem.walls import CYLINDER, DISK
+
+    mats = table(e=0.5, mu=0.3, E=1e8)
+    yc, zc, a = 0.05, 0.05, 0.01
+    sim = Simulation(mats, gravity=(0, 0, 0), box=(0, _L, 0, 0.1), periodic=(True, False))
+    sim.add_wall("rod", "soil", [
+        (CYLINDER, np.array([_L / 2, yc, zc, 1, 0, 0, a, _L / 2, 0.0]), 0b1, 0b10),
+        (DISK, np.array([0, yc, zc, 1, 0, 0, a]), 0b1, 0b10),
+        (DISK, np.array([_L, yc, zc, 1, 0, 0, a]), 0b1, 0b10)])
+    sim.add_particles([[1e-3, yc, zc + a + R - _D]], R, "soil")
+    f, _ = sim.compute_forces()
+    assert f[0] == pytest.approx([0, 0, _hertz_wall_force(mats, R, _D)], rel=1e-9, abs=1e-12)
+
+
+def _curved_floor(n, zf, shift=0.0):
+    """A floor mesh over 0 .. _L (x) by 0 .. _L (y) of n x n cells, height zf(y), float32
+    rounded as read from a file, shifted by ``shift`` along x."""
+    xs = np.linspace(0, _L, n + 1)
+    X, Y = np.meshgrid(xs, xs)
+    v = np.column_stack([X.ravel(), Y.ravel(), zf(Y.ravel())]).astype(np.float32).astype(float)
+    v[:, 0] += shift
+    t = [[j * (n + 1) + i, j * (n + 1) + i + 1, j * (n + 1) + i + n + 2] for j in range(n) for i in range(n)]
+    t += [[j * (n + 1) + i, j * (n + 1) + i + n + 2, j * (n + 1) + i + n + 1] for j in range(n) for i in range(n)]
+    return v, np.array(t)
+
+
+_CURVED = {  # a cross-profile across y, running along x, and where the sphere sits
+    "sine_2mm": (lambda y: 2e-3 * np.sin(2 * np.pi * y / _L), _L / 4, 2e-3),
+    "sine_5mm": (lambda y: 5e-3 * np.sin(2 * np.pi * y / _L), _L / 4, 5e-3),
+    "parabola": (lambda y: 0.5 * (y - _L / 2) ** 2, _L / 2, 0.0),
+}
+
+
+@pytest.mark.parametrize("n", [30, 60, 100])
+@pytest.mark.parametrize("profile", sorted(_CURVED))
+def test_a_floor_curved_across_the_periodic_axis_is_accepted_at_every_resolution(profile, n):
+    """A faceted floor whose height varies across y only runs along x: the sections at
+    x = 0 and x = L are the same at any mesh resolution, and a sphere beside x = 0 feels the
+    force of the same floor made non-periodic (copies shifted by +-L).  It was refused at
+    some resolutions only (z = 2 mm sin(2 pi y / L) at 60 and 100 cells, 5 mm at 100, the
+    parabola at 30 and 60): nearly collinear pieces were merged greedily into lines, differently at
+    x = 0 (cut along mesh edges) and inside."""
+    zf, y, z = _CURVED[profile]
+    mats = table(e=0.5, mu=0.3, E=1e8)
+    x = [1e-4, y, z + R - _D]
+    forces = []
+    for periodic in (True, False):
+        sim = Simulation(mats, gravity=(0, 0, 0), box=(0, _L, 0, _L), periodic=(periodic, False))
+        for k, s in enumerate((0.0,) if periodic else (0.0, -_L, _L)):
+            sim.add_mesh(*_curved_floor(n, zf, s), "soil", name=f"floor{k}")
+        sim.add_particles([x], R, "soil")
+        forces.append(sim.compute_forces()[0][0])
+    assert forces[1][2] > 0.1 * _hertz_wall_force(mats, R, _D)
+    assert forces[0] == pytest.approx(forces[1], rel=1e-9, abs=1e-12)

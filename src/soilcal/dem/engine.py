@@ -184,53 +184,70 @@ def _section_lines(tri, q, c, eps):
     return seg, use
 
 
-def _merge_lines(seg, tol):
-    """The union of segments ``seg`` [k, 2, 2] as maximal pieces: segments on one line
-    (within ``tol``) that overlap or leave gaps up to ``tol`` joined, each line taken along
-    the longest segment left; points (corners touching the plane) off every line shorter
-    than ``tol`` are left out (the faces around such a corner are cut beside it)."""
-    out = []
-    rest = seg
-    while rest.shape[0]:
-        ln = np.linalg.norm(rest[:, 1] - rest[:, 0], axis=1)
-        k = int(np.argmax(ln))
-        if ln[k] <= tol:
-            break
-        p0, p1 = rest[k]
-        u = (p1 - p0) / ln[k]
-        nrm = np.array([-u[1], u[0]])
-        on = ((np.abs((rest[:, 0] - p0) @ nrm) <= tol) & (np.abs((rest[:, 1] - p0) @ nrm) <= tol))
-        ta, tb = (rest[on, 0] - p0) @ u, (rest[on, 1] - p0) @ u
-        order = np.argsort(np.minimum(ta, tb))
-        a, b = np.minimum(ta, tb)[order], np.maximum(ta, tb)[order]
-        reach = np.maximum.accumulate(b)
-        start = np.concatenate([[True], a[1:] > reach[:-1] + tol])  # a gap before it
-        first = np.flatnonzero(start)
-        last = np.concatenate([first[1:], [a.size]]) - 1
-        out += [[p0 + a[i] * u, p0 + reach[j] * u] for i, j in zip(first, last)]
-        rest = rest[~on]
-    return np.array(out).reshape(-1, 2, 2)
-
-
-def _lines_within(x, y, tol) -> bool:
-    """Whether every piece of ``x`` lies on one piece of ``y`` (both ends within ``tol``)."""
+def _covered(x, y, tol) -> bool:
+    """Whether every point of the segments ``x`` [k, 2, 2] lies within ``tol`` of a segment
+    of ``y`` [m, 2, 2]: along each segment of x, the points within tol of one segment of y
+    (the convex capsule about it) form one interval, and those intervals must cover the
+    whole segment.  Points and pieces of x shorter than tol (a corner touching the plane)
+    are left out.  No segments are joined first, so how finely a surface is meshed does not
+    change the answer."""
+    if x.shape[0]:
+        x = x[np.linalg.norm(x[:, 1] - x[:, 0], axis=1) > tol]
     if x.shape[0] == 0:
         return True
     if y.shape[0] == 0:
         return False
-    a, d = y[:, 0], y[:, 1] - y[:, 0]
-    dd = np.einsum("ij,ij->i", d, d)
-    near = np.ones((x.shape[0], y.shape[0]), dtype=bool)
-    for e in (0, 1):
-        w = x[:, e][:, None, :] - a[None]
-        t = np.clip(np.einsum("kij,ij->ki", w, d) / dd, 0.0, 1.0)
-        near &= np.linalg.norm(w - t[:, :, None] * d[None], axis=2) <= tol
-    return bool(near.any(axis=1).all())
+    a, e = y[:, 0], y[:, 1] - y[:, 0]
+    ln = np.linalg.norm(e, axis=1)
+    u = e / np.where(ln > 0, ln, 1.0)[:, None]
+    nrm = np.stack([-u[:, 1], u[:, 0]], axis=1)
+    t2 = tol * tol
+    for k0 in range(0, x.shape[0], 256):
+        p0 = x[k0:k0 + 256, 0]
+        d = x[k0:k0 + 256, 1] - p0
+        dd = np.einsum("ij,ij->i", d, d)[:, None]
+        starts, ends = [], []
+        for c in (y[:, 0], y[:, 1]):  # the discs about y's ends: |p0 + t d - c| <= tol
+            w = p0[:, None, :] - c[None]
+            bb = np.einsum("kij,kj->ki", w, d)
+            disc = bb * bb - dd * (np.einsum("kij,kij->ki", w, w) - t2)
+            r = np.sqrt(np.maximum(disc, 0.0))
+            ok = disc >= 0
+            starts.append(np.where(ok, (-bb - r) / dd, np.inf))
+            ends.append(np.where(ok, (-bb + r) / dd, -np.inf))
+        # the band beside y: |n.(p - a)| <= tol and 0 <= u.(p - a) <= |e|
+        w = p0[:, None, :] - a[None]
+        s0, s1 = np.full(w.shape[:2], -np.inf), np.full(w.shape[:2], np.inf)
+        for dirn, lo_, hi_ in ((nrm, -tol, tol), (u, 0.0, ln)):
+            al = np.einsum("kij,ij->ki", w, dirn)
+            be = d @ dirn.T
+            flat = np.abs(be) <= 1e-300
+            with np.errstate(divide="ignore", invalid="ignore"):
+                ta, tb = (lo_ - al) / be, (hi_ - al) / be
+            lo_t = np.where(flat, np.where((al >= lo_) & (al <= hi_), -np.inf, np.inf),
+                            np.minimum(ta, tb))
+            hi_t = np.where(flat, np.where((al >= lo_) & (al <= hi_), np.inf, -np.inf),
+                            np.maximum(ta, tb))
+            s0, s1 = np.maximum(s0, lo_t), np.minimum(s1, hi_t)
+        band = ln[None, :] > 0
+        starts.append(np.where(band, s0, np.inf))
+        ends.append(np.where(band, s1, -np.inf))
+        st, en = np.concatenate(starts, axis=1), np.concatenate(ends, axis=1)
+        use = (en >= st) & (en >= 0) & (st <= 1)
+        st = np.where(use, np.maximum(st, 0.0), np.inf)
+        en = np.where(use, np.minimum(en, 1.0), -np.inf)
+        order = np.argsort(st, axis=1)
+        st, en = np.take_along_axis(st, order, 1), np.take_along_axis(en, order, 1)
+        reach = np.maximum.accumulate(en, axis=1)
+        gap = (st[:, 1:] > reach[:, :-1] + 1e-12) & (reach[:, :-1] < 1.0)
+        if np.any(st[:, 0] > 0) or np.any(gap) or np.any(reach[:, -1] < 1.0):
+            return False
+    return True
 
 
 class _Sections:
     """Sections across axis q of the flat primitives of a set of walls, by material:
-    ``at(c)`` maps each material to (merged segments, circles) where the plane q = c cuts
+    ``at(c)`` maps each material to (segments, circles) where the plane q = c cuts
     them; ``same(s1, s2)`` compares two sections within ``tol``."""
 
     def __init__(self, kinds, par, mats, q, eps, tol, windows):
@@ -255,7 +272,7 @@ class _Sections:
         seg, it = _section_lines(self.tri, self.q, c, self.eps)
         ic = np.flatnonzero((self.cext[:, 0] <= c + self.eps) & (self.cext[:, 1] >= c - self.eps))
         for m in set(self.tmat[it].tolist()) | set(self.cmat[ic].tolist()):
-            out[m] = (_merge_lines(seg[self.tmat[it] == m], self.tol),
+            out[m] = (seg[self.tmat[it] == m],
                       self.circ[ic[self.cmat[ic] == m]])
         return out
 
@@ -276,7 +293,7 @@ class _Sections:
             return False
         for m in s1:
             (l1, c1), (l2, c2) = s1[m], s2[m]
-            if not (_lines_within(l1, l2, self.tol) and _lines_within(l2, l1, self.tol)):
+            if not (_covered(l1, l2, self.tol) and _covered(l2, l1, self.tol)):
                 return False
             for x, y in ((c1, c2), (c2, c1)):
                 if x.shape[0] and (y.shape[0] == 0 or not np.all(
@@ -945,8 +962,12 @@ class Simulation:
         the slab, a floor ending on the boundary).  A section changes only at a corner or a
         cylinder's end along q: it is taken there and halfway between.  An end face lying on
         a boundary (the cap of a closed solid spanning the period) is met at its rim only when
-        it lies inside the section there.  Sections are compared per material within
-        max(2e-4 rho, 4 float32 ulps of the coordinates), as walls.py joins tiles."""
+        its centre lies inside the section there (an odd count of the section's straight
+        pieces crossing a ray from it, or within one of its circles).  Sections are compared
+        per material within max(2e-4 rho, 4 float32 ulps of the coordinates), as walls.py
+        joins tiles: every point of the pieces of each within that distance of a piece of
+        the other (:func:`_covered`; pieces shorter than it left out), circles by centre and
+        radius."""
         wa = self._warr
         lo, hi = float(self.box[2 * q]), float(self.box[2 * q + 1])
         sel = np.isin(wa["prim_wall"][ks], walls)
@@ -995,9 +1016,12 @@ class Simulation:
                 kind = wa["prim_kind"][k]
                 ctr = p[:9].reshape(3, 3).mean(axis=0) if kind == TRIANGLE else p[0:3]
                 c = lo if abs(ctr[q] - lo) <= abs(ctr[q] - hi) else hi
-                pieces = [v[0] for v in sec.at(c).values()]
-                lines = np.concatenate(pieces) if pieces else np.zeros((0, 2, 2))
-                if not _inside(ctr[list(_ACROSS[q])], lines):
+                at = sec.at(c).values()
+                lines = np.concatenate([v[0] for v in at]) if at else np.zeros((0, 2, 2))
+                circ = np.concatenate([v[1] for v in at]) if at else np.zeros((0, 3))
+                pt = ctr[list(_ACROSS[q])]
+                if not (_inside(pt, lines) or np.any(
+                        np.hypot(*(circ[:, :2] - pt).T) <= circ[:, 2] + tol)):
                     why = (f"an end face on the boundary {ax} = {c:.6g} m that no section of "
                            f"its faces along {ax} encloses (a sphere meets its face)")
                     break
