@@ -837,3 +837,105 @@ def test_a_floor_curved_across_the_periodic_axis_is_accepted_at_every_resolution
         forces.append(sim.compute_forces()[0][0])
     assert forces[1][2] > 0.1 * _hertz_wall_force(mats, R, _D)
     assert forces[0] == pytest.approx(forces[1], rel=1e-9, abs=1e-12)
+
+
+def _tri(a, b, c):
+    from soilcal.dem.walls import TRIANGLE
+
+    return (TRIANGLE, np.concatenate([a, b, c]).astype(float), 0b111, 0)
+
+
+def _square_tube(h, yc=0.05, zc=0.05):
+    """Four faces (two triangles each) of a square tube of half side h along x, 0 .. _L."""
+    p = lambda x, y, z: np.array([x, yc + y, zc + z])
+    cs = [(-h, -h), (h, -h), (h, h), (-h, h)]
+    out = []
+    for i in range(4):
+        (y0, z0), (y1, z1) = cs[i], cs[(i + 1) % 4]
+        out += [_tri(p(0, y0, z0), p(_L, y0, z0), p(_L, y1, z1)),
+                _tri(p(0, y0, z0), p(_L, y1, z1), p(0, y1, z1))]
+    return out
+
+
+def _end_square(h, yc=0.05, zc=0.05):
+    q = lambda y, z: np.array([0.0, yc + y, zc + z])
+    return [_tri(q(-h, -h), q(h, -h), q(h, h)), _tri(q(-h, -h), q(h, h), q(-h, h))]
+
+
+def _u_channel_with_end():
+    y0, y1, hh = 0.03, 0.07, 0.04
+    p = lambda x, y, z: np.array([x, y, z])
+    out = []
+    for (ya, za), (yb, zb) in (((y0, hh), (y0, 0)), ((y0, 0), (y1, 0)), ((y1, 0), (y1, hh))):
+        out += [_tri(p(0, ya, za), p(_L, ya, za), p(_L, yb, zb)),
+                _tri(p(0, ya, za), p(_L, yb, zb), p(0, yb, zb))]
+    return out + [_tri(p(0, y0, 0), p(0, y1, 0), p(0, y1, hh)),
+                  _tri(p(0, y0, 0), p(0, y1, hh), p(0, y0, hh))]
+
+
+def _floor_with_bulkhead():
+    from soilcal.dem.walls import RECTANGLE
+
+    rect = lambda c, n, u, a, b: (RECTANGLE, np.concatenate([c, n, u, [a, b]]).astype(float), 0b1, 0b110)
+    return [rect((_L / 2, 0.05, 0), (0, 0, 1), (1, 0, 0), _L / 2, 0.05),
+            rect((0, 0.05, -2.5e-3), (1, 0, 0), (0, 1, 0), 0.05, 17.5e-3)]
+
+
+def _shifted(prims, s):
+    from soilcal.dem.walls import TRIANGLE
+
+    out = []
+    for kind, v, pts, dirs in prims:
+        v = v.copy()
+        v[[0, 3, 6] if kind == TRIANGLE else [0]] += s
+        out.append((kind, v, pts, dirs))
+    return out
+
+
+_END_FACES_MET = {  # walls spanning the period with an end face at x = 0, a sphere beside x = L
+    # an open U channel (y 0.03 .. 0.07, z 0 .. 0.04) and an end plate across it: the
+    # channel's section encloses nothing
+    "u_channel_end_plate": (_u_channel_with_end, (_L - R + _D, 0.05, 0.02)),
+    # a floor and a bulkhead (z -20 .. 15 mm) whose centre lies below the floor
+    "floor_bulkhead": (_floor_with_bulkhead, (_L - R + _D, 0.05, 7e-3)),
+    # a square tube (+-10 mm) and a bulkhead of two triangles (+-25 mm) whose centres lie
+    # inside the tube
+    "tube_wider_bulkhead": (lambda: _square_tube(0.01) + _end_square(0.025),
+                            (_L - R + _D, 0.05 + 0.017, 0.05)),
+}
+
+
+@pytest.mark.parametrize("case", sorted(_END_FACES_MET))
+def test_an_end_face_reaching_outside_a_closed_outline_of_the_section_is_refused(case):
+    """An end face on the boundary x = 0 is met at its rim only when every corner lies
+    inside or on a closed outline of the section of the faces along x there.  In these
+    set-ups a sphere beside x = L presses the end face across the boundary: the set-up made
+    non-periodic (the wall copied at +-L) pushes it with the Hertz force of an overlap
+    0.01 R, and the periodic run gave 0 (its centre, or the centres of its triangles, lay
+    inside the section by a ray count that also counted open outlines): it is refused,
+    naming the wall and the corner outside."""
+    mats = table(e=0.5, mu=0.3, E=1e8)
+    build, x = _END_FACES_MET[case]
+    sim = Simulation(mats, gravity=(0, 0, 0), box=(0, _L, 0, 0.1))
+    sim.add_wall("w", "soil", build() + _shifted(build(), _L) + _shifted(build(), -_L))
+    sim.add_particles([x], R, "soil")
+    f, _ = sim.compute_forces()
+    assert np.linalg.norm(f[0]) == pytest.approx(_hertz_wall_force(mats, R, _D), rel=1e-9)
+    sim = Simulation(mats, gravity=(0, 0, 0), box=(0, _L, 0, 0.1), periodic=(True, False))
+    sim.add_wall("w", "soil", build())
+    sim.add_particles([x], R, "soil")
+    with pytest.raises(InputError, match=r"walls\.w.*end face on the boundary x = 0 m with a "
+                                         r"corner at \(y, z\) = .* outside every closed outline"):
+        sim.compute_forces()
+
+
+def test_a_tube_closed_by_end_faces_on_its_section_pushes_with_the_hertz_force():
+    """The square tube closed by end squares exactly its section (corners on the closed
+    outline) stays accepted: a sphere pressed 0.01 R into its top beside x = L feels the
+    Hertz force."""
+    mats = table(e=0.5, mu=0.3, E=1e8)
+    sim = Simulation(mats, gravity=(0, 0, 0), box=(0, _L, 0, 0.1), periodic=(True, False))
+    sim.add_wall("w", "soil", _square_tube(0.01) + _end_square(0.01))
+    sim.add_particles([[_L - R / 2, 0.05, 0.06 + R - _D]], R, "soil")
+    f, _ = sim.compute_forces()
+    assert f[0] == pytest.approx([0, 0, _hertz_wall_force(mats, R, _D)], rel=1e-9, abs=1e-12)

@@ -301,18 +301,72 @@ class _Sections:
                     return False
         return True
 
-def _inside(p, lines) -> bool:
-    """Whether point ``p`` (2) lies inside the closed outline ``lines`` [k, 2, 2] (even-odd
-    count of the outline's crossings of a ray from p)."""
-    if lines.shape[0] == 0:
+def _seg_dist(p, seg):
+    """Distances [k, m] from points ``p`` [k, 2] to segments ``seg`` [m, 2, 2]."""
+    a, d = seg[:, 0], seg[:, 1] - seg[:, 0]
+    dd = np.einsum("ij,ij->i", d, d)
+    w = p[:, None, :] - a[None]
+    t = np.clip(np.einsum("kij,ij->ki", w, d) / np.where(dd > 0, dd, 1.0), 0.0, 1.0)
+    return np.linalg.norm(w - t[:, :, None] * d[None], axis=2)
+
+
+def _closed_outline(seg, tol):
+    """The pieces of ``seg`` [k, 2, 2] that form closed outlines: pieces no longer than
+    ``tol`` and pieces lying within tol of a longer one (the same edge cut from two faces)
+    dropped, then, repeatedly, every piece with an end farther than tol from every other
+    piece left (an open end: a floor, a U channel, a fin) removed."""
+    if seg.shape[0] == 0:
+        return seg
+    seg = seg[np.linalg.norm(seg[:, 1] - seg[:, 0], axis=1) > tol]
+    if seg.shape[0] == 0:
+        return seg
+    ln = np.linalg.norm(seg[:, 1] - seg[:, 0], axis=1)
+    k = seg.shape[0]
+    d0, d1 = _seg_dist(seg[:, 0], seg), _seg_dist(seg[:, 1], seg)
+    rank = np.argsort(np.argsort(-ln, kind="stable"), kind="stable")  # 0 = longest
+    under = (d0 <= tol) & (d1 <= tol) & (rank[None, :] < rank[:, None])
+    keep = ~under.any(axis=1)
+    while True:
+        other = keep[None, :] & ~np.eye(k, dtype=bool)
+        ok = keep & ((d0 <= tol) & other).any(axis=1) & ((d1 <= tol) & other).any(axis=1)
+        if np.array_equal(ok, keep):
+            return seg[keep]
+        keep = ok
+
+
+def _enclosed(p, loops, circ, tol) -> bool:
+    """Whether point ``p`` (2) lies inside or on (within ``tol``) the closed outlines
+    ``loops`` [k, 2, 2] (an odd count of them crossing a ray from p) or circles ``circ``
+    [m, 3] (centre, radius)."""
+    if circ.shape[0] and np.any(np.hypot(*(circ[:, :2] - p).T) <= circ[:, 2] + tol):
+        return True
+    if loops.shape[0] == 0:
         return False
+    if np.any(_seg_dist(p[None], loops) <= tol):
+        return True
     r = np.array([math.cos(0.3183), math.sin(0.3183)])  # a ray along no mesh line
-    a, d = lines[:, 0] - p, lines[:, 1] - lines[:, 0]
-    den = r[0] * d[:, 1] - r[1] * d[:, 0]
-    with np.errstate(divide="ignore", invalid="ignore"):
-        t = (a[:, 0] * r[1] - a[:, 1] * r[0]) / den  # along the line
-        s = (a[:, 0] * d[:, 1] - a[:, 1] * d[:, 0]) / den  # along the ray
-    return bool(np.count_nonzero((den != 0) & (t >= 0) & (t < 1) & (s > 0)) % 2)
+    e0, e1 = loops[:, 0] - p, loops[:, 1] - p
+    c0, c1 = r[0] * e0[:, 1] - r[1] * e0[:, 0], r[0] * e1[:, 1] - r[1] * e1[:, 0]
+    cross = (c0 > 0) != (c1 > 0)  # the ends on the two sides of the ray's line
+    w = np.where(cross, c0 / np.where(cross, c0 - c1, 1.0), 0.0)
+    along = (e0 + w[:, None] * (e1 - e0)) @ r
+    return bool(np.count_nonzero(cross & (along > 0)) % 2)
+
+
+def _face_corners(kind, p):
+    """The corners [n, 3] of an end face: a triangle's three, a rectangle's four, 32 points
+    round a disk's rim."""
+    if kind == TRIANGLE:
+        return p[:9].reshape(3, 3)
+    c, n = p[0:3], p[3:6]
+    if kind == RECTANGLE:
+        du, dv = p[6:9] * p[9], np.cross(n, p[6:9]) * p[10]
+        return np.array([c - du - dv, c + du - dv, c + du + dv, c - du + dv])
+    e1 = np.cross(n, np.eye(3)[int(np.argmin(np.abs(n)))])
+    e1 /= np.linalg.norm(e1)
+    e2 = np.cross(n, e1)
+    th = np.linspace(0.0, 2 * math.pi, 32, endpoint=False)
+    return c + p[6] * (np.cos(th)[:, None] * e1 + np.sin(th)[:, None] * e2)
 
 
 class Simulation:
@@ -962,8 +1016,9 @@ class Simulation:
         the slab, a floor ending on the boundary).  A section changes only at a corner or a
         cylinder's end along q: it is taken there and halfway between.  An end face lying on
         a boundary (the cap of a closed solid spanning the period) is met at its rim only when
-        its centre lies inside the section there (an odd count of the section's straight
-        pieces crossing a ray from it, or within one of its circles).  Sections are compared
+        every corner of it (32 points round a disk's rim) lies inside or on a closed outline
+        of the section there (:func:`_closed_outline`: pieces with an open end never
+        enclose; inside: an odd count of them crossing a ray from it, or within a circle).  Sections are compared
         per material within max(2e-4 rho, 4 float32 ulps of the coordinates), as walls.py
         joins tiles: every point of the pieces of each within that distance of a piece of
         the other (:func:`_covered`; pieces shorter than it left out), circles by centre and
@@ -1009,21 +1064,23 @@ class Simulation:
             if why is not None:
                 break
         if why is None:
-            # the caps on a boundary: inside the section there
+            # the caps on a boundary: every corner inside or on a closed outline there
             cp = ks[sel & cap]
             for k in cp:
-                p = wa["prim_par"][k]
-                kind = wa["prim_kind"][k]
-                ctr = p[:9].reshape(3, 3).mean(axis=0) if kind == TRIANGLE else p[0:3]
-                c = lo if abs(ctr[q] - lo) <= abs(ctr[q] - hi) else hi
-                at = sec.at(c).values()
+                cor = _face_corners(wa["prim_kind"][k], wa["prim_par"][k])
+                c = lo if abs(cor[:, q].mean() - lo) <= abs(cor[:, q].mean() - hi) else hi
+                at = list(sec.at(c).values())
                 lines = np.concatenate([v[0] for v in at]) if at else np.zeros((0, 2, 2))
                 circ = np.concatenate([v[1] for v in at]) if at else np.zeros((0, 3))
-                pt = ctr[list(_ACROSS[q])]
-                if not (_inside(pt, lines) or np.any(
-                        np.hypot(*(circ[:, :2] - pt).T) <= circ[:, 2] + tol)):
-                    why = (f"an end face on the boundary {ax} = {c:.6g} m that no section of "
-                           f"its faces along {ax} encloses (a sphere meets its face)")
+                loops = _closed_outline(lines, tol)
+                out = [pt for pt in cor[:, list(_ACROSS[q])]
+                       if not _enclosed(pt, loops, circ, tol)]
+                if out:
+                    yz = ", ".join(f"{v:.6g}" for v in out[0])
+                    across = ", ".join("xyz"[i] for i in _ACROSS[q])
+                    why = (f"an end face on the boundary {ax} = {c:.6g} m with a corner at "
+                           f"({across}) = ({yz}) m outside every closed outline of the "
+                           f"section of its faces along {ax} there (a sphere meets its face)")
                     break
         cache[key] = why
         return why
