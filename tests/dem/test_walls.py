@@ -939,3 +939,27 @@ def test_a_tube_closed_by_end_faces_on_its_section_pushes_with_the_hertz_force()
     sim.add_particles([[_L - R / 2, 0.05, 0.06 + R - _D]], R, "soil")
     f, _ = sim.compute_forces()
     assert f[0] == pytest.approx([0, 0, _hertz_wall_force(mats, R, _D)], rel=1e-9, abs=1e-12)
+
+
+def test_spheres_inside_a_closed_solid_spanning_the_period_are_refused():
+    """A closed bin (a box mesh, 0 .. L along x) spanning the period with spheres inside,
+    0.99 R from its end walls: made non-periodic (the bin copied at +-L) each sphere is
+    pushed by its end wall with the Hertz force of an overlap 0.01 R; periodic, each got
+    three times that (5.4945 N), the two spheres touching across x = 0 through the end
+    walls.  The end walls are met at more than their rims: the set-up is refused, naming
+    the bin and a sphere inside it."""
+    mats = table(e=0.5, mu=0.3, E=1e8)
+    x = [(0.99 * R, _L / 2, 0.015), (_L - 0.99 * R, _L / 2, 0.015)]
+    sim = Simulation(mats, gravity=(0, 0, 0), box=(0, _L, 0, _L))
+    for k, s in enumerate((0.0, -_L, _L)):
+        sim.add_box((s, 0.0, 0.0), (s + _L, _L, 0.03), "soil", name=f"bin{k}")
+    sim.add_particles(x, R, "soil")
+    f, _ = sim.compute_forces()
+    fh = _hertz_wall_force(mats, R, 0.01 * R)
+    assert f.ravel() == pytest.approx([fh, 0, 0, -fh, 0, 0], rel=1e-9, abs=1e-12)
+    sim = Simulation(mats, gravity=(0, 0, 0), box=(0, _L, 0, _L), periodic=(True, False))
+    sim.add_box((0.0, 0.0, 0.0), (_L, _L, 0.03), "soil", name="bin")
+    sim.add_particles(x, R, "soil")
+    with pytest.raises(InputError, match=r"walls\.bin.*2 sphere\(s\) inside the closed section "
+                                         r"enclosing its end face"):
+        sim.compute_forces()

@@ -353,6 +353,24 @@ def _enclosed(p, loops, circ, tol) -> bool:
     return bool(np.count_nonzero(cross & (along > 0)) % 2)
 
 
+def _inside_many(pts, loops, circ) -> np.ndarray:
+    """Which points ``pts`` [n, 2] lie inside the closed outlines ``loops`` [k, 2, 2] (an
+    odd count crossing a ray from the point) or circles ``circ`` [m, 3]."""
+    out = np.zeros(pts.shape[0], dtype=bool)
+    if circ.shape[0]:
+        out |= (np.hypot(pts[:, None, 0] - circ[None, :, 0], pts[:, None, 1] - circ[None, :, 1])
+                < circ[None, :, 2]).any(axis=1)
+    if loops.shape[0]:
+        r = np.array([math.cos(0.3183), math.sin(0.3183)])
+        e0, e1 = loops[None, :, 0] - pts[:, None], loops[None, :, 1] - pts[:, None]
+        c0, c1 = r[0] * e0[..., 1] - r[1] * e0[..., 0], r[0] * e1[..., 1] - r[1] * e1[..., 0]
+        cross = (c0 > 0) != (c1 > 0)
+        w = np.where(cross, c0 / np.where(cross, c0 - c1, 1.0), 0.0)
+        along = (e0 + w[..., None] * (e1 - e0)) @ r
+        out |= (np.count_nonzero(cross & (along > 0), axis=1) % 2).astype(bool)
+    return out
+
+
 def _face_corners(kind, p):
     """The corners [n, 3] of an end face: a triangle's three, a rectangle's four, 32 points
     round a disk's rim."""
@@ -889,7 +907,8 @@ class Simulation:
         largest radius) of a boundary x = lo or hi is accepted only where its surface there
         runs along x and continues periodically (:meth:`_periodic_fault`: the planes x = lo
         and x = hi cut it in the same section, a floor, a plate across the slab or wider than
-        it, a closed solid whose caps lie on the boundaries); walls moving together (floor
+        it, a closed solid whose caps lie on the boundaries inside a closed outline of that
+        section, with no sphere inside it); walls moving together (floor
         tiles) that fail alone are judged as one surface.  Otherwise a sphere beside one
         boundary would miss the contacts across it, or, outside the box, every contact.  A
         plane must be parallel to the periodic axes.  A moving wall is checked over the
@@ -1018,7 +1037,9 @@ class Simulation:
         a boundary (the cap of a closed solid spanning the period) is met at its rim only when
         every corner of it (32 points round a disk's rim) lies inside or on a closed outline
         of the section there (:func:`_closed_outline`: pieces with an open end never
-        enclose; inside: an odd count of them crossing a ray from it, or within a circle).  Sections are compared
+        enclose; inside: an odd count of them crossing a ray from it, or within a circle),
+        and no sphere centre lies inside such an outline at the run's start
+        (:meth:`_spheres_enclosed`, judged again at every run).  Sections are compared
         per material within max(2e-4 rho, 4 float32 ulps of the coordinates), as walls.py
         joins tiles: every point of the pieces of each within that distance of a piece of
         the other (:func:`_covered`; pieces shorter than it left out), circles by centre and
@@ -1034,7 +1055,7 @@ class Simulation:
         still = not (np.any(wa["wall_vel"][walls] != 0) or np.any(wa["wall_omega"][walls] != 0))
         cache = self.__dict__.setdefault("_periodic_cache", {}) if still else {}
         if key in cache:
-            return cache[key]
+            return self._spheres_enclosed(q, *cache[key])
         scale = float(np.abs(par[:, :9]).max()) if par.size else 0.0
         tol = max(2e-4 * rho, 4.8e-7 * scale)
         sp, sn = max(shift, 0.0), min(shift, 0.0)
@@ -1063,6 +1084,7 @@ class Simulation:
                 break
             if why is not None:
                 break
+        shut = []  # the closed outlines enclosing accepted caps, and where
         if why is None:
             # the caps on a boundary: every corner inside or on a closed outline there
             cp = ks[sel & cap]
@@ -1082,8 +1104,30 @@ class Simulation:
                            f"({across}) = ({yz}) m outside every closed outline of the "
                            f"section of its faces along {ax} there (a sphere meets its face)")
                     break
-        cache[key] = why
-        return why
+                shut.append((loops, circ, c))
+        cache[key] = (why, shut)
+        return self._spheres_enclosed(q, why, shut)
+
+    def _spheres_enclosed(self, q, why, shut):
+        """``why``, or, when it is None, what a sphere inside a closed solid whose end faces
+        were accepted on a boundary breaks: its centre (now, at the run's start) inside the
+        closed outline of the section enclosing an end face; such a sphere meets the end
+        faces, and the spheres beside the other boundary across them."""
+        if why is not None or not shut or self.p.x.shape[0] == 0:
+            return why
+        ax = ("x", "y")[q]
+        pts = self.p.x[:, list(_ACROSS[q])]
+        for loops, circ, c in shut:
+            ins = np.flatnonzero(_inside_many(pts, loops, circ))
+            if ins.size:
+                i = int(ins[0])
+                across = ", ".join("xyz"[j] for j in _ACROSS[q])
+                at = ", ".join(f"{v:.6g}" for v in pts[i])
+                return (f"{ins.size} sphere(s) inside the closed section enclosing its end face "
+                        f"on the boundary {ax} = {c:.6g} m (sphere {i} at ({across}) = ({at}) m): "
+                        f"they meet the end faces, and each other across the boundary through "
+                        f"them")
+        return None
 
     def _check_wall_steps(self, reach) -> None:
         """InputError naming the wall whose surface moves more than ``max_overlap`` of the
