@@ -963,3 +963,23 @@ def test_spheres_inside_a_closed_solid_spanning_the_period_are_refused():
     with pytest.raises(InputError, match=r"walls\.bin.*2 sphere\(s\) inside the closed section "
                                          r"enclosing its end face"):
         sim.compute_forces()
+
+
+def test_points_inside_closed_outlines_are_found_in_chunks():
+    # an L-shaped outline (the unit square less its upper right quarter) and a circle of radius
+    # 0.1 about (2, 2): inside by the shapes' inequalities, tested in chunks of a few points
+    # and with the points outside both bounding boxes never tested
+    from soilcal.dem.engine import _inside_many
+
+    corners = np.array([(0, 0), (1, 0), (1, 0.5), (0.5, 0.5), (0.5, 1), (0, 1)], float)
+    loops = np.stack([corners, np.roll(corners, -1, axis=0)], axis=1)
+    circ = np.array([[2.0, 2.0, 0.1]])
+    rng = np.random.default_rng(3)
+    pts = rng.uniform(-0.5, 2.5, size=(5000, 2))
+    x, y = pts[:, 0], pts[:, 1]
+    in_l = (x > 0) & (x < 1) & (y > 0) & (y < 1) & ~((x > 0.5) & (y > 0.5))
+    in_c = np.hypot(x - 2.0, y - 2.0) < 0.1
+    for block in (7, 500_000):
+        got = _inside_many(pts, loops, circ, block=block)
+        assert np.array_equal(got, in_l | in_c)
+    assert not _inside_many(pts, np.zeros((0, 2, 2)), np.zeros((0, 3))).any()

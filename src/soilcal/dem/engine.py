@@ -353,21 +353,35 @@ def _enclosed(p, loops, circ, tol) -> bool:
     return bool(np.count_nonzero(cross & (along > 0)) % 2)
 
 
-def _inside_many(pts, loops, circ) -> np.ndarray:
+def _inside_many(pts, loops, circ, block: int = 500_000) -> np.ndarray:
     """Which points ``pts`` [n, 2] lie inside the closed outlines ``loops`` [k, 2, 2] (an
-    odd count crossing a ray from the point) or circles ``circ`` [m, 3]."""
+    odd count crossing a ray from the point) or circles ``circ`` [m, 3].  Only the points in
+    the outlines' and circles' bounding box are tested, in chunks of at most ``block`` point x
+    piece pairs: a finely faceted round outline (2048 pieces) beside 20,000 spheres took 7.6 s
+    and 3.7 GB in one go."""
     out = np.zeros(pts.shape[0], dtype=bool)
-    if circ.shape[0]:
-        out |= (np.hypot(pts[:, None, 0] - circ[None, :, 0], pts[:, None, 1] - circ[None, :, 1])
-                < circ[None, :, 2]).any(axis=1)
-    if loops.shape[0]:
-        r = np.array([math.cos(0.3183), math.sin(0.3183)])
-        e0, e1 = loops[None, :, 0] - pts[:, None], loops[None, :, 1] - pts[:, None]
-        c0, c1 = r[0] * e0[..., 1] - r[1] * e0[..., 0], r[0] * e1[..., 1] - r[1] * e1[..., 0]
-        cross = (c0 > 0) != (c1 > 0)
-        w = np.where(cross, c0 / np.where(cross, c0 - c1, 1.0), 0.0)
-        along = (e0 + w[..., None] * (e1 - e0)) @ r
-        out |= (np.count_nonzero(cross & (along > 0), axis=1) % 2).astype(bool)
+    if not (loops.shape[0] or circ.shape[0]) or not pts.shape[0]:
+        return out
+    lo = np.min(np.concatenate([loops.reshape(-1, 2), circ[:, :2] - circ[:, 2:3]]), axis=0)
+    hi = np.max(np.concatenate([loops.reshape(-1, 2), circ[:, :2] + circ[:, 2:3]]), axis=0)
+    idx = np.flatnonzero(np.all((pts >= lo) & (pts <= hi), axis=1))
+    r = np.array([math.cos(0.3183), math.sin(0.3183)])
+    step = max(1, block // max(1, loops.shape[0], circ.shape[0]))
+    for a in range(0, idx.size, step):
+        sel = idx[a:a + step]
+        q = pts[sel]
+        hit = np.zeros(sel.size, dtype=bool)
+        if circ.shape[0]:
+            hit |= (np.hypot(q[:, None, 0] - circ[None, :, 0], q[:, None, 1] - circ[None, :, 1])
+                    < circ[None, :, 2]).any(axis=1)
+        if loops.shape[0]:
+            e0, e1 = loops[None, :, 0] - q[:, None], loops[None, :, 1] - q[:, None]
+            c0, c1 = r[0] * e0[..., 1] - r[1] * e0[..., 0], r[0] * e1[..., 1] - r[1] * e1[..., 0]
+            cross = (c0 > 0) != (c1 > 0)
+            w = np.where(cross, c0 / np.where(cross, c0 - c1, 1.0), 0.0)
+            along = (e0 + w[..., None] * (e1 - e0)) @ r
+            hit |= (np.count_nonzero(cross & (along > 0), axis=1) % 2).astype(bool)
+        out[sel] = hit
     return out
 
 
