@@ -10,8 +10,9 @@ from soilcal.dem.engine import Simulation
 
 
 def random_box(rng, n=300, L=0.04, periodic=True, skin=None):
+    per = (periodic, periodic) if isinstance(periodic, bool) else periodic
     sim = Simulation(table(E=1e8), dt_fraction=0.2, gravity=(0, 0, 0), box=(0, L, 0, L),
-                     periodic=(periodic, periodic), skin=skin)
+                     periodic=per, skin=skin)
     x = rng.uniform(0, L, (n, 3))
     r = rng.uniform(0.5e-3, 2.5e-3, n)
     sim.add_particles(x, r, "soil", v=rng.normal(0, 1e-3, (n, 3)))
@@ -210,18 +211,20 @@ def test_run_until_settled():
 def test_wall_lists_equal_brute_force_with_binned_triangles(rng, periodic, lift):
     # a finely meshed tilted plate (800 triangles, binned by cell) at two heights, an
     # analytic plane and a cylinder (tested by every particle): the wall list of every
-    # particle must hold exactly the primitives within R + skin of its centre
+    # particle must hold exactly the primitives within R + skin of its centre.  Periodic in
+    # y, along which the tilted plate and the cylinder run (periodic in x they would be
+    # refused: a sphere crossing x = L would meet them elsewhere than their continuation)
     from soilcal.dem.geometry import plate_mesh
     from soilcal.dem.walls import prim_closest
 
     L = 0.04
-    sim = random_box(rng, n=400, L=L, periodic=periodic)
+    sim = random_box(rng, n=400, L=L, periodic=(False, True) if periodic else False)
     sim.p.x[:, 2] *= 0.5
     v, t = plate_mesh((L / 2, L / 2, 0.006 + lift), (1, 0, 0.2), (0, 1, 0), 0.05, 0.05,
                       n_u=20, n_v=20)
     sim.add_mesh(v, t, "soil")
     sim.add_plane((0, 0, 0), (0, 0, 1), "soil")
-    sim.add_cylinder((L / 2, L / 2, 0), (0, 0, 1), 0.03, 0.05, "soil")
+    sim.add_cylinder((L / 2, L / 2, 0), (0, 1, 0), 0.03, 0.05, "soil")
     sim._kw = 32
     sim.run(0)
     wa, lists = sim._warr, sim._lists

@@ -526,6 +526,11 @@ _UNSEEN = {  # walls a sphere could touch across a periodic boundary, without se
     "bar_ending_on_boundary_beside_a_floor": lambda s: (
         s.add_mesh([[0, 0, 0], [_L, 0, 0], [_L, _L, 0], [0, _L, 0]], [[0, 1, 2], [0, 2, 3]], "soil", name="floor"),
         s.add_box((0.0, 0.006, 0.02), (0.02, 0.014, 0.03), "soil", name="w")),
+    # a floor mesh tilted along x, wider than the box: past x = L it is 1 mm higher than its
+    # continuation from x = 0 (it was accepted as continued past both boundaries)
+    "tilted_mesh_wider_than_box": lambda s: s.add_mesh(
+        [[-0.01, 0, 0], [_L + 0.01, 0, 0.0015], [_L + 0.01, _L, 0.0015], [-0.01, _L, 0]],
+        [[0, 1, 2], [0, 2, 3]], "soil", name="w"),
     # a plate lying in the boundary plane x = 0 (a bulkhead): its face is touched across it
     "bulkhead_on_boundary": lambda s: s.add_rectangle((0.0, _L / 2, 0.01), (1, 0, 0), (0, 1, 0), 0.005, 0.005,
                                                       "soil", name="w"),
@@ -625,3 +630,356 @@ def test_a_settling_run_judges_a_moving_wall_where_it_stands():
                       velocity=(1e-3, 0, 0))
     sim.add_particles([[_L / 2, _L / 4, 0.01]], R, "soil")
     assert sim.run_until_settled(ke_tol=1.0, check_every=10)
+
+
+_H = 4 * R  # the height of a terrace's step
+
+
+def _terrace(s):
+    """One mesh spanning the period in x: a floor z = 0 for x < L/2, a riser, z = _H beyond."""
+    v = [[0, 0, 0], [_L / 2, 0, 0], [_L / 2, _L, 0], [0, _L, 0],
+         [_L / 2, 0, _H], [_L, 0, _H], [_L, _L, _H], [_L / 2, _L, _H]]
+    s.add_mesh(v, [[0, 1, 2], [0, 2, 3], [4, 5, 6], [4, 6, 7], [1, 2, 7], [1, 7, 4]], "soil",
+               name="w")
+
+
+@pytest.mark.parametrize("where", ["riser", "edge"])
+def test_a_floor_at_another_height_at_each_end_of_the_period_is_refused(where):
+    """A terraced floor spanning x = 0 .. L in one mesh, low at x = 0 and high at x = L: its
+    periodic continuation steps down at x = 0.  A sphere beside x = 0 pressed delta = 0.01 R
+    into that riser, or onto the edge of the high floor across the boundary, is pushed by the
+    Hertz force of the overlap (computed below on the continued mesh in a box that is not
+    periodic), where it felt no force at all: such a floor is refused, naming it."""
+    mats = table(e=0.5, mu=0.3, E=1e8)
+    a = 0.6 * R
+    x = {"riser": (R - _D, _L / 2, _H / 2), "edge": (a, _L / 2, _H + math.sqrt((R - _D) ** 2 - a**2))}[where]
+    # the contact the periodic box would have: the same sphere one period on, by the mesh
+    # continued by one period
+    sim = Simulation(mats, gravity=(0, 0, 0))
+    _terrace(sim)
+    sim.add_mesh([[_L, 0, 0], [1.5 * _L, 0, 0], [1.5 * _L, _L, 0], [_L, _L, 0], [_L, 0, _H], [_L, _L, _H]],
+                 [[0, 1, 2], [0, 2, 3], [0, 3, 5], [0, 5, 4]], "soil", name="next")
+    sim.add_particles([[x[0] + _L, x[1], x[2]]], R, "soil")
+    f, _ = sim.compute_forces()
+    n = {"riser": np.array([1.0, 0, 0]), "edge": np.array([a, 0, x[2] - _H]) / (R - _D)}[where]
+    assert f[0] == pytest.approx(_hertz_wall_force(mats, R, _D) * n, rel=1e-9, abs=1e-12)
+    sim = _periodic_sim()
+    _terrace(sim)
+    sim.add_particles([x], R, "soil")
+    with pytest.raises(InputError, match=r"walls\.w.*periodic in x.*at x = 0 m \(y 0 \.\. 0\.04, z 0 m\)"):
+        sim.compute_forces()
+
+
+def _floor_tile(s, x0, x1, y0, y1, z=0.0, name=None, mesh=True):
+    if mesh:
+        s.add_mesh([[x0, y0, z], [x1, y0, z], [x1, y1, z], [x0, y1, z]], [[0, 1, 2], [0, 2, 3]], "soil",
+                   name=name)
+    else:
+        s.add_rectangle(((x0 + x1) / 2, (y0 + y1) / 2, z), (0, 0, 1), (1, 0, 0), (x1 - x0) / 2,
+                        (y1 - y0) / 2, "soil", name=name)
+
+
+@pytest.mark.parametrize("mesh", [True, False])
+@pytest.mark.parametrize("x", [(1e-4, 1e-4), (0.0, _L / 2), (_L - 1e-4, _L - 1e-4), (_L / 2, _L / 2)])
+def test_a_floor_of_tiles_meeting_at_both_boundaries_pushes_with_the_hertz_force(mesh, x):
+    """A floor given as four tiles (STL meshes or rectangles, each its own wall) covering the
+    period in x and y: a tile on a boundary meets one at the same height on the other, so the
+    floor continues periodically, and a sphere pressed 0.01 R into it beside a boundary, at a
+    corner of the box or on the tiles' seams feels the Hertz force of one face (it was
+    refused, naming the first tile)."""
+    mats = table(e=0.5, mu=0.3, E=1e8)
+    sim = Simulation(mats, gravity=(0, 0, 0), box=(0, _L, 0, _L), periodic=(True, True))
+    h = _L / 2
+    for i, j in ((0, 0), (1, 0), (0, 1), (1, 1)):
+        _floor_tile(sim, i * h, (i + 1) * h, j * h, (j + 1) * h, mesh=mesh)
+    sim.add_particles([[x[0], x[1], R - _D]], R, "soil")
+    f, _ = sim.compute_forces()
+    assert f[0] == pytest.approx([0, 0, _hertz_wall_force(mats, R, _D)], rel=1e-9, abs=1e-12)
+
+
+_UNMATCHED_TILES = {
+    # the second tile a step higher: the floor steps at x = 0 = L
+    "step": lambda s: (_floor_tile(s, 0, _L / 2, 0, _L, name="w"), _floor_tile(s, _L / 2, _L, 0, _L, z=_H)),
+    # the second tile narrower in y: a gap at x = L, y > L/2
+    "narrower": lambda s: (_floor_tile(s, 0, _L / 2, 0, _L, name="w"), _floor_tile(s, _L / 2, _L, 0, _L / 2)),
+    # the second tile moving: it is not the same surface over the run
+    "moving": lambda s: (_floor_tile(s, 0, _L / 2, 0, _L, name="w"),
+                         s.add_rectangle((3 * _L / 4, _L / 2, 0), (0, 0, 1), (1, 0, 0), _L / 4, _L / 2, "soil",
+                                         velocity=(0, 0.01, 0))),
+}
+
+
+@pytest.mark.parametrize("case", sorted(_UNMATCHED_TILES))
+def test_tiles_that_do_not_meet_alike_at_both_boundaries_are_refused(case):
+    sim = _periodic_sim()
+    _UNMATCHED_TILES[case](sim)
+    sim.add_particles([[1e-4, _L / 4, R - _D]], R, "soil")
+    with pytest.raises(InputError, match=r"walls\.w.*periodic in x"):
+        sim.compute_forces()
+
+
+def test_a_floor_spanning_the_period_exactly_may_not_slide_along_it():
+    """A floor mesh from x = 0 to L moving along x at 0.1 m/s (a belt) leaves x = 0 .. v t
+    bare: a frictionless sphere resting on it at x = 2 mm fell through it (z 3.5 mm, 1.5 mm
+    below its resting height, after 5 mm of travel).  Refused over the run; a belt wider than
+    the box by its travel plus the largest radius is accepted."""
+    def run(x0, x1, steps):
+        sim = Simulation(table(e=0.5, mu=0.0, E=1e8), box=(0, _L, 0, _L), periodic=(True, True))
+        sim.add_mesh([[x0, 0, 0], [x1, 0, 0], [x1, _L, 0], [x0, _L, 0]], [[0, 1, 2], [0, 2, 3]], "soil",
+                     name="w", velocity=(0.1, 0, 0))
+        sim.add_particles([[2e-3, _L / 2, R]], R, "soil")
+        sim.compute_forces()
+        sim.run(steps(sim.dt))
+        return sim
+
+    with pytest.raises(InputError, match=r"walls\.w.*over the run"):
+        run(0.0, _L, lambda dt: int(0.05 / dt))
+    sim = run(-0.011, _L + 0.011, lambda dt: int(0.05 / dt))  # 5 mm of travel, 11 mm wider
+    assert sim.x[0, 2] > R - 0.01 * R
+
+
+def test_a_settling_run_stops_where_a_moving_wall_would_need_its_image():
+    """run_until_settled of a sphere that never settles (it coasts along y without gravity)
+    beside a paddle moving along x at 0.5 m/s: the paddle's edge, 25 mm from x = 0, may come
+    to x = L - R = 35 mm (within 2e-4 R), which it does after (0.01 + 2e-4 R) / (0.5 dt)
+    steps; the run stops there, refused, where it carried the paddle through the boundary
+    for all of max_steps (to x = 0.3 m)."""
+    sim = _periodic_sim()
+    sim.add_rectangle((_L / 2, _L / 2, 0.01), (0, 1, 0), (1, 0, 0), 0.005, 0.005, "soil", name="w",
+                      velocity=(0.5, 0, 0))
+    sim.add_particles([[_L / 2, _L / 4, 0.03]], R, "soil", v=[(0, 0.1, 0)])
+    with pytest.raises(InputError, match=r"walls\.w.*not settled after"):
+        sim.run_until_settled(1e-30, check_every=10, max_steps=20000)
+    assert sim.step == math.floor((0.01 + 2e-4 * R) / (0.5 * sim.dt))
+
+
+@pytest.mark.parametrize("axis, refused", [((0, 0, 5.0), True), ((0, 5.0, 0), False)])
+def test_a_blade_spanning_a_slab_may_turn_only_about_the_periodic_axis(axis, refused):
+    """A closed blade (a box mesh) exactly as wide as a slab periodic in y, turning at 5 rad/s
+    about its centre: about y its ends stay on the boundaries, and a sphere pressed 0.01 R
+    into its face beside y = L feels the Hertz force along the normal; about z its ends swing off the
+    boundaries (a sphere beside one boundary would miss the end across it), and it was
+    accepted, its sweep counted as reaching past both boundaries."""
+    from soilcal.dem.geometry import box_mesh
+
+    mats = table(e=0.5, mu=0.3, E=1e8)
+    sim = Simulation(mats, gravity=(0, 0, 0), box=(0, _L, 0, _L), periodic=(False, True))
+    v, t = box_mesh(np.array([0.015, 0.0, 0.0]), np.array([0.018, _L, 0.03]))
+    sim.add_mesh(v, t, "soil", name="w", omega=axis, centre=(0.0165, _L / 2, 0.015))
+    sim.add_particles([[0.015 - R + _D, _L - 1e-4, 0.015]], R, "soil")
+    if refused:
+        with pytest.raises(InputError, match=r"walls\.w.*periodic in y.*over the run"):
+            sim.run(10)
+    else:
+        f, _ = sim.compute_forces()
+        # along the normal the Hertz force (the face slides past the sphere along z: a
+        # tangential force besides)
+        assert f[0][:2] == pytest.approx([-_hertz_wall_force(mats, R, _D), 0], rel=1e-9, abs=1e-12)
+        sim.run(10)
+
+
+def test_a_closed_rod_with_disk_caps_on_the_boundaries_pushes_with_the_hertz_force():
+    """A cylinder rod (radius 10 mm) along x spanning the period, closed by disks lying on
+    x = 0 and x = L: its caps are met at their rims only, and a sphere pressed 0.01 R into
+    the rod's top beside x = 0 feels the Hertz force.  It was refused (the caps' centres
+    were looked for inside the straight pieces of the section only, never its circles)."""
+    from soilcal.dem.walls import CYLINDER, DISK
+
+    mats = table(e=0.5, mu=0.3, E=1e8)
+    yc, zc, a = 0.05, 0.05, 0.01
+    sim = Simulation(mats, gravity=(0, 0, 0), box=(0, _L, 0, 0.1), periodic=(True, False))
+    sim.add_wall("rod", "soil", [
+        (CYLINDER, np.array([_L / 2, yc, zc, 1, 0, 0, a, _L / 2, 0.0]), 0b1, 0b10),
+        (DISK, np.array([0, yc, zc, 1, 0, 0, a]), 0b1, 0b10),
+        (DISK, np.array([_L, yc, zc, 1, 0, 0, a]), 0b1, 0b10)])
+    sim.add_particles([[1e-3, yc, zc + a + R - _D]], R, "soil")
+    f, _ = sim.compute_forces()
+    assert f[0] == pytest.approx([0, 0, _hertz_wall_force(mats, R, _D)], rel=1e-9, abs=1e-12)
+
+
+def _curved_floor(n, zf, shift=0.0):
+    """A floor mesh over 0 .. _L (x) by 0 .. _L (y) of n x n cells, height zf(y), float32
+    rounded as read from a file, shifted by ``shift`` along x."""
+    xs = np.linspace(0, _L, n + 1)
+    X, Y = np.meshgrid(xs, xs)
+    v = np.column_stack([X.ravel(), Y.ravel(), zf(Y.ravel())]).astype(np.float32).astype(float)
+    v[:, 0] += shift
+    t = [[j * (n + 1) + i, j * (n + 1) + i + 1, j * (n + 1) + i + n + 2] for j in range(n) for i in range(n)]
+    t += [[j * (n + 1) + i, j * (n + 1) + i + n + 2, j * (n + 1) + i + n + 1] for j in range(n) for i in range(n)]
+    return v, np.array(t)
+
+
+_CURVED = {  # a cross-profile across y, running along x, and where the sphere sits
+    "sine_2mm": (lambda y: 2e-3 * np.sin(2 * np.pi * y / _L), _L / 4, 2e-3),
+    "sine_5mm": (lambda y: 5e-3 * np.sin(2 * np.pi * y / _L), _L / 4, 5e-3),
+    "parabola": (lambda y: 0.5 * (y - _L / 2) ** 2, _L / 2, 0.0),
+}
+
+
+@pytest.mark.parametrize("n", [30, 60, 100])
+@pytest.mark.parametrize("profile", sorted(_CURVED))
+def test_a_floor_curved_across_the_periodic_axis_is_accepted_at_every_resolution(profile, n):
+    """A faceted floor whose height varies across y only runs along x: the sections at
+    x = 0 and x = L are the same at any mesh resolution, and a sphere beside x = 0 feels the
+    force of the same floor made non-periodic (copies shifted by +-L).  It was refused at
+    some resolutions only (z = 2 mm sin(2 pi y / L) at 60 and 100 cells, 5 mm at 100, the
+    parabola at 30 and 60): nearly collinear pieces were merged greedily into lines, differently at
+    x = 0 (cut along mesh edges) and inside."""
+    zf, y, z = _CURVED[profile]
+    mats = table(e=0.5, mu=0.3, E=1e8)
+    x = [1e-4, y, z + R - _D]
+    forces = []
+    for periodic in (True, False):
+        sim = Simulation(mats, gravity=(0, 0, 0), box=(0, _L, 0, _L), periodic=(periodic, False))
+        for k, s in enumerate((0.0,) if periodic else (0.0, -_L, _L)):
+            sim.add_mesh(*_curved_floor(n, zf, s), "soil", name=f"floor{k}")
+        sim.add_particles([x], R, "soil")
+        forces.append(sim.compute_forces()[0][0])
+    assert forces[1][2] > 0.1 * _hertz_wall_force(mats, R, _D)
+    assert forces[0] == pytest.approx(forces[1], rel=1e-9, abs=1e-12)
+
+
+def _tri(a, b, c):
+    from soilcal.dem.walls import TRIANGLE
+
+    return (TRIANGLE, np.concatenate([a, b, c]).astype(float), 0b111, 0)
+
+
+def _square_tube(h, yc=0.05, zc=0.05):
+    """Four faces (two triangles each) of a square tube of half side h along x, 0 .. _L."""
+    p = lambda x, y, z: np.array([x, yc + y, zc + z])
+    cs = [(-h, -h), (h, -h), (h, h), (-h, h)]
+    out = []
+    for i in range(4):
+        (y0, z0), (y1, z1) = cs[i], cs[(i + 1) % 4]
+        out += [_tri(p(0, y0, z0), p(_L, y0, z0), p(_L, y1, z1)),
+                _tri(p(0, y0, z0), p(_L, y1, z1), p(0, y1, z1))]
+    return out
+
+
+def _end_square(h, yc=0.05, zc=0.05):
+    q = lambda y, z: np.array([0.0, yc + y, zc + z])
+    return [_tri(q(-h, -h), q(h, -h), q(h, h)), _tri(q(-h, -h), q(h, h), q(-h, h))]
+
+
+def _u_channel_with_end():
+    y0, y1, hh = 0.03, 0.07, 0.04
+    p = lambda x, y, z: np.array([x, y, z])
+    out = []
+    for (ya, za), (yb, zb) in (((y0, hh), (y0, 0)), ((y0, 0), (y1, 0)), ((y1, 0), (y1, hh))):
+        out += [_tri(p(0, ya, za), p(_L, ya, za), p(_L, yb, zb)),
+                _tri(p(0, ya, za), p(_L, yb, zb), p(0, yb, zb))]
+    return out + [_tri(p(0, y0, 0), p(0, y1, 0), p(0, y1, hh)),
+                  _tri(p(0, y0, 0), p(0, y1, hh), p(0, y0, hh))]
+
+
+def _floor_with_bulkhead():
+    from soilcal.dem.walls import RECTANGLE
+
+    rect = lambda c, n, u, a, b: (RECTANGLE, np.concatenate([c, n, u, [a, b]]).astype(float), 0b1, 0b110)
+    return [rect((_L / 2, 0.05, 0), (0, 0, 1), (1, 0, 0), _L / 2, 0.05),
+            rect((0, 0.05, -2.5e-3), (1, 0, 0), (0, 1, 0), 0.05, 17.5e-3)]
+
+
+def _shifted(prims, s):
+    from soilcal.dem.walls import TRIANGLE
+
+    out = []
+    for kind, v, pts, dirs in prims:
+        v = v.copy()
+        v[[0, 3, 6] if kind == TRIANGLE else [0]] += s
+        out.append((kind, v, pts, dirs))
+    return out
+
+
+_END_FACES_MET = {  # walls spanning the period with an end face at x = 0, a sphere beside x = L
+    # an open U channel (y 0.03 .. 0.07, z 0 .. 0.04) and an end plate across it: the
+    # channel's section encloses nothing
+    "u_channel_end_plate": (_u_channel_with_end, (_L - R + _D, 0.05, 0.02)),
+    # a floor and a bulkhead (z -20 .. 15 mm) whose centre lies below the floor
+    "floor_bulkhead": (_floor_with_bulkhead, (_L - R + _D, 0.05, 7e-3)),
+    # a square tube (+-10 mm) and a bulkhead of two triangles (+-25 mm) whose centres lie
+    # inside the tube
+    "tube_wider_bulkhead": (lambda: _square_tube(0.01) + _end_square(0.025),
+                            (_L - R + _D, 0.05 + 0.017, 0.05)),
+}
+
+
+@pytest.mark.parametrize("case", sorted(_END_FACES_MET))
+def test_an_end_face_reaching_outside_a_closed_outline_of_the_section_is_refused(case):
+    """An end face on the boundary x = 0 is met at its rim only when every corner lies
+    inside or on a closed outline of the section of the faces along x there.  In these
+    set-ups a sphere beside x = L presses the end face across the boundary: the set-up made
+    non-periodic (the wall copied at +-L) pushes it with the Hertz force of an overlap
+    0.01 R, and the periodic run gave 0 (its centre, or the centres of its triangles, lay
+    inside the section by a ray count that also counted open outlines): it is refused,
+    naming the wall and the corner outside."""
+    mats = table(e=0.5, mu=0.3, E=1e8)
+    build, x = _END_FACES_MET[case]
+    sim = Simulation(mats, gravity=(0, 0, 0), box=(0, _L, 0, 0.1))
+    sim.add_wall("w", "soil", build() + _shifted(build(), _L) + _shifted(build(), -_L))
+    sim.add_particles([x], R, "soil")
+    f, _ = sim.compute_forces()
+    assert np.linalg.norm(f[0]) == pytest.approx(_hertz_wall_force(mats, R, _D), rel=1e-9)
+    sim = Simulation(mats, gravity=(0, 0, 0), box=(0, _L, 0, 0.1), periodic=(True, False))
+    sim.add_wall("w", "soil", build())
+    sim.add_particles([x], R, "soil")
+    with pytest.raises(InputError, match=r"walls\.w.*end face on the boundary x = 0 m with a "
+                                         r"corner at \(y, z\) = .* outside every closed outline"):
+        sim.compute_forces()
+
+
+def test_a_tube_closed_by_end_faces_on_its_section_pushes_with_the_hertz_force():
+    """The square tube closed by end squares exactly its section (corners on the closed
+    outline) stays accepted: a sphere pressed 0.01 R into its top beside x = L feels the
+    Hertz force."""
+    mats = table(e=0.5, mu=0.3, E=1e8)
+    sim = Simulation(mats, gravity=(0, 0, 0), box=(0, _L, 0, 0.1), periodic=(True, False))
+    sim.add_wall("w", "soil", _square_tube(0.01) + _end_square(0.01))
+    sim.add_particles([[_L - R / 2, 0.05, 0.06 + R - _D]], R, "soil")
+    f, _ = sim.compute_forces()
+    assert f[0] == pytest.approx([0, 0, _hertz_wall_force(mats, R, _D)], rel=1e-9, abs=1e-12)
+
+
+def test_spheres_inside_a_closed_solid_spanning_the_period_are_refused():
+    """A closed bin (a box mesh, 0 .. L along x) spanning the period with spheres inside,
+    0.99 R from its end walls: made non-periodic (the bin copied at +-L) each sphere is
+    pushed by its end wall with the Hertz force of an overlap 0.01 R; periodic, each got
+    three times that (5.4945 N), the two spheres touching across x = 0 through the end
+    walls.  The end walls are met at more than their rims: the set-up is refused, naming
+    the bin and a sphere inside it."""
+    mats = table(e=0.5, mu=0.3, E=1e8)
+    x = [(0.99 * R, _L / 2, 0.015), (_L - 0.99 * R, _L / 2, 0.015)]
+    sim = Simulation(mats, gravity=(0, 0, 0), box=(0, _L, 0, _L))
+    for k, s in enumerate((0.0, -_L, _L)):
+        sim.add_box((s, 0.0, 0.0), (s + _L, _L, 0.03), "soil", name=f"bin{k}")
+    sim.add_particles(x, R, "soil")
+    f, _ = sim.compute_forces()
+    fh = _hertz_wall_force(mats, R, 0.01 * R)
+    assert f.ravel() == pytest.approx([fh, 0, 0, -fh, 0, 0], rel=1e-9, abs=1e-12)
+    sim = Simulation(mats, gravity=(0, 0, 0), box=(0, _L, 0, _L), periodic=(True, False))
+    sim.add_box((0.0, 0.0, 0.0), (_L, _L, 0.03), "soil", name="bin")
+    sim.add_particles(x, R, "soil")
+    with pytest.raises(InputError, match=r"walls\.bin.*2 sphere\(s\) inside the closed section "
+                                         r"enclosing its end face"):
+        sim.compute_forces()
+
+
+def test_points_inside_closed_outlines_are_found_in_chunks():
+    # an L-shaped outline (the unit square less its upper right quarter) and a circle of radius
+    # 0.1 about (2, 2): inside by the shapes' inequalities, tested in chunks of a few points
+    # and with the points outside both bounding boxes never tested
+    from soilcal.dem.engine import _inside_many
+
+    corners = np.array([(0, 0), (1, 0), (1, 0.5), (0.5, 0.5), (0.5, 1), (0, 1)], float)
+    loops = np.stack([corners, np.roll(corners, -1, axis=0)], axis=1)
+    circ = np.array([[2.0, 2.0, 0.1]])
+    rng = np.random.default_rng(3)
+    pts = rng.uniform(-0.5, 2.5, size=(5000, 2))
+    x, y = pts[:, 0], pts[:, 1]
+    in_l = (x > 0) & (x < 1) & (y > 0) & (y < 1) & ~((x > 0.5) & (y > 0.5))
+    in_c = np.hypot(x - 2.0, y - 2.0) < 0.1
+    for block in (7, 500_000):
+        got = _inside_many(pts, loops, circ, block=block)
+        assert np.array_equal(got, in_l | in_c)
+    assert not _inside_many(pts, np.zeros((0, 2, 2)), np.zeros((0, 3))).any()

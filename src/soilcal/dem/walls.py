@@ -84,11 +84,12 @@ force step (a 5 mm sphere, centre 0.98 R above the first face, crossing a 5.6 de
 ends).  LIGGGHTS keeps such an edge active on one of the two triangles (by triangle id), so it
 has one of the two steps.  Wall contacts do not see periodic images: a
 sphere near a periodic boundary does not feel a wall primitive across it.  So in a periodic box
-a wall keeps the largest radius clear of the periodic boundaries, continues past both by that
-much (a plate wider than the slab), or is a surface parallel to the axis spanning the period
-(a floor, a plate across the slab), and a plane is parallel to the periodic axes; a run
-refuses any other wall by name (``Simulation._check_periodic_walls``), a moving one over the
-extent it sweeps in the run (LIGGGHTS copies mesh elements across periodic boundaries).
+a wall keeps the largest radius clear of the periodic boundaries, or its surface within that
+radius of each boundary runs along the axis and is cut by both boundary planes in the same
+section (a floor, a plate across the slab or wider than it, tiles that meet alike at both
+boundaries, taken together when they move together), and a plane is parallel to the periodic
+axes; a run refuses any other wall by name (``Simulation._check_periodic_walls``), a moving
+one over the run (LIGGGHTS copies mesh elements across periodic boundaries).
 """
 
 from __future__ import annotations
