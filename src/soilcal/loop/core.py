@@ -605,9 +605,8 @@ def _not_separated(sel, alpha: float) -> str:
     for nm in sel.forward_chosen:
         drop = [s for step, _, s in sel.steps if step == "gate" and not s.accepted
                 and s.reason.startswith(f"without {nm},")]
-        # named only where it lowers the held-out error by MIN_IMPROVEMENT and the AICc and misses
-        # only the paired test, as a held-back one below (under a 4 % offset, effects absent from
-        # the rows that the gate dropped for their held-out error were named in 3 of 40 tables)
+        # named on the same rule as a held-back one below: it lowers the held-out error by
+        # MIN_IMPROVEMENT and the AICc and misses only the paired test
         if nm not in sel.chosen and drop and sl.short_of_p(drop[-1], alpha):
             dropped.append((nm, drop[-1]))
     # those the forward step tried beside a free uniform scale, which gained against the chosen
@@ -652,7 +651,7 @@ def _unscored(sel, u: pd.DataFrame, alpha: float = 0.05) -> str:
     for step, names, s in sel.steps:
         if step == "gate" or not math.isnan(s.aicc) or s.accepted:
             continue
-        if not s.rmse() <= (1 - sl.MIN_IMPROVEMENT) * s.rmse(True):
+        if not sl.lowers_heldout(s):
             continue  # its held-out error refused it as well: the undefined AICc is not why it stayed out
         n_obs = sl.sse_of(s.fitted_errors, groups)[1]
         seen.setdefault((len(s.names) + 1, n_obs), []).append("+".join(names))

@@ -428,10 +428,16 @@ def cross_validate(model: Model, folds) -> tuple[np.ndarray, np.ndarray]:
 MIN_IMPROVEMENT = 0.1
 
 
+def lowers_heldout(s) -> bool:
+    """Whether a :class:`Score`'s model lowers its reference's held-out RMS error by at least
+    :data:`MIN_IMPROVEMENT`."""
+    return s.rmse() <= (1 - MIN_IMPROVEMENT) * s.rmse(True)
+
+
 def short_of_p(s, alpha: float) -> bool:
     """Whether a :class:`Score`'s model lowers its reference's held-out RMS error by at least
     :data:`MIN_IMPROVEMENT` and its AICc, and fails only on the paired test (p >= ``alpha``)."""
-    return (s.rmse() <= (1 - MIN_IMPROVEMENT) * s.rmse(True) and aicc_lower(s)
+    return (lowers_heldout(s) and aicc_lower(s)
             and not (np.isfinite(s.p) and s.p < alpha))
 
 
