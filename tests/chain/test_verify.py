@@ -214,6 +214,33 @@ def test_verification_frame_statistics(cinnamon):
     assert r["note"] == "seed 11086 failed (SimulationError: blow-up): the statistics are of the other 4"
 
 
+def test_a_miss_is_judged_against_the_targets_own_scatter(cinnamon):
+    """The target's SD (the soil's ``sd``, else the photo group's spread) is written beside the
+    miss, and a miss of the 2 % band no larger than it is said to lie within the measured
+    scatter; a zero spread (one drum frame) is no scatter."""
+    runs = {"stacking_angle": _runs([28.7, 28.9, 29.1, 29.3])}  # mean 29.0: +1.0 from 28, 3.6 %
+    # the soil's own SD 1.25 >= the miss 1.0: within the measured scatter, 0.8 SD
+    targets = {"stacking_angle": {"value": 28.0, "source": "measurement", "sd": 1.25}}
+    r = verification_frame(cinnamon, _stage(), OPTIMUM, targets, runs).iloc[0]
+    assert not r["within_2_percent"] and r["target_sd"] == 1.25
+    assert r["miss_in_target_sd"] == pytest.approx(1.0 / 1.25)
+    assert r["note"].endswith("within the measurement's scatter: the miss +1.00 is no larger than the "
+                              "target's own SD 1.25")
+    # a photo target: no sd, the group's spread 0.8 < the miss: -> 1.25 SD, no such clause
+    targets = {"stacking_angle": {"value": 28.0, "source": "image", "sd": np.nan, "image_spread": 0.8}}
+    r = verification_frame(cinnamon, _stage(), OPTIMUM, targets, runs).iloc[0]
+    assert r["target_sd"] == 0.8 and r["miss_in_target_sd"] == pytest.approx(1.25)
+    assert "measurement's scatter" not in r["note"] and r["note"]
+    # a spread of 0 (one frame) and no sd: unknown, not zero
+    targets = {"stacking_angle": {"value": 28.0, "source": "image", "sd": np.nan, "image_spread": 0.0}}
+    r = verification_frame(cinnamon, _stage(), OPTIMUM, targets, runs).iloc[0]
+    assert np.isnan(r["target_sd"]) and np.isnan(r["miss_in_target_sd"])
+    # a met target keeps an empty note whatever its scatter
+    targets = {"stacking_angle": {"value": 29.0, "source": "measurement", "sd": 1.25}}
+    r = verification_frame(cinnamon, _stage(), OPTIMUM, targets, runs).iloc[0]
+    assert r["within_2_percent"] and r["miss_in_target_sd"] == pytest.approx(0.0) and r["note"] == ""
+
+
 def test_verification_row_of_one_seed_left_by_a_failed_one(cinnamon):
     """Two verification seeds, the second failed: n = 1, no SD, and the row says that a seed
     failed and why, beside the diagnosis of the miss."""

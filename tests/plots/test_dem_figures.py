@@ -257,6 +257,21 @@ def test_bar_labels_of_neighbouring_bars_do_not_overlap(rows):
     assert _overlapping_labels(dem._verification_figure(v)) == []
 
 
+def test_case_labels_of_two_stages_with_long_names_do_not_run_together():
+    # two stages, case and response ids of 25 characters: the x tick labels' drawn boxes must
+    # not touch (the stage prefix made a 29-character line that ran into its neighbours' in a
+    # 6.5 in figure of three groups)
+    v = vineyard_verification().iloc[:3].copy()
+    v["stage"] = ["soil-soil", "soil-soil", "soil-65mn"]
+    v["case"] = v["response"] = ["accumulation_angle_" + s for s in ("first", "other", "65mn_x")]
+    fig = dem._verification_figure(v)
+    fig.canvas.draw()
+    r = fig.canvas.get_renderer()
+    boxes = [t.get_window_extent(r) for t in fig.axes[0].get_xticklabels() if t.get_text()]
+    assert len(boxes) == 3
+    assert not any(a.overlaps(b) for i, a in enumerate(boxes) for b in boxes[i + 1:])
+
+
 def test_tool_stem_sanitised(tmp_path):
     df = rotary_tool().assign(measurement="rotary tiller", measure="torque/N")
     paths = plots.tool_curves(df, tmp_path / "t")

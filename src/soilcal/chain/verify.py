@@ -27,8 +27,8 @@ TOLERANCE_PERCENT = 2.0
 SURFACE_TOLERANCE = 0.5
 VERIFICATION_COLUMNS = ["stage", "case", "round", "response", "target_id", "target", "target_source", "preset", "n",
                         "seeds", "failed_seeds", "simulated_mean", "simulated_sd", "relative_error_percent",
-                        "within_2_percent", "predicted", "predicted_minus_target", "particles", "paper_target",
-                        "paper_simulated", "paper_relative_error_percent", "status", "note"]
+                        "within_2_percent", "target_sd", "miss_in_target_sd", "predicted", "predicted_minus_target",
+                        "particles", "paper_target", "paper_simulated", "paper_relative_error_percent", "status", "note"]
 TOOL_COLUMNS = ["measurement", "row", "covariate", "covariate_value", "scenario", "setup", "measure", "unit",
                 "preset", "stage", "case", "n", "seeds", "measured", "measured_sd", "simulated_mean",
                 "simulated_sd", "relative_error_percent", "paper_simulated", "paper_relative_error_percent",
@@ -116,7 +116,7 @@ def region_limit(on_bounds, otherwise: str) -> str:
 
 def diagnose(mean: float, sd: float, n: int, target: float, predicted: float | None,
              ci: tuple[float, float] | None = None, replicates: int | None = None,
-             model: str | None = None, on_bounds=None) -> str:
+             model: str | None = None, on_bounds=None, target_sd: float | None = None) -> str:
     """Why a verification mean misses its target by more than 2 % (empty when it meets it).
 
     * the surface cannot reach the target: the prediction at the optimum is more than 0.5
@@ -143,6 +143,11 @@ def diagnose(mean: float, sd: float, n: int, target: float, predicted: float | N
       the seed scatter explains (lack of fit of the quadratic at the optimum);
     * undecided: fewer than two seeds (failed seeds can leave one): no scatter to tell seed
       scatter from a surface bias.
+
+    Whatever the reason, where the target's own measurements scatter (``target_sd``, the SD
+    the soil gives with the target or the photo group's spread) by at least the miss, the
+    note ends saying so: the simulated mean lies inside the measured scatter, so the miss of
+    the 2 % band is no larger than the measurement's own uncertainty.
     """
     if not np.isfinite(target) or target == 0 or not np.isfinite(mean):
         return ""
@@ -189,6 +194,9 @@ def diagnose(mean: float, sd: float, n: int, target: float, predicted: float | N
     elif not notes:
         notes.append(f"the mean of {n} seeds, {mean:.2f}, misses the target by more than the seed scatter "
                      "explains (no surface prediction at this set)")
+    if target_sd is not None and np.isfinite(target_sd) and target_sd > 0 and abs(mean - target) <= target_sd:
+        notes.append(f"within the measurement's scatter: the miss {mean - target:+.2f} is no larger than the "
+                     f"target's own SD {target_sd:.2f}")
     return "; ".join(notes)
 
 
@@ -266,7 +274,8 @@ def _verification_row(stage, case, rid, goal, targets, soil_data, cal, sel, pres
         if len(cal) and f"{rid}_ci_low" in cal.columns else None
     model = (stage.get("optimise") or {}).get("model", "reduced")
     bounds = factors_on_bounds(stage, cal.iloc[0]) if len(cal) else []
-    note = diagnose(mean, sd, n, target, pred, ci, design_replicates(soil_data), model, bounds) \
+    tsd = target_scatter(t)
+    note = diagnose(mean, sd, n, target, pred, ci, design_replicates(soil_data), model, bounds, tsd) \
         if len(cal) and n else ""
     if len(cal) and n and goal.get("goal") != "target":
         note = f"goal {goal.get('goal')}: no target value" + (
@@ -280,6 +289,8 @@ def _verification_row(stage, case, rid, goal, targets, soil_data, cal, sel, pres
         "seeds": " ".join(str(int(s)) for s in ok["seed"]) if len(ok) else "", "failed_seeds": failed,
         "simulated_mean": mean, "simulated_sd": sd, "relative_error_percent": rel,
         "within_2_percent": bool(np.isfinite(rel) and abs(rel) <= TOLERANCE_PERCENT),
+        "target_sd": tsd, "miss_in_target_sd": (mean - target) / tsd
+        if np.isfinite(tsd) and tsd > 0 and np.isfinite(target) and n else np.nan,
         "predicted": pred, "predicted_minus_target": pred - target if np.isfinite(target) else np.nan,
         "particles": float(pd.to_numeric(ok["particles"], errors="coerce").mean())
         if len(ok) and "particles" in ok else np.nan,
@@ -287,6 +298,23 @@ def _verification_row(stage, case, rid, goal, targets, soil_data, cal, sel, pres
         "paper_relative_error_percent": (paper_sim - paper_target) / paper_target * 100
         if np.isfinite(paper_sim) and np.isfinite(paper_target) and paper_target else np.nan,
         "status": status, "note": note}
+
+
+def target_scatter(t: dict) -> float:
+    """The scatter of a target's own measurements, from its ``targets.csv`` row ``t``
+    (:mod:`soilcal.chain.targets`): the SD the soil gives with the value (``sd``), else the
+    photo group's spread (``image_spread``: the SD of the flanks or frames measured); NaN where
+    neither is known (a value given in an optimisation goal has none) or the scatter is not
+    positive (a single drum frame's spread is written as 0: no scatter measured)."""
+    for key in ("sd", "image_spread"):
+        v = t.get(key)
+        try:
+            v = float(v)
+        except (TypeError, ValueError):
+            continue
+        if np.isfinite(v) and v > 0:
+            return v
+    return float("nan")
 
 
 def _pinned(v):

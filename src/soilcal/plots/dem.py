@@ -167,14 +167,19 @@ def _verification_figure(df: pd.DataFrame, title: str | None = None) -> Figure:
     rounds = pd.to_numeric(df["round"], errors="coerce").fillna(1).astype(int).tolist() \
         if "round" in df.columns else [1] * len(df)
     presets = [_text(v) for v in df["preset"]] if "preset" in df.columns else [""] * len(df)
-    labels = [(f"{st}: " if several_stages and st else "") + f"{_text(c)}\n{_text(r)}"
+    labels = [(f"{st}:\n" if several_stages and st else "") + f"{_text(c)}\n{_text(r)}"
               + (f"\nround {k}" if k > 1 else "") + (f"\n{p} preset" if p == "paper" else "")
               for st, c, r, k, p in zip(stages, df["case"], df["response"], rounds, presets)]
 
     n = len(df)
-    fig = _figure(max(6.5, 1.25 * n + 2.0), 5.0)
+    # a group as wide as its longest label line (about 0.075 in per character at 8 pt)
+    widest = max((len(line) for lab in labels for line in lab.split("\n")), default=0)
+    fig = _figure(max(6.5, max(1.25, 0.075 * widest) * n + 2.0), 5.0)
     ax = fig.add_subplot(1, 1, 1)
-    seen = _three_bars(ax, target, None, "target", sim, sd, err, paper, paper_err, status)
+    # the target's own scatter (a column older tables lack) as its error bar
+    tsd = _num(df, "target_sd") if "target_sd" in df.columns else None
+    seen = _three_bars(ax, target, tsd, "target (± its SD where known)" if tsd is not None
+                       and np.isfinite(tsd).any() else "target", sim, sd, err, paper, paper_err, status)
     ax.set_xticklabels(labels, fontsize=8)
     ax.set_ylabel("response")
     ax.set_xlabel("case / response")
@@ -193,7 +198,8 @@ def _verification_figure(df: pd.DataFrame, title: str | None = None) -> Figure:
 
 
 def verification_bars(df: pd.DataFrame, stem="verification", title: str | None = None) -> list[Path]:
-    """Grouped bars per (case, response) row: target, soilcal's simulated mean with SD error
+    """Grouped bars per (case, response) row: target (with its own SD, ``target_sd``, as error
+    bars where known), soilcal's simulated mean with SD error
     bars and its relative error (%) above, and the paper's simulated value where printed (with
     the paper's relative error when given). Rows without a target (a 'minimize' goal) show the
     simulated bars only; a row without a simulated mean shows its status text."""
