@@ -123,6 +123,30 @@ def test_second_round_rows_in_the_verification_and_the_summary(refined, tmp_path
                                                   ("met", 1), ("scatter", 1)]
 
 
+def test_a_second_round_says_whether_the_dem_moved_as_the_surface_promised(refined):
+    # "biased": y = 30 + 2 A, the set moved A coded 0.5 -> 0: the surface promised -1.00
+    ref = refined.reset_index()
+    soil = {"targets": {"y": {"value": 31.0}, "lost": {"value": None}}}
+
+    def note(values):
+        df = verification_frame(soil, _stage(), OPTIMUM, TARGETS, RUNS, ref,
+                                {"biased": _runs(values, seed0=11004)})
+        return df[(df["round"] == 2) & (df["case"] == "biased")].iloc[0]["note"]
+
+    # the DEM fell by 0.95 from the first round's 32.0: as promised (2 SE = 2 sqrt(0.0067/4 +
+    # 0.0167/4) = 0.155)
+    n = note([31.1, 30.9, 31.0, 31.2])
+    assert "the DEM changed by -0.95 (two standard errors 0.15) where the surface promised -1.00" in n
+    assert n.endswith("as the surface said, within the seed scatter")
+    # the DEM did not move (32.0 again, 2 SE = 2 sqrt(2 x 0.0067/4) = 0.115): the surface's
+    # slope is wrong along the move
+    n = note([32.1, 31.9, 32.0, 32.0])
+    assert "the DEM changed by +0.00 (two standard errors 0.12) where the surface promised -1.00" in n
+    assert "slope along the move is not the DEM's here" in n
+    # one seed in the second round: no standard error, nothing said
+    assert "the DEM changed" not in note([31.0])
+
+
 def test_written_from_files(tmp_path):
     import json
 

@@ -211,10 +211,51 @@ def verification_frame(soil_data: dict, stage: dict, optimum: pd.DataFrame, targ
     moved = refined_cases(refined) if refined is not None else []
     rows = []
     for case in (stage.get("optimise") or {}).get("cases", []):
-        rows += _case_rows(soil_data, stage, case, optimum, targets, runs.get(case["id"], []), 1)
+        first = _case_rows(soil_data, stage, case, optimum, targets, runs.get(case["id"], []), 1)
+        rows += first
         if case["id"] in moved:
-            rows += _case_rows(soil_data, stage, case, refined, targets, (refined_runs or {}).get(case["id"], []), 2)
+            second = _case_rows(soil_data, stage, case, refined, targets, (refined_runs or {}).get(case["id"], []), 2)
+            ref = refined[refined["case"].astype(str) == str(case["id"])]
+            for r2 in second:
+                r1 = [r for r in first if r["response"] == r2["response"] and r["preset"] == r2["preset"]]
+                bias = ref[f"bias_{r2['response']}"].iloc[0] if f"bias_{r2['response']}" in ref.columns else 0.0
+                change = round_change(r1[0], r2, bias) if r1 and len(ref) else ""
+                if change:
+                    r2["note"] = "; ".join(x for x in (r2["note"], change) if x)
+            rows += second
     return pd.DataFrame(rows, columns=VERIFICATION_COLUMNS)
+
+
+def round_change(first: dict, second: dict, bias) -> str:
+    """What the move from the first set to the second round's did to one response, beside what
+    the response surface promised: the DEM's change, the verification means' difference
+    m2 - m1 with two standard errors sqrt(s1^2/n1 + s2^2/n2), against the surface's change
+    between the two sets, ``second.predicted - bias - first.predicted`` (the second set's
+    prediction carries the bias the round corrected by; without one it is the surface's own).
+    Where the two differ by more than those two standard errors, the surface's slope along the
+    move is not the DEM's there, so a constant bias correction cannot aim the set: a local
+    design at the set (more than one point near it) would learn the slope.  Empty where either
+    round has fewer than two seeds or no prediction."""
+    m1, s1, n1 = first["simulated_mean"], first["simulated_sd"], first["n"]
+    m2, s2, n2 = second["simulated_mean"], second["simulated_sd"], second["n"]
+    p1, p2 = first["predicted"], second["predicted"]
+    try:
+        b = float(bias)
+    except (TypeError, ValueError):
+        b = float("nan")
+    b = b if np.isfinite(b) else 0.0
+    vals = (m1, s1, m2, s2, p1, p2)
+    if n1 < 2 or n2 < 2 or not all(np.isfinite(float(v)) for v in vals):
+        return ""
+    dem, surf = float(m2 - m1), float(p2 - b - p1)
+    two_se = 2.0 * float(np.sqrt(s1 ** 2 / n1 + s2 ** 2 / n2))
+    text = (f"from the first set the DEM changed by {dem:+.2f} (two standard errors {two_se:.2f}) where the "
+            f"surface promised {surf:+.2f}")
+    if abs(dem - surf) > two_se:
+        return (text + ": the surface's slope along the move is not the DEM's here, so shifting it by a "
+                "constant cannot aim the set (a local design at this set, more than one point near it, "
+                "would learn the slope)")
+    return text + ": as the surface said, within the seed scatter"
 
 
 def _case_rows(soil_data, stage, case, optimum, targets, frames, rnd) -> list[dict]:
