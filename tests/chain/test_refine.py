@@ -124,9 +124,11 @@ def test_second_round_rows_in_the_verification_and_the_summary(refined, tmp_path
 
 
 def test_a_second_round_says_whether_the_dem_moved_as_the_surface_promised(refined):
-    # "biased": y = 30 + 2 A, the set moved A coded 0.5 -> 0: the surface promised -1.00
+    # "biased": y = 30 + 2 A, the set moved A coded 0.5 -> 0: the surface promised -1.00; the
+    # fit is almost exact (pure error 0.01 on the centre points), so its own SE is ~0.003
     ref = refined.reset_index()
     soil = {"targets": {"y": {"value": 31.0}, "lost": {"value": None}}}
+    assert 0 < ref.set_index("case").loc["biased", "surface_change_se_y"] < 0.01
 
     def note(values):
         df = verification_frame(soil, _stage(), OPTIMUM, TARGETS, RUNS, ref,
@@ -134,17 +136,40 @@ def test_a_second_round_says_whether_the_dem_moved_as_the_surface_promised(refin
         return df[(df["round"] == 2) & (df["case"] == "biased")].iloc[0]["note"]
 
     # the DEM fell by 0.95 from the first round's 32.0: as promised (2 SE = 2 sqrt(0.0067/4 +
-    # 0.0167/4) = 0.155)
+    # 0.0167/4) = 0.153)
     n = note([31.1, 30.9, 31.0, 31.2])
-    assert "the DEM changed by -0.95 (two standard errors 0.15) where the surface promised -1.00" in n
-    assert n.endswith("as the surface said, within the seed scatter")
+    assert "the DEM changed by -0.95 where the surface promised -1.00 (two standard errors of their " \
+           "difference 0.15, seeds and surface)" in n
+    assert n.endswith(": as the surface said")
     # the DEM did not move (32.0 again, 2 SE = 2 sqrt(2 x 0.0067/4) = 0.115): the surface's
-    # slope is wrong along the move
+    # slope is wrong along the move, and the round missed (3.2 %)
     n = note([32.1, 31.9, 32.0, 32.0])
-    assert "the DEM changed by +0.00 (two standard errors 0.12) where the surface promised -1.00" in n
-    assert "slope along the move is not the DEM's here" in n
+    assert "the DEM changed by +0.00 where the surface promised -1.00 (two standard errors of their " \
+           "difference 0.12" in n
+    assert "slope along the move is not the DEM's here, so shifting it by a constant cannot aim" in n
+    # it fell by 0.5 only, but 31.5 meets the target (1.6 %): the slope is still said to differ,
+    # without claiming the set cannot be aimed
+    n = note([31.6, 31.4, 31.5, 31.5])
+    assert n.endswith("the surface's slope along the move is not the DEM's here (the target is met nonetheless)")
     # one seed in the second round: no standard error, nothing said
     assert "the DEM changed" not in note([31.0])
+
+
+def test_a_far_move_counts_the_surfaces_own_uncertainty(refined):
+    # "far" moved A coded 0.5 -> -1 (1.5 coded): the promised change -3.00; its SE from the fit
+    # is written, and taken into the two standard errors
+    ref = refined.reset_index().copy()
+    i = ref.index[ref["case"] == "far"][0]
+    soil = {"targets": {"y": {"value": 31.0}, "lost": {"value": None}}}
+    runs2 = {"far": _runs([36.9, 37.1, 37.0, 37.0], seed0=11004)}  # -1.0 from 38, 2 seed SE = 0.115
+    ref.loc[i, "surface_change_se_y"] = 1.5  # a surface that knows its change to +-1.5 only
+    df = verification_frame(soil, _stage(), OPTIMUM, TARGETS, RUNS, ref, runs2)
+    n = df[(df["round"] == 2) & (df["case"] == "far")].iloc[0]["note"]
+    # 2 sqrt(0.0067/4 + 0.0067/4 + 1.5^2) = 3.002 > |-1 - (-3)| = 2: as the surface said
+    assert "(two standard errors of their difference 3.00, seeds and surface): as the surface said" in n
+    ref.loc[i, "surface_change_se_y"] = 0.0
+    df = verification_frame(soil, _stage(), OPTIMUM, TARGETS, RUNS, ref, runs2)
+    assert "not the DEM's" in df[(df["round"] == 2) & (df["case"] == "far")].iloc[0]["note"]
 
 
 def test_written_from_files(tmp_path):

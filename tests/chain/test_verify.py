@@ -215,26 +215,29 @@ def test_verification_frame_statistics(cinnamon):
 
 
 def test_a_miss_is_judged_against_the_targets_own_scatter(cinnamon):
-    """The target's SD (the soil's ``sd``, else the photo group's spread) is written beside the
-    miss, and a miss of the 2 % band no larger than it is said to lie within the measured
-    scatter; a zero spread (one drum frame) is no scatter."""
+    """The SD the soil gives with a target is written beside the miss, and a miss of the 2 %
+    band no larger than it is said to lie inside the measured spread; a photo target has none
+    (its group's spread is the SD of single flanks of angle_deg, not of the target's repeats)."""
     runs = {"stacking_angle": _runs([28.7, 28.9, 29.1, 29.3])}  # mean 29.0: +1.0 from 28, 3.6 %
-    # the soil's own SD 1.25 >= the miss 1.0: within the measured scatter, 0.8 SD
+    # the soil's own SD 1.25 >= the miss 1.0: inside the measured spread, 0.8 SD
     targets = {"stacking_angle": {"value": 28.0, "source": "measurement", "sd": 1.25}}
     r = verification_frame(cinnamon, _stage(), OPTIMUM, targets, runs).iloc[0]
     assert not r["within_2_percent"] and r["target_sd"] == 1.25
     assert r["miss_in_target_sd"] == pytest.approx(1.0 / 1.25)
-    assert r["note"].endswith("within the measurement's scatter: the miss +1.00 is no larger than the "
-                              "target's own SD 1.25")
-    # a photo target: no sd, the group's spread 0.8 < the miss: -> 1.25 SD, no such clause
-    targets = {"stacking_angle": {"value": 28.0, "source": "image", "sd": np.nan, "image_spread": 0.8}}
+    assert r["note"].endswith("inside the measured spread: the miss +1.00 is no larger than the SD 1.25 of the "
+                              "measurements the target is the mean of")
+    # SD 0.8 < the miss: 1.25 SD, no such clause
+    targets = {"stacking_angle": {"value": 28.0, "source": "measurement", "sd": 0.8}}
     r = verification_frame(cinnamon, _stage(), OPTIMUM, targets, runs).iloc[0]
     assert r["target_sd"] == 0.8 and r["miss_in_target_sd"] == pytest.approx(1.25)
-    assert "measurement's scatter" not in r["note"] and r["note"]
-    # a spread of 0 (one frame) and no sd: unknown, not zero
-    targets = {"stacking_angle": {"value": 28.0, "source": "image", "sd": np.nan, "image_spread": 0.0}}
+    assert "measured spread" not in r["note"] and r["note"]
+    # a photo target: its group's flank spread 3.2 is not taken (it would excuse the miss)
+    targets = {"stacking_angle": {"value": 28.0, "source": "image", "sd": np.nan, "image_spread": 3.2}}
     r = verification_frame(cinnamon, _stage(), OPTIMUM, targets, runs).iloc[0]
-    assert np.isnan(r["target_sd"]) and np.isnan(r["miss_in_target_sd"])
+    assert np.isnan(r["target_sd"]) and np.isnan(r["miss_in_target_sd"]) and "measured spread" not in r["note"]
+    # a zero SD is no spread
+    targets = {"stacking_angle": {"value": 28.0, "source": "measurement", "sd": 0.0}}
+    assert np.isnan(verification_frame(cinnamon, _stage(), OPTIMUM, targets, runs).iloc[0]["target_sd"])
     # a met target keeps an empty note whatever its scatter
     targets = {"stacking_angle": {"value": 29.0, "source": "measurement", "sd": 1.25}}
     r = verification_frame(cinnamon, _stage(), OPTIMUM, targets, runs).iloc[0]

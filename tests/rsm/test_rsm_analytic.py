@@ -189,3 +189,26 @@ def test_bad_inputs_raise_input_error():
         fit_response_surface(df, FACTORS, "y", LOW, HIGH, transform="cube")
     with pytest.raises(InputError):
         compare_printed("n.s.", 1.0)
+
+
+def test_the_standard_error_of_a_change_between_two_sets():
+    # y = b0 + b1 A on A coded -1, 0, 1 (two runs each): b1 = (mean(+1) - mean(-1)) / 2, its
+    # variance MSE / Sxx with Sxx = sum (A - 0)^2 = 4; the change from A = -0.5 to A = 0.5 is
+    # b1, so its SE is sqrt(MSE / 4); MSE = SSE / (6 - 2)
+    A = np.array([-1.0, -1.0, 0.0, 0.0, 1.0, 1.0])
+    y = np.array([9.0, 11.0, 19.0, 21.0, 30.0, 32.0])
+    fit = fit_response_surface(pd.DataFrame({"A": A, "y": y}), ["A"], "y", [-1.0], [1.0], terms=["A"])
+    b1 = (31.0 - 10.0) / 2
+    sse = float(((y - (y.mean() + b1 * A)) ** 2).sum())
+    assert fit.change_se([-0.5], [0.5]) == pytest.approx(np.sqrt(sse / 4 / 4))
+    # the intercept cancels: a change of zero length has no error; twice the move, twice the SE
+    assert fit.change_se([0.3], [0.3]) == pytest.approx(0.0, abs=1e-12)
+    assert fit.change_se([-1.0], [1.0]) == pytest.approx(2 * np.sqrt(sse / 4 / 4))
+    # on a log scale (delta method): the change exp(eta2) - exp(eta1), eta = b0 + b1 A, has the
+    # gradient exp(eta2) [1, A2] - exp(eta1) [1, A1] in (b0, b1)
+    lf = fit_response_surface(pd.DataFrame({"A": A, "y": np.exp(y / 10)}), ["A"], "y", [-1.0], [1.0],
+                              terms=["A"], transform="ln")
+    e1, e2 = lf.predict([[-0.5]])[0], lf.predict([[0.5]])[0]
+    a = np.array([e2 - e1, 0.5 * (e2 + e1)])
+    assert lf.change_se([-0.5], [0.5]) == pytest.approx(float(np.sqrt(a @ np.asarray(lf.ols.cov_params()) @ a)),
+                                                        rel=1e-5)

@@ -17,7 +17,9 @@ keeps x0, and its row says why (met, scatter only, no target, nothing better wit
 with, in the columns of ``optimum.csv`` (factor levels coded and actual, predicted responses,
 corrected where refined), so the tool tests and ``calibrated_vs_paper`` read the final set
 the same way they read an optimum; plus ``round`` (1 = x0 kept, 2 = bias-corrected),
-``refined``, ``bias_<response>``, ``move_coded`` and ``note``.
+``refined``, ``bias_<response>``, ``surface_change_se_<response>`` (round 2: the standard error
+of the surface's change from x0 to the new set, :meth:`soilcal.rsm.model.RSMFit.change_se`),
+``move_coded`` and ``note``.
 """
 
 from __future__ import annotations
@@ -177,6 +179,9 @@ def refine_frame(stage: dict, table: pd.DataFrame, targets: dict, optimum: pd.Da
         for r, m in models.items():
             row[r] = float(m.predict(x[None, :])[0]) + bias.get(r, 0.0)
         row.update({f"bias_{r}": b for r, b in bias.items()})
+        # how well the surface knows its own change between the two sets (the verification
+        # compares it with the DEM's, soilcal.chain.verify.round_change)
+        row.update({f"surface_change_se_{r}": m.change_se(x0, x) for r, m in models.items()})
         row["move_coded"] = res["move"]
         row["note"] = (f"bias-corrected: verification mean minus surface at the first set {btxt}; smallest "
                        f"move (coded {res['move']:.3f}) at which the corrected surface meets every target"

@@ -291,6 +291,21 @@ class RSMFit:
         b = inverse_transform(ci, self.transform, self.transform_constant)
         return np.minimum(b[:, 0], b[:, 1]), np.maximum(b[:, 0], b[:, 1])
 
+    def change_se(self, x_from_coded, x_to_coded) -> float:
+        """The standard error of the surface's change between two sets (coded levels),
+        predict(x_to) - predict(x_from): sqrt(a' C a) with C the coefficients' covariance and
+        a = g'(eta_to) f(x_to) - g'(eta_from) f(x_from), f the model row, eta the prediction on
+        the transformed scale and g the inverse transform (the delta method; g' = 1 without a
+        transform, where it is exact)."""
+        mm = _model_matrix(self._coded_input(np.vstack([x_from_coded, x_to_coded])), self._exps)
+        eta = mm @ self.params
+        h = 1e-6 * np.maximum(1.0, np.abs(eta))
+        up = inverse_transform(eta + h, self.transform, self.transform_constant)
+        down = inverse_transform(eta - h, self.transform, self.transform_constant)
+        slope = (np.asarray(up, float) - np.asarray(down, float)) / (2 * h)
+        a = slope[1] * mm[1] - slope[0] * mm[0]
+        return float(np.sqrt(max(float(a @ np.asarray(self._res.cov_params()) @ a), 0.0)))
+
     # -- ANOVA
     def _pure_error(self) -> tuple[float, int]:
         groups: dict[tuple, list[float]] = defaultdict(list)
