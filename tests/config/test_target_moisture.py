@@ -141,3 +141,30 @@ def test_a_target_moisture_the_soil_does_not_declare_names_the_fix(tmp_path, par
     with pytest.raises(InputError) as ei:
         _load(tmp_path, d)
     assert "add it to properties.moisture_content.values" in ei.value.expected
+
+
+def _declared_range_case(parsed, keys):
+    """The compression table's moisture map (keys in %) against a soil declaring only the
+    range 0.07-0.29 as a fraction, its targets giving no moisture of their own."""
+    from soilcal.config.measurements import _check_case_moisture
+
+    d = copy.deepcopy(parsed)
+    for t in d["targets"].values():
+        t.pop("moisture_content", None)
+    d["properties"]["moisture_content"] = {"low": 0.07, "high": 0.29, "unit": "fraction"}
+    cv = {"case": dict(zip(keys, ("mc05", "mc10", "mc15"))), "quantity": "moisture_content", "unit": "%"}
+    st = next(s for s in d["stages"] if s["id"] == "bbd")
+    _check_case_moisture("x.yaml", d, st, "measurements.compression.covariates.moisture_content", cv)
+
+
+def test_the_ends_of_a_fraction_range_hold_the_same_moisture_in_percent(parsed):
+    # 7 % and 29 % are the ends of 0.07-0.29 written in %; in floating point 0.07 * 100 is
+    # 7.000000000000001 and 0.29 * 100 is 28.999999999999996, which refused both ends
+    _declared_range_case(parsed, ("7", "10", "29"))
+
+
+def test_a_moisture_just_outside_a_fraction_range_is_refused(parsed):
+    with pytest.raises(InputError) as ei:
+        _declared_range_case(parsed, ("6.9", "10", "29"))
+    assert ei.value.field == "measurements.compression.covariates.moisture_content.case.6.9"
+    assert "0.07-0.29 fraction" in ei.value.expected

@@ -546,29 +546,20 @@ def _check_targets(path: Path, d: dict, resources_root: Path) -> None:
                                  f"{units[rid]}, the unit of response {rid!r} of stage {st['id']!r} ({how})", got)
 
 
-#: how near a target's moisture content must lie to one the soil declares (relative, and
-#: absolute in the declared unit): the same number written twice, not a neighbouring moisture
-MOISTURE_RTOL = 1e-9
-
-
 def _check_target_moisture(path: Path, d: dict, tid: str, mc) -> None:
     """A target recorded at a moisture content (``targets.<id>.moisture_content``, in the unit
     of ``properties.moisture_content``) is a target of this soil only at a moisture the soil
     declares: one of its ``properties.moisture_content`` values, or inside its ``low`` ..
     ``high``.  A measurement or photo at another moisture is of another soil state: the DEM
     parameters calibrated to it would be filed under the soil's own moisture without a word."""
-    import math
-
-    from soilcal.config.quantities import soil_moisture
+    from soilcal.config.quantities import declares_moisture, soil_moisture
 
     where = f"targets.{tid}.moisture_content"
     declared = soil_moisture(path, d)
     if declared is None:
         raise InputError(path, where, "a moisture content the soil declares (properties.moisture_content: "
                                       "value, values or low/high, none given)", mc)
-    x = float(mc)
-    if any(math.isclose(x, v, rel_tol=MOISTURE_RTOL, abs_tol=MOISTURE_RTOL) for v in declared["points"]) \
-            or any(lo <= x <= hi for lo, hi in declared["ranges"]):
+    if declares_moisture(declared, float(mc) * declared["factor"]):
         return
     raise InputError(path, where, f"a moisture content the soil declares in properties.moisture_content "
                                   f"({declared['text']}; the target's moisture is in that unit, the same number): "

@@ -296,8 +296,7 @@ def _check_case_moisture(soil_path, data: dict, stage: dict, cw: str, cv: dict) 
     would otherwise be simulated with the parameters calibrated at another."""
     import math
 
-    from soilcal.config.load import MOISTURE_RTOL
-    from soilcal.config.quantities import soil_moisture
+    from soilcal.config.quantities import MOISTURE_RTOL, declares_moisture, soil_moisture
 
     declared = soil_moisture(soil_path, data)  # an unknown unit is refused here
     soil_factor = declared["factor"] if declared else None
@@ -330,8 +329,7 @@ def _check_case_moisture(soil_path, data: dict, stage: dict, cw: str, cv: dict) 
         if declared is None:
             raise InputError(soil_path, f"{cw}.case.{k}", "a moisture content the soil declares "
                              "(properties.moisture_content: value, values or low/high, none given)", k)
-        if not (any(same(pct, v * soil_factor) for v in declared["points"])
-                or any(lo * soil_factor <= pct <= hi * soil_factor for lo, hi in declared["ranges"])):
+        if not declares_moisture(declared, pct):
             raise InputError(soil_path, f"{cw}.case.{k}", f"a moisture content the soil declares in "
                              f"properties.moisture_content ({declared['text']}), in {cv['unit']}, the same "
                              "number: add it to properties.moisture_content.values if the soil was measured at it",

@@ -65,5 +65,27 @@ def soil_moisture(path, data: dict) -> dict | None:
     return {"points": points, "ranges": ranges, "unit": unit, "factor": factor, "text": text}
 
 
+#: how near two moisture contents, both in %, must lie to be the same moisture (relative, and
+#: absolute in %): the same number written twice or in the other form (0.07 as a fraction is
+#: 7.000000000000001 %), not a neighbouring moisture (16.31 against 17.2 %)
+MOISTURE_RTOL = 1e-9
+
+
+def declares_moisture(declared: dict, pct: float) -> bool:
+    """Whether the moisture contents a soil declares (:func:`soil_moisture`) hold ``pct``, a
+    moisture content in %: one of its values, or inside its ``low`` .. ``high`` (its ends
+    included), compared in % within :data:`MOISTURE_RTOL`, so that a moisture written in % and
+    declared as a fraction, or the other way round, is the same moisture at every value and
+    at a range's ends."""
+    f = declared["factor"]
+
+    def same(a, b):
+        return math.isclose(a, b, rel_tol=MOISTURE_RTOL, abs_tol=MOISTURE_RTOL)
+
+    return (any(same(pct, v * f) for v in declared["points"])
+            or any(lo * f <= pct <= hi * f or same(pct, lo * f) or same(pct, hi * f)
+                   for lo, hi in declared["ranges"]))
+
+
 #: quantities that must be above zero (an effect takes their logarithm or a ratio to them)
 POSITIVE_QUANTITIES = ("tool_speed", "working_depth", "rotor_speed", "layer_depth", "bulk_density")
