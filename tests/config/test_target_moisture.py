@@ -168,3 +168,25 @@ def test_a_moisture_just_outside_a_fraction_range_is_refused(parsed):
         _declared_range_case(parsed, ("6.9", "10", "29"))
     assert ei.value.field == "measurements.compression.covariates.moisture_content.case.6.9"
     assert "0.07-0.29 fraction" in ei.value.expected
+
+
+@pytest.mark.parametrize("unit", ["percent", "wt%", "% w/w", "g/100g", "Percent"])
+def test_a_moisture_column_takes_the_percent_units_the_soil_moisture_takes(tmp_path, parsed, unit):
+    # the compression table holds 5, 10, 15 (%): every spelling of a percentage reads them as
+    # 5, 10, 15 %, as properties.moisture_content takes them; before, only "%" was accepted
+    from soilcal.config.measurements import conditions
+
+    d = copy.deepcopy(parsed)
+    d["measurements"]["compression"]["covariates"]["moisture_content"]["unit"] = unit
+    got = sorted((c.quantities["moisture_content"], c.case) for c in conditions(_load(tmp_path, d)))
+    assert got == [(5.0, "mc05"), (10.0, "mc10"), (15.0, "mc15")]
+
+
+def test_a_moisture_column_in_a_volumetric_unit_is_refused_naming_the_units(tmp_path, parsed):
+    d = copy.deepcopy(parsed)
+    d["measurements"]["compression"]["covariates"]["moisture_content"]["unit"] = "vol%"
+    with pytest.raises(InputError) as ei:
+        _load(tmp_path, d)
+    e = ei.value
+    assert e.field == "measurements.compression.covariates.moisture_content.unit" and e.got == "vol%"
+    assert "wt%" in e.expected and "g/g" in e.expected

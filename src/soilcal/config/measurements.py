@@ -80,7 +80,12 @@ from pathlib import Path
 
 import pandas as pd
 
-from soilcal.config.quantities import POSITIVE_QUANTITIES, QUANTITIES  # noqa: F401 (QUANTITIES re-exported)
+from soilcal.config.quantities import (  # noqa: F401 (QUANTITIES re-exported)
+    MOISTURE_UNITS,
+    POSITIVE_QUANTITIES,
+    QUANTITIES,
+    quantity_factor,
+)
 from soilcal.errors import InputError
 
 BLOCK = "measurements"
@@ -327,7 +332,7 @@ def _check_case_moisture(soil_path, data: dict, stage: dict, cw: str, cv: dict) 
     declared = soil_moisture(soil_path, data)  # an unknown unit is refused here
     soil_factor = declared["factor"] if declared else None
     soil_unit = declared["unit"] if declared else "%"
-    col_factor = QUANTITIES["moisture_content"][1][cv["unit"]]
+    col_factor = quantity_factor("moisture_content", cv["unit"])
     cases = {c["id"]: c for c in (stage.get("optimise") or {}).get("cases", [])}
     targets = data.get("targets") or {}
     for k, cid in cv["case"].items():
@@ -501,9 +506,9 @@ def _entry(soil_path, data: dict, mid: str, entry: dict, tpath: Path):
                 raise InputError(soil_path, f"{cw}.quantity", "one of " + ", ".join(QUANTITIES), q)
             if QUANTITIES[q] is None and "unit" in cv:
                 raise InputError(soil_path, f"{cw}.unit", f"no unit: {q} is a label", cv["unit"])
-            if QUANTITIES[q] is not None and cv.get("unit") not in QUANTITIES[q][1]:
-                raise InputError(soil_path, f"{cw}.unit", f"a unit of {q} ({', '.join(QUANTITIES[q][1])})",
-                                 cv.get("unit"))
+            if QUANTITIES[q] is not None and quantity_factor(q, cv.get("unit")) is None:
+                units = MOISTURE_UNITS if q == "moisture_content" else ", ".join(QUANTITIES[q][1])
+                raise InputError(soil_path, f"{cw}.unit", f"a unit of {q} ({units})", cv.get("unit"))
         elif "unit" in cv:
             raise InputError(soil_path, f"{cw}.quantity", "the quantity the unit belongs to", None)
         if "scale" in cv and form not in ("set", "param"):
@@ -759,7 +764,7 @@ def _entry(soil_path, data: dict, mid: str, entry: dict, tpath: Path):
                 raise InputError(tpath, at(col), f"a number ({q} in {covs[col]['unit']})", _plain(cell))
             if q in POSITIVE_QUANTITIES and not x > 0:
                 raise InputError(tpath, at(col), f"a positive {q} (in {covs[col]['unit']})", _plain(cell))
-            quantities[q] = x * QUANTITIES[q][1][covs[col]["unit"]]
+            quantities[q] = x * quantity_factor(q, covs[col]["unit"])
         label_parts = [f"{c}={_text(rec[c])}" for c in active]
         conds.append(Condition(
             measurement=mid, row=row, label=", ".join(label_parts) if label_parts else f"row {row}",
@@ -809,7 +814,7 @@ def _check_moisture(soil_path, data: dict, tpath: Path, df: pd.DataFrame, covs: 
         x = np.array([v for v in (_number(c) for c in df[col]) if v is not None], float)
         if not len(x):
             continue
-        factor = QUANTITIES[q][1][unit]
+        factor = quantity_factor(q, unit)
         where = f"column {col}"
         if factor != 1.0 and x.max() > 1.0:
             raise InputError(tpath, where, f"a moisture content as a fraction of 1 (unit: {unit}, as declared): "
@@ -834,7 +839,7 @@ def _check_moisture(soil_path, data: dict, tpath: Path, df: pd.DataFrame, covs: 
                     raise InputError(tpath, where, f"moisture contents near the soil's own ({soil[1]}, "
                                      f"properties.moisture_content): the column's median, {med:.4g} %, is about "
                                      f"{times} times {'smaller' if lg < 0 else 'larger'} ({hint})", float(x[0]))
-        elif unit == "%" and x.max() <= 1.0 and x.max() > 0:
+        elif factor == 1.0 and x.max() <= 1.0 and x.max() > 0:
             raise InputError(tpath, where, "a moisture content in % (every value is at most 1 %: fractions of 1? "
                              "declare unit: fraction under the covariate to have them read as such, or give the "
                              "soil's properties.moisture_content if it is that dry)", float(x[0]))
@@ -857,7 +862,7 @@ def _check_scale(soil_path, cw: str, cv: dict, scenario: str) -> None:
     if target not in factors or target == DIMENSIONLESS:  # a dimensionless DEM parameter is no moisture
         return
     unit = cv["unit"]
-    factor = factors[unit] / factors[target]
+    factor = quantity_factor(q, unit) / quantity_factor(q, target)
     scale = cv.get("scale", 1)
     if not abs(float(scale) - factor) <= SCALE_RTOL * factor:
         raise InputError(soil_path, f"{cw}.scale",

@@ -30,6 +30,19 @@ def moisture_factor(unit) -> float | None:
     return {**QUANTITIES["moisture_content"][1], "percent": 1.0, "wt%": 1.0, "%w/w": 1.0, "g/100g": 1.0}.get(key)
 
 
+def quantity_factor(quantity: str, unit) -> float | None:
+    """Factor to the SI unit of :data:`QUANTITIES` of a numeric quantity's ``unit`` as a
+    measured table's covariate declares it: one of the quantity's units, and for a moisture
+    content every unit :func:`moisture_factor` knows (the units the soil's own
+    ``properties.moisture_content`` takes, ``percent`` or ``wt%`` too).  None for another unit
+    or a label quantity."""
+    if QUANTITIES.get(quantity) is None:
+        return None
+    if quantity == "moisture_content":
+        return moisture_factor(unit)
+    return QUANTITIES[quantity][1].get(unit)
+
+
 #: the units of a moisture content :func:`moisture_factor` knows, as the messages name them
 MOISTURE_UNITS = "% (also percent, wt%, % w/w, g/100g) or a mass fraction (-, fraction, g/g, kg/kg)"
 
