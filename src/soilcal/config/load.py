@@ -537,9 +537,12 @@ def _check_image_states(path: Path, targets: dict, named: dict) -> None:
         other, ostate = first[key]
         from soilcal.config.quantities import MOISTURE_RTOL
 
-        differ = [k for k in ("moisture_content", "layer") if k in state and k in ostate
-                  and not (str(state[k]).strip() == str(ostate[k]).strip() if k == "layer" else
-                           math.isclose(float(state[k]), float(ostate[k]), rel_tol=MOISTURE_RTOL, abs_tol=MOISTURE_RTOL))]
+        def same(k):
+            if k == "layer":
+                return str(state[k]).strip() == str(ostate[k]).strip()
+            return math.isclose(float(state[k]), float(ostate[k]), rel_tol=MOISTURE_RTOL, abs_tol=MOISTURE_RTOL)
+
+        differ = [k for k in ("moisture_content", "layer") if k in state and k in ostate and not same(k)]
         if differ:
             says = "; ".join(f"{k} {ostate[k]} there, {state[k]} here" for k in differ)
             raise InputError(path, f"targets.{tid}.image",
