@@ -57,6 +57,29 @@ def test_the_same_photos_for_one_state_load(tmp_path, parsed):
     d["targets"]["static_angle_upper_again"] = dict(d["targets"]["static_angle_upper"])
     d["targets"]["static_angle_any"] = {k: v for k, v in d["targets"]["static_angle_upper"].items() if k != "layer"}
     _load(tmp_path, d)
-    # another measure of the same group is another value, not the same one
-    d["targets"]["static_angle_middle"].update(image="static_upper", image_measure="left_deg")
-    _load(tmp_path, d)
+
+
+@pytest.mark.parametrize("measure", ["left_deg", "spread_deg"])
+def test_another_measure_of_the_same_photos_is_of_the_same_state(tmp_path, parsed, measure):
+    # every measure of a group comes from the same photos: the middle layer's target on the
+    # upper layer's heaps is refused whichever measure it takes
+    d = copy.deepcopy(parsed)
+    d["targets"]["static_angle_middle"].update(image="static_upper", image_measure=measure)
+    with pytest.raises(InputError) as ei:
+        _load(tmp_path, d)
+    assert ei.value.field == "targets.static_angle_middle.image"
+    assert "targets.static_angle_upper" in ei.value.expected and "layer upper there, middle here" in ei.value.expected
+
+
+def test_a_state_given_by_a_later_target_counts(tmp_path, parsed):
+    # the first target on the group gives no layer, the second the upper one: a third of the
+    # middle layer is of another state than the second
+    d = copy.deepcopy(parsed)
+    up = d["targets"].pop("static_angle_upper")
+    d["targets"] = {"static_angle_any": {k: v for k, v in up.items() if k != "layer"},
+                    "static_angle_upper": up, **d["targets"]}
+    d["targets"]["static_angle_middle"]["image"] = "static_upper"
+    with pytest.raises(InputError) as ei:
+        _load(tmp_path, d)
+    assert ei.value.field == "targets.static_angle_middle.image"
+    assert "layer upper there, middle here" in ei.value.expected

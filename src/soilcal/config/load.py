@@ -521,34 +521,37 @@ def _check_images(path: Path, d: dict, resources_root: Path) -> dict | None:
 
 
 def _check_image_states(path: Path, targets: dict, named: dict) -> None:
-    """One photo group's measurement is of one soil state: two targets that take the same
-    value of the same group (``image`` and ``image_measure``) and both give a moisture content
-    or a layer (``moisture_content``, ``layer``), different ones, would calibrate both states to the same photos
-    (a target line copied for the next moisture with its ``image`` left as it was): refused
-    naming the second target's ``image``, the first target and both states."""
+    """One photo group's measurement is of one soil state (a group has one kind, and every
+    measure of it, ``angle_deg``, ``left_deg`` or ``spread_deg``, comes from the same photos):
+    two targets on the same group (``image``) that both give a moisture content or a layer
+    (``moisture_content``, ``layer``), different ones, would calibrate both states to the same
+    photos (a target line copied for the next moisture with its ``image`` left as it was):
+    refused naming the second target's ``image``, the first target and both states."""
+    from soilcal.config.quantities import same_moisture
+
     first = {}
     for tid, g in named.items():
         t = targets[tid]
-        key = (g, t.get("image_measure", "angle_deg"))
         state = {k: t[k] for k in ("moisture_content", "layer") if t.get(k) is not None}
-        if key not in first:
-            first[key] = (tid, state)
+        if g not in first:
+            first[g] = (tid, state)
             continue
-        other, ostate = first[key]
-        from soilcal.config.quantities import MOISTURE_RTOL
+        other, ostate = first[g]
 
         def same(k):
             if k == "layer":
                 return str(state[k]).strip() == str(ostate[k]).strip()
-            return math.isclose(float(state[k]), float(ostate[k]), rel_tol=MOISTURE_RTOL, abs_tol=MOISTURE_RTOL)
+            return same_moisture(float(state[k]), float(ostate[k]))
 
         differ = [k for k in ("moisture_content", "layer") if k in state and k in ostate and not same(k)]
         if differ:
             says = "; ".join(f"{k} {ostate[k]} there, {state[k]} here" for k in differ)
             raise InputError(path, f"targets.{tid}.image",
-                             f"a photo group of this target's own soil state: {g!r} ({key[1]}) is already the "
-                             f"photo group of targets.{other} ({says}); one group's photos are of one moisture "
-                             "and layer", g)
+                             f"a photo group of this target's own soil state: {g!r} is already the "
+                             f"photo group of targets.{other} ({says}); one group's photos, every measure "
+                             "of them, are of one moisture and layer", g)
+        for k, v in state.items():  # a later target may give what the first left out
+            ostate.setdefault(k, v)
 
 
 def _check_targets(path: Path, d: dict, resources_root: Path) -> None:

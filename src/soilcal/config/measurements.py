@@ -325,9 +325,7 @@ def _check_case_moisture(soil_path, data: dict, stage: dict, cw: str, cv: dict) 
     ``moisture_content`` (in the unit of ``properties.moisture_content``), were measured at it,
     and otherwise the soil declares it (``properties.moisture_content``).  Rows at one moisture
     would otherwise be simulated with the parameters calibrated at another."""
-    import math
-
-    from soilcal.config.quantities import MOISTURE_RTOL, declares_moisture, soil_moisture
+    from soilcal.config.quantities import declares_moisture, same_moisture, soil_moisture
 
     declared = soil_moisture(soil_path, data)  # an unknown unit is refused here
     soil_factor = declared["factor"] if declared else None
@@ -341,14 +339,10 @@ def _check_case_moisture(soil_path, data: dict, stage: dict, cw: str, cv: dict) 
             raise InputError(soil_path, f"{cw}.case.{k}", f"a moisture content in {cv['unit']} (quantity: "
                              "moisture_content)", k)
         pct = x * col_factor
-
-        def same(a_pct, b_pct):
-            return math.isclose(a_pct, b_pct, rel_tol=MOISTURE_RTOL, abs_tol=MOISTURE_RTOL)
-
         aimed = [(tid, targets[tid]["moisture_content"]) for g in cases[cid]["goals"].values()
                  if (tid := g.get("target")) in targets and targets[tid].get("moisture_content") is not None]
         if aimed and declared is not None:
-            off = [(tid, m) for tid, m in aimed if not same(pct, float(m) * soil_factor)]
+            off = [(tid, m) for tid, m in aimed if not same_moisture(pct, float(m) * soil_factor)]
             if off:
                 raise InputError(soil_path, f"{cw}.case.{k}",
                                  f"the moisture content of the targets case {cid!r} aims at ("

@@ -84,19 +84,21 @@ def soil_moisture(path, data: dict) -> dict | None:
 MOISTURE_RTOL = 1e-9
 
 
+def same_moisture(a: float, b: float) -> bool:
+    """Whether two moisture contents, in one unit, are the same moisture: equal within
+    :data:`MOISTURE_RTOL`, relative and absolute."""
+    return math.isclose(a, b, rel_tol=MOISTURE_RTOL, abs_tol=MOISTURE_RTOL)
+
+
 def declares_moisture(declared: dict, pct: float) -> bool:
     """Whether the moisture contents a soil declares (:func:`soil_moisture`) hold ``pct``, a
     moisture content in %: one of its values, or inside its ``low`` .. ``high`` (its ends
-    included), compared in % within :data:`MOISTURE_RTOL`, so that a moisture written in % and
+    included), compared in % by :func:`same_moisture`, so that a moisture written in % and
     declared as a fraction, or the other way round, is the same moisture at every value and
     at a range's ends."""
     f = declared["factor"]
-
-    def same(a, b):
-        return math.isclose(a, b, rel_tol=MOISTURE_RTOL, abs_tol=MOISTURE_RTOL)
-
-    return (any(same(pct, v * f) for v in declared["points"])
-            or any(lo * f <= pct <= hi * f or same(pct, lo * f) or same(pct, hi * f)
+    return (any(same_moisture(pct, v * f) for v in declared["points"])
+            or any(lo * f <= pct <= hi * f or same_moisture(pct, lo * f) or same_moisture(pct, hi * f)
                    for lo, hi in declared["ranges"]))
 
 
