@@ -51,3 +51,50 @@ def test_two_keys_of_one_value_are_refused(tmp_path, parsed):
     e = ei.value
     assert e.field == "measurements.compression.covariates.moisture_content.case.5.0" and e.got == "5.0"
     assert "'5' is the same value" in e.expected
+
+
+# A label column's text is the label as written: tool ids "007" and "7" are two tools (the
+# cinnamon soil's cutting-resistance table, its directrix column a tool label).
+
+def _cinnamon(tmp_path, mapping):
+    import shutil
+
+    d = read_yaml(ROOT / "config/soils/cinnamon-soil.yaml")
+    d["measurements"]["cutting_resistance"]["covariates"]["directrix"]["setup"] = mapping
+    res = tmp_path / "resources"  # the shipped resources, the cinnamon soil's tables copied
+    (res / "measurements").mkdir(parents=True)
+    for f in (ROOT / "resources").iterdir():
+        if f.name != "measurements":
+            (res / f.name).symlink_to(f)
+    for f in (ROOT / "resources/measurements").iterdir():
+        if f.name != "cinnamon-soil":
+            (res / "measurements" / f.name).symlink_to(f)
+    shutil.copytree(ROOT / "resources/measurements/cinnamon-soil", res / "measurements/cinnamon-soil")
+    table = res / "measurements/cinnamon-soil/cutting_resistance.csv"
+    rows = table.read_text().splitlines()
+    assert rows[1].startswith("1,arc,") and rows[2].startswith("2,parabola,")
+    rows[1] = rows[1].replace(",arc,", ",007,")
+    rows[2] = rows[2].replace(",parabola,", ",7,")
+    table.write_text("\n".join(rows) + "\n")
+    p = tmp_path / "cinnamon-soil.yaml"
+    p.write_text(yaml.safe_dump(d, sort_keys=False))
+    return load_soil(p, res)
+
+
+def test_label_keys_that_read_as_one_number_are_two_labels(tmp_path):
+    from soilcal.config.measurements import conditions
+
+    soil = _cinnamon(tmp_path, {"007": "plate-arc", "7": "plate-parabola", "bionic": "plate-bionic",
+                                "line": "plate-line"})
+    got = {c.row: c.setup for c in conditions(soil) if c.measurement == "cutting_resistance"}
+    # the setups the unchanged table's rows 1 (arc) and 2 (parabola) run
+    ref = {c.row: c.setup for c in conditions(load_soil(ROOT / "config/soils/cinnamon-soil.yaml", ROOT / "resources"))
+           if c.measurement == "cutting_resistance"}
+    assert ref[1] != ref[2]
+    assert got[1] == ref[1] and got[2] == ref[2]
+
+
+def test_a_label_left_out_of_the_map_is_refused_not_read_as_another(tmp_path):
+    with pytest.raises(InputError) as ei:
+        _cinnamon(tmp_path, {"007": "plate-arc", "bionic": "plate-bionic", "line": "plate-line"})
+    assert "cutting_resistance.csv" in str(ei.value.path) and "directrix" in ei.value.field

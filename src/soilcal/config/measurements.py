@@ -235,22 +235,31 @@ def _text(v) -> str:
 _NUMERIC_TEXT = re.compile(r"[+-]?(\d+\.?\d*|\.\d+)([eE][+-]?\d+)?")
 
 
-def _map_key(v) -> str:
-    """A ``setup`` or ``case`` map key, or the cell looked up in the map, as :func:`_text`;
-    text that is a number (a key quoted in the YAML, ``"5.0"`` or ``"17.20"``, a cell of a
-    column that also holds text) reads as that number, as the table's numeric cells are read:
-    a quoted ``"17.20"`` and a cell 17.2 are one value."""
-    if isinstance(v, str) and _NUMERIC_TEXT.fullmatch(v.strip()):
+def _numeric_column(cv: dict) -> bool:
+    """Whether a covariate's cells are numbers of a physical quantity (``quantity`` one of the
+    numeric :data:`QUANTITIES`: moisture, speed, depth, ...), not labels (a tool id, a day, a
+    group, or a column that declares no quantity)."""
+    return QUANTITIES.get(cv.get("quantity")) is not None
+
+
+def _map_key(v, numeric: bool) -> str:
+    """A ``setup`` or ``case`` map key, or the cell looked up in the map, as :func:`_text`.
+    In a column of a numeric quantity (``numeric``), text that is a number (a key quoted in the
+    YAML, ``"5.0"`` or ``"17.20"``) reads as that number, as the table's numeric cells are read:
+    a quoted ``"17.20"`` and a cell 17.2 are one value.  In a label column (a tool id, a
+    revision) the text is the label as written: ``"007"`` and ``"7"`` are two tools."""
+    if numeric and isinstance(v, str) and _NUMERIC_TEXT.fullmatch(v.strip()):
         return _text(float(v))
     return _text(v)
 
 
-def _check_map_keys(soil_path, field: str, amap: dict) -> None:
-    """Two keys of one ``setup`` or ``case`` map that are the same value (``5`` and ``"5.0"``)
-    would send the rows at it to one of two entries: refused naming both."""
+def _check_map_keys(soil_path, field: str, amap: dict, numeric: bool) -> None:
+    """Two keys of one ``setup`` or ``case`` map that are the same value (``5`` and ``"5.0"``
+    in a numeric column, :func:`_map_key`) would send the rows at it to one of two entries:
+    refused naming both."""
     seen = {}
     for k in amap:
-        key = _map_key(k)
+        key = _map_key(k, numeric)
         if key in seen:
             raise InputError(soil_path, f"{field}.{k}", f"a value not already mapped ({seen[key]!r} is the same "
                              f"value, {key})", k)
@@ -510,7 +519,7 @@ def _entry(soil_path, data: dict, mid: str, entry: dict, tpath: Path):
         if form == "setup":
             if not cv["setup"]:
                 raise InputError(soil_path, f"{cw}.setup", "a map of cell value -> setup name", cv["setup"])
-            _check_map_keys(soil_path, f"{cw}.setup", cv["setup"])
+            _check_map_keys(soil_path, f"{cw}.setup", cv["setup"], _numeric_column(cv))
             for k, s in cv["setup"].items():
                 if s not in setups:
                     raise InputError(soil_path, f"{cw}.setup.{k}", f"a setup of {name} ({', '.join(setups)})", s)
@@ -529,7 +538,7 @@ def _entry(soil_path, data: dict, mid: str, entry: dict, tpath: Path):
         elif form == "case":
             if not cv["case"]:
                 raise InputError(soil_path, f"{cw}.case", "a map of cell value -> case id", cv["case"])
-            _check_map_keys(soil_path, f"{cw}.case", cv["case"])
+            _check_map_keys(soil_path, f"{cw}.case", cv["case"], _numeric_column(cv))
             for k, c in cv["case"].items():
                 if c not in case_ids:
                     raise InputError(soil_path, f"{cw}.case.{k}",
@@ -634,8 +643,9 @@ def _entry(soil_path, data: dict, mid: str, entry: dict, tpath: Path):
                 raise InputError(tpath, at(col), f"a value of the covariate {col}", "empty")
             if "setup" in cv or "case" in cv:
                 form = "setup" if "setup" in cv else "case"
-                amap = {_map_key(k): v for k, v in cv[form].items()}
-                key = _map_key(cell)
+                numeric = _numeric_column(cv)
+                amap = {_map_key(k, numeric): v for k, v in cv[form].items()}
+                key = _map_key(cell, numeric)
                 if key not in amap:
                     raise InputError(tpath, at(col),
                                      f"a value mapped under {where}.covariates.{col}.{form} ({', '.join(amap)})",
