@@ -190,3 +190,15 @@ def test_a_moisture_column_in_a_volumetric_unit_is_refused_naming_the_units(tmp_
     e = ei.value
     assert e.field == "measurements.compression.covariates.moisture_content.unit" and e.got == "vol%"
     assert "wt%" in e.expected and "g/g" in e.expected
+
+
+@pytest.mark.parametrize("given, missing", [("low", "high"), ("high", "low")])
+def test_a_range_end_without_the_other_is_refused(tmp_path, parsed, given, missing):
+    # a lone high beside the declared values declared no range and passed unread before
+    d = copy.deepcopy(parsed)
+    d["properties"]["moisture_content"][given] = 12
+    with pytest.raises(InputError) as ei:
+        _load(tmp_path, d)
+    e = ei.value
+    assert e.field == f"properties.moisture_content.{missing}"
+    assert f"{missing} with {given}" in e.expected and "12" in str(e.got)

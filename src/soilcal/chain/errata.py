@@ -286,23 +286,17 @@ def plausibility(err: Errata, soil: dict) -> None:
         if kind is None:
             return
         lo, hi, si_unit = _PLAUSIBLE[kind]
+        declared = [q.get("value")] + list(q.get("values", [])) + [q.get("low"), q.get("high")]
         if kind == "moisture_content":
-            # the one reader of a soil's moisture (values, value, low..high, its unit's factor
-            # to %); a unit without a factor is judged where a moisture is compared with it
-            from soilcal.config.quantities import soil_moisture
-            from soilcal.errors import InputError
+            # every declared value and range end, a lone low or high too, in % by the factor of
+            # its unit (quantities.moisture_factor); a unit without a factor is judged where a
+            # moisture is compared with it, a value without a unit is taken as printed, in %
+            from soilcal.config.quantities import moisture_factor
 
-            try:
-                m = soil_moisture(where, {"properties": {"moisture_content": q}})
-            except InputError:
-                return
-            if m is None:
-                return
-            pairs = [(f"{v:g}", v * m["factor"]) for v in m["points"] + [x for r in m["ranges"] for x in r]]
+            f = 1.0 if q.get("unit") is None else moisture_factor(q.get("unit"))
+            pairs = [(v, None if f is None else float(v) * f) for v in declared if v is not None]
         else:
-            pairs = [(v, _si(float(v), str(q.get("unit", ""))))
-                     for v in [q.get("value")] + list(q.get("values", [])) + [q.get("low"), q.get("high")]
-                     if v is not None]
+            pairs = [(v, _si(float(v), str(q.get("unit", "")))) for v in declared if v is not None]
         for v, x in pairs:
             if x is None:
                 continue

@@ -115,6 +115,14 @@ def _schema_error(path: Path, schema: dict, data: Any) -> None:
         missing = err.message.split("'")[1] if "'" in err.message else err.message
         fld = f"{where}.{missing}" if where != "<root>" else missing
         raise InputError(path, fld, "a required field", "nothing")
+    if err.validator == "dependentRequired":
+        # e.g. a range's low given without its high: which key is there and which one it needs
+        given = next((k for k, need in err.validator_value.items()
+                      if k in err.instance and any(n not in err.instance for n in need)), None)
+        need = [n for n in err.validator_value.get(given, []) if n not in err.instance]
+        fld = f"{where}.{need[0]}" if where != "<root>" else need[0]
+        raise InputError(path, fld, f"{' and '.join(need)} with {given} (a range has both ends)",
+                         f"{given} {err.instance[given]!r} alone")
     if err.validator == "type":
         types = err.validator_value if isinstance(err.validator_value, list) else [err.validator_value]
         raise InputError(path, where, "a value of type " + " or ".join(map(str, types)), err.instance)
