@@ -98,3 +98,17 @@ def test_a_label_left_out_of_the_map_is_refused_not_read_as_another(tmp_path):
     with pytest.raises(InputError) as ei:
         _cinnamon(tmp_path, {"007": "plate-arc", "bionic": "plate-bionic", "line": "plate-line"})
     assert "cutting_resistance.csv" in str(ei.value.path) and "directrix" in ei.value.field
+
+
+def test_unquoted_keys_of_one_number_are_refused_by_the_reader(tmp_path):
+    # 5 and 5.0 are one Python key: the later entry would replace the first without a word
+    from soilcal.config.load import read_yaml
+
+    p = tmp_path / "s.yaml"
+    p.write_text("case:\n  5: mc05\n  5.0: mc10\n")
+    with pytest.raises(InputError) as ei:
+        read_yaml(p)
+    assert ei.value.field == "line 3" and "first given on line 2" in ei.value.expected
+    # a quoted "5" is text, another key (a label column's "5"), read as written
+    p.write_text("case:\n  '5': mc05\n  5: mc10\n")
+    assert read_yaml(p) == {"case": {"5": "mc05", 5: "mc10"}}

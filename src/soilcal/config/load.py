@@ -24,7 +24,9 @@ WORKFLOW_SCHEMA = Path(str(resources.files("soilcal.config") / "workflow.schema.
 
 class _Loader(yaml.SafeLoader):
     """SafeLoader that also reads ``7.9e10`` (no sign, no dot) as a float, as YAML 1.2 does,
-    and refuses a key given twice in one mapping (plain PyYAML keeps the last silently)."""
+    and refuses a key given twice in one mapping (plain PyYAML keeps the last silently).  Keys
+    are compared as the values they read as, so ``5`` and ``5.0`` (one Python key, the later
+    entry would win) are the same key; a quoted ``"5"`` is text, another key."""
 
     def construct_mapping(self, node, deep=False):
         if isinstance(node, yaml.MappingNode):
@@ -32,9 +34,9 @@ class _Loader(yaml.SafeLoader):
             for key_node, _ in node.value:
                 if not isinstance(key_node, yaml.ScalarNode) or key_node.tag == "tag:yaml.org,2002:merge":
                     continue
-                key = key_node.value
+                key = self.construct_object(key_node)
                 if key in seen:
-                    raise _DuplicateKey(key, key_node.start_mark.line + 1, seen[key])
+                    raise _DuplicateKey(key_node.value, key_node.start_mark.line + 1, seen[key])
                 seen[key] = key_node.start_mark.line + 1
         return super().construct_mapping(node, deep=deep)
 
