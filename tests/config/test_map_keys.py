@@ -108,7 +108,7 @@ def test_unquoted_keys_of_one_number_are_refused_by_the_reader(tmp_path):
     p.write_text("case:\n  5: mc05\n  5.0: mc10\n")
     with pytest.raises(InputError) as ei:
         read_yaml(p)
-    assert ei.value.field == "line 3" and "first given on line 2" in ei.value.expected
+    assert ei.value.field == "line 3" and "first given on line 2, as '5'" in ei.value.expected
     # a quoted "5" is text, another key (a label column's "5"), read as written
     p.write_text("case:\n  '5': mc05\n  5: mc10\n")
     assert read_yaml(p) == {"case": {"5": "mc05", 5: "mc10"}}

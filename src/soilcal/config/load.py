@@ -36,8 +36,10 @@ class _Loader(yaml.SafeLoader):
                     continue
                 key = self.construct_object(key_node)
                 if key in seen:
-                    raise _DuplicateKey(key_node.value, key_node.start_mark.line + 1, seen[key])
-                seen[key] = key_node.start_mark.line + 1
+                    line, text = seen[key]
+                    raise _DuplicateKey(key_node.value, key_node.start_mark.line + 1,
+                                        line if text == key_node.value else f"{line}, as {text!r}")
+                seen[key] = (key_node.start_mark.line + 1, key_node.value)
         return super().construct_mapping(node, deep=deep)
 
 
