@@ -112,3 +112,44 @@ def test_unquoted_keys_of_one_number_are_refused_by_the_reader(tmp_path):
     # a quoted "5" is text, another key (a label column's "5"), read as written
     p.write_text("case:\n  '5': mc05\n  5: mc10\n")
     assert read_yaml(p) == {"case": {"5": "mc05", 5: "mc10"}}
+
+
+def _guangxi_row1_moisture(tmp_path, cell):
+    import shutil
+
+    res = tmp_path / "resources"  # the shipped resources, the guangxi soil's tables copied
+    (res / "measurements").mkdir(parents=True)
+    for f in (ROOT / "resources").iterdir():
+        if f.name != "measurements":
+            (res / f.name).symlink_to(f)
+    for f in (ROOT / "resources/measurements").iterdir():
+        if f.name != SOIL:
+            (res / "measurements" / f.name).symlink_to(f)
+    shutil.copytree(ROOT / f"resources/measurements/{SOIL}", res / f"measurements/{SOIL}")
+    table = res / f"measurements/{SOIL}/compression.csv"
+    rows = table.read_text().splitlines()
+    i = rows[0].split(",").index("moisture_content")
+    r = rows[1].split(",")
+    assert float(r[i]) == 5
+    r[i] = cell
+    rows[1] = ",".join(r)
+    table.write_text("\n".join(rows) + "\n")
+    p = tmp_path / f"{SOIL}.yaml"
+    p.write_text(yaml.safe_dump(read_yaml(ROOT / f"config/soils/{SOIL}.yaml"), sort_keys=False))
+    return load_soil(p, res)
+
+
+def test_a_cell_near_a_numeric_key_is_not_that_key(tmp_path):
+    # 5.000004 % is not the 5 % the case mc05 was calibrated at (relative 8e-7, beyond the 1e-9
+    # a moisture is compared with); printed to 6 digits it read "5" and took the case
+    with pytest.raises(InputError) as ei:
+        _guangxi_row1_moisture(tmp_path, "5.000004")
+    assert ei.value.field == "row 1, column moisture_content" and ei.value.got == 5.000004
+
+
+def test_a_cell_that_is_the_key_written_longer_is_that_key(tmp_path):
+    from soilcal.config.measurements import conditions
+
+    soil = _guangxi_row1_moisture(tmp_path, "5.0000000001")  # relative 2e-11
+    (c,) = [c for c in conditions(soil) if c.measurement == "compression" and c.row == 1]
+    assert c.case == "mc05"

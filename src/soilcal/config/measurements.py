@@ -242,28 +242,49 @@ def _numeric_column(cv: dict) -> bool:
     return QUANTITIES.get(cv.get("quantity")) is not None
 
 
-def _map_key(v, numeric: bool) -> str:
-    """A ``setup`` or ``case`` map key, or the cell looked up in the map, as :func:`_text`.
-    In a column of a numeric quantity (``numeric``), text that is a number (a key quoted in the
-    YAML, ``"5.0"`` or ``"17.20"``) reads as that number, as the table's numeric cells are read:
-    a quoted ``"17.20"`` and a cell 17.2 are one value.  In a label column (a tool id, a
-    revision) the text is the label as written: ``"007"`` and ``"7"`` are two tools."""
-    if numeric and isinstance(v, str) and _NUMERIC_TEXT.fullmatch(v.strip()):
-        return _text(float(v))
+def _map_key(v, numeric: bool):
+    """A ``setup`` or ``case`` map key, or the cell looked up in the map, as it is compared
+    (:func:`_same_key`).  In a column of a numeric quantity (``numeric``) a number, or text
+    that is a number (a key quoted in the YAML, ``"5.0"`` or ``"17.20"``), is that number, a
+    float: a quoted ``"17.20"`` and a cell 17.2 are one value.  Otherwise, and in a label
+    column (a tool id, a revision), the text as :func:`_text` writes it: ``"007"`` and ``"7"``
+    are two tools."""
+    if numeric:
+        if isinstance(v, str):
+            if _NUMERIC_TEXT.fullmatch(v.strip()):
+                return float(v)
+        elif (x := _number(v)) is not None:
+            return x
     return _text(v)
+
+
+def _same_key(a, b) -> bool:
+    """Two map keys or a key and a cell (:func:`_map_key`) are one value: numbers equal within
+    :func:`soilcal.config.quantities.same_number` (relative 1e-9, as a moisture is compared
+    with the soil's), text as written."""
+    from soilcal.config.quantities import same_number
+
+    if isinstance(a, float) and isinstance(b, float):
+        return same_number(a, b)
+    return a == b
+
+
+def _key_text(k) -> str:
+    return f"{k:.15g}" if isinstance(k, float) else str(k)
 
 
 def _check_map_keys(soil_path, field: str, amap: dict, numeric: bool) -> None:
     """Two keys of one ``setup`` or ``case`` map that are the same value (``5`` and ``"5.0"``
     in a numeric column, :func:`_map_key`) would send the rows at it to one of two entries:
     refused naming both."""
-    seen = {}
+    seen = []
     for k in amap:
         key = _map_key(k, numeric)
-        if key in seen:
-            raise InputError(soil_path, f"{field}.{k}", f"a value not already mapped ({seen[key]!r} is the same "
-                             f"value, {key})", k)
-        seen[key] = k
+        first = next((f for f, fk in seen if _same_key(key, fk)), None)
+        if first is not None:
+            raise InputError(soil_path, f"{field}.{k}", f"a value not already mapped ({first!r} is the same "
+                             f"value, {_key_text(key)})", k)
+        seen.append((k, key))
 
 
 def _missing(v) -> bool:
@@ -644,16 +665,16 @@ def _entry(soil_path, data: dict, mid: str, entry: dict, tpath: Path):
             if "setup" in cv or "case" in cv:
                 form = "setup" if "setup" in cv else "case"
                 numeric = _numeric_column(cv)
-                amap = {_map_key(k, numeric): v for k, v in cv[form].items()}
                 key = _map_key(cell, numeric)
-                if key not in amap:
+                hit = [v for k, v in cv[form].items() if _same_key(_map_key(k, numeric), key)]
+                if not hit:
                     raise InputError(tpath, at(col),
-                                     f"a value mapped under {where}.covariates.{col}.{form} ({', '.join(amap)})",
-                                     _plain(cell))
+                                     f"a value mapped under {where}.covariates.{col}.{form} "
+                                     f"({', '.join(map(str, cv[form]))})", _plain(cell))
                 if form == "setup":
-                    sname = amap[key]
+                    sname = hit[0]
                 else:
-                    case = amap[key]
+                    case = hit[0]
                 continue
             scale = float(cv.get("scale", 1.0))
             x = _number(cell)

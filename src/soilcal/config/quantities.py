@@ -84,10 +84,16 @@ def soil_moisture(path, data: dict) -> dict | None:
 MOISTURE_RTOL = 1e-9
 
 
-def same_moisture(a: float, b: float) -> bool:
-    """Whether two moisture contents, in one unit, are the same moisture: equal within
-    :data:`MOISTURE_RTOL`, relative and absolute."""
+def same_number(a: float, b: float) -> bool:
+    """Whether two numbers of one quantity, in one unit, are the same value written twice (a
+    map key and a table's cell, two moistures): equal within :data:`MOISTURE_RTOL`, relative
+    and absolute."""
     return math.isclose(a, b, rel_tol=MOISTURE_RTOL, abs_tol=MOISTURE_RTOL)
+
+
+def same_moisture(a: float, b: float) -> bool:
+    """Whether two moisture contents, in one unit, are the same moisture (:func:`same_number`)."""
+    return same_number(a, b)
 
 
 def declares_moisture(declared: dict, pct: float) -> bool:
