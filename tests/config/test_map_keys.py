@@ -56,11 +56,15 @@ def test_two_keys_of_one_value_are_refused(tmp_path, parsed):
 # A label column's text is the label as written: tool ids "007" and "7" are two tools (the
 # cinnamon soil's cutting-resistance table, its directrix column a tool label).
 
-def _cinnamon(tmp_path, mapping):
+def _cinnamon(tmp_path, mapping, cells=("007", "7", "bionic", "line"), quantity="tool"):
     import shutil
 
     d = read_yaml(ROOT / "config/soils/cinnamon-soil.yaml")
-    d["measurements"]["cutting_resistance"]["covariates"]["directrix"]["setup"] = mapping
+    cv = d["measurements"]["cutting_resistance"]["covariates"]["directrix"]
+    assert cv.get("quantity") == "tool"
+    cv["setup"] = mapping
+    if quantity is None:
+        del cv["quantity"]
     res = tmp_path / "resources"  # the shipped resources, the cinnamon soil's tables copied
     (res / "measurements").mkdir(parents=True)
     for f in (ROOT / "resources").iterdir():
@@ -73,8 +77,9 @@ def _cinnamon(tmp_path, mapping):
     table = res / "measurements/cinnamon-soil/cutting_resistance.csv"
     rows = table.read_text().splitlines()
     assert rows[1].startswith("1,arc,") and rows[2].startswith("2,parabola,")
-    rows[1] = rows[1].replace(",arc,", ",007,")
-    rows[2] = rows[2].replace(",parabola,", ",7,")
+    for i, (was, cell) in enumerate(zip(("arc", "parabola", "bionic", "line"), cells), 1):
+        assert f",{was}," in rows[i]
+        rows[i] = rows[i].replace(f",{was},", f",{cell},")
     table.write_text("\n".join(rows) + "\n")
     p = tmp_path / "cinnamon-soil.yaml"
     p.write_text(yaml.safe_dump(d, sort_keys=False))
@@ -92,6 +97,43 @@ def test_label_keys_that_read_as_one_number_are_two_labels(tmp_path):
            if c.measurement == "cutting_resistance"}
     assert ref[1] != ref[2]
     assert got[1] == ref[1] and got[2] == ref[2]
+
+
+def _setups(soil):
+    from soilcal.config.measurements import conditions
+
+    return {c.row: c.setup["name"] for c in conditions(soil) if c.measurement == "cutting_resistance"}
+
+
+PLATES = ("plate-arc", "plate-parabola", "plate-bionic", "plate-line")
+
+
+@pytest.mark.parametrize("cells", [("007", "7", "8", "9"), ("1.10", "1.1", "2", "3")])
+def test_a_label_column_of_numbers_only_keeps_each_label_as_written(tmp_path, cells):
+    # every cell a number: parsed as numbers, 007 and 7 (1.10 and 1.1) were one value and
+    # row 1 ran the setup mapped under the other label, plate-parabola, without a word
+    soil = _cinnamon(tmp_path, dict(zip(cells, PLATES)), cells)
+    assert _setups(soil) == dict(zip((1, 2, 3, 4), PLATES))
+
+
+def test_a_label_cell_is_not_a_key_that_reads_as_its_number(tmp_path):
+    # no quantity: cell 1 and the quoted key "1.0" are two labels; the refusal says the
+    # comparison is of text and how to compare numbers instead
+    with pytest.raises(InputError) as ei:
+        _cinnamon(tmp_path, {"1.0": PLATES[0], "2.0": PLATES[1], "3.0": PLATES[2], "4.0": PLATES[3]},
+                  ("1", "2", "3", "4"), quantity=None)
+    e = ei.value
+    assert e.field == "row 1, column directrix" and e.got == "1"
+    assert "'1.0', '2.0'" in e.expected and "as text" in e.expected and "numeric quantity" in e.expected
+    # a cell 1.000004 is not the label 1 (printed to 6 digits, it read "1" and took its key)
+    with pytest.raises(InputError) as ei:
+        _cinnamon(tmp_path / "b", {1: PLATES[0], 2: PLATES[1], 3: PLATES[2], 4: PLATES[3]},
+                  ("1.000004", "2", "3", "4"), quantity=None)
+    assert ei.value.field == "row 1, column directrix" and ei.value.got == "1.000004"
+    # unquoted whole-number keys are the labels the cells write
+    soil = _cinnamon(tmp_path / "c", {1: PLATES[0], 2: PLATES[1], 3: PLATES[2], 4: PLATES[3]},
+                     ("1", "2", "3", "4"), quantity=None)
+    assert _setups(soil) == dict(zip((1, 2, 3, 4), PLATES))
 
 
 def test_a_label_left_out_of_the_map_is_refused_not_read_as_another(tmp_path):

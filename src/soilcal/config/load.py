@@ -212,8 +212,12 @@ class Soil:
         return {s["id"]: read_table(self.table_path(s["id"])) for s in self.stages if s.get("table")}
 
 
-def read_table(path: Path) -> pd.DataFrame:
+def read_table(path: Path, text_columns=()) -> pd.DataFrame:
     """Read a published CSV table; a missing or unreadable file raises InputError.
+
+    The columns named in ``text_columns`` (labels: a tool id, a revision) keep each cell's
+    text as the file writes it (``007`` stays ``"007"``, ``1.10`` stays ``"1.10"``; an empty
+    cell is missing); the other columns are parsed by pandas (numbers as numbers).
 
     The header's cells are stripped of surrounding spaces.  Refused, naming the file: a
     header that names a column twice, a header of one cell holding ``;`` (a
@@ -266,6 +270,12 @@ def read_table(path: Path) -> pd.DataFrame:
         raise InputError(path, "<file>", "a readable CSV table", text or type(exc).__name__) from None
     if len(df.columns) == len(names):
         df.columns = [nm or str(c) for nm, c in zip(names, df.columns)]
+    keep = [c for c in text_columns if c in df.columns]
+    if keep:
+        as_text = pd.read_csv(io.StringIO(body), dtype=str)
+        as_text.columns = df.columns
+        for c in keep:
+            df[c] = as_text[c]
     filled = np.flatnonzero(df.notna().any(axis=1).to_numpy())
     return df.iloc[:filled[-1] + 1 if filled.size else 0]
 

@@ -247,14 +247,18 @@ def _map_key(v, numeric: bool):
     (:func:`_same_key`).  In a column of a numeric quantity (``numeric``) a number, or text
     that is a number (a key quoted in the YAML, ``"5.0"`` or ``"17.20"``), is that number, a
     float: a quoted ``"17.20"`` and a cell 17.2 are one value.  Otherwise, and in a label
-    column (a tool id, a revision), the text as :func:`_text` writes it: ``"007"`` and ``"7"``
-    are two tools."""
+    column (a tool id, a revision), whose cells are read as the table writes them
+    (:func:`_label_column`), text: ``"007"`` and ``"7"`` are two tools, ``"1.10"`` and ``"1.1"``
+    two revisions; an unquoted number key is the text :func:`_text` writes (``7`` is ``"7"``),
+    a key with decimals in full (``1.0000004`` is not ``"1"``)."""
     if numeric:
         if isinstance(v, str):
             if _NUMERIC_TEXT.fullmatch(v.strip()):
                 return float(v)
         elif (x := _number(v)) is not None:
             return x
+    elif isinstance(v, float) and math.isfinite(v) and v != int(v):
+        return repr(v)
     return _text(v)
 
 
@@ -315,12 +319,21 @@ def _plain(v):
     return x if x is not None else str(v).strip()
 
 
-def _read(soil_path, where: str, tpath: Path) -> pd.DataFrame:
+def _label_column(cv: dict) -> bool:
+    """Whether a covariate's cells are labels read as the table writes them: a ``setup`` or
+    ``case`` map column, or a column of a label quantity (tool, day, group), that declares no
+    numeric quantity (:func:`_numeric_column`)."""
+    if _numeric_column(cv):
+        return False
+    return "setup" in cv or "case" in cv or cv.get("quantity") is not None
+
+
+def _read(soil_path, where: str, tpath: Path, text_columns=()) -> pd.DataFrame:
     from soilcal.config.load import read_table
 
     if not tpath.is_file():
         raise InputError(soil_path, f"{where}.table", f"an existing file {tpath}", "no such file")
-    df = read_table(tpath)
+    df = read_table(tpath, text_columns)
     if len(df) == 0:
         raise InputError(tpath, "rows", "at least one row (one measured condition)", 0)
     return df
@@ -618,7 +631,7 @@ def _entry(soil_path, data: dict, mid: str, entry: dict, tpath: Path):
                              f"a column with one role ({col} is already {roles[col][1]})", col)
 
     # -- the table: columns
-    df = _read(soil_path, where, tpath)
+    df = _read(soil_path, where, tpath, [c for c, cv in covs.items() if _label_column(cv)])
     cols = [str(c) for c in df.columns]
     listed = ", ".join(cols)
     for col in covs:
@@ -667,10 +680,18 @@ def _entry(soil_path, data: dict, mid: str, entry: dict, tpath: Path):
                 numeric = _numeric_column(cv)
                 key = _map_key(cell, numeric)
                 hit = [v for k, v in cv[form].items() if _same_key(_map_key(k, numeric), key)]
-                if not hit:
+                if not hit and numeric:
                     raise InputError(tpath, at(col),
                                      f"a value mapped under {where}.covariates.{col}.{form} "
                                      f"({', '.join(map(str, cv[form]))})", _plain(cell))
+                if not hit:
+                    keys = ", ".join(repr(_map_key(k, False)) for k in cv[form])
+                    raise InputError(tpath, at(col),
+                                     f"a value mapped under {where}.covariates.{col}.{form} ({keys}): "
+                                     f"this column declares no numeric quantity, so its cells are labels "
+                                     f"compared with the keys as text, as written ({key!r} is none of them); "
+                                     "write the key as the table writes the cell, or declare the column's "
+                                     "numeric quantity and unit to compare them as numbers", key)
                 if form == "setup":
                     sname = hit[0]
                 else:
