@@ -82,4 +82,6 @@ def test_a_state_given_by_a_later_target_counts(tmp_path, parsed):
     with pytest.raises(InputError) as ei:
         _load(tmp_path, d)
     assert ei.value.field == "targets.static_angle_middle.image"
-    assert "layer upper there, middle here" in ei.value.expected
+    # named by the target that gave the layer, not the group's first target (which gives none)
+    assert "targets.static_angle_upper (layer upper there, middle here)" in ei.value.expected
+    assert "static_angle_any" not in ei.value.expected

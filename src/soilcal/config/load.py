@@ -548,32 +548,32 @@ def _check_image_states(path: Path, targets: dict, named: dict) -> None:
     two targets on the same group (``image``) that both give a moisture content or a layer
     (``moisture_content``, ``layer``), different ones, would calibrate both states to the same
     photos (a target line copied for the next moisture with its ``image`` left as it was):
-    refused naming the second target's ``image``, the first target and both states."""
+    refused naming the second target's ``image``, both states and, for each, the target that
+    gave it (the first on the group to give that state, not always the group's first
+    target)."""
     from soilcal.config.quantities import same_moisture
 
-    first = {}
+    given = {}  # photo group -> state key -> (its value, the first target that gave it)
     for tid, g in named.items():
         t = targets[tid]
         state = {k: t[k] for k in ("moisture_content", "layer") if t.get(k) is not None}
-        if g not in first:
-            first[g] = (tid, state)
-            continue
-        other, ostate = first[g]
+        seen = given.setdefault(g, {})
 
-        def same(k):
+        def same(k, v):
             if k == "layer":
-                return str(state[k]).strip() == str(ostate[k]).strip()
-            return same_moisture(float(state[k]), float(ostate[k]))
+                return str(state[k]).strip() == str(v).strip()
+            return same_moisture(float(state[k]), float(v))
 
-        differ = [k for k in ("moisture_content", "layer") if k in state and k in ostate and not same(k)]
+        differ = [(k, *seen[k]) for k in ("moisture_content", "layer") if k in state and k in seen
+                  and not same(k, seen[k][0])]
         if differ:
-            says = "; ".join(f"{k} {ostate[k]} there, {state[k]} here" for k in differ)
+            says = "; ".join(f"targets.{other} ({k} {v} there, {state[k]} here)" for k, v, other in differ)
             raise InputError(path, f"targets.{tid}.image",
                              f"a photo group of this target's own soil state: {g!r} is already the "
-                             f"photo group of targets.{other} ({says}); one group's photos, every measure "
+                             f"photo group of {says}; one group's photos, every measure "
                              "of them, are of one moisture and layer", g)
         for k, v in state.items():  # a later target may give what the first left out
-            ostate.setdefault(k, v)
+            seen.setdefault(k, (v, tid))
 
 
 def _check_targets(path: Path, d: dict, resources_root: Path) -> None:
