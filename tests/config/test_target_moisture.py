@@ -202,3 +202,17 @@ def test_a_range_end_without_the_other_is_refused(tmp_path, parsed, given, missi
     e = ei.value
     assert e.field == f"properties.moisture_content.{missing}"
     assert f"{missing} with {given}" in e.expected and "12" in str(e.got)
+
+
+def test_a_one_sided_bound_is_refused_saying_where_it_goes(tmp_path, parsed):
+    # a soil sieved below 2 mm has an upper bound and no range: the refusal names the form
+    # that holds it (the entry's note, with its value if one was measured)
+    d = copy.deepcopy(parsed)
+    d["properties"]["particle_size"] = {"high": 2, "unit": "mm"}
+    with pytest.raises(InputError) as ei:
+        _load(tmp_path, d)
+    e = ei.value
+    assert e.field == "properties.particle_size.low" and e.got == "high 2 alone"
+    assert "one-sided bound" in e.expected and "note" in e.expected and "value" in e.expected
+    d["properties"]["particle_size"] = {"value": None, "unit": "mm", "note": "sieved below 2 mm"}
+    _load(tmp_path, d)

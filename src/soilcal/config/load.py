@@ -125,7 +125,11 @@ def _schema_error(path: Path, schema: dict, data: Any) -> None:
                       if k in err.instance and any(n not in err.instance for n in need)), None)
         need = [n for n in err.validator_value.get(given, []) if n not in err.instance]
         fld = f"{where}.{need[0]}" if where != "<root>" else need[0]
-        raise InputError(path, fld, f"{' and '.join(need)} with {given} (a range has both ends)",
+        hint = ""
+        if given in ("low", "high"):
+            hint = ("; a one-sided bound, such as a soil sieved below 2 mm, is no range: write it in the "
+                    "entry's note, and its value if one was measured")
+        raise InputError(path, fld, f"{' and '.join(need)} with {given} (a range has both ends{hint})",
                          f"{given} {err.instance[given]!r} alone")
     if err.validator == "type":
         types = err.validator_value if isinstance(err.validator_value, list) else [err.validator_value]
