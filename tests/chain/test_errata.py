@@ -103,3 +103,19 @@ def test_a_moisture_content_is_judged_in_its_declared_unit():
     for unit in ("wt%", "percent", "% w/w"):
         (row,) = rows({"value": 150, "unit": unit})
         assert row.recomputed == "150 %", unit
+
+
+def test_every_declared_moisture_is_judged_a_lone_range_end_too():
+    """A moisture above 100 % of dry mass is implausible for a mineral soil whichever field
+    declares it: a range's low or high given alone (refused by the loader, but the errata read
+    the file as printed) and a range end beside a plausible value."""
+    def rows(q):
+        err = Errata()
+        plausibility(err, {"properties": {"moisture_content": q}, "parameters": {}, "stages": []})
+        return [r.recomputed for r in err.frame().itertuples()]
+
+    assert rows({"low": 150, "unit": "%"}) == ["150 %"]
+    assert rows({"high": 150, "unit": "%"}) == ["150 %"]
+    assert rows({"low": 25, "unit": "fraction"}) == ["2500 %"]
+    assert rows({"value": 17.2, "low": 150, "unit": "%"}) == ["150 %"]
+    assert rows({"values": [0.172, 0.215], "low": 0.1, "high": 2.5, "unit": "fraction"}) == ["250 %"]

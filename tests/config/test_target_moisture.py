@@ -141,3 +141,78 @@ def test_a_target_moisture_the_soil_does_not_declare_names_the_fix(tmp_path, par
     with pytest.raises(InputError) as ei:
         _load(tmp_path, d)
     assert "add it to properties.moisture_content.values" in ei.value.expected
+
+
+def _declared_range_case(parsed, keys):
+    """The compression table's moisture map (keys in %) against a soil declaring only the
+    range 0.07-0.29 as a fraction, its targets giving no moisture of their own."""
+    from soilcal.config.measurements import _check_case_moisture
+
+    d = copy.deepcopy(parsed)
+    for t in d["targets"].values():
+        t.pop("moisture_content", None)
+    d["properties"]["moisture_content"] = {"low": 0.07, "high": 0.29, "unit": "fraction"}
+    cv = {"case": dict(zip(keys, ("mc05", "mc10", "mc15"))), "quantity": "moisture_content", "unit": "%"}
+    st = next(s for s in d["stages"] if s["id"] == "bbd")
+    _check_case_moisture("x.yaml", d, st, "measurements.compression.covariates.moisture_content", cv)
+
+
+def test_the_ends_of_a_fraction_range_hold_the_same_moisture_in_percent(parsed):
+    # 7 % and 29 % are the ends of 0.07-0.29 written in %; in floating point 0.07 * 100 is
+    # 7.000000000000001 and 0.29 * 100 is 28.999999999999996, which refused both ends
+    _declared_range_case(parsed, ("7", "10", "29"))
+
+
+def test_a_moisture_just_outside_a_fraction_range_is_refused(parsed):
+    with pytest.raises(InputError) as ei:
+        _declared_range_case(parsed, ("6.9", "10", "29"))
+    assert ei.value.field == "measurements.compression.covariates.moisture_content.case.6.9"
+    assert "0.07-0.29 fraction" in ei.value.expected
+
+
+@pytest.mark.parametrize("unit", ["percent", "wt%", "% w/w", "g/100g", "Percent"])
+def test_a_moisture_column_takes_the_percent_units_the_soil_moisture_takes(tmp_path, parsed, unit):
+    # the compression table holds 5, 10, 15 (%): every spelling of a percentage reads them as
+    # 5, 10, 15 %, as properties.moisture_content takes them; before, only "%" was accepted
+    from soilcal.config.measurements import conditions
+
+    d = copy.deepcopy(parsed)
+    d["measurements"]["compression"]["covariates"]["moisture_content"]["unit"] = unit
+    got = sorted((c.quantities["moisture_content"], c.case) for c in conditions(_load(tmp_path, d)))
+    assert got == [(5.0, "mc05"), (10.0, "mc10"), (15.0, "mc15")]
+
+
+def test_a_moisture_column_in_a_volumetric_unit_is_refused_naming_the_units(tmp_path, parsed):
+    d = copy.deepcopy(parsed)
+    d["measurements"]["compression"]["covariates"]["moisture_content"]["unit"] = "vol%"
+    with pytest.raises(InputError) as ei:
+        _load(tmp_path, d)
+    e = ei.value
+    assert e.field == "measurements.compression.covariates.moisture_content.unit" and e.got == "vol%"
+    assert "wt%" in e.expected and "g/g" in e.expected
+
+
+@pytest.mark.parametrize("given, missing", [("low", "high"), ("high", "low")])
+def test_a_range_end_without_the_other_is_refused(tmp_path, parsed, given, missing):
+    # a lone high beside the declared values declared no range and passed unread before
+    d = copy.deepcopy(parsed)
+    d["properties"]["moisture_content"][given] = 12
+    with pytest.raises(InputError) as ei:
+        _load(tmp_path, d)
+    e = ei.value
+    assert e.field == f"properties.moisture_content.{missing}"
+    assert f"{missing} with {given}" in e.expected and "12" in str(e.got)
+
+
+def test_a_one_sided_bound_is_refused_saying_where_it_goes(tmp_path, parsed):
+    # a soil sieved below 2 mm has an upper bound and no range: the refusal names the form
+    # that holds it (the entry's note, with its value if one was measured)
+    d = copy.deepcopy(parsed)
+    d["properties"]["particle_size"] = {"high": 2, "unit": "mm"}
+    with pytest.raises(InputError) as ei:
+        _load(tmp_path, d)
+    e = ei.value
+    assert e.field == "properties.particle_size.low" and e.got == "high 2 alone"
+    assert "one-sided bound" in e.expected and "note" in e.expected and "value" in e.expected
+    d["properties"]["particle_size"] = {"value": None, "unit": "mm", "note": "sieved below 2 mm"}
+    _load(tmp_path, d)

@@ -280,31 +280,24 @@ def _si(value: float, unit: str) -> float | None:
     return None if f is None else value * f
 
 
-def _moisture_percent(value: float, unit) -> float | None:
-    """A moisture content in percent from its declared unit
-    (:func:`soilcal.config.quantities.moisture_factor`: a mass fraction in ``-``, ``fraction``,
-    ``g/g`` or ``kg/kg`` times 100; ``%``, ``percent``, ``wt%``); None for a unit without a
-    factor (as :func:`_si`).  A value without a unit is taken as printed, in percent."""
-    from soilcal.config.quantities import moisture_factor
-
-    if unit is None:
-        return value
-    f = moisture_factor(unit)
-    return None if f is None else value * f
-
-
 def plausibility(err: Errata, soil: dict) -> None:
     def check(where, name, q):
         kind = name if name in _PLAUSIBLE else None
         if kind is None:
             return
         lo, hi, si_unit = _PLAUSIBLE[kind]
-        vals = [q.get("value")] + list(q.get("values", [])) + [q.get("low"), q.get("high")]
-        for v in vals:
-            if v is None:
-                continue
-            x = _moisture_percent(float(v), q.get("unit")) if kind == "moisture_content" \
-                else _si(float(v), str(q.get("unit", "")))
+        declared = [q.get("value")] + list(q.get("values", [])) + [q.get("low"), q.get("high")]
+        if kind == "moisture_content":
+            # every declared value and range end, a lone low or high too, in % by the factor of
+            # its unit (quantities.moisture_factor); a unit without a factor is judged where a
+            # moisture is compared with it, a value without a unit is taken as printed, in %
+            from soilcal.config.quantities import moisture_factor
+
+            f = 1.0 if q.get("unit") is None else moisture_factor(q.get("unit"))
+            pairs = [(v, None if f is None else float(v) * f) for v in declared if v is not None]
+        else:
+            pairs = [(v, _si(float(v), str(q.get("unit", "")))) for v in declared if v is not None]
+        for v, x in pairs:
             if x is None:
                 continue
             if not lo <= x <= hi:

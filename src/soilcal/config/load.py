@@ -24,7 +24,9 @@ WORKFLOW_SCHEMA = Path(str(resources.files("soilcal.config") / "workflow.schema.
 
 class _Loader(yaml.SafeLoader):
     """SafeLoader that also reads ``7.9e10`` (no sign, no dot) as a float, as YAML 1.2 does,
-    and refuses a key given twice in one mapping (plain PyYAML keeps the last silently)."""
+    and refuses a key given twice in one mapping (plain PyYAML keeps the last silently).  Keys
+    are compared as the values they read as, so ``5`` and ``5.0`` (one Python key, the later
+    entry would win) are the same key; a quoted ``"5"`` is text, another key."""
 
     def construct_mapping(self, node, deep=False):
         if isinstance(node, yaml.MappingNode):
@@ -32,10 +34,12 @@ class _Loader(yaml.SafeLoader):
             for key_node, _ in node.value:
                 if not isinstance(key_node, yaml.ScalarNode) or key_node.tag == "tag:yaml.org,2002:merge":
                     continue
-                key = key_node.value
+                key = self.construct_object(key_node)
                 if key in seen:
-                    raise _DuplicateKey(key, key_node.start_mark.line + 1, seen[key])
-                seen[key] = key_node.start_mark.line + 1
+                    line, text = seen[key]
+                    raise _DuplicateKey(key_node.value, key_node.start_mark.line + 1,
+                                        line if text == key_node.value else f"{line}, as {text!r}")
+                seen[key] = (key_node.start_mark.line + 1, key_node.value)
         return super().construct_mapping(node, deep=deep)
 
 
@@ -115,6 +119,18 @@ def _schema_error(path: Path, schema: dict, data: Any) -> None:
         missing = err.message.split("'")[1] if "'" in err.message else err.message
         fld = f"{where}.{missing}" if where != "<root>" else missing
         raise InputError(path, fld, "a required field", "nothing")
+    if err.validator == "dependentRequired":
+        # e.g. a range's low given without its high: which key is there and which one it needs
+        given = next((k for k, need in err.validator_value.items()
+                      if k in err.instance and any(n not in err.instance for n in need)), None)
+        need = [n for n in err.validator_value.get(given, []) if n not in err.instance]
+        fld = f"{where}.{need[0]}" if where != "<root>" else need[0]
+        hint = ""
+        if given in ("low", "high"):
+            hint = ("; a one-sided bound, such as a soil sieved below 2 mm, is no range: write it in the "
+                    "entry's note, and its value if one was measured")
+        raise InputError(path, fld, f"{' and '.join(need)} with {given} (a range has both ends{hint})",
+                         f"{given} {err.instance[given]!r} alone")
     if err.validator == "type":
         types = err.validator_value if isinstance(err.validator_value, list) else [err.validator_value]
         raise InputError(path, where, "a value of type " + " or ".join(map(str, types)), err.instance)
@@ -200,8 +216,12 @@ class Soil:
         return {s["id"]: read_table(self.table_path(s["id"])) for s in self.stages if s.get("table")}
 
 
-def read_table(path: Path) -> pd.DataFrame:
+def read_table(path: Path, text_columns=()) -> pd.DataFrame:
     """Read a published CSV table; a missing or unreadable file raises InputError.
+
+    The columns named in ``text_columns`` (labels: a tool id, a revision) keep each cell's
+    text as the file writes it (``007`` stays ``"007"``, ``1.10`` stays ``"1.10"``; an empty
+    cell is missing); the other columns are parsed by pandas (numbers as numbers).
 
     The header's cells are stripped of surrounding spaces.  Refused, naming the file: a
     header that names a column twice, a header of one cell holding ``;`` (a
@@ -254,6 +274,12 @@ def read_table(path: Path) -> pd.DataFrame:
         raise InputError(path, "<file>", "a readable CSV table", text or type(exc).__name__) from None
     if len(df.columns) == len(names):
         df.columns = [nm or str(c) for nm, c in zip(names, df.columns)]
+    keep = [c for c in text_columns if c in df.columns]
+    if keep:
+        as_text = pd.read_csv(io.StringIO(body), dtype=str)
+        as_text.columns = df.columns
+        for c in keep:
+            df[c] = as_text[c]
     filled = np.flatnonzero(df.notna().any(axis=1).to_numpy())
     return df.iloc[:filled[-1] + 1 if filled.size else 0]
 
@@ -516,7 +542,42 @@ def _check_images(path: Path, d: dict, resources_root: Path) -> dict | None:
             raise InputError(path, f"targets.{tid}.image_measure",
                              f"a value the measurement of the {kinds[g]} group {g!r} gives ({', '.join(MEASURES[kinds[g]])})"
                              + ("" if "image_measure" in targets[tid] else "; left out, it is angle_deg"), key)
+    _check_image_states(path, targets, named)
     return m
+
+
+def _check_image_states(path: Path, targets: dict, named: dict) -> None:
+    """One photo group's measurement is of one soil state (a group has one kind, and every
+    measure of it, ``angle_deg``, ``left_deg`` or ``spread_deg``, comes from the same photos):
+    two targets on the same group (``image``) that both give a moisture content or a layer
+    (``moisture_content``, ``layer``), different ones, would calibrate both states to the same
+    photos (a target line copied for the next moisture with its ``image`` left as it was):
+    refused naming the second target's ``image``, both states and, for each, the target that
+    gave it (the first on the group to give that state, not always the group's first
+    target)."""
+    from soilcal.config.quantities import same_moisture
+
+    given = {}  # photo group -> state key -> (its value, the first target that gave it)
+    for tid, g in named.items():
+        t = targets[tid]
+        state = {k: t[k] for k in ("moisture_content", "layer") if t.get(k) is not None}
+        seen = given.setdefault(g, {})
+
+        def same(k, v):
+            if k == "layer":
+                return str(state[k]).strip() == str(v).strip()
+            return same_moisture(float(state[k]), float(v))
+
+        differ = [(k, *seen[k]) for k in ("moisture_content", "layer") if k in state and k in seen
+                  and not same(k, seen[k][0])]
+        if differ:
+            says = "; ".join(f"targets.{other} ({k} {v} there, {state[k]} here)" for k, v, other in differ)
+            raise InputError(path, f"targets.{tid}.image",
+                             f"a photo group of this target's own soil state: {g!r} is already the "
+                             f"photo group of {says}; one group's photos, every measure "
+                             "of them, are of one moisture and layer", g)
+        for k, v in state.items():  # a later target may give what the first left out
+            seen.setdefault(k, (v, tid))
 
 
 def _check_targets(path: Path, d: dict, resources_root: Path) -> None:
@@ -546,29 +607,20 @@ def _check_targets(path: Path, d: dict, resources_root: Path) -> None:
                                  f"{units[rid]}, the unit of response {rid!r} of stage {st['id']!r} ({how})", got)
 
 
-#: how near a target's moisture content must lie to one the soil declares (relative, and
-#: absolute in the declared unit): the same number written twice, not a neighbouring moisture
-MOISTURE_RTOL = 1e-9
-
-
 def _check_target_moisture(path: Path, d: dict, tid: str, mc) -> None:
     """A target recorded at a moisture content (``targets.<id>.moisture_content``, in the unit
     of ``properties.moisture_content``) is a target of this soil only at a moisture the soil
     declares: one of its ``properties.moisture_content`` values, or inside its ``low`` ..
     ``high``.  A measurement or photo at another moisture is of another soil state: the DEM
     parameters calibrated to it would be filed under the soil's own moisture without a word."""
-    import math
-
-    from soilcal.config.quantities import soil_moisture
+    from soilcal.config.quantities import declares_moisture, soil_moisture
 
     where = f"targets.{tid}.moisture_content"
     declared = soil_moisture(path, d)
     if declared is None:
         raise InputError(path, where, "a moisture content the soil declares (properties.moisture_content: "
                                       "value, values or low/high, none given)", mc)
-    x = float(mc)
-    if any(math.isclose(x, v, rel_tol=MOISTURE_RTOL, abs_tol=MOISTURE_RTOL) for v in declared["points"]) \
-            or any(lo <= x <= hi for lo, hi in declared["ranges"]):
+    if declares_moisture(declared, float(mc) * declared["factor"]):
         return
     raise InputError(path, where, f"a moisture content the soil declares in properties.moisture_content "
                                   f"({declared['text']}; the target's moisture is in that unit, the same number): "

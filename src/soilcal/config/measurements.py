@@ -80,7 +80,12 @@ from pathlib import Path
 
 import pandas as pd
 
-from soilcal.config.quantities import POSITIVE_QUANTITIES, QUANTITIES  # noqa: F401 (QUANTITIES re-exported)
+from soilcal.config.quantities import (  # noqa: F401 (QUANTITIES re-exported)
+    MOISTURE_UNITS,
+    POSITIVE_QUANTITIES,
+    QUANTITIES,
+    quantity_factor,
+)
 from soilcal.errors import InputError
 
 BLOCK = "measurements"
@@ -226,6 +231,66 @@ def _text(v) -> str:
     return str(v).strip()
 
 
+#: a number written as text ("5.0", "17.20", "-3", ".5", "1e3"), as a map key quoted in the YAML
+_NUMERIC_TEXT = re.compile(r"[+-]?(\d+\.?\d*|\.\d+)([eE][+-]?\d+)?")
+
+
+def _numeric_column(cv: dict) -> bool:
+    """Whether a covariate's cells are numbers of a physical quantity (``quantity`` one of the
+    numeric :data:`QUANTITIES`: moisture, speed, depth, ...), not labels (a tool id, a day, a
+    group, or a column that declares no quantity)."""
+    return QUANTITIES.get(cv.get("quantity")) is not None
+
+
+def _map_key(v, numeric: bool):
+    """A ``setup`` or ``case`` map key, or the cell looked up in the map, as it is compared
+    (:func:`_same_key`).  In a column of a numeric quantity (``numeric``) a number, or text
+    that is a number (a key quoted in the YAML, ``"5.0"`` or ``"17.20"``), is that number, a
+    float: a quoted ``"17.20"`` and a cell 17.2 are one value.  Otherwise, and in a label
+    column (a tool id, a revision), whose cells are read as the table writes them
+    (:func:`_label_column`), text: ``"007"`` and ``"7"`` are two tools, ``"1.10"`` and ``"1.1"``
+    two revisions; an unquoted number key is the text :func:`_text` writes (``7`` is ``"7"``),
+    a key with decimals in full (``1.0000004`` is not ``"1"``)."""
+    if numeric:
+        if isinstance(v, str):
+            if _NUMERIC_TEXT.fullmatch(v.strip()):
+                return float(v)
+        elif (x := _number(v)) is not None:
+            return x
+    elif isinstance(v, float) and math.isfinite(v) and v != int(v):
+        return repr(v)
+    return _text(v)
+
+
+def _same_key(a, b) -> bool:
+    """Two map keys or a key and a cell (:func:`_map_key`) are one value: numbers equal within
+    :func:`soilcal.config.quantities.same_number` (relative 1e-9, as a moisture is compared
+    with the soil's), text as written."""
+    from soilcal.config.quantities import same_number
+
+    if isinstance(a, float) and isinstance(b, float):
+        return same_number(a, b)
+    return a == b
+
+
+def _key_text(k) -> str:
+    return f"{k:.15g}" if isinstance(k, float) else str(k)
+
+
+def _check_map_keys(soil_path, field: str, amap: dict, numeric: bool) -> None:
+    """Two keys of one ``setup`` or ``case`` map that are the same value (``5`` and ``"5.0"``
+    in a numeric column, :func:`_map_key`) would send the rows at it to one of two entries:
+    refused naming both."""
+    seen = []
+    for k in amap:
+        key = _map_key(k, numeric)
+        first = next((f for f, fk in seen if _same_key(key, fk)), None)
+        if first is not None:
+            raise InputError(soil_path, f"{field}.{k}", f"a value not already mapped ({first!r} is the same "
+                             f"value, {_key_text(key)})", k)
+        seen.append((k, key))
+
+
 def _missing(v) -> bool:
     if v is None:
         return True
@@ -254,12 +319,21 @@ def _plain(v):
     return x if x is not None else str(v).strip()
 
 
-def _read(soil_path, where: str, tpath: Path) -> pd.DataFrame:
+def _label_column(cv: dict) -> bool:
+    """Whether a covariate's cells are labels read as the table writes them: a ``setup`` or
+    ``case`` map column, or a column of a label quantity (tool, day, group), that declares no
+    numeric quantity (:func:`_numeric_column`)."""
+    if _numeric_column(cv):
+        return False
+    return "setup" in cv or "case" in cv or cv.get("quantity") is not None
+
+
+def _read(soil_path, where: str, tpath: Path, text_columns=()) -> pd.DataFrame:
     from soilcal.config.load import read_table
 
     if not tpath.is_file():
         raise InputError(soil_path, f"{where}.table", f"an existing file {tpath}", "no such file")
-    df = read_table(tpath)
+    df = read_table(tpath, text_columns)
     if len(df) == 0:
         raise InputError(tpath, "rows", "at least one row (one measured condition)", 0)
     return df
@@ -294,15 +368,12 @@ def _check_case_moisture(soil_path, data: dict, stage: dict, cw: str, cv: dict) 
     ``moisture_content`` (in the unit of ``properties.moisture_content``), were measured at it,
     and otherwise the soil declares it (``properties.moisture_content``).  Rows at one moisture
     would otherwise be simulated with the parameters calibrated at another."""
-    import math
-
-    from soilcal.config.load import MOISTURE_RTOL
-    from soilcal.config.quantities import soil_moisture
+    from soilcal.config.quantities import declares_moisture, same_moisture, soil_moisture
 
     declared = soil_moisture(soil_path, data)  # an unknown unit is refused here
     soil_factor = declared["factor"] if declared else None
     soil_unit = declared["unit"] if declared else "%"
-    col_factor = QUANTITIES["moisture_content"][1][cv["unit"]]
+    col_factor = quantity_factor("moisture_content", cv["unit"])
     cases = {c["id"]: c for c in (stage.get("optimise") or {}).get("cases", [])}
     targets = data.get("targets") or {}
     for k, cid in cv["case"].items():
@@ -311,14 +382,10 @@ def _check_case_moisture(soil_path, data: dict, stage: dict, cw: str, cv: dict) 
             raise InputError(soil_path, f"{cw}.case.{k}", f"a moisture content in {cv['unit']} (quantity: "
                              "moisture_content)", k)
         pct = x * col_factor
-
-        def same(a_pct, b_pct):
-            return math.isclose(a_pct, b_pct, rel_tol=MOISTURE_RTOL, abs_tol=MOISTURE_RTOL)
-
         aimed = [(tid, targets[tid]["moisture_content"]) for g in cases[cid]["goals"].values()
                  if (tid := g.get("target")) in targets and targets[tid].get("moisture_content") is not None]
         if aimed and declared is not None:
-            off = [(tid, m) for tid, m in aimed if not same(pct, float(m) * soil_factor)]
+            off = [(tid, m) for tid, m in aimed if not same_moisture(pct, float(m) * soil_factor)]
             if off:
                 raise InputError(soil_path, f"{cw}.case.{k}",
                                  f"the moisture content of the targets case {cid!r} aims at ("
@@ -330,8 +397,7 @@ def _check_case_moisture(soil_path, data: dict, stage: dict, cw: str, cv: dict) 
         if declared is None:
             raise InputError(soil_path, f"{cw}.case.{k}", "a moisture content the soil declares "
                              "(properties.moisture_content: value, values or low/high, none given)", k)
-        if not (any(same(pct, v * soil_factor) for v in declared["points"])
-                or any(lo * soil_factor <= pct <= hi * soil_factor for lo, hi in declared["ranges"])):
+        if not declares_moisture(declared, pct):
             raise InputError(soil_path, f"{cw}.case.{k}", f"a moisture content the soil declares in "
                              f"properties.moisture_content ({declared['text']}), in {cv['unit']}, the same "
                              "number: add it to properties.moisture_content.values if the soil was measured at it",
@@ -477,9 +543,9 @@ def _entry(soil_path, data: dict, mid: str, entry: dict, tpath: Path):
                 raise InputError(soil_path, f"{cw}.quantity", "one of " + ", ".join(QUANTITIES), q)
             if QUANTITIES[q] is None and "unit" in cv:
                 raise InputError(soil_path, f"{cw}.unit", f"no unit: {q} is a label", cv["unit"])
-            if QUANTITIES[q] is not None and cv.get("unit") not in QUANTITIES[q][1]:
-                raise InputError(soil_path, f"{cw}.unit", f"a unit of {q} ({', '.join(QUANTITIES[q][1])})",
-                                 cv.get("unit"))
+            if QUANTITIES[q] is not None and quantity_factor(q, cv.get("unit")) is None:
+                units = MOISTURE_UNITS if q == "moisture_content" else ", ".join(QUANTITIES[q][1])
+                raise InputError(soil_path, f"{cw}.unit", f"a unit of {q} ({units})", cv.get("unit"))
         elif "unit" in cv:
             raise InputError(soil_path, f"{cw}.quantity", "the quantity the unit belongs to", None)
         if "scale" in cv and form not in ("set", "param"):
@@ -487,6 +553,7 @@ def _entry(soil_path, data: dict, mid: str, entry: dict, tpath: Path):
         if form == "setup":
             if not cv["setup"]:
                 raise InputError(soil_path, f"{cw}.setup", "a map of cell value -> setup name", cv["setup"])
+            _check_map_keys(soil_path, f"{cw}.setup", cv["setup"], _numeric_column(cv))
             for k, s in cv["setup"].items():
                 if s not in setups:
                     raise InputError(soil_path, f"{cw}.setup.{k}", f"a setup of {name} ({', '.join(setups)})", s)
@@ -505,6 +572,7 @@ def _entry(soil_path, data: dict, mid: str, entry: dict, tpath: Path):
         elif form == "case":
             if not cv["case"]:
                 raise InputError(soil_path, f"{cw}.case", "a map of cell value -> case id", cv["case"])
+            _check_map_keys(soil_path, f"{cw}.case", cv["case"], _numeric_column(cv))
             for k, c in cv["case"].items():
                 if c not in case_ids:
                     raise InputError(soil_path, f"{cw}.case.{k}",
@@ -563,7 +631,7 @@ def _entry(soil_path, data: dict, mid: str, entry: dict, tpath: Path):
                              f"a column with one role ({col} is already {roles[col][1]})", col)
 
     # -- the table: columns
-    df = _read(soil_path, where, tpath)
+    df = _read(soil_path, where, tpath, [c for c, cv in covs.items() if _label_column(cv)])
     cols = [str(c) for c in df.columns]
     listed = ", ".join(cols)
     for col in covs:
@@ -609,16 +677,25 @@ def _entry(soil_path, data: dict, mid: str, entry: dict, tpath: Path):
                 raise InputError(tpath, at(col), f"a value of the covariate {col}", "empty")
             if "setup" in cv or "case" in cv:
                 form = "setup" if "setup" in cv else "case"
-                amap = {_text(k): v for k, v in cv[form].items()}
-                key = _text(cell)
-                if key not in amap:
+                numeric = _numeric_column(cv)
+                key = _map_key(cell, numeric)
+                hit = [v for k, v in cv[form].items() if _same_key(_map_key(k, numeric), key)]
+                if not hit and numeric:
                     raise InputError(tpath, at(col),
-                                     f"a value mapped under {where}.covariates.{col}.{form} ({', '.join(amap)})",
-                                     _plain(cell))
+                                     f"a value mapped under {where}.covariates.{col}.{form} "
+                                     f"({', '.join(map(str, cv[form]))})", _plain(cell))
+                if not hit:
+                    keys = ", ".join(repr(_map_key(k, False)) for k in cv[form])
+                    raise InputError(tpath, at(col),
+                                     f"a value mapped under {where}.covariates.{col}.{form} ({keys}): "
+                                     f"this column declares no numeric quantity, so its cells are labels "
+                                     f"compared with the keys as text, as written ({key!r} is none of them); "
+                                     "write the key as the table writes the cell, or declare the column's "
+                                     "numeric quantity and unit to compare them as numbers", key)
                 if form == "setup":
-                    sname = amap[key]
+                    sname = hit[0]
                 else:
-                    case = amap[key]
+                    case = hit[0]
                 continue
             scale = float(cv.get("scale", 1.0))
             x = _number(cell)
@@ -733,7 +810,7 @@ def _entry(soil_path, data: dict, mid: str, entry: dict, tpath: Path):
                 raise InputError(tpath, at(col), f"a number ({q} in {covs[col]['unit']})", _plain(cell))
             if q in POSITIVE_QUANTITIES and not x > 0:
                 raise InputError(tpath, at(col), f"a positive {q} (in {covs[col]['unit']})", _plain(cell))
-            quantities[q] = x * QUANTITIES[q][1][covs[col]["unit"]]
+            quantities[q] = x * quantity_factor(q, covs[col]["unit"])
         label_parts = [f"{c}={_text(rec[c])}" for c in active]
         conds.append(Condition(
             measurement=mid, row=row, label=", ".join(label_parts) if label_parts else f"row {row}",
@@ -783,7 +860,7 @@ def _check_moisture(soil_path, data: dict, tpath: Path, df: pd.DataFrame, covs: 
         x = np.array([v for v in (_number(c) for c in df[col]) if v is not None], float)
         if not len(x):
             continue
-        factor = QUANTITIES[q][1][unit]
+        factor = quantity_factor(q, unit)
         where = f"column {col}"
         if factor != 1.0 and x.max() > 1.0:
             raise InputError(tpath, where, f"a moisture content as a fraction of 1 (unit: {unit}, as declared): "
@@ -808,7 +885,7 @@ def _check_moisture(soil_path, data: dict, tpath: Path, df: pd.DataFrame, covs: 
                     raise InputError(tpath, where, f"moisture contents near the soil's own ({soil[1]}, "
                                      f"properties.moisture_content): the column's median, {med:.4g} %, is about "
                                      f"{times} times {'smaller' if lg < 0 else 'larger'} ({hint})", float(x[0]))
-        elif unit == "%" and x.max() <= 1.0 and x.max() > 0:
+        elif factor == 1.0 and x.max() <= 1.0 and x.max() > 0:
             raise InputError(tpath, where, "a moisture content in % (every value is at most 1 %: fractions of 1? "
                              "declare unit: fraction under the covariate to have them read as such, or give the "
                              "soil's properties.moisture_content if it is that dry)", float(x[0]))
@@ -831,7 +908,7 @@ def _check_scale(soil_path, cw: str, cv: dict, scenario: str) -> None:
     if target not in factors or target == DIMENSIONLESS:  # a dimensionless DEM parameter is no moisture
         return
     unit = cv["unit"]
-    factor = factors[unit] / factors[target]
+    factor = quantity_factor(q, unit) / quantity_factor(q, target)
     scale = cv.get("scale", 1)
     if not abs(float(scale) - factor) <= SCALE_RTOL * factor:
         raise InputError(soil_path, f"{cw}.scale",

@@ -30,6 +30,19 @@ def moisture_factor(unit) -> float | None:
     return {**QUANTITIES["moisture_content"][1], "percent": 1.0, "wt%": 1.0, "%w/w": 1.0, "g/100g": 1.0}.get(key)
 
 
+def quantity_factor(quantity: str, unit) -> float | None:
+    """Factor to the SI unit of :data:`QUANTITIES` of a numeric quantity's ``unit`` as a
+    measured table's covariate declares it: one of the quantity's units, and for a moisture
+    content every unit :func:`moisture_factor` knows (the units the soil's own
+    ``properties.moisture_content`` takes, ``percent`` or ``wt%`` too).  None for another unit
+    or a label quantity."""
+    if QUANTITIES.get(quantity) is None:
+        return None
+    if quantity == "moisture_content":
+        return moisture_factor(unit)
+    return QUANTITIES[quantity][1].get(unit)
+
+
 #: the units of a moisture content :func:`moisture_factor` knows, as the messages name them
 MOISTURE_UNITS = "% (also percent, wt%, % w/w, g/100g) or a mass fraction (-, fraction, g/g, kg/kg)"
 
@@ -63,6 +76,36 @@ def soil_moisture(path, data: dict) -> dict | None:
                          "give the values in % or as a fraction)", unit)
     text = ", ".join([f"{v:g}" for v in points] + [f"{lo:g}-{hi:g}" for lo, hi in ranges]) + f" {unit}"
     return {"points": points, "ranges": ranges, "unit": unit, "factor": factor, "text": text}
+
+
+#: how near two moisture contents, both in %, must lie to be the same moisture (relative, and
+#: absolute in %): the same number written twice or in the other form (0.07 as a fraction is
+#: 7.000000000000001 %), not a neighbouring moisture (16.31 against 17.2 %)
+MOISTURE_RTOL = 1e-9
+
+
+def same_number(a: float, b: float) -> bool:
+    """Whether two numbers of one quantity, in one unit, are the same value written twice (a
+    map key and a table's cell, two moistures): equal within :data:`MOISTURE_RTOL`, relative
+    and absolute."""
+    return math.isclose(a, b, rel_tol=MOISTURE_RTOL, abs_tol=MOISTURE_RTOL)
+
+
+def same_moisture(a: float, b: float) -> bool:
+    """Whether two moisture contents, in one unit, are the same moisture (:func:`same_number`)."""
+    return same_number(a, b)
+
+
+def declares_moisture(declared: dict, pct: float) -> bool:
+    """Whether the moisture contents a soil declares (:func:`soil_moisture`) hold ``pct``, a
+    moisture content in %: one of its values, or inside its ``low`` .. ``high`` (its ends
+    included), compared in % by :func:`same_moisture`, so that a moisture written in % and
+    declared as a fraction, or the other way round, is the same moisture at every value and
+    at a range's ends."""
+    f = declared["factor"]
+    return (any(same_moisture(pct, v * f) for v in declared["points"])
+            or any(lo * f <= pct <= hi * f or same_moisture(pct, lo * f) or same_moisture(pct, hi * f)
+                   for lo, hi in declared["ranges"]))
 
 
 #: quantities that must be above zero (an effect takes their logarithm or a ratio to them)
