@@ -90,19 +90,30 @@ class PileResult:
     # PILE_WORK_PIXELS): flank_rms_px and the plate line are in the measured image's pixels
     work_scale: float = 1.0
     # where the plate line came from: "found" by the plate search, "manifest" (the photo's
-    # plate_line_px) or "given" (a caller's, e.g. a rendered silhouette's)
+    # plate_line_px), "command line" (soilcal image pile --plate-line-px) or "given" (a
+    # caller's, e.g. a rendered silhouette's)
     plate_line: str = "found"
     # two points [column, row] of the plate line in the photo's pixels as shown: the manifest's
     # as given, else the line measured on, at the measured image's first and last columns
     plate_line_px: list | None = None
+    # where a second plate candidate also carries the heap, tilted against the line measured on
+    # so that the flanks differ by more than PLATE_AMBIGUOUS_DEG (a line through a scale card
+    # standing on the plate beside a foot, crossing the plate's edge further on): the photo, the
+    # two lines and the flanks on each, and the way out (the plate line given by hand); the
+    # result is then "low" (:func:`_plate_alternative`); "" where no such line was found
+    plate_ambiguous: str = ""
     # (plate slope, plate intercept, left line, right line, heap height px): where the flanks
     # were fitted, for a later refinement; not reported
     geometry: tuple | None = field(default=None, repr=False)
+    # (slope, intercept, left deg, right deg) of the second plate candidate that carries the
+    # heap (plate_ambiguous), in the measured image's pixels; not reported
+    alternative: tuple | None = field(default=None, repr=False)
 
     def as_dict(self):
         d = asdict(self)
         d.pop("stages")
         d.pop("geometry")
+        d.pop("alternative")
         return d
 
 
@@ -375,7 +386,7 @@ def _components_on_plate(path, binary, slope, intercept, kind):
 
 
 def measure_pile(path, threshold="otsu", keep_stages=False, channel="auto", refusals=None, *,
-                 image=None, plate=None, plate_px=None) -> PileResult:
+                 image=None, plate=None, plate_px=None, plate_px_from="manifest") -> PileResult:
     """Left/right flank angles of one heap photo relative to the plate line.
 
     Plate candidates: the long near-horizontal edges below the image middle, topmost first, of
@@ -410,18 +421,20 @@ def measure_pile(path, threshold="otsu", keep_stages=False, channel="auto", refu
     row), (column, row)) on the plate's top edge in the photo's pixels as shown (a manifest's
     ``plate_line_px``), the plate line measured on instead of the one the search would find
     (a card standing on the plate, a plate of the soil's colour); ``plate_line`` reports
-    "manifest".
+    ``plate_px_from`` ("manifest", or "command line" for ``soilcal image pile --plate-line-px``).
     """
     tried = Tried(keep_masks=refusals is not None)
     with explained(path, refusals, tried):
-        res = _measure_pile(path, threshold, keep_stages, channel, tried, image, plate, plate_px)
+        res = _measure_pile(path, threshold, keep_stages, channel, tried, image, plate, plate_px, plate_px_from)
     if channel == "auto" and res.confidence != "ok":
         res = _texture_flanks(res, tried.gray)
+    if res.plate_ambiguous:
+        res.confidence = "low"
     return res
 
 
 def _measure_pile(path, threshold, keep_stages, channel, tried: Tried, image=None,
-                  plate=None, plate_px=None) -> PileResult:
+                  plate=None, plate_px=None, plate_px_from="manifest") -> PileResult:
     if image is None:
         # a phone's 12 or 48 megapixels are measured at a working size (the angles do not depend
         # on it): decoded reduced by a whole factor where the format allows (a JPEG by 2, 4 or
@@ -458,12 +471,23 @@ def _measure_pile(path, threshold, keep_stages, channel, tried: Tried, image=Non
         _check_levels_around(path, rgb, res, depth)
     res.work_scale = scale
     if plate_px is not None:
-        res.plate_line, res.plate_line_px = "manifest", [[float(c), float(r)] for c, r in plate_px]
+        res.plate_line, res.plate_line_px = plate_px_from, [[float(c), float(r)] for c, r in plate_px]
     else:
         slope, intercept = res.geometry[:2]
         ends = (0.0, rgb.shape[1] - 1.0)
         res.plate_line = "found" if plate is None else "given"
         res.plate_line_px = [[round(v, 2) for v in to_photo(c, slope * c + intercept)] for c in ends]
+        if res.alternative is not None:
+            s2, b2, left2, right2 = res.alternative
+            other = [[round(v, 2) for v in to_photo(c, s2 * c + b2)] for c in ends]
+            res.plate_ambiguous = (
+                f"{path}: two plate lines carry the heap: the one measured on, tilted {roll_of(slope):+.2f} deg "
+                f"({res.plate_line_px} in the photo's pixels; flanks {res.left_deg:.2f} / {res.right_deg:.2f} deg), "
+                f"and one tilted {roll_of(s2):+.2f} deg ({other}; flanks {left2:.2f} / {right2:.2f} deg), as a "
+                f"line through an object standing on the plate beside a foot (a scale card) and the plate's "
+                f"edge further on is; the photo does not tell which is the plate's top edge: give it by hand, "
+                f"two points on it as plate_line_px in the photo's manifest entry (or soilcal image pile "
+                f"--plate-line-px C0 R0 C1 R1)")
     return res
 
 
@@ -565,8 +589,12 @@ def _pile_on_lines(path, rgb, threshold, keep_stages, channel, tried: Tried, pla
         raise InputError(path, "image", "a straight base plate edge", "none found")
     beside = []  # lines on which a heap was measured but which do not run on beside it
     try:
-        return _on_plate_lines(path, rgb, lum, grays, lines[:PLATE_CANDIDATES], 1, channel, threshold, keep_stages,
-                               tried, plate_edges, beside)
+        res = _on_plate_lines(path, rgb, lum, grays, lines[:PLATE_CANDIDATES], 1, channel, threshold, keep_stages,
+                              tried, plate_edges, beside)
+        if plate is None:
+            res.alternative = _plate_alternative(path, rgb, lum, grays, lines[:PLATE_CANDIDATES], res, channel,
+                                                 threshold, plate_edges)
+        return res
     except InputError as refused:
         if not beside:
             raise _noting_tilt(refused, tilted) from None
@@ -580,6 +608,75 @@ def _pile_on_lines(path, rgb, threshold, keep_stages, channel, tried: Tried, pla
             raise _noting_tilt(refused, tilted) from None
         res.plate_beside = why
         return res
+
+
+#: flank difference (deg) between the heap measured on the plate line found and on a second
+#: plate candidate above which the photo's plate is ambiguous (:func:`_plate_alternative`): a
+#: line tilted by t against the plate turns both flanks by t, opposite ways, and a plate line
+#: given by hand is held to half a degree (a point 1 px off at its shortest span)
+PLATE_AMBIGUOUS_DEG = 0.5
+
+
+def _plate_alternative(path, rgb, lum, grays, lines, res, channel, threshold, plate_edges):
+    """A second plate candidate of ``lines`` that carries the heap as the line ``res`` was
+    measured on does, tilted against it by more than :data:`PLATE_AMBIGUOUS_DEG`, and on which
+    the flanks read more than that differently: (slope, intercept, left deg, right deg) of the
+    one meeting edges beside the heap along the largest share of the columns, else None.  Such a line is no chance chord: the heap stands on it with a foot, its flanks fit
+    ("ok" by a cue search of their own) and it runs on beside the heap as an edge on both
+    sides (:func:`_plate_beside_heap`), as the plate does; so does a line from a scale card's
+    edge standing on the plate beside one foot to the plate's own edge beyond the other.  Such
+    a line is no worse evidence of a plate than the line measured on where it runs on as an
+    edge beside the heap along at least as large a share of the columns on either side
+    (:func:`_edge_beside`): the photo then does not say which of the two is the plate, and no
+    rule choosing between them is safe (the first line from the top can be either), so both
+    are reported and the result is "low".  A line that meets edges beside the heap along a
+    smaller share than the line measured on (a chord from a card's top edge, or from a plate
+    face's lower edge, to the plate's top edge) leaves the result as it is.  Lines parallel to
+    the one measured on (a plate's face, the table below a dark plate) turn no flank and are
+    not judged."""
+    slope = res.geometry[0]
+    own = _edge_beside(plate_edges, res)
+    best, found = own, None
+    for n, (s2, b2) in enumerate(lines, 1):
+        if abs(math.degrees(math.atan(s2) - math.atan(slope))) <= PLATE_AMBIGUOUS_DEG:
+            continue
+        try:
+            other = _on_plate_lines(path, rgb, lum, grays, [(s2, b2)], n, channel, threshold, False,
+                                    Tried(keep_masks=False), plate_edges, [])
+        except InputError:
+            continue
+        if other.confidence != "ok" or _flank_difference(res, other) <= PLATE_AMBIGUOUS_DEG:
+            continue
+        share = _edge_beside(plate_edges, other)
+        if share >= best:  # of several such lines, the one running on furthest beside the heap
+            best, found = share, (float(s2), float(b2), other.left_deg, other.right_deg)
+    return found
+
+
+def _edge_beside(edges, res):
+    """The smaller of the shares of the columns beside the heap measured in ``res``, left and
+    right of it (more than 5 px beyond its feet, where its flank lines meet its plate line; a
+    side of fewer than 10 such columns is not judged), where ``edges`` meet that plate line: 1
+    for a plate's edge running on to the frame on both sides, less for a chord of two edges (a
+    card's and the plate's) that meets each only near where it crosses it; 0 with no side
+    judged."""
+    h, w = edges.shape
+    slope, intercept, lline, rline, _ = res.geometry
+    ang = math.atan(slope)
+    cx, cy = w / 2 - 0.5, h / 2 - 0.5
+    prow = cy + (slope * cx + intercept - cy) * math.cos(ang)
+    feet = []
+    for u0, v0, du, dv in (lline, rline):
+        u = u0 - v0 / dv * du  # the flank line at height 0 (the plate row) in the levelled frame
+        feet.append(cx + (u - cx) * math.cos(ang) - (prow - cy) * math.sin(ang))
+    cols = np.arange(w)
+    rows = np.round(slope * cols + intercept).astype(int)
+    out = []
+    for beside in (cols < min(feet) - 5, cols > max(feet) + 5):
+        ok = beside & (rows >= 0) & (rows < h)
+        if beside.sum() >= 10:
+            out.append(float(edges[rows[ok], cols[ok]].sum()) / float(beside.sum()))
+    return min(out, default=0.0)
 
 
 def _heap_stands_on(path, rgb, lum, grays, line, channel, threshold, plate_edges) -> bool:
@@ -1001,12 +1098,14 @@ def _texture_flanks(res: PileResult, lum) -> PileResult:
     return res
 
 
-def measure_piles(paths, threshold="otsu", keep_stages=False, channel="auto", refusals=None, plate_px=None):
+def measure_piles(paths, threshold="otsu", keep_stages=False, channel="auto", refusals=None, plate_px=None,
+                  plate_px_from="manifest"):
     """Multi-view average: mean of all flank angles, spread = their sample std (``refusals``:
     :func:`measure_pile`; ``plate_px``: one given plate line or None per photo, as
-    :func:`measure_pile` takes it)."""
+    :func:`measure_pile` takes it, ``plate_px_from`` where they came from)."""
     per = plate_px if plate_px is not None else [None] * len(paths)
-    res = [measure_pile(p, threshold, keep_stages, channel, refusals, plate_px=q) for p, q in zip(paths, per)]
+    res = [measure_pile(p, threshold, keep_stages, channel, refusals, plate_px=q, plate_px_from=plate_px_from)
+           for p, q in zip(paths, per)]
     return pile_summary(res), res
 
 
