@@ -347,6 +347,9 @@ def _fit(path, u, v, label, seed=0, residual=None):
     return float(np.degrees(np.arctan2(abs(dv), abs(du)))), (u0, v0, du, dv), pts[inl]
 
 
+#: a flank is fitted over at least this many columns (boundary points) of its band
+#: (:data:`BAND` of the heap's height): a heap smaller in the photo is refused as too small
+MIN_FLANK_COLUMNS = 20
 #: what a photo with no heap on its plate is refused with
 NONE_FOUND = "none found"
 #: what a heap cut by the image border is refused with
@@ -713,6 +716,7 @@ def _on_plate_lines(path, rgb, lum, grays, lines, n_first, channel, threshold, k
     h, w = lum.shape
     rr, cc = np.mgrid[0:h, 0:w]
     refusals = []  # every cue's refusal, the topmost line's first
+    small = None  # the topmost line's refusal where its first two cues both saw a heap too small
     first = None  # the first cue's result, waiting for a second cue to cross-check it
     for n_line, (slope, intercept) in enumerate(lines, n_first):  # the plate top first; a faint one may hide behind a lower edge
         if beside and slope * w / 2 + intercept <= min(b[1] * w / 2 + b[2] for b in beside) + 3:
@@ -777,6 +781,13 @@ def _on_plate_lines(path, rgb, lum, grays, lines, n_first, channel, threshold, k
             # no further credible cue measured a heap on this plate line: the first stands
             # alone, or against the one that disagrees
             return first if dissent is None else _cross_checked(first, dissent)
+        if small is None and (len(line_refusals) >= 2 or channel != "auto") and all(
+                getattr(r, "too_small", False) for r in line_refusals[:2]):
+            small = line_refusals[0]
+    if small is not None:
+        # a heap too small for its flanks to be fitted stood on a line (two segmentations agree):
+        # that, not what the lines above it were refused for, is what the photo lacks
+        raise small
     raise _refusal(path, refusals, channel == "auto")
 
 
@@ -860,6 +871,19 @@ def _pile_with(path, rgb, gray, cue, polarity, band, slope, intercept, threshold
     band = (v > BAND[0] * hmax) & (v < BAND[1] * hmax)
     lsel, rsel = band & (cu < apex), band & (cu > apex)
     vs = [v] + [prow - r for r in rl]
+    cols_in = {"left flank": int(lsel.sum()), "right flank": int(rsel.sum())}
+    if min(cols_in.values()) < MIN_FLANK_COLUMNS:
+        # the heap is too small in the photo for a line fit of a flank: say so, with the size at
+        # which both flanks would span enough columns (they grow in proportion to the heap)
+        short = [k for k, n in cols_in.items() if n < MIN_FLANK_COLUMNS]
+        need = hmax * MIN_FLANK_COLUMNS / max(min(cols_in.values()), 1)
+        e = InputError(path, short[0], f"a heap large enough in the photo to fit its flanks: each flank over at "
+                       f"least {MIN_FLANK_COLUMNS} columns between {BAND[0]:.0%} and {BAND[1]:.0%} of the "
+                       f"heap's height", f"a heap {hmax:.0f} px high, its flanks over {cols_in['left flank']} and "
+                       f"{cols_in['right flank']} columns ({cue}/{polarity}): too small; take the photo closer "
+                       f"or at a higher resolution, so that the heap is at least {math.ceil(need)} px high")
+        e.too_small = True
+        raise e
     left, lline, lp = _straighter(path, cu, vs, lsel, "left flank")
     right, rline, rp = _straighter(path, cu, vs, rsel, "right flank")
     ang = np.array([left, right])
