@@ -214,6 +214,8 @@ def measure_manifest(path, figdir=None, threshold="otsu", refusals=None):
                 summary, res = measure.measure_piles(files, threshold, keep_stages=keep, refusals=refusals,
                                                      plate_px=lines)
             except InputError as e:
+                if e.field == "confidence":  # no photo of the group measured "ok"
+                    raise InputError(path, f"group {g} ({len(files)} photos)", e.expected, e.got) from None
                 given = {str(f): i for f, q, i in zip(files, lines, range(len(files))) if q is not None}
                 if e.path not in given or e.field not in ("image", "left flank", "right flank", "plate line"):
                     raise

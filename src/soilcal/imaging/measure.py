@@ -1124,29 +1124,74 @@ def _texture_flanks(res: PileResult, lum) -> PileResult:
 
 def measure_piles(paths, threshold="otsu", keep_stages=False, channel="auto", refusals=None, plate_px=None,
                   plate_px_from="manifest"):
-    """Multi-view average: mean of all flank angles, spread = their sample std (``refusals``:
-    :func:`measure_pile`; ``plate_px``: one given plate line or None per photo, as
-    :func:`measure_pile` takes it, ``plate_px_from`` where they came from)."""
+    """One group of heap photos: the mean of the flanks of its photos measured with confidence
+    "ok", a photo flagged "low" set aside with its reason (:func:`pile_summary` with
+    ``ok_only``; a group with no photo "ok" is refused).  ``refusals``: :func:`measure_pile`;
+    ``plate_px``: one given plate line or None per photo, as :func:`measure_pile` takes it,
+    ``plate_px_from`` where they came from."""
     per = plate_px if plate_px is not None else [None] * len(paths)
     res = [measure_pile(p, threshold, keep_stages, channel, refusals, plate_px=q, plate_px_from=plate_px_from)
            for p, q in zip(paths, per)]
-    return pile_summary(res), res
+    return pile_summary(res, ok_only=True), res
 
 
-def pile_summary(res) -> dict:
+def low_reason(r: PileResult) -> str:
+    """Why the heap photo ``r`` (:class:`PileResult`) is "low" ("" for an "ok" one): the plate
+    ambiguity (naming both lines and the plate line to give), else the flank fit, the flanks'
+    difference, the heap continuing past a flank or the further cue that disagrees."""
+    if r.confidence == "ok":
+        return ""
+    if r.plate_ambiguous:
+        return r.plate_ambiguous
+    why = []
+    if r.flank_points_used < FLANK_USED_MIN:
+        why.append(f"{r.flank_points_used:.0%} of a flank's points on its line, under {FLANK_USED_MIN:.0%}")
+    if r.flank_rms_px > FLANK_RMS_MAX:
+        why.append(f"a flank's points {r.flank_rms_px:.1f} px from its line, above {FLANK_RMS_MAX:g} px")
+    if abs(r.left_deg - r.right_deg) > 12.0:
+        why.append(f"flanks {r.left_deg:.1f} and {r.right_deg:.1f} deg, more than 12 deg apart")
+    if r.flank_outside_share > FLANK_OUTSIDE_MAX:
+        why.append(f"{r.flank_outside_share:.0%} of the heap's contrast found past a flank's line, "
+                   f"above {FLANK_OUTSIDE_MAX:.0%}")
+    if r.cue_check and r.cue_check_deg > CUE_AGREEMENT_DEG:
+        why.append(f"the cue {r.cue_check} puts a flank {r.cue_check_deg:.1f} deg away, more than "
+                   f"{CUE_AGREEMENT_DEG:g} deg")
+    if not why and r.cue_outvoted:
+        why.append(f"the cue {r.cue_outvoted} disagrees by {r.cue_outvoted_deg:.1f} deg and no further cue decides")
+    if not why:
+        why.append("its cues disagree and none decides")
+    return "; ".join(why) + " (read its figure, --figures; retake the photo, or give its plate line if the " \
+        "plate was misread: plate_line_px in the manifest, --plate-line-px)"
+
+
+def pile_summary(res, ok_only=False) -> dict:
     """Mean of every flank of the measured photos ``res`` (:class:`PileResult`), the mean left
-    and right flank, and the flanks' sample std (``spread_deg``)."""
-    lefts = np.array([r.left_deg for r in res])
-    rights = np.array([r.right_deg for r in res])
+    and right flank, and the flanks' sample std (``spread_deg``).  With ``ok_only`` (a group
+    of photos, :func:`measure_piles`) only the photos of confidence "ok" count: each other one
+    is listed in ``set_aside`` (path, reason: :func:`low_reason`), ``n_photos`` counts those
+    used, and a group with none "ok" is refused naming each photo and its reason.  ``photos``
+    holds every photo's result."""
+    used = [r for r in res if r.confidence == "ok"] if ok_only else list(res)
+    aside = [{"path": r.path, "reason": low_reason(r)} for r in res if ok_only and r.confidence != "ok"]
+    if not used:
+        raise InputError(res[0].path if len(res) == 1 else "<photo group>", "confidence",
+                         "at least one photo of the group measured with confidence ok (a photo flagged low "
+                         "is not averaged into the group's angle)",
+                         "; ".join(f"{a['path']}: low, {a['reason']}" for a in aside))
+    lefts = np.array([r.left_deg for r in used])
+    rights = np.array([r.right_deg for r in used])
     allf = np.concatenate([lefts, rights])
-    return {
+    out = {
         "angle_deg": float(allf.mean()),
         "left_deg": float(lefts.mean()),
         "right_deg": float(rights.mean()),
         "spread_deg": float(allf.std(ddof=1)) if allf.size > 1 else 0.0,
-        "n_photos": len(res),
+        "n_photos": len(used),
         "photos": [r.as_dict() for r in res],
     }
+    if ok_only:
+        out["set_aside"] = aside
+    return out
 
 
 #: the most a plate line may be tilted in the photo (deg either way): the camera's roll the plate
