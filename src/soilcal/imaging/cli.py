@@ -11,6 +11,10 @@ def _print(obj):
     sys.stdout.write("\n")
 
 
+def _n(n, noun):
+    return f"{n} {noun}{'' if n == 1 else 's'}"
+
+
 def _plate_lines(args):
     """The ``--plate-line-px`` lines, one per photo in the photos' order (None for each photo
     where none is given), checked as a manifest's ``plate_line_px`` is
@@ -23,8 +27,8 @@ def _plate_lines(args):
         return None
     if len(given) != len(args.photos):
         raise InputError("<command line>", "--plate-line-px", f"one plate line per photo, in the photos' order "
-                         f"({len(args.photos)} photos; several photos' lines can also be given in a manifest, "
-                         f"soilcal image soil)", f"{len(given)} lines")
+                         f"({_n(len(args.photos), 'photo')}; several photos' lines can also be given in a manifest, "
+                         f"soilcal image soil)", _n(len(given), "line"))
     return [check_plate_line("<command line>", "--plate-line-px",
                              {"kind": "pile", "file": str(photo), "plate_line_px": [q[:2], q[2:]]}, photo)
             for photo, q in zip(args.photos, given)]

@@ -88,8 +88,9 @@ def check_plate_line(where, field, entry, photo):
     the line within :data:`PLATE_LINE_MAX_DEG` of the image rows.  Returns ((c0, r0), (c1,
     r1)) as floats, in the order given."""
     pts = entry["plate_line_px"]
+    eg = f"{field} 40 612.5 1580 618" if field.startswith("--") else "[[40, 612.5], [1580, 618]]"  # as typed
     expected = ("two points [column, row] on the plate's top edge, in the photo's pixels as shown, "
-                f"e.g. [[40, 612.5], [1580, 618]] (photo {entry.get('file')})")
+                f"e.g. {eg} (photo {entry.get('file')})")
     if entry.get("kind") != "pile":
         raise InputError(where, field, f"no plate line: it is given for heap photos (kind pile) only "
                          f"(photo {entry.get('file')}, kind {entry.get('kind')})", pts)
