@@ -122,3 +122,36 @@ def test_cli_pile_refusal_on_the_line_given_names_it(tmp_path, capsys):
                  "--refusals", str(tmp_path)]) == 2
     err = capsys.readouterr().err
     assert "plain.png" in err and "--plate-line-px 10 120.5 390 120.5" in err, err
+
+
+def _result_on(slope, intercept, feet, left, right):
+    """A heap measured on the plate line ``slope``, ``intercept`` with its feet at columns
+    ``feet`` (flank lines (u0, v0, du, dv) crossing the plate row at u0 in a level frame)."""
+    return measure.PileResult("heap.png", (left + right) / 2, left, right, 1.0, 0.0,
+                              geometry=(slope, intercept, (feet[0], 0.0, 1.0, 1.0), (feet[1], 0.0, 1.0, 1.0),
+                                        100.0))
+
+
+def test_a_line_with_no_columns_beside_the_heap_is_not_judged_a_tie(monkeypatch):
+    # a heap spanning the frame (feet 3 px from either edge of 400): fewer than 10 columns
+    # beside it on either side, for the line measured on and for a second line tilted 2 deg
+    # that reads the flanks 3 deg differently, "ok"; nothing beside the heap says either line
+    # is the plate, so the second one is no evidence against the first
+    edges = np.zeros((300, 400), bool)
+    res = _result_on(0.0, 215.5, (3.0, 396.0), 32.0, 35.0)
+    tilted = float(np.tan(np.radians(2.0)))
+    other = _result_on(tilted, 212.0, (3.0, 396.0), 35.0, 32.0)
+    monkeypatch.setattr(measure, "_on_plate_lines", lambda *a, **k: other)
+    assert measure._plate_alternative("heap.png", None, None, None, [(tilted, 212.0)], res, "auto", "otsu",
+                                      edges) is None
+    assert measure._edge_beside(edges, res) is None and measure._edge_beside(edges, other) is None
+    # where the second line does meet edges beside the heap, the first line having none to show,
+    # it is flagged
+    other = _result_on(tilted, 212.0, (150.0, 250.0), 35.0, 32.0)
+    rows = np.round(tilted * np.arange(400) + 212.0).astype(int)
+    edges[rows, np.arange(400)] = True
+    res = _result_on(0.0, 215.5, (3.0, 396.0), 32.0, 35.0)
+    monkeypatch.setattr(measure, "_on_plate_lines", lambda *a, **k: other)
+    assert measure._plate_alternative("heap.png", None, None, None, [(tilted, 212.0)], res, "auto", "otsu",
+                                      edges) is not None
+

@@ -636,10 +636,14 @@ def _plate_alternative(path, rgb, lum, grays, lines, res, channel, threshold, pl
     smaller share than the line measured on (a chord from a card's top edge, or from a plate
     face's lower edge, to the plate's top edge) leaves the result as it is.  Lines parallel to
     the one measured on (a plate's face, the table below a dark plate) turn no flank and are
-    not judged."""
+    not judged.  A line with no side of the heap to judge (:func:`_edge_beside` None) shows no
+    support beside the heap: such an alternative is not compared (a missing comparison is no
+    tie), and where the line measured on has none, an alternative is flagged only where it meets
+    edges beside the heap."""
     slope = res.geometry[0]
     own = _edge_beside(plate_edges, res)
-    best, found = own, None
+    # where the line measured on has no side to judge, any judged support beside the heap is more
+    best, found = (own if own is not None else 0.0), None
     for n, (s2, b2) in enumerate(lines, 1):
         if abs(math.degrees(math.atan(s2) - math.atan(slope))) <= PLATE_AMBIGUOUS_DEG:
             continue
@@ -651,6 +655,8 @@ def _plate_alternative(path, rgb, lum, grays, lines, res, channel, threshold, pl
         if other.confidence != "ok" or _flank_difference(res, other) <= PLATE_AMBIGUOUS_DEG:
             continue
         share = _edge_beside(plate_edges, other)
+        if share is None or (own is None and share <= 0.0):
+            continue  # nothing beside the heap to compare
         if share >= best:  # of several such lines, the one running on furthest beside the heap
             best, found = share, (float(s2), float(b2), other.left_deg, other.right_deg)
     return found
@@ -661,8 +667,7 @@ def _edge_beside(edges, res):
     right of it (more than 5 px beyond its feet, where its flank lines meet its plate line; a
     side of fewer than 10 such columns is not judged), where ``edges`` meet that plate line: 1
     for a plate's edge running on to the frame on both sides, less for a chord of two edges (a
-    card's and the plate's) that meets each only near where it crosses it; 0 with no side
-    judged."""
+    card's and the plate's) that meets each only near where it crosses it; None with no side judged (nothing beside the heap to judge the line by)."""
     h, w = edges.shape
     slope, intercept, lline, rline, _ = res.geometry
     ang = math.atan(slope)
@@ -679,7 +684,7 @@ def _edge_beside(edges, res):
         ok = beside & (rows >= 0) & (rows < h)
         if beside.sum() >= 10:
             out.append(float(edges[rows[ok], cols[ok]].sum()) / float(beside.sum()))
-    return min(out, default=0.0)
+    return min(out) if out else None
 
 
 def _heap_stands_on(path, rgb, lum, grays, line, channel, threshold, plate_edges) -> bool:
