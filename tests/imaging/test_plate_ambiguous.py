@@ -155,3 +155,18 @@ def test_a_line_with_no_columns_beside_the_heap_is_not_judged_a_tie(monkeypatch)
     assert measure._plate_alternative("heap.png", None, None, None, [(tilted, 212.0)], res, "auto", "otsu",
                                       edges) is not None
 
+
+def test_cli_pile_plate_line_wording_is_the_command_lines(tmp_path, capsys):
+    # a refused --plate-line-px shows its example as typed on the command line, and counts
+    # are worded in the singular for one
+    from soilcal.cli import main
+
+    p = tmp_path / "plain.png"
+    _u8(heap_photo()).save(p)
+    assert main(["image", "pile", str(p), "--plate-line-px", "10", "120", "390", "700"]) == 2
+    err = capsys.readouterr().err
+    assert "e.g. --plate-line-px 40 612.5 1580 618" in err and "[[40, 612.5]" not in err, err
+    assert main(["image", "pile", str(p), "--plate-line-px", "10", "215.5", "390", "215.5",
+                 "--plate-line-px", "10", "215.5", "390", "215.5"]) == 2
+    err = capsys.readouterr().err
+    assert "(1 photo;" in err and "2 lines" in err, err
