@@ -170,3 +170,21 @@ def test_cli_pile_plate_line_wording_is_the_command_lines(tmp_path, capsys):
                  "--plate-line-px", "10", "215.5", "390", "215.5"]) == 2
     err = capsys.readouterr().err
     assert "(1 photo;" in err and "2 lines" in err, err
+
+
+def test_lines_the_search_refused_are_not_measured_again(monkeypatch):
+    # the search refused line 1 with every cue: the ambiguity check measures only line 2
+    res = _result_on(0.0, 215.5, (150.0, 250.0), 32.0, 35.0)
+    tilted = float(np.tan(np.radians(2.0)))
+    seen = []
+
+    def measured(path, rgb, lum, grays, lines, n, *a, **k):
+        seen.append(n)
+        raise InputError(path, "image", "a heap", "none")
+
+    from soilcal.errors import InputError
+    monkeypatch.setattr(measure, "_on_plate_lines", measured)
+    edges = np.zeros((300, 400), bool)
+    assert measure._plate_alternative("heap.png", None, None, None, [(tilted, 150.0), (-tilted, 220.0)], res,
+                                      "auto", "otsu", edges, {1}) is None
+    assert seen == [2]

@@ -591,12 +591,13 @@ def _pile_on_lines(path, rgb, threshold, keep_stages, channel, tried: Tried, pla
     if not lines:
         raise InputError(path, "image", "a straight base plate edge", "none found")
     beside = []  # lines on which a heap was measured but which do not run on beside it
+    refused = set()  # the lines every cue refused (numbered from 1)
     try:
         res = _on_plate_lines(path, rgb, lum, grays, lines[:PLATE_CANDIDATES], 1, channel, threshold, keep_stages,
-                              tried, plate_edges, beside)
+                              tried, plate_edges, beside, refused)
         if plate is None:
             res.alternative = _plate_alternative(path, rgb, lum, grays, lines[:PLATE_CANDIDATES], res, channel,
-                                                 threshold, plate_edges)
+                                                 threshold, plate_edges, refused)
         return res
     except InputError as refused:
         if not beside:
@@ -620,7 +621,7 @@ def _pile_on_lines(path, rgb, threshold, keep_stages, channel, tried: Tried, pla
 PLATE_AMBIGUOUS_DEG = 0.5
 
 
-def _plate_alternative(path, rgb, lum, grays, lines, res, channel, threshold, plate_edges):
+def _plate_alternative(path, rgb, lum, grays, lines, res, channel, threshold, plate_edges, refused=()):
     """A second plate candidate of ``lines`` that carries the heap as the line ``res`` was
     measured on does, tilted against it by more than :data:`PLATE_AMBIGUOUS_DEG`, and on which
     the flanks read more than that differently: (slope, intercept, left deg, right deg) of the
@@ -639,13 +640,14 @@ def _plate_alternative(path, rgb, lum, grays, lines, res, channel, threshold, pl
     not judged.  A line with no side of the heap to judge (:func:`_edge_beside` None) shows no
     support beside the heap: such an alternative is not compared (a missing comparison is no
     tie), and where the line measured on has none, an alternative is flagged only where it meets
-    edges beside the heap."""
+    edges beside the heap.  ``refused``: the numbers of the lines (from 1) on which the search
+    measured no heap with any cue; measured alone they are refused again, so they are skipped."""
     slope = res.geometry[0]
     own = _edge_beside(plate_edges, res)
     # where the line measured on has no side to judge, any judged support beside the heap is more
     best, found = (own if own is not None else 0.0), None
     for n, (s2, b2) in enumerate(lines, 1):
-        if abs(math.degrees(math.atan(s2) - math.atan(slope))) <= PLATE_AMBIGUOUS_DEG:
+        if n in refused or abs(math.degrees(math.atan(s2) - math.atan(slope))) <= PLATE_AMBIGUOUS_DEG:
             continue
         try:
             other = _on_plate_lines(path, rgb, lum, grays, [(s2, b2)], n, channel, threshold, False,
@@ -714,10 +716,11 @@ def _noting_tilt(refused: InputError, tilted) -> InputError:
 
 
 def _on_plate_lines(path, rgb, lum, grays, lines, n_first, channel, threshold, keep_stages, tried, plate_edges,
-                    beside):
+                    beside, refused=None):
     """The heap measured on the first of ``lines`` (numbered from ``n_first``) on which a cue
     finds one (module text); a line refused only because it does not run on beside the heap
-    (:func:`_plate_beside_heap`) is added to ``beside`` with the reason."""
+    (:func:`_plate_beside_heap`) is added to ``beside`` with the reason; ``refused``: a set
+    given gets the number of each line every cue refused."""
     h, w = lum.shape
     rr, cc = np.mgrid[0:h, 0:w]
     refusals = []  # every cue's refusal, the topmost line's first
@@ -789,6 +792,8 @@ def _on_plate_lines(path, rgb, lum, grays, lines, n_first, channel, threshold, k
         if small is None and (len(line_refusals) >= 2 or channel != "auto") and all(
                 getattr(r, "too_small", False) for r in line_refusals[:2]):
             small = line_refusals[0]
+        if refused is not None:
+            refused.add(n_line)
     if small is not None:
         # a heap too small for its flanks to be fitted stood on a line (two segmentations agree):
         # that, not what the lines above it were refused for, is what the photo lacks
