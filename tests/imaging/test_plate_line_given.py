@@ -125,15 +125,26 @@ def test_plate_line_is_for_heap_photos_only(tmp_path):
         read_manifest(m)
 
 
-def test_plate_line_given_a_pixel_off_at_the_shortest_span_turns_the_flanks_by_half_a_degree(tmp_path):
-    # the right point clicked 1 px below the drawn plate edge, 115 px from the left one: the
-    # line is tilted atan(1 / 115) = 0.50 deg, taken as the camera's roll, which turns the two
-    # flanks by as much, opposite ways; their mean stays at the drawn 33.5
-    m = _manifest(tmp_path, {"file": "plain.png", "plate_line_px": [[30, PLATE_EDGE], [145, PLATE_EDGE + 1]]},
-                  **{"plain.png": heap_photo()})
-    r = _photo(measure_manifest(m))
-    tilt = math.degrees(math.atan(1 / 115))
-    assert abs(r["left_deg"] - 32.0) <= tilt + 0.3 and abs(r["right_deg"] - 35.0) <= tilt + 0.3, r
+@pytest.mark.parametrize("low_point,turn_left", [(1, 1.0), (0, -1.0)])
+def test_plate_line_given_a_pixel_off_at_the_shortest_span_turns_the_flanks_by_half_a_degree(tmp_path, low_point,
+                                                                                            turn_left):
+    # one point clicked 1 px below the drawn plate edge, 115 px from the other: the line is
+    # tilted t = atan(1 / 115) = 0.498 deg, taken as the camera's roll.  Against a line falling
+    # to the right by t (the right point low) the left flank, rising to the right, reads t
+    # steeper and the right flank t flatter; the left point low turns them the other way.  The
+    # turn is read against the same photo measured on the level line through the same columns;
+    # the mean of the two flanks stays at the drawn 33.5
+    photo = heap_photo()
+    level = [[30, PLATE_EDGE], [145, PLATE_EDGE]]
+    tilted = [list(q) for q in level]
+    tilted[low_point][1] += 1
+    r0 = _photo(measure_manifest(_manifest(tmp_path, {"file": "plain.png", "plate_line_px": level},
+                                           **{"plain.png": photo})))
+    r = _photo(measure_manifest(_manifest(tmp_path, {"file": "plain.png", "plate_line_px": tilted})))
+    t = math.degrees(math.atan(1 / 115))
+    assert abs((r["left_deg"] - r0["left_deg"]) - turn_left * t) <= 0.15, (r0, r)
+    assert abs((r["right_deg"] - r0["right_deg"]) + turn_left * t) <= 0.15, (r0, r)
+    assert abs(r["roll_deg"] + turn_left * t) <= 1e-6, r["roll_deg"]
     assert abs(0.5 * (r["left_deg"] + r["right_deg"]) - 33.5) <= 0.3, r
 
 

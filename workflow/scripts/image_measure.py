@@ -16,5 +16,8 @@ with redirect(snakemake.log[0]):  # noqa: F821
                               refusals=snakemake.params.refusals)  # noqa: F821
     for group, r in result.items():
         logging.info("%s: %s", group, {k: r[k] for k in ("angle_deg", "spread_deg", "area_mm2") if k in r})
+        for a in r.get("set_aside", []):
+            logging.warning("%s: photo %s set aside (confidence low, not averaged into the group): %s",
+                            group, a["path"], a["reason"])
     out.parent.mkdir(parents=True, exist_ok=True)
     out.write_text(json.dumps(result, indent=2) + "\n")

@@ -11,11 +11,45 @@ def _print(obj):
     sys.stdout.write("\n")
 
 
+def _n(n, noun):
+    return f"{n} {noun}{'' if n == 1 else 's'}"
+
+
+def _plate_lines(args):
+    """The ``--plate-line-px`` lines, one per photo in the photos' order (None for each photo
+    where none is given), checked as a manifest's ``plate_line_px`` is
+    (:func:`soilcal.imaging.manifest.check_plate_line`)."""
+    from soilcal.errors import InputError
+    from soilcal.imaging.manifest import check_plate_line
+
+    given = args.plate_line_px or []
+    if not given:
+        return None
+    if len(given) != len(args.photos):
+        raise InputError("<command line>", "--plate-line-px", f"one plate line per photo, in the photos' order "
+                         f"({_n(len(args.photos), 'photo')}; several photos' lines can also be given in a manifest, "
+                         f"soilcal image soil)", _n(len(given), "line"))
+    return [check_plate_line("<command line>", "--plate-line-px",
+                             {"kind": "pile", "file": str(photo), "plate_line_px": [q[:2], q[2:]]}, photo)
+            for photo, q in zip(args.photos, given)]
+
+
 def _pile(args):
+    from soilcal.errors import InputError
     from soilcal.imaging import figures, measure
 
-    summary, res = measure.measure_piles(args.photos, args.threshold, keep_stages=bool(args.figures),
-                                         channel=args.channel, refusals=args.refusals)
+    lines = _plate_lines(args)
+    try:
+        summary, res = measure.measure_piles(args.photos, args.threshold, keep_stages=bool(args.figures),
+                                             channel=args.channel, refusals=args.refusals, plate_px=lines,
+                                             plate_px_from="command line")
+    except InputError as e:
+        # a photo measured on the line given: the refusal names the option and the line
+        given = {str(f): q for f, q in zip(args.photos, lines or []) if q is not None}
+        if e.path not in given or e.field not in ("image", "left flank", "right flank", "plate line"):
+            raise
+        raise InputError(e.path, e.field, e.expected, f"{e.got} on the plate line given on the command line "
+                         f"--plate-line-px {' '.join(f'{v:g}' for q in given[e.path] for v in q)}", e.note) from None
     if args.figures:
         for r in res:
             figures.angle_figure(r, f"{args.figures}/{r.path.rsplit('/', 1)[-1].rsplit('.', 1)[0]}")
@@ -93,6 +127,11 @@ def register(subparsers) -> None:
     q = sub.add_parser("pile", help="heap photos (several views are averaged)")
     q.add_argument("photos", nargs="+")
     q.add_argument("--channel", choices=("auto", "gray", "chroma"), default="auto")
+    q.add_argument("--plate-line-px", dest="plate_line_px", type=float, nargs=4, action="append",
+                   metavar=("C0", "R0", "C1", "R1"),
+                   help="the plate's top edge given by hand, not searched: two points (column, row) on it in the "
+                        "photo's pixels as a viewer shows them, at least 115 px apart, within 45 deg of "
+                        "horizontal (a manifest's plate_line_px); once per photo, in the photos' order")
     common(q)
     q.set_defaults(func=_pile)
     q = sub.add_parser("drum", help="rotating-drum frames or tester exports (dynamic angle, S-shape, averaged)")

@@ -88,8 +88,9 @@ def check_plate_line(where, field, entry, photo):
     the line within :data:`PLATE_LINE_MAX_DEG` of the image rows.  Returns ((c0, r0), (c1,
     r1)) as floats, in the order given."""
     pts = entry["plate_line_px"]
+    eg = f"{field} 40 612.5 1580 618" if field.startswith("--") else "[[40, 612.5], [1580, 618]]"  # as typed
     expected = ("two points [column, row] on the plate's top edge, in the photo's pixels as shown, "
-                f"e.g. [[40, 612.5], [1580, 618]] (photo {entry.get('file')})")
+                f"e.g. {eg} (photo {entry.get('file')})")
     if entry.get("kind") != "pile":
         raise InputError(where, field, f"no plate line: it is given for heap photos (kind pile) only "
                          f"(photo {entry.get('file')}, kind {entry.get('kind')})", pts)
@@ -214,6 +215,8 @@ def measure_manifest(path, figdir=None, threshold="otsu", refusals=None):
                 summary, res = measure.measure_piles(files, threshold, keep_stages=keep, refusals=refusals,
                                                      plate_px=lines)
             except InputError as e:
+                if e.field == "confidence":  # no photo of the group measured "ok"
+                    raise InputError(path, f"group {g} ({len(files)} photos)", e.expected, e.got) from None
                 given = {str(f): i for f, q, i in zip(files, lines, range(len(files))) if q is not None}
                 if e.path not in given or e.field not in ("image", "left flank", "right flank", "plate line"):
                     raise

@@ -90,19 +90,30 @@ class PileResult:
     # PILE_WORK_PIXELS): flank_rms_px and the plate line are in the measured image's pixels
     work_scale: float = 1.0
     # where the plate line came from: "found" by the plate search, "manifest" (the photo's
-    # plate_line_px) or "given" (a caller's, e.g. a rendered silhouette's)
+    # plate_line_px), "command line" (soilcal image pile --plate-line-px) or "given" (a
+    # caller's, e.g. a rendered silhouette's)
     plate_line: str = "found"
     # two points [column, row] of the plate line in the photo's pixels as shown: the manifest's
     # as given, else the line measured on, at the measured image's first and last columns
     plate_line_px: list | None = None
+    # where a second plate candidate also carries the heap, tilted against the line measured on
+    # so that the flanks differ by more than PLATE_AMBIGUOUS_DEG (a line through a scale card
+    # standing on the plate beside a foot, crossing the plate's edge further on): the photo, the
+    # two lines and the flanks on each, and the way out (the plate line given by hand); the
+    # result is then "low" (:func:`_plate_alternative`); "" where no such line was found
+    plate_ambiguous: str = ""
     # (plate slope, plate intercept, left line, right line, heap height px): where the flanks
     # were fitted, for a later refinement; not reported
     geometry: tuple | None = field(default=None, repr=False)
+    # (slope, intercept, left deg, right deg) of the second plate candidate that carries the
+    # heap (plate_ambiguous), in the measured image's pixels; not reported
+    alternative: tuple | None = field(default=None, repr=False)
 
     def as_dict(self):
         d = asdict(self)
         d.pop("stages")
         d.pop("geometry")
+        d.pop("alternative")
         return d
 
 
@@ -336,6 +347,9 @@ def _fit(path, u, v, label, seed=0, residual=None):
     return float(np.degrees(np.arctan2(abs(dv), abs(du)))), (u0, v0, du, dv), pts[inl]
 
 
+#: a flank is fitted over at least this many columns (boundary points) of its band
+#: (:data:`BAND` of the heap's height): a heap smaller in the photo is refused as too small
+MIN_FLANK_COLUMNS = 20
 #: what a photo with no heap on its plate is refused with
 NONE_FOUND = "none found"
 #: what a heap cut by the image border is refused with
@@ -375,7 +389,7 @@ def _components_on_plate(path, binary, slope, intercept, kind):
 
 
 def measure_pile(path, threshold="otsu", keep_stages=False, channel="auto", refusals=None, *,
-                 image=None, plate=None, plate_px=None) -> PileResult:
+                 image=None, plate=None, plate_px=None, plate_px_from="manifest") -> PileResult:
     """Left/right flank angles of one heap photo relative to the plate line.
 
     Plate candidates: the long near-horizontal edges below the image middle, topmost first, of
@@ -410,18 +424,20 @@ def measure_pile(path, threshold="otsu", keep_stages=False, channel="auto", refu
     row), (column, row)) on the plate's top edge in the photo's pixels as shown (a manifest's
     ``plate_line_px``), the plate line measured on instead of the one the search would find
     (a card standing on the plate, a plate of the soil's colour); ``plate_line`` reports
-    "manifest".
+    ``plate_px_from`` ("manifest", or "command line" for ``soilcal image pile --plate-line-px``).
     """
     tried = Tried(keep_masks=refusals is not None)
     with explained(path, refusals, tried):
-        res = _measure_pile(path, threshold, keep_stages, channel, tried, image, plate, plate_px)
+        res = _measure_pile(path, threshold, keep_stages, channel, tried, image, plate, plate_px, plate_px_from)
     if channel == "auto" and res.confidence != "ok":
         res = _texture_flanks(res, tried.gray)
+    if res.plate_ambiguous:
+        res.confidence = "low"
     return res
 
 
 def _measure_pile(path, threshold, keep_stages, channel, tried: Tried, image=None,
-                  plate=None, plate_px=None) -> PileResult:
+                  plate=None, plate_px=None, plate_px_from="manifest") -> PileResult:
     if image is None:
         # a phone's 12 or 48 megapixels are measured at a working size (the angles do not depend
         # on it): decoded reduced by a whole factor where the format allows (a JPEG by 2, 4 or
@@ -458,12 +474,23 @@ def _measure_pile(path, threshold, keep_stages, channel, tried: Tried, image=Non
         _check_levels_around(path, rgb, res, depth)
     res.work_scale = scale
     if plate_px is not None:
-        res.plate_line, res.plate_line_px = "manifest", [[float(c), float(r)] for c, r in plate_px]
+        res.plate_line, res.plate_line_px = plate_px_from, [[float(c), float(r)] for c, r in plate_px]
     else:
         slope, intercept = res.geometry[:2]
         ends = (0.0, rgb.shape[1] - 1.0)
         res.plate_line = "found" if plate is None else "given"
         res.plate_line_px = [[round(v, 2) for v in to_photo(c, slope * c + intercept)] for c in ends]
+        if res.alternative is not None:
+            s2, b2, left2, right2 = res.alternative
+            other = [[round(v, 2) for v in to_photo(c, s2 * c + b2)] for c in ends]
+            res.plate_ambiguous = (
+                f"{path}: two plate lines carry the heap: the one measured on, tilted {roll_of(slope):+.2f} deg "
+                f"({res.plate_line_px} in the photo's pixels; flanks {res.left_deg:.2f} / {res.right_deg:.2f} deg), "
+                f"and one tilted {roll_of(s2):+.2f} deg ({other}; flanks {left2:.2f} / {right2:.2f} deg), as a "
+                f"line through an object standing on the plate beside a foot (a scale card) and the plate's "
+                f"edge further on is; the photo does not tell which is the plate's top edge: give it by hand, "
+                f"two points on it as plate_line_px in the photo's manifest entry (or soilcal image pile "
+                f"--plate-line-px C0 R0 C1 R1)")
     return res
 
 
@@ -564,9 +591,14 @@ def _pile_on_lines(path, rgb, threshold, keep_stages, channel, tried: Tried, pla
     if not lines:
         raise InputError(path, "image", "a straight base plate edge", "none found")
     beside = []  # lines on which a heap was measured but which do not run on beside it
+    refused = set()  # the lines every cue refused (numbered from 1)
     try:
-        return _on_plate_lines(path, rgb, lum, grays, lines[:PLATE_CANDIDATES], 1, channel, threshold, keep_stages,
-                               tried, plate_edges, beside)
+        res = _on_plate_lines(path, rgb, lum, grays, lines[:PLATE_CANDIDATES], 1, channel, threshold, keep_stages,
+                              tried, plate_edges, beside, refused)
+        if plate is None:
+            res.alternative = _plate_alternative(path, rgb, lum, grays, lines[:PLATE_CANDIDATES], res, channel,
+                                                 threshold, plate_edges, refused)
+        return res
     except InputError as refused:
         if not beside:
             raise _noting_tilt(refused, tilted) from None
@@ -580,6 +612,81 @@ def _pile_on_lines(path, rgb, threshold, keep_stages, channel, tried: Tried, pla
             raise _noting_tilt(refused, tilted) from None
         res.plate_beside = why
         return res
+
+
+#: flank difference (deg) between the heap measured on the plate line found and on a second
+#: plate candidate above which the photo's plate is ambiguous (:func:`_plate_alternative`): a
+#: line tilted by t against the plate turns both flanks by t, opposite ways, and a plate line
+#: given by hand is held to half a degree (a point 1 px off at its shortest span)
+PLATE_AMBIGUOUS_DEG = 0.5
+
+
+def _plate_alternative(path, rgb, lum, grays, lines, res, channel, threshold, plate_edges, refused=()):
+    """A second plate candidate of ``lines`` that carries the heap as the line ``res`` was
+    measured on does, tilted against it by more than :data:`PLATE_AMBIGUOUS_DEG`, and on which
+    the flanks read more than that differently: (slope, intercept, left deg, right deg) of the
+    one meeting edges beside the heap along the largest share of the columns, else None.  Such a line is no chance chord: the heap stands on it with a foot, its flanks fit
+    ("ok" by a cue search of their own) and it runs on beside the heap as an edge on both
+    sides (:func:`_plate_beside_heap`), as the plate does; so does a line from a scale card's
+    edge standing on the plate beside one foot to the plate's own edge beyond the other.  Such
+    a line is no worse evidence of a plate than the line measured on where it runs on as an
+    edge beside the heap along at least as large a share of the columns on either side
+    (:func:`_edge_beside`): the photo then does not say which of the two is the plate, and no
+    rule choosing between them is safe (the first line from the top can be either), so both
+    are reported and the result is "low".  A line that meets edges beside the heap along a
+    smaller share than the line measured on (a chord from a card's top edge, or from a plate
+    face's lower edge, to the plate's top edge) leaves the result as it is.  Lines parallel to
+    the one measured on (a plate's face, the table below a dark plate) turn no flank and are
+    not judged.  A line with no side of the heap to judge (:func:`_edge_beside` None) shows no
+    support beside the heap: such an alternative is not compared (a missing comparison is no
+    tie), and where the line measured on has none, an alternative is flagged only where it meets
+    edges beside the heap.  ``refused``: the numbers of the lines (from 1) on which the search
+    measured no heap with any cue; measured alone they are refused again, so they are skipped."""
+    slope = res.geometry[0]
+    own = _edge_beside(plate_edges, res)
+    # where the line measured on has no side to judge, any judged support beside the heap is more
+    best, found = (own if own is not None else 0.0), None
+    for n, (s2, b2) in enumerate(lines, 1):
+        if n in refused or abs(math.degrees(math.atan(s2) - math.atan(slope))) <= PLATE_AMBIGUOUS_DEG:
+            continue
+        try:
+            other = _on_plate_lines(path, rgb, lum, grays, [(s2, b2)], n, channel, threshold, False,
+                                    Tried(keep_masks=False), plate_edges, [])
+        except InputError:
+            continue
+        if other.confidence != "ok" or _flank_difference(res, other) <= PLATE_AMBIGUOUS_DEG:
+            continue
+        share = _edge_beside(plate_edges, other)
+        if share is None or (own is None and share <= 0.0):
+            continue  # nothing beside the heap to compare
+        if share >= best:  # of several such lines, the one running on furthest beside the heap
+            best, found = share, (float(s2), float(b2), other.left_deg, other.right_deg)
+    return found
+
+
+def _edge_beside(edges, res):
+    """The smaller of the shares of the columns beside the heap measured in ``res``, left and
+    right of it (more than 5 px beyond its feet, where its flank lines meet its plate line; a
+    side of fewer than 10 such columns is not judged), where ``edges`` meet that plate line: 1
+    for a plate's edge running on to the frame on both sides, less for a chord of two edges (a
+    card's and the plate's) that meets each only near where it crosses it; None with no side judged (nothing beside the heap to judge the line by)."""
+    h, w = edges.shape
+    slope, intercept, lline, rline, _ = res.geometry
+    ang = math.atan(slope)
+    cx, cy = w / 2 - 0.5, h / 2 - 0.5
+    prow = cy + (slope * cx + intercept - cy) * math.cos(ang)
+    feet = []
+    for u0, v0, du, dv in (lline, rline):
+        u = u0 - v0 / dv * du  # the flank line at height 0 (the plate row) in the levelled frame
+        feet.append(cx + (u - cx) * math.cos(ang) - (prow - cy) * math.sin(ang))
+    cols = np.arange(w)
+    rows = np.round(slope * cols + intercept).astype(int)
+    out = []
+    for beside in (cols < min(feet) - 5, cols > max(feet) + 5):
+        ok = beside & (rows >= 0) & (rows < h)
+        if beside.sum() >= 10:
+            out.append(float(edges[rows[ok], cols[ok]].sum()) / float(beside.sum()))
+    return min(out) if out else None
 
 
 def _heap_stands_on(path, rgb, lum, grays, line, channel, threshold, plate_edges) -> bool:
@@ -609,13 +716,15 @@ def _noting_tilt(refused: InputError, tilted) -> InputError:
 
 
 def _on_plate_lines(path, rgb, lum, grays, lines, n_first, channel, threshold, keep_stages, tried, plate_edges,
-                    beside):
+                    beside, refused=None):
     """The heap measured on the first of ``lines`` (numbered from ``n_first``) on which a cue
     finds one (module text); a line refused only because it does not run on beside the heap
-    (:func:`_plate_beside_heap`) is added to ``beside`` with the reason."""
+    (:func:`_plate_beside_heap`) is added to ``beside`` with the reason; ``refused``: a set
+    given gets the number of each line every cue refused."""
     h, w = lum.shape
     rr, cc = np.mgrid[0:h, 0:w]
     refusals = []  # every cue's refusal, the topmost line's first
+    small = None  # the topmost line's refusal where its first two cues both saw a heap too small
     first = None  # the first cue's result, waiting for a second cue to cross-check it
     for n_line, (slope, intercept) in enumerate(lines, n_first):  # the plate top first; a faint one may hide behind a lower edge
         if beside and slope * w / 2 + intercept <= min(b[1] * w / 2 + b[2] for b in beside) + 3:
@@ -680,6 +789,15 @@ def _on_plate_lines(path, rgb, lum, grays, lines, n_first, channel, threshold, k
             # no further credible cue measured a heap on this plate line: the first stands
             # alone, or against the one that disagrees
             return first if dissent is None else _cross_checked(first, dissent)
+        if small is None and (len(line_refusals) >= 2 or channel != "auto") and all(
+                getattr(r, "too_small", False) for r in line_refusals[:2]):
+            small = line_refusals[0]
+        if refused is not None:
+            refused.add(n_line)
+    if small is not None:
+        # a heap too small for its flanks to be fitted stood on a line (two segmentations agree):
+        # that, not what the lines above it were refused for, is what the photo lacks
+        raise small
     raise _refusal(path, refusals, channel == "auto")
 
 
@@ -763,6 +881,19 @@ def _pile_with(path, rgb, gray, cue, polarity, band, slope, intercept, threshold
     band = (v > BAND[0] * hmax) & (v < BAND[1] * hmax)
     lsel, rsel = band & (cu < apex), band & (cu > apex)
     vs = [v] + [prow - r for r in rl]
+    cols_in = {"left flank": int(lsel.sum()), "right flank": int(rsel.sum())}
+    if min(cols_in.values()) < MIN_FLANK_COLUMNS:
+        # the heap is too small in the photo for a line fit of a flank: say so, with the size at
+        # which both flanks would span enough columns (they grow in proportion to the heap)
+        short = [k for k, n in cols_in.items() if n < MIN_FLANK_COLUMNS]
+        need = hmax * MIN_FLANK_COLUMNS / max(min(cols_in.values()), 1)
+        e = InputError(path, short[0], f"a heap large enough in the photo to fit its flanks: each flank over at "
+                       f"least {MIN_FLANK_COLUMNS} columns between {BAND[0]:.0%} and {BAND[1]:.0%} of the "
+                       f"heap's height", f"a heap {hmax:.0f} px high, its flanks over {cols_in['left flank']} and "
+                       f"{cols_in['right flank']} columns ({cue}/{polarity}): too small; take the photo closer "
+                       f"or at a higher resolution, so that the heap is at least {math.ceil(need)} px high")
+        e.too_small = True
+        raise e
     left, lline, lp = _straighter(path, cu, vs, lsel, "left flank")
     right, rline, rp = _straighter(path, cu, vs, rsel, "right flank")
     ang = np.array([left, right])
@@ -1001,29 +1132,76 @@ def _texture_flanks(res: PileResult, lum) -> PileResult:
     return res
 
 
-def measure_piles(paths, threshold="otsu", keep_stages=False, channel="auto", refusals=None, plate_px=None):
-    """Multi-view average: mean of all flank angles, spread = their sample std (``refusals``:
-    :func:`measure_pile`; ``plate_px``: one given plate line or None per photo, as
-    :func:`measure_pile` takes it)."""
+def measure_piles(paths, threshold="otsu", keep_stages=False, channel="auto", refusals=None, plate_px=None,
+                  plate_px_from="manifest"):
+    """One group of heap photos: the mean of the flanks of its photos measured with confidence
+    "ok", a photo flagged "low" set aside with its reason (:func:`pile_summary` with
+    ``ok_only``; a group with no photo "ok" is refused).  ``refusals``: :func:`measure_pile`;
+    ``plate_px``: one given plate line or None per photo, as :func:`measure_pile` takes it,
+    ``plate_px_from`` where they came from."""
     per = plate_px if plate_px is not None else [None] * len(paths)
-    res = [measure_pile(p, threshold, keep_stages, channel, refusals, plate_px=q) for p, q in zip(paths, per)]
-    return pile_summary(res), res
+    res = [measure_pile(p, threshold, keep_stages, channel, refusals, plate_px=q, plate_px_from=plate_px_from)
+           for p, q in zip(paths, per)]
+    return pile_summary(res, ok_only=True), res
 
 
-def pile_summary(res) -> dict:
+def low_reason(r: PileResult) -> str:
+    """Why the heap photo ``r`` (:class:`PileResult`) is "low" ("" for an "ok" one): the plate
+    ambiguity (naming both lines and the plate line to give), else the flank fit, the flanks'
+    difference, the heap continuing past a flank or the further cue that disagrees."""
+    if r.confidence == "ok":
+        return ""
+    if r.plate_ambiguous:
+        return r.plate_ambiguous
+    why = []
+    if r.flank_points_used < FLANK_USED_MIN:
+        why.append(f"{r.flank_points_used:.0%} of a flank's points on its line, under {FLANK_USED_MIN:.0%}")
+    if r.flank_rms_px > FLANK_RMS_MAX:
+        why.append(f"a flank's points {r.flank_rms_px:.1f} px from its line, above {FLANK_RMS_MAX:g} px")
+    if abs(r.left_deg - r.right_deg) > 12.0:
+        why.append(f"flanks {r.left_deg:.1f} and {r.right_deg:.1f} deg, more than 12 deg apart")
+    if r.flank_outside_share > FLANK_OUTSIDE_MAX:
+        why.append(f"{r.flank_outside_share:.0%} of the heap's contrast found past a flank's line, "
+                   f"above {FLANK_OUTSIDE_MAX:.0%}")
+    if r.cue_check and r.cue_check_deg > CUE_AGREEMENT_DEG:
+        why.append(f"the cue {r.cue_check} puts a flank {r.cue_check_deg:.1f} deg away, more than "
+                   f"{CUE_AGREEMENT_DEG:g} deg")
+    if not why and r.cue_outvoted:
+        why.append(f"the cue {r.cue_outvoted} disagrees by {r.cue_outvoted_deg:.1f} deg and no further cue decides")
+    if not why:
+        why.append("its cues disagree and none decides")
+    return "; ".join(why) + " (read its figure, --figures; retake the photo, or give its plate line if the " \
+        "plate was misread: plate_line_px in the manifest, --plate-line-px)"
+
+
+def pile_summary(res, ok_only=False) -> dict:
     """Mean of every flank of the measured photos ``res`` (:class:`PileResult`), the mean left
-    and right flank, and the flanks' sample std (``spread_deg``)."""
-    lefts = np.array([r.left_deg for r in res])
-    rights = np.array([r.right_deg for r in res])
+    and right flank, and the flanks' sample std (``spread_deg``).  With ``ok_only`` (a group
+    of photos, :func:`measure_piles`) only the photos of confidence "ok" count: each other one
+    is listed in ``set_aside`` (path, reason: :func:`low_reason`), ``n_photos`` counts those
+    used, and a group with none "ok" is refused naming each photo and its reason.  ``photos``
+    holds every photo's result."""
+    used = [r for r in res if r.confidence == "ok"] if ok_only else list(res)
+    aside = [{"path": r.path, "reason": low_reason(r)} for r in res if ok_only and r.confidence != "ok"]
+    if not used:
+        raise InputError(res[0].path if len(res) == 1 else "<photo group>", "confidence",
+                         "at least one photo of the group measured with confidence ok (a photo flagged low "
+                         "is not averaged into the group's angle)",
+                         "; ".join(f"{a['path']}: low, {a['reason']}" for a in aside))
+    lefts = np.array([r.left_deg for r in used])
+    rights = np.array([r.right_deg for r in used])
     allf = np.concatenate([lefts, rights])
-    return {
+    out = {
         "angle_deg": float(allf.mean()),
         "left_deg": float(lefts.mean()),
         "right_deg": float(rights.mean()),
         "spread_deg": float(allf.std(ddof=1)) if allf.size > 1 else 0.0,
-        "n_photos": len(res),
+        "n_photos": len(used),
         "photos": [r.as_dict() for r in res],
     }
+    if ok_only:
+        out["set_aside"] = aside
+    return out
 
 
 #: the most a plate line may be tilted in the photo (deg either way): the camera's roll the plate
