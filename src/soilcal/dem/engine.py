@@ -401,6 +401,28 @@ def _face_corners(kind, p):
     return c + p[6] * (np.cos(th)[:, None] * e1 + np.sin(th)[:, None] * e2)
 
 
+def _surface_steps(kind, wall, par, vel, omega, centre, reach, dt) -> np.ndarray:
+    """How far the surface of each wall primitive moves in one step ``dt`` [m] (0 for a wall
+    at rest): its wall's velocity ``vel`` (its normal part for a plane) plus its spin
+    ``omega`` (less the part about a plane's normal or a cylinder's, cone's or disk's axis,
+    which leaves the surface in place, while that part still carries an axis off the wall's
+    ``centre`` round it) times the wall's ``reach``; all primitives at once (an STL floor
+    has tens of thousands)."""
+    v, om = vel[wall], omega[wall]
+    speed = np.sqrt(np.einsum("ij,ij->i", v, v))
+    spin = np.sqrt(np.einsum("ij,ij->i", om, om))
+    ax = np.isin(kind, (PLANE, CYLINDER, CONE, DISK))
+    if ax.any():
+        a = par[ax, 3:6]
+        along = np.einsum("ij,ij->i", om[ax], a)[:, None] * a
+        spin[ax] = np.linalg.norm(om[ax] - along, axis=1)
+        plane = kind[ax] == PLANE
+        carried = np.linalg.norm(np.cross(along, par[ax, 0:3] - centre[wall[ax]]), axis=1)
+        speed[ax] = np.where(plane, np.abs(np.einsum("ij,ij->i", v[ax], a)), speed[ax] + carried)
+    still = ~(np.any(v != 0, axis=1) | np.any(om != 0, axis=1))
+    return np.where(still, 0.0, (speed + spin * reach[wall]) * dt)
+
+
 class Simulation:
     """Spheres, walls and a contact model advanced by velocity Verlet in compiled loops."""
 
@@ -1147,40 +1169,29 @@ class Simulation:
         """InputError naming the wall whose surface moves more than ``max_overlap`` of the
         smallest radius in one step: a contact it makes would start deeper than the run
         accepts (a blow-up at its first step), and a thin wall moving more than a diameter
-        per step passes through a sphere without touching it.  The speed of a primitive's
-        surface: the wall's velocity (its normal part for a plane) plus its spin (less the
-        part about a plane's normal or a cylinder's, cone's or disk's axis, which leaves the
-        surface in place, while that part still carries an axis off the wall's centre
-        round it) times ``reach`` (:meth:`run`)."""
+        per step passes through a sphere without touching it.  The step of each primitive's
+        surface: :func:`_surface_steps`, with ``reach`` from :meth:`run`; the first primitive
+        over the limit names its wall."""
         wa = self._warr
         limit = self.max_overlap * float(self.p.r.min())
-        for k, (kind, w) in enumerate(zip(wa["prim_kind"], wa["prim_wall"])):
-            v, om, par = wa["wall_vel"][w], wa["wall_omega"][w], wa["prim_par"][k]
-            if not (np.any(v != 0) or np.any(om != 0)):
-                continue
-            speed = float(np.linalg.norm(v))
-            spin = float(np.linalg.norm(om))
-            if kind in (PLANE, CYLINDER, CONE, DISK):
-                a = par[3:6]
-                along = float(np.dot(om, a)) * a
-                spin = float(np.linalg.norm(om - along))
-                if kind == PLANE:
-                    speed = abs(float(np.dot(v, a)))
-                else:
-                    speed += float(np.linalg.norm(np.cross(along, par[0:3] - wa["wall_centre"][w])))
-            step = (speed + spin * float(reach[w])) * self.dt
-            if step > limit:
-                name = self.walls.names[w]
-                raise InputError(
-                    self.source, f"walls.{name}",
-                    f"a wall whose surface moves at most max_overlap = "
-                    f"{100 * self.max_overlap:g} % of the smallest radius ({limit:.4g} m) per "
-                    f"step (a contact would start deeper than the run accepts, and a thin wall "
-                    f"can pass through a sphere unseen): a step dt <= {self.dt * limit / step:.4g} s "
-                    f"at this motion, or a surface speed <= {limit / self.dt:.4g} m/s at dt = "
-                    f"{self.dt:.4g} s",
-                    f"{step / self.dt:.4g} m/s (velocity {v.tolist()} m/s, omega {om.tolist()} "
-                    f"rad/s): {step:.4g} m per step")
+        step = _surface_steps(wa["prim_kind"], wa["prim_wall"], wa["prim_par"], wa["wall_vel"],
+                              wa["wall_omega"], wa["wall_centre"], reach, self.dt)
+        over = np.flatnonzero(step > limit)
+        if over.size:
+            k = int(over[0])
+            w = int(wa["prim_wall"][k])
+            v, om, step = wa["wall_vel"][w], wa["wall_omega"][w], float(step[k])
+            name = self.walls.names[w]
+            raise InputError(
+                self.source, f"walls.{name}",
+                f"a wall whose surface moves at most max_overlap = "
+                f"{100 * self.max_overlap:g} % of the smallest radius ({limit:.4g} m) per "
+                f"step (a contact would start deeper than the run accepts, and a thin wall "
+                f"can pass through a sphere unseen): a step dt <= {self.dt * limit / step:.4g} s "
+                f"at this motion, or a surface speed <= {limit / self.dt:.4g} m/s at dt = "
+                f"{self.dt:.4g} s",
+                f"{step / self.dt:.4g} m/s (velocity {v.tolist()} m/s, omega {om.tolist()} "
+                f"rad/s): {step:.4g} m per step")
 
     def _initial_state_error(self, i: int, overlap: bool) -> InputError:
         """The error of a state that a run cannot start from: row ``i`` overlaps a sphere or
