@@ -33,6 +33,9 @@ import math
 
 import numba
 import numpy as np
+from scipy.sparse import coo_matrix
+from scipy.sparse.csgraph import connected_components
+from scipy.spatial import cKDTree
 
 from soilcal.dem import integrator as itg
 from soilcal.dem.contact import H_SIZE, hist_width, jkr_separation, model_codes
@@ -310,62 +313,165 @@ def _seg_dist(p, seg):
     return np.linalg.norm(w - t[:, :, None] * d[None], axis=2)
 
 
-def _closed_outline(seg, tol):
-    """The pieces of ``seg`` [k, 2, 2] that form closed outlines: pieces no longer than
-    ``tol`` and pieces lying within tol of a longer one (the same edge cut from two faces)
-    dropped, then, repeatedly, every piece with an end farther than tol from every other
-    piece left (an open end: a floor, a U channel, a fin) removed."""
-    if seg.shape[0] == 0:
-        return seg
-    seg = seg[np.linalg.norm(seg[:, 1] - seg[:, 0], axis=1) > tol]
-    if seg.shape[0] == 0:
-        return seg
-    ln = np.linalg.norm(seg[:, 1] - seg[:, 0], axis=1)
+def _box_pairs(seg, tol, chunk: int = 1_000_000):
+    """The pairs (i, j), i != j once, of pieces ``seg`` [k, 2, 2] whose bounding boxes grown
+    by ``tol`` overlap, in lists of at most about ``chunk`` (pieces sorted by their lower x,
+    each paired with the ones starting before it ends)."""
+    lo = seg.min(axis=1) - tol
+    hi = seg.max(axis=1) + tol
+    order = np.argsort(lo[:, 0], kind="stable")
+    end = np.searchsorted(lo[order, 0], hi[order, 0], side="right")
+    cnt = np.maximum(end - np.arange(1, order.size + 1), 0)
+    start = 0
+    while start < order.size:
+        stop = start + 1 + int(np.searchsorted(np.cumsum(cnt[start:]), chunk))
+        c = cnt[start:stop]
+        rows = np.repeat(np.arange(start, min(stop, order.size)), c)
+        first = np.repeat(np.cumsum(c) - c, c)
+        cols = rows + 1 + np.arange(rows.size) - first
+        i, j = order[rows], order[cols]
+        ok = (lo[i, 1] <= hi[j, 1]) & (lo[j, 1] <= hi[i, 1])
+        yield i[ok], j[ok]
+        start = stop
+
+
+def _node(seg, tol):
+    """The planar graph of the pieces ``seg`` [k, 2, 2] (each longer than ``tol``): every
+    piece split where an end of another lies on it (within tol; a solid standing on a
+    floor meets it there) and where two cross, the split points within tol of each other
+    joined into one vertex (the mean of them).  Returns the vertices [v, 2] and the edges
+    [e, 2] between distinct vertices, each once (the same edge cut from two faces, a box's
+    bottom lying on the floor)."""
+    a, d = seg[:, 0], seg[:, 1] - seg[:, 0]
+    ln = np.linalg.norm(d, axis=1)
+    u = d / ln[:, None]
     k = seg.shape[0]
-    d0, d1 = _seg_dist(seg[:, 0], seg), _seg_dist(seg[:, 1], seg)
-    rank = np.argsort(np.argsort(-ln, kind="stable"), kind="stable")  # 0 = longest
-    under = (d0 <= tol) & (d1 <= tol) & (rank[None, :] < rank[:, None])
-    keep = ~under.any(axis=1)
-    while True:
-        other = keep[None, :] & ~np.eye(k, dtype=bool)
-        ok = keep & ((d0 <= tol) & other).any(axis=1) & ((d1 <= tol) & other).any(axis=1)
-        if np.array_equal(ok, keep):
-            return seg[keep]
-        keep = ok
+    rows, cuts = [np.arange(k), np.arange(k)], [np.zeros(k), np.ones(k)]
+    for i, j in _box_pairs(seg, tol):
+        for p, q in ((i, j), (j, i)):
+            for e in (0, 1):  # an end of q on p, away from p's own ends
+                w = seg[q, e] - a[p]
+                t = np.einsum("ij,ij->i", w, u[p])
+                on = ((np.abs(w[:, 0] * u[p, 1] - w[:, 1] * u[p, 0]) <= tol) & (t > tol)
+                      & (t < ln[p] - tol))
+                rows.append(p[on])
+                cuts.append(t[on] / ln[p[on]])
+        # crossings inside both: a_i + s d_i = a_j + r d_j, 0 < s, r < 1
+        den = d[i, 0] * d[j, 1] - d[i, 1] * d[j, 0]
+        g = a[j] - a[i]
+        x = np.abs(den) > 1e-12 * ln[i] * ln[j]
+        den = np.where(x, den, 1.0)
+        s = (g[:, 0] * d[j, 1] - g[:, 1] * d[j, 0]) / den
+        r = (g[:, 0] * d[i, 1] - g[:, 1] * d[i, 0]) / den
+        x &= (s > 0) & (s < 1) & (r > 0) & (r < 1)
+        rows += [i[x], j[x]]
+        cuts += [s[x], r[x]]
+    rows, cuts = np.concatenate(rows), np.concatenate(cuts)
+    order = np.lexsort((cuts, rows))
+    rows, cuts = rows[order], cuts[order]
+    pts = a[rows] + cuts[:, None] * d[rows]
+    # join the points within tol (connected components of the pairs closer than tol)
+    pairs = cKDTree(pts).query_pairs(tol, output_type="ndarray")
+    n = pts.shape[0]
+    graph = coo_matrix((np.ones(len(pairs)), (pairs[:, 0], pairs[:, 1])), shape=(n, n))
+    nv, lab = connected_components(graph, directed=False)
+    cnt = np.bincount(lab, minlength=nv)
+    verts = np.stack([np.bincount(lab, pts[:, j], nv) for j in range(2)], axis=1) / cnt[:, None]
+    # consecutive points along one piece are its edges
+    same = rows[1:] == rows[:-1]
+    e = np.stack([lab[:-1][same], lab[1:][same]], axis=1)
+    e = np.sort(e[e[:, 0] != e[:, 1]], axis=1)
+    return verts, np.unique(e, axis=0).reshape(-1, 2)
 
 
-def _enclosed(p, loops, circ, tol) -> bool:
-    """Whether point ``p`` (2) lies inside or on (within ``tol``) the closed outlines
-    ``loops`` [k, 2, 2] (an odd count of them crossing a ray from p) or circles ``circ``
-    [m, 3] (centre, radius)."""
+def _closed_outline(seg, tol):
+    """The closed outlines of the pieces ``seg`` [k, 2, 2]: the bounded faces of the planar
+    graph they form (:func:`_node`), found by walking round each face (at every vertex the
+    next edge clockwise from the one arrived by), each as its boundary pieces ``loops``
+    [m, 2, 2] with the number of its face ``face`` [m] (ascending).  Pieces no longer than
+    tol are left out; a piece with an open end (a floor, a U channel, a fin) bounds no face
+    or lies inside one (walked there and back, it is left out), so only closed outlines
+    remain, also where a solid stands on a floor of the same wall, or two solids share a
+    face (a solid with a ridge on it); faces no wider than about tol (area <= tol x half
+    the perimeter) are left out."""
+    none = (np.zeros((0, 2, 2)), np.zeros(0, dtype=np.int64))
+    if seg.shape[0]:
+        seg = seg[np.linalg.norm(seg[:, 1] - seg[:, 0], axis=1) > tol]
+    if seg.shape[0] == 0:
+        return none
+    verts, edges = _node(seg, tol)
+    if edges.shape[0] == 0:
+        return none
+    # half-edges 2e (u -> v) and 2e + 1 (v -> u); at each vertex in counter-clockwise order
+    org = edges.reshape(-1)
+    dst = edges[:, ::-1].reshape(-1)
+    dv = verts[dst] - verts[org]
+    ang = np.arctan2(dv[:, 1], dv[:, 0])
+    ring = np.lexsort((ang, org))
+    pos = np.empty_like(ring)
+    pos[ring] = np.arange(ring.size)
+    first = np.searchsorted(org[ring], np.arange(verts.shape[0]))
+    deg = np.bincount(org, minlength=verts.shape[0])
+    # the face on the left of half-edge h continues at its end v with the outgoing edge
+    # just clockwise of the one back (h ^ 1)
+    tw = np.arange(org.size) ^ 1
+    v = org[tw]
+    nxt = ring[first[v] + (pos[tw] - first[v] - 1) % deg[v]]
+    seen = np.zeros(org.size, dtype=bool)
+    loops, face = [], []
+    for h0 in range(org.size):
+        if seen[h0]:
+            continue
+        cyc = [h0]
+        seen[h0] = True
+        h = nxt[h0]
+        while h != h0:
+            cyc.append(h)
+            seen[h] = True
+            h = nxt[h]
+        cyc = np.array(cyc)
+        p0, p1 = verts[org[cyc]], verts[dst[cyc]]
+        area = 0.5 * float(np.sum(p0[:, 0] * p1[:, 1] - p1[:, 0] * p0[:, 1]))
+        if area <= 0.5 * tol * float(np.linalg.norm(p1 - p0, axis=1).sum()):
+            continue  # the outside of a group of pieces, or a sliver
+        keep = ~np.isin(cyc ^ 1, cyc)  # an edge walked there and back bounds nothing
+        loops.append(np.stack([p0[keep], p1[keep]], axis=1))
+        face.append(np.full(int(keep.sum()), len(face)))
+    if not loops:
+        return none
+    return np.concatenate(loops), np.concatenate(face)
+
+
+def _enclosed(p, loops, face, circ, tol) -> bool:
+    """Whether point ``p`` (2) lies inside or on (within ``tol``) a closed outline of
+    ``loops`` [k, 2, 2] (those of one face ``face`` [k] crossing a ray from p an odd number
+    of times) or a circle of ``circ`` [m, 3] (centre, radius)."""
     if circ.shape[0] and np.any(np.hypot(*(circ[:, :2] - p).T) <= circ[:, 2] + tol):
         return True
     if loops.shape[0] == 0:
         return False
     if np.any(_seg_dist(p[None], loops) <= tol):
         return True
-    r = np.array([math.cos(0.3183), math.sin(0.3183)])  # a ray along no mesh line
-    e0, e1 = loops[:, 0] - p, loops[:, 1] - p
-    c0, c1 = r[0] * e0[:, 1] - r[1] * e0[:, 0], r[0] * e1[:, 1] - r[1] * e1[:, 0]
-    cross = (c0 > 0) != (c1 > 0)  # the ends on the two sides of the ray's line
-    w = np.where(cross, c0 / np.where(cross, c0 - c1, 1.0), 0.0)
-    along = (e0 + w[:, None] * (e1 - e0)) @ r
-    return bool(np.count_nonzero(cross & (along > 0)) % 2)
+    return bool(_inside_many(p[None], loops, np.zeros((0, 3)), face=face)[0])
 
 
-def _inside_many(pts, loops, circ, block: int = 500_000) -> np.ndarray:
-    """Which points ``pts`` [n, 2] lie inside the closed outlines ``loops`` [k, 2, 2] (an
-    odd count crossing a ray from the point) or circles ``circ`` [m, 3].  Only the points in
-    the outlines' and circles' bounding box are tested, in chunks of at most ``block`` point x
-    piece pairs: a finely faceted round outline (2048 pieces) beside 20,000 spheres took 7.6 s
-    and 3.7 GB in one go."""
+def _inside_many(pts, loops, circ, block: int = 500_000, face=None) -> np.ndarray:
+    """Which points ``pts`` [n, 2] lie inside a closed outline of ``loops`` [k, 2, 2] (the
+    pieces of one face, ``face`` [k] ascending, all one face when None, crossing a ray from
+    the point an odd number of times) or a circle of ``circ`` [m, 3].  Only the points in
+    the outlines' and circles' bounding box are tested, in chunks of at most ``block`` point
+    x piece pairs: a finely faceted round outline (2048 pieces) beside 20,000 spheres took
+    7.6 s and 3.7 GB in one go."""
     out = np.zeros(pts.shape[0], dtype=bool)
     if not (loops.shape[0] or circ.shape[0]) or not pts.shape[0]:
         return out
+    if face is None:
+        face = np.zeros(loops.shape[0], dtype=np.int64)
+    starts = np.flatnonzero(np.r_[True, face[1:] != face[:-1]]) if loops.shape[0] else None
     lo = np.min(np.concatenate([loops.reshape(-1, 2), circ[:, :2] - circ[:, 2:3]]), axis=0)
     hi = np.max(np.concatenate([loops.reshape(-1, 2), circ[:, :2] + circ[:, 2:3]]), axis=0)
     idx = np.flatnonzero(np.all((pts >= lo) & (pts <= hi), axis=1))
-    r = np.array([math.cos(0.3183), math.sin(0.3183)])
+    r = np.array([math.cos(0.3183), math.sin(0.3183)])  # a ray along no mesh line
     step = max(1, block // max(1, loops.shape[0], circ.shape[0]))
     for a in range(0, idx.size, step):
         sel = idx[a:a + step]
@@ -377,10 +483,11 @@ def _inside_many(pts, loops, circ, block: int = 500_000) -> np.ndarray:
         if loops.shape[0]:
             e0, e1 = loops[None, :, 0] - q[:, None], loops[None, :, 1] - q[:, None]
             c0, c1 = r[0] * e0[..., 1] - r[1] * e0[..., 0], r[0] * e1[..., 1] - r[1] * e1[..., 0]
-            cross = (c0 > 0) != (c1 > 0)
+            cross = (c0 > 0) != (c1 > 0)  # the ends on the two sides of the ray's line
             w = np.where(cross, c0 / np.where(cross, c0 - c1, 1.0), 0.0)
             along = (e0 + w[..., None] * (e1 - e0)) @ r
-            hit |= (np.count_nonzero(cross & (along > 0), axis=1) % 2).astype(bool)
+            n = np.add.reduceat((cross & (along > 0)).astype(np.int64), starts, axis=1)
+            hit |= (n % 2 == 1).any(axis=1)
         out[sel] = hit
     return out
 
@@ -1072,8 +1179,10 @@ class Simulation:
         cylinder's end along q: it is taken there and halfway between.  An end face lying on
         a boundary (the cap of a closed solid spanning the period) is met at its rim only when
         every corner of it (32 points round a disk's rim) lies inside or on a closed outline
-        of the section there (:func:`_closed_outline`: pieces with an open end never
-        enclose; inside: an odd count of them crossing a ray from it, or within a circle),
+        of the section there (:func:`_closed_outline`: the bounded faces of the planar graph
+        of its pieces, split where they meet or cross, so a solid standing on a floor of the
+        same wall or on another solid is enclosed and pieces with an open end never enclose;
+        inside: an odd count of one face's pieces crossing a ray from it, or within a circle),
         and no sphere centre lies inside such an outline at the run's start
         (:meth:`_spheres_enclosed`, judged again at every run).  Sections are compared
         per material within max(2e-4 rho, 4 float32 ulps of the coordinates), as walls.py
@@ -1120,19 +1229,22 @@ class Simulation:
                 break
             if why is not None:
                 break
-        shut = []  # the closed outlines enclosing accepted caps, and where
+        shut = {}  # the closed outlines enclosing accepted caps, by boundary
         if why is None:
             # the caps on a boundary: every corner inside or on a closed outline there
             cp = ks[sel & cap]
+            outline = {}
             for k in cp:
                 cor = _face_corners(wa["prim_kind"][k], wa["prim_par"][k])
                 c = lo if abs(cor[:, q].mean() - lo) <= abs(cor[:, q].mean() - hi) else hi
-                at = list(sec.at(c).values())
-                lines = np.concatenate([v[0] for v in at]) if at else np.zeros((0, 2, 2))
-                circ = np.concatenate([v[1] for v in at]) if at else np.zeros((0, 3))
-                loops = _closed_outline(lines, tol)
+                if c not in outline:
+                    at = list(sec.at(c).values())
+                    lines = np.concatenate([v[0] for v in at]) if at else np.zeros((0, 2, 2))
+                    circ = np.concatenate([v[1] for v in at]) if at else np.zeros((0, 3))
+                    outline[c] = (*_closed_outline(lines, tol), circ)
+                loops, face, circ = outline[c]
                 out = [pt for pt in cor[:, list(_ACROSS[q])]
-                       if not _enclosed(pt, loops, circ, tol)]
+                       if not _enclosed(pt, loops, face, circ, tol)]
                 if out:
                     yz = ", ".join(f"{v:.6g}" for v in out[0])
                     across = ", ".join("xyz"[i] for i in _ACROSS[q])
@@ -1140,7 +1252,8 @@ class Simulation:
                            f"({across}) = ({yz}) m outside every closed outline of the "
                            f"section of its faces along {ax} there (a sphere meets its face)")
                     break
-                shut.append((loops, circ, c))
+                shut[c] = (loops, face, circ, c)
+        shut = list(shut.values())
         cache[key] = (why, shut)
         return self._spheres_enclosed(q, why, shut)
 
@@ -1153,8 +1266,8 @@ class Simulation:
             return why
         ax = ("x", "y")[q]
         pts = self.p.x[:, list(_ACROSS[q])]
-        for loops, circ, c in shut:
-            ins = np.flatnonzero(_inside_many(pts, loops, circ))
+        for loops, face, circ, c in shut:
+            ins = np.flatnonzero(_inside_many(pts, loops, circ, face=face))
             if ins.size:
                 i = int(ins[0])
                 across = ", ".join("xyz"[j] for j in _ACROSS[q])
