@@ -1115,3 +1115,41 @@ def test_pieces_whose_boxes_overlap_are_paired_once_in_any_chunks():
     for chunk in (7, 1_000_000):
         got = [tuple(sorted(p)) for a, b in _box_pairs(seg, 1e-3, chunk) for p in zip(a, b)]
         assert len(got) == len(set(got)) and set(got) == {(int(a), int(b)) for a, b in want}
+
+
+def _tilted(kind, tilt):
+    """A plane (z = 0 at x = L/2) or a rod (radius 10 mm, axis through (L/2, 0.05, 0.05))
+    along x tilted by ``tilt`` rad towards +z, and the signed distance of a point from it."""
+    a = np.array([math.cos(tilt), 0.0, math.sin(tilt)])
+    if kind == "plane":
+        n = np.array([-math.sin(tilt), 0.0, math.cos(tilt)])
+        return (lambda s: s.add_plane((_L / 2, 0, 0), n, "soil", name="w"),
+                lambda x: float(np.dot(np.asarray(x) - [_L / 2, 0, 0], n)))
+    p = np.array([_L / 2, 0.05, 0.05])
+    return (lambda s: s.add_cylinder(p, a, 0.01, _L / 2, "soil", inner=False, name="w"),
+            lambda x: float(np.linalg.norm(np.cross(np.asarray(x) - p, a))) - 0.01)
+
+
+@pytest.mark.parametrize("kind", ["plane", "rod"])
+def test_a_wall_tilted_along_the_periodic_axis_by_a_step_a_contact_feels_is_refused(kind):
+    """A plane or a rod along x tilted by 1.5e-4 rad in a box periodic in x (L = 0.04 m)
+    rises 6 um over the period: a sphere (R = 5 mm) pressed 0.01 R into it just inside x = L
+    and, after crossing the boundary at the same height, just inside x = 0 felt 2.00 N and
+    then 1.67 N (the Hertz forces of overlaps 3 um more and less than 0.01 R).  Both were
+    accepted (a tilt under 2e-4 counted as none, the rod's section taken at its axis point);
+    they are refused, naming the wall.  Tilted by 1e-5 rad (a rise of 0.4 um, under 2e-4 R =
+    1 um) each is accepted and pushes with the Hertz force of its own overlap there."""
+    mats = table(e=0.5, mu=0.3, E=1e8)
+    z = (0.0 if kind == "plane" else 0.06) + R - _D
+    for tilt, refused in ((1.5e-4, True), (1e-5, False)):
+        add, dist = _tilted(kind, tilt)
+        for x in ((_L - 1e-4, 0.05, z), (1e-4, 0.05, z)):
+            sim = Simulation(mats, gravity=(0, 0, 0), box=(0, _L, 0, 0.1), periodic=(True, False))
+            add(sim)
+            sim.add_particles([x], R, "soil")
+            if refused:
+                with pytest.raises(InputError, match=r"walls\.w.*periodic in x"):
+                    sim.compute_forces()
+            else:
+                f = np.linalg.norm(sim.compute_forces()[0][0])
+                assert f == pytest.approx(_hertz_wall_force(mats, R, R - dist(x)), rel=1e-6)
