@@ -960,8 +960,8 @@ def test_spheres_inside_a_closed_solid_spanning_the_period_are_refused():
     sim = Simulation(mats, gravity=(0, 0, 0), box=(0, _L, 0, _L), periodic=(True, False))
     sim.add_box((0.0, 0.0, 0.0), (_L, _L, 0.03), "soil", name="bin")
     sim.add_particles(x, R, "soil")
-    with pytest.raises(InputError, match=r"walls\.bin.*2 sphere\(s\) inside the closed section "
-                                         r"enclosing its end face"):
+    with pytest.raises(InputError, match=r"walls\.bin.*2 sphere\(s\) inside the end faces on "
+                                         r"the boundary"):
         sim.compute_forces()
 
 
@@ -1068,7 +1068,85 @@ def test_a_sphere_inside_a_solid_standing_on_a_floor_is_refused(case, x, tmp_pat
     sim = Simulation(mats, gravity=(0, 0, 0), box=(0, _L, 0, 0.06), periodic=(True, False))
     _stl_wall(sim, "bin", _ON_FLOOR[case](0.0, _L), tmp_path)
     sim.add_particles([x], 1e-3, "soil")
-    with pytest.raises(InputError, match=r"walls\.bin.*1 sphere\(s\) inside the closed section"):
+    with pytest.raises(InputError, match=r"walls\.bin.*1 sphere\(s\) inside the end faces"):
+        sim.compute_forces()
+
+
+
+def _sheet(path, x0, x1):
+    """Faces along x over the open polyline ``path`` of (y, z) corners, from x0 to x1."""
+    out = []
+    for (ya, za), (yb, zb) in zip(path[:-1], path[1:]):
+        out += _quad((x0, ya, za), (x1, ya, za), (x1, yb, zb), (x0, yb, zb))
+    return out
+
+
+def _duct(outer, inner, x0, x1):
+    """A hollow duct along x: the faces of the outer and inner prisms and ring end faces."""
+    out = _sheet(outer + outer[:1], x0, x1) + _sheet(inner[::-1] + inner[-1:], x0, x1)
+    for x in (x0, x1):
+        for i in range(len(outer)):
+            j = (i + 1) % len(outer)
+            out += _quad((x, *outer[i]), (x, *outer[j]), (x, *inner[j]), (x, *inner[i]))
+    return out
+
+
+_RIDGE = [(_Y0, 0), (_Y1, 0), (_Y1, _H), (_Y0, _H)]
+_OUTER = [(0.01, 0.0), (0.05, 0.0), (0.05, 0.04), (0.01, 0.04)]
+_INNER = [(0.015, 0.005), (0.045, 0.005), (0.045, 0.035), (0.015, 0.035)]
+_ARCH = [(0.005 + 0.01 * (1 - math.cos(t)), 0.01 * math.sin(t))
+         for t in np.linspace(0.0, math.pi, 13)]
+_HOLLOW = {  # one wall with open space inside its closed outlines, and a point there
+    # a hollow square duct: a sphere on the floor of its cavity (the ring end faces
+    # on x = 0 and L leave the cavity open)
+    "duct_cavity": (lambda x0, x1: _duct(_OUTER, _INNER, x0, x1), (0.03, 0.005)),
+    # a floor, an arch sheet over it (a tunnel, no end faces) and a closed ridge beside it:
+    # a sphere on the floor in the tunnel
+    "tunnel_beside_ridge": (lambda x0, x1: _floor(x0, x1) + _sheet(_ARCH, x0, x1)
+                            + _prism(_RIDGE, x0, x1), (0.015, 0.0)),
+    # a channel sealed by floor, side and lid sheets with a closed ridge on its floor: a
+    # sphere on the floor beside the ridge
+    "sealed_channel_with_ridge": (lambda x0, x1: _floor(x0, x1) + _sheet(
+        [(0, 0), (0, 0.04), (0.06, 0.04), (0.06, 0)], x0, x1) + _prism(_RIDGE, x0, x1),
+        (0.01, 0.0)),
+}
+
+
+@pytest.mark.parametrize("x", [1e-4, _L / 2, _L - 1e-4])
+@pytest.mark.parametrize("case", sorted(_HOLLOW))
+def test_a_sphere_in_open_space_inside_closed_outlines_pushes_with_the_hertz_force(case, x,
+                                                                                   tmp_path):
+    """A sphere pressed 0.01 R onto a floor in open space that closed outlines of the section
+    surround (a duct's cavity, a tunnel or sealed channel beside a closed ridge, all one STL
+    file): it meets no end face on the boundaries, only faces along x, and feels the Hertz
+    force of its overlap, as with the wall copied at +-L.  It was refused as inside a closed
+    solid (a sphere inside any closed outline of the section was taken to be in a solid)."""
+    build, (y, z) = _HOLLOW[case]
+    mats = table(e=0.5, mu=0.3, E=1e8)
+    forces = []
+    for periodic in (True, False):
+        sim = Simulation(mats, gravity=(0, 0, 0), box=(0, _L, 0, 0.06), periodic=(periodic, False))
+        for k, s in enumerate((0.0,) if periodic else (0.0, -_L, _L)):
+            _stl_wall(sim, f"bin{k}", build(s, s + _L), tmp_path)
+        sim.add_particles([(x, y, z + R - _D)], R, "soil")
+        forces.append(sim.compute_forces()[0][0].copy())
+    assert np.linalg.norm(forces[0]) == pytest.approx(_hertz_wall_force(mats, R, _D), rel=1e-4)
+    assert forces[0] == pytest.approx(forces[1], rel=1e-9, abs=1e-12)
+
+
+@pytest.mark.parametrize("case,x", [("duct_wall", (0.02, 0.03, 0.0025)),
+                                    ("nested_boxes", (0.02, 0.03, 0.0025))])
+def test_a_sphere_inside_the_material_of_a_hollow_or_nested_solid_is_refused(case, x, tmp_path):
+    """A sphere (radius 1 mm) inside the wall of a hollow duct, or inside a closed box between
+    it and a second closed box within it (its end faces cover both): it meets the end faces
+    on the boundaries; the set-up is refused, naming the wall and the sphere."""
+    tris = (_duct(_OUTER, _INNER, 0.0, _L) if case == "duct_wall"
+            else _prism(_OUTER, 0.0, _L) + _prism(_INNER, 0.0, _L))
+    mats = table(e=0.5, mu=0.3, E=1e8)
+    sim = Simulation(mats, gravity=(0, 0, 0), box=(0, _L, 0, 0.06), periodic=(True, False))
+    _stl_wall(sim, "bin", tris, tmp_path)
+    sim.add_particles([x], 1e-3, "soil")
+    with pytest.raises(InputError, match=r"walls\.bin.*1 sphere\(s\) inside the end faces"):
         sim.compute_forces()
 
 

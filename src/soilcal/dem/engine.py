@@ -451,6 +451,34 @@ def _closed_outline(seg, tol):
     return np.concatenate(loops), np.concatenate(face)
 
 
+def _inside_caps(pts, caps, tol, block: int = 500_000) -> np.ndarray:
+    """Which points ``pts`` [n, 2] lie inside or on one of the convex polygons ``caps`` (a
+    list of corner arrays [m, 2] in either order: end faces seen along the periodic axis, a
+    triangle, a rectangle, a disk's 32 rim points); polygons no wider than about ``tol``
+    (area <= tol x half the perimeter, a sliver of a fan) are left out.  Only the points in
+    a polygon's group's bounding box are tested, in chunks of at most ``block`` point x
+    polygon pairs."""
+    out = np.zeros(pts.shape[0], dtype=bool)
+    for m in sorted({c.shape[0] for c in caps}):
+        P = np.array([c for c in caps if c.shape[0] == m], dtype=float)
+        e = np.roll(P, -1, axis=1) - P
+        area = 0.5 * np.sum(P[..., 0] * np.roll(P, -1, axis=1)[..., 1]
+                            - np.roll(P, -1, axis=1)[..., 0] * P[..., 1], axis=1)
+        big = np.abs(area) > 0.5 * tol * np.linalg.norm(e, axis=2).sum(axis=1)
+        P, e, sgn = P[big], e[big], np.sign(area[big])
+        if P.shape[0] == 0:
+            continue
+        lo, hi = P.min(axis=(0, 1)), P.max(axis=(0, 1))
+        idx = np.flatnonzero(~out & np.all((pts >= lo) & (pts <= hi), axis=1))
+        step = max(1, block // (P.shape[0] * m))
+        for a in range(0, idx.size, step):
+            sel = idx[a:a + step]
+            d = pts[sel, None, None, :] - P[None]
+            cr = (e[None, ..., 0] * d[..., 1] - e[None, ..., 1] * d[..., 0]) * sgn[None, :, None]
+            out[sel] |= np.all(cr >= 0.0, axis=2).any(axis=1)
+    return out
+
+
 def _enclosed(p, loops, face, circ, tol) -> bool:
     """Whether point ``p`` (2) lies inside or on (within ``tol``) a closed outline of
     ``loops`` [k, 2, 2] (those of one face ``face`` [k] crossing a ray from p an odd number
@@ -1060,7 +1088,7 @@ class Simulation:
         runs along x and continues periodically (:meth:`_periodic_fault`: the planes x = lo
         and x = hi cut it in the same section, a floor, a plate across the slab or wider than
         it, a closed solid whose caps lie on the boundaries inside a closed outline of that
-        section, with no sphere inside it); walls moving together (floor
+        section, with no sphere centre inside its end faces); walls moving together (floor
         tiles) that fail alone are judged as one surface.  Otherwise a sphere beside one
         boundary would miss the contacts across it, or, outside the box, every contact.  A
         plane must be parallel to the periodic axes, rising over a period by at most
@@ -1200,8 +1228,9 @@ class Simulation:
         of its pieces, split where they meet or cross, so a solid standing on a floor of the
         same wall or on another solid is enclosed and pieces with an open end never enclose;
         inside: an odd count of one face's pieces crossing a ray from it, or within a circle),
-        and no sphere centre lies inside such an outline at the run's start
-        (:meth:`_spheres_enclosed`, judged again at every run).  Sections are compared
+        and no sphere centre lies inside or on such an end face (seen along q) at the run's
+        start (:meth:`_spheres_enclosed`, judged again at every run; the open space that
+        closed outlines surround, a duct's cavity or a tunnel beside a ridge, is free).  Sections are compared
         per material within max(2e-4 rho, 4 float32 ulps of the coordinates), as walls.py
         joins tiles: every point of the pieces of each within that distance of a piece of
         the other (:func:`_covered`; pieces shorter than it left out), circles by centre and
@@ -1250,7 +1279,7 @@ class Simulation:
         if why is None:
             # the caps on a boundary: every corner inside or on a closed outline there
             cp = ks[sel & cap]
-            outline = {}
+            outline, faces = {}, {}
             for k in cp:
                 cor = _face_corners(wa["prim_kind"][k], wa["prim_par"][k])
                 c = lo if abs(cor[:, q].mean() - lo) <= abs(cor[:, q].mean() - hi) else hi
@@ -1269,28 +1298,34 @@ class Simulation:
                            f"({across}) = ({yz}) m outside every closed outline of the "
                            f"section of its faces along {ax} there (a sphere meets its face)")
                     break
-                shut[c] = (loops, face, circ, c)
+                faces.setdefault(c, []).append(cor[:, list(_ACROSS[q])])
+            if why is None:
+                # the solid a sphere would meet at these end faces is the part of the
+                # section they cover (a duct's cavity, a tunnel beside a ridge are open)
+                shut = {c: (f, c, tol) for c, f in faces.items()}
         shut = list(shut.values())
         cache[key] = (why, shut)
         return self._spheres_enclosed(q, why, shut)
 
     def _spheres_enclosed(self, q, why, shut):
         """``why``, or, when it is None, what a sphere inside a closed solid whose end faces
-        were accepted on a boundary breaks: its centre (now, at the run's start) inside the
-        closed outline of the section enclosing an end face; such a sphere meets the end
-        faces, and the spheres beside the other boundary across them."""
+        were accepted on a boundary breaks: its centre (now, at the run's start) inside or on
+        one of those end faces seen along q (:func:`_inside_caps`); such a sphere meets the
+        end faces, and the spheres beside the other boundary across them.  Inside a closed
+        outline but off the end faces (a hollow duct's cavity, a tunnel beside a closed ridge)
+        a sphere meets only faces along q, which continue periodically."""
         if why is not None or not shut or self.p.x.shape[0] == 0:
             return why
         ax = ("x", "y")[q]
         pts = self.p.x[:, list(_ACROSS[q])]
-        for loops, face, circ, c in shut:
-            ins = np.flatnonzero(_inside_many(pts, loops, circ, face=face))
+        for caps, c, tol in shut:
+            ins = np.flatnonzero(_inside_caps(pts, caps, tol))
             if ins.size:
                 i = int(ins[0])
                 across = ", ".join("xyz"[j] for j in _ACROSS[q])
                 at = ", ".join(f"{v:.6g}" for v in pts[i])
-                return (f"{ins.size} sphere(s) inside the closed section enclosing its end face "
-                        f"on the boundary {ax} = {c:.6g} m (sphere {i} at ({across}) = ({at}) m): "
+                return (f"{ins.size} sphere(s) inside the end faces on the boundary "
+                        f"{ax} = {c:.6g} m (sphere {i} at ({across}) = ({at}) m): "
                         f"they meet the end faces, and each other across the boundary through "
                         f"them")
         return None
