@@ -1208,6 +1208,27 @@ def _tilted(kind, tilt):
             lambda x: float(np.linalg.norm(np.cross(np.asarray(x) - p, a))) - 0.01)
 
 
+def test_a_plane_rising_over_the_period_is_judged_against_the_smallest_radius():
+    """Spheres of radii 1.5 and 4.5 mm beside a plane tilted by 1.5e-5 rad along x in a box
+    periodic in x (L = 0.04 m): it rises 0.6 um over the period, under 2e-4 of the largest
+    radius (0.9 um) but twice 2e-4 of the smallest (0.3 um); a small sphere pressed 0.01 R
+    (15 um) into it lands 0.6 um deeper or shallower after crossing the boundary, 4 % of its
+    overlap, 6 % of its Hertz force.  It was accepted; it is refused, naming the plane.  Level,
+    it is accepted."""
+    mats = table(e=0.5, mu=0.3, E=1e8)
+    for tilt, refused in ((1.5e-5, True), (0.0, False)):
+        sim = Simulation(mats, gravity=(0, 0, 0), box=(0, _L, 0, 0.1), periodic=(True, False))
+        sim.add_plane((_L / 2, 0, 0), (-math.sin(tilt), 0, math.cos(tilt)), "soil", name="w")
+        sim.add_particles([(_L - 1e-4, 0.02, 0.99 * 1.5e-3)], 1.5e-3, "soil")
+        sim.add_particles([(_L / 2, 0.07, 0.99 * 4.5e-3)], 4.5e-3, "soil")
+        if refused:
+            with pytest.raises(InputError, match=r"walls\.w.*rise over the period"):
+                sim.compute_forces()
+        else:
+            f = np.linalg.norm(sim.compute_forces()[0][0])
+            assert f == pytest.approx(_hertz_wall_force(mats, 1.5e-3, 1.5e-5), rel=1e-6)
+
+
 @pytest.mark.parametrize("kind", ["plane", "rod"])
 def test_a_wall_tilted_along_the_periodic_axis_by_a_step_a_contact_feels_is_refused(kind):
     """A plane or a rod along x tilted by 1.5e-4 rad in a box periodic in x (L = 0.04 m)

@@ -1092,7 +1092,8 @@ class Simulation:
         tiles) that fail alone are judged as one surface.  Otherwise a sphere beside one
         boundary would miss the contacts across it, or, outside the box, every contact.  A
         plane must be parallel to the periodic axes, rising over a period by at most
-        max(2e-4 R_max, 4 float32 ulps of the box).  A moving wall is checked over the
+        max(2e-4 R_min, 4 float32 ulps of the box) (R_min the smallest radius, whose contacts
+        a step changes most).  A moving wall is checked over the
         ``steps`` of the run: its extent swept by its velocity, its sections over the planes
         its motion along x carries past, and the sphere of its reach about its centre when it
         turns about any axis but x."""
@@ -1120,13 +1121,14 @@ class Simulation:
                 par = par_all[k]
                 nq = abs(float(par[3 + q]))
                 rise = (hi - lo) * nq / math.sqrt(1.0 - nq * nq) if nq < 1.0 else math.inf
-                if rise > eps:
+                eps_p = max(2e-4 * float(self.p.r.min()), 4.8e-7 * max(abs(lo), abs(hi)))
+                if rise > eps_p:
                     name = self.walls.names[walls_of[k]]
                     raise InputError(
                         self.source, f"walls.{name}",
                         f"a plane parallel to {names[q]} in a box periodic in {names[q]}, its "
-                        f"rise over the period ({hi - lo:.6g} m) within {eps:.3g} m "
-                        f"(max(2e-4 R_max, 4 float32 ulps of the box); a sphere crossing the "
+                        f"rise over the period ({hi - lo:.6g} m) within {eps_p:.3g} m "
+                        f"(max(2e-4 R_min, 4 float32 ulps of the box); a sphere crossing the "
                         f"boundary would land deeper in it or farther from it; wall contacts "
                         f"do not see periodic images)",
                         f"normal {par[3:6].tolist()}: a rise of {rise:.4g} m")
