@@ -1,5 +1,6 @@
 """Bad parameters fail before the run with a clear message; blow-ups name step and particle."""
 
+import math
 import re
 
 import numpy as np
@@ -252,6 +253,87 @@ def test_a_wall_moving_further_per_step_than_the_overlap_limit_is_named():
     sim.add_plane((0, 0, -0.05), (0, 0, 1), "soil", omega=(0, 0, 3000.0))
     sim.run(10)
 
+
+def _reference_surface_step(kind, par, v, om, c, reach, dt):
+    """One primitive's surface step, directly: a plane moves by its normal velocity and
+    turns by the spin about axes in its plane; a cylinder, cone or disk turns by the spin
+    across its axis, and the spin about its axis carries the axis point round the wall
+    centre; any other surface moves at |v| + |omega| reach."""
+    from soilcal.dem.walls import CONE, CYLINDER, DISK, PLANE
+
+    if not (any(q != 0 for q in v) or any(q != 0 for q in om)):
+        return 0.0
+    norm = lambda a: math.sqrt(sum(q * q for q in a))
+    if kind in (PLANE, CYLINDER, CONE, DISK):
+        a = par[3:6]
+        oa = sum(om[i] * a[i] for i in range(3))
+        across = [om[i] - oa * a[i] for i in range(3)]
+        if kind == PLANE:
+            speed = abs(sum(v[i] * a[i] for i in range(3)))
+        else:
+            r = [par[i] - c[i] for i in range(3)]
+            carried = [oa * (a[1] * r[2] - a[2] * r[1]), oa * (a[2] * r[0] - a[0] * r[2]),
+                       oa * (a[0] * r[1] - a[1] * r[0])]
+            speed = norm(v) + norm(carried)
+        return (speed + norm(across) * reach) * dt
+    return (norm(v) + norm(om) * reach) * dt
+
+
+def test_wall_steps_of_many_primitives_match_the_step_of_each():
+    """The surface step of every primitive (an STL floor has 80,000; checking them one by
+    one took 2 s per run) equals the direct step of each, for random walls of every kind,
+    at rest, sliding, turning or both, and the wall refused is the first one over the
+    limit."""
+    from soilcal.dem.engine import _surface_steps
+    from soilcal.dem.walls import CONE, CYLINDER, DISK, PLANE, RECTANGLE, TRIANGLE
+
+    rng = np.random.default_rng(11)
+    unit = lambda: (lambda a: a / np.linalg.norm(a))(rng.normal(size=3))
+    sim = Simulation(table(E=1e7), dt=1e-5, gravity=(0, 0, 0))
+    sim.add_particles([[0.0, 0, 0]], 1e-3, "soil")
+    for w in range(48):
+        k, motion = w % 6, (w // 6) % 4  # kind; at rest, sliding, turning, both
+        vel = rng.normal(size=3) * 0.5 if motion in (1, 3) else np.zeros(3)
+        om = rng.normal(size=3) * 20.0 if motion in (2, 3) else np.zeros(3)
+        pt, n = rng.normal(size=3) * 0.1, unit()
+        if w // 6 == 6:  # turning about z, normal or axis along z: the surface stays in place
+            om, n = np.array([0.0, 0.0, 30.0]), np.array([0.0, 0.0, 1.0])
+        kw = dict(name=f"w{w}", velocity=vel, omega=om)
+        if k == 0:
+            sim.add_plane(pt, n, "soil", centre=rng.normal(size=3) * 0.1, **kw)
+        elif k == 1:
+            sim.add_cylinder(pt, n, 0.05, 0.02, "soil", centre=rng.normal(size=3) * 0.1, **kw)
+        elif k == 2:
+            sim.add_cone(pt, n, 0.01, 0.03, -0.01, 0.02, "soil", centre=rng.normal(size=3) * 0.1, **kw)
+        elif k == 3:
+            sim.add_disk(pt, n, 0.02, "soil", **kw)
+        elif k == 4:
+            sim.add_rectangle(pt, n, unit(), 0.02, 0.01, "soil", **kw)
+        else:
+            v = rng.normal(size=(30, 3)) * 0.05
+            t = np.array([[i, (i + 1) % 30, (i + 7) % 30] for i in range(30)])
+            sim.add_mesh(v, t, "soil", **kw)
+    wa = sim._warr
+    assert set(wa["prim_kind"].tolist()) == {PLANE, CYLINDER, CONE, DISK, RECTANGLE, TRIANGLE}
+    reach = rng.uniform(0.01, 0.2, size=wa["wall_vel"].shape[0])
+    got = _surface_steps(wa["prim_kind"], wa["prim_wall"], wa["prim_par"], wa["wall_vel"],
+                         wa["wall_omega"], wa["wall_centre"], reach, 1e-5)
+    want = np.array([_reference_surface_step(
+        int(kd), wa["prim_par"][k].tolist(), wa["wall_vel"][w].tolist(),
+        wa["wall_omega"][w].tolist(), wa["wall_centre"][w].tolist(), float(reach[w]), 1e-5)
+        for k, (kd, w) in enumerate(zip(wa["prim_kind"], wa["prim_wall"]))])
+    assert np.count_nonzero(want == 0) > 50 and np.count_nonzero(want) > 100
+    assert got == pytest.approx(want, rel=1e-12, abs=0.0)
+    # the wall refused at each overlap limit is the one of the first primitive over it
+    sim._prepare()
+    for limit in np.quantile(want[want > 0], [0.1, 0.5, 0.9, 0.999]):
+        sim.max_overlap = limit / 1e-3
+        first = int(np.flatnonzero(want > limit)[0])
+        with pytest.raises(InputError) as e:
+            sim._check_wall_steps(reach)
+        assert e.value.field == f"walls.w{wa['prim_wall'][first]}"
+    sim.max_overlap = 1.01 * want.max() / 1e-3
+    sim._check_wall_steps(reach)
 
 def test_a_material_too_soft_to_carry_its_weight_is_named_before_the_run():
     """A 1 cm sphere of 10 kPa on a floor of its material: Hertz's resting overlap

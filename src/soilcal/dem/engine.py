@@ -33,6 +33,9 @@ import math
 
 import numba
 import numpy as np
+from scipy.sparse import coo_matrix
+from scipy.sparse.csgraph import connected_components
+from scipy.spatial import cKDTree
 
 from soilcal.dem import integrator as itg
 from soilcal.dem.contact import H_SIZE, hist_width, jkr_separation, model_codes
@@ -96,11 +99,13 @@ def _number(source, field, value, expected, ok) -> float:
     return x
 
 
-def _extent_along(kind, par, q):
+def _extent_along(kind, par, q, eps):
     """``(lo, hi, parallel)``: the extent of a bounded primitive other than a triangle (those
     are taken at once in :meth:`Simulation._check_periodic_walls`) along axis q, and whether
-    its surface is unchanged along q (a flat face whose normal is perpendicular to q, a
-    cylinder about q)."""
+    its surface runs along q (a flat face whose normal is perpendicular to q, a cylinder
+    whose section across q is its circle within ``eps``: radius r, tilt t from q, the
+    ellipse's long half-axis r / cos t at most eps longer; how far its section moves along
+    q is judged by the sections, :class:`_Sections`)."""
     n = par[3:6]
     side = math.sqrt(max(0.0, 1.0 - float(n[q]) ** 2))
     if kind == RECTANGLE:
@@ -111,7 +116,8 @@ def _extent_along(kind, par, q):
         return float(par[q] - par[6] * side), float(par[q] + par[6] * side), False
     if kind == CYLINDER:
         h = abs(n[q]) * par[7] + par[6] * side
-        return float(par[q] - h), float(par[q] + h), side <= 2e-4
+        return (float(par[q] - h), float(par[q] + h),
+                abs(n[q]) > 0 and par[6] * (1.0 / abs(n[q]) - 1.0) <= eps)
     # CONE: the end circles at z0 (radius r0) and z1 (r1)
     e0, e1 = par[q] + par[8] * n[q], par[q] + par[9] * n[q]
     return (float(min(e0 - par[6] * side, e1 - par[7] * side)),
@@ -125,8 +131,9 @@ _ACROSS = ((1, 2), (2, 0))  # the coordinates across periodic axis x (y, z) and 
 def _flat_pieces(kinds, par, q):
     """The flat-along-q primitives ``par`` (rows of kinds ``kinds``) as triangles
     [n, 3, 3] (a rectangle as two) with the row each came from, and cylinders about q as
-    circles [m, 3] (the axis across q, radius) with their extents along q [m, 2]."""
-    tri, trow, circ, crow, cext = [], [], [], [], []
+    circles [m, 3] (the axis across q where it crosses q = 0, radius), how far the axis
+    moves across q per unit along q [m, 2], and their extents along q [m, 2]."""
+    tri, trow, circ, crow, cext, slope = [], [], [], [], [], []
     for i, (kind, p) in enumerate(zip(kinds, par)):
         if kind == TRIANGLE:
             tri.append(p[:9].reshape(3, 3))
@@ -138,12 +145,16 @@ def _flat_pieces(kinds, par, q):
             tri += [np.array([k[0], k[1], k[2]]), np.array([k[0], k[2], k[3]])]
             trow += [i, i]
         elif kind == CYLINDER:
-            circ.append([p[_ACROSS[q][0]], p[_ACROSS[q][1]], p[6]])
-            cext.append([p[q] - p[7], p[q] + p[7]])
+            a0, a1 = _ACROSS[q]
+            k = np.array([p[3 + a0], p[3 + a1]]) / p[3 + q]
+            circ.append([p[a0] - k[0] * p[q], p[a1] - k[1] * p[q], p[6]])
+            slope.append(k)
+            h = abs(p[3 + q]) * p[7] + p[6] * math.sqrt(max(0.0, 1.0 - p[3 + q] ** 2))
+            cext.append([p[q] - h, p[q] + h])
             crow.append(i)
     return (np.array(tri).reshape(-1, 3, 3), np.array(trow, dtype=np.int64),
-            np.array(circ).reshape(-1, 3), np.array(crow, dtype=np.int64),
-            np.array(cext).reshape(-1, 2))
+            np.array(circ).reshape(-1, 3), np.array(slope).reshape(-1, 2),
+            np.array(crow, dtype=np.int64), np.array(cext).reshape(-1, 2))
 
 
 def _section_lines(tri, q, c, eps):
@@ -252,7 +263,7 @@ class _Sections:
 
     def __init__(self, kinds, par, mats, q, eps, tol, windows):
         self.q, self.eps, self.tol = q, eps, tol
-        tri, trow, circ, crow, cext = _flat_pieces(kinds, par, q)
+        tri, trow, circ, slope, crow, cext = _flat_pieces(kinds, par, q)
         # the pieces reaching the windows along q where sections are taken
         s = tri[:, :, q]
         t = np.zeros(trow.size, dtype=bool)
@@ -260,7 +271,7 @@ class _Sections:
         for a, b in windows:
             t |= (s.min(axis=1) <= b + eps) & (s.max(axis=1) >= a - eps)
             c |= (cext[:, 0] <= b + eps) & (cext[:, 1] >= a - eps)
-        self.tri, self.circ, self.cext = tri[t], circ[c], cext[c]
+        self.tri, self.circ, self.slope, self.cext = tri[t], circ[c], slope[c], cext[c]
         self.tmat, self.cmat = mats[trow[t]], mats[crow[c]]
 
     def breaks(self):
@@ -271,9 +282,10 @@ class _Sections:
         out = {}
         seg, it = _section_lines(self.tri, self.q, c, self.eps)
         ic = np.flatnonzero((self.cext[:, 0] <= c + self.eps) & (self.cext[:, 1] >= c - self.eps))
+        circ = self.circ[ic].copy()  # where the axes cross the plane q = c
+        circ[:, :2] += self.slope[ic] * c
         for m in set(self.tmat[it].tolist()) | set(self.cmat[ic].tolist()):
-            out[m] = (seg[self.tmat[it] == m],
-                      self.circ[ic[self.cmat[ic] == m]])
+            out[m] = (seg[self.tmat[it] == m], circ[self.cmat[ic] == m])
         return out
 
     def describe(self, s) -> str:
@@ -285,7 +297,7 @@ class _Sections:
         if pts.shape[0] == 0:
             return "no face"
         lo, hi = pts.min(axis=0), pts.max(axis=0)
-        return ", ".join(f"{'xyz'[k]} {a:.4g}" + (f" .. {b:.4g}" if b - a > self.tol else "")
+        return ", ".join(f"{'xyz'[k]} {a:.6g}" + (f" .. {b:.6g}" if b - a > self.tol else "")
                          for k, a, b in zip(_ACROSS[self.q], lo, hi)) + " m"
 
     def same(self, s1, s2) -> bool:
@@ -310,62 +322,193 @@ def _seg_dist(p, seg):
     return np.linalg.norm(w - t[:, :, None] * d[None], axis=2)
 
 
-def _closed_outline(seg, tol):
-    """The pieces of ``seg`` [k, 2, 2] that form closed outlines: pieces no longer than
-    ``tol`` and pieces lying within tol of a longer one (the same edge cut from two faces)
-    dropped, then, repeatedly, every piece with an end farther than tol from every other
-    piece left (an open end: a floor, a U channel, a fin) removed."""
-    if seg.shape[0] == 0:
-        return seg
-    seg = seg[np.linalg.norm(seg[:, 1] - seg[:, 0], axis=1) > tol]
-    if seg.shape[0] == 0:
-        return seg
-    ln = np.linalg.norm(seg[:, 1] - seg[:, 0], axis=1)
+def _box_pairs(seg, tol, chunk: int = 1_000_000):
+    """The pairs (i, j), i != j once, of pieces ``seg`` [k, 2, 2] whose bounding boxes grown
+    by ``tol`` overlap, in lists of at most about ``chunk`` (pieces sorted by their lower x,
+    each paired with the ones starting before it ends)."""
+    lo = seg.min(axis=1) - tol
+    hi = seg.max(axis=1) + tol
+    order = np.argsort(lo[:, 0], kind="stable")
+    end = np.searchsorted(lo[order, 0], hi[order, 0], side="right")
+    cnt = np.maximum(end - np.arange(1, order.size + 1), 0)
+    start = 0
+    while start < order.size:
+        stop = start + 1 + int(np.searchsorted(np.cumsum(cnt[start:]), chunk))
+        c = cnt[start:stop]
+        rows = np.repeat(np.arange(start, min(stop, order.size)), c)
+        first = np.repeat(np.cumsum(c) - c, c)
+        cols = rows + 1 + np.arange(rows.size) - first
+        i, j = order[rows], order[cols]
+        ok = (lo[i, 1] <= hi[j, 1]) & (lo[j, 1] <= hi[i, 1])
+        yield i[ok], j[ok]
+        start = stop
+
+
+def _node(seg, tol):
+    """The planar graph of the pieces ``seg`` [k, 2, 2] (each longer than ``tol``): every
+    piece split where an end of another lies on it (within tol; a solid standing on a
+    floor meets it there) and where two cross, the split points within tol of each other
+    joined into one vertex (the mean of them).  Returns the vertices [v, 2] and the edges
+    [e, 2] between distinct vertices, each once (the same edge cut from two faces, a box's
+    bottom lying on the floor)."""
+    a, d = seg[:, 0], seg[:, 1] - seg[:, 0]
+    ln = np.linalg.norm(d, axis=1)
+    u = d / ln[:, None]
     k = seg.shape[0]
-    d0, d1 = _seg_dist(seg[:, 0], seg), _seg_dist(seg[:, 1], seg)
-    rank = np.argsort(np.argsort(-ln, kind="stable"), kind="stable")  # 0 = longest
-    under = (d0 <= tol) & (d1 <= tol) & (rank[None, :] < rank[:, None])
-    keep = ~under.any(axis=1)
-    while True:
-        other = keep[None, :] & ~np.eye(k, dtype=bool)
-        ok = keep & ((d0 <= tol) & other).any(axis=1) & ((d1 <= tol) & other).any(axis=1)
-        if np.array_equal(ok, keep):
-            return seg[keep]
-        keep = ok
+    rows, cuts = [np.arange(k), np.arange(k)], [np.zeros(k), np.ones(k)]
+    for i, j in _box_pairs(seg, tol):
+        for p, q in ((i, j), (j, i)):
+            for e in (0, 1):  # an end of q on p, away from p's own ends
+                w = seg[q, e] - a[p]
+                t = np.einsum("ij,ij->i", w, u[p])
+                on = ((np.abs(w[:, 0] * u[p, 1] - w[:, 1] * u[p, 0]) <= tol) & (t > tol)
+                      & (t < ln[p] - tol))
+                rows.append(p[on])
+                cuts.append(t[on] / ln[p[on]])
+        # crossings inside both: a_i + s d_i = a_j + r d_j, 0 < s, r < 1
+        den = d[i, 0] * d[j, 1] - d[i, 1] * d[j, 0]
+        g = a[j] - a[i]
+        x = np.abs(den) > 1e-12 * ln[i] * ln[j]
+        den = np.where(x, den, 1.0)
+        s = (g[:, 0] * d[j, 1] - g[:, 1] * d[j, 0]) / den
+        r = (g[:, 0] * d[i, 1] - g[:, 1] * d[i, 0]) / den
+        x &= (s > 0) & (s < 1) & (r > 0) & (r < 1)
+        rows += [i[x], j[x]]
+        cuts += [s[x], r[x]]
+    rows, cuts = np.concatenate(rows), np.concatenate(cuts)
+    order = np.lexsort((cuts, rows))
+    rows, cuts = rows[order], cuts[order]
+    pts = a[rows] + cuts[:, None] * d[rows]
+    # join the points within tol (connected components of the pairs closer than tol)
+    pairs = cKDTree(pts).query_pairs(tol, output_type="ndarray")
+    n = pts.shape[0]
+    graph = coo_matrix((np.ones(len(pairs)), (pairs[:, 0], pairs[:, 1])), shape=(n, n))
+    nv, lab = connected_components(graph, directed=False)
+    cnt = np.bincount(lab, minlength=nv)
+    verts = np.stack([np.bincount(lab, pts[:, j], nv) for j in range(2)], axis=1) / cnt[:, None]
+    # consecutive points along one piece are its edges
+    same = rows[1:] == rows[:-1]
+    e = np.stack([lab[:-1][same], lab[1:][same]], axis=1)
+    e = np.sort(e[e[:, 0] != e[:, 1]], axis=1)
+    return verts, np.unique(e, axis=0).reshape(-1, 2)
 
 
-def _enclosed(p, loops, circ, tol) -> bool:
-    """Whether point ``p`` (2) lies inside or on (within ``tol``) the closed outlines
-    ``loops`` [k, 2, 2] (an odd count of them crossing a ray from p) or circles ``circ``
-    [m, 3] (centre, radius)."""
+def _closed_outline(seg, tol):
+    """The closed outlines of the pieces ``seg`` [k, 2, 2]: the bounded faces of the planar
+    graph they form (:func:`_node`), found by walking round each face (at every vertex the
+    next edge clockwise from the one arrived by), each as its boundary pieces ``loops``
+    [m, 2, 2] with the number of its face ``face`` [m] (ascending).  Pieces no longer than
+    tol are left out; a piece with an open end (a floor, a U channel, a fin) bounds no face
+    or lies inside one (walked there and back, it is left out), so only closed outlines
+    remain, also where a solid stands on a floor of the same wall, or two solids share a
+    face (a solid with a ridge on it); faces no wider than about tol (area <= tol x half
+    the perimeter) are left out."""
+    none = (np.zeros((0, 2, 2)), np.zeros(0, dtype=np.int64))
+    if seg.shape[0]:
+        seg = seg[np.linalg.norm(seg[:, 1] - seg[:, 0], axis=1) > tol]
+    if seg.shape[0] == 0:
+        return none
+    verts, edges = _node(seg, tol)
+    if edges.shape[0] == 0:
+        return none
+    # half-edges 2e (u -> v) and 2e + 1 (v -> u); at each vertex in counter-clockwise order
+    org = edges.reshape(-1)
+    dst = edges[:, ::-1].reshape(-1)
+    dv = verts[dst] - verts[org]
+    ang = np.arctan2(dv[:, 1], dv[:, 0])
+    ring = np.lexsort((ang, org))
+    pos = np.empty_like(ring)
+    pos[ring] = np.arange(ring.size)
+    first = np.searchsorted(org[ring], np.arange(verts.shape[0]))
+    deg = np.bincount(org, minlength=verts.shape[0])
+    # the face on the left of half-edge h continues at its end v with the outgoing edge
+    # just clockwise of the one back (h ^ 1)
+    tw = np.arange(org.size) ^ 1
+    v = org[tw]
+    nxt = ring[first[v] + (pos[tw] - first[v] - 1) % deg[v]]
+    seen = np.zeros(org.size, dtype=bool)
+    loops, face = [], []
+    for h0 in range(org.size):
+        if seen[h0]:
+            continue
+        cyc = [h0]
+        seen[h0] = True
+        h = nxt[h0]
+        while h != h0:
+            cyc.append(h)
+            seen[h] = True
+            h = nxt[h]
+        cyc = np.array(cyc)
+        p0, p1 = verts[org[cyc]], verts[dst[cyc]]
+        area = 0.5 * float(np.sum(p0[:, 0] * p1[:, 1] - p1[:, 0] * p0[:, 1]))
+        if area <= 0.5 * tol * float(np.linalg.norm(p1 - p0, axis=1).sum()):
+            continue  # the outside of a group of pieces, or a sliver
+        keep = ~np.isin(cyc ^ 1, cyc)  # an edge walked there and back bounds nothing
+        loops.append(np.stack([p0[keep], p1[keep]], axis=1))
+        face.append(np.full(int(keep.sum()), len(face)))
+    if not loops:
+        return none
+    return np.concatenate(loops), np.concatenate(face)
+
+
+def _inside_caps(pts, caps, tol, block: int = 500_000) -> np.ndarray:
+    """Which points ``pts`` [n, 2] lie inside or on one of the convex polygons ``caps`` (a
+    list of corner arrays [m, 2] in either order: end faces seen along the periodic axis, a
+    triangle, a rectangle, a disk's 32 rim points); polygons no wider than about ``tol``
+    (area <= tol x half the perimeter, a sliver of a fan) are left out.  Only the points in
+    a polygon's group's bounding box are tested, in chunks of at most ``block`` point x
+    polygon pairs."""
+    out = np.zeros(pts.shape[0], dtype=bool)
+    for m in sorted({c.shape[0] for c in caps}):
+        P = np.array([c for c in caps if c.shape[0] == m], dtype=float)
+        e = np.roll(P, -1, axis=1) - P
+        area = 0.5 * np.sum(P[..., 0] * np.roll(P, -1, axis=1)[..., 1]
+                            - np.roll(P, -1, axis=1)[..., 0] * P[..., 1], axis=1)
+        big = np.abs(area) > 0.5 * tol * np.linalg.norm(e, axis=2).sum(axis=1)
+        P, e, sgn = P[big], e[big], np.sign(area[big])
+        if P.shape[0] == 0:
+            continue
+        lo, hi = P.min(axis=(0, 1)), P.max(axis=(0, 1))
+        idx = np.flatnonzero(~out & np.all((pts >= lo) & (pts <= hi), axis=1))
+        step = max(1, block // (P.shape[0] * m))
+        for a in range(0, idx.size, step):
+            sel = idx[a:a + step]
+            d = pts[sel, None, None, :] - P[None]
+            cr = (e[None, ..., 0] * d[..., 1] - e[None, ..., 1] * d[..., 0]) * sgn[None, :, None]
+            out[sel] |= np.all(cr >= 0.0, axis=2).any(axis=1)
+    return out
+
+
+def _enclosed(p, loops, face, circ, tol) -> bool:
+    """Whether point ``p`` (2) lies inside or on (within ``tol``) a closed outline of
+    ``loops`` [k, 2, 2] (those of one face ``face`` [k] crossing a ray from p an odd number
+    of times) or a circle of ``circ`` [m, 3] (centre, radius)."""
     if circ.shape[0] and np.any(np.hypot(*(circ[:, :2] - p).T) <= circ[:, 2] + tol):
         return True
     if loops.shape[0] == 0:
         return False
     if np.any(_seg_dist(p[None], loops) <= tol):
         return True
-    r = np.array([math.cos(0.3183), math.sin(0.3183)])  # a ray along no mesh line
-    e0, e1 = loops[:, 0] - p, loops[:, 1] - p
-    c0, c1 = r[0] * e0[:, 1] - r[1] * e0[:, 0], r[0] * e1[:, 1] - r[1] * e1[:, 0]
-    cross = (c0 > 0) != (c1 > 0)  # the ends on the two sides of the ray's line
-    w = np.where(cross, c0 / np.where(cross, c0 - c1, 1.0), 0.0)
-    along = (e0 + w[:, None] * (e1 - e0)) @ r
-    return bool(np.count_nonzero(cross & (along > 0)) % 2)
+    return bool(_inside_many(p[None], loops, np.zeros((0, 3)), face=face)[0])
 
 
-def _inside_many(pts, loops, circ, block: int = 500_000) -> np.ndarray:
-    """Which points ``pts`` [n, 2] lie inside the closed outlines ``loops`` [k, 2, 2] (an
-    odd count crossing a ray from the point) or circles ``circ`` [m, 3].  Only the points in
-    the outlines' and circles' bounding box are tested, in chunks of at most ``block`` point x
-    piece pairs: a finely faceted round outline (2048 pieces) beside 20,000 spheres took 7.6 s
-    and 3.7 GB in one go."""
+def _inside_many(pts, loops, circ, block: int = 500_000, face=None) -> np.ndarray:
+    """Which points ``pts`` [n, 2] lie inside a closed outline of ``loops`` [k, 2, 2] (the
+    pieces of one face, ``face`` [k] ascending, all one face when None, crossing a ray from
+    the point an odd number of times) or a circle of ``circ`` [m, 3].  Only the points in
+    the outlines' and circles' bounding box are tested, in chunks of at most ``block`` point
+    x piece pairs: a finely faceted round outline (2048 pieces) beside 20,000 spheres took
+    7.6 s and 3.7 GB in one go."""
     out = np.zeros(pts.shape[0], dtype=bool)
     if not (loops.shape[0] or circ.shape[0]) or not pts.shape[0]:
         return out
+    if face is None:
+        face = np.zeros(loops.shape[0], dtype=np.int64)
+    starts = np.flatnonzero(np.r_[True, face[1:] != face[:-1]]) if loops.shape[0] else None
     lo = np.min(np.concatenate([loops.reshape(-1, 2), circ[:, :2] - circ[:, 2:3]]), axis=0)
     hi = np.max(np.concatenate([loops.reshape(-1, 2), circ[:, :2] + circ[:, 2:3]]), axis=0)
     idx = np.flatnonzero(np.all((pts >= lo) & (pts <= hi), axis=1))
-    r = np.array([math.cos(0.3183), math.sin(0.3183)])
+    r = np.array([math.cos(0.3183), math.sin(0.3183)])  # a ray along no mesh line
     step = max(1, block // max(1, loops.shape[0], circ.shape[0]))
     for a in range(0, idx.size, step):
         sel = idx[a:a + step]
@@ -377,10 +520,11 @@ def _inside_many(pts, loops, circ, block: int = 500_000) -> np.ndarray:
         if loops.shape[0]:
             e0, e1 = loops[None, :, 0] - q[:, None], loops[None, :, 1] - q[:, None]
             c0, c1 = r[0] * e0[..., 1] - r[1] * e0[..., 0], r[0] * e1[..., 1] - r[1] * e1[..., 0]
-            cross = (c0 > 0) != (c1 > 0)
+            cross = (c0 > 0) != (c1 > 0)  # the ends on the two sides of the ray's line
             w = np.where(cross, c0 / np.where(cross, c0 - c1, 1.0), 0.0)
             along = (e0 + w[..., None] * (e1 - e0)) @ r
-            hit |= (np.count_nonzero(cross & (along > 0), axis=1) % 2).astype(bool)
+            n = np.add.reduceat((cross & (along > 0)).astype(np.int64), starts, axis=1)
+            hit |= (n % 2 == 1).any(axis=1)
         out[sel] = hit
     return out
 
@@ -399,6 +543,28 @@ def _face_corners(kind, p):
     e2 = np.cross(n, e1)
     th = np.linspace(0.0, 2 * math.pi, 32, endpoint=False)
     return c + p[6] * (np.cos(th)[:, None] * e1 + np.sin(th)[:, None] * e2)
+
+
+def _surface_steps(kind, wall, par, vel, omega, centre, reach, dt) -> np.ndarray:
+    """How far the surface of each wall primitive moves in one step ``dt`` [m] (0 for a wall
+    at rest): its wall's velocity ``vel`` (its normal part for a plane) plus its spin
+    ``omega`` (less the part about a plane's normal or a cylinder's, cone's or disk's axis,
+    which leaves the surface in place, while that part still carries an axis off the wall's
+    ``centre`` round it) times the wall's ``reach``; all primitives at once (an STL floor
+    has tens of thousands)."""
+    v, om = vel[wall], omega[wall]
+    speed = np.sqrt(np.einsum("ij,ij->i", v, v))
+    spin = np.sqrt(np.einsum("ij,ij->i", om, om))
+    ax = np.isin(kind, (PLANE, CYLINDER, CONE, DISK))
+    if ax.any():
+        a = par[ax, 3:6]
+        along = np.einsum("ij,ij->i", om[ax], a)[:, None] * a
+        spin[ax] = np.linalg.norm(om[ax] - along, axis=1)
+        plane = kind[ax] == PLANE
+        carried = np.linalg.norm(np.cross(along, par[ax, 0:3] - centre[wall[ax]]), axis=1)
+        speed[ax] = np.where(plane, np.abs(np.einsum("ij,ij->i", v[ax], a)), speed[ax] + carried)
+    still = ~(np.any(v != 0, axis=1) | np.any(om != 0, axis=1))
+    return np.where(still, 0.0, (speed + spin * reach[wall]) * dt)
 
 
 class Simulation:
@@ -922,10 +1088,12 @@ class Simulation:
         runs along x and continues periodically (:meth:`_periodic_fault`: the planes x = lo
         and x = hi cut it in the same section, a floor, a plate across the slab or wider than
         it, a closed solid whose caps lie on the boundaries inside a closed outline of that
-        section, with no sphere inside it); walls moving together (floor
+        section, with no sphere centre inside its end faces); walls moving together (floor
         tiles) that fail alone are judged as one surface.  Otherwise a sphere beside one
         boundary would miss the contacts across it, or, outside the box, every contact.  A
-        plane must be parallel to the periodic axes.  A moving wall is checked over the
+        plane must be parallel to the periodic axes, rising over a period by at most
+        max(2e-4 R_min, 4 float32 ulps of the box) (R_min the smallest radius, whose contacts
+        a step changes most).  A moving wall is checked over the
         ``steps`` of the run: its extent swept by its velocity, its sections over the planes
         its motion along x carries past, and the sphere of its reach about its centre when it
         turns about any axis but x."""
@@ -947,15 +1115,23 @@ class Simulation:
             kinds, walls_of, par_all = wa["prim_kind"], wa["prim_wall"], wa["prim_par"]
             planes = np.flatnonzero(kinds == PLANE)
             for k in planes:
+                # how far the plane rises across the period: a sphere crossing the boundary
+                # lands that much deeper in it or farther from it (a 6 um step changes an
+                # overlap of 0.01 R = 50 um by 12 % at R = 5 mm, its Hertz force by 16 %)
                 par = par_all[k]
-                if abs(par[3 + q]) > 2e-4:
+                nq = abs(float(par[3 + q]))
+                rise = (hi - lo) * nq / math.sqrt(1.0 - nq * nq) if nq < 1.0 else math.inf
+                eps_p = max(2e-4 * float(self.p.r.min()), 4.8e-7 * max(abs(lo), abs(hi)))
+                if rise > eps_p:
                     name = self.walls.names[walls_of[k]]
                     raise InputError(
                         self.source, f"walls.{name}",
-                        f"a plane parallel to {names[q]} in a box periodic in {names[q]} "
-                        f"(a sphere crossing the boundary would land on the other side of "
-                        f"it; wall contacts do not see periodic images)",
-                        f"normal {par[3:6].tolist()}")
+                        f"a plane parallel to {names[q]} in a box periodic in {names[q]}, its "
+                        f"rise over the period ({hi - lo:.6g} m) within {eps_p:.3g} m "
+                        f"(max(2e-4 R_min, 4 float32 ulps of the box); a sphere crossing the "
+                        f"boundary would land deeper in it or farther from it; wall contacts "
+                        f"do not see periodic images)",
+                        f"normal {par[3:6].tolist()}: a rise of {rise:.4g} m")
             ks = np.flatnonzero(kinds != PLANE)
             if ks.size == 0:
                 continue
@@ -971,7 +1147,7 @@ class Simulation:
                 a[tri], b[tri] = c.min(axis=1), c.max(axis=1)
                 flat[tri] = np.abs(n[:, q]) <= 2e-4 * np.linalg.norm(n, axis=1)
             for i in np.flatnonzero(~tri):
-                a[i], b[i], flat[i] = _extent_along(kinds[ks[i]], par_all[ks[i]], q)
+                a[i], b[i], flat[i] = _extent_along(kinds[ks[i]], par_all[ks[i]], q, eps)
             # an end face lying on a boundary, across the axis (the cap of a closed solid
             # exactly spanning the period): a sphere meets it at its rim only, where the faces
             # along the axis have it
@@ -1050,10 +1226,13 @@ class Simulation:
         cylinder's end along q: it is taken there and halfway between.  An end face lying on
         a boundary (the cap of a closed solid spanning the period) is met at its rim only when
         every corner of it (32 points round a disk's rim) lies inside or on a closed outline
-        of the section there (:func:`_closed_outline`: pieces with an open end never
-        enclose; inside: an odd count of them crossing a ray from it, or within a circle),
-        and no sphere centre lies inside such an outline at the run's start
-        (:meth:`_spheres_enclosed`, judged again at every run).  Sections are compared
+        of the section there (:func:`_closed_outline`: the bounded faces of the planar graph
+        of its pieces, split where they meet or cross, so a solid standing on a floor of the
+        same wall or on another solid is enclosed and pieces with an open end never enclose;
+        inside: an odd count of one face's pieces crossing a ray from it, or within a circle),
+        and no sphere centre lies inside or on such an end face (seen along q) at the run's
+        start (:meth:`_spheres_enclosed`, judged again at every run; the open space that
+        closed outlines surround, a duct's cavity or a tunnel beside a ridge, is free).  Sections are compared
         per material within max(2e-4 rho, 4 float32 ulps of the coordinates), as walls.py
         joins tiles: every point of the pieces of each within that distance of a piece of
         the other (:func:`_covered`; pieces shorter than it left out), circles by centre and
@@ -1098,19 +1277,22 @@ class Simulation:
                 break
             if why is not None:
                 break
-        shut = []  # the closed outlines enclosing accepted caps, and where
+        shut = {}  # the closed outlines enclosing accepted caps, by boundary
         if why is None:
             # the caps on a boundary: every corner inside or on a closed outline there
             cp = ks[sel & cap]
+            outline, faces = {}, {}
             for k in cp:
                 cor = _face_corners(wa["prim_kind"][k], wa["prim_par"][k])
                 c = lo if abs(cor[:, q].mean() - lo) <= abs(cor[:, q].mean() - hi) else hi
-                at = list(sec.at(c).values())
-                lines = np.concatenate([v[0] for v in at]) if at else np.zeros((0, 2, 2))
-                circ = np.concatenate([v[1] for v in at]) if at else np.zeros((0, 3))
-                loops = _closed_outline(lines, tol)
+                if c not in outline:
+                    at = list(sec.at(c).values())
+                    lines = np.concatenate([v[0] for v in at]) if at else np.zeros((0, 2, 2))
+                    circ = np.concatenate([v[1] for v in at]) if at else np.zeros((0, 3))
+                    outline[c] = (*_closed_outline(lines, tol), circ)
+                loops, face, circ = outline[c]
                 out = [pt for pt in cor[:, list(_ACROSS[q])]
-                       if not _enclosed(pt, loops, circ, tol)]
+                       if not _enclosed(pt, loops, face, circ, tol)]
                 if out:
                     yz = ", ".join(f"{v:.6g}" for v in out[0])
                     across = ", ".join("xyz"[i] for i in _ACROSS[q])
@@ -1118,27 +1300,34 @@ class Simulation:
                            f"({across}) = ({yz}) m outside every closed outline of the "
                            f"section of its faces along {ax} there (a sphere meets its face)")
                     break
-                shut.append((loops, circ, c))
+                faces.setdefault(c, []).append(cor[:, list(_ACROSS[q])])
+            if why is None:
+                # the solid a sphere would meet at these end faces is the part of the
+                # section they cover (a duct's cavity, a tunnel beside a ridge are open)
+                shut = {c: (f, c, tol) for c, f in faces.items()}
+        shut = list(shut.values())
         cache[key] = (why, shut)
         return self._spheres_enclosed(q, why, shut)
 
     def _spheres_enclosed(self, q, why, shut):
         """``why``, or, when it is None, what a sphere inside a closed solid whose end faces
-        were accepted on a boundary breaks: its centre (now, at the run's start) inside the
-        closed outline of the section enclosing an end face; such a sphere meets the end
-        faces, and the spheres beside the other boundary across them."""
+        were accepted on a boundary breaks: its centre (now, at the run's start) inside or on
+        one of those end faces seen along q (:func:`_inside_caps`); such a sphere meets the
+        end faces, and the spheres beside the other boundary across them.  Inside a closed
+        outline but off the end faces (a hollow duct's cavity, a tunnel beside a closed ridge)
+        a sphere meets only faces along q, which continue periodically."""
         if why is not None or not shut or self.p.x.shape[0] == 0:
             return why
         ax = ("x", "y")[q]
         pts = self.p.x[:, list(_ACROSS[q])]
-        for loops, circ, c in shut:
-            ins = np.flatnonzero(_inside_many(pts, loops, circ))
+        for caps, c, tol in shut:
+            ins = np.flatnonzero(_inside_caps(pts, caps, tol))
             if ins.size:
                 i = int(ins[0])
                 across = ", ".join("xyz"[j] for j in _ACROSS[q])
                 at = ", ".join(f"{v:.6g}" for v in pts[i])
-                return (f"{ins.size} sphere(s) inside the closed section enclosing its end face "
-                        f"on the boundary {ax} = {c:.6g} m (sphere {i} at ({across}) = ({at}) m): "
+                return (f"{ins.size} sphere(s) inside the end faces on the boundary "
+                        f"{ax} = {c:.6g} m (sphere {i} at ({across}) = ({at}) m): "
                         f"they meet the end faces, and each other across the boundary through "
                         f"them")
         return None
@@ -1147,40 +1336,29 @@ class Simulation:
         """InputError naming the wall whose surface moves more than ``max_overlap`` of the
         smallest radius in one step: a contact it makes would start deeper than the run
         accepts (a blow-up at its first step), and a thin wall moving more than a diameter
-        per step passes through a sphere without touching it.  The speed of a primitive's
-        surface: the wall's velocity (its normal part for a plane) plus its spin (less the
-        part about a plane's normal or a cylinder's, cone's or disk's axis, which leaves the
-        surface in place, while that part still carries an axis off the wall's centre
-        round it) times ``reach`` (:meth:`run`)."""
+        per step passes through a sphere without touching it.  The step of each primitive's
+        surface: :func:`_surface_steps`, with ``reach`` from :meth:`run`; the first primitive
+        over the limit names its wall."""
         wa = self._warr
         limit = self.max_overlap * float(self.p.r.min())
-        for k, (kind, w) in enumerate(zip(wa["prim_kind"], wa["prim_wall"])):
-            v, om, par = wa["wall_vel"][w], wa["wall_omega"][w], wa["prim_par"][k]
-            if not (np.any(v != 0) or np.any(om != 0)):
-                continue
-            speed = float(np.linalg.norm(v))
-            spin = float(np.linalg.norm(om))
-            if kind in (PLANE, CYLINDER, CONE, DISK):
-                a = par[3:6]
-                along = float(np.dot(om, a)) * a
-                spin = float(np.linalg.norm(om - along))
-                if kind == PLANE:
-                    speed = abs(float(np.dot(v, a)))
-                else:
-                    speed += float(np.linalg.norm(np.cross(along, par[0:3] - wa["wall_centre"][w])))
-            step = (speed + spin * float(reach[w])) * self.dt
-            if step > limit:
-                name = self.walls.names[w]
-                raise InputError(
-                    self.source, f"walls.{name}",
-                    f"a wall whose surface moves at most max_overlap = "
-                    f"{100 * self.max_overlap:g} % of the smallest radius ({limit:.4g} m) per "
-                    f"step (a contact would start deeper than the run accepts, and a thin wall "
-                    f"can pass through a sphere unseen): a step dt <= {self.dt * limit / step:.4g} s "
-                    f"at this motion, or a surface speed <= {limit / self.dt:.4g} m/s at dt = "
-                    f"{self.dt:.4g} s",
-                    f"{step / self.dt:.4g} m/s (velocity {v.tolist()} m/s, omega {om.tolist()} "
-                    f"rad/s): {step:.4g} m per step")
+        step = _surface_steps(wa["prim_kind"], wa["prim_wall"], wa["prim_par"], wa["wall_vel"],
+                              wa["wall_omega"], wa["wall_centre"], reach, self.dt)
+        over = np.flatnonzero(step > limit)
+        if over.size:
+            k = int(over[0])
+            w = int(wa["prim_wall"][k])
+            v, om, step = wa["wall_vel"][w], wa["wall_omega"][w], float(step[k])
+            name = self.walls.names[w]
+            raise InputError(
+                self.source, f"walls.{name}",
+                f"a wall whose surface moves at most max_overlap = "
+                f"{100 * self.max_overlap:g} % of the smallest radius ({limit:.4g} m) per "
+                f"step (a contact would start deeper than the run accepts, and a thin wall "
+                f"can pass through a sphere unseen): a step dt <= {self.dt * limit / step:.4g} s "
+                f"at this motion, or a surface speed <= {limit / self.dt:.4g} m/s at dt = "
+                f"{self.dt:.4g} s",
+                f"{step / self.dt:.4g} m/s (velocity {v.tolist()} m/s, omega {om.tolist()} "
+                f"rad/s): {step:.4g} m per step")
 
     def _initial_state_error(self, i: int, overlap: bool) -> InputError:
         """The error of a state that a run cannot start from: row ``i`` overlaps a sphere or
