@@ -631,6 +631,12 @@ def _not_separated(sel, alpha: float) -> str:
     return out
 
 
+def _aicc_undefined(s) -> bool:
+    """Whether a :class:`soilcal.loop.select.Score` could not be scored for an undefined AICc
+    (of the model or its reference: too few observations, :func:`soilcal.loop.select.aicc`)."""
+    return math.isnan(s.aicc) or math.isnan(s.ref_aicc)
+
+
 def _rejected(sel_rows: list) -> str:
     """The verdict's list of rejected candidates (``selection.csv`` rows with a reason): a try
     scored against the model held as is (step ``2, against X as is``) is told from the same
@@ -760,12 +766,17 @@ def analyse(soil: str, res: pd.DataFrame, diag: pd.DataFrame, cands: list, effec
         sv, b, k = sel.uniform_s, sel.beside_uniform, len(sel.judged)
         nuisance = ({SCALE_KEY: sv}, {SCALE_KEY: sel.uniform_ci},
                     "fitted alone: the uniform bias the verdict names, the calibrated model times (1 + s)")
+        if _aicc_undefined(b):  # too few rows to score them beside the scale: judged against it alone
+            beside = (f"cannot be scored beside a free uniform scale ({b.reason}) and alone do"
+                      f"{'es' if k == 1 else ''} not beat the uniform scale ({sel.uniform.reason})")
+        else:
+            beside = (f"add{'s' if k == 1 else ''} nothing beside a free uniform scale ({b.reason}; AICc "
+                      f"{b.aicc:.1f} against {b.ref_aicc:.1f} for the scale alone)")
         verdict = (f"unexplained: the measured values are {abs(100 * sv):.1f} % {'above' if sv > 0 else 'below'} "
                    "the model throughout, a uniform bias (an instrument's calibration, a zero offset) that no "
                    "mechanism of the library carries; " + " + ".join(sel.judged) + f" fit{'s' if k == 1 else ''} it "
                    f"(held-out RMS {100 * sel.uniform.rmse():.2f} % against {100 * sel.uniform.rmse(True):.2f} % for "
-                   f"the uniform bias alone) but add{'s' if k == 1 else ''} nothing beside a free uniform scale ("
-                   f"{b.reason}; AICc {b.aicc:.1f} against {b.ref_aicc:.1f} for the scale alone): on these rows "
+                   f"the uniform bias alone) but {beside}: on these rows "
                    f"{'its' if k == 1 else 'their'} signature cannot be told from a constant")
     elif sel is not None and sel.chosen:
         chosen = sel.chosen
@@ -815,6 +826,16 @@ def analyse(soil: str, res: pd.DataFrame, diag: pd.DataFrame, cands: list, effec
                 verdict += (f", beside a uniform bias that no effect of the library carries (the measured values "
                             f"{abs(100 * sv):.1f} % {'above' if sv > 0 else 'below'} the model throughout; 95 %: "
                             f"{100 * lo:+.1f} to {100 * hi:+.1f} %), fitted with them")
+        if (uniform is None and b is not None and _aicc_undefined(b) and sel.uniform is not None
+                and sel.uniform.accepted):
+            verdict += (f"; beside a free uniform scale {'it' if len(chosen) == 1 else 'they'} could not be scored "
+                        f"({b.reason}), "
+                        f"so {'it was' if len(chosen) == 1 else 'they were'} judged against that scale alone, which "
+                        f"{'it beats' if len(chosen) == 1 else 'they beat'} (held-out RMS "
+                        f"{100 * sel.uniform.rmse():.2f} % "
+                        f"against {100 * sel.uniform.rmse(True):.2f} %, paired p {sel.uniform.p:.2g}); "
+                        "whether a uniform bias lies beside "
+                        + ("it" if len(chosen) == 1 else "them") + " these rows cannot tell")
         if sel.uniform is not None and not sel.uniform.accepted and uniform is None:
             sv = sel.uniform_s
             how = "as well or better" if sel.uniform.rmse(True) <= sel.uniform.rmse() else "nearly as well"

@@ -828,10 +828,21 @@ def like_a_constant(sel: Selection) -> bool:
     with a rate effect 6.1 lower beside a scale of 0.069; 27 %: an adhesion 0.36 lower, its
     held-out error higher); a weak hidden adhesion on twelve tests (gamma_a 1.0, 2 % noise)
     lowers it by 9.7 beside a scale of 0.005 though its paired test over few folds does not
-    decide."""
+    decide.
+
+    Where the rows are too few to score them beside the scale (its AICc undefined,
+    :func:`aicc`: one effect and the scale on four observations), that comparison is not made,
+    and they count as more than a constant where they beat the scale alone (``uniform``: the
+    same gate, each model with its own parameters): a criterion that cannot be computed says
+    nothing of a constant (4 conditions with a trend of 30 % over their range and no offset,
+    2 % noise: the trend was chosen and then called a uniform bias in 16 of 16 tables)."""
     b = sel.beside_uniform
     if b is None or b.accepted:
         return False
+    if sel.uniform is not None and sel.uniform.accepted:
+        return False
+    if math.isnan(b.aicc) or math.isnan(b.ref_aicc):
+        return True
     lo, hi = b.ci.get("uniform_scale.s", (math.nan, math.nan))
     nil = bool(np.isfinite(lo) and np.isfinite(hi) and lo <= 0.0 <= hi)
     lower = bool(np.isfinite(b.aicc) and np.isfinite(b.ref_aicc) and b.aicc < b.ref_aicc - CONSTANT_AICC)
