@@ -428,10 +428,10 @@ def cross_validate(model: Model, folds) -> tuple[np.ndarray, np.ndarray]:
 MIN_IMPROVEMENT = 0.1
 
 
-def lowers_heldout(s) -> bool:
+def lowers_heldout(s, min_improvement: float = MIN_IMPROVEMENT) -> bool:
     """Whether a :class:`Score`'s model lowers its reference's held-out RMS error by at least
-    :data:`MIN_IMPROVEMENT`."""
-    return s.rmse() <= (1 - MIN_IMPROVEMENT) * s.rmse(True)
+    ``min_improvement`` (:data:`MIN_IMPROVEMENT`)."""
+    return s.rmse() <= (1 - min_improvement) * s.rmse(True)
 
 
 def short_of_p(s, alpha: float) -> bool:
@@ -499,16 +499,17 @@ def score(model: Model, ref: Model, folds, alpha: float = 0.05, min_improvement:
         p = float(stats.ttest_rel(ref_rms[ok], fold_rms[ok], alternative="greater").pvalue)
         reason = ""
     hm = np.isfinite(held) & np.isfinite(ref_held)
-    rmse = float(np.sqrt(np.mean(held[hm] ** 2))) if hm.any() else math.nan
-    rmse_r = float(np.sqrt(np.mean(ref_held[hm] ** 2))) if hm.any() else math.nan
-    accepted = False
+    out = Score(names=names, theta=dict(zip(names, map(float, x))), ci=ci, fold_rms=fold_rms, ref_fold_rms=ref_rms,
+                heldout_errors=held[hm], ref_heldout_errors=ref_held[hm], fitted_errors=e, aicc=a, ref_aicc=ar,
+                p=p, accepted=False, reason=reason)
+    rmse, rmse_r = out.rmse(), out.rmse(True)
     if not reason:
         fails = []
         if not (p < alpha):
             fails.append(f"held-out error not significantly lower (paired t-test p = {p:.3g} >= {alpha:g})")
         if not (rmse < rmse_r):
             fails.append("held-out RMS error not lower")
-        elif not (rmse <= (1 - min_improvement) * rmse_r):
+        elif not lowers_heldout(out, min_improvement):
             fails.append(f"held-out RMS error lower by less than {min_improvement:.0%} ({100 * rmse:.2f} % vs "
                          f"{100 * rmse_r:.2f} %)")
         undefined = [(nm, kk, o[1]) for nm, kk, v, o in (("the model", k + 1, a, obs_m),
@@ -519,11 +520,9 @@ def score(model: Model, ref: Model, folds, alpha: float = 0.05, min_improvement:
                 f"among them), which need {aicc_needs(k_)} at least, so it cannot be scored" for nm, k_, n_ in undefined))
         elif not (a < ar):
             fails.append(f"AICc not lower ({a:.2f} vs {ar:.2f})")
-        reason = "; ".join(fails)
-        accepted = not fails
-    return Score(names=names, theta=dict(zip(names, map(float, x))), ci=ci, fold_rms=fold_rms, ref_fold_rms=ref_rms,
-                 heldout_errors=held[hm], ref_heldout_errors=ref_held[hm], fitted_errors=e, aicc=a, ref_aicc=ar,
-                 p=p, accepted=accepted, reason=reason)
+        out = _renamed(out, "; ".join(fails))
+        out.accepted = not fails
+    return out
 
 
 #: refits of the chosen model's bootstrap interval (module docstring), and its generator's seed
@@ -709,7 +708,7 @@ def forward(obs: pd.DataFrame, y0: np.ndarray, data: dict, fold_by: str | None =
         return Model([data[c] for c in names] + [bias], y0, measured, scale)
 
     def gains(s):
-        return s.rmse() <= (1 - MIN_IMPROVEMENT) * s.rmse(True) and aicc_lower(s)
+        return lowers_heldout(s) and aicc_lower(s)
 
     with_scale = False  # whether an effect was added beside the free uniform scale: the scale stays in the model
     held_back = []  # (effect, Score): beside the scale it gained, against the model held without the scale it did not
