@@ -150,3 +150,23 @@ def test_a_uniform_offset_on_four_conditions_is_still_told_from_an_effect_that_a
         elif sel.chosen:
             named += 1
     assert said >= 5 and named <= 2, (said, named)
+
+
+def test_a_paired_test_that_cannot_be_run_is_said_so_not_printed_as_a_p_of_nan():
+    # six conditions, 8 % low with a trend 0.3 x (1 % noise), held out by test day: five on one
+    # day, one on the other.  Fitted on the lone condition, an effect beside the scale has one
+    # row for two parameters, so that fold cannot be predicted and the paired test has one fold:
+    # it cannot be run.  The verdict must say why, not give "paired p nan"
+    from soilcal.loop import core
+
+    x = np.linspace(-0.5, 0.5, 6)
+    rng = np.random.default_rng(7)
+    measured = 100.0 * (1 - 0.08) * (1 + 0.3 * x) * (1 + rng.normal(0.0, 0.01, 6))
+    obs = pd.DataFrame({"simulation": [f"s{i}" for i in range(6)], "measure": "F", "measured": measured,
+                        "cov:day": [0, 0, 0, 0, 0, 1]})
+    sel = sl.forward(obs, np.full(6, 100.0), {"trend": _trend_effect(x)}, "day")
+    gate = [s for step, _, s in sel.steps if step == "gate"][-1]
+    assert math.isnan(gate.p) and not gate.accepted
+    clause = core._not_separated(sel, 0.05)
+    assert "trend was not separated" in clause and "nan" not in clause, clause
+    assert "no paired test (fewer than two folds to compare (of 2 held-out groups, 1 could" in clause, clause

@@ -623,9 +623,10 @@ def _not_separated(sel, alpha: float) -> str:
         aicc = (f", AICc {g.aicc:.1f} against {g.ref_aicc:.1f}" if np.isfinite(g.aicc) and np.isfinite(g.ref_aicc)
                 else "")
         out += (f"; {nm} was not separated from " + (" + ".join(sel.chosen) or "the model") + f"{beside}: with it the "
-                f"held-out RMS error is {100 * g.rmse():.2f} % against {100 * g.rmse(True):.2f} %{aicc}, paired p "
-                f"{g.p:.2g} over {int(np.isfinite(g.fold_rms).sum())} held-out groups (alpha {alpha:g}), so it stays "
-                f"out ({g.reason.split(': ', 1)[-1] if g.reason.startswith('without') else g.reason}), and the "
+                f"held-out RMS error is {100 * g.rmse():.2f} % against {100 * g.rmse(True):.2f} %{aicc}, "
+                + (f"paired p {g.p:.2g} over {int(np.isfinite(g.fold_rms).sum())} held-out groups (alpha {alpha:g})"
+                   f", so it stays out ({g.own_reason or g.reason})" if np.isfinite(g.p)
+                   else g.p_text() + ", so it stays out") + ", and the "
                 "parameters and any uniform scale reported are fitted without it; these rows can "
                 "neither name nor rule it out (more groups decide)")
     return out
@@ -833,7 +834,7 @@ def analyse(soil: str, res: pd.DataFrame, diag: pd.DataFrame, cands: list, effec
                         f"so {'it was' if len(chosen) == 1 else 'they were'} judged against that scale alone, which "
                         f"{'it beats' if len(chosen) == 1 else 'they beat'} (held-out RMS "
                         f"{100 * sel.uniform.rmse():.2f} % "
-                        f"against {100 * sel.uniform.rmse(True):.2f} %, paired p {sel.uniform.p:.2g}); "
+                        f"against {100 * sel.uniform.rmse(True):.2f} %, {sel.uniform.p_text()}); "
                         "whether a uniform bias lies beside "
                         + ("it" if len(chosen) == 1 else "them") + " these rows cannot tell")
         if sel.uniform is not None and not sel.uniform.accepted and uniform is None:
@@ -842,7 +843,7 @@ def analyse(soil: str, res: pd.DataFrame, diag: pd.DataFrame, cands: list, effec
             verdict += (f"; a uniform bias fits the held-out rows {how} (the measured values "
                         f"{abs(100 * sv):.1f} % {'above' if sv > 0 else 'below'} the model throughout: held-out "
                         f"RMS {100 * sel.uniform.rmse(True):.2f} % against {100 * sel.uniform.rmse():.2f} % "
-                        f"with the effect{'s' if len(chosen) > 1 else ''}, paired p {sel.uniform.p:.2g}), "
+                        f"with the effect{'s' if len(chosen) > 1 else ''}, {sel.uniform.p_text()}), "
                         "so these rows cannot tell "
                         + ("it" if len(chosen) == 1 else "them") + " from a bias no mechanism carries")
         gap = f"{100 * float(np.sqrt(np.mean((jt.gap / rs.scale_of(u)) ** 2))):.2g} % RMS" if jt is not None else ""

@@ -352,6 +352,14 @@ class Score:
     p: float
     accepted: bool
     reason: str
+    no_test: str = ""  # where p is NaN, why the paired test could not be run
+    own_reason: str = ""  # the score's own reason where ``reason`` puts the backward gate's words before it
+
+    def p_text(self, digits: int = 2) -> str:
+        """The paired test's p for a sentence, or, where it could not be run, why."""
+        if np.isfinite(self.p):
+            return f"paired p {self.p:.{digits}g}"
+        return "no paired test (" + (self.no_test or "it could not be computed") + ")"
 
     def rmse(self, ref=False) -> float:
         e = self.ref_heldout_errors if ref else self.heldout_errors
@@ -501,7 +509,7 @@ def score(model: Model, ref: Model, folds, alpha: float = 0.05, min_improvement:
     hm = np.isfinite(held) & np.isfinite(ref_held)
     out = Score(names=names, theta=dict(zip(names, map(float, x))), ci=ci, fold_rms=fold_rms, ref_fold_rms=ref_rms,
                 heldout_errors=held[hm], ref_heldout_errors=ref_held[hm], fitted_errors=e, aicc=a, ref_aicc=ar,
-                p=p, accepted=False, reason=reason)
+                p=p, accepted=False, reason=reason, no_test=reason if not np.isfinite(p) else "")
     rmse, rmse_r = out.rmse(), out.rmse(True)
     if not reason:
         fails = []
@@ -779,7 +787,7 @@ def forward(obs: pd.DataFrame, y0: np.ndarray, data: dict, fold_by: str | None =
         if s.accepted:
             return s
         return s2 if s2.accepted else _renamed(s, f"without {nm}, as is and with a free uniform scale on both "
-                                                  f"(p {s2.p:.3g}): " + s.reason)
+                                                  f"({s2.p_text(3)}): " + s.reason)
 
     while chosen:
         gates = [(nm, gate(chosen, nm)) for nm in chosen]
@@ -851,4 +859,4 @@ def like_a_constant(sel: Selection) -> bool:
 def _renamed(s: Score, reason: str) -> Score:
     from dataclasses import replace
 
-    return replace(s, reason=reason)
+    return replace(s, reason=reason, own_reason=s.own_reason or s.reason)
