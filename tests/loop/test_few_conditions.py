@@ -175,3 +175,62 @@ def test_a_paired_test_that_cannot_be_run_is_said_so_not_printed_as_a_p_of_nan()
     clause = core._not_separated(sel, 0.05)
     assert "trend was not separated" in clause and "nan" not in clause, clause
     assert "no paired test (fewer than two folds to compare (of 2 held-out groups, 1 could" in clause, clause
+
+
+def _offset_and_share(n, off, seed, t_share=0.0):
+    # n conditions with two candidates: a centred trend (x over [-0.5, 0.5], shuffled) and an
+    # all-positive share (0.6-1.0, an adhesion's share of the force); the measured values are
+    # 100 (1 + t_share share)(1 + off) times (1 + 2 % noise)
+    rng = np.random.default_rng(seed)
+    trend = np.linspace(-0.5, 0.5, n)
+    rng.shuffle(trend)
+    share = 0.6 + 0.4 * rng.uniform(0.0, 1.0, n)
+    measured = 100.0 * (1 + t_share * share) * (1 + off) * (1 + rng.normal(0.0, 0.02, n))
+    obs = pd.DataFrame({"simulation": [f"s{i}" for i in range(n)], "measure": "F", "measured": measured})
+    return obs, sl.forward(obs, np.full(n, 100.0), {"A": _named_effect(trend, "A"), "P": _named_effect(share, "P")})
+
+
+def test_beating_the_scale_alone_does_not_name_an_effect_where_the_comparison_beside_it_is_scored():
+    # six conditions 6 % high and nothing else: the all-positive share fits the offset, and
+    # alone beats the scale alone, but beside the scale (AICc defined with a spare observation)
+    # it does not lower the held-out error significantly: the rows show a uniform bias, and
+    # the share must not be named for it
+    from soilcal.loop import core
+
+    obs, sel = _offset_and_share(6, 0.06, 920010)
+    b = sel.beside_uniform
+    assert sel.chosen == ["P"] and sel.uniform.accepted
+    assert math.isfinite(b.aicc) and b.aicc_spare > 0 and not b.p < 0.05
+    assert not sl.rule_of_one(sel) and sl.like_a_constant(sel)
+    assert core._beside_clause(sel, 0.05).startswith("adds nothing beside a free uniform scale")
+    assert core._judged_alone(sel, 0.05) == ""
+
+
+def test_an_offset_whose_effect_the_gates_dropped_is_still_a_uniform_bias():
+    # four conditions 10 % high and nothing else: where the share beats the scale alone and the
+    # gates beside the scale then drop it (chosen empty, the forward step's choice judged),
+    # nothing was chosen to name, so the rows' offset is the verdict, not silence
+    from soilcal.loop import core
+
+    obs, beat = _offset_and_share(4, 0.10, 913001)
+    assert beat.chosen == [] and beat.judged and beat.uniform.accepted and math.isnan(beat.beside_uniform.aicc)
+    assert not sl.rule_of_one(beat) and sl.like_a_constant(beat)
+    clause = core._beside_clause(beat, 0.05)
+    assert clause.startswith("cannot be scored beside a free uniform scale") and "alone it beats" in clause, clause
+    assert "does not lower the held-out error" in clause or "gates did not keep it" in clause, clause
+
+
+@pytest.mark.parametrize("n,seed,said", [(4, 940004, "could not be scored"), (5, 940003, "decided by its small-sample term")])
+def test_an_effect_kept_for_beating_the_scale_alone_is_said_to_maybe_hold_an_offset(n, seed, said):
+    # a share effect 0.3 and an 8 % offset on n conditions: where the comparison beside the
+    # scale does not decide (AICc undefined on 4, defined on its fewest observations on 5),
+    # the share is kept for beating the scale alone, and its parameter may then hold the
+    # offset (fitted 0.19 for a true 0.3): the verdict must say so
+    from soilcal.loop import core
+
+    obs, sel = _offset_and_share(n, -0.08, seed, t_share=0.3)
+    assert sel.chosen == ["P"] and not sel.with_scale and sl.rule_of_one(sel) and not sl.like_a_constant(sel)
+    assert sel.final.theta["P.t"] < 0.25  # the offset sits in the share's parameter
+    clause = core._judged_alone(sel, 0.05)
+    assert said in clause and "judged against that scale alone" in clause, clause
+    assert "whether a uniform bias lies beside it these rows cannot tell: its parameter may hold it" in clause, clause

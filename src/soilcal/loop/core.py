@@ -632,6 +632,44 @@ def _not_separated(sel, alpha: float) -> str:
     return out
 
 
+def _beside_clause(sel, alpha: float) -> str:
+    """Why the uniform-bias verdict finds the judged effects no more than a constant beside a
+    free uniform scale (:func:`soilcal.loop.select.like_a_constant`)."""
+    b, k = sel.beside_uniform, len(sel.judged)
+    if not _aicc_undefined(b):
+        return (f"add{'s' if k == 1 else ''} nothing beside a free uniform scale ({b.reason}; AICc "
+                f"{b.aicc:.1f} against {b.ref_aicc:.1f} for the scale alone)")
+    # too few rows to score them beside the scale: judged against it alone
+    out = f"cannot be scored beside a free uniform scale ({b.reason})"
+    if not sel.uniform.accepted:
+        return out + f" and alone do{'es' if k == 1 else ''} not beat the uniform scale ({sel.uniform.reason})"
+    out += f"; alone {'it beats' if k == 1 else 'they beat'} the uniform scale ({sel.uniform.p_text()}), but "
+    if not (sl.lowers_heldout(b) and np.isfinite(b.p) and b.p < alpha):
+        return out + (f"beside it {'it does' if k == 1 else 'they do'} not lower the held-out error significantly "
+                      f"(held-out RMS {100 * b.rmse():.2f} % against {100 * b.rmse(True):.2f} %, {b.p_text()})")
+    return out + f"the selection's gates did not keep {'it' if k == 1 else 'them'}"
+
+
+def _judged_alone(sel, alpha: float) -> str:
+    """The verdict's warning where the chosen effects were kept for beating a free uniform scale
+    alone, the comparison beside it not deciding (:func:`soilcal.loop.select.rule_of_one`): a
+    uniform bias beside them would sit in their parameters, and these rows cannot show it."""
+    if not sl.rule_of_one(sel, alpha):
+        return ""
+    b, one = sel.beside_uniform, len(sel.chosen) == 1
+    if _aicc_undefined(b):
+        scored = "could not be scored"
+    else:
+        scored = (f"lower{'s' if one else ''} the held-out error, but the AICc, on the fewest observations that "
+                  "define it, is decided by its small-sample term")
+    return (f"; beside a free uniform scale {'it' if one else 'they'} {scored} ({b.reason}), "
+            f"so {'it was' if one else 'they were'} judged against that scale alone, which "
+            f"{'it beats' if one else 'they beat'} (held-out RMS {100 * sel.uniform.rmse():.2f} % "
+            f"against {100 * sel.uniform.rmse(True):.2f} %, {sel.uniform.p_text()}); "
+            f"whether a uniform bias lies beside {'it' if one else 'them'} these rows cannot tell: "
+            f"{'its parameter' if one else 'their parameters'} may hold it")
+
+
 def _aicc_undefined(s) -> bool:
     """Whether a :class:`soilcal.loop.select.Score` could not be scored for an undefined AICc
     (of the model or its reference: too few observations, :func:`soilcal.loop.select.aicc`)."""
@@ -768,19 +806,14 @@ def analyse(soil: str, res: pd.DataFrame, diag: pd.DataFrame, cands: list, effec
                    "model's own values?)")
     elif n < 3:
         verdict = f"unexplained: too few measured values to decide ({n})"
-    elif sel is not None and sel.judged and sl.like_a_constant(sel):
+    elif sel is not None and sel.judged and sl.like_a_constant(sel, settings.alpha):
         # the chosen effects (or, where the gates beside a free uniform scale dropped them all,
         # those the forward step took) add nothing beside that scale: the rows show a uniform
         # offset (an instrument's calibration), not the effects' signature
         sv, b, k = sel.uniform_s, sel.beside_uniform, len(sel.judged)
         nuisance = ({SCALE_KEY: sv}, {SCALE_KEY: sel.uniform_ci},
                     "fitted alone: the uniform bias the verdict names, the calibrated model times (1 + s)")
-        if _aicc_undefined(b):  # too few rows to score them beside the scale: judged against it alone
-            beside = (f"cannot be scored beside a free uniform scale ({b.reason}) and alone do"
-                      f"{'es' if k == 1 else ''} not beat the uniform scale ({sel.uniform.reason})")
-        else:
-            beside = (f"add{'s' if k == 1 else ''} nothing beside a free uniform scale ({b.reason}; AICc "
-                      f"{b.aicc:.1f} against {b.ref_aicc:.1f} for the scale alone)")
+        beside = _beside_clause(sel, settings.alpha)
         verdict = (f"unexplained: the measured values are {abs(100 * sv):.1f} % {'above' if sv > 0 else 'below'} "
                    "the model throughout, a uniform bias (an instrument's calibration, a zero offset) that no "
                    "mechanism of the library carries; " + " + ".join(sel.judged) + f" fit{'s' if k == 1 else ''} it "
@@ -835,16 +868,8 @@ def analyse(soil: str, res: pd.DataFrame, diag: pd.DataFrame, cands: list, effec
                 verdict += (f", beside a uniform bias that no effect of the library carries (the measured values "
                             f"{abs(100 * sv):.1f} % {'above' if sv > 0 else 'below'} the model throughout; 95 %: "
                             f"{100 * lo:+.1f} to {100 * hi:+.1f} %), fitted with them")
-        if (uniform is None and b is not None and _aicc_undefined(b) and sel.uniform is not None
-                and sel.uniform.accepted):
-            verdict += (f"; beside a free uniform scale {'it' if len(chosen) == 1 else 'they'} could not be scored "
-                        f"({b.reason}), "
-                        f"so {'it was' if len(chosen) == 1 else 'they were'} judged against that scale alone, which "
-                        f"{'it beats' if len(chosen) == 1 else 'they beat'} (held-out RMS "
-                        f"{100 * sel.uniform.rmse():.2f} % "
-                        f"against {100 * sel.uniform.rmse(True):.2f} %, {sel.uniform.p_text()}); "
-                        "whether a uniform bias lies beside "
-                        + ("it" if len(chosen) == 1 else "them") + " these rows cannot tell")
+        if uniform is None:
+            verdict += _judged_alone(sel, settings.alpha)
         if sel.uniform is not None and not sel.uniform.accepted and uniform is None:
             sv = sel.uniform_s
             how = "as well or better" if sel.uniform.rmse(True) <= sel.uniform.rmse() else "nearly as well"

@@ -354,6 +354,7 @@ class Score:
     reason: str
     no_test: str = ""  # where p is NaN, why the paired test could not be run
     own_reason: str = ""  # the score's own reason where ``reason`` puts the backward gate's words before it
+    aicc_spare: int = 0  # observations beyond the fewest for which the model's AICc is defined (:func:`aicc_needs`)
 
     def p_text(self, digits: int = 2) -> str:
         """The paired test's p for a sentence, or, where it could not be run, why."""
@@ -509,7 +510,8 @@ def score(model: Model, ref: Model, folds, alpha: float = 0.05, min_improvement:
     hm = np.isfinite(held) & np.isfinite(ref_held)
     out = Score(names=names, theta=dict(zip(names, map(float, x))), ci=ci, fold_rms=fold_rms, ref_fold_rms=ref_rms,
                 heldout_errors=held[hm], ref_heldout_errors=ref_held[hm], fitted_errors=e, aicc=a, ref_aicc=ar,
-                p=p, accepted=False, reason=reason, no_test=reason if not np.isfinite(p) else "")
+                p=p, accepted=False, reason=reason, no_test=reason if not np.isfinite(p) else "",
+                aicc_spare=int(obs_m[1]) - aicc_needs(k + 1))
     rmse, rmse_r = out.rmse(), out.rmse(True)
     if not reason:
         fails = []
@@ -822,7 +824,27 @@ def forward(obs: pd.DataFrame, y0: np.ndarray, data: dict, fold_by: str | None =
 CONSTANT_AICC = 2.0
 
 
-def like_a_constant(sel: Selection) -> bool:
+def rule_of_one(sel: Selection, alpha: float = 0.05) -> bool:
+    """Whether the chosen effects are kept for beating a free uniform scale alone where the nested
+    comparison (the effects beside that scale against the scale alone) cannot decide: they were
+    chosen, beat the scale alone (``uniform``: the selection's own gate, each model with its own
+    parameters), and beside the scale their held-out error is lower by :data:`MIN_IMPROVEMENT`
+    with the paired test passed (p < ``alpha``), while the AICc there is undefined (:func:`aicc`:
+    one effect and the scale on four observations, two on five) or, for one effect, defined on
+    the fewest observations it needs, where its small-sample term decides (one effect and the
+    scale on five: 24 against 6 for the scale alone).  Otherwise the nested comparison decides
+    (6 conditions, a 6 % offset, an all-positive candidate that beat the scale alone with
+    p 0.036 but not beside it, p 0.12, was named; two candidates beside the scale on 6, the
+    fewest for their AICc, were named in 1 of 25 such tables)."""
+    b = sel.beside_uniform
+    if not sel.chosen or b is None or b.accepted or sel.uniform is None or not sel.uniform.accepted:
+        return False
+    if not (math.isnan(b.aicc) or math.isnan(b.ref_aicc) or (b.aicc_spare == 0 and len(sel.chosen) == 1)):
+        return False
+    return bool(lowers_heldout(b) and np.isfinite(b.p) and b.p < alpha)
+
+
+def like_a_constant(sel: Selection, alpha: float = 0.05) -> bool:
     """Whether the chosen effects' signature cannot be told from a constant on these rows.
     Beside a free uniform scale of the simulated values they count as more than a constant when
     they pass the selection's own gate against the scale alone (held-out error significantly
@@ -838,15 +860,19 @@ def like_a_constant(sel: Selection) -> bool:
     decide.
 
     Where the rows are too few to score them beside the scale (its AICc undefined,
-    :func:`aicc`: one effect and the scale on four observations), that comparison is not made,
-    and they count as more than a constant where they beat the scale alone (``uniform``: the
-    same gate, each model with its own parameters): a criterion that cannot be computed says
-    nothing of a constant (4 conditions with a trend of 30 % over their range and no offset,
-    2 % noise: the trend was chosen and then called a uniform bias in 16 of 16 tables)."""
+    :func:`aicc`: one effect and the scale on four observations) or just enough (five), that
+    comparison does not decide,
+    and they count as more than a constant where they were chosen, beat the scale alone and
+    lower the held-out error beside it (:func:`rule_of_one`): a criterion that
+    cannot be computed says nothing of a constant (4 conditions with a trend of 30 % over their
+    range and no offset, 2 % noise: the trend was chosen and then called a uniform bias in 16 of
+    16 tables).  Where the nested comparison is scored and fails on its held-out error or paired
+    test, or has more observations than the fewest it needs, beating the scale alone does not
+    count."""
     b = sel.beside_uniform
     if b is None or b.accepted:
         return False
-    if sel.uniform is not None and sel.uniform.accepted:
+    if rule_of_one(sel, alpha):
         return False
     if math.isnan(b.aicc) or math.isnan(b.ref_aicc):
         return True
