@@ -234,3 +234,14 @@ def test_an_effect_kept_for_beating_the_scale_alone_is_said_to_maybe_hold_an_off
     clause = core._judged_alone(sel, 0.05)
     assert said in clause and "judged against that scale alone" in clause, clause
     assert "whether a uniform bias lies beside it these rows cannot tell: its parameter may hold it" in clause, clause
+
+
+def test_the_backward_gate_gives_a_finite_p_as_before():
+    # eight conditions with a weak share effect (0.04, 2 % noise): the forward step takes the
+    # share and the backward gate drops it with a paired test that could be run; its reason
+    # keeps the form "(p 0.933)" that selection.csv has always had
+    import re
+
+    obs, sel = _offset_and_share(8, 0.0, 0, t_share=0.04)
+    gate = [s for step, names, s in sel.steps if step == "gate" and names == ["P"]][-1]
+    assert re.match(r"without P, as is and with a free uniform scale on both \(p 0\.\d+\): ", gate.reason), gate.reason

@@ -789,7 +789,7 @@ def forward(obs: pd.DataFrame, y0: np.ndarray, data: dict, fold_by: str | None =
         if s.accepted:
             return s
         return s2 if s2.accepted else _renamed(s, f"without {nm}, as is and with a free uniform scale on both "
-                                                  f"({s2.p_text(3)}): " + s.reason)
+                                                  + (f"(p {s2.p:.3g}): " if np.isfinite(s2.p) else f"({s2.p_text(3)}): ") + s.reason)
 
     while chosen:
         gates = [(nm, gate(chosen, nm)) for nm in chosen]
