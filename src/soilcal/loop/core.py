@@ -623,12 +623,57 @@ def _not_separated(sel, alpha: float) -> str:
         aicc = (f", AICc {g.aicc:.1f} against {g.ref_aicc:.1f}" if np.isfinite(g.aicc) and np.isfinite(g.ref_aicc)
                 else "")
         out += (f"; {nm} was not separated from " + (" + ".join(sel.chosen) or "the model") + f"{beside}: with it the "
-                f"held-out RMS error is {100 * g.rmse():.2f} % against {100 * g.rmse(True):.2f} %{aicc}, paired p "
-                f"{g.p:.2g} over {int(np.isfinite(g.fold_rms).sum())} held-out groups (alpha {alpha:g}), so it stays "
-                f"out ({g.reason.split(': ', 1)[-1] if g.reason.startswith('without') else g.reason}), and the "
+                f"held-out RMS error is {100 * g.rmse():.2f} % against {100 * g.rmse(True):.2f} %{aicc}, "
+                + (f"paired p {g.p:.2g} over {int(np.isfinite(g.fold_rms).sum())} held-out groups (alpha {alpha:g})"
+                   f", so it stays out ({g.own_reason or g.reason})" if np.isfinite(g.p)
+                   else g.p_text() + ", so it stays out") + ", and the "
                 "parameters and any uniform scale reported are fitted without it; these rows can "
                 "neither name nor rule it out (more groups decide)")
     return out
+
+
+def _beside_clause(sel, alpha: float) -> str:
+    """Why the uniform-bias verdict finds the judged effects no more than a constant beside a
+    free uniform scale (:func:`soilcal.loop.select.like_a_constant`)."""
+    b, k = sel.beside_uniform, len(sel.judged)
+    if not _aicc_undefined(b):
+        return (f"add{'s' if k == 1 else ''} nothing beside a free uniform scale ({b.reason}; AICc "
+                f"{b.aicc:.1f} against {b.ref_aicc:.1f} for the scale alone)")
+    # too few rows to score them beside the scale: judged against it alone
+    out = f"cannot be scored beside a free uniform scale ({b.reason})"
+    if not sel.uniform.accepted:
+        return out + f" and alone do{'es' if k == 1 else ''} not beat the uniform scale ({sel.uniform.reason})"
+    out += f"; alone {'it beats' if k == 1 else 'they beat'} the uniform scale ({sel.uniform.p_text()}), but "
+    if not (sl.lowers_heldout(b) and np.isfinite(b.p) and b.p < alpha):
+        return out + (f"beside it {'it does' if k == 1 else 'they do'} not lower the held-out error significantly "
+                      f"(held-out RMS {100 * b.rmse():.2f} % against {100 * b.rmse(True):.2f} %, {b.p_text()})")
+    return out + f"the selection's gates did not keep {'it' if k == 1 else 'them'}"
+
+
+def _judged_alone(sel, alpha: float) -> str:
+    """The verdict's warning where the chosen effects were kept for beating a free uniform scale
+    alone, the comparison beside it not deciding (:func:`soilcal.loop.select.rule_of_one`): a
+    uniform bias beside them would sit in their parameters, and these rows cannot show it."""
+    if not sl.rule_of_one(sel, alpha):
+        return ""
+    b, one = sel.beside_uniform, len(sel.chosen) == 1
+    if _aicc_undefined(b):
+        scored = "could not be scored"
+    else:
+        scored = (f"lower{'s' if one else ''} the held-out error, but the AICc, on the fewest observations that "
+                  "define it, is decided by its small-sample term")
+    return (f"; beside a free uniform scale {'it' if one else 'they'} {scored} ({b.reason}), "
+            f"so {'it was' if one else 'they were'} judged against that scale alone, which "
+            f"{'it beats' if one else 'they beat'} (held-out RMS {100 * sel.uniform.rmse():.2f} % "
+            f"against {100 * sel.uniform.rmse(True):.2f} %, {sel.uniform.p_text()}); "
+            f"whether a uniform bias lies beside {'it' if one else 'them'} these rows cannot tell: "
+            f"{'its parameter' if one else 'their parameters'} may hold it")
+
+
+def _aicc_undefined(s) -> bool:
+    """Whether a :class:`soilcal.loop.select.Score` could not be scored for an undefined AICc
+    (of the model or its reference: too few observations, :func:`soilcal.loop.select.aicc`)."""
+    return math.isnan(s.aicc) or math.isnan(s.ref_aicc)
 
 
 def _rejected(sel_rows: list) -> str:
@@ -645,7 +690,8 @@ def _unscored(sel, u: pd.DataFrame, alpha: float = 0.05) -> str:
     for their parameters to define an AICc (:func:`soilcal.loop.select.aicc`), named where their
     held-out error is at least MIN_IMPROVEMENT lower, whatever their paired p (on 4 or 5
     conditions it has 3 or 4 degrees of freedom: a model 85 % lower at p 0.069 was left unsaid
-    beside the effect chosen); empty where every such model also failed the held-out error."""
+    beside the effect chosen), each with its held-out errors and paired p; empty where every
+    such model also failed the held-out error."""
     groups = sl.replicate_groups(u)
     seen = {}
     for step, names, s in sel.steps:
@@ -654,13 +700,20 @@ def _unscored(sel, u: pd.DataFrame, alpha: float = 0.05) -> str:
         if not sl.lowers_heldout(s):
             continue  # its held-out error refused it as well: the undefined AICc is not why it stayed out
         n_obs = sl.sse_of(s.fitted_errors, groups)[1]
-        seen.setdefault((len(s.names) + 1, n_obs), []).append("+".join(names))
+        # with what the held-out test showed: the clause is not a sign that the rows favour the
+        # model (on 4 conditions with no effect in them, 2 % noise, it was given in 10 of 40
+        # tables, paired p up to 0.41)
+        held = (f"held-out RMS {100 * s.rmse():.2f} % against {100 * s.rmse(True):.2f} %, "
+                + (f"paired p {s.p:.2g}" + ("" if s.p < alpha else f" >= {alpha:g}, which does not decide either")
+                   if np.isfinite(s.p) else s.p_text()))
+        seen.setdefault((len(s.names) + 1, n_obs), {}).setdefault("+".join(names), held)
     out = ""
     for (k, n_obs), models in sorted(seen.items()):
         need = sl.aicc_needs(k)
-        out += (f"; {', '.join(dict.fromkeys(models))} could not be scored: on {n_obs} observations (measured "
-                f"conditions and quantities, replicates as one) the AICc of {k} estimated parameters (the residual "
-                f"variance among them) is undefined; it needs {need}, {need - n_obs} more (selection.csv)")
+        out += (f"; {', '.join(f'{m} ({h})' for m, h in models.items())} could not be scored: on {n_obs} "
+                f"observations (measured conditions and quantities, replicates as one) the AICc of {k} estimated "
+                f"parameters (the residual variance among them) is undefined; it needs {need}, {need - n_obs} more "
+                "(selection.csv)")
     return out
 
 
@@ -753,19 +806,19 @@ def analyse(soil: str, res: pd.DataFrame, diag: pd.DataFrame, cands: list, effec
                    "model's own values?)")
     elif n < 3:
         verdict = f"unexplained: too few measured values to decide ({n})"
-    elif sel is not None and sel.judged and sl.like_a_constant(sel):
+    elif sel is not None and sel.judged and sl.like_a_constant(sel, settings.alpha):
         # the chosen effects (or, where the gates beside a free uniform scale dropped them all,
         # those the forward step took) add nothing beside that scale: the rows show a uniform
         # offset (an instrument's calibration), not the effects' signature
         sv, b, k = sel.uniform_s, sel.beside_uniform, len(sel.judged)
         nuisance = ({SCALE_KEY: sv}, {SCALE_KEY: sel.uniform_ci},
                     "fitted alone: the uniform bias the verdict names, the calibrated model times (1 + s)")
+        beside = _beside_clause(sel, settings.alpha)
         verdict = (f"unexplained: the measured values are {abs(100 * sv):.1f} % {'above' if sv > 0 else 'below'} "
                    "the model throughout, a uniform bias (an instrument's calibration, a zero offset) that no "
                    "mechanism of the library carries; " + " + ".join(sel.judged) + f" fit{'s' if k == 1 else ''} it "
                    f"(held-out RMS {100 * sel.uniform.rmse():.2f} % against {100 * sel.uniform.rmse(True):.2f} % for "
-                   f"the uniform bias alone) but add{'s' if k == 1 else ''} nothing beside a free uniform scale ("
-                   f"{b.reason}; AICc {b.aicc:.1f} against {b.ref_aicc:.1f} for the scale alone): on these rows "
+                   f"the uniform bias alone) but {beside}: on these rows "
                    f"{'its' if k == 1 else 'their'} signature cannot be told from a constant")
     elif sel is not None and sel.chosen:
         chosen = sel.chosen
@@ -815,13 +868,15 @@ def analyse(soil: str, res: pd.DataFrame, diag: pd.DataFrame, cands: list, effec
                 verdict += (f", beside a uniform bias that no effect of the library carries (the measured values "
                             f"{abs(100 * sv):.1f} % {'above' if sv > 0 else 'below'} the model throughout; 95 %: "
                             f"{100 * lo:+.1f} to {100 * hi:+.1f} %), fitted with them")
+        if uniform is None:
+            verdict += _judged_alone(sel, settings.alpha)
         if sel.uniform is not None and not sel.uniform.accepted and uniform is None:
             sv = sel.uniform_s
             how = "as well or better" if sel.uniform.rmse(True) <= sel.uniform.rmse() else "nearly as well"
             verdict += (f"; a uniform bias fits the held-out rows {how} (the measured values "
                         f"{abs(100 * sv):.1f} % {'above' if sv > 0 else 'below'} the model throughout: held-out "
                         f"RMS {100 * sel.uniform.rmse(True):.2f} % against {100 * sel.uniform.rmse():.2f} % "
-                        f"with the effect{'s' if len(chosen) > 1 else ''}, paired p {sel.uniform.p:.2g}), "
+                        f"with the effect{'s' if len(chosen) > 1 else ''}, {sel.uniform.p_text()}), "
                         "so these rows cannot tell "
                         + ("it" if len(chosen) == 1 else "them") + " from a bias no mechanism carries")
         gap = f"{100 * float(np.sqrt(np.mean((jt.gap / rs.scale_of(u)) ** 2))):.2g} % RMS" if jt is not None else ""

@@ -352,6 +352,15 @@ class Score:
     p: float
     accepted: bool
     reason: str
+    no_test: str = ""  # where p is NaN, why the paired test could not be run
+    own_reason: str = ""  # the score's own reason where ``reason`` puts the backward gate's words before it
+    aicc_spare: int = 0  # observations beyond the fewest for which the model's AICc is defined (:func:`aicc_needs`)
+
+    def p_text(self, digits: int = 2) -> str:
+        """The paired test's p for a sentence, or, where it could not be run, why."""
+        if np.isfinite(self.p):
+            return f"paired p {self.p:.{digits}g}"
+        return "no paired test (" + (self.no_test or "it could not be computed") + ")"
 
     def rmse(self, ref=False) -> float:
         e = self.ref_heldout_errors if ref else self.heldout_errors
@@ -428,10 +437,10 @@ def cross_validate(model: Model, folds) -> tuple[np.ndarray, np.ndarray]:
 MIN_IMPROVEMENT = 0.1
 
 
-def lowers_heldout(s) -> bool:
+def lowers_heldout(s, min_improvement: float = MIN_IMPROVEMENT) -> bool:
     """Whether a :class:`Score`'s model lowers its reference's held-out RMS error by at least
-    :data:`MIN_IMPROVEMENT`."""
-    return s.rmse() <= (1 - MIN_IMPROVEMENT) * s.rmse(True)
+    ``min_improvement`` (:data:`MIN_IMPROVEMENT`)."""
+    return s.rmse() <= (1 - min_improvement) * s.rmse(True)
 
 
 def short_of_p(s, alpha: float) -> bool:
@@ -499,16 +508,18 @@ def score(model: Model, ref: Model, folds, alpha: float = 0.05, min_improvement:
         p = float(stats.ttest_rel(ref_rms[ok], fold_rms[ok], alternative="greater").pvalue)
         reason = ""
     hm = np.isfinite(held) & np.isfinite(ref_held)
-    rmse = float(np.sqrt(np.mean(held[hm] ** 2))) if hm.any() else math.nan
-    rmse_r = float(np.sqrt(np.mean(ref_held[hm] ** 2))) if hm.any() else math.nan
-    accepted = False
+    out = Score(names=names, theta=dict(zip(names, map(float, x))), ci=ci, fold_rms=fold_rms, ref_fold_rms=ref_rms,
+                heldout_errors=held[hm], ref_heldout_errors=ref_held[hm], fitted_errors=e, aicc=a, ref_aicc=ar,
+                p=p, accepted=False, reason=reason, no_test=reason if not np.isfinite(p) else "",
+                aicc_spare=int(obs_m[1]) - aicc_needs(k + 1))
+    rmse, rmse_r = out.rmse(), out.rmse(True)
     if not reason:
         fails = []
         if not (p < alpha):
             fails.append(f"held-out error not significantly lower (paired t-test p = {p:.3g} >= {alpha:g})")
         if not (rmse < rmse_r):
             fails.append("held-out RMS error not lower")
-        elif not (rmse <= (1 - min_improvement) * rmse_r):
+        elif not lowers_heldout(out, min_improvement):
             fails.append(f"held-out RMS error lower by less than {min_improvement:.0%} ({100 * rmse:.2f} % vs "
                          f"{100 * rmse_r:.2f} %)")
         undefined = [(nm, kk, o[1]) for nm, kk, v, o in (("the model", k + 1, a, obs_m),
@@ -519,11 +530,9 @@ def score(model: Model, ref: Model, folds, alpha: float = 0.05, min_improvement:
                 f"among them), which need {aicc_needs(k_)} at least, so it cannot be scored" for nm, k_, n_ in undefined))
         elif not (a < ar):
             fails.append(f"AICc not lower ({a:.2f} vs {ar:.2f})")
-        reason = "; ".join(fails)
-        accepted = not fails
-    return Score(names=names, theta=dict(zip(names, map(float, x))), ci=ci, fold_rms=fold_rms, ref_fold_rms=ref_rms,
-                 heldout_errors=held[hm], ref_heldout_errors=ref_held[hm], fitted_errors=e, aicc=a, ref_aicc=ar,
-                 p=p, accepted=accepted, reason=reason)
+        out = _renamed(out, "; ".join(fails))
+        out.accepted = not fails
+    return out
 
 
 #: refits of the chosen model's bootstrap interval (module docstring), and its generator's seed
@@ -709,7 +718,7 @@ def forward(obs: pd.DataFrame, y0: np.ndarray, data: dict, fold_by: str | None =
         return Model([data[c] for c in names] + [bias], y0, measured, scale)
 
     def gains(s):
-        return s.rmse() <= (1 - MIN_IMPROVEMENT) * s.rmse(True) and aicc_lower(s)
+        return lowers_heldout(s) and aicc_lower(s)
 
     with_scale = False  # whether an effect was added beside the free uniform scale: the scale stays in the model
     held_back = []  # (effect, Score): beside the scale it gained, against the model held without the scale it did not
@@ -780,7 +789,7 @@ def forward(obs: pd.DataFrame, y0: np.ndarray, data: dict, fold_by: str | None =
         if s.accepted:
             return s
         return s2 if s2.accepted else _renamed(s, f"without {nm}, as is and with a free uniform scale on both "
-                                                  f"(p {s2.p:.3g}): " + s.reason)
+                                                  + (f"(p {s2.p:.3g}): " if np.isfinite(s2.p) else f"({s2.p_text(3)}): ") + s.reason)
 
     while chosen:
         gates = [(nm, gate(chosen, nm)) for nm in chosen]
@@ -815,7 +824,27 @@ def forward(obs: pd.DataFrame, y0: np.ndarray, data: dict, fold_by: str | None =
 CONSTANT_AICC = 2.0
 
 
-def like_a_constant(sel: Selection) -> bool:
+def rule_of_one(sel: Selection, alpha: float = 0.05) -> bool:
+    """Whether the chosen effects are kept for beating a free uniform scale alone where the nested
+    comparison (the effects beside that scale against the scale alone) cannot decide: they were
+    chosen, beat the scale alone (``uniform``: the selection's own gate, each model with its own
+    parameters), and beside the scale their held-out error is lower by :data:`MIN_IMPROVEMENT`
+    with the paired test passed (p < ``alpha``), while the AICc there is undefined (:func:`aicc`:
+    one effect and the scale on four observations, two on five) or, for one effect, defined on
+    the fewest observations it needs, where its small-sample term decides (one effect and the
+    scale on five: 24 against 6 for the scale alone).  Otherwise the nested comparison decides
+    (6 conditions, a 6 % offset, an all-positive candidate that beat the scale alone with
+    p 0.036 but not beside it, p 0.12, was named; two candidates beside the scale on 6, the
+    fewest for their AICc, were named in 1 of 25 such tables)."""
+    b = sel.beside_uniform
+    if not sel.chosen or b is None or b.accepted or sel.uniform is None or not sel.uniform.accepted:
+        return False
+    if not (math.isnan(b.aicc) or math.isnan(b.ref_aicc) or (b.aicc_spare == 0 and len(sel.chosen) == 1)):
+        return False
+    return bool(lowers_heldout(b) and np.isfinite(b.p) and b.p < alpha)
+
+
+def like_a_constant(sel: Selection, alpha: float = 0.05) -> bool:
     """Whether the chosen effects' signature cannot be told from a constant on these rows.
     Beside a free uniform scale of the simulated values they count as more than a constant when
     they pass the selection's own gate against the scale alone (held-out error significantly
@@ -828,10 +857,25 @@ def like_a_constant(sel: Selection) -> bool:
     with a rate effect 6.1 lower beside a scale of 0.069; 27 %: an adhesion 0.36 lower, its
     held-out error higher); a weak hidden adhesion on twelve tests (gamma_a 1.0, 2 % noise)
     lowers it by 9.7 beside a scale of 0.005 though its paired test over few folds does not
-    decide."""
+    decide.
+
+    Where the rows are too few to score them beside the scale (its AICc undefined,
+    :func:`aicc`: one effect and the scale on four observations) or just enough (five), that
+    comparison does not decide,
+    and they count as more than a constant where they were chosen, beat the scale alone and
+    lower the held-out error beside it (:func:`rule_of_one`): a criterion that
+    cannot be computed says nothing of a constant (4 conditions with a trend of 30 % over their
+    range and no offset, 2 % noise: the trend was chosen and then called a uniform bias in 16 of
+    16 tables).  Where the nested comparison is scored and fails on its held-out error or paired
+    test, or has more observations than the fewest it needs, beating the scale alone does not
+    count."""
     b = sel.beside_uniform
     if b is None or b.accepted:
         return False
+    if rule_of_one(sel, alpha):
+        return False
+    if math.isnan(b.aicc) or math.isnan(b.ref_aicc):
+        return True
     lo, hi = b.ci.get("uniform_scale.s", (math.nan, math.nan))
     nil = bool(np.isfinite(lo) and np.isfinite(hi) and lo <= 0.0 <= hi)
     lower = bool(np.isfinite(b.aicc) and np.isfinite(b.ref_aicc) and b.aicc < b.ref_aicc - CONSTANT_AICC)
@@ -841,4 +885,4 @@ def like_a_constant(sel: Selection) -> bool:
 def _renamed(s: Score, reason: str) -> Score:
     from dataclasses import replace
 
-    return replace(s, reason=reason)
+    return replace(s, reason=reason, own_reason=s.own_reason or s.reason)
