@@ -388,3 +388,32 @@ def test_rendered_drum_truth_gives_the_drum_in_the_photo(roll):
     cx, cy, r_, how = drum.find_drum(_gray(img / 255.0))
     assert how == "rim"
     assert np.hypot(cx - truth["centre_px"][0], cy - truth["centre_px"][1]) <= 0.5 and abs(r_ - truth["radius_px"]) <= 0.5
+
+
+def _band(img, truth, x_over_r, height, width=0.04):
+    """A vertical reflection band across the frame, ``x_over_r`` drum radii right of the centre."""
+    cc = np.arange(img.shape[1])[None, :]
+    x0 = truth["centre_px"][0] + x_over_r * truth["radius_px"]
+    return np.clip(img + height * np.exp(-((cc - x0) / (width * truth["radius_px"])) ** 2), 0.0, 1.0)
+
+
+@pytest.mark.parametrize("angle", [35.0, -35.0, 50.0])
+def test_bed_cut_by_a_reflection_band_is_measured_whole(tmp_path, angle):
+    # a bright band on the window, over the rising half of an S-shaped surface, lifts the dark
+    # powder under it above the powder/air threshold and cuts the bed in two; both pieces lie
+    # on the drum wall and are the bed (only the larger was measured: its surface lies to one
+    # side of the drum centre and the central slope read 1.7 to 5.2 deg low)
+    img, truth = render.render_tester_frame(7, angle, fill=0.3, s_amp=0.1, size=(716, 716), window="rim", n_avg=8)
+    img = _band(img, truth, 0.35 * np.sign(angle), 0.4)
+    r = drum.measure_drum_frame(render.save_frame(tmp_path / "band.png", img))
+    assert abs(r.angle_deg - abs(truth["angle_deg"])) < 0.5
+
+
+def test_dark_hub_in_the_air_is_not_the_bed(tmp_path):
+    # the drum's dark hub floats in the air above the bed: a powder-grey region off the wall
+    img, truth = render.render_tester_frame(5, 38.0, fill=0.25, size=(500, 500), window="crop", n_avg=8)
+    rr, cc = np.mgrid[0:500, 0:500]
+    (cx, cy), R = truth["centre_px"], truth["radius_px"]
+    img[np.hypot(cc - cx, rr - (cy - 0.3 * R)) < 0.2 * R] = 0.22
+    r = drum.measure_drum_frame(render.save_frame(tmp_path / "hub.png", img))
+    assert abs(r.angle_deg - abs(truth["angle_deg"])) < 0.5

@@ -32,7 +32,9 @@ drum window, 8- or 16-bit grey, time-averaged over many frames, no plate in view
    requires a plate.  The frame is rotated about the drum centre by the roll.
 4. Interface: Otsu's threshold inside the masked drum separates powder from air; the powder is
    the class lying lower (its centroid below the air's: dark powder on a white backlight, or
-   the converse), its largest connected region the bed.  In every
+   the converse), its largest connected region the bed, with every other region of at least 2 %
+   of the drum's area that lies against the drum wall (a reflection band or a bracket across
+   the window cuts the bed into such pieces; a hub floating in the air is no bed).  In every
    column the powder's top is refined to the half-level crossing: the row where the grey level
    crosses the mean of the column's air and powder levels (medians over 30 px beyond the
    interface), linearly interpolated.  A time-averaged frame's soft grey ramp thus gives the
@@ -334,7 +336,14 @@ def _surface(path, p, inside, cx, cy, rm):
     sizes[0] = 0
     if lab.max() == 0 or sizes.max() < 0.02 * np.pi * rm ** 2:
         raise InputError(path, "image", DRUM_EXPECTED, "no powder region in the drum")
-    powder = lab == sizes.argmax()
+    # the bed: the largest powder region and every other one as large as the least bed that lies
+    # against the drum wall (the edge of the measured disc); a bright reflection band or a dark
+    # bracket across the window cuts the bed into pieces that all lie on the wall, while a hub or
+    # a speck floating in the air does not
+    wall = inside & ~ndi.binary_erosion(inside, np.ones((3, 3), bool), border_value=0)
+    on_wall = np.zeros(sizes.size, bool)
+    on_wall[np.unique(lab[wall & binary])] = True
+    powder = np.isin(lab, np.flatnonzero((sizes >= 0.02 * np.pi * rm ** 2) & on_wall)) | (lab == sizes.argmax())
     air_lvl = np.median(p[inside & ~morphology.dilation(powder, morphology.disk(8))])
     pow_lvl = np.median(p[morphology.erosion(powder, morphology.disk(8)) & inside])
     cols, rows = [], []
