@@ -417,3 +417,25 @@ def test_dark_hub_in_the_air_is_not_the_bed(tmp_path):
     img[np.hypot(cc - cx, rr - (cy - 0.3 * R)) < 0.2 * R] = 0.22
     r = drum.measure_drum_frame(render.save_frame(tmp_path / "hub.png", img))
     assert abs(r.angle_deg - abs(truth["angle_deg"])) < 0.5
+
+
+@pytest.mark.parametrize("angle", [38.0, -38.0])
+@pytest.mark.parametrize("streak,height", [("glare on a dark drum", -0.45), ("glare on a dark drum", 0.3),
+                                           ("dark rod on a light drum", 0.3)])
+def test_streak_across_the_air_joined_to_the_bed_is_no_surface(tmp_path, streak, height, angle):
+    # a thin horizontal streak of the powder's grey class across the air, ``height`` drum radii
+    # above the centre, crossing the surface: a glare line on a drum with bright powder, a dark
+    # rod in front of one with dark powder.  Joined to the bed its top was taken for the surface
+    # in the columns it spans: with status ok the glare read 38 deg as 33.4 and 33.6 (0.45 R
+    # below the centre); 0.3 R above the centre the glare and the rod were refused as a level edge
+    dark = streak.startswith("dark")
+    img, truth = render.render_tester_frame(9, angle, fill=0.4, size=(480, 480), window="rim", powder_dark=dark,
+                                            n_avg=8)
+    (cx, cy), R = truth["centre_px"], truth["radius_px"]
+    rows = np.arange(480)[:, None] - (cy - height * R)
+    if dark:
+        img = np.where(np.abs(rows) < 0.03 * R, 0.05, img)
+    else:
+        img = np.clip(img + 0.45 * np.exp(-(rows / (0.03 * R)) ** 2), 0.0, 1.0)
+    r = drum.measure_drum_frame(render.save_frame(tmp_path / "streak.png", img))
+    assert abs(r.angle_deg - abs(truth["angle_deg"])) < 0.5

@@ -35,9 +35,13 @@ drum window, 8- or 16-bit grey, time-averaged over many frames, no plate in view
    the converse), its largest connected region the bed, with every other region of at least 2 %
    of the drum's area that lies against the drum wall (a reflection band or a bracket across
    the window cuts the bed into such pieces; a hub floating in the air is no bed).  In every
-   column the powder's top is refined to the half-level crossing: the row where the grey level
-   crosses the mean of the column's air and powder levels (medians over 30 px beyond the
-   interface), linearly interpolated.  A time-averaged frame's soft grey ramp thus gives the
+   column the powder's top is the top of the first powder run with air above it and powder
+   below (the medians over 30 px beyond it differ by at least :data:`MIN_STEP` of the bed's
+   step: a thin streak of the powder's grey across the air joined to the bed, a glare line or a
+   rod, is passed over), refined to the half-level crossing: the row where the grey level
+   crosses the mean of those two levels, linearly interpolated (a column crossing it upwards
+   twice, with 3 or more rows back below it between, is left out: a streak just above or just
+   below the surface).  A time-averaged frame's soft grey ramp thus gives the
    median surface position to a fraction of a pixel, whatever its grey levels.  Columns where
    the powder reaches the masked rim are wall, not surface.
 5. Angle (``angle_deg``): least-squares line v = a + b u (u along the level, as ``np.polyfit``
@@ -85,6 +89,10 @@ DRUM_ANGLE_RANGE = (3.0, 80.0)
 #: the most a free surface may stray from one straight line (RMS, % of the drum radius): a
 #: cascading drum's S stays within a few %, a boundary that wanders further is no powder surface
 MAX_LINE_RMS_PCT = 10.0
+#: the least grey step across a surface point (the median of the 30 px below it minus that of the
+#: 30 px above, beyond 8 px), as a fraction of the bed's step from the air's grey to the powder's:
+#: a true surface has the powder below it and the air above (a step near 1)
+MIN_STEP = 0.6
 #: what every frame refused for showing no measurable drum is expected to show
 DRUM_EXPECTED = (f"a drum frame: powder lying in a drum, clearly darker or lighter than the air above it, its "
                  f"free surface one line at {DRUM_ANGLE_RANGE[0]:.0f} to {DRUM_ANGLE_RANGE[1]:.0f} deg")
@@ -353,19 +361,38 @@ def _surface(path, p, inside, cx, cy, rm):
         idx = np.flatnonzero(powder[:, c])
         if idx.size == 0:
             continue
-        i = int(idx[0])
-        if i <= top + 2 or i >= bot - 2:
+        if idx[0] <= top + 2:
             continue  # the powder reaches the rim in this column: wall, not free surface
         r0, r1 = int(np.ceil(top)) + 1, int(np.floor(bot))
-        a = p[max(r0, i - 38):max(r0, i - 8), c]
-        b = p[min(r1, i + 8):min(r1, i + 38), c]
-        mid = 0.5 * ((np.median(a) if a.size >= 4 else air_lvl) + (np.median(b) if b.size >= 4 else pow_lvl))
+        # the surface is the top of the first powder run with powder below it and air above: a
+        # thin streak of the powder's class across the air (a glare line on a dark drum, a dark
+        # rod in front of a light one) joined to the bed has air, not powder, below its top
+        for i in idx[np.r_[True, np.diff(idx) > 1]]:
+            i = int(i)
+            if i >= bot - 2:
+                break
+            a = p[max(r0, i - 38):max(r0, i - 8), c]
+            b = p[min(r1, i + 8):min(r1, i + 38), c]
+            la = np.median(a) if a.size >= 4 else air_lvl
+            lb = np.median(b) if b.size >= 4 else pow_lvl
+            if lb - la >= MIN_STEP * (pow_lvl - air_lvl):
+                break
+        else:
+            continue
+        if i >= bot - 2:
+            continue
+        mid = 0.5 * (la + lb)
         s0, s1 = max(r0, i - 25), min(r1, i + 25)
         seg = p[s0:s1 + 1, c]
         up = seg >= mid
         js = np.flatnonzero(up[1:] & ~up[:-1]) + 1
         if js.size == 0:
             continue
+        gap = np.flatnonzero(~up[:-2] & ~up[1:-1] & ~up[2:])
+        if np.any((gap > js[0]) & (gap < js[-1])):
+            continue  # two steps up with 3 or more rows between back below the half level: a streak
+            # across the air just above the surface, or across the bed just below it; which is the
+            # surface cannot be told in this column
         j = int(js[np.argmin(np.abs(s0 + js - i))])
         rows.append(s0 + j - 1 + (mid - seg[j - 1]) / (seg[j] - seg[j - 1]))
         cols.append(float(c))
