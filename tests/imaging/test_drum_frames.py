@@ -10,6 +10,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 import yaml
+from scipy import ndimage as ndi
 
 from soilcal.errors import InputError
 from soilcal.imaging import drum, render
@@ -410,13 +411,41 @@ def test_bed_cut_by_a_reflection_band_is_measured_whole(tmp_path, angle):
 
 
 def test_dark_hub_in_the_air_is_not_the_bed(tmp_path):
-    # the drum's dark hub floats in the air above the bed: a powder-grey region off the wall
+    # the drum's dark hub floats in the air above the bed: a powder-grey region off the wall.
+    # A guard: measured right also when only the largest powder region was the bed
     img, truth = render.render_tester_frame(5, 38.0, fill=0.25, size=(500, 500), window="crop", n_avg=8)
     rr, cc = np.mgrid[0:500, 0:500]
     (cx, cy), R = truth["centre_px"], truth["radius_px"]
     img[np.hypot(cc - cx, rr - (cy - 0.3 * R)) < 0.2 * R] = 0.22
     r = drum.measure_drum_frame(render.save_frame(tmp_path / "hub.png", img))
     assert abs(r.angle_deg - abs(truth["angle_deg"])) < 0.5
+
+
+@pytest.mark.parametrize("seed,angle,phi,span,depth,dark", [(501, 35.0, 35, 20, 0.3, True),
+                                                          (509, 35.0, 25, 20, 0.3, True),
+                                                          (520, 45.0, 25, 20, 0.3, False),
+                                                          (531, -40.0, 35, 25, 0.2, True)])
+def test_powder_held_in_a_lifter_above_the_surface_is_not_the_bed(tmp_path, seed, angle, phi, span, depth, dark):
+    # powder carried up by a lifter: a pile of the powder's grey against the wall on the rising
+    # side, polar angles phi..phi+span, from (1 - depth) R out to the wall, at least 10 px above the
+    # surface, 2.2 to 2.9 % of the drum's area.  Taken into the bed, its top was read as the surface:
+    # 35 deg refused as a boundary straying 13 % of R, or its upper half read -47.6 deg; 45 deg
+    # upper half 53.4 (41.8 when only the largest region was the bed, the pile's blur touching it)
+    img, truth = render.render_tester_frame(seed, angle, fill=0.3, size=(480, 480), window="rim", powder_dark=dark,
+                                            n_avg=8)
+    (cx, cy), R = truth["centre_px"], truth["radius_px"]
+    rr, cc = np.mgrid[0:480, 0:480].astype(float)
+    x, z = cc - cx, cy - rr
+    th = np.radians(angle)
+    above = -x * np.sin(th) + z * np.cos(th) + render.segment_fill(R, 0.3)   # px above the flat surface
+    ph = np.degrees(np.arctan2(z, x))
+    ph0 = phi if angle > 0 else 180 - phi - span
+    pile = (np.hypot(x, z) > (1 - depth) * R) & (np.hypot(x, z) < R + 1) & (ph > ph0) & (ph < ph0 + span) & (above > 10)
+    air, powder = (0.92, 0.22) if dark else (0.12, 0.78)
+    img = np.clip(img + (powder - air) * ndi.gaussian_filter(pile.astype(float), 1.5), 0.0, 1.0)
+    r = drum.measure_drum_frame(render.save_frame(tmp_path / "lifter.png", img))
+    assert abs(r.angle_deg - abs(truth["angle_deg"])) < 0.5
+    assert abs(r.upper_deg - abs(truth["angle_deg"])) < 1.0 and abs(r.s_shape_deg) < 0.5
 
 
 @pytest.mark.parametrize("angle", [38.0, -38.0])

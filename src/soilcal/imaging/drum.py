@@ -33,8 +33,10 @@ drum window, 8- or 16-bit grey, time-averaged over many frames, no plate in view
 4. Interface: Otsu's threshold inside the masked drum separates powder from air; the powder is
    the class lying lower (its centroid below the air's: dark powder on a white backlight, or
    the converse), its largest connected region the bed, with every other region of at least 2 %
-   of the drum's area that lies against the drum wall (a reflection band or a bracket across
-   the window cuts the bed into such pieces; a hub floating in the air is no bed).  In every
+   of the drum's area whose contact with the drum wall reaches below the largest region's
+   highest wall contact on its side (a reflection band or a bracket across the window cuts the
+   bed into such pieces; powder held in a lifter above the surface, or a hub floating in the
+   air, is no bed).  In every
    column the powder's top is the top of the first powder run with air above it and powder
    below (the medians over 30 px beyond it differ by at least :data:`MIN_STEP` of the bed's
    step: a thin streak of the powder's grey across the air joined to the bed, a glare line or a
@@ -329,6 +331,19 @@ def _angle(d, sign=1.0):
     return float(np.degrees(np.arctan2(sign * d[1], d[0])))
 
 
+def _thin_cut_above(piece, main, rm):
+    """Whether ``piece`` lies on ``main`` across a thin cut (a glare line or a rod along the
+    window): in the median of the piece's columns the main region begins at most 0.05 drum radii
+    below the piece's lowest pixel.  Powder in a lifter stands clear of the surface by air."""
+    cols = np.flatnonzero(piece.any(axis=0))
+    gaps = []
+    for c in cols:
+        bottom = np.flatnonzero(piece[:, c]).max()
+        below = np.flatnonzero(main[bottom:, c])
+        gaps.append(below[0] if below.size else np.inf)
+    return bool(cols.size) and float(np.median(gaps)) <= 0.05 * rm
+
+
 def _surface(path, p, inside, cx, cy, rm):
     """Sub-pixel (column, row) points of the powder's free surface (powder high in ``p``)."""
     h, w = p.shape
@@ -344,14 +359,24 @@ def _surface(path, p, inside, cx, cy, rm):
     sizes[0] = 0
     if lab.max() == 0 or sizes.max() < 0.02 * np.pi * rm ** 2:
         raise InputError(path, "image", DRUM_EXPECTED, "no powder region in the drum")
-    # the bed: the largest powder region and every other one as large as the least bed that lies
-    # against the drum wall (the edge of the measured disc); a bright reflection band or a dark
-    # bracket across the window cuts the bed into pieces that all lie on the wall, while a hub or
-    # a speck floating in the air does not
+    # the bed: the largest powder region, and every other one of at least 2 % of the drum's area
+    # that lies against the drum wall (the edge of the measured disc) down to below the largest
+    # region's highest wall contact on its side of the drum: a bright reflection band or
+    # a dark bracket across the window cuts the bed into pieces that run down the wall from the
+    # surface's two ends, while powder held up in a lifter against the wall above the surface,
+    # a hub or a speck floating in the air is no bed
     wall = inside & ~ndi.binary_erosion(inside, np.ones((3, 3), bool), border_value=0)
-    on_wall = np.zeros(sizes.size, bool)
-    on_wall[np.unique(lab[wall & binary])] = True
-    powder = np.isin(lab, np.flatnonzero((sizes >= 0.02 * np.pi * rm ** 2) & on_wall)) | (lab == sizes.argmax())
+    main = int(sizes.argmax())
+    wr, wc = np.nonzero(wall & (lab == main))
+    keep = [main]
+    for k in np.flatnonzero(sizes >= 0.02 * np.pi * rm ** 2):
+        kr, kc = np.nonzero(wall & (lab == k))
+        if k == main or wr.size == 0 or kr.size == 0:
+            continue
+        side = (wc >= cx) == (kc.mean() >= cx)
+        if kr.max() > (wr[side].min() if side.any() else wr.min()) or _thin_cut_above(lab == k, lab == main, rm):
+            keep.append(int(k))
+    powder = np.isin(lab, keep)
     air_lvl = np.median(p[inside & ~morphology.dilation(powder, morphology.disk(8))])
     pow_lvl = np.median(p[morphology.erosion(powder, morphology.disk(8)) & inside])
     cols, rows = [], []
