@@ -34,9 +34,10 @@ drum window, 8- or 16-bit grey, time-averaged over many frames, no plate in view
    the class lying lower (its centroid below the air's: dark powder on a white backlight, or
    the converse), its largest connected region the bed, with every other region of at least 2 %
    of the drum's area whose contact with the drum wall reaches below the largest region's
-   highest wall contact on its side (a reflection band or a bracket across the window cuts the
-   bed into such pieces; powder held in a lifter above the surface, or a hub floating in the
-   air, is no bed).  In every
+   highest wall contact on its side, or that lies on it across a cut of at most 0.05 drum radii
+   (a reflection band, a glare line or a bracket across the window cuts the bed into such
+   pieces; powder held in a lifter above the surface, or a hub floating in the air, is no
+   bed).  In every
    column the powder's top is the top of the first powder run with air above it and powder
    below (the medians over 30 px beyond it differ by at least :data:`MIN_STEP` of the bed's
    step: a thin streak of the powder's grey across the air joined to the bed, a glare line or a
@@ -361,9 +362,10 @@ def _surface(path, p, inside, cx, cy, rm):
         raise InputError(path, "image", DRUM_EXPECTED, "no powder region in the drum")
     # the bed: the largest powder region, and every other one of at least 2 % of the drum's area
     # that lies against the drum wall (the edge of the measured disc) down to below the largest
-    # region's highest wall contact on its side of the drum: a bright reflection band or
-    # a dark bracket across the window cuts the bed into pieces that run down the wall from the
-    # surface's two ends, while powder held up in a lifter against the wall above the surface,
+    # region's highest wall contact on its side of the drum, or that lies on the largest region
+    # across a thin cut: a bright reflection band or a dark bracket across the window cuts the
+    # bed into pieces that run down the wall from the surface's two ends, a glare line along
+    # the window into pieces one above the other, while powder held up in a lifter against the wall above the surface,
     # a hub or a speck floating in the air is no bed
     wall = inside & ~ndi.binary_erosion(inside, np.ones((3, 3), bool), border_value=0)
     main = int(sizes.argmax())
