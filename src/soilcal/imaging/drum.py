@@ -32,10 +32,19 @@ drum window, 8- or 16-bit grey, time-averaged over many frames, no plate in view
    requires a plate.  The frame is rotated about the drum centre by the roll.
 4. Interface: Otsu's threshold inside the masked drum separates powder from air; the powder is
    the class lying lower (its centroid below the air's: dark powder on a white backlight, or
-   the converse), its largest connected region the bed.  In every
-   column the powder's top is refined to the half-level crossing: the row where the grey level
-   crosses the mean of the column's air and powder levels (medians over 30 px beyond the
-   interface), linearly interpolated.  A time-averaged frame's soft grey ramp thus gives the
+   the converse), its largest connected region the bed, with every other region of at least 2 %
+   of the drum's area whose contact with the drum wall reaches below the largest region's
+   highest wall contact on its side, or that lies on it across a cut of at most 0.05 drum radii
+   (a reflection band, a glare line or a bracket across the window cuts the bed into such
+   pieces; powder held in a lifter above the surface, or a hub floating in the air, is no
+   bed).  In every
+   column the powder's top is the top of the first powder run with air above it and powder
+   below (the medians over 30 px beyond it differ by at least :data:`MIN_STEP` of the bed's
+   step: a thin streak of the powder's grey across the air joined to the bed, a glare line or a
+   rod, is passed over), refined to the half-level crossing: the row where the grey level
+   crosses the mean of those two levels, linearly interpolated (a column crossing it upwards
+   twice, with 3 or more rows back below it between, is left out: a streak just above or just
+   below the surface).  A time-averaged frame's soft grey ramp thus gives the
    median surface position to a fraction of a pixel, whatever its grey levels.  Columns where
    the powder reaches the masked rim are wall, not surface.
 5. Angle (``angle_deg``): least-squares line v = a + b u (u along the level, as ``np.polyfit``
@@ -83,6 +92,10 @@ DRUM_ANGLE_RANGE = (3.0, 80.0)
 #: the most a free surface may stray from one straight line (RMS, % of the drum radius): a
 #: cascading drum's S stays within a few %, a boundary that wanders further is no powder surface
 MAX_LINE_RMS_PCT = 10.0
+#: the least grey step across a surface point (the median of the 30 px below it minus that of the
+#: 30 px above, beyond 8 px), as a fraction of the bed's step from the air's grey to the powder's:
+#: a true surface has the powder below it and the air above (a step near 1)
+MIN_STEP = 0.6
 #: what every frame refused for showing no measurable drum is expected to show
 DRUM_EXPECTED = (f"a drum frame: powder lying in a drum, clearly darker or lighter than the air above it, its "
                  f"free surface one line at {DRUM_ANGLE_RANGE[0]:.0f} to {DRUM_ANGLE_RANGE[1]:.0f} deg")
@@ -319,6 +332,19 @@ def _angle(d, sign=1.0):
     return float(np.degrees(np.arctan2(sign * d[1], d[0])))
 
 
+def _thin_cut_above(piece, main, rm):
+    """Whether ``piece`` lies on ``main`` across a thin cut (a glare line or a rod along the
+    window): in the median of the piece's columns the main region begins at most 0.05 drum radii
+    below the piece's lowest pixel.  Powder in a lifter stands clear of the surface by air."""
+    cols = np.flatnonzero(piece.any(axis=0))
+    gaps = []
+    for c in cols:
+        bottom = np.flatnonzero(piece[:, c]).max()
+        below = np.flatnonzero(main[bottom:, c])
+        gaps.append(below[0] if below.size else np.inf)
+    return bool(cols.size) and float(np.median(gaps)) <= 0.05 * rm
+
+
 def _surface(path, p, inside, cx, cy, rm):
     """Sub-pixel (column, row) points of the powder's free surface (powder high in ``p``)."""
     h, w = p.shape
@@ -334,7 +360,25 @@ def _surface(path, p, inside, cx, cy, rm):
     sizes[0] = 0
     if lab.max() == 0 or sizes.max() < 0.02 * np.pi * rm ** 2:
         raise InputError(path, "image", DRUM_EXPECTED, "no powder region in the drum")
-    powder = lab == sizes.argmax()
+    # the bed: the largest powder region, and every other one of at least 2 % of the drum's area
+    # that lies against the drum wall (the edge of the measured disc) down to below the largest
+    # region's highest wall contact on its side of the drum, or that lies on the largest region
+    # across a thin cut: a bright reflection band or a dark bracket across the window cuts the
+    # bed into pieces that run down the wall from the surface's two ends, a glare line along
+    # the window into pieces one above the other, while powder held up in a lifter against the wall above the surface,
+    # a hub or a speck floating in the air is no bed
+    wall = inside & ~ndi.binary_erosion(inside, np.ones((3, 3), bool), border_value=0)
+    main = int(sizes.argmax())
+    wr, wc = np.nonzero(wall & (lab == main))
+    keep = [main]
+    for k in np.flatnonzero(sizes >= 0.02 * np.pi * rm ** 2):
+        kr, kc = np.nonzero(wall & (lab == k))
+        if k == main or wr.size == 0 or kr.size == 0:
+            continue
+        side = (wc >= cx) == (kc.mean() >= cx)
+        if kr.max() > (wr[side].min() if side.any() else wr.min()) or _thin_cut_above(lab == k, lab == main, rm):
+            keep.append(int(k))
+    powder = np.isin(lab, keep)
     air_lvl = np.median(p[inside & ~morphology.dilation(powder, morphology.disk(8))])
     pow_lvl = np.median(p[morphology.erosion(powder, morphology.disk(8)) & inside])
     cols, rows = [], []
@@ -344,19 +388,38 @@ def _surface(path, p, inside, cx, cy, rm):
         idx = np.flatnonzero(powder[:, c])
         if idx.size == 0:
             continue
-        i = int(idx[0])
-        if i <= top + 2 or i >= bot - 2:
+        if idx[0] <= top + 2:
             continue  # the powder reaches the rim in this column: wall, not free surface
         r0, r1 = int(np.ceil(top)) + 1, int(np.floor(bot))
-        a = p[max(r0, i - 38):max(r0, i - 8), c]
-        b = p[min(r1, i + 8):min(r1, i + 38), c]
-        mid = 0.5 * ((np.median(a) if a.size >= 4 else air_lvl) + (np.median(b) if b.size >= 4 else pow_lvl))
+        # the surface is the top of the first powder run with powder below it and air above: a
+        # thin streak of the powder's class across the air (a glare line on a dark drum, a dark
+        # rod in front of a light one) joined to the bed has air, not powder, below its top
+        for i in idx[np.r_[True, np.diff(idx) > 1]]:
+            i = int(i)
+            if i >= bot - 2:
+                break
+            a = p[max(r0, i - 38):max(r0, i - 8), c]
+            b = p[min(r1, i + 8):min(r1, i + 38), c]
+            la = np.median(a) if a.size >= 4 else air_lvl
+            lb = np.median(b) if b.size >= 4 else pow_lvl
+            if lb - la >= MIN_STEP * (pow_lvl - air_lvl):
+                break
+        else:
+            continue
+        if i >= bot - 2:
+            continue
+        mid = 0.5 * (la + lb)
         s0, s1 = max(r0, i - 25), min(r1, i + 25)
         seg = p[s0:s1 + 1, c]
         up = seg >= mid
         js = np.flatnonzero(up[1:] & ~up[:-1]) + 1
         if js.size == 0:
             continue
+        gap = np.flatnonzero(~up[:-2] & ~up[1:-1] & ~up[2:])
+        if np.any((gap > js[0]) & (gap < js[-1])):
+            continue  # two steps up with 3 or more rows between back below the half level: a streak
+            # across the air just above the surface, or across the bed just below it; which is the
+            # surface cannot be told in this column
         j = int(js[np.argmin(np.abs(s0 + js - i))])
         rows.append(s0 + j - 1 + (mid - seg[j - 1]) / (seg[j] - seg[j - 1]))
         cols.append(float(c))
