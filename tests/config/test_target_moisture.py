@@ -11,27 +11,24 @@ parameters calibrated at another.  Each test edits the parsed guangxi cohesive s
 from __future__ import annotations
 
 import copy
-from pathlib import Path
 
 import pytest
 import yaml
 
+from soil_copies import ROOT, load_copy, read_shipped
 from soilcal.config.load import load_soil, read_yaml
 from soilcal.errors import InputError
 
-ROOT = Path(__file__).resolve().parents[2]
 SOIL = "guangxi-cohesive"
 
 
 @pytest.fixture(scope="module")
 def parsed():
-    return read_yaml(ROOT / f"config/soils/{SOIL}.yaml")
+    return read_shipped(SOIL)
 
 
 def _load(tmp_path, data):
-    p = tmp_path / f"{SOIL}.yaml"
-    p.write_text(yaml.safe_dump(data, sort_keys=False))
-    return load_soil(p, ROOT / "resources")
+    return load_copy(tmp_path, SOIL, data)
 
 
 def test_the_shipped_moistures_load(tmp_path, parsed):

@@ -8,27 +8,22 @@ calibrated to the same photos and targets.csv gave both the upper layer's angle.
 from __future__ import annotations
 
 import copy
-from pathlib import Path
 
 import pytest
-import yaml
 
-from soilcal.config.load import load_soil, read_yaml
+from soil_copies import load_copy, read_shipped
 from soilcal.errors import InputError
 
-ROOT = Path(__file__).resolve().parents[2]
 SOIL = "xinjiang-vineyard"
 
 
 @pytest.fixture(scope="module")
 def parsed():
-    return read_yaml(ROOT / f"config/soils/{SOIL}.yaml")
+    return read_shipped(SOIL)
 
 
 def _load(tmp_path, data):
-    p = tmp_path / f"{SOIL}.yaml"
-    p.write_text(yaml.safe_dump(data, sort_keys=False))
-    return load_soil(p, ROOT / "resources")
+    return load_copy(tmp_path, SOIL, data)
 
 
 def test_a_target_of_another_layer_on_the_same_photos_is_refused(tmp_path, parsed):
