@@ -246,14 +246,7 @@ def round_change(first: dict, second: dict, bias, surface_se=0.0) -> str:
     m2, s2, n2 = second["simulated_mean"], second["simulated_sd"], second["n"]
     p1, p2 = first["predicted"], second["predicted"]
 
-    def num(v):
-        try:
-            v = float(v)
-        except (TypeError, ValueError):
-            return 0.0
-        return v if np.isfinite(v) else 0.0
-
-    b, sse = num(bias), num(surface_se)
+    b, sse = _finite(bias, 0.0), _finite(surface_se, 0.0)
     vals = (m1, s1, m2, s2, p1, p2)
     if n1 < 2 or n2 < 2 or not all(np.isfinite(float(v)) for v in vals):
         return ""
@@ -359,14 +352,17 @@ def target_scatter(t: dict) -> float:
     ``image_spread`` is the SD of ``angle_deg`` over single flanks (a heap's left and right
     included) or frames, whatever measure the target takes, and is not the spread of repeated
     measurements of the target's value."""
-    if str(t.get("source", "")) == "image":
-        return float("nan")
-    v = t.get("sd")
+    v = float("nan") if str(t.get("source", "")) == "image" else _finite(t.get("sd"), float("nan"))
+    return v if v > 0 else float("nan")
+
+
+def _finite(v, default: float) -> float:
+    """``v`` as a finite float, else ``default`` (a CSV cell may be empty, text or NaN)."""
     try:
         v = float(v)
     except (TypeError, ValueError):
-        return float("nan")
-    return v if np.isfinite(v) and v > 0 else float("nan")
+        return default
+    return v if np.isfinite(v) else default
 
 
 def _pinned(v):
