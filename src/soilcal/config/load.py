@@ -555,7 +555,7 @@ def _check_image_states(path: Path, targets: dict, named: dict) -> None:
     refused naming the second target's ``image``, both states and, for each, the target that
     gave it (the first on the group to give that state, not always the group's first
     target)."""
-    from soilcal.config.quantities import same_moisture
+    from soilcal.config.quantities import same_number
 
     given = {}  # photo group -> state key -> (its value, the first target that gave it)
     for tid, g in named.items():
@@ -566,7 +566,7 @@ def _check_image_states(path: Path, targets: dict, named: dict) -> None:
         def same(k, v):
             if k == "layer":
                 return str(state[k]).strip() == str(v).strip()
-            return same_moisture(float(state[k]), float(v))
+            return same_number(float(state[k]), float(v))
 
         differ = [(k, *seen[k]) for k in ("moisture_content", "layer") if k in state and k in seen
                   and not same(k, seen[k][0])]

@@ -368,7 +368,7 @@ def _check_case_moisture(soil_path, data: dict, stage: dict, cw: str, cv: dict) 
     ``moisture_content`` (in the unit of ``properties.moisture_content``), were measured at it,
     and otherwise the soil declares it (``properties.moisture_content``).  Rows at one moisture
     would otherwise be simulated with the parameters calibrated at another."""
-    from soilcal.config.quantities import declares_moisture, same_moisture, soil_moisture
+    from soilcal.config.quantities import declares_moisture, same_number, soil_moisture
 
     declared = soil_moisture(soil_path, data)  # an unknown unit is refused here
     soil_factor = declared["factor"] if declared else None
@@ -385,7 +385,7 @@ def _check_case_moisture(soil_path, data: dict, stage: dict, cw: str, cv: dict) 
         aimed = [(tid, targets[tid]["moisture_content"]) for g in cases[cid]["goals"].values()
                  if (tid := g.get("target")) in targets and targets[tid].get("moisture_content") is not None]
         if aimed and declared is not None:
-            off = [(tid, m) for tid, m in aimed if not same_moisture(pct, float(m) * soil_factor)]
+            off = [(tid, m) for tid, m in aimed if not same_number(pct, float(m) * soil_factor)]
             if off:
                 raise InputError(soil_path, f"{cw}.case.{k}",
                                  f"the moisture content of the targets case {cid!r} aims at ("

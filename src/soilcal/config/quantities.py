@@ -91,20 +91,15 @@ def same_number(a: float, b: float) -> bool:
     return math.isclose(a, b, rel_tol=MOISTURE_RTOL, abs_tol=MOISTURE_RTOL)
 
 
-def same_moisture(a: float, b: float) -> bool:
-    """Whether two moisture contents, in one unit, are the same moisture (:func:`same_number`)."""
-    return same_number(a, b)
-
-
 def declares_moisture(declared: dict, pct: float) -> bool:
     """Whether the moisture contents a soil declares (:func:`soil_moisture`) hold ``pct``, a
     moisture content in %: one of its values, or inside its ``low`` .. ``high`` (its ends
-    included), compared in % by :func:`same_moisture`, so that a moisture written in % and
+    included), compared in % by :func:`same_number`, so that a moisture written in % and
     declared as a fraction, or the other way round, is the same moisture at every value and
     at a range's ends."""
     f = declared["factor"]
-    return (any(same_moisture(pct, v * f) for v in declared["points"])
-            or any(lo * f <= pct <= hi * f or same_moisture(pct, lo * f) or same_moisture(pct, hi * f)
+    return (any(same_number(pct, v * f) for v in declared["points"])
+            or any(lo * f <= pct <= hi * f or same_number(pct, lo * f) or same_number(pct, hi * f)
                    for lo, hi in declared["ranges"]))
 
 
