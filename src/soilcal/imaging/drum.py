@@ -76,8 +76,8 @@ from skimage import feature, filters, measure, morphology, transform
 
 from soilcal.errors import InputError
 from soilcal.imaging.io import read_gray_reduced
-from soilcal.imaging.measure import (PILE_WORK_PIXELS, PLATE_MAX_ROLL_DEG, Stages, _plate_beyond_search, plate_line_any,
-                                     roll_of)
+from soilcal.imaging.measure import (PILE_WORK_PIXELS, PLATE_MAX_ROLL_DEG, Stages, _plate_beyond_search, open_fill,
+                                     plate_line_any, roll_of)
 from soilcal.imaging.refusal import Tried, explained
 
 CHORD_FRACTION = 0.6
@@ -354,7 +354,7 @@ def _surface(path, p, inside, cx, cy, rm):
     if hi_m - lo_m < 0.1:
         raise InputError(path, "image", DRUM_EXPECTED, f"no powder against air: the grey classes inside the drum "
                          f"differ by {hi_m - lo_m:.2f} of the frame's range (at least 0.10 needed)")
-    binary = ndi.binary_fill_holes(morphology.opening((p >= t) & inside, morphology.disk(2)))
+    binary = open_fill((p >= t) & inside)
     lab = measure.label(binary)
     sizes = np.bincount(lab.ravel())
     sizes[0] = 0

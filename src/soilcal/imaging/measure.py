@@ -182,6 +182,29 @@ def colour_edges(rgb, sigma=1.5):
     return out
 
 
+#: the opening that removes specks from a segmented class before its holes are filled
+SPECK_FOOTPRINT = morphology.disk(2)
+
+
+def open_fill(mask):
+    """``mask`` opened by :data:`SPECK_FOOTPRINT` and its holes filled: the same as
+    ``ndi.binary_fill_holes(morphology.opening(mask, SPECK_FOOTPRINT))`` (an opening at the
+    image border reflected, as scikit-image's; a hole is a 4-connected region of background that
+    does not reach the border, as scipy's), in about half the time: the opening by binary
+    erosion and dilation of the reflected image, the holes by one labelling of the background
+    instead of a propagation from the border.  Every candidate plate line and cue of a heap
+    photo segments the photo once."""
+    r = SPECK_FOOTPRINT.shape[0] // 2
+    eroded = ndi.binary_erosion(np.pad(mask, r, mode="symmetric"), SPECK_FOOTPRINT)[r:-r, r:-r]
+    opened = ndi.binary_dilation(np.pad(eroded, r, mode="symmetric"), SPECK_FOOTPRINT)[r:-r, r:-r]
+    lab, n = ndi.label(~opened)
+    outside = np.zeros(n + 1, bool)
+    for border in (lab[0], lab[-1], lab[:, 0], lab[:, -1]):
+        outside[border] = True
+    outside[0] = False  # label 0: the opened mask itself, kept
+    return ~outside[lab]
+
+
 def _binary(path, gray, method, classes=2):
     if method == "otsu":
         t = filters.threshold_otsu(gray) if classes == 2 else filters.threshold_multiotsu(gray, classes)[-1]
@@ -191,8 +214,7 @@ def _binary(path, gray, method, classes=2):
         dark = gray < filters.threshold_local(gray, block, offset=0.02)
     else:
         raise InputError(path, "threshold", "'otsu' or 'adaptive'", method)
-    dark = morphology.opening(dark, morphology.disk(2))
-    return ndi.binary_fill_holes(dark)
+    return open_fill(dark)
 
 
 def plate_line(path, gray, binary):
@@ -862,7 +884,7 @@ def _pile_with(path, rgb, gray, cue, polarity, band, slope, intercept, threshold
     on beside the heap (:func:`_plate_beside_heap`)."""
     if threshold == "otsu":
         t = filters.threshold_otsu(gray[band])
-        binary = ndi.binary_fill_holes(morphology.opening(gray < t, morphology.disk(2)))
+        binary = open_fill(gray < t)
     else:
         binary = _binary(path, gray, threshold)
     if tried is not None:
