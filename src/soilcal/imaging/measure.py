@@ -668,21 +668,28 @@ def _plate_alternative(path, rgb, lum, grays, lines, res, channel, threshold, pl
     own = _edge_beside(plate_edges, res)
     # where the line measured on has no side to judge, any judged support beside the heap is more
     best, found = (own if own is not None else 0.0), None
+
+    def rival(other):
+        # an "ok" heap whose flanks read differently, on a line meeting edges beside it along
+        # at least the share of the best so far (the first cue's heap is the one returned: the
+        # further cues only confirm it or make it "low", so they are run only where it passes)
+        if other.confidence != "ok" or _flank_difference(res, other) <= PLATE_AMBIGUOUS_DEG:
+            return False
+        share = _edge_beside(plate_edges, other)
+        if share is None or (own is None and share <= 0.0):
+            return False  # nothing beside the heap to compare
+        return share >= best  # of several such lines, the one running on furthest beside the heap
+
     for n, (s2, b2) in enumerate(lines, 1):
         if n in refused or abs(math.degrees(math.atan(s2) - math.atan(slope))) <= PLATE_AMBIGUOUS_DEG:
             continue
         try:
             other = _on_plate_lines(path, rgb, lum, grays, [(s2, b2)], n, channel, threshold, False,
-                                    Tried(keep_masks=False), plate_edges, [])
+                                    Tried(keep_masks=False), plate_edges, [], wanted=rival)
         except InputError:
             continue
-        if other.confidence != "ok" or _flank_difference(res, other) <= PLATE_AMBIGUOUS_DEG:
-            continue
-        share = _edge_beside(plate_edges, other)
-        if share is None or (own is None and share <= 0.0):
-            continue  # nothing beside the heap to compare
-        if share >= best:  # of several such lines, the one running on furthest beside the heap
-            best, found = share, (float(s2), float(b2), other.left_deg, other.right_deg)
+        if rival(other):
+            best, found = _edge_beside(plate_edges, other), (float(s2), float(b2), other.left_deg, other.right_deg)
     return found
 
 
@@ -738,11 +745,14 @@ def _noting_tilt(refused: InputError, tilted) -> InputError:
 
 
 def _on_plate_lines(path, rgb, lum, grays, lines, n_first, channel, threshold, keep_stages, tried, plate_edges,
-                    beside, refused=None):
+                    beside, refused=None, wanted=None):
     """The heap measured on the first of ``lines`` (numbered from ``n_first``) on which a cue
     finds one (module text); a line refused only because it does not run on beside the heap
     (:func:`_plate_beside_heap`) is added to ``beside`` with the reason; ``refused``: a set
-    given gets the number of each line every cue refused."""
+    given gets the number of each line every cue refused.  ``wanted``: a test of the first
+    cue's heap (the one returned, whose geometry the further cues only confirm or make "low");
+    a heap failing it is returned as the first cue measured it, unchecked by further cues (for
+    a caller that would not use it whatever they found)."""
     h, w = lum.shape
     rr, cc = np.mgrid[0:h, 0:w]
     refusals = []  # every cue's refusal, the topmost line's first
@@ -798,6 +808,8 @@ def _on_plate_lines(path, rgb, lum, grays, lines, n_first, channel, threshold, k
                 return res
             if first is None:
                 first = res
+                if wanted is not None and not wanted(res):
+                    return res
                 continue
             checks -= 1
             if res.confidence != "ok":
