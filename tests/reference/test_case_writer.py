@@ -35,6 +35,21 @@ def test_case_files_carry_the_simulation(tmp_path):
     assert json.loads((tmp_path / "case.json").read_text())["law"].endswith("cdt")
 
 
+def test_epsd_becomes_liggghts_epsd_undamped(tmp_path):
+    """soilcal's epsd (Ai et al.'s spring without the viscous term) is LIGGGHTS's
+    rolling_friction epsd with coefficientRollingViscousDamping 0; the form matches with the
+    liggghts conventions only."""
+    sim, phases = build("stack", "epsd")
+    info = L.write_case(sim, tmp_path, phases, BOUNDS)
+    deck = (tmp_path / "in.case").read_text()
+    assert "pair_style gran model hertz tangential history rolling_friction epsd" in deck
+    assert "coefficientRollingFriction peratomtypepair 2 0.1 0.15 0.15 0.0" in deck
+    assert "coefficientRollingViscousDamping peratomtypepair 2 0.0 0.0 0.0 0.0" in deck
+    assert info["conventions_match"]
+    sim, phases = build("stack", "epsd", conventions="edem")
+    assert not L.write_case(sim, tmp_path, phases, BOUNDS)["conventions_match"]
+
+
 def test_other_conventions_are_recorded_and_damping_off_passed(tmp_path):
     sim, phases = build("wall_roll", "constant_torque", conventions="edem")
     assert not L.write_case(sim, tmp_path, phases, BOUNDS)["conventions_match"]
