@@ -196,12 +196,12 @@ an option of :func:`model_codes` (``rolling_lever``, ``rolling_force``, ``rollin
 * ``epsd_form``: the ``epsd`` spring.  ``tangent`` (above: k_n = S_n = 2 E* a, the limit
   on the ``rolling_force``, the stored moment turned into the current tangent plane, nothing
   added at a run's setup) or ``liggghts`` (LIGGGHTS ``rolling_friction epsd`` with
-  coefficientRollingViscousDamping 0, rolling_model_epsd.h: k_n = F_ne/delta = 4/3 E* a, its
-  Hertz kn, so k_r is 2/3 of the tangent form's; the limit mu_r R* |F_n,tot| with the
-  damping, whatever ``rolling_force`` says; the stored moment not turned; against a wall
-  the rotation scaled by (R_i - delta/2)/(R_i - delta), LIGGGHTS's wall wr; and a run's
-  setup applying M_r - k_r dtheta_r of one step without storing it, as LIGGGHTS's setup
-  evaluates the torque with its step but keeps the history).
+  coefficientRollingViscousDamping 0, rolling_model_epsd.h: k_n = 4/3 E* a, LIGGGHTS's
+  Hertz kn (F_ne/delta for plain Hertz only), so k_r is 2/3 of the tangent form's; the
+  limit mu_r R* |F_n,tot| with the damping, whatever ``rolling_force`` says; the stored
+  moment not turned; against a wall the rotation scaled by (R_i - delta/2)/(R_i - delta),
+  LIGGGHTS's wall wr; and a run's setup applying M_r - k_r dtheta_r of one step without
+  storing it, as LIGGGHTS's setup evaluates the torque with its step but keeps the history).
 * ``wall_curvature``: the effective radius of a contact with an analytic cylinder that holds
   the spheres inside (a drum).  ``flat`` (R* = R_i, as against a plane or the facets of a
   mesh, which is how EDEM and LIGGGHTS meet a drum) or ``cylinder`` (R* = R_i R_w /
@@ -662,8 +662,8 @@ def contact_force(codes, pair, ma, mb, delta, nx, ny, nz, rvx, rvy, rvz, wrx, wr
             tjz += m * lj * uz
     elif codes[3] == 2 and mur > 0.0:
         # ``epsd_form``: tangent (k_n = S_n, the limit on fnr, the moment turned with the
-        # tangent plane, no increment at a run's setup) or liggghts (k_n = F_ne/delta =
-        # 4/3 E* a, the limit on |F_n,tot|, the moment kept as stored, and at a run's setup the
+        # tangent plane, no increment at a run's setup) or liggghts (k_n = 4/3 E* a, LIGGGHTS's
+        # Hertz kn, the limit on |F_n,tot|, the moment kept as stored, and at a run's setup the
         # step's increment added to the torque but not stored: rolling_model_epsd.h)
         lig = codes[17] == 1
         wd = wrx * nx + wry * ny + wrz * nz

@@ -32,7 +32,8 @@ What LIGGGHTS computes is its own law: Hertz with viscoelastic damping and Mindl
 ``cdt`` (rolling_model_cdt.h) or the EPSD spring (rolling_model_epsd.h), which soilcal computes
 exactly with the ``liggghts`` conventions (:mod:`soilcal.dem.contact`; for epsd its
 ``epsd_form: liggghts``).  :func:`write_case` records in ``case.json``
-whether the simulation's conventions are LIGGGHTS's; with any other conventions the two runs
+whether the simulation's conventions are LIGGGHTS's (``conventions_match``: those of the
+tangential history and of the rolling law in use); with any other conventions the two runs
 differ by the conventions, which is what a comparison then measures.
 
 Not translated (an :class:`~soilcal.errors.InputError` names the part): JKR cohesion
@@ -59,9 +60,14 @@ __all__ = ["available", "binary", "check_phases", "launch", "mpirun", "read_dump
            "run_phases", "write_case"]
 
 SOURCE = "<liggghts case>"
-_LIGGGHTS_EPSD = 1  # epsd_form of the ``liggghts`` set (contact.py)
-_LIGGGHTS_CONV = (1, 1, 1)  # rolling lever, force, axis of the ``liggghts`` set (contact.py)
-_LIGGGHTS_WALL = 1  # rolling against a wall: the sphere's own rotation
+#: the conventions that change what a LIGGGHTS case computes: the tangential history's (every
+#: case: the law is always Mindlin's) and each rolling law's; tangential_damping is written
+#: into the case, wall_curvature concerns analytic cylinders and the JKR ones cohesion, which
+#: a LIGGGHTS case has neither of
+_TANGENTIAL_CONV = ("tangential_slip", "history_rotation", "contact_lever")
+_ROLLING_CONV = {"none": (), "epsd": ("rolling_wall", "epsd_form"),
+                 "constant_torque": ("rolling_lever", "rolling_force", "rolling_axis",
+                                     "rolling_wall")}
 
 
 def binary() -> str | None:
@@ -92,8 +98,9 @@ def available() -> tuple[bool, str]:
 
 def _law(sim) -> tuple[str, str, bool]:
     """The LIGGGHTS contact model, its options and whether soilcal's conventions are
-    LIGGGHTS's."""
-    from soilcal.dem.contact import COHESION, DAMPING, NORMAL, ROLLING, TANGENTIAL
+    LIGGGHTS's (the ``liggghts`` set's entries that the case's law uses)."""
+    from soilcal.dem.contact import (CODE_CONVENTIONS, COHESION, CONVENTION_TABLES,
+                                     CONVENTIONS, DAMPING, NORMAL, ROLLING, TANGENTIAL)
 
     c = [int(v) for v in sim.codes]
     if c[0] != NORMAL["hertz"]:
@@ -113,13 +120,11 @@ def _law(sim) -> tuple[str, str, bool]:
                          "'none', 'constant_torque' (LIGGGHTS cdt) or 'epsd' (LIGGGHTS epsd)",
                          rolling)
     law = "gran model hertz tangential history"
-    same = True
-    if rolling == "constant_torque":
-        law += " rolling_friction cdt"
-        same = tuple(c[5:8]) == _LIGGGHTS_CONV and c[9] == _LIGGGHTS_WALL
-    elif rolling == "epsd":
-        law += " rolling_friction epsd"
-        same = c[17] == _LIGGGHTS_EPSD
+    if rolling != "none":
+        law += " rolling_friction " + ("cdt" if rolling == "constant_torque" else "epsd")
+    lig = CONVENTIONS["liggghts"]
+    same = all(c[5 + CODE_CONVENTIONS.index(k)] == CONVENTION_TABLES[k][lig[k]]
+               for k in _TANGENTIAL_CONV + _ROLLING_CONV[rolling])
     opts = " tangential_damping off" if c[8] == 1 else ""  # after the walls' own arguments
     return law, opts, same
 
