@@ -172,13 +172,15 @@ def test_tangential_history_after_one_step():
 
 def test_named_sets_and_single_entries():
     codes, w = model_codes(rolling="constant_torque")
-    assert list(codes[5:]) == [0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0] and w == 1.0
+    assert list(codes[5:]) == [0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0] and w == 1.0
     codes, w = model_codes(rolling="constant_torque", conventions="lammps")
-    assert list(codes[5:]) == [1, 1, 1, 0, 0, 1, 1, 1, 1, 1, 0, 1] and w == 2.0
+    assert list(codes[5:]) == [1, 1, 1, 0, 0, 1, 1, 1, 1, 1, 0, 1, 0] and w == 2.0
     codes, _ = model_codes(conventions="liggghts", rolling_force="total")
-    assert list(codes[5:]) == [1, 0, 1, 0, 1, 0, 0, 0, 0, 0, 0, 0]
+    assert list(codes[5:]) == [1, 0, 1, 0, 1, 0, 0, 0, 0, 0, 0, 0, 1]
     codes, _ = model_codes(conventions="lammps", jkr_break="displacement")
-    assert list(codes[10:]) == [0, 1, 1, 1, 1, 0, 1]
+    assert list(codes[10:]) == [0, 1, 1, 1, 1, 0, 1, 0]
+    codes, _ = model_codes(conventions="liggghts", epsd_form="tangent")
+    assert codes[17] == 0
     codes, _ = model_codes(jkr_approach="gap")
     assert codes[15] == 1
     codes, _ = model_codes(conventions="lammps", wall_curvature="flat")
@@ -204,7 +206,7 @@ def test_setup_conventions_reach_the_engine():
     setup = dict(repose.setups()["cinnamon-soil"], n_particles=50,
                  contact_conventions={"conventions": "liggghts", "tangential_damping": "off"})
     sim, _ = make_simulation(DemParams(), setup, "quick", "t")
-    assert list(sim.codes[5:]) == [1, 1, 1, 1, 1, 0, 0, 0, 0, 0, 0, 0]
+    assert list(sim.codes[5:]) == [1, 1, 1, 1, 1, 0, 0, 0, 0, 0, 0, 0, 1]
     assert conventions_of(None)["conventions"] == "edem"
 
 
@@ -237,3 +239,54 @@ def test_jkr_attraction_across_a_gap(approach, wall):
         fz = sim.compute_forces()[0][k, 2]
         assert fz == pytest.approx(expected, rel=1e-9, abs=1e-15)
     assert force < 0
+
+
+def test_liggghts_epsd_pair_spring_is_secant_and_counts_the_setup_step():
+    """LIGGGHTS rolling_model_epsd.h between spheres: r_torque = M_old + k_r w_t dt with
+    k_r = 2.25 k_n mu_r^2 R*^2 and k_n = F_ne / delta = 4/3 E* a (its Hertz kn), w_t the
+    relative rotation without its normal part; -r_torque on i, +r_torque on j.  A run's setup
+    (compute_forces) applies the step's increment without storing it.  soilcal's own form
+    (``tangent``, EDEM's set) takes S_n = 2 E* a and adds nothing at the setup."""
+    delta, w = 2e-5, np.array([0.0, 3.0, 4.0])
+    dt = 1e-7  # the step of pair()
+    _, ti, tj, rstar, _ = pair("liggghts", w, vz=-0.01, rj=1.5 * R, delta=delta,
+                               rolling="epsd")
+    kn = 4 / 3 * ESTAR * math.sqrt(rstar * delta)
+    kr = 2.25 * kn * MUR**2 * rstar**2
+    wt = w - np.array([0.0, 0.0, w[2]])  # normal along z
+    np.testing.assert_allclose(ti, -kr * wt * dt, rtol=1e-9, atol=1e-25)
+    np.testing.assert_allclose(tj, kr * wt * dt, rtol=1e-9, atol=1e-25)
+    _, ti, _, _, _ = pair("edem", w, vz=-0.01, rj=1.5 * R, delta=delta, rolling="epsd")
+    np.testing.assert_allclose(ti, 0.0, atol=1e-25)
+
+
+def _epsd_on_floor(conv, w, vz, delta=2e-5, dt=1e-7):
+    sim = Simulation(table(e=REST, mu=0.5, mur=MUR, E=E, nu=NU), dt=dt, gravity=(0, 0, 0),
+                     contact_model=dict(rolling="epsd", tangential="none", conventions=conv))
+    sim.add_particles([[0, 0, R - delta]], R, "soil", v=[[0, 0, vz]])
+    sim.add_plane((0, 0, 0), (0, 0, 1), "soil")
+    sim.p.omega[0] = w
+    return sim
+
+
+def test_liggghts_epsd_wall_spring_and_limit():
+    """Against a wall LIGGGHTS's epsd turns the spring by wr = omega (R - delta/2)/(R - delta)
+    (surface_model_default.h) with R_eff = R, and limits it at mu_r R |F_n| with the damping
+    in F_n (sidata.Fn); the setup's increment is not stored (evaluating twice gives the same
+    torque)."""
+    delta, dt = 2e-5, 1e-7
+    w = np.array([0.0, 3.0, 4.0])
+    sim = _epsd_on_floor("liggghts", w, 0.0, delta, dt)
+    kn = 4 / 3 * ESTAR * math.sqrt(R * delta)
+    kr = 2.25 * kn * MUR**2 * R**2
+    wt = np.array([0.0, 3.0, 0.0]) * (R - delta / 2) / (R - delta)
+    for _ in range(2):
+        t = sim.compute_forces()[1][0].copy()
+        np.testing.assert_allclose(t, -kr * wt * dt, rtol=1e-9, atol=1e-25)
+    # a spin far beyond the spring's reach: the limit with the normal damping in the force
+    big = np.array([0.0, 1e8, 0.0])
+    sim = _epsd_on_floor("liggghts", big, -0.01, delta, dt)
+    t = sim.compute_forces()[1][0]
+    m = 4 / 3 * math.pi * R**3 * RHO
+    fn = hertz(delta, R) + damping(delta, R, m, -0.01)
+    np.testing.assert_allclose(t, [0.0, -MUR * R * fn, 0.0], rtol=1e-9, atol=1e-25)

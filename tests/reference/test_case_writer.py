@@ -35,6 +35,48 @@ def test_case_files_carry_the_simulation(tmp_path):
     assert json.loads((tmp_path / "case.json").read_text())["law"].endswith("cdt")
 
 
+def test_epsd_becomes_liggghts_epsd_undamped(tmp_path):
+    """soilcal's epsd (Ai et al.'s spring without the viscous term) is LIGGGHTS's
+    rolling_friction epsd with coefficientRollingViscousDamping 0; the form matches with the
+    liggghts conventions only."""
+    sim, phases = build("stack", "epsd")
+    info = L.write_case(sim, tmp_path, phases, BOUNDS)
+    deck = (tmp_path / "in.case").read_text()
+    assert "pair_style gran model hertz tangential history rolling_friction epsd" in deck
+    assert "coefficientRollingFriction peratomtypepair 2 0.1 0.15 0.15 0.0" in deck
+    assert "coefficientRollingViscousDamping peratomtypepair 2 0.0 0.0 0.0 0.0" in deck
+    assert info["conventions_match"]
+    sim, phases = build("stack", "epsd", conventions="edem")
+    assert not L.write_case(sim, tmp_path, phases, BOUNDS)["conventions_match"]
+
+
+@pytest.mark.parametrize("rolling, entry, value", [
+    ("epsd", "rolling_wall", "relative"),  # the epsd spring turns with omega_i - omega_wall
+    ("constant_torque", "rolling_wall", "relative"),
+    ("none", "tangential_slip", "damped"),  # every case's Mindlin history
+    ("none", "contact_lever", "radius"),
+    ("epsd", "history_rotation", "rescale"),
+])
+def test_a_convention_the_law_uses_off_the_liggghts_set_is_no_match(tmp_path, rolling, entry,
+                                                                      value):
+    """The liggghts set with one entry changed that the case's law computes with is not
+    LIGGGHTS's law: conventions_match is False (LIGGGHTS turns the epsd spring against a
+    turning drum by the sphere's own rotation, so with rolling_wall: relative the few-body
+    drum_turn's spins part from LIGGGHTS's by several times their size)."""
+    from soilcal.dem.contact import CODE_CONVENTIONS, CONVENTION_TABLES
+
+    sim, phases = build("drum_turn", rolling)
+    assert L.write_case(sim, tmp_path, phases, BOUNDS)["conventions_match"]
+    sim.codes[5 + CODE_CONVENTIONS.index(entry)] = CONVENTION_TABLES[entry][value]
+    assert not L.write_case(sim, tmp_path, phases, BOUNDS)["conventions_match"]
+    # LAMMPS's set with LIGGGHTS's rolling entries (its lever, force and axis are already
+    # LIGGGHTS's) still has LAMMPS's tangential history
+    sim, phases = build("drum_turn", rolling, conventions="lammps")
+    for k, v in (("rolling_wall", "absolute"), ("epsd_form", "liggghts")):
+        sim.codes[5 + CODE_CONVENTIONS.index(k)] = CONVENTION_TABLES[k][v]
+    assert not L.write_case(sim, tmp_path, phases, BOUNDS)["conventions_match"]
+
+
 def test_other_conventions_are_recorded_and_damping_off_passed(tmp_path):
     sim, phases = build("wall_roll", "constant_torque", conventions="edem")
     assert not L.write_case(sim, tmp_path, phases, BOUNDS)["conventions_match"]

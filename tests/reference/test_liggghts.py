@@ -26,6 +26,19 @@ def test_few_body_trajectories_agree_to_rounding(name):
     assert r["dw"] <= r["tol"] * r["wmax"]
 
 
+@pytest.mark.parametrize("name", ["wall_roll", "pair_roll", "stack"])
+def test_epsd_rolling_agrees_to_rounding(name):
+    """The same with the EPSD rolling spring (LIGGGHTS rolling_friction epsd, no rolling
+    damping): a sphere rolling on the floor, a pair spinning against each other, a stack."""
+    from soilcal.reference.few import compare
+
+    r = compare(name, "epsd")
+    assert r["travel"] > 1e-5
+    assert r["dx"] <= r["tol"] * r["travel"]
+    assert r["dv"] <= r["tol"] * r["vmax"]
+    assert r["dw"] <= r["tol"] * r["wmax"]
+
+
 def test_edem_conventions_differ_from_liggghts():
     """The check can fail: soilcal with EDEM's rolling conventions leaves LIGGGHTS's
     trajectory of the rolling sphere by far more than rounding."""
@@ -81,7 +94,7 @@ def test_cases_the_reference_cannot_run_are_named():
     from soilcal.errors import InputError
     from soilcal.reference.few import materials
 
-    sim = Simulation(materials(True), dt=1e-6, contact_model=dict(rolling="epsd"))
+    sim = Simulation(materials(True), dt=1e-6, contact_model=dict(rolling="bounded"))
     sim.add_particles([[0, 0, 0.01]], 1e-3, "soil")
     with pytest.raises(InputError, match="contact_model.rolling"):
         L.write_case(sim, "/nonexistent", [(10, {})], (-1, 1, -1, 1, -1, 1))

@@ -83,6 +83,9 @@ Powder Technol. 206:269, Eqs. 11-14; undamped, eta_r = 0)::
     k_r = 2.25 k_n mu_r^2 R_r^2 (k_n = S_n, R_r = R*),  M_r <- M_r - k_r dtheta_r,
     dtheta_r = (omega_i - omega_j)_t dt,  |M_r| <= mu_r R_r |F_n,tot|
 
+(Ai et al. write k_n for a linear spring; with Hertz this form takes the tangent stiffness
+S_n.  LIGGGHTS's ``rolling_friction epsd`` takes the secant one: ``epsd_form`` below.)
+
 Rolling, ``bounded`` (EDEM's type A torque on each particle's own rotation, bounded so that it
 cannot reverse that rotation within a step; Irazabal, Salazar & Onate 2017, "Numerical
 modelling of granular materials with spherical discrete particles and the bounded rolling
@@ -190,6 +193,15 @@ an option of :func:`model_codes` (``rolling_lever``, ``rolling_force``, ``rollin
   ``contact_point`` (c_i = R_i - delta/2 for the velocity and the torques, as LIGGGHTS) or
   ``radius`` (R_i in the velocity, R_i - delta/2 in a pair's torques and R_i in a wall's,
   LAMMPS ``GranularModel::calculate_forces``).
+* ``epsd_form``: the ``epsd`` spring.  ``tangent`` (above: k_n = S_n = 2 E* a, the limit
+  on the ``rolling_force``, the stored moment turned into the current tangent plane, nothing
+  added at a run's setup) or ``liggghts`` (LIGGGHTS ``rolling_friction epsd`` with
+  coefficientRollingViscousDamping 0, rolling_model_epsd.h: k_n = 4/3 E* a, LIGGGHTS's
+  Hertz kn (F_ne/delta for plain Hertz only), so k_r is 2/3 of the tangent form's; the
+  limit mu_r R* |F_n,tot| with the damping, whatever ``rolling_force`` says; the stored
+  moment not turned; against a wall the rotation scaled by (R_i - delta/2)/(R_i - delta),
+  LIGGGHTS's wall wr; and a run's setup applying M_r - k_r dtheta_r of one step without
+  storing it, as LIGGGHTS's setup evaluates the torque with its step but keeps the history).
 * ``wall_curvature``: the effective radius of a contact with an analytic cylinder that holds
   the spheres inside (a drum).  ``flat`` (R* = R_i, as against a plane or the facets of a
   mesh, which is how EDEM and LIGGGHTS meet a drum) or ``cylinder`` (R* = R_i R_w /
@@ -199,7 +211,7 @@ an option of :func:`model_codes` (``rolling_lever``, ``rolling_force``, ``rollin
   50 mm drum).  Planes and the other wall kinds keep R_i in both.
 
 ``liggghts`` = effective lever, elastic force, tangential axis, damping on, absolute wall
-rotation (LIGGGHTS has no JKR law: ``cohesion sjkr`` is a different model, so its JKR entries
+rotation, LIGGGHTS's epsd spring (LIGGGHTS has no JKR law: ``cohesion sjkr`` is a different model, so its JKR entries
 stay EDEM's); ``lammps`` = the same rolling entries (its ``rolling sds`` is the ``epsd`` model
 here, whose lever is R* in every set), the LAMMPS JKR convention, the break at the force
 minimum, the elastic JKR force in the Coulomb limit, the damped slip, the rescaled rotation,
@@ -249,6 +261,7 @@ HISTORY_ROTATION = {"project": 0, "rescale": 1}
 CONTACT_LEVER = {"contact_point": 0, "radius": 1}
 JKR_APPROACH = {"touch": 0, "gap": 1}
 WALL_CURVATURE = {"flat": 0, "cylinder": 1}
+EPSD_FORM = {"tangent": 0, "liggghts": 1}
 #: |xi . n| k_t above this share of the Coulomb limit rotates a ``rescale`` history (LAMMPS
 #: GRAN_KERNEL_EPSILON, gran_sub_mod_kernel_defs.h)
 RESCALE_EPS = 1e-10
@@ -258,18 +271,18 @@ CONVENTIONS = {
                  tangential_damping="on", jkr_convention="edem", rolling_wall="relative",
                  jkr_break="displacement", coulomb_force="total", tangential_slip="spring",
                  history_rotation="project", contact_lever="contact_point", jkr_approach="touch",
-                 wall_curvature="flat"),
+                 wall_curvature="flat", epsd_form="tangent"),
     "liggghts": dict(rolling_lever="effective", rolling_force="elastic",
                      rolling_axis="tangential", tangential_damping="on", jkr_convention="edem",
                      rolling_wall="absolute", jkr_break="displacement", coulomb_force="total",
                      tangential_slip="spring", history_rotation="project",
                      contact_lever="contact_point", jkr_approach="touch",
-                     wall_curvature="flat"),
+                     wall_curvature="flat", epsd_form="liggghts"),
     "lammps": dict(rolling_lever="effective", rolling_force="elastic", rolling_axis="tangential",
                    tangential_damping="on", jkr_convention="lammps", rolling_wall="relative",
                    jkr_break="force", coulomb_force="jkr_elastic", tangential_slip="damped",
                    history_rotation="rescale", contact_lever="radius", jkr_approach="touch",
-                   wall_curvature="cylinder"),
+                   wall_curvature="cylinder", epsd_form="tangent"),
 }
 CONVENTION_TABLES = {"rolling_lever": ROLLING_LEVER, "rolling_force": ROLLING_FORCE,
                      "rolling_axis": ROLLING_AXIS, "tangential_damping": TANGENTIAL_DAMPING,
@@ -277,11 +290,12 @@ CONVENTION_TABLES = {"rolling_lever": ROLLING_LEVER, "rolling_force": ROLLING_FO
                      "jkr_break": JKR_BREAK, "coulomb_force": COULOMB_FORCE,
                      "tangential_slip": TANGENTIAL_SLIP, "history_rotation": HISTORY_ROTATION,
                      "contact_lever": CONTACT_LEVER, "jkr_approach": JKR_APPROACH,
-                     "wall_curvature": WALL_CURVATURE}
+                     "wall_curvature": WALL_CURVATURE, "epsd_form": EPSD_FORM}
 #: the conventions' entries of the codes array, from codes[5] on (jkr_convention is w_factor)
 CODE_CONVENTIONS = ("rolling_lever", "rolling_force", "rolling_axis", "tangential_damping",
                     "rolling_wall", "jkr_break", "coulomb_force", "tangential_slip",
-                    "history_rotation", "contact_lever", "jkr_approach", "wall_curvature")
+                    "history_rotation", "contact_lever", "jkr_approach", "wall_curvature",
+                    "epsd_form")
 
 # history slot layout (per particle and contact partner)
 H_XI = 0  # 3 tangential displacement
@@ -342,7 +356,7 @@ def _yaml_note(value, table):
 def model_codes(normal="hertz", damping="viscoelastic", tangential="mindlin", rolling="none",
                 cohesion="none", conventions="edem", source="<input>", damping_eta=None,
                 **overrides):
-    """Return (codes int64[17], w_factor) for a model composed by names.
+    """Return (codes int64[18], w_factor) for a model composed by names.
 
     ``conventions`` names a set of :data:`CONVENTIONS` (EDEM's by default); ``overrides``
     (any key of :data:`CONVENTION_TABLES`) change single entries of it.  ``damping_eta``
@@ -456,6 +470,9 @@ def contact_force(codes, pair, ma, mb, delta, nx, ny, nz, rvx, rvy, rvz, wrx, wr
     """
     estar = pair[ma, mb, P_ESTAR]
     w = pair[ma, mb, P_W]
+    # dt < 0: a run's setup evaluation, whose step will be -dt; the histories advance by
+    # nothing (only LIGGGHTS's epsd adds its step's increment to the setup torque)
+    step = dt if dt > 0.0 else 0.0
     cohesive = codes[4] == 1 and w > 0.0
     if cohesive:
         if delta <= 0.0:
@@ -555,9 +572,9 @@ def contact_force(codes, pair, ma, mb, delta, nx, ny, nz, rvx, rvy, rvz, wrx, wr
             xx *= s1
             xy *= s1
             xz *= s1
-        xx += vtx * dt
-        xy += vty * dt
-        xz += vtz * dt
+        xx += vtx * step
+        xy += vty * step
+        xz += vtz * step
         ftx = -st * xx
         fty = -st * xy
         ftz = -st * xz
@@ -644,15 +661,27 @@ def contact_force(codes, pair, ma, mb, delta, nx, ny, nz, rvx, rvy, rvz, wrx, wr
             tjy += m * lj * uy
             tjz += m * lj * uz
     elif codes[3] == 2 and mur > 0.0:
+        # ``epsd_form``: tangent (k_n = S_n, the limit on fnr, the moment turned with the
+        # tangent plane, no increment at a run's setup) or liggghts (k_n = 4/3 E* a, LIGGGHTS's
+        # Hertz kn, the limit on |F_n,tot|, the moment kept as stored, and at a run's setup the
+        # step's increment added to the torque but not stored: rolling_model_epsd.h)
+        lig = codes[17] == 1
         wd = wrx * nx + wry * ny + wrz * nz
-        dtx = (wrx - wd * nx) * dt
-        dty = (wry - wd * ny) * dt
-        dtz = (wrz - wd * nz) * dt
+        dtr = abs(dt) if lig else step
+        if lig and cj == 0.0:
+            # against a wall LIGGGHTS turns the spring by its wr = omega_i (R_i - delta/2) /
+            # (R_i - delta) (surface_model_default.h: the contact lever over the centre's
+            # distance to the wall)
+            rc = ci if codes[14] == 0 else ci - 0.5 * delta
+            dtr *= rc / (rc - 0.5 * delta)
+        dtx = (wrx - wd * nx) * dtr
+        dty = (wry - wd * ny) * dtr
+        dtz = (wrz - wd * nz) * dtr
         mx = hist[hk, H_MR]
         my = hist[hk, H_MR + 1]
         mz = hist[hk, H_MR + 2]
         old2 = mx * mx + my * my + mz * mz
-        if old2 > 0.0:
+        if old2 > 0.0 and not lig:
             mn = mx * nx + my * ny + mz * nz
             mx -= mn * nx
             my -= mn * ny
@@ -663,20 +692,21 @@ def contact_force(codes, pair, ma, mb, delta, nx, ny, nz, rvx, rvy, rvz, wrx, wr
                 mx *= s
                 my *= s
                 mz *= s
-        kr = 2.25 * sn * mur * mur * rstar * rstar
+        kr = 2.25 * (4.0 / 3.0 * estar * a if lig else sn) * mur * mur * rstar * rstar
         mx -= kr * dtx
         my -= kr * dty
         mz -= kr * dtz
-        mlim = mur * rstar * fnr
+        mlim = mur * rstar * (fnf if lig else fnr)
         m2 = mx * mx + my * my + mz * mz
         if m2 > mlim * mlim:
             r = mlim / math.sqrt(m2)
             mx *= r
             my *= r
             mz *= r
-        hist[hk, H_MR] = mx
-        hist[hk, H_MR + 1] = my
-        hist[hk, H_MR + 2] = mz
+        if dt >= 0.0 or not lig:
+            hist[hk, H_MR] = mx
+            hist[hk, H_MR + 1] = my
+            hist[hk, H_MR + 2] = mz
         tix += mx
         tiy += my
         tiz += mz

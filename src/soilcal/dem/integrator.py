@@ -387,7 +387,7 @@ def gather(x, v, om, r, inv_m, inv_i, mat, f, t, ovr, peak, mroll, dt, kick, max
                     on, cfx, cfy, cfz, ctx, cty, ctz, _, _, _, mr = contact_force(
                         codes, pair, mi, prim_mat[p], delta, nx, ny, nz, rvx, rvy, rvz,
                         wxi - rw * ox, wyi - rw * oy, wzi - rw * oz, ci, 0.0, rs, 1.0 / imi,
-                        dt if kick else 0.0, touching, whist, row)
+                        dt if kick else -dt, touching, whist, row)
                     # the last history slot of a wall row is its touching flag
                     whist[row, H_SIZE - 1] = 1.0 if on else 0.0
                     if on:
@@ -682,8 +682,9 @@ def run_loop(nsteps, step0, resume_mid, need_forces, ke_tol, ke_every, max_ovr, 
             wrebuild = False
             fstate[0] = 0.0
         # the forces of the initial state advance no history (no time passes: LAMMPS and
-        # LIGGGHTS likewise do not update their shear history in a run's setup)
-        dth = 0.0 if first else dt
+        # LIGGGHTS likewise do not update their shear history in a run's setup); -dt tells
+        # the contact law it is the setup of a run with step dt (contact.py)
+        dth = -dt if first else dt
         for colour in range(3):
             pair_forces(colour, xr, vw, pair, codes, box, periodic, dth, sc, nc, hc, ac,
                         sorder, sgroup, f, t, ovr, mroll)

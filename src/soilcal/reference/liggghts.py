@@ -14,8 +14,10 @@ Translation (LIGGGHTS 3.8 commands)::
     materials       fix property/global youngsModulus / poissonsRatio (peratomtype),
                     coefficientRestitution / coefficientFriction /
                     coefficientRollingFriction (peratomtypepair)
-    contact law     pair_style gran model hertz tangential history [rolling_friction cdt]
-                    (``tangential_damping off`` when soilcal's is off)
+    contact law     pair_style gran model hertz tangential history [rolling_friction cdt
+                    | epsd] (``tangential_damping off`` when soilcal's is off; epsd with
+                    fix property/global coefficientRollingViscousDamping 0, soilcal's
+                    spring having no dashpot)
     plane walls     fix wall/gran ... primitive type T xplane|yplane|zplane c (axis planes)
     mesh walls      fix mesh/surface file W.stl type T (ASCII STL of the wall's current
                     triangles) + fix wall/gran ... mesh; a phase's velocity: fix move/mesh
@@ -27,14 +29,15 @@ Translation (LIGGGHTS 3.8 commands)::
 
 What LIGGGHTS computes is its own law: Hertz with viscoelastic damping and Mindlin history
 (the law soilcal's ``viscoelastic`` / ``mindlin`` copy), and the constant directional torque
-``cdt`` (rolling_model_cdt.h), which soilcal computes exactly with the ``liggghts``
-conventions (:mod:`soilcal.dem.contact`).  :func:`write_case` records in ``case.json``
-whether the simulation's conventions are LIGGGHTS's; with any other conventions the two runs
+``cdt`` (rolling_model_cdt.h) or the EPSD spring (rolling_model_epsd.h), which soilcal computes
+exactly with the ``liggghts`` conventions (:mod:`soilcal.dem.contact`; for epsd its
+``epsd_form: liggghts``).  :func:`write_case` records in ``case.json``
+whether the simulation's conventions are LIGGGHTS's (``conventions_match``: those of the
+tangential history and of the rolling law in use); with any other conventions the two runs
 differ by the conventions, which is what a comparison then measures.
 
 Not translated (an :class:`~soilcal.errors.InputError` names the part): JKR cohesion
-(LIGGGHTS 3.8 has only ``sjkr``, a different law), the ``epsd`` and ``bounded`` rolling
-models, undamped or frictionless laws, periodic boundaries, cylinders, cones, discs,
+(LIGGGHTS 3.8 has only ``sjkr``, a different law), the ``bounded`` rolling model, undamped or frictionless laws, periodic boundaries, cylinders, cones, discs,
 rectangles, planes not normal to an axis, moving planes, a wall translating and rotating in
 one phase, coarse graining, and fixed or rotation-locked spheres.
 """
@@ -57,8 +60,14 @@ __all__ = ["available", "binary", "check_phases", "launch", "mpirun", "read_dump
            "run_phases", "write_case"]
 
 SOURCE = "<liggghts case>"
-_LIGGGHTS_CONV = (1, 1, 1)  # rolling lever, force, axis of the ``liggghts`` set (contact.py)
-_LIGGGHTS_WALL = 1  # rolling against a wall: the sphere's own rotation
+#: the conventions that change what a LIGGGHTS case computes: the tangential history's (every
+#: case: the law is always Mindlin's) and each rolling law's; tangential_damping is written
+#: into the case, wall_curvature concerns analytic cylinders and the JKR ones cohesion, which
+#: a LIGGGHTS case has neither of
+_TANGENTIAL_CONV = ("tangential_slip", "history_rotation", "contact_lever")
+_ROLLING_CONV = {"none": (), "epsd": ("rolling_wall", "epsd_form"),
+                 "constant_torque": ("rolling_lever", "rolling_force", "rolling_axis",
+                                     "rolling_wall")}
 
 
 def binary() -> str | None:
@@ -89,8 +98,9 @@ def available() -> tuple[bool, str]:
 
 def _law(sim) -> tuple[str, str, bool]:
     """The LIGGGHTS contact model, its options and whether soilcal's conventions are
-    LIGGGHTS's."""
-    from soilcal.dem.contact import COHESION, DAMPING, NORMAL, ROLLING, TANGENTIAL
+    LIGGGHTS's (the ``liggghts`` set's entries that the case's law uses)."""
+    from soilcal.dem.contact import (CODE_CONVENTIONS, COHESION, CONVENTION_TABLES,
+                                     CONVENTIONS, DAMPING, NORMAL, ROLLING, TANGENTIAL)
 
     c = [int(v) for v in sim.codes]
     if c[0] != NORMAL["hertz"]:
@@ -105,14 +115,16 @@ def _law(sim) -> tuple[str, str, bool]:
         raise InputError(SOURCE, "contact_model.cohesion",
                          "no JKR cohesion (LIGGGHTS 3.8 has only sjkr, a different law)", "jkr")
     rolling = {v: k for k, v in ROLLING.items()}[c[3]]
-    if rolling not in ("none", "constant_torque"):
+    if rolling not in ("none", "constant_torque", "epsd"):
         raise InputError(SOURCE, "contact_model.rolling",
-                         "'none' or 'constant_torque' (LIGGGHTS cdt)", rolling)
+                         "'none', 'constant_torque' (LIGGGHTS cdt) or 'epsd' (LIGGGHTS epsd)",
+                         rolling)
     law = "gran model hertz tangential history"
-    same = True
-    if rolling == "constant_torque":
-        law += " rolling_friction cdt"
-        same = tuple(c[5:8]) == _LIGGGHTS_CONV and c[9] == _LIGGGHTS_WALL
+    if rolling != "none":
+        law += " rolling_friction " + ("cdt" if rolling == "constant_torque" else "epsd")
+    lig = CONVENTIONS["liggghts"]
+    same = all(c[5 + CODE_CONVENTIONS.index(k)] == CONVENTION_TABLES[k][lig[k]]
+               for k in _TANGENTIAL_CONV + _ROLLING_CONV[rolling])
     opts = " tangential_damping off" if c[8] == 1 else ""  # after the walls' own arguments
     return law, opts, same
 
@@ -204,9 +216,13 @@ def write_case(sim, workdir, phases, bounds) -> dict:
             + _pairs(nm, lambda i, j: pair[(i, j)].restitution),
             f"fix m4 all property/global coefficientFriction peratomtypepair {nm} "
             + _pairs(nm, lambda i, j: pair[(i, j)].friction)]
-    if int(sim.codes[3]) == ROLLING["constant_torque"]:
+    if int(sim.codes[3]) in (ROLLING["constant_torque"], ROLLING["epsd"]):
         deck.append(f"fix m5 all property/global coefficientRollingFriction peratomtypepair {nm} "
                     + _pairs(nm, lambda i, j: pair[(i, j)].rolling_friction))
+    if int(sim.codes[3]) == ROLLING["epsd"]:
+        # soilcal's epsd is undamped (Ai et al.'s eta_r = 0)
+        deck.append(f"fix m6 all property/global coefficientRollingViscousDamping "
+                    f"peratomtypepair {nm} " + _pairs(nm, lambda i, j: 0.0))
     deck += [f"pair_style {law}{opts}", "pair_coeff * *", f"timestep {num(sim.dt)}"]
     meshes = []
     for k, w in enumerate(walls):

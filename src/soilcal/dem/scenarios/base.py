@@ -529,7 +529,7 @@ def conventions_of(value, source: str = "<input>") -> dict:
     :data:`soilcal.dem.contact.CONVENTION_TABLES`: ``rolling_lever``, ``rolling_force``,
     ``rolling_axis``, ``tangential_damping``, ``rolling_wall``, ``jkr_convention``,
     ``jkr_break``, ``coulomb_force``, ``tangential_slip``, ``history_rotation``,
-    ``contact_lever``) that change it."""
+    ``contact_lever``, ``jkr_approach``, ``wall_curvature``, ``epsd_form``) that change it."""
     from soilcal.dem.contact import resolve_conventions
 
     named = isinstance(value, str)
