@@ -103,6 +103,28 @@ def test_label_quantity_keeps_the_cell_text(cinnamon):
     assert conds[0].quantity_columns == {"plate": "tool"}
 
 
+def test_label_cells_that_pandas_takes_for_missing_keep_their_text(cinnamon):
+    # tools called NA, N/A, null and None: labels, not missing cells; the setup map finds them
+    t = _table(cinnamon, "cinnamon-soil", "cutting_resistance.csv")
+    df = pd.read_csv(t)
+    df["plate"] = ["NA", "N/A", "null", "None"]
+    df.to_csv(t, index=False)
+    plates = {"NA": "plate-arc", "N/A": "plate-parabola", "null": "plate-bionic", "None": "plate-line"}
+
+    def edit(d):
+        _entry(d)["covariates"]["plate"] = {"setup": plates, "quantity": "tool"}
+        _entry(d)["covariates"]["directrix"] = {"ignore": True}
+
+    _declare(cinnamon, "cinnamon-soil", edit)
+    conds = _load(cinnamon, "cinnamon-soil")
+    assert [c.quantities["tool"] for c in conds] == list(plates)
+    assert [c.setup["name"] for c in conds] == list(plates.values())
+    # an empty label cell is still missing, and refused naming its row
+    df["plate"] = ["NA", "", "null", "None"]
+    df.to_csv(t, index=False)
+    _fails(cinnamon, "cinnamon-soil", "row 2, column plate")
+
+
 # --- bad declarations -------------------------------------------------------------------------
 
 

@@ -220,8 +220,8 @@ def read_table(path: Path, text_columns=()) -> pd.DataFrame:
     """Read a published CSV table; a missing or unreadable file raises InputError.
 
     The columns named in ``text_columns`` (labels: a tool id, a revision) keep each cell's
-    text as the file writes it (``007`` stays ``"007"``, ``1.10`` stays ``"1.10"``; an empty
-    cell is missing); the other columns are parsed by pandas (numbers as numbers).
+    text as the file writes it (``007`` stays ``"007"``, ``1.10`` stays ``"1.10"``, ``NA`` or
+    ``null`` stays that word, not pandas' missing value; an empty cell is missing); the other columns are parsed by pandas (numbers as numbers).
 
     The header's cells are stripped of surrounding spaces.  Refused, naming the file: a
     header that names a column twice, a header of one cell holding ``;`` (a
@@ -276,10 +276,13 @@ def read_table(path: Path, text_columns=()) -> pd.DataFrame:
         df.columns = [nm or str(c) for nm, c in zip(names, df.columns)]
     keep = [c for c in text_columns if c in df.columns]
     if keep:
-        as_text = pd.read_csv(io.StringIO(body), dtype=str)
+        # as written: pandas' default missing-value words (NA, N/A, null, None, nan, ...) are
+        # a label's text there (a tool or day called NA); only an empty cell is missing
+        as_text = pd.read_csv(io.StringIO(body), dtype=str, keep_default_na=False, na_values=[])
         as_text.columns = df.columns
         for c in keep:
-            df[c] = as_text[c]
+            cells = as_text[c]
+            df[c] = cells.where(cells.str.strip() != "", np.nan)
     filled = np.flatnonzero(df.notna().any(axis=1).to_numpy())
     return df.iloc[:filled[-1] + 1 if filled.size else 0]
 
