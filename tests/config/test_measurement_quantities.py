@@ -194,3 +194,47 @@ def test_a_set_column_named_in_another_unit_needs_its_unit(cinnamon):
     _declare(cinnamon, "cinnamon-soil",
              lambda d: _entry(d)["covariates"].update(speed_kmh={"set": "speed", "scale": 0.2778}))
     assert [c.setup["speed"] for c in _load(cinnamon, "cinnamon-soil")] == pytest.approx([0.16] * 4, rel=1e-3)
+
+
+# --- rows that differ only in an ignored covariate ----------------------------------------------
+
+
+def test_rows_told_when_they_differ_only_in_an_ignored_covariate(cinnamon, capsys):
+    # two tools A and B on one plate geometry, the tool column ignored: one simulation serves
+    # both rows, and the user is told so; tool C runs its own setup and gets no note
+    import json
+
+    from soilcal.chain.verify import tool_frame
+    from soilcal.cli import main
+
+    t = _table(cinnamon, "cinnamon-soil", "cutting_resistance.csv")
+    df = pd.read_csv(t).iloc[:3]
+    df["plate"] = ["A", "B", "C"]
+    df["directrix"] = ["line", "line", "arc"]
+    df.to_csv(t, index=False)
+    _declare(cinnamon, "cinnamon-soil", lambda d: _entry(d)["covariates"].update(
+        plate={"ignore": True, "quantity": "tool"}))
+    soil = load_soil(_yaml(cinnamon, "cinnamon-soil"), cinnamon / "resources")
+    a, b, c = conditions(soil)
+    assert a.setup == b.setup and a.params == b.params and a.setup != c.setup
+    assert a.note == b.note and "rows 1, 2" in a.note and "plate = A, B" in a.note and c.note == ""
+    assert soil.notes == [a.note]
+    frame = tool_frame([a, b, c], {})
+    assert frame["note"].str.contains("plate = A, B", regex=False).tolist() == [True] * 4 + [False] * 2
+    assert main(["config", "check", "--resources", str(cinnamon / "resources"),
+                 str(_yaml(cinnamon, "cinnamon-soil"))]) == 0
+    out, err = capsys.readouterr()
+    assert json.loads(out)["notes"] == [a.note]
+    assert a.note in err
+
+
+def test_no_note_where_the_ignored_covariate_goes_with_a_simulated_one(cinnamon):
+    # the shipped table: plate numbers 1-4 each with its own directrix, and rows at one
+    # simulation that agree in every ignored covariate (repeats), get no note
+    t = _table(cinnamon, "cinnamon-soil", "cutting_resistance.csv")
+    df = pd.read_csv(t)
+    assert all(c.note == "" for c in _load(cinnamon, "cinnamon-soil"))
+    df["plate"] = [1, 1, 2, 2]
+    df["directrix"] = ["line", "line", "arc", "arc"]
+    df.to_csv(t, index=False)
+    assert all(c.note == "" for c in _load(cinnamon, "cinnamon-soil"))

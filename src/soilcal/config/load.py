@@ -192,6 +192,13 @@ class Soil:
         return self.data["name"]
 
     @property
+    def notes(self) -> list[str]:
+        """What the user should know of how the soil is simulated though nothing is wrong:
+        measured rows that differ only in ignored covariates and share one simulation
+        (:attr:`soilcal.config.measurements.Condition.note`), each once."""
+        return list(dict.fromkeys(c.note for c in (self.measured or ()) if c.note))
+
+    @property
     def stages(self) -> list[dict]:
         return self.data["stages"]
 

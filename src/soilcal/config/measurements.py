@@ -184,6 +184,10 @@ class Condition:
     quantities: dict = None
     #: covariate column -> its declared quantity
     quantity_columns: dict = None
+    #: where the row differs from others only in ignored covariates (a tool, a slightly
+    #: different moisture): the rows simulated alike with it and the values the simulation
+    #: leaves out (:func:`_shared_runs`); empty otherwise
+    note: str = ""
 
 
 def unit_of(measure: str) -> str:
@@ -820,7 +824,43 @@ def _entry(soil_path, data: dict, mid: str, entry: dict, tpath: Path):
             covariates={c: (None if _missing(rec[c]) else _plain(rec[c])) for c in covs},
             quantities=quantities, quantity_columns=dict(quantity_cols)))
     _check_moisture(soil_path, data, tpath, df, covs, quantity_cols)
-    return df, conds
+    return df, _shared_runs(tpath, covs, conds)
+
+
+def _shared_runs(tpath: Path, covs: dict, conds: list[Condition]) -> list[Condition]:
+    """Rows that run the same simulation (scenario, setup, DEM parameters, calibrated stage
+    and case, preset, replicates: one job, one run per seed for all of them) yet differ in an
+    ignored covariate (``{ignore: true}``: a tool, a day, a moisture varied only slightly) are
+    compared with one simulated value: the simulation does not represent that difference.
+    Ignoring the column is the user's choice, so the rows are not refused; each gets a note
+    naming the rows simulated alike and the ignored values (the soil's :attr:`notes`, printed
+    by ``soilcal config check`` and the workflow, and written in ``tool_verification.csv``)."""
+    import json
+
+    ignored = [c for c, cv in covs.items() if cv.get("ignore")]
+    if not ignored or len(conds) < 2:
+        return conds
+    groups = {}
+    for c in conds:
+        ident = json.dumps([c.scenario, c.setup, c.params, c.stage, c.case, c.preset, c.replicates],
+                           sort_keys=True, default=str)
+        groups.setdefault(ident, []).append(c)
+    notes = {}
+    for rows in groups.values():
+        differ = [col for col in ignored if len({_text(r.covariates.get(col)) for r in rows}) > 1]
+        if len(rows) < 2 or not differ:
+            continue
+        what = "; ".join(f"{col} = " + ", ".join(_text(r.covariates.get(col)) for r in rows) for col in differ)
+        text = (f"{tpath.name} rows {', '.join(str(r.row) for r in rows)} differ only in the ignored "
+                f"covariate{'s' if len(differ) > 1 else ''} {', '.join(differ)} ({what}) and are simulated "
+                "alike: one simulated value for all of them, the difference is not represented")
+        for r in rows:
+            notes[r.row] = text
+    if not notes:
+        return conds
+    from dataclasses import replace
+
+    return [replace(c, note=notes[c.row]) if c.row in notes else c for c in conds]
 
 
 #: a moisture table whose median is this many decades from the soil's own moisture (or, where the
