@@ -591,7 +591,8 @@ def _check_image_states(path: Path, targets: dict, named: dict) -> None:
 
 
 def _check_targets(path: Path, d: dict, resources_root: Path) -> None:
-    """A target's ``table`` is a file under ``<resources>/measurements/<soil>/``, and a target
+    """A target's ``layer`` is one of the soil's declared ``layers`` (a misspelt one would make a
+    layer of its own), its ``table`` a file under ``<resources>/measurements/<soil>/``, and a target
     has the unit of every response it is the target of: the response whose id it bears (the
     steepest-ascent path aims that response at it) and every response an optimisation goal
     aims at it (``target: <id>``)."""
@@ -599,7 +600,15 @@ def _check_targets(path: Path, d: dict, resources_root: Path) -> None:
     mdir = resources_root / "measurements" / d["name"]
     from soilcal.config.measurements import table_inside
 
+    layers = d.get("layers")
     for tid, t in targets.items():
+        if t.get("layer") is not None and str(t["layer"]) not in {str(k) for k in (layers or {})}:
+            if layers:
+                want = "one of the soil's layers (" + ", ".join(map(str, layers)) + ")"
+            else:
+                want = ('a layer the soil declares: it declares none (add layers: {' + f"{t['layer']}: ..." +
+                        '} naming each layer once, e.g. its depth "0-20 cm")')
+            raise InputError(path, f"targets.{tid}.layer", want, t["layer"])
         if t.get("table") is not None and not table_inside(path, f"targets.{tid}.table", mdir, t["table"]).is_file():
             raise InputError(path, f"targets.{tid}.table", f"an existing file under {mdir}", t["table"])
         if t.get("moisture_content") is not None:

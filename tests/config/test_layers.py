@@ -1,0 +1,60 @@
+"""A soil's layers are declared once (``layers``) and a target's ``layer`` must be one of them.
+
+Before, ``layer`` was a free label: the vineyard soil's upper-layer target written ``uper``
+loaded without a word and targets.csv held a fourth layer, calibrated on its own."""
+
+from __future__ import annotations
+
+import copy
+
+import pytest
+
+from soil_copies import load_copy, read_shipped
+from soilcal.errors import InputError
+
+SOIL = "xinjiang-vineyard"
+
+
+@pytest.fixture(scope="module")
+def parsed():
+    return read_shipped(SOIL)
+
+
+def _refused(tmp_path, d) -> InputError:
+    with pytest.raises(InputError) as ei:
+        load_copy(tmp_path, SOIL, d)
+    assert "\n" not in str(ei.value)
+    return ei.value
+
+
+def test_the_shipped_layers_are_the_targets_layers(tmp_path, parsed):
+    soil = load_copy(tmp_path, SOIL, copy.deepcopy(parsed))
+    assert list(soil.data["layers"]) == ["upper", "middle", "lower"]
+    assert {t["layer"] for t in soil.data["targets"].values()} == {"upper", "middle", "lower"}
+
+
+def test_a_misspelt_layer_is_refused_naming_the_declared_ones(tmp_path, parsed):
+    d = copy.deepcopy(parsed)
+    d["targets"]["static_angle_upper"]["layer"] = "uper"
+    e = _refused(tmp_path, d)
+    assert e.field == "targets.static_angle_upper.layer" and e.got == "uper"
+    assert "upper, middle, lower" in e.expected
+    assert str(e).startswith(f"{tmp_path / (SOIL + '.yaml')}: targets.static_angle_upper.layer: expected")
+
+
+def test_a_layer_without_declared_layers_is_refused(tmp_path, parsed):
+    d = copy.deepcopy(parsed)
+    del d["layers"]
+    e = _refused(tmp_path, d)
+    assert e.field.endswith(".layer") and "declares none" in e.expected and "layers:" in e.expected
+
+
+def test_layers_named_without_a_description_and_targets_without_a_layer_load(tmp_path, parsed):
+    d = copy.deepcopy(parsed)
+    d["layers"] = {"upper": None, "middle": None, "lower": None}
+    load_copy(tmp_path, SOIL, d)
+    d = copy.deepcopy(parsed)
+    del d["layers"]
+    for t in d["targets"].values():
+        t.pop("layer")
+    load_copy(tmp_path, SOIL, d)
