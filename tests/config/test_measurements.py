@@ -217,10 +217,11 @@ def test_a_table_in_kN_is_read_in_N(cinnamon):
     """The plates' forces tabled in kN (0.3211 kN = 321.1 N): the conditions hold them in N, the
     unit the DEM gives horizontal_force_N in, and say so."""
     t = _table(cinnamon, "cinnamon-soil", "cutting_resistance.csv")
-    df = pd.read_csv(t)
-    df["horizontal_measured_N"] = [0.3211, 0.2521, 0.1545, 0.3048]
+    df = pd.read_csv(t).rename(columns={"horizontal_measured_N": "horizontal_measured_kN"})
+    df["horizontal_measured_kN"] = [0.3211, 0.2521, 0.1545, 0.3048]
     df.to_csv(t, index=False)
-    p = _edit(cinnamon, "cinnamon-soil", lambda d: _entry(d)["responses"][0].update(unit="kN"))
+    p = _edit(cinnamon, "cinnamon-soil",
+              lambda d: _entry(d)["responses"][0].update(unit="kN", value="horizontal_measured_kN"))
     conds = conditions(load_soil(p, cinnamon / "resources"))
     h = [next(r for r in c.responses if r["measure"] == "horizontal_force_N") for c in conds]
     assert [r["measured"] for r in h] == pytest.approx([321.1, 252.1, 154.5, 304.8])
@@ -229,6 +230,30 @@ def test_a_table_in_kN_is_read_in_N(cinnamon):
     # the other force stays as tabled
     v = [next(r for r in c.responses if r["measure"] == "vertical_force_N") for c in conds]
     assert [r["measured"] for r in v] == pytest.approx([48.80, 13.98, 15.50, 10.40]) and v[0]["note"] == ""
+
+
+def test_a_column_named_in_another_unit_than_the_response_s_is_refused(cinnamon):
+    """Draughts tabled in kN under a column draught_kN, the response left at unit: N (the
+    README's example): read as N they were 1000 times too small (0.3211 N).  Refused naming the
+    response's unit and the column; the same for an SD column (sd_kN) and a name in brackets."""
+    from soilcal.config.measurements import column_unit
+
+    t = _table(cinnamon, "cinnamon-soil", "cutting_resistance.csv")
+    df = pd.read_csv(t).rename(columns={"horizontal_measured_N": "draught_kN"})
+    df["draught_kN"] = [0.3211, 0.2521, 0.1545, 0.3048]
+    df.to_csv(t, index=False)
+    p = _edit(cinnamon, "cinnamon-soil", lambda d: _entry(d)["responses"][0].update(value="draught_kN"))
+    msg = _fails(cinnamon, "cinnamon-soil", f"{p}: measurements.cutting_resistance.responses[0].unit")
+    assert "column draught_kN (value) says is kN" in msg and "got 'N'" in msg
+    # declared kN, it loads in N
+    p = _edit(cinnamon, "cinnamon-soil", lambda d: _entry(d)["responses"][0].update(unit="kN"))
+    conds = conditions(load_soil(p, cinnamon / "resources"))
+    assert [c.responses[0]["measured"] for c in conds] == pytest.approx([321.1, 252.1, 154.5, 304.8])
+    assert column_unit("draught (kN)", "horizontal_force_N") == "kN"
+    assert column_unit("sd [mN]", "horizontal_force_N") == "mN"
+    assert column_unit("torque_Nm", "torque_Nm") == "N m"
+    assert column_unit("draught_mean", "horizontal_force_N") is None  # no unit of a force
+    assert column_unit("sd_m", "horizontal_force_N") is None  # a length is no force unit
 
 
 def test_a_flatness_in_cm_and_a_strain_in_percent_are_converted():

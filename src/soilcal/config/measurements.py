@@ -736,6 +736,7 @@ def _entry(soil_path, data: dict, mid: str, entry: dict, tpath: Path):
                                  f"{want} (the unit of {r['measure']}, from its name) or another unit of its "
                                  f"quantity, converted to {want} as {tpath.name} is read: "
                                  + ", ".join(response_units(r["measure"])), r["unit"])
+            _check_response_column_units(soil_path, f"{where}.responses[{j}]", r, tpath)
         try:
             dem = DemParams.from_mapping(params, src, base=soil_base)
         except InputError as exc:  # a soil-wide simulation.params value: reported by its own check
@@ -983,6 +984,36 @@ def _check_column_unit(soil_path, cw: str, col: str, cv: dict, scenario: str) ->
                      f"(quantity: {q}, unit: {named}, scale: {family[named] / family[target]:.4g}, {named} to "
                      f"{target}, the unit of setup key {cv['set']}; or scale: 1 if they are in {target})",
                      "no unit and no scale")
+
+
+def column_unit(col: str, measure: str) -> str | None:
+    """The unit of ``measure``'s quantity (:func:`response_units`, a spelling of
+    :data:`UNIT_ALIASES` as its unit) that a column's name ends in: after its last ``_``
+    (``draught_kN``) or in closing brackets (``draught (kN)``, ``draught [kN]``), matched with
+    its case (``mN`` is no ``MN``); None where the name gives none."""
+    name = str(col).strip()
+    m = re.search(r"[(\[]\s*([^()\[\]]+?)\s*[)\]]$", name)
+    tail = m.group(1) if m else (name.rsplit("_", 1)[1] if "_" in name else None)
+    if tail is None:
+        return None
+    unit = UNIT_ALIASES.get(tail, tail)
+    return unit if unit in response_units(measure) else None
+
+
+def _check_response_column_units(soil_path, rw: str, r: dict, tpath: Path) -> None:
+    """A response's value, SD or paper column whose name ends in a unit of its measure's
+    quantity (``draught_kN``) other than the response's declared ``unit`` (``unit: N``, as in
+    the README's example) would be read 1000 times off without a word: refused naming the
+    response's ``unit``, the column and the unit its name gives."""
+    declared = UNIT_ALIASES.get(str(r["unit"]).strip(), str(r["unit"]).strip())
+    for key in ("value", "sd", "paper_simulated", "paper_difference"):
+        col = r.get(key)
+        named = column_unit(col, r["measure"]) if col is not None else None
+        if named is not None and named != declared:
+            raise InputError(soil_path, f"{rw}.unit",
+                             f"the unit of {tpath.name}'s columns, which the name of column {col} ({key}) says is "
+                             f"{named} (unit: {named}, converted to {unit_of(r['measure'])} as the table is read; "
+                             f"or rename the column if its cells are in {r['unit']})", r["unit"])
 
 
 def _renamed(exc: InputError, soil_path, prefix: str, field_prefix: str) -> InputError:
