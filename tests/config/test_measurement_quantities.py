@@ -196,6 +196,25 @@ def test_a_set_column_named_in_another_unit_needs_its_unit(cinnamon):
     assert [c.setup["speed"] for c in _load(cinnamon, "cinnamon-soil")] == pytest.approx([0.16] * 4, rel=1e-3)
 
 
+@pytest.mark.parametrize("col", ["speed (km/h)", "speed [km/h]"])
+def test_a_set_column_with_a_unit_in_brackets_needs_its_unit(cinnamon, col):
+    """A spreadsheet's header "speed (km/h)" on a column that sets the plate's speed (m/s) with
+    no unit and no scale ran 0.576 km/h as 0.576 m/s: refused as speed_kmh is; "(m/s)" loads."""
+    t = _table(cinnamon, "cinnamon-soil", "cutting_resistance.csv")
+    df = pd.read_csv(t)
+    df[col] = [0.576] * 4
+    df.to_csv(t, index=False)
+    p = _declare(cinnamon, "cinnamon-soil", lambda d: _entry(d)["covariates"].update({col: {"set": "speed"}}))
+    msg = _fails(cinnamon, "cinnamon-soil", f"{p}: {CR}.{col}")
+    assert "which the column's name says are in km/h" in msg and "scale: 0.2778" in msg
+    df = df.rename(columns={col: "speed (m/s)"})
+    df["speed (m/s)"] = [0.16] * 4
+    df.to_csv(t, index=False)
+    _declare(cinnamon, "cinnamon-soil", lambda d: (_entry(d)["covariates"].pop(col),
+                                                   _entry(d)["covariates"].update({"speed (m/s)": {"set": "speed"}})))
+    assert [c.setup["speed"] for c in _load(cinnamon, "cinnamon-soil")] == [0.16] * 4
+
+
 # --- rows that differ only in an ignored covariate ----------------------------------------------
 
 

@@ -971,9 +971,14 @@ def _check_column_unit(soil_path, cw: str, col: str, cv: dict, scenario: str) ->
     target = SETUP_KEY_UNITS.get(scenario, {}).get(cv["set"])
     if target is None:
         return
-    low = col.lower()
+    low = col.lower().strip()
     named = next((u for suf, u in sorted(COLUMN_UNIT_SUFFIXES.items(), key=lambda kv: -len(kv[0]))
                   if low.endswith("_" + suf)), None)
+    bracket = re.search(r"[(\[]\s*([^()\[\]]+?)\s*[)\]]$", col.strip())
+    if named is None and bracket:  # a spreadsheet's header: "speed (km/h)", "depth [mm]"
+        text = bracket.group(1)
+        units = {u for spec in QUANTITIES.values() if spec for u in spec[1]}
+        named = text if text in units else COLUMN_UNIT_SUFFIXES.get(text.lower().replace("/", "_"))
     if named is None or named == target:
         return
     q = next((q for q, spec in QUANTITIES.items() if spec and target in spec[1] and named in spec[1]), None)
