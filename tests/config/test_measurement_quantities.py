@@ -67,7 +67,14 @@ def test_rotor_speed_in_r_per_min(black):
 
 
 def test_rotor_speed_in_rad_per_s(black):
-    _declare(black, "black-soil", lambda d: _rotor(d).update(quantity="rotor_speed", unit="rad/s"))
+    # a column whose name gives no unit (rotor_speed_rpm declared rad/s is refused: the name says rpm)
+    t = _table(black, "black-soil", "surface_flatness.csv")
+    pd.read_csv(t).rename(columns={"rotor_speed_rpm": "rotor_speed"}).to_csv(t, index=False)
+
+    def edit(d):
+        cv = _entry(d, "surface_flatness")["covariates"]
+        cv["rotor_speed"] = {**cv.pop("rotor_speed_rpm"), "quantity": "rotor_speed", "unit": "rad/s"}
+    _declare(black, "black-soil", edit)
     flat = [c for c in _load(black, "black-soil") if c.measurement == "surface_flatness"]
     # 150 rad/s = 150 * 60 / (2 pi) r/min = 1432.39 r/min
     assert flat[0].quantities["rotor_speed"] == pytest.approx(150 * 60 / (2 * math.pi))
@@ -213,6 +220,51 @@ def test_a_set_column_with_a_unit_in_brackets_needs_its_unit(cinnamon, col):
     _declare(cinnamon, "cinnamon-soil", lambda d: (_entry(d)["covariates"].pop(col),
                                                    _entry(d)["covariates"].update({"speed (m/s)": {"set": "speed"}})))
     assert [c.setup["speed"] for c in _load(cinnamon, "cinnamon-soil")] == [0.16] * 4
+
+
+@pytest.mark.parametrize("col", ["blade speed (rpm)", "blade speed (RPM)", "blade_speed_RPM", "speed (r/min)"])
+def test_a_set_column_named_in_the_key_s_unit_by_another_spelling_loads(black, col):
+    """The rotor's rpm is taken in r/min; a header "blade speed (rpm)" names r/min by another
+    spelling (factor 1) and sets rpm 150..350 as tabled; it was refused as if rpm were another
+    unit ('says are in rpm ... scale: 1')."""
+    t = _table(black, "black-soil", "surface_flatness.csv")
+    df = pd.read_csv(t)
+    df[col] = df["rotor_speed_rpm"]
+    df.to_csv(t, index=False)
+    _declare(black, "black-soil", lambda d: _entry(d, "surface_flatness")["covariates"].update({col: {"set": "rpm"}}))
+    flat = [c for c in _load(black, "black-soil") if c.measurement == "surface_flatness"]
+    assert [c.setup["rpm"] for c in flat] == [150.0, 200.0, 250.0, 300.0, 350.0]
+
+
+@pytest.mark.parametrize("col", ["blade speed (rad/s)", "blade speed (Rad/s)", "blade_speed_RAD_S"])
+def test_a_set_column_in_rad_per_s_needs_its_unit_however_written(black, col):
+    """rad/s is not r/min (factor 60/2pi = 9.549): "(Rad/s)" loaded 150 rad/s as 150 r/min while
+    "(rad/s)" was refused; every spelling is refused alike."""
+    t = _table(black, "black-soil", "surface_flatness.csv")
+    df = pd.read_csv(t)
+    df[col] = df["rotor_speed_rpm"]
+    df.to_csv(t, index=False)
+    p = _declare(black, "black-soil", lambda d: _entry(d, "surface_flatness")["covariates"].update({col: {"set": "rpm"}}))
+    msg = _fails(black, "black-soil", f"{p}: {SF}.{col}")
+    assert f"scale: {60 / (2 * math.pi):.4g}" in msg and "rad/s" in msg
+
+
+@pytest.mark.parametrize("cv", [{"unit": "m/s"}, {"unit": "m/s", "scale": 1}])
+def test_a_column_named_in_another_unit_than_its_declared_one_is_refused(cinnamon, cv):
+    """"speed (km/h)" declared unit: m/s (scale 1): its 0.576 km/h ran as 0.576 m/s, header and
+    declaration contradicting each other; refused naming the unit and the unit the name gives."""
+    t = _table(cinnamon, "cinnamon-soil", "cutting_resistance.csv")
+    df = pd.read_csv(t)
+    df["speed (km/h)"] = [0.576] * 4
+    df.to_csv(t, index=False)
+    p = _declare(cinnamon, "cinnamon-soil", lambda d: _entry(d)["covariates"].update(
+        {"speed (km/h)": {"set": "speed", "quantity": "tool_speed", **cv}}))
+    msg = _fails(cinnamon, "cinnamon-soil", f"{p}: {CR}.speed (km/h).unit")
+    assert "the column's name says are in km/h" in msg and "got 'm/s'" in msg
+    # the name's unit declared, with its factor, it runs 0.576 km/h = 0.16 m/s
+    _declare(cinnamon, "cinnamon-soil", lambda d: _entry(d)["covariates"].update(
+        {"speed (km/h)": {"set": "speed", "quantity": "tool_speed", "unit": "km/h", "scale": 1 / 3.6}}))
+    assert [c.setup["speed"] for c in _load(cinnamon, "cinnamon-soil")] == pytest.approx([0.16] * 4)
 
 
 # --- rows that differ only in an ignored covariate ----------------------------------------------

@@ -236,8 +236,6 @@ def test_a_column_named_in_another_unit_than_the_response_s_is_refused(cinnamon)
     """Draughts tabled in kN under a column draught_kN, the response left at unit: N (the
     README's example): read as N they were 1000 times too small (0.3211 N).  Refused naming the
     response's unit and the column; the same for an SD column (sd_kN) and a name in brackets."""
-    from soilcal.config.measurements import column_unit
-
     t = _table(cinnamon, "cinnamon-soil", "cutting_resistance.csv")
     df = pd.read_csv(t).rename(columns={"horizontal_measured_N": "draught_kN"})
     df["draught_kN"] = [0.3211, 0.2521, 0.1545, 0.3048]
@@ -249,11 +247,50 @@ def test_a_column_named_in_another_unit_than_the_response_s_is_refused(cinnamon)
     p = _edit(cinnamon, "cinnamon-soil", lambda d: _entry(d)["responses"][0].update(unit="kN"))
     conds = conditions(load_soil(p, cinnamon / "resources"))
     assert [c.responses[0]["measured"] for c in conds] == pytest.approx([321.1, 252.1, 154.5, 304.8])
-    assert column_unit("draught (kN)", "horizontal_force_N") == "kN"
-    assert column_unit("sd [mN]", "horizontal_force_N") == "mN"
-    assert column_unit("torque_Nm", "torque_Nm") == "N m"
-    assert column_unit("draught_mean", "horizontal_force_N") is None  # no unit of a force
-    assert column_unit("sd_m", "horizontal_force_N") is None  # a length is no force unit
+
+
+@pytest.mark.parametrize("col", ["draught_kn", "Draught (KN)", "draught kN", "draught, kN", "draught_kN_mean",
+                                 "draught [kN]", "draught/kN"])
+def test_a_kn_column_is_refused_under_unit_n_however_written(cinnamon, col):
+    """A unit is a word of the column's name anywhere (between _, spaces, commas, brackets,
+    after a /), matched without its case where that names one unit (kn, KN: kN): each of these
+    loaded 0.3211 kN as 0.3211 N."""
+    t = _table(cinnamon, "cinnamon-soil", "cutting_resistance.csv")
+    df = pd.read_csv(t).rename(columns={"horizontal_measured_N": col})
+    df[col] = [0.3211, 0.2521, 0.1545, 0.3048]
+    df.to_csv(t, index=False)
+    p = _edit(cinnamon, "cinnamon-soil", lambda d: _entry(d)["responses"][0].update(value=col))
+    msg = _fails(cinnamon, "cinnamon-soil", f"{p}: measurements.cutting_resistance.responses[0].unit")
+    assert f"column {col} (value) says is kN" in msg
+
+
+def test_a_one_letter_word_of_a_column_s_name_is_no_unit(black):
+    """Sd_m, Sd_s: the measured and simulated flatness in mm (unit: mm).  The m of 'measured' was
+    taken for metres and the table refused; a one-letter word is no unit outside brackets
+    (Sd (m) is one), so the flatness loads as tabled."""
+    t = _table(black, "black-soil", "surface_flatness.csv")
+    df = pd.read_csv(t).rename(columns={"Sd_measured_mm": "Sd_m", "Sd_simulated_mm": "Sd_s"})
+    df.to_csv(t, index=False)
+    p = _edit(black, "black-soil", lambda d: _entry(d, "surface_flatness")["responses"][0].update(
+        value="Sd_m", paper_simulated="Sd_s"))
+    flat = [c for c in conditions(load_soil(p, black / "resources")) if c.measurement == "surface_flatness"]
+    assert [c.responses[0]["measured"] for c in flat] == pytest.approx(list(df["Sd_m"]))
+    assert [c.responses[0]["paper_simulated"] for c in flat] == pytest.approx(list(df["Sd_s"]))
+    # in brackets a letter is a unit: metres under unit mm are refused
+    df.rename(columns={"Sd_m": "Sd (m)"}).to_csv(t, index=False)
+    p = _edit(black, "black-soil", lambda d: _entry(d, "surface_flatness")["responses"][0].update(value="Sd (m)"))
+    msg = _fails(black, "black-soil", f"{p}: measurements.surface_flatness.responses[0].unit")
+    assert "column Sd (m) (value) says is m" in msg
+
+
+def test_name_units():
+    from soilcal.config.measurements import name_units
+
+    assert name_units("draught (kN)") == ["kN"] and name_units("sd [mN]") == ["mN"]
+    assert name_units("torque_Nm") == ["N m"] and name_units("torque_N_m") == ["N m"]
+    assert name_units("speed_km_h") == ["km/h"] and name_units("pressure_mpa") == ["MPa"]
+    assert name_units("draught_mean") == [] and name_units("horizontal_measured_N") == []
+    assert name_units("x (M)") == [] and name_units("n") == []  # one letter: with its case, in brackets
 
 
 def test_a_flatness_in_cm_and_a_strain_in_percent_are_converted():

@@ -587,6 +587,7 @@ def _entry(soil_path, data: dict, mid: str, entry: dict, tpath: Path):
         if form in ("set", "param"):
             _check_scale(soil_path, cw, cv, name)
             _check_column_unit(soil_path, cw, col, cv, name)
+        _check_declared_unit(soil_path, cw, col, cv)
     quantity_cols = {c: cv["quantity"] for c, cv in covs.items() if "quantity" in cv}
     twice = [q for q in set(quantity_cols.values()) if list(quantity_cols.values()).count(q) > 1]
     if twice:
@@ -956,65 +957,128 @@ def _check_scale(soil_path, cw: str, cv: dict, scenario: str) -> None:
                          f"{factor:.4g} ({unit} to {target}, the unit of {what})", scale)
 
 
-#: column-name endings that name a unit (``speed_kmh``, ``depth_mm``): unit
-COLUMN_UNIT_SUFFIXES = {"kmh": "km/h", "km_h": "km/h", "mm_s": "mm/s", "cm_s": "cm/s", "m_s": "m/s", "mm": "mm",
-                        "cm": "cm", "m": "m"}
+#: spellings a column's name may give a unit in besides the units of :data:`RESPONSE_UNITS`,
+#: :data:`UNIT_ALIASES` and :data:`QUANTITIES` (``speed_kmh``): unit
+NAME_UNIT_SPELLINGS = {"kmh": "km/h", "percent": "%", "wt%": "%"}
+#: words that are a unit only in a name's brackets (``w (fraction)``), not as a word of it
+#: (``clay_fraction``, ``percent_sand``)
+_UNIT_WORDS = ("fraction", "percent", "degree", "degrees")
+#: a name's bracketed part: ``speed (km/h)``, ``depth [mm]``
+_BRACKETS = re.compile(r"[(\[]\s*([^()\[\]]*?)\s*[)\]]")
+
+
+def _name_unit_table() -> tuple[dict, dict]:
+    """Every unit spelling :func:`name_units` knows -> its unit as the tables key it, and the
+    same by lower-case spelling where that names one unit only (``kn`` is kN; a spelling of
+    one letter is matched with its case only: ``M`` is no ``m``, ``n`` no ``N``)."""
+    exact = {u: u for family in RESPONSE_UNITS for u in family}
+    exact.update({u: u for spec in QUANTITIES.values() if spec for u in spec[1]})
+    exact.update(UNIT_ALIASES)
+    exact.update(NAME_UNIT_SPELLINGS)
+    lower = {}
+    for spelling, unit in exact.items():
+        if len(spelling) > 1:
+            lower.setdefault(spelling.lower(), set()).add(unit)
+    return exact, {k: next(iter(v)) for k, v in lower.items() if len(v) == 1}
+
+
+def name_units(col) -> list[str]:
+    """The units a column's name gives (as :data:`RESPONSE_UNITS` and :data:`QUANTITIES` key
+    them), in the order written: a unit written as a word of the name, between ``_``, spaces,
+    commas or brackets, anywhere in it (``draught_kN``, ``draught kN``, ``draught, kN``,
+    ``draught_kN_mean``, ``speed_km_h``, ``torque_N_m``), or after a ``/`` (``draught/kN``),
+    or in brackets (``draught (kN)``, ``depth [mm]``, ``speed (km/h)``).  Matched with its
+    case, else without it where that names one unit only (``kn``, ``KN`` are kN; ``mpa`` is
+    MPa; ``RPM`` is rpm), a one-letter spelling with its case only.  A one-letter word outside
+    brackets (``Sd_m``, measured; ``n``; ``F_N``) is no unit: it is as often an abbreviation;
+    ``depth (m)``, ``draught [N]`` are."""
+    exact, lower = _name_unit_table()
+
+    def unit(text, bracketed):
+        if len(text) == 1 and text.isalpha() and not bracketed:
+            return None
+        if text.lower() in _UNIT_WORDS and not bracketed:
+            return None
+        return exact.get(text) or (lower.get(text.lower()) if len(text) > 1 else None)
+
+    name = str(col).strip()
+    found = []
+    for m in _BRACKETS.finditer(name):
+        inside = m.group(1)
+        words = [w for w in re.split(r"[\s,;]+", inside) if w]
+        whole = unit(inside, True)
+        found += [whole] if whole else [unit(w, True) for w in words]
+    words = [w for w in re.split(r"[\s_,;]+", _BRACKETS.sub(" ", name)) if w]
+    i = 0
+    while i < len(words):
+        pair = None
+        if i + 1 < len(words):  # a unit written in two words: km_h, m_s, r_min, N_m
+            pair = unit(f"{words[i]}/{words[i + 1]}", False) or unit(f"{words[i]} {words[i + 1]}", False)
+        if pair:
+            found.append(pair)
+            i += 2
+            continue
+        w = words[i]
+        found.append(unit(w, False) or (unit(w.split("/", 1)[1], False) if "/" in w else None))
+        i += 1
+    return list(dict.fromkeys(u for u in found if u))
 
 
 def _check_column_unit(soil_path, cw: str, col: str, cv: dict, scenario: str) -> None:
     """A ``set`` covariate that declares no ``unit`` and no ``scale`` takes its cells in the
-    unit of the setup key (:data:`SETUP_KEY_UNITS`); a column whose name ends in another unit
-    of that key (``speed_kmh`` for a speed in m/s, ``depth_mm`` for a depth in m) would be read
+    unit of the setup key (:data:`SETUP_KEY_UNITS`); a column whose name gives another unit of
+    that key's quantity, of another factor (:func:`name_units`: ``speed_kmh`` or ``speed (km/h)``
+    for a speed in m/s, ``depth_mm`` for a depth in m; ``rpm`` is r/min), would be read
     1000 mm as 1000 m without a word, so it is refused, asking for the unit and its scale."""
     if "set" not in cv or "unit" in cv or "scale" in cv:
         return
     target = SETUP_KEY_UNITS.get(scenario, {}).get(cv["set"])
     if target is None:
         return
-    low = col.lower().strip()
-    named = next((u for suf, u in sorted(COLUMN_UNIT_SUFFIXES.items(), key=lambda kv: -len(kv[0]))
-                  if low.endswith("_" + suf)), None)
-    bracket = re.search(r"[(\[]\s*([^()\[\]]+?)\s*[)\]]$", col.strip())
-    if named is None and bracket:  # a spreadsheet's header: "speed (km/h)", "depth [mm]"
-        text = bracket.group(1)
-        units = {u for spec in QUANTITIES.values() if spec for u in spec[1]}
-        named = text if text in units else COLUMN_UNIT_SUFFIXES.get(text.lower().replace("/", "_"))
-    if named is None or named == target:
-        return
-    q = next((q for q, spec in QUANTITIES.items() if spec and target in spec[1] and named in spec[1]), None)
-    if q is None:
-        return
-    family = QUANTITIES[q][1]
-    raise InputError(soil_path, cw, f"the unit of the cells, which the column's name says are in {named} "
-                     f"(quantity: {q}, unit: {named}, scale: {family[named] / family[target]:.4g}, {named} to "
-                     f"{target}, the unit of setup key {cv['set']}; or scale: 1 if they are in {target})",
-                     "no unit and no scale")
+    for named in name_units(col):
+        q = next((q for q, spec in QUANTITIES.items() if spec and target in spec[1] and named in spec[1]), None)
+        if q is None:
+            continue
+        family = QUANTITIES[q][1]
+        factor = family[named] / family[target]
+        if abs(factor - 1.0) <= SCALE_RTOL:
+            continue
+        raise InputError(soil_path, cw, f"the unit of the cells, which the column's name says are in {named} "
+                         f"(quantity: {q}, unit: {named}, scale: {factor:.4g}, {named} to "
+                         f"{target}, the unit of setup key {cv['set']}; or scale: 1 if they are in {target})",
+                         "no unit and no scale")
 
 
-def column_unit(col: str, measure: str) -> str | None:
-    """The unit of ``measure``'s quantity (:func:`response_units`, a spelling of
-    :data:`UNIT_ALIASES` as its unit) that a column's name ends in: after its last ``_``
-    (``draught_kN``) or in closing brackets (``draught (kN)``, ``draught [kN]``), matched with
-    its case (``mN`` is no ``MN``); None where the name gives none."""
-    name = str(col).strip()
-    m = re.search(r"[(\[]\s*([^()\[\]]+?)\s*[)\]]$", name)
-    tail = m.group(1) if m else (name.rsplit("_", 1)[1] if "_" in name else None)
-    if tail is None:
-        return None
-    unit = UNIT_ALIASES.get(tail, tail)
-    return unit if unit in response_units(measure) else None
+def _check_declared_unit(soil_path, cw: str, col: str, cv: dict) -> None:
+    """A covariate of a numeric quantity declares its cells' ``unit``; a column whose name
+    gives another unit of that quantity, of another factor (``speed (km/h)`` declared
+    ``unit: m/s``), contradicts it: one of the two is wrong, and reading 0.576 km/h as
+    0.576 m/s would go unnoticed, so it is refused naming the unit the name gives."""
+    q = cv.get("quantity")
+    if q is None or QUANTITIES.get(q) is None or "unit" not in cv:
+        return
+    declared = quantity_factor(q, cv["unit"])
+    for named in name_units(col):
+        factor = quantity_factor(q, named)
+        if factor is None or abs(factor - declared) <= SCALE_RTOL * declared:
+            continue
+        raise InputError(soil_path, f"{cw}.unit",
+                         f"the unit of the cells, which the column's name says are in {named} (unit: {named}; "
+                         f"or rename the column if its cells are in {cv['unit']})", cv["unit"])
 
 
 def _check_response_column_units(soil_path, rw: str, r: dict, tpath: Path) -> None:
-    """A response's value, SD or paper column whose name ends in a unit of its measure's
-    quantity (``draught_kN``) other than the response's declared ``unit`` (``unit: N``, as in
-    the README's example) would be read 1000 times off without a word: refused naming the
-    response's ``unit``, the column and the unit its name gives."""
-    declared = UNIT_ALIASES.get(str(r["unit"]).strip(), str(r["unit"]).strip())
+    """A response's value, SD or paper column whose name gives a unit of its measure's
+    quantity (:func:`name_units`: ``draught_kN``, ``Draught (KN)``) of another factor than the
+    response's declared ``unit`` (``unit: N``) would be read 1000 times off without a word:
+    refused naming the response's ``unit``, the column and the unit its name gives."""
+    family = response_units(r["measure"])
+    declared = unit_factor(r["unit"], r["measure"])
     for key in ("value", "sd", "paper_simulated", "paper_difference"):
         col = r.get(key)
-        named = column_unit(col, r["measure"]) if col is not None else None
-        if named is not None and named != declared:
+        for named in (name_units(col) if col is not None else ()):
+            if named not in family or abs(family[named] - declared) <= 1e-9 * declared:
+                continue
             raise InputError(soil_path, f"{rw}.unit",
                              f"the unit of {tpath.name}'s columns, which the name of column {col} ({key}) says is "
                              f"{named} (unit: {named}, converted to {unit_of(r['measure'])} as the table is read; "
