@@ -132,6 +132,33 @@ def test_label_cells_that_pandas_takes_for_missing_keep_their_text(cinnamon):
     _fails(cinnamon, "cinnamon-soil", "row 2, column plate")
 
 
+def test_a_missing_word_in_a_label_column_without_a_map_key_is_missing(cinnamon):
+    """R's write.csv writes a missing day NA: days 2024-05-01, NA, 2024-05-02, NA made a day
+    called "NA" holding rows 2 and 4.  A cell pandas reads as missing is a label only where the
+    column's map has it for a key; here it is missing, refused naming its row, column and how
+    to keep such a name."""
+    t = _table(cinnamon, "cinnamon-soil", "cutting_resistance.csv")
+    df = pd.read_csv(t)
+    df["day"] = ["2024-05-01", "NA", "2024-05-02", "NA"]
+    df.to_csv(t, index=False)
+    _edit(cinnamon, "cinnamon-soil", lambda d: _entry(d)["covariates"].update(day={"ignore": True, "quantity": "day"}))
+    msg = _fails(cinnamon, "cinnamon-soil", f"{t}: row 2, column day")
+    assert "'NA' is read as a missing value" in msg and '"NA": ...' in msg
+    # a tool mapped under the quoted key NA stays that tool; the unmapped word beside it is missing
+    df["plate"] = ["1", "NA", "2", "nan"]
+    df = df.drop(columns="day")
+    df.to_csv(t, index=False)
+
+    def edit(d):
+        _entry(d)["covariates"].pop("day")
+        _entry(d)["covariates"]["plate"] = {"setup": {"1": "plate-arc", "NA": "plate-parabola", "2": "plate-bionic"},
+                                            "quantity": "tool"}
+        _entry(d)["covariates"]["directrix"] = {"ignore": True}
+    _edit(cinnamon, "cinnamon-soil", edit)
+    msg = _fails(cinnamon, "cinnamon-soil", f"{t}: row 4, column plate")
+    assert "'nan' is read as a missing value" in msg
+
+
 # --- bad declarations -------------------------------------------------------------------------
 
 

@@ -226,9 +226,11 @@ class Soil:
 def read_table(path: Path, text_columns=()) -> pd.DataFrame:
     """Read a published CSV table; a missing or unreadable file raises InputError.
 
-    The columns named in ``text_columns`` (labels: a tool id, a revision) keep each cell's
-    text as the file writes it (``007`` stays ``"007"``, ``1.10`` stays ``"1.10"``, ``NA`` or
-    ``null`` stays that word, not pandas' missing value; an empty cell is missing); the other columns are parsed by pandas (numbers as numbers).
+    The columns named in ``text_columns`` (labels: a tool id, a revision; ``True``: every
+    column, to write the table back as it was) keep each cell's text as the file writes it (``007`` stays ``"007"``, ``1.10`` stays ``"1.10"``, ``NA`` or
+    ``null`` stays that word, not pandas' missing value: the measured tables' loader decides
+    where it is a label, :func:`soilcal.config.measurements._missing_words`; an empty cell is
+    missing); the other columns are parsed by pandas (numbers as numbers).
 
     The header's cells are stripped of surrounding spaces.  Refused, naming the file: a
     header that names a column twice, a header of one cell holding ``;`` (a
@@ -281,7 +283,7 @@ def read_table(path: Path, text_columns=()) -> pd.DataFrame:
         raise InputError(path, "<file>", "a readable CSV table", text or type(exc).__name__) from None
     if len(df.columns) == len(names):
         df.columns = [nm or str(c) for nm, c in zip(names, df.columns)]
-    keep = [c for c in text_columns if c in df.columns]
+    keep = list(df.columns) if text_columns is True else [c for c in text_columns if c in df.columns]
     if keep:
         # as written: pandas' default missing-value words (NA, N/A, null, None, nan, ...) are
         # a label's text there (a tool or day called NA); only an empty cell is missing

@@ -662,6 +662,18 @@ def _entry(soil_path, data: dict, mid: str, entry: dict, tpath: Path):
                              f"a column declared in {Path(soil_path).name} under {where} (a covariate, "
                              "a response column or an entry of ignore_columns)", col)
 
+    # -- label cells pandas reads as missing (NA, as R's write.csv writes a missing value)
+    na_words = _missing_words(df, covs)
+
+    def empty(row, col, what):
+        word = na_words.get((row - 1, col))
+        if word is None:
+            raise InputError(tpath, f"row {row}, column {col}", what, "empty")
+        raise InputError(tpath, f"row {row}, column {col}",
+                         f"{what} ({word!r} is read as a missing value, as R's write.csv writes one; a tool, day "
+                         f"or group so named is kept as a label where the column's setup or case map has it for a "
+                         f"key, quoted: \"{word}\": ...)", word)
+
     # -- rows
     active = [c for c in covs if not covs[c].get("ignore")]
     replicates = int(entry.get("replicates", DEFAULT_REPLICATES))
@@ -679,7 +691,7 @@ def _entry(soil_path, data: dict, mid: str, entry: dict, tpath: Path):
             cv = covs[col]
             cell = rec[col]
             if _missing(cell):
-                raise InputError(tpath, at(col), f"a value of the covariate {col}", "empty")
+                empty(row, col, f"a value of the covariate {col}")
             if "setup" in cv or "case" in cv:
                 form = "setup" if "setup" in cv else "case"
                 numeric = _numeric_column(cv)
@@ -807,7 +819,7 @@ def _entry(soil_path, data: dict, mid: str, entry: dict, tpath: Path):
         for col, q in quantity_cols.items():
             cell = rec[col]
             if _missing(cell):
-                raise InputError(tpath, at(col), f"a value of the covariate {col} ({q})", "empty")
+                empty(row, col, f"a value of the covariate {col} ({q})")
             if QUANTITIES[q] is None:
                 quantities[q] = _text(cell)
                 continue
@@ -827,6 +839,28 @@ def _entry(soil_path, data: dict, mid: str, entry: dict, tpath: Path):
             quantities=quantities, quantity_columns=dict(quantity_cols)))
     _check_moisture(soil_path, data, tpath, df, covs, quantity_cols)
     return df, _shared_runs(tpath, covs, conds)
+
+
+def _missing_words(df: pd.DataFrame, covs: dict) -> dict:
+    """Label columns (:func:`_label_column`) are read as written, so a cell ``NA``, ``N/A``,
+    ``null``, ``None``, ``nan`` (pandas' missing-value words; R's ``write.csv`` writes a missing
+    value ``NA``) is text there.  Such a cell is a label only where the column's ``setup`` or
+    ``case`` map has it for a key (a tool called NA, mapped ``"NA": plate-arc``); elsewhere it
+    is made missing in ``df``, as an empty cell is, so two days written NA are not one day
+    called "NA".  Returns (row position, column) -> the word, for the messages."""
+    from pandas._libs.parsers import STR_NA_VALUES
+
+    words = {}
+    for col, cv in covs.items():
+        if not _label_column(cv) or col not in df.columns:
+            continue
+        keys = {_map_key(k, False) for form in ("setup", "case") for k in (cv.get(form) or {})}
+        j = df.columns.get_loc(col)
+        for i, cell in enumerate(df[col].tolist()):
+            if isinstance(cell, str) and cell.strip() and cell.strip() in STR_NA_VALUES and cell.strip() not in keys:
+                words[(i, col)] = cell.strip()
+                df.iloc[i, j] = float("nan")
+    return words
 
 
 def _shared_runs(tpath: Path, covs: dict, conds: list[Condition]) -> list[Condition]:
