@@ -58,3 +58,27 @@ def test_layers_named_without_a_description_and_targets_without_a_layer_load(tmp
     for t in d["targets"].values():
         t.pop("layer")
     load_copy(tmp_path, SOIL, d)
+
+
+def test_layers_as_a_list_of_names(tmp_path, parsed):
+    """layers: [upper, middle, lower] was refused as 'expected a value of type object'; the
+    names are all a target's layer needs."""
+    d = copy.deepcopy(parsed)
+    d["layers"] = ["upper", "middle", "lower"]
+    load_copy(tmp_path, SOIL, d)
+    d["targets"]["static_angle_upper"]["layer"] = "uper"
+    e = _refused(tmp_path, d)
+    assert e.field == "targets.static_angle_upper.layer" and "(upper, middle, lower)" in e.expected
+
+
+@pytest.mark.parametrize("layers, field, said", [
+    ({"upper": 20, "middle": 40, "lower": 60}, "layers.upper", "a bare number has no unit"),
+    ({}, "layers", 'layers: {upper: "0-20 cm", middle: "20-40 cm"}'),
+    ("upper", "layers", "layers: [upper, middle]"),
+    (["upper", "upper"], "layers[1]", "a layer named once"),
+])
+def test_a_layers_form_not_taken_is_refused_showing_the_forms(tmp_path, parsed, layers, field, said):
+    d = copy.deepcopy(parsed)
+    d["layers"] = layers
+    e = _refused(tmp_path, d)
+    assert e.field == field and said in e.expected

@@ -430,6 +430,7 @@ def _semantic_checks(path: Path, d: dict, resources_root: Path,
                     raise InputError(path, f"{where}.printed.{r}.{key}", "an existing file under resources/published/" + d["name"], pr[key])
         seen[sid] = st
     manifest = _check_images(path, d, resources_root)
+    _check_layers(path, d)
     _check_targets(path, d, resources_root)
     if d.get("source") in ("dem", "both") and not d.get("simulation"):
         # the DEM source needs to know how each response is simulated; the source is the soil's
@@ -590,6 +591,32 @@ def _check_image_states(path: Path, targets: dict, named: dict) -> None:
                              "of them, are of one moisture and layer", g)
         for k, v in state.items():  # a later target may give what the first left out
             seen.setdefault(k, (v, tid))
+
+
+def _check_layers(path: Path, d: dict) -> None:
+    """``layers``: a mapping of each layer's name to what it is, as text with its unit
+    (``upper: "0-20 cm"``) or nothing, or a list of the names (``[upper, middle, lower]``);
+    each refusal names the field and shows the forms taken."""
+    if "layers" not in d:
+        return
+    layers = d["layers"]
+    forms = ('a mapping of each layer to what it is, layers: {upper: "0-20 cm", middle: "20-40 cm"} '
+             "(or nothing: {upper: null}), or a list of the names, layers: [upper, middle]")
+    if isinstance(layers, list):
+        if not layers:
+            raise InputError(path, "layers", forms, "an empty list")
+        for i, name in enumerate(layers):
+            if not isinstance(name, str) or not name.strip():
+                raise InputError(path, f"layers[{i}]", "a layer's name (text)", name)
+            if name in layers[:i]:
+                raise InputError(path, f"layers[{i}]", "a layer named once", name)
+        return
+    if not isinstance(layers, dict) or not layers:
+        raise InputError(path, "layers", forms, layers)
+    for name, what in layers.items():
+        if what is not None and not isinstance(what, str):
+            raise InputError(path, f"layers.{name}", 'what the layer is, as text with its unit ("0-20 cm", '
+                             '"20 cm deep"), or nothing: a bare number has no unit', what)
 
 
 def _check_targets(path: Path, d: dict, resources_root: Path) -> None:
