@@ -316,14 +316,29 @@ def test_rows_told_when_they_differ_only_in_an_ignored_covariate(cinnamon, capsy
     a, b, c = conditions(soil)
     assert a.setup == b.setup and a.params == b.params and a.setup != c.setup
     assert a.note == b.note and "rows 1, 2" in a.note and "plate = A, B" in a.note and c.note == ""
-    assert soil.notes == [a.note]
+    assert soil.load_notes == [a.note]
     frame = tool_frame([a, b, c], {})
     assert frame["note"].str.contains("plate = A, B", regex=False).tolist() == [True] * 4 + [False] * 2
     assert main(["config", "check", "--resources", str(cinnamon / "resources"),
                  str(_yaml(cinnamon, "cinnamon-soil"))]) == 0
     out, err = capsys.readouterr()
-    assert json.loads(out)["notes"] == [a.note]
+    assert json.loads(out)["load_notes"] == [a.note]
     assert a.note in err
+
+
+def test_the_load_notes_are_not_the_soil_s_own_notes(black, capsys):
+    """The black soil's file has its own free-text notes:; soilcal config check's JSON said
+    "notes": [] for it, as if it had none.  Its load notes are load_notes, and the JSON has no
+    notes field."""
+    import json
+
+    from soilcal.cli import main
+
+    soil = load_soil(_yaml(black, "black-soil"), black / "resources")
+    assert soil.data["notes"] and soil.load_notes == []
+    assert main(["config", "check", "--resources", str(black / "resources"), str(_yaml(black, "black-soil"))]) == 0
+    out = json.loads(capsys.readouterr().out)
+    assert out["load_notes"] == [] and "notes" not in out
 
 
 def test_no_note_where_the_ignored_covariate_goes_with_a_simulated_one(cinnamon):

@@ -39,7 +39,7 @@ except InputError as e:
 # what a soil's user should know though nothing is wrong (measured rows simulated alike), as
 # soilcal config check says it
 for _soil in SOILS.values():
-    for _note in _soil.notes:
+    for _note in _soil.load_notes:
         print(f"soilcal: note: {_soil.path}: {_note}", file=sys.stderr)
 RES = config.get("resources", "resources")
 # every soil's photo manifest, read and checked with the soil (soilcal config check does the same)

@@ -58,10 +58,13 @@ def targets_frame(soil_data: dict, source: str, measurements: dict | None = None
     """The targets table of a soil for ``source`` (module docstring)."""
     rows = []
     cited = bool(soil_data.get("citation"))
-    # a target's moisture is in the unit of the soil's properties.moisture_content (% by default,
-    # as soilcal.config.quantities.soil_moisture reads it): written beside it, 0.172 is no 0.172 %
-    prop = (soil_data.get("properties") or {}).get("moisture_content")
-    moisture_unit = str(prop.get("unit", "%")) if isinstance(prop, dict) else "%"
+    # a target's moisture is in the unit of the soil's properties.moisture_content, as its one
+    # reader gives it (% by default; a target with a moisture needs the soil to declare one):
+    # written beside it, 0.172 is no 0.172 %
+    from soilcal.config.quantities import soil_moisture
+
+    declared = soil_moisture(f"soil {soil_data.get('name', '')}", soil_data)
+    moisture_unit = str(declared["unit"]) if declared else "%"
     for tid, t in (soil_data.get("targets") or {}).items():
         printed = t.get("value")
         printed = float(printed) if printed is not None else np.nan

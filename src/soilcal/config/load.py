@@ -192,7 +192,7 @@ class Soil:
         return self.data["name"]
 
     @property
-    def notes(self) -> list[str]:
+    def load_notes(self) -> list[str]:
         """What the user should know of how the soil is simulated though nothing is wrong:
         measured rows that differ only in ignored covariates and share one simulation
         (:attr:`soilcal.config.measurements.Condition.note`), each once."""

@@ -869,7 +869,7 @@ def _shared_runs(tpath: Path, covs: dict, conds: list[Condition]) -> list[Condit
     ignored covariate (``{ignore: true}``: a tool, a day, a moisture varied only slightly) are
     compared with one simulated value: the simulation does not represent that difference.
     Ignoring the column is the user's choice, so the rows are not refused; each gets a note
-    naming the rows simulated alike and the ignored values (the soil's :attr:`notes`, printed
+    naming the rows simulated alike and the ignored values (the soil's ``load_notes``, printed
     by ``soilcal config check`` and the workflow, and written in ``tool_verification.csv``)."""
     import json
 
