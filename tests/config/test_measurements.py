@@ -233,9 +233,9 @@ def test_a_table_in_kN_is_read_in_N(cinnamon):
 
 
 def test_a_column_named_in_another_unit_than_the_response_s_is_refused(cinnamon):
-    """Draughts tabled in kN under a column draught_kN, the response left at unit: N (the
-    README's example): read as N they were 1000 times too small (0.3211 N).  Refused naming the
-    response's unit and the column; the same for an SD column (sd_kN) and a name in brackets."""
+    """Draughts tabled in kN under a column draught_kN, the response left at unit: N: read as N
+    they were 1000 times too small (0.3211 N).  Refused naming the response's unit and the
+    column; declared unit: kN, they load in N."""
     t = _table(cinnamon, "cinnamon-soil", "cutting_resistance.csv")
     df = pd.read_csv(t).rename(columns={"horizontal_measured_N": "draught_kN"})
     df["draught_kN"] = [0.3211, 0.2521, 0.1545, 0.3048]
