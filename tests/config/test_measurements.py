@@ -264,33 +264,68 @@ def test_a_kn_column_is_refused_under_unit_n_however_written(cinnamon, col):
     assert f"column {col} (value) says is kN" in msg
 
 
-def test_a_one_letter_word_of_a_column_s_name_is_no_unit(black):
-    """Sd_m, Sd_s: the measured and simulated flatness in mm (unit: mm).  The m of 'measured' was
-    taken for metres and the table refused; a one-letter word is no unit outside brackets
-    (Sd (m) is one), so the flatness loads as tabled."""
+def test_a_one_letter_last_word_of_a_column_s_name_is_its_unit(cinnamon):
+    """horizontal_measured_N, the tables' own naming: its last word N is the unit of its cells.
+    Under unit: kN the draughts 321.1 were read as 321100 N without a word (a one-letter word
+    was a unit only in brackets); now refused naming N, and under unit: N they load as tabled."""
+    p = _edit(cinnamon, "cinnamon-soil", lambda d: _entry(d)["responses"][0].update(unit="kN"))
+    msg = _fails(cinnamon, "cinnamon-soil", f"{p}: measurements.cutting_resistance.responses[0].unit")
+    assert "column horizontal_measured_N (value) says is N" in msg and "got 'kN'" in msg
+    assert "rename the column, e.g. horizontal_measured_N (kN)" in msg
+    p = _edit(cinnamon, "cinnamon-soil", lambda d: _entry(d)["responses"][0].update(unit="N"))
+    conds = conditions(load_soil(p, cinnamon / "resources"))
+    t = pd.read_csv(_table(cinnamon, "cinnamon-soil", "cutting_resistance.csv"))
+    assert [c.responses[0]["measured"] for c in conds] == pytest.approx(list(t["horizontal_measured_N"]))
+
+
+def test_a_one_letter_word_inside_a_column_s_name_is_no_unit(black):
+    """Sd_m_mm, F_N_mean: a one-letter word not at the end is as often an abbreviation
+    (m: measured); Sd_m, ending in m, is metres: under unit mm refused, asking for a name such
+    as Sd_m (mm), with which the flatness loads as tabled."""
     t = _table(black, "black-soil", "surface_flatness.csv")
-    df = pd.read_csv(t).rename(columns={"Sd_measured_mm": "Sd_m", "Sd_simulated_mm": "Sd_s"})
+    df = pd.read_csv(t).rename(columns={"Sd_measured_mm": "Sd_m", "Sd_simulated_mm": "Sd_s (mm)"})
     df.to_csv(t, index=False)
     p = _edit(black, "black-soil", lambda d: _entry(d, "surface_flatness")["responses"][0].update(
-        value="Sd_m", paper_simulated="Sd_s"))
+        value="Sd_m", paper_simulated="Sd_s (mm)"))
+    msg = _fails(black, "black-soil", f"{p}: measurements.surface_flatness.responses[0].unit")
+    assert "column Sd_m (value) says is m" in msg and "e.g. Sd_m (mm)" in msg
+    df.rename(columns={"Sd_m": "Sd_m (mm)"}).to_csv(t, index=False)
+    p = _edit(black, "black-soil", lambda d: _entry(d, "surface_flatness")["responses"][0].update(
+        value="Sd_m (mm)"))
     flat = [c for c in conditions(load_soil(p, black / "resources")) if c.measurement == "surface_flatness"]
     assert [c.responses[0]["measured"] for c in flat] == pytest.approx(list(df["Sd_m"]))
-    assert [c.responses[0]["paper_simulated"] for c in flat] == pytest.approx(list(df["Sd_s"]))
-    # in brackets a letter is a unit: metres under unit mm are refused
-    df.rename(columns={"Sd_m": "Sd (m)"}).to_csv(t, index=False)
-    p = _edit(black, "black-soil", lambda d: _entry(d, "surface_flatness")["responses"][0].update(value="Sd (m)"))
-    msg = _fails(black, "black-soil", f"{p}: measurements.surface_flatness.responses[0].unit")
-    assert "column Sd (m) (value) says is m" in msg
+    assert [c.responses[0]["paper_simulated"] for c in flat] == pytest.approx(list(df["Sd_s (mm)"]))
 
 
-def test_name_units():
+def test_a_lone_hyphen_in_a_column_s_name_is_no_unit(guangxi):
+    """Moisture - %, declared unit: %: the hyphen was read as the dimensionless unit '-' and the
+    column refused as 'the column's name says are in -'.  A word of punctuation only is no unit
+    outside brackets; w (-) still is dimensionless."""
     from soilcal.config.measurements import name_units
 
-    assert name_units("draught (kN)") == ["kN"] and name_units("sd [mN]") == ["mN"]
-    assert name_units("torque_Nm") == ["N m"] and name_units("torque_N_m") == ["N m"]
-    assert name_units("speed_km_h") == ["km/h"] and name_units("pressure_mpa") == ["MPa"]
-    assert name_units("draught_mean") == [] and name_units("horizontal_measured_N") == []
-    assert name_units("x (M)") == [] and name_units("n") == []  # one letter: with its case, in brackets
+    t = _table(guangxi, "guangxi-cohesive", "compression.csv")
+    pd.read_csv(t).rename(columns={"moisture_content": "Moisture - %"}).to_csv(t, index=False)
+
+    def rename(d):
+        cov = _entry(d, "compression")["covariates"]
+        cov["Moisture - %"] = cov.pop("moisture_content")
+    p = _edit(guangxi, "guangxi-cohesive", rename)
+    conds = [c for c in conditions(load_soil(p, guangxi / "resources")) if c.measurement == "compression"]
+    assert [c.case for c in conds] == ["mc05", "mc10", "mc15"]
+    assert name_units("Moisture - %") == ["%"] and name_units("w (-)") == ["-"] and name_units("a - b") == []
+
+
+@pytest.mark.parametrize("col", ["horizontal_mn", "horizontal_N_mn", "horizontal_MN_x", "horizontal_nm"])
+def test_two_letters_in_another_case_are_no_unit(cinnamon, col):
+    """mn (a mean, as R's headers write it), MN (meganewtons), nm (nanometres) were all matched
+    without case as mN or N m: horizontal_mn under unit: N was refused as mN.  A spelling of two
+    letters is matched with its case (or as kn, KN for kN): the draughts load as tabled."""
+    t = _table(cinnamon, "cinnamon-soil", "cutting_resistance.csv")
+    df = pd.read_csv(t).rename(columns={"horizontal_measured_N": col})
+    df.to_csv(t, index=False)
+    p = _edit(cinnamon, "cinnamon-soil", lambda d: _entry(d)["responses"][0].update(value=col))
+    conds = conditions(load_soil(p, cinnamon / "resources"))
+    assert [c.responses[0]["measured"] for c in conds] == pytest.approx(list(df[col]))
 
 
 def test_a_flatness_in_cm_and_a_strain_in_percent_are_converted():

@@ -75,6 +75,7 @@ from __future__ import annotations
 import math
 import os
 import re
+import string
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -994,6 +995,9 @@ def _check_scale(soil_path, cw: str, cv: dict, scenario: str) -> None:
 #: spellings a column's name may give a unit in besides the units of :data:`RESPONSE_UNITS`,
 #: :data:`UNIT_ALIASES` and :data:`QUANTITIES` (``speed_kmh``): unit
 NAME_UNIT_SPELLINGS = {"kmh": "km/h", "percent": "%", "wt%": "%"}
+#: two-letter spellings a name may give in another case than the unit's (``draught_kn``,
+#: ``Draught (KN)``, ``power_KW``): unit
+NAME_UNIT_CASES = {"kn": "kN", "KN": "kN", "Kn": "kN", "kw": "kW", "KW": "kW", "Kw": "kW"}
 #: words that are a unit only in a name's brackets (``w (fraction)``), not as a word of it
 #: (``clay_fraction``, ``percent_sand``)
 _UNIT_WORDS = ("fraction", "percent", "degree", "degrees")
@@ -1003,17 +1007,22 @@ _BRACKETS = re.compile(r"[(\[]\s*([^()\[\]]*?)\s*[)\]]")
 
 def _name_unit_table() -> tuple[dict, dict]:
     """Every unit spelling :func:`name_units` knows -> its unit as the tables key it, and the
-    same by lower-case spelling where that names one unit only (``kn`` is kN; a spelling of
-    one letter is matched with its case only: ``M`` is no ``m``, ``n`` no ``N``)."""
+    same by lower-case spelling where that names one unit only (``mpa`` is MPa, ``RPM`` rpm),
+    for spellings of three characters or more: two letters in another case are as often
+    something else (``mn`` a mean, ``MN`` meganewtons, ``nm`` nanometres, ``pa``), so a
+    spelling of two is matched with its case or as :data:`NAME_UNIT_CASES` lists it, one of
+    one letter with its case only (``M`` is no ``m``, ``n`` no ``N``)."""
     exact = {u: u for family in RESPONSE_UNITS for u in family}
     exact.update({u: u for spec in QUANTITIES.values() if spec for u in spec[1]})
     exact.update(UNIT_ALIASES)
     exact.update(NAME_UNIT_SPELLINGS)
     lower = {}
     for spelling, unit in exact.items():
-        if len(spelling) > 1:
+        if len(spelling) > 2:
             lower.setdefault(spelling.lower(), set()).add(unit)
-    return exact, {k: next(iter(v)) for k, v in lower.items() if len(v) == 1}
+    lower = {k: next(iter(v)) for k, v in lower.items() if len(v) == 1}
+    exact.update(NAME_UNIT_CASES)
+    return exact, lower
 
 
 def name_units(col) -> list[str]:
@@ -1022,18 +1031,23 @@ def name_units(col) -> list[str]:
     commas or brackets, anywhere in it (``draught_kN``, ``draught kN``, ``draught, kN``,
     ``draught_kN_mean``, ``speed_km_h``, ``torque_N_m``), or after a ``/`` (``draught/kN``),
     or in brackets (``draught (kN)``, ``depth [mm]``, ``speed (km/h)``).  Matched with its
-    case, else without it where that names one unit only (``kn``, ``KN`` are kN; ``mpa`` is
-    MPa; ``RPM`` is rpm), a one-letter spelling with its case only.  A one-letter word outside
-    brackets (``Sd_m``, measured; ``n``; ``F_N``) is no unit: it is as often an abbreviation;
-    ``depth (m)``, ``draught [N]`` are."""
+    case, else without it where that names one unit only and the spelling has three
+    characters or more (``mpa`` is MPa; ``RPM`` is rpm; of two, ``kn`` and ``KN`` are kN, but
+    ``mn`` is no mN: :func:`_name_unit_table`).  A one-letter word is a unit with its case, in
+    brackets (``depth (m)``, ``draught [N]``) or as the name's last word after a ``_``
+    (``horizontal_measured_N``, ``Sd_m``: the tables' own naming); elsewhere (``F_N_mean``,
+    ``n``) it is as often an abbreviation.  A word of punctuation only (the ``-`` of
+    ``Moisture - %``) is no unit outside brackets (``w (-)`` is dimensionless), but ``%``."""
     exact, lower = _name_unit_table()
 
-    def unit(text, bracketed):
-        if len(text) == 1 and text.isalpha() and not bracketed:
+    def unit(text, bracketed, last=False):
+        if len(text) == 1 and text.isalpha() and not (bracketed or last):
+            return None
+        if not bracketed and text != "%" and all(c in string.punctuation for c in text):
             return None
         if text.lower() in _UNIT_WORDS and not bracketed:
             return None
-        return exact.get(text) or (lower.get(text.lower()) if len(text) > 1 else None)
+        return exact.get(text) or (lower.get(text.lower()) if len(text) > 2 else None)
 
     name = str(col).strip()
     found = []
@@ -1053,9 +1067,18 @@ def name_units(col) -> list[str]:
             i += 2
             continue
         w = words[i]
-        found.append(unit(w, False) or (unit(w.split("/", 1)[1], False) if "/" in w else None))
+        last = i == len(words) - 1 and name.endswith("_" + w)
+        found.append(unit(w, False, last) or (unit(w.split("/", 1)[1], False) if "/" in w else None))
         i += 1
     return list(dict.fromkeys(u for u in found if u))
+
+
+def _rename_hint(col, declared: str) -> str:
+    """How to rename a column whose name gives another unit than its cells are declared in."""
+    if re.search(r"_[A-Za-z]$", str(col).strip()):
+        return (f"or, if its cells are in {declared}, rename the column, e.g. {col} ({declared}): a one-letter "
+                "last word after _ is read as a unit")
+    return f"or rename the column if its cells are in {declared}"
 
 
 def _check_column_unit(soil_path, cw: str, col: str, cv: dict, scenario: str) -> None:
@@ -1098,7 +1121,7 @@ def _check_declared_unit(soil_path, cw: str, col: str, cv: dict) -> None:
             continue
         raise InputError(soil_path, f"{cw}.unit",
                          f"the unit of the cells, which the column's name says are in {named} (unit: {named}; "
-                         f"or rename the column if its cells are in {cv['unit']})", cv["unit"])
+                         f"{_rename_hint(col, cv['unit'])})", cv["unit"])
 
 
 def _check_response_column_units(soil_path, rw: str, r: dict, tpath: Path) -> None:
@@ -1116,7 +1139,7 @@ def _check_response_column_units(soil_path, rw: str, r: dict, tpath: Path) -> No
             raise InputError(soil_path, f"{rw}.unit",
                              f"the unit of {tpath.name}'s columns, which the name of column {col} ({key}) says is "
                              f"{named} (unit: {named}, converted to {unit_of(r['measure'])} as the table is read; "
-                             f"or rename the column if its cells are in {r['unit']})", r["unit"])
+                             f"{_rename_hint(col, r['unit'])})", r["unit"])
 
 
 def _renamed(exc: InputError, soil_path, prefix: str, field_prefix: str) -> InputError:
