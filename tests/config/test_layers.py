@@ -82,3 +82,28 @@ def test_a_layers_form_not_taken_is_refused_showing_the_forms(tmp_path, parsed, 
     d["layers"] = layers
     e = _refused(tmp_path, d)
     assert e.field == field and said in e.expected
+
+
+@pytest.mark.parametrize("layers, field", [
+    (["upper", "middle", "lower", 20], "layers[3]"),
+    ({"upper": "0-20 cm", "middle": "20-40 cm", "lower": "40-60 cm", 20: "x"}, "layers.20"),
+])
+def test_a_number_as_a_layer_s_name_is_refused_in_either_form(tmp_path, parsed, layers, field):
+    """A layer named by a bare number was refused in a list but loaded as a mapping's key (20: x),
+    a name no target's layer (text) could give.  Both forms ask for the name quoted."""
+    d = copy.deepcopy(parsed)
+    d["layers"] = layers
+    e = _refused(tmp_path, d)
+    assert e.field == field and e.got == 20 and '(quote it, "20"' in e.expected
+    d["layers"] = [str(x) for x in layers] if isinstance(layers, list) else {str(k): v for k, v in layers.items()}
+    load_copy(tmp_path, SOIL, d)
+
+
+@pytest.mark.parametrize("what", ["20", "0-20", " 20.5 "])
+def test_a_layer_described_by_a_number_in_quotes_is_refused(tmp_path, parsed, what):
+    """upper: "20" loaded though upper: 20 was refused as a bare number without a unit: the
+    quotes add no unit."""
+    d = copy.deepcopy(parsed)
+    d["layers"] = {"upper": what, "middle": "20-40 cm", "lower": "40-60 cm"}
+    e = _refused(tmp_path, d)
+    assert e.field == "layers.upper" and "a bare number has no unit" in e.expected and e.got == what

@@ -596,7 +596,10 @@ def _check_image_states(path: Path, targets: dict, named: dict) -> None:
 def _check_layers(path: Path, d: dict) -> None:
     """``layers``: a mapping of each layer's name to what it is, as text with its unit
     (``upper: "0-20 cm"``) or nothing, or a list of the names (``[upper, middle, lower]``);
-    each refusal names the field and shows the forms taken."""
+    each refusal names the field and shows the forms taken.  A name is text in either form, as
+    a target's ``layer`` gives it: a bare number (``20``, a mapping's key as a list's item) is
+    refused asking for it quoted; what a layer is, given as a number alone (``20`` or
+    ``"20"``, ``"0-20"``), is refused: it has no unit."""
     if "layers" not in d:
         return
     layers = d["layers"]
@@ -605,18 +608,22 @@ def _check_layers(path: Path, d: dict) -> None:
     if isinstance(layers, list):
         if not layers:
             raise InputError(path, "layers", forms, "an empty list")
-        for i, name in enumerate(layers):
-            if not isinstance(name, str) or not name.strip():
-                raise InputError(path, f"layers[{i}]", "a layer's name (text)", name)
-            if name in layers[:i]:
-                raise InputError(path, f"layers[{i}]", "a layer named once", name)
-        return
-    if not isinstance(layers, dict) or not layers:
+        names = [(f"layers[{i}]", name) for i, name in enumerate(layers)]
+    elif isinstance(layers, dict) and layers:
+        names = [(f"layers.{name}", name) for name in layers]
+    else:
         raise InputError(path, "layers", forms, layers)
-    for name, what in layers.items():
-        if what is not None and not isinstance(what, str):
-            raise InputError(path, f"layers.{name}", 'what the layer is, as text with its unit ("0-20 cm", '
-                             '"20 cm deep"), or nothing: a bare number has no unit', what)
+    for i, (field, name) in enumerate(names):
+        if not isinstance(name, str) or not name.strip():
+            said = f' (quote it, "{name}", if the layer is so named)' if isinstance(name, (int, float)) else ""
+            raise InputError(path, field, "a layer's name, as text, the text a target's layer gives" + said, name)
+        if name in [n for _f, n in names[:i]]:
+            raise InputError(path, field, "a layer named once", name)
+    if isinstance(layers, dict):
+        for name, what in layers.items():
+            if what is not None and (not isinstance(what, str) or re.fullmatch(r"[\d\s.,;:+\-\u2013\u2014/~]*", what)):
+                raise InputError(path, f"layers.{name}", 'what the layer is, as text with its unit ("0-20 cm", '
+                                 '"20 cm deep"), or nothing: a bare number has no unit', what)
 
 
 def _check_targets(path: Path, d: dict, resources_root: Path) -> None:
