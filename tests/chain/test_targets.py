@@ -129,3 +129,17 @@ def test_a_measured_target_s_sd_is_written_beside_its_value():
     assert r["drum"]["sd"] == 0.9 and r["drum"]["value"] == 38.4
     assert np.isnan(r["bare"]["sd"])
     assert np.isnan(r["pile"]["sd"]) and r["pile"]["image_spread"] == 0.7
+
+
+def test_a_target_s_moisture_is_written_with_its_unit():
+    # a soil that gives its moistures as fractions: the target at 0.172 is 17.2 %, and the
+    # file says which; a soil that gives no unit is in %, a target without a moisture has none
+    frac = {"properties": {"moisture_content": {"values": [0.172, 0.215], "unit": "fraction"}},
+            "targets": {"dry": {"value": 28.0, "unit": "deg", "moisture_content": 0.172},
+                        "any": {"value": 30.0, "unit": "deg"}}}
+    r = _by_id(targets_frame(frac, "dem"))
+    assert (r["dry"]["moisture_content"], r["dry"]["moisture_unit"]) == (0.172, "fraction")
+    assert r["any"]["moisture_unit"] == ""
+    pct = {"properties": {"moisture_content": {"values": [17.2]}},
+           "targets": {"dry": {"value": 28.0, "unit": "deg", "moisture_content": 17.2}}}
+    assert _by_id(targets_frame(pct, "dem"))["dry"]["moisture_unit"] == "%"

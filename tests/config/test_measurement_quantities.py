@@ -67,7 +67,14 @@ def test_rotor_speed_in_r_per_min(black):
 
 
 def test_rotor_speed_in_rad_per_s(black):
-    _declare(black, "black-soil", lambda d: _rotor(d).update(quantity="rotor_speed", unit="rad/s"))
+    # a column whose name gives no unit (rotor_speed_rpm declared rad/s is refused: the name says rpm)
+    t = _table(black, "black-soil", "surface_flatness.csv")
+    pd.read_csv(t).rename(columns={"rotor_speed_rpm": "rotor_speed"}).to_csv(t, index=False)
+
+    def edit(d):
+        cv = _entry(d, "surface_flatness")["covariates"]
+        cv["rotor_speed"] = {**cv.pop("rotor_speed_rpm"), "quantity": "rotor_speed", "unit": "rad/s"}
+    _declare(black, "black-soil", edit)
     flat = [c for c in _load(black, "black-soil") if c.measurement == "surface_flatness"]
     # 150 rad/s = 150 * 60 / (2 pi) r/min = 1432.39 r/min
     assert flat[0].quantities["rotor_speed"] == pytest.approx(150 * 60 / (2 * math.pi))
@@ -101,6 +108,55 @@ def test_label_quantity_keeps_the_cell_text(cinnamon):
     conds = _load(cinnamon, "cinnamon-soil")
     assert [c.quantities for c in conds] == [{"tool": s} for s in ("1", "2", "3", "4")]
     assert conds[0].quantity_columns == {"plate": "tool"}
+
+
+def test_label_cells_that_pandas_takes_for_missing_keep_their_text(cinnamon):
+    # tools called NA, N/A, null and None: labels, not missing cells; the setup map finds them
+    t = _table(cinnamon, "cinnamon-soil", "cutting_resistance.csv")
+    df = pd.read_csv(t)
+    df["plate"] = ["NA", "N/A", "null", "None"]
+    df.to_csv(t, index=False)
+    plates = {"NA": "plate-arc", "N/A": "plate-parabola", "null": "plate-bionic", "None": "plate-line"}
+
+    def edit(d):
+        _entry(d)["covariates"]["plate"] = {"setup": plates, "quantity": "tool"}
+        _entry(d)["covariates"]["directrix"] = {"ignore": True}
+
+    _declare(cinnamon, "cinnamon-soil", edit)
+    conds = _load(cinnamon, "cinnamon-soil")
+    assert [c.quantities["tool"] for c in conds] == list(plates)
+    assert [c.setup["name"] for c in conds] == list(plates.values())
+    # an empty label cell is still missing, and refused naming its row
+    df["plate"] = ["NA", "", "null", "None"]
+    df.to_csv(t, index=False)
+    _fails(cinnamon, "cinnamon-soil", "row 2, column plate")
+
+
+def test_a_missing_word_in_a_label_column_without_a_map_key_is_missing(cinnamon):
+    """R's write.csv writes a missing day NA: days 2024-05-01, NA, 2024-05-02, NA made a day
+    called "NA" holding rows 2 and 4.  A cell pandas reads as missing is a label only where the
+    column's map has it for a key; here it is missing, refused naming its row, column and how
+    to keep such a name."""
+    t = _table(cinnamon, "cinnamon-soil", "cutting_resistance.csv")
+    df = pd.read_csv(t)
+    df["day"] = ["2024-05-01", "NA", "2024-05-02", "NA"]
+    df.to_csv(t, index=False)
+    _edit(cinnamon, "cinnamon-soil", lambda d: _entry(d)["covariates"].update(day={"ignore": True, "quantity": "day"}))
+    msg = _fails(cinnamon, "cinnamon-soil", f"{t}: row 2, column day")
+    assert "'NA' is read as a missing value" in msg and '"NA": ...' in msg
+    # a tool mapped under the quoted key NA stays that tool; the unmapped word beside it is missing
+    df["plate"] = ["1", "NA", "2", "nan"]
+    df = df.drop(columns="day")
+    df.to_csv(t, index=False)
+
+    def edit(d):
+        _entry(d)["covariates"].pop("day")
+        _entry(d)["covariates"]["plate"] = {"setup": {"1": "plate-arc", "NA": "plate-parabola", "2": "plate-bionic"},
+                                            "quantity": "tool"}
+        _entry(d)["covariates"]["directrix"] = {"ignore": True}
+    _edit(cinnamon, "cinnamon-soil", edit)
+    msg = _fails(cinnamon, "cinnamon-soil", f"{t}: row 4, column plate")
+    assert "'nan' is read as a missing value" in msg
 
 
 # --- bad declarations -------------------------------------------------------------------------
@@ -172,3 +228,126 @@ def test_a_set_column_named_in_another_unit_needs_its_unit(cinnamon):
     _declare(cinnamon, "cinnamon-soil",
              lambda d: _entry(d)["covariates"].update(speed_kmh={"set": "speed", "scale": 0.2778}))
     assert [c.setup["speed"] for c in _load(cinnamon, "cinnamon-soil")] == pytest.approx([0.16] * 4, rel=1e-3)
+
+
+@pytest.mark.parametrize("col", ["speed (km/h)", "speed [km/h]"])
+def test_a_set_column_with_a_unit_in_brackets_needs_its_unit(cinnamon, col):
+    """A spreadsheet's header "speed (km/h)" on a column that sets the plate's speed (m/s) with
+    no unit and no scale ran 0.576 km/h as 0.576 m/s: refused as speed_kmh is; "(m/s)" loads."""
+    t = _table(cinnamon, "cinnamon-soil", "cutting_resistance.csv")
+    df = pd.read_csv(t)
+    df[col] = [0.576] * 4
+    df.to_csv(t, index=False)
+    p = _declare(cinnamon, "cinnamon-soil", lambda d: _entry(d)["covariates"].update({col: {"set": "speed"}}))
+    msg = _fails(cinnamon, "cinnamon-soil", f"{p}: {CR}.{col}")
+    assert "which the column's name says are in km/h" in msg and "scale: 0.2778" in msg
+    df = df.rename(columns={col: "speed (m/s)"})
+    df["speed (m/s)"] = [0.16] * 4
+    df.to_csv(t, index=False)
+    _declare(cinnamon, "cinnamon-soil", lambda d: (_entry(d)["covariates"].pop(col),
+                                                   _entry(d)["covariates"].update({"speed (m/s)": {"set": "speed"}})))
+    assert [c.setup["speed"] for c in _load(cinnamon, "cinnamon-soil")] == [0.16] * 4
+
+
+@pytest.mark.parametrize("col", ["blade speed (rpm)", "blade speed (RPM)", "blade_speed_RPM", "speed (r/min)"])
+def test_a_set_column_named_in_the_key_s_unit_by_another_spelling_loads(black, col):
+    """The rotor's rpm is taken in r/min; a header "blade speed (rpm)" names r/min by another
+    spelling (factor 1) and sets rpm 150..350 as tabled; it was refused as if rpm were another
+    unit ('says are in rpm ... scale: 1')."""
+    t = _table(black, "black-soil", "surface_flatness.csv")
+    df = pd.read_csv(t)
+    df[col] = df["rotor_speed_rpm"]
+    df.to_csv(t, index=False)
+    _declare(black, "black-soil", lambda d: _entry(d, "surface_flatness")["covariates"].update({col: {"set": "rpm"}}))
+    flat = [c for c in _load(black, "black-soil") if c.measurement == "surface_flatness"]
+    assert [c.setup["rpm"] for c in flat] == [150.0, 200.0, 250.0, 300.0, 350.0]
+
+
+@pytest.mark.parametrize("col", ["blade speed (rad/s)", "blade speed (Rad/s)", "blade_speed_RAD_S"])
+def test_a_set_column_in_rad_per_s_needs_its_unit_however_written(black, col):
+    """rad/s is not r/min (factor 60/2pi = 9.549): "(Rad/s)" loaded 150 rad/s as 150 r/min while
+    "(rad/s)" was refused; every spelling is refused alike."""
+    t = _table(black, "black-soil", "surface_flatness.csv")
+    df = pd.read_csv(t)
+    df[col] = df["rotor_speed_rpm"]
+    df.to_csv(t, index=False)
+    p = _declare(black, "black-soil", lambda d: _entry(d, "surface_flatness")["covariates"].update({col: {"set": "rpm"}}))
+    msg = _fails(black, "black-soil", f"{p}: {SF}.{col}")
+    assert f"scale: {60 / (2 * math.pi):.4g}" in msg and "rad/s" in msg
+
+
+@pytest.mark.parametrize("cv", [{"unit": "m/s"}, {"unit": "m/s", "scale": 1}])
+def test_a_column_named_in_another_unit_than_its_declared_one_is_refused(cinnamon, cv):
+    """"speed (km/h)" declared unit: m/s (scale 1): its 0.576 km/h ran as 0.576 m/s, header and
+    declaration contradicting each other; refused naming the unit and the unit the name gives."""
+    t = _table(cinnamon, "cinnamon-soil", "cutting_resistance.csv")
+    df = pd.read_csv(t)
+    df["speed (km/h)"] = [0.576] * 4
+    df.to_csv(t, index=False)
+    p = _declare(cinnamon, "cinnamon-soil", lambda d: _entry(d)["covariates"].update(
+        {"speed (km/h)": {"set": "speed", "quantity": "tool_speed", **cv}}))
+    msg = _fails(cinnamon, "cinnamon-soil", f"{p}: {CR}.speed (km/h).unit")
+    assert "the column's name says are in km/h" in msg and "got 'm/s'" in msg
+    # the name's unit declared, with its factor, it runs 0.576 km/h = 0.16 m/s
+    _declare(cinnamon, "cinnamon-soil", lambda d: _entry(d)["covariates"].update(
+        {"speed (km/h)": {"set": "speed", "quantity": "tool_speed", "unit": "km/h", "scale": 1 / 3.6}}))
+    assert [c.setup["speed"] for c in _load(cinnamon, "cinnamon-soil")] == pytest.approx([0.16] * 4)
+
+
+# --- rows that differ only in an ignored covariate ----------------------------------------------
+
+
+def test_rows_told_when_they_differ_only_in_an_ignored_covariate(cinnamon, capsys):
+    # two tools A and B on one plate geometry, the tool column ignored: one simulation serves
+    # both rows, and the user is told so; tool C runs its own setup and gets no note
+    import json
+
+    from soilcal.chain.verify import tool_frame
+    from soilcal.cli import main
+
+    t = _table(cinnamon, "cinnamon-soil", "cutting_resistance.csv")
+    df = pd.read_csv(t).iloc[:3]
+    df["plate"] = ["A", "B", "C"]
+    df["directrix"] = ["line", "line", "arc"]
+    df.to_csv(t, index=False)
+    _declare(cinnamon, "cinnamon-soil", lambda d: _entry(d)["covariates"].update(
+        plate={"ignore": True, "quantity": "tool"}))
+    soil = load_soil(_yaml(cinnamon, "cinnamon-soil"), cinnamon / "resources")
+    a, b, c = conditions(soil)
+    assert a.setup == b.setup and a.params == b.params and a.setup != c.setup
+    assert a.note == b.note and "rows 1, 2" in a.note and "plate = A, B" in a.note and c.note == ""
+    assert soil.load_notes == [a.note]
+    frame = tool_frame([a, b, c], {})
+    assert frame["note"].str.contains("plate = A, B", regex=False).tolist() == [True] * 4 + [False] * 2
+    assert main(["config", "check", "--resources", str(cinnamon / "resources"),
+                 str(_yaml(cinnamon, "cinnamon-soil"))]) == 0
+    out, err = capsys.readouterr()
+    assert json.loads(out)["load_notes"] == [a.note]
+    assert a.note in err
+
+
+def test_the_load_notes_are_not_the_soil_s_own_notes(black, capsys):
+    """The black soil's file has its own free-text notes:; soilcal config check's JSON said
+    "notes": [] for it, as if it had none.  Its load notes are load_notes, and the JSON has no
+    notes field."""
+    import json
+
+    from soilcal.cli import main
+
+    soil = load_soil(_yaml(black, "black-soil"), black / "resources")
+    assert soil.data["notes"] and soil.load_notes == []
+    assert main(["config", "check", "--resources", str(black / "resources"), str(_yaml(black, "black-soil"))]) == 0
+    out = json.loads(capsys.readouterr().out)
+    assert out["load_notes"] == [] and "notes" not in out
+
+
+def test_no_note_where_the_ignored_covariate_goes_with_a_simulated_one(cinnamon):
+    # the shipped table: plate numbers 1-4 each with its own directrix, and rows at one
+    # simulation that agree in every ignored covariate (repeats), get no note
+    t = _table(cinnamon, "cinnamon-soil", "cutting_resistance.csv")
+    df = pd.read_csv(t)
+    assert all(c.note == "" for c in _load(cinnamon, "cinnamon-soil"))
+    df["plate"] = [1, 1, 2, 2]
+    df["directrix"] = ["line", "line", "arc", "arc"]
+    df.to_csv(t, index=False)
+    assert all(c.note == "" for c in _load(cinnamon, "cinnamon-soil"))

@@ -217,10 +217,11 @@ def test_a_table_in_kN_is_read_in_N(cinnamon):
     """The plates' forces tabled in kN (0.3211 kN = 321.1 N): the conditions hold them in N, the
     unit the DEM gives horizontal_force_N in, and say so."""
     t = _table(cinnamon, "cinnamon-soil", "cutting_resistance.csv")
-    df = pd.read_csv(t)
-    df["horizontal_measured_N"] = [0.3211, 0.2521, 0.1545, 0.3048]
+    df = pd.read_csv(t).rename(columns={"horizontal_measured_N": "horizontal_measured_kN"})
+    df["horizontal_measured_kN"] = [0.3211, 0.2521, 0.1545, 0.3048]
     df.to_csv(t, index=False)
-    p = _edit(cinnamon, "cinnamon-soil", lambda d: _entry(d)["responses"][0].update(unit="kN"))
+    p = _edit(cinnamon, "cinnamon-soil",
+              lambda d: _entry(d)["responses"][0].update(unit="kN", value="horizontal_measured_kN"))
     conds = conditions(load_soil(p, cinnamon / "resources"))
     h = [next(r for r in c.responses if r["measure"] == "horizontal_force_N") for c in conds]
     assert [r["measured"] for r in h] == pytest.approx([321.1, 252.1, 154.5, 304.8])
@@ -229,6 +230,102 @@ def test_a_table_in_kN_is_read_in_N(cinnamon):
     # the other force stays as tabled
     v = [next(r for r in c.responses if r["measure"] == "vertical_force_N") for c in conds]
     assert [r["measured"] for r in v] == pytest.approx([48.80, 13.98, 15.50, 10.40]) and v[0]["note"] == ""
+
+
+def test_a_column_named_in_another_unit_than_the_response_s_is_refused(cinnamon):
+    """Draughts tabled in kN under a column draught_kN, the response left at unit: N: read as N
+    they were 1000 times too small (0.3211 N).  Refused naming the response's unit and the
+    column; declared unit: kN, they load in N."""
+    t = _table(cinnamon, "cinnamon-soil", "cutting_resistance.csv")
+    df = pd.read_csv(t).rename(columns={"horizontal_measured_N": "draught_kN"})
+    df["draught_kN"] = [0.3211, 0.2521, 0.1545, 0.3048]
+    df.to_csv(t, index=False)
+    p = _edit(cinnamon, "cinnamon-soil", lambda d: _entry(d)["responses"][0].update(value="draught_kN"))
+    msg = _fails(cinnamon, "cinnamon-soil", f"{p}: measurements.cutting_resistance.responses[0].unit")
+    assert "column draught_kN (value) says is kN" in msg and "got 'N'" in msg
+    # declared kN, it loads in N
+    p = _edit(cinnamon, "cinnamon-soil", lambda d: _entry(d)["responses"][0].update(unit="kN"))
+    conds = conditions(load_soil(p, cinnamon / "resources"))
+    assert [c.responses[0]["measured"] for c in conds] == pytest.approx([321.1, 252.1, 154.5, 304.8])
+
+
+@pytest.mark.parametrize("col", ["draught_kn", "Draught (KN)", "draught kN", "draught, kN", "draught_kN_mean",
+                                 "draught [kN]", "draught/kN"])
+def test_a_kn_column_is_refused_under_unit_n_however_written(cinnamon, col):
+    """A unit is a word of the column's name anywhere (between _, spaces, commas, brackets,
+    after a /), matched without its case where that names one unit (kn, KN: kN): each of these
+    loaded 0.3211 kN as 0.3211 N."""
+    t = _table(cinnamon, "cinnamon-soil", "cutting_resistance.csv")
+    df = pd.read_csv(t).rename(columns={"horizontal_measured_N": col})
+    df[col] = [0.3211, 0.2521, 0.1545, 0.3048]
+    df.to_csv(t, index=False)
+    p = _edit(cinnamon, "cinnamon-soil", lambda d: _entry(d)["responses"][0].update(value=col))
+    msg = _fails(cinnamon, "cinnamon-soil", f"{p}: measurements.cutting_resistance.responses[0].unit")
+    assert f"column {col} (value) says is kN" in msg
+
+
+def test_a_one_letter_last_word_of_a_column_s_name_is_its_unit(cinnamon):
+    """horizontal_measured_N, the tables' own naming: its last word N is the unit of its cells.
+    Under unit: kN the draughts 321.1 were read as 321100 N without a word (a one-letter word
+    was a unit only in brackets); now refused naming N, and under unit: N they load as tabled."""
+    p = _edit(cinnamon, "cinnamon-soil", lambda d: _entry(d)["responses"][0].update(unit="kN"))
+    msg = _fails(cinnamon, "cinnamon-soil", f"{p}: measurements.cutting_resistance.responses[0].unit")
+    assert "column horizontal_measured_N (value) says is N" in msg and "got 'kN'" in msg
+    assert "rename the column, e.g. horizontal_measured_N (kN)" in msg
+    p = _edit(cinnamon, "cinnamon-soil", lambda d: _entry(d)["responses"][0].update(unit="N"))
+    conds = conditions(load_soil(p, cinnamon / "resources"))
+    t = pd.read_csv(_table(cinnamon, "cinnamon-soil", "cutting_resistance.csv"))
+    assert [c.responses[0]["measured"] for c in conds] == pytest.approx(list(t["horizontal_measured_N"]))
+
+
+def test_a_one_letter_word_inside_a_column_s_name_is_no_unit(black):
+    """Sd_m_mm, F_N_mean: a one-letter word not at the end is as often an abbreviation
+    (m: measured); Sd_m, ending in m, is metres: under unit mm refused, asking for a name such
+    as Sd_m (mm), with which the flatness loads as tabled."""
+    t = _table(black, "black-soil", "surface_flatness.csv")
+    df = pd.read_csv(t).rename(columns={"Sd_measured_mm": "Sd_m", "Sd_simulated_mm": "Sd_s (mm)"})
+    df.to_csv(t, index=False)
+    p = _edit(black, "black-soil", lambda d: _entry(d, "surface_flatness")["responses"][0].update(
+        value="Sd_m", paper_simulated="Sd_s (mm)"))
+    msg = _fails(black, "black-soil", f"{p}: measurements.surface_flatness.responses[0].unit")
+    assert "column Sd_m (value) says is m" in msg and "e.g. Sd_m (mm)" in msg
+    df.rename(columns={"Sd_m": "Sd_m (mm)"}).to_csv(t, index=False)
+    p = _edit(black, "black-soil", lambda d: _entry(d, "surface_flatness")["responses"][0].update(
+        value="Sd_m (mm)"))
+    flat = [c for c in conditions(load_soil(p, black / "resources")) if c.measurement == "surface_flatness"]
+    assert [c.responses[0]["measured"] for c in flat] == pytest.approx(list(df["Sd_m"]))
+    assert [c.responses[0]["paper_simulated"] for c in flat] == pytest.approx(list(df["Sd_s (mm)"]))
+
+
+def test_a_lone_hyphen_in_a_column_s_name_is_no_unit(guangxi):
+    """Moisture - %, declared unit: %: the hyphen was read as the dimensionless unit '-' and the
+    column refused as 'the column's name says are in -'.  A word of punctuation only is no unit
+    outside brackets; w (-) still is dimensionless."""
+    from soilcal.config.measurements import name_units
+
+    t = _table(guangxi, "guangxi-cohesive", "compression.csv")
+    pd.read_csv(t).rename(columns={"moisture_content": "Moisture - %"}).to_csv(t, index=False)
+
+    def rename(d):
+        cov = _entry(d, "compression")["covariates"]
+        cov["Moisture - %"] = cov.pop("moisture_content")
+    p = _edit(guangxi, "guangxi-cohesive", rename)
+    conds = [c for c in conditions(load_soil(p, guangxi / "resources")) if c.measurement == "compression"]
+    assert [c.case for c in conds] == ["mc05", "mc10", "mc15"]
+    assert name_units("Moisture - %") == ["%"] and name_units("w (-)") == ["-"] and name_units("a - b") == []
+
+
+@pytest.mark.parametrize("col", ["horizontal_mn", "horizontal_N_mn", "horizontal_MN_x", "horizontal_nm"])
+def test_two_letters_in_another_case_are_no_unit(cinnamon, col):
+    """mn (a mean, as R's headers write it), MN (meganewtons), nm (nanometres) were all matched
+    without case as mN or N m: horizontal_mn under unit: N was refused as mN.  A spelling of two
+    letters is matched with its case (or as kn, KN for kN): the draughts load as tabled."""
+    t = _table(cinnamon, "cinnamon-soil", "cutting_resistance.csv")
+    df = pd.read_csv(t).rename(columns={"horizontal_measured_N": col})
+    df.to_csv(t, index=False)
+    p = _edit(cinnamon, "cinnamon-soil", lambda d: _entry(d)["responses"][0].update(value=col))
+    conds = conditions(load_soil(p, cinnamon / "resources"))
+    assert [c.responses[0]["measured"] for c in conds] == pytest.approx(list(df[col]))
 
 
 def test_a_flatness_in_cm_and_a_strain_in_percent_are_converted():

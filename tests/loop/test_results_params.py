@@ -279,3 +279,60 @@ def test_run_writes_the_parameters_of_every_condition(tmp_path, monkeypatch, cap
     # the report and the figures, as the workflow writes them
     assert (out / "report.md").read_text().startswith("# Measured-data loop: cinnamon-soil")
     assert list((out / "figures/residuals").glob("*.png")) and (out / "ranking.csv").is_file()
+
+
+def _cinnamon_with_tools(tmp_path, plates):
+    """A copy of the cinnamon soil whose four plates are tools named ``plates`` (mapped, quoted,
+    to the four plate setups)."""
+    import shutil
+
+    import yaml
+
+    from soilcal.config.load import read_yaml
+
+    (tmp_path / "config/soils").mkdir(parents=True)
+    soil = tmp_path / "config/soils/cinnamon-soil.yaml"
+    shutil.copy(CINNAMON, soil)
+    for kind in ("published", "measurements", "images"):
+        shutil.copytree(RES / kind / "cinnamon-soil", tmp_path / "resources" / kind / "cinnamon-soil")
+    table = tmp_path / "resources/measurements/cinnamon-soil/cutting_resistance.csv"
+    df = pd.read_csv(table)
+    df["plate"] = plates
+    df.to_csv(table, index=False)
+    d = read_yaml(soil)
+    cov = d["measurements"]["cutting_resistance"]["covariates"]
+    cov["plate"] = {"setup": dict(zip(plates, ("plate-arc", "plate-parabola", "plate-bionic", "plate-line"))),
+                    "quantity": "tool"}
+    cov["directrix"] = {"ignore": True}
+    soil.write_text(yaml.safe_dump(d, sort_keys=False))
+    return soil, tmp_path / "resources", table
+
+
+def test_synthesize_writes_the_user_s_table_back_as_written(tmp_path, monkeypatch):
+    """Tools NA, N/A, null and None (mapped in the soil): synthesize re-read the user's table
+    with pandas' missing-value words and wrote the four tools back as empty cells."""
+    monkeypatch.setattr(lc, "dem_simulator", _fake_simulator)
+    plates = ["NA", "N/A", "null", "None"]
+    soil, res, _ = _cinnamon_with_tools(tmp_path, plates)
+    assert [c.quantities["tool"] for c in conditions(load_soil(soil, res))] == plates
+    out = tmp_path / "synthetic.csv"
+    assert main(["loop", "synthesize", str(soil), "--measurement", "cutting_resistance", "--resources", str(res),
+                 "--out", str(out)]) == 0
+    assert pd.read_csv(out, dtype=str, keep_default_na=False)["plate"].tolist() == plates
+
+
+def test_residuals_are_read_back_as_written(tmp_path):
+    """residuals.csv's covariate and tool columns of four tools NA, N/A, null, None (and 007):
+    re-read with pandas' missing-value words the four were one missing level, 007 the number 7."""
+    from soilcal.chain.files import write_csv
+    from soilcal.loop.files import read_written
+
+    tools = ["NA", "N/A", "null", "None", "007"]
+    res = pd.DataFrame({"measurement": ["m"] * 5, "row": range(1, 6), "cov:plate": tools, "q:tool": tools,
+                        "cov:speed": [0.1, 0.2, float("nan"), 0.4, 0.5], "residual": [1.0, 2.0, 3.0, 4.0, 5.0]})
+    write_csv(res, tmp_path / "residuals.csv")
+    back = read_written(tmp_path / "residuals.csv")
+    assert back["cov:plate"].tolist()[:4] == tools[:4] and back["q:tool"].tolist() == tools
+    assert back["q:tool"].nunique() == 5
+    assert back["cov:speed"].isna().tolist() == [False, False, True, False, False]
+    assert back["residual"].tolist() == [1.0, 2.0, 3.0, 4.0, 5.0]

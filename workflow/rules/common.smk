@@ -36,6 +36,11 @@ except InputError as e:
     # one line naming file, field and what was expected, status 2 as the soilcal commands; no traceback
     print(f"soilcal: error: {e}", file=sys.stderr)
     sys.exit(2)
+# what a soil's user should know though nothing is wrong (measured rows simulated alike), as
+# soilcal config check says it
+for _soil in SOILS.values():
+    for _note in _soil.load_notes:
+        print(f"soilcal: note: {_soil.path}: {_note}", file=sys.stderr)
 RES = config.get("resources", "resources")
 # every soil's photo manifest, read and checked with the soil (soilcal config check does the same)
 IMAGE_MANIFESTS = {soil: s.manifest for soil, s in SOILS.items() if s.manifest is not None}

@@ -19,7 +19,9 @@ and says so (``source = not available``); the optimisation cases that aim at it 
 have no optimum.  Columns: target_id, value, sd (the standard deviation the soil gives with
 the value, ``targets.<id>.sd``; empty for a photo measurement, whose scatter is image_spread),
 unit, source, image_group, image_value, image_spread, image_n, printed_value, layer,
-moisture_content (in the unit of ``properties.moisture_content``), note.
+moisture_content (as the target gives it, in the unit of ``properties.moisture_content``),
+moisture_unit (that unit as the soil writes it, ``%`` where it gives none; empty for a target
+without a moisture), note.
 """
 
 from __future__ import annotations
@@ -33,7 +35,7 @@ import pandas as pd
 from soilcal.errors import InputError
 
 COLUMNS = ["target_id", "value", "sd", "unit", "source", "image_group", "image_value", "image_spread", "image_n",
-           "printed_value", "layer", "moisture_content", "note"]
+           "printed_value", "layer", "moisture_content", "moisture_unit", "note"]
 
 
 def target_has_value(soil_data: dict, target_id) -> bool:
@@ -56,11 +58,19 @@ def targets_frame(soil_data: dict, source: str, measurements: dict | None = None
     """The targets table of a soil for ``source`` (module docstring)."""
     rows = []
     cited = bool(soil_data.get("citation"))
+    # a target's moisture is in the unit of the soil's properties.moisture_content, as its one
+    # reader gives it (% by default; a target with a moisture needs the soil to declare one):
+    # written beside it, 0.172 is no 0.172 %
+    from soilcal.config.quantities import soil_moisture
+
+    declared = soil_moisture(f"soil {soil_data.get('name', '')}", soil_data)
+    moisture_unit = str(declared["unit"]) if declared else "%"
     for tid, t in (soil_data.get("targets") or {}).items():
         printed = t.get("value")
         printed = float(printed) if printed is not None else np.nan
         row = {"target_id": tid, "unit": t.get("unit", ""), "printed_value": printed if cited else np.nan,
                "layer": t.get("layer", ""), "moisture_content": t.get("moisture_content", np.nan),
+               "moisture_unit": moisture_unit if t.get("moisture_content") is not None else "",
                "image_group": t.get("image", ""), "image_value": np.nan, "image_spread": np.nan,
                "image_n": np.nan}
         if source == "dem" and t.get("image"):

@@ -490,7 +490,7 @@ def tool_frame(conditions, runs: dict[tuple[str, int], pd.DataFrame]) -> pd.Data
                 status = "no value: the runs measured nothing for this quantity"
             else:
                 status = "ok"
-            note = resp.get("note") or ""
+            note = "; ".join(n for n in (resp.get("note") or "", getattr(c, "note", "") or "") if n)
             if not np.isfinite(measured):
                 note = (note + "; " if note else "") + "measured value not printed"
             pdiff = resp.get("paper_difference")

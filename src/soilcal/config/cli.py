@@ -5,6 +5,7 @@ lists, as the workflow does before any job."""
 from __future__ import annotations
 
 import json
+import sys
 
 
 def _check(args) -> int:
@@ -23,7 +24,9 @@ def _check(args) -> int:
     for path, soil in soils:
         stages = [{"id": s["id"], "kind": s["kind"], "runs": design_runs(s), "table": s.get("table")} for s in soil.stages]
         print(json.dumps({"file": path, "soil": soil.name, "valid": True, "stages": stages,
-                          "defaults": list(soil.defaulted)}))
+                          "defaults": list(soil.defaulted), "load_notes": soil.load_notes}))
+        for note in soil.load_notes:
+            print(f"soilcal: note: {path}: {note}", file=sys.stderr)
     return 0
 
 

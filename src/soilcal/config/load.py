@@ -192,6 +192,13 @@ class Soil:
         return self.data["name"]
 
     @property
+    def load_notes(self) -> list[str]:
+        """What the user should know of how the soil is simulated though nothing is wrong:
+        measured rows that differ only in ignored covariates and share one simulation
+        (:attr:`soilcal.config.measurements.Condition.note`), each once."""
+        return list(dict.fromkeys(c.note for c in (self.measured or ()) if c.note))
+
+    @property
     def stages(self) -> list[dict]:
         return self.data["stages"]
 
@@ -219,9 +226,11 @@ class Soil:
 def read_table(path: Path, text_columns=()) -> pd.DataFrame:
     """Read a published CSV table; a missing or unreadable file raises InputError.
 
-    The columns named in ``text_columns`` (labels: a tool id, a revision) keep each cell's
-    text as the file writes it (``007`` stays ``"007"``, ``1.10`` stays ``"1.10"``; an empty
-    cell is missing); the other columns are parsed by pandas (numbers as numbers).
+    The columns named in ``text_columns`` (labels: a tool id, a revision; ``True``: every
+    column, to write the table back as it was) keep each cell's text as the file writes it (``007`` stays ``"007"``, ``1.10`` stays ``"1.10"``, ``NA`` or
+    ``null`` stays that word, not pandas' missing value: the measured tables' loader decides
+    where it is a label, :func:`soilcal.config.measurements._missing_words`; an empty cell is
+    missing); the other columns are parsed by pandas (numbers as numbers).
 
     The header's cells are stripped of surrounding spaces.  Refused, naming the file: a
     header that names a column twice, a header of one cell holding ``;`` (a
@@ -274,12 +283,15 @@ def read_table(path: Path, text_columns=()) -> pd.DataFrame:
         raise InputError(path, "<file>", "a readable CSV table", text or type(exc).__name__) from None
     if len(df.columns) == len(names):
         df.columns = [nm or str(c) for nm, c in zip(names, df.columns)]
-    keep = [c for c in text_columns if c in df.columns]
+    keep = list(df.columns) if text_columns is True else [c for c in text_columns if c in df.columns]
     if keep:
-        as_text = pd.read_csv(io.StringIO(body), dtype=str)
+        # as written: pandas' default missing-value words (NA, N/A, null, None, nan, ...) are
+        # a label's text there (a tool or day called NA); only an empty cell is missing
+        as_text = pd.read_csv(io.StringIO(body), dtype=str, keep_default_na=False, na_values=[])
         as_text.columns = df.columns
         for c in keep:
-            df[c] = as_text[c]
+            cells = as_text[c]
+            df[c] = cells.where(cells.str.strip() != "", np.nan)
     filled = np.flatnonzero(df.notna().any(axis=1).to_numpy())
     return df.iloc[:filled[-1] + 1 if filled.size else 0]
 
@@ -418,6 +430,7 @@ def _semantic_checks(path: Path, d: dict, resources_root: Path,
                     raise InputError(path, f"{where}.printed.{r}.{key}", "an existing file under resources/published/" + d["name"], pr[key])
         seen[sid] = st
     manifest = _check_images(path, d, resources_root)
+    _check_layers(path, d)
     _check_targets(path, d, resources_root)
     if d.get("source") in ("dem", "both") and not d.get("simulation"):
         # the DEM source needs to know how each response is simulated; the source is the soil's
@@ -580,8 +593,42 @@ def _check_image_states(path: Path, targets: dict, named: dict) -> None:
             seen.setdefault(k, (v, tid))
 
 
+def _check_layers(path: Path, d: dict) -> None:
+    """``layers``: a mapping of each layer's name to what it is, as text with its unit
+    (``upper: "0-20 cm"``) or nothing, or a list of the names (``[upper, middle, lower]``);
+    each refusal names the field and shows the forms taken.  A name is text in either form, as
+    a target's ``layer`` gives it: a bare number (``20``, a mapping's key as a list's item) is
+    refused asking for it quoted; what a layer is, given as a number alone (``20`` or
+    ``"20"``, ``"0-20"``), is refused: it has no unit."""
+    if "layers" not in d:
+        return
+    layers = d["layers"]
+    forms = ('a mapping of each layer to what it is, layers: {upper: "0-20 cm", middle: "20-40 cm"} '
+             "(or nothing: {upper: null}), or a list of the names, layers: [upper, middle]")
+    if isinstance(layers, list):
+        if not layers:
+            raise InputError(path, "layers", forms, "an empty list")
+        names = [(f"layers[{i}]", name) for i, name in enumerate(layers)]
+    elif isinstance(layers, dict) and layers:
+        names = [(f"layers.{name}", name) for name in layers]
+    else:
+        raise InputError(path, "layers", forms, layers)
+    for i, (field, name) in enumerate(names):
+        if not isinstance(name, str) or not name.strip():
+            said = f' (quote it, "{name}", if the layer is so named)' if isinstance(name, (int, float)) else ""
+            raise InputError(path, field, "a layer's name, as text, the text a target's layer gives" + said, name)
+        if name in [n for _f, n in names[:i]]:
+            raise InputError(path, field, "a layer named once", name)
+    if isinstance(layers, dict):
+        for name, what in layers.items():
+            if what is not None and (not isinstance(what, str) or re.fullmatch(r"[\d\s.,;:+\-\u2013\u2014/~]*", what)):
+                raise InputError(path, f"layers.{name}", 'what the layer is, as text with its unit ("0-20 cm", '
+                                 '"20 cm deep"), or nothing: a bare number has no unit', what)
+
+
 def _check_targets(path: Path, d: dict, resources_root: Path) -> None:
-    """A target's ``table`` is a file under ``<resources>/measurements/<soil>/``, and a target
+    """A target's ``layer`` is one of the soil's declared ``layers`` (a misspelt one would make a
+    layer of its own), its ``table`` a file under ``<resources>/measurements/<soil>/``, and a target
     has the unit of every response it is the target of: the response whose id it bears (the
     steepest-ascent path aims that response at it) and every response an optimisation goal
     aims at it (``target: <id>``)."""
@@ -589,7 +636,15 @@ def _check_targets(path: Path, d: dict, resources_root: Path) -> None:
     mdir = resources_root / "measurements" / d["name"]
     from soilcal.config.measurements import table_inside
 
+    layers = d.get("layers")
     for tid, t in targets.items():
+        if t.get("layer") is not None and str(t["layer"]) not in {str(k) for k in (layers or {})}:
+            if layers:
+                want = "one of the soil's layers (" + ", ".join(map(str, layers)) + ")"
+            else:
+                want = ('a layer the soil declares: it declares none (add layers: {' + f"{t['layer']}: ..." +
+                        '} naming each layer once, e.g. its depth "0-20 cm")')
+            raise InputError(path, f"targets.{tid}.layer", want, t["layer"])
         if t.get("table") is not None and not table_inside(path, f"targets.{tid}.table", mdir, t["table"]).is_file():
             raise InputError(path, f"targets.{tid}.table", f"an existing file under {mdir}", t["table"])
         if t.get("moisture_content") is not None:

@@ -75,6 +75,7 @@ from __future__ import annotations
 import math
 import os
 import re
+import string
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -184,6 +185,10 @@ class Condition:
     quantities: dict = None
     #: covariate column -> its declared quantity
     quantity_columns: dict = None
+    #: where the row differs from others only in ignored covariates (a tool, a slightly
+    #: different moisture): the rows simulated alike with it and the values the simulation
+    #: leaves out (:func:`_shared_runs`); empty otherwise
+    note: str = ""
 
 
 def unit_of(measure: str) -> str:
@@ -583,6 +588,7 @@ def _entry(soil_path, data: dict, mid: str, entry: dict, tpath: Path):
         if form in ("set", "param"):
             _check_scale(soil_path, cw, cv, name)
             _check_column_unit(soil_path, cw, col, cv, name)
+        _check_declared_unit(soil_path, cw, col, cv)
     quantity_cols = {c: cv["quantity"] for c, cv in covs.items() if "quantity" in cv}
     twice = [q for q in set(quantity_cols.values()) if list(quantity_cols.values()).count(q) > 1]
     if twice:
@@ -657,6 +663,18 @@ def _entry(soil_path, data: dict, mid: str, entry: dict, tpath: Path):
                              f"a column declared in {Path(soil_path).name} under {where} (a covariate, "
                              "a response column or an entry of ignore_columns)", col)
 
+    # -- label cells pandas reads as missing (NA, as R's write.csv writes a missing value)
+    na_words = _missing_words(df, covs)
+
+    def empty(row, col, what):
+        word = na_words.get((row - 1, col))
+        if word is None:
+            raise InputError(tpath, f"row {row}, column {col}", what, "empty")
+        raise InputError(tpath, f"row {row}, column {col}",
+                         f"{what} ({word!r} is read as a missing value, as R's write.csv writes one; a tool, day "
+                         f"or group so named is kept as a label where the column's setup or case map has it for a "
+                         f"key, quoted: \"{word}\": ...)", word)
+
     # -- rows
     active = [c for c in covs if not covs[c].get("ignore")]
     replicates = int(entry.get("replicates", DEFAULT_REPLICATES))
@@ -674,7 +692,7 @@ def _entry(soil_path, data: dict, mid: str, entry: dict, tpath: Path):
             cv = covs[col]
             cell = rec[col]
             if _missing(cell):
-                raise InputError(tpath, at(col), f"a value of the covariate {col}", "empty")
+                empty(row, col, f"a value of the covariate {col}")
             if "setup" in cv or "case" in cv:
                 form = "setup" if "setup" in cv else "case"
                 numeric = _numeric_column(cv)
@@ -732,6 +750,7 @@ def _entry(soil_path, data: dict, mid: str, entry: dict, tpath: Path):
                                  f"{want} (the unit of {r['measure']}, from its name) or another unit of its "
                                  f"quantity, converted to {want} as {tpath.name} is read: "
                                  + ", ".join(response_units(r["measure"])), r["unit"])
+            _check_response_column_units(soil_path, f"{where}.responses[{j}]", r, tpath)
         try:
             dem = DemParams.from_mapping(params, src, base=soil_base)
         except InputError as exc:  # a soil-wide simulation.params value: reported by its own check
@@ -801,7 +820,7 @@ def _entry(soil_path, data: dict, mid: str, entry: dict, tpath: Path):
         for col, q in quantity_cols.items():
             cell = rec[col]
             if _missing(cell):
-                raise InputError(tpath, at(col), f"a value of the covariate {col} ({q})", "empty")
+                empty(row, col, f"a value of the covariate {col} ({q})")
             if QUANTITIES[q] is None:
                 quantities[q] = _text(cell)
                 continue
@@ -820,7 +839,65 @@ def _entry(soil_path, data: dict, mid: str, entry: dict, tpath: Path):
             covariates={c: (None if _missing(rec[c]) else _plain(rec[c])) for c in covs},
             quantities=quantities, quantity_columns=dict(quantity_cols)))
     _check_moisture(soil_path, data, tpath, df, covs, quantity_cols)
-    return df, conds
+    return df, _shared_runs(tpath, covs, conds)
+
+
+def _missing_words(df: pd.DataFrame, covs: dict) -> dict:
+    """Label columns (:func:`_label_column`) are read as written, so a cell ``NA``, ``N/A``,
+    ``null``, ``None``, ``nan`` (pandas' missing-value words; R's ``write.csv`` writes a missing
+    value ``NA``) is text there.  Such a cell is a label only where the column's ``setup`` or
+    ``case`` map has it for a key (a tool called NA, mapped ``"NA": plate-arc``); elsewhere it
+    is made missing in ``df``, as an empty cell is, so two days written NA are not one day
+    called "NA".  Returns (row position, column) -> the word, for the messages."""
+    from pandas._libs.parsers import STR_NA_VALUES
+
+    words = {}
+    for col, cv in covs.items():
+        if not _label_column(cv) or col not in df.columns:
+            continue
+        keys = {_map_key(k, False) for form in ("setup", "case") for k in (cv.get(form) or {})}
+        j = df.columns.get_loc(col)
+        for i, cell in enumerate(df[col].tolist()):
+            if isinstance(cell, str) and cell.strip() and cell.strip() in STR_NA_VALUES and cell.strip() not in keys:
+                words[(i, col)] = cell.strip()
+                df.iloc[i, j] = float("nan")
+    return words
+
+
+def _shared_runs(tpath: Path, covs: dict, conds: list[Condition]) -> list[Condition]:
+    """Rows that run the same simulation (scenario, setup, DEM parameters, calibrated stage
+    and case, preset, replicates: one job, one run per seed for all of them) yet differ in an
+    ignored covariate (``{ignore: true}``: a tool, a day, a moisture varied only slightly) are
+    compared with one simulated value: the simulation does not represent that difference.
+    Ignoring the column is the user's choice, so the rows are not refused; each gets a note
+    naming the rows simulated alike and the ignored values (the soil's ``load_notes``, printed
+    by ``soilcal config check`` and the workflow, and written in ``tool_verification.csv``)."""
+    import json
+
+    ignored = [c for c, cv in covs.items() if cv.get("ignore")]
+    if not ignored or len(conds) < 2:
+        return conds
+    groups = {}
+    for c in conds:
+        ident = json.dumps([c.scenario, c.setup, c.params, c.stage, c.case, c.preset, c.replicates],
+                           sort_keys=True, default=str)
+        groups.setdefault(ident, []).append(c)
+    notes = {}
+    for rows in groups.values():
+        differ = [col for col in ignored if len({_text(r.covariates.get(col)) for r in rows}) > 1]
+        if len(rows) < 2 or not differ:
+            continue
+        what = "; ".join(f"{col} = " + ", ".join(_text(r.covariates.get(col)) for r in rows) for col in differ)
+        text = (f"{tpath.name} rows {', '.join(str(r.row) for r in rows)} differ only in the ignored "
+                f"covariate{'s' if len(differ) > 1 else ''} {', '.join(differ)} ({what}) and are simulated "
+                "alike: one simulated value for all of them, the difference is not represented")
+        for r in rows:
+            notes[r.row] = text
+    if not notes:
+        return conds
+    from dataclasses import replace
+
+    return [replace(c, note=notes[c.row]) if c.row in notes else c for c in conds]
 
 
 #: a moisture table whose median is this many decades from the soil's own moisture (or, where the
@@ -915,34 +992,154 @@ def _check_scale(soil_path, cw: str, cv: dict, scenario: str) -> None:
                          f"{factor:.4g} ({unit} to {target}, the unit of {what})", scale)
 
 
-#: column-name endings that name a unit (``speed_kmh``, ``depth_mm``): unit
-COLUMN_UNIT_SUFFIXES = {"kmh": "km/h", "km_h": "km/h", "mm_s": "mm/s", "cm_s": "cm/s", "m_s": "m/s", "mm": "mm",
-                        "cm": "cm", "m": "m"}
+#: spellings a column's name may give a unit in besides the units of :data:`RESPONSE_UNITS`,
+#: :data:`UNIT_ALIASES` and :data:`QUANTITIES` (``speed_kmh``): unit
+NAME_UNIT_SPELLINGS = {"kmh": "km/h", "percent": "%", "wt%": "%"}
+#: two-letter spellings a name may give in another case than the unit's (``draught_kn``,
+#: ``Draught (KN)``, ``power_KW``): unit
+NAME_UNIT_CASES = {"kn": "kN", "KN": "kN", "Kn": "kN", "kw": "kW", "KW": "kW", "Kw": "kW"}
+#: words that are a unit only in a name's brackets (``w (fraction)``), not as a word of it
+#: (``clay_fraction``, ``percent_sand``)
+_UNIT_WORDS = ("fraction", "percent", "degree", "degrees")
+#: a name's bracketed part: ``speed (km/h)``, ``depth [mm]``
+_BRACKETS = re.compile(r"[(\[]\s*([^()\[\]]*?)\s*[)\]]")
+
+
+def _name_unit_table() -> tuple[dict, dict]:
+    """Every unit spelling :func:`name_units` knows -> its unit as the tables key it, and the
+    same by lower-case spelling where that names one unit only (``mpa`` is MPa, ``RPM`` rpm),
+    for spellings of three characters or more: two letters in another case are as often
+    something else (``mn`` a mean, ``MN`` meganewtons, ``nm`` nanometres, ``pa``), so a
+    spelling of two is matched with its case or as :data:`NAME_UNIT_CASES` lists it, one of
+    one letter with its case only (``M`` is no ``m``, ``n`` no ``N``)."""
+    exact = {u: u for family in RESPONSE_UNITS for u in family}
+    exact.update({u: u for spec in QUANTITIES.values() if spec for u in spec[1]})
+    exact.update(UNIT_ALIASES)
+    exact.update(NAME_UNIT_SPELLINGS)
+    lower = {}
+    for spelling, unit in exact.items():
+        if len(spelling) > 2:
+            lower.setdefault(spelling.lower(), set()).add(unit)
+    lower = {k: next(iter(v)) for k, v in lower.items() if len(v) == 1}
+    exact.update(NAME_UNIT_CASES)
+    return exact, lower
+
+
+def name_units(col) -> list[str]:
+    """The units a column's name gives (as :data:`RESPONSE_UNITS` and :data:`QUANTITIES` key
+    them), in the order written: a unit written as a word of the name, between ``_``, spaces,
+    commas or brackets, anywhere in it (``draught_kN``, ``draught kN``, ``draught, kN``,
+    ``draught_kN_mean``, ``speed_km_h``, ``torque_N_m``), or after a ``/`` (``draught/kN``),
+    or in brackets (``draught (kN)``, ``depth [mm]``, ``speed (km/h)``).  Matched with its
+    case, else without it where that names one unit only and the spelling has three
+    characters or more (``mpa`` is MPa; ``RPM`` is rpm; of two, ``kn`` and ``KN`` are kN, but
+    ``mn`` is no mN: :func:`_name_unit_table`).  A one-letter word is a unit with its case, in
+    brackets (``depth (m)``, ``draught [N]``) or as the name's last word after a ``_``
+    (``horizontal_measured_N``, ``Sd_m``: the tables' own naming); elsewhere (``F_N_mean``,
+    ``n``) it is as often an abbreviation.  A word of punctuation only (the ``-`` of
+    ``Moisture - %``) is no unit outside brackets (``w (-)`` is dimensionless), but ``%``."""
+    exact, lower = _name_unit_table()
+
+    def unit(text, bracketed, last=False):
+        if len(text) == 1 and text.isalpha() and not (bracketed or last):
+            return None
+        if not bracketed and text != "%" and all(c in string.punctuation for c in text):
+            return None
+        if text.lower() in _UNIT_WORDS and not bracketed:
+            return None
+        return exact.get(text) or (lower.get(text.lower()) if len(text) > 2 else None)
+
+    name = str(col).strip()
+    found = []
+    for m in _BRACKETS.finditer(name):
+        inside = m.group(1)
+        words = [w for w in re.split(r"[\s,;]+", inside) if w]
+        whole = unit(inside, True)
+        found += [whole] if whole else [unit(w, True) for w in words]
+    words = [w for w in re.split(r"[\s_,;]+", _BRACKETS.sub(" ", name)) if w]
+    i = 0
+    while i < len(words):
+        pair = None
+        if i + 1 < len(words):  # a unit written in two words: km_h, m_s, r_min, N_m
+            pair = unit(f"{words[i]}/{words[i + 1]}", False) or unit(f"{words[i]} {words[i + 1]}", False)
+        if pair:
+            found.append(pair)
+            i += 2
+            continue
+        w = words[i]
+        last = i == len(words) - 1 and name.endswith("_" + w)
+        found.append(unit(w, False, last) or (unit(w.split("/", 1)[1], False) if "/" in w else None))
+        i += 1
+    return list(dict.fromkeys(u for u in found if u))
+
+
+def _rename_hint(col, declared: str) -> str:
+    """How to rename a column whose name gives another unit than its cells are declared in."""
+    if re.search(r"_[A-Za-z]$", str(col).strip()):
+        return (f"or, if its cells are in {declared}, rename the column, e.g. {col} ({declared}): a one-letter "
+                "last word after _ is read as a unit")
+    return f"or rename the column if its cells are in {declared}"
 
 
 def _check_column_unit(soil_path, cw: str, col: str, cv: dict, scenario: str) -> None:
     """A ``set`` covariate that declares no ``unit`` and no ``scale`` takes its cells in the
-    unit of the setup key (:data:`SETUP_KEY_UNITS`); a column whose name ends in another unit
-    of that key (``speed_kmh`` for a speed in m/s, ``depth_mm`` for a depth in m) would be read
+    unit of the setup key (:data:`SETUP_KEY_UNITS`); a column whose name gives another unit of
+    that key's quantity, of another factor (:func:`name_units`: ``speed_kmh`` or ``speed (km/h)``
+    for a speed in m/s, ``depth_mm`` for a depth in m; ``rpm`` is r/min), would be read
     1000 mm as 1000 m without a word, so it is refused, asking for the unit and its scale."""
     if "set" not in cv or "unit" in cv or "scale" in cv:
         return
     target = SETUP_KEY_UNITS.get(scenario, {}).get(cv["set"])
     if target is None:
         return
-    low = col.lower()
-    named = next((u for suf, u in sorted(COLUMN_UNIT_SUFFIXES.items(), key=lambda kv: -len(kv[0]))
-                  if low.endswith("_" + suf)), None)
-    if named is None or named == target:
+    for named in name_units(col):
+        q = next((q for q, spec in QUANTITIES.items() if spec and target in spec[1] and named in spec[1]), None)
+        if q is None:
+            continue
+        family = QUANTITIES[q][1]
+        factor = family[named] / family[target]
+        if abs(factor - 1.0) <= SCALE_RTOL:
+            continue
+        raise InputError(soil_path, cw, f"the unit of the cells, which the column's name says are in {named} "
+                         f"(quantity: {q}, unit: {named}, scale: {factor:.4g}, {named} to "
+                         f"{target}, the unit of setup key {cv['set']}; or scale: 1 if they are in {target})",
+                         "no unit and no scale")
+
+
+def _check_declared_unit(soil_path, cw: str, col: str, cv: dict) -> None:
+    """A covariate of a numeric quantity declares its cells' ``unit``; a column whose name
+    gives another unit of that quantity, of another factor (``speed (km/h)`` declared
+    ``unit: m/s``), contradicts it: one of the two is wrong, and reading 0.576 km/h as
+    0.576 m/s would go unnoticed, so it is refused naming the unit the name gives."""
+    q = cv.get("quantity")
+    if q is None or QUANTITIES.get(q) is None or "unit" not in cv:
         return
-    q = next((q for q, spec in QUANTITIES.items() if spec and target in spec[1] and named in spec[1]), None)
-    if q is None:
-        return
-    family = QUANTITIES[q][1]
-    raise InputError(soil_path, cw, f"the unit of the cells, which the column's name says are in {named} "
-                     f"(quantity: {q}, unit: {named}, scale: {family[named] / family[target]:.4g}, {named} to "
-                     f"{target}, the unit of setup key {cv['set']}; or scale: 1 if they are in {target})",
-                     "no unit and no scale")
+    declared = quantity_factor(q, cv["unit"])
+    for named in name_units(col):
+        factor = quantity_factor(q, named)
+        if factor is None or abs(factor - declared) <= SCALE_RTOL * declared:
+            continue
+        raise InputError(soil_path, f"{cw}.unit",
+                         f"the unit of the cells, which the column's name says are in {named} (unit: {named}; "
+                         f"{_rename_hint(col, cv['unit'])})", cv["unit"])
+
+
+def _check_response_column_units(soil_path, rw: str, r: dict, tpath: Path) -> None:
+    """A response's value, SD or paper column whose name gives a unit of its measure's
+    quantity (:func:`name_units`: ``draught_kN``, ``Draught (KN)``) of another factor than the
+    response's declared ``unit`` (``unit: N``) would be read 1000 times off without a word:
+    refused naming the response's ``unit``, the column and the unit its name gives."""
+    family = response_units(r["measure"])
+    declared = unit_factor(r["unit"], r["measure"])
+    for key in ("value", "sd", "paper_simulated", "paper_difference"):
+        col = r.get(key)
+        for named in (name_units(col) if col is not None else ()):
+            if named not in family or abs(family[named] - declared) <= 1e-9 * declared:
+                continue
+            raise InputError(soil_path, f"{rw}.unit",
+                             f"the unit of {tpath.name}'s columns, which the name of column {col} ({key}) says is "
+                             f"{named} (unit: {named}, converted to {unit_of(r['measure'])} as the table is read; "
+                             f"{_rename_hint(col, r['unit'])})", r["unit"])
 
 
 def _renamed(exc: InputError, soil_path, prefix: str, field_prefix: str) -> InputError:

@@ -225,6 +225,7 @@ def _synthesize(args) -> int:
     import pandas as pd
 
     from soilcal.atomic import write_text
+    from soilcal.config.load import read_table
     from soilcal.errors import InputError
     from soilcal.config.measurements import measurements_dir
     from soilcal.loop import synthesize as sy
@@ -260,7 +261,8 @@ def _synthesize(args) -> int:
     table = table.join(pd.DataFrame([params[k] for k in keys], index=table.index).add_prefix("base:"))
     entry = soil.data["measurements"][args.measurement]
     src = measurements_dir(soil.resources_root, soil.name) / entry["table"]
-    df = pd.read_csv(src)
+    # every cell as the user's table writes it (a tool NA, 007), only the responses replaced
+    df = read_table(src, text_columns=True)
     for j, r in enumerate(entry["responses"]):
         t = table[table["measure"] == r["measure"]].sort_values("row")
         if r.get("value") is None:

@@ -41,6 +41,20 @@ def _soil(soil_path, resources_root):
     return load_soil(soil_path, resources_root)
 
 
+def read_written(path) -> pd.DataFrame:
+    """A table this module wrote (``residuals.csv``, ``diagnosis.csv``) as it was written:
+    :func:`soilcal.chain.files.write_csv` writes a missing value as an empty cell, so only an
+    empty cell is missing.  pandas' default missing-value words would make a covariate's cell
+    ``NA``, ``N/A``, ``null`` or ``None`` (a tool so called, kept by its measured table's map)
+    missing, four such tools one level; and a label quantity's column (``q:tool``, ``q:day``,
+    ``q:group``) is text, as the measured table writes it (``007`` is no ``7``)."""
+    from soilcal.config.quantities import QUANTITIES
+
+    head = pd.read_csv(path, nrows=0).columns
+    labels = {c: str for c in head if c.startswith("q:") and c[2:] in QUANTITIES and QUANTITIES[c[2:]] is None}
+    return pd.read_csv(path, keep_default_na=False, na_values=[""], dtype=labels)
+
+
 def condition_runs(conds, files: dict, theta: dict | None = None) -> pd.DataFrame:
     """Run rows of every condition from the job file that simulated it (``files``:
     ``"<measurement>/<row>"`` -> path), tagged with the condition and, for an effect's design
@@ -148,8 +162,8 @@ def _outcome(soil, outdir, effect_files: dict, plans: list[dict]):
     out = Path(outdir)
     settings = core.settings_from(soil.data, soil.path)
     conds = conditions(soil)
-    res = pd.read_csv(out / "residuals.csv")
-    diag = pd.read_csv(out / "diagnosis.csv")
+    res = read_written(out / "residuals.csv")
+    diag = read_written(out / "diagnosis.csv")
     cands, designs = [], {}
     for plan in plans:
         cands += plan["candidates"]
@@ -175,7 +189,7 @@ def more_files(soil_path, resources_root, outdir, effect_files: dict, out_plan) 
     outcome, conds, settings = _outcome(soil, outdir, effect_files, [plan])
     more = core.more_candidates(outcome, conds, settings) if plan["candidates"] else []
     plan_more = _plan(soil.name, more, plan["reference"], settings, plan["quantity_columns"],
-                      res=pd.read_csv(Path(outdir) / "residuals.csv"))
+                      res=read_written(Path(outdir) / "residuals.csv"))
     write_json(plan_more, out_plan)
     return plan_more
 
