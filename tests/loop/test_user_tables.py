@@ -846,3 +846,26 @@ def test_a_scale_fitted_beside_two_effects_whose_interval_holds_zero_names_no_bi
     assert "uniform bias that no effect" not in out.verdict
     v, (lo, hi), how, _ = _scale_fitted(out)
     assert lo < 0 < hi and "no bias shown" in how
+
+
+def test_repeats_of_one_condition_measuring_two_forces_are_counted_as_table_rows():
+    # one soil-bin condition measured on four days, horizontal and vertical force each (4 table
+    # rows, 8 values), every value 10 % above the noise-free stand-in, SD 3 % over 5 repeats:
+    # the verdict counts the rows of the table, as its trend clause does, not the values
+    from dataclasses import replace
+
+    from soilcal.loop import core
+    from soilcal.loop import standin as S
+
+    def exact(cond, params, seed):
+        fh, fv = S.forces(params, cond.quantities)
+        return {"horizontal_force_N": fh, "vertical_force_N": fv}
+
+    one = {"tool": "A", "tool_speed": 1.0, "working_depth": 0.1, "position": 10.0}
+    conds = S.conditions([dict(one, day=f"d{i}") for i in range(4)])
+    conds = [replace(c, responses=tuple(dict(r, measured=1.1 * exact(c, S.BASE, 0)[r["measure"]],
+                                             measured_sd=0.03 * exact(c, S.BASE, 0)[r["measure"]], n=5)
+                                        for r in c.responses)) for c in conds]
+    out = core.run_inprocess("user", conds, S.base_params, S.simulate, core.Settings(bootstrap=0))
+    assert "the 4 rows (8 measured values) repeat one measured condition" in out.verdict, out.verdict
+    assert "with 1 measured condition (4 rows, repeats of them)" in out.verdict, out.verdict

@@ -973,7 +973,9 @@ def analyse(soil: str, res: pd.DataFrame, diag: pd.DataFrame, cands: list, effec
         if sel_rows:
             verdict += "; no candidate effect lowered the held-out error significantly (selection.csv)"
     elif not cands and len(dg.per_condition(dg.per_test(u))) == 1:
-        verdict = (f"unexplained: the residual follows {follows}; the {n} rows repeat one measured condition, "
+        rows = len(dg.per_test(u))  # table rows, each measuring one or more quantities
+        verdict = (f"unexplained: the residual follows {follows}; the {rows} row{'s' if rows != 1 else ''}"
+                   + (f" ({n} measured values)" if n != rows else "") + " repeat one measured condition, "
                    "which cannot tell a bias of the model from that condition's own deviation, nor fit an effect "
                    "(measure two conditions at least)")
     elif not cands:
