@@ -305,7 +305,10 @@ def test_rows_that_repeat_one_condition_say_why_no_effect_can_be_compared():
     out = core.run_inprocess("user", sy.with_measured(conds, table), S.base_params, S.simulate,
                              core.Settings(bootstrap=0))
     assert out.chosen == []
-    assert "the 5 rows repeat one measured condition, which cannot tell a bias of the model" in out.verdict
+    m = re.search(r"the 5 rows repeat one measured condition, ([0-9.]+) % above the model \(a uniform scale fitted "
+                  r"to them\); one condition cannot tell a bias of the model from that condition's own deviation",
+                  out.verdict)
+    assert m and abs(float(m.group(1)) - 10.0) < 1.5, out.verdict
     assert not (out.diagnosis["test"] == "bias").any()  # one condition mean: no t-test of a bias
 
 
@@ -867,5 +870,7 @@ def test_repeats_of_one_condition_measuring_two_forces_are_counted_as_table_rows
                                              measured_sd=0.03 * exact(c, S.BASE, 0)[r["measure"]], n=5)
                                         for r in c.responses)) for c in conds]
     out = core.run_inprocess("user", conds, S.base_params, S.simulate, core.Settings(bootstrap=0))
-    assert "the 4 rows (8 measured values) repeat one measured condition" in out.verdict, out.verdict
+    m = re.search(r"the 4 rows \(8 measured values\) repeat one measured condition, ([0-9.]+) % above the model",
+                  out.verdict)
+    assert m and abs(float(m.group(1)) - 10.0) < 1.5, out.verdict  # the 10 % it is measured above
     assert "with 1 measured condition (4 rows, repeats of them)" in out.verdict, out.verdict

@@ -974,10 +974,14 @@ def analyse(soil: str, res: pd.DataFrame, diag: pd.DataFrame, cands: list, effec
             verdict += "; no candidate effect lowered the held-out error significantly (selection.csv)"
     elif not cands and len(dg.per_condition(dg.per_test(u))) == 1:
         rows = len(dg.per_test(u))  # table rows, each measuring one or more quantities
+        # how far the condition lies from the model: a free uniform scale of its simulated values
+        y0, meas = u["simulated_mean"].to_numpy(float), u["measured"].to_numpy(float)
+        sv = float(sl.Model([sl.scale_data()], y0, meas, rs.scale_of(u)).fit()[0][0])
         verdict = (f"unexplained: the residual follows {follows}; the {rows} row{'s' if rows != 1 else ''}"
                    + (f" ({n} measured values)" if n != rows else "") + " repeat one measured condition, "
-                   "which cannot tell a bias of the model from that condition's own deviation, nor fit an effect "
-                   "(measure two conditions at least)")
+                   f"{abs(100 * sv):.1f} % {'above' if sv > 0 else 'below'} the model (a uniform scale fitted to "
+                   "them); one condition cannot tell a bias of the model from that condition's own deviation, nor "
+                   "fit an effect (measure two conditions at least)")
     elif not cands:
         sig = dg.matched_quantities(diag) if len(diag) else set()
         held = [nm for nm in (skipped_effects or {}) if sig & set(EFFECTS[nm].signature)]
