@@ -706,6 +706,28 @@ def scatter_about_scale(res: pd.DataFrame, s: float) -> tuple[float, int, float]
     return chi, k, float(stats.chi2.sf(chi, k))
 
 
+def _scatter_about_holm(res: pd.DataFrame, s: float, diag: pd.DataFrame, alpha: float) -> tuple[float, int, float]:
+    """:func:`scatter_about_scale` with its p corrected together with the diagnosis's tests
+    (Holm), one more test of that family."""
+    chi, dof, p = scatter_about_scale(res, s)
+    if np.isfinite(p) and len(diag):
+        from statsmodels.stats.multitest import multipletests
+
+        p = float(multipletests(np.append(diag["p"].fillna(1.0).to_numpy(float), p), alpha=alpha,
+                                method="holm")[1][-1])
+    return chi, dof, p
+
+
+def _far_off(diag: pd.DataFrame) -> str:
+    """Why rows scatter about a mean offset: the significant covariates of the diagnosis, where
+    there are (a day's level), else a reason no covariate carries (stones in the bin)."""
+    sig = diag[diag["significant"].astype(bool) & ~diag["test"].isin(["bias", "scatter"])] if len(diag) else diag
+    names = list(dict.fromkeys(sig["covariate"].astype(str))) if len(sig) else []
+    if names:
+        return "their levels follow " + ", ".join(names) + " (the diagnosis)"
+    return "some rows lie far off for a reason no covariate carries (stones in the bin, a disturbance)"
+
+
 def _aicc_undefined(s) -> bool:
     """Whether a :class:`soilcal.loop.select.Score` could not be scored for an undefined AICc
     (of the model or its reference: too few observations, :func:`soilcal.loop.select.aicc`)."""
@@ -850,12 +872,7 @@ def analyse(soil: str, res: pd.DataFrame, diag: pd.DataFrame, cands: list, effec
         nuisance = ({SCALE_KEY: sv}, {SCALE_KEY: sel.uniform_ci},
                     "fitted alone: the uniform bias the verdict names, the calibrated model times (1 + s)")
         beside = _beside_clause(sel, settings.alpha)
-        chi, dof, p_about = scatter_about_scale(res, sv)
-        if np.isfinite(p_about) and len(diag):  # one more test of the diagnosis's family: Holm over them all
-            from statsmodels.stats.multitest import multipletests
-
-            p_about = float(multipletests(np.append(diag["p"].fillna(1.0).to_numpy(float), p_about),
-                                          alpha=settings.alpha, method="holm")[1][-1])
+        chi, dof, p_about = _scatter_about_holm(res, sv, diag, settings.alpha)
         where = ("the model throughout, a uniform bias (an instrument's calibration, a zero offset) that no "
                  "mechanism of the library carries; ")
         if p_about < settings.alpha:  # the rows are not shifted alike: no uniform bias
@@ -863,8 +880,8 @@ def analyse(soil: str, res: pd.DataFrame, diag: pd.DataFrame, cands: list, effec
                         "times (1 + s); they scatter about it beyond their uncertainty (no uniform bias)")
             where = (f"the model on average, but they scatter about that level beyond the measured and seed "
                      f"uncertainty (chi-square {chi:.3g} on {dof} degrees of freedom, Holm p {p_about:.2g}), so it is no "
-                     "uniform bias throughout (an instrument's calibration shifts every row alike): some rows lie "
-                     "far off for a reason no covariate carries (stones in the bin, a disturbance); ")
+                     "uniform bias throughout (an instrument's calibration shifts every row alike): "
+                     + _far_off(diag) + "; ")
         verdict = (f"unexplained: the measured values are {abs(100 * sv):.1f} % {'above' if sv > 0 else 'below'} "
                    + where + " + ".join(sel.judged) + f" fit{'s' if k == 1 else ''} it "
                    f"(held-out RMS {100 * sel.uniform.rmse():.2f} % against {100 * sel.uniform.rmse(True):.2f} % for "
@@ -1010,6 +1027,15 @@ def analyse(soil: str, res: pd.DataFrame, diag: pd.DataFrame, cands: list, effec
                                              settings.alpha, groups=sl.replicate_groups(u)))
         nuisance = ({SCALE_KEY: sv}, {SCALE_KEY: (lo, hi)},
                     "fitted alone: the uniform bias the residual follows, the calibrated model times (1 + s)")
+        chi, dof, p_about = _scatter_about_holm(res, sv, diag, settings.alpha)
+        if p_about < settings.alpha:  # the rows are not shifted alike (stones): say so
+            verdict += (f"; the measured values are {abs(100 * sv):.1f} % {'above' if sv > 0 else 'below'} the model "
+                        "on average, but they scatter about that level beyond the measured and seed uncertainty "
+                        f"(chi-square {chi:.3g} on {dof} degrees of freedom, Holm p {p_about:.2g}), so the bias is "
+                        "no uniform one throughout (an instrument's calibration shifts every row alike): "
+                        + _far_off(diag))
+            nuisance = (nuisance[0], nuisance[1], "fitted alone: the mean offset of the rows, the calibrated model "
+                        "times (1 + s); they scatter about it beyond their uncertainty (no uniform bias)")
     if sel is not None:
         verdict += _unscored(sel, u, settings.alpha)
     matched = dg.matched_quantities(diag) if len(diag) else set()
