@@ -245,3 +245,30 @@ def test_the_backward_gate_gives_a_finite_p_as_before():
     obs, sel = _offset_and_share(8, 0.0, 0, t_share=0.04)
     gate = [s for step, names, s in sel.steps if step == "gate" and names == ["P"]][-1]
     assert re.match(r"without P, as is and with a free uniform scale on both \(p 0\.\d+\): ", gate.reason), gate.reason
+
+
+def test_the_warning_for_an_effect_judged_against_the_scale_alone_reaches_the_report_and_summary(tmp_path):
+    # four soil-bin tests of one force each on the stand-in blade, a hidden rate effect (beta 0.3)
+    # and 1 % noise: beside a free uniform scale the rate effect has no AICc (3 parameters on 4
+    # observations), so it is judged against the scale alone, and the verdict written to
+    # report.md and loop_summary.csv says that a uniform bias beside it would sit in its parameter
+    from soilcal.chain.files import write_csv
+    from soilcal.loop import core, files
+    from soilcal.loop import standin as S
+    from soilcal.loop import synthesize as sy
+
+    ref = {"tool_speed": 1.75, "working_depth": 0.1, "moisture_content": 16.0}
+    conds = S.conditions(S.grid(27, 4, moisture=True, days=4), measures=("horizontal_force_N",))
+    table = sy.synthesize(conds, S.base_params, S.simulate, {"rate_friction": {"beta": 0.3}}, ref, {}, noise=0.01,
+                          seed=37)
+    settings = core.Settings(reference=ref, bootstrap=0)
+    out = core.run_inprocess("bin", sy.with_measured(conds, table), S.base_params, S.simulate, settings)
+    assert out.chosen == ["rate_friction"], out.verdict
+    plan = files._plan("bin", out.candidates, ref, settings, core.quantity_of(conds), out.skipped, out.residuals)
+    report = files.report("bin", out, [plan])
+    write_csv(out.summary, tmp_path / "loop_summary.csv")
+    summary = pd.read_csv(tmp_path / "loop_summary.csv")["verdict"].iloc[0]
+    for text in (report, summary):
+        assert "explained by rate_friction; beside a free uniform scale it could not be scored (" in text
+        assert "so it was judged against that scale alone, which it beats (held-out RMS" in text
+        assert "whether a uniform bias lies beside it these rows cannot tell: its parameter may hold it" in text

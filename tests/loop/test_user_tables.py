@@ -305,7 +305,10 @@ def test_rows_that_repeat_one_condition_say_why_no_effect_can_be_compared():
     out = core.run_inprocess("user", sy.with_measured(conds, table), S.base_params, S.simulate,
                              core.Settings(bootstrap=0))
     assert out.chosen == []
-    assert "the 5 rows repeat one measured condition, which cannot tell a bias of the model" in out.verdict
+    m = re.search(r"the 5 rows repeat one measured condition, ([0-9.]+) % above the model \(a uniform scale fitted "
+                  r"to them\); one condition cannot tell a bias of the model from that condition's own deviation",
+                  out.verdict)
+    assert m and abs(float(m.group(1)) - 10.0) < 1.5, out.verdict
     assert not (out.diagnosis["test"] == "bias").any()  # one condition mean: no t-test of a bias
 
 
@@ -846,3 +849,55 @@ def test_a_scale_fitted_beside_two_effects_whose_interval_holds_zero_names_no_bi
     assert "uniform bias that no effect" not in out.verdict
     v, (lo, hi), how, _ = _scale_fitted(out)
     assert lo < 0 < hi and "no bias shown" in how
+
+
+def test_repeats_of_one_condition_measuring_two_forces_are_counted_as_table_rows():
+    # one soil-bin condition measured on four days, horizontal and vertical force each (4 table
+    # rows, 8 values), every value 10 % above the noise-free stand-in, SD 3 % over 5 repeats:
+    # the verdict counts the rows of the table, as its trend clause does, not the values
+    from dataclasses import replace
+
+    from soilcal.loop import core
+    from soilcal.loop import standin as S
+
+    def exact(cond, params, seed):
+        fh, fv = S.forces(params, cond.quantities)
+        return {"horizontal_force_N": fh, "vertical_force_N": fv}
+
+    one = {"tool": "A", "tool_speed": 1.0, "working_depth": 0.1, "position": 10.0}
+    conds = S.conditions([dict(one, day=f"d{i}") for i in range(4)])
+    conds = [replace(c, responses=tuple(dict(r, measured=1.1 * exact(c, S.BASE, 0)[r["measure"]],
+                                             measured_sd=0.03 * exact(c, S.BASE, 0)[r["measure"]], n=5)
+                                        for r in c.responses)) for c in conds]
+    out = core.run_inprocess("user", conds, S.base_params, S.simulate, core.Settings(bootstrap=0))
+    m = re.search(r"the 4 rows \(8 measured values\) repeat one measured condition, horizontal_force_N ([0-9.]+) % "
+                  r"above, vertical_force_N ([0-9.]+) % above the model \(a uniform scale fitted to each quantity's rows\)",
+                  out.verdict)
+    assert m and abs(float(m.group(1)) - 10.0) < 1.5 and abs(float(m.group(2)) - 10.0) < 1.5, out.verdict
+    assert "with 1 measured condition (4 rows, repeats of them)" in out.verdict, out.verdict
+
+
+def test_one_condition_gives_its_offset_per_measured_quantity():
+    # one condition measured on four days (horizontal force 20 % above the noise-free stand-in,
+    # vertical force 20 % below, SD 3 % over 5 repeats), or on two: each quantity is given its
+    # own offset, not one scale mixing them (which read "7.3 % below the model")
+    from dataclasses import replace
+
+    from soilcal.loop import core
+    from soilcal.loop import standin as S
+
+    def exact(cond, params, seed):
+        fh, fv = S.forces(params, cond.quantities)
+        return {"horizontal_force_N": fh, "vertical_force_N": fv}
+
+    fac = {"horizontal_force_N": 1.2, "vertical_force_N": 0.8}
+    one = {"tool": "A", "tool_speed": 1.0, "working_depth": 0.1, "position": 10.0}
+    for days, head in ((4, r"the 4 rows \(8 measured values\) repeat"), (2, r"the 2 rows \(4 measured values\) repeat")):
+        conds = S.conditions([dict(one, day=f"d{i}") for i in range(days)])
+        conds = [replace(c, responses=tuple(dict(r, measured=fac[r["measure"]] * exact(c, S.BASE, 0)[r["measure"]],
+                                                 measured_sd=0.03 * exact(c, S.BASE, 0)[r["measure"]], n=5)
+                                            for r in c.responses)) for c in conds]
+        out = core.run_inprocess("user", conds, S.base_params, S.simulate, core.Settings(bootstrap=0))
+        m = re.search(head + r" one measured condition, horizontal_force_N ([0-9.]+) % above, vertical_force_N "
+                      r"([0-9.]+) % below the model", out.verdict)
+        assert m and abs(float(m.group(1)) - 20.0) < 1.5 and abs(float(m.group(2)) - 20.0) < 1.5, out.verdict
