@@ -1229,6 +1229,40 @@ def test_a_plane_rising_over_the_period_is_judged_against_the_smallest_radius():
             assert f == pytest.approx(_hertz_wall_force(mats, 1.5e-3, 1.5e-5), rel=1e-6)
 
 
+@pytest.mark.parametrize("kind", ["mesh", "rectangle"])
+def test_a_flat_face_rising_over_the_period_is_judged_as_a_plane_is(kind):
+    """A floor of two triangles or a rectangle, wider than the period, tilted by 1.5e-5 rad
+    along x in a box periodic in x (L = 0.04 m), with spheres of radii 1.5 and 4.5 mm: it rises
+    0.6 um over the period, twice 2e-4 of the smallest radius (0.3 um), the limit a plane is
+    held to.  A small sphere pressed 0.01 R (15 um) into it just inside x = L felt the Hertz
+    force of that overlap, and after crossing the boundary at the same height 0.941 of it (a
+    bare slope under 2e-4 counted as none, the sections 0.6 um apart within 2e-4 of the largest
+    radius).  It is refused, naming the wall; level, it is accepted with the Hertz force on
+    both sides."""
+    mats = table(e=0.5, mu=0.3, E=1e8)
+    r = 1.5e-3
+    for tilt, refused in ((1.5e-5, True), (0.0, False)):
+        s, c = math.sin(tilt), math.cos(tilt)
+        for x in (_L - 1e-4, 1e-4):
+            sim = Simulation(mats, gravity=(0, 0, 0), box=(0, _L, 0, 0.1), periodic=(True, False))
+            if kind == "mesh":
+                zf = [(xx - _L / 2) * math.tan(tilt) for xx in (-0.01, _L + 0.01)]
+                sim.add_mesh([[-0.01, -0.05, zf[0]], [_L + 0.01, -0.05, zf[1]],
+                              [_L + 0.01, 0.15, zf[1]], [-0.01, 0.15, zf[0]]],
+                             [[0, 1, 2], [0, 2, 3]], "soil", name="w")
+            else:
+                sim.add_rectangle((_L / 2, 0.05, 0), (-s, 0, c), (c, 0, s), (_L / 2 + 0.01) / c,
+                                  0.1, "soil", name="w")
+            sim.add_particles([(x, 0.05, 0.99 * r)], r, "soil")
+            sim.add_particles([(_L / 2, 0.07, 0.05)], 4.5e-3, "soil")
+            if refused:
+                with pytest.raises(InputError, match=r"walls\.w.*rising over the period"):
+                    sim.compute_forces()
+            else:
+                f = np.linalg.norm(sim.compute_forces()[0][0])
+                assert f == pytest.approx(_hertz_wall_force(mats, r, 0.01 * r), rel=1e-9)
+
+
 @pytest.mark.parametrize("kind", ["plane", "rod"])
 def test_a_wall_tilted_along_the_periodic_axis_by_a_step_a_contact_feels_is_refused(kind):
     """A plane or a rod along x tilted by 1.5e-4 rad in a box periodic in x (L = 0.04 m)
