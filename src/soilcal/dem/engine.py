@@ -1157,9 +1157,20 @@ class Simulation:
                 c = par[:, [q, 3 + q, 6 + q]]
                 n = np.cross(par[:, 3:6] - par[:, 0:3], par[:, 6:9] - par[:, 0:3])
                 a[tri], b[tri] = c.min(axis=1), c.max(axis=1)
+                nn = np.linalg.norm(n, axis=1)
                 with np.errstate(invalid="ignore", divide="ignore"):
-                    nq = n[:, q] / np.linalg.norm(n, axis=1)
-                flat[tri] = _rise(np.nan_to_num(nq, nan=1.0), hi - lo) <= eps_p
+                    nq = np.nan_to_num(np.abs(n[:, q]) / nn, nan=1.0)
+                    # the slope a float32 mesh (binary STL) cannot resolve: each vertex is
+                    # rounded by half an ulp of its largest coordinate, which tilts a face
+                    # by up to (rounding) x (its two edges) / (twice its area); 4 half-ulps
+                    # of that are forgiven before the rise is taken (a level floor of 2 mm
+                    # triangles at z = 0.1 m reads back with slopes of ~3e-6, 1 um over a
+                    # 0.4 m period), at most 1e-3 (a face across the axis stays one)
+                    ulp = np.spacing(np.abs(par[:, :9]).max(axis=1).astype(np.float32)).astype(float)
+                    edges = (np.linalg.norm(par[:, 3:6] - par[:, 0:3], axis=1)
+                             + np.linalg.norm(par[:, 6:9] - par[:, 0:3], axis=1))
+                    noise = np.nan_to_num(np.minimum(2.0 * ulp * edges / nn, 1e-3), nan=0.0)
+                flat[tri] = _rise(np.maximum(nq - noise, 0.0), hi - lo) <= eps_p
             for i in np.flatnonzero(~tri):
                 a[i], b[i], flat[i] = _extent_along(kinds[ks[i]], par_all[ks[i]], q, eps,
                                                     hi - lo, eps_p)
