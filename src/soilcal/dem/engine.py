@@ -1195,7 +1195,12 @@ class Simulation:
             # within reach of a sphere in the box beside a boundary (farther out, unreachable)
             near = (((a < lo + rho - eps) & (b > lo - rho + eps))
                     | ((a < hi + rho - eps) & (b > hi - rho + eps)))
-            bad[w[near & ~flat & ~(cap & ~turn & ~moves)]] = True
+            off = near & ~flat & ~(cap & ~turn & ~moves)
+            bad[w[off]] = True
+            # a flat face (triangle, rectangle) at rest turning about nothing but q: its rise
+            flat_kind = ((kinds[ks] == TRIANGLE) | (kinds[ks] == RECTANGLE)) & ~turn
+            tilted = np.zeros(nw, dtype=bool)
+            tilted[w[off & flat_kind]] = True
             cap &= ~turn & ~moves  # a cap of a wall at rest, met at its rim (below)
             for w in range(nw):
                 if not has[w]:
@@ -1204,9 +1209,9 @@ class Simulation:
                 if A >= lo + rho - eps and B <= hi - rho + eps:
                     continue  # clear of both boundaries
                 why = ("a face within the largest radius of a boundary that does not run "
-                       f"along {names[q]} (a flat face rising over the period by more than "
-                       f"{eps_p:.3g} m, max(2e-4 R_min, 4 float32 ulps of the box), as a plane "
-                       f"would)" if bad[w] else None)
+                       f"along {names[q]}" + (f" (a flat face rising over the period by more "
+                       f"than {eps_p:.3g} m, max(2e-4 R_min, 4 float32 ulps of the box), as a "
+                       f"plane would)" if tilted[w] else "") if bad[w] else None)
                 if why is None:
                     why = self._periodic_fault(q, [w], ks, flat, cap, rho, eps, span)
                 if why is not None and not bad[w]:
