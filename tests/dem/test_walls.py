@@ -1229,6 +1229,72 @@ def test_a_plane_rising_over_the_period_is_judged_against_the_smallest_radius():
             assert f == pytest.approx(_hertz_wall_force(mats, 1.5e-3, 1.5e-5), rel=1e-6)
 
 
+@pytest.mark.parametrize("kind", ["mesh", "rectangle"])
+def test_a_flat_face_rising_over_the_period_is_judged_as_a_plane_is(kind):
+    """A floor of two triangles or a rectangle, wider than the period, tilted by 1.5e-5 rad
+    along x in a box periodic in x (L = 0.04 m), with spheres of radii 1.5 and 4.5 mm: it rises
+    0.6 um over the period, twice 2e-4 of the smallest radius (0.3 um), the limit a plane is
+    held to.  A small sphere pressed 0.01 R (15 um) into it just inside x = L felt the Hertz
+    force of that overlap, and after crossing the boundary at the same height 0.941 of it (a
+    bare slope under 2e-4 counted as none, the sections 0.6 um apart within 2e-4 of the largest
+    radius).  It is refused, naming the wall; level, it is accepted with the Hertz force on
+    both sides."""
+    mats = table(e=0.5, mu=0.3, E=1e8)
+    r = 1.5e-3
+    for tilt, refused in ((1.5e-5, True), (0.0, False)):
+        s, c = math.sin(tilt), math.cos(tilt)
+        for x in (_L - 1e-4, 1e-4):
+            sim = Simulation(mats, gravity=(0, 0, 0), box=(0, _L, 0, 0.1), periodic=(True, False))
+            if kind == "mesh":
+                zf = [(xx - _L / 2) * math.tan(tilt) for xx in (-0.01, _L + 0.01)]
+                sim.add_mesh([[-0.01, -0.05, zf[0]], [_L + 0.01, -0.05, zf[1]],
+                              [_L + 0.01, 0.15, zf[1]], [-0.01, 0.15, zf[0]]],
+                             [[0, 1, 2], [0, 2, 3]], "soil", name="w")
+            else:
+                sim.add_rectangle((_L / 2, 0.05, 0), (-s, 0, c), (c, 0, s), (_L / 2 + 0.01) / c,
+                                  0.1, "soil", name="w")
+            sim.add_particles([(x, 0.05, 0.99 * r)], r, "soil")
+            sim.add_particles([(_L / 2, 0.07, 0.05)], 4.5e-3, "soil")
+            if refused:
+                with pytest.raises(InputError, match=r"walls\.w.*rising over the period"):
+                    sim.compute_forces()
+            else:
+                f = np.linalg.norm(sim.compute_forces()[0][0])
+                assert f == pytest.approx(_hertz_wall_force(mats, r, 0.01 * r), rel=1e-9)
+
+
+def test_a_level_float32_stl_floor_tilted_across_the_periodic_axis_is_accepted(tmp_path):
+    """A floor z = -0.1 + y tan 0.3 (true n_x = 0) of irregular 2 mm triangles over a 0.2 m
+    period in x, written as binary STL and read back: float32 rounding of each vertex (7 nm at
+    |z| = 0.1 m) tilts the faces by up to ~8e-6 along x, a "rise" over the period of 1.7 um,
+    beyond the 0.3 um limit, so the floor was refused though both boundary sections agree to
+    float32 rounding.  That rounding is forgiven: the floor is accepted and a 1.5 mm sphere
+    pressed 0.01 R into it feels the Hertz force on both sides of the boundary."""
+    from scipy.spatial import Delaunay
+
+    from soilcal.dem.stl import read_stl, write_stl
+
+    mats = table(e=0.5, mu=0.3, E=1e8)
+    L, W, h, a, r = 0.2, 0.1, 2e-3, 0.3, 1.5e-3
+    rng = np.random.default_rng(1)
+    X, Y = np.meshgrid(np.linspace(-0.01, L + 0.01, 111), np.linspace(0, W, 51), indexing="ij")
+    X, Y = X.ravel(), Y.ravel()
+    inner = (X > X.min()) & (X < X.max()) & (Y > 0) & (Y < W)
+    X[inner] += h * rng.uniform(-0.3, 0.3, inner.sum())
+    Y[inner] += h * rng.uniform(-0.3, 0.3, inner.sum())
+    write_stl(tmp_path / "floor.stl", np.c_[X, Y, -0.1 + Y * math.tan(a)], Delaunay(np.c_[X, Y]).simplices)
+    v, t = read_stl(tmp_path / "floor.stl")
+    n = np.array([0.0, -math.sin(a), math.cos(a)])
+    for x in (L - 1e-4, 1e-4):
+        sim = Simulation(mats, gravity=(0, 0, 0), box=(0, L, 0, W), periodic=(True, False))
+        sim.add_mesh(v, t, "soil", name="floor")
+        y = W / 2
+        sim.add_particles([np.array([x, y, -0.1 + y * math.tan(a)]) + 0.99 * r * n], r, "soil")
+        sim.add_particles([(L / 2, 0.07, 0.05)], 4.5e-3, "soil")
+        f = np.linalg.norm(sim.compute_forces()[0][0])
+        assert f == pytest.approx(_hertz_wall_force(mats, r, 0.01 * r), rel=2e-3)
+
+
 @pytest.mark.parametrize("kind", ["plane", "rod"])
 def test_a_wall_tilted_along_the_periodic_axis_by_a_step_a_contact_feels_is_refused(kind):
     """A plane or a rod along x tilted by 1.5e-4 rad in a box periodic in x (L = 0.04 m)

@@ -99,10 +99,21 @@ def _number(source, field, value, expected, ok) -> float:
     return x
 
 
-def _extent_along(kind, par, q, eps):
+def _rise(nq, period):
+    """How far a flat face whose unit normal has component ``nq`` along a periodic axis rises
+    over the period (array or number): a sphere crossing the boundary lands that much deeper
+    in it or farther from it.  Every flat primitive (plane, rectangle, triangle) is judged by
+    this against the same limit in :meth:`Simulation._check_periodic_walls`."""
+    nq = np.minimum(np.abs(nq), 1.0)
+    with np.errstate(divide="ignore"):
+        return np.where(nq < 1.0, period * nq / np.sqrt(1.0 - nq * nq), np.inf)
+
+
+def _extent_along(kind, par, q, eps, period, eps_p):
     """``(lo, hi, parallel)``: the extent of a bounded primitive other than a triangle (those
     are taken at once in :meth:`Simulation._check_periodic_walls`) along axis q, and whether
-    its surface runs along q (a flat face whose normal is perpendicular to q, a cylinder
+    its surface runs along q (a flat face rising over the ``period`` by at most ``eps_p``,
+    :func:`_rise`, a cylinder
     whose section across q is its circle within ``eps``: radius r, tilt t from q, the
     ellipse's long half-axis r / cos t at most eps longer; how far its section moves along
     q is judged by the sections, :class:`_Sections`)."""
@@ -111,7 +122,7 @@ def _extent_along(kind, par, q, eps):
     if kind == RECTANGLE:
         v = np.cross(n, par[6:9])
         h = abs(par[6 + q]) * par[9] + abs(v[q]) * par[10]
-        return float(par[q] - h), float(par[q] + h), abs(n[q]) <= 2e-4
+        return float(par[q] - h), float(par[q] + h), bool(_rise(n[q], period) <= eps_p)
     if kind == DISK:
         return float(par[q] - par[6] * side), float(par[q] + par[6] * side), False
     if kind == CYLINDER:
@@ -1108,6 +1119,9 @@ class Simulation:
                 continue
             lo, hi = float(self.box[2 * q]), float(self.box[2 * q + 1])
             eps = max(2e-4 * rho, 4.8e-7 * max(abs(lo), abs(hi)))
+            # the largest rise over the period of a flat face along q (plane, rectangle,
+            # triangle alike): 2e-4 of the smallest radius, whose contacts a step changes most
+            eps_p = max(2e-4 * float(self.p.r.min()), 4.8e-7 * max(abs(lo), abs(hi)))
             nw = wa["wall_vel"].shape[0]
             a_w, b_w = np.full(nw, np.inf), np.full(nw, -np.inf)
             bad = np.zeros(nw, dtype=bool)  # a primitive near a boundary that is not parallel
@@ -1119,9 +1133,7 @@ class Simulation:
                 # lands that much deeper in it or farther from it (a 6 um step changes an
                 # overlap of 0.01 R = 50 um by 12 % at R = 5 mm, its Hertz force by 16 %)
                 par = par_all[k]
-                nq = abs(float(par[3 + q]))
-                rise = (hi - lo) * nq / math.sqrt(1.0 - nq * nq) if nq < 1.0 else math.inf
-                eps_p = max(2e-4 * float(self.p.r.min()), 4.8e-7 * max(abs(lo), abs(hi)))
+                rise = float(_rise(par[3 + q], hi - lo))
                 if rise > eps_p:
                     name = self.walls.names[walls_of[k]]
                     raise InputError(
@@ -1145,9 +1157,23 @@ class Simulation:
                 c = par[:, [q, 3 + q, 6 + q]]
                 n = np.cross(par[:, 3:6] - par[:, 0:3], par[:, 6:9] - par[:, 0:3])
                 a[tri], b[tri] = c.min(axis=1), c.max(axis=1)
-                flat[tri] = np.abs(n[:, q]) <= 2e-4 * np.linalg.norm(n, axis=1)
+                nn = np.linalg.norm(n, axis=1)
+                with np.errstate(invalid="ignore", divide="ignore"):
+                    nq = np.nan_to_num(np.abs(n[:, q]) / nn, nan=1.0)
+                    # the slope a float32 mesh (binary STL) cannot resolve: each vertex is
+                    # rounded by half an ulp of its largest coordinate, which tilts a face
+                    # by up to (rounding) x (its two edges) / (twice its area); 4 half-ulps
+                    # of that are forgiven before the rise is taken (a level floor of 2 mm
+                    # triangles at z = 0.1 m reads back with slopes of ~3e-6, 1 um over a
+                    # 0.4 m period), at most 1e-3 (a face across the axis stays one)
+                    ulp = np.spacing(np.abs(par[:, :9]).max(axis=1).astype(np.float32)).astype(float)
+                    edges = (np.linalg.norm(par[:, 3:6] - par[:, 0:3], axis=1)
+                             + np.linalg.norm(par[:, 6:9] - par[:, 0:3], axis=1))
+                    noise = np.nan_to_num(np.minimum(2.0 * ulp * edges / nn, 1e-3), nan=0.0)
+                flat[tri] = _rise(np.maximum(nq - noise, 0.0), hi - lo) <= eps_p
             for i in np.flatnonzero(~tri):
-                a[i], b[i], flat[i] = _extent_along(kinds[ks[i]], par_all[ks[i]], q, eps)
+                a[i], b[i], flat[i] = _extent_along(kinds[ks[i]], par_all[ks[i]], q, eps,
+                                                    hi - lo, eps_p)
             # an end face lying on a boundary, across the axis (the cap of a closed solid
             # exactly spanning the period): a sphere meets it at its rim only, where the faces
             # along the axis have it
@@ -1169,7 +1195,12 @@ class Simulation:
             # within reach of a sphere in the box beside a boundary (farther out, unreachable)
             near = (((a < lo + rho - eps) & (b > lo - rho + eps))
                     | ((a < hi + rho - eps) & (b > hi - rho + eps)))
-            bad[w[near & ~flat & ~(cap & ~turn & ~moves)]] = True
+            off = near & ~flat & ~(cap & ~turn & ~moves)
+            bad[w[off]] = True
+            # a flat face (triangle, rectangle) at rest turning about nothing but q: its rise
+            flat_kind = ((kinds[ks] == TRIANGLE) | (kinds[ks] == RECTANGLE)) & ~turn
+            tilted = np.zeros(nw, dtype=bool)
+            tilted[w[off & flat_kind]] = True
             cap &= ~turn & ~moves  # a cap of a wall at rest, met at its rim (below)
             for w in range(nw):
                 if not has[w]:
@@ -1178,7 +1209,9 @@ class Simulation:
                 if A >= lo + rho - eps and B <= hi - rho + eps:
                     continue  # clear of both boundaries
                 why = ("a face within the largest radius of a boundary that does not run "
-                       f"along {names[q]}" if bad[w] else None)
+                       f"along {names[q]}" + (f" (a flat face rising over the period by more "
+                       f"than {eps_p:.3g} m, max(2e-4 R_min, 4 float32 ulps of the box), as a "
+                       f"plane would)" if tilted[w] else "") if bad[w] else None)
                 if why is None:
                     why = self._periodic_fault(q, [w], ks, flat, cap, rho, eps, span)
                 if why is not None and not bad[w]:
