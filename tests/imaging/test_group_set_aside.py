@@ -72,3 +72,29 @@ def test_rendered_silhouettes_keep_every_view():
          measure.PileResult("b", 35.0, 34.0, 36.0, 1.0, 0.0)]
     s = measure.pile_summary(r)
     assert s["left_deg"] == 33.0 and s["n_photos"] == 2 and "set_aside" not in s
+
+
+def test_cli_warns_on_stderr_of_each_photo_set_aside(tmp_path, capsys):
+    # the angle on stdout is the ok photo's; stderr names the photo left out and why, for
+    # soilcal image pile and soilcal image soil alike
+    from soilcal.cli import main
+
+    plain, card = _photos(tmp_path, **{"plain.png": heap_photo(), "card.png": _card("left", 60, 30, "checker")})
+    assert main(["image", "pile", str(plain), str(card)]) == 0
+    err = capsys.readouterr().err
+    assert f"photo {card} set aside" in err and "1 photo used" in err and "plate_line_px" in err, err
+    assert str(plain) not in err
+    assert main(["image", "soil", str(_group(tmp_path, ["plain.png", "card.png"]))]) == 0
+    err = capsys.readouterr().err
+    assert f"group heap: photo {card} set aside" in err, err
+
+
+def test_a_low_photo_on_a_given_plate_line_is_not_told_to_give_it(tmp_path):
+    # flanks drawn 25 and 40 deg, more than 12 deg apart: "low" on the plate line given too; its
+    # way out is to check the points given, not to give a plate line again
+    r = measure.measure_pile("steep.png", image=heap_photo(left=25.0, right=40.0),
+                             plate_px=((10.0, 215.5), (390.0, 215.5)))
+    assert r.confidence == "low" and abs(r.left_deg - 25.0) <= 0.5 and abs(r.right_deg - 40.0) <= 0.5
+    why = measure.low_reason(r)
+    assert "more than 12 deg apart" in why and "plate line given" in why and "check those two points" in why, why
+    assert "give its plate line" not in why, why

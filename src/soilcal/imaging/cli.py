@@ -15,6 +15,16 @@ def _n(n, noun):
     return f"{n} {noun}{'' if n == 1 else 's'}"
 
 
+def _warn_set_aside(summary, group=None):
+    """One line on stderr per heap photo a group set aside (``set_aside`` of
+    :func:`soilcal.imaging.measure.pile_summary`): the JSON on stdout carries it too, but a group's
+    angle from fewer photos than given should not pass unseen."""
+    for a in summary.get("set_aside", []):
+        where = f"group {group}: " if group is not None else ""
+        print(f"soilcal: warning: {where}photo {a['path']} set aside (confidence low, not averaged into the "
+              f"group's angle; {_n(summary['n_photos'], 'photo')} used): {a['reason']}", file=sys.stderr)
+
+
 def _plate_lines(args):
     """The ``--plate-line-px`` lines, one per photo in the photos' order (None for each photo
     where none is given), checked as a manifest's ``plate_line_px`` is
@@ -53,6 +63,7 @@ def _pile(args):
     if args.figures:
         for r in res:
             figures.angle_figure(r, f"{args.figures}/{r.path.rsplit('/', 1)[-1].rsplit('.', 1)[0]}")
+    _warn_set_aside(summary)
     _print(summary)
     return 0
 
@@ -102,7 +113,10 @@ def _furrow(args):
 def _soil(args):
     from soilcal.imaging.manifest import measure_manifest
 
-    _print(measure_manifest(args.manifest, args.figures, args.threshold, args.refusals))
+    out = measure_manifest(args.manifest, args.figures, args.threshold, args.refusals)
+    for group, summary in out.items():
+        _warn_set_aside(summary, group)
+    _print(out)
     return 0
 
 

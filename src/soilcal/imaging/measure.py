@@ -1182,7 +1182,9 @@ def measure_piles(paths, threshold="otsu", keep_stages=False, channel="auto", re
 def low_reason(r: PileResult) -> str:
     """Why the heap photo ``r`` (:class:`PileResult`) is "low" ("" for an "ok" one): the plate
     ambiguity (naming both lines and the plate line to give), else the flank fit, the flanks'
-    difference, the heap continuing past a flank or the further cue that disagrees."""
+    difference, the heap continuing past a flank or the further cue that disagrees; the way out
+    is the plate line given by hand, or for a photo measured on one given (``plate_line``
+    "manifest" or "command line"), checking its two points."""
     if r.confidence == "ok":
         return ""
     if r.plate_ambiguous:
@@ -1204,6 +1206,11 @@ def low_reason(r: PileResult) -> str:
         why.append(f"the cue {r.cue_outvoted} disagrees by {r.cue_outvoted_deg:.1f} deg and no further cue decides")
     if not why:
         why.append("its cues disagree and none decides")
+    if r.plate_line in ("manifest", "command line"):
+        # measured on the plate line given: giving it again is no way out
+        given = "its manifest entry's plate_line_px" if r.plate_line == "manifest" else "--plate-line-px"
+        return "; ".join(why) + f" on the plate line given ({given} {r.plate_line_px}; read its figure, " \
+            "--figures: check those two points on the plate's top edge, or retake the photo)"
     return "; ".join(why) + " (read its figure, --figures; retake the photo, or give its plate line if the " \
         "plate was misread: plate_line_px in the manifest, --plate-line-px)"
 
