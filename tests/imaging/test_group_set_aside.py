@@ -98,3 +98,23 @@ def test_a_low_photo_on_a_given_plate_line_is_not_told_to_give_it(tmp_path):
     why = measure.low_reason(r)
     assert "more than 12 deg apart" in why and "plate line given" in why and "check those two points" in why, why
     assert "give its plate line" not in why, why
+
+
+def test_a_refused_group_of_flagged_photos_still_gets_the_figures_its_reasons_name(tmp_path, capsys):
+    # each reason says "read its figure, --figures" (or names two plate lines to look at): with
+    # --figures the refusal writes every photo's figure, as a measured group's are written
+    from soilcal.cli import main
+
+    a, b = _photos(tmp_path, **{"a.png": _card("left", 60, 30, "checker"), "b.png": _card("right", 100, 60, "checker")})
+    figs = tmp_path / "figs"
+    figs.mkdir()
+    assert main(["image", "pile", str(a), str(b), "--figures", str(figs)]) != 0
+    err = capsys.readouterr().err
+    assert "confidence" in err and f"figures of every photo in {figs}" in err, err
+    assert (figs / "a.png").is_file() and (figs / "b.png").is_file()
+    mfigs = tmp_path / "mfigs"
+    mfigs.mkdir()
+    with pytest.raises(InputError) as e:
+        measure_manifest(_group(tmp_path, ["a.png", "b.png"]), figdir=mfigs)
+    assert "group heap" in e.value.field and str(mfigs) in str(e.value)
+    assert (mfigs / "a.png").is_file() and (mfigs / "b.png").is_file()

@@ -54,6 +54,12 @@ def _pile(args):
                                              channel=args.channel, refusals=args.refusals, plate_px=lines,
                                              plate_px_from="command line")
     except InputError as e:
+        if e.field == "confidence" and args.figures:
+            # no photo "ok": their figures, which the reasons point to, are written all the same
+            for r in e.results:
+                figures.angle_figure(r, f"{args.figures}/{r.path.rsplit('/', 1)[-1].rsplit('.', 1)[0]}")
+            raise InputError(e.path, e.field, e.expected, f"{e.got}; figures of every photo in {args.figures}",
+                             e.note) from None
         # a photo measured on the line given: the refusal names the option and the line
         given = {str(f): q for f, q in zip(args.photos, lines or []) if q is not None}
         if e.path not in given or e.field not in ("image", "left flank", "right flank", "plate line"):

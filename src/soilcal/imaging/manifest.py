@@ -216,7 +216,12 @@ def measure_manifest(path, figdir=None, threshold="otsu", refusals=None):
                                                      plate_px=lines)
             except InputError as e:
                 if e.field == "confidence":  # no photo of the group measured "ok"
-                    raise InputError(path, f"group {g} ({len(files)} photos)", e.expected, e.got) from None
+                    got = e.got
+                    if figdir is not None:  # the figures its reasons point to, written all the same
+                        for r in e.results:
+                            figures.angle_figure(r, Path(figdir) / Path(r.path).stem)
+                        got += f"; figures of the group's photos in {figdir}"
+                    raise InputError(path, f"group {g} ({len(files)} photos)", e.expected, got) from None
                 given = {str(f): i for f, q, i in zip(files, lines, range(len(files))) if q is not None}
                 if e.path not in given or e.field not in ("image", "left flank", "right flank", "plate line"):
                     raise

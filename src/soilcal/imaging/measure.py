@@ -1172,11 +1172,16 @@ def measure_piles(paths, threshold="otsu", keep_stages=False, channel="auto", re
     "ok", a photo flagged "low" set aside with its reason (:func:`pile_summary` with
     ``ok_only``; a group with no photo "ok" is refused).  ``refusals``: :func:`measure_pile`;
     ``plate_px``: one given plate line or None per photo, as :func:`measure_pile` takes it,
-    ``plate_px_from`` where they came from."""
+    ``plate_px_from`` where they came from.  The refusal of a group with no photo "ok" carries
+    every photo's result as ``results`` (the callers write their figures, which its reasons name)."""
     per = plate_px if plate_px is not None else [None] * len(paths)
     res = [measure_pile(p, threshold, keep_stages, channel, refusals, plate_px=q, plate_px_from=plate_px_from)
            for p, q in zip(paths, per)]
-    return pile_summary(res, ok_only=True), res
+    try:
+        return pile_summary(res, ok_only=True), res
+    except InputError as e:
+        e.results = res  # a group of low photos only: their results, for the figures its reasons point to
+        raise
 
 
 def low_reason(r: PileResult) -> str:
