@@ -118,3 +118,9 @@ def test_a_refused_group_of_flagged_photos_still_gets_the_figures_its_reasons_na
         measure_manifest(_group(tmp_path, ["a.png", "b.png"]), figdir=mfigs)
     assert "group heap" in e.value.field and str(mfigs) in str(e.value)
     assert (mfigs / "a.png").is_file() and (mfigs / "b.png").is_file()
+    # with a refusals folder (the workflow's logs/<soil>/images/refused, which outlives the failed
+    # job whose outputs, the figures folder among them, are removed), the figures go there
+    kept = tmp_path / "refused"
+    with pytest.raises(InputError) as e:
+        measure_manifest(_group(tmp_path, ["a.png", "b.png"]), figdir=tmp_path / "gone", refusals=kept)
+    assert str(kept) in str(e.value) and (kept / "a.png").is_file() and (kept / "b.png").is_file()

@@ -217,10 +217,15 @@ def measure_manifest(path, figdir=None, threshold="otsu", refusals=None):
             except InputError as e:
                 if e.field == "confidence":  # no photo of the group measured "ok"
                     got = e.got
-                    if figdir is not None:  # the figures its reasons point to, written all the same
+                    if figdir is not None:
+                        # the figures its reasons point to, written all the same: beside the
+                        # diagnostic images of refused photos where there is such a folder (the
+                        # workflow's outputs, figdir among them, do not outlive a failed job)
+                        where = Path(refusals if refusals is not None else figdir)
+                        where.mkdir(parents=True, exist_ok=True)
                         for r in e.results:
-                            figures.angle_figure(r, Path(figdir) / Path(r.path).stem)
-                        got += f"; figures of the group's photos in {figdir}"
+                            figures.angle_figure(r, where / Path(r.path).stem)
+                        got += f"; figures of the group's photos in {where}"
                     raise InputError(path, f"group {g} ({len(files)} photos)", e.expected, got) from None
                 given = {str(f): i for f, q, i in zip(files, lines, range(len(files))) if q is not None}
                 if e.path not in given or e.field not in ("image", "left flank", "right flank", "plate line"):
