@@ -85,8 +85,10 @@ def targets_frame(soil_data: dict, source: str, measurements: dict | None = None
             val = float(entry[key])
             # heap photos flagged low are not in the group's value: the row says which
             aside = [Path(str(a.get("path", ""))).name for a in entry.get("set_aside") or []]
-            said = (f"photo group {group} ({key}; set aside as low, not in the value: {', '.join(aside)}, "
-                    f"reasons in {Path(measurements_path).name} set_aside)" if aside else f"photo group {group} ({key})")
+            said = f"photo group {group} ({key})"
+            if aside:
+                said = (f"photo group {group} ({key}; set aside as low, not in the value: {', '.join(aside)}, "
+                        f"reasons in {Path(measurements_path).name} set_aside)")
             row.update(value=val, source="image", image_value=val,
                        image_spread=float(entry.get("spread_deg", np.nan)),
                        image_n=int(entry.get("n_photos", entry.get("n_frames", 1))),
