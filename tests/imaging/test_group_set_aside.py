@@ -124,3 +124,27 @@ def test_a_refused_group_of_flagged_photos_still_gets_the_figures_its_reasons_na
     with pytest.raises(InputError) as e:
         measure_manifest(_group(tmp_path, ["a.png", "b.png"]), figdir=tmp_path / "gone", refusals=kept)
     assert str(kept) in str(e.value) and (kept / "a.png").is_file() and (kept / "b.png").is_file()
+
+
+def test_cli_soil_writes_a_refused_groups_figures_to_figures_unless_refusals_is_given(tmp_path, capsys,
+                                                                                      monkeypatch):
+    # soilcal image soil --figures DIR: a refused group's figures go to DIR like a measured
+    # group's, not to the current folder (the default of --refusals); --refusals DIR takes them
+    from soilcal.cli import main
+
+    _photos(tmp_path, **{"a.png": _card("left", 60, 30, "checker"), "b.png": _card("right", 100, 60, "checker")})
+    m = _group(tmp_path, ["a.png", "b.png"])
+    here = tmp_path / "here"
+    here.mkdir()
+    monkeypatch.chdir(here)
+    figs = tmp_path / "figs"
+    assert main(["image", "soil", str(m), "--figures", str(figs)]) != 0
+    err = capsys.readouterr().err
+    assert f"figures of the group's photos in {figs}" in err, err
+    assert (figs / "a.png").is_file() and (figs / "b.png").is_file()
+    assert not (here / "a.png").exists() and not (here / "b.png").exists()
+    kept = tmp_path / "kept"
+    assert main(["image", "soil", str(m), "--figures", str(tmp_path / "figs2"), "--refusals", str(kept)]) != 0
+    err = capsys.readouterr().err
+    assert f"figures of the group's photos in {kept}" in err, err
+    assert (kept / "a.png").is_file() and (kept / "b.png").is_file()

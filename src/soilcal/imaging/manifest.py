@@ -190,10 +190,12 @@ def lookup(photo):
     return None
 
 
-def measure_manifest(path, figdir=None, threshold="otsu", refusals=None):
+def measure_manifest(path, figdir=None, threshold="otsu", refusals=None, refused_figdir=None):
     """Measure every group of the manifest; returns {group: result dict}.  ``refusals``: a
     folder for the diagnostic image of a photo that cannot be measured
-    (:mod:`soilcal.imaging.refusal`)."""
+    (:mod:`soilcal.imaging.refusal`).  ``refused_figdir``: where a group refused for having no
+    ok photo gets its photos' figures (with ``figdir`` given); default ``refusals``, else
+    ``figdir``."""
     from soilcal.imaging import drum, figures, measure
 
     path = Path(path)
@@ -221,7 +223,8 @@ def measure_manifest(path, figdir=None, threshold="otsu", refusals=None):
                         # the figures its reasons point to, written all the same: beside the
                         # diagnostic images of refused photos where there is such a folder (the
                         # workflow's outputs, figdir among them, do not outlive a failed job)
-                        where = Path(refusals if refusals is not None else figdir)
+                        where = Path(refused_figdir if refused_figdir is not None
+                                     else refusals if refusals is not None else figdir)
                         where.mkdir(parents=True, exist_ok=True)
                         for r in e.results:
                             figures.angle_figure(r, where / Path(r.path).stem)
