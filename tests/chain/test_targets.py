@@ -143,3 +143,17 @@ def test_a_target_s_moisture_is_written_with_its_unit():
     pct = {"properties": {"moisture_content": {"values": [17.2]}},
            "targets": {"dry": {"value": 28.0, "unit": "deg", "moisture_content": 17.2}}}
     assert _by_id(targets_frame(pct, "dem"))["dry"]["moisture_unit"] == "%"
+
+
+def test_a_photo_target_names_the_heap_photos_its_group_set_aside():
+    # 3 heap photos, one flagged low and set aside (measurements.json's set_aside): the value
+    # and image_n are the 2 others', and the row says which photo was left out and where why
+    meas = {**MEAS, "stacking": {"angle_deg": 28.4, "spread_deg": 0.7, "n_photos": 2,
+                                 "set_aside": [{"path": "resources/images/x/heap_card.jpg",
+                                                "reason": "two plate lines"}]}}
+    s = _by_id(targets_frame(SOIL, "dem", meas, "results/x/images/measurements.json"))["stacking_angle"]
+    assert s["value"] == 28.4 and s["image_n"] == 2
+    assert "heap_card.jpg" in s["note"] and "set aside" in s["note"] and "measurements.json" in s["note"], s["note"]
+    assert "printed 27.69" in s["note"]
+    # a group with nothing set aside says nothing of it
+    assert "set aside" not in _by_id(targets_frame(SOIL, "dem", MEAS))["stacking_angle"]["note"]

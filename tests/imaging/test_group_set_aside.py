@@ -72,3 +72,79 @@ def test_rendered_silhouettes_keep_every_view():
          measure.PileResult("b", 35.0, 34.0, 36.0, 1.0, 0.0)]
     s = measure.pile_summary(r)
     assert s["left_deg"] == 33.0 and s["n_photos"] == 2 and "set_aside" not in s
+
+
+def test_cli_warns_on_stderr_of_each_photo_set_aside(tmp_path, capsys):
+    # the angle on stdout is the ok photo's; stderr names the photo left out and why, for
+    # soilcal image pile and soilcal image soil alike
+    from soilcal.cli import main
+
+    plain, card = _photos(tmp_path, **{"plain.png": heap_photo(), "card.png": _card("left", 60, 30, "checker")})
+    assert main(["image", "pile", str(plain), str(card)]) == 0
+    err = capsys.readouterr().err
+    assert f"photo {card} set aside" in err and "1 photo used" in err and "plate_line_px" in err, err
+    assert str(plain) not in err
+    assert main(["image", "soil", str(_group(tmp_path, ["plain.png", "card.png"]))]) == 0
+    err = capsys.readouterr().err
+    assert f"group heap: photo {card} set aside" in err, err
+
+
+def test_a_low_photo_on_a_given_plate_line_is_not_told_to_give_it(tmp_path):
+    # flanks drawn 25 and 40 deg, more than 12 deg apart: "low" on the plate line given too; its
+    # way out is to check the points given, not to give a plate line again
+    r = measure.measure_pile("steep.png", image=heap_photo(left=25.0, right=40.0),
+                             plate_px=((10.0, 215.5), (390.0, 215.5)))
+    assert r.confidence == "low" and abs(r.left_deg - 25.0) <= 0.5 and abs(r.right_deg - 40.0) <= 0.5
+    why = measure.low_reason(r)
+    assert "more than 12 deg apart" in why and "plate line given" in why and "check those two points" in why, why
+    assert "give its plate line" not in why, why
+
+
+def test_a_refused_group_of_flagged_photos_still_gets_the_figures_its_reasons_name(tmp_path, capsys):
+    # each reason says "read its figure, --figures" (or names two plate lines to look at): with
+    # --figures the refusal writes every photo's figure, as a measured group's are written
+    from soilcal.cli import main
+
+    a, b = _photos(tmp_path, **{"a.png": _card("left", 60, 30, "checker"), "b.png": _card("right", 100, 60, "checker")})
+    figs = tmp_path / "figs"
+    figs.mkdir()
+    assert main(["image", "pile", str(a), str(b), "--figures", str(figs)]) != 0
+    err = capsys.readouterr().err
+    assert "confidence" in err and f"figures of every photo in {figs}" in err, err
+    assert (figs / "a.png").is_file() and (figs / "b.png").is_file()
+    mfigs = tmp_path / "mfigs"
+    mfigs.mkdir()
+    with pytest.raises(InputError) as e:
+        measure_manifest(_group(tmp_path, ["a.png", "b.png"]), figdir=mfigs)
+    assert "group heap" in e.value.field and str(mfigs) in str(e.value)
+    assert (mfigs / "a.png").is_file() and (mfigs / "b.png").is_file()
+    # with a refusals folder (the workflow's logs/<soil>/images/refused, which outlives the failed
+    # job whose outputs, the figures folder among them, are removed), the figures go there
+    kept = tmp_path / "refused"
+    with pytest.raises(InputError) as e:
+        measure_manifest(_group(tmp_path, ["a.png", "b.png"]), figdir=tmp_path / "gone", refusals=kept)
+    assert str(kept) in str(e.value) and (kept / "a.png").is_file() and (kept / "b.png").is_file()
+
+
+def test_cli_soil_writes_a_refused_groups_figures_to_figures_unless_refusals_is_given(tmp_path, capsys,
+                                                                                      monkeypatch):
+    # soilcal image soil --figures DIR: a refused group's figures go to DIR like a measured
+    # group's, not to the current folder (the default of --refusals); --refusals DIR takes them
+    from soilcal.cli import main
+
+    _photos(tmp_path, **{"a.png": _card("left", 60, 30, "checker"), "b.png": _card("right", 100, 60, "checker")})
+    m = _group(tmp_path, ["a.png", "b.png"])
+    here = tmp_path / "here"
+    here.mkdir()
+    monkeypatch.chdir(here)
+    figs = tmp_path / "figs"
+    assert main(["image", "soil", str(m), "--figures", str(figs)]) != 0
+    err = capsys.readouterr().err
+    assert f"figures of the group's photos in {figs}" in err, err
+    assert (figs / "a.png").is_file() and (figs / "b.png").is_file()
+    assert not (here / "a.png").exists() and not (here / "b.png").exists()
+    kept = tmp_path / "kept"
+    assert main(["image", "soil", str(m), "--figures", str(tmp_path / "figs2"), "--refusals", str(kept)]) != 0
+    err = capsys.readouterr().err
+    assert f"figures of the group's photos in {kept}" in err, err
+    assert (kept / "a.png").is_file() and (kept / "b.png").is_file()

@@ -12,7 +12,9 @@ of the soil config with the value the chain calibrates to:
 
 A soil without a ``citation`` (a soil of one's own, no paper) has no printed values: its
 targets' values are its own measurements, ``printed_value`` is empty and a photo target's note
-names the value the soil gives beside the photo measurement.
+names the value the soil gives beside the photo measurement.  A photo target's note also names
+the heap photos its group set aside as ``low`` (``set_aside`` in ``measurements.json``), which
+its value and ``image_n`` leave out.
 
 A target whose value is neither measured on a photo nor printed is kept with an empty value
 and says so (``source = not available``); the optimisation cases that aim at it say why they
@@ -81,12 +83,17 @@ def targets_frame(soil_data: dict, source: str, measurements: dict | None = None
                                  f"the photo measurement of target {tid} (targets.{tid}.image)",
                                  sorted(measurements or {}) if entry is None else sorted(entry))
             val = float(entry[key])
+            # heap photos flagged low are not in the group's value: the row says which
+            aside = [Path(str(a.get("path", ""))).name for a in entry.get("set_aside") or []]
+            said = f"photo group {group} ({key})"
+            if aside:
+                said = (f"photo group {group} ({key}; set aside as low, not in the value: {', '.join(aside)}, "
+                        f"reasons in {Path(measurements_path).name} set_aside)")
             row.update(value=val, source="image", image_value=val,
                        image_spread=float(entry.get("spread_deg", np.nan)),
                        image_n=int(entry.get("n_photos", entry.get("n_frames", 1))),
-                       note=f"photo group {group} ({key}); " + (f"printed {printed:g}" if cited else
-                                                                  f"the soil's own value {printed:g}")
-                       if np.isfinite(printed) else f"photo group {group} ({key})")
+                       note=f"{said}; " + (f"printed {printed:g}" if cited else f"the soil's own value {printed:g}")
+                       if np.isfinite(printed) else said)
         elif np.isfinite(printed):
             row.update(value=printed, source="printed" if source == "published" and cited else "measurement",
                        sd=float(t["sd"]) if t.get("sd") is not None else np.nan, note=t.get("source", ""))

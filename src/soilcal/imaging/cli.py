@@ -15,6 +15,16 @@ def _n(n, noun):
     return f"{n} {noun}{'' if n == 1 else 's'}"
 
 
+def _warn_set_aside(summary, group=None):
+    """One line on stderr per heap photo a group set aside (``set_aside`` of
+    :func:`soilcal.imaging.measure.pile_summary`): the JSON on stdout carries it too, but a group's
+    angle from fewer photos than given should not pass unseen."""
+    for a in summary.get("set_aside", []):
+        where = f"group {group}: " if group is not None else ""
+        print(f"soilcal: warning: {where}photo {a['path']} set aside (confidence low, not averaged into the "
+              f"group's angle; {_n(summary['n_photos'], 'photo')} used): {a['reason']}", file=sys.stderr)
+
+
 def _plate_lines(args):
     """The ``--plate-line-px`` lines, one per photo in the photos' order (None for each photo
     where none is given), checked as a manifest's ``plate_line_px`` is
@@ -34,6 +44,11 @@ def _plate_lines(args):
             for photo, q in zip(args.photos, given)]
 
 
+def _refusals(args):
+    """The folder for refused photos' diagnostic images: --refusals, else the current folder."""
+    return args.refusals if args.refusals is not None else "."
+
+
 def _pile(args):
     from soilcal.errors import InputError
     from soilcal.imaging import figures, measure
@@ -41,9 +56,15 @@ def _pile(args):
     lines = _plate_lines(args)
     try:
         summary, res = measure.measure_piles(args.photos, args.threshold, keep_stages=bool(args.figures),
-                                             channel=args.channel, refusals=args.refusals, plate_px=lines,
+                                             channel=args.channel, refusals=_refusals(args), plate_px=lines,
                                              plate_px_from="command line")
     except InputError as e:
+        if e.field == "confidence" and args.figures:
+            # no photo "ok": their figures, which the reasons point to, are written all the same
+            for r in e.results:
+                figures.angle_figure(r, f"{args.figures}/{r.path.rsplit('/', 1)[-1].rsplit('.', 1)[0]}")
+            raise InputError(e.path, e.field, e.expected, f"{e.got}; figures of every photo in {args.figures}",
+                             e.note) from None
         # a photo measured on the line given: the refusal names the option and the line
         given = {str(f): q for f, q in zip(args.photos, lines or []) if q is not None}
         if e.path not in given or e.field not in ("image", "left flank", "right flank", "plate line"):
@@ -53,6 +74,7 @@ def _pile(args):
     if args.figures:
         for r in res:
             figures.angle_figure(r, f"{args.figures}/{r.path.rsplit('/', 1)[-1].rsplit('.', 1)[0]}")
+    _warn_set_aside(summary)
     _print(summary)
     return 0
 
@@ -67,7 +89,7 @@ def _drum(args):
     except InputError as exc:  # name the option as it is typed: --chord-fraction
         raise InputError(exc.path, exc.field.replace("_", "-"), exc.expected, exc.got) from None
     summary, res = drum.measure_drum(args.frames, args.threshold, keep_stages=bool(args.figures), options=opts,
-                                     refusals=args.refusals)
+                                     refusals=_refusals(args))
     if args.figures:
         for r in res:
             figures.angle_figure(r, f"{args.figures}/{r.path.rsplit('/', 1)[-1].rsplit('.', 1)[0]}")
@@ -92,7 +114,7 @@ def _furrow(args):
         length = float(entry["scale_length_mm"])
         datum = float(entry.get("beam_datum_mm", 0.0)) if datum is None else datum
     r = measure.measure_furrow(args.photo, length, datum or 0.0, args.degree, args.threshold,
-                               keep_stages=bool(args.figures), refusals=args.refusals)
+                               keep_stages=bool(args.figures), refusals=_refusals(args))
     if args.figures:
         figures.furrow_figure(r, f"{args.figures}/{r.path.rsplit('/', 1)[-1].rsplit('.', 1)[0]}")
     _print(r.as_dict())
@@ -102,7 +124,12 @@ def _furrow(args):
 def _soil(args):
     from soilcal.imaging.manifest import measure_manifest
 
-    _print(measure_manifest(args.manifest, args.figures, args.threshold, args.refusals))
+    # a refused group's figures go to --refusals where it was given, else with the others
+    out = measure_manifest(args.manifest, args.figures, args.threshold, _refusals(args),
+                           refused_figdir=args.refusals if args.refusals is not None else args.figures)
+    for group, summary in out.items():
+        _warn_set_aside(summary, group)
+    _print(out)
     return 0
 
 
@@ -120,7 +147,7 @@ def register(subparsers) -> None:
     def common(q):
         q.add_argument("--threshold", choices=("otsu", "adaptive"), default="otsu")
         q.add_argument("--figures", metavar="DIR", help="write original/gray/binary/contour/fit figures")
-        q.add_argument("--refusals", metavar="DIR", default=".",
+        q.add_argument("--refusals", metavar="DIR", default=None,
                        help="where a photo that cannot be measured gets its diagnostic image, "
                             "<photo stem>.refused.png (default: the current folder)")
 

@@ -190,10 +190,12 @@ def lookup(photo):
     return None
 
 
-def measure_manifest(path, figdir=None, threshold="otsu", refusals=None):
+def measure_manifest(path, figdir=None, threshold="otsu", refusals=None, refused_figdir=None):
     """Measure every group of the manifest; returns {group: result dict}.  ``refusals``: a
     folder for the diagnostic image of a photo that cannot be measured
-    (:mod:`soilcal.imaging.refusal`)."""
+    (:mod:`soilcal.imaging.refusal`).  ``refused_figdir``: where a group refused for having no
+    ok photo gets its photos' figures (with ``figdir`` given); default ``refusals``, else
+    ``figdir``."""
     from soilcal.imaging import drum, figures, measure
 
     path = Path(path)
@@ -216,7 +218,18 @@ def measure_manifest(path, figdir=None, threshold="otsu", refusals=None):
                                                      plate_px=lines)
             except InputError as e:
                 if e.field == "confidence":  # no photo of the group measured "ok"
-                    raise InputError(path, f"group {g} ({len(files)} photos)", e.expected, e.got) from None
+                    got = e.got
+                    if figdir is not None:
+                        # the figures its reasons point to, written all the same: beside the
+                        # diagnostic images of refused photos where there is such a folder (the
+                        # workflow's outputs, figdir among them, do not outlive a failed job)
+                        where = Path(refused_figdir if refused_figdir is not None
+                                     else refusals if refusals is not None else figdir)
+                        where.mkdir(parents=True, exist_ok=True)
+                        for r in e.results:
+                            figures.angle_figure(r, where / Path(r.path).stem)
+                        got += f"; figures of the group's photos in {where}"
+                    raise InputError(path, f"group {g} ({len(files)} photos)", e.expected, got) from None
                 given = {str(f): i for f, q, i in zip(files, lines, range(len(files))) if q is not None}
                 if e.path not in given or e.field not in ("image", "left flank", "right flank", "plate line"):
                     raise

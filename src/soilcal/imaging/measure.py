@@ -1172,17 +1172,24 @@ def measure_piles(paths, threshold="otsu", keep_stages=False, channel="auto", re
     "ok", a photo flagged "low" set aside with its reason (:func:`pile_summary` with
     ``ok_only``; a group with no photo "ok" is refused).  ``refusals``: :func:`measure_pile`;
     ``plate_px``: one given plate line or None per photo, as :func:`measure_pile` takes it,
-    ``plate_px_from`` where they came from."""
+    ``plate_px_from`` where they came from.  The refusal of a group with no photo "ok" carries
+    every photo's result as ``results`` (the callers write their figures, which its reasons name)."""
     per = plate_px if plate_px is not None else [None] * len(paths)
     res = [measure_pile(p, threshold, keep_stages, channel, refusals, plate_px=q, plate_px_from=plate_px_from)
            for p, q in zip(paths, per)]
-    return pile_summary(res, ok_only=True), res
+    try:
+        return pile_summary(res, ok_only=True), res
+    except InputError as e:
+        e.results = res  # a group of low photos only: their results, for the figures its reasons point to
+        raise
 
 
 def low_reason(r: PileResult) -> str:
     """Why the heap photo ``r`` (:class:`PileResult`) is "low" ("" for an "ok" one): the plate
     ambiguity (naming both lines and the plate line to give), else the flank fit, the flanks'
-    difference, the heap continuing past a flank or the further cue that disagrees."""
+    difference, the heap continuing past a flank or the further cue that disagrees; the way out
+    is the plate line given by hand, or for a photo measured on one given (``plate_line``
+    "manifest" or "command line"), checking its two points."""
     if r.confidence == "ok":
         return ""
     if r.plate_ambiguous:
@@ -1204,6 +1211,11 @@ def low_reason(r: PileResult) -> str:
         why.append(f"the cue {r.cue_outvoted} disagrees by {r.cue_outvoted_deg:.1f} deg and no further cue decides")
     if not why:
         why.append("its cues disagree and none decides")
+    if r.plate_line in ("manifest", "command line"):
+        # measured on the plate line given: giving it again is no way out
+        given = "its manifest entry's plate_line_px" if r.plate_line == "manifest" else "--plate-line-px"
+        return "; ".join(why) + f" on the plate line given ({given} {r.plate_line_px}; read its figure, " \
+            "--figures: check those two points on the plate's top edge, or retake the photo)"
     return "; ".join(why) + " (read its figure, --figures; retake the photo, or give its plate line if the " \
         "plate was misread: plate_line_px in the manifest, --plate-line-px)"
 
