@@ -468,3 +468,20 @@ def test_streak_across_the_air_joined_to_the_bed_is_no_surface(tmp_path, streak,
         img = np.clip(img + 0.45 * np.exp(-(rows / (0.03 * R)) ** 2), 0.0, 1.0)
     r = drum.measure_drum_frame(render.save_frame(tmp_path / "streak.png", img))
     assert abs(r.angle_deg - abs(truth["angle_deg"])) < 0.5
+
+
+@pytest.mark.parametrize("angle", [30.0, 35.0])
+def test_bed_cut_by_two_glare_lines_is_measured_whole(tmp_path, angle):
+    # two bright glare lines along the window, 0.05 and 0.3 drum radii below the centre, cut the
+    # dark bed into three pieces one above the other.  The top piece (the surface's upper end)
+    # lies on the middle one, not on the largest: it was left out and the upper part of the
+    # surface read from the middle piece's top, the glare line (status ok: 30 deg read 27.86,
+    # upper third 20.6; 35 deg read 33.2, upper third 26.5)
+    img, truth = render.render_tester_frame(4, angle, fill=0.35, size=(440, 440), window="rim", n_avg=8)
+    (cx, cy), R = truth["centre_px"], truth["radius_px"]
+    rows = np.arange(440)[:, None].astype(float)
+    for below in (0.05, 0.3):
+        img = img + 0.45 * np.exp(-((rows - (cy + below * R)) / (0.015 * R)) ** 2)
+    r = drum.measure_drum_frame(render.save_frame(tmp_path / "glare2.png", np.clip(img, 0.0, 1.0)))
+    assert abs(r.angle_deg - abs(truth["angle_deg"])) < 0.5
+    assert abs(r.upper_deg - abs(truth["angle_deg"])) < 1.5

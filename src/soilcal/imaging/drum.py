@@ -33,11 +33,11 @@ drum window, 8- or 16-bit grey, time-averaged over many frames, no plate in view
 4. Interface: Otsu's threshold inside the masked drum separates powder from air; the powder is
    the class lying lower (its centroid below the air's: dark powder on a white backlight, or
    the converse), its largest connected region the bed, with every other region of at least 2 %
-   of the drum's area whose contact with the drum wall reaches below the largest region's
-   highest wall contact on its side, or that lies on it across a cut of at most 0.05 drum radii
-   (a reflection band, a glare line or a bracket across the window cuts the bed into such
-   pieces; powder held in a lifter above the surface, or a hub floating in the air, is no
-   bed).  In every
+   of the drum's area whose contact with the drum wall reaches below the bed's highest wall
+   contact on its side, or that lies on the bed across a cut of at most 0.05 drum radii, the
+   bed growing by each region joined (a reflection band, a glare line or a bracket across the
+   window cuts the bed into such pieces, two glare lines into three one above the other;
+   powder held in a lifter above the surface, or a hub floating in the air, is no bed).  In every
    column the powder's top is the top of the first powder run with air above it and powder
    below (the medians over 30 px beyond it differ by at least :data:`MIN_STEP` of the bed's
    step: a thin streak of the powder's grey across the air joined to the bed, a glare line or a
@@ -361,24 +361,34 @@ def _surface(path, p, inside, cx, cy, rm):
     if lab.max() == 0 or sizes.max() < 0.02 * np.pi * rm ** 2:
         raise InputError(path, "image", DRUM_EXPECTED, "no powder region in the drum")
     # the bed: the largest powder region, and every other one of at least 2 % of the drum's area
-    # that lies against the drum wall (the edge of the measured disc) down to below the largest
-    # region's highest wall contact on its side of the drum, or that lies on the largest region
-    # across a thin cut: a bright reflection band or a dark bracket across the window cuts the
-    # bed into pieces that run down the wall from the surface's two ends, a glare line along
-    # the window into pieces one above the other, while powder held up in a lifter against the wall above the surface,
-    # a hub or a speck floating in the air is no bed
+    # that lies against the drum wall (the edge of the measured disc) down to below the bed's
+    # highest wall contact on its side of the drum, or that lies on the bed across a thin cut,
+    # the bed growing by each piece joined until no other joins: a bright reflection band or a
+    # dark bracket across the window cuts the bed into pieces that run down the wall from the
+    # surface's two ends, a glare line along the window into pieces one above the other (two
+    # lines into three, the top one lying on the middle one, not on the largest), while powder
+    # held up in a lifter against the wall above the surface, a hub or a speck floating in the
+    # air is no bed
     wall = inside & ~ndi.binary_erosion(inside, np.ones((3, 3), bool), border_value=0)
     main = int(sizes.argmax())
-    wr, wc = np.nonzero(wall & (lab == main))
     keep = [main]
-    for k in np.flatnonzero(sizes >= 0.02 * np.pi * rm ** 2):
-        kr, kc = np.nonzero(wall & (lab == k))
-        if k == main or wr.size == 0 or kr.size == 0:
-            continue
-        side = (wc >= cx) == (kc.mean() >= cx)
-        if kr.max() > (wr[side].min() if side.any() else wr.min()) or _thin_cut_above(lab == k, lab == main, rm):
-            keep.append(int(k))
-    powder = np.isin(lab, keep)
+    powder = lab == main
+    left = [int(k) for k in np.flatnonzero(sizes >= 0.02 * np.pi * rm ** 2) if k != main]
+    grown = True
+    while grown and left:
+        grown = False
+        wr, wc = np.nonzero(wall & powder)
+        for k in list(left):
+            kr, kc = np.nonzero(wall & (lab == k))
+            if wr.size == 0 or kr.size == 0:
+                continue
+            side = (wc >= cx) == (kc.mean() >= cx)
+            if kr.max() > (wr[side].min() if side.any() else wr.min()) or _thin_cut_above(lab == k, powder, rm):
+                keep.append(k)
+                left.remove(k)
+                powder = powder | (lab == k)
+                grown = True
+                break
     air_lvl = np.median(p[inside & ~morphology.dilation(powder, morphology.disk(8))])
     pow_lvl = np.median(p[morphology.erosion(powder, morphology.disk(8)) & inside])
     cols, rows = [], []
