@@ -18,6 +18,10 @@ drum window, 8- or 16-bit grey, time-averaged over many frames, no plate in view
      centre, radius = half the shorter side.  A frame that shows only part of a larger drum
      and no rim needs the drum given: the central chord is the drum's.
 
+   A rim that an ellipse fits better than the circle (:func:`window_ellipse`), of axes ratio
+   below :data:`MIN_WINDOW_AXES_RATIO`, is a window seen off the drum's axis (a phone held to
+   one side or above): refused, naming the ratio, as the frame tilts the surface.
+
    The outer ``rim_margin`` (default 5 %) of the radius is masked, as the testers' software
    masks the drum wall.
 3. Level (``level_reference``): ``manifest roll`` when the user gives ``roll_deg`` (the angle by
@@ -296,6 +300,58 @@ def find_drum(gray):
     return cx, cy, r, "rim"
 
 
+#: the least axes ratio (minor over major) of the drum window's outline in the frame: a circular
+#: window seen off the drum's axis is an ellipse, which tilts a surface at 45 deg in the frame by
+#: atan(1 / ratio) - 45 deg; at this ratio by 0.5 deg (0.9 reads 48.0 deg, 0.8 reads 51.3)
+MIN_WINDOW_AXES_RATIO = math.tan(math.radians(45.0)) / math.tan(math.radians(45.5))
+
+
+class _Ellipse(measure.EllipseModel):
+    """skimage's ellipse with the Sampson distance (first-order geometric) as its residual: the
+    library's exact distance solves one optimisation per point, seconds per frame."""
+
+    def residuals(self, data):
+        xc, yc, a, b, th = self.params
+        x, y = data[:, 0] - xc, data[:, 1] - yc
+        u, v = x * np.cos(th) + y * np.sin(th), -x * np.sin(th) + y * np.cos(th)
+        return np.abs((u / a) ** 2 + (v / b) ** 2 - 1.0) / np.maximum(2.0 * np.hypot(u / a ** 2, v / b ** 2), 1e-12)
+
+
+def window_ellipse(gray, cx, cy, r):
+    """The drum window's outline as an ellipse, when an ellipse fits its rim better than the
+    circle found: (axes ratio minor / major, minor axis direction in deg from the image's
+    horizontal, counter-clockwise), else None.  RANSAC of :class:`_Ellipse` through the edge
+    pixels between 0.6 r and 1.6 r from the circle's centre; the ellipse counts only with at
+    least 1.5 times the edge pixels within 1.5 px of it that the best circle through them (RANSAC
+    on the same pixels) has, its centre within 0.5 r of the
+    circle's and its mean radius 0.6 to 1.6 r (a true circle's rim, or its ring's two
+    edges, hold as many pixels on the circle as on any ellipse)."""
+    import warnings
+
+    edges = _edges(gray)
+    er, ec = np.nonzero(edges)
+    d = np.hypot(ec - cx, er - cy)
+    near = (d > 0.6 * r) & (d < 1.6 * r)
+    pts = np.column_stack([ec[near], er[near]]).astype(float)
+    if len(pts) < 50:
+        return None
+    pts = pts[:: max(1, len(pts) // 4000)]
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")  # the library's deprecation notices for model.params
+        circle, on = measure.ransac(pts, measure.CircleModel, min_samples=3, residual_threshold=1.5,
+                                    max_trials=150, rng=0)
+        on_circle = int(on.sum()) if circle is not None else 0
+        model, inl = measure.ransac(pts, _Ellipse, min_samples=5, residual_threshold=1.5, max_trials=150, rng=0)
+        if model is None:
+            return None
+        xc, yc, a, b, th = (float(x) for x in model.params)
+    if (inl.sum() < 1.5 * on_circle or math.hypot(xc - cx, yc - cy) > 0.5 * r
+            or not 0.6 * r <= math.sqrt(a * b) <= 1.6 * r):
+        return None
+    minor_th = th if a < b else th + math.pi / 2  # image rows point down: angles counter-clockwise negate
+    return min(a, b) / max(a, b), float(-math.degrees(minor_th) % 180.0)
+
+
 def _tls(u, v):
     p = np.column_stack([u, v])
     m = p.mean(axis=0)
@@ -472,6 +528,16 @@ def _measure_drum_frame(path, threshold, keep_stages, options, tried: Tried) -> 
         cx, cy, R, dref = find_drum(gray)
         tried.attempts[-1].circle = (cx, cy, R)
         tried.attempts[-1].outcome = "drum at ({:.0f}, {:.0f}) px, radius {:.0f} px".format(*frame_px(cx, cy, R))
+        ell = window_ellipse(gray, cx, cy, R) if dref == "rim" else None
+        if ell is not None and ell[0] < MIN_WINDOW_AXES_RATIO:
+            q, minor = ell
+            raise InputError(path, "image", "a drum window seen square-on: its rim a circle in the frame (axes ratio at "
+                             f"least {MIN_WINDOW_AXES_RATIO:.3f})",
+                             f"the rim an ellipse of axes ratio {q:.3f}, its short axis at {minor:.0f} deg from the "
+                             f"frame's horizontal: the camera looked at the window about "
+                             f"{math.degrees(math.acos(q)):.0f} deg off the drum's axis, which tilts a surface in "
+                             f"the frame by up to {math.degrees(math.atan(1.0 / q)) - 45.0:.1f} deg; take the frame "
+                             "with the camera on the drum's axis")
     roll, lref = 0.0, "image axes"
     if opts["roll_deg"] is not None:
         roll, lref = opts["roll_deg"], "manifest roll"
