@@ -468,3 +468,39 @@ def test_streak_across_the_air_joined_to_the_bed_is_no_surface(tmp_path, streak,
         img = np.clip(img + 0.45 * np.exp(-(rows / (0.03 * R)) ** 2), 0.0, 1.0)
     r = drum.measure_drum_frame(render.save_frame(tmp_path / "streak.png", img))
     assert abs(r.angle_deg - abs(truth["angle_deg"])) < 0.5
+
+
+@pytest.mark.parametrize("angle", [30.0, 35.0])
+def test_bed_cut_by_two_glare_lines_is_measured_whole(tmp_path, angle):
+    # two bright glare lines along the window, 0.05 and 0.3 drum radii below the centre, cut the
+    # dark bed into three pieces one above the other.  The top piece (the surface's upper end)
+    # lies on the middle one, not on the largest: it was left out and the upper part of the
+    # surface read from the middle piece's top, the glare line (status ok: 30 deg read 27.86,
+    # upper third 20.6; 35 deg read 33.2, upper third 26.5)
+    img, truth = render.render_tester_frame(4, angle, fill=0.35, size=(440, 440), window="rim", n_avg=8)
+    (cx, cy), R = truth["centre_px"], truth["radius_px"]
+    rows = np.arange(440)[:, None].astype(float)
+    for below in (0.05, 0.3):
+        img = img + 0.45 * np.exp(-((rows - (cy + below * R)) / (0.015 * R)) ** 2)
+    r = drum.measure_drum_frame(render.save_frame(tmp_path / "glare2.png", np.clip(img, 0.0, 1.0)))
+    assert abs(r.angle_deg - abs(truth["angle_deg"])) < 0.5
+    assert abs(r.upper_deg - abs(truth["angle_deg"])) < 1.5
+
+
+@pytest.mark.parametrize("axis,ratio,size", [("x", 0.9, 480), ("y", 0.93, 480), ("x", 0.75, 480), ("y", 0.75, 480)])
+def test_window_seen_off_the_drum_axis_is_refused(tmp_path, axis, ratio, size):
+    # a phone held off the drum's axis sees the circular window as an ellipse: the frame below is
+    # a square-on frame squashed by ``ratio`` across ``axis`` about the drum centre (a camera
+    # turned about the vertical, or tilted about the horizontal).  A 35 deg surface read 38.0 deg
+    # (x, 0.9) and 33.2 deg (y, 0.93) with status ok; now refused naming the axes ratio.  Far off
+    # the axis (0.75) a smaller circle inside the ellipse was taken for the rim and the ellipse,
+    # its centre off that circle's, dropped: 35 deg read 42.67 (x) and 27.70 (y), status ok
+    img, truth = render.render_tester_frame(6, 35.0, fill=0.35, size=(size, size), window="rim", n_avg=8)
+    (cx, cy), R = truth["centre_px"], truth["radius_px"]
+    scale = np.array([1.0, 1.0 / ratio]) if axis == "x" else np.array([1.0 / ratio, 1.0])  # (row, column)
+    centre = np.array([cy, cx])
+    squashed = ndi.affine_transform(img, scale, offset=centre - scale * centre, order=1, mode="nearest")
+    with pytest.raises(InputError, match="the rim an ellipse of axes ratio") as err:
+        drum.measure_drum_frame(render.save_frame(tmp_path / "oblique.png", squashed))
+    found = float(str(err.value).split("axes ratio ")[2].split(",")[0])
+    assert abs(found - ratio) < 0.04  # the rim ring's inner and outer edges (0.75 found 0.779)

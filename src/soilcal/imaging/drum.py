@@ -18,6 +18,11 @@ drum window, 8- or 16-bit grey, time-averaged over many frames, no plate in view
      centre, radius = half the shorter side.  A frame that shows only part of a larger drum
      and no rim needs the drum given: the central chord is the drum's.
 
+   A rim that an ellipse fits better than the circle (:func:`window_ellipse`), of axes ratio
+   below :data:`MIN_WINDOW_AXES_RATIO`, is a window seen off the drum's axis (a phone held to
+   one side or above): refused, naming the ratio, as the frame tilts the surface.  Only a
+   ``rim`` drum is checked: ``image border`` and ``manifest`` drums are taken as circles.
+
    The outer ``rim_margin`` (default 5 %) of the radius is masked, as the testers' software
    masks the drum wall.
 3. Level (``level_reference``): ``manifest roll`` when the user gives ``roll_deg`` (the angle by
@@ -33,11 +38,11 @@ drum window, 8- or 16-bit grey, time-averaged over many frames, no plate in view
 4. Interface: Otsu's threshold inside the masked drum separates powder from air; the powder is
    the class lying lower (its centroid below the air's: dark powder on a white backlight, or
    the converse), its largest connected region the bed, with every other region of at least 2 %
-   of the drum's area whose contact with the drum wall reaches below the largest region's
-   highest wall contact on its side, or that lies on it across a cut of at most 0.05 drum radii
-   (a reflection band, a glare line or a bracket across the window cuts the bed into such
-   pieces; powder held in a lifter above the surface, or a hub floating in the air, is no
-   bed).  In every
+   of the drum's area whose contact with the drum wall reaches below the bed's highest wall
+   contact on its side, or that lies on the bed across a cut of at most 0.05 drum radii, the
+   bed growing by each region joined (a reflection band, a glare line or a bracket across the
+   window cuts the bed into such pieces, two glare lines into three one above the other;
+   powder held in a lifter above the surface, or a hub floating in the air, is no bed).  In every
    column the powder's top is the top of the first powder run with air above it and powder
    below (the medians over 30 px beyond it differ by at least :data:`MIN_STEP` of the bed's
    step: a thin streak of the powder's grey across the air joined to the bed, a glare line or a
@@ -296,6 +301,62 @@ def find_drum(gray):
     return cx, cy, r, "rim"
 
 
+#: the least axes ratio (minor over major) of the drum window's outline in the frame: a circular
+#: window seen off the drum's axis is an ellipse, which tilts a surface at 45 deg in the frame by
+#: atan(1 / ratio) - 45 deg; at this ratio by 0.5 deg (0.9 reads 48.0 deg, 0.8 reads 51.3)
+MIN_WINDOW_AXES_RATIO = math.tan(math.radians(45.0)) / math.tan(math.radians(45.5))
+
+
+class _Ellipse(measure.EllipseModel):
+    """skimage's ellipse with the Sampson distance (first-order geometric) as its residual: the
+    library's exact distance solves one optimisation per point, seconds per frame."""
+
+    def residuals(self, data):
+        xc, yc, a, b, th = self.params
+        x, y = data[:, 0] - xc, data[:, 1] - yc
+        u, v = x * np.cos(th) + y * np.sin(th), -x * np.sin(th) + y * np.cos(th)
+        return np.abs((u / a) ** 2 + (v / b) ** 2 - 1.0) / np.maximum(2.0 * np.hypot(u / a ** 2, v / b ** 2), 1e-12)
+
+
+def window_ellipse(gray, cx, cy, r):
+    """The drum window's outline as an ellipse, when an ellipse fits its rim better than the
+    circle found: (axes ratio minor / major, minor axis direction in deg from the image's
+    horizontal, counter-clockwise), else None.  RANSAC of :class:`_Ellipse` through the edge
+    pixels between 0.6 r and 1.6 r from the circle's centre; the ellipse counts only with at
+    least 1.5 times the edge pixels within 1.5 px of it that the best circle through them (RANSAC
+    on the same pixels) has and its mean radius 0.6 to 1.6 r, wherever its centre (far off the
+    axis the circle found is a smaller one inside the ellipse, off its centre).  A true circle's
+    rim, or its ring's two edges, hold as many pixels on the circle as on any ellipse; so does a
+    window seen slightly off the axis on a small drum (ratio 0.96 to 0.975 at R 70 to 90 px),
+    which is not caught.  Not checked: a drum found from the image border, or given in the
+    manifest."""
+    import warnings
+
+    edges = _edges(gray)
+    er, ec = np.nonzero(edges)
+    d = np.hypot(ec - cx, er - cy)
+    near = (d > 0.6 * r) & (d < 1.6 * r)
+    pts = np.column_stack([ec[near], er[near]]).astype(float)
+    if len(pts) < 50:
+        return None
+    pts = pts[:: max(1, len(pts) // 4000)]
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")  # the library's deprecation notices for model.params
+        circle, on = measure.ransac(pts, measure.CircleModel, min_samples=3, residual_threshold=1.5,
+                                    max_trials=150, rng=0)
+        on_circle = int(on.sum()) if circle is not None else 0
+        model, inl = measure.ransac(pts, _Ellipse, min_samples=5, residual_threshold=1.5, max_trials=150, rng=0)
+        if model is None:
+            return None
+        xc, yc, a, b, th = (float(x) for x in model.params)
+    # an ellipse clearly holding more of the rim than the circle is the window wherever its centre:
+    # far off the axis the circle found is a smaller one inside the ellipse, off its centre
+    if inl.sum() < 1.5 * on_circle or not 0.6 * r <= math.sqrt(a * b) <= 1.6 * r:
+        return None
+    minor_th = th if a < b else th + math.pi / 2  # image rows point down: angles counter-clockwise negate
+    return min(a, b) / max(a, b), float(-math.degrees(minor_th) % 180.0)
+
+
 def _tls(u, v):
     p = np.column_stack([u, v])
     m = p.mean(axis=0)
@@ -361,24 +422,34 @@ def _surface(path, p, inside, cx, cy, rm):
     if lab.max() == 0 or sizes.max() < 0.02 * np.pi * rm ** 2:
         raise InputError(path, "image", DRUM_EXPECTED, "no powder region in the drum")
     # the bed: the largest powder region, and every other one of at least 2 % of the drum's area
-    # that lies against the drum wall (the edge of the measured disc) down to below the largest
-    # region's highest wall contact on its side of the drum, or that lies on the largest region
-    # across a thin cut: a bright reflection band or a dark bracket across the window cuts the
-    # bed into pieces that run down the wall from the surface's two ends, a glare line along
-    # the window into pieces one above the other, while powder held up in a lifter against the wall above the surface,
-    # a hub or a speck floating in the air is no bed
+    # that lies against the drum wall (the edge of the measured disc) down to below the bed's
+    # highest wall contact on its side of the drum, or that lies on the bed across a thin cut,
+    # the bed growing by each piece joined until no other joins: a bright reflection band or a
+    # dark bracket across the window cuts the bed into pieces that run down the wall from the
+    # surface's two ends, a glare line along the window into pieces one above the other (two
+    # lines into three, the top one lying on the middle one, not on the largest), while powder
+    # held up in a lifter against the wall above the surface, a hub or a speck floating in the
+    # air is no bed
     wall = inside & ~ndi.binary_erosion(inside, np.ones((3, 3), bool), border_value=0)
     main = int(sizes.argmax())
-    wr, wc = np.nonzero(wall & (lab == main))
     keep = [main]
-    for k in np.flatnonzero(sizes >= 0.02 * np.pi * rm ** 2):
-        kr, kc = np.nonzero(wall & (lab == k))
-        if k == main or wr.size == 0 or kr.size == 0:
-            continue
-        side = (wc >= cx) == (kc.mean() >= cx)
-        if kr.max() > (wr[side].min() if side.any() else wr.min()) or _thin_cut_above(lab == k, lab == main, rm):
-            keep.append(int(k))
-    powder = np.isin(lab, keep)
+    powder = lab == main
+    left = [int(k) for k in np.flatnonzero(sizes >= 0.02 * np.pi * rm ** 2) if k != main]
+    grown = True
+    while grown and left:
+        grown = False
+        wr, wc = np.nonzero(wall & powder)
+        for k in list(left):
+            kr, kc = np.nonzero(wall & (lab == k))
+            if wr.size == 0 or kr.size == 0:
+                continue
+            side = (wc >= cx) == (kc.mean() >= cx)
+            if kr.max() > (wr[side].min() if side.any() else wr.min()) or _thin_cut_above(lab == k, powder, rm):
+                keep.append(k)
+                left.remove(k)
+                powder = powder | (lab == k)
+                grown = True
+                break
     air_lvl = np.median(p[inside & ~morphology.dilation(powder, morphology.disk(8))])
     pow_lvl = np.median(p[morphology.erosion(powder, morphology.disk(8)) & inside])
     cols, rows = [], []
@@ -462,6 +533,16 @@ def _measure_drum_frame(path, threshold, keep_stages, options, tried: Tried) -> 
         cx, cy, R, dref = find_drum(gray)
         tried.attempts[-1].circle = (cx, cy, R)
         tried.attempts[-1].outcome = "drum at ({:.0f}, {:.0f}) px, radius {:.0f} px".format(*frame_px(cx, cy, R))
+        ell = window_ellipse(gray, cx, cy, R) if dref == "rim" else None
+        if ell is not None and ell[0] < MIN_WINDOW_AXES_RATIO:
+            q, minor = ell
+            raise InputError(path, "image", "a drum window seen square-on: its rim a circle in the frame (axes ratio at "
+                             f"least {MIN_WINDOW_AXES_RATIO:.3f})",
+                             f"the rim an ellipse of axes ratio {q:.3f}, its short axis at {minor:.0f} deg from the "
+                             f"frame's horizontal: the camera looked at the window about "
+                             f"{math.degrees(math.acos(q)):.0f} deg off the drum's axis, which tilts a surface in "
+                             f"the frame by up to {math.degrees(math.atan(1.0 / q)) - 45.0:.1f} deg; take the frame "
+                             "with the camera on the drum's axis")
     roll, lref = 0.0, "image axes"
     if opts["roll_deg"] is not None:
         roll, lref = opts["roll_deg"], "manifest roll"
