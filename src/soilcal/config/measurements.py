@@ -72,6 +72,7 @@ runner (``stage``, ``case``).
 
 from __future__ import annotations
 
+import functools
 import math
 import os
 import re
@@ -1005,6 +1006,7 @@ _UNIT_WORDS = ("fraction", "percent", "degree", "degrees")
 _BRACKETS = re.compile(r"[(\[]\s*([^()\[\]]*?)\s*[)\]]")
 
 
+@functools.cache
 def _name_unit_table() -> tuple[dict, dict]:
     """Every unit spelling :func:`name_units` knows -> its unit as the tables key it, and the
     same by lower-case spelling where that names one unit only (``mpa`` is MPa, ``RPM`` rpm),

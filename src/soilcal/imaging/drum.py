@@ -265,8 +265,9 @@ def _circle_peaks(hspaces, radii, dist, total):
     return accum[keep], cx[keep], cy[keep], r[keep]
 
 
-def find_drum(gray):
-    """(cx, cy, radius, reference) of the drum: its rim circle, else the image border."""
+def find_drum(gray, edges=None):
+    """(cx, cy, radius, reference) of the drum: its rim circle, else the image border.
+    ``edges``: :func:`_edges` of ``gray``, where the caller has them already."""
     h, w = gray.shape
     f = max(1.0, min(h, w) / 240.0)
     small = transform.rescale(gray, 1.0 / f, anti_aliasing=True) if f > 1 else gray
@@ -274,7 +275,7 @@ def find_drum(gray):
     radii = np.arange(int(0.25 * m), int(0.62 * m) + 1)
     hs = transform.hough_circle(_edges(small), radii)
     _, xs, ys, rs = _circle_peaks(hs, radii, dist=3, total=8)
-    edges = _edges(gray)
+    edges = _edges(gray) if edges is None else edges
     er, ec = np.nonzero(edges)
     near_edges = morphology.dilation(edges, morphology.disk(1))
     found = []
@@ -318,10 +319,11 @@ class _Ellipse(measure.EllipseModel):
         return np.abs((u / a) ** 2 + (v / b) ** 2 - 1.0) / np.maximum(2.0 * np.hypot(u / a ** 2, v / b ** 2), 1e-12)
 
 
-def window_ellipse(gray, cx, cy, r):
-    """The drum window's outline as an ellipse, when an ellipse fits its rim better than the
-    circle found: (axes ratio minor / major, minor axis direction in deg from the image's
-    horizontal, counter-clockwise), else None.  RANSAC of :class:`_Ellipse` through the edge
+def window_ellipse(edges, cx, cy, r):
+    """The drum window's outline as an ellipse in the frame's edge map ``edges``
+    (:func:`_edges`), when an ellipse fits its rim better than the circle found: (axes ratio
+    minor / major, minor axis direction in deg from the image's horizontal, counter-clockwise),
+    else None.  RANSAC of :class:`_Ellipse` through the edge
     pixels between 0.6 r and 1.6 r from the circle's centre; the ellipse counts only with at
     least 1.5 times the edge pixels within 1.5 px of it that the best circle through them (RANSAC
     on the same pixels) has and its mean radius 0.6 to 1.6 r, wherever its centre (far off the
@@ -332,7 +334,6 @@ def window_ellipse(gray, cx, cy, r):
     manifest."""
     import warnings
 
-    edges = _edges(gray)
     er, ec = np.nonzero(edges)
     d = np.hypot(ec - cx, er - cy)
     near = (d > 0.6 * r) & (d < 1.6 * r)
@@ -432,7 +433,6 @@ def _surface(path, p, inside, cx, cy, rm):
     # air is no bed
     wall = inside & ~ndi.binary_erosion(inside, np.ones((3, 3), bool), border_value=0)
     main = int(sizes.argmax())
-    keep = [main]
     powder = lab == main
     left = [int(k) for k in np.flatnonzero(sizes >= 0.02 * np.pi * rm ** 2) if k != main]
     grown = True
@@ -445,7 +445,6 @@ def _surface(path, p, inside, cx, cy, rm):
                 continue
             side = (wc >= cx) == (kc.mean() >= cx)
             if kr.max() > (wr[side].min() if side.any() else wr.min()) or _thin_cut_above(lab == k, powder, rm):
-                keep.append(k)
                 left.remove(k)
                 powder = powder | (lab == k)
                 grown = True
@@ -530,10 +529,11 @@ def _measure_drum_frame(path, threshold, keep_stages, options, tried: Tried) -> 
         cx, cy, R = (cx + 0.5) * sx - 0.5, (cy + 0.5) * sy - 0.5, R * math.sqrt(sx * sy)
     else:
         tried.add("drum circle search")
-        cx, cy, R, dref = find_drum(gray)
+        edges = _edges(gray)  # the rim's search and the ellipse check read the same edge map
+        cx, cy, R, dref = find_drum(gray, edges)
         tried.attempts[-1].circle = (cx, cy, R)
         tried.attempts[-1].outcome = "drum at ({:.0f}, {:.0f}) px, radius {:.0f} px".format(*frame_px(cx, cy, R))
-        ell = window_ellipse(gray, cx, cy, R) if dref == "rim" else None
+        ell = window_ellipse(edges, cx, cy, R) if dref == "rim" else None
         if ell is not None and ell[0] < MIN_WINDOW_AXES_RATIO:
             q, minor = ell
             raise InputError(path, "image", "a drum window seen square-on: its rim a circle in the frame (axes ratio at "
