@@ -25,6 +25,14 @@ def _warn_set_aside(summary, group=None):
               f"group's angle; {_n(summary['n_photos'], 'photo')} used): {a['reason']}", file=sys.stderr)
 
 
+def _figure_base(folder, r):
+    """Where a photo's figures go: ``folder`` and the photo's file name without its extension
+    (the figure functions add theirs)."""
+    from pathlib import PurePath
+
+    return f"{folder}/{PurePath(r.path).stem}"
+
+
 def _plate_lines(args):
     """The ``--plate-line-px`` lines, one per photo in the photos' order (None for each photo
     where none is given), checked as a manifest's ``plate_line_px`` is
@@ -62,7 +70,7 @@ def _pile(args):
         if e.field == "confidence" and args.figures:
             # no photo "ok": their figures, which the reasons point to, are written all the same
             for r in e.results:
-                figures.angle_figure(r, f"{args.figures}/{r.path.rsplit('/', 1)[-1].rsplit('.', 1)[0]}")
+                figures.angle_figure(r, _figure_base(args.figures, r))
             raise InputError(e.path, e.field, e.expected, f"{e.got}; figures of every photo in {args.figures}",
                              e.note) from None
         # a photo measured on the line given: the refusal names the option and the line
@@ -73,7 +81,7 @@ def _pile(args):
                          f"--plate-line-px {' '.join(f'{v:g}' for q in given[e.path] for v in q)}", e.note) from None
     if args.figures:
         for r in res:
-            figures.angle_figure(r, f"{args.figures}/{r.path.rsplit('/', 1)[-1].rsplit('.', 1)[0]}")
+            figures.angle_figure(r, _figure_base(args.figures, r))
     _warn_set_aside(summary)
     _print(summary)
     return 0
@@ -92,7 +100,7 @@ def _drum(args):
                                      refusals=_refusals(args))
     if args.figures:
         for r in res:
-            figures.angle_figure(r, f"{args.figures}/{r.path.rsplit('/', 1)[-1].rsplit('.', 1)[0]}")
+            figures.angle_figure(r, _figure_base(args.figures, r))
     _print(summary)
     return 0
 
@@ -116,7 +124,7 @@ def _furrow(args):
     r = measure.measure_furrow(args.photo, length, datum or 0.0, args.degree, args.threshold,
                                keep_stages=bool(args.figures), refusals=_refusals(args))
     if args.figures:
-        figures.furrow_figure(r, f"{args.figures}/{r.path.rsplit('/', 1)[-1].rsplit('.', 1)[0]}")
+        figures.furrow_figure(r, _figure_base(args.figures, r))
     _print(r.as_dict())
     return 0
 
