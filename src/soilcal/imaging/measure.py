@@ -108,11 +108,16 @@ class PileResult:
     # (slope, intercept, left deg, right deg) of the second plate candidate that carries the
     # heap (plate_ambiguous), in the measured image's pixels; not reported
     alternative: tuple | None = field(default=None, repr=False)
+    # (slope, intercept, left deg, right deg, its across share, the measured line's) of a
+    # straight edge running across the photo at the heap's foot further than the line measured
+    # on, tilted against it (plate_ambiguous, :func:`_level_rival`); not reported
+    rival: tuple | None = field(default=None, repr=False)
 
     def as_dict(self):
         d = asdict(self)
         d.pop("stages")
         d.pop("geometry")
+        d.pop("rival")
         d.pop("alternative")
         return d
 
@@ -513,6 +518,18 @@ def _measure_pile(path, threshold, keep_stages, channel, tried: Tried, image=Non
                 f"edge further on is; the photo does not tell which is the plate's top edge: give it by hand, "
                 f"two points on it as plate_line_px in the photo's manifest entry (or soilcal image pile "
                 f"--plate-line-px C0 R0 C1 R1)")
+        elif res.rival is not None:
+            s2, b2, left2, right2, across2, across1 = res.rival
+            other = [[round(v, 2) for v in to_photo(c, s2 * c + b2)] for c in ends]
+            res.plate_ambiguous = (
+                f"{path}: the line measured on as the plate's top edge, tilted {roll_of(slope):+.2f} deg "
+                f"({res.plate_line_px} in the photo's pixels; flanks {res.left_deg:.2f} / {res.right_deg:.2f} deg), "
+                f"runs across the photo less far (an edge along {across1:.0%} of its outer quarters) than a "
+                f"straight edge at the heap's foot tilted {roll_of(s2):+.2f} deg ({other}, {across2:.0%}; "
+                f"flanks {left2:.2f} / {right2:.2f} deg on it), as the plate's edge does beside a ruler or "
+                f"strip lying askew in front of the heap's foot; the photo does not tell which is level: give "
+                f"the plate's top edge by hand, two points on it as plate_line_px in the photo's manifest entry "
+                f"(or soilcal image pile --plate-line-px C0 R0 C1 R1)")
     return res
 
 
@@ -620,6 +637,7 @@ def _pile_on_lines(path, rgb, threshold, keep_stages, channel, tried: Tried, pla
         if plate is None:
             res.alternative = _plate_alternative(path, rgb, lum, grays, lines[:PLATE_CANDIDATES], res, channel,
                                                  threshold, plate_edges, refused)
+            res.rival = _level_rival(plate_edges, lines, res)
         return res
     except InputError as refused:
         if not beside:
@@ -633,6 +651,7 @@ def _pile_on_lines(path, rgb, threshold, keep_stages, channel, tried: Tried, pla
         except InputError:
             raise _noting_tilt(refused, tilted) from None
         res.plate_beside = why
+        res.rival = _level_rival(plate_edges, lines, res)
         return res
 
 
@@ -716,6 +735,48 @@ def _edge_beside(edges, res):
         if beside.sum() >= 10:
             out.append(float(edges[rows[ok], cols[ok]].sum()) / float(beside.sum()))
     return min(out) if out else None
+
+
+#: a straight edge competes with the plate line measured on as the level (:func:`_level_rival`)
+#: where it crosses the heap's centre column within this share of the heap's height of it
+RIVAL_NEAR_FOOT = 0.25
+
+
+def _level_rival(edges, lines, res):
+    """A straight edge of ``lines`` (the plate search's candidates) at the heap's foot that runs
+    across the photo (:func:`_across`, at least :data:`ACROSS_MIN` of each outer quarter) further
+    than the line ``res`` was measured on, tilted against it by more than
+    :data:`PLATE_AMBIGUOUS_DEG`: (slope, intercept, left deg, right deg, its across share, the
+    measured line's), the flanks re-levelled on it, or None.  A plate's top edge runs across the
+    photo; a ruler or strip lying askew in front of the heap hides its foot and the plate's edge
+    behind it, so the heap stands on the ruler's top edge alone, which ends with the ruler: the
+    flanks were read turned by the ruler's tilt against the plate, with no second line carrying
+    the heap (:func:`_plate_alternative`).  Which of the two is level the photo does not say
+    (a plate's edge seen askew by perspective runs across as well), so such a result is "low".
+    "At the foot": crossing the heap's centre column within :data:`RIVAL_NEAR_FOOT` of the
+    heap's height of the line measured on (the plate's face and the table below lie further
+    down, a wall's edges above the heap's foot)."""
+    if edges is None:
+        return None
+    slope, intercept, lline, rline, hmax = res.geometry
+    own = _across(edges, slope, intercept)
+    h, w = edges.shape
+    ang = math.atan(slope)
+    cx, cy = w / 2 - 0.5, h / 2 - 0.5
+    prow = cy + (slope * cx + intercept - cy) * math.cos(ang)
+    # the heap's centre column: midway between its feet, where its flank lines meet the plate line
+    feet = [cx + (u0 - v0 / dv * du - cx) * math.cos(ang) - (prow - cy) * math.sin(ang)
+            for u0, v0, du, dv in (lline, rline)]
+    mid = 0.5 * (feet[0] + feet[1])
+    found = None
+    for s2, b2 in lines:
+        turn = roll_of(slope) - roll_of(s2)  # the flanks on (s2, b2): left + turn, right - turn
+        if abs(turn) <= PLATE_AMBIGUOUS_DEG or abs((s2 - slope) * mid + b2 - intercept) > RIVAL_NEAR_FOOT * hmax:
+            continue
+        share = _across(edges, s2, b2)
+        if share >= ACROSS_MIN and share > own + 0.03 and (found is None or share > found[4]):
+            found = (float(s2), float(b2), res.left_deg + turn, res.right_deg - turn, share, own)
+    return found
 
 
 def _heap_stands_on(path, rgb, lum, grays, line, channel, threshold, plate_edges) -> bool:
