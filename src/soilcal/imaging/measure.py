@@ -525,9 +525,10 @@ def _measure_pile(path, threshold, keep_stages, channel, tried: Tried, image=Non
                 f"{path}: the line measured on as the plate's top edge, tilted {roll_of(slope):+.2f} deg "
                 f"({res.plate_line_px} in the photo's pixels; flanks {res.left_deg:.2f} / {res.right_deg:.2f} deg), "
                 f"runs across the photo less far (an edge along {across1:.0%} of its outer quarters) than a "
-                f"straight edge at the heap's foot tilted {roll_of(s2):+.2f} deg ({other}, {across2:.0%}; "
-                f"flanks {left2:.2f} / {right2:.2f} deg on it), as the plate's edge does beside a ruler or "
-                f"strip lying askew in front of the heap's foot; the photo does not tell which is level: give "
+                f"second straight edge at the heap's foot tilted {roll_of(s2):+.2f} deg ({other}, {across2:.0%}; "
+                f"flanks {left2:.2f} / {right2:.2f} deg on it), as the plate's edge does beyond a ruler or "
+                f"strip lying askew in front of the heap's foot, and as a wall's or a shadow's edge crossing "
+                f"the foot can; the photo does not tell which is level: give "
                 f"the plate's top edge by hand, two points on it as plate_line_px in the photo's manifest entry "
                 f"(or soilcal image pile --plate-line-px C0 R0 C1 R1)")
     return res
@@ -637,7 +638,7 @@ def _pile_on_lines(path, rgb, threshold, keep_stages, channel, tried: Tried, pla
         if plate is None:
             res.alternative = _plate_alternative(path, rgb, lum, grays, lines[:PLATE_CANDIDATES], res, channel,
                                                  threshold, plate_edges, refused)
-            res.rival = _level_rival(plate_edges, lines, res)
+            res.rival = _level_rival(plate_edges, lines, res, rgb)
         return res
     except InputError as refused:
         if not beside:
@@ -651,7 +652,7 @@ def _pile_on_lines(path, rgb, threshold, keep_stages, channel, tried: Tried, pla
         except InputError:
             raise _noting_tilt(refused, tilted) from None
         res.plate_beside = why
-        res.rival = _level_rival(plate_edges, lines, res)
+        res.rival = _level_rival(plate_edges, lines, res, rgb)
         return res
 
 
@@ -742,7 +743,7 @@ def _edge_beside(edges, res):
 RIVAL_NEAR_FOOT = 0.25
 
 
-def _level_rival(edges, lines, res):
+def _level_rival(edges, lines, res, rgb=None):
     """A straight edge of ``lines`` (the plate search's candidates) at the heap's foot that runs
     across the photo (:func:`_across`, at least :data:`ACROSS_MIN` of each outer quarter) further
     than the line ``res`` was measured on, tilted against it by more than
@@ -754,8 +755,10 @@ def _level_rival(edges, lines, res):
     the heap (:func:`_plate_alternative`).  Which of the two is level the photo does not say
     (a plate's edge seen askew by perspective runs across as well), so such a result is "low".
     "At the foot": crossing the heap's centre column within :data:`RIVAL_NEAR_FOOT` of the
-    heap's height of the line measured on (the plate's face and the table below lie further
-    down, a wall's edges above the heap's foot)."""
+    heap's height of the line measured on.  Not a rival: the lower edge of the plate's front
+    face under the line measured on (:func:`_face_below`, with ``rgb`` the measured image), which
+    a thin face under a low heap puts within that reach, tilted by perspective, and which runs
+    across further where the heap, of the face's colour, hides the plate's top edge."""
     if edges is None:
         return None
     slope, intercept, lline, rline, hmax = res.geometry
@@ -774,9 +777,42 @@ def _level_rival(edges, lines, res):
         if abs(turn) <= PLATE_AMBIGUOUS_DEG or abs((s2 - slope) * mid + b2 - intercept) > RIVAL_NEAR_FOOT * hmax:
             continue
         share = _across(edges, s2, b2)
-        if share >= ACROSS_MIN and share > own + 0.03 and (found is None or share > found[4]):
+        if share >= ACROSS_MIN and share > own + 0.03 and (found is None or share > found[4]) and not (
+                rgb is not None and _face_below(rgb, slope, intercept, s2, b2, feet)):
             found = (float(s2), float(b2), res.left_deg + turn, res.right_deg - turn, share, own)
     return found
+
+
+#: the largest difference (any channel, of 1) between the median colours of a band under the
+#: heap and at the frame's two ends for the band to be a plate's front face (:func:`_face_below`)
+FACE_COLOUR_TOL = 0.05
+
+
+def _face_below(rgb, slope, intercept, s2, b2, feet) -> bool:
+    """Whether the line (s2, b2) is the lower edge of a plate's front face under the line
+    (slope, intercept) measured on: below it across the whole width, the band between them (1.5
+    px in from each line) of one colour under the heap (the middle half between its ``feet``)
+    and at both ends of the frame (its outer 5 % of columns), each median within
+    :data:`FACE_COLOUR_TOL` in every channel.  A ruler or strip askew before the heap is a
+    short object: beyond its ends, the band between its top edge and the plate's is the wall."""
+    h, w = rgb.shape[:2]
+    if not (b2 - intercept > 0 and (s2 - slope) * (w - 1) + b2 - intercept > 0):
+        return False
+    cols = np.arange(w)
+    q = (max(feet) - min(feet)) / 4
+
+    def band(sel):
+        vals = []
+        for c in cols[sel]:
+            r0 = max(int(math.ceil(slope * c + intercept + 1.5)), 0)
+            r1 = min(int(math.floor(s2 * c + b2 - 1.5)), h - 1)
+            if r1 >= r0:
+                vals.append(rgb[r0:r1 + 1, c, :3])
+        return np.median(np.concatenate(vals), axis=0) if vals else None
+
+    mid = band((cols > min(feet) + q) & (cols < max(feet) - q))
+    ends = [band(cols < 0.05 * w), band(cols >= 0.95 * w)]
+    return mid is not None and all(e is not None and float(np.max(np.abs(e - mid))) < FACE_COLOUR_TOL for e in ends)
 
 
 def _heap_stands_on(path, rgb, lum, grays, line, channel, threshold, plate_edges) -> bool:

@@ -1,0 +1,49 @@
+"""A plate whose front face is about the soil's colour (a wooden plate, brown soil), its lower
+edge sloping 1.5 deg against the level top edge (perspective), under a wide low heap: the heap
+hides the plate's top edge over most of the photo's outer quarters, so the face's lower edge,
+against the dark table, runs across further than the top edge measured on.  It is no ruler
+askew before the heap (test_ruler_in_front.py): the band between the two lines is the face's
+colour under the heap and at both ends of the frame.  Drawn: flanks 25 deg left, 28 deg right
+on a level plate edge at row 216."""
+
+from __future__ import annotations
+
+import numpy as np
+from skimage import filters
+
+from soilcal.imaging import measure
+
+from test_user_photos import _u8
+
+WALL, SOIL, FACE, TABLE = (0.75, 0.72, 0.65), (0.45, 0.33, 0.22), (0.42, 0.32, 0.22), (0.2, 0.15, 0.1)
+
+
+def face_photo(left=25.0, right=28.0, face=10.0, face_tilt=-1.5, h=300, w=400, seed=0):
+    """Wall; a plate's level top edge at row 0.72 h across the photo, its front face ``face`` px
+    high at the middle column, the face's lower edge turned ``face_tilt`` deg; the table below;
+    a heap of ``left``/``right`` deg flanks, 0.25 h high, with a grain."""
+    rng = np.random.default_rng(seed)
+    rr, cc = np.mgrid[0:h, 0:w].astype(float)
+    c, prow = w / 2, 0.72 * h
+    img = np.empty((h, w, 3))
+    img[:] = WALL
+    low = prow + face - np.tan(np.radians(face_tilt)) * (cc - c)
+    img[(rr >= prow) & (rr < low)] = FACE
+    img[rr >= low] = TABLE
+    top = np.maximum(prow - 0.25 * h + (c - cc) * np.tan(np.radians(left)),
+                     prow - 0.25 * h + (cc - c) * np.tan(np.radians(right)))
+    heap = (rr >= top) & (rr < prow)
+    img[heap] = SOIL
+    img[heap] += 0.15 * filters.gaussian(rng.normal(size=(h, w)), 1.0)[heap][:, None]
+    img = filters.gaussian(img, 0.8, channel_axis=-1)
+    return np.clip(img + rng.normal(scale=0.01, size=img.shape), 0.0, 1.0)
+
+
+def test_a_plate_face_of_the_soils_colour_sloping_by_perspective_is_no_rival_level(tmp_path):
+    # before: 24.99 / 27.77 deg (right) but flagged "low", "a ruler or strip lying askew in front
+    # of the heap's foot" named, the face's lower edge (-1.54 deg) as the rival level
+    p = tmp_path / "face.png"
+    _u8(face_photo()).save(p)
+    r = measure.measure_pile(str(p))
+    assert abs(r.left_deg - 25.0) <= 0.5 and abs(r.right_deg - 28.0) <= 0.5, (r.left_deg, r.right_deg)
+    assert r.rival is None and r.confidence == "ok", r.plate_ambiguous
