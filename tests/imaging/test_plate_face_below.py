@@ -47,3 +47,36 @@ def test_a_plate_face_of_the_soils_colour_sloping_by_perspective_is_no_rival_lev
     r = measure.measure_pile(str(p))
     assert abs(r.left_deg - 25.0) <= 0.5 and abs(r.right_deg - 28.0) <= 0.5, (r.left_deg, r.right_deg)
     assert r.rival is None and r.confidence == "ok", r.plate_ambiguous
+
+
+def falling_light(img, fall):
+    """``img`` lit by a light falling off linearly across the photo: brightness 1 + ``fall`` / 2 at
+    the left edge, 1 - ``fall`` / 2 at the right (a lamp to one side)."""
+    w = img.shape[1]
+    ramp = 1.0 + fall * (0.5 - np.arange(w) / (w - 1))
+    return np.clip(img * ramp[None, :, None], 0.0, 1.0)
+
+
+def test_a_plate_face_under_a_light_falling_off_across_the_photo_is_no_rival_level(tmp_path):
+    # the face 30 % brighter at the left end than at the right: its ends' medians differ from
+    # the middle's by 0.06 in red, yet the face runs on unbroken, its middle the colour its ends
+    # give there.  Before: 24.91 / 27.77 deg (right) but "low", the face's lower edge named as
+    # a ruler's askew before the heap
+    p = tmp_path / "face_lit.png"
+    _u8(falling_light(face_photo(), 0.3)).save(p)
+    r = measure.measure_pile(str(p))
+    assert abs(r.left_deg - 25.0) <= 0.5 and abs(r.right_deg - 28.0) <= 0.5, (r.left_deg, r.right_deg)
+    assert r.rival is None and r.confidence == "ok", r.plate_ambiguous
+
+
+def test_an_askew_ruler_under_a_light_falling_off_across_the_photo_is_still_flagged(tmp_path):
+    # the same light on a ruler askew before the heap, hiding its foot (the heap read on the
+    # ruler's edge, 4 deg off): beyond the ruler's ends the band to the plate's edge is the wall,
+    # a step along it, so the plate's edge stays the rival named
+    from test_ruler_in_front import ruler_photo
+    p = tmp_path / "ruler_lit.png"
+    _u8(falling_light(ruler_photo(-4, 6, 240), 0.3)).save(p)
+    r = measure.measure_pile(str(p))
+    assert r.confidence == "low" and r.rival is not None, (r.left_deg, r.right_deg, r.confidence)
+    on_other = [float(v) for v in r.plate_ambiguous.split("flanks ")[2].split(" deg")[0].split(" / ")]
+    assert abs(on_other[0] - 32.0) <= 0.5 and abs(on_other[1] - 35.0) <= 0.5, r.plate_ambiguous

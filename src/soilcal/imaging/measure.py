@@ -783,18 +783,27 @@ def _level_rival(edges, lines, res, rgb=None):
     return found
 
 
-#: the largest difference (any channel, of 1) between the median colours of a band under the
-#: heap and at the frame's two ends for the band to be a plate's front face (:func:`_face_below`)
+#: the largest difference (any channel, of 1) between the median colour of a band under the heap
+#: and the colour its two ends give there, and between the median colours of neighbouring
+#: stretches of the band, for the band to be a plate's front face (:func:`_face_below`)
 FACE_COLOUR_TOL = 0.05
+#: stretches of equal width the band is cut into across the photo to see it run on unbroken
+FACE_STRETCHES = 40
 
 
 def _face_below(rgb, slope, intercept, s2, b2, feet) -> bool:
     """Whether the line (s2, b2) is the lower edge of a plate's front face under the line
     (slope, intercept) measured on: below it across the whole width, the band between them (1.5
-    px in from each line) of one colour under the heap (the middle half between its ``feet``)
-    and at both ends of the frame (its outer 5 % of columns), each median within
-    :data:`FACE_COLOUR_TOL` in every channel.  A ruler or strip askew before the heap is a
-    short object: beyond its ends, the band between its top edge and the plate's is the wall."""
+    px in from each line) one face from end to end.  Its brightness may change along it (light
+    falling off across the plate), so the band is cut into :data:`FACE_STRETCHES` stretches
+    across the photo: the median colours of neighbouring stretches (those the band is wide
+    enough in to give one) differ by less than
+    :data:`FACE_COLOUR_TOL` in every channel (no end of an object in it), and under the heap
+    (the middle half between its ``feet``) the band's median is within that of the colour
+    interpolated there, column-wise, between its medians at the frame's two ends (their outer
+    5 % of columns).  A ruler or strip askew before the heap is a short object: beyond its ends
+    the band between its top edge and the plate's is the wall, a step of colour along the band
+    and a colour at the ends other than the ruler's under the heap."""
     h, w = rgb.shape[:2]
     if not (b2 - intercept > 0 and (s2 - slope) * (w - 1) + b2 - intercept > 0):
         return False
@@ -810,9 +819,18 @@ def _face_below(rgb, slope, intercept, s2, b2, feet) -> bool:
                 vals.append(rgb[r0:r1 + 1, c, :3])
         return np.median(np.concatenate(vals), axis=0) if vals else None
 
-    mid = band((cols > min(feet) + q) & (cols < max(feet) - q))
-    ends = [band(cols < 0.05 * w), band(cols >= 0.95 * w)]
-    return mid is not None and all(e is not None and float(np.max(np.abs(e - mid))) < FACE_COLOUR_TOL for e in ends)
+    sels = [(cols > min(feet) + q) & (cols < max(feet) - q), cols < 0.05 * w, cols >= 0.95 * w]
+    mid, left, right = (band(sel) for sel in sels)
+    if mid is None or left is None or right is None:
+        return False
+    xm, xl, xr = (float(cols[sel].mean()) for sel in sels)
+    if float(np.max(np.abs(mid - (left + (right - left) * (xm - xl) / (xr - xl))))) >= FACE_COLOUR_TOL:
+        return False
+    cuts = np.linspace(0, w, FACE_STRETCHES + 1).round().astype(int)
+    # a stretch at a frame's end where the band, thinning towards it, is no wider than the
+    # 1.5 px left out along each line gives no colour
+    stretches = [m for c0, c1 in zip(cuts[:-1], cuts[1:]) if (m := band((cols >= c0) & (cols < c1))) is not None]
+    return len(stretches) >= 2 and float(np.max(np.abs(np.diff(np.array(stretches), axis=0)))) < FACE_COLOUR_TOL
 
 
 def _heap_stands_on(path, rgb, lum, grays, line, channel, threshold, plate_edges) -> bool:
