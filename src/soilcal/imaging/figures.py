@@ -15,6 +15,29 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
 
+def check_apart(photos, folder, field):
+    """Refuse (InputError naming the first photo at fault and ``field``) a ``folder`` for figures
+    that is the folder of one of ``photos``, before anything is measured or written: figures are
+    written as <photo's name>.png / .pdf, which there would replace a PNG photo of that name
+    (the one measured, or another photo beside it: x.jpg's figure x.png over a photo x.png).
+    The folders are compared as the files they are (:func:`os.path.samefile`), so a symlinked,
+    relative or differently spelled path to the same folder is the same folder.  A folder that
+    does not exist yet is no photo's."""
+    import os
+
+    from soilcal.errors import InputError
+
+    if folder is None or not Path(folder).is_dir():
+        return
+    for photo in photos:
+        parent = Path(photo).parent
+        if parent.is_dir() and os.path.samefile(parent, folder):
+            stem = Path(photo).stem
+            raise InputError(photo, field, f"a folder for the figures other than the photo's own (its figure "
+                             f"is written as {stem}.png and {stem}.pdf, which there would replace a photo of "
+                             f"that name)", str(folder))
+
+
 def _not_over_photo(result, stem):
     """Refuse (InputError naming the photo) to write the figures ``stem``.png / .pdf of
     ``result`` where one of them is the photo measured itself: a figures folder that is the
