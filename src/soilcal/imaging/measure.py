@@ -810,22 +810,35 @@ def _face_below(rgb, slope, intercept, s2, b2, feet) -> bool:
     cols = np.arange(w)
     q = (max(feet) - min(feet)) / 4
 
-    def band(sel):
+    def band(sel, part=None):
+        # part 0 / 1: the band's upper / lower half (columns where it is at least 2 px high)
         vals = []
         for c in cols[sel]:
             r0 = max(int(math.ceil(slope * c + intercept + 1.5)), 0)
             r1 = min(int(math.floor(s2 * c + b2 - 1.5)), h - 1)
+            if part is not None and r1 > r0:
+                rm = (r0 + r1) // 2
+                r0, r1 = (r0, rm) if part == 0 else (rm + 1, r1)
+            elif part is not None:
+                continue
             if r1 >= r0:
                 vals.append(rgb[r0:r1 + 1, c, :3])
         return np.median(np.concatenate(vals), axis=0) if vals else None
 
     sels = [(cols > min(feet) + q) & (cols < max(feet) - q), cols < 0.05 * w, cols >= 0.95 * w]
-    mid, left, right = (band(sel) for sel in sels)
-    if mid is None or left is None or right is None:
-        return False
     xm, xl, xr = (float(cols[sel].mean()) for sel in sels)
-    if float(np.max(np.abs(mid - (left + (right - left) * (xm - xl) / (xr - xl))))) >= FACE_COLOUR_TOL:
-        return False
+    # the whole band, then its upper and its lower half on their own: a band on the wall behind
+    # the plate (a shadow, a strip) over the plate's top edge and face has the heap's foot in its
+    # upper half under the heap and the wall beside it, though the face filling its lower half
+    # may make the whole band's colours agree
+    for part in (None, 0, 1):
+        mid, left, right = (band(sel, part) for sel in sels)
+        if mid is None or left is None or right is None:
+            if part is None:
+                return False
+            continue  # a half too thin somewhere to compare
+        if float(np.max(np.abs(mid - (left + (right - left) * (xm - xl) / (xr - xl))))) >= FACE_COLOUR_TOL:
+            return False
     cuts = np.linspace(0, w, FACE_STRETCHES + 1).round().astype(int)
     # a stretch at a frame's end where the band, thinning towards it, is no wider than the
     # 1.5 px left out along each line gives no colour
