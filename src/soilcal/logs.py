@@ -63,3 +63,26 @@ def redirect(log_path: str | Path | None):
     if failed is not None:
         report_input_error(failed, real_stderr)
         raise SystemExit(2)
+
+
+def empty_folder(folder: str | Path, field: str = "folder") -> None:
+    """Remove everything in ``folder`` (a run's own output folder, such as the workflow's
+    ``logs/<soil>/images/refused``), keeping the folder: files, symlinks (the link, never what it
+    points to) and real subfolders with their contents.  ``folder`` may itself be a symlink to a
+    folder (kept elsewhere): its target's contents are emptied, the link and its target kept.
+    A ``folder`` that does not exist is left so; a path that is no folder is refused."""
+    import shutil
+
+    from soilcal.errors import InputError
+
+    folder = Path(folder)
+    if not folder.exists() and not folder.is_symlink():
+        return
+    if not folder.is_dir():
+        raise InputError(folder, field, "a folder to empty (or no such path)",
+                         "a broken symlink" if folder.is_symlink() else "a file")
+    for entry in folder.iterdir():
+        if entry.is_symlink() or not entry.is_dir():
+            entry.unlink()
+        else:
+            shutil.rmtree(entry)  # does not follow symlinks inside it

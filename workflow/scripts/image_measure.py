@@ -5,12 +5,16 @@ import logging
 from pathlib import Path
 
 from soilcal.imaging.manifest import measure_manifest
-from soilcal.logs import redirect
+from soilcal.logs import empty_folder, redirect
 
 with redirect(snakemake.log[0]):  # noqa: F821
     out = Path(snakemake.output.json)  # noqa: F821
     figdir = Path(snakemake.output.figures)  # noqa: F821
     figdir.mkdir(parents=True, exist_ok=True)
+    # the refusals folder holds this run's diagnostic images and a refused group's figures only:
+    # those of an earlier run (a photo since replaced, a group since measured) would be read as
+    # this run's (a symlink to a folder kept elsewhere: its contents; no link inside is followed)
+    empty_folder(snakemake.params.refusals, "refusals folder")  # noqa: F821
     logging.info("measuring %s", snakemake.params.manifest)  # noqa: F821
     result = measure_manifest(snakemake.params.manifest, figdir, snakemake.params.threshold,  # noqa: F821
                               refusals=snakemake.params.refusals)  # noqa: F821

@@ -62,6 +62,7 @@ def _pile(args):
     from soilcal.imaging import figures, measure
 
     lines = _plate_lines(args)
+    figures.check_apart(args.photos, args.figures, "--figures")
     try:
         summary, res = measure.measure_piles(args.photos, args.threshold, keep_stages=bool(args.figures),
                                              channel=args.channel, refusals=_refusals(args), plate_px=lines,
@@ -96,6 +97,7 @@ def _drum(args):
         opts = drum.frame_options({k: getattr(args, k) for k in drum.OPTIONS}, "<command line>", prefix="--")
     except InputError as exc:  # name the option as it is typed: --chord-fraction
         raise InputError(exc.path, exc.field.replace("_", "-"), exc.expected, exc.got) from None
+    figures.check_apart(args.frames, args.figures, "--figures")
     summary, res = drum.measure_drum(args.frames, args.threshold, keep_stages=bool(args.figures), options=opts,
                                      refusals=_refusals(args))
     if args.figures:
@@ -121,6 +123,7 @@ def _furrow(args):
                              "--scale-length-mm or a manifest.yaml entry beside the photo", None)
         length = float(entry["scale_length_mm"])
         datum = float(entry.get("beam_datum_mm", 0.0)) if datum is None else datum
+    figures.check_apart([args.photo], args.figures, "--figures")
     r = measure.measure_furrow(args.photo, length, datum or 0.0, args.degree, args.threshold,
                                keep_stages=bool(args.figures), refusals=_refusals(args))
     if args.figures:
@@ -134,7 +137,9 @@ def _soil(args):
 
     # a refused group's figures go to --refusals where it was given, else with the others
     out = measure_manifest(args.manifest, args.figures, args.threshold, _refusals(args),
-                           refused_figdir=args.refusals if args.refusals is not None else args.figures)
+                           refused_figdir=args.refusals if args.refusals is not None else args.figures,
+                           figdir_field="--figures",
+                           refused_figdir_field="--refusals" if args.refusals is not None else "--figures")
     for group, summary in out.items():
         _warn_set_aside(summary, group)
     _print(out)

@@ -15,6 +15,43 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
 
+def check_apart(photos, folder, field):
+    """Refuse (InputError naming the first photo at fault and ``field``) a ``folder`` for figures
+    that is the folder of one of ``photos``, before anything is measured or written: figures are
+    written as <photo's name>.png / .pdf, which there would replace a PNG photo of that name
+    (the one measured, or another photo beside it: x.jpg's figure x.png over a photo x.png).
+    The folders are compared as the files they are (:func:`os.path.samefile`), so a symlinked,
+    relative or differently spelled path to the same folder is the same folder.  A folder that
+    does not exist yet is no photo's."""
+    import os
+
+    from soilcal.errors import InputError
+
+    if folder is None or not Path(folder).is_dir():
+        return
+    for photo in photos:
+        parent = Path(photo).parent
+        if parent.is_dir() and os.path.samefile(parent, folder):
+            stem = Path(photo).stem
+            raise InputError(photo, field, f"a folder for the figures other than the photo's own (its figure "
+                             f"is written as {stem}.png and {stem}.pdf, which there would replace a photo of "
+                             f"that name)", str(folder))
+
+
+def _not_over_photo(result, stem):
+    """Refuse (InputError naming the photo) to write the figures ``stem``.png / .pdf of
+    ``result`` where one of them is the photo measured itself: a figures folder that is the
+    photos' own folder, a PNG photo, would have the photo replaced by its figure."""
+    from soilcal.errors import InputError
+
+    photo = Path(result.path)
+    for out in (Path(stem).with_suffix(".png"), Path(stem).with_suffix(".pdf")):
+        if photo.is_file() and out.exists() and out.resolve() == photo.resolve():
+            raise InputError(photo, "figures folder", f"a folder other than the photo's own for its figures "
+                             f"(its figure {out.name} would replace the photo)",
+                             str(Path(stem).parent))
+
+
 def _save(fig, stem):
     stem = Path(stem)
     stem.parent.mkdir(parents=True, exist_ok=True)
@@ -26,6 +63,7 @@ def _save(fig, stem):
 
 def angle_figure(result, stem, title=""):
     """Five panels for a pile photo or a drum frame measured with ``keep_stages=True``."""
+    _not_over_photo(result, stem)
     st = result.stages
     fig, ax = plt.subplots(1, 5, figsize=(17, 3.4))
     ax[0].imshow(st.rgb)
@@ -64,6 +102,7 @@ def angle_figure(result, stem, title=""):
 
 
 def furrow_figure(result, stem, title=""):
+    _not_over_photo(result, stem)
     st = result.stages
     fig, ax = plt.subplots(1, 3, figsize=(15, 3.8))
     ax[0].imshow(st.rgb)

@@ -190,16 +190,26 @@ def lookup(photo):
     return None
 
 
-def measure_manifest(path, figdir=None, threshold="otsu", refusals=None, refused_figdir=None):
+def measure_manifest(path, figdir=None, threshold="otsu", refusals=None, refused_figdir=None,
+                     figdir_field="figures folder", refused_figdir_field="refusals folder"):
     """Measure every group of the manifest; returns {group: result dict}.  ``refusals``: a
     folder for the diagnostic image of a photo that cannot be measured
     (:mod:`soilcal.imaging.refusal`).  ``refused_figdir``: where a group refused for having no
     ok photo gets its photos' figures (with ``figdir`` given); default ``refusals``, else
-    ``figdir``."""
+    ``figdir``.  A figures folder (either) that is the folder of one of the manifest's photos is
+    refused before any photo is measured, naming ``figdir_field`` / ``refused_figdir_field``
+    (:func:`soilcal.imaging.figures.check_apart`)."""
     from soilcal.imaging import drum, figures, measure
 
     path = Path(path)
     data = read_manifest(path)
+    if figdir is not None:
+        photos = [path.parent / p["file"] for p in data["photos"]]
+        figures.check_apart(photos, figdir, figdir_field)
+        if refused_figdir is not None:
+            figures.check_apart(photos, refused_figdir, refused_figdir_field)
+        elif refusals is not None:
+            figures.check_apart(photos, refusals, refused_figdir_field)
     groups: OrderedDict[str, list] = OrderedDict()
     for p in data["photos"]:
         groups.setdefault(p["group"], []).append(p)

@@ -108,11 +108,16 @@ class PileResult:
     # (slope, intercept, left deg, right deg) of the second plate candidate that carries the
     # heap (plate_ambiguous), in the measured image's pixels; not reported
     alternative: tuple | None = field(default=None, repr=False)
+    # (slope, intercept, left deg, right deg, its across share, the measured line's) of a
+    # straight edge running across the photo at the heap's foot further than the line measured
+    # on, tilted against it (plate_ambiguous, :func:`_level_rival`); not reported
+    rival: tuple | None = field(default=None, repr=False)
 
     def as_dict(self):
         d = asdict(self)
         d.pop("stages")
         d.pop("geometry")
+        d.pop("rival")
         d.pop("alternative")
         return d
 
@@ -513,6 +518,19 @@ def _measure_pile(path, threshold, keep_stages, channel, tried: Tried, image=Non
                 f"edge further on is; the photo does not tell which is the plate's top edge: give it by hand, "
                 f"two points on it as plate_line_px in the photo's manifest entry (or soilcal image pile "
                 f"--plate-line-px C0 R0 C1 R1)")
+        elif res.rival is not None:
+            s2, b2, left2, right2, across2, across1 = res.rival
+            other = [[round(v, 2) for v in to_photo(c, s2 * c + b2)] for c in ends]
+            res.plate_ambiguous = (
+                f"{path}: the line measured on as the plate's top edge, tilted {roll_of(slope):+.2f} deg "
+                f"({res.plate_line_px} in the photo's pixels; flanks {res.left_deg:.2f} / {res.right_deg:.2f} deg), "
+                f"runs across the photo less far (an edge along {across1:.0%} of its outer quarters) than a "
+                f"second straight edge at the heap's foot tilted {roll_of(s2):+.2f} deg ({other}, {across2:.0%}; "
+                f"flanks {left2:.2f} / {right2:.2f} deg on it), as the plate's edge does beyond a ruler or "
+                f"strip lying askew in front of the heap's foot, and as a wall's or a shadow's edge crossing "
+                f"the foot can; the photo does not tell which is level: give "
+                f"the plate's top edge by hand, two points on it as plate_line_px in the photo's manifest entry "
+                f"(or soilcal image pile --plate-line-px C0 R0 C1 R1)")
     return res
 
 
@@ -620,6 +638,7 @@ def _pile_on_lines(path, rgb, threshold, keep_stages, channel, tried: Tried, pla
         if plate is None:
             res.alternative = _plate_alternative(path, rgb, lum, grays, lines[:PLATE_CANDIDATES], res, channel,
                                                  threshold, plate_edges, refused)
+            res.rival = _level_rival(plate_edges, lines, res, rgb)
         return res
     except InputError as refused:
         if not beside:
@@ -633,6 +652,7 @@ def _pile_on_lines(path, rgb, threshold, keep_stages, channel, tried: Tried, pla
         except InputError:
             raise _noting_tilt(refused, tilted) from None
         res.plate_beside = why
+        res.rival = _level_rival(plate_edges, lines, res, rgb)
         return res
 
 
@@ -716,6 +736,114 @@ def _edge_beside(edges, res):
         if beside.sum() >= 10:
             out.append(float(edges[rows[ok], cols[ok]].sum()) / float(beside.sum()))
     return min(out) if out else None
+
+
+#: a straight edge competes with the plate line measured on as the level (:func:`_level_rival`)
+#: where it crosses the heap's centre column within this share of the heap's height of it
+RIVAL_NEAR_FOOT = 0.25
+
+
+def _level_rival(edges, lines, res, rgb=None):
+    """A straight edge of ``lines`` (the plate search's candidates) at the heap's foot that runs
+    across the photo (:func:`_across`, at least :data:`ACROSS_MIN` of each outer quarter) further
+    than the line ``res`` was measured on, tilted against it by more than
+    :data:`PLATE_AMBIGUOUS_DEG`: (slope, intercept, left deg, right deg, its across share, the
+    measured line's), the flanks re-levelled on it, or None.  A plate's top edge runs across the
+    photo; a ruler or strip lying askew in front of the heap hides its foot and the plate's edge
+    behind it, so the heap stands on the ruler's top edge alone, which ends with the ruler: the
+    flanks were read turned by the ruler's tilt against the plate, with no second line carrying
+    the heap (:func:`_plate_alternative`).  Which of the two is level the photo does not say
+    (a plate's edge seen askew by perspective runs across as well), so such a result is "low".
+    "At the foot": crossing the heap's centre column within :data:`RIVAL_NEAR_FOOT` of the
+    heap's height of the line measured on.  Not a rival: the lower edge of the plate's front
+    face under the line measured on (:func:`_face_below`, with ``rgb`` the measured image), which
+    a thin face under a low heap puts within that reach, tilted by perspective, and which runs
+    across further where the heap, of the face's colour, hides the plate's top edge."""
+    if edges is None:
+        return None
+    slope, intercept, lline, rline, hmax = res.geometry
+    own = _across(edges, slope, intercept)
+    h, w = edges.shape
+    ang = math.atan(slope)
+    cx, cy = w / 2 - 0.5, h / 2 - 0.5
+    prow = cy + (slope * cx + intercept - cy) * math.cos(ang)
+    # the heap's centre column: midway between its feet, where its flank lines meet the plate line
+    feet = [cx + (u0 - v0 / dv * du - cx) * math.cos(ang) - (prow - cy) * math.sin(ang)
+            for u0, v0, du, dv in (lline, rline)]
+    mid = 0.5 * (feet[0] + feet[1])
+    found = None
+    for s2, b2 in lines:
+        turn = roll_of(slope) - roll_of(s2)  # the flanks on (s2, b2): left + turn, right - turn
+        if abs(turn) <= PLATE_AMBIGUOUS_DEG or abs((s2 - slope) * mid + b2 - intercept) > RIVAL_NEAR_FOOT * hmax:
+            continue
+        share = _across(edges, s2, b2)
+        if share >= ACROSS_MIN and share > own + 0.03 and (found is None or share > found[4]) and not (
+                rgb is not None and _face_below(rgb, slope, intercept, s2, b2, feet)):
+            found = (float(s2), float(b2), res.left_deg + turn, res.right_deg - turn, share, own)
+    return found
+
+
+#: the largest difference (any channel, of 1) between the median colour of a band under the heap
+#: and the colour its two ends give there, and between the median colours of neighbouring
+#: stretches of the band, for the band to be a plate's front face (:func:`_face_below`)
+FACE_COLOUR_TOL = 0.05
+#: stretches of equal width the band is cut into across the photo to see it run on unbroken
+FACE_STRETCHES = 40
+
+
+def _face_below(rgb, slope, intercept, s2, b2, feet) -> bool:
+    """Whether the line (s2, b2) is the lower edge of a plate's front face under the line
+    (slope, intercept) measured on: below it across the whole width, the band between them (1.5
+    px in from each line) one face from end to end.  Its brightness may change along it (light
+    falling off across the plate), so the band is cut into :data:`FACE_STRETCHES` stretches
+    across the photo: the median colours of neighbouring stretches (those the band is wide
+    enough in to give one) differ by less than
+    :data:`FACE_COLOUR_TOL` in every channel (no end of an object in it), and under the heap
+    (the middle half between its ``feet``) the band's median is within that of the colour
+    interpolated there, column-wise, between its medians at the frame's two ends (their outer
+    5 % of columns).  A ruler or strip askew before the heap is a short object: beyond its ends
+    the band between its top edge and the plate's is the wall, a step of colour along the band
+    and a colour at the ends other than the ruler's under the heap."""
+    h, w = rgb.shape[:2]
+    if not (b2 - intercept > 0 and (s2 - slope) * (w - 1) + b2 - intercept > 0):
+        return False
+    cols = np.arange(w)
+    q = (max(feet) - min(feet)) / 4
+
+    def band(sel, part=None):
+        # part 0 / 1: the band's upper / lower half (columns where it is at least 2 px high)
+        vals = []
+        for c in cols[sel]:
+            r0 = max(int(math.ceil(slope * c + intercept + 1.5)), 0)
+            r1 = min(int(math.floor(s2 * c + b2 - 1.5)), h - 1)
+            if part is not None and r1 > r0:
+                rm = (r0 + r1) // 2
+                r0, r1 = (r0, rm) if part == 0 else (rm + 1, r1)
+            elif part is not None:
+                continue
+            if r1 >= r0:
+                vals.append(rgb[r0:r1 + 1, c, :3])
+        return np.median(np.concatenate(vals), axis=0) if vals else None
+
+    sels = [(cols > min(feet) + q) & (cols < max(feet) - q), cols < 0.05 * w, cols >= 0.95 * w]
+    xm, xl, xr = (float(cols[sel].mean()) for sel in sels)
+    # the whole band, then its upper and its lower half on their own: a band on the wall behind
+    # the plate (a shadow, a strip) over the plate's top edge and face has the heap's foot in its
+    # upper half under the heap and the wall beside it, though the face filling its lower half
+    # may make the whole band's colours agree
+    for part in (None, 0, 1):
+        mid, left, right = (band(sel, part) for sel in sels)
+        if mid is None or left is None or right is None:
+            if part is None:
+                return False
+            continue  # a half too thin somewhere to compare
+        if float(np.max(np.abs(mid - (left + (right - left) * (xm - xl) / (xr - xl))))) >= FACE_COLOUR_TOL:
+            return False
+    cuts = np.linspace(0, w, FACE_STRETCHES + 1).round().astype(int)
+    # a stretch at a frame's end where the band, thinning towards it, is no wider than the
+    # 1.5 px left out along each line gives no colour
+    stretches = [m for c0, c1 in zip(cuts[:-1], cuts[1:]) if (m := band((cols >= c0) & (cols < c1))) is not None]
+    return len(stretches) >= 2 and float(np.max(np.abs(np.diff(np.array(stretches), axis=0)))) < FACE_COLOUR_TOL
 
 
 def _heap_stands_on(path, rgb, lum, grays, line, channel, threshold, plate_edges) -> bool:
