@@ -159,6 +159,23 @@ def test_a_missing_word_in_a_label_column_without_a_map_key_is_missing(cinnamon)
     assert "'nan' is read as a missing value" in msg
 
 
+def test_missing_words_are_pandas_documented_list_not_its_private_module(cinnamon, monkeypatch):
+    """The words a label column reads as missing are pandas' documented ``na_values`` default
+    (read_csv's docs), held by soilcal: the loader must not import ``pandas._libs.parsers``, a
+    private module that may move in any release.  With that module unavailable, Excel's
+    ``#N/A`` for a missing day is still read as missing (refused naming row and column)."""
+    import sys
+
+    monkeypatch.setitem(sys.modules, "pandas._libs.parsers", None)  # import of it raises ImportError
+    t = _table(cinnamon, "cinnamon-soil", "cutting_resistance.csv")
+    df = pd.read_csv(t)
+    df["day"] = ["2024-05-01", "#N/A", "2024-05-02", "2024-05-02"]
+    df.to_csv(t, index=False)
+    _edit(cinnamon, "cinnamon-soil", lambda d: _entry(d)["covariates"].update(day={"ignore": True, "quantity": "day"}))
+    msg = _fails(cinnamon, "cinnamon-soil", f"{t}: row 2, column day")
+    assert "'#N/A' is read as a missing value" in msg
+
+
 # --- bad declarations -------------------------------------------------------------------------
 
 

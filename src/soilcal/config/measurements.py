@@ -843,15 +843,21 @@ def _entry(soil_path, data: dict, mid: str, entry: dict, tpath: Path):
     return df, _shared_runs(tpath, covs, conds)
 
 
+#: the words pandas' ``read_csv`` reads as a missing value by default (its documented
+#: ``na_values`` default, pandas 2.2 to 3.0), which a numeric column of a measured table reads
+#: as missing: in a label column they are made missing too (:func:`_missing_words`)
+MISSING_WORDS = frozenset({"", "#N/A", "#N/A N/A", "#NA", "-1.#IND", "-1.#QNAN", "-NaN", "-nan", "1.#IND",
+                           "1.#QNAN", "<NA>", "N/A", "NA", "NULL", "NaN", "None", "n/a", "nan", "null"})
+
+
 def _missing_words(df: pd.DataFrame, covs: dict) -> dict:
     """Label columns (:func:`_label_column`) are read as written, so a cell ``NA``, ``N/A``,
     ``null``, ``None``, ``nan`` (pandas' missing-value words; R's ``write.csv`` writes a missing
     value ``NA``) is text there.  Such a cell is a label only where the column's ``setup`` or
     ``case`` map has it for a key (a tool called NA, mapped ``"NA": plate-arc``); elsewhere it
     is made missing in ``df``, as an empty cell is, so two days written NA are not one day
-    called "NA".  Returns (row position, column) -> the word, for the messages."""
-    from pandas._libs.parsers import STR_NA_VALUES
-
+    called "NA".  The words are :data:`MISSING_WORDS`.  Returns (row position, column) -> the
+    word, for the messages."""
     words = {}
     for col, cv in covs.items():
         if not _label_column(cv) or col not in df.columns:
@@ -859,7 +865,7 @@ def _missing_words(df: pd.DataFrame, covs: dict) -> dict:
         keys = {_map_key(k, False) for form in ("setup", "case") for k in (cv.get(form) or {})}
         j = df.columns.get_loc(col)
         for i, cell in enumerate(df[col].tolist()):
-            if isinstance(cell, str) and cell.strip() and cell.strip() in STR_NA_VALUES and cell.strip() not in keys:
+            if isinstance(cell, str) and cell.strip() and cell.strip() in MISSING_WORDS and cell.strip() not in keys:
                 words[(i, col)] = cell.strip()
                 df.iloc[i, j] = float("nan")
     return words
