@@ -80,6 +80,30 @@ def test_rotor_speed_in_rad_per_s(black):
     assert flat[0].quantities["rotor_speed"] == pytest.approx(150 * 60 / (2 * math.pi))
 
 
+@pytest.mark.parametrize("col, cells, wrong, right, si", [
+    ("speed (m s-1)", [0.16, 1.0, 2.0, 0.5], "km/h", "m/s", [0.16, 1.0, 2.0, 0.5]),
+    ("speed [km.h-1]", [0.576, 3.6, 7.2, 1.8], "m/s", "km/h", [0.16, 1.0, 2.0, 0.5]),
+    ("density (g cm-3)", [1.3, 1.35, 1.4, 1.45], "kg/m^3", "g/cm^3", [1300, 1350, 1400, 1450]),
+    ("density (Mg m-3)", [1.3, 1.35, 1.4, 1.45], "kg/m^3", "t/m^3", [1300, 1350, 1400, 1450])])
+def test_a_covariate_named_in_an_si_compound_unit(cinnamon, col, cells, wrong, right, si):
+    """speed (m s-1) declared unit: km/h loaded 1 m/s as 1 km/h (0.278 m/s) without a word: the
+    name's m s-1 was read as m, of no speed, and g cm-3 as no unit.  Now the name's unit is
+    compared with the declared one: refused naming it; declared as the name says, the cells
+    load in SI (1.3 g/cm^3 = 1300 kg/m^3, 3.6 km/h = 1 m/s)."""
+    q = "bulk_density" if "density" in col else "tool_speed"
+    t = _table(cinnamon, "cinnamon-soil", "cutting_resistance.csv")
+    df = pd.read_csv(t)
+    df[col] = cells
+    df.to_csv(t, index=False)
+    p = _declare(cinnamon, "cinnamon-soil", lambda d: _entry(d)["covariates"].update(
+        {col: {"ignore": True, "quantity": q, "unit": wrong}}))
+    msg = _fails(cinnamon, "cinnamon-soil", f"{p}: {CR}.{col}.unit")
+    assert f"says are in {right}" in msg and f"got '{wrong}'" in msg
+    _declare(cinnamon, "cinnamon-soil", lambda d: _entry(d)["covariates"].update(
+        {col: {"ignore": True, "quantity": q, "unit": right}}))
+    assert [c.quantities[q] for c in _load(cinnamon, "cinnamon-soil")] == pytest.approx(si)
+
+
 def test_tool_speed_in_km_per_h(cinnamon):
     _speed_column(cinnamon, [0.576, 3.6, 7.2, 1.8])
     conds = _load(cinnamon, "cinnamon-soil")
