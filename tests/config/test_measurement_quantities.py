@@ -114,6 +114,25 @@ def test_tool_speed_in_km_per_h(cinnamon):
     assert QUANTITIES["tool_speed"][0] == "m/s"
 
 
+@pytest.mark.parametrize("col, q, unit, cells, si", [
+    ("speed", "tool_speed", "km h-1", [0.576, 3.6, 7.2, 1.8], [0.16, 1.0, 2.0, 0.5]),
+    ("speed", "tool_speed", "m s^-1", [0.16, 1.0, 2.0, 0.5], [0.16, 1.0, 2.0, 0.5]),
+    ("bd", "bulk_density", "g cm-3", [1.3, 1.35, 1.4, 1.45], [1300, 1350, 1400, 1450]),
+    ("bd", "bulk_density", "Mg m-3", [1.3, 1.35, 1.4, 1.45], [1300, 1350, 1400, 1450]),
+    ("w", "moisture_content", "g g-1", [0.11, 0.12, 0.115, 0.1162], [11, 12, 11.5, 11.62])])
+def test_a_covariate_s_unit_written_si_style(cinnamon, col, q, unit, cells, si):
+    """unit: "km h-1" (or m s^-1, g cm-3, Mg m-3, g g-1) was refused as no unit of the
+    quantity though it is km/h; now it is read as that unit (3.6 km/h = 1 m/s, 1.3 g/cm^3 =
+    1300 kg/m^3, 0.11 g/g = 11 %)."""
+    t = _table(cinnamon, "cinnamon-soil", "cutting_resistance.csv")
+    df = pd.read_csv(t)
+    df[col] = cells
+    df.to_csv(t, index=False)
+    _declare(cinnamon, "cinnamon-soil", lambda d: _entry(d)["covariates"].update(
+        {col: {"ignore": True, "quantity": q, "unit": unit}}))
+    assert [c.quantities[q] for c in _load(cinnamon, "cinnamon-soil")] == pytest.approx(si)
+
+
 def test_moisture_content_as_a_fraction(cinnamon):
     # a moisture column tabled as mass fractions (unit "-"): 0.172 is 17.2 %
     t = _table(cinnamon, "cinnamon-soil", "cutting_resistance.csv")
@@ -392,3 +411,14 @@ def test_no_note_where_the_ignored_covariate_goes_with_a_simulated_one(cinnamon)
     df["directrix"] = ["line", "line", "arc", "arc"]
     df.to_csv(t, index=False)
     assert all(c.note == "" for c in _load(cinnamon, "cinnamon-soil"))
+
+
+def test_a_soil_s_moisture_and_a_response_s_unit_written_si_style():
+    """A soil's properties.moisture_content in "g g-1" (0.15 g/g = 15 %) was refused as a unit
+    soilcal does not know; a response's unit "KN" as no unit of a force.  Both read now."""
+    from soilcal.config.measurements import unit_factor
+    from soilcal.config.quantities import soil_moisture
+
+    assert soil_moisture("s.yaml", {"properties": {"moisture_content": {"value": 0.15, "unit": "g g-1"}}})[
+        "factor"] == 100.0
+    assert unit_factor("KN", "horizontal_force_N") == 1000.0 and unit_factor("N m-1", "horizontal_force_N") is None

@@ -371,11 +371,11 @@ def _property_kind(name: str, material: bool) -> str | None:
 def _property_factor(kind: str, unit) -> float | None:
     """Factor to the SI unit of :data:`PROPERTY_RANGES` of a property's ``unit``, or None."""
     from soilcal.config.measurements import name_units
-    from soilcal.config.quantities import QUANTITIES, moisture_factor
+    from soilcal.config.quantities import QUANTITIES, quantity_factor
 
     u = str(unit).strip()
     if kind == "moisture_content":
-        return moisture_factor(u)
+        return quantity_factor("moisture_content", u)
     if kind == "poisson_ratio":
         return 1.0 if u in ("-", "") else None
     if kind.endswith("modulus"):

@@ -213,9 +213,13 @@ def response_units(measure: str) -> dict:
 
 def unit_factor(unit, measure: str) -> float | None:
     """Factor from ``unit`` to the unit of ``measure`` (:func:`response_units`; a spelling of
-    :data:`UNIT_ALIASES` as its unit), or None when ``unit`` is not a unit of its quantity."""
+    :data:`UNIT_ALIASES`, or one :func:`name_units` reads in brackets, as its unit), or None when ``unit`` is not a unit of its quantity."""
     u = str(unit).strip()
-    return response_units(measure).get(UNIT_ALIASES.get(u, u))
+    f = response_units(measure).get(UNIT_ALIASES.get(u, u))
+    if f is None and u:
+        named = name_units(f"({u})")  # written SI style: N m, m2, kN.m
+        f = response_units(measure).get(named[0]) if len(named) == 1 and named[0] != u else None
+    return f
 
 
 def measurements_dir(resources_root, soil_name: str) -> Path:

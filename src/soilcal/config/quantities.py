@@ -34,13 +34,20 @@ def quantity_factor(quantity: str, unit) -> float | None:
     """Factor to the SI unit of :data:`QUANTITIES` of a numeric quantity's ``unit`` as a
     measured table's covariate declares it: one of the quantity's units, and for a moisture
     content every unit :func:`moisture_factor` knows (the units the soil's own
-    ``properties.moisture_content`` takes, ``percent`` or ``wt%`` too).  None for another unit
-    or a label quantity."""
+    ``properties.moisture_content`` takes, ``percent`` or ``wt%`` too); also one of these
+    written SI style, with exponents (``m s-1``, ``km h-1``, ``g cm-3``, ``Mg m-3``, ``min-1``,
+    ``g g-1``: :func:`soilcal.config.measurements.name_units`).  None for another unit or a
+    label quantity."""
     if QUANTITIES.get(quantity) is None:
         return None
-    if quantity == "moisture_content":
-        return moisture_factor(unit)
-    return QUANTITIES[quantity][1].get(unit)
+    f = moisture_factor(unit) if quantity == "moisture_content" else QUANTITIES[quantity][1].get(unit)
+    if f is None and isinstance(unit, str) and unit.strip():
+        from soilcal.config.measurements import name_units
+
+        named = name_units(f"({unit.strip()})")
+        if len(named) == 1 and named[0] != unit:
+            return quantity_factor(quantity, named[0])
+    return f
 
 
 #: the units of a moisture content :func:`moisture_factor` knows, as the messages name them
@@ -69,7 +76,7 @@ def soil_moisture(path, data: dict) -> dict | None:
     if not points and not ranges:
         return None
     unit = prop.get("unit", "%")
-    factor = moisture_factor(unit)
+    factor = quantity_factor("moisture_content", unit)
     if factor is None:
         raise InputError(path, "properties.moisture_content.unit",
                          f"a moisture content unit soilcal knows, {MOISTURE_UNITS} ({unit!r} is not one of them: "
