@@ -691,7 +691,7 @@ def _check_layers(path: Path, d: dict) -> None:
     each refusal names the field and shows the forms taken.  A name is text in either form, as
     a target's ``layer`` gives it: a bare number (``20``, a mapping's key as a list's item) is
     refused asking for it quoted; what a layer is, given as a number alone (``20`` or
-    ``"20"``, ``"0-20"``), is refused: it has no unit."""
+    ``"20"``, ``"0-20"``), is refused: it has no unit; blank text (``""``) is nothing."""
     if "layers" not in d:
         return
     layers = d["layers"]
@@ -713,6 +713,8 @@ def _check_layers(path: Path, d: dict) -> None:
             raise InputError(path, field, "a layer named once", name)
     if isinstance(layers, dict):
         for name, what in layers.items():
+            if isinstance(what, str) and not what.strip():
+                continue  # upper: "" says nothing of the layer, as upper: (null) does
             if what is not None and (not isinstance(what, str) or re.fullmatch(r"[\d\s.,;:+\-\u2013\u2014/~]*", what)):
                 raise InputError(path, f"layers.{name}", 'what the layer is, as text with its unit ("0-20 cm", '
                                  '"20 cm deep"), or nothing: a bare number has no unit', what)
