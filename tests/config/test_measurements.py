@@ -320,11 +320,11 @@ def test_a_one_letter_unit_inside_a_column_s_name_is_its_unit(cinnamon, col):
     ("speed_m_per_s", "m/s"), ("v (km h-1)", "km/h"), ("density (g cm-3)", "g/cm^3"), ("bd (g.cm-3)", "g/cm^3"),
     ("density (Mg m-3)", "t/m^3"), ("Bulk density (Mg/m3)", "t/m^3"), ("density_kg_m3", "kg/m^3"),
     ("rotor (min-1)", "r/min"), ("w (g g-1)", "g/g"), ("A (cm²)", "cm^2"), ("torque..N.m.", "N m"),
-    ("draught (N m-1)", None), ("draught_N_per_m", None), ("time (s)", None), ("mass (g)", None)])
+    ("draught (N m-1)", "N/m"), ("draught_N_per_m", "N/m"), ("time (s)", None), ("mass (g)", None)])
 def test_compound_units_in_a_column_s_name(name, unit):
     """Units written SI style with exponents (m s-1, g cm-3, Mg m-3: a megagram is a tonne) or a
-    / are read whole; one no table knows (a draught per width, N m-1) is no unit, not its N,
-    and s or g alone are units of no table."""
+    / are read whole; a quotient no table knows (a draught per width, N m-1) is given as
+    written, so that it is seen as no N, and s or g alone are units of no table."""
     from soilcal.config.measurements import name_units
 
     assert name_units(name) == ([unit] if unit else [])

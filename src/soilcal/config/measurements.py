@@ -212,14 +212,12 @@ def response_units(measure: str) -> dict:
 
 
 def unit_factor(unit, measure: str) -> float | None:
-    """Factor from ``unit`` to the unit of ``measure`` (:func:`response_units`; a spelling of
-    :data:`UNIT_ALIASES`, or one :func:`name_units` reads in brackets, as its unit), or None when ``unit`` is not a unit of its quantity."""
-    u = str(unit).strip()
-    f = response_units(measure).get(UNIT_ALIASES.get(u, u))
-    if f is None and u:
-        named = name_units(f"({u})")  # written SI style: N m, m2, kN.m
-        f = response_units(measure).get(named[0]) if len(named) == 1 and named[0] != u else None
-    return f
+    """Factor from ``unit`` to the unit of ``measure`` (:func:`response_units`), or None when
+    ``unit`` is not a unit of its quantity.  The whole text must be one unit
+    (:func:`whole_unit`: a spelling of :data:`UNIT_ALIASES`, ``KN``, ``N m``, ``m2``); a text
+    that holds a unit among other words or numbers (``x1000 N``, ``0.1 kN``, ``N, mean of 3``)
+    is none: what those add cannot be read."""
+    return response_units(measure).get(whole_unit(unit))
 
 
 def measurements_dir(resources_root, soil_name: str) -> Path:
@@ -1013,6 +1011,9 @@ NAME_UNIT_CASES = {"kn": "kN", "KN": "kN", "Kn": "kN", "kw": "kW", "KW": "kW", "
 #: (``clay_fraction``, ``percent_sand``)
 _UNIT_WORDS = ("fraction", "percent", "degree", "degrees")
 #: a name's bracketed part: ``speed (km/h)``, ``depth [mm]``
+#: the words after which a one-letter word of a column's name inside it is read as a unit
+#: (``F_N_mean``, ``draught_N_sd``): a statistic of the quantity in that unit
+STATISTIC_WORDS = ("mean", "avg", "average", "sd", "std", "se", "sem", "min", "max", "median")
 _BRACKETS = re.compile(r"[(\[]\s*([^()\[\]]*?)\s*[)\]]")
 
 
@@ -1048,6 +1049,8 @@ def _compound(text: str):
         if m is None or m["sym"] not in _UNIT_SYMBOLS:
             return False, None
         e = int(m["exp"] or 1)
+        if m["exp"] is not None and 0 <= e < 2:
+            return False, None  # r1, s1, m1, h0 next to a unit word are ids, not powers
         marked = marked or m["exp"] is not None
         if e < 0 or below:
             den.append((m["sym"], abs(e)))
@@ -1055,6 +1058,8 @@ def _compound(text: str):
             num.append((m["sym"], e))
     if not marked or not (num or den) or (parts and parts[-1] == "/"):
         return False, None
+    if not den and len(num) > 1:
+        return False, None  # m2, cm3 are units; kN t2, depth_cm_r2 hold an id (t2, r2), no product of powers
 
     def power(fs):
         return " ".join(sym if e == 1 else f"{sym}^{e}" for sym, e in fs)
@@ -1090,6 +1095,26 @@ def _name_unit_table() -> tuple[dict, dict, dict]:
     return exact, lower, forms
 
 
+def whole_unit(text) -> str | None:
+    """The unit a declared ``unit:`` text is, as the tables key it, where the WHOLE text is one
+    unit: one of its spellings (:func:`_name_unit_table`: ``kN``, ``N.m``, ``m2``, ``KN``,
+    ``kmh``; with its case, or without it for a spelling of three characters or more that
+    names one unit only), or a compound unit :func:`_compound` reads in full (``m s-1``,
+    ``km h-1``, ``g cm-3``, ``Mg m-3``, ``kg/m3``, ``min-1``, ``g g-1``).  None otherwise: a
+    unit is never picked out of a longer text (``x1000 N``, ``10^3 N``, ``0.1 kN``,
+    ``N per 3 tines``, ``vol %``), whose other words change what the number means."""
+    exact, lower, forms = _name_unit_table()
+    u = str(text).strip()
+    if not u:
+        return None
+    if u in exact:
+        return exact[u]
+    if len(u) > 2 and u.lower() in lower:
+        return lower[u.lower()]
+    written, form = _compound(u)
+    return forms.get(form) if written else None
+
+
 def name_units(col) -> list[str]:
     """The units a column's name gives (as :data:`RESPONSE_UNITS` and :data:`QUANTITIES` key
     them), in the order written: a unit written as a word of the name, between ``_``, spaces,
@@ -1111,9 +1136,11 @@ def name_units(col) -> list[str]:
     is no unit outside brackets (``w (-)`` is dimensionless), but ``%``."""
     exact, lower, forms = _name_unit_table()
 
-    def compound(text):
+    def compound(text, raw=False):
+        # raw: a quotient the text writes out but no table has (N m-1, a force per width) is
+        # given as written, so that it is seen as another quantity's unit; t2, r2 alone are ids
         written, form = _compound(text)
-        return (True, forms.get(form)) if written else (False, None)
+        return (True, forms.get(form, form if raw and "/" in form else None)) if written else (False, None)
 
     def unit(text, bracketed, one_letter=False):
         if len(text) == 1 and text.isalpha() and not (bracketed or one_letter):
@@ -1128,7 +1155,7 @@ def name_units(col) -> list[str]:
     found, weak = [], []
     for m in _BRACKETS.finditer(name):
         inside = m.group(1)
-        written, form = compound(inside)
+        written, form = compound(inside, raw=True)
         if written:
             found.append(form)
             continue
@@ -1151,7 +1178,7 @@ def name_units(col) -> list[str]:
             if i + n > len(words):
                 continue
             # kg_m3 is kg/m3 as km_h is km/h
-            tries = [compound(t) for t in (" ".join(words[i:i + n]), f"{words[i]}/{' '.join(words[i + 1:i + n])}")]
+            tries = [compound(" ".join(words[i:i + n]), raw=True), compound(f"{words[i]}/{' '.join(words[i + 1:i + n])}")]
             known = next((form for written, form in tries if form), None)
             if known or tries[0][0]:
                 span = (n, known)
@@ -1164,12 +1191,17 @@ def name_units(col) -> list[str]:
             i += span[0]
             continue
         w = words[i]
-        written, form = compound(w)
+        written, form = compound(w, raw=True)
         if written:
             found.append(form)
         elif len(w) == 1 and i > 0:
             last = i == len(words) - 1 and name.rstrip(".").endswith(w)  # Sd_m (mm): the brackets' mm
-            (found if last else weak).append(unit(w, False, True))
+            following = words[i + 1].lower() if i + 1 < len(words) else None
+            if last:
+                found.append(unit(w, False, True))
+            elif following is None or following in STATISTIC_WORDS:  # F_N_mean, Sd_m (mm)
+                weak.append(unit(w, False, True))
+            # else draught_N_2, draught_N_A, tool_m_depth: a one-letter id or abbreviation
         else:
             found.append(unit(w, False) or (unit(w.split("/", 1)[1], False) if "/" in w else None))
         i += 1
@@ -1182,7 +1214,7 @@ def _rename_hint(col, declared: str, named: str) -> str:
     declared in."""
     if len(named) == 1:
         return (f"or, if its cells are in {declared}, rename the column, e.g. {col} ({declared}): a one-letter "
-                "word after the first is read as a unit where the name gives no other")
+                "word after the first is read as a unit at the name's end or before mean, sd, se, min, max, avg or std")
     return f"or rename the column if its cells are in {declared}"
 
 
@@ -1239,6 +1271,13 @@ def _check_response_column_units(soil_path, rw: str, r: dict, tpath: Path) -> No
     for key in ("value", "sd", "paper_simulated", "paper_difference"):
         col = r.get(key)
         for named in (name_units(col) if col is not None else ()):
+            if named not in family and named.split("/")[0] in family:
+                raise InputError(soil_path, f"{rw}.value" if key == "value" else f"{rw}.{key}",
+                                 f"a column of {r['measure']} in a unit of its quantity "
+                                 f"({', '.join(family)}): the name of column {col} says {named}, "
+                                 f"{named.split('/')[0]} per {named.split('/', 1)[1]}, another quantity "
+                                 "(a force per width is no force; give the measured total in its own column)",
+                                 col)
             if named not in family or abs(family[named] - declared) <= 1e-9 * declared:
                 continue
             raise InputError(soil_path, f"{rw}.unit",

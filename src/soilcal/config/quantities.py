@@ -22,12 +22,16 @@ QUANTITIES = {
 
 def moisture_factor(unit) -> float | None:
     """Factor to % of a moisture content's declared unit: ``%`` (also written ``percent``,
-    ``wt%``, ``% w/w``, ``g/100g``) or a mass fraction (``-``, ``fraction``, ``g/g``, ``kg/kg``) times 100;
-    case, spaces, dots and brackets ignored.  None for any other unit."""
+    ``wt%``, ``% w/w``, ``g/100g``, ``% dry basis``, ``% of dry mass``) or a mass fraction
+    (``-``, ``fraction``, ``g/g``, ``kg/kg``) times 100; case, spaces, dots and brackets
+    ignored.  A moisture content is gravimetric, of the dry mass: None for any other unit,
+    a volumetric one (``vol %``, ``% v/v``, ``m3 m-3``) or one of the wet mass
+    (``% wet basis``) too."""
     import re
 
     key = re.sub(r"[\s.()]+", "", str(unit).lower())
-    return {**QUANTITIES["moisture_content"][1], "percent": 1.0, "wt%": 1.0, "%w/w": 1.0, "g/100g": 1.0}.get(key)
+    return {**QUANTITIES["moisture_content"][1], "percent": 1.0, "wt%": 1.0, "%w/w": 1.0, "g/100g": 1.0,
+            "%drybasis": 1.0, "%ofdrymass": 1.0}.get(key)
 
 
 def quantity_factor(quantity: str, unit) -> float | None:
@@ -35,23 +39,27 @@ def quantity_factor(quantity: str, unit) -> float | None:
     measured table's covariate declares it: one of the quantity's units, and for a moisture
     content every unit :func:`moisture_factor` knows (the units the soil's own
     ``properties.moisture_content`` takes, ``percent`` or ``wt%`` too); also one of these
-    written SI style, with exponents (``m s-1``, ``km h-1``, ``g cm-3``, ``Mg m-3``, ``min-1``,
-    ``g g-1``: :func:`soilcal.config.measurements.name_units`).  None for another unit or a
+    written otherwise where the WHOLE text is that unit
+    (:func:`soilcal.config.measurements.whole_unit`: ``m s-1``, ``km h-1``, ``g cm-3``,
+    ``Mg m-3``, ``min-1``, ``g g-1``).  None for another unit, for a text that holds a unit
+    among other words or numbers (``10 cm``, ``0.1 m s-1``, ``vol %``, ``% wet basis``), or a
     label quantity."""
     if QUANTITIES.get(quantity) is None:
         return None
     f = moisture_factor(unit) if quantity == "moisture_content" else QUANTITIES[quantity][1].get(unit)
-    if f is None and isinstance(unit, str) and unit.strip():
-        from soilcal.config.measurements import name_units
+    if f is None and isinstance(unit, str):
+        from soilcal.config.measurements import whole_unit
 
-        named = name_units(f"({unit.strip()})")
-        if len(named) == 1 and named[0] != unit:
-            return quantity_factor(quantity, named[0])
+        u = whole_unit(unit)
+        if u is not None and u != unit:
+            return moisture_factor(u) if quantity == "moisture_content" else QUANTITIES[quantity][1].get(u)
     return f
 
 
 #: the units of a moisture content :func:`moisture_factor` knows, as the messages name them
-MOISTURE_UNITS = "% (also percent, wt%, % w/w, g/100g) or a mass fraction (-, fraction, g/g, kg/kg)"
+MOISTURE_UNITS = ("% (also percent, wt%, % w/w, g/100g, % dry basis) or a mass fraction (-, fraction, g/g, "
+                  "kg/kg) of the dry mass: a gravimetric moisture content (a volumetric one, theta_v, is "
+                  "theta_v * rho_water / rho_dry_bulk; one of the wet mass, w_wet, is w_wet / (1 - w_wet))")
 
 
 def soil_moisture(path, data: dict) -> dict | None:
