@@ -31,12 +31,12 @@ def _refused(tmp_path, field, **extra):
 
 @pytest.mark.parametrize("prop, key, expected", [
     ({"bulk_density": {"value": 1.52, "unit": "kg/m^3"}}, "value",
-     "a bulk density of 100 to 3000 kg/m^3 (in g/cm^3? declare unit: g/cm^3), got 1.52"),
+     "a bulk density of 50 to 3000 kg/m^3 (in g/cm^3? declare unit: g/cm^3), got 1.52"),
     ({"bulk_density": {"values": [1.35, 1520], "unit": "g/cm^3"}}, "values[1]",
      "(1520 g/cm^3 is 1.52e+06 kg/m^3: in kg/m^3? declare unit: kg/m^3)"),
-    ({"dry_density": {"low": 1.2, "high": 1.6, "unit": "kg/m^3"}}, "low", "a dry density of 100 to 3000 kg/m^3"),
+    ({"dry_density": {"low": 1.2, "high": 1.6, "unit": "kg/m^3"}}, "low", "a dry density of 50 to 3000 kg/m^3"),
     ({"moisture_content": {"value": 15, "unit": "fraction"}}, "value",
-     "a moisture content of 0 to 100 % (15 fraction is 1500 %: in %? declare unit: %)"),
+     "a moisture content of 0 to 500 % (15 fraction is 1500 %: in %? declare unit: %)"),
     ({"poisson_ratio": {"value": 30, "unit": "-"}}, "value", "a Poisson ratio of 0 to 0.5, got 30"),
 ])
 def test_an_own_soil_s_property_outside_its_range_is_refused(tmp_path, prop, key, expected):
@@ -50,9 +50,9 @@ def test_an_own_soil_s_property_outside_its_range_is_refused(tmp_path, prop, key
 def test_an_own_soil_s_material_density_and_unknown_units_are_refused(tmp_path):
     msg = _refused(tmp_path, "materials.steel.density.value",
                    materials={"steel": {"density": {"value": 7.85, "unit": "kg/m^3"}}})
-    assert "a material's density of 100 to 20000 kg/m^3 (in g/cm^3? declare unit: g/cm^3)" in msg
-    msg = _refused(tmp_path, "properties.bulk_density.unit", properties={"bulk_density": {"value": 1.5, "unit": "g/cc"}})
-    assert "kg/m^3, g/cm^3 or t/m^3" in msg and "got 'g/cc'" in msg
+    assert "a density of 50 to 20000 kg/m^3 (in g/cm^3? declare unit: g/cm^3)" in msg
+    msg = _refused(tmp_path, "properties.bulk_density.unit", properties={"bulk_density": {"value": 95, "unit": "lb/ft^3"}})
+    assert "kg/m^3, g/cm^3, t/m^3" in msg and "got 'lb/ft^3'" in msg
 
 
 @pytest.mark.parametrize("q", [{"value": 1.52, "unit": "g/cm^3"}, {"value": 1.52, "unit": "Mg m-3"},
@@ -68,3 +68,56 @@ def test_a_cited_soil_s_printed_property_is_kept_as_printed(tmp_path):
     published replay's errata report it."""
     soil = _load(tmp_path, citation={"title": "A paper"}, properties={"bulk_density": {"value": 1.52, "unit": "kg/m^3"}})
     assert soil.data["properties"]["bulk_density"]["value"] == 1.52
+
+
+@pytest.mark.parametrize("prop", [
+    {"bulk_density": {"value": 0.08, "unit": "g/cm^3"}},  # sphagnum peat at the surface
+    {"moisture_content": {"value": 350, "unit": "%"}},  # a peat, gravimetric
+    {"moisture_content": {"value": 1.2, "unit": "g/g"}},  # an andisol
+    {"relative_density": {"value": 65, "unit": "%"}},  # of a sand, no mass density
+    {"dry_density_ratio": {"value": 0.95, "unit": "-"}},
+    {"root_length_density": {"value": 1.2, "unit": "cm/cm^3"}},
+    {"bulk_density": {"value": 1.45, "unit": "kg/dm^3"}},
+    {"bulk_density": {"value": 1.45, "unit": "g/ml"}},
+    {"particle_density": {"value": 2.65, "unit": "Mg m^-3"}},
+    {"shear_modulus": {"value": 1, "unit": "MN/m2"}},
+    {"shear_modulus": {"value": 1e6, "unit": "N/m^2"}},
+    {"youngs_modulus": {"value": 1e6, "unit": "N m-2"}},
+    {"poisson_ratio": {"value": 0.3, "unit": "1"}},
+    {"poisson_ratio": {"value": 0.3, "unit": "dimensionless"}}])
+def test_a_real_own_soil_property_in_an_si_unit_loads(tmp_path, prop):
+    """Each was refused: a peat's 80 kg/m^3 and 350 % (real: peat holds several times its dry
+    mass of water) lay outside ranges of 100 kg/m^3 and 100 %; any key with density in it was
+    taken as a mass density (relative_density 65 % refused as no density unit); N/m^2, MN/m2,
+    kg/dm^3, g/ml, a Poisson ratio in 1 were no units of the range."""
+    soil = _load(tmp_path, properties=prop)
+    assert soil.data["properties"] == prop
+
+
+@pytest.mark.parametrize("prop, field, expected", [
+    ({"bulk_density": {"value": 18, "unit": "kN/m^3"}}, "properties.bulk_density.unit", "kg/m^3, g/cm^3"),
+    ({"bulk_density": {"value": 1.5, "unit": "x1000 kg/m3"}}, "properties.bulk_density.unit", "kg/m^3, g/cm^3"),
+    ({"shear_modulus": {"value": 1, "unit": "MN/m^3"}}, "properties.shear_modulus.unit", "Pa, kPa, MPa"),
+    ({"moisture_content": {"value": 25, "unit": "vol %"}}, "properties.moisture_content.unit", "gravimetric"),
+    ({"moisture_content": {"value": 600, "unit": "%"}}, "properties.moisture_content.value", "0 to 500 %"),
+    ({"bulk_density": {"value": 40, "unit": "kg/m^3"}}, "properties.bulk_density.value", "50 to 3000 kg/m^3")])
+def test_a_wrong_quantity_s_unit_or_an_unreal_value_is_still_refused(tmp_path, prop, field, expected):
+    """A unit weight (kN/m^3) is no density, a modulus per length no pressure."""
+    assert expected in _refused(tmp_path, field, properties=prop)
+
+
+def test_the_load_check_and_the_errata_judge_by_one_table():
+    """The published soils' errata and the load check of an own soil read one table of ranges and
+    one conversion: a bulk density of 0.04 g/cm^3 (40 kg/m^3) is out of both, 0.08 in both, and
+    an errata-judged density in g cm-3 or Mg m-3 is converted as at load (2.65 Mg/m^3 = 2650)."""
+    from soilcal.chain.errata import Errata, plausibility
+
+    def errata(prop):
+        e = Errata()
+        plausibility(e, {"properties": prop, "materials": {}, "stages": [], "parameters": {}})
+        return e.rows
+
+    assert errata({"bulk_density": {"value": 0.04, "unit": "g/cm^3"}})
+    assert not errata({"bulk_density": {"value": 0.08, "unit": "g/cm^3"}})
+    assert not errata({"particle_density": {"value": 2.65, "unit": "Mg m-3"}})
+    assert errata({"particle_density": {"value": 0.265, "unit": "t/m^3"}})

@@ -343,94 +343,51 @@ def _check_stage_sets_each_parameter_once(path: Path, where: str, st: dict, para
                              "dummy column names used once and by no factor (" + ", ".join(st["factors"]) + ")", name)
 
 
-#: (low, high, SI unit, what) of a soil's own measured property or material's, by the name it is
-#: keyed under: the bounds the published soils' errata judge printed values by
-#: (:data:`soilcal.chain.errata._PLAUSIBLE`), a density not named below taken as a soil's
-#: (bulk to particle) or, under ``materials``, as a tool's
-PROPERTY_RANGES = {
-    "bulk_density": (100.0, 3.0e3, "kg/m^3", "a bulk density"),
-    "dry_density": (100.0, 3.0e3, "kg/m^3", "a dry density"),
-    "particle_density": (500.0, 5.0e3, "kg/m^3", "a particle density"),
-    "density": (100.0, 5.0e3, "kg/m^3", "a soil density"),
-    "material_density": (100.0, 2.0e4, "kg/m^3", "a material's density"),
-    "moisture_content": (0.0, 100.0, "%", "a moisture content"),
-    "poisson_ratio": (0.0, 0.5, "-", "a Poisson ratio"),
-    "shear_modulus": (1e3, 3e11, "Pa", "a shear modulus"),
-    "youngs_modulus": (1e3, 5e11, "Pa", "a Young's modulus"),
-}
-_MODULUS_UNITS = {"Pa": 1.0, "kPa": 1e3, "MPa": 1e6, "GPa": 1e9}
-
-
-def _property_kind(name: str, material: bool) -> str | None:
-    if "density" in name:
-        return ("material_density" if material else
-                name if name in PROPERTY_RANGES else "density")
-    return name if name in PROPERTY_RANGES else None
-
-
-def _property_factor(kind: str, unit) -> float | None:
-    """Factor to the SI unit of :data:`PROPERTY_RANGES` of a property's ``unit``, or None."""
-    from soilcal.config.measurements import name_units
-    from soilcal.config.quantities import QUANTITIES, quantity_factor
-
-    u = str(unit).strip()
-    if kind == "moisture_content":
-        return quantity_factor("moisture_content", u)
-    if kind == "poisson_ratio":
-        return 1.0 if u in ("-", "") else None
-    if kind.endswith("modulus"):
-        return _MODULUS_UNITS.get(u)
-    units = QUANTITIES["bulk_density"][1]
-    if u in units:
-        return units[u]
-    named = name_units(f"({u})")  # the spellings a measured table's column name may give: g cm-3, Mg/m3
-    return units.get(named[0]) if len(named) == 1 else None
-
-
 def _check_own_properties(path: Path, d: dict) -> None:
     """A soil of one's own (no ``citation``: no printed value to keep as printed) gives its
-    measured properties and materials in their units; a value outside the range of
-    :data:`PROPERTY_RANGES` once converted (a bulk density 1.52 declared in kg/m^3, a moisture
-    content 15 declared as a fraction) would run the DEM or judge a moisture a thousand or a
-    hundred times off without a word.  Refused naming the field, the range and, where the
-    other unit of the quantity takes the value into it, that unit; a unit the range has no
-    factor for is refused naming the units it takes."""
-    from soilcal.config.quantities import MOISTURE_UNITS
+    measured properties and materials in their units; a value outside the physical range of
+    :data:`soilcal.config.quantities.PLAUSIBLE` once converted (a bulk density 1.52 declared in
+    kg/m^3, a moisture content 15 declared as a fraction) would run the DEM or judge a moisture
+    a thousand or a hundred times off without a word.  Refused naming the field, the range and,
+    where the other unit of the quantity takes the value into it, that unit; a unit of no
+    factor to the range's (:func:`~soilcal.config.quantities.si_factor`,
+    :func:`~soilcal.config.quantities.moisture_factor`) is refused naming the units taken.
+    A key no range is known of (relative_density, root_length_density) is not judged."""
+    from soilcal.config.quantities import MOISTURE_UNITS, PLAUSIBLE, SI_UNITS_TAKEN, moisture_factor, plausible_kind, si_factor
 
     entries = [(f"properties.{k}", k, q, False) for k, q in (d.get("properties") or {}).items()]
     entries += [(f"materials.{m}.{k}", k, q, True) for m, props in (d.get("materials") or {}).items()
                 for k, q in (props or {}).items()]
     for where, name, q, material in entries:
-        kind = _property_kind(name, material)
+        kind = plausible_kind(name, material)
         if kind is None or not isinstance(q, dict) or "bins" in q:
             continue
-        lo, hi, si, what = PROPERTY_RANGES[kind]
-        values = [(key, q[key]) for key in ("value", "low", "high") if isinstance(q.get(key), (int, float))]
-        values += [(f"values[{i}]", v) for i, v in enumerate(q.get("values") or []) if isinstance(v, (int, float))]
+        lo, hi, si = PLAUSIBLE[kind]
+        what = name.replace("_", " ").replace("poisson", "Poisson").replace("youngs", "Young's")
+        values = [(key, q[key]) for key in ("value", "low", "high")
+                  if isinstance(q.get(key), (int, float)) and not isinstance(q.get(key), bool)]
+        values += [(f"values[{i}]", v) for i, v in enumerate(q.get("values") or [])
+                   if isinstance(v, (int, float)) and not isinstance(v, bool)]
         if not values:
             continue
         unit = q.get("unit")
-        factor = _property_factor(kind, unit)
+        factor = moisture_factor(unit) if kind == "moisture_content" else si_factor(unit, si)
         if factor is None:
-            taken = {"moisture_content": MOISTURE_UNITS,
-                     "poisson_ratio": "- (dimensionless)"}.get(kind, ", ".join(_MODULUS_UNITS)
-                                                                if kind.endswith("modulus") else
-                                                                "kg/m^3, g/cm^3 or t/m^3 (also Mg/m^3, g cm-3)")
-            raise InputError(path, f"{where}.unit", f"a unit of {what[2:] if what.startswith('a ') else what}: "
-                             f"{taken}", unit)
+            taken = MOISTURE_UNITS if kind == "moisture_content" else SI_UNITS_TAKEN[si]
+            raise InputError(path, f"{where}.unit", f"a unit of {what}: {taken}", unit)
         for key, v in values:
             x = float(v) * factor
             if lo <= x <= hi:
                 continue
             said = [] if str(unit).strip() == si else [f"{v:g} {unit} is {x:.4g} {si}"]
-            if kind.endswith("density"):
+            if si == "kg/m^3":
                 other = next((u for u, f in (("g/cm^3", 1e3), ("kg/m^3", 1.0)) if lo <= float(v) * f <= hi), None)
                 said += [f"in {other}? declare unit: {other}"] if other else []
             elif kind == "moisture_content" and factor != 1.0 and lo <= float(v) <= hi:
                 said += ["in %? declare unit: %"]
             said = f" ({': '.join(said)})" if said else ""
             range_text = f"{lo:g} to {hi:g}" + ("" if si == "-" else f" {si}")
-            raise InputError(path, f"{where}.{key}", f"{what} of {range_text}{said}", v)
+            raise InputError(path, f"{where}.{key}", f"a {what} of {range_text}{said}", v)
 
 
 def _semantic_checks(path: Path, d: dict, resources_root: Path,
