@@ -1023,7 +1023,7 @@ _UNIT_SYMBOLS = ("km", "m", "dm", "cm", "mm", "s", "h", "min", "kg", "g", "Mg", 
                  "kPa", "MPa", "W", "kW", "rad", "r", "rev")
 #: compound units, as :func:`_compound` writes them, that name a unit of the tables under
 #: another symbol: a megagram is a tonne, a revolution per minute with or without the r
-_COMPOUND_SPELLINGS = {"Mg/m^3": "t/m^3", "1/min": "r/min", "rev/min": "r/min"}
+_COMPOUND_SPELLINGS = {"Mg/m^3": "t/m^3", "1/min": "r/min", "rev/min": "r/min", "rev/s": "r/s"}
 _SUPERSCRIPTS = str.maketrans("⁻¹²³⁴", "-1234")
 _FACTOR = re.compile(r"(?P<sym>[A-Za-z]+)(?:\^?(?P<exp>-?\d))?")
 
@@ -1133,7 +1133,8 @@ def name_units(col) -> list[str]:
     ``Sd_m``: the tables' own naming; ``Sd_m (mm)`` is in mm), or as a word after the first where the name gives no
     other unit (``draught_N_mean``, ``F_N_sd``; ``Sd_m_mm`` is in mm); the first word alone
     (``N``, ``n``, ``m``) is none.  A word of punctuation only (the ``-`` of ``Moisture - %``)
-    is no unit outside brackets (``w (-)`` is dimensionless), but ``%``."""
+    is no unit outside brackets (``w (-)`` is dimensionless), but ``%``; the one-letter rule is for
+    letters: ``%`` and ``°`` are units wherever they stand (``strain_%_total``, ``angle_°_paper``)."""
     exact, lower, forms = _name_unit_table()
 
     def compound(text, raw=False):
@@ -1194,7 +1195,7 @@ def name_units(col) -> list[str]:
         written, form = compound(w, raw=True)
         if written:
             found.append(form)
-        elif len(w) == 1 and i > 0:
+        elif len(w) == 1 and w.isalpha() and i > 0:  # %, ° are units wherever they stand
             last = i == len(words) - 1 and name.rstrip(".").endswith(w)  # Sd_m (mm): the brackets' mm
             following = words[i + 1].lower() if i + 1 < len(words) else None
             if last:
@@ -1212,7 +1213,7 @@ def name_units(col) -> list[str]:
 def _rename_hint(col, declared: str, named: str) -> str:
     """How to rename a column whose name gives another unit (``named``) than its cells are
     declared in."""
-    if len(named) == 1:
+    if len(named) == 1 and named.isalpha():
         return (f"or, if its cells are in {declared}, rename the column, e.g. {col} ({declared}): a one-letter "
                 "word after the first is read as a unit at the name's end or before mean, sd, se, min, max, avg or std")
     return f"or rename the column if its cells are in {declared}"
@@ -1254,7 +1255,14 @@ def _check_declared_unit(soil_path, cw: str, col: str, cv: dict) -> None:
     declared = quantity_factor(q, cv["unit"])
     for named in name_units(col):
         factor = quantity_factor(q, named)
-        if factor is None or abs(factor - declared) <= SCALE_RTOL * declared:
+        if factor is None:
+            units = MOISTURE_UNITS if q == "moisture_content" else ", ".join(QUANTITIES[q][1])
+            raise InputError(soil_path, f"{cw}.unit",
+                             f"the unit of the cells, which the name of column {col} says are in {named}, no unit "
+                             f"of {q} soilcal converts ({units}): give the cells in one of them and name the "
+                             f"column in it, e.g. {col.split('(')[0].split('[')[0].strip() or col} ({cv['unit']})",
+                             cv["unit"])
+        if abs(factor - declared) <= SCALE_RTOL * declared:
             continue
         raise InputError(soil_path, f"{cw}.unit",
                          f"the unit of the cells, which the column's name says are in {named} (unit: {named}; "

@@ -7,9 +7,9 @@ import math
 #: quantity -> (SI unit, {accepted unit: factor to SI}); ``None`` for a label quantity
 #: (a tool id, a test day, a group) whose cells are names, not numbers
 QUANTITIES = {
-    "tool_speed": ("m/s", {"m/s": 1.0, "km/h": 1 / 3.6, "mm/s": 1e-3, "cm/s": 1e-2}),
+    "tool_speed": ("m/s", {"m/s": 1.0, "km/h": 1 / 3.6, "m/min": 1 / 60, "mm/s": 1e-3, "cm/s": 1e-2}),
     "working_depth": ("m", {"m": 1.0, "cm": 1e-2, "mm": 1e-3}),
-    "rotor_speed": ("r/min", {"r/min": 1.0, "rpm": 1.0, "rad/s": 60 / (2 * math.pi)}),
+    "rotor_speed": ("r/min", {"r/min": 1.0, "rpm": 1.0, "r/s": 60.0, "rad/s": 60 / (2 * math.pi)}),
     "moisture_content": ("%", {"%": 1.0, "-": 100.0, "fraction": 100.0, "g/g": 100.0, "kg/kg": 100.0}),  # a mass fraction: 0.15 = 15 %
     "layer_depth": ("m", {"m": 1.0, "cm": 1e-2, "mm": 1e-3}),
     "bulk_density": ("kg/m^3", {"kg/m^3": 1.0, "g/cm^3": 1e3, "t/m^3": 1e3}),
