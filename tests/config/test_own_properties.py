@@ -121,3 +121,36 @@ def test_the_load_check_and_the_errata_judge_by_one_table():
     assert not errata({"bulk_density": {"value": 0.08, "unit": "g/cm^3"}})
     assert not errata({"particle_density": {"value": 2.65, "unit": "Mg m-3"}})
     assert errata({"particle_density": {"value": 0.265, "unit": "t/m^3"}})
+
+
+@pytest.mark.parametrize("prop", [
+    {"surface_energy": {"value": 72, "unit": "mN/m"}},  # water's surface tension, 0.072 J/m^2
+    {"surface_energy": {"value": 0.072, "unit": "N/m"}},
+    {"bulk_density": {"value": 1450, "unit": "Kg/m3"}},
+    {"bulk_density": {"value": 1450, "unit": "KG/M3"}},
+    {"bulk_density": {"value": 1.45, "unit": "G/CM3"}},
+    {"moisture_content": {"value": 0.15, "unit": "g g-1"}},
+    {"moisture_content": {"value": 0.15, "unit": "kg kg-1"}},
+    {"moisture_content": {"value": 15, "unit": "pct"}}])
+def test_an_own_soil_property_in_a_unit_the_tables_take_loads(tmp_path, prop):
+    """Each was refused as no unit of its quantity: mN/m was missing from the symbols, a density
+    in capitals was matched with its case only, and the own-property check read moisture by
+    another conversion than soil_moisture and the tables (g g-1, kg kg-1, pct refused)."""
+    soil = _load(tmp_path, properties=prop)
+    assert soil.data["properties"] == prop
+
+
+def test_an_out_of_range_moisture_in_g_per_g_is_refused_and_judged():
+    """6 g g-1 is 600 %, over a gravimetric moisture's 500 %: the load check refused the unit,
+    the errata skipped the value (no factor)."""
+    from soilcal.chain.errata import Errata, plausibility
+    from soilcal.config.quantities import si_factor
+
+    def errata(prop):
+        e = Errata()
+        plausibility(e, {"properties": prop, "materials": {}, "stages": [], "parameters": {}})
+        return e.rows
+
+    assert errata({"moisture_content": {"value": 6, "unit": "g g-1"}})
+    assert not errata({"moisture_content": {"value": 0.15, "unit": "kg kg-1"}})
+    assert si_factor("mN/m", "J/m^2") == pytest.approx(1e-3) and si_factor("MG/M3", "kg/m^3") is None

@@ -280,11 +280,11 @@ def plausibility(err: Errata, soil: dict) -> None:
         declared = [q.get("value")] + list(q.get("values", [])) + [q.get("low"), q.get("high")]
         if kind == "moisture_content":
             # every declared value and range end, a lone low or high too, in % by the factor of
-            # its unit (quantities.moisture_factor); a unit without a factor is judged where a
+            # its unit (quantities.quantity_factor, as the tables read it); a unit without a factor is judged where a
             # moisture is compared with it, a value without a unit is taken as printed, in %
-            from soilcal.config.quantities import moisture_factor
+            from soilcal.config.quantities import quantity_factor
 
-            f = 1.0 if q.get("unit") is None else moisture_factor(q.get("unit"))
+            f = 1.0 if q.get("unit") is None else quantity_factor("moisture_content", q.get("unit"))
             pairs = [(v, None if f is None else float(v) * f) for v in declared if v is not None]
         else:
             pairs = [(v, _si(float(v), str(q.get("unit", "")), si_unit)) for v in declared if v is not None]

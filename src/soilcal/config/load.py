@@ -351,9 +351,9 @@ def _check_own_properties(path: Path, d: dict) -> None:
     a thousand or a hundred times off without a word.  Refused naming the field, the range and,
     where the other unit of the quantity takes the value into it, that unit; a unit of no
     factor to the range's (:func:`~soilcal.config.quantities.si_factor`,
-    :func:`~soilcal.config.quantities.moisture_factor`) is refused naming the units taken.
+    :func:`~soilcal.config.quantities.quantity_factor`, the moisture units the tables take) is refused naming the units taken.
     A key no range is known of (relative_density, root_length_density) is not judged."""
-    from soilcal.config.quantities import MOISTURE_UNITS, PLAUSIBLE, SI_UNITS_TAKEN, moisture_factor, plausible_kind, si_factor
+    from soilcal.config.quantities import MOISTURE_UNITS, PLAUSIBLE, SI_UNITS_TAKEN, plausible_kind, quantity_factor, si_factor
 
     entries = [(f"properties.{k}", k, q, False) for k, q in (d.get("properties") or {}).items()]
     entries += [(f"materials.{m}.{k}", k, q, True) for m, props in (d.get("materials") or {}).items()
@@ -371,7 +371,7 @@ def _check_own_properties(path: Path, d: dict) -> None:
         if not values:
             continue
         unit = q.get("unit")
-        factor = moisture_factor(unit) if kind == "moisture_content" else si_factor(unit, si)
+        factor = quantity_factor("moisture_content", unit) if kind == "moisture_content" else si_factor(unit, si)
         if factor is None:
             taken = MOISTURE_UNITS if kind == "moisture_content" else SI_UNITS_TAKEN[si]
             raise InputError(path, f"{where}.unit", f"a unit of {what}: {taken}", unit)

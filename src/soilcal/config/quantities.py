@@ -172,17 +172,22 @@ _SI_SYMBOLS = {
     "ml": (1e-6, (0, 3, 0)), "cc": (1e-6, (0, 3, 0)), "s": (1.0, (0, 0, 1)),
     "N": (1.0, (1, 1, -2)), "kN": (1e3, (1, 1, -2)), "MN": (1e6, (1, 1, -2)),
     "Pa": (1.0, (1, -1, -2)), "kPa": (1e3, (1, -1, -2)), "MPa": (1e6, (1, -1, -2)), "GPa": (1e9, (1, -1, -2)),
-    "J": (1.0, (1, 2, -2)), "mJ": (1e-3, (1, 2, -2)),
+    "J": (1.0, (1, 2, -2)), "mJ": (1e-3, (1, 2, -2)), "mN": (1e-3, (1, 1, -2)),
 }
+#: symbols of :data:`_SI_SYMBOLS` matched in another case (``Kg/m3``, ``KG/M3``, ``G/CM3``):
+#: those whose letters name one unit in any case; not ``mg``/``MG`` (Mg or a milligram), ``mn``
+#: (mN or MN) or ``mj`` (mJ or MJ), matched with their case only
+_SI_ANY_CASE = {s.lower(): s for s in ("g", "kg", "t", "mm", "cm", "dm", "m", "km", "L", "mL", "cc", "s", "N", "kN",
+                                       "Pa", "kPa", "GPa", "J")}
 #: the SI units of :data:`PLAUSIBLE` as dimensions
 _SI_DIMENSIONS = {"kg/m^3": (1, -3, 0), "Pa": (1, -1, -2), "J/m^2": (1, 0, -2), "-": (0, 0, 0)}
 #: a dimensionless value's unit: factor
 _DIMENSIONLESS = {"": 1.0, "-": 1.0, "1": 1.0, "dimensionless": 1.0, "%": 1e-2}
 #: the units :func:`si_factor` takes, by SI unit, as the messages name them
 SI_UNITS_TAKEN = {
-    "kg/m^3": "kg/m^3, g/cm^3, t/m^3, Mg/m^3, kg/dm^3, g/mL (also written g cm-3, kg m-3)",
+    "kg/m^3": "kg/m^3, g/cm^3, t/m^3, Mg/m^3, kg/dm^3, g/mL (also written g cm-3, kg m-3; Kg/m3, G/CM3)",
     "Pa": "Pa, kPa, MPa, GPa, N/m^2, kN/m^2, MN/m^2 (also written N m-2)",
-    "J/m^2": "J/m^2, mJ/m^2 (also written J m-2)",
+    "J/m^2": "J/m^2, mJ/m^2, N/m, mN/m (also written J m-2, mN m-1)",
     "-": "- (also 1, dimensionless) or %",
 }
 
@@ -213,9 +218,10 @@ def si_factor(unit, si_unit: str) -> float | None:
             below = True
             continue
         m = re.fullmatch(r"([A-Za-z]+)(?:\^?(-?\d))?", w)
-        if m is None or m[1] not in _SI_SYMBOLS:
+        sym = None if m is None else m[1] if m[1] in _SI_SYMBOLS else _SI_ANY_CASE.get(m[1].lower())
+        if sym is None:
             return None
-        f, d = _SI_SYMBOLS[m[1]]
+        f, d = _SI_SYMBOLS[sym]
         e = int(m[2] or 1) * (-1 if below else 1)
         factor *= f ** e
         dims = [a + b * e for a, b in zip(dims, d)]
