@@ -77,3 +77,11 @@ def test_a_covariate_named_in_a_unit_of_no_quantity_it_takes_is_refused(cinnamon
     with pytest.raises(InputError) as e:
         _speed(cinnamon, "speed (mm/min)", "m/s")
     assert "mm/min" in str(e.value) and "tool_speed" in str(e.value)
+
+
+@pytest.mark.parametrize("col, unit", [("Sd_m_mean", ["m"]), ("Sd_m_mean (mm)", ["mm"]), ("Sd_m_mean_mm", ["mm"]),
+                                       ("Sd_meas_mean", [])])
+def test_a_one_letter_word_before_a_statistic_and_its_renames(col, unit):
+    """Sd_m_mean reads m before mean as metres (the README says so); the renames its refusal
+    proposes give mm or no unit."""
+    assert name_units(col) == unit
