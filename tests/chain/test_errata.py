@@ -88,7 +88,8 @@ def test_implausible_modulus_and_copied_column():
 
 def test_a_moisture_content_is_judged_in_its_declared_unit():
     """0.9 as a mass fraction (unit -) is 90 %, plausible; 15 with unit - (15 % meant, typed as
-    a fraction) is 1500 %, beyond the 0-100 % a moisture content can take; 15 % is plausible."""
+    a fraction) is 1500 %, beyond the 0-500 % a gravimetric moisture content of a real soil
+    takes (a peat holds a few times its dry mass); 15 % is plausible."""
     def rows(q):
         err = Errata()
         plausibility(err, {"properties": {"moisture_content": q}, "parameters": {}, "stages": []})
@@ -101,12 +102,12 @@ def test_a_moisture_content_is_judged_in_its_declared_unit():
     assert "implausible moisture content" in row.note
     # the units the measurement tables take for a percentage are judged as percent too
     for unit in ("wt%", "percent", "% w/w"):
-        (row,) = rows({"value": 150, "unit": unit})
-        assert row.recomputed == "150 %", unit
+        (row,) = rows({"value": 650, "unit": unit})
+        assert row.recomputed == "650 %", unit
 
 
 def test_every_declared_moisture_is_judged_a_lone_range_end_too():
-    """A moisture above 100 % of dry mass is implausible for a mineral soil whichever field
+    """A moisture above 500 % of dry mass is implausible for any soil whichever field
     declares it: a range's low or high given alone (refused by the loader, but the errata read
     the file as printed) and a range end beside a plausible value."""
     def rows(q):
@@ -114,8 +115,8 @@ def test_every_declared_moisture_is_judged_a_lone_range_end_too():
         plausibility(err, {"properties": {"moisture_content": q}, "parameters": {}, "stages": []})
         return [r.recomputed for r in err.frame().itertuples()]
 
-    assert rows({"low": 150, "unit": "%"}) == ["150 %"]
-    assert rows({"high": 150, "unit": "%"}) == ["150 %"]
+    assert rows({"low": 650, "unit": "%"}) == ["650 %"]
+    assert rows({"high": 650, "unit": "%"}) == ["650 %"]
     assert rows({"low": 25, "unit": "fraction"}) == ["2500 %"]
-    assert rows({"value": 17.2, "low": 150, "unit": "%"}) == ["150 %"]
-    assert rows({"values": [0.172, 0.215], "low": 0.1, "high": 2.5, "unit": "fraction"}) == ["250 %"]
+    assert rows({"value": 17.2, "low": 650, "unit": "%"}) == ["650 %"]
+    assert rows({"values": [0.172, 0.215], "low": 0.1, "high": 6.5, "unit": "fraction"}) == ["650 %"]

@@ -107,3 +107,13 @@ def test_a_layer_described_by_a_number_in_quotes_is_refused(tmp_path, parsed, wh
     d["layers"] = {"upper": what, "middle": "20-40 cm", "lower": "40-60 cm"}
     e = _refused(tmp_path, d)
     assert e.field == "layers.upper" and "a bare number has no unit" in e.expected and e.got == what
+
+
+@pytest.mark.parametrize("what", ["", "  "])
+def test_a_layer_described_by_blank_text_is_a_layer_described_by_nothing(tmp_path, parsed, what):
+    """upper: "" was refused as 'a bare number has no unit' (the pattern of a number matched
+    the empty text), though it says as little as upper: (null), which loads; now both load."""
+    d = copy.deepcopy(parsed)
+    d["layers"] = {"upper": what, "middle": None, "lower": "40-60 cm"}
+    soil = load_copy(tmp_path, SOIL, d)
+    assert list(soil.data["layers"]) == ["upper", "middle", "lower"]

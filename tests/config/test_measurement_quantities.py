@@ -80,6 +80,30 @@ def test_rotor_speed_in_rad_per_s(black):
     assert flat[0].quantities["rotor_speed"] == pytest.approx(150 * 60 / (2 * math.pi))
 
 
+@pytest.mark.parametrize("col, cells, wrong, right, si", [
+    ("speed (m s-1)", [0.16, 1.0, 2.0, 0.5], "km/h", "m/s", [0.16, 1.0, 2.0, 0.5]),
+    ("speed [km.h-1]", [0.576, 3.6, 7.2, 1.8], "m/s", "km/h", [0.16, 1.0, 2.0, 0.5]),
+    ("density (g cm-3)", [1.3, 1.35, 1.4, 1.45], "kg/m^3", "g/cm^3", [1300, 1350, 1400, 1450]),
+    ("density (Mg m-3)", [1.3, 1.35, 1.4, 1.45], "kg/m^3", "t/m^3", [1300, 1350, 1400, 1450])])
+def test_a_covariate_named_in_an_si_compound_unit(cinnamon, col, cells, wrong, right, si):
+    """speed (m s-1) declared unit: km/h loaded 1 m/s as 1 km/h (0.278 m/s) without a word: the
+    name's m s-1 was read as m, of no speed, and g cm-3 as no unit.  Now the name's unit is
+    compared with the declared one: refused naming it; declared as the name says, the cells
+    load in SI (1.3 g/cm^3 = 1300 kg/m^3, 3.6 km/h = 1 m/s)."""
+    q = "bulk_density" if "density" in col else "tool_speed"
+    t = _table(cinnamon, "cinnamon-soil", "cutting_resistance.csv")
+    df = pd.read_csv(t)
+    df[col] = cells
+    df.to_csv(t, index=False)
+    p = _declare(cinnamon, "cinnamon-soil", lambda d: _entry(d)["covariates"].update(
+        {col: {"ignore": True, "quantity": q, "unit": wrong}}))
+    msg = _fails(cinnamon, "cinnamon-soil", f"{p}: {CR}.{col}.unit")
+    assert f"says are in {right}" in msg and f"got '{wrong}'" in msg
+    _declare(cinnamon, "cinnamon-soil", lambda d: _entry(d)["covariates"].update(
+        {col: {"ignore": True, "quantity": q, "unit": right}}))
+    assert [c.quantities[q] for c in _load(cinnamon, "cinnamon-soil")] == pytest.approx(si)
+
+
 def test_tool_speed_in_km_per_h(cinnamon):
     _speed_column(cinnamon, [0.576, 3.6, 7.2, 1.8])
     conds = _load(cinnamon, "cinnamon-soil")
@@ -88,6 +112,25 @@ def test_tool_speed_in_km_per_h(cinnamon):
     assert [c.covariates["speed_kmh"] for c in conds] == pytest.approx([0.576, 3.6, 7.2, 1.8])
     assert conds[0].label == "directrix=arc"  # an ignored column changes nothing else
     assert QUANTITIES["tool_speed"][0] == "m/s"
+
+
+@pytest.mark.parametrize("col, q, unit, cells, si", [
+    ("speed", "tool_speed", "km h-1", [0.576, 3.6, 7.2, 1.8], [0.16, 1.0, 2.0, 0.5]),
+    ("speed", "tool_speed", "m s^-1", [0.16, 1.0, 2.0, 0.5], [0.16, 1.0, 2.0, 0.5]),
+    ("bd", "bulk_density", "g cm-3", [1.3, 1.35, 1.4, 1.45], [1300, 1350, 1400, 1450]),
+    ("bd", "bulk_density", "Mg m-3", [1.3, 1.35, 1.4, 1.45], [1300, 1350, 1400, 1450]),
+    ("w", "moisture_content", "g g-1", [0.11, 0.12, 0.115, 0.1162], [11, 12, 11.5, 11.62])])
+def test_a_covariate_s_unit_written_si_style(cinnamon, col, q, unit, cells, si):
+    """unit: "km h-1" (or m s^-1, g cm-3, Mg m-3, g g-1) was refused as no unit of the
+    quantity though it is km/h; now it is read as that unit (3.6 km/h = 1 m/s, 1.3 g/cm^3 =
+    1300 kg/m^3, 0.11 g/g = 11 %)."""
+    t = _table(cinnamon, "cinnamon-soil", "cutting_resistance.csv")
+    df = pd.read_csv(t)
+    df[col] = cells
+    df.to_csv(t, index=False)
+    _declare(cinnamon, "cinnamon-soil", lambda d: _entry(d)["covariates"].update(
+        {col: {"ignore": True, "quantity": q, "unit": unit}}))
+    assert [c.quantities[q] for c in _load(cinnamon, "cinnamon-soil")] == pytest.approx(si)
 
 
 def test_moisture_content_as_a_fraction(cinnamon):
@@ -157,6 +200,23 @@ def test_a_missing_word_in_a_label_column_without_a_map_key_is_missing(cinnamon)
     _edit(cinnamon, "cinnamon-soil", edit)
     msg = _fails(cinnamon, "cinnamon-soil", f"{t}: row 4, column plate")
     assert "'nan' is read as a missing value" in msg
+
+
+def test_missing_words_are_pandas_documented_list_not_its_private_module(cinnamon, monkeypatch):
+    """The words a label column reads as missing are pandas' documented ``na_values`` default
+    (read_csv's docs), held by soilcal: the loader must not import ``pandas._libs.parsers``, a
+    private module that may move in any release.  With that module unavailable, Excel's
+    ``#N/A`` for a missing day is still read as missing (refused naming row and column)."""
+    import sys
+
+    monkeypatch.setitem(sys.modules, "pandas._libs.parsers", None)  # import of it raises ImportError
+    t = _table(cinnamon, "cinnamon-soil", "cutting_resistance.csv")
+    df = pd.read_csv(t)
+    df["day"] = ["2024-05-01", "#N/A", "2024-05-02", "2024-05-02"]
+    df.to_csv(t, index=False)
+    _edit(cinnamon, "cinnamon-soil", lambda d: _entry(d)["covariates"].update(day={"ignore": True, "quantity": "day"}))
+    msg = _fails(cinnamon, "cinnamon-soil", f"{t}: row 2, column day")
+    assert "'#N/A' is read as a missing value" in msg
 
 
 # --- bad declarations -------------------------------------------------------------------------
@@ -351,3 +411,14 @@ def test_no_note_where_the_ignored_covariate_goes_with_a_simulated_one(cinnamon)
     df["directrix"] = ["line", "line", "arc", "arc"]
     df.to_csv(t, index=False)
     assert all(c.note == "" for c in _load(cinnamon, "cinnamon-soil"))
+
+
+def test_a_soil_s_moisture_and_a_response_s_unit_written_si_style():
+    """A soil's properties.moisture_content in "g g-1" (0.15 g/g = 15 %) was refused as a unit
+    soilcal does not know; a response's unit "KN" as no unit of a force.  Both read now."""
+    from soilcal.config.measurements import unit_factor
+    from soilcal.config.quantities import soil_moisture
+
+    assert soil_moisture("s.yaml", {"properties": {"moisture_content": {"value": 0.15, "unit": "g g-1"}}})[
+        "factor"] == 100.0
+    assert unit_factor("KN", "horizontal_force_N") == 1000.0 and unit_factor("N m-1", "horizontal_force_N") is None

@@ -250,11 +250,12 @@ def test_a_column_named_in_another_unit_than_the_response_s_is_refused(cinnamon)
 
 
 @pytest.mark.parametrize("col", ["draught_kn", "Draught (KN)", "draught kN", "draught, kN", "draught_kN_mean",
-                                 "draught [kN]", "draught/kN"])
+                                 "draught [kN]", "draught/kN", "Draught..kN.", "draught.kN", "draught_kN.1"])
 def test_a_kn_column_is_refused_under_unit_n_however_written(cinnamon, col):
     """A unit is a word of the column's name anywhere (between _, spaces, commas, brackets,
-    after a /), matched without its case where that names one unit (kn, KN: kN): each of these
-    loaded 0.3211 kN as 0.3211 N."""
+    after a /, between the dots of R's names: read.csv turns Draught (kN) into Draught..kN.;
+    pandas names a second draught_kN draught_kN.1), matched without its case where that names
+    one unit (kn, KN: kN): each of these loaded 0.3211 kN as 0.3211 N."""
     t = _table(cinnamon, "cinnamon-soil", "cutting_resistance.csv")
     df = pd.read_csv(t).rename(columns={"horizontal_measured_N": col})
     df[col] = [0.3211, 0.2521, 0.1545, 0.3048]
@@ -278,10 +279,10 @@ def test_a_one_letter_last_word_of_a_column_s_name_is_its_unit(cinnamon):
     assert [c.responses[0]["measured"] for c in conds] == pytest.approx(list(t["horizontal_measured_N"]))
 
 
-def test_a_one_letter_word_inside_a_column_s_name_is_no_unit(black):
-    """Sd_m_mm, F_N_mean: a one-letter word not at the end is as often an abbreviation
-    (m: measured); Sd_m, ending in m, is metres: under unit mm refused, asking for a name such
-    as Sd_m (mm), with which the flatness loads as tabled."""
+def test_a_one_letter_word_beside_another_unit_is_no_unit(black):
+    """Sd_m (mm): the name's unit is the bracketed mm, its m a word (measured); Sd_m, ending in
+    m, is metres: under unit mm refused, asking for a name such as Sd_m (mm), with which the
+    flatness loads as tabled."""
     t = _table(black, "black-soil", "surface_flatness.csv")
     df = pd.read_csv(t).rename(columns={"Sd_measured_mm": "Sd_m", "Sd_simulated_mm": "Sd_s (mm)"})
     df.to_csv(t, index=False)
@@ -295,6 +296,38 @@ def test_a_one_letter_word_inside_a_column_s_name_is_no_unit(black):
     flat = [c for c in conditions(load_soil(p, black / "resources")) if c.measurement == "surface_flatness"]
     assert [c.responses[0]["measured"] for c in flat] == pytest.approx(list(df["Sd_m"]))
     assert [c.responses[0]["paper_simulated"] for c in flat] == pytest.approx(list(df["Sd_s (mm)"]))
+
+
+@pytest.mark.parametrize("col", ["draught_N_mean", "F_N_sd", "draught N mean"])
+def test_a_one_letter_unit_inside_a_column_s_name_is_its_unit(cinnamon, col):
+    """draught_N_mean under unit: kN: the draughts 321.1 N were read as 321100 N without a word
+    (a one-letter word was a unit only as the name's last word).  A one-letter word after the
+    first is the unit where the name gives no other: refused naming N; under unit: N they
+    load as tabled."""
+    t = _table(cinnamon, "cinnamon-soil", "cutting_resistance.csv")
+    df = pd.read_csv(t).rename(columns={"horizontal_measured_N": col})
+    df.to_csv(t, index=False)
+    p = _edit(cinnamon, "cinnamon-soil", lambda d: _entry(d)["responses"][0].update(value=col, unit="kN"))
+    msg = _fails(cinnamon, "cinnamon-soil", f"{p}: measurements.cutting_resistance.responses[0].unit")
+    assert f"column {col} (value) says is N" in msg and "got 'kN'" in msg and f"e.g. {col} (kN)" in msg
+    p = _edit(cinnamon, "cinnamon-soil", lambda d: _entry(d)["responses"][0].update(unit="N"))
+    conds = conditions(load_soil(p, cinnamon / "resources"))
+    assert [c.responses[0]["measured"] for c in conds] == pytest.approx(list(df[col]))
+
+
+@pytest.mark.parametrize("name, unit", [
+    ("speed (m s-1)", "m/s"), ("speed [m.s-1]", "m/s"), ("speed (m·s⁻¹)", "m/s"), ("speed (m s^-1)", "m/s"),
+    ("speed_m_per_s", "m/s"), ("v (km h-1)", "km/h"), ("density (g cm-3)", "g/cm^3"), ("bd (g.cm-3)", "g/cm^3"),
+    ("density (Mg m-3)", "t/m^3"), ("Bulk density (Mg/m3)", "t/m^3"), ("density_kg_m3", "kg/m^3"),
+    ("rotor (min-1)", "r/min"), ("w (g g-1)", "g/g"), ("A (cm²)", "cm^2"), ("torque..N.m.", "N m"),
+    ("draught (N m-1)", "N/m"), ("draught_N_per_m", "N/m"), ("time (s)", None), ("mass (g)", None)])
+def test_compound_units_in_a_column_s_name(name, unit):
+    """Units written SI style with exponents (m s-1, g cm-3, Mg m-3: a megagram is a tonne) or a
+    / are read whole; a quotient no table knows (a draught per width, N m-1) is given as
+    written, so that it is seen as no N, and s or g alone are units of no table."""
+    from soilcal.config.measurements import name_units
+
+    assert name_units(name) == ([unit] if unit else [])
 
 
 def test_a_lone_hyphen_in_a_column_s_name_is_no_unit(guangxi):

@@ -19,6 +19,7 @@ import numpy as np
 import pandas as pd
 from scipy import stats
 
+from soilcal.config.quantities import PLAUSIBLE
 from soilcal.errors import InputError
 from soilcal.rsm.printed import parse_printed as rsm_parse_printed
 
@@ -256,47 +257,37 @@ def _longest_common_run(a: np.ndarray, b: np.ndarray) -> int:
 
 # ------------------------------------------------------------------ physical plausibility
 
-_UNIT_TO_SI = {"pa": 1.0, "kpa": 1e3, "mpa": 1e6, "gpa": 1e9, "kg/m^3": 1.0, "g/cm^3": 1e3, "j/m^2": 1.0, "-": 1.0, "": 1.0}
-# (low, high) in SI units; generous bounds for soils and steels
-_PLAUSIBLE = {
-    "shear_modulus": (1e3, 3e11, "Pa"),
-    "youngs_modulus": (1e3, 5e11, "Pa"),
-    "poisson_ratio": (0.0, 0.5, "-"),
-    "density": (100.0, 2.0e4, "kg/m^3"),
-    "bulk_density": (100.0, 3.0e3, "kg/m^3"),
-    "particle_density": (500.0, 5.0e3, "kg/m^3"),
-    "restitution": (1e-9, 1.0, "-"),
-    "static_friction": (0.0, 3.0, "-"),
-    "rolling_friction": (0.0, 1.0, "-"),
-    "surface_energy": (0.0, 100.0, "J/m^2"),
-    "moisture_content": (0.0, 100.0, "%"),
-}
+# (low, high, SI unit) of each kind: the one table of physical ranges, shared with the check
+# of a soil of one's own at load
+_PLAUSIBLE = PLAUSIBLE
 
 
-def _si(value: float, unit: str) -> float | None:
-    u = unit.strip().lower().replace(" ", "").replace("·", "").replace("kg·m-3", "kg/m^3")
-    u = {"kg/m3": "kg/m^3", "kg m-3": "kg/m^3", "j/m2": "j/m^2", "%": ""}.get(u, u)
-    f = _UNIT_TO_SI.get(u)
+def _si(value: float, unit: str, si_unit: str) -> float | None:
+    from soilcal.config.quantities import si_factor
+
+    f = si_factor(unit, si_unit)
     return None if f is None else value * f
 
 
 def plausibility(err: Errata, soil: dict) -> None:
     def check(where, name, q):
-        kind = name if name in _PLAUSIBLE else None
+        from soilcal.config.quantities import plausible_kind
+
+        kind = plausible_kind(name, where.startswith("materials.")) if not where.startswith("stages.") else name
         if kind is None:
             return
         lo, hi, si_unit = _PLAUSIBLE[kind]
         declared = [q.get("value")] + list(q.get("values", [])) + [q.get("low"), q.get("high")]
         if kind == "moisture_content":
             # every declared value and range end, a lone low or high too, in % by the factor of
-            # its unit (quantities.moisture_factor); a unit without a factor is judged where a
+            # its unit (quantities.quantity_factor, as the tables read it); a unit without a factor is judged where a
             # moisture is compared with it, a value without a unit is taken as printed, in %
-            from soilcal.config.quantities import moisture_factor
+            from soilcal.config.quantities import quantity_factor
 
-            f = 1.0 if q.get("unit") is None else moisture_factor(q.get("unit"))
+            f = 1.0 if q.get("unit") is None else quantity_factor("moisture_content", q.get("unit"))
             pairs = [(v, None if f is None else float(v) * f) for v in declared if v is not None]
         else:
-            pairs = [(v, _si(float(v), str(q.get("unit", "")))) for v in declared if v is not None]
+            pairs = [(v, _si(float(v), str(q.get("unit", "")), si_unit)) for v in declared if v is not None]
         for v, x in pairs:
             if x is None:
                 continue

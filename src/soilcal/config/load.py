@@ -343,6 +343,53 @@ def _check_stage_sets_each_parameter_once(path: Path, where: str, st: dict, para
                              "dummy column names used once and by no factor (" + ", ".join(st["factors"]) + ")", name)
 
 
+def _check_own_properties(path: Path, d: dict) -> None:
+    """A soil of one's own (no ``citation``: no printed value to keep as printed) gives its
+    measured properties and materials in their units; a value outside the physical range of
+    :data:`soilcal.config.quantities.PLAUSIBLE` once converted (a bulk density 1.52 declared in
+    kg/m^3, a moisture content 15 declared as a fraction) would run the DEM or judge a moisture
+    a thousand or a hundred times off without a word.  Refused naming the field, the range and,
+    where the other unit of the quantity takes the value into it, that unit; a unit of no
+    factor to the range's (:func:`~soilcal.config.quantities.si_factor`,
+    :func:`~soilcal.config.quantities.quantity_factor`, the moisture units the tables take) is refused naming the units taken.
+    A key no range is known of (relative_density, root_length_density) is not judged."""
+    from soilcal.config.quantities import MOISTURE_UNITS, PLAUSIBLE, SI_UNITS_TAKEN, plausible_kind, quantity_factor, si_factor
+
+    entries = [(f"properties.{k}", k, q, False) for k, q in (d.get("properties") or {}).items()]
+    entries += [(f"materials.{m}.{k}", k, q, True) for m, props in (d.get("materials") or {}).items()
+                for k, q in (props or {}).items()]
+    for where, name, q, material in entries:
+        kind = plausible_kind(name, material)
+        if kind is None or not isinstance(q, dict) or "bins" in q:
+            continue
+        lo, hi, si = PLAUSIBLE[kind]
+        what = name.replace("_", " ").replace("poisson", "Poisson").replace("youngs", "Young's")
+        values = [(key, q[key]) for key in ("value", "low", "high")
+                  if isinstance(q.get(key), (int, float)) and not isinstance(q.get(key), bool)]
+        values += [(f"values[{i}]", v) for i, v in enumerate(q.get("values") or [])
+                   if isinstance(v, (int, float)) and not isinstance(v, bool)]
+        if not values:
+            continue
+        unit = q.get("unit")
+        factor = quantity_factor("moisture_content", unit) if kind == "moisture_content" else si_factor(unit, si)
+        if factor is None:
+            taken = MOISTURE_UNITS if kind == "moisture_content" else SI_UNITS_TAKEN[si]
+            raise InputError(path, f"{where}.unit", f"a unit of {what}: {taken}", unit)
+        for key, v in values:
+            x = float(v) * factor
+            if lo <= x <= hi:
+                continue
+            said = [] if str(unit).strip() == si else [f"{v:g} {unit} is {x:.4g} {si}"]
+            if si == "kg/m^3":
+                other = next((u for u, f in (("g/cm^3", 1e3), ("kg/m^3", 1.0)) if lo <= float(v) * f <= hi), None)
+                said += [f"in {other}? declare unit: {other}"] if other else []
+            elif kind == "moisture_content" and factor != 1.0 and lo <= float(v) <= hi:
+                said += ["in %? declare unit: %"]
+            said = f" ({': '.join(said)})" if said else ""
+            range_text = f"{lo:g} to {hi:g}" + ("" if si == "-" else f" {si}")
+            raise InputError(path, f"{where}.{key}", f"a {what} of {range_text}{said}", v)
+
+
 def _semantic_checks(path: Path, d: dict, resources_root: Path,
                      source_override: bool = False) -> tuple[dict | None, tuple]:
     """The checks a schema cannot state; returns the soil's photo manifest (None without one)
@@ -355,6 +402,8 @@ def _semantic_checks(path: Path, d: dict, resources_root: Path,
     for k, q in d.get("properties", {}).items():
         if isinstance(q, dict) and "bins" not in q:
             _check_levels(path, f"properties.{k}", q)
+    if d.get("citation") is None:
+        _check_own_properties(path, d)
     params = d["parameters"]
     targets = d.get("targets", {})
     seen: dict[str, dict] = {}
@@ -599,7 +648,7 @@ def _check_layers(path: Path, d: dict) -> None:
     each refusal names the field and shows the forms taken.  A name is text in either form, as
     a target's ``layer`` gives it: a bare number (``20``, a mapping's key as a list's item) is
     refused asking for it quoted; what a layer is, given as a number alone (``20`` or
-    ``"20"``, ``"0-20"``), is refused: it has no unit."""
+    ``"20"``, ``"0-20"``), is refused: it has no unit; blank text (``""``) is nothing."""
     if "layers" not in d:
         return
     layers = d["layers"]
@@ -621,6 +670,8 @@ def _check_layers(path: Path, d: dict) -> None:
             raise InputError(path, field, "a layer named once", name)
     if isinstance(layers, dict):
         for name, what in layers.items():
+            if isinstance(what, str) and not what.strip():
+                continue  # upper: "" says nothing of the layer, as upper: (null) does
             if what is not None and (not isinstance(what, str) or re.fullmatch(r"[\d\s.,;:+\-\u2013\u2014/~]*", what)):
                 raise InputError(path, f"layers.{name}", 'what the layer is, as text with its unit ("0-20 cm", '
                                  '"20 cm deep"), or nothing: a bare number has no unit', what)

@@ -212,10 +212,12 @@ def response_units(measure: str) -> dict:
 
 
 def unit_factor(unit, measure: str) -> float | None:
-    """Factor from ``unit`` to the unit of ``measure`` (:func:`response_units`; a spelling of
-    :data:`UNIT_ALIASES` as its unit), or None when ``unit`` is not a unit of its quantity."""
-    u = str(unit).strip()
-    return response_units(measure).get(UNIT_ALIASES.get(u, u))
+    """Factor from ``unit`` to the unit of ``measure`` (:func:`response_units`), or None when
+    ``unit`` is not a unit of its quantity.  The whole text must be one unit
+    (:func:`whole_unit`: a spelling of :data:`UNIT_ALIASES`, ``KN``, ``N m``, ``m2``); a text
+    that holds a unit among other words or numbers (``x1000 N``, ``0.1 kN``, ``N, mean of 3``)
+    is none: what those add cannot be read."""
+    return response_units(measure).get(whole_unit(unit))
 
 
 def measurements_dir(resources_root, soil_name: str) -> Path:
@@ -843,15 +845,21 @@ def _entry(soil_path, data: dict, mid: str, entry: dict, tpath: Path):
     return df, _shared_runs(tpath, covs, conds)
 
 
+#: the words pandas' ``read_csv`` reads as a missing value by default (its documented
+#: ``na_values`` default, pandas 2.2 to 3.0), which a numeric column of a measured table reads
+#: as missing: in a label column they are made missing too (:func:`_missing_words`)
+MISSING_WORDS = frozenset({"", "#N/A", "#N/A N/A", "#NA", "-1.#IND", "-1.#QNAN", "-NaN", "-nan", "1.#IND",
+                           "1.#QNAN", "<NA>", "N/A", "NA", "NULL", "NaN", "None", "n/a", "nan", "null"})
+
+
 def _missing_words(df: pd.DataFrame, covs: dict) -> dict:
     """Label columns (:func:`_label_column`) are read as written, so a cell ``NA``, ``N/A``,
     ``null``, ``None``, ``nan`` (pandas' missing-value words; R's ``write.csv`` writes a missing
     value ``NA``) is text there.  Such a cell is a label only where the column's ``setup`` or
     ``case`` map has it for a key (a tool called NA, mapped ``"NA": plate-arc``); elsewhere it
     is made missing in ``df``, as an empty cell is, so two days written NA are not one day
-    called "NA".  Returns (row position, column) -> the word, for the messages."""
-    from pandas._libs.parsers import STR_NA_VALUES
-
+    called "NA".  The words are :data:`MISSING_WORDS`.  Returns (row position, column) -> the
+    word, for the messages."""
     words = {}
     for col, cv in covs.items():
         if not _label_column(cv) or col not in df.columns:
@@ -859,7 +867,7 @@ def _missing_words(df: pd.DataFrame, covs: dict) -> dict:
         keys = {_map_key(k, False) for form in ("setup", "case") for k in (cv.get(form) or {})}
         j = df.columns.get_loc(col)
         for i, cell in enumerate(df[col].tolist()):
-            if isinstance(cell, str) and cell.strip() and cell.strip() in STR_NA_VALUES and cell.strip() not in keys:
+            if isinstance(cell, str) and cell.strip() and cell.strip() in MISSING_WORDS and cell.strip() not in keys:
                 words[(i, col)] = cell.strip()
                 df.iloc[i, j] = float("nan")
     return words
@@ -995,7 +1003,7 @@ def _check_scale(soil_path, cw: str, cv: dict, scenario: str) -> None:
 
 #: spellings a column's name may give a unit in besides the units of :data:`RESPONSE_UNITS`,
 #: :data:`UNIT_ALIASES` and :data:`QUANTITIES` (``speed_kmh``): unit
-NAME_UNIT_SPELLINGS = {"kmh": "km/h", "percent": "%", "wt%": "%"}
+NAME_UNIT_SPELLINGS = {"kmh": "km/h", "percent": "%", "pct": "%", "wt%": "%"}
 #: two-letter spellings a name may give in another case than the unit's (``draught_kn``,
 #: ``Draught (KN)``, ``power_KW``): unit
 NAME_UNIT_CASES = {"kn": "kN", "KN": "kN", "Kn": "kN", "kw": "kW", "KW": "kW", "Kw": "kW"}
@@ -1003,17 +1011,71 @@ NAME_UNIT_CASES = {"kn": "kN", "KN": "kN", "Kn": "kN", "kw": "kW", "KW": "kW", "
 #: (``clay_fraction``, ``percent_sand``)
 _UNIT_WORDS = ("fraction", "percent", "degree", "degrees")
 #: a name's bracketed part: ``speed (km/h)``, ``depth [mm]``
+#: the words after which a one-letter word of a column's name inside it is read as a unit
+#: (``F_N_mean``, ``draught_N_sd``): a statistic of the quantity in that unit
+STATISTIC_WORDS = ("mean", "avg", "average", "sd", "std", "se", "sem", "min", "max", "median")
 _BRACKETS = re.compile(r"[(\[]\s*([^()\[\]]*?)\s*[)\]]")
 
 
+#: unit symbols a compound unit in a column's name is written with (``m s-1``, ``g cm-3``,
+#: ``kg/m3``, ``Mg m-3``, ``min-1``), matched with their case
+_UNIT_SYMBOLS = ("km", "m", "dm", "cm", "mm", "s", "h", "min", "kg", "g", "Mg", "t", "N", "kN", "mN", "Pa",
+                 "kPa", "MPa", "W", "kW", "rad", "r", "rev")
+#: compound units, as :func:`_compound` writes them, that name a unit of the tables under
+#: another symbol: a megagram is a tonne, a revolution per minute with or without the r
+_COMPOUND_SPELLINGS = {"Mg/m^3": "t/m^3", "1/min": "r/min", "rev/min": "r/min", "rev/s": "r/s"}
+_SUPERSCRIPTS = str.maketrans("⁻¹²³⁴", "-1234")
+_FACTOR = re.compile(r"(?P<sym>[A-Za-z]+)(?:\^?(?P<exp>-?\d))?")
+
+
+def _compound(text: str):
+    """A compound unit written with exponents or a ``/``, SI style: ``m s-1``, ``m.s-1``,
+    ``m·s⁻¹``, ``m s^-1``, ``km h-1``, ``g cm-3``, ``kg/m3``, ``Mg m-3``, ``min-1``, ``g g-1``,
+    ``N per m``, as ``(written, form)``: ``written`` whether the text is such a unit (symbols of
+    :data:`_UNIT_SYMBOLS` with an exponent, a ``/`` or ``per`` between them), ``form`` the unit
+    in one spelling, ``num/den`` with powers as ``^n`` (``m/s``, ``g/cm^3``, ``1/min``).  A
+    text that is no compound unit gives ``(False, None)``."""
+    t = text.translate(_SUPERSCRIPTS).replace("−", "-").strip()
+    t = re.sub(r"\s+per\s+|\s*/\s*", " / ", t, flags=re.IGNORECASE)
+    parts = [w for w in re.split(r"[\s.·⋅*]+", t) if w]
+    num, den, below, marked = [], [], False, False
+    for w in parts:
+        if w == "/":
+            if below or not parts:
+                return False, None
+            below = marked = True
+            continue
+        m = _FACTOR.fullmatch(w)
+        if m is None or m["sym"] not in _UNIT_SYMBOLS:
+            return False, None
+        e = int(m["exp"] or 1)
+        if m["exp"] is not None and 0 <= e < 2:
+            return False, None  # r1, s1, m1, h0 next to a unit word are ids, not powers
+        marked = marked or m["exp"] is not None
+        if e < 0 or below:
+            den.append((m["sym"], abs(e)))
+        else:
+            num.append((m["sym"], e))
+    if not marked or not (num or den) or (parts and parts[-1] == "/"):
+        return False, None
+    if not den and len(num) > 1:
+        return False, None  # m2, cm3 are units; kN t2, depth_cm_r2 hold an id (t2, r2), no product of powers
+
+    def power(fs):
+        return " ".join(sym if e == 1 else f"{sym}^{e}" for sym, e in fs)
+
+    return True, (power(num) or "1") + (f"/{power(den)}" if den else "")
+
+
 @functools.cache
-def _name_unit_table() -> tuple[dict, dict]:
+def _name_unit_table() -> tuple[dict, dict, dict]:
     """Every unit spelling :func:`name_units` knows -> its unit as the tables key it, and the
     same by lower-case spelling where that names one unit only (``mpa`` is MPa, ``RPM`` rpm),
     for spellings of three characters or more: two letters in another case are as often
     something else (``mn`` a mean, ``MN`` meganewtons, ``nm`` nanometres, ``pa``), so a
     spelling of two is matched with its case or as :data:`NAME_UNIT_CASES` lists it, one of
-    one letter with its case only (``M`` is no ``m``, ``n`` no ``N``)."""
+    one letter with its case only (``M`` is no ``m``, ``n`` no ``N``); and the compound units
+    among them by the form :func:`_compound` gives them (``m/s``, ``kg/m^3``, ``N m``)."""
     exact = {u: u for family in RESPONSE_UNITS for u in family}
     exact.update({u: u for spec in QUANTITIES.values() if spec for u in spec[1]})
     exact.update(UNIT_ALIASES)
@@ -1024,7 +1086,33 @@ def _name_unit_table() -> tuple[dict, dict]:
             lower.setdefault(spelling.lower(), set()).add(unit)
     lower = {k: next(iter(v)) for k, v in lower.items() if len(v) == 1}
     exact.update(NAME_UNIT_CASES)
-    return exact, lower
+    forms = dict(_COMPOUND_SPELLINGS)
+    for spelling, unit in exact.items():
+        for text in (spelling, spelling.replace("^", "")):
+            written, form = _compound(text)
+            if written:
+                forms.setdefault(form, unit)
+    return exact, lower, forms
+
+
+def whole_unit(text) -> str | None:
+    """The unit a declared ``unit:`` text is, as the tables key it, where the WHOLE text is one
+    unit: one of its spellings (:func:`_name_unit_table`: ``kN``, ``N.m``, ``m2``, ``KN``,
+    ``kmh``; with its case, or without it for a spelling of three characters or more that
+    names one unit only), or a compound unit :func:`_compound` reads in full (``m s-1``,
+    ``km h-1``, ``g cm-3``, ``Mg m-3``, ``kg/m3``, ``min-1``, ``g g-1``).  None otherwise: a
+    unit is never picked out of a longer text (``x1000 N``, ``10^3 N``, ``0.1 kN``,
+    ``N per 3 tines``, ``vol %``), whose other words change what the number means."""
+    exact, lower, forms = _name_unit_table()
+    u = str(text).strip()
+    if not u:
+        return None
+    if u in exact:
+        return exact[u]
+    if len(u) > 2 and u.lower() in lower:
+        return lower[u.lower()]
+    written, form = _compound(u)
+    return forms.get(form) if written else None
 
 
 def name_units(col) -> list[str]:
@@ -1032,18 +1120,31 @@ def name_units(col) -> list[str]:
     them), in the order written: a unit written as a word of the name, between ``_``, spaces,
     commas or brackets, anywhere in it (``draught_kN``, ``draught kN``, ``draught, kN``,
     ``draught_kN_mean``, ``speed_km_h``, ``torque_N_m``), or after a ``/`` (``draught/kN``),
-    or in brackets (``draught (kN)``, ``depth [mm]``, ``speed (km/h)``).  Matched with its
+    or in brackets (``draught (kN)``, ``depth [mm]``, ``speed (km/h)``); between dots where a
+    word of dots is no unit itself (R's names: ``Draught..kN.`` for ``Draught (kN)``,
+    ``draught.kN``; pandas' ``draught_kN.1``).  A compound unit written SI style, with
+    exponents or a ``/`` (``speed (m s-1)``, ``speed [m.s-1]``, ``density (g cm-3)``,
+    ``Mg m-3``, ``kg/m3``, ``(min-1)``: :func:`_compound`), is that unit, or no unit of the
+    tables (``draught (N m-1)``, a draught per width, is no N).  Matched with its
     case, else without it where that names one unit only and the spelling has three
     characters or more (``mpa`` is MPa; ``RPM`` is rpm; of two, ``kn`` and ``KN`` are kN, but
-    ``mn`` is no mN: :func:`_name_unit_table`).  A one-letter word is a unit with its case, in
-    brackets (``depth (m)``, ``draught [N]``) or as the name's last word after a ``_``
-    (``horizontal_measured_N``, ``Sd_m``: the tables' own naming); elsewhere (``F_N_mean``,
-    ``n``) it is as often an abbreviation.  A word of punctuation only (the ``-`` of
-    ``Moisture - %``) is no unit outside brackets (``w (-)`` is dimensionless), but ``%``."""
-    exact, lower = _name_unit_table()
+    ``mn`` is no mN: :func:`_name_unit_table`).  A one-letter word is a unit with its case in
+    brackets (``depth (m)``, ``draught [N]``), as the name's last word (``horizontal_measured_N``,
+    ``Sd_m``: the tables' own naming; ``Sd_m (mm)`` is in mm), or as a word after the first where the name gives no
+    other unit (``draught_N_mean``, ``F_N_sd``; ``Sd_m_mm`` is in mm); the first word alone
+    (``N``, ``n``, ``m``) is none.  A word of punctuation only (the ``-`` of ``Moisture - %``)
+    is no unit outside brackets (``w (-)`` is dimensionless), but ``%``; the one-letter rule is for
+    letters: ``%`` and ``°`` are units wherever they stand (``strain_%_total``, ``angle_°_paper``)."""
+    exact, lower, forms = _name_unit_table()
 
-    def unit(text, bracketed, last=False):
-        if len(text) == 1 and text.isalpha() and not (bracketed or last):
+    def compound(text, raw=False):
+        # raw: a quotient the text writes out but no table has (N m-1, a force per width) is
+        # given as written, so that it is seen as another quantity's unit; t2, r2 alone are ids
+        written, form = _compound(text)
+        return (True, forms.get(form, form if raw and "/" in form else None)) if written else (False, None)
+
+    def unit(text, bracketed, one_letter=False):
+        if len(text) == 1 and text.isalpha() and not (bracketed or one_letter):
             return None
         if not bracketed and text != "%" and all(c in string.punctuation for c in text):
             return None
@@ -1052,34 +1153,69 @@ def name_units(col) -> list[str]:
         return exact.get(text) or (lower.get(text.lower()) if len(text) > 2 else None)
 
     name = str(col).strip()
-    found = []
+    found, weak = [], []
     for m in _BRACKETS.finditer(name):
         inside = m.group(1)
+        written, form = compound(inside, raw=True)
+        if written:
+            found.append(form)
+            continue
         words = [w for w in re.split(r"[\s,;]+", inside) if w]
         whole = unit(inside, True)
         found += [whole] if whole else [unit(w, True) for w in words]
-    words = [w for w in re.split(r"[\s_,;]+", _BRACKETS.sub(" ", name)) if w]
+    words = []
+    for w in re.split(r"[\s_,;]+", _BRACKETS.sub(" ", name)):
+        if "." in w and not unit(w, False) and not compound(w)[0]:
+            words += w.split(".")  # R's names: Draught..kN., draught.kN
+        else:
+            words.append(w)
+    words = [w for w in words if w]
     i = 0
     while i < len(words):
-        pair = None
-        if i + 1 < len(words):  # a unit written in two words: km_h, m_s, r_min, N_m
+        # a compound unit over several words (m s-1, g cm-3, N per m) or two words of one
+        # unit (km_h, m_s, r_min, N_m)
+        span = None
+        for n in (4, 3, 2):
+            if i + n > len(words):
+                continue
+            # kg_m3 is kg/m3 as km_h is km/h
+            tries = [compound(" ".join(words[i:i + n]), raw=True), compound(f"{words[i]}/{' '.join(words[i + 1:i + n])}")]
+            known = next((form for written, form in tries if form), None)
+            if known or tries[0][0]:
+                span = (n, known)
+                break
+        if span is None and i + 1 < len(words):
             pair = unit(f"{words[i]}/{words[i + 1]}", False) or unit(f"{words[i]} {words[i + 1]}", False)
-        if pair:
-            found.append(pair)
-            i += 2
+            span = (2, pair) if pair else None
+        if span is not None:
+            found.append(span[1])
+            i += span[0]
             continue
         w = words[i]
-        last = i == len(words) - 1 and name.endswith("_" + w)
-        found.append(unit(w, False, last) or (unit(w.split("/", 1)[1], False) if "/" in w else None))
+        written, form = compound(w, raw=True)
+        if written:
+            found.append(form)
+        elif len(w) == 1 and w.isalpha() and i > 0:  # %, ° are units wherever they stand
+            last = i == len(words) - 1 and name.rstrip(".").endswith(w)  # Sd_m (mm): the brackets' mm
+            following = words[i + 1].lower() if i + 1 < len(words) else None
+            if last:
+                found.append(unit(w, False, True))
+            elif following is None or following in STATISTIC_WORDS:  # F_N_mean, Sd_m (mm)
+                weak.append(unit(w, False, True))
+            # else draught_N_2, draught_N_A, tool_m_depth: a one-letter id or abbreviation
+        else:
+            found.append(unit(w, False) or (unit(w.split("/", 1)[1], False) if "/" in w else None))
         i += 1
-    return list(dict.fromkeys(u for u in found if u))
+    found = [u for u in found if u]
+    return list(dict.fromkeys(found or [u for u in weak if u]))
 
 
-def _rename_hint(col, declared: str) -> str:
-    """How to rename a column whose name gives another unit than its cells are declared in."""
-    if re.search(r"_[A-Za-z]$", str(col).strip()):
+def _rename_hint(col, declared: str, named: str) -> str:
+    """How to rename a column whose name gives another unit (``named``) than its cells are
+    declared in."""
+    if len(named) == 1 and named.isalpha():
         return (f"or, if its cells are in {declared}, rename the column, e.g. {col} ({declared}): a one-letter "
-                "last word after _ is read as a unit")
+                "word after the first is read as a unit at the name's end or before mean, sd, se, min, max, avg or std")
     return f"or rename the column if its cells are in {declared}"
 
 
@@ -1119,11 +1255,18 @@ def _check_declared_unit(soil_path, cw: str, col: str, cv: dict) -> None:
     declared = quantity_factor(q, cv["unit"])
     for named in name_units(col):
         factor = quantity_factor(q, named)
-        if factor is None or abs(factor - declared) <= SCALE_RTOL * declared:
+        if factor is None:
+            units = MOISTURE_UNITS if q == "moisture_content" else ", ".join(QUANTITIES[q][1])
+            raise InputError(soil_path, f"{cw}.unit",
+                             f"the unit of the cells, which the name of column {col} says are in {named}, no unit "
+                             f"of {q} soilcal converts ({units}): give the cells in one of them and name the "
+                             f"column in it, e.g. {col.split('(')[0].split('[')[0].strip() or col} ({cv['unit']})",
+                             cv["unit"])
+        if abs(factor - declared) <= SCALE_RTOL * declared:
             continue
         raise InputError(soil_path, f"{cw}.unit",
                          f"the unit of the cells, which the column's name says are in {named} (unit: {named}; "
-                         f"{_rename_hint(col, cv['unit'])})", cv["unit"])
+                         f"{_rename_hint(col, cv['unit'], named)})", cv["unit"])
 
 
 def _check_response_column_units(soil_path, rw: str, r: dict, tpath: Path) -> None:
@@ -1136,12 +1279,19 @@ def _check_response_column_units(soil_path, rw: str, r: dict, tpath: Path) -> No
     for key in ("value", "sd", "paper_simulated", "paper_difference"):
         col = r.get(key)
         for named in (name_units(col) if col is not None else ()):
+            if named not in family and named.split("/")[0] in family:
+                raise InputError(soil_path, f"{rw}.value" if key == "value" else f"{rw}.{key}",
+                                 f"a column of {r['measure']} in a unit of its quantity "
+                                 f"({', '.join(family)}): the name of column {col} says {named}, "
+                                 f"{named.split('/')[0]} per {named.split('/', 1)[1]}, another quantity "
+                                 "(a force per width is no force; give the measured total in its own column)",
+                                 col)
             if named not in family or abs(family[named] - declared) <= 1e-9 * declared:
                 continue
             raise InputError(soil_path, f"{rw}.unit",
                              f"the unit of {tpath.name}'s columns, which the name of column {col} ({key}) says is "
                              f"{named} (unit: {named}, converted to {unit_of(r['measure'])} as the table is read; "
-                             f"{_rename_hint(col, r['unit'])})", r["unit"])
+                             f"{_rename_hint(col, r['unit'], named)})", r["unit"])
 
 
 def _renamed(exc: InputError, soil_path, prefix: str, field_prefix: str) -> InputError:

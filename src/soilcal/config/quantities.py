@@ -7,9 +7,9 @@ import math
 #: quantity -> (SI unit, {accepted unit: factor to SI}); ``None`` for a label quantity
 #: (a tool id, a test day, a group) whose cells are names, not numbers
 QUANTITIES = {
-    "tool_speed": ("m/s", {"m/s": 1.0, "km/h": 1 / 3.6, "mm/s": 1e-3, "cm/s": 1e-2}),
+    "tool_speed": ("m/s", {"m/s": 1.0, "km/h": 1 / 3.6, "m/min": 1 / 60, "mm/s": 1e-3, "cm/s": 1e-2}),
     "working_depth": ("m", {"m": 1.0, "cm": 1e-2, "mm": 1e-3}),
-    "rotor_speed": ("r/min", {"r/min": 1.0, "rpm": 1.0, "rad/s": 60 / (2 * math.pi)}),
+    "rotor_speed": ("r/min", {"r/min": 1.0, "rpm": 1.0, "r/s": 60.0, "rad/s": 60 / (2 * math.pi)}),
     "moisture_content": ("%", {"%": 1.0, "-": 100.0, "fraction": 100.0, "g/g": 100.0, "kg/kg": 100.0}),  # a mass fraction: 0.15 = 15 %
     "layer_depth": ("m", {"m": 1.0, "cm": 1e-2, "mm": 1e-3}),
     "bulk_density": ("kg/m^3", {"kg/m^3": 1.0, "g/cm^3": 1e3, "t/m^3": 1e3}),
@@ -22,29 +22,44 @@ QUANTITIES = {
 
 def moisture_factor(unit) -> float | None:
     """Factor to % of a moisture content's declared unit: ``%`` (also written ``percent``,
-    ``wt%``, ``% w/w``, ``g/100g``) or a mass fraction (``-``, ``fraction``, ``g/g``, ``kg/kg``) times 100;
-    case, spaces, dots and brackets ignored.  None for any other unit."""
+    ``wt%``, ``% w/w``, ``g/100g``, ``% dry basis``, ``% of dry mass``) or a mass fraction
+    (``-``, ``fraction``, ``g/g``, ``kg/kg``) times 100; case, spaces, dots and brackets
+    ignored.  A moisture content is gravimetric, of the dry mass: None for any other unit,
+    a volumetric one (``vol %``, ``% v/v``, ``m3 m-3``) or one of the wet mass
+    (``% wet basis``) too."""
     import re
 
     key = re.sub(r"[\s.()]+", "", str(unit).lower())
-    return {**QUANTITIES["moisture_content"][1], "percent": 1.0, "wt%": 1.0, "%w/w": 1.0, "g/100g": 1.0}.get(key)
+    return {**QUANTITIES["moisture_content"][1], "percent": 1.0, "wt%": 1.0, "%w/w": 1.0, "g/100g": 1.0,
+            "%drybasis": 1.0, "%ofdrymass": 1.0}.get(key)
 
 
 def quantity_factor(quantity: str, unit) -> float | None:
     """Factor to the SI unit of :data:`QUANTITIES` of a numeric quantity's ``unit`` as a
     measured table's covariate declares it: one of the quantity's units, and for a moisture
     content every unit :func:`moisture_factor` knows (the units the soil's own
-    ``properties.moisture_content`` takes, ``percent`` or ``wt%`` too).  None for another unit
-    or a label quantity."""
+    ``properties.moisture_content`` takes, ``percent`` or ``wt%`` too); also one of these
+    written otherwise where the WHOLE text is that unit
+    (:func:`soilcal.config.measurements.whole_unit`: ``m s-1``, ``km h-1``, ``g cm-3``,
+    ``Mg m-3``, ``min-1``, ``g g-1``).  None for another unit, for a text that holds a unit
+    among other words or numbers (``10 cm``, ``0.1 m s-1``, ``vol %``, ``% wet basis``), or a
+    label quantity."""
     if QUANTITIES.get(quantity) is None:
         return None
-    if quantity == "moisture_content":
-        return moisture_factor(unit)
-    return QUANTITIES[quantity][1].get(unit)
+    f = moisture_factor(unit) if quantity == "moisture_content" else QUANTITIES[quantity][1].get(unit)
+    if f is None and isinstance(unit, str):
+        from soilcal.config.measurements import whole_unit
+
+        u = whole_unit(unit)
+        if u is not None and u != unit:
+            return moisture_factor(u) if quantity == "moisture_content" else QUANTITIES[quantity][1].get(u)
+    return f
 
 
 #: the units of a moisture content :func:`moisture_factor` knows, as the messages name them
-MOISTURE_UNITS = "% (also percent, wt%, % w/w, g/100g) or a mass fraction (-, fraction, g/g, kg/kg)"
+MOISTURE_UNITS = ("% (also percent, wt%, % w/w, g/100g, % dry basis) or a mass fraction (-, fraction, g/g, "
+                  "kg/kg) of the dry mass: a gravimetric moisture content (a volumetric one, theta_v, is "
+                  "theta_v * rho_water / rho_dry_bulk; one of the wet mass, w_wet, is w_wet / (1 - w_wet))")
 
 
 def soil_moisture(path, data: dict) -> dict | None:
@@ -69,7 +84,7 @@ def soil_moisture(path, data: dict) -> dict | None:
     if not points and not ranges:
         return None
     unit = prop.get("unit", "%")
-    factor = moisture_factor(unit)
+    factor = quantity_factor("moisture_content", unit)
     if factor is None:
         raise InputError(path, "properties.moisture_content.unit",
                          f"a moisture content unit soilcal knows, {MOISTURE_UNITS} ({unit!r} is not one of them: "
@@ -105,3 +120,111 @@ def declares_moisture(declared: dict, pct: float) -> bool:
 
 #: quantities that must be above zero (an effect takes their logarithm or a ratio to them)
 POSITIVE_QUANTITIES = ("tool_speed", "working_depth", "rotor_speed", "layer_depth", "bulk_density")
+
+
+# ------------------------------------------------------------------ physical ranges
+
+#: kind -> (low, high, SI unit): the physical range of a measured property or material of a
+#: real soil or tool, in SI, by which a soil of one's own is checked at load
+#: (:func:`soilcal.config.load._check_own_properties`) and a published soil's printed values
+#: are judged (:func:`soilcal.chain.errata.plausibility`).  Bounds of real materials, not of the
+#: shipped soils: a bulk density from surface peat (~50 kg/m^3) to a compacted gravel
+#: (~2.4e3); a particle density from organic matter (~1.3e3, bounded at 500) to iron oxides
+#: (~5.2e3); any mass density (a tool's, a plain ``density``) from peat to tungsten (1.93e4);
+#: a gravimetric moisture content to 500 % (peat holds 300-1000 % at saturation, andisols
+#: over 100 %); moduli from a loose soil's kPa to a carbide's 5e11 Pa.
+PLAUSIBLE = {
+    "shear_modulus": (1e3, 3e11, "Pa"),
+    "youngs_modulus": (1e3, 5e11, "Pa"),
+    "poisson_ratio": (0.0, 0.5, "-"),
+    "density": (50.0, 2.0e4, "kg/m^3"),
+    "bulk_density": (50.0, 3.0e3, "kg/m^3"),
+    "particle_density": (500.0, 5.0e3, "kg/m^3"),
+    "restitution": (1e-9, 1.0, "-"),
+    "static_friction": (0.0, 3.0, "-"),
+    "rolling_friction": (0.0, 1.0, "-"),
+    "surface_energy": (0.0, 100.0, "J/m^2"),
+    "moisture_content": (0.0, 500.0, "%"),
+}
+#: the keys a soil's mass density of its bulk is given under (judged as a bulk density), and
+#: of its solids (as a particle density); any other key with "density" in it is some other
+#: quantity (relative_density in %, root_length_density in cm/cm^3, dry_density_ratio) and not
+#: judged as a mass density
+BULK_DENSITY_KEYS = ("bulk_density", "dry_density", "dry_bulk_density", "wet_density", "wet_bulk_density",
+                     "maximum_dry_density", "max_dry_density")
+PARTICLE_DENSITY_KEYS = ("particle_density", "solid_density", "grain_density")
+
+
+def plausible_kind(name: str, material: bool = False) -> str | None:
+    """The kind of :data:`PLAUSIBLE` a property keyed ``name`` (under ``materials`` when
+    ``material``) is judged as, or None for a property no range is known of: a material's
+    mass density under ``density`` or a bulk or particle density key is a ``density``."""
+    if name in BULK_DENSITY_KEYS + PARTICLE_DENSITY_KEYS:
+        return "density" if material else ("bulk_density" if name in BULK_DENSITY_KEYS else "particle_density")
+    return name if name in PLAUSIBLE else None
+
+
+#: unit symbol -> (factor to SI, dimension as powers of mass, length, time)
+_SI_SYMBOLS = {
+    "g": (1e-3, (1, 0, 0)), "kg": (1.0, (1, 0, 0)), "Mg": (1e3, (1, 0, 0)), "t": (1e3, (1, 0, 0)),
+    "mm": (1e-3, (0, 1, 0)), "cm": (1e-2, (0, 1, 0)), "dm": (0.1, (0, 1, 0)), "m": (1.0, (0, 1, 0)),
+    "km": (1e3, (0, 1, 0)), "L": (1e-3, (0, 3, 0)), "l": (1e-3, (0, 3, 0)), "mL": (1e-6, (0, 3, 0)),
+    "ml": (1e-6, (0, 3, 0)), "cc": (1e-6, (0, 3, 0)), "s": (1.0, (0, 0, 1)),
+    "N": (1.0, (1, 1, -2)), "kN": (1e3, (1, 1, -2)), "MN": (1e6, (1, 1, -2)),
+    "Pa": (1.0, (1, -1, -2)), "kPa": (1e3, (1, -1, -2)), "MPa": (1e6, (1, -1, -2)), "GPa": (1e9, (1, -1, -2)),
+    "J": (1.0, (1, 2, -2)), "mJ": (1e-3, (1, 2, -2)), "mN": (1e-3, (1, 1, -2)),
+}
+#: symbols of :data:`_SI_SYMBOLS` matched in another case (``Kg/m3``, ``KG/M3``, ``G/CM3``):
+#: those whose letters name one unit in any case; not ``mg``/``MG`` (Mg or a milligram), ``mn``
+#: (mN or MN) or ``mj`` (mJ or MJ), matched with their case only
+_SI_ANY_CASE = {s.lower(): s for s in ("g", "kg", "t", "mm", "cm", "dm", "m", "km", "L", "mL", "cc", "s", "N", "kN",
+                                       "Pa", "kPa", "GPa", "J")}
+#: the SI units of :data:`PLAUSIBLE` as dimensions
+_SI_DIMENSIONS = {"kg/m^3": (1, -3, 0), "Pa": (1, -1, -2), "J/m^2": (1, 0, -2), "-": (0, 0, 0)}
+#: a dimensionless value's unit: factor
+_DIMENSIONLESS = {"": 1.0, "-": 1.0, "1": 1.0, "dimensionless": 1.0, "%": 1e-2}
+#: the units :func:`si_factor` takes, by SI unit, as the messages name them
+SI_UNITS_TAKEN = {
+    "kg/m^3": "kg/m^3, g/cm^3, t/m^3, Mg/m^3, kg/dm^3, g/mL (also written g cm-3, kg m-3; Kg/m3, G/CM3)",
+    "Pa": "Pa, kPa, MPa, GPa, N/m^2, kN/m^2, MN/m^2 (also written N m-2)",
+    "J/m^2": "J/m^2, mJ/m^2, N/m, mN/m (also written J m-2, mN m-1)",
+    "-": "- (also 1, dimensionless) or %",
+}
+
+
+def si_factor(unit, si_unit: str) -> float | None:
+    """Factor to ``si_unit`` (a unit of :data:`PLAUSIBLE`) of a property's declared ``unit``,
+    where the whole text is a unit of that dimension: symbols of :data:`_SI_SYMBOLS` with
+    exponents, a ``/`` or ``per`` between them (``g/cm^3``, ``g cm-3``, ``kg.m-3``,
+    ``Mg m^-3``, ``kg/dm3``, ``g/mL``, ``N/m^2``, ``MN m-2``, ``J/m2``), a pressure in another
+    case (``mpa``, ``KPA``: MPa, kPa, as printed tables write them), or a dimensionless one
+    (``-``, ``1``, ``dimensionless``, ``%``).  None for a text that is no unit of that
+    dimension (``kN/m^3`` is a unit weight, no density; ``x1000 kg/m3`` is no unit)."""
+    import re
+
+    u = "" if unit is None else str(unit).strip()
+    if si_unit == "-":
+        return _DIMENSIONLESS.get(u.lower())
+    if si_unit == "Pa" and u.lower() in ("pa", "kpa", "mpa", "gpa"):
+        return {"pa": 1.0, "kpa": 1e3, "mpa": 1e6, "gpa": 1e9}[u.lower()]
+    t = re.sub(r"\s+per\s+|\s*/\s*", " / ", u.replace("·", " ").replace("⋅", " ").replace("−", "-"),
+               flags=re.IGNORECASE)
+    t = t.translate(str.maketrans("⁻¹²³", "-123"))
+    factor, dims, below, words = 1.0, [0, 0, 0], False, [w for w in re.split(r"[\s.*]+", t) if w]
+    for w in words:
+        if w == "/":
+            if below:
+                return None
+            below = True
+            continue
+        m = re.fullmatch(r"([A-Za-z]+)(?:\^?(-?\d))?", w)
+        sym = None if m is None else m[1] if m[1] in _SI_SYMBOLS else _SI_ANY_CASE.get(m[1].lower())
+        if sym is None:
+            return None
+        f, d = _SI_SYMBOLS[sym]
+        e = int(m[2] or 1) * (-1 if below else 1)
+        factor *= f ** e
+        dims = [a + b * e for a, b in zip(dims, d)]
+    if not words or words[-1] == "/" or tuple(dims) != _SI_DIMENSIONS[si_unit]:
+        return None
+    return float(f"{factor:.12g}")  # g/cm^3 is 1000, not 999.9999999999999
