@@ -1265,7 +1265,7 @@ def test_a_flat_face_rising_over_the_period_is_judged_as_a_plane_is(kind):
 
 def test_a_level_float32_stl_floor_tilted_across_the_periodic_axis_is_accepted(tmp_path):
     """A floor z = -0.1 + y tan 0.3 (true n_x = 0) of irregular 2 mm triangles over a 0.2 m
-    period in x, written as binary STL and read back: float32 rounding of each vertex (7 nm at
+    period in x (a strip 2 cm wide), written as binary STL and read back: float32 rounding of each vertex (7 nm at
     |z| = 0.1 m) tilts the faces by up to ~8e-6 along x, a "rise" over the period of 1.7 um,
     beyond the 0.3 um limit, so the floor was refused though both boundary sections agree to
     float32 rounding.  That rounding is forgiven: the floor is accepted and a 1.5 mm sphere
@@ -1275,9 +1275,9 @@ def test_a_level_float32_stl_floor_tilted_across_the_periodic_axis_is_accepted(t
     from soilcal.dem.stl import read_stl, write_stl
 
     mats = table(e=0.5, mu=0.3, E=1e8)
-    L, W, h, a, r = 0.2, 0.1, 2e-3, 0.3, 1.5e-3
+    L, W, h, a, r = 0.2, 0.02, 2e-3, 0.3, 1.5e-3
     rng = np.random.default_rng(1)
-    X, Y = np.meshgrid(np.linspace(-0.01, L + 0.01, 111), np.linspace(0, W, 51), indexing="ij")
+    X, Y = np.meshgrid(np.linspace(-0.01, L + 0.01, 111), np.linspace(0, W, 11), indexing="ij")
     X, Y = X.ravel(), Y.ravel()
     inner = (X > X.min()) & (X < X.max()) & (Y > 0) & (Y < W)
     X[inner] += h * rng.uniform(-0.3, 0.3, inner.sum())
@@ -1290,7 +1290,6 @@ def test_a_level_float32_stl_floor_tilted_across_the_periodic_axis_is_accepted(t
         sim.add_mesh(v, t, "soil", name="floor")
         y = W / 2
         sim.add_particles([np.array([x, y, -0.1 + y * math.tan(a)]) + 0.99 * r * n], r, "soil")
-        sim.add_particles([(L / 2, 0.07, 0.05)], 4.5e-3, "soil")
         f = np.linalg.norm(sim.compute_forces()[0][0])
         assert f == pytest.approx(_hertz_wall_force(mats, r, 0.01 * r), rel=2e-3)
 
