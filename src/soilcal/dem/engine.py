@@ -311,16 +311,18 @@ class _Sections:
         return ", ".join(f"{'xyz'[k]} {a:.6g}" + (f" .. {b:.6g}" if b - a > self.tol else "")
                          for k, a, b in zip(_ACROSS[self.q], lo, hi)) + " m"
 
-    def same(self, s1, s2) -> bool:
+    def same(self, s1, s2, tol=None) -> bool:
+        """Whether sections ``s1`` and ``s2`` agree within ``tol`` (default: the one given)."""
+        tol = self.tol if tol is None else tol
         if set(s1) != set(s2):
             return False
         for m in s1:
             (l1, c1), (l2, c2) = s1[m], s2[m]
-            if not (_covered(l1, l2, self.tol) and _covered(l2, l1, self.tol)):
+            if not (_covered(l1, l2, tol) and _covered(l2, l1, tol)):
                 return False
             for x, y in ((c1, c2), (c2, c1)):
                 if x.shape[0] and (y.shape[0] == 0 or not np.all(
-                        (np.abs(x[:, None, :] - y[None]).max(axis=2) <= self.tol).any(axis=1))):
+                        (np.abs(x[:, None, :] - y[None]).max(axis=2) <= tol).any(axis=1))):
                     return False
         return True
 
@@ -1269,7 +1271,9 @@ class Simulation:
         per material within max(2e-4 rho, 4 float32 ulps of the coordinates), as walls.py
         joins tiles: every point of the pieces of each within that distance of a piece of
         the other (:func:`_covered`; pieces shorter than it left out), circles by centre and
-        radius."""
+        radius; the sections exactly one period apart (q = lo and hi), which a sphere crossing
+        the boundary meets in turn, within max(2e-4 R_min, 4 float32 ulps), the limit of a
+        flat face's rise over the period."""
         wa = self._warr
         lo, hi = float(self.box[2 * q]), float(self.box[2 * q + 1])
         sel = np.isin(wa["prim_wall"][ks], walls)
@@ -1296,8 +1300,23 @@ class Simulation:
 
         ref = sec.at(lo - sp)
         why = None
+        # one period on, the section a sphere crossing the boundary meets in place of ref:
+        # the step between them is judged as a flat face's rise over the period is, within
+        # max(2e-4 R_min, 4 float32 ulps of the coordinates) (the tilt float32 rounding
+        # gives a small face is forgiven face by face, a rise of the whole surface is not)
+        end = sec.at(hi - sp)
+        tol_end = max(2e-4 * float(self.p.r.min()), 4.8e-7 * max(scale, abs(lo), abs(hi)))
+        if not sec.same(end, ref, min(tol, tol_end)):
+            why = (f"its faces at {ax} = {hi - sp:.6g} m ({sec.describe(end)}) are not those "
+                   f"one period away at {ax} = {lo - sp:.6g} m ({sec.describe(ref)}) within "
+                   f"{min(tol, tol_end):.3g} m (max(2e-4 R_min, 4 float32 ulps of the "
+                   f"coordinates); a sphere crossing the boundary would meet a step)"
+                   + (", as it stands at the start, moving by "
+                      f"{shift:.4g} m along {ax} over the run" if shift else ""))
         for a, b, inside in ((lo - sp, lo + rho - sn, True), (hi - rho - sp, hi - sn, True),
                              (lo - rho - sp, lo - sp, False), (hi - sn, hi + rho - sn, False)):
+            if why is not None:
+                break
             for c in samples(a, b):
                 s = sec.at(c)
                 if sec.same(s, ref) or (not inside and not s):
