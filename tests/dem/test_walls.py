@@ -1,6 +1,7 @@
 """Wall kinds wired into the force loop: equal forces for equivalent geometries, moving walls."""
 
 import math
+import re
 
 import numpy as np
 import pytest
@@ -1321,6 +1322,29 @@ def test_a_floor_of_small_faces_rising_over_the_period_beside_a_large_stone_is_r
                 sim.compute_forces()
         else:
             assert np.linalg.norm(sim.compute_forces()[0][0]) > 0
+
+
+def test_the_refusal_of_a_mesh_names_the_face_tilted_along_the_periodic_axis():
+    """A level floor (triangles 0 and 2) over a 0.04 m period in x and, between them in the
+    mesh, triangle 1: a wedge z = 0.025 x on the boundary x = 0 (unit normal (-0.025, 0, 1) /
+    sqrt(1 + 0.025^2), a rise of 0.025 L = 1 mm over the period).  The refusal named the wall
+    only; it names the triangle, its normal and its rise."""
+    L = 0.04
+    v = [[-0.004, 0, 0], [L + 0.004, 0, 0], [L + 0.004, 0.02, 0], [-0.004, 0.02, 0],
+         [0, 0.004, 0], [0.004, 0.004, 1e-4], [0, 0.008, 0]]
+    sim = Simulation(table(e=0.5, mu=0.3, E=1e8), gravity=(0, 0, 0), box=(0, L, 0, 0.02),
+                     periodic=(True, False))
+    sim.add_mesh(v, [[0, 1, 2], [4, 5, 6], [0, 2, 3]], "soil", name="floor")
+    sim.add_particles([(L / 2, 0.01, 2e-3)], 1e-3, "soil")
+    with pytest.raises(InputError, match=r"walls\.floor") as err:
+        sim.compute_forces()
+    m = re.search(r"face (\d+) of its (\d+) \(triangle, normal \(([^)]*)\), rising (\S+) m over "
+                  r"the period\)", str(err.value))
+    assert m is not None, str(err.value)
+    assert (int(m[1]), int(m[2])) == (1, 3)
+    n = np.abs([float(c) for c in m[3].split(",")])
+    assert n == pytest.approx(np.array([0.025, 0.0, 1.0]) / math.hypot(1, 0.025), abs=1e-6)
+    assert float(m[4]) == pytest.approx(0.025 * L, rel=1e-3)
 
 
 @pytest.mark.parametrize("kind", ["plane", "rod"])

@@ -1153,6 +1153,8 @@ class Simulation:
             # q: triangles (a mesh's thousands) at once, the few other primitives one by one
             a, b = np.empty(ks.size), np.empty(ks.size)
             flat = np.zeros(ks.size, dtype=bool)
+            # a flat face's unit normal and rise over the period (named when it is refused)
+            unit, rises = np.full((ks.size, 3), np.nan), np.full(ks.size, np.nan)
             tri = kinds[ks] == TRIANGLE
             if tri.any():
                 par = par_all[ks[tri]]
@@ -1172,10 +1174,15 @@ class Simulation:
                     edges = (np.linalg.norm(par[:, 3:6] - par[:, 0:3], axis=1)
                              + np.linalg.norm(par[:, 6:9] - par[:, 0:3], axis=1))
                     noise = np.nan_to_num(np.minimum(2.0 * ulp * edges / nn, 1e-3), nan=0.0)
-                flat[tri] = _rise(np.maximum(nq - noise, 0.0), hi - lo) <= eps_p
+                    unit[tri] = n / nn[:, None]
+                rises[tri] = _rise(np.maximum(nq - noise, 0.0), hi - lo)
+                flat[tri] = rises[tri] <= eps_p
             for i in np.flatnonzero(~tri):
                 a[i], b[i], flat[i] = _extent_along(kinds[ks[i]], par_all[ks[i]], q, eps,
                                                     hi - lo, eps_p)
+                if kinds[ks[i]] == RECTANGLE:
+                    unit[i] = par_all[ks[i], 3:6]
+                    rises[i] = _rise(par_all[ks[i], 3 + q], hi - lo)
             # an end face lying on a boundary, across the axis (the cap of a closed solid
             # exactly spanning the period): a sphere meets it at its rim only, where the faces
             # along the axis have it
@@ -1199,6 +1206,7 @@ class Simulation:
                     | ((a < hi + rho - eps) & (b > hi - rho + eps)))
             off = near & ~flat & ~(cap & ~turn & ~moves)
             bad[w[off]] = True
+            w_of, off_of, turn_of = w, off, turn  # per primitive in ks (w is reused below)
             # a flat face (triangle, rectangle) at rest turning about nothing but q: its rise
             flat_kind = ((kinds[ks] == TRIANGLE) | (kinds[ks] == RECTANGLE)) & ~turn
             tilted = np.zeros(nw, dtype=bool)
@@ -1213,7 +1221,9 @@ class Simulation:
                 why = ("a face within the largest radius of a boundary that does not run "
                        f"along {names[q]}" + (f" (a flat face rising over the period by more "
                        f"than {eps_p:.3g} m, max(2e-4 R_min, 4 float32 ulps of the box), as a "
-                       f"plane would)" if tilted[w] else "") if bad[w] else None)
+                       f"plane would)" if tilted[w] else "")
+                       + f", {self._face_at_fault(q, w, ks, w_of, off_of, turn_of, unit, rises)}"
+                       if bad[w] else None)
                 if why is None:
                     why = self._periodic_fault(q, [w], ks, flat, cap, rho, eps, span)
                 if why is not None and not bad[w]:
@@ -1245,6 +1255,28 @@ class Simulation:
                     f"section or nothing",
                     f"a wall reaching {ax} = {A:.6g} .. {B:.6g} m{moving}: {why}; a sphere "
                     f"beside one boundary would miss the surface across it")
+
+    def _face_at_fault(self, q, w, ks, w_of, off, turn, unit, rises) -> str:
+        """The first face of wall ``w`` refused near a periodic boundary, in words: its index
+        among the wall's faces (a mesh's triangle index, as add_mesh was given them), its
+        kind, and for a flat face its unit normal and rise over the period (after forgiving
+        the tilt float32 rounding of a triangle's vertices gives it)."""
+        kinds, walls_of = self._warr["prim_kind"], self._warr["prim_wall"]
+        j = int(np.flatnonzero(off & (w_of == w))[0])
+        k = int(ks[j])
+        face = int(np.count_nonzero(walls_of[:k] == w))
+        kind = {TRIANGLE: "triangle", RECTANGLE: "rectangle", DISK: "disk",
+                CYLINDER: "cylinder", CONE: "cone"}.get(int(kinds[k]), "face")
+        ax = ("x", "y")[q]
+        if turn[j]:
+            how = f"turning about an axis other than {ax}"
+        elif np.isfinite(rises[j]):
+            nrm = ", ".join(f"{c:.6g}" for c in unit[j])
+            how = f"normal ({nrm}), rising {rises[j]:.4g} m over the period"
+        else:
+            how = f"its section across {ax} not the same all along it"
+        n_faces = int(np.count_nonzero(walls_of == w))
+        return f"face {face} of its {n_faces} ({kind}, {how})"
 
     def _periodic_fault(self, q, walls, ks, flat, cap, rho, eps, span):
         """None when the surface of ``walls`` (moving together) continues periodically across
