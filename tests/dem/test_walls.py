@@ -1295,7 +1295,9 @@ def test_a_level_float32_stl_floor_tilted_across_the_periodic_axis_is_accepted(t
         assert f == pytest.approx(_hertz_wall_force(mats, r, 0.01 * r), rel=2e-3)
 
 
-def test_a_floor_of_small_faces_rising_over_the_period_beside_a_large_stone_is_refused():
+@pytest.mark.parametrize("stone_first", [False, True])
+def test_a_floor_of_small_faces_rising_over_the_period_beside_a_large_stone_is_refused(
+        stone_first):
     """A floor z = 0.1 + 1.5e-5 x of 2 mm right triangles over a 0.2 m period in x rises 3 um
     over the period, 10 times the limit 2e-4 R_min = 0.3 um (R_min = 1.5 mm): a sphere pressed
     0.01 R = 15 um into it just inside x = L lands 3 um shallower after crossing the boundary
@@ -1303,25 +1305,33 @@ def test_a_floor_of_small_faces_rising_over_the_period_beside_a_large_stone_is_r
     rounding of its vertices could give (1.8e-5 at z = 0.1 m), so the faces were forgiven,
     and with a 20 mm stone in the box the sections at both ends were compared within
     2e-4 R_max = 4 um: the floor was accepted.  The step between the two ends is judged
-    against R_min as a plane's rise is: refused, naming the wall.  Level, it is accepted."""
+    against R_min as a plane's rise is: refused, naming the wall, also when the small spheres
+    are added after a run with the stone alone (the wall's answer was kept from that run,
+    when R_min was the stone's 20 mm).  Level, it is accepted, and a sphere pressed 0.01 R
+    into it just inside x = L and one at the same height just past x = 0 (the first wrapped
+    across the boundary) both feel the Hertz force of that overlap."""
     L, W, h, r = 0.2, 0.02, 2e-3, 1.5e-3
     nx, ny = int(round((L + 0.02) / h)) + 1, int(round(W / h)) + 1
     X, Y = np.meshgrid(np.linspace(-0.01, L + 0.01, nx), np.linspace(0, W, ny), indexing="ij")
     i = np.arange(nx * ny).reshape(nx, ny)
     a, b, c, d = i[:-1, :-1].ravel(), i[1:, :-1].ravel(), i[1:, 1:].ravel(), i[:-1, 1:].ravel()
     tri = np.r_[np.c_[a, b, c], np.c_[a, c, d]]
+    mats = table(e=0.5, mu=0.3, E=1e8)
     for slope in (1.5e-5, 0.0):
-        sim = Simulation(table(e=0.5, mu=0.3, E=1e8), gravity=(0, 0, 0), box=(0, L, 0, W),
-                         periodic=(True, False))
+        sim = Simulation(mats, gravity=(0, 0, 0), box=(0, L, 0, W), periodic=(True, False))
         sim.add_mesh(np.c_[X.ravel(), Y.ravel(), 0.1 + slope * X.ravel()], tri, "soil",
                      name="floor")
-        sim.add_particles([(L - 1e-4, W / 2, 0.1 + slope * L + 0.99 * r)], r, "soil")
         sim.add_particles([(L / 2, W / 2, 0.15)], 0.02, "soil")
+        if stone_first:
+            sim.compute_forces()
+        z = 0.1 + slope * L + 0.99 * r
+        sim.add_particles([(L - 1e-4, 0.005, z), (1e-4, 0.015, z)], r, "soil")
         if slope:
             with pytest.raises(InputError, match=r"walls\.floor.*one period away.*a step"):
                 sim.compute_forces()
         else:
-            assert np.linalg.norm(sim.compute_forces()[0][0]) > 0
+            f = np.linalg.norm(sim.compute_forces()[0][sim.p.r == r], axis=1)
+            assert f == pytest.approx([_hertz_wall_force(mats, r, 0.01 * r)] * 2, rel=1e-6)
 
 
 def test_the_refusal_of_a_mesh_names_the_face_tilted_along_the_periodic_axis():

@@ -1312,14 +1312,21 @@ class Simulation:
         prims = ks[sel & flat]
         par = wa["prim_par"][prims]
         shift = float(wa["wall_vel"][walls[0], q]) * span
-        key = (q, tuple(walls), rho, eps, shift, lo, hi, hash(par.tobytes()))
+        scale = float(np.abs(par[:, :9]).max()) if par.size else 0.0
+        tol = max(2e-4 * rho, 4.8e-7 * scale)
+        # one period on, the section a sphere crossing the boundary meets in place of the
+        # one at lo: the step between them is judged as a flat face's rise over the period
+        # is, within max(2e-4 R_min, 4 float32 ulps of the coordinates) (the tilt float32
+        # rounding gives a small face is forgiven face by face, a rise of the whole surface
+        # is not)
+        tol_end = max(2e-4 * float(self.p.r.min()), 4.8e-7 * max(scale, abs(lo), abs(hi)))
+        # the answer depends on R_min through tol_end: spheres added later change it
+        key = (q, tuple(walls), rho, eps, tol_end, shift, lo, hi, hash(par.tobytes()))
         # walls at rest keep their answer (a moving wall is elsewhere at the next run)
         still = not (np.any(wa["wall_vel"][walls] != 0) or np.any(wa["wall_omega"][walls] != 0))
         cache = self.__dict__.setdefault("_periodic_cache", {}) if still else {}
         if key in cache:
             return self._spheres_enclosed(q, *cache[key])
-        scale = float(np.abs(par[:, :9]).max()) if par.size else 0.0
-        tol = max(2e-4 * rho, 4.8e-7 * scale)
         sp, sn = max(shift, 0.0), min(shift, 0.0)
         sec = _Sections(wa["prim_kind"][prims], par, wa["prim_mat"][prims], q, eps, tol,
                         [(lo - rho - sp, lo + rho - sn), (hi - rho - sp, hi + rho - sn)])
@@ -1332,12 +1339,7 @@ class Simulation:
 
         ref = sec.at(lo - sp)
         why = None
-        # one period on, the section a sphere crossing the boundary meets in place of ref:
-        # the step between them is judged as a flat face's rise over the period is, within
-        # max(2e-4 R_min, 4 float32 ulps of the coordinates) (the tilt float32 rounding
-        # gives a small face is forgiven face by face, a rise of the whole surface is not)
         end = sec.at(hi - sp)
-        tol_end = max(2e-4 * float(self.p.r.min()), 4.8e-7 * max(scale, abs(lo), abs(hi)))
         if not sec.same(end, ref, min(tol, tol_end)):
             why = (f"its faces at {ax} = {hi - sp:.6g} m ({sec.describe(end)}) are not those "
                    f"one period away at {ax} = {lo - sp:.6g} m ({sec.describe(ref)}) within "
