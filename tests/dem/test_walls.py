@@ -1348,13 +1348,43 @@ def test_the_refusal_of_a_mesh_names_the_face_tilted_along_the_periodic_axis():
     sim.add_particles([(L / 2, 0.01, 2e-3)], 1e-3, "soil")
     with pytest.raises(InputError, match=r"walls\.floor") as err:
         sim.compute_forces()
-    m = re.search(r"face (\d+) of its (\d+) \(triangle, normal \(([^)]*)\), rising (\S+) m over "
+    m = re.search(r"face (\d+) of its (\d+) as added \(triangle, normal \(([^)]*)\), rising (\S+) m over "
                   r"the period\)", str(err.value))
     assert m is not None, str(err.value)
     assert (int(m[1]), int(m[2])) == (1, 3)
     n = np.abs([float(c) for c in m[3].split(",")])
     assert n == pytest.approx(np.array([0.025, 0.0, 1.0]) / math.hypot(1, 0.025), abs=1e-6)
     assert float(m[4]) == pytest.approx(0.025 * L, rel=1e-3)
+
+
+def test_the_refusal_of_an_stl_mesh_names_the_facet_of_the_file(tmp_path):
+    """The mesh above written as an STL file whose first facet is a sliver (three corners on
+    one line, as CAD exports write): read_stl leaves it out, so the wedge, the file's facet 2
+    of 4, is triangle 1 of the 3 read.  Read with facets=True and added with them, the
+    refusal names facet 2 of the file (it named only "face 1 of its 3")."""
+    from soilcal.dem.stl import read_stl, write_stl
+
+    L = 0.04
+    v = np.array([[-0.004, 0, 0], [L + 0.004, 0, 0], [L + 0.004, 0.02, 0], [-0.004, 0.02, 0],
+                  [0, 0.004, 0], [0.004, 0.004, 1e-4], [0, 0.008, 0],
+                  [0.01, 0.01, 0], [0.02, 0.01, 0], [0.03, 0.01, 0]])
+    path = tmp_path / "floor.stl"
+    write_stl(path, v, np.array([[7, 8, 9], [0, 1, 2], [4, 5, 6], [0, 2, 3]]))
+    V, T, facets = read_stl(path, facets=True)
+    assert facets.tolist() == [1, 2, 3]
+    sim = Simulation(table(e=0.5, mu=0.3, E=1e8), gravity=(0, 0, 0), box=(0, L, 0, 0.02),
+                     periodic=(True, False))
+    sim.add_mesh(V, T, "soil", name="floor", facets=facets)
+    sim.add_particles([(L / 2, 0.01, 2e-3)], 1e-3, "soil")
+    with pytest.raises(InputError, match=r"walls\.floor") as err:
+        sim.compute_forces()
+    m = re.search(r"facet (\d+) of its STL file, face (\d+) of its (\d+) as added \(triangle, "
+                  r"normal \(([^)]*)\), rising (\S+) m", str(err.value))
+    assert m is not None, str(err.value)
+    assert (int(m[1]), int(m[2]), int(m[3])) == (2, 1, 3)
+    assert float(m[5]) == pytest.approx(0.025 * L, rel=1e-3)
+    with pytest.raises(InputError, match=r"walls\.mesh\.facets"):
+        sim.add_mesh(V, T, "soil", facets=[0, 1])
 
 
 @pytest.mark.parametrize("kind", ["plane", "rod"])

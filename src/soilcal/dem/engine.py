@@ -775,10 +775,12 @@ class Simulation:
                              [(DISK, vals, 0b1, 0b10)], velocity, omega, c)
 
     def add_mesh(self, vertices, triangles, material, name=None, velocity=(0, 0, 0),
-                 omega=(0, 0, 0), centre=None) -> int:
+                 omega=(0, 0, 0), centre=None, facets=None) -> int:
         """Triangle mesh wall (boxes, STL tools); one primitive per triangle.  ``omega``
         turns it about ``centre``, by default the mean of its vertices (the axis of a drum,
-        the middle of a box; give the shaft of a paddle or blade explicitly)."""
+        the middle of a box; give the shaft of a paddle or blade explicitly).  ``facets``:
+        each triangle's facet index in its STL file (``read_stl(path, facets=True)``, which
+        leaves out facets without area), by which a refused face is named."""
         v = _rows(self.source, "walls.mesh.vertices", vertices, None, "vertices [m]")
         t = np.asarray(triangles)
         if (t.ndim != 2 or t.shape[1] != 3 or t.size == 0 or not np.issubdtype(t.dtype, np.integer)
@@ -795,9 +797,19 @@ class Simulation:
             raise InputError(self.source, f"walls.mesh.triangles[{k}]",
                              "a triangle with area (three corners not on one line)",
                              f"corners {t[k].tolist()} at {rows[k].reshape(3, 3).tolist()}")
+        if facets is not None:
+            fa = np.asarray(facets)
+            if (fa.shape != (len(t),) or not np.issubdtype(fa.dtype, np.integer)
+                    or (fa.size and fa.min() < 0)):
+                raise InputError(self.source, "walls.mesh.facets",
+                                 f"one whole facet index >= 0 per triangle ({len(t)})",
+                                 f"an array of shape {fa.shape} and type {fa.dtype}")
         c = v.mean(axis=0) if centre is None else centre
-        return self.add_wall(name or f"mesh{len(self.walls.names)}", material,
-                             [(TRIANGLE, row, 0b111, 0) for row in rows], velocity, omega, c)
+        w = self.add_wall(name or f"mesh{len(self.walls.names)}", material,
+                          [(TRIANGLE, row, 0b111, 0) for row in rows], velocity, omega, c)
+        if facets is not None:
+            self.__dict__.setdefault("_mesh_facets", {})[w] = fa.astype(np.int64)
+        return w
 
     def add_box(self, lo, hi, material, name=None, velocity=(0, 0, 0), omega=(0, 0, 0)) -> int:
         """Closed box surface as a triangle mesh (particles outside or inside)."""
@@ -1276,7 +1288,11 @@ class Simulation:
         else:
             how = f"its section across {ax} not the same all along it"
         n_faces = int(np.count_nonzero(walls_of == w))
-        return f"face {face} of its {n_faces} ({kind}, {how})"
+        fac = self.__dict__.get("_mesh_facets", {}).get(w)
+        if fac is not None:
+            return (f"facet {int(fac[face])} of its STL file, face {face} of its {n_faces} "
+                    f"as added ({kind}, {how})")
+        return f"face {face} of its {n_faces} as added ({kind}, {how})"
 
     def _periodic_fault(self, q, walls, ks, flat, cap, rho, eps, span):
         """None when the surface of ``walls`` (moving together) continues periodically across
