@@ -1327,8 +1327,15 @@ def test_a_floor_of_small_faces_rising_over_the_period_beside_a_large_stone_is_r
         z = 0.1 + slope * L + 0.99 * r
         sim.add_particles([(L - 1e-4, 0.005, z), (1e-4, 0.015, z)], r, "soil")
         if slope:
-            with pytest.raises(InputError, match=r"walls\.floor.*one period away.*a step"):
+            with pytest.raises(InputError, match=r"walls\.floor.*one period away.*a step") as err:
                 sim.compute_forces()
+            # the limit printed is the one the text names: 2e-4 R_min = 3e-7 m (the float32
+            # ulps of coordinates up to 0.21 m, 1e-7 m, are smaller)
+            m = re.search(r"within (\S+) m \(max\(2e-4 R_min = (\S+) m, 4 float32 ulps of the "
+                          r"coordinates = (\S+) m\)", str(err.value))
+            assert m is not None, str(err.value)
+            assert float(m[1]) == float(m[2]) == pytest.approx(2e-4 * r, rel=1e-3)
+            assert float(m[3]) == pytest.approx(4.8e-7 * (L + 0.01), rel=5e-3)  # 3 digits
         else:
             f = np.linalg.norm(sim.compute_forces()[0][sim.p.r == r], axis=1)
             assert f == pytest.approx([_hertz_wall_force(mats, r, 0.01 * r)] * 2, rel=1e-6)

@@ -1357,10 +1357,16 @@ class Simulation:
         why = None
         end = sec.at(hi - sp)
         if not sec.same(end, ref, min(tol, tol_end)):
+            r_min, ulp_end = float(self.p.r.min()), 4.8e-7 * max(scale, abs(lo), abs(hi))
+            limit = (f"max(2e-4 R_min = {2e-4 * r_min:.3g} m, 4 float32 ulps of the "
+                     f"coordinates = {ulp_end:.3g} m)" if tol_end <= tol else
+                     f"max(2e-4 R_max = {2e-4 * rho:.3g} m, 4 float32 ulps of the faces' "
+                     f"coordinates = {4.8e-7 * scale:.3g} m), within which any two sections "
+                     f"are compared")
             why = (f"its faces at {ax} = {hi - sp:.6g} m ({sec.describe(end)}) are not those "
                    f"one period away at {ax} = {lo - sp:.6g} m ({sec.describe(ref)}) within "
-                   f"{min(tol, tol_end):.3g} m (max(2e-4 R_min, 4 float32 ulps of the "
-                   f"coordinates); a sphere crossing the boundary would meet a step)"
+                   f"{min(tol, tol_end):.3g} m ({limit}; a sphere crossing the boundary would "
+                   f"meet a step)"
                    + (", as it stands at the start, moving by "
                       f"{shift:.4g} m along {ax} over the run" if shift else ""))
         for a, b, inside in ((lo - sp, lo + rho - sn, True), (hi - rho - sp, hi - sn, True),
