@@ -1,6 +1,7 @@
 """Wall kinds wired into the force loop: equal forces for equivalent geometries, moving walls."""
 
 import math
+import re
 
 import numpy as np
 import pytest
@@ -1265,7 +1266,7 @@ def test_a_flat_face_rising_over_the_period_is_judged_as_a_plane_is(kind):
 
 def test_a_level_float32_stl_floor_tilted_across_the_periodic_axis_is_accepted(tmp_path):
     """A floor z = -0.1 + y tan 0.3 (true n_x = 0) of irregular 2 mm triangles over a 0.2 m
-    period in x, written as binary STL and read back: float32 rounding of each vertex (7 nm at
+    period in x (a strip 2 cm wide), written as binary STL and read back: float32 rounding of each vertex (7 nm at
     |z| = 0.1 m) tilts the faces by up to ~8e-6 along x, a "rise" over the period of 1.7 um,
     beyond the 0.3 um limit, so the floor was refused though both boundary sections agree to
     float32 rounding.  That rounding is forgiven: the floor is accepted and a 1.5 mm sphere
@@ -1275,9 +1276,9 @@ def test_a_level_float32_stl_floor_tilted_across_the_periodic_axis_is_accepted(t
     from soilcal.dem.stl import read_stl, write_stl
 
     mats = table(e=0.5, mu=0.3, E=1e8)
-    L, W, h, a, r = 0.2, 0.1, 2e-3, 0.3, 1.5e-3
+    L, W, h, a, r = 0.2, 0.02, 2e-3, 0.3, 1.5e-3
     rng = np.random.default_rng(1)
-    X, Y = np.meshgrid(np.linspace(-0.01, L + 0.01, 111), np.linspace(0, W, 51), indexing="ij")
+    X, Y = np.meshgrid(np.linspace(-0.01, L + 0.01, 111), np.linspace(0, W, 11), indexing="ij")
     X, Y = X.ravel(), Y.ravel()
     inner = (X > X.min()) & (X < X.max()) & (Y > 0) & (Y < W)
     X[inner] += h * rng.uniform(-0.3, 0.3, inner.sum())
@@ -1290,9 +1291,107 @@ def test_a_level_float32_stl_floor_tilted_across_the_periodic_axis_is_accepted(t
         sim.add_mesh(v, t, "soil", name="floor")
         y = W / 2
         sim.add_particles([np.array([x, y, -0.1 + y * math.tan(a)]) + 0.99 * r * n], r, "soil")
-        sim.add_particles([(L / 2, 0.07, 0.05)], 4.5e-3, "soil")
         f = np.linalg.norm(sim.compute_forces()[0][0])
         assert f == pytest.approx(_hertz_wall_force(mats, r, 0.01 * r), rel=2e-3)
+
+
+@pytest.mark.parametrize("stone_first", [False, True])
+def test_a_floor_of_small_faces_rising_over_the_period_beside_a_large_stone_is_refused(
+        stone_first):
+    """A floor z = 0.1 + 1.5e-5 x of 2 mm right triangles over a 0.2 m period in x rises 3 um
+    over the period, 10 times the limit 2e-4 R_min = 0.3 um (R_min = 1.5 mm): a sphere pressed
+    0.01 R = 15 um into it just inside x = L lands 3 um shallower after crossing the boundary
+    (Hertz: (12/15)^1.5, 28 % less force).  Each face's own tilt is below what float32
+    rounding of its vertices could give (1.8e-5 at z = 0.1 m), so the faces were forgiven,
+    and with a 20 mm stone in the box the sections at both ends were compared within
+    2e-4 R_max = 4 um: the floor was accepted.  The step between the two ends is judged
+    against R_min as a plane's rise is: refused, naming the wall, also when the small spheres
+    are added after a run with the stone alone (the wall's answer was kept from that run,
+    when R_min was the stone's 20 mm).  Level, it is accepted, and a sphere pressed 0.01 R
+    into it just inside x = L and one at the same height just past x = 0 (the first wrapped
+    across the boundary) both feel the Hertz force of that overlap."""
+    L, W, h, r = 0.2, 0.02, 2e-3, 1.5e-3
+    nx, ny = int(round((L + 0.02) / h)) + 1, int(round(W / h)) + 1
+    X, Y = np.meshgrid(np.linspace(-0.01, L + 0.01, nx), np.linspace(0, W, ny), indexing="ij")
+    i = np.arange(nx * ny).reshape(nx, ny)
+    a, b, c, d = i[:-1, :-1].ravel(), i[1:, :-1].ravel(), i[1:, 1:].ravel(), i[:-1, 1:].ravel()
+    tri = np.r_[np.c_[a, b, c], np.c_[a, c, d]]
+    mats = table(e=0.5, mu=0.3, E=1e8)
+    for slope in (1.5e-5, 0.0):
+        sim = Simulation(mats, gravity=(0, 0, 0), box=(0, L, 0, W), periodic=(True, False))
+        sim.add_mesh(np.c_[X.ravel(), Y.ravel(), 0.1 + slope * X.ravel()], tri, "soil",
+                     name="floor")
+        sim.add_particles([(L / 2, W / 2, 0.15)], 0.02, "soil")
+        if stone_first:
+            sim.compute_forces()
+        z = 0.1 + slope * L + 0.99 * r
+        sim.add_particles([(L - 1e-4, 0.005, z), (1e-4, 0.015, z)], r, "soil")
+        if slope:
+            with pytest.raises(InputError, match=r"walls\.floor.*one period away.*a step") as err:
+                sim.compute_forces()
+            # the limit printed is the one the text names: 2e-4 R_min = 3e-7 m (the float32
+            # ulps of coordinates up to 0.21 m, 1e-7 m, are smaller)
+            m = re.search(r"within (\S+) m \(max\(2e-4 R_min = (\S+) m, 4 float32 ulps of the "
+                          r"coordinates = (\S+) m\)", str(err.value))
+            assert m is not None, str(err.value)
+            assert float(m[1]) == float(m[2]) == pytest.approx(2e-4 * r, rel=1e-3)
+            assert float(m[3]) == pytest.approx(4.8e-7 * (L + 0.01), rel=5e-3)  # 3 digits
+        else:
+            f = np.linalg.norm(sim.compute_forces()[0][sim.p.r == r], axis=1)
+            assert f == pytest.approx([_hertz_wall_force(mats, r, 0.01 * r)] * 2, rel=1e-6)
+
+
+def test_the_refusal_of_a_mesh_names_the_face_tilted_along_the_periodic_axis():
+    """A level floor (triangles 0 and 2) over a 0.04 m period in x and, between them in the
+    mesh, triangle 1: a wedge z = 0.025 x on the boundary x = 0 (unit normal (-0.025, 0, 1) /
+    sqrt(1 + 0.025^2), a rise of 0.025 L = 1 mm over the period).  The refusal named the wall
+    only; it names the triangle, its normal and its rise."""
+    L = 0.04
+    v = [[-0.004, 0, 0], [L + 0.004, 0, 0], [L + 0.004, 0.02, 0], [-0.004, 0.02, 0],
+         [0, 0.004, 0], [0.004, 0.004, 1e-4], [0, 0.008, 0]]
+    sim = Simulation(table(e=0.5, mu=0.3, E=1e8), gravity=(0, 0, 0), box=(0, L, 0, 0.02),
+                     periodic=(True, False))
+    sim.add_mesh(v, [[0, 1, 2], [4, 5, 6], [0, 2, 3]], "soil", name="floor")
+    sim.add_particles([(L / 2, 0.01, 2e-3)], 1e-3, "soil")
+    with pytest.raises(InputError, match=r"walls\.floor") as err:
+        sim.compute_forces()
+    m = re.search(r"face (\d+) of its (\d+) as added \(triangle, normal \(([^)]*)\), rising (\S+) m over "
+                  r"the period\)", str(err.value))
+    assert m is not None, str(err.value)
+    assert (int(m[1]), int(m[2])) == (1, 3)
+    n = np.abs([float(c) for c in m[3].split(",")])
+    assert n == pytest.approx(np.array([0.025, 0.0, 1.0]) / math.hypot(1, 0.025), abs=1e-6)
+    assert float(m[4]) == pytest.approx(0.025 * L, rel=1e-3)
+
+
+def test_the_refusal_of_an_stl_mesh_names_the_facet_of_the_file(tmp_path):
+    """The mesh above written as an STL file whose first facet is a sliver (three corners on
+    one line, as CAD exports write): read_stl leaves it out, so the wedge, the file's facet 2
+    of 4, is triangle 1 of the 3 read.  Read with facets=True and added with them, the
+    refusal names facet 2 of the file (it named only "face 1 of its 3")."""
+    from soilcal.dem.stl import read_stl, write_stl
+
+    L = 0.04
+    v = np.array([[-0.004, 0, 0], [L + 0.004, 0, 0], [L + 0.004, 0.02, 0], [-0.004, 0.02, 0],
+                  [0, 0.004, 0], [0.004, 0.004, 1e-4], [0, 0.008, 0],
+                  [0.01, 0.01, 0], [0.02, 0.01, 0], [0.03, 0.01, 0]])
+    path = tmp_path / "floor.stl"
+    write_stl(path, v, np.array([[7, 8, 9], [0, 1, 2], [4, 5, 6], [0, 2, 3]]))
+    V, T, facets = read_stl(path, facets=True)
+    assert facets.tolist() == [1, 2, 3]
+    sim = Simulation(table(e=0.5, mu=0.3, E=1e8), gravity=(0, 0, 0), box=(0, L, 0, 0.02),
+                     periodic=(True, False))
+    sim.add_mesh(V, T, "soil", name="floor", facets=facets)
+    sim.add_particles([(L / 2, 0.01, 2e-3)], 1e-3, "soil")
+    with pytest.raises(InputError, match=r"walls\.floor") as err:
+        sim.compute_forces()
+    m = re.search(r"facet (\d+) of its STL file, face (\d+) of its (\d+) as added \(triangle, "
+                  r"normal \(([^)]*)\), rising (\S+) m", str(err.value))
+    assert m is not None, str(err.value)
+    assert (int(m[1]), int(m[2]), int(m[3])) == (2, 1, 3)
+    assert float(m[5]) == pytest.approx(0.025 * L, rel=1e-3)
+    with pytest.raises(InputError, match=r"walls\.mesh\.facets"):
+        sim.add_mesh(V, T, "soil", facets=[0, 1])
 
 
 @pytest.mark.parametrize("kind", ["plane", "rod"])

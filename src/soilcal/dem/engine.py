@@ -311,16 +311,18 @@ class _Sections:
         return ", ".join(f"{'xyz'[k]} {a:.6g}" + (f" .. {b:.6g}" if b - a > self.tol else "")
                          for k, a, b in zip(_ACROSS[self.q], lo, hi)) + " m"
 
-    def same(self, s1, s2) -> bool:
+    def same(self, s1, s2, tol=None) -> bool:
+        """Whether sections ``s1`` and ``s2`` agree within ``tol`` (default: the one given)."""
+        tol = self.tol if tol is None else tol
         if set(s1) != set(s2):
             return False
         for m in s1:
             (l1, c1), (l2, c2) = s1[m], s2[m]
-            if not (_covered(l1, l2, self.tol) and _covered(l2, l1, self.tol)):
+            if not (_covered(l1, l2, tol) and _covered(l2, l1, tol)):
                 return False
             for x, y in ((c1, c2), (c2, c1)):
                 if x.shape[0] and (y.shape[0] == 0 or not np.all(
-                        (np.abs(x[:, None, :] - y[None]).max(axis=2) <= self.tol).any(axis=1))):
+                        (np.abs(x[:, None, :] - y[None]).max(axis=2) <= tol).any(axis=1))):
                     return False
         return True
 
@@ -773,10 +775,12 @@ class Simulation:
                              [(DISK, vals, 0b1, 0b10)], velocity, omega, c)
 
     def add_mesh(self, vertices, triangles, material, name=None, velocity=(0, 0, 0),
-                 omega=(0, 0, 0), centre=None) -> int:
+                 omega=(0, 0, 0), centre=None, facets=None) -> int:
         """Triangle mesh wall (boxes, STL tools); one primitive per triangle.  ``omega``
         turns it about ``centre``, by default the mean of its vertices (the axis of a drum,
-        the middle of a box; give the shaft of a paddle or blade explicitly)."""
+        the middle of a box; give the shaft of a paddle or blade explicitly).  ``facets``:
+        each triangle's facet index in its STL file (``read_stl(path, facets=True)``, which
+        leaves out facets without area), by which a refused face is named."""
         v = _rows(self.source, "walls.mesh.vertices", vertices, None, "vertices [m]")
         t = np.asarray(triangles)
         if (t.ndim != 2 or t.shape[1] != 3 or t.size == 0 or not np.issubdtype(t.dtype, np.integer)
@@ -793,9 +797,19 @@ class Simulation:
             raise InputError(self.source, f"walls.mesh.triangles[{k}]",
                              "a triangle with area (three corners not on one line)",
                              f"corners {t[k].tolist()} at {rows[k].reshape(3, 3).tolist()}")
+        if facets is not None:
+            fa = np.asarray(facets)
+            if (fa.shape != (len(t),) or not np.issubdtype(fa.dtype, np.integer)
+                    or (fa.size and fa.min() < 0)):
+                raise InputError(self.source, "walls.mesh.facets",
+                                 f"one whole facet index >= 0 per triangle ({len(t)})",
+                                 f"an array of shape {fa.shape} and type {fa.dtype}")
         c = v.mean(axis=0) if centre is None else centre
-        return self.add_wall(name or f"mesh{len(self.walls.names)}", material,
-                             [(TRIANGLE, row, 0b111, 0) for row in rows], velocity, omega, c)
+        w = self.add_wall(name or f"mesh{len(self.walls.names)}", material,
+                          [(TRIANGLE, row, 0b111, 0) for row in rows], velocity, omega, c)
+        if facets is not None:
+            self.__dict__.setdefault("_mesh_facets", {})[w] = fa.astype(np.int64)
+        return w
 
     def add_box(self, lo, hi, material, name=None, velocity=(0, 0, 0), omega=(0, 0, 0)) -> int:
         """Closed box surface as a triangle mesh (particles outside or inside)."""
@@ -1151,6 +1165,8 @@ class Simulation:
             # q: triangles (a mesh's thousands) at once, the few other primitives one by one
             a, b = np.empty(ks.size), np.empty(ks.size)
             flat = np.zeros(ks.size, dtype=bool)
+            # a flat face's unit normal and rise over the period (named when it is refused)
+            unit, rises = np.full((ks.size, 3), np.nan), np.full(ks.size, np.nan)
             tri = kinds[ks] == TRIANGLE
             if tri.any():
                 par = par_all[ks[tri]]
@@ -1170,10 +1186,15 @@ class Simulation:
                     edges = (np.linalg.norm(par[:, 3:6] - par[:, 0:3], axis=1)
                              + np.linalg.norm(par[:, 6:9] - par[:, 0:3], axis=1))
                     noise = np.nan_to_num(np.minimum(2.0 * ulp * edges / nn, 1e-3), nan=0.0)
-                flat[tri] = _rise(np.maximum(nq - noise, 0.0), hi - lo) <= eps_p
+                    unit[tri] = n / nn[:, None]
+                rises[tri] = _rise(np.maximum(nq - noise, 0.0), hi - lo)
+                flat[tri] = rises[tri] <= eps_p
             for i in np.flatnonzero(~tri):
                 a[i], b[i], flat[i] = _extent_along(kinds[ks[i]], par_all[ks[i]], q, eps,
                                                     hi - lo, eps_p)
+                if kinds[ks[i]] == RECTANGLE:
+                    unit[i] = par_all[ks[i], 3:6]
+                    rises[i] = _rise(par_all[ks[i], 3 + q], hi - lo)
             # an end face lying on a boundary, across the axis (the cap of a closed solid
             # exactly spanning the period): a sphere meets it at its rim only, where the faces
             # along the axis have it
@@ -1197,6 +1218,7 @@ class Simulation:
                     | ((a < hi + rho - eps) & (b > hi - rho + eps)))
             off = near & ~flat & ~(cap & ~turn & ~moves)
             bad[w[off]] = True
+            w_of, off_of, turn_of = w, off, turn  # per primitive in ks (w is reused below)
             # a flat face (triangle, rectangle) at rest turning about nothing but q: its rise
             flat_kind = ((kinds[ks] == TRIANGLE) | (kinds[ks] == RECTANGLE)) & ~turn
             tilted = np.zeros(nw, dtype=bool)
@@ -1211,7 +1233,9 @@ class Simulation:
                 why = ("a face within the largest radius of a boundary that does not run "
                        f"along {names[q]}" + (f" (a flat face rising over the period by more "
                        f"than {eps_p:.3g} m, max(2e-4 R_min, 4 float32 ulps of the box), as a "
-                       f"plane would)" if tilted[w] else "") if bad[w] else None)
+                       f"plane would)" if tilted[w] else "")
+                       + f", {self._face_at_fault(q, w, ks, w_of, off_of, turn_of, unit, rises)}"
+                       if bad[w] else None)
                 if why is None:
                     why = self._periodic_fault(q, [w], ks, flat, cap, rho, eps, span)
                 if why is not None and not bad[w]:
@@ -1244,6 +1268,32 @@ class Simulation:
                     f"a wall reaching {ax} = {A:.6g} .. {B:.6g} m{moving}: {why}; a sphere "
                     f"beside one boundary would miss the surface across it")
 
+    def _face_at_fault(self, q, w, ks, w_of, off, turn, unit, rises) -> str:
+        """The first face of wall ``w`` refused near a periodic boundary, in words: its index
+        among the wall's faces (a mesh's triangle index, as add_mesh was given them), its
+        kind, and for a flat face its unit normal and rise over the period (after forgiving
+        the tilt float32 rounding of a triangle's vertices gives it)."""
+        kinds, walls_of = self._warr["prim_kind"], self._warr["prim_wall"]
+        j = int(np.flatnonzero(off & (w_of == w))[0])
+        k = int(ks[j])
+        face = int(np.count_nonzero(walls_of[:k] == w))
+        kind = {TRIANGLE: "triangle", RECTANGLE: "rectangle", DISK: "disk",
+                CYLINDER: "cylinder", CONE: "cone"}.get(int(kinds[k]), "face")
+        ax = ("x", "y")[q]
+        if turn[j]:
+            how = f"turning about an axis other than {ax}"
+        elif np.isfinite(rises[j]):
+            nrm = ", ".join(f"{c:.6g}" for c in unit[j])
+            how = f"normal ({nrm}), rising {rises[j]:.4g} m over the period"
+        else:
+            how = f"its section across {ax} not the same all along it"
+        n_faces = int(np.count_nonzero(walls_of == w))
+        fac = self.__dict__.get("_mesh_facets", {}).get(w)
+        if fac is not None:
+            return (f"facet {int(fac[face])} of its STL file, face {face} of its {n_faces} "
+                    f"as added ({kind}, {how})")
+        return f"face {face} of its {n_faces} as added ({kind}, {how})"
+
     def _periodic_fault(self, q, walls, ks, flat, cap, rho, eps, span):
         """None when the surface of ``walls`` (moving together) continues periodically across
         axis q over a run of ``span`` seconds, else what breaks it.  In the walls' own frame
@@ -1269,21 +1319,30 @@ class Simulation:
         per material within max(2e-4 rho, 4 float32 ulps of the coordinates), as walls.py
         joins tiles: every point of the pieces of each within that distance of a piece of
         the other (:func:`_covered`; pieces shorter than it left out), circles by centre and
-        radius."""
+        radius; the sections exactly one period apart (q = lo and hi), which a sphere crossing
+        the boundary meets in turn, within max(2e-4 R_min, 4 float32 ulps), the limit of a
+        flat face's rise over the period."""
         wa = self._warr
         lo, hi = float(self.box[2 * q]), float(self.box[2 * q + 1])
         sel = np.isin(wa["prim_wall"][ks], walls)
         prims = ks[sel & flat]
         par = wa["prim_par"][prims]
         shift = float(wa["wall_vel"][walls[0], q]) * span
-        key = (q, tuple(walls), rho, eps, shift, lo, hi, hash(par.tobytes()))
+        scale = float(np.abs(par[:, :9]).max()) if par.size else 0.0
+        tol = max(2e-4 * rho, 4.8e-7 * scale)
+        # one period on, the section a sphere crossing the boundary meets in place of the
+        # one at lo: the step between them is judged as a flat face's rise over the period
+        # is, within max(2e-4 R_min, 4 float32 ulps of the coordinates) (the tilt float32
+        # rounding gives a small face is forgiven face by face, a rise of the whole surface
+        # is not)
+        tol_end = max(2e-4 * float(self.p.r.min()), 4.8e-7 * max(scale, abs(lo), abs(hi)))
+        # the answer depends on R_min through tol_end: spheres added later change it
+        key = (q, tuple(walls), rho, eps, tol_end, shift, lo, hi, hash(par.tobytes()))
         # walls at rest keep their answer (a moving wall is elsewhere at the next run)
         still = not (np.any(wa["wall_vel"][walls] != 0) or np.any(wa["wall_omega"][walls] != 0))
         cache = self.__dict__.setdefault("_periodic_cache", {}) if still else {}
         if key in cache:
             return self._spheres_enclosed(q, *cache[key])
-        scale = float(np.abs(par[:, :9]).max()) if par.size else 0.0
-        tol = max(2e-4 * rho, 4.8e-7 * scale)
         sp, sn = max(shift, 0.0), min(shift, 0.0)
         sec = _Sections(wa["prim_kind"][prims], par, wa["prim_mat"][prims], q, eps, tol,
                         [(lo - rho - sp, lo + rho - sn), (hi - rho - sp, hi + rho - sn)])
@@ -1296,8 +1355,24 @@ class Simulation:
 
         ref = sec.at(lo - sp)
         why = None
+        end = sec.at(hi - sp)
+        if not sec.same(end, ref, min(tol, tol_end)):
+            r_min, ulp_end = float(self.p.r.min()), 4.8e-7 * max(scale, abs(lo), abs(hi))
+            limit = (f"max(2e-4 R_min = {2e-4 * r_min:.3g} m, 4 float32 ulps of the "
+                     f"coordinates = {ulp_end:.3g} m)" if tol_end <= tol else
+                     f"max(2e-4 R_max = {2e-4 * rho:.3g} m, 4 float32 ulps of the faces' "
+                     f"coordinates = {4.8e-7 * scale:.3g} m), within which any two sections "
+                     f"are compared")
+            why = (f"its faces at {ax} = {hi - sp:.6g} m ({sec.describe(end)}) are not those "
+                   f"one period away at {ax} = {lo - sp:.6g} m ({sec.describe(ref)}) within "
+                   f"{min(tol, tol_end):.3g} m ({limit}; a sphere crossing the boundary would "
+                   f"meet a step)"
+                   + (", as it stands at the start, moving by "
+                      f"{shift:.4g} m along {ax} over the run" if shift else ""))
         for a, b, inside in ((lo - sp, lo + rho - sn, True), (hi - rho - sp, hi - sn, True),
                              (lo - rho - sp, lo - sp, False), (hi - sn, hi + rho - sn, False)):
+            if why is not None:
+                break
             for c in samples(a, b):
                 s = sec.at(c)
                 if sec.same(s, ref) or (not inside and not s):

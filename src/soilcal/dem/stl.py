@@ -149,13 +149,14 @@ def read_stl_soup(path):
     return tri
 
 
-def weld(soup, weld_tol=0.0):
+def weld(soup, weld_tol=0.0, facets=False):
     """Indexed mesh from a triangle soup; vertices within ``weld_tol`` of each other or
     identical (``weld_tol=0``) merge into the first of them (ValueError where a chain of such
     vertices would merge two more than 2 ``weld_tol`` apart: a mesh finer than ``weld_tol``),
     wherever they lie (two copies of a corner a float-noise apart are one vertex, as on no
     grid of rounding).  Facets without area (two corners merged, or three on one line, as
-    CAD exports write slivers) are left out: they bound nothing."""
+    CAD exports write slivers) are left out: they bound nothing.  ``facets=True`` returns
+    also each kept triangle's index in the soup."""
     pts = soup.reshape(-1, 3)
     if weld_tol > 0:
         n = pts.shape[0]
@@ -178,7 +179,8 @@ def weld(soup, weld_tol=0.0):
         _, first, inv = np.unique(pts, axis=0, return_index=True, return_inverse=True)
     verts = pts[first]
     tris = inv.reshape(-1, 3).astype(np.int64)
-    return verts, tris[~without_area(verts[tris])]
+    kept = np.flatnonzero(~without_area(verts[tris]))
+    return (verts, tris[kept], kept) if facets else (verts, tris[kept])
 
 
 def without_area(corners) -> np.ndarray:
@@ -191,9 +193,13 @@ def without_area(corners) -> np.ndarray:
     return ~(area2 > 1e-12 * np.maximum((e1 ** 2).sum(axis=1), (e2 ** 2).sum(axis=1)))
 
 
-def read_stl(path, scale=1.0, weld_tol=0.0):
+def read_stl(path, scale=1.0, weld_tol=0.0, facets=False):
     """Read an STL file into ``(vertices float64[nv, 3], triangles int64[nt, 3])``,
-    coordinates multiplied by ``scale``."""
+    coordinates multiplied by ``scale``.  Facets without area are left out (:func:`weld`), so
+    triangle k need not be the file's facet k: ``facets=True`` returns also each triangle's
+    facet index in the file, ``(vertices, triangles, facets int64[nt])``; give it to
+    :meth:`soilcal.dem.engine.Simulation.add_mesh` (``facets=``) and a refused face is named
+    by its facet in the file."""
     try:
         tol = float(weld_tol)
     except (TypeError, ValueError):
@@ -203,10 +209,10 @@ def read_stl(path, scale=1.0, weld_tol=0.0):
                          weld_tol)
     soup = read_stl_soup(path) * float(scale)
     try:
-        v, t = weld(soup, tol)
+        v, t, kept = weld(soup, tol, facets=True)
     except ValueError as exc:
         raise InputError(path, "weld_tol", "a welding distance below the mesh's shortest edge", f"{tol:g}: {exc}") \
             from None
     if t.shape[0] == 0:
         raise InputError(path, "triangles", "at least one non-degenerate triangle", 0)
-    return v, t
+    return (v, t, kept) if facets else (v, t)
