@@ -504,3 +504,50 @@ def test_window_seen_off_the_drum_axis_is_refused(tmp_path, axis, ratio, size):
         drum.measure_drum_frame(render.save_frame(tmp_path / "oblique.png", squashed))
     found = float(str(err.value).split("axes ratio ")[2].split(",")[0])
     assert abs(found - ratio) < 0.04  # the rim ring's inner and outer edges (0.75 found 0.779)
+
+
+def _particles_in_flight(img, truth, n=200, seed=0):
+    """``n`` discs of the powder's grey (0.012 to 0.03 drum radii) thrown from the bed: their
+    columns over the rising 60 % of the drum, their heights above the surface in that column
+    exponential (mean 0.15 R, at most 0.45 R), inside 0.93 R, as a cascading drum throws grains
+    into the air; the bed and its surface are untouched."""
+    rng = np.random.default_rng(seed)
+    (cx, cy), R = truth["centre_px"], truth["radius_px"]
+    rr, cc = np.mgrid[0:img.shape[0], 0:img.shape[1]]
+    inside = np.hypot(cc - cx, rr - cy) < 0.9 * R
+    powder = inside & (img < 0.5 * (img[inside].min() + img[inside].max()))  # dark powder
+    grey = float(np.median(img[powder]))
+    side = 1.0 if truth["angle_deg"] > 0 else -1.0
+    k = 0
+    while k < n:
+        x = cx + side * rng.uniform(-0.3, 0.9) * R
+        col = powder[:, int(round(x))]
+        if not col.any():
+            continue
+        y = np.flatnonzero(col)[0] - rng.exponential(0.15 * R)
+        r = rng.uniform(0.012, 0.03) * R
+        if np.flatnonzero(col)[0] - y > 0.45 * R or np.hypot(x - cx, y - cy) > 0.93 * R:
+            continue
+        img[np.hypot(cc - x, rr - y) < r] = grey
+        k += 1
+    return img
+
+
+@pytest.mark.parametrize("angle", [35.0, -42.0])
+def test_particles_in_flight_flag_the_frame_low(tmp_path, angle):
+    # 200 powder-grey particles in flight above the upper part of the surface crowd into clusters
+    # that the first step from air to powder takes for the surface in their columns: these 35 and
+    # 42 deg surfaces read 41.63 and 47.62 deg, status ok.  Their jagged trace (a few % of the radius from
+    # a smooth curve, a straight or S-shaped surface stays within 0.05 %) flags the frame low,
+    # and a group sets it aside
+    img, truth = render.render_tester_frame(8, angle, fill=0.35, size=(500, 500), window="rim", n_avg=8)
+    clean = render.save_frame(tmp_path / "clean.png", img)
+    flying = render.save_frame(tmp_path / "flying.png", _particles_in_flight(img.copy(), truth))
+    summary, (ok, low) = drum.measure_drum([clean, flying])
+    assert ok.confidence == "ok" and low.confidence == "low" and "particles in flight" in low.low_reason
+    assert abs(summary["angle_deg"] - abs(truth["angle_deg"])) < 0.5
+    assert summary["n_frames"] == 1 and [a["path"] for a in summary["set_aside"]] == [str(flying)]
+    with pytest.raises(InputError, match="flying.png: low, a jagged free surface") as err:
+        drum.drum_summary([low])
+    assert err.value.field == "confidence"
+

@@ -16,13 +16,15 @@ def _n(n, noun):
 
 
 def _warn_set_aside(summary, group=None):
-    """One line on stderr per heap photo a group set aside (``set_aside`` of
-    :func:`soilcal.imaging.measure.pile_summary`): the JSON on stdout carries it too, but a group's
-    angle from fewer photos than given should not pass unseen."""
+    """One line on stderr per heap photo or drum frame a group set aside (``set_aside`` of
+    :func:`soilcal.imaging.measure.pile_summary` or :func:`soilcal.imaging.drum.drum_summary`):
+    the JSON on stdout carries it too, but a group's angle from fewer photos than given should not
+    pass unseen."""
+    noun, n = ("frame", summary.get("n_frames")) if "n_frames" in summary else ("photo", summary.get("n_photos"))
     for a in summary.get("set_aside", []):
         where = f"group {group}: " if group is not None else ""
-        print(f"soilcal: warning: {where}photo {a['path']} set aside (confidence low, not averaged into the "
-              f"group's angle; {_n(summary['n_photos'], 'photo')} used): {a['reason']}", file=sys.stderr)
+        print(f"soilcal: warning: {where}{noun} {a['path']} set aside (confidence low, not averaged into the "
+              f"group's angle; {_n(n, noun)} used): {a['reason']}", file=sys.stderr)
 
 
 def _plate_lines(args):
@@ -93,6 +95,7 @@ def _drum(args):
     if args.figures:
         for r in res:
             figures.angle_figure(r, f"{args.figures}/{r.path.rsplit('/', 1)[-1].rsplit('.', 1)[0]}")
+    _warn_set_aside(summary)
     _print(summary)
     return 0
 

@@ -66,8 +66,13 @@ drum window, 8- or 16-bit grey, time-averaged over many frames, no plate in view
    shows no powder against air in the drum, a surface outside :data:`DRUM_ANGLE_RANGE` (a level
    boundary is a frame with no turning drum in it, e.g. a table edge) or one straying
    more than :data:`MAX_LINE_RMS_PCT` % of the radius from a line (no powder surface).
+7. Confidence: a frame whose surface points stray more than :data:`MAX_ROUGHNESS_PCT` % of the
+   radius (RMS, ``roughness_pct``) from a local parabola over 0.1 radii of columns is "low"
+   (``low_reason``): particles in flight above the surface, crowding into powder-grey clusters
+   traced as surface, tilt the line and make it jagged; a free surface, straight or S-shaped, is
+   smooth at that scale.
 
-The frames of one group are averaged (:func:`measure_drum`).
+The frames of one group measured "ok" are averaged, the others set aside (:func:`measure_drum`).
 """
 
 from __future__ import annotations
@@ -76,7 +81,7 @@ import math
 from dataclasses import asdict, dataclass
 
 import numpy as np
-from scipy import ndimage as ndi
+from scipy import ndimage as ndi, signal
 from skimage import feature, filters, measure, morphology, transform
 
 from soilcal.errors import InputError
@@ -101,6 +106,12 @@ MAX_LINE_RMS_PCT = 10.0
 #: 30 px above, beyond 8 px), as a fraction of the bed's step from the air's grey to the powder's:
 #: a true surface has the powder below it and the air above (a step near 1)
 MIN_STEP = 0.6
+#: the most a measured surface may stray from a local parabola over 0.1 drum radii of columns (RMS,
+#: % of the radius, ``roughness_pct``) for the frame to be "ok": drawn straight and S-shaped
+#: surfaces give 0.01 to 0.02, a time-average of surfaces 8 px apart 0.4, photos of a textured
+#: powder 0.18 to 0.26; 80 to 200 powder-grey particles in flight above the surface (a cascade's
+#: curtain), traced as surface where they crowd, give 0.95 to 5.5 and tilt the angle by up to 15 deg
+MAX_ROUGHNESS_PCT = 0.6
 #: what every frame refused for showing no measurable drum is expected to show
 DRUM_EXPECTED = (f"a drum frame: powder lying in a drum, clearly darker or lighter than the air above it, its "
                  f"free surface one line at {DRUM_ANGLE_RANGE[0]:.0f} to {DRUM_ANGLE_RANGE[1]:.0f} deg")
@@ -174,6 +185,12 @@ class DrumResult:
     # shown, as the options give them), n_points counts the measured image's columns
     work_scale: float = 1.0
     pixels: str = "frame"
+    # RMS distance of the surface points from a local parabola over 0.1 drum radii of columns
+    # (Savitzky-Golay), % of the radius: a free surface, straight or S-shaped, is smooth at that
+    # scale; particles in flight traced as surface make it jagged
+    roughness_pct: float = 0.0
+    confidence: str = "ok"  # "low": see low_reason
+    low_reason: str = ""
 
     def as_dict(self):
         d = asdict(self)
@@ -636,7 +653,18 @@ def _measure_drum_frame(path, threshold, keep_stages, options, tried: Tried) -> 
     keep = np.abs(res) <= 8.0 * 1.4826 * np.median(np.abs(res)) + 2.0
     ma, da, res = _tls(u[keep], v[keep])
     rms = float(np.sqrt(np.mean(res ** 2)) / R * 100.0)
+    o = np.argsort(u)
+    k = min(max(5, int(round(0.1 * R)) | 1), u.size if u.size % 2 else u.size - 1)  # odd, 0.1 R of columns
+    rough = float(np.sqrt(np.mean((v[o] - signal.savgol_filter(v[o], k, 2, mode="interp")) ** 2)) / R * 100.0)
     where = {"image border": "no drum rim found", "rim": "drum rim found", "manifest": "drum as given"}[dref]
+    conf, why = "ok", ""
+    if rough > MAX_ROUGHNESS_PCT:
+        conf = "low"
+        why = (f"a jagged free surface: its points {rough:.2f} % of the drum radius (RMS) from a smooth curve over "
+               f"0.1 radii, above {MAX_ROUGHNESS_PCT:g} % (upper third {upper:.1f} deg, lower third {lower:.1f} deg, "
+               f"central chord {angle:.1f} deg): particles in flight above the surface (a cascade's curtain) or "
+               "lumps traced as surface, which tilt the line; take a frame where the curtain is sparse, with a "
+               "shorter exposure, or the tester's time-averaged frame")
     if not DRUM_ANGLE_RANGE[0] <= angle <= DRUM_ANGLE_RANGE[1]:
         raise InputError(path, "image", DRUM_EXPECTED, f"a surface at {angle:.1f} deg ({where}): a level edge, "
                          "no turning drum in the frame")
@@ -653,7 +681,8 @@ def _measure_drum_frame(path, threshold, keep_stages, options, tried: Tried) -> 
     fcx, fcy, fR = frame_px(cx, cy, R) if (sx, sy) != (1.0, 1.0) else (cx, cy, R)
     return DrumResult(str(path), angle, upper, lower, angle - 0.5 * (upper + lower), rms, float(roll), lref, dref,
                       [float(fcx), float(fcy)], float(fR), float(fr), int(cols.size), st,
-                      work_scale=float(math.sqrt(sx * sy)))
+                      work_scale=float(math.sqrt(sx * sy)), roughness_pct=rough,
+                      confidence=conf, low_reason=why)
 
 
 def measure_drum(paths, threshold="otsu", keep_stages=False, options=None, refusals=None):
@@ -663,20 +692,34 @@ def measure_drum(paths, threshold="otsu", keep_stages=False, options=None, refus
     """
     per = options if isinstance(options, list) else [options] * len(paths)
     res = [measure_drum_frame(p, threshold, keep_stages, o, refusals) for p, o in zip(paths, per)]
-    return drum_summary(res), res
+    try:
+        return drum_summary(res), res
+    except InputError as e:
+        e.results = res  # frames flagged low only: their results, for the figures
+        raise
 
 
 def drum_summary(res) -> dict:
-    """The mean angle and S-shape measures of the measured frames ``res`` (:class:`DrumResult`),
-    the angles' spread and the references they were measured against."""
+    """The mean angle and S-shape measures of the frames ``res`` (:class:`DrumResult`) measured
+    with confidence "ok", the angles' spread and the references they were measured against; a
+    frame flagged "low" is listed in ``set_aside`` (path, reason) and not averaged, ``n_frames``
+    counts those used, and a group with none "ok" is refused naming each frame and its reason.
+    ``frames`` holds every frame's result."""
+    used = [r for r in res if r.confidence == "ok"]
+    aside = [{"path": r.path, "reason": r.low_reason} for r in res if r.confidence != "ok"]
+    if not used:
+        raise InputError(res[0].path if len(res) == 1 else "<drum frame group>", "confidence",
+                         "at least one frame of the group measured with confidence ok (a frame flagged low is not "
+                         "averaged into the group's angle)",
+                         "; ".join(f"{a['path']}: low, {a['reason']}" for a in aside))
 
     def mean(key):
-        return float(np.nanmean([getattr(r, key) for r in res]))
+        return float(np.nanmean([getattr(r, key) for r in used]))
 
-    a = np.array([r.angle_deg for r in res])
+    a = np.array([r.angle_deg for r in used])
     return {"angle_deg": float(a.mean()), "spread_deg": float(a.std(ddof=1)) if a.size > 1 else 0.0,
-            "n_frames": len(res), "upper_deg": mean("upper_deg"), "lower_deg": mean("lower_deg"),
+            "n_frames": len(used), "upper_deg": mean("upper_deg"), "lower_deg": mean("lower_deg"),
             "s_shape_deg": mean("s_shape_deg"), "line_rms_pct": mean("line_rms_pct"),
-            "level_reference": ", ".join(sorted({r.level_reference for r in res})),
-            "drum_reference": ", ".join(sorted({r.drum_reference for r in res})),
-            "frames": [r.as_dict() for r in res]}
+            "level_reference": ", ".join(sorted({r.level_reference for r in used})),
+            "drum_reference": ", ".join(sorted({r.drum_reference for r in used})),
+            "frames": [r.as_dict() for r in res], "set_aside": aside}

@@ -238,9 +238,14 @@ def measure_manifest(path, figdir=None, threshold="otsu", refusals=None, refused
                                  f"{entries[given[e.path]]['plate_line_px']}", e.note) from None
             summary["views"] = [e.get("view") for e in entries]
         elif kind == "drum":
-            summary, res = drum.measure_drum(files, threshold, keep_stages=keep,
-                                             options=[drum.frame_options(e, path) for e in entries],
-                                             refusals=refusals)
+            try:
+                summary, res = drum.measure_drum(files, threshold, keep_stages=keep,
+                                                 options=[drum.frame_options(e, path) for e in entries],
+                                                 refusals=refusals)
+            except InputError as e:
+                if e.field != "confidence":  # no frame of the group measured "ok"
+                    raise
+                raise InputError(path, f"group {g} ({len(files)} frames)", e.expected, e.got) from None
         else:
             e = entries[0]
             r = measure.measure_furrow(files[0], e.get("scale_length_mm"), e.get("beam_datum_mm", 0.0),
