@@ -424,7 +424,7 @@ def _thin_cut_above(piece, main, rm):
     return bool(cols.size) and float(np.median(gaps)) <= 0.05 * rm
 
 
-def _surface(path, p, inside, cx, cy, rm):
+def _surface(path, p, inside, cx, cy, rm, circle_said=""):
     """Sub-pixel (column, row) points of the powder's free surface (powder high in ``p``)."""
     h, w = p.shape
     vals = p[inside]
@@ -466,8 +466,16 @@ def _surface(path, p, inside, cx, cy, rm):
                 powder = powder | (lab == k)
                 grown = True
                 break
-    air_lvl = np.median(p[inside & ~morphology.dilation(powder, morphology.disk(8))])
-    pow_lvl = np.median(p[morphology.erosion(powder, morphology.disk(8)) & inside])
+    air = inside & ~morphology.dilation(powder, morphology.disk(8))
+    core = morphology.erosion(powder, morphology.disk(8)) & inside
+    if air.sum() < 20 or core.sum() < 20:
+        raise InputError(path, "image", DRUM_EXPECTED, (
+            f"the bed filling the drum circle {circle_said}, no air above it" if air.sum() < 20 else
+            f"the bed a sliver along the drum circle {circle_said}, no powder more than 8 px from its edge") +
+            ": that circle is not the drum's window (a rim smeared by motion blur or out of focus is found "
+            "wrong: give drum_centre_px and drum_radius_px, or take a sharper frame), or the frame shows no bed")
+    air_lvl = np.median(p[air])
+    pow_lvl = np.median(p[core])
     cols, rows = [], []
     for c in range(max(0, int(np.ceil(cx - rm)) + 1), min(w, int(np.floor(cx + rm)))):
         half = math.sqrt(max(rm ** 2 - (c - cx) ** 2, 0.0))
@@ -608,7 +616,10 @@ def _measure_drum_frame(path, threshold, keep_stages, options, tried: Tried) -> 
     tried.add("powder and air split in the drum (Otsu); the lower class is the powder",
               bright if bright_powder else dark, circle=(cx, cy, rm))
     p = g if bright_powder else 1.0 - g
-    cols, rows, binary, powder = _surface(path, p, inside, cx, cy, rm)
+    said = "(centre ({:.0f}, {:.0f}) px, radius {:.0f} px, ".format(*frame_px(cx, cy, R)) + \
+        {"image border": "the image border: no drum rim found)", "rim": "the drum rim found)",
+         "manifest": "as given)"}[dref]
+    cols, rows, binary, powder = _surface(path, p, inside, cx, cy, rm, said)
     if cols.size < 30:
         raise InputError(path, "image", DRUM_EXPECTED, f"a free surface across {cols.size} pixel columns "
                          "(at least 30 needed)")
