@@ -627,3 +627,23 @@ def test_thin_bed_in_a_small_drum_is_measured(tmp_path):
     # rim was found; the powder's grey is now taken from as deep in the bed as it goes
     r = drum.measure_drum_frame(render.save_frame(tmp_path / "thin.png", _thin_bed()))
     assert abs(r.angle_deg - 35.0) < 0.2 and r.drum_reference == "rim"
+
+
+def test_a_refused_group_of_flagged_frames_still_gets_its_figures(tmp_path):
+    # a drum group whose frames are all flagged low was refused with no figures written, though
+    # a heap photo group's refusal writes them: now both the CLI and the manifest write them
+    from soilcal.cli import main
+
+    img, truth = render.render_tester_frame(8, 35.0, fill=0.35, size=(500, 500), window="rim", n_avg=8)
+    p = render.save_frame(tmp_path / "flying.png", _particles_in_flight(img.copy(), truth))
+    figs = tmp_path / "figs"
+    figs.mkdir()
+    assert main(["image", "drum", str(p), "--figures", str(figs)]) != 0
+    assert (figs / "flying.png").is_file()
+    (tmp_path / "m.yaml").write_text(yaml.safe_dump({"photos": [
+        {"file": "flying.png", "kind": "drum", "group": "drum", "level": "image"}]}))
+    mfigs = tmp_path / "mfigs"
+    with pytest.raises(InputError) as e:
+        measure_manifest(tmp_path / "m.yaml", figdir=mfigs)
+    assert "group drum" in e.value.field and str(mfigs) in str(e.value)
+    assert (mfigs / "flying.png").is_file()

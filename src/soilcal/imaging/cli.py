@@ -90,8 +90,17 @@ def _drum(args):
         opts = drum.frame_options({k: getattr(args, k) for k in drum.OPTIONS}, "<command line>", prefix="--")
     except InputError as exc:  # name the option as it is typed: --chord-fraction
         raise InputError(exc.path, exc.field.replace("_", "-"), exc.expected, exc.got) from None
-    summary, res = drum.measure_drum(args.frames, args.threshold, keep_stages=bool(args.figures), options=opts,
-                                     refusals=_refusals(args))
+    try:
+        summary, res = drum.measure_drum(args.frames, args.threshold, keep_stages=bool(args.figures), options=opts,
+                                         refusals=_refusals(args))
+    except InputError as e:
+        if e.field != "confidence" or not args.figures:
+            raise
+        # no frame "ok": their figures, which the reasons point to, are written all the same
+        for r in e.results:
+            figures.angle_figure(r, f"{args.figures}/{r.path.rsplit('/', 1)[-1].rsplit('.', 1)[0]}")
+        raise InputError(e.path, e.field, e.expected, f"{e.got}; figures of every frame in {args.figures}",
+                         e.note) from None
     if args.figures:
         for r in res:
             figures.angle_figure(r, f"{args.figures}/{r.path.rsplit('/', 1)[-1].rsplit('.', 1)[0]}")
