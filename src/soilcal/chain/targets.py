@@ -13,8 +13,8 @@ of the soil config with the value the chain calibrates to:
 A soil without a ``citation`` (a soil of one's own, no paper) has no printed values: its
 targets' values are its own measurements, ``printed_value`` is empty and a photo target's note
 names the value the soil gives beside the photo measurement.  A photo target's note also names
-the heap photos its group set aside as ``low`` (``set_aside`` in ``measurements.json``), which
-its value and ``image_n`` leave out.
+the heap photos or drum frames its group set aside as ``low`` (``set_aside`` in
+``measurements.json``), which its value and ``image_n`` leave out.
 
 A target whose value is neither measured on a photo nor printed is kept with an empty value
 and says so (``source = not available``); the optimisation cases that aim at it say why they

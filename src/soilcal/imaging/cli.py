@@ -16,13 +16,15 @@ def _n(n, noun):
 
 
 def _warn_set_aside(summary, group=None):
-    """One line on stderr per heap photo a group set aside (``set_aside`` of
-    :func:`soilcal.imaging.measure.pile_summary`): the JSON on stdout carries it too, but a group's
-    angle from fewer photos than given should not pass unseen."""
+    """One line on stderr per heap photo or drum frame a group set aside (``set_aside`` of
+    :func:`soilcal.imaging.measure.pile_summary` or :func:`soilcal.imaging.drum.drum_summary`):
+    the JSON on stdout carries it too, but a group's angle from fewer photos than given should not
+    pass unseen."""
+    noun, n = ("frame", summary.get("n_frames")) if "n_frames" in summary else ("photo", summary.get("n_photos"))
     for a in summary.get("set_aside", []):
         where = f"group {group}: " if group is not None else ""
-        print(f"soilcal: warning: {where}photo {a['path']} set aside (confidence low, not averaged into the "
-              f"group's angle; {_n(summary['n_photos'], 'photo')} used): {a['reason']}", file=sys.stderr)
+        print(f"soilcal: warning: {where}{noun} {a['path']} set aside (confidence low, not averaged into the "
+              f"group's angle; {_n(n, noun)} used): {a['reason']}", file=sys.stderr)
 
 
 def _figure_base(folder, r):
@@ -98,11 +100,21 @@ def _drum(args):
     except InputError as exc:  # name the option as it is typed: --chord-fraction
         raise InputError(exc.path, exc.field.replace("_", "-"), exc.expected, exc.got) from None
     figures.check_apart(args.frames, args.figures, "--figures")
-    summary, res = drum.measure_drum(args.frames, args.threshold, keep_stages=bool(args.figures), options=opts,
-                                     refusals=_refusals(args))
+    try:
+        summary, res = drum.measure_drum(args.frames, args.threshold, keep_stages=bool(args.figures), options=opts,
+                                         refusals=_refusals(args))
+    except InputError as e:
+        if e.field != "confidence" or not args.figures:
+            raise
+        # no frame "ok": their figures, which the reasons point to, are written all the same
+        for r in e.results:
+            figures.angle_figure(r, _figure_base(args.figures, r))
+        raise InputError(e.path, e.field, e.expected, f"{e.got}; figures of every frame in {args.figures}",
+                         e.note) from None
     if args.figures:
         for r in res:
             figures.angle_figure(r, _figure_base(args.figures, r))
+    _warn_set_aside(summary)
     _print(summary)
     return 0
 

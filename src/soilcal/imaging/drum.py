@@ -66,8 +66,15 @@ drum window, 8- or 16-bit grey, time-averaged over many frames, no plate in view
    shows no powder against air in the drum, a surface outside :data:`DRUM_ANGLE_RANGE` (a level
    boundary is a frame with no turning drum in it, e.g. a table edge) or one straying
    more than :data:`MAX_LINE_RMS_PCT` % of the radius from a line (no powder surface).
+7. Confidence: a frame whose surface points stray more than :data:`MAX_ROUGHNESS_PCT` % of the
+   radius (RMS, ``roughness_pct``, across the surface from its fitted line) from a local parabola
+   over 0.1 radii along the surface, and whose upper or lower third's angle parts more than
+   :data:`MAX_THIRD_TILT_DEG` deg from the central chord's, is "low" (``low_reason``): particles in
+   flight above the upper part, crowding into powder-grey clusters traced as surface, make the
+   trace jagged and tilt the line; a free surface, straight or S-shaped, is smooth at that scale,
+   and clods spread along it leave the thirds as the chord.
 
-The frames of one group are averaged (:func:`measure_drum`).
+The frames of one group measured "ok" are averaged, the others set aside (:func:`measure_drum`).
 """
 
 from __future__ import annotations
@@ -76,7 +83,7 @@ import math
 from dataclasses import asdict, dataclass
 
 import numpy as np
-from scipy import ndimage as ndi
+from scipy import ndimage as ndi, signal
 from skimage import feature, filters, measure, morphology, transform
 
 from soilcal.errors import InputError
@@ -101,6 +108,18 @@ MAX_LINE_RMS_PCT = 10.0
 #: 30 px above, beyond 8 px), as a fraction of the bed's step from the air's grey to the powder's:
 #: a true surface has the powder below it and the air above (a step near 1)
 MIN_STEP = 0.6
+#: the most a measured surface may stray from a local parabola over 0.1 drum radii along it (RMS
+#: distance across the surface, % of the radius, ``roughness_pct``) for the frame to be "ok"
+#: whatever its thirds: drawn straight and S-shaped surfaces give 0.01 to 0.02, rendered drum frames
+#: at 45 to 74 deg 0.11 to 0.13, twelve clods 6 % of the radius across along the surface 0.35 to
+#: 0.59; 80 to 200 powder-grey particles in flight above the surface (a cascade's curtain), traced
+#: as surface where they crowd, give 0.49 to 3.6 and tilt the angle by up to 15 deg
+MAX_ROUGHNESS_PCT = 0.55
+#: with the surface rougher than :data:`MAX_ROUGHNESS_PCT`, the most the upper or lower third's
+#: angle may part from the central chord's (deg) for the frame to be "ok": particles in flight
+#: crowding over the upper part tilt the chord away from the thirds, lumps spread evenly along the
+#: surface do not
+MAX_THIRD_TILT_DEG = 0.65
 #: what every frame refused for showing no measurable drum is expected to show
 DRUM_EXPECTED = (f"a drum frame: powder lying in a drum, clearly darker or lighter than the air above it, its "
                  f"free surface one line at {DRUM_ANGLE_RANGE[0]:.0f} to {DRUM_ANGLE_RANGE[1]:.0f} deg")
@@ -174,6 +193,12 @@ class DrumResult:
     # shown, as the options give them), n_points counts the measured image's columns
     work_scale: float = 1.0
     pixels: str = "frame"
+    # RMS distance of the surface points from a local parabola over 0.1 drum radii of columns
+    # (Savitzky-Golay), % of the radius: a free surface, straight or S-shaped, is smooth at that
+    # scale; particles in flight traced as surface make it jagged
+    roughness_pct: float = 0.0
+    confidence: str = "ok"  # "low": see low_reason
+    low_reason: str = ""
 
     def as_dict(self):
         d = asdict(self)
@@ -407,7 +432,7 @@ def _thin_cut_above(piece, main, rm):
     return bool(cols.size) and float(np.median(gaps)) <= 0.05 * rm
 
 
-def _surface(path, p, inside, cx, cy, rm):
+def _surface(path, p, inside, cx, cy, rm, circle_said=""):
     """Sub-pixel (column, row) points of the powder's free surface (powder high in ``p``)."""
     h, w = p.shape
     vals = p[inside]
@@ -449,8 +474,23 @@ def _surface(path, p, inside, cx, cy, rm):
                 powder = powder | (lab == k)
                 grown = True
                 break
-    air_lvl = np.median(p[inside & ~morphology.dilation(powder, morphology.disk(8))])
-    pow_lvl = np.median(p[morphology.erosion(powder, morphology.disk(8)) & inside])
+    air = inside & ~morphology.dilation(powder, morphology.disk(8))
+    if air.sum() < 20:
+        raise InputError(path, "image", DRUM_EXPECTED, (
+            f"the bed filling the drum circle {circle_said}, no air above it: that circle is not the drum's "
+            "window (a rim smeared by motion blur or out of focus is found wrong: give drum_centre_px and "
+            "drum_radius_px, or take a sharper frame)"))
+    # the powder's grey from its core 8 px from the bed's edge; a thin bed (a small drum little
+    # filled) from as far inside as it has
+    for k in (8, 4, 2, 1, 0):
+        core = (morphology.erosion(powder, morphology.disk(k)) if k else powder) & inside
+        if core.sum() >= 20:
+            break
+    else:
+        raise InputError(path, "image", DRUM_EXPECTED, f"{int(core.sum())} powder pixels in the drum circle "
+                         f"{circle_said} (at least 20 needed): the frame shows no bed")
+    air_lvl = np.median(p[air])
+    pow_lvl = np.median(p[core])
     cols, rows = [], []
     for c in range(max(0, int(np.ceil(cx - rm)) + 1), min(w, int(np.floor(cx + rm)))):
         half = math.sqrt(max(rm ** 2 - (c - cx) ** 2, 0.0))
@@ -591,7 +631,10 @@ def _measure_drum_frame(path, threshold, keep_stages, options, tried: Tried) -> 
     tried.add("powder and air split in the drum (Otsu); the lower class is the powder",
               bright if bright_powder else dark, circle=(cx, cy, rm))
     p = g if bright_powder else 1.0 - g
-    cols, rows, binary, powder = _surface(path, p, inside, cx, cy, rm)
+    said = "(centre ({:.0f}, {:.0f}) px, radius {:.0f} px, ".format(*frame_px(cx, cy, R)) + \
+        {"image border": "the image border: no drum rim found)", "rim": "the drum rim found)",
+         "manifest": "as given)"}[dref]
+    cols, rows, binary, powder = _surface(path, p, inside, cx, cy, rm, said)
     if cols.size < 30:
         raise InputError(path, "image", DRUM_EXPECTED, f"a free surface across {cols.size} pixel columns "
                          "(at least 30 needed)")
@@ -636,7 +679,29 @@ def _measure_drum_frame(path, threshold, keep_stages, options, tried: Tried) -> 
     keep = np.abs(res) <= 8.0 * 1.4826 * np.median(np.abs(res)) + 2.0
     ma, da, res = _tls(u[keep], v[keep])
     rms = float(np.sqrt(np.mean(res ** 2)) / R * 100.0)
+    # roughness across the surface: distances from the fitted line (its normal), sorted and
+    # smoothed along it over 0.1 radii of surface (the points' spacing along the line is
+    # 1 / cos of its slope per column), so a steep smooth surface reads as smooth as a shallow one
+    sa, na = (pts - ma) @ da, (pts - ma) @ np.array([-da[1], da[0]])
+    o = np.argsort(sa)
+    step = float(np.median(np.diff(sa[o]))) or 1.0
+    k = min(max(5, int(round(0.1 * R / step)) | 1), u.size if u.size % 2 else u.size - 1)  # odd
+    rough = float(np.sqrt(np.mean((na[o] - signal.savgol_filter(na[o], k, 2, mode="interp")) ** 2)) / R * 100.0)
+    # a jagged trace tilts the line only where it is one-sided: particles in flight crowd over
+    # the upper part, so a third's angle parts from the central chord's; lumps spread evenly
+    # along the surface leave the thirds as the chord
+    tilt = max((abs(x - angle) for x in (upper, lower) if np.isfinite(x)), default=0.0)
     where = {"image border": "no drum rim found", "rim": "drum rim found", "manifest": "drum as given"}[dref]
+    conf, why = "ok", ""
+    if rough > MAX_ROUGHNESS_PCT and tilt > MAX_THIRD_TILT_DEG:
+        conf = "low"
+        why = (f"a jagged free surface tilting the line: its points {rough:.2f} % of the drum radius (RMS) across "
+               f"the surface from a smooth curve over 0.1 radii, above {MAX_ROUGHNESS_PCT:g} %, and a third's angle "
+               f"{tilt:.1f} deg from the central chord's, above {MAX_THIRD_TILT_DEG:g} deg (upper third {upper:.1f} "
+               f"deg, lower third {lower:.1f} deg, central chord {angle:.1f} deg): particles in flight above the "
+               "surface (a cascade's curtain) or lumps gathered on one part, traced as surface; take a frame where "
+               "the curtain is sparse, with a shorter exposure, or the tester's time-averaged frame; if the "
+               "surface truly bends so, read its angle from the frame by hand")
     if not DRUM_ANGLE_RANGE[0] <= angle <= DRUM_ANGLE_RANGE[1]:
         raise InputError(path, "image", DRUM_EXPECTED, f"a surface at {angle:.1f} deg ({where}): a level edge, "
                          "no turning drum in the frame")
@@ -653,7 +718,8 @@ def _measure_drum_frame(path, threshold, keep_stages, options, tried: Tried) -> 
     fcx, fcy, fR = frame_px(cx, cy, R) if (sx, sy) != (1.0, 1.0) else (cx, cy, R)
     return DrumResult(str(path), angle, upper, lower, angle - 0.5 * (upper + lower), rms, float(roll), lref, dref,
                       [float(fcx), float(fcy)], float(fR), float(fr), int(cols.size), st,
-                      work_scale=float(math.sqrt(sx * sy)))
+                      work_scale=float(math.sqrt(sx * sy)), roughness_pct=rough,
+                      confidence=conf, low_reason=why)
 
 
 def measure_drum(paths, threshold="otsu", keep_stages=False, options=None, refusals=None):
@@ -663,20 +729,34 @@ def measure_drum(paths, threshold="otsu", keep_stages=False, options=None, refus
     """
     per = options if isinstance(options, list) else [options] * len(paths)
     res = [measure_drum_frame(p, threshold, keep_stages, o, refusals) for p, o in zip(paths, per)]
-    return drum_summary(res), res
+    try:
+        return drum_summary(res), res
+    except InputError as e:
+        e.results = res  # frames flagged low only: their results, for the figures
+        raise
 
 
 def drum_summary(res) -> dict:
-    """The mean angle and S-shape measures of the measured frames ``res`` (:class:`DrumResult`),
-    the angles' spread and the references they were measured against."""
+    """The mean angle and S-shape measures of the frames ``res`` (:class:`DrumResult`) measured
+    with confidence "ok", the angles' spread and the references they were measured against; a
+    frame flagged "low" is listed in ``set_aside`` (path, reason) and not averaged, ``n_frames``
+    counts those used, and a group with none "ok" is refused naming each frame and its reason.
+    ``frames`` holds every frame's result."""
+    used = [r for r in res if r.confidence == "ok"]
+    aside = [{"path": r.path, "reason": r.low_reason} for r in res if r.confidence != "ok"]
+    if not used:
+        raise InputError(res[0].path if len(res) == 1 else "<drum frame group>", "confidence",
+                         "at least one frame of the group measured with confidence ok (a frame flagged low is not "
+                         "averaged into the group's angle)",
+                         "; ".join(f"{a['path']}: low, {a['reason']}" for a in aside))
 
     def mean(key):
-        return float(np.nanmean([getattr(r, key) for r in res]))
+        return float(np.nanmean([getattr(r, key) for r in used]))
 
-    a = np.array([r.angle_deg for r in res])
+    a = np.array([r.angle_deg for r in used])
     return {"angle_deg": float(a.mean()), "spread_deg": float(a.std(ddof=1)) if a.size > 1 else 0.0,
-            "n_frames": len(res), "upper_deg": mean("upper_deg"), "lower_deg": mean("lower_deg"),
+            "n_frames": len(used), "upper_deg": mean("upper_deg"), "lower_deg": mean("lower_deg"),
             "s_shape_deg": mean("s_shape_deg"), "line_rms_pct": mean("line_rms_pct"),
-            "level_reference": ", ".join(sorted({r.level_reference for r in res})),
-            "drum_reference": ", ".join(sorted({r.drum_reference for r in res})),
-            "frames": [r.as_dict() for r in res]}
+            "level_reference": ", ".join(sorted({r.level_reference for r in used})),
+            "drum_reference": ", ".join(sorted({r.drum_reference for r in used})),
+            "frames": [r.as_dict() for r in res], "set_aside": aside}

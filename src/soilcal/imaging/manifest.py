@@ -195,7 +195,7 @@ def measure_manifest(path, figdir=None, threshold="otsu", refusals=None, refused
     """Measure every group of the manifest; returns {group: result dict}.  ``refusals``: a
     folder for the diagnostic image of a photo that cannot be measured
     (:mod:`soilcal.imaging.refusal`).  ``refused_figdir``: where a group refused for having no
-    ok photo gets its photos' figures (with ``figdir`` given); default ``refusals``, else
+    ok photo or frame gets its figures (with ``figdir`` given); default ``refusals``, else
     ``figdir``.  A figures folder (either) that is the folder of one of the manifest's photos is
     refused before any photo is measured, naming ``figdir_field`` / ``refused_figdir_field``
     (:func:`soilcal.imaging.figures.check_apart`)."""
@@ -213,6 +213,21 @@ def measure_manifest(path, figdir=None, threshold="otsu", refusals=None, refused
     groups: OrderedDict[str, list] = OrderedDict()
     for p in data["photos"]:
         groups.setdefault(p["group"], []).append(p)
+
+    def refused_figures(e, noun):
+        """The refusal's text for a group with no ok photo or frame (``e`` from measure_piles or
+        measure_drum, its ``results`` the group's measurements); with ``figdir`` given, the figures
+        its reasons point to are written all the same: beside the diagnostic images of refused
+        photos where there is such a folder (the workflow's outputs, figdir among them, do not
+        outlive a failed job)."""
+        if figdir is None:
+            return e.got
+        where = Path(refused_figdir if refused_figdir is not None else refusals if refusals is not None else figdir)
+        where.mkdir(parents=True, exist_ok=True)
+        for r in e.results:
+            figures.angle_figure(r, where / Path(r.path).stem)
+        return f"{e.got}; figures of the group's {noun} in {where}"
+
     out = OrderedDict()
     figures_of = []  # written once every group is measured: a bad photo leaves no figures
     for g, entries in groups.items():
@@ -228,18 +243,8 @@ def measure_manifest(path, figdir=None, threshold="otsu", refusals=None, refused
                                                      plate_px=lines)
             except InputError as e:
                 if e.field == "confidence":  # no photo of the group measured "ok"
-                    got = e.got
-                    if figdir is not None:
-                        # the figures its reasons point to, written all the same: beside the
-                        # diagnostic images of refused photos where there is such a folder (the
-                        # workflow's outputs, figdir among them, do not outlive a failed job)
-                        where = Path(refused_figdir if refused_figdir is not None
-                                     else refusals if refusals is not None else figdir)
-                        where.mkdir(parents=True, exist_ok=True)
-                        for r in e.results:
-                            figures.angle_figure(r, where / Path(r.path).stem)
-                        got += f"; figures of the group's photos in {where}"
-                    raise InputError(path, f"group {g} ({len(files)} photos)", e.expected, got) from None
+                    raise InputError(path, f"group {g} ({len(files)} photos)", e.expected,
+                                     refused_figures(e, "photos")) from None
                 given = {str(f): i for f, q, i in zip(files, lines, range(len(files))) if q is not None}
                 if e.path not in given or e.field not in ("image", "left flank", "right flank", "plate line"):
                     raise
@@ -248,9 +253,15 @@ def measure_manifest(path, figdir=None, threshold="otsu", refusals=None, refused
                                  f"{entries[given[e.path]]['plate_line_px']}", e.note) from None
             summary["views"] = [e.get("view") for e in entries]
         elif kind == "drum":
-            summary, res = drum.measure_drum(files, threshold, keep_stages=keep,
-                                             options=[drum.frame_options(e, path) for e in entries],
-                                             refusals=refusals)
+            try:
+                summary, res = drum.measure_drum(files, threshold, keep_stages=keep,
+                                                 options=[drum.frame_options(e, path) for e in entries],
+                                                 refusals=refusals)
+            except InputError as e:
+                if e.field != "confidence":  # no frame of the group measured "ok"
+                    raise
+                raise InputError(path, f"group {g} ({len(files)} frames)", e.expected,
+                                 refused_figures(e, "frames")) from None
         else:
             e = entries[0]
             r = measure.measure_furrow(files[0], e.get("scale_length_mm"), e.get("beam_datum_mm", 0.0),
