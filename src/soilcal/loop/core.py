@@ -535,6 +535,25 @@ def unit_hints(u: pd.DataFrame) -> list[str]:
     return out
 
 
+def constant_hints(u: pd.DataFrame) -> list[str]:
+    """A sentence per measured quantity of a table (``u``: usable residual rows) whose measured
+    values are all one number over two measured conditions at least whose simulated values
+    differ: a column filled down with one value, or the same cell pasted into every row, reads
+    as a bias and trends of the model's own, which the verdict would otherwise explain."""
+    out = []
+    if not len(u) or "simulation" not in u:
+        return out
+    for (m, q), g in u.groupby(["measurement", "measure"], sort=False):
+        v, sim = g["measured"].to_numpy(float), g["simulated_mean"].to_numpy(float)
+        if g["simulation"].astype(str).nunique() < 2 or np.unique(v).size != 1 or np.ptp(sim) <= rs.EXACT * np.abs(sim).max():
+            continue
+        unit = str(g["unit"].iloc[0]) if "unit" in g else ""
+        out.append(f"every measured {q} of {m} is {v[0]:g}{' ' + unit if unit else ''} over its "
+                   f"{g['simulation'].astype(str).nunique()} measured conditions, whose simulated values range "
+                   f"{sim.min():.4g}-{sim.max():.4g}: is the column filled with one value?")
+    return out
+
+
 def _theta_keys(names: list) -> tuple[list[str], np.ndarray]:
     """The parameters of the effects ``names`` (``<effect>.<parameter>``, in their order) and
     their switched-off values."""
@@ -1053,8 +1072,10 @@ def analyse(soil: str, res: pd.DataFrame, diag: pd.DataFrame, cands: list, effec
             verdict = ("consistent: no significant structure, and the residual lies within the measured and seed "
                        f"uncertainty (RMS error {rms:.1f} %)")
         else:
+            # the rows may be many: what is missing is an uncertainty of the measured values
             verdict = (f"unexplained: RMS error {rms:.1f} % with no significant structure over {n} rows, and no "
-                       "measured uncertainty to judge the scatter against (too few data to decide"
+                       "measured uncertainty to judge the scatter against (no measured SD given: the table's `sd` "
+                       "and `n` columns, or each condition's repeats as rows of their own, give it"
                        + (f"; largest: {follows})" if follows else ")"))
         if sel_rows:
             verdict += "; no candidate effect lowered the held-out error significantly (selection.csv)"
@@ -1119,7 +1140,7 @@ def analyse(soil: str, res: pd.DataFrame, diag: pd.DataFrame, cands: list, effec
     for nm, why in (skipped_effects or {}).items():  # those the structure (or candidates: all) would have tried
         if settings.candidates == "all" or matched & set(EFFECTS[nm].signature):
             verdict += f"; {nm} {why}"
-    for hint in unit_hints(u):
+    for hint in constant_hints(u) + unit_hints(u):
         verdict += f"; {hint}"
     per_test = dg.per_test(u)  # table rows; the trend tests take one value per measured condition
     tests, conds = len(per_test), len(dg.per_condition(per_test))
