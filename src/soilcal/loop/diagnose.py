@@ -299,7 +299,8 @@ def varies_within(dt: pd.DataFrame) -> set[str]:
 
 
 def replicate_residuals(d: pd.DataFrame) -> tuple[np.ndarray, np.ndarray]:
-    """Standardised residuals (and their Welch-Satterthwaite degrees of freedom) of the
+    """Standardised residuals (and their Welch-Satterthwaite degrees of freedom, from the
+    replicate and seed variances pooled over the measured quantity's conditions) of the
     conditions measured as replicate rows without an SD: per condition and measured quantity
     with two measured values at least, not all equal, the residual of their mean, over
     sqrt(s^2 / n + sd_s^2 / n_s) with s the replicates' sample SD (n of them) and sd_s the seed
@@ -311,8 +312,10 @@ def replicate_residuals(d: pd.DataFrame) -> tuple[np.ndarray, np.ndarray]:
     need = {"simulation", "measure", "measured", "simulated_mean", "simulated_sd", "simulated_n"}
     if not need <= set(d.columns) or not len(d):
         return np.empty(0), np.empty(0)
+    from soilcal.loop.residuals import pooled_relative_variance, satterthwaite
+
     rows = d if "measured_sd" not in d else d[~np.isfinite(d["measured_sd"].astype(float).to_numpy())]
-    z, dof = [], []
+    cond = []  # per condition and quantity: mean, replicate SD, n, simulated mean, seed SD, seeds, scale, quantity
     for _, g in rows.groupby([rows["simulation"].astype(str), rows["measure"].astype(str)], sort=False):
         m = g["measured"].to_numpy(float)  # every repeat: rounded forces repeat a value
         m = m[np.isfinite(m)]
@@ -322,17 +325,29 @@ def replicate_residuals(d: pd.DataFrame) -> tuple[np.ndarray, np.ndarray]:
         sd = float(np.std(m, ddof=1))
         if sd == 0.0:
             continue  # repeats that all read one value (rounded) state no scatter to judge against
-        sim, sd_s, n_s = (float(g["simulated_mean"].iloc[0]), float(g["simulated_sd"].iloc[0]),
-                          float(g["simulated_n"].iloc[0]))
-        var_m = sd ** 2 / n
-        var_s = sd_s ** 2 / n_s if np.isfinite(sd_s) and n_s >= 1 else 0.0
-        se = np.sqrt(var_m + var_s)
-        if not (np.isfinite(sim) and se > 0):
-            continue
-        den = var_m ** 2 / (n - 1) + (var_s ** 2 / (n_s - 1) if n_s > 1 else 0.0)
-        z.append((float(np.mean(m)) - sim) / se)
-        dof.append(se ** 4 / den if den > 0 else np.inf)
-    return np.array(z, float), np.array(dof, float)
+        scale = (float(np.nanmean(g["scale"].to_numpy(float))) if "scale" in g else float(np.mean(np.abs(m))))
+        cond.append((float(np.mean(m)), sd, n, float(g["simulated_mean"].iloc[0]), float(g["simulated_sd"].iloc[0]),
+                     float(g["simulated_n"].iloc[0]), scale,
+                     str(g["measurement"].iloc[0]) + "\x00" + str(g["measure"].iloc[0]) if "measurement" in g
+                     else str(g["measure"].iloc[0])))
+    if not cond:
+        return np.empty(0), np.empty(0)
+    mean, sd, n, sim, sd_s, n_s, scale, q = (np.array(c) for c in zip(*cond))
+    mean, sd, n, sim, sd_s, n_s, scale = (np.asarray(x, float) for x in (mean, sd, n, sim, sd_s, n_s, scale))
+    var_m = sd ** 2 / n
+    var_s = np.where(np.isfinite(sd_s) & (n_s >= 1), sd_s ** 2 / np.clip(n_s, 1.0, None), 0.0)
+    se = np.sqrt(var_m + var_s)
+    # degrees of freedom from the variances pooled over the quantity's conditions (relative to
+    # their scale), not from the condition's own: those grow where its two or three replicates
+    # or seeds happen to scatter little, exactly where the residual over them is large
+    # (:func:`soilcal.loop.residuals.reference_variances`)
+    ref_m = pooled_relative_variance(sd, n, scale, q) * scale ** 2 / n
+    ref_s = np.where(n_s > 1, pooled_relative_variance(sd_s, n_s, scale, q) * scale ** 2 / np.clip(n_s, 1.0, None),
+                     var_s)
+    ref_m, ref_s = np.where(np.isfinite(ref_m), ref_m, var_m), np.where(np.isfinite(ref_s), ref_s, var_s)
+    ok = np.isfinite(sim) & (se > 0)
+    z = (mean - sim) / np.where(se > 0, se, 1.0)
+    return z[ok], satterthwaite(ref_m, n - 1.0, ref_s, n_s - 1.0)[ok]
 
 def diagnose(res: pd.DataFrame, quantity_of: dict | None = None, alpha: float = 0.05) -> pd.DataFrame:
     """One row per test (module docstring) on the usable rows of a residual table;
