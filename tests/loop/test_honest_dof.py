@@ -14,6 +14,7 @@ test at p < 0.05 in 17.5 % of 200 tables).
 from __future__ import annotations
 
 import numpy as np
+import pytest
 import pandas as pd
 
 from soilcal.loop.diagnose import normal_equivalent, replicate_residuals
@@ -70,3 +71,20 @@ def test_replicate_rows_without_an_sd_are_unit_normal_on_their_degrees_of_freedo
     ms, tail = _unit_normal(normal_equivalent(z, dof))
     assert _honest(ms, tail), (ms, tail)
 
+
+@pytest.mark.parametrize("cv_m, n_m, cv_s, reps", [(0.02, 5, 0.03, 3),  # replicate rows, SDs of 5 repeats
+                                                   (0.05, 10, 0.01, 1),  # the measurement dominates
+                                                   (0.01, 10, 0.05, 1)])  # the seeds dominate
+def test_the_scatter_about_the_scale_is_chi_square_on_its_degrees_of_freedom(cv_m, n_m, cv_s, reps):
+    """No offset, 150 conditions: the statistic's mean is its degrees of freedom, its SD
+    sqrt(2 dof) (per degree of freedom 0.07-0.12 here).  Before, the replicates' scatter was
+    taken against each row's own SD of 5 repeats (a sum of t^2: chi-square per degree of
+    freedom 1.31), and the residual of a condition's mean on the fewer of the measured and seed
+    degrees of freedom, 2 for 3 seeds however small their share (0.62 where the measurement
+    dominates)."""
+    from soilcal.loop.core import scatter_about_scale
+
+    res = _table(np.random.default_rng(9), 150, cv_m, n_m, cv_s, 3, reps=reps)
+    chi, dof, p = scatter_about_scale(res, 0.0)
+    assert dof == 149 + 150 * (reps - 1)
+    assert abs(chi / dof - 1.0) < 2.5 * np.sqrt(2.0 / dof), (chi / dof, p)

@@ -703,10 +703,12 @@ def scatter_about_scale(res: pd.DataFrame, s: float) -> tuple[float, int, float]
     sqrt(1 / sum(1 / var_m) + (1 + s)^2 sd_s^2 / n_s) (the seed part scales with the
     prediction; replicates share one simulated mean and so its seeds' error) as the unit-normal
     deviate of the same tail probability
-    (:func:`soilcal.loop.diagnose.normal_equivalent`) on the fewer degrees of freedom of its
-    measured and seed parts, squared, and the chi-square of the
-    replicates about their mean (sum (m_i - mean)^2 / var_m, one degree of freedom fewer than
-    them), which together are the generalised chi-square of rows sharing a seed error.
+    (:func:`soilcal.loop.diagnose.normal_equivalent`) on the Welch-Satterthwaite degrees of
+    freedom of its measured and seed parts (from the variances pooled over the quantity's
+    rows, :func:`soilcal.loop.residuals.reference_variances`), squared, and the chi-square of the
+    replicates about their mean (sum (m_i - mean)^2 / var_m with var_m the measured variance
+    pooled over the quantity's rows, read as F on its degrees of freedom and given as the
+    chi-square of the same tail, one degree of freedom fewer than them), which together are the generalised chi-square of rows sharing a seed error.
     Replicate rows without an SD give the first part against their own scatter
     (:func:`soilcal.loop.diagnose.replicate_residuals`).  Table rows entered twice count once.
     The quantities one condition measures (its horizontal and vertical force) share its stone,
@@ -735,6 +737,10 @@ def scatter_about_scale(res: pd.DataFrame, s: float) -> tuple[float, int, float]
     sd_m = u["measured_sd"].astype(float).to_numpy() if "measured_sd" in u else np.full(len(u), np.nan)
     n_m = u["measured_n"].astype(float).fillna(1.0).clip(lower=1.0).to_numpy() if "measured_n" in u else np.ones(len(u))
     known = np.isfinite(sd_m) & (sd_m > 0) & np.isfinite(u["measured"].astype(float).to_numpy())
+    ref_m, ref_s = rs.reference_variances(u)  # the variances the degrees of freedom are computed from
+    # the degrees of freedom of the pooled measured SD (ref_m) of each row's quantity
+    qkey = (u["measurement"].astype(str) + "\x00" + u["measure"].astype(str)).to_numpy()
+    pooled_dof = pd.Series(np.where(known & (n_m > 1), n_m - 1.0, 0.0)).groupby(qkey).transform("sum").to_numpy(float)
     groups = []  # per simulation: its quantities' (measured mean, var_m, dof_m, sim, seed var, n_s, within chi, within dof)
     for sim_key, g in u.groupby(u["simulation"].astype(str), sort=False):
         parts = []
@@ -744,10 +750,22 @@ def scatter_about_scale(res: pd.DataFrame, s: float) -> tuple[float, int, float]
             vm = (q["measured_sd"].to_numpy(float) ** 2) / n_m[u.index.get_indexer(q.index)]
             w = 1.0 / vm
             mean = float(np.sum(w * m) / np.sum(w))
-            dof_m = float(np.sum(np.clip(n_m[u.index.get_indexer(q.index)] - 1.0, 0.0, None))) or np.inf
+            at = u.index.get_indexer(q.index)
+            dof_m = float(np.sum(np.clip(n_m[at] - 1.0, 0.0, None))) or np.inf
+            # the replicates' scatter about their mean against the measured SD pooled over the
+            # quantity's rows, read as F on that SD's degrees of freedom and given as the
+            # chi-square of the same tail: against each row's own SD of a few repeats, it is a
+            # sum of t^2, not chi-square (6 conditions x 3 days, 2 % noise over 5 repeats, 3 %
+            # seed scatter, no offset: chi-square per degree of freedom 1.30, p < 0.05 in 20 %)
+            wr = 1.0 / ref_m[at]
+            within = float(np.sum(wr * (m - np.sum(wr * m) / np.sum(wr)) ** 2))
+            if len(m) > 1 and np.isfinite(pooled_dof[at[0]]) and pooled_dof[at[0]] > 0:
+                tail = stats.f.sf(within / (len(m) - 1), len(m) - 1, pooled_dof[at[0]])
+                within = float(stats.chi2.isf(max(tail, 1e-300), len(m) - 1))
             parts.append((mean, 1.0 / float(np.sum(w)), dof_m, float(q["simulated_mean"].iloc[0]),
                           float(q["simulated_sd"].iloc[0]), float(q["simulated_n"].iloc[0]),
-                          float(np.sum(w * (m - mean) ** 2)), len(m) - 1))
+                          within, len(m) - 1,
+                          1.0 / float(np.sum(1.0 / ref_m[at])), float(np.mean(ref_s[at]))))
         rep = g[~kg]
         groups.append((parts, rep))
     if not any(p or len(r) for p, r in groups):
@@ -757,16 +775,18 @@ def scatter_about_scale(res: pd.DataFrame, s: float) -> tuple[float, int, float]
         total, n_cond, dof_within = 0.0, 0, 0
         for parts, rep in groups:
             between, within, wdof = [], [], []
-            for mean, var_m, dof_m, sim, sd_s, n_s, wchi, wd in parts:
+            for mean, var_m, dof_m, sim, sd_s, n_s, wchi, wd, rm, rs_ in parts:
                 var_s = (1.0 + scale) ** 2 * sd_s ** 2 / n_s if np.isfinite(sd_s) and n_s >= 1 else 0.0
                 se = math.sqrt(var_m + var_s)
                 if not (np.isfinite(sim) and se > 0):
                     continue
-                # the fewer degrees of freedom of the two parts: Welch-Satterthwaite's, from
-                # the estimated variances themselves, grows where 3 seeds happen to scatter
-                # little, exactly where the residual is large (1 % measured, 5 % seeds:
-                # chi-square 1.16 per row, 6.2 % beyond its 5 % point; the smaller: 0.94, 4.2 %)
-                dof = min(dof_m if var_m > 0 else np.inf, n_s - 1.0 if var_s > 0 and n_s > 1 else np.inf)
+                # Welch-Satterthwaite from the variances pooled over the quantity's rows
+                # (:func:`soilcal.loop.residuals.reference_variances`): from the condition's own
+                # it grows where its 3 seeds happen to scatter little, exactly where the residual
+                # is large; the fewer of the two parts' degrees of freedom instead takes a
+                # residual as heavy-tailed as 3 seeds make it where the seed part is negligible
+                dof = float(rs.satterthwaite(rm, dof_m, (1.0 + scale) ** 2 * rs_ if var_s > 0 else 0.0,
+                                             n_s - 1.0))
                 z = (mean - sim * (1.0 + scale)) / se
                 between.append(float(dg.normal_equivalent([z], [dof])[0]) ** 2)
                 within.append(wchi)
