@@ -48,3 +48,22 @@ def test_a_constant_table_of_one_condition_repeated_is_not_named():
     u = pd.DataFrame({"measurement": "m", "measure": "F_N", "unit": "N", "simulation": ["a", "a"],
                       "measured": [5.0, 5.0], "simulated_mean": [4.0, 4.0]})
     assert core.constant_hints(u) == []
+
+
+def _constant(sim, value, sd=None):
+    return pd.DataFrame({"measurement": "bin", "measure": "sinkage_mm", "unit": "mm",
+                         "simulation": [f"c{i}" for i in range(len(sim))], "measured": value,
+                         "measured_sd": np.nan if sd is None else sd, "simulated_mean": sim})
+
+
+def test_a_rounded_table_the_model_agrees_with_is_not_named():
+    # sinkage read to the millimetre: 2 mm in all 12 rows, the model 1.96-2.04 mm, all of which
+    # read 2 to the millimetre; a constant column is what a right model gives here
+    sim = np.linspace(1.96, 2.04, 12)
+    assert core.constant_hints(_constant(sim, 2.0)) == []
+    # read to 0.01 mm with an SD of 0.1 mm: a spread of 0.08 mm is within +-1.96 SD of one value
+    assert core.constant_hints(_constant(sim, 2.0, sd=0.1)) == []
+    # the model spreading 1-3 mm cannot all read 2 to the millimetre: named
+    assert core.constant_hints(_constant(np.linspace(1.0, 3.0, 12), 2.0))
+    # a spread of 0.08 mm where the table is read to 0.01 mm without an SD: named
+    assert core.constant_hints(_constant(sim, 2.01))

@@ -535,17 +535,35 @@ def unit_hints(u: pd.DataFrame) -> list[str]:
     return out
 
 
+def rounding_step(x: float) -> float:
+    """The step a recorded value was rounded to, read from its decimals: 10^-k for the fewest
+    decimals k (0-12) that give it back (2 -> 1, 2.5 -> 0.1, 0.04 -> 0.01; trailing zeros of a
+    whole number are not read as rounding, 1000 -> 1)."""
+    for k in range(13):
+        if abs(round(x, k) - x) <= 1e-9 * max(abs(x), 1e-300):
+            return 10.0 ** -k
+    return 0.0
+
+
 def constant_hints(u: pd.DataFrame) -> list[str]:
     """A sentence per measured quantity of a table (``u``: usable residual rows) whose measured
     values are all one number over two measured conditions at least whose simulated values
     differ: a column filled down with one value, or the same cell pasted into every row, reads
-    as a bias and trends of the model's own, which the verdict would otherwise explain."""
+    as a bias and trends of the model's own, which the verdict would otherwise explain.  The
+    simulated values must differ by more than the measurement could hide: more than the
+    rounding step of the recorded value (2 mm read to the millimetre holds anything from 1.5 to
+    2.5 mm) and more than 4 measured SDs (the median of the rows'; +-1.96 SD about one value),
+    else one value throughout is what the table would read if the model were right."""
     out = []
     if not len(u) or "simulation" not in u:
         return out
     for (m, q), g in u.groupby(["measurement", "measure"], sort=False):
         v, sim = g["measured"].to_numpy(float), g["simulated_mean"].to_numpy(float)
-        if g["simulation"].astype(str).nunique() < 2 or np.unique(v).size != 1 or np.ptp(sim) <= rs.EXACT * np.abs(sim).max():
+        if g["simulation"].astype(str).nunique() < 2 or np.unique(v).size != 1 or not np.isfinite(v[0]):
+            continue
+        sd = g["measured_sd"].astype(float).to_numpy() if "measured_sd" in g else np.full(len(g), np.nan)
+        sd = float(np.median(sd[np.isfinite(sd)])) if np.isfinite(sd).any() else 0.0
+        if np.ptp(sim) <= max(rounding_step(v[0]), 4.0 * sd, rs.EXACT * np.abs(sim).max()):
             continue
         unit = str(g["unit"].iloc[0]) if "unit" in g else ""
         out.append(f"every measured {q} of {m} is {v[0]:g}{' ' + unit if unit else ''} over its "
