@@ -103,3 +103,50 @@ def test_replicate_rows_sharing_a_simulation_hold_the_scatter_tests_level():
         d = diagnose(_table(rng, 6, 0.02, 5, 0.03, 3, reps=3))
         p.append(float(d.loc[d["test"] == "scatter", "p"].iloc[0]))
     assert np.sum(np.array(p) < 0.05) <= 8, np.sum(np.array(p) < 0.05)
+
+
+def _mixed(rng, spec, tables):
+    """``tables`` tables of rows (truth, absolute measured SD, repeats, seed CV, seeds), no
+    offset; per row its truth and its residual mapped to the unit normal."""
+    out = []
+    for _ in range(tables):
+        obs, runs = [], []
+        for i, (t, sd, n_m, cv_s, n_s) in enumerate(spec):
+            rep = t + sd * rng.standard_normal(n_m)
+            obs.append(dict(measurement="bin", row=i + 1, measure="F_N", unit="N", label="", simulation=f"c{i}",
+                            measured=float(rep.mean()), measured_sd=float(rep.std(ddof=1)), measured_n=float(n_m)))
+            runs += [dict(measurement="bin", row=i + 1, measure="F_N", seed=k, value=float(v), status="ok")
+                     for k, v in enumerate(t * (1.0 + cv_s * rng.standard_normal(n_s)))]
+        res = residual_frame(pd.DataFrame(obs), pd.DataFrame(runs))
+        out += zip([s[0] for s in spec], normal_equivalent(res["standardised_residual"], res["residual_dof"]))
+    return np.array(out)
+
+
+@pytest.mark.parametrize("spec", [
+    # an absolute noise floor: 6 rows of 20 N +- 2 N next to 6 of 500 N +- 5 N
+    [(20.0, 2.0, 10, 0.05, 3)] * 6 + [(500.0, 5.0, 10, 0.05, 3)] * 6,
+    # one row far noisier than the rest: 11 rows 100-200 N at 1 %, one of 45 N +- 20 N
+    [(t, 0.01 * t, 10, 0.05, 3) for t in np.linspace(100.0, 200.0, 11)] + [(45.0, 20.0, 10, 0.05, 3)]])
+def test_sds_not_proportional_to_the_value_are_not_pooled(spec):
+    """Where a quantity's measured SDs are not one share of its values, a relative SD pooled
+    over its rows is no row's SD: the large rows' residuals were read on the degrees of freedom
+    of the small rows' huge relative SD (12.3 % and 13.4 % of them beyond 1.96; a right model
+    looks wrong).  Bartlett's test rejects the common relative variance and each row keeps its
+    own degrees of freedom: each group of rows 5 % beyond 1.96 within Welch-Satterthwaite's
+    approximation (binomial SD 0.5-1.4 % over these rows)."""
+    z = _mixed(np.random.default_rng(11), spec, 150)
+    for small in (True, False):
+        zz = z[(z[:, 0] < 50.0) == small, 1]
+        tail = float(np.mean(np.abs(zz) > 1.959964))
+        assert 0.02 < tail < 0.08, (small, tail, len(zz))
+
+
+def test_bartlett_from_summary_statistics_is_scipys():
+    from scipy import stats
+
+    from soilcal.loop.residuals import bartlett_p
+
+    rng = np.random.default_rng(2)
+    groups = [rng.normal(0.0, s, n) for s, n in ((1.0, 5), (1.5, 8), (0.7, 4), (3.0, 10))]
+    p = bartlett_p([np.var(g, ddof=1) for g in groups], [len(g) - 1 for g in groups])
+    assert abs(p - stats.bartlett(*groups).pvalue) < 1e-12

@@ -757,8 +757,7 @@ def scatter_about_scale(res: pd.DataFrame, s: float) -> tuple[float, int, float]
     known = np.isfinite(sd_m) & (sd_m > 0) & np.isfinite(u["measured"].astype(float).to_numpy())
     ref_m, ref_s = rs.reference_variances(u)  # the variances the degrees of freedom are computed from
     # the degrees of freedom of the pooled measured SD (ref_m) of each row's quantity
-    qkey = (u["measurement"].astype(str) + "\x00" + u["measure"].astype(str)).to_numpy()
-    pooled_dof = pd.Series(np.where(known & (n_m > 1), n_m - 1.0, 0.0)).groupby(qkey).transform("sum").to_numpy(float)
+    pooled_dof = rs.pooled_measured_dof(u, known)  # 0 where the quantity's SDs are not pooled
     groups = []  # per simulation: its quantities' (measured mean, var_m, dof_m, sim, seed var, n_s, within chi, within dof)
     for sim_key, g in u.groupby(u["simulation"].astype(str), sort=False):
         parts = []

@@ -379,8 +379,7 @@ def _shared_simulation(d: pd.DataFrame, known: np.ndarray) -> tuple[np.ndarray, 
         return taken, 0.0, 0
     n_m = d["measured_n"].astype(float).fillna(1.0).clip(lower=1.0).to_numpy() if "measured_n" in d else np.ones(len(d))
     ref_m, ref_s = rs.reference_variances(d)
-    qkey = (d["measurement"].astype(str) + "\x00" + d["measure"].astype(str)).to_numpy()
-    pooled_dof = pd.Series(np.where(known & (n_m > 1), n_m - 1.0, 0.0)).groupby(qkey).transform("sum").to_numpy(float)
+    pooled_dof = rs.pooled_measured_dof(d, known)  # 0 where the quantity's SDs are not pooled
     chi, n = 0.0, 0
     for _, at in pd.Series(np.arange(len(d))[multi]).groupby(key[multi]):
         at = at.to_numpy()

@@ -206,18 +206,63 @@ def satterthwaite(var_a, dof_a, var_b, dof_b) -> np.ndarray:
     return np.where(den > 0, (a + b) ** 2 / np.where(den > 0, den, 1.0), np.inf)
 
 
+HOMOGENEITY_ALPHA = 0.05  # Bartlett's test of a quantity's relative variances: below it, not pooled
+
+
+def bartlett_p(var, dof) -> float:
+    """Bartlett's test of equal variances from the estimates ``var`` on ``dof`` degrees of
+    freedom each (the summary-statistic form of :func:`scipy.stats.bartlett`): its p value; 1
+    for fewer than two estimates."""
+    from scipy import stats
+
+    v, d = np.asarray(var, float), np.asarray(dof, float)
+    if len(v) < 2:
+        return 1.0
+    if np.any(v <= 0):
+        return 0.0 if np.any(v > 0) else 1.0
+    big = float(np.sum(d))
+    sp = float(np.sum(d * v)) / big
+    m = big * np.log(sp) - float(np.sum(d * np.log(v)))
+    c = 1.0 + (float(np.sum(1.0 / d)) - 1.0 / big) / (3.0 * (len(v) - 1))
+    return float(stats.chi2.sf(m / c, len(v) - 1))
+
+
 def pooled_relative_variance(sd, n, scale, group) -> np.ndarray:
     """Per row, the squared SD over ``scale`` pooled over the rows of its ``group`` (a measured
     quantity) that estimate it (n > 1 values behind it, the SD finite): sum((n - 1) (sd /
-    scale)^2) / sum(n - 1); NaN where its group has none.  Rows repeating one estimate (the
-    replicate rows of one simulation) are to be passed once."""
+    scale)^2) / sum(n - 1); NaN where its group has none, or where Bartlett's test
+    (:func:`bartlett_p`) rejects that the group's relative variances are one at
+    :data:`HOMOGENEITY_ALPHA`: an SD that is not proportional to the value (an absolute noise
+    floor, one row far noisier than the others, a quantity scaled by its RMS) is not pooled and
+    each row keeps its own.  Rows repeating one estimate (the replicate rows of one simulation)
+    are to be passed once."""
     sd, n, scale = (np.asarray(x, float) for x in (sd, n, scale))
     rel = (sd / scale) ** 2
     ok = np.isfinite(rel) & np.isfinite(n) & (n > 1)
     g = pd.Series(np.asarray(group).astype(str))
     num = pd.Series(np.where(ok, (n - 1) * rel, 0.0)).groupby(g).transform("sum").to_numpy(float)
     den = pd.Series(np.where(ok, n - 1, 0.0)).groupby(g).transform("sum").to_numpy(float)
-    return np.where(den > 0, num / np.where(den > 0, den, 1.0), np.nan)
+    out = np.where(den > 0, num / np.where(den > 0, den, 1.0), np.nan)
+    for _, at in pd.Series(np.arange(len(g))).groupby(g):
+        at = at.to_numpy()
+        at = at[ok[at]]
+        if len(at) > 1 and bartlett_p(rel[at], n[at] - 1.0) < HOMOGENEITY_ALPHA:
+            out[pd.Series(np.asarray(group).astype(str)).to_numpy() == g.iloc[at[0]]] = np.nan
+    return out
+
+
+def pooled_measured_dof(df: pd.DataFrame, known: np.ndarray) -> np.ndarray:
+    """Per row, the degrees of freedom of its quantity's pooled measured SD (the ``known`` rows'
+    n - 1 summed over the quantity), 0 where the quantity's measured SDs are not pooled
+    (:func:`pooled_relative_variance`)."""
+    if "measured_sd" not in df or not len(df):
+        return np.zeros(len(df))
+    nm = df["measured_n"].astype(float).fillna(1.0).clip(lower=1.0).to_numpy() if "measured_n" in df else np.ones(len(df))
+    sd = df["measured_sd"].astype(float).to_numpy()
+    meas = (df["measurement"].astype(str) + "\x00" + df["measure"].astype(str)).to_numpy()
+    pooled = np.isfinite(pooled_relative_variance(np.where(known, sd, np.nan), nm, scale_of(df), meas))
+    dof = pd.Series(np.where(known & (nm > 1), nm - 1.0, 0.0)).groupby(meas).transform("sum").to_numpy(float)
+    return np.where(pooled, dof, 0.0)
 
 
 def reference_variances(df: pd.DataFrame) -> tuple[np.ndarray, np.ndarray]:
