@@ -265,7 +265,7 @@ def pooled_measured_dof(df: pd.DataFrame, known: np.ndarray) -> np.ndarray:
     return np.where(pooled, dof, 0.0)
 
 
-def reference_variances(df: pd.DataFrame) -> tuple[np.ndarray, np.ndarray]:
+def reference_variances(df: pd.DataFrame, flags: bool = False) -> tuple[np.ndarray, ...]:
     """The measured and seed variances of the rows' means that their residual degrees of
     freedom are computed from: where a part is estimated (n > 1 repeats or seeds), its squared
     SD relative to the row's scale pooled over the measured quantity's rows
@@ -275,7 +275,8 @@ def reference_variances(df: pd.DataFrame) -> tuple[np.ndarray, np.ndarray]:
     as known).  Welch-Satterthwaite's degrees of freedom computed from the row's own estimated
     variances grow where those few repeats or seeds happen to scatter little, exactly where
     the standardised residual is large (1 % measured noise over 10 repeats, 5 % seed scatter
-    over 3 seeds: 7.9 % of the rows beyond the 5 % two-sided point, mean square 1.23)."""
+    over 3 seeds: 7.9 % of the rows beyond the 5 % two-sided point, mean square 1.23).  With
+    ``flags``, also per row whether each estimated part is pooled (else the row's own)."""
     nm = df["measured_n"].astype(float).fillna(1.0).clip(lower=1.0).to_numpy()
     ns = df["simulated_n"].astype(float).fillna(0.0).to_numpy()
     sd_m, sd_s = df["measured_sd"].astype(float).to_numpy(), df["simulated_sd"].astype(float).to_numpy()
@@ -290,6 +291,9 @@ def reference_variances(df: pd.DataFrame) -> tuple[np.ndarray, np.ndarray]:
     ref_m = np.where((nm > 1) & np.isfinite(sd_m) & np.isfinite(cv_m * scale), cv_m * scale ** 2 / nm, own_m)
     ref_s = np.where((ns > 1) & np.isfinite(sd_s) & np.isfinite(cv_s * scale), cv_s * scale ** 2 / np.clip(ns, 1.0, None),
                      own_s)
+    if flags:
+        est_m, est_s = (nm > 1) & np.isfinite(sd_m), (ns > 1) & np.isfinite(sd_s)
+        return ref_m, ref_s, ~est_m | np.isfinite(cv_m * scale), ~est_s | np.isfinite(cv_s * scale)
     return ref_m, ref_s
 
 
