@@ -535,6 +535,43 @@ def unit_hints(u: pd.DataFrame) -> list[str]:
     return out
 
 
+def rounding_step(x: float) -> float:
+    """The step a recorded value was rounded to, read from its decimals: 10^-k for the fewest
+    decimals k (0-12) that give it back (2 -> 1, 2.5 -> 0.1, 0.04 -> 0.01; trailing zeros of a
+    whole number are not read as rounding, 1000 -> 1)."""
+    for k in range(13):
+        if abs(round(x, k) - x) <= 1e-9 * max(abs(x), 1e-300):
+            return 10.0 ** -k
+    return 0.0
+
+
+def constant_hints(u: pd.DataFrame) -> list[str]:
+    """A sentence per measured quantity of a table (``u``: usable residual rows) whose measured
+    values are all one number over two measured conditions at least whose simulated values
+    differ: a column filled down with one value, or the same cell pasted into every row, reads
+    as a bias and trends of the model's own, which the verdict would otherwise explain.  The
+    simulated values must differ by more than the measurement could hide: more than the
+    rounding step of the recorded value (2 mm read to the millimetre holds anything from 1.5 to
+    2.5 mm) and more than 4 measured SDs (the median of the rows'; +-1.96 SD about one value),
+    else one value throughout is what the table would read if the model were right."""
+    out = []
+    if not len(u) or "simulation" not in u:
+        return out
+    for (m, q), g in u.groupby(["measurement", "measure"], sort=False):
+        v, sim = g["measured"].to_numpy(float), g["simulated_mean"].to_numpy(float)
+        if g["simulation"].astype(str).nunique() < 2 or np.unique(v).size != 1 or not np.isfinite(v[0]):
+            continue
+        sd = g["measured_sd"].astype(float).to_numpy() if "measured_sd" in g else np.full(len(g), np.nan)
+        sd = float(np.median(sd[np.isfinite(sd)])) if np.isfinite(sd).any() else 0.0
+        if np.ptp(sim) <= max(rounding_step(v[0]), 4.0 * sd, rs.EXACT * np.abs(sim).max()):
+            continue
+        unit = str(g["unit"].iloc[0]) if "unit" in g else ""
+        out.append(f"every measured {q} of {m} is {v[0]:g}{' ' + unit if unit else ''} over its "
+                   f"{g['simulation'].astype(str).nunique()} measured conditions, whose simulated values range "
+                   f"{sim.min():.4g}-{sim.max():.4g}: is the column filled with one value?")
+    return out
+
+
 def _theta_keys(names: list) -> tuple[list[str], np.ndarray]:
     """The parameters of the effects ``names`` (``<effect>.<parameter>``, in their order) and
     their switched-off values."""
@@ -684,10 +721,12 @@ def scatter_about_scale(res: pd.DataFrame, s: float) -> tuple[float, int, float]
     sqrt(1 / sum(1 / var_m) + (1 + s)^2 sd_s^2 / n_s) (the seed part scales with the
     prediction; replicates share one simulated mean and so its seeds' error) as the unit-normal
     deviate of the same tail probability
-    (:func:`soilcal.loop.diagnose.normal_equivalent`) on the fewer degrees of freedom of its
-    measured and seed parts, squared, and the chi-square of the
-    replicates about their mean (sum (m_i - mean)^2 / var_m, one degree of freedom fewer than
-    them), which together are the generalised chi-square of rows sharing a seed error.
+    (:func:`soilcal.loop.diagnose.normal_equivalent`) on the Welch-Satterthwaite degrees of
+    freedom of its measured and seed parts (from the variances pooled over the quantity's
+    rows, :func:`soilcal.loop.residuals.reference_variances`), squared, and the chi-square of the
+    replicates about their mean (sum (m_i - mean)^2 / var_m with var_m the measured variance
+    pooled over the quantity's rows, read as F on its degrees of freedom and given as the
+    chi-square of the same tail, one degree of freedom fewer than them), which together are the generalised chi-square of rows sharing a seed error.
     Replicate rows without an SD give the first part against their own scatter
     (:func:`soilcal.loop.diagnose.replicate_residuals`).  Table rows entered twice count once.
     The quantities one condition measures (its horizontal and vertical force) share its stone,
@@ -716,6 +755,10 @@ def scatter_about_scale(res: pd.DataFrame, s: float) -> tuple[float, int, float]
     sd_m = u["measured_sd"].astype(float).to_numpy() if "measured_sd" in u else np.full(len(u), np.nan)
     n_m = u["measured_n"].astype(float).fillna(1.0).clip(lower=1.0).to_numpy() if "measured_n" in u else np.ones(len(u))
     known = np.isfinite(sd_m) & (sd_m > 0) & np.isfinite(u["measured"].astype(float).to_numpy())
+    # the variances the degrees of freedom are computed from, and whether they are pooled
+    ref_m, ref_s, pool_m, pool_s = rs.reference_variances(u, flags=True)
+    # the degrees of freedom of the pooled measured SD (ref_m) of each row's quantity
+    pooled_dof = rs.pooled_measured_dof(u, known)  # 0 where the quantity's SDs are not pooled
     groups = []  # per simulation: its quantities' (measured mean, var_m, dof_m, sim, seed var, n_s, within chi, within dof)
     for sim_key, g in u.groupby(u["simulation"].astype(str), sort=False):
         parts = []
@@ -725,10 +768,23 @@ def scatter_about_scale(res: pd.DataFrame, s: float) -> tuple[float, int, float]
             vm = (q["measured_sd"].to_numpy(float) ** 2) / n_m[u.index.get_indexer(q.index)]
             w = 1.0 / vm
             mean = float(np.sum(w * m) / np.sum(w))
-            dof_m = float(np.sum(np.clip(n_m[u.index.get_indexer(q.index)] - 1.0, 0.0, None))) or np.inf
+            at = u.index.get_indexer(q.index)
+            dof_m = float(np.sum(np.clip(n_m[at] - 1.0, 0.0, None))) or np.inf
+            # the replicates' scatter about their mean against the measured SD pooled over the
+            # quantity's rows, read as F on that SD's degrees of freedom and given as the
+            # chi-square of the same tail: against each row's own SD of a few repeats, it is a
+            # sum of t^2, not chi-square (6 conditions x 3 days, 2 % noise over 5 repeats, 3 %
+            # seed scatter, no offset: chi-square per degree of freedom 1.30, p < 0.05 in 20 %)
+            wr = 1.0 / ref_m[at]
+            within = float(np.sum(wr * (m - np.sum(wr * m) / np.sum(wr)) ** 2))
+            if len(m) > 1 and np.isfinite(pooled_dof[at[0]]) and pooled_dof[at[0]] > 0:
+                tail = stats.f.sf(within / (len(m) - 1), len(m) - 1, pooled_dof[at[0]])
+                within = float(stats.chi2.isf(max(tail, 1e-300), len(m) - 1))
             parts.append((mean, 1.0 / float(np.sum(w)), dof_m, float(q["simulated_mean"].iloc[0]),
                           float(q["simulated_sd"].iloc[0]), float(q["simulated_n"].iloc[0]),
-                          float(np.sum(w * (m - mean) ** 2)), len(m) - 1))
+                          within, len(m) - 1,
+                          1.0 / float(np.sum(1.0 / ref_m[at])), float(np.mean(ref_s[at])),
+                          bool(np.all(pool_m[at] & pool_s[at]))))
         rep = g[~kg]
         groups.append((parts, rep))
     if not any(p or len(r) for p, r in groups):
@@ -738,16 +794,22 @@ def scatter_about_scale(res: pd.DataFrame, s: float) -> tuple[float, int, float]
         total, n_cond, dof_within = 0.0, 0, 0
         for parts, rep in groups:
             between, within, wdof = [], [], []
-            for mean, var_m, dof_m, sim, sd_s, n_s, wchi, wd in parts:
+            for mean, var_m, dof_m, sim, sd_s, n_s, wchi, wd, rm, rs_, pooled in parts:
                 var_s = (1.0 + scale) ** 2 * sd_s ** 2 / n_s if np.isfinite(sd_s) and n_s >= 1 else 0.0
                 se = math.sqrt(var_m + var_s)
                 if not (np.isfinite(sim) and se > 0):
                     continue
-                # the fewer degrees of freedom of the two parts: Welch-Satterthwaite's, from
-                # the estimated variances themselves, grows where 3 seeds happen to scatter
-                # little, exactly where the residual is large (1 % measured, 5 % seeds:
-                # chi-square 1.16 per row, 6.2 % beyond its 5 % point; the smaller: 0.94, 4.2 %)
-                dof = min(dof_m if var_m > 0 else np.inf, n_s - 1.0 if var_s > 0 and n_s > 1 else np.inf)
+                # Welch-Satterthwaite from the variances pooled over the quantity's rows
+                # (:func:`soilcal.loop.residuals.reference_variances`): from the condition's own
+                # it grows where its 3 seeds happen to scatter little, exactly where the residual
+                # is large; the fewer of the two parts' degrees of freedom instead takes a
+                # residual as heavy-tailed as 3 seeds make it where the seed part is negligible.
+                # Where a part keeps the row's own SD (not pooled: SDs not proportional to the
+                # value), the fewer of the two parts' degrees of freedom, Welch-Satterthwaite's
+                # from the own SDs growing with their luck (5 N +- 2 N beside 500 N +- 10 N, scaled
+                # by their RMS: p < 0.05 in 9 % of right tables, the fewer 0 %)
+                dof = (float(rs.satterthwaite(rm, dof_m, (1.0 + scale) ** 2 * rs_ if var_s > 0 else 0.0, n_s - 1.0))
+                       if pooled else min(dof_m if var_m > 0 else np.inf, n_s - 1.0 if var_s > 0 and n_s > 1 else np.inf))
                 z = (mean - sim * (1.0 + scale)) / se
                 between.append(float(dg.normal_equivalent([z], [dof])[0]) ** 2)
                 within.append(wchi)
@@ -1053,8 +1115,10 @@ def analyse(soil: str, res: pd.DataFrame, diag: pd.DataFrame, cands: list, effec
             verdict = ("consistent: no significant structure, and the residual lies within the measured and seed "
                        f"uncertainty (RMS error {rms:.1f} %)")
         else:
+            # the rows may be many: what is missing is an uncertainty of the measured values
             verdict = (f"unexplained: RMS error {rms:.1f} % with no significant structure over {n} rows, and no "
-                       "measured uncertainty to judge the scatter against (too few data to decide"
+                       "measured uncertainty to judge the scatter against (no measured SD given: the table's `sd` "
+                       "and `n` columns, or each condition's repeats as rows of their own, give it"
                        + (f"; largest: {follows})" if follows else ")"))
         if sel_rows:
             verdict += "; no candidate effect lowered the held-out error significantly (selection.csv)"
@@ -1119,7 +1183,7 @@ def analyse(soil: str, res: pd.DataFrame, diag: pd.DataFrame, cands: list, effec
     for nm, why in (skipped_effects or {}).items():  # those the structure (or candidates: all) would have tried
         if settings.candidates == "all" or matched & set(EFFECTS[nm].signature):
             verdict += f"; {nm} {why}"
-    for hint in unit_hints(u):
+    for hint in constant_hints(u) + unit_hints(u):
         verdict += f"; {hint}"
     per_test = dg.per_test(u)  # table rows; the trend tests take one value per measured condition
     tests, conds = len(per_test), len(dg.per_condition(per_test))

@@ -12,7 +12,8 @@ each an ordinary least-squares fit (statsmodels) against a null of no structure:
   measured SD is known: scatter beyond what the measurement and the seeds explain (a stone,
   a disturbance the covariates do not carry); a condition measured as replicate rows without
   an SD enters with the residual of their mean over their own scatter
-  (:func:`replicate_residuals`).  Taken as unit normal instead, residuals
+  (:func:`replicate_residuals`), replicate rows with an SD, which share their simulation's
+  seed error, with their mean's residual and their scatter about it (:func:`_shared_simulation`).  Taken as unit normal instead, residuals
   standardised with SDs of three repeats and three seeds flag scatter where there is none:
   at alpha 0.05, in 44.5 % of 600 simulated 12-row tables (2.7 % with the t deviates; with
   ten repeats and seeds 10.3 % against 3.5 %);
@@ -299,7 +300,8 @@ def varies_within(dt: pd.DataFrame) -> set[str]:
 
 
 def replicate_residuals(d: pd.DataFrame) -> tuple[np.ndarray, np.ndarray]:
-    """Standardised residuals (and their Welch-Satterthwaite degrees of freedom) of the
+    """Standardised residuals (and their Welch-Satterthwaite degrees of freedom, from the
+    replicate and seed variances pooled over the measured quantity's conditions) of the
     conditions measured as replicate rows without an SD: per condition and measured quantity
     with two measured values at least, not all equal, the residual of their mean, over
     sqrt(s^2 / n + sd_s^2 / n_s) with s the replicates' sample SD (n of them) and sd_s the seed
@@ -311,8 +313,10 @@ def replicate_residuals(d: pd.DataFrame) -> tuple[np.ndarray, np.ndarray]:
     need = {"simulation", "measure", "measured", "simulated_mean", "simulated_sd", "simulated_n"}
     if not need <= set(d.columns) or not len(d):
         return np.empty(0), np.empty(0)
+    from soilcal.loop.residuals import pooled_relative_variance, satterthwaite
+
     rows = d if "measured_sd" not in d else d[~np.isfinite(d["measured_sd"].astype(float).to_numpy())]
-    z, dof = [], []
+    cond = []  # per condition and quantity: mean, replicate SD, n, simulated mean, seed SD, seeds, scale, quantity
     for _, g in rows.groupby([rows["simulation"].astype(str), rows["measure"].astype(str)], sort=False):
         m = g["measured"].to_numpy(float)  # every repeat: rounded forces repeat a value
         m = m[np.isfinite(m)]
@@ -322,17 +326,84 @@ def replicate_residuals(d: pd.DataFrame) -> tuple[np.ndarray, np.ndarray]:
         sd = float(np.std(m, ddof=1))
         if sd == 0.0:
             continue  # repeats that all read one value (rounded) state no scatter to judge against
-        sim, sd_s, n_s = (float(g["simulated_mean"].iloc[0]), float(g["simulated_sd"].iloc[0]),
-                          float(g["simulated_n"].iloc[0]))
-        var_m = sd ** 2 / n
+        scale = (float(np.nanmean(g["scale"].to_numpy(float))) if "scale" in g else float(np.mean(np.abs(m))))
+        cond.append((float(np.mean(m)), sd, n, float(g["simulated_mean"].iloc[0]), float(g["simulated_sd"].iloc[0]),
+                     float(g["simulated_n"].iloc[0]), scale,
+                     str(g["measurement"].iloc[0]) + "\x00" + str(g["measure"].iloc[0]) if "measurement" in g
+                     else str(g["measure"].iloc[0])))
+    if not cond:
+        return np.empty(0), np.empty(0)
+    mean, sd, n, sim, sd_s, n_s, scale, q = (np.array(c) for c in zip(*cond))
+    mean, sd, n, sim, sd_s, n_s, scale = (np.asarray(x, float) for x in (mean, sd, n, sim, sd_s, n_s, scale))
+    var_m = sd ** 2 / n
+    var_s = np.where(np.isfinite(sd_s) & (n_s >= 1), sd_s ** 2 / np.clip(n_s, 1.0, None), 0.0)
+    se = np.sqrt(var_m + var_s)
+    # degrees of freedom from the variances pooled over the quantity's conditions (relative to
+    # their scale), not from the condition's own: those grow where its two or three replicates
+    # or seeds happen to scatter little, exactly where the residual over them is large
+    # (:func:`soilcal.loop.residuals.reference_variances`)
+    ref_m = pooled_relative_variance(sd, n, scale, q) * scale ** 2 / n
+    ref_s = np.where(n_s > 1, pooled_relative_variance(sd_s, n_s, scale, q) * scale ** 2 / np.clip(n_s, 1.0, None),
+                     var_s)
+    ref_m, ref_s = np.where(np.isfinite(ref_m), ref_m, var_m), np.where(np.isfinite(ref_s), ref_s, var_s)
+    ok = np.isfinite(sim) & (se > 0)
+    z = (mean - sim) / np.where(se > 0, se, 1.0)
+    return z[ok], satterthwaite(ref_m, n - 1.0, ref_s, n_s - 1.0)[ok]
+
+def _shared_simulation(d: pd.DataFrame, known: np.ndarray) -> tuple[np.ndarray, float, int]:
+    """The scatter test's part of the rows with a measured SD (``known``) that share one
+    simulation and quantity with another such row (replicate rows of a condition, on other
+    days): they share its seeds' error, so their residuals are not independent (6 conditions x 3
+    days, no offset: the scatter test at p < 0.05 in 8 % of tables).  Per such group of r rows,
+    the residual of their inverse-variance mean (seed variance sd_s^2 / n_s once) as the normal
+    deviate on its Welch-Satterthwaite degrees of freedom (from the SDs pooled over the
+    quantity's rows, :func:`soilcal.loop.residuals.reference_variances`), squared, plus their
+    scatter about their mean against the pooled measured SD, read as F on its degrees of
+    freedom and given as chi-square on r - 1 of the same tail: r degrees of freedom, as r
+    independent rows would give.  Returns the rows so taken, their chi-square and its degrees
+    of freedom."""
+    from scipy import stats
+
+    from soilcal.loop import residuals as rs
+
+    taken = np.zeros(len(d), bool)
+    need = {"simulation", "measure", "measurement", "measured", "measured_sd", "simulated_mean", "simulated_sd",
+            "simulated_n"}
+    if not need <= set(d.columns) or not known.any():
+        return taken, 0.0, 0
+    known = known & (d["measured_sd"].astype(float).to_numpy() > 0)  # an SD of 0 gives no weight
+    key = (d["simulation"].astype(str) + "\x00" + d["measure"].astype(str)).to_numpy()
+    size = pd.Series(known.astype(int)).groupby(key).transform("sum").to_numpy()
+    multi = known & (size > 1)
+    if not multi.any():
+        return taken, 0.0, 0
+    n_m = d["measured_n"].astype(float).fillna(1.0).clip(lower=1.0).to_numpy() if "measured_n" in d else np.ones(len(d))
+    ref_m, ref_s = rs.reference_variances(d)
+    pooled_dof = rs.pooled_measured_dof(d, known)  # 0 where the quantity's SDs are not pooled
+    chi, n = 0.0, 0
+    for _, at in pd.Series(np.arange(len(d))[multi]).groupby(key[multi]):
+        at = at.to_numpy()
+        m = d["measured"].to_numpy(float)[at]
+        w = 1.0 / (d["measured_sd"].to_numpy(float)[at] ** 2 / n_m[at])
+        sim, sd_s, n_s = (float(d["simulated_mean"].iloc[at[0]]), float(d["simulated_sd"].iloc[at[0]]),
+                          float(d["simulated_n"].iloc[at[0]]))
         var_s = sd_s ** 2 / n_s if np.isfinite(sd_s) and n_s >= 1 else 0.0
-        se = np.sqrt(var_m + var_s)
-        if not (np.isfinite(sim) and se > 0):
+        se = np.sqrt(1.0 / np.sum(w) + var_s)
+        if not (np.isfinite(sim) and np.isfinite(se) and se > 0):
             continue
-        den = var_m ** 2 / (n - 1) + (var_s ** 2 / (n_s - 1) if n_s > 1 else 0.0)
-        z.append((float(np.mean(m)) - sim) / se)
-        dof.append(se ** 4 / den if den > 0 else np.inf)
-    return np.array(z, float), np.array(dof, float)
+        dof_m = float(np.sum(n_m[at] - 1.0)) or np.inf
+        dof = float(rs.satterthwaite(1.0 / np.sum(1.0 / ref_m[at]), dof_m, float(np.mean(ref_s[at])), n_s - 1.0))
+        between = float(normal_equivalent([(np.sum(w * m) / np.sum(w) - sim) / se], [dof])[0]) ** 2
+        wr = 1.0 / ref_m[at]
+        within = float(np.sum(wr * (m - np.sum(wr * m) / np.sum(wr)) ** 2))
+        if np.isfinite(pooled_dof[at[0]]) and pooled_dof[at[0]] > 0:
+            within = float(stats.chi2.isf(max(stats.f.sf(within / (len(at) - 1), len(at) - 1, pooled_dof[at[0]]),
+                                              1e-300), len(at) - 1))
+        chi += between + within
+        n += len(at)
+        taken[at] = True
+    return taken, chi, n
+
 
 def diagnose(res: pd.DataFrame, quantity_of: dict | None = None, alpha: float = 0.05) -> pd.DataFrame:
     """One row per test (module docstring) on the usable rows of a residual table;
@@ -363,17 +434,19 @@ def diagnose(res: pd.DataFrame, quantity_of: dict | None = None, alpha: float = 
     z = (d["standardised_residual"].astype(float).to_numpy() if "standardised_residual" in d
          else np.full(len(d), np.nan))  # no standardised residual: no scatter test
     dof = (d["residual_dof"].astype(float).to_numpy() if "residual_dof" in d else np.full(len(z), np.inf))
-    if "measured_sd" in d:  # only where the measured uncertainty is known: seed scatter alone understates it
-        known = np.isfinite(d["measured_sd"].astype(float).to_numpy())
-        z, dof = z[known], dof[known]
-    keep = np.isfinite(z)
-    z = normal_equivalent(z[keep], dof[keep])
+    # only where the measured uncertainty is known: seed scatter alone understates it
+    known = (np.isfinite(d["measured_sd"].astype(float).to_numpy()) if "measured_sd" in d
+             else np.ones(len(d), bool)) & np.isfinite(z)
+    shared, chi_shared, n_shared = _shared_simulation(d, known)
+    single = known & ~shared
+    z = normal_equivalent(z[single], dof[single])
     zr, dofr = replicate_residuals(d)  # replicate rows without an SD: their mean against their own scatter
     z = np.concatenate([z, normal_equivalent(zr, dofr)])
-    if len(z) >= 3:
-        chi = float(np.sum(z ** 2))
-        rows.append(dict(test="scatter", covariate="", quantity="scatter", n=len(z), levels=1,
-                         estimate=float(np.sqrt(chi / len(z))), statistic=chi, p=float(stats.chi2.sf(chi, len(z))),
+    n_all = len(z) + n_shared
+    if n_all >= 3:
+        chi = float(np.sum(z ** 2)) + chi_shared
+        rows.append(dict(test="scatter", covariate="", quantity="scatter", n=n_all, levels=1,
+                         estimate=float(np.sqrt(chi / n_all)), statistic=chi, p=float(stats.chi2.sf(chi, n_all)),
                          r2=0.0))
     # a covariate constant over each condition's replicates is tested on the condition means; one
     # that varies among them (a test day, a replicate number) on the measured tests

@@ -161,12 +161,9 @@ def residual_frame(obs: pd.DataFrame, runs: pd.DataFrame) -> pd.DataFrame:
     var_s = (df["simulated_sd"] ** 2 / df["simulated_n"].clip(lower=1)).fillna(0.0)
     se = np.sqrt(var_m + var_s)
     df["residual_se"] = np.where(se > 0, se, np.nan)
-    # Welch-Satterthwaite: each estimated variance contributes var^2 / its degrees of freedom
-    n_m, n_s = df["measured_n"].astype(float), df["simulated_n"].astype(float)
-    t_m = np.where(n_m > 1, var_m ** 2 / (n_m - 1).clip(lower=1.0), 0.0)
-    t_s = np.where(n_s > 1, var_s ** 2 / (n_s - 1).clip(lower=1.0), 0.0)
-    den = t_m + t_s
-    df["residual_dof"] = np.where(den > 0, se ** 4 / np.where(den > 0, den, 1.0), np.inf)
+    n_m, n_s = df["measured_n"].astype(float).to_numpy(), df["simulated_n"].astype(float).to_numpy()
+    ref_m, ref_s = reference_variances(df)
+    df["residual_dof"] = satterthwaite(ref_m, n_m - 1.0, ref_s, n_s - 1.0)
     df["standardised_residual"] = df["residual"] / df["residual_se"]
     notes = []
     rms_scaled = set(by_rms)
@@ -193,6 +190,111 @@ def residual_frame(obs: pd.DataFrame, runs: pd.DataFrame) -> pd.DataFrame:
     df = df.drop(columns=["failed_reason"], errors="ignore")
     extra = [c for c in df.columns if c.startswith(("cov:", "q:"))]
     return df[RESIDUAL_COLUMNS[:5] + extra + RESIDUAL_COLUMNS[5:]]
+
+
+def satterthwaite(var_a, dof_a, var_b, dof_b) -> np.ndarray:
+    """Welch-Satterthwaite degrees of freedom of a sum of two variances on ``dof_a`` and
+    ``dof_b`` degrees of freedom, (a + b)^2 / (a^2 / dof_a + b^2 / dof_b); a part with no
+    degrees of freedom of its own (dof <= 0 or infinite: known, or absent with variance 0)
+    adds nothing below the line; infinite where neither part is estimated."""
+    a, b = np.asarray(var_a, float), np.asarray(var_b, float)
+    da, db = np.asarray(dof_a, float), np.asarray(dof_b, float)
+    a, b = np.where(np.isfinite(a), a, 0.0), np.where(np.isfinite(b), b, 0.0)
+    ta = np.where(np.isfinite(da) & (da > 0), a ** 2 / np.where(da > 0, da, 1.0), 0.0)
+    tb = np.where(np.isfinite(db) & (db > 0), b ** 2 / np.where(db > 0, db, 1.0), 0.0)
+    den = ta + tb
+    return np.where(den > 0, (a + b) ** 2 / np.where(den > 0, den, 1.0), np.inf)
+
+
+HOMOGENEITY_ALPHA = 0.05  # Bartlett's test of a quantity's relative variances: below it, not pooled
+
+
+def bartlett_p(var, dof) -> float:
+    """Bartlett's test of equal variances from the estimates ``var`` on ``dof`` degrees of
+    freedom each (the summary-statistic form of :func:`scipy.stats.bartlett`): its p value; 1
+    for fewer than two estimates."""
+    from scipy import stats
+
+    v, d = np.asarray(var, float), np.asarray(dof, float)
+    if len(v) < 2:
+        return 1.0
+    if np.any(v <= 0):
+        return 0.0 if np.any(v > 0) else 1.0
+    big = float(np.sum(d))
+    sp = float(np.sum(d * v)) / big
+    m = big * np.log(sp) - float(np.sum(d * np.log(v)))
+    c = 1.0 + (float(np.sum(1.0 / d)) - 1.0 / big) / (3.0 * (len(v) - 1))
+    return float(stats.chi2.sf(m / c, len(v) - 1))
+
+
+def pooled_relative_variance(sd, n, scale, group) -> np.ndarray:
+    """Per row, the squared SD over ``scale`` pooled over the rows of its ``group`` (a measured
+    quantity) that estimate it (n > 1 values behind it, the SD finite): sum((n - 1) (sd /
+    scale)^2) / sum(n - 1); NaN where its group has none, or where Bartlett's test
+    (:func:`bartlett_p`) rejects that the group's relative variances are one at
+    :data:`HOMOGENEITY_ALPHA`: an SD that is not proportional to the value (an absolute noise
+    floor, one row far noisier than the others, a quantity scaled by its RMS) is not pooled and
+    each row keeps its own.  Rows repeating one estimate (the replicate rows of one simulation)
+    are to be passed once."""
+    sd, n, scale = (np.asarray(x, float) for x in (sd, n, scale))
+    rel = (sd / scale) ** 2
+    ok = np.isfinite(rel) & np.isfinite(n) & (n > 1)
+    g = pd.Series(np.asarray(group).astype(str))
+    num = pd.Series(np.where(ok, (n - 1) * rel, 0.0)).groupby(g).transform("sum").to_numpy(float)
+    den = pd.Series(np.where(ok, n - 1, 0.0)).groupby(g).transform("sum").to_numpy(float)
+    out = np.where(den > 0, num / np.where(den > 0, den, 1.0), np.nan)
+    for _, at in pd.Series(np.arange(len(g))).groupby(g):
+        at = at.to_numpy()
+        at = at[ok[at]]
+        if len(at) > 1 and bartlett_p(rel[at], n[at] - 1.0) < HOMOGENEITY_ALPHA:
+            out[pd.Series(np.asarray(group).astype(str)).to_numpy() == g.iloc[at[0]]] = np.nan
+    return out
+
+
+def pooled_measured_dof(df: pd.DataFrame, known: np.ndarray) -> np.ndarray:
+    """Per row, the degrees of freedom of its quantity's pooled measured SD (the ``known`` rows'
+    n - 1 summed over the quantity), 0 where the quantity's measured SDs are not pooled
+    (:func:`pooled_relative_variance`)."""
+    if "measured_sd" not in df or not len(df):
+        return np.zeros(len(df))
+    nm = df["measured_n"].astype(float).fillna(1.0).clip(lower=1.0).to_numpy() if "measured_n" in df else np.ones(len(df))
+    sd = df["measured_sd"].astype(float).to_numpy()
+    meas = (df["measurement"].astype(str) + "\x00" + df["measure"].astype(str)).to_numpy()
+    pooled = np.isfinite(pooled_relative_variance(np.where(known, sd, np.nan), nm, scale_of(df), meas))
+    dof = pd.Series(np.where(known & (nm > 1), nm - 1.0, 0.0)).groupby(meas).transform("sum").to_numpy(float)
+    return np.where(pooled, dof, 0.0)
+
+
+def reference_variances(df: pd.DataFrame, flags: bool = False) -> tuple[np.ndarray, ...]:
+    """The measured and seed variances of the rows' means that their residual degrees of
+    freedom are computed from: where a part is estimated (n > 1 repeats or seeds), its squared
+    SD relative to the row's scale pooled over the measured quantity's rows
+    (:func:`pooled_relative_variance`; the seeds once per simulation), times the row's scale
+    squared over n (a measured quantity of a measurement table: one rig, one simulated scenario);
+    else the row's own variance (a measured SD without a repeat count is taken
+    as known).  Welch-Satterthwaite's degrees of freedom computed from the row's own estimated
+    variances grow where those few repeats or seeds happen to scatter little, exactly where
+    the standardised residual is large (1 % measured noise over 10 repeats, 5 % seed scatter
+    over 3 seeds: 7.9 % of the rows beyond the 5 % two-sided point, mean square 1.23).  With
+    ``flags``, also per row whether each estimated part is pooled (else the row's own)."""
+    nm = df["measured_n"].astype(float).fillna(1.0).clip(lower=1.0).to_numpy()
+    ns = df["simulated_n"].astype(float).fillna(0.0).to_numpy()
+    sd_m, sd_s = df["measured_sd"].astype(float).to_numpy(), df["simulated_sd"].astype(float).to_numpy()
+    scale = scale_of(df)
+    meas = (df["measurement"].astype(str) + "\x00" + df["measure"].astype(str)).to_numpy()
+    own_m = np.where(np.isfinite(sd_m), sd_m ** 2 / nm, 0.0)
+    own_s = np.where(np.isfinite(sd_s) & (ns >= 1), sd_s ** 2 / np.clip(ns, 1.0, None), 0.0)
+    cv_m = pooled_relative_variance(sd_m, nm, scale, meas)
+    first = ~pd.DataFrame({"s": df["simulation"].astype(str) if "simulation" in df else np.arange(len(df)).astype(str),
+                           "m": meas}).duplicated().to_numpy()
+    cv_s = pooled_relative_variance(np.where(first, sd_s, np.nan), ns, scale, meas)
+    ref_m = np.where((nm > 1) & np.isfinite(sd_m) & np.isfinite(cv_m * scale), cv_m * scale ** 2 / nm, own_m)
+    ref_s = np.where((ns > 1) & np.isfinite(sd_s) & np.isfinite(cv_s * scale), cv_s * scale ** 2 / np.clip(ns, 1.0, None),
+                     own_s)
+    if flags:
+        est_m, est_s = (nm > 1) & np.isfinite(sd_m), (ns > 1) & np.isfinite(sd_s)
+        return ref_m, ref_s, ~est_m | np.isfinite(cv_m * scale), ~est_s | np.isfinite(cv_s * scale)
+    return ref_m, ref_s
 
 
 def scale_of(df: pd.DataFrame) -> np.ndarray:
