@@ -44,6 +44,21 @@ def test_a_symlinked_refusals_folder_is_emptied_not_followed_out_of(tmp_path):
     assert (outside / "photo.png").read_bytes() == b"photo"
 
 
+def test_an_earlier_runs_refusals_are_emptied_before_the_photos_are_measured(tmp_path):
+    # logs/<soil>/images/refused holds the diagnostic images and a refused group's figures of the
+    # run that refused; before: what an earlier run left there stayed beside a later run's results
+    # and was taken for them (the job empties it before it reads the manifest)
+    kept = tmp_path / "logs" / "refused"
+    kept.mkdir(parents=True)
+    for name in ("stacking_1.refused.png", "stacking_1.png", "stacking_2.png"):
+        (kept / name).write_bytes(b"an earlier run's figure")
+    with pytest.raises(SystemExit) as e:  # the manifest is missing: one line, exit 2, after emptying
+        exec(compile(SCRIPT.read_text(), str(SCRIPT), "exec"), {"snakemake": _job(tmp_path, kept),
+                                                                 "__name__": "__main__"})
+    assert e.value.code == 2
+    assert kept.is_dir() and not any(kept.iterdir()), sorted(p.name for p in kept.iterdir())
+
+
 def test_empty_folder_refuses_a_file_and_leaves_a_missing_folder(tmp_path):
     from soilcal.errors import InputError
     from soilcal.logs import empty_folder

@@ -76,21 +76,6 @@ def test_bad_photo_found_by_a_job_is_one_line_without_traceback(tmp_path):
     assert not (tmp / out).exists() and not (tmp / "results/cinnamon-soil/images/figures").exists()
 
 
-def test_a_measuring_run_clears_an_earlier_runs_refusals(tmp_path):
-    # logs/<soil>/images/refused holds the diagnostic images and a refused group's figures of the
-    # run that refused; once the photos are measured, what an earlier run left there (a refused
-    # photo's diagnostic image, a group's figures) is gone, not taken for this run's
-    tmp = _copy(tmp_path)
-    kept = tmp / "logs/cinnamon-soil/images/refused"
-    kept.mkdir(parents=True)
-    for name in ("stacking_1.refused.png", "stacking_1.png", "stacking_2.png"):
-        (kept / name).write_bytes(b"an earlier run's figure")
-    out = "results/cinnamon-soil/images/measurements.json"
-    _run(tmp, "--cores", "1", out)
-    assert (tmp / out).is_file()
-    assert not kept.exists() or not any(kept.iterdir()), sorted(p.name for p in kept.iterdir())
-
-
 def _planned_jobs(tmp: Path) -> list[str]:
     return planned_jobs(tmp)
 
