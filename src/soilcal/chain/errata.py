@@ -19,7 +19,7 @@ import numpy as np
 import pandas as pd
 from scipy import stats
 
-from soilcal.config.quantities import PLAUSIBLE
+from soilcal.config.quantities import PLAUSIBLE, plausible_kind, quantity_factor, si_factor
 from soilcal.errors import InputError
 from soilcal.rsm.printed import parse_printed as rsm_parse_printed
 
@@ -257,37 +257,24 @@ def _longest_common_run(a: np.ndarray, b: np.ndarray) -> int:
 
 # ------------------------------------------------------------------ physical plausibility
 
-# (low, high, SI unit) of each kind: the one table of physical ranges, shared with the check
-# of a soil of one's own at load
-_PLAUSIBLE = PLAUSIBLE
-
-
-def _si(value: float, unit: str, si_unit: str) -> float | None:
-    from soilcal.config.quantities import si_factor
-
-    f = si_factor(unit, si_unit)
-    return None if f is None else value * f
-
-
 def plausibility(err: Errata, soil: dict) -> None:
+    # the ranges of PLAUSIBLE, the one table of physical ranges, shared with the check of a soil
+    # of one's own at load
     def check(where, name, q):
-        from soilcal.config.quantities import plausible_kind
-
-        kind = plausible_kind(name, where.startswith("materials.")) if not where.startswith("stages.") else name
+        kind = plausible_kind(name, where.startswith("materials."))
         if kind is None:
             return
-        lo, hi, si_unit = _PLAUSIBLE[kind]
+        lo, hi, si_unit = PLAUSIBLE[kind]
         declared = [q.get("value")] + list(q.get("values", [])) + [q.get("low"), q.get("high")]
         if kind == "moisture_content":
             # every declared value and range end, a lone low or high too, in % by the factor of
             # its unit (quantities.quantity_factor, as the tables read it); a unit without a factor is judged where a
             # moisture is compared with it, a value without a unit is taken as printed, in %
-            from soilcal.config.quantities import quantity_factor
-
             f = 1.0 if q.get("unit") is None else quantity_factor("moisture_content", q.get("unit"))
             pairs = [(v, None if f is None else float(v) * f) for v in declared if v is not None]
         else:
-            pairs = [(v, _si(float(v), str(q.get("unit", "")), si_unit)) for v in declared if v is not None]
+            f = si_factor(str(q.get("unit", "")), si_unit)
+            pairs = [(v, None if f is None else float(v) * f) for v in declared if v is not None]
         for v, x in pairs:
             if x is None:
                 continue
@@ -304,7 +291,7 @@ def plausibility(err: Errata, soil: dict) -> None:
     for st in soil["stages"]:
         for sym, f in st["factors"].items():
             kind = soil["parameters"][f["parameter"]].get("kind")
-            if kind in _PLAUSIBLE and kind != "shear_modulus":
+            if kind in PLAUSIBLE and kind != "shear_modulus":
                 q = {"low": f.get("low"), "high": f.get("high"), "values": f.get("levels", []),
                      "unit": soil["parameters"][f["parameter"]]["unit"], "source": st.get("source", "")}
                 check(f"stages.{st['id']}.factors.{sym}", kind, q)
