@@ -760,15 +760,15 @@ def scatter_about_scale(res: pd.DataFrame, s: float) -> tuple[float, int, float]
     # the degrees of freedom of the pooled measured SD (ref_m) of each row's quantity
     pooled_dof = rs.pooled_measured_dof(u, known)  # 0 where the quantity's SDs are not pooled
     groups = []  # per simulation: its quantities' (measured mean, var_m, dof_m, sim, seed var, n_s, within chi, within dof)
-    for sim_key, g in u.groupby(u["simulation"].astype(str), sort=False):
+    for _, g in u.groupby(u["simulation"].astype(str), sort=False):
         parts = []
         kg = known[u.index.get_indexer(g.index)]
         for _, q in g[kg].groupby(g[kg]["measure"].astype(str), sort=False):
             m = q["measured"].to_numpy(float)
-            vm = (q["measured_sd"].to_numpy(float) ** 2) / n_m[u.index.get_indexer(q.index)]
+            at = u.index.get_indexer(q.index)
+            vm = (q["measured_sd"].to_numpy(float) ** 2) / n_m[at]
             w = 1.0 / vm
             mean = float(np.sum(w * m) / np.sum(w))
-            at = u.index.get_indexer(q.index)
             dof_m = float(np.sum(np.clip(n_m[at] - 1.0, 0.0, None))) or np.inf
             # the replicates' scatter about their mean against the measured SD pooled over the
             # quantity's rows, read as F on that SD's degrees of freedom and given as the
