@@ -775,11 +775,7 @@ def scatter_about_scale(res: pd.DataFrame, s: float) -> tuple[float, int, float]
             # chi-square of the same tail: against each row's own SD of a few repeats, it is a
             # sum of t^2, not chi-square (6 conditions x 3 days, 2 % noise over 5 repeats, 3 %
             # seed scatter, no offset: chi-square per degree of freedom 1.30, p < 0.05 in 20 %)
-            wr = 1.0 / ref_m[at]
-            within = float(np.sum(wr * (m - np.sum(wr * m) / np.sum(wr)) ** 2))
-            if len(m) > 1 and np.isfinite(pooled_dof[at[0]]) and pooled_dof[at[0]] > 0:
-                tail = stats.f.sf(within / (len(m) - 1), len(m) - 1, pooled_dof[at[0]])
-                within = float(stats.chi2.isf(max(tail, 1e-300), len(m) - 1))
+            within = rs.replicate_scatter_chi(m, ref_m[at], pooled_dof[at[0]])
             parts.append((mean, 1.0 / float(np.sum(w)), dof_m, float(q["simulated_mean"].iloc[0]),
                           float(q["simulated_sd"].iloc[0]), float(q["simulated_n"].iloc[0]),
                           within, len(m) - 1,

@@ -362,7 +362,6 @@ def _shared_simulation(d: pd.DataFrame, known: np.ndarray) -> tuple[np.ndarray, 
     freedom and given as chi-square on r - 1 of the same tail: r degrees of freedom, as r
     independent rows would give.  Returns the rows so taken, their chi-square and its degrees
     of freedom."""
-    from scipy import stats
 
     from soilcal.loop import residuals as rs
 
@@ -394,11 +393,7 @@ def _shared_simulation(d: pd.DataFrame, known: np.ndarray) -> tuple[np.ndarray, 
         dof_m = float(np.sum(n_m[at] - 1.0)) or np.inf
         dof = float(rs.satterthwaite(1.0 / np.sum(1.0 / ref_m[at]), dof_m, float(np.mean(ref_s[at])), n_s - 1.0))
         between = float(normal_equivalent([(np.sum(w * m) / np.sum(w) - sim) / se], [dof])[0]) ** 2
-        wr = 1.0 / ref_m[at]
-        within = float(np.sum(wr * (m - np.sum(wr * m) / np.sum(wr)) ** 2))
-        if np.isfinite(pooled_dof[at[0]]) and pooled_dof[at[0]] > 0:
-            within = float(stats.chi2.isf(max(stats.f.sf(within / (len(at) - 1), len(at) - 1, pooled_dof[at[0]]),
-                                              1e-300), len(at) - 1))
+        within = rs.replicate_scatter_chi(m, ref_m[at], pooled_dof[at[0]])
         chi += between + within
         n += len(at)
         taken[at] = True

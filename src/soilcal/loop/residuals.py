@@ -206,6 +206,22 @@ def satterthwaite(var_a, dof_a, var_b, dof_b) -> np.ndarray:
     return np.where(den > 0, (a + b) ** 2 / np.where(den > 0, den, 1.0), np.inf)
 
 
+def replicate_scatter_chi(m, ref_m, pooled_dof) -> float:
+    """The chi-square of replicate rows' values ``m`` about their weighted mean, each weighted by
+    1 / its reference variance ``ref_m``; where that variance is a measured SD pooled over the
+    quantity's rows on ``pooled_dof`` degrees of freedom (finite, > 0), the scatter is read as
+    F on them and given as the chi-square of the same tail on len(m) - 1 degrees of freedom:
+    against each row's own SD of a few repeats it is a sum of t^2, not chi-square."""
+    from scipy import stats
+
+    m, wr = np.asarray(m, float), 1.0 / np.asarray(ref_m, float)
+    chi = float(np.sum(wr * (m - np.sum(wr * m) / np.sum(wr)) ** 2))
+    if len(m) > 1 and np.isfinite(pooled_dof) and pooled_dof > 0:
+        tail = stats.f.sf(chi / (len(m) - 1), len(m) - 1, pooled_dof)
+        chi = float(stats.chi2.isf(max(tail, 1e-300), len(m) - 1))
+    return chi
+
+
 HOMOGENEITY_ALPHA = 0.05  # Bartlett's test of a quantity's relative variances: below it, not pooled
 
 
