@@ -72,8 +72,7 @@ def _pile(args):
     except InputError as e:
         if e.field == "confidence" and args.figures:
             # no photo "ok": their figures, which the reasons point to, are written all the same
-            for r in e.results:
-                figures.angle_figure(r, _figure_base(args.figures, r))
+            figures.angle_figures(e.results, args.figures)
             raise InputError(e.path, e.field, e.expected, f"{e.got}; figures of every photo in {args.figures}",
                              e.note) from None
         # a photo measured on the line given: the refusal names the option and the line
@@ -83,8 +82,7 @@ def _pile(args):
         raise InputError(e.path, e.field, e.expected, f"{e.got} on the plate line given on the command line "
                          f"--plate-line-px {' '.join(f'{v:g}' for q in given[e.path] for v in q)}", e.note) from None
     if args.figures:
-        for r in res:
-            figures.angle_figure(r, _figure_base(args.figures, r))
+        figures.angle_figures(res, args.figures)
     _warn_set_aside(summary)
     _print(summary)
     return 0
@@ -107,13 +105,11 @@ def _drum(args):
         if e.field != "confidence" or not args.figures:
             raise
         # no frame "ok": their figures, which the reasons point to, are written all the same
-        for r in e.results:
-            figures.angle_figure(r, _figure_base(args.figures, r))
+        figures.angle_figures(e.results, args.figures)
         raise InputError(e.path, e.field, e.expected, f"{e.got}; figures of every frame in {args.figures}",
                          e.note) from None
     if args.figures:
-        for r in res:
-            figures.angle_figure(r, _figure_base(args.figures, r))
+        figures.angle_figures(res, args.figures)
     _warn_set_aside(summary)
     _print(summary)
     return 0

@@ -101,6 +101,13 @@ def angle_figure(result, stem, title=""):
     return _save(fig, stem)
 
 
+def angle_figures(results, folder):
+    """Each heap photo's or drum frame's angle figure in ``folder``, named by the photo's file
+    name without its extension (:func:`angle_figure` adds ``.png`` and ``.pdf``)."""
+    for r in results:
+        angle_figure(r, Path(folder) / Path(r.path).stem)
+
+
 def furrow_figure(result, stem, title=""):
     _not_over_photo(result, stem)
     st = result.stages

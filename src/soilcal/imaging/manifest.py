@@ -224,8 +224,7 @@ def measure_manifest(path, figdir=None, threshold="otsu", refusals=None, refused
             return e.got
         where = Path(refused_figdir if refused_figdir is not None else refusals if refusals is not None else figdir)
         where.mkdir(parents=True, exist_ok=True)
-        for r in e.results:
-            figures.angle_figure(r, where / Path(r.path).stem)
+        figures.angle_figures(e.results, where)
         return f"{e.got}; figures of the group's {noun} in {where}"
 
     out = OrderedDict()
