@@ -69,3 +69,17 @@ def test_a_manifests_figures_folder_that_is_its_photos_folder_is_refused(tmp_pat
         measure_manifest(m, figdir=tmp_path)
     assert e.value.field == "figures folder"
     assert (tmp_path / "a.png").read_bytes() == data and not (tmp_path / "figs").exists()
+
+
+def test_photos_named_with_dots_get_a_figure_each(tmp_path):
+    # heap.v1.png and heap.v2.png have the stems heap.v1 and heap.v2; their figures were both
+    # written as heap.png / heap.pdf (Path.with_suffix took .v1 and .v2 for extensions), the
+    # second replacing the first
+    import matplotlib.pyplot as plt
+
+    from soilcal.imaging.figures import _save
+
+    for stem in ("heap.v1", "heap.v2"):
+        _save(plt.figure(), tmp_path / stem)
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["heap.v1.pdf", "heap.v1.png", "heap.v2.pdf",
+                                                          "heap.v2.png"]

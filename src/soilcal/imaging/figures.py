@@ -38,6 +38,13 @@ def check_apart(photos, folder, field):
                              f"that name)", str(folder))
 
 
+def _named(stem, suffix):
+    """``stem`` with ``suffix`` added: a photo's name may hold dots of its own (heap.v2.png has
+    the stem heap.v2), which Path.with_suffix would take for an extension and replace."""
+    stem = Path(stem)
+    return stem.with_name(stem.name + suffix)
+
+
 def _not_over_photo(result, stem):
     """Refuse (InputError naming the photo) to write the figures ``stem``.png / .pdf of
     ``result`` where one of them is the photo measured itself: a figures folder that is the
@@ -45,7 +52,7 @@ def _not_over_photo(result, stem):
     from soilcal.errors import InputError
 
     photo = Path(result.path)
-    for out in (Path(stem).with_suffix(".png"), Path(stem).with_suffix(".pdf")):
+    for out in (_named(stem, ".png"), _named(stem, ".pdf")):
         if photo.is_file() and out.exists() and out.resolve() == photo.resolve():
             raise InputError(photo, "figures folder", f"a folder other than the photo's own for its figures "
                              f"(its figure {out.name} would replace the photo)",
@@ -55,10 +62,11 @@ def _not_over_photo(result, stem):
 def _save(fig, stem):
     stem = Path(stem)
     stem.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(stem.with_suffix(".png"), dpi=150)
-    fig.savefig(stem.with_suffix(".pdf"))
+    png, pdf = _named(stem, ".png"), _named(stem, ".pdf")
+    fig.savefig(png, dpi=150)
+    fig.savefig(pdf)
     plt.close(fig)
-    return stem.with_suffix(".png"), stem.with_suffix(".pdf")
+    return png, pdf
 
 
 def angle_figure(result, stem, title=""):
