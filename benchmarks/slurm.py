@@ -5,7 +5,7 @@ resumes with the jobs it left.
 Needs a running SLURM (``sudo benchmarks/slurm/single_node.sh`` starts a one-node cluster on
 this machine) and ``pip install snakemake-executor-plugin-slurm``.  Two fresh copies of the
 workflow are made with the tiny run of the workflow tests (``tests/wfutil.make_tiny``: the
-cinnamon soil calibrated on heaps of 300 spheres, the yangtze soil replayed):
+cinnamon soil calibrated on heaps of 300 spheres and replayed from its printed tables):
 
 1. ``snakemake --cores 2`` in the first (the local run);
 2. ``snakemake --profile profiles/slurm`` in the second, killed with SIGKILL after
@@ -53,7 +53,7 @@ SNAKEMAKE = [sys.executable, "-m", "snakemake"]
 #: what both comparisons run
 TINY_RUN = ("The run: the tiny calibration of the workflow tests (cinnamon soil on heaps of 300 "
             "spheres through screening, path, Box-Behnken, verification, plate tests and the "
-            "measured-data loop; yangtze soil replayed)")
+            "measured-data loop; its printed tables replayed)")
 RUN_FIELDS = ["utc", "commit", "run_id", "kind", "command", "elapsed_s", "jobs_done", "rc", "note"]
 FILE_FIELDS = ["utc", "commit", "run_id", "outcome", "files", "example"]
 

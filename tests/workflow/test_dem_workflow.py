@@ -2,9 +2,9 @@
 
 A copy of the workflow calibrates the cinnamon soil on soilcal's DEM through every stage kind
 (Plackett-Burman screening -> steepest ascent derived from it -> Box-Behnken centred on the
-path), with heaps of 300 spheres (``set: {n_particles: 300}``) so that a design point takes
-seconds, and replays the yangtze soil's printed tables beside it (the run is
-``conftest.tiny_dem_run``).
+path), with heaps of 300 spheres lifted at four times the paper's speed (``wfutil.make_tiny``)
+so that a design point takes seconds, and replays the soil's printed tables beside it (the run
+is ``conftest.tiny_dem_run``).
 """
 
 from __future__ import annotations
