@@ -86,6 +86,11 @@ class PileResult:
     # where the plate line does not run on as an edge beside the heap (a plate hardly wider than
     # the heap, or one whose edge is faint there) and no other line gave a heap: what was found
     plate_beside: str = ""
+    # the smaller flank's share of the heap-to-wall step found again below the plate line, on the
+    # flank's line carried on below it (_foot_below_share; NaN where not judged): above
+    # FOOT_BELOW_MAX the heap runs on below the line, which passes behind it (e.g. the edge of a
+    # table top behind a plate hardly wider than the heap) and is no plate the heap stands on
+    foot_below_share: float = float("nan")
     # the measured image's size over the photo's (below 1 for a photo reduced to
     # PILE_WORK_PIXELS): flank_rms_px and the plate line are in the measured image's pixels
     work_scale: float = 1.0
@@ -636,6 +641,7 @@ def _pile_on_lines(path, rgb, threshold, keep_stages, channel, tried: Tried, pla
         res = _on_plate_lines(path, rgb, lum, grays, lines[:PLATE_CANDIDATES], 1, channel, threshold, keep_stages,
                               tried, plate_edges, beside, refused)
         if plate is None:
+            _judge_foot_below(res, grays)
             res.alternative = _plate_alternative(path, rgb, lum, grays, lines[:PLATE_CANDIDATES], res, channel,
                                                  threshold, plate_edges, refused)
             res.rival = _level_rival(plate_edges, lines, res, rgb)
@@ -652,6 +658,7 @@ def _pile_on_lines(path, rgb, threshold, keep_stages, channel, tried: Tried, pla
         except InputError:
             raise _noting_tilt(refused, tilted) from None
         res.plate_beside = why
+        _judge_foot_below(res, grays)
         res.rival = _level_rival(plate_edges, lines, res, rgb)
         return res
 
@@ -1153,6 +1160,62 @@ def _outside_share(glev, prow, line, side, v_lo, v_hi, n=60):
     return (near - wall) / (inside - wall)
 
 
+#: heights (px above the plate line, negative: below it) of the two bands in which a flank's step
+#: is compared (_foot_below_share): the heap's foot above the line, and the flank's line carried
+#: on below it
+FOOT_BANDS = {"above": (3, 12), "below": (-12, -3)}
+#: columns beside a flank's line at each height (px, outward positive) read as the heap's side
+#: and the other side
+FOOT_SIDES = {"inside": (-8, -3), "outside": (3, 8)}
+#: both flanks carrying on below the plate line more than this share of their step above it,
+#: the heap's colour there that of its foot (within half that step): the heap runs on below the
+#: line, which is no plate it stands on; the result is "low"
+FOOT_BELOW_MAX = 0.25
+
+
+def _foot_below_share(glev, prow, line, side):
+    """How far a flank continues below the plate line: in the levelled cue image ``glev`` with
+    the plate at row ``prow``, the flank's fitted ``line`` (u0, v0, du, dv; ``side`` -1 for the
+    left flank) is followed from just above the line (:data:`FOOT_BANDS` "above") to just below
+    it ("below"), and at each height the median of the columns on the heap's side of it
+    (:data:`FOOT_SIDES`) is compared with the other side's.  The share is the step below over
+    the step above (signed: 0 where the plate's face or the table runs across under the foot
+    and beside it alike, 1 where the heap and what is beside it run on unchanged); NaN where
+    the step above is under :data:`OUTSIDE_MIN_STEP` or the heap's side below is not the
+    heap's colour (a plate face as dark as the heap's foot, within half the step)."""
+    u0, v0, du, dv = line
+    if abs(dv) < 1e-6:
+        return float("nan")
+
+    def level(band, cols):
+        vs = np.arange(FOOT_BANDS[band][0], FOOT_BANDS[band][1] + 1, dtype=float)
+        us = u0 + (vs - v0) / dv * du
+        ks = np.arange(FOOT_SIDES[cols][0], FOOT_SIDES[cols][1] + 1, dtype=float)
+        uu = (us[:, None] + side * ks[None, :]).ravel()
+        rr = np.repeat(prow - vs, len(ks))
+        return float(np.median(ndi.map_coordinates(glev, [rr, uu], order=1, mode="nearest")))
+
+    in_a, out_a, in_b, out_b = (level(b, c) for b in ("above", "below") for c in ("inside", "outside"))
+    step = in_a - out_a
+    if abs(step) < OUTSIDE_MIN_STEP or abs(in_b - in_a) > 0.5 * abs(step):
+        return float("nan")
+    return (in_b - out_b) / step
+
+
+def _judge_foot_below(res: PileResult, grays) -> None:
+    """Set ``res.foot_below_share`` (the smaller flank's :func:`_foot_below_share` in the cue
+    the heap was measured in) and make ``res`` "low" where both flanks run on below the plate
+    line (above :data:`FOOT_BELOW_MAX`)."""
+    if res.geometry is None:
+        return
+    slope, intercept, lline, rline, _ = res.geometry
+    glev, prow, _ = _level(grays[res.cue.split("/")[0]], slope, intercept)
+    shares = [_foot_below_share(glev, prow, ln, side) for ln, side in ((lline, -1.0), (rline, 1.0))]
+    res.foot_below_share = float(min(shares)) if np.isfinite(shares).all() else float("nan")
+    if res.foot_below_share > FOOT_BELOW_MAX:
+        res.confidence = "low"
+
+
 def _straighter(path, u, vs, sel, label):
     """The line fit (:func:`_fit`) of the flank ``sel`` on the cue's own edge ``vs[0]``, or on
     the edge refined in luminance ``vs[1]`` (where a colour cue segmented the heap,
@@ -1332,6 +1395,11 @@ def low_reason(r: PileResult) -> str:
     if r.flank_outside_share > FLANK_OUTSIDE_MAX:
         why.append(f"{r.flank_outside_share:.0%} of the heap's contrast found past a flank's line, "
                    f"above {FLANK_OUTSIDE_MAX:.0%}")
+    if r.foot_below_share > FOOT_BELOW_MAX:
+        why.append(f"the heap runs on below the plate line (both flanks carry on past it, "
+                   f"{r.foot_below_share:.0%} of their step found below it, above {FOOT_BELOW_MAX:.0%}): the line "
+                   f"{r.plate_line_px} passes behind the heap (a table top's or wall's edge), the plate it stands "
+                   f"on is lower")
     if r.cue_check and r.cue_check_deg > CUE_AGREEMENT_DEG:
         why.append(f"the cue {r.cue_check} puts a flank {r.cue_check_deg:.1f} deg away, more than "
                    f"{CUE_AGREEMENT_DEG:g} deg")
