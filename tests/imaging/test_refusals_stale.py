@@ -21,3 +21,16 @@ def test_an_earlier_runs_refusal_of_a_photo_now_measured_is_removed(tmp_path):
     assert main(["image", "pile", str(photo), "--refusals", str(refused)]) == 0
     assert not (refused / "heap.refused.png").exists()
     assert sorted(p.name for p in refused.iterdir()) == ["notes.txt", "other.refused.png"]
+
+
+def test_two_photos_sharing_a_refusal_name_are_refused_naming_both(tmp_path, capsys):
+    # before: heap.png and heap.jpg measured in one call both had refused/heap.refused.png, one
+    # photo's refusal overwriting or (measured first) removing the other's
+    from soilcal.cli import main
+
+    png, jpg = tmp_path / "heap.png", tmp_path / "heap.jpg"
+    _u8(heap_photo()).save(png)
+    _u8(heap_photo()).save(jpg, quality=95)
+    assert main(["image", "pile", str(png), str(jpg), "--refusals", str(tmp_path / "refused")]) == 2
+    err = capsys.readouterr().err
+    assert str(png) in err and str(jpg) in err and "heap.refused.png" in err, err
