@@ -54,9 +54,31 @@ def _plate_lines(args):
             for photo, q in zip(args.photos, given)]
 
 
-def _refusals(args):
-    """The folder for refused photos' diagnostic images: --refusals, else the current folder."""
-    return args.refusals if args.refusals is not None else "."
+def _refusals(args, photos=(), field="photos"):
+    """The folder for refused photos' diagnostic images: --refusals, else the current folder.
+    Each of ``photos``' diagnostic image left there by an earlier run
+    (:func:`soilcal.imaging.refusal.refusal_path`) is removed first: this call writes it again
+    where the photo is still refused, and one left beside a photo now measured would be taken
+    for this run's refusal.  Nothing else in the folder (the current one by default) is touched.
+    Two of ``photos`` whose diagnostic images would share a name (the same stem: heap.png and
+    heap.jpg, or a/heap.png and b/heap.png) are refused, naming both (argument ``field``): one's
+    refusal would overwrite or remove the other's."""
+    from soilcal.errors import InputError
+    from soilcal.imaging.refusal import refusal_path
+
+    folder = args.refusals if args.refusals is not None else "."
+    seen = {}
+    for photo in photos:
+        out = refusal_path(photo, folder)
+        if out in seen:
+            raise InputError(photo, field, f"a refusal image name of its own: {seen[out]}, given too, would write the "
+                                           f"same {out} (rename one, or measure them in separate calls with "
+                                           f"different --refusals)")
+        seen[out] = photo
+    for out in seen:
+        if out.is_file() or out.is_symlink():
+            out.unlink()
+    return folder
 
 
 def _pile(args):
@@ -67,7 +89,7 @@ def _pile(args):
     figures.check_apart(args.photos, args.figures, "--figures")
     try:
         summary, res = measure.measure_piles(args.photos, args.threshold, keep_stages=bool(args.figures),
-                                             channel=args.channel, refusals=_refusals(args), plate_px=lines,
+                                             channel=args.channel, refusals=_refusals(args, args.photos), plate_px=lines,
                                              plate_px_from="command line")
     except InputError as e:
         if e.field == "confidence" and args.figures:
@@ -100,7 +122,7 @@ def _drum(args):
     figures.check_apart(args.frames, args.figures, "--figures")
     try:
         summary, res = drum.measure_drum(args.frames, args.threshold, keep_stages=bool(args.figures), options=opts,
-                                         refusals=_refusals(args))
+                                         refusals=_refusals(args, args.frames, "frames"))
     except InputError as e:
         if e.field != "confidence" or not args.figures:
             raise
@@ -133,7 +155,7 @@ def _furrow(args):
         datum = float(entry.get("beam_datum_mm", 0.0)) if datum is None else datum
     figures.check_apart([args.photo], args.figures, "--figures")
     r = measure.measure_furrow(args.photo, length, datum or 0.0, args.degree, args.threshold,
-                               keep_stages=bool(args.figures), refusals=_refusals(args))
+                               keep_stages=bool(args.figures), refusals=_refusals(args, [args.photo]))
     if args.figures:
         figures.furrow_figure(r, _figure_base(args.figures, r))
     _print(r.as_dict())

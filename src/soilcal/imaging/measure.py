@@ -86,6 +86,11 @@ class PileResult:
     # where the plate line does not run on as an edge beside the heap (a plate hardly wider than
     # the heap, or one whose edge is faint there) and no other line gave a heap: what was found
     plate_beside: str = ""
+    # the smaller flank's edge found running on along its own line below the plate line, as a
+    # share of its heap-to-wall step above it (_foot_below_share; NaN where not judged): above
+    # FOOT_BELOW_MAX the heap runs on below the line, which passes behind it (e.g. the edge of a
+    # table top behind a plate hardly wider than the heap) and is no plate the heap stands on
+    foot_below_share: float = float("nan")
     # the measured image's size over the photo's (below 1 for a photo reduced to
     # PILE_WORK_PIXELS): flank_rms_px and the plate line are in the measured image's pixels
     work_scale: float = 1.0
@@ -636,6 +641,7 @@ def _pile_on_lines(path, rgb, threshold, keep_stages, channel, tried: Tried, pla
         res = _on_plate_lines(path, rgb, lum, grays, lines[:PLATE_CANDIDATES], 1, channel, threshold, keep_stages,
                               tried, plate_edges, beside, refused)
         if plate is None:
+            _judge_foot_below(res, grays)
             res.alternative = _plate_alternative(path, rgb, lum, grays, lines[:PLATE_CANDIDATES], res, channel,
                                                  threshold, plate_edges, refused)
             res.rival = _level_rival(plate_edges, lines, res, rgb)
@@ -652,6 +658,7 @@ def _pile_on_lines(path, rgb, threshold, keep_stages, channel, tried: Tried, pla
         except InputError:
             raise _noting_tilt(refused, tilted) from None
         res.plate_beside = why
+        _judge_foot_below(res, grays)
         res.rival = _level_rival(plate_edges, lines, res, rgb)
         return res
 
@@ -1153,6 +1160,83 @@ def _outside_share(glev, prow, line, side, v_lo, v_hi, n=60):
     return (near - wall) / (inside - wall)
 
 
+#: heights (px above the plate line, negative: below it) of the two bands in which a flank is
+#: read (_foot_below_share): the heap's foot above the line, and the flank's line carried on
+#: below it
+FOOT_BANDS = {"above": (3, 12), "below": (-12, -3)}
+#: columns beside a flank's line (px, outward positive) read as the heap's side and the other
+#: side in the band above the line
+FOOT_SIDES = {"inside": (-8, -3), "outside": (3, 8)}
+#: below the line: the edge across the flank's line carried on is the step between the means
+#: over FOOT_EDGE_PX (from, to) px either side of it, counted square to the line; the same step
+#: FOOT_BESIDE_PX px to either side of the line is what lies beside it (an edge that does not
+#: run along the flank, e.g. a plate's end, shows in both alike)
+FOOT_EDGE_PX, FOOT_BESIDE_PX = (2, 4), 8
+#: both flanks carrying their edge on below the plate line, along their own lines, by more than
+#: this share of their step above it: the heap runs on below the line, which is no plate it
+#: stands on; the result is "low"
+FOOT_BELOW_MAX = 0.08
+
+
+def _foot_below_share(glev, prow, line, side):
+    """How far a flank's edge runs on below the plate line, whatever the colour of what lies
+    beside it there: in the levelled cue image ``glev`` with the plate at row ``prow``, the
+    flank's fitted ``line`` (u0, v0, du, dv; ``side`` -1 for the left flank) is carried on below
+    the line (:data:`FOOT_BANDS` "below").  Each row there is read across the line, at distances
+    from it counted square to it, and the rows' median taken: an edge running along the flank
+    stays on the line in every row, one at another angle (a plate's end or face) is spread over
+    the distances.  The share is the step across the line (means over :data:`FOOT_EDGE_PX` px either
+    side) less the larger such step :data:`FOOT_BESIDE_PX` px to either side, over the
+    heap-to-wall step just above the line (:data:`FOOT_BANDS` "above", :data:`FOOT_SIDES`):
+    about |heap - beside| / |heap - wall| where the heap runs on below the line, about 0 or
+    below where it does not.  NaN where the step above is under :data:`OUTSIDE_MIN_STEP`.  A
+    heap running on below the line beside something of its own colour leaves no edge to find."""
+    u0, v0, du, dv = line
+    if abs(dv) < 1e-6:
+        return float("nan")
+
+    def rows(band):
+        vs = np.arange(FOOT_BANDS[band][0], FOOT_BANDS[band][1] + 1, dtype=float)
+        return vs, u0 + (vs - v0) / dv * du
+
+    across = float(np.hypot(du, dv) / abs(dv))  # columns per px square to the line
+
+    def read(vs, us, ks):
+        uu = (us[:, None] + side * across * ks[None, :]).ravel()
+        rr = np.repeat(prow - vs, len(ks))
+        return ndi.map_coordinates(glev, [rr, uu], order=1, mode="nearest").reshape(len(vs), len(ks))
+
+    vs, us = rows("above")
+    lo, hi = FOOT_SIDES["inside"], FOOT_SIDES["outside"]
+    step = float(np.median(read(vs, us, np.arange(lo[0], lo[1] + 1.0)))
+                 - np.median(read(vs, us, np.arange(hi[0], hi[1] + 1.0))))
+    if abs(step) < OUTSIDE_MIN_STEP:
+        return float("nan")
+    reach = FOOT_BESIDE_PX + FOOT_EDGE_PX[1]
+    ks = np.arange(-reach, reach + 1, dtype=float)
+    prof = np.median(read(*rows("below"), ks), axis=0)
+
+    def edge(at):
+        i, (a, b) = reach + at, FOOT_EDGE_PX
+        return abs(prof[i - b:i - a + 1].mean() - prof[i + a:i + b + 1].mean())
+
+    return (edge(0) - max(edge(-FOOT_BESIDE_PX), edge(FOOT_BESIDE_PX))) / abs(step)
+
+
+def _judge_foot_below(res: PileResult, grays) -> None:
+    """Set ``res.foot_below_share`` (the smaller flank's :func:`_foot_below_share` in the cue
+    the heap was measured in) and make ``res`` "low" where both flanks run on below the plate
+    line (above :data:`FOOT_BELOW_MAX`)."""
+    if res.geometry is None:
+        return
+    slope, intercept, lline, rline, _ = res.geometry
+    glev, prow, _ = _level(grays[res.cue.split("/")[0]], slope, intercept)
+    shares = [_foot_below_share(glev, prow, ln, side) for ln, side in ((lline, -1.0), (rline, 1.0))]
+    res.foot_below_share = float(min(shares)) if np.isfinite(shares).all() else float("nan")
+    if res.foot_below_share > FOOT_BELOW_MAX:
+        res.confidence = "low"
+
+
 def _straighter(path, u, vs, sel, label):
     """The line fit (:func:`_fit`) of the flank ``sel`` on the cue's own edge ``vs[0]``, or on
     the edge refined in luminance ``vs[1]`` (where a colour cue segmented the heap,
@@ -1332,6 +1416,11 @@ def low_reason(r: PileResult) -> str:
     if r.flank_outside_share > FLANK_OUTSIDE_MAX:
         why.append(f"{r.flank_outside_share:.0%} of the heap's contrast found past a flank's line, "
                    f"above {FLANK_OUTSIDE_MAX:.0%}")
+    if r.foot_below_share > FOOT_BELOW_MAX:
+        why.append(f"the heap runs on below the plate line (foot_below_share {r.foot_below_share:.2f}, above "
+                   f"{FOOT_BELOW_MAX:g}: both flanks' edges carry on along their lines past it): the line "
+                   f"{r.plate_line_px} passes behind the heap (a table top's or wall's edge), the plate it stands "
+                   f"on is lower")
     if r.cue_check and r.cue_check_deg > CUE_AGREEMENT_DEG:
         why.append(f"the cue {r.cue_check} puts a flank {r.cue_check_deg:.1f} deg away, more than "
                    f"{CUE_AGREEMENT_DEG:g} deg")

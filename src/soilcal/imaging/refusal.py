@@ -87,6 +87,11 @@ def _draw_line(ax, line, w, **kw):
     ax.plot(cols, slope * cols + b, **kw)
 
 
+def refusal_path(photo, folder) -> Path:
+    """Where the diagnostic image of the refused ``photo`` goes: ``folder/<stem>.refused.png``."""
+    return Path(folder) / f"{Path(photo).stem}.refused.png"
+
+
 def write_diagnostic(photo, exc: Exception, tried: Tried, folder) -> Path:
     """Draw ``tried`` for the refused ``photo`` into ``folder/<stem>.refused.png``; returns the path."""
     import matplotlib
@@ -96,7 +101,7 @@ def write_diagnostic(photo, exc: Exception, tried: Tried, folder) -> Path:
 
     photo = Path(photo)
     rgb = tried.rgb
-    out = Path(folder) / f"{photo.stem}.refused.png"
+    out = refusal_path(photo, folder)
     out.parent.mkdir(parents=True, exist_ok=True)
     attempts = tried.attempts[:MAX_ATTEMPTS]
     panels = 1 + (tried.gray is not None or rgb is not None) + (tried.edges is not None) + len(attempts)
@@ -180,4 +185,4 @@ def explained(photo, folder, tried: Tried):
         raise InputError(exc.path, exc.field, exc.expected, exc.got, note=f"what was tried: {png}") from None
 
 
-__all__ = ["Attempt", "MAX_ATTEMPTS", "Tried", "explained", "write_diagnostic"]
+__all__ = ["Attempt", "MAX_ATTEMPTS", "Tried", "explained", "refusal_path", "write_diagnostic"]
