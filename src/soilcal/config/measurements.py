@@ -86,7 +86,9 @@ from soilcal.config.quantities import (  # noqa: F401 (QUANTITIES re-exported)
     MOISTURE_UNITS,
     POSITIVE_QUANTITIES,
     QUANTITIES,
+    UNIT_SYMBOLS,
     quantity_factor,
+    unit_powers,
 )
 from soilcal.errors import InputError
 
@@ -115,11 +117,11 @@ DIMENSIONLESS = "-"
 #: for ``flatness_mm``, % for a dimensionless strain) is converted to the measure's unit as it
 #: is read; a unit of another quantity is refused
 RESPONSE_UNITS = (
-    {"N": 1.0, "kN": 1e3, "mN": 1e-3},
-    {"m": 1.0, "cm": 1e-2, "mm": 1e-3},
+    {"N": 1.0, "kN": 1e3, "mN": 1e-3, "lbf": UNIT_SYMBOLS["lbf"][0]},
+    {"m": 1.0, "cm": 1e-2, "mm": 1e-3, "in": 0.0254, "ft": 0.3048},
     {"m^2": 1.0, "dm^2": 1e-2, "cm^2": 1e-4, "mm^2": 1e-6},
     {"deg": 1.0, "rad": 180.0 / math.pi},
-    {"Pa": 1.0, "kPa": 1e3, "MPa": 1e6},
+    {"Pa": 1.0, "kPa": 1e3, "MPa": 1e6, "mPa": 1e-3, "psi": UNIT_SYMBOLS["psi"][0]},
     {"W": 1.0, "kW": 1e3},
     {"N m": 1.0, "kN m": 1e3},
     {DIMENSIONLESS: 1.0, "%": 1e-2},
@@ -1004,12 +1006,18 @@ def _check_scale(soil_path, cw: str, cv: dict, scenario: str) -> None:
 #: spellings a column's name may give a unit in besides the units of :data:`RESPONSE_UNITS`,
 #: :data:`UNIT_ALIASES` and :data:`QUANTITIES` (``speed_kmh``): unit
 NAME_UNIT_SPELLINGS = {"kmh": "km/h", "percent": "%", "pct": "%", "wt%": "%"}
-#: two-letter spellings a name may give in another case than the unit's (``draught_kn``,
-#: ``Draught (KN)``, ``power_KW``): unit
-NAME_UNIT_CASES = {"kn": "kN", "KN": "kN", "Kn": "kN", "kw": "kW", "KW": "kW", "Kw": "kW"}
+#: spellings a name may give in another case than the unit's that name two units without their
+#: case (``draught_kn``, ``Draught (KN)``, ``power_KW``; ``mpa``, ``MPA`` a printed table's MPa,
+#: ``mPa`` being a millipascal): unit
+NAME_UNIT_CASES = {"kn": "kN", "KN": "kN", "Kn": "kN", "kw": "kW", "KW": "kW", "Kw": "kW",
+                   "mpa": "MPa", "MPA": "MPa", "Mpa": "MPa"}
 #: words that are a unit only in a name's brackets (``w (fraction)``), not as a word of it
 #: (``clay_fraction``, ``percent_sand``)
 _UNIT_WORDS = ("fraction", "percent", "degree", "degrees")
+#: unit symbols that are words too (``depth in mm``, ``psi`` a matric potential: ``psi (kPa)``):
+#: a unit in brackets (``depth (in)``) or as a name's last word after the first where the name
+#: gives no other unit (``depth_in``, ``pressure_psi``), no unit elsewhere
+_WORD_UNITS = ("in", "psi")
 #: a name's bracketed part: ``speed (km/h)``, ``depth [mm]``
 #: the words after which a one-letter word of a column's name inside it is read as a unit
 #: (``F_N_mean``, ``draught_N_sd``): a statistic of the quantity in that unit
@@ -1017,46 +1025,33 @@ STATISTIC_WORDS = ("mean", "avg", "average", "sd", "std", "se", "sem", "min", "m
 _BRACKETS = re.compile(r"[(\[]\s*([^()\[\]]*?)\s*[)\]]")
 
 
-#: unit symbols a compound unit in a column's name is written with (``m s-1``, ``g cm-3``,
-#: ``kg/m3``, ``Mg m-3``, ``min-1``), matched with their case
-_UNIT_SYMBOLS = ("km", "m", "dm", "cm", "mm", "s", "h", "min", "kg", "g", "Mg", "t", "N", "kN", "mN", "Pa",
-                 "kPa", "MPa", "W", "kW", "rad", "r", "rev")
 #: compound units, as :func:`_compound` writes them, that name a unit of the tables under
-#: another symbol: a megagram is a tonne, a revolution per minute with or without the r
-_COMPOUND_SPELLINGS = {"Mg/m^3": "t/m^3", "1/min": "r/min", "rev/min": "r/min", "rev/s": "r/s"}
-_SUPERSCRIPTS = str.maketrans("⁻¹²³⁴", "-1234")
-_FACTOR = re.compile(r"(?P<sym>[A-Za-z]+)(?:\^?(?P<exp>-?\d))?")
+#: another symbol: a megagram is a tonne, a rotation rate per minute or per second (``min-1``,
+#: ``s-1``, ISO 80000-3's rotational frequency) is in revolutions, with or without the r
+_COMPOUND_SPELLINGS = {"Mg/m^3": "t/m^3", "1/min": "r/min", "rev/min": "r/min", "1/s": "r/s", "rev/s": "r/s"}
 
 
 def _compound(text: str):
     """A compound unit written with exponents or a ``/``, SI style: ``m s-1``, ``m.s-1``,
-    ``m·s⁻¹``, ``m s^-1``, ``km h-1``, ``g cm-3``, ``kg/m3``, ``Mg m-3``, ``min-1``, ``g g-1``,
-    ``N per m``, as ``(written, form)``: ``written`` whether the text is such a unit (symbols of
-    :data:`_UNIT_SYMBOLS` with an exponent, a ``/`` or ``per`` between them), ``form`` the unit
-    in one spelling, ``num/den`` with powers as ``^n`` (``m/s``, ``g/cm^3``, ``1/min``).  A
-    text that is no compound unit gives ``(False, None)``."""
-    t = text.translate(_SUPERSCRIPTS).replace("−", "-").strip()
-    t = re.sub(r"\s+per\s+|\s*/\s*", " / ", t, flags=re.IGNORECASE)
-    parts = [w for w in re.split(r"[\s.·⋅*]+", t) if w]
-    num, den, below, marked = [], [], False, False
-    for w in parts:
-        if w == "/":
-            if below or not parts:
-                return False, None
-            below = marked = True
-            continue
-        m = _FACTOR.fullmatch(w)
-        if m is None or m["sym"] not in _UNIT_SYMBOLS:
-            return False, None
-        e = int(m["exp"] or 1)
-        if m["exp"] is not None and 0 <= e < 2:
+    ``m·s⁻¹``, ``m s^-1``, ``km h-1``, ``g cm-3``, ``kg/m3``, ``Mg m-3``, ``min-1``, ``1/s``,
+    ``g g-1``, ``N per m``, as ``(written, form)``: ``written`` whether the text is such a unit
+    (:func:`~soilcal.config.quantities.unit_powers`, its symbols with their case, with an
+    exponent or a ``/``), ``form`` the unit in one spelling, ``num/den`` with powers as ``^n``
+    (``m/s``, ``g/cm^3``, ``1/min``).  A text that is no compound unit gives ``(False, None)``."""
+    powers = unit_powers(text)
+    if powers is None:
+        return False, None
+    num, den, marked = [], [], False
+    for sym, exp, below in powers:
+        e = int(exp or 1)
+        if exp is not None and 0 <= e < 2:
             return False, None  # r1, s1, m1, h0 next to a unit word are ids, not powers
-        marked = marked or m["exp"] is not None
+        marked = marked or below or exp is not None
         if e < 0 or below:
-            den.append((m["sym"], abs(e)))
+            den.append((sym, abs(e)))
         else:
-            num.append((m["sym"], e))
-    if not marked or not (num or den) or (parts and parts[-1] == "/"):
+            num.append((sym, e))
+    if not marked:
         return False, None
     if not den and len(num) > 1:
         return False, None  # m2, cm3 are units; kN t2, depth_cm_r2 hold an id (t2, r2), no product of powers
@@ -1203,6 +1198,8 @@ def name_units(col) -> list[str]:
             elif following is None or following in STATISTIC_WORDS:  # F_N_mean, Sd_m (mm)
                 weak.append(unit(w, False, True))
             # else draught_N_2, draught_N_A, tool_m_depth: a one-letter id or abbreviation
+        elif w in _WORD_UNITS:  # depth_in, pressure_psi; not draught_kN_in (kN), psi_kPa, depth in mm
+            weak.append(w if i > 0 and i == len(words) - 1 and name.rstrip(".").endswith(w) else None)
         else:
             found.append(unit(w, False) or (unit(w.split("/", 1)[1], False) if "/" in w else None))
         i += 1
