@@ -77,3 +77,14 @@ def test_a_depth_named_in_inches_is_refused_in_metres_and_converted_in_inches(ci
         _covariate(cinnamon, "depth_in", "m", "working_depth", [4.0] * 4)
     assert e.value.field.endswith("covariates.depth_in.unit") and "in" in e.value.expected
     assert _covariate(cinnamon, "depth_in", "in", "working_depth", [4.0] * 4) == pytest.approx([0.1016] * 4)
+
+
+def test_a_moisture_fraction_above_one_loads_and_one_above_five_is_refused_clearly(cinnamon):
+    """A peat's 1.5 g/g (150 % of the dry mass) was refused as "1.5 reads as a percentage";
+    40 g/g (4000 %) is past any soil's (500 %) and is refused saying what it would be."""
+    assert _covariate(cinnamon, "w (g/g)", "g/g", "moisture_content",
+                      [0.2, 0.3, 1.5, 0.4]) == pytest.approx([20.0, 30.0, 150.0, 40.0])
+    with pytest.raises(InputError) as e:
+        _covariate(cinnamon, "w (g/g)", "g/g", "moisture_content", [20, 30, 15, 40])
+    assert "cutting_resistance.csv" in str(e.value.path) and e.value.field == "column w (g/g)"
+    assert "4000 %" in e.value.expected and "500 %" in e.value.expected and 'unit: "%"' in e.value.expected

@@ -84,6 +84,7 @@ import pandas as pd
 
 from soilcal.config.quantities import (  # noqa: F401 (QUANTITIES re-exported)
     MOISTURE_UNITS,
+    PLAUSIBLE,
     POSITIVE_QUANTITIES,
     QUANTITIES,
     UNIT_SYMBOLS,
@@ -925,7 +926,9 @@ def _check_moisture(soil_path, data: dict, tpath: Path, df: pd.DataFrame, covs: 
     """A moisture column whose numbers are fractions under a percent unit (0.15 for 15 %), or
     percentages under a fraction unit: the moisture effect would take a change of 0.1 % for one
     of 10 %.  Refused naming the table and column, where (1) a column declared as a fraction
-    (``-``, ``fraction``, ``g/g``, ``kg/kg``) holds a value above 1; (2) its median, in %, lies 1.5 to 2.5
+    (``-``, ``fraction``, ``g/g``, ``kg/kg``) holds a value above 5 (500 %, :data:`PLAUSIBLE`),
+    or above 1 without the soil's ``properties.moisture_content`` (a soil wetter than its dry
+    mass, a peat's 1.5 g/g, loads where the soil says it is that wet); (2) its median, in %, lies 1.5 to 2.5
     decades below or above the median of the soil's own ``properties.moisture_content`` (in %
     or as a fraction, as the soil file says) and, read the other way (times or over 100),
     within :data:`MOISTURE_MATCH` decades of it; (3) without that property, a column in % holds
@@ -950,9 +953,18 @@ def _check_moisture(soil_path, data: dict, tpath: Path, df: pd.DataFrame, covs: 
             continue
         factor = quantity_factor(q, unit)
         where = f"column {col}"
-        if factor != 1.0 and x.max() > 1.0:
-            raise InputError(tpath, where, f"a moisture content as a fraction of 1 (unit: {unit}, as declared): "
-                             f"{x.max():g} reads as a percentage (declare unit: \"%\")", float(x.max()))
+        top = PLAUSIBLE["moisture_content"][1]
+        if factor != 1.0 and x.max() * factor > top:
+            raise InputError(tpath, where, f"a moisture content as a fraction of the dry mass (unit: {unit}, as the "
+                             f"soil's covariates.{col}.unit declares) of at most {top / factor:g} ({top:g} %, a "
+                             f"peat's at saturation): {x.max():g} would be {x.max() * factor:g} %; if the cells are "
+                             "percentages, declare unit: \"%\"", float(x.max()))
+        if factor != 1.0 and x.max() > 1.0 and soil is None:
+            raise InputError(tpath, where, f"a moisture content as a fraction of the dry mass (unit: {unit}, as the "
+                             f"soil's covariates.{col}.unit declares) of at most 1 unless the soil says it is "
+                             f"wetter: {x.max():g} is {x.max() * factor:g} % of the dry mass (a peat's or an "
+                             "andisol's); give the soil's properties.moisture_content if it is that wet, or declare "
+                             "unit: \"%\" if the cells are percentages", float(x.max()))
         pct = x * factor
         med = float(np.median(pct))
         if soil is not None:
