@@ -1282,12 +1282,22 @@ def _check_response_column_units(soil_path, rw: str, r: dict, tpath: Path) -> No
     """A response's value, SD or paper column whose name gives a unit of its measure's
     quantity (:func:`name_units`: ``draught_kN``, ``Draught (KN)``) of another factor than the
     response's declared ``unit`` (``unit: N``) would be read 1000 times off without a word:
-    refused naming the response's ``unit``, the column and the unit its name gives."""
+    refused naming the response's ``unit``, the column and the unit its name gives.  So is a
+    column of a measure with units whose name gives % and no unit of the measure
+    (``draught CV (%)`` as the SD of a force in N: a relative SD read as one in N)."""
     family = response_units(r["measure"])
     declared = unit_factor(r["unit"], r["measure"])
     for key in ("value", "sd", "paper_simulated", "paper_difference"):
         col = r.get(key)
-        for named in (name_units(col) if col is not None else ()):
+        names = name_units(col) if col is not None else []
+        if "%" in names and "%" not in family and not any(u in family for u in names):
+            raise InputError(soil_path, f"{rw}.value" if key == "value" else f"{rw}.{key}",
+                             f"a column of {r['measure']} in a unit of its quantity ({', '.join(family)}): the "
+                             f"name of column {col} says %, a value relative to another (a coefficient of "
+                             f"variation?), which would be read as {unit_of(r['measure'])}; give the "
+                             f"{'SD' if key == 'sd' else 'values'} in {r['unit']} in a column of its own"
+                             + (" (SD = CV / 100 x mean)" if key == "sd" else ""), col)
+        for named in names:
             if named not in family and named.split("/")[0] in family:
                 raise InputError(soil_path, f"{rw}.value" if key == "value" else f"{rw}.{key}",
                                  f"a column of {r['measure']} in a unit of its quantity "
