@@ -81,9 +81,12 @@ def test_a_depth_named_in_inches_is_refused_in_metres_and_converted_in_inches(ci
 
 def test_a_moisture_fraction_above_one_loads_and_one_above_five_is_refused_clearly(cinnamon):
     """A peat's 1.5 g/g (150 % of the dry mass) was refused as "1.5 reads as a percentage";
-    40 g/g (4000 %) is past any soil's (500 %) and is refused saying what it would be."""
+    it loads where the soil says it is that wet.  40 g/g (4000 %) is past any soil's (500 %)
+    and is refused saying what it would be."""
+    _edit(cinnamon, "cinnamon-soil", lambda d: d["properties"].update(
+        moisture_content={"value": 120.0, "unit": "%"}))
     assert _covariate(cinnamon, "w (g/g)", "g/g", "moisture_content",
-                      [0.2, 0.3, 1.5, 0.4]) == pytest.approx([20.0, 30.0, 150.0, 40.0])
+                      [1.2, 0.9, 1.5, 1.1]) == pytest.approx([120.0, 90.0, 150.0, 110.0])
     with pytest.raises(InputError) as e:
         _covariate(cinnamon, "w (g/g)", "g/g", "moisture_content", [20, 30, 15, 40])
     assert "cutting_resistance.csv" in str(e.value.path) and e.value.field == "column w (g/g)"

@@ -920,6 +920,11 @@ MOISTURE_DECADES = (1.5, 2.5)
 #: how near (decades) the other reading of a suspect moisture column (x 100 or / 100) must come to
 #: the soil's own moisture for the column to be refused as in the wrong form
 MOISTURE_MATCH = 0.3
+#: a moisture column declared as a fraction of 1 may hold a value above 1 (more water than dry
+#: mass, a peat's 1.5 g/g) only within this factor of the wettest moisture the soil's own
+#: ``properties.moisture_content`` gives (in %): a soil of 12 % does not hold 150 %; its
+#: "1, 2, 3, 4" are percentages declared as a fraction
+MOISTURE_FRACTION_NEAR = 3.0
 
 
 def _check_moisture(soil_path, data: dict, tpath: Path, df: pd.DataFrame, covs: dict, quantity_cols: dict) -> None:
@@ -927,8 +932,9 @@ def _check_moisture(soil_path, data: dict, tpath: Path, df: pd.DataFrame, covs: 
     percentages under a fraction unit: the moisture effect would take a change of 0.1 % for one
     of 10 %.  Refused naming the table and column, where (1) a column declared as a fraction
     (``-``, ``fraction``, ``g/g``, ``kg/kg``) holds a value above 5 (500 %, :data:`PLAUSIBLE`),
-    or above 1 without the soil's ``properties.moisture_content`` (a soil wetter than its dry
-    mass, a peat's 1.5 g/g, loads where the soil says it is that wet); (2) its median, in %, lies 1.5 to 2.5
+    or above 1 where the soil's ``properties.moisture_content`` is not given or its wettest is
+    more than :data:`MOISTURE_FRACTION_NEAR` times drier than the column's (a soil wetter than
+    its dry mass, a peat's 1.5 g/g, loads where the soil says it is that wet); (2) its median, in %, lies 1.5 to 2.5
     decades below or above the median of the soil's own ``properties.moisture_content`` (in %
     or as a fraction, as the soil file says) and, read the other way (times or over 100),
     within :data:`MOISTURE_MATCH` decades of it; (3) without that property, a column in % holds
@@ -959,12 +965,16 @@ def _check_moisture(soil_path, data: dict, tpath: Path, df: pd.DataFrame, covs: 
                              f"soil's covariates.{col}.unit declares) of at most {top / factor:g} ({top:g} %, a "
                              f"peat's at saturation): {x.max():g} would be {x.max() * factor:g} %; if the cells are "
                              "percentages, declare unit: \"%\"", float(x.max()))
-        if factor != 1.0 and x.max() > 1.0 and soil is None:
+        wettest = None if soil is None else max(soil[0])
+        if factor != 1.0 and x.max() > 1.0 and (wettest is None or x.max() * factor > MOISTURE_FRACTION_NEAR * wettest):
+            own = ("the soil gives no properties.moisture_content" if wettest is None else
+                   f"the soil's own properties.moisture_content is {soil[1]}, more than "
+                   f"{MOISTURE_FRACTION_NEAR:g} times drier")
             raise InputError(tpath, where, f"a moisture content as a fraction of the dry mass (unit: {unit}, as the "
                              f"soil's covariates.{col}.unit declares) of at most 1 unless the soil says it is "
-                             f"wetter: {x.max():g} is {x.max() * factor:g} % of the dry mass (a peat's or an "
-                             "andisol's); give the soil's properties.moisture_content if it is that wet, or declare "
-                             "unit: \"%\" if the cells are percentages", float(x.max()))
+                             f"that wet: {x.max():g} would be {x.max() * factor:g} % of the dry mass (a peat's or "
+                             f"an andisol's) and {own}; if the cells are percentages, declare unit: \"%\" under "
+                             f"covariates.{col}", float(x.max()))
         pct = x * factor
         med = float(np.median(pct))
         if soil is not None:
@@ -978,6 +988,9 @@ def _check_moisture(soil_path, data: dict, tpath: Path, df: pd.DataFrame, covs: 
                     times = f"{10 ** round(abs(lg)):g}"
                     if lg < 0:
                         hint = (f"fractions of 1 under unit {unit}? declare unit: fraction under the covariate to "
+                                "have them read as such")
+                    elif factor != 1.0:  # the column, declared a fraction, is the likelier one wrong
+                        hint = (f"percentages under unit {unit}? declare unit: \"%\" under covariates.{col} to "
                                 "have them read as such")
                     else:
                         hint = (f"is the soil's properties.moisture_content a fraction under unit "
@@ -1278,6 +1291,24 @@ def _check_declared_unit(soil_path, cw: str, col: str, cv: dict) -> None:
                          f"{_rename_hint(col, cv['unit'], named)})", cv["unit"])
 
 
+#: words of a column's name that make its numbers relative to another value (a coefficient of
+#: variation, a relative SD, a percentage): ``draught CV (%)``, ``horizontal_SD_percent``,
+#: ``Draught.CV....``, ``draught_rsd``
+RELATIVE_WORDS = ("cv", "rsd", "cov", "percent", "pct", "relative", "rel")
+
+
+def _relative_word(col) -> str | None:
+    """The word of a column's name that makes its numbers relative (:data:`RELATIVE_WORDS`, a
+    ``%`` anywhere: ``CV%``, ``draught_sd (% of mean) N``), even where the name gives a unit
+    too (``horizontal (N) CV (%)``, ``draught_cv_pct_N``); None for a name of none
+    (``sd (N)``, ``draught_sd_N``).  Words are split at anything not a letter or digit and at
+    pandas' or R's dots (``Draught.CV....``)."""
+    name = str(col)
+    if "%" in name:
+        return "%"
+    return next((w for w in re.split(r"[^A-Za-z0-9]+", name) if w.lower() in RELATIVE_WORDS), None)
+
+
 def _check_response_column_units(soil_path, rw: str, r: dict, tpath: Path) -> None:
     """A response's value, SD or paper column whose name gives a unit of its measure's
     quantity (:func:`name_units`: ``draught_kN``, ``Draught (KN)``) of another factor than the
@@ -1290,11 +1321,12 @@ def _check_response_column_units(soil_path, rw: str, r: dict, tpath: Path) -> No
     for key in ("value", "sd", "paper_simulated", "paper_difference"):
         col = r.get(key)
         names = name_units(col) if col is not None else []
-        if "%" in names and "%" not in family and not any(u in family for u in names):
+        relative = _relative_word(col) if col is not None and "%" not in family else None
+        if relative is not None:
             raise InputError(soil_path, f"{rw}.value" if key == "value" else f"{rw}.{key}",
                              f"a column of {r['measure']} in a unit of its quantity ({', '.join(family)}): the "
-                             f"name of column {col} says %, a value relative to another (a coefficient of "
-                             f"variation?), which would be read as {unit_of(r['measure'])}; give the "
+                             f"name of column {col} says {relative}, a value relative to another (a coefficient "
+                             f"of variation?), which would be read as {unit_of(r['measure'])}; give the "
                              f"{'SD' if key == 'sd' else 'values'} in {r['unit']} in a column of its own"
                              + (" (SD = CV / 100 x mean)" if key == "sd" else ""), col)
         for named in names:
