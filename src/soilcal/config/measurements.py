@@ -83,11 +83,13 @@ from pathlib import Path
 import pandas as pd
 
 from soilcal.config.quantities import (  # noqa: F401 (QUANTITIES re-exported)
+    MILLIPASCAL,
     MOISTURE_UNITS,
     PLAUSIBLE,
     POSITIVE_QUANTITIES,
     QUANTITIES,
     UNIT_SYMBOLS,
+    UNIT_CASES,
     quantity_factor,
     unit_powers,
 )
@@ -122,7 +124,7 @@ RESPONSE_UNITS = (
     {"m": 1.0, "cm": 1e-2, "mm": 1e-3, "in": 0.0254, "ft": 0.3048},
     {"m^2": 1.0, "dm^2": 1e-2, "cm^2": 1e-4, "mm^2": 1e-6},
     {"deg": 1.0, "rad": 180.0 / math.pi},
-    {"Pa": 1.0, "kPa": 1e3, "MPa": 1e6, "mPa": 1e-3, "psi": UNIT_SYMBOLS["psi"][0]},
+    {"Pa": 1.0, "kPa": 1e3, "MPa": 1e6, "psi": UNIT_SYMBOLS["psi"][0]},
     {"W": 1.0, "kW": 1e3},
     {"N m": 1.0, "kN m": 1e3},
     {DIMENSIONLESS: 1.0, "%": 1e-2},
@@ -755,7 +757,8 @@ def _entry(soil_path, data: dict, mid: str, entry: dict, tpath: Path):
                 raise InputError(soil_path, f"{where}.responses[{j}].unit",
                                  f"{want} (the unit of {r['measure']}, from its name) or another unit of its "
                                  f"quantity, converted to {want} as {tpath.name} is read: "
-                                 + ", ".join(response_units(r["measure"])), r["unit"])
+                                 + ", ".join(response_units(r["measure"])) + _millipascal_hint(r["unit"]),
+                                 r["unit"])
             _check_response_column_units(soil_path, f"{where}.responses[{j}]", r, tpath)
         try:
             dem = DemParams.from_mapping(params, src, base=soil_base)
@@ -1028,21 +1031,31 @@ def _check_scale(soil_path, cw: str, cv: dict, scenario: str) -> None:
                          f"{factor:.4g} ({unit} to {target}, the unit of {what})", scale)
 
 
-#: spellings a column's name may give a unit in besides the units of :data:`RESPONSE_UNITS`,
-#: :data:`UNIT_ALIASES` and :data:`QUANTITIES` (``speed_kmh``): unit
-NAME_UNIT_SPELLINGS = {"kmh": "km/h", "percent": "%", "pct": "%", "wt%": "%"}
-#: spellings a name may give in another case than the unit's that name two units without their
-#: case (``draught_kn``, ``Draught (KN)``, ``power_KW``; ``mpa``, ``MPA`` a printed table's MPa,
-#: ``mPa`` being a millipascal): unit
-NAME_UNIT_CASES = {"kn": "kN", "KN": "kN", "Kn": "kN", "kw": "kW", "KW": "kW", "Kw": "kW",
-                   "mpa": "MPa", "MPA": "MPa", "Mpa": "MPa"}
+#: spellings a column's name or a ``unit:`` may give a unit in besides the units of
+#: :data:`RESPONSE_UNITS`, :data:`UNIT_ALIASES` and :data:`QUANTITIES` (``speed_kmh``): unit.
+#: ``lb`` and ``lbs`` for a force are the pound-force, as US papers write it (a pound of mass
+#: only in a density, ``lb/ft^3``, ``pcf``); a viscosity's ``mPa s`` is kept whole so that it
+#: reads as no stress
+NAME_UNIT_SPELLINGS = {"kmh": "km/h", "percent": "%", "pct": "%", "wt%": "%", "lb": "lbf", "lbs": "lbf",
+                       "inch": "in", "inches": "in", "in.": "in", "feet": "ft", "foot": "ft", "pcf": "lb/ft^3",
+                       MILLIPASCAL: MILLIPASCAL, "mPa s": "mPa s", "mPa.s": "mPa s", "mPa·s": "mPa s"}
 #: words that are a unit only in a name's brackets (``w (fraction)``), not as a word of it
 #: (``clay_fraction``, ``percent_sand``)
 _UNIT_WORDS = ("fraction", "percent", "degree", "degrees")
-#: unit symbols that are words too (``depth in mm``, ``psi`` a matric potential: ``psi (kPa)``):
-#: a unit in brackets (``depth (in)``) or as a name's last word after the first where the name
-#: gives no other unit (``depth_in``, ``pressure_psi``), no unit elsewhere
-_WORD_UNITS = ("in", "psi")
+#: name words after which a unit symbol that is an English word too is read as a unit at the
+#: name's end: a length's (``depth_in``, ``Layer depth..in.``, ``plot_width_ft``) or a
+#: pressure's (``pressure_psi``, ``cone_index_PSI``)
+LENGTH_WORDS = ("depth", "height", "width", "length", "position", "distance", "sinkage", "diameter", "thickness",
+                "spacing", "elevation", "rut", "flatness", "deflection", "layer")
+STRESS_WORDS = ("pressure", "stress", "cone", "index", "strength", "inflation", "load", "ci")
+#: units whose symbols are words too (``depth in mm``, ``gain_in``, ``ft_id``, ``psi`` a
+#: matric potential: ``psi (kPa)``, ``suction PSI``), in any spelling (``PSI``, ``inches``,
+#: ``feet``): a unit only where the name gives no other unit, and then in brackets
+#: (``depth (in)``; ``depth (in) [mm]`` is in mm) or as the name's last word after ``_``, a
+#: space or R's ``..``, behind a word of the unit's kind (``depth_in``, ``plot_width_ft``,
+#: ``pressure_psi``); no unit elsewhere (``moisture_in``, ``w_in``, ``plot_ft``, ``depth.in``,
+#: ``tool_ft_2``)
+_WORD_UNITS = {"in": LENGTH_WORDS, "ft": LENGTH_WORDS, "psi": STRESS_WORDS}
 #: a name's bracketed part: ``speed (km/h)``, ``depth [mm]``
 #: the words after which a one-letter word of a column's name inside it is read as a unit
 #: (``F_N_mean``, ``draught_N_sd``): a statistic of the quantity in that unit
@@ -1090,11 +1103,10 @@ def _compound(text: str):
 @functools.cache
 def _name_unit_table() -> tuple[dict, dict, dict]:
     """Every unit spelling :func:`name_units` knows -> its unit as the tables key it, and the
-    same by lower-case spelling where that names one unit only (``mpa`` is MPa, ``RPM`` rpm),
-    for spellings of three characters or more: two letters in another case are as often
-    something else (``mn`` a mean, ``MN`` meganewtons, ``nm`` nanometres, ``pa``), so a
-    spelling of two is matched with its case or as :data:`NAME_UNIT_CASES` lists it, one of
-    one letter with its case only (``M`` is no ``m``, ``n`` no ``N``); and the compound units
+    same by lower-case spelling where that names one unit only (``RPM`` rpm, ``KMH`` km/h),
+    for spellings of three characters or more, or a symbol of two letters or more in another
+    case by :data:`~soilcal.config.quantities.UNIT_CASES` (``KN``, ``MPA``; ``mn`` is no mN),
+    one of one letter with its case only (``M`` is no ``m``, ``n`` no ``N``); and the compound units
     among them by the form :func:`_compound` gives them (``m/s``, ``kg/m^3``, ``N m``)."""
     exact = {u: u for family in RESPONSE_UNITS for u in family}
     exact.update({u: u for spec in QUANTITIES.values() if spec for u in spec[1]})
@@ -1105,9 +1117,12 @@ def _name_unit_table() -> tuple[dict, dict, dict]:
         if len(spelling) > 2:
             lower.setdefault(spelling.lower(), set()).add(unit)
     lower = {k: next(iter(v)) for k, v in lower.items() if len(v) == 1}
-    exact.update(NAME_UNIT_CASES)
+    # a symbol in another case, by the one rule of quantities.UNIT_CASES (KN, MPA, PSI, FT)
+    lower.update({low: exact[sym] for low, sym in UNIT_CASES.items() if len(low) > 1 and sym in exact})
     forms = dict(_COMPOUND_SPELLINGS)
     for spelling, unit in exact.items():
+        if unit == "mPa s":
+            continue
         for text in (spelling, spelling.replace("^", "")):
             written, form = _compound(text)
             if written:
@@ -1129,7 +1144,7 @@ def whole_unit(text) -> str | None:
         return None
     if u in exact:
         return exact[u]
-    if len(u) > 2 and u.lower() in lower:
+    if len(u) > 1 and u.lower() in lower:
         return lower[u.lower()]
     written, form = _compound(u)
     return forms.get(form) if written else None
@@ -1170,9 +1185,10 @@ def name_units(col) -> list[str]:
             return None
         if text.lower() in _UNIT_WORDS and not bracketed:
             return None
-        return exact.get(text) or (lower.get(text.lower()) if len(text) > 2 else None)
+        return exact.get(text) or (lower.get(text.lower()) if len(text) > 1 else None)
 
-    name = str(col).strip()
+    # pandas' and R's suffix of a duplicate name (depth_in.1, Depth..in..1) is no part of it
+    name = re.sub(r"(?<=\D)\.\d+$", "", str(col).strip())
     found, weak = [], []
     for m in _BRACKETS.finditer(name):
         inside = m.group(1)
@@ -1182,7 +1198,8 @@ def name_units(col) -> list[str]:
             continue
         words = [w for w in re.split(r"[\s,;]+", inside) if w]
         whole = unit(inside, True)
-        found += [whole] if whole else [unit(w, True) for w in words]
+        for u in [whole] if whole else [unit(w, True) for w in words]:
+            (weak if u in _WORD_UNITS else found).append(u)  # depth (in) [mm] is in mm
     words = []
     for w in re.split(r"[\s_,;]+", _BRACKETS.sub(" ", name)):
         if "." in w and not unit(w, False) and not compound(w)[0]:
@@ -1223,8 +1240,11 @@ def name_units(col) -> list[str]:
             elif following is None or following in STATISTIC_WORDS:  # F_N_mean, Sd_m (mm)
                 weak.append(unit(w, False, True))
             # else draught_N_2, draught_N_A, tool_m_depth: a one-letter id or abbreviation
-        elif w in _WORD_UNITS:  # depth_in, pressure_psi; not draught_kN_in (kN), psi_kPa, depth in mm
-            weak.append(w if i > 0 and i == len(words) - 1 and name.rstrip(".").endswith(w) else None)
+        elif unit(w, False) in _WORD_UNITS:  # depth_in, pressure_psi; not draught_kN_in (kN), psi_kPa, gain_in
+            u = unit(w, False)
+            last = i == len(words) - 1 and re.search(r"(?:[_\s,;]|\.\.)" + re.escape(w) + r"\.*$", name)
+            kind = any(p.lower().startswith(_WORD_UNITS[u]) for p in words[:i])
+            weak.append(u if i > 0 and last and kind else None)
         else:
             found.append(unit(w, False) or (unit(w.split("/", 1)[1], False) if "/" in w else None))
         i += 1
@@ -1309,6 +1329,12 @@ def _relative_word(col) -> str | None:
     return next((w for w in re.split(r"[^A-Za-z0-9]+", name) if w.lower() in RELATIVE_WORDS), None)
 
 
+def _millipascal_hint(text) -> str:
+    """What a stress declared in mPa is told: a millipascal is no soil's stress."""
+    return ("; mPa is a millipascal, 1e-9 of a MPa, no soil's stress: did you mean MPa?"
+            if whole_unit(text) == MILLIPASCAL else "")
+
+
 def _check_response_column_units(soil_path, rw: str, r: dict, tpath: Path) -> None:
     """A response's value, SD or paper column whose name gives a unit of its measure's
     quantity (:func:`name_units`: ``draught_kN``, ``Draught (KN)``) of another factor than the
@@ -1329,6 +1355,11 @@ def _check_response_column_units(soil_path, rw: str, r: dict, tpath: Path) -> No
                              f"of variation?), which would be read as {unit_of(r['measure'])}; give the "
                              f"{'SD' if key == 'sd' else 'values'} in {r['unit']} in a column of its own"
                              + (" (SD = CV / 100 x mean)" if key == "sd" else ""), col)
+        if MILLIPASCAL in names and "Pa" in family:
+            raise InputError(soil_path, f"{rw}.value" if key == "value" else f"{rw}.{key}",
+                             f"a column of {r['measure']} in a unit of its quantity ({', '.join(family)}): the "
+                             f"name of column {col} says mPa, a millipascal, 1e-9 of a MPa, no soil's stress (did "
+                             "you mean MPa? name the column in it)", col)
         for named in names:
             if named not in family and named.split("/")[0] in family:
                 raise InputError(soil_path, f"{rw}.value" if key == "value" else f"{rw}.{key}",

@@ -189,13 +189,37 @@ UNIT_SYMBOLS = {
     "W": (1.0, (1, 2, -3)), "kW": (1e3, (1, 2, -3)),
     "rad": (1.0, (0, 0, 0)), "r": (2 * math.pi, (0, 0, 0)), "rev": (2 * math.pi, (0, 0, 0)),
 }
-#: symbols of :data:`UNIT_SYMBOLS` a property's unit (:func:`si_factor`) matches in another case
-#: (``Kg/m3``, ``KG/M3``, ``G/CM3``): those whose letters name one unit in any case; not
-#: ``mg``/``MG`` (Mg or a milligram), ``mn`` (mN or MN), ``mj`` (mJ or MJ) or ``mpa`` (mPa or
-#: MPa; a whole ``mpa`` or ``MPA`` is read as MPa by :func:`si_factor`, no soil's modulus being
-#: in millipascals), matched with their case only
-_SI_ANY_CASE = {s.lower(): s for s in ("g", "kg", "t", "mm", "cm", "dm", "m", "km", "L", "mL", "cc", "s", "N", "kN",
-                                       "Pa", "kPa", "GPa", "J")}
+#: symbols whose letters name two units, one of them not in :data:`UNIT_SYMBOLS`: ``mg`` (a
+#: Mg or a milligram), ``mj`` (a mJ or a megajoule); matched with their case only
+_CASE_SENSITIVE = ("mg", "mj")
+#: the ``mpa`` of a printed table (``mpa``, ``MPA``, ``Mpa``) is a megapascal: no soil's stress
+#: or modulus is in millipascals, and a ``mPa`` written so, exactly, is refused as a stress
+#: (:data:`MILLIPASCAL`)
+_CASE_CHOICES = {"mpa": "MPa"}
+
+
+def _unit_cases() -> dict:
+    """lower-case spelling -> symbol of :data:`UNIT_SYMBOLS`, for the symbols whose letters name
+    one unit in any case (``kg`` for ``Kg``, ``KG``; ``kn`` for ``KN``; ``psi`` for ``PSI``):
+    not those of two units (``mn``: mN or MN; ``mg``, ``mj``: :data:`_CASE_SENSITIVE`), but
+    :data:`_CASE_CHOICES`."""
+    by_lower = {}
+    for sym, spec in UNIT_SYMBOLS.items():
+        by_lower.setdefault(sym.lower(), {})[sym] = spec
+    cases = {low: min(syms) for low, syms in by_lower.items()
+             if len(set(syms.values())) == 1 and low not in _CASE_SENSITIVE}
+    return {**cases, **_CASE_CHOICES}
+
+
+#: THE rule of a unit symbol's case, for a property's unit (:func:`si_factor`), a response's or
+#: covariate's ``unit:`` and a column's name (:func:`soilcal.config.measurements.whole_unit`,
+#: ``name_units``): a symbol written in another case is read where its letters name one unit of
+#: :data:`UNIT_SYMBOLS` in any case (:func:`_unit_cases`); a name's one-letter word is matched
+#: with its case only (``M`` is no ``m``, ``n`` no ``N``)
+UNIT_CASES = _unit_cases()
+#: a millipascal, a unit of a viscosity (``mPa s``), never of a soil's stress or modulus: as a
+#: stress it is refused, asking whether MPa was meant
+MILLIPASCAL = "mPa"
 _SUPERSCRIPTS = str.maketrans("⁻¹²³⁴−", "-1234-")
 _POWER = re.compile(r"(?P<sym>[A-Za-z]+)(?:\^?(?P<exp>-?\d))?")
 
@@ -249,17 +273,16 @@ def si_factor(unit, si_unit: str) -> float | None:
     where the whole text is a unit of that dimension (:func:`unit_powers`): symbols of
     :data:`UNIT_SYMBOLS` with exponents, a ``/`` or ``per`` between them (``g/cm^3``, ``g cm-3``, ``kg.m-3``,
     ``Mg m^-3``, ``kg/dm3``, ``g/mL``, ``lb/ft3``, ``N/m^2``, ``MN m-2``, ``psi``, ``J/m2``), a
-    pressure in another case (``mpa``, ``KPA``: MPa, kPa, as printed tables write them; ``mPa``
-    is a millipascal), or a dimensionless one
+    unit in another case by :data:`UNIT_CASES` (``mpa``, ``KPA``, ``PSI``: MPa, kPa, psi, as
+    printed tables write them; ``mPa``, a millipascal, is no soil's stress: None), or a
+    dimensionless one
     (``-``, ``1``, ``dimensionless``, ``%``).  None for a text that is no unit of that
     dimension (``kN/m^3`` is a unit weight, no density; ``x1000 kg/m3`` is no unit)."""
     u = "" if unit is None else str(unit).strip()
     if si_unit == "-":
         return _DIMENSIONLESS.get(u.lower())
-    if si_unit == "Pa" and u.lower() == "mpa" and u != "mPa":
-        return 1e6  # a printed table's MPa in another case (mpa, MPA, Mpa); a millipascal is written mPa
-    powers = unit_powers(u, _SI_ANY_CASE)
-    if powers is None:
+    powers = unit_powers(u, UNIT_CASES)
+    if powers is None or (si_unit == "Pa" and any(sym == MILLIPASCAL for sym, _, _ in powers)):
         return None
     factor, dims = 1.0, [0, 0, 0]
     for sym, exp, below in powers:
