@@ -681,7 +681,7 @@ PERCENT = [12.0, 15.0, 18.0, 12.0, 15.0, 18.0]
     (PERCENT, "fraction", None, ["a moisture content as a fraction of the dry mass (unit: fraction",
                                  "18 would be 1800 %", 'declare unit: "%"']),
     # a peat's fractions above 1 (150 %) where the soil gives no moisture of its own to say it is that wet
-    ([1.2, 1.5, 1.8] * 2, "g/g", None, ["of at most 1 unless the soil says it is wetter: 1.8 is 180 %",
+    ([1.2, 1.5, 1.8] * 2, "g/g", None, ["of at most 1 unless the soil says it is that wet: 1.8 would be 180 %",
                                         "give the soil's properties.moisture_content"]),
     # the table in %, the soil's own moisture written as a fraction under %
     (PERCENT, "%", "{value: 0.15, unit: \"%\"}", ["15 %, is about 100 times larger",

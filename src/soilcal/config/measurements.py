@@ -970,7 +970,8 @@ def _check_moisture(soil_path, data: dict, tpath: Path, df: pd.DataFrame, covs: 
                              "percentages, declare unit: \"%\"", float(x.max()))
         wettest = None if soil is None else max(soil[0])
         if factor != 1.0 and x.max() > 1.0 and (wettest is None or x.max() * factor > MOISTURE_FRACTION_NEAR * wettest):
-            own = ("the soil gives no properties.moisture_content" if wettest is None else
+            own = ("the soil gives no properties.moisture_content (give the soil's properties.moisture_content "
+                   "if it is that wet)" if wettest is None else
                    f"the soil's own properties.moisture_content is {soil[1]}, more than "
                    f"{MOISTURE_FRACTION_NEAR:g} times drier")
             raise InputError(tpath, where, f"a moisture content as a fraction of the dry mass (unit: {unit}, as the "
