@@ -37,7 +37,8 @@ def test_a_duplicate_inch_column_under_metres_is_refused(cinnamon):
     ("ft_id", []), ("plot_ft", []), ("tool_ft_2", []), ("draught_ft_N", ["N"]), ("depth_ft", ["ft"]),
     ("plot_width_ft", ["ft"]), ("moisture_in", []), ("w_in", []), ("gain_in", []), ("N_in", []), ("depth.in", []),
     ("depth (in) [mm]", ["mm"]), ("depth (in)", ["in"]), ("Layer.depth..in.", ["in"]),
-    ("PSI (kPa)", ["kPa"]), ("suction PSI", []), ("cone_index_PSI", ["psi"]), ("pressure_psi", ["psi"])])
+    ("PSI (kPa)", ["kPa"]), ("suction PSI", []), ("cone_index_PSI", ["psi"]), ("pressure_psi", ["psi"]),
+    ("stress_psi_mean", ["psi"]), ("depth_in_sd", ["in"]), ("psi_mean", []), ("gain_in_max", [])])
 def test_units_that_are_words_are_units_only_behind_a_word_of_their_kind(col, units):
     """ft anywhere (ft_id, tool_ft_2) gave ft; draught_ft_N was refused as two lengths... in as
     a last word (gain_in, N_in) gave inches; PSI in capitals escaped the guard."""

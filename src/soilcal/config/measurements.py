@@ -1047,14 +1047,14 @@ _UNIT_WORDS = ("fraction", "percent", "degree", "degrees")
 #: name's end: a length's (``depth_in``, ``Layer depth..in.``, ``plot_width_ft``) or a
 #: pressure's (``pressure_psi``, ``cone_index_PSI``)
 LENGTH_WORDS = ("depth", "height", "width", "length", "position", "distance", "sinkage", "diameter", "thickness",
-                "spacing", "elevation", "rut", "flatness", "deflection", "layer")
+                "spacing", "elevation", "rut", "flatness", "deflection", "layer", "penetration")
 STRESS_WORDS = ("pressure", "stress", "cone", "index", "strength", "inflation", "load", "ci")
 #: units whose symbols are words too (``depth in mm``, ``gain_in``, ``ft_id``, ``psi`` a
 #: matric potential: ``psi (kPa)``, ``suction PSI``), in any spelling (``PSI``, ``inches``,
 #: ``feet``): a unit only where the name gives no other unit, and then in brackets
 #: (``depth (in)``; ``depth (in) [mm]`` is in mm) or as the name's last word after ``_``, a
-#: space or R's ``..``, behind a word of the unit's kind (``depth_in``, ``plot_width_ft``,
-#: ``pressure_psi``); no unit elsewhere (``moisture_in``, ``w_in``, ``plot_ft``, ``depth.in``,
+#: space or R's ``..`` or before a statistic word, behind a word of the unit's kind
+#: (``depth_in``, ``plot_width_ft``, ``pressure_psi``, ``stress_psi_mean``); no unit elsewhere (``moisture_in``, ``w_in``, ``plot_ft``, ``depth.in``,
 #: ``tool_ft_2``)
 _WORD_UNITS = {"in": LENGTH_WORDS, "ft": LENGTH_WORDS, "psi": STRESS_WORDS}
 #: a name's bracketed part: ``speed (km/h)``, ``depth [mm]``
@@ -1244,6 +1244,8 @@ def name_units(col) -> list[str]:
         elif unit(w, False) in _WORD_UNITS:  # depth_in, pressure_psi; not draught_kN_in (kN), psi_kPa, gain_in
             u = unit(w, False)
             last = i == len(words) - 1 and re.search(r"(?:[_\s,;]|\.\.)" + re.escape(w) + r"\.*$", name)
+            # or before a statistic word, as a one-letter unit is: depth_in_mean, stress_psi_sd
+            last = last or (i + 1 < len(words) and words[i + 1].lower() in STATISTIC_WORDS)
             kind = any(p.lower().startswith(_WORD_UNITS[u]) for p in words[:i])
             weak.append(u if i > 0 and last and kind else None)
         else:
