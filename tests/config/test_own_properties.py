@@ -51,12 +51,14 @@ def test_an_own_soil_s_material_density_and_unknown_units_are_refused(tmp_path):
     msg = _refused(tmp_path, "materials.steel.density.value",
                    materials={"steel": {"density": {"value": 7.85, "unit": "kg/m^3"}}})
     assert "a density of 50 to 20000 kg/m^3 (in g/cm^3? declare unit: g/cm^3)" in msg
-    msg = _refused(tmp_path, "properties.bulk_density.unit", properties={"bulk_density": {"value": 95, "unit": "lb/ft^3"}})
-    assert "kg/m^3, g/cm^3, t/m^3" in msg and "got 'lb/ft^3'" in msg
+    # a unit weight is no density
+    msg = _refused(tmp_path, "properties.bulk_density.unit", properties={"bulk_density": {"value": 15, "unit": "kN/m^3"}})
+    assert "kg/m^3, g/cm^3, t/m^3" in msg and "got 'kN/m^3'" in msg
 
 
 @pytest.mark.parametrize("q", [{"value": 1.52, "unit": "g/cm^3"}, {"value": 1.52, "unit": "Mg m-3"},
-                               {"value": 1520, "unit": "kg/m3"}, {"value": 1.52, "unit": "t/m^3"}])
+                               {"value": 1520, "unit": "kg/m3"}, {"value": 1.52, "unit": "t/m^3"},
+                               {"value": 95, "unit": "lb/ft^3"}])  # 1521.7 kg/m^3
 def test_an_own_soil_s_density_in_any_density_unit_loads(tmp_path, q):
     soil = _load(tmp_path, properties={"bulk_density": q, "moisture_content": {"value": 0.15, "unit": "-"}},
                  materials={"steel": {"density": {"value": 7850, "unit": "kg/m^3"}}})

@@ -678,7 +678,11 @@ PERCENT = [12.0, 15.0, 18.0, 12.0, 15.0, 18.0]
     # fractions under %, no moisture of the soil's own: no value above 1 %
     (FRACTIONS, "%", None, ["every value is at most 1 %", "declare unit: fraction"]),
     # percentages declared as a fraction: 12-18 read as 1200-1800 %
-    (PERCENT, "fraction", None, ["a moisture content as a fraction of 1 (unit: fraction", "18 reads as a percentage"]),
+    (PERCENT, "fraction", None, ["a moisture content as a fraction of the dry mass (unit: fraction",
+                                 "18 would be 1800 %", 'declare unit: "%"']),
+    # a peat's fractions above 1 (150 %) where the soil gives no moisture of its own to say it is that wet
+    ([1.2, 1.5, 1.8] * 2, "g/g", None, ["of at most 1 unless the soil says it is that wet: 1.8 would be 180 %",
+                                        "give the soil's properties.moisture_content"]),
     # the table in %, the soil's own moisture written as a fraction under %
     (PERCENT, "%", "{value: 0.15, unit: \"%\"}", ["15 %, is about 100 times larger",
                                                   "is the soil's properties.moisture_content a fraction under unit %"]),

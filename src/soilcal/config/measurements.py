@@ -83,10 +83,15 @@ from pathlib import Path
 import pandas as pd
 
 from soilcal.config.quantities import (  # noqa: F401 (QUANTITIES re-exported)
+    MILLIPASCAL,
     MOISTURE_UNITS,
+    PLAUSIBLE,
     POSITIVE_QUANTITIES,
     QUANTITIES,
+    UNIT_SYMBOLS,
+    UNIT_CASES,
     quantity_factor,
+    unit_powers,
 )
 from soilcal.errors import InputError
 
@@ -115,11 +120,11 @@ DIMENSIONLESS = "-"
 #: for ``flatness_mm``, % for a dimensionless strain) is converted to the measure's unit as it
 #: is read; a unit of another quantity is refused
 RESPONSE_UNITS = (
-    {"N": 1.0, "kN": 1e3, "mN": 1e-3},
-    {"m": 1.0, "cm": 1e-2, "mm": 1e-3},
+    {"N": 1.0, "kN": 1e3, "mN": 1e-3, "lbf": UNIT_SYMBOLS["lbf"][0]},
+    {"m": 1.0, "cm": 1e-2, "mm": 1e-3, "in": 0.0254, "ft": 0.3048},
     {"m^2": 1.0, "dm^2": 1e-2, "cm^2": 1e-4, "mm^2": 1e-6},
     {"deg": 1.0, "rad": 180.0 / math.pi},
-    {"Pa": 1.0, "kPa": 1e3, "MPa": 1e6},
+    {"Pa": 1.0, "kPa": 1e3, "MPa": 1e6, "psi": UNIT_SYMBOLS["psi"][0]},
     {"W": 1.0, "kW": 1e3},
     {"N m": 1.0, "kN m": 1e3},
     {DIMENSIONLESS: 1.0, "%": 1e-2},
@@ -752,7 +757,8 @@ def _entry(soil_path, data: dict, mid: str, entry: dict, tpath: Path):
                 raise InputError(soil_path, f"{where}.responses[{j}].unit",
                                  f"{want} (the unit of {r['measure']}, from its name) or another unit of its "
                                  f"quantity, converted to {want} as {tpath.name} is read: "
-                                 + ", ".join(response_units(r["measure"])), r["unit"])
+                                 + ", ".join(response_units(r["measure"])) + _millipascal_hint(r["unit"]),
+                                 r["unit"])
             _check_response_column_units(soil_path, f"{where}.responses[{j}]", r, tpath)
         try:
             dem = DemParams.from_mapping(params, src, base=soil_base)
@@ -917,13 +923,21 @@ MOISTURE_DECADES = (1.5, 2.5)
 #: how near (decades) the other reading of a suspect moisture column (x 100 or / 100) must come to
 #: the soil's own moisture for the column to be refused as in the wrong form
 MOISTURE_MATCH = 0.3
+#: a moisture column declared as a fraction of 1 may hold a value above 1 (more water than dry
+#: mass, a peat's 1.5 g/g) only within this factor of the wettest moisture the soil's own
+#: ``properties.moisture_content`` gives (in %): a soil of 12 % does not hold 150 %; its
+#: "1, 2, 3, 4" are percentages declared as a fraction
+MOISTURE_FRACTION_NEAR = 3.0
 
 
 def _check_moisture(soil_path, data: dict, tpath: Path, df: pd.DataFrame, covs: dict, quantity_cols: dict) -> None:
     """A moisture column whose numbers are fractions under a percent unit (0.15 for 15 %), or
     percentages under a fraction unit: the moisture effect would take a change of 0.1 % for one
     of 10 %.  Refused naming the table and column, where (1) a column declared as a fraction
-    (``-``, ``fraction``, ``g/g``, ``kg/kg``) holds a value above 1; (2) its median, in %, lies 1.5 to 2.5
+    (``-``, ``fraction``, ``g/g``, ``kg/kg``) holds a value above 5 (500 %, :data:`PLAUSIBLE`),
+    or above 1 where the soil's ``properties.moisture_content`` is not given or its wettest is
+    more than :data:`MOISTURE_FRACTION_NEAR` times drier than the column's (a soil wetter than
+    its dry mass, a peat's 1.5 g/g, loads where the soil says it is that wet); (2) its median, in %, lies 1.5 to 2.5
     decades below or above the median of the soil's own ``properties.moisture_content`` (in %
     or as a fraction, as the soil file says) and, read the other way (times or over 100),
     within :data:`MOISTURE_MATCH` decades of it; (3) without that property, a column in % holds
@@ -948,9 +962,23 @@ def _check_moisture(soil_path, data: dict, tpath: Path, df: pd.DataFrame, covs: 
             continue
         factor = quantity_factor(q, unit)
         where = f"column {col}"
-        if factor != 1.0 and x.max() > 1.0:
-            raise InputError(tpath, where, f"a moisture content as a fraction of 1 (unit: {unit}, as declared): "
-                             f"{x.max():g} reads as a percentage (declare unit: \"%\")", float(x.max()))
+        top = PLAUSIBLE["moisture_content"][1]
+        if factor != 1.0 and x.max() * factor > top:
+            raise InputError(tpath, where, f"a moisture content as a fraction of the dry mass (unit: {unit}, as the "
+                             f"soil's covariates.{col}.unit declares) of at most {top / factor:g} ({top:g} %, a "
+                             f"peat's at saturation): {x.max():g} would be {x.max() * factor:g} %; if the cells are "
+                             "percentages, declare unit: \"%\"", float(x.max()))
+        wettest = None if soil is None else max(soil[0])
+        if factor != 1.0 and x.max() > 1.0 and (wettest is None or x.max() * factor > MOISTURE_FRACTION_NEAR * wettest):
+            own = ("the soil gives no properties.moisture_content (give the soil's properties.moisture_content "
+                   "if it is that wet)" if wettest is None else
+                   f"the soil's own properties.moisture_content is {soil[1]}, more than "
+                   f"{MOISTURE_FRACTION_NEAR:g} times drier")
+            raise InputError(tpath, where, f"a moisture content as a fraction of the dry mass (unit: {unit}, as the "
+                             f"soil's covariates.{col}.unit declares) of at most 1 unless the soil says it is "
+                             f"that wet: {x.max():g} would be {x.max() * factor:g} % of the dry mass (a peat's or "
+                             f"an andisol's) and {own}; if the cells are percentages, declare unit: \"%\" under "
+                             f"covariates.{col}", float(x.max()))
         pct = x * factor
         med = float(np.median(pct))
         if soil is not None:
@@ -964,6 +992,9 @@ def _check_moisture(soil_path, data: dict, tpath: Path, df: pd.DataFrame, covs: 
                     times = f"{10 ** round(abs(lg)):g}"
                     if lg < 0:
                         hint = (f"fractions of 1 under unit {unit}? declare unit: fraction under the covariate to "
+                                "have them read as such")
+                    elif factor != 1.0:  # the column, declared a fraction, is the likelier one wrong
+                        hint = (f"percentages under unit {unit}? declare unit: \"%\" under covariates.{col} to "
                                 "have them read as such")
                     else:
                         hint = (f"is the soil's properties.moisture_content a fraction under unit "
@@ -1001,15 +1032,31 @@ def _check_scale(soil_path, cw: str, cv: dict, scenario: str) -> None:
                          f"{factor:.4g} ({unit} to {target}, the unit of {what})", scale)
 
 
-#: spellings a column's name may give a unit in besides the units of :data:`RESPONSE_UNITS`,
-#: :data:`UNIT_ALIASES` and :data:`QUANTITIES` (``speed_kmh``): unit
-NAME_UNIT_SPELLINGS = {"kmh": "km/h", "percent": "%", "pct": "%", "wt%": "%"}
-#: two-letter spellings a name may give in another case than the unit's (``draught_kn``,
-#: ``Draught (KN)``, ``power_KW``): unit
-NAME_UNIT_CASES = {"kn": "kN", "KN": "kN", "Kn": "kN", "kw": "kW", "KW": "kW", "Kw": "kW"}
+#: spellings a column's name or a ``unit:`` may give a unit in besides the units of
+#: :data:`RESPONSE_UNITS`, :data:`UNIT_ALIASES` and :data:`QUANTITIES` (``speed_kmh``): unit.
+#: ``lb`` and ``lbs`` for a force are the pound-force, as US papers write it (a pound of mass
+#: only in a density, ``lb/ft^3``, ``pcf``); a viscosity's ``mPa s`` is kept whole so that it
+#: reads as no stress
+NAME_UNIT_SPELLINGS = {"kmh": "km/h", "percent": "%", "pct": "%", "wt%": "%", "lb": "lbf", "lbs": "lbf",
+                       "inch": "in", "inches": "in", "in.": "in", "feet": "ft", "foot": "ft", "pcf": "lb/ft^3",
+                       MILLIPASCAL: MILLIPASCAL, "mPa s": "mPa s", "mPa.s": "mPa s", "mPa·s": "mPa s"}
 #: words that are a unit only in a name's brackets (``w (fraction)``), not as a word of it
 #: (``clay_fraction``, ``percent_sand``)
 _UNIT_WORDS = ("fraction", "percent", "degree", "degrees")
+#: name words after which a unit symbol that is an English word too is read as a unit at the
+#: name's end: a length's (``depth_in``, ``Layer depth..in.``, ``plot_width_ft``) or a
+#: pressure's (``pressure_psi``, ``cone_index_PSI``)
+LENGTH_WORDS = ("depth", "height", "width", "length", "position", "distance", "sinkage", "diameter", "thickness",
+                "spacing", "elevation", "rut", "flatness", "deflection", "layer", "penetration")
+STRESS_WORDS = ("pressure", "stress", "cone", "index", "strength", "inflation", "load", "ci")
+#: units whose symbols are words too (``depth in mm``, ``gain_in``, ``ft_id``, ``psi`` a
+#: matric potential: ``psi (kPa)``, ``suction PSI``), in any spelling (``PSI``, ``inches``,
+#: ``feet``): a unit only where the name gives no other unit, and then in brackets
+#: (``depth (in)``; ``depth (in) [mm]`` is in mm) or as the name's last word after ``_``, a
+#: space or R's ``..`` or before a statistic word, behind a word of the unit's kind
+#: (``depth_in``, ``plot_width_ft``, ``pressure_psi``, ``stress_psi_mean``); no unit elsewhere (``moisture_in``, ``w_in``, ``plot_ft``, ``depth.in``,
+#: ``tool_ft_2``)
+_WORD_UNITS = {"in": LENGTH_WORDS, "ft": LENGTH_WORDS, "psi": STRESS_WORDS}
 #: a name's bracketed part: ``speed (km/h)``, ``depth [mm]``
 #: the words after which a one-letter word of a column's name inside it is read as a unit
 #: (``F_N_mean``, ``draught_N_sd``): a statistic of the quantity in that unit
@@ -1017,46 +1064,33 @@ STATISTIC_WORDS = ("mean", "avg", "average", "sd", "std", "se", "sem", "min", "m
 _BRACKETS = re.compile(r"[(\[]\s*([^()\[\]]*?)\s*[)\]]")
 
 
-#: unit symbols a compound unit in a column's name is written with (``m s-1``, ``g cm-3``,
-#: ``kg/m3``, ``Mg m-3``, ``min-1``), matched with their case
-_UNIT_SYMBOLS = ("km", "m", "dm", "cm", "mm", "s", "h", "min", "kg", "g", "Mg", "t", "N", "kN", "mN", "Pa",
-                 "kPa", "MPa", "W", "kW", "rad", "r", "rev")
 #: compound units, as :func:`_compound` writes them, that name a unit of the tables under
-#: another symbol: a megagram is a tonne, a revolution per minute with or without the r
-_COMPOUND_SPELLINGS = {"Mg/m^3": "t/m^3", "1/min": "r/min", "rev/min": "r/min", "rev/s": "r/s"}
-_SUPERSCRIPTS = str.maketrans("⁻¹²³⁴", "-1234")
-_FACTOR = re.compile(r"(?P<sym>[A-Za-z]+)(?:\^?(?P<exp>-?\d))?")
+#: another symbol: a megagram is a tonne, a rotation rate per minute or per second (``min-1``,
+#: ``s-1``, ISO 80000-3's rotational frequency) is in revolutions, with or without the r
+_COMPOUND_SPELLINGS = {"Mg/m^3": "t/m^3", "1/min": "r/min", "rev/min": "r/min", "1/s": "r/s", "rev/s": "r/s"}
 
 
 def _compound(text: str):
     """A compound unit written with exponents or a ``/``, SI style: ``m s-1``, ``m.s-1``,
-    ``m·s⁻¹``, ``m s^-1``, ``km h-1``, ``g cm-3``, ``kg/m3``, ``Mg m-3``, ``min-1``, ``g g-1``,
-    ``N per m``, as ``(written, form)``: ``written`` whether the text is such a unit (symbols of
-    :data:`_UNIT_SYMBOLS` with an exponent, a ``/`` or ``per`` between them), ``form`` the unit
-    in one spelling, ``num/den`` with powers as ``^n`` (``m/s``, ``g/cm^3``, ``1/min``).  A
-    text that is no compound unit gives ``(False, None)``."""
-    t = text.translate(_SUPERSCRIPTS).replace("−", "-").strip()
-    t = re.sub(r"\s+per\s+|\s*/\s*", " / ", t, flags=re.IGNORECASE)
-    parts = [w for w in re.split(r"[\s.·⋅*]+", t) if w]
-    num, den, below, marked = [], [], False, False
-    for w in parts:
-        if w == "/":
-            if below or not parts:
-                return False, None
-            below = marked = True
-            continue
-        m = _FACTOR.fullmatch(w)
-        if m is None or m["sym"] not in _UNIT_SYMBOLS:
-            return False, None
-        e = int(m["exp"] or 1)
-        if m["exp"] is not None and 0 <= e < 2:
+    ``m·s⁻¹``, ``m s^-1``, ``km h-1``, ``g cm-3``, ``kg/m3``, ``Mg m-3``, ``min-1``, ``1/s``,
+    ``g g-1``, ``N per m``, as ``(written, form)``: ``written`` whether the text is such a unit
+    (:func:`~soilcal.config.quantities.unit_powers`, its symbols with their case, with an
+    exponent or a ``/``), ``form`` the unit in one spelling, ``num/den`` with powers as ``^n``
+    (``m/s``, ``g/cm^3``, ``1/min``).  A text that is no compound unit gives ``(False, None)``."""
+    powers = unit_powers(text)
+    if powers is None:
+        return False, None
+    num, den, marked = [], [], False
+    for sym, exp, below in powers:
+        e = int(exp or 1)
+        if exp is not None and 0 <= e < 2:
             return False, None  # r1, s1, m1, h0 next to a unit word are ids, not powers
-        marked = marked or m["exp"] is not None
+        marked = marked or below or exp is not None
         if e < 0 or below:
-            den.append((m["sym"], abs(e)))
+            den.append((sym, abs(e)))
         else:
-            num.append((m["sym"], e))
-    if not marked or not (num or den) or (parts and parts[-1] == "/"):
+            num.append((sym, e))
+    if not marked:
         return False, None
     if not den and len(num) > 1:
         return False, None  # m2, cm3 are units; kN t2, depth_cm_r2 hold an id (t2, r2), no product of powers
@@ -1070,11 +1104,10 @@ def _compound(text: str):
 @functools.cache
 def _name_unit_table() -> tuple[dict, dict, dict]:
     """Every unit spelling :func:`name_units` knows -> its unit as the tables key it, and the
-    same by lower-case spelling where that names one unit only (``mpa`` is MPa, ``RPM`` rpm),
-    for spellings of three characters or more: two letters in another case are as often
-    something else (``mn`` a mean, ``MN`` meganewtons, ``nm`` nanometres, ``pa``), so a
-    spelling of two is matched with its case or as :data:`NAME_UNIT_CASES` lists it, one of
-    one letter with its case only (``M`` is no ``m``, ``n`` no ``N``); and the compound units
+    same by lower-case spelling where that names one unit only (``RPM`` rpm, ``KMH`` km/h),
+    for spellings of three characters or more, or a symbol of two letters or more in another
+    case by :data:`~soilcal.config.quantities.UNIT_CASES` (``KN``, ``MPA``; ``mn`` is no mN),
+    one of one letter with its case only (``M`` is no ``m``, ``n`` no ``N``); and the compound units
     among them by the form :func:`_compound` gives them (``m/s``, ``kg/m^3``, ``N m``)."""
     exact = {u: u for family in RESPONSE_UNITS for u in family}
     exact.update({u: u for spec in QUANTITIES.values() if spec for u in spec[1]})
@@ -1085,9 +1118,12 @@ def _name_unit_table() -> tuple[dict, dict, dict]:
         if len(spelling) > 2:
             lower.setdefault(spelling.lower(), set()).add(unit)
     lower = {k: next(iter(v)) for k, v in lower.items() if len(v) == 1}
-    exact.update(NAME_UNIT_CASES)
+    # a symbol in another case, by the one rule of quantities.UNIT_CASES (KN, MPA, PSI, FT)
+    lower.update({low: exact[sym] for low, sym in UNIT_CASES.items() if len(low) > 1 and sym in exact})
     forms = dict(_COMPOUND_SPELLINGS)
     for spelling, unit in exact.items():
+        if unit == "mPa s":
+            continue
         for text in (spelling, spelling.replace("^", "")):
             written, form = _compound(text)
             if written:
@@ -1109,7 +1145,7 @@ def whole_unit(text) -> str | None:
         return None
     if u in exact:
         return exact[u]
-    if len(u) > 2 and u.lower() in lower:
+    if len(u) > 1 and u.lower() in lower:
         return lower[u.lower()]
     written, form = _compound(u)
     return forms.get(form) if written else None
@@ -1150,9 +1186,10 @@ def name_units(col) -> list[str]:
             return None
         if text.lower() in _UNIT_WORDS and not bracketed:
             return None
-        return exact.get(text) or (lower.get(text.lower()) if len(text) > 2 else None)
+        return exact.get(text) or (lower.get(text.lower()) if len(text) > 1 else None)
 
-    name = str(col).strip()
+    # pandas' and R's suffix of a duplicate name (depth_in.1, Depth..in..1) is no part of it
+    name = re.sub(r"(?<=\D)\.\d+$", "", str(col).strip())
     found, weak = [], []
     for m in _BRACKETS.finditer(name):
         inside = m.group(1)
@@ -1162,7 +1199,8 @@ def name_units(col) -> list[str]:
             continue
         words = [w for w in re.split(r"[\s,;]+", inside) if w]
         whole = unit(inside, True)
-        found += [whole] if whole else [unit(w, True) for w in words]
+        for u in [whole] if whole else [unit(w, True) for w in words]:
+            (weak if u in _WORD_UNITS else found).append(u)  # depth (in) [mm] is in mm
     words = []
     for w in re.split(r"[\s_,;]+", _BRACKETS.sub(" ", name)):
         if "." in w and not unit(w, False) and not compound(w)[0]:
@@ -1203,6 +1241,13 @@ def name_units(col) -> list[str]:
             elif following is None or following in STATISTIC_WORDS:  # F_N_mean, Sd_m (mm)
                 weak.append(unit(w, False, True))
             # else draught_N_2, draught_N_A, tool_m_depth: a one-letter id or abbreviation
+        elif unit(w, False) in _WORD_UNITS:  # depth_in, pressure_psi; not draught_kN_in (kN), psi_kPa, gain_in
+            u = unit(w, False)
+            last = i == len(words) - 1 and re.search(r"(?:[_\s,;]|\.\.)" + re.escape(w) + r"\.*$", name)
+            # or before a statistic word, as a one-letter unit is: depth_in_mean, stress_psi_sd
+            last = last or (i + 1 < len(words) and words[i + 1].lower() in STATISTIC_WORDS)
+            kind = any(p.lower().startswith(_WORD_UNITS[u]) for p in words[:i])
+            weak.append(u if i > 0 and last and kind else None)
         else:
             found.append(unit(w, False) or (unit(w.split("/", 1)[1], False) if "/" in w else None))
         i += 1
@@ -1269,16 +1314,56 @@ def _check_declared_unit(soil_path, cw: str, col: str, cv: dict) -> None:
                          f"{_rename_hint(col, cv['unit'], named)})", cv["unit"])
 
 
+#: words of a column's name that make its numbers relative to another value (a coefficient of
+#: variation, a relative SD, a percentage): ``draught CV (%)``, ``horizontal_SD_percent``,
+#: ``Draught.CV....``, ``draught_rsd``
+RELATIVE_WORDS = ("cv", "rsd", "cov", "percent", "pct", "relative", "rel")
+
+
+def _relative_word(col) -> str | None:
+    """The word of a column's name that makes its numbers relative (:data:`RELATIVE_WORDS`, a
+    ``%`` anywhere: ``CV%``, ``draught_sd (% of mean) N``), even where the name gives a unit
+    too (``horizontal (N) CV (%)``, ``draught_cv_pct_N``); None for a name of none
+    (``sd (N)``, ``draught_sd_N``).  Words are split at anything not a letter or digit and at
+    pandas' or R's dots (``Draught.CV....``)."""
+    name = str(col)
+    if "%" in name:
+        return "%"
+    return next((w for w in re.split(r"[^A-Za-z0-9]+", name) if w.lower() in RELATIVE_WORDS), None)
+
+
+def _millipascal_hint(text) -> str:
+    """What a stress declared in mPa is told: a millipascal is no soil's stress."""
+    return ("; mPa is a millipascal, 1e-9 of a MPa, no soil's stress: did you mean MPa?"
+            if whole_unit(text) == MILLIPASCAL else "")
+
+
 def _check_response_column_units(soil_path, rw: str, r: dict, tpath: Path) -> None:
     """A response's value, SD or paper column whose name gives a unit of its measure's
     quantity (:func:`name_units`: ``draught_kN``, ``Draught (KN)``) of another factor than the
     response's declared ``unit`` (``unit: N``) would be read 1000 times off without a word:
-    refused naming the response's ``unit``, the column and the unit its name gives."""
+    refused naming the response's ``unit``, the column and the unit its name gives.  So is a
+    column of a measure with units whose name gives % and no unit of the measure
+    (``draught CV (%)`` as the SD of a force in N: a relative SD read as one in N)."""
     family = response_units(r["measure"])
     declared = unit_factor(r["unit"], r["measure"])
     for key in ("value", "sd", "paper_simulated", "paper_difference"):
         col = r.get(key)
-        for named in (name_units(col) if col is not None else ()):
+        names = name_units(col) if col is not None else []
+        relative = _relative_word(col) if col is not None and "%" not in family else None
+        if relative is not None:
+            raise InputError(soil_path, f"{rw}.value" if key == "value" else f"{rw}.{key}",
+                             f"a column of {r['measure']} in a unit of its quantity ({', '.join(family)}): the "
+                             f"name of column {col} says {relative}, a value relative to another (a coefficient "
+                             f"of variation?), which would be read as {unit_of(r['measure'])}; give the "
+                             f"{'SD' if key == 'sd' else 'values'} in {r['unit']} in a column of its own"
+                             + (" (SD = CV / 100 x mean)" if key == "sd" else ""), col)
+        if MILLIPASCAL in names and "Pa" in family:
+            raise InputError(soil_path, f"{rw}.value" if key == "value" else f"{rw}.{key}",
+                             f"a column of {r['measure']} in a unit of its quantity ({', '.join(family)}): the "
+                             f"name of column {col} says mPa, a millipascal, 1e-9 of a MPa, no soil's stress (did "
+                             "you mean MPa? name the column in it)", col)
+        for named in names:
             if named not in family and named.split("/")[0] in family:
                 raise InputError(soil_path, f"{rw}.value" if key == "value" else f"{rw}.{key}",
                                  f"a column of {r['measure']} in a unit of its quantity "

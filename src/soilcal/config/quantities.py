@@ -3,17 +3,21 @@ their SI unit and accepted units.  Plain data, imported by the measurement loade
 measured-data loop."""
 
 import math
+import re
 
 #: quantity -> (SI unit, {accepted unit: factor to SI}); ``None`` for a label quantity
 #: (a tool id, a test day, a group) whose cells are names, not numbers
+#: (imperial units by their exact definitions: the inch 0.0254 m, the foot 0.3048 m, the mile
+#: 1609.344 m, the pound 0.45359237 kg)
 QUANTITIES = {
-    "tool_speed": ("m/s", {"m/s": 1.0, "km/h": 1 / 3.6, "m/min": 1 / 60, "mm/s": 1e-3, "cm/s": 1e-2}),
-    "working_depth": ("m", {"m": 1.0, "cm": 1e-2, "mm": 1e-3}),
+    "tool_speed": ("m/s", {"m/s": 1.0, "km/h": 1 / 3.6, "m/min": 1 / 60, "mm/s": 1e-3, "cm/s": 1e-2,
+                           "mph": 0.44704, "ft/s": 0.3048, "ft/min": 0.3048 / 60}),
+    "working_depth": ("m", {"m": 1.0, "cm": 1e-2, "mm": 1e-3, "in": 0.0254, "ft": 0.3048}),
     "rotor_speed": ("r/min", {"r/min": 1.0, "rpm": 1.0, "r/s": 60.0, "rad/s": 60 / (2 * math.pi)}),
     "moisture_content": ("%", {"%": 1.0, "-": 100.0, "fraction": 100.0, "g/g": 100.0, "kg/kg": 100.0}),  # a mass fraction: 0.15 = 15 %
-    "layer_depth": ("m", {"m": 1.0, "cm": 1e-2, "mm": 1e-3}),
-    "bulk_density": ("kg/m^3", {"kg/m^3": 1.0, "g/cm^3": 1e3, "t/m^3": 1e3}),
-    "position": ("m", {"m": 1.0, "cm": 1e-2, "mm": 1e-3}),
+    "layer_depth": ("m", {"m": 1.0, "cm": 1e-2, "mm": 1e-3, "in": 0.0254, "ft": 0.3048}),
+    "bulk_density": ("kg/m^3", {"kg/m^3": 1.0, "g/cm^3": 1e3, "t/m^3": 1e3, "lb/ft^3": 0.45359237 / 0.3048 ** 3}),
+    "position": ("m", {"m": 1.0, "cm": 1e-2, "mm": 1e-3, "in": 0.0254, "ft": 0.3048}),
     "tool": None,
     "day": None,
     "group": None,
@@ -46,14 +50,11 @@ def quantity_factor(quantity: str, unit) -> float | None:
     label quantity."""
     if QUANTITIES.get(quantity) is None:
         return None
-    f = moisture_factor(unit) if quantity == "moisture_content" else QUANTITIES[quantity][1].get(unit)
-    if f is None and isinstance(unit, str):
-        from soilcal.config.measurements import whole_unit
+    from soilcal.config.measurements import whole_unit
 
-        u = whole_unit(unit)
-        if u is not None and u != unit:
-            return moisture_factor(u) if quantity == "moisture_content" else QUANTITIES[quantity][1].get(u)
-    return f
+    units = [unit] + ([whole_unit(unit)] if isinstance(unit, str) else [])
+    lookup = moisture_factor if quantity == "moisture_content" else QUANTITIES[quantity][1].get
+    return next((f for f in map(lookup, units) if f is not None), None)
 
 
 #: the units of a moisture content :func:`moisture_factor` knows, as the messages name them
@@ -164,29 +165,104 @@ def plausible_kind(name: str, material: bool = False) -> str | None:
     return name if name in PLAUSIBLE else None
 
 
-#: unit symbol -> (factor to SI, dimension as powers of mass, length, time)
-_SI_SYMBOLS = {
+#: the one table of unit symbols soilcal reads a unit written with symbols by
+#: (:func:`unit_powers`: a property's unit by :func:`si_factor`, a compound unit in a table's
+#: column name or ``unit:`` by :func:`soilcal.config.measurements.whole_unit`): symbol ->
+#: (factor to SI, dimension as powers of mass, length, time).  Case matters: ``mPa`` is a
+#: millipascal, ``MPa`` a megapascal, ``mN`` a millinewton, ``MN`` a meganewton.  An angle or a
+#: revolution is dimensionless here (``r``, ``rev`` a revolution, 2 pi rad).  The imperial units
+#: are exact by definition (the inch 0.0254 m, the foot 0.3048 m, the pound 0.45359237 kg, the
+#: pound-force 0.45359237 kg x 9.80665 m/s^2).
+UNIT_SYMBOLS = {
     "g": (1e-3, (1, 0, 0)), "kg": (1.0, (1, 0, 0)), "Mg": (1e3, (1, 0, 0)), "t": (1e3, (1, 0, 0)),
+    "lb": (0.45359237, (1, 0, 0)),
     "mm": (1e-3, (0, 1, 0)), "cm": (1e-2, (0, 1, 0)), "dm": (0.1, (0, 1, 0)), "m": (1.0, (0, 1, 0)),
-    "km": (1e3, (0, 1, 0)), "L": (1e-3, (0, 3, 0)), "l": (1e-3, (0, 3, 0)), "mL": (1e-6, (0, 3, 0)),
-    "ml": (1e-6, (0, 3, 0)), "cc": (1e-6, (0, 3, 0)), "s": (1.0, (0, 0, 1)),
-    "N": (1.0, (1, 1, -2)), "kN": (1e3, (1, 1, -2)), "MN": (1e6, (1, 1, -2)),
+    "km": (1e3, (0, 1, 0)), "in": (0.0254, (0, 1, 0)), "ft": (0.3048, (0, 1, 0)),
+    "L": (1e-3, (0, 3, 0)), "l": (1e-3, (0, 3, 0)), "mL": (1e-6, (0, 3, 0)),
+    "ml": (1e-6, (0, 3, 0)), "cc": (1e-6, (0, 3, 0)),
+    "s": (1.0, (0, 0, 1)), "min": (60.0, (0, 0, 1)), "h": (3600.0, (0, 0, 1)),
+    "N": (1.0, (1, 1, -2)), "kN": (1e3, (1, 1, -2)), "MN": (1e6, (1, 1, -2)), "mN": (1e-3, (1, 1, -2)),
+    "lbf": (0.45359237 * 9.80665, (1, 1, -2)),
     "Pa": (1.0, (1, -1, -2)), "kPa": (1e3, (1, -1, -2)), "MPa": (1e6, (1, -1, -2)), "GPa": (1e9, (1, -1, -2)),
-    "J": (1.0, (1, 2, -2)), "mJ": (1e-3, (1, 2, -2)), "mN": (1e-3, (1, 1, -2)),
+    "mPa": (1e-3, (1, -1, -2)), "psi": (0.45359237 * 9.80665 / 0.0254 ** 2, (1, -1, -2)),
+    "J": (1.0, (1, 2, -2)), "mJ": (1e-3, (1, 2, -2)),
+    "W": (1.0, (1, 2, -3)), "kW": (1e3, (1, 2, -3)),
+    "rad": (1.0, (0, 0, 0)), "r": (2 * math.pi, (0, 0, 0)), "rev": (2 * math.pi, (0, 0, 0)),
 }
-#: symbols of :data:`_SI_SYMBOLS` matched in another case (``Kg/m3``, ``KG/M3``, ``G/CM3``):
-#: those whose letters name one unit in any case; not ``mg``/``MG`` (Mg or a milligram), ``mn``
-#: (mN or MN) or ``mj`` (mJ or MJ), matched with their case only
-_SI_ANY_CASE = {s.lower(): s for s in ("g", "kg", "t", "mm", "cm", "dm", "m", "km", "L", "mL", "cc", "s", "N", "kN",
-                                       "Pa", "kPa", "GPa", "J")}
+#: symbols whose letters name two units, one of them not in :data:`UNIT_SYMBOLS`: ``mg`` (a
+#: Mg or a milligram), ``mj`` (a mJ or a megajoule); matched with their case only
+_CASE_SENSITIVE = ("mg", "mj")
+#: the ``mpa`` of a printed table (``mpa``, ``MPA``, ``Mpa``) is a megapascal: no soil's stress
+#: or modulus is in millipascals, and a ``mPa`` written so, exactly, is refused as a stress
+#: (:data:`MILLIPASCAL`)
+_CASE_CHOICES = {"mpa": "MPa"}
+
+
+def _unit_cases() -> dict:
+    """lower-case spelling -> symbol of :data:`UNIT_SYMBOLS`, for the symbols whose letters name
+    one unit in any case (``kg`` for ``Kg``, ``KG``; ``kn`` for ``KN``; ``psi`` for ``PSI``):
+    not those of two units (``mn``: mN or MN; ``mg``, ``mj``: :data:`_CASE_SENSITIVE`), but
+    :data:`_CASE_CHOICES`."""
+    by_lower = {}
+    for sym, spec in UNIT_SYMBOLS.items():
+        by_lower.setdefault(sym.lower(), {})[sym] = spec
+    cases = {low: min(syms) for low, syms in by_lower.items()
+             if len(set(syms.values())) == 1 and low not in _CASE_SENSITIVE}
+    return {**cases, **_CASE_CHOICES}
+
+
+#: THE rule of a unit symbol's case, for a property's unit (:func:`si_factor`), a response's or
+#: covariate's ``unit:`` and a column's name (:func:`soilcal.config.measurements.whole_unit`,
+#: ``name_units``): a symbol written in another case is read where its letters name one unit of
+#: :data:`UNIT_SYMBOLS` in any case (:func:`_unit_cases`); a name's one-letter word is matched
+#: with its case only (``M`` is no ``m``, ``n`` no ``N``)
+UNIT_CASES = _unit_cases()
+#: a millipascal, a unit of a viscosity (``mPa s``), never of a soil's stress or modulus: as a
+#: stress it is refused, asking whether MPa was meant
+MILLIPASCAL = "mPa"
+_SUPERSCRIPTS = str.maketrans("⁻¹²³⁴−", "-1234-")
+_POWER = re.compile(r"(?P<sym>[A-Za-z]+)(?:\^?(?P<exp>-?\d))?")
+
+
+def unit_powers(text, any_case: dict | None = None) -> list[tuple[str, str | None, bool]] | None:
+    """The symbols of a unit written with symbols of :data:`UNIT_SYMBOLS`, SI style: exponents
+    (``m s-1``, ``g cm-3``, ``m^2``, ``m·s⁻¹``), at most one ``/`` or ``per`` (``kg/m3``,
+    ``N per m``), symbols apart by spaces, dots, ``*`` or ``·``; a ``1`` before the ``/`` is no
+    symbol (``1/min``).  As ``(symbol, exponent as written or None, below the /)`` in the
+    order written; a symbol matched with its case, or by its lower case in ``any_case``
+    (lower case -> symbol).  None for a text that is not such a unit (a word or number of no
+    symbol, two ``/``, a ``/`` with nothing after it, an empty text).  The one parser of units
+    written with symbols."""
+    t = ("" if text is None else str(text)).translate(_SUPERSCRIPTS).strip()
+    t = re.sub(r"\s+per\s+|\s*/\s*", " / ", t, flags=re.IGNORECASE)
+    words = [w for w in re.split(r"[\s.·⋅*]+", t) if w]
+    if words[:2] == ["1", "/"]:
+        words = words[1:]
+    out, below = [], False
+    for w in words:
+        if w == "/":
+            if below:
+                return None
+            below = True
+            continue
+        m = _POWER.fullmatch(w)
+        sym = None if m is None else m["sym"] if m["sym"] in UNIT_SYMBOLS else (any_case or {}).get(m["sym"].lower())
+        if sym is None:
+            return None
+        out.append((sym, m["exp"], below))
+    if not out or words[-1] == "/":
+        return None
+    return out
+
+
 #: the SI units of :data:`PLAUSIBLE` as dimensions
 _SI_DIMENSIONS = {"kg/m^3": (1, -3, 0), "Pa": (1, -1, -2), "J/m^2": (1, 0, -2), "-": (0, 0, 0)}
 #: a dimensionless value's unit: factor
 _DIMENSIONLESS = {"": 1.0, "-": 1.0, "1": 1.0, "dimensionless": 1.0, "%": 1e-2}
 #: the units :func:`si_factor` takes, by SI unit, as the messages name them
 SI_UNITS_TAKEN = {
-    "kg/m^3": "kg/m^3, g/cm^3, t/m^3, Mg/m^3, kg/dm^3, g/mL (also written g cm-3, kg m-3; Kg/m3, G/CM3)",
-    "Pa": "Pa, kPa, MPa, GPa, N/m^2, kN/m^2, MN/m^2 (also written N m-2)",
+    "kg/m^3": "kg/m^3, g/cm^3, t/m^3, Mg/m^3, kg/dm^3, g/mL, lb/ft^3 (also written g cm-3, kg m-3; Kg/m3, G/CM3)",
+    "Pa": "Pa, kPa, MPa, GPa, N/m^2, kN/m^2, MN/m^2, psi (also written N m-2)",
     "J/m^2": "J/m^2, mJ/m^2, N/m, mN/m (also written J m-2, mN m-1)",
     "-": "- (also 1, dimensionless) or %",
 }
@@ -194,37 +270,26 @@ SI_UNITS_TAKEN = {
 
 def si_factor(unit, si_unit: str) -> float | None:
     """Factor to ``si_unit`` (a unit of :data:`PLAUSIBLE`) of a property's declared ``unit``,
-    where the whole text is a unit of that dimension: symbols of :data:`_SI_SYMBOLS` with
-    exponents, a ``/`` or ``per`` between them (``g/cm^3``, ``g cm-3``, ``kg.m-3``,
-    ``Mg m^-3``, ``kg/dm3``, ``g/mL``, ``N/m^2``, ``MN m-2``, ``J/m2``), a pressure in another
-    case (``mpa``, ``KPA``: MPa, kPa, as printed tables write them), or a dimensionless one
+    where the whole text is a unit of that dimension (:func:`unit_powers`): symbols of
+    :data:`UNIT_SYMBOLS` with exponents, a ``/`` or ``per`` between them (``g/cm^3``, ``g cm-3``, ``kg.m-3``,
+    ``Mg m^-3``, ``kg/dm3``, ``g/mL``, ``lb/ft3``, ``N/m^2``, ``MN m-2``, ``psi``, ``J/m2``), a
+    unit in another case by :data:`UNIT_CASES` (``mpa``, ``KPA``, ``PSI``: MPa, kPa, psi, as
+    printed tables write them; ``mPa``, a millipascal, is no soil's stress: None), or a
+    dimensionless one
     (``-``, ``1``, ``dimensionless``, ``%``).  None for a text that is no unit of that
     dimension (``kN/m^3`` is a unit weight, no density; ``x1000 kg/m3`` is no unit)."""
-    import re
-
     u = "" if unit is None else str(unit).strip()
     if si_unit == "-":
         return _DIMENSIONLESS.get(u.lower())
-    if si_unit == "Pa" and u.lower() in ("pa", "kpa", "mpa", "gpa"):
-        return {"pa": 1.0, "kpa": 1e3, "mpa": 1e6, "gpa": 1e9}[u.lower()]
-    t = re.sub(r"\s+per\s+|\s*/\s*", " / ", u.replace("·", " ").replace("⋅", " ").replace("−", "-"),
-               flags=re.IGNORECASE)
-    t = t.translate(str.maketrans("⁻¹²³", "-123"))
-    factor, dims, below, words = 1.0, [0, 0, 0], False, [w for w in re.split(r"[\s.*]+", t) if w]
-    for w in words:
-        if w == "/":
-            if below:
-                return None
-            below = True
-            continue
-        m = re.fullmatch(r"([A-Za-z]+)(?:\^?(-?\d))?", w)
-        sym = None if m is None else m[1] if m[1] in _SI_SYMBOLS else _SI_ANY_CASE.get(m[1].lower())
-        if sym is None:
-            return None
-        f, d = _SI_SYMBOLS[sym]
-        e = int(m[2] or 1) * (-1 if below else 1)
+    powers = unit_powers(u, UNIT_CASES)
+    if powers is None or (si_unit == "Pa" and any(sym == MILLIPASCAL for sym, _, _ in powers)):
+        return None
+    factor, dims = 1.0, [0, 0, 0]
+    for sym, exp, below in powers:
+        f, d = UNIT_SYMBOLS[sym]
+        e = int(exp or 1) * (-1 if below else 1)
         factor *= f ** e
-        dims = [a + b * e for a, b in zip(dims, d)]
-    if not words or words[-1] == "/" or tuple(dims) != _SI_DIMENSIONS[si_unit]:
+        dims = [x + y * e for x, y in zip(dims, d)]
+    if tuple(dims) != _SI_DIMENSIONS[si_unit]:
         return None
     return float(f"{factor:.12g}")  # g/cm^3 is 1000, not 999.9999999999999
