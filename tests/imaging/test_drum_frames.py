@@ -665,8 +665,9 @@ def _smeared(angle=35.0, streak=30, R=200.0, w=520, h=480):
 def test_drum_circle_found_wrong_in_a_smeared_frame_is_flagged(tmp_path):
     # the smeared rim of a 200 px drum centred at (259.5, 239.5) was found as a 273 px circle at
     # (301, 299): the surface, straight, read 34.99 deg, status ok, though the chord (and for an
-    # S-shaped surface the angle) is not the drum's; its surface ends 0.71 radii short of that
-    # circle, where a bed lies against the drum wall
+    # S-shaped surface the angle) is not the drum's; its surface ends 0.23 radii short of that
+    # circle (radially, where the step from air to powder stops), where a bed lies against the
+    # drum wall
     r = drum.measure_drum_frame(render.save_frame(tmp_path / "smeared.png", _smeared()))
     assert r.confidence == "low" and "short of the drum circle" in r.low_reason
     assert "drum_centre_px and drum_radius_px" in r.low_reason
@@ -675,7 +676,8 @@ def test_drum_circle_found_wrong_in_a_smeared_frame_is_flagged(tmp_path):
 @pytest.mark.parametrize("angle", [30.0, -45.0])
 def test_drum_given_wrong_is_flagged_and_given_right_is_not(tmp_path, angle):
     # a drum given 1.3 times too large and 0.25 radii off the centre read 29.12 and 41.59 deg for
-    # these 30 and 45 deg surfaces, status ok; the surface ends 0.47 and 0.38 radii short of it
+    # these 30 and 45 deg surfaces, status ok; the surface ends 0.34 and 0.38 radii short of it.
+    # The reason says the drum given does not match the frame (it advised giving the drum, given)
     R, w, h = 80.0, 184, 184
     p = render.save_frame(tmp_path / "f.png", _thin_bed(R=R, fill=0.35, angle=angle, w=w, h=h))
     c = [(w - 1) / 2, (h - 1) / 2]
@@ -684,6 +686,22 @@ def test_drum_given_wrong_is_flagged_and_given_right_is_not(tmp_path, angle):
     wrong = drum.measure_drum_frame(p, options={"drum_centre_px": [c[0] + 0.25 * R * np.sign(angle), c[1] + 0.1 * R],
                                                 "drum_radius_px": 1.3 * R})
     assert wrong.confidence == "low" and "short of the drum circle" in wrong.low_reason
+    assert "given does not match the frame's drum" in wrong.low_reason
+    assert "give drum_centre_px" not in wrong.low_reason
+
+
+@pytest.mark.parametrize("angle,x_over_r,width", [(35.0, 0.7, 0.08), (-35.0, -0.62, 0.06)])
+def test_trace_stopped_by_a_glare_band_near_the_wall_is_not_flagged(tmp_path, angle, x_over_r, width):
+    # a vertical glare band across the rising end of the surface, 0.62 to 0.7 radii from the
+    # centre, stops the trace there while the bed goes on to the wall under it: the rim was found
+    # right and the angle read within 0.15 deg, but the frame was flagged low, "ends 0.28 (0.35)
+    # drum radii short of the drum circle ... give drum_centre_px", so a group of frames under the
+    # same lamp was refused.  The surface's end is where the step from air down to powder along
+    # the end's line stops, not where the trace stops
+    img, truth = render.render_tester_frame(7, angle, fill=0.3, s_amp=0.1, size=(500, 500), window="rim", n_avg=8)
+    r = drum.measure_drum_frame(render.save_frame(tmp_path / "band.png", _band(img, truth, x_over_r, 0.4, width)))
+    assert r.drum_reference == "rim" and abs(r.angle_deg - abs(truth["angle_deg"])) < 0.5
+    assert r.confidence == "ok", r.low_reason
 
 
 def test_a_flagged_frame_accepted_by_the_user_is_averaged_and_said_so(tmp_path, capsys):

@@ -122,14 +122,19 @@ MAX_ROUGHNESS_PCT = 0.55
 #: crowding over the upper part tilt the chord away from the thirds, lumps spread evenly along the
 #: surface do not
 MAX_THIRD_TILT_DEG = 0.65
-#: the most the measured free surface may stop short of the masked drum circle at either end
-#: (along the surface, in drum radii) for the frame to be "ok", unless it runs out of the frame
-#: there: a bed lies against the drum wall, so its surface reaches the wall at both ends (drawn
-#: frames with grains and clods on the surface, S-shaped, 20 to 75 deg, radii 60 to 220 px: 0.02
-#: to 0.11, the most in small drums and steep surfaces, where the columns next to the wall are
-#: wall); a circle found wrong, larger than the drum or off its centre (a rim smeared by motion
-#: blur, a drum given wrong), leaves the surface ending 0.24 to 0.71 R inside it, the chord and
-#: so the central window not the drum's
+#: the most the free surface may stop short of the masked drum circle at either end for the frame
+#: to be "ok", unless it runs out of the frame there: measured radially, (rm - |end|) / R, the
+#: masked radius rm less the end's distance from the drum centre, in drum radii; the end is where
+#: the traced surface stops or, past it, where a step from air down to powder along the end's line
+#: stops (a bright glare band across the window stops the trace, not the surface).  A
+#: bed lies against the drum wall, so its surface reaches the wall at both ends (drawn frames with
+#: grains and clods on the surface, S-shaped, 20 to 75 deg, radii 60 to 220 px: 0.02 to 0.11, the
+#: most in small drums and steep surfaces, where the columns next to the wall are wall); a circle
+#: grossly wrong, larger than the drum or off its centre (a rim smeared by motion blur, a drum given
+#: 1.3 times too large and 0.25 radii off), leaves the surface ending 0.23 to 0.38 R inside it, the
+#: chord and so the central window not the drum's.  A circle a little wrong (0.1 radii off the
+#: centre) leaves the surface ending within the limit and is not caught: it moves the angle by up
+#: to about 1 deg
 MAX_END_GAP = 0.2
 #: what every frame refused for showing no measurable drum is expected to show
 DRUM_EXPECTED = (f"a drum frame: powder lying in a drum, clearly darker or lighter than the air above it, its "
@@ -554,6 +559,47 @@ def _surface(path, p, inside, cx, cy, rm, circle_said=""):
     return np.asarray(cols), np.asarray(rows), binary, powder
 
 
+def _surface_reach(p, u, v, part, end, outward, d, cx, cy, rm, R):
+    """How far from the drum centre the free surface reaches past its traced ``end`` (a point;
+    ``part``: the trace's points next to it, boolean over ``u, v``, drum centre at the origin, v
+    up; ``outward``: the end's sign along the surface direction ``d``).  The end's line is followed
+    to the masked circle ``rm``, and at each pixel along it the grey ``p`` (powder high) just below
+    the line is compared with just above it, as under the traced end: the surface goes on where
+    the step from air to powder is at least half the traced end's (a bright glare band across the
+    window shifts both sides alike, the trace stopping at it while the bed goes on to the wall);
+    the reach is the furthest such point up to which at least half the points followed are such.
+    Beyond the drum's wall (a circle found or given larger than the drum, or off it) no bed lies
+    under the line: the reach stops at the wall, short of that circle."""
+    me, de, _ = _tls(u[part], v[part])
+    de = de if de @ d * outward > 0 else -de
+    nrm = np.array([-de[1], de[0]])
+    nrm = nrm if nrm[1] < 0 else -nrm  # into the powder, below the surface
+    off = np.arange(max(3.0, 0.02 * R), max(8.0, 0.06 * R) + 0.5)
+
+    def step(q):  # (n, 2) points: median grey below minus above, nan where a side leaves the circle
+        lo = q[:, None, :] + off[None, :, None] * nrm
+        hi = q[:, None, :] - off[None, :, None] * nrm
+        out = np.full(len(q), np.nan)
+        ok = (np.hypot(lo[..., 0], lo[..., 1]).max(axis=1) < rm) & (np.hypot(hi[..., 0], hi[..., 1]).max(axis=1) < rm)
+        for k in np.flatnonzero(ok):
+            a, b = (ndi.map_coordinates(p, [cy - x[:, 1], cx + x[:, 0]], order=1) for x in (lo[k], hi[k]))
+            out[k] = np.median(a) - np.median(b)
+        return out
+
+    ref = np.nanmedian(step(np.column_stack([u[part], v[part]])))
+    s0 = float((end - me) @ de)
+    b = float(me @ de)
+    s1 = -b + math.sqrt(max(b * b - float(me @ me) + rm ** 2, 0.0))
+    if not np.isfinite(ref) or ref <= 0 or s1 <= s0 + 1:
+        return float(np.hypot(*end))
+    q = me + np.arange(s0 + 1.0, s1)[:, None] * de
+    st = step(q)
+    q, st = q[np.isfinite(st)], st[np.isfinite(st)]
+    good = st >= 0.5 * ref
+    carried = good & (np.cumsum(good) >= 0.5 * np.arange(1, good.size + 1))
+    return max(float(np.hypot(*end)), float(np.hypot(*q[np.flatnonzero(carried)[-1]])) if carried.any() else 0.0)
+
+
 def measure_drum_frame(path, threshold="otsu", keep_stages=False, options=None, refusals=None) -> DrumResult:
     """Dynamic angle and S-shape of one drum frame (see the module text for the method);
     ``refusals``: a folder for the diagnostic image of a frame that cannot be measured
@@ -711,20 +757,30 @@ def _measure_drum_frame(path, threshold, keep_stages, options, tried: Tried) -> 
     tilt = max((abs(x - angle) for x in (upper, lower) if np.isfinite(x)), default=0.0)
     where = {"image border": "no drum rim found", "rim": "drum rim found", "manifest": "drum as given"}[dref]
     conf, why = "ok", ""
-    # the surface's two ends against the drum wall: an end short of the masked circle, inside the
-    # frame, is a surface meeting no wall there, so the circle is not the drum's
+    # the surface's two ends against the drum wall: an end short of the masked circle (radially,
+    # (rm - |end|) / R), inside the frame, is a surface meeting no wall there, so the circle is not
+    # the drum's; where the trace stops short, the surface's end is where the step from air down to
+    # powder along the end's line stops (MAX_END_GAP)
     border = max(3.0, 0.02 * R)
     gaps = []
-    for e in (pts[np.argmin(tt)], pts[np.argmax(tt)]):
+    for e, part, outward in ((pts[np.argmin(tt)], tt <= t0 + 0.1 * (t1 - t0), -1.0),
+                             (pts[np.argmax(tt)], tt >= t1 - 0.1 * (t1 - t0), 1.0)):
         col, row = cx + e[0], cy - e[1]
         at_border = min(col, row, w - 1 - col, h - 1 - row) <= border
-        gaps.append(0.0 if at_border else (rm - math.hypot(*e)) / R)
+        gap = 0.0 if at_border else (rm - math.hypot(*e)) / R
+        if gap > MAX_END_GAP and part.sum() >= 5:  # the trace may stop short of a surface going on
+            gap = (rm - _surface_reach(p, u, v, part, e, outward, d, cx, cy, rm, R)) / R
+        gaps.append(gap)
     if max(gaps) > MAX_END_GAP:
         conf = "low"
-        why = (f"the free surface ends {max(gaps):.2f} drum radii short of the drum circle {said} (at most "
-               f"{MAX_END_GAP:g}): a bed lies against the drum wall, so that circle is not the drum's (a rim "
-               "smeared by motion blur or out of focus is found wrong), and the central chord is not the drum's; "
-               "give drum_centre_px and drum_radius_px, or take a sharper frame")
+        why = f"the free surface ends {max(gaps):.2f} drum radii short of the drum circle {said} (at most " \
+              f"{MAX_END_GAP:g}, radially): a bed lies against the drum wall, so " + (
+                  "the drum_centre_px or drum_radius_px given does not match the frame's drum, and the central "
+                  "chord is not the drum's; check them against the frame (the frame's pixels, as shown)"
+                  if dref == "manifest" else
+                  "that circle is not the drum's (a rim smeared by motion blur or out of focus is found wrong), and "
+                  "the central chord is not the drum's; give drum_centre_px and drum_radius_px, or take a sharper "
+                  "frame")
     if rough > MAX_ROUGHNESS_PCT and tilt > MAX_THIRD_TILT_DEG:
         conf = "low"
         why = (why + "; " if why else "") + (f"a jagged free surface tilting the line: its points {rough:.2f} % of the drum radius (RMS) across "
