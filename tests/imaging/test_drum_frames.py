@@ -729,3 +729,26 @@ def test_a_flagged_frame_accepted_by_the_user_is_averaged_and_said_so(tmp_path, 
     assert main(argv + ["--accept-low"]) == 0
     out = capsys.readouterr()
     assert json.loads(out.out)["accepted_low"][0]["path"] == str(p) and "accepted by the user" in out.err
+
+
+def test_the_figure_of_a_frame_flagged_low_says_so(tmp_path, monkeypatch):
+    # a frame flagged low, set aside or accepted by the user, had a figure titled by its file name
+    # only, as an "ok" one's: the user checking its figure did not see the flag
+    from soilcal.imaging import figures
+
+    titles = []
+    save = figures._save
+    monkeypatch.setattr(figures, "_save", lambda fig, stem: (titles.append(fig.get_suptitle()), save(fig, stem))[1])
+    R, w, h = 80.0, 184, 184
+    p = render.save_frame(tmp_path / "f.png", _thin_bed(R=R, fill=0.35, angle=40.0, w=w, h=h))
+    wrong = {"drum_centre_px": [(w - 1) / 2 + 20.0, (h - 1) / 2 + 8.0], "drum_radius_px": 1.3 * R}
+    ok = drum.measure_drum_frame(p, keep_stages=True)
+    low = drum.measure_drum_frame(p, keep_stages=True, options=wrong)
+    accepted = drum.measure_drum_frame(p, keep_stages=True, options=wrong | {"accept_low": True})
+    for name, r in (("ok", ok), ("low", low), ("accepted", accepted)):
+        figures.angle_figure(r, tmp_path / "figs" / name)
+    assert titles[0] == "f.png"
+    assert titles[1].startswith("f.png\nconfidence low: the free surface ends") and "accepted" not in titles[1]
+    assert titles[2].startswith("f.png\nconfidence low, accepted by the user (accept_low): the free surface ends")
+    assert "short of the drum circle" in " ".join(titles[2].split())
+    assert (tmp_path / "figs" / "accepted.png").is_file()
