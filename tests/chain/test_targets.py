@@ -157,3 +157,15 @@ def test_a_photo_target_names_the_heap_photos_its_group_set_aside():
     assert "printed 27.69" in s["note"]
     # a group with nothing set aside says nothing of it
     assert "set aside" not in _by_id(targets_frame(SOIL, "dem", MEAS))["stacking_angle"]["note"]
+
+
+def test_a_photo_target_names_the_frames_the_user_accepted_though_flagged_low():
+    # a drum frame flagged low that the user checked and accepted (accept_low) is in the value:
+    # the row says so and where why it was flagged, beside the frames set aside
+    meas = {**MEAS, "stacking": {"angle_deg": 28.4, "spread_deg": 0.7, "n_frames": 2,
+                                 "set_aside": [{"path": "f/a.png", "reason": "jagged"}],
+                                 "accepted_low": [{"path": "f/b.png", "reason": "short of the drum circle"}]}}
+    s = _by_id(targets_frame(SOIL, "dem", meas, "results/x/images/measurements.json"))["stacking_angle"]
+    assert "set aside as low, not in the value: a.png" in s["note"]
+    assert "accepted by the user, in the value: b.png" in s["note"] and "accepted_low" in s["note"], s["note"]
+    assert "accepted" not in _by_id(targets_frame(SOIL, "dem", MEAS))["stacking_angle"]["note"]

@@ -647,3 +647,108 @@ def test_a_refused_group_of_flagged_frames_still_gets_its_figures(tmp_path):
         measure_manifest(tmp_path / "m.yaml", figdir=mfigs)
     assert "group drum" in e.value.field and str(mfigs) in str(e.value)
     assert (mfigs / "flying.png").is_file()
+
+
+def _smeared(angle=35.0, streak=30, R=200.0, w=520, h=480):
+    """A drawn drum (:func:`_thin_bed`, a third full) smeared by the camera moving along the
+    surface: a line kernel 2 ``streak`` + 1 px long in the surface's direction, then a 1 px
+    Gaussian and 1 % noise (seeded)."""
+    img = _thin_bed(R=R, fill=0.35, angle=angle, w=w, h=h)
+    k = np.zeros((2 * streak + 1, 2 * streak + 1))
+    ta = np.radians(angle)
+    for s in np.linspace(-streak, streak, 4 * streak + 1):
+        k[int(round(streak - s * np.sin(ta))), int(round(streak + s * np.cos(ta)))] += 1
+    img = ndi.gaussian_filter(ndi.convolve(img, k / k.sum(), mode="nearest"), 1.0)
+    return np.clip(img + 0.01 * np.random.default_rng(7).standard_normal(img.shape), 0, 1)
+
+
+def test_drum_circle_found_wrong_in_a_smeared_frame_is_flagged(tmp_path):
+    # the smeared rim of a 200 px drum centred at (259.5, 239.5) was found as a 273 px circle at
+    # (301, 299): the surface, straight, read 34.99 deg, status ok, though the chord (and for an
+    # S-shaped surface the angle) is not the drum's; its surface ends 0.23 radii short of that
+    # circle (radially, where the step from air to powder stops), where a bed lies against the
+    # drum wall
+    r = drum.measure_drum_frame(render.save_frame(tmp_path / "smeared.png", _smeared()))
+    assert r.confidence == "low" and "short of the drum circle" in r.low_reason
+    assert "drum_centre_px and drum_radius_px" in r.low_reason
+
+
+@pytest.mark.parametrize("angle", [30.0, -45.0])
+def test_drum_given_wrong_is_flagged_and_given_right_is_not(tmp_path, angle):
+    # a drum given 1.3 times too large and 0.25 radii off the centre read 29.12 and 41.59 deg for
+    # these 30 and 45 deg surfaces, status ok; the surface ends 0.34 and 0.38 radii short of it.
+    # The reason says the drum given does not match the frame (it advised giving the drum, given)
+    R, w, h = 80.0, 184, 184
+    p = render.save_frame(tmp_path / "f.png", _thin_bed(R=R, fill=0.35, angle=angle, w=w, h=h))
+    c = [(w - 1) / 2, (h - 1) / 2]
+    right = drum.measure_drum_frame(p, options={"drum_centre_px": c, "drum_radius_px": R})
+    assert right.confidence == "ok" and abs(right.angle_deg - abs(angle)) < 0.2
+    wrong = drum.measure_drum_frame(p, options={"drum_centre_px": [c[0] + 0.25 * R * np.sign(angle), c[1] + 0.1 * R],
+                                                "drum_radius_px": 1.3 * R})
+    assert wrong.confidence == "low" and "short of the drum circle" in wrong.low_reason
+    assert "given does not match the frame's drum" in wrong.low_reason
+    assert "give drum_centre_px" not in wrong.low_reason
+
+
+@pytest.mark.parametrize("angle,x_over_r,width", [(35.0, 0.7, 0.08), (-35.0, -0.62, 0.06)])
+def test_trace_stopped_by_a_glare_band_near_the_wall_is_not_flagged(tmp_path, angle, x_over_r, width):
+    # a vertical glare band across the rising end of the surface, 0.62 to 0.7 radii from the
+    # centre, stops the trace there while the bed goes on to the wall under it: the rim was found
+    # right and the angle read within 0.15 deg, but the frame was flagged low, "ends 0.28 (0.35)
+    # drum radii short of the drum circle ... give drum_centre_px", so a group of frames under the
+    # same lamp was refused.  The surface's end is where the step from air down to powder along
+    # the end's line stops, not where the trace stops
+    img, truth = render.render_tester_frame(7, angle, fill=0.3, s_amp=0.1, size=(500, 500), window="rim", n_avg=8)
+    r = drum.measure_drum_frame(render.save_frame(tmp_path / "band.png", _band(img, truth, x_over_r, 0.4, width)))
+    assert r.drum_reference == "rim" and abs(r.angle_deg - abs(truth["angle_deg"])) < 0.5
+    assert r.confidence == "ok", r.low_reason
+
+
+def test_a_flagged_frame_accepted_by_the_user_is_averaged_and_said_so(tmp_path, capsys):
+    # a frame flagged low could not be used even when the user had checked it: its group was
+    # refused; accept_low: true (--accept-low) averages it, its result says accepted_by_user and
+    # the group lists it in accepted_low, not in set_aside
+    from soilcal.cli import main
+
+    R, w, h = 80.0, 184, 184
+    p = render.save_frame(tmp_path / "f.png", _thin_bed(R=R, fill=0.35, angle=40.0, w=w, h=h))
+    given = {"drum_centre_px": [(w - 1) / 2 + 20.0, (h - 1) / 2 + 8.0], "drum_radius_px": 1.3 * R}
+    with pytest.raises(InputError, match="accept_low"):
+        drum.measure_drum([p], options=given)
+    summary, (r,) = drum.measure_drum([p], options=given | {"accept_low": True})
+    assert r.confidence == "low" and r.accepted_by_user and summary["n_frames"] == 1
+    assert summary["set_aside"] == [] and summary["accepted_low"] == [{"path": str(p), "reason": r.low_reason}]
+    assert summary["frames"][0]["accepted_by_user"] is True
+    # a frame measured ok is not marked accepted
+    assert not drum.measure_drum_frame(p, options={"accept_low": True}).accepted_by_user
+    with pytest.raises(InputError) as err:
+        drum.frame_options({"accept_low": "yes"}, "m.yaml", prefix="photos[0].")
+    assert err.value.field == "photos[0].accept_low" and "true or false" in str(err.value)
+    argv = ["image", "drum", str(p), "--drum-centre-px", *map(str, given["drum_centre_px"]),
+            "--drum-radius-px", str(given["drum_radius_px"])]
+    assert main(argv + ["--accept-low"]) == 0
+    out = capsys.readouterr()
+    assert json.loads(out.out)["accepted_low"][0]["path"] == str(p) and "accepted by the user" in out.err
+
+
+def test_the_figure_of_a_frame_flagged_low_says_so(tmp_path, monkeypatch):
+    # a frame flagged low, set aside or accepted by the user, had a figure titled by its file name
+    # only, as an "ok" one's: the user checking its figure did not see the flag
+    from soilcal.imaging import figures
+
+    titles = []
+    save = figures._save
+    monkeypatch.setattr(figures, "_save", lambda fig, stem: (titles.append(fig.get_suptitle()), save(fig, stem))[1])
+    R, w, h = 80.0, 184, 184
+    p = render.save_frame(tmp_path / "f.png", _thin_bed(R=R, fill=0.35, angle=40.0, w=w, h=h))
+    wrong = {"drum_centre_px": [(w - 1) / 2 + 20.0, (h - 1) / 2 + 8.0], "drum_radius_px": 1.3 * R}
+    ok = drum.measure_drum_frame(p, keep_stages=True)
+    low = drum.measure_drum_frame(p, keep_stages=True, options=wrong)
+    accepted = drum.measure_drum_frame(p, keep_stages=True, options=wrong | {"accept_low": True})
+    for name, r in (("ok", ok), ("low", low), ("accepted", accepted)):
+        figures.angle_figure(r, tmp_path / "figs" / name)
+    assert titles[0] == "f.png"
+    assert titles[1].startswith("f.png\nconfidence low: the free surface ends") and "accepted" not in titles[1]
+    assert titles[2].startswith("f.png\nconfidence low, accepted by the user (accept_low): the free surface ends")
+    assert "short of the drum circle" in " ".join(titles[2].split())
+    assert (tmp_path / "figs" / "accepted.png").is_file()

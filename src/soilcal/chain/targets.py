@@ -89,6 +89,10 @@ def targets_frame(soil_data: dict, source: str, measurements: dict | None = None
             if aside:
                 said = (f"photo group {group} ({key}; set aside as low, not in the value: {', '.join(aside)}, "
                         f"reasons in {Path(measurements_path).name} set_aside)")
+            accepted = [Path(str(a.get("path", ""))).name for a in entry.get("accepted_low") or []]
+            if accepted:
+                said += (f"; flagged low and accepted by the user, in the value: {', '.join(accepted)} (reasons in "
+                         f"{Path(measurements_path).name} accepted_low)")
             row.update(value=val, source="image", image_value=val,
                        image_spread=float(entry.get("spread_deg", np.nan)),
                        image_n=int(entry.get("n_photos", entry.get("n_frames", 1))),

@@ -25,6 +25,10 @@ def _warn_set_aside(summary, group=None):
         where = f"group {group}: " if group is not None else ""
         print(f"soilcal: warning: {where}{noun} {a['path']} set aside (confidence low, not averaged into the "
               f"group's angle; {_n(n, noun)} used): {a['reason']}", file=sys.stderr)
+    for a in summary.get("accepted_low", []):
+        where = f"group {group}: " if group is not None else ""
+        print(f"soilcal: warning: {where}{noun} {a['path']} flagged low and accepted by the user (accept_low), "
+              f"averaged into the group's angle: {a['reason']}", file=sys.stderr)
 
 
 def _figure_base(folder, r):
@@ -216,6 +220,8 @@ def register(subparsers) -> None:
                    help="outer fraction of the drum radius masked as wall (default 0.05)")
     q.add_argument("--drum-centre-px", dest="drum_centre_px", type=float, nargs=2, metavar=("COL", "ROW"))
     q.add_argument("--drum-radius-px", dest="drum_radius_px", type=float)
+    q.add_argument("--accept-low", dest="accept_low", action="store_true",
+                   help="average frames flagged low all the same, once checked by eye (listed as accepted_low)")
     common(q)
     q.set_defaults(func=_drum)
     q = sub.add_parser("furrow", help="furrow cross-section: profile, polynomial, area")

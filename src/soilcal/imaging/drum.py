@@ -72,7 +72,9 @@ drum window, 8- or 16-bit grey, time-averaged over many frames, no plate in view
    :data:`MAX_THIRD_TILT_DEG` deg from the central chord's, is "low" (``low_reason``): particles in
    flight above the upper part, crowding into powder-grey clusters traced as surface, make the
    trace jagged and tilt the line; a free surface, straight or S-shaped, is smooth at that scale,
-   and clods spread along it leave the thirds as the chord.
+   and clods spread along it leave the thirds as the chord.  A frame flagged low that the user has
+   checked is averaged all the same with ``accept_low: true`` (``--accept-low``): its result says
+   ``accepted_by_user``, its group lists it in ``accepted_low``.
 
 The frames of one group measured "ok" are averaged, the others set aside (:func:`measure_drum`).
 """
@@ -120,6 +122,20 @@ MAX_ROUGHNESS_PCT = 0.55
 #: crowding over the upper part tilt the chord away from the thirds, lumps spread evenly along the
 #: surface do not
 MAX_THIRD_TILT_DEG = 0.65
+#: the most the free surface may stop short of the masked drum circle at either end for the frame
+#: to be "ok", unless it runs out of the frame there: measured radially, (rm - |end|) / R, the
+#: masked radius rm less the end's distance from the drum centre, in drum radii; the end is where
+#: the traced surface stops or, past it, where a step from air down to powder along the end's line
+#: stops (a bright glare band across the window stops the trace, not the surface).  A
+#: bed lies against the drum wall, so its surface reaches the wall at both ends (drawn frames with
+#: grains and clods on the surface, S-shaped, 20 to 75 deg, radii 60 to 220 px: 0.02 to 0.11, the
+#: most in small drums and steep surfaces, where the columns next to the wall are wall); a circle
+#: grossly wrong, larger than the drum or off its centre (a rim smeared by motion blur, a drum given
+#: 1.3 times too large and 0.25 radii off), leaves the surface ending 0.23 to 0.38 R inside it, the
+#: chord and so the central window not the drum's.  A circle a little wrong (0.1 radii off the
+#: centre) leaves the surface ending within the limit and is not caught: it moves the angle by up
+#: to about 1 deg
+MAX_END_GAP = 0.2
 #: what every frame refused for showing no measurable drum is expected to show
 DRUM_EXPECTED = (f"a drum frame: powder lying in a drum, clearly darker or lighter than the air above it, its "
                  f"free surface one line at {DRUM_ANGLE_RANGE[0]:.0f} to {DRUM_ANGLE_RANGE[1]:.0f} deg")
@@ -128,7 +144,7 @@ _LIMITS = {"roll_deg": (-45.0, 45.0, "an angle between -45 and 45 deg"),
            "chord_fraction": (0.1, 1.0, "a fraction of the chord in [0.1, 1]"),
            "rim_margin": (0.0, 0.3, "a fraction of the drum radius in [0, 0.3]"),
            "drum_radius_px": (8.0, 1e6, "a radius of at least 8 px")}
-OPTIONS = ("level", "roll_deg", "chord_fraction", "rim_margin", "drum_centre_px", "drum_radius_px")
+OPTIONS = ("level", "roll_deg", "chord_fraction", "rim_margin", "drum_centre_px", "drum_radius_px", "accept_low")
 #: a frame larger than this (pixels) is measured reduced to it, as a heap photo is: a phone's 12
 #: megapixels are decoded reduced (a JPEG by 2, 4 or 8 in its decoder) and scaled to it
 DRUM_WORK_PIXELS = PILE_WORK_PIXELS
@@ -145,7 +161,7 @@ def frame_options(entry=None, where=None, prefix=""):
     """
     entry = entry or {}
     opts = {"level": "auto", "roll_deg": None, "chord_fraction": CHORD_FRACTION, "rim_margin": RIM_MARGIN,
-            "drum_centre_px": None, "drum_radius_px": None}
+            "drum_centre_px": None, "drum_radius_px": None, "accept_low": False}
     for k in OPTIONS:
         v = entry.get(k)
         if v is None:
@@ -154,6 +170,10 @@ def frame_options(entry=None, where=None, prefix=""):
         if k == "level":
             if v not in LEVELS:
                 raise InputError(where, field, f"one of {LEVELS}", v)
+        elif k == "accept_low":
+            if not isinstance(v, bool):
+                raise InputError(where, field, "true or false (true: a frame flagged low that the user has checked "
+                                 "is averaged all the same, listed as accepted_low)", v)
         elif k == "drum_centre_px":
             if not (isinstance(v, (list, tuple)) and len(v) == 2 and all(_number(x) for x in v)):
                 raise InputError(where, field, "[column, row] of the drum centre in pixels", v)
@@ -199,6 +219,9 @@ class DrumResult:
     roughness_pct: float = 0.0
     confidence: str = "ok"  # "low": see low_reason
     low_reason: str = ""
+    # the frame flagged low and accepted by the user (option accept_low): averaged into its group,
+    # listed in the group's accepted_low; confidence stays "low"
+    accepted_by_user: bool = False
 
     def as_dict(self):
         d = asdict(self)
@@ -536,6 +559,47 @@ def _surface(path, p, inside, cx, cy, rm, circle_said=""):
     return np.asarray(cols), np.asarray(rows), binary, powder
 
 
+def _surface_reach(p, u, v, part, end, outward, d, cx, cy, rm, R):
+    """How far from the drum centre the free surface reaches past its traced ``end`` (a point;
+    ``part``: the trace's points next to it, boolean over ``u, v``, drum centre at the origin, v
+    up; ``outward``: the end's sign along the surface direction ``d``).  The end's line is followed
+    to the masked circle ``rm``, and at each pixel along it the grey ``p`` (powder high) just below
+    the line is compared with just above it, as under the traced end: the surface goes on where
+    the step from air to powder is at least half the traced end's (a bright glare band across the
+    window shifts both sides alike, the trace stopping at it while the bed goes on to the wall);
+    the reach is the furthest such point up to which at least half the points followed are such.
+    Beyond the drum's wall (a circle found or given larger than the drum, or off it) no bed lies
+    under the line: the reach stops at the wall, short of that circle."""
+    me, de, _ = _tls(u[part], v[part])
+    de = de if de @ d * outward > 0 else -de
+    nrm = np.array([-de[1], de[0]])
+    nrm = nrm if nrm[1] < 0 else -nrm  # into the powder, below the surface
+    off = np.arange(max(3.0, 0.02 * R), max(8.0, 0.06 * R) + 0.5)
+
+    def step(q):  # (n, 2) points: median grey below minus above, nan where a side leaves the circle
+        lo = q[:, None, :] + off[None, :, None] * nrm
+        hi = q[:, None, :] - off[None, :, None] * nrm
+        out = np.full(len(q), np.nan)
+        ok = (np.hypot(lo[..., 0], lo[..., 1]).max(axis=1) < rm) & (np.hypot(hi[..., 0], hi[..., 1]).max(axis=1) < rm)
+        for k in np.flatnonzero(ok):
+            a, b = (ndi.map_coordinates(p, [cy - x[:, 1], cx + x[:, 0]], order=1) for x in (lo[k], hi[k]))
+            out[k] = np.median(a) - np.median(b)
+        return out
+
+    ref = np.nanmedian(step(np.column_stack([u[part], v[part]])))
+    s0 = float((end - me) @ de)
+    b = float(me @ de)
+    s1 = -b + math.sqrt(max(b * b - float(me @ me) + rm ** 2, 0.0))
+    if not np.isfinite(ref) or ref <= 0 or s1 <= s0 + 1:
+        return float(np.hypot(*end))
+    q = me + np.arange(s0 + 1.0, s1)[:, None] * de
+    st = step(q)
+    q, st = q[np.isfinite(st)], st[np.isfinite(st)]
+    good = st >= 0.5 * ref
+    carried = good & (np.cumsum(good) >= 0.5 * np.arange(1, good.size + 1))
+    return max(float(np.hypot(*end)), float(np.hypot(*q[np.flatnonzero(carried)[-1]])) if carried.any() else 0.0)
+
+
 def measure_drum_frame(path, threshold="otsu", keep_stages=False, options=None, refusals=None) -> DrumResult:
     """Dynamic angle and S-shape of one drum frame (see the module text for the method);
     ``refusals``: a folder for the diagnostic image of a frame that cannot be measured
@@ -693,9 +757,33 @@ def _measure_drum_frame(path, threshold, keep_stages, options, tried: Tried) -> 
     tilt = max((abs(x - angle) for x in (upper, lower) if np.isfinite(x)), default=0.0)
     where = {"image border": "no drum rim found", "rim": "drum rim found", "manifest": "drum as given"}[dref]
     conf, why = "ok", ""
+    # the surface's two ends against the drum wall: an end short of the masked circle (radially,
+    # (rm - |end|) / R), inside the frame, is a surface meeting no wall there, so the circle is not
+    # the drum's; where the trace stops short, the surface's end is where the step from air down to
+    # powder along the end's line stops (MAX_END_GAP)
+    border = max(3.0, 0.02 * R)
+    gaps = []
+    for e, part, outward in ((pts[np.argmin(tt)], tt <= t0 + 0.1 * (t1 - t0), -1.0),
+                             (pts[np.argmax(tt)], tt >= t1 - 0.1 * (t1 - t0), 1.0)):
+        col, row = cx + e[0], cy - e[1]
+        at_border = min(col, row, w - 1 - col, h - 1 - row) <= border
+        gap = 0.0 if at_border else (rm - math.hypot(*e)) / R
+        if gap > MAX_END_GAP and part.sum() >= 5:  # the trace may stop short of a surface going on
+            gap = (rm - _surface_reach(p, u, v, part, e, outward, d, cx, cy, rm, R)) / R
+        gaps.append(gap)
+    if max(gaps) > MAX_END_GAP:
+        conf = "low"
+        why = f"the free surface ends {max(gaps):.2f} drum radii short of the drum circle {said} (at most " \
+              f"{MAX_END_GAP:g}, radially): a bed lies against the drum wall, so " + (
+                  "the drum_centre_px or drum_radius_px given does not match the frame's drum, and the central "
+                  "chord is not the drum's; check them against the frame (the frame's pixels, as shown)"
+                  if dref == "manifest" else
+                  "that circle is not the drum's (a rim smeared by motion blur or out of focus is found wrong), and "
+                  "the central chord is not the drum's; give drum_centre_px and drum_radius_px, or take a sharper "
+                  "frame")
     if rough > MAX_ROUGHNESS_PCT and tilt > MAX_THIRD_TILT_DEG:
         conf = "low"
-        why = (f"a jagged free surface tilting the line: its points {rough:.2f} % of the drum radius (RMS) across "
+        why = (why + "; " if why else "") + (f"a jagged free surface tilting the line: its points {rough:.2f} % of the drum radius (RMS) across "
                f"the surface from a smooth curve over 0.1 radii, above {MAX_ROUGHNESS_PCT:g} %, and a third's angle "
                f"{tilt:.1f} deg from the central chord's, above {MAX_THIRD_TILT_DEG:g} deg (upper third {upper:.1f} "
                f"deg, lower third {lower:.1f} deg, central chord {angle:.1f} deg): particles in flight above the "
@@ -719,7 +807,7 @@ def _measure_drum_frame(path, threshold, keep_stages, options, tried: Tried) -> 
     return DrumResult(str(path), angle, upper, lower, angle - 0.5 * (upper + lower), rms, float(roll), lref, dref,
                       [float(fcx), float(fcy)], float(fR), float(fr), int(cols.size), st,
                       work_scale=float(math.sqrt(sx * sy)), roughness_pct=rough,
-                      confidence=conf, low_reason=why)
+                      confidence=conf, low_reason=why, accepted_by_user=conf == "low" and opts["accept_low"])
 
 
 def measure_drum(paths, threshold="otsu", keep_stages=False, options=None, refusals=None):
@@ -739,15 +827,19 @@ def measure_drum(paths, threshold="otsu", keep_stages=False, options=None, refus
 def drum_summary(res) -> dict:
     """The mean angle and S-shape measures of the frames ``res`` (:class:`DrumResult`) measured
     with confidence "ok", the angles' spread and the references they were measured against; a
-    frame flagged "low" is listed in ``set_aside`` (path, reason) and not averaged, ``n_frames``
-    counts those used, and a group with none "ok" is refused naming each frame and its reason.
+    frame flagged "low" is listed in ``set_aside`` (path, reason) and not averaged, unless the
+    user accepted it (option ``accept_low``): then it is averaged and listed in ``accepted_low``
+    (path, reason); ``n_frames`` counts those used, and a group with none used is refused naming
+    each frame and its reason.
     ``frames`` holds every frame's result."""
-    used = [r for r in res if r.confidence == "ok"]
-    aside = [{"path": r.path, "reason": r.low_reason} for r in res if r.confidence != "ok"]
+    used = [r for r in res if r.confidence == "ok" or r.accepted_by_user]
+    aside = [{"path": r.path, "reason": r.low_reason} for r in res if r.confidence != "ok" and not r.accepted_by_user]
+    accepted = [{"path": r.path, "reason": r.low_reason} for r in res if r.confidence != "ok" and r.accepted_by_user]
     if not used:
         raise InputError(res[0].path if len(res) == 1 else "<drum frame group>", "confidence",
                          "at least one frame of the group measured with confidence ok (a frame flagged low is not "
-                         "averaged into the group's angle)",
+                         "averaged into the group's angle unless the user, having checked it, gives accept_low: true "
+                         "for it, or --accept-low)",
                          "; ".join(f"{a['path']}: low, {a['reason']}" for a in aside))
 
     def mean(key):
@@ -759,4 +851,4 @@ def drum_summary(res) -> dict:
             "s_shape_deg": mean("s_shape_deg"), "line_rms_pct": mean("line_rms_pct"),
             "level_reference": ", ".join(sorted({r.level_reference for r in used})),
             "drum_reference": ", ".join(sorted({r.drum_reference for r in used})),
-            "frames": [r.as_dict() for r in res], "set_aside": aside}
+            "frames": [r.as_dict() for r in res], "set_aside": aside, "accepted_low": accepted}

@@ -69,11 +69,32 @@ def _save(fig, stem):
     return png, pdf
 
 
+def low_flag(result) -> str:
+    """What the title of ``result``'s figure says of its confidence: "" for an "ok" heap photo
+    or drum frame, else "confidence low: <reason>", or "confidence low, accepted by the user
+    (accept_low): <reason>" for a drum frame the user accepted, so that its figure, checked by
+    eye, shows the flag."""
+    if getattr(result, "confidence", "ok") == "ok":
+        return ""
+    why = getattr(result, "low_reason", None)
+    if why is None:  # a heap photo: its reason is worked out from its result
+        from soilcal.imaging.measure import low_reason
+
+        why = low_reason(result)
+    head = ("confidence low, accepted by the user (accept_low)" if getattr(result, "accepted_by_user", False)
+            else "confidence low")
+    return f"{head}: {why}"
+
+
 def angle_figure(result, stem, title=""):
-    """Five panels for a pile photo or a drum frame measured with ``keep_stages=True``."""
+    """Five panels for a pile photo or a drum frame measured with ``keep_stages=True``; the
+    title says a result flagged low and why (:func:`low_flag`)."""
+    import textwrap
+
     _not_over_photo(result, stem)
     st = result.stages
-    fig, ax = plt.subplots(1, 5, figsize=(17, 3.4))
+    flag = textwrap.wrap(low_flag(result), 190)
+    fig, ax = plt.subplots(1, 5, figsize=(17, 3.4 + 0.17 * len(flag)))
     ax[0].imshow(st.rgb)
     ax[0].set_title("(a) original")
     ax[1].imshow(st.gray, cmap="gray")
@@ -104,7 +125,8 @@ def angle_figure(result, stem, title=""):
     ax[4].set_title(f"(e) fitted lines, {result.angle_deg:.2f} deg")
     for a in ax[:4]:
         a.set_axis_off()
-    fig.suptitle(title or Path(result.path).name)
+    fig.suptitle("\n".join([title or Path(result.path).name, *flag]), color="firebrick" if flag else "black",
+                 fontsize=10 if flag else None)
     fig.tight_layout()
     return _save(fig, stem)
 
