@@ -775,7 +775,7 @@ def scatter_about_scale(res: pd.DataFrame, s: float) -> tuple[float, int, float]
             # chi-square of the same tail: against each row's own SD of a few repeats, it is a
             # sum of t^2, not chi-square (6 conditions x 3 days, 2 % noise over 5 repeats, 3 %
             # seed scatter, no offset: chi-square per degree of freedom 1.30, p < 0.05 in 20 %)
-            within = rs.replicate_scatter_chi(m, ref_m[at], pooled_dof[at[0]])
+            within = rs.replicate_scatter_chi(m, ref_m[at], pooled_dof[at[0]], q["measured_sd"].to_numpy(float), n_m[at])
             parts.append((mean, 1.0 / float(np.sum(w)), dof_m, float(q["simulated_mean"].iloc[0]),
                           float(q["simulated_sd"].iloc[0]), float(q["simulated_n"].iloc[0]),
                           within, len(m) - 1,

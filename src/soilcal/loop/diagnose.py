@@ -393,7 +393,8 @@ def _shared_simulation(d: pd.DataFrame, known: np.ndarray) -> tuple[np.ndarray, 
         dof_m = float(np.sum(n_m[at] - 1.0)) or np.inf
         dof = float(rs.satterthwaite(1.0 / np.sum(1.0 / ref_m[at]), dof_m, float(np.mean(ref_s[at])), n_s - 1.0))
         between = float(normal_equivalent([(np.sum(w * m) / np.sum(w) - sim) / se], [dof])[0]) ** 2
-        within = rs.replicate_scatter_chi(m, ref_m[at], pooled_dof[at[0]])
+        within = rs.replicate_scatter_chi(m, ref_m[at], pooled_dof[at[0]], d["measured_sd"].to_numpy(float)[at],
+                                            n_m[at])
         chi += between + within
         n += len(at)
         taken[at] = True
