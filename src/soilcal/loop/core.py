@@ -855,6 +855,23 @@ def _far_off(diag: pd.DataFrame) -> str:
     return "some rows lie far off for a reason no covariate carries (stones in the bin, a disturbance)"
 
 
+def _replicate_spread(u: pd.DataFrame, alpha: float) -> tuple[str, bool]:
+    """The verdict's clause where replicate rows without a measured SD scatter about their
+    conditions' means beyond the seed scatter (:func:`soilcal.loop.diagnose.replicate_spread`,
+    p below ``alpha``), and whether they do: those rows' means are judged against that scatter,
+    so stones met in some replicates and not others read as within the uncertainty, or as a
+    uniform bias, which moves every replicate alike and spreads none."""
+    sp = dg.replicate_spread(u)
+    if sp is None or not sp["p"] < alpha:
+        return "", False
+    return (f"; the replicate rows (no measured SD) scatter {sp['replicate_percent']:.2g} % about their conditions' "
+            f"means, {sp['ratio']:.2g} times the seed scatter ({sp['seed_percent']:.2g} %; F on {sp['dof'][0]} and "
+            f"{sp['dof'][1]} degrees of freedom, p {sp['p']:.2g}): the rows vary beyond the model's own scatter, which "
+            "a uniform bias does not cause (it moves every replicate alike) but the rig's noise or stones met in some "
+            "replicates and not others do, and against that scatter a row raised far off looks within the "
+            "uncertainty (a measured SD per row tells them apart)"), True
+
+
 def _aicc_undefined(s) -> bool:
     """Whether a :class:`soilcal.loop.select.Score` could not be scored for an undefined AICc
     (of the model or its reference: too few observations, :func:`soilcal.loop.select.aicc`)."""
@@ -1002,6 +1019,11 @@ def analyse(soil: str, res: pd.DataFrame, diag: pd.DataFrame, cands: list, effec
         chi, dof, p_about = _scatter_about_holm(res, sv, diag, settings.alpha)
         where = ("the model throughout, a uniform bias (an instrument's calibration, a zero offset) that no "
                  "mechanism of the library carries; ")
+        if _replicate_spread(u, settings.alpha)[1]:  # replicates spread beyond the seeds: not shown uniform
+            where = ("the model on average, which these rows cannot show to be a uniform bias throughout (their "
+                     "replicates scatter beyond the seed scatter, below); ")
+            nuisance = (nuisance[0], nuisance[1], "fitted alone: the mean offset of the rows, the calibrated model "
+                        "times (1 + s); their replicates scatter beyond the seed scatter (not shown uniform)")
         if p_about < settings.alpha:  # the rows are not shifted alike: no uniform bias
             nuisance = (nuisance[0], nuisance[1], "fitted alone: the mean offset of the rows, the calibrated model "
                         "times (1 + s); they scatter about it beyond their uncertainty (no uniform bias)")
@@ -1173,12 +1195,17 @@ def analyse(soil: str, res: pd.DataFrame, diag: pd.DataFrame, cands: list, effec
                         + _far_off(diag))
             nuisance = (nuisance[0], nuisance[1], "fitted alone: the mean offset of the rows, the calibrated model "
                         "times (1 + s); they scatter about it beyond their uncertainty (no uniform bias)")
+        elif _replicate_spread(u, settings.alpha)[1]:  # replicates spread beyond the seeds (the clause below)
+            nuisance = (nuisance[0], nuisance[1], "fitted alone: the mean offset of the rows, the calibrated model "
+                        "times (1 + s); their replicates scatter beyond the seed scatter (not shown uniform)")
     if sel is not None:
         verdict += _unscored(sel, u, settings.alpha)
     matched = dg.matched_quantities(diag) if len(diag) else set()
     for nm, why in (skipped_effects or {}).items():  # those the structure (or candidates: all) would have tried
         if settings.candidates == "all" or matched & set(EFFECTS[nm].signature):
             verdict += f"; {nm} {why}"
+    if n >= 3 and not verdict.startswith("no "):
+        verdict += _replicate_spread(u, settings.alpha)[0]
     for hint in constant_hints(u) + unit_hints(u):
         verdict += f"; {hint}"
     per_test = dg.per_test(u)  # table rows; the trend tests take one value per measured condition

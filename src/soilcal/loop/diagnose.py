@@ -350,6 +350,44 @@ def replicate_residuals(d: pd.DataFrame) -> tuple[np.ndarray, np.ndarray]:
     z = (mean - sim) / np.where(se > 0, se, 1.0)
     return z[ok], satterthwaite(ref_m, n - 1.0, ref_s, n_s - 1.0)[ok]
 
+def replicate_spread(d: pd.DataFrame) -> dict | None:
+    """How far the replicate rows without a measured SD scatter about their condition's mean
+    against the DEM's seed scatter: the replicates' variance relative to their scale, pooled
+    over the conditions and quantities measured twice at least (sum (r - 1) s^2 / sum (r - 1)),
+    over the seeds' relative variance pooled over the same conditions (n_s > 1 seeds, once per
+    simulation), read as F on the two sums of degrees of freedom (upper tail).  A uniform bias
+    (an instrument's calibration) moves every replicate alike and adds nothing to their spread;
+    a stone met in some replicates of a condition and not in others does, and there the
+    replicates' own scatter, which :func:`replicate_residuals` judges each mean against, grows
+    with it, so that their means look within it.  Returns ``ratio`` (the replicates' relative SD
+    over the seeds'), ``replicate_percent``, ``seed_percent``, ``dof`` (replicates', seeds'),
+    ``p``; None where no condition has replicate rows without an SD and seeds to compare."""
+    from scipy import stats
+
+    need = {"simulation", "measure", "measured", "simulated_sd", "simulated_n"}
+    if not need <= set(d.columns) or not len(d):
+        return None
+    rows = d if "measured_sd" not in d else d[~np.isfinite(d["measured_sd"].astype(float).to_numpy())]
+    num_r = den_r = num_s = den_s = 0.0
+    for _, g in rows.groupby([rows["simulation"].astype(str), rows["measure"].astype(str)], sort=False):
+        m = g["measured"].to_numpy(float)
+        m = m[np.isfinite(m)]
+        sd_s, n_s = float(g["simulated_sd"].iloc[0]), float(g["simulated_n"].iloc[0])
+        scale = float(np.nanmean(g["scale"].to_numpy(float))) if "scale" in g else float(np.mean(np.abs(m)))
+        if len(m) < 2 or not (np.isfinite(sd_s) and n_s > 1 and np.isfinite(scale) and scale > 0):
+            continue
+        num_r += (len(m) - 1) * float(np.var(m, ddof=1)) / scale ** 2
+        den_r += len(m) - 1
+        num_s += (n_s - 1) * sd_s ** 2 / scale ** 2
+        den_s += n_s - 1
+    if den_r == 0 or den_s == 0 or num_s <= 0:
+        return None
+    vr, vs = num_r / den_r, num_s / den_s
+    return dict(ratio=float(np.sqrt(vr / vs)), replicate_percent=100 * float(np.sqrt(vr)),
+                seed_percent=100 * float(np.sqrt(vs)), dof=(int(den_r), int(den_s)),
+                p=float(stats.f.sf(vr / vs, den_r, den_s)))
+
+
 def _shared_simulation(d: pd.DataFrame, known: np.ndarray) -> tuple[np.ndarray, float, int]:
     """The scatter test's part of the rows with a measured SD (``known``) that share one
     simulation and quantity with another such row (replicate rows of a condition, on other
