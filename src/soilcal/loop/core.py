@@ -857,19 +857,21 @@ def _far_off(diag: pd.DataFrame) -> str:
 
 def _replicate_spread(u: pd.DataFrame, alpha: float) -> tuple[str, bool]:
     """The verdict's clause where replicate rows without a measured SD scatter about their
-    conditions' means beyond the seed scatter (:func:`soilcal.loop.diagnose.replicate_spread`,
-    p below ``alpha``), and whether they do: those rows' means are judged against that scatter,
-    so stones met in some replicates and not others read as within the uncertainty, or as a
-    uniform bias, which moves every replicate alike and spreads none."""
+    conditions' means far more in some conditions than in others
+    (:func:`soilcal.loop.diagnose.replicate_spread`, p below ``alpha``), and whether they do:
+    those rows' means are judged against their own scatter, so stones met in some replicates
+    and not others read as within the uncertainty, or as a uniform bias, which moves every
+    replicate alike and widens no condition's spread more than another's."""
     sp = dg.replicate_spread(u)
     if sp is None or not sp["p"] < alpha:
         return "", False
-    return (f"; the replicate rows (no measured SD) scatter {sp['replicate_percent']:.2g} % about their conditions' "
-            f"means, {sp['ratio']:.2g} times the seed scatter ({sp['seed_percent']:.2g} %; F on {sp['dof'][0]} and "
-            f"{sp['dof'][1]} degrees of freedom, p {sp['p']:.2g}): the rows vary beyond the model's own scatter, which "
-            "a uniform bias does not cause (it moves every replicate alike) but the rig's noise or stones met in some "
-            "replicates and not others do, and against that scatter a row raised far off looks within the "
-            "uncertainty (a measured SD per row tells them apart)"), True
+    return (f"; the replicate rows (no measured SD) scatter about their conditions' means unevenly: "
+            f"{sp['widest_percent']:.2g} % in the widest condition, {sp['narrowest_percent']:.2g} % in the "
+            f"narrowest, {sp['replicate_percent']:.2g} % pooled (Bartlett's test on {sp['dof'][0]} degrees of freedom, "
+            f"p {sp['p']:.2g}): some replicates vary beyond the others, which neither the rig's "
+            "noise nor a uniform bias causes (they widen every condition alike) but stones met in some replicates "
+            "and not others do, and against that scatter a row raised far off looks within the uncertainty (a "
+            "measured SD per row tells them apart)"), True
 
 
 def _aicc_undefined(s) -> bool:
@@ -1019,11 +1021,11 @@ def analyse(soil: str, res: pd.DataFrame, diag: pd.DataFrame, cands: list, effec
         chi, dof, p_about = _scatter_about_holm(res, sv, diag, settings.alpha)
         where = ("the model throughout, a uniform bias (an instrument's calibration, a zero offset) that no "
                  "mechanism of the library carries; ")
-        if _replicate_spread(u, settings.alpha)[1]:  # replicates spread beyond the seeds: not shown uniform
+        if _replicate_spread(u, settings.alpha)[1]:  # some conditions' replicates spread more: not shown uniform
             where = ("the model on average, which these rows cannot show to be a uniform bias throughout (their "
-                     "replicates scatter beyond the seed scatter, below); ")
+                     "replicates scatter unevenly across conditions, below); ")
             nuisance = (nuisance[0], nuisance[1], "fitted alone: the mean offset of the rows, the calibrated model "
-                        "times (1 + s); their replicates scatter beyond the seed scatter (not shown uniform)")
+                        "times (1 + s); their replicates scatter unevenly across conditions (not shown uniform)")
         if p_about < settings.alpha:  # the rows are not shifted alike: no uniform bias
             nuisance = (nuisance[0], nuisance[1], "fitted alone: the mean offset of the rows, the calibrated model "
                         "times (1 + s); they scatter about it beyond their uncertainty (no uniform bias)")
@@ -1195,9 +1197,9 @@ def analyse(soil: str, res: pd.DataFrame, diag: pd.DataFrame, cands: list, effec
                         + _far_off(diag))
             nuisance = (nuisance[0], nuisance[1], "fitted alone: the mean offset of the rows, the calibrated model "
                         "times (1 + s); they scatter about it beyond their uncertainty (no uniform bias)")
-        elif _replicate_spread(u, settings.alpha)[1]:  # replicates spread beyond the seeds (the clause below)
+        elif _replicate_spread(u, settings.alpha)[1]:  # replicates spread unevenly (the clause below)
             nuisance = (nuisance[0], nuisance[1], "fitted alone: the mean offset of the rows, the calibrated model "
-                        "times (1 + s); their replicates scatter beyond the seed scatter (not shown uniform)")
+                        "times (1 + s); their replicates scatter unevenly across conditions (not shown uniform)")
     if sel is not None:
         verdict += _unscored(sel, u, settings.alpha)
     matched = dg.matched_quantities(diag) if len(diag) else set()
