@@ -237,7 +237,10 @@ def replicate_scatter_chi(m, ref_m, pooled_dof, sd=None, n=None) -> float:
     heteroscedastic ANOVA (:func:`welch_anova_p`, each row its own true SD: a replicate day may
     be noisier than another) and its tail given as the chi-square of the same tail.  Null
     conditions of 3 rows of 10 repeats, the third of 3 repeats at 3 times the SD: an SD pooled
-    over the condition's rows put 25 % at p < 0.05, Welch 6.6 % (4.5 % at equal SDs)."""
+    over the condition's rows put 25 % at p < 0.05, Welch 7.6-7.9 % (4.5 % at equal SDs).
+    Welch's F approximation is not exact for so few repeats: rows of 10, 10 and 2 repeats, SDs
+    1, 1 and 3, 12.6-12.9 %; six equal-SD rows of 3 repeats 7.0-7.8 % (a pooled SD is exact
+    there), of 5, 6.0 %; two or three rows of 2 or 3 repeats at equal SDs 2.6-3.7 %."""
     from scipy import stats
 
     m, wr = np.asarray(m, float), 1.0 / np.asarray(ref_m, float)
