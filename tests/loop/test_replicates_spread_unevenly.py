@@ -41,12 +41,13 @@ def _no_sd_campaign(disturbances, seed, noise=0.02, conditions=8, edit=None):
 
 
 def _stones_in_half_the_conditions(table, conds):
-    """Day d0 of every other condition (rows 0, 6, 12, 18) raised by 25 %: those conditions'
-    replicates scatter about 14 % about their mean (one of 3 rows 25 % up: SD 0.25 / sqrt(3) of
-    the mean), the other four 1.2 %."""
+    """One row of every other condition raised by 25 %, on days d0, d1, d2, d0 (rows 0, 7, 14,
+    18), so that no day carries the stones: those conditions' replicates scatter about 14 %
+    about their mean (one of 3 rows 25 % up: SD 0.25 / sqrt(3) of the mean), the other four
+    1.2 %."""
     assert [conds[i].covariates["day"] for i in range(6)] == ["d0", "d1", "d2"] * 2  # rows in grid order
     v = table["value"].to_numpy(float).copy()
-    v[[0, 6, 12, 18]] *= 1.25
+    v[[0, 7, 14, 18]] *= 1.25
     table["value"] = v
 
 
