@@ -150,3 +150,70 @@ def test_bartlett_from_summary_statistics_is_scipys():
     groups = [rng.normal(0.0, s, n) for s, n in ((1.0, 5), (1.5, 8), (0.7, 4), (3.0, 10))]
     p = bartlett_p([np.var(g, ddof=1) for g in groups], [len(g) - 1 for g in groups])
     assert abs(p - stats.bartlett(*groups).pvalue) < 1e-12
+
+
+def _floor_replicates(rng, n_cond, reps):
+    """``n_cond`` conditions, half of 20 N +- 2 N and half of 500 N +- 5 N (an absolute noise
+    floor: Bartlett's test refuses one relative SD), each measured as ``reps`` replicate rows
+    with the mean and sample SD of 10 normal repeats, its 3 seeds at 5 %; no offset."""
+    obs, runs = [], []
+    for i in range(n_cond):
+        t, sd = (20.0, 2.0) if i % 2 else (500.0, 5.0)
+        seeds = t * (1.0 + 0.05 * rng.standard_normal(3))
+        for j in range(reps):
+            rep = t + sd * rng.standard_normal(10)
+            row = i * reps + j + 1
+            obs.append(dict(measurement="bin", row=row, measure="F_N", unit="N", label="", simulation=f"c{i}",
+                            measured=float(rep.mean()), measured_sd=float(rep.std(ddof=1)), measured_n=10.0))
+            runs += [dict(measurement="bin", row=row, measure="F_N", seed=k, value=float(v), status="ok")
+                     for k, v in enumerate(seeds)]
+    return residual_frame(pd.DataFrame(obs), pd.DataFrame(runs))
+
+
+def test_replicates_of_sds_not_pooled_scatter_as_chi_square():
+    """Where a quantity's SDs are not pooled (an absolute noise floor), the replicate rows of a
+    condition scatter about their mean against the SD pooled over those rows, read as F on
+    their repeats' degrees of freedom: 300 conditions x 3 replicate rows of 10 repeats, no
+    offset, so the scatter about the scale and the diagnosis's scatter test are chi-square on
+    their degrees of freedom (per degree of freedom 1 +- 0.05 here).  Against each row's own SD
+    the replicates' part was a sum of t^2 (mean 9/7 per degree of freedom on 9): here 1.08 and
+    1.12 per degree of freedom (0.93 and 0.97 now), and of 200 tables of 12 conditions 11.5 %
+    and 14 % at p < 0.05 (3.5 % and 5 % now)."""
+    from soilcal.loop.core import scatter_about_scale
+    from soilcal.loop.diagnose import diagnose
+
+    res = _floor_replicates(np.random.default_rng(17), 300, 3)
+    chi, dof, p = scatter_about_scale(res, 0.0)
+    assert dof == 299 + 300 * 2
+    assert abs(chi / dof - 1.0) < 2.5 * np.sqrt(2.0 / dof), (chi / dof, p)
+    d = diagnose(res)
+    sc = d[d["test"] == "scatter"].iloc[0]
+    assert sc["n"] == 900
+    assert abs(sc["statistic"] / sc["n"] - 1.0) < 2.5 * np.sqrt(2.0 / sc["n"]), sc["statistic"] / sc["n"]
+
+
+def test_the_scatter_about_the_scale_holds_its_level_where_sds_are_not_pooled():
+    """5 N +- 2 N beside 500 N +- 10 N (10 repeats each, 6 rows of each, 3 seeds at 5 %; the
+    quantity scaled by its RMS, so neither the measured nor the seed SDs are one share of it and
+    Bartlett's test refuses their pooling), no offset: at alpha 0.05 a test of the right level
+    rejects 5 % of tables, so of 40 at most 6 (the binomial's upper 0.34 % tail begins at 7).
+    Where a part keeps the row's own SD, the mean's residual is read on the fewer of its
+    measured and seed degrees of freedom; Welch-Satterthwaite's from the own SDs grows where 3
+    seeds happen to scatter little (8.5 % of 200 tables at p < 0.05).  The fewer degrees of
+    freedom are conservative here (chi-square per degree of freedom 0.7, no table rejected):
+    the conservative side is accepted, the bound guards the level only."""
+    from soilcal.loop.core import scatter_about_scale
+
+    spec = [(5.0, 2.0)] * 6 + [(500.0, 10.0)] * 6
+    rng = np.random.default_rng(13)
+    p = []
+    for _ in range(40):
+        obs, runs = [], []
+        for i, (t, sd) in enumerate(spec):
+            rep = t + sd * rng.standard_normal(10)
+            obs.append(dict(measurement="bin", row=i + 1, measure="F_N", unit="N", label="", simulation=f"c{i}",
+                            measured=float(rep.mean()), measured_sd=float(rep.std(ddof=1)), measured_n=10.0))
+            runs += [dict(measurement="bin", row=i + 1, measure="F_N", seed=k, value=float(v), status="ok")
+                     for k, v in enumerate(t * (1.0 + 0.05 * rng.standard_normal(3)))]
+        p.append(scatter_about_scale(residual_frame(pd.DataFrame(obs), pd.DataFrame(runs)), 0.0)[2])
+    assert np.sum(np.array(p) < 0.05) <= 6, np.sum(np.array(p) < 0.05)

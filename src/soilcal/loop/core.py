@@ -775,7 +775,7 @@ def scatter_about_scale(res: pd.DataFrame, s: float) -> tuple[float, int, float]
             # chi-square of the same tail: against each row's own SD of a few repeats, it is a
             # sum of t^2, not chi-square (6 conditions x 3 days, 2 % noise over 5 repeats, 3 %
             # seed scatter, no offset: chi-square per degree of freedom 1.30, p < 0.05 in 20 %)
-            within = rs.replicate_scatter_chi(m, ref_m[at], pooled_dof[at[0]])
+            within = rs.replicate_scatter_chi(m, ref_m[at], pooled_dof[at[0]], q["measured_sd"].to_numpy(float), n_m[at])
             parts.append((mean, 1.0 / float(np.sum(w)), dof_m, float(q["simulated_mean"].iloc[0]),
                           float(q["simulated_sd"].iloc[0]), float(q["simulated_n"].iloc[0]),
                           within, len(m) - 1,
@@ -853,6 +853,29 @@ def _far_off(diag: pd.DataFrame) -> str:
     if names:
         return "their levels follow " + ", ".join(names) + " (the diagnosis)"
     return "some rows lie far off for a reason no covariate carries (stones in the bin, a disturbance)"
+
+
+def _replicate_spread(u: pd.DataFrame, alpha: float) -> tuple[str, bool]:
+    """The verdict's note where replicate rows without a measured SD scatter about their
+    conditions' means far more in some conditions than in others
+    (:func:`soilcal.loop.diagnose.replicate_spread`, p below ``alpha``), and whether they do.
+    Two causes give that: stones met in some replicates and not others (those rows' means are
+    judged against their own scatter, so such rows read as within the uncertainty), and rig
+    noise that is neither one share of the value nor one floor (an SD growing as value^1.5, or
+    2 % of the reading plus a 5 N floor), which a uniform bias rides on unchanged.  The rows
+    cannot tell them apart, so the note names both and withholds no verdict: a uniform 10 %
+    offset on a rig of SD proportional to value^1.5 (24 conditions x 3 days) brought the note
+    in 9 of 20 tables, where it had withheld the uniform bias."""
+    sp = dg.replicate_spread(u)
+    if sp is None or not sp["p"] < alpha:
+        return "", False
+    return (f"; the replicate rows (no measured SD) scatter about their conditions' means unevenly: "
+            f"{sp['widest_percent']:.2g} % in the widest condition, {sp['narrowest_percent']:.2g} % in the "
+            f"narrowest, {sp['replicate_percent']:.2g} % pooled (Bartlett's test on {sp['dof'][0]} degrees of freedom, "
+            f"p {sp['p']:.2g}), which a uniform bias does not cause but either of two things does: stones met in "
+            "some replicates and not others, or rig noise that is neither one share of the value nor one floor; "
+            "these rows cannot tell the two apart (a measured SD per row does), and if it is stones, a row raised "
+            "far off looks within the uncertainty against that scatter"), True
 
 
 def _aicc_undefined(s) -> bool:
@@ -1002,6 +1025,9 @@ def analyse(soil: str, res: pd.DataFrame, diag: pd.DataFrame, cands: list, effec
         chi, dof, p_about = _scatter_about_holm(res, sv, diag, settings.alpha)
         where = ("the model throughout, a uniform bias (an instrument's calibration, a zero offset) that no "
                  "mechanism of the library carries; ")
+        if _replicate_spread(u, settings.alpha)[1]:  # uneven spread: stones or the rig's noise form (noted below)
+            nuisance = (nuisance[0], nuisance[1], nuisance[2] + "; its replicates scatter unevenly across "
+                        "conditions (stones, or rig noise neither one share of the value nor one floor)")
         if p_about < settings.alpha:  # the rows are not shifted alike: no uniform bias
             nuisance = (nuisance[0], nuisance[1], "fitted alone: the mean offset of the rows, the calibrated model "
                         "times (1 + s); they scatter about it beyond their uncertainty (no uniform bias)")
@@ -1173,12 +1199,17 @@ def analyse(soil: str, res: pd.DataFrame, diag: pd.DataFrame, cands: list, effec
                         + _far_off(diag))
             nuisance = (nuisance[0], nuisance[1], "fitted alone: the mean offset of the rows, the calibrated model "
                         "times (1 + s); they scatter about it beyond their uncertainty (no uniform bias)")
+        elif _replicate_spread(u, settings.alpha)[1]:  # uneven spread: stones or the rig's noise form (noted below)
+            nuisance = (nuisance[0], nuisance[1], nuisance[2] + "; its replicates scatter unevenly across "
+                        "conditions (stones, or rig noise neither one share of the value nor one floor)")
     if sel is not None:
         verdict += _unscored(sel, u, settings.alpha)
     matched = dg.matched_quantities(diag) if len(diag) else set()
     for nm, why in (skipped_effects or {}).items():  # those the structure (or candidates: all) would have tried
         if settings.candidates == "all" or matched & set(EFFECTS[nm].signature):
             verdict += f"; {nm} {why}"
+    if n >= 3 and not verdict.startswith("no "):
+        verdict += _replicate_spread(u, settings.alpha)[0]
     for hint in constant_hints(u) + unit_hints(u):
         verdict += f"; {hint}"
     per_test = dg.per_test(u)  # table rows; the trend tests take one value per measured condition
