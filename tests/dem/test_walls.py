@@ -1319,8 +1319,9 @@ def test_a_floor_of_small_faces_rising_over_the_period_beside_a_large_stone_is_r
     mats = table(e=0.5, mu=0.3, E=1e8)
     for slope in (1.5e-5, 0.0):
         sim = Simulation(mats, gravity=(0, 0, 0), box=(0, L, 0, W), periodic=(True, False))
-        sim.add_mesh(np.c_[X.ravel(), Y.ravel(), 0.1 + slope * X.ravel()], tri, "soil",
-                     name="floor")
+        v = np.c_[X.ravel(), Y.ravel(), 0.1 + slope * X.ravel()]
+        # rising, as a binary STL stores it (float32): each face's tilt within its rounding
+        sim.add_mesh(v.astype(np.float32) if slope else v, tri, "soil", name="floor")
         sim.add_particles([(L / 2, W / 2, 0.15)], 0.02, "soil")
         if stone_first:
             sim.compute_forces()
@@ -1329,13 +1330,13 @@ def test_a_floor_of_small_faces_rising_over_the_period_beside_a_large_stone_is_r
         if slope:
             with pytest.raises(InputError, match=r"walls\.floor.*one period away.*a step") as err:
                 sim.compute_forces()
-            # the limit printed is the one the text names: 2e-4 R_min = 3e-7 m (the float32
-            # ulps of coordinates up to 0.21 m, 1e-7 m, are smaller)
-            m = re.search(r"within (\S+) m \(max\(2e-4 R_min = (\S+) m, 4 float32 ulps of the "
-                          r"coordinates = (\S+) m\)", str(err.value))
+            # the limit printed is the one the text names: 2e-4 R_min = 3e-7 m (4 float32
+            # ulps of coordinates up to 0.21 m, 8 x 2^-24 x 0.21 m = 1e-7 m, are smaller)
+            m = re.search(r"within (\S+) m \(max\(2e-4 R_min = (\S+) m, 4 ulps of the "
+                          r"coordinates as stored = (\S+) m\)", str(err.value))
             assert m is not None, str(err.value)
             assert float(m[1]) == float(m[2]) == pytest.approx(2e-4 * r, rel=1e-3)
-            assert float(m[3]) == pytest.approx(4.8e-7 * (L + 0.01), rel=5e-3)  # 3 digits
+            assert float(m[3]) == pytest.approx(8 * 2.0 ** -24 * (L + 0.01), rel=5e-3)
         else:
             f = np.linalg.norm(sim.compute_forces()[0][sim.p.r == r], axis=1)
             assert f == pytest.approx([_hertz_wall_force(mats, r, 0.01 * r)] * 2, rel=1e-6)
@@ -1417,3 +1418,68 @@ def test_a_wall_tilted_along_the_periodic_axis_by_a_step_a_contact_feels_is_refu
             else:
                 f = np.linalg.norm(sim.compute_forces()[0][0])
                 assert f == pytest.approx(_hertz_wall_force(mats, R, R - dist(x)), rel=1e-6)
+
+
+def _far_floor(rise):
+    """A floor z = 0.1 + rise (x - 100) / 0.2 over x = 100 .. 100.2 m, y = 0 .. 0.02 m."""
+    X, Y = np.meshgrid(np.linspace(100.0, 100.2, 3), [0.0, 0.02])
+    v = np.c_[X.ravel(), Y.ravel(), 0.1 + rise * (X.ravel() - 100.0) / 0.2]
+    return v, np.array([[0, 1, 4], [0, 4, 3], [1, 2, 5], [1, 5, 4]])
+
+
+def _far_sim():
+    sim = Simulation(table(e=0.5, mu=0.3, E=1e8), gravity=(0, 0, 0), box=(100.0, 100.2, 0, 0.02),
+                     periodic=(True, False))
+    sim.add_particles([(100.1, 0.01, 0.101)], 1e-3, "soil")
+    return sim
+
+
+@pytest.mark.parametrize("how", ["array", "ascii", "binary"])
+def test_a_floor_far_from_the_origin_is_forgiven_the_rounding_of_its_storage_only(how, tmp_path):
+    """A floor over x = 100 .. 100.2 m rising 20 um over the period: a sphere of R = 1 mm
+    crossing the boundary lands 20 um deeper or shallower (its 0.01 R overlap doubled or
+    gone), 100 times the limit 2e-4 R_min = 0.2 um.  Four float32 ulps at x = 100 m are
+    8 x 2^-24 x 100 m = 48 um, which was forgiven whatever the mesh was stored in: the floor
+    was accepted.  Given as float64 arrays, or as an ASCII STL whose numbers carry 17
+    digits, it is refused; written as binary STL (float32 vertices: 100.1 m is stored 3.1 um
+    off, so a face's rise of 20 um is within the rounding) it is accepted."""
+    from soilcal.dem.stl import write_stl
+
+    v, t = _far_floor(20e-6)
+    sim = _far_sim()
+    if how == "array":
+        sim.add_mesh(v, t, "soil", name="floor")
+    else:
+        write_stl(tmp_path / "f.stl", v, t, binary=how == "binary")
+        sim.add_stl(tmp_path / "f.stl", "soil", name="floor")
+    if how == "binary":
+        sim.compute_forces()
+    else:
+        with pytest.raises(InputError, match=r"walls\.floor.*rising 2(\.\d*)?e-05 m over the period"):
+            sim.compute_forces()
+    # level, it is accepted whichever way it was given
+    sim = _far_sim()
+    sim.add_mesh(*_far_floor(0.0), "soil", name="floor")
+    sim.compute_forces()
+
+
+def test_read_stl_gives_each_vertex_the_rounding_its_file_stored_it_with(tmp_path):
+    """Binary STL: float32, |fl(x) - x| <= 2^-24 |x|; ASCII: half the last digit the
+    writer's format keeps (%e with 6 decimals: 5e-7 of the leading digit; %f with 4
+    decimals: 5e-5 m), times ``scale``."""
+    from soilcal.dem.stl import read_stl, write_stl
+
+    v = np.array([[100.0, 0.0, 0.1], [100.2, 0.0, 0.1], [100.0, 0.02, 0.1]])
+    t = np.array([[0, 1, 2]])
+    write_stl(tmp_path / "b.stl", v, t)
+    vb, _, rd = read_stl(tmp_path / "b.stl", rounding=True)
+    assert rd == pytest.approx(2.0 ** -24 * np.abs(vb).max(axis=1), rel=1e-12)
+    for fmt, want in (("{:.6e}", 0.5e-6 * 100), ("{:.4f}", 0.5e-4)):
+        lines = ["solid s", "facet normal 0 0 1", "outer loop"]
+        lines += ["vertex " + " ".join(fmt.format(c) for c in p) for p in v]
+        lines += ["endloop", "endfacet", "endsolid s"]
+        (tmp_path / "a.stl").write_text("\n".join(lines) + "\n")
+        _, _, rd = read_stl(tmp_path / "a.stl", rounding=True)
+        assert rd == pytest.approx([want] * 3, rel=1e-9)
+        _, _, rd = read_stl(tmp_path / "a.stl", scale=1e-3, rounding=True)
+        assert rd == pytest.approx([1e-3 * want] * 3, rel=1e-9)

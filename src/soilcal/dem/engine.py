@@ -775,12 +775,19 @@ class Simulation:
                              [(DISK, vals, 0b1, 0b10)], velocity, omega, c)
 
     def add_mesh(self, vertices, triangles, material, name=None, velocity=(0, 0, 0),
-                 omega=(0, 0, 0), centre=None, facets=None) -> int:
+                 omega=(0, 0, 0), centre=None, facets=None, rounding=None) -> int:
         """Triangle mesh wall (boxes, STL tools); one primitive per triangle.  ``omega``
         turns it about ``centre``, by default the mean of its vertices (the axis of a drum,
         the middle of a box; give the shaft of a paddle or blade explicitly).  ``facets``:
         each triangle's facet index in its STL file (``read_stl(path, facets=True)``, which
-        leaves out facets without area), by which a refused face is named."""
+        leaves out facets without area), by which a refused face is named.  ``rounding``:
+        how far each vertex [nv] (or all, one number) may lie from where it was drawn, as
+        the file stored it [m] (``read_stl(path, rounding=True)``: half a float32 ulp of
+        each coordinate in a binary STL, half the last digit written in an ASCII one); by
+        default the unit roundoff of the vertices' own type (float32: 2^-24 |x|, float64),
+        float32 also where every coordinate is a float32 number (a binary STL read unscaled).  The checks of
+        a periodic box forgive a face that much tilt and step, no more."""
+        raw = vertices
         v = _rows(self.source, "walls.mesh.vertices", vertices, None, "vertices [m]")
         t = np.asarray(triangles)
         if (t.ndim != 2 or t.shape[1] != 3 or t.size == 0 or not np.issubdtype(t.dtype, np.integer)
@@ -804,12 +811,56 @@ class Simulation:
                 raise InputError(self.source, "walls.mesh.facets",
                                  f"one whole facet index >= 0 per triangle ({len(t)})",
                                  f"an array of shape {fa.shape} and type {fa.dtype}")
+        if rounding is None:
+            # the vertices' own type: float32 (a binary STL's, kept, or read by read_stl into
+            # float64 unchanged: every coordinate a float32 number) or float64
+            kind = np.asarray(raw).dtype
+            ftype = kind if np.issubdtype(kind, np.floating) else np.dtype(np.float64)
+            if ftype == np.float64 and np.array_equal(v.astype(np.float32).astype(float), v):
+                ftype = np.dtype(np.float32)
+            # the unit roundoff: |fl(x) - x| <= eps / 2 |x|
+            rd = 0.5 * float(np.finfo(ftype).eps) * np.abs(v).max(axis=1)
+        else:
+            rd = np.asarray(rounding, dtype=float) if np.ndim(rounding) else np.full(
+                len(v), float(rounding) if isinstance(rounding, (int, float, np.number))
+                and not isinstance(rounding, bool) else np.nan)
+            if rd.shape != (len(v),) or not np.all(np.isfinite(rd)) or np.any(rd < 0):
+                raise InputError(self.source, "walls.mesh.rounding",
+                                 f"one distance >= 0 [m] per vertex ({len(v)}) or one for all",
+                                 f"{rounding!r}" if np.ndim(rounding) == 0 else
+                                 f"an array of shape {np.shape(rounding)}")
         c = v.mean(axis=0) if centre is None else centre
         w = self.add_wall(name or f"mesh{len(self.walls.names)}", material,
                           [(TRIANGLE, row, 0b111, 0) for row in rows], velocity, omega, c)
         if facets is not None:
             self.__dict__.setdefault("_mesh_facets", {})[w] = fa.astype(np.int64)
+        # each face's: the largest of its corners'
+        self.__dict__.setdefault("_mesh_rounding", {})[w] = rd[t].max(axis=1)
         return w
+
+    def add_stl(self, path, material, scale=1.0, weld_tol=0.0, **kw) -> int:
+        """An STL file as a mesh wall (:func:`soilcal.dem.stl.read_stl`, then
+        :meth:`add_mesh` with its facets and the rounding the file stored its vertices
+        with); ``kw`` as :meth:`add_mesh` takes them."""
+        from soilcal.dem.stl import read_stl
+
+        v, t, fa, rd = read_stl(path, scale=scale, weld_tol=weld_tol, facets=True,
+                                rounding=True)
+        return self.add_mesh(v, t, material, facets=fa, rounding=rd, **kw)
+
+    def _rounding(self) -> np.ndarray:
+        """How far each primitive's stored coordinates may lie from where they were drawn
+        [m]: a mesh face's as add_mesh recorded it, else the float64 unit roundoff of its
+        largest number."""
+        wa = self._warr
+        par = wa["prim_par"]
+        out = (0.5 * float(np.finfo(np.float64).eps) * np.abs(par).max(axis=1) if par.size
+               else np.zeros(0))
+        for w, rd in self.__dict__.get("_mesh_rounding", {}).items():
+            k = np.flatnonzero(wa["prim_wall"] == w)
+            if k.size == rd.size:
+                out[k] = rd
+        return out
 
     def add_box(self, lo, hi, material, name=None, velocity=(0, 0, 0), omega=(0, 0, 0)) -> int:
         """Closed box surface as a triangle mesh (particles outside or inside)."""
@@ -1117,7 +1168,8 @@ class Simulation:
         tiles) that fail alone are judged as one surface.  Otherwise a sphere beside one
         boundary would miss the contacts across it, or, outside the box, every contact.  A
         plane must be parallel to the periodic axes, rising over a period by at most
-        max(2e-4 R_min, 4 float32 ulps of the box) (R_min the smallest radius, whose contacts
+        max(2e-4 R_min, 4 ulps of its coordinates as stored: float32 for a binary STL, the
+        last digit of an ASCII one, float64 for arrays and analytic walls) (R_min the smallest radius, whose contacts
         a step changes most).  A moving wall is checked over the
         ``steps`` of the run: its extent swept by its velocity, its sections over the planes
         its motion along x carries past, and the sphere of its reach about its centre when it
@@ -1132,10 +1184,15 @@ class Simulation:
             if not self.periodic[q]:
                 continue
             lo, hi = float(self.box[2 * q]), float(self.box[2 * q + 1])
-            eps = max(2e-4 * rho, 4.8e-7 * max(abs(lo), abs(hi)))
+            # 4 ulps of the coordinates as they were stored (8 unit roundoffs: a binary STL's
+            # float32, an ASCII STL's last digit, float64 arrays and analytic walls)
+            res = self._rounding()
+            eps = max(2e-4 * rho, 8.0 * float(res.max()),
+                      4.0 * float(np.finfo(np.float64).eps) * max(abs(lo), abs(hi)))
             # the largest rise over the period of a flat face along q (plane, rectangle,
-            # triangle alike): 2e-4 of the smallest radius, whose contacts a step changes most
-            eps_p = max(2e-4 * float(self.p.r.min()), 4.8e-7 * max(abs(lo), abs(hi)))
+            # triangle alike): 2e-4 of the smallest radius, whose contacts a step changes
+            # most, or 4 ulps of the face's own coordinates as stored, per primitive
+            eps_p = np.maximum(2e-4 * float(self.p.r.min()), 8.0 * res)
             nw = wa["wall_vel"].shape[0]
             a_w, b_w = np.full(nw, np.inf), np.full(nw, -np.inf)
             bad = np.zeros(nw, dtype=bool)  # a primitive near a boundary that is not parallel
@@ -1148,13 +1205,14 @@ class Simulation:
                 # overlap of 0.01 R = 50 um by 12 % at R = 5 mm, its Hertz force by 16 %)
                 par = par_all[k]
                 rise = float(_rise(par[3 + q], hi - lo))
-                if rise > eps_p:
+                if rise > eps_p[k]:
                     name = self.walls.names[walls_of[k]]
                     raise InputError(
                         self.source, f"walls.{name}",
                         f"a plane parallel to {names[q]} in a box periodic in {names[q]}, its "
-                        f"rise over the period ({hi - lo:.6g} m) within {eps_p:.3g} m "
-                        f"(max(2e-4 R_min, 4 float32 ulps of the box); a sphere crossing the "
+                        f"rise over the period ({hi - lo:.6g} m) within {eps_p[k]:.3g} m "
+                        f"(max(2e-4 R_min, 4 ulps of its coordinates as stored, float64); a "
+                        f"sphere crossing the "
                         f"boundary would land deeper in it or farther from it; wall contacts "
                         f"do not see periodic images)",
                         f"normal {par[3:6].tolist()}: a rise of {rise:.4g} m")
@@ -1182,16 +1240,16 @@ class Simulation:
                     # of that are forgiven before the rise is taken (a level floor of 2 mm
                     # triangles at z = 0.1 m reads back with slopes of ~3e-6, 1 um over a
                     # 0.4 m period), at most 1e-3 (a face across the axis stays one)
-                    ulp = np.spacing(np.abs(par[:, :9]).max(axis=1).astype(np.float32)).astype(float)
+                    ulp = 2.0 * res[ks[tri]]  # as stored: float32, ASCII digits, float64
                     edges = (np.linalg.norm(par[:, 3:6] - par[:, 0:3], axis=1)
                              + np.linalg.norm(par[:, 6:9] - par[:, 0:3], axis=1))
                     noise = np.nan_to_num(np.minimum(2.0 * ulp * edges / nn, 1e-3), nan=0.0)
                     unit[tri] = n / nn[:, None]
                 rises[tri] = _rise(np.maximum(nq - noise, 0.0), hi - lo)
-                flat[tri] = rises[tri] <= eps_p
+                flat[tri] = rises[tri] <= eps_p[ks[tri]]
             for i in np.flatnonzero(~tri):
                 a[i], b[i], flat[i] = _extent_along(kinds[ks[i]], par_all[ks[i]], q, eps,
-                                                    hi - lo, eps_p)
+                                                    hi - lo, float(eps_p[ks[i]]))
                 if kinds[ks[i]] == RECTANGLE:
                     unit[i] = par_all[ks[i], 3:6]
                     rises[i] = _rise(par_all[ks[i], 3 + q], hi - lo)
@@ -1232,8 +1290,8 @@ class Simulation:
                     continue  # clear of both boundaries
                 why = ("a face within the largest radius of a boundary that does not run "
                        f"along {names[q]}" + (f" (a flat face rising over the period by more "
-                       f"than {eps_p:.3g} m, max(2e-4 R_min, 4 float32 ulps of the box), as a "
-                       f"plane would)" if tilted[w] else "")
+                       f"than {eps_p[ks[w_of == w]].min():.3g} m, max(2e-4 R_min, 4 ulps of "
+                       f"its coordinates as stored), as a plane would)" if tilted[w] else "")
                        + f", {self._face_at_fault(q, w, ks, w_of, off_of, turn_of, unit, rises)}"
                        if bad[w] else None)
                 if why is None:
@@ -1272,7 +1330,7 @@ class Simulation:
         """The first face of wall ``w`` refused near a periodic boundary, in words: its index
         among the wall's faces (a mesh's triangle index, as add_mesh was given them), its
         kind, and for a flat face its unit normal and rise over the period (after forgiving
-        the tilt float32 rounding of a triangle's vertices gives it)."""
+        the tilt the stored rounding of a triangle's vertices gives it)."""
         kinds, walls_of = self._warr["prim_kind"], self._warr["prim_wall"]
         j = int(np.flatnonzero(off & (w_of == w))[0])
         k = int(ks[j])
@@ -1316,11 +1374,11 @@ class Simulation:
         and no sphere centre lies inside or on such an end face (seen along q) at the run's
         start (:meth:`_spheres_enclosed`, judged again at every run; the open space that
         closed outlines surround, a duct's cavity or a tunnel beside a ridge, is free).  Sections are compared
-        per material within max(2e-4 rho, 4 float32 ulps of the coordinates), as walls.py
+        per material within max(2e-4 rho, 4 ulps of the coordinates as stored), as walls.py
         joins tiles: every point of the pieces of each within that distance of a piece of
         the other (:func:`_covered`; pieces shorter than it left out), circles by centre and
         radius; the sections exactly one period apart (q = lo and hi), which a sphere crossing
-        the boundary meets in turn, within max(2e-4 R_min, 4 float32 ulps), the limit of a
+        the boundary meets in turn, within max(2e-4 R_min, 4 ulps as stored), the limit of a
         flat face's rise over the period."""
         wa = self._warr
         lo, hi = float(self.box[2 * q]), float(self.box[2 * q + 1])
@@ -1328,16 +1386,18 @@ class Simulation:
         prims = ks[sel & flat]
         par = wa["prim_par"][prims]
         shift = float(wa["wall_vel"][walls[0], q]) * span
-        scale = float(np.abs(par[:, :9]).max()) if par.size else 0.0
-        tol = max(2e-4 * rho, 4.8e-7 * scale)
+        # 4 ulps of the faces' coordinates as stored (8 unit roundoffs: float32 for a
+        # binary STL, the last digit of an ASCII one, float64 for arrays)
+        ulps = 8.0 * float(self._rounding()[prims].max()) if prims.size else 0.0
+        tol = max(2e-4 * rho, ulps)
         # one period on, the section a sphere crossing the boundary meets in place of the
         # one at lo: the step between them is judged as a flat face's rise over the period
-        # is, within max(2e-4 R_min, 4 float32 ulps of the coordinates) (the tilt float32
+        # is, within max(2e-4 R_min, 4 ulps of the coordinates as stored) (the tilt the
         # rounding gives a small face is forgiven face by face, a rise of the whole surface
         # is not)
-        tol_end = max(2e-4 * float(self.p.r.min()), 4.8e-7 * max(scale, abs(lo), abs(hi)))
+        tol_end = max(2e-4 * float(self.p.r.min()), ulps)
         # the answer depends on R_min through tol_end: spheres added later change it
-        key = (q, tuple(walls), rho, eps, tol_end, shift, lo, hi, hash(par.tobytes()))
+        key = (q, tuple(walls), rho, eps, tol, tol_end, shift, lo, hi, hash(par.tobytes()))
         # walls at rest keep their answer (a moving wall is elsewhere at the next run)
         still = not (np.any(wa["wall_vel"][walls] != 0) or np.any(wa["wall_omega"][walls] != 0))
         cache = self.__dict__.setdefault("_periodic_cache", {}) if still else {}
@@ -1357,11 +1417,11 @@ class Simulation:
         why = None
         end = sec.at(hi - sp)
         if not sec.same(end, ref, min(tol, tol_end)):
-            r_min, ulp_end = float(self.p.r.min()), 4.8e-7 * max(scale, abs(lo), abs(hi))
-            limit = (f"max(2e-4 R_min = {2e-4 * r_min:.3g} m, 4 float32 ulps of the "
-                     f"coordinates = {ulp_end:.3g} m)" if tol_end <= tol else
-                     f"max(2e-4 R_max = {2e-4 * rho:.3g} m, 4 float32 ulps of the faces' "
-                     f"coordinates = {4.8e-7 * scale:.3g} m), within which any two sections "
+            r_min = float(self.p.r.min())
+            limit = (f"max(2e-4 R_min = {2e-4 * r_min:.3g} m, 4 ulps of the coordinates as "
+                     f"stored = {ulps:.3g} m)" if tol_end <= tol else
+                     f"max(2e-4 R_max = {2e-4 * rho:.3g} m, 4 ulps of the faces' "
+                     f"coordinates as stored = {ulps:.3g} m), within which any two sections "
                      f"are compared")
             why = (f"its faces at {ax} = {hi - sp:.6g} m ({sec.describe(end)}) are not those "
                    f"one period away at {ax} = {lo - sp:.6g} m ({sec.describe(ref)}) within "

@@ -71,12 +71,41 @@ def write_stl(path, vertices, triangles, binary=True, name="soilcal"):
         path.write_text("\n".join(lines) + "\n", encoding="ascii")
 
 
+def _digits(s: str):
+    """``(place, lead)``: the decimal exponents of the last and the first non-zero digit of
+    the number ``s`` as written (``1.250e-03``: -6, -3; ``0.1``: -1, -1; zero: lead None)."""
+    m = re.match(r"^[-+]?(\d*)(?:\.(\d*))?(?:[eE]([-+]?\d+))?$", s)
+    if m is None:  # nan, inf: refused later as not finite
+        return 0, None
+    whole, frac, e = m.group(1) or "", m.group(2) or "", int(m.group(3) or 0)
+    place = e - len(frac)
+    digits = (whole + frac).lstrip("0")
+    return place, (place + len(digits) - 1 if digits else None)
+
+
+def _ascii_rounding(words) -> np.ndarray:
+    """How far each number written in ``words`` may lie from the one it stands for: its
+    writer's resolution, read off the file as a whole (a number written shorter had zeros
+    there, as shortest-repr and %g writers leave them out): the most significant digits any
+    number has (%e, %g, repr: a relative resolution) or the most decimals any has (%f: an
+    absolute one), whichever is coarser for the number, half of it, and never more than half
+    its own last digit."""
+    pl = np.array([_digits(w) for w in words], dtype=object)
+    place = pl[:, 0].astype(float)
+    lead = np.array([np.nan if v is None else v for v in pl[:, 1]], dtype=float)
+    sig = np.nanmax(lead - place) + 1 if np.any(np.isfinite(lead)) else 1.0
+    decimals = -place.min()
+    rel = np.where(np.isfinite(lead), lead - sig + 1, -np.inf)
+    fmt = np.maximum(rel, -decimals)
+    return 0.5 * 10.0 ** np.minimum(fmt, place)
+
+
 def _parse_ascii(path, text):
     toks = text.split()
     if not toks or toks[0].lower() != "solid":
         raise InputError(path, "STL", "binary STL of 84 + 50 n bytes or ASCII STL starting "
                          "with 'solid'", "neither")
-    tris = []
+    tris, digits = [], []
     i = 1
     # skip the solid name (until the first 'facet' or 'endsolid')
     while i < len(toks) and toks[i].lower() not in ("facet", "endsolid"):
@@ -105,14 +134,22 @@ def _parse_ascii(path, text):
         if not all(num.match(s) for s in vals + chunk[2:5]):
             raise InputError(path, f"facet {len(tris)} coordinates", "numbers", vals)
         tris.append([float(s) for s in vals])
+        digits.extend(vals)
         i += 21
     if not ended:
         raise InputError(path, "endsolid", "'endsolid' closing the solid", "truncated file")
-    return np.array(tris, dtype=np.float64).reshape(-1, 3, 3)
+    tri = np.array(tris, dtype=np.float64).reshape(-1, 3, 3)
+    # a number written with more digits than float64 holds is read to float64's roundoff
+    res = np.maximum(_ascii_rounding(digits).reshape(-1, 3, 3) if digits else tri * 0.0,
+                     0.5 * float(np.finfo(np.float64).eps) * np.abs(tri))
+    return tri, res
 
 
-def read_stl_soup(path):
-    """Triangle soup ``float64[nt, 3, 3]`` from a binary or ASCII STL file."""
+def read_stl_soup(path, rounding=False):
+    """Triangle soup ``float64[nt, 3, 3]`` from a binary or ASCII STL file; ``rounding=True``
+    returns also how far each coordinate may lie from the number it stands for
+    ``float64[nt, 3, 3]``: the unit roundoff of float32 (2^-24 |x|) in a binary file, half
+    the last digit written in an ASCII one (``0.1`` 0.05, ``1.250e-03`` 5e-7)."""
     path = Path(path)
     try:
         data = path.read_bytes()
@@ -127,6 +164,8 @@ def read_stl_soup(path):
                 raise InputError(path, "vertices", "finite coordinates", "NaN or inf")
             if n == 0:
                 raise InputError(path, "triangle count", "at least one triangle", 0)
+            if rounding:
+                return tri, 0.5 * float(np.finfo(np.float32).eps) * np.abs(tri)
             return tri
     head = data[:5].lower()
     if head != b"solid":
@@ -141,12 +180,12 @@ def read_stl_soup(path):
     except UnicodeDecodeError:
         raise InputError(path, "STL", "ASCII text after 'solid' (or a binary STL of "
                          "84 + 50 n bytes)", "non-ASCII bytes") from None
-    tri = _parse_ascii(path, text)
+    tri, res = _parse_ascii(path, text)
     if tri.shape[0] == 0:
         raise InputError(path, "triangle count", "at least one facet", 0)
     if not np.all(np.isfinite(tri)):
         raise InputError(path, "vertices", "finite coordinates", "NaN or inf")
-    return tri
+    return (tri, res) if rounding else tri
 
 
 def weld(soup, weld_tol=0.0, facets=False):
@@ -193,13 +232,18 @@ def without_area(corners) -> np.ndarray:
     return ~(area2 > 1e-12 * np.maximum((e1 ** 2).sum(axis=1), (e2 ** 2).sum(axis=1)))
 
 
-def read_stl(path, scale=1.0, weld_tol=0.0, facets=False):
+def read_stl(path, scale=1.0, weld_tol=0.0, facets=False, rounding=False):
     """Read an STL file into ``(vertices float64[nv, 3], triangles int64[nt, 3])``,
     coordinates multiplied by ``scale``.  Facets without area are left out (:func:`weld`), so
     triangle k need not be the file's facet k: ``facets=True`` returns also each triangle's
     facet index in the file, ``(vertices, triangles, facets int64[nt])``; give it to
     :meth:`soilcal.dem.engine.Simulation.add_mesh` (``facets=``) and a refused face is named
-    by its facet in the file."""
+    by its facet in the file.  ``rounding=True`` returns also how far each vertex may lie
+    from where it was drawn, the largest over its coordinates (and its welded copies)
+    ``float64[nv]`` [m, times ``scale``]: half a float32 ulp (2^-24 |x|) in a binary file,
+    half the last digit written in an ASCII one; give it to ``add_mesh(rounding=)``, or use
+    :meth:`soilcal.dem.engine.Simulation.add_stl`, and a periodic box forgives a face that
+    much and no more."""
     try:
         tol = float(weld_tol)
     except (TypeError, ValueError):
@@ -207,7 +251,8 @@ def read_stl(path, scale=1.0, weld_tol=0.0, facets=False):
     if not (math.isfinite(tol) and tol >= 0):
         raise InputError(path, "weld_tol", "a welding distance >= 0 (0: identical corners only)",
                          weld_tol)
-    soup = read_stl_soup(path) * float(scale)
+    soup, res = read_stl_soup(path, rounding=True)
+    soup, res = soup * float(scale), res * abs(float(scale))
     try:
         v, t, kept = weld(soup, tol, facets=True)
     except ValueError as exc:
@@ -215,4 +260,10 @@ def read_stl(path, scale=1.0, weld_tol=0.0, facets=False):
             from None
     if t.shape[0] == 0:
         raise InputError(path, "triangles", "at least one non-degenerate triangle", 0)
-    return (v, t, kept) if facets else (v, t)
+    out = (v, t, kept) if facets else (v, t)
+    if rounding:
+        # each vertex: the largest over its coordinates and the corners welded into it
+        rv = np.zeros(v.shape[0])
+        np.maximum.at(rv, t.ravel(), res[kept].max(axis=2).ravel())
+        out = (*out, rv)
+    return out
