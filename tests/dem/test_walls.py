@@ -1483,3 +1483,11 @@ def test_read_stl_gives_each_vertex_the_rounding_its_file_stored_it_with(tmp_pat
         assert rd == pytest.approx([want] * 3, rel=1e-9)
         _, _, rd = read_stl(tmp_path / "a.stl", scale=1e-3, rounding=True)
         assert rd == pytest.approx([1e-3 * want] * 3, rel=1e-9)
+
+
+@pytest.mark.parametrize("bad", [[1e-9, 1e-9], -1e-9, float("nan"), "1e-9", True])
+def test_a_mesh_rounding_that_is_not_one_distance_per_vertex_is_refused(bad):
+    sim = _far_sim()
+    v, t = _far_floor(0.0)
+    with pytest.raises(InputError, match=r"walls\.mesh\.rounding.*one distance >= 0"):
+        sim.add_mesh(v, t, "soil", rounding=bad)
