@@ -1491,3 +1491,42 @@ def test_a_mesh_rounding_that_is_not_one_distance_per_vertex_is_refused(bad):
     v, t = _far_floor(0.0)
     with pytest.raises(InputError, match=r"walls\.mesh\.rounding.*one distance >= 0"):
         sim.add_mesh(v, t, "soil", rounding=bad)
+
+
+def test_an_end_face_bridging_the_gap_between_two_bars_on_the_boundary_is_refused():
+    """Two bars along x spanning the period (y 0.01 .. 0.02 and 0.03 .. 0.04 m, z 0 .. 0.01
+    m), their end faces on x = 0 and x = L, and on each boundary one more end triangle with
+    corners (y, z) = (0.01, 0), (0.04, 0), (0.04, 0.002) m: each corner lies on a bar's
+    outline, but the triangle spans the open gap y 0.02 .. 0.03 between them.  A 1 mm sphere
+    in that gap beside x = 0, touching nothing of the periodic bars, was pushed by that face
+    (8.3 N along x).  The face is refused, naming the point (0.025, 0) of its edge outside
+    both outlines; without the bridging triangles the bars are accepted and the sphere feels
+    nothing."""
+    L = 0.1
+
+    def bar(y0, y1, z0=0.0, z1=0.01):
+        out = []
+        for (ya, za), (yb, zb) in (((y0, z0), (y1, z0)), ((y1, z0), (y1, z1)),
+                                   ((y1, z1), (y0, z1)), ((y0, z1), (y0, z0))):
+            out += _quad([0, ya, za], [L, ya, za], [L, yb, zb], [0, yb, zb])
+        return out
+
+    for bridge in (True, False):
+        tris = bar(0.01, 0.02) + bar(0.03, 0.04)
+        for x in (0.0, L):
+            tris += _quad([x, 0.01, 0], [x, 0.02, 0], [x, 0.02, 0.01], [x, 0.01, 0.01])
+            tris += _quad([x, 0.03, 0], [x, 0.04, 0], [x, 0.04, 0.01], [x, 0.03, 0.01])
+            if bridge:
+                tris += [[[x, 0.01, 0.0], [x, 0.04, 0.0], [x, 0.04, 0.002]]]
+        tris = np.array(tris, float)
+        sim = Simulation(table(E=1e8), gravity=(0, 0, 0), box=(0, L, 0, 0.05),
+                         periodic=(True, False))
+        sim.add_particles([[0.0005, 0.025, 0.0015]], 1e-3, "soil")
+        sim.add_mesh(tris.reshape(-1, 3), np.arange(tris.shape[0] * 3).reshape(-1, 3), "soil",
+                     name="bars")
+        if bridge:
+            with pytest.raises(InputError, match=r"walls\.bars.*an edge \(bridging open space.*"
+                               r"\(y, z\) = \(0\.025, 0\) m"):
+                sim.compute_forces()
+        else:
+            assert np.all(sim.compute_forces()[0][0] == 0)

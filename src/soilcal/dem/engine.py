@@ -492,6 +492,38 @@ def _inside_caps(pts, caps, tol, block: int = 500_000) -> np.ndarray:
     return out
 
 
+def _edge_outside(poly, loops, face, circ, tol):
+    """A point of the edges of the polygon ``poly`` [m, 2] (closed) outside every closed
+    outline (:func:`_enclosed`), or None: each edge is cut where it crosses a piece of
+    ``loops`` or a circle of ``circ``, and the middle of each part tested (an end face whose
+    corners lie in two solids bridges the open space between them)."""
+    for a, b in zip(poly, np.roll(poly, -1, axis=0)):
+        d = b - a
+        ts = [0.0, 1.0]
+        if loops.shape[0]:
+            e0, e = loops[:, 0], loops[:, 1] - loops[:, 0]
+            den = d[0] * e[:, 1] - d[1] * e[:, 0]
+            g = e0 - a
+            ok = np.abs(den) > 1e-300
+            den = np.where(ok, den, 1.0)
+            t = (g[:, 0] * e[:, 1] - g[:, 1] * e[:, 0]) / den
+            u = (g[:, 0] * d[1] - g[:, 1] * d[0]) / den
+            ts += t[ok & (t > 0) & (t < 1) & (u >= 0) & (u <= 1)].tolist()
+        for cx, cy, r in circ:
+            w = a - (cx, cy)
+            qa, qb, qc = d @ d, 2 * (w @ d), w @ w - r * r
+            disc = qb * qb - 4 * qa * qc
+            if qa > 0 and disc > 0:
+                ts += [t for t in ((-qb - disc ** 0.5) / (2 * qa), (-qb + disc ** 0.5) / (2 * qa))
+                       if 0 < t < 1]
+        ts = np.unique(ts)
+        for m in 0.5 * (ts[1:] + ts[:-1]):
+            pt = a + m * d
+            if not _enclosed(pt, loops, face, circ, tol):
+                return pt
+    return None
+
+
 def _enclosed(p, loops, face, circ, tol) -> bool:
     """Whether point ``p`` (2) lies inside or on (within ``tol``) a closed outline of
     ``loops`` [k, 2, 2] (those of one face ``face`` [k] crossing a ray from p an odd number
@@ -1366,7 +1398,8 @@ class Simulation:
         the slab, a floor ending on the boundary).  A section changes only at a corner or a
         cylinder's end along q: it is taken there and halfway between.  An end face lying on
         a boundary (the cap of a closed solid spanning the period) is met at its rim only when
-        every corner of it (32 points round a disk's rim) lies inside or on a closed outline
+        every corner of it (32 points round a disk's rim) and every point of its edges
+        (:func:`_edge_outside`) lies inside or on a closed outline
         of the section there (:func:`_closed_outline`: the bounded faces of the planar graph
         of its pieces, split where they meet or cross, so a solid standing on a floor of the
         same wall or on another solid is enclosed and pieces with an open end never enclose;
@@ -1459,13 +1492,16 @@ class Simulation:
                     circ = np.concatenate([v[1] for v in at]) if at else np.zeros((0, 3))
                     outline[c] = (*_closed_outline(lines, tol), circ)
                 loops, face, circ = outline[c]
-                out = [pt for pt in cor[:, list(_ACROSS[q])]
-                       if not _enclosed(pt, loops, face, circ, tol)]
-                if out:
-                    yz = ", ".join(f"{v:.6g}" for v in out[0])
+                poly = cor[:, list(_ACROSS[q])]
+                out = [pt for pt in poly if not _enclosed(pt, loops, face, circ, tol)]
+                edge = None if out else _edge_outside(poly, loops, face, circ, tol)
+                if out or edge is not None:
+                    yz = ", ".join(f"{v:.6g}" for v in (out[0] if out else edge))
                     across = ", ".join("xyz"[i] for i in _ACROSS[q])
-                    why = (f"an end face on the boundary {ax} = {c:.6g} m with a corner at "
-                           f"({across}) = ({yz}) m outside every closed outline of the "
+                    why = (f"an end face on the boundary {ax} = {c:.6g} m with "
+                           + ("a corner" if out else "a point of an edge (bridging open space "
+                              "between closed outlines)")
+                           + f" at ({across}) = ({yz}) m outside every closed outline of the "
                            f"section of its faces along {ax} there (a sphere meets its face)")
                     break
                 faces.setdefault(c, []).append(cor[:, list(_ACROSS[q])])
