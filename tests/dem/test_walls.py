@@ -1464,25 +1464,190 @@ def test_a_floor_far_from_the_origin_is_forgiven_the_rounding_of_its_storage_onl
 
 
 def test_read_stl_gives_each_vertex_the_rounding_its_file_stored_it_with(tmp_path):
-    """Binary STL: float32, |fl(x) - x| <= 2^-24 |x|; ASCII: half the last digit the
-    writer's format keeps (%e with 6 decimals: 5e-7 of the leading digit; %f with 4
-    decimals: 5e-5 m), times ``scale``."""
+    """Binary STL: float32, |fl(x) - x| <= 2^-24 |x|, the vertices returned as float32 (scaled
+    in float32, so add_mesh knows them); ASCII: its numbers taken as written, float64's unit
+    roundoff 2^-53 |x| whatever format wrote them (%e, %f, integers), times ``scale``."""
     from soilcal.dem.stl import read_stl, write_stl
 
     v = np.array([[100.0, 0.0, 0.1], [100.2, 0.0, 0.1], [100.0, 0.02, 0.1]])
     t = np.array([[0, 1, 2]])
     write_stl(tmp_path / "b.stl", v, t)
     vb, _, rd = read_stl(tmp_path / "b.stl", rounding=True)
-    assert rd == pytest.approx(2.0 ** -24 * np.abs(vb).max(axis=1), rel=1e-12)
-    for fmt, want in (("{:.6e}", 0.5e-6 * 100), ("{:.4f}", 0.5e-4)):
+    assert vb.dtype == np.float32
+    assert rd == pytest.approx(2.0 ** -24 * np.abs(vb.astype(float)).max(axis=1), rel=1e-12)
+    vm = read_stl(tmp_path / "b.stl", scale=1e-3)[0]
+    assert vm.dtype == np.float32
+    assert vm.astype(float) == pytest.approx(1e-3 * vb.astype(float), rel=1e-7)
+    for fmt in ("{:.6e}", "{:.4f}", "{!r}"):
         lines = ["solid s", "facet normal 0 0 1", "outer loop"]
-        lines += ["vertex " + " ".join(fmt.format(c) for c in p) for p in v]
+        lines += ["vertex " + " ".join(fmt.format(float(c)) for c in p) for p in v]
         lines += ["endloop", "endfacet", "endsolid s"]
         (tmp_path / "a.stl").write_text("\n".join(lines) + "\n")
-        _, _, rd = read_stl(tmp_path / "a.stl", rounding=True)
-        assert rd == pytest.approx([want] * 3, rel=1e-9)
+        va, _, rd = read_stl(tmp_path / "a.stl", rounding=True)
+        assert va.dtype == np.float64
+        assert rd == pytest.approx(2.0 ** -53 * np.abs(v).max(axis=1), rel=1e-9)
         _, _, rd = read_stl(tmp_path / "a.stl", scale=1e-3, rounding=True)
-        assert rd == pytest.approx([1e-3 * want] * 3, rel=1e-9)
+        assert rd == pytest.approx(1e-3 * 2.0 ** -53 * np.abs(v).max(axis=1), rel=1e-9)
+
+
+def _slab_floor(rise, L=0.1, W=0.02):
+    """Two triangles z = rise x / L over x = 0 .. L, y = 0 .. W (a floor rising ``rise``
+    over a period L along x)."""
+    v = np.array([[0, 0, 0], [L, 0, rise], [L, W, rise], [0, W, 0]], float)
+    return v, np.array([[0, 1, 2], [0, 2, 3]])
+
+
+def _slab_sim(L=0.1, W=0.02, periodic=(True, True)):
+    sim = Simulation(table(e=0.5, mu=0.3, E=1e8), gravity=(0, 0, 0), box=(0, L, 0, W),
+                     periodic=periodic)
+    sim.add_particles([(L / 2, W / 2, 0.002)], 1e-3, "soil")
+    return sim
+
+
+def test_a_coarsely_stored_mesh_loosens_no_other_walls_periodic_checks():
+    """A plate across x (normal along x) 0.5 mm inside the boundary x = 0 of a box periodic
+    in x, within the largest radius (1 mm) of it: a sphere at x = 0.0995 m meets the plate's
+    image 1 mm away, which wall contacts do not see, so the plate is refused.  A block in the
+    middle of the box whose vertices were stored to 1 mm (rounding=1e-3, eight of which were
+    the tolerance of every face, 8 mm) let the plate pass: its rounding is its own faces'."""
+    pv = np.array([[5e-4, 0, 0], [5e-4, 0.02, 0], [5e-4, 0.02, 0.01], [5e-4, 0, 0.01]])
+    from soilcal.dem.geometry import box_mesh
+
+    bv, bt = box_mesh((0.04, 0.005, 0.0), (0.06, 0.015, 0.01))
+    for block in (False, True):
+        sim = Simulation(table(e=0.5, mu=0.3, E=1e8), gravity=(0, 0, 0), box=(0, 0.1, 0, 0.02),
+                         periodic=(True, False))
+        sim.add_particles([(0.0995, 0.01, 0.005)], 1e-3, "soil")
+        sim.add_mesh(pv, [[0, 1, 2], [0, 2, 3]], "soil", name="plate")
+        if block:
+            sim.add_mesh(np.asarray(bv, float), np.asarray(bt), "soil", name="block",
+                         rounding=1e-3)
+        # the plate's faces cross the axis: named as such, not as a rise of 1e6 m
+        with pytest.raises(InputError, match=r"walls\.plate.*at 90 degrees to the x axis") as e:
+            sim.compute_forces()
+        assert "rising" not in str(e.value)
+
+
+@pytest.mark.parametrize("rise", [1e-3, 2e-5])
+def test_an_ascii_stl_is_taken_as_written_not_as_rounded_to_its_shortest_number(rise, tmp_path):
+    """A floor rising 1 mm (or 20 um) over a 0.1 m period, R = 1 mm: a sphere crossing the
+    boundary lands that much deeper, 5 (0.1) times its 0.01 R overlap.  Written by
+    write_stl(binary=False) (repr: '0.1', '0.001', '2e-05') its numbers were taken as rounded
+    to their last digit (up to 0.05 m) and the floor was accepted by add_stl; as arrays it
+    was refused.  Now it is refused both ways; a level floor written so is accepted, and a
+    rounding the user declares (rounding=) is the one forgiven."""
+    from soilcal.dem.stl import write_stl
+
+    write_stl(tmp_path / "f.stl", *_slab_floor(rise), binary=False)
+    sim = _slab_sim()
+    sim.add_stl(tmp_path / "f.stl", "soil", name="floor")
+    with pytest.raises(InputError, match=r"walls\.floor.*rising"):
+        sim.compute_forces()
+    write_stl(tmp_path / "g.stl", *_slab_floor(0.0), binary=False)
+    sim = _slab_sim()
+    sim.add_stl(tmp_path / "g.stl", "soil", name="floor")
+    sim.compute_forces()
+    # declared: stored to within `rise` (8 x that is forgiven)
+    sim = _slab_sim()
+    sim.add_stl(tmp_path / "f.stl", "soil", name="floor", rounding=rise)
+    sim.compute_forces()
+
+
+def test_an_integer_millimetre_ascii_stl_rising_3_mm_is_refused(tmp_path):
+    """A CAD floor written in whole millimetres, 400 x 40 mm at z = 100 mm, read with
+    scale=1e-3 into a box periodic over 0.4 m: z = 103 mm at x = 400 mm is a rise of 3 mm over
+    the period (a 1 mm sphere crossing lands 3 mm deep), refused; it was forgiven as
+    rounding of 0.5 mm (the integers' last digit).  z = 100 everywhere is accepted."""
+    for top, ok in (("100", True), ("103", False)):
+        P = [("0", "0", "100"), ("400", "0", top), ("400", "40", top), ("0", "40", "100")]
+        lines = ["solid floor"]
+        for tri in ((0, 1, 2), (0, 2, 3)):
+            lines += ["facet normal 0 0 1", "outer loop"]
+            lines += ["vertex " + " ".join(P[k]) for k in tri] + ["endloop", "endfacet"]
+        (tmp_path / "f.stl").write_text("\n".join(lines + ["endsolid floor"]) + "\n")
+        sim = Simulation(table(e=0.5, mu=0.3, E=1e8), gravity=(0, 0, 0), box=(0, 0.4, 0, 0.04),
+                         periodic=(True, True))
+        sim.add_particles([(0.2, 0.02, 0.102)], 1e-3, "soil")
+        sim.add_stl(tmp_path / "f.stl", "soil", scale=1e-3, name="floor")
+        if ok:
+            sim.compute_forces()
+        else:
+            with pytest.raises(InputError, match=r"walls\.floor.*rising 0\.003 m"):
+                sim.compute_forces()
+
+
+def test_a_millimetre_binary_stl_read_and_scaled_keeps_float32s_allowance(tmp_path):
+    """A level floor (along x) of 4 mm triangles with jittered corners at z = 100 mm + 0.1 y,
+    written as binary STL in millimetres: float32 rounds each corner by up to 2^-24 |x|,
+    tilting small faces by a few 1e-6.  Read with read_stl(scale=1e-3) (or read and then
+    multiplied by 1e-3) and given to add_mesh it was refused for that noise (a rise of
+    4.6e-7 m against 2e-7 m: float64 arrays were judged as float64); read_stl now returns a
+    binary file's float32 numbers, scaled in float32, and the floor is accepted as add_stl
+    accepts it.  The same floor rising 20 um over the period is refused all ways."""
+    from soilcal.dem.stl import read_stl, write_stl
+
+    rng = np.random.default_rng(1)
+    xs, ys = np.arange(0, 400.001, 4.0), np.arange(0, 40.001, 4.0)
+    X, Y = (a.copy() for a in np.meshgrid(xs, ys))
+    inner = (X > 0) & (X < 400) & (Y > 0) & (Y < 40)
+    X[inner] += rng.uniform(-1, 1, inner.sum())
+    Y[inner] += rng.uniform(-1, 1, inner.sum())
+    nx, ny = len(xs), len(ys)
+    t = np.array([[j * nx + i, j * nx + i + 1, j * nx + i + nx + 1] for j in range(ny - 1)
+                  for i in range(nx - 1)] + [[j * nx + i, j * nx + i + nx + 1, j * nx + i + nx]
+                                             for j in range(ny - 1) for i in range(nx - 1)])
+    for rise_mm, ok in ((0.0, True), (0.02, False)):
+        v = np.c_[X.ravel(), Y.ravel(), 100.0 + 0.1 * Y.ravel() + rise_mm * X.ravel() / 400]
+        write_stl(tmp_path / "f.stl", v, t, binary=True)
+        for how in ("scale", "times", "add_stl"):
+            sim = Simulation(table(e=0.5, mu=0.3, E=1e8), gravity=(0, 0, 0),
+                             box=(0, 0.4, 0, 0.04), periodic=(True, False))
+            sim.add_particles([(0.2, 0.02, 0.2)], 1e-3, "soil")
+            if how == "scale":
+                sim.add_mesh(*read_stl(tmp_path / "f.stl", scale=1e-3), "soil", name="floor")
+            elif how == "times":
+                vv, tt = read_stl(tmp_path / "f.stl")
+                sim.add_mesh(vv * 1e-3, tt, "soil", name="floor")
+            else:
+                sim.add_stl(tmp_path / "f.stl", "soil", scale=1e-3, name="floor")
+            if ok:
+                sim.compute_forces()
+            else:
+                with pytest.raises(InputError, match=r"walls\.floor"):
+                    sim.compute_forces()
+
+
+@pytest.mark.parametrize("rise", [2.0 ** -15, 3.0e-5])
+def test_float64_vertices_are_judged_as_float64_whatever_numbers_they_hold(rise):
+    """A floor over x = 100 .. 100.25 m rising ~30 um over the period (R = 1 mm: 30 times
+    the 2e-4 R_min limit): as float64 arrays it is refused whether or not its numbers happen
+    to be float32 numbers (2^-15 is one; it was accepted with float32's 48 um allowance);
+    as float32 arrays (a binary STL's storage, 100 m rounded by up to 6 um) it is within
+    float32's allowance and accepted."""
+    v = np.array([[100, 0, 0.0], [100.25, 0, rise], [100.25, 0.03125, rise],
+                  [100, 0.03125, 0.0]], float)
+    for dtype in (np.float64, np.float32):
+        sim = Simulation(table(e=0.5, mu=0.3, E=1e8), gravity=(0, 0, 0),
+                         box=(100, 100.25, 0, 0.03125), periodic=(True, True))
+        sim.add_particles([(100.1, 0.015, 1e-3)], 1e-3, "soil")
+        sim.add_mesh(v.astype(dtype), [[0, 1, 2], [0, 2, 3]], "soil", name="floor")
+        if dtype == np.float32:
+            sim.compute_forces()
+        else:
+            with pytest.raises(InputError, match=r"walls\.floor.*rising"):
+                sim.compute_forces()
+
+
+def test_add_stl_refuses_facets_it_sets_itself(tmp_path):
+    """add_stl numbers refused faces by the file's facets itself: a facets= passed on to
+    add_mesh raised a TypeError (a duplicate argument); it is refused by name."""
+    from soilcal.dem.stl import write_stl
+
+    write_stl(tmp_path / "f.stl", *_slab_floor(0.0))
+    sim = _slab_sim()
+    with pytest.raises(InputError, match=r"f\.stl.*facets"):
+        sim.add_stl(tmp_path / "f.stl", "soil", facets=[0, 1])
+
 
 
 @pytest.mark.parametrize("bad", [[1e-9, 1e-9], -1e-9, float("nan"), "1e-9", True])

@@ -814,11 +814,11 @@ class Simulation:
         each triangle's facet index in its STL file (``read_stl(path, facets=True)``, which
         leaves out facets without area), by which a refused face is named.  ``rounding``:
         how far each vertex [nv] (or all, one number) may lie from where it was drawn, as
-        the file stored it [m] (``read_stl(path, rounding=True)``: half a float32 ulp of
-        each coordinate in a binary STL, half the last digit written in an ASCII one); by
-        default the unit roundoff of the vertices' own type (float32: 2^-24 |x|, float64),
-        float32 also where every coordinate is a float32 number (a binary STL read unscaled).  The checks of
-        a periodic box forgive a face that much tilt and step, no more."""
+        it was stored [m] (a CAD export rounded to 0.01 mm: 5e-6); by default the unit
+        roundoff of the vertices' own type: float32 (2^-24 |x|: a binary STL as
+        ``read_stl`` returns it, scaled or not) or float64 (any other array, whatever its
+        numbers).  The checks of a periodic box forgive a face that much tilt and step, no
+        more, and only that face."""
         raw = vertices
         v = _rows(self.source, "walls.mesh.vertices", vertices, None, "vertices [m]")
         t = np.asarray(triangles)
@@ -844,12 +844,10 @@ class Simulation:
                                  f"one whole facet index >= 0 per triangle ({len(t)})",
                                  f"an array of shape {fa.shape} and type {fa.dtype}")
         if rounding is None:
-            # the vertices' own type: float32 (a binary STL's, kept, or read by read_stl into
-            # float64 unchanged: every coordinate a float32 number) or float64
+            # the vertices' own type: float32 (a binary STL's, as read_stl returns it), else
+            # float64 (a float64 array is judged as one, whatever numbers it holds)
             kind = np.asarray(raw).dtype
-            ftype = kind if np.issubdtype(kind, np.floating) else np.dtype(np.float64)
-            if ftype == np.float64 and np.array_equal(v.astype(np.float32).astype(float), v):
-                ftype = np.dtype(np.float32)
+            ftype = np.dtype(np.float32) if kind == np.float32 else np.dtype(np.float64)
             # the unit roundoff: |fl(x) - x| <= eps / 2 |x|
             rd = 0.5 * float(np.finfo(ftype).eps) * np.abs(v).max(axis=1)
         else:
@@ -870,15 +868,22 @@ class Simulation:
         self.__dict__.setdefault("_mesh_rounding", {})[w] = rd[t].max(axis=1)
         return w
 
-    def add_stl(self, path, material, scale=1.0, weld_tol=0.0, **kw) -> int:
+    def add_stl(self, path, material, scale=1.0, weld_tol=0.0, rounding=None, **kw) -> int:
         """An STL file as a mesh wall (:func:`soilcal.dem.stl.read_stl`, then
-        :meth:`add_mesh` with its facets and the rounding the file stored its vertices
-        with); ``kw`` as :meth:`add_mesh` takes them."""
+        :meth:`add_mesh` with its facets, by which a refused face is named, and the rounding
+        the file stored its vertices with: float32's in a binary file, an ASCII file's
+        numbers as written, or ``rounding`` [m, after ``scale``] where given, as an ASCII
+        export rounded to 0.01 mm has it: 5e-6, half of it, also with ``scale=1e-3``); ``kw``: the
+        other arguments of :meth:`add_mesh` (name, velocity, omega, centre)."""
         from soilcal.dem.stl import read_stl
 
+        if "facets" in kw:
+            raise InputError(path, "facets", "no facets= to add_stl (it numbers a refused "
+                             "face by its facet in the file itself)", kw["facets"])
         v, t, fa, rd = read_stl(path, scale=scale, weld_tol=weld_tol, facets=True,
                                 rounding=True)
-        return self.add_mesh(v, t, material, facets=fa, rounding=rd, **kw)
+        return self.add_mesh(v, t, material, facets=fa,
+                             rounding=rd if rounding is None else rounding, **kw)
 
     def _rounding(self) -> np.ndarray:
         """How far each primitive's stored coordinates may lie from where they were drawn
@@ -1218,9 +1223,11 @@ class Simulation:
             lo, hi = float(self.box[2 * q]), float(self.box[2 * q + 1])
             # 4 ulps of the coordinates as they were stored (8 unit roundoffs: a binary STL's
             # float32, an ASCII STL's last digit, float64 arrays and analytic walls)
+            # per primitive: each face is judged with its own rounding (a coarsely stored
+            # mesh elsewhere in the box loosens no other wall's checks)
             res = self._rounding()
-            eps = max(2e-4 * rho, 8.0 * float(res.max()),
-                      4.0 * float(np.finfo(np.float64).eps) * max(abs(lo), abs(hi)))
+            eps_all = np.maximum(max(2e-4 * rho, 4.0 * float(np.finfo(np.float64).eps)
+                                     * max(abs(lo), abs(hi))), 8.0 * res)
             # the largest rise over the period of a flat face along q (plane, rectangle,
             # triangle alike): 2e-4 of the smallest radius, whose contacts a step changes
             # most, or 4 ulps of the face's own coordinates as stored, per primitive
@@ -1279,9 +1286,11 @@ class Simulation:
                     unit[tri] = n / nn[:, None]
                 rises[tri] = _rise(np.maximum(nq - noise, 0.0), hi - lo)
                 flat[tri] = rises[tri] <= eps_p[ks[tri]]
+            eps = eps_all[ks]  # each bounded primitive's
             for i in np.flatnonzero(~tri):
-                a[i], b[i], flat[i] = _extent_along(kinds[ks[i]], par_all[ks[i]], q, eps,
-                                                    hi - lo, float(eps_p[ks[i]]))
+                a[i], b[i], flat[i] = _extent_along(kinds[ks[i]], par_all[ks[i]], q,
+                                                    float(eps[i]), hi - lo,
+                                                    float(eps_p[ks[i]]))
                 if kinds[ks[i]] == RECTANGLE:
                     unit[i] = par_all[ks[i], 3:6]
                     rises[i] = _rise(par_all[ks[i], 3 + q], hi - lo)
@@ -1301,6 +1310,9 @@ class Simulation:
             a = np.where(moves, np.minimum(a, a + vq * span), a)
             b = np.where(moves, np.maximum(b, b + vq * span), b)
             has[w] = True
+            # each wall's: the largest of its faces' (whether it is clear of the boundaries)
+            eps_w = np.zeros(nw)
+            np.maximum.at(eps_w, w, eps)
             np.minimum.at(a_w, w, a)
             np.maximum.at(b_w, w, b)
             # within reach of a sphere in the box beside a boundary (farther out, unreachable)
@@ -1312,13 +1324,14 @@ class Simulation:
             # a flat face (triangle, rectangle) at rest turning about nothing but q: its rise
             flat_kind = ((kinds[ks] == TRIANGLE) | (kinds[ks] == RECTANGLE)) & ~turn
             tilted = np.zeros(nw, dtype=bool)
-            tilted[w[off & flat_kind]] = True
+            # (steeper than 45 degrees it crosses the axis: named so by _face_at_fault)
+            tilted[w[off & flat_kind & (rises <= hi - lo)]] = True
             cap &= ~turn & ~moves  # a cap of a wall at rest, met at its rim (below)
             for w in range(nw):
                 if not has[w]:
                     continue
                 A, B = a_w[w], b_w[w]
-                if A >= lo + rho - eps and B <= hi - rho + eps:
+                if A >= lo + rho - eps_w[w] and B <= hi - rho + eps_w[w]:
                     continue  # clear of both boundaries
                 why = ("a face within the largest radius of a boundary that does not run "
                        f"along {names[q]}" + (f" (a flat face rising over the period by more "
@@ -1327,17 +1340,18 @@ class Simulation:
                        + f", {self._face_at_fault(q, w, ks, w_of, off_of, turn_of, unit, rises)}"
                        if bad[w] else None)
                 if why is None:
-                    why = self._periodic_fault(q, [w], ks, flat, cap, rho, eps, span)
+                    why = self._periodic_fault(q, [w], ks, flat, cap, rho, eps_all, span)
                 if why is not None and not bad[w]:
                     # tiles: the walls moving with this one, judged as one surface
                     mates = [g for g in range(nw) if has[g] and not bad[g]
-                             and not (a_w[g] >= lo + rho - eps and b_w[g] <= hi - rho + eps)
+                             and not (a_w[g] >= lo + rho - eps_w[g]
+                                      and b_w[g] <= hi - rho + eps_w[g])
                              and np.array_equal(wa["wall_vel"][g], wa["wall_vel"][w])
                              and np.array_equal(wa["wall_omega"][g], wa["wall_omega"][w])
                              and (not np.any(wa["wall_omega"][w] != 0)
                                   or np.array_equal(wa["wall_centre"][g], wa["wall_centre"][w]))]
-                    if len(mates) > 1 and self._periodic_fault(q, mates, ks, flat, cap, rho, eps,
-                                                               span) is None:
+                    if len(mates) > 1 and self._periodic_fault(q, mates, ks, flat, cap, rho,
+                                                               eps_all, span) is None:
                         continue
                 if why is None:
                     continue
@@ -1372,9 +1386,15 @@ class Simulation:
         ax = ("x", "y")[q]
         if turn[j]:
             how = f"turning about an axis other than {ax}"
-        elif np.isfinite(rises[j]):
+        elif np.isfinite(rises[j]) and rises[j] <= float(self.box[2 * q + 1] - self.box[2 * q]):
             nrm = ", ".join(f"{c:.6g}" for c in unit[j])
             how = f"normal ({nrm}), rising {rises[j]:.4g} m over the period"
+        elif np.all(np.isfinite(unit[j])):
+            # steeper than 45 degrees: it crosses the axis rather than rising along it
+            nrm = ", ".join(f"{c:.6g}" for c in unit[j])
+            tilt = math.degrees(math.asin(min(1.0, abs(float(unit[j][q])))))
+            how = (f"normal ({nrm}): a face at {tilt:.3g} degrees to the {ax} axis, across "
+                   f"it rather than flat along the period (0 degrees)")
         else:
             how = f"its section across {ax} not the same all along it"
         n_faces = int(np.count_nonzero(walls_of == w))
@@ -1384,7 +1404,7 @@ class Simulation:
                     f"as added ({kind}, {how})")
         return f"face {face} of its {n_faces} as added ({kind}, {how})"
 
-    def _periodic_fault(self, q, walls, ks, flat, cap, rho, eps, span):
+    def _periodic_fault(self, q, walls, ks, flat, cap, rho, eps_all, span):
         """None when the surface of ``walls`` (moving together) continues periodically across
         axis q over a run of ``span`` seconds, else what breaks it.  In the walls' own frame
         at the start (a shift s = v_q span along q sweeps the planes the spheres meet), the
@@ -1412,10 +1432,12 @@ class Simulation:
         the other (:func:`_covered`; pieces shorter than it left out), circles by centre and
         radius; the sections exactly one period apart (q = lo and hi), which a sphere crossing
         the boundary meets in turn, within max(2e-4 R_min, 4 ulps as stored), the limit of a
-        flat face's rise over the period."""
+        flat face's rise over the period.  ``eps_all``: each primitive's tolerance of where
+        it lies (its stored rounding), of which the largest among these walls' is taken."""
         wa = self._warr
         lo, hi = float(self.box[2 * q]), float(self.box[2 * q + 1])
         sel = np.isin(wa["prim_wall"][ks], walls)
+        eps = float(eps_all[ks[sel]].max())
         prims = ks[sel & flat]
         par = wa["prim_par"][prims]
         shift = float(wa["wall_vel"][walls[0], q]) * span

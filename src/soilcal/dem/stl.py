@@ -71,41 +71,12 @@ def write_stl(path, vertices, triangles, binary=True, name="soilcal"):
         path.write_text("\n".join(lines) + "\n", encoding="ascii")
 
 
-def _digits(s: str):
-    """``(place, lead)``: the decimal exponents of the last and the first non-zero digit of
-    the number ``s`` as written (``1.250e-03``: -6, -3; ``0.1``: -1, -1; zero: lead None)."""
-    m = re.match(r"^[-+]?(\d*)(?:\.(\d*))?(?:[eE]([-+]?\d+))?$", s)
-    if m is None:  # nan, inf: refused later as not finite
-        return 0, None
-    whole, frac, e = m.group(1) or "", m.group(2) or "", int(m.group(3) or 0)
-    place = e - len(frac)
-    digits = (whole + frac).lstrip("0")
-    return place, (place + len(digits) - 1 if digits else None)
-
-
-def _ascii_rounding(words) -> np.ndarray:
-    """How far each number written in ``words`` may lie from the one it stands for: its
-    writer's resolution, read off the file as a whole (a number written shorter had zeros
-    there, as shortest-repr and %g writers leave them out): the most significant digits any
-    number has (%e, %g, repr: a relative resolution) or the most decimals any has (%f: an
-    absolute one), whichever is coarser for the number, half of it, and never more than half
-    its own last digit."""
-    pl = np.array([_digits(w) for w in words], dtype=object)
-    place = pl[:, 0].astype(float)
-    lead = np.array([np.nan if v is None else v for v in pl[:, 1]], dtype=float)
-    sig = np.nanmax(lead - place) + 1 if np.any(np.isfinite(lead)) else 1.0
-    decimals = -place.min()
-    rel = np.where(np.isfinite(lead), lead - sig + 1, -np.inf)
-    fmt = np.maximum(rel, -decimals)
-    return 0.5 * 10.0 ** np.minimum(fmt, place)
-
-
 def _parse_ascii(path, text):
     toks = text.split()
     if not toks or toks[0].lower() != "solid":
         raise InputError(path, "STL", "binary STL of 84 + 50 n bytes or ASCII STL starting "
                          "with 'solid'", "neither")
-    tris, digits = [], []
+    tris = []
     i = 1
     # skip the solid name (until the first 'facet' or 'endsolid')
     while i < len(toks) and toks[i].lower() not in ("facet", "endsolid"):
@@ -134,22 +105,21 @@ def _parse_ascii(path, text):
         if not all(num.match(s) for s in vals + chunk[2:5]):
             raise InputError(path, f"facet {len(tris)} coordinates", "numbers", vals)
         tris.append([float(s) for s in vals])
-        digits.extend(vals)
         i += 21
     if not ended:
         raise InputError(path, "endsolid", "'endsolid' closing the solid", "truncated file")
     tri = np.array(tris, dtype=np.float64).reshape(-1, 3, 3)
-    # a number written with more digits than float64 holds is read to float64's roundoff
-    res = np.maximum(_ascii_rounding(digits).reshape(-1, 3, 3) if digits else tri * 0.0,
-                     0.5 * float(np.finfo(np.float64).eps) * np.abs(tri))
-    return tri, res
+    # a number is taken as written: read to float64's unit roundoff (the digits a writer
+    # leaves out say nothing of how the drawing was rounded: 0.1 and 100 are exact)
+    return tri, 0.5 * float(np.finfo(np.float64).eps) * np.abs(tri)
 
 
 def read_stl_soup(path, rounding=False):
-    """Triangle soup ``float64[nt, 3, 3]`` from a binary or ASCII STL file; ``rounding=True``
-    returns also how far each coordinate may lie from the number it stands for
-    ``float64[nt, 3, 3]``: the unit roundoff of float32 (2^-24 |x|) in a binary file, half
-    the last digit written in an ASCII one (``0.1`` 0.05, ``1.250e-03`` 5e-7)."""
+    """Triangle soup ``[nt, 3, 3]`` from a binary or ASCII STL file: float32 as a binary file
+    stores it, float64 from an ASCII one; ``rounding=True`` returns also how far each
+    coordinate may lie from the number it stands for ``float64[nt, 3, 3]``: the unit
+    roundoff of float32 (2^-24 |x|) in a binary file, of float64 in an ASCII one (its
+    numbers are taken as written)."""
     path = Path(path)
     try:
         data = path.read_bytes()
@@ -159,13 +129,13 @@ def read_stl_soup(path, rounding=False):
         (n,) = struct.unpack("<I", data[80:84])
         if len(data) == 84 + 50 * n:
             rec = np.frombuffer(data, dtype=_BIN_DTYPE, count=n, offset=84)
-            tri = rec["v"].astype(np.float64)
+            tri = rec["v"].astype(np.float32)
             if not np.all(np.isfinite(tri)):
                 raise InputError(path, "vertices", "finite coordinates", "NaN or inf")
             if n == 0:
                 raise InputError(path, "triangle count", "at least one triangle", 0)
             if rounding:
-                return tri, 0.5 * float(np.finfo(np.float32).eps) * np.abs(tri)
+                return tri, 0.5 * float(np.finfo(np.float32).eps) * np.abs(tri.astype(float))
             return tri
     head = data[:5].lower()
     if head != b"solid":
@@ -233,17 +203,20 @@ def without_area(corners) -> np.ndarray:
 
 
 def read_stl(path, scale=1.0, weld_tol=0.0, facets=False, rounding=False):
-    """Read an STL file into ``(vertices float64[nv, 3], triangles int64[nt, 3])``,
-    coordinates multiplied by ``scale``.  Facets without area are left out (:func:`weld`), so
+    """Read an STL file into ``(vertices [nv, 3], triangles int64[nt, 3])``, coordinates
+    multiplied by ``scale``: float32 from a binary file (as it stores them, scaled in
+    float32, so :meth:`soilcal.dem.engine.Simulation.add_mesh` forgives a face float32's
+    rounding, also after ``v * 1e-3``), float64 from an ASCII one (its numbers taken as
+    written).  Facets without area are left out (:func:`weld`), so
     triangle k need not be the file's facet k: ``facets=True`` returns also each triangle's
     facet index in the file, ``(vertices, triangles, facets int64[nt])``; give it to
     :meth:`soilcal.dem.engine.Simulation.add_mesh` (``facets=``) and a refused face is named
     by its facet in the file.  ``rounding=True`` returns also how far each vertex may lie
     from where it was drawn, the largest over its coordinates (and its welded copies)
-    ``float64[nv]`` [m, times ``scale``]: half a float32 ulp (2^-24 |x|) in a binary file,
-    half the last digit written in an ASCII one; give it to ``add_mesh(rounding=)``, or use
-    :meth:`soilcal.dem.engine.Simulation.add_stl`, and a periodic box forgives a face that
-    much and no more."""
+    ``float64[nv]`` [m, times ``scale``]: the unit roundoff of float32 (2^-24 |x|) in a
+    binary file, of float64 in an ASCII one; :meth:`soilcal.dem.engine.Simulation.add_stl`
+    gives it to ``add_mesh(rounding=)``, and a periodic box forgives a face that much and no
+    more."""
     try:
         tol = float(weld_tol)
     except (TypeError, ValueError):
@@ -252,7 +225,11 @@ def read_stl(path, scale=1.0, weld_tol=0.0, facets=False, rounding=False):
         raise InputError(path, "weld_tol", "a welding distance >= 0 (0: identical corners only)",
                          weld_tol)
     soup, res = read_stl_soup(path, rounding=True)
-    soup, res = soup * float(scale), res * abs(float(scale))
+    f32 = soup.dtype == np.float32
+    # a binary file's float32 numbers scaled in float32: the result is float32 numbers, and
+    # its rounding float32's (one more unit roundoff, forgiven as the file's own)
+    soup = (soup * np.float32(scale)).astype(np.float64) if f32 else soup * float(scale)
+    res = 0.5 * float(np.finfo(np.float32 if f32 else np.float64).eps) * np.abs(soup)
     try:
         v, t, kept = weld(soup, tol, facets=True)
     except ValueError as exc:
@@ -260,6 +237,8 @@ def read_stl(path, scale=1.0, weld_tol=0.0, facets=False, rounding=False):
             from None
     if t.shape[0] == 0:
         raise InputError(path, "triangles", "at least one non-degenerate triangle", 0)
+    if f32:
+        v = v.astype(np.float32)  # each vertex a corner of the soup: float32 numbers
     out = (v, t, kept) if facets else (v, t)
     if rounding:
         # each vertex: the largest over its coordinates and the corners welded into it
