@@ -146,7 +146,7 @@ def test_phases_that_start_and_stop_a_mesh_agree_to_rounding():
         assert np.abs(mine["omega"] - ref["omega"]).max() <= 1e-9 * wmax
 
 
-def test_a_sphere_launched_down_an_stl_incline_slips_then_rolls_as_coulomb_says():
+def test_a_sphere_launched_down_an_stl_incline_slips_then_rolls_as_coulomb_says(tmp_path):
     """A 1 mm soil sphere launched at v0 = 5 cm/s without spin down a binary-STL steel incline
     of 10 deg (mu = 0.6 > tan 10 deg): friction mu g cos slows it and spins it up until it
     rolls, at t* = v0 / (3.5 mu g cos - g sin) = 2.69 ms (rigid Coulomb body, I = 2/5 m R^2),
@@ -175,10 +175,7 @@ def test_a_sphere_launched_down_an_stl_incline_slips_then_rolls_as_coulomb_says(
         sim.add_particles([-0.01 * d + 0.9999 * R * n], R, "soil", v=[v0 * d])
         return sim
 
-    import tempfile
-    from pathlib import Path
-
-    tmp = Path(tempfile.mkdtemp())
+    tmp = tmp_path
     T = steps * dt
     ts = v0 / (3.5 * mu * g * c - g * s)
     a_slip, a_roll = g * s - mu * g * c, 5 / 7 * g * s
