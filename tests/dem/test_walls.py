@@ -1505,27 +1505,104 @@ def _slab_sim(L=0.1, W=0.02, periodic=(True, True)):
 
 
 def test_a_coarsely_stored_mesh_loosens_no_other_walls_periodic_checks():
-    """A plate across x (normal along x) 0.5 mm inside the boundary x = 0 of a box periodic
-    in x, within the largest radius (1 mm) of it: a sphere at x = 0.0995 m meets the plate's
-    image 1 mm away, which wall contacts do not see, so the plate is refused.  A block in the
-    middle of the box whose vertices were stored to 1 mm (rounding=1e-3, eight of which were
-    the tolerance of every face, 8 mm) let the plate pass: its rounding is its own faces'."""
-    pv = np.array([[5e-4, 0, 0], [5e-4, 0.02, 0], [5e-4, 0.02, 0.01], [5e-4, 0, 0.01]])
+    """A plate across x (normal along x) at x = 0.98 mm in a box periodic in x, 20 um within
+    the largest radius (1 mm) of the boundary x = 0: a sphere at x = 0.09999 m meets the
+    plate's image 0.99 mm away, an overlap of 10 um (0.01 R) that wall contacts do not see,
+    so the plate is refused.  A block in the middle of the box stored as float32 at z = 100 m (2^-24 x 100 m
+    = 6e-6 m per vertex, eight of which, 4.8e-5 m, were once the tolerance of every face)
+    let the plate count as clear of the boundary: its rounding is its own faces'."""
     from soilcal.dem.geometry import box_mesh
 
-    bv, bt = box_mesh((0.04, 0.005, 0.0), (0.06, 0.015, 0.01))
-    for block in (False, True):
+    pv = np.array([[9.8e-4, 0, 0], [9.8e-4, 0.02, 0], [9.8e-4, 0.02, 0.01], [9.8e-4, 0, 0.01]])
+    bv, bt = box_mesh((0.04, 0.005, 100.0), (0.06, 0.015, 100.01))
+    for block in (True, False):
         sim = Simulation(table(e=0.5, mu=0.3, E=1e8), gravity=(0, 0, 0), box=(0, 0.1, 0, 0.02),
                          periodic=(True, False))
-        sim.add_particles([(0.0995, 0.01, 0.005)], 1e-3, "soil")
+        sim.add_particles([(0.09999, 0.01, 0.005)], 1e-3, "soil")
         sim.add_mesh(pv, [[0, 1, 2], [0, 2, 3]], "soil", name="plate")
         if block:
-            sim.add_mesh(np.asarray(bv, float), np.asarray(bt), "soil", name="block",
-                         rounding=1e-3)
-        # the plate's faces cross the axis: named as such, not as a rise of 1e6 m
-        with pytest.raises(InputError, match=r"walls\.plate.*at 90 degrees to the x axis") as e:
+            sim.add_mesh(np.asarray(bv, np.float32), np.asarray(bt), "soil", name="block")
+        with pytest.raises(InputError, match=r"walls\.plate") as e:
             sim.compute_forces()
-        assert "rising" not in str(e.value)
+        if not block:
+            # the plate's faces cross the axis: named as such, not as a rise of 1e6 m
+            assert "at 90 degrees to the x axis" in str(e.value)
+            assert "rising" not in str(e.value)
+
+
+def test_a_walls_own_rounding_never_makes_it_clear_of_a_periodic_boundary():
+    """The same plate at x = 0.98 mm, itself stored as float32 at z = 100 m (a rounding of
+    6e-6 m per vertex, 4.8e-5 m for 4 ulps): it counted as clear of the boundary within its
+    own rounding and was accepted, while a sphere at x = 0.09999 m overlaps its image by
+    10 um (0.01 R).  Whether a wall is clear is judged to float64's rounding of the box only."""
+    pv = np.array([[9.8e-4, 0, 99.995], [9.8e-4, 0.02, 99.995], [9.8e-4, 0.02, 100.005],
+                   [9.8e-4, 0, 100.005]], np.float32)
+    sim = Simulation(table(e=0.5, mu=0.3, E=1e8), gravity=(0, 0, 0), box=(0, 0.1, 0, 0.02),
+                     periodic=(True, False))
+    sim.add_particles([(0.09999, 0.01, 100.0)], 1e-3, "soil")
+    sim.add_mesh(pv, [[0, 1, 2], [0, 2, 3]], "soil", name="plate")
+    with pytest.raises(InputError, match=r"walls\.plate"):
+        sim.compute_forces()
+
+
+@pytest.mark.parametrize("rounding", [1e-4, 5e-4])
+def test_a_declared_rounding_forgives_no_more_than_the_periodic_step(rounding):
+    """A floor rising 5 mm over a 0.1 m period (R = 1 mm) and a plate across x 0.5 mm inside
+    x = 0 were accepted when added with rounding=5e-4 (the plate also with 1e-4): 8 x the
+    rounding was forgiven as a rise and as clearance.  A rounding whose 4 ulps exceed the
+    2e-4 R_min step the periodic checks allow is refused, naming the field; one within it
+    keeps a level floor accepted."""
+    floor = np.array([[0, 0, 0], [0.1, 0, 0.005], [0.1, 0.02, 0.005], [0, 0.02, 0]])
+    plate = np.array([[5e-4, 0, 0], [5e-4, 0.02, 0], [5e-4, 0.02, 0.01], [5e-4, 0, 0.01]])
+    for v, x in ((floor, (0.0995, 0.01, 0.0059)), (plate, (0.0995, 0.01, 0.005))):
+        sim = Simulation(table(e=0.5, mu=0.3, E=1e8), gravity=(0, 0, 0),
+                         box=(0, 0.1, 0, 0.02), periodic=(True, False))
+        sim.add_particles([x], 1e-3, "soil")
+        sim.add_mesh(v, [[0, 1, 2], [0, 2, 3]], "soil", name="w", rounding=rounding)
+        with pytest.raises(InputError, match=r"walls\.w\.rounding.*at most 2\.5e-5 R_min"):
+            sim.compute_forces()
+    level = floor * [1, 1, 0]
+    sim = Simulation(table(e=0.5, mu=0.3, E=1e8), gravity=(0, 0, 0), box=(0, 0.1, 0, 0.02),
+                     periodic=(True, False))
+    sim.add_particles([(0.0995, 0.01, 0.0009)], 1e-3, "soil")
+    sim.add_mesh(level, [[0, 1, 2], [0, 2, 3]], "soil", name="w", rounding=2e-8)
+    sim.compute_forces()
+
+
+def test_a_refused_rise_names_the_remedy_for_a_float32_mesh_made_float64():
+    """A mesh face refused for its rise over the period tells how a binary STL's float32
+    allowance is kept (a float32 mesh moved with float64 numbers is judged as float64)."""
+    floor = np.array([[0, 0, 0], [0.1, 0, 0.005], [0.1, 0.02, 0.005], [0, 0.02, 0]])
+    sim = Simulation(table(e=0.5, mu=0.3, E=1e8), gravity=(0, 0, 0), box=(0, 0.1, 0, 0.02),
+                     periodic=(True, False))
+    sim.add_particles([(0.0995, 0.01, 0.0059)], 1e-3, "soil")
+    sim.add_mesh(floor, [[0, 1, 2], [0, 2, 3]], "soil", name="w")
+    with pytest.raises(InputError, match=r"walls\.w.*astype\(np\.float32\).*add_stl"
+                                         r"\(scale=\).*rounding="):
+        sim.compute_forces()
+
+
+def test_grouped_walls_are_held_to_the_strictest_of_their_own_limits():
+    """A floor (float64) whose section at x = 0.1 m stands 20 um above the one at x = 0
+    (R = 1 mm: a sphere crossing the boundary lands 20 um deeper, twice its 0.01 R overlap)
+    is refused alone.  With an unrelated ridge stored as float32 at z = 100 m (4 ulps: 4.8e-5
+    m) beside it, the two were re-checked as one surface within the ridge's limit and the
+    floor accepted; the group is now held to each wall's own, the floor's."""
+    from soilcal.dem.geometry import box_mesh
+
+    step = 2e-5
+    fv = np.array([[0, 0, 0], [0.05, 0, 0], [0.05, 0.01, 0], [0, 0.01, 0],
+                   [0.05, 0, step], [0.1, 0, step], [0.1, 0.01, step], [0.05, 0.01, step]])
+    bv, bt = box_mesh((0.0, 0.015, 100.0), (0.1, 0.02, 100.01))
+    for ridge in (False, True):
+        sim = Simulation(table(e=0.5, mu=0.3, E=1e8), gravity=(0, 0, 0), dt=1e-6,
+                         box=(0, 0.1, 0, 0.02), periodic=(True, False))
+        sim.add_particles([(0.0999, 0.005, step + 0.0009)], 1e-3, "soil")
+        sim.add_mesh(fv, [[0, 1, 2], [0, 2, 3], [4, 5, 6], [4, 6, 7]], "soil", name="floor")
+        if ridge:
+            sim.add_mesh(np.asarray(bv, np.float32), np.asarray(bt), "soil", name="ridge")
+        with pytest.raises(InputError, match=r"walls\.floor.*not those one period away"):
+            sim.compute_forces()
 
 
 @pytest.mark.parametrize("rise", [1e-3, 2e-5])
@@ -1535,7 +1612,8 @@ def test_an_ascii_stl_is_taken_as_written_not_as_rounded_to_its_shortest_number(
     write_stl(binary=False) (repr: '0.1', '0.001', '2e-05') its numbers were taken as rounded
     to their last digit (up to 0.05 m) and the floor was accepted by add_stl; as arrays it
     was refused.  Now it is refused both ways; a level floor written so is accepted, and a
-    rounding the user declares (rounding=) is the one forgiven."""
+    rounding the user declares (rounding=) that would forgive the rise (8 x rounding beyond
+    the 2e-4 R_min step allowed) is refused, naming the field."""
     from soilcal.dem.stl import write_stl
 
     write_stl(tmp_path / "f.stl", *_slab_floor(rise), binary=False)
@@ -1547,10 +1625,11 @@ def test_an_ascii_stl_is_taken_as_written_not_as_rounded_to_its_shortest_number(
     sim = _slab_sim()
     sim.add_stl(tmp_path / "g.stl", "soil", name="floor")
     sim.compute_forces()
-    # declared: stored to within `rise` (8 x that is forgiven)
+    # declared: stored to within `rise`, far beyond the step a sphere of 1 mm tolerates
     sim = _slab_sim()
     sim.add_stl(tmp_path / "f.stl", "soil", name="floor", rounding=rise)
-    sim.compute_forces()
+    with pytest.raises(InputError, match=r"walls\.floor\.rounding"):
+        sim.compute_forces()
 
 
 def test_an_integer_millimetre_ascii_stl_rising_3_mm_is_refused(tmp_path):

@@ -817,8 +817,10 @@ class Simulation:
         it was stored [m] (a CAD export rounded to 0.01 mm: 5e-6); by default the unit
         roundoff of the vertices' own type: float32 (2^-24 |x|: a binary STL as
         ``read_stl`` returns it, scaled or not) or float64 (any other array, whatever its
-        numbers).  The checks of a periodic box forgive a face that much tilt and step, no
-        more, and only that face."""
+        numbers; a float32 array moved with float64 numbers is float64).  The checks of a
+        periodic box forgive a face that much tilt, no more, and only that face; there a
+        declared rounding may be at most 2.5e-5 R_min (its 8 x within the 2e-4 R_min step
+        allowed), and none makes a wall count as clear of a boundary."""
         raw = vertices
         v = _rows(self.source, "walls.mesh.vertices", vertices, None, "vertices [m]")
         t = np.asarray(triangles)
@@ -866,6 +868,8 @@ class Simulation:
             self.__dict__.setdefault("_mesh_facets", {})[w] = fa.astype(np.int64)
         # each face's: the largest of its corners'
         self.__dict__.setdefault("_mesh_rounding", {})[w] = rd[t].max(axis=1)
+        if rounding is not None:
+            self.__dict__.setdefault("_mesh_declared", {})[w] = rd
         return w
 
     def add_stl(self, path, material, scale=1.0, weld_tol=0.0, rounding=None, **kw) -> int:
@@ -882,8 +886,28 @@ class Simulation:
                              "face by its facet in the file itself)", kw["facets"])
         v, t, fa, rd = read_stl(path, scale=scale, weld_tol=weld_tol, facets=True,
                                 rounding=True)
-        return self.add_mesh(v, t, material, facets=fa,
-                             rounding=rd if rounding is None else rounding, **kw)
+        w = self.add_mesh(v, t, material, facets=fa,
+                          rounding=rd if rounding is None else rounding, **kw)
+        if rounding is None:  # the file's own storage, not a rounding the user declared
+            self.__dict__.get("_mesh_declared", {}).pop(w, None)
+        return w
+
+    def _check_declared_rounding(self, q):
+        """A rounding given to add_mesh or add_stl (rounding=) is forgiven by a periodic
+        box's checks only up to the step they allow: its 4 ulps (8 x rounding) at most
+        2e-4 R_min, else a declared rounding would forgive steps and rises that change
+        contacts (a floor rising 5 mm accepted for rounding=5e-4)."""
+        r_min = float(self.p.r.min())
+        for w, rd in self.__dict__.get("_mesh_declared", {}).items():
+            if rd.size and 8.0 * float(rd.max()) > 2e-4 * r_min:
+                name = self.walls.names[w]
+                raise InputError(
+                    self.source, f"walls.{name}.rounding",
+                    f"in a box periodic in {('x', 'y')[q]}: a rounding [m] of at most "
+                    f"2.5e-5 R_min = {2.5e-5 * r_min:.3g} m (its 4 ulps, 8 x rounding, within "
+                    f"the 2e-4 R_min step the periodic checks allow; a coarser one would "
+                    f"forgive steps that change contacts)",
+                    f"{float(rd.max()):.3g} m")
 
     def _rounding(self) -> np.ndarray:
         """How far each primitive's stored coordinates may lie from where they were drawn
@@ -1226,6 +1250,11 @@ class Simulation:
             # per primitive: each face is judged with its own rounding (a coarsely stored
             # mesh elsewhere in the box loosens no other wall's checks)
             res = self._rounding()
+            self._check_declared_rounding(q)
+            # whether a wall is clear of the boundaries (within reach of a sphere beside one)
+            # is judged to float64's rounding of the box's numbers only: no wall's stored
+            # rounding makes it count as clear
+            eps_c = 4.0 * float(np.finfo(np.float64).eps) * max(abs(lo), abs(hi))
             eps_all = np.maximum(max(2e-4 * rho, 4.0 * float(np.finfo(np.float64).eps)
                                      * max(abs(lo), abs(hi))), 8.0 * res)
             # the largest rise over the period of a flat face along q (plane, rectangle,
@@ -1310,14 +1339,11 @@ class Simulation:
             a = np.where(moves, np.minimum(a, a + vq * span), a)
             b = np.where(moves, np.maximum(b, b + vq * span), b)
             has[w] = True
-            # each wall's: the largest of its faces' (whether it is clear of the boundaries)
-            eps_w = np.zeros(nw)
-            np.maximum.at(eps_w, w, eps)
             np.minimum.at(a_w, w, a)
             np.maximum.at(b_w, w, b)
             # within reach of a sphere in the box beside a boundary (farther out, unreachable)
-            near = (((a < lo + rho - eps) & (b > lo - rho + eps))
-                    | ((a < hi + rho - eps) & (b > hi - rho + eps)))
+            near = (((a < lo + rho - eps_c) & (b > lo - rho + eps_c))
+                    | ((a < hi + rho - eps_c) & (b > hi - rho + eps_c)))
             off = near & ~flat & ~(cap & ~turn & ~moves)
             bad[w[off]] = True
             w_of, off_of, turn_of = w, off, turn  # per primitive in ks (w is reused below)
@@ -1331,12 +1357,16 @@ class Simulation:
                 if not has[w]:
                     continue
                 A, B = a_w[w], b_w[w]
-                if A >= lo + rho - eps_w[w] and B <= hi - rho + eps_w[w]:
+                if A >= lo + rho - eps_c and B <= hi - rho + eps_c:
                     continue  # clear of both boundaries
                 why = ("a face within the largest radius of a boundary that does not run "
                        f"along {names[q]}" + (f" (a flat face rising over the period by more "
                        f"than {eps_p[ks[w_of == w]].min():.3g} m, max(2e-4 R_min, 4 ulps of "
-                       f"its coordinates as stored), as a plane would)" if tilted[w] else "")
+                       f"its coordinates as stored), as a plane would; vertices are judged "
+                       f"as float64 unless given as float32: a binary STL moved or scaled with "
+                       f"float64 numbers loses float32's allowance, keep them float32 "
+                       f"(.astype(np.float32)), read it with add_stl(scale=) or give add_mesh "
+                       f"rounding=)" if tilted[w] else "")
                        + f", {self._face_at_fault(q, w, ks, w_of, off_of, turn_of, unit, rises)}"
                        if bad[w] else None)
                 if why is None:
@@ -1344,8 +1374,8 @@ class Simulation:
                 if why is not None and not bad[w]:
                     # tiles: the walls moving with this one, judged as one surface
                     mates = [g for g in range(nw) if has[g] and not bad[g]
-                             and not (a_w[g] >= lo + rho - eps_w[g]
-                                      and b_w[g] <= hi - rho + eps_w[g])
+                             and not (a_w[g] >= lo + rho - eps_c
+                                      and b_w[g] <= hi - rho + eps_c)
                              and np.array_equal(wa["wall_vel"][g], wa["wall_vel"][w])
                              and np.array_equal(wa["wall_omega"][g], wa["wall_omega"][w])
                              and (not np.any(wa["wall_omega"][w] != 0)
@@ -1433,17 +1463,23 @@ class Simulation:
         radius; the sections exactly one period apart (q = lo and hi), which a sphere crossing
         the boundary meets in turn, within max(2e-4 R_min, 4 ulps as stored), the limit of a
         flat face's rise over the period.  ``eps_all``: each primitive's tolerance of where
-        it lies (its stored rounding), of which the largest among these walls' is taken."""
+        it lies (its stored rounding): each wall's largest, the smallest of those among
+        these walls taken (no wall's rounding loosens another's check)."""
         wa = self._warr
         lo, hi = float(self.box[2 * q]), float(self.box[2 * q + 1])
         sel = np.isin(wa["prim_wall"][ks], walls)
-        eps = float(eps_all[ks[sel]].max())
+        # walls judged together (tiles) are held to the strictest of their own limits (each
+        # wall's: the largest of its faces'): a coarsely stored wall loosens no other's
+        wk = wa["prim_wall"][ks]
+        eps = min(float(eps_all[ks[wk == g]].max()) for g in walls if np.any(wk == g))
         prims = ks[sel & flat]
         par = wa["prim_par"][prims]
         shift = float(wa["wall_vel"][walls[0], q]) * span
         # 4 ulps of the faces' coordinates as stored (8 unit roundoffs: float32 for a
         # binary STL, the last digit of an ASCII one, float64 for arrays)
-        ulps = 8.0 * float(self._rounding()[prims].max()) if prims.size else 0.0
+        res, pw = self._rounding()[prims], wa["prim_wall"][prims]
+        ulps = (8.0 * min(float(res[pw == g].max()) for g in walls if np.any(pw == g))
+                if prims.size else 0.0)
         tol = max(2e-4 * rho, ulps)
         # one period on, the section a sphere crossing the boundary meets in place of the
         # one at lo: the step between them is judged as a flat face's rise over the period
