@@ -1319,8 +1319,9 @@ def test_a_floor_of_small_faces_rising_over_the_period_beside_a_large_stone_is_r
     mats = table(e=0.5, mu=0.3, E=1e8)
     for slope in (1.5e-5, 0.0):
         sim = Simulation(mats, gravity=(0, 0, 0), box=(0, L, 0, W), periodic=(True, False))
-        sim.add_mesh(np.c_[X.ravel(), Y.ravel(), 0.1 + slope * X.ravel()], tri, "soil",
-                     name="floor")
+        v = np.c_[X.ravel(), Y.ravel(), 0.1 + slope * X.ravel()]
+        # rising, as a binary STL stores it (float32): each face's tilt within its rounding
+        sim.add_mesh(v.astype(np.float32) if slope else v, tri, "soil", name="floor")
         sim.add_particles([(L / 2, W / 2, 0.15)], 0.02, "soil")
         if stone_first:
             sim.compute_forces()
@@ -1329,13 +1330,13 @@ def test_a_floor_of_small_faces_rising_over_the_period_beside_a_large_stone_is_r
         if slope:
             with pytest.raises(InputError, match=r"walls\.floor.*one period away.*a step") as err:
                 sim.compute_forces()
-            # the limit printed is the one the text names: 2e-4 R_min = 3e-7 m (the float32
-            # ulps of coordinates up to 0.21 m, 1e-7 m, are smaller)
-            m = re.search(r"within (\S+) m \(max\(2e-4 R_min = (\S+) m, 4 float32 ulps of the "
-                          r"coordinates = (\S+) m\)", str(err.value))
+            # the limit printed is the one the text names: 2e-4 R_min = 3e-7 m (4 float32
+            # ulps of coordinates up to 0.21 m, 8 x 2^-24 x 0.21 m = 1e-7 m, are smaller)
+            m = re.search(r"within (\S+) m \(max\(2e-4 R_min = (\S+) m, 4 ulps of the "
+                          r"coordinates as stored = (\S+) m\)", str(err.value))
             assert m is not None, str(err.value)
             assert float(m[1]) == float(m[2]) == pytest.approx(2e-4 * r, rel=1e-3)
-            assert float(m[3]) == pytest.approx(4.8e-7 * (L + 0.01), rel=5e-3)  # 3 digits
+            assert float(m[3]) == pytest.approx(8 * 2.0 ** -24 * (L + 0.01), rel=5e-3)
         else:
             f = np.linalg.norm(sim.compute_forces()[0][sim.p.r == r], axis=1)
             assert f == pytest.approx([_hertz_wall_force(mats, r, 0.01 * r)] * 2, rel=1e-6)
@@ -1417,3 +1418,359 @@ def test_a_wall_tilted_along_the_periodic_axis_by_a_step_a_contact_feels_is_refu
             else:
                 f = np.linalg.norm(sim.compute_forces()[0][0])
                 assert f == pytest.approx(_hertz_wall_force(mats, R, R - dist(x)), rel=1e-6)
+
+
+def _far_floor(rise):
+    """A floor z = 0.1 + rise (x - 100) / 0.2 over x = 100 .. 100.2 m, y = 0 .. 0.02 m."""
+    X, Y = np.meshgrid(np.linspace(100.0, 100.2, 3), [0.0, 0.02])
+    v = np.c_[X.ravel(), Y.ravel(), 0.1 + rise * (X.ravel() - 100.0) / 0.2]
+    return v, np.array([[0, 1, 4], [0, 4, 3], [1, 2, 5], [1, 5, 4]])
+
+
+def _far_sim():
+    sim = Simulation(table(e=0.5, mu=0.3, E=1e8), gravity=(0, 0, 0), box=(100.0, 100.2, 0, 0.02),
+                     periodic=(True, False))
+    sim.add_particles([(100.1, 0.01, 0.101)], 1e-3, "soil")
+    return sim
+
+
+@pytest.mark.parametrize("how", ["array", "ascii", "binary"])
+def test_a_floor_far_from_the_origin_is_forgiven_the_rounding_of_its_storage_only(how, tmp_path):
+    """A floor over x = 100 .. 100.2 m rising 20 um over the period: a sphere of R = 1 mm
+    crossing the boundary lands 20 um deeper or shallower (its 0.01 R overlap doubled or
+    gone), 100 times the limit 2e-4 R_min = 0.2 um.  Four float32 ulps at x = 100 m are
+    8 x 2^-24 x 100 m = 48 um, which was forgiven whatever the mesh was stored in: the floor
+    was accepted.  Given as float64 arrays, or as an ASCII STL whose numbers carry 17
+    digits, it is refused; written as binary STL (float32 vertices: 100.1 m is stored 3.1 um
+    off, so a face's rise of 20 um is within the rounding) it is accepted."""
+    from soilcal.dem.stl import write_stl
+
+    v, t = _far_floor(20e-6)
+    sim = _far_sim()
+    if how == "array":
+        sim.add_mesh(v, t, "soil", name="floor")
+    else:
+        write_stl(tmp_path / "f.stl", v, t, binary=how == "binary")
+        sim.add_stl(tmp_path / "f.stl", "soil", name="floor")
+    if how == "binary":
+        sim.compute_forces()
+    else:
+        with pytest.raises(InputError, match=r"walls\.floor.*rising 2(\.\d*)?e-05 m over the period"):
+            sim.compute_forces()
+    # level, it is accepted whichever way it was given
+    sim = _far_sim()
+    sim.add_mesh(*_far_floor(0.0), "soil", name="floor")
+    sim.compute_forces()
+
+
+def test_read_stl_gives_each_vertex_the_rounding_its_file_stored_it_with(tmp_path):
+    """Binary STL: float32, |fl(x) - x| <= 2^-24 |x|, the vertices returned as float32 (scaled
+    in float32, so add_mesh knows them); ASCII: its numbers taken as written, float64's unit
+    roundoff 2^-53 |x| whatever format wrote them (%e, %f, integers), times ``scale``."""
+    from soilcal.dem.stl import read_stl, write_stl
+
+    v = np.array([[100.0, 0.0, 0.1], [100.2, 0.0, 0.1], [100.0, 0.02, 0.1]])
+    t = np.array([[0, 1, 2]])
+    write_stl(tmp_path / "b.stl", v, t)
+    vb, _, rd = read_stl(tmp_path / "b.stl", rounding=True)
+    assert vb.dtype == np.float32
+    assert rd == pytest.approx(2.0 ** -24 * np.abs(vb.astype(float)).max(axis=1), rel=1e-12)
+    vm = read_stl(tmp_path / "b.stl", scale=1e-3)[0]
+    assert vm.dtype == np.float32
+    assert vm.astype(float) == pytest.approx(1e-3 * vb.astype(float), rel=1e-7)
+    for fmt in ("{:.6e}", "{:.4f}", "{!r}"):
+        lines = ["solid s", "facet normal 0 0 1", "outer loop"]
+        lines += ["vertex " + " ".join(fmt.format(float(c)) for c in p) for p in v]
+        lines += ["endloop", "endfacet", "endsolid s"]
+        (tmp_path / "a.stl").write_text("\n".join(lines) + "\n")
+        va, _, rd = read_stl(tmp_path / "a.stl", rounding=True)
+        assert va.dtype == np.float64
+        assert rd == pytest.approx(2.0 ** -53 * np.abs(v).max(axis=1), rel=1e-9)
+        _, _, rd = read_stl(tmp_path / "a.stl", scale=1e-3, rounding=True)
+        assert rd == pytest.approx(1e-3 * 2.0 ** -53 * np.abs(v).max(axis=1), rel=1e-9)
+
+
+def _slab_floor(rise, L=0.1, W=0.02):
+    """Two triangles z = rise x / L over x = 0 .. L, y = 0 .. W (a floor rising ``rise``
+    over a period L along x)."""
+    v = np.array([[0, 0, 0], [L, 0, rise], [L, W, rise], [0, W, 0]], float)
+    return v, np.array([[0, 1, 2], [0, 2, 3]])
+
+
+def _slab_sim(L=0.1, W=0.02, periodic=(True, True)):
+    sim = Simulation(table(e=0.5, mu=0.3, E=1e8), gravity=(0, 0, 0), box=(0, L, 0, W),
+                     periodic=periodic)
+    sim.add_particles([(L / 2, W / 2, 0.002)], 1e-3, "soil")
+    return sim
+
+
+def test_a_coarsely_stored_mesh_loosens_no_other_walls_periodic_checks():
+    """A plate across x (normal along x) at x = 0.98 mm in a box periodic in x, 20 um within
+    the largest radius (1 mm) of the boundary x = 0: a sphere at x = 0.09999 m meets the
+    plate's image 0.99 mm away, an overlap of 10 um (0.01 R) that wall contacts do not see,
+    so the plate is refused.  A block in the middle of the box stored as float32 at z = 100 m (2^-24 x 100 m
+    = 6e-6 m per vertex, eight of which, 4.8e-5 m, were once the tolerance of every face)
+    let the plate count as clear of the boundary: its rounding is its own faces'."""
+    from soilcal.dem.geometry import box_mesh
+
+    pv = np.array([[9.8e-4, 0, 0], [9.8e-4, 0.02, 0], [9.8e-4, 0.02, 0.01], [9.8e-4, 0, 0.01]])
+    bv, bt = box_mesh((0.04, 0.005, 100.0), (0.06, 0.015, 100.01))
+    for block in (True, False):
+        sim = Simulation(table(e=0.5, mu=0.3, E=1e8), gravity=(0, 0, 0), box=(0, 0.1, 0, 0.02),
+                         periodic=(True, False))
+        sim.add_particles([(0.09999, 0.01, 0.005)], 1e-3, "soil")
+        sim.add_mesh(pv, [[0, 1, 2], [0, 2, 3]], "soil", name="plate")
+        if block:
+            sim.add_mesh(np.asarray(bv, np.float32), np.asarray(bt), "soil", name="block")
+        with pytest.raises(InputError, match=r"walls\.plate") as e:
+            sim.compute_forces()
+        if not block:
+            # the plate's faces cross the axis: named as such, not as a rise of 1e6 m
+            assert "at 90 degrees to the x axis" in str(e.value)
+            assert "rising" not in str(e.value)
+
+
+def test_a_walls_own_rounding_never_makes_it_clear_of_a_periodic_boundary():
+    """The same plate at x = 0.98 mm, itself stored as float32 at z = 100 m (a rounding of
+    6e-6 m per vertex, 4.8e-5 m for 4 ulps): it counted as clear of the boundary within its
+    own rounding and was accepted, while a sphere at x = 0.09999 m overlaps its image by
+    10 um (0.01 R).  Whether a wall is clear is judged to float64's rounding of the box only."""
+    pv = np.array([[9.8e-4, 0, 99.995], [9.8e-4, 0.02, 99.995], [9.8e-4, 0.02, 100.005],
+                   [9.8e-4, 0, 100.005]], np.float32)
+    sim = Simulation(table(e=0.5, mu=0.3, E=1e8), gravity=(0, 0, 0), box=(0, 0.1, 0, 0.02),
+                     periodic=(True, False))
+    sim.add_particles([(0.09999, 0.01, 100.0)], 1e-3, "soil")
+    sim.add_mesh(pv, [[0, 1, 2], [0, 2, 3]], "soil", name="plate")
+    with pytest.raises(InputError, match=r"walls\.plate"):
+        sim.compute_forces()
+
+
+@pytest.mark.parametrize("rounding", [1e-4, 5e-4])
+def test_a_declared_rounding_forgives_no_more_than_the_periodic_step(rounding):
+    """A floor rising 5 mm over a 0.1 m period (R = 1 mm) and a plate across x 0.5 mm inside
+    x = 0 were accepted when added with rounding=5e-4 (the plate also with 1e-4): 8 x the
+    rounding was forgiven as a rise and as clearance.  A rounding whose 4 ulps exceed the
+    2e-4 R_min step the periodic checks allow is refused, naming the field; one within it
+    keeps a level floor accepted."""
+    floor = np.array([[0, 0, 0], [0.1, 0, 0.005], [0.1, 0.02, 0.005], [0, 0.02, 0]])
+    plate = np.array([[5e-4, 0, 0], [5e-4, 0.02, 0], [5e-4, 0.02, 0.01], [5e-4, 0, 0.01]])
+    for v, x in ((floor, (0.0995, 0.01, 0.0059)), (plate, (0.0995, 0.01, 0.005))):
+        sim = Simulation(table(e=0.5, mu=0.3, E=1e8), gravity=(0, 0, 0),
+                         box=(0, 0.1, 0, 0.02), periodic=(True, False))
+        sim.add_particles([x], 1e-3, "soil")
+        sim.add_mesh(v, [[0, 1, 2], [0, 2, 3]], "soil", name="w", rounding=rounding)
+        with pytest.raises(InputError, match=r"walls\.w\.rounding.*at most 2\.5e-5 R_min"):
+            sim.compute_forces()
+    level = floor * [1, 1, 0]
+    sim = Simulation(table(e=0.5, mu=0.3, E=1e8), gravity=(0, 0, 0), box=(0, 0.1, 0, 0.02),
+                     periodic=(True, False))
+    sim.add_particles([(0.0995, 0.01, 0.0009)], 1e-3, "soil")
+    sim.add_mesh(level, [[0, 1, 2], [0, 2, 3]], "soil", name="w", rounding=2e-8)
+    sim.compute_forces()
+
+
+def test_a_refused_rise_names_the_remedy_for_a_float32_mesh_made_float64():
+    """A mesh face refused for its rise over the period tells how a binary STL's float32
+    allowance is kept (a float32 mesh moved with float64 numbers is judged as float64)."""
+    floor = np.array([[0, 0, 0], [0.1, 0, 0.005], [0.1, 0.02, 0.005], [0, 0.02, 0]])
+    sim = Simulation(table(e=0.5, mu=0.3, E=1e8), gravity=(0, 0, 0), box=(0, 0.1, 0, 0.02),
+                     periodic=(True, False))
+    sim.add_particles([(0.0995, 0.01, 0.0059)], 1e-3, "soil")
+    sim.add_mesh(floor, [[0, 1, 2], [0, 2, 3]], "soil", name="w")
+    with pytest.raises(InputError, match=r"walls\.w.*astype\(np\.float32\).*add_stl"
+                                         r"\(scale=\).*rounding="):
+        sim.compute_forces()
+
+
+def test_grouped_walls_are_held_to_the_strictest_of_their_own_limits():
+    """A floor (float64) whose section at x = 0.1 m stands 20 um above the one at x = 0
+    (R = 1 mm: a sphere crossing the boundary lands 20 um deeper, twice its 0.01 R overlap)
+    is refused alone.  With an unrelated ridge stored as float32 at z = 100 m (4 ulps: 4.8e-5
+    m) beside it, the two were re-checked as one surface within the ridge's limit and the
+    floor accepted; the group is now held to each wall's own, the floor's."""
+    from soilcal.dem.geometry import box_mesh
+
+    step = 2e-5
+    fv = np.array([[0, 0, 0], [0.05, 0, 0], [0.05, 0.01, 0], [0, 0.01, 0],
+                   [0.05, 0, step], [0.1, 0, step], [0.1, 0.01, step], [0.05, 0.01, step]])
+    bv, bt = box_mesh((0.0, 0.015, 100.0), (0.1, 0.02, 100.01))
+    for ridge in (False, True):
+        sim = Simulation(table(e=0.5, mu=0.3, E=1e8), gravity=(0, 0, 0), dt=1e-6,
+                         box=(0, 0.1, 0, 0.02), periodic=(True, False))
+        sim.add_particles([(0.0999, 0.005, step + 0.0009)], 1e-3, "soil")
+        sim.add_mesh(fv, [[0, 1, 2], [0, 2, 3], [4, 5, 6], [4, 6, 7]], "soil", name="floor")
+        if ridge:
+            sim.add_mesh(np.asarray(bv, np.float32), np.asarray(bt), "soil", name="ridge")
+        with pytest.raises(InputError, match=r"walls\.floor.*not those one period away"):
+            sim.compute_forces()
+
+
+@pytest.mark.parametrize("rise", [1e-3, 2e-5])
+def test_an_ascii_stl_is_taken_as_written_not_as_rounded_to_its_shortest_number(rise, tmp_path):
+    """A floor rising 1 mm (or 20 um) over a 0.1 m period, R = 1 mm: a sphere crossing the
+    boundary lands that much deeper, 5 (0.1) times its 0.01 R overlap.  Written by
+    write_stl(binary=False) (repr: '0.1', '0.001', '2e-05') its numbers were taken as rounded
+    to their last digit (up to 0.05 m) and the floor was accepted by add_stl; as arrays it
+    was refused.  Now it is refused both ways; a level floor written so is accepted, and a
+    rounding the user declares (rounding=) that would forgive the rise (8 x rounding beyond
+    the 2e-4 R_min step allowed) is refused, naming the field."""
+    from soilcal.dem.stl import write_stl
+
+    write_stl(tmp_path / "f.stl", *_slab_floor(rise), binary=False)
+    sim = _slab_sim()
+    sim.add_stl(tmp_path / "f.stl", "soil", name="floor")
+    with pytest.raises(InputError, match=r"walls\.floor.*rising"):
+        sim.compute_forces()
+    write_stl(tmp_path / "g.stl", *_slab_floor(0.0), binary=False)
+    sim = _slab_sim()
+    sim.add_stl(tmp_path / "g.stl", "soil", name="floor")
+    sim.compute_forces()
+    # declared: stored to within `rise`, far beyond the step a sphere of 1 mm tolerates
+    sim = _slab_sim()
+    sim.add_stl(tmp_path / "f.stl", "soil", name="floor", rounding=rise)
+    with pytest.raises(InputError, match=r"walls\.floor\.rounding"):
+        sim.compute_forces()
+
+
+def test_an_integer_millimetre_ascii_stl_rising_3_mm_is_refused(tmp_path):
+    """A CAD floor written in whole millimetres, 400 x 40 mm at z = 100 mm, read with
+    scale=1e-3 into a box periodic over 0.4 m: z = 103 mm at x = 400 mm is a rise of 3 mm over
+    the period (a 1 mm sphere crossing lands 3 mm deep), refused; it was forgiven as
+    rounding of 0.5 mm (the integers' last digit).  z = 100 everywhere is accepted."""
+    for top, ok in (("100", True), ("103", False)):
+        P = [("0", "0", "100"), ("400", "0", top), ("400", "40", top), ("0", "40", "100")]
+        lines = ["solid floor"]
+        for tri in ((0, 1, 2), (0, 2, 3)):
+            lines += ["facet normal 0 0 1", "outer loop"]
+            lines += ["vertex " + " ".join(P[k]) for k in tri] + ["endloop", "endfacet"]
+        (tmp_path / "f.stl").write_text("\n".join(lines + ["endsolid floor"]) + "\n")
+        sim = Simulation(table(e=0.5, mu=0.3, E=1e8), gravity=(0, 0, 0), box=(0, 0.4, 0, 0.04),
+                         periodic=(True, True))
+        sim.add_particles([(0.2, 0.02, 0.102)], 1e-3, "soil")
+        sim.add_stl(tmp_path / "f.stl", "soil", scale=1e-3, name="floor")
+        if ok:
+            sim.compute_forces()
+        else:
+            with pytest.raises(InputError, match=r"walls\.floor.*rising 0\.003 m"):
+                sim.compute_forces()
+
+
+def test_a_millimetre_binary_stl_read_and_scaled_keeps_float32s_allowance(tmp_path):
+    """A level floor (along x) of 4 mm triangles with jittered corners at z = 100 mm + 0.1 y,
+    written as binary STL in millimetres: float32 rounds each corner by up to 2^-24 |x|,
+    tilting small faces by a few 1e-6.  Read with read_stl(scale=1e-3) (or read and then
+    multiplied by 1e-3) and given to add_mesh it was refused for that noise (a rise of
+    4.6e-7 m against 2e-7 m: float64 arrays were judged as float64); read_stl now returns a
+    binary file's float32 numbers, scaled in float32, and the floor is accepted as add_stl
+    accepts it.  The same floor rising 20 um over the period is refused all ways."""
+    from soilcal.dem.stl import read_stl, write_stl
+
+    rng = np.random.default_rng(1)
+    xs, ys = np.arange(0, 400.001, 4.0), np.arange(0, 40.001, 4.0)
+    X, Y = (a.copy() for a in np.meshgrid(xs, ys))
+    inner = (X > 0) & (X < 400) & (Y > 0) & (Y < 40)
+    X[inner] += rng.uniform(-1, 1, inner.sum())
+    Y[inner] += rng.uniform(-1, 1, inner.sum())
+    nx, ny = len(xs), len(ys)
+    t = np.array([[j * nx + i, j * nx + i + 1, j * nx + i + nx + 1] for j in range(ny - 1)
+                  for i in range(nx - 1)] + [[j * nx + i, j * nx + i + nx + 1, j * nx + i + nx]
+                                             for j in range(ny - 1) for i in range(nx - 1)])
+    for rise_mm, ok in ((0.0, True), (0.02, False)):
+        v = np.c_[X.ravel(), Y.ravel(), 100.0 + 0.1 * Y.ravel() + rise_mm * X.ravel() / 400]
+        write_stl(tmp_path / "f.stl", v, t, binary=True)
+        for how in ("scale", "times", "add_stl"):
+            sim = Simulation(table(e=0.5, mu=0.3, E=1e8), gravity=(0, 0, 0),
+                             box=(0, 0.4, 0, 0.04), periodic=(True, False))
+            sim.add_particles([(0.2, 0.02, 0.2)], 1e-3, "soil")
+            if how == "scale":
+                sim.add_mesh(*read_stl(tmp_path / "f.stl", scale=1e-3), "soil", name="floor")
+            elif how == "times":
+                vv, tt = read_stl(tmp_path / "f.stl")
+                sim.add_mesh(vv * 1e-3, tt, "soil", name="floor")
+            else:
+                sim.add_stl(tmp_path / "f.stl", "soil", scale=1e-3, name="floor")
+            if ok:
+                sim.compute_forces()
+            else:
+                with pytest.raises(InputError, match=r"walls\.floor"):
+                    sim.compute_forces()
+
+
+@pytest.mark.parametrize("rise", [2.0 ** -15, 3.0e-5])
+def test_float64_vertices_are_judged_as_float64_whatever_numbers_they_hold(rise):
+    """A floor over x = 100 .. 100.25 m rising ~30 um over the period (R = 1 mm: 30 times
+    the 2e-4 R_min limit): as float64 arrays it is refused whether or not its numbers happen
+    to be float32 numbers (2^-15 is one; it was accepted with float32's 48 um allowance);
+    as float32 arrays (a binary STL's storage, 100 m rounded by up to 6 um) it is within
+    float32's allowance and accepted."""
+    v = np.array([[100, 0, 0.0], [100.25, 0, rise], [100.25, 0.03125, rise],
+                  [100, 0.03125, 0.0]], float)
+    for dtype in (np.float64, np.float32):
+        sim = Simulation(table(e=0.5, mu=0.3, E=1e8), gravity=(0, 0, 0),
+                         box=(100, 100.25, 0, 0.03125), periodic=(True, True))
+        sim.add_particles([(100.1, 0.015, 1e-3)], 1e-3, "soil")
+        sim.add_mesh(v.astype(dtype), [[0, 1, 2], [0, 2, 3]], "soil", name="floor")
+        if dtype == np.float32:
+            sim.compute_forces()
+        else:
+            with pytest.raises(InputError, match=r"walls\.floor.*rising"):
+                sim.compute_forces()
+
+
+def test_add_stl_refuses_facets_it_sets_itself(tmp_path):
+    """add_stl numbers refused faces by the file's facets itself: a facets= passed on to
+    add_mesh raised a TypeError (a duplicate argument); it is refused by name."""
+    from soilcal.dem.stl import write_stl
+
+    write_stl(tmp_path / "f.stl", *_slab_floor(0.0))
+    sim = _slab_sim()
+    with pytest.raises(InputError, match=r"f\.stl.*facets"):
+        sim.add_stl(tmp_path / "f.stl", "soil", facets=[0, 1])
+
+
+
+@pytest.mark.parametrize("bad", [[1e-9, 1e-9], -1e-9, float("nan"), "1e-9", True])
+def test_a_mesh_rounding_that_is_not_one_distance_per_vertex_is_refused(bad):
+    sim = _far_sim()
+    v, t = _far_floor(0.0)
+    with pytest.raises(InputError, match=r"walls\.mesh\.rounding.*one distance >= 0"):
+        sim.add_mesh(v, t, "soil", rounding=bad)
+
+
+def test_an_end_face_bridging_the_gap_between_two_bars_on_the_boundary_is_refused():
+    """Two bars along x spanning the period (y 0.01 .. 0.02 and 0.03 .. 0.04 m, z 0 .. 0.01
+    m), their end faces on x = 0 and x = L, and on each boundary one more end triangle with
+    corners (y, z) = (0.01, 0), (0.04, 0), (0.04, 0.002) m: each corner lies on a bar's
+    outline, but the triangle spans the open gap y 0.02 .. 0.03 between them.  A 1 mm sphere
+    in that gap beside x = 0, touching nothing of the periodic bars, was pushed by that face
+    (8.3 N along x).  The face is refused, naming the point (0.025, 0) of its edge outside
+    both outlines; without the bridging triangles the bars are accepted and the sphere feels
+    nothing."""
+    L = 0.1
+
+    def bar(y0, y1, z0=0.0, z1=0.01):
+        out = []
+        for (ya, za), (yb, zb) in (((y0, z0), (y1, z0)), ((y1, z0), (y1, z1)),
+                                   ((y1, z1), (y0, z1)), ((y0, z1), (y0, z0))):
+            out += _quad([0, ya, za], [L, ya, za], [L, yb, zb], [0, yb, zb])
+        return out
+
+    for bridge in (True, False):
+        tris = bar(0.01, 0.02) + bar(0.03, 0.04)
+        for x in (0.0, L):
+            tris += _quad([x, 0.01, 0], [x, 0.02, 0], [x, 0.02, 0.01], [x, 0.01, 0.01])
+            tris += _quad([x, 0.03, 0], [x, 0.04, 0], [x, 0.04, 0.01], [x, 0.03, 0.01])
+            if bridge:
+                tris += [[[x, 0.01, 0.0], [x, 0.04, 0.0], [x, 0.04, 0.002]]]
+        tris = np.array(tris, float)
+        sim = Simulation(table(E=1e8), gravity=(0, 0, 0), box=(0, L, 0, 0.05),
+                         periodic=(True, False))
+        sim.add_particles([[0.0005, 0.025, 0.0015]], 1e-3, "soil")
+        sim.add_mesh(tris.reshape(-1, 3), np.arange(tris.shape[0] * 3).reshape(-1, 3), "soil",
+                     name="bars")
+        if bridge:
+            with pytest.raises(InputError, match=r"walls\.bars.*an edge \(bridging open space.*"
+                               r"\(y, z\) = \(0\.025, 0\) m"):
+                sim.compute_forces()
+        else:
+            assert np.all(sim.compute_forces()[0][0] == 0)

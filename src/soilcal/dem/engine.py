@@ -492,6 +492,38 @@ def _inside_caps(pts, caps, tol, block: int = 500_000) -> np.ndarray:
     return out
 
 
+def _edge_outside(poly, loops, face, circ, tol):
+    """A point of the edges of the polygon ``poly`` [m, 2] (closed) outside every closed
+    outline (:func:`_enclosed`), or None: each edge is cut where it crosses a piece of
+    ``loops`` or a circle of ``circ``, and the middle of each part tested (an end face whose
+    corners lie in two solids bridges the open space between them)."""
+    for a, b in zip(poly, np.roll(poly, -1, axis=0)):
+        d = b - a
+        ts = [0.0, 1.0]
+        if loops.shape[0]:
+            e0, e = loops[:, 0], loops[:, 1] - loops[:, 0]
+            den = d[0] * e[:, 1] - d[1] * e[:, 0]
+            g = e0 - a
+            ok = np.abs(den) > 1e-300
+            den = np.where(ok, den, 1.0)
+            t = (g[:, 0] * e[:, 1] - g[:, 1] * e[:, 0]) / den
+            u = (g[:, 0] * d[1] - g[:, 1] * d[0]) / den
+            ts += t[ok & (t > 0) & (t < 1) & (u >= 0) & (u <= 1)].tolist()
+        for cx, cy, r in circ:
+            w = a - (cx, cy)
+            qa, qb, qc = d @ d, 2 * (w @ d), w @ w - r * r
+            disc = qb * qb - 4 * qa * qc
+            if qa > 0 and disc > 0:
+                ts += [t for t in ((-qb - disc ** 0.5) / (2 * qa), (-qb + disc ** 0.5) / (2 * qa))
+                       if 0 < t < 1]
+        ts = np.unique(ts)
+        for m in 0.5 * (ts[1:] + ts[:-1]):
+            pt = a + m * d
+            if not _enclosed(pt, loops, face, circ, tol):
+                return pt
+    return None
+
+
 def _enclosed(p, loops, face, circ, tol) -> bool:
     """Whether point ``p`` (2) lies inside or on (within ``tol``) a closed outline of
     ``loops`` [k, 2, 2] (those of one face ``face`` [k] crossing a ray from p an odd number
@@ -775,12 +807,21 @@ class Simulation:
                              [(DISK, vals, 0b1, 0b10)], velocity, omega, c)
 
     def add_mesh(self, vertices, triangles, material, name=None, velocity=(0, 0, 0),
-                 omega=(0, 0, 0), centre=None, facets=None) -> int:
+                 omega=(0, 0, 0), centre=None, facets=None, rounding=None) -> int:
         """Triangle mesh wall (boxes, STL tools); one primitive per triangle.  ``omega``
         turns it about ``centre``, by default the mean of its vertices (the axis of a drum,
         the middle of a box; give the shaft of a paddle or blade explicitly).  ``facets``:
         each triangle's facet index in its STL file (``read_stl(path, facets=True)``, which
-        leaves out facets without area), by which a refused face is named."""
+        leaves out facets without area), by which a refused face is named.  ``rounding``:
+        how far each vertex [nv] (or all, one number) may lie from where it was drawn, as
+        it was stored [m] (a CAD export rounded to 0.01 mm: 5e-6); by default the unit
+        roundoff of the vertices' own type: float32 (2^-24 |x|: a binary STL as
+        ``read_stl`` returns it, scaled or not) or float64 (any other array, whatever its
+        numbers; a float32 array moved with float64 numbers is float64).  The checks of a
+        periodic box forgive a face that much tilt, no more, and only that face; there a
+        declared rounding may be at most 2.5e-5 R_min (its 8 x within the 2e-4 R_min step
+        allowed), and none makes a wall count as clear of a boundary."""
+        raw = vertices
         v = _rows(self.source, "walls.mesh.vertices", vertices, None, "vertices [m]")
         t = np.asarray(triangles)
         if (t.ndim != 2 or t.shape[1] != 3 or t.size == 0 or not np.issubdtype(t.dtype, np.integer)
@@ -804,12 +845,83 @@ class Simulation:
                 raise InputError(self.source, "walls.mesh.facets",
                                  f"one whole facet index >= 0 per triangle ({len(t)})",
                                  f"an array of shape {fa.shape} and type {fa.dtype}")
+        if rounding is None:
+            # the vertices' own type: float32 (a binary STL's, as read_stl returns it), else
+            # float64 (a float64 array is judged as one, whatever numbers it holds)
+            kind = np.asarray(raw).dtype
+            ftype = np.dtype(np.float32) if kind == np.float32 else np.dtype(np.float64)
+            # the unit roundoff: |fl(x) - x| <= eps / 2 |x|
+            rd = 0.5 * float(np.finfo(ftype).eps) * np.abs(v).max(axis=1)
+        else:
+            rd = np.asarray(rounding, dtype=float) if np.ndim(rounding) else np.full(
+                len(v), float(rounding) if isinstance(rounding, (int, float, np.number))
+                and not isinstance(rounding, bool) else np.nan)
+            if rd.shape != (len(v),) or not np.all(np.isfinite(rd)) or np.any(rd < 0):
+                raise InputError(self.source, "walls.mesh.rounding",
+                                 f"one distance >= 0 [m] per vertex ({len(v)}) or one for all",
+                                 f"{rounding!r}" if np.ndim(rounding) == 0 else
+                                 f"an array of shape {np.shape(rounding)}")
         c = v.mean(axis=0) if centre is None else centre
         w = self.add_wall(name or f"mesh{len(self.walls.names)}", material,
                           [(TRIANGLE, row, 0b111, 0) for row in rows], velocity, omega, c)
         if facets is not None:
             self.__dict__.setdefault("_mesh_facets", {})[w] = fa.astype(np.int64)
+        # each face's: the largest of its corners'
+        self.__dict__.setdefault("_mesh_rounding", {})[w] = rd[t].max(axis=1)
+        if rounding is not None:
+            self.__dict__.setdefault("_mesh_declared", {})[w] = rd
         return w
+
+    def add_stl(self, path, material, scale=1.0, weld_tol=0.0, rounding=None, **kw) -> int:
+        """An STL file as a mesh wall (:func:`soilcal.dem.stl.read_stl`, then
+        :meth:`add_mesh` with its facets, by which a refused face is named, and the rounding
+        the file stored its vertices with: float32's in a binary file, an ASCII file's
+        numbers as written, or ``rounding`` [m, after ``scale``] where given, as an ASCII
+        export rounded to 0.01 mm has it: 5e-6, half of it, also with ``scale=1e-3``); ``kw``: the
+        other arguments of :meth:`add_mesh` (name, velocity, omega, centre)."""
+        from soilcal.dem.stl import read_stl
+
+        if "facets" in kw:
+            raise InputError(path, "facets", "no facets= to add_stl (it numbers a refused "
+                             "face by its facet in the file itself)", kw["facets"])
+        v, t, fa, rd = read_stl(path, scale=scale, weld_tol=weld_tol, facets=True,
+                                rounding=True)
+        w = self.add_mesh(v, t, material, facets=fa,
+                          rounding=rd if rounding is None else rounding, **kw)
+        if rounding is None:  # the file's own storage, not a rounding the user declared
+            self.__dict__.get("_mesh_declared", {}).pop(w, None)
+        return w
+
+    def _check_declared_rounding(self, q):
+        """A rounding given to add_mesh or add_stl (rounding=) is forgiven by a periodic
+        box's checks only up to the step they allow: its 4 ulps (8 x rounding) at most
+        2e-4 R_min, else a declared rounding would forgive steps and rises that change
+        contacts (a floor rising 5 mm accepted for rounding=5e-4)."""
+        r_min = float(self.p.r.min())
+        for w, rd in self.__dict__.get("_mesh_declared", {}).items():
+            if rd.size and 8.0 * float(rd.max()) > 2e-4 * r_min:
+                name = self.walls.names[w]
+                raise InputError(
+                    self.source, f"walls.{name}.rounding",
+                    f"in a box periodic in {('x', 'y')[q]}: a rounding [m] of at most "
+                    f"2.5e-5 R_min = {2.5e-5 * r_min:.3g} m (its 4 ulps, 8 x rounding, within "
+                    f"the 2e-4 R_min step the periodic checks allow; a coarser one would "
+                    f"forgive steps that change contacts)",
+                    f"{float(rd.max()):.3g} m")
+
+    def _rounding(self) -> np.ndarray:
+        """How far each primitive's stored coordinates may lie from where they were drawn
+        [m]: a mesh face's as add_mesh recorded it, else the float64 unit roundoff of its
+        largest number."""
+        wa = self._warr
+        par = wa["prim_par"]
+        out = (0.5 * float(np.finfo(np.float64).eps) * np.abs(par).max(axis=1) if par.size
+               else np.zeros(0))
+        for w, rd in self.__dict__.get("_mesh_rounding", {}).items():
+            k = np.flatnonzero(wa["prim_wall"] == w)
+            if k.size == rd.size:
+                out[k] = rd
+        return out
 
     def add_box(self, lo, hi, material, name=None, velocity=(0, 0, 0), omega=(0, 0, 0)) -> int:
         """Closed box surface as a triangle mesh (particles outside or inside)."""
@@ -1117,7 +1229,8 @@ class Simulation:
         tiles) that fail alone are judged as one surface.  Otherwise a sphere beside one
         boundary would miss the contacts across it, or, outside the box, every contact.  A
         plane must be parallel to the periodic axes, rising over a period by at most
-        max(2e-4 R_min, 4 float32 ulps of the box) (R_min the smallest radius, whose contacts
+        max(2e-4 R_min, 4 ulps of its coordinates as stored: float32 for a binary STL, the
+        last digit of an ASCII one, float64 for arrays and analytic walls) (R_min the smallest radius, whose contacts
         a step changes most).  A moving wall is checked over the
         ``steps`` of the run: its extent swept by its velocity, its sections over the planes
         its motion along x carries past, and the sphere of its reach about its centre when it
@@ -1132,10 +1245,22 @@ class Simulation:
             if not self.periodic[q]:
                 continue
             lo, hi = float(self.box[2 * q]), float(self.box[2 * q + 1])
-            eps = max(2e-4 * rho, 4.8e-7 * max(abs(lo), abs(hi)))
+            # 4 ulps of the coordinates as they were stored (8 unit roundoffs: a binary STL's
+            # float32, an ASCII STL's last digit, float64 arrays and analytic walls)
+            # per primitive: each face is judged with its own rounding (a coarsely stored
+            # mesh elsewhere in the box loosens no other wall's checks)
+            res = self._rounding()
+            self._check_declared_rounding(q)
+            # whether a wall is clear of the boundaries (within reach of a sphere beside one)
+            # is judged to float64's rounding of the box's numbers only: no wall's stored
+            # rounding makes it count as clear
+            eps_c = 4.0 * float(np.finfo(np.float64).eps) * max(abs(lo), abs(hi))
+            eps_all = np.maximum(max(2e-4 * rho, 4.0 * float(np.finfo(np.float64).eps)
+                                     * max(abs(lo), abs(hi))), 8.0 * res)
             # the largest rise over the period of a flat face along q (plane, rectangle,
-            # triangle alike): 2e-4 of the smallest radius, whose contacts a step changes most
-            eps_p = max(2e-4 * float(self.p.r.min()), 4.8e-7 * max(abs(lo), abs(hi)))
+            # triangle alike): 2e-4 of the smallest radius, whose contacts a step changes
+            # most, or 4 ulps of the face's own coordinates as stored, per primitive
+            eps_p = np.maximum(2e-4 * float(self.p.r.min()), 8.0 * res)
             nw = wa["wall_vel"].shape[0]
             a_w, b_w = np.full(nw, np.inf), np.full(nw, -np.inf)
             bad = np.zeros(nw, dtype=bool)  # a primitive near a boundary that is not parallel
@@ -1148,13 +1273,14 @@ class Simulation:
                 # overlap of 0.01 R = 50 um by 12 % at R = 5 mm, its Hertz force by 16 %)
                 par = par_all[k]
                 rise = float(_rise(par[3 + q], hi - lo))
-                if rise > eps_p:
+                if rise > eps_p[k]:
                     name = self.walls.names[walls_of[k]]
                     raise InputError(
                         self.source, f"walls.{name}",
                         f"a plane parallel to {names[q]} in a box periodic in {names[q]}, its "
-                        f"rise over the period ({hi - lo:.6g} m) within {eps_p:.3g} m "
-                        f"(max(2e-4 R_min, 4 float32 ulps of the box); a sphere crossing the "
+                        f"rise over the period ({hi - lo:.6g} m) within {eps_p[k]:.3g} m "
+                        f"(max(2e-4 R_min, 4 ulps of its coordinates as stored, float64); a "
+                        f"sphere crossing the "
                         f"boundary would land deeper in it or farther from it; wall contacts "
                         f"do not see periodic images)",
                         f"normal {par[3:6].tolist()}: a rise of {rise:.4g} m")
@@ -1182,16 +1308,18 @@ class Simulation:
                     # of that are forgiven before the rise is taken (a level floor of 2 mm
                     # triangles at z = 0.1 m reads back with slopes of ~3e-6, 1 um over a
                     # 0.4 m period), at most 1e-3 (a face across the axis stays one)
-                    ulp = np.spacing(np.abs(par[:, :9]).max(axis=1).astype(np.float32)).astype(float)
+                    ulp = 2.0 * res[ks[tri]]  # as stored: float32, ASCII digits, float64
                     edges = (np.linalg.norm(par[:, 3:6] - par[:, 0:3], axis=1)
                              + np.linalg.norm(par[:, 6:9] - par[:, 0:3], axis=1))
                     noise = np.nan_to_num(np.minimum(2.0 * ulp * edges / nn, 1e-3), nan=0.0)
                     unit[tri] = n / nn[:, None]
                 rises[tri] = _rise(np.maximum(nq - noise, 0.0), hi - lo)
-                flat[tri] = rises[tri] <= eps_p
+                flat[tri] = rises[tri] <= eps_p[ks[tri]]
+            eps = eps_all[ks]  # each bounded primitive's
             for i in np.flatnonzero(~tri):
-                a[i], b[i], flat[i] = _extent_along(kinds[ks[i]], par_all[ks[i]], q, eps,
-                                                    hi - lo, eps_p)
+                a[i], b[i], flat[i] = _extent_along(kinds[ks[i]], par_all[ks[i]], q,
+                                                    float(eps[i]), hi - lo,
+                                                    float(eps_p[ks[i]]))
                 if kinds[ks[i]] == RECTANGLE:
                     unit[i] = par_all[ks[i], 3:6]
                     rises[i] = _rise(par_all[ks[i], 3 + q], hi - lo)
@@ -1214,40 +1342,46 @@ class Simulation:
             np.minimum.at(a_w, w, a)
             np.maximum.at(b_w, w, b)
             # within reach of a sphere in the box beside a boundary (farther out, unreachable)
-            near = (((a < lo + rho - eps) & (b > lo - rho + eps))
-                    | ((a < hi + rho - eps) & (b > hi - rho + eps)))
+            near = (((a < lo + rho - eps_c) & (b > lo - rho + eps_c))
+                    | ((a < hi + rho - eps_c) & (b > hi - rho + eps_c)))
             off = near & ~flat & ~(cap & ~turn & ~moves)
             bad[w[off]] = True
             w_of, off_of, turn_of = w, off, turn  # per primitive in ks (w is reused below)
             # a flat face (triangle, rectangle) at rest turning about nothing but q: its rise
             flat_kind = ((kinds[ks] == TRIANGLE) | (kinds[ks] == RECTANGLE)) & ~turn
             tilted = np.zeros(nw, dtype=bool)
-            tilted[w[off & flat_kind]] = True
+            # (steeper than 45 degrees it crosses the axis: named so by _face_at_fault)
+            tilted[w[off & flat_kind & (rises <= hi - lo)]] = True
             cap &= ~turn & ~moves  # a cap of a wall at rest, met at its rim (below)
             for w in range(nw):
                 if not has[w]:
                     continue
                 A, B = a_w[w], b_w[w]
-                if A >= lo + rho - eps and B <= hi - rho + eps:
+                if A >= lo + rho - eps_c and B <= hi - rho + eps_c:
                     continue  # clear of both boundaries
                 why = ("a face within the largest radius of a boundary that does not run "
                        f"along {names[q]}" + (f" (a flat face rising over the period by more "
-                       f"than {eps_p:.3g} m, max(2e-4 R_min, 4 float32 ulps of the box), as a "
-                       f"plane would)" if tilted[w] else "")
+                       f"than {eps_p[ks[w_of == w]].min():.3g} m, max(2e-4 R_min, 4 ulps of "
+                       f"its coordinates as stored), as a plane would; vertices are judged "
+                       f"as float64 unless given as float32: a binary STL moved or scaled with "
+                       f"float64 numbers loses float32's allowance, keep them float32 "
+                       f"(.astype(np.float32)), read it with add_stl(scale=) or give add_mesh "
+                       f"rounding=)" if tilted[w] else "")
                        + f", {self._face_at_fault(q, w, ks, w_of, off_of, turn_of, unit, rises)}"
                        if bad[w] else None)
                 if why is None:
-                    why = self._periodic_fault(q, [w], ks, flat, cap, rho, eps, span)
+                    why = self._periodic_fault(q, [w], ks, flat, cap, rho, eps_all, span)
                 if why is not None and not bad[w]:
                     # tiles: the walls moving with this one, judged as one surface
                     mates = [g for g in range(nw) if has[g] and not bad[g]
-                             and not (a_w[g] >= lo + rho - eps and b_w[g] <= hi - rho + eps)
+                             and not (a_w[g] >= lo + rho - eps_c
+                                      and b_w[g] <= hi - rho + eps_c)
                              and np.array_equal(wa["wall_vel"][g], wa["wall_vel"][w])
                              and np.array_equal(wa["wall_omega"][g], wa["wall_omega"][w])
                              and (not np.any(wa["wall_omega"][w] != 0)
                                   or np.array_equal(wa["wall_centre"][g], wa["wall_centre"][w]))]
-                    if len(mates) > 1 and self._periodic_fault(q, mates, ks, flat, cap, rho, eps,
-                                                               span) is None:
+                    if len(mates) > 1 and self._periodic_fault(q, mates, ks, flat, cap, rho,
+                                                               eps_all, span) is None:
                         continue
                 if why is None:
                     continue
@@ -1272,7 +1406,7 @@ class Simulation:
         """The first face of wall ``w`` refused near a periodic boundary, in words: its index
         among the wall's faces (a mesh's triangle index, as add_mesh was given them), its
         kind, and for a flat face its unit normal and rise over the period (after forgiving
-        the tilt float32 rounding of a triangle's vertices gives it)."""
+        the tilt the stored rounding of a triangle's vertices gives it)."""
         kinds, walls_of = self._warr["prim_kind"], self._warr["prim_wall"]
         j = int(np.flatnonzero(off & (w_of == w))[0])
         k = int(ks[j])
@@ -1282,9 +1416,15 @@ class Simulation:
         ax = ("x", "y")[q]
         if turn[j]:
             how = f"turning about an axis other than {ax}"
-        elif np.isfinite(rises[j]):
+        elif np.isfinite(rises[j]) and rises[j] <= float(self.box[2 * q + 1] - self.box[2 * q]):
             nrm = ", ".join(f"{c:.6g}" for c in unit[j])
             how = f"normal ({nrm}), rising {rises[j]:.4g} m over the period"
+        elif np.all(np.isfinite(unit[j])):
+            # steeper than 45 degrees: it crosses the axis rather than rising along it
+            nrm = ", ".join(f"{c:.6g}" for c in unit[j])
+            tilt = math.degrees(math.asin(min(1.0, abs(float(unit[j][q])))))
+            how = (f"normal ({nrm}): a face at {tilt:.3g} degrees to the {ax} axis, across "
+                   f"it rather than flat along the period (0 degrees)")
         else:
             how = f"its section across {ax} not the same all along it"
         n_faces = int(np.count_nonzero(walls_of == w))
@@ -1294,7 +1434,7 @@ class Simulation:
                     f"as added ({kind}, {how})")
         return f"face {face} of its {n_faces} as added ({kind}, {how})"
 
-    def _periodic_fault(self, q, walls, ks, flat, cap, rho, eps, span):
+    def _periodic_fault(self, q, walls, ks, flat, cap, rho, eps_all, span):
         """None when the surface of ``walls`` (moving together) continues periodically across
         axis q over a run of ``span`` seconds, else what breaks it.  In the walls' own frame
         at the start (a shift s = v_q span along q sweeps the planes the spheres meet), the
@@ -1308,7 +1448,8 @@ class Simulation:
         the slab, a floor ending on the boundary).  A section changes only at a corner or a
         cylinder's end along q: it is taken there and halfway between.  An end face lying on
         a boundary (the cap of a closed solid spanning the period) is met at its rim only when
-        every corner of it (32 points round a disk's rim) lies inside or on a closed outline
+        every corner of it (32 points round a disk's rim) and every point of its edges
+        (:func:`_edge_outside`) lies inside or on a closed outline
         of the section there (:func:`_closed_outline`: the bounded faces of the planar graph
         of its pieces, split where they meet or cross, so a solid standing on a floor of the
         same wall or on another solid is enclosed and pieces with an open end never enclose;
@@ -1316,28 +1457,38 @@ class Simulation:
         and no sphere centre lies inside or on such an end face (seen along q) at the run's
         start (:meth:`_spheres_enclosed`, judged again at every run; the open space that
         closed outlines surround, a duct's cavity or a tunnel beside a ridge, is free).  Sections are compared
-        per material within max(2e-4 rho, 4 float32 ulps of the coordinates), as walls.py
+        per material within max(2e-4 rho, 4 ulps of the coordinates as stored), as walls.py
         joins tiles: every point of the pieces of each within that distance of a piece of
         the other (:func:`_covered`; pieces shorter than it left out), circles by centre and
         radius; the sections exactly one period apart (q = lo and hi), which a sphere crossing
-        the boundary meets in turn, within max(2e-4 R_min, 4 float32 ulps), the limit of a
-        flat face's rise over the period."""
+        the boundary meets in turn, within max(2e-4 R_min, 4 ulps as stored), the limit of a
+        flat face's rise over the period.  ``eps_all``: each primitive's tolerance of where
+        it lies (its stored rounding): each wall's largest, the smallest of those among
+        these walls taken (no wall's rounding loosens another's check)."""
         wa = self._warr
         lo, hi = float(self.box[2 * q]), float(self.box[2 * q + 1])
         sel = np.isin(wa["prim_wall"][ks], walls)
+        # walls judged together (tiles) are held to the strictest of their own limits (each
+        # wall's: the largest of its faces'): a coarsely stored wall loosens no other's
+        wk = wa["prim_wall"][ks]
+        eps = min(float(eps_all[ks[wk == g]].max()) for g in walls if np.any(wk == g))
         prims = ks[sel & flat]
         par = wa["prim_par"][prims]
         shift = float(wa["wall_vel"][walls[0], q]) * span
-        scale = float(np.abs(par[:, :9]).max()) if par.size else 0.0
-        tol = max(2e-4 * rho, 4.8e-7 * scale)
+        # 4 ulps of the faces' coordinates as stored (8 unit roundoffs: float32 for a
+        # binary STL, the last digit of an ASCII one, float64 for arrays)
+        res, pw = self._rounding()[prims], wa["prim_wall"][prims]
+        ulps = (8.0 * min(float(res[pw == g].max()) for g in walls if np.any(pw == g))
+                if prims.size else 0.0)
+        tol = max(2e-4 * rho, ulps)
         # one period on, the section a sphere crossing the boundary meets in place of the
         # one at lo: the step between them is judged as a flat face's rise over the period
-        # is, within max(2e-4 R_min, 4 float32 ulps of the coordinates) (the tilt float32
+        # is, within max(2e-4 R_min, 4 ulps of the coordinates as stored) (the tilt the
         # rounding gives a small face is forgiven face by face, a rise of the whole surface
         # is not)
-        tol_end = max(2e-4 * float(self.p.r.min()), 4.8e-7 * max(scale, abs(lo), abs(hi)))
+        tol_end = max(2e-4 * float(self.p.r.min()), ulps)
         # the answer depends on R_min through tol_end: spheres added later change it
-        key = (q, tuple(walls), rho, eps, tol_end, shift, lo, hi, hash(par.tobytes()))
+        key = (q, tuple(walls), rho, eps, tol, tol_end, shift, lo, hi, hash(par.tobytes()))
         # walls at rest keep their answer (a moving wall is elsewhere at the next run)
         still = not (np.any(wa["wall_vel"][walls] != 0) or np.any(wa["wall_omega"][walls] != 0))
         cache = self.__dict__.setdefault("_periodic_cache", {}) if still else {}
@@ -1357,11 +1508,11 @@ class Simulation:
         why = None
         end = sec.at(hi - sp)
         if not sec.same(end, ref, min(tol, tol_end)):
-            r_min, ulp_end = float(self.p.r.min()), 4.8e-7 * max(scale, abs(lo), abs(hi))
-            limit = (f"max(2e-4 R_min = {2e-4 * r_min:.3g} m, 4 float32 ulps of the "
-                     f"coordinates = {ulp_end:.3g} m)" if tol_end <= tol else
-                     f"max(2e-4 R_max = {2e-4 * rho:.3g} m, 4 float32 ulps of the faces' "
-                     f"coordinates = {4.8e-7 * scale:.3g} m), within which any two sections "
+            r_min = float(self.p.r.min())
+            limit = (f"max(2e-4 R_min = {2e-4 * r_min:.3g} m, 4 ulps of the coordinates as "
+                     f"stored = {ulps:.3g} m)" if tol_end <= tol else
+                     f"max(2e-4 R_max = {2e-4 * rho:.3g} m, 4 ulps of the faces' "
+                     f"coordinates as stored = {ulps:.3g} m), within which any two sections "
                      f"are compared")
             why = (f"its faces at {ax} = {hi - sp:.6g} m ({sec.describe(end)}) are not those "
                    f"one period away at {ax} = {lo - sp:.6g} m ({sec.describe(ref)}) within "
@@ -1399,13 +1550,16 @@ class Simulation:
                     circ = np.concatenate([v[1] for v in at]) if at else np.zeros((0, 3))
                     outline[c] = (*_closed_outline(lines, tol), circ)
                 loops, face, circ = outline[c]
-                out = [pt for pt in cor[:, list(_ACROSS[q])]
-                       if not _enclosed(pt, loops, face, circ, tol)]
-                if out:
-                    yz = ", ".join(f"{v:.6g}" for v in out[0])
+                poly = cor[:, list(_ACROSS[q])]
+                out = [pt for pt in poly if not _enclosed(pt, loops, face, circ, tol)]
+                edge = None if out else _edge_outside(poly, loops, face, circ, tol)
+                if out or edge is not None:
+                    yz = ", ".join(f"{v:.6g}" for v in (out[0] if out else edge))
                     across = ", ".join("xyz"[i] for i in _ACROSS[q])
-                    why = (f"an end face on the boundary {ax} = {c:.6g} m with a corner at "
-                           f"({across}) = ({yz}) m outside every closed outline of the "
+                    why = (f"an end face on the boundary {ax} = {c:.6g} m with "
+                           + ("a corner" if out else "a point of an edge (bridging open space "
+                              "between closed outlines)")
+                           + f" at ({across}) = ({yz}) m outside every closed outline of the "
                            f"section of its faces along {ax} there (a sphere meets its face)")
                     break
                 faces.setdefault(c, []).append(cor[:, list(_ACROSS[q])])

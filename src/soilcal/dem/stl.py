@@ -108,11 +108,18 @@ def _parse_ascii(path, text):
         i += 21
     if not ended:
         raise InputError(path, "endsolid", "'endsolid' closing the solid", "truncated file")
-    return np.array(tris, dtype=np.float64).reshape(-1, 3, 3)
+    tri = np.array(tris, dtype=np.float64).reshape(-1, 3, 3)
+    # a number is taken as written: read to float64's unit roundoff (the digits a writer
+    # leaves out say nothing of how the drawing was rounded: 0.1 and 100 are exact)
+    return tri, 0.5 * float(np.finfo(np.float64).eps) * np.abs(tri)
 
 
-def read_stl_soup(path):
-    """Triangle soup ``float64[nt, 3, 3]`` from a binary or ASCII STL file."""
+def read_stl_soup(path, rounding=False):
+    """Triangle soup ``[nt, 3, 3]`` from a binary or ASCII STL file: float32 as a binary file
+    stores it, float64 from an ASCII one; ``rounding=True`` returns also how far each
+    coordinate may lie from the number it stands for ``float64[nt, 3, 3]``: the unit
+    roundoff of float32 (2^-24 |x|) in a binary file, of float64 in an ASCII one (its
+    numbers are taken as written)."""
     path = Path(path)
     try:
         data = path.read_bytes()
@@ -122,11 +129,13 @@ def read_stl_soup(path):
         (n,) = struct.unpack("<I", data[80:84])
         if len(data) == 84 + 50 * n:
             rec = np.frombuffer(data, dtype=_BIN_DTYPE, count=n, offset=84)
-            tri = rec["v"].astype(np.float64)
+            tri = rec["v"].astype(np.float32)
             if not np.all(np.isfinite(tri)):
                 raise InputError(path, "vertices", "finite coordinates", "NaN or inf")
             if n == 0:
                 raise InputError(path, "triangle count", "at least one triangle", 0)
+            if rounding:
+                return tri, 0.5 * float(np.finfo(np.float32).eps) * np.abs(tri.astype(float))
             return tri
     head = data[:5].lower()
     if head != b"solid":
@@ -141,12 +150,12 @@ def read_stl_soup(path):
     except UnicodeDecodeError:
         raise InputError(path, "STL", "ASCII text after 'solid' (or a binary STL of "
                          "84 + 50 n bytes)", "non-ASCII bytes") from None
-    tri = _parse_ascii(path, text)
+    tri, res = _parse_ascii(path, text)
     if tri.shape[0] == 0:
         raise InputError(path, "triangle count", "at least one facet", 0)
     if not np.all(np.isfinite(tri)):
         raise InputError(path, "vertices", "finite coordinates", "NaN or inf")
-    return tri
+    return (tri, res) if rounding else tri
 
 
 def weld(soup, weld_tol=0.0, facets=False):
@@ -193,13 +202,21 @@ def without_area(corners) -> np.ndarray:
     return ~(area2 > 1e-12 * np.maximum((e1 ** 2).sum(axis=1), (e2 ** 2).sum(axis=1)))
 
 
-def read_stl(path, scale=1.0, weld_tol=0.0, facets=False):
-    """Read an STL file into ``(vertices float64[nv, 3], triangles int64[nt, 3])``,
-    coordinates multiplied by ``scale``.  Facets without area are left out (:func:`weld`), so
+def read_stl(path, scale=1.0, weld_tol=0.0, facets=False, rounding=False):
+    """Read an STL file into ``(vertices [nv, 3], triangles int64[nt, 3])``, coordinates
+    multiplied by ``scale``: float32 from a binary file (as it stores them, scaled in
+    float32, so :meth:`soilcal.dem.engine.Simulation.add_mesh` forgives a face float32's
+    rounding, also after ``v * 1e-3``), float64 from an ASCII one (its numbers taken as
+    written).  Facets without area are left out (:func:`weld`), so
     triangle k need not be the file's facet k: ``facets=True`` returns also each triangle's
     facet index in the file, ``(vertices, triangles, facets int64[nt])``; give it to
     :meth:`soilcal.dem.engine.Simulation.add_mesh` (``facets=``) and a refused face is named
-    by its facet in the file."""
+    by its facet in the file.  ``rounding=True`` returns also how far each vertex may lie
+    from where it was drawn, the largest over its coordinates (and its welded copies)
+    ``float64[nv]`` [m, times ``scale``]: the unit roundoff of float32 (2^-24 |x|) in a
+    binary file, of float64 in an ASCII one; :meth:`soilcal.dem.engine.Simulation.add_stl`
+    gives it to ``add_mesh(rounding=)``, and a periodic box forgives a face that much and no
+    more."""
     try:
         tol = float(weld_tol)
     except (TypeError, ValueError):
@@ -207,7 +224,12 @@ def read_stl(path, scale=1.0, weld_tol=0.0, facets=False):
     if not (math.isfinite(tol) and tol >= 0):
         raise InputError(path, "weld_tol", "a welding distance >= 0 (0: identical corners only)",
                          weld_tol)
-    soup = read_stl_soup(path) * float(scale)
+    soup, res = read_stl_soup(path, rounding=True)
+    f32 = soup.dtype == np.float32
+    # a binary file's float32 numbers scaled in float32: the result is float32 numbers, and
+    # its rounding float32's (one more unit roundoff, forgiven as the file's own)
+    soup = (soup * np.float32(scale)).astype(np.float64) if f32 else soup * float(scale)
+    res = 0.5 * float(np.finfo(np.float32 if f32 else np.float64).eps) * np.abs(soup)
     try:
         v, t, kept = weld(soup, tol, facets=True)
     except ValueError as exc:
@@ -215,4 +237,12 @@ def read_stl(path, scale=1.0, weld_tol=0.0, facets=False):
             from None
     if t.shape[0] == 0:
         raise InputError(path, "triangles", "at least one non-degenerate triangle", 0)
-    return (v, t, kept) if facets else (v, t)
+    if f32:
+        v = v.astype(np.float32)  # each vertex a corner of the soup: float32 numbers
+    out = (v, t, kept) if facets else (v, t)
+    if rounding:
+        # each vertex: the largest over its coordinates and the corners welded into it
+        rv = np.zeros(v.shape[0])
+        np.maximum.at(rv, t.ravel(), res[kept].max(axis=2).ravel())
+        out = (*out, rv)
+    return out

@@ -100,7 +100,8 @@ def _law(sim) -> tuple[str, str, bool]:
     """The LIGGGHTS contact model, its options and whether soilcal's conventions are
     LIGGGHTS's (the ``liggghts`` set's entries that the case's law uses)."""
     from soilcal.dem.contact import (CODE_CONVENTIONS, COHESION, CONVENTION_TABLES,
-                                     CONVENTIONS, DAMPING, NORMAL, ROLLING, TANGENTIAL)
+                                     CONVENTIONS, DAMPING, NORMAL, ROLLING, TANGENTIAL,
+                                     TANGENTIAL_DAMPING)
 
     c = [int(v) for v in sim.codes]
     if c[0] != NORMAL["hertz"]:
@@ -125,7 +126,9 @@ def _law(sim) -> tuple[str, str, bool]:
     lig = CONVENTIONS["liggghts"]
     same = all(c[5 + CODE_CONVENTIONS.index(k)] == CONVENTION_TABLES[k][lig[k]]
                for k in _TANGENTIAL_CONV + _ROLLING_CONV[rolling])
-    opts = " tangential_damping off" if c[8] == 1 else ""  # after the walls' own arguments
+    # after the walls' own arguments
+    off = c[5 + CODE_CONVENTIONS.index("tangential_damping")] == TANGENTIAL_DAMPING["off"]
+    opts = " tangential_damping off" if off else ""
     return law, opts, same
 
 
