@@ -937,6 +937,7 @@ def analyse(soil: str, res: pd.DataFrame, diag: pd.DataFrame, cands: list, effec
     are fitted with their interaction, else as the sum of their separate changes (the verdict
     says so)."""
     u = rs.usable(res)
+    spread_note, spread_uneven = _replicate_spread(u, settings.alpha)  # the verdict's note (and its nuisance words)
     rank = dg.ranking(diag)
     follows = _follows(rank, res, quantity_cols, settings.alpha)
     sel_rows, chosen, theta, ci, ci_method = [], [], {}, {}, ""
@@ -1025,7 +1026,7 @@ def analyse(soil: str, res: pd.DataFrame, diag: pd.DataFrame, cands: list, effec
         chi, dof, p_about = _scatter_about_holm(res, sv, diag, settings.alpha)
         where = ("the model throughout, a uniform bias (an instrument's calibration, a zero offset) that no "
                  "mechanism of the library carries; ")
-        if _replicate_spread(u, settings.alpha)[1]:  # uneven spread: stones or the rig's noise form (noted below)
+        if spread_uneven:  # uneven spread: stones or the rig's noise form (noted below)
             nuisance = (nuisance[0], nuisance[1], nuisance[2] + "; its replicates scatter unevenly across "
                         "conditions (stones, or rig noise neither one share of the value nor one floor)")
         if p_about < settings.alpha:  # the rows are not shifted alike: no uniform bias
@@ -1199,7 +1200,7 @@ def analyse(soil: str, res: pd.DataFrame, diag: pd.DataFrame, cands: list, effec
                         + _far_off(diag))
             nuisance = (nuisance[0], nuisance[1], "fitted alone: the mean offset of the rows, the calibrated model "
                         "times (1 + s); they scatter about it beyond their uncertainty (no uniform bias)")
-        elif _replicate_spread(u, settings.alpha)[1]:  # uneven spread: stones or the rig's noise form (noted below)
+        elif spread_uneven:  # uneven spread: stones or the rig's noise form (noted below)
             nuisance = (nuisance[0], nuisance[1], nuisance[2] + "; its replicates scatter unevenly across "
                         "conditions (stones, or rig noise neither one share of the value nor one floor)")
     if sel is not None:
@@ -1209,7 +1210,7 @@ def analyse(soil: str, res: pd.DataFrame, diag: pd.DataFrame, cands: list, effec
         if settings.candidates == "all" or matched & set(EFFECTS[nm].signature):
             verdict += f"; {nm} {why}"
     if n >= 3 and not verdict.startswith("no "):
-        verdict += _replicate_spread(u, settings.alpha)[0]
+        verdict += spread_note
     for hint in constant_hints(u) + unit_hints(u):
         verdict += f"; {hint}"
     per_test = dg.per_test(u)  # table rows; the trend tests take one value per measured condition
