@@ -103,6 +103,9 @@ MIN_RIM_SUPPORT = 0.3
 #: low speed (5 deg), does not show; a drum stopped after turning keeps a sloping surface, so a
 #: frame cannot tell a drum at rest from a turning one
 DRUM_ANGLE_RANGE = (3.0, 80.0)
+#: where a frame's drum circle came from, as a refusal or a low reason names it
+DRUM_SOURCE_WORDS = {"image border": "the image border: no drum rim found", "rim": "the drum rim found",
+                     "manifest": "the drum as given"}
 #: the most a free surface may stray from one straight line (RMS, % of the drum radius): a
 #: cascading drum's S stays within a few %, a boundary that wanders further is no powder surface
 MAX_LINE_RMS_PCT = 10.0
@@ -695,9 +698,8 @@ def _measure_drum_frame(path, threshold, keep_stages, options, tried: Tried) -> 
     tried.add("powder and air split in the drum (Otsu); the lower class is the powder",
               bright if bright_powder else dark, circle=(cx, cy, rm))
     p = g if bright_powder else 1.0 - g
-    said = "(centre ({:.0f}, {:.0f}) px, radius {:.0f} px, ".format(*frame_px(cx, cy, R)) + \
-        {"image border": "the image border: no drum rim found)", "rim": "the drum rim found)",
-         "manifest": "as given)"}[dref]
+    where = DRUM_SOURCE_WORDS[dref]
+    said = "(centre ({:.0f}, {:.0f}) px, radius {:.0f} px, {})".format(*frame_px(cx, cy, R), where)
     cols, rows, binary, powder = _surface(path, p, inside, cx, cy, rm, said)
     if cols.size < 30:
         raise InputError(path, "image", DRUM_EXPECTED, f"a free surface across {cols.size} pixel columns "
@@ -755,7 +757,6 @@ def _measure_drum_frame(path, threshold, keep_stages, options, tried: Tried) -> 
     # the upper part, so a third's angle parts from the central chord's; lumps spread evenly
     # along the surface leave the thirds as the chord
     tilt = max((abs(x - angle) for x in (upper, lower) if np.isfinite(x)), default=0.0)
-    where = {"image border": "no drum rim found", "rim": "drum rim found", "manifest": "drum as given"}[dref]
     conf, why = "ok", ""
     # the surface's two ends against the drum wall: an end short of the masked circle (radially,
     # (rm - |end|) / R), inside the frame, is a surface meeting no wall there, so the circle is not
