@@ -271,13 +271,12 @@ def plausibility(err: Errata, soil: dict) -> None:
             # its unit (quantities.quantity_factor, as the tables read it); a unit without a factor is judged where a
             # moisture is compared with it, a value without a unit is taken as printed, in %
             f = 1.0 if q.get("unit") is None else quantity_factor("moisture_content", q.get("unit"))
-            pairs = [(v, None if f is None else float(v) * f) for v in declared if v is not None]
         else:
             f = si_factor(str(q.get("unit", "")), si_unit)
-            pairs = [(v, None if f is None else float(v) * f) for v in declared if v is not None]
-        for v, x in pairs:
-            if x is None:
-                continue
+        if f is None:
+            return
+        for v in (v for v in declared if v is not None):
+            x = float(v) * f
             if not lo <= x <= hi:
                 err.add(f"{where} ({q.get('source', '')})", f"{v} {q.get('unit', '')}", f"{x:.4g} {si_unit}",
                         f"physically implausible {kind.replace('_', ' ')} (expected {lo:g}..{hi:g} {si_unit})")

@@ -1122,8 +1122,6 @@ def _name_unit_table() -> tuple[dict, dict, dict]:
     lower.update({low: exact[sym] for low, sym in UNIT_CASES.items() if len(low) > 1 and sym in exact})
     forms = dict(_COMPOUND_SPELLINGS)
     for spelling, unit in exact.items():
-        if unit == "mPa s":
-            continue
         for text in (spelling, spelling.replace("^", "")):
             written, form = _compound(text)
             if written:

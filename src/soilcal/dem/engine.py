@@ -1255,8 +1255,7 @@ class Simulation:
             # is judged to float64's rounding of the box's numbers only: no wall's stored
             # rounding makes it count as clear
             eps_c = 4.0 * float(np.finfo(np.float64).eps) * max(abs(lo), abs(hi))
-            eps_all = np.maximum(max(2e-4 * rho, 4.0 * float(np.finfo(np.float64).eps)
-                                     * max(abs(lo), abs(hi))), 8.0 * res)
+            eps_all = np.maximum(max(2e-4 * rho, eps_c), 8.0 * res)
             # the largest rise over the period of a flat face along q (plane, rectangle,
             # triangle alike): 2e-4 of the smallest radius, whose contacts a step changes
             # most, or 4 ulps of the face's own coordinates as stored, per primitive

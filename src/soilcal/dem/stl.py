@@ -108,18 +108,14 @@ def _parse_ascii(path, text):
         i += 21
     if not ended:
         raise InputError(path, "endsolid", "'endsolid' closing the solid", "truncated file")
-    tri = np.array(tris, dtype=np.float64).reshape(-1, 3, 3)
-    # a number is taken as written: read to float64's unit roundoff (the digits a writer
-    # leaves out say nothing of how the drawing was rounded: 0.1 and 100 are exact)
-    return tri, 0.5 * float(np.finfo(np.float64).eps) * np.abs(tri)
+    # a number is taken as written (the digits a writer leaves out say nothing of how the
+    # drawing was rounded: 0.1 and 100 are exact)
+    return np.array(tris, dtype=np.float64).reshape(-1, 3, 3)
 
 
-def read_stl_soup(path, rounding=False):
+def read_stl_soup(path):
     """Triangle soup ``[nt, 3, 3]`` from a binary or ASCII STL file: float32 as a binary file
-    stores it, float64 from an ASCII one; ``rounding=True`` returns also how far each
-    coordinate may lie from the number it stands for ``float64[nt, 3, 3]``: the unit
-    roundoff of float32 (2^-24 |x|) in a binary file, of float64 in an ASCII one (its
-    numbers are taken as written)."""
+    stores it, float64 from an ASCII one (its numbers are taken as written)."""
     path = Path(path)
     try:
         data = path.read_bytes()
@@ -134,8 +130,6 @@ def read_stl_soup(path, rounding=False):
                 raise InputError(path, "vertices", "finite coordinates", "NaN or inf")
             if n == 0:
                 raise InputError(path, "triangle count", "at least one triangle", 0)
-            if rounding:
-                return tri, 0.5 * float(np.finfo(np.float32).eps) * np.abs(tri.astype(float))
             return tri
     head = data[:5].lower()
     if head != b"solid":
@@ -150,12 +144,12 @@ def read_stl_soup(path, rounding=False):
     except UnicodeDecodeError:
         raise InputError(path, "STL", "ASCII text after 'solid' (or a binary STL of "
                          "84 + 50 n bytes)", "non-ASCII bytes") from None
-    tri, res = _parse_ascii(path, text)
+    tri = _parse_ascii(path, text)
     if tri.shape[0] == 0:
         raise InputError(path, "triangle count", "at least one facet", 0)
     if not np.all(np.isfinite(tri)):
         raise InputError(path, "vertices", "finite coordinates", "NaN or inf")
-    return (tri, res) if rounding else tri
+    return tri
 
 
 def weld(soup, weld_tol=0.0, facets=False):
@@ -224,7 +218,7 @@ def read_stl(path, scale=1.0, weld_tol=0.0, facets=False, rounding=False):
     if not (math.isfinite(tol) and tol >= 0):
         raise InputError(path, "weld_tol", "a welding distance >= 0 (0: identical corners only)",
                          weld_tol)
-    soup, res = read_stl_soup(path, rounding=True)
+    soup = read_stl_soup(path)
     f32 = soup.dtype == np.float32
     # a binary file's float32 numbers scaled in float32: the result is float32 numbers, and
     # its rounding float32's (one more unit roundoff, forgiven as the file's own)

@@ -855,10 +855,15 @@ def _far_off(diag: pd.DataFrame) -> str:
     return "some rows lie far off for a reason no covariate carries (stones in the bin, a disturbance)"
 
 
-def _replicate_spread(u: pd.DataFrame, alpha: float) -> tuple[str, bool]:
-    """The verdict's note where replicate rows without a measured SD scatter about their
+#: what the nuisance column adds where the replicates scatter unevenly (:func:`_replicate_spread`)
+UNEVEN_SPREAD_WORDS = ("; its replicates scatter unevenly across conditions (stones, or rig noise neither one share "
+                       "of the value nor one floor)")
+
+
+def _replicate_spread(u: pd.DataFrame, alpha: float) -> str:
+    """The verdict's note ("" for none) where replicate rows without a measured SD scatter about their
     conditions' means far more in some conditions than in others
-    (:func:`soilcal.loop.diagnose.replicate_spread`, p below ``alpha``), and whether they do.
+    (:func:`soilcal.loop.diagnose.replicate_spread`, p below ``alpha``).
     Two causes give that: stones met in some replicates and not others (those rows' means are
     judged against their own scatter, so such rows read as within the uncertainty), and rig
     noise that is neither one share of the value nor one floor (an SD growing as value^1.5, or
@@ -868,14 +873,14 @@ def _replicate_spread(u: pd.DataFrame, alpha: float) -> tuple[str, bool]:
     in 9 of 20 tables, where it had withheld the uniform bias."""
     sp = dg.replicate_spread(u)
     if sp is None or not sp["p"] < alpha:
-        return "", False
+        return ""
     return (f"; the replicate rows (no measured SD) scatter about their conditions' means unevenly: "
             f"{sp['widest_percent']:.2g} % in the widest condition, {sp['narrowest_percent']:.2g} % in the "
             f"narrowest, {sp['replicate_percent']:.2g} % pooled (Bartlett's test on {sp['dof'][0]} degrees of freedom, "
             f"p {sp['p']:.2g}), which a uniform bias does not cause but either of two things does: stones met in "
             "some replicates and not others, or rig noise that is neither one share of the value nor one floor; "
             "these rows cannot tell the two apart (a measured SD per row does), and if it is stones, a row raised "
-            "far off looks within the uncertainty against that scatter"), True
+            "far off looks within the uncertainty against that scatter")
 
 
 def _aicc_undefined(s) -> bool:
@@ -937,7 +942,7 @@ def analyse(soil: str, res: pd.DataFrame, diag: pd.DataFrame, cands: list, effec
     are fitted with their interaction, else as the sum of their separate changes (the verdict
     says so)."""
     u = rs.usable(res)
-    spread_note, spread_uneven = _replicate_spread(u, settings.alpha)  # the verdict's note (and its nuisance words)
+    spread_note = _replicate_spread(u, settings.alpha)  # the verdict's note ("": none) and its nuisance words
     rank = dg.ranking(diag)
     follows = _follows(rank, res, quantity_cols, settings.alpha)
     sel_rows, chosen, theta, ci, ci_method = [], [], {}, {}, ""
@@ -1026,9 +1031,6 @@ def analyse(soil: str, res: pd.DataFrame, diag: pd.DataFrame, cands: list, effec
         chi, dof, p_about = _scatter_about_holm(res, sv, diag, settings.alpha)
         where = ("the model throughout, a uniform bias (an instrument's calibration, a zero offset) that no "
                  "mechanism of the library carries; ")
-        if spread_uneven:  # uneven spread: stones or the rig's noise form (noted below)
-            nuisance = (nuisance[0], nuisance[1], nuisance[2] + "; its replicates scatter unevenly across "
-                        "conditions (stones, or rig noise neither one share of the value nor one floor)")
         if p_about < settings.alpha:  # the rows are not shifted alike: no uniform bias
             nuisance = (nuisance[0], nuisance[1], "fitted alone: the mean offset of the rows, the calibrated model "
                         "times (1 + s); they scatter about it beyond their uncertainty (no uniform bias)")
@@ -1036,6 +1038,8 @@ def analyse(soil: str, res: pd.DataFrame, diag: pd.DataFrame, cands: list, effec
                      f"uncertainty (chi-square {chi:.3g} on {dof} degrees of freedom, Holm p {p_about:.2g}), so it is no "
                      "uniform bias throughout (an instrument's calibration shifts every row alike): "
                      + _far_off(diag) + "; ")
+        elif spread_note:  # uneven spread: stones or the rig's noise form (noted below)
+            nuisance = (nuisance[0], nuisance[1], nuisance[2] + UNEVEN_SPREAD_WORDS)
         verdict = (f"unexplained: the measured values are {abs(100 * sv):.1f} % {'above' if sv > 0 else 'below'} "
                    + where + " + ".join(sel.judged) + f" fit{'s' if k == 1 else ''} it "
                    f"(held-out RMS {100 * sel.uniform.rmse():.2f} % against {100 * sel.uniform.rmse(True):.2f} % for "
@@ -1200,9 +1204,8 @@ def analyse(soil: str, res: pd.DataFrame, diag: pd.DataFrame, cands: list, effec
                         + _far_off(diag))
             nuisance = (nuisance[0], nuisance[1], "fitted alone: the mean offset of the rows, the calibrated model "
                         "times (1 + s); they scatter about it beyond their uncertainty (no uniform bias)")
-        elif spread_uneven:  # uneven spread: stones or the rig's noise form (noted below)
-            nuisance = (nuisance[0], nuisance[1], nuisance[2] + "; its replicates scatter unevenly across "
-                        "conditions (stones, or rig noise neither one share of the value nor one floor)")
+        elif spread_note:  # uneven spread: stones or the rig's noise form (noted below)
+            nuisance = (nuisance[0], nuisance[1], nuisance[2] + UNEVEN_SPREAD_WORDS)
     if sel is not None:
         verdict += _unscored(sel, u, settings.alpha)
     matched = dg.matched_quantities(diag) if len(diag) else set()
