@@ -884,13 +884,10 @@ class Simulation:
         if "facets" in kw:
             raise InputError(path, "facets", "no facets= to add_stl (it numbers a refused "
                              "face by its facet in the file itself)", kw["facets"])
-        v, t, fa, rd = read_stl(path, scale=scale, weld_tol=weld_tol, facets=True,
-                                rounding=True)
-        w = self.add_mesh(v, t, material, facets=fa,
-                          rounding=rd if rounding is None else rounding, **kw)
-        if rounding is None:  # the file's own storage, not a rounding the user declared
-            self.__dict__.get("_mesh_declared", {}).pop(w, None)
-        return w
+        # read_stl returns a binary file's vertices as float32 and an ASCII file's as
+        # float64: add_mesh takes the unit roundoff of that type as the file's own rounding
+        v, t, fa = read_stl(path, scale=scale, weld_tol=weld_tol, facets=True)
+        return self.add_mesh(v, t, material, facets=fa, rounding=rounding, **kw)
 
     def _check_declared_rounding(self, q):
         """A rounding given to add_mesh or add_stl (rounding=) is forgiven by a periodic
@@ -1369,7 +1366,8 @@ class Simulation:
                        + f", {self._face_at_fault(q, w, ks, w_of, off_of, turn_of, unit, rises)}"
                        if bad[w] else None)
                 if why is None:
-                    why = self._periodic_fault(q, [w], ks, flat, cap, rho, eps_all, span)
+                    why = self._periodic_fault(q, [w], ks, flat, cap, rho, eps_all, res,
+                                               span)
                 if why is not None and not bad[w]:
                     # tiles: the walls moving with this one, judged as one surface
                     mates = [g for g in range(nw) if has[g] and not bad[g]
@@ -1380,7 +1378,7 @@ class Simulation:
                              and (not np.any(wa["wall_omega"][w] != 0)
                                   or np.array_equal(wa["wall_centre"][g], wa["wall_centre"][w]))]
                     if len(mates) > 1 and self._periodic_fault(q, mates, ks, flat, cap, rho,
-                                                               eps_all, span) is None:
+                                                               eps_all, res, span) is None:
                         continue
                 if why is None:
                     continue
@@ -1433,7 +1431,7 @@ class Simulation:
                     f"as added ({kind}, {how})")
         return f"face {face} of its {n_faces} as added ({kind}, {how})"
 
-    def _periodic_fault(self, q, walls, ks, flat, cap, rho, eps_all, span):
+    def _periodic_fault(self, q, walls, ks, flat, cap, rho, eps_all, res, span):
         """None when the surface of ``walls`` (moving together) continues periodically across
         axis q over a run of ``span`` seconds, else what breaks it.  In the walls' own frame
         at the start (a shift s = v_q span along q sweeps the planes the spheres meet), the
@@ -1463,7 +1461,8 @@ class Simulation:
         the boundary meets in turn, within max(2e-4 R_min, 4 ulps as stored), the limit of a
         flat face's rise over the period.  ``eps_all``: each primitive's tolerance of where
         it lies (its stored rounding): each wall's largest, the smallest of those among
-        these walls taken (no wall's rounding loosens another's check)."""
+        these walls taken (no wall's rounding loosens another's check); ``res``: each
+        primitive's stored rounding (:meth:`_rounding`), as the caller took it."""
         wa = self._warr
         lo, hi = float(self.box[2 * q]), float(self.box[2 * q + 1])
         sel = np.isin(wa["prim_wall"][ks], walls)
@@ -1476,7 +1475,7 @@ class Simulation:
         shift = float(wa["wall_vel"][walls[0], q]) * span
         # 4 ulps of the faces' coordinates as stored (8 unit roundoffs: float32 for a
         # binary STL, the last digit of an ASCII one, float64 for arrays)
-        res, pw = self._rounding()[prims], wa["prim_wall"][prims]
+        res, pw = res[prims], wa["prim_wall"][prims]
         ulps = (8.0 * min(float(res[pw == g].max()) for g in walls if np.any(pw == g))
                 if prims.size else 0.0)
         tol = max(2e-4 * rho, ulps)
