@@ -83,6 +83,7 @@ from pathlib import Path
 import pandas as pd
 
 from soilcal.config.quantities import (  # noqa: F401 (QUANTITIES re-exported)
+    LENGTH_FACTORS,
     MILLIPASCAL,
     MOISTURE_UNITS,
     PLAUSIBLE,
@@ -121,7 +122,7 @@ DIMENSIONLESS = "-"
 #: is read; a unit of another quantity is refused
 RESPONSE_UNITS = (
     {"N": 1.0, "kN": 1e3, "mN": 1e-3, "lbf": UNIT_SYMBOLS["lbf"][0]},
-    {"m": 1.0, "cm": 1e-2, "mm": 1e-3, "in": 0.0254, "ft": 0.3048},
+    dict(LENGTH_FACTORS),
     {"m^2": 1.0, "dm^2": 1e-2, "cm^2": 1e-4, "mm^2": 1e-6},
     {"deg": 1.0, "rad": 180.0 / math.pi},
     {"Pa": 1.0, "kPa": 1e3, "MPa": 1e6, "psi": UNIT_SYMBOLS["psi"][0]},
