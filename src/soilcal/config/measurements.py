@@ -948,7 +948,7 @@ def _check_moisture(soil_path, data: dict, tpath: Path, df: pd.DataFrame, covs: 
 
     from soilcal.config.quantities import soil_moisture
 
-    soil = declared = None
+    soil = declared = wettest = ref = None
     for col, q in quantity_cols.items():
         if q != "moisture_content":
             continue
@@ -957,6 +957,9 @@ def _check_moisture(soil_path, data: dict, tpath: Path, df: pd.DataFrame, covs: 
             soil = (None if not declared else
                     ([v * declared["factor"] for v in declared["points"] + [x for r in declared["ranges"] for x in r]],
                      declared["text"]))
+            # the soil's wettest and median moisture [%], the same for every column
+            if soil is not None:
+                wettest, ref = max(soil[0]), float(np.median(soil[0]))
         unit = covs[col]["unit"]
         x = np.array([v for v in (_number(c) for c in df[col]) if v is not None], float)
         if not len(x):
@@ -969,7 +972,6 @@ def _check_moisture(soil_path, data: dict, tpath: Path, df: pd.DataFrame, covs: 
                              f"soil's covariates.{col}.unit declares) of at most {top / factor:g} ({top:g} %, a "
                              f"peat's at saturation): {x.max():g} would be {x.max() * factor:g} %; if the cells are "
                              "percentages, declare unit: \"%\"", float(x.max()))
-        wettest = None if soil is None else max(soil[0])
         if factor != 1.0 and x.max() > 1.0 and (wettest is None or x.max() * factor > MOISTURE_FRACTION_NEAR * wettest):
             own = ("the soil gives no properties.moisture_content (give the soil's properties.moisture_content "
                    "if it is that wet)" if wettest is None else
@@ -983,7 +985,6 @@ def _check_moisture(soil_path, data: dict, tpath: Path, df: pd.DataFrame, covs: 
         pct = x * factor
         med = float(np.median(pct))
         if soil is not None:
-            ref = float(np.median(soil[0]))
             if med > 0 and ref > 0:
                 lg = float(np.log10(med / ref))
                 # read the other way (x 100 or / 100) the column must match the soil's own moisture:
