@@ -16,19 +16,12 @@ def _n(n, noun):
 
 
 def _warn_set_aside(summary, group=None):
-    """One line on stderr per heap photo or drum frame a group set aside (``set_aside`` of
-    :func:`soilcal.imaging.measure.pile_summary` or :func:`soilcal.imaging.drum.drum_summary`):
-    the JSON on stdout carries it too, but a group's angle from fewer photos than given should not
-    pass unseen."""
-    noun, n = ("frame", summary.get("n_frames")) if "n_frames" in summary else ("photo", summary.get("n_photos"))
-    for a in summary.get("set_aside", []):
-        where = f"group {group}: " if group is not None else ""
-        print(f"soilcal: warning: {where}{noun} {a['path']} set aside (confidence low, not averaged into the "
-              f"group's angle; {_n(n, noun)} used): {a['reason']}", file=sys.stderr)
-    for a in summary.get("accepted_low", []):
-        where = f"group {group}: " if group is not None else ""
-        print(f"soilcal: warning: {where}{noun} {a['path']} flagged low and accepted by the user (accept_low), "
-              f"averaged into the group's angle: {a['reason']}", file=sys.stderr)
+    """On stderr, the group's lines of photos or frames set aside or accepted low
+    (:func:`soilcal.imaging.manifest.set_aside_lines`)."""
+    from soilcal.imaging.manifest import set_aside_lines
+
+    for line in set_aside_lines(summary, group):
+        print(f"soilcal: warning: {line}", file=sys.stderr)
 
 
 def _figure_base(folder, r):
