@@ -1517,6 +1517,36 @@ def test_a_welded_binary_stl_is_forgiven_float32_rounding_of_its_kept_corners(ri
             sim.compute_forces()
 
 
+def test_a_welded_binary_stl_stores_the_float32_rounding_of_each_faces_kept_corners(tmp_path):
+    """The rule pinned: a face of a binary STL keeps, as its rounding, float32's unit
+    roundoff 2^-24 |x| of the largest coordinate among its corners as stored, and where
+    copies of a corner were welded (weld_tol) the kept one is the first in the file, so it is
+    the first copy's coordinate that counts, not the largest over the copies.  A level
+    floor z = 0.5 m over x = 100 .. 100.25 m in two columns (x = 100, 100.125, 100.25), y = 0
+    .. 0.25 m, all numbers exact in float32; every later copy of a corner lies 2^-14 m (61
+    um, exact in float32 there) further in x, welded with weld_tol = 0.1 mm.  The first
+    column's faces keep 2^-24 x 100.125 m, the second's 2^-24 x 100.25 m (the copies' 2^-24 x
+    (x + 2^-14) would be larger by 2^-38 m)."""
+    from soilcal.dem.stl import write_stl
+
+    xs, shift = np.array([100.0, 100.125, 100.25]), 2.0 ** -14
+    X, Y = np.meshgrid(xs, [0.0, 0.25])
+    v = np.c_[X.ravel(), Y.ravel(), np.full(6, 0.5)]
+    t = np.array([[0, 1, 4], [0, 4, 3], [1, 2, 5], [1, 5, 4]])
+    soup = v[t].reshape(-1, 3)
+    later = np.array([t.ravel()[k] in t.ravel()[:k] for k in range(t.size)])
+    soup[later, 0] += shift
+    assert np.array_equal(soup.astype(np.float32).astype(float), soup)  # as the file holds it
+    write_stl(tmp_path / "f.stl", soup, np.arange(len(soup)).reshape(-1, 3))
+    sim = Simulation(table(e=0.5, mu=0.3, E=1e8), gravity=(0, 0, 0))
+    sim.add_particles([(100.1, 0.1, 0.6)], 1e-3, "soil")
+    w = sim.add_stl(tmp_path / "f.stl", "soil", name="floor", weld_tol=1e-4)
+    assert sim.walls.names[w] == "floor"
+    # each face its facet of the file (all four have area); its kept corners: the first copies
+    kept = 2.0 ** -24 * np.array([100.125, 100.125, 100.25, 100.25])
+    assert np.array_equal(sim._mesh_rounding[w], kept)
+
+
 def _slab_floor(rise, L=0.1, W=0.02):
     """Two triangles z = rise x / L over x = 0 .. L, y = 0 .. W (a floor rising ``rise``
     over a period L along x)."""

@@ -817,10 +817,14 @@ class Simulation:
         it was stored [m] (a CAD export rounded to 0.01 mm: 5e-6); by default the unit
         roundoff of the vertices' own type: float32 (2^-24 |x|: a binary STL as
         ``read_stl`` returns it, scaled or not) or float64 (any other array, whatever its
-        numbers; a float32 array moved with float64 numbers is float64).  The checks of a
-        periodic box forgive a face that much tilt, no more, and only that face; there a
-        declared rounding may be at most 2.5e-5 R_min (its 8 x within the 2e-4 R_min step
-        allowed), and none makes a wall count as clear of a boundary."""
+        numbers; a float32 array moved with float64 numbers is float64), of each vertex's
+        largest coordinate as given: where ``read_stl(weld_tol=)`` merged copies of a corner,
+        the copy it kept (the first in the file), not the largest of the copies (how far the
+        copies lay apart is ``weld_tol``'s, stated separately).  Each face takes the largest
+        of its three corners'.  The checks of a periodic box forgive a face that much tilt,
+        no more, and only that face; there a declared rounding may be at most 2.5e-5 R_min
+        (its 8 x within the 2e-4 R_min step allowed), and none makes a wall count as clear
+        of a boundary."""
         raw = vertices
         v = _rows(self.source, "walls.mesh.vertices", vertices, None, "vertices [m]")
         t = np.asarray(triangles)
@@ -875,10 +879,12 @@ class Simulation:
     def add_stl(self, path, material, scale=1.0, weld_tol=0.0, rounding=None, **kw) -> int:
         """An STL file as a mesh wall (:func:`soilcal.dem.stl.read_stl`, then
         :meth:`add_mesh` with its facets, by which a refused face is named, and the rounding
-        the file stored its vertices with: float32's in a binary file, an ASCII file's
-        numbers as written, or ``rounding`` [m, after ``scale``] where given, as an ASCII
-        export rounded to 0.01 mm has it: 5e-6, half of it, also with ``scale=1e-3``); ``kw``: the
-        other arguments of :meth:`add_mesh` (name, velocity, omega, centre)."""
+        the file stored its vertices with: float32's in a binary file (2^-24 |x| of the
+        coordinates kept, a welded corner's first copy in the file: the copies' distance is
+        ``weld_tol``'s, not a rounding), an ASCII file's numbers as written, or ``rounding``
+        [m, after ``scale``] where given, as an ASCII export rounded to 0.01 mm has it: 5e-6,
+        half of it, also with ``scale=1e-3``); ``kw``: the other arguments of
+        :meth:`add_mesh` (name, velocity, omega, centre)."""
         from soilcal.dem.stl import read_stl
 
         if "facets" in kw:
