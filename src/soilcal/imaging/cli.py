@@ -5,21 +5,17 @@ from __future__ import annotations
 import json
 import sys
 
+from soilcal.imaging.manifest import counted, set_aside_lines
+
 
 def _print(obj):
     json.dump(obj, sys.stdout, indent=2)
     sys.stdout.write("\n")
 
 
-def _n(n, noun):
-    return f"{n} {noun}{'' if n == 1 else 's'}"
-
-
 def _warn_set_aside(summary, group=None):
     """On stderr, the group's lines of photos or frames set aside or accepted low
     (:func:`soilcal.imaging.manifest.set_aside_lines`)."""
-    from soilcal.imaging.manifest import set_aside_lines
-
     for line in set_aside_lines(summary, group):
         print(f"soilcal: warning: {line}", file=sys.stderr)
 
@@ -44,8 +40,8 @@ def _plate_lines(args):
         return None
     if len(given) != len(args.photos):
         raise InputError("<command line>", "--plate-line-px", f"one plate line per photo, in the photos' order "
-                         f"({_n(len(args.photos), 'photo')}; several photos' lines can also be given in a manifest, "
-                         f"soilcal image soil)", _n(len(given), "line"))
+                         f"({counted(len(args.photos), 'photo')}; several photos' lines can also be given in a manifest, "
+                         f"soilcal image soil)", counted(len(given), "line"))
     return [check_plate_line("<command line>", "--plate-line-px",
                              {"kind": "pile", "file": str(photo), "plate_line_px": [q[:2], q[2:]]}, photo)
             for photo, q in zip(args.photos, given)]
