@@ -366,8 +366,8 @@ def replicate_spread(d: pd.DataFrame) -> dict | None:
     and 4.1 % of 8-condition tables); for heavier tails (t on 3 dof) it rejects in 19 %.
     Returns ``replicate_percent`` (the replicates' relative SD pooled over the conditions),
     ``widest_percent`` and ``narrowest_percent`` (the largest and smallest condition's),
-    ``dof`` (of the quantity with the smallest p), ``p``; None where no quantity has three conditions with replicate rows without an SD that
-    differ."""
+    ``dof`` (of the quantity with the smallest p), ``p``; None where no quantity has three
+    conditions with replicate rows without an SD that differ."""
     from scipy import stats
 
     need = {"simulation", "measure", "measured"}
