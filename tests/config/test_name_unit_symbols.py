@@ -85,17 +85,3 @@ def test_a_one_letter_word_before_a_statistic_and_its_renames(col, unit):
     """Sd_m_mean reads m before mean as metres (the README says so); the renames its refusal
     proposes give mm or no unit."""
     assert name_units(col) == unit
-
-
-@pytest.mark.parametrize("col", ["horizontal CV (%)", "horizontal_sd_%", "horizontal_cv_pct"])
-def test_a_relative_sd_column_is_refused_as_the_sd_of_a_force(cinnamon, col):
-    """A coefficient of variation of 5 % given as the SD column of a force in N was read as an
-    SD of 5 N (the true SD of the 321.1 N mean is 0.05 x 321.1 = 16.1 N)."""
-    t = _table(cinnamon, "cinnamon-soil", "cutting_resistance.csv")
-    df = pd.read_csv(t)
-    df[col] = [5.0] * len(df)
-    df.to_csv(t, index=False)
-    _edit(cinnamon, "cinnamon-soil", lambda d: _entry(d)["responses"][0].update(sd=col))
-    with pytest.raises(InputError) as e:
-        conditions(load_soil(_yaml(cinnamon, "cinnamon-soil"), cinnamon / "resources"))
-    assert e.value.field.endswith("responses[0].sd") and col in e.value.expected and "CV / 100" in e.value.expected

@@ -49,9 +49,11 @@ def _sd_column(ws, col):
 
 
 @pytest.mark.parametrize("col", ["horizontal (N) CV (%)", "draught_cv_pct_N", "draught_sd (% of mean) N", "CV%",
-                                 "horizontal_SD_percent", "Draught.CV....", "draught_rsd", "draught_CV"])
+                                 "horizontal_SD_percent", "Draught.CV....", "draught_rsd", "draught_CV",
+                                 "horizontal CV (%)", "horizontal_sd_%", "horizontal_cv_pct"])
 def test_a_coefficient_of_variation_is_no_sd_in_newtons(cinnamon, col):
-    """Each loaded as an SD of 5 N; a name that gives N too does not make a CV one."""
+    """Each loaded as an SD of 5 N (a CV of 5 % of the 321.1 N mean is an SD of 16.1 N); a
+    name that gives N too does not make a CV one."""
     with pytest.raises(InputError) as e:
         _sd_column(cinnamon, col)
     assert e.value.field.endswith(".sd") and e.value.got == col and "SD = CV / 100 x mean" in e.value.expected

@@ -1463,18 +1463,18 @@ def test_a_floor_far_from_the_origin_is_forgiven_the_rounding_of_its_storage_onl
     sim.compute_forces()
 
 
-def test_read_stl_gives_each_vertex_the_rounding_its_file_stored_it_with(tmp_path):
-    """Binary STL: float32, |fl(x) - x| <= 2^-24 |x|, the vertices returned as float32 (scaled
-    in float32, so add_mesh knows them); ASCII: its numbers taken as written, float64's unit
-    roundoff 2^-53 |x| whatever format wrote them (%e, %f, integers), times ``scale``."""
+def test_read_stl_gives_vertices_the_type_their_file_stored_them_in(tmp_path):
+    """Binary STL: float32 vertices (scaled in float32, so add_mesh forgives them float32's
+    rounding, 2^-24 |x|); ASCII: its numbers taken as written, float64 whatever format wrote
+    them (%e, %f, integers), scaled or not."""
     from soilcal.dem.stl import read_stl, write_stl
 
     v = np.array([[100.0, 0.0, 0.1], [100.2, 0.0, 0.1], [100.0, 0.02, 0.1]])
     t = np.array([[0, 1, 2]])
     write_stl(tmp_path / "b.stl", v, t)
-    vb, _, rd = read_stl(tmp_path / "b.stl", rounding=True)
+    vb = read_stl(tmp_path / "b.stl")[0]
     assert vb.dtype == np.float32
-    assert rd == pytest.approx(2.0 ** -24 * np.abs(vb.astype(float)).max(axis=1), rel=1e-12)
+    assert np.array_equal(np.unique(vb, axis=0), np.unique(v.astype(np.float32), axis=0))
     vm = read_stl(tmp_path / "b.stl", scale=1e-3)[0]
     assert vm.dtype == np.float32
     assert vm.astype(float) == pytest.approx(1e-3 * vb.astype(float), rel=1e-7)
@@ -1483,11 +1483,68 @@ def test_read_stl_gives_each_vertex_the_rounding_its_file_stored_it_with(tmp_pat
         lines += ["vertex " + " ".join(fmt.format(float(c)) for c in p) for p in v]
         lines += ["endloop", "endfacet", "endsolid s"]
         (tmp_path / "a.stl").write_text("\n".join(lines) + "\n")
-        va, _, rd = read_stl(tmp_path / "a.stl", rounding=True)
-        assert va.dtype == np.float64
-        assert rd == pytest.approx(2.0 ** -53 * np.abs(v).max(axis=1), rel=1e-9)
-        _, _, rd = read_stl(tmp_path / "a.stl", scale=1e-3, rounding=True)
-        assert rd == pytest.approx(1e-3 * 2.0 ** -53 * np.abs(v).max(axis=1), rel=1e-9)
+        for scale in (1.0, 1e-3):
+            va = read_stl(tmp_path / "a.stl", scale=scale)[0]
+            assert va.dtype == np.float64
+            assert np.unique(va, axis=0) == pytest.approx(np.unique(scale * v, axis=0), rel=1e-6)
+
+
+@pytest.mark.parametrize("rise, accepted", [(40e-6, True), (60e-6, False)])
+def test_a_welded_binary_stl_is_forgiven_float32_rounding_of_its_kept_corners(rise, accepted,
+                                                                               tmp_path):
+    """The floor over x = 100 .. 100.2 m written as a binary STL soup whose later copies of
+    each corner lie up to 10 um off in x and y (as CAD exports write them), welded with
+    weld_tol = 0.1 mm into its 6 corners: a face may rise over the period by 4 float32
+    ulps of its largest coordinate, 8 x 2^-24 x 100.2 m = 47.8 um.  Rising 40 um it is
+    accepted, 60 um refused."""
+    from soilcal.dem.stl import read_stl, write_stl
+
+    v, t = _far_floor(rise)
+    soup = v[t].reshape(-1, 3)
+    later = np.zeros(len(soup), dtype=bool)
+    later[[k for k in range(len(soup)) if t.ravel()[k] in t.ravel()[:k]]] = True
+    soup[later, :2] += np.random.default_rng(3).uniform(-1e-5, 1e-5, (int(later.sum()), 2))
+    write_stl(tmp_path / "f.stl", soup, np.arange(len(soup)).reshape(-1, 3))
+    assert len(read_stl(tmp_path / "f.stl")[0]) == 12  # the copies apart: 6 + 6
+    assert len(read_stl(tmp_path / "f.stl", weld_tol=1e-4)[0]) == 6
+    sim = _far_sim()
+    sim.add_stl(tmp_path / "f.stl", "soil", name="floor", weld_tol=1e-4)
+    if accepted:
+        sim.compute_forces()
+    else:
+        # its end sections a step of 60 um apart, more than 8 x 2^-24 x 100.2 m
+        with pytest.raises(InputError, match=r"walls\.floor.*within 4\.78e-05 m"):
+            sim.compute_forces()
+
+
+def test_a_welded_binary_stl_stores_the_float32_rounding_of_each_faces_kept_corners(tmp_path):
+    """The rule pinned: a face of a binary STL keeps, as its rounding, float32's unit
+    roundoff 2^-24 |x| of the largest coordinate among its corners as stored, and where
+    copies of a corner were welded (weld_tol) the kept one is the first in the file, so it is
+    the first copy's coordinate that counts, not the largest over the copies.  A level
+    floor z = 0.5 m over x = 100 .. 100.25 m in two columns (x = 100, 100.125, 100.25), y = 0
+    .. 0.25 m, all numbers exact in float32; every later copy of a corner lies 2^-14 m (61
+    um, exact in float32 there) further in x, welded with weld_tol = 0.1 mm.  The first
+    column's faces keep 2^-24 x 100.125 m, the second's 2^-24 x 100.25 m (the copies' 2^-24 x
+    (x + 2^-14) would be larger by 2^-38 m)."""
+    from soilcal.dem.stl import write_stl
+
+    xs, shift = np.array([100.0, 100.125, 100.25]), 2.0 ** -14
+    X, Y = np.meshgrid(xs, [0.0, 0.25])
+    v = np.c_[X.ravel(), Y.ravel(), np.full(6, 0.5)]
+    t = np.array([[0, 1, 4], [0, 4, 3], [1, 2, 5], [1, 5, 4]])
+    soup = v[t].reshape(-1, 3)
+    later = np.array([t.ravel()[k] in t.ravel()[:k] for k in range(t.size)])
+    soup[later, 0] += shift
+    assert np.array_equal(soup.astype(np.float32).astype(float), soup)  # as the file holds it
+    write_stl(tmp_path / "f.stl", soup, np.arange(len(soup)).reshape(-1, 3))
+    sim = Simulation(table(e=0.5, mu=0.3, E=1e8), gravity=(0, 0, 0))
+    sim.add_particles([(100.1, 0.1, 0.6)], 1e-3, "soil")
+    w = sim.add_stl(tmp_path / "f.stl", "soil", name="floor", weld_tol=1e-4)
+    assert sim.walls.names[w] == "floor"
+    # each face its facet of the file (all four have area); its kept corners: the first copies
+    kept = 2.0 ** -24 * np.array([100.125, 100.125, 100.25, 100.25])
+    assert np.array_equal(sim._mesh_rounding[w], kept)
 
 
 def _slab_floor(rise, L=0.1, W=0.02):

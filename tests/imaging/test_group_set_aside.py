@@ -86,7 +86,9 @@ def test_cli_warns_on_stderr_of_each_photo_set_aside(tmp_path, capsys):
     assert str(plain) not in err
     assert main(["image", "soil", str(_group(tmp_path, ["plain.png", "card.png"]))]) == 0
     err = capsys.readouterr().err
-    assert f"group heap: photo {card} set aside" in err, err
+    # the group named as in the image_measure job's log, the angle named as on the accepted-low line
+    assert (f"soilcal: warning: group heap: photo {card} set aside (confidence low, not averaged into "
+            f"the group's angle; 1 photo used)") in err, err
 
 
 def test_a_low_photo_on_a_given_plate_line_is_not_told_to_give_it(tmp_path):

@@ -37,7 +37,10 @@ def test_the_log_names_frames_set_aside_and_accepted_low(tmp_path):
     lines = log.splitlines()
     aside = [x for x in lines if "b.png" in x]
     accepted = [x for x in lines if "c.png" in x]
-    assert len(accepted) == 1 and "dyn: frame" in accepted[0] and "accepted by the user" in accepted[0], log
+    assert len(accepted) == 1 and "group dyn: frame" in accepted[0] and "accepted by the user" in accepted[0], log
+    assert "averaged into the group's angle" in accepted[0], log
     assert "short of the drum circle" in accepted[0]
-    assert len(aside) == 1 and "dyn: frame" in aside[0] and "set aside" in aside[0], log
+    assert len(aside) == 1 and "group dyn: frame" in aside[0] and "set aside" in aside[0], log
+    # as soilcal image words it: the angle it is left out of, the frames behind the angle
+    assert "not averaged into the group's angle; 1 frame used" in aside[0], log
     assert "short of the drum circle" in aside[0]

@@ -4,7 +4,7 @@ import json
 import logging
 from pathlib import Path
 
-from soilcal.imaging.manifest import measure_manifest
+from soilcal.imaging.manifest import measure_manifest, set_aside_lines
 from soilcal.logs import empty_folder, redirect
 
 with redirect(snakemake.log[0]):  # noqa: F821
@@ -22,12 +22,7 @@ with redirect(snakemake.log[0]):  # noqa: F821
         logging.info("%s: %s", group, {k: r[k] for k in ("angle_deg", "spread_deg", "area_mm2") if k in r})
         # as soilcal image warns on stderr: each photo or frame set aside, and each frame flagged
         # low that the user accepted (accept_low), averaged into the group's angle all the same
-        noun = "frame" if "n_frames" in r else "photo"
-        for a in r.get("set_aside", []):
-            logging.warning("%s: %s %s set aside (confidence low, not averaged into the group): %s",
-                            group, noun, a["path"], a["reason"])
-        for a in r.get("accepted_low", []):
-            logging.warning("%s: %s %s flagged low and accepted by the user (accept_low), averaged into the "
-                            "group's angle: %s", group, noun, a["path"], a["reason"])
+        for line in set_aside_lines(r, group):
+            logging.warning("%s", line)
     out.parent.mkdir(parents=True, exist_ok=True)
     out.write_text(json.dumps(result, indent=2) + "\n")

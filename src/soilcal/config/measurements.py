@@ -83,6 +83,7 @@ from pathlib import Path
 import pandas as pd
 
 from soilcal.config.quantities import (  # noqa: F401 (QUANTITIES re-exported)
+    LENGTH_FACTORS,
     MILLIPASCAL,
     MOISTURE_UNITS,
     PLAUSIBLE,
@@ -121,7 +122,7 @@ DIMENSIONLESS = "-"
 #: is read; a unit of another quantity is refused
 RESPONSE_UNITS = (
     {"N": 1.0, "kN": 1e3, "mN": 1e-3, "lbf": UNIT_SYMBOLS["lbf"][0]},
-    {"m": 1.0, "cm": 1e-2, "mm": 1e-3, "in": 0.0254, "ft": 0.3048},
+    dict(LENGTH_FACTORS),
     {"m^2": 1.0, "dm^2": 1e-2, "cm^2": 1e-4, "mm^2": 1e-6},
     {"deg": 1.0, "rad": 180.0 / math.pi},
     {"Pa": 1.0, "kPa": 1e3, "MPa": 1e6, "psi": UNIT_SYMBOLS["psi"][0]},
@@ -947,7 +948,7 @@ def _check_moisture(soil_path, data: dict, tpath: Path, df: pd.DataFrame, covs: 
 
     from soilcal.config.quantities import soil_moisture
 
-    soil = declared = None
+    soil = declared = wettest = ref = None
     for col, q in quantity_cols.items():
         if q != "moisture_content":
             continue
@@ -956,6 +957,9 @@ def _check_moisture(soil_path, data: dict, tpath: Path, df: pd.DataFrame, covs: 
             soil = (None if not declared else
                     ([v * declared["factor"] for v in declared["points"] + [x for r in declared["ranges"] for x in r]],
                      declared["text"]))
+            # the soil's wettest and median moisture [%], the same for every column
+            if soil is not None:
+                wettest, ref = max(soil[0]), float(np.median(soil[0]))
         unit = covs[col]["unit"]
         x = np.array([v for v in (_number(c) for c in df[col]) if v is not None], float)
         if not len(x):
@@ -968,7 +972,6 @@ def _check_moisture(soil_path, data: dict, tpath: Path, df: pd.DataFrame, covs: 
                              f"soil's covariates.{col}.unit declares) of at most {top / factor:g} ({top:g} %, a "
                              f"peat's at saturation): {x.max():g} would be {x.max() * factor:g} %; if the cells are "
                              "percentages, declare unit: \"%\"", float(x.max()))
-        wettest = None if soil is None else max(soil[0])
         if factor != 1.0 and x.max() > 1.0 and (wettest is None or x.max() * factor > MOISTURE_FRACTION_NEAR * wettest):
             own = ("the soil gives no properties.moisture_content (give the soil's properties.moisture_content "
                    "if it is that wet)" if wettest is None else
@@ -982,7 +985,6 @@ def _check_moisture(soil_path, data: dict, tpath: Path, df: pd.DataFrame, covs: 
         pct = x * factor
         med = float(np.median(pct))
         if soil is not None:
-            ref = float(np.median(soil[0]))
             if med > 0 and ref > 0:
                 lg = float(np.log10(med / ref))
                 # read the other way (x 100 or / 100) the column must match the soil's own moisture:

@@ -5,19 +5,48 @@ measured-data loop."""
 import math
 import re
 
+#: the one table of unit symbols soilcal reads a unit written with symbols by
+#: (:func:`unit_powers`: a property's unit by :func:`si_factor`, a compound unit in a table's
+#: column name or ``unit:`` by :func:`soilcal.config.measurements.whole_unit`): symbol ->
+#: (factor to SI, dimension as powers of mass, length, time).  Case matters: ``mPa`` is a
+#: millipascal, ``MPa`` a megapascal, ``mN`` a millinewton, ``MN`` a meganewton.  An angle or a
+#: revolution is dimensionless here (``r``, ``rev`` a revolution, 2 pi rad).  The imperial units
+#: are exact by definition (the inch 0.0254 m, the foot 0.3048 m, the pound 0.45359237 kg, the
+#: pound-force a pound times the standard gravity 9.80665 m/s^2, the psi a pound-force per
+#: square inch); :data:`QUANTITIES` and the measured responses' units take them from here.
+_INCH, _FOOT, _POUND, _G_N = 0.0254, 0.3048, 0.45359237, 9.80665
+UNIT_SYMBOLS = {
+    "g": (1e-3, (1, 0, 0)), "kg": (1.0, (1, 0, 0)), "Mg": (1e3, (1, 0, 0)), "t": (1e3, (1, 0, 0)),
+    "lb": (_POUND, (1, 0, 0)),
+    "mm": (1e-3, (0, 1, 0)), "cm": (1e-2, (0, 1, 0)), "dm": (0.1, (0, 1, 0)), "m": (1.0, (0, 1, 0)),
+    "km": (1e3, (0, 1, 0)), "in": (_INCH, (0, 1, 0)), "ft": (_FOOT, (0, 1, 0)),
+    "L": (1e-3, (0, 3, 0)), "l": (1e-3, (0, 3, 0)), "mL": (1e-6, (0, 3, 0)),
+    "ml": (1e-6, (0, 3, 0)), "cc": (1e-6, (0, 3, 0)),
+    "s": (1.0, (0, 0, 1)), "min": (60.0, (0, 0, 1)), "h": (3600.0, (0, 0, 1)),
+    "N": (1.0, (1, 1, -2)), "kN": (1e3, (1, 1, -2)), "MN": (1e6, (1, 1, -2)), "mN": (1e-3, (1, 1, -2)),
+    "lbf": (_POUND * _G_N, (1, 1, -2)),
+    "Pa": (1.0, (1, -1, -2)), "kPa": (1e3, (1, -1, -2)), "MPa": (1e6, (1, -1, -2)), "GPa": (1e9, (1, -1, -2)),
+    "mPa": (1e-3, (1, -1, -2)), "psi": (_POUND * _G_N / _INCH ** 2, (1, -1, -2)),
+    "J": (1.0, (1, 2, -2)), "mJ": (1e-3, (1, 2, -2)),
+    "W": (1.0, (1, 2, -3)), "kW": (1e3, (1, 2, -3)),
+    "rad": (1.0, (0, 0, 0)), "r": (2 * math.pi, (0, 0, 0)), "rev": (2 * math.pi, (0, 0, 0)),
+}
+#: the units of a length or depth a table or a response may be given in, factor to m
+LENGTH_FACTORS = {u: UNIT_SYMBOLS[u][0] for u in ("m", "cm", "mm", "in", "ft")}
+
+
 #: quantity -> (SI unit, {accepted unit: factor to SI}); ``None`` for a label quantity
-#: (a tool id, a test day, a group) whose cells are names, not numbers
-#: (imperial units by their exact definitions: the inch 0.0254 m, the foot 0.3048 m, the mile
-#: 1609.344 m, the pound 0.45359237 kg)
+#: (a tool id, a test day, a group) whose cells are names, not numbers (imperial units as
+#: :data:`UNIT_SYMBOLS` defines them; the mile 1609.344 m: a mile per hour 0.44704 m/s)
 QUANTITIES = {
     "tool_speed": ("m/s", {"m/s": 1.0, "km/h": 1 / 3.6, "m/min": 1 / 60, "mm/s": 1e-3, "cm/s": 1e-2,
-                           "mph": 0.44704, "ft/s": 0.3048, "ft/min": 0.3048 / 60}),
-    "working_depth": ("m", {"m": 1.0, "cm": 1e-2, "mm": 1e-3, "in": 0.0254, "ft": 0.3048}),
+                           "mph": 0.44704, "ft/s": _FOOT, "ft/min": _FOOT / 60}),
+    "working_depth": ("m", dict(LENGTH_FACTORS)),
     "rotor_speed": ("r/min", {"r/min": 1.0, "rpm": 1.0, "r/s": 60.0, "rad/s": 60 / (2 * math.pi)}),
     "moisture_content": ("%", {"%": 1.0, "-": 100.0, "fraction": 100.0, "g/g": 100.0, "kg/kg": 100.0}),  # a mass fraction: 0.15 = 15 %
-    "layer_depth": ("m", {"m": 1.0, "cm": 1e-2, "mm": 1e-3, "in": 0.0254, "ft": 0.3048}),
-    "bulk_density": ("kg/m^3", {"kg/m^3": 1.0, "g/cm^3": 1e3, "t/m^3": 1e3, "lb/ft^3": 0.45359237 / 0.3048 ** 3}),
-    "position": ("m", {"m": 1.0, "cm": 1e-2, "mm": 1e-3, "in": 0.0254, "ft": 0.3048}),
+    "layer_depth": ("m", dict(LENGTH_FACTORS)),
+    "bulk_density": ("kg/m^3", {"kg/m^3": 1.0, "g/cm^3": 1e3, "t/m^3": 1e3, "lb/ft^3": _POUND / _FOOT ** 3}),
+    "position": ("m", dict(LENGTH_FACTORS)),
     "tool": None,
     "day": None,
     "group": None,
@@ -165,30 +194,6 @@ def plausible_kind(name: str, material: bool = False) -> str | None:
     return name if name in PLAUSIBLE else None
 
 
-#: the one table of unit symbols soilcal reads a unit written with symbols by
-#: (:func:`unit_powers`: a property's unit by :func:`si_factor`, a compound unit in a table's
-#: column name or ``unit:`` by :func:`soilcal.config.measurements.whole_unit`): symbol ->
-#: (factor to SI, dimension as powers of mass, length, time).  Case matters: ``mPa`` is a
-#: millipascal, ``MPa`` a megapascal, ``mN`` a millinewton, ``MN`` a meganewton.  An angle or a
-#: revolution is dimensionless here (``r``, ``rev`` a revolution, 2 pi rad).  The imperial units
-#: are exact by definition (the inch 0.0254 m, the foot 0.3048 m, the pound 0.45359237 kg, the
-#: pound-force 0.45359237 kg x 9.80665 m/s^2).
-UNIT_SYMBOLS = {
-    "g": (1e-3, (1, 0, 0)), "kg": (1.0, (1, 0, 0)), "Mg": (1e3, (1, 0, 0)), "t": (1e3, (1, 0, 0)),
-    "lb": (0.45359237, (1, 0, 0)),
-    "mm": (1e-3, (0, 1, 0)), "cm": (1e-2, (0, 1, 0)), "dm": (0.1, (0, 1, 0)), "m": (1.0, (0, 1, 0)),
-    "km": (1e3, (0, 1, 0)), "in": (0.0254, (0, 1, 0)), "ft": (0.3048, (0, 1, 0)),
-    "L": (1e-3, (0, 3, 0)), "l": (1e-3, (0, 3, 0)), "mL": (1e-6, (0, 3, 0)),
-    "ml": (1e-6, (0, 3, 0)), "cc": (1e-6, (0, 3, 0)),
-    "s": (1.0, (0, 0, 1)), "min": (60.0, (0, 0, 1)), "h": (3600.0, (0, 0, 1)),
-    "N": (1.0, (1, 1, -2)), "kN": (1e3, (1, 1, -2)), "MN": (1e6, (1, 1, -2)), "mN": (1e-3, (1, 1, -2)),
-    "lbf": (0.45359237 * 9.80665, (1, 1, -2)),
-    "Pa": (1.0, (1, -1, -2)), "kPa": (1e3, (1, -1, -2)), "MPa": (1e6, (1, -1, -2)), "GPa": (1e9, (1, -1, -2)),
-    "mPa": (1e-3, (1, -1, -2)), "psi": (0.45359237 * 9.80665 / 0.0254 ** 2, (1, -1, -2)),
-    "J": (1.0, (1, 2, -2)), "mJ": (1e-3, (1, 2, -2)),
-    "W": (1.0, (1, 2, -3)), "kW": (1e3, (1, 2, -3)),
-    "rad": (1.0, (0, 0, 0)), "r": (2 * math.pi, (0, 0, 0)), "rev": (2 * math.pi, (0, 0, 0)),
-}
 #: symbols whose letters name two units, one of them not in :data:`UNIT_SYMBOLS`: ``mg`` (a
 #: Mg or a milligram), ``mj`` (a mJ or a megajoule); matched with their case only
 _CASE_SENSITIVE = ("mg", "mj")

@@ -817,10 +817,14 @@ class Simulation:
         it was stored [m] (a CAD export rounded to 0.01 mm: 5e-6); by default the unit
         roundoff of the vertices' own type: float32 (2^-24 |x|: a binary STL as
         ``read_stl`` returns it, scaled or not) or float64 (any other array, whatever its
-        numbers; a float32 array moved with float64 numbers is float64).  The checks of a
-        periodic box forgive a face that much tilt, no more, and only that face; there a
-        declared rounding may be at most 2.5e-5 R_min (its 8 x within the 2e-4 R_min step
-        allowed), and none makes a wall count as clear of a boundary."""
+        numbers; a float32 array moved with float64 numbers is float64), of each vertex's
+        largest coordinate as given: where ``read_stl(weld_tol=)`` merged copies of a corner,
+        the copy it kept (the first in the file), not the largest of the copies (how far the
+        copies lay apart is ``weld_tol``'s, stated separately).  Each face takes the largest
+        of its three corners'.  The checks of a periodic box forgive a face that much tilt,
+        no more, and only that face; there a declared rounding may be at most 2.5e-5 R_min
+        (its 8 x within the 2e-4 R_min step allowed), and none makes a wall count as clear
+        of a boundary."""
         raw = vertices
         v = _rows(self.source, "walls.mesh.vertices", vertices, None, "vertices [m]")
         t = np.asarray(triangles)
@@ -875,22 +879,21 @@ class Simulation:
     def add_stl(self, path, material, scale=1.0, weld_tol=0.0, rounding=None, **kw) -> int:
         """An STL file as a mesh wall (:func:`soilcal.dem.stl.read_stl`, then
         :meth:`add_mesh` with its facets, by which a refused face is named, and the rounding
-        the file stored its vertices with: float32's in a binary file, an ASCII file's
-        numbers as written, or ``rounding`` [m, after ``scale``] where given, as an ASCII
-        export rounded to 0.01 mm has it: 5e-6, half of it, also with ``scale=1e-3``); ``kw``: the
-        other arguments of :meth:`add_mesh` (name, velocity, omega, centre)."""
+        the file stored its vertices with: float32's in a binary file (2^-24 |x| of the
+        coordinates kept, a welded corner's first copy in the file: the copies' distance is
+        ``weld_tol``'s, not a rounding), an ASCII file's numbers as written, or ``rounding``
+        [m, after ``scale``] where given, as an ASCII export rounded to 0.01 mm has it: 5e-6,
+        half of it, also with ``scale=1e-3``); ``kw``: the other arguments of
+        :meth:`add_mesh` (name, velocity, omega, centre)."""
         from soilcal.dem.stl import read_stl
 
         if "facets" in kw:
             raise InputError(path, "facets", "no facets= to add_stl (it numbers a refused "
                              "face by its facet in the file itself)", kw["facets"])
-        v, t, fa, rd = read_stl(path, scale=scale, weld_tol=weld_tol, facets=True,
-                                rounding=True)
-        w = self.add_mesh(v, t, material, facets=fa,
-                          rounding=rd if rounding is None else rounding, **kw)
-        if rounding is None:  # the file's own storage, not a rounding the user declared
-            self.__dict__.get("_mesh_declared", {}).pop(w, None)
-        return w
+        # read_stl returns a binary file's vertices as float32 and an ASCII file's as
+        # float64: add_mesh takes the unit roundoff of that type as the file's own rounding
+        v, t, fa = read_stl(path, scale=scale, weld_tol=weld_tol, facets=True)
+        return self.add_mesh(v, t, material, facets=fa, rounding=rounding, **kw)
 
     def _check_declared_rounding(self, q):
         """A rounding given to add_mesh or add_stl (rounding=) is forgiven by a periodic
@@ -1369,7 +1372,8 @@ class Simulation:
                        + f", {self._face_at_fault(q, w, ks, w_of, off_of, turn_of, unit, rises)}"
                        if bad[w] else None)
                 if why is None:
-                    why = self._periodic_fault(q, [w], ks, flat, cap, rho, eps_all, span)
+                    why = self._periodic_fault(q, [w], ks, flat, cap, rho, eps_all, res,
+                                               span)
                 if why is not None and not bad[w]:
                     # tiles: the walls moving with this one, judged as one surface
                     mates = [g for g in range(nw) if has[g] and not bad[g]
@@ -1380,7 +1384,7 @@ class Simulation:
                              and (not np.any(wa["wall_omega"][w] != 0)
                                   or np.array_equal(wa["wall_centre"][g], wa["wall_centre"][w]))]
                     if len(mates) > 1 and self._periodic_fault(q, mates, ks, flat, cap, rho,
-                                                               eps_all, span) is None:
+                                                               eps_all, res, span) is None:
                         continue
                 if why is None:
                     continue
@@ -1433,7 +1437,7 @@ class Simulation:
                     f"as added ({kind}, {how})")
         return f"face {face} of its {n_faces} as added ({kind}, {how})"
 
-    def _periodic_fault(self, q, walls, ks, flat, cap, rho, eps_all, span):
+    def _periodic_fault(self, q, walls, ks, flat, cap, rho, eps_all, res, span):
         """None when the surface of ``walls`` (moving together) continues periodically across
         axis q over a run of ``span`` seconds, else what breaks it.  In the walls' own frame
         at the start (a shift s = v_q span along q sweeps the planes the spheres meet), the
@@ -1463,7 +1467,8 @@ class Simulation:
         the boundary meets in turn, within max(2e-4 R_min, 4 ulps as stored), the limit of a
         flat face's rise over the period.  ``eps_all``: each primitive's tolerance of where
         it lies (its stored rounding): each wall's largest, the smallest of those among
-        these walls taken (no wall's rounding loosens another's check)."""
+        these walls taken (no wall's rounding loosens another's check); ``res``: each
+        primitive's stored rounding (:meth:`_rounding`), as the caller took it."""
         wa = self._warr
         lo, hi = float(self.box[2 * q]), float(self.box[2 * q + 1])
         sel = np.isin(wa["prim_wall"][ks], walls)
@@ -1476,7 +1481,7 @@ class Simulation:
         shift = float(wa["wall_vel"][walls[0], q]) * span
         # 4 ulps of the faces' coordinates as stored (8 unit roundoffs: float32 for a
         # binary STL, the last digit of an ASCII one, float64 for arrays)
-        res, pw = self._rounding()[prims], wa["prim_wall"][prims]
+        res, pw = res[prims], wa["prim_wall"][prims]
         ulps = (8.0 * min(float(res[pw == g].max()) for g in walls if np.any(pw == g))
                 if prims.size else 0.0)
         tol = max(2e-4 * rho, ulps)

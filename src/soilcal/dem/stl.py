@@ -196,7 +196,7 @@ def without_area(corners) -> np.ndarray:
     return ~(area2 > 1e-12 * np.maximum((e1 ** 2).sum(axis=1), (e2 ** 2).sum(axis=1)))
 
 
-def read_stl(path, scale=1.0, weld_tol=0.0, facets=False, rounding=False):
+def read_stl(path, scale=1.0, weld_tol=0.0, facets=False):
     """Read an STL file into ``(vertices [nv, 3], triangles int64[nt, 3])``, coordinates
     multiplied by ``scale``: float32 from a binary file (as it stores them, scaled in
     float32, so :meth:`soilcal.dem.engine.Simulation.add_mesh` forgives a face float32's
@@ -205,12 +205,9 @@ def read_stl(path, scale=1.0, weld_tol=0.0, facets=False, rounding=False):
     triangle k need not be the file's facet k: ``facets=True`` returns also each triangle's
     facet index in the file, ``(vertices, triangles, facets int64[nt])``; give it to
     :meth:`soilcal.dem.engine.Simulation.add_mesh` (``facets=``) and a refused face is named
-    by its facet in the file.  ``rounding=True`` returns also how far each vertex may lie
-    from where it was drawn, the largest over its coordinates (and its welded copies)
-    ``float64[nv]`` [m, times ``scale``]: the unit roundoff of float32 (2^-24 |x|) in a
-    binary file, of float64 in an ASCII one; :meth:`soilcal.dem.engine.Simulation.add_stl`
-    gives it to ``add_mesh(rounding=)``, and a periodic box forgives a face that much and no
-    more."""
+    by its facet in the file.  The vertices' type is their rounding: ``add_mesh`` takes
+    float32's unit roundoff (2^-24 |x|) for a binary file's, float64's for an ASCII one's,
+    and a periodic box forgives a face that much and no more."""
     try:
         tol = float(weld_tol)
     except (TypeError, ValueError):
@@ -223,7 +220,6 @@ def read_stl(path, scale=1.0, weld_tol=0.0, facets=False, rounding=False):
     # a binary file's float32 numbers scaled in float32: the result is float32 numbers, and
     # its rounding float32's (one more unit roundoff, forgiven as the file's own)
     soup = (soup * np.float32(scale)).astype(np.float64) if f32 else soup * float(scale)
-    res = 0.5 * float(np.finfo(np.float32 if f32 else np.float64).eps) * np.abs(soup)
     try:
         v, t, kept = weld(soup, tol, facets=True)
     except ValueError as exc:
@@ -233,10 +229,4 @@ def read_stl(path, scale=1.0, weld_tol=0.0, facets=False, rounding=False):
         raise InputError(path, "triangles", "at least one non-degenerate triangle", 0)
     if f32:
         v = v.astype(np.float32)  # each vertex a corner of the soup: float32 numbers
-    out = (v, t, kept) if facets else (v, t)
-    if rounding:
-        # each vertex: the largest over its coordinates and the corners welded into it
-        rv = np.zeros(v.shape[0])
-        np.maximum.at(rv, t.ravel(), res[kept].max(axis=2).ravel())
-        out = (*out, rv)
-    return out
+    return (v, t, kept) if facets else (v, t)

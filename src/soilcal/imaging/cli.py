@@ -5,30 +5,19 @@ from __future__ import annotations
 import json
 import sys
 
+from soilcal.imaging.manifest import counted, set_aside_lines
+
 
 def _print(obj):
     json.dump(obj, sys.stdout, indent=2)
     sys.stdout.write("\n")
 
 
-def _n(n, noun):
-    return f"{n} {noun}{'' if n == 1 else 's'}"
-
-
 def _warn_set_aside(summary, group=None):
-    """One line on stderr per heap photo or drum frame a group set aside (``set_aside`` of
-    :func:`soilcal.imaging.measure.pile_summary` or :func:`soilcal.imaging.drum.drum_summary`):
-    the JSON on stdout carries it too, but a group's angle from fewer photos than given should not
-    pass unseen."""
-    noun, n = ("frame", summary.get("n_frames")) if "n_frames" in summary else ("photo", summary.get("n_photos"))
-    for a in summary.get("set_aside", []):
-        where = f"group {group}: " if group is not None else ""
-        print(f"soilcal: warning: {where}{noun} {a['path']} set aside (confidence low, not averaged into the "
-              f"group's angle; {_n(n, noun)} used): {a['reason']}", file=sys.stderr)
-    for a in summary.get("accepted_low", []):
-        where = f"group {group}: " if group is not None else ""
-        print(f"soilcal: warning: {where}{noun} {a['path']} flagged low and accepted by the user (accept_low), "
-              f"averaged into the group's angle: {a['reason']}", file=sys.stderr)
+    """On stderr, the group's lines of photos or frames set aside or accepted low
+    (:func:`soilcal.imaging.manifest.set_aside_lines`)."""
+    for line in set_aside_lines(summary, group):
+        print(f"soilcal: warning: {line}", file=sys.stderr)
 
 
 def _figure_base(folder, r):
@@ -51,8 +40,8 @@ def _plate_lines(args):
         return None
     if len(given) != len(args.photos):
         raise InputError("<command line>", "--plate-line-px", f"one plate line per photo, in the photos' order "
-                         f"({_n(len(args.photos), 'photo')}; several photos' lines can also be given in a manifest, "
-                         f"soilcal image soil)", _n(len(given), "line"))
+                         f"({counted(len(args.photos), 'photo')}; several photos' lines can also be given in a manifest, "
+                         f"soilcal image soil)", counted(len(given), "line"))
     return [check_plate_line("<command line>", "--plate-line-px",
                              {"kind": "pile", "file": str(photo), "plate_line_px": [q[:2], q[2:]]}, photo)
             for photo, q in zip(args.photos, given)]

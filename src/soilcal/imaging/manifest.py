@@ -190,6 +190,28 @@ def lookup(photo):
     return None
 
 
+def counted(n, noun) -> str:
+    """``n`` and the noun, plural but for one: '1 photo', '2 photos', '0 frames'."""
+    return f"{n} {noun}{'' if n == 1 else 's'}"
+
+
+def set_aside_lines(summary, group=None) -> list[str]:
+    """The warning lines of a group's summary (:func:`soilcal.imaging.measure.pile_summary` or
+    :func:`soilcal.imaging.drum.drum_summary`): one per heap photo or drum frame it set aside
+    (``set_aside``) and one per frame flagged low that the user accepted (``accepted_low``,
+    averaged into the group's angle all the same), each ``group NAME: `` first where a group is
+    named.  ``soilcal image`` prints them on stderr and the workflow's image_measure job logs
+    them: the JSON carries them too, but a group's angle from fewer photos than given, or from
+    one the measurement doubted, should not pass unseen."""
+    frames = "n_frames" in summary
+    noun, n = ("frame", summary.get("n_frames")) if frames else ("photo", summary.get("n_photos"))
+    where = f"group {group}: " if group is not None else ""
+    return ([f"{where}{noun} {a['path']} set aside (confidence low, not averaged into the group's angle; "
+             f"{counted(n, noun)} used): {a['reason']}" for a in summary.get("set_aside", [])]
+            + [f"{where}{noun} {a['path']} flagged low and accepted by the user (accept_low), averaged into the "
+               f"group's angle: {a['reason']}" for a in summary.get("accepted_low", [])])
+
+
 def measure_manifest(path, figdir=None, threshold="otsu", refusals=None, refused_figdir=None,
                      figdir_field="figures folder", refused_figdir_field="refusals folder"):
     """Measure every group of the manifest; returns {group: result dict}.  ``refusals``: a

@@ -366,9 +366,8 @@ def replicate_spread(d: pd.DataFrame) -> dict | None:
     and 4.1 % of 8-condition tables); for heavier tails (t on 3 dof) it rejects in 19 %.
     Returns ``replicate_percent`` (the replicates' relative SD pooled over the conditions),
     ``widest_percent`` and ``narrowest_percent`` (the largest and smallest condition's),
-    ``statistic`` (Bartlett's of the quantity with the smallest p, relative rows), ``dof``,
-    ``p``; None where no quantity has three conditions with replicate rows without an SD that
-    differ."""
+    ``dof`` (of the quantity with the smallest p), ``p``; None where no quantity has three
+    conditions with replicate rows without an SD that differ."""
     from scipy import stats
 
     need = {"simulation", "measure", "measured"}
@@ -388,13 +387,11 @@ def replicate_spread(d: pd.DataFrame) -> dict | None:
         if len(rel) < 3:
             continue
         k += 1
-        w_rel, p_rel = stats.bartlett(*rel)
-        p_abs = stats.bartlett(*ab).pvalue
-        p = max(float(p_rel), float(p_abs))
+        p = max(float(stats.bartlett(*rel).pvalue), float(stats.bartlett(*ab).pvalue))
         sds = np.array([np.std(r, ddof=1) for r in rel])
         dofs = np.array([len(r) - 1 for r in rel], float)
         if best is None or p < best["p"]:
-            best = dict(p=p, statistic=float(w_rel), dof=(len(rel) - 1, int(sum(len(r) for r in rel)) - len(rel)),
+            best = dict(p=p, dof=(len(rel) - 1, int(sum(len(r) for r in rel)) - len(rel)),
                         replicate_percent=100 * float(np.sqrt(np.sum(dofs * sds ** 2) / np.sum(dofs))),
                         widest_percent=100 * float(np.max(sds)), narrowest_percent=100 * float(np.min(sds)))
     if best is None:
