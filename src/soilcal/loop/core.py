@@ -838,10 +838,7 @@ def _scatter_about_holm(res: pd.DataFrame, s: float, diag: pd.DataFrame, alpha: 
     (Holm), one more test of that family."""
     chi, dof, p = scatter_about_scale(res, s)
     if np.isfinite(p) and len(diag):
-        from statsmodels.stats.multitest import multipletests
-
-        p = float(multipletests(np.append(diag["p"].fillna(1.0).to_numpy(float), p), alpha=alpha,
-                                method="holm")[1][-1])
+        p = float(dg.holm_adjusted(np.append(diag["p"].fillna(1.0).to_numpy(float), p))[-1])
     return chi, dof, p
 
 
