@@ -341,16 +341,7 @@ def _power_table(r, **covs):
                                     measured_sd=np.nan, measured_n=np.nan)  # no SD measured: no scatter test
 
 
-@pytest.fixture
-def no_gc(monkeypatch):
-    """statsmodels' ``multipletests`` runs a full garbage collection on every call (70 ms in
-    a small process, more in a test session): left out for the 400 diagnoses of a draw."""
-    import gc
-
-    monkeypatch.setattr(gc, "collect", lambda *a, **k: 0)
-
-
-def test_a_trend_of_the_detectable_size_is_found_at_the_stated_power(no_gc):
+def test_a_trend_of_the_detectable_size_is_found_at_the_stated_power():
     sigma = 0.05
     # sigma sqrt(6/8) TM: orthogonal to 1 and x, so its standard error about the line is sigma
     base = _power_table(sigma * np.sqrt(6 / 8) * TM, speed=X)
@@ -369,7 +360,7 @@ def test_a_trend_of_the_detectable_size_is_found_at_the_stated_power(no_gc):
     assert 0.74 <= found / 400 <= 0.9, found
 
 
-def test_a_bias_of_the_detectable_size_is_found_at_the_stated_power(no_gc):
+def test_a_bias_of_the_detectable_size_is_found_at_the_stated_power():
     sigma = 0.05
     base = _power_table(sigma * np.sqrt(7 / 8) * TM)  # mean 0, SD sigma
     diag = diagnose(base)
