@@ -5,11 +5,12 @@ standard error, the model refitted.
 Expected values: an effect simulated without seed scatter and measured exactly leaves
 nothing to resample, so the interval is the fitted value itself; and on a linear stand-in,
 100 (1 + a_i beta), with 14 % scatter per run in every design point (three seeds) and in the
-measured repeats, a 95 % interval must cover the true beta in most campaigns: at least 33 of
-40.  A binomial count with p = 0.95 falls below that with probability 0.0003; with three
+measured repeats, a 95 % interval must cover the true beta in most campaigns: at least 17 of
+20.  A binomial count with p = 0.95 falls below that with probability 0.016; with three
 seeds a percentile bootstrap covers somewhat less than its level (the estimate carries a
-small bias from the surrogates' noisy slopes), and at p = 0.92 the count falls below 33 with
-probability 0.06."""
+small bias from the surrogates' noisy slopes), and at p = 0.92 the count falls below 17 with
+probability 0.07.  Intervals that leave the measured values where they are cover the true
+beta in 16 of these 20 campaigns (29 of 40)."""
 
 from __future__ import annotations
 
@@ -80,13 +81,13 @@ def test_the_interval_covers_the_true_parameter_at_its_level():
     rng = np.random.default_rng(20261128)
     true = 0.3
     covered = 0
-    for _ in range(40):
+    for _ in range(20):
         obs, runs = _campaign(rng, true, 0.14)
         _, x, ci = _fit(obs, runs)
         lo, hi = ci["rate_friction.beta"]
         assert lo <= x <= hi
         covered += lo <= true <= hi
-    assert covered >= 33, covered
+    assert covered >= 17, covered
 
 
 def test_runs_without_a_seed_number_are_left_out_and_rows_may_have_more_seeds():

@@ -9,7 +9,7 @@ import pandas as pd
 import pytest
 import yaml
 
-from wfutil import N_SPHERES, adaptive_copy, planned_jobs, run
+from wfutil import LIFT_SPEED, N_SPHERES, adaptive_copy, planned_jobs, run
 
 SOIL = "cinnamon-soil"
 CASE = f"results/{SOIL}/dem/adaptive/bbd/stacking_angle"
@@ -22,8 +22,10 @@ STOPPED = ("budget spent", "target met")
 
 @pytest.fixture(scope="module")
 def wf(tmp_path_factory):
+    # the heaps lifted at the tiny run's speed, a quarter of the lift's steps: these tests read
+    # the records' runs, seeds, levels and files, not the angles' values
     tmp = adaptive_copy(tmp_path_factory.mktemp("adaptive"), SOIL, "stacking_angle", N_SPHERES, BUDGET,
-                        verify_seeds=VERIFY_SEEDS)
+                        setup={"lift_speed": LIFT_SPEED}, verify_seeds=VERIFY_SEEDS)
     # first only up to the decision of iteration 1 (the start's runs are done by then), as a
     # run killed after its first iteration leaves it
     run(tmp, "--cores", "2", f"{CASE}/step/1.json", "--config", "design=adaptive")

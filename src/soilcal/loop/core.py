@@ -833,15 +833,12 @@ def scatter_about_scale(res: pd.DataFrame, s: float) -> tuple[float, int, float]
     return chi, k, float(stats.chi2.sf(chi, k))
 
 
-def _scatter_about_holm(res: pd.DataFrame, s: float, diag: pd.DataFrame, alpha: float) -> tuple[float, int, float]:
+def _scatter_about_holm(res: pd.DataFrame, s: float, diag: pd.DataFrame) -> tuple[float, int, float]:
     """:func:`scatter_about_scale` with its p corrected together with the diagnosis's tests
     (Holm), one more test of that family."""
     chi, dof, p = scatter_about_scale(res, s)
     if np.isfinite(p) and len(diag):
-        from statsmodels.stats.multitest import multipletests
-
-        p = float(multipletests(np.append(diag["p"].fillna(1.0).to_numpy(float), p), alpha=alpha,
-                                method="holm")[1][-1])
+        p = float(dg.holm_adjusted(np.append(diag["p"].fillna(1.0).to_numpy(float), p))[-1])
     return chi, dof, p
 
 
@@ -1028,7 +1025,7 @@ def analyse(soil: str, res: pd.DataFrame, diag: pd.DataFrame, cands: list, effec
         nuisance = ({SCALE_KEY: sv}, {SCALE_KEY: sel.uniform_ci},
                     "fitted alone: the uniform bias the verdict names, the calibrated model times (1 + s)")
         beside = _beside_clause(sel, settings.alpha)
-        chi, dof, p_about = _scatter_about_holm(res, sv, diag, settings.alpha)
+        chi, dof, p_about = _scatter_about_holm(res, sv, diag)
         where = ("the model throughout, a uniform bias (an instrument's calibration, a zero offset) that no "
                  "mechanism of the library carries; ")
         if p_about < settings.alpha:  # the rows are not shifted alike: no uniform bias
@@ -1195,7 +1192,7 @@ def analyse(soil: str, res: pd.DataFrame, diag: pd.DataFrame, cands: list, effec
                                              settings.alpha, groups=sl.replicate_groups(u)))
         nuisance = ({SCALE_KEY: sv}, {SCALE_KEY: (lo, hi)},
                     "fitted alone: the uniform bias the residual follows, the calibrated model times (1 + s)")
-        chi, dof, p_about = _scatter_about_holm(res, sv, diag, settings.alpha)
+        chi, dof, p_about = _scatter_about_holm(res, sv, diag)
         if p_about < settings.alpha:  # the rows are not shifted alike (stones): say so
             verdict += (f"; the measured values are {abs(100 * sv):.1f} % {'above' if sv > 0 else 'below'} the model "
                         "on average, but they scatter about that level beyond the measured and seed uncertainty "
