@@ -42,6 +42,9 @@ checkpoint refine:
     output:
         report("results/{soil}/dem/{stage}/refined.csv", caption="../report/refined.rst", category="{soil}",
                subcategory="dem verification"),
+    params:
+        # the screening ranges a second-round set may move into past the Box-Behnken box
+        soil=lambda w: soil_cfg(w.soil),
     conda:
         "../../envs/soilcal.yaml"
     log:

@@ -28,7 +28,8 @@ SURFACE_TOLERANCE = 0.5
 VERIFICATION_COLUMNS = ["stage", "case", "round", "response", "target_id", "target", "target_source", "preset", "n",
                         "seeds", "failed_seeds", "simulated_mean", "simulated_sd", "relative_error_percent",
                         "within_2_percent", "target_sd", "miss_in_target_sd", "predicted", "predicted_minus_target",
-                        "particles", "paper_target", "paper_simulated", "paper_relative_error_percent", "status", "note"]
+                        "particles", "paper_target", "paper_simulated", "paper_relative_error_percent", "status",
+                        "final", "note"]
 TOOL_COLUMNS = ["measurement", "row", "covariate", "covariate_value", "scenario", "setup", "measure", "unit",
                 "preset", "stage", "case", "n", "seeds", "measured", "measured_sd", "simulated_mean",
                 "simulated_sd", "relative_error_percent", "paper_simulated", "paper_relative_error_percent",
@@ -226,8 +227,37 @@ def verification_frame(soil_data: dict, stage: dict, optimum: pd.DataFrame, targ
                 change = round_change(r1[0], r2, bias, se) if r1 and len(ref) else ""
                 if change:
                     r2["note"] = "; ".join(x for x in (r2["note"], change) if x)
+            _better_round(first, second)
             rows += second
+    for r in rows:
+        r.setdefault("final", True)
     return pd.DataFrame(rows, columns=VERIFICATION_COLUMNS)
+
+
+def _worst_miss(rows: list[dict]) -> float:
+    errs = [abs(float(r["relative_error_percent"])) for r in rows
+            if r.get("n", 0) and np.isfinite(float(r["relative_error_percent"]))]
+    return max(errs) if errs else np.nan
+
+
+def _better_round(first: list[dict], second: list[dict]) -> None:
+    """Mark (``final``) the round whose verified set a case ends with: the second round's
+    bias-corrected (or extrapolated) set only where its verified worst relative miss, over the
+    responses and presets it was verified at, is no worse than the first round's there; the
+    DEM runs judge the move, not the surface that proposed it.  A worse second round says so in
+    its notes.  First-round rows at a preset the second round did not run stay final."""
+    at = {(r["response"], r["preset"]) for r in second}
+    same = [r for r in first if (r["response"], r["preset"]) in at]
+    w1, w2 = _worst_miss(same), _worst_miss(second)
+    keep_second = bool(np.isfinite(w2) and (not np.isfinite(w1) or w2 <= w1))
+    for r in same:
+        r["final"] = not keep_second
+    for r in second:
+        r["final"] = keep_second
+        if np.isfinite(w1) and np.isfinite(w2) and not keep_second:
+            r["note"] = "; ".join(x for x in (r["note"], (
+                f"the second round's verified worst miss {w2:.2g} % is worse than the first round's {w1:.2g} %: "
+                "the case ends with the first round's set")) if x)
 
 
 def round_change(first: dict, second: dict, bias, surface_se=0.0) -> str:
@@ -708,12 +738,15 @@ SUMMARY_COLUMNS = ["soil", "stage", "case", "round", "response", "target", "targ
 
 
 def summary_frame(verifications: dict[str, pd.DataFrame], responses: dict[str, list[pd.DataFrame]]) -> pd.DataFrame:
-    """One row per soil, case, response and preset at the set the soil ends with (the last
-    verification round), with each soil's DEM design points (count, failed; their wall time is in the
-    jobs' benchmark files)."""
+    """One row per soil, case, response and preset at the set the soil ends with (the rows
+    marked ``final``: the better verified round, :func:`verification_frame`; a table without
+    that column, the last verification round), with each soil's DEM design points (count,
+    failed; their wall time is in the jobs' benchmark files)."""
     rows = []
     for soil, v in verifications.items():
-        if "round" in v.columns and len(v):
+        if "final" in v.columns and len(v):
+            v = v[v["final"].astype(str).str.lower() != "false"]
+        elif "round" in v.columns and len(v):
             key = ["stage", "case", "response", "preset"]
             last = v.groupby(key, dropna=False)["round"].transform("max")
             v = v[v["round"] == last]

@@ -1,0 +1,115 @@
+"""The second round moving past the Box-Behnken box towards a target outside it, within each
+factor's screening range and one box half-width (soilcal.chain.refine.BEYOND_HALF_WIDTHS), on
+the stand-in of test_refine: responses exactly y = 30 + 2 A (A coded, actual 0.5 + 0.5 A), so
+the corrected surface is 30 + b + 2 A and the set meeting a target T is A = (T - 30 - b) / 2."""
+
+from __future__ import annotations
+
+import pandas as pd
+import pytest
+
+from soilcal.chain.refine import BEYOND_HALF_WIDTHS, refine_frame
+from soilcal.chain.stage import screening_ranges
+from soilcal.chain.verify import summary_frame, verification_frame
+from test_refine import OPTIMUM, _runs, _stage, _table
+
+T31 = {"y": {"value": 31.0, "source": "image"}, "lost": {"value": None}}
+
+
+def _one(case, mean, wider, targets=T31, x0=None):
+    """refined.csv row of one case calibrated at X0 (or ``x0``) whose four seeds average ``mean``."""
+    opt = OPTIMUM[OPTIMUM["case"] == case].copy() if x0 is None else pd.DataFrame([dict(x0, case=case,
+                                                                                        calibrated=True)])
+    runs = {case: _runs([mean - 0.1, mean + 0.1, mean, mean])}
+    return refine_frame(_stage(), _table(), targets, opt, runs, wider).set_index("case").loc[case]
+
+
+def test_the_trust_region_is_one_box_half_width():
+    assert BEYOND_HALF_WIDTHS == 1.0
+
+
+def test_a_target_outside_the_box_is_met_inside_the_screening_range():
+    # x0 A = 0.5 (surface 31), seeds 34.5: bias +3.5, 33.5 + 2 A = 31 at A = -1.25 (actual -0.125),
+    # past the low bound 0 by a quarter half-width; A was screened over -1 .. 2 (coded -3 .. 3)
+    r = _one("biased", 34.5, {"A": (-1.0, 2.0)})
+    assert (r["round"], bool(r["refined"]), r["region"]) == (2, True, "beyond")
+    assert r["A_coded"] == pytest.approx(-1.25, abs=1e-5) and r["A"] == pytest.approx(-0.125, abs=1e-5)
+    assert (r["B_coded"], r["C_coded"]) == pytest.approx((0.3, -0.2), abs=1e-5)
+    assert r["y"] == pytest.approx(31.0, abs=1e-5) and r["bias_y"] == pytest.approx(3.5)
+    assert r["note"].startswith("bias-corrected: ")
+    assert "extrapolated beyond the design region" in r["note"]
+    assert "A = -0.125 (0.25 half-widths past its low bound 0, inside its screening range -1..2)" in r["note"]
+
+
+def test_the_move_stops_at_the_trust_region_and_at_the_screening_range():
+    # bias +7: 37 + 2 A = 31 needs A = -3; the trust region stops it at -2 (y 33, 6.5 % against
+    # the box corner's 35, 12.9 %) ...
+    r = _one("far", 38.0, {"A": (-5.0, 5.0)})
+    assert r["region"] == "beyond" and r["A_coded"] == pytest.approx(-1.0 - BEYOND_HALF_WIDTHS, abs=1e-4)
+    assert r["y"] == pytest.approx(33.0, abs=1e-3) and r["note"].startswith("bias-corrected compromise")
+    # ... and a screening range ending at actual -0.25 (coded -1.5) before that
+    r = _one("far", 38.0, {"A": (-0.25, 1.0)})
+    assert r["region"] == "beyond" and r["A_coded"] == pytest.approx(-1.5, abs=1e-4)
+    assert r["A"] == pytest.approx(-0.25, abs=1e-4)
+
+
+def test_a_factor_without_a_wider_range_never_leaves_the_box():
+    # only B (no effect on y) was screened wider: A stops at its bound as before, B stays put
+    r = _one("far", 38.0, {"B": (0.0, 40.0)})
+    assert r["region"] == "inside" and r["A_coded"] == pytest.approx(-1.0, abs=1e-4)
+    assert (r["B_coded"], r["C_coded"]) == pytest.approx((0.3, -0.2), abs=1e-4)
+    assert "extrapolated" not in r["note"]
+
+
+def test_nothing_extrapolates_where_the_box_reaches_the_target():
+    # bias +1: 31 + 2 A = 31 at A = 0, inside the box although A could go past it
+    r = _one("biased", 32.0, {"A": (-1.0, 2.0), "B": (0.0, 40.0), "C": (-200.0, 600.0)})
+    assert r["region"] == "inside" and r["A_coded"] == pytest.approx(0.0, abs=1e-6)
+    assert (r["B_coded"], r["C_coded"]) == pytest.approx((0.3, -0.2), abs=1e-6)
+
+
+def test_an_unbiased_miss_at_a_bound_moves_past_it():
+    # x0 at A's low bound, where the surface predicts 28 and the seeds agree (no bias); the target
+    # 27 lies at A = -1.5 (actual -0.25), outside the box: without a wider range the set stays
+    # (the target lies outside the design region), with one the surface itself leads past the bound
+    x0 = {"A": 0.0, "B": 16.5, "C": 180.0, "A_coded": -1.0, "B_coded": 0.3, "C_coded": -0.2, "y": 28.0}
+    t27 = {"y": {"value": 27.0, "source": "image"}}
+    kept = _one("biased", 28.0, None, t27, x0)
+    assert kept["round"] == 1 and "outside the design region" in kept["note"]
+    r = _one("biased", 28.0, {"A": (-1.0, 2.0)}, t27, x0)
+    assert (r["round"], r["region"]) == (2, "beyond") and r["A_coded"] == pytest.approx(-1.5, abs=1e-5)
+    assert r["y"] == pytest.approx(27.0, abs=1e-5) and r["note"].startswith("no bias")
+
+
+def test_a_worse_second_round_says_so_and_the_first_set_stays_final():
+    # "biased" moved to A = -1.25 (prediction 31); its verification lands at 36 (16 % off),
+    # worse than the first round's 34.5 (11 %): the soil ends with the first set
+    ref = _one("biased", 34.5, {"A": (-1.0, 2.0)}).to_frame().T.reset_index(names="case")
+    opt = OPTIMUM[OPTIMUM["case"] == "biased"]
+    runs1 = {"biased": _runs([34.4, 34.6, 34.5, 34.5])}
+    soil = {"targets": {"y": {"value": 31.0}}}
+    stage = _stage()
+    stage["optimise"]["cases"] = [c for c in stage["optimise"]["cases"] if c["id"] == "biased"]
+    df = verification_frame(soil, stage, opt, T31, runs1, ref, {"biased": _runs([35.9, 36.1, 36.0, 36.0])})
+    one, two = df[df["round"] == 1].iloc[0], df[df["round"] == 2].iloc[0]
+    assert bool(one["final"]) and not bool(two["final"])
+    assert "worse than the first round's 11 %: the case ends with the first round's set" in two["note"]
+    assert list(summary_frame({"soil": df}, {})["round"]) == [1]
+    # a second round that lands at 31.2 is final, and the summary takes it
+    df = verification_frame(soil, stage, opt, T31, runs1, ref, {"biased": _runs([31.1, 31.3, 31.2, 31.2])})
+    assert not bool(df[df["round"] == 1].iloc[0]["final"]) and bool(df[df["round"] == 2].iloc[0]["final"])
+    assert list(summary_frame({"soil": df}, {})["round"]) == [2]
+
+
+def test_screening_ranges_come_from_the_screening_of_a_path_design_only():
+    pb = {"id": "pb", "kind": "plackett_burman",
+          "factors": {"X1": {"parameter": "soil_soil_rolling_friction", "low": -1.0, "high": 2.0},
+                      "X2": {"parameter": "soil_steel_restitution", "low": 150.0, "high": 250.0}}}
+    soil = {"stages": [pb, {"id": "path", "kind": "steepest_ascent", "from_stage": "pb"},
+                       {"id": "bbd", "kind": "box_behnken", "from_stage": "path"}]}
+    st = dict(_stage(), derivation={"kind": "path"})
+    # A from X1's range; C's screening range lies inside its box (100..300): the box stays; B unscreened
+    assert screening_ranges(soil, st) == {"A": (-1.0, 2.0), "C": (100.0, 300.0)}
+    assert screening_ranges(dict(soil, simulation={"design": "printed"}), st) == {}
+    assert screening_ranges(dict(soil, simulation={"design": "adaptive"}), st) == {}
+    assert screening_ranges(soil, _stage()) == {}
