@@ -24,10 +24,6 @@ def _one(case, mean, wider, targets=T31, x0=None):
     return refine_frame(_stage(), _table(), targets, opt, runs, wider).set_index("case").loc[case]
 
 
-def test_the_trust_region_is_one_box_half_width():
-    assert BEYOND_HALF_WIDTHS == 1.0
-
-
 def test_a_target_outside_the_box_is_met_inside_the_screening_range():
     # x0 A = 0.5 (surface 31), seeds 34.5: bias +3.5, 33.5 + 2 A = 31 at A = -1.25 (actual -0.125),
     # past the low bound 0 by a quarter half-width; A was screened over -1 .. 2 (coded -3 .. 3)
