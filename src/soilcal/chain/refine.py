@@ -47,7 +47,9 @@ COMPROMISE_GAIN = 1.0
 #: move a factor that was screened over a wider range: the surfaces were fitted inside the box
 #: and a quadratic's error grows quickly outside it, so one half-width, which in the recipe's
 #: design (a Box-Behnken whose low and high are the path steps either side of its centre) is the
-#: next path step, where the path's own DEM runs saw the responses
+#: next path step.  The path's DEM runs saw the responses there only along the path line (every
+#: factor at that step's levels at once), not at the other factors' levels of the set, so past
+#: the box the surface is extrapolated and only the verification with fresh seeds judges it
 BEYOND_HALF_WIDTHS = 1.0
 
 
@@ -58,10 +60,11 @@ def refine_settings(soil_data: dict) -> bool:
 
 
 def set_file(soil_data) -> str:
-    """The file of a DEM stage holding the set a soil ends with, which its tool jobs run at:
-    ``refined.csv`` where the soil runs the second verification round (:func:`refine_settings`,
-    the default), else ``optimum.csv``."""
-    return "refined.csv" if refine_settings(soil_data) else "optimum.csv"
+    """The file of a DEM stage holding the set a soil ends with, which its tool jobs, a later
+    stage fixing its parameters and ``calibrated_vs_paper`` read: ``final.csv``
+    (:func:`final_frame`) where the soil runs the second verification round
+    (:func:`refine_settings`, the default), else ``optimum.csv``."""
+    return "final.csv" if refine_settings(soil_data) else "optimum.csv"
 
 
 def refined_cases(refined: pd.DataFrame) -> list[str]:
@@ -232,8 +235,8 @@ def refine_frame(stage: dict, table: pd.DataFrame, targets: dict, optimum: pd.Da
                                 starts=[*starts, res["x_coded"]], lower=lo_w, upper=hi_w)
             if out["success"] or worst(out["x_coded"]) <= worst(res["x_coded"]) - COMPROMISE_GAIN:
                 inside_text = (f"inside the design region the {'corrected ' if btxt else ''}surface reaches no set "
-                               "meeting every target "
-                               f"(its compromise there: worst error {worst(res['x_coded']):.2g} %)")
+                               "meeting every target; its compromise there: worst error "
+                               f"{worst(res['x_coded']):.2g} %")
                 res = out
         x = res["x_coded"]
         past = beyond_text(stage, x, wider)
@@ -247,8 +250,11 @@ def refine_frame(stage: dict, table: pd.DataFrame, targets: dict, optimum: pd.Da
             # error lower by COMPROMISE_GAIN percentage points than the corrected surfaces at x0
             w0, w1 = worst(x0), worst(x)
             region = ("inside the design region" if not can_leave else
-                      f"inside the design region or up to {BEYOND_HALF_WIDTHS:g} box half-width past it within "
-                      "the screening ranges")
+                      "inside the design region or past it where a factor may leave it (" + ", ".join(
+                          f"{sy} coded {a:.3g} to {b:.3g}" for sy, a, b in zip(syms, lo_w, hi_w)
+                          if a < -1.0 or b > 1.0)
+                      + f": at most {BEYOND_HALF_WIDTHS:g} box half-width past a bound and within its screening "
+                      "range)")
             why = (f"{lead} does not reach every target {region} "
                    f"(its least-squares compromise: worst error {w1:.2g} % against {w0:.2g} % at the first set)")
             if w1 > w0 - COMPROMISE_GAIN:
@@ -306,5 +312,68 @@ def write_refined(stage_json, responses_csv, targets_csv, optimum_csv, run_paths
     wider = screening_ranges(soil_data, stage) if soil_data else {}
     df = refine_frame(stage, read_table(Path(responses_csv)), read_targets(targets_csv), pd.read_csv(optimum_csv), runs,
                       wider)
+    write_csv(df, out)
+    return df
+
+
+def final_frame(soil_data: dict, stage: dict, optimum: pd.DataFrame, targets: dict,
+                runs: dict[str, list[pd.DataFrame]], refined: pd.DataFrame,
+                refined_runs: dict[str, list[pd.DataFrame]]) -> pd.DataFrame:
+    """``final.csv`` of one stage: the set each case ends with, in the columns of
+    ``refined.csv``.  A case moved to a second-round set keeps its ``refined.csv`` row where the
+    verification of both rounds (``runs``: case id -> first-round frames at every preset,
+    ``refined_runs``: the second round's) makes the second round final
+    (:func:`soilcal.chain.verify.better_round`, the rule of ``verification.csv``'s ``final``);
+    otherwise its row is the first round's calibrated set of ``optimum.csv`` with
+    ``round = 1``, ``refined = False`` and a note saying why.  Other cases are their
+    ``refined.csv`` rows."""
+    from soilcal.chain.stage import bounds, calibrated_rows, goal_values
+    from soilcal.chain.verify import better_round, verification_frame
+
+    v = verification_frame(soil_data, stage, optimum, targets, runs, refined, refined_runs)
+    moved = set(refined_cases(refined))
+    syms = bounds(stage)[0]
+    rows = []
+    for case in (stage.get("optimise") or {}).get("cases", []):
+        cid = str(case["id"])
+        ref = refined[refined["case"].astype(str) == cid]
+        mine = v[v["case"].astype(str) == cid]
+        keep, why = (better_round(mine[mine["round"] == 1].to_dict("records"),
+                                  mine[mine["round"] == 2].to_dict("records")) if cid in moved else (True, ""))
+        if keep:
+            rows += ref.to_dict("records")
+            continue
+        columns = [f"{s}_coded" for s in syms] + list(syms) + list(goal_values(case["goals"], targets))
+        row = _kept(cid, calibrated_rows(optimum, cid), f"second round at {_levels_text(ref, syms)} not kept: {why}",
+                    columns)
+        rows.append(row)
+    return pd.DataFrame(rows, columns=list(refined.columns))
+
+
+def _levels_text(ref: pd.DataFrame, syms) -> str:
+    return ", ".join(f"{s} = {float(ref[s].iloc[0]):.4g}" for s in syms if s in ref.columns) if len(ref) else "?"
+
+
+def write_final(soil_data: dict, stage_json, targets_csv, optimum_csv, refined_csv, run_paths, refined_run_paths,
+                out) -> pd.DataFrame:
+    """``final.csv`` of one stage (:func:`final_frame`) from its files, its first-round
+    verification runs ``verify/<preset>/<stage>/<case>/<k>.csv`` and its second-round runs
+    ``refine/<stage>/<case>/<k>.csv``."""
+    from pathlib import Path
+
+    from soilcal.chain.files import read_stage, read_targets, write_csv
+
+    stage = read_stage(stage_json)
+
+    def by_case(paths):
+        got: dict[str, list[pd.DataFrame]] = {}
+        for p in paths:
+            p = Path(p)
+            if p.parent.parent.name == stage["id"]:
+                got.setdefault(p.parent.name, []).append(pd.read_csv(p))
+        return got
+
+    df = final_frame(soil_data, stage, pd.read_csv(optimum_csv), read_targets(targets_csv), by_case(run_paths),
+                     pd.read_csv(refined_csv), by_case(refined_run_paths))
     write_csv(df, out)
     return df

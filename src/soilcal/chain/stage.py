@@ -590,25 +590,21 @@ def screening_ranges(soil_data: dict, stage: dict) -> dict[str, tuple[float, flo
     """``{symbol: (low, high)}`` (actual units) of the range each factor of a DEM stage derived
     from a path (``derivation.kind = "path"``, ``design: recipe``) was screened over: the
     ``low`` .. ``high`` of the factor setting the same parameter in the Plackett-Burman
-    screening the stage descends from (:func:`soilcal.chain.adaptive.screening_of`), widened
-    to the stage's own bounds where it is narrower.  Empty for a printed or adaptive design, a
-    stage with no screening above it, or a soil config without one; a factor the screening
-    does not vary between a low and a high level has no entry (its range is the stage's own)."""
-    from soilcal.chain.adaptive import screening_of
+    screening the stage descends from (:func:`soilcal.chain.adaptive.screened_factor`, the
+    lookup the adaptive design takes its ranges by), widened to the stage's own bounds where it
+    is narrower.  Empty for a printed or adaptive design, a stage with no screening above it, or
+    a soil config without one; a factor the screening does not vary between a low and a high
+    level has no entry (its range is the stage's own)."""
+    from soilcal.chain.adaptive import screened_factor
     from soilcal.chain.derive import design_mode
 
     if design_mode(soil_data) != "recipe" or (stage.get("derivation") or {}).get("kind") != "path":
         return {}
-    scr = screening_of(soil_data, stage["id"])
-    if scr is None:
-        return {}
-    by_param = {f.get("parameter"): f for f in (scr.get("factors") or {}).values()
-                if f.get("low") is not None and f.get("high") is not None}
     out = {}
     for s, f in (stage.get("factors") or {}).items():
-        g = by_param.get(f.get("parameter"))
-        if g is None or f.get("low") is None or f.get("high") is None:
+        found = screened_factor(soil_data, stage["id"], f.get("parameter"))
+        if found is None or f.get("low") is None or f.get("high") is None:
             continue
-        lo, hi = sorted((float(g["low"]), float(g["high"])))
+        lo, hi = sorted((float(found[2]["low"]), float(found[2]["high"])))
         out[s] = (min(lo, float(f["low"])), max(hi, float(f["high"])))
     return out

@@ -234,30 +234,69 @@ def verification_frame(soil_data: dict, stage: dict, optimum: pd.DataFrame, targ
     return pd.DataFrame(rows, columns=VERIFICATION_COLUMNS)
 
 
-def _worst_miss(rows: list[dict]) -> float:
-    errs = [abs(float(r["relative_error_percent"])) for r in rows
-            if r.get("n", 0) and np.isfinite(float(r["relative_error_percent"]))]
-    return max(errs) if errs else np.nan
+def _worst_miss(rows: list[dict]) -> tuple[float, float]:
+    """The largest relative miss (%) over ``rows`` with a finite error, and its standard error
+    (the seeds' sd / sqrt(n) as a percentage of the target; nan with fewer than two seeds)."""
+    best = (np.nan, np.nan)
+    for r in rows:
+        e = abs(float(r["relative_error_percent"]))
+        if not (r.get("n", 0) and np.isfinite(e)) or (np.isfinite(best[0]) and e <= best[0]):
+            continue
+        n, sd, t = int(r["n"]), float(r.get("simulated_sd", np.nan)), abs(float(r.get("target", np.nan)))
+        best = (e, sd / np.sqrt(n) / t * 100 if n > 1 and np.isfinite(sd) and t > 0 else np.nan)
+    return best
+
+
+def better_round(first: list[dict], second: list[dict]) -> tuple[bool, str]:
+    """Whether a case ends with its second round's set, and why not (empty when it does).  The
+    DEM runs judge the move, not the surface that proposed it, which is often extrapolated: the
+    second round is final only where (a) every response and preset the first round verified
+    with a finite error at, among those the second round ran, has a finite error in the second
+    round too (a response whose seeds all failed is not met by default), and (b) its verified
+    worst relative miss is lower than the first round's by more than the combined standard
+    error of the two worst-miss means, sqrt(se1^2 + se2^2) (a worst miss over fewer than two
+    seeds has no standard error, and cannot be told better).  A first round with no finite
+    error at all leaves the second final wherever it has one."""
+    at = {(r["response"], r["preset"]) for r in second}
+    same = [r for r in first if (r["response"], r["preset"]) in at]
+    (w1, s1), (w2, s2) = _worst_miss(same), _worst_miss(second)
+    if not np.isfinite(w2):
+        return False, "no second-round seed gave a value: the case ends with the first round's set"
+    if not np.isfinite(w1):
+        return True, ""
+    finite2 = {(r["response"], r["preset"]) for r in second
+               if r.get("n", 0) and np.isfinite(float(r["relative_error_percent"]))}
+    lost = sorted({f"{r['response']} ({r['preset']})" for r in same
+                   if r.get("n", 0) and np.isfinite(float(r["relative_error_percent"]))
+                   and (r["response"], r["preset"]) not in finite2})
+    if lost:
+        return False, (f"the second round has no value for {', '.join(lost)} (every seed failed), which the first "
+                       "round verified: the case ends with the first round's set")
+    margin = float(np.hypot(s1, s2))
+    if not np.isfinite(margin):
+        return False, (f"the second round's verified worst miss {w2:.2g} % against the first round's {w1:.2g} % "
+                       "cannot be told apart (a worst miss over fewer than two seeds has no standard error): "
+                       "the case ends with the first round's set")
+    if w2 < w1 - margin:
+        return True, ""
+    return False, (f"the second round's verified worst miss {w2:.2g} % is not lower than the first round's "
+                   f"{w1:.2g} % by more than their combined standard error {margin:.2g} %: the case ends with "
+                   "the first round's set")
 
 
 def _better_round(first: list[dict], second: list[dict]) -> None:
-    """Mark (``final``) the round whose verified set a case ends with: the second round's
-    bias-corrected (or extrapolated) set only where its verified worst relative miss, over the
-    responses and presets it was verified at, is no worse than the first round's there; the
-    DEM runs judge the move, not the surface that proposed it.  A worse second round says so in
-    its notes.  First-round rows at a preset the second round did not run stay final."""
+    """Mark (``final``) the round whose verified set a case ends with (:func:`better_round`);
+    a second round that is not final says why in its notes.  First-round rows at a preset the
+    second round did not run stay final."""
     at = {(r["response"], r["preset"]) for r in second}
-    same = [r for r in first if (r["response"], r["preset"]) in at]
-    w1, w2 = _worst_miss(same), _worst_miss(second)
-    keep_second = bool(np.isfinite(w2) and (not np.isfinite(w1) or w2 <= w1))
-    for r in same:
-        r["final"] = not keep_second
+    keep_second, why = better_round(first, second)
+    for r in first:
+        if (r["response"], r["preset"]) in at:
+            r["final"] = not keep_second
     for r in second:
         r["final"] = keep_second
-        if np.isfinite(w1) and np.isfinite(w2) and not keep_second:
-            r["note"] = "; ".join(x for x in (r["note"], (
-                f"the second round's verified worst miss {w2:.2g} % is worse than the first round's {w1:.2g} %: "
-                "the case ends with the first round's set")) if x)
+        if why:
+            r["note"] = "; ".join(x for x in (r["note"], why) if x)
 
 
 def round_change(first: dict, second: dict, bias, surface_se=0.0) -> str:
