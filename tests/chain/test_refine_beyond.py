@@ -134,7 +134,8 @@ def _final(second_means):
 def test_final_csv_holds_the_round_verification_marks_final():
     # the set read by the tool jobs, a later stage and calibrated_vs_paper (set_file) is the
     # first round's where the second verifies worse (36: 16 % off against 11 %) ...
-    assert set_file({}) == "final.csv" and set_file({"simulation": {"verification": {"refine": False}}}) == "optimum.csv"
+    assert set_file({}) == "final.csv"
+    assert set_file({"simulation": {"verification": {"refine": False}}}) == "optimum.csv"
     r = _final([35.9, 36.1, 36.0, 36.0])
     assert (int(r["round"]), bool(r["refined"]), bool(r["calibrated"])) == (1, False, True)
     assert r["A"] == pytest.approx(0.75) and r["A_coded"] == pytest.approx(0.5)
