@@ -161,8 +161,54 @@ def test_a_second_round_must_beat_the_first_by_more_than_their_standard_error():
     # sd 0.1 of 4 seeds about 31: standard error 0.05 / 31 = 0.161 %, combined 0.228 %
     assert not better_round([_row("y", 3.0)], [_row("y", 2.8)])[0]
     assert better_round([_row("y", 3.0)], [_row("y", 2.7)])[0]
-    # one surviving seed has no standard error: 2.9 % cannot be told better than 3.0 %
+    # one surviving seed takes the other round's seed sd 0.1: standard error 0.1 / 31 = 0.323 %,
+    # combined with 0.161 % 0.36 %: 2.9 % is not told better than 3.0 %
     keep, why = better_round([_row("y", 3.0)], [_row("y", 2.9, n=1, sd=float("nan"))])
-    assert not keep and "fewer than two seeds" in why
+    assert not keep and "combined standard error 0.36 %" in why
     # a first round with no finite error leaves the second final
     assert better_round([_row("y", float("nan"), n=0, sd=float("nan"))], [_row("y", 2.9)])[0]
+
+
+NAN = float("nan")
+
+
+def test_a_worst_miss_over_one_seed_takes_the_other_rounds_seed_sd():
+    # round 1's worst miss, y, over one surviving seed: its standard error is round 2's seed sd
+    # 0.1 over one seed, 0.1 / 31 = 0.323 %; with round 2's 0.161 % the margin is 0.361 %
+    assert better_round([_row("y", 3.0, n=1, sd=NAN)], [_row("y", 2.6)])[0]
+    assert not better_round([_row("y", 3.0, n=1, sd=NAN)], [_row("y", 2.7)])[0]
+    # a 30 % miss over one seed against 1 % over four: round 2 is final whichever response of
+    # round 1 misses most (z 29 % over four seeds beside y 30 % or 28 % over one)
+    for y1 in (30.0, 28.0):
+        assert better_round([_row("y", y1, n=1, sd=NAN), _row("z", 29.0)], [_row("y", 1.0), _row("z", 1.0)])[0]
+    # neither round has two seeds of y: no seed scatter to tell them apart by
+    keep, why = better_round([_row("y", 3.0, n=1, sd=NAN)], [_row("y", 1.0, n=1, sd=NAN)])
+    assert not keep and "cannot be told apart" in why and "y (quick)" in why
+
+
+def test_a_response_the_first_round_never_measured_does_not_count_against_the_second():
+    # every B seed of round 1 failed: the rounds compare on A alone (10 % against 1 %)
+    assert better_round([_row("A", 10.0), _row("B", NAN, n=0, sd=NAN)], [_row("A", 1.0), _row("B", 12.0)]) == (True, "")
+
+
+def test_final_marks_only_the_rows_of_the_round_final_csv_keeps():
+    # round 1 verified y at the quick (32.0, 3.2 %) and paper preset (33.0, 6.5 %), round 2 at
+    # the soil's preset only (31.0, 0 %): round 2 is final, and round 1's paper row is not
+    stage = _stage()
+    stage["optimise"]["cases"] = [c for c in stage["optimise"]["cases"] if c["id"] == "biased"]
+    ref = _one("biased", 32.0, {"A": (-1.0, 2.0)}).to_frame().T.reset_index(names="case")
+    paper = []
+    for k, val in enumerate([32.9, 33.1, 33.0, 33.0]):
+        d = _runs([val], seed0=20000 + k)[0]
+        d["preset"] = "paper"
+        paper.append(d)
+    soil = {"targets": {"y": {"value": 31.0}}}
+    opt = OPTIMUM[OPTIMUM["case"] == "biased"]
+    runs1, runs2 = _runs([31.9, 32.1, 32.0, 32.0]), {"biased": _runs([30.9, 31.1, 31.0, 31.0], seed0=12000)}
+    v = verification_frame(soil, stage, opt, T31, {"biased": runs1 + paper}, ref, runs2)
+    final = {(int(r["round"]), r["preset"]): bool(r["final"]) for r in v.to_dict("records")}
+    assert final == {(1, "quick"): False, (1, "paper"): False, (2, "quick"): True}
+    assert summary_frame({"s": v}, {})["round"].tolist() == [2]
+    # final.csv, which weighs the soil's preset only, says the same
+    r = final_frame(soil, stage, opt, T31, {"biased": runs1}, ref, runs2).iloc[0]
+    assert int(r["round"]) == 2

@@ -354,12 +354,6 @@ def final_files(w):
     return {s: final_of(w.soil, s) for s in optimised_stages(w.soil)} if refine_on(w.soil) else {}
 
 
-def stage_all_verify_runs(w):
-    """The first round's verification runs of one stage at every preset (what final.csv
-    weighs the second round against)."""
-    return [p for p in verify_runs(w) if p.split("/")[-3] == w.stage]
-
-
 def stage_refined_runs(w):
     """The second round's runs of one stage."""
     reps = int(verify.verify_settings(soil_cfg(w.soil))["replicates"])

@@ -83,7 +83,7 @@ checkpoint final_set:
         targets="results/{soil}/dem/targets.csv",
         optimum=lambda w: optimum_of(w.soil, w.stage),
         refined=lambda w: refined_of(w.soil, w.stage),
-        runs=stage_all_verify_runs,
+        runs=stage_verify_runs,
         refined_runs=stage_refined_runs,
     output:
         "results/{soil}/dem/{stage}/final.csv",

@@ -321,8 +321,8 @@ def final_frame(soil_data: dict, stage: dict, optimum: pd.DataFrame, targets: di
                 refined_runs: dict[str, list[pd.DataFrame]]) -> pd.DataFrame:
     """``final.csv`` of one stage: the set each case ends with, in the columns of
     ``refined.csv``.  A case moved to a second-round set keeps its ``refined.csv`` row where the
-    verification of both rounds (``runs``: case id -> first-round frames at every preset,
-    ``refined_runs``: the second round's) makes the second round final
+    verification of both rounds (``runs``: case id -> first-round frames at the soil's preset,
+    the one the second round runs at, ``refined_runs``: the second round's) makes the second round final
     (:func:`soilcal.chain.verify.better_round`, the rule of ``verification.csv``'s ``final``);
     otherwise its row is the first round's calibrated set of ``optimum.csv`` with
     ``round = 1``, ``refined = False`` and a note saying why.  Other cases are their

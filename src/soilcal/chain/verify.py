@@ -234,65 +234,80 @@ def verification_frame(soil_data: dict, stage: dict, optimum: pd.DataFrame, targ
     return pd.DataFrame(rows, columns=VERIFICATION_COLUMNS)
 
 
-def _worst_miss(rows: list[dict]) -> tuple[float, float]:
-    """The largest relative miss (%) over ``rows`` with a finite error, and its standard error
-    (the seeds' sd / sqrt(n) as a percentage of the target; nan with fewer than two seeds)."""
-    best = (np.nan, np.nan)
-    for r in rows:
-        e = abs(float(r["relative_error_percent"]))
-        if not (r.get("n", 0) and np.isfinite(e)) or (np.isfinite(best[0]) and e <= best[0]):
-            continue
-        n, sd, t = int(r["n"]), float(r.get("simulated_sd", np.nan)), abs(float(r.get("target", np.nan)))
-        best = (e, sd / np.sqrt(n) / t * 100 if n > 1 and np.isfinite(sd) and t > 0 else np.nan)
-    return best
+def _measured(r: dict) -> bool:
+    """Whether a verification row has a finite error (some seed gave a value)."""
+    return bool(r.get("n", 0)) and np.isfinite(float(r["relative_error_percent"]))
+
+
+def _miss_se(r: dict, other: dict | None) -> float:
+    """The standard error (% of the target) of one verification row's relative miss: its seeds'
+    sd / sqrt(n).  A row with fewer than two seeds has no sd of its own; it takes the other
+    round's sd of the same response and preset (``other``; the seed scatter of one response at
+    two nearby sets), still over its own n seeds.  nan where neither round has two seeds."""
+    n, t = int(r["n"]), abs(float(r.get("target", np.nan)))
+    sd = float(r.get("simulated_sd", np.nan)) if n > 1 else np.nan
+    if not np.isfinite(sd) and other is not None and int(other.get("n", 0)) > 1:
+        sd = float(other.get("simulated_sd", np.nan))
+    return sd / np.sqrt(n) / t * 100 if n > 0 and np.isfinite(sd) and t > 0 else np.nan
+
+
+def _worst_miss(rows: list[dict], others: list[dict]) -> tuple[float, float, str]:
+    """The largest relative miss (%) over ``rows`` (all measured), its standard error
+    (:func:`_miss_se`, with ``others``: the other round's rows) and its response (preset)."""
+    r = max(rows, key=lambda x: abs(float(x["relative_error_percent"])))
+    other = next((o for o in others if (o["response"], o["preset"]) == (r["response"], r["preset"])), None)
+    return abs(float(r["relative_error_percent"])), _miss_se(r, other), f"{r['response']} ({r['preset']})"
 
 
 def better_round(first: list[dict], second: list[dict]) -> tuple[bool, str]:
     """Whether a case ends with its second round's set, and why not (empty when it does).  The
-    DEM runs judge the move, not the surface that proposed it, which is often extrapolated: the
-    second round is final only where (a) every response and preset the first round verified
-    with a finite error at, among those the second round ran, has a finite error in the second
-    round too (a response whose seeds all failed is not met by default), and (b) its verified
-    worst relative miss is lower than the first round's by more than the combined standard
-    error of the two worst-miss means, sqrt(se1^2 + se2^2) (a worst miss over fewer than two
-    seeds has no standard error, and cannot be told better).  A first round with no finite
-    error at all leaves the second final wherever it has one."""
+    DEM runs judge the move, not the surface that proposed it, which is often extrapolated.
+    The rounds are compared over the (response, preset) pairs both measured (a finite error:
+    some seed gave a value), so a response the first round never measured does not count
+    against the second.  The second round is final only where (a) every pair the first round
+    measured, among those the second round ran, is measured in the second round too (a
+    response whose seeds all failed is not met by default), and (b) its worst relative miss
+    over the shared pairs is lower than the first round's by more than the combined standard
+    error of the two worst-miss means, sqrt(se1^2 + se2^2); a worst miss over one seed takes
+    the other round's seed sd of that response (:func:`_miss_se`), and where neither round has
+    two seeds of it the two cannot be told apart.  A first round that measured none of the
+    pairs the second ran leaves the second final wherever it measured one."""
     at = {(r["response"], r["preset"]) for r in second}
     same = [r for r in first if (r["response"], r["preset"]) in at]
-    (w1, s1), (w2, s2) = _worst_miss(same), _worst_miss(second)
-    if not np.isfinite(w2):
+    got2 = {(r["response"], r["preset"]) for r in second if _measured(r)}
+    if not got2:
         return False, "no second-round seed gave a value: the case ends with the first round's set"
-    if not np.isfinite(w1):
-        return True, ""
-    finite2 = {(r["response"], r["preset"]) for r in second
-               if r.get("n", 0) and np.isfinite(float(r["relative_error_percent"]))}
     lost = sorted({f"{r['response']} ({r['preset']})" for r in same
-                   if r.get("n", 0) and np.isfinite(float(r["relative_error_percent"]))
-                   and (r["response"], r["preset"]) not in finite2})
+                   if _measured(r) and (r["response"], r["preset"]) not in got2})
     if lost:
         return False, (f"the second round has no value for {', '.join(lost)} (every seed failed), which the first "
                        "round verified: the case ends with the first round's set")
+    shared = {(r["response"], r["preset"]) for r in same if _measured(r)}
+    if not shared:
+        return True, ""
+    one = [r for r in same if (r["response"], r["preset"]) in shared]
+    two = [r for r in second if (r["response"], r["preset"]) in shared]
+    (w1, s1, at1), (w2, s2, at2) = _worst_miss(one, two), _worst_miss(two, one)
     margin = float(np.hypot(s1, s2))
     if not np.isfinite(margin):
-        return False, (f"the second round's verified worst miss {w2:.2g} % against the first round's {w1:.2g} % "
-                       "cannot be told apart (a worst miss over fewer than two seeds has no standard error): "
-                       "the case ends with the first round's set")
+        return False, (f"the second round's verified worst miss {w2:.2g} % against the first round's "
+                       f"{w1:.2g} % cannot be told apart (neither round has two seeds of "
+                       f"{at1 if not np.isfinite(s1) else at2} to give it a standard error): the case ends with the "
+                       "first round's set")
     if w2 < w1 - margin:
         return True, ""
     return False, (f"the second round's verified worst miss {w2:.2g} % is not lower than the first round's "
-                   f"{w1:.2g} % by more than their combined standard error {margin:.2g} %: the case ends with "
-                   "the first round's set")
+                   f"{w1:.2g} % by more than their combined standard error {margin:.2g} % (worst at {at2} and "
+                   f"{at1}, over the responses both rounds measured): the case ends with the first round's set")
 
 
 def _better_round(first: list[dict], second: list[dict]) -> None:
-    """Mark (``final``) the round whose verified set a case ends with (:func:`better_round`);
-    a second round that is not final says why in its notes.  First-round rows at a preset the
-    second round did not run stay final."""
-    at = {(r["response"], r["preset"]) for r in second}
+    """Mark (``final``) the rows of the round whose verified set a case ends with
+    (:func:`better_round`, as ``final.csv``): every row of that round, at every preset, and
+    none of the other's; a second round that is not final says why in its notes."""
     keep_second, why = better_round(first, second)
     for r in first:
-        if (r["response"], r["preset"]) in at:
-            r["final"] = not keep_second
+        r["final"] = not keep_second
     for r in second:
         r["final"] = keep_second
         if why:
