@@ -302,7 +302,7 @@ def stage_inputs(w):
         if "fixed_from" in deps:
             d = stage_dir(w.soil, deps["fixed_from"], "dem")
             out["fixed_stage"] = f"{d}/stage.json"
-            # the set the upstream stage ends with (its second round where the soil runs one)
+            # the set the upstream stage ends with (final.csv where the soil runs a second round)
             out["fixed_optimum"] = f"{d}/{set_file(w.soil)}"
     return out
 

@@ -494,7 +494,11 @@ def calibrated_vs_paper(soil_data: dict, stages: dict[str, tuple[dict, pd.DataFr
     ``paper_source`` "no published value" (a soil without a citation) or "not printed" (one
     with).  ``pinned``: whether the near-optimal sets pin a factor down (True, False, ``at
     bound`` where a bound of the design region holds it rather than the data), ``fixed`` for
-    a fixed parameter.
+    a fixed parameter.  The near-optimal range and ``pinned`` come from the first round's
+    near-optimal sets (``identifiability.csv``); where a case ends with its second round's set
+    (``round`` 2) the ``note`` says so, and whether the value lies outside that range; a
+    second-round value past the Box-Behnken box (the stage's ``low``..``high``) is ``pinned``
+    "beyond the box": no bound and no near-optimal set of the design holds it there.
     """
     from soilcal.chain.stage import calibrated_rows
 
@@ -532,16 +536,36 @@ def calibrated_vs_paper(soil_data: dict, stages: dict[str, tuple[dict, pd.DataFr
                        "unit": (params.get(pname) or {}).get("unit", ""), "calibrated": ours, "paper": paper,
                        "paper_source": psrc, "difference": ours - paper,
                        "relative_difference_percent": (ours - paper) / paper * 100 if paper else np.nan,
-                       "pinned": "", "near_optimal_min": np.nan, "near_optimal_max": np.nan}
+                       "pinned": "", "near_optimal_min": np.nan, "near_optimal_max": np.nan, "note": ""}
                 if role == "factor" and idt is not None:
                     r = idt[idt["factor"] == sym]
                     if len(r):
                         row.update(pinned=_pinned(r["pinned"].iloc[0]), near_optimal_min=float(r["min"].iloc[0]),
                                    near_optimal_max=float(r["max"].iloc[0]))
+                if role == "factor" and row["round"] == 2:
+                    row.update(_second_round_factor(stage["factors"][sym], ours, row))
                 if role == "fixed":
                     row["pinned"] = "fixed"
                 rows.append(row)
     return pd.DataFrame(rows)
+
+
+def _second_round_factor(factor: dict, value: float, row: dict) -> dict:
+    """``pinned`` and ``note`` of a factor of :func:`calibrated_vs_paper` whose case ends with
+    its second round's set ``value``: the near-optimal range and ``pinned`` describe the first
+    round's sets; a value past the box's ``low``..``high`` is "beyond the box"."""
+    lo, hi = row["near_optimal_min"], row["near_optimal_max"]
+    out = {}
+    notes = ["the second round's set: near_optimal_min/max and pinned describe the first round's near-optimal sets"]
+    if np.isfinite(lo) and np.isfinite(hi) and np.isfinite(value) and not lo <= value <= hi:
+        notes.append(f"this value lies outside their range {lo:.4g} to {hi:.4g}")
+    low, high = (float(factor[k]) if factor.get(k) is not None else np.nan for k in ("low", "high"))
+    tol = 1e-9 * max(abs(low), abs(high), 1.0) if np.isfinite(low) and np.isfinite(high) else 0.0
+    if np.isfinite(value) and (value < low - tol or value > high + tol):
+        out["pinned"] = "beyond the box"
+        notes.append(f"it lies beyond the Box-Behnken box {low:.4g} to {high:.4g}, where no bound holds it")
+    out["note"] = "; ".join(notes)
+    return out
 
 
 def tool_frame(conditions, runs: dict[tuple[str, int], pd.DataFrame]) -> pd.DataFrame:
@@ -771,7 +795,8 @@ def write_tool_verification(soil_path, resources_root, run_paths, run_map: dict,
 def write_calibrated_vs_paper(soil_data: dict, stage_ids, stage_dirs: dict[str, str], out,
                               set_file: str = "optimum.csv") -> pd.DataFrame:
     """``calibrated_vs_paper.csv``: the calibrated set of each case read from ``set_file`` in
-    each stage's folder (``refined.csv`` where the soil runs the second round)."""
+    each stage's folder (:func:`soilcal.chain.refine.set_file`: ``final.csv``, the set each
+    case ends with, where the soil runs the second round)."""
     from pathlib import Path
 
     from soilcal.chain.files import read_stage, write_csv
