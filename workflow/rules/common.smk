@@ -354,25 +354,31 @@ def final_files(w):
     return {s: final_of(w.soil, s) for s in optimised_stages(w.soil)} if refine_on(w.soil) else {}
 
 
+def _stage_refined_runs(soil, stage):
+    """The second round's runs of one stage: its refined cases at their bias-corrected sets."""
+    reps = int(verify.verify_settings(soil_cfg(soil))["replicates"])
+    _, ref = _calibration(soil, stage, refined=True)
+    return [f"results/{soil}/dem/refine/{stage}/{case}/{k}.csv"
+            for case in refine.refined_cases(ref) for k in range(reps)]
+
+
 def stage_refined_runs(w):
     """The second round's runs of one stage."""
-    reps = int(verify.verify_settings(soil_cfg(w.soil))["replicates"])
-    _, ref = _calibration(w.soil, w.stage, refined=True)
-    return [f"results/{w.soil}/dem/refine/{w.stage}/{case}/{k}.csv"
-            for case in refine.refined_cases(ref) for k in range(reps)]
+    return _stage_refined_runs(w.soil, w.stage)
 
 
 def refined_runs(w):
     """Second-round runs: the refined cases of every stage at their bias-corrected sets."""
     if not refine_on(w.soil):
         return []
-    reps = int(verify.verify_settings(soil_cfg(w.soil))["replicates"])
-    out = []
-    for sid in optimised_stages(w.soil):
-        _, ref = _calibration(w.soil, sid, refined=True)
-        for case in refine.refined_cases(ref):
-            out += [f"results/{w.soil}/dem/refine/{sid}/{case}/{k}.csv" for k in range(reps)]
-    return out
+    return [p for sid in optimised_stages(w.soil) for p in _stage_refined_runs(w.soil, sid)]
+
+
+def verification_soil(w):
+    """The soil config the verification and final.csv judge a round by (without its
+    documentation: editing a note re-runs nothing); ``citation``: whether the soil has a paper
+    whose targets and verification to set beside."""
+    return dict(dem_context(soil_cfg(w.soil)), citation=bool(soil_cfg(w.soil).get("citation")))
 
 
 def refine_spec(w):

@@ -89,7 +89,7 @@ checkpoint final_set:
         "results/{soil}/dem/{stage}/final.csv",
     params:
         # as the verification rule's: final.csv takes the round verification.csv marks final
-        soil=lambda w: dict(dem_context(soil_cfg(w.soil)), citation=bool(soil_cfg(w.soil).get("citation"))),
+        soil=verification_soil,
     conda:
         "../../envs/soilcal.yaml"
     log:
@@ -109,8 +109,7 @@ rule verification:
         report("results/{soil}/dem/verification.csv", caption="../report/verification.rst", category="{soil}",
                subcategory="dem verification"),
     params:
-        # citation: whether the soil has a paper whose targets and verification to set beside
-        soil=lambda w: dict(dem_context(soil_cfg(w.soil)), citation=bool(soil_cfg(w.soil).get("citation"))),
+        soil=verification_soil,
         stages=lambda w: optimised_stages(w.soil),
     conda:
         "../../envs/soilcal.yaml"

@@ -291,6 +291,18 @@ def refine_frame(stage: dict, table: pd.DataFrame, targets: dict, optimum: pd.Da
         pd.DataFrame(columns=lead + ["note"])
 
 
+def runs_by_case(paths, stage_id: str) -> dict[str, list[pd.DataFrame]]:
+    """Run files ``.../<stage>/<case>/<k>.csv`` of one stage, read and grouped by case id
+    (files of other stages are left out)."""
+    from pathlib import Path
+
+    got: dict[str, list[pd.DataFrame]] = {}
+    for p in map(Path, paths):
+        if p.parent.parent.name == stage_id:
+            got.setdefault(p.parent.name, []).append(pd.read_csv(p))
+    return got
+
+
 def write_refined(stage_json, responses_csv, targets_csv, optimum_csv, run_paths, out,
                   soil_data: dict | None = None) -> pd.DataFrame:
     """``refined.csv`` of one stage from its files and the first round's verification runs
@@ -304,11 +316,7 @@ def write_refined(stage_json, responses_csv, targets_csv, optimum_csv, run_paths
     from soilcal.config.load import read_table
 
     stage = read_stage(stage_json)
-    runs: dict[str, list[pd.DataFrame]] = {}
-    for p in run_paths:
-        p = Path(p)
-        if p.parent.parent.name == stage["id"]:
-            runs.setdefault(p.parent.name, []).append(pd.read_csv(p))
+    runs = runs_by_case(run_paths, stage["id"])
     wider = screening_ranges(soil_data, stage) if soil_data else {}
     df = refine_frame(stage, read_table(Path(responses_csv)), read_targets(targets_csv), pd.read_csv(optimum_csv), runs,
                       wider)
@@ -357,23 +365,13 @@ def _levels_text(ref: pd.DataFrame, syms) -> str:
 def write_final(soil_data: dict, stage_json, targets_csv, optimum_csv, refined_csv, run_paths, refined_run_paths,
                 out) -> pd.DataFrame:
     """``final.csv`` of one stage (:func:`final_frame`) from its files, its first-round
-    verification runs ``verify/<preset>/<stage>/<case>/<k>.csv`` and its second-round runs
-    ``refine/<stage>/<case>/<k>.csv``."""
-    from pathlib import Path
-
+    verification runs ``verify/<preset>/<stage>/<case>/<k>.csv`` (the soil's preset) and its
+    second-round runs ``refine/<stage>/<case>/<k>.csv``."""
     from soilcal.chain.files import read_stage, read_targets, write_csv
 
     stage = read_stage(stage_json)
-
-    def by_case(paths):
-        got: dict[str, list[pd.DataFrame]] = {}
-        for p in paths:
-            p = Path(p)
-            if p.parent.parent.name == stage["id"]:
-                got.setdefault(p.parent.name, []).append(pd.read_csv(p))
-        return got
-
-    df = final_frame(soil_data, stage, pd.read_csv(optimum_csv), read_targets(targets_csv), by_case(run_paths),
-                     pd.read_csv(refined_csv), by_case(refined_run_paths))
+    df = final_frame(soil_data, stage, pd.read_csv(optimum_csv), read_targets(targets_csv),
+                     runs_by_case(run_paths, stage["id"]), pd.read_csv(refined_csv),
+                     runs_by_case(refined_run_paths, stage["id"]))
     write_csv(df, out)
     return df
