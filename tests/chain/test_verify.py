@@ -374,6 +374,28 @@ def test_calibrated_vs_paper(cinnamon):
     assert list(df.loc[["A", "B", "X1"], "pinned"]) == ["at bound", False, True]
 
 
+def test_calibrated_vs_paper_of_a_second_round_set_past_the_box():
+    # round 1's near-optimal sets put D at 0.0917..0.0941 (pinned) and H at its lower bound
+    # 0.14; the second round ends at D = 0.0865 and H = 0.10, past the box 0.14..0.42
+    soil = {"name": "own", "parameters": {"d": {"unit": "-"}, "h": {"unit": "-"}},
+            "stages": [{"id": "bbd", "factors": {"D": {"parameter": "d"}, "H": {"parameter": "h"}}}]}
+    stage = {"id": "bbd", "factors": {"D": {"parameter": "d", "low": 0.05, "high": 0.15},
+                                      "H": {"parameter": "h", "low": 0.14, "high": 0.42}},
+             "optimise": {"cases": [{"id": "upper", "goals": {}}]}}
+    final = pd.DataFrame({"case": ["upper"], "round": [2], "refined": [True], "D": [0.0865], "H": [0.10],
+                          "calibrated": [True]})
+    ident = pd.DataFrame({"case": ["upper"] * 2, "factor": ["D", "H"], "pinned": ["True", "at bound"],
+                          "min": [0.0917, 0.14], "max": [0.0941, 0.14]})
+    df = calibrated_vs_paper(soil, {"bbd": (stage, final, ident)}).set_index("symbol")
+    d, h = df.loc["D"], df.loc["H"]
+    assert (d["round"], h["round"]) == (2, 2)
+    assert "first round's near-optimal sets" in d["note"] and "outside their range 0.0917 to 0.0941" in d["note"]
+    assert h["pinned"] == "beyond the box" and "beyond the Box-Behnken box 0.14 to 0.42" in h["note"]
+    # a first-round set keeps the near-optimal columns as they are, with no note
+    df = calibrated_vs_paper(soil, {"bbd": (stage, final.assign(round=1), ident)}).set_index("symbol")
+    assert list(df["pinned"]) == [True, "at bound"] and list(df["note"]) == ["", ""]
+
+
 def test_calibrated_vs_paper_without_a_calibrated_set(cinnamon):
     stage = copy.deepcopy(next(s for s in cinnamon["stages"] if s["id"] == "bbd"))
     optimum = pd.DataFrame({"case": ["stacking_angle"], "method": ["none"], "note": ["target value not available"]})

@@ -1,7 +1,7 @@
 """``soilcal loop synthesize|run --results DIR``: every measured condition starts from the
 calibrated set the workflow's tool job for it runs at (soilcal.chain.verify.tool_point), read
 from a results tree as the workflow reads it: the stage from ``<soil>/dem/<stage>/stage.json``,
-the set from ``refined.csv`` (``simulation.verification.refine``, on by default) or
+the set from ``final.csv`` (``simulation.verification.refine``, on by default) or
 ``optimum.csv``; ``--param`` goes on top.
 
 The results trees here are written by hand (no DEM run): every expected number below is one
@@ -52,7 +52,7 @@ CINNAMON_STAGE = {
                                                        "goals": {"stacking_angle": {"goal": "target"}}}]},
 }
 
-#: the final set (refined.csv): a first-round row that is not the calibrated one, then the set
+#: the final set (final.csv): a first-round row that is not the calibrated one, then the set
 CINNAMON_REFINED = pd.DataFrame({
     "case": ["stacking_angle", "stacking_angle"], "A": [0.09, 0.083], "B": [0.30, 0.412], "C": [0.50, 0.615],
     "round": [1, 2], "refined": [True, True], "calibrated": [False, True], "note": ["", ""]})
@@ -84,13 +84,13 @@ def _cinnamon():
 
 def test_each_condition_starts_from_the_refined_set_of_its_stage_plus_param(tmp_path):
     results = _tree(tmp_path, "cinnamon-soil", CINNAMON_STAGE,
-                    {"refined.csv": CINNAMON_REFINED, "optimum.csv": CINNAMON_OPTIMUM})
+                    {"final.csv": CINNAMON_REFINED, "optimum.csv": CINNAMON_OPTIMUM})
     soil, conds = _cinnamon()
     assert len(conds) == 4
     overrides = {"soil_density": 1500.0, "soil_steel_static_friction": 0.7}
     got = lc.base_parameters(soil, conds, overrides, results)
     expected = dict(DEFAULTS,
-                    # the calibrated row of refined.csv, each factor to its <pair>_<kind> field (J/m^2 is SI)
+                    # the calibrated row of final.csv, each factor to its <pair>_<kind> field (J/m^2 is SI)
                     soil_soil_rolling_friction=0.083, soil_soil_surface_energy=0.412,
                     soil_steel_static_friction=0.7,  # --param over the calibrated 0.615
                     # stage.json's fixed values
@@ -110,7 +110,7 @@ def test_each_condition_starts_from_the_refined_set_of_its_stage_plus_param(tmp_
 
 def test_a_soil_without_the_second_round_reads_optimum_csv(tmp_path):
     results = _tree(tmp_path, "cinnamon-soil", CINNAMON_STAGE,
-                    {"refined.csv": CINNAMON_REFINED, "optimum.csv": CINNAMON_OPTIMUM})
+                    {"final.csv": CINNAMON_REFINED, "optimum.csv": CINNAMON_OPTIMUM})
     soil, conds = _cinnamon()
     soil.data.setdefault("simulation", {})["verification"] = {"refine": False}
     from soilcal.chain.refine import set_file
@@ -134,7 +134,7 @@ def test_each_row_takes_the_set_of_its_own_case(tmp_path):
     sets = {"mc00": (0.20, 0.30, 0.010), "mc05": (0.28, 0.40, 0.045), "mc10": (0.31, 0.47, 0.061),
             "mc15": (0.36, 0.55, 0.077), "mc20": (0.39, 0.58, 0.079)}
     refined = pd.DataFrame([{"case": c, "A": a, "B": b, "G": g, "calibrated": True} for c, (a, b, g) in sets.items()])
-    results = _tree(tmp_path, "guangxi-cohesive", stage, {"refined.csv": refined})
+    results = _tree(tmp_path, "guangxi-cohesive", stage, {"final.csv": refined})
     soil = load_soil(GUANGXI, RES)
     conds = conditions(soil)
     assert [(c.row, c.case) for c in conds] == [(1, "mc05"), (2, "mc10"), (3, "mc15")]
@@ -165,11 +165,11 @@ def test_without_results_the_parameters_are_as_before():
 def test_a_case_without_a_calibrated_set_is_an_error_naming_the_file(tmp_path):
     none = pd.DataFrame({"case": ["stacking_angle"], "A": [float("nan")], "B": [float("nan")], "C": [float("nan")],
                          "calibrated": [False], "note": ["target value not available"]})
-    results = _tree(tmp_path, "cinnamon-soil", CINNAMON_STAGE, {"refined.csv": none})
+    results = _tree(tmp_path, "cinnamon-soil", CINNAMON_STAGE, {"final.csv": none})
     soil, conds = _cinnamon()
     with pytest.raises(InputError) as exc:
         lc.base_parameters(soil, conds, {}, results)
-    assert exc.value.path == str(results / "cinnamon-soil/dem/bbd/refined.csv")
+    assert exc.value.path == str(results / "cinnamon-soil/dem/bbd/final.csv")
     assert exc.value.field == "case stacking_angle" and "calibrated = True" in exc.value.expected
     assert exc.value.got == "target value not available"
 
@@ -190,14 +190,14 @@ def test_a_stage_not_run_yet_stops_the_command_with_one_line(command, tmp_path, 
         argv[3:3] = ["--measurement", "cutting_resistance"]
     code, lines = _cli(argv, capsys)
     assert code == 2 and len(lines) == 1, lines
-    missing = results / "cinnamon-soil/dem/bbd/refined.csv"
+    missing = results / "cinnamon-soil/dem/bbd/final.csv"
     assert lines[0].startswith(f"soilcal: error: {missing}: <file>: expected ")
-    assert "refined.csv" in lines[0] and "no such file" in lines[0]
+    assert "final.csv" in lines[0] and "no such file" in lines[0]
     assert not out.exists() and not (tmp_path / "x.truth.csv").exists()
 
 
 def test_a_missing_stage_file_and_a_missing_folder_are_named(tmp_path, capsys):
-    results = _tree(tmp_path, "cinnamon-soil", None, {"refined.csv": CINNAMON_REFINED})
+    results = _tree(tmp_path, "cinnamon-soil", None, {"final.csv": CINNAMON_REFINED})
     base = ["loop", "run", CINNAMON, "--resources", RES, "--out", tmp_path / "out"]
     code, lines = _cli(base + ["--results", results], capsys)
     assert code == 2 and len(lines) == 1
@@ -214,7 +214,7 @@ def test_the_shell_sees_exit_status_2(tmp_path):
                         "--results", str(results), "--out", str(tmp_path / "out")],
                        capture_output=True, text=True, cwd=tmp_path, timeout=300)
     assert p.returncode == 2 and "Traceback" not in p.stderr
-    assert p.stderr.strip().count("\n") == 0 and "cinnamon-soil/dem/bbd/refined.csv" in p.stderr
+    assert p.stderr.strip().count("\n") == 0 and "cinnamon-soil/dem/bbd/final.csv" in p.stderr
     assert not (tmp_path / "out").exists()
 
 
@@ -233,7 +233,7 @@ def _fake_simulator(threads=None):
 
 def test_synthesize_records_the_parameters_in_the_truth_file(tmp_path, monkeypatch, capsys):
     monkeypatch.setattr(lc, "dem_simulator", _fake_simulator)
-    results = _tree(tmp_path, "cinnamon-soil", CINNAMON_STAGE, {"refined.csv": CINNAMON_REFINED})
+    results = _tree(tmp_path, "cinnamon-soil", CINNAMON_STAGE, {"final.csv": CINNAMON_REFINED})
     out = tmp_path / "synthetic.csv"
     code = main(["loop", "synthesize", str(CINNAMON), "--measurement", "cutting_resistance", "--resources", str(RES),
                  "--results", str(results), "--param", "soil_density=1500", "--out", str(out)])
@@ -262,7 +262,7 @@ def test_synthesize_records_the_parameters_in_the_truth_file(tmp_path, monkeypat
 
 def test_run_writes_the_parameters_of_every_condition(tmp_path, monkeypatch, capsys):
     monkeypatch.setattr(lc, "dem_simulator", _fake_simulator)
-    results = _tree(tmp_path, "cinnamon-soil", CINNAMON_STAGE, {"refined.csv": CINNAMON_REFINED})
+    results = _tree(tmp_path, "cinnamon-soil", CINNAMON_STAGE, {"final.csv": CINNAMON_REFINED})
     out = tmp_path / "loop"
     code = main(["loop", "run", str(CINNAMON), "--resources", str(RES), "--results", str(results),
                  "--param", "soil_steel_rolling_friction=0.2", "--sim-seeds", "1", "--out", str(out)])

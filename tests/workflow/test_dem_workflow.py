@@ -10,6 +10,7 @@ is ``conftest.tiny_dem_run``).
 from __future__ import annotations
 
 import json
+import os
 import re
 
 import numpy as np
@@ -132,9 +133,12 @@ def test_verification_and_comparison_tables(done):
     assert {"parameter", "calibrated", "paper", "pinned", "round"} <= set(c.columns)
     opt = pd.read_csv(d / "bbd/optimum.csv")
     opt = opt[opt["calibrated"]].iloc[0]
+    # the set the soil ends with (final.csv) is the round verification.csv marks final
+    fin = pd.read_csv(d / "bbd/final.csv")
+    assert list(fin["case"]) == ["stacking_angle"]
+    assert set(v.loc[v["final"].astype(bool), "round"]) == set(fin["round"]) == set(c["round"])
     if bool(ref["refined"].iloc[0]):
         assert [int(s) for s in str(second["seeds"].iloc[0]).split()] == [1082 + 10002, 1082 + 10003]
-        assert set(c["round"]) == {2}
     else:
         assert second.empty and set(c["round"]) == {1}
         assert str(ref["note"].iloc[0])  # why the first set was kept
@@ -222,6 +226,21 @@ def test_the_loop_compares_every_measured_plate_and_fits_the_adhesion_effect(don
 
 def test_a_second_run_has_nothing_to_do(done):
     assert planned_jobs(done) == []
+
+
+def test_editing_a_note_reruns_no_second_round(done):
+    # the refine step reads the soil config without its documentation (plan.dem_context)
+    p = done / "config/soils/cinnamon-soil.yaml"
+    text, st = p.read_text(), p.stat()
+    d = yaml.safe_load(text)
+    d["title"] = f"{d['title']} (edited)"
+    p.write_text(yaml.safe_dump(d, sort_keys=False))
+    try:
+        planned = planned_jobs(done)
+    finally:
+        p.write_text(text)
+        os.utime(p, ns=(st.st_atime_ns, st.st_mtime_ns))
+    assert not any(re.search(r"refined\.csv|final\.csv|/refine/|/verify/|/tools/", o) for o in planned), planned
 
 
 def test_changing_a_factor_range_reruns_only_that_soil(done):

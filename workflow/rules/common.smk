@@ -302,7 +302,7 @@ def stage_inputs(w):
         if "fixed_from" in deps:
             d = stage_dir(w.soil, deps["fixed_from"], "dem")
             out["fixed_stage"] = f"{d}/stage.json"
-            # the set the upstream stage ends with (its second round where the soil runs one)
+            # the set the upstream stage ends with (final.csv where the soil runs a second round)
             out["fixed_optimum"] = f"{d}/{set_file(w.soil)}"
     return out
 
@@ -346,21 +346,43 @@ def refined_files(w):
     return {s: refined_of(w.soil, s) for s in optimised_stages(w.soil)} if refine_on(w.soil) else {}
 
 
+def final_of(soil, stage):
+    return checkpoints.final_set.get(soil=soil, stage=stage).output[0]
+
+
+def final_files(w):
+    return {s: final_of(w.soil, s) for s in optimised_stages(w.soil)} if refine_on(w.soil) else {}
+
+
+def _stage_refined_runs(soil, stage):
+    """The second round's runs of one stage: its refined cases at their bias-corrected sets."""
+    reps = int(verify.verify_settings(soil_cfg(soil))["replicates"])
+    _, ref = _calibration(soil, stage, refined=True)
+    return [f"results/{soil}/dem/refine/{stage}/{case}/{k}.csv"
+            for case in refine.refined_cases(ref) for k in range(reps)]
+
+
+def stage_refined_runs(w):
+    """The second round's runs of one stage."""
+    return _stage_refined_runs(w.soil, w.stage)
+
+
 def refined_runs(w):
     """Second-round runs: the refined cases of every stage at their bias-corrected sets."""
     if not refine_on(w.soil):
         return []
-    reps = int(verify.verify_settings(soil_cfg(w.soil))["replicates"])
-    out = []
-    for sid in optimised_stages(w.soil):
-        _, ref = _calibration(w.soil, sid, final=True)
-        for case in refine.refined_cases(ref):
-            out += [f"results/{w.soil}/dem/refine/{sid}/{case}/{k}.csv" for k in range(reps)]
-    return out
+    return [p for sid in optimised_stages(w.soil) for p in _stage_refined_runs(w.soil, sid)]
+
+
+def verification_soil(w):
+    """The soil config the verification and final.csv judge a round by (without its
+    documentation: editing a note re-runs nothing); ``citation``: whether the soil has a paper
+    whose targets and verification to set beside."""
+    return dict(dem_context(soil_cfg(w.soil)), citation=bool(soil_cfg(w.soil).get("citation")))
 
 
 def refine_spec(w):
-    st, ref = _calibration(w.soil, w.stage, final=True)
+    st, ref = _calibration(w.soil, w.stage, refined=True)
     reps = int(verify.verify_settings(soil_cfg(w.soil))["replicates"])
     return verify.verification_point(SOILS[w.soil], st, ref, w.case, reps + int(w.rep))
 
@@ -368,14 +390,17 @@ def refine_spec(w):
 _CALIBRATED = {}
 
 
-def _calibration(soil, stage, final=False):
+def _calibration(soil, stage, final=False, refined=False):
     """(stage, optimum) of a DEM stage once its optimum checkpoint has run, read once per file
-    version; with ``final`` the set the soil ends with (refined.csv where the soil runs the
-    second round)."""
+    version; with ``final`` the set the soil ends with (final.csv, the better verified round,
+    where the soil runs the second round); with ``refined`` the second round's sets
+    (refined.csv, what its runs simulate)."""
     import pandas as pd
 
-    if final and refine_on(soil):
+    if refined and refine_on(soil):
         opt = refined_of(soil, stage)
+    elif final and refine_on(soil):
+        opt = final_of(soil, stage)
     else:
         opt = checkpoints.optimum.get(soil=soil, source="dem", stage=stage).output.optimum
     d = stage_dir(soil, stage, "dem")
@@ -442,7 +467,7 @@ def tool_spec(w):
 
 
 def final_set_of(soil, stage):
-    return ancient(refined_of(soil, stage)) if refine_on(soil) else optimum_of(soil, stage)
+    return ancient(final_of(soil, stage)) if refine_on(soil) else optimum_of(soil, stage)
 
 
 def tool_optima(w):

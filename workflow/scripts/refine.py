@@ -5,5 +5,6 @@ from soilcal.logs import redirect
 
 with redirect(snakemake.log[0]):  # noqa: F821
     i = snakemake.input  # noqa: F821
-    df = write_refined(i.stage, i.responses, i.targets, i.optimum, i.runs, snakemake.output[0])  # noqa: F821
+    df = write_refined(i.stage, i.responses, i.targets, i.optimum, i.runs, snakemake.output[0],  # noqa: F821
+                       soil_data=snakemake.params.soil)  # noqa: F821
     print(df.to_string(index=False))

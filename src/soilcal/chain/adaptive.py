@@ -128,6 +128,14 @@ def screening_factor(soil_data: dict, stage_id: str, parameter) -> tuple[dict, s
     start-up checks of the adaptive design follow."""
     if ranges_setting(soil_data) != "screening":
         return None
+    return screened_factor(soil_data, stage_id, parameter)
+
+
+def screened_factor(soil_data: dict, stage_id: str, parameter) -> tuple[dict, str, dict] | None:
+    """``(screening stage, its symbol, its factor)``: the first factor of the Plackett-Burman
+    screening stage ``stage_id`` descends from (:func:`screening_of`) that varies ``parameter``
+    between a low and a high level, or None.  The lookup of :func:`screening_factor` and of
+    :func:`soilcal.chain.stage.screening_ranges`."""
     screening = screening_of(soil_data, stage_id)
     for sym, f in ((screening or {}).get("factors") or {}).items():
         if f.get("parameter") == parameter and f.get("low") is not None and f.get("high") is not None:

@@ -34,8 +34,8 @@ from the DEM results of the earlier stage, as the papers derived it from theirs:
   rule, so its files stay those of the published replay.
 * **parameters fixed at an earlier stage's optimum** (``fixed_from``, black soil stage 2):
   the DEM source fixes them at ITS calibrated set of that stage (the ``calibrated`` row of
-  ``optimum.csv``, or of ``refined.csv`` where the soil runs the second verification round,
-  :mod:`soilcal.chain.refine`), not at the paper's.
+  ``optimum.csv``, or of ``final.csv``, the better verified round, where the soil runs the
+  second verification round, :func:`soilcal.chain.refine.final_frame`), not at the paper's.
 
 ``simulation.design: printed`` runs every stage on the paper's own printed levels instead
 (the same for a stage that follows one the DEM source does not run, ``simulation.stages``).

@@ -8,10 +8,20 @@ response (:func:`soilcal.optimise.correction.significant_bias`); the new set is 
 move from x0 at which the bias-corrected surfaces meet every target
 (:func:`soilcal.optimise.correction.corrected_set`), and the workflow verifies it with fresh
 seeds (``seed + seed_offset + replicates + k``).  Where the corrected surfaces cannot meet every
-target inside the design region (two targets pulling apart, as a layer's static and dynamic
-angles can), their least-squares compromise is verified instead if it promises a worst relative
-error at least :data:`COMPROMISE_GAIN` percentage points below theirs at x0.  Every other case
-keeps x0, and its row says why (met, scatter only, no target, nothing better within reach).
+target inside the design region, the region is moved, as response-surface practice moves it
+towards a target outside it (Myers, Montgomery & Anderson-Cook, Response Surface Methodology,
+ch. 5-6): the search reaches past the box, in each factor that the design descends from a wider
+screening range of (:func:`soilcal.chain.stage.screening_ranges`: a Box-Behnken centred on a
+path step, whose Plackett-Burman screening spans more), by at most :data:`BEYOND_HALF_WIDTHS`
+box half-widths and never past that range; a factor with no wider range stays in the box.  Such
+a row has ``region = beyond`` and its note says in which factors and how far; the DEM
+verification of it with fresh seeds judges it (the verification rows say where it missed by
+more than the first round).  Where the corrected surfaces cannot meet every target in that
+region either (two targets pulling apart, as a layer's static and dynamic angles can), their
+least-squares compromise is verified instead if it promises a worst relative error at least
+:data:`COMPROMISE_GAIN` percentage points below theirs at x0 (a compromise past the box only
+where it promises that much more than the best inside it).  Every other case keeps x0, and its
+row says why (met, scatter only, no target, nothing better within reach).
 
 ``refined.csv`` has one row per case with ``calibrated = True`` on the set the soil ends
 with, in the columns of ``optimum.csv`` (factor levels coded and actual, predicted responses,
@@ -19,7 +29,7 @@ corrected where refined), so the tool tests and ``calibrated_vs_paper`` read the
 the same way they read an optimum; plus ``round`` (1 = x0 kept, 2 = bias-corrected),
 ``refined``, ``bias_<response>``, ``surface_change_se_<response>`` (round 2: the standard error
 of the surface's change from x0 to the new set, :meth:`soilcal.rsm.model.RSMFit.change_se`),
-``move_coded`` and ``note``.
+``move_coded``, ``region`` (``inside`` the Box-Behnken box or ``beyond`` it) and ``note``.
 """
 
 from __future__ import annotations
@@ -33,6 +43,14 @@ TOLERANCE_PERCENT = 2.0
 #: a compromise set is verified when the corrected surfaces promise a worst relative error at
 #: least this many percentage points below theirs at the first set (half the 2 % tolerance)
 COMPROMISE_GAIN = 1.0
+#: how far past a bound of the design box (in box half-widths, coded units) the second round may
+#: move a factor that was screened over a wider range: the surfaces were fitted inside the box
+#: and a quadratic's error grows quickly outside it, so one half-width, which in the recipe's
+#: design (a Box-Behnken whose low and high are the path steps either side of its centre) is the
+#: next path step.  The path's DEM runs saw the responses there only along the path line (every
+#: factor at that step's levels at once), not at the other factors' levels of the set, so past
+#: the box the surface is extrapolated and only the verification with fresh seeds judges it
+BEYOND_HALF_WIDTHS = 1.0
 
 
 def refine_settings(soil_data: dict) -> bool:
@@ -42,10 +60,11 @@ def refine_settings(soil_data: dict) -> bool:
 
 
 def set_file(soil_data) -> str:
-    """The file of a DEM stage holding the set a soil ends with, which its tool jobs run at:
-    ``refined.csv`` where the soil runs the second verification round (:func:`refine_settings`,
-    the default), else ``optimum.csv``."""
-    return "refined.csv" if refine_settings(soil_data) else "optimum.csv"
+    """The file of a DEM stage holding the set a soil ends with, which its tool jobs, a later
+    stage fixing its parameters and ``calibrated_vs_paper`` read: ``final.csv``
+    (:func:`final_frame`) where the soil runs the second verification round
+    (:func:`refine_settings`, the default), else ``optimum.csv``."""
+    return "final.csv" if refine_settings(soil_data) else "optimum.csv"
 
 
 def refined_cases(refined: pd.DataFrame) -> list[str]:
@@ -99,14 +118,52 @@ def _unbiased_miss(stage: dict, cal: pd.DataFrame, tgt: dict, stats: dict, pred:
 def _kept(case_id, cal: pd.DataFrame, note: str, columns) -> dict:
     row = {c: cal[c].iloc[0] for c in columns if c in cal.columns} if len(cal) else {}
     return row | {"case": case_id, "round": 1, "refined": False, "calibrated": bool(len(cal)),
-                  "move_coded": 0.0, "note": note}
+                  "move_coded": 0.0, "region": "inside", "note": note}
+
+
+def search_region(stage: dict, wider: dict | None) -> tuple[np.ndarray, np.ndarray]:
+    """Coded lower and upper bounds of the second round's search past the box: each factor's
+    screening range ``wider[symbol] = (low, high)`` (actual units,
+    :func:`soilcal.chain.stage.screening_ranges`) cut to :data:`BEYOND_HALF_WIDTHS` past the
+    box; [-1, 1] for a factor without one."""
+    from soilcal.chain.stage import bounds
+
+    syms, low, high = bounds(stage)
+    centre, half = (low + high) / 2.0, (high - low) / 2.0
+    lo, hi = np.full(len(syms), -1.0), np.full(len(syms), 1.0)
+    for j, s in enumerate(syms):
+        if s in (wider or {}):
+            a, b = ((float(v) - centre[j]) / half[j] for v in wider[s])
+            lo[j] = min(-1.0, max(a, -1.0 - BEYOND_HALF_WIDTHS))
+            hi[j] = max(1.0, min(b, 1.0 + BEYOND_HALF_WIDTHS))
+    return lo, hi
+
+
+def beyond_text(stage: dict, x, wider: dict | None) -> str:
+    """Which factors of the coded set ``x`` lie outside the box and how far, as text (empty
+    when none does)."""
+    from soilcal.chain.stage import bounds
+
+    syms, low, high = bounds(stage)
+    centre, half = (low + high) / 2.0, (high - low) / 2.0
+    parts = []
+    for j, s in enumerate(syms):
+        xj = float(x[j])
+        if abs(xj) <= 1.0 + 1e-9:
+            continue
+        side, b = ("low", low[j]) if xj < 0 else ("high", high[j])
+        lo, hi = wider[s]
+        parts.append(f"{s} = {centre[j] + xj * half[j]:.4g} ({abs(xj) - 1.0:.2f} half-widths past its {side} bound "
+                     f"{b:g}, inside its screening range {lo:g}..{hi:g})")
+    return "; ".join(parts)
 
 
 def refine_frame(stage: dict, table: pd.DataFrame, targets: dict, optimum: pd.DataFrame,
-                 runs: dict[str, list[pd.DataFrame]]) -> pd.DataFrame:
+                 runs: dict[str, list[pd.DataFrame]], wider: dict | None = None) -> pd.DataFrame:
     """``refined.csv`` of one stage (module docstring).  ``table``: the stage's responses
     (design points), ``runs``: case id -> the first round's verification frames at the soil's
-    own preset."""
+    own preset, ``wider``: symbol -> (low, high), the range each factor was screened over
+    (:func:`soilcal.chain.stage.screening_ranges`; none: every factor stays in the box)."""
     from soilcal.chain.stage import bounds, calibrated_rows, fit_stage, goal_values
     from soilcal.optimise import desirability_optimise
     from soilcal.optimise.correction import Shifted, corrected_set, significant_bias
@@ -114,6 +171,8 @@ def refine_frame(stage: dict, table: pd.DataFrame, targets: dict, optimum: pd.Da
     opt = stage.get("optimise") or {}
     syms, low, high = bounds(stage)
     centre, half = (low + high) / 2.0, (high - low) / 2.0
+    lo_w, hi_w = search_region(stage, wider)
+    can_leave = bool(np.any(lo_w < -1.0) or np.any(hi_w > 1.0))
     fits = None
     rows = []
     for case in opt.get("cases", []):
@@ -142,9 +201,15 @@ def refine_frame(stage: dict, table: pd.DataFrame, targets: dict, optimum: pd.Da
             rows.append(_kept(cid, cal, "the first round meets every target within 2 %", columns))
             continue
         bias = {r: significant_bias(m, sd, n, pred[r]) for r, (m, sd, n) in stats.items()}
+        unbiased = ""
         if not any(bias.values()):
-            rows.append(_kept(cid, cal, _unbiased_miss(stage, cal, tgt, stats, pred, missed), columns))
-            continue
+            from soilcal.chain.verify import seed_scatter
+
+            unbiased = _unbiased_miss(stage, cal, tgt, stats, pred, missed)
+            # the surface itself misses beyond seed scatter: only a move past the box can help
+            if not (can_leave and any(seed_scatter(*stats[r], tgt[r])[1] is False for r in missed)):
+                rows.append(_kept(cid, cal, unbiased, columns))
+                continue
         if fits is None:
             fits = {sf.response: (sf.reduced if opt.get("model", "reduced") == "reduced" else sf.full)
                     for sf in fit_stage(stage, table)}
@@ -158,15 +223,39 @@ def refine_frame(stage: dict, table: pd.DataFrame, targets: dict, optimum: pd.Da
             starts = np.empty((0, len(syms)))
         res = corrected_set({r: models[r] for r in tgt}, tgt, bias, x0, starts=starts)
         btxt = ", ".join(f"{r} {b:+.3g}" for r, b in bias.items() if b)
+
+        def worst(xc):
+            return max(abs(float(models[r].predict(xc[None, :])[0]) + bias.get(r, 0.0) - t) / abs(t) * 100
+                       for r, t in tgt.items())
+        inside_text = ""
+        if not res["success"] and can_leave:
+            # move the region: the same search past the box, within the screening ranges and the
+            # trust region; its compromise only where it promises COMPROMISE_GAIN more than the box's
+            out = corrected_set({r: models[r] for r in tgt}, tgt, bias, x0,
+                                starts=[*starts, res["x_coded"]], lower=lo_w, upper=hi_w)
+            if out["success"] or worst(out["x_coded"]) <= worst(res["x_coded"]) - COMPROMISE_GAIN:
+                inside_text = (f"inside the design region the {'corrected ' if btxt else ''}surface reaches no set "
+                               "meeting every target; its compromise there: worst error "
+                               f"{worst(res['x_coded']):.2g} %")
+                res = out
         x = res["x_coded"]
+        past = beyond_text(stage, x, wider)
+        if unbiased and not (past and (res["success"] or worst(x) <= worst(x0) - COMPROMISE_GAIN)):
+            rows.append(_kept(cid, cal, unbiased, columns))
+            continue
+        lead = (f"bias {btxt}: the corrected surface" if btxt else
+                "no bias (the verification means agree with the surface at the first set): the surface itself")
         if not res["success"]:
             # the corrected surfaces' least-squares compromise, if it promises a worst relative
             # error lower by COMPROMISE_GAIN percentage points than the corrected surfaces at x0
-            def worst(xc):
-                return max(abs(float(models[r].predict(xc[None, :])[0]) + bias.get(r, 0.0) - t) / abs(t) * 100
-                           for r, t in tgt.items())
             w0, w1 = worst(x0), worst(x)
-            why = (f"bias {btxt}: the corrected surface does not reach every target inside the design region "
+            region = ("inside the design region" if not can_leave else
+                      "inside the design region or past it where a factor may leave it (" + ", ".join(
+                          f"{sy} coded {a:.3g} to {b:.3g}" for sy, a, b in zip(syms, lo_w, hi_w)
+                          if a < -1.0 or b > 1.0)
+                      + f": at most {BEYOND_HALF_WIDTHS:g} box half-width past a bound and within its screening "
+                      "range)")
+            why = (f"{lead} does not reach every target {region} "
                    f"(its least-squares compromise: worst error {w1:.2g} % against {w0:.2g} % at the first set)")
             if w1 > w0 - COMPROMISE_GAIN:
                 rows.append(_kept(cid, cal, why, columns) | {f"bias_{r}": b for r, b in bias.items()})
@@ -183,9 +272,18 @@ def refine_frame(stage: dict, table: pd.DataFrame, targets: dict, optimum: pd.Da
         # compares it with the DEM's, soilcal.chain.verify.round_change)
         row.update({f"surface_change_se_{r}": m.change_se(x0, x) for r, m in models.items()})
         row["move_coded"] = res["move"]
-        row["note"] = (f"bias-corrected: verification mean minus surface at the first set {btxt}; smallest "
-                       f"move (coded {res['move']:.3f}) at which the corrected surface meets every target"
-                       if res["success"] else why.replace("bias ", "bias-corrected compromise: bias ", 1))
+        row["region"] = "beyond" if past else "inside"
+        if res["success"]:
+            note = ((f"bias-corrected: verification mean minus surface at the first set {btxt}" if btxt else
+                     "no bias (the verification means agree with the surface at the first set)")
+                    + f"; smallest move (coded {res['move']:.3f}) at which the "
+                    f"{'corrected ' if btxt else ''}surface meets every target")
+        else:
+            note = ("bias-corrected compromise: " if btxt else "compromise: ") + why
+        if past:
+            note += (f"; extrapolated beyond the design region ({inside_text}): {past}; the surfaces were "
+                     "fitted inside the box only, so the verification at this set judges it")
+        row["note"] = note
         rows.append(row)
     out = pd.DataFrame(rows)
     lead = ["case", "round", "refined", "calibrated"]
@@ -193,20 +291,87 @@ def refine_frame(stage: dict, table: pd.DataFrame, targets: dict, optimum: pd.Da
         pd.DataFrame(columns=lead + ["note"])
 
 
-def write_refined(stage_json, responses_csv, targets_csv, optimum_csv, run_paths, out) -> pd.DataFrame:
+def runs_by_case(paths, stage_id: str) -> dict[str, list[pd.DataFrame]]:
+    """Run files ``.../<stage>/<case>/<k>.csv`` of one stage, read and grouped by case id
+    (files of other stages are left out)."""
+    from pathlib import Path
+
+    got: dict[str, list[pd.DataFrame]] = {}
+    for p in map(Path, paths):
+        if p.parent.parent.name == stage_id:
+            got.setdefault(p.parent.name, []).append(pd.read_csv(p))
+    return got
+
+
+def write_refined(stage_json, responses_csv, targets_csv, optimum_csv, run_paths, out,
+                  soil_data: dict | None = None) -> pd.DataFrame:
     """``refined.csv`` of one stage from its files and the first round's verification runs
-    ``verify/<preset>/<stage>/<case>/<k>.csv`` (the soil's own preset only)."""
+    ``verify/<preset>/<stage>/<case>/<k>.csv`` (the soil's own preset only); ``soil_data``
+    (the soil config) gives the screening ranges the second round may move into
+    (:func:`soilcal.chain.stage.screening_ranges`)."""
     from pathlib import Path
 
     from soilcal.chain.files import read_stage, read_targets, write_csv
+    from soilcal.chain.stage import screening_ranges
     from soilcal.config.load import read_table
 
     stage = read_stage(stage_json)
-    runs: dict[str, list[pd.DataFrame]] = {}
-    for p in run_paths:
-        p = Path(p)
-        if p.parent.parent.name == stage["id"]:
-            runs.setdefault(p.parent.name, []).append(pd.read_csv(p))
-    df = refine_frame(stage, read_table(Path(responses_csv)), read_targets(targets_csv), pd.read_csv(optimum_csv), runs)
+    runs = runs_by_case(run_paths, stage["id"])
+    wider = screening_ranges(soil_data, stage) if soil_data else {}
+    df = refine_frame(stage, read_table(Path(responses_csv)), read_targets(targets_csv), pd.read_csv(optimum_csv), runs,
+                      wider)
+    write_csv(df, out)
+    return df
+
+
+def final_frame(soil_data: dict, stage: dict, optimum: pd.DataFrame, targets: dict,
+                runs: dict[str, list[pd.DataFrame]], refined: pd.DataFrame,
+                refined_runs: dict[str, list[pd.DataFrame]]) -> pd.DataFrame:
+    """``final.csv`` of one stage: the set each case ends with, in the columns of
+    ``refined.csv``.  A case moved to a second-round set keeps its ``refined.csv`` row where the
+    verification of both rounds (``runs``: case id -> first-round frames at the soil's preset,
+    the one the second round runs at, ``refined_runs``: the second round's) makes the second round final
+    (:func:`soilcal.chain.verify.better_round`, the rule of ``verification.csv``'s ``final``);
+    otherwise its row is the first round's calibrated set of ``optimum.csv`` with
+    ``round = 1``, ``refined = False`` and a note saying why.  Other cases are their
+    ``refined.csv`` rows."""
+    from soilcal.chain.stage import bounds, calibrated_rows, goal_values
+    from soilcal.chain.verify import better_round, verification_frame
+
+    v = verification_frame(soil_data, stage, optimum, targets, runs, refined, refined_runs)
+    moved = set(refined_cases(refined))
+    syms = bounds(stage)[0]
+    rows = []
+    for case in (stage.get("optimise") or {}).get("cases", []):
+        cid = str(case["id"])
+        ref = refined[refined["case"].astype(str) == cid]
+        mine = v[v["case"].astype(str) == cid]
+        keep, why = (better_round(mine[mine["round"] == 1].to_dict("records"),
+                                  mine[mine["round"] == 2].to_dict("records")) if cid in moved else (True, ""))
+        if keep:
+            rows += ref.to_dict("records")
+            continue
+        columns = [f"{s}_coded" for s in syms] + list(syms) + list(goal_values(case["goals"], targets))
+        row = _kept(cid, calibrated_rows(optimum, cid), f"second round at {_levels_text(ref, syms)} not kept: {why}",
+                    columns)
+        rows.append(row)
+    return pd.DataFrame(rows, columns=list(refined.columns))
+
+
+def _levels_text(ref: pd.DataFrame, syms) -> str:
+    return ", ".join(f"{s} = {float(ref[s].iloc[0]):.4g}" for s in syms if s in ref.columns) if len(ref) else "?"
+
+
+def write_final(soil_data: dict, stage_json, targets_csv, optimum_csv, refined_csv, run_paths, refined_run_paths,
+                out) -> pd.DataFrame:
+    """``final.csv`` of one stage (:func:`final_frame`) from its files, its first-round
+    verification runs ``verify/<preset>/<stage>/<case>/<k>.csv`` (the soil's preset) and its
+    second-round runs ``refine/<stage>/<case>/<k>.csv``."""
+    from soilcal.chain.files import read_stage, read_targets, write_csv
+
+    stage = read_stage(stage_json)
+    df = final_frame(soil_data, stage, pd.read_csv(optimum_csv), read_targets(targets_csv),
+                     runs_by_case(run_paths, stage["id"]), pd.read_csv(refined_csv),
+                     runs_by_case(refined_run_paths, stage["id"]))
     write_csv(df, out)
     return df

@@ -584,3 +584,27 @@ def calibrated_levels(stage: dict, optimum: pd.DataFrame, case: str | None = Non
     row = sel.iloc[0]
     # 12 significant digits: a level on a bound stays the bound (0.2, not 0.1999999999999999)
     return {s: float(f"{float(row[s]):.12g}") for s in stage["factors"]}
+
+
+def screening_ranges(soil_data: dict, stage: dict) -> dict[str, tuple[float, float]]:
+    """``{symbol: (low, high)}`` (actual units) of the range each factor of a DEM stage derived
+    from a path (``derivation.kind = "path"``, ``design: recipe``) was screened over: the
+    ``low`` .. ``high`` of the factor setting the same parameter in the Plackett-Burman
+    screening the stage descends from (:func:`soilcal.chain.adaptive.screened_factor`, the
+    lookup the adaptive design takes its ranges by), widened to the stage's own bounds where it
+    is narrower.  Empty for a printed or adaptive design, a stage with no screening above it, or
+    a soil config without one; a factor the screening does not vary between a low and a high
+    level has no entry (its range is the stage's own)."""
+    from soilcal.chain.adaptive import screened_factor
+    from soilcal.chain.derive import design_mode
+
+    if design_mode(soil_data) != "recipe" or (stage.get("derivation") or {}).get("kind") != "path":
+        return {}
+    out = {}
+    for s, f in (stage.get("factors") or {}).items():
+        found = screened_factor(soil_data, stage["id"], f.get("parameter"))
+        if found is None or f.get("low") is None or f.get("high") is None:
+            continue
+        lo, hi = sorted((float(found[2]["low"]), float(found[2]["high"])))
+        out[s] = (min(lo, float(f["low"])), max(hi, float(f["high"])))
+    return out

@@ -28,7 +28,8 @@ SURFACE_TOLERANCE = 0.5
 VERIFICATION_COLUMNS = ["stage", "case", "round", "response", "target_id", "target", "target_source", "preset", "n",
                         "seeds", "failed_seeds", "simulated_mean", "simulated_sd", "relative_error_percent",
                         "within_2_percent", "target_sd", "miss_in_target_sd", "predicted", "predicted_minus_target",
-                        "particles", "paper_target", "paper_simulated", "paper_relative_error_percent", "status", "note"]
+                        "particles", "paper_target", "paper_simulated", "paper_relative_error_percent", "status",
+                        "final", "note"]
 TOOL_COLUMNS = ["measurement", "row", "covariate", "covariate_value", "scenario", "setup", "measure", "unit",
                 "preset", "stage", "case", "n", "seeds", "measured", "measured_sd", "simulated_mean",
                 "simulated_sd", "relative_error_percent", "paper_simulated", "paper_relative_error_percent",
@@ -226,8 +227,91 @@ def verification_frame(soil_data: dict, stage: dict, optimum: pd.DataFrame, targ
                 change = round_change(r1[0], r2, bias, se) if r1 and len(ref) else ""
                 if change:
                     r2["note"] = "; ".join(x for x in (r2["note"], change) if x)
+            _better_round(first, second)
             rows += second
+    for r in rows:
+        r.setdefault("final", True)
     return pd.DataFrame(rows, columns=VERIFICATION_COLUMNS)
+
+
+def _measured(r: dict) -> bool:
+    """Whether a verification row has a finite error (some seed gave a value)."""
+    return bool(r.get("n", 0)) and np.isfinite(float(r["relative_error_percent"]))
+
+
+def _miss_se(r: dict, other: dict | None) -> float:
+    """The standard error (% of the target) of one verification row's relative miss: its seeds'
+    sd / sqrt(n).  A row with fewer than two seeds has no sd of its own; it takes the other
+    round's sd of the same response and preset (``other``; the seed scatter of one response at
+    two nearby sets), still over its own n seeds.  nan where neither round has two seeds."""
+    n, t = int(r["n"]), abs(float(r.get("target", np.nan)))
+    sd = float(r.get("simulated_sd", np.nan)) if n > 1 else np.nan
+    if not np.isfinite(sd) and other is not None and int(other.get("n", 0)) > 1:
+        sd = float(other.get("simulated_sd", np.nan))
+    return sd / np.sqrt(n) / t * 100 if n > 0 and np.isfinite(sd) and t > 0 else np.nan
+
+
+def _worst_miss(rows: list[dict], others: list[dict]) -> tuple[float, float, str]:
+    """The largest relative miss (%) over ``rows`` (all measured), its standard error
+    (:func:`_miss_se`, with ``others``: the other round's rows) and its response (preset)."""
+    r = max(rows, key=lambda x: abs(float(x["relative_error_percent"])))
+    other = next((o for o in others if (o["response"], o["preset"]) == (r["response"], r["preset"])), None)
+    return abs(float(r["relative_error_percent"])), _miss_se(r, other), f"{r['response']} ({r['preset']})"
+
+
+def better_round(first: list[dict], second: list[dict]) -> tuple[bool, str]:
+    """Whether a case ends with its second round's set, and why not (empty when it does).  The
+    DEM runs judge the move, not the surface that proposed it, which is often extrapolated.
+    The rounds are compared over the (response, preset) pairs both measured (a finite error:
+    some seed gave a value), so a response the first round never measured does not count
+    against the second.  The second round is final only where (a) every pair the first round
+    measured, among those the second round ran, is measured in the second round too (a
+    response whose seeds all failed is not met by default), and (b) its worst relative miss
+    over the shared pairs is lower than the first round's by more than the combined standard
+    error of the two worst-miss means, sqrt(se1^2 + se2^2); a worst miss over one seed takes
+    the other round's seed sd of that response (:func:`_miss_se`), and where neither round has
+    two seeds of it the two cannot be told apart.  A first round that measured none of the
+    pairs the second ran leaves the second final wherever it measured one."""
+    at = {(r["response"], r["preset"]) for r in second}
+    same = [r for r in first if (r["response"], r["preset"]) in at]
+    got2 = {(r["response"], r["preset"]) for r in second if _measured(r)}
+    if not got2:
+        return False, "no second-round seed gave a value: the case ends with the first round's set"
+    lost = sorted({f"{r['response']} ({r['preset']})" for r in same
+                   if _measured(r) and (r["response"], r["preset"]) not in got2})
+    if lost:
+        return False, (f"the second round has no value for {', '.join(lost)} (every seed failed), which the first "
+                       "round verified: the case ends with the first round's set")
+    shared = {(r["response"], r["preset"]) for r in same if _measured(r)}
+    if not shared:
+        return True, ""
+    one = [r for r in same if (r["response"], r["preset"]) in shared]
+    two = [r for r in second if (r["response"], r["preset"]) in shared]
+    (w1, s1, at1), (w2, s2, at2) = _worst_miss(one, two), _worst_miss(two, one)
+    margin = float(np.hypot(s1, s2))
+    if not np.isfinite(margin):
+        return False, (f"the second round's verified worst miss {w2:.2g} % against the first round's "
+                       f"{w1:.2g} % cannot be told apart (neither round has two seeds of "
+                       f"{at1 if not np.isfinite(s1) else at2} to give it a standard error): the case ends with the "
+                       "first round's set")
+    if w2 < w1 - margin:
+        return True, ""
+    return False, (f"the second round's verified worst miss {w2:.2g} % is not lower than the first round's "
+                   f"{w1:.2g} % by more than their combined standard error {margin:.2g} % (worst at {at2} and "
+                   f"{at1}, over the responses both rounds measured): the case ends with the first round's set")
+
+
+def _better_round(first: list[dict], second: list[dict]) -> None:
+    """Mark (``final``) the rows of the round whose verified set a case ends with
+    (:func:`better_round`, as ``final.csv``): every row of that round, at every preset, and
+    none of the other's; a second round that is not final says why in its notes."""
+    keep_second, why = better_round(first, second)
+    for r in first:
+        r["final"] = not keep_second
+    for r in second:
+        r["final"] = keep_second
+        if why:
+            r["note"] = "; ".join(x for x in (r["note"], why) if x)
 
 
 def round_change(first: dict, second: dict, bias, surface_se=0.0) -> str:
@@ -410,7 +494,11 @@ def calibrated_vs_paper(soil_data: dict, stages: dict[str, tuple[dict, pd.DataFr
     ``paper_source`` "no published value" (a soil without a citation) or "not printed" (one
     with).  ``pinned``: whether the near-optimal sets pin a factor down (True, False, ``at
     bound`` where a bound of the design region holds it rather than the data), ``fixed`` for
-    a fixed parameter.
+    a fixed parameter.  The near-optimal range and ``pinned`` come from the first round's
+    near-optimal sets (``identifiability.csv``); where a case ends with its second round's set
+    (``round`` 2) the ``note`` says so, and whether the value lies outside that range; a
+    second-round value past the Box-Behnken box (the stage's ``low``..``high``) is ``pinned``
+    "beyond the box": no bound and no near-optimal set of the design holds it there.
     """
     from soilcal.chain.stage import calibrated_rows
 
@@ -448,16 +536,36 @@ def calibrated_vs_paper(soil_data: dict, stages: dict[str, tuple[dict, pd.DataFr
                        "unit": (params.get(pname) or {}).get("unit", ""), "calibrated": ours, "paper": paper,
                        "paper_source": psrc, "difference": ours - paper,
                        "relative_difference_percent": (ours - paper) / paper * 100 if paper else np.nan,
-                       "pinned": "", "near_optimal_min": np.nan, "near_optimal_max": np.nan}
+                       "pinned": "", "near_optimal_min": np.nan, "near_optimal_max": np.nan, "note": ""}
                 if role == "factor" and idt is not None:
                     r = idt[idt["factor"] == sym]
                     if len(r):
                         row.update(pinned=_pinned(r["pinned"].iloc[0]), near_optimal_min=float(r["min"].iloc[0]),
                                    near_optimal_max=float(r["max"].iloc[0]))
+                if role == "factor" and row["round"] == 2:
+                    row.update(_second_round_factor(stage["factors"][sym], ours, row))
                 if role == "fixed":
                     row["pinned"] = "fixed"
                 rows.append(row)
     return pd.DataFrame(rows)
+
+
+def _second_round_factor(factor: dict, value: float, row: dict) -> dict:
+    """``pinned`` and ``note`` of a factor of :func:`calibrated_vs_paper` whose case ends with
+    its second round's set ``value``: the near-optimal range and ``pinned`` describe the first
+    round's sets; a value past the box's ``low``..``high`` is "beyond the box"."""
+    lo, hi = row["near_optimal_min"], row["near_optimal_max"]
+    out = {}
+    notes = ["the second round's set: near_optimal_min/max and pinned describe the first round's near-optimal sets"]
+    if np.isfinite(lo) and np.isfinite(hi) and np.isfinite(value) and not lo <= value <= hi:
+        notes.append(f"this value lies outside their range {lo:.4g} to {hi:.4g}")
+    low, high = (float(factor[k]) if factor.get(k) is not None else np.nan for k in ("low", "high"))
+    tol = 1e-9 * max(abs(low), abs(high), 1.0) if np.isfinite(low) and np.isfinite(high) else 0.0
+    if np.isfinite(value) and (value < low - tol or value > high + tol):
+        out["pinned"] = "beyond the box"
+        notes.append(f"it lies beyond the Box-Behnken box {low:.4g} to {high:.4g}, where no bound holds it")
+    out["note"] = "; ".join(notes)
+    return out
 
 
 def tool_frame(conditions, runs: dict[tuple[str, int], pd.DataFrame]) -> pd.DataFrame:
@@ -687,7 +795,8 @@ def write_tool_verification(soil_path, resources_root, run_paths, run_map: dict,
 def write_calibrated_vs_paper(soil_data: dict, stage_ids, stage_dirs: dict[str, str], out,
                               set_file: str = "optimum.csv") -> pd.DataFrame:
     """``calibrated_vs_paper.csv``: the calibrated set of each case read from ``set_file`` in
-    each stage's folder (``refined.csv`` where the soil runs the second round)."""
+    each stage's folder (:func:`soilcal.chain.refine.set_file`: ``final.csv``, the set each
+    case ends with, where the soil runs the second round)."""
     from pathlib import Path
 
     from soilcal.chain.files import read_stage, write_csv
@@ -708,12 +817,15 @@ SUMMARY_COLUMNS = ["soil", "stage", "case", "round", "response", "target", "targ
 
 
 def summary_frame(verifications: dict[str, pd.DataFrame], responses: dict[str, list[pd.DataFrame]]) -> pd.DataFrame:
-    """One row per soil, case, response and preset at the set the soil ends with (the last
-    verification round), with each soil's DEM design points (count, failed; their wall time is in the
-    jobs' benchmark files)."""
+    """One row per soil, case, response and preset at the set the soil ends with (the rows
+    marked ``final``: the better verified round, :func:`verification_frame`; a table without
+    that column, the last verification round), with each soil's DEM design points (count,
+    failed; their wall time is in the jobs' benchmark files)."""
     rows = []
     for soil, v in verifications.items():
-        if "round" in v.columns and len(v):
+        if "final" in v.columns and len(v):
+            v = v[v["final"].astype(str).str.lower() != "false"]
+        elif "round" in v.columns and len(v):
             key = ["stage", "case", "response", "preset"]
             last = v.groupby(key, dropna=False)["round"].transform("max")
             v = v[v["round"] == last]

@@ -99,8 +99,9 @@ def _calibration(soil, results: Path, stage_id: str):
     if not stage_path.is_file():
         raise InputError(stage_path, "<file>", f"the DEM stage {stage_id} as the workflow writes it (stage.json; "
                          "run the workflow's DEM stage first)", "no such file")
-    why = ("written by the workflow's refine step after the stage's verification; simulation.verification.refine "
-           "is on" if set_name == "refined.csv" else "written by the workflow's optimum step")
+    why = ("written by the workflow's final_set step once the stage's second verification round is in; "
+           "simulation.verification.refine is on" if set_name == "final.csv" else
+           "written by the workflow's optimum step")
     if not set_path.is_file():
         raise InputError(set_path, "<file>", f"the calibrated sets of DEM stage {stage_id} that the workflow's tool "
                          f"jobs use ({set_name}, {why})", "no such file")

@@ -65,9 +65,11 @@ class Shifted:
 
 
 def corrected_set(models: Mapping[str, Any], targets: Mapping[str, float], bias: Mapping[str, float],
-                  x0_coded, starts=(), tol: float = 1e-6) -> dict:
+                  x0_coded, starts=(), tol: float = 1e-6, lower=None, upper=None) -> dict:
     """The smallest coded move from ``x0_coded`` at which ``models[r] + bias[r]`` equals
-    ``targets[r]`` for every r in ``targets``, inside the coded box [-1, 1]^k.
+    ``targets[r]`` for every r in ``targets``, inside the coded box [-1, 1]^k, or inside
+    ``lower`` .. ``upper`` (coded, per factor) where given (a region reaching past the box,
+    :func:`soilcal.chain.refine.refine_frame`).
 
     ``starts``: further starting points (coded), e.g. the corrected surfaces' desirability
     optima.  Returns dict(success, x_coded, predicted {r: corrected prediction}, move (coded
@@ -91,36 +93,42 @@ def corrected_set(models: Mapping[str, Any], targets: Mapping[str, float], bias:
                          for r, t in targets.items()])
 
     cons = [{"type": "eq", "fun": residuals}]
-    box = [(-1.0, 1.0)] * k
+    lo = np.full(k, -1.0) if lower is None else np.asarray(lower, float).reshape(-1)
+    hi = np.full(k, 1.0) if upper is None else np.asarray(upper, float).reshape(-1)
+    if lo.size != k or hi.size != k or np.any(lo > hi):
+        raise InputError(None, "lower/upper", f"{k} coded bounds with lower <= upper", (lo, hi))
+    box = list(zip(lo, hi))
     best = None
     for s in [x0, *[np.asarray(p, float).reshape(-1) for p in starts]]:
-        s = np.clip(s, -1.0, 1.0)
+        s = np.clip(s, lo, hi)
         res = optimize.minimize(lambda x: float(np.sum((x - x0) ** 2)), s, jac=lambda x: 2.0 * (x - x0),
                                 method="SLSQP", bounds=box, constraints=cons,
                                 options={"ftol": 1e-12, "maxiter": 500})
-        x = np.clip(res.x, -1.0, 1.0)
+        x = np.clip(res.x, lo, hi)
         worst = float(np.max(np.abs(residuals(x))))
         key = (worst > tol, float(np.linalg.norm(x - x0)) if worst <= tol else worst)
         if best is None or key < best[0]:
             best = (key, x, worst)
     _, x, worst = best
     if worst > tol:
-        x = compromise(residuals, x0, [x0, *[np.asarray(p, float).reshape(-1) for p in starts]])
+        x = compromise(residuals, x0, [x0, *[np.asarray(p, float).reshape(-1) for p in starts]], lower=lo, upper=hi)
     pred = {r: float(shifted[r].predict(x[None, :])[0]) for r in targets}
     return {"success": worst <= tol, "x_coded": x, "predicted": pred,
             "move": float(np.linalg.norm(x - x0)),
             "residual": max(abs(pred[r] - float(t)) for r, t in targets.items())}
 
 
-def compromise(residuals, x0, starts, step_weight: float = 1e-6) -> np.ndarray:
-    """Where the targets cannot all be met: the set in the coded box minimising the sum of
-    squared scaled residuals (plus ``step_weight`` |x - x0|^2, which picks the least move among
-    equally good sets), by L-BFGS-B from every start."""
+def compromise(residuals, x0, starts, step_weight: float = 1e-6, lower=None, upper=None) -> np.ndarray:
+    """Where the targets cannot all be met: the set in the coded box (or ``lower`` .. ``upper``)
+    minimising the sum of squared scaled residuals (plus ``step_weight`` |x - x0|^2, which picks
+    the least move among equally good sets), by L-BFGS-B from every start."""
     x0 = np.asarray(x0, float)
+    lo = np.full(x0.size, -1.0) if lower is None else np.asarray(lower, float)
+    hi = np.full(x0.size, 1.0) if upper is None else np.asarray(upper, float)
 
     def f(x):
         return float(np.sum(residuals(x) ** 2) + step_weight * np.sum((x - x0) ** 2))
 
-    ends = [optimize.minimize(f, np.clip(s, -1.0, 1.0), method="L-BFGS-B", bounds=[(-1.0, 1.0)] * x0.size).x
+    ends = [optimize.minimize(f, np.clip(s, lo, hi), method="L-BFGS-B", bounds=list(zip(lo, hi))).x
             for s in starts]
-    return np.clip(min(ends, key=f), -1.0, 1.0)
+    return np.clip(min(ends, key=f), lo, hi)
