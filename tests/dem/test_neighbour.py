@@ -304,3 +304,41 @@ def test_spheres_far_from_the_rest_keep_the_grid_small_and_their_contacts(rng):
     for i in range(sim.n):
         assert nbr[start[i]:start[i + 1]].tolist() == [j for j in np.nonzero(want[i])[0]
                                                        if j > i]
+
+
+def test_a_triangle_is_skipped_only_where_its_plane_is_beyond_reach(rng):
+    """The wall-list build skips a binned triangle whose plane lies beyond a sphere's reach
+    (a point's distance from a triangle is at least that from its plane).  Drawn cases: the
+    unit right triangle in z = 0, a point 0.3 above it (over the face: distance 0.3; beside
+    it at (5, 5): distance sqrt(4.5^2 + 4.5^2 + 0.3^2)); then random triangles (slivers
+    among them) and points, where a skipped triangle must be one the exact closest point
+    puts at the reach or beyond."""
+    from soilcal.dem.walls import TRIANGLE, prim_closest
+
+    par = np.zeros((1, 16))
+    par[0, :9] = [0, 0, 0, 1, 0, 0, 0, 1, 0]
+    # over the face: skipped for a reach below 0.3, kept at 0.3 and above
+    assert nb.tri_beyond(par, 0, 0.2, 0.2, 0.3, 0.29)
+    assert not nb.tri_beyond(par, 0, 0.2, 0.2, 0.3, 0.3)
+    assert not nb.tri_beyond(par, 0, 0.2, 0.2, -0.3, 0.31)
+    # beside it the plane is still 0.3 away: the bound is the plane's, never more
+    assert not nb.tri_beyond(par, 0, 5.0, 5.0, 0.3, 0.31)
+    assert nb.tri_beyond(par, 0, 5.0, 5.0, 0.3, 0.29)
+    # a sliver (widest angle's sine 1e-6) is never skipped
+    par[0, :9] = [0, 0, 0, 1, 0, 0, 0.5, 1e-6, 0]
+    assert not nb.tri_beyond(par, 0, 0.5, 0.0, 5.0, 1.0)
+    n = 4000
+    tri = rng.normal(size=(n, 9))
+    tri[::4, 6:9] = tri[::4, 0:3] + (tri[::4, 3:6] - tri[::4, 0:3]) * 0.4 + 1e-5 * rng.normal(
+        size=(n // 4, 3))  # slivers
+    pts = rng.normal(size=(n, 3)) * 2.0
+    skipped = 0
+    for k in range(n):
+        par = np.zeros((1, 16))
+        par[0, :9] = tri[k]
+        d = prim_closest(TRIANGLE, par, 0, *pts[k])[0]
+        for lim in (0.5 * d, d * (1 - 1e-12), d, 1.5 * d):
+            if nb.tri_beyond(par, 0, *pts[k], lim):
+                skipped += 1
+                assert d >= lim, (k, d, lim)
+    assert skipped > n // 4  # the bound does skip (not only in the drawn cases above)

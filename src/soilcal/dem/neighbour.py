@@ -374,6 +374,36 @@ def _grid(x, r, box, periodic, skin, extra, cell_start, cell_idx, cell_of, cpos)
 
 
 @njit(cache=True, inline="always")
+def tri_beyond(par, p, x, y, z, lim):
+    """Whether triangle p (rows v0 v1 v2 of ``par``) lies surely at lim or farther from
+    point (x, y, z): its plane does, by a margin (1e-9 of lim and of the point's distance
+    from v0) far beyond the rounding of either distance.  A point's distance from a
+    triangle is at least its distance from the triangle's plane, so a triangle this
+    rejects is one :func:`soilcal.dem.walls.prim_closest` puts at lim or beyond too: the
+    wall lists are the same, at a fraction of the cost (most triangles binned to a cell
+    are the large faces of a funnel or a hopper, whose bounding boxes hold many cells
+    their planes are far from).  A sliver (sine of its widest angle below 1e-3, whose
+    normal is not known well) is never rejected."""
+    e1x, e1y, e1z = par[p, 3] - par[p, 0], par[p, 4] - par[p, 1], par[p, 5] - par[p, 2]
+    e2x, e2y, e2z = par[p, 6] - par[p, 0], par[p, 7] - par[p, 1], par[p, 8] - par[p, 2]
+    nx = e1y * e2z - e1z * e2y
+    ny = e1z * e2x - e1x * e2z
+    nz = e1x * e2y - e1y * e2x
+    nn = math.sqrt(nx * nx + ny * ny + nz * nz)
+    l1 = math.sqrt(e1x * e1x + e1y * e1y + e1z * e1z)
+    l2 = math.sqrt(e2x * e2x + e2y * e2y + e2z * e2z)
+    l3 = math.sqrt((e2x - e1x) ** 2 + (e2y - e1y) ** 2 + (e2z - e1z) ** 2)
+    # 2 area = nn = product of two sides times the sine of their angle; the smallest of the
+    # three sines is that of the triangle's widest angle (or of a needle's narrow one)
+    if not nn > 1e-3 * max(l1 * l2, l1 * l3, l2 * l3):
+        return False
+    wx, wy, wz = x - par[p, 0], y - par[p, 1], z - par[p, 2]
+    s = abs(wx * nx + wy * ny + wz * nz)
+    w = math.sqrt(wx * wx + wy * wy + wz * wz)
+    return s > (lim + 1e-9 * (lim + w)) * nn
+
+
+@njit(cache=True, inline="always")
 def _wall_row(i, io, x, r, cut0, cell_of, prim_kind, prim_par, wcell_start, wcell_idx, glob,
               ng, wnbr_old, wcnt_old, whist_old, wnbr_new, wcnt_new, whist_new):
     """Wall list of particle i: unbounded primitives, then the triangles binned in its cell
@@ -390,6 +420,8 @@ def _wall_row(i, io, x, r, cut0, cell_of, prim_kind, prim_par, wcell_start, wcel
             p = glob[t]
         else:
             p = wcell_idx[wcell_start[c] + t - ng]
+        if prim_kind[p] == TRIANGLE and tri_beyond(prim_par, p, xi, yi, zi, ri + cut0):
+            continue
         d = prim_closest(prim_kind[p], prim_par, p, xi, yi, zi)[0]
         if d < ri + cut0:
             if wc < KW:
