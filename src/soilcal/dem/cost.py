@@ -245,7 +245,8 @@ def bytes_per_particle(pair_slots: float = PAIR_SLOTS_MIN, hist: int | None = No
     """Engine bytes per sphere: the state (:data:`soilcal.dem.state.STATE_BYTES`), the two
     list buffers with ``pair_slots`` pair slots (partner, ``hist`` history columns, touching
     flag) and ``wall_slots`` wall slots (primitive, 9 history columns) each, the work arrays
-    ``_alloc_lists`` allocates beside them, and the cell arrays; with ``reallocation`` the
+    ``_alloc_lists`` allocates beside them (with the build's int32 partner work space, one
+    per pair slot), and the cell arrays; with ``reallocation`` the
     lists twice (old and new buffers coexist while the engine widens them), plus
     :data:`SCENARIO_BYTES`.  With the defaults and without ``reallocation`` and the
     scenario's bytes it is :data:`soilcal.dem.state.BYTES_PER_PARTICLE`."""
@@ -254,7 +255,7 @@ def bytes_per_particle(pair_slots: float = PAIR_SLOTS_MIN, hist: int | None = No
 
     h = H_SHORT if hist is None else int(hist)
     lists = (2 * (8 + pair_slots * (8 + 8 * h + 1) + wall_slots * (8 + 8 * H_SIZE) + 8)
-             + 8 * (6 * wall_slots + 4 + 8 + 1 + 8 + 1 + 1))
+             + 8 * (6 * wall_slots + 4 + 8 + 1 + 8 + 1 + 1) + 4 * pair_slots)
     cells = 8 * (1 + 1 + 4)
     total = STATE_BYTES + cells + lists * (2 if reallocation else 1)
     return int(math.ceil(total + (SCENARIO_BYTES if reallocation else 0)))

@@ -165,7 +165,7 @@ def _cell_ranges(c, n0, n1, n2, p0, p1):
 
 @njit(cache=True, inline="always")
 def _scan(q0, q1, i, xi, yi, zi, ri, cpos, cell_idx, p0, h0, L0, p1, h1, L1, cut0, out, o0,
-          cnt, fill):
+          lim, cnt):
     """Candidates q0..q1-1 of the cell-sorted arrays against particle i (see :func:`_row`)."""
     for q in range(q0, q1):
         j = cell_idx[q]
@@ -176,22 +176,17 @@ def _scan(q0, q1, i, xi, yi, zi, ri, cpos, cell_idx, p0, h0, L0, p1, h1, L1, cut
         ddz = zi - cpos[q, 2]
         cut = ri + cpos[q, 3] + cut0
         if ddx * ddx + ddy * ddy + ddz * ddz < cut * cut:
-            if fill:
-                # insertion into the sorted row
-                s = o0 + cnt
-                while s > o0 and out[s - 1] > j:
-                    out[s] = out[s - 1]
-                    s -= 1
-                out[s] = j
+            if o0 + cnt < lim:
+                out[o0 + cnt] = j
             cnt += 1
     return cnt
 
 
 @njit(cache=True)
 def _row(q, cpos, cell_idx, cell_of, box, periodic, cut0, cell_start, n0, n1, n2, out, o0,
-         fill):
-    """Partners j > i of particle i = cell_idx[q] within the cutoff; if ``fill`` they are
-    written sorted to out[o0:]; returns their number.
+         lim):
+    """Partners j > i of particle i = cell_idx[q] within the cutoff, written in the order
+    they are met to out[o0:lim] (those beyond lim are only counted); returns their number.
 
     Candidates are read from the cell-sorted copy ``cpos`` (x, y, z, R per slot of
     ``cell_idx``), so each neighbour cell is a contiguous stretch of memory; the three cells
@@ -218,7 +213,7 @@ def _row(q, cpos, cell_idx, cell_of, box, periodic, cut0, cell_start, n0, n1, n2
             if cx + a0 >= 0 and cx + b0 < n0:
                 cnt = _scan(cell_start[base + cx + a0], cell_start[base + cx + b0 + 1], i,
                             xi, yi, zi, ri, cpos, cell_idx, p0, h0, L0, p1, h1, L1, cut0, out,
-                            o0, cnt, fill)
+                            o0, lim, cnt)
             else:
                 for dx in range(a0, b0 + 1):
                     xx = cx + dx
@@ -228,7 +223,7 @@ def _row(q, cpos, cell_idx, cell_of, box, periodic, cut0, cell_start, n0, n1, n2
                         xx -= n0
                     cc = base + xx
                     cnt = _scan(cell_start[cc], cell_start[cc + 1], i, xi, yi, zi, ri, cpos,
-                                cell_idx, p0, h0, L0, p1, h1, L1, cut0, out, o0, cnt, fill)
+                                cell_idx, p0, h0, L0, p1, h1, L1, cut0, out, o0, lim, cnt)
     return cnt
 
 
@@ -668,12 +663,13 @@ def _old_slot(start_old, nbr_old, io, jo):
 
 
 @njit(cache=True)
-def _fill_row(q, x, r, cpos, cell_idx, cell_of, box, periodic, cut0, cell_start, n0, n1, n2,
-              start_old, nbr_old, hist_old, act_old, start_new, nbr_new, hist_new, act_new,
-              remap, perm, prim_kind, prim_par, wcell_start, wcell_idx, glob, ng, wnbr_old,
+def _fill_row(q, x, r, cell_idx, cell_of, cut0, hits, h0, start_old, nbr_old, hist_old,
+              act_old, start_new, nbr_new, hist_new, act_new, remap, perm, prim_kind,
+              prim_par, wcell_start, wcell_idx, glob, ng, wnbr_old,
               wcnt_old, whist_old, wnbr_new, wcnt_new, whist_new):
-    """Sorted row of particle i = cell_idx[q] (offsets already in start_new), history rows
-    and touching flags merged from i's old sorted row, and i's wall list.
+    """Sorted row of particle i = cell_idx[q] (offsets already in start_new; its partners
+    as the count pass met them in hits[h0:]), history rows and touching flags merged from
+    i's old sorted row, and i's wall list.
 
     remap: the particles were just re-sorted (:func:`sort_particles`) and the old lists
     still use the previous rows, perm[new row] = old row.  Pair (i, j), j > i, is then found
@@ -684,8 +680,14 @@ def _fill_row(q, x, r, cpos, cell_idx, cell_of, box, periodic, cut0, cell_start,
     i = cell_idx[q]
     o0 = start_new[i]
     o1 = start_new[i + 1]
-    _row(q, cpos, cell_idx, cell_of, box, periodic, cut0, cell_start, n0, n1, n2, nbr_new,
-         o0, True)
+    # insertion into the sorted row
+    for k in range(o1 - o0):
+        j = hits[h0 + k]
+        s = o0 + k
+        while s > o0 and nbr_new[s - 1] > j:
+            nbr_new[s] = nbr_new[s - 1]
+            s -= 1
+        nbr_new[s] = j
     io = i
     if remap:
         io = perm[i]
@@ -727,16 +729,19 @@ def _fill_row(q, x, r, cpos, cell_idx, cell_of, box, periodic, cut0, cell_start,
 @njit(cache=True, parallel=True)
 def build_lists(x, r, box, periodic, skin, extra, cell_start, cell_idx, cell_of, cpos,
                 start_old, nbr_old, hist_old, act_old, start_new, nbr_new, hist_new, act_new,
-                groups, sorder, sgroup, scratch, remap, perm, prim_kind, prim_par, wcell_start,
-                wcell_idx, glob, wnbr_old, wcnt_old, whist_old, wnbr_new, wcnt_new, whist_new):
+                groups, sorder, sgroup, scratch, hits, remap, perm, prim_kind, prim_par,
+                wcell_start, wcell_idx, glob, wnbr_old, wcnt_old, whist_old, wnbr_new,
+                wcnt_new, whist_new):
     """Rebuild the half lists (CSR), the slab groups (:func:`_slabs`, ``groups`` per
     colour: one per thread) and the wall lists into *_new.
 
     History rows and touching flags are copied from *_old (``remap``: the old lists use
-    the rows before a spatial sort, perm[new row] = old row; :func:`_fill_row`).  Returns (status, need):
-    status 0 ok, 1 pair buffers too short (need = pairs), 2 wall list too short (need =
-    width), 3 cell buffer too short (need = cells), 5 triangle bins too short (need =
-    entries).
+    the rows before a spatial sort, perm[new row] = old row; :func:`_fill_row`).  ``hits``:
+    work space, hits.shape[0] // NBLK_GROUPS partners per block group, in which the count
+    pass keeps the partners it finds so that the fill pass need not look for them again.
+    Returns (status, need): status 0 ok, 1 pair buffers too short (need = pairs), 2 wall
+    list too short (need = width), 3 cell buffer too short (need = cells), 5 triangle bins
+    too short (need = entries), 7 ``hits`` too short (need = length).
     """
     n = x.shape[0]
     P = nbr_new.shape[0]
@@ -752,30 +757,46 @@ def build_lists(x, r, box, periodic, skin, extra, cell_start, cell_idx, cell_of,
     if code != 0:
         return code, need
     cut0 = skin + extra
+    cap = hits.shape[0] // NBLK_GROUPS
     # pass 1: row lengths -> offsets (particles taken in cell order, in blocks: neighbouring
-    # particles are processed together and their candidates stay in cache)
+    # particles are processed together and their candidates stay in cache); the partners
+    # of block group c are kept one row after another in hits[c * cap:(c + 1) * cap]
     bs = block_size(n)
     nblk = (n + bs - 1) // bs
     for c in prange(NBLK_GROUPS):
+        h = c * cap
         for blk in range(c, nblk, NBLK_GROUPS):
             for q in range(blk * bs, min(n, blk * bs + bs)):
-                start_new[cell_idx[q] + 1] = _row(q, cpos, cell_idx, cell_of, box, periodic,
-                                                  cut0, cell_start, n0, n1, n2, nbr_new, 0,
-                                                  False)
+                cnt = _row(q, cpos, cell_idx, cell_of, box, periodic, cut0, cell_start, n0, n1,
+                           n2, hits, h, (c + 1) * cap)
+                start_new[cell_idx[q] + 1] = cnt
+                h += cnt
+    # partners of each block group (serial: a sum over the rows in the same order)
+    most = 0
+    for c in range(NBLK_GROUPS):
+        m = 0
+        for blk in range(c, nblk, NBLK_GROUPS):
+            for q in range(blk * bs, min(n, blk * bs + bs)):
+                m += start_new[cell_idx[q] + 1]
+        most = max(most, m)
     start_new[0] = 0
     for i in range(n):
         start_new[i + 1] += start_new[i]
     if start_new[n] > P:
         return 1, start_new[n]
+    if most > cap:
+        return 7, most * NBLK_GROUPS
     # pass 2: sorted rows, history merged from the old sorted rows; wall lists
     for c in prange(NBLK_GROUPS):
+        h = c * cap
         for blk in range(c, nblk, NBLK_GROUPS):
             for q in range(blk * bs, min(n, blk * bs + bs)):
-                _fill_row(q, x, r, cpos, cell_idx, cell_of, box, periodic, cut0, cell_start,
-                          n0, n1, n2, start_old, nbr_old, hist_old, act_old, start_new,
-                          nbr_new, hist_new, act_new, remap, perm, prim_kind, prim_par,
-                          wcell_start, wcell_idx, glob, ng, wnbr_old, wcnt_old, whist_old,
-                          wnbr_new, wcnt_new, whist_new)
+                i = cell_idx[q]
+                _fill_row(q, x, r, cell_idx, cell_of, cut0, hits, h, start_old, nbr_old,
+                          hist_old, act_old, start_new, nbr_new, hist_new, act_new, remap,
+                          perm, prim_kind, prim_par, wcell_start, wcell_idx, glob, ng,
+                          wnbr_old, wcnt_old, whist_old, wnbr_new, wcnt_new, whist_new)
+                h += start_new[i + 1] - start_new[i]
     wneed = _wall_need(wcnt_new, wnbr_new.shape[1])
     if wneed > 0:
         return 2, wneed
