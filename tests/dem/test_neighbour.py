@@ -394,3 +394,42 @@ def test_a_triangle_is_skipped_only_where_its_plane_is_beyond_reach(rng):
                 skipped += 1
                 assert d >= lim, (k, d, lim)
     assert skipped > n // 4  # the bound does skip (not only in the drawn cases above)
+
+
+def test_a_triangle_far_from_the_origin_is_not_skipped_within_a_tiny_reach(rng):
+    """The closest point of a triangle is formed at the size of its coordinates, so its
+    rounding grows with the distance from the origin, not with the triangle's size: a
+    millimetre triangle 100 m or 1 km away, a point microns above its plane just beside
+    an edge, and a reach one unit in the last place beyond the exact closest-point
+    distance must keep the triangle (the plane is nearer than the reach by construction:
+    the point's distance from the triangle is at least that from its plane)."""
+    from soilcal.dem.walls import TRIANGLE, prim_closest
+
+    # a drawn case 100 m out: plane 1e-6 away, closest-point distance rounds a hair below
+    par = np.zeros((1, 16))
+    par[0, :9] = [99.99984669507923, 99.9999707860961, 99.99994196837494,
+                  99.99977241021428, 99.99998642453347, 99.9999571533272,
+                  99.99988479516935, 99.99994296689896, 99.99985635317093]
+    p = (99.99984473459759, 99.99997020895451, 99.9999425817665)
+    d = prim_closest(TRIANGLE, par, 0, *p)[0]
+    assert not nb.tri_beyond(par, 0, *p, np.nextafter(d, np.inf))
+    for origin, size, height in ((100.0, 1e-4, 1e-6), (100.0, 1e-3, 1e-6),
+                                 (1e3, 1e-3, 1e-5), (1e3, 1e-3, 1e-6)):
+        for _ in range(400):
+            v0 = origin + rng.normal(size=3) * size
+            par[0, 0:3] = v0
+            par[0, 3:6] = v0 + rng.normal(size=3) * size
+            par[0, 6:9] = v0 + rng.normal(size=3) * size
+            a, b, c = par[0, 0:3], par[0, 3:6], par[0, 6:9]
+            n = np.cross(b - a, c - a)
+            n /= np.linalg.norm(n)
+            out = np.cross(b - a, n)
+            out /= np.linalg.norm(out)
+            if out @ (c - a) > 0:
+                out = -out
+            for beside in (0.0, 1e-10):  # on edge a-b, or just outside it
+                p = a + rng.uniform() * (b - a) + out * beside * size + n * height
+                d = prim_closest(TRIANGLE, par, 0, *p)[0]
+                for lim in (np.nextafter(d, np.inf), d * (1 + 1e-13)):
+                    assert not nb.tri_beyond(par, 0, *p, lim), (origin, size, d, lim)
+                assert nb.tri_beyond(par, 0, *p, 0.5 * d)  # the bound still skips

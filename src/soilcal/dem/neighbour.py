@@ -371,8 +371,12 @@ def _grid(x, r, box, periodic, skin, extra, cell_start, cell_idx, cell_of, cpos)
 @njit(cache=True, inline="always")
 def tri_beyond(par, p, x, y, z, lim):
     """Whether triangle p (rows v0 v1 v2 of ``par``) lies surely at lim or farther from
-    point (x, y, z): its plane does, by a margin (1e-9 of lim and of the point's distance
-    from v0) far beyond the rounding of either distance.  A point's distance from a
+    point (x, y, z): its plane does, by a margin far beyond the rounding of either distance
+    (1e-9 of lim and of the point's distance from v0, for the rounding relative to the
+    triangle's size, plus 1e-14 of the distances of v0 and of the point from the origin,
+    some 45 units in the last place, for that of the closest point's coordinates, which
+    prim_closest forms at the size of the coordinates: a millimetre triangle 1 km from the
+    origin and a reach of microns).  A point's distance from a
     triangle is at least its distance from the triangle's plane, so a triangle this
     rejects is one :func:`soilcal.dem.walls.prim_closest` puts at lim or beyond too: the
     wall lists are the same, at a fraction of the cost (most triangles binned to a cell
@@ -395,7 +399,9 @@ def tri_beyond(par, p, x, y, z, lim):
     wx, wy, wz = x - par[p, 0], y - par[p, 1], z - par[p, 2]
     s = abs(wx * nx + wy * ny + wz * nz)
     w = math.sqrt(wx * wx + wy * wy + wz * wz)
-    return s > (lim + 1e-9 * (lim + w)) * nn
+    a = (math.sqrt(par[p, 0] ** 2 + par[p, 1] ** 2 + par[p, 2] ** 2)
+         + math.sqrt(x * x + y * y + z * z))
+    return s > (lim + 1e-9 * (lim + w) + 1e-14 * a) * nn
 
 
 @njit(cache=True, inline="always")
