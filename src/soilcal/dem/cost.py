@@ -246,7 +246,10 @@ def bytes_per_particle(pair_slots: float = PAIR_SLOTS_MIN, hist: int | None = No
     list buffers with ``pair_slots`` pair slots (partner, ``hist`` history columns, touching
     flag) and ``wall_slots`` wall slots (primitive, 9 history columns) each, the work arrays
     ``_alloc_lists`` allocates beside them (with the build's int32 partner work space, one
-    per pair slot), and the cell arrays; with ``reallocation`` the
+    per pair slot: the size it takes in a bed of even packing; where a few of the build's
+    block groups hold most pairs, e.g. a dense cluster among sparse spheres, it grows to
+    up to NBLK_GROUPS = 32 entries per pair, :func:`soilcal.dem.neighbour.build_lists`,
+    which this count does not assume), and the cell arrays; with ``reallocation`` the
     lists twice (old and new buffers coexist while the engine widens them), plus
     :data:`SCENARIO_BYTES`.  With the defaults and without ``reallocation`` and the
     scenario's bytes it is :data:`soilcal.dem.state.BYTES_PER_PARTICLE`."""

@@ -1027,7 +1027,8 @@ class Simulation:
         L["sorder"] = np.zeros(n, dtype=np.int64)  # particles grouped by slab group
         L["sgroup"] = np.zeros(SGROUP_LEN, dtype=np.int64)  # group offsets, last: groups
         L["sscratch"] = np.zeros(SCRATCH_LEN, dtype=np.int64)  # work space of the build
-        # partners found by the build's count pass (work space, neighbour.build_lists)
+        # partners found by the build's count pass (work space, neighbour.build_lists: one
+        # per pair in an even bed, up to NBLK_GROUPS per pair in an uneven one)
         nh = npair if old is None else max(npair, old["hits"].shape[0])
         L["hits"] = np.zeros(nh, dtype=np.int32)
         L["wslot"] = np.zeros((n, kw, 6))
@@ -1137,9 +1138,6 @@ class Simulation:
         total = 0
         resume_mid = False
         step0 = self.step
-        if "hits" not in self._lists:
-            # a simulation saved (restart file) before the lists had this work space
-            self._lists["hits"] = np.zeros(self._lists["nbr_a"].shape[0], dtype=np.int32)
         while True:
             L = self._lists
             done = itg.run_loop(

@@ -745,9 +745,15 @@ def build_lists(x, r, box, periodic, skin, extra, cell_start, cell_idx, cell_of,
     the rows before a spatial sort, perm[new row] = old row; :func:`_fill_row`).  ``hits``:
     work space, hits.shape[0] // NBLK_GROUPS partners per block group, in which the count
     pass keeps the partners it finds so that the fill pass need not look for them again.
+    Every group has a stretch as long as the busiest group's, so ``hits`` needs
+    NBLK_GROUPS times the busiest group's partners: the number of pairs where the groups
+    hold as many each (a bed of even packing), up to NBLK_GROUPS times the pairs where
+    a few groups hold most of them (a dense cluster among sparse spheres: 42,744 entries
+    for 1,381 pairs, 31 per pair, with 1,964 spheres).
     Returns (status, need): status 0 ok, 1 pair buffers too short (need = pairs), 2 wall
     list too short (need = width), 3 cell buffer too short (need = cells), 5 triangle bins
-    too short (need = entries), 7 ``hits`` too short (need = length).
+    too short (need = entries), 7 ``hits`` too short (need = NBLK_GROUPS x the busiest
+    block group's partners).
     """
     n = x.shape[0]
     P = nbr_new.shape[0]
