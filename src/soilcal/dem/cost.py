@@ -57,8 +57,8 @@ kernel compiled, nothing allocated per particle), from the same code the run use
   pair-list slots a size distribution needs, wider wall lists against triangle-mesh tools
   and room for the lists' reallocation, when old and new buffers coexist), for the largest
   number of spheres alive at once.  The count is of allocated bytes: a 94,000-sphere bin
-  held 1.7 kB per sphere resident after 400 steps against 3.8 kB counted here
-  (``throughput.md``, case ``memory``);
+  held 1.7 kB per sphere resident after 400 steps against 4.0 kB (3,992 B) counted here
+  (``throughput.md``, case ``memory``, whose row has the 3.8 kB of an earlier count);
 * **runtime** (:meth:`Cost.wall_s`, :meth:`Cost.runtime_min`): particle-steps over the
   measured engine throughput :data:`THROUGHPUT` (particle-steps per second on one
   thread), times a thread speed-up from the measured two-thread efficiency

@@ -32,7 +32,8 @@ Stop codes (status[0]): 0 finished, 1 pair buffers too short, 2 wall list too sh
 3 cell buffer too short, 4 blow-up (status[1] step, status[2] particle, reason in status[3]:
 1 overlap above the limit, 2 non-finite state; 3 and 4 the same in the state a run starts
 from, before any step), 5 settled (status[1] steps done), 6 triangle
-bins too short.
+bins too short, 7 the list build's partner work space (``hits``) too short; for 1, 2, 3,
+6 and 7 status[3] is the length needed (:func:`soilcal.dem.neighbour.build_lists`).
 """
 
 from __future__ import annotations
