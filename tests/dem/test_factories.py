@@ -262,9 +262,9 @@ def test_lattice_jitter_psd_cylinder_and_count():
 def test_samples_beyond_the_available_memory_are_refused(monkeypatch):
     from soilcal.dem import state
 
-    # 1 MB available: 600 spheres of BYTES_PER_PARTICLE (1,904 bytes) do not fit
-    monkeypatch.setattr(state, "available_memory", lambda: 1_000_000)
-    assert state.BYTES_PER_PARTICLE * 600 > 1_000_000 > state.BYTES_PER_PARTICLE * 500
+    # 1.1 MB available: 600 spheres of BYTES_PER_PARTICLE (2,000 bytes) do not fit
+    monkeypatch.setattr(state, "available_memory", lambda: 1_100_000)
+    assert state.BYTES_PER_PARTICLE * 600 > 1_100_000 > state.BYTES_PER_PARTICLE * 500
     with pytest.raises(InputError, match=r"fill\.n: expected a particle count whose engine"):
         F.insert_random(BOX, F.UniformRadius(1e-3, 1e-3), n=600, seed=1, source="s",
                       field="fill")

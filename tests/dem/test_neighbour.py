@@ -39,6 +39,58 @@ def test_lists_contain_every_pair_within_cutoff(rng, periodic):
 
 
 
+
+def brute_half_rows(x, r, cut0, box, periodic):
+    """Partners j > i of every i within r_i + r_j + cut0 (minimum image along the periodic
+    axes), ascending: the half lists by the definition, all pairs looked at."""
+    rows = []
+    for i in range(len(r)):
+        d = x[i + 1:] - x[i]
+        for a in (0, 1):
+            if periodic[a]:
+                L = box[2 * a + 1] - box[2 * a]
+                d[:, a] -= L * np.round(d[:, a] / L)
+        hit = np.einsum("ij,ij->i", d, d) < (r[i] + r[i + 1:] + cut0) ** 2
+        rows.append(i + 1 + np.nonzero(hit)[0])
+    return rows
+
+
+@pytest.mark.parametrize("periodic", [(True, True), (False, False), (True, False)])
+def test_lists_equal_brute_force_row_by_row_in_order(rng, periodic):
+    # 3,000 spheres (several blocks to each block group of the build), a floor and a tilted
+    # meshed plate beside them: the CSR rows must be exactly the brute-force rows, in
+    # ascending order, at the first build, at a rebuild that merges the old lists, and at
+    # a rebuild whose partner work space was too short (the build asks for more, and the
+    # lists come out the same)
+    from soilcal.dem.geometry import plate_mesh
+
+    L = 0.05
+    sim = random_box(rng, n=3000, L=L, periodic=periodic)
+    v, t = plate_mesh((L / 2, L / 2, 0.02), (1, 0, 0.2), (0, 1, 0), 0.03, 0.03, n_u=6, n_v=6)
+    sim.add_mesh(v, t, "soil")
+    sim.add_plane((0, 0, 0), (0, 0, 1), "soil")
+    sim._kw = 16
+
+    def check():
+        lists = sim._lists
+        want = brute_half_rows(sim.p.x, sim.p.r, sim.skin + sim.extra, sim.box, sim.periodic)
+        start = lists["start_a"]
+        assert np.array_equal(start, np.concatenate([[0], np.cumsum([len(w) for w in want])]))
+        assert np.array_equal(lists["nbr_a"][:start[-1]], np.concatenate(want))
+        return start[-1]
+
+    sim.run(0)
+    assert check() > 2 * sim.n
+    sim.p.x[:] = rng.uniform(0, L, (sim.n, 3))
+    sim.compute_forces()
+    check()
+    sim._lists["hits"] = np.zeros(7, np.int32)
+    sim.p.x[:] = rng.uniform(0, L, (sim.n, 3))
+    sim.compute_forces()
+    check()
+    assert sim._lists["hits"].shape[0] >= sim._lists["start_a"][-1]
+
+
 def test_a_periodic_axis_alone_above_the_cap_ends_the_grid_search():
     """Ten spheres in a line along a periodic x of 200 m (1 mm spheres: more cells along x
     than the cap, one cell across y and z): no axis can be halved, and the grid is built at
@@ -304,3 +356,80 @@ def test_spheres_far_from_the_rest_keep_the_grid_small_and_their_contacts(rng):
     for i in range(sim.n):
         assert nbr[start[i]:start[i + 1]].tolist() == [j for j in np.nonzero(want[i])[0]
                                                        if j > i]
+
+
+def test_a_triangle_is_skipped_only_where_its_plane_is_beyond_reach(rng):
+    """The wall-list build skips a binned triangle whose plane lies beyond a sphere's reach
+    (a point's distance from a triangle is at least that from its plane).  Drawn cases: the
+    unit right triangle in z = 0, a point 0.3 above it (over the face: distance 0.3; beside
+    it at (5, 5): distance sqrt(4.5^2 + 4.5^2 + 0.3^2)); then random triangles (slivers
+    among them) and points, where a skipped triangle must be one the exact closest point
+    puts at the reach or beyond."""
+    from soilcal.dem.walls import TRIANGLE, prim_closest
+
+    par = np.zeros((1, 16))
+    par[0, :9] = [0, 0, 0, 1, 0, 0, 0, 1, 0]
+    # over the face: skipped for a reach below 0.3, kept at 0.3 and above
+    assert nb.tri_beyond(par, 0, 0.2, 0.2, 0.3, 0.29)
+    assert not nb.tri_beyond(par, 0, 0.2, 0.2, 0.3, 0.3)
+    assert not nb.tri_beyond(par, 0, 0.2, 0.2, -0.3, 0.31)
+    # beside it the plane is still 0.3 away: the bound is the plane's, never more
+    assert not nb.tri_beyond(par, 0, 5.0, 5.0, 0.3, 0.31)
+    assert nb.tri_beyond(par, 0, 5.0, 5.0, 0.3, 0.29)
+    # a sliver (widest angle's sine 1e-6) is never skipped
+    par[0, :9] = [0, 0, 0, 1, 0, 0, 0.5, 1e-6, 0]
+    assert not nb.tri_beyond(par, 0, 0.5, 0.0, 5.0, 1.0)
+    n = 4000
+    tri = rng.normal(size=(n, 9))
+    tri[::4, 6:9] = tri[::4, 0:3] + (tri[::4, 3:6] - tri[::4, 0:3]) * 0.4 + 1e-5 * rng.normal(
+        size=(n // 4, 3))  # slivers
+    pts = rng.normal(size=(n, 3)) * 2.0
+    skipped = 0
+    for k in range(n):
+        par = np.zeros((1, 16))
+        par[0, :9] = tri[k]
+        d = prim_closest(TRIANGLE, par, 0, *pts[k])[0]
+        for lim in (0.5 * d, d * (1 - 1e-12), d, 1.5 * d):
+            if nb.tri_beyond(par, 0, *pts[k], lim):
+                skipped += 1
+                assert d >= lim, (k, d, lim)
+    assert skipped > n // 4  # the bound does skip (not only in the drawn cases above)
+
+
+def test_a_triangle_far_from_the_origin_is_not_skipped_within_a_tiny_reach(rng):
+    """The closest point of a triangle is formed at the size of its coordinates, so its
+    rounding grows with the distance from the origin, not with the triangle's size: a
+    millimetre triangle 100 m or 1 km away, a point microns above its plane just beside
+    an edge, and a reach one unit in the last place beyond the exact closest-point
+    distance must keep the triangle (the plane is nearer than the reach by construction:
+    the point's distance from the triangle is at least that from its plane)."""
+    from soilcal.dem.walls import TRIANGLE, prim_closest
+
+    # a drawn case 100 m out: plane 1e-6 away, closest-point distance rounds a hair below
+    par = np.zeros((1, 16))
+    par[0, :9] = [99.99984669507923, 99.9999707860961, 99.99994196837494,
+                  99.99977241021428, 99.99998642453347, 99.9999571533272,
+                  99.99988479516935, 99.99994296689896, 99.99985635317093]
+    p = (99.99984473459759, 99.99997020895451, 99.9999425817665)
+    d = prim_closest(TRIANGLE, par, 0, *p)[0]
+    assert not nb.tri_beyond(par, 0, *p, np.nextafter(d, np.inf))
+    for origin, size, height in ((100.0, 1e-4, 1e-6), (100.0, 1e-3, 1e-6),
+                                 (1e3, 1e-3, 1e-5), (1e3, 1e-3, 1e-6)):
+        for _ in range(400):
+            v0 = origin + rng.normal(size=3) * size
+            par[0, 0:3] = v0
+            par[0, 3:6] = v0 + rng.normal(size=3) * size
+            par[0, 6:9] = v0 + rng.normal(size=3) * size
+            a, b, c = par[0, 0:3], par[0, 3:6], par[0, 6:9]
+            n = np.cross(b - a, c - a)
+            n /= np.linalg.norm(n)
+            out = np.cross(b - a, n)
+            out /= np.linalg.norm(out)
+            if out @ (c - a) > 0:
+                out = -out
+            for beside in (0.0, 1e-10):  # on edge a-b, or just outside it
+                p = a + rng.uniform() * (b - a) + out * beside * size + n * height
+                d = prim_closest(TRIANGLE, par, 0, *p)[0]
+                for lim in (np.nextafter(d, np.inf), d * (1 + 1e-13)):
+                    assert not nb.tri_beyond(par, 0, *p, lim), (origin, size, d, lim)
+                assert nb.tri_beyond(par, 0, *p, 0.5 * d)  # the bound still skips

@@ -1030,6 +1030,10 @@ class Simulation:
         L["sorder"] = np.zeros(n, dtype=np.int64)  # particles grouped by slab group
         L["sgroup"] = np.zeros(SGROUP_LEN, dtype=np.int64)  # group offsets, last: groups
         L["sscratch"] = np.zeros(SCRATCH_LEN, dtype=np.int64)  # work space of the build
+        # partners found by the build's count pass (work space, neighbour.build_lists: one
+        # per pair in an even bed, up to NBLK_GROUPS per pair in an uneven one)
+        nh = npair if old is None else max(npair, old["hits"].shape[0])
+        L["hits"] = np.zeros(nh, dtype=np.int32)
         L["wslot"] = np.zeros((n, kw, 6))
         L["xr"] = np.zeros((n, 4))
         L["vw"] = np.zeros((n, 8))
@@ -1149,7 +1153,7 @@ class Simulation:
                 self._cidx(), self._cof(), self._cpos_arr, self._wcells, self._wbins, self._glob(),
                 L["start_a"], L["nbr_a"], L["hist_a"], L["act_a"], L["start_b"], L["nbr_b"],
                 L["hist_b"], L["act_b"], min(numba.get_num_threads(), GROUPS_MAX),
-                L["sorder"], L["sgroup"], L["sscratch"],
+                L["sorder"], L["sgroup"], L["sscratch"], L["hits"],
                 L["wnbr_a"], L["wcnt_a"], L["whist_a"], L["wnbr_b"], L["wcnt_b"],
                 L["whist_b"], L["wslot"], wa["prim_kind"], wa["prim_wall"], wa["prim_mat"],
                 wa["prim_par"], wa["prim_pts"], wa["prim_dirs"], wa["wall_vel"],
@@ -1158,7 +1162,8 @@ class Simulation:
             total += done
             self.step = step0 + total
             code = int(status[0])
-            if code in (itg.NEED_PAIRS, itg.NEED_KW, itg.NEED_CELLS, itg.NEED_WBINS):
+            if code in (itg.NEED_PAIRS, itg.NEED_KW, itg.NEED_CELLS, itg.NEED_WBINS,
+                        itg.NEED_HITS):
                 if status[4] == 1:
                     self._need_forces = False
                     resume_mid = True
@@ -1168,6 +1173,8 @@ class Simulation:
                     self._wcells = np.zeros(2 * need, dtype=np.int64)
                 elif code == itg.NEED_WBINS:
                     self._wbins = np.zeros(2 * need, dtype=np.int64)
+                elif code == itg.NEED_HITS:
+                    self._lists["hits"] = np.zeros(int(1.25 * need) + 64, dtype=np.int32)
                 elif code == itg.NEED_PAIRS:
                     self._alloc_lists(p.n, int(1.25 * need) + 64, self._kw, self._lists)
                 else:

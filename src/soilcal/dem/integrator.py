@@ -32,7 +32,8 @@ Stop codes (status[0]): 0 finished, 1 pair buffers too short, 2 wall list too sh
 3 cell buffer too short, 4 blow-up (status[1] step, status[2] particle, reason in status[3]:
 1 overlap above the limit, 2 non-finite state; 3 and 4 the same in the state a run starts
 from, before any step), 5 settled (status[1] steps done), 6 triangle
-bins too short.
+bins too short, 7 the list build's partner work space (``hits``) too short; for 1, 2, 3,
+6 and 7 status[3] is the length needed (:func:`soilcal.dem.neighbour.build_lists`).
 """
 
 from __future__ import annotations
@@ -46,7 +47,8 @@ from soilcal.dem.neighbour import (NBLK_GROUPS, SGROUP_LEN, block_size, build_li
                                    build_wall_lists, min_image, sort_particles)
 from soilcal.dem.walls import CYLINDER, PLANE, move_walls, prim_closest
 
-DONE, NEED_PAIRS, NEED_KW, NEED_CELLS, BLOWUP, SETTLED, NEED_WBINS = 0, 1, 2, 3, 4, 5, 6
+(DONE, NEED_PAIRS, NEED_KW, NEED_CELLS, BLOWUP, SETTLED, NEED_WBINS,
+ NEED_HITS) = 0, 1, 2, 3, 4, 5, 6, 7
 
 
 # below this many particles a step is shorter than waking the worker threads three times
@@ -565,7 +567,7 @@ def run_loop(nsteps, step0, resume_mid, need_forces, ke_tol, ke_every, max_ovr, 
              gravity, box, periodic, dt, skin, extra, pair, codes, sort_every, perm, fbuf, ibuf,
              cell_start, cell_idx, cell_of, cpos, wcell_start, wcell_idx, glob,
              start_a, nbr_a, hist_a, act_a, start_b, nbr_b, hist_b, act_b, groups, sorder,
-             sgroup, scratch, wnbr_a, wcnt_a, whist_a, wnbr_b, wcnt_b, whist_b, wslot,
+             sgroup, scratch, hits, wnbr_a, wcnt_a, whist_a, wnbr_b, wcnt_b, whist_b, wslot,
              prim_kind, prim_wall, prim_mat, prim_par, prim_pts, prim_dirs,
              wall_vel, wall_omega, wall_centre, wall_force, wall_torque, wall_reach, wlog,
              fstate, status):
@@ -646,8 +648,8 @@ def run_loop(nsteps, step0, resume_mid, need_forces, ke_tol, ke_every, max_ovr, 
                 if code == 0:
                     code, need = build_lists(x, r, box, periodic, skin, extra, cell_start,
                                              cell_idx, cell_of, cpos, sc, nc, hc, ac, so, no,
-                                             ho, ao, groups, sorder, sgroup, scratch, remap,
-                                             perm, prim_kind, prim_par, wcell_start,
+                                             ho, ao, groups, sorder, sgroup, scratch, hits,
+                                             remap, perm, prim_kind, prim_par, wcell_start,
                                              wcell_idx, glob, wnc, wcc, whc, wno, wco, who)
                 if code != 0 and remap:
                     # the old lists use the old rows: restore them for the retry

@@ -165,7 +165,7 @@ def _cell_ranges(c, n0, n1, n2, p0, p1):
 
 @njit(cache=True, inline="always")
 def _scan(q0, q1, i, xi, yi, zi, ri, cpos, cell_idx, p0, h0, L0, p1, h1, L1, cut0, out, o0,
-          cnt, fill):
+          lim, cnt):
     """Candidates q0..q1-1 of the cell-sorted arrays against particle i (see :func:`_row`)."""
     for q in range(q0, q1):
         j = cell_idx[q]
@@ -176,22 +176,17 @@ def _scan(q0, q1, i, xi, yi, zi, ri, cpos, cell_idx, p0, h0, L0, p1, h1, L1, cut
         ddz = zi - cpos[q, 2]
         cut = ri + cpos[q, 3] + cut0
         if ddx * ddx + ddy * ddy + ddz * ddz < cut * cut:
-            if fill:
-                # insertion into the sorted row
-                s = o0 + cnt
-                while s > o0 and out[s - 1] > j:
-                    out[s] = out[s - 1]
-                    s -= 1
-                out[s] = j
+            if o0 + cnt < lim:
+                out[o0 + cnt] = j
             cnt += 1
     return cnt
 
 
 @njit(cache=True)
 def _row(q, cpos, cell_idx, cell_of, box, periodic, cut0, cell_start, n0, n1, n2, out, o0,
-         fill):
-    """Partners j > i of particle i = cell_idx[q] within the cutoff; if ``fill`` they are
-    written sorted to out[o0:]; returns their number.
+         lim):
+    """Partners j > i of particle i = cell_idx[q] within the cutoff, written in the order
+    they are met to out[o0:lim] (those beyond lim are only counted); returns their number.
 
     Candidates are read from the cell-sorted copy ``cpos`` (x, y, z, R per slot of
     ``cell_idx``), so each neighbour cell is a contiguous stretch of memory; the three cells
@@ -218,7 +213,7 @@ def _row(q, cpos, cell_idx, cell_of, box, periodic, cut0, cell_start, n0, n1, n2
             if cx + a0 >= 0 and cx + b0 < n0:
                 cnt = _scan(cell_start[base + cx + a0], cell_start[base + cx + b0 + 1], i,
                             xi, yi, zi, ri, cpos, cell_idx, p0, h0, L0, p1, h1, L1, cut0, out,
-                            o0, cnt, fill)
+                            o0, lim, cnt)
             else:
                 for dx in range(a0, b0 + 1):
                     xx = cx + dx
@@ -228,7 +223,7 @@ def _row(q, cpos, cell_idx, cell_of, box, periodic, cut0, cell_start, n0, n1, n2
                         xx -= n0
                     cc = base + xx
                     cnt = _scan(cell_start[cc], cell_start[cc + 1], i, xi, yi, zi, ri, cpos,
-                                cell_idx, p0, h0, L0, p1, h1, L1, cut0, out, o0, cnt, fill)
+                                cell_idx, p0, h0, L0, p1, h1, L1, cut0, out, o0, lim, cnt)
     return cnt
 
 
@@ -374,6 +369,42 @@ def _grid(x, r, box, periodic, skin, extra, cell_start, cell_idx, cell_of, cpos)
 
 
 @njit(cache=True, inline="always")
+def tri_beyond(par, p, x, y, z, lim):
+    """Whether triangle p (rows v0 v1 v2 of ``par``) lies surely at lim or farther from
+    point (x, y, z): its plane does, by a margin far beyond the rounding of either distance
+    (1e-9 of lim and of the point's distance from v0, for the rounding relative to the
+    triangle's size, plus 1e-14 of the distances of v0 and of the point from the origin,
+    some 45 units in the last place, for that of the closest point's coordinates, which
+    prim_closest forms at the size of the coordinates: a millimetre triangle 1 km from the
+    origin and a reach of microns).  A point's distance from a
+    triangle is at least its distance from the triangle's plane, so a triangle this
+    rejects is one :func:`soilcal.dem.walls.prim_closest` puts at lim or beyond too: the
+    wall lists are the same, at a fraction of the cost (most triangles binned to a cell
+    are the large faces of a funnel or a hopper, whose bounding boxes hold many cells
+    their planes are far from).  A sliver (sine of its widest angle below 1e-3, whose
+    normal is not known well) is never rejected."""
+    e1x, e1y, e1z = par[p, 3] - par[p, 0], par[p, 4] - par[p, 1], par[p, 5] - par[p, 2]
+    e2x, e2y, e2z = par[p, 6] - par[p, 0], par[p, 7] - par[p, 1], par[p, 8] - par[p, 2]
+    nx = e1y * e2z - e1z * e2y
+    ny = e1z * e2x - e1x * e2z
+    nz = e1x * e2y - e1y * e2x
+    nn = math.sqrt(nx * nx + ny * ny + nz * nz)
+    l1 = math.sqrt(e1x * e1x + e1y * e1y + e1z * e1z)
+    l2 = math.sqrt(e2x * e2x + e2y * e2y + e2z * e2z)
+    l3 = math.sqrt((e2x - e1x) ** 2 + (e2y - e1y) ** 2 + (e2z - e1z) ** 2)
+    # 2 area = nn = product of two sides times the sine of their angle; the smallest of the
+    # three sines is that of the triangle's widest angle (or of a needle's narrow one)
+    if not nn > 1e-3 * max(l1 * l2, l1 * l3, l2 * l3):
+        return False
+    wx, wy, wz = x - par[p, 0], y - par[p, 1], z - par[p, 2]
+    s = abs(wx * nx + wy * ny + wz * nz)
+    w = math.sqrt(wx * wx + wy * wy + wz * wz)
+    a = (math.sqrt(par[p, 0] ** 2 + par[p, 1] ** 2 + par[p, 2] ** 2)
+         + math.sqrt(x * x + y * y + z * z))
+    return s > (lim + 1e-9 * (lim + w) + 1e-14 * a) * nn
+
+
+@njit(cache=True, inline="always")
 def _wall_row(i, io, x, r, cut0, cell_of, prim_kind, prim_par, wcell_start, wcell_idx, glob,
               ng, wnbr_old, wcnt_old, whist_old, wnbr_new, wcnt_new, whist_new):
     """Wall list of particle i: unbounded primitives, then the triangles binned in its cell
@@ -390,6 +421,8 @@ def _wall_row(i, io, x, r, cut0, cell_of, prim_kind, prim_par, wcell_start, wcel
             p = glob[t]
         else:
             p = wcell_idx[wcell_start[c] + t - ng]
+        if prim_kind[p] == TRIANGLE and tri_beyond(prim_par, p, xi, yi, zi, ri + cut0):
+            continue
         d = prim_closest(prim_kind[p], prim_par, p, xi, yi, zi)[0]
         if d < ri + cut0:
             if wc < KW:
@@ -636,12 +669,13 @@ def _old_slot(start_old, nbr_old, io, jo):
 
 
 @njit(cache=True)
-def _fill_row(q, x, r, cpos, cell_idx, cell_of, box, periodic, cut0, cell_start, n0, n1, n2,
-              start_old, nbr_old, hist_old, act_old, start_new, nbr_new, hist_new, act_new,
-              remap, perm, prim_kind, prim_par, wcell_start, wcell_idx, glob, ng, wnbr_old,
+def _fill_row(q, x, r, cell_idx, cell_of, cut0, hits, h0, start_old, nbr_old, hist_old,
+              act_old, start_new, nbr_new, hist_new, act_new, remap, perm, prim_kind,
+              prim_par, wcell_start, wcell_idx, glob, ng, wnbr_old,
               wcnt_old, whist_old, wnbr_new, wcnt_new, whist_new):
-    """Sorted row of particle i = cell_idx[q] (offsets already in start_new), history rows
-    and touching flags merged from i's old sorted row, and i's wall list.
+    """Sorted row of particle i = cell_idx[q] (offsets already in start_new; its partners
+    as the count pass met them in hits[h0:]), history rows and touching flags merged from
+    i's old sorted row, and i's wall list.
 
     remap: the particles were just re-sorted (:func:`sort_particles`) and the old lists
     still use the previous rows, perm[new row] = old row.  Pair (i, j), j > i, is then found
@@ -652,8 +686,14 @@ def _fill_row(q, x, r, cpos, cell_idx, cell_of, box, periodic, cut0, cell_start,
     i = cell_idx[q]
     o0 = start_new[i]
     o1 = start_new[i + 1]
-    _row(q, cpos, cell_idx, cell_of, box, periodic, cut0, cell_start, n0, n1, n2, nbr_new,
-         o0, True)
+    # insertion into the sorted row
+    for k in range(o1 - o0):
+        j = hits[h0 + k]
+        s = o0 + k
+        while s > o0 and nbr_new[s - 1] > j:
+            nbr_new[s] = nbr_new[s - 1]
+            s -= 1
+        nbr_new[s] = j
     io = i
     if remap:
         io = perm[i]
@@ -695,16 +735,25 @@ def _fill_row(q, x, r, cpos, cell_idx, cell_of, box, periodic, cut0, cell_start,
 @njit(cache=True, parallel=True)
 def build_lists(x, r, box, periodic, skin, extra, cell_start, cell_idx, cell_of, cpos,
                 start_old, nbr_old, hist_old, act_old, start_new, nbr_new, hist_new, act_new,
-                groups, sorder, sgroup, scratch, remap, perm, prim_kind, prim_par, wcell_start,
-                wcell_idx, glob, wnbr_old, wcnt_old, whist_old, wnbr_new, wcnt_new, whist_new):
+                groups, sorder, sgroup, scratch, hits, remap, perm, prim_kind, prim_par,
+                wcell_start, wcell_idx, glob, wnbr_old, wcnt_old, whist_old, wnbr_new,
+                wcnt_new, whist_new):
     """Rebuild the half lists (CSR), the slab groups (:func:`_slabs`, ``groups`` per
     colour: one per thread) and the wall lists into *_new.
 
     History rows and touching flags are copied from *_old (``remap``: the old lists use
-    the rows before a spatial sort, perm[new row] = old row; :func:`_fill_row`).  Returns (status, need):
-    status 0 ok, 1 pair buffers too short (need = pairs), 2 wall list too short (need =
-    width), 3 cell buffer too short (need = cells), 5 triangle bins too short (need =
-    entries).
+    the rows before a spatial sort, perm[new row] = old row; :func:`_fill_row`).  ``hits``:
+    work space, hits.shape[0] // NBLK_GROUPS partners per block group, in which the count
+    pass keeps the partners it finds so that the fill pass need not look for them again.
+    Every group has a stretch as long as the busiest group's, so ``hits`` needs
+    NBLK_GROUPS times the busiest group's partners: the number of pairs where the groups
+    hold as many each (a bed of even packing), up to NBLK_GROUPS times the pairs where
+    a few groups hold most of them (a dense cluster among sparse spheres: 42,744 entries
+    for 1,381 pairs, 31 per pair, with 1,964 spheres).
+    Returns (status, need): status 0 ok, 1 pair buffers too short (need = pairs), 2 wall
+    list too short (need = width), 3 cell buffer too short (need = cells), 5 triangle bins
+    too short (need = entries), 7 ``hits`` too short (need = NBLK_GROUPS x the busiest
+    block group's partners).
     """
     n = x.shape[0]
     P = nbr_new.shape[0]
@@ -720,30 +769,46 @@ def build_lists(x, r, box, periodic, skin, extra, cell_start, cell_idx, cell_of,
     if code != 0:
         return code, need
     cut0 = skin + extra
+    cap = hits.shape[0] // NBLK_GROUPS
     # pass 1: row lengths -> offsets (particles taken in cell order, in blocks: neighbouring
-    # particles are processed together and their candidates stay in cache)
+    # particles are processed together and their candidates stay in cache); the partners
+    # of block group c are kept one row after another in hits[c * cap:(c + 1) * cap]
     bs = block_size(n)
     nblk = (n + bs - 1) // bs
     for c in prange(NBLK_GROUPS):
+        h = c * cap
         for blk in range(c, nblk, NBLK_GROUPS):
             for q in range(blk * bs, min(n, blk * bs + bs)):
-                start_new[cell_idx[q] + 1] = _row(q, cpos, cell_idx, cell_of, box, periodic,
-                                                  cut0, cell_start, n0, n1, n2, nbr_new, 0,
-                                                  False)
+                cnt = _row(q, cpos, cell_idx, cell_of, box, periodic, cut0, cell_start, n0, n1,
+                           n2, hits, h, (c + 1) * cap)
+                start_new[cell_idx[q] + 1] = cnt
+                h += cnt
+    # partners of each block group (serial: a sum over the rows in the same order)
+    most = 0
+    for c in range(NBLK_GROUPS):
+        m = 0
+        for blk in range(c, nblk, NBLK_GROUPS):
+            for q in range(blk * bs, min(n, blk * bs + bs)):
+                m += start_new[cell_idx[q] + 1]
+        most = max(most, m)
     start_new[0] = 0
     for i in range(n):
         start_new[i + 1] += start_new[i]
     if start_new[n] > P:
         return 1, start_new[n]
+    if most > cap:
+        return 7, most * NBLK_GROUPS
     # pass 2: sorted rows, history merged from the old sorted rows; wall lists
     for c in prange(NBLK_GROUPS):
+        h = c * cap
         for blk in range(c, nblk, NBLK_GROUPS):
             for q in range(blk * bs, min(n, blk * bs + bs)):
-                _fill_row(q, x, r, cpos, cell_idx, cell_of, box, periodic, cut0, cell_start,
-                          n0, n1, n2, start_old, nbr_old, hist_old, act_old, start_new,
-                          nbr_new, hist_new, act_new, remap, perm, prim_kind, prim_par,
-                          wcell_start, wcell_idx, glob, ng, wnbr_old, wcnt_old, whist_old,
-                          wnbr_new, wcnt_new, whist_new)
+                i = cell_idx[q]
+                _fill_row(q, x, r, cell_idx, cell_of, cut0, hits, h, start_old, nbr_old,
+                          hist_old, act_old, start_new, nbr_new, hist_new, act_new, remap,
+                          perm, prim_kind, prim_par, wcell_start, wcell_idx, glob, ng,
+                          wnbr_old, wcnt_old, whist_old, wnbr_new, wcnt_new, whist_new)
+                h += start_new[i + 1] - start_new[i]
     wneed = _wall_need(wcnt_new, wnbr_new.shape[1])
     if wneed > 0:
         return 2, wneed
