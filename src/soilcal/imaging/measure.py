@@ -117,6 +117,11 @@ class PileResult:
     # straight edge running across the photo at the heap's foot further than the line measured
     # on, tilted against it (plate_ambiguous, :func:`_level_rival`); not reported
     rival: tuple | None = field(default=None, repr=False)
+    # (slope, intercept, left deg, right deg, why passed over) of a plate candidate above the
+    # line measured on, at the heap's foot, that carries the heap and meets edges along its foot
+    # from foot to foot, but which the search passed over (plate_ambiguous, :func:`_stood_above`);
+    # not reported
+    stood_above: tuple | None = field(default=None, repr=False)
 
     def as_dict(self):
         d = asdict(self)
@@ -124,6 +129,7 @@ class PileResult:
         d.pop("geometry")
         d.pop("rival")
         d.pop("alternative")
+        d.pop("stood_above")
         return d
 
 
@@ -536,6 +542,18 @@ def _measure_pile(path, threshold, keep_stages, channel, tried: Tried, image=Non
                 f"the foot can; the photo does not tell which is level: give "
                 f"the plate's top edge by hand, two points on it as plate_line_px in the photo's manifest entry "
                 f"(or soilcal image pile --plate-line-px C0 R0 C1 R1)")
+        elif res.stood_above is not None:
+            s2, b2, left2, right2, why = res.stood_above
+            other = [[round(v, 2) for v in to_photo(c, s2 * c + b2)] for c in ends]
+            res.plate_ambiguous = (
+                f"{path}: the heap stands on a straight edge tilted {roll_of(s2):+.2f} deg above the line measured "
+                f"on ({other} in the photo's pixels; flanks {left2:.2f} / {right2:.2f} deg on it, which end there), "
+                f"passed over as the plate's top edge ({why}); the "
+                f"line measured on, tilted {roll_of(slope):+.2f} deg ({res.plate_line_px}; flanks "
+                f"{res.left_deg:.2f} / {res.right_deg:.2f} deg), runs below the heap's foot, as the front edge of "
+                f"a table askew under a plate narrower than the photo does; the photo does not tell which is "
+                f"level: give the plate's top edge by hand, two points on it as plate_line_px in the photo's "
+                f"manifest entry (or soilcal image pile --plate-line-px C0 R0 C1 R1)")
     return res
 
 
@@ -602,7 +620,10 @@ def _pile_on_lines(path, rgb, threshold, keep_stages, channel, tried: Tried, pla
         all_edges = ledges | cedges
         plate_edges = ndi.binary_dilation(all_edges, np.ones((3, 1), bool))
         for ln in plate_lines(lum, edges=cedges, paired=True):
-            if all(abs((ln[0] - o[0]) * w / 2 + ln[1] - o[1]) > 3 for o in lines):
+            # a colour edge is new unless within 3 px of a line already found across the whole
+            # width (at both ends: two lines tilted against each other, crossing near the
+            # middle, are different edges, e.g. a plate's top edge and a chord across the heap)
+            if all(max(abs(ln[1] - o[1]), abs((ln[0] - o[0]) * (w - 1) + ln[1] - o[1])) > 3 for o in lines):
                 lines.append(ln)
         beyond = _plate_beyond_search(all_edges, plate_edges, lines[:PLATE_CANDIDATES])
     tried.lines = list(lines[:PLATE_CANDIDATES])
@@ -645,6 +666,8 @@ def _pile_on_lines(path, rgb, threshold, keep_stages, channel, tried: Tried, pla
             res.alternative = _plate_alternative(path, rgb, lum, grays, lines[:PLATE_CANDIDATES], res, channel,
                                                  threshold, plate_edges, refused)
             res.rival = _level_rival(plate_edges, lines, res, rgb)
+            res.stood_above = _stood_above(path, rgb, lum, grays, lines[:PLATE_CANDIDATES], beside, refused, res,
+                                           channel, threshold)
         return res
     except InputError as refused:
         if not beside:
@@ -661,6 +684,104 @@ def _pile_on_lines(path, rgb, threshold, keep_stages, channel, tried: Tried, pla
         _judge_foot_below(res, grays)
         res.rival = _level_rival(plate_edges, lines, res, rgb)
         return res
+
+
+#: a plate candidate above the line measured on is the heap's own lower outline where one step
+#: of colour crosses it along at least this share of the heap's foot (:func:`_edge_under`,
+#: :func:`_stood_above`)
+STOOD_UNDER_MIN = 0.9
+
+
+def _edge_under(rgb, res):
+    """The share of the columns under the heap measured in ``res`` (between its feet, where its
+    flank lines meet its plate line, less 5 % of that span at either end) across which the
+    colour steps at that plate line as it does along the whole foot: per column the mean colour
+    2-4 px above the line less that 2-4 px below it; the columns' median step, at least
+    :data:`FACE_COLOUR_TOL` in some channel, and the share of columns whose step carries at least
+    half of it along it (else 0).  About 1 for the line along which the heap's soil meets the
+    plate under it (its lower outline, one step of colour from foot to foot); about 0 for a line
+    across the heap's grain, which has soil on both sides, its steps scattered about none."""
+    h, w = rgb.shape[:2]
+    slope, intercept, lline, rline, _ = res.geometry
+    ang = math.atan(slope)
+    cx, cy = w / 2 - 0.5, h / 2 - 0.5
+    prow = cy + (slope * cx + intercept - cy) * math.cos(ang)
+    feet = sorted(cx + (u0 - v0 / dv * du - cx) * math.cos(ang) - (prow - cy) * math.sin(ang)
+                  for u0, v0, du, dv in (lline, rline))
+    q = 0.05 * (feet[1] - feet[0])
+    cols = np.arange(w)
+    cols = cols[(cols > feet[0] + q) & (cols < feet[1] - q)]
+    rows = np.round(slope * cols + intercept).astype(int)
+    keep = (rows - 4 >= 0) & (rows + 4 < h)
+    cols, rows = cols[keep], rows[keep]
+    if not len(cols):
+        return 0.0
+    above = np.mean([rgb[rows - k, cols, :3] for k in (2, 3, 4)], axis=0)
+    below = np.mean([rgb[rows + k, cols, :3] for k in (2, 3, 4)], axis=0)
+    steps = above - below
+    step = np.median(steps, axis=0)
+    if float(np.max(np.abs(step))) < FACE_COLOUR_TOL:
+        return 0.0
+    return float(np.mean(steps @ step >= 0.5 * float(step @ step)))
+
+
+def _stood_above(path, rgb, lum, grays, lines, beside, refused, res, channel, threshold):
+    """A plate candidate of ``lines`` above the line ``res`` was measured on, at the heap's
+    foot, on which the heap stands but which the search passed over, tilted against the line
+    measured on so that the flanks read more than :data:`PLATE_AMBIGUOUS_DEG` differently:
+    (slope, intercept, left deg, right deg, why it was passed over) of the first such, or None.
+    Passed over: tried after the line measured on (the luminance's candidates come before the
+    colour edges'), or refused for running on too little beside the heap (``beside``,
+    :func:`_plate_beside_heap`).  A plate narrower than the photo, set on a table top of the
+    wall's colour, shows its top edge only along its own width (against the heap in hue alone
+    where they are equally bright), which a heap filling most of the plate leaves little of
+    beside its feet; the luminance's line below it running across the photo is then the
+    table's front edge, askew against the plate, and the heap "stands" on it only through the
+    strip of plate between the two: its flanks are read turned by the table's tilt.  Such a line
+    has one step of colour across it along the heap's whole foot (:func:`_edge_under` at least
+    :data:`STOOD_UNDER_MIN`): the heap's soil meets the plate under it there; a line across the
+    heap's grain just above its foot, soil on both sides, or a chord from one foot up across
+    it, has none, and is no rival; nor is a line within 3 px of the one measured on at either
+    foot (the same edge fitted again, a little tilted, or one crossing it under the heap).  The
+    line measured on must show such a step as well (the table's edge under the plate's strip
+    does): one broken under the foot is hidden there by something lying before the heap, as
+    the plate's edge is behind a ruler lying on it, whose top edge then runs along the foot
+    above it and is no plate either.  "At the foot": crossing the heap's centre column above
+    the line measured on by at most :data:`RIVAL_NEAR_FOOT` of the
+    heap's height.  The photo then does not say which of the two lines is the plate's top
+    edge, so the result is "low".  ``refused``: the numbers (from 1) of lines every cue refused
+    in the search, which are skipped."""
+    slope, intercept, lline, rline, hmax = res.geometry
+    h, w = lum.shape
+    ang = math.atan(slope)
+    cx, cy = w / 2 - 0.5, h / 2 - 0.5
+    prow = cy + (slope * cx + intercept - cy) * math.cos(ang)
+    feet = [cx + (u0 - v0 / dv * du - cx) * math.cos(ang) - (prow - cy) * math.sin(ang)
+            for u0, v0, du, dv in (lline, rline)]
+    mid = 0.5 * (feet[0] + feet[1])
+    passed = {b[0]: b[3] for b in beside}
+    if _edge_under(rgb, res) < STOOD_UNDER_MIN:
+        return None  # the line measured on is hidden along part of the foot: something lies before it
+    own = next((n for n, ln in enumerate(lines, 1) if ln[0] == slope and ln[1] == intercept), None)
+    for n, (s2, b2) in enumerate(lines, 1):
+        rise = (slope - s2) * mid + intercept - b2  # how far above the measured line, at the heap's centre
+        # at both feet more than 3 px above it: no second fit of the same edge, nor one crossing it
+        apart = min((slope - s2) * f + intercept - b2 for f in feet) > 3.0
+        if (n in refused and n not in passed) or not apart or rise > RIVAL_NEAR_FOOT * hmax or \
+                abs(roll_of(slope) - roll_of(s2)) <= PLATE_AMBIGUOUS_DEG:
+            continue
+        try:
+            other = _on_plate_lines(path, rgb, lum, grays, [(s2, b2)], n, channel, threshold, False,
+                                    Tried(keep_masks=False), None, [])
+        except InputError:
+            continue
+        if other.confidence != "ok" or _flank_difference(res, other) <= PLATE_AMBIGUOUS_DEG:
+            continue
+        if _edge_under(rgb, other) >= STOOD_UNDER_MIN:
+            why = passed.get(n, f"line {n} of the plate search, tried after line {own} measured on, which carried "
+                                  f"the heap first")
+            return float(s2), float(b2), other.left_deg, other.right_deg, why
+    return None
 
 
 #: flank difference (deg) between the heap measured on the plate line found and on a second
