@@ -61,3 +61,49 @@ def test_a_heap_standing_on_its_plate_across_the_photo_is_ok(tmp_path):
     r = measure.measure_pile(str(p))
     assert abs(r.left_deg - 32.0) <= 0.5 and abs(r.right_deg - 35.0) <= 0.5, (r.left_deg, r.right_deg)
     assert r.confidence == "ok", measure.low_reason(r)
+
+
+def moist_base_photo(tilt, band, dark, seed=3):
+    """heap_photo's heap with a band of moister, darker soil along its base: the soil ``band`` px
+    above the plate's top edge (row 216) at the middle column, the band's top edge turned
+    ``tilt`` deg, darkened to ``dark`` of its colour.  The band's top edge crosses the heap
+    from flank to flank, one step of colour along it under the heap, but ends at its flanks:
+    beyond them the wall shows on both sides of it."""
+    img = heap_photo(seed=seed)
+    h, w = img.shape[:2]
+    rr, cc = np.mgrid[0:h, 0:w].astype(float)
+    prow = 0.72 * h
+    top = np.maximum(prow - 0.3 * h + (w / 2 - cc) * np.tan(np.radians(32.0)),
+                     prow - 0.3 * h + (cc - w / 2) * np.tan(np.radians(35.0)))
+    m = (rr >= top + 1) & (rr < prow) & (rr >= prow - band - np.tan(np.radians(tilt)) * (cc - w / 2))
+    img[m] *= dark
+    return img
+
+
+@pytest.mark.parametrize("tilt,band,dark", [(1.0, 8.0, 0.6), (0.7, 12.0, 0.6)])
+def test_a_moist_band_along_the_heaps_base_is_no_plate(tmp_path, tilt, band, dark):
+    # measured on the plate's top edge, right; the band's top edge, tilted, carries the heap
+    # too and steps in colour along its whole foot, but ends at the heap's flanks, where no
+    # plate edge does
+    p = tmp_path / "moist.png"
+    _u8(moist_base_photo(tilt, band, dark)).save(p)
+    r = measure.measure_pile(str(p))
+    assert abs(r.left_deg - 32.0) <= 0.5 and abs(r.right_deg - 35.0) <= 0.5, (r.left_deg, r.right_deg)
+    assert r.confidence == "ok", measure.low_reason(r)
+
+
+@pytest.mark.parametrize("scale", [0.6, 0.8])
+def test_a_small_photo_of_a_level_plate_on_a_level_table_is_ok(tmp_path, scale):
+    # 240 x 180 and 320 x 240 px: the plate's top edge and the table's front edge 12 px below
+    # it are both level; the plate's edge, fitted from the short stretch beside the heap, may
+    # come out a little tilted, but followed beside the heap on both sides it is level
+    from skimage import transform
+
+    img = askew_table_photo(0.0, 12.0, 300)
+    h, w = img.shape[:2]
+    small = transform.resize(img, (int(h * scale), int(w * scale)), order=1, anti_aliasing=True)
+    p = tmp_path / "small.png"
+    _u8(np.clip(small, 0.0, 1.0)).save(p)
+    r = measure.measure_pile(str(p))
+    assert abs(r.left_deg - 32.0) <= 0.5 and abs(r.right_deg - 35.0) <= 0.5, (r.left_deg, r.right_deg)
+    assert r.confidence == "ok", measure.low_reason(r)
