@@ -117,6 +117,11 @@ class PileResult:
     # straight edge running across the photo at the heap's foot further than the line measured
     # on, tilted against it (plate_ambiguous, :func:`_level_rival`); not reported
     rival: tuple | None = field(default=None, repr=False)
+    # (slope, intercept, left deg, right deg, why passed over) of a plate candidate above the
+    # line measured on, at the heap's foot, that carries the heap and meets edges along its foot
+    # from foot to foot, but which the search passed over (plate_ambiguous, :func:`_stood_above`);
+    # not reported
+    stood_above: tuple | None = field(default=None, repr=False)
 
     def as_dict(self):
         d = asdict(self)
@@ -124,6 +129,7 @@ class PileResult:
         d.pop("geometry")
         d.pop("rival")
         d.pop("alternative")
+        d.pop("stood_above")
         return d
 
 
@@ -536,6 +542,18 @@ def _measure_pile(path, threshold, keep_stages, channel, tried: Tried, image=Non
                 f"the foot can; the photo does not tell which is level: give "
                 f"the plate's top edge by hand, two points on it as plate_line_px in the photo's manifest entry "
                 f"(or soilcal image pile --plate-line-px C0 R0 C1 R1)")
+        elif res.stood_above is not None:
+            s2, b2, left2, right2, why = res.stood_above
+            other = [[round(v, 2) for v in to_photo(c, s2 * c + b2)] for c in ends]
+            res.plate_ambiguous = (
+                f"{path}: the heap stands on a straight edge tilted {roll_of(s2):+.2f} deg above the line measured "
+                f"on ({other} in the photo's pixels; flanks {left2:.2f} / {right2:.2f} deg on it, which end there), "
+                f"passed over as the plate's top edge ({why}); the "
+                f"line measured on, tilted {roll_of(slope):+.2f} deg ({res.plate_line_px}; flanks "
+                f"{res.left_deg:.2f} / {res.right_deg:.2f} deg), runs below the heap's foot, as the front edge of "
+                f"a table askew under a plate narrower than the photo does; the photo does not tell which is "
+                f"level: give the plate's top edge by hand, two points on it as plate_line_px in the photo's "
+                f"manifest entry (or soilcal image pile --plate-line-px C0 R0 C1 R1)")
     return res
 
 
@@ -590,6 +608,7 @@ def _pile_on_lines(path, rgb, threshold, keep_stages, channel, tried: Tried, pla
     plate_edges = None  # the edges a plate candidate must follow beside the heap
     tilted = None  # a straight edge across the photo tilted beyond the plate search
     beyond = []  # the straight edges tilted beyond the search (none looked for on a given plate)
+    crossing = []  # colour edges crossing a line found at the middle column (_stood_above only)
     if plate is not None:
         lines = [(float(plate[0]), float(plate[1]))]
     else:
@@ -604,6 +623,12 @@ def _pile_on_lines(path, rgb, threshold, keep_stages, channel, tried: Tried, pla
         for ln in plate_lines(lum, edges=cedges, paired=True):
             if all(abs((ln[0] - o[0]) * w / 2 + ln[1] - o[1]) > 3 for o in lines):
                 lines.append(ln)
+            elif all(max(abs(ln[1] - o[1]), abs((ln[0] - o[0]) * (w - 1) + ln[1] - o[1])) > 3 for o in lines):
+                # within 3 px of a line found at the middle column only: tilted against it and
+                # crossing it there, a different edge (a plate's top edge crossed by a chord
+                # across the heap), not tried in the search but a rival plate line for
+                # _stood_above
+                crossing.append(ln)
         beyond = _plate_beyond_search(all_edges, plate_edges, lines[:PLATE_CANDIDATES])
     tried.lines = list(lines[:PLATE_CANDIDATES])
     grays = _grays(rgb, CUES if channel == "auto" else (channel,), lum)
@@ -645,6 +670,8 @@ def _pile_on_lines(path, rgb, threshold, keep_stages, channel, tried: Tried, pla
             res.alternative = _plate_alternative(path, rgb, lum, grays, lines[:PLATE_CANDIDATES], res, channel,
                                                  threshold, plate_edges, refused)
             res.rival = _level_rival(plate_edges, lines, res, rgb)
+            res.stood_above = _stood_above(path, rgb, lum, grays, lines[:PLATE_CANDIDATES], beside, refused, res,
+                                           channel, threshold, crossing)
         return res
     except InputError as refused:
         if not beside:
@@ -661,6 +688,199 @@ def _pile_on_lines(path, rgb, threshold, keep_stages, channel, tried: Tried, pla
         _judge_foot_below(res, grays)
         res.rival = _level_rival(plate_edges, lines, res, rgb)
         return res
+
+
+def _feet(geometry, w, h):
+    """The photo's columns of the heap's two feet (left flank's, right flank's), where its flank
+    lines meet its plate line, from a result's ``geometry`` (slope, intercept, left line, right
+    line, height; the flank lines (u0, v0, du, dv) in the frame levelled on the plate line about
+    the centre of the ``w`` x ``h`` photo)."""
+    slope, intercept, lline, rline = geometry[:4]
+    ang = math.atan(slope)
+    cx, cy = w / 2 - 0.5, h / 2 - 0.5
+    prow = cy + (slope * cx + intercept - cy) * math.cos(ang)
+    # each flank line at height 0 (the plate row) in the levelled frame, turned back into the photo
+    return [cx + (u0 - v0 / dv * du - cx) * math.cos(ang) - (prow - cy) * math.sin(ang)
+            for u0, v0, du, dv in (lline, rline)]
+
+
+#: a plate candidate above the line measured on is the heap's own lower outline where one step
+#: of colour crosses it along at least this share of the heap's foot (:func:`_edge_under`,
+#: :func:`_stood_above`)
+STOOD_UNDER_MIN = 0.9
+
+
+def _edge_under(rgb, res):
+    """The share of the columns under the heap measured in ``res`` (between its feet, where its
+    flank lines meet its plate line, less 5 % of that span at either end) across which the
+    colour steps at that plate line as it does along the whole foot: per column the mean colour
+    2-4 px above the line less that 2-4 px below it; the columns' median step, at least
+    :data:`FACE_COLOUR_TOL` in some channel, and the share of columns whose step carries at least
+    half of it along it (else 0).  About 1 for the line along which the heap's soil meets the
+    plate under it (its lower outline, one step of colour from foot to foot); about 0 for a line
+    across the heap's grain, which has soil on both sides, its steps scattered about none."""
+    h, w = rgb.shape[:2]
+    slope, intercept, lline, rline, _ = res.geometry
+    feet = sorted(_feet(res.geometry, w, h))
+    q = 0.05 * (feet[1] - feet[0])
+    cols = np.arange(w)
+    cols = cols[(cols > feet[0] + q) & (cols < feet[1] - q)]
+    rows = np.round(slope * cols + intercept).astype(int)
+    keep = (rows - 4 >= 0) & (rows + 4 < h)
+    cols, rows = cols[keep], rows[keep]
+    if not len(cols):
+        return 0.0
+    above = np.mean([rgb[rows - k, cols, :3] for k in (2, 3, 4)], axis=0)
+    below = np.mean([rgb[rows + k, cols, :3] for k in (2, 3, 4)], axis=0)
+    steps = above - below
+    step = np.median(steps, axis=0)
+    if float(np.max(np.abs(step))) < FACE_COLOUR_TOL:
+        return 0.0
+    return float(np.mean(steps @ step >= 0.5 * float(step @ step)))
+
+
+#: a rival plate line of :func:`_stood_above` must show its colour step beside the heap, beyond
+#: each foot, along at least this share of the heap's foot (and 3 columns)
+STOOD_BESIDE_MIN = 0.01
+#: ... and the edge fitted there must be tilted against the line measured on by more than
+#: :data:`PLATE_AMBIGUOUS_DEG` and more than this many standard deviations of its fitted tilt
+STOOD_TILT_SD = 2.0
+#: ... and lie within this many px of the line at both feet (edge location to a pixel)
+STOOD_ON_LINE_PX = 1.5
+
+
+def _edge_beside_fit(rgb, res):
+    """The plate line of ``res`` followed beside the heap, beyond both its feet: (roll in deg,
+    its standard deviation in deg) of the straight line fitted to where the colour steps across
+    it, or None where either side has no such step.  From each foot outwards the columns
+    whose colour 2-4 px above the line less that 2-4 px below carries at least half of the
+    median step of the first of them (that at least :data:`FACE_COLOUR_TOL` in some channel),
+    from 2 px beyond the foot (the heap's toe, rounded or blurred); the first :data:`STOOD_BESIDE_MIN` of the heap's foot (at least 3 columns) must all carry
+    it, and the run is followed to its first column that does not.  In each such column the
+    edge lies where the colour, projected on the step, falls from the colour above to that below
+    most steeply within 6 px of the line; the straight line fitted to these must lie
+    within :data:`STOOD_ON_LINE_PX` of the plate line at both feet (else the edge beside the heap
+    is another, e.g. the plate's a few px below a moist band's top edge).  A plate's
+    top edge (or a table's) runs on beyond the heap's feet, plate or table below, wall above; a
+    band of moist soil along the heap's base, or a chord across the heap, ends at its flanks,
+    with the same colour on both sides of it beyond them.  The fitted tilt rests on both sides,
+    the whole width of the heap apart, not on the short stretch a line fitted by the plate
+    search may have followed."""
+    h, w = rgb.shape[:2]
+    slope, intercept = res.geometry[:2]
+    lo, hi = sorted(_feet(res.geometry, w, h))
+    need = max(3, int(math.ceil(STOOD_BESIDE_MIN * (hi - lo))))
+    clear = 2.0  # beyond the heap's toe, rounded or blurred
+    offs = np.arange(-4, 5)
+    cs, ps = [], []
+    for cols in (np.arange(int(math.floor(lo - clear)), -1, -1), np.arange(int(math.ceil(hi + clear)), w)):
+        rows = np.round(slope * cols + intercept).astype(int)
+        inside = (rows - 6 >= 0) & (rows + 6 < h)
+        n_in = len(cols) if inside.all() else int(np.argmin(inside))
+        cols, rows = cols[:n_in], rows[:n_in]
+        if len(cols) < need:
+            return None
+        prof = rgb[rows[:, None] + offs[None, :], cols[:, None], :3]  # columns x 9 rows x colour
+        above, below = prof[:, :3].mean(axis=1), prof[:, -3:].mean(axis=1)
+        steps = above - below
+        step = np.median(steps[:need], axis=0)
+        if float(np.max(np.abs(step))) < FACE_COLOUR_TOL:
+            return None
+        carry = steps @ step >= 0.5 * float(step @ step)
+        run = len(carry) if carry.all() else int(np.argmin(carry))
+        if run < need:
+            return None
+        # the colour projected on the step over the 13 rows about the line, high above the edge,
+        # low below: the edge is where it falls most (to a tenth of a pixel by a parabola)
+        on = rgb[rows[:run, None] + np.arange(-6, 7)[None, :], cols[:run, None], :3] @ step
+        fall = on[:, :-1] - on[:, 1:]
+        k = np.clip(np.argmax(fall, axis=1), 1, fall.shape[1] - 2)
+        i = np.arange(run)
+        a, b, c = fall[i, k - 1], fall[i, k], fall[i, k + 1]
+        den = a - 2 * b + c
+        sub = np.where(den < 0, 0.5 * (a - c) / np.where(den < 0, den, -1.0), 0.0)
+        cs.append(cols[:run])
+        ps.append(rows[:run] - 5.5 + k + np.clip(sub, -0.5, 0.5))
+    cs, ps = np.concatenate(cs).astype(float), np.concatenate(ps)
+    (s_fit, b_fit), cov = np.polyfit(cs, ps, 1, cov=True)
+    # the edge found beside the heap is the line's own, not another near it (a moist band's top
+    # edge a few px above the plate's: the plate's edge beside the heap)
+    if max(abs((s_fit - slope) * f + b_fit - intercept) for f in (lo, hi)) > STOOD_ON_LINE_PX:
+        return None
+    sd = float(np.degrees(math.sqrt(max(float(cov[0, 0]), 0.0)) / (1.0 + s_fit * s_fit)))
+    return roll_of(s_fit), sd
+
+
+def _stood_above(path, rgb, lum, grays, lines, beside, refused, res, channel, threshold, crossing=()):
+    """A plate candidate of ``lines`` above the line ``res`` was measured on, at the heap's
+    foot, on which the heap stands but which the search passed over, tilted against the line
+    measured on so that the flanks read more than :data:`PLATE_AMBIGUOUS_DEG` differently:
+    (slope, intercept, left deg, right deg, why it was passed over) of the first such, or None.
+    Passed over: tried after the line measured on (the luminance's candidates come before the
+    colour edges'), or refused for running on too little beside the heap (``beside``,
+    :func:`_plate_beside_heap`).  A plate narrower than the photo, set on a table top of the
+    wall's colour, shows its top edge only along its own width (against the heap in hue alone
+    where they are equally bright), which a heap filling most of the plate leaves little of
+    beside its feet; the luminance's line below it running across the photo is then the
+    table's front edge, askew against the plate, and the heap "stands" on it only through the
+    strip of plate between the two: its flanks are read turned by the table's tilt.  Such a line
+    has one step of colour across it along the heap's whole foot (:func:`_edge_under` at least
+    :data:`STOOD_UNDER_MIN`): the heap's soil meets the plate under it there; a line across the
+    heap's grain just above its foot, soil on both sides, or a chord from one foot up across
+    it, has none, and is no rival; nor is a line within 3 px of the one measured on at either
+    foot (the same edge fitted again, a little tilted, or one crossing it under the heap).  The
+    line measured on must show such a step as well (the table's edge under the plate's strip
+    does): one broken under the foot is hidden there by something lying before the heap, as
+    the plate's edge is behind a ruler lying on it, whose top edge then runs along the foot
+    above it and is no plate either.  "At the foot": crossing the heap's centre column above
+    the line measured on by at most :data:`RIVAL_NEAR_FOOT` of the
+    heap's height.  And the rival must run on beyond both feet as a plate's (or table's) edge
+    does, tilted against the line measured on as fitted there (:func:`_edge_beside_fit`, by
+    more than :data:`PLATE_AMBIGUOUS_DEG` and :data:`STOOD_TILT_SD` standard deviations): the
+    top edge of a band of darker, moister soil along the heap's base also steps in colour from
+    foot to foot, but ends at the flanks.  The photo then does not say which of the two lines
+    is the plate's top edge, so the result is "low".  ``refused``: the numbers (from 1) of
+    lines every cue refused in the search, which are skipped; ``crossing``: colour edges left
+    out of the search as within 3 px of one of its lines at the middle column, but not at both
+    ends of the width (tilted against it, crossing it there), rivals here after ``lines``."""
+    slope, intercept, lline, rline, hmax = res.geometry
+    h, w = lum.shape
+    feet = _feet(res.geometry, w, h)
+    mid = 0.5 * (feet[0] + feet[1])
+    passed = {b[0]: b[3] for b in beside}
+    if _edge_under(rgb, res) < STOOD_UNDER_MIN:
+        return None  # the line measured on is hidden along part of the foot: something lies before it
+    own = next((n for n, ln in enumerate(lines, 1) if ln[0] == slope and ln[1] == intercept), None)
+    for n, (s2, b2) in enumerate(list(lines) + list(crossing), 1):
+        rise = (slope - s2) * mid + intercept - b2  # how far above the measured line, at the heap's centre
+        # at both feet more than 3 px above it: no second fit of the same edge, nor one crossing it
+        apart = min((slope - s2) * f + intercept - b2 for f in feet) > 3.0
+        if (n in refused and n not in passed) or not apart or rise > RIVAL_NEAR_FOOT * hmax or \
+                abs(roll_of(slope) - roll_of(s2)) <= PLATE_AMBIGUOUS_DEG:
+            continue
+        try:
+            other = _on_plate_lines(path, rgb, lum, grays, [(s2, b2)], n, channel, threshold, False,
+                                    Tried(keep_masks=False), None, [])
+        except InputError:
+            continue
+        if other.confidence != "ok" or _flank_difference(res, other) <= PLATE_AMBIGUOUS_DEG:
+            continue
+        if _edge_under(rgb, other) < STOOD_UNDER_MIN:
+            continue
+        fit = _edge_beside_fit(rgb, other)
+        if fit is None:
+            continue  # no step beside the heap beyond both feet: the line ends with the heap
+        tilt, sd = fit[0] - roll_of(slope), fit[1]
+        if abs(tilt) <= max(PLATE_AMBIGUOUS_DEG, STOOD_TILT_SD * sd):
+            continue  # the edge beside the heap is not tilted against the line measured on beyond doubt
+        if n > len(lines):
+            why = (f"within 3 px at the middle column of a line of the plate search, crossing it there, and "
+                   f"not tried")
+        else:
+            why = passed.get(n, f"line {n} of the plate search, tried after line {own} measured on, which "
+                                f"carried the heap first")
+        return float(s2), float(b2), other.left_deg, other.right_deg, why
+    return None
 
 
 #: flank difference (deg) between the heap measured on the plate line found and on a second
@@ -728,13 +948,7 @@ def _edge_beside(edges, res):
     card's and the plate's) that meets each only near where it crosses it; None with no side judged (nothing beside the heap to judge the line by)."""
     h, w = edges.shape
     slope, intercept, lline, rline, _ = res.geometry
-    ang = math.atan(slope)
-    cx, cy = w / 2 - 0.5, h / 2 - 0.5
-    prow = cy + (slope * cx + intercept - cy) * math.cos(ang)
-    feet = []
-    for u0, v0, du, dv in (lline, rline):
-        u = u0 - v0 / dv * du  # the flank line at height 0 (the plate row) in the levelled frame
-        feet.append(cx + (u - cx) * math.cos(ang) - (prow - cy) * math.sin(ang))
+    feet = _feet(res.geometry, w, h)
     cols = np.arange(w)
     rows = np.round(slope * cols + intercept).astype(int)
     out = []
@@ -771,12 +985,8 @@ def _level_rival(edges, lines, res, rgb=None):
     slope, intercept, lline, rline, hmax = res.geometry
     own = _across(edges, slope, intercept)
     h, w = edges.shape
-    ang = math.atan(slope)
-    cx, cy = w / 2 - 0.5, h / 2 - 0.5
-    prow = cy + (slope * cx + intercept - cy) * math.cos(ang)
     # the heap's centre column: midway between its feet, where its flank lines meet the plate line
-    feet = [cx + (u0 - v0 / dv * du - cx) * math.cos(ang) - (prow - cy) * math.sin(ang)
-            for u0, v0, du, dv in (lline, rline)]
+    feet = _feet(res.geometry, w, h)
     mid = 0.5 * (feet[0] + feet[1])
     found = None
     for s2, b2 in lines:
