@@ -539,9 +539,7 @@ def _measure_pile(path, threshold, keep_stages, channel, tried: Tried, image=Non
                 f"second straight edge at the heap's foot tilted {roll_of(s2):+.2f} deg ({other}, {across2:.0%}; "
                 f"flanks {left2:.2f} / {right2:.2f} deg on it), as the plate's edge does beyond a ruler or "
                 f"strip lying askew in front of the heap's foot, and as a wall's or a shadow's edge crossing "
-                f"the foot can; the photo does not tell which is level: give "
-                f"the plate's top edge by hand, two points on it as plate_line_px in the photo's manifest entry "
-                f"(or soilcal image pile --plate-line-px C0 R0 C1 R1)")
+                f"the foot can" + _GIVE_LEVEL_LINE)
         elif res.stood_above is not None:
             s2, b2, left2, right2, why = res.stood_above
             other = [[round(v, 2) for v in to_photo(c, s2 * c + b2)] for c in ends]
@@ -551,10 +549,14 @@ def _measure_pile(path, threshold, keep_stages, channel, tried: Tried, image=Non
                 f"passed over as the plate's top edge ({why}); the "
                 f"line measured on, tilted {roll_of(slope):+.2f} deg ({res.plate_line_px}; flanks "
                 f"{res.left_deg:.2f} / {res.right_deg:.2f} deg), runs below the heap's foot, as the front edge of "
-                f"a table askew under a plate narrower than the photo does; the photo does not tell which is "
-                f"level: give the plate's top edge by hand, two points on it as plate_line_px in the photo's "
-                f"manifest entry (or soilcal image pile --plate-line-px C0 R0 C1 R1)")
+                f"a table askew under a plate narrower than the photo does" + _GIVE_LEVEL_LINE)
     return res
+
+
+#: how a photo whose two candidate plate lines both carry the heap asks for the level one
+_GIVE_LEVEL_LINE = ("; the photo does not tell which is level: give the plate's top edge by hand, two points on "
+                    "it as plate_line_px in the photo's manifest entry (or soilcal image pile --plate-line-px "
+                    "C0 R0 C1 R1)")
 
 
 def _levels_around(rgb, res: PileResult, depth: int = 256) -> tuple[float, int]:
