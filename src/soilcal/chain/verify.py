@@ -699,24 +699,16 @@ def write_verification(soil_data: dict, stage_ids, stage_dirs: dict[str, str], t
     from pathlib import Path
 
     from soilcal.chain.files import read_stage, read_targets, write_csv
+    from soilcal.chain.refine import runs_by_case
 
     targets = read_targets(targets_csv)
-
-    def by_case(paths):
-        out_: dict[tuple[str, str], list[pd.DataFrame]] = {}
-        for p in paths:
-            p = Path(p)
-            out_.setdefault((p.parent.parent.name, p.parent.name), []).append(pd.read_csv(p))
-        return out_
-
-    first, second = by_case(run_paths), by_case(refined_run_paths)
     frames = []
     for sid in stage_ids:
         d = Path(stage_dirs[sid])
         stage = read_stage(d / "stage.json")
-        runs = {case: fr for (s, case), fr in first.items() if s == sid}
+        runs = runs_by_case(run_paths, sid)
         ref = pd.read_csv(refined_paths[sid]) if refined_paths and sid in refined_paths else None
-        runs2 = {case: fr for (s, case), fr in second.items() if s == sid}
+        runs2 = runs_by_case(refined_run_paths, sid)
         frames.append(verification_frame(soil_data, stage, pd.read_csv(d / "optimum.csv"), targets, runs, ref, runs2))
     df = pd.concat(frames, ignore_index=True) if frames else pd.DataFrame(columns=VERIFICATION_COLUMNS)
     write_csv(df, out)

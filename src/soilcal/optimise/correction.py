@@ -99,7 +99,8 @@ def corrected_set(models: Mapping[str, Any], targets: Mapping[str, float], bias:
         raise InputError(None, "lower/upper", f"{k} coded bounds with lower <= upper", (lo, hi))
     box = list(zip(lo, hi))
     best = None
-    for s in [x0, *[np.asarray(p, float).reshape(-1) for p in starts]]:
+    pts = [x0, *(np.asarray(p, float).reshape(-1) for p in starts)]
+    for s in pts:
         s = np.clip(s, lo, hi)
         res = optimize.minimize(lambda x: float(np.sum((x - x0) ** 2)), s, jac=lambda x: 2.0 * (x - x0),
                                 method="SLSQP", bounds=box, constraints=cons,
@@ -111,20 +112,18 @@ def corrected_set(models: Mapping[str, Any], targets: Mapping[str, float], bias:
             best = (key, x, worst)
     _, x, worst = best
     if worst > tol:
-        x = compromise(residuals, x0, [x0, *[np.asarray(p, float).reshape(-1) for p in starts]], lower=lo, upper=hi)
+        x = compromise(residuals, x0, pts, lo, hi)
     pred = {r: float(shifted[r].predict(x[None, :])[0]) for r in targets}
     return {"success": worst <= tol, "x_coded": x, "predicted": pred,
             "move": float(np.linalg.norm(x - x0)),
             "residual": max(abs(pred[r] - float(t)) for r, t in targets.items())}
 
 
-def compromise(residuals, x0, starts, step_weight: float = 1e-6, lower=None, upper=None) -> np.ndarray:
-    """Where the targets cannot all be met: the set in the coded box (or ``lower`` .. ``upper``)
+def compromise(residuals, x0, starts, lo, hi, step_weight: float = 1e-6) -> np.ndarray:
+    """Where the targets cannot all be met: the set within the coded bounds ``lo`` .. ``hi``
     minimising the sum of squared scaled residuals (plus ``step_weight`` |x - x0|^2, which picks
     the least move among equally good sets), by L-BFGS-B from every start."""
     x0 = np.asarray(x0, float)
-    lo = np.full(x0.size, -1.0) if lower is None else np.asarray(lower, float)
-    hi = np.full(x0.size, 1.0) if upper is None else np.asarray(upper, float)
 
     def f(x):
         return float(np.sum(residuals(x) ** 2) + step_weight * np.sum((x - x0) ** 2))
