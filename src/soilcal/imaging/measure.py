@@ -672,8 +672,9 @@ def _pile_on_lines(path, rgb, threshold, keep_stages, channel, tried: Tried, pla
             res.alternative = _plate_alternative(path, rgb, lum, grays, lines[:PLATE_CANDIDATES], res, channel,
                                                  threshold, plate_edges, refused)
             res.rival = _level_rival(plate_edges, lines, res, rgb)
-            res.stood_above = _stood_above(path, rgb, lum, grays, lines[:PLATE_CANDIDATES], beside, refused, res,
-                                           channel, threshold, crossing)
+            if res.alternative is None and res.rival is None:  # read only where neither is found
+                res.stood_above = _stood_above(path, rgb, lum, grays, lines[:PLATE_CANDIDATES], beside, refused,
+                                               res, channel, threshold, crossing)
         return res
     except InputError as refused:
         if not beside:
@@ -722,7 +723,7 @@ def _edge_under(rgb, res):
     plate under it (its lower outline, one step of colour from foot to foot); about 0 for a line
     across the heap's grain, which has soil on both sides, its steps scattered about none."""
     h, w = rgb.shape[:2]
-    slope, intercept, lline, rline, _ = res.geometry
+    slope, intercept = res.geometry[:2]
     feet = sorted(_feet(res.geometry, w, h))
     q = 0.05 * (feet[1] - feet[0])
     cols = np.arange(w)
@@ -845,7 +846,8 @@ def _stood_above(path, rgb, lum, grays, lines, beside, refused, res, channel, th
     lines every cue refused in the search, which are skipped; ``crossing``: colour edges left
     out of the search as within 3 px of one of its lines at the middle column, but not at both
     ends of the width (tilted against it, crossing it there), rivals here after ``lines``."""
-    slope, intercept, lline, rline, hmax = res.geometry
+    slope, intercept = res.geometry[:2]
+    hmax = res.geometry[4]
     h, w = lum.shape
     feet = _feet(res.geometry, w, h)
     mid = 0.5 * (feet[0] + feet[1])
@@ -949,7 +951,7 @@ def _edge_beside(edges, res):
     for a plate's edge running on to the frame on both sides, less for a chord of two edges (a
     card's and the plate's) that meets each only near where it crosses it; None with no side judged (nothing beside the heap to judge the line by)."""
     h, w = edges.shape
-    slope, intercept, lline, rline, _ = res.geometry
+    slope, intercept = res.geometry[:2]
     feet = _feet(res.geometry, w, h)
     cols = np.arange(w)
     rows = np.round(slope * cols + intercept).astype(int)
@@ -984,7 +986,8 @@ def _level_rival(edges, lines, res, rgb=None):
     across further where the heap, of the face's colour, hides the plate's top edge."""
     if edges is None:
         return None
-    slope, intercept, lline, rline, hmax = res.geometry
+    slope, intercept = res.geometry[:2]
+    hmax = res.geometry[4]
     own = _across(edges, slope, intercept)
     h, w = edges.shape
     # the heap's centre column: midway between its feet, where its flank lines meet the plate line
