@@ -516,11 +516,15 @@ def _measure_pile(path, threshold, keep_stages, channel, tried: Tried, image=Non
     else:
         slope, intercept = res.geometry[:2]
         ends = (0.0, rgb.shape[1] - 1.0)
+
+        def in_photo(s, b):  # a line's two ends across the width, in the photo's pixels
+            return [[round(v, 2) for v in to_photo(c, s * c + b)] for c in ends]
+
         res.plate_line = "found" if plate is None else "given"
-        res.plate_line_px = [[round(v, 2) for v in to_photo(c, slope * c + intercept)] for c in ends]
+        res.plate_line_px = in_photo(slope, intercept)
         if res.alternative is not None:
             s2, b2, left2, right2 = res.alternative
-            other = [[round(v, 2) for v in to_photo(c, s2 * c + b2)] for c in ends]
+            other = in_photo(s2, b2)
             res.plate_ambiguous = (
                 f"{path}: two plate lines carry the heap: the one measured on, tilted {roll_of(slope):+.2f} deg "
                 f"({res.plate_line_px} in the photo's pixels; flanks {res.left_deg:.2f} / {res.right_deg:.2f} deg), "
@@ -531,7 +535,7 @@ def _measure_pile(path, threshold, keep_stages, channel, tried: Tried, image=Non
                 f"--plate-line-px C0 R0 C1 R1)")
         elif res.rival is not None:
             s2, b2, left2, right2, across2, across1 = res.rival
-            other = [[round(v, 2) for v in to_photo(c, s2 * c + b2)] for c in ends]
+            other = in_photo(s2, b2)
             res.plate_ambiguous = (
                 f"{path}: the line measured on as the plate's top edge, tilted {roll_of(slope):+.2f} deg "
                 f"({res.plate_line_px} in the photo's pixels; flanks {res.left_deg:.2f} / {res.right_deg:.2f} deg), "
@@ -542,7 +546,7 @@ def _measure_pile(path, threshold, keep_stages, channel, tried: Tried, image=Non
                 f"the foot can" + _GIVE_LEVEL_LINE)
         elif res.stood_above is not None:
             s2, b2, left2, right2, why = res.stood_above
-            other = [[round(v, 2) for v in to_photo(c, s2 * c + b2)] for c in ends]
+            other = in_photo(s2, b2)
             res.plate_ambiguous = (
                 f"{path}: the heap stands on a straight edge tilted {roll_of(s2):+.2f} deg above the line measured "
                 f"on ({other} in the photo's pixels; flanks {left2:.2f} / {right2:.2f} deg on it, which end there), "
