@@ -200,3 +200,25 @@ def test_the_fit_is_relative_to_the_rows_scale():
     m = sl.Model([ed], np.array([125.0]), np.array([-1.0]), np.array([10.0]))
     assert m.errors(np.array([0.0])) == pytest.approx([-12.6])
     assert sl.Model([ed], np.array([125.0]), np.array([-1.0])).errors(np.array([0.0])) == pytest.approx([-126.0])
+
+
+def test_one_row_two_seeds_the_interval_is_the_two_one_seed_fits_widened():
+    # one row, a = 1, two seeds that sit d above and d below the design point's mean at every
+    # design point: value = 100 (1 + beta) +- d, the measured value 100 (1 + 0.3) exactly
+    # (no SD). A draw takes two seeds with replacement: both the first (probability 1/4), both
+    # the second (1/4), or one of each (1/2); the draw's deviation from the mean, widened by
+    # sqrt(n / (n - 1)) = sqrt(2), is +sqrt(2) d, -sqrt(2) d or 0, and the refit solves
+    # 100 (1 + beta) + dev = 130 exactly: beta = 0.3 - dev / 100. With d = 10 / sqrt(2) the
+    # draws are 0.2, 0.3 and 0.4, and 200 draws put far more than 2.5 % on each end, so the
+    # 95 % percentile interval is (0.2, 0.4). Without the widening it would be
+    # (0.3 -+ 0.0707); without resampling the seeds every draw refits 0.3.
+    d = 10.0 / np.sqrt(2.0)
+    runs = pd.DataFrame([{"measurement": "m", "row": 1, "measure": "F_N", "seed": s, "status": "ok",
+                          "value": 100.0 * (1 + b["beta"]) + sign * d, "t:beta": b["beta"]}
+                         for b in DESIGN for s, sign in ((0, 1.0), (1, -1.0))])
+    obs = pd.DataFrame({"measurement": ["m"], "row": [1], "measure": ["F_N"], "measured": [130.0]})
+    ed = sl.build_effect_data(obs, runs, EFF, BOUNDS)
+    y0 = ed.surrogate([0.0])
+    assert y0 == pytest.approx([100.0])
+    lo, hi = sl.bootstrap_ci([ed], y0, np.array([130.0]), np.zeros(1), 200, x0=[0.3])["rate_friction.beta"]
+    assert lo == pytest.approx(0.2, abs=1e-6) and hi == pytest.approx(0.4, abs=1e-6)
