@@ -7,12 +7,12 @@ a second.  Processes started side by side before the cache exists each compile t
 the first two design-point jobs of ``snakemake --cores 2``, the jobs of a cluster run submitted at
 once, the workers of the test suite.  :func:`compile_kernels` runs a few-sphere case of every
 scenario (each contact law, wall kind, moving mesh and measurement the scenarios use) on one
-thread, so that one process compiles and the others load.  Each case is the shortest run that
-still passes through every phase of its scenario (a settled bin, the pass, the lift and the rest
-of the rotating tool; the seating and one hold of the incline): about 1,100 steps (the incline's
-19 spheres) to 12,000 (compression's 120).  Numba compiles a kernel whole at its first call,
-whatever branches that call takes, so a shorter phase reaches the same kernels.  Their
-numbers are not results and are not kept.
+thread, so that one process compiles and the others load.  Each case is kept short but runs
+every phase of its scenario (the rotating tool's two settling rounds, pass, lift and rest; the
+incline's seating and one hold): about 1,100 steps (the incline's 19 spheres) to 12,000
+(compression's 120).  Numba compiles a kernel whole at its first call, whatever branches that
+call takes, so a shorter phase reaches the same kernels.  Their numbers are not results and
+are not kept.
 
     soilcal scenario compile            # the workflow's rule dem_kernels runs it before any DEM job
 """
