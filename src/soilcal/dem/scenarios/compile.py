@@ -7,10 +7,12 @@ a second.  Processes started side by side before the cache exists each compile t
 the first two design-point jobs of ``snakemake --cores 2``, the jobs of a cluster run submitted at
 once, the workers of the test suite.  :func:`compile_kernels` runs a few-sphere case of every
 scenario (each contact law, wall kind, moving mesh and measurement the scenarios use) on one
-thread, so that one process compiles and the others load.  The cases run from about 2,700
-steps (the translating tool) to about 87,000 (the incline's 19 spheres); the rotating tool's
-pass (978 spheres, about 24,000 steps) takes about half their time once the kernels are cached.
-Their numbers are not results and are not kept.
+thread, so that one process compiles and the others load.  Each case is kept short but runs
+every phase of its scenario (the rotating tool's two settling rounds, pass, lift and rest; the
+incline's seating and one hold): about 1,100 steps (the incline's 19 spheres) to 12,000
+(compression's 120).  Numba compiles a kernel whole at its first call, whatever branches that
+call takes, so a shorter phase reaches the same kernels.  Their numbers are not results and
+are not kept.
 
     soilcal scenario compile            # the workflow's rule dem_kernels runs it before any DEM job
 """
@@ -18,6 +20,11 @@ Their numbers are not results and are not kept.
 from __future__ import annotations
 
 import time
+
+
+#: the rotating-tool case's settings that replace the quick preset's
+ROTARY_OVERRIDES = ["travel", "forward_speed", "depth", "bin_length", "bin_height",
+                    "flatness_points", "settle_time", "lift_time", "rest_time"]
 
 
 def cases() -> list[tuple[str, object, dict, object, dict]]:
@@ -37,16 +44,20 @@ def cases() -> list[tuple[str, object, dict, object, dict]]:
          dict(rep["guangxi-cohesive"], load_mass=0.008), sticky, {}),
         ("drum", drum, dict(drum.setups()["xinjiang-vineyard"], n_particles=100, spin_time=0.1,
                             transient_time=0.05, frame_every=0.05), dry, {}),
-        ("incline", incline, dict(incline.setups()["yangtze-static"]), dry, {}),
+        # the staircase starts 1.6 deg above the block's Coulomb onset atan(0.54) = 28.4 deg
+        ("incline", incline, dict(incline.setups()["yangtze-static"], start_deg=30.0), dry, {}),
         ("compression", compression, dict(compression.setups()["guangxi-cohesive"],
                                           n_particles=120, max_strain=0.05), sticky, {}),
         ("soil bin, translating tool", bulldozing,
          dict(bulldozing.setups()["plate-line"], travel=0.02, settle_time=0.05,
               overrides=["travel", "settle_time"]), bulldozing.paper_params(),
          dict(use_cache=False)),
+        # a 0.06 m pass at 2 m/s through a 0.09 m bed 0.62 m long (the shortest the rotor's
+        # diameter, the pass and the margin allow), cut 50 mm deep, two flatness points
         ("soil bin, rotating tool", rotary,
-         dict(rotary.setups()["rpm-250"], travel=0.15, settle_time=0.05, lift_time=0.01,
-              rest_time=0.01, overrides=["travel", "settle_time", "lift_time", "rest_time"]),
+         dict(rotary.setups()["rpm-250"], travel=0.06, forward_speed=2.0, depth=0.05,
+              bin_length=0.62, bin_height=0.09, flatness_points=2, settle_time=0.01,
+              lift_time=0.002, rest_time=0.002, overrides=ROTARY_OVERRIDES),
          rotary.paper_params(), dict(use_cache=False)),
     ]
 
