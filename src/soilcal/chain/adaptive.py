@@ -1,8 +1,9 @@
 """The adaptive design (``simulation.design: adaptive``) on a soil's DEM jobs.
 
 One design per optimisation case of each optimised stage the DEM source runs: the space is the
-stage's factors over their screening ranges, or their own ranges in the soil config (``low`` ..
-``high``; :func:`stage_for`, ``simulation.adaptive.ranges``), the stage's fixed
+stage's factors over their screening ranges (or, where no screening gives one, the ranges the
+soil declares under ``simulation.search_ranges``), or their own ranges in the soil config
+(``low`` .. ``high``; :func:`stage_for`, ``simulation.adaptive.ranges``), the stage's fixed
 values stay fixed (and, for a stage fixed from an earlier one, ``fixed_from``, at that stage's
 adaptive result), and the targets are the case's target goals with the values of
 ``results/<soil>/dem/targets.csv`` (photo or measurement).  :mod:`soilcal.doe.adaptive` decides
@@ -36,6 +37,7 @@ Settings: the soil's ``simulation.adaptive`` block (:data:`soilcal.doe.adaptive.
 from __future__ import annotations
 
 import json
+from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
@@ -119,23 +121,64 @@ def screening_of(soil_data: dict, stage_id: str) -> dict | None:
     return None
 
 
-def screening_factor(soil_data: dict, stage_id: str, parameter) -> tuple[dict, str, dict] | None:
-    """The factor of the Plackett-Burman screening whose range ``design: adaptive`` gives
-    ``parameter`` in stage ``stage_id``: ``(screening stage, its symbol, its factor)``, or None
-    where the stage keeps its own range (``simulation.adaptive.ranges: stage``, no screening
-    the stage descends from (:func:`screening_of`), or a screening that does not vary the
-    parameter between a low and a high level).  The one rule :func:`stage_for` and the
-    start-up checks of the adaptive design follow."""
+@dataclass(frozen=True)
+class SearchRange:
+    """The range (``low`` .. ``high``, the parameter's unit) a factor may be searched over, and
+    where it comes from: ``field`` is ``stages.<screening>.factors.<symbol>`` (``kind``
+    ``screening``) or ``simulation.search_ranges.<parameter>`` (``kind`` ``declared``)."""
+
+    low: float
+    high: float
+    field: str
+    kind: str
+
+    def text(self) -> str:
+        what = "screening range" if self.kind == "screening" else "declared search range"
+        return f"{what} {self.low:g}..{self.high:g} ({self.field})"
+
+
+def declared_range(soil_data: dict, parameter) -> SearchRange | None:
+    """The range the soil declares ``parameter`` may be searched over
+    (``simulation.search_ranges.<parameter>``, checked as the soil loads:
+    :func:`soilcal.config.load.check_search_ranges`), or None."""
+    entry = ((soil_data.get("simulation") or {}).get("search_ranges") or {}).get(parameter)
+    if not entry:
+        return None
+    return SearchRange(float(entry["low"]), float(entry["high"]), f"simulation.search_ranges.{parameter}", "declared")
+
+
+def search_range(soil_data: dict, stage_id: str, parameter, screening: bool = True) -> SearchRange | None:
+    """THE lookup of the range a factor of stage ``stage_id`` setting ``parameter`` may be
+    searched over past the stage's own levels: the range of the Plackett-Burman screening the
+    stage descends from (:func:`screened_factor`) where ``screening`` (the caller's screening
+    counts: the adaptive design's, the second round's of a path-derived stage) and it varies
+    the parameter, else the range the soil declares (:func:`declared_range`), else None.  Read
+    by the adaptive design (:func:`screening_factor`) and by the second calibration round
+    (:func:`soilcal.chain.stage.screening_ranges`)."""
+    found = screened_factor(soil_data, stage_id, parameter) if screening else None
+    if found is not None:
+        scr, sym, f = found
+        lo, hi = sorted((float(f["low"]), float(f["high"])))
+        return SearchRange(lo, hi, f"stages.{scr['id']}.factors.{sym}", "screening")
+    return declared_range(soil_data, parameter)
+
+
+def screening_factor(soil_data: dict, stage_id: str, parameter) -> SearchRange | None:
+    """The range ``design: adaptive`` gives ``parameter`` in stage ``stage_id``
+    (:func:`search_range`: its screening's, else the soil's declared range), or None where the
+    stage keeps its own range (``simulation.adaptive.ranges: stage``, or neither a screening
+    the stage descends from (:func:`screening_of`) that varies the parameter between a low and
+    a high level nor a declared range).  The one rule :func:`stage_for` and the start-up checks
+    of the adaptive design follow."""
     if ranges_setting(soil_data) != "screening":
         return None
-    return screened_factor(soil_data, stage_id, parameter)
+    return search_range(soil_data, stage_id, parameter)
 
 
 def screened_factor(soil_data: dict, stage_id: str, parameter) -> tuple[dict, str, dict] | None:
     """``(screening stage, its symbol, its factor)``: the first factor of the Plackett-Burman
     screening stage ``stage_id`` descends from (:func:`screening_of`) that varies ``parameter``
-    between a low and a high level, or None.  The lookup of :func:`screening_factor` and of
-    :func:`soilcal.chain.stage.screening_ranges`."""
+    between a low and a high level, or None.  The screening part of :func:`search_range`."""
     screening = screening_of(soil_data, stage_id)
     for sym, f in ((screening or {}).get("factors") or {}).items():
         if f.get("parameter") == parameter and f.get("low") is not None and f.get("high") is not None:
@@ -144,24 +187,23 @@ def screened_factor(soil_data: dict, stage_id: str, parameter) -> tuple[dict, st
 
 
 def screening_range(soil_data: dict, stage_id: str, parameter) -> tuple[float, float] | None:
-    """``(low, high)`` the adaptive design takes for ``parameter`` in ``stage_id`` from its
-    screening (:func:`screening_factor`), None where the stage keeps its own range."""
+    """``(low, high)`` the adaptive design takes for ``parameter`` in ``stage_id``
+    (:func:`screening_factor`), None where the stage keeps its own range."""
     found = screening_factor(soil_data, stage_id, parameter)
-    if found is None:
-        return None
-    f = found[2]
-    return float(f["low"]), float(f["high"])
+    return None if found is None else (found.low, found.high)
 
 
-def _screening_ranges(soil_data: dict, st: dict) -> list[str]:
-    """Widen the factors of ``st`` in place to the range the screening gave their parameter
-    (:func:`screening_range`); returns the factors widened ("A (0.08-0.14 -> 0.05-0.2)")."""
-    moved = []
+def _screening_ranges(soil_data: dict, st: dict) -> tuple[list[str], dict]:
+    """Widen the factors of ``st`` in place to the range :func:`screening_factor` gives their
+    parameter; returns the factors widened ("A (0.08-0.14 -> 0.05-0.2)") and, per symbol taking
+    a range, ``{"low", "high", "from"}`` (the field it comes from)."""
+    moved, used = [], {}
     for sym, f in st["factors"].items():
-        found = screening_range(soil_data, st["id"], f.get("parameter"))
+        found = screening_factor(soil_data, st["id"], f.get("parameter"))
         if found is None:
             continue
-        lo, hi = found
+        lo, hi = found.low, found.high
+        used[sym] = {"low": lo, "high": hi, "from": found.field}
         if f.get("low") is None or f.get("high") is None:
             # a stage whose levels the recipe derives (no levels of its own): the screening's
             moved.append(f"{sym} (no levels -> {lo:g}-{hi:g})")
@@ -170,7 +212,7 @@ def _screening_ranges(soil_data: dict, st: dict) -> list[str]:
         f["low"], f["high"] = lo, hi
         if "centre" in f:
             f["centre"] = (lo + hi) / 2
-    return moved
+    return moved, used
 
 
 def stage_for(soil_data: dict, stage_id: str, upstream_optimum: pd.DataFrame | None = None) -> dict:
@@ -182,7 +224,10 @@ def stage_for(soil_data: dict, stage_id: str, upstream_optimum: pd.DataFrame | N
     its parameter, where the stage has one: the screening says which factors matter and over
     what range the user expects them, while a Box-Behnken stage's narrower printed levels were
     centred by the paper's steepest ascent on its own engine's responses, which another
-    engine need not share; ``stage`` keeps the stage's printed ranges.  The non-significant
+    engine need not share; a factor no screening ranges takes the soil's declared range
+    (``simulation.search_ranges``) where there is one (:func:`screening_factor`); ``stage``
+    keeps the stage's printed ranges.  ``derivation.ranges`` records, per factor taking a
+    range, its ``low``, ``high`` and the field it comes ``from``.  The non-significant
     factors stay at the stage's fixed values either way."""
     from soilcal.chain.derive import _dem_base, _stage, apply_own_fixed, dependencies, fix_from_optimum
 
@@ -190,11 +235,18 @@ def stage_for(soil_data: dict, stage_id: str, upstream_optimum: pd.DataFrame | N
     st = _dem_base(config_stage)
     text = "the factor ranges in the soil config (design: adaptive)"
     screening = screening_of(soil_data, stage_id) if ranges_setting(soil_data) == "screening" else None
+    moved, used = _screening_ranges(soil_data, st) if ranges_setting(soil_data) == "screening" else ([], {})
     if screening is not None:
-        moved = _screening_ranges(soil_data, st)
         text = (f"the ranges of screening stage {screening['id']} (design: adaptive, ranges: screening"
                 + (f"; widened: {', '.join(moved)})" if moved else ")"))
+    elif moved:
+        text += f"; widened: {', '.join(moved)}"
+    declared = [f"{s} {u['low']:g}-{u['high']:g}" for s, u in used.items() if u["from"].startswith("simulation.")]
+    if declared:
+        text += f"; declared ranges (simulation.search_ranges): {', '.join(declared)}"
     st["derivation"] = {"kind": "adaptive", "text": text}
+    if used:
+        st["derivation"]["ranges"] = used
     # every fixed value with its origin (derivation.fixed), as the DEM source's stages record it
     apply_own_fixed(st, config_stage, {}, {}, set(), soil_data)
     deps = dependencies(dict(soil_data, simulation={**(soil_data.get("simulation") or {}), "design": "printed"}),

@@ -581,9 +581,10 @@ def check_dem_stages(soil_path, soil_data: dict) -> None:
       parameter's physical range, and a Box-Behnken factor's ``centre`` is the midpoint of
       its ``low`` and ``high`` where the runs are decoded from them (:func:`decodes_low_high`);
       with ``design: adaptive`` a factor's levels are the range it
-      takes from its screening where it takes one
+      takes from its screening, or from the soil's declared range, where it takes one
       (:func:`soilcal.chain.adaptive.screening_factor`), named as the screening's
-      ``stages.<screening>.factors.<symbol>.low`` / ``.high``.
+      ``stages.<screening>.factors.<symbol>.low`` / ``.high`` or as
+      ``simulation.search_ranges.<parameter>.low`` / ``.high``.
 
     (A Plackett-Burman stage's ``runs`` is checked for every soil as it loads.)
     """
@@ -624,10 +625,9 @@ def check_dem_stages(soil_path, soil_data: dict) -> None:
                         if design_mode(soil_data) == "adaptive" else None)
             if screened is not None:
                 # the adaptive design ranges the factor over its screening's levels (ranges:
-                # screening), which it runs in place of the stage's own
-                scr, ssym, sf = screened
+                # screening) or the soil's declared range, which it runs in place of the stage's own
                 for key in ("low", "high"):
-                    in_range(name, sf[key], scale, f"stages.{scr['id']}.factors.{ssym}.{key}")
+                    in_range(name, getattr(screened, key), scale, f"{screened.field}.{key}")
                 continue
             if st["kind"] == "box_behnken" and decodes_low_high(soil_data, sid) \
                     and None not in (f.get("low"), f.get("centre"), f.get("high")):

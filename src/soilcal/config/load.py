@@ -306,6 +306,58 @@ def _check_levels(path: Path, where: str, d: dict) -> None:
         raise InputError(path, f"{where}.centre", f"a number between low ({lo}) and high ({hi})", c)
 
 
+#: parameter kind -> (low, high, low inclusive, high inclusive, text): the physical range a
+#: declared search range (``simulation.search_ranges``) must lie in, in any unit the kind takes
+#: (the bounds are 0 and 1 of dimensionless coefficients, or 0)
+SEARCH_RANGE_BOUNDS = {
+    "restitution": (0.0, 1.0, False, True, "a coefficient of restitution in (0, 1]"),
+    "static_friction": (0.0, math.inf, True, False, "a friction coefficient >= 0"),
+    "rolling_friction": (0.0, math.inf, True, False, "a friction coefficient >= 0"),
+    "surface_energy": (0.0, math.inf, True, False, "a surface energy >= 0"),
+    "shear_modulus": (0.0, math.inf, False, False, "a modulus > 0"),
+    "youngs_modulus": (0.0, math.inf, False, False, "a modulus > 0"),
+    "density": (0.0, math.inf, False, False, "a density > 0"),
+    "poisson_ratio": (-1.0, 0.5, False, False, "a Poisson ratio in (-1, 0.5)"),
+    "plasticity": (0.0, 1.0, True, False, "a contact plasticity ratio in [0, 1)"),
+}
+
+
+def check_search_ranges(path: Path, d: dict) -> None:
+    """``simulation.search_ranges``: each entry names a parameter under ``parameters``, has
+    low < high, lies in the physical range of the parameter's kind
+    (:data:`SEARCH_RANGE_BOUNDS`) and contains the ``low`` .. ``high`` of every stage factor
+    setting that parameter (a search range narrower than a box it is to widen is a typing slip
+    or another unit)."""
+    ranges = (d.get("simulation") or {}).get("search_ranges") or {}
+    params = d.get("parameters") or {}
+    for pid, r in ranges.items():
+        where = f"simulation.search_ranges.{pid}"
+        if pid not in params:
+            raise InputError(path, where, "a parameter id listed under parameters (" + ", ".join(params) + ")", pid)
+        lo, hi = float(r["low"]), float(r["high"])
+        if not (math.isfinite(lo) and math.isfinite(hi) and lo < hi):
+            raise InputError(path, f"{where}.low", f"a finite number below high ({r['high']})", r["low"])
+        kind = params[pid].get("kind")
+        if kind in SEARCH_RANGE_BOUNDS:
+            b_lo, b_hi, lo_in, hi_in, text = SEARCH_RANGE_BOUNDS[kind]
+            unit = params[pid].get("unit", "")
+            if not (lo >= b_lo if lo_in else lo > b_lo):
+                raise InputError(path, f"{where}.low", f"{text} (parameter {pid}, kind {kind}, unit {unit})", r["low"])
+            if not (hi <= b_hi if hi_in else hi < b_hi):
+                raise InputError(path, f"{where}.high", f"{text} (parameter {pid}, kind {kind}, unit {unit})", r["high"])
+        for st in d.get("stages") or []:
+            for sym, f in (st.get("factors") or {}).items():
+                if f.get("parameter") != pid or f.get("low") is None or f.get("high") is None:
+                    continue
+                box = f"stages.{st['id']}.factors.{sym}"
+                if lo > float(f["low"]):
+                    raise InputError(path, f"{where}.low", f"at most {f['low']:g}, the low level of {box}: a "
+                                     f"search range contains every stage's range of {pid}", r["low"])
+                if hi < float(f["high"]):
+                    raise InputError(path, f"{where}.high", f"at least {f['high']:g}, the high level of {box}: a "
+                                     f"search range contains every stage's range of {pid}", r["high"])
+
+
 def _check_stage_sets_each_parameter_once(path: Path, where: str, st: dict, params: dict) -> None:
     """A stage varies or fixes each parameter once: two factors on one parameter, or a factor
     and a fixed value of it, would leave one of the two without any effect on the runs (the
@@ -488,6 +540,7 @@ def _semantic_checks(path: Path, d: dict, resources_root: Path,
                "or run the workflow with source=published" if source_override
                else f"source {d['source']} runs the DEM; or source: published")
         raise InputError(path, "simulation", f"a simulation block naming the scenario of each response ({how})", None)
+    check_search_ranges(path, d)
     if d.get("simulation"):
         from soilcal.dem.scenarios.design import check_block
 
