@@ -146,6 +146,14 @@ def test_final_csv_holds_the_round_verification_marks_final():
     assert (int(r["round"]), bool(r["refined"])) == (2, True) and r["A"] == pytest.approx(-0.125, abs=1e-5)
 
 
+def test_final_csv_names_the_search_ranges_whichever_round_it_keeps():
+    # the second round searched A over its screening range -1..2: final.csv says so on the
+    # first round's row it falls back to (36 verifies worse) as on the second round's it keeps
+    for means, kept in (([35.9, 36.1, 36.0, 36.0], 1), ([31.1, 31.3, 31.2, 31.2], 2)):
+        r = _final(means)
+        assert int(r["round"]) == kept and r["search_ranges"] == "A: screening range -1..2"
+
+
 def _row(resp, rel, n=4, sd=0.1, target=31.0, preset="quick"):
     return {"response": resp, "preset": preset, "n": n, "relative_error_percent": rel, "simulated_sd": sd,
             "target": target, "note": ""}

@@ -1,8 +1,10 @@
 """A soil's declared search ranges (``simulation.search_ranges``): the one lookup of the range a
-factor may be searched over (soilcal.chain.adaptive.search_range: the screening's where a
-simulated screening gives one, else the declared, else none), its use by the second calibration
-round (soilcal.chain.stage.screening_ranges, soilcal.chain.refine) and by the adaptive design,
-and its checks as the soil loads (soilcal.config.load.check_search_ranges).
+factor may be searched over (soilcal.chain.adaptive.search_range: the declared range wherever it
+is declared, else the screening's, else none, in every design mode), its use by the second
+calibration round (soilcal.chain.stage.screening_ranges, soilcal.chain.refine; design: printed
+keeps the box) and by the adaptive design, its checks as the soil loads
+(soilcal.config.load.check_search_ranges) and which rules' params carry it
+(soilcal.chain.plan.dem_context, soilcal.chain.provenance.setup_inputs).
 
 The second-round tests use the stand-in of test_refine: responses exactly y = 30 + 2 A (A coded,
 actual 0.5 + 0.5 A), so the corrected surface is 30 + b + 2 A and the set meeting a target T is
@@ -17,8 +19,10 @@ import pytest
 import yaml
 
 from soilcal.chain.adaptive import screening_factor, search_range, stage_for
+from soilcal.chain.plan import dem_context
+from soilcal.chain.provenance import setup_inputs
 from soilcal.chain.refine import refine_frame
-from soilcal.chain.stage import screening_ranges
+from soilcal.chain.stage import screening_ranges, unused_search_ranges
 from soilcal.config.load import load_soil
 from soilcal.errors import InputError
 from test_refine import OPTIMUM, _runs, _stage, _table
@@ -61,45 +65,72 @@ def _soil(design=None):
     return soil
 
 
-def test_the_lookup_takes_the_screening_else_the_declared_range_else_none():
+def test_the_lookup_takes_the_declared_range_else_the_screening_else_none():
     soil = _soil()
-    got = search_range(soil, "bbd", "gamma")
-    assert (got.low, got.high, got.kind, got.field) == (0.0, 5.0, "screening", "stages.pb.factors.X1")
-    # the screening does not count (a stage not derived from a simulated path): the declared range
-    got = search_range(soil, "bbd", "gamma", screening=False)
-    assert (got.low, got.high, got.kind, got.field) == (0.0, 10.0, "declared", "simulation.search_ranges.gamma")
+    # gamma: screened over 0..5 and declared 0..10: the declaration wins, screening counted or not
+    for screening in (True, False):
+        got = search_range(soil, "bbd", "gamma", screening=screening)
+        assert (got.low, got.high, got.kind, got.field) == (0.0, 10.0, "declared", "simulation.search_ranges.gamma")
     got = search_range(soil, "bbd", "e")  # not screened: declared
     assert (got.low, got.high, got.field) == (0.1, 0.9, "simulation.search_ranges.e")
+    got = search_range(soil, "bbd", "mu")  # not declared: the screening's
+    assert (got.low, got.high, got.kind, got.field) == (0.2, 1.0, "screening", "stages.pb.factors.X2")
     assert search_range(soil, "bbd", "mu", screening=False) is None  # neither
-    assert search_range(soil, "bbd", "mu").field == "stages.pb.factors.X2"
 
 
-def test_the_second_round_takes_a_path_stages_screening_and_a_printed_stages_declared_range():
+@pytest.mark.parametrize("design, stages, kind", [
+    ("recipe", None, "path"),               # every stage simulated, the Box-Behnken derived from the path
+    ("recipe", ["pb", "bbd"], "config"),    # the screening simulated, the Box-Behnken on its printed levels
+    ("recipe", ["bbd"], "config"),          # no screening simulated
+])
+def test_the_second_round_takes_a_declared_range_in_every_recipe_case(design, stages, kind):
+    soil = _soil(design)
+    if stages:
+        soil["simulation"]["stages"] = stages
+    st = {**soil["stages"][2], "derivation": {"kind": kind}}
+    ranges = screening_ranges(soil, st)
+    assert ranges["A"] == (0.0, 10.0, "declared search range 0..10 (simulation.search_ranges.gamma)")
+    assert ranges["C"][:2] == (0.1, 0.9)
+    # mu, not declared: the screening's where the stage descends from the simulated path, else none
+    assert ranges.get("B", (None, None))[:2] == ((0.2, 1.0) if kind == "path" else (None, None))
+    assert unused_search_ranges(soil, st) == []
+
+
+def test_a_printed_design_keeps_the_box_and_names_the_declared_ranges_not_used():
+    soil = _soil("printed")
+    st = {**soil["stages"][2], "derivation": {"kind": "config"}}
+    assert screening_ranges(soil, st) == {}
+    assert unused_search_ranges(soil, st) == [
+        "A: declared search range 0..10 (simulation.search_ranges.gamma)",
+        "C: declared search range 0.1..0.9 (simulation.search_ranges.e)"]
+    assert screening_ranges(_soil("adaptive"), st) == {}
+
+
+def test_a_screening_range_is_quoted_as_used_after_widening_to_the_box():
+    # the screening of mu spans 0.5..1.0, the box 0.4..0.6: the second round searches 0.4..1.0
     soil = _soil()
-    derived = {**soil["stages"][2], "derivation": {"kind": "path"}}
-    assert {s: r[:2] for s, r in screening_ranges(soil, derived).items()} == \
-        {"A": (0.0, 5.0), "B": (0.2, 1.0), "C": (0.1, 0.9)}
-    printed = {**soil["stages"][2], "derivation": {"kind": "config"}}
-    ranges = screening_ranges(soil, printed)
-    assert {s: r[:2] for s, r in ranges.items()} == {"A": (0.0, 10.0), "C": (0.1, 0.9)}
-    assert ranges["A"][2] == "declared search range 0..10 (simulation.search_ranges.gamma)"
-    assert screening_ranges(_soil("printed"), derived)["A"][:2] == (0.0, 10.0)
-    assert screening_ranges(_soil("adaptive"), derived) == {}
+    soil["stages"][0]["factors"]["X2"]["low"] = 0.5
+    st = {**soil["stages"][2], "derivation": {"kind": "path"}}
+    assert screening_ranges(soil, st)["B"] == (0.4, 1.0, "screening range 0.4..1 (stages.pb.factors.X2)")
 
 
 def test_the_adaptive_design_takes_the_same_lookup_and_records_where_each_range_comes_from():
     soil = _soil("adaptive")
     assert screening_factor(soil, "bbd", "e").field == "simulation.search_ranges.e"
     st = stage_for(soil, "bbd")
+    assert screening_factor(soil, "bbd", "gamma").field == "simulation.search_ranges.gamma"  # declared wins
     assert {s: (f["low"], f["high"]) for s, f in st["factors"].items()} == \
-        {"A": (0.0, 5.0), "B": (0.2, 1.0), "C": (0.1, 0.9)}
+        {"A": (0.0, 10.0), "B": (0.2, 1.0), "C": (0.1, 0.9)}
     assert st["derivation"]["ranges"]["C"] == {"low": 0.1, "high": 0.9, "from": "simulation.search_ranges.e"}
-    assert st["derivation"]["ranges"]["A"]["from"] == "stages.pb.factors.X1"
-    assert "declared ranges (simulation.search_ranges): C 0.1-0.9" in st["derivation"]["text"]
+    assert st["derivation"]["ranges"]["A"]["from"] == "simulation.search_ranges.gamma"
+    assert st["derivation"]["ranges"]["B"]["from"] == "stages.pb.factors.X2"
+    assert "declared ranges (simulation.search_ranges): A 0-10, C 0.1-0.9" in st["derivation"]["text"]
     # ranges: stage keeps the stage's own, declared or not
     soil["simulation"]["adaptive"] = {"ranges": "stage"}
     assert screening_factor(soil, "bbd", "e") is None
-    assert stage_for(soil, "bbd")["factors"]["C"]["low"] == 0.3
+    st = stage_for(soil, "bbd")
+    assert st["factors"]["C"]["low"] == 0.3 and "ranges" not in st["derivation"]
+    assert "declared ranges not used (adaptive.ranges: stage): A 0-10, C 0.1-0.9" in st["derivation"]["text"]
 
 
 # ------------------------------------------------------------------ the second round
@@ -113,8 +144,8 @@ def _energy_stage():
     return st
 
 
-def _declared(low, high):
-    return {"simulation": {"search_ranges": {"jkr_surface_energy": {"low": low, "high": high}}}}
+def _declared(low, high, design="recipe"):
+    return {"simulation": {"design": design, "search_ranges": {"jkr_surface_energy": {"low": low, "high": high}}}}
 
 
 def _refined(soil):
@@ -125,7 +156,7 @@ def _refined(soil):
     opt = OPTIMUM[OPTIMUM["case"] == "biased"]
     runs = {"biased": _runs([28.4, 28.6, 28.5, 28.5])}
     df = refine_frame(stage, _table(), {"y": {"value": 31.0}, "lost": {"value": None}}, opt, runs,
-                      screening_ranges(soil, stage))
+                      screening_ranges(soil, stage), unused_search_ranges(soil, stage))
     return df.set_index("case").loc["biased"]
 
 
@@ -146,6 +177,16 @@ def test_the_move_stops_at_the_declared_range():
     assert r["A"] == pytest.approx(1.2, abs=1e-4) and r["y"] == pytest.approx(30.3, abs=1e-3)
 
 
+def test_a_printed_design_stays_in_the_box_and_records_the_declared_range_as_not_used():
+    # as without a declared range: the compromise on the box's bound, A = 1, y = 29.5
+    r = _refined(_declared(0.0, 10.0, design="printed"))
+    assert r["region"] == "inside" and r["A_coded"] == pytest.approx(1.0, abs=1e-4)
+    assert r["y"] == pytest.approx(29.5, abs=1e-3)
+    assert r["search_ranges"] == ("none: every factor stays in the design box (design: printed, compared point by "
+                                  "point with the paper); not used: A: declared search range 0..10 "
+                                  "(simulation.search_ranges.jkr_surface_energy)")
+
+
 def test_without_a_declared_range_the_set_stays_in_the_box():
     # the compromise on the box's bound: A = 1, y = 29.5
     r = _refined({})
@@ -156,9 +197,12 @@ def test_without_a_declared_range_the_set_stays_in_the_box():
 # ------------------------------------------------------------------ checks as the soil loads
 
 
-def _load(tmp_path, ranges):
+def _load(tmp_path, ranges, design=None, parameters=None):
     data = yaml.safe_load((ROOT / "config/soils/guangxi-cohesive.yaml").read_text(encoding="utf-8"))
     data["simulation"]["search_ranges"] = ranges
+    if design:
+        data["simulation"]["design"] = design
+    data["parameters"].update(parameters or {})
     path = tmp_path / "guangxi-cohesive.yaml"
     path.write_text(yaml.safe_dump(data, sort_keys=False), encoding="utf-8")
     return load_soil(path, resources_root=ROOT / "resources")
@@ -173,29 +217,45 @@ def test_the_shipped_cohesive_soil_declares_the_printed_surface_energy_range():
     assert {s: r[:2] for s, r in screening_ranges(soil.data, st).items()} == {"G": (0.0, 10.0)}
 
 
+@pytest.mark.parametrize("design", ["recipe", "printed", "adaptive"])
 @pytest.mark.parametrize("ranges, field, expected", [
     ({"soil_soil_restitution": {"low": 0.3, "high": 0.5, "source": "x"}},
      "simulation.search_ranges.soil_soil_restitution.low", "at most 0.27, the low level of stages.bbd.factors.A"),
     ({"jkr_surface_energy": {"low": 0, "high": 5, "source": "x"}},
      "simulation.search_ranges.jkr_surface_energy.high", "at least 10, the high level of stages.pb.factors.G"),
+    # the DEM parameters' own ranges (soilcal.dem.scenarios.base, the check of every DEM run)
     ({"soil_soil_restitution": {"low": 0, "high": 0.5, "source": "x"}},
      "simulation.search_ranges.soil_soil_restitution.low", "a coefficient of restitution in (0, 1]"),
     ({"soil_soil_restitution": {"low": 0.1, "high": 1.2, "source": "x"}},
      "simulation.search_ranges.soil_soil_restitution.high", "a coefficient of restitution in (0, 1]"),
     ({"soil_soil_static_friction": {"low": -0.1, "high": 1, "source": "x"}},
-     "simulation.search_ranges.soil_soil_static_friction.low", "a friction coefficient >= 0"),
+     "simulation.search_ranges.soil_soil_static_friction.low", "sliding friction coefficient in [0, "),
+    ({"soil_soil_static_friction": {"low": 0.2, "high": 50, "source": "x"}},
+     "simulation.search_ranges.soil_soil_static_friction.high", "sliding friction coefficient in [0, "),
     ({"jkr_surface_energy": {"low": -1, "high": 10, "source": "x"}},
-     "simulation.search_ranges.jkr_surface_energy.low", "a surface energy >= 0"),
+     "simulation.search_ranges.jkr_surface_energy.low", "JKR surface energy in [0, "),
+    # mJ/m^2 typed into a J/m^2 parameter
+    ({"jkr_surface_energy": {"low": 0, "high": 380, "source": "x"}},
+     "simulation.search_ranges.jkr_surface_energy.high", "a soil-soil JKR surface energy in [0, 100] J/m^2"),
     ({"soil_soil_static_friction": {"low": 1, "high": 0.3, "source": "x"}},
      "simulation.search_ranges.soil_soil_static_friction.low", "a finite number below high (0.3)"),
     ({"shear_energy": {"low": 0, "high": 1, "source": "x"}},
      "simulation.search_ranges.shear_energy", "a parameter id listed under parameters"),
+    # a range no stage past the screening varies would never be used: only screened (and fixed
+    # in the Box-Behnken), or set by no stage
+    ({"soil_steel_restitution": {"low": 0.1, "high": 0.9, "source": "x"}},
+     "simulation.search_ranges.soil_steel_restitution", "none does (only a screening varies it)"),
+    ({"unused_mu": {"low": 0, "high": 1, "source": "x"}},
+     "simulation.search_ranges.unused_mu", "none does (no stage varies it)"),
 ])
-def test_a_bad_declared_range_is_refused_naming_file_field_and_what_was_expected(tmp_path, ranges, field, expected):
+def test_a_bad_declared_range_is_refused_naming_file_field_and_what_was_expected(tmp_path, ranges, field, expected,
+                                                                                  design):
+    unused = {"unused_mu": {"name": "steel rolling", "unit": "-", "pair": "soil-steel", "kind": "rolling_friction"}}
     with pytest.raises(InputError) as exc:
-        _load(tmp_path, ranges)
+        _load(tmp_path, ranges, design=design, parameters=unused)
     assert exc.value.field == field and expected in exc.value.expected
     assert exc.value.path == str(tmp_path / "guangxi-cohesive.yaml")
+    assert "\n" not in str(exc.value)
 
 
 def test_a_declared_range_needs_its_source(tmp_path):
@@ -208,3 +268,20 @@ def test_a_wider_declared_range_loads(tmp_path):
     soil = _load(tmp_path, {"jkr_surface_energy": {"low": 0, "high": 25, "source": "GEMM range, Sec. 3.1"},
                             "soil_soil_static_friction": {"low": 0.2, "high": 1.0, "source": "a choice"}})
     assert screening_ranges(soil.data, {**soil.stage("bbd"), "derivation": {"kind": "config"}})["B"][:2] == (0.2, 1.0)
+
+
+# ------------------------------------------------------------------ which rules read the ranges
+
+
+def test_only_the_second_round_and_adaptive_rules_get_the_declared_ranges():
+    soil = load_soil(ROOT / "config/soils/guangxi-cohesive.yaml", resources_root=ROOT / "resources").data
+    assert "search_ranges" in soil["simulation"]
+    # refine and adaptive: the ranges, without their documentation (editing a note re-runs nothing)
+    kept = dem_context(soil, search_ranges=True)["simulation"]["search_ranges"]
+    assert kept == {"jkr_surface_energy": {"low": 0, "high": 10}}
+    # every other DEM rule, and simulation_setup: without them (editing a range re-runs none of them)
+    assert "search_ranges" not in dem_context(soil)["simulation"]
+    assert "search_ranges" not in setup_inputs(soil)["simulation"]
+    assert dem_context(soil)["simulation"] == {k: v for k, v in dem_context(soil, search_ranges=True)["simulation"].items()
+                                               if k != "search_ranges"}
+    assert "search_ranges" in soil["simulation"]  # the soil config itself is left as it was

@@ -1,8 +1,8 @@
 """The adaptive design (``simulation.design: adaptive``) on a soil's DEM jobs.
 
 One design per optimisation case of each optimised stage the DEM source runs: the space is the
-stage's factors over their screening ranges (or, where no screening gives one, the ranges the
-soil declares under ``simulation.search_ranges``), or their own ranges in the soil config
+stage's factors over the ranges the soil declares under ``simulation.search_ranges`` (they win
+where declared) or else their screening ranges, or their own ranges in the soil config
 (``low`` .. ``high``; :func:`stage_for`, ``simulation.adaptive.ranges``), the stage's fixed
 values stay fixed (and, for a stage fixed from an earlier one, ``fixed_from``, at that stage's
 adaptive result), and the targets are the case's target goals with the values of
@@ -133,6 +133,8 @@ class SearchRange:
     kind: str
 
     def text(self) -> str:
+        """``declared search range 0..10 (simulation.search_ranges.G)``: the values this range
+        holds (the caller's, after any widening to a stage's bounds) and their field."""
         what = "screening range" if self.kind == "screening" else "declared search range"
         return f"{what} {self.low:g}..{self.high:g} ({self.field})"
 
@@ -149,26 +151,30 @@ def declared_range(soil_data: dict, parameter) -> SearchRange | None:
 
 def search_range(soil_data: dict, stage_id: str, parameter, screening: bool = True) -> SearchRange | None:
     """THE lookup of the range a factor of stage ``stage_id`` setting ``parameter`` may be
-    searched over past the stage's own levels: the range of the Plackett-Burman screening the
-    stage descends from (:func:`screened_factor`) where ``screening`` (the caller's screening
-    counts: the adaptive design's, the second round's of a path-derived stage) and it varies
-    the parameter, else the range the soil declares (:func:`declared_range`), else None.  Read
-    by the adaptive design (:func:`screening_factor`) and by the second calibration round
-    (:func:`soilcal.chain.stage.screening_ranges`)."""
+    searched over past the stage's own levels, one precedence in every design mode: the range
+    the soil declares (:func:`declared_range`, the user's explicit choice) wherever it is
+    declared; else, where ``screening`` (the caller's screening counts: the adaptive design's,
+    the second round's of a stage derived from the simulated path), the range of the
+    Plackett-Burman screening the stage descends from (:func:`screened_factor`) where it varies
+    the parameter; else None.  Read by the adaptive design (:func:`screening_factor`) and by
+    the second calibration round (:func:`soilcal.chain.stage.screening_ranges`)."""
+    declared = declared_range(soil_data, parameter)
+    if declared is not None:
+        return declared
     found = screened_factor(soil_data, stage_id, parameter) if screening else None
-    if found is not None:
-        scr, sym, f = found
-        lo, hi = sorted((float(f["low"]), float(f["high"])))
-        return SearchRange(lo, hi, f"stages.{scr['id']}.factors.{sym}", "screening")
-    return declared_range(soil_data, parameter)
+    if found is None:
+        return None
+    scr, sym, f = found
+    lo, hi = sorted((float(f["low"]), float(f["high"])))
+    return SearchRange(lo, hi, f"stages.{scr['id']}.factors.{sym}", "screening")
 
 
 def screening_factor(soil_data: dict, stage_id: str, parameter) -> SearchRange | None:
     """The range ``design: adaptive`` gives ``parameter`` in stage ``stage_id``
-    (:func:`search_range`: its screening's, else the soil's declared range), or None where the
-    stage keeps its own range (``simulation.adaptive.ranges: stage``, or neither a screening
-    the stage descends from (:func:`screening_of`) that varies the parameter between a low and
-    a high level nor a declared range).  The one rule :func:`stage_for` and the start-up checks
+    (:func:`search_range`: the soil's declared range, else its screening's), or None where the
+    stage keeps its own range (``simulation.adaptive.ranges: stage``, or neither a declared
+    range nor a screening the stage descends from (:func:`screening_of`) that varies the
+    parameter between a low and a high level).  The one rule :func:`stage_for` and the start-up checks
     of the adaptive design follow."""
     if ranges_setting(soil_data) != "screening":
         return None
@@ -224,8 +230,9 @@ def stage_for(soil_data: dict, stage_id: str, upstream_optimum: pd.DataFrame | N
     its parameter, where the stage has one: the screening says which factors matter and over
     what range the user expects them, while a Box-Behnken stage's narrower printed levels were
     centred by the paper's steepest ascent on its own engine's responses, which another
-    engine need not share; a factor no screening ranges takes the soil's declared range
-    (``simulation.search_ranges``) where there is one (:func:`screening_factor`); ``stage``
+    engine need not share; a factor whose parameter the soil declares a range for
+    (``simulation.search_ranges``) takes that range instead, screened or not
+    (:func:`screening_factor`); ``stage``
     keeps the stage's printed ranges.  ``derivation.ranges`` records, per factor taking a
     range, its ``low``, ``high`` and the field it comes ``from``.  The non-significant
     factors stay at the stage's fixed values either way."""
@@ -244,6 +251,11 @@ def stage_for(soil_data: dict, stage_id: str, upstream_optimum: pd.DataFrame | N
     declared = [f"{s} {u['low']:g}-{u['high']:g}" for s, u in used.items() if u["from"].startswith("simulation.")]
     if declared:
         text += f"; declared ranges (simulation.search_ranges): {', '.join(declared)}"
+    if ranges_setting(soil_data) != "screening":
+        unused = [f"{s} {r.low:g}-{r.high:g}" for s, f in st["factors"].items()
+                  if (r := declared_range(soil_data, f.get("parameter"))) is not None]
+        if unused:
+            text += f"; declared ranges not used (adaptive.ranges: stage): {', '.join(unused)}"
     st["derivation"] = {"kind": "adaptive", "text": text}
     if used:
         st["derivation"]["ranges"] = used

@@ -10,12 +10,13 @@ move from x0 at which the bias-corrected surfaces meet every target
 seeds (``seed + seed_offset + replicates + k``).  Where the corrected surfaces cannot meet every
 target inside the design region, the region is moved, as response-surface practice moves it
 towards a target outside it (Myers, Montgomery & Anderson-Cook, Response Surface Methodology,
-ch. 5-6): the search reaches past the box, in each factor that the design descends from a wider
-screening range of (:func:`soilcal.chain.stage.screening_ranges`: a Box-Behnken centred on a
-path step, whose Plackett-Burman screening spans more), or, where no simulated screening gives
-one, that the soil declares a search range for (``simulation.search_ranges``: a Box-Behnken run
-on its printed levels), by at most :data:`BEYOND_HALF_WIDTHS` box half-widths and never past
-that range; a factor with no wider range stays in the box.  Such
+ch. 5-6): the search reaches past the box (``design: recipe``; ``printed`` keeps the box, to be
+compared point by point with the paper), in each factor whose parameter the soil declares a
+search range for (``simulation.search_ranges``, wherever declared), or else that the design
+descends from a wider simulated screening range of (:func:`soilcal.chain.stage.screening_ranges`:
+a Box-Behnken centred on a path step, whose Plackett-Burman screening spans more), by at most
+:data:`BEYOND_HALF_WIDTHS` box half-widths and never past that range; a factor with no wider
+range stays in the box.  Such
 a row has ``region = beyond`` and its note says in which factors and how far; the DEM
 verification of it with fresh seeds judges it (the verification rows say where it missed by
 more than the first round).  Where the corrected surfaces cannot meet every target in that
@@ -32,8 +33,10 @@ the same way they read an optimum; plus ``round`` (1 = x0 kept, 2 = bias-correct
 ``refined``, ``bias_<response>``, ``surface_change_se_<response>`` (round 2: the standard error
 of the surface's change from x0 to the new set, :meth:`soilcal.rsm.model.RSMFit.change_se`),
 ``move_coded``, ``region`` (``inside`` the Box-Behnken box or ``beyond`` it), ``note`` and
-``search_ranges`` (each factor's range past the box and where it comes from: the screening's
-factor or the declared ``simulation.search_ranges`` entry; the same on every row of a stage).
+``search_ranges`` (each factor's range past the box, as used after widening to the box, and
+where it comes from: the declared ``simulation.search_ranges`` entry or the screening's factor;
+a declared range ``design: printed`` does not use is named as not used; the same on every row
+of a stage, and on ``final.csv``'s).
 """
 
 from __future__ import annotations
@@ -167,23 +170,30 @@ def _range_text(rng) -> str:
     return rng[2] if len(rng) > 2 else f"screening range {float(rng[0]):g}..{float(rng[1]):g}"
 
 
-def search_ranges_text(stage: dict, wider: dict | None) -> str:
+def search_ranges_text(stage: dict, wider: dict | None, unused=()) -> str:
     """The ``search_ranges`` column of ``refined.csv``: each factor's range past the box and
-    where it comes from, or that every factor stays in the box."""
+    where it comes from, or that every factor stays in the box; ``unused``: the declared ranges
+    the stage's second round does not use (:func:`soilcal.chain.stage.unused_search_ranges`),
+    named as such."""
     from soilcal.chain.stage import bounds
 
     syms = bounds(stage)[0]
     parts = [f"{s}: {_range_text(wider[s])}" for s in syms if s in (wider or {})]
-    return "; ".join(parts) if parts else ("none: every factor stays in the design box (no simulated screening "
+    text = "; ".join(parts) if parts else ("none: every factor stays in the design box (no simulated screening "
                                            "and no simulation.search_ranges entry gives a wider range)")
+    if unused:
+        text = ("none: every factor stays in the design box (design: printed, compared point by point with the "
+                "paper); not used: " + "; ".join(unused)) if not parts else text + "; not used: " + "; ".join(unused)
+    return text
 
 
 def refine_frame(stage: dict, table: pd.DataFrame, targets: dict, optimum: pd.DataFrame,
-                 runs: dict[str, list[pd.DataFrame]], wider: dict | None = None) -> pd.DataFrame:
+                 runs: dict[str, list[pd.DataFrame]], wider: dict | None = None, unused=()) -> pd.DataFrame:
     """``refined.csv`` of one stage (module docstring).  ``table``: the stage's responses
     (design points), ``runs``: case id -> the first round's verification frames at the soil's
     own preset, ``wider``: symbol -> (low, high[, origin]), the range each factor may be searched over
-    (:func:`soilcal.chain.stage.screening_ranges`; none: every factor stays in the box)."""
+    (:func:`soilcal.chain.stage.screening_ranges`; none: every factor stays in the box),
+    ``unused``: the declared ranges it does not use (:func:`search_ranges_text`)."""
     from soilcal.chain.stage import bounds, calibrated_rows, fit_stage, goal_values
     from soilcal.optimise import desirability_optimise
     from soilcal.optimise.correction import Shifted, corrected_set, significant_bias
@@ -309,7 +319,7 @@ def refine_frame(stage: dict, table: pd.DataFrame, targets: dict, optimum: pd.Da
     lead = ["case", "round", "refined", "calibrated"]
     if not len(out):
         return pd.DataFrame(columns=lead + ["note", "search_ranges"])
-    out["search_ranges"] = search_ranges_text(stage, wider)
+    out["search_ranges"] = search_ranges_text(stage, wider, unused)
     return out[lead + [c for c in out.columns if c not in lead]]
 
 
@@ -334,14 +344,15 @@ def write_refined(stage_json, responses_csv, targets_csv, optimum_csv, run_paths
     from pathlib import Path
 
     from soilcal.chain.files import read_stage, read_targets, write_csv
-    from soilcal.chain.stage import screening_ranges
+    from soilcal.chain.stage import screening_ranges, unused_search_ranges
     from soilcal.config.load import read_table
 
     stage = read_stage(stage_json)
     runs = runs_by_case(run_paths, stage["id"])
     wider = screening_ranges(soil_data, stage) if soil_data else {}
+    unused = unused_search_ranges(soil_data, stage) if soil_data else []
     df = refine_frame(stage, read_table(Path(responses_csv)), read_targets(targets_csv), pd.read_csv(optimum_csv), runs,
-                      wider)
+                      wider, unused)
     write_csv(df, out)
     return df
 

@@ -590,25 +590,47 @@ def screening_ranges(soil_data: dict, stage: dict) -> dict[str, tuple[float, flo
     """``{symbol: (low, high, origin)}`` (actual units) of the range each factor of a DEM stage
     may be searched over past its own levels by the second calibration round
     (:func:`soilcal.chain.refine.search_region`), by the one lookup the adaptive design takes its
-    ranges by (:func:`soilcal.chain.adaptive.search_range`): for a stage derived from a path
-    (``derivation.kind = "path"``, ``design: recipe``) the ``low`` .. ``high`` of the factor
-    setting the same parameter in the simulated Plackett-Burman screening the stage descends
-    from; else, and for a factor that screening does not vary, the range the soil declares
-    under ``simulation.search_ranges`` (a stage run on its printed levels, whose screening and
-    path the DEM source cannot simulate).  Each range is widened to the stage's own bounds where
-    it is narrower; ``origin`` names where it comes from (:meth:`SearchRange.text`).  Empty for
-    ``design: adaptive`` (its own ranges: :func:`soilcal.chain.adaptive.stage_for`), and for a
-    factor with neither range (its range is the stage's own)."""
+    ranges by (:func:`soilcal.chain.adaptive.search_range`): the range the soil declares under
+    ``simulation.search_ranges`` wherever it declares one (the user's explicit choice); else, for
+    a stage derived from the simulated path (``derivation.kind = "path"``, ``design: recipe``),
+    the ``low`` .. ``high`` of the factor setting the same parameter in the Plackett-Burman
+    screening the stage descends from; else none.  Each range is widened to the stage's own
+    bounds where it is narrower; ``origin`` names the values used and where they come from
+    (:meth:`SearchRange.text`).  Empty for ``design: printed`` (its second round stays in the
+    Box-Behnken box, to be compared point by point with the paper; :func:`unused_search_ranges`)
+    and ``design: adaptive`` (its own ranges: :func:`soilcal.chain.adaptive.stage_for`), and for
+    a factor with neither range (its range is the stage's own)."""
+    from dataclasses import replace
+
     from soilcal.chain.adaptive import search_range
     from soilcal.chain.derive import design_mode
 
-    if design_mode(soil_data) == "adaptive":
+    if design_mode(soil_data) != "recipe":
         return {}
-    path = design_mode(soil_data) == "recipe" and (stage.get("derivation") or {}).get("kind") == "path"
+    path = (stage.get("derivation") or {}).get("kind") == "path"
     out = {}
     for s, f in (stage.get("factors") or {}).items():
         found = search_range(soil_data, stage["id"], f.get("parameter"), screening=path)
         if found is None or f.get("low") is None or f.get("high") is None:
             continue
-        out[s] = (min(found.low, float(f["low"])), max(found.high, float(f["high"])), found.text())
+        used = replace(found, low=min(found.low, float(f["low"])), high=max(found.high, float(f["high"])))
+        out[s] = (used.low, used.high, used.text())
+    return out
+
+
+def unused_search_ranges(soil_data: dict, stage: dict) -> list[str]:
+    """The declared ranges (``simulation.search_ranges``) of a stage's factors that its second
+    calibration round does not use: every one under ``design: printed``, whose second round
+    stays in the Box-Behnken box (the printed design is there to compare point by point with
+    the paper); ``["A: declared search range 0..10 (simulation.search_ranges.G)", ...]``."""
+    from soilcal.chain.adaptive import declared_range
+    from soilcal.chain.derive import design_mode
+
+    if design_mode(soil_data) != "printed":
+        return []
+    out = []
+    for s, f in (stage.get("factors") or {}).items():
+        found = declared_range(soil_data, f.get("parameter"))
+        if found is not None:
+            out.append(f"{s}: {found.text()}")
     return out
