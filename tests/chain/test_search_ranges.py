@@ -1,8 +1,9 @@
 """A soil's declared search ranges (``simulation.search_ranges``): the one lookup of the range a
 factor may be searched over (soilcal.chain.adaptive.search_range: the declared range wherever it
-is declared, else the screening's, else none, in every design mode), its use by the second
-calibration round (soilcal.chain.stage.screening_ranges, soilcal.chain.refine; design: printed
-keeps the box) and by the adaptive design, its checks as the soil loads
+is declared, else the screening's, else none), its use by the second calibration round
+(soilcal.chain.stage.screening_ranges, soilcal.chain.refine; design: printed keeps the box), the
+adaptive design's ranges (its screening's or the stage's own: a declared range is recorded as not
+used), its checks as the soil loads
 (soilcal.config.load.check_search_ranges) and which rules' params carry it
 (soilcal.chain.plan.dem_context, soilcal.chain.provenance.setup_inputs).
 
@@ -114,23 +115,40 @@ def test_a_screening_range_is_quoted_as_used_after_widening_to_the_box():
     assert screening_ranges(soil, st)["B"] == (0.4, 1.0, "screening range 0.4..1 (stages.pb.factors.X2)")
 
 
-def test_the_adaptive_design_takes_the_same_lookup_and_records_where_each_range_comes_from():
+def test_the_adaptive_design_keeps_its_screening_ranges_and_records_a_declared_range_as_not_used():
     soil = _soil("adaptive")
-    assert screening_factor(soil, "bbd", "e").field == "simulation.search_ranges.e"
-    st = stage_for(soil, "bbd")
-    assert screening_factor(soil, "bbd", "gamma").field == "simulation.search_ranges.gamma"  # declared wins
-    assert {s: (f["low"], f["high"]) for s, f in st["factors"].items()} == \
-        {"A": (0.0, 10.0), "B": (0.2, 1.0), "C": (0.1, 0.9)}
-    assert st["derivation"]["ranges"]["C"] == {"low": 0.1, "high": 0.9, "from": "simulation.search_ranges.e"}
-    assert st["derivation"]["ranges"]["A"]["from"] == "simulation.search_ranges.gamma"
-    assert st["derivation"]["ranges"]["B"]["from"] == "stages.pb.factors.X2"
-    assert "declared ranges (simulation.search_ranges): A 0-10, C 0.1-0.9" in st["derivation"]["text"]
-    # ranges: stage keeps the stage's own, declared or not
-    soil["simulation"]["adaptive"] = {"ranges": "stage"}
+    # the screening's range, declared or not (gamma is declared 0..10 and screened 0..5); e is
+    # declared but not screened: the stage's own 0.3..0.5
+    assert screening_factor(soil, "bbd", "gamma").field == "stages.pb.factors.X1"
     assert screening_factor(soil, "bbd", "e") is None
     st = stage_for(soil, "bbd")
-    assert st["factors"]["C"]["low"] == 0.3 and "ranges" not in st["derivation"]
-    assert "declared ranges not used (adaptive.ranges: stage): A 0-10, C 0.1-0.9" in st["derivation"]["text"]
+    assert {s: (f["low"], f["high"]) for s, f in st["factors"].items()} == \
+        {"A": (0.0, 5.0), "B": (0.2, 1.0), "C": (0.3, 0.5)}
+    assert st["derivation"]["ranges"] == {"A": {"low": 0.0, "high": 5.0, "from": "stages.pb.factors.X1"},
+                                          "B": {"low": 0.2, "high": 1.0, "from": "stages.pb.factors.X2"}}
+    assert "declared ranges not used by the adaptive design" in st["derivation"]["text"]
+    assert "A 0-10, C 0.1-0.9" in st["derivation"]["text"]
+    # ranges: stage keeps the stage's own, declared or not
+    soil["simulation"]["adaptive"] = {"ranges": "stage"}
+    assert screening_factor(soil, "bbd", "e") is None and screening_factor(soil, "bbd", "gamma") is None
+    st = stage_for(soil, "bbd")
+    assert {s: (f["low"], f["high"]) for s, f in st["factors"].items()} == \
+        {"A": (0.5, 1.5), "B": (0.4, 0.6), "C": (0.3, 0.5)}
+    assert "ranges" not in st["derivation"]
+    assert "declared ranges not used by the adaptive design" in st["derivation"]["text"]
+
+
+def test_the_shipped_cohesive_soil_keeps_its_box_adaptively_and_searches_g_to_10_in_the_second_round():
+    # guangxi-cohesive: Box-Behnken G 0.04-0.08 J/m^2 (Sec. 3.2), screening level 0-10 J/m^2
+    # printed in Sec. 3.1 and declared under simulation.search_ranges
+    soil = load_soil(ROOT / "config/soils/guangxi-cohesive.yaml", resources_root=ROOT / "resources").data
+    adaptive = dict(soil, simulation={**soil["simulation"], "design": "adaptive"})
+    st = stage_for(adaptive, "bbd")
+    assert (st["factors"]["G"]["low"], st["factors"]["G"]["high"]) == (0.04, 0.08)
+    assert "G 0-10" in st["derivation"]["text"] and "not used" in st["derivation"]["text"]
+    recipe = dict(soil, simulation={**soil["simulation"], "design": "recipe"})
+    ranges = screening_ranges(recipe, {**st, "derivation": {"kind": "config"}})
+    assert ranges == {"G": (0.0, 10.0, "declared search range 0..10 (simulation.search_ranges.jkr_surface_energy)")}
 
 
 # ------------------------------------------------------------------ the second round

@@ -1,9 +1,10 @@
 """The adaptive design (``simulation.design: adaptive``) on a soil's DEM jobs.
 
 One design per optimisation case of each optimised stage the DEM source runs: the space is the
-stage's factors over the ranges the soil declares under ``simulation.search_ranges`` (they win
-where declared) or else their screening ranges, or their own ranges in the soil config
-(``low`` .. ``high``; :func:`stage_for`, ``simulation.adaptive.ranges``), the stage's fixed
+stage's factors over their screening ranges, or their own ranges in the soil config (``low`` ..
+``high``; :func:`stage_for`, ``simulation.adaptive.ranges``; a range the soil declares under
+``simulation.search_ranges`` serves the recipe's second round only and is recorded in the
+stage's ``derivation.text`` as not used by the adaptive design), the stage's fixed
 values stay fixed (and, for a stage fixed from an earlier one, ``fixed_from``, at that stage's
 adaptive result), and the targets are the case's target goals with the values of
 ``results/<soil>/dem/targets.csv`` (photo or measurement).  :mod:`soilcal.doe.adaptive` decides
@@ -150,18 +151,23 @@ def declared_range(soil_data: dict, parameter) -> SearchRange | None:
 
 
 def search_range(soil_data: dict, stage_id: str, parameter, screening: bool = True) -> SearchRange | None:
-    """THE lookup of the range a factor of stage ``stage_id`` setting ``parameter`` may be
-    searched over past the stage's own levels, one precedence in every design mode: the range
-    the soil declares (:func:`declared_range`, the user's explicit choice) wherever it is
-    declared; else, where ``screening`` (the caller's screening counts: the adaptive design's,
-    the second round's of a stage derived from the simulated path), the range of the
-    Plackett-Burman screening the stage descends from (:func:`screened_factor`) where it varies
-    the parameter; else None.  Read by the adaptive design (:func:`screening_factor`) and by
-    the second calibration round (:func:`soilcal.chain.stage.screening_ranges`)."""
+    """The range a factor of stage ``stage_id`` setting ``parameter`` may be searched over past
+    the stage's own levels by the second calibration round of ``design: recipe``
+    (:func:`soilcal.chain.stage.screening_ranges`): the range the soil declares
+    (:func:`declared_range`, the user's explicit choice) wherever it is declared; else, where
+    ``screening`` (a stage derived from the simulated path), the range of the Plackett-Burman
+    screening the stage descends from (:func:`screened_range`) where it varies the parameter;
+    else None.  The adaptive design does not read declared ranges (:func:`screening_factor`)."""
     declared = declared_range(soil_data, parameter)
     if declared is not None:
         return declared
-    found = screened_factor(soil_data, stage_id, parameter) if screening else None
+    return screened_range(soil_data, stage_id, parameter) if screening else None
+
+
+def screened_range(soil_data: dict, stage_id: str, parameter) -> SearchRange | None:
+    """:func:`screened_factor` as a :class:`SearchRange` (``kind`` ``screening``, ``low`` <=
+    ``high``), or None."""
+    found = screened_factor(soil_data, stage_id, parameter)
     if found is None:
         return None
     scr, sym, f = found
@@ -170,21 +176,23 @@ def search_range(soil_data: dict, stage_id: str, parameter, screening: bool = Tr
 
 
 def screening_factor(soil_data: dict, stage_id: str, parameter) -> SearchRange | None:
-    """The range ``design: adaptive`` gives ``parameter`` in stage ``stage_id``
-    (:func:`search_range`: the soil's declared range, else its screening's), or None where the
-    stage keeps its own range (``simulation.adaptive.ranges: stage``, or neither a declared
-    range nor a screening the stage descends from (:func:`screening_of`) that varies the
-    parameter between a low and a high level).  The one rule :func:`stage_for` and the start-up checks
-    of the adaptive design follow."""
+    """The range ``design: adaptive`` gives ``parameter`` in stage ``stage_id``: that of the
+    Plackett-Burman screening the stage descends from (:func:`screened_range`), or None where
+    the stage keeps its own range (``simulation.adaptive.ranges: stage``, no screening the stage
+    descends from (:func:`screening_of`), or a screening that does not vary the parameter
+    between a low and a high level).  A range declared under ``simulation.search_ranges`` does
+    not enter: it serves the recipe's second round (:func:`search_range`).  The one rule
+    :func:`stage_for` and the start-up checks of the adaptive design follow."""
     if ranges_setting(soil_data) != "screening":
         return None
-    return search_range(soil_data, stage_id, parameter)
+    return screened_range(soil_data, stage_id, parameter)
 
 
 def screened_factor(soil_data: dict, stage_id: str, parameter) -> tuple[dict, str, dict] | None:
     """``(screening stage, its symbol, its factor)``: the first factor of the Plackett-Burman
     screening stage ``stage_id`` descends from (:func:`screening_of`) that varies ``parameter``
-    between a low and a high level, or None.  The screening part of :func:`search_range`."""
+    between a low and a high level, or None.  The lookup of :func:`screening_factor` and of
+    :func:`search_range`."""
     screening = screening_of(soil_data, stage_id)
     for sym, f in ((screening or {}).get("factors") or {}).items():
         if f.get("parameter") == parameter and f.get("low") is not None and f.get("high") is not None:
@@ -230,11 +238,10 @@ def stage_for(soil_data: dict, stage_id: str, upstream_optimum: pd.DataFrame | N
     its parameter, where the stage has one: the screening says which factors matter and over
     what range the user expects them, while a Box-Behnken stage's narrower printed levels were
     centred by the paper's steepest ascent on its own engine's responses, which another
-    engine need not share; a factor whose parameter the soil declares a range for
-    (``simulation.search_ranges``) takes that range instead, screened or not
-    (:func:`screening_factor`); ``stage``
-    keeps the stage's printed ranges.  ``derivation.ranges`` records, per factor taking a
-    range, its ``low``, ``high`` and the field it comes ``from``.  The non-significant
+    engine need not share; ``stage`` keeps the stage's printed ranges.  A range the soil
+    declares under ``simulation.search_ranges`` is not used (it serves the recipe's second
+    round) and ``derivation.text`` says so.  ``derivation.ranges`` records, per factor taking a
+    screening range, its ``low``, ``high`` and the field it comes ``from``.  The non-significant
     factors stay at the stage's fixed values either way."""
     from soilcal.chain.derive import _dem_base, _stage, apply_own_fixed, dependencies, fix_from_optimum
 
@@ -242,20 +249,15 @@ def stage_for(soil_data: dict, stage_id: str, upstream_optimum: pd.DataFrame | N
     st = _dem_base(config_stage)
     text = "the factor ranges in the soil config (design: adaptive)"
     screening = screening_of(soil_data, stage_id) if ranges_setting(soil_data) == "screening" else None
-    moved, used = _screening_ranges(soil_data, st) if ranges_setting(soil_data) == "screening" else ([], {})
+    moved, used = _screening_ranges(soil_data, st) if screening is not None else ([], {})
     if screening is not None:
         text = (f"the ranges of screening stage {screening['id']} (design: adaptive, ranges: screening"
                 + (f"; widened: {', '.join(moved)})" if moved else ")"))
-    elif moved:
-        text += f"; widened: {', '.join(moved)}"
-    declared = [f"{s} {u['low']:g}-{u['high']:g}" for s, u in used.items() if u["from"].startswith("simulation.")]
-    if declared:
-        text += f"; declared ranges (simulation.search_ranges): {', '.join(declared)}"
-    if ranges_setting(soil_data) != "screening":
-        unused = [f"{s} {r.low:g}-{r.high:g}" for s, f in st["factors"].items()
-                  if (r := declared_range(soil_data, f.get("parameter"))) is not None]
-        if unused:
-            text += f"; declared ranges not used (adaptive.ranges: stage): {', '.join(unused)}"
+    unused = [f"{s} {r.low:g}-{r.high:g}" for s, f in st["factors"].items()
+              if (r := declared_range(soil_data, f.get("parameter"))) is not None]
+    if unused:
+        text += (f"; declared ranges not used by the adaptive design (simulation.search_ranges, for the "
+                 f"recipe's second round): {', '.join(unused)}")
     st["derivation"] = {"kind": "adaptive", "text": text}
     if used:
         st["derivation"]["ranges"] = used

@@ -595,11 +595,11 @@ def check_dem_stages(soil_path, soil_data: dict) -> None:
       parameter's physical range, and a Box-Behnken factor's ``centre`` is the midpoint of
       its ``low`` and ``high`` where the runs are decoded from them (:func:`decodes_low_high`);
       with ``design: adaptive`` a factor's levels are the range it
-      takes from the soil's declared range, or else from its screening, where it takes one
-      (:func:`soilcal.chain.adaptive.screening_factor`), named as
-      ``simulation.search_ranges.<parameter>.low`` / ``.high`` or as the screening's
-      ``stages.<screening>.factors.<symbol>.low`` / ``.high`` (a declared range is checked
-      against the same ranges as the soil loads, in every mode:
+      takes from its screening where it takes one
+      (:func:`soilcal.chain.adaptive.screening_factor`), named as the screening's
+      ``stages.<screening>.factors.<symbol>.low`` / ``.high`` (a range declared under
+      ``simulation.search_ranges``, which the adaptive design does not use, is checked against
+      the same ranges as the soil loads, in every mode:
       :func:`soilcal.config.load.check_search_ranges`).
 
     (A Plackett-Burman stage's ``runs`` is checked for every soil as it loads.)
@@ -636,8 +636,8 @@ def check_dem_stages(soil_path, soil_data: dict) -> None:
             screened = (adaptive.screening_factor(soil_data, sid, f["parameter"])
                         if design_mode(soil_data) == "adaptive" else None)
             if screened is not None:
-                # the adaptive design ranges the factor over the soil's declared range or else its
-                # screening's levels (ranges: screening), which it runs in place of the stage's own
+                # the adaptive design ranges the factor over its screening's levels (ranges:
+                # screening), which it runs in place of the stage's own
                 for key in ("low", "high"):
                     in_range(name, getattr(screened, key), scale, f"{screened.field}.{key}")
                 continue

@@ -589,8 +589,8 @@ def calibrated_levels(stage: dict, optimum: pd.DataFrame, case: str | None = Non
 def screening_ranges(soil_data: dict, stage: dict) -> dict[str, tuple[float, float, str]]:
     """``{symbol: (low, high, origin)}`` (actual units) of the range each factor of a DEM stage
     may be searched over past its own levels by the second calibration round
-    (:func:`soilcal.chain.refine.search_region`), by the one lookup the adaptive design takes its
-    ranges by (:func:`soilcal.chain.adaptive.search_range`): the range the soil declares under
+    (:func:`soilcal.chain.refine.search_region`), looked up by
+    :func:`soilcal.chain.adaptive.search_range`: the range the soil declares under
     ``simulation.search_ranges`` wherever it declares one (the user's explicit choice); else, for
     a stage derived from the simulated path (``derivation.kind = "path"``, ``design: recipe``),
     the ``low`` .. ``high`` of the factor setting the same parameter in the Plackett-Burman
@@ -598,7 +598,8 @@ def screening_ranges(soil_data: dict, stage: dict) -> dict[str, tuple[float, flo
     bounds where it is narrower; ``origin`` names the values used and where they come from
     (:meth:`SearchRange.text`).  Empty for ``design: printed`` (its second round stays in the
     Box-Behnken box, to be compared point by point with the paper; :func:`unused_search_ranges`)
-    and ``design: adaptive`` (its own ranges: :func:`soilcal.chain.adaptive.stage_for`), and for
+    and ``design: adaptive`` (no second round; its ranges, which do not take declared ones:
+    :func:`soilcal.chain.adaptive.stage_for`), and for
     a factor with neither range (its range is the stage's own)."""
     from dataclasses import replace
 
