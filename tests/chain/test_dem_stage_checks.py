@@ -384,8 +384,9 @@ def test_a_path_on_its_own_levels_with_uneven_steps_is_refused_at_load(tmp_path)
 def test_the_adaptive_designs_stage_and_its_start_up_check_take_the_screening_range_from_one_rule(
         tmp_path, monkeypatch):
     """Which range design: adaptive takes from the screening is one rule
-    (soilcal.chain.adaptive.screening_range) for the stage it runs and for the start-up check
-    that the stage has a range: a rule that gives mu_ss 0.25-0.85 and nothing else reaches both."""
+    (soilcal.chain.adaptive.screening_factor, of which screening_range is the (low, high)) for
+    the stage it runs and for the start-up check that the stage has a range: a rule that gives
+    mu_ss 0.25-0.85 and nothing else reaches both."""
     from soilcal.chain import adaptive
 
     p = _write(tmp_path, lambda d: (_recipe_chain(d), d["simulation"].update(design="adaptive")))
@@ -393,8 +394,8 @@ def test_the_adaptive_designs_stage_and_its_start_up_check_take_the_screening_ra
     assert adaptive.screening_range(soil.data, "rsm", "mu_ss") == (0.2, 0.9)  # the screening's B
     assert adaptive.screening_range(soil.data, "rsm", "e_ss") == (0.2, 0.7)   # the screening's A
     assert adaptive.screening_range(soil.data, "screen", "mu_ss") is None    # no screening above it
-    only_mu = {"mu_ss": (0.25, 0.85)}
-    monkeypatch.setattr(adaptive, "screening_range", lambda data, sid, par: only_mu.get(par))
+    only_mu = {"mu_ss": adaptive.SearchRange(0.25, 0.85, "a rule", "declared")}
+    monkeypatch.setattr(adaptive, "screening_factor", lambda data, sid, par: only_mu.get(par))
     st = adaptive.stage_for(soil.data, "rsm")
     assert (st["factors"]["A"]["low"], st["factors"]["A"]["high"]) == (0.25, 0.85)
     assert st["factors"]["B"].get("low") is None  # mur_ss: no range from the rule

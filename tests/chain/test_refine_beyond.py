@@ -107,7 +107,8 @@ def test_screening_ranges_come_from_the_screening_of_a_path_design_only():
                        {"id": "bbd", "kind": "box_behnken", "from_stage": "path"}]}
     st = dict(_stage(), derivation={"kind": "path"})
     # A from X1's range; C's screening range lies inside its box (100..300): the box stays; B unscreened
-    assert screening_ranges(soil, st) == {"A": (-1.0, 2.0), "C": (100.0, 300.0)}
+    assert {s: r[:2] for s, r in screening_ranges(soil, st).items()} == {"A": (-1.0, 2.0), "C": (100.0, 300.0)}
+    assert screening_ranges(soil, st)["A"][2] == "screening range -1..2 (stages.pb.factors.X1)"
     assert screening_ranges(dict(soil, simulation={"design": "printed"}), st) == {}
     assert screening_ranges(dict(soil, simulation={"design": "adaptive"}), st) == {}
     assert screening_ranges(soil, _stage()) == {}
@@ -118,7 +119,7 @@ def test_screening_ranges_come_from_the_screening_of_a_path_design_only():
                                                     "high": 5.0}))
     soil2 = dict(soil, stages=[pb2, *soil["stages"][1:]])
     assert screened_factor(soil2, "bbd", "soil_soil_rolling_friction")[1] == "X1"
-    assert screening_ranges(soil2, st)["A"] == (-1.0, 2.0)
+    assert screening_ranges(soil2, st)["A"][:2] == (-1.0, 2.0)
 
 
 def _final(second_means):
@@ -143,6 +144,14 @@ def test_final_csv_holds_the_round_verification_marks_final():
     # ... and the second round's where it verifies better (31.2: 0.6 %)
     r = _final([31.1, 31.3, 31.2, 31.2])
     assert (int(r["round"]), bool(r["refined"])) == (2, True) and r["A"] == pytest.approx(-0.125, abs=1e-5)
+
+
+def test_final_csv_names_the_search_ranges_whichever_round_it_keeps():
+    # the second round searched A over its screening range -1..2: final.csv says so on the
+    # first round's row it falls back to (36 verifies worse) as on the second round's it keeps
+    for means, kept in (([35.9, 36.1, 36.0, 36.0], 1), ([31.1, 31.3, 31.2, 31.2], 2)):
+        r = _final(means)
+        assert int(r["round"]) == kept and r["search_ranges"] == "A: screening range -1..2"
 
 
 def _row(resp, rel, n=4, sd=0.1, target=31.0, preset="quick"):

@@ -11,7 +11,7 @@ checkpoint adaptive_step:
     output:
         "results/{soil}/dem/adaptive/{stage}/{case}/step/{it}.json",
     params:
-        soil=lambda w: dem_context(soil_cfg(w.soil)),
+        soil=lambda w: dem_context(soil_cfg(w.soil), search_ranges=True),
         iteration=lambda w: int(w.it),
     conda:
         "../../envs/soilcal.yaml"
@@ -55,7 +55,7 @@ rule adaptive_case:
         result="results/{soil}/dem/adaptive/{stage}/{case}/result.json",
         verification_runs="results/{soil}/dem/adaptive/{stage}/{case}/verification_runs.csv",
     params:
-        soil=lambda w: dem_context(soil_cfg(w.soil)),
+        soil=lambda w: dem_context(soil_cfg(w.soil), search_ranges=True),
     conda:
         "../../envs/soilcal.yaml"
     log:
@@ -72,7 +72,7 @@ rule adaptive_stage:
         optimum="results/{soil}/dem/adaptive/{stage}/optimum.csv",
         identifiability="results/{soil}/dem/adaptive/{stage}/identifiability.csv",
     params:
-        soil=lambda w: dem_context(soil_cfg(w.soil)),
+        soil=lambda w: dem_context(soil_cfg(w.soil), search_ranges=True),
     conda:
         "../../envs/soilcal.yaml"
     log:
@@ -89,7 +89,7 @@ rule adaptive_verification:
         summary="results/{soil}/dem/adaptive/summary.csv",
     params:
         # citation: whether the soil has a paper whose targets and verification to set beside
-        soil=lambda w: dict(dem_context(soil_cfg(w.soil)), citation=bool(soil_cfg(w.soil).get("citation"))),
+        soil=lambda w: dict(dem_context(soil_cfg(w.soil), search_ranges=True), citation=bool(soil_cfg(w.soil).get("citation"))),
         stage_dirs=lambda w: {s: f"results/{w.soil}/dem/adaptive/{s}" for s in adaptive_stages(w.soil)},
     conda:
         "../../envs/soilcal.yaml"

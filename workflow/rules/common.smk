@@ -9,7 +9,7 @@ from soilcal.chain import adaptive, derive, refine, verify
 from soilcal.chain.files import read_stage
 from soilcal.config import load_workflow_config
 from soilcal.errors import InputError
-from soilcal.chain.plan import dem_context, soil_sources
+from soilcal.chain.plan import dem_context, soil_sources, without_search_ranges
 from soilcal.chain.provenance import setup_inputs
 
 

@@ -7,7 +7,7 @@ rule errata:
     output:
         report("results/{soil}/published/errata.csv", caption="../report/errata.rst", category="{soil}"),
     params:
-        soil=lambda w: soil_cfg(w.soil),
+        soil=lambda w: without_search_ranges(soil_cfg(w.soil)),
         published=lambda w: f"{RES}/published/{w.soil}",
         stage_dirs=lambda w: {st["id"]: stage_dir(w.soil, st["id"]) for st in SOILS[w.soil].stages},
     conda:

@@ -44,9 +44,9 @@ checkpoint refine:
         report("results/{soil}/dem/{stage}/refined.csv", caption="../report/refined.rst", category="{soil}",
                subcategory="dem verification"),
     params:
-        # the screening ranges a second-round set may move into past the Box-Behnken box (the
-        # config without its documentation: editing a note re-runs nothing)
-        soil=lambda w: dem_context(soil_cfg(w.soil)),
+        # the screening or declared search ranges a second-round set may move into past the
+        # Box-Behnken box (the config without its documentation: editing a note re-runs nothing)
+        soil=lambda w: dem_context(soil_cfg(w.soil), search_ranges=True),
     conda:
         "../../envs/soilcal.yaml"
     log:
@@ -167,7 +167,7 @@ rule calibrated_vs_paper:
         report("results/{soil}/dem/calibrated_vs_paper.csv", caption="../report/calibrated_vs_paper.rst",
                category="{soil}", subcategory="dem verification"),
     params:
-        soil=lambda w: soil_cfg(w.soil),
+        soil=lambda w: without_search_ranges(soil_cfg(w.soil)),
         stages=lambda w: optimised_stages(w.soil),
         set_file=lambda w: set_file(w.soil),
     conda:

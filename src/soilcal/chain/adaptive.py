@@ -2,7 +2,9 @@
 
 One design per optimisation case of each optimised stage the DEM source runs: the space is the
 stage's factors over their screening ranges, or their own ranges in the soil config (``low`` ..
-``high``; :func:`stage_for`, ``simulation.adaptive.ranges``), the stage's fixed
+``high``; :func:`stage_for`, ``simulation.adaptive.ranges``; a range the soil declares under
+``simulation.search_ranges`` serves the recipe's second round only and is recorded in the
+stage's ``derivation.text`` as not used by the adaptive design), the stage's fixed
 values stay fixed (and, for a stage fixed from an earlier one, ``fixed_from``, at that stage's
 adaptive result), and the targets are the case's target goals with the values of
 ``results/<soil>/dem/targets.csv`` (photo or measurement).  :mod:`soilcal.doe.adaptive` decides
@@ -36,6 +38,7 @@ Settings: the soil's ``simulation.adaptive`` block (:data:`soilcal.doe.adaptive.
 from __future__ import annotations
 
 import json
+from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
@@ -119,23 +122,77 @@ def screening_of(soil_data: dict, stage_id: str) -> dict | None:
     return None
 
 
-def screening_factor(soil_data: dict, stage_id: str, parameter) -> tuple[dict, str, dict] | None:
-    """The factor of the Plackett-Burman screening whose range ``design: adaptive`` gives
-    ``parameter`` in stage ``stage_id``: ``(screening stage, its symbol, its factor)``, or None
-    where the stage keeps its own range (``simulation.adaptive.ranges: stage``, no screening
-    the stage descends from (:func:`screening_of`), or a screening that does not vary the
-    parameter between a low and a high level).  The one rule :func:`stage_for` and the
-    start-up checks of the adaptive design follow."""
+@dataclass(frozen=True)
+class SearchRange:
+    """The range (``low`` .. ``high``, the parameter's unit) a factor may be searched over, and
+    where it comes from: ``field`` is ``stages.<screening>.factors.<symbol>`` (``kind``
+    ``screening``) or ``simulation.search_ranges.<parameter>`` (``kind`` ``declared``)."""
+
+    low: float
+    high: float
+    field: str
+    kind: str
+
+    def text(self) -> str:
+        """``declared search range 0..10 (simulation.search_ranges.G)``: the values this range
+        holds (the caller's, after any widening to a stage's bounds) and their field."""
+        what = "screening range" if self.kind == "screening" else "declared search range"
+        return f"{what} {self.low:g}..{self.high:g} ({self.field})"
+
+
+def declared_range(soil_data: dict, parameter) -> SearchRange | None:
+    """The range the soil declares ``parameter`` may be searched over
+    (``simulation.search_ranges.<parameter>``, checked as the soil loads:
+    :func:`soilcal.config.load.check_search_ranges`), or None."""
+    entry = ((soil_data.get("simulation") or {}).get("search_ranges") or {}).get(parameter)
+    if not entry:
+        return None
+    return SearchRange(float(entry["low"]), float(entry["high"]), f"simulation.search_ranges.{parameter}", "declared")
+
+
+def search_range(soil_data: dict, stage_id: str, parameter, screening: bool = True) -> SearchRange | None:
+    """The range a factor of stage ``stage_id`` setting ``parameter`` may be searched over past
+    the stage's own levels by the second calibration round of ``design: recipe``
+    (:func:`soilcal.chain.stage.screening_ranges`): the range the soil declares
+    (:func:`declared_range`, the user's explicit choice) wherever it is declared; else, where
+    ``screening`` (a stage derived from the simulated path), the range of the Plackett-Burman
+    screening the stage descends from (:func:`screened_range`) where it varies the parameter;
+    else None.  The adaptive design does not read declared ranges (:func:`screening_factor`)."""
+    declared = declared_range(soil_data, parameter)
+    if declared is not None:
+        return declared
+    return screened_range(soil_data, stage_id, parameter) if screening else None
+
+
+def screened_range(soil_data: dict, stage_id: str, parameter) -> SearchRange | None:
+    """:func:`screened_factor` as a :class:`SearchRange` (``kind`` ``screening``, ``low`` <=
+    ``high``), or None."""
+    found = screened_factor(soil_data, stage_id, parameter)
+    if found is None:
+        return None
+    scr, sym, f = found
+    lo, hi = sorted((float(f["low"]), float(f["high"])))
+    return SearchRange(lo, hi, f"stages.{scr['id']}.factors.{sym}", "screening")
+
+
+def screening_factor(soil_data: dict, stage_id: str, parameter) -> SearchRange | None:
+    """The range ``design: adaptive`` gives ``parameter`` in stage ``stage_id``: that of the
+    Plackett-Burman screening the stage descends from (:func:`screened_range`), or None where
+    the stage keeps its own range (``simulation.adaptive.ranges: stage``, no screening the stage
+    descends from (:func:`screening_of`), or a screening that does not vary the parameter
+    between a low and a high level).  A range declared under ``simulation.search_ranges`` does
+    not enter: it serves the recipe's second round (:func:`search_range`).  The one rule
+    :func:`stage_for` and the start-up checks of the adaptive design follow."""
     if ranges_setting(soil_data) != "screening":
         return None
-    return screened_factor(soil_data, stage_id, parameter)
+    return screened_range(soil_data, stage_id, parameter)
 
 
 def screened_factor(soil_data: dict, stage_id: str, parameter) -> tuple[dict, str, dict] | None:
     """``(screening stage, its symbol, its factor)``: the first factor of the Plackett-Burman
     screening stage ``stage_id`` descends from (:func:`screening_of`) that varies ``parameter``
     between a low and a high level, or None.  The lookup of :func:`screening_factor` and of
-    :func:`soilcal.chain.stage.screening_ranges`."""
+    :func:`search_range`."""
     screening = screening_of(soil_data, stage_id)
     for sym, f in ((screening or {}).get("factors") or {}).items():
         if f.get("parameter") == parameter and f.get("low") is not None and f.get("high") is not None:
@@ -144,24 +201,23 @@ def screened_factor(soil_data: dict, stage_id: str, parameter) -> tuple[dict, st
 
 
 def screening_range(soil_data: dict, stage_id: str, parameter) -> tuple[float, float] | None:
-    """``(low, high)`` the adaptive design takes for ``parameter`` in ``stage_id`` from its
-    screening (:func:`screening_factor`), None where the stage keeps its own range."""
+    """``(low, high)`` the adaptive design takes for ``parameter`` in ``stage_id``
+    (:func:`screening_factor`), None where the stage keeps its own range."""
     found = screening_factor(soil_data, stage_id, parameter)
-    if found is None:
-        return None
-    f = found[2]
-    return float(f["low"]), float(f["high"])
+    return None if found is None else (found.low, found.high)
 
 
-def _screening_ranges(soil_data: dict, st: dict) -> list[str]:
-    """Widen the factors of ``st`` in place to the range the screening gave their parameter
-    (:func:`screening_range`); returns the factors widened ("A (0.08-0.14 -> 0.05-0.2)")."""
-    moved = []
+def _screening_ranges(soil_data: dict, st: dict) -> tuple[list[str], dict]:
+    """Widen the factors of ``st`` in place to the range :func:`screening_factor` gives their
+    parameter; returns the factors widened ("A (0.08-0.14 -> 0.05-0.2)") and, per symbol taking
+    a range, ``{"low", "high", "from"}`` (the field it comes from)."""
+    moved, used = [], {}
     for sym, f in st["factors"].items():
-        found = screening_range(soil_data, st["id"], f.get("parameter"))
+        found = screening_factor(soil_data, st["id"], f.get("parameter"))
         if found is None:
             continue
-        lo, hi = found
+        lo, hi = found.low, found.high
+        used[sym] = {"low": lo, "high": hi, "from": found.field}
         if f.get("low") is None or f.get("high") is None:
             # a stage whose levels the recipe derives (no levels of its own): the screening's
             moved.append(f"{sym} (no levels -> {lo:g}-{hi:g})")
@@ -170,7 +226,7 @@ def _screening_ranges(soil_data: dict, st: dict) -> list[str]:
         f["low"], f["high"] = lo, hi
         if "centre" in f:
             f["centre"] = (lo + hi) / 2
-    return moved
+    return moved, used
 
 
 def stage_for(soil_data: dict, stage_id: str, upstream_optimum: pd.DataFrame | None = None) -> dict:
@@ -182,7 +238,10 @@ def stage_for(soil_data: dict, stage_id: str, upstream_optimum: pd.DataFrame | N
     its parameter, where the stage has one: the screening says which factors matter and over
     what range the user expects them, while a Box-Behnken stage's narrower printed levels were
     centred by the paper's steepest ascent on its own engine's responses, which another
-    engine need not share; ``stage`` keeps the stage's printed ranges.  The non-significant
+    engine need not share; ``stage`` keeps the stage's printed ranges.  A range the soil
+    declares under ``simulation.search_ranges`` is not used (it serves the recipe's second
+    round) and ``derivation.text`` says so.  ``derivation.ranges`` records, per factor taking a
+    screening range, its ``low``, ``high`` and the field it comes ``from``.  The non-significant
     factors stay at the stage's fixed values either way."""
     from soilcal.chain.derive import _dem_base, _stage, apply_own_fixed, dependencies, fix_from_optimum
 
@@ -190,11 +249,18 @@ def stage_for(soil_data: dict, stage_id: str, upstream_optimum: pd.DataFrame | N
     st = _dem_base(config_stage)
     text = "the factor ranges in the soil config (design: adaptive)"
     screening = screening_of(soil_data, stage_id) if ranges_setting(soil_data) == "screening" else None
+    moved, used = _screening_ranges(soil_data, st) if screening is not None else ([], {})
     if screening is not None:
-        moved = _screening_ranges(soil_data, st)
         text = (f"the ranges of screening stage {screening['id']} (design: adaptive, ranges: screening"
                 + (f"; widened: {', '.join(moved)})" if moved else ")"))
+    unused = [f"{s} {r.low:g}-{r.high:g}" for s, f in st["factors"].items()
+              if (r := declared_range(soil_data, f.get("parameter"))) is not None]
+    if unused:
+        text += (f"; declared ranges not used by the adaptive design (simulation.search_ranges, for the "
+                 f"recipe's second round): {', '.join(unused)}")
     st["derivation"] = {"kind": "adaptive", "text": text}
+    if used:
+        st["derivation"]["ranges"] = used
     # every fixed value with its origin (derivation.fixed), as the DEM source's stages record it
     apply_own_fixed(st, config_stage, {}, {}, set(), soil_data)
     deps = dependencies(dict(soil_data, simulation={**(soil_data.get("simulation") or {}), "design": "printed"}),

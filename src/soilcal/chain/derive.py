@@ -49,6 +49,7 @@ optimisation cases aim that response at (``path_targets``).
 from __future__ import annotations
 
 import copy
+from functools import partial
 
 import numpy as np
 import pandas as pd
@@ -568,6 +569,19 @@ def dem_stage(soil_data: dict, stage_id: str, targets: dict, upstream: dict | No
 BBD_CENTRE_RTOL = 0.02
 
 
+def dem_value_in_range(soil_path, name: str, value, scale: float, where: str) -> None:
+    """A config value (``value`` in the config's unit, ``scale`` to SI) of DEM parameter
+    ``name`` lies in that parameter's physical range and, for a soil's material parameter, its
+    plausibility bound (:class:`soilcal.dem.scenarios.base.DemParams`, the check every DEM run
+    makes), else InputError naming ``soil_path`` and ``where``."""
+    from soilcal.dem.scenarios.base import DemParams
+
+    try:
+        DemParams.from_mapping({name: float(value) * scale}, str(soil_path))
+    except InputError as exc:
+        raise InputError(soil_path, where, f"{exc.expected} (DEM parameter {name})", value) from None
+
+
 def check_dem_stages(soil_path, soil_data: dict) -> None:
     """Start-up check of the stages the DEM source runs (:func:`simulated_stage_ids`), so that a
     config the chain cannot run fails before any DEM job, naming the soil file and field:
@@ -583,18 +597,17 @@ def check_dem_stages(soil_path, soil_data: dict) -> None:
       with ``design: adaptive`` a factor's levels are the range it
       takes from its screening where it takes one
       (:func:`soilcal.chain.adaptive.screening_factor`), named as the screening's
-      ``stages.<screening>.factors.<symbol>.low`` / ``.high``.
+      ``stages.<screening>.factors.<symbol>.low`` / ``.high`` (a range declared under
+      ``simulation.search_ranges``, which the adaptive design does not use, is checked against
+      the same ranges as the soil loads, in every mode:
+      :func:`soilcal.config.load.check_search_ranges`).
 
     (A Plackett-Burman stage's ``runs`` is checked for every soil as it loads.)
     """
     from soilcal.chain import adaptive
-    from soilcal.dem.scenarios.base import DemParams, dem_field
+    from soilcal.dem.scenarios.base import dem_field
 
-    def in_range(name, value, scale, where):
-        try:
-            DemParams.from_mapping({name: float(value) * scale}, str(soil_path))
-        except InputError as exc:
-            raise InputError(soil_path, where, f"{exc.expected} (DEM parameter {name})", value) from None
+    in_range = partial(dem_value_in_range, soil_path)
 
     def mapped(pname, where):
         try:
@@ -625,9 +638,8 @@ def check_dem_stages(soil_path, soil_data: dict) -> None:
             if screened is not None:
                 # the adaptive design ranges the factor over its screening's levels (ranges:
                 # screening), which it runs in place of the stage's own
-                scr, ssym, sf = screened
                 for key in ("low", "high"):
-                    in_range(name, sf[key], scale, f"stages.{scr['id']}.factors.{ssym}.{key}")
+                    in_range(name, getattr(screened, key), scale, f"{screened.field}.{key}")
                 continue
             if st["kind"] == "box_behnken" and decodes_low_high(soil_data, sid) \
                     and None not in (f.get("low"), f.get("centre"), f.get("high")):
@@ -649,5 +661,5 @@ def check_dem_stages(soil_path, soil_data: dict) -> None:
             in_range(name, v, scale, where)
 
 
-__all__ = ["bbd_from_path", "check_dem_stages", "dem_stage", "dem_stage_ids", "simulated_stage_ids", "dependencies", "design_mode",
+__all__ = ["bbd_from_path", "check_dem_stages", "dem_value_in_range", "dem_stage", "dem_stage_ids", "simulated_stage_ids", "dependencies", "design_mode",
            "path_from_screening", "published_stage", "response_targets", "decodes_low_high", "runs_own_levels"]

@@ -30,12 +30,25 @@ def _strip_notes(obj):
     return obj
 
 
-def dem_context(soil_data: dict) -> dict:
+def dem_context(soil_data: dict, search_ranges: bool = False) -> dict:
     """The soil config without its documentation (citation, notes, errata, printed
     verification prose): what the DEM source's results depend on.  Passed to the DEM rules
-    as params, so that editing a note re-runs nothing."""
+    as params, so that editing a note re-runs nothing.  ``simulation.search_ranges`` only with
+    ``search_ranges`` (the second round's rules, which search within it, and the adaptive
+    design's, which record it as not used, :func:`soilcal.chain.adaptive.stage_for`:
+    editing a declared range re-runs those alone, :func:`without_search_ranges`)."""
     d = {k: copy.deepcopy(v) for k, v in soil_data.items() if k not in _DOCUMENTATION}
-    return _strip_notes(d)
+    return _strip_notes(d if search_ranges else without_search_ranges(d))
 
 
-__all__ = ["SOURCES", "dem_context", "soil_sources"]
+def without_search_ranges(soil_data: dict) -> dict:
+    """The soil config without ``simulation.search_ranges`` (the ranges only the second
+    calibration round searches within and the adaptive design records as not used), for the
+    params of every other rule."""
+    sim = soil_data.get("simulation")
+    if not isinstance(sim, dict) or "search_ranges" not in sim:
+        return soil_data
+    return dict(soil_data, simulation={k: v for k, v in sim.items() if k != "search_ranges"})
+
+
+__all__ = ["SOURCES", "dem_context", "soil_sources", "without_search_ranges"]

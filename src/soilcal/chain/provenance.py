@@ -444,8 +444,8 @@ def setup_inputs(data: dict) -> dict:
     ``seed``, ``simulation``, ``stages``, ``parameters``, ``measurements``, the printed
     properties the runs take (:data:`soilcal.dem.scenarios.base.PROPERTY_FIELDS`) and, for
     ``design: adaptive`` (whose stages are those with a case to aim at), whether each target has
-    a value or a photo group; the text that documents them (``note``, ``source``, ``title``) is
-    left out.  The workflow's rule passes this as its params, so an edit elsewhere in the soil
+    a value or a photo group; the text that documents them (``note``, ``source``, ``title``) and
+    ``simulation.search_ranges`` (which simulation.csv does not read) are left out.  The workflow's rule passes this as its params, so an edit elsewhere in the soil
     file (its citation, notes, errata, a target's value) does not rerun it."""
     from soilcal.chain.derive import design_mode
     from soilcal.dem.scenarios.base import PROPERTY_FIELDS
@@ -459,6 +459,9 @@ def setup_inputs(data: dict) -> dict:
 
     out = {k: bare(data[k]) for k in ("name", "seed", "simulation", "stages", "parameters", "measurements")
            if k in data}
+    if isinstance(out.get("simulation"), dict):
+        # the declared search ranges: read by the second round and the adaptive design only
+        out["simulation"].pop("search_ranges", None)
     props = data.get("properties") or {}
     out["properties"] = {p: bare(props[p]) for p in PROPERTY_FIELDS if p in props}
     if data.get("simulation") and design_mode(data) == "adaptive":

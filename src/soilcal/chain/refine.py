@@ -10,10 +10,13 @@ move from x0 at which the bias-corrected surfaces meet every target
 seeds (``seed + seed_offset + replicates + k``).  Where the corrected surfaces cannot meet every
 target inside the design region, the region is moved, as response-surface practice moves it
 towards a target outside it (Myers, Montgomery & Anderson-Cook, Response Surface Methodology,
-ch. 5-6): the search reaches past the box, in each factor that the design descends from a wider
-screening range of (:func:`soilcal.chain.stage.screening_ranges`: a Box-Behnken centred on a
-path step, whose Plackett-Burman screening spans more), by at most :data:`BEYOND_HALF_WIDTHS`
-box half-widths and never past that range; a factor with no wider range stays in the box.  Such
+ch. 5-6): the search reaches past the box (``design: recipe``; ``printed`` keeps the box, to be
+compared point by point with the paper), in each factor whose parameter the soil declares a
+search range for (``simulation.search_ranges``, wherever declared), or else that the design
+descends from a wider simulated screening range of (:func:`soilcal.chain.stage.screening_ranges`:
+a Box-Behnken centred on a path step, whose Plackett-Burman screening spans more), by at most
+:data:`BEYOND_HALF_WIDTHS` box half-widths and never past that range; a factor with no wider
+range stays in the box.  Such
 a row has ``region = beyond`` and its note says in which factors and how far; the DEM
 verification of it with fresh seeds judges it (the verification rows say where it missed by
 more than the first round).  Where the corrected surfaces cannot meet every target in that
@@ -29,7 +32,11 @@ corrected where refined), so the tool tests and ``calibrated_vs_paper`` read the
 the same way they read an optimum; plus ``round`` (1 = x0 kept, 2 = bias-corrected),
 ``refined``, ``bias_<response>``, ``surface_change_se_<response>`` (round 2: the standard error
 of the surface's change from x0 to the new set, :meth:`soilcal.rsm.model.RSMFit.change_se`),
-``move_coded``, ``region`` (``inside`` the Box-Behnken box or ``beyond`` it) and ``note``.
+``move_coded``, ``region`` (``inside`` the Box-Behnken box or ``beyond`` it), ``note`` and
+``search_ranges`` (each factor's range past the box, as used after widening to the box, and
+where it comes from: the declared ``simulation.search_ranges`` entry or the screening's factor;
+a declared range ``design: printed`` does not use is named as not used; the same on every row
+of a stage, and on ``final.csv``'s).
 """
 
 from __future__ import annotations
@@ -123,7 +130,7 @@ def _kept(case_id, cal: pd.DataFrame, note: str, columns) -> dict:
 
 def search_region(stage: dict, wider: dict | None) -> tuple[np.ndarray, np.ndarray]:
     """Coded lower and upper bounds of the second round's search past the box: each factor's
-    screening range ``wider[symbol] = (low, high)`` (actual units,
+    screening or declared range ``wider[symbol] = (low, high[, origin])`` (actual units,
     :func:`soilcal.chain.stage.screening_ranges`) cut to :data:`BEYOND_HALF_WIDTHS` past the
     box; [-1, 1] for a factor without one."""
     from soilcal.chain.stage import bounds
@@ -133,7 +140,7 @@ def search_region(stage: dict, wider: dict | None) -> tuple[np.ndarray, np.ndarr
     lo, hi = np.full(len(syms), -1.0), np.full(len(syms), 1.0)
     for j, s in enumerate(syms):
         if s in (wider or {}):
-            a, b = ((float(v) - centre[j]) / half[j] for v in wider[s])
+            a, b = ((float(v) - centre[j]) / half[j] for v in wider[s][:2])
             lo[j] = min(-1.0, max(a, -1.0 - BEYOND_HALF_WIDTHS))
             hi[j] = max(1.0, min(b, 1.0 + BEYOND_HALF_WIDTHS))
     return lo, hi
@@ -152,18 +159,41 @@ def beyond_text(stage: dict, x, wider: dict | None) -> str:
         if abs(xj) <= 1.0 + 1e-9:
             continue
         side, b = ("low", low[j]) if xj < 0 else ("high", high[j])
-        lo, hi = wider[s]
         parts.append(f"{s} = {centre[j] + xj * half[j]:.4g} ({abs(xj) - 1.0:.2f} half-widths past its {side} bound "
-                     f"{b:g}, inside its screening range {lo:g}..{hi:g})")
+                     f"{b:g}, inside its {_range_text(wider[s])})")
     return "; ".join(parts)
 
 
+def _range_text(rng) -> str:
+    """``screening range 0..10 (stages.pb.factors.G)`` of one ``wider`` entry: ``(low, high)``
+    (a screening range) or ``(low, high, origin)`` (:func:`soilcal.chain.stage.screening_ranges`)."""
+    return rng[2] if len(rng) > 2 else f"screening range {float(rng[0]):g}..{float(rng[1]):g}"
+
+
+def search_ranges_text(stage: dict, wider: dict | None, unused=()) -> str:
+    """The ``search_ranges`` column of ``refined.csv``: each factor's range past the box and
+    where it comes from, or that every factor stays in the box; ``unused``: the declared ranges
+    the stage's second round does not use (:func:`soilcal.chain.stage.unused_search_ranges`),
+    named as such."""
+    from soilcal.chain.stage import bounds
+
+    syms = bounds(stage)[0]
+    parts = [f"{s}: {_range_text(wider[s])}" for s in syms if s in (wider or {})]
+    text = "; ".join(parts) if parts else ("none: every factor stays in the design box (no simulated screening "
+                                           "and no simulation.search_ranges entry gives a wider range)")
+    if unused:
+        text = ("none: every factor stays in the design box (design: printed, compared point by point with the "
+                "paper); not used: " + "; ".join(unused)) if not parts else text + "; not used: " + "; ".join(unused)
+    return text
+
+
 def refine_frame(stage: dict, table: pd.DataFrame, targets: dict, optimum: pd.DataFrame,
-                 runs: dict[str, list[pd.DataFrame]], wider: dict | None = None) -> pd.DataFrame:
+                 runs: dict[str, list[pd.DataFrame]], wider: dict | None = None, unused=()) -> pd.DataFrame:
     """``refined.csv`` of one stage (module docstring).  ``table``: the stage's responses
     (design points), ``runs``: case id -> the first round's verification frames at the soil's
-    own preset, ``wider``: symbol -> (low, high), the range each factor was screened over
-    (:func:`soilcal.chain.stage.screening_ranges`; none: every factor stays in the box)."""
+    own preset, ``wider``: symbol -> (low, high[, origin]), the range each factor may be searched over
+    (:func:`soilcal.chain.stage.screening_ranges`; none: every factor stays in the box),
+    ``unused``: the declared ranges it does not use (:func:`search_ranges_text`)."""
     from soilcal.chain.stage import bounds, calibrated_rows, fit_stage, goal_values
     from soilcal.optimise import desirability_optimise
     from soilcal.optimise.correction import Shifted, corrected_set, significant_bias
@@ -253,8 +283,8 @@ def refine_frame(stage: dict, table: pd.DataFrame, targets: dict, optimum: pd.Da
                       "inside the design region or past it where a factor may leave it (" + ", ".join(
                           f"{sy} coded {a:.3g} to {b:.3g}" for sy, a, b in zip(syms, lo_w, hi_w)
                           if a < -1.0 or b > 1.0)
-                      + f": at most {BEYOND_HALF_WIDTHS:g} box half-width past a bound and within its screening "
-                      "range)")
+                      + f": at most {BEYOND_HALF_WIDTHS:g} box half-width past a bound and within its search "
+                      "range, column search_ranges)")
             why = (f"{lead} does not reach every target {region} "
                    f"(its least-squares compromise: worst error {w1:.2g} % against {w0:.2g} % at the first set)")
             if w1 > w0 - COMPROMISE_GAIN:
@@ -287,8 +317,10 @@ def refine_frame(stage: dict, table: pd.DataFrame, targets: dict, optimum: pd.Da
         rows.append(row)
     out = pd.DataFrame(rows)
     lead = ["case", "round", "refined", "calibrated"]
-    return out[lead + [c for c in out.columns if c not in lead]] if len(out) else \
-        pd.DataFrame(columns=lead + ["note"])
+    if not len(out):
+        return pd.DataFrame(columns=lead + ["note", "search_ranges"])
+    out["search_ranges"] = search_ranges_text(stage, wider, unused)
+    return out[lead + [c for c in out.columns if c not in lead]]
 
 
 def runs_by_case(paths, stage_id: str) -> dict[str, list[pd.DataFrame]]:
@@ -307,19 +339,20 @@ def write_refined(stage_json, responses_csv, targets_csv, optimum_csv, run_paths
                   soil_data: dict | None = None) -> pd.DataFrame:
     """``refined.csv`` of one stage from its files and the first round's verification runs
     ``verify/<preset>/<stage>/<case>/<k>.csv`` (the soil's own preset only); ``soil_data``
-    (the soil config) gives the screening ranges the second round may move into
+    (the soil config) gives the screening or declared ranges the second round may move into
     (:func:`soilcal.chain.stage.screening_ranges`)."""
     from pathlib import Path
 
     from soilcal.chain.files import read_stage, read_targets, write_csv
-    from soilcal.chain.stage import screening_ranges
+    from soilcal.chain.stage import screening_ranges, unused_search_ranges
     from soilcal.config.load import read_table
 
     stage = read_stage(stage_json)
     runs = runs_by_case(run_paths, stage["id"])
     wider = screening_ranges(soil_data, stage) if soil_data else {}
+    unused = unused_search_ranges(soil_data, stage) if soil_data else []
     df = refine_frame(stage, read_table(Path(responses_csv)), read_targets(targets_csv), pd.read_csv(optimum_csv), runs,
-                      wider)
+                      wider, unused)
     write_csv(df, out)
     return df
 
@@ -354,6 +387,8 @@ def final_frame(soil_data: dict, stage: dict, optimum: pd.DataFrame, targets: di
         columns = [f"{s}_coded" for s in syms] + list(syms) + list(goal_values(case["goals"], targets))
         row = _kept(cid, calibrated_rows(optimum, cid), f"second round at {_levels_text(ref, syms)} not kept: {why}",
                     columns)
+        if "search_ranges" in ref.columns:
+            row["search_ranges"] = ref["search_ranges"].iloc[0]
         rows.append(row)
     return pd.DataFrame(rows, columns=list(refined.columns))
 

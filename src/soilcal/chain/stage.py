@@ -586,25 +586,52 @@ def calibrated_levels(stage: dict, optimum: pd.DataFrame, case: str | None = Non
     return {s: float(f"{float(row[s]):.12g}") for s in stage["factors"]}
 
 
-def screening_ranges(soil_data: dict, stage: dict) -> dict[str, tuple[float, float]]:
-    """``{symbol: (low, high)}`` (actual units) of the range each factor of a DEM stage derived
-    from a path (``derivation.kind = "path"``, ``design: recipe``) was screened over: the
-    ``low`` .. ``high`` of the factor setting the same parameter in the Plackett-Burman
-    screening the stage descends from (:func:`soilcal.chain.adaptive.screened_factor`, the
-    lookup the adaptive design takes its ranges by), widened to the stage's own bounds where it
-    is narrower.  Empty for a printed or adaptive design, a stage with no screening above it, or
-    a soil config without one; a factor the screening does not vary between a low and a high
-    level has no entry (its range is the stage's own)."""
-    from soilcal.chain.adaptive import screened_factor
+def screening_ranges(soil_data: dict, stage: dict) -> dict[str, tuple[float, float, str]]:
+    """``{symbol: (low, high, origin)}`` (actual units) of the range each factor of a DEM stage
+    may be searched over past its own levels by the second calibration round
+    (:func:`soilcal.chain.refine.search_region`), looked up by
+    :func:`soilcal.chain.adaptive.search_range`: the range the soil declares under
+    ``simulation.search_ranges`` wherever it declares one (the user's explicit choice); else, for
+    a stage derived from the simulated path (``derivation.kind = "path"``, ``design: recipe``),
+    the ``low`` .. ``high`` of the factor setting the same parameter in the Plackett-Burman
+    screening the stage descends from; else none.  Each range is widened to the stage's own
+    bounds where it is narrower; ``origin`` names the values used and where they come from
+    (:meth:`SearchRange.text`).  Empty for ``design: printed`` (its second round stays in the
+    Box-Behnken box, to be compared point by point with the paper; :func:`unused_search_ranges`)
+    and ``design: adaptive`` (no second round; its ranges, which do not take declared ones:
+    :func:`soilcal.chain.adaptive.stage_for`), and for
+    a factor with neither range (its range is the stage's own)."""
+    from dataclasses import replace
+
+    from soilcal.chain.adaptive import search_range
     from soilcal.chain.derive import design_mode
 
-    if design_mode(soil_data) != "recipe" or (stage.get("derivation") or {}).get("kind") != "path":
+    if design_mode(soil_data) != "recipe":
         return {}
+    path = (stage.get("derivation") or {}).get("kind") == "path"
     out = {}
     for s, f in (stage.get("factors") or {}).items():
-        found = screened_factor(soil_data, stage["id"], f.get("parameter"))
+        found = search_range(soil_data, stage["id"], f.get("parameter"), screening=path)
         if found is None or f.get("low") is None or f.get("high") is None:
             continue
-        lo, hi = sorted((float(found[2]["low"]), float(found[2]["high"])))
-        out[s] = (min(lo, float(f["low"])), max(hi, float(f["high"])))
+        used = replace(found, low=min(found.low, float(f["low"])), high=max(found.high, float(f["high"])))
+        out[s] = (used.low, used.high, used.text())
+    return out
+
+
+def unused_search_ranges(soil_data: dict, stage: dict) -> list[str]:
+    """The declared ranges (``simulation.search_ranges``) of a stage's factors that its second
+    calibration round does not use: every one under ``design: printed``, whose second round
+    stays in the Box-Behnken box (the printed design is there to compare point by point with
+    the paper); ``["A: declared search range 0..10 (simulation.search_ranges.G)", ...]``."""
+    from soilcal.chain.adaptive import declared_range
+    from soilcal.chain.derive import design_mode
+
+    if design_mode(soil_data) != "printed":
+        return []
+    out = []
+    for s, f in (stage.get("factors") or {}).items():
+        found = declared_range(soil_data, f.get("parameter"))
+        if found is not None:
+            out.append(f"{s}: {found.text()}")
     return out

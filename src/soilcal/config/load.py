@@ -306,6 +306,49 @@ def _check_levels(path: Path, where: str, d: dict) -> None:
         raise InputError(path, f"{where}.centre", f"a number between low ({lo}) and high ({hi})", c)
 
 
+def check_search_ranges(path: Path, d: dict) -> None:
+    """``simulation.search_ranges``: each entry names a parameter under ``parameters`` that a
+    stage past the screening varies (a factor of a steepest-ascent or Box-Behnken stage sets it:
+    the ranges are searched past such a stage's levels; one for a parameter only fixed there,
+    only screened, or set nowhere would never be used), has low < high, lies in the physical range of the DEM parameter it sets (the
+    check every DEM run makes: :func:`soilcal.chain.derive.dem_value_in_range`, in the
+    parameter's unit) and contains the ``low`` .. ``high`` of every stage factor setting that
+    parameter (a search range narrower than a box it is to widen is a typing slip or another
+    unit).  Checked in every design mode."""
+    from soilcal.chain.derive import dem_value_in_range
+    from soilcal.dem.scenarios.base import dem_field
+
+    ranges = (d.get("simulation") or {}).get("search_ranges") or {}
+    params = d.get("parameters") or {}
+    for pid, r in ranges.items():
+        where = f"simulation.search_ranges.{pid}"
+        if pid not in params:
+            raise InputError(path, where, "a parameter id listed under parameters (" + ", ".join(params) + ")", pid)
+        varying = [(st["id"], sym, f) for st in d.get("stages") or []
+                   for sym, f in (st.get("factors") or {}).items() if f.get("parameter") == pid]
+        if not any(st["kind"] != "plackett_burman" for st in d.get("stages") or []
+                   for f in (st.get("factors") or {}).values() if f.get("parameter") == pid):
+            raise InputError(path, where, f"a parameter a stage past the screening varies (a factor with parameter: "
+                             f"{pid}); none does ({'only a screening varies it' if varying else 'no stage varies it'}"
+                             "), so the range would never be used: delete the entry", pid)
+        lo, hi = float(r["low"]), float(r["high"])
+        if not (math.isfinite(lo) and math.isfinite(hi) and lo < hi):
+            raise InputError(path, f"{where}.low", f"a finite number below high ({r['high']})", r["low"])
+        name, scale = dem_field(path, d, pid, f"parameters.{pid}")
+        for key in ("low", "high"):
+            dem_value_in_range(path, name, r[key], scale, f"{where}.{key}")
+        for sid, sym, f in varying:
+            if f.get("low") is None or f.get("high") is None:
+                continue
+            box = f"stages.{sid}.factors.{sym}"
+            if lo > float(f["low"]):
+                raise InputError(path, f"{where}.low", f"at most {f['low']:g}, the low level of {box}: a "
+                                 f"search range contains every stage's range of {pid}", r["low"])
+            if hi < float(f["high"]):
+                raise InputError(path, f"{where}.high", f"at least {f['high']:g}, the high level of {box}: a "
+                                 f"search range contains every stage's range of {pid}", r["high"])
+
+
 def _check_stage_sets_each_parameter_once(path: Path, where: str, st: dict, params: dict) -> None:
     """A stage varies or fixes each parameter once: two factors on one parameter, or a factor
     and a fixed value of it, would leave one of the two without any effect on the runs (the
@@ -488,6 +531,7 @@ def _semantic_checks(path: Path, d: dict, resources_root: Path,
                "or run the workflow with source=published" if source_override
                else f"source {d['source']} runs the DEM; or source: published")
         raise InputError(path, "simulation", f"a simulation block naming the scenario of each response ({how})", None)
+    check_search_ranges(path, d)
     if d.get("simulation"):
         from soilcal.dem.scenarios.design import check_block
 

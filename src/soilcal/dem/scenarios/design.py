@@ -230,7 +230,8 @@ def check_block(soil_path, data: dict) -> None:
                     and not (design_mode(data) == "adaptive"
                              and adaptive.screening_range(data, sid, f.get("parameter")) is not None):
                 how = (f"simulation.adaptive.ranges: screening, with a screening stage {sid!r} descends from that "
-                       "varies the parameter" if design_mode(data) == "adaptive"
+                       f"varies the parameter, or a range for {f.get('parameter')} under "
+                       f"{BLOCK}.search_ranges" if design_mode(data) == "adaptive"
                        else f"leave {sid!r} out of {BLOCK}.stages")
                 raise InputError(soil_path, where, f"low and high levels to simulate the stage (or {how})", f)
         if st["kind"] == "steepest_ascent" and runs_own_levels(data, sid):
