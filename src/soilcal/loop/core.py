@@ -1175,9 +1175,10 @@ def analyse(soil: str, res: pd.DataFrame, diag: pd.DataFrame, cands: list, effec
         verdict = f"unexplained: the residual follows {follows}; candidates rejected ({rejected})"
         groups = len(sl._folds(u, fold_by)) if fold_by else 0
         if 2 <= groups < FEW_FOLDS:
-            verdict += (f"; the rows were held out by `{fold_by}`, {groups} groups, so the paired test has "
-                        f"{groups - 1} degree{'s' if groups > 2 else ''} of freedom and passes only a large gain "
-                        "alike in every group (more groups decide; loop.fold_by sets the grouping)")
+            verdict += (f"; the rows were held out by `{fold_by}`, {groups} groups: where the conditions' gains "
+                        f"differ between groups the paired test is over the groups, with {groups - 1} "
+                        f"degree{'s' if groups > 2 else ''} of freedom, and passes only a large gain (more groups "
+                        "decide; loop.fold_by sets the grouping)")
     if (not nuisance[0] and n >= 3 and len(diag) and verdict.startswith("unexplained")
             and bool(((diag["test"] == "bias") & diag["significant"].astype(bool)).any())):
         # the residual follows a bias no effect explained: the uniform scale alone, its value and
