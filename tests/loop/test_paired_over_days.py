@@ -1,8 +1,9 @@
-"""The paired test of the held-out error where the folds are test days: over four days it has
-three degrees of freedom, and a gain that is the same on every day but scatters from
-condition to condition (a DEM's seed scatter) did not pass it; where the days' differences do
-not differ (one-way ANOVA), the test is over the conditions (``soilcal.loop.select.paired_p``).
-The expected values are the t statistics worked by hand from the constructed errors."""
+"""The paired test of the held-out error where the folds are test days
+(``soilcal.loop.select.paired_p``): over four days or more the conditions' gains are tested,
+their mean against the larger of the between-day and within-day mean squares (the conditions
+of a day share its fit, so the between-day one can be the larger); over fewer days, over the
+days.  The expected values are the t statistics and mean squares worked by hand from the
+constructed errors."""
 
 from __future__ import annotations
 
@@ -20,52 +21,74 @@ DAY_MEAN = np.array([0.10, -0.01, 0.07, 0.04])
 REF = 1.0  # the reference's held-out relative error of every condition
 
 
-def _days(day_mean=DAY_MEAN):
-    d = (day_mean[:, None] + PATTERN[None, :]).ravel()  # 20 conditions, day by day
+def _days(day_mean=DAY_MEAN, pattern=PATTERN):
+    per = len(pattern)
+    d = (day_mean[:, None] + pattern[None, :]).ravel()  # conditions, day by day
     ref_held = np.full(d.size, REF)
     held = REF - d  # the model's held-out error (all positive here)
-    folds = sl.Folds(np.arange(5 * k, 5 * k + 5) for k in range(len(day_mean)))
+    folds = sl.Folds(np.arange(per * k, per * k + per) for k in range(len(day_mean)))
     folds.units = [np.array([i]) for i in range(d.size)]
-    rms = lambda e: np.array([math.sqrt(np.mean(e[f] ** 2)) for f in folds])  # noqa: E731
+    rms = lambda e: np.array([math.sqrt(np.mean(e[f] ** 2)) if np.all(np.isfinite(e[f])) else math.nan  # noqa: E731
+                              for f in folds])
     return rms(ref_held), rms(held), ref_held, held, folds
 
 
-def test_a_gain_alike_on_every_day_is_tested_over_the_conditions():
+def test_days_as_alike_as_chance_are_tested_over_the_conditions_with_the_within_mean_square():
+    # day means 0.06, 0.03, 0.07, 0.04 (mean 0.05): MS between = 5 x (0.01^2 + 0.02^2 + 0.02^2
+    # + 0.01^2) / 3 = 0.005 / 3; MS within = 4 x 0.04 / 16 = 0.01, the larger: t = 0.05 /
+    # sqrt(0.01 / 20) = sqrt(5) on 16 df
+    p = sl.paired_p(*_days(np.array([0.06, 0.03, 0.07, 0.04])))
+    assert (p.test, p.variance, p.df) == ("conditions", "within", 16)
+    assert math.isclose(p.ms_between, 0.005 / 3, rel_tol=1e-9) and math.isclose(p.ms_within, 0.01, rel_tol=1e-9)
+    assert math.isclose(p.p, stats.t.sf(math.sqrt(5), 16), rel_tol=1e-9) and p.p < 0.05
+
+
+def test_days_that_differ_more_than_their_conditions_take_the_between_mean_square():
+    # day means 0.10, -0.01, 0.07, 0.04: MS between = 5 x (0.05^2 + 0.06^2 + 0.02^2 + 0.01^2) / 3
+    # = 0.011 > MS within 0.01: t = 0.05 / sqrt(0.011 / 20) on 3 df, not significant, where the
+    # within mean square alone (t = sqrt(5), 16 df) would have passed it
+    p = sl.paired_p(*_days())
+    assert (p.test, p.variance, p.df) == ("conditions", "between", 3)
+    assert math.isclose(p.ms_between, 0.011, rel_tol=1e-9)
+    assert math.isclose(p.p, stats.t.sf(0.05 / math.sqrt(0.011 / 20), 3), rel_tol=1e-9) and p.p > 0.05
+    # the pattern 10 % larger: MS within = 1.21 x 0.01 = 0.0121 > 0.011, so the within one is taken
+    q = sl.paired_p(*_days(pattern=1.1 * PATTERN))
+    assert (q.test, q.variance, q.df) == ("conditions", "within", 16)
+    assert math.isclose(q.p, stats.t.sf(0.05 / math.sqrt(0.0121 / 20), 16), rel_tol=1e-9)
+
+
+def test_fewer_than_four_days_keep_the_test_over_the_days():
+    # the first three days of the four: the test is over their RMS errors, 2 df
+    ref_rms, fold_rms, ref_held, held, folds = _days(DAY_MEAN[:3])
+    p = sl.paired_p(ref_rms, fold_rms, ref_held, held, folds)
+    assert (p.test, p.df) == ("folds", 2) and sl.MIN_POOLED_FOLDS == 4
+    assert p.p == stats.ttest_rel(ref_rms, fold_rms, alternative="greater").pvalue
+    # two days of five conditions: over the two days, 1 df
+    ref_rms, fold_rms, ref_held, held, folds = _days(DAY_MEAN[:2])
+    p = sl.paired_p(ref_rms, fold_rms, ref_held, held, folds)
+    assert (p.test, p.df) == ("folds", 1)
+    assert p.p == stats.ttest_rel(ref_rms, fold_rms, alternative="greater").pvalue
+
+
+def test_a_condition_without_a_finite_error_is_left_out_of_the_conditions():
     ref_rms, fold_rms, ref_held, held, folds = _days()
-    # by hand: gains d = day mean + pattern; mean 0.05; squares about the mean: 0.04 per day
-    # from the pattern + 5 x (0.05^2 + 0.06^2 + 0.02^2 + 0.01^2) = 0.033 from the day means
-    n, ss = 20, 4 * 0.04 + 5 * (0.05 ** 2 + 0.06 ** 2 + 0.02 ** 2 + 0.01 ** 2)
-    t_conditions = 0.05 / math.sqrt(ss / (n - 1) / n)
-    assert math.isclose(t_conditions, 2.2184, rel_tol=1e-4)
-    # the days differ by no more than chance: F = MS between / MS within = (0.033 / 3) / (0.16 / 16) = 1.1
-    f_days = stats.f_oneway(*[ref_held[f] - held[f] for f in folds])
-    assert math.isclose(f_days.statistic, 1.1, rel_tol=1e-9) and f_days.pvalue > sl.POOL_ALPHA
+    held = held.copy()
+    held[3] = math.nan  # day 1's fourth condition could not be predicted
     p = sl.paired_p(ref_rms, fold_rms, ref_held, held, folds)
-    assert math.isclose(p, stats.t.sf(t_conditions, n - 1), rel_tol=1e-9)
-    assert p < 0.05
-    # over the four days' RMS errors alone (three degrees of freedom) the same gain is not
-    # significant: the test the loop made before
-    over_days = stats.ttest_rel(ref_rms, fold_rms, alternative="greater").pvalue
-    assert over_days > 0.05
-
-
-def test_days_that_differ_keep_the_test_over_the_days():
-    # one day carries the whole gain (a day's offset followed through a covariate): the
-    # conditions are not independent draws, and the test stays over the four days
-    day_mean = np.array([0.6, 0.0, 0.0, 0.0])
-    ref_rms, fold_rms, ref_held, held, folds = _days(day_mean)
-    # by hand: mean gain 0.15; MS between = 5 x (0.45^2 + 3 x 0.15^2) / 3 = 0.45, MS within 0.16 / 16 = 0.01
-    f_days = stats.f_oneway(*[ref_held[f] - held[f] for f in folds])
-    assert math.isclose(f_days.statistic, 45.0, rel_tol=1e-9) and f_days.pvalue < sl.POOL_ALPHA
-    p = sl.paired_p(ref_rms, fold_rms, ref_held, held, folds)
-    assert p == stats.ttest_rel(ref_rms, fold_rms, alternative="greater").pvalue
-    assert p > 0.05
-    # over the conditions it would have passed
-    assert stats.ttest_1samp(ref_held - held, 0.0, alternative="greater").pvalue < 0.05
+    # the mean squares by their definitions over the 19 others (day 1 holds four)
+    d = (REF - np.delete(held, 3))
+    g = np.repeat(np.arange(4), 5)[np.arange(20) != 3]
+    m = d.mean()
+    msb = sum((g == j).sum() * (d[g == j].mean() - m) ** 2 for j in range(4)) / 3
+    msw = sum(((d[g == j] - d[g == j].mean()) ** 2).sum() for j in range(4)) / 15
+    assert math.isclose(p.ms_within, msw, rel_tol=1e-9) and math.isclose(p.ms_between, msb, rel_tol=1e-9)
+    df = 3 if msb >= msw else 15
+    assert p.df == df and math.isclose(p.p, stats.t.sf(m / math.sqrt(max(msb, msw) / 19), df), rel_tol=1e-9)
 
 
 def test_folds_of_single_conditions_are_tested_as_before():
     ref_rms, fold_rms, ref_held, held, folds = _days()
     single = sl.Folds(np.array([i]) for i in range(20))
     p = sl.paired_p(np.abs(ref_held), np.abs(held), ref_held, held, single)
-    assert p == stats.ttest_rel(np.abs(ref_held), np.abs(held), alternative="greater").pvalue
+    assert (p.test, p.df) == ("folds", 19)
+    assert p.p == stats.ttest_rel(np.abs(ref_held), np.abs(held), alternative="greater").pvalue
