@@ -508,9 +508,9 @@ def paired_p(ref_rms, fold_rms, ref_held, held, folds) -> PairedTest:
     (within folds) is.  The conditions of one day share its fitted parameters and its level, so
     their gains are correlated: the mean's variance is then E[MSB] / N (equal folds), which MSW
     alone underestimates; where the days do not differ, MSW is the sharper estimate of it.
-    The larger of the two is taken, with no preliminary test of whether the days differ (a
-    pretest pooling at F p >= 0.25 rejected about 8 % of null draws on 2 days).  Size at level
-    0.05 on normal null gains (day effect + condition noise, SD(day)/SD(condition) 0, 0.5, 1,
+    The larger of the two is taken, with no preliminary test of whether the days differ
+    (pooling where an F pretest found the days alike, p >= 0.25, let too many null cases
+    through on 2 days).  Size at level 0.05 on normal null gains (day effect + condition noise, SD(day)/SD(condition) 0, 0.5, 1,
     2; 4000 draws per setup): 0.018-0.056 on 4 days x 2, 3 or 5 and 6 days x 3 or 5
     conditions; on 2 days x 3 or 9 it was 0.021-0.076, so with fewer than
     :data:`MIN_POOLED_FOLDS` folds holding conditions (or no fold with two conditions) the test
