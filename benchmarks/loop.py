@@ -164,7 +164,7 @@ def _campaign(tmp: Path, n: int, seed: int):
              "vertical_sd_N,repeats"]
     for i in range(n):
         lines.append(f"{plates[i % 3]},{rng.uniform(0.1, 1.0):.3f},{rng.uniform(20, 40):.1f},{rng.uniform(0, 40):.2f},"
-                     f"d{i * 4 // n},{rng.uniform(8, 20):.1f},1,0,1,0,3")
+                     f"d{i * 4 // n},{rng.uniform(8, 20):.1f},1,,1,,3")
     return _with_campaign(tmp, "cinnamon-soil", lines, {
         "source": "synthetic soil-bin campaign (benchmarks/loop.py)",
         "scenario": "bulldozing", "setup": "plate-line",
@@ -187,7 +187,7 @@ def _compression_campaign(tmp: Path, n: int, seed: int):
     rng = np.random.default_rng(seed)
     lines = ["test,max_strain_pct,recovered,recovered_sd,repeats"]
     for i in range(n):
-        lines.append(f"t{i + 1},{rng.uniform(6, 12):.2f},1,0,3")
+        lines.append(f"t{i + 1},{rng.uniform(6, 12):.2f},1,,3")
     name = "guangxi-cohesive"
     return _with_campaign(tmp, name, lines, {
         "source": "synthetic compression campaign (benchmarks/loop.py)",

@@ -11,6 +11,7 @@ import pandas as pd
 import pytest
 
 from soilcal.loop import core, files
+from soilcal.loop import select as sl
 from soilcal.loop import standin as S
 from soilcal.loop import synthesize as sy
 
@@ -115,8 +116,10 @@ def test_numbered_test_days_are_tested_as_groups_not_as_a_trend():
 
 def test_candidates_rejected_over_few_day_groups_say_how_few_they_are():
     # twelve blade tests on three test days with a weak rate effect (beta 0.1) under 4 % noise:
-    # held out a day at a time, the paired test over three groups has two degrees of freedom,
-    # and the verdict says so beside the rejected candidate
+    # held out a day at a time; three days are fewer than select.MIN_POOLED_FOLDS, so the paired
+    # test is over the three groups, with two degrees of freedom, and the verdict says so beside
+    # the rejected candidate, as does the candidate's reason
+    assert sl.MIN_POOLED_FOLDS > 3
     reference = {"tool_speed": 1.75, "working_depth": 0.1}
     conds = S.conditions(S.grid(3, 12, days=3))
     table = sy.synthesize(conds, S.base_params, S.simulate, {"rate_friction": {"beta": 0.1}}, reference, {},
@@ -124,9 +127,10 @@ def test_candidates_rejected_over_few_day_groups_say_how_few_they_are():
     out = core.run_inprocess("user", sy.with_measured(conds, table), S.base_params, S.simulate,
                              core.Settings(reference=reference, bootstrap=0))
     assert out.chosen == [] and "candidates rejected" in out.verdict, out.verdict
-    assert out.verdict.endswith("the rows were held out by `day`, 3 groups, so the paired test has 2 degrees of "
-                                "freedom and passes only a large gain alike in every group (more groups decide; "
-                                "loop.fold_by sets the grouping)"), out.verdict
+    assert "(paired t-test over the folds, 2 df: p = " in out.verdict, out.verdict
+    assert out.verdict.endswith("the rows were held out by `day`, 3 groups, and the paired test that rejected a "
+                                "candidate had 2 degrees of freedom over them; it passes only a large gain (more "
+                                "groups decide; loop.fold_by sets the grouping)"), out.verdict
 
 
 def test_a_declared_day_column_comes_before_a_column_named_like_one_and_two_named_groups_are_none():

@@ -1174,10 +1174,16 @@ def analyse(soil: str, res: pd.DataFrame, diag: pd.DataFrame, cands: list, effec
         rejected = _rejected(sel_rows)
         verdict = f"unexplained: the residual follows {follows}; candidates rejected ({rejected})"
         groups = len(sl._folds(u, fold_by)) if fold_by else 0
-        if 2 <= groups < FEW_FOLDS:
-            verdict += (f"; the rows were held out by `{fold_by}`, {groups} groups, so the paired test has "
-                        f"{groups - 1} degree{'s' if groups > 2 else ''} of freedom and passes only a large gain "
-                        "alike in every group (more groups decide; loop.fold_by sets the grouping)")
+        # the few-groups clause where a candidate failed a paired test over the groups (over the
+        # folds, or over the conditions with the mean's variance from the between-group mean square)
+        few = sorted({s.test.df for _, _, s in (sel.steps if sel is not None else [])
+                      if s.test is not None and not s.accepted and not s.p < settings.alpha
+                      and (s.test.test == "folds" or s.test.variance == "between")})
+        if 2 <= groups < FEW_FOLDS and few:
+            df = few[0]
+            verdict += (f"; the rows were held out by `{fold_by}`, {groups} groups, and the paired test that "
+                        f"rejected a candidate had {df} degree{'s' if df != 1 else ''} of freedom over them; it "
+                        "passes only a large gain (more groups decide; loop.fold_by sets the grouping)")
     if (not nuisance[0] and n >= 3 and len(diag) and verdict.startswith("unexplained")
             and bool(((diag["test"] == "bias") & diag["significant"].astype(bool)).any())):
         # the residual follows a bias no effect explained: the uniform scale alone, its value and
