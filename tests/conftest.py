@@ -2,11 +2,10 @@
 file goes to one worker whole, so its module-scoped fixtures are built once.  The session
 fixture ``tiny_dem_run`` (the tiny DEM calibration, minutes) would be built once per worker that
 runs a test using it: all its users live in one file.  The workflow tests (whole Snakemake
-runs, minutes per file) are collected first; pytest-xdist (3.5 and later) still queues the
-files by their number of tests, most first, so these few-test files start later, each beside
-short tests on the other worker.  Starting them first (``--no-loadscope-reorder``) ran the
-workflow fixtures side by side, each a Snakemake run on two cores, and the whole CI took
-27.5 min against about 20."""
+runs, minutes per file) are collected first, and ``--no-loadscope-reorder`` (pyproject.toml)
+has the workers take the files in that order (without it pytest-xdist queues the files by their
+number of tests, most first, and these few-test files came late), so that the workers start them
+first and the short tests fill in beside them instead of one long file running alone at the end."""
 
 from __future__ import annotations
 
