@@ -448,6 +448,7 @@ def setup_inputs(data: dict) -> dict:
     ``simulation.search_ranges`` (which simulation.csv does not read) are left out.  The workflow's rule passes this as its params, so an edit elsewhere in the soil
     file (its citation, notes, errata, a target's value) does not rerun it."""
     from soilcal.chain.derive import design_mode
+    from soilcal.chain.plan import without_search_ranges
     from soilcal.dem.scenarios.base import PROPERTY_FIELDS
 
     def bare(v):
@@ -457,11 +458,10 @@ def setup_inputs(data: dict) -> dict:
             return [bare(x) for x in v]
         return v
 
-    out = {k: bare(data[k]) for k in ("name", "seed", "simulation", "stages", "parameters", "measurements")
-           if k in data}
-    if isinstance(out.get("simulation"), dict):
-        # the declared search ranges: read by the second round and the adaptive design only
-        out["simulation"].pop("search_ranges", None)
+    # the declared search ranges: read by the second round and the adaptive design only
+    runs_read = without_search_ranges(data)
+    out = {k: bare(runs_read[k]) for k in ("name", "seed", "simulation", "stages", "parameters", "measurements")
+           if k in runs_read}
     props = data.get("properties") or {}
     out["properties"] = {p: bare(props[p]) for p in PROPERTY_FIELDS if p in props}
     if data.get("simulation") and design_mode(data) == "adaptive":
