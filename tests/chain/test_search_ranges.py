@@ -215,8 +215,9 @@ def test_without_a_declared_range_the_set_stays_in_the_box():
 # ------------------------------------------------------------------ checks as the soil loads
 
 
-def _load(tmp_path, ranges, design=None, parameters=None):
-    data = yaml.safe_load((ROOT / "config/soils/guangxi-cohesive.yaml").read_text(encoding="utf-8"))
+def _load(tmp_path, ranges, design=None, parameters=None, data=None):
+    if data is None:
+        data = yaml.safe_load((ROOT / "config/soils/guangxi-cohesive.yaml").read_text(encoding="utf-8"))
     data["simulation"]["search_ranges"] = ranges
     if design:
         data["simulation"]["design"] = design
@@ -259,12 +260,6 @@ def test_the_shipped_cohesive_soil_declares_the_printed_surface_energy_range():
      "simulation.search_ranges.soil_soil_static_friction.low", "a finite number below high (0.3)"),
     ({"shear_energy": {"low": 0, "high": 1, "source": "x"}},
      "simulation.search_ranges.shear_energy", "a parameter id listed under parameters"),
-    # a range no stage past the screening varies would never be used: only screened (and fixed
-    # in the Box-Behnken), or set by no stage
-    ({"soil_steel_restitution": {"low": 0.1, "high": 0.9, "source": "x"}},
-     "simulation.search_ranges.soil_steel_restitution", "none does (only a screening varies it)"),
-    ({"unused_mu": {"low": 0, "high": 1, "source": "x"}},
-     "simulation.search_ranges.unused_mu", "none does (no stage varies it)"),
 ])
 def test_a_bad_declared_range_is_refused_naming_file_field_and_what_was_expected(tmp_path, ranges, field, expected,
                                                                                   design):
@@ -274,6 +269,56 @@ def test_a_bad_declared_range_is_refused_naming_file_field_and_what_was_expected
     assert exc.value.field == field and expected in exc.value.expected
     assert exc.value.path == str(tmp_path / "guangxi-cohesive.yaml")
     assert "\n" not in str(exc.value)
+
+
+@pytest.mark.parametrize("design", ["recipe", "printed", "adaptive"])
+@pytest.mark.parametrize("pid, on_the_path, why", [
+    # only screened (and fixed in the Box-Behnken)
+    ("soil_steel_restitution", False,
+     "stages.pb.factors.D is in a stage the DEM source does not run (simulation.stages: bbd)"),
+    # set by no stage
+    ("unused_mu", False, "no stage varies it"),
+    # varied by the climbing stage too, whose levels are lost (Sec. 3.2, Table 7): a range there
+    # would never be searched, as the stage is not simulated and has no optimisation
+    ("soil_soil_rolling_friction", True,
+     "stages.pb.factors.C is in a stage the DEM source does not run (simulation.stages: bbd); "
+     "stages.steepest.factors.C is in a stage the DEM source does not run (simulation.stages: bbd)"),
+])
+def test_a_range_the_second_round_never_uses_is_refused_naming_the_stages_that_vary_it(tmp_path, pid, on_the_path,
+                                                                                        why, design):
+    """The second round moves the factors of the optimised stages the DEM source runs (the
+    cohesive soil: bbd, with simulation.stages: [bbd]); a factor of any other stage does not
+    make a declared range usable."""
+    data = yaml.safe_load((ROOT / "config/soils/guangxi-cohesive.yaml").read_text(encoding="utf-8"))
+    if on_the_path:
+        data["stages"][1]["factors"]["C"] = {"parameter": "soil_soil_rolling_friction"}
+    unused = {"unused_mu": {"name": "steel rolling", "unit": "-", "pair": "soil-steel", "kind": "rolling_friction"}}
+    with pytest.raises(InputError) as exc:
+        _load(tmp_path, {pid: {"low": 0.05, "high": 0.9, "source": "x"}}, design=design, parameters=unused,
+              data=data)
+    assert exc.value.field == f"simulation.search_ranges.{pid}"
+    assert exc.value.expected == ("a parameter set by a factor of a stage the second calibration round moves (an "
+                                  "optimised stage the DEM source runs: bbd)")
+    assert exc.value.note == f"{why}; the range would never be used: delete the entry"
+    assert exc.value.path == str(tmp_path / "guangxi-cohesive.yaml") and "\n" not in str(exc.value)
+
+
+def test_a_factor_of_an_unoptimised_stage_does_not_make_a_declared_range_usable(tmp_path):
+    """Every stage simulated: the path's factor is still no factor the second round moves, as
+    the second round re-verifies the optimised stages only."""
+    from soilcal.config.load import check_search_ranges
+
+    soil = _soil()
+    soil["stages"][1]["factors"] = {"D": {"parameter": "e", "levels": [0.3, 0.4, 0.5]}}
+    del soil["stages"][2]["factors"]["C"]
+    soil["stages"][2]["optimise"] = {"method": "desirability", "cases": []}
+    with pytest.raises(InputError) as exc:
+        check_search_ranges(tmp_path / "soil.yaml", soil)
+    assert exc.value.field == "simulation.search_ranges.e"
+    assert exc.value.expected.endswith("(an optimised stage the DEM source runs: bbd)")
+    assert exc.value.note.startswith("stages.path.factors.D is in a steepest-ascent stage without an optimise block;")
+    del soil["simulation"]["search_ranges"]["e"]
+    check_search_ranges(tmp_path / "soil.yaml", soil)  # gamma: a factor of bbd
 
 
 def test_a_declared_range_needs_its_source(tmp_path):

@@ -306,31 +306,58 @@ def _check_levels(path: Path, where: str, d: dict) -> None:
         raise InputError(path, f"{where}.centre", f"a number between low ({lo}) and high ({hi})", c)
 
 
+def _second_round_stages(d: dict) -> list[str]:
+    """Ids of the stages whose factors the second calibration round moves: the stages with an
+    ``optimise`` block that the DEM source runs (:func:`soilcal.chain.derive.dem_stage_ids`,
+    ``simulation.stages``), the ones the workflow verifies and refines."""
+    from soilcal.chain.derive import dem_stage_ids
+
+    return [sid for sid in dem_stage_ids(d) if next(st for st in d["stages"] if st["id"] == sid).get("optimise")]
+
+
+def _why_not_moved(d: dict, stage_id: str) -> str:
+    """Why the second round does not move the factors of stage ``stage_id``, one not among
+    :func:`_second_round_stages`."""
+    st = next(st for st in d["stages"] if st["id"] == stage_id)
+    chosen = (d.get("simulation") or {}).get("stages")
+    if chosen and stage_id not in chosen:
+        return f"a stage the DEM source does not run (simulation.stages: {', '.join(chosen)})"
+    return f"a {st['kind'].replace('_', '-')} stage without an optimise block"
+
+
 def check_search_ranges(path: Path, d: dict) -> None:
     """``simulation.search_ranges``: each entry names a parameter under ``parameters`` that a
-    stage past the screening varies (a factor of a steepest-ascent or Box-Behnken stage sets it:
-    the ranges are searched past such a stage's levels; one for a parameter only fixed there,
-    only screened, or set nowhere would never be used), has low < high, lies in the physical range of the DEM parameter it sets (the
-    check every DEM run makes: :func:`soilcal.chain.derive.dem_value_in_range`, in the
-    parameter's unit) and contains the ``low`` .. ``high`` of every stage factor setting that
-    parameter (a search range narrower than a box it is to widen is a typing slip or another
-    unit).  Checked in every design mode."""
+    factor of a stage the second calibration round moves sets (:func:`_second_round_stages`:
+    a stage with an ``optimise`` block that the DEM source runs, ``simulation.stages``; the
+    round searches past that stage's levels, :func:`soilcal.chain.refine.search_region`).  A
+    range for a parameter only screened, only on a path, only in a stage the DEM source does
+    not run (one whose printed levels are lost), only fixed, or set nowhere would never be
+    used, and is refused naming the stages that vary it.  (Under ``design: recipe`` a
+    Box-Behnken derived from the DEM path varies the parameters the DEM screening selects,
+    for which the stage's config factors stand.)  Each range has low < high, lies in the
+    physical range of the DEM parameter it sets (the check every DEM run makes:
+    :func:`soilcal.chain.derive.dem_value_in_range`, in the parameter's unit) and contains
+    the ``low`` .. ``high`` of every stage factor setting that parameter (a search range
+    narrower than a box it is to widen is a typing slip or another unit).  Checked in every
+    design mode (``design: printed`` and ``adaptive`` record a declared range as not used)."""
     from soilcal.chain.derive import dem_value_in_range
     from soilcal.dem.scenarios.base import dem_field
 
     ranges = (d.get("simulation") or {}).get("search_ranges") or {}
     params = d.get("parameters") or {}
+    moved = _second_round_stages(d) if ranges else []
     for pid, r in ranges.items():
         where = f"simulation.search_ranges.{pid}"
         if pid not in params:
             raise InputError(path, where, "a parameter id listed under parameters (" + ", ".join(params) + ")", pid)
         varying = [(st["id"], sym, f) for st in d.get("stages") or []
                    for sym, f in (st.get("factors") or {}).items() if f.get("parameter") == pid]
-        if not any(st["kind"] != "plackett_burman" for st in d.get("stages") or []
-                   for f in (st.get("factors") or {}).values() if f.get("parameter") == pid):
-            raise InputError(path, where, f"a parameter a stage past the screening varies (a factor with parameter: "
-                             f"{pid}); none does ({'only a screening varies it' if varying else 'no stage varies it'}"
-                             "), so the range would never be used: delete the entry", pid)
+        if not any(sid in moved for sid, _, _ in varying):
+            why = "; ".join(f"stages.{sid}.factors.{sym} is in {_why_not_moved(d, sid)}"
+                            for sid, sym, _ in varying) or "no stage varies it"
+            raise InputError(path, where, "a parameter set by a factor of a stage the second calibration round "
+                             f"moves (an optimised stage the DEM source runs: {', '.join(moved) or 'none'})", pid,
+                             note=f"{why}; the range would never be used: delete the entry")
         lo, hi = float(r["low"]), float(r["high"])
         if not (math.isfinite(lo) and math.isfinite(hi) and lo < hi):
             raise InputError(path, f"{where}.low", f"a finite number below high ({r['high']})", r["low"])
