@@ -200,13 +200,6 @@ def screened_factor(soil_data: dict, stage_id: str, parameter) -> tuple[dict, st
     return None
 
 
-def screening_range(soil_data: dict, stage_id: str, parameter) -> tuple[float, float] | None:
-    """``(low, high)`` the adaptive design takes for ``parameter`` in ``stage_id``
-    (:func:`screening_factor`), None where the stage keeps its own range."""
-    found = screening_factor(soil_data, stage_id, parameter)
-    return None if found is None else (found.low, found.high)
-
-
 def _screening_ranges(soil_data: dict, st: dict) -> tuple[list[str], dict]:
     """Widen the factors of ``st`` in place to the range :func:`screening_factor` gives their
     parameter; returns the factors widened ("A (0.08-0.14 -> 0.05-0.2)") and, per symbol taking
