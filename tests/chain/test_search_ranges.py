@@ -303,6 +303,20 @@ def test_a_range_the_second_round_never_uses_is_refused_naming_the_stages_that_v
     assert exc.value.path == str(tmp_path / "guangxi-cohesive.yaml") and "\n" not in str(exc.value)
 
 
+@pytest.mark.parametrize("design", ["recipe", "printed", "adaptive"])
+def test_a_declared_range_of_a_soil_without_a_second_round_is_refused(tmp_path, design):
+    data = yaml.safe_load((ROOT / "config/soils/guangxi-cohesive.yaml").read_text(encoding="utf-8"))
+    data["simulation"]["verification"] = {"refine": False}
+    with pytest.raises(InputError) as exc:
+        _load(tmp_path, {"jkr_surface_energy": {"low": 0, "high": 10, "source": "Sec. 3.1"}}, design=design,
+              data=data)
+    assert (exc.value.path, exc.value.field) == (str(tmp_path / "guangxi-cohesive.yaml"), "simulation.search_ranges")
+    assert exc.value.expected.startswith("no entry while simulation.verification.refine is false")
+    assert exc.value.got == "jkr_surface_energy"
+    data["simulation"]["verification"] = {"refine": True}
+    _load(tmp_path, {"jkr_surface_energy": {"low": 0, "high": 10, "source": "Sec. 3.1"}}, design=design, data=data)
+
+
 def test_a_factor_of_an_unoptimised_stage_does_not_make_a_declared_range_usable(tmp_path):
     """Every stage simulated: the path's factor is still no factor the second round moves, as
     the second round re-verifies the optimised stages only."""

@@ -332,19 +332,27 @@ def check_search_ranges(path: Path, d: dict) -> None:
     round searches past that stage's levels, :func:`soilcal.chain.refine.search_region`).  A
     range for a parameter only screened, only on a path, only in a stage the DEM source does
     not run (one whose printed levels are lost), only fixed, or set nowhere would never be
-    used, and is refused naming the stages that vary it.  (Under ``design: recipe`` a
-    Box-Behnken derived from the DEM path varies the parameters the DEM screening selects,
-    for which the stage's config factors stand.)  Each range has low < high, lies in the
-    physical range of the DEM parameter it sets (the check every DEM run makes:
-    :func:`soilcal.chain.derive.dem_value_in_range`, in the parameter's unit) and contains
-    the ``low`` .. ``high`` of every stage factor setting that parameter (a search range
-    narrower than a box it is to widen is a typing slip or another unit).  Checked in every
-    design mode (``design: printed`` and ``adaptive`` record a declared range as not used)."""
+    used, and is refused naming the stages that vary it; so is every range of a soil that
+    turns the second round off (``simulation.verification.refine: false``).  (Under
+    ``design: recipe`` a Box-Behnken derived from the DEM path varies the parameters the DEM
+    screening selects, for which the stage's config factors stand.)  Each range has low <
+    high, lies in the physical range of the DEM parameter it sets (the check every DEM run
+    makes: :func:`soilcal.chain.derive.dem_value_in_range`, in the parameter's unit) and
+    contains the ``low`` .. ``high`` of every stage factor setting that parameter (a search
+    range narrower than a box it is to widen is a typing slip or another unit).  Checked in
+    every design mode (``design: printed`` and ``adaptive`` record a declared range as not
+    used)."""
     from soilcal.chain.derive import dem_value_in_range
     from soilcal.dem.scenarios.base import dem_field
 
+    from soilcal.chain.refine import refine_settings
+
     ranges = (d.get("simulation") or {}).get("search_ranges") or {}
     params = d.get("parameters") or {}
+    if ranges and not refine_settings(d):
+        raise InputError(path, "simulation.search_ranges", "no entry while simulation.verification.refine is "
+                         "false: the second calibration round, the only reader of a declared range, does not run",
+                         ", ".join(ranges), note="delete the entries, or turn the second round on")
     moved = _second_round_stages(d) if ranges else []
     for pid, r in ranges.items():
         where = f"simulation.search_ranges.{pid}"
