@@ -322,11 +322,9 @@ def settings_for(soil_data: dict, stage_id: str | None = None, case_id: str | No
 def adaptive_stage_ids(soil_data: dict) -> list[str]:
     """The stages the adaptive design runs: the optimised stages the DEM source runs with at
     least one case it can run (:func:`adaptive_cases`)."""
-    from soilcal.chain.derive import dem_stage_ids
+    from soilcal.chain.derive import optimised_dem_stage_ids
 
-    ids = [sid for sid in dem_stage_ids(soil_data)
-           if (next(s for s in soil_data["stages"] if s["id"] == sid).get("optimise"))]
-    return [sid for sid in ids if adaptive_cases(soil_data, [sid])]
+    return [sid for sid in optimised_dem_stage_ids(soil_data) if adaptive_cases(soil_data, [sid])]
 
 
 def start_runs(settings: ad.Settings, d: int) -> int:

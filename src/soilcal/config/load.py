@@ -306,36 +306,44 @@ def _check_levels(path: Path, where: str, d: dict) -> None:
         raise InputError(path, f"{where}.centre", f"a number between low ({lo}) and high ({hi})", c)
 
 
-def _second_round_stages(d: dict) -> list[str]:
-    """Ids of the stages whose factors the second calibration round moves: the stages with an
-    ``optimise`` block that the DEM source runs (:func:`soilcal.chain.derive.dem_stage_ids`,
-    ``simulation.stages``), the ones the workflow verifies and refines."""
-    from soilcal.chain.derive import dem_stage_ids
+def _second_round_factor_stages(d: dict) -> dict[str, str]:
+    """``{stage: factor stage}`` of the stages whose factors the second calibration round moves,
+    the optimised stages the DEM source runs (:func:`soilcal.chain.derive.optimised_dem_stage_ids`,
+    ``simulation.stages``): each with the stage whose config factors its DEM runs may vary
+    (:func:`soilcal.chain.derive.factor_stage`: itself, or under ``design: recipe`` for a
+    Box-Behnken design derived from the DEM path, the path, or the screening the path is
+    derived from)."""
+    from soilcal.chain.derive import factor_stage, optimised_dem_stage_ids
 
-    return [sid for sid in dem_stage_ids(d) if next(st for st in d["stages"] if st["id"] == sid).get("optimise")]
+    return {sid: factor_stage(d, sid) for sid in optimised_dem_stage_ids(d)}
 
 
-def _why_not_moved(d: dict, stage_id: str) -> str:
-    """Why the second round does not move the factors of stage ``stage_id``, one not among
-    :func:`_second_round_stages`."""
+def _why_not_moved(d: dict, stage_id: str, moved: dict[str, str]) -> str:
+    """Why the second round does not move the factors of stage ``stage_id``, one that is no
+    factor stage of :func:`_second_round_factor_stages` (``moved``)."""
     st = next(st for st in d["stages"] if st["id"] == stage_id)
     chosen = (d.get("simulation") or {}).get("stages")
     if chosen and stage_id not in chosen:
         return f"a stage the DEM source does not run (simulation.stages: {', '.join(chosen)})"
+    if stage_id in moved:
+        return f"a stage whose DEM runs vary the factors of stage {moved[stage_id]} instead (design: recipe)"
     return f"a {st['kind'].replace('_', '-')} stage without an optimise block"
 
 
 def check_search_ranges(path: Path, d: dict) -> None:
     """``simulation.search_ranges``: each entry names a parameter under ``parameters`` that a
-    factor of a stage the second calibration round moves sets (:func:`_second_round_stages`:
-    a stage with an ``optimise`` block that the DEM source runs, ``simulation.stages``; the
-    round searches past that stage's levels, :func:`soilcal.chain.refine.search_region`).  A
-    range for a parameter only screened, only on a path, only in a stage the DEM source does
-    not run (one whose printed levels are lost), only fixed, or set nowhere would never be
-    used, and is refused naming the stages that vary it; so is every range of a soil that
-    turns the second round off (``simulation.verification.refine: false``).  (Under
-    ``design: recipe`` a Box-Behnken derived from the DEM path varies the parameters the DEM
-    screening selects, for which the stage's config factors stand.)  Each range has low <
+    factor the second calibration round may move sets (:func:`_second_round_factor_stages`: a
+    factor of an optimised stage that the DEM source runs, ``simulation.stages``, or, where
+    ``design: recipe`` derives that stage from the DEM path, a factor of the path or of the
+    screening the path is derived from, as the stage's DEM runs vary those; the round searches
+    past the stage's levels, :func:`soilcal.chain.refine.search_region`).  A range for a
+    parameter varied only by a stage no such run varies (a screening or a path the optimised
+    stage is not derived from, a stage the DEM source does not run, one whose printed levels
+    are lost), only fixed, or set nowhere would never be used, and is refused naming the stage
+    factors that set it and why each does not count; so is every range of a soil that turns
+    the second round off (``simulation.verification.refine: false``).  (A parameter the
+    screening may select counts; the second round's ``refined.csv`` names the ranges of the
+    stage's factors it uses.)  Each range has low <
     high, lies in the physical range of the DEM parameter it sets (the check every DEM run
     makes: :func:`soilcal.chain.derive.dem_value_in_range`, in the parameter's unit) and
     contains the ``low`` .. ``high`` of every stage factor setting that parameter (a search
@@ -353,18 +361,21 @@ def check_search_ranges(path: Path, d: dict) -> None:
         raise InputError(path, "simulation.search_ranges", "no entry while simulation.verification.refine is "
                          "false: the second calibration round, the only reader of a declared range, does not run",
                          ", ".join(ranges), note="delete the entries, or turn the second round on")
-    moved = _second_round_stages(d) if ranges else []
+    moved = _second_round_factor_stages(d) if ranges else {}
+    sources = set(moved.values())
+    runs = "; ".join(sid if src == sid else f"{sid}, whose DEM runs vary the factors of stage {src} (design: recipe)"
+                     for sid, src in moved.items()) or "none"
     for pid, r in ranges.items():
         where = f"simulation.search_ranges.{pid}"
         if pid not in params:
             raise InputError(path, where, "a parameter id listed under parameters (" + ", ".join(params) + ")", pid)
         varying = [(st["id"], sym, f) for st in d.get("stages") or []
                    for sym, f in (st.get("factors") or {}).items() if f.get("parameter") == pid]
-        if not any(sid in moved for sid, _, _ in varying):
-            why = "; ".join(f"stages.{sid}.factors.{sym} is in {_why_not_moved(d, sid)}"
+        if not any(sid in sources for sid, _, _ in varying):
+            why = "; ".join(f"stages.{sid}.factors.{sym} is in {_why_not_moved(d, sid, moved)}"
                             for sid, sym, _ in varying) or "no stage varies it"
             raise InputError(path, where, "a parameter set by a factor of a stage the second calibration round "
-                             f"moves (an optimised stage the DEM source runs: {', '.join(moved) or 'none'})", pid,
+                             f"moves (an optimised stage the DEM source runs: {runs})", pid,
                              note=f"{why}; the range would never be used: delete the entry")
         lo, hi = float(r["low"]), float(r["high"])
         if not (math.isfinite(lo) and math.isfinite(hi) and lo < hi):
