@@ -16,6 +16,20 @@ from test_refine import OPTIMUM, _runs, _stage, _table
 T31 = {"y": {"value": 31.0, "source": "image"}, "lost": {"value": None}}
 
 
+def _screened(**ranges):
+    """``wider`` as the second round gets it (symbol -> (low, high, origin),
+    :func:`soilcal.chain.stage.screening_ranges`) for the stand-in stage derived from a DEM path
+    whose screening pb varies the parameter of factor A, B, C (symbols X1, X2, X3) over
+    ``ranges[factor] = (low, high)``."""
+    st = dict(_stage(), derivation={"kind": "path"})
+    pb = {"id": "pb", "kind": "plackett_burman",
+          "factors": {f"X{'ABC'.index(s) + 1}": {"parameter": st["factors"][s]["parameter"], "low": lo, "high": hi}
+                      for s, (lo, hi) in ranges.items()}}
+    soil = {"stages": [pb, {"id": "path", "kind": "steepest_ascent", "from_stage": "pb"},
+                       {"id": "bbd", "kind": "box_behnken", "from_stage": "path"}]}
+    return screening_ranges(soil, st)
+
+
 def _one(case, mean, wider, targets=T31, x0=None):
     """refined.csv row of one case calibrated at X0 (or ``x0``) whose four seeds average ``mean``."""
     opt = OPTIMUM[OPTIMUM["case"] == case].copy() if x0 is None else pd.DataFrame([dict(x0, case=case,
@@ -27,32 +41,33 @@ def _one(case, mean, wider, targets=T31, x0=None):
 def test_a_target_outside_the_box_is_met_inside_the_screening_range():
     # x0 A = 0.5 (surface 31), seeds 34.5: bias +3.5, 33.5 + 2 A = 31 at A = -1.25 (actual -0.125),
     # past the low bound 0 by a quarter half-width; A was screened over -1 .. 2 (coded -3 .. 3)
-    r = _one("biased", 34.5, {"A": (-1.0, 2.0)})
+    r = _one("biased", 34.5, _screened(A=(-1.0, 2.0)))
     assert (r["round"], bool(r["refined"]), r["region"]) == (2, True, "beyond")
     assert r["A_coded"] == pytest.approx(-1.25, abs=1e-5) and r["A"] == pytest.approx(-0.125, abs=1e-5)
     assert (r["B_coded"], r["C_coded"]) == pytest.approx((0.3, -0.2), abs=1e-5)
     assert r["y"] == pytest.approx(31.0, abs=1e-5) and r["bias_y"] == pytest.approx(3.5)
     assert r["note"].startswith("bias-corrected: ")
     assert "extrapolated beyond the design region" in r["note"]
-    assert "A = -0.125 (0.25 half-widths past its low bound 0, inside its screening range -1..2)" in r["note"]
+    assert ("A = -0.125 (0.25 half-widths past its low bound 0, inside its screening range -1..2 "
+            "(stages.pb.factors.X1))") in r["note"]
     assert "; its compromise there: worst error" in r["note"] and "%))" not in r["note"]
 
 
 def test_the_move_stops_at_the_trust_region_and_at_the_screening_range():
     # bias +7: 37 + 2 A = 31 needs A = -3; the trust region stops it at -2 (y 33, 6.5 % against
     # the box corner's 35, 12.9 %) ...
-    r = _one("far", 38.0, {"A": (-5.0, 5.0)})
+    r = _one("far", 38.0, _screened(A=(-5.0, 5.0)))
     assert r["region"] == "beyond" and r["A_coded"] == pytest.approx(-1.0 - BEYOND_HALF_WIDTHS, abs=1e-4)
     assert r["y"] == pytest.approx(33.0, abs=1e-3) and r["note"].startswith("bias-corrected compromise")
     # ... and a screening range ending at actual -0.25 (coded -1.5) before that
-    r = _one("far", 38.0, {"A": (-0.25, 1.0)})
+    r = _one("far", 38.0, _screened(A=(-0.25, 1.0)))
     assert r["region"] == "beyond" and r["A_coded"] == pytest.approx(-1.5, abs=1e-4)
     assert r["A"] == pytest.approx(-0.25, abs=1e-4)
 
 
 def test_a_factor_without_a_wider_range_never_leaves_the_box():
     # only B (no effect on y) was screened wider: A stops at its bound as before, B stays put
-    r = _one("far", 38.0, {"B": (0.0, 40.0)})
+    r = _one("far", 38.0, _screened(B=(0.0, 40.0)))
     assert r["region"] == "inside" and r["A_coded"] == pytest.approx(-1.0, abs=1e-4)
     assert (r["B_coded"], r["C_coded"]) == pytest.approx((0.3, -0.2), abs=1e-4)
     assert "extrapolated" not in r["note"]
@@ -60,7 +75,7 @@ def test_a_factor_without_a_wider_range_never_leaves_the_box():
 
 def test_nothing_extrapolates_where_the_box_reaches_the_target():
     # bias +1: 31 + 2 A = 31 at A = 0, inside the box although A could go past it
-    r = _one("biased", 32.0, {"A": (-1.0, 2.0), "B": (0.0, 40.0), "C": (-200.0, 600.0)})
+    r = _one("biased", 32.0, _screened(A=(-1.0, 2.0), B=(0.0, 40.0), C=(-200.0, 600.0)))
     assert r["region"] == "inside" and r["A_coded"] == pytest.approx(0.0, abs=1e-6)
     assert (r["B_coded"], r["C_coded"]) == pytest.approx((0.3, -0.2), abs=1e-6)
 
@@ -73,7 +88,7 @@ def test_an_unbiased_miss_at_a_bound_moves_past_it():
     t27 = {"y": {"value": 27.0, "source": "image"}}
     kept = _one("biased", 28.0, None, t27, x0)
     assert kept["round"] == 1 and "outside the design region" in kept["note"]
-    r = _one("biased", 28.0, {"A": (-1.0, 2.0)}, t27, x0)
+    r = _one("biased", 28.0, _screened(A=(-1.0, 2.0)), t27, x0)
     assert (r["round"], r["region"]) == (2, "beyond") and r["A_coded"] == pytest.approx(-1.5, abs=1e-5)
     assert r["y"] == pytest.approx(27.0, abs=1e-5) and r["note"].startswith("no bias")
 
@@ -81,7 +96,7 @@ def test_an_unbiased_miss_at_a_bound_moves_past_it():
 def test_a_worse_second_round_says_so_and_the_first_set_stays_final():
     # "biased" moved to A = -1.25 (prediction 31); its verification lands at 36 (16 % off),
     # worse than the first round's 34.5 (11 %): the soil ends with the first set
-    ref = _one("biased", 34.5, {"A": (-1.0, 2.0)}).to_frame().T.reset_index(names="case")
+    ref = _one("biased", 34.5, _screened(A=(-1.0, 2.0))).to_frame().T.reset_index(names="case")
     opt = OPTIMUM[OPTIMUM["case"] == "biased"]
     runs1 = {"biased": _runs([34.4, 34.6, 34.5, 34.5])}
     soil = {"targets": {"y": {"value": 31.0}}}
@@ -125,7 +140,7 @@ def test_screening_ranges_come_from_the_screening_of_a_path_design_only():
 def _final(second_means):
     """final.csv of the "biased" case: first round at X0 (A = 0.75 actual, y 34.5 against the
     target 31), second round at A = -0.125 verified at ``second_means``."""
-    ref = _one("biased", 34.5, {"A": (-1.0, 2.0)}).to_frame().T.reset_index(names="case")
+    ref = _one("biased", 34.5, _screened(A=(-1.0, 2.0))).to_frame().T.reset_index(names="case")
     stage = _stage()
     stage["optimise"]["cases"] = [c for c in stage["optimise"]["cases"] if c["id"] == "biased"]
     return final_frame({"targets": {"y": {"value": 31.0}}}, stage, OPTIMUM[OPTIMUM["case"] == "biased"], T31,
@@ -151,7 +166,7 @@ def test_final_csv_names_the_search_ranges_whichever_round_it_keeps():
     # first round's row it falls back to (36 verifies worse) as on the second round's it keeps
     for means, kept in (([35.9, 36.1, 36.0, 36.0], 1), ([31.1, 31.3, 31.2, 31.2], 2)):
         r = _final(means)
-        assert int(r["round"]) == kept and r["search_ranges"] == "A: screening range -1..2"
+        assert int(r["round"]) == kept and r["search_ranges"] == "A: screening range -1..2 (stages.pb.factors.X1)"
 
 
 def _row(resp, rel, n=4, sd=0.1, target=31.0, preset="quick"):
@@ -205,7 +220,7 @@ def test_final_marks_only_the_rows_of_the_round_final_csv_keeps():
     # the soil's preset only (31.0, 0 %): round 2 is final, and round 1's paper row is not
     stage = _stage()
     stage["optimise"]["cases"] = [c for c in stage["optimise"]["cases"] if c["id"] == "biased"]
-    ref = _one("biased", 32.0, {"A": (-1.0, 2.0)}).to_frame().T.reset_index(names="case")
+    ref = _one("biased", 32.0, _screened(A=(-1.0, 2.0))).to_frame().T.reset_index(names="case")
     paper = []
     for k, val in enumerate([32.9, 33.1, 33.0, 33.0]):
         d = _runs([val], seed0=20000 + k)[0]

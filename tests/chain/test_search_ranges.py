@@ -215,8 +215,9 @@ def test_without_a_declared_range_the_set_stays_in_the_box():
 # ------------------------------------------------------------------ checks as the soil loads
 
 
-def _load(tmp_path, ranges, design=None, parameters=None):
-    data = yaml.safe_load((ROOT / "config/soils/guangxi-cohesive.yaml").read_text(encoding="utf-8"))
+def _load(tmp_path, ranges, design=None, parameters=None, data=None):
+    if data is None:
+        data = yaml.safe_load((ROOT / "config/soils/guangxi-cohesive.yaml").read_text(encoding="utf-8"))
     data["simulation"]["search_ranges"] = ranges
     if design:
         data["simulation"]["design"] = design
@@ -259,12 +260,6 @@ def test_the_shipped_cohesive_soil_declares_the_printed_surface_energy_range():
      "simulation.search_ranges.soil_soil_static_friction.low", "a finite number below high (0.3)"),
     ({"shear_energy": {"low": 0, "high": 1, "source": "x"}},
      "simulation.search_ranges.shear_energy", "a parameter id listed under parameters"),
-    # a range no stage past the screening varies would never be used: only screened (and fixed
-    # in the Box-Behnken), or set by no stage
-    ({"soil_steel_restitution": {"low": 0.1, "high": 0.9, "source": "x"}},
-     "simulation.search_ranges.soil_steel_restitution", "none does (only a screening varies it)"),
-    ({"unused_mu": {"low": 0, "high": 1, "source": "x"}},
-     "simulation.search_ranges.unused_mu", "none does (no stage varies it)"),
 ])
 def test_a_bad_declared_range_is_refused_naming_file_field_and_what_was_expected(tmp_path, ranges, field, expected,
                                                                                   design):
@@ -274,6 +269,184 @@ def test_a_bad_declared_range_is_refused_naming_file_field_and_what_was_expected
     assert exc.value.field == field and expected in exc.value.expected
     assert exc.value.path == str(tmp_path / "guangxi-cohesive.yaml")
     assert "\n" not in str(exc.value)
+
+
+@pytest.mark.parametrize("design", ["recipe", "printed", "adaptive"])
+@pytest.mark.parametrize("pid, on_the_path, why", [
+    # only screened (and fixed in the Box-Behnken)
+    ("soil_steel_restitution", False,
+     "stages.pb.factors.D is in a stage the DEM source does not run (simulation.stages: bbd)"),
+    # set by no stage
+    ("unused_mu", False, "no stage varies it"),
+    # varied by the climbing stage too, whose levels are lost (Sec. 3.2, Table 7): a range there
+    # would never be searched, as the stage is not simulated and has no optimisation
+    ("soil_soil_rolling_friction", True,
+     "stages.pb.factors.C is in a stage the DEM source does not run (simulation.stages: bbd); "
+     "stages.steepest.factors.C is in a stage the DEM source does not run (simulation.stages: bbd)"),
+])
+def test_a_range_the_second_round_never_uses_is_refused_naming_the_stages_that_vary_it(tmp_path, pid, on_the_path,
+                                                                                        why, design):
+    """The second round moves the factors of the optimised stages the DEM source runs (the
+    cohesive soil: bbd, with simulation.stages: [bbd]); a factor of any other stage does not
+    make a declared range usable."""
+    data = yaml.safe_load((ROOT / "config/soils/guangxi-cohesive.yaml").read_text(encoding="utf-8"))
+    if on_the_path:
+        data["stages"][1]["factors"]["C"] = {"parameter": "soil_soil_rolling_friction"}
+    unused = {"unused_mu": {"name": "steel rolling", "unit": "-", "pair": "soil-steel", "kind": "rolling_friction"}}
+    with pytest.raises(InputError) as exc:
+        _load(tmp_path, {pid: {"low": 0.05, "high": 0.9, "source": "x"}}, design=design, parameters=unused,
+              data=data)
+    assert exc.value.field == f"simulation.search_ranges.{pid}"
+    assert exc.value.expected == ("a parameter set by a factor of a stage the second calibration round moves (an "
+                                  "optimised stage the DEM source runs: bbd)")
+    assert exc.value.note == f"{why}; the range would never be used: delete the entry"
+    assert exc.value.path == str(tmp_path / "guangxi-cohesive.yaml") and "\n" not in str(exc.value)
+
+
+@pytest.mark.parametrize("design", ["recipe", "printed", "adaptive"])
+def test_a_declared_range_of_a_soil_without_a_second_round_is_refused(tmp_path, design):
+    data = yaml.safe_load((ROOT / "config/soils/guangxi-cohesive.yaml").read_text(encoding="utf-8"))
+    data["simulation"]["verification"] = {"refine": False}
+    with pytest.raises(InputError) as exc:
+        _load(tmp_path, {"jkr_surface_energy": {"low": 0, "high": 10, "source": "Sec. 3.1"}}, design=design,
+              data=data)
+    assert (exc.value.path, exc.value.field) == (str(tmp_path / "guangxi-cohesive.yaml"), "simulation.search_ranges")
+    assert exc.value.expected.startswith("no entry while simulation.verification.refine is false")
+    assert exc.value.got == "jkr_surface_energy"
+    data["simulation"]["verification"] = {"refine": True}
+    _load(tmp_path, {"jkr_surface_energy": {"low": 0, "high": 10, "source": "Sec. 3.1"}}, design=design, data=data)
+
+
+def test_a_factor_of_an_unoptimised_stage_does_not_make_a_declared_range_usable(tmp_path):
+    """Every stage simulated (design: recipe): the Box-Behnken stage is derived from the DEM path,
+    which is derived from the DEM screening, so its runs vary the screening's factors the
+    screening selects; the path's own factor is no factor the second round moves, nor is it
+    with design: printed, where the Box-Behnken stage runs its own factors."""
+    from soilcal.config.load import check_search_ranges
+
+    soil = _soil()
+    soil["stages"][1]["factors"] = {"D": {"parameter": "e", "levels": [0.3, 0.4, 0.5]}}
+    del soil["stages"][2]["factors"]["C"]
+    soil["stages"][2]["optimise"] = {"method": "desirability", "cases": []}
+    with pytest.raises(InputError) as exc:
+        check_search_ranges(tmp_path / "soil.yaml", soil)
+    assert exc.value.field == "simulation.search_ranges.e"
+    assert exc.value.expected.endswith("(an optimised stage the DEM source runs: bbd, whose DEM runs vary the "
+                                       "factors of stage pb (design: recipe))")
+    assert exc.value.note.startswith("stages.path.factors.D is in a steepest-ascent stage without an optimise block;")
+    soil["simulation"]["design"] = "printed"
+    with pytest.raises(InputError) as exc:
+        check_search_ranges(tmp_path / "soil.yaml", soil)
+    assert exc.value.expected.endswith("(an optimised stage the DEM source runs: bbd)")
+    # the screening not simulated: the path runs its own levels, and the Box-Behnken stage
+    # derived from it varies the path's factors, D among them
+    soil["simulation"]["design"] = "recipe"
+    soil["simulation"]["stages"] = ["path", "bbd"]
+    gamma = soil["simulation"]["search_ranges"].pop("gamma")  # on no path: refused
+    check_search_ranges(tmp_path / "soil.yaml", soil)
+    soil["simulation"]["search_ranges"]["gamma"] = gamma
+    del soil["simulation"]["search_ranges"]["e"]
+    del soil["simulation"]["stages"]
+    check_search_ranges(tmp_path / "soil.yaml", soil)  # gamma: a factor of the screening
+
+
+def test_a_box_behnken_factor_the_recipe_replaces_by_the_screenings_does_not_make_a_range_usable(tmp_path):
+    """design: recipe, every stage simulated: the Box-Behnken stage's runs vary the factors the
+    DEM screening selects (gamma, mu), not its config factor C (e, screened by no stage)."""
+    from soilcal.config.load import check_search_ranges
+
+    soil = _soil()
+    soil["stages"][2]["optimise"] = {"method": "desirability", "cases": []}
+    with pytest.raises(InputError) as exc:
+        check_search_ranges(tmp_path / "soil.yaml", soil)
+    assert exc.value.field == "simulation.search_ranges.e"
+    assert exc.value.note == ("stages.bbd.factors.C is in a stage whose DEM runs vary the factors of stage pb "
+                              "instead (design: recipe); the range would never be used: delete the entry")
+    soil["simulation"]["design"] = "printed"  # the stage's own factors: C counts
+    check_search_ranges(tmp_path / "soil.yaml", soil)
+
+
+def _cinnamon(stages=None, ranges=None, design=None):
+    data = yaml.safe_load((ROOT / "config/soils/cinnamon-soil.yaml").read_text(encoding="utf-8"))
+    if stages:
+        data["simulation"]["stages"] = stages
+    if ranges:
+        data["simulation"]["search_ranges"] = ranges
+    if design:
+        data["simulation"]["design"] = design
+    return data
+
+
+def _write(tmp_path, data):
+    path = tmp_path / "cinnamon-soil.yaml"
+    path.write_text(yaml.safe_dump(data, sort_keys=False), encoding="utf-8")
+    return path
+
+
+RESTITUTION = {"soil_steel_restitution": {"low": 0.1, "high": 0.9, "source": "a test"}}
+
+
+def test_a_path_factor_counts_where_the_box_behnken_design_is_derived_from_the_path(tmp_path):
+    """Cinnamon soil, its path given a fourth factor D on the soil-steel restitution (six levels
+    inside the screening's 0.2-0.7, Table 2), the screening not simulated: the path runs its
+    own levels and the Box-Behnken stage derived from it (design: recipe) varies A, B, C and D,
+    so the second round searches D over the declared 0.1..0.9 (soilcal.chain.stage.screening_ranges)."""
+    from soilcal.chain.derive import bbd_from_path, dem_stage
+
+    data = _cinnamon(stages=["steepest", "bbd"], ranges=RESTITUTION)
+    path_cfg = data["stages"][1]
+    del path_cfg["fixed"]["soil_steel_restitution"], path_cfg["table"]  # Table 5 has no column D
+    path_cfg["factors"]["D"] = {"parameter": "soil_steel_restitution", "levels": [0.2, 0.3, 0.4, 0.5, 0.6, 0.7]}
+    soil = load_soil(_write(tmp_path, data), resources_root=ROOT / "resources").data
+    path = dem_stage(soil, "steepest", {"stacking_angle": {"value": 27.69}})
+    # stand-in runs of the path: the angle rises 2 deg a step, closest to 27.69 deg at step 4
+    responses = pd.DataFrame({"step": range(1, 7), "stacking_angle": [22.0, 24.0, 26.0, 28.0, 30.0, 32.0]})
+    bbd = bbd_from_path(soil, "bbd", path, responses)
+    assert bbd["factors"]["D"]["parameter"] == "soil_steel_restitution"
+    assert screening_ranges(soil, bbd)["D"] == (
+        0.1, 0.9, "declared search range 0.1..0.9 (simulation.search_ranges.soil_steel_restitution)")
+    # the same path with the printed design: the Box-Behnken stage runs its own A, B, C
+    data["simulation"]["design"] = "printed"
+    with pytest.raises(InputError) as exc:
+        load_soil(_write(tmp_path, data), resources_root=ROOT / "resources")
+    assert exc.value.field == "simulation.search_ranges.soil_steel_restitution"
+    assert exc.value.note.startswith("stages.pb.factors.X4 is in a stage the DEM source does not run (simulation."
+                                     "stages: steepest, bbd); stages.steepest.factors.D is in a steepest-ascent "
+                                     "stage without an optimise block")
+
+
+@pytest.mark.parametrize("design, loads", [("recipe", True), ("printed", False), ("adaptive", False)])
+def test_a_screened_parameter_counts_where_the_box_behnken_design_descends_from_the_dem_screening(
+        tmp_path, design, loads):
+    """Cinnamon soil, every stage simulated: the recipe's Box-Behnken stage varies the factors
+    its DEM screening selects, any of X1..X7 (the soil-steel restitution X4 among them, though
+    the paper's path and box fix it at 0.45, Table 3); the printed and adaptive designs run the
+    stage's own A, B, C."""
+    path = _write(tmp_path, _cinnamon(ranges=RESTITUTION, design=design))
+    if loads:
+        load_soil(path, resources_root=ROOT / "resources")
+        return
+    with pytest.raises(InputError) as exc:
+        load_soil(path, resources_root=ROOT / "resources")
+    assert exc.value.note.startswith("stages.pb.factors.X4 is in a plackett-burman stage without an optimise block;")
+
+
+@pytest.mark.parametrize("design", ["recipe", "printed", "adaptive"])
+def test_a_box_behnken_factor_left_out_of_the_simulated_stages_does_not_make_a_range_usable(tmp_path, design):
+    """Cinnamon soil with simulation.stages: [pb, steepest]: its optimised Box-Behnken stage is
+    not simulated, so no stage the second round moves varies the surface energy (its factor B
+    there)."""
+    data = _cinnamon(stages=["pb", "steepest"], design=design)
+    del data["measurements"]  # their tool runs take the Box-Behnken stage's optimum
+    load_soil(_write(tmp_path, data), resources_root=ROOT / "resources")  # without the range: loads
+    data["simulation"]["search_ranges"] = {"jkr_surface_energy": {"low": 0.05, "high": 2, "source": "a test"}}
+    with pytest.raises(InputError) as exc:
+        load_soil(_write(tmp_path, data), resources_root=ROOT / "resources")
+    assert exc.value.field == "simulation.search_ranges.jkr_surface_energy"
+    assert exc.value.expected.endswith("(an optimised stage the DEM source runs: none)")
+    assert exc.value.note.endswith("stages.bbd.factors.B is in a stage the DEM source does not run (simulation.stages: "
+                                   "pb, steepest); the range would never be used: delete the entry")
+    assert exc.value.path == str(tmp_path / "cinnamon-soil.yaml") and "\n" not in str(exc.value)
 
 
 def test_a_declared_range_needs_its_source(tmp_path):

@@ -120,7 +120,8 @@ def stage_targets(soil, st, source="published"):
 
 
 def optimised_stages(soil):
-    return [s for s in source_stages(soil, "dem") if stage_cfg(soil, s).get("optimise")]
+    """The optimised stages the DEM source runs (soilcal.chain.derive.optimised_dem_stage_ids)."""
+    return derive.optimised_dem_stage_ids(soil_cfg(soil))
 
 
 def dem_soil_targets(soil):

@@ -200,13 +200,6 @@ def screened_factor(soil_data: dict, stage_id: str, parameter) -> tuple[dict, st
     return None
 
 
-def screening_range(soil_data: dict, stage_id: str, parameter) -> tuple[float, float] | None:
-    """``(low, high)`` the adaptive design takes for ``parameter`` in ``stage_id``
-    (:func:`screening_factor`), None where the stage keeps its own range."""
-    found = screening_factor(soil_data, stage_id, parameter)
-    return None if found is None else (found.low, found.high)
-
-
 def _screening_ranges(soil_data: dict, st: dict) -> tuple[list[str], dict]:
     """Widen the factors of ``st`` in place to the range :func:`screening_factor` gives their
     parameter; returns the factors widened ("A (0.08-0.14 -> 0.05-0.2)") and, per symbol taking
@@ -329,11 +322,9 @@ def settings_for(soil_data: dict, stage_id: str | None = None, case_id: str | No
 def adaptive_stage_ids(soil_data: dict) -> list[str]:
     """The stages the adaptive design runs: the optimised stages the DEM source runs with at
     least one case it can run (:func:`adaptive_cases`)."""
-    from soilcal.chain.derive import dem_stage_ids
+    from soilcal.chain.derive import optimised_dem_stage_ids
 
-    ids = [sid for sid in dem_stage_ids(soil_data)
-           if (next(s for s in soil_data["stages"] if s["id"] == sid).get("optimise"))]
-    return [sid for sid in ids if adaptive_cases(soil_data, [sid])]
+    return [sid for sid in optimised_dem_stage_ids(soil_data) if adaptive_cases(soil_data, [sid])]
 
 
 def start_runs(settings: ad.Settings, d: int) -> int:

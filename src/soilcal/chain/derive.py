@@ -144,6 +144,26 @@ def dependencies(soil_data: dict, stage_id: str) -> dict[str, str]:
     return out
 
 
+def optimised_dem_stage_ids(soil_data: dict) -> list[str]:
+    """The optimised stages the DEM source runs: those of :func:`dem_stage_ids` with an
+    ``optimise`` block, the stages the workflow verifies and the second calibration round
+    refines."""
+    return [sid for sid in dem_stage_ids(soil_data) if _stage(soil_data, sid).get("optimise")]
+
+
+def factor_stage(soil_data: dict, stage_id: str) -> str:
+    """The stage whose config factors are those the DEM runs of stage ``stage_id`` may vary:
+    the stage itself, or, for a stage derived from an earlier DEM stage (:func:`dependencies`,
+    ``design: recipe``), that of the stage it is derived from, followed back: a Box-Behnken
+    design derived from the DEM path varies the path's factors (:func:`bbd_from_path`), which
+    are the path's own where the path runs its own levels, and the screening's factors it selects
+    where the path is derived from the DEM screening (:func:`path_from_screening`)."""
+    sid = stage_id
+    while "from" in (deps := dependencies(soil_data, sid)):
+        sid = deps["from"]  # an earlier stage (soilcal.config.load): the chain ends
+    return sid
+
+
 def published_stage(soil_data: dict, stage_id: str) -> dict:
     """The stage as the paper ran it (the published source)."""
     st = copy.deepcopy(_stage(soil_data, stage_id))

@@ -130,7 +130,7 @@ def _kept(case_id, cal: pd.DataFrame, note: str, columns) -> dict:
 
 def search_region(stage: dict, wider: dict | None) -> tuple[np.ndarray, np.ndarray]:
     """Coded lower and upper bounds of the second round's search past the box: each factor's
-    screening or declared range ``wider[symbol] = (low, high[, origin])`` (actual units,
+    screening or declared range ``wider[symbol] = (low, high, origin)`` (actual units,
     :func:`soilcal.chain.stage.screening_ranges`) cut to :data:`BEYOND_HALF_WIDTHS` past the
     box; [-1, 1] for a factor without one."""
     from soilcal.chain.stage import bounds
@@ -160,14 +160,8 @@ def beyond_text(stage: dict, x, wider: dict | None) -> str:
             continue
         side, b = ("low", low[j]) if xj < 0 else ("high", high[j])
         parts.append(f"{s} = {centre[j] + xj * half[j]:.4g} ({abs(xj) - 1.0:.2f} half-widths past its {side} bound "
-                     f"{b:g}, inside its {_range_text(wider[s])})")
+                     f"{b:g}, inside its {wider[s][2]})")
     return "; ".join(parts)
-
-
-def _range_text(rng) -> str:
-    """``screening range 0..10 (stages.pb.factors.G)`` of one ``wider`` entry: ``(low, high)``
-    (a screening range) or ``(low, high, origin)`` (:func:`soilcal.chain.stage.screening_ranges`)."""
-    return rng[2] if len(rng) > 2 else f"screening range {float(rng[0]):g}..{float(rng[1]):g}"
 
 
 def search_ranges_text(stage: dict, wider: dict | None, unused=()) -> str:
@@ -178,7 +172,7 @@ def search_ranges_text(stage: dict, wider: dict | None, unused=()) -> str:
     from soilcal.chain.stage import bounds
 
     syms = bounds(stage)[0]
-    parts = [f"{s}: {_range_text(wider[s])}" for s in syms if s in (wider or {})]
+    parts = [f"{s}: {wider[s][2]}" for s in syms if s in (wider or {})]
     text = "; ".join(parts) if parts else ("none: every factor stays in the design box (no simulated screening "
                                            "and no simulation.search_ranges entry gives a wider range)")
     if unused:
@@ -191,7 +185,7 @@ def refine_frame(stage: dict, table: pd.DataFrame, targets: dict, optimum: pd.Da
                  runs: dict[str, list[pd.DataFrame]], wider: dict | None = None, unused=()) -> pd.DataFrame:
     """``refined.csv`` of one stage (module docstring).  ``table``: the stage's responses
     (design points), ``runs``: case id -> the first round's verification frames at the soil's
-    own preset, ``wider``: symbol -> (low, high[, origin]), the range each factor may be searched over
+    own preset, ``wider``: symbol -> (low, high, origin), the range each factor may be searched over
     (:func:`soilcal.chain.stage.screening_ranges`; none: every factor stays in the box),
     ``unused``: the declared ranges it does not use (:func:`search_ranges_text`)."""
     from soilcal.chain.stage import bounds, calibrated_rows, fit_stage, goal_values

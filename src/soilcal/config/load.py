@@ -306,31 +306,77 @@ def _check_levels(path: Path, where: str, d: dict) -> None:
         raise InputError(path, f"{where}.centre", f"a number between low ({lo}) and high ({hi})", c)
 
 
+def _second_round_factor_stages(d: dict) -> dict[str, str]:
+    """``{stage: factor stage}`` of the stages whose factors the second calibration round moves,
+    the optimised stages the DEM source runs (:func:`soilcal.chain.derive.optimised_dem_stage_ids`,
+    ``simulation.stages``): each with the stage whose config factors its DEM runs may vary
+    (:func:`soilcal.chain.derive.factor_stage`: itself, or under ``design: recipe`` for a
+    Box-Behnken design derived from the DEM path, the path, or the screening the path is
+    derived from)."""
+    from soilcal.chain.derive import factor_stage, optimised_dem_stage_ids
+
+    return {sid: factor_stage(d, sid) for sid in optimised_dem_stage_ids(d)}
+
+
+def _why_not_moved(d: dict, stage_id: str, moved: dict[str, str]) -> str:
+    """Why the second round does not move the factors of stage ``stage_id``, one that is no
+    factor stage of :func:`_second_round_factor_stages` (``moved``)."""
+    st = next(st for st in d["stages"] if st["id"] == stage_id)
+    chosen = (d.get("simulation") or {}).get("stages")
+    if chosen and stage_id not in chosen:
+        return f"a stage the DEM source does not run (simulation.stages: {', '.join(chosen)})"
+    if stage_id in moved:
+        return f"a stage whose DEM runs vary the factors of stage {moved[stage_id]} instead (design: recipe)"
+    return f"a {st['kind'].replace('_', '-')} stage without an optimise block"
+
+
 def check_search_ranges(path: Path, d: dict) -> None:
     """``simulation.search_ranges``: each entry names a parameter under ``parameters`` that a
-    stage past the screening varies (a factor of a steepest-ascent or Box-Behnken stage sets it:
-    the ranges are searched past such a stage's levels; one for a parameter only fixed there,
-    only screened, or set nowhere would never be used), has low < high, lies in the physical range of the DEM parameter it sets (the
-    check every DEM run makes: :func:`soilcal.chain.derive.dem_value_in_range`, in the
-    parameter's unit) and contains the ``low`` .. ``high`` of every stage factor setting that
-    parameter (a search range narrower than a box it is to widen is a typing slip or another
-    unit).  Checked in every design mode."""
+    factor the second calibration round may move sets (:func:`_second_round_factor_stages`: a
+    factor of an optimised stage that the DEM source runs, ``simulation.stages``, or, where
+    ``design: recipe`` derives that stage from the DEM path, a factor of the path or of the
+    screening the path is derived from, as the stage's DEM runs vary those; the round searches
+    past the stage's levels, :func:`soilcal.chain.refine.search_region`).  A range for a
+    parameter varied only by a stage no such run varies (a screening or a path the optimised
+    stage is not derived from, a stage the DEM source does not run, one whose printed levels
+    are lost), only fixed, or set nowhere would never be used, and is refused naming the stage
+    factors that set it and why each does not count; so is every range of a soil that turns
+    the second round off (``simulation.verification.refine: false``).  (A parameter the
+    screening may select counts; the second round's ``refined.csv`` names the ranges of the
+    stage's factors it uses.)  Each range has low <
+    high, lies in the physical range of the DEM parameter it sets (the check every DEM run
+    makes: :func:`soilcal.chain.derive.dem_value_in_range`, in the parameter's unit) and
+    contains the ``low`` .. ``high`` of every stage factor setting that parameter (a search
+    range narrower than a box it is to widen is a typing slip or another unit).  Checked in
+    every design mode (``design: printed`` and ``adaptive`` record a declared range as not
+    used)."""
     from soilcal.chain.derive import dem_value_in_range
     from soilcal.dem.scenarios.base import dem_field
 
+    from soilcal.chain.refine import refine_settings
+
     ranges = (d.get("simulation") or {}).get("search_ranges") or {}
     params = d.get("parameters") or {}
+    if ranges and not refine_settings(d):
+        raise InputError(path, "simulation.search_ranges", "no entry while simulation.verification.refine is "
+                         "false: the second calibration round, the only reader of a declared range, does not run",
+                         ", ".join(ranges), note="delete the entries, or turn the second round on")
+    moved = _second_round_factor_stages(d) if ranges else {}
+    sources = set(moved.values())
+    runs = "; ".join(sid if src == sid else f"{sid}, whose DEM runs vary the factors of stage {src} (design: recipe)"
+                     for sid, src in moved.items()) or "none"
     for pid, r in ranges.items():
         where = f"simulation.search_ranges.{pid}"
         if pid not in params:
             raise InputError(path, where, "a parameter id listed under parameters (" + ", ".join(params) + ")", pid)
         varying = [(st["id"], sym, f) for st in d.get("stages") or []
                    for sym, f in (st.get("factors") or {}).items() if f.get("parameter") == pid]
-        if not any(st["kind"] != "plackett_burman" for st in d.get("stages") or []
-                   for f in (st.get("factors") or {}).values() if f.get("parameter") == pid):
-            raise InputError(path, where, f"a parameter a stage past the screening varies (a factor with parameter: "
-                             f"{pid}); none does ({'only a screening varies it' if varying else 'no stage varies it'}"
-                             "), so the range would never be used: delete the entry", pid)
+        if not any(sid in sources for sid, _, _ in varying):
+            why = "; ".join(f"stages.{sid}.factors.{sym} is in {_why_not_moved(d, sid, moved)}"
+                            for sid, sym, _ in varying) or "no stage varies it"
+            raise InputError(path, where, "a parameter set by a factor of a stage the second calibration round "
+                             f"moves (an optimised stage the DEM source runs: {runs})", pid,
+                             note=f"{why}; the range would never be used: delete the entry")
         lo, hi = float(r["low"]), float(r["high"])
         if not (math.isfinite(lo) and math.isfinite(hi) and lo < hi):
             raise InputError(path, f"{where}.low", f"a finite number below high ({r['high']})", r["low"])
