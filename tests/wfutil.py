@@ -51,13 +51,19 @@ def copy_workflow(tmp: Path, soils: list[str], source: str | None = None) -> Pat
 
 
 def adaptive_copy(tmp: Path, soil: str, response: str, n_spheres: int, budget: int, setup: dict | None = None,
-                  **settings) -> Path:
+                  photos: bool = True, **settings) -> Path:
     """A workflow copy of one soil for design: adaptive: its ``response`` simulated with
     ``n_spheres`` spheres (and further ``setup`` values) and a ``budget`` of runs per case (and
-    further ``simulation.adaptive`` settings)."""
+    further ``simulation.adaptive`` settings).  ``photos=False``: without the soil's photos
+    (for a soil whose targets read none of them: no job measures photos nothing reads)."""
     copy_workflow(tmp, [soil])
     p = tmp / f"config/soils/{soil}.yaml"
     d = yaml.safe_load(p.read_text())
+    if not photos:
+        read = sorted(t["image"] for t in d["targets"].values() if t.get("image"))
+        if read:
+            raise ValueError(f"{soil}: targets read the photo groups {read}: keep its photos")
+        shutil.rmtree(tmp / "resources/images" / soil, ignore_errors=True)
     d["simulation"]["responses"][response]["set"] = {"n_particles": n_spheres, **(setup or {})}
     d["simulation"]["adaptive"] = {"budget": budget, **settings}
     p.write_text(yaml.safe_dump(d, sort_keys=False))

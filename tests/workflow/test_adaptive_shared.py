@@ -25,12 +25,13 @@ BUDGET, VERIFY_SEEDS, BATCH, ITERATIONS = 9, 1, 1, 1
 #: heaps read as at 1,500 spheres (centre and two corners of the box: 36-45 deg) at a third of
 #: the CPU time
 N_SPHERES, LOAD_MASS = 750, 0.1
+#: the soil's photos are left out of the copy: no target of the soil reads them, nor do these tests
 
 
 @pytest.fixture(scope="module")
 def wf(tmp_path_factory):
     tmp = adaptive_copy(tmp_path_factory.mktemp("adaptive_shared"), SOIL, "angle_of_repose", N_SPHERES, BUDGET,
-                        setup={"load_mass": LOAD_MASS},
+                        setup={"load_mass": LOAD_MASS}, photos=False,
                         verify_seeds=VERIFY_SEEDS, batch=BATCH, max_iterations=ITERATIONS)
     run(tmp, "--cores", "2", "--config", "design=adaptive")
     return tmp

@@ -12,6 +12,7 @@ from __future__ import annotations
 import json
 import os
 import re
+import shutil
 
 import numpy as np
 import pandas as pd
@@ -261,20 +262,27 @@ def test_changing_a_factor_range_reruns_only_that_soil(done):
 
 
 # ------------------------------------------------------------------ reproducible
-# Same inputs, same tables: DEM jobs of a second run from an empty results/ give the tiny run's
-# files again, byte for byte (their timings are in the benchmark files and logs, not in the
-# tables).  (Whole runs, local against a SLURM cluster:
+# Same inputs, same tables: DEM jobs of a second run give the tiny run's files again, byte for
+# byte (their timings are in the benchmark files and logs, not in the tables).  The second run
+# starts from the tiny run's photo measurement and kernel stamp (copied, as a user's results/
+# keeps them): it designs the screening afresh and runs two of its points again (they differ in
+# four of the seven factors).  (Whole runs, local against a SLURM cluster:
 # benchmarks/slurm.py; one and two Numba threads give identical states: tests/dem/test_motion.py.)
 # Here, beside the other users of the tiny run: test files go to the test workers whole
 # (--dist loadfile), so the session's tiny run is built once.
 
 REPRO_STAGE = "results/cinnamon-soil/dem/pb"
-REPRO_RUNS = [1, 2, 3, 4]
+REPRO_RUNS = [1, 2]
+#: what the second run takes from the tiny run instead of computing it again: the photos'
+#: measurement (the targets the design reads) and the stamp of the kernel cache
+REPRO_COPIED = ["results/cinnamon-soil/images", "results/cache"]
 
 
 @pytest.fixture(scope="module")
-def second(tmp_path_factory):
+def second(tiny_dem_run, tmp_path_factory):
     tmp = make_tiny(copy_workflow(tmp_path_factory.mktemp("again"), TINY_SOILS))
+    for d in REPRO_COPIED:
+        shutil.copytree(tiny_dem_run / d, tmp / d)
     targets = [f"{REPRO_STAGE}/runs/{r}.csv" for r in REPRO_RUNS]
     run(tmp, "--cores", "2", *targets)
     if not all((tmp / t).exists() for t in targets):
@@ -284,6 +292,14 @@ def second(tmp_path_factory):
         # the same command then builds them, as a restarted run does for a user
         run(tmp, "--cores", "2", *targets)
     return tmp
+
+
+def test_the_second_run_measured_no_photo_and_compiled_no_kernel(second):
+    """The copied photo measurement and kernel stamp are taken as they are (no job of theirs
+    ran), and the design and the points are this run's own."""
+    logs = {p.relative_to(second / "logs").as_posix() for p in (second / "logs").rglob("*.log")}
+    assert "cinnamon-soil/images/image_measure.log" not in logs and "dem_kernels.log" not in logs
+    assert {"cinnamon-soil/dem/pb/design.log"} | {f"cinnamon-soil/dem/pb/runs/{r}.log" for r in REPRO_RUNS} <= logs
 
 
 def test_a_second_run_gives_the_same_rows(tiny_dem_run, second):
