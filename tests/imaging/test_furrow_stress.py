@@ -15,11 +15,18 @@ def _measure(path, truth):
     return measure.measure_furrow(path, truth["scale_length_mm"], truth["beam_datum_mm"])
 
 
-def test_stress_subset_within_two_percent(tmp_path):
+@pytest.fixture(scope="module")
+def subset(tmp_path_factory):
+    """The first 6 photos of the seeded furrow corpus (path, truth), written once for this file."""
+    folder = tmp_path_factory.mktemp("furrows")
+    return [corpus.write_furrow_photo(params, folder, f"f{k}")
+            for k, params in enumerate(corpus.furrow_photo_params(6, seed=0))]
+
+
+def test_stress_subset_within_two_percent(subset):
     """The first 6 photos of the seeded furrow corpus: every area within 2 % of the truth, the
     scale from the beam's ends within 0.3 %, the roll within 0.1 deg."""
-    for k, params in enumerate(corpus.furrow_photo_params(6, seed=0)):
-        path, truth = corpus.write_furrow_photo(params, tmp_path, f"f{k}")
+    for k, (path, truth) in enumerate(subset):
         r = _measure(path, truth)
         assert abs(r.area_mm2 / truth["area_mm2"] - 1) <= 0.02, (k, r.area_mm2, truth["area_mm2"])
         assert abs(r.px_per_mm / truth["px_per_mm"] - 1) <= 0.003, k
@@ -69,12 +76,12 @@ def test_a_photo_it_cannot_read_is_refused_naming_what_is_missing(tmp_path, case
 
 
 @pytest.mark.parametrize("zoom", [0.5, 2.0])
-def test_the_same_photo_at_another_resolution_gives_the_same_area(tmp_path, zoom):
+def test_the_same_photo_at_another_resolution_gives_the_same_area(tmp_path, subset, zoom):
     """A user's camera may give a quarter or four times the pixels: the scale comes from the
     beam in pixels, the area in mm^2 stays within 2 % of the truth."""
     from PIL import Image
 
-    path, truth = corpus.write_furrow_photo(corpus.furrow_photo_params(6, seed=0)[5], tmp_path, "f5")
+    path, truth = subset[5]
     im = Image.open(path)
     big = tmp_path / f"zoom{zoom}.jpg"
     im.resize((int(im.width * zoom), int(im.height * zoom)), Image.BILINEAR).save(big, quality=92)

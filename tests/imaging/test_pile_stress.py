@@ -20,6 +20,27 @@ def _photo(tmp_path, name, left, right, style, roll=1.0, seed=11):
     return render.save_photo(tmp_path / f"{name}.jpg", img, truth, quality=85), truth
 
 
+@pytest.fixture(scope="module")
+def stress_photo(tmp_path_factory):
+    """Photo k of the seeded stress corpus (seed 0), written once for this file's tests, and
+    its default measurement (measure_pile's result or its InputError), also made once."""
+    folder = tmp_path_factory.mktemp("stress")
+    params = corpus.pile_photo_params(197, seed=0)
+    done = {}
+
+    def photo(k):
+        if k not in done:
+            path, truth = corpus.write_pile_photo(params[k], folder, f"s{k:03d}")
+            try:
+                r = measure.measure_pile(path)
+            except InputError as e:
+                r = e
+            done[k] = path, truth, r
+        return done[k]
+
+    return photo
+
+
 def _check(r, truth):
     # the photo's value (mean of the flanks) within 0.3 deg, each flank within 0.5 deg
     assert abs(r.angle_deg - truth["angle_deg"]) <= 0.3
@@ -28,10 +49,10 @@ def _check(r, truth):
     assert abs(r.roll_deg - truth["roll_deg"]) <= 0.15
 
 
-@pytest.mark.parametrize("roll", [-4.5, 3.0])
-def test_heap_lighter_than_a_dark_wall(tmp_path, roll):
+def test_heap_lighter_than_a_dark_wall(tmp_path):
+    # rolled the other way and further than the photos below (roll 1.0)
     style = PLAIN | {"wall_rgb": [0.12, 0.12, 0.14], "soil_rgb": [0.62, 0.55, 0.45]}
-    p, truth = _photo(tmp_path, "dark", 33.0, 36.0, style, roll=roll)
+    p, truth = _photo(tmp_path, "dark", 33.0, 36.0, style, roll=-4.5)
     r = measure.measure_pile(p)
     _check(r, truth)
     assert r.confidence == "ok"
@@ -61,7 +82,7 @@ def test_empty_plate_on_a_coloured_wall_is_refused(tmp_path):
         assert str(p) in str(e.value)
 
 
-def test_stress_subset_right_or_flagged(tmp_path):
+def test_stress_subset_right_or_flagged(stress_photo):
     """The first 8 photos of the seeded stress corpus (the whole corpus is
     benchmarks/pile_photos.py): none silently wrong by more than 1 deg; at least 5 measured
     within 0.3 deg with confidence ok.  Six of the 8 are such heaps by construction (the
@@ -71,11 +92,9 @@ def test_stress_subset_right_or_flagged(tmp_path):
     hold both of the benchmark's ways out: a heap cut by the image border (refused) and one
     whose flank reads 6 deg off (flagged low)."""
     good = 0
-    for k, params in enumerate(corpus.pile_photo_params(8, seed=0)):
-        path, truth = corpus.write_pile_photo(params, tmp_path, f"s{k:02d}")
-        try:
-            r = measure.measure_pile(path)
-        except InputError:
+    for k in range(8):
+        path, truth, r = stress_photo(k)
+        if isinstance(r, InputError):
             continue
         err = abs(r.angle_deg - truth["angle_deg"])
         if r.confidence == "ok":
@@ -95,74 +114,65 @@ def test_corpus_is_seeded():
     assert np.array_equal(img1, img2)
 
 
-def test_a_second_cue_flags_a_flank_the_first_one_misreads(tmp_path, monkeypatch):
+def test_a_second_cue_flags_a_flank_the_first_one_misreads(stress_photo, monkeypatch):
     """Photo 64 of the seeded corpus: a heap of nearly the wall's hue whose right flank the
     first cue (luminance, heap lighter) reads 6 deg off its rendered 22.7 deg with a clean line
     fit (under 1 px RMS), so neither fit check sees it; the second cue disagrees and the result
     is flagged.  The flank is the shaded one, lost to a wall as dark as it: the soil's grain
     then locates it within 0.5 deg (the result stays low).  Photo 0: two cues agree within
     1 deg, confidence stays ok."""
-    params = corpus.pile_photo_params(65, seed=0)
-    path, truth = corpus.write_pile_photo(params[64], tmp_path, "s64")
+    path, truth, r64 = stress_photo(64)
     with monkeypatch.context() as m:
         m.setattr(measure, "_texture_flanks", lambda res, lum: res)
         r = measure.measure_pile(path)
     assert abs(r.right_deg - truth["right_deg"]) > 1.0 and r.flank_rms_px < 2.5  # wrong, cleanly fitted
     assert r.cue_check and r.cue_check != r.cue and r.cue_check_deg > measure.CUE_AGREEMENT_DEG
     assert r.confidence == "low"
-    r = measure.measure_pile(path)
+    r = r64
     assert r.texture_flanks == "right" and r.confidence == "low"
     assert abs(r.right_deg - truth["right_deg"]) <= 0.5 and abs(r.angle_deg - truth["angle_deg"]) <= 0.3
-    path, truth = corpus.write_pile_photo(params[0], tmp_path, "s00")
-    r = measure.measure_pile(path)
+    path, truth, r = stress_photo(0)
     assert r.cue_check and r.cue_check_deg <= measure.CUE_AGREEMENT_DEG and r.confidence == "ok"
     assert abs(r.angle_deg - truth["angle_deg"]) <= 0.3
 
 
-def test_a_third_cue_decides_between_two_that_disagree(tmp_path):
+def test_a_third_cue_decides_between_two_that_disagree(stress_photo):
     """Photos 27 and 196 of the seeded corpus.  27: the first cue (luminance) reads both
     flanks within 0.3 deg of the rendered ones, the chroma cue reads a flank more than 1 deg
     away; the next credible cue agrees with the first, so the dissent is outvoted, recorded,
     and the result stays ok.  196: the first cue (luminance) reads the right flank 2.4 deg
     flat, the next credible cue reads it within 0.1 deg, and no third cue measures a heap to
     decide between the two: flagged low."""
-    params = corpus.pile_photo_params(197, seed=0)
-    path, truth = corpus.write_pile_photo(params[27], tmp_path, "s27")
-    r = measure.measure_pile(path)
+    path, truth, r = stress_photo(27)
     assert abs(r.left_deg - truth["left_deg"]) <= 0.3 and abs(r.right_deg - truth["right_deg"]) <= 0.3
     assert r.cue_outvoted and r.cue_outvoted_deg > measure.CUE_AGREEMENT_DEG
     assert r.cue_check not in ("", r.cue_outvoted) and r.cue_check_deg <= measure.CUE_AGREEMENT_DEG
     assert r.confidence == "ok"
-    path, truth = corpus.write_pile_photo(params[196], tmp_path, "s196")
-    r = measure.measure_pile(path)
+    path, truth, r = stress_photo(196)
     assert abs(r.right_deg - truth["right_deg"]) > 1.0  # the first cue's reading, refuted
     assert r.cue_check and r.cue_outvoted == ""
     assert r.cue_check_deg > measure.CUE_AGREEMENT_DEG and r.confidence == "low"
 
 
-def test_a_flank_line_inside_the_heap_is_flagged_and_cannot_refute(tmp_path):
+def test_a_flank_line_inside_the_heap_is_flagged_and_cannot_refute(stress_photo):
     """Photo 183 of the seeded corpus: luminance alone reads the left flank 4.6 deg steep (its
     fitted edge runs inside the heap: the strip just outside the line is still more than half
     way from the wall's level to the heap's), so that reading is low; in the cue search it is
     then no credible dissent, and the first cue, within 0.3 deg, stands confirmed and ok."""
-    params = corpus.pile_photo_params(184, seed=0)
-    path, truth = corpus.write_pile_photo(params[183], tmp_path, "s183")
+    path, truth, r = stress_photo(183)
     g = measure.measure_pile(path, channel="gray")
     assert abs(g.left_deg - truth["left_deg"]) > 4.0
     assert g.flank_outside_share > measure.FLANK_OUTSIDE_MAX and g.confidence == "low"
-    r = measure.measure_pile(path)
     assert abs(r.left_deg - truth["left_deg"]) <= 0.3 and abs(r.right_deg - truth["right_deg"]) <= 0.3
     assert r.cue_outvoted == "" and r.cue_check and r.cue_check_deg <= measure.CUE_AGREEMENT_DEG
     assert r.flank_outside_share < 0.2 and r.confidence == "ok"
 
 
-def test_a_cue_that_does_not_split_the_band_neither_confirms_nor_refutes(tmp_path):
+def test_a_cue_that_does_not_split_the_band_neither_confirms_nor_refutes(stress_photo):
     """Photo 56 of the seeded corpus: luminance splits the band above the plate poorly
     (Otsu's eta below MIN_CUE_ETA) and reads a flank 10 deg off; it is not taken as a
     check, the next clear cue confirms the first, which is within 0.3 deg."""
-    params = corpus.pile_photo_params(57, seed=0)
-    path, truth = corpus.write_pile_photo(params[56], tmp_path, "s56")
-    r = measure.measure_pile(path)
+    path, truth, r = stress_photo(56)
     assert r.confidence == "ok" and r.cue_check and r.cue_check_deg <= measure.CUE_AGREEMENT_DEG
     assert r.cue_outvoted == ""
     assert abs(r.angle_deg - truth["angle_deg"]) <= 0.3
@@ -173,7 +183,8 @@ def test_a_colour_cue_edge_is_refined_in_luminance(tmp_path, monkeypatch):
     16 px blocks): the chroma cue segments the heap, and its blocky edge reads the shaded right
     flank flatter than rendered.  Refined in luminance (full resolution, a clear step at this
     edge) every flank is within 0.5 deg and the photo's value within 0.3 deg; with the
-    luminance refinement switched off at least one flank is more than 0.5 deg off."""
+    luminance refinement switched off a flank of the second photo is more than 0.5 deg off
+    (each of the three reads one 0.8 to 3.0 deg off so)."""
     style = PLAIN | {"wall_rgb": [0.26, 0.24, 0.22], "soil_rgb": [0.64, 0.57, 0.47], "noise": 0.01,
                      "blur_px": 1.4, "scale_bar": False,
                      "shadow": {"dx_mm": -18.0, "dy_mm": 8.0, "blur_px": 3.0, "darkness": 0.15}}
@@ -187,11 +198,9 @@ def test_a_colour_cue_edge_is_refined_in_luminance(tmp_path, monkeypatch):
         assert abs(r.angle_deg - truth["angle_deg"]) <= 0.3
         assert abs(r.left_deg - truth["left_deg"]) <= 0.5 and abs(r.right_deg - truth["right_deg"]) <= 0.5
     monkeypatch.setattr(measure, "LUM_EDGE_SNR", np.inf)
-    worst = 0.0
-    for p, truth in photos:
-        r = measure.measure_pile(p)
-        worst = max(worst, abs(r.left_deg - truth["left_deg"]), abs(r.right_deg - truth["right_deg"]))
-    assert worst > 0.5
+    p, truth = photos[1]
+    r = measure.measure_pile(p)
+    assert max(abs(r.left_deg - truth["left_deg"]), abs(r.right_deg - truth["right_deg"])) > 0.5
 
 
 def _flank_image(side, heap=0.2, wall=0.8, h=300, w=400, prow=250.0, edge=200.0):
