@@ -10,8 +10,9 @@ the hidden effect, then ``soilcal.loop.core.run_inprocess`` runs the whole loop 
   packing) in a campaign of 12 tests (rod stopped at 15-30 % strain; stress at 10 % strain
   and recovered strain);
 * ``dem``: soilcal's DEM, the cinnamon soil's bulldozing plates at the ``quick`` preset in a
-  soil-bin campaign of ``--n`` conditions (three plates, speeds 0.1-1.0 m/s, depths
-  20-40 mm, positions along a 40 m bin, four test days, moisture 8-20 %), horizontal force,
+  soil-bin campaign of ``--n`` conditions (three plates, speeds 0.1-1.0 m/s spaced evenly
+  on a log scale, depths 20-40 mm, positions along a 40 m bin, four test days, moisture
+  8-20 %), horizontal force,
   three DEM seeds per condition and design point, three levels per effect parameter
   (minutes per case).  A quick plate's horizontal force scatters by about 15 % from seed to
   seed, so the DEM cases' effects are larger than the stand-in's.  ``plastic_contact`` runs
@@ -40,6 +41,14 @@ data, so a DEM row is an example, several campaigns a rate.
 ``--design-points``: levels per effect parameter of the DEM cases (default 3, to keep a case
 to minutes; the loop's own default, ``loop.design_points``, is 5); a DEM row records it
 (column ``design_points``; empty in rows written before it existed).
+
+``--speeds``: how the DEM campaign draws its tool speeds in 0.1-1.0 m/s: ``log`` (default)
+uniform in ln v, so that every e-fold of speed holds as many conditions (rate_friction acts
+per e-fold of speed, ``soilcal.loop.effects``; four in ten conditions fall below 0.25 m/s,
+where the quick plate's force answers a change of friction most, ``loop.md``), or
+``uniform`` in v (one in six below 0.25 m/s), the campaigns of the rows written before the
+option existed (column ``speeds``, empty there).  Both map the same random draw, so the
+other covariates of a campaign are the same under either.
 """
 
 from __future__ import annotations
@@ -61,7 +70,7 @@ HERE = Path(__file__).resolve().parent
 ROOT = HERE.parent
 FIELDS = ["engine", "case", "seed", "hidden", "disturbance", "chosen", "correct", "false_attribution",
           "parameter_error_percent", "rmse_before_percent", "rmse_after_percent", "error_reduction_percent",
-          "verdict", "dem_runs", "wall_s", "commit", "design_points", "parameters", "ci95"]
+          "verdict", "dem_runs", "wall_s", "commit", "design_points", "parameters", "ci95", "speeds"]
 
 STANDIN_CASES = {
     "rate_friction": ({"rate_friction": {"beta": 0.2}}, {}),
@@ -155,15 +164,32 @@ def _with_campaign(tmp: Path, name: str, lines: list[str], entry: dict):
     return conditions(load_soil(p, tmp / "resources"))
 
 
-def _campaign(tmp: Path, n: int, seed: int):
+#: the DEM campaign's speed range (m/s) and how it is spaced (``--speeds``, module docstring)
+SPEED_RANGE = (0.1, 1.0)
+SPEED_SPACINGS = ("log", "uniform")
+
+
+def campaign_speed(rng, spacing: str) -> float:
+    """One tool speed of the DEM campaign in :data:`SPEED_RANGE`: uniform in ln v (``log``) or
+    in v (``uniform``), from one uniform draw of ``rng`` either way."""
+    lo, hi = SPEED_RANGE
+    if spacing == "log":
+        return float(np.exp(rng.uniform(np.log(lo), np.log(hi))))
+    if spacing == "uniform":
+        return float(rng.uniform(lo, hi))
+    raise ValueError(f"speed spacing {spacing!r} is not one of {', '.join(SPEED_SPACINGS)}")
+
+
+def _campaign(tmp: Path, n: int, seed: int, speeds: str = "log"):
     """A copy of the cinnamon soil whose measurements block is a soil-bin campaign of the
-    bulldozing plates (module docstring); returns its conditions."""
+    bulldozing plates (module docstring; ``speeds``: their spacing, :func:`campaign_speed`);
+    returns its conditions."""
     rng = np.random.default_rng(seed)
     plates = ["line", "arc", "parabola"]
     lines = ["directrix,speed_m_s,depth_mm,position_m,day,moisture_pct,horizontal_N,horizontal_sd_N,vertical_N,"
              "vertical_sd_N,repeats"]
     for i in range(n):
-        lines.append(f"{plates[i % 3]},{rng.uniform(0.1, 1.0):.3f},{rng.uniform(20, 40):.1f},{rng.uniform(0, 40):.2f},"
+        lines.append(f"{plates[i % 3]},{campaign_speed(rng, speeds):.3f},{rng.uniform(20, 40):.1f},{rng.uniform(0, 40):.2f},"
                      f"d{i * 4 // n},{rng.uniform(8, 20):.1f},1,,1,,3")
     return _with_campaign(tmp, "cinnamon-soil", lines, {
         "source": "synthetic soil-bin campaign (benchmarks/loop.py)",
@@ -198,7 +224,7 @@ def _compression_campaign(tmp: Path, n: int, seed: int):
         "calibrated": {"stage": "bbd", "case": "mc10"}, "replicates": 2})
 
 
-def dem_rows(cases, n, seed, threads, design_points=3, outdir=HERE / "results"):
+def dem_rows(cases, n, seed, threads, design_points=3, outdir=HERE / "results", speeds="log"):
     from soilcal.loop import core, synthesize as sy
     from soilcal.loop.cli import condition_params, dem_simulator
 
@@ -218,7 +244,8 @@ def dem_rows(cases, n, seed, threads, design_points=3, outdir=HERE / "results"):
             continue
         hidden, dist = DEM_CASES[case]
         with tempfile.TemporaryDirectory() as tmp:
-            conds = (_compression_campaign if case in COMPRESSION_CASES else _campaign)(Path(tmp), n, seed)
+            conds = (_compression_campaign(Path(tmp), n, seed) if case in COMPRESSION_CASES
+                     else _campaign(Path(tmp), n, seed, speeds))
             t0 = time.perf_counter()
             counter["runs"] = 0
             table = sy.synthesize(conds, base, counted, hidden, DEM_REFERENCE, dist, noise=0.02, seed=seed + 10,
@@ -226,7 +253,7 @@ def dem_rows(cases, n, seed, threads, design_points=3, outdir=HERE / "results"):
             out = core.run_inprocess("dem-campaign", sy.with_measured(conds, table), base, counted, settings,
                                      seeds=tuple(range(DEM_SEEDS)))
             rows.append(dict(_row("dem", case, seed, hidden, dist, out, time.perf_counter() - t0, counter["runs"]),
-                             design_points=design_points))
+                             design_points=design_points, speeds="" if case in COMPRESSION_CASES else speeds))
             detail = Path(outdir) / "loop_dem"
             detail.mkdir(parents=True, exist_ok=True)
             tag = case if seed == 0 else f"{case}_campaign{seed}"  # campaign 0 keeps its earlier names
@@ -237,6 +264,14 @@ def dem_rows(cases, n, seed, threads, design_points=3, outdir=HERE / "results"):
                     df.to_csv(detail / f"{tag}_{name}.csv", index=False)
             print(rows[-1]["case"], rows[-1]["chosen"], rows[-1]["verdict"][:100], rows[-1]["wall_s"], flush=True)
     return rows
+
+
+def _speeds_text(r) -> str:
+    """The campaign's speed spacing of a DEM row: its ``speeds``; a soil-bin row written before
+    the column existed drew them uniformly; a compression campaign has none."""
+    if r.get("speeds"):
+        return r["speeds"]
+    return "" if r["case"] in COMPRESSION_CASES else "uniform"
 
 
 def _theta_text(r) -> str:
@@ -278,6 +313,8 @@ def main(argv=None):
     ap.add_argument("--seed", type=int, default=0, help="seed of the DEM campaign")
     ap.add_argument("--threads", type=int, default=None)
     ap.add_argument("--design-points", type=int, default=3, help="levels per effect parameter (dem; default 3)")
+    ap.add_argument("--speeds", choices=SPEED_SPACINGS, default="log",
+                    help="spacing of the DEM campaign's tool speeds in 0.1-1.0 m/s (default log)")
     ap.add_argument("--out", default=str(HERE / "results"))
     ap.add_argument("--rows-from", action="append", default=[], metavar="CSV",
                     help="also take the rows of another run's loop.csv (a DEM campaign run in a clone)")
@@ -297,7 +334,7 @@ def main(argv=None):
     if "standin" in engines:
         new += standin_rows(cases, args.seeds)
     if "dem" in engines:
-        new += dem_rows(cases, args.n, args.seed, args.threads, args.design_points, out)
+        new += dem_rows(cases, args.n, args.seed, args.threads, args.design_points, out, args.speeds)
     for path in args.rows_from:  # rows of a run elsewhere (a clone), each with its own commit
         new += read_rows(Path(path), FIELDS)
 
@@ -321,10 +358,10 @@ def main(argv=None):
           "held-out RMS error down by 70 %; no false attribution.", "",
           *_summary(rows), "", "DEM rows (verdicts in full):", "",
           "| case | campaign | chosen | parameters (95 % interval) | parameter error, % | RMS error before -> after, % "
-          "| levels | DEM runs | wall s | commit | verdict |",
-          "|---|---|---|---|---|---|---|---|---|---|---|",
+          "| levels | speeds | DEM runs | wall s | commit | verdict |",
+          "|---|---|---|---|---|---|---|---|---|---|---|---|",
           *(f"| {r['case']} | {r['seed']} | {r['chosen']} | {_theta_text(r)} | {r['parameter_error_percent']} | {r['rmse_before_percent']} -> "
-            f"{r['rmse_after_percent']} | {r.get('design_points') or 3} | {r['dem_runs']} | {r['wall_s']} | "
+            f"{r['rmse_after_percent']} | {r.get('design_points') or 3} | {_speeds_text(r)} | {r['dem_runs']} | {r['wall_s']} | "
             f"{r['commit']} | {r['verdict']} |"
             for r in rows if r["engine"] == "dem"),
           "", "Rows: `loop.csv`; per DEM case and campaign: `loop_dem/`.", ""]
