@@ -25,7 +25,8 @@ Cases: every library effect, two effects at once, a periodic disturbance along t
 stones, a random offset between test days, and no effect.  Written:
 ``benchmarks/results/loop.csv`` (one row per engine, case and campaign seed: chosen effects,
 parameter error, RMS error before/after, false attribution, wall time; earlier rows kept where
-not rerun: a stand-in case reruns all its seeds, a DEM case the campaign of ``--seed``),
+not rerun: a stand-in case reruns all its seeds, a DEM case the campaign of ``--seed`` and
+``--speeds``),
 ``loop.md``, and per DEM case and campaign its residuals, diagnosis before and after, every
 model tried and the predictions with the chosen effects
 (``benchmarks/results/loop_dem/<case>_*.csv``, ``<case>_campaign<seed>_*.csv`` for a campaign
@@ -48,7 +49,10 @@ per e-fold of speed, ``soilcal.loop.effects``; four in ten conditions fall below
 where the quick plate's force answers a change of friction most, ``loop.md``), or
 ``uniform`` in v (one in six below 0.25 m/s), the campaigns of the rows written before the
 option existed (column ``speeds``, empty there).  Both map the same random draw, so the
-other covariates of a campaign are the same under either.
+other covariates of a campaign are the same under either.  A campaign of one spacing does not
+replace the other's row, and the summary counts them apart (the case named with its spacing
+where a case has rows of both).  The page's header names the files of ``--rows-from`` and
+``--out`` by their names only.
 """
 
 from __future__ import annotations
@@ -268,10 +272,36 @@ def dem_rows(cases, n, seed, threads, design_points=3, outdir=HERE / "results", 
 
 def _speeds_text(r) -> str:
     """The campaign's speed spacing of a DEM row: its ``speeds``; a soil-bin row written before
-    the column existed drew them uniformly; a compression campaign has none."""
+    the column existed drew them uniformly; a compression campaign and a stand-in row have none."""
+    if r["engine"] != "dem":
+        return ""
     if r.get("speeds"):
         return r["speeds"]
     return "" if r["case"] in COMPRESSION_CASES else "uniform"
+
+
+def replaced(r, new) -> bool:
+    """Whether an earlier row ``r`` is replaced by one of the ``new`` rows: a stand-in case reruns
+    all its seeds; a DEM case its campaign drawn with the same speed spacing (a campaign of the
+    other spacing is another campaign, kept beside it)."""
+    return any(r["engine"] == x["engine"] and r["case"] == x["case"]
+               and (r["engine"] != "dem" or (str(r["seed"]) == str(x["seed"])
+                                             and _speeds_text(r) == _speeds_text(x))) for x in new)
+
+
+def _command_text(argv) -> str:
+    """The command line of a run for the page's header, the files of ``--rows-from`` and
+    ``--out`` given by their names only (their directories are the run's own)."""
+    out, it = [], iter(argv)
+    for a in it:
+        opt, eq, val = a.partition("=")
+        if opt in ("--rows-from", "--out"):
+            if not eq:
+                val = next(it, "")
+            out += [opt, Path(val).name] if val else [opt]
+        else:
+            out.append(a)
+    return " ".join(out)
 
 
 def _theta_text(r) -> str:
@@ -289,9 +319,11 @@ def _theta_text(r) -> str:
 def _summary(rows):
     out = ["| engine | case | campaigns | correct | false attributions | max parameter error, % | "
            "RMS error before -> after, % (median) | median wall s |", "|---|---|---|---|---|---|---|---|"]
-    keys = list(dict.fromkeys((r["engine"], r["case"]) for r in rows))
-    for eng, case in keys:
-        g = [r for r in rows if r["engine"] == eng and r["case"] == case]
+    keys = list(dict.fromkeys((r["engine"], r["case"], _speeds_text(r)) for r in rows))
+    for eng, case, speeds in keys:
+        g = [r for r in rows if r["engine"] == eng and r["case"] == case and _speeds_text(r) == speeds]
+        if any(k[:2] == (eng, case) and k[2] != speeds for k in keys):  # both spacings: say which
+            case = f"{case} ({speeds or 'no'} speeds)"
         pe = [float(r["parameter_error_percent"]) for r in g if str(r["parameter_error_percent"]) not in ("", "nan")]
         b = np.median([float(r["rmse_before_percent"]) for r in g])
         a = np.median([float(r["rmse_after_percent"]) for r in g])
@@ -338,18 +370,14 @@ def main(argv=None):
     for path in args.rows_from:  # rows of a run elsewhere (a clone), each with its own commit
         new += read_rows(Path(path), FIELDS)
 
-    def replaced(r):  # a stand-in case reruns all its seeds; a DEM case its campaign
-        return any(r["engine"] == x["engine"] and r["case"] == x["case"]
-                   and (r["engine"] != "dem" or str(r["seed"]) == str(x["seed"])) for x in new)
-
     # earlier rows read only now, so that a run of another engine in the meantime is kept
-    old = [r for r in read_rows(out / "loop.csv", FIELDS) if not replaced(r)]
+    old = [r for r in read_rows(out / "loop.csv", FIELDS) if not replaced(r, new)]
     rows = sorted(old + new, key=lambda r: (r["engine"], str(r["seed"]) if r["engine"] == "dem" else ""))
     write_rows(out / "loop.csv", rows, FIELDS)
     md = ["# Measured-data loop benchmark", "",
           f"Machine: {platform.machine()}, {os.cpu_count()} logical CPUs, Python {platform.python_version()}; "
           f"commit {commit()}, {time.strftime('%Y-%m-%d %H:%M', time.gmtime())} UTC; "
-          f"`python benchmarks/loop.py {' '.join(sys.argv[1:])}` ({time.perf_counter() - t0:.0f} s for the rows "
+          f"`python benchmarks/loop.py {_command_text(sys.argv[1:] if argv is None else argv)}` ({time.perf_counter() - t0:.0f} s for the rows "
           "of this run; rows of engines and cases not run are kept from earlier runs, each with its commit).", "",
           "A case's measured values come from the engine with the hidden effect (or disturbance) and 2 % noise per "
           "repeat (three repeats); the loop then runs without it.  correct: the chosen effects are exactly the "
