@@ -52,7 +52,7 @@ option existed (column ``speeds``, empty there).  Both map the same random draw,
 other covariates of a campaign are the same under either.  A campaign of one spacing does not
 replace the other's row, and the summary counts them apart (the case named with its spacing
 where a case has rows of both).  The page's header names the files of ``--rows-from`` and
-``--out`` by their names only.
+``--out`` by their names only, and the rows taken from other runs by engine, case and campaign.
 """
 
 from __future__ import annotations
@@ -304,6 +304,16 @@ def _command_text(argv) -> str:
     return " ".join(out)
 
 
+def _merged_text(rows) -> str:
+    """What a run took from other runs' tables (``--rows-from``), for the page's header: each
+    row's engine, case and campaign, and a DEM soil-bin row's speed spacing."""
+    if not rows:
+        return ""
+    return "; rows taken from other runs: " + ", ".join(
+        f"{r['engine']} {r['case']}" + (f" campaign {r['seed']}" if r["engine"] == "dem" else f" seed {r['seed']}")
+        + (f" ({_speeds_text(r)} speeds)" if _speeds_text(r) else "") for r in rows)
+
+
 def _theta_text(r) -> str:
     """``name = value (low to high)`` of a row's fitted parameters; empty in rows without them."""
     import json
@@ -367,8 +377,8 @@ def main(argv=None):
         new += standin_rows(cases, args.seeds)
     if "dem" in engines:
         new += dem_rows(cases, args.n, args.seed, args.threads, args.design_points, out, args.speeds)
-    for path in args.rows_from:  # rows of a run elsewhere (a clone), each with its own commit
-        new += read_rows(Path(path), FIELDS)
+    merged = [r for path in args.rows_from for r in read_rows(Path(path), FIELDS)]
+    new += merged  # rows of a run elsewhere (a clone), each with its own commit
 
     # earlier rows read only now, so that a run of another engine in the meantime is kept
     old = [r for r in read_rows(out / "loop.csv", FIELDS) if not replaced(r, new)]
@@ -378,7 +388,7 @@ def main(argv=None):
           f"Machine: {platform.machine()}, {os.cpu_count()} logical CPUs, Python {platform.python_version()}; "
           f"commit {commit()}, {time.strftime('%Y-%m-%d %H:%M', time.gmtime())} UTC; "
           f"`python benchmarks/loop.py {_command_text(sys.argv[1:] if argv is None else argv)}` ({time.perf_counter() - t0:.0f} s for the rows "
-          "of this run; rows of engines and cases not run are kept from earlier runs, each with its commit).", "",
+          f"of this run{_merged_text(merged)}; rows of engines and cases not run are kept from earlier runs, each with its commit).", "",
           "A case's measured values come from the engine with the hidden effect (or disturbance) and 2 % noise per "
           "repeat (three repeats); the loop then runs without it.  correct: the chosen effects are exactly the "
           "hidden ones (none for a disturbance outside the library or no effect); false attribution: a library "

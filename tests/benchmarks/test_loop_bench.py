@@ -76,3 +76,11 @@ def test_header_names_files_not_directories(bench):
     text = bench._command_text(["--engines", "none", "--rows-from", "/scratch/a/rate.csv",
                                 "--rows-from=/scratch/b/none.csv", "--out", "/scratch/c/out"])
     assert text == "--engines none --rows-from rate.csv --rows-from none.csv --out out"
+
+
+def test_header_names_the_merged_rows(bench):
+    assert bench._merged_text([]) == ""
+    assert bench._merged_text([_row("none", 0, "log"), _row("stones", 1, ""), _row("plastic_contact", 0, ""),
+                               _row("none", 2, "", engine="standin")]) == (
+        "; rows taken from other runs: dem none campaign 0 (log speeds), dem stones campaign 1 (uniform speeds), "
+        "dem plastic_contact campaign 0, standin none seed 2")
