@@ -10,8 +10,9 @@ the hidden effect, then ``soilcal.loop.core.run_inprocess`` runs the whole loop 
   packing) in a campaign of 12 tests (rod stopped at 15-30 % strain; stress at 10 % strain
   and recovered strain);
 * ``dem``: soilcal's DEM, the cinnamon soil's bulldozing plates at the ``quick`` preset in a
-  soil-bin campaign of ``--n`` conditions (three plates, speeds 0.1-1.0 m/s, depths
-  20-40 mm, positions along a 40 m bin, four test days, moisture 8-20 %), horizontal force,
+  soil-bin campaign of ``--n`` conditions (three plates, speeds 0.1-1.0 m/s spaced evenly
+  on a log scale, depths 20-40 mm, positions along a 40 m bin, four test days, moisture
+  8-20 %), horizontal force,
   three DEM seeds per condition and design point, three levels per effect parameter
   (minutes per case).  A quick plate's horizontal force scatters by about 15 % from seed to
   seed, so the DEM cases' effects are larger than the stand-in's.  ``plastic_contact`` runs
@@ -24,7 +25,8 @@ Cases: every library effect, two effects at once, a periodic disturbance along t
 stones, a random offset between test days, and no effect.  Written:
 ``benchmarks/results/loop.csv`` (one row per engine, case and campaign seed: chosen effects,
 parameter error, RMS error before/after, false attribution, wall time; earlier rows kept where
-not rerun: a stand-in case reruns all its seeds, a DEM case the campaign of ``--seed``),
+not rerun: a stand-in case reruns all its seeds, a DEM case the campaign of ``--seed`` and
+``--speeds``),
 ``loop.md``, and per DEM case and campaign its residuals, diagnosis before and after, every
 model tried and the predictions with the chosen effects
 (``benchmarks/results/loop_dem/<case>_*.csv``, ``<case>_campaign<seed>_*.csv`` for a campaign
@@ -40,6 +42,17 @@ data, so a DEM row is an example, several campaigns a rate.
 ``--design-points``: levels per effect parameter of the DEM cases (default 3, to keep a case
 to minutes; the loop's own default, ``loop.design_points``, is 5); a DEM row records it
 (column ``design_points``; empty in rows written before it existed).
+
+``--speeds``: how the DEM campaign draws its tool speeds in 0.1-1.0 m/s: ``log`` (default)
+uniform in ln v, so that every e-fold of speed holds as many conditions (rate_friction acts
+per e-fold of speed, ``soilcal.loop.effects``; four in ten conditions fall below 0.25 m/s,
+where the quick plate's force answers a change of friction most, ``loop.md``), or
+``uniform`` in v (one in six below 0.25 m/s), the campaigns of the rows written before the
+option existed (column ``speeds``, empty there).  Both map the same random draw, so the
+other covariates of a campaign are the same under either.  A campaign of one spacing does not
+replace the other's row, and the summary counts them apart (the case named with its spacing
+where a case has rows of both).  The page's header names the files of ``--rows-from`` and
+``--out`` by their names only, and the rows taken from other runs by engine, case and campaign.
 """
 
 from __future__ import annotations
@@ -61,7 +74,7 @@ HERE = Path(__file__).resolve().parent
 ROOT = HERE.parent
 FIELDS = ["engine", "case", "seed", "hidden", "disturbance", "chosen", "correct", "false_attribution",
           "parameter_error_percent", "rmse_before_percent", "rmse_after_percent", "error_reduction_percent",
-          "verdict", "dem_runs", "wall_s", "commit", "design_points", "parameters", "ci95"]
+          "verdict", "dem_runs", "wall_s", "commit", "design_points", "parameters", "ci95", "speeds"]
 
 STANDIN_CASES = {
     "rate_friction": ({"rate_friction": {"beta": 0.2}}, {}),
@@ -155,15 +168,32 @@ def _with_campaign(tmp: Path, name: str, lines: list[str], entry: dict):
     return conditions(load_soil(p, tmp / "resources"))
 
 
-def _campaign(tmp: Path, n: int, seed: int):
+#: the DEM campaign's speed range (m/s) and how it is spaced (``--speeds``, module docstring)
+SPEED_RANGE = (0.1, 1.0)
+SPEED_SPACINGS = ("log", "uniform")
+
+
+def campaign_speed(rng, spacing: str) -> float:
+    """One tool speed of the DEM campaign in :data:`SPEED_RANGE`: uniform in ln v (``log``) or
+    in v (``uniform``), from one uniform draw of ``rng`` either way."""
+    lo, hi = SPEED_RANGE
+    if spacing == "log":
+        return float(np.exp(rng.uniform(np.log(lo), np.log(hi))))
+    if spacing == "uniform":
+        return float(rng.uniform(lo, hi))
+    raise ValueError(f"speed spacing {spacing!r} is not one of {', '.join(SPEED_SPACINGS)}")
+
+
+def _campaign(tmp: Path, n: int, seed: int, speeds: str = "log"):
     """A copy of the cinnamon soil whose measurements block is a soil-bin campaign of the
-    bulldozing plates (module docstring); returns its conditions."""
+    bulldozing plates (module docstring; ``speeds``: their spacing, :func:`campaign_speed`);
+    returns its conditions."""
     rng = np.random.default_rng(seed)
     plates = ["line", "arc", "parabola"]
     lines = ["directrix,speed_m_s,depth_mm,position_m,day,moisture_pct,horizontal_N,horizontal_sd_N,vertical_N,"
              "vertical_sd_N,repeats"]
     for i in range(n):
-        lines.append(f"{plates[i % 3]},{rng.uniform(0.1, 1.0):.3f},{rng.uniform(20, 40):.1f},{rng.uniform(0, 40):.2f},"
+        lines.append(f"{plates[i % 3]},{campaign_speed(rng, speeds):.3f},{rng.uniform(20, 40):.1f},{rng.uniform(0, 40):.2f},"
                      f"d{i * 4 // n},{rng.uniform(8, 20):.1f},1,,1,,3")
     return _with_campaign(tmp, "cinnamon-soil", lines, {
         "source": "synthetic soil-bin campaign (benchmarks/loop.py)",
@@ -198,7 +228,7 @@ def _compression_campaign(tmp: Path, n: int, seed: int):
         "calibrated": {"stage": "bbd", "case": "mc10"}, "replicates": 2})
 
 
-def dem_rows(cases, n, seed, threads, design_points=3, outdir=HERE / "results"):
+def dem_rows(cases, n, seed, threads, design_points=3, outdir=HERE / "results", speeds="log"):
     from soilcal.loop import core, synthesize as sy
     from soilcal.loop.cli import condition_params, dem_simulator
 
@@ -218,7 +248,8 @@ def dem_rows(cases, n, seed, threads, design_points=3, outdir=HERE / "results"):
             continue
         hidden, dist = DEM_CASES[case]
         with tempfile.TemporaryDirectory() as tmp:
-            conds = (_compression_campaign if case in COMPRESSION_CASES else _campaign)(Path(tmp), n, seed)
+            conds = (_compression_campaign(Path(tmp), n, seed) if case in COMPRESSION_CASES
+                     else _campaign(Path(tmp), n, seed, speeds))
             t0 = time.perf_counter()
             counter["runs"] = 0
             table = sy.synthesize(conds, base, counted, hidden, DEM_REFERENCE, dist, noise=0.02, seed=seed + 10,
@@ -226,7 +257,7 @@ def dem_rows(cases, n, seed, threads, design_points=3, outdir=HERE / "results"):
             out = core.run_inprocess("dem-campaign", sy.with_measured(conds, table), base, counted, settings,
                                      seeds=tuple(range(DEM_SEEDS)))
             rows.append(dict(_row("dem", case, seed, hidden, dist, out, time.perf_counter() - t0, counter["runs"]),
-                             design_points=design_points))
+                             design_points=design_points, speeds="" if case in COMPRESSION_CASES else speeds))
             detail = Path(outdir) / "loop_dem"
             detail.mkdir(parents=True, exist_ok=True)
             tag = case if seed == 0 else f"{case}_campaign{seed}"  # campaign 0 keeps its earlier names
@@ -237,6 +268,50 @@ def dem_rows(cases, n, seed, threads, design_points=3, outdir=HERE / "results"):
                     df.to_csv(detail / f"{tag}_{name}.csv", index=False)
             print(rows[-1]["case"], rows[-1]["chosen"], rows[-1]["verdict"][:100], rows[-1]["wall_s"], flush=True)
     return rows
+
+
+def _speeds_text(r) -> str:
+    """The campaign's speed spacing of a DEM row: its ``speeds``; a soil-bin row written before
+    the column existed drew them uniformly; a compression campaign and a stand-in row have none."""
+    if r["engine"] != "dem":
+        return ""
+    if r.get("speeds"):
+        return r["speeds"]
+    return "" if r["case"] in COMPRESSION_CASES else "uniform"
+
+
+def replaced(r, new) -> bool:
+    """Whether an earlier row ``r`` is replaced by one of the ``new`` rows: a stand-in case reruns
+    all its seeds; a DEM case its campaign drawn with the same speed spacing (a campaign of the
+    other spacing is another campaign, kept beside it)."""
+    return any(r["engine"] == x["engine"] and r["case"] == x["case"]
+               and (r["engine"] != "dem" or (str(r["seed"]) == str(x["seed"])
+                                             and _speeds_text(r) == _speeds_text(x))) for x in new)
+
+
+def _command_text(argv) -> str:
+    """The command line of a run for the page's header, the files of ``--rows-from`` and
+    ``--out`` given by their names only (their directories are the run's own)."""
+    out, it = [], iter(argv)
+    for a in it:
+        opt, eq, val = a.partition("=")
+        if opt in ("--rows-from", "--out"):
+            if not eq:
+                val = next(it, "")
+            out += [opt, Path(val).name] if val else [opt]
+        else:
+            out.append(a)
+    return " ".join(out)
+
+
+def _merged_text(rows) -> str:
+    """What a run took from other runs' tables (``--rows-from``), for the page's header: each
+    row's engine, case and campaign, and a DEM soil-bin row's speed spacing."""
+    if not rows:
+        return ""
+    return "; rows taken from other runs: " + ", ".join(
+        f"{r['engine']} {r['case']}" + (f" campaign {r['seed']}" if r["engine"] == "dem" else f" seed {r['seed']}")
+        + (f" ({_speeds_text(r)} speeds)" if _speeds_text(r) else "") for r in rows)
 
 
 def _theta_text(r) -> str:
@@ -254,9 +329,11 @@ def _theta_text(r) -> str:
 def _summary(rows):
     out = ["| engine | case | campaigns | correct | false attributions | max parameter error, % | "
            "RMS error before -> after, % (median) | median wall s |", "|---|---|---|---|---|---|---|---|"]
-    keys = list(dict.fromkeys((r["engine"], r["case"]) for r in rows))
-    for eng, case in keys:
-        g = [r for r in rows if r["engine"] == eng and r["case"] == case]
+    keys = list(dict.fromkeys((r["engine"], r["case"], _speeds_text(r)) for r in rows))
+    for eng, case, speeds in keys:
+        g = [r for r in rows if r["engine"] == eng and r["case"] == case and _speeds_text(r) == speeds]
+        if any(k[:2] == (eng, case) and k[2] != speeds for k in keys):  # both spacings: say which
+            case = f"{case} ({speeds or 'no'} speeds)"
         pe = [float(r["parameter_error_percent"]) for r in g if str(r["parameter_error_percent"]) not in ("", "nan")]
         b = np.median([float(r["rmse_before_percent"]) for r in g])
         a = np.median([float(r["rmse_after_percent"]) for r in g])
@@ -278,6 +355,8 @@ def main(argv=None):
     ap.add_argument("--seed", type=int, default=0, help="seed of the DEM campaign")
     ap.add_argument("--threads", type=int, default=None)
     ap.add_argument("--design-points", type=int, default=3, help="levels per effect parameter (dem; default 3)")
+    ap.add_argument("--speeds", choices=SPEED_SPACINGS, default="log",
+                    help="spacing of the DEM campaign's tool speeds in 0.1-1.0 m/s (default log)")
     ap.add_argument("--out", default=str(HERE / "results"))
     ap.add_argument("--rows-from", action="append", default=[], metavar="CSV",
                     help="also take the rows of another run's loop.csv (a DEM campaign run in a clone)")
@@ -297,23 +376,19 @@ def main(argv=None):
     if "standin" in engines:
         new += standin_rows(cases, args.seeds)
     if "dem" in engines:
-        new += dem_rows(cases, args.n, args.seed, args.threads, args.design_points, out)
-    for path in args.rows_from:  # rows of a run elsewhere (a clone), each with its own commit
-        new += read_rows(Path(path), FIELDS)
-
-    def replaced(r):  # a stand-in case reruns all its seeds; a DEM case its campaign
-        return any(r["engine"] == x["engine"] and r["case"] == x["case"]
-                   and (r["engine"] != "dem" or str(r["seed"]) == str(x["seed"])) for x in new)
+        new += dem_rows(cases, args.n, args.seed, args.threads, args.design_points, out, args.speeds)
+    merged = [r for path in args.rows_from for r in read_rows(Path(path), FIELDS)]
+    new += merged  # rows of a run elsewhere (a clone), each with its own commit
 
     # earlier rows read only now, so that a run of another engine in the meantime is kept
-    old = [r for r in read_rows(out / "loop.csv", FIELDS) if not replaced(r)]
+    old = [r for r in read_rows(out / "loop.csv", FIELDS) if not replaced(r, new)]
     rows = sorted(old + new, key=lambda r: (r["engine"], str(r["seed"]) if r["engine"] == "dem" else ""))
     write_rows(out / "loop.csv", rows, FIELDS)
     md = ["# Measured-data loop benchmark", "",
           f"Machine: {platform.machine()}, {os.cpu_count()} logical CPUs, Python {platform.python_version()}; "
           f"commit {commit()}, {time.strftime('%Y-%m-%d %H:%M', time.gmtime())} UTC; "
-          f"`python benchmarks/loop.py {' '.join(sys.argv[1:])}` ({time.perf_counter() - t0:.0f} s for the rows "
-          "of this run; rows of engines and cases not run are kept from earlier runs, each with its commit).", "",
+          f"`python benchmarks/loop.py {_command_text(sys.argv[1:] if argv is None else argv)}` ({time.perf_counter() - t0:.0f} s for the rows "
+          f"of this run{_merged_text(merged)}; rows of engines and cases not run are kept from earlier runs, each with its commit).", "",
           "A case's measured values come from the engine with the hidden effect (or disturbance) and 2 % noise per "
           "repeat (three repeats); the loop then runs without it.  correct: the chosen effects are exactly the "
           "hidden ones (none for a disturbance outside the library or no effect); false attribution: a library "
@@ -321,10 +396,10 @@ def main(argv=None):
           "held-out RMS error down by 70 %; no false attribution.", "",
           *_summary(rows), "", "DEM rows (verdicts in full):", "",
           "| case | campaign | chosen | parameters (95 % interval) | parameter error, % | RMS error before -> after, % "
-          "| levels | DEM runs | wall s | commit | verdict |",
-          "|---|---|---|---|---|---|---|---|---|---|---|",
+          "| levels | speeds | DEM runs | wall s | commit | verdict |",
+          "|---|---|---|---|---|---|---|---|---|---|---|---|",
           *(f"| {r['case']} | {r['seed']} | {r['chosen']} | {_theta_text(r)} | {r['parameter_error_percent']} | {r['rmse_before_percent']} -> "
-            f"{r['rmse_after_percent']} | {r.get('design_points') or 3} | {r['dem_runs']} | {r['wall_s']} | "
+            f"{r['rmse_after_percent']} | {r.get('design_points') or 3} | {_speeds_text(r)} | {r['dem_runs']} | {r['wall_s']} | "
             f"{r['commit']} | {r['verdict']} |"
             for r in rows if r["engine"] == "dem"),
           "", "Rows: `loop.csv`; per DEM case and campaign: `loop_dem/`.", ""]

@@ -3,27 +3,16 @@ pooled seed SD, centre SD, the largest linear effect over its range, the ANOVA's
 
 from __future__ import annotations
 
-import importlib.util
 import math
-import sys
 from pathlib import Path
 
 import pandas as pd
 import pytest
 
-BENCH = Path(__file__).resolve().parents[2] / "benchmarks"
-
 
 @pytest.fixture(scope="module")
-def calibration():
-    sys.path.insert(0, str(BENCH))
-    try:
-        spec = importlib.util.spec_from_file_location("calibration_bench", BENCH / "calibration.py")
-        mod = importlib.util.module_from_spec(spec)
-        spec.loader.exec_module(mod)
-        yield mod
-    finally:
-        sys.path.remove(str(BENCH))
+def calibration(load_benchmark):
+    return load_benchmark("calibration.py", "calibration_bench")
 
 
 def _stage(d: Path, centre_values, sds, ns):

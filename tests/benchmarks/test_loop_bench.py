@@ -1,0 +1,73 @@
+"""The loop benchmark's DEM campaign speeds (uniform in v or in ln v over 0.1-1.0 m/s, from the
+same uniform draw) and its rows' spacing: a campaign of one spacing neither replaces nor is
+counted with the other's."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+
+@pytest.fixture(scope="module")
+def bench(load_benchmark):
+    return load_benchmark("loop.py", "loop_bench")
+
+
+@pytest.mark.parametrize("seed", [0, 7])
+def test_campaign_speed_maps_one_draw(bench, seed):
+    # the generator's first standard-uniform draw u; uniform in [0.1, 1.0): 0.1 + 0.9 u;
+    # uniform in ln v over the same range: exp(ln 0.1 + u (ln 1 - ln 0.1)) = 0.1 * 10**u
+    u = np.random.default_rng(seed).random()
+    assert bench.campaign_speed(np.random.default_rng(seed), "uniform") == pytest.approx(0.1 + 0.9 * u, rel=1e-12)
+    assert bench.campaign_speed(np.random.default_rng(seed), "log") == pytest.approx(0.1 * 10 ** u, rel=1e-12)
+
+
+def test_campaign_speed_refuses_an_unknown_spacing(bench):
+    with pytest.raises(ValueError, match="'Log' is not one of log, uniform"):
+        bench.campaign_speed(np.random.default_rng(0), "Log")
+
+
+def _row(case, seed, speeds, before="20", engine="dem"):
+    return {"engine": engine, "case": case, "seed": seed, "speeds": speeds, "correct": "True",
+            "false_attribution": "False", "parameter_error_percent": "", "rmse_before_percent": before,
+            "rmse_after_percent": before, "wall_s": "1"}
+
+
+def test_speeds_column(bench):
+    assert bench._speeds_text(_row("none", 0, "log")) == "log"
+    assert bench._speeds_text(_row("none", 0, "")) == "uniform"  # written before the column existed
+    assert bench._speeds_text(_row("plastic_contact", 0, "")) == ""  # a compression campaign
+    assert bench._speeds_text(_row("none", 0, "", engine="standin")) == ""
+
+
+def test_a_campaign_of_the_other_spacing_replaces_nothing(bench):
+    old_uniform, old_log = _row("none", 0, ""), _row("none", 0, "log")
+    assert not bench.replaced(old_uniform, [_row("none", 0, "log")])
+    assert bench.replaced(old_log, [_row("none", 0, "log")])
+    assert bench.replaced(old_uniform, [_row("none", 0, "uniform")])
+    assert not bench.replaced(old_log, [_row("none", 1, "log")])
+    # a stand-in case reruns all its seeds, whatever their number
+    assert bench.replaced(_row("none", 3, "", engine="standin"), [_row("none", 0, "", engine="standin")])
+
+
+def test_summary_counts_the_spacings_apart(bench):
+    rows = [_row("none", 0, "", "10"), _row("none", 1, "uniform", "12"), _row("none", 0, "log", "30"),
+            _row("stones", 0, "")]
+    lines = bench._summary(rows)[2:]
+    assert lines == ["| dem | none (uniform speeds) | 2 | 2 | 0 |  | 11.00 -> 11.00 | 1.0 |",
+                     "| dem | none (log speeds) | 1 | 1 | 0 |  | 30.00 -> 30.00 | 1.0 |",
+                     "| dem | stones | 1 | 1 | 0 |  | 20.00 -> 20.00 | 1.0 |"]
+
+
+def test_header_names_files_not_directories(bench):
+    text = bench._command_text(["--engines", "none", "--rows-from", "/scratch/a/rate.csv",
+                                "--rows-from=/scratch/b/none.csv", "--out", "/scratch/c/out"])
+    assert text == "--engines none --rows-from rate.csv --rows-from none.csv --out out"
+
+
+def test_header_names_the_merged_rows(bench):
+    assert bench._merged_text([]) == ""
+    assert bench._merged_text([_row("none", 0, "log"), _row("stones", 1, ""), _row("plastic_contact", 0, ""),
+                               _row("none", 2, "", engine="standin")]) == (
+        "; rows taken from other runs: dem none campaign 0 (log speeds), dem stones campaign 1 (uniform speeds), "
+        "dem plastic_contact campaign 0, standin none seed 2")
