@@ -235,3 +235,19 @@ def test_cli_error_names_file(capsys, tmp_path):
     p.write_bytes(b"\xff\xd8\xff\xe0garbage")
     assert main(["image", "drum", str(p)]) == 2
     assert str(p) in capsys.readouterr().err
+
+
+@pytest.mark.parametrize("dtype", [np.float64, np.float32, np.uint8])
+def test_saturation_cue_is_hsv_saturation(dtype):
+    """The saturation cue is scikit-image's HSV saturation (rgb2hsv's S), smoothed: the same
+    numbers, 0 on black and grey pixels (where max = min), for float and 8-bit images."""
+    from skimage import color, filters
+
+    rng = np.random.default_rng(3)
+    x = rng.random((60, 50, 3))
+    x[:8] = 0.0  # black
+    x[8:16] = x[8:16, :, :1]  # grey
+    x = (x * 255).astype(np.uint8) if dtype == np.uint8 else x.astype(dtype)
+    expected = filters.gaussian(color.rgb2hsv(x)[..., 1], 1.2)
+    got = measure._gray(x, "saturation")
+    assert got.dtype == expected.dtype and np.array_equal(got, expected)

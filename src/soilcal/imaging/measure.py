@@ -33,7 +33,7 @@ from dataclasses import asdict, dataclass, field
 
 import numpy as np
 from scipy import ndimage as ndi
-from skimage import color, feature, filters, measure, morphology, transform
+from skimage import color, feature, filters, measure, morphology, transform, util
 
 from soilcal.errors import InputError
 from soilcal.imaging.io import read_photo, read_photo_reduced
@@ -162,7 +162,14 @@ def _gray(rgb, channel="gray", lab=None):
             lab = _smoothed_lab(rgb)
         return np.clip((lab[..., 1 if channel == "lab_a" else 2] + 100.0) / 200.0, 0, 1)
     if channel == "saturation":
-        return filters.gaussian(color.rgb2hsv(rgb)[..., 1], 1.2)
+        # rgb2hsv's S channel, (max - min) / max and 0 where max = min, computed as rgb2hsv
+        # computes it (the same numbers) without the hue and value it would also compute
+        rgb = util.img_as_float(rgb)
+        delta = np.ptp(rgb, axis=-1)
+        with np.errstate(invalid="ignore"):
+            s = delta / rgb.max(-1)
+        s[delta == 0.0] = 0.0
+        return filters.gaussian(s, 1.2)
     raise InputError(None, "channel", "'gray', 'chroma' or 'auto'", channel)
 
 
@@ -577,7 +584,7 @@ def _levels_around(rgb, res: PileResult, depth: int = 256) -> tuple[float, int]:
 
     slope, intercept, _, _, hmax = res.geometry
     h, w = rgb.shape[:2]
-    rr, cc = np.mgrid[0:h, 0:w]
+    rr, cc = np.arange(h)[:, None], np.arange(w)[None, :]
     above = slope * cc + intercept - rr  # height above the plate line
     region = (above <= 1.25 * hmax) & (above >= -max(0.1 * hmax, 5.0))
     values = np.concatenate([color.rgb2gray(rgb)[region][:, None], rgb[region]], axis=1)
@@ -1108,7 +1115,7 @@ def _on_plate_lines(path, rgb, lum, grays, lines, n_first, channel, threshold, k
     a heap failing it is returned as the first cue measured it, unchecked by further cues (for
     a caller that would not use it whatever they found)."""
     h, w = lum.shape
-    rr, cc = np.mgrid[0:h, 0:w]
+    rr, cc = np.arange(h)[:, None], np.arange(w)[None, :]
     refusals = []  # every cue's refusal, the topmost line's first
     small = None  # the topmost line's refusal where its first two cues both saw a heap too small
     first = None  # the first cue's result, waiting for a second cue to cross-check it
@@ -1130,6 +1137,7 @@ def _on_plate_lines(path, rgb, lum, grays, lines, n_first, channel, threshold, k
             order += sorted([(ch, pol) for ch in CUES for pol in ("dark", "light")
                              if (ch, pol) not in order and etas[ch] >= MIN_CUE_ETA], key=lambda t: -etas[t[0]])
         checks = CUE_CHECKS
+        levelled = {}  # the luminance levelled on this line, once for all its cues (_pile_with)
         line_refusals = []  # this line's
         dissent = None  # a credible cue that disagrees with the first, waiting for a third
         for ch, pol in order:
@@ -1141,7 +1149,8 @@ def _on_plate_lines(path, rgb, lum, grays, lines, n_first, channel, threshold, k
             try:
                 res = _pile_with(path, rgb, g, ch, pol, band, slope, intercept, threshold,
                                  keep_stages and first is None, search=channel == "auto", tried=tried,
-                                 label=f"line {n_line}, {ch}/{pol}", lum=lum, plate_edges=plate_edges)
+                                 label=f"line {n_line}, {ch}/{pol}", lum=lum, plate_edges=plate_edges,
+                                 levelled=levelled)
             except InputError as e:
                 if e.field not in ("image", "left flank", "right flank", "plate line"):
                     raise
@@ -1240,14 +1249,15 @@ def _cross_checked(res: PileResult, check: PileResult, outvoted: PileResult | No
 
 
 def _pile_with(path, rgb, gray, cue, polarity, band, slope, intercept, threshold, keep_stages, search=True,
-               tried: Tried | None = None, label: str = "", lum=None, plate_edges=None):
+               tried: Tried | None = None, label: str = "", lum=None, plate_edges=None, levelled=None):
     """Measure with one cue: the heap is the class below Otsu's threshold of ``gray``.  In a
     cue search (``search``) the result must look like a heap; a channel chosen by the caller
     (e.g. a DEM silhouette, whatever its flanks) is measured as it is.  ``tried`` records the
     attempt (its segmented class and plate line) for a refusal's diagnostic image; ``lum``:
     the photo's luminance, in which a colour cue's edge is refined (:func:`_top_edge`);
     ``plate_edges``: the photo's edge map, in which a plate line found by the search must run
-    on beside the heap (:func:`_plate_beside_heap`)."""
+    on beside the heap (:func:`_plate_beside_heap`); ``levelled``: a dict in which the caller
+    keeps ``lum`` levelled on this plate line (:func:`_level`) for its further cues."""
     if threshold == "otsu":
         t = filters.threshold_otsu(gray[band])
         binary = open_fill(gray < t)
@@ -1259,8 +1269,16 @@ def _pile_with(path, rgb, gray, cue, polarity, band, slope, intercept, threshold
     if plate_edges is not None:
         _plate_beside_heap(path, plate_edges, comp, slope, intercept)
     lev, prow, roll = _level(comp, slope, intercept)
-    glev = _level(gray, slope, intercept)[0]
-    llev = _level(lum, slope, intercept)[0] if lum is not None and cue != "gray" else None
+
+    def levelled_lum():
+        if levelled is None:
+            return _level(lum, slope, intercept)[0]
+        if "lum" not in levelled:
+            levelled["lum"] = _level(lum, slope, intercept)[0]
+        return levelled["lum"]
+
+    glev = levelled_lum() if gray is lum else _level(gray, slope, intercept)[0]
+    llev = levelled_lum() if lum is not None and cue != "gray" else None
     cols = np.nonzero(lev.max(axis=0) >= 0.5)[0]
     cu, rv, *rl = _top_edge(lev, cols.min(), cols.max() + 1, glev, llev)
     v = prow - rv
