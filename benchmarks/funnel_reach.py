@@ -14,8 +14,17 @@ the cover's withdrawal (``cover``), the discharge (until the first trace with no
 in the funnel: resolved to ``--trace`` steps) and the heap's rest after it; CPU seconds by
 phase exclude the traces' measurements.
 
+``--rest V`` (m/s, at most the scenario's ``rest_speed``) lets the heap's settle go on past the
+scenario's own stop (kinetic energy below 1/2 M rest_speed^2) to 1/2 M V^2, within the same
+bound (``max_settle_time``): the trajectory up to that stop is the plain run's, and the row
+records the step and the angle there (``shipped_stop_step``, ``angle_image_at_shipped_stop_deg``)
+besides the angle at the end.  ``--rolling`` sets the setup's ``rolling_model``.  Both are
+recorded in the row (``rest_mm_s``, ``rolling``).
+
     python benchmarks/funnel_reach.py run --tag reach --A 0.39 --B 0.584 --G 0.02 \\
         --seeds 350462-350465 --workdir /tmp/funnel-reach
+    python benchmarks/funnel_reach.py run --tag centre-rest1 --A 0.33 --B 0.488 --G 0.06 \\
+        --rest 0.001 --seeds 350462-350465 --workdir /tmp/funnel-reach
     python benchmarks/funnel_reach.py table --workdir /tmp/funnel-reach
 
 ``table`` writes ``benchmarks/results/funnel_reach.csv`` (one row per seed: tag, levels, seed,
@@ -38,10 +47,36 @@ import numpy as np
 
 HERE = Path(__file__).resolve().parent
 ROOT = HERE.parent
-FIELDS = ["utc", "commit", "tag", "A", "B", "G", "seed", "particles", "angle_image_deg", "angle_deg",
-          "settled", "steps", "fill_steps", "cover_steps", "discharge_steps", "rest_steps",
+FIELDS = ["utc", "commit", "tag", "A", "B", "G", "rolling", "rest_mm_s", "seed", "particles", "angle_image_deg",
+          "angle_deg", "settled", "steps", "fill_steps", "cover_steps", "discharge_steps", "rest_steps",
           "dt_s", "discharge_end_s", "heap_end_s", "cpu_s", "fill_cpu_s", "heap_cpu_s",
-          "angle_image_at_discharge_end_deg"]
+          "angle_image_at_discharge_end_deg", "shipped_stop_step", "angle_image_at_shipped_stop_deg",
+          "v_rms_end_mm_s"]
+SHIPPED_REST = 0.005  # the repose scenario's rest_speed [m/s], the runs' before --rest was recorded
+SHIPPED_ROLLING = "constant_torque"  # its rolling model then (DEFAULT_ROLLING)
+
+
+def settle_traced(sim, max_steps, ke_tol, ke_rest, check_every, chunk, observe):
+    """The heap's settle as ``restart.run_to_rest`` runs it (kinetic energy checked every
+    ``check_every`` steps against ``ke_tol``, at most ``max_steps``), in chunks of ``chunk`` steps
+    (a whole multiple of ``check_every``: the same checks, the same trajectory), calling
+    ``observe()`` after each chunk and at the stop.  Where ``ke_tol`` is met the plain run would
+    stop; if ``ke_rest`` is lower the run goes on from there, within the same bound, until
+    ``ke_rest`` is met.  Returns (steps done, settled against the last tolerance, the row
+    ``observe`` returned at the ``ke_tol`` stop or None if it was never met)."""
+    done, stopped, tol, shipped = 0, False, ke_tol, None
+    while done < max_steps and not stopped:
+        n = min(chunk, max_steps - done)
+        k = sim.run(n, ke_tol=tol, ke_every=check_every)
+        done += k
+        stopped = k < n or (sim.step % check_every == 0 and sim.kinetic_energy() < tol)
+        at_ship = stopped and tol == ke_tol
+        if at_ship and ke_rest < tol:
+            tol, stopped = ke_rest, sim.kinetic_energy() < ke_rest
+        row = observe()
+        if at_ship:
+            shipped = row
+    return done, bool(done < max_steps or sim.kinetic_energy() < tol), shipped
 
 
 def one_seed(a) -> None:
@@ -53,7 +88,7 @@ def one_seed(a) -> None:
     from soilcal.config.load import load_soil
     from soilcal.dem import measure, restart
     from soilcal.dem.scenarios import get, setup_for_measures
-    from soilcal.dem.scenarios.base import DemParams
+    from soilcal.dem.scenarios.base import DEFAULT_ROLLING, DemParams
 
     soil = load_soil(ROOT / "config/soils/guangxi-cohesive.yaml", resources_root=ROOT / "resources")
     st = next(s for s in soil.data["stages"] if s["id"] == "bbd")
@@ -63,7 +98,13 @@ def one_seed(a) -> None:
     rs = spec["responses"]["angle_of_repose"]
     mod = get(rs["scenario"])
     setup = setup_for_measures(mod, rs["setup"], ["angle_image_deg"])
-    phases, trace, meas = [], [], [0.0]
+    if a.rolling is not None:
+        setup["rolling_model"] = a.rolling  # checked by the scenario (ROLLING_MODELS)
+    rest = setup["rest_speed"] if a.rest is None else a.rest
+    if not 0 < rest <= setup["rest_speed"]:
+        raise SystemExit(f"funnel_reach.py: --rest: a heap rest speed in (0, {setup['rest_speed']}] m/s "
+                         f"(the scenario's) expected, got {a.rest}")
+    phases, trace, meas, shipped = [], [], [0.0], {}
     orig = restart.run_to_rest
 
     def traced(sim, max_steps, ke_tol, check_every, st_, key, checkpoint=None):
@@ -73,17 +114,12 @@ def one_seed(a) -> None:
         else:
             z_out, half = setup["outlet_height"], setup["plate_size"] / 2
             r_max, mass = float(sim.p.r.max()), float(sim.p.m.sum())
-            done, stopped = 0, False
-            chunk = max(1, a.trace // check_every) * check_every
-            while done < max_steps and not stopped:
-                n = min(chunk, max_steps - done)
-                k = sim.run(n, ke_tol=ke_tol, ke_every=check_every)
-                done += k
-                stopped = k < n or (sim.step % check_every == 0 and sim.kinetic_energy() < ke_tol)
+
+            def observe():
                 x, r, v = sim.x.copy(), sim.p.r.copy(), sim.v
                 inside = (np.abs(x[:, 0]) <= half) & (np.abs(x[:, 1]) <= half)
                 on = inside & (x[:, 2] < z_out - 0.5 * r_max)
-                row = dict(t=done * sim.dt, step=int(sim.step),
+                row = dict(t=(sim.step - s0) * sim.dt, step=int(sim.step),
                            v_rms=math.sqrt(2 * sim.kinetic_energy() / mass),
                            v_max=float(np.sqrt((v ** 2).sum(1)).max()),
                            retained=int((x[:, 2] >= z_out - 0.5 * r_max).sum()))
@@ -95,7 +131,13 @@ def one_seed(a) -> None:
                     row["err"] = str(exc)[:200]
                 meas[0] += time.process_time() - m0
                 trace.append(row)
-            out = (done, bool(done < max_steps or sim.kinetic_energy() < ke_tol))
+                return row
+
+            chunk = max(1, a.trace // check_every) * check_every
+            done, ok, ship = settle_traced(sim, max_steps, ke_tol, 0.5 * mass * rest ** 2, check_every,
+                                           chunk, observe)
+            shipped.update(ship or {})
+            out = (done, ok)
         phases.append(dict(key=key, steps=int(sim.step - s0), cpu=time.process_time() - c0 - meas[0]))
         return out
 
@@ -106,6 +148,7 @@ def one_seed(a) -> None:
 
     out = dict(commit=commit(), tag=a.tag, levels=dict(A=a.A, B=a.B, G=a.G), seed=a.seed, n=res.n_particles,
                steps=res.steps, dt=res.setup["dt"], cpu_s=time.process_time() - c0 - meas[0],
+               rest_speed=rest, rolling=setup.get("rolling_model") or DEFAULT_ROLLING, shipped_stop=shipped,
                phases=phases, trace=trace, responses={k: res.responses[k] for k in
                                                        ("angle_image_deg", "angle_deg", "settled", "settle_time_s")})
     Path(a.out).parent.mkdir(parents=True, exist_ok=True)
@@ -119,15 +162,23 @@ def row_of(d: dict, rev: str) -> dict:
     step0 = d["steps"] - heap  # the heap's settle starts here
     end = next((t for t in d["trace"] if t["retained"] == 0), None)
     dis = (end["step"] - step0) if end else heap
+    rest = d.get("rest_speed", SHIPPED_REST)
+    # the scenario's own stop: recorded when --rest went past it, else the run's end if it settled
+    ship = d.get("shipped_stop") or ({} if rest < SHIPPED_REST or not d["responses"]["settled"] else
+                                     dict(step=d["steps"], image=d["responses"]["angle_image_deg"]))
+    last = d["trace"][-1] if d["trace"] else {}
     return dict(utc=time.strftime("%Y-%m-%d %H:%M", time.gmtime()), commit=d.get("commit", rev), tag=d["tag"], **d["levels"],
-                seed=d["seed"], particles=d["n"], angle_image_deg=round(d["responses"]["angle_image_deg"], 2),
+                rolling=d.get("rolling", SHIPPED_ROLLING), rest_mm_s=round(1e3 * rest, 3), seed=d["seed"], particles=d["n"], angle_image_deg=round(d["responses"]["angle_image_deg"], 2),
                 angle_deg=round(d["responses"]["angle_deg"], 2), settled=d["responses"]["settled"],
                 steps=d["steps"], fill_steps=fill, cover_steps=d["steps"] - fill - heap, discharge_steps=dis,
                 rest_steps=heap - dis, dt_s=f"{d['dt']:.4g}",
                 discharge_end_s=round((end["step"] if end else d["steps"]) * d["dt"], 3),
                 heap_end_s=round(d["steps"] * d["dt"], 3), cpu_s=round(d["cpu_s"], 1),
                 fill_cpu_s=round(ph["fill_steps"]["cpu"], 1), heap_cpu_s=round(ph["heap_steps"]["cpu"], 1),
-                angle_image_at_discharge_end_deg=round(end["image"], 2) if end and "image" in end else "")
+                angle_image_at_discharge_end_deg=round(end["image"], 2) if end and "image" in end else "",
+                shipped_stop_step=ship.get("step", ""),
+                angle_image_at_shipped_stop_deg=round(ship["image"], 2) if "image" in ship else "",
+                v_rms_end_mm_s=round(1e3 * last["v_rms"], 2) if "v_rms" in last else "")
 
 
 def table(workdir: Path) -> None:
@@ -141,13 +192,21 @@ def table(workdir: Path) -> None:
              f"`python benchmarks/funnel_reach.py table --workdir {workdir}` (module docstring).  "
              "Rows: `funnel_reach.csv`.  CPU: process seconds on one thread, the traces' measurements left out.",
              "", "## Points (mean +- SD over seeds, silhouette angle)", "",
-             "| tag | A | B | G J/m^2 | seeds | angle deg | SD | steps | discharge steps | rest steps | CPU s |",
-             "|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|"]
+             "| tag | A | B | G J/m^2 | rolling | rest mm/s | seeds | settled | angle deg | SD | "
+             "angle at the scenario's stop | SD | rms speed at the end mm/s | steps | discharge steps | rest steps | CPU s |",
+             "|---|---:|---:|---:|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|"]
+
+    def mean_sd(vals):
+        v = np.array([x for x in vals if x != ""], float)
+        return (f"{v.mean():.2f}" if len(v) else "", f"{v.std(ddof=1):.2f}" if len(v) > 1 else "")
+
     for tag in dict.fromkeys(r["tag"] for r in rows):
         g = [r for r in rows if r["tag"] == tag]
-        ang = np.array([r["angle_image_deg"] for r in g], float)
-        sd = f"{ang.std(ddof=1):.2f}" if len(g) > 1 else ""
-        lines.append(f"| {tag} | {g[0]['A']} | {g[0]['B']} | {g[0]['G']} | {len(g)} | {ang.mean():.2f} | {sd} | "
+        ang, sd = mean_sd([r["angle_image_deg"] for r in g])
+        ship, ship_sd = mean_sd([r["angle_image_at_shipped_stop_deg"] for r in g])
+        lines.append(f"| {tag} | {g[0]['A']} | {g[0]['B']} | {g[0]['G']} | {g[0]['rolling']} | {g[0]['rest_mm_s']} | "
+                     f"{len(g)} | {sum(int(r['settled']) for r in g)} | {ang} | {sd} | {ship} | {ship_sd} | "
+                     f"{mean_sd([r['v_rms_end_mm_s'] for r in g])[0]} | "
                      f"{np.mean([r['steps'] for r in g]):.0f} | {np.mean([r['discharge_steps'] for r in g]):.0f} | "
                      f"{np.mean([r['rest_steps'] for r in g]):.0f} | {np.mean([r['cpu_s'] for r in g]):.1f} |")
     lines += ["", "## Seeds", "", *runs_table(rows, FIELDS)]
@@ -170,6 +229,9 @@ def main(argv=None) -> None:
         p.add_argument("--B", type=float, required=True)
         p.add_argument("--G", type=float, required=True)
         p.add_argument("--trace", type=int, default=4000, help="steps between traces of the heap")
+        p.add_argument("--rest", type=float, default=None,
+                       help="rest speed of the heap phase [m/s] (default: the scenario's)")
+        p.add_argument("--rolling", default=None, help="setup rolling_model (default: the scenario's)")
         if name == "run":
             p.add_argument("--seeds", required=True, help="e.g. 350462-350465")
             p.add_argument("--workdir", required=True)
@@ -187,6 +249,8 @@ def main(argv=None) -> None:
         for s in seeds_of(a.seeds):
             subprocess.run([sys.executable, __file__, "seed", "--tag", a.tag, "--A", str(a.A), "--B", str(a.B),
                             "--G", str(a.G), "--trace", str(a.trace), "--seed", str(s),
+                            *([] if a.rest is None else ["--rest", str(a.rest)]),
+                            *([] if a.rolling is None else ["--rolling", a.rolling]),
                             "--out", str(Path(a.workdir) / a.tag / f"{s}.json")], check=True)
 
 
