@@ -18,7 +18,7 @@ phase exclude the traces' measurements.
 scenario's own stop (kinetic energy below 1/2 M rest_speed^2) to 1/2 M V^2, within the same
 bound (``max_settle_time``): the trajectory up to that stop is the plain run's, and the row
 records the step and the angle there (``shipped_stop_step``, ``angle_image_at_shipped_stop_deg``)
-besides the angle at the end.  ``--rolling`` sets the setup's ``rolling_model``.  Both are
+besides the angle, the rms speed and the spheres left in the funnel at the end.  ``--rolling`` sets the setup's ``rolling_model``.  Both are
 recorded in the row (``rest_mm_s``, ``rolling``).
 
     python benchmarks/funnel_reach.py run --tag reach --A 0.39 --B 0.584 --G 0.02 \\
@@ -51,7 +51,7 @@ FIELDS = ["utc", "commit", "tag", "A", "B", "G", "rolling", "rest_mm_s", "seed",
           "angle_deg", "settled", "steps", "fill_steps", "cover_steps", "discharge_steps", "rest_steps",
           "dt_s", "discharge_end_s", "heap_end_s", "cpu_s", "fill_cpu_s", "heap_cpu_s",
           "angle_image_at_discharge_end_deg", "shipped_stop_step", "angle_image_at_shipped_stop_deg",
-          "v_rms_end_mm_s"]
+          "v_rms_end_mm_s", "retained_end"]
 SHIPPED_REST = 0.005  # the repose scenario's rest_speed [m/s], the runs' before --rest was recorded
 SHIPPED_ROLLING = "constant_torque"  # its rolling model then (DEFAULT_ROLLING)
 
@@ -178,7 +178,8 @@ def row_of(d: dict, rev: str) -> dict:
                 angle_image_at_discharge_end_deg=round(end["image"], 2) if end and "image" in end else "",
                 shipped_stop_step=ship.get("step", ""),
                 angle_image_at_shipped_stop_deg=round(ship["image"], 2) if "image" in ship else "",
-                v_rms_end_mm_s=round(1e3 * last["v_rms"], 2) if "v_rms" in last else "")
+                v_rms_end_mm_s=round(1e3 * last["v_rms"], 2) if "v_rms" in last else "",
+                retained_end=last.get("retained", ""))
 
 
 def table(workdir: Path) -> None:

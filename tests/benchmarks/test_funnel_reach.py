@@ -111,7 +111,7 @@ def test_rows_record_the_rest_the_rolling_model_and_the_plain_stop(reach):
     row = reach.row_of(run, "abc")
     assert (row["rolling"], row["rest_mm_s"]) == ("bounded", 1.0)
     assert (row["shipped_stop_step"], row["angle_image_at_shipped_stop_deg"]) == (8_000, 36.25)
-    assert row["v_rms_end_mm_s"] == 3.1
+    assert (row["v_rms_end_mm_s"], row["retained_end"]) == (3.1, 0)
 
 
 def test_rows_of_runs_before_the_rest_was_recorded_stopped_at_the_plain_rest(reach):
