@@ -214,12 +214,6 @@ def table(workdir: Path) -> None:
     write_page(HERE / "results" / "funnel_reach.md", lines)
 
 
-def seeds_of(text: str) -> list[int]:
-    from _report import seed_list
-
-    return seed_list(text)
-
-
 def main(argv=None) -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     sub = ap.add_subparsers(dest="cmd", required=True)
@@ -247,7 +241,9 @@ def main(argv=None) -> None:
     elif a.cmd == "table":
         table(Path(a.workdir))
     else:
-        for s in seeds_of(a.seeds):
+        from _report import seed_list
+
+        for s in seed_list(a.seeds):
             subprocess.run([sys.executable, __file__, "seed", "--tag", a.tag, "--A", str(a.A), "--B", str(a.B),
                             "--G", str(a.G), "--trace", str(a.trace), "--seed", str(s),
                             *([] if a.rest is None else ["--rest", str(a.rest)]),

@@ -4,26 +4,14 @@ funnel, and the heap's rest after it."""
 
 from __future__ import annotations
 
-import importlib.util
 import math
-import sys
-from pathlib import Path
 
 import pytest
 
-BENCH = Path(__file__).resolve().parents[2] / "benchmarks"
-
 
 @pytest.fixture(scope="module")
-def reach():
-    sys.path.insert(0, str(BENCH))
-    try:
-        spec = importlib.util.spec_from_file_location("funnel_reach_bench", BENCH / "funnel_reach.py")
-        mod = importlib.util.module_from_spec(spec)
-        spec.loader.exec_module(mod)
-        yield mod
-    finally:
-        sys.path.remove(str(BENCH))
+def reach(load_benchmark):
+    return load_benchmark("funnel_reach.py", "funnel_reach_bench")
 
 
 def _run(trace, steps=10_000, fill=1_000, heap=8_600):

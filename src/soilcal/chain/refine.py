@@ -173,12 +173,14 @@ def search_ranges_text(stage: dict, wider: dict | None, unused=()) -> str:
 
     syms = bounds(stage)[0]
     parts = [f"{s}: {wider[s][2]}" for s in syms if s in (wider or {})]
-    text = "; ".join(parts) if parts else ("none: every factor stays in the design box (no simulated screening "
-                                           "and no simulation.search_ranges entry gives a wider range)")
-    if unused:
-        text = ("none: every factor stays in the design box (design: printed, compared point by point with the "
-                "paper); not used: " + "; ".join(unused)) if not parts else text + "; not used: " + "; ".join(unused)
-    return text
+    if parts:
+        text = "; ".join(parts)
+    elif unused:
+        text = "none: every factor stays in the design box (design: printed, compared point by point with the paper)"
+    else:
+        text = ("none: every factor stays in the design box (no simulated screening and no simulation.search_ranges "
+                "entry gives a wider range)")
+    return text + ("; not used: " + "; ".join(unused) if unused else "")
 
 
 def refine_frame(stage: dict, table: pd.DataFrame, targets: dict, optimum: pd.DataFrame,

@@ -351,9 +351,8 @@ def check_search_ranges(path: Path, d: dict) -> None:
     every design mode (``design: printed`` and ``adaptive`` record a declared range as not
     used)."""
     from soilcal.chain.derive import dem_value_in_range
-    from soilcal.dem.scenarios.base import dem_field
-
     from soilcal.chain.refine import refine_settings
+    from soilcal.dem.scenarios.base import dem_field
 
     ranges = (d.get("simulation") or {}).get("search_ranges") or {}
     params = d.get("parameters") or {}

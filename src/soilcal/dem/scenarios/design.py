@@ -232,7 +232,7 @@ def check_block(soil_path, data: dict) -> None:
                 # a range declared under simulation.search_ranges does not count: the adaptive
                 # design does not use it (soilcal.chain.adaptive.screening_factor)
                 how = (f"simulation.adaptive.ranges: screening, with a screening stage {sid!r} descends from that "
-                       f"varies the parameter" if design_mode(data) == "adaptive"
+                       "varies the parameter" if design_mode(data) == "adaptive"
                        else f"leave {sid!r} out of {BLOCK}.stages")
                 raise InputError(soil_path, where, f"low and high levels to simulate the stage (or {how})", f)
         if st["kind"] == "steepest_ascent" and runs_own_levels(data, sid):
