@@ -83,13 +83,57 @@ def theta_design(effect, bounds: dict, points: int = 5) -> list[dict]:
     return [dict(zip(effect.theta_names(), combo)) for combo in itertools.product(*axes)]
 
 
+#: level of the lack-of-fit test (:func:`smooth_fits`) below which a one-parameter surrogate
+#: interpolates its design means instead of fitting a quadratic through them
+LACK_OF_FIT_ALPHA = 0.05
+
+
+def smooth_fits(thetas: np.ndarray, values: np.ndarray | None) -> tuple[bool, float]:
+    """Whether a least-squares quadratic in one parameter follows the design's seed means
+    within their seed scatter, and the lack-of-fit test's p: (smooth, p).
+
+    ``values``: design point x row x seed (NaN where a run failed), the same seeds at every
+    point (common random numbers).  Per complete row (every design point and seed run) the
+    runs are a two-way layout, point x seed: the seeds' own levels, shared by every point,
+    cancel in the changes the surrogate carries, so the error is the point x seed interaction
+    (mean square on (D - 1)(S - 1) degrees of freedom, D points, S seeds), and the lack of fit
+    the seed means' deviations from the row's quadratic, times S, on D - 3 (Montgomery, Design
+    and Analysis of Experiments, lack-of-fit test; two-factor layout without replication).
+    Both pooled over the rows, F = MS_lof / MS_error, p its upper tail.  Smooth where p >=
+    :data:`LACK_OF_FIT_ALPHA`; not where there are fewer than four points (a quadratic through
+    three interpolates them), fewer than two seeds, no complete row, or no scatter."""
+    from scipy import stats
+
+    t = np.asarray(thetas, float).ravel()
+    if values is None or len(t) < 4 or values.ndim != 3 or values.shape[2] < 2:
+        return False, math.nan
+    V = values[:, np.isfinite(values).all(axis=(0, 2)), :]  # complete rows only
+    D, R, S = V.shape
+    if R == 0:
+        return False, math.nan
+    means = V.mean(axis=2)  # D x R
+    B = np.column_stack([np.ones(D), t, t ** 2])
+    coef, *_ = np.linalg.lstsq(B, means, rcond=None)
+    ss_lof = S * float(np.sum((means - B @ coef) ** 2))
+    inter = V - means[:, :, None] - V.mean(axis=0, keepdims=True) + means.mean(axis=0)[None, :, None]
+    ss_err = float(np.sum(inter ** 2))
+    df_lof, df_err = R * (D - 3), R * (D - 1) * (S - 1)
+    if not ss_err > 0:
+        return False, math.nan
+    p = float(stats.f.sf((ss_lof / df_lof) / (ss_err / df_err), df_lof, df_err))
+    return p >= LACK_OF_FIT_ALPHA, p
+
+
 class Surrogate:
-    """Per-row surrogate of one effect's parameters over its design (module docstring): a
-    monotone cubic through the design points in one parameter (scipy ``PchipInterpolator``,
-    no overshoot where an effect saturates, e.g. a surface energy clamped at zero), a least-
+    """Per-row surrogate of one effect's parameters over its design (module docstring).  In
+    one parameter: a least-squares quadratic through the design means where it follows them
+    within the runs' seed scatter (``smooth``, :func:`smooth_fits`: a response measured with
+    a few seeds per point is not taken for its noise, which an interpolant would follow from
+    point to point), else a monotone cubic through them (scipy ``PchipInterpolator``, no
+    overshoot where an effect saturates, e.g. a surface energy clamped at zero); a least-
     squares quadratic in two."""
 
-    def __init__(self, effect, bounds: dict, thetas: np.ndarray, means: np.ndarray):
+    def __init__(self, effect, bounds: dict, thetas: np.ndarray, means: np.ndarray, smooth: bool = False):
         from scipy.interpolate import PchipInterpolator
 
         self.effect = effect
@@ -98,7 +142,8 @@ class Surrogate:
         self.hi = np.array([bounds[k][1] for k in self.names], float)
         self.k = len(self.names)
         self.pchip = None
-        if self.k == 1 and len(thetas) >= 3:
+        self.smooth = bool(smooth) and self.k == 1 and len(thetas) >= 4
+        if self.k == 1 and len(thetas) >= 3 and not self.smooth:
             order = np.argsort(np.asarray(thetas, float)[:, 0])
             self.pchip = PchipInterpolator(np.asarray(thetas, float)[order, 0], np.asarray(means)[order], axis=0,
                                            extrapolate=True)
@@ -139,7 +184,8 @@ class EffectData:
     missing: list = field(default_factory=list)  # rows with a failed run at some design point
     values: np.ndarray | None = None
     seeds: list | None = None  # per row, the seeds behind values' last axis (ascending)
-    means: np.ndarray | None = None  # design x row: the means the surrogate went through
+    means: np.ndarray | None = None  # design x row: the means the surrogate went through (or was fitted to)
+    lack_of_fit_p: float = math.nan  # the one-parameter surrogate's lack-of-fit test (:func:`smooth_fits`)
 
     def thetas(self) -> np.ndarray:
         return np.array([[d[k] for k in self.effect.theta_names()] for d in self.design], float)
@@ -191,8 +237,9 @@ def build_effect_data(obs: pd.DataFrame, runs: pd.DataFrame, effect, bounds: dic
             Y[index[tuple(float(x) for x in rec[3:3 + len(tcols)])], i] = rec[-1]
     values, seeds = _seed_values(r, obs, design, index, keys, tcols)
     missing = _fill_failed(Y, design, effect, obs.reset_index(drop=True))
-    return EffectData(effect, bounds, Surrogate(effect, bounds, np.array(design), Y), [dict(zip(names, t)) for t in design],
-                      missing, values, seeds, Y.copy())
+    smooth, p_lof = smooth_fits(np.array(design), values) if len(names) == 1 else (False, math.nan)
+    return EffectData(effect, bounds, Surrogate(effect, bounds, np.array(design), Y, smooth),
+                      [dict(zip(names, t)) for t in design], missing, values, seeds, Y.copy(), p_lof)
 
 
 def _seed_values(r: pd.DataFrame, obs, design, index, keys, tcols):
@@ -721,7 +768,8 @@ def bootstrap_ci(effects: list, y0: np.ndarray, measured: np.ndarray, measured_s
                 break
             if yb is None and j_null is not None:
                 yb = Y[j_null]
-            fitted.append(EffectData(e.effect, e.bounds, Surrogate(e.effect, e.bounds, e.thetas(), Y), e.design))
+            fitted.append(EffectData(e.effect, e.bounds, Surrogate(e.effect, e.bounds, e.thetas(), Y, getattr(e.surrogate, "smooth", False)),
+                                     e.design))
         if lost:
             continue
         x, _ = Model(fitted, y0 if yb is None else yb, m, scale, joint).fit(x0=x0)
