@@ -616,7 +616,7 @@ def check_dem_stages(soil_path, soil_data: dict) -> None:
       its ``low`` and ``high`` where the runs are decoded from them (:func:`decodes_low_high`);
       with ``design: adaptive`` a factor's levels are the range it
       takes from its screening where it takes one
-      (:func:`soilcal.chain.adaptive.screening_factor`), named as the screening's
+      (:func:`soilcal.chain.adaptive.adaptive_range`), named as the screening's
       ``stages.<screening>.factors.<symbol>.low`` / ``.high`` (a range declared under
       ``simulation.search_ranges``, which the adaptive design does not use, is checked against
       the same ranges as the soil loads, in every mode:
@@ -653,7 +653,7 @@ def check_dem_stages(soil_path, soil_data: dict) -> None:
             name, scale = mapped(f["parameter"], f"{where}.parameter")
             if "from" in deps:
                 continue  # levels derived from the earlier stage's DEM results
-            screened = (adaptive.screening_factor(soil_data, sid, f["parameter"])
+            screened = (adaptive.adaptive_range(soil_data, sid, f["parameter"])
                         if design_mode(soil_data) == "adaptive" else None)
             if screened is not None:
                 # the adaptive design ranges the factor over its screening's levels (ranges:
