@@ -135,6 +135,10 @@ def test_screening_ranges_come_from_the_screening_of_a_path_design_only():
     soil2 = dict(soil, stages=[pb2, *soil["stages"][1:]])
     assert screening_range(soil2, "bbd", "soil_soil_rolling_friction").field == "stages.pb.factors.X1"
     assert screening_ranges(soil2, st)["A"][:2] == (-1.0, 2.0)
+    # and a derived stage's fixed value is judged against that same factor
+    from soilcal.chain.derive import _screened_factors
+
+    assert [v[1] for v in _screened_factors(soil2, "bbd").values()] == ["X1", "X2"]
 
 
 def _final(second_means):

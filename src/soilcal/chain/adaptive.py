@@ -190,12 +190,6 @@ def adaptive_range(soil_data: dict, stage_id: str, parameter) -> SearchRange | N
     return screening_range(soil_data, stage_id, parameter)
 
 
-def screening_factor(soil_data: dict, stage_id: str, parameter) -> SearchRange | None:
-    """:func:`adaptive_range`, under the name :func:`soilcal.dem.scenarios.design.check_block`
-    calls it by."""
-    return adaptive_range(soil_data, stage_id, parameter)
-
-
 def _screening_ranges(soil_data: dict, st: dict) -> tuple[list[str], dict]:
     """Widen the factors of ``st`` in place to the range :func:`adaptive_range` gives their
     parameter; returns the factors widened ("A (0.08-0.14 -> 0.05-0.2)") and, per symbol taking

@@ -224,22 +224,24 @@ def _seed_values(r: pd.DataFrame, obs, design, index, keys, tcols):
     return out, seeds
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)
 class Folds:
     """The folds of a cross-validation: ``held_out``, the index arrays of the rows held out
     together (one array a fold), and ``units``, the index arrays of the simulated conditions,
-    each within one fold (:func:`paired_p` tests over them), or None where every fold is one
-    condition."""
+    each within one fold (:func:`paired_p` tests over them), or None where the folds are not
+    grouped by a covariate (each fold is then one condition).  Compared by identity: arrays
+    have no single truth value."""
 
     held_out: list[np.ndarray]
     units: list[np.ndarray] | None = None
 
 
 def _folds(obs: pd.DataFrame, fold_by: str | None) -> Folds:
-    """The held-out groups: the values of ``fold_by`` (a covariate column), else the simulated
-    conditions (rows of one test measured twice, as two rows of a table or in two tables, are
-    held out together: :func:`soilcal.loop.residuals.simulation_key`); with ``fold_by``, the
-    conditions as :attr:`Folds.units`."""
+    """The :class:`Folds` of ``obs``: as ``held_out``, the groups of the values of
+    ``fold_by`` (a covariate column), else the simulated conditions (rows of one test measured
+    twice, as two rows of a table or in two tables, are held out together:
+    :func:`soilcal.loop.residuals.simulation_key`); with ``fold_by``, the conditions within each
+    group as ``units`` (else None)."""
     cond = (obs["simulation"].astype(str) if "simulation" in obs
             else obs["measurement"].astype(str) + "/" + obs["row"].astype(str))
     if fold_by:
