@@ -19,7 +19,12 @@ scenario's own stop (kinetic energy below 1/2 M rest_speed^2) to 1/2 M V^2, with
 bound (``max_settle_time``): the trajectory up to that stop is the plain run's, and the row
 records the step and the angle there (``shipped_stop_step``, ``angle_image_at_shipped_stop_deg``)
 besides the angle, the rms speed and the spheres left in the funnel at the end.  ``--rolling`` sets the setup's ``rolling_model``.  Both are
-recorded in the row (``rest_mm_s``, ``rolling``).
+recorded in the row (``rest_mm_s``, ``rolling``).  ``--until T`` runs the heap's phase on to
+the simulated time T of the run (from its first step, the load's settle on the cover
+included), with no rest stop after the scenario's own (``rest_mm_s`` 0): the trace then shows
+the heap's angle against time out to a paper's simulated duration (the cohesive soil's 10 s,
+004 Sec. 2.6); the JSON's ``trace`` holds every traced state (``t``: seconds into the heap's
+phase, ``image``: the silhouette angle).
 
     python benchmarks/funnel_reach.py run --tag reach --A 0.39 --B 0.584 --G 0.02 \\
         --seeds 350462-350465 --workdir /tmp/funnel-reach
@@ -101,7 +106,9 @@ def one_seed(a) -> None:
     if a.rolling is not None:
         setup["rolling_model"] = a.rolling  # checked by the scenario (ROLLING_MODELS)
     rest = setup["rest_speed"] if a.rest is None else a.rest
-    if not 0 < rest <= setup["rest_speed"]:
+    if a.until is not None:
+        rest = 0.0  # the heap's settle runs on to the simulated time --until
+    elif not 0 < rest <= setup["rest_speed"]:
         raise SystemExit(f"funnel_reach.py: --rest: a heap rest speed in (0, {setup['rest_speed']}] m/s "
                          f"(the scenario's) expected, got {a.rest}")
     phases, trace, meas, shipped = [], [], [0.0], {}
@@ -134,6 +141,8 @@ def one_seed(a) -> None:
                 return row
 
             chunk = max(1, a.trace // check_every) * check_every
+            if a.until is not None:  # no rest stop: the heap runs to the simulated time a.until
+                max_steps = max(0, int(round(a.until / sim.dt)) - int(sim.step))
             done, ok, ship = settle_traced(sim, max_steps, ke_tol, 0.5 * mass * rest ** 2, check_every,
                                            chunk, observe)
             shipped.update(ship or {})
@@ -211,7 +220,23 @@ def table(workdir: Path) -> None:
                      f"{np.mean([r['steps'] for r in g]):.0f} | {np.mean([r['discharge_steps'] for r in g]):.0f} | "
                      f"{np.mean([r['rest_steps'] for r in g]):.0f} | {np.mean([r['cpu_s'] for r in g]):.1f} |")
     lines += ["", "## Seeds", "", *runs_table(rows, FIELDS)]
+    lines += trace_lines([json.loads(p.read_text()) for p in sorted(Path(workdir).glob("*/*.json"))])
     write_page(HERE / "results" / "funnel_reach.md", lines)
+
+
+def trace_lines(runs: list) -> list:
+    """The traced angle against time of the runs without a rest stop (``--until``): time
+    after the release (the cover starts to move), silhouette angle, rms speed."""
+    out = []
+    for d in (d for d in runs if d.get("rest_speed", SHIPPED_REST) == 0):
+        fill = next(p["steps"] for p in d["phases"] if p["key"] == "fill_steps")
+        out += ["", f"## Trace: {d['tag']}, seed {d['seed']} (A {d['levels']['A']}, B {d['levels']['B']}, "
+                f"G {d['levels']['G']}, {d.get('rolling', SHIPPED_ROLLING)}, no rest stop)", "",
+                "| s after the release | step | silhouette angle deg | radial bins deg | rms speed mm/s | in the funnel |",
+                "|---:|---:|---:|---:|---:|---:|"]
+        out += [f"| {(t['step'] - fill) * d['dt']:.3f} | {t['step']} | {t.get('image', float('nan')):.2f} | "
+                f"{t.get('bins', float('nan')):.2f} | {1e3 * t['v_rms']:.2f} | {t['retained']} |" for t in d["trace"]]
+    return out
 
 
 def main(argv=None) -> None:
@@ -227,6 +252,8 @@ def main(argv=None) -> None:
         p.add_argument("--rest", type=float, default=None,
                        help="rest speed of the heap phase [m/s] (default: the scenario's)")
         p.add_argument("--rolling", default=None, help="setup rolling_model (default: the scenario's)")
+        p.add_argument("--until", type=float, default=None,
+                       help="run the heap phase on to this simulated time of the run [s], no rest stop")
         if name == "run":
             p.add_argument("--seeds", required=True, help="e.g. 350462-350465")
             p.add_argument("--workdir", required=True)
@@ -248,6 +275,7 @@ def main(argv=None) -> None:
                             "--G", str(a.G), "--trace", str(a.trace), "--seed", str(s),
                             *([] if a.rest is None else ["--rest", str(a.rest)]),
                             *([] if a.rolling is None else ["--rolling", a.rolling]),
+                            *([] if a.until is None else ["--until", str(a.until)]),
                             "--out", str(Path(a.workdir) / a.tag / f"{s}.json")], check=True)
 
 

@@ -1,0 +1,32 @@
+"""A funnel heap read at a fixed simulated time (``read_time`` of the repose setup): the
+cohesive soil's heap has no resting state under its constant-torque rolling model
+(benchmarks/results/funnel_reach.md), so it is read at its paper's simulated duration."""
+
+from __future__ import annotations
+
+import pytest
+
+from soilcal.dem.scenarios import design
+from soilcal.errors import InputError
+from soil_copies import ROOT, load_copy, read_shipped
+
+from soilcal.config.load import load_soil
+
+
+def test_the_cohesive_heap_is_read_at_the_paper_s_simulated_duration():
+    # 004 Sec. 2.6: "a total simulation duration of 10 s", in EDEM, whose standard rolling
+    # friction is a constant torque against the rotation (the engine's constant_torque)
+    soil = load_soil(ROOT / "config/soils/guangxi-cohesive.yaml", ROOT / "resources")
+    setup = design.spec(soil, "angle_of_repose").setup
+    assert setup["read_time"] == 10.0
+    assert setup["rolling_model"] in (None, "constant_torque")
+
+
+@pytest.mark.parametrize("value", [-10.0, 0.0, "10 s", float("nan")])
+def test_a_bad_read_time_names_the_soil_file_and_field(tmp_path, value):
+    d = read_shipped("guangxi-cohesive")
+    d["simulation"]["responses"]["angle_of_repose"]["set"]["read_time"] = value
+    with pytest.raises(InputError) as e:
+        load_copy(tmp_path, "guangxi-cohesive", d)
+    assert e.value.field == "simulation.responses.angle_of_repose.set.read_time"
+    assert str(e.value.path).endswith("guangxi-cohesive.yaml") and "> 0 s after the release" in e.value.expected
