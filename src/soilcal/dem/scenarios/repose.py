@@ -31,7 +31,8 @@ starts (the cover starts to move, the tube starts to lift), whatever it is doing
 paper's fixed simulated duration, for a heap that has no resting state to stop at; the fill's
 settle keeps the rest rule, ``settled`` then says whether the heap's kinetic energy is below
 the rest threshold at the reading, and a release that takes longer than ``read_time`` is an
-error naming ``setup.read_time``.
+error naming ``setup.read_time`` (for the funnel at start-up, from the cover's travel; for
+the cylinder, whose lift depends on the settled fill, at the release).
 
 Rolling resistance: the setup's ``rolling_model`` (base.py; ``constant_torque`` by default,
 under which the heap keeps creeping after the rest criterion; ``bounded`` stops the
@@ -296,6 +297,11 @@ def validate(setup: dict, preset: str = "quick", source: str = "<input>",
               "setup.funnel_bottom_diameter",
               f"an outlet of at least 5 particle diameters ({10 * sz['r_max']:.4g} m)",
               setup["funnel_bottom_diameter"])
+        # the cover's travel, as run() pulls it: 2.5 outlet radii + a diameter at cover_speed
+        travel = (1.25 * setup["funnel_bottom_diameter"] + 2 * sz["r_max"]) / setup["cover_speed"]
+        rt = setup.get("read_time")
+        check(rt is None or rt > travel, source, "setup.read_time",
+              f"more than the {travel:.3g} s the cover takes to clear the outlet (the release)", rt)
 
 
 def _plate(sim, setup):
