@@ -52,7 +52,9 @@ option existed (column ``speeds``, empty there).  Both map the same random draw,
 other covariates of a campaign are the same under either.  A campaign of one spacing does not
 replace the other's row, and the summary counts them apart (the case named with its spacing
 where a case has rows of both).  The page's header names the files of ``--rows-from`` and
-``--out`` by their names only, and the rows taken from other runs by engine, case and campaign.
+``--out`` by their names (a ``--rows-from`` file with as many of its directories as tell it from
+another of the same name, ``rate/loop.csv``; a file given twice is refused), and the rows
+taken from each by engine, case and campaign.
 """
 
 from __future__ import annotations
@@ -289,29 +291,58 @@ def replaced(r, new) -> bool:
                                              and _speeds_text(r) == _speeds_text(x))) for x in new)
 
 
+def source_labels(paths) -> list[str]:
+    """Labels of the ``--rows-from`` files for the page's header: each file's name, with as
+    many of its parent directories as tell it from the other files of the same name
+    (``rate/loop.csv`` and ``none/loop.csv``, not ``loop.csv`` twice).  A file given twice
+    is refused: its rows would be merged twice."""
+    parts = [Path(p).resolve().parts for p in paths]
+    seen = {}
+    for p, a in zip(paths, parts):
+        if a in seen:
+            raise ValueError(f"--rows-from: {p} is given twice (as {seen[a]} and {p}); each run's rows once")
+        seen[a] = p
+    out = []
+    for i, a in enumerate(parts):
+        k = 1
+        while k < len(a) and any(b[-k:] == a[-k:] for j, b in enumerate(parts) if j != i):
+            k += 1
+        out.append(Path(*a[-k:]).as_posix())
+    return out
+
+
 def _command_text(argv) -> str:
-    """The command line of a run for the page's header, the files of ``--rows-from`` and
-    ``--out`` given by their names only (their directories are the run's own)."""
-    out, it = [], iter(argv)
+    """The command line of a run for the page's header, the files of ``--rows-from`` by
+    :func:`source_labels` and ``--out`` by its name only (their directories are the run's own)."""
+    args, files = list(argv), []
+    for i, a in enumerate(args):  # the --rows-from files, in order, for their labels
+        opt, eq, val = a.partition("=")
+        if opt == "--rows-from":
+            files.append(val if eq else (args[i + 1] if i + 1 < len(args) else ""))
+    out, it, labels = [], iter(args), iter(source_labels([f for f in files if f]))
     for a in it:
         opt, eq, val = a.partition("=")
         if opt in ("--rows-from", "--out"):
             if not eq:
                 val = next(it, "")
-            out += [opt, Path(val).name] if val else [opt]
+            if not val:
+                out.append(opt)
+            else:
+                out += [opt, next(labels) if opt == "--rows-from" else Path(val).name]
         else:
             out.append(a)
     return " ".join(out)
 
 
-def _merged_text(rows) -> str:
-    """What a run took from other runs' tables (``--rows-from``), for the page's header: each
-    row's engine, case and campaign, and a DEM soil-bin row's speed spacing."""
-    if not rows:
-        return ""
-    return "; rows taken from other runs: " + ", ".join(
+def _merged_text(sources) -> str:
+    """What a run took from other runs' tables (``--rows-from``), for the page's header: per
+    file (its label, :func:`source_labels`) each row's engine, case and campaign, and a DEM
+    soil-bin row's speed spacing; ``sources``: (label, rows) pairs."""
+    parts = [f"{label}: " + (", ".join(
         f"{r['engine']} {r['case']}" + (f" campaign {r['seed']}" if r["engine"] == "dem" else f" seed {r['seed']}")
-        + (f" ({_speeds_text(r)} speeds)" if _speeds_text(r) else "") for r in rows)
+        + (f" ({_speeds_text(r)} speeds)" if _speeds_text(r) else "") for r in rows) or "no rows")
+        for label, rows in sources]
+    return "; rows taken from other runs: " + "; ".join(parts) if parts else ""
 
 
 def _theta_text(r) -> str:
@@ -369,6 +400,10 @@ def main(argv=None):
     for c in cases:
         if c not in STANDIN_CASES:
             ap.error(f"--cases: {c!r} is not one of {', '.join(STANDIN_CASES)}")
+    try:
+        labels = source_labels(args.rows_from)
+    except ValueError as e:
+        ap.error(str(e))
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
     new = []
@@ -377,8 +412,8 @@ def main(argv=None):
         new += standin_rows(cases, args.seeds)
     if "dem" in engines:
         new += dem_rows(cases, args.n, args.seed, args.threads, args.design_points, out, args.speeds)
-    merged = [r for path in args.rows_from for r in read_rows(Path(path), FIELDS)]
-    new += merged  # rows of a run elsewhere (a clone), each with its own commit
+    sources = [(label, read_rows(Path(path), FIELDS)) for label, path in zip(labels, args.rows_from)]
+    new += [r for _, rows in sources for r in rows]  # rows of a run elsewhere (a clone), each with its own commit
 
     # earlier rows read only now, so that a run of another engine in the meantime is kept
     old = [r for r in read_rows(out / "loop.csv", FIELDS) if not replaced(r, new)]
@@ -388,7 +423,7 @@ def main(argv=None):
           f"Machine: {platform.machine()}, {os.cpu_count()} logical CPUs, Python {platform.python_version()}; "
           f"commit {commit()}, {time.strftime('%Y-%m-%d %H:%M', time.gmtime())} UTC; "
           f"`python benchmarks/loop.py {_command_text(sys.argv[1:] if argv is None else argv)}` ({time.perf_counter() - t0:.0f} s for the rows "
-          f"of this run{_merged_text(merged)}; rows of engines and cases not run are kept from earlier runs, each with its commit).", "",
+          f"of this run{_merged_text(sources)}; rows of engines and cases not run are kept from earlier runs, each with its commit).", "",
           "A case's measured values come from the engine with the hidden effect (or disturbance) and 2 % noise per "
           "repeat (three repeats); the loop then runs without it.  correct: the chosen effects are exactly the "
           "hidden ones (none for a disturbance outside the library or no effect); false attribution: a library "

@@ -65,9 +65,28 @@ def test_header_names_files_not_directories(bench):
     assert text == "--engines none --rows-from rate.csv --rows-from none.csv --out out"
 
 
+def test_header_tells_two_files_of_one_name_apart(bench):
+    # two runs' tables of the same name: each named with the directory that tells it apart
+    text = bench._command_text(["--engines", "none", "--rows-from", "/scratch/out/rate/loop.csv",
+                                "--rows-from", "/scratch/out/none/loop.csv"])
+    assert text == "--engines none --rows-from rate/loop.csv --rows-from none/loop.csv"
+    assert bench.source_labels(["/s/x/a/loop.csv", "/s/y/a/loop.csv", "/s/y/b.csv"]) == [
+        "x/a/loop.csv", "y/a/loop.csv", "b.csv"]
+
+
+def test_a_file_given_twice_is_refused(bench, tmp_path):
+    with pytest.raises(ValueError, match="given twice"):
+        bench.source_labels([tmp_path / "loop.csv", tmp_path / "sub" / ".." / "loop.csv"])
+    with pytest.raises(SystemExit):
+        bench.main(["--engines", "none", "--out", str(tmp_path / "out"),
+                    "--rows-from", str(tmp_path / "loop.csv"), "--rows-from", str(tmp_path / "loop.csv")])
+    assert not (tmp_path / "out").exists()  # refused before anything is written
+
+
 def test_header_names_the_merged_rows(bench):
     assert bench._merged_text([]) == ""
-    assert bench._merged_text([_row("none", 0, "log"), _row("stones", 1, ""), _row("plastic_contact", 0, ""),
-                               _row("none", 2, "", engine="standin")]) == (
-        "; rows taken from other runs: dem none campaign 0 (log speeds), dem stones campaign 1 (uniform speeds), "
-        "dem plastic_contact campaign 0, standin none seed 2")
+    assert bench._merged_text([("rate/loop.csv", [_row("none", 0, "log"), _row("stones", 1, "")]),
+                               ("none/loop.csv", [_row("plastic_contact", 0, ""), _row("none", 2, "", engine="standin")]),
+                               ("empty.csv", [])]) == (
+        "; rows taken from other runs: rate/loop.csv: dem none campaign 0 (log speeds), dem stones campaign 1 "
+        "(uniform speeds); none/loop.csv: dem plastic_contact campaign 0, standin none seed 2; empty.csv: no rows")
