@@ -19,7 +19,14 @@ scenario's own stop (kinetic energy below 1/2 M rest_speed^2) to 1/2 M V^2, with
 bound (``max_settle_time``): the trajectory up to that stop is the plain run's, and the row
 records the step and the angle there (``shipped_stop_step``, ``angle_image_at_shipped_stop_deg``)
 besides the angle, the rms speed and the spheres left in the funnel at the end.  ``--rolling`` sets the setup's ``rolling_model``.  Both are
-recorded in the row (``rest_mm_s``, ``rolling``).
+recorded in the row (``rest_mm_s``, ``rolling``).  ``--until T`` runs the heap's phase on to
+T simulated seconds after the release (the cover starts to move: the origin of the setup's
+``read_time``), with no rest stop after the scenario's own (``rest_mm_s`` 0): the trace then
+shows the heap's angle against time out to a paper's reading time (the cohesive soil's
+``read_time``); the JSON's ``trace`` holds every traced state (``t``: seconds into the heap's
+phase, ``image``: the silhouette angle).  The script always runs the heap's phase to its own
+stop (the rest rule, ``--rest`` or ``--until``), so it sets the soil's ``read_time`` to None
+(:func:`point_setup`).
 
     python benchmarks/funnel_reach.py run --tag reach --A 0.39 --B 0.584 --G 0.02 \\
         --seeds 350462-350465 --workdir /tmp/funnel-reach
@@ -79,31 +86,52 @@ def settle_traced(sim, max_steps, ke_tol, ke_rest, check_every, chunk, observe):
     return done, bool(done < max_steps or sim.kinetic_energy() < tol), shipped
 
 
+def point_setup(A, B, G, seed, rolling=None, rest=None, until=None):
+    """``(scenario module, setup, DemParams, heap rest speed)`` of one Box-Behnken point as the
+    workflow's job runs it, with ``read_time`` None: the script runs the heap's phase to its
+    own stop (the rest rule at ``rest``, or the time ``until`` after the release, rest 0), which
+    a shipped ``read_time`` would bypass (the scenario then advances the heap without the rest
+    check the trace hooks into)."""
+    from soilcal.chain.sources import point_spec
+    from soilcal.config.load import load_soil
+    from soilcal.dem.scenarios import get, setup_for_measures
+    from soilcal.dem.scenarios.base import DemParams
+
+    soil = load_soil(ROOT / "config/soils/guangxi-cohesive.yaml", resources_root=ROOT / "resources")
+    st = next(s for s in soil.data["stages"] if s["id"] == "bbd")
+    spec = point_spec(soil, st, {"A": A, "B": B, "G": G}, 0, seed, replicates=1, responses=["angle_of_repose"])
+    params = DemParams.from_mapping(spec["params"], "<point>", plausible=False)
+    rs = spec["responses"]["angle_of_repose"]
+    mod = get(rs["scenario"])
+    setup = setup_for_measures(mod, rs["setup"], ["angle_image_deg"])
+    setup["read_time"] = None  # the heap's stop is the script's (docstring)
+    if rolling is not None:
+        setup["rolling_model"] = rolling  # checked by the scenario (ROLLING_MODELS)
+    if until is not None:
+        return mod, setup, params, 0.0  # the heap's settle runs on to --until after the release
+    rest = setup["rest_speed"] if rest is None else rest
+    if not 0 < rest <= setup["rest_speed"]:
+        raise SystemExit(f"funnel_reach.py: --rest: a heap rest speed in (0, {setup['rest_speed']}] m/s "
+                         f"(the scenario's) expected, got {rest}")
+    return mod, setup, params, rest
+
+
+def until_steps(until: float, dt: float, step: int, release_step: int) -> int:
+    """Steps left in the heap's phase at ``step`` for it to end ``until`` simulated seconds
+    after the release (the cover starts to move at ``release_step``), the origin the setup's
+    ``read_time`` counts from: round(until / dt) steps after the release, none if past it."""
+    return max(0, int(round(until / dt)) - (int(step) - int(release_step)))
+
+
 def one_seed(a) -> None:
     """Run one seed (module docstring) and write its JSON."""
     import numba
 
     numba.set_num_threads(1)
-    from soilcal.chain.sources import point_spec
-    from soilcal.config.load import load_soil
     from soilcal.dem import measure, restart
-    from soilcal.dem.scenarios import get, setup_for_measures
-    from soilcal.dem.scenarios.base import DEFAULT_ROLLING, DemParams
+    from soilcal.dem.scenarios.base import DEFAULT_ROLLING
 
-    soil = load_soil(ROOT / "config/soils/guangxi-cohesive.yaml", resources_root=ROOT / "resources")
-    st = next(s for s in soil.data["stages"] if s["id"] == "bbd")
-    spec = point_spec(soil, st, {"A": a.A, "B": a.B, "G": a.G}, 0, a.seed, replicates=1,
-                      responses=["angle_of_repose"])
-    params = DemParams.from_mapping(spec["params"], "<point>", plausible=False)
-    rs = spec["responses"]["angle_of_repose"]
-    mod = get(rs["scenario"])
-    setup = setup_for_measures(mod, rs["setup"], ["angle_image_deg"])
-    if a.rolling is not None:
-        setup["rolling_model"] = a.rolling  # checked by the scenario (ROLLING_MODELS)
-    rest = setup["rest_speed"] if a.rest is None else a.rest
-    if not 0 < rest <= setup["rest_speed"]:
-        raise SystemExit(f"funnel_reach.py: --rest: a heap rest speed in (0, {setup['rest_speed']}] m/s "
-                         f"(the scenario's) expected, got {a.rest}")
+    mod, setup, params, rest = point_setup(a.A, a.B, a.G, a.seed, a.rolling, a.rest, a.until)
     phases, trace, meas, shipped = [], [], [0.0], {}
     orig = restart.run_to_rest
 
@@ -134,6 +162,8 @@ def one_seed(a) -> None:
                 return row
 
             chunk = max(1, a.trace // check_every) * check_every
+            if a.until is not None:  # no rest stop: the heap runs to a.until after the release
+                max_steps = until_steps(a.until, sim.dt, sim.step, st_["move_step0"])
             done, ok, ship = settle_traced(sim, max_steps, ke_tol, 0.5 * mass * rest ** 2, check_every,
                                            chunk, observe)
             shipped.update(ship or {})
@@ -211,7 +241,23 @@ def table(workdir: Path) -> None:
                      f"{np.mean([r['steps'] for r in g]):.0f} | {np.mean([r['discharge_steps'] for r in g]):.0f} | "
                      f"{np.mean([r['rest_steps'] for r in g]):.0f} | {np.mean([r['cpu_s'] for r in g]):.1f} |")
     lines += ["", "## Seeds", "", *runs_table(rows, FIELDS)]
+    lines += trace_lines([json.loads(p.read_text()) for p in sorted(Path(workdir).glob("*/*.json"))])
     write_page(HERE / "results" / "funnel_reach.md", lines)
+
+
+def trace_lines(runs: list) -> list:
+    """The traced angle against time of the runs without a rest stop (``--until``): time
+    after the release (the cover starts to move), silhouette angle, rms speed."""
+    out = []
+    for d in (d for d in runs if d.get("rest_speed", SHIPPED_REST) == 0):
+        fill = next(p["steps"] for p in d["phases"] if p["key"] == "fill_steps")
+        out += ["", f"## Trace: {d['tag']}, seed {d['seed']} (A {d['levels']['A']}, B {d['levels']['B']}, "
+                f"G {d['levels']['G']}, {d.get('rolling', SHIPPED_ROLLING)}, no rest stop)", "",
+                "| s after the release | step | silhouette angle deg | radial bins deg | rms speed mm/s | in the funnel |",
+                "|---:|---:|---:|---:|---:|---:|"]
+        out += [f"| {(t['step'] - fill) * d['dt']:.3f} | {t['step']} | {t.get('image', float('nan')):.2f} | "
+                f"{t.get('bins', float('nan')):.2f} | {1e3 * t['v_rms']:.2f} | {t['retained']} |" for t in d["trace"]]
+    return out
 
 
 def main(argv=None) -> None:
@@ -227,6 +273,8 @@ def main(argv=None) -> None:
         p.add_argument("--rest", type=float, default=None,
                        help="rest speed of the heap phase [m/s] (default: the scenario's)")
         p.add_argument("--rolling", default=None, help="setup rolling_model (default: the scenario's)")
+        p.add_argument("--until", type=float, default=None,
+                       help="run the heap phase on to this simulated time after the release [s], no rest stop")
         if name == "run":
             p.add_argument("--seeds", required=True, help="e.g. 350462-350465")
             p.add_argument("--workdir", required=True)
@@ -248,6 +296,7 @@ def main(argv=None) -> None:
                             "--G", str(a.G), "--trace", str(a.trace), "--seed", str(s),
                             *([] if a.rest is None else ["--rest", str(a.rest)]),
                             *([] if a.rolling is None else ["--rolling", a.rolling]),
+                            *([] if a.until is None else ["--until", str(a.until)]),
                             "--out", str(Path(a.workdir) / a.tag / f"{s}.json")], check=True)
 
 

@@ -64,6 +64,9 @@ def adaptive_copy(tmp: Path, soil: str, response: str, n_spheres: int, budget: i
         if read:
             raise ValueError(f"{soil}: targets read the photo groups {read}: keep its photos")
         shutil.rmtree(tmp / "resources/images" / soil, ignore_errors=True)
+    # the copy's set replaces the soil's whole: a setting the soil ships there (the cohesive
+    # soil's read_time) is dropped unless ``setup`` gives it, so its heaps are read at the rest
+    # rule, which keeps these fixtures' DEM time what it was
     d["simulation"]["responses"][response]["set"] = {"n_particles": n_spheres, **(setup or {})}
     d["simulation"]["adaptive"] = {"budget": budget, **settings}
     p.write_text(yaml.safe_dump(d, sort_keys=False))

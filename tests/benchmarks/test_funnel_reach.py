@@ -109,3 +109,29 @@ def test_rows_of_runs_before_the_rest_was_recorded_stopped_at_the_plain_rest(rea
     unsettled = _run([{"step": 10_000, "retained": 0}])
     unsettled["responses"]["settled"] = 0
     assert reach.row_of(unsettled, "abc")["angle_image_at_shipped_stop_deg"] == ""
+
+
+def test_the_script_runs_its_own_heap_stop_not_the_soils_read_time(reach):
+    """The soil reads its heap at ``read_time`` after the release, which bypasses the rest check
+    the script's trace hooks into: the script's setup drops it, for the rest rule and for
+    --until alike, and keeps the rest speed it is given."""
+    from soilcal.chain.sources import point_spec
+    from soilcal.config.load import load_soil
+
+    soil = load_soil(reach.ROOT / "config/soils/guangxi-cohesive.yaml", resources_root=reach.ROOT / "resources")
+    st = next(s for s in soil.data["stages"] if s["id"] == "bbd")
+    shipped = point_spec(soil, st, {"A": 0.33, "B": 0.488, "G": 0.06}, 0, 1, replicates=1,
+                         responses=["angle_of_repose"])["responses"]["angle_of_repose"]["setup"]
+    assert shipped["read_time"] is not None  # what the script must not run with
+    for kw, rest in (({}, 0.005), ({"rest": 0.001}, 0.001), ({"until": 6.0}, 0.0)):
+        mod, setup, params, r = reach.point_setup(0.33, 0.488, 0.06, 1, **kw)
+        assert setup["read_time"] is None and r == rest
+        mod.validate(setup, "quick", "t", params)
+
+
+def test_until_counts_from_the_release_as_read_time_does(reach):
+    # dt 1e-4 s, the cover starts to move at step 3,000: 6 s after it is step 63,000; at the
+    # heap's start (step 4,000) 59,000 steps remain, at 63,000 or later none
+    assert reach.until_steps(6.0, 1e-4, 4_000, 3_000) == 63_000 - 4_000
+    assert reach.until_steps(6.0, 1e-4, 63_000, 3_000) == 0
+    assert reach.until_steps(6.0, 1e-4, 70_000, 3_000) == 0

@@ -386,18 +386,18 @@ def test_a_path_on_its_own_levels_with_uneven_steps_is_refused_at_load(tmp_path)
 def test_the_adaptive_designs_stage_and_its_start_up_check_take_the_screening_range_from_one_rule(
         tmp_path, monkeypatch):
     """Which range design: adaptive takes from the screening is one rule
-    (soilcal.chain.adaptive.screening_factor) for the stage it runs and for the start-up check
+    (soilcal.chain.adaptive.adaptive_range) for the stage it runs and for the start-up check
     that the stage has a range: a rule that gives mu_ss 0.25-0.85 and nothing else reaches both."""
     from soilcal.chain import adaptive
 
     p = _write(tmp_path, lambda d: (_recipe_chain(d), d["simulation"].update(design="adaptive")))
     soil = _load(p)
-    mu, e = (adaptive.screening_factor(soil.data, "rsm", par) for par in ("mu_ss", "e_ss"))
+    mu, e = (adaptive.adaptive_range(soil.data, "rsm", par) for par in ("mu_ss", "e_ss"))
     assert (mu.low, mu.high, mu.field) == (0.2, 0.9, "stages.screen.factors.B")  # the screening's B
     assert (e.low, e.high, e.field) == (0.2, 0.7, "stages.screen.factors.A")     # the screening's A
-    assert adaptive.screening_factor(soil.data, "screen", "mu_ss") is None       # no screening above it
+    assert adaptive.adaptive_range(soil.data, "screen", "mu_ss") is None         # no screening above it
     only_mu = {"mu_ss": adaptive.SearchRange(0.25, 0.85, "a rule", "declared")}
-    monkeypatch.setattr(adaptive, "screening_factor", lambda data, sid, par: only_mu.get(par))
+    monkeypatch.setattr(adaptive, "adaptive_range", lambda data, sid, par: only_mu.get(par))
     st = adaptive.stage_for(soil.data, "rsm")
     assert (st["factors"]["A"]["low"], st["factors"]["A"]["high"]) == (0.25, 0.85)
     assert st["factors"]["B"].get("low") is None  # mur_ss: no range from the rule

@@ -128,13 +128,17 @@ def test_screening_ranges_come_from_the_screening_of_a_path_design_only():
     assert screening_ranges(dict(soil, simulation={"design": "adaptive"}), st) == {}
     assert screening_ranges(soil, _stage()) == {}
     # two screening factors of one parameter: the first, as the adaptive design takes it
-    from soilcal.chain.adaptive import screened_factor
+    from soilcal.chain.adaptive import screening_range
 
     pb2 = dict(pb, factors=dict(pb["factors"], X3={"parameter": "soil_soil_rolling_friction", "low": -3.0,
                                                     "high": 5.0}))
     soil2 = dict(soil, stages=[pb2, *soil["stages"][1:]])
-    assert screened_factor(soil2, "bbd", "soil_soil_rolling_friction")[1] == "X1"
+    assert screening_range(soil2, "bbd", "soil_soil_rolling_friction").field == "stages.pb.factors.X1"
     assert screening_ranges(soil2, st)["A"][:2] == (-1.0, 2.0)
+    # and a derived stage's fixed value is judged against that same factor
+    from soilcal.chain.derive import _screened_factors
+
+    assert [v[1] for v in _screened_factors(soil2, "bbd").values()] == ["X1", "X2"]
 
 
 def _final(second_means):

@@ -1,6 +1,6 @@
 """A soil's declared search ranges (``simulation.search_ranges``): the one lookup of the range a
-factor may be searched over (soilcal.chain.adaptive.search_range: the declared range wherever it
-is declared, else the screening's, else none), its use by the second calibration round
+factor may be searched over (soilcal.chain.adaptive.second_round_range: the declared range
+wherever it is declared, else the screening's, else none), its use by the second calibration round
 (soilcal.chain.stage.screening_ranges, soilcal.chain.refine; design: printed keeps the box), the
 adaptive design's ranges (its screening's or the stage's own: a declared range is recorded as not
 used), its checks as the soil loads
@@ -19,7 +19,7 @@ import pandas as pd
 import pytest
 import yaml
 
-from soilcal.chain.adaptive import screening_factor, search_range, stage_for
+from soilcal.chain.adaptive import adaptive_range, second_round_range, stage_for
 from soilcal.chain.plan import dem_context
 from soilcal.chain.provenance import setup_inputs
 from soilcal.chain.refine import refine_frame
@@ -70,13 +70,13 @@ def test_the_lookup_takes_the_declared_range_else_the_screening_else_none():
     soil = _soil()
     # gamma: screened over 0..5 and declared 0..10: the declaration wins, screening counted or not
     for screening in (True, False):
-        got = search_range(soil, "bbd", "gamma", screening=screening)
+        got = second_round_range(soil, "bbd", "gamma", screening=screening)
         assert (got.low, got.high, got.kind, got.field) == (0.0, 10.0, "declared", "simulation.search_ranges.gamma")
-    got = search_range(soil, "bbd", "e")  # not screened: declared
+    got = second_round_range(soil, "bbd", "e")  # not screened: declared
     assert (got.low, got.high, got.field) == (0.1, 0.9, "simulation.search_ranges.e")
-    got = search_range(soil, "bbd", "mu")  # not declared: the screening's
+    got = second_round_range(soil, "bbd", "mu")  # not declared: the screening's
     assert (got.low, got.high, got.kind, got.field) == (0.2, 1.0, "screening", "stages.pb.factors.X2")
-    assert search_range(soil, "bbd", "mu", screening=False) is None  # neither
+    assert second_round_range(soil, "bbd", "mu", screening=False) is None  # neither
 
 
 @pytest.mark.parametrize("design, stages, kind", [
@@ -119,8 +119,8 @@ def test_the_adaptive_design_keeps_its_screening_ranges_and_records_a_declared_r
     soil = _soil("adaptive")
     # the screening's range, declared or not (gamma is declared 0..10 and screened 0..5); e is
     # declared but not screened: the stage's own 0.3..0.5
-    assert screening_factor(soil, "bbd", "gamma").field == "stages.pb.factors.X1"
-    assert screening_factor(soil, "bbd", "e") is None
+    assert adaptive_range(soil, "bbd", "gamma").field == "stages.pb.factors.X1"
+    assert adaptive_range(soil, "bbd", "e") is None
     st = stage_for(soil, "bbd")
     assert {s: (f["low"], f["high"]) for s, f in st["factors"].items()} == \
         {"A": (0.0, 5.0), "B": (0.2, 1.0), "C": (0.3, 0.5)}
@@ -130,7 +130,7 @@ def test_the_adaptive_design_keeps_its_screening_ranges_and_records_a_declared_r
     assert "A 0-10, C 0.1-0.9" in st["derivation"]["text"]
     # ranges: stage keeps the stage's own, declared or not
     soil["simulation"]["adaptive"] = {"ranges": "stage"}
-    assert screening_factor(soil, "bbd", "e") is None and screening_factor(soil, "bbd", "gamma") is None
+    assert adaptive_range(soil, "bbd", "e") is None and adaptive_range(soil, "bbd", "gamma") is None
     st = stage_for(soil, "bbd")
     assert {s: (f["low"], f["high"]) for s, f in st["factors"].items()} == \
         {"A": (0.5, 1.5), "B": (0.4, 0.6), "C": (0.3, 0.5)}

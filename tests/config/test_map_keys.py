@@ -24,15 +24,11 @@ def parsed():
     return read_shipped(SOIL)
 
 
-def _load(tmp_path, data):
-    return load_copy(tmp_path, SOIL, data)
-
-
 def test_quoted_keys_with_decimals_map_the_numeric_cells(tmp_path, parsed):
     d = copy.deepcopy(parsed)
     cv = d["measurements"]["compression"]["covariates"]["moisture_content"]
     cv["case"] = {"5.0": "mc05", "10.00": "mc10", "15.0": "mc15"}
-    soil = _load(tmp_path, d)
+    soil = load_copy(tmp_path, SOIL, d)
     from soilcal.config.measurements import conditions
 
     got = {c.quantities["moisture_content"]: c.case for c in conditions(soil)}
@@ -44,7 +40,7 @@ def test_two_keys_of_one_value_are_refused(tmp_path, parsed):
     cv = d["measurements"]["compression"]["covariates"]["moisture_content"]
     cv["case"] = {"5": "mc05", "5.0": "mc10", "10": "mc10", "15": "mc15"}
     with pytest.raises(InputError) as ei:
-        _load(tmp_path, d)
+        load_copy(tmp_path, SOIL, d)
     e = ei.value
     assert e.field == "measurements.compression.covariates.moisture_content.case.5.0" and e.got == "5.0"
     assert "'5' is the same value" in e.expected

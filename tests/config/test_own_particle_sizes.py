@@ -15,6 +15,7 @@ import textwrap
 import pytest
 import yaml
 
+from own_soil import bbd_soil, write_soil
 from soilcal.chain.provenance import simulation_setup
 from soilcal.config import load_soil
 from soilcal.config.measurements import conditions
@@ -22,35 +23,12 @@ from soilcal.errors import InputError
 
 OWN_PSD = [[0.001, 30], [0.0005, 70]]
 
-SOIL = textwrap.dedent("""\
-    name: own-psd
+#: the soil's blocks beside its one Box-Behnken stage (own_soil.bbd_soil)
+BLOCKS = textwrap.dedent("""\
     properties:
       particle_density: {value: 2650, unit: kg/m^3}
       poisson_ratio: {value: 0.35, unit: "-"}
       shear_modulus: {value: 2.0, unit: MPa}
-    parameters:
-      rolling: {name: Soil-soil rolling friction, unit: "-", pair: soil-soil, kind: rolling_friction}
-      energy: {name: JKR surface energy, unit: J/m^2, pair: soil-soil, kind: surface_energy}
-      sfric: {name: Soil-soil static friction, unit: "-", pair: soil-soil, kind: static_friction}
-    stages:
-      - id: bbd
-        kind: box_behnken
-        factors:
-          A: {parameter: rolling, low: 0.1, high: 0.3}
-          B: {parameter: energy, low: 0.2, high: 0.6}
-          C: {parameter: sfric, low: 0.4, high: 0.8}
-        fixed: {}
-        center_points: 3
-        table: null
-        responses:
-          - {id: angle, name: Repose angle, unit: deg}
-        optimise:
-          method: desirability
-          cases:
-            - id: angle
-              goals: {angle: {goal: target, target: angle}}
-    targets:
-      angle: {value: 36.0, unit: deg}
     simulation:
       params:
         soil_soil_restitution: 0.4
@@ -72,14 +50,11 @@ SOIL = textwrap.dedent("""\
 
 
 def _soil(tmp_path, edit=None):
-    (tmp_path / "measurements/own-psd").mkdir(parents=True, exist_ok=True)
-    (tmp_path / "measurements/own-psd/tiller.csv").write_text("flatness_mm\n14.0\n")
-    d = yaml.safe_load(SOIL)
+    d = bbd_soil("own-psd", {"rolling": (0.1, 0.3), "energy": (0.2, 0.6), "sfric": (0.4, 0.8)}, target_angle=36.0,
+                 **yaml.safe_load(BLOCKS))
     if edit:
         edit(d)
-    path = tmp_path / "own-psd.yaml"
-    path.write_text(yaml.safe_dump(d, sort_keys=False))
-    return load_soil(path, tmp_path, source="dem")
+    return load_soil(write_soil(tmp_path, d, {"tiller.csv": "flatness_mm\n14.0\n"}), tmp_path, source="dem")
 
 
 def test_a_tool_test_takes_the_soil_s_own_particle_sizes(tmp_path):

@@ -12,7 +12,9 @@ from __future__ import annotations
 import textwrap
 
 import pytest
+import yaml
 
+from own_soil import bbd_soil, write_soil
 from soilcal.config import load_soil
 from soilcal.dem.scenarios import bulldozing, rotary
 from soilcal.dem.scenarios.base import merge_setup
@@ -94,67 +96,44 @@ def test_rotary_particle_radius_error_names_the_particle_radius():
     assert exc.value.field == "setup.particle_radius"
 
 
-SOIL = textwrap.dedent("""\
-    name: own-bin
-    parameters:
-      rolling: {name: Soil-soil rolling friction, unit: "-", pair: soil-soil, kind: rolling_friction}
-      energy: {name: JKR surface energy, unit: J/m^2, pair: soil-soil, kind: surface_energy}
-      steel: {name: Soil-steel static friction, unit: "-", pair: soil-steel, kind: static_friction}
-    stages:
-      - id: bbd
-        kind: box_behnken
-        factors:
-          A: {parameter: rolling, low: 0.1, high: 0.3}
-          B: {parameter: energy, low: 0.2, high: 0.6}
-          C: {parameter: steel, low: 0.4, high: 0.8}
-        center_points: 3
-        table: null
-        responses:
-          - {id: angle, name: Repose angle, unit: deg}
-        optimise:
-          method: desirability
-          cases:
-            - id: angle
-              goals: {angle: {goal: target, target: angle}}
-    targets:
-      angle: {value: 35.0, unit: deg}
-    measurements:
-      plate:
-        table: plate.csv
-        scenario: bulldozing
-        setup: plate-line
-        set: {particle_radius: 0.004, radius_spread: 0.05, paper_psd: [[0.0008, 100]]}
-        responses:
-          - {measure: horizontal_force_N, value: horizontal_N, unit: N}
-        calibrated: {stage: bbd, case: angle}
-      tiller:
-        table: tiller.csv
-        scenario: rotary
-        setup: rpm-250
-        set: {particle_radius: 0.006, radius_spread: 0.1}
-        responses:
-          - {measure: flatness_mm, value: flatness_mm, unit: mm}
-        calibrated: {stage: bbd, case: angle}
+#: the soil's measured tool tests beside its one Box-Behnken stage (own_soil.bbd_soil), each
+#: with its own bin spheres
+MEASUREMENTS = textwrap.dedent("""\
+    plate:
+      table: plate.csv
+      scenario: bulldozing
+      setup: plate-line
+      set: {particle_radius: 0.004, radius_spread: 0.05, paper_psd: [[0.0008, 100]]}
+      responses:
+        - {measure: horizontal_force_N, value: horizontal_N, unit: N}
+      calibrated: {stage: bbd, case: angle}
+    tiller:
+      table: tiller.csv
+      scenario: rotary
+      setup: rpm-250
+      set: {particle_radius: 0.006, radius_spread: 0.1}
+      responses:
+        - {measure: flatness_mm, value: flatness_mm, unit: mm}
+      calibrated: {stage: bbd, case: angle}
     """)
 
 
+def _write(tmp_path, edit=None):
+    d = bbd_soil("own-bin", {"rolling": (0.1, 0.3), "energy": (0.2, 0.6), "steel": (0.4, 0.8)}, target_angle=35.0,
+                 measurements=yaml.safe_load(MEASUREMENTS))
+    if edit:
+        edit(d)
+    return write_soil(tmp_path, d, {"plate.csv": "horizontal_N\n120.5\n", "tiller.csv": "flatness_mm\n14.0\n"})
+
+
 def test_a_soil_sets_its_own_bin_spheres_in_its_measurements_block(tmp_path):
-    (tmp_path / "measurements/own-bin").mkdir(parents=True)
-    (tmp_path / "measurements/own-bin/plate.csv").write_text("horizontal_N\n120.5\n")
-    (tmp_path / "measurements/own-bin/tiller.csv").write_text("flatness_mm\n14.0\n")
-    path = tmp_path / "own-bin.yaml"
-    path.write_text(SOIL)
-    soil = load_soil(path, tmp_path)
+    soil = load_soil(_write(tmp_path), tmp_path)
     assert soil.data["measurements"]["plate"]["set"]["particle_radius"] == 0.004
 
 
 def test_half_a_distribution_in_the_soil_file_names_the_soils_key(tmp_path):
-    (tmp_path / "measurements/own-bin").mkdir(parents=True)
-    (tmp_path / "measurements/own-bin/plate.csv").write_text("horizontal_N\n120.5\n")
-    (tmp_path / "measurements/own-bin/tiller.csv").write_text("flatness_mm\n14.0\n")
-    path = tmp_path / "own-bin.yaml"
-    path.write_text(SOIL.replace("set: {particle_radius: 0.004, radius_spread: 0.05, paper_psd: [[0.0008, 100]]}",
-                                 "preset: paper\n    set: {psd_sizes: [0.006, 0.004, 0.002]}"))
+    path = _write(tmp_path, lambda d: d["measurements"]["plate"].update(
+        preset="paper", set={"psd_sizes": [0.006, 0.004, 0.002]}))
     with pytest.raises(InputError) as exc:
         load_soil(path, tmp_path)
     assert exc.value.field == "measurements.plate.set.psd_sizes" and str(path) in str(exc.value)

@@ -27,19 +27,15 @@ def parsed():
     return read_shipped(SOIL)
 
 
-def _load(tmp_path, data):
-    return load_copy(tmp_path, SOIL, data)
-
-
 def test_the_shipped_moistures_load(tmp_path, parsed):
-    _load(tmp_path, copy.deepcopy(parsed))
+    load_copy(tmp_path, SOIL, copy.deepcopy(parsed))
 
 
 def test_a_target_at_a_moisture_the_soil_does_not_declare_is_refused(tmp_path, parsed):
     d = copy.deepcopy(parsed)
     d["targets"]["angle_mc10"]["moisture_content"] = 12.5  # declared: 0, 5, 10, 15, 20 %
     with pytest.raises(InputError) as ei:
-        _load(tmp_path, d)
+        load_copy(tmp_path, SOIL, d)
     e = ei.value
     assert e.field == "targets.angle_mc10.moisture_content" and e.got == 12.5
     assert "0, 5, 10, 15, 20 %" in e.expected and str(e.path).endswith(f"{SOIL}.yaml")
@@ -50,17 +46,17 @@ def test_a_target_moisture_is_accepted_once_the_soil_declares_it(tmp_path, parse
     # angle_mc00 (no measured table maps to its case): only the soil's moistures decide
     d["targets"]["angle_mc00"]["moisture_content"] = 12.5
     d["properties"]["moisture_content"]["values"].append(12.5)
-    _load(tmp_path, d)
+    load_copy(tmp_path, SOIL, d)
     # a declared range holds every moisture inside it
     d["properties"]["moisture_content"] = {"low": 0, "high": 20, "unit": "%"}
-    _load(tmp_path, d)
+    load_copy(tmp_path, SOIL, d)
 
 
 def test_a_target_moisture_without_any_declared_moisture_is_refused(tmp_path, parsed):
     d = copy.deepcopy(parsed)
     del d["properties"]["moisture_content"]
     with pytest.raises(InputError) as ei:
-        _load(tmp_path, d)
+        load_copy(tmp_path, SOIL, d)
     assert ei.value.field.endswith(".moisture_content") and ei.value.field.startswith("targets.")
 
 
@@ -70,7 +66,7 @@ def test_a_moisture_column_mapped_to_a_case_at_another_moisture_is_refused(tmp_p
     d["measurements"]["compression"]["covariates"]["moisture_content"]["case"] = {"5": "mc10", "10": "mc10",
                                                                                    "15": "mc15"}
     with pytest.raises(InputError) as ei:
-        _load(tmp_path, d)
+        load_copy(tmp_path, SOIL, d)
     e = ei.value
     assert e.field == "measurements.compression.covariates.moisture_content.case.5"
     assert "targets.angle_mc10.moisture_content = 10 %" in e.expected
@@ -94,7 +90,7 @@ def test_a_soil_moisture_unit_soilcal_does_not_know_is_refused_naming_the_unit(t
     # a volumetric water content is another quantity: it cannot be compared with the targets' %
     d["properties"]["moisture_content"]["unit"] = "vol%"  # values 0, 5, 10, 15, 20 given
     with pytest.raises(InputError) as ei:
-        _load(tmp_path, d)
+        load_copy(tmp_path, SOIL, d)
     e = ei.value
     assert e.field == "properties.moisture_content.unit" and e.got == "vol%"
     assert "'vol%' is not one of them" in e.expected
@@ -105,7 +101,7 @@ def test_a_soil_moisture_unit_soilcal_does_not_know_is_refused_naming_the_unit(t
 def test_grams_per_hundred_grams_is_a_percentage(tmp_path, parsed):
     d = copy.deepcopy(parsed)
     d["properties"]["moisture_content"]["unit"] = "g/100g"  # 10 g of water per 100 g: 10 %
-    _load(tmp_path, d)
+    load_copy(tmp_path, SOIL, d)
 
 
 @pytest.mark.parametrize("soil", ["black-soil", "cinnamon-soil", "yangtze-clay-loam"])
@@ -126,7 +122,7 @@ def test_a_case_moisture_the_soil_does_not_declare_names_the_fix(tmp_path, parse
     d["measurements"]["compression"]["covariates"]["moisture_content"]["case"] = {"5": "mc05", "12": "mc10",
                                                                                 "15": "mc15"}
     with pytest.raises(InputError) as ei:
-        _load(tmp_path, d)
+        load_copy(tmp_path, SOIL, d)
     e = ei.value
     assert e.field == "measurements.compression.covariates.moisture_content.case.12"
     assert "add it to properties.moisture_content.values" in e.expected
@@ -136,7 +132,7 @@ def test_a_target_moisture_the_soil_does_not_declare_names_the_fix(tmp_path, par
     d = copy.deepcopy(parsed)
     d["targets"]["angle_mc10"]["moisture_content"] = 10.2
     with pytest.raises(InputError) as ei:
-        _load(tmp_path, d)
+        load_copy(tmp_path, SOIL, d)
     assert "add it to properties.moisture_content.values" in ei.value.expected
 
 
@@ -175,7 +171,7 @@ def test_a_moisture_column_takes_the_percent_units_the_soil_moisture_takes(tmp_p
 
     d = copy.deepcopy(parsed)
     d["measurements"]["compression"]["covariates"]["moisture_content"]["unit"] = unit
-    got = sorted((c.quantities["moisture_content"], c.case) for c in conditions(_load(tmp_path, d)))
+    got = sorted((c.quantities["moisture_content"], c.case) for c in conditions(load_copy(tmp_path, SOIL, d)))
     assert got == [(5.0, "mc05"), (10.0, "mc10"), (15.0, "mc15")]
 
 
@@ -183,7 +179,7 @@ def test_a_moisture_column_in_a_volumetric_unit_is_refused_naming_the_units(tmp_
     d = copy.deepcopy(parsed)
     d["measurements"]["compression"]["covariates"]["moisture_content"]["unit"] = "vol%"
     with pytest.raises(InputError) as ei:
-        _load(tmp_path, d)
+        load_copy(tmp_path, SOIL, d)
     e = ei.value
     assert e.field == "measurements.compression.covariates.moisture_content.unit" and e.got == "vol%"
     assert "wt%" in e.expected and "g/g" in e.expected
@@ -195,7 +191,7 @@ def test_a_range_end_without_the_other_is_refused(tmp_path, parsed, given, missi
     d = copy.deepcopy(parsed)
     d["properties"]["moisture_content"][given] = 12
     with pytest.raises(InputError) as ei:
-        _load(tmp_path, d)
+        load_copy(tmp_path, SOIL, d)
     e = ei.value
     assert e.field == f"properties.moisture_content.{missing}"
     assert f"{missing} with {given}" in e.expected and "12" in str(e.got)
@@ -207,9 +203,9 @@ def test_a_one_sided_bound_is_refused_saying_where_it_goes(tmp_path, parsed):
     d = copy.deepcopy(parsed)
     d["properties"]["particle_size"] = {"high": 2, "unit": "mm"}
     with pytest.raises(InputError) as ei:
-        _load(tmp_path, d)
+        load_copy(tmp_path, SOIL, d)
     e = ei.value
     assert e.field == "properties.particle_size.low" and e.got == "high 2 alone"
     assert "one-sided bound" in e.expected and "note" in e.expected and "value" in e.expected
     d["properties"]["particle_size"] = {"value": None, "unit": "mm", "note": "sieved below 2 mm"}
-    _load(tmp_path, d)
+    load_copy(tmp_path, SOIL, d)

@@ -22,15 +22,11 @@ def parsed():
     return read_shipped(SOIL)
 
 
-def _load(tmp_path, data):
-    return load_copy(tmp_path, SOIL, data)
-
-
 def test_a_target_of_another_layer_on_the_same_photos_is_refused(tmp_path, parsed):
     d = copy.deepcopy(parsed)
     d["targets"]["static_angle_middle"]["image"] = "static_upper"
     with pytest.raises(InputError) as ei:
-        _load(tmp_path, d)
+        load_copy(tmp_path, SOIL, d)
     e = ei.value
     assert e.field == "targets.static_angle_middle.image" and e.got == "static_upper"
     assert "targets.static_angle_upper" in e.expected and "layer upper there, middle here" in e.expected
@@ -41,7 +37,7 @@ def test_a_target_at_another_moisture_on_the_same_photos_is_refused(tmp_path, pa
     d["targets"]["static_angle_upper"]["moisture_content"] = 8.39
     d["targets"]["static_angle_lower"].update(image="static_upper", layer="upper", moisture_content=12.40)
     with pytest.raises(InputError) as ei:
-        _load(tmp_path, d)
+        load_copy(tmp_path, SOIL, d)
     assert ei.value.field == "targets.static_angle_lower.image"
     assert "moisture_content 8.39 there, 12.4 here" in ei.value.expected
 
@@ -51,7 +47,7 @@ def test_the_same_photos_for_one_state_load(tmp_path, parsed):
     # a second target of the upper layer, and one that gives no layer, on the upper layer's heaps
     d["targets"]["static_angle_upper_again"] = dict(d["targets"]["static_angle_upper"])
     d["targets"]["static_angle_any"] = {k: v for k, v in d["targets"]["static_angle_upper"].items() if k != "layer"}
-    _load(tmp_path, d)
+    load_copy(tmp_path, SOIL, d)
 
 
 @pytest.mark.parametrize("measure", ["left_deg", "spread_deg"])
@@ -61,7 +57,7 @@ def test_another_measure_of_the_same_photos_is_of_the_same_state(tmp_path, parse
     d = copy.deepcopy(parsed)
     d["targets"]["static_angle_middle"].update(image="static_upper", image_measure=measure)
     with pytest.raises(InputError) as ei:
-        _load(tmp_path, d)
+        load_copy(tmp_path, SOIL, d)
     assert ei.value.field == "targets.static_angle_middle.image"
     assert "targets.static_angle_upper" in ei.value.expected and "layer upper there, middle here" in ei.value.expected
 
@@ -75,7 +71,7 @@ def test_a_state_given_by_a_later_target_counts(tmp_path, parsed):
                     "static_angle_upper": up, **d["targets"]}
     d["targets"]["static_angle_middle"]["image"] = "static_upper"
     with pytest.raises(InputError) as ei:
-        _load(tmp_path, d)
+        load_copy(tmp_path, SOIL, d)
     assert ei.value.field == "targets.static_angle_middle.image"
     # named by the target that gave the layer, not the group's first target (which gives none)
     assert "targets.static_angle_upper (layer upper there, middle here)" in ei.value.expected

@@ -73,13 +73,15 @@ def test_lattice_and_random_fill_counts_are_exact():
 
 SMALL = [
     ("repose", "black-soil-stage2", {"load_mass": 0.06, "max_settle_time": 1.0}, BLACK),
+    # read past the settle bound: the heap's phase runs to read_time, longer than max_settle_time
+    ("repose", "black-soil-stage2", {"load_mass": 0.06, "max_settle_time": 0.2, "read_time": 0.5}, BLACK),
     ("repose", "cinnamon-soil", {"n_particles": 200, "max_settle_time": 1.0}, DemParams()),
     ("drum", "xinjiang-vineyard", {"n_particles": 200, "spin_time": 0.6, "transient_time": 0.3,
                                    "max_settle_time": 0.5}, DemParams(soil_density=1757.567)),
 ]
 
 
-@pytest.mark.parametrize("scenario,name,over,params", SMALL, ids=[s[1] for s in SMALL])
+@pytest.mark.parametrize("scenario,name,over,params", SMALL, ids=[s[1] + ("-read" if "read_time" in s[2] else "") for s in SMALL])
 def test_estimate_bounds_a_small_bench_top_run(scenario, name, over, params, monkeypatch):
     mod = {"repose": repose, "drum": drum}[scenario]
     setup = merge_setup(mod.setups(), name, over, "t")

@@ -158,29 +158,14 @@ def test_demparams_switch_the_soil_soil_contacts_to_the_plastic_law():
 def test_a_stage_factor_of_kind_plasticity_sets_the_soil_soil_ratio(tmp_path):
     """A user's soil may vary the contact plasticity ratio like any contact parameter: a
     factor whose parameter has pair soil-soil and kind plasticity sets soil_soil_plasticity."""
-    import textwrap
-
+    from own_soil import bbd_soil, write_soil
     from soilcal.config import load_soil
     from soilcal.dem.scenarios.base import stage_params
 
-    (tmp_path / "my-soil.yaml").write_text(textwrap.dedent("""\
-        name: my-soil
-        parameters:
-          plastic: {name: Contact plasticity ratio, unit: "-", pair: soil-soil, kind: plasticity}
-          energy: {name: JKR surface energy, unit: J/m^2, pair: soil-soil, kind: surface_energy}
-          steel: {name: Soil-steel static friction, unit: "-", pair: soil-steel, kind: static_friction}
-        stages:
-          - id: bbd
-            kind: box_behnken
-            factors:
-              A: {parameter: plastic, low: 0.2, high: 0.6}
-              B: {parameter: energy, low: 2, high: 6}
-              C: {parameter: steel, low: 0.4, high: 0.8}
-            center_points: 3
-            responses:
-              - {id: recovered, name: Recovered strain, unit: "-"}
-        """))
-    soil = load_soil(tmp_path / "my-soil.yaml", tmp_path / "resources")
+    plastic = {"name": "Contact plasticity ratio", "unit": "-", "pair": "soil-soil", "kind": "plasticity"}
+    data = bbd_soil("my-soil", {"plastic": (0.2, 0.6), "energy": (2, 6), "steel": (0.4, 0.8)},
+                    parameters={"plastic": plastic})
+    soil = load_soil(write_soil(tmp_path, data), tmp_path / "resources")
     p = stage_params(soil, "bbd", {"A": 0.0, "B": 0.0, "C": 0.0}, coded=True)
     assert p.soil_soil_plasticity == pytest.approx(0.4, rel=1e-12)
     with pytest.raises(InputError, match="stages.bbd.factors.A"):

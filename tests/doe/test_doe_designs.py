@@ -205,3 +205,16 @@ def test_at_bound_default_tolerance_and_side_check():
     assert at_bound(1.0 - 0.9e-6, "high") and not at_bound(1.0 - 1.1e-6, "high")
     with pytest.raises(InputError):
         at_bound(0.0, "middle")
+
+
+def test_loading_the_designs_does_not_import_pydoe3():
+    """pyDOE3 (its package import loads every design module of it) is imported where a
+    Box-Behnken or a Hadamard Plackett-Burman design is built: the workflow's rule files,
+    which import soilcal.chain (and with it soilcal.doe) at every start, do not pay for it."""
+    import subprocess
+    import sys
+
+    code = ("import sys, soilcal.doe, soilcal.chain; print('pyDOE3' in sys.modules); "
+            "soilcal.doe.box_behnken(3, 1); print('pyDOE3' in sys.modules)")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout
+    assert out.split() == ["False", "True"]

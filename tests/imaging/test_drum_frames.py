@@ -579,6 +579,19 @@ def test_steep_smooth_surface_is_not_flagged_jagged(tmp_path, angle=74.0):
     assert r.confidence == "ok" and r.roughness_pct < 0.3
 
 
+def test_reading_photos_does_not_import_the_drum_filter():
+    """The roughness filter (scipy.signal, about 0.8 CPU-s to import) is imported where a drum
+    frame's roughness is taken: a photo measurement of heaps or furrows, which imports this
+    module for the manifest's checks, does not pay for it."""
+    import subprocess
+    import sys
+
+    code = ("import sys, soilcal.imaging.manifest, soilcal.imaging.drum, soilcal.imaging.measure; "
+            "print(sorted(m for m in sys.modules if m == 'scipy.signal' or m.startswith('scipy.signal.')))")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout
+    assert out.strip() == "[]"
+
+
 def _lumps(img, truth, n=12, r_frac=0.03):
     """``n`` powder-grey discs (radius ``r_frac`` drum radii) centred on the surface, evenly
     spaced over the columns the bed spans: clods lying on the surface all along it."""

@@ -163,3 +163,18 @@ def test_a_moisture_set_per_treatment_group_is_tried(name):
                              core.Settings(reference=REFERENCE, bootstrap=0))
     assert out.chosen == ["moisture_cohesion"], out.verdict
     assert out.theta["moisture_cohesion.c_w"] == pytest.approx(0.03, rel=0.25)
+
+
+def test_day_folds_hold_their_conditions_as_the_units_of_the_paired_test():
+    # rows 0-1: one test measured twice on day d1; row 2 another test on d1; row 3 a test on d2;
+    # row 4 a test with no day, a fold of its own.  Folds by day (first seen first): d1 (rows
+    # 0, 1, 2), d2 (3), the dayless test (4); the conditions within them: (0, 1), (2), (3), (4)
+    obs = pd.DataFrame({"simulation": ["s1", "s1", "s2", "s3", "s4"],
+                        "cov:day": ["d1", "d1", "d1", "d2", None]})
+    folds = sl._folds(obs, "day")
+    assert [f.tolist() for f in folds.held_out] == [[0, 1, 2], [3], [4]]
+    assert [u.tolist() for u in folds.units] == [[0, 1], [2], [3], [4]]
+    # by condition (no fold_by), every fold is one condition: no units
+    by_condition = sl._folds(obs, None)
+    assert [f.tolist() for f in by_condition.held_out] == [[0, 1], [2], [3], [4]]
+    assert by_condition.units is None

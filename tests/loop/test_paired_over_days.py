@@ -26,10 +26,10 @@ def _days(day_mean=DAY_MEAN, pattern=PATTERN):
     d = (day_mean[:, None] + pattern[None, :]).ravel()  # conditions, day by day
     ref_held = np.full(d.size, REF)
     held = REF - d  # the model's held-out error (all positive here)
-    folds = sl.Folds(np.arange(per * k, per * k + per) for k in range(len(day_mean)))
-    folds.units = [np.array([i]) for i in range(d.size)]
+    folds = sl.Folds([np.arange(per * k, per * k + per) for k in range(len(day_mean))],
+                     units=[np.array([i]) for i in range(d.size)])
     rms = lambda e: np.array([math.sqrt(np.mean(e[f] ** 2)) if np.all(np.isfinite(e[f])) else math.nan  # noqa: E731
-                              for f in folds])
+                              for f in folds.held_out])
     return rms(ref_held), rms(held), ref_held, held, folds
 
 
@@ -88,7 +88,7 @@ def test_a_condition_without_a_finite_error_is_left_out_of_the_conditions():
 
 def test_folds_of_single_conditions_are_tested_as_before():
     ref_rms, fold_rms, ref_held, held, folds = _days()
-    single = sl.Folds(np.array([i]) for i in range(20))
+    single = sl.Folds([np.array([i]) for i in range(20)])
     p = sl.paired_p(np.abs(ref_held), np.abs(held), ref_held, held, single)
     assert (p.test, p.df) == ("folds", 19)
     assert p.p == stats.ttest_rel(np.abs(ref_held), np.abs(held), alternative="greater").pvalue

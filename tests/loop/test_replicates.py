@@ -130,7 +130,7 @@ def test_the_fit_interval_of_replicate_rows_is_that_of_their_condition_means():
     dev = rng.normal(0.0, 0.05, 8)
     meas = np.array([100 * 1.1 * (1 + d + rng.normal(0.0, 0.005)) for d in dev for _ in range(3)])
     y0 = np.full(len(meas), 100.0)
-    folds = [np.arange(3 * i, 3 * i + 3) for i in range(8)]
+    folds = sl.Folds([np.arange(3 * i, 3 * i + 3) for i in range(8)])
     m = sl.Model([sl.scale_data()], y0, meas)
     s = sl.score(m, sl.Model([], y0, meas), folds)
     lo, hi = s.ci["uniform_scale.s"]
@@ -218,7 +218,7 @@ def test_replicate_rows_are_one_observation_in_the_information_criterion():
     y0 = np.full(n_c * reps, 100.0)
     obs = pd.DataFrame({"simulation": np.repeat([f"s{i}" for i in range(n_c)], reps), "measure": "F_N"})
     groups = sl.replicate_groups(obs)
-    folds = [np.arange(reps * i, reps * i + reps) for i in range(n_c)]
+    folds = sl.Folds([np.arange(reps * i, reps * i + reps) for i in range(n_c)])
     ed = _trend_effect(x)
     for _ in range(tables):
         meas = 100.0 * (1.0 + np.repeat(rng.normal(0.0, 0.05, n_c), reps) + rng.normal(0.0, 0.005, n_c * reps))
@@ -241,13 +241,14 @@ def test_the_information_criterion_of_replicate_rows_is_that_of_their_means():
     xc = np.linspace(-0.5, 0.5, n_c)
     meas = 100.0 * (1.0 + 0.2 * np.repeat(xc, reps) + rng.normal(0.0, 0.03, n_c * reps))
     obs = pd.DataFrame({"simulation": np.repeat([f"s{i}" for i in range(n_c)], reps), "measure": "F_N"})
-    folds = [np.arange(reps * i, reps * i + reps) for i in range(n_c)]
+    folds = sl.Folds([np.arange(reps * i, reps * i + reps) for i in range(n_c)])
     rows = sl.score(sl.Model([_trend_effect(np.repeat(xc, reps))], np.full(n_c * reps, 100.0), meas,
                              np.full(n_c * reps, 100.0)),
                     sl.Model([], np.full(n_c * reps, 100.0), meas, np.full(n_c * reps, 100.0)), folds,
                     groups=sl.replicate_groups(obs))
     mean = meas.reshape(n_c, reps).mean(axis=1)
     one = sl.score(sl.Model([_trend_effect(xc)], np.full(n_c, 100.0), mean, np.full(n_c, 100.0)),
-                   sl.Model([], np.full(n_c, 100.0), mean, np.full(n_c, 100.0)), [np.array([i]) for i in range(n_c)])
+                   sl.Model([], np.full(n_c, 100.0), mean, np.full(n_c, 100.0)),
+                   sl.Folds([np.array([i]) for i in range(n_c)]))
     assert rows.aicc == pytest.approx(one.aicc, rel=1e-6) and rows.ref_aicc == pytest.approx(one.ref_aicc, rel=1e-6)
     assert rows.theta["trend.t"] == pytest.approx(0.2, abs=0.03)

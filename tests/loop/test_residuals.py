@@ -208,4 +208,5 @@ def test_a_test_measured_twice_is_one_simulation_and_one_fold():
              _cond(3, [("F_N", 120.0, 6.0, 4)], quantities={"tool_speed": 2.0, "day": "d2"})]
     obs = observations(twins)
     assert obs["simulation"].iloc[0] == obs["simulation"].iloc[1] != obs["simulation"].iloc[2]
-    assert [list(f) for f in _folds(obs, None)] == [[0, 1], [2]]
+    folds = _folds(obs, None)
+    assert [list(f) for f in folds.held_out] == [[0, 1], [2]] and folds.units is None

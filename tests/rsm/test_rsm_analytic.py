@@ -212,3 +212,44 @@ def test_the_standard_error_of_a_change_between_two_sets():
     a = np.array([e2 - e1, 0.5 * (e2 + e1)])
     assert lf.change_se([-0.5], [0.5]) == pytest.approx(float(np.sqrt(a @ np.asarray(lf.ols.cov_params()) @ a)),
                                                         rel=1e-5)
+
+
+def test_prediction_of_a_known_quadratic_at_chosen_points():
+    """A noise-free fit reproduces the polynomial TRUE, so its prediction at a point is the
+    polynomial's value there, worked by hand from TRUE: 10 at the centre; the sum of all
+    fifteen coefficients, 12.4, at (1, 1, 1, 1); 10 - 1.5 - 1.1 = 7.4 at A = -1;
+    10 + 0.75 + 0.7 - 0.2 - 0.275 + 0.8 = 11.775 at (0.5, -1, 0, 0); 10 - 2 - 0.3 = 7.7 at
+    D = -1.  One point at a time (as the optimisers call it) and the five as one batch, coded
+    and actual levels alike; under a ln transform the prediction is exp of the polynomial."""
+    pts = np.array([[0, 0, 0, 0], [1, 1, 1, 1], [-1, 0, 0, 0], [0.5, -1, 0, 0], [0, 0, 0, -1]], dtype=float)
+    want = np.array([10.0, 12.4, 7.4, 11.775, 7.7])
+    for transform, back in (("none", want), ("ln", np.exp(want))):
+        df = _data()
+        if transform == "ln":
+            df["y"] = np.exp(df["y"])
+        fit = fit_response_surface(df, FACTORS, "y", LOW, HIGH, transform=transform)
+        np.testing.assert_allclose(fit.predict(pts), back, rtol=1e-10)
+        np.testing.assert_allclose([fit.predict(p)[0] for p in pts], back, rtol=1e-10)
+        np.testing.assert_allclose(fit.predict_actual(coded_to_actual(pts, LOW, HIGH)), back, rtol=1e-10)
+        np.testing.assert_allclose(fit.predict_transformed(pts), want, rtol=1e-10)
+
+
+def test_prediction_of_a_reduced_and_a_one_factor_model():
+    """Terms kept in another order than the full quadratic's, and a single factor (its own
+    path through the model matrix): y = 3 - 2 B + 0.5 A*B + 1.5 B^2 gives 3 - 2 - 0.5 + 1.5 = 2
+    at (A, B) = (-1, 1) and 3 + 1 - 0.125 + 0.375 = 4.25 at (0.5, -0.5); y = 2 + 3 x - 0.5 x^2
+    gives 3.12 at x = 0.4 and -1.5 at x = -1."""
+    x = box_behnken(3, 3)[:, :2]
+    a, b = x.T
+    df = pd.DataFrame(x, columns=["A", "B"])
+    df["y"] = 3 - 2 * b + 0.5 * a * b + 1.5 * b**2
+    fit = fit_response_surface(df, ["A", "B"], "y", [0, 0], [1, 1], terms=["B^2", "A*B", "B"])
+    pts = np.array([[-1.0, 1.0], [0.5, -0.5]])
+    np.testing.assert_allclose(fit.predict(pts), [2.0, 4.25], rtol=1e-10)
+    np.testing.assert_allclose([fit.predict(p)[0] for p in pts], [2.0, 4.25], rtol=1e-10)
+
+    x1 = np.linspace(-1, 1, 7)
+    df1 = pd.DataFrame({"x": x1, "y": 2 + 3 * x1 - 0.5 * x1**2})
+    fit1 = fit_response_surface(df1, ["x"], "y", [0], [1])
+    np.testing.assert_allclose(fit1.predict([[0.4], [-1.0]]), [3.12, -1.5], rtol=1e-10)
+    np.testing.assert_allclose(fit1.predict([0.4]), [3.12], rtol=1e-10)

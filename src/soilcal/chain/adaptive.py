@@ -150,63 +150,53 @@ def declared_range(soil_data: dict, parameter) -> SearchRange | None:
     return SearchRange(float(entry["low"]), float(entry["high"]), f"simulation.search_ranges.{parameter}", "declared")
 
 
-def search_range(soil_data: dict, stage_id: str, parameter, screening: bool = True) -> SearchRange | None:
+def screening_range(soil_data: dict, stage_id: str, parameter) -> SearchRange | None:
+    """The range (``kind`` ``screening``, ``low`` <= ``high``) of the first factor of the
+    Plackett-Burman screening stage ``stage_id`` descends from (:func:`screening_of`) that
+    varies ``parameter`` between a low and a high level, or None: what
+    :func:`second_round_range` and :func:`adaptive_range` take from the screening."""
+    screening = screening_of(soil_data, stage_id)
+    for sym, f in ((screening or {}).get("factors") or {}).items():
+        if f.get("parameter") == parameter and f.get("low") is not None and f.get("high") is not None:
+            lo, hi = sorted((float(f["low"]), float(f["high"])))
+            return SearchRange(lo, hi, f"stages.{screening['id']}.factors.{sym}", "screening")
+    return None
+
+
+def second_round_range(soil_data: dict, stage_id: str, parameter, screening: bool = True) -> SearchRange | None:
     """The range a factor of stage ``stage_id`` setting ``parameter`` may be searched over past
     the stage's own levels by the second calibration round of ``design: recipe``
     (:func:`soilcal.chain.stage.screening_ranges`): the range the soil declares
     (:func:`declared_range`, the user's explicit choice) wherever it is declared; else, where
     ``screening`` (a stage derived from the simulated path), the range of the Plackett-Burman
-    screening the stage descends from (:func:`screened_range`) where it varies the parameter;
-    else None.  The adaptive design does not read declared ranges (:func:`screening_factor`)."""
+    screening the stage descends from (:func:`screening_range`) where it varies the parameter;
+    else None.  The adaptive design does not read declared ranges (:func:`adaptive_range`)."""
     declared = declared_range(soil_data, parameter)
     if declared is not None:
         return declared
-    return screened_range(soil_data, stage_id, parameter) if screening else None
+    return screening_range(soil_data, stage_id, parameter) if screening else None
 
 
-def screened_range(soil_data: dict, stage_id: str, parameter) -> SearchRange | None:
-    """:func:`screened_factor` as a :class:`SearchRange` (``kind`` ``screening``, ``low`` <=
-    ``high``), or None."""
-    found = screened_factor(soil_data, stage_id, parameter)
-    if found is None:
-        return None
-    scr, sym, f = found
-    lo, hi = sorted((float(f["low"]), float(f["high"])))
-    return SearchRange(lo, hi, f"stages.{scr['id']}.factors.{sym}", "screening")
-
-
-def screening_factor(soil_data: dict, stage_id: str, parameter) -> SearchRange | None:
+def adaptive_range(soil_data: dict, stage_id: str, parameter) -> SearchRange | None:
     """The range ``design: adaptive`` gives ``parameter`` in stage ``stage_id``: that of the
-    Plackett-Burman screening the stage descends from (:func:`screened_range`), or None where
+    Plackett-Burman screening the stage descends from (:func:`screening_range`), or None where
     the stage keeps its own range (``simulation.adaptive.ranges: stage``, no screening the stage
     descends from (:func:`screening_of`), or a screening that does not vary the parameter
     between a low and a high level).  A range declared under ``simulation.search_ranges`` does
-    not enter: it serves the recipe's second round (:func:`search_range`).  The one rule
+    not enter: it serves the recipe's second round (:func:`second_round_range`).  The one rule
     :func:`stage_for` and the start-up checks of the adaptive design follow."""
     if ranges_setting(soil_data) != "screening":
         return None
-    return screened_range(soil_data, stage_id, parameter)
-
-
-def screened_factor(soil_data: dict, stage_id: str, parameter) -> tuple[dict, str, dict] | None:
-    """``(screening stage, its symbol, its factor)``: the first factor of the Plackett-Burman
-    screening stage ``stage_id`` descends from (:func:`screening_of`) that varies ``parameter``
-    between a low and a high level, or None.  The lookup of :func:`screening_factor` and of
-    :func:`search_range`."""
-    screening = screening_of(soil_data, stage_id)
-    for sym, f in ((screening or {}).get("factors") or {}).items():
-        if f.get("parameter") == parameter and f.get("low") is not None and f.get("high") is not None:
-            return screening, sym, f
-    return None
+    return screening_range(soil_data, stage_id, parameter)
 
 
 def _screening_ranges(soil_data: dict, st: dict) -> tuple[list[str], dict]:
-    """Widen the factors of ``st`` in place to the range :func:`screening_factor` gives their
+    """Widen the factors of ``st`` in place to the range :func:`adaptive_range` gives their
     parameter; returns the factors widened ("A (0.08-0.14 -> 0.05-0.2)") and, per symbol taking
     a range, ``{"low", "high", "from"}`` (the field it comes from)."""
     moved, used = [], {}
     for sym, f in st["factors"].items():
-        found = screening_factor(soil_data, st["id"], f.get("parameter"))
+        found = adaptive_range(soil_data, st["id"], f.get("parameter"))
         if found is None:
             continue
         lo, hi = found.low, found.high

@@ -239,7 +239,8 @@ def apply_own_fixed(st: dict, config_stage: dict, fixed: dict, origin: dict, var
 
 
 def _screened_factors(soil_data: dict, stage_id: str) -> dict:
-    """``{dem_key: (screening id, symbol, factor)}`` of the Plackett-Burman screening a stage
+    """``{dem_key: (screening id, symbol, factor)}``, the first factor setting each DEM parameter
+    in the Plackett-Burman screening a stage
     descends from through its ``from_stage`` links (:func:`soilcal.chain.adaptive.screening_of`,
     the same in every design mode), keyed by the DEM parameter each factor sets
     (:func:`soilcal.config.parameters.dem_key`)."""
@@ -250,8 +251,13 @@ def _screened_factors(soil_data: dict, stage_id: str) -> dict:
     if scr is None:
         return {}
     params = soil_data.get("parameters") or {}
-    return {dem_key(params, f["parameter"]): (scr["id"], sym, f) for sym, f in scr["factors"].items()
-            if f.get("low") is not None and f.get("high") is not None}
+    found = {}
+    for sym, f in scr["factors"].items():
+        if f.get("low") is not None and f.get("high") is not None:
+            # the first factor of a parameter, as :func:`soilcal.chain.adaptive.screening_range`
+            # takes it
+            found.setdefault(dem_key(params, f["parameter"]), (scr["id"], sym, f))
+    return found
 
 
 #: how far (relative to the screening range) a fixed value may lie past a range end and still
@@ -616,7 +622,7 @@ def check_dem_stages(soil_path, soil_data: dict) -> None:
       its ``low`` and ``high`` where the runs are decoded from them (:func:`decodes_low_high`);
       with ``design: adaptive`` a factor's levels are the range it
       takes from its screening where it takes one
-      (:func:`soilcal.chain.adaptive.screening_factor`), named as the screening's
+      (:func:`soilcal.chain.adaptive.adaptive_range`), named as the screening's
       ``stages.<screening>.factors.<symbol>.low`` / ``.high`` (a range declared under
       ``simulation.search_ranges``, which the adaptive design does not use, is checked against
       the same ranges as the soil loads, in every mode:
@@ -653,7 +659,7 @@ def check_dem_stages(soil_path, soil_data: dict) -> None:
             name, scale = mapped(f["parameter"], f"{where}.parameter")
             if "from" in deps:
                 continue  # levels derived from the earlier stage's DEM results
-            screened = (adaptive.screening_factor(soil_data, sid, f["parameter"])
+            screened = (adaptive.adaptive_range(soil_data, sid, f["parameter"])
                         if design_mode(soil_data) == "adaptive" else None)
             if screened is not None:
                 # the adaptive design ranges the factor over its screening's levels (ranges:

@@ -590,7 +590,7 @@ def screening_ranges(soil_data: dict, stage: dict) -> dict[str, tuple[float, flo
     """``{symbol: (low, high, origin)}`` (actual units) of the range each factor of a DEM stage
     may be searched over past its own levels by the second calibration round
     (:func:`soilcal.chain.refine.search_region`), looked up by
-    :func:`soilcal.chain.adaptive.search_range`: the range the soil declares under
+    :func:`soilcal.chain.adaptive.second_round_range`: the range the soil declares under
     ``simulation.search_ranges`` wherever it declares one (the user's explicit choice); else, for
     a stage derived from the simulated path (``derivation.kind = "path"``, ``design: recipe``),
     the ``low`` .. ``high`` of the factor setting the same parameter in the Plackett-Burman
@@ -603,7 +603,7 @@ def screening_ranges(soil_data: dict, stage: dict) -> dict[str, tuple[float, flo
     a factor with neither range (its range is the stage's own)."""
     from dataclasses import replace
 
-    from soilcal.chain.adaptive import search_range
+    from soilcal.chain.adaptive import second_round_range
     from soilcal.chain.derive import design_mode
 
     if design_mode(soil_data) != "recipe":
@@ -611,7 +611,7 @@ def screening_ranges(soil_data: dict, stage: dict) -> dict[str, tuple[float, flo
     path = (stage.get("derivation") or {}).get("kind") == "path"
     out = {}
     for s, f in (stage.get("factors") or {}).items():
-        found = search_range(soil_data, stage["id"], f.get("parameter"), screening=path)
+        found = second_round_range(soil_data, stage["id"], f.get("parameter"), screening=path)
         if found is None or f.get("low") is None or f.get("high") is None:
             continue
         used = replace(found, low=min(found.low, float(f["low"])), high=max(found.high, float(f["high"])))

@@ -31,10 +31,12 @@ kernel compiled, nothing allocated per particle), from the same code the run use
 * **simulated time**: an upper bound of one run, from each scenario's ``run``:
 
   - repose, funnel: 2 x ``max_settle_time`` (fill, heap) + the cover's travel
-    (2.5 R_outlet + d_max) / ``cover_speed``;
+    (2.5 R_outlet + d_max) / ``cover_speed``; with ``read_time`` the heap's phase is
+    ``read_time`` less the cover's travel (exact);
   - repose, cylinder: 2 x ``max_settle_time`` + the lift (insertion height + d_max) /
     ``lift_speed`` (the settled fill is no higher than the region it was inserted in;
-    the run lifts by the settled fill height + d_max, or less);
+    the run lifts by the settled fill height + d_max, or less); with ``read_time`` the
+    heap's phase is at most ``read_time``;
   - drum: ``max_settle_time`` + the rotation (``spin_time``: transient + frames);
   - compression: ``max_settle_time`` + the rod's longest travel, from half a radius above
     the fill (no higher than its insertion height) down to 5 % of that height, at
@@ -327,11 +329,15 @@ def _repose(mod, setup, params, preset, source):
         vol = sz["n"] * sz["dist"].mean_volume()
         h_ins = vol / (mod.FILL_FRACTION * m.pi * (R - sz["r_max"]) ** 2)
         lift = int(m.ceil((h_ins + dmax) / (setup["lift_speed"] * dt))) + 1
-        steps = [("fill settle", settle), ("lift", lift), ("heap settle", settle)]
+        release = ("lift", lift)
     else:
         Rb = setup["funnel_bottom_diameter"] / 2
-        cover = _rsteps((2.5 * Rb + dmax) / setup["cover_speed"], dt)
-        steps = [("fill settle", settle), ("cover", cover), ("heap settle", settle)]
+        release = ("cover", _rsteps((2.5 * Rb + dmax) / setup["cover_speed"], dt))
+    heap = settle
+    if setup.get("read_time") is not None:
+        # the heap runs to read_time after the release starts (a shorter lift leaves it more)
+        heap = _rsteps(setup["read_time"], dt) - (release[1] if release[0] == "cover" else 0)
+    steps = [("fill settle", settle), release, ("heap settle", max(1, heap))]
     return [(nm, sz["n"], k, dt) for nm, k in steps], sz["n"], sz["dist"], 0.6 * sz["r_max"], \
         "exact (repose.sizing)"
 

@@ -39,7 +39,6 @@ from dataclasses import dataclass, field
 from typing import Mapping
 
 import numpy as np
-import pyDOE3
 
 from soilcal.errors import InputError
 
@@ -90,6 +89,8 @@ def plackett_burman(n_columns: int) -> np.ndarray:
     elif n_runs == 4:
         design = np.array([[1, 1, -1], [-1, 1, 1], [1, -1, 1], [-1, -1, -1]], dtype=float)
     else:
+        import pyDOE3  # here, not at module import: its package import loads every design module of it
+
         design = np.asarray(pyDOE3.pbdesign(n_runs - 1), dtype=float)
     return design[:, : int(n_columns)].astype(float)
 
@@ -104,6 +105,8 @@ def box_behnken(k: int, center_points: int) -> np.ndarray:
         raise InputError(None, "k", f"an integer number of factors >= {BBD_MIN_FACTORS}", k)
     if int(center_points) != center_points or center_points < 0:
         raise InputError(None, "center_points", "a non-negative integer", center_points)
+    import pyDOE3  # here, not at module import: its package import loads every design module of it
+
     return np.asarray(pyDOE3.bbdesign(int(k), center=int(center_points)), dtype=float)
 
 

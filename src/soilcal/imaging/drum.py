@@ -85,7 +85,7 @@ import math
 from dataclasses import asdict, dataclass
 
 import numpy as np
-from scipy import ndimage as ndi, signal
+from scipy import ndimage as ndi
 from skimage import feature, filters, measure, morphology, transform
 
 from soilcal.errors import InputError
@@ -752,7 +752,11 @@ def _measure_drum_frame(path, threshold, keep_stages, options, tried: Tried) -> 
     o = np.argsort(sa)
     step = float(np.median(np.diff(sa[o]))) or 1.0
     k = min(max(5, int(round(0.1 * R / step)) | 1), u.size if u.size % 2 else u.size - 1)  # odd
-    rough = float(np.sqrt(np.mean((na[o] - signal.savgol_filter(na[o], k, 2, mode="interp")) ** 2)) / R * 100.0)
+    # scipy.signal here, not at the top: importing it takes about 0.8 CPU-s, and every photo
+    # measurement imports this module (manifest checks) while only drum frames need the filter
+    from scipy.signal import savgol_filter
+
+    rough = float(np.sqrt(np.mean((na[o] - savgol_filter(na[o], k, 2, mode="interp")) ** 2)) / R * 100.0)
     # a jagged trace tilts the line only where it is one-sided: particles in flight crowd over
     # the upper part, so a third's angle parts from the central chord's; lumps spread evenly
     # along the surface leave the thirds as the chord

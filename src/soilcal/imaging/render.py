@@ -67,7 +67,7 @@ def _wall(rng, h, w, hard, avoid=None, floor_row=None, style=None):
     base = base * (1 + 0.02 * rng.standard_normal(3))
     img = np.ones((h, w, 3)) * base
     img *= (1 + 0.03 * _noise(rng, (h, w), 20.0))[..., None]
-    rr, cc = np.mgrid[0:h, 0:w]
+    rr, cc = np.arange(h)[:, None], np.arange(w)[None, :]  # broadcast as np.mgrid's rows, columns
     if "wall_gradient" in style:
         gx, gy = style["wall_gradient"]
         img *= (1 + gx * (cc / w - 0.5) + gy * (rr / h - 0.5))[..., None]
@@ -84,10 +84,12 @@ def _wall(rng, h, w, hard, avoid=None, floor_row=None, style=None):
                 continue
         col = rng.uniform(0.35, 0.95, 3) if not hard else rng.uniform(0.1, 0.35, 3)
         if rng.random() < 0.5:
-            m = (rr >= r0) & (rr < r0 + hh) & (cc >= c0) & (cc < c0 + ww)
-        else:
-            m = ((rr - r0 - hh / 2) / (hh / 2)) ** 2 + ((cc - c0 - ww / 2) / (ww / 2)) ** 2 <= 1
-        img[m] = col * (1 + 0.04 * rng.standard_normal())
+            box, m = img[r0:r0 + hh, c0:c0 + ww], np.s_[...]
+        else:  # the ellipse inscribed in rows r0..r0 + hh, columns c0..c0 + ww (ends included)
+            box = img[r0:r0 + hh + 1, c0:c0 + ww + 1]
+            br, bc = rr[r0:r0 + hh + 1], cc[:, c0:c0 + ww + 1]
+            m = ((br - r0 - hh / 2) / (hh / 2)) ** 2 + ((bc - c0 - ww / 2) / (ww / 2)) ** 2 <= 1
+        box[m] = col * (1 + 0.04 * rng.standard_normal())
     return ndi.gaussian_filter(img, (1.5, 1.5, 0))
 
 
@@ -218,7 +220,8 @@ def render_pile(seed, left_deg, right_deg, front_deg=None, back_deg=None, soil="
     sil_all = np.zeros((ch, cw), bool)
     layers = []
     for cx in centres:
-        cols = np.arange(max(0, int(cx - reach)), min(cw, int(cx + reach)))
+        c_lo = max(0, int(cx - reach))
+        cols = np.arange(c_lo, min(cw, int(cx + reach)))
         xs = (cols - cx) / s
         ys = np.arange(-1.6 * r0, 1.6 * r0, 0.4)
         X, Y = np.meshgrid(xs, ys, indexing="ij")
@@ -230,8 +233,10 @@ def render_pile(seed, left_deg, right_deg, front_deg=None, back_deg=None, soil="
         tex = 1 + 0.12 * _texture(rng, h.shape)
         sil = h.max(axis=1)
         front = np.maximum.accumulate(h[:, : len(ys) // 2 + 1], axis=1)
-        layer = np.zeros((ch, cw, 3))
-        lm = np.zeros((ch, cw), bool)
+        # the heap's pixels lie in rows 0..row_p - 1 of its columns: the layer and its mask
+        # cover that box of the canvas only
+        layer = np.zeros((row_p, len(cols), 3))
+        lm = np.zeros((row_p, len(cols)), bool)
         for i, c in enumerate(cols):
             top = sil[i] * s
             if top <= 0:
@@ -240,10 +245,13 @@ def render_pile(seed, left_deg, right_deg, front_deg=None, back_deg=None, soil="
             z = (row_p - rows) / s
             j = np.minimum(np.searchsorted(front[i], z), front.shape[1] - 1)
             v = shade[i, j] * tex[i, j]
-            layer[rows, c] = v[:, None] * albedo
-            lm[rows, c] = True
-        layers.append((layer, lm))
-        sil_all |= lm
+            if rows.size and rows[0] < 0:
+                raise ValueError(f"heap {top:.0f} px high does not fit above the plate row {row_p}")
+            layer[rows, i] = v[:, None] * albedo
+            lm[rows, i] = True
+        box = np.s_[:row_p, c_lo:c_lo + len(cols)]
+        layers.append((box, layer, lm))
+        sil_all[box] |= lm
     # cast shadow on the wall, then heap(s)
     dx, dy = int(round(-light[0] / light[2] * 25 * s * 0.3)), int(round(8 * s * 0.3))
     sh = style.get("shadow", {})
@@ -252,16 +260,19 @@ def render_pile(seed, left_deg, right_deg, front_deg=None, back_deg=None, soil="
     shadow = np.roll(np.roll(sil_all.astype(float), dx, axis=1), dy, axis=0)
     shadow = ndi.gaussian_filter(shadow, sh.get("blur_px", 2.0 if hard else 7.0))
     canvas *= (1 - sh.get("darkness", 0.55 if hard else 0.25) * shadow)[..., None]
-    for layer, lm in layers:
-        canvas[lm] = layer[lm]
-    # crumbs on the plate next to the toe
-    rr, cc = np.mgrid[0:ch, 0:cw]
+    for box, layer, lm in layers:
+        canvas[box][lm] = layer[lm]
+    # crumbs on the plate next to the toe: half ellipses above row_p, evaluated in their
+    # bounding box (a pixel beyond it lies a pixel or more outside the ellipse)
     for _ in range(int(rng.integers(4, 10)) if centres else 0):
         side = rng.choice([-1, 1])
         cx = centres[0] + side * rng.uniform(1.15, 1.45) * r0 * s
         a, b = rng.uniform(1.0, 3.0) * s, rng.uniform(0.8, 2.0) * s
-        m = (((cc - cx) / a) ** 2 + ((rr - row_p) / b) ** 2 <= 1) & (rr < row_p)
-        canvas[m] = albedo * rng.uniform(0.6, 1.0)
+        r_lo = min(max(0, int(np.floor(row_p - b)) - 1), row_p)
+        c_lo, c_hi = min(max(0, int(np.floor(cx - a)) - 1), cw), min(max(0, int(np.ceil(cx + a)) + 2), cw)
+        rr, cc = np.arange(r_lo, row_p)[:, None], np.arange(c_lo, c_hi)[None, :]
+        m = ((cc - cx) / a) ** 2 + ((rr - row_p) / b) ** 2 <= 1
+        canvas[r_lo:row_p, c_lo:c_hi][m] = albedo * rng.uniform(0.6, 1.0)
     pl = style.get("plate", {})
     thick = int(pl.get("thick_mm", 6) * s)
     _plate(canvas, rng, row_p, 0, cw, thick, pl.get("grey", 0.68), pl.get("rgb", (0.97, 0.99, 1.0)),

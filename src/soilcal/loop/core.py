@@ -1173,7 +1173,7 @@ def analyse(soil: str, res: pd.DataFrame, diag: pd.DataFrame, cands: list, effec
     else:
         rejected = _rejected(sel_rows)
         verdict = f"unexplained: the residual follows {follows}; candidates rejected ({rejected})"
-        groups = len(sl._folds(u, fold_by)) if fold_by else 0
+        groups = len(sl._folds(u, fold_by).held_out) if fold_by else 0
         # the few-groups clause where a candidate failed a paired test over the groups (over the
         # folds, or over the conditions with the mean's variance from the between-group mean square)
         few = sorted({s.test.df for _, _, s in (sel.steps if sel is not None else [])

@@ -271,18 +271,24 @@ def _seed_values(r: pd.DataFrame, obs, design, index, keys, tcols):
     return out, seeds
 
 
-class Folds(list):
-    """The held-out groups (index arrays of rows), and ``units``: the index arrays of the
-    simulated conditions, each within one group (:func:`paired_p` tests over them); None where every group is one condition."""
+@dataclass(frozen=True, eq=False)
+class Folds:
+    """The folds of a cross-validation: ``held_out``, the index arrays of the rows held out
+    together (one array a fold), and ``units``, the index arrays of the simulated conditions,
+    each within one fold (:func:`paired_p` tests over them), or None where the folds are not
+    grouped by a covariate (each fold is then one condition).  Compared by identity: arrays
+    have no single truth value."""
 
-    units: list | None = None
+    held_out: list[np.ndarray]
+    units: list[np.ndarray] | None = None
 
 
 def _folds(obs: pd.DataFrame, fold_by: str | None) -> Folds:
-    """Index arrays of the held-out groups: the values of ``fold_by`` (a covariate column),
-    else the simulated conditions (rows of one test measured twice, as two rows of a table
-    or in two tables, are held out together: :func:`soilcal.loop.residuals.simulation_key`);
-    with ``fold_by``, the conditions as :attr:`Folds.units`."""
+    """The :class:`Folds` of ``obs``: as ``held_out``, the groups of the values of
+    ``fold_by`` (a covariate column), else the simulated conditions (rows of one test measured
+    twice, as two rows of a table or in two tables, are held out together:
+    :func:`soilcal.loop.residuals.simulation_key`); with ``fold_by``, the conditions within each
+    group as ``units`` (else None)."""
     cond = (obs["simulation"].astype(str) if "simulation" in obs
             else obs["measurement"].astype(str) + "/" + obs["row"].astype(str))
     if fold_by:
@@ -290,12 +296,12 @@ def _folds(obs: pd.DataFrame, fold_by: str | None) -> Folds:
         col = ("g:" + raw.astype(str)).where(raw.notna(), "c:" + cond)  # a row without the group: its condition
     else:
         col = cond
-    out = Folds(np.flatnonzero(col.to_numpy() == g) for g in dict.fromkeys(col))
-    if fold_by:
-        # a condition's rows lie in one group (a table's row carries one value of fold_by)
-        key = (col + "\x00" + cond).to_numpy()
-        out.units = [np.flatnonzero(key == g) for g in dict.fromkeys(key)]
-    return out
+    held_out = [np.flatnonzero(col.to_numpy() == g) for g in dict.fromkeys(col)]
+    if not fold_by:
+        return Folds(held_out)
+    # a condition's rows lie in one group (a table's row carries one value of fold_by)
+    key = (col + "\x00" + cond).to_numpy()
+    return Folds(held_out, [np.flatnonzero(key == g) for g in dict.fromkeys(key)])
 
 
 @dataclass
@@ -480,12 +486,12 @@ def aicc_lower(s) -> bool:
     return s.aicc < s.ref_aicc
 
 
-def cross_validate(model: Model, folds) -> tuple[np.ndarray, np.ndarray]:
+def cross_validate(model: Model, folds: Folds) -> tuple[np.ndarray, np.ndarray]:
     """(fold RMS errors, held-out relative error of every row) of a model."""
     n = len(model.y0)
     held = np.full(n, np.nan)
     rms = []
-    for f in folds:
+    for f in folds.held_out:
         train = np.setdiff1d(np.arange(n), f)
         if len(train) < model.k + 1:
             rms.append(np.nan)
@@ -541,7 +547,7 @@ class PairedTest(NamedTuple):
                 f"square ({self.ms_between:.3g} between, {self.ms_within:.3g} within), {self.df} df")
 
 
-def paired_p(ref_rms, fold_rms, ref_held, held, folds) -> PairedTest:
+def paired_p(ref_rms, fold_rms, ref_held, held, folds: Folds) -> PairedTest:
     """One-sided p that the reference's held-out error exceeds the model's (:class:`PairedTest`).
 
     The differences of the folds' RMS errors (``ref_rms - fold_rms``) go to a paired t-test
@@ -568,14 +574,13 @@ def paired_p(ref_rms, fold_rms, ref_held, held, folds) -> PairedTest:
     ok = np.isfinite(fold_rms) & np.isfinite(ref_rms)
     over_folds = PairedTest(float(stats.ttest_rel(ref_rms[ok], fold_rms[ok], alternative="greater").pvalue),
                             "folds", int(ok.sum()) - 1)
-    units = getattr(folds, "units", None)
-    if not units:
+    if not folds.units:
         return over_folds
     fold_of = np.full(len(held), -1)
-    for j, f in enumerate(folds):
+    for j, f in enumerate(folds.held_out):
         fold_of[f] = j
     d, g = [], []
-    for u in units:
+    for u in folds.units:
         e, er = held[u], ref_held[u]
         if len(u) and np.all(np.isfinite(e)) and np.all(np.isfinite(er)):
             d.append(math.sqrt(float(np.mean(er ** 2))) - math.sqrt(float(np.mean(e ** 2))))
@@ -594,7 +599,7 @@ def paired_p(ref_rms, fold_rms, ref_held, held, folds) -> PairedTest:
     return PairedTest(float(stats.t.sf(m / math.sqrt(var / n), df)), "conditions", df, msb, msw, which)
 
 
-def score(model: Model, ref: Model, folds, alpha: float = 0.05, min_improvement: float = MIN_IMPROVEMENT,
+def score(model: Model, ref: Model, folds: Folds, alpha: float = 0.05, min_improvement: float = MIN_IMPROVEMENT,
           groups: np.ndarray | None = None) -> Score:
     """Score ``model`` against ``ref`` (module docstring); ``groups``: each row's observation
     for the AICc (:func:`replicate_groups`; default every row its own)."""
@@ -625,7 +630,7 @@ def score(model: Model, ref: Model, folds, alpha: float = 0.05, min_improvement:
         else:
             A = np.linalg.pinv(J.T @ J)
             half = st.t.ppf(0.975, n - k) * np.sqrt(np.clip(np.diag(s2 * A), 0, None))
-            groups = [f for f in folds if len(f)]
+            groups = [f for f in folds.held_out if len(f)]
             if len(groups) > k + 1:  # the wider of it and the interval clustered by held-out group
                 g = len(groups)
                 meat = sum(np.outer(J[f].T @ e[f], J[f].T @ e[f]) for f in groups)
@@ -640,11 +645,12 @@ def score(model: Model, ref: Model, folds, alpha: float = 0.05, min_improvement:
     test = None
     if ok.sum() < 2:
         p = math.nan
-        if len(folds) < 2:
-            reason = (f"fewer than two folds to compare ({len(folds)} held-out group: the rows of one measured "
+        n_folds = len(folds.held_out)
+        if n_folds < 2:
+            reason = (f"fewer than two folds to compare ({n_folds} held-out group: the rows of one measured "
                       "condition, or of one loop.fold_by group, are held out together; more conditions decide)")
         else:
-            reason = (f"fewer than two folds to compare (of {len(folds)} held-out groups, {int(ok.sum())} could be "
+            reason = (f"fewer than two folds to compare (of {n_folds} held-out groups, {int(ok.sum())} could be "
                       "predicted from a fit without their rows)")
     elif np.allclose(d, d[0]) if len(d) else True:
         p = 0.0 if len(d) and d[0] > 0 else 1.0

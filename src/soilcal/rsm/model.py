@@ -166,21 +166,26 @@ def _bounds(values, factors: Sequence[str], name: str) -> np.ndarray:
     return arr
 
 
-def _model_matrix(xc: np.ndarray, exps: Sequence[tuple[int, ...]]) -> np.ndarray:
-    """[1, prod(x ** e) for each term e]: with two or more factors all terms in one array
-    operation (the optimisers call this for one point at a time, a hundred thousand times per
-    stage; the values are those of the term-by-term loop, bit for bit).  With one factor the
-    term-by-term loop: numpy squares an array against a one-element exponent array exactly,
-    and the broadcast power may differ from that in the last bit."""
+def _term_exponents(exps: Sequence[tuple[int, ...]], k: int) -> np.ndarray:
+    """The terms' exponents as a (terms, k) float array, the form :func:`_model_matrix` takes."""
+    return np.asarray(exps, dtype=float).reshape(-1, k)
+
+
+def _model_matrix(xc: np.ndarray, e: np.ndarray) -> np.ndarray:
+    """[1, prod(x ** e) for each term e], e from :func:`_term_exponents`: with two or more
+    factors all terms in one array operation (the optimisers call this for one point at a
+    time, a hundred thousand times per stage; the values are those of the term-by-term loop,
+    bit for bit).  With one factor the term-by-term loop: numpy squares an array against a
+    one-element exponent array exactly, and the broadcast power may differ from that in the
+    last bit."""
     if xc.shape[1] < 2:
         cols = [np.ones(xc.shape[0])]
-        for e in exps:
-            cols.append(np.prod(xc ** np.array(e, dtype=float), axis=1))
+        for row in e:
+            cols.append(np.prod(xc ** row, axis=1))
         return np.column_stack(cols)
-    e = np.asarray(exps, dtype=float).reshape(-1, xc.shape[1])
     out = np.empty((xc.shape[0], e.shape[0] + 1))
     out[:, 0] = 1.0
-    out[:, 1:] = np.prod(xc[:, None, :] ** e, axis=2)
+    out[:, 1:] = np.multiply.reduce(xc[:, None, :] ** e, axis=2)  # np.prod without its wrapper
     return out
 
 
@@ -205,19 +210,24 @@ class RSMFit:
         if len(set(self.terms)) != len(self.terms):
             raise InputError(None, "terms", "each term at most once", self.terms)
         self.y_t = apply_transform(self.observed, self.transform, self.transform_constant)
-        self.model_matrix = _model_matrix(self.X_coded, self._exps)
+        self._exp_array = _term_exponents(self._exps, len(self.factors))
+        self.model_matrix = _model_matrix(self.X_coded, self._exp_array)
         self.n, self.p = self.model_matrix.shape
         if self.n <= self.p:
             raise InputError(None, "data", f"more runs than model parameters ({self.p})", self.n)
         if np.linalg.matrix_rank(self.model_matrix) < self.p:
             raise InputError(None, "terms", "terms estimable from the design (full-rank model matrix)", self.terms)
         self._res = OLS(self.y_t, self.model_matrix).fit()
+        # the coefficients as a plain read-only array: statsmodels' params wrapper costs more
+        # than a one-point prediction itself, and the optimisers make tens of thousands of them
+        self._params = np.array(self._res.params, dtype=float)
+        self._params.setflags(write=False)
 
     # -- basic quantities
     @property
     def params(self) -> np.ndarray:
         """Coded coefficients [Intercept, terms...] on the transformed scale."""
-        return np.asarray(self._res.params)
+        return self._params
 
     @property
     def fitted_transformed(self) -> np.ndarray:
@@ -268,7 +278,7 @@ class RSMFit:
         return X
 
     def predict_transformed(self, X_coded) -> np.ndarray:
-        return _model_matrix(self._coded_input(X_coded), self._exps) @ self.params
+        return _model_matrix(self._coded_input(X_coded), self._exp_array) @ self.params
 
     def predict(self, X_coded) -> np.ndarray:
         """Prediction in original units from coded factor levels."""
@@ -286,7 +296,7 @@ class RSMFit:
         levels, x0' b -+ t(1 - alpha/2, n - p) sqrt(MSE x0' (X'X)^-1 x0) on the transformed
         scale (statsmodels ``get_prediction``), back-transformed to original units (bounds
         sorted: a decreasing transform swaps them)."""
-        mm = _model_matrix(self._coded_from_actual(X_actual), self._exps)
+        mm = _model_matrix(self._coded_from_actual(X_actual), self._exp_array)
         ci = np.asarray(self._res.get_prediction(mm).conf_int(alpha=alpha))
         b = inverse_transform(ci, self.transform, self.transform_constant)
         return np.minimum(b[:, 0], b[:, 1]), np.maximum(b[:, 0], b[:, 1])
@@ -297,7 +307,7 @@ class RSMFit:
         a = g'(eta_to) f(x_to) - g'(eta_from) f(x_from), f the model row, eta the prediction on
         the transformed scale and g the inverse transform (the delta method; g' = 1 without a
         transform, where it is exact)."""
-        mm = _model_matrix(self._coded_input(np.vstack([x_from_coded, x_to_coded])), self._exps)
+        mm = _model_matrix(self._coded_input(np.vstack([x_from_coded, x_to_coded])), self._exp_array)
         eta = mm @ self.params
         h = 1e-6 * np.maximum(1.0, np.abs(eta))
         up = inverse_transform(eta + h, self.transform, self.transform_constant)

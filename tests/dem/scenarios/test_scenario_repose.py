@@ -35,6 +35,9 @@ def fun(**kw):
     (fun(outlet_height=-0.01), "setup.outlet_height"),
     (fun(radius=0.004), "setup.funnel_bottom_diameter"),       # outlet under 5 diameters
     (fun(max_retained=1.0), "setup.max_retained"),             # a fraction below 1
+    (fun(read_time=0.0), "setup.read_time"),                   # a time after the release
+    (fun(read_time=-10.0), "setup.read_time"),
+    (fun(read_time="10 s"), "setup.read_time"),
 ])
 def test_bad_settings_fail_before_the_run(setup, field):
     with pytest.raises(InputError) as e:
@@ -165,6 +168,28 @@ def test_setup_rolling_model_reaches_the_engine(model, name):
 
     sim, _ = make_simulation(DemParams(), cyl(rolling_model=model), "quick", "t")
     assert sim.codes[3] == ROLLING[name]
+
+
+def test_read_time_reads_the_heap_that_long_after_the_release_whatever_its_speed():
+    """With ``read_time`` the heap is read ``read_time`` after the cover starts to move (the
+    paper's fixed simulated duration), not when the rest rule fires: with a rest speed no heap
+    reaches (1 nm/s) and a bound of 1 s the rest rule would run the heap for 1 s; the cover's
+    travel, 2.5 outlet radii + a diameter at ``cover_speed``, and the heap's time after it add
+    up to the 0.3 s, to within a step each."""
+    from soilcal.dem.scenarios.base import merge_setup
+
+    setup = merge_setup(repose.setups(), "black-soil-stage2",
+                        {"load_mass": 0.06, "max_settle_time": 1.0, "read_time": 0.3}, "t")
+    res = repose.run(dict(setup, rest_speed=1e-9), DemParams(soil_density=1560.0), "quick", seed=0,
+                     threads=1)
+    s, r = res.setup, res.responses
+    cover = (2.5 * s["funnel_bottom_diameter"] / 2 + 2 * s["r_max"]) / s["cover_speed"]
+    assert r["settled"] == 0  # 1 nm/s: still moving when read
+    assert cover + r["settle_time_s"] == pytest.approx(0.3, abs=2 * s["dt"])
+    with pytest.raises(InputError) as e:  # the release itself takes longer than the reading
+        repose.run(dict(setup, read_time=0.5 * cover), DemParams(soil_density=1560.0), "quick", seed=0,
+                   threads=1, source="run.yaml")
+    assert e.value.field == "setup.read_time" and "release" in e.value.expected
 
 
 SMALL = dict(n_particles=500, fill_height=0.04)

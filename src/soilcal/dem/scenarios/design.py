@@ -228,9 +228,9 @@ def check_block(soil_path, data: dict) -> None:
                                  f"{BLOCK}.stages)", None)
             if st["kind"] != "steepest_ascent" and (f.get("low") is None or f.get("high") is None) \
                     and not (design_mode(data) == "adaptive"
-                             and adaptive.screening_factor(data, sid, f.get("parameter")) is not None):
+                             and adaptive.adaptive_range(data, sid, f.get("parameter")) is not None):
                 # a range declared under simulation.search_ranges does not count: the adaptive
-                # design does not use it (soilcal.chain.adaptive.screening_factor)
+                # design does not use it (soilcal.chain.adaptive.adaptive_range)
                 how = (f"simulation.adaptive.ranges: screening, with a screening stage {sid!r} descends from that "
                        "varies the parameter" if design_mode(data) == "adaptive"
                        else f"leave {sid!r} out of {BLOCK}.stages")

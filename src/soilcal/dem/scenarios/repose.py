@@ -25,7 +25,14 @@ Rest: the translational kinetic energy falls below 1/2 M v_rest^2 with M the tot
 v_rest = ``rest_speed`` (a mean speed of 5 mm/s by default: resting beds keep a
 jitter of about 1/2 M (3 mm/s)^2 with the constant-torque rolling model, whose torque flips
 with the sign of a vanishing angular velocity), checked every 200 steps, with
-``max_settle_time`` as an upper bound (the run then reports ``settled = 0``).
+``max_settle_time`` as an upper bound (the run then reports ``settled = 0``).  With
+``read_time`` (seconds, None by default) the heap is instead read that long after the release
+starts (the cover starts to move, the tube starts to lift), whatever it is doing then: a
+paper's fixed simulated duration, for a heap that has no resting state to stop at; the fill's
+settle keeps the rest rule, ``settled`` then says whether the heap's kinetic energy is below
+the rest threshold at the reading, and a release that takes longer than ``read_time`` is an
+error naming ``setup.read_time`` (for the funnel at start-up, from the cover's travel; for
+the cylinder, whose lift depends on the settled fill, at the release).
 
 Rolling resistance: the setup's ``rolling_model`` (base.py; ``constant_torque`` by default,
 under which the heap keeps creeping after the rest criterion; ``bounded`` stops the
@@ -93,7 +100,8 @@ from soilcal.dem.factories import ConeRegion, CylinderRegion, UniformRadius, ins
 from soilcal.dem.geometry import cone_mesh, disk_mesh
 from soilcal.dem.scenarios.base import (DemParams, Frames, Result, check, check_discretisation,
                                         check_preset, make_simulation, paper_cohesion, paper_psd,
-                                        rng, run_time, setup_number, threads_used)
+                                        rest_tolerance, rng, run_time, setup_number,
+                                        threads_used)
 from soilcal.errors import InputError
 
 NAME = "repose"
@@ -138,7 +146,8 @@ def setups() -> dict:
     common = dict(rest_speed=0.005, max_settle_time=4.0, image=True, image_views=IMAGE_VIEWS,
                   n_particles=None,
                   radius=None, stiffness_scale=None, dt_fraction=None, rolling_model=None,
-                  contact_conventions=None, seed_stream="repose", scale_cohesion=True)
+                  contact_conventions=None, seed_stream="repose", scale_cohesion=True,
+                  read_time=None)
     cyl = dict(common, method="cylinder", wall_material="steel", plate_material="steel")
     fun = dict(common, method="funnel", wall_material="steel", plate_material="steel",
                cover_speed=1.0, max_retained=MAX_RETAINED)
@@ -241,6 +250,11 @@ def validate(setup: dict, preset: str = "quick", source: str = "<input>",
     plate = setup_number(setup, "plate_size", source)
     setup_number(setup, "rest_speed", source)
     setup_number(setup, "max_settle_time", source)
+    rt = setup.get("read_time")
+    check(rt is None or (isinstance(rt, (int, float)) and not isinstance(rt, bool) and math.isfinite(rt)
+                         and rt > 0), source, "setup.read_time",
+          "a simulated time > 0 s after the release (cover or lift) to read the heap at, or None to read "
+          "it when it comes to rest", rt)
     views = setup.get("image_views", IMAGE_VIEWS)
     check(isinstance(views, int) and not isinstance(views, bool) and views >= 1, source,
           "setup.image_views", "a number of side views >= 1", views)
@@ -283,6 +297,11 @@ def validate(setup: dict, preset: str = "quick", source: str = "<input>",
               "setup.funnel_bottom_diameter",
               f"an outlet of at least 5 particle diameters ({10 * sz['r_max']:.4g} m)",
               setup["funnel_bottom_diameter"])
+        # the cover's travel, as run() pulls it: 2.5 outlet radii + a diameter at cover_speed
+        travel = (1.25 * setup["funnel_bottom_diameter"] + 2 * sz["r_max"]) / setup["cover_speed"]
+        rt = setup.get("read_time")
+        check(rt is None or rt > travel, source, "setup.read_time",
+              f"more than the {travel:.3g} s the cover takes to clear the outlet (the release)", rt)
 
 
 def _plate(sim, setup):
@@ -423,7 +442,16 @@ def run(setup: dict, params: DemParams, preset: str = "quick", seed: int = 0, th
         frames(sim)
         prog.next("settle_heap")
     prog.checkpoint()
-    ok, t_rest = prog.settle(setup["rest_speed"], setup["max_settle_time"], "heap_steps")
+    read_time = setup.get("read_time")
+    if read_time is None:
+        ok, t_rest = prog.settle(setup["rest_speed"], setup["max_settle_time"], "heap_steps")
+    else:  # read at a fixed time after the release, whatever the heap is doing then
+        # steps of the release (a resumed run has done st["heap_steps"] of the heap's already)
+        released = sim.step - st.get("heap_steps", 0) - st["move_step0"]
+        check(released * sim.dt < read_time, source, "setup.read_time",
+              f"more than the {released * sim.dt:.3g} s the release (cover or lift) took", read_time)
+        t_rest = prog.advance(int(round(read_time / sim.dt)) - released, "heap_steps") * sim.dt
+        ok = sim.kinetic_energy() < rest_tolerance(sim, setup["rest_speed"])
     frames(sim)
     frames.close()
     scale = st["scale"]
