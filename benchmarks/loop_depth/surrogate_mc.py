@@ -1,13 +1,14 @@
 """The effect parameter's estimate through the one-parameter surrogate: interpolated (monotone
 cubic through the design's seed means, the loop's surrogate before) against the surrogate now
-(a least-squares quadratic where the lack-of-fit test against the seed scatter passes,
-soilcal.loop.select.smooth_fits).  The linear stand-in of tests/loop/test_bootstrap.py:
+(per row, a least-squares quadratic where the row's own lack-of-fit test against its seed
+scatter passes and the quadratic does not turn over inside the bounds where the row's means are
+monotone: soilcal.loop.select.smooth_fits, Surrogate).  The linear stand-in of tests/loop/test_bootstrap.py:
 18 conditions, y_i = 100 (1 + a_i beta), a_i evenly over [-1, 1], design beta in
 {-0.3, -0.075, 0.15, 0.375, 0.6} (5 levels, 0 added), three seeds per point; per run scatter
 SCATTER of which a share CRN is the seed's own (shared by every design point: common random
 numbers), the rest independent; measured: three repeats with the same scatter, independent.
 Prints bias, SD and RMS error of the fitted beta over CAMPAIGNS campaigns, and how often the
-quadratic was taken.
+quadratic was taken (rows of all campaigns).
     python benchmarks/loop_depth/surrogate_mc.py [CAMPAIGNS] [TRUE] [SCATTER] [CRN] [LEVELS] [AMP]   (default 400 0.3 0.14 0.0 5 1.0;
     LEVELS: design levels of beta over its bounds, AMP: a_i evenly over [-AMP, AMP])
 """
@@ -44,12 +45,12 @@ for c in range(C):
     reps = 100.0 * (1 + A * TRUE)[:, None] * (1 + SC * rng.standard_normal((N, SEEDS)))
     obs = pd.DataFrame({"measurement": "m", "row": np.arange(1, N + 1), "measure": "F_N", "measured": reps.mean(1)})
     ed = sl.build_effect_data(obs, runs, EFF, BOUNDS)
-    smooth += ed.surrogate.smooth
+    smooth += int(ed.surrogate.quadratic.sum())
     interp = sl.EffectData(EFF, BOUNDS, sl.Surrogate(EFF, BOUNDS, ed.thetas(), ed.means), ed.design)
     y0 = ed.means[[d["beta"] for d in ed.design].index(0.0)]
     for key, e in (("interpolated", interp), ("now", ed)):
         est[key].append(float(sl.Model([e], y0, obs["measured"].to_numpy(float)).fit()[0][0]))
-print(f"{C} campaigns, beta {TRUE}, scatter {SC}, CRN share {CRN}, {LEVELS} levels, a_i up to {AMP}: quadratic taken in {smooth} of {C}")
+print(f"{C} campaigns, beta {TRUE}, scatter {SC}, CRN share {CRN}, {LEVELS} levels, a_i up to {AMP}: quadratic taken in {smooth} of {C * N} rows")
 for k, v in est.items():
     v = np.array(v)
     print(f"  {k:12s} mean {v.mean():.4f} bias {v.mean() - TRUE:+.4f} SD {v.std(ddof=1):.4f} "

@@ -68,11 +68,11 @@ def _obs(beta: float) -> pd.DataFrame:
 def test_lack_of_fit_p_from_the_sums_of_squares():
     lof, scatter = 0.4, 2.0
     smooth, p = sl.smooth_fits(T[:, None], _values(lof, scatter))
-    # per row: lack-of-fit SS = SEEDS * lof^2 (unit pattern orthogonal to the quadratic), error
-    # SS = scatter^2 (unit interaction pattern); pooled over N rows
-    f = (N * SEEDS * lof ** 2 / (N * (len(T) - 3))) / (N * scatter ** 2 / (N * (len(T) - 1) * (SEEDS - 1)))
-    assert p == pytest.approx(stats.f.sf(f, N * (len(T) - 3), N * (len(T) - 1) * (SEEDS - 1)), rel=1e-9)
-    assert smooth == (p >= sl.LACK_OF_FIT_ALPHA)
+    # per row, on its own: lack-of-fit SS = SEEDS * lof^2 (unit pattern orthogonal to the
+    # quadratic), error SS = scatter^2 (unit interaction pattern)
+    f = (SEEDS * lof ** 2 / (len(T) - 3)) / (scatter ** 2 / ((len(T) - 1) * (SEEDS - 1)))
+    assert p == pytest.approx(np.full(N, stats.f.sf(f, len(T) - 3, (len(T) - 1) * (SEEDS - 1))), rel=1e-9)
+    assert (smooth == (p >= sl.LACK_OF_FIT_ALPHA)).all()
 
 
 def test_the_seeds_own_levels_do_not_count_as_scatter():
@@ -87,7 +87,7 @@ def test_within_the_scatter_the_quadratic_gives_back_the_parameter():
     # an interpolant through the means follows the pattern and misses it
     V = _values(5.0, 40.0)
     ed = sl.build_effect_data(_obs(0.3), _runs(V), EFF, BOUNDS)
-    assert ed.surrogate.smooth and ed.lack_of_fit_p >= sl.LACK_OF_FIT_ALPHA
+    assert ed.surrogate.quadratic.all() and (ed.lack_of_fit_p >= sl.LACK_OF_FIT_ALPHA).all()
     y0 = ed.means[list(T).index(0.0)]
     x, _ = sl.Model([ed], y0, _obs(0.3)["measured"].to_numpy(float)).fit()
     assert x[0] == pytest.approx(0.3, abs=1e-7)
@@ -98,13 +98,97 @@ def test_beyond_the_scatter_the_surrogate_interpolates():
     # surrogate goes through them (a response that saturates keeps its shape)
     V = _values(5.0, 0.5)
     ed = sl.build_effect_data(_obs(0.3), _runs(V), EFF, BOUNDS)
-    assert not ed.surrogate.smooth and ed.lack_of_fit_p < sl.LACK_OF_FIT_ALPHA
+    assert not ed.surrogate.quadratic.any() and (ed.lack_of_fit_p < sl.LACK_OF_FIT_ALPHA).all()
     for d, t in enumerate(T):
         assert ed.surrogate([t]) == pytest.approx(V[d].mean(axis=1), rel=1e-12)
 
 
 def test_no_smoothing_without_scatter_or_with_too_few_points():
-    assert not sl.smooth_fits(T[:, None], _values(0.0, 0.0))[0]  # no scatter: nothing to smooth away
-    assert not sl.smooth_fits(T[:3, None], _values(0.4, 2.0)[:3])[0]
-    assert not sl.smooth_fits(T[:, None], _values(0.4, 2.0)[:, :, :1])[0]
-    assert not sl.smooth_fits(T[:, None], None)[0]
+    assert not sl.smooth_fits(T[:, None], _values(0.0, 0.0))[0].any()  # no scatter: nothing to smooth away
+    assert not sl.smooth_fits(T[:3, None], _values(0.4, 2.0)[:3])[0].any()
+    assert not sl.smooth_fits(T[:, None], _values(0.4, 2.0)[:, :, :1])[0].any()
+    assert not sl.smooth_fits(T[:, None], None)[0].any()
+
+
+def _saturating(t, a):
+    """A monotone, concave response that saturates: 100 (1 + a (1 - exp(-6 (t + 0.3))))."""
+    return 100.0 * (1 + a * (1 - np.exp(-6.0 * (t + 0.3))))
+
+
+@pytest.mark.parametrize("beta", [0.45, 0.6])
+def test_a_quadratic_that_turns_over_where_the_means_do_not_is_not_used(beta):
+    # twelve rows of a saturating response, exact seed means (the seed pattern has zero mean
+    # over the seeds) and a seed scatter of 40 that the lack-of-fit test lets the quadratic
+    # through: its vertex lies inside the bounds, so it would fall past its peak where every
+    # row's means rise.  The monotone cubic through the means rises in every row, and the
+    # measured values at beta lie between the rows' values at the design points either side
+    # of it (0.375 and 0.6), so the fit lands between them; at a design point (0.6) the cubic
+    # goes through the exact means and gives beta back to rounding
+    a = np.linspace(0.2, 1.0, N)
+    V = np.stack([_saturating(T, ai)[:, None] + 40.0 * _seed_pattern() for ai in a], axis=1)
+    obs = pd.DataFrame({"measurement": "m", "row": np.arange(1, N + 1), "measure": "F_N",
+                        "measured": _saturating(beta, a)})
+    ed = sl.build_effect_data(obs, _runs(V), EFF, BOUNDS)
+    assert ed.surrogate.smooth.any()  # the test alone would take the quadratic
+    assert not ed.surrogate.quadratic.any() and ed.surrogate.kind() == "monotone cubic"
+    y0 = ed.means[list(T).index(0.0)]
+    x, _ = sl.Model([ed], y0, obs["measured"].to_numpy(float)).fit()
+    if beta in T:
+        assert x[0] == pytest.approx(beta, abs=1e-6)
+    else:
+        assert 0.375 <= x[0] <= 0.6
+
+
+def test_each_row_is_tested_against_its_own_scatter():
+    # eleven force rows (about 1000 N, linear in beta, 2 % seed scatter) and one row of order
+    # 1 clamped at zero below beta 0 (exact means, scatter 0.001): pooled, the force rows'
+    # scatter would hide the small row's lack of fit.  On its own the small row's lack of fit
+    # is far beyond its scatter, so it keeps the monotone cubic, which stays at its means' 0
+    # over the clamped part, where a quadratic undershoots
+    rng = np.random.default_rng(1)
+    V = np.empty((len(T), N, SEEDS))
+    for i in range(N - 1):
+        V[:, i, :] = (1000.0 * (1 + 0.5 * T))[:, None] + 20.0 * rng.standard_normal((len(T), SEEDS))
+    V[:, N - 1, :] = np.maximum(0.0, T)[:, None] + 0.001 * _seed_pattern()
+    smooth, p = sl.smooth_fits(T[:, None], V)
+    assert not smooth[N - 1] and p[N - 1] < 1e-6
+    s = sl.Surrogate(EFF, BOUNDS, T[:, None], V.mean(axis=2), smooth)
+    for t in np.linspace(-0.3, 0.0, 7):
+        assert s([t])[N - 1] == pytest.approx(0.0, abs=1e-12)
+    assert s.kind().endswith("monotone cubic in 1")
+
+
+def test_the_selection_files_say_which_surrogate_each_fit_used(tmp_path):
+    # the loop on the stand-in soil bin (a hidden rate effect, beta 0.3, 1 % noise): every
+    # selection.csv row that fitted rate_friction, and loop_summary.csv where it is chosen,
+    # name its surrogate and the smallest of its rows' lack-of-fit p, as built from its runs
+    import json
+
+    from soilcal.chain.files import write_csv
+    from soilcal.loop import core
+    from soilcal.loop import standin as S
+    from soilcal.loop import synthesize as sy
+
+    ref = {"tool_speed": 1.75, "working_depth": 0.1, "moisture_content": 16.0}
+    conds = S.conditions(S.grid(27, 4, moisture=True, days=4), measures=("horizontal_force_N",))
+    table = sy.synthesize(conds, S.base_params, S.simulate, {"rate_friction": {"beta": 0.3}}, ref, {}, noise=0.01,
+                          seed=37)
+    out = core.run_inprocess("bin", sy.with_measured(conds, table), S.base_params, S.simulate,
+                             core.Settings(reference=ref, bootstrap=0))
+    assert out.chosen == ["rate_friction"], out.verdict
+    ed = out.effect_data["rate_friction"]
+    p = np.asarray(ed.lack_of_fit_p, float)
+    kinds = {"quadratic", "monotone cubic"} | {f"quadratic in {q} of {len(p)} rows, monotone cubic in {len(p) - q}"
+                                               for q in range(1, len(p))}
+    write_csv(out.selection, tmp_path / "selection.csv")
+    write_csv(out.summary, tmp_path / "loop_summary.csv")
+    sel = pd.read_csv(tmp_path / "selection.csv")
+    rows = sel[sel["effects"].str.split("+").apply(lambda e: "rate_friction" in e) & (sel["parameters"] != "{}")]
+    summary = pd.read_csv(tmp_path / "loop_summary.csv").iloc[0]
+    assert len(rows)
+    for kind_text, p_text in list(zip(rows["surrogate"], rows["lack_of_fit_p"])) + [
+            (summary["surrogate"], summary["lack_of_fit_p"])]:
+        kind, lof = json.loads(kind_text), json.loads(p_text)
+        assert kind["rate_friction"] in kinds and kind["rate_friction"] == ed.surrogate.kind()
+        assert 0.0 <= lof["rate_friction"] <= 1.0
+        assert lof["rate_friction"] == pytest.approx(np.nanmin(p), abs=1e-6)
