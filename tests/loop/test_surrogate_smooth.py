@@ -1,0 +1,194 @@
+"""The one-parameter surrogate (soilcal.loop.select.Surrogate, smooth_fits): a least-squares
+quadratic through the design's seed means where it follows them within the seed scatter, an
+interpolant where it does not.
+
+Expected values by construction: design means that are a line in the parameter plus a
+pattern orthogonal to 1, theta and theta^2 over the design points are fitted by the
+quadratic exactly as the line, so measured values on that line give back its parameter to
+rounding; the lack-of-fit F and its p follow from the sums of squares the values were built
+with (Montgomery, Design and Analysis of Experiments: lack of fit against pure error, here the
+point x seed interaction of a two-way layout without replication)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pandas as pd
+import pytest
+from scipy import stats
+
+from soilcal.loop import select as sl
+from soilcal.loop.effects import EFFECTS
+
+EFF = EFFECTS["rate_friction"]
+BOUNDS = {"beta": (-0.3, 0.6)}
+DESIGN = sl.theta_design(EFF, BOUNDS, 5)  # -0.3, -0.075, 0, 0.15, 0.375, 0.6
+T = np.array([d["beta"] for d in DESIGN])
+N, SEEDS = 12, 3
+A = np.linspace(-1.0, 1.0, N)
+
+
+def _orthogonal() -> np.ndarray:
+    """A unit pattern over the design points orthogonal to 1, theta and theta^2."""
+    B = np.column_stack([np.ones_like(T), T, T ** 2])
+    r = np.array([1.0, -2.0, 0.5, 3.0, -1.0, 0.25])
+    r = r - B @ np.linalg.lstsq(B, r, rcond=None)[0]
+    return r / np.linalg.norm(r)
+
+
+def _seed_pattern() -> np.ndarray:
+    """Deviations over points x seeds with zero mean over the seeds and over the points, unit sum of squares."""
+    rng = np.random.default_rng(0)
+    e = rng.standard_normal((len(T), SEEDS))
+    e = e - e.mean(axis=1, keepdims=True) - e.mean(axis=0, keepdims=True) + e.mean()
+    return e / np.linalg.norm(e)
+
+
+def _values(lof: float, scatter: float, seed_level: float = 0.0) -> np.ndarray:
+    """points x rows x seeds: 100 (1 + a_i theta) + lof * pattern (sign by row) + scatter * the
+    seed pattern + each seed's own level (shared by every point: common random numbers)."""
+    r, e = _orthogonal(), _seed_pattern()
+    V = np.empty((len(T), N, SEEDS))
+    for i in range(N):
+        V[:, i, :] = (100.0 * (1 + A[i] * T))[:, None] + lof * (-1) ** i * r[:, None] + scatter * e \
+            + seed_level * np.array([-1.0, 0.5, 2.0])[None, :] * (i + 1)
+    return V
+
+
+def _runs(V: np.ndarray) -> pd.DataFrame:
+    return pd.DataFrame([{"measurement": "m", "row": i + 1, "measure": "F_N", "seed": s, "value": V[d, i, s],
+                          "status": "ok", "t:beta": T[d]}
+                         for d in range(len(T)) for i in range(N) for s in range(SEEDS)])
+
+
+def _obs(beta: float) -> pd.DataFrame:
+    return pd.DataFrame({"measurement": "m", "row": np.arange(1, N + 1), "measure": "F_N",
+                         "measured": 100.0 * (1 + A * beta)})
+
+
+def test_lack_of_fit_p_from_the_sums_of_squares():
+    lof, scatter = 0.4, 2.0
+    smooth, p = sl.smooth_fits(T[:, None], _values(lof, scatter))
+    # per row, on its own: lack-of-fit SS = SEEDS * lof^2 (unit pattern orthogonal to the
+    # quadratic), error SS = scatter^2 (unit interaction pattern)
+    f = (SEEDS * lof ** 2 / (len(T) - 3)) / (scatter ** 2 / ((len(T) - 1) * (SEEDS - 1)))
+    assert p == pytest.approx(np.full(N, stats.f.sf(f, len(T) - 3, (len(T) - 1) * (SEEDS - 1))), rel=1e-9)
+    assert (smooth == (p >= sl.LACK_OF_FIT_ALPHA)).all()
+
+
+def test_the_seeds_own_levels_do_not_count_as_scatter():
+    # common random numbers: a seed's level shared by every design point cancels in the changes
+    assert sl.smooth_fits(T[:, None], _values(0.4, 2.0, seed_level=50.0))[1] == pytest.approx(
+        sl.smooth_fits(T[:, None], _values(0.4, 2.0))[1], rel=1e-9)
+
+
+def test_within_the_scatter_the_quadratic_gives_back_the_parameter():
+    # the orthogonal pattern (5 % of the force) within a seed scatter that holds it: the
+    # quadratic takes the line, and measured values on the line give its beta to rounding;
+    # an interpolant through the means follows the pattern and misses it
+    V = _values(5.0, 40.0)
+    ed = sl.build_effect_data(_obs(0.3), _runs(V), EFF, BOUNDS)
+    assert ed.surrogate.quadratic.all() and (ed.lack_of_fit_p >= sl.LACK_OF_FIT_ALPHA).all()
+    y0 = ed.means[list(T).index(0.0)]
+    x, _ = sl.Model([ed], y0, _obs(0.3)["measured"].to_numpy(float)).fit()
+    assert x[0] == pytest.approx(0.3, abs=1e-7)
+
+
+def test_beyond_the_scatter_the_surrogate_interpolates():
+    # the same pattern with little seed scatter: the quadratic does not follow the means, so the
+    # surrogate goes through them (a response that saturates keeps its shape)
+    V = _values(5.0, 0.5)
+    ed = sl.build_effect_data(_obs(0.3), _runs(V), EFF, BOUNDS)
+    assert not ed.surrogate.quadratic.any() and (ed.lack_of_fit_p < sl.LACK_OF_FIT_ALPHA).all()
+    for d, t in enumerate(T):
+        assert ed.surrogate([t]) == pytest.approx(V[d].mean(axis=1), rel=1e-12)
+
+
+def test_no_smoothing_without_scatter_or_with_too_few_points():
+    assert not sl.smooth_fits(T[:, None], _values(0.0, 0.0))[0].any()  # no scatter: nothing to smooth away
+    assert not sl.smooth_fits(T[:3, None], _values(0.4, 2.0)[:3])[0].any()
+    assert not sl.smooth_fits(T[:, None], _values(0.4, 2.0)[:, :, :1])[0].any()
+    assert not sl.smooth_fits(T[:, None], None)[0].any()
+
+
+def _saturating(t, a):
+    """A monotone, concave response that saturates: 100 (1 + a (1 - exp(-6 (t + 0.3))))."""
+    return 100.0 * (1 + a * (1 - np.exp(-6.0 * (t + 0.3))))
+
+
+@pytest.mark.parametrize("beta", [0.45, 0.6])
+def test_a_quadratic_that_turns_over_where_the_means_do_not_is_not_used(beta):
+    # twelve rows of a saturating response, exact seed means (the seed pattern has zero mean
+    # over the seeds) and a seed scatter of 40 that the lack-of-fit test lets the quadratic
+    # through: its vertex lies inside the bounds, so it would fall past its peak where every
+    # row's means rise.  The monotone cubic through the means rises in every row, and the
+    # measured values at beta lie between the rows' values at the design points either side
+    # of it (0.375 and 0.6), so the fit lands between them; at a design point (0.6) the cubic
+    # goes through the exact means and gives beta back to rounding
+    a = np.linspace(0.2, 1.0, N)
+    V = np.stack([_saturating(T, ai)[:, None] + 40.0 * _seed_pattern() for ai in a], axis=1)
+    obs = pd.DataFrame({"measurement": "m", "row": np.arange(1, N + 1), "measure": "F_N",
+                        "measured": _saturating(beta, a)})
+    ed = sl.build_effect_data(obs, _runs(V), EFF, BOUNDS)
+    assert ed.surrogate.smooth.any()  # the test alone would take the quadratic
+    assert not ed.surrogate.quadratic.any() and ed.surrogate.kind() == "monotone cubic"
+    y0 = ed.means[list(T).index(0.0)]
+    x, _ = sl.Model([ed], y0, obs["measured"].to_numpy(float)).fit()
+    if beta in T:
+        assert x[0] == pytest.approx(beta, abs=1e-6)
+    else:
+        assert 0.375 <= x[0] <= 0.6
+
+
+def test_each_row_is_tested_against_its_own_scatter():
+    # eleven force rows (about 1000 N, linear in beta, 2 % seed scatter) and one row of order
+    # 1 clamped at zero below beta 0 (exact means, scatter 0.001): pooled, the force rows'
+    # scatter would hide the small row's lack of fit.  On its own the small row's lack of fit
+    # is far beyond its scatter, so it keeps the monotone cubic, which stays at its means' 0
+    # over the clamped part, where a quadratic undershoots
+    rng = np.random.default_rng(1)
+    V = np.empty((len(T), N, SEEDS))
+    for i in range(N - 1):
+        V[:, i, :] = (1000.0 * (1 + 0.5 * T))[:, None] + 20.0 * rng.standard_normal((len(T), SEEDS))
+    V[:, N - 1, :] = np.maximum(0.0, T)[:, None] + 0.001 * _seed_pattern()
+    smooth, p = sl.smooth_fits(T[:, None], V)
+    assert not smooth[N - 1] and p[N - 1] < 1e-6
+    s = sl.Surrogate(EFF, BOUNDS, T[:, None], V.mean(axis=2), smooth)
+    for t in np.linspace(-0.3, 0.0, 7):
+        assert s([t])[N - 1] == pytest.approx(0.0, abs=1e-12)
+    assert s.kind().endswith("monotone cubic in 1")
+
+
+def test_the_selection_files_say_which_surrogate_each_fit_used(tmp_path):
+    # the loop on the stand-in soil bin (a hidden rate effect, beta 0.3, 1 % noise): every
+    # selection.csv row that fitted rate_friction, and loop_summary.csv where it is chosen,
+    # name its surrogate and the smallest of its rows' lack-of-fit p, as built from its runs
+    import json
+
+    from soilcal.chain.files import write_csv
+    from soilcal.loop import core
+    from soilcal.loop import standin as S
+    from soilcal.loop import synthesize as sy
+
+    ref = {"tool_speed": 1.75, "working_depth": 0.1, "moisture_content": 16.0}
+    conds = S.conditions(S.grid(27, 4, moisture=True, days=4), measures=("horizontal_force_N",))
+    table = sy.synthesize(conds, S.base_params, S.simulate, {"rate_friction": {"beta": 0.3}}, ref, {}, noise=0.01,
+                          seed=37)
+    out = core.run_inprocess("bin", sy.with_measured(conds, table), S.base_params, S.simulate,
+                             core.Settings(reference=ref, bootstrap=0))
+    assert out.chosen == ["rate_friction"], out.verdict
+    ed = out.effect_data["rate_friction"]
+    p = np.asarray(ed.lack_of_fit_p, float)
+    kinds = {"quadratic", "monotone cubic"} | {f"quadratic in {q} of {len(p)} rows, monotone cubic in {len(p) - q}"
+                                               for q in range(1, len(p))}
+    write_csv(out.selection, tmp_path / "selection.csv")
+    write_csv(out.summary, tmp_path / "loop_summary.csv")
+    sel = pd.read_csv(tmp_path / "selection.csv")
+    rows = sel[sel["effects"].str.split("+").apply(lambda e: "rate_friction" in e) & (sel["parameters"] != "{}")]
+    summary = pd.read_csv(tmp_path / "loop_summary.csv").iloc[0]
+    assert len(rows)
+    for kind_text, p_text in list(zip(rows["surrogate"], rows["lack_of_fit_p"])) + [
+            (summary["surrogate"], summary["lack_of_fit_p"])]:
+        kind, lof = json.loads(kind_text), json.loads(p_text)
+        assert kind["rate_friction"] in kinds and kind["rate_friction"] == ed.surrogate.kind()
+        assert 0.0 <= lof["rate_friction"] <= 1.0
+        assert lof["rate_friction"] == pytest.approx(np.nanmin(p), abs=1e-6)
