@@ -331,8 +331,7 @@ def _repose(mod, setup, params, preset, source):
         lift = int(m.ceil((h_ins + dmax) / (setup["lift_speed"] * dt))) + 1
         release = ("lift", lift)
     else:
-        Rb = setup["funnel_bottom_diameter"] / 2
-        release = ("cover", _rsteps((2.5 * Rb + dmax) / setup["cover_speed"], dt))
+        release = ("cover", _rsteps(mod.cover_travel_time(setup, sz["r_max"]), dt))
     heap = settle
     if setup.get("read_time") is not None:
         # the heap runs to read_time after the release starts (a shorter lift leaves it more)

@@ -297,11 +297,17 @@ def validate(setup: dict, preset: str = "quick", source: str = "<input>",
               "setup.funnel_bottom_diameter",
               f"an outlet of at least 5 particle diameters ({10 * sz['r_max']:.4g} m)",
               setup["funnel_bottom_diameter"])
-        # the cover's travel, as run() pulls it: 2.5 outlet radii + a diameter at cover_speed
-        travel = (1.25 * setup["funnel_bottom_diameter"] + 2 * sz["r_max"]) / setup["cover_speed"]
+        travel = cover_travel_time(setup, sz["r_max"])
         rt = setup.get("read_time")
         check(rt is None or rt > travel, source, "setup.read_time",
               f"more than the {travel:.3g} s the cover takes to clear the outlet (the release)", rt)
+
+
+def cover_travel_time(setup: dict, r_max: float) -> float:
+    """Seconds the funnel's cover is pulled for: 2.5 outlet radii and a particle diameter at
+    ``cover_speed``, until it is clear of the outlet (the release; :func:`run`, the start-up
+    check of ``read_time`` and the job cost estimate, :mod:`soilcal.dem.cost`)."""
+    return (2.5 * (setup["funnel_bottom_diameter"] / 2) + 2 * r_max) / setup["cover_speed"]
 
 
 def _plate(sim, setup):
@@ -433,10 +439,9 @@ def run(setup: dict, params: DemParams, preset: str = "quick", seed: int = 0, th
         prog.next("settle_heap")
     if not cylinder and prog.at("cover"):
         cover = sim.walls.names.index("cover")
-        Rb = setup["funnel_bottom_diameter"] / 2
         sim.set_wall_motion(cover, velocity=(setup["cover_speed"], 0, 0))
         prog.checkpoint()
-        steps = max(1, int(round((2.5 * Rb + dmax) / setup["cover_speed"] / sim.dt)))
+        steps = max(1, int(round(cover_travel_time(setup, sz["r_max"]) / sim.dt)))
         prog.advance(steps, "cover_steps")  # run_time's steps
         sim.set_wall_motion(cover, velocity=(0, 0, 0))
         frames(sim)
