@@ -108,6 +108,8 @@ def smooth_fits(thetas: np.ndarray, values: np.ndarray | None) -> tuple[np.ndarr
     an incomplete row, or for a row without scatter."""
     from scipy import stats
 
+    from soilcal.rsm.model import RSMFit
+
     t = np.asarray(thetas, float).ravel()
     if values is None or values.ndim != 3:
         return np.zeros(0, bool), np.zeros(0)
@@ -123,7 +125,9 @@ def smooth_fits(thetas: np.ndarray, values: np.ndarray | None) -> tuple[np.ndarr
         coef, *_ = np.linalg.lstsq(B, means, rcond=None)
         ss_lof = S * float(np.sum((means - B @ coef) ** 2))
         ss_err = float(np.sum((V - means[:, None] - V.mean(axis=0)[None, :] + means.mean()) ** 2))
-        if ss_err > 0:
+        # a row whose point x seed error is rounding only (at most RSMFit.PURE_ERROR_RTOL of its
+        # total, what means of equal floats leave) has no scatter to test against
+        if ss_err > RSMFit.PURE_ERROR_RTOL * float(np.sum((V - V.mean()) ** 2)):
             df_lof, df_err = D - 3, (D - 1) * (S - 1)
             p[i] = float(stats.f.sf((ss_lof / df_lof) / (ss_err / df_err), df_lof, df_err))
     return np.isfinite(p) & (p >= LACK_OF_FIT_ALPHA), p
