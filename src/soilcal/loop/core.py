@@ -1255,6 +1255,7 @@ def analyse(soil: str, res: pd.DataFrame, diag: pd.DataFrame, cands: list, effec
     ra = float(np.sqrt(np.mean(after_cv[ok] ** 2))) * 100 if ok.any() else math.nan
     mb = float(np.max(np.abs(before[ok]))) * 100 if ok.any() else math.nan
     ma = float(np.max(np.abs(after_cv[ok]))) * 100 if ok.any() else math.nan
+    surrogate_kind, lack_of_fit_p = _surrogates(data, chosen)
     summary = pd.DataFrame([{
         "soil": soil, "rows": len(res), "usable_rows": n, "verdict": verdict, "effects": "+".join(chosen),
         "parameters": _fmt(theta), "ci95": _fmt_ci(ci), "ci95_method": ci_method, "follows": follows, "rmse_before_percent": rb,
@@ -1262,7 +1263,7 @@ def analyse(soil: str, res: pd.DataFrame, diag: pd.DataFrame, cands: list, effec
         "error_reduction_percent": (1 - ra / rb) * 100 if rb and np.isfinite(rb) and rb > 0 else math.nan,
         "alpha": settings.alpha, "reference": _fmt(reference), "folds": fold_text, "nuisance": _fmt(nuisance[0]),
         "nuisance_ci95": _fmt_ci(nuisance[1]), "nuisance_method": nuisance[2],
-        "surrogate": _surrogates(data, chosen)[0], "lack_of_fit_p": _surrogates(data, chosen)[1]}],
+        "surrogate": surrogate_kind, "lack_of_fit_p": lack_of_fit_p}],
         columns=SUMMARY_COLUMNS)
     return Outcome(res, diag, rank, cands, pd.DataFrame(sel_rows, columns=SELECTION_COLUMNS), summary, pred,
                    verdict, chosen, theta, after, dg.detectable(res, diag, quantity_cols, settings.alpha),
