@@ -3,14 +3,12 @@ condition resampled with common random numbers, the measured values redrawn with
 standard error, the model refitted.
 
 Expected values: an effect simulated without seed scatter and measured exactly leaves
-nothing to resample, so the interval is the fitted value itself; and on a linear stand-in,
-100 (1 + a_i beta), with 14 % scatter per run in every design point (three seeds) and in the
-measured repeats, a 95 % interval must cover the true beta in most campaigns: at least 17 of
-20.  A binomial count with p = 0.95 falls below that with probability 0.016; with three
-seeds a percentile bootstrap covers somewhat less than its level (the estimate carries a
-small bias from the surrogates' noisy slopes), and at p = 0.92 the count falls below 17 with
-probability 0.07.  Intervals that leave the measured values where they are cover the true
-beta in 16 of these 20 campaigns (29 of 40)."""
+nothing to resample, so the interval is the fitted value itself; a linear one-parameter
+campaign with Gaussian measured values of known SE has a bootstrap distribution known in
+closed form, so the interval's coverage of the true parameter (binomial over seeded
+campaigns), width and centre follow from the level and the number of draws; one row of two
+seeds at +-d gives draws at three known values; rows of one simulation drawn together widen
+the interval by sqrt(2) over rows drawn apart."""
 
 from __future__ import annotations
 
@@ -77,17 +75,65 @@ def test_one_seed_or_no_refits_leave_nothing_to_resample():
     assert sl.bootstrap_ci([one], y0, m, np.zeros(N), 100) is None
 
 
+def _percentile_interval_of_normals(b: int, level: float, reps: int = 20000):
+    """numpy's percentile interval at ``level`` of ``b`` standard normal draws, over ``reps``
+    sets of draws (a fixed generator, no code under test): (its coverage of an independent
+    standard normal, E[Phi(q_hi) - Phi(q_lo)]; its width's mean and SD; its midpoint's SD)."""
+    from scipy import stats
+
+    z = np.random.default_rng(12345).standard_normal((reps, b))
+    tail = 100 * (1 - level) / 2
+    lo, hi = np.percentile(z, [tail, 100 - tail], axis=1)
+    cover = float(np.mean(stats.norm.cdf(hi) - stats.norm.cdf(lo)))
+    return cover, float(np.mean(hi - lo)), float(np.std(hi - lo)), float(np.std((hi + lo) / 2))
+
+
 def test_the_interval_covers_the_true_parameter_at_its_level():
-    rng = np.random.default_rng(20261128)
-    true = 0.3
-    covered = 0
-    for _ in range(20):
-        obs, runs = _campaign(rng, true, 0.14)
-        _, x, ci = _fit(obs, runs)
-        lo, hi = ci["rate_friction.beta"]
-        assert lo <= x <= hi
-        covered += lo <= true <= hi
-    assert covered >= 17, covered
+    # A campaign whose bootstrap distribution is known exactly: six rows a_i = -1..1, runs
+    # without scatter (two seeds of equal values: nothing to resample, and the monotone cubic
+    # through collinear means is the line 100 (1 + a_i beta)), measured values 100 (1 + a_i
+    # beta_true) + SE z_i with their SE known, relative errors on the fixed scale 100. The fit
+    # is linear least squares, beta_hat = sum a_i (m_i - 100) / (100 sum a_i^2), and each draw,
+    # m_i + SE z*_i refitted, is beta_hat + sigma z* with sigma = SE / (100 sqrt(sum a_i^2)):
+    # beta_hat ~ N(beta_true, sigma^2) and the draws ~ N(beta_hat, sigma^2), so the 95 %
+    # percentile interval of B draws covers beta_true with the probability a percentile
+    # interval of B standard normals covers an independent one (computed below from normals
+    # alone: 0.87 for B = 20, below 0.95 by the percentiles' own scatter), and its width and
+    # midpoint are those of that interval times sigma about beta_hat.
+    # Over K = 40 seeded campaigns (each with its own bootstrap seed) the hit count is
+    # Binomial(K, p_B): it must lie in its central 99 % interval (29 to 39 hits); the mean width /
+    # sigma within 3.29 SD / sqrt(K) (99.9 %) of its expected value, the mean midpoint offset
+    # within 3.29 SD / sqrt(K) of 0.  An interval that does not redraw the measured values
+    # (width 0), or redraws them with the SE halved (coverage 0.58, P(hits >= 29) = 0.003), fails.
+    from scipy import stats
+
+    n, se, true, b, k, level = 6, 3.0, 0.2, 20, 40, 0.95
+    a = np.linspace(-1.0, 1.0, n)
+    sigma = se / (100.0 * np.sqrt(np.sum(a ** 2)))
+    p_b, w_mean, w_sd, mid_sd = _percentile_interval_of_normals(b, level)
+    runs = pd.DataFrame([{"measurement": "m", "row": i + 1, "measure": "F_N", "seed": s, "status": "ok",
+                          "value": 100.0 * (1 + a[i] * d["beta"]), "t:beta": d["beta"]}
+                         for d in DESIGN for i in range(n) for s in range(2)])
+    rng = np.random.default_rng(20261201)
+    hits, widths, mids = 0, [], []
+    for c in range(k):
+        m = 100.0 * (1 + a * true) + se * rng.standard_normal(n)
+        obs = pd.DataFrame({"measurement": "m", "row": np.arange(1, n + 1), "measure": "F_N", "measured": m})
+        ed = sl.build_effect_data(obs, runs, EFF, BOUNDS)
+        y0 = ed.surrogate([0.0])
+        assert y0 == pytest.approx(np.full(n, 100.0), rel=1e-12)
+        x, _ = sl.Model([ed], y0, m, np.full(n, 100.0)).fit()
+        beta_hat = np.sum(a * (m - 100.0)) / (100.0 * np.sum(a ** 2))
+        assert x[0] == pytest.approx(beta_hat, abs=1e-7)
+        lo, hi = sl.bootstrap_ci([ed], y0, m, np.full(n, se), b, seed=c, level=level, x0=x,
+                                 scale=np.full(n, 100.0))["rate_friction.beta"]
+        hits += lo <= true <= hi
+        widths.append((hi - lo) / sigma)
+        mids.append(((lo + hi) / 2 - beta_hat) / sigma)
+    low, high = stats.binom.interval(0.99, k, p_b)
+    assert low <= hits <= high, (hits, low, high, p_b)
+    assert np.mean(widths) == pytest.approx(w_mean, abs=3.29 * w_sd / np.sqrt(k)), (np.mean(widths), w_mean)
+    assert abs(np.mean(mids)) <= 3.29 * mid_sd / np.sqrt(k), np.mean(mids)
 
 
 def test_runs_without_a_seed_number_are_left_out_and_rows_may_have_more_seeds():
@@ -142,23 +188,40 @@ def test_a_row_without_numbered_seeds_keeps_its_means_and_the_rest_is_resampled(
 
 
 def test_rows_of_one_simulation_share_their_draws():
-    # every row measured twice from the same runs (two tables that one job simulates): drawn
-    # as one simulation per pair, the seed scatter of 18 simulations; drawn as 36 independent
-    # rows, twice the simulations, an interval narrower by sqrt(2) in expectation; the width
-    # ratio of one campaign scatters about it (1.19-1.57 over campaign seeds 0-7), so its mean
-    # over three campaigns is held to 1.2
-    ratios = []
-    for seed in (6, 7, 8):
+    """Every row measured twice from the same runs (two tables that one job simulates).
+    Drawn as one simulation per pair, the draws are those of the 18-row campaign; drawn as 36
+    independent rows, the fit (the two rows of a pair alike in measured value and scale) sees
+    per row the mean of two independent draws' deviations, whose spread is smaller by
+    sqrt(2) (to first order in the deviations).  So the width ratio w_shared / w_apart is
+    sqrt(2) in expectation, and 1 for code that ignores the shared labels.
+
+    Threshold: each width is a 95 % percentile interval of B = 200 draws; for Gaussian draws
+    its log has SD s_w = SD(width) / mean(width) = 0.066 (computed below from normals alone),
+    the two intervals treated as independent, a campaign's log ratio has SD sqrt(2) s_w =
+    0.094, and the mean over three campaigns sqrt(2/3) s_w = 0.054.  The mean log ratio is held
+    between log 2^(1/4) and log 2^(3/4): the geometric midpoints between sqrt(2) and the ratio
+    1 of shared draws ignored (or 2 of a pair's draws counted twice), each 0.173 = 3.2 SD away
+    from log sqrt(2): correct code fails it, or code that ignores the labels passes it, with
+    probability 7e-4.  Campaign seeds 0, 1, 2 (the first three), each the bootstrap's seed too."""
+    from scipy import stats
+
+    b = 200
+    _, w_mean, w_sd, _ = _percentile_interval_of_normals(b, 0.95)
+    s_mean = np.sqrt(2.0 / 3.0) * w_sd / w_mean
+    assert stats.norm.sf(np.log(2.0) / 4 / s_mean) < 1e-3  # the threshold's derivation above
+    logs = []
+    for seed in (0, 1, 2):
         obs, runs = _campaign(np.random.default_rng(seed), 0.3, 0.14)
         twice = pd.concat([obs, obs.assign(measurement="again")], ignore_index=True)
         runs2 = pd.concat([runs, runs.assign(measurement="again")], ignore_index=True)
         ed = sl.build_effect_data(twice, runs2, EFF, BOUNDS)
         y0, m, se = ed.surrogate([0.0]), twice["measured"].to_numpy(float), np.zeros(2 * N)
-        shared = sl.bootstrap_ci([ed], y0, m, se, 200, x0=[0.3], conditions=[f"job{r}" for r in twice["row"]])
-        apart = sl.bootstrap_ci([ed], y0, m, se, 200, x0=[0.3], conditions=list(range(2 * N)))
+        shared = sl.bootstrap_ci([ed], y0, m, se, b, seed=seed, x0=[0.3],
+                                 conditions=[f"job{r}" for r in twice["row"]])
+        apart = sl.bootstrap_ci([ed], y0, m, se, b, seed=seed, x0=[0.3], conditions=list(range(2 * N)))
         w = lambda ci: ci["rate_friction.beta"][1] - ci["rate_friction.beta"][0]  # noqa: E731
-        ratios.append(w(shared) / w(apart))
-    assert np.mean(ratios) > 1.2
+        logs.append(np.log(w(shared) / w(apart)))
+    assert np.log(2.0) / 4 < np.mean(logs) < 3 * np.log(2.0) / 4, np.exp(logs)
 
 
 def test_the_draws_centre_on_the_surrogates_means_which_count_unnumbered_runs():
