@@ -207,19 +207,38 @@ def colour_edges(rgb, sigma=1.5):
 
 #: the opening that removes specks from a segmented class before its holes are filled
 SPECK_FOOTPRINT = morphology.disk(2)
+#: its pixels' offsets from its centre (row, column); it is symmetric about the centre
+_SPECK_OFFSETS = tuple((int(i) - SPECK_FOOTPRINT.shape[0] // 2, int(j) - SPECK_FOOTPRINT.shape[1] // 2)
+                       for i, j in np.argwhere(SPECK_FOOTPRINT))
+
+
+def _reflected_min_max(mask, r, erode):
+    """Binary erosion (``erode``) or dilation of ``mask`` by :data:`SPECK_FOOTPRINT` with the
+    image reflected at its border by ``r`` px (``mode="symmetric"``): the AND (OR) of the
+    reflected image shifted by each offset of the footprint.  The same pixels as
+    ``ndi.binary_erosion`` (``binary_dilation``) of the reflected image cropped back (the
+    footprint is symmetric, so the dilation's reflected footprint is itself), a few whole-array
+    operations instead of a walk over every pixel's neighbourhood."""
+    h, w = mask.shape
+    padded = np.pad(mask, r, mode="symmetric")
+    op = np.logical_and if erode else np.logical_or
+    out = None
+    for di, dj in _SPECK_OFFSETS:
+        s = padded[r + di:r + di + h, r + dj:r + dj + w]
+        out = s.copy() if out is None else op(out, s, out=out)
+    return out
 
 
 def open_fill(mask):
     """``mask`` opened by :data:`SPECK_FOOTPRINT` and its holes filled: the same as
     ``ndi.binary_fill_holes(morphology.opening(mask, SPECK_FOOTPRINT))`` (an opening at the
     image border reflected, as scikit-image's; a hole is a 4-connected region of background that
-    does not reach the border, as scipy's), in about half the time: the opening by binary
-    erosion and dilation of the reflected image, the holes by one labelling of the background
-    instead of a propagation from the border.  Every candidate plate line and cue of a heap
-    photo segments the photo once."""
+    does not reach the border, as scipy's), in a fraction of the time: the opening by erosion
+    and dilation of the reflected image as shifted ANDs and ORs (:func:`_reflected_min_max`),
+    the holes by one labelling of the background instead of a propagation from the border.
+    Every candidate plate line and cue of a heap photo segments the photo once."""
     r = SPECK_FOOTPRINT.shape[0] // 2
-    eroded = ndi.binary_erosion(np.pad(mask, r, mode="symmetric"), SPECK_FOOTPRINT)[r:-r, r:-r]
-    opened = ndi.binary_dilation(np.pad(eroded, r, mode="symmetric"), SPECK_FOOTPRINT)[r:-r, r:-r]
+    opened = _reflected_min_max(_reflected_min_max(np.asarray(mask, bool), r, True), r, False)
     lab, n = ndi.label(~opened)
     outside = np.zeros(n + 1, bool)
     for border in (lab[0], lab[-1], lab[:, 0], lab[:, -1]):
@@ -411,15 +430,19 @@ def _components_on_plate(path, binary, slope, intercept, kind):
     lab = measure.label(above)
     touching = np.unique(lab[(rr > plate_rows - 8) & (rr < plate_rows - 1) & above])
     touching = touching[touching > 0]
-    props = {p.label: p for p in measure.regionprops(lab)}
-    cands = sorted((props[t] for t in touching if props[t].area > 0.004 * h * w), key=lambda p: -p.area)
+    # each component's area (pixels) by one count of the labels, not a region object per
+    # component: only the largest one's extent is wanted
+    area = np.bincount(lab.ravel())
+    cands = sorted((t for t in touching if area[t] > 0.004 * h * w), key=lambda t: -area[t])
     if not cands:
         raise InputError(path, "image", f"one {kind} standing on the plate", NONE_FOUND)
-    if len(cands) > 1 and cands[1].area > 0.25 * cands[0].area:
+    if len(cands) > 1 and area[cands[1]] > 0.25 * area[cands[0]]:
         raise InputError(path, "image", f"one {kind}", f"{len(cands)} separate {kind}s on the plate")
-    comp = lab == cands[0].label
-    r0, c0, r1, c1 = cands[0].bbox
+    comp = lab == cands[0]
     on = comp.any(axis=0)
+    # its bounding box (rows r0 to r1, columns c0 to c1, the ends past it), as regionprops' bbox
+    rows, cols = np.flatnonzero(comp.any(axis=1)), np.flatnonzero(on)
+    r0, c0, r1, c1 = rows[0], cols[0], rows[-1] + 1, cols[-1] + 1
     if c0 <= 2 and c1 >= w - 2 and np.median(plate_rows[0, on] - comp[:, on].argmax(axis=0)) < MIN_RISE * h:
         # a low class running along the plate from one side of the frame to the other is a
         # strip of the plate's own edge or of the wall's noise on an empty plate, not a heap
