@@ -160,6 +160,22 @@ def test_each_row_is_tested_against_its_own_scatter():
     assert s.kind().endswith("monotone cubic in 1")
 
 
+def test_rows_of_either_kind_interleaved_keep_their_own_values():
+    # four rows, alternately quadratic (smooth: 100 + 30 beta + 10 beta^2, its vertex at
+    # -1.5, outside the bounds) and monotone cubic (not smooth: a line, 50 - 20 beta, and a
+    # saturating row, 5 min(beta, 0)): the quadratic gives its parabola, the cubic (PCHIP)
+    # a line exactly and the saturating row's constant 0 beyond its kink, between and beyond
+    # the design points; each row its own, none another's
+    means = np.column_stack([100 + 30 * T + 10 * T ** 2, 50 - 20 * T, 200 + 30 * T + 10 * T ** 2,
+                             5 * np.minimum(T, 0.0)])
+    s = sl.Surrogate(EFF, BOUNDS, T[:, None], means, [True, False, True, False])
+    assert s.quadratic.tolist() == [True, False, True, False]
+    for t in np.linspace(-0.3, 0.6, 13):
+        got = s([t])
+        want = [100 + 30 * t + 10 * t ** 2, 50 - 20 * t, 200 + 30 * t + 10 * t ** 2, 5 * min(t, 0.0)]
+        assert got == pytest.approx(want, rel=1e-12, abs=1e-12), t
+
+
 def _friction_bin(scatter, saturating=False):
     """A soil-bin stand-in (soilcal.loop.standin's blade force at the base friction) whose
     horizontal force is exactly quadratic in the friction factor r = mu / mu_cal, so in

@@ -152,40 +152,37 @@ class Surrogate:
         self.names = effect.theta_names()
         self.lo = np.array([bounds[k][0] for k in self.names], float)
         self.hi = np.array([bounds[k][1] for k in self.names], float)
+        self.span = self.hi - self.lo
         self.k = len(self.names)
         means = np.asarray(means, float)
         R = means.shape[1]
         self.smooth = np.broadcast_to(np.asarray(smooth, bool), (R,)).copy()
         self.pchip = None
         self.quadratic = np.ones(R, bool)
+        t = None  # the one parameter's design values, where a cubic may be used
         if self.k == 1 and len(thetas) >= 3:
             self.quadratic = self.smooth & (len(thetas) >= 4)
-            order = np.argsort(np.asarray(thetas, float)[:, 0])
-            if not self.quadratic.all():
-                self.pchip = PchipInterpolator(np.asarray(thetas, float)[order, 0], means[order], axis=0,
-                                               extrapolate=True)
-            if not self.quadratic.any():
-                return
-        U = self._u(thetas)
-        B = self._basis(U)
-        if B.shape[0] < B.shape[1]:
-            B = B[:, : 1 + self.k]  # too few points for the square terms: linear
-        self.nb = B.shape[1]
-        self.coef, *_ = np.linalg.lstsq(B, means, rcond=None)  # means: (design, rows) -> (basis, rows)
-        if self.k == 1 and self.nb == 3:
-            # a quadratic whose vertex lies inside the bounds where the row's means are
-            # monotone turns over where the response does not: that row keeps the cubic
-            c1, c2 = self.coef[1], self.coef[2]
-            with np.errstate(divide="ignore", invalid="ignore"):
-                vertex = np.where(c2 != 0, -c1 / (2 * c2), np.inf)  # in u, the bounds are -1..1
-            d = np.diff(means[order], axis=0)
-            monotone = (d >= 0).all(axis=0) | (d <= 0).all(axis=0)
-            turns = monotone & (np.abs(vertex) < 1)
-            if (self.quadratic & turns).any():
-                self.quadratic &= ~turns
-                if self.pchip is None:
-                    self.pchip = PchipInterpolator(np.asarray(thetas, float)[order, 0], means[order], axis=0,
-                                                   extrapolate=True)
+            t = np.asarray(thetas, float)[:, 0]
+            order = np.argsort(t)
+        if t is None or self.quadratic.any():
+            B = self._basis(self._u(thetas))
+            if B.shape[0] < B.shape[1]:
+                B = B[:, : 1 + self.k]  # too few points for the square terms: linear
+            self.nb = B.shape[1]
+            self.coef, *_ = np.linalg.lstsq(B, means, rcond=None)  # means: (design, rows) -> (basis, rows)
+            if self.k == 1 and self.nb == 3:
+                # a quadratic whose vertex lies inside the bounds where the row's means are
+                # monotone turns over where the response does not: that row keeps the cubic
+                c1, c2 = self.coef[1], self.coef[2]
+                with np.errstate(divide="ignore", invalid="ignore"):
+                    vertex = np.where(c2 != 0, -c1 / (2 * c2), np.inf)  # in u, the bounds are -1..1
+                d = np.diff(means[order], axis=0)
+                monotone = (d >= 0).all(axis=0) | (d <= 0).all(axis=0)
+                self.quadratic &= ~(monotone & (np.abs(vertex) < 1))
+        if t is not None and not self.quadratic.all():
+            # the cubic through the rows that use it only (each row's cubic is its own)
+            self.cubic_rows = np.flatnonzero(~self.quadratic)
+            self.pchip = PchipInterpolator(t[order], means[order][:, self.cubic_rows], axis=0, extrapolate=True)
 
     def kind(self) -> str:
         """Which surrogate the rows use, for the selection's files: "quadratic", "monotone
@@ -200,7 +197,7 @@ class Surrogate:
         return f"quadratic in {q} of {n} rows, monotone cubic in {n - q}"
 
     def _u(self, thetas):
-        return 2.0 * (np.atleast_2d(thetas) - self.lo) / (self.hi - self.lo) - 1.0
+        return 2.0 * (np.atleast_2d(thetas) - self.lo) / self.span - 1.0
 
     def _basis(self, U):
         cols = [np.ones(len(U))] + [U[:, j] for j in range(self.k)]
@@ -209,13 +206,20 @@ class Surrogate:
         return np.column_stack(cols)
 
     def __call__(self, theta) -> np.ndarray:
+        """The rows' values at one parameter vector ``theta`` (the quadratic's basis built as
+        :meth:`_basis` builds it, with plain numbers: the optimisers call this thousands of times)."""
+        theta = np.asarray(theta, float).ravel()
         if self.pchip is not None:
-            cubic = self.pchip(float(np.asarray(theta, float).ravel()[0]))
+            cubic = self.pchip(float(theta[0]))
             if not self.quadratic.any():
                 return cubic
-        B = self._basis(self._u(np.asarray(theta, float)))[:, : self.nb]
-        quad = (B @ self.coef)[0]
-        return quad if self.pchip is None else np.where(self.quadratic, quad, cubic)
+        u = (2.0 * (theta - self.lo) / self.span - 1.0).tolist()
+        cols = [1.0] + u + [v * v for v in u]
+        cols += [u[a] * u[b] for a, b in itertools.combinations(range(self.k), 2)]
+        quad = (np.array([cols[: self.nb]]) @ self.coef)[0]
+        if self.pchip is not None:
+            quad[self.cubic_rows] = cubic
+        return quad
 
 
 @dataclass
@@ -389,6 +393,9 @@ class Model:
     measured: np.ndarray
     scale: np.ndarray | None = None  # the relative errors' denominators (residuals.scales); default |measured|
     joint: Joint | None = None  # the effects' interaction from runs with all of them on (:class:`Joint`)
+    # what its fits share (:meth:`_at_starts`, :func:`full_fit`, :func:`cross_validate`): the
+    # fields are not changed once the model has been fitted
+    _cache: dict = field(default_factory=dict, init=False, repr=False, compare=False)
 
     def __post_init__(self):
         if self.scale is None:
@@ -398,17 +405,18 @@ class Model:
     def k(self) -> int:
         return sum(e.surrogate.k for e in self.effects)
 
-    def predict(self, x: np.ndarray) -> np.ndarray:
+    def predict(self, x: np.ndarray, values: list | None = None) -> np.ndarray:
         """The calibrated means plus each effect's change; a uniform scale (:func:`scale_data`)
-        multiplies the sum, as a bias of the whole model does."""
-        out = self.y0.copy()
+        multiplies the sum, as a bias of the whole model does.  ``values``: per effect, its
+        surrogate's value at its part of ``x`` where that is known already."""
+        out = self.y0
         factor = 1.0
         j = 0
-        for e in self.effects:
+        for i, e in enumerate(self.effects):
             if isinstance(e.surrogate, _ScaleSurrogate):
                 factor = 1.0 + float(x[j])
             else:
-                out = out + (e.surrogate(x[j:j + e.surrogate.k]) - self.y0)
+                out = out + ((e.surrogate(x[j:j + e.surrogate.k]) if values is None else values[i]) - self.y0)
             j += e.surrogate.k
         if self.joint is not None:
             out = out + self.joint.gap * self.joint.weight(np.asarray(x, float)[:len(self.joint.centre)])
@@ -427,6 +435,26 @@ class Model:
         per = [[np.array([d[k] for k in e.effect.theta_names()], float) for d in e.design] for e in self.effects]
         return [np.concatenate(c) for c in itertools.product(*per)]
 
+    def _at_starts(self):
+        """(:meth:`starts` within the bounds, the prediction at each): every fit of the model
+        (one a held-out fold, :func:`cross_validate`) ranks the same starts, so they are
+        predicted once (the model's effects, means and joint term are not changed after its
+        first fit), each effect's surrogate once at each of its own design points."""
+        if "starts" not in self._cache:
+            points, values = [], []
+            for e in self.effects:
+                sg = e.surrogate
+                pts = [np.clip(np.array([d[k] for k in e.effect.theta_names()], float), sg.lo, sg.hi) for d in e.design]
+                points.append(pts)
+                values.append([None if isinstance(sg, _ScaleSurrogate) else sg(p) for p in pts])
+            starts, predicted = [], []
+            for c in itertools.product(*(range(len(p)) for p in points)):
+                x = np.concatenate([points[i][j] for i, j in enumerate(c)])
+                starts.append(x)
+                predicted.append(self.predict(x, [values[i][j] for i, j in enumerate(c)]))
+            self._cache["starts"] = (starts, predicted)
+        return self._cache["starts"]
+
     def fit(self, idx=None, x0=None):
         """Least-squares parameters on rows ``idx`` (all by default); (x, result or None).
         The search starts from the two best design points and, where given, from ``x0`` as
@@ -437,19 +465,24 @@ class Model:
         if not self.effects:
             return np.zeros(0), None
         lo, hi = self.bounds()
+        rows = np.arange(len(self.y0)) if idx is None else idx
+        measured, scale = self.measured[rows], self.scale[rows]
+
+        def errors(x):  # self.errors(x, idx), the rows' measured values and scales taken once
+            return (measured - self.predict(x)[rows]) / scale
+
         best = None
         if x0 is not None:
-            best = least_squares(lambda x: self.errors(x, idx), np.clip(np.asarray(x0, float), lo, hi),
-                                 bounds=(lo, hi), method="trf")
-        starts = [np.clip(s, lo, hi) for s in self.starts()]
-        cost = [float(np.sum(self.errors(s, idx) ** 2)) for s in starts]
+            best = least_squares(errors, np.clip(np.asarray(x0, float), lo, hi), bounds=(lo, hi), method="trf")
+        starts, predicted = self._at_starts()
+        cost = [float(np.sum(((measured - p[rows]) / scale) ** 2)) for p in predicted]
         null = np.concatenate([[e.effect.null[k] for k in e.effect.theta_names()] for e in self.effects])
         span = np.where(hi > lo, hi - lo, 1.0)
         dist = [float(np.sum(((s - null) / span) ** 2)) for s in starts]
         # the two best design points start the search; a tie (data that do not move the
         # result) goes to the switched-off value
         for j in sorted(range(len(starts)), key=lambda j: (round(cost[j], 12), dist[j]))[:2]:
-            res = least_squares(lambda x: self.errors(x, idx), starts[j], bounds=(lo, hi), method="trf")
+            res = least_squares(errors, starts[j], bounds=(lo, hi), method="trf")
             if best is None or res.cost < best.cost - 1e-15:
                 best = res
         return best.x, best
@@ -535,8 +568,24 @@ def aicc_lower(s) -> bool:
     return s.aicc < s.ref_aicc
 
 
+def full_fit(model: Model):
+    """``model.fit()`` on all rows, done once per model (a model is scored against several
+    references, and serves as the reference of several)."""
+    if "fit" not in model._cache:
+        model._cache["fit"] = model.fit()
+    return model._cache["fit"]
+
+
 def cross_validate(model: Model, folds: Folds) -> tuple[np.ndarray, np.ndarray]:
-    """(fold RMS errors, held-out relative error of every row) of a model."""
+    """(fold RMS errors, held-out relative error of every row) of a model; done once per
+    model and folds (copies returned)."""
+    if folds not in model._cache:
+        model._cache[folds] = _cross_validate(model, folds)
+    rms, held = model._cache[folds]
+    return rms.copy(), held.copy()
+
+
+def _cross_validate(model: Model, folds: Folds) -> tuple[np.ndarray, np.ndarray]:
     n = len(model.y0)
     held = np.full(n, np.nan)
     rms = []
@@ -658,8 +707,8 @@ def score(model: Model, ref: Model, folds: Folds, alpha: float = 0.05, min_impro
     fold_rms, held = cross_validate(model, folds)
     ref_rms, ref_held = cross_validate(ref, folds)
     ok = np.isfinite(fold_rms) & np.isfinite(ref_rms)
-    x, res = model.fit()
-    xr, _ = ref.fit()
+    x, res = full_fit(model)
+    xr, _ = full_fit(ref)
     e = model.errors(x)
     er = ref.errors(xr)
     sse, sse_r = float(np.sum(e ** 2)), float(np.sum(er ** 2))
@@ -793,10 +842,11 @@ def bootstrap_ci(effects: list, y0: np.ndarray, measured: np.ndarray, measured_s
             Vp = np.concatenate([V, np.full(V.shape[:2] + (1,), np.nan)], axis=2)
             mean = np.nanmean(V, axis=2)[..., None]
             count = np.sum(np.isfinite(V), axis=2)[..., None]
-            design = [tuple(t) for t in e.thetas()]
+            thetas = e.thetas()
+            design = [tuple(t) for t in thetas]
             null = tuple(float(e.effect.null[k]) for k in e.effect.theta_names())
             prepared.append((Vp, W, pad, mean, np.sqrt(count / np.maximum(count - 1, 1)), design,
-                             design.index(null) if null in design else None))
+                             design.index(null) if null in design else None, thetas))
     rng = np.random.default_rng(seed)
     se = np.where(np.isfinite(measured_se), measured_se, 0.0)
     names = [f"{e.effect.name}.{t}" for e in effects for t in e.effect.theta_names()]
@@ -808,7 +858,7 @@ def bootstrap_ci(effects: list, y0: np.ndarray, measured: np.ndarray, measured_s
         rows = picks[gindex]  # (n, width), -1 beyond a condition's own seed count
         m = measured + se * rng.standard_normal(n)
         fitted, yb, lost = [], None, False
-        for e, (Vp, W, pad, mean, widen, design, j_null) in zip(effects, prepared):
+        for e, (Vp, W, pad, mean, widen, design, j_null, thetas) in zip(effects, prepared):
             at = np.where(rows >= 0, np.take_along_axis(W, np.clip(rows, 0, None), axis=1), pad)
             take = np.take_along_axis(Vp, np.broadcast_to(at[None], (Vp.shape[0],) + at.shape), axis=2)
             with warnings.catch_warnings():
@@ -823,7 +873,7 @@ def bootstrap_ci(effects: list, y0: np.ndarray, measured: np.ndarray, measured_s
                 break
             if yb is None and j_null is not None:
                 yb = Y[j_null]
-            fitted.append(EffectData(e.effect, e.bounds, Surrogate(e.effect, e.bounds, e.thetas(), Y, e.surrogate.smooth),
+            fitted.append(EffectData(e.effect, e.bounds, Surrogate(e.effect, e.bounds, thetas, Y, e.surrogate.smooth),
                                      e.design))
         if lost:
             continue
@@ -913,13 +963,21 @@ def forward(obs: pd.DataFrame, y0: np.ndarray, data: dict, fold_by: str | None =
     chosen: list[str] = []
     steps = []
 
+    models = {}  # one Model per set of effects: each is fitted and cross-validated once (full_fit, cross_validate)
+
     def model(names):
-        return Model([data[c] for c in names], y0, measured, scale)
+        key = tuple(names)
+        if key not in models:
+            models[key] = Model([data[c] for c in names], y0, measured, scale)
+        return models[key]
 
     bias = scale_data()
 
     def scaled(names):
-        return Model([data[c] for c in names] + [bias], y0, measured, scale)
+        key = tuple(names) + (bias.effect.name,)
+        if key not in models:
+            models[key] = Model([data[c] for c in names] + [bias], y0, measured, scale)
+        return models[key]
 
     def gains(s):
         return lowers_heldout(s) and aicc_lower(s)
@@ -977,7 +1035,7 @@ def forward(obs: pd.DataFrame, y0: np.ndarray, data: dict, fold_by: str | None =
         # an offset beside the effects taken as is (its 95 % interval leaves out 0): without the
         # scale, any effect that takes up part of it passes its gate (an adhesion run to its
         # bound under an 8 % offset let a rate effect of beta 0.01 in), so the gates take it
-        lo, hi = score(scaled(chosen), Model([bias], y0, measured, scale), folds, alpha,
+        lo, hi = score(scaled(chosen), scaled([]), folds, alpha,
                        groups=groups).ci.get("uniform_scale.s", (math.nan, math.nan))
         with_scale = bool(np.isfinite(lo) and np.isfinite(hi) and (lo > 0.0 or hi < 0.0))
 
@@ -1010,12 +1068,12 @@ def forward(obs: pd.DataFrame, y0: np.ndarray, data: dict, fold_by: str | None =
     # scale dropped them all, those the forward step took (they fit an offset the scale fits)
     judged = chosen or (forward_chosen if with_scale else [])
     if judged:
-        alone = Model([bias], y0, measured, scale)
+        alone = scaled([])
         uniform = score(model(judged), alone, folds, alpha, groups=groups)
         own = score(alone, model([]), folds, alpha, groups=groups)  # the scale alone: its value and interval
         uniform_s = float(own.theta["uniform_scale.s"])
         uniform_ci = tuple(own.ci.get("uniform_scale.s", (math.nan, math.nan)))
-        beside = score(Model([data[c] for c in judged] + [bias], y0, measured, scale), alone, folds, alpha,
+        beside = score(scaled(judged), alone, folds, alpha,
                        groups=groups)
     return Selection(chosen=chosen, steps=steps, final=final, forward_chosen=forward_chosen, uniform=uniform,
                      uniform_s=uniform_s, uniform_ci=uniform_ci, beside_uniform=beside, with_scale=with_scale,
