@@ -13,7 +13,7 @@ from dataclasses import dataclass
 import numpy as np
 import pandas as pd
 
-from soilcal import doe, rsm
+from soilcal import doe
 from soilcal.errors import InputError
 
 
@@ -223,6 +223,8 @@ def _terms_of(stage: dict) -> list[str] | None:
 
 def fit_stage(stage: dict, table: pd.DataFrame) -> list[StageFit]:
     """Fit every response of a PB or BBD stage: full model and reduced model."""
+    from soilcal import rsm  # here, not at module import: the design jobs fit nothing
+
     syms, low, high = bounds(stage)
     data = stage_data(stage, table)
     fits = []
@@ -300,6 +302,8 @@ def regression_frames(stage: dict, table: pd.DataFrame) -> dict[str, pd.DataFram
     fit: one row per response and model; a statistic the data leave undefined (PRESS and
     pred R2 where a point has leverage 1, a Box-Cox interval reaching past the searched
     lambda range, any other infinity) is empty and the row's ``note`` says why."""
+    from soilcal import rsm  # here, not at module import: the design jobs fit nothing
+
     anova, fit, coef, effects = [], [], [], []
     data = stage_data(stage, table)
     syms = list(stage["factors"])

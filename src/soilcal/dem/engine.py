@@ -33,9 +33,6 @@ import math
 
 import numba
 import numpy as np
-from scipy.sparse import coo_matrix
-from scipy.sparse.csgraph import connected_components
-from scipy.spatial import cKDTree
 
 from soilcal.dem import integrator as itg
 from soilcal.dem.contact import H_SIZE, hist_width, jkr_separation, model_codes
@@ -364,6 +361,11 @@ def _node(seg, tol):
     joined into one vertex (the mean of them).  Returns the vertices [v, 2] and the edges
     [e, 2] between distinct vertices, each once (the same edge cut from two faces, a box's
     bottom lying on the floor)."""
+    # here, not at module import: scipy.sparse and scipy.spatial cost every run without a mesh ~0.4 s
+    from scipy.sparse import coo_matrix
+    from scipy.sparse.csgraph import connected_components
+    from scipy.spatial import cKDTree
+
     a, d = seg[:, 0], seg[:, 1] - seg[:, 0]
     ln = np.linalg.norm(d, axis=1)
     u = d / ln[:, None]

@@ -101,7 +101,6 @@ import math
 from pathlib import Path
 
 import numpy as np
-from scipy.optimize import fsolve
 
 from soilcal.dem.geometry import extrude_curve, is_watertight, merge_meshes, rotation_matrix
 from soilcal.dem.stl import write_stl
@@ -375,6 +374,8 @@ def directrix(shape, n=16, height=PLATE["height"], edge_length=PLATE["edge_lengt
 
 def _bionic_solve(p1, p2, th0, th1, height, bk, source):
     """c1, ls of theta(tau) = th0 + c1 tau + (th1 - th0 - c1) tau^2 reaching p2."""
+    # here, not at module import: scipy.optimize costs every DEM job that builds no such tool ~0.5 s
+    from scipy.optimize import fsolve
 
     def resid(z):
         c1, ls = z

@@ -26,7 +26,6 @@ import numpy as np
 import pandas as pd
 from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
-from scipy import stats
 
 from soilcal.errors import InputError
 
@@ -213,6 +212,8 @@ def response_surface(
 
 def standardized_effects(effects: pd.DataFrame, df_resid: float | None = None) -> pd.DataFrame:
     """[term, t] from a table with 't' (or 't_value'), or 'effect' with 'F' or 'p'."""
+    from scipy import stats  # here, not at module import: the DEM summary figures need no scipy.stats
+
     if not isinstance(effects, pd.DataFrame) or "term" not in effects.columns or effects.empty:
         raise InputError(None, "effects", "a non-empty DataFrame with column 'term'", type(effects).__name__)
     cols = set(effects.columns)
@@ -267,6 +268,8 @@ def _reference_effects(reference, terms) -> pd.DataFrame:
 
 def _pareto_figure(effects, alpha, bonferroni, df_resid, response_label, reference=None,
                    reference_label: str = "paper") -> Figure:
+    from scipy import stats  # here, not at module import: the DEM summary figures need no scipy.stats
+
     if not 0 < alpha < 1:
         raise InputError(None, "alpha", "a significance level in (0, 1)", alpha)
     if df_resid is None:
@@ -438,6 +441,8 @@ def predicted_vs_actual(model, stem="predicted_vs_actual", response_label: str |
 def residual_diagnostics(model, stem="residuals", response_label: str | None = None) -> tuple[Path, Path]:
     """2 x 2 panel: normal probability plot of studentized residuals, studentized residuals vs
     predicted, vs run order, and Cook's distance vs run (marker size from leverage)."""
+    from scipy import stats  # here, not at module import: the DEM summary figures need no scipy.stats
+
     d = _diagnostics(model)
     n = len(d)
     if n < 3:

@@ -93,7 +93,6 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from scipy.optimize import brentq
 
 from soilcal.dem import measure
 from soilcal.dem.factories import ConeRegion, CylinderRegion, UniformRadius, insert_random
@@ -348,8 +347,13 @@ def _fill_funnel(sim, setup, sz, gen, source):
         h = hf
         in_cone = min(sz["n"], int(FILL_FRACTION * whole / vmean))
     else:
-        h = h_min if frustum(h_min).volume >= need else brentq(
-            lambda q: frustum(q).volume - need, h_min, hf)
+        if frustum(h_min).volume >= need:
+            h = h_min
+        else:
+            # here, not at module import: scipy.optimize costs every other DEM job ~0.5 s
+            from scipy.optimize import brentq
+
+            h = brentq(lambda q: frustum(q).volume - need, h_min, hf)
         in_cone = sz["n"]
     cone = frustum(h)
     x, r = insert_random(cone, sz["dist"], n=in_cone, rng=gen, max_fraction=0.35,

@@ -1,0 +1,75 @@
+"""What a workflow job loads before it works: every job is a fresh Python process, so a package
+it imports without using it costs every job of its kind again (scipy.optimize about 0.5 s,
+statsmodels about 1.2 s on the project's machines; the DEM design points are most of the jobs).
+Each job kind's modules are imported in a fresh interpreter, as its script in workflow/scripts
+does, and the heavy packages that kind never calls must stay unloaded.  A package a job does
+call is imported where it is used: a missing one still stops the job with its name."""
+
+from __future__ import annotations
+
+import ast
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+ROOT = Path(__file__).resolve().parents[1]
+SCRIPTS = ROOT / "workflow/scripts"
+#: the scripts of the DEM jobs (one job per design point, tool condition, verification seed and
+#: loop run), with every scenario module the jobs may run
+DEM_SCRIPTS = ["dem_point", "tool_point", "verify_point"]
+DEM_MODULES = "import soilcal.dem.scenarios, soilcal.dem.scenarios.compile, soilcal.chain.sources, soilcal.chain.verify"
+#: heavy packages no DEM job calls on the workflow's scenarios' ordinary paths
+NOT_FOR_DEM = ["scipy.optimize", "scipy.stats", "scipy.spatial", "scipy.sparse", "statsmodels", "matplotlib",
+               "pymoo", "pyDOE3", "skimage"]
+
+
+def _script_imports(name: str) -> str:
+    """The top-level import statements of a workflow script, as its job runs them."""
+    tree = ast.parse((SCRIPTS / f"{name}.py").read_text())
+    return "\n".join(ast.unparse(n) for n in tree.body if isinstance(n, (ast.Import, ast.ImportFrom)))
+
+
+def _loaded(code: str, modules: list[str]) -> list[str]:
+    """Which of ``modules`` a fresh interpreter has loaded after running ``code``."""
+    probe = f"{code}\nimport sys\nprint(' '.join(m for m in {modules!r} if m in sys.modules))"
+    env = dict(os.environ, PYTHONPATH=os.pathsep.join([str(ROOT / "src"), os.environ.get("PYTHONPATH", "")]))
+    out = subprocess.run([sys.executable, "-c", probe], capture_output=True, text=True, env=env, cwd=ROOT)
+    assert out.returncode == 0, out.stderr[-2000:]
+    return out.stdout.split()
+
+
+@pytest.mark.parametrize("script", DEM_SCRIPTS)
+def test_a_dem_job_loads_no_fitting_plotting_or_root_finding_package(script):
+    assert _loaded(_script_imports(script) + "\n" + DEM_MODULES, NOT_FOR_DEM) == []
+
+
+def test_a_design_job_loads_no_response_surface_fit():
+    # the design jobs read the stage and build its design (pyDOE3 on use); the fits are the
+    # regression jobs'
+    code = _script_imports("design") + "\nimport soilcal.chain.stage, soilcal.chain.derive"
+    assert _loaded(code, ["statsmodels", "scipy.stats", "scipy.optimize", "matplotlib"]) == []
+
+
+@pytest.mark.parametrize("script", ["loop_diagnose", "loop_more", "loop_select"])
+def test_a_loop_job_loads_no_root_finder_before_it_fits(script):
+    assert _loaded(_script_imports(script), ["scipy.optimize", "scipy.stats", "statsmodels", "matplotlib"]) == []
+
+
+def test_the_dem_summary_figures_load_no_statistics():
+    assert _loaded(_script_imports("dem_figures"), ["scipy.stats", "statsmodels"]) == []
+
+
+def test_a_missing_package_still_stops_the_call_that_needs_it_with_its_name():
+    # scipy.sparse made unimportable: welding a mesh (which needs its graph) fails naming it,
+    # an import that needs nothing of it still works
+    code = ("import sys\nsys.modules['scipy.sparse'] = None\nimport numpy as np\n"
+            "from soilcal.dem import stl, engine\n"
+            "soup = np.array([[[0, 0, 0], [1, 0, 0], [0, 1, 0]]], float)\n"
+            "try:\n    stl.weld(soup, weld_tol=1e-6)\nexcept ImportError as exc:\n    print('refused:', exc)\n")
+    env = dict(os.environ, PYTHONPATH=os.pathsep.join([str(ROOT / "src"), os.environ.get("PYTHONPATH", "")]))
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, env=env, cwd=ROOT)
+    assert out.returncode == 0, out.stderr[-2000:]
+    assert out.stdout.startswith("refused:") and "scipy.sparse" in out.stdout
