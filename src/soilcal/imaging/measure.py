@@ -184,12 +184,13 @@ MIN_RISE = 0.03  # the least height of a heap above the plate, as a share of the
 
 
 def _eta(values):
-    """Otsu's separability s_b^2 / s_T^2 of a sample split at its Otsu threshold."""
+    """Otsu's separability s_b^2 / s_T^2 of a sample split at its Otsu threshold, and that
+    threshold: (eta, t)."""
     t = filters.threshold_otsu(values)
     lo, hi = values[values < t], values[values >= t]
     if not lo.size or not hi.size:
-        return 0.0
-    return float(lo.size * hi.size / values.size ** 2 * (hi.mean() - lo.mean()) ** 2 / (values.var() + 1e-12))
+        return 0.0, t
+    return float(lo.size * hi.size / values.size ** 2 * (hi.mean() - lo.mean()) ** 2 / (values.var() + 1e-12)), t
 
 
 def colour_edges(rgb, sigma=1.5):
@@ -428,7 +429,7 @@ def _components_on_plate(path, binary, slope, intercept, kind):
     plate_rows = slope * np.arange(w)[None, :] + intercept
     above = binary & (rr < plate_rows - 1)
     lab = measure.label(above)
-    touching = np.unique(lab[(rr > plate_rows - 8) & (rr < plate_rows - 1) & above])
+    touching = np.unique(lab[(rr > plate_rows - 8) & above])  # ``above`` holds rr < plate_rows - 1
     touching = touching[touching > 0]
     # each component's area (pixels) by one count of the labels, not a region object per
     # component: only the largest one's extent is wanted
@@ -1153,7 +1154,10 @@ def _on_plate_lines(path, rgb, lum, grays, lines, n_first, channel, threshold, k
         if channel != "auto":
             order = [(channel, "dark")]
         else:
-            etas = {ch: _eta(g[band]) for ch, g in grays.items()}
+            # each channel's separability in the band, and its Otsu threshold there (a dark cue
+            # segments the same channel in the same band at it: _pile_with's ``otsu``)
+            split = {ch: _eta(g[band]) for ch, g in grays.items()}
+            etas = {ch: e for ch, (e, _) in split.items()}
             order = [(ch, "dark") for ch in sorted(("gray", "chroma"), key=lambda k: -etas[k])]
             # further cues only where they split the band into two clear classes (a unimodal
             # band gives eta = 2/pi = 0.64 at best: noise, not a heap)
@@ -1173,7 +1177,8 @@ def _on_plate_lines(path, rgb, lum, grays, lines, n_first, channel, threshold, k
                 res = _pile_with(path, rgb, g, ch, pol, band, slope, intercept, threshold,
                                  keep_stages and first is None, search=channel == "auto", tried=tried,
                                  label=f"line {n_line}, {ch}/{pol}", lum=lum, plate_edges=plate_edges,
-                                 levelled=levelled)
+                                 levelled=levelled,
+                                 otsu=split[ch][1] if channel == "auto" and pol == "dark" else None)
             except InputError as e:
                 if e.field not in ("image", "left flank", "right flank", "plate line"):
                     raise
@@ -1272,7 +1277,7 @@ def _cross_checked(res: PileResult, check: PileResult, outvoted: PileResult | No
 
 
 def _pile_with(path, rgb, gray, cue, polarity, band, slope, intercept, threshold, keep_stages, search=True,
-               tried: Tried | None = None, label: str = "", lum=None, plate_edges=None, levelled=None):
+               tried: Tried | None = None, label: str = "", lum=None, plate_edges=None, levelled=None, otsu=None):
     """Measure with one cue: the heap is the class below Otsu's threshold of ``gray``.  In a
     cue search (``search``) the result must look like a heap; a channel chosen by the caller
     (e.g. a DEM silhouette, whatever its flanks) is measured as it is.  ``tried`` records the
@@ -1280,9 +1285,10 @@ def _pile_with(path, rgb, gray, cue, polarity, band, slope, intercept, threshold
     the photo's luminance, in which a colour cue's edge is refined (:func:`_top_edge`);
     ``plate_edges``: the photo's edge map, in which a plate line found by the search must run
     on beside the heap (:func:`_plate_beside_heap`); ``levelled``: a dict in which the caller
-    keeps ``lum`` levelled on this plate line (:func:`_level`) for its further cues."""
+    keeps ``lum`` levelled on this plate line (:func:`_level`) for its further cues; ``otsu``:
+    Otsu's threshold of ``gray[band]`` where the caller has it already (:func:`_eta`)."""
     if threshold == "otsu":
-        t = filters.threshold_otsu(gray[band])
+        t = filters.threshold_otsu(gray[band]) if otsu is None else otsu
         binary = open_fill(gray < t)
     else:
         binary = _binary(path, gray, threshold)
