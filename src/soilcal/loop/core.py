@@ -40,6 +40,7 @@ from __future__ import annotations
 
 import json
 import math
+import dataclasses
 from dataclasses import dataclass
 
 import numpy as np
@@ -957,6 +958,20 @@ def analyse(soil: str, res: pd.DataFrame, diag: pd.DataFrame, cands: list, effec
     switched on together (:func:`joint_interaction`), with which two or more chosen effects
     are fitted with their interaction, else as the sum of their separate changes (the verdict
     says so)."""
+    return _analyse(soil, res, diag, cands, effect_runs, settings, reference, quantity_cols, skipped_effects,
+                    joint, interval=True)[0]
+
+
+def _analyse(soil: str, res: pd.DataFrame, diag: pd.DataFrame, cands: list, effect_runs: dict,
+             settings: Settings, reference: dict, quantity_cols: dict | None, skipped_effects: dict | None,
+             joint: dict | None, interval: bool) -> tuple[Outcome, tuple | None]:
+    """:func:`analyse` and, where ``interval`` is False, the chosen effects' interval left out
+    of the summary (its ``ci95`` ``{}``, ``ci95_method`` only the words that follow the
+    interval's own): (the outcome, what :func:`_with_interval` needs to fill it in, or None
+    where there is nothing to fill in).  The interval's bootstrap refits the model
+    ``loop.bootstrap`` times; :func:`run_inprocess` computes it only for the round whose
+    outcome it returns.  Where the chosen effects are refitted beside a free uniform scale
+    the summary gives that fit's interval, and no bootstrap is run."""
     u = rs.usable(res)
     spread_note = _replicate_spread(u, settings.alpha)  # the verdict's note ("": none) and its nuisance words
     rank = dg.ranking(diag)
@@ -971,6 +986,7 @@ def analyse(soil: str, res: pd.DataFrame, diag: pd.DataFrame, cands: list, effec
     nuisance = ({}, {}, "")  # a free uniform scale fitted beside (or instead of) the effects: value, interval, how
     provisional = []
     sel = None
+    pending = None  # the interval left out (interval False): _with_interval's inputs
     data = {}
     fold_by, fold_text = fold_grouping(settings, quantity_cols, res)
     unfit = {}
@@ -1070,8 +1086,11 @@ def analyse(soil: str, res: pd.DataFrame, diag: pd.DataFrame, cands: list, effec
                              sl.Model([], y0, u["measured"].to_numpy(float), rs.scale_of(u)), sl._folds(u, fold_by),
                              settings.alpha, groups=sl.replicate_groups(u))
         theta = final.theta
-        ci, ci_method = _interval(u, [data[c] for c in chosen], final, settings, jt)
-        if uniform is not None:
+        if uniform is None and interval:
+            ci, ci_method = _interval(u, [data[c] for c in chosen], final, settings, jt)
+        elif uniform is None:
+            pending = (u, [data[c] for c in chosen], final, jt)
+        if uniform is not None:  # (no bootstrap: its interval would not be reported)
             sv, lo, hi = _scale_fit(uniform)
             nuisance = ({SCALE_KEY: sv}, {SCALE_KEY: (lo, hi)},
                         "fitted with the chosen effects (a bias none of them carries): their prediction times (1 + s)")
@@ -1265,10 +1284,24 @@ def analyse(soil: str, res: pd.DataFrame, diag: pd.DataFrame, cands: list, effec
         "nuisance_ci95": _fmt_ci(nuisance[1]), "nuisance_method": nuisance[2],
         "surrogate": surrogate_kind, "lack_of_fit_p": lack_of_fit_p}],
         columns=SUMMARY_COLUMNS)
-    return Outcome(res, diag, rank, cands, pd.DataFrame(sel_rows, columns=SELECTION_COLUMNS), summary, pred,
-                   verdict, chosen, theta, after, dg.detectable(res, diag, quantity_cols, settings.alpha),
-                   {nm: list(d.missing) for nm, d in data.items() if d.missing}, dict(skipped_effects or {}),
-                   fold_by, fold_text, data, uniform is not None)
+    out = Outcome(res, diag, rank, cands, pd.DataFrame(sel_rows, columns=SELECTION_COLUMNS), summary, pred,
+                  verdict, chosen, theta, after, dg.detectable(res, diag, quantity_cols, settings.alpha),
+                  {nm: list(d.missing) for nm, d in data.items() if d.missing}, dict(skipped_effects or {}),
+                  fold_by, fold_text, data, uniform is not None)
+    return out, (None if pending is None else pending + (ci_method,))
+
+
+def _with_interval(out: Outcome, pending: tuple | None, settings: Settings) -> Outcome:
+    """``out`` (from :func:`_analyse` without its interval) with the chosen effects' interval
+    (:func:`_interval`) in its summary, as :func:`analyse` gives it."""
+    if pending is None:
+        return out
+    u, effects, final, jt, after_words = pending
+    ci, ci_method = _interval(u, effects, final, settings, jt)
+    summary = out.summary.copy()
+    summary.loc[0, "ci95"] = _fmt_ci(ci)
+    summary.loc[0, "ci95_method"] = ci_method + after_words
+    return dataclasses.replace(out, summary=summary)
 
 
 # --------------------------------------------------------------------------- in process
@@ -1329,18 +1362,19 @@ def run_inprocess(soil: str, conditions, base_params, simulate, settings: Settin
 
     simulate_candidates(cands)
     skip = skipped(conditions, settings)
-    out = analyse(soil, res, diag, cands, effect_runs, settings, reference, qcols, skip)
+    # each round without its interval (the bootstrap), which is computed for the outcome returned alone
+    out, pending = _analyse(soil, res, diag, cands, effect_runs, settings, reference, qcols, skip, None, False)
     more = more_candidates(out, conditions, settings)
     if more:
         simulate_candidates(more)  # the second round, as the workflow's loop_more checkpoint
         cands = cands + more
-        out = analyse(soil, res, diag, cands, effect_runs, settings, reference, qcols, skip)
+        out, pending = _analyse(soil, res, diag, cands, effect_runs, settings, reference, qcols, skip, None, False)
     # the chosen effects simulated (together, where there are several) at the fitted parameters and
     # refitted with the difference between those runs and the model's prediction there as a
     # mixed term (select.Joint): the interaction of several effects, and the error of the
     # surrogates between their design points; repeated at the refitted values until they settle
     if not out.chosen or any(len(EFFECTS[c].params) != 1 for c in out.chosen):
-        return out
+        return _with_interval(out, pending, settings)
     keys, null = _theta_keys(out.chosen)
     span = np.array([float(np.subtract(*settings.effect_bounds(c)[k][::-1])) for c in out.chosen
                      for k in EFFECTS[c].theta_names()])
@@ -1362,9 +1396,11 @@ def run_inprocess(soil: str, conditions, base_params, simulate, settings: Settin
         if settled:
             break
     if joint is None:
-        return out
-    final = analyse(soil, res, diag, cands, effect_runs, settings, reference, qcols, skip, joint)
-    return final if sorted(final.chosen) == sorted(out.chosen) else out
+        return _with_interval(out, pending, settings)
+    final, pending_final = _analyse(soil, res, diag, cands, effect_runs, settings, reference, qcols, skip, joint, False)
+    if sorted(final.chosen) == sorted(out.chosen):
+        return _with_interval(final, pending_final, settings)
+    return _with_interval(out, pending, settings)
 
 
 def more_candidates(out: Outcome, conditions, settings: Settings) -> list[str]:

@@ -155,9 +155,10 @@ def loop_jobs(conds, tool_jobs: dict, tool_keys: dict, plan: dict, results: str)
     return jobs, files
 
 
-def _outcome(soil, outdir, effect_files: dict, plans: list[dict]):
+def _outcome(soil, outdir, effect_files: dict, plans: list[dict], interval: bool = True):
     """``analyse`` over the candidates of ``plans`` (the first round, and the second where
-    there is one)."""
+    there is one); without the chosen effects' interval (its bootstrap) where ``interval``
+    is False (:func:`soilcal.loop.core._analyse`)."""
     from soilcal.config.measurements import conditions
 
     out = Path(outdir)
@@ -176,8 +177,9 @@ def _outcome(soil, outdir, effect_files: dict, plans: list[dict]):
             per = effect_files[nm]
             frames.append(condition_runs(conds, per[j] if j in per else per[str(j)], theta))
         effect_runs[nm] = pd.concat(frames, ignore_index=True)
-    return core.analyse(soil.name, res, diag, cands, effect_runs, settings, plans[0]["reference"],
-                        plans[0]["quantity_columns"], core.skipped(conds, settings)), conds, settings
+    outcome, _ = core._analyse(soil.name, res, diag, cands, effect_runs, settings, plans[0]["reference"],
+                               plans[0]["quantity_columns"], core.skipped(conds, settings), None, interval)
+    return outcome, conds, settings
 
 
 def more_files(soil_path, resources_root, outdir, effect_files: dict, out_plan) -> dict:
@@ -187,7 +189,8 @@ def more_files(soil_path, resources_root, outdir, effect_files: dict, out_plan) 
 
     soil = _soil(soil_path, resources_root)
     plan = json.loads((Path(outdir) / "plan.json").read_text())
-    outcome, conds, settings = _outcome(soil, outdir, effect_files, [plan])
+    # the first round's interval is not needed to find the second round's candidates
+    outcome, conds, settings = _outcome(soil, outdir, effect_files, [plan], interval=False)
     more = core.more_candidates(outcome, conds, settings) if plan["candidates"] else []
     plan_more = _plan(soil.name, more, plan["reference"], settings, plan["quantity_columns"],
                       res=read_written(Path(outdir) / "residuals.csv"))
