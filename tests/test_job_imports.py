@@ -32,13 +32,17 @@ def _script_imports(name: str) -> str:
     return "\n".join(ast.unparse(n) for n in tree.body if isinstance(n, (ast.Import, ast.ImportFrom)))
 
 
+def _run(code: str) -> str:
+    """What a fresh interpreter prints running ``code`` with the package's sources first."""
+    env = dict(os.environ, PYTHONPATH=os.pathsep.join([str(ROOT / "src"), os.environ.get("PYTHONPATH", "")]))
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, env=env, cwd=ROOT)
+    assert out.returncode == 0, out.stderr[-2000:]
+    return out.stdout
+
+
 def _loaded(code: str, modules: list[str]) -> list[str]:
     """Which of ``modules`` a fresh interpreter has loaded after running ``code``."""
-    probe = f"{code}\nimport sys\nprint(' '.join(m for m in {modules!r} if m in sys.modules))"
-    env = dict(os.environ, PYTHONPATH=os.pathsep.join([str(ROOT / "src"), os.environ.get("PYTHONPATH", "")]))
-    out = subprocess.run([sys.executable, "-c", probe], capture_output=True, text=True, env=env, cwd=ROOT)
-    assert out.returncode == 0, out.stderr[-2000:]
-    return out.stdout.split()
+    return _run(f"{code}\nimport sys\nprint(' '.join(m for m in {modules!r} if m in sys.modules))").split()
 
 
 @pytest.mark.parametrize("script", DEM_SCRIPTS)
@@ -69,7 +73,5 @@ def test_a_missing_package_still_stops_the_call_that_needs_it_with_its_name():
             "from soilcal.dem import stl, engine\n"
             "soup = np.array([[[0, 0, 0], [1, 0, 0], [0, 1, 0]]], float)\n"
             "try:\n    stl.weld(soup, weld_tol=1e-6)\nexcept ImportError as exc:\n    print('refused:', exc)\n")
-    env = dict(os.environ, PYTHONPATH=os.pathsep.join([str(ROOT / "src"), os.environ.get("PYTHONPATH", "")]))
-    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, env=env, cwd=ROOT)
-    assert out.returncode == 0, out.stderr[-2000:]
-    assert out.stdout.startswith("refused:") and "scipy.sparse" in out.stdout
+    out = _run(code)
+    assert out.startswith("refused:") and "scipy.sparse" in out

@@ -337,8 +337,8 @@ def _surrogates(data: dict, names) -> tuple[str, str]:
     for nm in names:
         if nm in data:
             kind[nm] = data[nm].surrogate.kind()
-            lof = data[nm].lack_of_fit_p
-            finite = np.asarray(lof, float)[np.isfinite(np.asarray(lof, float))] if lof is not None else []
+            lof = np.asarray([] if data[nm].lack_of_fit_p is None else data[nm].lack_of_fit_p, float)
+            finite = lof[np.isfinite(lof)]
             p[nm] = round(float(np.min(finite)), 6) if len(finite) else math.nan
     return json.dumps(kind, sort_keys=True), json.dumps(p, sort_keys=True)
 

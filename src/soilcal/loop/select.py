@@ -199,23 +199,25 @@ class Surrogate:
     def _u(self, thetas):
         return 2.0 * (np.atleast_2d(thetas) - self.lo) / self.span - 1.0
 
+    @staticmethod
+    def _terms(u: list, one):
+        """The quadratic's terms [1, u_j, u_j^2, u_a u_b (a < b)] of the coded parameters ``u``:
+        columns over the design (arrays, ``one`` a column of ones) or one point's numbers
+        (``one`` 1.0, as :meth:`__call__` evaluates them)."""
+        return [one] + list(u) + [v * v for v in u] + [u[a] * u[b] for a, b in itertools.combinations(range(len(u)), 2)]
+
     def _basis(self, U):
-        cols = [np.ones(len(U))] + [U[:, j] for j in range(self.k)]
-        cols += [U[:, j] ** 2 for j in range(self.k)]
-        cols += [U[:, a] * U[:, b] for a, b in itertools.combinations(range(self.k), 2)]
-        return np.column_stack(cols)
+        return np.column_stack(self._terms([U[:, j] for j in range(self.k)], np.ones(len(U))))
 
     def __call__(self, theta) -> np.ndarray:
-        """The rows' values at one parameter vector ``theta`` (the quadratic's basis built as
-        :meth:`_basis` builds it, with plain numbers: the optimisers call this thousands of times)."""
+        """The rows' values at one parameter vector ``theta`` (the quadratic's terms of plain
+        numbers, :meth:`_terms`: the optimisers call this thousands of times)."""
         theta = np.asarray(theta, float).ravel()
         if self.pchip is not None:
             cubic = self.pchip(float(theta[0]))
             if not self.quadratic.any():
                 return cubic
-        u = (2.0 * (theta - self.lo) / self.span - 1.0).tolist()
-        cols = [1.0] + u + [v * v for v in u]
-        cols += [u[a] * u[b] for a, b in itertools.combinations(range(self.k), 2)]
+        cols = self._terms((2.0 * (theta - self.lo) / self.span - 1.0).tolist(), 1.0)
         quad = (np.array([cols[: self.nb]]) @ self.coef)[0]
         if self.pchip is not None:
             quad[self.cubic_rows] = cubic
@@ -431,15 +433,12 @@ class Model:
         hi = np.concatenate([e.surrogate.hi for e in self.effects]) if self.effects else np.zeros(0)
         return lo, hi
 
-    def starts(self) -> list[np.ndarray]:
-        per = [[np.array([d[k] for k in e.effect.theta_names()], float) for d in e.design] for e in self.effects]
-        return [np.concatenate(c) for c in itertools.product(*per)]
-
     def _at_starts(self):
-        """(:meth:`starts` within the bounds, the prediction at each): every fit of the model
-        (one a held-out fold, :func:`cross_validate`) ranks the same starts, so they are
-        predicted once (the model's effects, means and joint term are not changed after its
-        first fit), each effect's surrogate once at each of its own design points."""
+        """(every combination of the effects' design points, within the bounds: the starts, and
+        the prediction at each): every fit of the model (one a held-out fold,
+        :func:`cross_validate`) ranks the same starts, so they are predicted once (the model's
+        effects, means and joint term are not changed after its first fit), each effect's
+        surrogate once at each of its own design points."""
         if "starts" not in self._cache:
             points, values = [], []
             for e in self.effects:
