@@ -176,7 +176,7 @@ def one_seed(a) -> None:
     res = mod.run(setup, params, preset="quick", seed=a.seed, threads=1, source="funnel_reach")
     from _report import commit
 
-    out = dict(commit=commit(), tag=a.tag, levels=dict(A=a.A, B=a.B, G=a.G), seed=a.seed, n=res.n_particles,
+    out = dict(utc=time.strftime("%Y-%m-%d %H:%M", time.gmtime()), commit=commit(), tag=a.tag, levels=dict(A=a.A, B=a.B, G=a.G), seed=a.seed, n=res.n_particles,
                steps=res.steps, dt=res.setup["dt"], cpu_s=time.process_time() - c0 - meas[0],
                rest_speed=rest, rolling=setup.get("rolling_model") or DEFAULT_ROLLING, shipped_stop=shipped,
                phases=phases, trace=trace, responses={k: res.responses[k] for k in
@@ -186,7 +186,8 @@ def one_seed(a) -> None:
 
 
 def row_of(d: dict, rev: str) -> dict:
-    """A table row from one seed's JSON (``commit``: the run's, else ``rev``)."""
+    """A table row from one seed's JSON (``commit``: the run's, else ``rev``; ``utc``: when the
+    run ended, empty where the JSON does not record it)."""
     ph = {p["key"]: p for p in d["phases"]}
     fill, heap = ph["fill_steps"]["steps"], ph["heap_steps"]["steps"]
     step0 = d["steps"] - heap  # the heap's settle starts here
@@ -197,7 +198,7 @@ def row_of(d: dict, rev: str) -> dict:
     ship = d.get("shipped_stop") or ({} if rest < SHIPPED_REST or not d["responses"]["settled"] else
                                      dict(step=d["steps"], image=d["responses"]["angle_image_deg"]))
     last = d["trace"][-1] if d["trace"] else {}
-    return dict(utc=time.strftime("%Y-%m-%d %H:%M", time.gmtime()), commit=d.get("commit", rev), tag=d["tag"], **d["levels"],
+    return dict(utc=d.get("utc", ""), commit=d.get("commit", rev), tag=d["tag"], **d["levels"],
                 rolling=d.get("rolling", SHIPPED_ROLLING), rest_mm_s=round(1e3 * rest, 3), seed=d["seed"], particles=d["n"], angle_image_deg=round(d["responses"]["angle_image_deg"], 2),
                 angle_deg=round(d["responses"]["angle_deg"], 2), settled=d["responses"]["settled"],
                 steps=d["steps"], fill_steps=fill, cover_steps=d["steps"] - fill - heap, discharge_steps=dis,
@@ -220,8 +221,10 @@ def table(workdir: Path) -> None:
     write_rows(HERE / "results" / "funnel_reach.csv", rows, FIELDS)
     lines = ["# The cohesive soil's funnel heap: how low it goes, where its steps go", "",
              f"Machine: {platform.machine()}, Python {platform.python_version()}.  Command: "
-             f"`python benchmarks/funnel_reach.py table --workdir {workdir}` (module docstring).  "
-             "Rows: `funnel_reach.csv`.  CPU: process seconds on one thread, the traces' measurements left out.",
+             "`python benchmarks/funnel_reach.py table --workdir DIR`, DIR the seeds' JSON files of "
+             "`run --workdir DIR` (module docstring).  Rows: `funnel_reach.csv`; utc: when the seed's run "
+             "ended, recorded in its JSON (empty for seeds run before the JSON recorded it).  CPU: process "
+             "seconds on one thread, the traces' measurements left out.",
              "", "## Points (mean +- SD over seeds, silhouette angle)", "",
              "| tag | A | B | G J/m^2 | rolling | rest mm/s | seeds | settled | angle deg | SD | "
              "angle at the scenario's stop | SD | rms speed at the end mm/s | steps | discharge steps | rest steps | CPU s |",
