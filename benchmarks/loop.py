@@ -30,9 +30,11 @@ not rerun: a stand-in case reruns all its seeds, a DEM case the campaign of ``--
 ``loop.md``, and per DEM case and campaign its residuals, diagnosis before and after, every
 model tried and the predictions with the chosen effects
 (``benchmarks/results/loop_dem/<case>_*.csv``, ``<case>_campaign<seed>_*.csv`` for a campaign
-other than 0).  The DEM campaign's seed draws its conditions (and so which speeds fall on
-which test day), the measured side's noise and nothing else; one campaign is one draw of the
-data, so a DEM row is an example, several campaigns a rate.
+other than 0; a table the run does not make, such as the diagnosis after when nothing is
+chosen, is removed, not left from an earlier run of the campaign).  The DEM campaign's seed
+draws its conditions (and so which speeds fall on which test day), the measured side's noise
+and nothing else; one campaign is one draw of the data, so a DEM row is an example, several
+campaigns a rate.
 
     python benchmarks/loop.py [--engines standin,dem] [--cases rate,stones] [--seeds 3] [--n 12]
     python benchmarks/loop.py --engines dem --cases moisture_cohesion --design-points 5
@@ -266,8 +268,11 @@ def dem_rows(cases, n, seed, threads, design_points=3, outdir=HERE / "results", 
             for name, df in (("residuals", out.residuals), ("diagnosis", out.diagnosis), ("selection", out.selection),
                              ("diagnosis_after", out.diagnosis_after), ("predictions", out.predictions),
                              ("summary", out.summary)):
+                path = detail / f"{tag}_{name}.csv"
                 if df is not None:
-                    df.to_csv(detail / f"{tag}_{name}.csv", index=False)
+                    df.to_csv(path, index=False)
+                else:  # a table this run does not make: an earlier run's would contradict it
+                    path.unlink(missing_ok=True)
             print(rows[-1]["case"], rows[-1]["chosen"], rows[-1]["verdict"][:100], rows[-1]["wall_s"], flush=True)
     return rows
 

@@ -1,6 +1,7 @@
 """The loop benchmark's DEM campaign speeds (uniform in v or in ln v over 0.1-1.0 m/s, from the
 same uniform draw) and its rows' spacing: a campaign of one spacing neither replaces nor is
-counted with the other's."""
+counted with the other's; the header's file labels; a rerun campaign's tables replace the
+earlier run's, a table the rerun does not make included."""
 
 from __future__ import annotations
 
@@ -90,3 +91,36 @@ def test_header_names_the_merged_rows(bench):
                                ("empty.csv", [])]) == (
         "; rows taken from other runs: rate/loop.csv: dem none campaign 0 (log speeds), dem stones campaign 1 "
         "(uniform speeds); none/loop.csv: dem plastic_contact campaign 0, standin none seed 2; empty.csv: no rows")
+
+
+def test_a_rerun_campaign_leaves_no_table_of_the_earlier_run(bench, monkeypatch, tmp_path):
+    # a campaign rerun where nothing is chosen has no diagnosis after: the earlier run's file of
+    # that campaign, which described a choice, must not stay beside the new tables
+    import types
+
+    import pandas as pd
+
+    from soilcal.loop import cli, core, synthesize
+
+    table = pd.DataFrame({"x": [1.0]})
+    summary = pd.DataFrame([{"parameters": "{}", "ci95": "{}", "rmse_before_percent": 17.4,
+                             "rmse_after_percent": 17.4, "error_reduction_percent": 0.0}])
+    out = types.SimpleNamespace(chosen=[], theta={}, verdict="consistent", summary=summary, residuals=table,
+                                diagnosis=table, selection=table, diagnosis_after=None, predictions=table)
+    monkeypatch.setattr(cli, "dem_simulator", lambda threads: None)
+    monkeypatch.setattr(cli, "condition_params", lambda params: {})
+    monkeypatch.setattr(bench, "_campaign", lambda tmp, n, seed, speeds: [])
+    monkeypatch.setattr(synthesize, "synthesize", lambda *a, **k: table)
+    monkeypatch.setattr(synthesize, "with_measured", lambda conds, t: conds)
+    monkeypatch.setattr(core, "run_inprocess", lambda *a, **k: out)
+    detail = tmp_path / "loop_dem"
+    detail.mkdir()
+    stale = detail / "none_campaign1_diagnosis_after.csv"
+    stale.write_text("from an earlier run\n")
+    other = detail / "none_diagnosis_after.csv"  # campaign 0's: not this run's
+    other.write_text("campaign 0\n")
+    rows = bench.dem_rows(["none"], 18, 1, 1, outdir=tmp_path)
+    assert rows[0]["case"] == "none" and rows[0]["seed"] == 1
+    assert (detail / "none_campaign1_residuals.csv").exists()
+    assert not stale.exists()
+    assert other.read_text() == "campaign 0\n"
