@@ -14,7 +14,7 @@ processes from compiling them side by side: ``soilcal scenario compile`` holds i
 while it compiles (:func:`compiling`), and a process about to call the engine's main kernel for
 the first time takes it shared and lets it go at once (:func:`wait_for_compile`): it waits while
 a compile is under way, then loads the kernels from the cache.  Where Numba would not cache
-there is no lock.  The lock is ``flock(2)``'s (module :mod:`fcntl`), advisory and released by
+(or the system has no ``flock``, Windows) there is no lock.  The lock is ``flock(2)``'s (module :mod:`fcntl`), advisory and released by
 the system when its holder ends, even killed.
 """
 
@@ -130,7 +130,12 @@ def refresh_package(root: Path = HERE) -> int:
 
 def lock_path(root: Path = HERE) -> Path | None:
     """The lock file of the kernel cache: :data:`LOCK` in the directory Numba caches the
-    engine's main kernel (``integrator.run_loop``) in, or None where Numba would not cache."""
+    engine's main kernel (``integrator.run_loop``) in, or None where Numba would not cache or
+    the system has no ``flock`` (no module :mod:`fcntl`: Windows), where nothing is locked."""
+    try:
+        import fcntl  # noqa: F401
+    except ImportError:
+        return None
     d = cache_dir(root / "integrator.py")
     return None if d is None else d / LOCK
 
@@ -149,8 +154,8 @@ def _open_lock(path: Path) -> int:
 def compiling(root: Path = HERE):
     """Hold the kernel cache's lock exclusively for the ``with`` block (waiting first for any
     other process that holds it): the block compiles the kernels into the cache while other
-    processes' :func:`wait_for_compile` waits.  Nothing is locked where Numba would not cache,
-    or when this process already holds the lock."""
+    processes' :func:`wait_for_compile` waits.  Nothing is locked where :func:`lock_path` is
+    None, or when this process already holds the lock."""
     global _held
     path = None if _held else lock_path(root)
     if path is None:
