@@ -2,10 +2,16 @@
 file goes to one worker whole, so its module-scoped fixtures are built once.  The session
 fixture ``tiny_dem_run`` (the tiny DEM calibration, minutes) would be built once per worker that
 runs a test using it: all its users live in one file.  The workflow tests (whole Snakemake
-runs, minutes per file) are collected first, and ``--no-loadscope-reorder`` (pyproject.toml)
+runs, minutes per file) are collected early, and ``--no-loadscope-reorder`` (pyproject.toml)
 has the workers take the files in that order (without it pytest-xdist queues the files by their
 number of tests, most first, and these few-test files came late), so that the workers start them
-first and the short tests fill in beside them instead of one long file running alone at the end."""
+early and the short tests fill in beside them instead of one long file running alone at the end.
+
+Ahead of them come the longest files that call no DEM kernel (``NO_DEM``: photo measurement, at
+least three minutes of test time in CI's ``--durations`` list): CI (``.ci/run``) starts the
+tests while ``soilcal scenario compile`` still compiles the engine (about two minutes on one
+core), and a test or workflow job that reaches the engine's time loop meanwhile waits for it
+(:mod:`soilcal.dem._kernel_cache`), so the workers measure photos while the kernels compile."""
 
 from __future__ import annotations
 
@@ -14,11 +20,21 @@ import os
 import pytest
 
 
+#: files that run no DEM (no soilcal.dem.scenarios, engine or workflow), the longest first
+NO_DEM = ("tests/imaging/test_pile_stress.py", "tests/imaging/test_imaging.py",
+          "tests/imaging/test_furrow_stress.py")
 FIRST = ("tests/workflow/",)
 
 
+def _rank(item):
+    path = item.nodeid.split("::")[0]
+    if path in NO_DEM:
+        return NO_DEM.index(path)
+    return len(NO_DEM) + (0 if path.startswith(FIRST) else 1)
+
+
 def pytest_collection_modifyitems(config, items):
-    items.sort(key=lambda it: not it.nodeid.startswith(FIRST))  # stable: the order within each part stays
+    items.sort(key=_rank)  # stable: the order within each part stays
     files = sorted({it.nodeid.split("::")[0] for it in items
                     if "tiny_dem_run" in getattr(it, "fixturenames", ())})
     if len(files) > 1 and os.environ.get("PYTEST_XDIST_WORKER"):

@@ -3,6 +3,8 @@ keeps the machine code of the functions it calls from other files)."""
 
 from pathlib import Path
 
+import pytest
+
 from soilcal.dem import _kernel_cache as kc
 from soilcal.dem import contact
 
@@ -71,3 +73,84 @@ def test_a_job_says_whether_it_compiled_or_loaded_its_kernels(tmp_path):
                                     text=True, check=True).stdout.strip() for _ in range(2))
     assert first == "Numba kernels: 0 loaded from the cache, 1 compiled (contact.jkr_root)"
     assert second == "Numba kernels: 1 loaded from the cache, 0 compiled"
+
+
+# a few-sphere DEM run (two spheres falling onto a plane): its first call of the engine's time
+# loop is where a process waits for a compile under way
+FEW_SPHERES = """
+import sys, time
+from soilcal.dem.engine import Simulation
+from soilcal.dem.materials import Material, MaterialTable
+mats = MaterialTable()
+mats.add(Material("soil", 2600.0, 0.3, youngs=1e7))
+mats.set_pair("soil", "soil", 0.5, 0.5, 0.0, 0.0, 0.0)
+sim = Simulation(mats, dt_fraction=0.2)
+sim.add_particles([[0, 0, 0.006], [0.02, 0, 0.006]], 5e-3, "soil")
+sim.add_plane((0, 0, 0), (0, 0, 1), "soil")
+sim.run(50)
+open(sys.argv[1], "w").write(repr(time.time_ns()))
+"""
+
+# holds the kernel cache's lock as `soilcal scenario compile` does, until a process waits on it
+# (a blocked lock on the file in /proc/locks) or the run has ended without waiting (its file
+# exists); writes the time it lets the lock go
+HOLDER = """
+import os, sys, time
+from soilcal.dem import _kernel_cache as kc
+released, run_done, held = sys.argv[1:4]
+with kc.compiling():
+    open(held, "w").write("held")
+    ino = os.stat(kc.lock_path()).st_ino
+    def waited_on():
+        with open("/proc/locks") as f:
+            return any("->" in ln and ln.split()[-3].endswith(f":{ino}") for ln in f)
+    t_end = time.monotonic() + 900
+    while not (os.path.exists(run_done) or waited_on()) and time.monotonic() < t_end:
+        time.sleep(0.05)
+    open(released, "w").write(repr(time.time_ns()))
+"""
+
+
+def _python(code, *args, **kw):
+    import subprocess
+    import sys
+
+    return subprocess.Popen([sys.executable, "-c", code, *map(str, args)], **kw)
+
+
+@pytest.mark.skipif(not Path("/proc/locks").exists(), reason="needs Linux's /proc/locks")
+def test_a_run_waits_for_a_compile_under_way_then_loads(tmp_path):
+    """A process that reaches the time loop while another holds the kernel cache's lock
+    (soilcal scenario compile) finishes only after the holder let it go."""
+    import time
+
+    released, run_done, held = (tmp_path / n for n in ("released", "run_done", "held"))
+    holder = _python(HOLDER, released, run_done, held)
+    try:
+        t_end = time.monotonic() + 1200  # a compile under way (CI's) holds the lock first
+        while not held.exists():
+            assert holder.poll() is None, "the lock holder ended before it took the lock"
+            assert time.monotonic() < t_end, "the lock holder did not take the lock"
+            time.sleep(0.05)
+        run = _python(FEW_SPHERES, run_done)
+        assert run.wait(timeout=1200) == 0
+        assert holder.wait(timeout=60) == 0
+    finally:
+        holder.kill()
+    assert int(run_done.read_text()) > int(released.read_text())
+
+
+def test_the_compiling_process_does_not_wait_on_its_own_lock(tmp_path):
+    """Inside kc.compiling() (what soilcal scenario compile runs in) the engine's wait for a
+    compile under way returns at once: two open() of one file lock against each other even
+    in one process."""
+    code = ("import sys; from soilcal.dem import _kernel_cache as kc\n"
+            "with kc.compiling():\n"
+            "    assert kc.compile_under_way()\n"
+            + "".join("    " + ln + "\n" for ln in FEW_SPHERES.strip().splitlines()))
+    run = _python(code, tmp_path / "done")
+    try:
+        assert run.wait(timeout=1200) == 0
+    finally:
+        run.kill()
+    assert (tmp_path / "done").exists()

@@ -8,17 +8,34 @@ example after ``git pull`` in an editable install: the run would silently use th
 physics.  So a digest of every source file of the package is kept beside each cache
 directory, and where it differs from the sources the cache files of the package's modules
 are removed before any kernel loads; Numba then compiles afresh and caches again.
+
+A lock file beside the cached kernels (:data:`LOCK`, in :func:`cache_dir` of the package) keeps
+processes from compiling them side by side: ``soilcal scenario compile`` holds it exclusively
+while it compiles (:func:`compiling`), and a process about to call the engine's main kernel for
+the first time takes it shared and lets it go at once (:func:`wait_for_compile`): it waits while
+a compile is under way, then loads the kernels from the cache.  Where Numba would not cache
+(or the system has no ``flock``, Windows) there is no lock.  The lock is ``flock(2)``'s (module :mod:`fcntl`), advisory and released by
+the system when its holder ends, even killed.
 """
 
 from __future__ import annotations
 
+import contextlib
 import hashlib
 import os
 import tempfile
 from pathlib import Path
 
 STAMP = "soilcal-dem-sources.sha256"
+LOCK = "soilcal-dem-kernels.lock"
 HERE = Path(__file__).resolve().parent
+
+#: this process holds the lock exclusively (inside :func:`compiling`); two ``open()`` of one
+#: file in one process lock against each other, so its own wait must not take the lock
+_held = False
+#: this process has waited for a compile under way (once per process: from then on the kernels
+#: it calls are in memory)
+_waited = False
 
 
 def source_files(root: Path = HERE) -> list[Path]:
@@ -109,6 +126,89 @@ def refresh_package(root: Path = HERE) -> int:
         if d is not None:
             dirs.setdefault(d, []).extend(group)
     return refresh(files, dirs)
+
+
+def lock_path(root: Path = HERE) -> Path | None:
+    """The lock file of the kernel cache: :data:`LOCK` in the directory Numba caches the
+    engine's main kernel (``integrator.run_loop``) in, or None where Numba would not cache or
+    the system has no ``flock`` (no module :mod:`fcntl`: Windows), where nothing is locked."""
+    try:
+        import fcntl  # noqa: F401
+    except ImportError:
+        return None
+    d = cache_dir(root / "integrator.py")
+    return None if d is None else d / LOCK
+
+
+def _open_lock(path: Path) -> int:
+    try:
+        path.parent.mkdir(parents=True, exist_ok=True)
+        # read-only: flock needs no write access, so a lock file another user made serves too
+        return os.open(path, os.O_RDONLY | os.O_CREAT, 0o666)
+    except OSError as exc:
+        raise OSError(exc.errno, f"{path}: the lock of the Numba kernel cache: expected a file "
+                                 f"this process can create or read, got: {exc.strerror}") from None
+
+
+@contextlib.contextmanager
+def compiling(root: Path = HERE):
+    """Hold the kernel cache's lock exclusively for the ``with`` block (waiting first for any
+    other process that holds it): the block compiles the kernels into the cache while other
+    processes' :func:`wait_for_compile` waits.  Nothing is locked where :func:`lock_path` is
+    None, or when this process already holds the lock."""
+    global _held
+    path = None if _held else lock_path(root)
+    if path is None:
+        yield
+        return
+    import fcntl
+
+    fd = _open_lock(path)
+    try:
+        fcntl.flock(fd, fcntl.LOCK_EX)
+        _held = True
+        yield
+    finally:
+        _held = False
+        os.close(fd)  # releases the lock
+
+
+def wait_for_compile(root: Path = HERE) -> None:
+    """Before this process first calls the kernels: wait while another process compiles them
+    (holds the lock of :func:`compiling`), by taking the lock shared and releasing it at once.
+    Once per process; returns at once in the process that holds the lock and where Numba would
+    not cache."""
+    global _waited
+    if _waited or _held:
+        return
+    path = lock_path(root)
+    if path is not None:
+        import fcntl
+
+        fd = _open_lock(path)
+        try:
+            fcntl.flock(fd, fcntl.LOCK_SH)
+        finally:
+            os.close(fd)
+    _waited = True
+
+
+def compile_under_way(root: Path = HERE) -> bool:
+    """Whether a process holds the lock of :func:`compiling` (without waiting; True also in
+    the holding process itself)."""
+    path = lock_path(root)
+    if path is None:
+        return False
+    import fcntl
+
+    fd = _open_lock(path)
+    try:
+        fcntl.flock(fd, fcntl.LOCK_SH | fcntl.LOCK_NB)
+    except BlockingIOError:
+        return True
+    finally:
+        os.close(fd)
+    return False
 
 
 def kernel_counts() -> dict:

@@ -34,6 +34,7 @@ import math
 import numba
 import numpy as np
 
+from soilcal.dem import _kernel_cache as kc
 from soilcal.dem import integrator as itg
 from soilcal.dem.contact import H_SIZE, hist_width, jkr_separation, model_codes
 from soilcal.dem.materials import DAMPING_DT_SAFETY, P_ESTAR, P_W, MaterialTable
@@ -1143,6 +1144,7 @@ class Simulation:
         total = 0
         resume_mid = False
         step0 = self.step
+        kc.wait_for_compile()  # a compile under way (soilcal scenario compile) caches run_loop
         while True:
             L = self._lists
             done = itg.run_loop(

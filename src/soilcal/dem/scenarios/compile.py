@@ -14,7 +14,16 @@ incline's seating and one hold): about 1,100 steps (the incline's 19 spheres) to
 call takes, so a shorter phase reaches the same kernels.  Their numbers are not results and
 are not kept.
 
+While it compiles it holds a lock file in the kernel cache's directory
+(:mod:`soilcal.dem._kernel_cache`, ``soilcal-dem-kernels.lock``) exclusively, and a process
+that reaches the engine's time loop (``integrator.run_loop``) for the first time waits for that
+lock, then loads the kernels from the cache.  So DEM jobs may start while it runs: they wait
+rather than compile too.  A job that started its time loop before the compile took the lock
+compiles for itself, and kernels the scenarios call before the time loop (the packing and
+geometry helpers, seconds to compile) are not waited for.
+
     soilcal scenario compile            # the workflow's rule dem_kernels runs it before any DEM job
+    soilcal scenario compile &          # or in the background, and start the DEM jobs at once
 """
 
 from __future__ import annotations
@@ -63,16 +72,20 @@ def cases() -> list[tuple[str, object, dict, object, dict]]:
 
 
 def compile_kernels(log=print) -> list[dict]:
-    """Run :func:`cases` one after another on one thread; returns one row per case (label,
+    """Run :func:`cases` one after another on one thread, holding the kernel cache's lock
+    exclusively (:func:`soilcal.dem._kernel_cache.compiling`); returns one row per case (label,
     steps, spheres, wall seconds: the first rows carry the compilation)."""
+    from soilcal.dem import _kernel_cache as kc
+
     rows = []
-    for label, mod, setup, params, kw in cases():
-        t0 = time.perf_counter()
-        res = mod.run(setup, params, "quick", 0, threads=1, **kw)
-        row = dict(case=label, scenario=mod.NAME, particles=int(res.n_particles),
-                   steps=int(res.steps), wall_s=round(time.perf_counter() - t0, 2))
-        log(f"{label}: {row['particles']} spheres, {row['steps']} steps, {row['wall_s']} s")
-        rows.append(row)
+    with kc.compiling():
+        for label, mod, setup, params, kw in cases():
+            t0 = time.perf_counter()
+            res = mod.run(setup, params, "quick", 0, threads=1, **kw)
+            row = dict(case=label, scenario=mod.NAME, particles=int(res.n_particles),
+                       steps=int(res.steps), wall_s=round(time.perf_counter() - t0, 2))
+            log(f"{label}: {row['particles']} spheres, {row['steps']} steps, {row['wall_s']} s")
+            rows.append(row)
     return rows
 
 
