@@ -154,3 +154,62 @@ def test_the_compiling_process_does_not_wait_on_its_own_lock(tmp_path):
     finally:
         run.kill()
     assert (tmp_path / "done").exists()
+
+
+@pytest.mark.parametrize("err", ["ENOSYS", "EOPNOTSUPP", "ENOLCK"])
+def test_a_file_system_without_flock_gives_no_lock_and_says_so(tmp_path, monkeypatch, capsys, err):
+    """A cache on a file system without flock (some cluster file systems): the DEM process
+    neither fails nor waits; one warning per lock file names it and the reason."""
+    import errno
+    import fcntl
+    import os
+
+    def no_flock(fd, how):
+        raise OSError(getattr(errno, err), os.strerror(getattr(errno, err)))
+
+    lock = tmp_path / kc.LOCK
+    monkeypatch.setattr(kc, "lock_path", lambda root=kc.HERE: lock)
+    monkeypatch.setattr(fcntl, "flock", no_flock)
+    monkeypatch.setattr(kc, "_waited", False)
+    monkeypatch.setattr(kc, "_warned", set())
+    kc.wait_for_compile()
+    assert kc._waited
+    with kc.compiling():
+        assert not kc._held  # no lock taken: its own wait must not be skipped for a lock it lacks
+    assert not kc.compile_under_way()
+    err_text = capsys.readouterr().err
+    assert err_text.count("warning:") == 1 and str(lock) in err_text
+    assert os.strerror(getattr(errno, err)) in err_text
+
+
+def test_another_flock_error_is_raised_with_the_file(tmp_path, monkeypatch):
+    import errno
+    import fcntl
+
+    def broken(fd, how):
+        raise OSError(errno.EIO, "Input/output error")
+
+    monkeypatch.setattr(kc, "lock_path", lambda root=kc.HERE: tmp_path / kc.LOCK)
+    monkeypatch.setattr(fcntl, "flock", broken)
+    monkeypatch.setattr(kc, "_waited", False)
+    with pytest.raises(OSError, match="Input/output error"):
+        kc.wait_for_compile()
+    assert not kc._waited
+
+
+def test_a_lock_held_elsewhere_is_seen_without_waiting(tmp_path, monkeypatch):
+    """compile_under_way: True while another open file description holds the lock
+    exclusively (as another process's compile does), False once it is let go."""
+    import fcntl
+    import os
+
+    lock = tmp_path / kc.LOCK
+    monkeypatch.setattr(kc, "lock_path", lambda root=kc.HERE: lock)
+    assert not kc.compile_under_way()
+    fd = os.open(lock, os.O_RDONLY | os.O_CREAT, 0o666)
+    try:
+        fcntl.flock(fd, fcntl.LOCK_EX)
+        assert kc.compile_under_way()
+    finally:
+        os.close(fd)
+    assert not kc.compile_under_way()

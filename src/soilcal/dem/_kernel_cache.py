@@ -21,8 +21,10 @@ the system when its holder ends, even killed.
 from __future__ import annotations
 
 import contextlib
+import errno
 import hashlib
 import os
+import sys
 import tempfile
 from pathlib import Path
 
@@ -140,14 +142,54 @@ def lock_path(root: Path = HERE) -> Path | None:
     return None if d is None else d / LOCK
 
 
-def _open_lock(path: Path) -> int:
+#: errors of open(2) or flock(2) that mean this file system or directory gives no lock
+#: (flock not supported: some cluster file systems; a cache directory this user cannot write)
+NO_LOCK_ERRNOS = (errno.ENOSYS, errno.EOPNOTSUPP, errno.ENOLCK, errno.EACCES, errno.EPERM, errno.EROFS)
+
+
+#: lock files this process has warned about (once each)
+_warned: set = set()
+
+
+def _no_lock(path: Path, exc: OSError) -> None:
+    if path in _warned:
+        return
+    _warned.add(path)
+    print(f"warning: {path}: the lock of the Numba kernel cache is unavailable ({exc.strerror}): "
+          "this process does not wait for a compile under way (soilcal scenario compile); where "
+          "one runs, it compiles the kernels itself", file=sys.stderr)
+
+
+@contextlib.contextmanager
+def _locked(path: Path, how: int):
+    """``flock`` ``how`` on ``path`` for the ``with`` block (yields True), or, where the file
+    system or directory gives no lock (:data:`NO_LOCK_ERRNOS`), a warning on stderr naming the
+    file and the reason and no lock (yields False); other errors are raised with the file."""
+    import fcntl
+
     try:
         path.parent.mkdir(parents=True, exist_ok=True)
         # read-only: flock needs no write access, so a lock file another user made serves too
-        return os.open(path, os.O_RDONLY | os.O_CREAT, 0o666)
+        fd = os.open(path, os.O_RDONLY | os.O_CREAT, 0o666)
     except OSError as exc:
+        if exc.errno in NO_LOCK_ERRNOS:
+            _no_lock(path, exc)
+            yield False
+            return
         raise OSError(exc.errno, f"{path}: the lock of the Numba kernel cache: expected a file "
                                  f"this process can create or read, got: {exc.strerror}") from None
+    try:
+        try:
+            fcntl.flock(fd, how)
+        except OSError as exc:  # BlockingIOError (EAGAIN: held, non-blocking) is raised
+            if exc.errno not in NO_LOCK_ERRNOS:
+                raise
+            _no_lock(path, exc)
+            yield False
+            return
+        yield True
+    finally:
+        os.close(fd)  # releases the lock
 
 
 @contextlib.contextmanager
@@ -155,7 +197,8 @@ def compiling(root: Path = HERE):
     """Hold the kernel cache's lock exclusively for the ``with`` block (waiting first for any
     other process that holds it): the block compiles the kernels into the cache while other
     processes' :func:`wait_for_compile` waits.  Nothing is locked where :func:`lock_path` is
-    None, or when this process already holds the lock."""
+    None, where the file system gives no lock (a warning says so), or when this process
+    already holds the lock."""
     global _held
     path = None if _held else lock_path(root)
     if path is None:
@@ -163,21 +206,19 @@ def compiling(root: Path = HERE):
         return
     import fcntl
 
-    fd = _open_lock(path)
-    try:
-        fcntl.flock(fd, fcntl.LOCK_EX)
-        _held = True
-        yield
-    finally:
-        _held = False
-        os.close(fd)  # releases the lock
+    with _locked(path, fcntl.LOCK_EX) as got:
+        _held = got
+        try:
+            yield
+        finally:
+            _held = False
 
 
 def wait_for_compile(root: Path = HERE) -> None:
     """Before this process first calls the kernels: wait while another process compiles them
     (holds the lock of :func:`compiling`), by taking the lock shared and releasing it at once.
-    Once per process; returns at once in the process that holds the lock and where Numba would
-    not cache."""
+    Once per process; returns at once in the process that holds the lock, where Numba would
+    not cache and where the file system gives no lock (a warning says so)."""
     global _waited
     if _waited or _held:
         return
@@ -185,30 +226,24 @@ def wait_for_compile(root: Path = HERE) -> None:
     if path is not None:
         import fcntl
 
-        fd = _open_lock(path)
-        try:
-            fcntl.flock(fd, fcntl.LOCK_SH)
-        finally:
-            os.close(fd)
+        with _locked(path, fcntl.LOCK_SH):
+            pass
     _waited = True
 
 
 def compile_under_way(root: Path = HERE) -> bool:
     """Whether a process holds the lock of :func:`compiling` (without waiting; True also in
-    the holding process itself)."""
+    the holding process itself; False where there is no lock)."""
     path = lock_path(root)
     if path is None:
         return False
     import fcntl
 
-    fd = _open_lock(path)
     try:
-        fcntl.flock(fd, fcntl.LOCK_SH | fcntl.LOCK_NB)
+        with _locked(path, fcntl.LOCK_SH | fcntl.LOCK_NB):
+            return False
     except BlockingIOError:
         return True
-    finally:
-        os.close(fd)
-    return False
 
 
 def kernel_counts() -> dict:
