@@ -128,6 +128,7 @@ import numpy as np
 import pandas as pd
 from scipy import optimize, stats
 from scipy.stats import qmc
+from threadpoolctl import threadpool_limits
 
 from soilcal.doe.designs import actual_to_coded, at_bound, coded_to_actual
 from soilcal.errors import InputError
@@ -398,7 +399,10 @@ class GPSurrogate(Surrogate):
                   + WhiteKernel(1e-3, (1e-8, 1.0)))
         gp = GaussianProcessRegressor(kernel=kernel, alpha=alpha, normalize_y=False,
                                       n_restarts_optimizer=3, random_state=seed)
-        with warnings.catch_warnings():
+        # one BLAS thread: the fit's matrices are as small as the design's points, and the
+        # optimiser's thousands of calls on them cost a threaded BLAS more CPU in waking its
+        # threads than the work they share
+        with warnings.catch_warnings(), threadpool_limits(limits=1, user_api="blas"):
             warnings.simplefilter("ignore")  # convergence notes of the kernel's bounds
             gp.fit(xc, yn)
         self.gp = gp
