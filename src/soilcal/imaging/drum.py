@@ -500,7 +500,12 @@ def _surface(path, p, inside, cx, cy, rm, circle_said=""):
                 powder = powder | (lab == k)
                 grown = True
                 break
-    air = inside & ~morphology.dilation(powder, morphology.disk(8))
+    # the bed dilated and eroded by disks (skimage's disk(k): offsets of x^2 + y^2 <= k^2), read from
+    # Euclidean distance transforms: a pixel lies within disk(k) of the bed when its distance to the
+    # nearest bed pixel is at most k, and the bed's disk(k) erosion keeps the bed pixels farther than k
+    # from every pixel off the bed (exact integer distances, as morphology.dilation and .erosion give them
+    # with their default reflected border, which puts no pixel nearer than the image's own)
+    air = inside & ~(ndi.distance_transform_edt(~powder) <= 8.0)
     if air.sum() < 20:
         raise InputError(path, "image", DRUM_EXPECTED, (
             f"the bed filling the drum circle {circle_said}, no air above it: that circle is not the drum's "
@@ -508,8 +513,9 @@ def _surface(path, p, inside, cx, cy, rm, circle_said=""):
             "drum_radius_px, or take a sharper frame)"))
     # the powder's grey from its core 8 px from the bed's edge; a thin bed (a small drum little
     # filled) from as far inside as it has
+    depth = ndi.distance_transform_edt(powder)  # each bed pixel's distance from the nearest pixel off the bed
     for k in (8, 4, 2, 1, 0):
-        core = (morphology.erosion(powder, morphology.disk(k)) if k else powder) & inside
+        core = ((depth > k) if k else powder) & inside
         if core.sum() >= 20:
             break
     else:
