@@ -11,9 +11,7 @@ Ahead of them come the longest files that call no DEM kernel (``NO_DEM``: photo 
 least three minutes of test time in CI's ``--durations`` list): CI (``.ci/run``) starts the
 tests while ``soilcal scenario compile`` still compiles the engine (about two minutes on one
 core), and a test or workflow job that reaches the engine's time loop meanwhile waits for it
-(:mod:`soilcal.dem._kernel_cache`), so the workers measure photos while the kernels compile.
-After the workflow files come the other long files (``LONG``), the longest first, and then the
-rest in collection order, so that the files left at the end are short."""
+(:mod:`soilcal.dem._kernel_cache`), so the workers measure photos while the kernels compile."""
 
 from __future__ import annotations
 
@@ -36,23 +34,13 @@ for _var in ("OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
 NO_DEM = ("tests/imaging/test_pile_stress.py", "tests/imaging/test_imaging.py",
           "tests/imaging/test_furrow_stress.py")
 FIRST = ("tests/workflow/",)
-#: after the workflow files, the other files of a minute or more in CI's ``--durations`` list,
-#: the longest first: a long file taken last would leave the other worker idle while it runs
-LONG = ("tests/imaging/test_drum_frames.py", "tests/loop/test_identification.py",
-        "tests/dem/scenarios/test_scenario_repose.py", "tests/dem/test_restart.py",
-        "tests/loop/test_bootstrap.py", "tests/imaging/test_user_photos.py",
-        "tests/loop/test_user_tables.py", "tests/loop/test_honest_dof.py", "tests/corpus/test_corpus.py")
 
 
 def _rank(item):
     path = item.nodeid.split("::")[0]
     if path in NO_DEM:
         return NO_DEM.index(path)
-    if path.startswith(FIRST):
-        return len(NO_DEM)
-    if path in LONG:
-        return len(NO_DEM) + 1 + LONG.index(path)
-    return len(NO_DEM) + 1 + len(LONG)
+    return len(NO_DEM) + (0 if path.startswith(FIRST) else 1)
 
 
 def pytest_collection_modifyitems(config, items):
