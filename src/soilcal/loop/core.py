@@ -949,7 +949,7 @@ def _unscored(sel, u: pd.DataFrame, alpha: float = 0.05) -> str:
 
 def analyse(soil: str, res: pd.DataFrame, diag: pd.DataFrame, cands: list, effect_runs: dict,
             settings: Settings, reference: dict, quantity_cols: dict | None = None,
-            skipped_effects: dict | None = None, joint: dict | None = None) -> Outcome:
+            skipped_effects: dict | None = None, joint: dict | None = None, interval: bool = True) -> Outcome:
     """Steps 5 (module docstring): ``effect_runs`` maps each candidate to its runs
     (measurement, row, measure, value, ``t:<name>``), the switched-off point included; rows of
     one simulation (the residual table's ``simulation`` key) share the bootstrap's draws;
@@ -957,9 +957,10 @@ def analyse(soil: str, res: pd.DataFrame, diag: pd.DataFrame, cands: list, effec
     ``loop.candidates: all``) would have tried them; ``joint``: runs with the chosen effects
     switched on together (:func:`joint_interaction`), with which two or more chosen effects
     are fitted with their interaction, else as the sum of their separate changes (the verdict
-    says so)."""
+    says so); ``interval`` False: without the chosen effects' interval (its bootstrap), the
+    summary's ``ci95`` left ``{}`` (:func:`_analyse`)."""
     return _analyse(soil, res, diag, cands, effect_runs, settings, reference, quantity_cols, skipped_effects,
-                    joint, interval=True)[0]
+                    joint, interval)[0]
 
 
 def _analyse(soil: str, res: pd.DataFrame, diag: pd.DataFrame, cands: list, effect_runs: dict,

@@ -158,7 +158,7 @@ def loop_jobs(conds, tool_jobs: dict, tool_keys: dict, plan: dict, results: str)
 def _outcome(soil, outdir, effect_files: dict, plans: list[dict], interval: bool = True):
     """``analyse`` over the candidates of ``plans`` (the first round, and the second where
     there is one); without the chosen effects' interval (its bootstrap) where ``interval``
-    is False (:func:`soilcal.loop.core._analyse`)."""
+    is False."""
     from soilcal.config.measurements import conditions
 
     out = Path(outdir)
@@ -177,9 +177,8 @@ def _outcome(soil, outdir, effect_files: dict, plans: list[dict], interval: bool
             per = effect_files[nm]
             frames.append(condition_runs(conds, per[j] if j in per else per[str(j)], theta))
         effect_runs[nm] = pd.concat(frames, ignore_index=True)
-    outcome, _ = core._analyse(soil.name, res, diag, cands, effect_runs, settings, plans[0]["reference"],
-                               plans[0]["quantity_columns"], core.skipped(conds, settings), None, interval)
-    return outcome, conds, settings
+    return core.analyse(soil.name, res, diag, cands, effect_runs, settings, plans[0]["reference"],
+                        plans[0]["quantity_columns"], core.skipped(conds, settings), interval=interval), conds, settings
 
 
 def more_files(soil_path, resources_root, outdir, effect_files: dict, out_plan) -> dict:

@@ -425,8 +425,11 @@ class Model:
         return out * factor
 
     def errors(self, x, idx=None) -> np.ndarray:
-        idx = np.arange(len(self.y0)) if idx is None else idx
-        return (self.measured[idx] - self.predict(x)[idx]) / self.scale[idx]
+        return self._relative(self.predict(x), np.arange(len(self.y0)) if idx is None else idx)
+
+    def _relative(self, predicted, rows) -> np.ndarray:
+        """The relative errors of rows ``rows`` of a prediction."""
+        return (self.measured[rows] - predicted[rows]) / self.scale[rows]
 
     def bounds(self):
         lo = np.concatenate([e.surrogate.lo for e in self.effects]) if self.effects else np.zeros(0)
@@ -465,16 +468,15 @@ class Model:
             return np.zeros(0), None
         lo, hi = self.bounds()
         rows = np.arange(len(self.y0)) if idx is None else idx
-        measured, scale = self.measured[rows], self.scale[rows]
 
-        def errors(x):  # self.errors(x, idx), the rows' measured values and scales taken once
-            return (measured - self.predict(x)[rows]) / scale
+        def errors(x):
+            return self.errors(x, rows)
 
         best = None
         if x0 is not None:
             best = least_squares(errors, np.clip(np.asarray(x0, float), lo, hi), bounds=(lo, hi), method="trf")
         starts, predicted = self._at_starts()
-        cost = [float(np.sum(((measured - p[rows]) / scale) ** 2)) for p in predicted]
+        cost = [float(np.sum(self._relative(p, rows) ** 2)) for p in predicted]
         null = np.concatenate([[e.effect.null[k] for k in e.effect.theta_names()] for e in self.effects])
         span = np.where(hi > lo, hi - lo, 1.0)
         dist = [float(np.sum(((s - null) / span) ** 2)) for s in starts]
@@ -963,20 +965,17 @@ def forward(obs: pd.DataFrame, y0: np.ndarray, data: dict, fold_by: str | None =
     steps = []
 
     models = {}  # one Model per set of effects: each is fitted and cross-validated once (full_fit, cross_validate)
-
-    def model(names):
-        key = tuple(names)
-        if key not in models:
-            models[key] = Model([data[c] for c in names], y0, measured, scale)
-        return models[key]
-
     bias = scale_data()
 
-    def scaled(names):
-        key = tuple(names) + (bias.effect.name,)
+    def model(names, with_bias=False):
+        effects = [data[c] for c in names] + ([bias] if with_bias else [])
+        key = tuple(e.effect.name for e in effects)
         if key not in models:
-            models[key] = Model([data[c] for c in names] + [bias], y0, measured, scale)
+            models[key] = Model(effects, y0, measured, scale)
         return models[key]
+
+    def scaled(names):
+        return model(names, with_bias=True)
 
     def gains(s):
         return lowers_heldout(s) and aicc_lower(s)
