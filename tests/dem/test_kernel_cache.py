@@ -140,6 +140,7 @@ def test_a_run_waits_for_a_compile_under_way_then_loads(tmp_path):
     assert int(run_done.read_text()) > int(released.read_text())
 
 
+@pytest.mark.skipif(not Path("/proc/locks").exists(), reason="needs Linux's /proc/locks")
 def test_the_compiling_process_does_not_wait_on_its_own_lock(tmp_path):
     """Inside kc.compiling() (what soilcal scenario compile runs in) the engine's wait for a
     compile under way returns at once: two open() of one file lock against each other even
@@ -147,13 +148,32 @@ def test_the_compiling_process_does_not_wait_on_its_own_lock(tmp_path):
     code = ("import sys; from soilcal.dem import _kernel_cache as kc\n"
             "with kc.compiling():\n"
             "    assert kc.compile_under_way()\n"
+            "    WATCHDOG\n"
             + "".join("    " + ln + "\n" for ln in FEW_SPHERES.strip().splitlines()))
-    run = _python(code, tmp_path / "done")
+    run = _python(code.replace("WATCHDOG", SELF_WAIT_WATCHDOG), tmp_path / "done")
     try:
-        assert run.wait(timeout=1200) == 0
+        # entering compiling() may wait for a compile under way elsewhere (CI's); a wait on
+        # its own lock ends the process with 3 within a second
+        rc = run.wait(timeout=1200)
     finally:
         run.kill()
+    assert rc != 3, "the compiling process waited on its own lock"
+    assert rc == 0
     assert (tmp_path / "done").exists()
+
+
+# inside kc.compiling(): a thread that ends the process with 3 as soon as /proc/locks shows
+# this process blocked on the kernel cache's lock file (a wait on its own lock never ends)
+SELF_WAIT_WATCHDOG = (
+    "import os, threading, time; ino = os.stat(kc.lock_path()).st_ino; pid = str(os.getpid())\n"
+    "    def _watch():\n"
+    "        while True:\n"
+    "            with open('/proc/locks') as f:\n"
+    "                if any('->' in ln and ln.split()[-4] == pid\n"
+    "                       and ln.split()[-3].endswith(f':{ino}') for ln in f):\n"
+    "                    os._exit(3)\n"
+    "            time.sleep(0.05)\n"
+    "    threading.Thread(target=_watch, daemon=True).start()")
 
 
 @pytest.mark.parametrize("err", ["ENOSYS", "EOPNOTSUPP", "ENOLCK"])
