@@ -7,6 +7,7 @@ from __future__ import annotations
 import math
 
 import numpy as np
+import pandas as pd
 import pytest
 
 from soilcal.errors import InputError
@@ -110,3 +111,43 @@ def test_bad_inputs_are_named():
         corrected_set({"y": m}, {}, {}, [0, 0, 0])
     with pytest.raises(InputError, match="targets"):
         corrected_set({"y": m}, {"z": 31.0}, {}, [0, 0, 0])
+
+
+def _bowl(transform="none"):
+    """y = 1 + 2 A - A^2 + B^2 (coded A, B), fitted exactly to a 3 x 3 grid (ln transform: the
+    grid's exp(y)).  Over A, B in [-1, 1] it ranges over [-2, 3]: 2 A - A^2 rises from -3 to 1
+    and B^2 from 0 to 1, so the lowest value lies on the face A = -1 at B = 0, where no
+    vertex is (the vertices give -1, -1, 3, 3)."""
+    from soilcal.rsm.model import fit_response_surface
+
+    a, b = np.meshgrid([-1.0, 0.0, 1.0], [-1.0, 0.0, 1.0])
+    df = pd.DataFrame({"A": a.ravel(), "B": b.ravel()})
+    y = 1 + 2 * df["A"] - df["A"] ** 2 + df["B"] ** 2
+    df["y"] = np.exp(y) if transform == "ln" else y
+    return fit_response_surface(df, ["A", "B"], "y", [-1.0, -1.0], [1.0, 1.0], transform=transform)
+
+
+def test_a_quadratic_s_range_over_a_box_reaches_the_extremes_inside_its_faces():
+    m = _bowl()
+    assert m.extremes([-1.0, -1.0], [1.0, 1.0]) == pytest.approx((-2.0, 3.0), abs=1e-9)
+    # past the box: A over -1 .. 2 peaks at its stationary point A = 1 (2 A - A^2 = 1), B over
+    # -0.5 .. 2 gives B^2 from 0 to 4: [1 - 3 + 0, 1 + 1 + 4]
+    assert m.extremes([-1.0, -0.5], [2.0, 2.0]) == pytest.approx((-2.0, 6.0), abs=1e-9)
+    # an increasing back-transform keeps the places of the extremes
+    assert _bowl("ln").extremes([-1.0, -1.0], [1.0, 1.0]) == pytest.approx((math.exp(-2.0), math.exp(3.0)),
+                                                                            rel=1e-9)
+    # a decreasing or non-monotone one (1 / y) has no range this way
+    assert _bowl("inverse").extremes([-1.0, -1.0], [1.0, 1.0]) is None
+
+
+def test_a_target_met_only_inside_a_face_is_found_and_one_past_the_range_is_not():
+    # y = -1.9 lies within the range [-2, 3] only near A = -1, B = 0: the sets meeting it have
+    # B^2 = A^2 - 2 A - 2.9, A <= 1 - sqrt(3.9) = -0.9748, at squared distance 2 A^2 - 2 A - 2.9
+    # from (0, 0), least at the largest A: the nearest is (1 - sqrt(3.9), 0)
+    m = _bowl()
+    res = corrected_set({"y": m}, {"y": -1.9}, {}, [0.0, 0.0])
+    assert res["success"] and res["x_coded"] == pytest.approx([1 - math.sqrt(3.9), 0.0], abs=1e-5)
+    # y = -2.5 is below the whole range: no set meets it, the compromise is the lowest point
+    res = corrected_set({"y": m}, {"y": -2.5}, {}, [0.0, 0.0])
+    assert not res["success"] and res["x_coded"] == pytest.approx([-1.0, 0.0], abs=1e-4)
+    assert res["predicted"]["y"] == pytest.approx(-2.0, abs=1e-6)

@@ -186,6 +186,31 @@ def test_deterministic_for_a_seed():
     assert a.attrs["seed"] == 11
 
 
+def test_a_longer_search_s_first_ends_are_the_shorter_search_s():
+    # the random starts are drawn in order from one generator, so the end points of a search
+    # with 10 starts are the first 11 of one with 40 (the centre first): handed those, the
+    # 10-start optimisation and the near-optimal sets are the ones they compute themselves
+    from soilcal.optimise.desirability import search_ends
+    from soilcal.optimise.near_optimal import near_optimal_sets
+
+    g = {"y": {"goal": "target", "value": 0.5}}
+    ends = search_ends({"y": _circle_model()}, g, n_starts=40, seed=11)
+    assert ends.shape == (41, 2)
+    a = desirability_optimise({"y": _circle_model()}, g, n_starts=10, seed=11)
+    b = desirability_optimise({"y": _circle_model()}, g, n_starts=10, seed=11, ends=ends)
+    pd.testing.assert_frame_equal(a, b, check_exact=True)
+    a = near_optimal_sets({"y": _circle_model()}, g, n_starts=40, seed=11)
+    b = near_optimal_sets({"y": _circle_model()}, g, n_starts=40, seed=11, ends=ends)
+    pd.testing.assert_frame_equal(a, b, check_exact=True)
+    # fewer end points than the starts asked for, or of another number of factors: refused
+    with pytest.raises(InputError) as e:
+        desirability_optimise({"y": _circle_model()}, g, n_starts=60, seed=11, ends=ends)
+    assert e.value.field == "ends" and "at least 60 starts" in e.value.expected
+    with pytest.raises(InputError) as e:
+        desirability_optimise({"y": _circle_model()}, g, n_starts=10, seed=11, ends=ends[:, :1])
+    assert e.value.field == "ends"
+
+
 def test_bad_inputs_are_named():
     m = _circle_model()
     with pytest.raises(InputError, match="goals.z"):

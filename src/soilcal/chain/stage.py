@@ -415,6 +415,8 @@ def _steepest_frame(stage: dict, table: pd.DataFrame, targets: dict) -> pd.DataF
 
 #: optimum.csv methods whose rows come from a seeded search (their ``seed`` column is set)
 SEEDED_METHODS = ("desirability", "pso", "near_optimal")
+#: random starts of the near-optimal search (near_optimal_sets' default)
+NEAR_OPTIMAL_STARTS = 200
 
 
 def optimum_frames(stage: dict, table: pd.DataFrame, targets: dict, seed: int) -> dict[str, pd.DataFrame]:
@@ -433,6 +435,7 @@ def optimum_frames(stage: dict, table: pd.DataFrame, targets: dict, seed: int) -
     The rows of the seeded searches carry the soil's ``seed`` (column ``seed``).
     """
     from soilcal import optimise
+    from soilcal.optimise.desirability import search_ends
     from soilcal.optimise.near_optimal import calibrated_choice, identifiability, near_optimal_sets
 
     if stage["kind"] == "steepest_ascent":
@@ -452,7 +455,11 @@ def optimum_frames(stage: dict, table: pd.DataFrame, targets: dict, seed: int) -
                                          "note": "target value not available"}]))
             continue
         models = {rid: fits[rid] for rid in goals}
-        d = optimise.desirability_optimise(models, goals, seed=seed, n_solutions=opt.get("n_solutions", 5))
+        # one seeded search serves both: the desirability solutions take the end points of its
+        # centre and first 60 random starts (desirability_optimise's default), the near-optimal
+        # sets all of them
+        ends = search_ends(models, goals, n_starts=NEAR_OPTIMAL_STARTS, seed=seed)
+        d = optimise.desirability_optimise(models, goals, seed=seed, n_solutions=opt.get("n_solutions", 5), ends=ends)
         d.insert(0, "method", "desirability")
         d.insert(0, "case", case["id"])
         frames.append(d)
@@ -479,7 +486,7 @@ def optimum_frames(stage: dict, table: pd.DataFrame, targets: dict, seed: int) -
                 row[rid] = float(model.predict_actual(xa[None, :])[0])
                 row["objective"] = float(res["f"])
                 frames.append(pd.DataFrame([row]))
-        near = near_optimal_sets(models, goals, seed=seed)
+        near = near_optimal_sets(models, goals, seed=seed, n_starts=NEAR_OPTIMAL_STARTS, ends=ends)
         if len(near):
             chosen = calibrated_choice(near)
             near = near.drop(columns=["near_optimal"])

@@ -18,7 +18,10 @@ distance) at which every corrected surface meets its target, within the factor b
 was measured at x0 and holds best near it.  Solved with scipy's SLSQP (equality constraints
 yhat_c,r(x) = T_r) from x0 and from the corrected surfaces' own desirability optima; when no
 start reaches every target the corrected surfaces cannot meet them inside the design region
-and the result says so, with their least-squares compromise inside the box instead.
+and the result says so, with their least-squares compromise inside the box instead.  Where a
+target lies beyond its corrected surface's range over the bounds (a quadratic's exact range,
+:meth:`soilcal.rsm.model.RSMFit.extremes`) no start can reach it, and the search goes straight
+to the compromise.
 """
 
 from __future__ import annotations
@@ -100,7 +103,10 @@ def corrected_set(models: Mapping[str, Any], targets: Mapping[str, float], bias:
     box = list(zip(lo, hi))
     best = None
     pts = [x0, *(np.asarray(p, float).reshape(-1) for p in starts)]
-    for s in pts:
+    # a target farther from a surface's range over the bounds than the tolerance is met by no
+    # set there, so no start can succeed: the least-squares compromise below is the answer
+    # (surfaces without a closed-form range, models without .extremes, are searched as ever)
+    for s in ([] if _out_of_reach(shifted, targets, scale, lo, hi, tol) else pts):
         s = np.clip(s, lo, hi)
         res = optimize.minimize(lambda x: float(np.sum((x - x0) ** 2)), s, jac=lambda x: 2.0 * (x - x0),
                                 method="SLSQP", bounds=box, constraints=cons,
@@ -110,13 +116,30 @@ def corrected_set(models: Mapping[str, Any], targets: Mapping[str, float], bias:
         key = (worst > tol, float(np.linalg.norm(x - x0)) if worst <= tol else worst)
         if best is None or key < best[0]:
             best = (key, x, worst)
-    _, x, worst = best
+    _, x, worst = best if best is not None else (None, None, math.inf)
     if worst > tol:
         x = compromise(residuals, x0, pts, lo, hi)
     pred = {r: float(shifted[r].predict(x[None, :])[0]) for r in targets}
     return {"success": worst <= tol, "x_coded": x, "predicted": pred,
             "move": float(np.linalg.norm(x - x0)),
             "residual": max(abs(pred[r] - float(t)) for r, t in targets.items())}
+
+
+def _out_of_reach(shifted: Mapping[str, Shifted], targets: Mapping[str, float], scale: Mapping[str, float],
+                  lo: np.ndarray, hi: np.ndarray, tol: float) -> bool:
+    """Whether some response's target lies farther than ``tol`` (scaled) beyond the range of its
+    corrected surface over ``lo`` .. ``hi`` (:meth:`soilcal.rsm.model.RSMFit.extremes`), by a
+    margin of 1e-9 (scaled) over the rounding of that range."""
+    for r, t in targets.items():
+        ext = getattr(shifted[r].model, "extremes", None)
+        rng = ext(lo, hi) if ext is not None else None
+        if rng is None:
+            continue
+        low, high = rng[0] + shifted[r].bias, rng[1] + shifted[r].bias
+        gap = max(low - float(t), float(t) - high) / scale[r]
+        if gap > tol + 1e-9 * max(1.0, abs(low) / scale[r], abs(high) / scale[r]):
+            return True
+    return False
 
 
 def compromise(residuals, x0, starts, lo, hi, step_weight: float = 1e-6) -> np.ndarray:

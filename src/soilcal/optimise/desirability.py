@@ -275,36 +275,16 @@ def _coded_bounds(bounds, factors: list[str]) -> np.ndarray:
     return b
 
 
-def desirability_optimise(
-    models: Mapping[str, Any],
-    goals: Mapping[str, Mapping[str, Any]],
-    bounds=None,
-    n_starts: int = 60,
-    seed: int = 0,
-    n_solutions: int = 10,
-    tol: float = 0.05,
-    min_desirability: float = 0.0,
-) -> pd.DataFrame:
-    """Distinct maxima of the overall desirability, sorted by decreasing D.
-
-    models: response name -> fitted model (``.factors``, ``.low``, ``.high``,
-    ``.predict(X_coded)``), all on the same factors. goals: response name (or factor symbol,
-    goal on the factor's actual level) -> goal spec, see :func:`make_goal`. bounds: coded search
-    box, None = [-1, 1] for every factor, or (k, 2) pairs, or {symbol: (lo, hi)}.
-    n_starts random starts (seeded) plus the centre point; solutions within ``tol`` (Euclidean,
-    coded) of a better one are dropped; at most ``n_solutions`` rows.
-
-    Columns: solution, <f>_coded..., <f>..., <response>..., d_<goal>..., desirability. The
-    search settings (seed, n_starts, tol) are in ``df.attrs``.
-    """
+def _search(models: Mapping[str, Any], goals: Mapping[str, Mapping[str, Any]], bounds):
+    """The checked factors and coded box, resolved goals and importances, and the vectorised
+    ``evaluate`` and one-point ``objective`` (-D, or the distance to the limits where D = 0) of
+    a desirability search."""
     factors, low, high = _check_models(models)
     if not isinstance(goals, Mapping) or not goals:
         raise InputError(None, "goals", "a non-empty mapping name -> goal spec", goals)
     for name in goals:
         if name not in models and name not in factors:
             raise InputError(None, f"goals.{name}", f"a response among {list(models)} or a factor among {factors}", name)
-    if int(n_starts) < 1 or int(n_solutions) < 1:
-        raise InputError(None, "n_starts/n_solutions", "positive integers", (n_starts, n_solutions))
     box = _coded_bounds(bounds, factors)
     centre, half = (low + high) / 2.0, (high - low) / 2.0
 
@@ -344,6 +324,20 @@ def desirability_optimise(
                 logD += g.importance * math.log(d)
         return viol if zero else -math.exp(logD / rsum)
 
+    return factors, centre, half, box, resolved, importance, evaluate, objective
+
+
+def search_ends(models: Mapping[str, Any], goals: Mapping[str, Mapping[str, Any]], bounds=None,
+                n_starts: int = 60, seed: int = 0) -> np.ndarray:
+    """The end points (coded, clipped to the box) of the seeded multi-start search of
+    :func:`desirability_optimise`: row 0 refined from the centre point (clipped to the box),
+    rows 1 .. ``n_starts`` from the random starts, drawn in order from ``default_rng(seed)``,
+    so that the first ``n + 1`` rows of a search with more starts are those of a search with
+    ``n`` starts.  A caller running the search at several start counts (the calibration's
+    solutions and its near-optimal sets) computes them once and passes them as ``ends``."""
+    if int(n_starts) < 1:
+        raise InputError(None, "n_starts", "a positive integer", n_starts)
+    factors, _, _, box, _, _, _, objective = _search(models, goals, bounds)
     rng = np.random.default_rng(seed)
     starts = np.vstack([np.clip(np.zeros(len(factors)), box[:, 0], box[:, 1]),
                         rng.uniform(box[:, 0], box[:, 1], size=(int(n_starts), len(factors)))])
@@ -352,7 +346,46 @@ def desirability_optimise(
         res = optimize.minimize(objective, x0, method="Nelder-Mead", bounds=box,
                                 options={"xatol": 1e-7, "fatol": 1e-10, "maxiter": 4000, "adaptive": True})
         ends.append(np.clip(res.x, box[:, 0], box[:, 1]))
-    ends = np.array(ends)
+    return np.array(ends)
+
+
+def desirability_optimise(
+    models: Mapping[str, Any],
+    goals: Mapping[str, Mapping[str, Any]],
+    bounds=None,
+    n_starts: int = 60,
+    seed: int = 0,
+    n_solutions: int = 10,
+    tol: float = 0.05,
+    min_desirability: float = 0.0,
+    ends: np.ndarray | None = None,
+) -> pd.DataFrame:
+    """Distinct maxima of the overall desirability, sorted by decreasing D.
+
+    models: response name -> fitted model (``.factors``, ``.low``, ``.high``,
+    ``.predict(X_coded)``), all on the same factors. goals: response name (or factor symbol,
+    goal on the factor's actual level) -> goal spec, see :func:`make_goal`. bounds: coded search
+    box, None = [-1, 1] for every factor, or (k, 2) pairs, or {symbol: (lo, hi)}.
+    n_starts random starts (seeded) plus the centre point; solutions within ``tol`` (Euclidean,
+    coded) of a better one are dropped; at most ``n_solutions`` rows.  ``ends``: the
+    :func:`search_ends` of these models, goals, bounds and seed with at least ``n_starts``
+    starts, where the caller has them already (their first ``n_starts + 1`` rows are used, the
+    end points this call would compute); None: the search runs here.
+
+    Columns: solution, <f>_coded..., <f>..., <response>..., d_<goal>..., desirability. The
+    search settings (seed, n_starts, tol) are in ``df.attrs``.
+    """
+    if int(n_starts) < 1 or int(n_solutions) < 1:
+        raise InputError(None, "n_starts/n_solutions", "positive integers", (n_starts, n_solutions))
+    factors, centre, half, box, resolved, importance, evaluate, _ = _search(models, goals, bounds)
+    if ends is None:
+        ends = search_ends(models, goals, bounds, n_starts, seed)
+    else:
+        ends = np.asarray(ends, dtype=float)
+        if ends.ndim != 2 or ends.shape[1] != len(factors) or ends.shape[0] < int(n_starts) + 1:
+            raise InputError(None, "ends", f"the end points of a search with at least {int(n_starts)} starts: "
+                             f"({int(n_starts) + 1} or more, {len(factors)}) coded values", ends.shape)
+        ends = ends[: int(n_starts) + 1]
     preds, ds, _ = evaluate(ends)
     D = overall_desirability(ds, importance)
     order = np.argsort(-np.round(D, 10), kind="stable")

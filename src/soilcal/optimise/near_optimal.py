@@ -38,6 +38,7 @@ def near_optimal_sets(
     tol: float = 0.05,
     window: float = 0.01,
     max_sets: int = 50,
+    ends: np.ndarray | None = None,
 ) -> pd.DataFrame:
     """Every distinct parameter set whose overall desirability is within ``window`` of the best.
 
@@ -46,6 +47,9 @@ def near_optimal_sets(
     solutions with ``D >= D_best - window`` and ``D > 0`` (a set that misses a goal's limits is
     never near-optimal; if the goals cannot be met anywhere the frame is empty). Solutions are
     distinct: each lies at coded Euclidean distance >= ``tol`` from every kept one.
+    ``ends``: the search's end points where the caller has them already
+    (:func:`~soilcal.optimise.desirability.search_ends` of these models, goals, bounds and seed
+    with at least ``n_starts`` starts); None: the search runs here.
 
     Columns: those of :func:`~soilcal.optimise.desirability_optimise` (solution, <f>_coded...,
     <f>..., <response>..., d_<goal>..., desirability) plus ``near_optimal`` (True) and
@@ -77,7 +81,7 @@ def near_optimal_sets(
 
     # n_starts + 1 end points at most (random starts plus the centre): keep them all
     df = desirability_optimise(models, goals, bounds=bounds, n_starts=int(n_starts), seed=seed,
-                               n_solutions=int(n_starts) + 1, tol=tol_f, min_desirability=0.0)
+                               n_solutions=int(n_starts) + 1, tol=tol_f, min_desirability=0.0, ends=ends)
     coded = [f"{s}_coded" for s in next(iter(models.values())).factors]
     D = df["desirability"].to_numpy(dtype=float)
     best = float(D.max()) if len(D) else 0.0

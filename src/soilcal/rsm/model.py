@@ -301,6 +301,47 @@ class RSMFit:
         b = inverse_transform(ci, self.transform, self.transform_constant)
         return np.minimum(b[:, 0], b[:, 1]), np.maximum(b[:, 0], b[:, 1])
 
+    def extremes(self, lower, upper) -> tuple[float, float] | None:
+        """(lowest, highest) prediction over the coded box ``lower`` .. ``upper`` (per factor),
+        for a surface whose terms are of degree 2 at most and whose back-transform increases
+        (none, ln, log10); None for any other model.  A quadratic's extremes over a box lie at
+        a vertex or at the stationary point of its restriction to a face (each factor at its
+        lower bound, its upper bound or free: 3^k faces), so the candidates are the vertices and
+        those stationary points that lie inside their face; the extremes are the model's own
+        predictions there.  A face whose restricted Hessian is singular holds no isolated
+        extreme that its boundary does not match, and is passed over."""
+        name, _ = _normalise_transform(self.transform)
+        if name not in ("none", "ln", "log10") or any(sum(e) > 2 for e in self._exps):
+            return None
+        k = len(self.factors)
+        lo = np.asarray(lower, float).reshape(-1)
+        hi = np.asarray(upper, float).reshape(-1)
+        g, H = np.zeros(k), np.zeros((k, k))  # transformed prediction = b0 + g x + x' H x / 2
+        for b, e in zip(self.params[1:], self._exps):
+            idx = [i for i, p in enumerate(e) for _ in range(p)]
+            if len(idx) == 1:
+                g[idx[0]] += b
+            elif idx[0] == idx[1]:
+                H[idx[0], idx[0]] += 2.0 * b
+            else:
+                H[idx[0], idx[1]] += b
+                H[idx[1], idx[0]] += b
+        points = []
+        for pattern in np.ndindex(*(3,) * k):  # 0: at lower, 1: at upper, 2: free
+            x = np.where(np.array(pattern) == 1, hi, lo)
+            free = [i for i, p in enumerate(pattern) if p == 2]
+            if free:
+                fixed = [i for i, p in enumerate(pattern) if p != 2]
+                A = H[np.ix_(free, free)]
+                if np.linalg.matrix_rank(A) < len(free):
+                    continue
+                x[free] = np.linalg.solve(A, -(g[free] + H[np.ix_(free, fixed)] @ x[fixed]))
+                if np.any(x[free] < lo[free]) or np.any(x[free] > hi[free]):
+                    continue
+            points.append(x)
+        y = self.predict(np.array(points))
+        return float(np.min(y)), float(np.max(y))
+
     def change_se(self, x_from_coded, x_to_coded) -> float:
         """The standard error of the surface's change between two sets (coded levels),
         predict(x_to) - predict(x_from): sqrt(a' C a) with C the coefficients' covariance and
