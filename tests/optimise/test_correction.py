@@ -151,3 +151,45 @@ def test_a_target_met_only_inside_a_face_is_found_and_one_past_the_range_is_not(
     res = corrected_set({"y": m}, {"y": -2.5}, {}, [0.0, 0.0])
     assert not res["success"] and res["x_coded"] == pytest.approx([-1.0, 0.0], abs=1e-4)
     assert res["predicted"]["y"] == pytest.approx(-2.0, abs=1e-6)
+
+
+def test_the_bias_shifts_the_range_a_target_is_judged_against():
+    # the corrected surface y + b: with b = +10 it ranges over [8, 13], so 10 is met where
+    # 11 + 2 A - A^2 + B^2 = 10; the sets have B^2 = A^2 - 2 A - 1 >= 0, A <= 1 - sqrt(2), at
+    # squared distance 2 A^2 - 2 A - 1 from (0, 0), least at the largest A: (1 - sqrt(2), 0)
+    m = _bowl()
+    res = corrected_set({"y": m}, {"y": 10.0}, {"y": 10.0}, [0.0, 0.0])
+    assert res["success"] and res["x_coded"] == pytest.approx([1 - math.sqrt(2.0), 0.0], abs=1e-5)
+    # b = -10: [-12, -7] holds -8.5, met where 2 A - A^2 + B^2 = 0.5, nearest at (1 - sqrt(0.5), 0)
+    res = corrected_set({"y": m}, {"y": -8.5}, {"y": -10.0}, [0.0, 0.0])
+    assert res["success"] and res["x_coded"] == pytest.approx([1 - math.sqrt(0.5), 0.0], abs=1e-5)
+
+
+def test_a_target_past_the_range_goes_to_the_compromise_without_the_search(monkeypatch):
+    # -2.5 lies below the range [-2, 3]: no SLSQP start is run (each would end at its
+    # iteration limit), the least-squares compromise (L-BFGS-B) is the answer
+    from scipy import optimize
+
+    import soilcal.optimise.correction as correction
+
+    def minimize(*args, method=None, **kw):
+        assert method != "SLSQP", "a search was run for a target past the surface's range"
+        return optimize.minimize(*args, method=method, **kw)
+
+    monkeypatch.setattr(correction, "optimize", type("Opt", (), {"minimize": staticmethod(minimize)}))
+    res = corrected_set({"y": _bowl()}, {"y": -2.5}, {}, [0.0, 0.0])
+    assert not res["success"] and res["x_coded"] == pytest.approx([-1.0, 0.0], abs=1e-4)
+    # a target within the range is searched for
+    with pytest.raises(AssertionError, match="a search was run"):
+        corrected_set({"y": _bowl()}, {"y": -1.9}, {}, [0.0, 0.0])
+
+
+def test_a_start_or_box_of_another_size_than_the_factors_is_named():
+    m = _bowl()
+    for x0 in ([0.0, 0.0, 0.0], [0.0]):
+        with pytest.raises(InputError) as e:
+            corrected_set({"y": m}, {"y": 10.0}, {}, x0)
+        assert e.value.field == "x0_coded" and "['A', 'B']" in e.value.expected
+    with pytest.raises(InputError) as e:
+        m.extremes([-1.0], [1.0, 1.0])
+    assert e.value.field == "lower/upper"

@@ -415,8 +415,6 @@ def _steepest_frame(stage: dict, table: pd.DataFrame, targets: dict) -> pd.DataF
 
 #: optimum.csv methods whose rows come from a seeded search (their ``seed`` column is set)
 SEEDED_METHODS = ("desirability", "pso", "near_optimal")
-#: random starts of the near-optimal search (near_optimal_sets' default)
-NEAR_OPTIMAL_STARTS = 200
 
 
 def optimum_frames(stage: dict, table: pd.DataFrame, targets: dict, seed: int) -> dict[str, pd.DataFrame]:
@@ -436,7 +434,8 @@ def optimum_frames(stage: dict, table: pd.DataFrame, targets: dict, seed: int) -
     """
     from soilcal import optimise
     from soilcal.optimise.desirability import search_ends
-    from soilcal.optimise.near_optimal import calibrated_choice, identifiability, near_optimal_sets
+    from soilcal.optimise.near_optimal import (NEAR_OPTIMAL_STARTS, calibrated_choice, identifiability,
+                                               near_optimal_sets)
 
     if stage["kind"] == "steepest_ascent":
         return {"optimum": _steepest_frame(stage, table, targets), "identifiability": None}

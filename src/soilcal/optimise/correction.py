@@ -88,6 +88,10 @@ def corrected_set(models: Mapping[str, Any], targets: Mapping[str, float], bias:
         raise InputError(None, "targets", f"responses among the models {list(models)}", missing)
     x0 = np.asarray(x0_coded, float).reshape(-1)
     k = x0.size
+    for r in targets:
+        factors = list(getattr(models[r], "factors", [None] * k))
+        if len(factors) != k:
+            raise InputError(None, "x0_coded", f"{len(factors)} coded values, one per factor {factors} of {r}", k)
     shifted = {r: Shifted(models[r], bias.get(r, 0.0)) for r in targets}
     scale = {r: max(1.0, abs(float(t))) for r, t in targets.items()}
 

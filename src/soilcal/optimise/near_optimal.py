@@ -27,6 +27,8 @@ from soilcal.optimise.desirability import desirability_optimise
 #: overall desirability from which the goals count as met (a target goal's d is 1 at the
 #: target and falls off towards its limits)
 REACHED = 0.99
+#: random starts of the near-optimal search (its default)
+NEAR_OPTIMAL_STARTS = 200
 
 
 def near_optimal_sets(
@@ -34,7 +36,7 @@ def near_optimal_sets(
     goals: Mapping[str, Mapping[str, Any]],
     bounds=None,
     seed: int = 0,
-    n_starts: int = 200,
+    n_starts: int = NEAR_OPTIMAL_STARTS,
     tol: float = 0.05,
     window: float = 0.01,
     max_sets: int = 50,

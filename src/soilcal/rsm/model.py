@@ -303,8 +303,9 @@ class RSMFit:
 
     def extremes(self, lower, upper) -> tuple[float, float] | None:
         """(lowest, highest) prediction over the coded box ``lower`` .. ``upper`` (per factor),
-        for a surface whose terms are of degree 2 at most and whose back-transform increases
-        (none, ln, log10); None for any other model.  A quadratic's extremes over a box lie at
+        for a surface whose terms are of degree 2 at most and whose transform is none, ln or
+        log10 (increasing back-transforms); None for any other model (other increasing
+        back-transforms, such as a power with a positive exponent, included).  A quadratic's extremes over a box lie at
         a vertex or at the stationary point of its restriction to a face (each factor at its
         lower bound, its upper bound or free: 3^k faces), so the candidates are the vertices and
         those stationary points that lie inside their face; the extremes are the model's own
@@ -316,6 +317,9 @@ class RSMFit:
         k = len(self.factors)
         lo = np.asarray(lower, float).reshape(-1)
         hi = np.asarray(upper, float).reshape(-1)
+        if lo.size != k or hi.size != k:
+            raise InputError(None, "lower/upper", f"{k} coded bounds each, one per factor {list(self.factors)}",
+                             (lo.size, hi.size))
         g, H = np.zeros(k), np.zeros((k, k))  # transformed prediction = b0 + g x + x' H x / 2
         for b, e in zip(self.params[1:], self._exps):
             idx = [i for i, p in enumerate(e) for _ in range(p)]
