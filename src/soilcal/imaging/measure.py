@@ -423,10 +423,13 @@ CUT = "the whole heap inside the frame"
 def _components_on_plate(path, binary, slope, intercept, kind):
     h, w = binary.shape
     # a column of row numbers against a row of plate rows (broadcast, not two full grids: the
-    # cue search calls this for every cue on every plate line)
-    rr = np.arange(h)[:, None]
+    # cue search calls this for every cue on every plate line), over the rows above the plate
+    # line's lowest point only (no pixel below it is above the line: labelled, counted and
+    # compared, they would all be background)
     plate_rows = slope * np.arange(w)[None, :] + intercept
-    above = binary & (rr < plate_rows - 1)
+    top = min(h, max(1, math.ceil(float((plate_rows - 1).max()))))
+    rr = np.arange(top)[:, None]
+    above = binary[:top] & (rr < plate_rows - 1)
     lab = measure.label(above)
     touching = np.unique(lab[(rr > plate_rows - 8) & above])  # ``above`` holds rr < plate_rows - 1
     touching = touching[touching > 0]
@@ -438,7 +441,8 @@ def _components_on_plate(path, binary, slope, intercept, kind):
         raise InputError(path, "image", f"one {kind} standing on the plate", NONE_FOUND)
     if len(cands) > 1 and area[cands[1]] > 0.25 * area[cands[0]]:
         raise InputError(path, "image", f"one {kind}", f"{len(cands)} separate {kind}s on the plate")
-    comp = lab == cands[0]
+    comp = np.zeros((h, w), bool)
+    comp[:top] = lab == cands[0]
     on = comp.any(axis=0)
     # its bounding box (rows r0 to r1, columns c0 to c1, the ends past it), as regionprops' bbox
     rows, cols = np.flatnonzero(comp.any(axis=1)), np.flatnonzero(on)
