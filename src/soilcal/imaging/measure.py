@@ -266,8 +266,7 @@ def plate_line(path, gray, binary):
     h, w = gray.shape
     thetas = np.radians(np.linspace(84, 96, 241))
     hs, ang, dist = transform.hough_line(edges, theta=thetas)
-    _, angs, dists = transform.hough_line_peaks(hs, ang, dist, num_peaks=12, min_distance=4,
-                                                threshold=0.2 * w)
+    _, angs, dists = hough_peaks(hs, ang, dist, num_peaks=12, min_distance=4, threshold=0.2 * w)
     best, best_score = None, 0
     cols = np.arange(w)
     for a, d in zip(angs, dists):
@@ -424,10 +423,13 @@ CUT = "the whole heap inside the frame"
 def _components_on_plate(path, binary, slope, intercept, kind):
     h, w = binary.shape
     # a column of row numbers against a row of plate rows (broadcast, not two full grids: the
-    # cue search calls this for every cue on every plate line)
-    rr = np.arange(h)[:, None]
+    # cue search calls this for every cue on every plate line), over the rows above the plate
+    # line's lowest point only (no pixel below it is above the line: labelled, counted and
+    # compared, they would all be background)
     plate_rows = slope * np.arange(w)[None, :] + intercept
-    above = binary & (rr < plate_rows - 1)
+    top = min(h, max(1, math.ceil(float((plate_rows - 1).max()))))
+    rr = np.arange(top)[:, None]
+    above = binary[:top] & (rr < plate_rows - 1)
     lab = measure.label(above)
     touching = np.unique(lab[(rr > plate_rows - 8) & above])  # ``above`` holds rr < plate_rows - 1
     touching = touching[touching > 0]
@@ -439,7 +441,8 @@ def _components_on_plate(path, binary, slope, intercept, kind):
         raise InputError(path, "image", f"one {kind} standing on the plate", NONE_FOUND)
     if len(cands) > 1 and area[cands[1]] > 0.25 * area[cands[0]]:
         raise InputError(path, "image", f"one {kind}", f"{len(cands)} separate {kind}s on the plate")
-    comp = lab == cands[0]
+    comp = np.zeros((h, w), bool)
+    comp[:top] = lab == cands[0]
     on = comp.any(axis=0)
     # its bounding box (rows r0 to r1, columns c0 to c1, the ends past it), as regionprops' bbox
     rows, cols = np.flatnonzero(comp.any(axis=1)), np.flatnonzero(on)
@@ -1750,6 +1753,61 @@ def level_it(roll) -> str:
     return f"rotate the photo {abs(roll):.0f} deg {'clockwise' if roll > 0 else 'counter-clockwise'} to level it"
 
 
+def hough_peaks(hspace, angles, dists, num_peaks, min_distance, threshold, min_angle=10):
+    """The peaks of a straight-line Hough accumulator: the same (votes, angles, distances) as
+    ``skimage.transform.hough_line_peaks(hspace, angles, dists, min_distance=min_distance,
+    min_angle=min_angle, threshold=threshold, num_peaks=num_peaks)``, found by its steps
+    (a maximum filter of (2 ``min_distance`` + 1) distance bins by (2 ``min_angle`` + 1)
+    angle bins, the connected local maxima above ``threshold`` strongest first, each
+    suppressing its neighbourhood, angles wrapping as there) on the bounding box of the bins
+    above ``threshold`` instead of on the whole accumulator: a plate search's accumulator is
+    thousands of distance bins by hundreds of angles, its votes above the threshold a few
+    lines' worth.  Outside the box no bin is above the threshold, so no peak lies there; a
+    bin's filtered maximum matters only where it is above the threshold, and then it is a bin
+    inside the box that holds it (the filter's constant 0 at the box's border changes no such
+    maximum); the suppression around a peak reads and writes the box only (every later peak
+    lies in it)."""
+    rows, cols = hspace.shape
+    min_angle = min(min_angle, cols)
+    over = hspace > threshold
+    ra, ca = np.flatnonzero(over.any(axis=1)), np.flatnonzero(over.any(axis=0))
+    if not ra.size:
+        return np.array([]), np.array([]), np.array([])
+    r0, r1, c0, c1 = ra[0], ra[-1] + 1, ca[0], ca[-1] + 1
+    img = hspace[r0:r1, c0:c1].copy()
+    img_max = ndi.maximum_filter1d(img, size=2 * min_distance + 1, axis=0, mode="constant", cval=0)
+    img_max = ndi.maximum_filter1d(img_max, size=2 * min_angle + 1, axis=1, mode="constant", cval=0)
+    img *= img == img_max
+    props = measure.regionprops(measure.label(img > threshold), img_max)
+    props = sorted(props, key=lambda p: p.intensity_max)[::-1]
+    # each peak's centroid in the whole accumulator's bins, as regionprops' (the mean of its
+    # bins' coordinates) rounded
+    coords = np.array([np.round(((p.coords + (r0, c0)) * 1.0).mean(axis=0)) for p in props], dtype=int)
+    ys, xs = np.mgrid[-min_distance:min_distance + 1, -min_angle:min_angle + 1]
+    peaks, ypk, xpk = [], [], []
+    for y, x in coords:
+        accum = img_max[y - r0, x - c0]
+        if accum > threshold:
+            yn, xn = y + ys, x + xs
+            inside = (yn > 0) & (yn < rows)  # as skimage: no reflection in distance (nor its bin 0)
+            yn, xn = yn[inside], xn[inside]
+            low, high = xn < 0, xn >= cols  # angles wrap, the distance reflected
+            yn[low], xn[low] = rows - yn[low], xn[low] + cols
+            yn[high], xn[high] = rows - yn[high], xn[high] - cols
+            box = (yn >= r0) & (yn < r1) & (xn >= c0) & (xn < c1)
+            img_max[yn[box] - r0, xn[box] - c0] = 0
+            peaks.append(accum)
+            ypk.append(y)
+            xpk.append(x)
+    peaks, ypk, xpk = np.array(peaks), np.array(ypk), np.array(xpk)
+    if num_peaks < len(peaks):
+        keep = np.argsort(peaks)[::-1][:num_peaks]
+        peaks, ypk, xpk = peaks[keep], ypk[keep], xpk[keep]
+    if not xpk.size:
+        return peaks, np.array([]), np.array([])
+    return peaks, angles[xpk], dists[ypk]
+
+
 def plate_lines(gray, below=None, edges=None, paired=False):
     """Long near-horizontal edges below a point, topmost first, each refined by a RANSAC line
     fit: [(slope, intercept), ...] with row = slope * col + intercept.
@@ -1771,14 +1829,16 @@ def plate_lines(gray, below=None, edges=None, paired=False):
     # an edge lying on a pixel boundary comes out of Canny alternating between two rows,
     # which splits its votes between two neighbouring distance bins (a line crossing edges at
     # a slant spreads its votes over more bins and gains less)
-    hs = hs.astype(float)
-    up, down = np.zeros_like(hs), np.zeros_like(hs)
-    up[:-1], down[1:] = hs[1:], hs[:-1]
-    pair = hs + np.maximum(up, down)
-    _, angs, dists = transform.hough_line_peaks(hs, ang, dist, num_peaks=16, min_distance=4,
-                                                threshold=0.1 * w)
-    support = pair if paired else hs
-    keep = [support[np.argmin(np.abs(dist - d)), np.argmin(np.abs(ang - a))] >= 0.25 * w for a, d in zip(angs, dists)]
+    # (counted at the peaks only, not over the whole accumulator)
+    _, angs, dists = hough_peaks(hs, ang, dist, num_peaks=16, min_distance=4, threshold=0.1 * w)
+
+    def support(i, j):
+        own = float(hs[i, j])
+        if not paired:
+            return own
+        return own + max(float(hs[i + 1, j]) if i + 1 < hs.shape[0] else 0.0, float(hs[i - 1, j]) if i > 0 else 0.0)
+
+    keep = [support(np.argmin(np.abs(dist - d)), np.argmin(np.abs(ang - a))) >= 0.25 * w for a, d in zip(angs, dists)]
     angs, dists = angs[keep][:8], dists[keep][:8]
     at = sorted(((a, d, (d - col0 * np.cos(a)) / np.sin(a)) for a, d in zip(angs, dists)), key=lambda t: t[2])
     er, ec = np.nonzero(edges)
@@ -1835,7 +1895,7 @@ def _plate_beyond_search(edges, edges_wide, lines, below=None):
     t = np.arange(PLATE_MAX_ROLL_DEG + 0.1, ROLL_CHECK_MAX_DEG + 1e-9, 0.1)
     thetas = np.radians(np.concatenate([90.0 - t[::-1], 90.0 + t]))
     hs, ang, dist = transform.hough_line(edges, theta=thetas)
-    _, angs, dists = transform.hough_line_peaks(hs, ang, dist, num_peaks=8, min_distance=4, threshold=0.25 * w)
+    _, angs, dists = hough_peaks(hs, ang, dist, num_peaks=8, min_distance=4, threshold=0.25 * w)
     if not len(angs):
         return []
     er, ec = np.nonzero(edges)
@@ -1858,7 +1918,7 @@ def _parallel_lines(edges, slope, intercept):
     t0 = 90.0 + float(np.degrees(np.arctan(slope)))
     thetas = np.radians(np.linspace(t0 - 0.5, t0 + 0.5, 21))
     hs, ang, dist = transform.hough_line(edges, theta=thetas)
-    _, angs, dists = transform.hough_line_peaks(hs, ang, dist, num_peaks=16, min_distance=2, threshold=0.25 * w)
+    _, angs, dists = hough_peaks(hs, ang, dist, num_peaks=16, min_distance=2, threshold=0.25 * w)
     er, ec = np.nonzero(edges)
     out = [(0.0, slope, intercept)]
     for a, d in zip(angs, dists):
