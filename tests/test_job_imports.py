@@ -66,6 +66,16 @@ def test_the_dem_summary_figures_load_no_statistics():
     assert _loaded(_script_imports("dem_figures"), ["scipy.stats", "statsmodels"]) == []
 
 
+def test_the_workflow_plans_its_jobs_without_statistics_or_root_finding():
+    # snakemake's own process imports the rules' modules at every invocation (each run, each dry
+    # run) and asks them for the jobs' inputs; the adaptive design's fits and proposals, which
+    # call scipy's statistics, optimiser and sequences, run in its jobs only
+    smk = (ROOT / "workflow/rules/common.smk").read_text()
+    imports = "\n".join(line for line in smk.splitlines() if line.startswith(("import ", "from ")))
+    assert "soilcal.chain import adaptive" in imports
+    assert _loaded(imports, ["scipy.stats", "scipy.optimize", "statsmodels", "matplotlib"]) == []
+
+
 def test_a_missing_package_still_stops_the_call_that_needs_it_with_its_name():
     # scipy.sparse made unimportable: welding a mesh (which needs its graph) fails naming it,
     # an import that needs nothing of it still works

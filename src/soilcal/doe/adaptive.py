@@ -126,9 +126,6 @@ from dataclasses import dataclass, field
 
 import numpy as np
 import pandas as pd
-from scipy import optimize, stats
-from scipy.stats import qmc
-from threadpoolctl import threadpool_limits
 
 from soilcal.doe.designs import actual_to_coded, at_bound, coded_to_actual
 from soilcal.errors import InputError
@@ -214,6 +211,9 @@ class Target:
         ``mu`` and its standard deviation ``s``."""
         self._level()
         tol = self.tolerance
+        # scipy where it is used: the workflow's rules import this module to plan the jobs
+        from scipy import stats
+
         if self.goal == "minimize":
             return stats.norm.cdf((self.value + tol - mu) / s)
         if self.goal == "maximize":
@@ -227,6 +227,8 @@ class Target:
         if not self.optimised:
             return np.zeros_like(np.asarray(mu, float))
         self._level()
+        from scipy import stats
+
         gain = (self.value - self.tolerance - mu) if self.goal == "minimize" else (mu - self.value - self.tolerance)
         z = gain / s
         return s * (stats.norm.pdf(z) + z * stats.norm.cdf(z))
@@ -402,6 +404,8 @@ class GPSurrogate(Surrogate):
         # one BLAS thread: the fit's matrices are as small as the design's points, and the
         # optimiser's thousands of calls on them cost a threaded BLAS more CPU in waking its
         # threads than the work they share
+        from threadpoolctl import threadpool_limits
+
         with warnings.catch_warnings(), threadpool_limits(limits=1, user_api="blas"):
             warnings.simplefilter("ignore")  # convergence notes of the kernel's bounds
             gp.fit(xc, yn)
@@ -580,6 +584,8 @@ def shortfall(problem: Problem, pred: dict) -> np.ndarray:
 
 def halton(d: int, n: int, seed: int) -> np.ndarray:
     """``n`` scrambled Halton points in the coded box [-1, 1]^d."""
+    from scipy.stats import qmc
+
     return 2.0 * qmc.Halton(d=d, scramble=True, seed=np.random.default_rng(seed)).random(n) - 1.0
 
 
@@ -622,6 +628,8 @@ def closest_reachable(problem: Problem, surrogates: dict, cand: np.ndarray) -> d
     _, pred = consistency(problem, surrogates, cand)
     d_all = sum(((pred[t.response][0] - t.value) / t.tolerance) ** 2 for t in aimed) + np.zeros(len(cand))
     x0 = cand[int(np.argmin(d_all))]
+    from scipy import optimize
+
     res = optimize.minimize(dist, x0, method="L-BFGS-B", bounds=[(-1.0, 1.0)] * len(x0))
     xc = res.x if res.fun <= dist(x0) else x0
     _, pred = consistency(problem, surrogates, np.atleast_2d(xc))
@@ -728,6 +736,8 @@ def seeds_to_tell(scatter: float, tolerance: float, one_sided: bool = False) -> 
     (1.645 scatter / tolerance)^2 seeds."""
     if not (scatter > 0 and tolerance > 0):
         return 1
+    from scipy import stats
+
     z = stats.norm.ppf(TELL_SHARE if one_sided else 0.5 + TELL_SHARE / 2)
     return max(1, math.ceil((z * scatter / tolerance) ** 2))
 
