@@ -85,3 +85,81 @@ def test_a_plateau_peak_is_placed_as_scikit_image_places_it():
     assert len(want[0]) == 3
     for x, y in zip(want, got):
         assert np.array_equal(x, y)
+
+
+@pytest.mark.parametrize("seed", range(4))
+def test_random_accumulators_give_scikit_image_s_peaks(seed):
+    """Seeded random non-negative accumulators (integer votes, floats, plateaus, sparse peaks on
+    the borders, blocks of equal votes whose corners touch), thresholds equal to a bin's votes
+    (0 among them) or between them, min_angle up to past the angle count."""
+    rng = np.random.default_rng(seed)
+    for it in range(150):
+        rows, cols = int(rng.integers(3, 60)), int(rng.integers(2, 40))
+        kind = it % 5
+        if kind == 0:
+            hs = rng.integers(0, 6, (rows, cols)).astype(np.uint64)
+        elif kind == 1:
+            hs = rng.random((rows, cols))
+        elif kind == 2:
+            hs = (rng.integers(0, 3, (rows, cols)) * rng.integers(0, 2, (rows, cols))).astype(float)
+        elif kind == 3:
+            hs = np.zeros((rows, cols), np.uint64)
+            for _ in range(int(rng.integers(1, 8))):
+                r = int(rng.choice([0, rows - 1, rng.integers(0, rows)]))
+                c = int(rng.choice([0, cols - 1, rng.integers(0, cols)]))
+                hs[r, c] = rng.integers(1, 5)
+        else:
+            hs = np.kron(rng.integers(0, 4, (rows // 3 + 1, cols // 3 + 1)),
+                         np.ones((3, 3), int))[:rows, :cols].astype(np.uint64)
+        md, ma = int(rng.integers(1, 8)), int(rng.integers(1, 15))
+        th = float(rng.choice(np.unique(hs))) if rng.random() < 0.6 else float(rng.random() * hs.max())
+        num = int(rng.integers(1, 6)) if rng.random() < 0.5 else np.inf
+        angles = np.linspace(-np.pi / 2, np.pi / 2, cols, endpoint=False)
+        dists = np.arange(rows) - rows // 2.0
+        want = transform.hough_line_peaks(hs, angles, dists, min_distance=md, min_angle=ma, threshold=th,
+                                          num_peaks=num)
+        got = measure.hough_peaks(hs, angles, dists, num, md, th, min_angle=ma)
+        for x, y in zip(want, got):
+            assert np.array_equal(x, y), (seed, it)
+
+
+def test_diagonal_neighbours_are_one_peak_and_a_zero_threshold_skips_suppressed_bins():
+    hs = np.zeros((40, 30), np.uint64)
+    hs[10, 10] = hs[11, 11] = 7  # touching at a corner only: one region, as scikit-image labels
+    hs[30, 5] = 3
+    angles, dists = np.linspace(-0.5, 0.5, 30), np.arange(40.0)
+    for th in (0.0, 2.0):
+        want = transform.hough_line_peaks(hs, angles, dists, min_distance=2, min_angle=2, threshold=th)
+        got = measure.hough_peaks(hs, angles, dists, np.inf, 2, th, min_angle=2)
+        for x, y in zip(want, got):
+            assert np.array_equal(x, y)
+
+
+@pytest.mark.parametrize("slope,intercept", [(0.0, 40.0), (0.0, 41.0), (0.5, 10.0), (3.0, -100.0),
+                                             (-3.0, 200.0), (0.0, 61.0), (0.0, 60.0), (0.125, 30.0),
+                                             (0.125, 29.0), (-0.25, 41.0), (40.0, -1000.0)])
+def test_components_on_the_plate_as_when_every_row_is_labelled(slope, intercept):
+    """_components_on_plate labels the rows above the plate line's lowest point only: the same
+    component (or the same refusal) as labelling the whole photo, for flat, steep, exact-integer
+    and out-of-frame lines."""
+    from skimage import measure as skm
+
+    h, w = 60, 80
+    rng = np.random.default_rng(5)
+    for b in (np.pad(np.ones((25, 25), bool), ((20, 15), (25, 30))), rng.random((h, w)) < 0.5,
+              np.ones((h, w), bool)):
+        rr, cols = np.arange(h)[:, None], np.arange(w)[None, :]
+        plate_rows = slope * cols + intercept
+        above = b & (rr < plate_rows - 1)
+        lab = skm.label(above)
+        touching = np.unique(lab[(rr > plate_rows - 8) & above])
+        touching = touching[touching > 0]
+        try:
+            got = measure._components_on_plate("p", b, slope, intercept, "heap")
+        except Exception as e:  # noqa: BLE001 - compared with the full-height labelling below
+            got = e
+        if not touching.size:
+            assert isinstance(got, Exception)
+        elif not isinstance(got, Exception):
+            area = np.bincount(lab.ravel())
+            assert np.array_equal(got, lab == touching[np.argmax(area[touching])])

@@ -1766,7 +1766,10 @@ def hough_peaks(hspace, angles, dists, num_peaks, min_distance, threshold, min_a
     bin's filtered maximum matters only where it is above the threshold, and then it is a bin
     inside the box that holds it (the filter's constant 0 at the box's border changes no such
     maximum); the suppression around a peak reads and writes the box only (every later peak
-    lies in it)."""
+    lies in it).  For accumulators of non-negative votes and a given threshold, as every
+    straight-line Hough transform gives (skimage's default threshold, None, is not taken)."""
+    if threshold is None:
+        raise ValueError("hough_peaks needs a threshold")
     rows, cols = hspace.shape
     min_angle = min(min_angle, cols)
     over = hspace > threshold
