@@ -89,7 +89,7 @@ def corrected_set(models: Mapping[str, Any], targets: Mapping[str, float], bias:
     x0 = np.asarray(x0_coded, float).reshape(-1)
     k = x0.size
     for r in targets:
-        factors = list(getattr(models[r], "factors", [None] * k))
+        factors = list(models[r].factors)
         if len(factors) != k:
             raise InputError(None, "x0_coded", f"{len(factors)} coded values, one per factor {factors} of {r}", k)
     shifted = {r: Shifted(models[r], bias.get(r, 0.0)) for r in targets}
