@@ -229,11 +229,13 @@ def test_static_angle_trends_of_the_screening_designs():
     """002 Table 4 / 003 Table 4 / 001 Table 6: the angle rises with soil-soil rolling
     friction, sliding friction and JKR surface energy.  The angle is bounded by the weaker of
     rolling and sliding resistance, so each factor is raised with the other friction
-    moderate.  Each level is the mean of two seeds."""
+    moderate.  Both levels are run with the same seed (0): a factor the run ignored would give
+    the same heap twice, a rise of exactly 0.  Each rise is well above 3 deg with any one
+    seed: 20.3 / 15.8 / 14.7 deg (rolling), 9.1 / 8.1 / 9.3 (sliding) and 15.8 / 38.0 / 30.6
+    (surface energy) with seeds 0 / 1 / 2."""
 
     def level(**kw):
-        a = np.mean([_angle(seed, **dict(dict(soil_soil_surface_energy=0.0), **kw))
-                     for seed in (0, 1)])
+        a = _angle(0, **dict(dict(soil_soil_surface_energy=0.0), **kw))
         print(kw, round(a, 2))
         return a
 
