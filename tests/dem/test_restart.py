@@ -280,7 +280,7 @@ def test_sigkill_then_the_same_command_resumes(tmp_path):
     import time
 
     base = [sys.executable, "-m", "soilcal.cli", "scenario", "run", "repose", "--setup",
-            "cinnamon-soil", "--set", "n_particles=800", "--set", "image=false", "--seed", "5",
+            "cinnamon-soil", "--set", "n_particles=300", "--set", "image=false", "--seed", "5",
             "--threads", "1"]
     env = dict(os.environ)
     # the uninterrupted row from the same command run in this process (the Numba kernels are
