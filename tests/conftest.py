@@ -28,6 +28,12 @@ import pytest
 # A value given in the environment is kept.
 for _var in ("OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
     os.environ.setdefault(_var, "1")
+# numpy asks the kernel for transparent huge pages (madvise) for each array of 4 MB or more, and
+# the photo tests make many full-frame float arrays that live for milliseconds: on the 2-core
+# test machine faulting them in as huge pages cost several times the system time of small pages
+# (test_furrow_stress 18.0 -> 4.9 s system CPU, 60.6 -> 50.8 s in all, with them off).  Set
+# before numpy loads, as above, and kept when given in the environment.
+os.environ.setdefault("NUMPY_MADVISE_HUGEPAGE", "0")
 
 
 #: files that run no DEM (no soilcal.dem.scenarios, engine or workflow), the longest first

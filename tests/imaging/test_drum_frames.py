@@ -4,6 +4,7 @@ least-squares line over the central 60 % of the chord is at exactly ``angle_deg`
 
 from __future__ import annotations
 
+import functools
 import json
 from pathlib import Path
 
@@ -22,6 +23,21 @@ SHIPPED = ROOT / "resources" / "images" / "xinjiang-vineyard"
 # (angle, s_amp, blur_px, jitter_px, fill): slow rolling to fast cascading drums
 SPEEDS = [(32.0, 0.0, 1.5, 1.0, 0.30), (38.0, 0.04, 2.5, 3.0, 0.35),
           (44.0, 0.08, 3.5, 5.0, 0.40), (50.0, 0.12, 5.0, 8.0, 0.45)]
+
+
+@functools.lru_cache(maxsize=None)
+def _stand_photo(roll):
+    """render_drum(3, 35.0, roll_deg=roll): a drum on its stand, rendered once for the tests of
+    this file that use it (the file runs on one worker); the image is read-only, so no test
+    alters another's input, and each caller gets its own copy of the truth."""
+    img, truth = render.render_drum(3, 35.0, roll_deg=roll)
+    img.flags.writeable = False
+    return img, json.dumps(truth)
+
+
+def _stand(roll):
+    img, truth = _stand_photo(roll)
+    return img, json.loads(truth)
 
 
 def _frame(tmp_path, name, bits=8, **kw):
@@ -182,7 +198,7 @@ def test_drum_photo_rolled_beyond_the_plate_search(tmp_path, roll):
     # surface 18 to 22 deg off; refused, naming the roll to give, which then measures it
     import re
 
-    img, truth = render.render_drum(3, 35.0, roll_deg=roll)
+    img, truth = _stand(roll)
     p = render.save_photo(tmp_path / "rolled.jpg", img, truth, quality=90)
     with pytest.raises(InputError) as e:
         drum.measure_drum_frame(p)
@@ -201,7 +217,7 @@ def test_drum_photo_level_with_a_diagonal_shadow_below_the_drum(tmp_path, tilt):
     # wall and table below the drum at 20 or -25 deg: the plate below the drum is found within
     # the plate search, so the shadow is no roll (it was refused as one, and the roll it named
     # read the 35 deg surface at 54.9 or 9.9 deg); measured on the plate
-    img, truth = render.render_drum(3, 35.0, roll_deg=0.0)
+    img, truth = _stand(0.0)
     h, w = img.shape[:2]
     rr, cc = np.mgrid[0:h, 0:w]
     (cx, cy), r_ = truth["centre_px"], truth["radius_px"]  # the drum in the rendered photo
@@ -385,7 +401,7 @@ def test_rendered_drum_truth_gives_the_drum_in_the_photo(roll):
     # cropped): the rim found in the photo is there, within half a pixel
     from soilcal.imaging.measure import _gray
 
-    img, truth = render.render_drum(3, 35.0, roll_deg=roll)
+    img, truth = _stand(roll)
     cx, cy, r_, how = drum.find_drum(_gray(img / 255.0))
     assert how == "rim"
     assert np.hypot(cx - truth["centre_px"][0], cy - truth["centre_px"][1]) <= 0.5 and abs(r_ - truth["radius_px"]) <= 0.5

@@ -48,11 +48,20 @@ SOIL_COLOURS = {
 
 def _noise(rng, shape, sigma):
     n = ndi.gaussian_filter(rng.standard_normal(shape), sigma)
-    return n / (n.std() + 1e-12)
+    n /= n.std() + 1e-12
+    return n
 
 
 def _texture(rng, shape):
-    return 0.55 * _noise(rng, shape, 1.0) + 0.3 * _noise(rng, shape, 4.0) + 0.25 * _noise(rng, shape, 15.0)
+    """Multi-scale albedo texture 0.55 n_1 + 0.3 n_4 + 0.25 n_15 (n_sigma: unit-std noise
+    smoothed over sigma px), drawn in that order."""
+    t = _noise(rng, shape, 1.0)
+    t *= 0.55
+    for a, sigma in ((0.3, 4.0), (0.25, 15.0)):
+        n = _noise(rng, shape, sigma)
+        n *= a
+        t += n
+    return t
 
 
 def _wall(rng, h, w, hard, avoid=None, floor_row=None, style=None):
@@ -65,14 +74,15 @@ def _wall(rng, h, w, hard, avoid=None, floor_row=None, style=None):
     if "wall_rgb" in style:
         base = np.asarray(style["wall_rgb"], float)
     base = base * (1 + 0.02 * rng.standard_normal(3))
-    img = np.ones((h, w, 3)) * base
-    img *= (1 + 0.03 * _noise(rng, (h, w), 20.0))[..., None]
+    img = np.empty((h, w, 3))
+    img[...] = base
+    img *= _one_plus(0.03, _noise(rng, (h, w), 20.0))[..., None]
     rr, cc = np.arange(h)[:, None], np.arange(w)[None, :]  # broadcast as np.mgrid's rows, columns
     if "wall_gradient" in style:
         gx, gy = style["wall_gradient"]
         img *= (1 + gx * (cc / w - 0.5) + gy * (rr / h - 0.5))[..., None]
     if style.get("wall_texture"):
-        img *= (1 + style["wall_texture"] * _texture(rng, (h, w)))[..., None]
+        img *= _one_plus(style["wall_texture"], _texture(rng, (h, w)))[..., None]
     for _ in range(int(rng.integers(6, 12)) if style.get("clutter", True) else 0):
         hh, ww = rng.integers(40, 220, size=2)
         r0, c0 = int(rng.integers(0, h - hh)), int(rng.integers(0, w - ww))
@@ -93,11 +103,24 @@ def _wall(rng, h, w, hard, avoid=None, floor_row=None, style=None):
     return ndi.gaussian_filter(img, (1.5, 1.5, 0))
 
 
+def _one_plus(a, x):
+    """1 + a x, computed in place in ``x``."""
+    x *= a
+    x += 1
+    return x
+
+
 def _light_field(rng, h, w, strength):
-    rr, cc = np.mgrid[0:h, 0:w] / max(h, w)
-    g = 1 + strength * (rng.uniform(-1, 1) * (cc - 0.5) + rng.uniform(-1, 1) * (rr - 0.5))
+    """Uneven illumination: a linear gradient times a radial fall-off (rows and columns
+    scaled by the longer side)."""
+    rr, cc = np.arange(h)[:, None] / max(h, w), np.arange(w)[None, :] / max(h, w)
+    g = rng.uniform(-1, 1) * (cc - 0.5) + rng.uniform(-1, 1) * (rr - 0.5)
+    g = _one_plus(strength, g)
     r2 = (cc - rng.uniform(0.3, 0.7)) ** 2 + (rr - rng.uniform(0.2, 0.6)) ** 2
-    return g * (1 - 0.35 * strength * r2)
+    r2 *= 0.35 * strength
+    np.subtract(1, r2, out=r2)
+    g *= r2
+    return g
 
 
 def _plate(img, rng, row, c0, c1, thick_px, grey=0.68, rgb=(0.97, 0.99, 1.0), highlight=True):
@@ -133,13 +156,22 @@ def _finish(rng, canvas, roll_deg, hard, style=None):
     """Camera: roll about the image centre, crop, blur, vignetting, noise; ``style`` may set
     ``blur_px``, ``exposure`` (a gain: under < 1 < over, clipped) and ``noise``."""
     style = style or {}
-    rolled = rotate(canvas, roll_deg, order=1, mode="edge")
-    img = rolled[MARGIN:MARGIN + H, MARGIN:MARGIN + W]
+    # scikit-image's rotate of each channel alone (the same interpolation as of the three at
+    # once), cropped into one array, then clipped to the canvas's range as rotate clips
+    img = np.empty((H, W, canvas.shape[2]))
+    for k in range(canvas.shape[2]):
+        img[..., k] = rotate(canvas[..., k], roll_deg, order=1, mode="edge", clip=False)[MARGIN:MARGIN + H,
+                                                                                           MARGIN:MARGIN + W]
+    np.clip(img, canvas.min(), canvas.max(), out=img)
     b = style.get("blur_px", 0.8)
     img = ndi.gaussian_filter(img, (b, b, 0))
-    img = img * _light_field(rng, H, W, 0.15)[..., None] * style.get("exposure", 1.0)
-    img = img + rng.normal(0, style.get("noise", 0.012 if not hard else 0.02), img.shape)
-    return (np.clip(img, 0, 1) * 255 + 0.5).astype(np.uint8)
+    img *= _light_field(rng, H, W, 0.15)[..., None]
+    img *= style.get("exposure", 1.0)
+    img += rng.normal(0, style.get("noise", 0.012 if not hard else 0.02), img.shape)
+    np.clip(img, 0, 1, out=img)
+    img *= 255
+    img += 0.5
+    return img.astype(np.uint8)
 
 
 def _sector_tan(phi, right, back, left, front, blend_deg=6.0):
@@ -257,9 +289,10 @@ def render_pile(seed, left_deg, right_deg, front_deg=None, back_deg=None, soil="
     sh = style.get("shadow", {})
     if sh:
         dx, dy = int(round(sh["dx_mm"] * s)), int(round(sh["dy_mm"] * s))
-    shadow = np.roll(np.roll(sil_all.astype(float), dx, axis=1), dy, axis=0)
+    shadow = np.roll(sil_all, (dy, dx), axis=(0, 1)).astype(float)
     shadow = ndi.gaussian_filter(shadow, sh.get("blur_px", 2.0 if hard else 7.0))
-    canvas *= (1 - sh.get("darkness", 0.55 if hard else 0.25) * shadow)[..., None]
+    shadow *= sh.get("darkness", 0.55 if hard else 0.25)
+    canvas *= np.subtract(1, shadow, out=shadow)[..., None]
     for box, layer, lm in layers:
         canvas[box][lm] = layer[lm]
     # crumbs on the plate next to the toe: half ellipses above row_p, evaluated in their
@@ -403,9 +436,12 @@ def render_tester_frame(seed, angle_deg, fill=0.35, s_amp=0.0, size=(600, 640), 
     n_s = -d - s_signed * L * (xi ** 3 - k * xi)
     half = rng.normal(0.0, 1.0, n_avg // 2)
     offs = np.concatenate([half, -half]) * jitter_px
-    cover = np.zeros((h, w))
-    for o in offs:
-        cover += np.clip(0.5 + (n_s + o - nrm), 0.0, 1.0)
+    cover, part = np.zeros((h, w)), np.empty((h, w))
+    for o in offs:  # cover += clip(0.5 + (n_s + o - nrm), 0, 1), in place
+        np.add(n_s, o, out=part)
+        part -= nrm
+        part += 0.5
+        cover += np.clip(part, 0.0, 1.0, out=part)
     cover /= len(offs)
     air, powder = (0.92, 0.22) if powder_dark else (0.12, 0.78)
     tex = 1.0 + 0.06 * _noise(rng, (h, w), 2.0)
@@ -494,9 +530,10 @@ def render_furrow(seed, coeffs, span_mm, beam_datum_mm=180.0, soil="yangtze-clay
     ch, cw = H + 2 * MARGIN, W + 2 * MARGIN
     cx = cw / 2 + rng.uniform(-20, 20)
     z0_row = MARGIN + 0.80 * H  # row of F = 0
-    rr, cc = np.mgrid[0:ch, 0:cw]
-    X, Z = (cc - cx) / s, (z0_row - rr) / s
-    board = np.ones((ch, cw, 3)) * np.array(st.get("board_rgb", [0.93, 0.93, 0.90]))
+    rr, cc = np.arange(ch)[:, None], np.arange(cw)[None, :]  # broadcast as np.mgrid's rows, columns
+    X, Z = (cc - cx) / s, (z0_row - rr) / s  # X a row, Z a column: the masks below broadcast to the canvas
+    board = np.empty((ch, cw, 3))
+    board[...] = np.array(st.get("board_rgb", [0.93, 0.93, 0.90]))
     if "board_gradient" in st:
         gx, gy = st["board_gradient"]
         board *= (1 + gx * (cc / cw - 0.5) + gy * (rr / ch - 0.5))[..., None]
@@ -505,7 +542,7 @@ def render_furrow(seed, coeffs, span_mm, beam_datum_mm=180.0, soil="yangtze-clay
         half = pitch / 2
         grid = (np.abs(((X + 1000) % pitch) - half) > half - 0.4) | (np.abs(((Z + 1000) % pitch) - half) > half - 0.4)
         board[grid] = np.array(st.get("grid_rgb", [0.55, 0.6, 0.7]))
-    board *= (1 + 0.02 * _noise(rng, (ch, cw), 10.0))[..., None]
+    board *= _one_plus(0.02, _noise(rng, (ch, cw), 10.0))[..., None]
     bh = float(st.get("beam_mm", 12.0))
     sh = st.get("beam_shadow")
     if sh and sh.get("darkness", 0) > 0:
@@ -521,7 +558,7 @@ def render_furrow(seed, coeffs, span_mm, beam_datum_mm=180.0, soil="yangtze-clay
     prof = np.polyval(coeffs, xc)
     soil_m = Z < prof[None, :] + 0.3 * _noise(rng, (1, cw), 1.5)
     albedo = np.array(st.get("soil_rgb", SOIL_COLOURS.get(soil, SOIL_COLOURS["yangtze-clay-loam"])))
-    face = albedo * (1 + 0.12 * _texture(rng, (ch, cw)))[soil_m][:, None]
+    face = albedo * _one_plus(0.12, _texture(rng, (ch, cw)))[soil_m][:, None]
     if st.get("soil_shading"):
         depth = np.clip((prof[None, :] - Z) / 150.0, 0, 1)[soil_m]  # 0 at the surface, 1 150 mm below
         face *= (1 - st["soil_shading"] * depth)[:, None]
