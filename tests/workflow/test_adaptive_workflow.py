@@ -23,9 +23,12 @@ STOPPED = ("budget spent", "target met")
 @pytest.fixture(scope="module")
 def wf(tmp_path_factory):
     # the heaps lifted at the tiny run's speed, a quarter of the lift's steps: these tests read
-    # the records' runs, seeds, levels and files, not the angles' values
+    # the records' runs, seeds, levels and files, not the angles' values; the target is the
+    # printed angle and the copy holds no photos (no job measures photos these tests do not
+    # read: the target from the photos is the tiny run's test, test_dem_workflow.py)
     tmp = adaptive_copy(tmp_path_factory.mktemp("adaptive"), SOIL, "stacking_angle", N_SPHERES, BUDGET,
-                        setup={"lift_speed": LIFT_SPEED}, verify_seeds=VERIFY_SEEDS)
+                        setup={"lift_speed": LIFT_SPEED}, photos=False, printed_targets=True,
+                        verify_seeds=VERIFY_SEEDS)
     # first only up to the decision of iteration 1 (the start's runs are done by then), as a
     # run killed after its first iteration leaves it
     run(tmp, "--cores", "2", f"{CASE}/step/1.json", "--config", "design=adaptive")

@@ -3,6 +3,7 @@ the printed tables (published source)."""
 
 from __future__ import annotations
 
+import shutil
 from pathlib import Path
 
 import pandas as pd
@@ -14,8 +15,12 @@ SOILS = ["cinnamon-soil", "yangtze-clay-loam"]
 
 
 def _copy(tmp: Path) -> Path:
-    # the replay; tests/workflow/test_dem_workflow.py runs the DEM source
-    return copy_workflow(tmp, SOILS, source="published")
+    # the replay; tests/workflow/test_dem_workflow.py runs the DEM source.  The second soil's
+    # furrow photo is left out: no target of that soil reads it, nor does a test here (the
+    # cinnamon soil's photos are measured and read), so no job measures it
+    tmp = copy_workflow(tmp, SOILS, source="published")
+    shutil.rmtree(tmp / "resources/images" / SOILS[1])
+    return tmp
 
 
 def _run(tmp: Path, *args, check=True):
