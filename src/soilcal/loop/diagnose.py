@@ -404,8 +404,11 @@ def replicate_spread(d: pd.DataFrame) -> dict | None:
     best, k = None, 0
     for _, q in rows.groupby(rows["measure"].astype(str), sort=False):
         rel, ab = [], []
-        for _, g in q.groupby(q["simulation"].astype(str), sort=False):
-            m = g["measured"].to_numpy(float)
+        # its conditions in the order they first appear, each one's rows in table order
+        cond, _ = pd.factorize(q["simulation"].astype(str))
+        values = q["measured"].to_numpy(float)
+        for c in range(int(cond.max()) + 1):
+            m = values[cond == c]
             m = m[np.isfinite(m)]
             if len(m) < 2 or not np.mean(m) != 0 or not np.ptp(m) > 0:
                 continue  # identical replicates (values rounded alike) carry no spread to compare
