@@ -319,9 +319,10 @@ def replicate_conditions(d: pd.DataFrame) -> tuple | None:
     condition and measured quantity with two measured values at least, not all equal, (mean,
     replicate SD, n, simulated mean, seed SD, seeds, scale, quantity), each an array over them,
     and their relative variance pooled over each quantity's conditions
-    (:func:`soilcal.loop.residuals.pooled_relative_variance`); None where there is none.  Gathered once, it is standardised against the simulated means
-    and seed SDs times any factor (:func:`replicate_standardised`), as the scatter about a
-    uniform scale does at every scale it tries (:func:`soilcal.loop.core.scatter_about_scale`)."""
+    (:func:`soilcal.loop.residuals.pooled_relative_variance`); None where there is none.
+    Gathered once, it is standardised against the simulated means and seed SDs times any
+    factor (:func:`replicate_standardised`), as the scatter about a uniform scale does at every
+    scale it tries (:func:`soilcal.loop.core.scatter_about_scale`)."""
     need = {"simulation", "measure", "measured", "simulated_mean", "simulated_sd", "simulated_n"}
     if not need <= set(d.columns) or not len(d):
         return None
