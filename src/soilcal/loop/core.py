@@ -802,14 +802,17 @@ def scatter_about_scale(res: pd.DataFrame, s: float) -> tuple[float, int, float]
                           1.0 / float(np.sum(1.0 / ref_m[at])), float(np.mean(ref_s[at])),
                           bool(np.all(pool_m[at] & pool_s[at]))))
         rep = g[~kg]
-        groups.append((parts, rep))
-    if not any(p or len(r) for p, r in groups):
+        # the replicate rows without an SD gathered once, standardised at each scale tried
+        groups.append((parts, dg.replicate_conditions(rep) if len(rep) else None, len(rep)))
+    if not any(p or r for p, _, r in groups):
         return math.nan, 0, math.nan
 
     def chi_of(scale: float) -> tuple[float, int, int]:
-        total, n_cond, dof_within = 0.0, 0, 0
-        for parts, rep in groups:
-            between, within, wdof = [], [], []
+        # per simulation its quantities' deviates and degrees of freedom, then every deviate's
+        # unit-normal equivalent at once
+        zs, dofs, rows = [], [], []
+        for parts, rep, _ in groups:
+            at, within, wdof = [], [], []
             for mean, var_m, dof_m, sim, sd_s, n_s, wchi, wd, rm, rs_, pooled in parts:
                 var_s = (1.0 + scale) ** 2 * sd_s ** 2 / n_s if np.isfinite(sd_s) and n_s >= 1 else 0.0
                 se = math.sqrt(var_m + var_s)
@@ -827,14 +830,19 @@ def scatter_about_scale(res: pd.DataFrame, s: float) -> tuple[float, int, float]
                 dof = (float(rs.satterthwaite(rm, dof_m, (1.0 + scale) ** 2 * rs_ if var_s > 0 else 0.0, n_s - 1.0))
                        if pooled else min(dof_m if var_m > 0 else np.inf, n_s - 1.0 if var_s > 0 and n_s > 1 else np.inf))
                 z = (mean - sim * (1.0 + scale)) / se
-                between.append(float(dg.normal_equivalent([z], [dof])[0]) ** 2)
+                at.append(len(zs))
+                zs.append(z)
+                dofs.append(dof)
                 within.append(wchi)
                 wdof.append(wd)
-            if len(rep):
-                r = rep.assign(simulated_mean=rep["simulated_mean"].astype(float) * (1.0 + scale),
-                               simulated_sd=rep["simulated_sd"].astype(float) * abs(1.0 + scale))
-                zr, dofr = dg.replicate_residuals(r)
-                between += list(dg.normal_equivalent(zr, dofr) ** 2)
+            zr, dofr = dg.replicate_standardised(rep, 1.0 + scale)
+            rows.append((at, len(zs), len(zr), within, wdof))
+            zs += zr.tolist()
+            dofs += dofr.tolist()
+        ne = dg.normal_equivalent(zs, dofs)
+        total, n_cond, dof_within = 0.0, 0, 0
+        for at, r0, nr, within, wdof in rows:
+            between = [float(ne[j]) ** 2 for j in at] + list(ne[r0:r0 + nr] ** 2)
             if between:
                 total += float(np.mean(between)) + (float(np.mean(within)) if within else 0.0)
                 n_cond += 1

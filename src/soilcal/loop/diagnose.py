@@ -200,7 +200,8 @@ def _periodic(name, q, x, r, distinct, sst) -> dict:
     count, done = 0, 0
     while done < PERIODIC_PERMUTATIONS:  # in blocks, so a long table's scan stays small in memory
         k = min(500, PERIODIC_PERMUTATIONS - done)
-        null, _ = largest(np.stack([rc[rng.permutation(n)] for _ in range(k)]))
+        # k permutations at once, each row's shuffle the draws rng.permutation(n) makes in turn
+        null, _ = largest(rc[rng.permuted(np.tile(np.arange(n), (k, 1)), axis=1)])
         count += int(np.sum(null >= r2 - 1e-12))
         done += k
     p = (1.0 + count) / (1.0 + PERIODIC_PERMUTATIONS)
@@ -310,10 +311,21 @@ def replicate_residuals(d: pd.DataFrame) -> tuple[np.ndarray, np.ndarray]:
     columns.  Every repeat counts, equal values too: repeats rounded to whole newtons or half
     degrees often repeat a value, and counting them once shrank the test's degrees of freedom
     (250, 250, 256 N read as two repeats)."""
+    return replicate_standardised(replicate_conditions(d))
+
+
+def replicate_conditions(d: pd.DataFrame) -> tuple | None:
+    """What :func:`replicate_residuals` standardises, gathered from the rows ``d``: per
+    condition and measured quantity with two measured values at least, not all equal, (mean,
+    replicate SD, n, simulated mean, seed SD, seeds, scale, quantity), each an array over them,
+    and their relative variance pooled over each quantity's conditions
+    (:func:`soilcal.loop.residuals.pooled_relative_variance`); None where there is none.
+    Gathered once, it is standardised against the simulated means and seed SDs times any
+    factor (:func:`replicate_standardised`), as the scatter about a uniform scale does at every
+    scale it tries (:func:`soilcal.loop.core.scatter_about_scale`)."""
     need = {"simulation", "measure", "measured", "simulated_mean", "simulated_sd", "simulated_n"}
     if not need <= set(d.columns) or not len(d):
-        return np.empty(0), np.empty(0)
-    from soilcal.loop.residuals import pooled_relative_variance, satterthwaite
+        return None
 
     rows = d if "measured_sd" not in d else d[~np.isfinite(d["measured_sd"].astype(float).to_numpy())]
     cond = []  # per condition and quantity: mean, replicate SD, n, simulated mean, seed SD, seeds, scale, quantity
@@ -332,9 +344,25 @@ def replicate_residuals(d: pd.DataFrame) -> tuple[np.ndarray, np.ndarray]:
                      str(g["measurement"].iloc[0]) + "\x00" + str(g["measure"].iloc[0]) if "measurement" in g
                      else str(g["measure"].iloc[0])))
     if not cond:
-        return np.empty(0), np.empty(0)
+        return None
     mean, sd, n, sim, sd_s, n_s, scale, q = (np.array(c) for c in zip(*cond))
     mean, sd, n, sim, sd_s, n_s, scale = (np.asarray(x, float) for x in (mean, sd, n, sim, sd_s, n_s, scale))
+    from soilcal.loop.residuals import pooled_relative_variance
+
+    return mean, sd, n, sim, sd_s, n_s, scale, q, pooled_relative_variance(sd, n, scale, q)
+
+
+def replicate_standardised(cond: tuple | None, factor: float = 1.0) -> tuple[np.ndarray, np.ndarray]:
+    """(standardised residuals, degrees of freedom) of :func:`replicate_residuals` from the
+    conditions ``cond`` (:func:`replicate_conditions`), their simulated means and seed SDs
+    times ``factor`` (a uniform scale 1 + s: the means times 1 + s, the SDs times |1 + s|)."""
+    from soilcal.loop.residuals import pooled_relative_variance, satterthwaite
+
+    if cond is None:
+        return np.empty(0), np.empty(0)
+    mean, sd, n, sim, sd_s, n_s, scale, q, pooled_m = cond
+    if factor != 1.0:
+        sim, sd_s = sim * factor, sd_s * abs(factor)
     var_m = sd ** 2 / n
     var_s = np.where(np.isfinite(sd_s) & (n_s >= 1), sd_s ** 2 / np.clip(n_s, 1.0, None), 0.0)
     se = np.sqrt(var_m + var_s)
@@ -342,7 +370,7 @@ def replicate_residuals(d: pd.DataFrame) -> tuple[np.ndarray, np.ndarray]:
     # their scale), not from the condition's own: those grow where its two or three replicates
     # or seeds happen to scatter little, exactly where the residual over them is large
     # (:func:`soilcal.loop.residuals.reference_variances`)
-    ref_m = pooled_relative_variance(sd, n, scale, q) * scale ** 2 / n
+    ref_m = pooled_m * scale ** 2 / n
     ref_s = np.where(n_s > 1, pooled_relative_variance(sd_s, n_s, scale, q) * scale ** 2 / np.clip(n_s, 1.0, None),
                      var_s)
     ref_m, ref_s = np.where(np.isfinite(ref_m), ref_m, var_m), np.where(np.isfinite(ref_s), ref_s, var_s)
@@ -377,8 +405,11 @@ def replicate_spread(d: pd.DataFrame) -> dict | None:
     best, k = None, 0
     for _, q in rows.groupby(rows["measure"].astype(str), sort=False):
         rel, ab = [], []
-        for _, g in q.groupby(q["simulation"].astype(str), sort=False):
-            m = g["measured"].to_numpy(float)
+        # its conditions in the order they first appear, each one's rows in table order
+        cond, _ = pd.factorize(q["simulation"].astype(str))
+        values = q["measured"].to_numpy(float)
+        for c in range(int(cond.max()) + 1):
+            m = values[cond == c]
             m = m[np.isfinite(m)]
             if len(m) < 2 or not np.mean(m) != 0 or not np.ptp(m) > 0:
                 continue  # identical replicates (values rounded alike) carry no spread to compare

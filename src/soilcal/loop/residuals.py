@@ -289,9 +289,13 @@ def pooled_relative_variance(sd, n, scale, group) -> np.ndarray:
     sd, n, scale = (np.asarray(x, float) for x in (sd, n, scale))
     rel = (sd / scale) ** 2
     ok = np.isfinite(rel) & np.isfinite(n) & (n > 1)
-    g = pd.Series(np.asarray(group).astype(str))
-    num = pd.Series(np.where(ok, (n - 1) * rel, 0.0)).groupby(g).transform("sum").to_numpy(float)
-    den = pd.Series(np.where(ok, n - 1, 0.0)).groupby(g).transform("sum").to_numpy(float)
+    num, den = np.where(ok, (n - 1) * rel, 0.0), np.where(ok, n - 1, 0.0)
+    names = np.asarray(group).astype(str)
+    if len(set(names.tolist())) == len(names):  # every row its own group: nothing to pool or test
+        return np.where(den > 0, num / np.where(den > 0, den, 1.0), np.nan)
+    g = pd.Series(names)
+    num = pd.Series(num).groupby(g).transform("sum").to_numpy(float)
+    den = pd.Series(den).groupby(g).transform("sum").to_numpy(float)
     out = np.where(den > 0, num / np.where(den > 0, den, 1.0), np.nan)
     for _, at in pd.Series(np.arange(len(g))).groupby(g):
         at = at.to_numpy()
