@@ -1835,11 +1835,22 @@ def hough_peaks(hspace, angles, dists, num_peaks, min_distance, threshold, min_a
     img_max = ndi.maximum_filter1d(img, size=2 * min_distance + 1, axis=0, mode="constant", cval=0)
     img_max = ndi.maximum_filter1d(img_max, size=2 * min_angle + 1, axis=1, mode="constant", cval=0)
     img *= img == img_max
-    props = measure.regionprops(measure.label(img > threshold), img_max)
-    props = sorted(props, key=lambda p: p.intensity_max)[::-1]
-    # each peak's centroid in the whole accumulator's bins, as regionprops' (the mean of its
-    # bins' coordinates) rounded
-    coords = np.array([np.round(((p.coords + (r0, c0)) * 1.0).mean(axis=0)) for p in props], dtype=int)
+    lab, n = measure.label(img > threshold, return_num=True)
+    # the connected local maxima as regionprops gives them, by one count of the labels instead
+    # of a region object each (a textured photo's accumulator holds thousands): each one's
+    # maximum of img_max, strongest first (a stable sort reversed, as sorted()[::-1] of the
+    # regions in label order), and its centroid in the whole accumulator's bins (the mean of
+    # its bins' coordinates: sums of whole numbers, exact in any order) rounded
+    flat = lab.ravel()
+    at = np.flatnonzero(flat)
+    labs = flat[at]
+    strength = np.zeros(n + 1, img_max.dtype)
+    np.maximum.at(strength, labs, img_max.ravel()[at])
+    count = np.bincount(labs, minlength=n + 1)[1:]
+    cy = np.bincount(labs, weights=at // img.shape[1] + r0, minlength=n + 1)[1:]
+    cx = np.bincount(labs, weights=at % img.shape[1] + c0, minlength=n + 1)[1:]
+    order = np.argsort(strength[1:], kind="stable")[::-1]
+    coords = np.round(np.column_stack([cy / count, cx / count])[order]).astype(int)
     ys, xs = np.mgrid[-min_distance:min_distance + 1, -min_angle:min_angle + 1]
     peaks, ypk, xpk = [], [], []
     for y, x in coords:
