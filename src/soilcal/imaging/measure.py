@@ -156,7 +156,9 @@ def _gray(rgb, channel="gray", lab=None):
         return filters.gaussian(color.rgb2gray(rgb), 1.2)
     if channel == "chroma":
         rgb = filters.gaussian(rgb, 1.5, channel_axis=-1)
-        c = (rgb[..., 0] - rgb[..., 2]) / (rgb.sum(-1) + 0.05)
+        # R + G + B added channel by channel: the numbers of rgb.sum(-1) (three terms, added
+        # in order), without NumPy's reduction over an axis of three, ten times the time
+        c = (rgb[..., 0] - rgb[..., 2]) / (rgb[..., 0] + rgb[..., 1] + rgb[..., 2] + 0.05)
         return np.clip(0.5 - 2.0 * c, 0, 1)
     if channel in ("lab_a", "lab_b"):
         if lab is None:
@@ -164,11 +166,16 @@ def _gray(rgb, channel="gray", lab=None):
         return np.clip((lab[..., 1 if channel == "lab_a" else 2] + 100.0) / 200.0, 0, 1)
     if channel == "saturation":
         # rgb2hsv's S channel, (max - min) / max and 0 where max = min, computed as rgb2hsv
-        # computes it (the same numbers) without the hue and value it would also compute
+        # computes it (the same numbers) without the hue and value it would also compute; the
+        # largest and smallest channel taken pixel by pixel of the three (the same values as
+        # np.ptp and max over the colour axis, whose reductions over an axis of three take ten
+        # times as long)
         rgb = util.img_as_float(rgb)
-        delta = np.ptp(rgb, axis=-1)
+        r, g, b = rgb[..., 0], rgb[..., 1], rgb[..., 2]
+        top = np.maximum(np.maximum(r, g), b)
+        delta = top - np.minimum(np.minimum(r, g), b)
         with np.errstate(invalid="ignore"):
-            s = delta / rgb.max(-1)
+            s = delta / top
         s[delta == 0.0] = 0.0
         return filters.gaussian(s, 1.2)
     raise InputError(None, "channel", "'gray', 'chroma' or 'auto'", channel)
