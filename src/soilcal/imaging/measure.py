@@ -138,11 +138,23 @@ def _smoothed_lab(rgb):
     return color.rgb2lab(filters.gaussian(rgb, 1.2, channel_axis=-1))
 
 
+class _Cues(dict):
+    """The cue images of one photo by channel (:func:`_grays`), and ``segmented``: each class
+    segmented from them (:func:`open_fill` of a cue below a threshold) by (channel, polarity,
+    threshold), kept for the photo's further plate lines and checks: two plate candidates a
+    few rows apart often give the same Otsu threshold (a histogram bin's centre), so the same
+    class."""
+
+    def __init__(self, *args, **kwargs):
+        super().__init__(*args, **kwargs)
+        self.segmented = {}
+
+
 def _grays(rgb, channels, lum=None):
-    """``_gray`` of each channel; the smoothed L*a*b* image is converted once for both of its
-    cues, and ``lum`` (the "gray" channel, already computed) is reused."""
+    """``_gray`` of each channel (a :class:`_Cues`); the smoothed L*a*b* image is converted
+    once for both of its cues, and ``lum`` (the "gray" channel, already computed) is reused."""
     lab = _smoothed_lab(rgb) if {"lab_a", "lab_b"} <= set(channels) else None
-    return {ch: lum if ch == "gray" and lum is not None else _gray(rgb, ch, lab) for ch in channels}
+    return _Cues({ch: lum if ch == "gray" and lum is not None else _gray(rgb, ch, lab) for ch in channels})
 
 
 def _gray(rgb, channel="gray", lab=None):
@@ -1241,7 +1253,7 @@ def _on_plate_lines(path, rgb, lum, grays, lines, n_first, channel, threshold, k
                 res = _pile_with(path, rgb, g, ch, pol, band, slope, intercept, threshold,
                                  keep_stages and first is None, search=channel == "auto", tried=tried,
                                  label=f"line {n_line}, {ch}/{pol}", lum=lum, plate_edges=plate_edges,
-                                 levelled=levelled,
+                                 levelled=levelled, segmented=getattr(grays, "segmented", None),
                                  otsu=split[ch][1] if channel == "auto" and pol == "dark" else None)
             except InputError as e:
                 if e.field not in ("image", "left flank", "right flank", "plate line"):
@@ -1341,7 +1353,8 @@ def _cross_checked(res: PileResult, check: PileResult, outvoted: PileResult | No
 
 
 def _pile_with(path, rgb, gray, cue, polarity, band, slope, intercept, threshold, keep_stages, search=True,
-               tried: Tried | None = None, label: str = "", lum=None, plate_edges=None, levelled=None, otsu=None):
+               tried: Tried | None = None, label: str = "", lum=None, plate_edges=None, levelled=None, otsu=None,
+               segmented=None):
     """Measure with one cue: the heap is the class below Otsu's threshold of ``gray``.  In a
     cue search (``search``) the result must look like a heap; a channel chosen by the caller
     (e.g. a DEM silhouette, whatever its flanks) is measured as it is.  ``tried`` records the
@@ -1350,10 +1363,17 @@ def _pile_with(path, rgb, gray, cue, polarity, band, slope, intercept, threshold
     ``plate_edges``: the photo's edge map, in which a plate line found by the search must run
     on beside the heap (:func:`_plate_beside_heap`); ``levelled``: a dict in which the caller
     keeps ``lum`` levelled on this plate line (:func:`_level`) for its further cues; ``otsu``:
-    Otsu's threshold of ``gray[band]`` where the caller has it already (:func:`_eta`)."""
+    Otsu's threshold of ``gray[band]`` where the caller has it already (:func:`_eta`);
+    ``segmented``: a dict of the classes already segmented from the photo's cues by (cue,
+    polarity, threshold) (:class:`_Cues`), looked up before segmenting and added to."""
     if threshold == "otsu":
         t = filters.threshold_otsu(gray[band]) if otsu is None else otsu
-        binary = open_fill(gray < t)
+        key = (cue, polarity, float(t))
+        binary = None if segmented is None else segmented.get(key)
+        if binary is None:
+            binary = open_fill(gray < t)
+            if segmented is not None:
+                segmented[key] = binary
     else:
         binary = _binary(path, gray, threshold)
     if tried is not None:
