@@ -251,3 +251,16 @@ def test_saturation_cue_is_hsv_saturation(dtype):
     expected = filters.gaussian(color.rgb2hsv(x)[..., 1], 1.2)
     got = measure._gray(x, "saturation")
     assert got.dtype == expected.dtype and np.array_equal(got, expected)
+
+
+def test_chroma_cue_is_its_formula():
+    """The chroma cue is 1/2 - 2 (R - B) / (R + G + B + 0.05) of the smoothed image, clipped to
+    [0, 1]: the same numbers as the formula with NumPy's sum over the colour axis."""
+    from skimage import filters
+
+    rng = np.random.default_rng(4)
+    x = rng.random((60, 50, 3))
+    x[:8] = 0.0
+    g = filters.gaussian(x, 1.5, channel_axis=-1)
+    expected = np.clip(0.5 - 2.0 * (g[..., 0] - g[..., 2]) / (g.sum(-1) + 0.05), 0, 1)
+    assert np.array_equal(measure._gray(x, "chroma"), expected)

@@ -7,8 +7,8 @@ flank -> angle = atan(slope).  Here the reference is the plate line itself, foun
 transform of the Canny edges (lines within :data:`PLATE_MAX_ROLL_DEG` of horizontal) and refined by a RANSAC line fit, so a
 rolled camera does not bias the angle: the image is rotated by the plate's tilt before the
 flanks are read.  A camera rolled further is refused (:func:`_plate_beyond_search`) when a heap
-stands on the tilted edge (:func:`_heap_stands_on`; a shadow's edge across the wall is no roll).  Each flank is fitted with RANSAC (``skimage.measure.ransac`` with
-``LineModelND``) between 20 % and 75 % of the heap height (top cap and toe excluded):
+stands on the tilted edge (:func:`_heap_stands_on`; a shadow's edge across the wall is no roll).  Each flank is fitted with RANSAC (:func:`ransac_line`: ``skimage.measure.ransac``
+with ``LineModelND``, its steps without its per-trial overhead) between 20 % and 75 % of the heap height (top cap and toe excluded):
 
     alpha = atan(|d_v| / |d_u|)     (d = fitted line direction in the plate frame)
 
@@ -29,6 +29,7 @@ from __future__ import annotations
 
 import itertools
 import math
+import warnings
 from dataclasses import asdict, dataclass, field
 
 import numpy as np
@@ -137,11 +138,23 @@ def _smoothed_lab(rgb):
     return color.rgb2lab(filters.gaussian(rgb, 1.2, channel_axis=-1))
 
 
+class _Cues(dict):
+    """The cue images of one photo by channel (:func:`_grays`), and ``segmented``: each class
+    segmented from them (:func:`open_fill` of a cue below a threshold) by (channel, polarity,
+    threshold), kept for the photo's further plate lines and checks: two plate candidates a
+    few rows apart often give the same Otsu threshold (a histogram bin's centre), so the same
+    class."""
+
+    def __init__(self, *args, **kwargs):
+        super().__init__(*args, **kwargs)
+        self.segmented = {}
+
+
 def _grays(rgb, channels, lum=None):
-    """``_gray`` of each channel; the smoothed L*a*b* image is converted once for both of its
-    cues, and ``lum`` (the "gray" channel, already computed) is reused."""
+    """``_gray`` of each channel (a :class:`_Cues`); the smoothed L*a*b* image is converted
+    once for both of its cues, and ``lum`` (the "gray" channel, already computed) is reused."""
     lab = _smoothed_lab(rgb) if {"lab_a", "lab_b"} <= set(channels) else None
-    return {ch: lum if ch == "gray" and lum is not None else _gray(rgb, ch, lab) for ch in channels}
+    return _Cues({ch: lum if ch == "gray" and lum is not None else _gray(rgb, ch, lab) for ch in channels})
 
 
 def _gray(rgb, channel="gray", lab=None):
@@ -155,7 +168,9 @@ def _gray(rgb, channel="gray", lab=None):
         return filters.gaussian(color.rgb2gray(rgb), 1.2)
     if channel == "chroma":
         rgb = filters.gaussian(rgb, 1.5, channel_axis=-1)
-        c = (rgb[..., 0] - rgb[..., 2]) / (rgb.sum(-1) + 0.05)
+        # R + G + B added channel by channel: the numbers of rgb.sum(-1) (three terms, added
+        # in order), without NumPy's reduction over an axis of three, ten times the time
+        c = (rgb[..., 0] - rgb[..., 2]) / (rgb[..., 0] + rgb[..., 1] + rgb[..., 2] + 0.05)
         return np.clip(0.5 - 2.0 * c, 0, 1)
     if channel in ("lab_a", "lab_b"):
         if lab is None:
@@ -163,11 +178,16 @@ def _gray(rgb, channel="gray", lab=None):
         return np.clip((lab[..., 1 if channel == "lab_a" else 2] + 100.0) / 200.0, 0, 1)
     if channel == "saturation":
         # rgb2hsv's S channel, (max - min) / max and 0 where max = min, computed as rgb2hsv
-        # computes it (the same numbers) without the hue and value it would also compute
+        # computes it (the same numbers) without the hue and value it would also compute; the
+        # largest and smallest channel taken pixel by pixel of the three (the same values as
+        # np.ptp and max over the colour axis, whose reductions over an axis of three take ten
+        # times as long)
         rgb = util.img_as_float(rgb)
-        delta = np.ptp(rgb, axis=-1)
+        r, g, b = rgb[..., 0], rgb[..., 1], rgb[..., 2]
+        top = np.maximum(np.maximum(r, g), b)
+        delta = top - np.minimum(np.minimum(r, g), b)
         with np.errstate(invalid="ignore"):
-            s = delta / rgb.max(-1)
+            s = delta / top
         s[delta == 0.0] = 0.0
         return filters.gaussian(s, 1.2)
     raise InputError(None, "channel", "'gray', 'chroma' or 'auto'", channel)
@@ -285,8 +305,7 @@ def plate_line(path, gray, binary):
     er, ec = np.nonzero(edges)
     near = np.abs(er - rows[ec]) < 3
     pts = np.column_stack([ec[near], er[near]]).astype(float)
-    model, _ = measure.ransac(pts, measure.LineModelND, min_samples=2, residual_threshold=1.0,
-                              max_trials=200, rng=0)
+    model, _ = ransac_line(pts, residual_threshold=1.0, max_trials=200, rng=0)
     (c0, r0), (dc, dr) = model.origin, model.direction
     slope = dr / dc
     return slope, r0 - slope * c0
@@ -391,6 +410,61 @@ def _mid_crossing(seg, mid, sgn, start, default, near=None):
     return start + j - 1 + (seg[j - 1] - mid) / (seg[j - 1] - seg[j])
 
 
+def ransac_line(pts, residual_threshold, max_trials, rng):
+    """``skimage.measure.ransac(pts, LineModelND, min_samples=2, residual_threshold=...,
+    max_trials=..., rng=...)`` of points ``pts`` (N x 2, floats): the same (model, inliers),
+    by its steps on the same numbers (the same draws of two points from the seeded generator,
+    the same line through each pair, residuals, inlier count, tie-break on the residuals' sum
+    of squares and trial limit, the final total-least-squares line of the inliers), without
+    building a model object per trial: a plate search fits dozens of lines with up to 200
+    trials each, most of whose time went to that bookkeeping.  ``model`` is None (and a
+    warning is issued, as there) when no trial found an inlier."""
+    data = np.asarray(pts)
+    n = len(data)
+    if not 0 < 2 <= n:
+        raise ValueError(f"`min_samples` must be in range (0, {n}]")
+    gen = np.random.default_rng(rng)
+    best_num, best_sum, best = 0, np.inf, None
+    spl = gen.choice(n, 2, replace=False)
+    trials = 0
+    while trials < max_trials:
+        trials += 1
+        s = data[spl]
+        spl = gen.choice(n, 2, replace=False)
+        # LineModelND's estimate from two points: origin their mean, direction their difference
+        origin = s.mean(axis=0)
+        s = s - origin
+        direction = s[1] - s[0]
+        norm = np.linalg.norm(direction)
+        if norm != 0:
+            direction /= norm
+        # its residuals: the distance of each point from the line
+        d = data - origin
+        res = np.abs(np.linalg.norm(d - (d @ direction)[..., np.newaxis] * direction, axis=1))
+        inliers = res < residual_threshold
+        res_sum = res.dot(res)
+        count = np.count_nonzero(inliers)
+        if count > best_num or (count == best_num and res_sum < best_sum):
+            best_num, best_sum, best = count, res_sum, inliers
+            max_trials = min(max_trials, _dynamic_max_trials(best_num, n))
+    if best is None or not best.any():
+        warnings.warn("No inliers found. Model not fitted")
+        return None, None
+    return measure.LineModelND.from_estimate(data[best]), best
+
+
+def _dynamic_max_trials(n_inliers, n_samples, min_samples=2):
+    """skimage's trial limit of a RANSAC with stop probability 1 (its default): the trials
+    after which a sample of ``min_samples`` inliers was drawn with a probability of 1 -
+    machine epsilon."""
+    if n_inliers == 0:
+        return np.inf
+    eps = np.spacing(1)
+    nom = eps  # 1 - the stop probability, clipped to [eps, 1 - eps] as there
+    denom = np.clip(1 - (n_inliers / n_samples) ** min_samples, a_min=eps, a_max=1 - eps)
+    return np.ceil(np.log(nom) / np.log(denom))
+
+
 def _fit(path, u, v, label, seed=0, residual=None):
     """RANSAC line (``LineModelND``); residual threshold = max(1.5 px, 3 x robust sigma of the
     residuals about a first total-least-squares line) unless given, so a noisy edge keeps its
@@ -405,8 +479,7 @@ def _fit(path, u, v, label, seed=0, residual=None):
         res = first.residuals(pts)
         sigma = 1.4826 * np.median(np.abs(res - np.median(res)))
         residual = max(1.5, 3.0 * sigma)
-    model, inl = measure.ransac(pts, measure.LineModelND, min_samples=2, residual_threshold=residual,
-                                max_trials=500, rng=seed)
+    model, inl = ransac_line(pts, residual_threshold=residual, max_trials=500, rng=seed)
     (u0, v0), (du, dv) = model.origin, model.direction
     return float(np.degrees(np.arctan2(abs(dv), abs(du)))), (u0, v0, du, dv), pts[inl]
 
@@ -1180,7 +1253,7 @@ def _on_plate_lines(path, rgb, lum, grays, lines, n_first, channel, threshold, k
                 res = _pile_with(path, rgb, g, ch, pol, band, slope, intercept, threshold,
                                  keep_stages and first is None, search=channel == "auto", tried=tried,
                                  label=f"line {n_line}, {ch}/{pol}", lum=lum, plate_edges=plate_edges,
-                                 levelled=levelled,
+                                 levelled=levelled, segmented=getattr(grays, "segmented", None),
                                  otsu=split[ch][1] if channel == "auto" and pol == "dark" else None)
             except InputError as e:
                 if e.field not in ("image", "left flank", "right flank", "plate line"):
@@ -1280,7 +1353,8 @@ def _cross_checked(res: PileResult, check: PileResult, outvoted: PileResult | No
 
 
 def _pile_with(path, rgb, gray, cue, polarity, band, slope, intercept, threshold, keep_stages, search=True,
-               tried: Tried | None = None, label: str = "", lum=None, plate_edges=None, levelled=None, otsu=None):
+               tried: Tried | None = None, label: str = "", lum=None, plate_edges=None, levelled=None, otsu=None,
+               segmented=None):
     """Measure with one cue: the heap is the class below Otsu's threshold of ``gray``.  In a
     cue search (``search``) the result must look like a heap; a channel chosen by the caller
     (e.g. a DEM silhouette, whatever its flanks) is measured as it is.  ``tried`` records the
@@ -1289,10 +1363,17 @@ def _pile_with(path, rgb, gray, cue, polarity, band, slope, intercept, threshold
     ``plate_edges``: the photo's edge map, in which a plate line found by the search must run
     on beside the heap (:func:`_plate_beside_heap`); ``levelled``: a dict in which the caller
     keeps ``lum`` levelled on this plate line (:func:`_level`) for its further cues; ``otsu``:
-    Otsu's threshold of ``gray[band]`` where the caller has it already (:func:`_eta`)."""
+    Otsu's threshold of ``gray[band]`` where the caller has it already (:func:`_eta`);
+    ``segmented``: a dict of the classes already segmented from the photo's cues by (cue,
+    polarity, threshold) (:class:`_Cues`), looked up before segmenting and added to."""
     if threshold == "otsu":
         t = filters.threshold_otsu(gray[band]) if otsu is None else otsu
-        binary = open_fill(gray < t)
+        key = (cue, polarity, float(t))
+        binary = None if segmented is None else segmented.get(key)
+        if binary is None:
+            binary = open_fill(gray < t)
+            if segmented is not None:
+                segmented[key] = binary
     else:
         binary = _binary(path, gray, threshold)
     if tried is not None:
@@ -1781,11 +1862,22 @@ def hough_peaks(hspace, angles, dists, num_peaks, min_distance, threshold, min_a
     img_max = ndi.maximum_filter1d(img, size=2 * min_distance + 1, axis=0, mode="constant", cval=0)
     img_max = ndi.maximum_filter1d(img_max, size=2 * min_angle + 1, axis=1, mode="constant", cval=0)
     img *= img == img_max
-    props = measure.regionprops(measure.label(img > threshold), img_max)
-    props = sorted(props, key=lambda p: p.intensity_max)[::-1]
-    # each peak's centroid in the whole accumulator's bins, as regionprops' (the mean of its
-    # bins' coordinates) rounded
-    coords = np.array([np.round(((p.coords + (r0, c0)) * 1.0).mean(axis=0)) for p in props], dtype=int)
+    lab, n = measure.label(img > threshold, return_num=True)
+    # the connected local maxima as regionprops gives them, by one count of the labels instead
+    # of a region object each (a textured photo's accumulator holds thousands): each one's
+    # maximum of img_max, strongest first (a stable sort reversed, as sorted()[::-1] of the
+    # regions in label order), and its centroid in the whole accumulator's bins (the mean of
+    # its bins' coordinates: sums of whole numbers, exact in any order) rounded
+    flat = lab.ravel()
+    at = np.flatnonzero(flat)
+    labs = flat[at]
+    strength = np.zeros(n + 1, img_max.dtype)
+    np.maximum.at(strength, labs, img_max.ravel()[at])
+    count = np.bincount(labs, minlength=n + 1)[1:]
+    cy = np.bincount(labs, weights=at // img.shape[1] + r0, minlength=n + 1)[1:]
+    cx = np.bincount(labs, weights=at % img.shape[1] + c0, minlength=n + 1)[1:]
+    order = np.argsort(strength[1:], kind="stable")[::-1]
+    coords = np.round(np.column_stack([cy / count, cx / count])[order]).astype(int)
     ys, xs = np.mgrid[-min_distance:min_distance + 1, -min_angle:min_angle + 1]
     peaks, ypk, xpk = [], [], []
     for y, x in coords:
@@ -1855,8 +1947,7 @@ def _refined_line(er, ec, w, a, d):
     rows = (d - cols * np.cos(a)) / np.sin(a)
     near = np.abs(er - rows[ec]) < 3
     pts = np.column_stack([ec[near], er[near]]).astype(float)
-    model, _ = measure.ransac(pts, measure.LineModelND, min_samples=2, residual_threshold=1.0,
-                              max_trials=200, rng=0)
+    model, _ = ransac_line(pts, residual_threshold=1.0, max_trials=200, rng=0)
     (c0, r0), (dc, dr) = model.origin, model.direction
     return dr / dc, r0 - dr / dc * c0
 
