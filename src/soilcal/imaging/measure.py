@@ -7,8 +7,8 @@ flank -> angle = atan(slope).  Here the reference is the plate line itself, foun
 transform of the Canny edges (lines within :data:`PLATE_MAX_ROLL_DEG` of horizontal) and refined by a RANSAC line fit, so a
 rolled camera does not bias the angle: the image is rotated by the plate's tilt before the
 flanks are read.  A camera rolled further is refused (:func:`_plate_beyond_search`) when a heap
-stands on the tilted edge (:func:`_heap_stands_on`; a shadow's edge across the wall is no roll).  Each flank is fitted with RANSAC (:func:`ransac_line`: ``skimage.measure.ransac``
-with ``LineModelND``, its steps without its per-trial overhead) between 20 % and 75 % of the heap height (top cap and toe excluded):
+stands on the tilted edge (:func:`_heap_stands_on`; a shadow's edge across the wall is no roll).  Each flank is fitted with RANSAC (``skimage.measure.ransac`` with
+``LineModelND``) between 20 % and 75 % of the heap height (top cap and toe excluded):
 
     alpha = atan(|d_v| / |d_u|)     (d = fitted line direction in the plate frame)
 
@@ -29,7 +29,6 @@ from __future__ import annotations
 
 import itertools
 import math
-import warnings
 from dataclasses import asdict, dataclass, field
 
 import numpy as np
@@ -305,7 +304,8 @@ def plate_line(path, gray, binary):
     er, ec = np.nonzero(edges)
     near = np.abs(er - rows[ec]) < 3
     pts = np.column_stack([ec[near], er[near]]).astype(float)
-    model, _ = ransac_line(pts, residual_threshold=1.0, max_trials=200, rng=0)
+    model, _ = measure.ransac(pts, measure.LineModelND, min_samples=2, residual_threshold=1.0,
+                              max_trials=200, rng=0)
     (c0, r0), (dc, dr) = model.origin, model.direction
     slope = dr / dc
     return slope, r0 - slope * c0
@@ -410,61 +410,6 @@ def _mid_crossing(seg, mid, sgn, start, default, near=None):
     return start + j - 1 + (seg[j - 1] - mid) / (seg[j - 1] - seg[j])
 
 
-def ransac_line(pts, residual_threshold, max_trials, rng):
-    """``skimage.measure.ransac(pts, LineModelND, min_samples=2, residual_threshold=...,
-    max_trials=..., rng=...)`` of points ``pts`` (N x 2, floats): the same (model, inliers),
-    by its steps on the same numbers (the same draws of two points from the seeded generator,
-    the same line through each pair, residuals, inlier count, tie-break on the residuals' sum
-    of squares and trial limit, the final total-least-squares line of the inliers), without
-    building a model object per trial: a plate search fits dozens of lines with up to 200
-    trials each, most of whose time went to that bookkeeping.  ``model`` is None (and a
-    warning is issued, as there) when no trial found an inlier."""
-    data = np.asarray(pts)
-    n = len(data)
-    if not 0 < 2 <= n:
-        raise ValueError(f"`min_samples` must be in range (0, {n}]")
-    gen = np.random.default_rng(rng)
-    best_num, best_sum, best = 0, np.inf, None
-    spl = gen.choice(n, 2, replace=False)
-    trials = 0
-    while trials < max_trials:
-        trials += 1
-        s = data[spl]
-        spl = gen.choice(n, 2, replace=False)
-        # LineModelND's estimate from two points: origin their mean, direction their difference
-        origin = s.mean(axis=0)
-        s = s - origin
-        direction = s[1] - s[0]
-        norm = np.linalg.norm(direction)
-        if norm != 0:
-            direction /= norm
-        # its residuals: the distance of each point from the line
-        d = data - origin
-        res = np.abs(np.linalg.norm(d - (d @ direction)[..., np.newaxis] * direction, axis=1))
-        inliers = res < residual_threshold
-        res_sum = res.dot(res)
-        count = np.count_nonzero(inliers)
-        if count > best_num or (count == best_num and res_sum < best_sum):
-            best_num, best_sum, best = count, res_sum, inliers
-            max_trials = min(max_trials, _dynamic_max_trials(best_num, n))
-    if best is None or not best.any():
-        warnings.warn("No inliers found. Model not fitted")
-        return None, None
-    return measure.LineModelND.from_estimate(data[best]), best
-
-
-def _dynamic_max_trials(n_inliers, n_samples, min_samples=2):
-    """skimage's trial limit of a RANSAC with stop probability 1 (its default): the trials
-    after which a sample of ``min_samples`` inliers was drawn with a probability of 1 -
-    machine epsilon."""
-    if n_inliers == 0:
-        return np.inf
-    eps = np.spacing(1)
-    nom = eps  # 1 - the stop probability, clipped to [eps, 1 - eps] as there
-    denom = np.clip(1 - (n_inliers / n_samples) ** min_samples, a_min=eps, a_max=1 - eps)
-    return np.ceil(np.log(nom) / np.log(denom))
-
-
 def _fit(path, u, v, label, seed=0, residual=None):
     """RANSAC line (``LineModelND``); residual threshold = max(1.5 px, 3 x robust sigma of the
     residuals about a first total-least-squares line) unless given, so a noisy edge keeps its
@@ -479,7 +424,8 @@ def _fit(path, u, v, label, seed=0, residual=None):
         res = first.residuals(pts)
         sigma = 1.4826 * np.median(np.abs(res - np.median(res)))
         residual = max(1.5, 3.0 * sigma)
-    model, inl = ransac_line(pts, residual_threshold=residual, max_trials=500, rng=seed)
+    model, inl = measure.ransac(pts, measure.LineModelND, min_samples=2, residual_threshold=residual,
+                                max_trials=500, rng=seed)
     (u0, v0), (du, dv) = model.origin, model.direction
     return float(np.degrees(np.arctan2(abs(dv), abs(du)))), (u0, v0, du, dv), pts[inl]
 
@@ -1947,7 +1893,8 @@ def _refined_line(er, ec, w, a, d):
     rows = (d - cols * np.cos(a)) / np.sin(a)
     near = np.abs(er - rows[ec]) < 3
     pts = np.column_stack([ec[near], er[near]]).astype(float)
-    model, _ = ransac_line(pts, residual_threshold=1.0, max_trials=200, rng=0)
+    model, _ = measure.ransac(pts, measure.LineModelND, min_samples=2, residual_threshold=1.0,
+                              max_trials=200, rng=0)
     (c0, r0), (dc, dr) = model.origin, model.direction
     return dr / dc, r0 - dr / dc * c0
 
