@@ -210,3 +210,24 @@ def test_a_test_measured_twice_is_one_simulation_and_one_fold():
     assert obs["simulation"].iloc[0] == obs["simulation"].iloc[1] != obs["simulation"].iloc[2]
     folds = _folds(obs, None)
     assert [list(f) for f in folds.held_out] == [[0, 1], [2]] and folds.units is None
+
+
+
+
+def test_two_quantities_of_one_measurement_are_pooled_apart():
+    """A table measuring two quantities (horizontal and vertical force of one rig) in repeated
+    rows at two conditions: each quantity's relative variance is pooled over its own conditions
+    only, sum((n - 1) (sd / scale)^2) / sum(n - 1): F_h (1 / 10)^2 = (2 / 20)^2 = 0.01, F_v
+    (2 / 10)^2 = (4 / 20)^2 = 0.04.  Keys that pandas' grouping reads as one quantity (a
+    separator at which it stops reading) pool or refuse all four conditions together."""
+    from soilcal.loop.diagnose import replicate_conditions
+    from soilcal.loop.residuals import KEY_SEP
+
+    rows = [(sim, q, v, scale) for sim, scale, vals in (("s0", 10.0, {"F_h": (9, 10, 11), "F_v": (8, 10, 12)}),
+                                                        ("s1", 20.0, {"F_h": (18, 20, 22), "F_v": (16, 20, 24)}))
+            for q, vs in vals.items() for v in vs]
+    d = pd.DataFrame(rows, columns=["simulation", "measure", "measured", "scale"]).assign(
+        measurement="pull", simulated_mean=15.0, simulated_sd=1.0, simulated_n=3)
+    cond = replicate_conditions(d)
+    assert list(cond[7]) == [f"pull{KEY_SEP}F_h", f"pull{KEY_SEP}F_v"] * 2
+    np.testing.assert_allclose(cond[8], [0.01, 0.04, 0.01, 0.04], rtol=1e-12)

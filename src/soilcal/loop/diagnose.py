@@ -327,6 +327,8 @@ def replicate_conditions(d: pd.DataFrame) -> tuple | None:
     if not need <= set(d.columns) or not len(d):
         return None
 
+    from soilcal.loop.residuals import KEY_SEP, pooled_relative_variance
+
     rows = d if "measured_sd" not in d else d[~np.isfinite(d["measured_sd"].astype(float).to_numpy())]
     cond = []  # per condition and quantity: mean, replicate SD, n, simulated mean, seed SD, seeds, scale, quantity
     for _, g in rows.groupby([rows["simulation"].astype(str), rows["measure"].astype(str)], sort=False):
@@ -341,13 +343,12 @@ def replicate_conditions(d: pd.DataFrame) -> tuple | None:
         scale = (float(np.nanmean(g["scale"].to_numpy(float))) if "scale" in g else float(np.mean(np.abs(m))))
         cond.append((float(np.mean(m)), sd, n, float(g["simulated_mean"].iloc[0]), float(g["simulated_sd"].iloc[0]),
                      float(g["simulated_n"].iloc[0]), scale,
-                     str(g["measurement"].iloc[0]) + "\x00" + str(g["measure"].iloc[0]) if "measurement" in g
+                     str(g["measurement"].iloc[0]) + KEY_SEP + str(g["measure"].iloc[0]) if "measurement" in g
                      else str(g["measure"].iloc[0])))
     if not cond:
         return None
     mean, sd, n, sim, sd_s, n_s, scale, q = (np.array(c) for c in zip(*cond))
     mean, sd, n, sim, sd_s, n_s, scale = (np.asarray(x, float) for x in (mean, sd, n, sim, sd_s, n_s, scale))
-    from soilcal.loop.residuals import pooled_relative_variance
 
     return mean, sd, n, sim, sd_s, n_s, scale, q, pooled_relative_variance(sd, n, scale, q)
 
@@ -452,7 +453,7 @@ def _shared_simulation(d: pd.DataFrame, known: np.ndarray) -> tuple[np.ndarray, 
     if not need <= set(d.columns) or not known.any():
         return taken, 0.0, 0
     known = known & (d["measured_sd"].astype(float).to_numpy() > 0)  # an SD of 0 gives no weight
-    key = (d["simulation"].astype(str) + "\x00" + d["measure"].astype(str)).to_numpy()
+    key = (d["simulation"].astype(str) + rs.KEY_SEP + d["measure"].astype(str)).to_numpy()
     size = pd.Series(known.astype(int)).groupby(key).transform("sum").to_numpy()
     multi = known & (size > 1)
     if not multi.any():

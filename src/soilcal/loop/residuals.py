@@ -256,6 +256,10 @@ def replicate_scatter_chi(m, ref_m, pooled_dof, sd=None, n=None) -> float:
     return chi
 
 
+#: the separator of a quantity's key (measurement, measure): a control character no name holds,
+#: and not NUL, at which pandas' grouping and factorize stop reading a string key (pandas 3.0.6:
+#: "m\x00F_h" and "m\x00F_v" fall into one group)
+KEY_SEP = "\x1f"
 HOMOGENEITY_ALPHA = 0.05  # Bartlett's test of a quantity's relative variances: below it, not pooled
 
 
@@ -313,7 +317,7 @@ def pooled_measured_dof(df: pd.DataFrame, known: np.ndarray) -> np.ndarray:
         return np.zeros(len(df))
     nm = df["measured_n"].astype(float).fillna(1.0).clip(lower=1.0).to_numpy() if "measured_n" in df else np.ones(len(df))
     sd = df["measured_sd"].astype(float).to_numpy()
-    meas = (df["measurement"].astype(str) + "\x00" + df["measure"].astype(str)).to_numpy()
+    meas = (df["measurement"].astype(str) + KEY_SEP + df["measure"].astype(str)).to_numpy()
     pooled = np.isfinite(pooled_relative_variance(np.where(known, sd, np.nan), nm, scale_of(df), meas))
     dof = pd.Series(np.where(known & (nm > 1), nm - 1.0, 0.0)).groupby(meas).transform("sum").to_numpy(float)
     return np.where(pooled, dof, 0.0)
@@ -335,7 +339,7 @@ def reference_variances(df: pd.DataFrame, flags: bool = False) -> tuple[np.ndarr
     ns = df["simulated_n"].astype(float).fillna(0.0).to_numpy()
     sd_m, sd_s = df["measured_sd"].astype(float).to_numpy(), df["simulated_sd"].astype(float).to_numpy()
     scale = scale_of(df)
-    meas = (df["measurement"].astype(str) + "\x00" + df["measure"].astype(str)).to_numpy()
+    meas = (df["measurement"].astype(str) + KEY_SEP + df["measure"].astype(str)).to_numpy()
     own_m = np.where(np.isfinite(sd_m), sd_m ** 2 / nm, 0.0)
     own_s = np.where(np.isfinite(sd_s) & (ns >= 1), sd_s ** 2 / np.clip(ns, 1.0, None), 0.0)
     cv_m = pooled_relative_variance(sd_m, nm, scale, meas)

@@ -65,6 +65,7 @@ from typing import NamedTuple
 import numpy as np
 import pandas as pd
 
+from soilcal.loop.residuals import KEY_SEP
 
 T_PREFIX = "t:"
 
@@ -355,7 +356,7 @@ def _folds(obs: pd.DataFrame, fold_by: str | None) -> Folds:
     if not fold_by:
         return Folds(held_out)
     # a condition's rows lie in one group (a table's row carries one value of fold_by)
-    key = (col + "\x00" + cond).to_numpy()
+    key = (col + KEY_SEP + cond).to_numpy()
     return Folds(held_out, [np.flatnonzero(key == g) for g in dict.fromkeys(key)])
 
 
