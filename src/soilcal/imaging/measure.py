@@ -1199,7 +1199,7 @@ def _on_plate_lines(path, rgb, lum, grays, lines, n_first, channel, threshold, k
                 res = _pile_with(path, rgb, g, ch, pol, band, slope, intercept, threshold,
                                  keep_stages and first is None, search=channel == "auto", tried=tried,
                                  label=f"line {n_line}, {ch}/{pol}", lum=lum, plate_edges=plate_edges,
-                                 levelled=levelled, segmented=getattr(grays, "segmented", None),
+                                 levelled=levelled, segmented=grays.segmented,
                                  otsu=split[ch][1] if channel == "auto" and pol == "dark" else None)
             except InputError as e:
                 if e.field not in ("image", "left flank", "right flank", "plate line"):

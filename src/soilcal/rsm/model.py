@@ -305,11 +305,11 @@ class RSMFit:
         """(lowest, highest) prediction over the coded box ``lower`` .. ``upper`` (per factor),
         for a surface whose terms are of degree 2 at most and whose transform is none, ln or
         log10 (increasing back-transforms); None for any other model (other increasing
-        back-transforms, such as a power with a positive exponent, included).  A quadratic's extremes over a box lie at
-        a vertex or at the stationary point of its restriction to a face (each factor at its
-        lower bound, its upper bound or free: 3^k faces), so the candidates are the vertices and
-        those stationary points that lie inside their face; the extremes are the model's own
-        predictions there.  A face whose restricted Hessian is singular holds no isolated
+        back-transforms, such as a power with a positive exponent, included).  A quadratic's
+        extremes over a box lie at a vertex or at the stationary point of its restriction to a
+        face (each factor at its lower bound, its upper bound or free: 3^k faces), so the
+        candidates are the vertices and those stationary points that lie inside their face; the
+        extremes are the model's own predictions there.  A face whose restricted Hessian is singular holds no isolated
         extreme that its boundary does not match, and is passed over."""
         name, _ = _normalise_transform(self.transform)
         if name not in ("none", "ln", "log10") or any(sum(e) > 2 for e in self._exps):
