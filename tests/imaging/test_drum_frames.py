@@ -4,6 +4,7 @@ least-squares line over the central 60 % of the chord is at exactly ``angle_deg`
 
 from __future__ import annotations
 
+import copy
 import functools
 import json
 from pathlib import Path
@@ -29,15 +30,15 @@ SPEEDS = [(32.0, 0.0, 1.5, 1.0, 0.30), (38.0, 0.04, 2.5, 3.0, 0.35),
 def _stand_photo(roll):
     """render_drum(3, 35.0, roll_deg=roll): a drum on its stand, rendered once for the tests of
     this file that use it (the file runs on one worker); the image is read-only, so no test
-    alters another's input, and each caller gets its own copy of the truth."""
+    alters another's input, and _stand gives each caller its own copy of the truth."""
     img, truth = render.render_drum(3, 35.0, roll_deg=roll)
     img.flags.writeable = False
-    return img, json.dumps(truth)
+    return img, truth
 
 
 def _stand(roll):
     img, truth = _stand_photo(roll)
-    return img, json.loads(truth)
+    return img, copy.deepcopy(truth)
 
 
 def _frame(tmp_path, name, bits=8, **kw):

@@ -177,6 +177,49 @@ def test_hard_set_within_one_degree(tmp_path, seed, monkeypatch):
     assert abs(r.right_deg - t["right_deg"]) <= 1.5
 
 
+def _heap_mask(h, w, plate_row, cx, height, angle_deg):
+    """Pixels (by their centres) of a heap with both flanks at ``angle_deg`` to a horizontal
+    plate at ``plate_row``, its apex ``height`` px above it in column ``cx``."""
+    rr, cc = np.mgrid[0:h, 0:w] + 0.5
+    return (rr < plate_row) & (plate_row - rr < height - np.abs(cc - cx) * np.tan(np.radians(angle_deg)))
+
+
+def test_segmented_class_cache_tells_cues_and_polarities_apart():
+    """Two cues and the two polarities of one cue at the same threshold each keep their own
+    class in the photo's cache of segmented classes (:class:`measure._Cues`).  A three-level
+    luminance (heap A at 0.2, heap B at 0.8, the rest exactly 0.5) holds heap A (30 deg
+    flanks) in its dark class and heap B (45 deg) in its light one, and neither is the rest
+    (0.5 is not below 0.5, nor is 1 - 0.5); the chroma cue holds heap B dark.  All three are
+    segmented at 0.5 on one plate line, in the order a cue search takes them, with one cache:
+    each measures its own heap, as without the cache."""
+    h, w, plate = 100, 280, 80.0
+    a = _heap_mask(h, w, plate, 75.25, 36.0, 30.0)  # half base 62.4 px
+    b = _heap_mask(h, w, plate, 210.25, 48.0, 45.0)  # half base 48 px; no pixel centre on a flank
+    lum = np.full((h, w), 0.5)
+    lum[a], lum[b] = 0.2, 0.8
+    chroma = np.where(b, 0.2, 0.8)
+    rgb = np.repeat(lum[..., None], 3, axis=-1)
+    cues = measure._Cues({"gray": lum, "chroma": chroma})
+    rr = np.arange(h)[:, None]
+    band = np.broadcast_to((rr < plate - 3) & (rr > plate - 0.35 * h), (h, w))
+    calls = [("gray", "dark", 30.0), ("gray", "light", 45.0), ("chroma", "dark", 45.0)]
+
+    def angles(segmented):
+        out = []
+        for cue, pol, _ in calls:
+            g = cues[cue] if pol == "dark" else 1.0 - cues[cue]
+            r = measure._pile_with("synthetic.png", rgb, g, cue, pol, band, 0.0, plate, "otsu", False,
+                                   lum=lum, otsu=0.5, segmented=segmented)
+            assert r.cue == f"{cue}/{pol}"
+            out.append((r.left_deg, r.right_deg))
+        return np.array(out)
+
+    cached = angles(cues.segmented)
+    for (cue, pol, truth), flanks in zip(calls, cached):
+        assert np.abs(flanks - truth).max() < 0.5, (cue, pol, flanks)
+    assert np.array_equal(cached, angles(None)) and len(cues.segmented) == 3
+
+
 def test_renderer_is_deterministic():
     a, ta = render.render_drum(7, 43.91)
     b, tb = render.render_drum(7, 43.91)

@@ -248,3 +248,38 @@ def test_found_plate_line_is_reported_in_the_photos_pixels(tmp_path, monkeypatch
     _u8(heap_photo(h=1203, w=1603, plate_row=866, noise=0.005)).save(p)
     r = measure.measure_pile(p)
     assert all(abs(row - 865.5) <= 1.5 for _, row in r.plate_line_px), r.plate_line_px
+
+
+NAN, INF = float("nan"), float("inf")
+
+
+@pytest.mark.parametrize("given", [dict(plate=(0.0, NAN)), dict(plate=(NAN, PLATE_EDGE)), dict(plate=(INF, PLATE_EDGE)),
+                                   dict(plate=(0.0,)), dict(plate_px=((10.0, PLATE_EDGE), (390.0, NAN))),
+                                   dict(plate_px=((200.0, PLATE_EDGE), (200.0, PLATE_EDGE + 1.0)))])
+def test_plate_line_given_by_a_caller_that_is_no_line_is_refused_naming_it(given):
+    # measure_pile's plate (slope, intercept) and plate_px (two points) from a caller in Python,
+    # not through a manifest: refused before the photo is measured, naming the photo, the
+    # argument and the value (NaN gave an IndexError from an empty band, one column a
+    # ZeroDivisionError)
+    from soilcal.imaging.measure import measure_pile
+
+    (field, value), = given.items()
+    with pytest.raises(InputError) as e:
+        measure_pile("heap.png", image=heap_photo(), **given)
+    assert (e.value.path, e.value.field, e.value.got) == ("heap.png", field, value)
+    assert ("two finite numbers" if field == "plate" else "two points [column, row]") in e.value.expected
+
+
+@pytest.mark.parametrize("slope,intercept", [(0.0, NAN), (NAN, PLATE_EDGE), (INF, PLATE_EDGE)])
+def test_components_on_a_plate_line_that_is_not_finite_are_refused(slope, intercept):
+    # a plate candidate of infinite or NaN slope or intercept (a RANSAC line through two points
+    # of one column) carries no heap: refused as such, naming the line (math.ceil raised a bare
+    # ValueError, "cannot convert float NaN to integer", for each)
+    from soilcal.imaging.measure import _components_on_plate
+
+    binary = np.zeros((300, 400), bool)
+    binary[150:216, 150:250] = True  # a block standing on the plate edge
+    with pytest.raises(InputError) as e:
+        _components_on_plate("heap.png", binary, slope, intercept, "heap")
+    assert (e.value.path, e.value.field) == ("heap.png", "image") and "finite" in e.value.expected
+    assert e.value.got == f"slope {slope}, intercept {intercept}"

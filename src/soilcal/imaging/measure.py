@@ -441,6 +441,13 @@ CUT = "the whole heap inside the frame"
 
 def _components_on_plate(path, binary, slope, intercept, kind):
     h, w = binary.shape
+    if not (math.isfinite(slope) and math.isfinite(intercept)):
+        # measure_pile refuses a caller's line that is not finite (_check_given_plate,
+        # check_plate_line); a line of the plate search (_refined_line) is infinite only where
+        # RANSAC's best line ran through two points of one column: that candidate is refused,
+        # as one carrying no heap is
+        raise InputError(path, "image", "a plate line of finite slope and intercept (row = slope * col + "
+                         "intercept)", f"slope {slope}, intercept {intercept}")
     # a column of row numbers against a row of plate rows (broadcast, not two full grids: the
     # cue search calls this for every cue on every plate line), over the rows above the plate
     # line's lowest point only (no pixel below it is above the line: labelled, counted and
@@ -511,12 +518,21 @@ def measure_pile(path, threshold="otsu", keep_stages=False, channel="auto", refu
     ``image``: the photo as an RGB float array in [0, 1] (what :func:`read_photo` gives),
     measured instead of reading ``path``, which then only names it in messages.  ``plate``:
     the plate's top edge (slope, intercept), row = slope * col + intercept, when it is known
-    (a rendered silhouette): the plate search is skipped.  ``plate_px``: two points ((column,
-    row), (column, row)) on the plate's top edge in the photo's pixels as shown (a manifest's
-    ``plate_line_px``), the plate line measured on instead of the one the search would find
-    (a card standing on the plate, a plate of the soil's colour); ``plate_line`` reports
-    ``plate_px_from`` ("manifest", or "command line" for ``soilcal image pile --plate-line-px``).
+    (a rendered silhouette): the plate search is skipped; two finite numbers, else InputError
+    (field ``plate``).  ``plate_px``: two points ((column, row), (column, row)) on the plate's
+    top edge in the photo's pixels as shown (a manifest's ``plate_line_px``, checked as one:
+    :func:`~soilcal.imaging.manifest.check_plate_line`, field ``plate_px``), the plate line
+    measured on instead of the one the search would find (a card standing on the plate, a
+    plate of the soil's colour); ``plate_line`` reports ``plate_px_from`` ("manifest", or
+    "command line" for ``soilcal image pile --plate-line-px``).
     """
+    if plate is not None:
+        _check_given_plate(path, plate)
+    if plate_px is not None:
+        from soilcal.imaging.manifest import check_plate_line
+
+        plate_px = check_plate_line(path, "plate_px", {"kind": "pile", "file": str(path), "plate_line_px": plate_px},
+                                    path)
     tried = Tried(keep_masks=refusals is not None)
     with explained(path, refusals, tried):
         res = _measure_pile(path, threshold, keep_stages, channel, tried, image, plate, plate_px, plate_px_from)
@@ -525,6 +541,16 @@ def measure_pile(path, threshold="otsu", keep_stages=False, channel="auto", refu
     if res.plate_ambiguous:
         res.confidence = "low"
     return res
+
+
+def _check_given_plate(path, plate):
+    """A caller's ``plate`` (slope, intercept): two finite real numbers, else InputError naming it."""
+    ok = (isinstance(plate, (tuple, list, np.ndarray)) and len(plate) == 2
+          and all(isinstance(v, (int, float, np.integer, np.floating)) and not isinstance(v, bool)
+                  and math.isfinite(v) for v in plate))
+    if not ok:
+        raise InputError(path, "plate", "the plate's top edge as (slope, intercept), two finite numbers, "
+                         "row = slope * col + intercept", plate)
 
 
 def _measure_pile(path, threshold, keep_stages, channel, tried: Tried, image=None,

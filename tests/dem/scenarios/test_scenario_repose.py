@@ -277,10 +277,9 @@ def test_the_quick_drum_slumps_at_the_vineyard_centre_point():
     drum slumps.  The quick drum at the vineyard soil's BBD centre (config, 1000 spheres at
     7 r/min) must slump too: at least one collapse of 10 deg, the angle before collapse above
     the time mean, and no note that the estimator fell back.  The drum turns 4 s here (3 s of
-    frames) instead of the preset's 8 s: a 4 s spin gave 3 collapses with each of seeds 0-4,
-    the angle before them 49.0-53.8 deg against time means of 41.6-42.5 deg (seed 3, the
-    soil's: 52.1 against 42.5; 2-4 collapses over six seeds in
-    benchmarks/results/drum_seeds.md)."""
+    frames) instead of the preset's 8 s: a 4 s spin gave 3 collapses with each of seeds 0-5,
+    the angle before them 49.0-53.8 deg against time means of 41.1-42.5 deg (seed 3, the
+    soil's: 52.1 against 42.5; benchmarks/results/drum_seeds.md)."""
     import copy
 
     from soilcal.config.load import Soil, load_soil

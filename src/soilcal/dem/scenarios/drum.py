@@ -28,8 +28,8 @@ Number of spheres for fill fraction f at settled solid fraction phi = 0.6::
 rotation (1.17 turns) with frames from 3 s.  Frames every ``frame_every`` = 0.05 s (the drum
 turns 2.1 deg between frames at 7 r/min).  The quick rotation is long enough to see several
 collapses: at the vineyard soil's BBD centre point the angle before collapse scattered over
-six seeds with an SD of 2.00 deg after 4 s of rotation (2-4 collapses) and 1.29 deg after
-8 s (7-10 collapses), where the time mean scattered by 0.82 and 0.57 deg
+six seeds with an SD of 1.69 deg after 4 s of rotation (3 collapses each) and 1.27 deg after
+8 s (7-9 collapses), where the time mean scattered by 0.53 and 0.32 deg
 (benchmarks/results/drum_seeds.md).
 
 Responses: ``angle_deg`` (time mean of the frame angles), ``angle_sd_deg`` (their sample
