@@ -56,22 +56,6 @@ def test_sixteen_bit_photo_is_not_clipped(reference):
     assert img.std() > 0.1  # stretched over its range, not read as black or white
 
 
-def test_edge_median_is_numpys_median():
-    """The top-edge refinement's median (a sort of a few pixels, not NumPy's call) gives
-    NumPy's number: odd and even lengths, ties, signed zeros, NaN, empty."""
-    import warnings
-
-    rng = np.random.default_rng(3)
-    cases = [rng.random(n) for n in (1, 2, 5, 6, 12) for _ in range(200)]
-    cases += [np.round(rng.random(6) * 4) / 4 for _ in range(200)]  # ties
-    cases += [np.array([0.0, -0.0, 0.0, -0.0, 1.0, -1.0]), np.array([1.0, np.nan, 0.5])]
-    for a in cases:
-        assert np.array_equal(np.float64(measure._median(a)), np.median(a), equal_nan=True), a
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")
-        assert np.isnan(measure._median(np.array([])))
-
-
 def _grey_alpha16_png(path, grey: np.ndarray, orientation: int | None = None) -> None:
     """A PNG of colour type 4 (grey + alpha) at 16 bits per sample, as a scientific camera or an
     editor writes one (PIL cannot write it): ``grey`` uint16, the alpha opaque; ``orientation``:

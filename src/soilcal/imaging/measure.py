@@ -341,54 +341,58 @@ def _top_edge(lev, c0, c1, glev=None, llev=None):
     records luminance at full resolution and colour at half or less (Bayer demosaicing, JPEG
     4:2:0 subsampling in 16 px blocks), so a colour cue's edge is blurred and blocky where the
     luminance edge is sharp (:func:`_straighter` decides per flank which of the two edges is
-    fitted).
+    fitted).  All columns at once: each column's windows gathered as the rows of an array.
     """
-    cols, rows, rows_l = [], [], []
     n = lev.shape[0]
-    for c in range(int(c0), int(c1)):
-        col = lev[:, c]
-        idx = np.nonzero(col >= 0.5)[0]
-        if idx.size == 0 or idx[0] == 0:
-            continue
-        i = idx[0]
-        a, b = col[i - 1], col[i]
-        r = i - 1 + (0.5 - a) / (b - a)
-        rl = r
-        if glev is not None and 12 <= i < n - 12:
-            g = glev[:, c]
-            bg, fg = _median(g[i - 12:i - 6]), _median(g[i + 6:i + 12])
-            if abs(bg - fg) > 0.03:
-                r = _mid_crossing(g[i - 6:i + 6], 0.5 * (bg + fg), np.sign(bg - fg), i - 6, r)
-            rl = r
-            if llev is not None:
-                gl = llev[:, c]
-                above, below = gl[i - 12:i - 6], gl[i + 6:i + 12]
-                bl, fl = _median(above), _median(below)
-                noise = 1.4826 * _median(np.abs(np.concatenate([above - bl, below - fl])))
-                if abs(bl - fl) > max(0.03, LUM_EDGE_SNR * noise):
-                    rl = _mid_crossing(gl[i - 6:i + 6], 0.5 * (bl + fl), np.sign(bl - fl), i - 6,
-                                       i - 1 + (0.5 - a) / (b - a))
-        rows.append(r)
-        rows_l.append(rl)
-        cols.append(c)
-    out = np.asarray(cols, float), np.asarray(rows, float)
-    return out + (np.asarray(rows_l, float),) if llev is not None else out
+    cs = np.arange(int(c0), int(c1))
+    over = lev[:, cs] >= 0.5
+    i = over.argmax(axis=0)  # the first row at or above 0.5 (0 where none is)
+    keep = over[i, np.arange(cs.size)] & (i != 0)
+    cs, i = cs[keep], i[keep]
+    a, b = lev[i - 1, cs], lev[i, cs]
+    r0 = i - 1 + (0.5 - a) / (b - a)
+    r, rl = r0.copy(), r0.copy()
+    if glev is not None:
+        inner = np.nonzero((i >= 12) & (i < n - 12))[0]
+        ii, cc = i[inner], cs[inner]
 
+        def windows(img, lo, hi):  # img[i + lo:i + hi, c] of each inner column, as rows
+            return img[ii[:, None] + np.arange(lo, hi), cc[:, None]]
 
-def _median(a) -> float:
-    """``np.median`` of a short 1-D array, the same number without NumPy's per-call cost
-    (:func:`_top_edge` takes four per image column: about 40 us each through NumPy, 1 us
-    here): the middle value of the sorted values, or the mean of the middle two."""
-    s = sorted(a.tolist())
-    n = len(s)
-    if n == 0 or any(v != v for v in s):  # empty or NaN: NumPy's own answer
-        return float(np.median(a))
-    return s[n // 2] if n % 2 else (s[n // 2 - 1] + s[n // 2]) / 2
+        bg, fg = np.median(windows(glev, -12, -6), axis=1), np.median(windows(glev, 6, 12), axis=1)
+        step = np.abs(bg - fg) > 0.03
+        r[inner[step]] = _mid_crossings(windows(glev, -6, 6)[step], 0.5 * (bg + fg)[step], np.sign(bg - fg)[step],
+                                        ii[step] - 6, r0[inner[step]])
+        rl = r.copy()
+        if llev is not None:
+            above, below = windows(llev, -12, -6), windows(llev, 6, 12)
+            bl, fl = np.median(above, axis=1), np.median(below, axis=1)
+            noise = 1.4826 * np.median(np.abs(np.concatenate([above - bl[:, None], below - fl[:, None]], axis=1)),
+                                       axis=1)
+            lim = LUM_EDGE_SNR * noise
+            step = np.abs(bl - fl) > np.where(lim > 0.03, lim, 0.03)  # max(0.03, lim) as Python's max
+            rl[inner[step]] = _mid_crossings(windows(llev, -6, 6)[step], 0.5 * (bl + fl)[step],
+                                             np.sign(bl - fl)[step], ii[step] - 6, r0[inner[step]])
+    out = cs.astype(float), r
+    return out + (rl,) if llev is not None else out
 
 
 #: a luminance step across a heap's edge this many times its noise (robust SD of 6 px each
 #: side) refines the edge in luminance when a colour cue segmented the heap (_top_edge)
 LUM_EDGE_SNR = 4.0
+
+
+def _mid_crossings(segs, mid, sgn, start, default):
+    """:func:`_mid_crossing` (without ``near``) of each row of ``segs`` with its own ``mid``,
+    ``sgn``, ``start`` and ``default``: the same numbers, all rows at once."""
+    far = sgn[:, None] * (segs - mid[:, None]) <= 0
+    j = far.argmax(axis=1)  # the first sample on the far side (0 where none is)
+    ok = far[np.arange(j.size), j] & (j != 0)
+    out = np.array(default, float)
+    k, jk = np.nonzero(ok)[0], j[ok]
+    prev = segs[k, jk - 1]
+    out[k] = start[k] + jk - 1 + (prev - mid[k]) / (prev - segs[k, jk])
+    return out
 
 
 def _mid_crossing(seg, mid, sgn, start, default, near=None):
