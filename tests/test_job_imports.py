@@ -50,6 +50,26 @@ def test_a_dem_job_loads_no_fitting_plotting_or_root_finding_package(script):
     assert _loaded(_script_imports(script) + "\n" + DEM_MODULES, NOT_FOR_DEM) == []
 
 
+#: every scenario module (soilcal.dem.scenarios._MODULES)
+SCENARIO_MODULES = ["repose", "drum", "incline", "compression", "furrow", "bulldozing", "rotary"]
+
+
+@pytest.mark.parametrize("name", SCENARIO_MODULES)
+def test_a_dem_job_loads_its_own_scenario_and_no_config_schema(name):
+    # a DEM job asks for its one scenario module (chain.sources.simulate: scenarios.get): the
+    # other scenarios' modules stay unloaded, and so do the config loader's jsonschema and the
+    # loader itself (the job gets its spec as plain data)
+    code = _script_imports("dem_point") + f"\nfrom soilcal.dem.scenarios import get\nget({name!r})"
+    others = [f"soilcal.dem.scenarios.{m}" for m in SCENARIO_MODULES if m != name]
+    assert _loaded(code, others + ["soilcal.config.load", "jsonschema"]) == []
+    assert _loaded(code, [f"soilcal.dem.scenarios.{name}"]) == [f"soilcal.dem.scenarios.{name}"]
+
+
+def test_the_scenario_registry_still_lists_every_scenario():
+    out = _run("from soilcal.dem import scenarios\nprint(' '.join(sorted(scenarios.SCENARIOS)))")
+    assert out.split() == sorted(SCENARIO_MODULES)
+
+
 def test_a_design_job_loads_no_response_surface_fit():
     # the design jobs read the stage and build its design (pyDOE3 on use); the fits are the
     # regression jobs'

@@ -25,7 +25,9 @@ Every scenario module defines:
   does).
 
 ``SCENARIOS`` maps names to modules; a module that cannot be imported (not present in this
-installation) is skipped so that the others keep working.
+installation) is skipped so that the others keep working.  It is built on first use: a DEM job
+asks :func:`get` for its one scenario, which imports that module alone (each module registers
+under its own module name), and the other scenarios' modules are not loaded.
 """
 
 from __future__ import annotations
@@ -58,7 +60,17 @@ def _load(names):
     return out
 
 
-SCENARIOS = _load(_MODULES)
+def _scenarios() -> dict:
+    """:data:`SCENARIOS`, built (every scenario module imported) on its first use."""
+    if "SCENARIOS" not in globals():
+        globals()["SCENARIOS"] = _load(_MODULES)
+    return globals()["SCENARIOS"]
+
+
+def __getattr__(name):
+    if name == "SCENARIOS":
+        return _scenarios()
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
 
 
 def measures_of(mod, setup: dict) -> tuple:
@@ -76,6 +88,12 @@ def get(name: str, source: str = "<input>"):
     """The scenario module called ``name`` (InputError listing the known names otherwise)."""
     from soilcal.errors import InputError
 
-    if name not in SCENARIOS:
-        raise InputError(source, "scenario", f"one of {', '.join(sorted(SCENARIOS))}", name)
-    return SCENARIOS[name]
+    if name in _MODULES:
+        # that module alone (each registers under its own module name)
+        found = _load((name,))
+        if name in found:
+            return found[name]
+    scenarios = _scenarios()
+    if name not in scenarios:
+        raise InputError(source, "scenario", f"one of {', '.join(sorted(scenarios))}", name)
+    return scenarios[name]
