@@ -3,7 +3,7 @@
 One point of the guangxi-cohesive Box-Behnken stage (A soil-soil restitution, B soil-soil
 static friction, G JKR surface energy; the other parameters from ``simulation.params``) is run
 as the workflow's verification jobs run it: scenario ``repose``, setup ``guangxi-cohesive``
-with the soil's ``n_particles: 8000``, the ``quick`` preset, one seed per process on one
+with the soil's own ``n_particles``, the ``quick`` preset, one seed per process on one
 thread (the verification seeds are 340462 + 10000 + k, k = 0..3).  The heap's settle phase is
 traced: every ``--trace`` steps (a whole multiple of the rest check's 200 steps, so the
 trajectory is the plain run's, as a restart file's chunks are) the translational kinetic energy

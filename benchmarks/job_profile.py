@@ -7,7 +7,7 @@ spec :func:`soilcal.chain.sources.point_spec` builds), run in a fresh process on
 (the rule's default, ``simulation.threads``) with :func:`soilcal.chain.sources.simulate`:
 
 * ``heap``: black-soil stage soil-soil, a funnel heap (scenario repose, setup black-soil-stage1);
-* ``funnel``: guangxi-cohesive stage bbd, the cohesive funnel heap of 8,000 spheres;
+* ``funnel``: guangxi-cohesive stage bbd, the cohesive funnel heap (the soil's own ``n_particles``);
 * ``drum``: xinjiang-vineyard stage pb, the rotating drum's dynamic angle.
 
 Every figure is process CPU time (``time.process_time``), not wall time: the machine is
