@@ -447,9 +447,9 @@ def _components_on_plate(path, binary, slope, intercept, kind):
     h, w = binary.shape
     if not (math.isfinite(slope) and math.isfinite(intercept)):
         # measure_pile refuses a caller's line that is not finite (_check_given_plate,
-        # check_plate_line); a line of the plate search (_refined_line) is infinite only where
-        # RANSAC's best line ran through two points of one column: that candidate is refused,
-        # as one carrying no heap is
+        # check_plate_line), so this guards direct calls only; a candidate of the plate search
+        # that is not finite (RANSAC's best line through two points of one column) fails
+        # earlier, on its empty band in _on_plate_lines, and is not filtered out yet
         raise InputError(path, "image", "a plate line of finite slope and intercept (row = slope * col + "
                          "intercept)", f"slope {slope}, intercept {intercept}")
     # a column of row numbers against a row of plate rows (broadcast, not two full grids: the
