@@ -168,6 +168,7 @@ def _runs(values, response="stacking_angle", status="ok", error="", seed0=11082,
 
 def _stage():
     return {"id": "bbd", "factors": {"A": {"parameter": "soil_soil_rolling_friction"}},
+            "responses": [{"id": "other", "unit": "mm"}, {"id": "stacking_angle", "name": "Stacking angle", "unit": "deg"}],
             "optimise": {"cases": [
                 {"id": "stacking_angle", "goals": {"stacking_angle": {"goal": "target", "target": "stacking_angle"}},
                  "printed_verification": {"stacking_angle": 27.62}},
@@ -195,6 +196,7 @@ def test_verification_frame_statistics(cinnamon):
     r = df.iloc[0]
     assert (r["stage"], r["case"], r["response"], r["target_id"]) == ("bbd", "stacking_angle", "stacking_angle",
                                                                       "stacking_angle")
+    assert r["unit"] == "deg"  # the stage's unit of this response, not another response's
     assert r["target"] == 28.0 and r["target_source"] == "image"  # the DEM source's own target
     assert r["n"] == 4 and r["seeds"] == "11082 11083 11084 11085"  # the failed replicate left out
     assert r["preset"] == "quick"

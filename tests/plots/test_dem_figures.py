@@ -150,6 +150,20 @@ def test_verification_bars_name_the_round_and_the_paper_preset():
     assert labels[-2] == "upper\nstatic\nround 2" and labels[-1] == "upper\nstatic\npaper preset"
 
 
+def test_verification_axis_names_the_unit_the_rows_share_else_each_label_does():
+    df = vineyard_verification().assign(unit="deg")
+    fig = dem._verification_figure(df)
+    assert fig.axes[0].get_ylabel() == "response (deg)"
+    assert [t.get_text() for t in fig.axes[0].get_xticklabels()][0] == "upper\nstatic"
+    df.loc[1, "unit"] = "mm"
+    ax = dem._verification_figure(df).axes[0]
+    assert ax.get_ylabel() == "response"
+    labels = [t.get_text() for t in ax.get_xticklabels()]
+    assert labels[0] == "upper\nstatic (deg)" and labels[1] == "upper\ndynamic (mm)"
+    # a table without units (written before the column existed) keeps the bare axis
+    assert dem._verification_figure(vineyard_verification()).axes[0].get_ylabel() == "response"
+
+
 def test_summary_figure(tmp_path):
     df = summary_table()
     _check_files(plots.summary_figure(df, tmp_path / "summary"))

@@ -25,7 +25,7 @@ from soilcal.errors import InputError
 VERIFY_DEFAULTS = {"replicates": 4, "seed_offset": 10000, "paper": []}
 TOLERANCE_PERCENT = 2.0
 SURFACE_TOLERANCE = 0.5
-VERIFICATION_COLUMNS = ["stage", "case", "round", "response", "target_id", "target", "target_source", "preset", "n",
+VERIFICATION_COLUMNS = ["stage", "case", "round", "response", "unit", "target_id", "target", "target_source", "preset", "n",
                         "seeds", "failed_seeds", "simulated_mean", "simulated_sd", "relative_error_percent",
                         "within_2_percent", "target_sd", "miss_in_target_sd", "predicted", "predicted_minus_target",
                         "particles", "paper_target", "paper_simulated", "paper_relative_error_percent", "status",
@@ -411,8 +411,10 @@ def _verification_row(stage, case, rid, goal, targets, soil_data, cal, sel, pres
             "; the paper's verification is beside it" if np.isfinite(paper_sim) else "")
     if n and failed:
         note = "; ".join(x for x in (failed_note + f": the statistics are of the other {n}", note) if x)
+    unit = next((str(r.get("unit", "")) for r in stage.get("responses", []) if r.get("id") == rid), "")
     return {
-        "stage": stage["id"], "case": case["id"], "response": rid, "target_id": tid or goal.get("goal"),
+        "stage": stage["id"], "case": case["id"], "response": rid, "unit": unit,
+        "target_id": tid or goal.get("goal"),
         "target": target, "target_source": t.get("source", "config" if "value" in goal else ""),
         "preset": preset or (ok["preset"].iloc[0] if len(ok) else ""), "n": n,
         "seeds": " ".join(str(int(s)) for s in ok["seed"]) if len(ok) else "", "failed_seeds": failed,

@@ -167,9 +167,13 @@ def _verification_figure(df: pd.DataFrame, title: str | None = None) -> Figure:
     rounds = pd.to_numeric(df["round"], errors="coerce").fillna(1).astype(int).tolist() \
         if "round" in df.columns else [1] * len(df)
     presets = [_text(v) for v in df["preset"]] if "preset" in df.columns else [""] * len(df)
+    # the y axis names the responses' unit where they share one; otherwise each label names its own
+    units = [_text(v) for v in df["unit"]] if "unit" in df.columns else [""] * len(df)
+    shared = units[0] if len(set(units)) == 1 else None
     labels = [(f"{st}:\n" if several_stages and st else "") + f"{_text(c)}\n{_text(r)}"
+              + (f" ({u})" if shared is None and u else "")
               + (f"\nround {k}" if k > 1 else "") + (f"\n{p} preset" if p == "paper" else "")
-              for st, c, r, k, p in zip(stages, df["case"], df["response"], rounds, presets)]
+              for st, c, r, u, k, p in zip(stages, df["case"], df["response"], units, rounds, presets)]
 
     n = len(df)
     # a group as wide as its longest label line (about 0.075 in per character at 8 pt)
@@ -181,7 +185,7 @@ def _verification_figure(df: pd.DataFrame, title: str | None = None) -> Figure:
     seen = _three_bars(ax, target, tsd, "target (± its SD where known)" if tsd is not None
                        and np.isfinite(tsd).any() else "target", sim, sd, err, paper, paper_err, status)
     ax.set_xticklabels(labels, fontsize=8)
-    ax.set_ylabel("response")
+    ax.set_ylabel(_ylabel("response", shared or ""))
     ax.set_xlabel("case / response")
     if title is None:
         title = "Verification at the calibrated optimum"
