@@ -30,6 +30,7 @@ commit of that soil's adaptive rows.
     python benchmarks/adaptive.py --soils cinnamon-soil
     python benchmarks/adaptive.py --soils cinnamon-soil --methods adaptive
     python benchmarks/adaptive.py --soils yangtze-clay-loam --progress-from /tmp/soilcal-adaptive-bench
+    python benchmarks/adaptive.py --soils guangxi-cohesive --recipe-from /tmp/calibration-bench
     python benchmarks/adaptive.py --report-only
 """
 
@@ -67,13 +68,16 @@ def recipe_rows(wd: Path, soil: str) -> list[dict]:
     for f in d.glob("*/runs/*.csv"):
         df = pd.read_csv(f)
         runs += int(df["replicates"].iloc[0]) if len(df) else 0
-    runs += len(list(d.glob("verify/*/*/*/*.csv"))) + len(list(d.glob("refine/*/*/*.csv")))
+    # a verification seed of a case without a calibrated set writes a 'not run' row: no run
+    runs += sum(_ran(f) for f in [*d.glob("verify/*/*/*/*.csv"), *d.glob("refine/*/*/*.csv")])
     ver = pd.read_csv(d / "verification.csv")
     rows = []
     goals = {(st["id"], c["id"], rid): g.get("goal", "target") for st in _stages(wd, soil)
              for c in (st.get("optimise") or {}).get("cases", []) for rid, g in c["goals"].items()}
     for (stage, case, resp), g in ver.groupby(["stage", "case", "response"], sort=False):
-        last = g[g["round"] == g["round"].max()].iloc[0]
+        # the round the case ends with (``final``; a table without it: the last round)
+        fin = g[g["final"].astype(str) == "True"] if "final" in g.columns else g.iloc[:0]
+        last = fin.iloc[0] if len(fin) else g[g["round"] == g["round"].max()].iloc[0]
         goal = goals.get((stage, case, resp), "target")
         rows.append({"soil": soil, "stage": stage, "case": case, "target": resp, "method": "recipe",
                      "goal": goal, "verified_mean": last["simulated_mean"], "verified_sd": last["simulated_sd"],
@@ -84,6 +88,23 @@ def recipe_rows(wd: Path, soil: str) -> list[dict]:
                      if str(last["status"]) == "ok" else str(last["status"])[:80],
                      "note": f"runs: the soil's whole recipe; round {int(last['round'])}"})
     return rows
+
+
+def _ran(f: Path) -> bool:
+    """Whether the seed file ``f`` holds a DEM run (not a 'not run' row)."""
+    df = pd.read_csv(f)
+    return bool(len(df)) and (df["status"].astype(str) != "not run").any()
+
+
+def recipe_commit(wd: Path, soil: str) -> str:
+    """The commit every DEM run of a recipe workdir ran at (its run rows' ``commit``)."""
+    d = wd / "results" / soil / "dem"
+    found = set()
+    for f in [*d.glob("*/runs/*.csv"), *d.glob("verify/*/*/*/*.csv"), *d.glob("refine/*/*/*.csv")]:
+        found |= {str(c)[:7] for c in pd.read_csv(f).get("commit", pd.Series(dtype=str)).dropna()}
+    if len(found) != 1:
+        raise SystemExit(f"--recipe-from: the runs under {d} name {len(found)} commits ({sorted(found)}), not one")
+    return found.pop()
 
 
 def _stages(wd: Path, soil: str) -> list[dict]:
@@ -198,12 +219,26 @@ def main(argv=None):
     ap.add_argument("--workdir", default="/tmp/soilcal-adaptive-bench")
     ap.add_argument("--report-only", action="store_true")
     ap.add_argument("--progress-from", default=None, help="read the adaptive curves of --soils from this workdir")
+    ap.add_argument("--recipe-from", default=None,
+                    help="read the recipe rows of --soils from this workdir of a recipe run (benchmarks/calibration.py's "
+                         "--workdir): the commit from its runs, the time from its verification.csv, no elapsed time")
     a = ap.parse_args(argv)
     path = OUT / "adaptive.csv"
     ppath = OUT / "adaptive_progress.csv"
     rows = read_rows(path, FIELDS)
     progress = read_rows(ppath, PROGRESS_FIELDS)
-    if a.progress_from:
+    if a.recipe_from:
+        for soil in a.soils.split(","):
+            wd = Path(a.recipe_from)
+            ver = wd / "results" / soil / "dem" / "verification.csv"
+            if not ver.is_file():
+                raise SystemExit(f"--recipe-from: no {ver}")
+            utc = datetime.fromtimestamp(ver.stat().st_mtime, timezone.utc).strftime("%Y-%m-%d %H:%M")
+            rev = recipe_commit(wd, soil)
+            rows = [r for r in rows if not (r["soil"] == soil and r["method"] == "recipe")]
+            rows += [dict(r, utc=utc, commit=rev, elapsed_s="", cores="") for r in recipe_rows(wd, soil)]
+        write_rows(path, rows, FIELDS)
+    elif a.progress_from:
         for soil in a.soils.split(","):
             mine = [r for r in rows if r["soil"] == soil and r["method"] == "adaptive"]
             if not mine:

@@ -119,6 +119,20 @@ def evaluate(case_file: Path, batch_file: Path, out_file: Path, cores: int) -> N
 
 # --------------------------------------------------------------------------- one case
 
+def not_applicable(problem) -> str:
+    """Why GrainLearning cannot calibrate this case ('' where it can).  Its likelihood is a
+    normal centred on the observations with the covariance ``sigma * obs.max()**2`` (grainlearning
+    2.0.5, ``inference.SMC.get_covariance_matrices``): a goal minimize or maximize has no
+    observation to centre it on, and taking 0 for one (a difference to be minimised) makes the
+    covariance zero.  Such a case is an optimisation, not an inverse problem."""
+    goals = sorted({t.goal for t in problem.targets if t.optimised})
+    if not goals:
+        return ""
+    return (f"not applicable: goal {' and '.join(goals)} has no observed value, and GrainLearning's "
+            "likelihood is a normal around an observation, its covariance scaled by the observation "
+            "squared (an observation of 0 makes it zero)")
+
+
 def run_case(wd: Path, soil_name: str, stage_id: str, case_id: str, targets: dict, budget: int, args,
              upstream: pd.DataFrame | None, glpy: Path) -> dict:
     from soilcal.chain import adaptive as cad
@@ -129,6 +143,14 @@ def run_case(wd: Path, soil_name: str, stage_id: str, case_id: str, targets: dic
     stage = cad.stage_for(soil.data, stage_id, upstream)
     problem = cad.problem_for(soil.data, stage, case_id, targets)
     settings = cad.settings_for(soil.data)
+    why = not_applicable(problem)
+    if why:
+        print(f"{soil_name} {stage_id}/{case_id}: {why}", flush=True)
+        return {"rows": [{"soil": soil_name, "stage": stage_id, "case": case_id, "target": t.response,
+                          "method": "grainlearning", "runs": 0, "verification_rel_error_pct": math.nan,
+                          "within_2_percent": "", "elapsed_s": 0.0, "stopped_because": why,
+                          "note": f"grainlearning {GL_VERSION}: not run"} for t in problem.targets],
+                "optimum": None}
     cdir = wd / "gl" / f"{stage_id}-{case_id}"
     cdir.mkdir(parents=True, exist_ok=True)
     for f in cdir.glob("*"):
