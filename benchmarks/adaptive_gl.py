@@ -23,7 +23,9 @@ source, cases with a target value: :func:`soilcal.chain.adaptive.adaptive_cases`
   seeds run on from the soil's seed, one per run, as the adaptive design's do.
 
 A case where GrainLearning stops with an error gets a row saying so, with the runs it spent
-and no verification; the soil's other cases go on.  Rows (method ``grainlearning``) replace
+and no verification; the soil's other cases go on.  A case it cannot take (a goal minimize or
+maximize: :func:`not_applicable`) or whose budget leaves fewer than 2d+1 samples per iteration
+for d factors gets a row saying why, with no runs.  Rows (method ``grainlearning``) replace
 that soil's earlier GrainLearning rows; the page
 ``adaptive.md`` is rewritten with every method.  Per case the runs, samples and values go to
 ``<workdir>/<soil>-grainlearning/gl/<stage>-<case>/``.
@@ -133,6 +135,15 @@ def not_applicable(problem) -> str:
             "squared (an observation of 0 makes it zero)")
 
 
+def not_run(soil_name: str, stage_id: str, case_id: str, problem, why: str) -> dict:
+    """A case's rows when GrainLearning does not run it, with the reason and no runs spent."""
+    return {"rows": [{"soil": soil_name, "stage": stage_id, "case": case_id, "target": t.response,
+                      "method": "grainlearning", "runs": 0, "verification_rel_error_pct": math.nan,
+                      "within_2_percent": "", "elapsed_s": 0.0, "stopped_because": why,
+                      "note": f"grainlearning {GL_VERSION}: not run"} for t in problem.targets],
+            "optimum": None}
+
+
 def run_case(wd: Path, soil_name: str, stage_id: str, case_id: str, targets: dict, budget: int, args,
              upstream: pd.DataFrame | None, glpy: Path) -> dict:
     from soilcal.chain import adaptive as cad
@@ -146,11 +157,7 @@ def run_case(wd: Path, soil_name: str, stage_id: str, case_id: str, targets: dic
     why = not_applicable(problem)
     if why:
         print(f"{soil_name} {stage_id}/{case_id}: {why}", flush=True)
-        return {"rows": [{"soil": soil_name, "stage": stage_id, "case": case_id, "target": t.response,
-                          "method": "grainlearning", "runs": 0, "verification_rel_error_pct": math.nan,
-                          "within_2_percent": "", "elapsed_s": 0.0, "stopped_because": why,
-                          "note": f"grainlearning {GL_VERSION}: not run"} for t in problem.targets],
-                "optimum": None}
+        return not_run(soil_name, stage_id, case_id, problem, why)
     cdir = wd / "gl" / f"{stage_id}-{case_id}"
     cdir.mkdir(parents=True, exist_ok=True)
     for f in cdir.glob("*"):
@@ -161,8 +168,11 @@ def run_case(wd: Path, soil_name: str, stage_id: str, case_id: str, targets: dic
                                      "responses": responses}, default=float))
     samples = (budget - settings.verify_seeds) // args.iterations
     if samples < 2 * len(problem.names) + 1:
-        raise SystemExit(f"{soil_name} {stage_id}/{case_id}: a budget of {budget} runs leaves {samples} samples per "
-                         f"iteration for {args.iterations} iterations (at least {2 * len(problem.names) + 1} needed)")
+        why = (f"not run: a budget of {budget} runs (the recipe's, per case) leaves {samples} samples per iteration "
+               f"for {args.iterations} iterations after {settings.verify_seeds} verification seeds (at least "
+               f"{2 * len(problem.names) + 1} needed for {len(problem.names)} factors)")
+        print(f"{soil_name} {stage_id}/{case_id}: {why}", flush=True)
+        return not_run(soil_name, stage_id, case_id, problem, why)
     prob = {"names": problem.names, "low": [f.low for f in problem.factors], "high": [f.high for f in problem.factors],
             "responses": responses, "targets": [t.value for t in problem.targets], "samples": samples,
             "iterations": args.iterations, "seed": settings.seed, "ess_target": args.ess_target,
