@@ -139,7 +139,7 @@ def not_run(soil_name: str, stage_id: str, case_id: str, problem, why: str) -> d
     """A case's rows when GrainLearning does not run it, with the reason and no runs spent."""
     return {"rows": [{"soil": soil_name, "stage": stage_id, "case": case_id, "target": t.response,
                       "method": "grainlearning", "runs": 0, "verification_rel_error_pct": math.nan,
-                      "within_2_percent": "", "elapsed_s": 0.0, "stopped_because": why,
+                      "within_2_percent": "", "elapsed_s": "", "stopped_because": why,
                       "note": f"grainlearning {GL_VERSION}: not run"} for t in problem.targets],
             "optimum": None}
 
