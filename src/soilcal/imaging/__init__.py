@@ -11,3 +11,14 @@
 * :mod:`soilcal.imaging.manifest`: ``resources/images/<soil>/manifest.yaml`` and group means.
 * :mod:`soilcal.imaging.figures`: original / gray / binary / contour / fitted-line figures.
 """
+
+import os as _os
+
+# numpy asks the kernel for transparent huge pages (madvise) for every array of 4 MB or more,
+# and a photo measurement makes many full-frame float arrays that live for milliseconds:
+# faulting them in as huge pages costs more system time than they save (measuring the vineyard
+# soil's photos: 7-9 s of system CPU with them, 2.6-3.7 s without, the same user CPU).  Off for
+# a process that loads numpy through this package (the `soilcal image` commands and the
+# workflow's photo jobs); a value given in the environment is kept, and a process that loaded
+# numpy before this package keeps numpy's default.
+_os.environ.setdefault("NUMPY_MADVISE_HUGEPAGE", "0")
