@@ -2280,7 +2280,14 @@ def _soil_boundary(path, rgb, beam: _Beam):
     if v_max - beam.low < 3 * FURROW_SEED_ROWS:
         raise InputError(path, "image", "soil below the profile-meter beam", "the beam is at the frame's bottom")
     v = np.arange(v0, v_max)
-    lab_img = color.rgb2lab(filters.gaussian(rgb, 1.5, channel_axis=-1))
+    # L*a*b* of the smoothed photo on the rows the strip's bilinear samples read only (the
+    # rows of its corners' extremes and the next one), whole rows, so each pixel's conversion
+    # is the one of the whole image; the rows above and below are never read
+    rows = [beam.o[1] + uu * beam.ux[1] + vv * beam.vx[1] for uu in (u[0], u[-1]) for vv in (v[0], v[-1])]
+    r0, r1 = max(0, math.floor(min(rows)) - 1), min(h, math.floor(max(rows)) + 3)
+    smooth = filters.gaussian(rgb, 1.5, channel_axis=-1)
+    lab_img = np.zeros_like(smooth)
+    lab_img[r0:r1] = color.rgb2lab(smooth[r0:r1])
     strip = np.stack([beam.sample(lab_img[..., k], u, v) for k in range(3)], axis=-1)
     board = np.median(strip[:FURROW_SEED_ROWS].reshape(-1, 3), axis=0)
     soil_c = np.median(strip[-FURROW_SEED_ROWS:].reshape(-1, 3), axis=0)
