@@ -283,3 +283,61 @@ def test_components_on_a_plate_line_that_is_not_finite_are_refused(slope, interc
         _components_on_plate("heap.png", binary, slope, intercept, "heap")
     assert (e.value.path, e.value.field) == ("heap.png", "image") and "finite" in e.value.expected
     assert e.value.got == f"slope {slope}, intercept {intercept}"
+
+
+def test_a_plate_candidate_refined_to_a_vertical_line_is_no_candidate():
+    # edge pixels within 3 px of a level Hough line (row 50): five of column 10 (rows 48 to 52)
+    # and one of column 150, so RANSAC's best line (residual under 1 px) is the vertical one
+    # through the five: any other line through two of the six has the far pixel and at most
+    # three of the column's within 1 px; it is of no finite slope (it gave slope inf,
+    # intercept NaN, a plate candidate whose band above it was empty)
+    from soilcal.imaging.measure import _refined_line
+
+    er = np.array([48, 49, 50, 51, 52, 50])
+    ec = np.array([10, 10, 10, 10, 10, 150])
+    assert _refined_line(er, ec, 200, math.pi / 2, 50.0) is None
+
+
+def test_a_photo_whose_first_plate_candidate_is_no_finite_line_is_measured_or_refused_by_name(monkeypatch):
+    # the plate search's first RANSAC fit made vertical (as through pixels of one column): the
+    # photo gets a measurement on its other candidates, or one refusal naming it (this gave an
+    # IndexError from the candidate's empty band above the plate)
+    from skimage import measure as skmeasure
+
+    from soilcal.imaging import measure
+
+    ransac, calls = skmeasure.ransac, []
+
+    def first_vertical(data, model_class, *args, **kwargs):
+        model, inliers = ransac(data, model_class, *args, **kwargs)
+        calls.append(model_class)
+        if len(calls) == 1:
+            assert model_class is skmeasure.LineModelND
+            model = skmeasure.LineModelND.from_estimate(np.array([[5.0, 0.0], [5.0, 10.0]]))
+            assert model.direction[0] == 0.0
+        return model, inliers
+
+    monkeypatch.setattr(measure.measure, "ransac", first_vertical)
+    try:
+        r = measure.measure_pile("heap.png", image=heap_photo())
+    except InputError as e:
+        assert e.path == "heap.png" and "heap.png" in str(e)
+    else:
+        assert math.isfinite(r.angle_deg) and math.isfinite(r.roll_deg)
+    assert len(calls) > 1
+
+
+@pytest.mark.parametrize("given", [dict(plate=(0.0, 2.0)), dict(plate=(0.0, -50.0)), dict(plate=(0.0, 5000.0)),
+                                   dict(plate_px=((0.0, 5000.0), (399.0, 5000.0)))])
+@pytest.mark.parametrize("channel", ["auto", "gray"])
+def test_a_plate_line_with_no_rows_of_the_photo_above_it_is_refused_naming_the_photo(given, channel):
+    # finite plate lines at the frame's top (row 2: nothing 3 px above it) and off the photo
+    # (above and below its 300 rows): no heap can stand on them, and there is no band above
+    # them for a cue's threshold; refused naming the photo (they gave an IndexError from
+    # Otsu's threshold of the empty band)
+    from soilcal.imaging.measure import measure_pile
+
+    with pytest.raises(InputError) as e:
+        measure_pile("heap.png", image=heap_photo(), channel=channel, **given)
+    assert (e.value.path, e.value.field) == ("heap.png", "image")
+    assert "no rows of the photo" in e.value.got and "heap.png" in str(e.value)

@@ -447,9 +447,8 @@ def _components_on_plate(path, binary, slope, intercept, kind):
     h, w = binary.shape
     if not (math.isfinite(slope) and math.isfinite(intercept)):
         # measure_pile refuses a caller's line that is not finite (_check_given_plate,
-        # check_plate_line), so this guards direct calls only; a candidate of the plate search
-        # that is not finite (RANSAC's best line through two points of one column) fails
-        # earlier, on its empty band in _on_plate_lines, and is not filtered out yet
+        # check_plate_line) and the plate search keeps no such candidate (_refined_line), so
+        # this guards direct calls only
         raise InputError(path, "image", "a plate line of finite slope and intercept (row = slope * col + "
                          "intercept)", f"slope {slope}, intercept {intercept}")
     # a column of row numbers against a row of plate rows (broadcast, not two full grids: the
@@ -1203,6 +1202,18 @@ def _on_plate_lines(path, rgb, lum, grays, lines, n_first, channel, threshold, k
             continue
         prow = slope * cc + intercept
         band = (rr < prow - 3) & (rr > prow - 0.35 * h)  # where heap and wall meet
+        if not band.any():
+            # a line at the frame's top or outside it (a plate line given off the photo): no
+            # rows above it for a heap, nor a band for a cue's threshold
+            tried.add(f"line {n_line}", None, (slope, intercept))
+            e = InputError(path, "image", "one heap standing on the plate, inside the frame above its top edge",
+                           f"no rows of the photo from 3 px to 35 % of its height above the plate line "
+                           f"(row = {slope:.4g} x column + {intercept:.4g}, rows 0 to {h - 1} in the photo)")
+            tried.refuse_last(e)
+            refusals.append(e)
+            if refused is not None:
+                refused.add(n_line)
+            continue
         if channel != "auto":
             order = [(channel, "dark")]
         else:
@@ -1913,20 +1924,32 @@ def plate_lines(gray, below=None, edges=None, paired=False):
     angs, dists = angs[keep][:8], dists[keep][:8]
     at = sorted(((a, d, (d - col0 * np.cos(a)) / np.sin(a)) for a, d in zip(angs, dists)), key=lambda t: t[2])
     er, ec = np.nonzero(edges)
-    return [_refined_line(er, ec, w, a, d) for a, d, row in at if row > row0]
+    refined = (_refined_line(er, ec, w, a, d) for a, d, row in at if row > row0)
+    return [ln for ln in refined if ln is not None]
 
 
 def _refined_line(er, ec, w, a, d):
     """The Hough line (angle ``a``, distance ``d``) refined by a RANSAC line fit through the
-    edge pixels (rows ``er``, columns ``ec``) within 3 px of it: (slope, intercept)."""
+    edge pixels (rows ``er``, columns ``ec``) within 3 px of it: (slope, intercept), or None
+    where the fit gives no line of finite slope and intercept (fewer than two pixels near it,
+    no model, or a vertical one: the best of RANSAC's lines through pixels of one column), which
+    is then no plate candidate."""
     cols = np.arange(w)
     rows = (d - cols * np.cos(a)) / np.sin(a)
     near = np.abs(er - rows[ec]) < 3
     pts = np.column_stack([ec[near], er[near]]).astype(float)
+    if len(pts) < 2:
+        return None
     model, _ = measure.ransac(pts, measure.LineModelND, min_samples=2, residual_threshold=1.0,
                               max_trials=200, rng=0)
+    if model is None or not model:
+        return None
     (c0, r0), (dc, dr) = model.origin, model.direction
-    return dr / dc, r0 - dr / dc * c0
+    if dc == 0.0:
+        return None
+    slope = dr / dc
+    intercept = r0 - slope * c0
+    return (slope, intercept) if math.isfinite(slope) and math.isfinite(intercept) else None
 
 
 #: the steepest tilt (deg) at which a straight edge across the photo is looked for beyond the
@@ -1972,7 +1995,10 @@ def _plate_beyond_search(edges, edges_wide, lines, below=None):
     er, ec = np.nonzero(edges)
     beyond = []
     for a, d in zip(angs, dists):
-        slope, b = _refined_line(er, ec, w, a, d)
+        refined = _refined_line(er, ec, w, a, d)
+        if refined is None:
+            continue
+        slope, b = refined
         if below is not None and slope * below[0] + b <= below[1]:
             continue
         if abs(np.degrees(np.arctan(slope))) > PLATE_MAX_ROLL_DEG:
@@ -1993,7 +2019,10 @@ def _parallel_lines(edges, slope, intercept):
     er, ec = np.nonzero(edges)
     out = [(0.0, slope, intercept)]
     for a, d in zip(angs, dists):
-        s_, b_ = _refined_line(er, ec, w, a, d)
+        refined = _refined_line(er, ec, w, a, d)
+        if refined is None:
+            continue
+        s_, b_ = refined
         off = (s_ - slope) * w / 2 + b_ - intercept  # rows below the line at the middle column
         if -0.1 * h <= off <= 3.0 and all(abs((s_ - o[1]) * w / 2 + b_ - o[2]) > 1.5 for o in out):
             out.append((off, s_, b_))
@@ -2251,7 +2280,14 @@ def _soil_boundary(path, rgb, beam: _Beam):
     if v_max - beam.low < 3 * FURROW_SEED_ROWS:
         raise InputError(path, "image", "soil below the profile-meter beam", "the beam is at the frame's bottom")
     v = np.arange(v0, v_max)
-    lab_img = color.rgb2lab(filters.gaussian(rgb, 1.5, channel_axis=-1))
+    # L*a*b* of the smoothed photo on the rows the strip's bilinear samples read only (the
+    # rows of its corners' extremes and the next one), whole rows, so each pixel's conversion
+    # is the one of the whole image; the rows above and below are never read
+    rows = [beam.o[1] + uu * beam.ux[1] + vv * beam.vx[1] for uu in (u[0], u[-1]) for vv in (v[0], v[-1])]
+    r0, r1 = max(0, math.floor(min(rows)) - 1), min(h, math.floor(max(rows)) + 3)
+    smooth = filters.gaussian(rgb, 1.5, channel_axis=-1)
+    lab_img = np.zeros_like(smooth)
+    lab_img[r0:r1] = color.rgb2lab(smooth[r0:r1])
     strip = np.stack([beam.sample(lab_img[..., k], u, v) for k in range(3)], axis=-1)
     board = np.median(strip[:FURROW_SEED_ROWS].reshape(-1, 3), axis=0)
     soil_c = np.median(strip[-FURROW_SEED_ROWS:].reshape(-1, 3), axis=0)
@@ -2338,10 +2374,12 @@ def _measure_furrow(path, scale_length_mm, datum_mm, degree, threshold, keep_sta
     a, b = -scale_length_mm / 2, scale_length_mm / 2
     coeffs = poly.convert().coef[::-1].tolist()
     area = furrow_chord_area(a, b, coeffs)
-    # the soil found, in the photo's own pixels (diagnostics and figures)
+    # the soil found, in the photo's own pixels, for the figures (keep_stages) only: nothing
+    # after this point refuses the photo, so no diagnostic image draws it, and skimage's
+    # polygon fill of a vertex per column took some 40 % of the measurement's CPU
     uu = u[ok][keep]
-    soil_mask = np.zeros((h, w), bool)
-    if uu.size > 2:
+    soil_mask = np.zeros((h, w), bool) if keep_stages else None
+    if keep_stages and uu.size > 2:
         from skimage.draw import polygon
 
         vb = z_row[ok][keep]
