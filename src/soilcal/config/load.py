@@ -22,11 +22,11 @@ SOIL_SCHEMA = Path(str(resources.files("soilcal.config") / "soil.schema.yaml"))
 WORKFLOW_SCHEMA = Path(str(resources.files("soilcal.config") / "workflow.schema.yaml"))
 
 
-class _Loader(yaml.SafeLoader):
-    """SafeLoader that also reads ``7.9e10`` (no sign, no dot) as a float, as YAML 1.2 does,
-    and refuses a key given twice in one mapping (plain PyYAML keeps the last silently).  Keys
-    are compared as the values they read as, so ``5`` and ``5.0`` (one Python key, the later
-    entry would win) are the same key; a quoted ``"5"`` is text, another key."""
+class _Keys:
+    """The loaders' mapping rule: a key given twice in one mapping is refused (plain PyYAML
+    keeps the last silently).  Keys are compared as the values they read as, so ``5`` and
+    ``5.0`` (one Python key, the later entry would win) are the same key; a quoted ``"5"`` is
+    text, another key."""
 
     def construct_mapping(self, node, deep=False):
         if isinstance(node, yaml.MappingNode):
@@ -49,25 +49,46 @@ class _DuplicateKey(Exception):
         self.key, self.line, self.first = key, line, first
 
 
-_Loader.add_implicit_resolver(
-    "tag:yaml.org,2002:float",
-    re.compile(
-        r"""^(?:[-+]?(?:[0-9][0-9_]*)\.[0-9_]*(?:[eE][-+]?[0-9]+)?
-        |[-+]?(?:[0-9][0-9_]*)(?:[eE][-+]?[0-9]+)
-        |\.[0-9_]+(?:[eE][-+]?[0-9]+)?
-        |[-+]?\.(?:inf|Inf|INF)
-        |\.(?:nan|NaN|NAN))$""",
-        re.X,
-    ),
-    list("-+0123456789."),
-)
+class _Loader(_Keys, yaml.SafeLoader):
+    """SafeLoader that also reads ``7.9e10`` (no sign, no dot) as a float, as YAML 1.2 does,
+    and refuses a key given twice in one mapping (:class:`_Keys`).  Pure Python: its parse
+    errors are the messages :func:`read_yaml` gives."""
+
+
+class _CLoader(_Keys, yaml.CSafeLoader):
+    """:class:`_Loader` on libyaml's parser (PyYAML's ``CSafeLoader``): the same resolver and
+    constructor, so the same values, read several times faster; :func:`read_yaml` reads each
+    file with it first."""
+
+
+for _cls in (_Loader, _CLoader):
+    _cls.add_implicit_resolver(
+        "tag:yaml.org,2002:float",
+        re.compile(
+            r"""^(?:[-+]?(?:[0-9][0-9_]*)\.[0-9_]*(?:[eE][-+]?[0-9]+)?
+            |[-+]?(?:[0-9][0-9_]*)(?:[eE][-+]?[0-9]+)
+            |\.[0-9_]+(?:[eE][-+]?[0-9]+)?
+            |[-+]?\.(?:inf|Inf|INF)
+            |\.(?:nan|NaN|NAN))$""",
+            re.X,
+        ),
+        list("-+0123456789."),
+    )
 
 
 def read_yaml(path: str | Path) -> Any:
-    """Read a YAML file; a missing or unparsable file raises InputError naming it."""
+    """Read a YAML file; a missing or unparsable file raises InputError naming it.  The file is
+    parsed with libyaml (:class:`_CLoader`); where that fails in any way it is read again with
+    the pure-Python parser (:class:`_Loader`), whose error the message gives (libyaml words
+    its errors differently)."""
     path = Path(path)
     if not path.is_file():
         raise InputError(path, "<file>", "an existing YAML file", "no such file")
+    try:
+        with open(path, encoding="utf-8") as fh:
+            return yaml.load(fh, Loader=_CLoader)  # noqa: S506 - CSafeLoader subclass
+    except Exception:  # noqa: BLE001 - the pure-Python read below raises the error the message names
+        pass
     try:
         with open(path, encoding="utf-8") as fh:
             return yaml.load(fh, Loader=_Loader)  # noqa: S506 - SafeLoader subclass
