@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import copy
+import functools
 import math
 import re
 from dataclasses import dataclass, field
@@ -886,9 +888,20 @@ def _check_table(path: Path, st: dict, where: str, pub: Path) -> None:
                 raise InputError(tpath, f"column {c}", f"values within [{lo}, {hi}]", bad.tolist())
 
 
+@functools.lru_cache(maxsize=4)
+def _schema_once(path: Path) -> Any:
+    return read_yaml(path)
+
+
+def soil_schema() -> dict:
+    """The soil schema (:data:`SOIL_SCHEMA`), parsed once per process (a file of the package);
+    each call returns its own copy."""
+    return copy.deepcopy(_schema_once(Path(SOIL_SCHEMA)))
+
+
 def schema_defaults(schema: dict | None = None) -> dict[str, Any]:
     """The top-level fields the soil schema gives a ``default`` (documented in its description)."""
-    schema = read_yaml(SOIL_SCHEMA) if schema is None else schema
+    schema = soil_schema() if schema is None else schema
     return {k: v["default"] for k, v in schema["properties"].items() if isinstance(v, dict) and "default" in v}
 
 
@@ -972,13 +985,12 @@ def load_soil(path: str | Path, resources_root: str | Path = "resources", design
     simulation block before the checks, and ``source`` (``--config source=...``) its
     ``source``, so the soil is checked as the workflow runs it.
     """
-    import copy
 
     path = Path(path)
     data = read_yaml(path)
     if not isinstance(data, dict):
         raise InputError(path, "<root>", "a mapping of soil fields", "an empty file" if data is None else type(data).__name__)
-    schema = read_yaml(SOIL_SCHEMA)
+    schema = soil_schema()
     _schema_error(path, schema, data)
     defaulted = []
     for key, value in schema_defaults(schema).items():
