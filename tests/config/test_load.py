@@ -219,6 +219,28 @@ def test_yaml_exponent_without_sign_is_a_number(workspace):
     assert read_yaml(p) == {"g": 7.9e10, "h": 1e7}
 
 
+def _typed(v):
+    """``v`` with every scalar beside its type and every mapping as its (key, value) pairs in
+    order, so that == also compares types (1 == 1.0 == True) and key order."""
+    if isinstance(v, dict):
+        return ("dict", [(_typed(k), _typed(x)) for k, x in v.items()])
+    if isinstance(v, list):
+        return ("list", [_typed(x) for x in v])
+    return (type(v).__name__, repr(v))
+
+
+@pytest.mark.parametrize("rel", sorted(str(p.relative_to(ROOT)) for d in ("config", "src", "resources", "workflow")
+                                       for p in (ROOT / d).rglob("*.yaml")))
+def test_every_yaml_file_reads_as_the_pure_python_loader_reads_it(rel):
+    # read_yaml and the photo manifests parse with libyaml; PyYAML's pure-Python SafeLoader (with
+    # read_yaml's rules: load._Loader) is the reference
+    from soilcal.config import load
+
+    text = (ROOT / rel).read_text(encoding="utf-8")
+    assert _typed(load.read_yaml(ROOT / rel)) == _typed(yaml.load(text, Loader=load._Loader))  # noqa: S506
+    assert _typed(yaml.load(text, Loader=yaml.CSafeLoader)) == _typed(yaml.safe_load(text))  # noqa: S506
+
+
 def test_bbd_run_counts():
     # Box-Behnken with the papers' centre points: 29 runs for 4 factors, 17 for 3 (5 centres).
     four = {"kind": "box_behnken", "factors": dict.fromkeys("ABCD", {}), "center_points": 5}

@@ -152,7 +152,7 @@ def test_runs_without_a_seed_number_are_left_out_and_rows_may_have_more_seeds():
     assert ci is not None and ci["rate_friction.beta"][0] < x[0] < ci["rate_friction.beta"][1]
 
 
-def test_a_row_without_its_measured_sd_keeps_the_fits_interval():
+def test_a_row_without_its_measured_sd_keeps_the_fits_interval(monkeypatch):
     from soilcal.loop import core
 
     obs, runs = _campaign(np.random.default_rng(4), 0.3, 0.14)
@@ -160,11 +160,27 @@ def test_a_row_without_its_measured_sd_keeps_the_fits_interval():
     u = obs.assign(simulated_mean=ed.surrogate([0.0]))
     m = sl.Model([ed], u["simulated_mean"].to_numpy(float), u["measured"].to_numpy(float))
     final = sl.score(m, sl.Model([], m.y0, m.measured), sl._folds(u, None))
+    boots = []
+    bootstrap_ci = sl.bootstrap_ci
+    monkeypatch.setattr(sl, "bootstrap_ci", lambda *a, **k: boots.append((a, k, bootstrap_ci(*a, **k))) or boots[-1][2])
     ci, how = core._interval(u, [ed], final, core.Settings())
     assert how.startswith("the wider of the fit's (Jacobian) interval and a bootstrap of 200 refits")
-    # a fit that cannot bound the parameter (a rank-deficient Jacobian): the bootstrap's alone
+    # a fit that cannot bound the parameter (a rank-deficient Jacobian): the bootstrap's alone.
+    # Its bootstrap is the one above (the same effects, rows, measured values and start, only
+    # the fit's interval differs): the draws are not refitted again
     from dataclasses import replace
 
+    def same(x, y):
+        if isinstance(x, (list, tuple)):
+            return len(x) == len(y) and all(same(p, q) for p, q in zip(x, y))
+        return x is y or np.array_equal(x, y)
+
+    def same_draws(*a, **k):
+        a0, k0, ci0 = boots[0]
+        assert same(list(a), list(a0)) and set(k) == set(k0) and all(same(k[n], k0[n]) for n in k)
+        return ci0
+
+    monkeypatch.setattr(sl, "bootstrap_ci", same_draws)
     unbounded = replace(final, ci={"rate_friction.beta": (-np.inf, np.inf)})
     ci, how = core._interval(u, [ed], unbounded, core.Settings())
     assert np.isfinite(ci["rate_friction.beta"]).all() and how.endswith("alone: the fit does not bound every parameter")

@@ -282,17 +282,26 @@ def test_two_interacting_effects_are_recovered_from_runs_with_both_switched_on(h
         in out.verdict
 
 
-def test_a_single_effect_is_refitted_with_runs_at_its_fitted_value():
+def test_a_single_effect_is_refitted_with_runs_at_its_fitted_value(monkeypatch):
     # a moisture cohesion c_w = 0.03 J/m^2 per % about 16 %: on the dry rows (8 %) the surface
     # energy 0.4 - 0.03 * 8 stays above zero, but at the design point c_w = 0.1 it is clamped at
     # zero, so the monotone cubic through the design points (0, 0.1) bends where the response
     # has a kink: noise-free, the fit came out 0.0325 (8 % off); with runs at the fitted value
-    # and the model corrected there it is exact
+    # and the model corrected there it is exact.  The round with the runs at the fitted value
+    # changes the chosen effect's fit only, not the candidates or their runs: the selection
+    # over the candidates is made once per set of candidates, not again in that round
+    from soilcal.loop import select as sl
+
+    selected = []
+    forward = sl.forward
+    monkeypatch.setattr(sl, "forward", lambda obs, y0, data, *a, **k: selected.append(tuple(data))
+                        or forward(obs, y0, data, *a, **k))
     conds = S.conditions(S.grid(0, 18, moisture=True))
     hidden = {"moisture_cohesion": {"c_w": 0.03}}
     table = sy.synthesize(conds, S.base_params, S.simulate, hidden, REFERENCE, {}, noise=0.0, seed=10, seeds=SEEDS)
     out = core.run_inprocess("standin", sy.with_measured(conds, table), S.base_params, S.simulate,
                              core.Settings(reference=REFERENCE, bootstrap=0), seeds=SEEDS)
+    assert selected and len(set(selected)) == len(selected), selected
     assert out.chosen == ["moisture_cohesion"], out.verdict
     assert out.theta["moisture_cohesion.c_w"] == pytest.approx(0.03, rel=0.01)
     assert out.verdict.startswith("explained by moisture_cohesion")

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import copy
+import functools
 import math
 import re
 from dataclasses import dataclass, field
@@ -22,11 +24,11 @@ SOIL_SCHEMA = Path(str(resources.files("soilcal.config") / "soil.schema.yaml"))
 WORKFLOW_SCHEMA = Path(str(resources.files("soilcal.config") / "workflow.schema.yaml"))
 
 
-class _Loader(yaml.SafeLoader):
-    """SafeLoader that also reads ``7.9e10`` (no sign, no dot) as a float, as YAML 1.2 does,
-    and refuses a key given twice in one mapping (plain PyYAML keeps the last silently).  Keys
-    are compared as the values they read as, so ``5`` and ``5.0`` (one Python key, the later
-    entry would win) are the same key; a quoted ``"5"`` is text, another key."""
+class _Keys:
+    """The loaders' mapping rule: a key given twice in one mapping is refused (plain PyYAML
+    keeps the last silently).  Keys are compared as the values they read as, so ``5`` and
+    ``5.0`` (one Python key, the later entry would win) are the same key; a quoted ``"5"`` is
+    text, another key."""
 
     def construct_mapping(self, node, deep=False):
         if isinstance(node, yaml.MappingNode):
@@ -49,25 +51,46 @@ class _DuplicateKey(Exception):
         self.key, self.line, self.first = key, line, first
 
 
-_Loader.add_implicit_resolver(
-    "tag:yaml.org,2002:float",
-    re.compile(
-        r"""^(?:[-+]?(?:[0-9][0-9_]*)\.[0-9_]*(?:[eE][-+]?[0-9]+)?
-        |[-+]?(?:[0-9][0-9_]*)(?:[eE][-+]?[0-9]+)
-        |\.[0-9_]+(?:[eE][-+]?[0-9]+)?
-        |[-+]?\.(?:inf|Inf|INF)
-        |\.(?:nan|NaN|NAN))$""",
-        re.X,
-    ),
-    list("-+0123456789."),
-)
+class _Loader(_Keys, yaml.SafeLoader):
+    """SafeLoader that also reads ``7.9e10`` (no sign, no dot) as a float, as YAML 1.2 does,
+    and refuses a key given twice in one mapping (:class:`_Keys`).  Pure Python: its parse
+    errors are the messages :func:`read_yaml` gives."""
+
+
+class _CLoader(_Keys, yaml.CSafeLoader):
+    """:class:`_Loader` on libyaml's parser (PyYAML's ``CSafeLoader``): the same resolver and
+    constructor, so the same values, read several times faster; :func:`read_yaml` reads each
+    file with it first."""
+
+
+for _cls in (_Loader, _CLoader):
+    _cls.add_implicit_resolver(
+        "tag:yaml.org,2002:float",
+        re.compile(
+            r"""^(?:[-+]?(?:[0-9][0-9_]*)\.[0-9_]*(?:[eE][-+]?[0-9]+)?
+            |[-+]?(?:[0-9][0-9_]*)(?:[eE][-+]?[0-9]+)
+            |\.[0-9_]+(?:[eE][-+]?[0-9]+)?
+            |[-+]?\.(?:inf|Inf|INF)
+            |\.(?:nan|NaN|NAN))$""",
+            re.X,
+        ),
+        list("-+0123456789."),
+    )
 
 
 def read_yaml(path: str | Path) -> Any:
-    """Read a YAML file; a missing or unparsable file raises InputError naming it."""
+    """Read a YAML file; a missing or unparsable file raises InputError naming it.  The file is
+    parsed with libyaml (:class:`_CLoader`); where that fails in any way it is read again with
+    the pure-Python parser (:class:`_Loader`), whose error the message gives (libyaml words
+    its errors differently)."""
     path = Path(path)
     if not path.is_file():
         raise InputError(path, "<file>", "an existing YAML file", "no such file")
+    try:
+        with open(path, encoding="utf-8") as fh:
+            return yaml.load(fh, Loader=_CLoader)  # noqa: S506 - CSafeLoader subclass
+    except Exception:  # noqa: BLE001 - the pure-Python read below raises the error the message names
+        pass
     try:
         with open(path, encoding="utf-8") as fh:
             return yaml.load(fh, Loader=_Loader)  # noqa: S506 - SafeLoader subclass
@@ -865,9 +888,20 @@ def _check_table(path: Path, st: dict, where: str, pub: Path) -> None:
                 raise InputError(tpath, f"column {c}", f"values within [{lo}, {hi}]", bad.tolist())
 
 
+@functools.lru_cache(maxsize=4)
+def _schema_once(path: Path) -> Any:
+    return read_yaml(path)
+
+
+def soil_schema() -> dict:
+    """The soil schema (:data:`SOIL_SCHEMA`), parsed once per process (a file of the package);
+    each call returns its own copy."""
+    return copy.deepcopy(_schema_once(Path(SOIL_SCHEMA)))
+
+
 def schema_defaults(schema: dict | None = None) -> dict[str, Any]:
     """The top-level fields the soil schema gives a ``default`` (documented in its description)."""
-    schema = read_yaml(SOIL_SCHEMA) if schema is None else schema
+    schema = soil_schema() if schema is None else schema
     return {k: v["default"] for k, v in schema["properties"].items() if isinstance(v, dict) and "default" in v}
 
 
@@ -951,13 +985,12 @@ def load_soil(path: str | Path, resources_root: str | Path = "resources", design
     simulation block before the checks, and ``source`` (``--config source=...``) its
     ``source``, so the soil is checked as the workflow runs it.
     """
-    import copy
 
     path = Path(path)
     data = read_yaml(path)
     if not isinstance(data, dict):
         raise InputError(path, "<root>", "a mapping of soil fields", "an empty file" if data is None else type(data).__name__)
-    schema = read_yaml(SOIL_SCHEMA)
+    schema = soil_schema()
     _schema_error(path, schema, data)
     defaulted = []
     for key, value in schema_defaults(schema).items():

@@ -122,7 +122,11 @@ def read_manifest(path):
 
     path = Path(path)
     try:
-        data = yaml.safe_load(path.read_text(encoding="utf-8"))
+        text = path.read_text(encoding="utf-8")
+        try:
+            data = yaml.load(text, Loader=yaml.CSafeLoader)  # noqa: S506 - libyaml: the same values, faster
+        except yaml.YAMLError:  # read again by the pure-Python parser, whose error the message words
+            data = yaml.safe_load(text)
     except (OSError, UnicodeDecodeError, yaml.YAMLError) as exc:
         raise InputError(path, "manifest", "a readable YAML file", str(exc).splitlines()[0] if str(exc) else type(exc).__name__) from None
     if not isinstance(data, dict) or not isinstance(data.get("photos"), list) or not data["photos"]:

@@ -973,14 +973,19 @@ def analyse(soil: str, res: pd.DataFrame, diag: pd.DataFrame, cands: list, effec
 
 def _analyse(soil: str, res: pd.DataFrame, diag: pd.DataFrame, cands: list, effect_runs: dict,
              settings: Settings, reference: dict, quantity_cols: dict | None, skipped_effects: dict | None,
-             joint: dict | None, interval: bool) -> tuple[Outcome, tuple | None]:
+             joint: dict | None, interval: bool, selections: dict | None = None) -> tuple[Outcome, tuple | None]:
     """:func:`analyse` and, where ``interval`` is False, the chosen effects' interval left out
     of the summary (its ``ci95`` ``{}``, ``ci95_method`` only the words that follow the
     interval's own): (the outcome, what :func:`_with_interval` needs to fill it in, or None
     where there is nothing to fill in).  The interval's bootstrap refits the model
     ``loop.bootstrap`` times; :func:`run_inprocess` computes it only for the round whose
     outcome it returns.  Where the chosen effects are refitted beside a free uniform scale
-    the summary gives that fit's interval, and no bootstrap is run."""
+    the summary gives that fit's interval, and no bootstrap is run.  ``selections``: the
+    candidates' surrogates and the selection over them (:func:`soilcal.loop.select.forward`)
+    by the tuple of candidates, kept across the rounds of one :func:`run_inprocess` (the
+    same residual table, runs and settings): ``joint`` changes neither, only the chosen
+    effects' fit after them, so a round with joint runs reuses the selection of the round
+    before it instead of repeating it."""
     u = rs.usable(res)
     spread_note = _replicate_spread(u, settings.alpha)  # the verdict's note ("": none) and its nuisance words
     rank = dg.ranking(diag)
@@ -1000,14 +1005,20 @@ def _analyse(soil: str, res: pd.DataFrame, diag: pd.DataFrame, cands: list, effe
     fold_by, fold_text = fold_grouping(settings, quantity_cols, res)
     unfit = {}
     if n >= 3 and cands:
-        for nm in cands:  # an effect whose runs failed at too many design points cannot be fitted
-            try:
-                data[nm] = sl.build_effect_data(u, effect_runs[nm], EFFECTS[nm], settings.effect_bounds(nm))
-            except ValueError as exc:
-                unfit[nm] = str(exc)
-        if fold_by and f"cov:{fold_by}" not in u.columns:
-            raise InputError("<soil>", "loop.fold_by", "a covariate column of the measured tables", fold_by)
-        sel = sl.forward(u, u["simulated_mean"].to_numpy(float), data, fold_by, settings.alpha, settings.max_effects)
+        if selections is not None and tuple(cands) in selections:
+            data, unfit, sel = selections[tuple(cands)]
+        else:
+            for nm in cands:  # an effect whose runs failed at too many design points cannot be fitted
+                try:
+                    data[nm] = sl.build_effect_data(u, effect_runs[nm], EFFECTS[nm], settings.effect_bounds(nm))
+                except ValueError as exc:
+                    unfit[nm] = str(exc)
+            if fold_by and f"cov:{fold_by}" not in u.columns:
+                raise InputError("<soil>", "loop.fold_by", "a covariate column of the measured tables", fold_by)
+            sel = sl.forward(u, u["simulated_mean"].to_numpy(float), data, fold_by, settings.alpha,
+                             settings.max_effects)
+            if selections is not None:
+                selections[tuple(cands)] = (data, unfit, sel)
         for nm, why in unfit.items():
             sel_rows.append({"step": 1, "effects": nm, "parameters": "{}", "ci95": "{}", "accepted": False,
                              "reason": f"not fitted: {why}"})
@@ -1371,13 +1382,16 @@ def run_inprocess(soil: str, conditions, base_params, simulate, settings: Settin
 
     simulate_candidates(cands)
     skip = skipped(conditions, settings)
+    selections = {}  # the candidates' selection, once per set of candidates (_analyse)
     # each round without its interval (the bootstrap), which is computed for the outcome returned alone
-    out, pending = _analyse(soil, res, diag, cands, effect_runs, settings, reference, qcols, skip, None, False)
+    out, pending = _analyse(soil, res, diag, cands, effect_runs, settings, reference, qcols, skip, None, False,
+                            selections)
     more = more_candidates(out, conditions, settings)
     if more:
         simulate_candidates(more)  # the second round, as the workflow's loop_more checkpoint
         cands = cands + more
-        out, pending = _analyse(soil, res, diag, cands, effect_runs, settings, reference, qcols, skip, None, False)
+        out, pending = _analyse(soil, res, diag, cands, effect_runs, settings, reference, qcols, skip, None, False,
+                                selections)
     # the chosen effects simulated (together, where there are several) at the fitted parameters and
     # refitted with the difference between those runs and the model's prediction there as a
     # mixed term (select.Joint): the interaction of several effects, and the error of the
@@ -1406,7 +1420,8 @@ def run_inprocess(soil: str, conditions, base_params, simulate, settings: Settin
             break
     if joint is None:
         return _with_interval(out, pending, settings)
-    final, pending_final = _analyse(soil, res, diag, cands, effect_runs, settings, reference, qcols, skip, joint, False)
+    final, pending_final = _analyse(soil, res, diag, cands, effect_runs, settings, reference, qcols, skip, joint,
+                                    False, selections)
     if sorted(final.chosen) == sorted(out.chosen):
         return _with_interval(final, pending_final, settings)
     return _with_interval(out, pending, settings)
