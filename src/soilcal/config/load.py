@@ -57,7 +57,12 @@ class _Loader(_Keys, yaml.SafeLoader):
     errors are the messages :func:`read_yaml` gives."""
 
 
-class _CLoader(_Keys, yaml.CSafeLoader):
+#: libyaml's parser, where PyYAML was built with it (the wheels on PyPI are); a PyYAML without it
+#: reads every file with the pure-Python :class:`_Loader`: the same values, more slowly
+_CBase = getattr(yaml, "CSafeLoader", None)
+
+
+class _CLoader(_Keys, _CBase or yaml.SafeLoader):
     """:class:`_Loader` on libyaml's parser (PyYAML's ``CSafeLoader``): the same resolver and
     constructor, so the same values, read several times faster; :func:`read_yaml` reads each
     file with it first."""

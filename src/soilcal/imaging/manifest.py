@@ -124,7 +124,8 @@ def read_manifest(path):
     try:
         text = path.read_text(encoding="utf-8")
         try:
-            data = yaml.load(text, Loader=yaml.CSafeLoader)  # noqa: S506 - libyaml: the same values, faster
+            # libyaml where PyYAML has it (the same values, faster), else the pure-Python parser
+            data = yaml.load(text, Loader=getattr(yaml, "CSafeLoader", yaml.SafeLoader))  # noqa: S506
         except yaml.YAMLError:  # read again by the pure-Python parser, whose error the message words
             data = yaml.safe_load(text)
     except (OSError, UnicodeDecodeError, yaml.YAMLError) as exc:
