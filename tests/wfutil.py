@@ -90,9 +90,12 @@ def planned_jobs(tmp: Path, *args) -> list[str]:
 
 
 #: The soil of the tiny run: the cinnamon soil, calibrated on the DEM and replayed from its
-#: printed tables (a second soil's replay beside it, and edits that re-run one soil of several,
-#: are the replay run's tests: tests/workflow/test_workflow.py).
+#: printed tables.
 TINY_SOILS = ["cinnamon-soil"]
+#: The second soil of the session's tiny run (tests/workflow/conftest.py): replayed from its
+#: printed tables only, beside the cinnamon soil, so that the run replays two soils and an edit
+#: of one soil can be seen to re-run that soil alone (``replay_only``).
+REPLAY_SOIL = "yangtze-clay-loam"
 #: Spheres per heap of the tiny run.
 N_SPHERES = 300
 #: Cylinder lift speed (m/s) of the tiny run's heaps: four times the paper's 0.05 m/s, so that
@@ -124,4 +127,16 @@ def make_tiny(tmp: Path, threads: int | None = None) -> Path:
     d["measurements"]["cutting_resistance"]["set"] = {"speed": TOOL_SPEED}
     d["loop"] = {"candidates": "all", "effects": ["tool_adhesion"], "design_points": 3}
     p.write_text(yaml.safe_dump(d, sort_keys=False))
+    return tmp
+
+
+def replay_only(tmp: Path, soil: str = REPLAY_SOIL) -> Path:
+    """Have a workflow copy replay ``soil`` from its printed tables only (its ``source:
+    published``) and leave out its photos: no target of the published source reads them, so no
+    job measures them."""
+    p = tmp / f"config/soils/{soil}.yaml"
+    d = yaml.safe_load(p.read_text())
+    d["source"] = "published"
+    p.write_text(yaml.safe_dump(d, sort_keys=False))
+    shutil.rmtree(tmp / "resources/images" / soil, ignore_errors=True)
     return tmp

@@ -3,8 +3,9 @@
 A copy of the workflow calibrates the cinnamon soil on soilcal's DEM through every stage kind
 (Plackett-Burman screening -> steepest ascent derived from it -> Box-Behnken centred on the
 path), with heaps of 300 spheres lifted at four times the paper's speed (``wfutil.make_tiny``)
-so that a design point takes seconds, and replays the soil's printed tables beside it (the run
-is ``conftest.tiny_dem_run``).
+so that a design point takes seconds, and replays the soil's printed tables beside it, and a
+second soil's printed tables alone (``wfutil.replay_only``; the run is
+``conftest.tiny_dem_run``).
 """
 
 from __future__ import annotations
@@ -20,7 +21,7 @@ import pytest
 import yaml
 
 from soilcal.chain.compare import compare_trees
-from wfutil import N_SPHERES, TINY_SOILS, copy_workflow, make_tiny, planned_jobs, run
+from wfutil import N_SPHERES, REPLAY_SOIL, TINY_SOILS, copy_workflow, make_tiny, planned_jobs, run
 
 
 @pytest.fixture(scope="module")
@@ -259,6 +260,54 @@ def test_changing_a_factor_range_reruns_only_that_soil(done):
     assert all("results/cinnamon-soil/" in o or o.startswith("results/summary.csv") for o in planned), planned
     assert any("results/cinnamon-soil/dem/pb/design.csv" in o for o in planned)
     assert planned_jobs(done) == []
+
+
+# ------------------------------------------------------------------ replay
+# The printed tables replayed (published source): the cinnamon soil's beside its DEM
+# calibration, and the second soil's alone.
+
+
+def test_replay_outputs(done):
+    d = done / "results/cinnamon-soil/published"
+    anova = pd.read_csv(d / "bbd/anova.csv")
+    assert list(anova.columns[-6:]) == ["source", "sum_sq", "df", "mean_sq", "F", "p"]
+    assert {"full", "reduced"} == set(anova["model"])
+    rows = set(anova[anova["model"] == "full"]["source"])
+    assert {"Model", "A", "A*C", "B^2", "Residual", "Lack of Fit", "Pure Error", "Cor Total"} <= rows
+    coef = pd.read_csv(d / "bbd/coefficients.csv")
+    assert {"term", "coded", "actual", "model"} <= set(coef.columns)
+    assert (d / "bbd/optimum.csv").is_file() and (d / "errata.csv").is_file()
+    pngs = list((d / "bbd/figures/surfaces").glob("*.png"))
+    assert pngs and all(p.with_suffix(".pdf").is_file() for p in pngs)
+    assert list((d / "pb/figures/pareto").glob("*.png"))
+    errata = pd.read_csv(d / "errata.csv")
+    assert list(errata.columns) == ["where", "printed", "recomputed", "note"]
+    photos = done / "results/cinnamon-soil/images/measurements.json"
+    assert abs(json.loads(photos.read_text())["stacking"]["angle_deg"] - 27.69) <= 0.3
+    # the second soil: its printed Box-Behnken replayed and optimised, nothing simulated
+    d = done / f"results/{REPLAY_SOIL}"
+    assert set(pd.read_csv(d / "published/bbd/anova.csv")["model"]) >= {"reduced"}
+    assert (d / "published/bbd/optimum.csv").is_file() and not (d / "dem").exists()
+
+
+def test_editing_one_soil_reruns_only_that_soil(done):
+    assert planned_jobs(done) == []
+    p = done / f"config/soils/{REPLAY_SOIL}.yaml"
+    text, st = p.read_text(), p.stat()
+    assert "seed: 648" in text
+    p.write_text(text.replace("seed: 648", "seed: 649"))
+    try:
+        planned = planned_jobs(done)
+        assert planned, "changing the seed must re-run the optimisation"
+        assert all(f"results/{REPLAY_SOIL}/" in o for o in planned), planned
+    finally:
+        p.write_text(text)
+        os.utime(p, ns=(st.st_atime_ns, st.st_mtime_ns))
+
+
+def test_lint_is_clean(done):
+    p = run(done, "--lint", check=False)
+    assert p.returncode == 0, p.stdout + p.stderr
 
 
 # ------------------------------------------------------------------ reproducible
