@@ -12,13 +12,23 @@
 * :mod:`soilcal.imaging.figures`: original / gray / binary / contour / fitted-line figures.
 """
 
-import os as _os
 
-# numpy asks the kernel for transparent huge pages (madvise) for every array of 4 MB or more,
-# and a photo measurement makes many full-frame float arrays that live for milliseconds:
-# faulting them in as huge pages costs more system time than they save (measuring the vineyard
-# soil's photos: 7-9 s of system CPU with them, 2.6-3.7 s without, the same user CPU).  Off for
-# a process that loads numpy through this package (the `soilcal image` commands and the
-# workflow's photo jobs); a value given in the environment is kept, and a process that loaded
-# numpy before this package keeps numpy's default.
-_os.environ.setdefault("NUMPY_MADVISE_HUGEPAGE", "0")
+def huge_pages_off() -> None:
+    """Turn numpy's transparent huge pages off in this process, for a photo measurement.
+
+    numpy asks the kernel for transparent huge pages (madvise) for every array of 4 MB or more,
+    and a photo measurement makes many full-frame float arrays that live for milliseconds:
+    faulting them in as huge pages costs more system time than they save (``soilcal image soil``
+    on the vineyard soil's photos: 7.2-9.0 s of system CPU with them, 2.1-2.3 s without, the
+    same user CPU).  Called by the measurement entry points (the ``soilcal image`` commands,
+    :func:`soilcal.imaging.manifest.measure_manifest`, which the workflow's photo jobs run); it
+    changes this process only, not the environment its children inherit, and leaves numpy's
+    setting alone where the environment gives ``NUMPY_MADVISE_HUGEPAGE`` (read by numpy as it
+    loads).  numpy has no public call for it: this is the function numpy's own import uses."""
+    import os
+
+    if "NUMPY_MADVISE_HUGEPAGE" in os.environ:
+        return
+    from numpy._core import multiarray
+
+    multiarray._set_madvise_hugepage(False)

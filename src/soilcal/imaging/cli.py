@@ -5,6 +5,7 @@ from __future__ import annotations
 import json
 import sys
 
+from soilcal.imaging import huge_pages_off
 from soilcal.imaging.manifest import counted, set_aside_lines
 
 
@@ -75,6 +76,7 @@ def _refusals(args, photos=(), field="photos"):
 
 
 def _pile(args):
+    huge_pages_off()
     from soilcal.errors import InputError
     from soilcal.imaging import figures, measure
 
@@ -104,6 +106,7 @@ def _pile(args):
 
 
 def _drum(args):
+    huge_pages_off()
     from soilcal.imaging import drum, figures
 
     from soilcal.errors import InputError
@@ -131,6 +134,7 @@ def _drum(args):
 
 
 def _furrow(args):
+    huge_pages_off()
     from soilcal.errors import InputError
     from soilcal.imaging import figures, manifest, measure
 
@@ -156,6 +160,7 @@ def _furrow(args):
 
 
 def _soil(args):
+    huge_pages_off()
     from soilcal.imaging.manifest import measure_manifest
 
     # a refused group's figures go to --refusals where it was given, else with the others

@@ -226,7 +226,9 @@ def measure_manifest(path, figdir=None, threshold="otsu", refusals=None, refused
     ``figdir``.  A figures folder (either) that is the folder of one of the manifest's photos is
     refused before any photo is measured, naming ``figdir_field`` / ``refused_figdir_field``
     (:func:`soilcal.imaging.figures.check_apart`)."""
-    from soilcal.imaging import drum, figures, measure
+    from soilcal.imaging import drum, figures, huge_pages_off, measure
+
+    huge_pages_off()
 
     path = Path(path)
     data = read_manifest(path)
