@@ -270,13 +270,14 @@ def _hspace_peaks(img, dist):
     labels, n = ndi.label(peaks > threshold, structure=np.ones((3, 3)))
     if n == 0:
         return np.array([]), np.array([], int), np.array([], int)
-    idx = np.arange(1, n + 1)
     r_idx, c_idx = np.nonzero(labels)
     lab = labels[r_idx, c_idx]
     count = np.bincount(lab, minlength=n + 1)[1:]
     cen_r = np.round(np.bincount(lab, r_idx, minlength=n + 1)[1:] / count).astype(int)
     cen_c = np.round(np.bincount(lab, c_idx, minlength=n + 1)[1:] / count).astype(int)
-    top = ndi.maximum(img_max, labels, idx)
+    top = np.full(n + 1, -np.inf)  # each region's maximum (ndi.maximum's numbers, without its sort of
+    np.maximum.at(top, lab, img_max[r_idx, c_idx])  # every label: a max is exact in any order)
+    top = top[1:]
     order = sorted(range(n), key=lambda k: top[k])[::-1]  # as sorted(props)[::-1]: stable, then reversed
     vals, xs, ys = [], [], []
     for k in order:
