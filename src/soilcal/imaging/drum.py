@@ -264,19 +264,33 @@ def _hspace_peaks(img, dist):
     rows, cols = img.shape
     threshold = 0.5 * float(np.max(img))
     size = 2 * dist + 1
-    img_max = ndi.maximum_filter1d(img, size=size, axis=0, mode="constant", cval=0)
-    img_max = ndi.maximum_filter1d(img_max, size=size, axis=1, mode="constant", cval=0)
-    peaks = img * (img == img_max)
-    labels, n = ndi.label(peaks > threshold, structure=np.ones((3, 3)))
+    # the maximum filter, peaks and regions in the box of the pixels above the threshold, widened
+    # by dist (or to the image's edge): every pixel of a region and every region's centroid lies in
+    # that box, and the filter's (2 dist + 1)-wide windows of the box's pixels lie in the widened
+    # box or end at the image's edge as they do in the whole space, so the numbers read are those
+    # of the whole space's filter; ndi.label numbers the regions in raster order, the same in the box
+    rr, cc = np.nonzero(img > threshold)
+    if rr.size == 0:
+        return np.array([]), np.array([], int), np.array([], int)
+    ya, yb = max(int(rr.min()) - dist, 0), min(int(rr.max()) + dist + 1, rows)
+    xa, xb = max(int(cc.min()) - dist, 0), min(int(cc.max()) + dist + 1, cols)
+    sub = img[ya:yb, xa:xb]
+    sub_max = ndi.maximum_filter1d(sub, size=size, axis=0, mode="constant", cval=0)
+    sub_max = ndi.maximum_filter1d(sub_max, size=size, axis=1, mode="constant", cval=0)
+    img_max = np.zeros_like(img)  # read only in the box, where it holds the whole space's filter
+    img_max[ya:yb, xa:xb] = sub_max
+    labels, n = ndi.label(sub * (sub == sub_max) > threshold, structure=np.ones((3, 3)))
     if n == 0:
         return np.array([]), np.array([], int), np.array([], int)
-    idx = np.arange(1, n + 1)
     r_idx, c_idx = np.nonzero(labels)
     lab = labels[r_idx, c_idx]
+    r_idx, c_idx = r_idx + ya, c_idx + xa
     count = np.bincount(lab, minlength=n + 1)[1:]
     cen_r = np.round(np.bincount(lab, r_idx, minlength=n + 1)[1:] / count).astype(int)
     cen_c = np.round(np.bincount(lab, c_idx, minlength=n + 1)[1:] / count).astype(int)
-    top = ndi.maximum(img_max, labels, idx)
+    top = np.full(n + 1, -np.inf)  # each region's maximum (ndi.maximum's numbers, without its sort of
+    np.maximum.at(top, lab, img_max[r_idx, c_idx])  # every label: a max is exact in any order)
+    top = top[1:]
     order = sorted(range(n), key=lambda k: top[k])[::-1]  # as sorted(props)[::-1]: stable, then reversed
     vals, xs, ys = [], [], []
     for k in order:
