@@ -218,8 +218,9 @@ def main(argv=None):
     ap.add_argument("--cores", type=int, default=2)
     ap.add_argument("--workdir", default="/tmp/soilcal-adaptive-bench")
     ap.add_argument("--report-only", action="store_true")
-    ap.add_argument("--progress-from", default=None, help="read the adaptive curves of --soils from this workdir")
-    ap.add_argument("--recipe-from", default=None,
+    given = ap.add_mutually_exclusive_group()
+    given.add_argument("--progress-from", default=None, help="read the adaptive curves of --soils from this workdir")
+    given.add_argument("--recipe-from", default=None,
                     help="read the recipe rows of --soils from this workdir of a recipe run (benchmarks/calibration.py's "
                          "--workdir): the commit from its runs, the time from its verification.csv, no elapsed time")
     a = ap.parse_args(argv)

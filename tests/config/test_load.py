@@ -238,7 +238,34 @@ def test_every_yaml_file_reads_as_the_pure_python_loader_reads_it(rel):
 
     text = (ROOT / rel).read_text(encoding="utf-8")
     assert _typed(load.read_yaml(ROOT / rel)) == _typed(yaml.load(text, Loader=load._Loader))  # noqa: S506
-    assert _typed(yaml.load(text, Loader=yaml.CSafeLoader)) == _typed(yaml.safe_load(text))  # noqa: S506
+    # the manifests' loader (libyaml's, where PyYAML has it)
+    c_loader = getattr(yaml, "CSafeLoader", yaml.SafeLoader)
+    assert _typed(yaml.load(text, Loader=c_loader)) == _typed(yaml.safe_load(text))  # noqa: S506
+
+
+@pytest.mark.skipif(not hasattr(yaml, "CSafeLoader"), reason="PyYAML built without libyaml")
+def test_a_soil_is_read_by_libyaml_where_pyyaml_has_it(monkeypatch):
+    """read_yaml parses with libyaml first: a pure-Python loader that cannot parse leaves the
+    reading of a valid file unchanged (it is the fallback for errors only)."""
+    from soilcal.config import load
+
+    class Broken(load._Loader):
+        def get_single_data(self):
+            raise AssertionError("the pure-Python loader read a valid file")
+
+    expected = load.read_yaml(ROOT / "config/soils/black-soil.yaml")
+    monkeypatch.setattr(load, "_Loader", Broken)
+    assert load.read_yaml(ROOT / "config/soils/black-soil.yaml") == expected
+
+
+def test_the_soil_schema_is_a_fresh_copy_each_time():
+    """The schema is parsed once per process; a caller's edit of its copy reaches no other."""
+    from soilcal.config.load import schema_defaults, soil_schema
+
+    first = soil_schema()
+    before = schema_defaults()
+    first["properties"].clear()
+    assert soil_schema()["properties"] and schema_defaults() == before
 
 
 def test_bbd_run_counts():

@@ -2286,7 +2286,7 @@ def _soil_boundary(path, rgb, beam: _Beam):
     rows = [beam.o[1] + uu * beam.ux[1] + vv * beam.vx[1] for uu in (u[0], u[-1]) for vv in (v[0], v[-1])]
     r0, r1 = max(0, math.floor(min(rows)) - 1), min(h, math.floor(max(rows)) + 3)
     smooth = filters.gaussian(rgb, 1.5, channel_axis=-1)
-    lab_img = np.zeros_like(smooth)
+    lab_img = np.full_like(smooth, np.nan)  # a row outside the window would read NaN, not a colour
     lab_img[r0:r1] = color.rgb2lab(smooth[r0:r1])
     strip = np.stack([beam.sample(lab_img[..., k], u, v) for k in range(3)], axis=-1)
     board = np.median(strip[:FURROW_SEED_ROWS].reshape(-1, 3), axis=0)
