@@ -40,7 +40,6 @@ from __future__ import annotations
 
 import math
 
-import numpy as np
 from numba import njit, prange
 
 from soilcal.dem.contact import H_MR, H_SIZE, contact_force
@@ -142,149 +141,118 @@ def _same_tol(ri, xi, yi, zi):
     return max(2e-4 * ri, 4.8e-7 * max(abs(xi), abs(yi), abs(zi)))
 
 
-@njit(cache=True, parallel=True)
+@njit(cache=True, parallel=True, fastmath=CONTACT_MATH)
 def pair_forces(colour, xr, vw, pair, codes, box, periodic, dt, start, nbr, hist, act,
                 sorder, sgroup, f, t, ovr, mroll):
     """Pair pass of one colour: the slab groups of that colour in parallel (one per
-    thread); each evaluates the listed pairs of its particles' rows (:func:`_pair_group`) and
-    adds the force and torques to both particles (f, t; ovr: largest overlap of each
-    particle; mroll: the ``bounded`` rolling resistance mu_r |F_n| c of each particle).
-    Slabs of one colour share no particle (:func:`soilcal.dem.neighbour._slabs`), so the
-    writes never race."""
-    G = sgroup[SGROUP_LEN - 1]
-    for g in prange(G):
-        _pair_group(colour * G + g, xr, vw, pair, codes, box, periodic, dt, start, nbr, hist,
-                    act, sorder, sgroup, f, t, ovr, mroll)
-
-
-# the loop bodies of the parallel passes are kernels of their own, called once per thread's
-# share: Numba's parallel compilation analyses a prange loop's whole body, which costs
-# several times the serial compilation of a body this large, and a call per share costs
-# nothing measurable.  They keep the error model Numba gives a prange loop's body ("numpy":
-# a float division by zero gives inf or nan, which the blow-up check then names, instead
-# of raising ZeroDivisionError inside the kernel)
-@njit(cache=True, fastmath=CONTACT_MATH, error_model="numpy")
-def _pair_group(sg, xr, vw, pair, codes, box, periodic, dt, start, nbr, hist, act,
-                sorder, sgroup, f, t, ovr, mroll):
-    """The listed pairs of the rows of slab group ``sg`` (:func:`pair_forces`)."""
+    thread); each evaluates the listed pairs of its particles' rows and adds the force and
+    torques to both particles (f, t; ovr: largest overlap of each particle; mroll: the
+    ``bounded`` rolling resistance mu_r |F_n| c of each particle).  Slabs of one
+    colour share no particle (:func:`soilcal.dem.neighbour._slabs`), so the writes never
+    race."""
     L0 = box[1] - box[0]
     L1 = box[3] - box[2]
     h0 = 0.5 * L0
     h1 = 0.5 * L1
     p0 = periodic[0]
     p1 = periodic[1]
+    G = sgroup[SGROUP_LEN - 1]
     lever_r = codes[14] == 1
     # JKR across a gap (``jkr_approach: gap``): separated listed pairs go to the contact law
     gap = codes[15] == 1 and codes[4] == 1
-    for q in range(sgroup[sg], sgroup[sg + 1]):
-        i = sorder[q]
-        xi, yi, zi, ri = xr[i, 0], xr[i, 1], xr[i, 2], xr[i, 3]
-        fxi = 0.0
-        fyi = 0.0
-        fzi = 0.0
-        txi = 0.0
-        tyi = 0.0
-        tzi = 0.0
-        dmax = ovr[i]
-        mri = 0.0
-        for k in range(start[i], start[i + 1]):
-            j = nbr[k]
-            dx = min_image(xi - xr[j, 0], p0, h0, L0)
-            dy = min_image(yi - xr[j, 1], p1, h1, L1)
-            dz = zi - xr[j, 2]
-            rj = xr[j, 3]
-            rs = ri + rj
-            d2 = dx * dx + dy * dy + dz * dz
-            touching = act[k] != 0
-            if d2 >= rs * rs and not touching and not gap:
-                continue
-            ims = vw[i, 6] + vw[j, 6]
-            if ims == 0.0:
-                act[k] = 0
-                continue
-            d = math.sqrt(d2)
-            invd = 1.0 / d
-            nx = dx * invd
-            ny = dy * invd
-            nz = dz * invd
-            delta = rs - d
-            ci = ri - 0.5 * delta
-            cj = rj - 0.5 * delta
-            # the contact point's velocity from the spins with the levers c (or the
-            # radii: ``contact_lever: radius``, contact.py)
-            li = ri if lever_r else ci
-            lj = rj if lever_r else cj
-            wxi, wyi, wzi = vw[i, 3], vw[i, 4], vw[i, 5]
-            wxj, wyj, wzj = vw[j, 3], vw[j, 4], vw[j, 5]
-            ax = li * wxi + lj * wxj
-            ay = li * wyi + lj * wyj
-            az = li * wzi + lj * wzj
-            rvx = vw[i, 0] - vw[j, 0] - (ay * nz - az * ny)
-            rvy = vw[i, 1] - vw[j, 1] - (az * nx - ax * nz)
-            rvz = vw[i, 2] - vw[j, 2] - (ax * ny - ay * nx)
-            on, fx, fy, fz, tix, tiy, tiz, tjx, tjy, tjz, mr = contact_force(
-                codes, pair, int(vw[i, 7]), int(vw[j, 7]), delta, nx, ny, nz,
-                rvx, rvy, rvz, wxi - wxj, wyi - wyj, wzi - wzj,
-                ci, cj, ri * rj / rs, 1.0 / ims, dt, touching, hist, k)
-            if on:
-                act[k] = 1
-                if mr > 0.0:
-                    mri += mr * ci
-                    mroll[j] += mr * cj
-                fxi += fx
-                fyi += fy
-                fzi += fz
-                txi += tix
-                tyi += tiy
-                tzi += tiz
-                dmax = max(dmax, delta)
-                # Newton's third law: the opposite force on j
-                f[j, 0] -= fx
-                f[j, 1] -= fy
-                f[j, 2] -= fz
-                t[j, 0] += tjx
-                t[j, 1] += tjy
-                t[j, 2] += tjz
-                if delta > ovr[j]:
-                    ovr[j] = delta
-            else:
-                act[k] = 0
-        f[i, 0] += fxi
-        f[i, 1] += fyi
-        f[i, 2] += fzi
-        t[i, 0] += txi
-        t[i, 1] += tyi
-        t[i, 2] += tzi
-        ovr[i] = dmax
-        mroll[i] += mri
+    for g in prange(G):
+        k = colour * G + g
+        for q in range(sgroup[k], sgroup[k + 1]):
+            i = sorder[q]
+            xi, yi, zi, ri = xr[i, 0], xr[i, 1], xr[i, 2], xr[i, 3]
+            fxi = 0.0
+            fyi = 0.0
+            fzi = 0.0
+            txi = 0.0
+            tyi = 0.0
+            tzi = 0.0
+            dmax = ovr[i]
+            mri = 0.0
+            for k in range(start[i], start[i + 1]):
+                j = nbr[k]
+                dx = min_image(xi - xr[j, 0], p0, h0, L0)
+                dy = min_image(yi - xr[j, 1], p1, h1, L1)
+                dz = zi - xr[j, 2]
+                rj = xr[j, 3]
+                rs = ri + rj
+                d2 = dx * dx + dy * dy + dz * dz
+                touching = act[k] != 0
+                if d2 >= rs * rs and not touching and not gap:
+                    continue
+                ims = vw[i, 6] + vw[j, 6]
+                if ims == 0.0:
+                    act[k] = 0
+                    continue
+                d = math.sqrt(d2)
+                invd = 1.0 / d
+                nx = dx * invd
+                ny = dy * invd
+                nz = dz * invd
+                delta = rs - d
+                ci = ri - 0.5 * delta
+                cj = rj - 0.5 * delta
+                # the contact point's velocity from the spins with the levers c (or the
+                # radii: ``contact_lever: radius``, contact.py)
+                li = ri if lever_r else ci
+                lj = rj if lever_r else cj
+                wxi, wyi, wzi = vw[i, 3], vw[i, 4], vw[i, 5]
+                wxj, wyj, wzj = vw[j, 3], vw[j, 4], vw[j, 5]
+                ax = li * wxi + lj * wxj
+                ay = li * wyi + lj * wyj
+                az = li * wzi + lj * wzj
+                rvx = vw[i, 0] - vw[j, 0] - (ay * nz - az * ny)
+                rvy = vw[i, 1] - vw[j, 1] - (az * nx - ax * nz)
+                rvz = vw[i, 2] - vw[j, 2] - (ax * ny - ay * nx)
+                on, fx, fy, fz, tix, tiy, tiz, tjx, tjy, tjz, mr = contact_force(
+                    codes, pair, int(vw[i, 7]), int(vw[j, 7]), delta, nx, ny, nz,
+                    rvx, rvy, rvz, wxi - wxj, wyi - wyj, wzi - wzj,
+                    ci, cj, ri * rj / rs, 1.0 / ims, dt, touching, hist, k)
+                if on:
+                    act[k] = 1
+                    if mr > 0.0:
+                        mri += mr * ci
+                        mroll[j] += mr * cj
+                    fxi += fx
+                    fyi += fy
+                    fzi += fz
+                    txi += tix
+                    tyi += tiy
+                    tzi += tiz
+                    dmax = max(dmax, delta)
+                    # Newton's third law: the opposite force on j
+                    f[j, 0] -= fx
+                    f[j, 1] -= fy
+                    f[j, 2] -= fz
+                    t[j, 0] += tjx
+                    t[j, 1] += tjy
+                    t[j, 2] += tjz
+                    if delta > ovr[j]:
+                        ovr[j] = delta
+                else:
+                    act[k] = 0
+            f[i, 0] += fxi
+            f[i, 1] += fyi
+            f[i, 2] += fzi
+            t[i, 0] += txi
+            t[i, 1] += tyi
+            t[i, 2] += tzi
+            ovr[i] = dmax
+            mroll[i] += mri
 
 
-@njit(cache=True, parallel=True)
+@njit(cache=True, parallel=True, fastmath=CONTACT_MATH)
 def gather(x, v, om, r, inv_m, inv_i, mat, f, t, ovr, peak, mroll, dt, kick, max_ovr, pair, codes,
            prim_kind, prim_wall, prim_mat, prim_par, wall_vel, wall_omega, wall_centre,
            wnbr, wcnt, whist, wslot):
     """Wall pass: per particle, the pair sums (f, t, ovr, mroll) + wall contacts; the
     ``bounded`` rolling torque (contact.py); then the closing kick if ``kick``.  Returns the
     number of particles with an overlap above max_ovr (of their radius) or a non-finite
-    velocity.  ``peak[i]`` keeps the largest overlap of row i (of its radius) seen here.
-    The particles are taken in blocks, block group c (every NBLK_GROUPS-th block) by one
-    thread (:func:`_gather_group`)."""
-    nbad = 0
-    for c in prange(NBLK_GROUPS):
-        # int64 as in the serial typing of the loop (the parallel one counts in uint64): one
-        # specialisation of _gather_group, not two
-        nbad += _gather_group(np.int64(c), x, v, om, r, inv_m, inv_i, mat, f, t, ovr, peak, mroll, dt,
-                              kick, max_ovr, pair, codes, prim_kind, prim_wall, prim_mat,
-                              prim_par, wall_vel, wall_omega, wall_centre, wnbr, wcnt, whist,
-                              wslot)
-    return nbad
-
-
-@njit(cache=True, fastmath=CONTACT_MATH, error_model="numpy")
-def _gather_group(c, x, v, om, r, inv_m, inv_i, mat, f, t, ovr, peak, mroll, dt, kick, max_ovr,
-                  pair, codes, prim_kind, prim_wall, prim_mat, prim_par, wall_vel, wall_omega,
-                  wall_centre, wnbr, wcnt, whist, wslot):
-    """The particles of block group ``c`` (:func:`gather`); returns how many of them are bad."""
+    velocity.  ``peak[i]`` keeps the largest overlap of row i (of its radius) seen here."""
     n = x.shape[0]
     KW = wnbr.shape[1]
     h = 0.5 * dt
@@ -298,208 +266,209 @@ def _gather_group(c, x, v, om, r, inv_m, inv_i, mat, f, t, ovr, peak, mroll, dt,
     curved = codes[16] == 1  # an inner cylinder's curvature in R* (``wall_curvature``)
     bs = block_size(n)
     nblk = (n + bs - 1) // bs
-    for blk in range(c, nblk, NBLK_GROUPS):
-        for i in range(blk * bs, min(n, blk * bs + bs)):
-            xi, yi, zi, ri = x[i, 0], x[i, 1], x[i, 2], r[i]
-            vxi, vyi, vzi = v[i, 0], v[i, 1], v[i, 2]
-            wxi, wyi, wzi = om[i, 0], om[i, 1], om[i, 2]
-            imi = inv_m[i]
-            mi = mat[i]
-            fx = f[i, 0]
-            fy = f[i, 1]
-            fz = f[i, 2]
-            tx = t[i, 0]
-            ty = t[i, 1]
-            tz = t[i, 2]
-            mo = ovr[i] / ri
-            mres = mroll[i]
-            fk = -1  # the slot of the first face contact
-            nwc = wcnt[i]
-            moved = False  # a contact that has touched is on an edge, vertex or rim
-            # face contacts, of every wall and kind: two of them may be one (coplanar
-            # faces of two walls) only if their normals are parallel; the first two
-            # directions are kept, a fourth face counts as parallel (the full check)
-            tol = _same_tol(ri, xi, yi, zi)
-            coplanar = False
-            nref = 0
-            ax = ay = az = bx = by = bz = 0.0
-            touched = False
-            for k in range(nwc if nwc > 1 else 0):  # one primitive: nothing to share
-                p = wnbr[i, k]
-                r8 = prim_closest(prim_kind[p], prim_par, p, xi, yi, zi)
-                # kept for the force loop below (the slot's reaction is written after)
-                wslot[i, k, 0] = r8[0]
-                wslot[i, k, 1] = r8[1]
-                wslot[i, k, 2] = r8[2]
-                wslot[i, k, 3] = r8[3]
-                wslot[i, k, 4] = r8[7]
-                if r8[7] == 0 and r8[0] < ri:
-                    if fk < 0:
-                        fk = k
-                    n1, n2, n3 = r8[1], r8[2], r8[3]
-                    if nref > 0 and n1 * ax + n2 * ay + n3 * az > PARALLEL_COS:
-                        coplanar = True
-                    elif nref > 1 and n1 * bx + n2 * by + n3 * bz > PARALLEL_COS:
-                        coplanar = True
-                    elif nref > 2:
-                        coplanar = True
-                    elif nref == 0:
-                        ax, ay, az = n1, n2, n3
-                    elif nref == 1:
-                        bx, by, bz = n1, n2, n3
-                    nref += 1
-                if whist[i * KW + k, H_SIZE - 1] != 0.0:
-                    touched = True
-                    if r8[7] != 0:
-                        moved = True
-            moved = moved or (touched and coplanar)
-            # a contact that passes from one primitive to the next (over the edge or
-            # vertex shared by two triangles, or from a face onto a coplanar face of
-            # another wall) is one contact: its history (the tangential spring, the JKR
-            # neck, ...) passes to the primitive that counts it now, if that one has none
-            for _ in range(nwc if moved and imi != 0.0 else 0):
-                moved = False
+    for c in prange(NBLK_GROUPS):
+        for blk in range(c, nblk, NBLK_GROUPS):
+            for i in range(blk * bs, min(n, blk * bs + bs)):
+                xi, yi, zi, ri = x[i, 0], x[i, 1], x[i, 2], r[i]
+                vxi, vyi, vzi = v[i, 0], v[i, 1], v[i, 2]
+                wxi, wyi, wzi = om[i, 0], om[i, 1], om[i, 2]
+                imi = inv_m[i]
+                mi = mat[i]
+                fx = f[i, 0]
+                fy = f[i, 1]
+                fz = f[i, 2]
+                tx = t[i, 0]
+                ty = t[i, 1]
+                tz = t[i, 2]
+                mo = ovr[i] / ri
+                mres = mroll[i]
+                fk = -1  # the slot of the first face contact
+                nwc = wcnt[i]
+                moved = False  # a contact that has touched is on an edge, vertex or rim
+                # face contacts, of every wall and kind: two of them may be one (coplanar
+                # faces of two walls) only if their normals are parallel; the first two
+                # directions are kept, a fourth face counts as parallel (the full check)
+                tol = _same_tol(ri, xi, yi, zi)
+                coplanar = False
+                nref = 0
+                ax = ay = az = bx = by = bz = 0.0
+                touched = False
+                for k in range(nwc if nwc > 1 else 0):  # one primitive: nothing to share
+                    p = wnbr[i, k]
+                    r8 = prim_closest(prim_kind[p], prim_par, p, xi, yi, zi)
+                    # kept for the force loop below (the slot's reaction is written after)
+                    wslot[i, k, 0] = r8[0]
+                    wslot[i, k, 1] = r8[1]
+                    wslot[i, k, 2] = r8[2]
+                    wslot[i, k, 3] = r8[3]
+                    wslot[i, k, 4] = r8[7]
+                    if r8[7] == 0 and r8[0] < ri:
+                        if fk < 0:
+                            fk = k
+                        n1, n2, n3 = r8[1], r8[2], r8[3]
+                        if nref > 0 and n1 * ax + n2 * ay + n3 * az > PARALLEL_COS:
+                            coplanar = True
+                        elif nref > 1 and n1 * bx + n2 * by + n3 * bz > PARALLEL_COS:
+                            coplanar = True
+                        elif nref > 2:
+                            coplanar = True
+                        elif nref == 0:
+                            ax, ay, az = n1, n2, n3
+                        elif nref == 1:
+                            bx, by, bz = n1, n2, n3
+                        nref += 1
+                    if whist[i * KW + k, H_SIZE - 1] != 0.0:
+                        touched = True
+                        if r8[7] != 0:
+                            moved = True
+                moved = moved or (touched and coplanar)
+                # a contact that passes from one primitive to the next (over the edge or
+                # vertex shared by two triangles, or from a face onto a coplanar face of
+                # another wall) is one contact: its history (the tangential spring, the JKR
+                # neck, ...) passes to the primitive that counts it now, if that one has none
+                for _ in range(nwc if moved and imi != 0.0 else 0):
+                    moved = False
+                    for k in range(nwc):
+                        p = wnbr[i, k]
+                        row = i * KW + k
+                        if whist[row, H_SIZE - 1] == 0.0:
+                            continue
+                        r8 = prim_closest(prim_kind[p], prim_par, p, xi, yi, zi)
+                        if r8[7] == 0 and not coplanar:
+                            continue
+                        kk = _cover(i, k, nwc, p, r8[7], r8[4], r8[5], r8[6], tol, ri, xi, yi,
+                                    zi, fk, wnbr, prim_kind, prim_wall, prim_par, wall_vel, wall_omega)
+                        if kk >= 0 and whist[i * KW + kk, H_SIZE - 1] == 0.0:
+                            for q in range(H_SIZE):
+                                whist[i * KW + kk, q] = whist[row, q]
+                                whist[row, q] = 0.0
+                            moved = True
+                    if not moved:
+                        break
                 for k in range(nwc):
                     p = wnbr[i, k]
+                    if nwc > 1:  # the closest point of the first loop: c = x - dist n
+                        dist = wslot[i, k, 0]
+                        nx, ny, nz = wslot[i, k, 1], wslot[i, k, 2], wslot[i, k, 3]
+                        feat = int(wslot[i, k, 4])
+                        cx, cy, cz = xi - dist * nx, yi - dist * ny, zi - dist * nz
+                    else:
+                        dist, nx, ny, nz, cx, cy, cz, feat = prim_closest(
+                            prim_kind[p], prim_par, p, xi, yi, zi)
+                    for q in range(6):
+                        wslot[i, k, q] = 0.0
+                    delta = ri - dist
                     row = i * KW + k
-                    if whist[row, H_SIZE - 1] == 0.0:
+                    touching = whist[row, H_SIZE - 1] != 0.0
+                    if delta <= 0.0 and not touching and not gap:
                         continue
-                    r8 = prim_closest(prim_kind[p], prim_par, p, xi, yi, zi)
-                    if r8[7] == 0 and not coplanar:
+                    if imi == 0.0:
                         continue
-                    kk = _cover(i, k, nwc, p, r8[7], r8[4], r8[5], r8[6], tol, ri, xi, yi,
-                                zi, fk, wnbr, prim_kind, prim_wall, prim_par, wall_vel, wall_omega)
-                    if kk >= 0 and whist[i * KW + kk, H_SIZE - 1] == 0.0:
-                        for q in range(H_SIZE):
-                            whist[i * KW + kk, q] = whist[row, q]
-                            whist[row, q] = 0.0
-                        moved = True
-                if not moved:
-                    break
-            for k in range(nwc):
-                p = wnbr[i, k]
-                if nwc > 1:  # the closest point of the first loop: c = x - dist n
-                    dist = wslot[i, k, 0]
-                    nx, ny, nz = wslot[i, k, 1], wslot[i, k, 2], wslot[i, k, 3]
-                    feat = int(wslot[i, k, 4])
-                    cx, cy, cz = xi - dist * nx, yi - dist * ny, zi - dist * nz
-                else:
-                    dist, nx, ny, nz, cx, cy, cz, feat = prim_closest(
-                        prim_kind[p], prim_par, p, xi, yi, zi)
-                for q in range(6):
-                    wslot[i, k, q] = 0.0
-                delta = ri - dist
-                row = i * KW + k
-                touching = whist[row, H_SIZE - 1] != 0.0
-                if delta <= 0.0 and not touching and not gap:
-                    continue
-                if imi == 0.0:
-                    continue
-                if feat != 0 or coplanar:
-                    if _cover(i, k, nwc, p, feat, cx, cy, cz, tol, ri, xi, yi, zi, fk,
-                              wnbr, prim_kind, prim_wall, prim_par, wall_vel, wall_omega) >= 0:
-                        for q in range(H_SIZE):
-                            whist[row, q] = 0.0
-                        continue
-                w = prim_wall[p]
-                ci = ri if lever_r else ri - 0.5 * delta
-                ox, oy, oz = wall_omega[w, 0], wall_omega[w, 1], wall_omega[w, 2]
-                qx = cx - wall_centre[w, 0]
-                qy = cy - wall_centre[w, 1]
-                qz = cz - wall_centre[w, 2]
-                vwx = wall_vel[w, 0] + oy * qz - oz * qy
-                vwy = wall_vel[w, 1] + oz * qx - ox * qz
-                vwz = wall_vel[w, 2] + ox * qy - oy * qx
-                rvx = vxi - vwx - ci * (wyi * nz - wzi * ny)
-                rvy = vyi - vwy - ci * (wzi * nx - wxi * nz)
-                rvz = vzi - vwz - ci * (wxi * ny - wyi * nx)
-                rs = ri
-                if curved and prim_kind[p] == CYLINDER and prim_par[p, 8] != 0.0:
-                    rc = -2.0 * prim_par[p, 6]  # LAMMPS's contact radius of the face
-                    rs = ri * rc / (ri + rc)
-                on, cfx, cfy, cfz, ctx, cty, ctz, _, _, _, mr = contact_force(
-                    codes, pair, mi, prim_mat[p], delta, nx, ny, nz, rvx, rvy, rvz,
-                    wxi - rw * ox, wyi - rw * oy, wzi - rw * oz, ci, 0.0, rs, 1.0 / imi,
-                    dt if kick else -dt, touching, whist, row)
-                # the last history slot of a wall row is its touching flag
-                whist[row, H_SIZE - 1] = 1.0 if on else 0.0
-                if on:
-                    if bounded:
-                        # this contact's resistance, for its share of the reaction below
-                        whist[row, H_MR] = mr * ci
-                        mres += mr * ci
-                    fx += cfx
-                    fy += cfy
-                    fz += cfz
-                    tx += ctx
-                    ty += cty
-                    tz += ctz
-                    if delta > mo * ri:
-                        mo = delta / ri
-                    # reaction on the wall: force -F, torque about the wall centre
-                    # -(x_i - c_w) x F - T_i  (conserves angular momentum exactly; the
-                    # ``bounded`` rolling torque is added below, by shares)
-                    px = xi - wall_centre[w, 0]
-                    py = yi - wall_centre[w, 1]
-                    pz = zi - wall_centre[w, 2]
-                    wslot[i, k, 0] = -cfx
-                    wslot[i, k, 1] = -cfy
-                    wslot[i, k, 2] = -cfz
-                    wslot[i, k, 3] = -(py * cfz - pz * cfy) - ctx
-                    wslot[i, k, 4] = -(pz * cfx - px * cfz) - cty
-                    wslot[i, k, 5] = -(px * cfy - py * cfx) - ctz
-            iinv = inv_i[i]
-            if bounded and mres > 0.0 and iinv > 0.0:
-                # rotation at the next force evaluation without the resistance: the
-                # closing and the next opening kick apply t h / I each (the first
-                # evaluation, without a closing kick, only the opening one)
-                hb = dt if kick else h
-                sx = wxi + tx * iinv * hb
-                sy = wyi + ty * iinv * hb
-                sz = wzi + tz * iinv * hb
-                sn = math.sqrt(sx * sx + sy * sy + sz * sz)
-                if sn > 0.0:
-                    mb = min(mres, sn / (iinv * hb)) / sn
-                    rx = -mb * sx
-                    ry = -mb * sy
-                    rz = -mb * sz
-                    tx += rx
-                    ty += ry
-                    tz += rz
-                    for k in range(nwc):
-                        row = i * KW + k
-                        if whist[row, H_SIZE - 1] != 0.0:
-                            sh = whist[row, H_MR] / mres
-                            wslot[i, k, 3] -= sh * rx
-                            wslot[i, k, 4] -= sh * ry
-                            wslot[i, k, 5] -= sh * rz
-            f[i, 0] = fx
-            f[i, 1] = fy
-            f[i, 2] = fz
-            t[i, 0] = tx
-            t[i, 1] = ty
-            t[i, 2] = tz
-            ovr[i] = mo
-            if mo > peak[i]:
-                peak[i] = mo
-            if kick:
-                a = imi * h
-                b = iinv * h
-                vxi += fx * a
-                vyi += fy * a
-                vzi += fz * a
-                v[i, 0] = vxi
-                v[i, 1] = vyi
-                v[i, 2] = vzi
-                om[i, 0] = wxi + tx * b
-                om[i, 1] = wyi + ty * b
-                om[i, 2] = wzi + tz * b
-            bad = 0
-            if not (mo <= max_ovr):
-                bad = 1
-            if not (abs(vxi) + abs(vyi) + abs(vzi) < math.inf):
-                bad = 1
-            nbad += bad
+                    if feat != 0 or coplanar:
+                        if _cover(i, k, nwc, p, feat, cx, cy, cz, tol, ri, xi, yi, zi, fk,
+                                  wnbr, prim_kind, prim_wall, prim_par, wall_vel, wall_omega) >= 0:
+                            for q in range(H_SIZE):
+                                whist[row, q] = 0.0
+                            continue
+                    w = prim_wall[p]
+                    ci = ri if lever_r else ri - 0.5 * delta
+                    ox, oy, oz = wall_omega[w, 0], wall_omega[w, 1], wall_omega[w, 2]
+                    qx = cx - wall_centre[w, 0]
+                    qy = cy - wall_centre[w, 1]
+                    qz = cz - wall_centre[w, 2]
+                    vwx = wall_vel[w, 0] + oy * qz - oz * qy
+                    vwy = wall_vel[w, 1] + oz * qx - ox * qz
+                    vwz = wall_vel[w, 2] + ox * qy - oy * qx
+                    rvx = vxi - vwx - ci * (wyi * nz - wzi * ny)
+                    rvy = vyi - vwy - ci * (wzi * nx - wxi * nz)
+                    rvz = vzi - vwz - ci * (wxi * ny - wyi * nx)
+                    rs = ri
+                    if curved and prim_kind[p] == CYLINDER and prim_par[p, 8] != 0.0:
+                        rc = -2.0 * prim_par[p, 6]  # LAMMPS's contact radius of the face
+                        rs = ri * rc / (ri + rc)
+                    on, cfx, cfy, cfz, ctx, cty, ctz, _, _, _, mr = contact_force(
+                        codes, pair, mi, prim_mat[p], delta, nx, ny, nz, rvx, rvy, rvz,
+                        wxi - rw * ox, wyi - rw * oy, wzi - rw * oz, ci, 0.0, rs, 1.0 / imi,
+                        dt if kick else -dt, touching, whist, row)
+                    # the last history slot of a wall row is its touching flag
+                    whist[row, H_SIZE - 1] = 1.0 if on else 0.0
+                    if on:
+                        if bounded:
+                            # this contact's resistance, for its share of the reaction below
+                            whist[row, H_MR] = mr * ci
+                            mres += mr * ci
+                        fx += cfx
+                        fy += cfy
+                        fz += cfz
+                        tx += ctx
+                        ty += cty
+                        tz += ctz
+                        if delta > mo * ri:
+                            mo = delta / ri
+                        # reaction on the wall: force -F, torque about the wall centre
+                        # -(x_i - c_w) x F - T_i  (conserves angular momentum exactly; the
+                        # ``bounded`` rolling torque is added below, by shares)
+                        px = xi - wall_centre[w, 0]
+                        py = yi - wall_centre[w, 1]
+                        pz = zi - wall_centre[w, 2]
+                        wslot[i, k, 0] = -cfx
+                        wslot[i, k, 1] = -cfy
+                        wslot[i, k, 2] = -cfz
+                        wslot[i, k, 3] = -(py * cfz - pz * cfy) - ctx
+                        wslot[i, k, 4] = -(pz * cfx - px * cfz) - cty
+                        wslot[i, k, 5] = -(px * cfy - py * cfx) - ctz
+                iinv = inv_i[i]
+                if bounded and mres > 0.0 and iinv > 0.0:
+                    # rotation at the next force evaluation without the resistance: the
+                    # closing and the next opening kick apply t h / I each (the first
+                    # evaluation, without a closing kick, only the opening one)
+                    hb = dt if kick else h
+                    sx = wxi + tx * iinv * hb
+                    sy = wyi + ty * iinv * hb
+                    sz = wzi + tz * iinv * hb
+                    sn = math.sqrt(sx * sx + sy * sy + sz * sz)
+                    if sn > 0.0:
+                        mb = min(mres, sn / (iinv * hb)) / sn
+                        rx = -mb * sx
+                        ry = -mb * sy
+                        rz = -mb * sz
+                        tx += rx
+                        ty += ry
+                        tz += rz
+                        for k in range(nwc):
+                            row = i * KW + k
+                            if whist[row, H_SIZE - 1] != 0.0:
+                                sh = whist[row, H_MR] / mres
+                                wslot[i, k, 3] -= sh * rx
+                                wslot[i, k, 4] -= sh * ry
+                                wslot[i, k, 5] -= sh * rz
+                f[i, 0] = fx
+                f[i, 1] = fy
+                f[i, 2] = fz
+                t[i, 0] = tx
+                t[i, 1] = ty
+                t[i, 2] = tz
+                ovr[i] = mo
+                if mo > peak[i]:
+                    peak[i] = mo
+                if kick:
+                    a = imi * h
+                    b = iinv * h
+                    vxi += fx * a
+                    vyi += fy * a
+                    vzi += fz * a
+                    v[i, 0] = vxi
+                    v[i, 1] = vyi
+                    v[i, 2] = vzi
+                    om[i, 0] = wxi + tx * b
+                    om[i, 1] = wyi + ty * b
+                    om[i, 2] = wzi + tz * b
+                bad = 0
+                if not (mo <= max_ovr):
+                    bad = 1
+                if not (abs(vxi) + abs(vyi) + abs(vzi) < math.inf):
+                    bad = 1
+                nbad += bad
     return nbad
 
 

@@ -38,8 +38,6 @@ from __future__ import annotations
 
 import math
 
-import numpy as np
-
 from numba import njit, prange
 
 from soilcal.dem.contact import H_A, H_DP
@@ -406,7 +404,7 @@ def tri_beyond(par, p, x, y, z, lim):
     return s > (lim + 1e-9 * (lim + w) + 1e-14 * a) * nn
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _wall_row(i, io, x, r, cut0, cell_of, prim_kind, prim_par, wcell_start, wcell_idx, glob,
               ng, wnbr_old, wcnt_old, whist_old, wnbr_new, wcnt_new, whist_new):
     """Wall list of particle i: unbounded primitives, then the triangles binned in its cell
@@ -649,10 +647,7 @@ def build_wall_lists(x, r, box, periodic, skin, extra, cell_start, cell_idx, cel
     if code != 0:
         return code, need
     for i in prange(n):
-        # a call, not inlined: Numba's parallel compilation of a prange loop's whole body
-        # costs seconds; int64 rows as _fill_row's (the parallel loop counts in uint64)
-        row = np.int64(i)
-        _wall_row(row, row, x, r, skin + extra, cell_of, prim_kind, prim_par, wcell_start,
+        _wall_row(i, i, x, r, skin + extra, cell_of, prim_kind, prim_par, wcell_start,
                   wcell_idx, glob, ng, wnbr_old, wcnt_old, whist_old, wnbr_new, wcnt_new,
                   whist_new)
     wneed = _wall_need(wcnt_new, wnbr_new.shape[1])
