@@ -12,6 +12,7 @@ traceback and re-raised.
 from __future__ import annotations
 
 import contextlib
+import gc
 import logging
 import sys
 from pathlib import Path
@@ -29,6 +30,12 @@ def redirect(log_path: str | Path | None):
 
     An :class:`~soilcal.errors.InputError` raised inside ends the process with status 2
     after one line in the log and one line on the real standard error (module docstring).
+
+    A workflow job script does all its work inside this block, so a block that ends without
+    an error ends the job: every object then goes to the garbage collector's permanent
+    generation (``gc.freeze``), and the interpreter's exit does not traverse the heap of
+    Numba, pandas, SciPy and matplotlib objects once more (a few tenths of a CPU-second per job;
+    ``benchmarks/results/job_profile.md``).
     """
     from soilcal.errors import InputError
 
@@ -38,6 +45,7 @@ def redirect(log_path: str | Path | None):
         except InputError as exc:
             report_input_error(exc)
             raise SystemExit(2) from None
+        gc.freeze()
         return
     Path(log_path).parent.mkdir(parents=True, exist_ok=True)
     real_stderr = sys.stderr
@@ -63,6 +71,7 @@ def redirect(log_path: str | Path | None):
     if failed is not None:
         report_input_error(failed, real_stderr)
         raise SystemExit(2)
+    gc.freeze()
 
 
 def empty_folder(folder: str | Path, field: str = "folder") -> None:

@@ -1,7 +1,5 @@
 """Snakemake adapter: optimum.csv and identifiability.csv of a stage's adaptive designs."""
 
-import gc
-
 from soilcal.chain.adaptive import stage_files, stage_log_lines
 from soilcal.logs import redirect
 
@@ -13,8 +11,3 @@ with redirect(snakemake.log[0]):  # noqa: F821
     print(opt.to_string(index=False))
     for line in stage_log_lines(o.stage):
         print(line)
-
-# the job's work is done and its files written: move every object to the collector's permanent
-# generation, so that the interpreter's exit does not traverse the heap once more (as the DEM
-# jobs do, dem_point.py)
-gc.freeze()

@@ -1,7 +1,5 @@
 """Snakemake adapter: one iteration of the adaptive design of a case (checkpoint adaptive_step)."""
 
-import gc
-
 from soilcal.chain.adaptive import step_files
 from soilcal.logs import redirect
 
@@ -12,8 +10,3 @@ with redirect(snakemake.log[0]):  # noqa: F821
                      upstream_csv=i.upstream if hasattr(i, "upstream") else None,
                      shared_step_paths=list(i.shared_steps), shared_run_paths=list(i.shared_runs))
     print(rec["status"] + ":", rec["message"])
-
-# the job's work is done and its files written: move every object to the collector's permanent
-# generation, so that the interpreter's exit does not traverse the heap once more (as the DEM
-# jobs do, dem_point.py)
-gc.freeze()

@@ -1,7 +1,5 @@
 """Snakemake adapter: calibrated_vs_paper.csv of one soil."""
 
-import gc
-
 from soilcal.chain.verify import write_calibrated_vs_paper
 from soilcal.logs import redirect
 
@@ -11,8 +9,3 @@ with redirect(snakemake.log[0]):  # noqa: F821
     df = write_calibrated_vs_paper(snakemake.params.soil, snakemake.params.stages, dirs,  # noqa: F821
                                    snakemake.output[0], set_file=snakemake.params.set_file)  # noqa: F821
     print(df.to_string(index=False))
-
-# the job's work is done and its files written: move every object to the collector's permanent
-# generation, so that the interpreter's exit does not traverse the heap once more (as the DEM
-# jobs do, dem_point.py)
-gc.freeze()

@@ -1,6 +1,5 @@
 """Snakemake adapter: verification bars, or the tool-test curves and bars, of one soil."""
 
-import gc
 from pathlib import Path
 
 import pandas as pd
@@ -19,8 +18,3 @@ with redirect(snakemake.log[0]):  # noqa: F821
         df = pd.read_csv(snakemake.input.tools, dtype={"covariate_value": str})  # noqa: F821
         paths = plots.tool_curves(df, out / "tool") + plots.tool_bars(df, out / "tool")
     print("\n".join(map(str, paths)))
-
-# the job's work is done and its files written: move every object to the collector's permanent
-# generation, so that the interpreter's exit does not traverse the heap once more (as the DEM
-# jobs do, dem_point.py)
-gc.freeze()

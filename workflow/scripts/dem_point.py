@@ -1,7 +1,5 @@
 """Snakemake adapter: one DEM design point (rule dem_point), Numba threads from the job."""
 
-import gc
-
 import numba
 
 from soilcal.chain.files import restart_dir
@@ -17,8 +15,3 @@ with redirect(snakemake.log[0]):  # noqa: F821
                    restart_dir=restart_dir(snakemake.output[0]))  # noqa: F821
     print(df[["response", "value", "sd", "n", "status", "error"]].to_string(index=False))
     print(kernel_line())
-
-# the job's work is done and its files written: move every object to the collector's permanent
-# generation, so that the interpreter's exit does not traverse the heap of Numba, pandas and
-# SciPy objects once more (about 0.3 CPU-s of a job; benchmarks/results/job_profile.md)
-gc.freeze()

@@ -1,7 +1,5 @@
 """Snakemake adapter: a DEM stage's runs gathered into its response table."""
 
-import gc
-
 import pandas as pd
 
 from soilcal.chain.files import read_stage, write_csv
@@ -16,8 +14,3 @@ with redirect(snakemake.log[0]):  # noqa: F821
     print(f"{len(df)} points, {len(failed)} failed")
     for _, r in failed.iterrows():
         print(" ", r.iloc[0], r["error"])
-
-# the job's work is done and its files written: move every object to the collector's permanent
-# generation, so that the interpreter's exit does not traverse the heap once more (as the DEM
-# jobs do, dem_point.py)
-gc.freeze()

@@ -1,7 +1,5 @@
 """Snakemake adapter: the stage a source runs and its design (checkpoint design)."""
 
-import gc
-
 from soilcal.chain.files import write_stage_design
 from soilcal.logs import redirect
 
@@ -17,8 +15,3 @@ with redirect(snakemake.log[0]):  # noqa: F821
         print("fixed:", line)
     for line in info.get("fixed_warnings", []) + info.get("fixed_not_used", []):
         print("warning:", line)
-
-# the job's work is done and its files written: move every object to the collector's permanent
-# generation, so that the interpreter's exit does not traverse the heap once more (as the DEM
-# jobs do, dem_point.py)
-gc.freeze()

@@ -1,7 +1,5 @@
 """Snakemake adapter: the figures of one kind for one stage (rule figures)."""
 
-import gc
-
 from soilcal.chain.files import read_stage, read_targets, write_figures
 from soilcal.logs import redirect
 
@@ -12,8 +10,3 @@ with redirect(snakemake.log[0]):  # noqa: F821
                           snakemake.output[0], snakemake.params.parameters,  # noqa: F821
                           reference_stage=snakemake.params.reference_stage, reference_table=ref)  # noqa: F821
     print("\n".join(map(str, paths)))
-
-# the job's work is done and its files written: move every object to the collector's permanent
-# generation, so that the interpreter's exit does not traverse the heap once more (as the DEM
-# jobs do, dem_point.py)
-gc.freeze()

@@ -1,6 +1,5 @@
 """Snakemake adapter: measure every photo group of one soil's manifest (rule image_measure)."""
 
-import gc
 import json
 import logging
 from pathlib import Path
@@ -27,8 +26,3 @@ with redirect(snakemake.log[0]):  # noqa: F821
             logging.warning("%s", line)
     out.parent.mkdir(parents=True, exist_ok=True)
     out.write_text(json.dumps(result, indent=2) + "\n")
-
-# the job's work is done and its files written: move every object to the collector's permanent
-# generation, so that the interpreter's exit does not traverse the heap once more (as the DEM
-# jobs do, dem_point.py)
-gc.freeze()

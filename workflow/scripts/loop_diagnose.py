@@ -1,6 +1,5 @@
 """Snakemake adapter: residuals, diagnosis and the plan of candidate effects of one soil."""
 
-import gc
 from pathlib import Path
 
 from soilcal.logs import redirect
@@ -10,8 +9,3 @@ with redirect(snakemake.log[0]):  # noqa: F821
     plan = diagnose_files(snakemake.params.soil_path, snakemake.params.resources_root,  # noqa: F821
                           snakemake.params.files, Path(snakemake.output.plan).parent)  # noqa: F821
     print("candidates:", ", ".join(plan["candidates"]) or "none")
-
-# the job's work is done and its files written: move every object to the collector's permanent
-# generation, so that the interpreter's exit does not traverse the heap once more (as the DEM
-# jobs do, dem_point.py)
-gc.freeze()

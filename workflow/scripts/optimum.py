@@ -1,7 +1,5 @@
 """Snakemake adapter: optimum, near-optimal sets and identifiability of one stage."""
 
-import gc
-
 from soilcal.chain.files import read_stage, read_targets, write_optimum
 from soilcal.logs import redirect
 
@@ -9,8 +7,3 @@ with redirect(snakemake.log[0]):  # noqa: F821
     write_optimum(read_stage(snakemake.input.stage), snakemake.input.responses,  # noqa: F821
                   read_targets(snakemake.input.targets), snakemake.params.seed,  # noqa: F821
                   snakemake.output.optimum, snakemake.output.identifiability)  # noqa: F821
-
-# the job's work is done and its files written: move every object to the collector's permanent
-# generation, so that the interpreter's exit does not traverse the heap once more (as the DEM
-# jobs do, dem_point.py)
-gc.freeze()

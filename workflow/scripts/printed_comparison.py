@@ -1,7 +1,5 @@
 """Snakemake adapter: DEM responses against the paper's at the printed design points."""
 
-import gc
-
 import pandas as pd
 
 from soilcal.chain.files import read_stage, write_csv
@@ -15,8 +13,3 @@ with redirect(snakemake.log[0]):  # noqa: F821
     summary = out["summary"].assign(kind="summary")
     write_csv(pd.concat([summary, points], ignore_index=True), snakemake.output[0])  # noqa: F821
     print(out["summary"].to_string(index=False))
-
-# the job's work is done and its files written: move every object to the collector's permanent
-# generation, so that the interpreter's exit does not traverse the heap once more (as the DEM
-# jobs do, dem_point.py)
-gc.freeze()

@@ -1,7 +1,5 @@
 """Snakemake adapter: refined.csv of one stage (the second calibration round)."""
 
-import gc
-
 from soilcal.chain.refine import write_refined
 from soilcal.logs import redirect
 
@@ -10,8 +8,3 @@ with redirect(snakemake.log[0]):  # noqa: F821
     df = write_refined(i.stage, i.responses, i.targets, i.optimum, i.runs, snakemake.output[0],  # noqa: F821
                        soil_data=snakemake.params.soil)  # noqa: F821
     print(df.to_string(index=False))
-
-# the job's work is done and its files written: move every object to the collector's permanent
-# generation, so that the interpreter's exit does not traverse the heap once more (as the DEM
-# jobs do, dem_point.py)
-gc.freeze()

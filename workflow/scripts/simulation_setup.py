@@ -1,6 +1,5 @@
 """Snakemake adapter: simulation.csv of one soil (rule simulation_setup)."""
 
-import gc
 from pathlib import Path
 
 from soilcal.chain.provenance import write_simulation_setup
@@ -12,8 +11,3 @@ with redirect(snakemake.log[0]):  # noqa: F821
     soil = Soil(path=Path(p.path), data=p.soil, resources_root=Path(p.resources_root), defaulted=tuple(p.defaulted))
     df = write_simulation_setup(soil, snakemake.output[0], design_override=p.design)  # noqa: F821
     print(df[df["origin"] != "named setup"].to_string(index=False))
-
-# the job's work is done and its files written: move every object to the collector's permanent
-# generation, so that the interpreter's exit does not traverse the heap once more (as the DEM
-# jobs do, dem_point.py)
-gc.freeze()

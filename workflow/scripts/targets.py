@@ -1,7 +1,5 @@
 """Snakemake adapter: the targets of one soil and source (rule targets)."""
 
-import gc
-
 from soilcal.chain.targets import write_targets
 from soilcal.logs import redirect
 
@@ -9,8 +7,3 @@ with redirect(snakemake.log[0]):  # noqa: F821
     images = snakemake.input.images[0] if snakemake.input.images else None  # noqa: F821
     df = write_targets(snakemake.params.soil, snakemake.wildcards.source, snakemake.output[0], images)  # noqa: F821
     print(df[["target_id", "value", "source", "printed_value"]].to_string(index=False))
-
-# the job's work is done and its files written: move every object to the collector's permanent
-# generation, so that the interpreter's exit does not traverse the heap once more (as the DEM
-# jobs do, dem_point.py)
-gc.freeze()

@@ -1,7 +1,5 @@
 """Snakemake adapter: verification.csv of one soil."""
 
-import gc
-
 from soilcal.chain.verify import write_verification
 from soilcal.logs import redirect
 
@@ -13,8 +11,3 @@ with redirect(snakemake.log[0]):  # noqa: F821
                             snakemake.input.targets, snakemake.input.runs, snakemake.output[0],  # noqa: F821
                             refined_paths=refined, refined_run_paths=snakemake.input.refined_runs)  # noqa: F821
     print(df.to_string(index=False))
-
-# the job's work is done and its files written: move every object to the collector's permanent
-# generation, so that the interpreter's exit does not traverse the heap once more (as the DEM
-# jobs do, dem_point.py)
-gc.freeze()

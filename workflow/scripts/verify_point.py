@@ -1,7 +1,5 @@
 """Snakemake adapter: one verification seed of one case at its calibrated set."""
 
-import gc
-
 import numba
 
 from soilcal.chain.files import restart_dir
@@ -21,8 +19,3 @@ with redirect(snakemake.log[0]):  # noqa: F821
                                 copy_from=same[0] if same else None)
     print(df[["response", "preset", "value", "status", "error"]].to_string(index=False))
     print(kernel_line())
-
-# the job's work is done and its files written: move every object to the collector's permanent
-# generation, so that the interpreter's exit does not traverse the heap of Numba, pandas and
-# SciPy objects once more (about 0.3 CPU-s of a job; benchmarks/results/job_profile.md)
-gc.freeze()
