@@ -96,6 +96,17 @@ def test_the_workflow_plans_its_jobs_without_statistics_or_root_finding():
     assert _loaded(imports, ["scipy.stats", "scipy.optimize", "statsmodels", "matplotlib"]) == []
 
 
+def test_the_workflow_checks_every_soils_photos_without_the_image_libraries():
+    # snakemake's own process loads every soil at each invocation and checks its photo
+    # manifest, drum frames' options included (the vineyard soil's); measuring the photos,
+    # which needs scikit-image and scipy's image filters, is the image_measure job's
+    code = ("import yaml\nfrom soilcal.config import load_workflow_config\n"
+            "soils = load_workflow_config(yaml.safe_load(open('config/config.yaml')))\n"
+            "assert any(s.manifest is not None and any(p['kind'] == 'drum' for p in s.manifest['photos'])"
+            " for s in soils.values())")
+    assert _loaded(code, ["skimage", "scipy.ndimage", "soilcal.imaging.drum", "soilcal.imaging.measure"]) == []
+
+
 def test_a_missing_package_still_stops_the_call_that_needs_it_with_its_name():
     # scipy.sparse made unimportable: welding a mesh (which needs its graph) fails naming it,
     # an import that needs nothing of it still works

@@ -89,13 +89,13 @@ from scipy import ndimage as ndi
 from skimage import feature, filters, measure, morphology, transform
 
 from soilcal.errors import InputError
+from soilcal.imaging.drum_options import (CHORD_FRACTION, LEVELS, OPTIONS, RIM_MARGIN,  # noqa: F401
+                                          frame_options)
 from soilcal.imaging.io import read_gray_reduced
 from soilcal.imaging.measure import (PILE_WORK_PIXELS, PLATE_MAX_ROLL_DEG, Stages, _plate_beyond_search, open_fill,
                                      plate_line_any, roll_of)
 from soilcal.imaging.refusal import Tried, explained
 
-CHORD_FRACTION = 0.6
-RIM_MARGIN = 0.05
 MIN_RIM_SUPPORT = 0.3
 #: the angles a measured free surface may stand at: a boundary within 3 deg of level is the
 #: edge of a table, a plate or a wall in a frame with no drum in it (their edges read 0.0 to
@@ -142,57 +142,9 @@ MAX_END_GAP = 0.2
 #: what every frame refused for showing no measurable drum is expected to show
 DRUM_EXPECTED = (f"a drum frame: powder lying in a drum, clearly darker or lighter than the air above it, its "
                  f"free surface one line at {DRUM_ANGLE_RANGE[0]:.0f} to {DRUM_ANGLE_RANGE[1]:.0f} deg")
-LEVELS = ("auto", "plate", "image")
-_LIMITS = {"roll_deg": (-45.0, 45.0, "an angle between -45 and 45 deg"),
-           "chord_fraction": (0.1, 1.0, "a fraction of the chord in [0.1, 1]"),
-           "rim_margin": (0.0, 0.3, "a fraction of the drum radius in [0, 0.3]"),
-           "drum_radius_px": (8.0, 1e6, "a radius of at least 8 px")}
-OPTIONS = ("level", "roll_deg", "chord_fraction", "rim_margin", "drum_centre_px", "drum_radius_px", "accept_low")
 #: a frame larger than this (pixels) is measured reduced to it, as a heap photo is: a phone's 12
 #: megapixels are decoded reduced (a JPEG by 2, 4 or 8 in its decoder) and scaled to it
 DRUM_WORK_PIXELS = PILE_WORK_PIXELS
-
-
-def _number(x):
-    return isinstance(x, (int, float)) and not isinstance(x, bool) and math.isfinite(x)
-
-
-def frame_options(entry=None, where=None, prefix=""):
-    """Validated drum options from a manifest entry or CLI arguments (a dict).
-
-    Unknown values raise one InputError naming ``where`` (file) and ``prefix + key`` (field).
-    """
-    entry = entry or {}
-    opts = {"level": "auto", "roll_deg": None, "chord_fraction": CHORD_FRACTION, "rim_margin": RIM_MARGIN,
-            "drum_centre_px": None, "drum_radius_px": None, "accept_low": False}
-    for k in OPTIONS:
-        v = entry.get(k)
-        if v is None:
-            continue
-        field = prefix + k
-        if k == "level":
-            if v not in LEVELS:
-                raise InputError(where, field, f"one of {LEVELS}", v)
-        elif k == "accept_low":
-            if not isinstance(v, bool):
-                raise InputError(where, field, "true or false (true: a frame flagged low that the user has checked "
-                                 "is averaged all the same, listed as accepted_low)", v)
-        elif k == "drum_centre_px":
-            if not (isinstance(v, (list, tuple)) and len(v) == 2 and all(_number(x) for x in v)):
-                raise InputError(where, field, "[column, row] of the drum centre in pixels", v)
-            v = [float(x) for x in v]
-        else:
-            lo, hi, what = _LIMITS[k]
-            if not _number(v) or not lo <= v <= hi:
-                raise InputError(where, field, what, v)
-            v = float(v)
-        opts[k] = v
-    if (opts["drum_centre_px"] is None) != (opts["drum_radius_px"] is None):
-        raise InputError(where, prefix + ("drum_radius_px" if opts["drum_radius_px"] is None else "drum_centre_px"),
-                         "drum_centre_px and drum_radius_px given together", "only one of them")
-    if opts["roll_deg"] is not None and opts["level"] == "plate":
-        raise InputError(where, prefix + "roll_deg", "either roll_deg or level: plate", "both")
-    return opts
 
 
 @dataclass

@@ -118,7 +118,7 @@ def check_plate_line(where, field, entry, photo):
 def read_manifest(path):
     import yaml
 
-    from soilcal.imaging.drum import OPTIONS
+    from soilcal.imaging.drum_options import OPTIONS
 
     path = Path(path)
     try:
@@ -165,7 +165,7 @@ def read_manifest(path):
         if "plate_line_px" in p:
             check_plate_line(path, f"{at}.plate_line_px", p, path.parent / p["file"])
         if p["kind"] == "drum":
-            from soilcal.imaging.drum import frame_options
+            from soilcal.imaging.drum_options import frame_options
 
             frame_options(p, path, prefix=f"{at}.")
         else:
