@@ -387,6 +387,51 @@ def joint_gap(effects: list, y0: np.ndarray, centre: np.ndarray, joint_means: np
     return np.where(np.isfinite(joint_means), joint_means - first, 0.0)
 
 
+#: the relative step of scipy's forward differences (``approx_derivative`` with its default
+#: '2-point' method: the square root of the float64 machine epsilon)
+_FD_STEP = np.finfo(np.float64).eps ** 0.5
+
+
+def forward_difference(fun, lo: np.ndarray, hi: np.ndarray):
+    """(residuals, Jacobian) to hand scipy's ``least_squares`` for the residual function ``fun``
+    within the bounds ``lo``-``hi``: the Jacobian is the forward-difference one that
+    ``least_squares`` computes itself with its default ``jac='2-point'``
+    (``scipy.optimize._numdiff.approx_derivative``), number for number: the step
+    sqrt(eps) max(1, |x|) with the sign of x, reversed where it would cross a bound and fits
+    on the other side, else cut to the farther bound; the same differences, divisions and array
+    layout.  It takes the residuals at x from the point the optimiser evaluated last (every
+    Jacobian of the trust-region method is at such a point) and leaves out the generality of
+    scipy's routine, whose overhead was larger than the residuals' cost on the loop's small
+    problems.  ``tests/loop/test_forward_difference.py`` compares the fits with scipy's own."""
+    last = []
+
+    def residuals(x):
+        out = fun(x)
+        last[:] = [np.array(x, float), out]
+        return out
+
+    def jac(x):
+        x0 = np.asarray(x, float)
+        f0 = last[1] if last and np.array_equal(last[0], x0) else np.atleast_1d(fun(x0))
+        h = _FD_STEP * ((x0 >= 0).astype(float) * 2 - 1) * np.maximum(1.0, np.abs(x0))
+        below, above = x0 - lo, hi - x0
+        step = x0 + h
+        fitting = np.abs(h) <= np.maximum(below, above)
+        h[((step < lo) | (step > hi)) & fitting] *= -1
+        forward = (above >= below) & ~fitting
+        h[forward] = above[forward]
+        backward = (above < below) & ~fitting
+        h[backward] = -below[backward]
+        jt = np.empty((x0.size, f0.size))
+        for i in range(x0.size):
+            x1 = x0.copy()
+            x1[i] = x0[i] + h[i]
+            jt[i] = (np.atleast_1d(fun(x1)) - f0) / ((x0[i] + h[i]) - x0[i])
+        return (np.ravel(jt) if f0.size == 1 else jt).T
+
+    return residuals, jac
+
+
 @dataclass
 class Model:
     """Effects with fitted parameters and the calibrated means they modify."""
@@ -470,12 +515,11 @@ class Model:
         lo, hi = self.bounds()
         rows = np.arange(len(self.y0)) if idx is None else idx
 
-        def errors(x):
-            return self.errors(x, rows)
-
+        errors, jac = forward_difference(lambda x: self.errors(x, rows), lo, hi)
         best = None
         if x0 is not None:
-            best = least_squares(errors, np.clip(np.asarray(x0, float), lo, hi), bounds=(lo, hi), method="trf")
+            best = least_squares(errors, np.clip(np.asarray(x0, float), lo, hi), jac=jac, bounds=(lo, hi),
+                                 method="trf")
         starts, predicted = self._at_starts()
         cost = [float(np.sum(self._relative(p, rows) ** 2)) for p in predicted]
         null = np.concatenate([[e.effect.null[k] for k in e.effect.theta_names()] for e in self.effects])
@@ -484,7 +528,7 @@ class Model:
         # the two best design points start the search; a tie (data that do not move the
         # result) goes to the switched-off value
         for j in sorted(range(len(starts)), key=lambda j: (round(cost[j], 12), dist[j]))[:2]:
-            res = least_squares(errors, starts[j], bounds=(lo, hi), method="trf")
+            res = least_squares(errors, starts[j], jac=jac, bounds=(lo, hi), method="trf")
             if best is None or res.cost < best.cost - 1e-15:
                 best = res
         return best.x, best
