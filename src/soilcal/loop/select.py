@@ -57,6 +57,7 @@ its AICc is lower; :func:`forward` chooses the effects.
 
 from __future__ import annotations
 
+import bisect
 import itertools
 import math
 from dataclasses import dataclass, field
@@ -184,6 +185,11 @@ class Surrogate:
             # the cubic through the rows that use it only (each row's cubic is its own)
             self.cubic_rows = np.flatnonzero(~self.quadratic)
             self.pchip = PchipInterpolator(t[order], means[order][:, self.cubic_rows], axis=0, extrapolate=True)
+            # its pieces as :meth:`_cubic` evaluates them: the knots, and per interval the
+            # coefficients of s^0..s^3 (one array of the rows each)
+            self._knots = self.pchip.x.tolist()
+            self._pieces = [tuple(self.pchip.c[3 - p, i] for p in range(4)) for i in range(len(self._knots) - 1)]
+        self._any_quadratic = bool(self.quadratic.any())
 
     def kind(self) -> str:
         """Which surrogate the rows use, for the selection's files: "quadratic", "monotone
@@ -210,13 +216,26 @@ class Surrogate:
     def _basis(self, U):
         return np.column_stack(self._terms([U[:, j] for j in range(self.k)], np.ones(len(U))))
 
+    def _cubic(self, v: float) -> np.ndarray:
+        """The monotone cubic's rows at ``v``, as ``self.pchip(v)`` gives them, bit for bit
+        (scipy's ``PPoly`` evaluation: the interval whose left knot is the last at or below
+        ``v``, the first or the last one beyond the knots; the powers of the distance s from
+        that knot summed from the constant term up, s^2 as s s and s^3 as s^2 s), without the
+        per-call cost of ``PPoly.__call__`` (the optimisers call this thousands of times)."""
+        x = self._knots
+        i = min(max(bisect.bisect_right(x, v) - 1, 0), len(x) - 2)
+        c0, c1, c2, c3 = self._pieces[i]
+        s = v - x[i]
+        s2 = s * s
+        return (((0.0 + c0) + c1 * s) + c2 * s2) + c3 * (s2 * s)
+
     def __call__(self, theta) -> np.ndarray:
         """The rows' values at one parameter vector ``theta`` (the quadratic's terms of plain
         numbers, :meth:`_terms`: the optimisers call this thousands of times)."""
         theta = np.asarray(theta, float).ravel()
         if self.pchip is not None:
-            cubic = self.pchip(float(theta[0]))
-            if not self.quadratic.any():
+            cubic = self._cubic(float(theta[0]))
+            if not self._any_quadratic:
                 return cubic
         cols = self._terms((2.0 * (theta - self.lo) / self.span - 1.0).tolist(), 1.0)
         quad = (np.array([cols[: self.nb]]) @ self.coef)[0]
@@ -515,7 +534,13 @@ class Model:
         lo, hi = self.bounds()
         rows = np.arange(len(self.y0)) if idx is None else idx
 
-        errors, jac = forward_difference(lambda x: self.errors(x, rows), lo, hi)
+        # the rows' measured values and scales taken once: the same relative errors as
+        # self.errors(x, rows), for the many evaluations of one fit
+        measured, scale = self.measured[rows], self.scale[rows]
+        if idx is None:
+            errors, jac = forward_difference(lambda x: (measured - self.predict(x)) / scale, lo, hi)
+        else:
+            errors, jac = forward_difference(lambda x: (measured - self.predict(x)[rows]) / scale, lo, hi)
         best = None
         if x0 is not None:
             best = least_squares(errors, np.clip(np.asarray(x0, float), lo, hi), jac=jac, bounds=(lo, hi),
