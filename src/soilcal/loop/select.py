@@ -1001,7 +1001,7 @@ class Selection:
 
 
 def forward(obs: pd.DataFrame, y0: np.ndarray, data: dict, fold_by: str | None = None, alpha: float = 0.05,
-            max_effects: int = 2) -> Selection:
+            max_effects: int = 2, shared: dict | None = None) -> Selection:
     """Selection over the candidates ``data`` (name -> :class:`EffectData`):
 
     1. forward: add, one at a time, the candidate whose model has the lowest held-out RMS
@@ -1024,18 +1024,28 @@ def forward(obs: pd.DataFrame, y0: np.ndarray, data: dict, fold_by: str | None =
     either, and testing it against the scale rejected half of such tables); ``beside_uniform``
     scores the effects beside that scale against the scale alone, and where they do not lower
     its AICc (:func:`like_a_constant`) the verdict leaves the offset unexplained.
+
+    ``shared``: a dict that selections over the same rows (``obs``, ``y0``) and the same
+    :class:`EffectData` of each candidate share, a later one with more candidates (the loop's
+    second round): the folds and one :class:`Model` per set of effects, each fitted and
+    cross-validated once over all of them; every score is the one a selection of its own
+    gives.
     """
     measured = obs["measured"].to_numpy(float)
     from soilcal.loop.residuals import scale_of
 
+    shared = {} if shared is None else shared
     scale = scale_of(obs) if "measured" in obs else None
-    folds = _folds(obs, fold_by)
+    if fold_by not in shared.setdefault("folds", {}):  # (compared by identity: a model's cross-validations)
+        shared["folds"][fold_by] = _folds(obs, fold_by)
+    folds = shared["folds"][fold_by]
     groups = replicate_groups(obs)
     chosen: list[str] = []
     steps = []
 
-    models = {}  # one Model per set of effects: each is fitted and cross-validated once (full_fit, cross_validate)
-    bias = scale_data()
+    # one Model per set of effects: each is fitted and cross-validated once (full_fit, cross_validate)
+    models = shared.setdefault("models", {})
+    bias = shared.setdefault("bias", scale_data())
 
     def model(names, with_bias=False):
         effects = [data[c] for c in names] + ([bias] if with_bias else [])
