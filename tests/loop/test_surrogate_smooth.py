@@ -248,3 +248,21 @@ def test_the_selection_files_say_which_surrogate_each_fit_used(tmp_path, scatter
             assert np.isnan(lof["rate_friction"])
         else:
             assert lof["rate_friction"] == pytest.approx(lof_p, abs=1e-6)
+
+
+def test_the_cubic_rows_are_scipys_pchip_bit_for_bit():
+    # the cubic rows are evaluated from the PCHIP's pieces (Surrogate._cubic) rather than by
+    # calling it: at the knots, between them, at the bounds and beyond both ends (where it
+    # extrapolates), on irregular rows of either sign and several scales, the values must be
+    # the interpolant's own, to the last bit
+    rng = np.random.default_rng(7)
+    for trial in range(40):
+        means = rng.standard_normal((len(T), 5)) * rng.choice([1e-3, 1.0, 1e4]) + rng.choice([0.0, 50.0])
+        s = sl.Surrogate(EFF, BOUNDS, T[:, None], means, rng.random(5) < 0.4)
+        if s.pchip is None:
+            continue
+        for t in np.concatenate([T, rng.uniform(-0.5, 0.8, 30), [-0.3 - 1e-17, 0.6 + 1e-12, -0.0]]):
+            want = np.asarray(s.pchip(float(t)))
+            assert s._cubic(float(t)).tobytes() == want.tobytes(), (trial, t)
+            got = s([t])
+            assert got[s.cubic_rows].tobytes() == want.tobytes(), (trial, t)

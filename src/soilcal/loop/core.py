@@ -955,6 +955,19 @@ def _unscored(sel, u: pd.DataFrame, alpha: float = 0.05) -> str:
     return out
 
 
+@dataclass
+class _Rounds:
+    """What the rounds of one :func:`run_inprocess` share (:func:`_analyse`; the same residual
+    table, runs and settings): the selection by the tuple of candidates (their
+    select.EffectData by name, those that could not be fitted with why, the Selection), each
+    candidate's select.EffectData (or why it could not be fitted), and the models the
+    selections scored (``select.forward``'s ``shared``)."""
+
+    selections: dict = dataclasses.field(default_factory=dict)
+    effect_data: dict = dataclasses.field(default_factory=dict)
+    models: dict = dataclasses.field(default_factory=dict)
+
+
 def analyse(soil: str, res: pd.DataFrame, diag: pd.DataFrame, cands: list, effect_runs: dict,
             settings: Settings, reference: dict, quantity_cols: dict | None = None,
             skipped_effects: dict | None = None, joint: dict | None = None, interval: bool = True) -> Outcome:
@@ -973,19 +986,21 @@ def analyse(soil: str, res: pd.DataFrame, diag: pd.DataFrame, cands: list, effec
 
 def _analyse(soil: str, res: pd.DataFrame, diag: pd.DataFrame, cands: list, effect_runs: dict,
              settings: Settings, reference: dict, quantity_cols: dict | None, skipped_effects: dict | None,
-             joint: dict | None, interval: bool, selections: dict | None = None) -> tuple[Outcome, tuple | None]:
+             joint: dict | None, interval: bool, selections: _Rounds | None = None) -> tuple[Outcome, tuple | None]:
     """:func:`analyse` and, where ``interval`` is False, the chosen effects' interval left out
     of the summary (its ``ci95`` ``{}``, ``ci95_method`` only the words that follow the
     interval's own): (the outcome, what :func:`_with_interval` needs to fill it in, or None
     where there is nothing to fill in).  The interval's bootstrap refits the model
     ``loop.bootstrap`` times; :func:`run_inprocess` computes it only for the round whose
     outcome it returns.  Where the chosen effects are refitted beside a free uniform scale
-    the summary gives that fit's interval, and no bootstrap is run.  ``selections``: the
-    candidates' surrogates and the selection over them (:func:`soilcal.loop.select.forward`)
-    by the tuple of candidates, kept across the rounds of one :func:`run_inprocess` (the
-    same residual table, runs and settings): ``joint`` changes neither, only the chosen
-    effects' fit after them, so a round with joint runs reuses the selection of the round
-    before it instead of repeating it."""
+    the summary gives that fit's interval, and no bootstrap is run.  ``selections``
+    (:class:`_Rounds`): the candidates' surrogates and the selection over them
+    (:func:`soilcal.loop.select.forward`) by the tuple of candidates, kept across the rounds
+    of one :func:`run_inprocess` (the same residual table, runs and settings): ``joint``
+    changes neither, only the chosen effects' fit after them, so a round with joint runs
+    reuses the selection of the round before it instead of repeating it; a round with more
+    candidates reuses the surrogates of those it shares with the round before and the
+    models over them, fitted and cross-validated there."""
     u = rs.usable(res)
     spread_note = _replicate_spread(u, settings.alpha)  # the verdict's note ("": none) and its nuisance words
     rank = dg.ranking(diag)
@@ -1005,20 +1020,27 @@ def _analyse(soil: str, res: pd.DataFrame, diag: pd.DataFrame, cands: list, effe
     fold_by, fold_text = fold_grouping(settings, quantity_cols, res)
     unfit = {}
     if n >= 3 and cands:
-        if selections is not None and tuple(cands) in selections:
-            data, unfit, sel = selections[tuple(cands)]
+        rounds = selections if selections is not None else _Rounds()
+        if tuple(cands) in rounds.selections:
+            data, unfit, sel = rounds.selections[tuple(cands)]
         else:
             for nm in cands:  # an effect whose runs failed at too many design points cannot be fitted
-                try:
-                    data[nm] = sl.build_effect_data(u, effect_runs[nm], EFFECTS[nm], settings.effect_bounds(nm))
-                except ValueError as exc:
-                    unfit[nm] = str(exc)
+                if nm not in rounds.effect_data:
+                    try:
+                        rounds.effect_data[nm] = sl.build_effect_data(u, effect_runs[nm], EFFECTS[nm],
+                                                                      settings.effect_bounds(nm))
+                    except ValueError as exc:
+                        rounds.effect_data[nm] = str(exc)
+                built = rounds.effect_data[nm]
+                if isinstance(built, str):
+                    unfit[nm] = built
+                else:
+                    data[nm] = built
             if fold_by and f"cov:{fold_by}" not in u.columns:
                 raise InputError("<soil>", "loop.fold_by", "a covariate column of the measured tables", fold_by)
             sel = sl.forward(u, u["simulated_mean"].to_numpy(float), data, fold_by, settings.alpha,
-                             settings.max_effects)
-            if selections is not None:
-                selections[tuple(cands)] = (data, unfit, sel)
+                             settings.max_effects, shared=rounds.models)
+            rounds.selections[tuple(cands)] = (data, unfit, sel)
         for nm, why in unfit.items():
             sel_rows.append({"step": 1, "effects": nm, "parameters": "{}", "ci95": "{}", "accepted": False,
                              "reason": f"not fitted: {why}"})
@@ -1382,7 +1404,7 @@ def run_inprocess(soil: str, conditions, base_params, simulate, settings: Settin
 
     simulate_candidates(cands)
     skip = skipped(conditions, settings)
-    selections = {}  # the candidates' selection, once per set of candidates (_analyse)
+    selections = _Rounds()  # the candidates' surrogates, models and selection, once per round's candidates
     # each round without its interval (the bootstrap), which is computed for the outcome returned alone
     out, pending = _analyse(soil, res, diag, cands, effect_runs, settings, reference, qcols, skip, None, False,
                             selections)

@@ -57,6 +57,7 @@ its AICc is lower; :func:`forward` chooses the effects.
 
 from __future__ import annotations
 
+import bisect
 import itertools
 import math
 from dataclasses import dataclass, field
@@ -184,6 +185,11 @@ class Surrogate:
             # the cubic through the rows that use it only (each row's cubic is its own)
             self.cubic_rows = np.flatnonzero(~self.quadratic)
             self.pchip = PchipInterpolator(t[order], means[order][:, self.cubic_rows], axis=0, extrapolate=True)
+            # its pieces as :meth:`_cubic` evaluates them: the knots, and per interval the
+            # coefficients of s^0..s^3 (one array of the rows each)
+            self._knots = self.pchip.x.tolist()
+            self._pieces = [tuple(self.pchip.c[3 - p, i] for p in range(4)) for i in range(len(self._knots) - 1)]
+        self._any_quadratic = bool(self.quadratic.any())
 
     def kind(self) -> str:
         """Which surrogate the rows use, for the selection's files: "quadratic", "monotone
@@ -210,13 +216,26 @@ class Surrogate:
     def _basis(self, U):
         return np.column_stack(self._terms([U[:, j] for j in range(self.k)], np.ones(len(U))))
 
+    def _cubic(self, v: float) -> np.ndarray:
+        """The monotone cubic's rows at ``v``, as ``self.pchip(v)`` gives them, bit for bit
+        (scipy's ``PPoly`` evaluation: the interval whose left knot is the last at or below
+        ``v``, the first or the last one beyond the knots; the powers of the distance s from
+        that knot summed from the constant term up, s^2 as s s and s^3 as s^2 s), without the
+        per-call cost of ``PPoly.__call__`` (the optimisers call this thousands of times)."""
+        x = self._knots
+        i = min(max(bisect.bisect_right(x, v) - 1, 0), len(x) - 2)
+        c0, c1, c2, c3 = self._pieces[i]
+        s = v - x[i]
+        s2 = s * s
+        return (((0.0 + c0) + c1 * s) + c2 * s2) + c3 * (s2 * s)
+
     def __call__(self, theta) -> np.ndarray:
         """The rows' values at one parameter vector ``theta`` (the quadratic's terms of plain
         numbers, :meth:`_terms`: the optimisers call this thousands of times)."""
         theta = np.asarray(theta, float).ravel()
         if self.pchip is not None:
-            cubic = self.pchip(float(theta[0]))
-            if not self.quadratic.any():
+            cubic = self._cubic(float(theta[0]))
+            if not self._any_quadratic:
                 return cubic
         cols = self._terms((2.0 * (theta - self.lo) / self.span - 1.0).tolist(), 1.0)
         quad = (np.array([cols[: self.nb]]) @ self.coef)[0]
@@ -387,6 +406,51 @@ def joint_gap(effects: list, y0: np.ndarray, centre: np.ndarray, joint_means: np
     return np.where(np.isfinite(joint_means), joint_means - first, 0.0)
 
 
+#: the relative step of scipy's forward differences (``approx_derivative`` with its default
+#: '2-point' method: the square root of the float64 machine epsilon)
+_FD_STEP = np.finfo(np.float64).eps ** 0.5
+
+
+def forward_difference(fun, lo: np.ndarray, hi: np.ndarray):
+    """(residuals, Jacobian) to hand scipy's ``least_squares`` for the residual function ``fun``
+    within the bounds ``lo``-``hi``: the Jacobian is the forward-difference one that
+    ``least_squares`` computes itself with its default ``jac='2-point'``
+    (``scipy.optimize._numdiff.approx_derivative``), number for number: the step
+    sqrt(eps) max(1, |x|) with the sign of x, reversed where it would cross a bound and fits
+    on the other side, else cut to the farther bound; the same differences, divisions and array
+    layout.  It takes the residuals at x from the point the optimiser evaluated last (every
+    Jacobian of the trust-region method is at such a point) and leaves out the generality of
+    scipy's routine, whose overhead was larger than the residuals' cost on the loop's small
+    problems.  ``tests/loop/test_forward_difference.py`` compares the fits with scipy's own."""
+    last = []
+
+    def residuals(x):
+        out = fun(x)
+        last[:] = [np.array(x, float), out]
+        return out
+
+    def jac(x):
+        x0 = np.asarray(x, float)
+        f0 = last[1] if last and np.array_equal(last[0], x0) else np.atleast_1d(fun(x0))
+        h = _FD_STEP * ((x0 >= 0).astype(float) * 2 - 1) * np.maximum(1.0, np.abs(x0))
+        below, above = x0 - lo, hi - x0
+        step = x0 + h
+        fitting = np.abs(h) <= np.maximum(below, above)
+        h[((step < lo) | (step > hi)) & fitting] *= -1
+        forward = (above >= below) & ~fitting
+        h[forward] = above[forward]
+        backward = (above < below) & ~fitting
+        h[backward] = -below[backward]
+        jt = np.empty((x0.size, f0.size))
+        for i in range(x0.size):
+            x1 = x0.copy()
+            x1[i] = x0[i] + h[i]
+            jt[i] = (np.atleast_1d(fun(x1)) - f0) / ((x0[i] + h[i]) - x0[i])
+        return (np.ravel(jt) if f0.size == 1 else jt).T
+
+    return residuals, jac
+
+
 @dataclass
 class Model:
     """Effects with fitted parameters and the calibrated means they modify."""
@@ -470,12 +534,17 @@ class Model:
         lo, hi = self.bounds()
         rows = np.arange(len(self.y0)) if idx is None else idx
 
-        def errors(x):
-            return self.errors(x, rows)
-
+        # the rows' measured values and scales taken once: the same relative errors as
+        # self.errors(x, rows), for the many evaluations of one fit
+        measured, scale = self.measured[rows], self.scale[rows]
+        if idx is None:
+            errors, jac = forward_difference(lambda x: (measured - self.predict(x)) / scale, lo, hi)
+        else:
+            errors, jac = forward_difference(lambda x: (measured - self.predict(x)[rows]) / scale, lo, hi)
         best = None
         if x0 is not None:
-            best = least_squares(errors, np.clip(np.asarray(x0, float), lo, hi), bounds=(lo, hi), method="trf")
+            best = least_squares(errors, np.clip(np.asarray(x0, float), lo, hi), jac=jac, bounds=(lo, hi),
+                                 method="trf")
         starts, predicted = self._at_starts()
         cost = [float(np.sum(self._relative(p, rows) ** 2)) for p in predicted]
         null = np.concatenate([[e.effect.null[k] for k in e.effect.theta_names()] for e in self.effects])
@@ -484,7 +553,7 @@ class Model:
         # the two best design points start the search; a tie (data that do not move the
         # result) goes to the switched-off value
         for j in sorted(range(len(starts)), key=lambda j: (round(cost[j], 12), dist[j]))[:2]:
-            res = least_squares(errors, starts[j], bounds=(lo, hi), method="trf")
+            res = least_squares(errors, starts[j], jac=jac, bounds=(lo, hi), method="trf")
             if best is None or res.cost < best.cost - 1e-15:
                 best = res
         return best.x, best
@@ -932,7 +1001,7 @@ class Selection:
 
 
 def forward(obs: pd.DataFrame, y0: np.ndarray, data: dict, fold_by: str | None = None, alpha: float = 0.05,
-            max_effects: int = 2) -> Selection:
+            max_effects: int = 2, shared: dict | None = None) -> Selection:
     """Selection over the candidates ``data`` (name -> :class:`EffectData`):
 
     1. forward: add, one at a time, the candidate whose model has the lowest held-out RMS
@@ -955,18 +1024,28 @@ def forward(obs: pd.DataFrame, y0: np.ndarray, data: dict, fold_by: str | None =
     either, and testing it against the scale rejected half of such tables); ``beside_uniform``
     scores the effects beside that scale against the scale alone, and where they do not lower
     its AICc (:func:`like_a_constant`) the verdict leaves the offset unexplained.
+
+    ``shared``: a dict that selections over the same rows (``obs``, ``y0``) and the same
+    :class:`EffectData` of each candidate share, a later one with more candidates (the loop's
+    second round): the folds and one :class:`Model` per set of effects, each fitted and
+    cross-validated once over all of them; every score is the one a selection of its own
+    gives.
     """
     measured = obs["measured"].to_numpy(float)
     from soilcal.loop.residuals import scale_of
 
+    shared = {} if shared is None else shared
     scale = scale_of(obs) if "measured" in obs else None
-    folds = _folds(obs, fold_by)
+    if fold_by not in shared.setdefault("folds", {}):  # (compared by identity: a model's cross-validations)
+        shared["folds"][fold_by] = _folds(obs, fold_by)
+    folds = shared["folds"][fold_by]
     groups = replicate_groups(obs)
     chosen: list[str] = []
     steps = []
 
-    models = {}  # one Model per set of effects: each is fitted and cross-validated once (full_fit, cross_validate)
-    bias = scale_data()
+    # one Model per set of effects: each is fitted and cross-validated once (full_fit, cross_validate)
+    models = shared.setdefault("models", {})
+    bias = shared.setdefault("bias", scale_data())
 
     def model(names, with_bias=False):
         effects = [data[c] for c in names] + ([bias] if with_bias else [])
