@@ -254,15 +254,15 @@ def _edges(img, sigma=2.0):
     return feature.canny(img, sigma=sigma, low_threshold=0.1 * top, high_threshold=0.2 * top)
 
 
-def _hspace_peaks(img, dist):
+def _hspace_peaks(img, dist, top=None):
     """The peaks of one radius's Hough space as :func:`skimage.transform.hough_circle_peaks`
     finds them (skimage 0.26 ``_prominent_peaks``: local maxima over (2 ``dist`` + 1)^2 above
     half the space's maximum, strongest region first, each suppressing its neighbourhood), with
     the regions' centroids and maxima taken in one pass instead of one region object each: a
     mottled frame's noisy spaces hold hundreds of regions per radius, which took seconds.
-    Returns (values, columns, rows)."""
+    ``top``: the space's maximum, where the caller has it.  Returns (values, columns, rows)."""
     rows, cols = img.shape
-    threshold = 0.5 * float(np.max(img))
+    threshold = 0.5 * float(np.max(img) if top is None else top)
     size = 2 * dist + 1
     # the maximum filter, peaks and regions in the box of the pixels above the threshold, widened
     # by dist (or to the image's edge): every pixel of a region and every region's centroid lies in
@@ -311,23 +311,54 @@ def _hspace_peaks(img, dist):
 
 def _circle_peaks(hspaces, radii, dist, total):
     """:func:`skimage.transform.hough_circle_peaks` (``min_xdistance = min_ydistance = dist``,
-    ``total_num_peaks = total``) with its per-radius peak search done by :func:`_hspace_peaks`."""
+    ``total_num_peaks = total``) with its per-radius peak search done by :func:`_hspace_peaks`,
+    and only for the radii whose space can hold one of the peaks kept.
+
+    The peaks kept are the strongest ``total`` taken greedily, strongest first, each not within
+    ``dist`` (in x and in y) of one kept before it; a peak weaker than the last one kept comes
+    after every kept one in that order and changes nothing.  A radius's peaks are at most its
+    space's maximum, so the spaces are searched in the order of their maxima, strongest first,
+    until the peaks found keep ``total`` of which the weakest is stronger than every space not
+    yet searched: the peaks of those spaces would all come after it.  The peaks found are put in
+    the radii's order, as when every space is searched, before they are sorted.  Peaks of equal
+    strength are left in the order NumPy's sort gives them, which depends on every peak sorted:
+    where two peaks down to the weakest kept are equal, every space is searched and the peaks of
+    all sorted together, as skimage does."""
     from skimage.transform.hough_transform import label_distant_points
 
-    r, cx, cy, accum = [], [], [], []
-    for rad, hp in zip(radii, hspaces):
-        h_p, x_p, y_p = _hspace_peaks(hp, dist)
-        r.extend((rad,) * len(h_p))
-        cx.extend(x_p)
-        cy.extend(y_p)
-        accum.extend(h_p)
-    r, cx, cy, accum = np.array(r), np.array(cx), np.array(cy), np.array(accum)
-    s = np.argsort(accum)
-    accum, cx, cy, r = accum[s][::-1], cx[s][::-1], cy[s][::-1], r[s][::-1]
-    if len(accum) == 0:
-        return accum, cx, cy, r
-    keep = label_distant_points(cx, cy, dist, dist, total)
-    return accum[keep], cx[keep], cy[keep], r[keep]
+    def kept(found):
+        r, cx, cy, accum = [], [], [], []
+        for i in sorted(found):
+            h_p, x_p, y_p = found[i]
+            r.extend((radii[i],) * len(h_p))
+            cx.extend(x_p)
+            cy.extend(y_p)
+            accum.extend(h_p)
+        r, cx, cy, accum = np.array(r), np.array(cx), np.array(cy), np.array(accum)
+        s = np.argsort(accum)
+        accum, cx, cy, r = accum[s][::-1], cx[s][::-1], cy[s][::-1], r[s][::-1]
+        if len(accum) == 0:
+            return accum, cx, cy, r
+        keep = label_distant_points(cx, cy, dist, dist, total)
+        return accum[keep], cx[keep], cy[keep], r[keep]
+
+    tops = np.max(hspaces, axis=(1, 2)) if len(radii) else np.array([])
+    order = np.argsort(-tops, kind="stable")
+    found, tied = {}, False
+    for j, i in enumerate(order):
+        found[int(i)] = _hspace_peaks(hspaces[i], dist, tops[i])
+        if tied or j + 1 == len(order):
+            continue
+        nxt = tops[order[j + 1]]  # the most any space not yet searched holds
+        if sum(int(np.count_nonzero(v[0] > nxt)) for v in found.values()) >= total:
+            out = kept(found)
+            if len(out[0]) == total and out[0][-1] > nxt:
+                vals = np.concatenate([v[0] for v in found.values()])
+                vals = vals[vals >= out[0][-1]]
+                if np.unique(vals).size == vals.size:
+                    return out
+                tied = True  # equal peaks down to the weakest kept: sorted among all peaks, as before
+    return kept(found)
 
 
 def find_drum(gray, edges=None):
