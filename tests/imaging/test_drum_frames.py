@@ -565,6 +565,16 @@ def test_window_seen_off_the_drum_axis_is_refused(tmp_path, axis, ratio, size):
     assert abs(found - ratio) < 0.04  # the rim ring's inner and outer edges (0.75 found 0.779)
 
 
+def _disc(img, x, y, r, grey):
+    """``img[hypot(column - x, row - y) < r] = grey``, the distances taken in the disc's bounding
+    box only (every pixel of the disc lies in it)."""
+    r0, r1 = max(int(np.floor(y - r)), 0), min(int(np.ceil(y + r)) + 1, img.shape[0])
+    c0, c1 = max(int(np.floor(x - r)), 0), min(int(np.ceil(x + r)) + 1, img.shape[1])
+    if r0 < r1 and c0 < c1:
+        rr, cc = np.mgrid[r0:r1, c0:c1]
+        img[r0:r1, c0:c1][np.hypot(cc - x, rr - y) < r] = grey
+
+
 def _particles_in_flight(img, truth, n=200, seed=0):
     """``n`` discs of the powder's grey (0.012 to 0.03 drum radii) thrown from the bed: their
     columns over the rising 60 % of the drum, their heights above the surface in that column
@@ -587,7 +597,7 @@ def _particles_in_flight(img, truth, n=200, seed=0):
         r = rng.uniform(0.012, 0.03) * R
         if np.flatnonzero(col)[0] - y > 0.45 * R or np.hypot(x - cx, y - cy) > 0.93 * R:
             continue
-        img[np.hypot(cc - x, rr - y) < r] = grey
+        _disc(img, x, y, r, grey)
         k += 1
     return img
 
@@ -662,7 +672,7 @@ def _lumps(img, truth, n=12, r_frac=0.03):
     cols = np.flatnonzero(powder.any(axis=0))
     for x in np.linspace(cols[0], cols[-1], n + 2)[1:-1]:
         y = np.flatnonzero(powder[:, int(round(x))])[0]
-        img[np.hypot(cc - x, rr - y) < r_frac * R] = grey
+        _disc(img, x, y, r_frac * R, grey)
     return img
 
 
