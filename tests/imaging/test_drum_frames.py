@@ -394,6 +394,48 @@ def test_drum_circle_peaks_are_skimages(tmp_path):
     assert len(want[0]) == 8
     for a, b in zip(want, got):
         np.testing.assert_array_equal(a, b)
+    # spaces full of equal peaks (counts over one perimeter's pixels): the search stops short of
+    # the weaker radii only where no two of the peaks down to the weakest kept are equal (a
+    # reflection-band frame's kept peaks differed so, two equal peaks taken in another order)
+    for seed in range(3):
+        tied = np.round(np.random.default_rng(seed).gamma(2.0, 1.0, (30, 60, 80)) * 3) / 40.0
+        radii = np.arange(20, 50)
+        want = transform.hough_circle_peaks(tied, radii, total_num_peaks=8, min_xdistance=3, min_ydistance=3)
+        for a, b in zip(want, drum._circle_peaks(tied, radii, dist=3, total=8)):
+            np.testing.assert_array_equal(a, b)
+
+
+def test_drum_circle_ransac_is_skimages():
+    # the rim's RANSAC passes over the trials that cannot beat the best so far without fitting
+    # them; its circles and inliers are those of skimage's ransac, on edge pixels of circles among
+    # outliers, rounded or not, on points near a line and on repeated points
+    import warnings
+
+    from skimage import measure
+
+    rng = np.random.default_rng(1)
+    for k in range(12):
+        m = int(rng.integers(5, 600))
+        t = rng.uniform(0, 2 * np.pi, m)
+        pts = rng.uniform(0, 300, 2) + rng.uniform(5, 300) * np.column_stack([np.cos(t), np.sin(t)])
+        out = rng.random(m) < rng.uniform(0, 0.9)
+        pts[out] = rng.uniform(0, 400, (out.sum(), 2))
+        pts += rng.normal(0, rng.uniform(0, 2), pts.shape)
+        pts = np.round(pts) if k % 2 else pts
+        if k % 5 == 0:
+            pts[:, 1] = np.round(0.3 * pts[:, 0] + rng.normal(0, 0.5, m))  # near a line
+        if k % 7 == 0:
+            pts = np.round(pts / 4) * 4  # repeated points
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            want, want_in = measure.ransac(pts, measure.CircleModel, min_samples=3, residual_threshold=1.5,
+                                           max_trials=200, rng=0)
+            got, got_in = drum._circle_ransac(pts, 1.5, 200)
+        assert (want is None) == (got is None), k
+        if want is not None:
+            np.testing.assert_array_equal(got.center, want.center)
+            assert got.radius == want.radius
+            np.testing.assert_array_equal(got_in, want_in)
 
 
 @pytest.mark.parametrize("roll", [0.0, 10.0, -7.0])
@@ -523,6 +565,16 @@ def test_window_seen_off_the_drum_axis_is_refused(tmp_path, axis, ratio, size):
     assert abs(found - ratio) < 0.04  # the rim ring's inner and outer edges (0.75 found 0.779)
 
 
+def _disc(img, x, y, r, grey):
+    """``img[hypot(column - x, row - y) < r] = grey``, the distances taken in the disc's bounding
+    box only (every pixel of the disc lies in it)."""
+    r0, r1 = max(int(np.floor(y - r)), 0), min(int(np.ceil(y + r)) + 1, img.shape[0])
+    c0, c1 = max(int(np.floor(x - r)), 0), min(int(np.ceil(x + r)) + 1, img.shape[1])
+    if r0 < r1 and c0 < c1:
+        rr, cc = np.mgrid[r0:r1, c0:c1]
+        img[r0:r1, c0:c1][np.hypot(cc - x, rr - y) < r] = grey
+
+
 def _particles_in_flight(img, truth, n=200, seed=0):
     """``n`` discs of the powder's grey (0.012 to 0.03 drum radii) thrown from the bed: their
     columns over the rising 60 % of the drum, their heights above the surface in that column
@@ -545,7 +597,7 @@ def _particles_in_flight(img, truth, n=200, seed=0):
         r = rng.uniform(0.012, 0.03) * R
         if np.flatnonzero(col)[0] - y > 0.45 * R or np.hypot(x - cx, y - cy) > 0.93 * R:
             continue
-        img[np.hypot(cc - x, rr - y) < r] = grey
+        _disc(img, x, y, r, grey)
         k += 1
     return img
 
@@ -620,7 +672,7 @@ def _lumps(img, truth, n=12, r_frac=0.03):
     cols = np.flatnonzero(powder.any(axis=0))
     for x in np.linspace(cols[0], cols[-1], n + 2)[1:-1]:
         y = np.flatnonzero(powder[:, int(round(x))])[0]
-        img[np.hypot(cc - x, rr - y) < r_frac * R] = grey
+        _disc(img, x, y, r_frac * R, grey)
     return img
 
 

@@ -206,15 +206,15 @@ def _edges(img, sigma=2.0):
     return feature.canny(img, sigma=sigma, low_threshold=0.1 * top, high_threshold=0.2 * top)
 
 
-def _hspace_peaks(img, dist):
+def _hspace_peaks(img, dist, top=None):
     """The peaks of one radius's Hough space as :func:`skimage.transform.hough_circle_peaks`
     finds them (skimage 0.26 ``_prominent_peaks``: local maxima over (2 ``dist`` + 1)^2 above
     half the space's maximum, strongest region first, each suppressing its neighbourhood), with
     the regions' centroids and maxima taken in one pass instead of one region object each: a
     mottled frame's noisy spaces hold hundreds of regions per radius, which took seconds.
-    Returns (values, columns, rows)."""
+    ``top``: the space's maximum, where the caller has it.  Returns (values, columns, rows)."""
     rows, cols = img.shape
-    threshold = 0.5 * float(np.max(img))
+    threshold = 0.5 * float(np.max(img) if top is None else top)
     size = 2 * dist + 1
     # the maximum filter, peaks and regions in the box of the pixels above the threshold, widened
     # by dist (or to the image's edge): every pixel of a region and every region's centroid lies in
@@ -263,23 +263,117 @@ def _hspace_peaks(img, dist):
 
 def _circle_peaks(hspaces, radii, dist, total):
     """:func:`skimage.transform.hough_circle_peaks` (``min_xdistance = min_ydistance = dist``,
-    ``total_num_peaks = total``) with its per-radius peak search done by :func:`_hspace_peaks`."""
+    ``total_num_peaks = total``) with its per-radius peak search done by :func:`_hspace_peaks`,
+    and only for the radii whose space can hold one of the peaks kept.
+
+    The peaks kept are the strongest ``total`` taken greedily, strongest first, each not within
+    ``dist`` (in x and in y) of one kept before it; a peak weaker than the last one kept comes
+    after every kept one in that order and changes nothing.  A radius's peaks are at most its
+    space's maximum, so the spaces are searched in the order of their maxima, strongest first,
+    until the peaks found keep ``total`` of which the weakest is stronger than every space not
+    yet searched: the peaks of those spaces would all come after it.  The peaks found are put in
+    the radii's order, as when every space is searched, before they are sorted.  Peaks of equal
+    strength are left in the order NumPy's sort gives them, which depends on every peak sorted:
+    where two peaks down to the weakest kept are equal, every space is searched and the peaks of
+    all sorted together, as skimage does."""
     from skimage.transform.hough_transform import label_distant_points
 
-    r, cx, cy, accum = [], [], [], []
-    for rad, hp in zip(radii, hspaces):
-        h_p, x_p, y_p = _hspace_peaks(hp, dist)
-        r.extend((rad,) * len(h_p))
-        cx.extend(x_p)
-        cy.extend(y_p)
-        accum.extend(h_p)
-    r, cx, cy, accum = np.array(r), np.array(cx), np.array(cy), np.array(accum)
-    s = np.argsort(accum)
-    accum, cx, cy, r = accum[s][::-1], cx[s][::-1], cy[s][::-1], r[s][::-1]
-    if len(accum) == 0:
-        return accum, cx, cy, r
-    keep = label_distant_points(cx, cy, dist, dist, total)
-    return accum[keep], cx[keep], cy[keep], r[keep]
+    def kept(found):
+        r, cx, cy, accum = [], [], [], []
+        for i in sorted(found):
+            h_p, x_p, y_p = found[i]
+            r.extend((radii[i],) * len(h_p))
+            cx.extend(x_p)
+            cy.extend(y_p)
+            accum.extend(h_p)
+        r, cx, cy, accum = np.array(r), np.array(cx), np.array(cy), np.array(accum)
+        s = np.argsort(accum)
+        accum, cx, cy, r = accum[s][::-1], cx[s][::-1], cy[s][::-1], r[s][::-1]
+        if len(accum) == 0:
+            return accum, cx, cy, r
+        keep = label_distant_points(cx, cy, dist, dist, total)
+        return accum[keep], cx[keep], cy[keep], r[keep]
+
+    tops = np.max(hspaces, axis=(1, 2)) if len(radii) else np.array([])
+    order = np.argsort(-tops, kind="stable")
+    found, tied = {}, False
+    for j, i in enumerate(order):
+        found[int(i)] = _hspace_peaks(hspaces[i], dist, tops[i])
+        if tied or j + 1 == len(order):
+            continue
+        nxt = tops[order[j + 1]]  # the most any space not yet searched holds
+        if sum(int(np.count_nonzero(v[0] > nxt)) for v in found.values()) >= total:
+            out = kept(found)
+            if len(out[0]) == total and out[0][-1] > nxt:
+                vals = np.concatenate([v[0] for v in found.values()])
+                vals = vals[vals >= out[0][-1]]
+                if np.unique(vals).size == vals.size:
+                    return out
+                tied = True  # equal peaks down to the weakest kept: sorted among all peaks, as before
+    return kept(found)
+
+
+def _circumcircle(p):
+    """(column, row, radius) of the circle through the three points ``p`` ((3, 2)), closed form,
+    or None for three points on a line."""
+    (ax, ay), (bx, by), (qx, qy) = p[0], p[1] - p[0], p[2] - p[0]
+    d = 2.0 * (bx * qy - by * qx)
+    if d == 0.0:
+        return None
+    b2, q2 = bx * bx + by * by, qx * qx + qy * qy
+    ux, uy = (qy * b2 - by * q2) / d, (bx * q2 - qx * b2) / d
+    return ax + ux, ay + uy, math.hypot(ux, uy)
+
+
+def _circle_ransac(data, residual_threshold, max_trials):
+    """``skimage.measure.ransac(data, CircleModel, min_samples=3, residual_threshold, max_trials,
+    rng=0)`` (skimage 0.26: the same random samples, the same trials and the same stopping rule,
+    the same model fitted through the inliers), with the fit of a trial that cannot change the
+    outcome left out.  A trial replaces the best one so far only with at least as many inliers.
+    The model fitted through its three points is the circle through them: its inliers lie within
+    ``residual_threshold`` + 0.01 px of the closed-form circle (:func:`_circumcircle`; the two
+    differ by rounding, many orders of magnitude less while the radius is at most 1,000 times
+    the sample's shortest side, else the trial is fitted), so where fewer points than the best's
+    inliers lie there, the trial is passed over without its fit and residuals (some 0.1 ms).
+    Returns (model, inliers) as ``ransac`` does."""
+    import warnings
+
+    from skimage.measure.fit import _dynamic_max_trials
+
+    rng = np.random.default_rng(0)
+    n = len(data)
+    x, y = data[:, 0], data[:, 1]
+    best_num, best_sum, best_inliers = 0, np.inf, []
+    idx = rng.choice(n, 3, replace=False)
+    trials = 0
+    while trials < max_trials:
+        trials += 1
+        sample = data[idx]
+        idx = rng.choice(n, 3, replace=False)
+        if best_num > 0:
+            circle = _circumcircle(sample)
+            a, b, c = sample
+            side = min(math.dist(a, b), math.dist(b, c), math.dist(a, c))
+            if circle is not None and circle[2] <= 1e3 * side:
+                near = np.abs(circle[2] - np.hypot(x - circle[0], y - circle[1])) < residual_threshold + 0.01
+                if np.count_nonzero(near) < best_num:
+                    continue
+        model = measure.CircleModel.from_estimate(sample)
+        if not model:
+            continue
+        residuals = np.abs(model.residuals(data))
+        inliers = residuals < residual_threshold
+        residuals_sum = residuals.dot(residuals)
+        count = np.count_nonzero(inliers)
+        if count > best_num or (count == best_num and residuals_sum < best_sum):
+            best_num, best_sum, best_inliers = count, residuals_sum, inliers
+            max_trials = min(max_trials, _dynamic_max_trials(best_num, n, 3, 1))
+            if best_sum <= 0:
+                break
+    if any(best_inliers):
+        return measure.CircleModel.from_estimate(data[best_inliers]), best_inliers
+    warnings.warn("No inliers found. Model not fitted")
+    return None, None
 
 
 def find_drum(gray, edges=None):
@@ -301,8 +395,7 @@ def find_drum(gray, edges=None):
         if near.sum() < 30:
             continue
         pts = np.column_stack([ec[near], er[near]]).astype(float)
-        model, _ = measure.ransac(pts, measure.CircleModel, min_samples=3, residual_threshold=1.5,
-                                  max_trials=200, rng=0)
+        model, _ = _circle_ransac(pts, 1.5, 200)
         if model is None:
             continue
         (x1, y1), r1 = model.center, float(model.radius)
@@ -360,8 +453,7 @@ def window_ellipse(edges, cx, cy, r):
     pts = pts[:: max(1, len(pts) // 4000)]
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")  # the library's deprecation notices for model.params
-        circle, on = measure.ransac(pts, measure.CircleModel, min_samples=3, residual_threshold=1.5,
-                                    max_trials=150, rng=0)
+        circle, on = _circle_ransac(pts, 1.5, 150)
         on_circle = int(on.sum()) if circle is not None else 0
         model, inl = measure.ransac(pts, _Ellipse, min_samples=5, residual_threshold=1.5, max_trials=150, rng=0)
         if model is None:

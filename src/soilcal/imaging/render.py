@@ -436,13 +436,22 @@ def render_tester_frame(seed, angle_deg, fill=0.35, s_amp=0.0, size=(600, 640), 
     n_s = -d - s_signed * L * (xi ** 3 - k * xi)
     half = rng.normal(0.0, 1.0, n_avg // 2)
     offs = np.concatenate([half, -half]) * jitter_px
-    cover, part = np.zeros((h, w)), np.empty((h, w))
-    for o in offs:  # cover += clip(0.5 + (n_s + o - nrm), 0, 1), in place
-        np.add(n_s, o, out=part)
-        part -= nrm
+    # cover = mean over the offsets of clip(0.5 + (n_s + o - nrm), 0, 1): a pixel more than
+    # 0.5 + max |o| (and a pixel's margin for rounding) above or below the surface is 0 or 1 for
+    # every offset, so its mean is exactly 0.0 or 1.0; only the band along the surface is summed,
+    # offset by offset in the same order as over the whole frame
+    gap = n_s - nrm
+    band = np.abs(gap) < 1.5 + np.abs(offs).max() if len(offs) else np.ones(gap.shape, bool)  # none: 0 / 0
+    cover = (gap > 0).astype(float)
+    ns_b, nrm_b = n_s[band], nrm[band]
+    acc, part = np.zeros(ns_b.size), np.empty(ns_b.size)
+    for o in offs:  # acc += clip(0.5 + (n_s + o - nrm), 0, 1), in place
+        np.add(ns_b, o, out=part)
+        part -= nrm_b
         part += 0.5
-        cover += np.clip(part, 0.0, 1.0, out=part)
-    cover /= len(offs)
+        acc += np.clip(part, 0.0, 1.0, out=part)
+    acc /= len(offs)
+    cover[band] = acc
     air, powder = (0.92, 0.22) if powder_dark else (0.12, 0.78)
     tex = 1.0 + 0.06 * _noise(rng, (h, w), 2.0)
     img = air + (powder * tex - air) * cover
@@ -452,13 +461,14 @@ def render_tester_frame(seed, angle_deg, fill=0.35, s_amp=0.0, size=(600, 640), 
     for _ in range(int(specks)):
         sr, sc, sz = rng.uniform(0, h), rng.uniform(0, w), rng.uniform(1.0, 3.0)
         img = img + (powder - air) * 0.6 * np.exp(-((rr - sr) ** 2 + (cc - sc) ** 2) / (2 * sz ** 2))
-    disc = np.clip(0.5 + (R - np.hypot(x, z)), 0.0, 1.0)
+    rad = np.hypot(x, z)
+    disc = np.clip(0.5 + (R - rad), 0.0, 1.0)
     if window == "crop":
         out = 0.06 if surround is None else surround
         img = out + (img - out) * disc
     elif window == "rim":
         out = air if surround is None else surround
-        ring = np.clip(0.5 + (R + 4.0 - np.hypot(x, z)), 0.0, 1.0) - disc
+        ring = np.clip(0.5 + (R + 4.0 - rad), 0.0, 1.0) - disc
         rim = 0.15 if powder_dark else 0.85  # a dark rim on the backlight, a bright one on a dark ground
         img = img * disc + (1.0 - disc) * out + ring * (rim - out)
     elif window == "plain":
