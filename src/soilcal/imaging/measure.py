@@ -443,6 +443,11 @@ NONE_FOUND = "none found"
 CUT = "the whole heap inside the frame"
 
 
+#: up to this many components on the plate strip have their areas counted one by one
+#: (:func:`_components_on_plate`); more are counted by one pass over all the labels
+_COUNT_ALONE = 8
+
+
 def _components_on_plate(path, binary, slope, intercept, kind):
     h, w = binary.shape
     if not (math.isfinite(slope) and math.isfinite(intercept)):
@@ -460,12 +465,24 @@ def _components_on_plate(path, binary, slope, intercept, kind):
     rr = np.arange(top)[:, None]
     above = binary[:top] & (rr < plate_rows - 1)
     lab = measure.label(above)
-    touching = np.unique(lab[(rr > plate_rows - 8) & above])  # ``above`` holds rr < plate_rows - 1
+    # the components on the strip plate_rows - 8 < row < plate_rows - 1 (and row < top): its at
+    # most 7 rows of each column read by index, not a mask over every row above the line; the
+    # bounds are the first and last whole rows inside the open interval of the same floats
+    # (row > x from floor(x) + 1 on, row < x up to ceil(x) - 1), a label > 0 is ``above``
+    lo = np.clip(np.floor(plate_rows[0] - 8) + 1, 0, top).astype(np.intp)
+    hi = np.clip(np.ceil(plate_rows[0] - 1), 0, top).astype(np.intp)
+    strip_rows = lo[:, None] + np.arange(7)[None, :]
+    on_strip = strip_rows < hi[:, None]
+    touching = np.unique(lab[strip_rows[on_strip], np.nonzero(on_strip)[0]])
     touching = touching[touching > 0]
-    # each component's area (pixels) by one count of the labels, not a region object per
-    # component: only the largest one's extent is wanted
-    area = np.bincount(lab.ravel())
-    cands = sorted((t for t in touching if area[t] > 0.004 * h * w), key=lambda t: -area[t])
+    # the areas (pixels) of the components touching the strip only, not a region object per
+    # component: each counted alone where they are few, else one count of all the labels
+    if touching.size <= _COUNT_ALONE:
+        area = {int(t): int(np.count_nonzero(lab == t)) for t in touching}
+    else:
+        counts = np.bincount(lab.ravel())
+        area = {int(t): int(counts[t]) for t in touching}
+    cands = sorted((t for t in area if area[t] > 0.004 * h * w), key=lambda t: -area[t])
     if not cands:
         raise InputError(path, "image", f"one {kind} standing on the plate", NONE_FOUND)
     if len(cands) > 1 and area[cands[1]] > 0.25 * area[cands[0]]:
