@@ -1884,17 +1884,26 @@ def hough_peaks(hspace, angles, dists, num_peaks, min_distance, threshold, min_a
     coords = np.round(np.column_stack([cy / count, cx / count])[order]).astype(int)
     ys, xs = np.mgrid[-min_distance:min_distance + 1, -min_angle:min_angle + 1]
     peaks, ypk, xpk = [], [], []
-    for y, x in coords:
+    for y, x in coords.tolist():  # Python ints: the loop runs once per connected maximum
         accum = img_max[y - r0, x - c0]
         if accum > threshold:
-            yn, xn = y + ys, x + xs
-            inside = (yn > 0) & (yn < rows)  # as skimage: no reflection in distance (nor its bin 0)
-            yn, xn = yn[inside], xn[inside]
-            low, high = xn < 0, xn >= cols  # angles wrap, the distance reflected
-            yn[low], xn[low] = rows - yn[low], xn[low] + cols
-            yn[high], xn[high] = rows - yn[high], xn[high] - cols
-            box = (yn >= r0) & (yn < r1) & (xn >= c0) & (xn < c1)
-            img_max[yn[box] - r0, xn[box] - c0] = 0
+            if x - min_angle >= 0 and x + min_angle < cols:
+                # no angle wraps: the neighbourhood's bins (distance bins 1 to rows - 1, in the
+                # box) are one rectangle, set to 0 as one slice (a dense photo's accumulator has
+                # thousands of peaks above the threshold, each suppressing its neighbourhood)
+                ya, yb = max(y - min_distance, 1, r0), min(y + min_distance + 1, rows, r1)
+                xa, xb = max(x - min_angle, c0), min(x + min_angle + 1, c1)
+                if ya < yb and xa < xb:
+                    img_max[ya - r0:yb - r0, xa - c0:xb - c0] = 0
+            else:
+                yn, xn = y + ys, x + xs
+                inside = (yn > 0) & (yn < rows)  # as skimage: no reflection in distance (nor its bin 0)
+                yn, xn = yn[inside], xn[inside]
+                low, high = xn < 0, xn >= cols  # angles wrap, the distance reflected
+                yn[low], xn[low] = rows - yn[low], xn[low] + cols
+                yn[high], xn[high] = rows - yn[high], xn[high] - cols
+                box = (yn >= r0) & (yn < r1) & (xn >= c0) & (xn < c1)
+                img_max[yn[box] - r0, xn[box] - c0] = 0
             peaks.append(accum)
             ypk.append(y)
             xpk.append(x)
