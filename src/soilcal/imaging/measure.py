@@ -443,6 +443,11 @@ NONE_FOUND = "none found"
 CUT = "the whole heap inside the frame"
 
 
+#: up to this many components on the plate strip have their areas counted one by one
+#: (:func:`_components_on_plate`); more are counted by one pass over all the labels
+_COUNT_ALONE = 8
+
+
 def _components_on_plate(path, binary, slope, intercept, kind):
     h, w = binary.shape
     if not (math.isfinite(slope) and math.isfinite(intercept)):
@@ -460,12 +465,24 @@ def _components_on_plate(path, binary, slope, intercept, kind):
     rr = np.arange(top)[:, None]
     above = binary[:top] & (rr < plate_rows - 1)
     lab = measure.label(above)
-    touching = np.unique(lab[(rr > plate_rows - 8) & above])  # ``above`` holds rr < plate_rows - 1
+    # the components on the strip plate_rows - 8 < row < plate_rows - 1 (and row < top): its at
+    # most 7 rows of each column read by index, not a mask over every row above the line; the
+    # bounds are the first and last whole rows inside the open interval of the same floats
+    # (row > x from floor(x) + 1 on, row < x up to ceil(x) - 1), a label > 0 is ``above``
+    lo = np.clip(np.floor(plate_rows[0] - 8) + 1, 0, top).astype(np.intp)
+    hi = np.clip(np.ceil(plate_rows[0] - 1), 0, top).astype(np.intp)
+    strip_rows = lo[:, None] + np.arange(7)[None, :]
+    on_strip = strip_rows < hi[:, None]
+    touching = np.unique(lab[strip_rows[on_strip], np.nonzero(on_strip)[0]])
     touching = touching[touching > 0]
-    # each component's area (pixels) by one count of the labels, not a region object per
-    # component: only the largest one's extent is wanted
-    area = np.bincount(lab.ravel())
-    cands = sorted((t for t in touching if area[t] > 0.004 * h * w), key=lambda t: -area[t])
+    # the areas (pixels) of the components touching the strip only, not a region object per
+    # component: each counted alone where they are few, else one count of all the labels
+    if touching.size <= _COUNT_ALONE:
+        area = {int(t): int(np.count_nonzero(lab == t)) for t in touching}
+    else:
+        counts = np.bincount(lab.ravel())
+        area = {int(t): int(counts[t]) for t in touching}
+    cands = sorted((t for t in area if area[t] > 0.004 * h * w), key=lambda t: -area[t])
     if not cands:
         raise InputError(path, "image", f"one {kind} standing on the plate", NONE_FOUND)
     if len(cands) > 1 and area[cands[1]] > 0.25 * area[cands[0]]:
@@ -1867,17 +1884,26 @@ def hough_peaks(hspace, angles, dists, num_peaks, min_distance, threshold, min_a
     coords = np.round(np.column_stack([cy / count, cx / count])[order]).astype(int)
     ys, xs = np.mgrid[-min_distance:min_distance + 1, -min_angle:min_angle + 1]
     peaks, ypk, xpk = [], [], []
-    for y, x in coords:
+    for y, x in coords.tolist():  # Python ints: the loop runs once per connected maximum
         accum = img_max[y - r0, x - c0]
         if accum > threshold:
-            yn, xn = y + ys, x + xs
-            inside = (yn > 0) & (yn < rows)  # as skimage: no reflection in distance (nor its bin 0)
-            yn, xn = yn[inside], xn[inside]
-            low, high = xn < 0, xn >= cols  # angles wrap, the distance reflected
-            yn[low], xn[low] = rows - yn[low], xn[low] + cols
-            yn[high], xn[high] = rows - yn[high], xn[high] - cols
-            box = (yn >= r0) & (yn < r1) & (xn >= c0) & (xn < c1)
-            img_max[yn[box] - r0, xn[box] - c0] = 0
+            if x - min_angle >= 0 and x + min_angle < cols:
+                # no angle wraps: the neighbourhood's bins (distance bins 1 to rows - 1, in the
+                # box) are one rectangle, set to 0 as one slice (a dense photo's accumulator has
+                # thousands of peaks above the threshold, each suppressing its neighbourhood)
+                ya, yb = max(y - min_distance, 1, r0), min(y + min_distance + 1, rows, r1)
+                xa, xb = max(x - min_angle, c0), min(x + min_angle + 1, c1)
+                if ya < yb and xa < xb:
+                    img_max[ya - r0:yb - r0, xa - c0:xb - c0] = 0
+            else:
+                yn, xn = y + ys, x + xs
+                inside = (yn > 0) & (yn < rows)  # as skimage: no reflection in distance (nor its bin 0)
+                yn, xn = yn[inside], xn[inside]
+                low, high = xn < 0, xn >= cols  # angles wrap, the distance reflected
+                yn[low], xn[low] = rows - yn[low], xn[low] + cols
+                yn[high], xn[high] = rows - yn[high], xn[high] - cols
+                box = (yn >= r0) & (yn < r1) & (xn >= c0) & (xn < c1)
+                img_max[yn[box] - r0, xn[box] - c0] = 0
             peaks.append(accum)
             ypk.append(y)
             xpk.append(x)
