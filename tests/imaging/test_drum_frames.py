@@ -405,39 +405,6 @@ def test_drum_circle_peaks_are_skimages(tmp_path):
             np.testing.assert_array_equal(a, b)
 
 
-def test_drum_circle_ransac_is_skimages():
-    # the rim's RANSAC passes over the trials that cannot beat the best so far without fitting
-    # them; its circles and inliers are those of skimage's ransac, on edge pixels of circles among
-    # outliers, rounded or not, on points near a line and on repeated points
-    import warnings
-
-    from skimage import measure
-
-    rng = np.random.default_rng(1)
-    for k in range(12):
-        m = int(rng.integers(5, 600))
-        t = rng.uniform(0, 2 * np.pi, m)
-        pts = rng.uniform(0, 300, 2) + rng.uniform(5, 300) * np.column_stack([np.cos(t), np.sin(t)])
-        out = rng.random(m) < rng.uniform(0, 0.9)
-        pts[out] = rng.uniform(0, 400, (out.sum(), 2))
-        pts += rng.normal(0, rng.uniform(0, 2), pts.shape)
-        pts = np.round(pts) if k % 2 else pts
-        if k % 5 == 0:
-            pts[:, 1] = np.round(0.3 * pts[:, 0] + rng.normal(0, 0.5, m))  # near a line
-        if k % 7 == 0:
-            pts = np.round(pts / 4) * 4  # repeated points
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore")
-            want, want_in = measure.ransac(pts, measure.CircleModel, min_samples=3, residual_threshold=1.5,
-                                           max_trials=200, rng=0)
-            got, got_in = drum._circle_ransac(pts, 1.5, 200)
-        assert (want is None) == (got is None), k
-        if want is not None:
-            np.testing.assert_array_equal(got.center, want.center)
-            assert got.radius == want.radius
-            np.testing.assert_array_equal(got_in, want_in)
-
-
 @pytest.mark.parametrize("roll", [0.0, 10.0, -7.0])
 def test_rendered_drum_truth_gives_the_drum_in_the_photo(roll):
     # the renderer's truth places the drum in the photo (turned with the camera's roll and

@@ -313,69 +313,6 @@ def _circle_peaks(hspaces, radii, dist, total):
     return kept(found)
 
 
-def _circumcircle(p):
-    """(column, row, radius) of the circle through the three points ``p`` ((3, 2)), closed form,
-    or None for three points on a line."""
-    (ax, ay), (bx, by), (qx, qy) = p[0], p[1] - p[0], p[2] - p[0]
-    d = 2.0 * (bx * qy - by * qx)
-    if d == 0.0:
-        return None
-    b2, q2 = bx * bx + by * by, qx * qx + qy * qy
-    ux, uy = (qy * b2 - by * q2) / d, (bx * q2 - qx * b2) / d
-    return ax + ux, ay + uy, math.hypot(ux, uy)
-
-
-def _circle_ransac(data, residual_threshold, max_trials):
-    """``skimage.measure.ransac(data, CircleModel, min_samples=3, residual_threshold, max_trials,
-    rng=0)`` (skimage 0.26: the same random samples, the same trials and the same stopping rule,
-    the same model fitted through the inliers), with the fit of a trial that cannot change the
-    outcome left out.  A trial replaces the best one so far only with at least as many inliers.
-    The model fitted through its three points is the circle through them: its inliers lie within
-    ``residual_threshold`` + 0.01 px of the closed-form circle (:func:`_circumcircle`; the two
-    differ by rounding, many orders of magnitude less while the radius is at most 1,000 times
-    the sample's shortest side, else the trial is fitted), so where fewer points than the best's
-    inliers lie there, the trial is passed over without its fit and residuals (some 0.1 ms).
-    Returns (model, inliers) as ``ransac`` does."""
-    import warnings
-
-    from skimage.measure.fit import _dynamic_max_trials
-
-    rng = np.random.default_rng(0)
-    n = len(data)
-    x, y = data[:, 0], data[:, 1]
-    best_num, best_sum, best_inliers = 0, np.inf, []
-    idx = rng.choice(n, 3, replace=False)
-    trials = 0
-    while trials < max_trials:
-        trials += 1
-        sample = data[idx]
-        idx = rng.choice(n, 3, replace=False)
-        if best_num > 0:
-            circle = _circumcircle(sample)
-            a, b, c = sample
-            side = min(math.dist(a, b), math.dist(b, c), math.dist(a, c))
-            if circle is not None and circle[2] <= 1e3 * side:
-                near = np.abs(circle[2] - np.hypot(x - circle[0], y - circle[1])) < residual_threshold + 0.01
-                if np.count_nonzero(near) < best_num:
-                    continue
-        model = measure.CircleModel.from_estimate(sample)
-        if not model:
-            continue
-        residuals = np.abs(model.residuals(data))
-        inliers = residuals < residual_threshold
-        residuals_sum = residuals.dot(residuals)
-        count = np.count_nonzero(inliers)
-        if count > best_num or (count == best_num and residuals_sum < best_sum):
-            best_num, best_sum, best_inliers = count, residuals_sum, inliers
-            max_trials = min(max_trials, _dynamic_max_trials(best_num, n, 3, 1))
-            if best_sum <= 0:
-                break
-    if any(best_inliers):
-        return measure.CircleModel.from_estimate(data[best_inliers]), best_inliers
-    warnings.warn("No inliers found. Model not fitted")
-    return None, None
-
-
 def find_drum(gray, edges=None):
     """(cx, cy, radius, reference) of the drum: its rim circle, else the image border.
     ``edges``: :func:`_edges` of ``gray``, where the caller has them already."""
@@ -395,7 +332,8 @@ def find_drum(gray, edges=None):
         if near.sum() < 30:
             continue
         pts = np.column_stack([ec[near], er[near]]).astype(float)
-        model, _ = _circle_ransac(pts, 1.5, 200)
+        model, _ = measure.ransac(pts, measure.CircleModel, min_samples=3, residual_threshold=1.5,
+                                  max_trials=200, rng=0)
         if model is None:
             continue
         (x1, y1), r1 = model.center, float(model.radius)
@@ -453,7 +391,8 @@ def window_ellipse(edges, cx, cy, r):
     pts = pts[:: max(1, len(pts) // 4000)]
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")  # the library's deprecation notices for model.params
-        circle, on = _circle_ransac(pts, 1.5, 150)
+        circle, on = measure.ransac(pts, measure.CircleModel, min_samples=3, residual_threshold=1.5,
+                                    max_trials=150, rng=0)
         on_circle = int(on.sum()) if circle is not None else 0
         model, inl = measure.ransac(pts, _Ellipse, min_samples=5, residual_threshold=1.5, max_trials=150, rng=0)
         if model is None:
