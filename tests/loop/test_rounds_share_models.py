@@ -9,8 +9,10 @@ import dataclasses
 
 import numpy as np
 import pandas as pd
+import pytest
 
 from soilcal.loop import select as sl
+from soilcal.loop.core import _Rounds
 
 from test_few_conditions import _named_effect
 
@@ -59,3 +61,15 @@ def test_a_selection_sharing_the_first_rounds_models_is_the_one_of_its_own(monke
     for f in ("chosen", "final", "forward_chosen", "uniform", "uniform_s", "uniform_ci", "beside_uniform", "with_scale",
               "judged", "held_back"):
         assert _same(getattr(both, f), getattr(alone, f)), f
+
+
+def test_rounds_bound_to_one_residual_table_refuse_another():
+    # the rounds' fits belong to the residual table they were made on: another table is refused
+    # rather than given the first one's fits
+    a = pd.DataFrame({"measured": [1.0]})
+    b = a.copy()
+    rounds = _Rounds()
+    rounds.check(a)
+    rounds.check(a)
+    with pytest.raises(ValueError, match="another table"):
+        rounds.check(b)

@@ -267,7 +267,8 @@ def _circle_peaks(hspaces, radii, dist, total):
     and only for the radii whose space can hold one of the peaks kept.
 
     The peaks kept are the strongest ``total`` taken greedily, strongest first, each not within
-    ``dist`` (in x and in y) of one kept before it; a peak weaker than the last one kept comes
+    ``dist`` (in x and in y) of one kept before it (at ``dist`` 1 skimage keeps the strongest
+    ``total`` without that suppression, and so does this); a peak weaker than the last one kept comes
     after every kept one in that order and changes nothing.  A radius's peaks are at most its
     space's maximum, so the spaces are searched in the order of their maxima, strongest first,
     until the peaks found keep ``total`` of which the weakest is stronger than every space not
@@ -289,8 +290,8 @@ def _circle_peaks(hspaces, radii, dist, total):
         r, cx, cy, accum = np.array(r), np.array(cx), np.array(cy), np.array(accum)
         s = np.argsort(accum)
         accum, cx, cy, r = accum[s][::-1], cx[s][::-1], cy[s][::-1], r[s][::-1]
-        if len(accum) == 0:
-            return accum, cx, cy, r
+        if len(accum) == 0 or dist == 1:  # skimage keeps the strongest ``total`` unsuppressed at 1
+            return accum[:total], cx[:total], cy[:total], r[:total]
         keep = label_distant_points(cx, cy, dist, dist, total)
         return accum[keep], cx[keep], cy[keep], r[keep]
 
@@ -334,7 +335,7 @@ def find_drum(gray, edges=None):
         pts = np.column_stack([ec[near], er[near]]).astype(float)
         model, _ = measure.ransac(pts, measure.CircleModel, min_samples=3, residual_threshold=1.5,
                                   max_trials=200, rng=0)
-        if model is None:
+        if not model:  # None (no inliers) or the library's failed estimate of the final fit
             continue
         (x1, y1), r1 = model.center, float(model.radius)
         if abs(r1 - r) > 0.1 * r or math.hypot(x1 - x, y1 - y) > 0.1 * r:
@@ -393,9 +394,9 @@ def window_ellipse(edges, cx, cy, r):
         warnings.simplefilter("ignore")  # the library's deprecation notices for model.params
         circle, on = measure.ransac(pts, measure.CircleModel, min_samples=3, residual_threshold=1.5,
                                     max_trials=150, rng=0)
-        on_circle = int(on.sum()) if circle is not None else 0
+        on_circle = int(on.sum()) if circle else 0  # circle: None or a failed estimate when no circle fits
         model, inl = measure.ransac(pts, _Ellipse, min_samples=5, residual_threshold=1.5, max_trials=150, rng=0)
-        if model is None:
+        if not model:
             return None
         xc, yc, a, b, th = (float(x) for x in model.params)
     # an ellipse clearly holding more of the rim than the circle is the window wherever its centre:

@@ -961,11 +961,22 @@ class _Rounds:
     table, runs and settings): the selection by the tuple of candidates (their
     select.EffectData by name, those that could not be fitted with why, the Selection), each
     candidate's select.EffectData (or why it could not be fitted), and the models the
-    selections scored (``select.forward``'s ``shared``)."""
+    selections scored (``select.forward``'s ``shared``).  Kept for one residual table only
+    (``table``, the first one analysed): analysing another table with the same rounds is refused,
+    since its candidates' fits would be those of the first table."""
 
     selections: dict = dataclasses.field(default_factory=dict)
     effect_data: dict = dataclasses.field(default_factory=dict)
     models: dict = dataclasses.field(default_factory=dict)
+    table: object = None
+
+    def check(self, res) -> None:
+        """Bind the rounds to the residual table ``res`` or check they are bound to it."""
+        if self.table is None:
+            self.table = res
+        elif self.table is not res:
+            raise ValueError("the loop's rounds share their fits within one residual table; "
+                             "another table was given")
 
 
 def analyse(soil: str, res: pd.DataFrame, diag: pd.DataFrame, cands: list, effect_runs: dict,
@@ -1021,6 +1032,7 @@ def _analyse(soil: str, res: pd.DataFrame, diag: pd.DataFrame, cands: list, effe
     unfit = {}
     if n >= 3 and cands:
         rounds = selections if selections is not None else _Rounds()
+        rounds.check(res)
         if tuple(cands) in rounds.selections:
             data, unfit, sel = rounds.selections[tuple(cands)]
         else:

@@ -1045,7 +1045,9 @@ def forward(obs: pd.DataFrame, y0: np.ndarray, data: dict, fold_by: str | None =
 
     # one Model per set of effects: each is fitted and cross-validated once (full_fit, cross_validate)
     models = shared.setdefault("models", {})
-    bias = shared.setdefault("bias", scale_data())
+    if "bias" not in shared:
+        shared["bias"] = scale_data()
+    bias = shared["bias"]
 
     def model(names, with_bias=False):
         effects = [data[c] for c in names] + ([bias] if with_bias else [])
