@@ -77,6 +77,16 @@ def test_a_design_job_loads_no_response_surface_fit():
     assert _loaded(code, ["statsmodels", "scipy.stats", "scipy.optimize", "matplotlib"]) == []
 
 
+@pytest.mark.parametrize("script", ["regression", "optimum", "figures", "errata"])
+def test_a_job_reading_its_stage_table_loads_no_config_schema(script):
+    # the regression, optimum and figure jobs read their stage's response table through the
+    # published tables' reader (soilcal.config.tables): the soil's config loader, its schema
+    # checker and the YAML parser stay unloaded (the job gets its stage as plain data)
+    code = (_script_imports(script) + "\nfrom soilcal.chain.files import _table\n"
+            "assert len(_table('resources/published/cinnamon-soil/bbd.csv'))")
+    assert _loaded(code, ["soilcal.config.load", "jsonschema", "yaml"]) == []
+
+
 @pytest.mark.parametrize("script", ["loop_diagnose", "loop_more", "loop_select"])
 def test_a_loop_job_loads_no_root_finder_before_it_fits(script):
     assert _loaded(_script_imports(script), ["scipy.optimize", "scipy.stats", "statsmodels", "matplotlib"]) == []

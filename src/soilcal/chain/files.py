@@ -20,7 +20,7 @@ from soilcal.atomic import write_text
 
 
 def _table(path) -> pd.DataFrame | None:
-    from soilcal.config.load import read_table
+    from soilcal.config.tables import read_table
 
     return None if path in (None, "", []) else read_table(Path(path))
 
@@ -301,7 +301,7 @@ def fitted_models(stage: dict, table: pd.DataFrame, which: str = "reduced") -> d
 def write_errata(soil: dict, published_dir, stage_dirs: dict[str, str], out) -> pd.DataFrame:
     """Collect the stage outputs of one soil and write its errata table."""
     from soilcal.chain import errata as errata_mod
-    from soilcal.config.load import read_table
+    from soilcal.config.tables import read_table
 
     stages = {}
     for st in soil["stages"]:
