@@ -208,7 +208,7 @@ def write_figures(kind: str, stage: dict, table_path, targets: dict, outdir, par
     Pareto chart (same symbols, same parameters), the paper's path responses on the
     steepest-ascent plot (the same path: same parameters, same levels).
     """
-    from soilcal import plots, rsm
+    from soilcal import plots
     from soilcal.chain.stage import fit_stage, response_columns, stage_data
 
     outdir = Path(outdir)
@@ -235,6 +235,10 @@ def write_figures(kind: str, stage: dict, table_path, targets: dict, outdir, par
             written += list(plots.steepest_ascent(df, list(stage["factors"]), rid, tgt, outdir / rid,
                                                   response_label=rlab, reference=ref, trend=trend))
         return written
+    # the fits' package (statsmodels, about a second of imports) only where a figure fits: a
+    # steepest-ascent path's figure draws its runs (and their trend) without it
+    from soilcal import rsm
+
     data = stage_data(stage, table)
     syms = list(stage["factors"])
     labels = _labels(stage, parameters or {})
