@@ -77,6 +77,43 @@ def test_a_design_job_loads_no_response_surface_fit():
     assert _loaded(code, ["statsmodels", "scipy.stats", "scipy.optimize", "matplotlib"]) == []
 
 
+@pytest.mark.parametrize("script", ["regression", "optimum", "figures", "errata"])
+def test_a_job_reading_its_stage_table_loads_no_config_schema(script):
+    # the regression, optimum and figure jobs read their stage's response table through the
+    # published tables' reader (soilcal.config.tables): the soil's config loader, its schema
+    # checker and the YAML parser stay unloaded (the job gets its stage as plain data)
+    code = (_script_imports(script) + "\nfrom soilcal.chain.files import _table\n"
+            "assert len(_table('resources/published/cinnamon-soil/bbd.csv'))")
+    assert _loaded(code, ["soilcal.config.load", "jsonschema", "yaml"]) == []
+
+
+def test_a_paths_optimum_and_figure_jobs_load_no_surface_fit_or_optimiser():
+    # a steepest-ascent path's optimum job chooses its step and its figure job draws its runs
+    # (the cinnamon soil's printed path, as the published replay runs it): neither loads the
+    # response-surface fits, statsmodels' whole model catalogue or the optimisers
+    code = (_script_imports("optimum") + "\n" + _script_imports("figures") + "\n"
+            "import tempfile, yaml\nfrom pathlib import Path\nfrom soilcal.chain import derive\n"
+            "from soilcal.chain.files import write_figures\n"
+            "soil = yaml.safe_load(open('config/soils/cinnamon-soil.yaml'))\n"
+            "st = derive.published_stage({'stages': soil['stages']}, 'steepest')\n"
+            "table = 'resources/published/cinnamon-soil/steepest.csv'\n"
+            "out = Path(tempfile.mkdtemp())\n"
+            "write_optimum(st, table, soil['targets'], soil['seed'], out / 'optimum.csv')\n"
+            "assert (out / 'optimum.csv').stat().st_size\n"
+            "assert write_figures('steepest', st, table, soil['targets'], out / 'figures', soil['parameters'])\n")
+    assert _loaded(code, ["soilcal.rsm", "statsmodels.api", "scipy.optimize", "soilcal.optimise"]) == []
+
+
+def test_a_paths_trend_is_fitted_without_statsmodels_whole_catalogue():
+    # the trend through a path's runs (the DEM path's choice of step, its optimum and figure
+    # jobs) is one OLS fit: statsmodels' regression module, not statsmodels.api
+    code = ("from soilcal.doe.steepest import path_trend\n"
+            "t = path_trend([1, 2, 3, 4, 5, 6], [20.0, 22.5, 24.1, 27.0, 28.2, 31.0])\n"
+            "assert t['degree'] == 1 and t['n'] == 6\n")
+    assert _loaded(code, ["statsmodels.regression.linear_model", "statsmodels.api"]) == [
+        "statsmodels.regression.linear_model"]
+
+
 @pytest.mark.parametrize("script", ["loop_diagnose", "loop_more", "loop_select"])
 def test_a_loop_job_loads_no_root_finder_before_it_fits(script):
     assert _loaded(_script_imports(script), ["scipy.optimize", "scipy.stats", "statsmodels", "matplotlib"]) == []

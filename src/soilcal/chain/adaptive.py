@@ -45,7 +45,7 @@ import numpy as np
 import pandas as pd
 
 from soilcal.chain.targets import goal_has_value
-from soilcal.config.load import read_table
+from soilcal.config.tables import read_table
 from soilcal.doe import adaptive as ad
 from soilcal.doe.designs import actual_to_coded
 from soilcal.errors import InputError

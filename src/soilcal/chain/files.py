@@ -20,7 +20,7 @@ from soilcal.atomic import write_text
 
 
 def _table(path) -> pd.DataFrame | None:
-    from soilcal.config.load import read_table
+    from soilcal.config.tables import read_table
 
     return None if path in (None, "", []) else read_table(Path(path))
 
@@ -208,7 +208,7 @@ def write_figures(kind: str, stage: dict, table_path, targets: dict, outdir, par
     Pareto chart (same symbols, same parameters), the paper's path responses on the
     steepest-ascent plot (the same path: same parameters, same levels).
     """
-    from soilcal import plots, rsm
+    from soilcal import plots
     from soilcal.chain.stage import fit_stage, response_columns, stage_data
 
     outdir = Path(outdir)
@@ -235,6 +235,10 @@ def write_figures(kind: str, stage: dict, table_path, targets: dict, outdir, par
             written += list(plots.steepest_ascent(df, list(stage["factors"]), rid, tgt, outdir / rid,
                                                   response_label=rlab, reference=ref, trend=trend))
         return written
+    # the fits' package (statsmodels, about a second of imports) only where a figure fits: a
+    # steepest-ascent path's figure draws its runs (and their trend) without it
+    from soilcal import rsm
+
     data = stage_data(stage, table)
     syms = list(stage["factors"])
     labels = _labels(stage, parameters or {})
@@ -301,7 +305,7 @@ def fitted_models(stage: dict, table: pd.DataFrame, which: str = "reduced") -> d
 def write_errata(soil: dict, published_dir, stage_dirs: dict[str, str], out) -> pd.DataFrame:
     """Collect the stage outputs of one soil and write its errata table."""
     from soilcal.chain import errata as errata_mod
-    from soilcal.config.load import read_table
+    from soilcal.config.tables import read_table
 
     stages = {}
     for st in soil["stages"]:

@@ -341,7 +341,7 @@ def write_refined(stage_json, responses_csv, targets_csv, optimum_csv, run_paths
 
     from soilcal.chain.files import read_stage, read_targets, write_csv
     from soilcal.chain.stage import screening_ranges, unused_search_ranges
-    from soilcal.config.load import read_table
+    from soilcal.config.tables import read_table
 
     stage = read_stage(stage_json)
     runs = runs_by_case(run_paths, stage["id"])

@@ -432,17 +432,18 @@ def optimum_frames(stage: dict, table: pd.DataFrame, targets: dict, seed: int) -
     case and factor, the spread of the near-optimal sets and whether the data pin it down.
     The rows of the seeded searches carry the soil's ``seed`` (column ``seed``).
     """
-    from soilcal import optimise
-    from soilcal.optimise.desirability import search_ends
-    from soilcal.optimise.near_optimal import (NEAR_OPTIMAL_STARTS, calibrated_choice, identifiability,
-                                               near_optimal_sets)
-
     if stage["kind"] == "steepest_ascent":
         return {"optimum": _steepest_frame(stage, table, targets), "identifiability": None}
 
     opt = stage.get("optimise")
     if not opt:
         return {"optimum": pd.DataFrame(columns=["case", "method", "solution"]), "identifiability": None}
+    # the optimisers (scipy.optimize, about half a second of imports) only for a stage that has
+    # cases to optimise: a path's step is chosen without them
+    from soilcal import optimise
+    from soilcal.optimise.desirability import search_ends
+    from soilcal.optimise.near_optimal import (NEAR_OPTIMAL_STARTS, calibrated_choice, identifiability,
+                                               near_optimal_sets)
     fits = {sf.response: (sf.reduced if opt.get("model", "reduced") == "reduced" else sf.full)
             for sf in fit_stage(stage, table)}
     syms, low, high = bounds(stage)
