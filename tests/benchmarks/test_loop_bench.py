@@ -109,7 +109,7 @@ def test_a_rerun_campaign_leaves_no_table_of_the_earlier_run(bench, monkeypatch,
                                 diagnosis=table, selection=table, diagnosis_after=None, predictions=table)
     monkeypatch.setattr(cli, "dem_simulator", lambda threads: None)
     monkeypatch.setattr(cli, "condition_params", lambda params: {})
-    monkeypatch.setattr(bench, "_campaign", lambda tmp, n, seed, speeds: [])
+    monkeypatch.setattr(bench, "_campaign", lambda tmp, n, seed, speeds, responses: [])
     monkeypatch.setattr(synthesize, "synthesize", lambda *a, **k: table)
     monkeypatch.setattr(synthesize, "with_measured", lambda conds, t: conds)
     monkeypatch.setattr(core, "run_inprocess", lambda *a, **k: out)
