@@ -53,7 +53,21 @@ where the quick plate's force answers a change of friction most, ``loop.md``), o
 option existed (column ``speeds``, empty there).  Both map the same random draw, so the
 other covariates of a campaign are the same under either.  A campaign of one spacing does not
 replace the other's row, and the summary counts them apart (the case named with its spacing
-where a case has rows of both).  The page's header names the files of ``--rows-from`` and
+where a case has rows of both).
+
+``--responses``: the plate measures the DEM soil-bin campaign records, of
+``horizontal_force_N`` (the default, alone), ``vertical_force_N`` and ``resultant_angle_deg``
+(:data:`CAMPAIGN_RESPONSES`); the runs are the same (one run per seed gives every measure of a
+plate), the conditions too.  A DEM row records its campaign's measures (column ``responses``,
+``+``-joined; empty in rows written before it existed, which measured the horizontal force);
+a campaign of other measures does not replace the default campaign's row, its detail tables
+carry the measures in their names (``rate_friction_horizontal_vertical_*.csv``), and the
+summary counts it apart.  The horizontal force alone is the default because at the campaign's
+line plate (0.4 m/s, 30 mm) it carries rate_friction furthest above its seed scatter: per unit
+ln f, 3.6 seed SDs, against 2.1 for the vertical force and 1.8 for the resultant angle, whose
+seed deviations follow the horizontal force's (correlation +0.76 and +0.57); the diagnosis's
+mean of the two measures' relative residuals per test would carry 2.5
+(``benchmarks/loop_rate/``, ``loop.md``'s notes).  The page's header names the files of ``--rows-from`` and
 ``--out`` by their names (a ``--rows-from`` file with as many of its directories as tell it from
 another of the same name, ``rate/loop.csv``; a file given twice is refused), and the rows
 taken from each by engine, case and campaign.
