@@ -398,13 +398,24 @@ def _command_text(argv) -> str:
     return " ".join(out)
 
 
+def _campaign_text(r) -> str:
+    """How a DEM soil-bin row's campaign was drawn and what it measured, for the page's header:
+    `` (log speeds)``, with its measures where they are not the default's
+    (`` (log speeds; measuring horizontal_force_N, vertical_force_N)``); empty for other rows."""
+    parts = [f"{_speeds_text(r)} speeds"] if _speeds_text(r) else []
+    if _responses_text(r) and _responses_text(r) != "+".join(DEFAULT_RESPONSES):
+        parts.append("measuring " + _responses_text(r).replace("+", ", "))
+    return f" ({'; '.join(parts)})" if parts else ""
+
+
 def _merged_text(sources) -> str:
     """What a run took from other runs' tables (``--rows-from``), for the page's header: per
     file (its label, :func:`source_labels`) each row's engine, case and campaign, and a DEM
-    soil-bin row's speed spacing; ``sources``: (label, rows) pairs."""
+    soil-bin row's speed spacing and measures (:func:`_campaign_text`); ``sources``: (label,
+    rows) pairs."""
     parts = [f"{label}: " + (", ".join(
         f"{r['engine']} {r['case']}" + (f" campaign {r['seed']}" if r["engine"] == "dem" else f" seed {r['seed']}")
-        + (f" ({_speeds_text(r)} speeds)" if _speeds_text(r) else "") for r in rows) or "no rows")
+        + _campaign_text(r) for r in rows) or "no rows")
         for label, rows in sources]
     return "; rows taken from other runs: " + "; ".join(parts) if parts else ""
 

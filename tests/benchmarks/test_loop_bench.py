@@ -193,3 +193,10 @@ def test_a_campaign_of_other_measures_keeps_the_default_campaigns_tables(bench, 
     assert got["r"] == both and rows[0]["responses"] == "horizontal_force_N+vertical_force_N"
     assert (detail / "none_campaign1_horizontal_vertical_residuals.csv").exists()
     assert default.read_text() == "horizontal force\n"
+
+
+def test_header_names_a_merged_campaigns_measures(bench):
+    both = dict(_row("rate_friction", 1, "log"), responses="horizontal_force_N+vertical_force_N")
+    assert bench._merged_text([("hv/loop.csv", [both]), ("h/loop.csv", [_row("rate_friction", 1, "log")])]) == (
+        "; rows taken from other runs: hv/loop.csv: dem rate_friction campaign 1 (log speeds; measuring "
+        "horizontal_force_N, vertical_force_N); h/loop.csv: dem rate_friction campaign 1 (log speeds)")
