@@ -53,7 +53,21 @@ where the quick plate's force answers a change of friction most, ``loop.md``), o
 option existed (column ``speeds``, empty there).  Both map the same random draw, so the
 other covariates of a campaign are the same under either.  A campaign of one spacing does not
 replace the other's row, and the summary counts them apart (the case named with its spacing
-where a case has rows of both).  The page's header names the files of ``--rows-from`` and
+where a case has rows of both).
+
+``--responses``: the plate measures the DEM soil-bin campaign records, of
+``horizontal_force_N`` (the default, alone), ``vertical_force_N`` and ``resultant_angle_deg``
+(:data:`CAMPAIGN_RESPONSES`); the runs are the same (one run per seed gives every measure of a
+plate), the conditions too.  A DEM row records its campaign's measures (column ``responses``,
+``+``-joined; empty in rows written before it existed, which measured the horizontal force);
+a campaign of other measures does not replace the default campaign's row, its detail tables
+carry the measures in their names (``rate_friction_horizontal_vertical_*.csv``), and the
+summary counts it apart.  The horizontal force alone is the default because at the campaign's
+line plate (0.4 m/s, 30 mm) it carries rate_friction furthest above its seed scatter: per unit
+ln f, 3.6 seed SDs, against 2.1 for the vertical force and 1.8 for the resultant angle, whose
+seed deviations follow the horizontal force's (correlation +0.76 and +0.57); the diagnosis's
+mean of the two measures' relative residuals per test would carry 2.5
+(``benchmarks/loop_rate/``, ``loop.md``'s notes).  The page's header names the files of ``--rows-from`` and
 ``--out`` by their names (a ``--rows-from`` file with as many of its directories as tell it from
 another of the same name, ``rate/loop.csv``; a file given twice is refused), and the rows
 taken from each by engine, case and campaign.
@@ -78,7 +92,7 @@ HERE = Path(__file__).resolve().parent
 ROOT = HERE.parent
 FIELDS = ["engine", "case", "seed", "hidden", "disturbance", "chosen", "correct", "false_attribution",
           "parameter_error_percent", "rmse_before_percent", "rmse_after_percent", "error_reduction_percent",
-          "verdict", "dem_runs", "wall_s", "commit", "design_points", "parameters", "ci95", "speeds"]
+          "verdict", "dem_runs", "wall_s", "commit", "design_points", "parameters", "ci95", "speeds", "responses"]
 
 STANDIN_CASES = {
     "rate_friction": ({"rate_friction": {"beta": 0.2}}, {}),
@@ -188,17 +202,36 @@ def campaign_speed(rng, spacing: str) -> float:
     raise ValueError(f"speed spacing {spacing!r} is not one of {', '.join(SPEED_SPACINGS)}")
 
 
-def _campaign(tmp: Path, n: int, seed: int, speeds: str = "log"):
+#: the plate measures the DEM campaign can record (``--responses``): its table's value and SD
+#: columns and the unit; the table always holds the two forces' columns, the angle's only
+#: where it is measured (so that a horizontal-force campaign's table is the one it always was)
+CAMPAIGN_RESPONSES = {
+    "horizontal_force_N": ("horizontal_N", "horizontal_sd_N", "N"),
+    "vertical_force_N": ("vertical_N", "vertical_sd_N", "N"),
+    "resultant_angle_deg": ("angle_deg", "angle_sd_deg", "deg"),
+}
+DEFAULT_RESPONSES = ("horizontal_force_N",)
+
+
+def _campaign(tmp: Path, n: int, seed: int, speeds: str = "log", responses=DEFAULT_RESPONSES):
     """A copy of the cinnamon soil whose measurements block is a soil-bin campaign of the
-    bulldozing plates (module docstring; ``speeds``: their spacing, :func:`campaign_speed`);
-    returns its conditions."""
+    bulldozing plates (module docstring; ``speeds``: their spacing, :func:`campaign_speed`;
+    ``responses``: the measures of :data:`CAMPAIGN_RESPONSES` the table records); returns its
+    conditions.  The measures do not change the conditions (the same random draws)."""
+    unknown = [m for m in responses if m not in CAMPAIGN_RESPONSES]
+    if unknown or not responses:
+        raise ValueError(f"campaign responses {list(responses)!r}: expected one or more of "
+                         f"{', '.join(CAMPAIGN_RESPONSES)}")
+    angle = "resultant_angle_deg" in responses
     rng = np.random.default_rng(seed)
     plates = ["line", "arc", "parabola"]
     lines = ["directrix,speed_m_s,depth_mm,position_m,day,moisture_pct,horizontal_N,horizontal_sd_N,vertical_N,"
-             "vertical_sd_N,repeats"]
+             "vertical_sd_N," + ("angle_deg,angle_sd_deg," if angle else "") + "repeats"]
     for i in range(n):
         lines.append(f"{plates[i % 3]},{campaign_speed(rng, speeds):.3f},{rng.uniform(20, 40):.1f},{rng.uniform(0, 40):.2f},"
-                     f"d{i * 4 // n},{rng.uniform(8, 20):.1f},1,,1,,3")
+                     f"d{i * 4 // n},{rng.uniform(8, 20):.1f},1,,1,," + ("1,," if angle else "") + "3")
+    used = [c for m in responses for c in CAMPAIGN_RESPONSES[m][:2]]
+    columns = [c for m in CAMPAIGN_RESPONSES if m != "resultant_angle_deg" or angle for c in CAMPAIGN_RESPONSES[m][:2]]
     return _with_campaign(tmp, "cinnamon-soil", lines, {
         "source": "synthetic soil-bin campaign (benchmarks/loop.py)",
         "scenario": "bulldozing", "setup": "plate-line",
@@ -210,8 +243,9 @@ def _campaign(tmp: Path, n: int, seed: int, speeds: str = "log"):
             "day": {"ignore": True, "quantity": "day"},
             "moisture_pct": {"ignore": True, "quantity": "moisture_content", "unit": "%"}},
         "responses": [
-            {"measure": "horizontal_force_N", "value": "horizontal_N", "sd": "horizontal_sd_N", "n": "repeats", "unit": "N"}],
-        "ignore_columns": ["vertical_N", "vertical_sd_N"],
+            {"measure": m, "value": CAMPAIGN_RESPONSES[m][0], "sd": CAMPAIGN_RESPONSES[m][1], "n": "repeats",
+             "unit": CAMPAIGN_RESPONSES[m][2]} for m in responses],
+        "ignore_columns": [c for c in columns if c not in used],
         "calibrated": {"stage": "bbd", "case": "stacking_angle"}, "replicates": 2})
 
 
@@ -232,7 +266,18 @@ def _compression_campaign(tmp: Path, n: int, seed: int):
         "calibrated": {"stage": "bbd", "case": "mc10"}, "replicates": 2})
 
 
-def dem_rows(cases, n, seed, threads, design_points=3, outdir=HERE / "results", speeds="log"):
+def responses_tag(responses) -> str:
+    """The suffix of a DEM campaign's detail tables for its measures: none for the default
+    (:data:`DEFAULT_RESPONSES`, the names the tables always had), else ``_`` and the measures'
+    short names (``_horizontal_vertical``), so that a campaign measuring more does not overwrite
+    the default campaign's tables."""
+    if tuple(responses) == DEFAULT_RESPONSES:
+        return ""
+    return "_" + "_".join(m.split("_")[0] for m in responses)
+
+
+def dem_rows(cases, n, seed, threads, design_points=3, outdir=HERE / "results", speeds="log",
+             responses=DEFAULT_RESPONSES):
     from soilcal.loop import core, synthesize as sy
     from soilcal.loop.cli import condition_params, dem_simulator
 
@@ -253,7 +298,7 @@ def dem_rows(cases, n, seed, threads, design_points=3, outdir=HERE / "results", 
         hidden, dist = DEM_CASES[case]
         with tempfile.TemporaryDirectory() as tmp:
             conds = (_compression_campaign(Path(tmp), n, seed) if case in COMPRESSION_CASES
-                     else _campaign(Path(tmp), n, seed, speeds))
+                     else _campaign(Path(tmp), n, seed, speeds, responses))
             t0 = time.perf_counter()
             counter["runs"] = 0
             table = sy.synthesize(conds, base, counted, hidden, DEM_REFERENCE, dist, noise=0.02, seed=seed + 10,
@@ -261,10 +306,13 @@ def dem_rows(cases, n, seed, threads, design_points=3, outdir=HERE / "results", 
             out = core.run_inprocess("dem-campaign", sy.with_measured(conds, table), base, counted, settings,
                                      seeds=tuple(range(DEM_SEEDS)))
             rows.append(dict(_row("dem", case, seed, hidden, dist, out, time.perf_counter() - t0, counter["runs"]),
-                             design_points=design_points, speeds="" if case in COMPRESSION_CASES else speeds))
+                             design_points=design_points, speeds="" if case in COMPRESSION_CASES else speeds,
+                             responses="" if case in COMPRESSION_CASES else "+".join(responses)))
             detail = Path(outdir) / "loop_dem"
             detail.mkdir(parents=True, exist_ok=True)
             tag = case if seed == 0 else f"{case}_campaign{seed}"  # campaign 0 keeps its earlier names
+            if case not in COMPRESSION_CASES:
+                tag += responses_tag(responses)
             for name, df in (("residuals", out.residuals), ("diagnosis", out.diagnosis), ("selection", out.selection),
                              ("diagnosis_after", out.diagnosis_after), ("predictions", out.predictions),
                              ("summary", out.summary)):
@@ -287,13 +335,24 @@ def _speeds_text(r) -> str:
     return "" if r["case"] in COMPRESSION_CASES else "uniform"
 
 
+def _responses_text(r) -> str:
+    """The measures of a DEM soil-bin row's campaign (``+``-joined): its ``responses``; a row
+    written before the column existed measured the horizontal force alone; a compression
+    campaign and a stand-in row have none."""
+    if r["engine"] != "dem" or r["case"] in COMPRESSION_CASES:
+        return ""
+    return r.get("responses") or "+".join(DEFAULT_RESPONSES)
+
+
 def replaced(r, new) -> bool:
     """Whether an earlier row ``r`` is replaced by one of the ``new`` rows: a stand-in case reruns
-    all its seeds; a DEM case its campaign drawn with the same speed spacing (a campaign of the
-    other spacing is another campaign, kept beside it)."""
+    all its seeds; a DEM case its campaign drawn with the same speed spacing and measuring the
+    same quantities (a campaign of the other spacing, or of other measures, is another
+    campaign, kept beside it)."""
     return any(r["engine"] == x["engine"] and r["case"] == x["case"]
                and (r["engine"] != "dem" or (str(r["seed"]) == str(x["seed"])
-                                             and _speeds_text(r) == _speeds_text(x))) for x in new)
+                                             and _speeds_text(r) == _speeds_text(x)
+                                             and _responses_text(r) == _responses_text(x))) for x in new)
 
 
 def source_labels(paths) -> list[str]:
@@ -339,13 +398,24 @@ def _command_text(argv) -> str:
     return " ".join(out)
 
 
+def _campaign_text(r) -> str:
+    """How a DEM soil-bin row's campaign was drawn and what it measured, for the page's header:
+    `` (log speeds)``, with its measures where they are not the default's
+    (`` (log speeds; measuring horizontal_force_N, vertical_force_N)``); empty for other rows."""
+    parts = [f"{_speeds_text(r)} speeds"] if _speeds_text(r) else []
+    if _responses_text(r) and _responses_text(r) != "+".join(DEFAULT_RESPONSES):
+        parts.append("measuring " + _responses_text(r).replace("+", ", "))
+    return f" ({'; '.join(parts)})" if parts else ""
+
+
 def _merged_text(sources) -> str:
     """What a run took from other runs' tables (``--rows-from``), for the page's header: per
     file (its label, :func:`source_labels`) each row's engine, case and campaign, and a DEM
-    soil-bin row's speed spacing; ``sources``: (label, rows) pairs."""
+    soil-bin row's speed spacing and measures (:func:`_campaign_text`); ``sources``: (label,
+    rows) pairs."""
     parts = [f"{label}: " + (", ".join(
         f"{r['engine']} {r['case']}" + (f" campaign {r['seed']}" if r["engine"] == "dem" else f" seed {r['seed']}")
-        + (f" ({_speeds_text(r)} speeds)" if _speeds_text(r) else "") for r in rows) or "no rows")
+        + _campaign_text(r) for r in rows) or "no rows")
         for label, rows in sources]
     return "; rows taken from other runs: " + "; ".join(parts) if parts else ""
 
@@ -365,11 +435,17 @@ def _theta_text(r) -> str:
 def _summary(rows):
     out = ["| engine | case | campaigns | correct | false attributions | max parameter error, % | "
            "RMS error before -> after, % (median) | median wall s |", "|---|---|---|---|---|---|---|---|"]
-    keys = list(dict.fromkeys((r["engine"], r["case"], _speeds_text(r)) for r in rows))
-    for eng, case, speeds in keys:
-        g = [r for r in rows if r["engine"] == eng and r["case"] == case and _speeds_text(r) == speeds]
+    keys = list(dict.fromkeys((r["engine"], r["case"], _speeds_text(r), _responses_text(r)) for r in rows))
+    for eng, case, speeds, resp in keys:
+        g = [r for r in rows if r["engine"] == eng and r["case"] == case and _speeds_text(r) == speeds
+             and _responses_text(r) == resp]
+        label = []
         if any(k[:2] == (eng, case) and k[2] != speeds for k in keys):  # both spacings: say which
-            case = f"{case} ({speeds or 'no'} speeds)"
+            label.append(f"{speeds or 'no'} speeds")
+        if any(k[:2] == (eng, case) and k[3] != resp for k in keys):  # campaigns of other measures: say which
+            label.append(f"measuring {resp.replace('+', ', ')}")
+        if label:
+            case = f"{case} ({'; '.join(label)})"
         pe = [float(r["parameter_error_percent"]) for r in g if str(r["parameter_error_percent"]) not in ("", "nan")]
         b = np.median([float(r["rmse_before_percent"]) for r in g])
         a = np.median([float(r["rmse_after_percent"]) for r in g])
@@ -393,6 +469,9 @@ def main(argv=None):
     ap.add_argument("--design-points", type=int, default=3, help="levels per effect parameter (dem; default 3)")
     ap.add_argument("--speeds", choices=SPEED_SPACINGS, default="log",
                     help="spacing of the DEM campaign's tool speeds in 0.1-1.0 m/s (default log)")
+    ap.add_argument("--responses", default=",".join(DEFAULT_RESPONSES),
+                    help="plate measures the DEM soil-bin campaign records, comma-separated, of "
+                         + ", ".join(CAMPAIGN_RESPONSES) + " (default: the horizontal force alone)")
     ap.add_argument("--out", default=str(HERE / "results"))
     ap.add_argument("--rows-from", action="append", default=[], metavar="CSV",
                     help="also take the rows of another run's loop.csv (a DEM campaign run in a clone)")
@@ -405,6 +484,10 @@ def main(argv=None):
     for c in cases:
         if c not in STANDIN_CASES:
             ap.error(f"--cases: {c!r} is not one of {', '.join(STANDIN_CASES)}")
+    responses = tuple(dict.fromkeys(args.responses.split(",")))
+    for m in responses:
+        if m not in CAMPAIGN_RESPONSES:
+            ap.error(f"--responses: {m!r} is not one of {', '.join(CAMPAIGN_RESPONSES)}")
     try:
         labels = source_labels(args.rows_from)
     except ValueError as e:
@@ -416,7 +499,7 @@ def main(argv=None):
     if "standin" in engines:
         new += standin_rows(cases, args.seeds)
     if "dem" in engines:
-        new += dem_rows(cases, args.n, args.seed, args.threads, args.design_points, out, args.speeds)
+        new += dem_rows(cases, args.n, args.seed, args.threads, args.design_points, out, args.speeds, responses)
     sources = [(label, read_rows(Path(path), FIELDS)) for label, path in zip(labels, args.rows_from)]
     new += [r for _, rows in sources for r in rows]  # rows of a run elsewhere (a clone), each with its own commit
 
@@ -428,7 +511,9 @@ def main(argv=None):
           f"Machine: {platform.machine()}, {os.cpu_count()} logical CPUs, Python {platform.python_version()}; "
           f"commit {commit()}, {time.strftime('%Y-%m-%d %H:%M', time.gmtime())} UTC; "
           f"`python benchmarks/loop.py {_command_text(sys.argv[1:] if argv is None else argv)}` ({time.perf_counter() - t0:.0f} s for the rows "
-          f"of this run{_merged_text(sources)}; rows of engines and cases not run are kept from earlier runs, each with its commit).", "",
+          f"of this run{_merged_text(sources)}; rows of engines and cases not run are kept from earlier runs, each with its commit)"
+          + (f"; the DEM soil-bin campaign of this run measures {', '.join(responses)} (the column `measures` gives each "
+             f"DEM row's)" if "dem" in engines else "") + ".", "",
           "A case's measured values come from the engine with the hidden effect (or disturbance) and 2 % noise per "
           "repeat (three repeats); the loop then runs without it.  correct: the chosen effects are exactly the "
           "hidden ones (none for a disturbance outside the library or no effect); false attribution: a library "
@@ -436,10 +521,11 @@ def main(argv=None):
           "held-out RMS error down by 70 %; no false attribution.", "",
           *_summary(rows), "", "DEM rows (verdicts in full):", "",
           "| case | campaign | chosen | parameters (95 % interval) | parameter error, % | RMS error before -> after, % "
-          "| levels | speeds | DEM runs | wall s | commit | verdict |",
-          "|---|---|---|---|---|---|---|---|---|---|---|---|",
+          "| levels | speeds | measures | DEM runs | wall s | commit | verdict |",
+          "|---|---|---|---|---|---|---|---|---|---|---|---|---|",
           *(f"| {r['case']} | {r['seed']} | {r['chosen']} | {_theta_text(r)} | {r['parameter_error_percent']} | {r['rmse_before_percent']} -> "
-            f"{r['rmse_after_percent']} | {r.get('design_points') or 3} | {_speeds_text(r)} | {r['dem_runs']} | {r['wall_s']} | "
+            f"{r['rmse_after_percent']} | {r.get('design_points') or 3} | {_speeds_text(r)} | "
+            f"{_responses_text(r).replace('+', ', ')} | {r['dem_runs']} | {r['wall_s']} | "
             f"{r['commit']} | {r['verdict']} |"
             for r in rows if r["engine"] == "dem"),
           "", "Rows: `loop.csv`; per DEM case and campaign: `loop_dem/`.", ""]

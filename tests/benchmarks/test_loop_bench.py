@@ -109,7 +109,7 @@ def test_a_rerun_campaign_leaves_no_table_of_the_earlier_run(bench, monkeypatch,
                                 diagnosis=table, selection=table, diagnosis_after=None, predictions=table)
     monkeypatch.setattr(cli, "dem_simulator", lambda threads: None)
     monkeypatch.setattr(cli, "condition_params", lambda params: {})
-    monkeypatch.setattr(bench, "_campaign", lambda tmp, n, seed, speeds: [])
+    monkeypatch.setattr(bench, "_campaign", lambda tmp, n, seed, speeds, responses: [])
     monkeypatch.setattr(synthesize, "synthesize", lambda *a, **k: table)
     monkeypatch.setattr(synthesize, "with_measured", lambda conds, t: conds)
     monkeypatch.setattr(core, "run_inprocess", lambda *a, **k: out)
@@ -124,3 +124,79 @@ def test_a_rerun_campaign_leaves_no_table_of_the_earlier_run(bench, monkeypatch,
     assert (detail / "none_campaign1_residuals.csv").exists()
     assert not stale.exists()
     assert other.read_text() == "campaign 0\n"
+
+
+def test_campaign_measures_change_no_condition(bench, tmp_path):
+    # the measures a campaign records are response columns only: the same random draws give the
+    # same conditions (setups, speeds, depths, covariates), and the default table is the one the
+    # campaign always wrote (the horizontal force measured, the vertical force's columns ignored,
+    # no angle columns)
+    default = bench._campaign(tmp_path / "a", 18, 0)
+    both = bench._campaign(tmp_path / "b", 18, 0, responses=("horizontal_force_N", "vertical_force_N"))
+    every = bench._campaign(tmp_path / "c", 18, 0, responses=tuple(bench.CAMPAIGN_RESPONSES))
+    for other in (both, every):
+        assert [(c.setup, c.quantities) for c in other] == [(c.setup, c.quantities) for c in default]
+    assert [r["measure"] for r in default[0].responses] == ["horizontal_force_N"]
+    assert [r["measure"] for r in both[0].responses] == ["horizontal_force_N", "vertical_force_N"]
+    assert [r["unit"] for r in every[0].responses] == ["N", "N", "deg"]
+    header = (tmp_path / "a/resources/measurements/cinnamon-soil/campaign.csv").read_text().splitlines()[0]
+    assert header == ("directrix,speed_m_s,depth_mm,position_m,day,moisture_pct,horizontal_N,horizontal_sd_N,"
+                      "vertical_N,vertical_sd_N,repeats")
+
+
+def test_campaign_refuses_an_unknown_measure(bench, tmp_path):
+    with pytest.raises(ValueError, match="expected one or more of horizontal_force_N"):
+        bench._campaign(tmp_path, 18, 0, responses=("draft_N",))
+
+
+def test_a_campaign_of_other_measures_replaces_nothing(bench):
+    both = "horizontal_force_N+vertical_force_N"
+    old = _row("rate_friction", 0, "log")  # written before the column existed: the horizontal force
+    assert bench._responses_text(old) == "horizontal_force_N"
+    assert bench._responses_text(dict(_row("plastic_contact", 0, ""), responses="")) == ""
+    assert not bench.replaced(old, [dict(_row("rate_friction", 0, "log"), responses=both)])
+    assert bench.replaced(old, [dict(_row("rate_friction", 0, "log"), responses="horizontal_force_N")])
+    assert bench.replaced(dict(old, responses=both), [dict(_row("rate_friction", 0, "log"), responses=both)])
+    lines = bench._summary([old, dict(_row("rate_friction", 0, "log", "30"), responses=both)])[2:]
+    assert lines == ["| dem | rate_friction (measuring horizontal_force_N) | 1 | 1 | 0 |  | 20.00 -> 20.00 | 1.0 |",
+                     "| dem | rate_friction (measuring horizontal_force_N, vertical_force_N) | 1 | 1 | 0 |  | "
+                     "30.00 -> 30.00 | 1.0 |"]
+    assert bench.responses_tag(("horizontal_force_N",)) == ""
+    assert bench.responses_tag(("horizontal_force_N", "vertical_force_N")) == "_horizontal_vertical"
+
+
+def test_a_campaign_of_other_measures_keeps_the_default_campaigns_tables(bench, monkeypatch, tmp_path):
+    import types
+
+    import pandas as pd
+
+    from soilcal.loop import cli, core, synthesize
+
+    table = pd.DataFrame({"x": [1.0]})
+    summary = pd.DataFrame([{"parameters": "{}", "ci95": "{}", "rmse_before_percent": 17.4,
+                             "rmse_after_percent": 17.4, "error_reduction_percent": 0.0}])
+    out = types.SimpleNamespace(chosen=[], theta={}, verdict="consistent", summary=summary, residuals=table,
+                                diagnosis=table, selection=table, diagnosis_after=None, predictions=table)
+    got = {}
+    monkeypatch.setattr(cli, "dem_simulator", lambda threads: None)
+    monkeypatch.setattr(cli, "condition_params", lambda params: {})
+    monkeypatch.setattr(bench, "_campaign", lambda tmp, n, seed, speeds, responses: got.setdefault("r", responses) and [])
+    monkeypatch.setattr(synthesize, "synthesize", lambda *a, **k: table)
+    monkeypatch.setattr(synthesize, "with_measured", lambda conds, t: conds)
+    monkeypatch.setattr(core, "run_inprocess", lambda *a, **k: out)
+    detail = tmp_path / "loop_dem"
+    detail.mkdir()
+    default = detail / "none_campaign1_diagnosis_after.csv"  # the horizontal-force campaign's
+    default.write_text("horizontal force\n")
+    both = ("horizontal_force_N", "vertical_force_N")
+    rows = bench.dem_rows(["none"], 18, 1, 1, outdir=tmp_path, responses=both)
+    assert got["r"] == both and rows[0]["responses"] == "horizontal_force_N+vertical_force_N"
+    assert (detail / "none_campaign1_horizontal_vertical_residuals.csv").exists()
+    assert default.read_text() == "horizontal force\n"
+
+
+def test_header_names_a_merged_campaigns_measures(bench):
+    both = dict(_row("rate_friction", 1, "log"), responses="horizontal_force_N+vertical_force_N")
+    assert bench._merged_text([("hv/loop.csv", [both]), ("h/loop.csv", [_row("rate_friction", 1, "log")])]) == (
+        "; rows taken from other runs: hv/loop.csv: dem rate_friction campaign 1 (log speeds; measuring "
+        "horizontal_force_N, vertical_force_N); h/loop.csv: dem rate_friction campaign 1 (log speeds)")
