@@ -93,9 +93,9 @@ def test_header_names_the_merged_rows(bench):
         "(uniform speeds); none/loop.csv: dem plastic_contact campaign 0, standin none seed 2; empty.csv: no rows")
 
 
-def test_a_rerun_campaign_leaves_no_table_of_the_earlier_run(bench, monkeypatch, tmp_path):
-    # a campaign rerun where nothing is chosen has no diagnosis after: the earlier run's file of
-    # that campaign, which described a choice, must not stay beside the new tables
+def _no_dem_loop(bench, monkeypatch, campaign):
+    """dem_rows without the DEM: ``campaign`` stands for ``_campaign``, and the loop's outcome
+    is one where nothing is chosen (every table a one-cell frame)."""
     import types
 
     import pandas as pd
@@ -109,10 +109,16 @@ def test_a_rerun_campaign_leaves_no_table_of_the_earlier_run(bench, monkeypatch,
                                 diagnosis=table, selection=table, diagnosis_after=None, predictions=table)
     monkeypatch.setattr(cli, "dem_simulator", lambda threads: None)
     monkeypatch.setattr(cli, "condition_params", lambda params: {})
-    monkeypatch.setattr(bench, "_campaign", lambda tmp, n, seed, speeds, responses: [])
+    monkeypatch.setattr(bench, "_campaign", campaign)
     monkeypatch.setattr(synthesize, "synthesize", lambda *a, **k: table)
     monkeypatch.setattr(synthesize, "with_measured", lambda conds, t: conds)
     monkeypatch.setattr(core, "run_inprocess", lambda *a, **k: out)
+
+
+def test_a_rerun_campaign_leaves_no_table_of_the_earlier_run(bench, monkeypatch, tmp_path):
+    # a campaign rerun where nothing is chosen has no diagnosis after: the earlier run's file of
+    # that campaign, which described a choice, must not stay beside the new tables
+    _no_dem_loop(bench, monkeypatch, lambda tmp, n, seed, speeds, responses: [])
     detail = tmp_path / "loop_dem"
     detail.mkdir()
     stale = detail / "none_campaign1_diagnosis_after.csv"
@@ -166,24 +172,8 @@ def test_a_campaign_of_other_measures_replaces_nothing(bench):
 
 
 def test_a_campaign_of_other_measures_keeps_the_default_campaigns_tables(bench, monkeypatch, tmp_path):
-    import types
-
-    import pandas as pd
-
-    from soilcal.loop import cli, core, synthesize
-
-    table = pd.DataFrame({"x": [1.0]})
-    summary = pd.DataFrame([{"parameters": "{}", "ci95": "{}", "rmse_before_percent": 17.4,
-                             "rmse_after_percent": 17.4, "error_reduction_percent": 0.0}])
-    out = types.SimpleNamespace(chosen=[], theta={}, verdict="consistent", summary=summary, residuals=table,
-                                diagnosis=table, selection=table, diagnosis_after=None, predictions=table)
     got = {}
-    monkeypatch.setattr(cli, "dem_simulator", lambda threads: None)
-    monkeypatch.setattr(cli, "condition_params", lambda params: {})
-    monkeypatch.setattr(bench, "_campaign", lambda tmp, n, seed, speeds, responses: got.setdefault("r", responses) and [])
-    monkeypatch.setattr(synthesize, "synthesize", lambda *a, **k: table)
-    monkeypatch.setattr(synthesize, "with_measured", lambda conds, t: conds)
-    monkeypatch.setattr(core, "run_inprocess", lambda *a, **k: out)
+    _no_dem_loop(bench, monkeypatch, lambda tmp, n, seed, speeds, responses: got.setdefault("r", responses) and [])
     detail = tmp_path / "loop_dem"
     detail.mkdir()
     default = detail / "none_campaign1_diagnosis_after.csv"  # the horizontal-force campaign's
