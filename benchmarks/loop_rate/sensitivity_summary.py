@@ -22,6 +22,7 @@ import math
 import sys
 
 import numpy as np
+from scipy import stats
 
 MEASURES = ("horizontal_force_N", "vertical_force_N", "resultant_angle_deg")
 SPAN = math.log(1 + 0.4 * math.log(1.0 / 0.4)) - math.log(1 + 0.4 * math.log(0.1 / 0.4))  # ln f over 0.1-1.0 m/s
@@ -40,34 +41,31 @@ print()
 print("| measure | f range | slope per unit ln f (SE) | relative to the mean at f=1 | pooled seed SD (df) | "
       "slope / SD | campaign span x slope / SE of a residual |")
 print("|---|---|---|---|---|---|---|")
+def _fit(m, sel):
+    """Over the runs ``sel``: the least-squares slope of measure ``m`` on ln f with its standard
+    error (scipy's linregress), each run's deviation from its f's mean, and the pooled seed SD
+    (those deviations over the runs less the number of f levels) with its degrees of freedom."""
+    line = stats.linregress(np.log([r["f"] for r in sel]), [r[m] for r in sel])
+    levels = {r["f"] for r in sel}
+    dev = np.array([r[m] - np.mean([q[m] for q in sel if q["f"] == r["f"]]) for r in sel])
+    dof = len(sel) - len(levels)
+    return line.slope, line.stderr, dev, math.sqrt(float(dev @ dev) / dof), dof
+
+
 for m in MEASURES:
     m1 = np.mean([r[m] for r in rows if r["f"] == 1.0])
     for lo, hi in ((0.7, 1.3), (0.5, 1.0), (1.0, 1.3), (min(fs), max(fs))):
-        sel = [r for r in rows if lo <= r["f"] <= hi]
-        x = np.log([r["f"] for r in sel]); y = np.array([r[m] for r in sel])
-        levels = sorted({r["f"] for r in sel})
-        resid = np.concatenate([y[[r["f"] == f for r in sel]] - y[[r["f"] == f for r in sel]].mean() for f in levels])
-        dof = len(y) - len(levels)
-        sd = math.sqrt(float(resid @ resid) / dof)
-        X = np.column_stack([np.ones_like(x), x])
-        b, res, *_ = np.linalg.lstsq(X, y, rcond=None)
-        e = y - X @ b
-        s2 = float(e @ e) / (len(y) - 2)
-        se = math.sqrt(s2 * np.linalg.inv(X.T @ X)[1, 1])
+        slope, se, _, sd, dof = _fit(m, [r for r in rows if lo <= r["f"] <= hi])
         se_res = sd * math.sqrt(2 / 3)
-        print(f"| {m} | {lo}-{hi} | {b[1]:.2f} ({se:.2f}) | {b[1] / m1:+.2f} | {sd:.2f} ({dof}) | {b[1] / sd:.2f} | "
-              f"{SPAN * b[1] / se_res:.2f} |")
+        print(f"| {m} | {lo}-{hi} | {slope:.2f} ({se:.2f}) | {slope / m1:+.2f} | {sd:.2f} ({dof}) | {slope / sd:.2f} | "
+              f"{SPAN * slope / se_res:.2f} |")
 
 
 def _rel(m):
     """(relative slope per unit ln f over all f, relative pooled seed SD, within-f deviations)."""
     m1 = np.mean([r[m] for r in rows if r["f"] == 1.0])
-    x = np.log([r["f"] for r in rows]); y = np.array([r[m] for r in rows])
-    X = np.column_stack([np.ones_like(x), x])
-    b = np.linalg.lstsq(X, y, rcond=None)[0]
-    dev = np.array([r[m] - np.mean([q[m] for q in rows if q["f"] == r["f"]]) for r in rows])
-    sd = math.sqrt(float(dev @ dev) / (len(rows) - len(fs)))
-    return b[1] / m1, sd / m1, dev / m1
+    slope, _, dev, sd, _ = _fit(m, rows)
+    return slope / m1, sd / m1, dev / m1
 
 
 print()

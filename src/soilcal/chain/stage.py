@@ -444,6 +444,7 @@ def optimum_frames(stage: dict, table: pd.DataFrame, targets: dict, seed: int) -
     from soilcal.optimise.desirability import search_ends
     from soilcal.optimise.near_optimal import (NEAR_OPTIMAL_STARTS, calibrated_choice, identifiability,
                                                near_optimal_sets)
+
     fits = {sf.response: (sf.reduced if opt.get("model", "reduced") == "reduced" else sf.full)
             for sf in fit_stage(stage, table)}
     syms, low, high = bounds(stage)
