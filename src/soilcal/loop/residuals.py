@@ -364,3 +364,89 @@ def scale_of(df: pd.DataFrame) -> np.ndarray:
 def usable(res: pd.DataFrame) -> pd.DataFrame:
     """Rows with a measured and a simulated value (those the loop can learn from)."""
     return res[np.isfinite(res["relative_residual"].astype(float))].reset_index(drop=True)
+
+
+def noise_floor(df: pd.DataFrame, rows=None) -> tuple[float, str]:
+    """The RMS relative error a model without any misfit would show on the rows ``rows`` (a
+    boolean mask over the usable rows ``df``; all of them by default): sqrt(mean over those rows
+    of (sd_m^2 / n_m + sd_s^2 / n_s) / scale^2), the expected square of each row's relative
+    residual where the measured value and the simulated mean differ by their own errors alone,
+    with the row's relative scale (:func:`scales`, the ``scale`` column) and its measured SD over
+    its repeats (``n_m`` 1 where the table gives no count, as in the residual's standard error)
+    and its seed SD over its seeds.  Where a row's own SD is missing, its variance comes from
+    the rows that estimate one: for the measured part, the scatter of the replicate rows of its
+    condition where the table gives each repeat as a row without an SD (one repeat each), else
+    the measured SD relative to the scale pooled over its measured quantity's rows
+    (:func:`pooled_relative_variance`, none where Bartlett's test rejects that they share one),
+    else the replicate scatter pooled over the quantity's conditions; for the seed part (one
+    seed), the seed SD pooled over the quantity's simulations.  The pooling runs over every row
+    of ``df``; the mean over ``rows``.  Returns (the floor as a fraction, a note): NaN (not 0)
+    with the reason where some row's uncertainty is unknown, or no row is given; else the note
+    says how many rows took a pooled or replicate variance ("" where every row had its own)."""
+    n_rows = len(df)
+    pick = np.ones(n_rows, bool) if rows is None else np.asarray(rows, bool)
+    if n_rows == 0 or not pick.any():
+        return float("nan"), "no row with a measured and a simulated value"
+    scale = scale_of(df)
+    meas = (df["measurement"].astype(str) + KEY_SEP + df["measure"].astype(str)).to_numpy()
+    nm = (df["measured_n"].astype(float).fillna(1.0).clip(lower=1.0).to_numpy() if "measured_n" in df
+          else np.ones(n_rows))
+    sd_m = df["measured_sd"].astype(float).to_numpy() if "measured_sd" in df else np.full(n_rows, np.nan)
+    ns = df["simulated_n"].astype(float).fillna(0.0).to_numpy()
+    sd_s = df["simulated_sd"].astype(float).to_numpy()
+    sims = df["simulation"].astype(str).to_numpy() if "simulation" in df else np.arange(n_rows).astype(str)
+    # measured part: the row's own SD over its repeats
+    rel_m = np.where(np.isfinite(sd_m), sd_m ** 2 / nm / scale ** 2, np.nan)
+    own_m = np.isfinite(rel_m)
+    # the replicate rows of a condition given without an SD: one repeat each, their scatter its SD
+    rep = np.full(n_rows, np.nan)
+    rep_sd, rep_n, rep_scale, rep_q = [], [], [], []
+    m = df["measured"].astype(float).to_numpy()
+    loose = ~np.isfinite(sd_m) & np.isfinite(m)
+    if loose.any():
+        key = pd.Series(sims + KEY_SEP + meas)[loose]
+        for _, at in key.groupby(key.to_numpy(), sort=False):
+            at = at.index.to_numpy()
+            if len(at) < 2 or not np.ptp(m[at]) > 0:  # one value, or repeats rounded alike: no scatter
+                continue
+            sd, sc = float(np.std(m[at], ddof=1)), float(np.mean(scale[at]))
+            rep[at] = sd ** 2 / scale[at] ** 2  # each row one repeat, over its own scale
+            rep_sd.append(sd), rep_n.append(len(at)), rep_scale.append(sc), rep_q.append(meas[at[0]])
+    rel_m = np.where(own_m, rel_m, rep)
+    cv_m = pooled_relative_variance(sd_m, nm, scale, meas)  # per repeat, relative to the scale
+    rel_m = np.where(np.isfinite(rel_m), rel_m, cv_m / nm)
+    if rep_sd:  # the replicate scatter pooled over the quantity's conditions
+        pooled = pooled_relative_variance(np.asarray(rep_sd), np.asarray(rep_n, float), np.asarray(rep_scale),
+                                          np.asarray(rep_q))
+        by_q = {}
+        for q, v in zip(rep_q, pooled):
+            if np.isfinite(v):
+                by_q[q] = v
+        rel_m = np.where(np.isfinite(rel_m), rel_m, [by_q.get(q, np.nan) for q in meas])
+    # seed part: the row's own seed SD over its seeds (two at least), else pooled once per simulation
+    own_s = np.isfinite(sd_s) & (ns >= 2)
+    rel_s = np.where(own_s, sd_s ** 2 / np.clip(ns, 1.0, None) / scale ** 2, np.nan)
+    first = ~pd.DataFrame({"s": sims, "m": meas}).duplicated().to_numpy()
+    cv_s = pooled_relative_variance(np.where(first & own_s, sd_s, np.nan), ns, scale, meas)
+    rel_s = np.where(own_s, rel_s, cv_s / np.clip(ns, 1.0, None))
+    pm, ps = pick & ~np.isfinite(rel_m), pick & ~np.isfinite(rel_s)
+    total = int(pick.sum())
+    if pm.any() or ps.any():
+        why = []
+        if pm.any():
+            why.append(f"{int(pm.sum())} of the {total} rows have no measured SD and their measured quantity none to "
+                       "take one from (an `sd` column with `n`, or each condition's repeats as rows of their own)")
+        if ps.any():
+            why.append(f"{int(ps.sum())} of the {total} rows have one seed and their measured quantity no seed SD to "
+                       "take one from (two seeds per condition at least)")
+        return float("nan"), "; ".join(why)
+    floor = float(np.sqrt(np.mean((rel_m + rel_s)[pick])))
+    took_m = int((pick & ~own_m).sum())
+    took_s = int((pick & ~own_s).sum())
+    note = []
+    if took_m:
+        note.append(f"{took_m} of the {total} rows without a measured SD of their own took their condition's "
+                    "replicate scatter or their quantity's pooled SD")
+    if took_s:
+        note.append(f"{took_s} of the {total} rows with one seed took their quantity's pooled seed SD")
+    return floor, "; ".join(note)
