@@ -468,9 +468,13 @@ def floor_of(r, detail: Path) -> tuple:
     where they reproduce the row's RMS errors before and after to loop.csv's rounding (0.01 %),
     else "" (the tables are another run's: the campaign of the other speed spacing, or one
     rerun since)."""
-    own = str(r.get("rmse_floor_percent", "") or "")
-    if own not in ("", "nan") or r["engine"] != "dem":
-        return (own if own != "nan" else ""), str(r.get("explained_percent", "") or "")
+    def text(x):  # a cell as written: None (a row without the column) and NaN are empty, 0 is 0
+        x = "" if x is None else str(x)
+        return "" if x == "nan" else x
+
+    own = text(r.get("rmse_floor_percent"))
+    if own or r["engine"] != "dem":
+        return own, text(r.get("explained_percent"))
     tag = detail_tag(r)
     res_path, pred_path = Path(detail) / f"{tag}_residuals.csv", Path(detail) / f"{tag}_predictions.csv"
     if not res_path.exists():

@@ -91,6 +91,9 @@ def test_an_earlier_dem_row_takes_its_floor_from_its_campaign_tables(bench, tmp_
     assert bench.floor_of(dict(row, seed=2), detail) == ("", "")  # no tables of that campaign
     # a row with its own floor keeps it
     assert bench.floor_of(dict(row, rmse_floor_percent="5.5", explained_percent="12.0"), detail) == ("5.5", "12.0")
+    # a row of this run (numbers, not text): an explained share of 0 is 0, not empty
+    assert bench.floor_of(dict(row, engine="standin", rmse_floor_percent=1.42, explained_percent=0.0), detail) == (
+        "1.42", "0.0")
 
 
 def test_header_names_files_not_directories(bench):
