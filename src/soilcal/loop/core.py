@@ -383,6 +383,7 @@ class Outcome:
     effect_data: dict = None  # effect -> its select.EffectData (surrogates), for a refit with joint runs
     uniform_scale: bool = False  # whether the chosen effects were fitted beside a free uniform scale
     floor_note: str = ""  # why the noise floor is empty, or which rows took a pooled variance (:func:`noise_floor`)
+    floor_interval: tuple = (math.nan, math.nan, math.nan)  # its 95 % interval and degrees of freedom
 
 
 def _follows(rank: pd.DataFrame, res: pd.DataFrame | None = None, quantity_of: dict | None = None,
@@ -1331,6 +1332,7 @@ def _analyse(soil: str, res: pd.DataFrame, diag: pd.DataFrame, cands: list, effe
     ma = float(np.max(np.abs(after_cv[ok]))) * 100 if ok.any() else math.nan
     floor, floor_note = rs.noise_floor(u, ok)
     rf = 100 * floor
+    floor_lo, floor_hi, floor_dof = rs.floor_interval(u, ok)
     surrogate_kind, lack_of_fit_p = _surrogates(data, chosen)
     summary = pd.DataFrame([{
         "soil": soil, "rows": len(res), "usable_rows": n, "verdict": verdict, "effects": "+".join(chosen),
@@ -1345,7 +1347,8 @@ def _analyse(soil: str, res: pd.DataFrame, diag: pd.DataFrame, cands: list, effe
     out = Outcome(res, diag, rank, cands, pd.DataFrame(sel_rows, columns=SELECTION_COLUMNS), summary, pred,
                   verdict, chosen, theta, after, dg.detectable(res, diag, quantity_cols, settings.alpha),
                   {nm: list(d.missing) for nm, d in data.items() if d.missing}, dict(skipped_effects or {}),
-                  fold_by, fold_text, data, uniform is not None, floor_note)
+                  fold_by, fold_text, data, uniform is not None, floor_note,
+                  (100 * floor_lo, 100 * floor_hi, floor_dof))
     return out, (None if pending is None else pending + (ci_method,))
 
 

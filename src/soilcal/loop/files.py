@@ -287,33 +287,34 @@ def _nuisance_lines(s) -> list[str]:
             f"How: {s['nuisance_method']}.", ""]
 
 
-def _floor_lines(s, note: str, chosen) -> list[str]:
+def _floor_lines(s, o: core.Outcome) -> list[str]:
     """The report's noise floor (``loop_summary.csv``: ``rmse_floor_percent``,
-    ``explained_percent``): its row of the error table and what it means (``note``: why it is
-    not known, or which rows took a pooled variance; ``chosen``: the chosen effects)."""
+    ``explained_percent``; the outcome's ``floor_note`` and ``floor_interval``): its row of the
+    error table and what it means."""
     floor, before, after = (float(s[k]) for k in ("rmse_floor_percent", "rmse_before_percent", "rmse_after_percent"))
     if not np.isfinite(floor):
         return ["| the measured and seed uncertainty alone | not known | |", "",
                 "The error the measured and seed uncertainty alone give (what a model without misfit would show on "
-                f"these rows) is not known: {note or 'no uncertainty is given'}.", ""]
-    lines = [f"| the measured and seed uncertainty alone | {floor:.2f} | |", "",
-             f"The error the measured and seed uncertainty alone give is {floor:.2f} %: the RMS relative error a model "
-             "without any misfit would show on these rows, sqrt(mean((sd_m^2 / n_m + sd_s^2 / n_s) / scale^2)) of each "
-             "row's measured SD over its repeats and seed SD over its seeds (residuals.csv)"
-             + (f"; {note}" if note else "") + ".  No effect can bring the held-out error below it, except by chance."]
+                f"these rows) is not known: {o.floor_note or 'no uncertainty is given'}.", ""]
+    lo, hi, dof = o.floor_interval
+    band = (f" (95 % interval {lo:.2f}-{hi:.2f} %: the SDs it comes from are estimates, on {dof:.0f} degrees of "
+            "freedom)" if np.isfinite(lo) and np.isfinite(dof) else "")
+    text = (f"The error the measured and seed uncertainty alone give is {floor:.2f} %{band}: the RMS relative error a "
+            "model without any misfit would show on these rows, sqrt(mean((sd_m^2 / n_m + sd_s^2 / n_s) / scale^2)) "
+            "of each row's measured SD over its repeats and seed SD over its seeds (residuals.csv)"
+            + (f"; {o.floor_note}" if o.floor_note else "") + ".  No effect can bring the held-out error below it, "
+            "except by chance.")
     explained = float(s["explained_percent"])
-    if np.isfinite(explained) and not chosen:
-        beyond = 100 * (before ** 2 - floor ** 2) / before ** 2
-        lines[-1] += (f"  No effect was chosen: {beyond:.0f} % of the calibrated "
-                      "model's mean square error, (before^2 - floor^2) / before^2, lies beyond the uncertainties.")
-    elif np.isfinite(explained):
-        lines[-1] += (f"  The chosen effects removed {explained:.0f} % of the explainable error, "
-                      f"(before^2 - after^2) / (before^2 - floor^2) = ({before:.2f}^2 - {after:.2f}^2) / "
-                      f"({before:.2f}^2 - {floor:.2f}^2).")
-    else:
-        lines[-1] += ("  The error before is not above it: the calibrated model leaves nothing beyond the "
-                      "uncertainties to explain.")
-    return lines + [""]
+    if o.chosen and np.isfinite(explained):
+        text += (f"  The chosen effects removed {explained:.0f} % of the explainable error, "
+                 f"(before^2 - after^2) / (before^2 - floor^2) = ({before:.2f}^2 - {after:.2f}^2) / "
+                 f"({before:.2f}^2 - {floor:.2f}^2).")
+    elif o.chosen:
+        text += "  The error before is not above the floor: the share of the explainable error removed is not defined."
+    elif np.isfinite(lo) and np.isfinite(hi):
+        where = "above" if before > hi else ("below" if before < lo else "within")
+        text += f"  No effect was chosen; the error before lies {where} the floor's 95 % interval."
+    return [f"| the measured and seed uncertainty alone | {floor:.2f} | |", "", text, ""]
 
 
 def report(soil: str, o: core.Outcome, plans: list) -> str:
@@ -330,7 +331,7 @@ def report(soil: str, o: core.Outcome, plans: list) -> str:
              "| | RMS error, % | largest error, % |", "|---|---|---|",
              f"| calibrated model | {s['rmse_before_percent']:.2f} | {s['max_before_percent']:.2f} |",
              f"| with the chosen effects | {s['rmse_after_percent']:.2f} | {s['max_after_percent']:.2f} |",
-             *_floor_lines(s, o.floor_note, o.chosen)]
+             *_floor_lines(s, o)]
     if o.chosen:
         ci = json.loads(s["ci95"])
         lines += ["## Chosen effects", "", "| effect | parameter | value | 95 % interval | unit | formula | source |",
