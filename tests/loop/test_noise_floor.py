@@ -251,3 +251,27 @@ def test_a_table_without_sd_reports_no_floor_and_why():
     assert "| the measured and seed uncertainty alone | not known | |" in text
     assert ("is not known: 12 of the 12 rows have no measured SD and their measured quantity none to take one from"
             in text), text
+
+
+def test_a_pooled_replicate_scatter_is_per_repeat_over_each_rows_count():
+    # one quantity without any SD column: condition A measured as three rows, each the mean of 2
+    # repeats (98, 100, 105), condition B as one row, the mean of 4 repeats (200).  A's rows
+    # scatter as sigma^2 / 2 of the per-repeat variance sigma^2, so their sample variance s^2
+    # is each A row's variance and sigma^2 is estimated by 2 s^2; B, with no replicate rows of
+    # its own, takes that per-repeat variance relative to A's mean scale over its own 4 repeats:
+    # 2 s^2 / mean(A)^2 / 4, as a pooled measured SD is divided by the row's count.  (Taking A's
+    # row scatter s^2 as B's variance would count B as one mean of 2 repeats, twice too large.)
+    conds = [_cond(i, [("F_N", v, None, 2)]) for i, v in ((1, 98.0), (2, 100.0), (3, 105.0))]
+    conds.append(_tool(4, [("F_N", 200.0, None, 4)]))
+    runs = _runs([(r, "F_N", s, v, "ok") for r in (1, 2, 3) for s, v in enumerate((99.0, 100.0, 101.0))]
+                 + [(4, "F_N", s, v, "ok") for s, v in enumerate((196.0, 200.0, 204.0))])
+    u = usable(residual_frame(observations(conds), runs))
+    assert u["simulation"].nunique() == 2
+    s2 = float(np.var([98.0, 100.0, 105.0], ddof=1))
+    mean_a = float(np.mean([98.0, 100.0, 105.0]))
+    terms = {98.0: (s2 + 1.0 / 3) / 98.0 ** 2, 100.0: (s2 + 1.0 / 3) / 100.0 ** 2, 105.0: (s2 + 1.0 / 3) / 105.0 ** 2,
+             200.0: 2 * s2 / mean_a ** 2 / 4 + 16.0 / 3 / 200.0 ** 2}
+    expected = math.sqrt(np.mean([terms[v] for v in u["measured"]]))
+    floor, note = noise_floor(u)
+    assert floor == pytest.approx(expected, rel=1e-12)
+    assert "replicate scatter" in note

@@ -390,7 +390,10 @@ def _floor_terms(df: pd.DataFrame) -> dict:
     for i in np.flatnonzero(own_m):
         src_m[i] = f"m{i}"
         dof[src_m[i]] = n_given[i] - 1.0 if np.isfinite(n_given[i]) and n_given[i] > 1 else np.inf
-    # the replicate rows of a condition given without an SD: one repeat each, their scatter its SD
+    # the replicate rows of a condition given without an SD: their scatter is that of the rows'
+    # values, each the mean of its n_m repeats (one where no count is given), so it estimates
+    # sigma^2 mean(1 / n_m) of the per-repeat variance sigma^2, and each row's variance is
+    # sigma^2 / n_m (the rows' own scatter where their counts are equal)
     rep_sd, rep_n, rep_scale, rep_q = [], [], [], []
     loose = ~own_m & np.isfinite(m)
     if loose.any():
@@ -399,11 +402,11 @@ def _floor_terms(df: pd.DataFrame) -> dict:
             at = at.index.to_numpy()
             if len(at) < 2 or not np.ptp(m[at]) > 0:  # one value, or repeats rounded alike: no scatter
                 continue
-            sd = float(np.std(m[at], ddof=1))
-            rel_m[at] = sd ** 2 / scale[at] ** 2  # each row one repeat, over its own scale
+            per_repeat = float(np.var(m[at], ddof=1)) / float(np.mean(1.0 / nm[at]))
+            rel_m[at] = per_repeat / nm[at] / scale[at] ** 2  # over each row's own scale
             src_m[at] = f"r{k}"
             dof[f"r{k}"] = len(at) - 1.0
-            rep_sd.append(sd), rep_n.append(len(at)), rep_q.append(meas[at[0]])
+            rep_sd.append(np.sqrt(per_repeat)), rep_n.append(len(at)), rep_q.append(meas[at[0]])
             rep_scale.append(float(np.mean(scale[at])))
     # else the measured SD relative to the scale pooled over the quantity's rows, per repeat
     cv_m = pooled_relative_variance(sd_m, nm, scale, meas)
@@ -414,7 +417,7 @@ def _floor_terms(df: pd.DataFrame) -> dict:
     for i in np.flatnonzero(fill):
         src_m[i] = f"pm{meas[i]}"
         dof[src_m[i]] = pooled_dof[i]
-    if rep_sd:  # else the replicate scatter pooled over the quantity's conditions
+    if rep_sd:  # else the replicate scatter pooled over the quantity's conditions, per repeat as above
         pooled = pooled_relative_variance(np.asarray(rep_sd), np.asarray(rep_n, float), np.asarray(rep_scale),
                                           np.asarray(rep_q))
         by_q, dof_q = {}, {}
@@ -424,7 +427,7 @@ def _floor_terms(df: pd.DataFrame) -> dict:
                 dof_q[q] = dof_q.get(q, 0.0) + k - 1.0
         for i in np.flatnonzero(~np.isfinite(rel_m)):
             if meas[i] in by_q:
-                rel_m[i] = by_q[meas[i]]
+                rel_m[i] = by_q[meas[i]] / nm[i]
                 src_m[i] = f"pr{meas[i]}"
                 dof[src_m[i]] = dof_q[meas[i]]
     # seed part: the row's own seed SD over its seeds (two at least), shared by the rows of its
@@ -459,10 +462,14 @@ def noise_floor(df: pd.DataFrame, rows=None) -> tuple[float, str]:
     its repeats (``n_m`` 1 where the table gives no count, as in the residual's standard error)
     and its seed SD over its seeds.  Where a row's own SD is missing, its variance comes from
     the rows that estimate one: for the measured part, the scatter of the replicate rows of its
-    condition where the table gives each repeat as a row without an SD (one repeat each), else
-    the measured SD relative to the scale pooled over its measured quantity's rows
-    (:func:`pooled_relative_variance`, none where Bartlett's test rejects that they share one),
-    else the replicate scatter pooled over the quantity's conditions; for the seed part (one
+    condition where the table gives its repeats as rows without an SD (one repeat each, or
+    each the mean of its own count), else the measured SD relative to the scale pooled over its
+    measured quantity's rows (:func:`pooled_relative_variance`, none where Bartlett's test
+    rejects that they share one), else the replicate scatter pooled over the quantity's
+    conditions.  Every one of these is a variance per repeat, divided by the row's own ``n_m``:
+    a row that gives a count of 4 without an SD is the mean of 4 repeats whichever rows its
+    variance comes from (replicate rows of one repeat each scatter as one repeat, rows that are
+    each the mean of n repeats as sigma^2 / n).  For the seed part (one
     seed), the seed SD pooled over the quantity's simulations.  The pooling runs over every row
     of ``df``; the mean over ``rows``.  Returns (the floor as a fraction, a note): NaN (not 0)
     with the reason where some row's uncertainty is unknown, or no row is given; else the note
