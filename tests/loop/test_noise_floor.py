@@ -70,12 +70,19 @@ def test_the_floor_interval_by_hand():
     assert dof == pytest.approx(nu, rel=1e-12)
     assert lo == pytest.approx(math.sqrt(floor2 * nu / stats.chi2.ppf(0.975, nu)), rel=1e-12)
     assert hi == pytest.approx(math.sqrt(floor2 * nu / stats.chi2.ppf(0.025, nu)), rel=1e-12)
-    # an SD given without a repeat count is taken as known: SDs all known, the floor is exact
+    # an SD given without a repeat count is taken as known; a seed SD of 0 from two seeds is not:
+    # it says nothing of how far the true seed scatter may lie above 0
     known = [_tool(i, [("F_N", v, 2.0, None)]) for i, v in ((1, 100.0), (2, 120.0))]
     exact = usable(residual_frame(observations(known), _runs([(1, "F_N", 0, 99.0, "ok"), (2, "F_N", 0, 118.0, "ok"),
                                                              (1, "F_N", 1, 99.0, "ok"), (2, "F_N", 1, 118.0, "ok")])))
-    floor, _ = noise_floor(exact)  # (seed SD 0 over two seeds: known too, 0 scatter)
-    assert rs.floor_interval(exact) == (pytest.approx(floor), pytest.approx(floor), math.inf)
+    floor, _ = noise_floor(exact)  # (seed SD 0 over two seeds: an estimate, of unknown width)
+    assert floor == pytest.approx(math.sqrt((2.0 ** 2 / 100.0 ** 2 + 2.0 ** 2 / 120.0 ** 2) / 2), rel=1e-12)
+    assert all(math.isnan(x) for x in rs.floor_interval(exact))
+    # the same seeds scattering: the measured SDs known, the interval that of the seeds alone
+    scatter = usable(residual_frame(observations(known), _runs([(1, "F_N", 0, 98.0, "ok"), (2, "F_N", 0, 117.0, "ok"),
+                                                               (1, "F_N", 1, 100.0, "ok"), (2, "F_N", 1, 119.0, "ok")])))
+    lo, hi, dof = rs.floor_interval(scatter)
+    assert lo < noise_floor(scatter)[0] < hi and 1.0 < dof < math.inf
 
 
 def test_the_floor_interval_covers_the_true_floor_at_its_level():
@@ -275,3 +282,26 @@ def test_a_pooled_replicate_scatter_is_per_repeat_over_each_rows_count():
     floor, note = noise_floor(u)
     assert floor == pytest.approx(expected, rel=1e-12)
     assert "replicate scatter" in note
+
+
+def test_without_an_effect_the_report_claims_no_test_of_the_error_before_against_the_floor():
+    # the stand-in campaign without a hidden effect: the verdict is the diagnosis's, and the
+    # floor's interval (the SDs' uncertainty alone) is not set against the error before as if
+    # it were a test of misfit
+    out, text = _loop(True)
+    assert not out.chosen
+    s = out.summary.iloc[0]
+    assert f"Beside the floor the error before ({s['rmse_before_percent']:.2f} %) tests nothing" in text
+    assert "floor's 95 % interval" not in text
+    for word in ("above", "below", "within"):
+        assert f"lies {word} the floor" not in text
+
+
+def test_the_report_says_when_the_floor_interval_is_unknown():
+    from types import SimpleNamespace
+
+    s = pd.Series({"rmse_floor_percent": 1.2, "rmse_before_percent": 1.5, "rmse_after_percent": 1.5,
+                   "explained_percent": 36.0})
+    o = SimpleNamespace(chosen=[], floor_note="", floor_interval=(math.nan, math.nan, math.nan))
+    text = " ".join(files._floor_lines(s, o))
+    assert "its 95 % interval is not known: an SD it comes from was estimated as 0" in text

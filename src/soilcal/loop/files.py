@@ -297,8 +297,14 @@ def _floor_lines(s, o: core.Outcome) -> list[str]:
                 "The error the measured and seed uncertainty alone give (what a model without misfit would show on "
                 f"these rows) is not known: {o.floor_note or 'no uncertainty is given'}.", ""]
     lo, hi, dof = o.floor_interval
-    band = (f" (95 % interval {lo:.2f}-{hi:.2f} %: the SDs it comes from are estimates, on {dof:.0f} degrees of "
-            "freedom)" if np.isfinite(lo) and np.isfinite(dof) else "")
+    if np.isfinite(lo) and np.isfinite(dof):
+        band = (f" (95 % interval {lo:.2f}-{hi:.2f} %: the SDs it comes from are estimates, on {dof:.0f} degrees of "
+                "freedom)")
+    elif np.isfinite(lo):
+        band = " (exact: every SD it comes from is given as known)"
+    else:
+        band = (" (its 95 % interval is not known: an SD it comes from was estimated as 0 from its repeats or seeds, "
+                "values alike, which says nothing of how large the true scatter may be)")
     text = (f"The error the measured and seed uncertainty alone give is {floor:.2f} %{band}: the RMS relative error a "
             "model without any misfit would show on these rows, sqrt(mean((sd_m^2 / n_m + sd_s^2 / n_s) / scale^2)) "
             "of each row's measured SD over its repeats and seed SD over its seeds (residuals.csv)"
@@ -311,9 +317,12 @@ def _floor_lines(s, o: core.Outcome) -> list[str]:
                  f"({before:.2f}^2 - {floor:.2f}^2).")
     elif o.chosen:
         text += "  The error before is not above the floor: the share of the explainable error removed is not defined."
-    elif np.isfinite(lo) and np.isfinite(hi):
-        where = "above" if before > hi else ("below" if before < lo else "within")
-        text += f"  No effect was chosen; the error before lies {where} the floor's 95 % interval."
+    else:
+        # the floor's interval covers the SDs' uncertainty only, not the scatter of an RMS error
+        # over a few rows about it: no comparison of the two is a test, and none is made
+        text += (f"  No effect was chosen.  Beside the floor the error before ({before:.2f} %) tests nothing: the "
+                 "floor's interval covers only the uncertainty of the SDs, not the scatter of an RMS error over these "
+                 "rows; whether the residual lies within the uncertainties is the diagnosis's verdict above.")
     return [f"| the measured and seed uncertainty alone | {floor:.2f} | |", "", text, ""]
 
 

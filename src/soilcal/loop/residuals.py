@@ -513,7 +513,11 @@ def floor_interval(df: pd.DataFrame, rows=None, level: float = 0.95) -> tuple[fl
     (sum sigma^2)^2 by (sum T)^2 - 2 sum T^2 / (d + 2).  On 4000 seeded tables of 6-40 rows with
     SDs from 2-5 repeats and 3 seeds the 95 % interval covered the true floor in 93.5-94.9 %.
     (lo, hi, nu); NaN where the floor is unknown; a floor of known SDs alone (nu infinite) is its
-    own interval.  A pooled estimate and the rows' own SDs it pools are counted as independent,
+    own interval.  NaN too where an SD the floor takes as estimated is exactly 0 (three seeds or
+    repeats that gave one value, or values rounded alike): a chi-square estimate of 0 would give
+    its share, and with no other estimate the floor, an interval of zero width, as if it were
+    known, while the true variance behind it may be anything below the resolution of the values;
+    its width is unknown, and the report says so.  A pooled estimate and the rows' own SDs it pools are counted as independent,
     which overstates nu a little where some rows take it.  With three repeats and three seeds
     per row each SD has 2 degrees of freedom: on 18 rows of equal shares nu is about 72, and the
     interval runs from 0.86 to 1.19 times the floor."""
@@ -528,8 +532,11 @@ def floor_interval(df: pd.DataFrame, rows=None, level: float = 0.95) -> tuple[fl
     for rel, src in ((t["rel_m"], t["src_m"]), (t["rel_s"], t["src_s"])):
         for v, s in zip(rel[pick], src[pick]):
             share[s] = share.get(s, 0.0) + float(v) / int(pick.sum())
+    estimated = {s: v for s, v in share.items() if np.isfinite(t["dof"][s]) and t["dof"][s] > 0}
+    if any(v == 0 for v in estimated.values()):  # an SD estimated as 0: its own scatter is unknown
+        return float("nan"), float("nan"), float("nan")
     total = sum(share.values())
-    den = sum(v ** 2 / (t["dof"][s] + 2.0) for s, v in share.items() if np.isfinite(t["dof"][s]) and t["dof"][s] > 0)
+    den = sum(v ** 2 / (t["dof"][s] + 2.0) for s, v in estimated.items())
     if not den > 0 or not total > 0:
         return floor, floor, float("inf")
     nu = (total ** 2 - 2.0 * den) / den  # > 0: (sum T)^2 >= sum T^2 > 2 sum T^2 / (d + 2) for d > 0
