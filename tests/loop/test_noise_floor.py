@@ -79,8 +79,9 @@ def test_the_floor_interval_by_hand():
     assert floor == pytest.approx(math.sqrt((2.0 ** 2 / 100.0 ** 2 + 2.0 ** 2 / 120.0 ** 2) / 2), rel=1e-12)
     assert all(math.isnan(x) for x in rs.floor_interval(exact))
     # the same seeds scattering: the measured SDs known, the interval that of the seeds alone
-    scatter = usable(residual_frame(observations(known), _runs([(1, "F_N", 0, 98.0, "ok"), (2, "F_N", 0, 117.0, "ok"),
-                                                               (1, "F_N", 1, 100.0, "ok"), (2, "F_N", 1, 119.0, "ok")])))
+    seeds = _runs([(1, "F_N", 0, 98.0, "ok"), (2, "F_N", 0, 117.0, "ok"), (1, "F_N", 1, 100.0, "ok"),
+                   (2, "F_N", 1, 119.0, "ok")])
+    scatter = usable(residual_frame(observations(known), seeds))
     lo, hi, dof = rs.floor_interval(scatter)
     assert lo < noise_floor(scatter)[0] < hi and 1.0 < dof < math.inf
 
@@ -305,3 +306,90 @@ def test_the_report_says_when_the_floor_interval_is_unknown():
     o = SimpleNamespace(chosen=[], floor_note="", floor_interval=(math.nan, math.nan, math.nan))
     text = " ".join(files._floor_lines(s, o))
     assert "its 95 % interval is not known: an SD it comes from was estimated as 0" in text
+
+
+class _FailedFolds:
+    """soilcal.loop.select as core sees it, but the chosen effects' held-out errors of some rows
+    missing, as where a fold's fit fails (too few rows left to fit): those rows are not
+    held-out-valid, and the errors before and after, the floor and its interval leave them out."""
+
+    def __init__(self, rows):
+        from soilcal.loop import select
+
+        self._select, self._rows = select, rows
+
+    def __getattr__(self, name):
+        return getattr(self._select, name)
+
+    def cross_validate(self, model, folds):
+        rms, held = self._select.cross_validate(model, folds)
+        held[self._rows] = np.nan
+        return rms, held
+
+
+def test_the_floor_and_its_interval_are_those_of_the_held_out_valid_rows(monkeypatch):
+    # the stand-in campaign with rate_friction hidden, the held-out errors of its four noisiest
+    # rows (largest (sd_m^2 / n_m + sd_s^2 / n_s) / measured^2, from the table) missing: the floor
+    # and its interval are those of the other eight rows, and neither all twelve nor the four
+    # give them
+    base, _ = _loop(True, {"rate_friction": {"beta": 0.2}})
+    u = usable(base.residuals)
+    term = ((u["measured_sd"] ** 2 / u["measured_n"] + u["simulated_sd"] ** 2 / u["simulated_n"])
+            / u["measured"] ** 2).to_numpy()
+    noisy = np.argsort(term)[-4:]
+    monkeypatch.setattr(core, "sl", _FailedFolds(noisy))
+    out, text = _loop(True, {"rate_friction": {"beta": 0.2}})
+    assert out.chosen == ["rate_friction"]
+    ok = np.ones(len(u), bool)
+    ok[noisy] = False
+    s = out.summary.iloc[0]
+    assert s["rmse_before_percent"] == pytest.approx(100 * math.sqrt(np.mean(u["relative_residual"][ok] ** 2)))
+    right, everything, wrong = (100 * noise_floor(u, m)[0] for m in (ok, None, ~ok))
+    assert s["rmse_floor_percent"] == pytest.approx(right, rel=1e-12)
+    assert abs(right - everything) > 0.02 * right and abs(right - wrong) > 0.02 * right
+    lo, hi, nu = rs.floor_interval(u, ok)
+    assert out.floor_interval == (pytest.approx(100 * lo, rel=1e-12), pytest.approx(100 * hi, rel=1e-12),
+                                  pytest.approx(nu, rel=1e-12))
+    for m in (None, ~ok):
+        assert rs.floor_interval(u, m)[2] != pytest.approx(nu, rel=1e-3)
+
+
+def _one_estimate(sd_s, n_s):
+    # one row whose only estimated variance is its seed SD over n_s seeds: the measured value
+    # is given as exact (SD 0 without a repeat count, taken as known)
+    return pd.DataFrame({"measurement": "bin", "measure": "F_N", "simulation": "c0", "measured": [100.0],
+                         "scale": [100.0], "measured_sd": [0.0], "measured_n": [np.nan],
+                         "simulated_sd": [sd_s], "simulated_n": [float(n_s)]})
+
+
+@pytest.mark.parametrize("n_s", [3, 5])
+def test_one_estimated_variance_gives_its_exact_chi_square_interval(n_s):
+    # floor^2 is then one sample variance T = sigma^2 chi-square(d) / d on d = n_s - 1 degrees of
+    # freedom, whose exact interval is T d / chi2(d) quantiles: Satterthwaite's nu must be d.
+    # With sigma^4 / d estimated by T^2 / (d + 2), the numerator's correction
+    # (sum T)^2 - 2 sum T^2 / (d + 2) = T^2 d / (d + 2) gives nu = d exactly; (sum T)^2 alone
+    # would give d + 2, an interval too narrow (at d = 2 it covers sigma in
+    # exp(-0.121) - exp(-2.786) = 82.4 % of tables, not 95 %).
+    d = n_s - 1
+    df = _one_estimate(3.0, n_s)
+    floor, _ = noise_floor(df)
+    assert floor == pytest.approx(3.0 / math.sqrt(n_s) / 100.0, rel=1e-12)
+    lo, hi, nu = rs.floor_interval(df)
+    assert nu == pytest.approx(d, rel=1e-12)
+    assert lo == pytest.approx(floor * math.sqrt(d / stats.chi2.ppf(0.975, d)), rel=1e-12)
+    assert hi == pytest.approx(floor * math.sqrt(d / stats.chi2.ppf(0.025, d)), rel=1e-12)
+
+
+def test_one_estimated_variance_covers_the_true_floor_at_its_level():
+    # 1000 seeded one-row tables of three seeds (true seed SD 4 N): the interval covers the true
+    # floor 4 / sqrt(3) % in a share within the binomial 99.9 % band about 0.95 (926-971; 954 covered);
+    # an interval on d + 2 = 4 degrees of freedom would cover it in 82.4 % (824 expected)
+    rng = np.random.default_rng(7)
+    trials, covered = 1000, 0
+    true = 4.0 / math.sqrt(3) / 100.0
+    for sd in 4.0 * np.sqrt(rng.chisquare(2, trials) / 2):
+        lo, hi, _ = rs.floor_interval(_one_estimate(sd, 3))
+        covered += lo <= true <= hi
+    a, b = stats.binom.ppf([0.0005, 0.9995], trials, 0.95)
+    assert a <= covered <= b, (covered, a, b)
+    assert not a <= stats.binom.mean(trials, 0.824) <= b
