@@ -505,19 +505,28 @@ def floor_of(r, detail: Path) -> tuple:
     return _rounded(f, 2), _rounded(core.explained_percent(b, a, f), 1)
 
 
+#: at most this many known values of a case are shown each, not as a median: the median of two
+#: campaigns is their mean, which matches neither (0 and 112 would read 56)
+FEW = 3
+
+
 def _median_text(values, n, digits) -> str:
-    """The median of the rows' ``values`` that are known, with how many of the ``n`` rows they
-    are where some are not; empty where none is."""
-    v = [float(x) for x in values if str(x) not in ("", "nan")]
+    """The rows' ``values`` that are known: each of them, smallest first, where there are at most
+    :data:`FEW`, else their median with their range; with how many of the ``n`` rows they are
+    where some are not; empty where none is."""
+    v = sorted(float(x) for x in values if str(x) not in ("", "nan"))
     if not v:
         return ""
-    return f"{np.median(v):.{digits}f}" + (f" ({len(v)} of {n})" if len(v) < n else "")
+    if len(v) <= FEW:
+        text = ", ".join(f"{x:.{digits}f}" for x in v)
+    else:
+        text = f"{np.median(v):.{digits}f} ({v[0]:.{digits}f} to {v[-1]:.{digits}f})"
+    return text + (f" ({len(v)} of {n})" if len(v) < n else "")
 
 
 def _summary(rows):
     out = ["| engine | case | campaigns | correct | false attributions | max parameter error, % | "
-           "RMS error before -> after, % (median) | noise floor, % (median) | explainable error removed, % (median) "
-           "| median wall s |", "|---|---|---|---|---|---|---|---|---|---|"]
+           "RMS error before -> after, % (median) | noise floor, % | explainable error removed, % | median wall s |", "|---|---|---|---|---|---|---|---|---|---|"]
     keys = list(dict.fromkeys((r["engine"], r["case"], _speeds_text(r), _responses_text(r)) for r in rows))
     for eng, case, speeds, resp in keys:
         g = [r for r in rows if r["engine"] == eng and r["case"] == case and _speeds_text(r) == speeds
@@ -615,7 +624,11 @@ def main(argv=None):
           "the page computes them from its campaign's saved residual table and held-out predictions "
           "(`loop_dem/<case>[_campaign<seed>]_residuals.csv`, `_predictions.csv`) where those reproduce the row's "
           "errors before and after to 0.01 %, and leaves them empty where they do not (the tables are another run's: "
-          "campaigns of the two speed spacings share their names) or are missing.", "",
+          "campaigns of the two speed spacings share their names) or are missing.  In the summary a case's floors "
+          "and explained shares are each campaign's, smallest first, where it has at most three, else their median "
+          "(smallest to largest); \"(k of n)\" where only k of its n campaigns have one.  Even an exactly right "
+          "effect leaves the held-out error a little above the floor (it includes the error of fitting the effect's "
+          "parameter without the held-out rows), so its explained share lies a little below 100.", "",
           *_summary(shown), "", "DEM rows (verdicts in full):", "",
           "| case | campaign | chosen | parameters (95 % interval) | parameter error, % | RMS error before -> after, % "
           "| noise floor, % | explainable error removed, % | levels | speeds | measures | DEM runs | wall s | commit "

@@ -60,12 +60,24 @@ def test_summary_counts_the_spacings_apart(bench):
                      "| dem | stones | 1 | 1 | 0 |  | 20.00 -> 20.00 |  |  | 1.0 |"]
 
 
-def test_summary_gives_the_median_floor_and_how_many_rows_have_one(bench):
+def test_summary_gives_each_campaigns_floor_and_how_many_rows_have_one(bench):
+    # two of three campaigns with a floor, of 9.5 and 8.5: their median 9.0 would match neither
     rows = [dict(_row("none", 0, "log", "10"), rmse_floor_percent="9.5", explained_percent=""),
             dict(_row("none", 1, "log", "12"), rmse_floor_percent="8.5", explained_percent="40"),
             dict(_row("none", 2, "log", "14"), rmse_floor_percent="", explained_percent="")]
-    assert bench._summary(rows)[2:] == ["| dem | none | 3 | 3 | 0 |  | 12.00 -> 12.00 | 9.00 (2 of 3) | 40 (1 of 3) "
-                                        "| 1.0 |"]
+    assert bench._summary(rows)[2:] == ["| dem | none | 3 | 3 | 0 |  | 12.00 -> 12.00 | 8.50, 9.50 (2 of 3) | "
+                                        "40 (1 of 3) | 1.0 |"]
+    # explained shares of 0 and 112.2: both shown, not "56"
+    rows[0]["explained_percent"], rows[1]["explained_percent"] = "112.2", "0.0"
+    assert "| 0, 112 (2 of 3) |" in bench._summary(rows)[2]
+
+
+def test_summary_gives_the_median_and_range_of_more_campaigns(bench):
+    # five campaigns: floors 1.0-1.4, median 1.3; shares 90-101, median 99
+    rows = [dict(_row("none", i, "log", "10"), rmse_floor_percent=f, explained_percent=e)
+            for i, (f, e) in enumerate([("1.3", "99.4"), ("1.0", "90.0"), ("1.4", "101.0"), ("1.2", "98.6"),
+                                        ("1.35", "100.0")])]
+    assert bench._summary(rows)[2].split(" | ")[7:9] == ["1.30 (1.00 to 1.40)", "99 (90 to 101)"]
 
 
 def test_an_earlier_dem_row_takes_its_floor_from_its_campaign_tables(bench, tmp_path):
