@@ -24,7 +24,11 @@ the hidden effect, then ``soilcal.loop.core.run_inprocess`` runs the whole loop 
 Cases: every library effect, two effects at once, a periodic disturbance along the bin,
 stones, a random offset between test days, and no effect.  Written:
 ``benchmarks/results/loop.csv`` (one row per engine, case and campaign seed: chosen effects,
-parameter error, RMS error before/after, false attribution, wall time; earlier rows kept where
+parameter error, RMS error before/after beside the noise floor the measured and seed
+uncertainty alone give and the share of the explainable error removed (``rmse_floor_percent``,
+``explained_percent``, as in loop_summary.csv; empty in rows written before they existed, for
+which the page computes them from a DEM campaign's saved tables where those are the row's run,
+:func:`floor_of`), false attribution, wall time; earlier rows kept where
 not rerun: a stand-in case reruns all its seeds, a DEM case the campaign of ``--seed`` and
 ``--speeds``),
 ``loop.md``, and per DEM case and campaign its residuals, diagnosis before and after, every
@@ -91,8 +95,9 @@ from _report import commit, read_rows, write_page, write_rows
 HERE = Path(__file__).resolve().parent
 ROOT = HERE.parent
 FIELDS = ["engine", "case", "seed", "hidden", "disturbance", "chosen", "correct", "false_attribution",
-          "parameter_error_percent", "rmse_before_percent", "rmse_after_percent", "error_reduction_percent",
-          "verdict", "dem_runs", "wall_s", "commit", "design_points", "parameters", "ci95", "speeds", "responses"]
+          "parameter_error_percent", "rmse_before_percent", "rmse_after_percent", "rmse_floor_percent",
+          "error_reduction_percent", "explained_percent", "verdict", "dem_runs", "wall_s", "commit", "design_points",
+          "parameters", "ci95", "speeds", "responses"]
 
 STANDIN_CASES = {
     "rate_friction": ({"rate_friction": {"beta": 0.2}}, {}),
@@ -124,6 +129,15 @@ DEM_REFERENCE = {"tool_speed": 0.4, "working_depth": 0.03, "moisture_content": 1
 DEM_SEEDS = 3  # per condition, for the measured values and for every design point
 
 
+def _rounded(x, digits) -> float | str:
+    """``x`` rounded, or "" where it is missing or not finite (an unknown noise floor)."""
+    try:
+        x = float(x)
+    except (TypeError, ValueError):
+        return ""
+    return round(x, digits) if np.isfinite(x) else ""
+
+
 def _row(engine, case, seed, hidden, dist, out, wall, runs):
     chosen = sorted(out.chosen)
     errs = []
@@ -142,6 +156,8 @@ def _row(engine, case, seed, hidden, dist, out, wall, runs):
                 rmse_after_percent=round(float(s["rmse_after_percent"]), 2),
                 error_reduction_percent=round(float(s["error_reduction_percent"]), 1)
                 if np.isfinite(s["error_reduction_percent"]) else "",
+                rmse_floor_percent=_rounded(s.get("rmse_floor_percent"), 2),
+                explained_percent=_rounded(s.get("explained_percent"), 1),
                 verdict=out.verdict.replace("|", "/"), dem_runs=runs, wall_s=round(wall, 1), commit=commit())
 
 
@@ -432,9 +448,85 @@ def _theta_text(r) -> str:
                      for k, v in theta.items())
 
 
+def detail_tag(r) -> str:
+    """The name stem of a DEM row's detail tables (``loop_dem/<stem>_residuals.csv``), as
+    :func:`dem_rows` writes them: the case, ``_campaign<seed>`` for a campaign other than 0, and
+    the measures' tag (:func:`responses_tag`).  Campaigns of the two speed spacings share it:
+    the tables are those of the campaign run last."""
+    tag = r["case"] if str(r["seed"]) == "0" else f"{r['case']}_campaign{r['seed']}"
+    if r["case"] not in COMPRESSION_CASES:
+        tag += responses_tag(tuple(_responses_text(r).split("+")))
+    return tag
+
+
+def floor_of(r, detail: Path) -> tuple:
+    """(noise floor, share of the explainable error removed), in %, of a row, "" where unknown:
+    the row's own (``rmse_floor_percent``, ``explained_percent``, from
+    :func:`soilcal.loop.residuals.noise_floor` and :func:`soilcal.loop.core.explained_percent`);
+    for a DEM row written before those columns existed, computed from its campaign's saved
+    residual table and held-out predictions (``detail``: ``loop_dem/``, :func:`detail_tag`)
+    where they reproduce the row's RMS errors before and after to loop.csv's rounding (0.01 %),
+    else "" (the tables are another run's: the campaign of the other speed spacing, or one
+    rerun since)."""
+    def text(x):  # a cell as written: None (a row without the column) and NaN are empty, 0 is 0
+        x = "" if x is None else str(x)
+        return "" if x == "nan" else x
+
+    own = text(r.get("rmse_floor_percent"))
+    if own or r["engine"] != "dem":
+        return own, text(r.get("explained_percent"))
+    tag = detail_tag(r)
+    res_path, pred_path = Path(detail) / f"{tag}_residuals.csv", Path(detail) / f"{tag}_predictions.csv"
+    if not res_path.exists():
+        return "", ""
+    import pandas as pd
+
+    from soilcal.loop import core, residuals as rs
+
+    u = rs.usable(pd.read_csv(res_path))
+    before = u["relative_residual"].to_numpy(float)
+    after = before
+    if pred_path.exists():
+        pred = pd.read_csv(pred_path)
+        if "heldout_prediction" in pred and len(pred) == len(u):
+            after = (u["measured"].to_numpy(float) - pred["heldout_prediction"].to_numpy(float)) / rs.scale_of(u)
+    ok = np.isfinite(before) & np.isfinite(after)
+    if not ok.any():
+        return "", ""
+    b, a = (100 * float(np.sqrt(np.mean(x[ok] ** 2))) for x in (before, after))
+    try:
+        same = abs(b - float(r["rmse_before_percent"])) <= 0.005 + 1e-9 and abs(a - float(r["rmse_after_percent"])) \
+            <= 0.005 + 1e-9
+    except ValueError:
+        return "", ""
+    if not same:
+        return "", ""
+    f = 100 * rs.noise_floor(u, ok)[0]
+    return _rounded(f, 2), _rounded(core.explained_percent(b, a, f), 1)
+
+
+#: at most this many known values of a case are shown each, not as a median: the median of two
+#: campaigns is their mean, which matches neither (0 and 112 would read 56)
+FEW = 3
+
+
+def _median_text(values, n, digits) -> str:
+    """The rows' ``values`` that are known: each of them, smallest first, where there are at most
+    :data:`FEW`, else their median with their range; with how many of the ``n`` rows they are
+    where some are not; empty where none is."""
+    v = sorted(float(x) for x in values if str(x) not in ("", "nan"))
+    if not v:
+        return ""
+    if len(v) <= FEW:
+        text = ", ".join(f"{x:.{digits}f}" for x in v)
+    else:
+        text = f"{np.median(v):.{digits}f} ({v[0]:.{digits}f} to {v[-1]:.{digits}f})"
+    return text + (f" ({len(v)} of {n})" if len(v) < n else "")
+
+
 def _summary(rows):
     out = ["| engine | case | campaigns | correct | false attributions | max parameter error, % | "
-           "RMS error before -> after, % (median) | median wall s |", "|---|---|---|---|---|---|---|---|"]
+           "RMS error before -> after, % (median) | noise floor, % | explainable error removed, % | median wall s |", "|---|---|---|---|---|---|---|---|---|---|"]
     keys = list(dict.fromkeys((r["engine"], r["case"], _speeds_text(r), _responses_text(r)) for r in rows))
     for eng, case, speeds, resp in keys:
         g = [r for r in rows if r["engine"] == eng and r["case"] == case and _speeds_text(r) == speeds
@@ -451,10 +543,11 @@ def _summary(rows):
         a = np.median([float(r["rmse_after_percent"]) for r in g])
         ok = sum(str(r["correct"]) == "True" for r in g)
         fa = sum(str(r["false_attribution"]) == "True" for r in g)
-        out.append(f"| {eng} | {case} | {len(g)} | {ok} | {fa} | {max(pe):.1f} | {b:.2f} -> {a:.2f} | "
-                   f"{np.median([float(r['wall_s']) for r in g]):.1f} |" if pe else
-                   f"| {eng} | {case} | {len(g)} | {ok} | {fa} |  | {b:.2f} -> {a:.2f} | "
-                   f"{np.median([float(r['wall_s']) for r in g]):.1f} |")
+        floor = _median_text([r.get("rmse_floor_percent", "") for r in g], len(g), 2)
+        explained = _median_text([r.get("explained_percent", "") for r in g], len(g), 0)
+        worst = f"{max(pe):.1f}" if pe else ""
+        out.append(f"| {eng} | {case} | {len(g)} | {ok} | {fa} | {worst} | {b:.2f} -> {a:.2f} | "
+                   f"{floor} | {explained} | {np.median([float(r['wall_s']) for r in g]):.1f} |")
     return out
 
 
@@ -507,6 +600,9 @@ def main(argv=None):
     old = [r for r in read_rows(out / "loop.csv", FIELDS) if not replaced(r, new)]
     rows = sorted(old + new, key=lambda r: (r["engine"], str(r["seed"]) if r["engine"] == "dem" else ""))
     write_rows(out / "loop.csv", rows, FIELDS)
+    # the page's rows: a DEM row written before the noise floor existed gets it from its saved tables
+    shown = [dict(r, **dict(zip(("rmse_floor_percent", "explained_percent"), floor_of(r, out / "loop_dem"))))
+             for r in rows]
     md = ["# Measured-data loop benchmark", "",
           f"Machine: {platform.machine()}, {os.cpu_count()} logical CPUs, Python {platform.python_version()}; "
           f"commit {commit()}, {time.strftime('%Y-%m-%d %H:%M', time.gmtime())} UTC; "
@@ -519,18 +615,34 @@ def main(argv=None):
           "hidden ones (none for a disturbance outside the library or no effect); false attribution: a library "
           "effect chosen that was not hidden.  Targets: the right effect with its parameter within 25 % and the "
           "held-out RMS error down by 70 %; no false attribution.", "",
-          *_summary(rows), "", "DEM rows (verdicts in full):", "",
+          "Noise floor: the RMS relative error a model without any misfit would show on the same rows, "
+          "sqrt(mean((sd_m^2 / n_m + sd_s^2 / n_s) / scale^2)) of each row's measured SD over its repeats and seed "
+          "SD over its seeds (`soilcal.loop.residuals.noise_floor`, loop_summary.csv's `rmse_floor_percent`): no "
+          "effect brings the held-out error below it except by chance.  Explainable error removed: (before^2 - "
+          "after^2) / (before^2 - floor^2), empty where the error before is not above the floor "
+          "(`explained_percent`).  Rows written before these columns existed have none in loop.csv; for a DEM row "
+          "the page computes them from its campaign's saved residual table and held-out predictions "
+          "(`loop_dem/<case>[_campaign<seed>]_residuals.csv`, `_predictions.csv`) where those reproduce the row's "
+          "errors before and after to 0.01 %, and leaves them empty where they do not (the tables are another run's: "
+          "campaigns of the two speed spacings share their names) or are missing.  In the summary a case's floors "
+          "and explained shares are each campaign's, smallest first, where it has at most three, else their median "
+          "(smallest to largest); \"(k of n)\" where only k of its n campaigns have one.  Even an exactly right "
+          "effect leaves the held-out error a little above the floor (it includes the error of fitting the effect's "
+          "parameter without the held-out rows), so its explained share lies a little below 100.", "",
+          *_summary(shown), "", "DEM rows (verdicts in full):", "",
           "| case | campaign | chosen | parameters (95 % interval) | parameter error, % | RMS error before -> after, % "
-          "| levels | speeds | measures | DEM runs | wall s | commit | verdict |",
-          "|---|---|---|---|---|---|---|---|---|---|---|---|---|",
+          "| noise floor, % | explainable error removed, % | levels | speeds | measures | DEM runs | wall s | commit "
+          "| verdict |",
+          "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|",
           *(f"| {r['case']} | {r['seed']} | {r['chosen']} | {_theta_text(r)} | {r['parameter_error_percent']} | {r['rmse_before_percent']} -> "
-            f"{r['rmse_after_percent']} | {r.get('design_points') or 3} | {_speeds_text(r)} | "
+            f"{r['rmse_after_percent']} | {r['rmse_floor_percent']} | {r['explained_percent']} | "
+            f"{r.get('design_points') or 3} | {_speeds_text(r)} | "
             f"{_responses_text(r).replace('+', ', ')} | {r['dem_runs']} | {r['wall_s']} | "
             f"{r['commit']} | {r['verdict']} |"
-            for r in rows if r["engine"] == "dem"),
+            for r in shown if r["engine"] == "dem"),
           "", "Rows: `loop.csv`; per DEM case and campaign: `loop_dem/`.", ""]
     write_page(out / "loop.md", md)
-    print("\n".join(_summary(rows)))
+    print("\n".join(_summary(shown)))
 
 
 if __name__ == "__main__":

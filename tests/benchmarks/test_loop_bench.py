@@ -55,9 +55,57 @@ def test_summary_counts_the_spacings_apart(bench):
     rows = [_row("none", 0, "", "10"), _row("none", 1, "uniform", "12"), _row("none", 0, "log", "30"),
             _row("stones", 0, "")]
     lines = bench._summary(rows)[2:]
-    assert lines == ["| dem | none (uniform speeds) | 2 | 2 | 0 |  | 11.00 -> 11.00 | 1.0 |",
-                     "| dem | none (log speeds) | 1 | 1 | 0 |  | 30.00 -> 30.00 | 1.0 |",
-                     "| dem | stones | 1 | 1 | 0 |  | 20.00 -> 20.00 | 1.0 |"]
+    assert lines == ["| dem | none (uniform speeds) | 2 | 2 | 0 |  | 11.00 -> 11.00 |  |  | 1.0 |",
+                     "| dem | none (log speeds) | 1 | 1 | 0 |  | 30.00 -> 30.00 |  |  | 1.0 |",
+                     "| dem | stones | 1 | 1 | 0 |  | 20.00 -> 20.00 |  |  | 1.0 |"]
+
+
+def test_summary_gives_each_campaigns_floor_and_how_many_rows_have_one(bench):
+    # two of three campaigns with a floor, of 9.5 and 8.5: their median 9.0 would match neither
+    rows = [dict(_row("none", 0, "log", "10"), rmse_floor_percent="9.5", explained_percent=""),
+            dict(_row("none", 1, "log", "12"), rmse_floor_percent="8.5", explained_percent="40"),
+            dict(_row("none", 2, "log", "14"), rmse_floor_percent="", explained_percent="")]
+    assert bench._summary(rows)[2:] == ["| dem | none | 3 | 3 | 0 |  | 12.00 -> 12.00 | 8.50, 9.50 (2 of 3) | "
+                                        "40 (1 of 3) | 1.0 |"]
+    # explained shares of 0 and 112.2: both shown, not "56"
+    rows[0]["explained_percent"], rows[1]["explained_percent"] = "112.2", "0.0"
+    assert "| 0, 112 (2 of 3) |" in bench._summary(rows)[2]
+
+
+def test_summary_gives_the_median_and_range_of_more_campaigns(bench):
+    # five campaigns: floors 1.0-1.4, median 1.3; shares 90-101, median 99
+    rows = [dict(_row("none", i, "log", "10"), rmse_floor_percent=f, explained_percent=e)
+            for i, (f, e) in enumerate([("1.3", "99.4"), ("1.0", "90.0"), ("1.4", "101.0"), ("1.2", "98.6"),
+                                        ("1.35", "100.0")])]
+    assert bench._summary(rows)[2].split(" | ")[7:9] == ["1.30 (1.00 to 1.40)", "99 (90 to 101)"]
+
+
+def test_an_earlier_dem_row_takes_its_floor_from_its_campaign_tables(bench, tmp_path):
+    # a campaign's saved residual table: 100 N measured (SD 10 N over 4 repeats) against 90 N
+    # simulated (SD 6 N over 3 seeds), 200 N (SD 20 N, 4) against 210 N (SD 12 N, 3); relative
+    # residuals 0.1 and -0.05, so the RMS error sqrt((0.01 + 0.0025) / 2) = 7.91 %; each row's
+    # floor term (10^2 / 4 + 6^2 / 3) / 100^2 = (20^2 / 4 + 12^2 / 3) / 200^2 = 0.0037, so the
+    # floor sqrt(0.0037) = 6.08 %; nothing chosen, no held-out predictions: after = before
+    import pandas as pd
+
+    detail = tmp_path / "loop_dem"
+    detail.mkdir()
+    pd.DataFrame({"measurement": "campaign", "row": [1, 2], "measure": "horizontal_force_N",
+                  "simulation": ["a", "b"], "measured": [100.0, 200.0], "measured_sd": [10.0, 20.0],
+                  "measured_n": [4.0, 4.0], "simulated_mean": [90.0, 210.0], "simulated_sd": [6.0, 12.0],
+                  "simulated_n": [3, 3], "scale": [100.0, 200.0], "relative_residual": [0.1, -0.05]}
+                 ).to_csv(detail / "none_campaign1_residuals.csv", index=False)
+    row = dict(_row("none", 1, "log", "7.91"), responses="")
+    assert bench.detail_tag(row) == "none_campaign1"
+    assert bench.floor_of(row, detail) == (6.08, 0.0)
+    # tables that do not give the row's errors are another run's: no floor from them
+    assert bench.floor_of(dict(row, rmse_before_percent="8.00", rmse_after_percent="8.00"), detail) == ("", "")
+    assert bench.floor_of(dict(row, seed=2), detail) == ("", "")  # no tables of that campaign
+    # a row with its own floor keeps it
+    assert bench.floor_of(dict(row, rmse_floor_percent="5.5", explained_percent="12.0"), detail) == ("5.5", "12.0")
+    # a row of this run (numbers, not text): an explained share of 0 is 0, not empty
+    assert bench.floor_of(dict(row, engine="standin", rmse_floor_percent=1.42, explained_percent=0.0), detail) == (
+        "1.42", "0.0")
 
 
 def test_header_names_files_not_directories(bench):
@@ -164,9 +212,9 @@ def test_a_campaign_of_other_measures_replaces_nothing(bench):
     assert bench.replaced(old, [dict(_row("rate_friction", 0, "log"), responses="horizontal_force_N")])
     assert bench.replaced(dict(old, responses=both), [dict(_row("rate_friction", 0, "log"), responses=both)])
     lines = bench._summary([old, dict(_row("rate_friction", 0, "log", "30"), responses=both)])[2:]
-    assert lines == ["| dem | rate_friction (measuring horizontal_force_N) | 1 | 1 | 0 |  | 20.00 -> 20.00 | 1.0 |",
+    assert lines == ["| dem | rate_friction (measuring horizontal_force_N) | 1 | 1 | 0 |  | 20.00 -> 20.00 |  |  | 1.0 |",
                      "| dem | rate_friction (measuring horizontal_force_N, vertical_force_N) | 1 | 1 | 0 |  | "
-                     "30.00 -> 30.00 | 1.0 |"]
+                     "30.00 -> 30.00 |  |  | 1.0 |"]
     assert bench.responses_tag(("horizontal_force_N",)) == ""
     assert bench.responses_tag(("horizontal_force_N", "vertical_force_N")) == "_horizontal_vertical"
 

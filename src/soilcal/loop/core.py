@@ -299,9 +299,9 @@ SELECTION_COLUMNS = ["step", "effects", "parameters", "ci95", "heldout_rmse_perc
                      "heldout_max_percent", "aicc", "reference_aicc", "p_paired", "accepted", "reason", "surrogate",
                      "lack_of_fit_p"]
 SUMMARY_COLUMNS = ["soil", "rows", "usable_rows", "verdict", "effects", "parameters", "ci95", "ci95_method", "follows",
-                   "rmse_before_percent", "rmse_after_percent", "max_before_percent", "max_after_percent",
-                   "error_reduction_percent", "alpha", "reference", "folds", "nuisance", "nuisance_ci95",
-                   "nuisance_method", "surrogate", "lack_of_fit_p"]
+                   "rmse_before_percent", "rmse_after_percent", "rmse_floor_percent", "max_before_percent",
+                   "max_after_percent", "error_reduction_percent", "explained_percent", "alpha", "reference", "folds",
+                   "nuisance", "nuisance_ci95", "nuisance_method", "surrogate", "lack_of_fit_p"]
 
 
 #: the parameter of the free uniform scale of the model (:func:`soilcal.loop.select.scale_data`)
@@ -382,6 +382,8 @@ class Outcome:
     folds: str = ""  # which grouping the held-out folds used, and why (:func:`fold_grouping`)
     effect_data: dict = None  # effect -> its select.EffectData (surrogates), for a refit with joint runs
     uniform_scale: bool = False  # whether the chosen effects were fitted beside a free uniform scale
+    floor_note: str = ""  # why the noise floor is empty, or which rows took a pooled variance (:func:`noise_floor`)
+    floor_interval: tuple = (math.nan, math.nan, math.nan)  # its 95 % interval and degrees of freedom
 
 
 def _follows(rank: pd.DataFrame, res: pd.DataFrame | None = None, quantity_of: dict | None = None,
@@ -1328,12 +1330,16 @@ def _analyse(soil: str, res: pd.DataFrame, diag: pd.DataFrame, cands: list, effe
     ra = float(np.sqrt(np.mean(after_cv[ok] ** 2))) * 100 if ok.any() else math.nan
     mb = float(np.max(np.abs(before[ok]))) * 100 if ok.any() else math.nan
     ma = float(np.max(np.abs(after_cv[ok]))) * 100 if ok.any() else math.nan
+    floor, floor_note = rs.noise_floor(u, ok)
+    rf = 100 * floor
+    floor_lo, floor_hi, floor_dof = rs.floor_interval(u, ok)
     surrogate_kind, lack_of_fit_p = _surrogates(data, chosen)
     summary = pd.DataFrame([{
         "soil": soil, "rows": len(res), "usable_rows": n, "verdict": verdict, "effects": "+".join(chosen),
         "parameters": _fmt(theta), "ci95": _fmt_ci(ci), "ci95_method": ci_method, "follows": follows, "rmse_before_percent": rb,
-        "rmse_after_percent": ra, "max_before_percent": mb, "max_after_percent": ma,
+        "rmse_after_percent": ra, "rmse_floor_percent": rf, "max_before_percent": mb, "max_after_percent": ma,
         "error_reduction_percent": (1 - ra / rb) * 100 if rb and np.isfinite(rb) and rb > 0 else math.nan,
+        "explained_percent": explained_percent(rb, ra, rf),
         "alpha": settings.alpha, "reference": _fmt(reference), "folds": fold_text, "nuisance": _fmt(nuisance[0]),
         "nuisance_ci95": _fmt_ci(nuisance[1]), "nuisance_method": nuisance[2],
         "surrogate": surrogate_kind, "lack_of_fit_p": lack_of_fit_p}],
@@ -1341,8 +1347,23 @@ def _analyse(soil: str, res: pd.DataFrame, diag: pd.DataFrame, cands: list, effe
     out = Outcome(res, diag, rank, cands, pd.DataFrame(sel_rows, columns=SELECTION_COLUMNS), summary, pred,
                   verdict, chosen, theta, after, dg.detectable(res, diag, quantity_cols, settings.alpha),
                   {nm: list(d.missing) for nm, d in data.items() if d.missing}, dict(skipped_effects or {}),
-                  fold_by, fold_text, data, uniform is not None)
+                  fold_by, fold_text, data, uniform is not None, floor_note,
+                  (100 * floor_lo, 100 * floor_hi, floor_dof))
     return out, (None if pending is None else pending + (ci_method,))
+
+
+def explained_percent(before: float, after: float, floor: float) -> float:
+    """The share of the explainable error that the chosen effects removed, in %:
+    (before^2 - after^2) / (before^2 - floor^2) of the RMS errors before and after (held out)
+    and of the noise floor (:func:`soilcal.loop.residuals.noise_floor`), all in the same
+    unit.  The error a model without misfit would still show is the floor, so only
+    before^2 - floor^2 of the mean square can be explained: 100 where the effects bring the
+    held-out error down to the floor, above 100 where the rows happen to land below it, below
+    0 where the error grew.  NaN where the floor is unknown or the error before is not above
+    it (nothing beyond the uncertainties to explain)."""
+    if not (np.isfinite(before) and np.isfinite(after) and np.isfinite(floor)) or before <= floor:
+        return math.nan
+    return 100.0 * (before ** 2 - after ** 2) / (before ** 2 - floor ** 2)
 
 
 def _with_interval(out: Outcome, pending: tuple | None, settings: Settings) -> Outcome:

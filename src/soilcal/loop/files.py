@@ -14,9 +14,10 @@ Outputs under ``results/<soil>/loop/``:
   held-out RMS error against its reference, AICc, paired-test p, accepted, why not, which
   surrogate each effect went through and the smallest of its rows' lack-of-fit p),
   ``predictions.csv``, ``loop_summary.csv`` (error before and after on held-out
-  measurements, the verdict, the chosen effects' surrogates), ``detectable.csv`` (the smallest bias and trends the diagnosis
-  finds with 80 % power: :func:`soilcal.loop.diagnose.detectable`), ``report.md`` and
-  ``figures/after/``.
+  measurements beside the noise floor the measured and seed uncertainty alone give and the
+  share of the explainable error removed, the verdict, the chosen effects' surrogates),
+  ``detectable.csv`` (the smallest bias and trends the diagnosis finds with 80 % power:
+  :func:`soilcal.loop.diagnose.detectable`), ``report.md`` and ``figures/after/``.
 """
 
 from __future__ import annotations
@@ -286,6 +287,45 @@ def _nuisance_lines(s) -> list[str]:
             f"How: {s['nuisance_method']}.", ""]
 
 
+def _floor_lines(s, o: core.Outcome) -> list[str]:
+    """The report's noise floor (``loop_summary.csv``: ``rmse_floor_percent``,
+    ``explained_percent``; the outcome's ``floor_note`` and ``floor_interval``): its row of the
+    error table and what it means."""
+    floor, before, after = (float(s[k]) for k in ("rmse_floor_percent", "rmse_before_percent", "rmse_after_percent"))
+    if not np.isfinite(floor):
+        return ["| the measured and seed uncertainty alone | not known | |", "",
+                "The error the measured and seed uncertainty alone give (what a model without misfit would show on "
+                f"these rows) is not known: {o.floor_note or 'no uncertainty is given'}.", ""]
+    lo, hi, dof = o.floor_interval
+    if np.isfinite(lo) and np.isfinite(dof):
+        band = (f" (95 % interval {lo:.2f}-{hi:.2f} %: the SDs it comes from are estimates, on {dof:.0f} degrees of "
+                "freedom)")
+    elif np.isfinite(lo):
+        band = " (exact: every SD it comes from is given as known)"
+    else:
+        band = (" (its 95 % interval is not known: an SD it comes from was estimated as 0 from its repeats or seeds, "
+                "values alike, which says nothing of how large the true scatter may be)")
+    text = (f"The error the measured and seed uncertainty alone give is {floor:.2f} %{band}: the RMS relative error a "
+            "model without any misfit would show on these rows, sqrt(mean((sd_m^2 / n_m + sd_s^2 / n_s) / scale^2)) "
+            "of each row's measured SD over its repeats and seed SD over its seeds (residuals.csv)"
+            + (f"; {o.floor_note}" if o.floor_note else "") + ".  No effect can bring the held-out error below it, "
+            "except by chance.")
+    explained = float(s["explained_percent"])
+    if o.chosen and np.isfinite(explained):
+        text += (f"  The chosen effects removed {explained:.0f} % of the explainable error, "
+                 f"(before^2 - after^2) / (before^2 - floor^2) = ({before:.2f}^2 - {after:.2f}^2) / "
+                 f"({before:.2f}^2 - {floor:.2f}^2).")
+    elif o.chosen:
+        text += "  The error before is not above the floor: the share of the explainable error removed is not defined."
+    else:
+        # the floor's interval covers the SDs' uncertainty only, not the scatter of an RMS error
+        # over a few rows about it: no comparison of the two is a test, and none is made
+        text += (f"  No effect was chosen.  Beside the floor the error before ({before:.2f} %) tests nothing: the "
+                 "floor's interval covers only the uncertainty of the SDs, not the scatter of an RMS error over these "
+                 "rows; whether the residual lies within the uncertainties is the diagnosis's verdict above.")
+    return [f"| the measured and seed uncertainty alone | {floor:.2f} | |", "", text, ""]
+
+
 def report(soil: str, o: core.Outcome, plans: list) -> str:
     """``report.md``: verdict, error before and after, chosen effects, diagnosis, every
     candidate, settings."""
@@ -299,7 +339,8 @@ def report(soil: str, o: core.Outcome, plans: list) -> str:
              f"Held-out groups: {o.folds or plan.get('folds') or 'one fold per measured condition'}.", "",
              "| | RMS error, % | largest error, % |", "|---|---|---|",
              f"| calibrated model | {s['rmse_before_percent']:.2f} | {s['max_before_percent']:.2f} |",
-             f"| with the chosen effects | {s['rmse_after_percent']:.2f} | {s['max_after_percent']:.2f} |", ""]
+             f"| with the chosen effects | {s['rmse_after_percent']:.2f} | {s['max_after_percent']:.2f} |",
+             *_floor_lines(s, o)]
     if o.chosen:
         ci = json.loads(s["ci95"])
         lines += ["## Chosen effects", "", "| effect | parameter | value | 95 % interval | unit | formula | source |",
