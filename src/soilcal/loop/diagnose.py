@@ -38,7 +38,28 @@ stone, a ridge or a day's level moves the horizontal and the vertical force of o
 alike, and counted as two independent observations they make a trend look twice as well
 supported as it is: a periodic disturbance along the bin (amplitude 10 %, 15 tests of two
 forces) gave a curvature in the working depth at Holm p 0.0007 over 30 rows, 0.07 over the
-15 tests.  Replicates of one condition (table rows of one simulation: a speed run three
+15 tests.  The mean weights each quantity by the inverse of its relative residual's variance,
+v = (sd_m^2 / n_m + sd_s^2 / n_s) / scale^2, the measured and seed variances of the residual
+table (:mod:`soilcal.loop.residuals`) with each quantity's relative SDs pooled over its rows
+(:func:`soilcal.loop.residuals.relative_variances`), so that the weights are one per quantity
+and not the noise of each row's few repeats and seeds: sum(r_i / v_i) / sum(1 / v_i), whose
+variance 1 / sum(1 / v_i) is the least any weighting reaches for independent errors.  With
+equal weights a noisy quantity swamps a quiet one.  On the DEM soil bin (cinnamon soil, bulldozing plate,
+six seeds; ``benchmarks/results/loop_rate/sensitivity.md``) the horizontal force's relative
+seed SD is 0.10 and the vertical force's 0.34, their deviations correlated +0.76, and a
+friction change moves them by +0.36 and +0.70 per unit ln f: the horizontal force alone
+carries 3.6 seed SDs of it, the equal-weight mean 2.5, the inverse-variance mean 3.4 (the
+best linear combination, which needs the correlation the residual table does not carry,
+3.75).  In the loop benchmark (``benchmarks/results/loop.md``) the DEM campaigns that
+measured both forces, diagnosed with equal weights, named no effect where the horizontal
+force alone named rate_friction; their saved residual tables diagnosed with these weights
+follow the speed as the horizontal force's rows alone do (campaign 1: trend Holm p 0.043,
+0.43 with equal weights, 0.034 on the horizontal rows), the horizontal force weighted 0.94
+to 0.99.  Where the variance of a quantity of a test is unknown (no measured SD and one
+seed: no standard error in the residual table, and none to pool from the quantity's other
+rows) that test takes the plain mean, as does every test whose quantities have one variance
+(equal weights).  The shared disturbances are why the quantities are combined into one
+value; only the weights follow their noise.  Replicates of one condition (table rows of one simulation: a speed run three
 times) share the simulated mean and whatever the condition carries beyond the model, so the
 bias and the covariates' tests take the mean over them (:func:`per_condition`), except for a
 covariate that varies among the replicates (a test day, a replicate number), tested on the
@@ -227,8 +248,12 @@ def normal_equivalent(t, dof):
 
 def per_test(d: pd.DataFrame) -> pd.DataFrame:
     """One row per measured test of the residual rows ``d``: the relative residuals of the
-    quantities one test measures (its horizontal and vertical force) averaged, the other
-    columns (its covariates) kept.  A stone, a ridge or a day's level moves every quantity of a
+    quantities one test measures (its horizontal and vertical force) averaged with weights
+    1 / v, v each row's relative variance (:func:`soilcal.loop.residuals.relative_variances`:
+    measured and seed variance over the scale squared, the relative SDs pooled per quantity),
+    the plain mean where some row of the test has no known variance (no measured SD and one
+    seed, or a table without those columns) (module docstring), the other columns (its
+    covariates) kept.  A stone, a ridge or a day's level moves every quantity of a
     test alike, so they are not independent observations of a covariate's structure: counted
     as such, a table of two quantities per test halves the p-values of its trend tests (module
     docstring).  A test is a row of a measured table; table rows entered twice (the same
@@ -253,9 +278,18 @@ def per_test(d: pd.DataFrame) -> pd.DataFrame:
         key = pd.Series([sig[k] for k in key], index=d.index)
     if key.is_unique:
         return d
+    from soilcal.loop.residuals import relative_variances
+
+    r = d["relative_residual"].astype(float).to_numpy()
+    w = 1.0 / relative_variances(d)  # NaN where a row's variance is unknown
     g = d.assign(_test=key.to_numpy()).groupby("_test", sort=False)
     out = g.first()
-    out["relative_residual"] = g["relative_residual"].mean()
+    has = np.isfinite(r)  # a row without a residual counts in neither mean
+    t = pd.DataFrame({"_test": key.to_numpy(), "w": np.where(has, w, 0.0), "wr": np.where(has, w * r, 0.0), "r": r,
+                      "known": np.isfinite(w) | ~has})
+    s = t.groupby("_test", sort=False).agg(w=("w", "sum"), wr=("wr", "sum"), mean=("r", "mean"), known=("known", "all"))
+    weighted = s["known"] & (s["w"] > 0)
+    out["relative_residual"] = (s["wr"] / s["w"].where(weighted)).where(weighted, s["mean"])
     return out.reset_index(drop=True)
 
 
