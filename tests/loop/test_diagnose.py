@@ -599,3 +599,27 @@ def test_unknown_variances_fall_back_to_equal_weights():
     one = {q: np.full(3, 1.0) for q in r}
     got = per_test(_two_force_table(r, none, none, none, one, scale))["relative_residual"].to_numpy(float)
     np.testing.assert_allclose(got, plain, rtol=1e-12)
+
+
+def test_a_quantity_without_a_measured_sd_takes_no_weight_from_its_seeds_alone():
+    # horizontal force measured with a 10 % SD over three repeats and simulated with a 3 % seed
+    # SD over three seeds; the vertical force has no measured SD on any row and a 5 % seed SD
+    # over three seeds.  Weighted by what is known, v_h = 0.1^2 / 3 + 0.03^2 / 3 = 0.003633 and
+    # v_v = 0.05^2 / 3 = 0.000833, the vertical force would take 0.81 of the weight on its seed
+    # scatter alone, which understates its variance; the parts differ, so the plain mean
+    from soilcal.loop.diagnose import per_test
+    from soilcal.loop.residuals import relative_variances
+
+    scale = {QUIET: 100.0, NOISY: 20.0}
+    r = {QUIET: np.array([0.10, -0.05, 0.02]), NOISY: np.array([-0.30, 0.15, 0.07])}
+    sd_m = {QUIET: np.full(3, 10.0), NOISY: np.full(3, np.nan)}
+    sd_s = {QUIET: np.full(3, 3.0), NOISY: np.full(3, 1.0)}
+    n_m = {QUIET: np.full(3, 3.0), NOISY: np.full(3, np.nan)}
+    three = {q: np.full(3, 3.0) for q in r}
+    t = _two_force_table(r, sd_m, n_m, sd_s, three, scale)
+    v = relative_variances(t)
+    # the variances themselves are those of the residual's standard error (the known parts)
+    np.testing.assert_allclose(v[t["measure"] == QUIET], (0.01 + 0.0009) / 3.0, rtol=1e-12)
+    np.testing.assert_allclose(v[t["measure"] == NOISY], 0.0025 / 3.0, rtol=1e-12)
+    got = per_test(t)["relative_residual"].to_numpy(float)
+    np.testing.assert_allclose(got, (r[QUIET] + r[NOISY]) / 2.0, rtol=1e-12)

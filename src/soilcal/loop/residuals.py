@@ -359,25 +359,30 @@ def reference_variances(df: pd.DataFrame, flags: bool = False) -> tuple[np.ndarr
     return ref_m, ref_s
 
 
-def relative_variances(df: pd.DataFrame) -> np.ndarray:
+def relative_variances(df: pd.DataFrame, parts: bool = False):
     """Per row, the variance of its relative residual from the measured and the seed scatter,
-    (sd_m^2 / n_m + sd_s^2 / n_s) / scale^2 (module docstring), each part's relative variance
-    (sd / scale)^2 pooled over the rows of its measured quantity
-    (:func:`pooled_relative_variance` without its homogeneity test; the seeds once per
-    simulation) and divided by the row's own n: the weights of the quantities of one measured
-    test (:func:`soilcal.loop.diagnose.per_test`), which are to be one per quantity, not the
-    noise of each row's SD.  From three repeats or three seeds an SD squared is a variance on 2
-    degrees of freedom, a third of such estimates off by a factor of 3 or more either way
-    (chi-square on 2: e^-3 + 1 - e^(-1/3) = 0.33); pooled over the 18 rows of a quantity, on 36.
-    The pooled value stands where the row's own SD is missing too (one seed behind the
-    simulated mean); a simulation's seeds count once, as do the rows of a table entered twice; a part that no row of the quantity estimates (n > 1) takes the row's own
-    SD (a measured SD without a repeat count is taken as known, n_m 1), and a part with neither
-    is left out, as the residual's standard error leaves it out (no measured SD: the seed
-    scatter alone).  NaN where neither part is known (no measured SD and one seed) or the
-    variance is 0, and for a table without the columns."""
+    (sd_m^2 / n_m + sd_s^2 / n_s) / scale^2 (module docstring): the weights of the quantities
+    of one measured test (:func:`soilcal.loop.diagnose.per_test`), which are to be one per
+    quantity, not the noise of each row's SD.  Each part's relative variance (sd / scale)^2 is
+    pooled over the rows of its measured quantity (:func:`pooled_relative_variance` without its
+    homogeneity test, Bartlett's) and divided by the row's own n: the measured SDs pooled over
+    the quantity's rows, a row entered twice (the same simulation, measured value, SD and
+    repeat count) counted once, and divided by the row's repeat count n_m; the seed SDs pooled
+    once per simulation (its replicate rows repeat one estimate) and divided by the row's seed
+    count n_s.  From three repeats or three seeds an SD squared is a variance on 2 degrees of
+    freedom, a third of such estimates off by a factor of 3 or more either way (chi-square on
+    2: e^-3 + 1 - e^(-1/3) = 0.33); pooled over the 18 rows of a quantity, on 36.  The pooled
+    value stands where the row's own SD is missing too (one seed behind the simulated mean).  A
+    part that no row of the quantity estimates (n > 1) takes the row's own SD (a measured SD
+    without a repeat count is taken as known, n_m 1), and a part with neither is left out, as
+    the residual's standard error leaves it out (no measured SD: the seed scatter alone).  NaN
+    where neither part is known (no measured SD and one seed) or the variance is 0, and for a
+    table without the columns.  With ``parts`` also, per row, which parts the variance holds
+    (1 the measured, 2 the seed, 3 both, 0 none): variances of different parts are not to be
+    weighed against each other (the seed scatter alone understates a row's variance)."""
     n = len(df)
     if not n or not {"measurement", "measure"} <= set(df.columns) or not {"scale", "measured"} & set(df.columns):
-        return np.full(n, np.nan)
+        return (np.full(n, np.nan), np.zeros(n, int)) if parts else np.full(n, np.nan)
 
     def col(name):
         return df[name].astype(float).to_numpy() if name in df else np.full(n, np.nan)
@@ -399,7 +404,10 @@ def relative_variances(df: pd.DataFrame) -> np.ndarray:
                           np.nan)
     known = np.isfinite(part_m) | np.isfinite(part_s)
     var = np.where(np.isfinite(part_m), part_m, 0.0) + np.where(np.isfinite(part_s), part_s, 0.0)
-    return np.where(known & (var > 0), var, np.nan)
+    var = np.where(known & (var > 0), var, np.nan)
+    if parts:
+        return var, np.isfinite(part_m).astype(int) + 2 * np.isfinite(part_s).astype(int)
+    return var
 
 
 def scale_of(df: pd.DataFrame) -> np.ndarray:
