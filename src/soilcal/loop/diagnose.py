@@ -62,13 +62,19 @@ variance (equal weights), and every test whose quantities' variances are not mad
 parts: a quantity with no measured SD on any row but several seeds has its seed scatter alone,
 which understates its variance (as the scatter test below says of such a row), and beside one
 with both parts it would take most of the weight (a 10 % measured SD over three repeats and a
-3 % seed SD, against a 5 % seed SD alone: weights 0.19 and 0.81).  The shared disturbances are
-why the quantities are combined into one value; only the weights follow their noise.
-Replicates of one condition (table rows of one simulation: a speed run three times) share the
-simulated mean and whatever the condition carries beyond the model, so the bias and the
-covariates' tests take the mean over them (:func:`per_condition`), except for a covariate that
-varies among the replicates (a test day, a replicate number), tested on the measured tests.
-The scatter test and the group test of the measured quantities take every row.
+3 % seed SD, against a 5 % seed SD alone: weights 0.19 and 0.81).  The weights use each row's
+repeat and seed counts, so where those counts (or failed runs) follow a covariate the weights
+differ between tests, and the quantities' different offsets can look like structure in that
+covariate; with one count per quantity, the usual table, the weights are one per quantity.
+With most of the weight on the quiet quantity, an offset in the noisy quantity alone barely
+reaches the bias and trend tests; the group test of the measured quantities (``measure``), on
+all rows, still sees it.  The shared disturbances are why the quantities are combined into one
+value; only the weights follow their noise.  Replicates of one condition (table rows of one
+simulation: a speed run three times) share the simulated mean and whatever the condition
+carries beyond the model, so the bias and the covariates' tests take the mean over them
+(:func:`per_condition`), except for a covariate that varies among the replicates (a test day, a
+replicate number), tested on the measured tests.  The scatter test and the group test of the
+measured quantities take every row.
 
 The p-values of all tests of a table are corrected together (Holm, :func:`holm_adjusted`,
 statsmodels' values); a test is significant when its corrected p is below ``alpha``.  Each
@@ -750,12 +756,18 @@ def detectable(res: pd.DataFrame, diag: pd.DataFrame, quantity_of: dict | None =
       the residual standard error about the fitted line (the slope's t-test on n - 2 degrees
       of freedom, standard error scatter / sqrt(sum (x - mean x)^2)).
 
-    The noncentrality comes from the noncentral t (:func:`_smallest_shift`).  Beside it, the
-    median over the rows of the seeds' standard error of the simulated mean
-    (sd_s / sqrt(n_s)) and of the measurement's (sd_m / sqrt(n_m)), as percent of the measured
-    value (of the relative residual's scale, :func:`soilcal.loop.residuals.scales`): where the scatter is about their combination, more seeds or repeats (whichever
-    dominates) shrink what goes unseen as the square root of their number; where it is well
-    above, the rows scatter for a reason neither carries."""
+    The noncentrality comes from the noncentral t (:func:`_smallest_shift`).  Beside it,
+    ``seed_se_percent`` and ``measured_se_percent``: the medians, over every row of every
+    quantity of ``res`` (one per residual row, not per test, and unweighted), of the seeds'
+    standard error of the simulated mean (sd_s / sqrt(n_s)) and of the measurement's
+    (sd_m / sqrt(n_m)), each row's own SDs, as percent of the row's scale (the relative
+    residual's, :func:`soilcal.loop.residuals.scales`).  They describe the rows' noise, not
+    the standard error of a test's combined value: where a test measures several quantities of
+    unequal noise, that value is their inverse-variance mean (:func:`per_test`), whose standard
+    error, 1 / sqrt(sum(1 / v)) over the test's quantities, lies at or below the quietest
+    quantity's and so below these medians.  Where the scatter is about their combination, more
+    seeds or repeats (whichever dominates) shrink what goes unseen as the square root of their
+    number; where it is well above, the rows scatter for a reason neither carries."""
     from scipy import stats
 
     quantity_of = quantity_of or {}

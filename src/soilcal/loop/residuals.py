@@ -379,7 +379,16 @@ def relative_variances(df: pd.DataFrame, parts: bool = False):
     where neither part is known (no measured SD and one seed) or the variance is 0, and for a
     table without the columns.  With ``parts`` also, per row, which parts the variance holds
     (1 the measured, 2 the seed, 3 both, 0 none): variances of different parts are not to be
-    weighed against each other (the seed scatter alone understates a row's variance)."""
+    weighed against each other (the seed scatter alone understates a row's variance).
+
+    Without Bartlett's test the pool is the mean of (sd / scale)^2 over the quantity's rows
+    whatever their spread: for a quantity scaled by its RMS, or with an absolute noise floor,
+    its rows near zero have the largest (sd / scale)^2 and dominate it, so the quantity's
+    weight is too small; that costs the combined value precision, not its expectation (the
+    weights do not depend on the residuals).  The weights use each row's n, so where repeat or
+    seed counts (or failed runs) follow a covariate, the weights differ between tests and the
+    quantities' different offsets can look like structure in it; constant n per quantity (the
+    usual table) gives constant weights."""
     n = len(df)
     if not n or not {"measurement", "measure"} <= set(df.columns) or not {"scale", "measured"} & set(df.columns):
         return (np.full(n, np.nan), np.zeros(n, int)) if parts else np.full(n, np.nan)
