@@ -623,3 +623,50 @@ def test_a_quantity_without_a_measured_sd_takes_no_weight_from_its_seeds_alone()
     np.testing.assert_allclose(v[t["measure"] == NOISY], 0.0025 / 3.0, rtol=1e-12)
     got = per_test(t)["relative_residual"].to_numpy(float)
     np.testing.assert_allclose(got, (r[QUIET] + r[NOISY]) / 2.0, rtol=1e-12)
+
+
+# --- the pooled relative variances behind the weights (relative_variances) ---
+
+def _one_quantity(rows):
+    """A residual table of one measured quantity (scale 100 N) from (simulation, measured value,
+    relative measured SD, n_m, relative seed SD, n_s) per row."""
+    return pd.DataFrame([{"measurement": "bin", "row": i + 1, "measure": QUIET, "simulation": sim,
+                          "measured": m, "measured_sd": 100.0 * rm, "measured_n": nm,
+                          "simulated_sd": 100.0 * rs, "simulated_n": ns, "scale": 100.0,
+                          "relative_residual": m / 100.0 - 1.0}
+                         for i, (sim, m, rm, nm, rs, ns) in enumerate(rows)])
+
+
+def test_the_weights_pool_a_quantitys_relative_variances_however_unequal():
+    # relative measured SDs 0.02, 0.02, 0.20, 0.20 from ten repeats each, no seed SD: Bartlett's
+    # test would reject one relative variance (a ratio of 100 on 9 and 9 degrees of freedom)
+    # and leave each row its own, but the weights pool them all,
+    # 9 (0.0004 + 0.0004 + 0.04 + 0.04) / 36 = 0.0202, over n_m 10: 0.00202 on every row
+    from soilcal.loop.residuals import relative_variances
+
+    t = _one_quantity([(f"s{i}", 100.0 + i, rm, 10.0, np.nan, 1.0) for i, rm in enumerate([0.02, 0.02, 0.20, 0.20])])
+    np.testing.assert_allclose(relative_variances(t), np.full(4, 0.00202), rtol=1e-12)
+
+
+def test_a_simulations_seed_sd_counts_once_however_many_rows_it_serves():
+    # simulation s0 runs three replicate rows with a relative seed SD 0.10 over three seeds,
+    # s1 one row with 0.40 over three seeds, no measured SD: pooled once per simulation,
+    # (2 0.01 + 2 0.16) / 4 = 0.085, over n_s 3: 0.028333 on every row (counted per row it
+    # would be (3 2 0.01 + 2 0.16) / 8 = 0.0475, over 3: 0.015833)
+    from soilcal.loop.residuals import relative_variances
+
+    t = _one_quantity([("s0", 101.0, np.nan, np.nan, 0.10, 3.0), ("s0", 97.0, np.nan, np.nan, 0.10, 3.0),
+                       ("s0", 104.0, np.nan, np.nan, 0.10, 3.0), ("s1", 92.0, np.nan, np.nan, 0.40, 3.0)])
+    np.testing.assert_allclose(relative_variances(t), np.full(4, 0.085 / 3.0), rtol=1e-12)
+
+
+def test_a_row_entered_twice_counts_once_in_the_measured_pool():
+    # rows 1 and 2 are one row entered twice (simulation s0, measured 105 N, relative SD 0.10
+    # over three repeats), row 3 another (s1, 0.40 over three), no seed SD: pooled once,
+    # (2 0.01 + 2 0.16) / 4 = 0.085, over n_m 3: 0.028333 on every row (counted twice,
+    # (2 2 0.01 + 2 0.16) / 6 = 0.06, over 3: 0.02)
+    from soilcal.loop.residuals import relative_variances
+
+    t = _one_quantity([("s0", 105.0, 0.10, 3.0, np.nan, 1.0), ("s0", 105.0, 0.10, 3.0, np.nan, 1.0),
+                       ("s1", 93.0, 0.40, 3.0, np.nan, 1.0)])
+    np.testing.assert_allclose(relative_variances(t), np.full(3, 0.085 / 3.0), rtol=1e-12)
