@@ -69,9 +69,10 @@ carry the measures in their names (``rate_friction_horizontal_vertical_*.csv``),
 summary counts it apart.  The horizontal force alone is the default because at the campaign's
 line plate (0.4 m/s, 30 mm) it carries rate_friction furthest above its seed scatter: per unit
 ln f, 3.6 seed SDs, against 2.1 for the vertical force and 1.8 for the resultant angle, whose
-seed deviations follow the horizontal force's (correlation +0.76 and +0.57); the diagnosis's
-mean of the two measures' relative residuals per test would carry 2.5
-(``benchmarks/loop_rate/``, ``loop.md``'s notes).  The page's header names the files of ``--rows-from`` and
+seed deviations follow the horizontal force's (correlation +0.76 and +0.57); an equal-weight
+mean of the two measures' relative residuals per test would carry 2.5, the diagnosis's
+inverse-variance mean (``soilcal.loop.diagnose.per_test``) 3.4 (``benchmarks/loop_rate/``,
+``loop.md``'s notes).  The page's header names the files of ``--rows-from`` and
 ``--out`` by their names (a ``--rows-from`` file with as many of its directories as tell it from
 another of the same name, ``rate/loop.csv``; a file given twice is refused), and the rows
 taken from each by engine, case and campaign.

@@ -1,7 +1,7 @@
 """The loop's diagnosis of a two-measure DEM campaign, measure by measure: the residual table a
 ``benchmarks/loop.py --responses horizontal_force_N,vertical_force_N`` run wrote (its
 ``loop_dem/<case>[_campaign<seed>]_horizontal_vertical_residuals.csv``) diagnosed as the loop
-did (both measures, one mean relative residual per test), and on each measure's rows alone
+did (both measures, one inverse-variance mean relative residual per test), and on each measure's rows alone
 (``soilcal.loop.diagnose.diagnose``, no new DEM run).  Per table: the speed trend's and
 curvature's raw and Holm p, the smallest Holm p of any test, and the RMS relative residual of
 the rows; per measure, the mean relative residual of the conditions below 0.25 m/s and above.

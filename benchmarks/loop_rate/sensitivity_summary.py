@@ -7,13 +7,16 @@ of one residual of the loop (three seeds a side: SD sqrt(2/3)).  Relative values
 mean at f = 1.
 
 Then what a second measure adds beside the horizontal force.  The loop's diagnosis takes one
-value per measured test, the mean relative residual of the measures the test records
-(``soilcal.loop.diagnose.per_test``), so a test of the horizontal force and a second measure
-carries (r_h + r_2) / 2.  From the runs over all f: each measure's relative slope per unit ln f
-(the slope over the mean at f = 1) and relative seed SD (the pooled SD over the same mean), the
-within-f correlation of the two measures' seed deviations, and the ratio of slope to seed SD
-of the horizontal force alone, of the equal-weight mean the diagnosis takes, and of the best
-linear combination (sqrt(s' C^-1 s), s the relative slopes, C their seed covariance).
+value per measured test, the inverse-variance mean of the relative residuals of the measures
+the test records (``soilcal.loop.diagnose.per_test``), so a test of the horizontal force and a
+second measure carries (r_h / v_h + r_2 / v_2) / (1 / v_h + 1 / v_2), v the relative variances
+(before, the equal-weight mean (r_h + r_2) / 2).  From the runs over all f: each measure's
+relative slope per unit ln f (the slope over the mean at f = 1) and relative seed SD (the
+pooled SD over the same mean), the within-f correlation of the two measures' seed deviations,
+and the ratio of slope to seed SD of the horizontal force alone, of the equal-weight mean, of
+the inverse-variance mean the diagnosis takes (weights 1 / SD^2, the correlation counted in
+its SD: sqrt(w' C w)), and of the best linear combination (sqrt(s' C^-1 s), s the relative
+slopes, C their seed covariance).
 
     python benchmarks/loop_rate/sensitivity_summary.py benchmarks/results/loop_rate/sensitivity.jsonl
 """
@@ -70,8 +73,8 @@ def _rel(m):
 
 print()
 print("| second measure | relative slope h, 2 | relative seed SD h, 2 | correlation | slope / SD: horizontal alone | "
-      "equal-weight mean (the diagnosis) | best combination |")
-print("|---|---|---|---|---|---|---|")
+      "equal-weight mean | inverse-variance mean (the diagnosis) | best combination |")
+print("|---|---|---|---|---|---|---|---|")
 sh, dh, eh = _rel("horizontal_force_N")
 for m in MEASURES[1:]:
     s2, d2, e2 = _rel(m)
@@ -79,5 +82,9 @@ for m in MEASURES[1:]:
     C = np.array([[dh * dh, rho * dh * d2], [rho * dh * d2, d2 * d2]])
     s = np.array([sh, s2])
     mean_snr = (sh + s2) / 2 / math.sqrt((dh * dh + d2 * d2 + 2 * rho * dh * d2) / 4)
+    w = np.array([1 / (dh * dh), 1 / (d2 * d2)])
+    w /= w.sum()
+    inv_snr = float(w @ s) / math.sqrt(float(w @ C @ w))
     best = math.sqrt(float(s @ np.linalg.solve(C, s)))
-    print(f"| {m} | {sh:+.2f}, {s2:+.2f} | {dh:.2f}, {d2:.2f} | {rho:+.2f} | {sh / dh:.2f} | {mean_snr:.2f} | {best:.2f} |")
+    print(f"| {m} | {sh:+.2f}, {s2:+.2f} | {dh:.2f}, {d2:.2f} | {rho:+.2f} | {sh / dh:.2f} | {mean_snr:.2f} | "
+          f"{inv_snr:.2f} | {best:.2f} |")

@@ -471,3 +471,202 @@ def test_scatter_alone_points_to_the_test_most_sure_of_a_structure():
          "significant": False},
     ])
     assert dg.matched_quantities(diag) == {"speed"}
+
+
+# --- the quantities of one measured test combined by their uncertainty (per_test) ---
+
+QUIET, NOISY = "horizontal_force_N", "vertical_force_N"
+
+
+def _two_force_table(r, sd_m, n_m, sd_s, n_s, scale):
+    """A residual table of len(r[QUIET]) soil-bin tests measuring two forces: per quantity the
+    relative residuals, measured and seed SDs (absolute, N), their counts and the scale (N)."""
+    rows = []
+    for i in range(len(r[QUIET])):
+        for q in (QUIET, NOISY):
+            rows.append({"measurement": "bin", "row": i + 1, "measure": q, "simulation": f"s{i}",
+                         "measured": scale[q] * (1.0 + r[q][i]), "measured_sd": sd_m[q][i], "measured_n": n_m[q][i],
+                         "simulated_sd": sd_s[q][i], "simulated_n": n_s[q][i], "scale": scale[q],
+                         "relative_residual": r[q][i], "standardised_residual": np.nan, "cov:speed_m_s": 0.1 * (i + 1)})
+    return pd.DataFrame(rows)
+
+
+def test_a_tests_quantities_are_combined_by_their_inverse_variance():
+    # four tests of two forces, scales 100 N and 20 N, three repeats and three seeds; each
+    # quantity's relative SDs differ from row to row, so its weight comes from their pooled
+    # value, sum((n - 1)(sd / scale)^2) / sum(n - 1), here the mean of (sd / scale)^2 (equal n)
+    from soilcal.loop.diagnose import per_test
+
+    scale = {QUIET: 100.0, NOISY: 20.0}
+    rel_m = {QUIET: np.array([0.04, 0.06, 0.05, 0.05]), NOISY: np.array([0.30, 0.20, 0.25, 0.25])}
+    rel_s = {QUIET: np.array([0.03, 0.05, 0.04, 0.04]), NOISY: np.array([0.40, 0.30, 0.35, 0.35])}
+    r = {QUIET: np.array([-0.10, 0.02, 0.05, -0.01]), NOISY: np.array([0.40, -0.30, 0.10, 0.25])}
+    three = {q: np.full(4, 3.0) for q in (QUIET, NOISY)}
+    t = _two_force_table(r, {q: rel_m[q] * scale[q] for q in r}, three, {q: rel_s[q] * scale[q] for q in r},
+                         three, scale)
+    # by hand: v = (pooled (sd_m / scale)^2 / 3 + pooled (sd_s / scale)^2 / 3)
+    v = {q: (np.mean(rel_m[q] ** 2) + np.mean(rel_s[q] ** 2)) / 3.0 for q in (QUIET, NOISY)}
+    # horizontal: (0.0016 + 0.0036 + 0.0025 + 0.0025) / 4 = 0.00255 and (0.0009 + 0.0025 + 0.0016 + 0.0016) / 4
+    # = 0.00165, so v = 0.0042 / 3 = 0.0014
+    assert v[QUIET] == pytest.approx(0.0014, rel=1e-12)
+    want = (r[QUIET] / v[QUIET] + r[NOISY] / v[NOISY]) / (1.0 / v[QUIET] + 1.0 / v[NOISY])
+    got = per_test(t)
+    assert len(got) == 4
+    np.testing.assert_allclose(got["relative_residual"].to_numpy(float), want, rtol=1e-12)
+    # the bias test takes those values: its estimate is their mean, its p their t-test's
+    bias = _row(diagnose(t), "bias")
+    assert bias["n"] == 4 and bias["estimate"] == pytest.approx(want.mean(), rel=1e-12)
+    assert bias["p"] == pytest.approx(stats.ttest_1samp(want, 0.0).pvalue, rel=1e-9)
+    # a row whose simulated mean rests on one seed (no seed SD of its own) takes its quantity's
+    # pooled seed variance over that one seed
+    sd_s, n_s = {q: rel_s[q] * scale[q] for q in r}, {q: three[q].copy() for q in r}
+    sd_s[NOISY][3], n_s[NOISY][3] = np.nan, 1.0
+    t1 = _two_force_table(r, {q: rel_m[q] * scale[q] for q in r}, three, sd_s, n_s, scale)
+    cv_s = np.mean(rel_s[NOISY][:3] ** 2)
+    v_noisy = np.mean(rel_m[NOISY] ** 2) / 3.0 + cv_s / 1.0
+    v_quiet = v[QUIET]
+    want3 = (r[QUIET][3] / v_quiet + r[NOISY][3] / v_noisy) / (1.0 / v_quiet + 1.0 / v_noisy)
+    assert per_test(t1)["relative_residual"].iloc[3] == pytest.approx(want3, rel=1e-12)
+
+
+def test_the_weighted_combination_reaches_the_least_variance_a_common_shift_allows():
+    # 400 tables of 12 tests: both forces read 5 % above the model (a common relative shift);
+    # the horizontal force's repeats and seeds scatter by 5 % and 7 % of it, the vertical
+    # force's by 20 % and 30 %, three of each per test, every table drawing its own repeats and
+    # seeds (so each row's SDs are estimated, and the weights from their pooled values).  The
+    # mean of a table's combined values estimates the shift; its SD over the tables is, for
+    # the inverse-variance weights, sqrt(v_min / 12) with v_min = 1 / (1 / v_h + 1 / v_v), and
+    # for equal weights sqrt((v_h + v_v) / 4 / 12), 2.2 times as large
+    from soilcal.loop.diagnose import per_test
+
+    rng = np.random.default_rng(20261201)
+    k, tables, shift = 12, 400, 0.05
+    scale = {QUIET: 100.0, NOISY: 20.0}
+    sig_m, sig_s = {QUIET: 0.05, NOISY: 0.20}, {QUIET: 0.07, NOISY: 0.30}
+    v = {q: (sig_m[q] ** 2 + sig_s[q] ** 2) / 3.0 for q in (QUIET, NOISY)}
+    v_min = 1.0 / (1.0 / v[QUIET] + 1.0 / v[NOISY])
+    weighted, equal = [], []
+    for _ in range(tables):
+        r, sd_m, sd_s = {}, {}, {}
+        for q in (QUIET, NOISY):
+            rep = scale[q] * (1.0 + shift + sig_m[q] * rng.standard_normal((k, 3)))  # measured repeats
+            seeds = scale[q] * (1.0 + sig_s[q] * rng.standard_normal((k, 3)))  # simulated seeds
+            r[q] = (rep.mean(axis=1) - seeds.mean(axis=1)) / scale[q]
+            sd_m[q], sd_s[q] = rep.std(axis=1, ddof=1), seeds.std(axis=1, ddof=1)
+        three = {q: np.full(k, 3.0) for q in (QUIET, NOISY)}
+        weighted.append(per_test(_two_force_table(r, sd_m, three, sd_s, three, scale))["relative_residual"].mean())
+        equal.append(np.mean((r[QUIET] + r[NOISY]) / 2.0))
+    sd_w, sd_e = np.std(weighted, ddof=1), np.std(equal, ddof=1)
+    sd_min = np.sqrt(v_min / k)
+    # the relative standard error of an SD from 400 normal values: 1 / sqrt(2 * 399) = 0.035
+    se = 1.0 / np.sqrt(2.0 * (tables - 1))
+    assert abs(sd_w / sd_min - 1.0) < 3.0 * se, (sd_w, sd_min)
+    assert abs(sd_e / np.sqrt((v[QUIET] + v[NOISY]) / 4.0 / k) - 1.0) < 3.0 * se
+    assert sd_w < sd_e / 1.8
+    assert np.mean(weighted) == pytest.approx(shift, abs=3.0 * sd_min / np.sqrt(tables))
+
+
+def test_equal_variances_give_the_plain_mean():
+    # both forces scatter by the same share of their scale: the weights are equal and the
+    # combined value is the plain mean of the two relative residuals (the rule before weights)
+    from soilcal.loop.diagnose import per_test
+
+    scale = {QUIET: 100.0, NOISY: 20.0}
+    r = {QUIET: np.array([0.10, -0.05, 0.02]), NOISY: np.array([-0.30, 0.15, 0.07])}
+    rel = np.array([0.05, 0.08, 0.06])
+    sd = {q: rel * scale[q] for q in r}
+    three = {q: np.full(3, 3.0) for q in r}
+    got = per_test(_two_force_table(r, sd, three, sd, three, scale))["relative_residual"].to_numpy(float)
+    np.testing.assert_allclose(got, (r[QUIET] + r[NOISY]) / 2.0, rtol=1e-12)
+
+
+def test_unknown_variances_fall_back_to_equal_weights():
+    # no measured SD and one seed for the vertical force throughout: its variance is unknown
+    # (the residual table gives it no standard error), so every test takes the plain mean,
+    # though the horizontal force's variance is known; and so does a table with neither force's
+    from soilcal.loop.diagnose import per_test
+
+    scale = {QUIET: 100.0, NOISY: 20.0}
+    r = {QUIET: np.array([0.10, -0.05, 0.02]), NOISY: np.array([-0.30, 0.15, 0.07])}
+    plain = (r[QUIET] + r[NOISY]) / 2.0
+    sd_m = {QUIET: np.full(3, 5.0), NOISY: np.full(3, np.nan)}
+    sd_s = {QUIET: np.full(3, 4.0), NOISY: np.full(3, np.nan)}
+    n_m = {QUIET: np.full(3, 3.0), NOISY: np.full(3, np.nan)}
+    n_s = {QUIET: np.full(3, 3.0), NOISY: np.full(3, 1.0)}
+    got = per_test(_two_force_table(r, sd_m, n_m, sd_s, n_s, scale))["relative_residual"].to_numpy(float)
+    np.testing.assert_allclose(got, plain, rtol=1e-12)
+    none = {q: np.full(3, np.nan) for q in r}
+    one = {q: np.full(3, 1.0) for q in r}
+    got = per_test(_two_force_table(r, none, none, none, one, scale))["relative_residual"].to_numpy(float)
+    np.testing.assert_allclose(got, plain, rtol=1e-12)
+
+
+def test_a_quantity_without_a_measured_sd_takes_no_weight_from_its_seeds_alone():
+    # horizontal force measured with a 10 % SD over three repeats and simulated with a 3 % seed
+    # SD over three seeds; the vertical force has no measured SD on any row and a 5 % seed SD
+    # over three seeds.  Weighted by what is known, v_h = 0.1^2 / 3 + 0.03^2 / 3 = 0.003633 and
+    # v_v = 0.05^2 / 3 = 0.000833, the vertical force would take 0.81 of the weight on its seed
+    # scatter alone, which understates its variance; the parts differ, so the plain mean
+    from soilcal.loop.diagnose import per_test
+    from soilcal.loop.residuals import relative_variances
+
+    scale = {QUIET: 100.0, NOISY: 20.0}
+    r = {QUIET: np.array([0.10, -0.05, 0.02]), NOISY: np.array([-0.30, 0.15, 0.07])}
+    sd_m = {QUIET: np.full(3, 10.0), NOISY: np.full(3, np.nan)}
+    sd_s = {QUIET: np.full(3, 3.0), NOISY: np.full(3, 1.0)}
+    n_m = {QUIET: np.full(3, 3.0), NOISY: np.full(3, np.nan)}
+    three = {q: np.full(3, 3.0) for q in r}
+    t = _two_force_table(r, sd_m, n_m, sd_s, three, scale)
+    v = relative_variances(t)
+    # the variances themselves are those of the residual's standard error (the known parts)
+    np.testing.assert_allclose(v[t["measure"] == QUIET], (0.01 + 0.0009) / 3.0, rtol=1e-12)
+    np.testing.assert_allclose(v[t["measure"] == NOISY], 0.0025 / 3.0, rtol=1e-12)
+    got = per_test(t)["relative_residual"].to_numpy(float)
+    np.testing.assert_allclose(got, (r[QUIET] + r[NOISY]) / 2.0, rtol=1e-12)
+
+
+# --- the pooled relative variances behind the weights (relative_variances) ---
+
+def _one_quantity(rows):
+    """A residual table of one measured quantity (scale 100 N) from (simulation, measured value,
+    relative measured SD, n_m, relative seed SD, n_s) per row."""
+    return pd.DataFrame([{"measurement": "bin", "row": i + 1, "measure": QUIET, "simulation": sim,
+                          "measured": m, "measured_sd": 100.0 * rm, "measured_n": nm,
+                          "simulated_sd": 100.0 * rs, "simulated_n": ns, "scale": 100.0,
+                          "relative_residual": m / 100.0 - 1.0}
+                         for i, (sim, m, rm, nm, rs, ns) in enumerate(rows)])
+
+
+def test_the_weights_pool_a_quantitys_relative_variances_however_unequal():
+    # relative measured SDs 0.02, 0.02, 0.20, 0.20 from ten repeats each, no seed SD: Bartlett's
+    # test would reject one relative variance (a ratio of 100 on 9 and 9 degrees of freedom)
+    # and leave each row its own, but the weights pool them all,
+    # 9 (0.0004 + 0.0004 + 0.04 + 0.04) / 36 = 0.0202, over n_m 10: 0.00202 on every row
+    from soilcal.loop.residuals import relative_variances
+
+    t = _one_quantity([(f"s{i}", 100.0 + i, rm, 10.0, np.nan, 1.0) for i, rm in enumerate([0.02, 0.02, 0.20, 0.20])])
+    np.testing.assert_allclose(relative_variances(t), np.full(4, 0.00202), rtol=1e-12)
+
+
+def test_a_simulations_seed_sd_counts_once_however_many_rows_it_serves():
+    # simulation s0 runs three replicate rows with a relative seed SD 0.10 over three seeds,
+    # s1 one row with 0.40 over three seeds, no measured SD: pooled once per simulation,
+    # (2 0.01 + 2 0.16) / 4 = 0.085, over n_s 3: 0.028333 on every row (counted per row it
+    # would be (3 2 0.01 + 2 0.16) / 8 = 0.0475, over 3: 0.015833)
+    from soilcal.loop.residuals import relative_variances
+
+    t = _one_quantity([("s0", 101.0, np.nan, np.nan, 0.10, 3.0), ("s0", 97.0, np.nan, np.nan, 0.10, 3.0),
+                       ("s0", 104.0, np.nan, np.nan, 0.10, 3.0), ("s1", 92.0, np.nan, np.nan, 0.40, 3.0)])
+    np.testing.assert_allclose(relative_variances(t), np.full(4, 0.085 / 3.0), rtol=1e-12)
+
+
+def test_a_row_entered_twice_counts_once_in_the_measured_pool():
+    # rows 1 and 2 are one row entered twice (simulation s0, measured 105 N, relative SD 0.10
+    # over three repeats), row 3 another (s1, 0.40 over three), no seed SD: pooled once,
+    # (2 0.01 + 2 0.16) / 4 = 0.085, over n_m 3: 0.028333 on every row (counted twice,
+    # (2 2 0.01 + 2 0.16) / 6 = 0.06, over 3: 0.02)
+    from soilcal.loop.residuals import relative_variances
+
+    t = _one_quantity([("s0", 105.0, 0.10, 3.0, np.nan, 1.0), ("s0", 105.0, 0.10, 3.0, np.nan, 1.0),
+                       ("s1", 93.0, 0.40, 3.0, np.nan, 1.0)])
+    np.testing.assert_allclose(relative_variances(t), np.full(3, 0.085 / 3.0), rtol=1e-12)

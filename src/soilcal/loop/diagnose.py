@@ -38,11 +38,43 @@ stone, a ridge or a day's level moves the horizontal and the vertical force of o
 alike, and counted as two independent observations they make a trend look twice as well
 supported as it is: a periodic disturbance along the bin (amplitude 10 %, 15 tests of two
 forces) gave a curvature in the working depth at Holm p 0.0007 over 30 rows, 0.07 over the
-15 tests.  Replicates of one condition (table rows of one simulation: a speed run three
-times) share the simulated mean and whatever the condition carries beyond the model, so the
-bias and the covariates' tests take the mean over them (:func:`per_condition`), except for a
-covariate that varies among the replicates (a test day, a replicate number), tested on the
-measured tests.  The scatter test and the group test of the measured quantities take every row.
+15 tests.  The mean weights each quantity by the inverse of its relative residual's variance,
+v = (sd_m^2 / n_m + sd_s^2 / n_s) / scale^2, the measured and seed variances of the residual
+table (:mod:`soilcal.loop.residuals`) with each quantity's relative SDs pooled over its rows
+(:func:`soilcal.loop.residuals.relative_variances`), so that the weights are one per quantity
+and not the noise of each row's few repeats and seeds: sum(r_i / v_i) / sum(1 / v_i), whose
+variance 1 / sum(1 / v_i) is the least any weighting reaches for independent errors.  With
+equal weights a noisy quantity swamps a quiet one.  On the DEM soil bin (cinnamon soil,
+bulldozing plate, six seeds; ``benchmarks/results/loop_rate/sensitivity.md``) the horizontal
+force's relative seed SD is 0.10 and the vertical force's 0.34, their deviations
+correlated +0.76, and a friction change moves them by +0.36 and +0.70 per unit ln f: the
+horizontal force alone carries 3.6 seed SDs of it, the equal-weight mean 2.5, the
+inverse-variance mean 3.4 (the best linear combination, which needs the correlation the
+residual table does not carry, 3.75).  In the loop benchmark (``benchmarks/results/loop.md``)
+the DEM campaigns that measured both forces, diagnosed with equal weights, named no effect
+where the horizontal force alone named rate_friction; their saved residual tables diagnosed
+with these weights follow the speed as the horizontal force's rows alone do (campaign 1: trend
+Holm p 0.043, 0.43 with equal weights, 0.034 on the horizontal rows), the horizontal force
+weighted 0.94 to 0.99.  Where the variance of a quantity of a test is unknown (no measured SD
+and one seed: no standard error in the residual table, and none to pool from the quantity's
+other rows) that test takes the plain mean, as does every test whose quantities have one
+variance (equal weights), and every test whose quantities' variances are not made of the same
+parts: a quantity with no measured SD on any row but several seeds has its seed scatter alone,
+which understates its variance (as the scatter test below says of such a row), and beside one
+with both parts it would take most of the weight (a 10 % measured SD over three repeats and a
+3 % seed SD, against a 5 % seed SD alone: weights 0.19 and 0.81).  The weights use each row's
+repeat and seed counts, so where those counts (or failed runs) follow a covariate the weights
+differ between tests, and the quantities' different offsets can look like structure in that
+covariate; with one count per quantity, the usual table, the weights are one per quantity.
+With most of the weight on the quiet quantity, an offset in the noisy quantity alone barely
+reaches the bias and trend tests; the group test of the measured quantities (``measure``), on
+all rows, still sees it.  The shared disturbances are why the quantities are combined into one
+value; only the weights follow their noise.  Replicates of one condition (table rows of one
+simulation: a speed run three times) share the simulated mean and whatever the condition
+carries beyond the model, so the bias and the covariates' tests take the mean over them
+(:func:`per_condition`), except for a covariate that varies among the replicates (a test day, a
+replicate number), tested on the measured tests.  The scatter test and the group test of the
+measured quantities take every row.
 
 The p-values of all tests of a table are corrected together (Holm, :func:`holm_adjusted`,
 statsmodels' values); a test is significant when its corrected p is below ``alpha``.  Each
@@ -227,16 +259,20 @@ def normal_equivalent(t, dof):
 
 def per_test(d: pd.DataFrame) -> pd.DataFrame:
     """One row per measured test of the residual rows ``d``: the relative residuals of the
-    quantities one test measures (its horizontal and vertical force) averaged, the other
-    columns (its covariates) kept.  A stone, a ridge or a day's level moves every quantity of a
-    test alike, so they are not independent observations of a covariate's structure: counted
-    as such, a table of two quantities per test halves the p-values of its trend tests (module
-    docstring).  A test is a row of a measured table; table rows entered twice (the same
-    simulation, the same value in every covariate column and the same measured values, SDs and
-    repeat counts) are one test: a row copied into a table tells a covariate's structure no
-    more than once (three rows of twelve entered twice made the residual "follow" the
-    moisture at Holm p 0.004).  ``d`` itself where each test has one row or no test is named
-    (no ``measurement``, ``row`` columns)."""
+    quantities one test measures (its horizontal and vertical force) averaged with weights
+    1 / v, v each row's relative variance (:func:`soilcal.loop.residuals.relative_variances`:
+    measured and seed variance over the scale squared, the relative SDs pooled per quantity),
+    the plain mean where some row of the test has no known variance (no measured SD and one
+    seed, or a table without those columns) or where its rows' variances do not hold the same
+    parts (measured and seed) (module docstring), the other columns (its covariates) kept.  A
+    stone, a ridge or a day's level moves every quantity of a test alike, so they are not
+    independent observations of a covariate's structure: counted as such, a table of two
+    quantities per test halves the p-values of its trend tests (module docstring).  A test is a
+    row of a measured table; table rows entered twice (the same simulation, the same value in
+    every covariate column and the same measured values, SDs and repeat counts) are one test: a
+    row copied into a table tells a covariate's structure no more than once (three rows of
+    twelve entered twice made the residual "follow" the moisture at Holm p 0.004).  ``d`` itself
+    where each test has one row or no test is named (no ``measurement``, ``row`` columns)."""
     if "measurement" not in d.columns or "row" not in d.columns or len(d) == 0:
         return d
     key = d["measurement"].astype(str) + "/" + d["row"].astype(str)
@@ -253,9 +289,24 @@ def per_test(d: pd.DataFrame) -> pd.DataFrame:
         key = pd.Series([sig[k] for k in key], index=d.index)
     if key.is_unique:
         return d
+    from soilcal.loop.residuals import relative_variances
+
+    r = d["relative_residual"].astype(float).to_numpy()
+    v, parts = relative_variances(d, parts=True)  # v NaN where a row's variance is unknown
+    w = 1.0 / v
     g = d.assign(_test=key.to_numpy()).groupby("_test", sort=False)
     out = g.first()
-    out["relative_residual"] = g["relative_residual"].mean()
+    has = np.isfinite(r)  # a row without a residual counts in neither mean
+    # the parts each row's variance holds (1 measured, 2 seed, 3 both); a row without a
+    # residual is left out of the comparison (99 / -1 never set the min / max)
+    t = pd.DataFrame({"_test": key.to_numpy(), "w": np.where(has, w, 0.0), "wr": np.where(has, w * r, 0.0), "r": r,
+                      "known": np.isfinite(w) | ~has, "lo": np.where(has, parts, 99), "hi": np.where(has, parts, -1)})
+    s = t.groupby("_test", sort=False).agg(w=("w", "sum"), wr=("wr", "sum"), mean=("r", "mean"), known=("known", "all"),
+                                           lo=("lo", "min"), hi=("hi", "max"))
+    # weights only between variances of the same parts: a quantity without a measured SD has
+    # its seed scatter alone, which understates its variance beside one that has both
+    weighted = s["known"] & (s["w"] > 0) & (s["lo"] == s["hi"])
+    out["relative_residual"] = (s["wr"] / s["w"].where(weighted)).where(weighted, s["mean"])
     return out.reset_index(drop=True)
 
 
@@ -705,12 +756,18 @@ def detectable(res: pd.DataFrame, diag: pd.DataFrame, quantity_of: dict | None =
       the residual standard error about the fitted line (the slope's t-test on n - 2 degrees
       of freedom, standard error scatter / sqrt(sum (x - mean x)^2)).
 
-    The noncentrality comes from the noncentral t (:func:`_smallest_shift`).  Beside it, the
-    median over the rows of the seeds' standard error of the simulated mean
-    (sd_s / sqrt(n_s)) and of the measurement's (sd_m / sqrt(n_m)), as percent of the measured
-    value (of the relative residual's scale, :func:`soilcal.loop.residuals.scales`): where the scatter is about their combination, more seeds or repeats (whichever
-    dominates) shrink what goes unseen as the square root of their number; where it is well
-    above, the rows scatter for a reason neither carries."""
+    The noncentrality comes from the noncentral t (:func:`_smallest_shift`).  Beside it,
+    ``seed_se_percent`` and ``measured_se_percent``: the medians, over every row of every
+    quantity of ``res`` (one per residual row, not per test, and unweighted), of the seeds'
+    standard error of the simulated mean (sd_s / sqrt(n_s)) and of the measurement's
+    (sd_m / sqrt(n_m)), each row's own SDs, as percent of the row's scale (the relative
+    residual's, :func:`soilcal.loop.residuals.scales`).  They describe the rows' noise, not
+    the standard error of a test's combined value: where a test measures several quantities of
+    unequal noise, that value is their inverse-variance mean (:func:`per_test`), whose standard
+    error, 1 / sqrt(sum(1 / v)) over the test's quantities, lies at or below the quietest
+    quantity's and so below these medians.  Where the scatter is about their combination, more
+    seeds or repeats (whichever dominates) shrink what goes unseen as the square root of their
+    number; where it is well above, the rows scatter for a reason neither carries."""
     from scipy import stats
 
     quantity_of = quantity_of or {}

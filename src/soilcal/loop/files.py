@@ -247,8 +247,10 @@ def _detectable_lines(det: pd.DataFrame | None) -> list[str]:
             f"The smallest structure each test finds with probability {r['power']:.2g}, given the residual's "
             f"own scatter, at alpha / tests ({r['tests']} tests: Holm's strictest step); a trend as the change "
             "of the relative residual across the covariate's measured range (`detectable.csv`, "
-            "`soilcal.loop.diagnose.detectable`).  Beside it, the median standard errors, in % of the measured "
-            f"value: of the simulated mean over the seeds {r['seed_se_percent']:.3g} %, of the measured value "
+            "`soilcal.loop.diagnose.detectable`).  Beside it, the median standard errors over every row of every "
+            "quantity, in % of the row's scale (not those of a test's combined value, which weights its "
+            f"quantities by their noise): of the simulated mean over the seeds {r['seed_se_percent']:.3g} %, "
+            "of the measured value "
             + ("unknown (no SD measured)" if not np.isfinite(r["measured_se_percent"])
                else f"{r['measured_se_percent']:.3g} %")
             + ".  Where the scatter is about their combination, more seeds or repeats (whichever dominates) shrink "

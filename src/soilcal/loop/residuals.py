@@ -281,15 +281,17 @@ def bartlett_p(var, dof) -> float:
     return float(stats.chi2.sf(m / c, len(v) - 1))
 
 
-def pooled_relative_variance(sd, n, scale, group) -> np.ndarray:
+def pooled_relative_variance(sd, n, scale, group, homogeneity: bool = True) -> np.ndarray:
     """Per row, the squared SD over ``scale`` pooled over the rows of its ``group`` (a measured
     quantity) that estimate it (n > 1 values behind it, the SD finite): sum((n - 1) (sd /
     scale)^2) / sum(n - 1); NaN where its group has none, or where Bartlett's test
     (:func:`bartlett_p`) rejects that the group's relative variances are one at
     :data:`HOMOGENEITY_ALPHA`: an SD that is not proportional to the value (an absolute noise
     floor, one row far noisier than the others, a quantity scaled by its RMS) is not pooled and
-    each row keeps its own.  Rows repeating one estimate (the replicate rows of one simulation)
-    are to be passed once."""
+    each row keeps its own.  ``homogeneity=False`` skips that test: the pooled value is then
+    the group's typical relative variance whatever its rows' spread (the weights of
+    :func:`relative_variances`).  Rows repeating one estimate (the replicate rows of one
+    simulation) are to be passed once."""
     sd, n, scale = (np.asarray(x, float) for x in (sd, n, scale))
     rel = (sd / scale) ** 2
     ok = np.isfinite(rel) & np.isfinite(n) & (n > 1)
@@ -301,6 +303,8 @@ def pooled_relative_variance(sd, n, scale, group) -> np.ndarray:
     num = pd.Series(num).groupby(g).transform("sum").to_numpy(float)
     den = pd.Series(den).groupby(g).transform("sum").to_numpy(float)
     out = np.where(den > 0, num / np.where(den > 0, den, 1.0), np.nan)
+    if not homogeneity:
+        return out
     for _, at in pd.Series(np.arange(len(g))).groupby(g):
         at = at.to_numpy()
         at = at[ok[at]]
@@ -353,6 +357,66 @@ def reference_variances(df: pd.DataFrame, flags: bool = False) -> tuple[np.ndarr
         est_m, est_s = (nm > 1) & np.isfinite(sd_m), (ns > 1) & np.isfinite(sd_s)
         return ref_m, ref_s, ~est_m | np.isfinite(cv_m * scale), ~est_s | np.isfinite(cv_s * scale)
     return ref_m, ref_s
+
+
+def relative_variances(df: pd.DataFrame, parts: bool = False):
+    """Per row, the variance of its relative residual from the measured and the seed scatter,
+    (sd_m^2 / n_m + sd_s^2 / n_s) / scale^2 (module docstring): the weights of the quantities
+    of one measured test (:func:`soilcal.loop.diagnose.per_test`), which are to be one per
+    quantity, not the noise of each row's SD.  Each part's relative variance (sd / scale)^2 is
+    pooled over the rows of its measured quantity (:func:`pooled_relative_variance` without its
+    homogeneity test, Bartlett's) and divided by the row's own n: the measured SDs pooled over
+    the quantity's rows, a row entered twice (the same simulation, measured value, SD and
+    repeat count) counted once, and divided by the row's repeat count n_m; the seed SDs pooled
+    once per simulation (its replicate rows repeat one estimate) and divided by the row's seed
+    count n_s.  From three repeats or three seeds an SD squared is a variance on 2 degrees of
+    freedom, a third of such estimates off by a factor of 3 or more either way (chi-square on
+    2: e^-3 + 1 - e^(-1/3) = 0.33); pooled over the 18 rows of a quantity, on 36.  The pooled
+    value stands where the row's own SD is missing too (one seed behind the simulated mean).  A
+    part that no row of the quantity estimates (n > 1) takes the row's own SD (a measured SD
+    without a repeat count is taken as known, n_m 1), and a part with neither is left out, as
+    the residual's standard error leaves it out (no measured SD: the seed scatter alone).  NaN
+    where neither part is known (no measured SD and one seed) or the variance is 0, and for a
+    table without the columns.  With ``parts`` also, per row, which parts the variance holds
+    (1 the measured, 2 the seed, 3 both, 0 none): variances of different parts are not to be
+    weighed against each other (the seed scatter alone understates a row's variance).
+
+    Without Bartlett's test the pool is the mean of (sd / scale)^2 over the quantity's rows
+    whatever their spread: for a quantity scaled by its RMS, or with an absolute noise floor,
+    its rows near zero have the largest (sd / scale)^2 and dominate it, so the quantity's
+    weight is too small; that costs the combined value precision, not its expectation (the
+    weights do not depend on the residuals).  The weights use each row's n, so where repeat or
+    seed counts (or failed runs) follow a covariate, the weights differ between tests and the
+    quantities' different offsets can look like structure in it; constant n per quantity (the
+    usual table) gives constant weights."""
+    n = len(df)
+    if not n or not {"measurement", "measure"} <= set(df.columns) or not {"scale", "measured"} & set(df.columns):
+        return (np.full(n, np.nan), np.zeros(n, int)) if parts else np.full(n, np.nan)
+
+    def col(name):
+        return df[name].astype(float).to_numpy() if name in df else np.full(n, np.nan)
+
+    nm = np.clip(np.nan_to_num(col("measured_n"), nan=1.0), 1.0, None)
+    ns = np.nan_to_num(col("simulated_n"), nan=0.0)
+    sd_m, sd_s = col("measured_sd"), col("simulated_sd")
+    scale = scale_of(df).astype(float)
+    meas = (df["measurement"].astype(str) + KEY_SEP + df["measure"].astype(str)).to_numpy()
+    sim = df["simulation"].astype(str).to_numpy() if "simulation" in df else np.arange(n).astype(str)
+    first = ~pd.DataFrame({"s": sim, "m": meas}).duplicated().to_numpy()
+    # a row entered twice (same simulation and measured value, SD and count) pools its SD once
+    once = ~pd.DataFrame({"s": sim, "m": meas, "v": col("measured"), "sd": sd_m, "n": nm}).duplicated().to_numpy()
+    cv_m = pooled_relative_variance(np.where(once, sd_m, np.nan), nm, scale, meas, homogeneity=False)
+    cv_s = pooled_relative_variance(np.where(first, sd_s, np.nan), ns, scale, meas, homogeneity=False)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        part_m = np.where(np.isfinite(cv_m), cv_m, (sd_m / scale) ** 2) / nm
+        part_s = np.where(ns >= 1, np.where(np.isfinite(cv_s), cv_s, (sd_s / scale) ** 2) / np.clip(ns, 1.0, None),
+                          np.nan)
+    known = np.isfinite(part_m) | np.isfinite(part_s)
+    var = np.where(np.isfinite(part_m), part_m, 0.0) + np.where(np.isfinite(part_s), part_s, 0.0)
+    var = np.where(known & (var > 0), var, np.nan)
+    if parts:
+        return var, np.isfinite(part_m).astype(int) + 2 * np.isfinite(part_s).astype(int)
+    return var
 
 
 def scale_of(df: pd.DataFrame) -> np.ndarray:
