@@ -33,12 +33,14 @@ not rerun: a stand-in case reruns all its seeds, a DEM case the campaign of ``--
 ``--speeds``),
 ``loop.md``, and per DEM case and campaign its residuals, diagnosis before and after, every
 model tried and the predictions with the chosen effects
-(``benchmarks/results/loop_dem/<case>_*.csv``, ``<case>_campaign<seed>_*.csv`` for a campaign
-other than 0; a table the run does not make, such as the diagnosis after when nothing is
-chosen, is removed, not left from an earlier run of the campaign).  The DEM campaign's seed
-draws its conditions (and so which speeds fall on which test day), the measured side's noise
-and nothing else; one campaign is one draw of the data, so a DEM row is an example, several
-campaigns a rate.
+(``benchmarks/results/loop_dem/<stem>_*.csv``, :func:`detail_stem`: ``<case>_*.csv``,
+``<case>_campaign<seed>_*.csv`` for a campaign other than 0, and a soil-bin campaign's speed
+spacing and measures where they are not the default's, ``<case>_uniform_*.csv``,
+``<case>_horizontal_vertical_*.csv``; a table the run does not make, such as the diagnosis
+after when nothing is chosen, is removed, not left from an earlier run of the campaign).  The
+DEM campaign's seed draws its conditions (and so which speeds fall on which test day), the
+measured side's noise and nothing else; one campaign is one draw of the data, so a DEM row is
+an example, several campaigns a rate.
 
     python benchmarks/loop.py [--engines standin,dem] [--cases rate,stones] [--seeds 3] [--n 12]
     python benchmarks/loop.py --engines dem --cases moisture_cohesion --design-points 5
@@ -57,7 +59,9 @@ where the quick plate's force answers a change of friction most, ``loop.md``), o
 option existed (column ``speeds``, empty there).  Both map the same random draw, so the
 other covariates of a campaign are the same under either.  A campaign of one spacing does not
 replace the other's row, and the summary counts them apart (the case named with its spacing
-where a case has rows of both).
+where a case has rows of both); a uniform-speed campaign's detail tables carry the spacing in
+their names (``rate+depth_uniform_*.csv``, :func:`speeds_tag`), so that the log-speed
+campaign of the case keeps its own.
 
 ``--responses``: the plate measures the DEM soil-bin campaign records, of
 ``horizontal_force_N`` (the default, alone), ``vertical_force_N`` and ``resultant_angle_deg``
@@ -293,6 +297,34 @@ def responses_tag(responses) -> str:
     return "_" + "_".join(m.split("_")[0] for m in responses)
 
 
+def speeds_tag(speeds) -> str:
+    """The suffix of a DEM campaign's detail tables for its speed spacing (:data:`SPEED_SPACINGS`):
+    none for ``log``, the default (the names the log-speed tables always had), and none for a
+    campaign without speeds (``""``: a compression campaign); else ``_`` and the spacing
+    (``_uniform``), so that the campaigns of the two spacings do not overwrite each other's
+    tables."""
+    if speeds in ("", "log"):
+        return ""
+    if speeds not in SPEED_SPACINGS:
+        raise ValueError(f"speed spacing {speeds!r} is not one of {', '.join(SPEED_SPACINGS)}")
+    return f"_{speeds}"
+
+
+def detail_stem(case, seed, speeds="log", responses=DEFAULT_RESPONSES) -> str:
+    """The name stem of a DEM campaign's detail tables (``loop_dem/<stem>_residuals.csv``), the
+    one place the names are built, for :func:`dem_rows` writing them and every reader
+    (:func:`detail_tag`, ``loop_rate/per_measure.py``, ``loop_depth/p_floor.py``): the case,
+    ``_campaign<seed>`` for a campaign other than 0 (campaign 0 keeps its earlier names), then
+    for a soil-bin campaign its speed spacing (:func:`speeds_tag`) and its measures
+    (:func:`responses_tag`), each empty where it is the default's; a compression campaign has
+    neither.  ``rate+depth``, ``rate+depth_campaign1_uniform``,
+    ``rate_friction_campaign2_horizontal_vertical``."""
+    stem = case if str(seed) == "0" else f"{case}_campaign{seed}"
+    if case not in COMPRESSION_CASES:
+        stem += speeds_tag(speeds) + responses_tag(responses)
+    return stem
+
+
 def dem_rows(cases, n, seed, threads, design_points=3, outdir=HERE / "results", speeds="log",
              responses=DEFAULT_RESPONSES):
     from soilcal.loop import core, synthesize as sy
@@ -327,9 +359,7 @@ def dem_rows(cases, n, seed, threads, design_points=3, outdir=HERE / "results", 
                              responses="" if case in COMPRESSION_CASES else "+".join(responses)))
             detail = Path(outdir) / "loop_dem"
             detail.mkdir(parents=True, exist_ok=True)
-            tag = case if seed == 0 else f"{case}_campaign{seed}"  # campaign 0 keeps its earlier names
-            if case not in COMPRESSION_CASES:
-                tag += responses_tag(responses)
+            tag = detail_tag(rows[-1])
             for name, df in (("residuals", out.residuals), ("diagnosis", out.diagnosis), ("selection", out.selection),
                              ("diagnosis_after", out.diagnosis_after), ("predictions", out.predictions),
                              ("summary", out.summary)):
@@ -451,13 +481,11 @@ def _theta_text(r) -> str:
 
 def detail_tag(r) -> str:
     """The name stem of a DEM row's detail tables (``loop_dem/<stem>_residuals.csv``), as
-    :func:`dem_rows` writes them: the case, ``_campaign<seed>`` for a campaign other than 0, and
-    the measures' tag (:func:`responses_tag`).  Campaigns of the two speed spacings share it:
-    the tables are those of the campaign run last."""
-    tag = r["case"] if str(r["seed"]) == "0" else f"{r['case']}_campaign{r['seed']}"
-    if r["case"] not in COMPRESSION_CASES:
-        tag += responses_tag(tuple(_responses_text(r).split("+")))
-    return tag
+    :func:`dem_rows` writes them: :func:`detail_stem` of the row's case, campaign, speed spacing
+    (:func:`_speeds_text`: a soil-bin row written before the column existed drew its speeds
+    uniformly) and measures (:func:`_responses_text`)."""
+    resp = _responses_text(r)
+    return detail_stem(r["case"], r["seed"], _speeds_text(r), tuple(resp.split("+")) if resp else DEFAULT_RESPONSES)
 
 
 def floor_of(r, detail: Path) -> tuple:
@@ -467,8 +495,7 @@ def floor_of(r, detail: Path) -> tuple:
     for a DEM row written before those columns existed, computed from its campaign's saved
     residual table and held-out predictions (``detail``: ``loop_dem/``, :func:`detail_tag`)
     where they reproduce the row's RMS errors before and after to loop.csv's rounding (0.01 %),
-    else "" (the tables are another run's: the campaign of the other speed spacing, or one
-    rerun since)."""
+    else "" (the tables are another run's: one rerun since)."""
     def text(x):  # a cell as written: None (a row without the column) and NaN are empty, 0 is 0
         x = "" if x is None else str(x)
         return "" if x == "nan" else x
@@ -623,9 +650,9 @@ def main(argv=None):
           "after^2) / (before^2 - floor^2), empty where the error before is not above the floor "
           "(`explained_percent`).  Rows written before these columns existed have none in loop.csv; for a DEM row "
           "the page computes them from its campaign's saved residual table and held-out predictions "
-          "(`loop_dem/<case>[_campaign<seed>]_residuals.csv`, `_predictions.csv`) where those reproduce the row's "
-          "errors before and after to 0.01 %, and leaves them empty where they do not (the tables are another run's: "
-          "campaigns of the two speed spacings share their names) or are missing.  In the summary a case's floors "
+          "(`loop_dem/<case>[_campaign<seed>][_uniform]_residuals.csv`, `_predictions.csv`) where those reproduce the "
+          "row's errors before and after to 0.01 %, and leaves them empty where they do not (the tables are another "
+          "run's) or are missing.  In the summary a case's floors "
           "and explained shares are each campaign's, smallest first, where it has at most three, else their median "
           "(smallest to largest); \"(k of n)\" where only k of its n campaigns have one.  Even an exactly right "
           "effect leaves the held-out error a little above the floor (it includes the error of fitting the effect's "

@@ -143,7 +143,7 @@ def test_header_names_the_merged_rows(bench):
 
 def _no_dem_loop(bench, monkeypatch, campaign):
     """dem_rows without the DEM: ``campaign`` stands for ``_campaign``, and the loop's outcome
-    is one where nothing is chosen (every table a one-cell frame)."""
+    is one where nothing is chosen (every table a one-cell frame); returns that outcome."""
     import types
 
     import pandas as pd
@@ -161,6 +161,7 @@ def _no_dem_loop(bench, monkeypatch, campaign):
     monkeypatch.setattr(synthesize, "synthesize", lambda *a, **k: table)
     monkeypatch.setattr(synthesize, "with_measured", lambda conds, t: conds)
     monkeypatch.setattr(core, "run_inprocess", lambda *a, **k: out)
+    return out
 
 
 def test_a_rerun_campaign_leaves_no_table_of_the_earlier_run(bench, monkeypatch, tmp_path):
@@ -238,3 +239,88 @@ def test_header_names_a_merged_campaigns_measures(bench):
     assert bench._merged_text([("hv/loop.csv", [both]), ("h/loop.csv", [_row("rate_friction", 1, "log")])]) == (
         "; rows taken from other runs: hv/loop.csv: dem rate_friction campaign 1 (log speeds; measuring "
         "horizontal_force_N, vertical_force_N); h/loop.csv: dem rate_friction campaign 1 (log speeds)")
+
+
+def test_the_stem_names_a_campaigns_spacing_where_it_is_not_the_default(bench):
+    # the names the default campaigns' committed tables have: unchanged
+    assert bench.detail_stem("rate+depth", 0) == "rate+depth"
+    assert bench.detail_stem("rate+depth", 0, "log") == "rate+depth"
+    assert bench.detail_stem("rate_friction", 2, "log", ("horizontal_force_N", "vertical_force_N")) == (
+        "rate_friction_campaign2_horizontal_vertical")
+    # a uniform-speed campaign: its spacing, before its measures
+    assert bench.detail_stem("rate+depth", 0, "uniform") == "rate+depth_uniform"
+    assert bench.detail_stem("rate_friction", 1, "uniform", ("horizontal_force_N", "vertical_force_N")) == (
+        "rate_friction_campaign1_uniform_horizontal_vertical")
+    # a compression campaign has neither speeds nor soil-bin measures
+    assert bench.detail_stem("plastic_contact", 0, "") == "plastic_contact"
+    assert bench.detail_tag(dict(_row("plastic_contact", 1, ""), responses="")) == "plastic_contact_campaign1"
+    # a row written before the speeds column existed drew its speeds uniformly
+    assert bench.detail_tag(dict(_row("stones", 0, ""), responses="")) == "stones_uniform"
+    with pytest.raises(ValueError, match="'Log' is not one of log, uniform"):
+        bench.detail_stem("none", 0, "Log")
+
+
+def test_campaigns_of_the_two_spacings_write_their_own_tables(bench, monkeypatch, tmp_path):
+    # one case and campaign run with each spacing: each run's residual table says which campaign
+    # it is, and neither overwrites the other's
+    import types
+
+    import pandas as pd
+
+    from soilcal.loop import core
+
+    out = _no_dem_loop(bench, monkeypatch, lambda tmp, n, seed, speeds, responses: [speeds])
+    monkeypatch.setattr(core, "run_inprocess", lambda name, conds, *a, **k: types.SimpleNamespace(
+        **dict(vars(out), residuals=pd.DataFrame({"speeds": conds}))))
+    detail = tmp_path / "loop_dem"
+    for seed, default in ((0, "rate+depth"), (1, "rate+depth_campaign1")):
+        uniform = bench.dem_rows(["rate+depth"], 18, seed, 1, outdir=tmp_path, speeds="uniform")[0]
+        log = bench.dem_rows(["rate+depth"], 18, seed, 1, outdir=tmp_path, speeds="log")[0]
+        assert (uniform["speeds"], log["speeds"]) == ("uniform", "log")
+        assert (detail / f"{default}_residuals.csv").read_text() == "speeds\nlog\n"  # the default name, as before
+        assert (detail / f"{default}_uniform_residuals.csv").read_text() == "speeds\nuniform\n"
+        # the page's reader finds each row's own tables
+        for row in (uniform, log):
+            assert (detail / f"{bench.detail_tag(row)}_residuals.csv").read_text() == f"speeds\n{row['speeds']}\n"
+            assert (detail / f"{bench.detail_tag(row)}_summary.csv").exists()
+
+
+def test_the_page_takes_each_spacings_floor_from_its_own_tables(bench, tmp_path):
+    # campaign 1 of a case with each spacing, 100 N and 200 N measured (SDs 10 and 20 N over 4
+    # repeats) against SDs of 6 and 12 N over 3 seeds: the floor sqrt(0.0037) = 6.08 % in both
+    # (test_an_earlier_dem_row_takes_its_floor_from_its_campaign_tables); the log campaign
+    # simulates 90 and 210 N (relative residuals 0.1, -0.05: RMS 7.91 %), the uniform one 80
+    # and 200 N (0.2, 0: RMS sqrt(0.02) = 14.14 %); nothing chosen, so after = before and
+    # the explained share 0
+    import pandas as pd
+
+    detail = tmp_path / "loop_dem"
+    detail.mkdir()
+    for stem, sim, rel in (("none_campaign1", [90.0, 210.0], [0.1, -0.05]),
+                           ("none_campaign1_uniform", [80.0, 200.0], [0.2, 0.0])):
+        pd.DataFrame({"measurement": "campaign", "row": [1, 2], "measure": "horizontal_force_N",
+                      "simulation": ["a", "b"], "measured": [100.0, 200.0], "measured_sd": [10.0, 20.0],
+                      "measured_n": [4.0, 4.0], "simulated_mean": sim, "simulated_sd": [6.0, 12.0],
+                      "simulated_n": [3, 3], "scale": [100.0, 200.0], "relative_residual": rel}
+                     ).to_csv(detail / f"{stem}_residuals.csv", index=False)
+    log, uniform = _row("none", 1, "log", "7.91"), _row("none", 1, "uniform", "14.14")
+    assert bench.floor_of(log, detail) == (6.08, 0.0)
+    assert bench.floor_of(uniform, detail) == (6.08, 0.0)
+    # a row written before the speeds column existed is a uniform-speed campaign's
+    assert bench.floor_of(dict(uniform, speeds=""), detail) == (6.08, 0.0)
+
+
+def test_per_measure_finds_each_spacings_table(load_benchmark, tmp_path):
+    pm = load_benchmark("loop_rate/per_measure.py", "per_measure_bench")
+    log = tmp_path / "rate_friction_campaign1_horizontal_vertical_residuals.csv"
+    uniform = tmp_path / "rate_friction_campaign1_uniform_horizontal_vertical_residuals.csv"
+    for p in (log, uniform):
+        p.write_text("x\n1\n")
+    assert pm.residual_table("rate_friction:1", tmp_path) == log
+    assert pm.residual_table("rate_friction:1:log", tmp_path) == log
+    assert pm.residual_table("rate_friction:1:uniform", tmp_path) == uniform
+    assert pm.residual_table(str(uniform), tmp_path) == uniform  # a table's path, as given
+    with pytest.raises(ValueError, match="no residual table .*rate_friction_campaign2_horizontal_vertical"):
+        pm.residual_table("rate_friction:2", tmp_path)
+    with pytest.raises(ValueError, match="'rate_friction:1:Log': speed spacing 'Log' is not one of"):
+        pm.residual_table("rate_friction:1:Log", tmp_path)
