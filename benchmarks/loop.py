@@ -530,7 +530,7 @@ def floor_of(r, detail: Path) -> tuple:
     if not same:
         return "", ""
     f = 100 * rs.noise_floor(u, ok)[0]
-    return _rounded(f, 2), _rounded(core.explained_percent(b, a, f), 1)
+    return _rounded(f, 2), _rounded(core.explained_percent(b, a, f, 100 * rs.floor_interval(u, ok)[1]), 1)
 
 
 #: at most this many known values of a case are shown each, not as a median: the median of two

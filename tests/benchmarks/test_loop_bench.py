@@ -97,7 +97,12 @@ def test_an_earlier_dem_row_takes_its_floor_from_its_campaign_tables(bench, tmp_
                  ).to_csv(detail / "none_campaign1_residuals.csv", index=False)
     row = dict(_row("none", 1, "log", "7.91"), responses="")
     assert bench.detail_tag(row) == "none_campaign1"
-    assert bench.floor_of(row, detail) == (6.08, 0.0)
+    # the floor's 95 % interval (two rows, each SD on 2-3 degrees of freedom) reaches above the
+    # 7.91 % before: no explainable part told apart from the floor's uncertainty, no share
+    from soilcal.loop import residuals as rs
+
+    assert rs.floor_interval(rs.usable(pd.read_csv(detail / "none_campaign1_residuals.csv")))[1] > 0.0791
+    assert bench.floor_of(row, detail) == (6.08, "")
     # tables that do not give the row's errors are another run's: no floor from them
     assert bench.floor_of(dict(row, rmse_before_percent="8.00", rmse_after_percent="8.00"), detail) == ("", "")
     assert bench.floor_of(dict(row, seed=2), detail) == ("", "")  # no tables of that campaign
@@ -291,7 +296,9 @@ def test_the_page_takes_each_spacings_floor_from_its_own_tables(bench, tmp_path)
     # (test_an_earlier_dem_row_takes_its_floor_from_its_campaign_tables); the log campaign
     # simulates 90 and 210 N (relative residuals 0.1, -0.05: RMS 7.91 %), the uniform one 80
     # and 200 N (0.2, 0: RMS sqrt(0.02) = 14.14 %); nothing chosen, so after = before and
-    # the explained share 0
+    # the explained share 0 where the error before lies above the floor's 95 % interval (the
+    # uniform campaign's), empty where within it (the log campaign's 7.91 %,
+    # test_an_earlier_dem_row_takes_its_floor_from_its_campaign_tables)
     import pandas as pd
 
     detail = tmp_path / "loop_dem"
@@ -304,7 +311,11 @@ def test_the_page_takes_each_spacings_floor_from_its_own_tables(bench, tmp_path)
                       "simulated_n": [3, 3], "scale": [100.0, 200.0], "relative_residual": rel}
                      ).to_csv(detail / f"{stem}_residuals.csv", index=False)
     log, uniform = _row("none", 1, "log", "7.91"), _row("none", 1, "uniform", "14.14")
-    assert bench.floor_of(log, detail) == (6.08, 0.0)
+    from soilcal.loop import residuals as rs
+
+    hi = rs.floor_interval(rs.usable(pd.read_csv(detail / "none_campaign1_residuals.csv")))[1]
+    assert 0.0791 < hi < 0.1414
+    assert bench.floor_of(log, detail) == (6.08, "")
     assert bench.floor_of(uniform, detail) == (6.08, 0.0)
     # a row written before the speeds column existed is a uniform-speed campaign's
     assert bench.floor_of(dict(uniform, speeds=""), detail) == (6.08, 0.0)

@@ -252,6 +252,16 @@ def test_the_share_explained_is_empty_where_the_error_before_is_within_the_floor
     assert core.explained_percent(5.0, 3.0, 1.0) == pytest.approx(100 * 16 / 24)
 
 
+def test_the_share_explained_is_empty_where_the_error_before_lies_within_the_floor_interval():
+    # before 1.4 above the floor 1.3 but within its interval's upper end 1.5: (1.96 - 1.21) /
+    # (1.96 - 1.69) would read 278 %, a ratio set by the floor's own uncertainty
+    assert math.isnan(core.explained_percent(1.4, 1.1, 1.3, 1.5))
+    assert math.isnan(core.explained_percent(1.5, 1.1, 1.3, 1.5))
+    # above the interval, or the interval unknown: the share as before, (25 - 9) / (25 - 1)
+    assert core.explained_percent(5.0, 3.0, 1.0, 1.2) == pytest.approx(100 * 16 / 24)
+    assert core.explained_percent(5.0, 3.0, 1.0, math.nan) == pytest.approx(100 * 16 / 24)
+
+
 def test_a_table_without_sd_reports_no_floor_and_why():
     out, text = _loop(False)
     s = out.summary.iloc[0]

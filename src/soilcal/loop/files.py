@@ -318,7 +318,8 @@ def _floor_lines(s, o: core.Outcome) -> list[str]:
                  f"(before^2 - after^2) / (before^2 - floor^2) = ({before:.2f}^2 - {after:.2f}^2) / "
                  f"({before:.2f}^2 - {floor:.2f}^2).")
     elif o.chosen:
-        text += "  The error before is not above the floor: the share of the explainable error removed is not defined."
+        text += ("  The error before is not above the floor's 95 % interval: the explainable part is not told apart "
+                 "from the floor's own uncertainty, and the share of it removed is not defined.")
     else:
         # the floor's interval covers the SDs' uncertainty only, not the scatter of an RMS error
         # over a few rows about it: no comparison of the two is a test, and none is made
