@@ -230,6 +230,38 @@ def test_a_second_run_has_nothing_to_do(done):
     assert planned_jobs(done) == []
 
 
+#: files asked for after a forced checkpoint whose later checkpoints then have nothing to do:
+#: (forced checkpoint output, targets); the tables read the refined and final sets and the loop's
+#: plans (after the optimum), and a Box-Behnken design (after the path's design)
+AFTER_CHECKPOINT = [
+    ("results/cinnamon-soil/dem/bbd/optimum.csv",
+     ["results/cinnamon-soil/dem/tool_verification.csv", "results/cinnamon-soil/dem/verification.csv",
+      "results/cinnamon-soil/dem/calibrated_vs_paper.csv", "results/cinnamon-soil/loop/loop_summary.csv"]),
+    ("results/cinnamon-soil/dem/steepest/design.csv", ["results/cinnamon-soil/dem/bbd/responses.csv"]),
+]
+
+
+@pytest.mark.parametrize("forced,targets", AFTER_CHECKPOINT, ids=["optimum", "design"])
+def test_a_file_after_a_forced_checkpoint_is_made_from_its_real_inputs(done, tmp_path, forced, targets):
+    """``snakemake -f <checkpoint output> <files after it>`` on a finished run: the checkpoint
+    writes the same file again, the checkpoints after it (refine, final_set, the loop's plans,
+    the next stage's design) are then up to date and do not run, and every forced file is made
+    from its real inputs, the same tables as the run's own (a job that ran on a pending
+    checkpoint's placeholder failed: 'TBDString' object has no attribute 'items').  On a copy of
+    the tiny run: two to five light jobs, 10-15 s."""
+    tmp = tmp_path / "wf"
+    shutil.copytree(done, tmp, symlinks=True)
+    p = run(tmp, "--cores", "2", "-f", forced, *targets, check=False)
+    out = p.stdout + p.stderr
+    assert p.returncode == 0, out[-4000:]
+    name = "optimum" if forced.endswith("optimum.csv") else "design"
+    assert re.search(rf"^(local)?checkpoint {name}:", out, flags=re.M), out[-4000:]
+    # no job ran with a checkpoint's placeholder for input
+    assert "<TBD>" not in out, out[-4000:]
+    for t in targets:
+        assert (tmp / t).read_bytes() == (done / t).read_bytes(), t
+
+
 def test_editing_a_note_reruns_no_second_round(done):
     # the refine step reads the soil config without its documentation (plan.dem_context)
     p = done / "config/soils/cinnamon-soil.yaml"
