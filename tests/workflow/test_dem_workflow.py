@@ -14,6 +14,7 @@ import json
 import os
 import re
 import shutil
+from pathlib import Path
 
 import numpy as np
 import pandas as pd
@@ -228,6 +229,49 @@ def test_the_loop_compares_every_measured_plate_and_fits_the_adhesion_effect(don
 
 def test_a_second_run_has_nothing_to_do(done):
     assert planned_jobs(done) == []
+
+
+#: files asked for after a forced checkpoint whose later checkpoints then have nothing to do:
+#: (forced checkpoint output, targets); the tables read the refined and final sets and the loop's
+#: plans (after the optimum), and a Box-Behnken design (after the path's design)
+AFTER_CHECKPOINT = [
+    ("results/cinnamon-soil/dem/bbd/optimum.csv",
+     ["results/cinnamon-soil/dem/tool_verification.csv", "results/cinnamon-soil/dem/verification.csv",
+      "results/cinnamon-soil/dem/calibrated_vs_paper.csv", "results/cinnamon-soil/loop/loop_summary.csv"]),
+    ("results/cinnamon-soil/dem/steepest/design.csv", ["results/cinnamon-soil/dem/bbd/responses.csv"]),
+]
+
+#: the rule that makes each target of AFTER_CHECKPOINT
+RULE_OF = {"tool_verification.csv": "tool_verification", "verification.csv": "verification",
+           "calibrated_vs_paper.csv": "calibrated_vs_paper", "loop_summary.csv": "loop_select",
+           "responses.csv": "dem_responses"}
+
+
+@pytest.mark.parametrize("forced,targets", AFTER_CHECKPOINT, ids=["optimum", "design"])
+def test_a_file_after_a_forced_checkpoint_is_made_from_its_real_inputs(done, tmp_path, forced, targets):
+    """``snakemake -f <checkpoint output> <files after it>`` on a finished run: the checkpoint
+    writes the same file again, the checkpoints after it (refine, final_set, the loop's plans,
+    the next stage's design) are then up to date and do not run, and every forced file is made
+    from its real inputs, the same tables as the run's own (a job that ran on a pending
+    checkpoint's placeholder failed: 'TBDString' object has no attribute 'items').  On a copy of
+    the tiny run, its targets deleted so that each must be made again by its own job: two to
+    five light jobs, 10-15 s."""
+    tmp = tmp_path / "wf"
+    shutil.copytree(done, tmp, symlinks=True)
+    for t in targets:
+        (tmp / t).unlink()
+    p = run(tmp, "--cores", "2", "-f", forced, *targets, check=False)
+    out = p.stdout + p.stderr
+    assert p.returncode == 0, out[-4000:]
+    name = "optimum" if forced.endswith("optimum.csv") else "design"
+    assert re.search(rf"^(local)?checkpoint {name}:", out, flags=re.M), out[-4000:]
+    # no job ran with a checkpoint's placeholder for input
+    assert "<TBD>" not in out, out[-4000:]
+    for t in targets:
+        rule = RULE_OF[Path(t).name]
+        assert re.search(rf"^(local)?rule {rule}:", out, flags=re.M), (rule, out[-4000:])
+        assert (tmp / t).is_file(), (t, out[-4000:])
+        assert (tmp / t).read_bytes() == (done / t).read_bytes(), t
 
 
 def test_editing_a_note_reruns_no_second_round(done):

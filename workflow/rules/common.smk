@@ -244,9 +244,34 @@ def dem_priority(w):
     return stage_priority(w.soil, w.stage)
 
 
+# Every function below that reads a checkpoint's output first asks for the checkpoints that
+# output is made after, in the order they run (a stage's design after the designs and sets it is
+# derived from, its optimum after its design, refined.csv after the optimum, final.csv after
+# refined.csv, the loop's plans after the final sets).  Snakemake puts a pending checkpoint's
+# output in place of a job's input and params (a placeholder) and evaluates the job again when
+# that checkpoint has run, or when an evaluation names a checkpoint it had not named before and
+# that checkpoint has nothing to do.  A checkpoint that has nothing to do once an earlier one has
+# run (a forced optimum writes the same optimum.csv: refine and final_set are then up to date) does
+# not run, so a job still holding its placeholder is never evaluated again, and one that has to run
+# (a target given with -f, or missing) runs on the placeholder.  Asked in order, a job waits on the
+# first checkpoint still pending, and each evaluation after it has run names the next one.
+
+
+def design_of(soil, stage):
+    """design.csv of a DEM stage once its checkpoint has run, after the checkpoints of the
+    stages it is derived from (derive.dependencies: the DEM stage it follows, the stage whose
+    set it fixes)."""
+    deps = derive.dependencies(soil_cfg(soil), stage)
+    if "from" in deps:
+        design_of(soil, deps["from"])
+    if "fixed_from" in deps:
+        set_of(soil, deps["fixed_from"])
+    return checkpoints.design.get(soil=soil, source="dem", stage=stage).output.design
+
+
 def dem_design(w):
     """The DEM design of a stage, once its checkpoint has run."""
-    return checkpoints.design.get(soil=w.soil, source="dem", stage=w.stage).output.design
+    return design_of(w.soil, w.stage)
 
 
 _POINTS = {}
@@ -340,6 +365,8 @@ def refine_on(soil):
 
 
 def refined_of(soil, stage):
+    """refined.csv of a stage once the refine checkpoint has run (after its optimum)."""
+    optimum_file(soil, stage)
     return checkpoints.refine.get(soil=soil, stage=stage).output[0]
 
 
@@ -348,6 +375,8 @@ def refined_files(w):
 
 
 def final_of(soil, stage):
+    """final.csv of a stage once the final_set checkpoint has run (after refined.csv)."""
+    refined_of(soil, stage)
     return checkpoints.final_set.get(soil=soil, stage=stage).output[0]
 
 
@@ -403,7 +432,7 @@ def _calibration(soil, stage, final=False, refined=False):
     elif final and refine_on(soil):
         opt = final_of(soil, stage)
     else:
-        opt = checkpoints.optimum.get(soil=soil, source="dem", stage=stage).output.optimum
+        opt = optimum_file(soil, stage)
     d = stage_dir(soil, stage, "dem")
     key = (soil, stage, opt, os.path.getmtime(opt), os.path.getmtime(f"{d}/stage.json"))
     if key not in _CALIBRATED:
@@ -411,8 +440,14 @@ def _calibration(soil, stage, final=False, refined=False):
     return _CALIBRATED[key]
 
 
+def optimum_file(soil, stage):
+    """optimum.csv of a DEM stage once its optimum checkpoint has run (after its design)."""
+    design_of(soil, stage)
+    return checkpoints.optimum.get(soil=soil, source="dem", stage=stage).output.optimum
+
+
 def optimum_of(soil, stage):
-    return ancient(checkpoints.optimum.get(soil=soil, source="dem", stage=stage).output.optimum)
+    return ancient(optimum_file(soil, stage))
 
 
 def verify_spec(w):
@@ -467,12 +502,19 @@ def tool_spec(w):
     return tool_jobs(w.soil)[0][w.key]
 
 
-def final_set_of(soil, stage):
-    return ancient(final_of(soil, stage)) if refine_on(soil) else optimum_of(soil, stage)
+def set_of(soil, stage):
+    """The file holding the set a stage ends with (final.csv where the soil runs the second
+    round, else optimum.csv), once its checkpoint has run."""
+    return final_of(soil, stage) if refine_on(soil) else optimum_file(soil, stage)
+
+
+def tool_sets(soil):
+    """The sets the measured conditions are simulated at: one file per stage they name."""
+    return [set_of(soil, s) for s in sorted({c.stage for c in conditions(soil)})]
 
 
 def tool_optima(w):
-    return [final_set_of(w.soil, s) for s in sorted({c.stage for c in conditions(w.soil)})]
+    return [ancient(f) for f in tool_sets(w.soil)]
 
 
 def set_file(soil):
@@ -512,10 +554,14 @@ def tool_file_map(w):
 
 
 def loop_plan_file(soil):
+    """plan.json once loop_diagnose has run (after the final sets its tool runs simulate)."""
+    tool_sets(soil)
     return checkpoints.loop_diagnose.get(soil=soil).output.plan
 
 
 def loop_more_file(soil):
+    """plan_more.json once loop_more has run (after the first plan)."""
+    loop_plan_file(soil)
     return checkpoints.loop_more.get(soil=soil).output[0]
 
 
@@ -602,8 +648,15 @@ def adaptive_upstream(soil, stage):
     return derive.dependencies(data, stage).get("fixed_from")
 
 
-def adaptive_step_file(soil, stage, case, it):
+def _step_file(soil, stage, case, it):
     return checkpoints.adaptive_step.get(soil=soil, stage=stage, case=case, it=str(it)).output[0]
+
+
+def adaptive_step_file(soil, stage, case, it):
+    """step/<it>.json of a case once its checkpoint has run, after the checkpoints it is
+    decided from (adaptive_history)."""
+    adaptive_history(soil, stage, case, it)
+    return _step_file(soil, stage, case, it)
 
 
 _STEP_RECORDS = {}
@@ -619,11 +672,25 @@ def _step_record(path):
 
 def adaptive_history(soil, stage, case, upto=None):
     """(iteration records, run files) of the iterations before ``upto``, or of the whole design
-    (until an iteration stops it) when ``upto`` is None; each record is a checkpoint."""
+    (until an iteration stops it) when ``upto`` is None; each record is a checkpoint, asked for
+    after those it is decided from: the upstream stage's whole designs (adaptive_upstream) and
+    the iterations before it of the cases sharing its runs."""
+    up = adaptive_upstream(soil, stage)
+    if up:
+        for c in adaptive_case_ids(soil, up):
+            adaptive_history(soil, up, c)
+    # the next iteration of each sibling case to ask for (None once its design has stopped)
+    sibs = dict.fromkeys(adaptive.sibling_cases(soil_cfg(soil), stage, case), 0)
     steps, runs = [], []
     it = 0
-    while upto is None or it < upto:
-        p = adaptive_step_file(soil, stage, case, it)
+    while True:
+        # the siblings' iterations before this one (also before the iteration ``upto`` the caller asks for)
+        for c, k in sibs.items():
+            if k is not None and k < it:
+                sibs[c] = k + 1 if _step_record(_step_file(soil, stage, c, k))["status"] == "continue" else None
+        if upto is not None and it >= upto:
+            break
+        p = _step_file(soil, stage, case, it)
         rec = _step_record(p)
         steps.append(p)
         runs += [f"{adaptive_dir(soil, stage, case)}/runs/{it}/{k}.csv" for k in range(len(rec["runs"]))]

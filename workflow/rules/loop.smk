@@ -9,7 +9,9 @@
 
 checkpoint loop_diagnose:
     input:
-        tool_runs,
+        runs=tool_runs,
+        # the sets the run files (params) are read from
+        optima=tool_optima,
     output:
         residuals=report("results/{soil}/loop/residuals.csv", caption="../report/loop_residuals.rst",
                          category="{soil}", subcategory="measured-data loop"),

@@ -143,7 +143,9 @@ rule tool_point:
 
 rule tool_verification:
     input:
-        tool_runs,
+        runs=tool_runs,
+        # the sets the run map (params) is read from
+        optima=tool_optima,
     output:
         report("results/{soil}/dem/tool_verification.csv", caption="../report/tools.rst", category="{soil}",
                subcategory="dem tool tests"),

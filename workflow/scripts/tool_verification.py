@@ -5,5 +5,5 @@ from soilcal.logs import redirect
 
 with redirect(snakemake.log[0]):  # noqa: F821
     df = write_tool_verification(snakemake.params.soil_path, snakemake.params.resources_root,  # noqa: F821
-                                 list(snakemake.input), snakemake.params.runs, snakemake.output[0])  # noqa: F821
+                                 list(snakemake.input.runs), snakemake.params.runs, snakemake.output[0])  # noqa: F821
     print(df.to_string(index=False))
