@@ -518,10 +518,10 @@ def floor_of(r, detail: Path) -> tuple:
         pred = pd.read_csv(pred_path)
         if "heldout_prediction" in pred and len(pred) == len(u):
             after = (u["measured"].to_numpy(float) - pred["heldout_prediction"].to_numpy(float)) / rs.scale_of(u)
-    ok = np.isfinite(before) & np.isfinite(after)
-    if not ok.any():
+    e = core.error_figures(u, before, after)
+    b, a = e["rmse_before_percent"], e["rmse_after_percent"]
+    if not np.isfinite(b):
         return "", ""
-    b, a = (100 * float(np.sqrt(np.mean(x[ok] ** 2))) for x in (before, after))
     try:
         same = abs(b - float(r["rmse_before_percent"])) <= 0.005 + 1e-9 and abs(a - float(r["rmse_after_percent"])) \
             <= 0.005 + 1e-9
@@ -529,8 +529,7 @@ def floor_of(r, detail: Path) -> tuple:
         return "", ""
     if not same:
         return "", ""
-    f = 100 * rs.noise_floor(u, ok)[0]
-    return _rounded(f, 2), _rounded(core.explained_percent(b, a, f, 100 * rs.floor_interval(u, ok)[1]), 1)
+    return _rounded(e["rmse_floor_percent"], 2), _rounded(e["explained_percent"], 1)
 
 
 #: at most this many known values of a case are shown each, not as a median: the median of two
@@ -647,8 +646,8 @@ def main(argv=None):
           "sqrt(mean((sd_m^2 / n_m + sd_s^2 / n_s) / scale^2)) of each row's measured SD over its repeats and seed "
           "SD over its seeds (`soilcal.loop.residuals.noise_floor`, loop_summary.csv's `rmse_floor_percent`): no "
           "effect brings the held-out error below it except by chance.  Explainable error removed: (before^2 - "
-          "after^2) / (before^2 - floor^2), empty where the error before is not above the floor "
-          "(`explained_percent`).  Rows written before these columns existed have none in loop.csv; for a DEM row "
+          "after^2) / (before^2 - floor^2), empty where the error before is not above the floor's 95 % "
+          "interval (`explained_percent`).  Rows written before these columns existed have none in loop.csv; for a DEM row "
           "the page computes them from its campaign's saved residual table and held-out predictions "
           "(`loop_dem/<case>[_campaign<seed>][_uniform]_residuals.csv`, `_predictions.csv`) where those reproduce the "
           "row's errors before and after to 0.01 %, and leaves them empty where they do not (the tables are another "

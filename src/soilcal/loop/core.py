@@ -1325,21 +1325,16 @@ def _analyse(soil: str, res: pd.DataFrame, diag: pd.DataFrame, cands: list, effe
         if unsimulated:
             verdict += (f"; {int(measured.sum()) - unsimulated} of {int(measured.sum())} measured values have a "
                         f"simulated value: the runs of the other {unsimulated} failed (residuals.csv says why)")
-    ok = np.isfinite(after_cv) & np.isfinite(before)
-    rb = float(np.sqrt(np.mean(before[ok] ** 2))) * 100 if ok.any() else math.nan
-    ra = float(np.sqrt(np.mean(after_cv[ok] ** 2))) * 100 if ok.any() else math.nan
-    mb = float(np.max(np.abs(before[ok]))) * 100 if ok.any() else math.nan
-    ma = float(np.max(np.abs(after_cv[ok]))) * 100 if ok.any() else math.nan
-    floor, floor_note = rs.noise_floor(u, ok)
-    rf = 100 * floor
-    floor_lo, floor_hi, floor_dof = rs.floor_interval(u, ok)
+    e = error_figures(u, before, after_cv)
+    rb, ra, mb, ma, rf = (e[k] for k in ("rmse_before_percent", "rmse_after_percent", "max_before_percent",
+                                         "max_after_percent", "rmse_floor_percent"))
     surrogate_kind, lack_of_fit_p = _surrogates(data, chosen)
     summary = pd.DataFrame([{
         "soil": soil, "rows": len(res), "usable_rows": n, "verdict": verdict, "effects": "+".join(chosen),
         "parameters": _fmt(theta), "ci95": _fmt_ci(ci), "ci95_method": ci_method, "follows": follows, "rmse_before_percent": rb,
         "rmse_after_percent": ra, "rmse_floor_percent": rf, "max_before_percent": mb, "max_after_percent": ma,
         "error_reduction_percent": (1 - ra / rb) * 100 if rb and np.isfinite(rb) and rb > 0 else math.nan,
-        "explained_percent": explained_percent(rb, ra, rf, 100 * floor_hi),
+        "explained_percent": e["explained_percent"],
         "alpha": settings.alpha, "reference": _fmt(reference), "folds": fold_text, "nuisance": _fmt(nuisance[0]),
         "nuisance_ci95": _fmt_ci(nuisance[1]), "nuisance_method": nuisance[2],
         "surrogate": surrogate_kind, "lack_of_fit_p": lack_of_fit_p}],
@@ -1347,9 +1342,28 @@ def _analyse(soil: str, res: pd.DataFrame, diag: pd.DataFrame, cands: list, effe
     out = Outcome(res, diag, rank, cands, pd.DataFrame(sel_rows, columns=SELECTION_COLUMNS), summary, pred,
                   verdict, chosen, theta, after, dg.detectable(res, diag, quantity_cols, settings.alpha),
                   {nm: list(d.missing) for nm, d in data.items() if d.missing}, dict(skipped_effects or {}),
-                  fold_by, fold_text, data, uniform is not None, floor_note,
-                  (100 * floor_lo, 100 * floor_hi, floor_dof))
+                  fold_by, fold_text, data, uniform is not None, e["floor_note"], e["floor_interval"])
     return out, (None if pending is None else pending + (ci_method,))
+
+
+def error_figures(u: pd.DataFrame, before, after) -> dict:
+    """The held-out error figures of the usable residual rows ``u`` (:func:`soilcal.loop.residuals.usable`)
+    from their relative residuals ``before`` (the calibrated model's) and ``after`` (the held-out
+    predictions'), over the rows where both are known, in %: ``rmse_before_percent``,
+    ``rmse_after_percent``, ``max_before_percent``, ``max_after_percent``, the noise floor
+    ``rmse_floor_percent`` with its ``floor_note`` and ``floor_interval`` (low, high, degrees of
+    freedom; :func:`soilcal.loop.residuals.noise_floor_and_interval`) and
+    ``explained_percent`` (:func:`explained_percent`); NaN where no row has both."""
+    before, after = np.asarray(before, float), np.asarray(after, float)
+    ok = np.isfinite(after) & np.isfinite(before)
+    rms = (lambda x: float(np.sqrt(np.mean(x[ok] ** 2))) * 100) if ok.any() else (lambda x: math.nan)
+    top = (lambda x: float(np.max(np.abs(x[ok]))) * 100) if ok.any() else (lambda x: math.nan)
+    floor, note, (lo, hi, dof) = rs.noise_floor_and_interval(u, ok)
+    rb, ra = rms(before), rms(after)
+    return {"rmse_before_percent": rb, "rmse_after_percent": ra, "max_before_percent": top(before),
+            "max_after_percent": top(after), "rmse_floor_percent": 100 * floor, "floor_note": note,
+            "floor_interval": (100 * lo, 100 * hi, dof),
+            "explained_percent": explained_percent(rb, ra, 100 * floor, 100 * hi)}
 
 
 def explained_percent(before: float, after: float, floor: float, floor_high: float = math.nan) -> float:

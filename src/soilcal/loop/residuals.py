@@ -541,7 +541,11 @@ def noise_floor(df: pd.DataFrame, rows=None) -> tuple[float, str]:
     pick = _picked(df, rows)
     if len(df) == 0 or not pick.any():
         return float("nan"), "no row with a measured and a simulated value"
-    t = _floor_terms(df)
+    return _floor(_floor_terms(df), pick)
+
+
+def _floor(t: dict, pick) -> tuple[float, str]:
+    """:func:`noise_floor` from the rows' terms ``t`` (:func:`_floor_terms`) and the mask ``pick``."""
     pm, ps = pick & ~np.isfinite(t["rel_m"]), pick & ~np.isfinite(t["rel_s"])
     total = int(pick.sum())
     if pm.any() or ps.any():
@@ -588,13 +592,26 @@ def floor_interval(df: pd.DataFrame, rows=None, level: float = 0.95) -> tuple[fl
     take it.  With three repeats and three seeds
     per row each SD has 2 degrees of freedom: on 18 rows of equal shares nu is about 72, and the
     interval runs from 0.86 to 1.19 times the floor."""
+    return noise_floor_and_interval(df, rows, level)[2]
+
+
+def noise_floor_and_interval(df: pd.DataFrame, rows=None, level: float = 0.95) -> tuple:
+    """(floor, note, (lo, hi, nu)): :func:`noise_floor` and :func:`floor_interval` from one pass
+    over the rows' terms."""
+    pick = _picked(df, rows)
+    if len(df) == 0 or not pick.any():
+        return float("nan"), "no row with a measured and a simulated value", (float("nan"),) * 3
+    t = _floor_terms(df)
+    floor, note = _floor(t, pick)
+    return floor, note, _interval(t, pick, floor, level)
+
+
+def _interval(t: dict, pick, floor: float, level: float) -> tuple[float, float, float]:
+    """:func:`floor_interval` from the rows' terms ``t``, the mask ``pick`` and the floor."""
     from scipy import stats
 
-    floor, _ = noise_floor(df, rows)
     if not np.isfinite(floor):
         return float("nan"), float("nan"), float("nan")
-    pick = _picked(df, rows)
-    t = _floor_terms(df)
     share = {}
     for rel, src in ((t["rel_m"], t["src_m"]), (t["rel_s"], t["src_s"])):
         for v, s in zip(rel[pick], src[pick]):
