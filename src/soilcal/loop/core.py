@@ -447,7 +447,7 @@ def _interval(u: pd.DataFrame, effects: list, final, settings: Settings, joint=N
               else [f"{m}/{r}" for m, r in zip(u["measurement"], u["row"])])
     boot = sl.bootstrap_ci(effects, u["simulated_mean"].to_numpy(float), u["measured"].to_numpy(float), se,
                            settings.bootstrap, x0=[final.theta[nm] for nm in final.names], conditions=labels,
-                           scale=rs.scale_of(u), joint=joint)
+                           scale=rs.scale_of(u), joint=joint, weights=sl.row_weights(u))
     if boot is None:
         return final.ci, fit_only + " (too few seeds per condition to resample)"
     how = (f"a bootstrap of {settings.bootstrap} refits over each simulation's seeds and the measured standard errors "
@@ -1015,6 +1015,7 @@ def _analyse(soil: str, res: pd.DataFrame, diag: pd.DataFrame, cands: list, effe
     candidates reuses the surrogates of those it shares with the round before and the
     models over them, fitted and cross-validated there."""
     u = rs.usable(res)
+    weights = sl.row_weights(u)  # the selection's weights of the rows (None: alike), for every fit of them below
     spread_note = _replicate_spread(u, settings.alpha)  # the verdict's note ("": none) and its nuisance words
     rank = dg.ranking(diag)
     follows = _follows(rank, res, quantity_cols, settings.alpha)
@@ -1073,7 +1074,7 @@ def _analyse(soil: str, res: pd.DataFrame, diag: pd.DataFrame, cands: list, effe
     jt = joint_interaction(u, data, sel.chosen, joint) if sel is not None and sel.chosen else None
     if names:
         y0, meas = u["simulated_mean"].to_numpy(float), u["measured"].to_numpy(float)
-        m = sl.Model([data[c] for c in names], y0, meas, rs.scale_of(u), jt)
+        m = sl.Model([data[c] for c in names], y0, meas, rs.scale_of(u), jt, weights)
         x, _ = m.fit()
         fitted = m.predict(x)
         res_after = residual_after(res, fitted)
@@ -1086,8 +1087,8 @@ def _analyse(soil: str, res: pd.DataFrame, diag: pd.DataFrame, cands: list, effe
             # an 8 % offset ran to its bound): refit them beside a free uniform scale of the
             # model (select.scale_data), and say it
             bias, sc = sl.scale_data(), rs.scale_of(u)
-            ref = sl.Model([bias], y0, meas, sc)
-            m = sl.Model([data[c] for c in names] + [bias], y0, meas, sc, jt)
+            ref = sl.Model([bias], y0, meas, sc, weights=weights)
+            m = sl.Model([data[c] for c in names] + [bias], y0, meas, sc, jt, weights)
             uniform = sl.score(m, ref, sl._folds(u, fold_by), settings.alpha, groups=sl.replicate_groups(u))
             sel_rows.append(_selection_row("refit beside uniform scale", uniform, data=data))
             x = np.array([uniform.theta[k] for k in uniform.names], float)
@@ -1138,8 +1139,10 @@ def _analyse(soil: str, res: pd.DataFrame, diag: pd.DataFrame, cands: list, effe
         final = sel.final
         if jt is not None:  # the chosen effects with their interaction, against the calibrated model
             y0 = u["simulated_mean"].to_numpy(float)
-            final = sl.score(sl.Model([data[c] for c in chosen], y0, u["measured"].to_numpy(float), rs.scale_of(u), jt),
-                             sl.Model([], y0, u["measured"].to_numpy(float), rs.scale_of(u)), sl._folds(u, fold_by),
+            final = sl.score(sl.Model([data[c] for c in chosen], y0, u["measured"].to_numpy(float), rs.scale_of(u), jt,
+                                      weights),
+                             sl.Model([], y0, u["measured"].to_numpy(float), rs.scale_of(u), weights=weights),
+                             sl._folds(u, fold_by),
                              settings.alpha, groups=sl.replicate_groups(u))
         theta = final.theta
         if uniform is None and interval:
@@ -1248,7 +1251,7 @@ def _analyse(soil: str, res: pd.DataFrame, diag: pd.DataFrame, cands: list, effe
         scales = []
         for q, g in u.groupby(u["measure"].astype(str), sort=True):
             sq = float(sl.Model([sl.scale_data()], g["simulated_mean"].to_numpy(float), g["measured"].to_numpy(float),
-                                rs.scale_of(g)).fit()[0][0])
+                                rs.scale_of(g), weights=sl.row_weights(g)).fit()[0][0])
             scales.append((f"{q} " if u["measure"].nunique() > 1 else "")
                           + f"{abs(100 * sq):.1f} % {'above' if sq > 0 else 'below'}")
         verdict = (f"unexplained: the residual follows {follows}; the {rows} row{'s' if rows != 1 else ''}"
@@ -1287,8 +1290,8 @@ def _analyse(soil: str, res: pd.DataFrame, diag: pd.DataFrame, cands: list, effe
             sv, (lo, hi) = sel.uniform_s, sel.uniform_ci
         else:
             y0, meas, sc = u["simulated_mean"].to_numpy(float), u["measured"].to_numpy(float), rs.scale_of(u)
-            alone = sl.Model([sl.scale_data()], y0, meas, sc)
-            sv, lo, hi = _scale_fit(sl.score(alone, sl.Model([], y0, meas, sc), sl._folds(u, fold_by),
+            alone = sl.Model([sl.scale_data()], y0, meas, sc, weights=weights)
+            sv, lo, hi = _scale_fit(sl.score(alone, sl.Model([], y0, meas, sc, weights=weights), sl._folds(u, fold_by),
                                              settings.alpha, groups=sl.replicate_groups(u)))
         nuisance = ({SCALE_KEY: sv}, {SCALE_KEY: (lo, hi)},
                     "fitted alone: the uniform bias the residual follows, the calibrated model times (1 + s)")
@@ -1480,6 +1483,7 @@ def run_inprocess(soil: str, conditions, base_params, simulate, settings: Settin
                      for k in EFFECTS[c].theta_names()])
     u = rs.usable(res)
     y0, meas, sc = u["simulated_mean"].to_numpy(float), u["measured"].to_numpy(float), rs.scale_of(u)
+    weights = sl.row_weights(u)
     effects = [out.effect_data[c] for c in out.chosen] + ([sl.scale_data()] if out.uniform_scale else [])
     x, joint = np.array([out.theta[k] for k in keys], float), None
     for _ in range(JOINT_ROUNDS):
@@ -1490,7 +1494,7 @@ def run_inprocess(soil: str, conditions, base_params, simulate, settings: Settin
                  "runs": runs_at(None, None, reference, together), "base": base}
         jt = joint_interaction(u, out.effect_data, out.chosen, joint)
         start = np.concatenate([x, [0.0]]) if out.uniform_scale else x
-        new = sl.Model(effects, y0, meas, sc, jt).fit(x0=start)[0][:len(keys)]
+        new = sl.Model(effects, y0, meas, sc, jt, weights).fit(x0=start)[0][:len(keys)]
         settled = bool(np.all(np.abs(new - x) <= JOINT_SETTLED * span))
         x = new
         if settled:

@@ -1,0 +1,222 @@
+"""Weighted least squares through the effect selection (soilcal.loop.select.row_weights,
+Model.fit, cross_validate, score, forward): each row's squared relative error weighs 1 / v, v
+the variance of its relative residual ((sd_m^2 / n_m + sd_s^2 / n_s) / scale^2, the relative
+SDs pooled per measured quantity), the weights' mean 1; every row alike where a variance is
+unknown, the variances hold different parts, or they are equal.
+
+Expected values: a linear stand-in in which one measured test reports two quantities (a
+plate's horizontal and vertical force) whose relative error is r_i - t g_i, with known
+relative variances v_H and v_V (the vertical's about twelve times the horizontal's, as on the
+DEM plate, whose vertical force scatters about three times as much from seed to seed).  The
+weighted least-squares estimate is then t = sum(w g r) / sum(w g^2), the plain one
+sum(g r) / sum(g^2) (Draper & Smith, Applied Regression Analysis, 3rd ed., 1998, Sec. 9.2),
+their variances 1 / sum(g^2 / v) (the least of any linear unbiased estimate, Gauss-Markov) and
+sum(g^2 v) / (sum g^2)^2; a sample SD over M tables has (M - 1) s^2 / sigma^2 chi-square on
+M - 1 degrees of freedom."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pandas as pd
+import pytest
+from scipy import stats
+
+from soilcal.loop import select as sl
+
+N = 12  # measured conditions, each one test of two quantities
+X = np.linspace(-1.0, 1.0, N)  # the covariate the effect follows
+SCALE = 100.0
+# relative measured SD (over 3 repeats) and relative seed SD (over 3 seeds) of each quantity
+REL = {"horizontal_force_N": (0.02, 0.10), "vertical_force_N": (0.10, 0.34)}
+NM = NS = 3
+TRUE = 0.3
+BOUNDS = {"t": (-2.0, 2.0)}
+
+
+class _Trend:
+    name = "trend"
+    null = {"t": 0.0}
+
+    def theta_names(self):
+        return ("t",)
+
+
+def _variances(rel=REL) -> np.ndarray:
+    """Per row (every quantity's N rows in turn) its relative variance from the formula, by hand."""
+    return np.concatenate([np.full(N, sm ** 2 / NM + ss ** 2 / NS) for sm, ss in rel.values()])
+
+
+def _g(rel=REL) -> np.ndarray:
+    """Per row the relative change per unit t: both forces follow the covariate alike."""
+    return np.tile(X, len(rel))
+
+
+def _obs(rng, rel=REL, with_sd=True) -> pd.DataFrame:
+    """A measured table: per condition its two quantities (one simulation), measured
+    100 (1 + t g + eps), eps normal with the row's variance; the calibrated model 100."""
+    v, g = _variances(rel), _g(rel)
+    measured = SCALE * (1.0 + TRUE * g + np.sqrt(v) * rng.standard_normal(len(v)))
+    out = pd.DataFrame({"measurement": "campaign", "row": np.tile(np.arange(1, N + 1), len(rel)),
+                        "measure": np.repeat(list(rel), N), "simulation": np.tile([f"s{i}" for i in range(N)], len(rel)),
+                        "cov:x": np.tile(X, len(rel)), "measured": measured, "scale": SCALE,
+                        "simulated_mean": SCALE})
+    if with_sd:
+        out["measured_sd"] = np.repeat([SCALE * sm for sm, _ in rel.values()], N)
+        out["measured_n"] = NM
+        out["simulated_sd"] = np.repeat([SCALE * ss for _, ss in rel.values()], N)
+        out["simulated_n"] = NS
+    return out
+
+
+def _effect(rel=REL) -> sl.EffectData:
+    """The trend's surrogate: 100 (1 + t g) at each row, through its design points."""
+    eff = _Trend()
+    ts = np.array([[-2.0], [0.0], [2.0]])
+    means = np.array([SCALE * (1.0 + t * _g(rel)) for t in ts[:, 0]])
+    return sl.EffectData(eff, BOUNDS, sl.Surrogate(eff, BOUNDS, ts, means), [{"t": t} for t in ts[:, 0]])
+
+
+def _closed_form(obs, w) -> float:
+    r = obs["measured"].to_numpy(float) / SCALE - 1.0
+    g = _g()
+    return float(np.sum(w * g * r) / np.sum(w * g * g))
+
+
+def _fit(obs, ed, weights) -> float:
+    y0 = np.full(len(obs), SCALE)
+    return float(sl.Model([ed], y0, obs["measured"].to_numpy(float), np.full(len(obs), SCALE), weights=weights).fit()[0][0])
+
+
+def test_the_weights_are_the_inverse_relative_variances_with_mean_one():
+    obs = _obs(np.random.default_rng(0))
+    w = 1.0 / _variances()
+    np.testing.assert_allclose(sl.row_weights(obs), w / w.mean(), rtol=1e-12)
+    assert sl.row_weights(obs).mean() == pytest.approx(1.0, rel=1e-14)
+
+
+def test_the_weighted_fit_is_the_closed_form_weighted_least_squares_estimate():
+    obs, ed = _obs(np.random.default_rng(1)), _effect()
+    v = _variances()
+    wls, ols = _closed_form(obs, 1.0 / v), _closed_form(obs, np.ones(len(v)))
+    assert abs(wls - ols) > 0.02  # the table tells the two apart
+    assert _fit(obs, ed, sl.row_weights(obs)) == pytest.approx(wls, abs=1e-6)
+    assert _fit(obs, ed, None) == pytest.approx(ols, abs=1e-6)
+    # forward builds its models with the rows' weights: its first step's fit is the weighted one
+    sel = sl.forward(obs, np.full(len(obs), SCALE), {"trend": ed})
+    assert sel.steps[0][2].theta["trend.t"] == pytest.approx(wls, abs=1e-6)
+    plain = sl.forward(_obs(np.random.default_rng(1), with_sd=False), np.full(len(obs), SCALE), {"trend": ed})
+    assert plain.steps[0][2].theta["trend.t"] == pytest.approx(ols, abs=1e-6)
+
+
+def test_the_weighted_parameter_has_the_least_variance_over_seeded_tables():
+    # M tables: the SD of each estimate against its analytic value, within the two-sided 99.9 %
+    # band of a sample SD on M - 1 degrees of freedom
+    M = 300
+    rng = np.random.default_rng(2)
+    ed = _effect()
+    v, g = _variances(), _g()
+    sd_wls = math.sqrt(1.0 / np.sum(g * g / v))
+    sd_ols = math.sqrt(np.sum(g * g * v)) / np.sum(g * g)
+    assert sd_ols / sd_wls > 1.5  # the stand-in's noisy quantity costs the plain fit that much
+    weighted, plain = [], []
+    w = None
+    for _ in range(M):
+        obs = _obs(rng)
+        w = sl.row_weights(obs) if w is None else w  # the same SD columns in every table
+        weighted.append(_fit(obs, ed, w))
+        plain.append(_fit(obs, ed, None))
+    lo, hi = (math.sqrt(stats.chi2.ppf(q, M - 1) / (M - 1)) for q in (0.0005, 0.9995))
+    s_w, s_p = np.std(weighted, ddof=1), np.std(plain, ddof=1)
+    assert lo * sd_wls <= s_w <= hi * sd_wls
+    assert lo * sd_ols <= s_p <= hi * sd_ols
+    assert s_w < s_p
+    # both unbiased: the means within 3.3 standard errors of the true value
+    assert abs(np.mean(weighted) - TRUE) < 3.3 * sd_wls / math.sqrt(M)
+    assert abs(np.mean(plain) - TRUE) < 3.3 * sd_ols / math.sqrt(M)
+
+
+def _same_selection(a: sl.Selection, b: sl.Selection):
+    assert a.chosen == b.chosen and len(a.steps) == len(b.steps)
+    for (sa, na, x), (sb, nb, y) in zip(a.steps, b.steps):
+        assert (sa, na) == (sb, nb)
+        assert x.theta == y.theta and x.ci == y.ci
+        np.testing.assert_array_equal(x.fold_rms, y.fold_rms)
+        np.testing.assert_array_equal(x.heldout_errors, y.heldout_errors)
+        assert (x.aicc, x.ref_aicc, x.accepted, x.reason) == (y.aicc, y.ref_aicc, y.accepted, y.reason)
+        assert x.p == y.p or (math.isnan(x.p) and math.isnan(y.p))
+        assert x.heldout_weights is None and y.heldout_weights is None
+
+
+@pytest.mark.parametrize("case", ["equal", "unknown", "parts"])
+def test_equal_or_unknown_variances_give_exactly_the_unweighted_selection(case):
+    rel = REL
+    if case == "equal":  # the two quantities equally noisy: every row weighs alike
+        rel = {"horizontal_force_N": (0.05, 0.2), "vertical_force_N": (0.05, 0.2)}
+    obs = _obs(np.random.default_rng(3), rel)
+    if case == "unknown":  # the vertical force without a measured SD and on one seed: its variance unknown
+        vertical = obs["measure"] == "vertical_force_N"
+        obs.loc[vertical, ["measured_sd", "simulated_sd"]] = np.nan
+        obs.loc[vertical, "simulated_n"] = 1
+    if case == "parts":  # the vertical force without a measured SD: its seed scatter alone
+        obs.loc[obs["measure"] == "vertical_force_N", "measured_sd"] = np.nan
+    assert sl.row_weights(obs) is None
+    ed = _effect(rel)
+    with_sd = sl.forward(obs, np.full(len(obs), SCALE), {"trend": ed})
+    bare = obs.drop(columns=["measured_sd", "measured_n", "simulated_sd", "simulated_n"])
+    _same_selection(with_sd, sl.forward(bare, np.full(len(obs), SCALE), {"trend": ed}))
+
+
+def test_the_held_out_errors_aicc_and_acceptance_are_weighted():
+    obs, ed = _obs(np.random.default_rng(4)), _effect()
+    w = sl.row_weights(obs)
+    y0, m, sc = np.full(len(obs), SCALE), obs["measured"].to_numpy(float), np.full(len(obs), SCALE)
+    model, ref = sl.Model([ed], y0, m, sc, weights=w), sl.Model([], y0, m, sc, weights=w)
+    folds = sl._folds(obs, None)
+    s = sl.score(model, ref, folds)
+    fold_rms, held = sl.cross_validate(model, folds)
+    for j, f in enumerate(folds.held_out):  # each fold's RMS weighted by its rows' weights
+        assert fold_rms[j] == pytest.approx(math.sqrt(np.sum(w[f] * held[f] ** 2) / np.sum(w[f])), rel=1e-12)
+    e, er = s.heldout_errors, s.ref_heldout_errors  # the plain held-out relative errors, as reported
+    assert s.rmse() == pytest.approx(math.sqrt(np.mean(e ** 2)), rel=1e-12)
+    assert s.weighted_rmse() == pytest.approx(math.sqrt(np.sum(w * e ** 2) / np.sum(w)), rel=1e-12)
+    assert s.weighted_rmse(True) == pytest.approx(math.sqrt(np.sum(w * er ** 2) / np.sum(w)), rel=1e-12)
+    assert sl.lowers_heldout(s) == (s.weighted_rmse() <= 0.9 * s.weighted_rmse(True))
+    # AICc of the weighted SSE: n ln(SSE_w / n) + 2K + 2K(K + 1) / (n - K - 1), K = 2
+    n, sse = len(obs), float(np.sum(w * s.fitted_errors ** 2))
+    assert s.aicc == pytest.approx(n * math.log(sse / n) + 4 + 12 / (n - 3), rel=1e-12)
+    sse_r = float(np.sum(w * (m / SCALE - 1.0) ** 2))
+    assert s.ref_aicc == pytest.approx(n * math.log(sse_r / n) + 2 + 4 / (n - 2), rel=1e-12)
+
+
+def test_the_weighted_sum_of_squares_of_replicate_groups():
+    # group a: weighted mean (0.1 * 1 + 0.3 * 3) / 4 = 0.25 at its mean weight 2; group b: -0.2 at 2
+    e, w = np.array([0.1, 0.3, -0.2]), np.array([1.0, 3.0, 2.0])
+    assert sl.sse_of(e, np.array(["a", "a", "b"]), w) == (pytest.approx(2 * 0.25 ** 2 + 2 * 0.2 ** 2, rel=1e-14), 2)
+    assert sl.sse_of(e, None, w) == (pytest.approx(0.01 + 0.27 + 0.08, rel=1e-14), 3)
+
+
+def test_a_model_and_a_reference_of_different_weights_are_not_compared():
+    obs, ed = _obs(np.random.default_rng(5)), _effect()
+    y0, m, sc = np.full(len(obs), SCALE), obs["measured"].to_numpy(float), np.full(len(obs), SCALE)
+    with pytest.raises(ValueError, match="weigh the rows differently"):
+        sl.score(sl.Model([ed], y0, m, sc, weights=sl.row_weights(obs)), sl.Model([], y0, m, sc),
+                 sl._folds(obs, None))
+
+
+def test_the_bootstrap_refits_with_the_weights():
+    # seeds without scatter and measured values without error: every draw is the table itself,
+    # so the interval is the weighted fit's value (the closed form), not the plain one
+    obs = _obs(np.random.default_rng(6))
+    runs = pd.DataFrame([{"measurement": m, "row": r, "measure": q, "seed": s, "value": SCALE * (1.0 + t * g),
+                          "status": "ok", "t:t": t}
+                         for t in (-2.0, 0.0, 2.0) for m, r, q, g in zip(obs["measurement"], obs["row"], obs["measure"], _g())
+                         for s in range(3)])
+    ed = sl.build_effect_data(obs, runs, _Trend(), BOUNDS)
+    y0, m, sc = np.full(len(obs), SCALE), obs["measured"].to_numpy(float), np.full(len(obs), SCALE)
+    wls, ols = _closed_form(obs, 1.0 / _variances()), _closed_form(obs, np.ones(len(obs)))
+    for weights, expected in ((sl.row_weights(obs), wls), (None, ols)):
+        lo, hi = sl.bootstrap_ci([ed], y0, m, np.zeros(len(obs)), 40, scale=sc, weights=weights)["trend.t"]
+        assert lo == pytest.approx(expected, abs=1e-6) and hi == pytest.approx(expected, abs=1e-6)
+
