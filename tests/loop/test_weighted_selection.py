@@ -220,3 +220,19 @@ def test_the_bootstrap_refits_with_the_weights():
         lo, hi = sl.bootstrap_ci([ed], y0, m, np.zeros(len(obs)), 40, scale=sc, weights=weights)["trend.t"]
         assert lo == pytest.approx(expected, abs=1e-6) and hi == pytest.approx(expected, abs=1e-6)
 
+
+def test_the_summary_gives_the_weighted_held_out_errors_beside_the_plain_ones():
+    from soilcal.loop import core
+
+    obs = _obs(np.random.default_rng(7))
+    before = obs["measured"].to_numpy(float) / SCALE - 1.0
+    after = 0.5 * before
+    w = 1.0 / _variances()
+    e = core.error_figures(obs, before, after)
+    assert e["rmse_before_percent"] == pytest.approx(100 * math.sqrt(np.mean(before ** 2)), rel=1e-12)
+    assert e["weighted_rmse_before_percent"] == pytest.approx(100 * math.sqrt(np.sum(w * before ** 2) / np.sum(w)),
+                                                              rel=1e-12)
+    assert e["weighted_rmse_after_percent"] == pytest.approx(50 * math.sqrt(np.sum(w * before ** 2) / np.sum(w)),
+                                                             rel=1e-12)
+    alike = _obs(np.random.default_rng(7), {"horizontal_force_N": (0.05, 0.2), "vertical_force_N": (0.05, 0.2)})
+    assert math.isnan(core.error_figures(alike, before, after)["weighted_rmse_before_percent"])

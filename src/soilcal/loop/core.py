@@ -301,7 +301,8 @@ SELECTION_COLUMNS = ["step", "effects", "parameters", "ci95", "heldout_rmse_perc
 SUMMARY_COLUMNS = ["soil", "rows", "usable_rows", "verdict", "effects", "parameters", "ci95", "ci95_method", "follows",
                    "rmse_before_percent", "rmse_after_percent", "rmse_floor_percent", "max_before_percent",
                    "max_after_percent", "error_reduction_percent", "explained_percent", "alpha", "reference", "folds",
-                   "nuisance", "nuisance_ci95", "nuisance_method", "surrogate", "lack_of_fit_p"]
+                   "nuisance", "nuisance_ci95", "nuisance_method", "surrogate", "lack_of_fit_p",
+                   "weighted_rmse_before_percent", "weighted_rmse_after_percent"]
 
 
 #: the parameter of the free uniform scale of the model (:func:`soilcal.loop.select.scale_data`)
@@ -1340,7 +1341,9 @@ def _analyse(soil: str, res: pd.DataFrame, diag: pd.DataFrame, cands: list, effe
         "explained_percent": e["explained_percent"],
         "alpha": settings.alpha, "reference": _fmt(reference), "folds": fold_text, "nuisance": _fmt(nuisance[0]),
         "nuisance_ci95": _fmt_ci(nuisance[1]), "nuisance_method": nuisance[2],
-        "surrogate": surrogate_kind, "lack_of_fit_p": lack_of_fit_p}],
+        "surrogate": surrogate_kind, "lack_of_fit_p": lack_of_fit_p,
+        "weighted_rmse_before_percent": e["weighted_rmse_before_percent"],
+        "weighted_rmse_after_percent": e["weighted_rmse_after_percent"]}],
         columns=SUMMARY_COLUMNS)
     out = Outcome(res, diag, rank, cands, pd.DataFrame(sel_rows, columns=SELECTION_COLUMNS), summary, pred,
                   verdict, chosen, theta, after, dg.detectable(res, diag, quantity_cols, settings.alpha),
@@ -1356,17 +1359,25 @@ def error_figures(u: pd.DataFrame, before, after) -> dict:
     ``rmse_after_percent``, ``max_before_percent``, ``max_after_percent``, the noise floor
     ``rmse_floor_percent`` with its ``floor_note`` and ``floor_interval`` (low, high, degrees of
     freedom; :func:`soilcal.loop.residuals.noise_floor_and_interval`) and
-    ``explained_percent`` (:func:`explained_percent`); NaN where no row has both."""
+    ``explained_percent`` (:func:`explained_percent`); NaN where no row has both.  Beside them
+    the RMS errors the selection compares, weighted by the rows' weights
+    (:func:`soilcal.loop.select.row_weights`), sqrt(sum w e^2 / sum w):
+    ``weighted_rmse_before_percent``, ``weighted_rmse_after_percent``, NaN where every row
+    weighs alike (they would repeat the plain ones)."""
     before, after = np.asarray(before, float), np.asarray(after, float)
     ok = np.isfinite(after) & np.isfinite(before)
     rms = (lambda x: float(np.sqrt(np.mean(x[ok] ** 2))) * 100) if ok.any() else (lambda x: math.nan)
+    w = sl.row_weights(u)
+    wrms = ((lambda x: float(np.sqrt(np.sum(w[ok] * x[ok] ** 2) / np.sum(w[ok]))) * 100)
+            if w is not None and ok.any() else (lambda x: math.nan))
     top = (lambda x: float(np.max(np.abs(x[ok]))) * 100) if ok.any() else (lambda x: math.nan)
     floor, note, (lo, hi, dof) = rs.noise_floor_and_interval(u, ok)
     rb, ra = rms(before), rms(after)
     return {"rmse_before_percent": rb, "rmse_after_percent": ra, "max_before_percent": top(before),
             "max_after_percent": top(after), "rmse_floor_percent": 100 * floor, "floor_note": note,
             "floor_interval": (100 * lo, 100 * hi, dof),
-            "explained_percent": explained_percent(rb, ra, 100 * floor, 100 * hi)}
+            "explained_percent": explained_percent(rb, ra, 100 * floor, 100 * hi),
+            "weighted_rmse_before_percent": wrms(before), "weighted_rmse_after_percent": wrms(after)}
 
 
 def explained_percent(before: float, after: float, floor: float, floor_high: float = math.nan) -> float:

@@ -329,6 +329,19 @@ def _floor_lines(s, o: core.Outcome) -> list[str]:
     return [f"| the measured and seed uncertainty alone | {floor:.2f} | |", "", text, ""]
 
 
+def _weighted_lines(s) -> list[str]:
+    """The report's weighted held-out RMS errors (``loop_summary.csv``:
+    ``weighted_rmse_before_percent``, ``weighted_rmse_after_percent``), the errors the selection
+    compares where the rows weigh differently; nothing where every row weighs alike."""
+    before, after = (float(s.get(k, np.nan)) for k in ("weighted_rmse_before_percent", "weighted_rmse_after_percent"))
+    if not np.isfinite(before):
+        return []
+    return [f"Weighted by the inverse variance of each row's relative residual (its measured and seed variance over "
+            f"its scale squared, the relative SDs pooled per measured quantity), as the selection fits and compares "
+            f"them, the RMS error is {before:.2f} % for the calibrated model and {after:.2f} % with the chosen effects "
+            "(each row predicted without its group; the table above weighs every row alike).", ""]
+
+
 def report(soil: str, o: core.Outcome, plans: list) -> str:
     """``report.md``: verdict, error before and after, chosen effects, diagnosis, every
     candidate, settings."""
@@ -343,7 +356,7 @@ def report(soil: str, o: core.Outcome, plans: list) -> str:
              "| | RMS error, % | largest error, % |", "|---|---|---|",
              f"| calibrated model | {s['rmse_before_percent']:.2f} | {s['max_before_percent']:.2f} |",
              f"| with the chosen effects | {s['rmse_after_percent']:.2f} | {s['max_after_percent']:.2f} |",
-             *_floor_lines(s, o)]
+             *_floor_lines(s, o), *_weighted_lines(s)]
     if o.chosen:
         ci = json.loads(s["ci95"])
         lines += ["## Chosen effects", "", "| effect | parameter | value | 95 % interval | unit | formula | source |",
