@@ -236,3 +236,100 @@ def test_the_summary_gives_the_weighted_held_out_errors_beside_the_plain_ones():
                                                              rel=1e-12)
     alike = _obs(np.random.default_rng(7), {"horizontal_force_N": (0.05, 0.2), "vertical_force_N": (0.05, 0.2)})
     assert math.isnan(core.error_figures(alike, before, after)["weighted_rmse_before_percent"])
+
+
+# The verdict's words: where the rows weigh differently a clause quotes the weighted held-out RMS
+# errors its decision used, and where they weigh alike it reads as it always has.  Two held-out
+# rows, the model's relative errors 0.1 and 0.5, its reference's 0.3 and 0.4, weights 1.9 and
+# 0.1 (mean 1), by hand: plain RMS sqrt(0.26 / 2) = 36.06 % against sqrt(0.25 / 2) = 35.36 %,
+# the model no lower; weighted sqrt(0.044 / 2) = 14.83 % against sqrt(0.187 / 2) = 30.58 %, the
+# model lower by more than 10 %.  The plain clauses' expected words are the clauses as written
+# before the weights.
+W2 = np.array([1.9, 0.1])
+
+
+def _held(weights, e=(0.1, 0.5), er=(0.3, 0.4), names=("trend.t",), **kw) -> sl.Score:
+    e, er = np.asarray(e, float), np.asarray(er, float)
+    fields = dict(names=list(names), theta={n: 0.1 for n in names}, ci={}, fold_rms=np.abs(e),
+                  ref_fold_rms=np.abs(er), heldout_errors=e, ref_heldout_errors=er, fitted_errors=e, aicc=-10.0,
+                  ref_aicc=-8.0, p=0.2, accepted=False, reason="", heldout_weights=weights)
+    fields.update(kw)
+    return sl.Score(**fields)
+
+
+def test_the_held_out_words_and_numbers_are_those_the_decision_used():
+    from soilcal.loop import core
+
+    assert core._heldout(_held(W2)) == ("weighted held-out RMS", pytest.approx(100 * math.sqrt(0.022), rel=1e-12),
+                                        pytest.approx(100 * math.sqrt(0.0935), rel=1e-12))
+    assert core._heldout(_held(None)) == ("held-out RMS", pytest.approx(100 * math.sqrt(0.13), rel=1e-12),
+                                          pytest.approx(100 * math.sqrt(0.125), rel=1e-12))
+    assert sl.lowers_heldout(_held(W2)) and not sl.lowers_heldout(_held(None))
+
+
+def test_a_uniform_bias_fitting_as_well_is_worded_from_the_errors_compared():
+    from soilcal.loop import core
+
+    # weighted, the bias (30.58 %) is above the effect (14.83 %): "nearly as well"; plain, 35.36 %
+    # is below 36.06 %: "as well or better", which the weighted selection did not find
+    assert core._bias_fits_as_well(_held(W2), 0.05, 1) == (
+        "; a uniform bias fits the held-out rows nearly as well (the measured values 5.0 % above the model "
+        "throughout: weighted held-out RMS 30.58 % against 14.83 % with the effect, paired p 0.2), so these rows "
+        "cannot tell it from a bias no mechanism carries")
+    assert core._bias_fits_as_well(_held(None), -0.05, 2) == (
+        "; a uniform bias fits the held-out rows as well or better (the measured values 5.0 % below the model "
+        "throughout: held-out RMS 35.36 % against 36.06 % with the effects, paired p 0.2), so these rows "
+        "cannot tell them from a bias no mechanism carries")
+
+
+def test_an_unscored_model_is_named_on_the_errors_that_named_it():
+    from soilcal.loop import core
+
+    u = pd.DataFrame({"simulation": ["s0", "s1"], "measure": "horizontal_force_N"})
+    names = ("trend.t", "uniform_scale.s")
+
+    def clause(s):
+        return core._unscored(sl.Selection([], [("1", ["trend", "uniform_scale"], s)], None), u)
+
+    text = clause(_held(W2, names=names, aicc=math.nan))
+    assert text.startswith("; trend+uniform_scale (weighted held-out RMS 14.83 % against 30.58 %, paired p 0.2 >= "
+                           "0.05, which does not decide either) could not be scored: on 2 observations"), text
+    assert clause(_held(None, names=names, aicc=math.nan)) == ""  # plain, the model is no lower: not named
+    # rows alike, a model 10 % lower: the words as before
+    assert clause(_held(None, e=(0.1, 0.1), names=names, aicc=math.nan)).startswith(
+        "; trend+uniform_scale (held-out RMS 10.00 % against 35.36 %, paired p 0.2 >= 0.05, which does not decide "
+        "either) could not be scored: on 2 observations")
+
+
+def test_an_effect_not_separated_is_named_on_the_errors_that_named_it():
+    from soilcal.loop import core
+
+    def clause(g):
+        return core._not_separated(sl.Selection([], [("gate", ["trend"], g)], None, forward_chosen=["trend"]), 0.05)
+
+    reason = "without trend, held-out error not significantly lower"
+    assert clause(_held(W2, reason=reason)).startswith(
+        "; trend was not separated from the model: with it the weighted held-out RMS error is 14.83 % against "
+        "30.58 %, AICc -10.0 against -8.0, paired p 0.2 over 2 held-out groups (alpha 0.05)")
+    assert clause(_held(None, reason=reason)) == ""
+    assert clause(_held(None, e=(0.1, 0.1), reason=reason)).startswith(
+        "; trend was not separated from the model: with it the held-out RMS error is 10.00 % against 35.36 %, "
+        "AICc -10.0 against -8.0, paired p 0.2 over 2 held-out groups (alpha 0.05)")
+
+
+@pytest.mark.parametrize("weights,said", [(W2, "weighted held-out RMS 14.83 % against 30.58 %"),
+                                          (None, "held-out RMS 36.06 % against 35.36 %")])
+def test_the_comparisons_beside_and_against_a_uniform_scale_quote_the_errors_compared(weights, said):
+    from soilcal.loop import core
+
+    # beside the scale, too few observations for the AICc, the paired test not passed
+    b = _held(weights, names=("trend.t", "uniform_scale.s"), aicc=math.nan, reason="AICc undefined")
+    uniform = _held(None, e=(0.1, 0.1), accepted=True, p=0.01)
+    sel = sl.Selection(["trend"], [], None, uniform=uniform, beside_uniform=b, judged=["trend"])
+    assert core._beside_clause(sel, 0.05).endswith(
+        f"beside it it does not lower the held-out error significantly ({said}, paired p 0.2)")
+    # judged against the scale alone, which the effect beats: that comparison's errors
+    sel = sl.Selection(["trend"], [], None, uniform=_held(weights, accepted=True, p=0.01),
+                       beside_uniform=_held(W2, e=(0.1, 0.1), aicc=math.nan, p=0.01, reason="AICc undefined"),
+                       judged=["trend"])
+    assert f"which it beats ({said}, paired p 0.01); " in core._judged_alone(sel, 0.05)

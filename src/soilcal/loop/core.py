@@ -363,6 +363,17 @@ def _fmt_ci(d: dict) -> str:
     return json.dumps({k: [round(a, 6), round(b, 6)] for k, (a, b) in d.items()}, sort_keys=True)
 
 
+def _heldout(s) -> tuple[str, float, float]:
+    """The held-out RMS errors a decision on a :class:`soilcal.loop.select.Score` used, for a
+    sentence: (words, the model's in %, its reference's in %).  Where the rows weigh differently
+    (:func:`soilcal.loop.select.row_weights`) the selection compares the weighted errors
+    (:meth:`soilcal.loop.select.Score.weighted_rmse`), and the words say "weighted held-out
+    RMS"; else the plain ones, "held-out RMS"."""
+    if s.weighted:
+        return "weighted held-out RMS", 100 * s.weighted_rmse(), 100 * s.weighted_rmse(True)
+    return "held-out RMS", 100 * s.rmse(), 100 * s.rmse(True)
+
+
 @dataclass
 class Outcome:
     residuals: pd.DataFrame
@@ -682,8 +693,9 @@ def _not_separated(sel, alpha: float) -> str:
         beside = " beside a free uniform scale" if sl._ScaleEffect.name in {k.split(".")[0] for k in g.names} else ""
         aicc = (f", AICc {g.aicc:.1f} against {g.ref_aicc:.1f}" if np.isfinite(g.aicc) and np.isfinite(g.ref_aicc)
                 else "")
+        words, rm, rr = _heldout(g)
         out += (f"; {nm} was not separated from " + (" + ".join(sel.chosen) or "the model") + f"{beside}: with it the "
-                f"held-out RMS error is {100 * g.rmse():.2f} % against {100 * g.rmse(True):.2f} %{aicc}, "
+                f"{words} error is {rm:.2f} % against {rr:.2f} %{aicc}, "
                 + (f"paired p {g.p:.2g} over {int(np.isfinite(g.fold_rms).sum())} held-out groups (alpha {alpha:g})"
                    f", so it stays out ({g.own_reason or g.reason})" if np.isfinite(g.p)
                    else g.p_text() + ", so it stays out") + ", and the "
@@ -705,9 +717,26 @@ def _beside_clause(sel, alpha: float) -> str:
         return out + f" and alone do{'es' if k == 1 else ''} not beat the uniform scale ({sel.uniform.reason})"
     out += f"; alone {'it beats' if k == 1 else 'they beat'} the uniform scale ({sel.uniform.p_text()}), but "
     if not (sl.lowers_heldout(b) and np.isfinite(b.p) and b.p < alpha):
+        words, rm, rr = _heldout(b)
         return out + (f"beside it {'it does' if k == 1 else 'they do'} not lower the held-out error significantly "
-                      f"(held-out RMS {100 * b.rmse():.2f} % against {100 * b.rmse(True):.2f} %, {b.p_text()})")
+                      f"({words} {rm:.2f} % against {rr:.2f} %, {b.p_text()})")
     return out + f"the selection's gates did not keep {'it' if k == 1 else 'them'}"
+
+
+def _bias_fits_as_well(s, sv: float, k: int) -> str:
+    """The verdict's clause where the ``k`` chosen effects do not beat a free uniform scale
+    alone (``s``: their :class:`soilcal.loop.select.Score` against it, not accepted; ``sv``: the
+    scale's value): the bias fits the held-out rows "as well or better" where its held-out RMS
+    error is not above the effects', else "nearly as well", judged and quoted on the errors the
+    selection compared (:func:`_heldout`: weighted where the rows weigh differently)."""
+    words, rm, rr = _heldout(s)
+    how = "as well or better" if s.weighted_rmse(True) <= s.weighted_rmse() else "nearly as well"
+    return (f"; a uniform bias fits the held-out rows {how} (the measured values "
+            f"{abs(100 * sv):.1f} % {'above' if sv > 0 else 'below'} the model throughout: {words} "
+            f"{rr:.2f} % against {rm:.2f} % "
+            f"with the effect{'s' if k > 1 else ''}, {s.p_text()}), "
+            "so these rows cannot tell "
+            + ("it" if k == 1 else "them") + " from a bias no mechanism carries")
 
 
 def _judged_alone(sel, alpha: float) -> str:
@@ -722,10 +751,11 @@ def _judged_alone(sel, alpha: float) -> str:
     else:
         scored = (f"lower{'s' if one else ''} the held-out error, but the AICc, on the fewest observations that "
                   "define it, is decided by its small-sample term")
+    words, rm, rr = _heldout(sel.uniform)
     return (f"; beside a free uniform scale {'it' if one else 'they'} {scored} ({b.reason}), "
             f"so {'it was' if one else 'they were'} judged against that scale alone, which "
-            f"{'it beats' if one else 'they beat'} (held-out RMS {100 * sel.uniform.rmse():.2f} % "
-            f"against {100 * sel.uniform.rmse(True):.2f} %, {sel.uniform.p_text()}); "
+            f"{'it beats' if one else 'they beat'} ({words} {rm:.2f} % "
+            f"against {rr:.2f} %, {sel.uniform.p_text()}); "
             f"whether a uniform bias lies beside {'it' if one else 'them'} these rows cannot tell: "
             f"{'its parameter' if one else 'their parameters'} may hold it")
 
@@ -944,7 +974,8 @@ def _unscored(sel, u: pd.DataFrame, alpha: float = 0.05) -> str:
         # with what the held-out test showed: the clause is not a sign that the rows favour the
         # model (on 4 conditions with no effect in them, 2 % noise, it was given in 10 of 40
         # tables, paired p up to 0.41)
-        held = (f"held-out RMS {100 * s.rmse():.2f} % against {100 * s.rmse(True):.2f} %, "
+        words, rm, rr = _heldout(s)
+        held = (f"{words} {rm:.2f} % against {rr:.2f} %, "
                 + (f"paired p {s.p:.2g}" + ("" if s.p < alpha else f" >= {alpha:g}, which does not decide either")
                    if np.isfinite(s.p) else s.p_text()))
         seen.setdefault((len(s.names) + 1, n_obs), {}).setdefault("+".join(names), held)
@@ -1130,9 +1161,10 @@ def _analyse(soil: str, res: pd.DataFrame, diag: pd.DataFrame, cands: list, effe
                      + _far_off(diag) + "; ")
         elif spread_note:  # uneven spread: stones or the rig's noise form (noted below)
             nuisance = (nuisance[0], nuisance[1], nuisance[2] + UNEVEN_SPREAD_WORDS)
+        words, rm, rr = _heldout(sel.uniform)
         verdict = (f"unexplained: the measured values are {abs(100 * sv):.1f} % {'above' if sv > 0 else 'below'} "
                    + where + " + ".join(sel.judged) + f" fit{'s' if k == 1 else ''} it "
-                   f"(held-out RMS {100 * sel.uniform.rmse():.2f} % against {100 * sel.uniform.rmse(True):.2f} % for "
+                   f"({words} {rm:.2f} % against {rr:.2f} % for "
                    f"the uniform bias alone) but {beside}: on these rows "
                    f"{'its' if k == 1 else 'their'} signature cannot be told from a constant")
     elif sel is not None and sel.chosen:
@@ -1191,14 +1223,7 @@ def _analyse(soil: str, res: pd.DataFrame, diag: pd.DataFrame, cands: list, effe
         if uniform is None:
             verdict += _judged_alone(sel, settings.alpha)
         if sel.uniform is not None and not sel.uniform.accepted and uniform is None:
-            sv = sel.uniform_s
-            how = "as well or better" if sel.uniform.rmse(True) <= sel.uniform.rmse() else "nearly as well"
-            verdict += (f"; a uniform bias fits the held-out rows {how} (the measured values "
-                        f"{abs(100 * sv):.1f} % {'above' if sv > 0 else 'below'} the model throughout: held-out "
-                        f"RMS {100 * sel.uniform.rmse(True):.2f} % against {100 * sel.uniform.rmse():.2f} % "
-                        f"with the effect{'s' if len(chosen) > 1 else ''}, {sel.uniform.p_text()}), "
-                        "so these rows cannot tell "
-                        + ("it" if len(chosen) == 1 else "them") + " from a bias no mechanism carries")
+            verdict += _bias_fits_as_well(sel.uniform, sel.uniform_s, len(chosen))
         gap = f"{100 * float(np.sqrt(np.mean((jt.gap / rs.scale_of(u)) ** 2))):.2g} % RMS" if jt is not None else ""
         at = ", ".join(f"{k} {v:.4g}" for k, v in joint["theta"].items()) if jt is not None else ""
         if jt is not None and len(chosen) == 1:  # said with the interval (summary ci95_method, report)
