@@ -855,7 +855,9 @@ def paired_p(ref_rms, fold_rms, ref_held, held, folds: Folds, weights: np.ndarra
     stays over the folds (0.037-0.051 there).  With unequal folds E[MSB] / N falls short of the
     mean's variance where the days differ (not measured).  ``weights`` (per row,
     :func:`row_weights`): each condition's RMS errors weighted as the folds' are
-    (:meth:`Model.rms`)."""
+    (:meth:`Model.rms`).  The weights act only within each fold's or condition's RMS error: the
+    test over the folds counts every fold alike (and the one over the conditions every
+    condition), however much weight its rows carry."""
     from scipy import stats
 
     ok = np.isfinite(fold_rms) & np.isfinite(ref_rms)
