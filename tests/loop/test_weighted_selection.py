@@ -333,3 +333,34 @@ def test_the_comparisons_beside_and_against_a_uniform_scale_quote_the_errors_com
                        beside_uniform=_held(W2, e=(0.1, 0.1), aicc=math.nan, p=0.01, reason="AICc undefined"),
                        judged=["trend"])
     assert f"which it beats ({said}, paired p 0.01); " in core._judged_alone(sel, 0.05)
+
+
+def test_selection_csv_gives_the_weighted_held_out_errors_beside_the_plain_ones(tmp_path):
+    from soilcal.chain.files import write_csv
+    from soilcal.loop import core
+
+    w = 1.0 / _variances()  # by hand; their mean does not change a weighted RMS
+    rows = []
+    for obs in (_obs(np.random.default_rng(8)), _obs(np.random.default_rng(8), with_sd=False)):
+        y0, m, sc = np.full(len(obs), SCALE), obs["measured"].to_numpy(float), np.full(len(obs), SCALE)
+        weights = sl.row_weights(obs)
+        s = sl.score(sl.Model([_effect()], y0, m, sc, weights=weights), sl.Model([], y0, m, sc, weights=weights),
+                     sl._folds(obs, None))
+        row = core._selection_row("1", s, ["trend"])
+        e, er = s.heldout_errors, s.ref_heldout_errors
+        assert row["heldout_rmse_percent"] == pytest.approx(100 * math.sqrt(np.mean(e ** 2)), rel=1e-12)
+        assert row["reference_heldout_rmse_percent"] == pytest.approx(100 * math.sqrt(np.mean(er ** 2)), rel=1e-12)
+        if weights is not None:
+            assert row["weighted_heldout_rmse_percent"] == pytest.approx(
+                100 * math.sqrt(np.sum(w * e ** 2) / np.sum(w)), rel=1e-12)
+            assert row["reference_weighted_heldout_rmse_percent"] == pytest.approx(
+                100 * math.sqrt(np.sum(w * er ** 2) / np.sum(w)), rel=1e-12)
+            assert abs(row["weighted_heldout_rmse_percent"] - row["heldout_rmse_percent"]) > 0.1
+        rows.append(row)
+    # beside the plain columns; every row alike (the table without SD columns): the cells empty
+    write_csv(pd.DataFrame(rows, columns=core.SELECTION_COLUMNS), tmp_path / "selection.csv")
+    back = pd.read_csv(tmp_path / "selection.csv")
+    assert list(back.columns[4:8]) == ["heldout_rmse_percent", "reference_heldout_rmse_percent",
+                                       "weighted_heldout_rmse_percent", "reference_weighted_heldout_rmse_percent"]
+    assert back.loc[0, ["weighted_heldout_rmse_percent", "reference_weighted_heldout_rmse_percent"]].notna().all()
+    assert back.loc[1, ["weighted_heldout_rmse_percent", "reference_weighted_heldout_rmse_percent"]].isna().all()

@@ -296,8 +296,8 @@ def plan(conditions, names, settings: Settings, reference: dict) -> list[dict]:
 # --------------------------------------------------------------------------- analysis
 
 SELECTION_COLUMNS = ["step", "effects", "parameters", "ci95", "heldout_rmse_percent", "reference_heldout_rmse_percent",
-                     "heldout_max_percent", "aicc", "reference_aicc", "p_paired", "accepted", "reason", "surrogate",
-                     "lack_of_fit_p"]
+                     "weighted_heldout_rmse_percent", "reference_weighted_heldout_rmse_percent", "heldout_max_percent",
+                     "aicc", "reference_aicc", "p_paired", "accepted", "reason", "surrogate", "lack_of_fit_p"]
 SUMMARY_COLUMNS = ["soil", "rows", "usable_rows", "verdict", "effects", "parameters", "ci95", "ci95_method", "follows",
                    "rmse_before_percent", "rmse_after_percent", "rmse_floor_percent", "max_before_percent",
                    "max_after_percent", "error_reduction_percent", "explained_percent", "alpha", "reference", "folds",
@@ -346,11 +346,16 @@ def _surrogates(data: dict, names) -> tuple[str, str]:
 
 def _selection_row(step, s, names=None, data=None) -> dict:
     """A row of ``selection.csv``: a model tried (:class:`soilcal.loop.select.Score`), with
-    which surrogate each effect's data (``data``: effect -> EffectData) went through."""
+    which surrogate each effect's data (``data``: effect -> EffectData) went through.  Beside
+    the plain held-out RMS errors, the weighted ones the selection compared
+    (:meth:`soilcal.loop.select.Score.weighted_rmse`), NaN (an empty cell) where every row
+    weighs alike."""
     names = names if names is not None else list(dict.fromkeys(k.split(".")[0] for k in s.names))
     kind, p = _surrogates(data or {}, names)
+    wm, wr = (100 * s.weighted_rmse(), 100 * s.weighted_rmse(True)) if s.weighted else (math.nan, math.nan)
     return {"step": step, "effects": "+".join(names), "parameters": _fmt(s.theta), "ci95": _fmt_ci(s.ci),
             "heldout_rmse_percent": 100 * s.rmse(), "reference_heldout_rmse_percent": 100 * s.rmse(True),
+            "weighted_heldout_rmse_percent": wm, "reference_weighted_heldout_rmse_percent": wr,
             "heldout_max_percent": 100 * s.max_error(), "aicc": s.aicc, "reference_aicc": s.ref_aicc,
             "p_paired": s.p, "accepted": s.accepted, "reason": s.reason, "surrogate": kind, "lack_of_fit_p": p}
 

@@ -70,10 +70,13 @@ term of the weights, sum ln w_i / 2, is the same for a model and its reference);
 intervals' J, e and s^2 are those of the weighted residuals sqrt(w_i) e_i; the bootstrap
 refits each draw with the same weights (they come from the rows' pooled variances, not from
 a draw).  The RMS and largest errors of ``selection.csv`` and ``loop_summary.csv``
-(``rmse_before_percent``, ``rmse_after_percent``) stay those of the plain relative errors
-(:meth:`Score.rmse`); the weighted held-out RMS the selection compares is
-:meth:`Score.weighted_rmse` (``loop_summary.csv``'s ``weighted_rmse_before_percent``,
-``weighted_rmse_after_percent``, empty where every row weighs alike).
+(``heldout_rmse_percent``, ``reference_heldout_rmse_percent``, ``rmse_before_percent``,
+``rmse_after_percent``) stay those of the plain relative errors (:meth:`Score.rmse`); the
+weighted held-out RMS the selection compares is :meth:`Score.weighted_rmse`
+(``selection.csv``'s ``weighted_heldout_rmse_percent`` and
+``reference_weighted_heldout_rmse_percent``, ``loop_summary.csv``'s
+``weighted_rmse_before_percent`` and ``weighted_rmse_after_percent``, empty where every row
+weighs alike), and the verdict quotes it, as "weighted held-out RMS", where it decided.
 
 A model is accepted against its reference when the paired test's p is below ``alpha``, its
 pooled (weighted) held-out RMS error is at least :data:`MIN_IMPROVEMENT` (10 %) below the reference's
