@@ -6,6 +6,12 @@ measures, one inverse-variance mean relative residual per test), and on each mea
 (``soilcal.loop.diagnose.diagnose``, no new DEM run).  Per table: the speed trend's and
 curvature's raw and Holm p, the smallest Holm p of any test, and the RMS relative residual of
 the rows; per measure, the mean relative residual of the conditions below 0.25 m/s and above.
+Then the weights the effect selection gives each measure's rows (``soilcal.loop.select.row_weights``:
+the inverse of the relative residual's variance, mean 1) and, where the campaign's saved
+predictions (``<stem>_predictions.csv``) are beside the table, the RMS relative error before and
+held out after, plain (``loop_summary.csv``'s) and weighted by those weights: the run's own
+held-out predictions, from the fit of the code that ran the campaign (the effects' design runs
+are not saved, so no fit is repeated here).
 
 A campaign is given as CASE:CAMPAIGN[:SPACING] (spacing ``log``, the default, or ``uniform``),
 its table looked up in ``benchmarks/results/loop_dem/`` (``--detail DIR``) under the measures of
@@ -25,6 +31,8 @@ if str(Path(__file__).resolve().parents[1]) not in sys.path:
     sys.path.insert(0, str(Path(__file__).resolve().parents[1]))  # benchmarks/loop.py
 import loop as B
 from soilcal.loop import diagnose as dg
+from soilcal.loop import residuals as rs
+from soilcal.loop import select as sl
 
 QUANTITY_OF = {"directrix": "tool", "speed_m_s": "tool_speed", "depth_mm": "working_depth",
                "position_m": "position", "day": "day", "moisture_pct": "moisture_content"}
@@ -72,6 +80,36 @@ def report(path):
         slow = g["cov:speed_m_s"] < 0.25
         print(f"  {m}: mean relative residual below 0.25 m/s {g.loc[slow, 'relative_residual'].mean():+.3f} "
               f"({int(slow.sum())} conditions), above {g.loc[~slow, 'relative_residual'].mean():+.3f}")
+    weights(path, res)
+
+
+def weights(path, res):
+    """Print the selection's weight of each measure's rows and the RMS relative error before and
+    held out after, plain and weighted, from the campaign's saved predictions beside ``path``."""
+    u = rs.usable(res)
+    w = sl.row_weights(u)
+    measures = sorted(u["measure"].unique())
+    if w is None:
+        print("  selection weights: every row alike (a variance unknown, of different parts, or all equal)")
+        w = np.ones(len(u))
+    else:
+        print("  selection weights (mean 1): " + ", ".join(
+            f"{m} {w[(u['measure'] == m).to_numpy()].mean():.4g}" for m in measures))
+    preds = path.with_name(path.name.replace("_residuals.csv", "_predictions.csv"))
+    if not preds.is_file():
+        return
+    keys = ["measurement", "row", "measure"]
+    p = u[keys].merge(pd.read_csv(preds), on=keys, how="left", validate="one_to_one")
+    before = u["relative_residual"].to_numpy(float)
+    after = ((p["measured"] - p["heldout_prediction"]).to_numpy(float) / rs.scale_of(u)
+             if "heldout_prediction" in p else before)  # nothing chosen: the model as calibrated
+    ok = np.isfinite(before) & np.isfinite(after)
+
+    def rms(x, wt):
+        return 100 * np.sqrt(np.sum(wt[ok] * x[ok] ** 2) / np.sum(wt[ok]))
+
+    print(f"  held-out RMS relative error, before -> after ({preds.name}): plain {rms(before, np.ones(len(u))):.2f} "
+          f"-> {rms(after, np.ones(len(u))):.2f} %, weighted {rms(before, w):.2f} -> {rms(after, w):.2f} %")
 
 
 def main(argv=None):

@@ -330,7 +330,12 @@ def test_a_refit_on_runs_whose_noise_changes_with_the_parameters_keeps_to_the_ef
     # here 4 % per run, hashed from the parameters, with a weak rate effect beta = 0.06.  The
     # joint runs' difference from the surrogate is then mostly that scatter; taken as an
     # interaction and scaled towards the switched-off value, it pulled beta to 0.024; kept to the
-    # rows where it exceeds two standard errors, the refit stays within 25 % of 0.06
+    # rows where it exceeds two standard errors, the mean refit lies within 25 % of 0.06 (it sits
+    # about 13-19 % low over campaigns: mean 0.052 over 30 equal-weight campaigns, 0.049 over
+    # these eight weighted ones).  Any change of a fitted value redraws every later run of this
+    # stand-in, so one campaign is one draw of the refit (its beta lies outside 25 % of 0.06 in
+    # about one campaign of five): the claim is on the mean over eight campaigns, within 25 % of
+    # 0.06
     import json
     import zlib
 
@@ -345,9 +350,12 @@ def test_a_refit_on_runs_whose_noise_changes_with_the_parameters_keeps_to_the_ef
         return {"horizontal_force_N": fh * (1 + e[0]), "vertical_force_N": fv * (1 + e[1])}
 
     conds = S.conditions(S.grid(2, 18))
-    table = sy.synthesize(conds, S.base_params, chaotic, {"rate_friction": {"beta": 0.06}}, ref, {}, noise=0.005,
-                          seed=12)
-    out = core.run_inprocess("standin", sy.with_measured(conds, table), S.base_params, chaotic,
-                             core.Settings(reference=ref, bootstrap=0))
-    assert out.chosen == ["rate_friction"], out.verdict
-    assert out.theta["rate_friction.beta"] == pytest.approx(0.06, rel=0.25)
+    betas = []
+    for seed in range(12, 20):
+        table = sy.synthesize(conds, S.base_params, chaotic, {"rate_friction": {"beta": 0.06}}, ref, {},
+                              noise=0.005, seed=seed)
+        out = core.run_inprocess("standin", sy.with_measured(conds, table), S.base_params, chaotic,
+                                 core.Settings(reference=ref, bootstrap=0))
+        assert out.chosen == ["rate_friction"], (seed, out.verdict)
+        betas.append(out.theta["rate_friction.beta"])
+    assert float(np.mean(betas)) == pytest.approx(0.06, rel=0.25), betas

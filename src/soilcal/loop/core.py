@@ -296,12 +296,13 @@ def plan(conditions, names, settings: Settings, reference: dict) -> list[dict]:
 # --------------------------------------------------------------------------- analysis
 
 SELECTION_COLUMNS = ["step", "effects", "parameters", "ci95", "heldout_rmse_percent", "reference_heldout_rmse_percent",
-                     "heldout_max_percent", "aicc", "reference_aicc", "p_paired", "accepted", "reason", "surrogate",
-                     "lack_of_fit_p"]
+                     "weighted_heldout_rmse_percent", "reference_weighted_heldout_rmse_percent", "heldout_max_percent",
+                     "aicc", "reference_aicc", "p_paired", "accepted", "reason", "surrogate", "lack_of_fit_p"]
 SUMMARY_COLUMNS = ["soil", "rows", "usable_rows", "verdict", "effects", "parameters", "ci95", "ci95_method", "follows",
                    "rmse_before_percent", "rmse_after_percent", "rmse_floor_percent", "max_before_percent",
                    "max_after_percent", "error_reduction_percent", "explained_percent", "alpha", "reference", "folds",
-                   "nuisance", "nuisance_ci95", "nuisance_method", "surrogate", "lack_of_fit_p"]
+                   "nuisance", "nuisance_ci95", "nuisance_method", "surrogate", "lack_of_fit_p",
+                   "weighted_rmse_before_percent", "weighted_rmse_after_percent"]
 
 
 #: the parameter of the free uniform scale of the model (:func:`soilcal.loop.select.scale_data`)
@@ -345,11 +346,16 @@ def _surrogates(data: dict, names) -> tuple[str, str]:
 
 def _selection_row(step, s, names=None, data=None) -> dict:
     """A row of ``selection.csv``: a model tried (:class:`soilcal.loop.select.Score`), with
-    which surrogate each effect's data (``data``: effect -> EffectData) went through."""
+    which surrogate each effect's data (``data``: effect -> EffectData) went through.  Beside
+    the plain held-out RMS errors, the weighted ones the selection compared
+    (:meth:`soilcal.loop.select.Score.weighted_rmse`), NaN (an empty cell) where every row
+    weighs alike."""
     names = names if names is not None else list(dict.fromkeys(k.split(".")[0] for k in s.names))
     kind, p = _surrogates(data or {}, names)
+    wm, wr = (100 * s.weighted_rmse(), 100 * s.weighted_rmse(True)) if s.weighted else (math.nan, math.nan)
     return {"step": step, "effects": "+".join(names), "parameters": _fmt(s.theta), "ci95": _fmt_ci(s.ci),
             "heldout_rmse_percent": 100 * s.rmse(), "reference_heldout_rmse_percent": 100 * s.rmse(True),
+            "weighted_heldout_rmse_percent": wm, "reference_weighted_heldout_rmse_percent": wr,
             "heldout_max_percent": 100 * s.max_error(), "aicc": s.aicc, "reference_aicc": s.ref_aicc,
             "p_paired": s.p, "accepted": s.accepted, "reason": s.reason, "surrogate": kind, "lack_of_fit_p": p}
 
@@ -360,6 +366,17 @@ def _fmt(d: dict) -> str:
 
 def _fmt_ci(d: dict) -> str:
     return json.dumps({k: [round(a, 6), round(b, 6)] for k, (a, b) in d.items()}, sort_keys=True)
+
+
+def _heldout(s) -> tuple[str, float, float]:
+    """The held-out RMS errors a decision on a :class:`soilcal.loop.select.Score` used, for a
+    sentence: (words, the model's in %, its reference's in %).  Where the rows weigh differently
+    (:func:`soilcal.loop.select.row_weights`) the selection compares the weighted errors
+    (:meth:`soilcal.loop.select.Score.weighted_rmse`), and the words say "weighted held-out
+    RMS"; else the plain ones, "held-out RMS"."""
+    if s.weighted:
+        return "weighted held-out RMS", 100 * s.weighted_rmse(), 100 * s.weighted_rmse(True)
+    return "held-out RMS", 100 * s.rmse(), 100 * s.rmse(True)
 
 
 @dataclass
@@ -447,7 +464,7 @@ def _interval(u: pd.DataFrame, effects: list, final, settings: Settings, joint=N
               else [f"{m}/{r}" for m, r in zip(u["measurement"], u["row"])])
     boot = sl.bootstrap_ci(effects, u["simulated_mean"].to_numpy(float), u["measured"].to_numpy(float), se,
                            settings.bootstrap, x0=[final.theta[nm] for nm in final.names], conditions=labels,
-                           scale=rs.scale_of(u), joint=joint)
+                           scale=rs.scale_of(u), joint=joint, weights=sl.row_weights(u))
     if boot is None:
         return final.ci, fit_only + " (too few seeds per condition to resample)"
     how = (f"a bootstrap of {settings.bootstrap} refits over each simulation's seeds and the measured standard errors "
@@ -681,8 +698,9 @@ def _not_separated(sel, alpha: float) -> str:
         beside = " beside a free uniform scale" if sl._ScaleEffect.name in {k.split(".")[0] for k in g.names} else ""
         aicc = (f", AICc {g.aicc:.1f} against {g.ref_aicc:.1f}" if np.isfinite(g.aicc) and np.isfinite(g.ref_aicc)
                 else "")
+        words, rm, rr = _heldout(g)
         out += (f"; {nm} was not separated from " + (" + ".join(sel.chosen) or "the model") + f"{beside}: with it the "
-                f"held-out RMS error is {100 * g.rmse():.2f} % against {100 * g.rmse(True):.2f} %{aicc}, "
+                f"{words} error is {rm:.2f} % against {rr:.2f} %{aicc}, "
                 + (f"paired p {g.p:.2g} over {int(np.isfinite(g.fold_rms).sum())} held-out groups (alpha {alpha:g})"
                    f", so it stays out ({g.own_reason or g.reason})" if np.isfinite(g.p)
                    else g.p_text() + ", so it stays out") + ", and the "
@@ -704,9 +722,26 @@ def _beside_clause(sel, alpha: float) -> str:
         return out + f" and alone do{'es' if k == 1 else ''} not beat the uniform scale ({sel.uniform.reason})"
     out += f"; alone {'it beats' if k == 1 else 'they beat'} the uniform scale ({sel.uniform.p_text()}), but "
     if not (sl.lowers_heldout(b) and np.isfinite(b.p) and b.p < alpha):
+        words, rm, rr = _heldout(b)
         return out + (f"beside it {'it does' if k == 1 else 'they do'} not lower the held-out error significantly "
-                      f"(held-out RMS {100 * b.rmse():.2f} % against {100 * b.rmse(True):.2f} %, {b.p_text()})")
+                      f"({words} {rm:.2f} % against {rr:.2f} %, {b.p_text()})")
     return out + f"the selection's gates did not keep {'it' if k == 1 else 'them'}"
+
+
+def _bias_fits_as_well(s, sv: float, k: int) -> str:
+    """The verdict's clause where the ``k`` chosen effects do not beat a free uniform scale
+    alone (``s``: their :class:`soilcal.loop.select.Score` against it, not accepted; ``sv``: the
+    scale's value): the bias fits the held-out rows "as well or better" where its held-out RMS
+    error is not above the effects', else "nearly as well", judged and quoted on the errors the
+    selection compared (:func:`_heldout`: weighted where the rows weigh differently)."""
+    words, rm, rr = _heldout(s)
+    how = "as well or better" if s.weighted_rmse(True) <= s.weighted_rmse() else "nearly as well"
+    return (f"; a uniform bias fits the held-out rows {how} (the measured values "
+            f"{abs(100 * sv):.1f} % {'above' if sv > 0 else 'below'} the model throughout: {words} "
+            f"{rr:.2f} % against {rm:.2f} % "
+            f"with the effect{'s' if k > 1 else ''}, {s.p_text()}), "
+            "so these rows cannot tell "
+            + ("it" if k == 1 else "them") + " from a bias no mechanism carries")
 
 
 def _judged_alone(sel, alpha: float) -> str:
@@ -721,10 +756,11 @@ def _judged_alone(sel, alpha: float) -> str:
     else:
         scored = (f"lower{'s' if one else ''} the held-out error, but the AICc, on the fewest observations that "
                   "define it, is decided by its small-sample term")
+    words, rm, rr = _heldout(sel.uniform)
     return (f"; beside a free uniform scale {'it' if one else 'they'} {scored} ({b.reason}), "
             f"so {'it was' if one else 'they were'} judged against that scale alone, which "
-            f"{'it beats' if one else 'they beat'} (held-out RMS {100 * sel.uniform.rmse():.2f} % "
-            f"against {100 * sel.uniform.rmse(True):.2f} %, {sel.uniform.p_text()}); "
+            f"{'it beats' if one else 'they beat'} ({words} {rm:.2f} % "
+            f"against {rr:.2f} %, {sel.uniform.p_text()}); "
             f"whether a uniform bias lies beside {'it' if one else 'them'} these rows cannot tell: "
             f"{'its parameter' if one else 'their parameters'} may hold it")
 
@@ -943,7 +979,8 @@ def _unscored(sel, u: pd.DataFrame, alpha: float = 0.05) -> str:
         # with what the held-out test showed: the clause is not a sign that the rows favour the
         # model (on 4 conditions with no effect in them, 2 % noise, it was given in 10 of 40
         # tables, paired p up to 0.41)
-        held = (f"held-out RMS {100 * s.rmse():.2f} % against {100 * s.rmse(True):.2f} %, "
+        words, rm, rr = _heldout(s)
+        held = (f"{words} {rm:.2f} % against {rr:.2f} %, "
                 + (f"paired p {s.p:.2g}" + ("" if s.p < alpha else f" >= {alpha:g}, which does not decide either")
                    if np.isfinite(s.p) else s.p_text()))
         seen.setdefault((len(s.names) + 1, n_obs), {}).setdefault("+".join(names), held)
@@ -1015,6 +1052,7 @@ def _analyse(soil: str, res: pd.DataFrame, diag: pd.DataFrame, cands: list, effe
     candidates reuses the surrogates of those it shares with the round before and the
     models over them, fitted and cross-validated there."""
     u = rs.usable(res)
+    weights = sl.row_weights(u)  # the selection's weights of the rows (None: alike), for every fit of them below
     spread_note = _replicate_spread(u, settings.alpha)  # the verdict's note ("": none) and its nuisance words
     rank = dg.ranking(diag)
     follows = _follows(rank, res, quantity_cols, settings.alpha)
@@ -1073,7 +1111,7 @@ def _analyse(soil: str, res: pd.DataFrame, diag: pd.DataFrame, cands: list, effe
     jt = joint_interaction(u, data, sel.chosen, joint) if sel is not None and sel.chosen else None
     if names:
         y0, meas = u["simulated_mean"].to_numpy(float), u["measured"].to_numpy(float)
-        m = sl.Model([data[c] for c in names], y0, meas, rs.scale_of(u), jt)
+        m = sl.Model([data[c] for c in names], y0, meas, rs.scale_of(u), jt, weights)
         x, _ = m.fit()
         fitted = m.predict(x)
         res_after = residual_after(res, fitted)
@@ -1086,8 +1124,8 @@ def _analyse(soil: str, res: pd.DataFrame, diag: pd.DataFrame, cands: list, effe
             # an 8 % offset ran to its bound): refit them beside a free uniform scale of the
             # model (select.scale_data), and say it
             bias, sc = sl.scale_data(), rs.scale_of(u)
-            ref = sl.Model([bias], y0, meas, sc)
-            m = sl.Model([data[c] for c in names] + [bias], y0, meas, sc, jt)
+            ref = sl.Model([bias], y0, meas, sc, weights=weights)
+            m = sl.Model([data[c] for c in names] + [bias], y0, meas, sc, jt, weights)
             uniform = sl.score(m, ref, sl._folds(u, fold_by), settings.alpha, groups=sl.replicate_groups(u))
             sel_rows.append(_selection_row("refit beside uniform scale", uniform, data=data))
             x = np.array([uniform.theta[k] for k in uniform.names], float)
@@ -1128,9 +1166,10 @@ def _analyse(soil: str, res: pd.DataFrame, diag: pd.DataFrame, cands: list, effe
                      + _far_off(diag) + "; ")
         elif spread_note:  # uneven spread: stones or the rig's noise form (noted below)
             nuisance = (nuisance[0], nuisance[1], nuisance[2] + UNEVEN_SPREAD_WORDS)
+        words, rm, rr = _heldout(sel.uniform)
         verdict = (f"unexplained: the measured values are {abs(100 * sv):.1f} % {'above' if sv > 0 else 'below'} "
                    + where + " + ".join(sel.judged) + f" fit{'s' if k == 1 else ''} it "
-                   f"(held-out RMS {100 * sel.uniform.rmse():.2f} % against {100 * sel.uniform.rmse(True):.2f} % for "
+                   f"({words} {rm:.2f} % against {rr:.2f} % for "
                    f"the uniform bias alone) but {beside}: on these rows "
                    f"{'its' if k == 1 else 'their'} signature cannot be told from a constant")
     elif sel is not None and sel.chosen:
@@ -1138,8 +1177,10 @@ def _analyse(soil: str, res: pd.DataFrame, diag: pd.DataFrame, cands: list, effe
         final = sel.final
         if jt is not None:  # the chosen effects with their interaction, against the calibrated model
             y0 = u["simulated_mean"].to_numpy(float)
-            final = sl.score(sl.Model([data[c] for c in chosen], y0, u["measured"].to_numpy(float), rs.scale_of(u), jt),
-                             sl.Model([], y0, u["measured"].to_numpy(float), rs.scale_of(u)), sl._folds(u, fold_by),
+            final = sl.score(sl.Model([data[c] for c in chosen], y0, u["measured"].to_numpy(float), rs.scale_of(u), jt,
+                                      weights),
+                             sl.Model([], y0, u["measured"].to_numpy(float), rs.scale_of(u), weights=weights),
+                             sl._folds(u, fold_by),
                              settings.alpha, groups=sl.replicate_groups(u))
         theta = final.theta
         if uniform is None and interval:
@@ -1187,14 +1228,7 @@ def _analyse(soil: str, res: pd.DataFrame, diag: pd.DataFrame, cands: list, effe
         if uniform is None:
             verdict += _judged_alone(sel, settings.alpha)
         if sel.uniform is not None and not sel.uniform.accepted and uniform is None:
-            sv = sel.uniform_s
-            how = "as well or better" if sel.uniform.rmse(True) <= sel.uniform.rmse() else "nearly as well"
-            verdict += (f"; a uniform bias fits the held-out rows {how} (the measured values "
-                        f"{abs(100 * sv):.1f} % {'above' if sv > 0 else 'below'} the model throughout: held-out "
-                        f"RMS {100 * sel.uniform.rmse(True):.2f} % against {100 * sel.uniform.rmse():.2f} % "
-                        f"with the effect{'s' if len(chosen) > 1 else ''}, {sel.uniform.p_text()}), "
-                        "so these rows cannot tell "
-                        + ("it" if len(chosen) == 1 else "them") + " from a bias no mechanism carries")
+            verdict += _bias_fits_as_well(sel.uniform, sel.uniform_s, len(chosen))
         gap = f"{100 * float(np.sqrt(np.mean((jt.gap / rs.scale_of(u)) ** 2))):.2g} % RMS" if jt is not None else ""
         at = ", ".join(f"{k} {v:.4g}" for k, v in joint["theta"].items()) if jt is not None else ""
         if jt is not None and len(chosen) == 1:  # said with the interval (summary ci95_method, report)
@@ -1248,7 +1282,7 @@ def _analyse(soil: str, res: pd.DataFrame, diag: pd.DataFrame, cands: list, effe
         scales = []
         for q, g in u.groupby(u["measure"].astype(str), sort=True):
             sq = float(sl.Model([sl.scale_data()], g["simulated_mean"].to_numpy(float), g["measured"].to_numpy(float),
-                                rs.scale_of(g)).fit()[0][0])
+                                rs.scale_of(g), weights=sl.row_weights(g)).fit()[0][0])
             scales.append((f"{q} " if u["measure"].nunique() > 1 else "")
                           + f"{abs(100 * sq):.1f} % {'above' if sq > 0 else 'below'}")
         verdict = (f"unexplained: the residual follows {follows}; the {rows} row{'s' if rows != 1 else ''}"
@@ -1287,8 +1321,8 @@ def _analyse(soil: str, res: pd.DataFrame, diag: pd.DataFrame, cands: list, effe
             sv, (lo, hi) = sel.uniform_s, sel.uniform_ci
         else:
             y0, meas, sc = u["simulated_mean"].to_numpy(float), u["measured"].to_numpy(float), rs.scale_of(u)
-            alone = sl.Model([sl.scale_data()], y0, meas, sc)
-            sv, lo, hi = _scale_fit(sl.score(alone, sl.Model([], y0, meas, sc), sl._folds(u, fold_by),
+            alone = sl.Model([sl.scale_data()], y0, meas, sc, weights=weights)
+            sv, lo, hi = _scale_fit(sl.score(alone, sl.Model([], y0, meas, sc, weights=weights), sl._folds(u, fold_by),
                                              settings.alpha, groups=sl.replicate_groups(u)))
         nuisance = ({SCALE_KEY: sv}, {SCALE_KEY: (lo, hi)},
                     "fitted alone: the uniform bias the residual follows, the calibrated model times (1 + s)")
@@ -1337,7 +1371,9 @@ def _analyse(soil: str, res: pd.DataFrame, diag: pd.DataFrame, cands: list, effe
         "explained_percent": e["explained_percent"],
         "alpha": settings.alpha, "reference": _fmt(reference), "folds": fold_text, "nuisance": _fmt(nuisance[0]),
         "nuisance_ci95": _fmt_ci(nuisance[1]), "nuisance_method": nuisance[2],
-        "surrogate": surrogate_kind, "lack_of_fit_p": lack_of_fit_p}],
+        "surrogate": surrogate_kind, "lack_of_fit_p": lack_of_fit_p,
+        "weighted_rmse_before_percent": e["weighted_rmse_before_percent"],
+        "weighted_rmse_after_percent": e["weighted_rmse_after_percent"]}],
         columns=SUMMARY_COLUMNS)
     out = Outcome(res, diag, rank, cands, pd.DataFrame(sel_rows, columns=SELECTION_COLUMNS), summary, pred,
                   verdict, chosen, theta, after, dg.detectable(res, diag, quantity_cols, settings.alpha),
@@ -1353,17 +1389,25 @@ def error_figures(u: pd.DataFrame, before, after) -> dict:
     ``rmse_after_percent``, ``max_before_percent``, ``max_after_percent``, the noise floor
     ``rmse_floor_percent`` with its ``floor_note`` and ``floor_interval`` (low, high, degrees of
     freedom; :func:`soilcal.loop.residuals.noise_floor_and_interval`) and
-    ``explained_percent`` (:func:`explained_percent`); NaN where no row has both."""
+    ``explained_percent`` (:func:`explained_percent`); NaN where no row has both.  Beside them
+    the RMS errors the selection compares, weighted by the rows' weights
+    (:func:`soilcal.loop.select.row_weights`), sqrt(sum w e^2 / sum w):
+    ``weighted_rmse_before_percent``, ``weighted_rmse_after_percent``, NaN where every row
+    weighs alike (they would repeat the plain ones)."""
     before, after = np.asarray(before, float), np.asarray(after, float)
     ok = np.isfinite(after) & np.isfinite(before)
     rms = (lambda x: float(np.sqrt(np.mean(x[ok] ** 2))) * 100) if ok.any() else (lambda x: math.nan)
+    w = sl.row_weights(u)
+    wrms = ((lambda x: float(np.sqrt(np.sum(w[ok] * x[ok] ** 2) / np.sum(w[ok]))) * 100)
+            if w is not None and ok.any() else (lambda x: math.nan))
     top = (lambda x: float(np.max(np.abs(x[ok]))) * 100) if ok.any() else (lambda x: math.nan)
     floor, note, (lo, hi, dof) = rs.noise_floor_and_interval(u, ok)
     rb, ra = rms(before), rms(after)
     return {"rmse_before_percent": rb, "rmse_after_percent": ra, "max_before_percent": top(before),
             "max_after_percent": top(after), "rmse_floor_percent": 100 * floor, "floor_note": note,
             "floor_interval": (100 * lo, 100 * hi, dof),
-            "explained_percent": explained_percent(rb, ra, 100 * floor, 100 * hi)}
+            "explained_percent": explained_percent(rb, ra, 100 * floor, 100 * hi),
+            "weighted_rmse_before_percent": wrms(before), "weighted_rmse_after_percent": wrms(after)}
 
 
 def explained_percent(before: float, after: float, floor: float, floor_high: float = math.nan) -> float:
@@ -1480,6 +1524,7 @@ def run_inprocess(soil: str, conditions, base_params, simulate, settings: Settin
                      for k in EFFECTS[c].theta_names()])
     u = rs.usable(res)
     y0, meas, sc = u["simulated_mean"].to_numpy(float), u["measured"].to_numpy(float), rs.scale_of(u)
+    weights = sl.row_weights(u)
     effects = [out.effect_data[c] for c in out.chosen] + ([sl.scale_data()] if out.uniform_scale else [])
     x, joint = np.array([out.theta[k] for k in keys], float), None
     for _ in range(JOINT_ROUNDS):
@@ -1490,7 +1535,7 @@ def run_inprocess(soil: str, conditions, base_params, simulate, settings: Settin
                  "runs": runs_at(None, None, reference, together), "base": base}
         jt = joint_interaction(u, out.effect_data, out.chosen, joint)
         start = np.concatenate([x, [0.0]]) if out.uniform_scale else x
-        new = sl.Model(effects, y0, meas, sc, jt).fit(x0=start)[0][:len(keys)]
+        new = sl.Model(effects, y0, meas, sc, jt, weights).fit(x0=start)[0][:len(keys)]
         settled = bool(np.all(np.abs(new - x) <= JOINT_SETTLED * span))
         x = new
         if settled:

@@ -11,11 +11,13 @@ Outputs under ``results/<soil>/loop/``:
   condition (conditions that run the same simulation share a job, as the tool tests do), with
   the seeds of the calibrated tool runs, which are the switched-off design point;
 * ``selection.csv`` (every model tried: step, effects, parameters with 95 % intervals,
-  held-out RMS error against its reference, AICc, paired-test p, accepted, why not, which
+  held-out RMS error against its reference, plain and, where the rows weigh differently,
+  weighted as the selection compared them, AICc, paired-test p, accepted, why not, which
   surrogate each effect went through and the smallest of its rows' lack-of-fit p),
   ``predictions.csv``, ``loop_summary.csv`` (error before and after on held-out
   measurements beside the noise floor the measured and seed uncertainty alone give and the
-  share of the explainable error removed, the verdict, the chosen effects' surrogates),
+  share of the explainable error removed, the RMS errors weighted as the selection weighs the
+  rows, the verdict, the chosen effects' surrogates),
   ``detectable.csv`` (the smallest bias and trends the diagnosis finds with 80 % power:
   :func:`soilcal.loop.diagnose.detectable`), ``report.md`` and ``figures/after/``.
 """
@@ -329,6 +331,19 @@ def _floor_lines(s, o: core.Outcome) -> list[str]:
     return [f"| the measured and seed uncertainty alone | {floor:.2f} | |", "", text, ""]
 
 
+def _weighted_lines(s) -> list[str]:
+    """The report's weighted held-out RMS errors (``loop_summary.csv``:
+    ``weighted_rmse_before_percent``, ``weighted_rmse_after_percent``), the errors the selection
+    compares where the rows weigh differently; nothing where every row weighs alike."""
+    before, after = (float(s.get(k, np.nan)) for k in ("weighted_rmse_before_percent", "weighted_rmse_after_percent"))
+    if not np.isfinite(before):
+        return []
+    return [f"Weighted by the inverse variance of each row's relative residual (its measured and seed variance over "
+            f"its scale squared, the relative SDs pooled per measured quantity), as the selection fits and compares "
+            f"them, the RMS error is {before:.2f} % for the calibrated model and {after:.2f} % with the chosen effects "
+            "(each row predicted without its group; the table above weighs every row alike).", ""]
+
+
 def report(soil: str, o: core.Outcome, plans: list) -> str:
     """``report.md``: verdict, error before and after, chosen effects, diagnosis, every
     candidate, settings."""
@@ -343,7 +358,7 @@ def report(soil: str, o: core.Outcome, plans: list) -> str:
              "| | RMS error, % | largest error, % |", "|---|---|---|",
              f"| calibrated model | {s['rmse_before_percent']:.2f} | {s['max_before_percent']:.2f} |",
              f"| with the chosen effects | {s['rmse_after_percent']:.2f} | {s['max_after_percent']:.2f} |",
-             *_floor_lines(s, o)]
+             *_floor_lines(s, o), *_weighted_lines(s)]
     if o.chosen:
         ci = json.loads(s["ci95"])
         lines += ["## Chosen effects", "", "| effect | parameter | value | 95 % interval | unit | formula | source |",
@@ -364,9 +379,13 @@ def report(soil: str, o: core.Outcome, plans: list) -> str:
               *_detectable_lines(o.detectable),
               "## Candidates", ""]
     if len(o.selection):
+        # the weighted held-out RMS errors the selection compared, where the rows weigh differently
+        weighted = (["weighted_heldout_rmse_percent", "reference_weighted_heldout_rmse_percent"]
+                    if "weighted_heldout_rmse_percent" in o.selection
+                    and o.selection["weighted_heldout_rmse_percent"].notna().any() else [])
         lines.append(_table(o.selection, ["step", "effects", "parameters", "heldout_rmse_percent",
-                                          "reference_heldout_rmse_percent", "aicc", "reference_aicc", "p_paired",
-                                          "accepted", "reason"]))
+                                          "reference_heldout_rmse_percent", *weighted, "aicc", "reference_aicc",
+                                          "p_paired", "accepted", "reason"]))
     else:
         lines.append("No candidate effect: " + ("none of the library acts through the significant structure."
                                                  if len(o.diagnosis) and o.diagnosis["significant"].any()

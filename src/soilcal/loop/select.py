@@ -13,7 +13,8 @@ switched on together exist, their difference from that sum enters as a mixed ter
 fitted value correct its surrogate there.
 
 Scoring a model against a reference model (the calibrated one, or the model with the
-effects already chosen), on the relative errors ``e_i = (measured_i - prediction_i) / |measured_i|``:
+effects already chosen), on the relative errors ``e_i = (measured_i - prediction_i) / |measured_i|``
+(weighted, below):
 
 * **held-out error**: leave-one-group-out folds (a group is a measured condition, or the
   value of the ``fold_by`` covariate); in each fold the parameters are fitted on the other
@@ -49,8 +50,36 @@ effects already chosen), on the relative errors ``e_i = (measured_i - prediction
   percentiles of :data:`BOOTSTRAP` refits, the generator seeded with :data:`BOOTSTRAP_SEED`
   (:func:`soilcal.loop.core._interval` reports the wider of the two).
 
+**Weights** (:func:`row_weights`): each row's relative error weighs ``w_i = 1 / v_i``, ``v_i``
+the variance of its relative residual, (sd_m^2 / n_m + sd_s^2 / n_s) / scale^2 with the
+relative SDs pooled per measured quantity (:func:`soilcal.loop.residuals.relative_variances`,
+the diagnosis's weights), the weights divided by their mean.  The quantities one test
+measures (a plate's horizontal and vertical force) differ in their scatter, and taken alike
+the noisy one drives the fitted parameter and the held-out comparison (on the DEM plate the
+vertical force's relative seed SD is about three times the horizontal's; in the saved
+two-force campaigns its rows weigh 1/15 to 1/80 of the horizontal force's, its measured
+noise relative to its smaller scale adding to its seed scatter).  Where some row's variance is unknown, the rows' variances do not hold the
+same parts (measured and seed), or they are all equal, every row weighs alike (the plain
+least squares, number for number).  The weights run through every part above: the fit
+minimises sum w_i e_i^2 (generalised least squares with a diagonal covariance known up to
+one factor, sigma^2 / w_i); a fold's held-out error is the weighted RMS sqrt(sum w_i e_i^2 /
+sum w_i) over its rows, and so are the conditions' gains of the paired test and the 10 % of
+the acceptance (:func:`lowers_heldout`); the AICc's SSE is sum w_i e_i^2 (a replicate group's
+observation its rows' weighted mean error with their mean weight; the log-likelihood's own
+term of the weights, sum ln w_i / 2, is the same for a model and its reference); the
+intervals' J, e and s^2 are those of the weighted residuals sqrt(w_i) e_i; the bootstrap
+refits each draw with the same weights (they come from the rows' pooled variances, not from
+a draw).  The RMS and largest errors of ``selection.csv`` and ``loop_summary.csv``
+(``heldout_rmse_percent``, ``reference_heldout_rmse_percent``, ``rmse_before_percent``,
+``rmse_after_percent``) stay those of the plain relative errors (:meth:`Score.rmse`); the
+weighted held-out RMS the selection compares is :meth:`Score.weighted_rmse`
+(``selection.csv``'s ``weighted_heldout_rmse_percent`` and
+``reference_weighted_heldout_rmse_percent``, ``loop_summary.csv``'s
+``weighted_rmse_before_percent`` and ``weighted_rmse_after_percent``, empty where every row
+weighs alike), and the verdict quotes it, as "weighted held-out RMS", where it decided.
+
 A model is accepted against its reference when the paired test's p is below ``alpha``, its
-pooled held-out RMS error is at least :data:`MIN_IMPROVEMENT` (10 %) below the reference's
+pooled (weighted) held-out RMS error is at least :data:`MIN_IMPROVEMENT` (10 %) below the reference's
 (an effect whose gain is within the measurements' precision is not worth its parameter) and
 its AICc is lower; :func:`forward` chooses the effects.
 """
@@ -460,6 +489,8 @@ class Model:
     measured: np.ndarray
     scale: np.ndarray | None = None  # the relative errors' denominators (residuals.scales); default |measured|
     joint: Joint | None = None  # the effects' interaction from runs with all of them on (:class:`Joint`)
+    # per row the weight of its squared relative error, mean 1 (:func:`row_weights`); None: every row alike
+    weights: np.ndarray | None = None
     # what its fits share (:meth:`_at_starts`, :func:`full_fit`, :func:`cross_validate`): the
     # fields are not changed once the model has been fitted
     _cache: dict = field(default_factory=dict, init=False, repr=False, compare=False)
@@ -467,6 +498,9 @@ class Model:
     def __post_init__(self):
         if self.scale is None:
             self.scale = np.abs(np.asarray(self.measured, float))
+        if self.weights is not None:
+            self.weights = np.asarray(self.weights, float)
+        self._root_w = None if self.weights is None else np.sqrt(self.weights)
 
     @property
     def k(self) -> int:
@@ -496,6 +530,22 @@ class Model:
         """The relative errors of rows ``rows`` of a prediction."""
         return (self.measured[rows] - predicted[rows]) / self.scale[rows]
 
+    def weighted(self, e, rows=None) -> np.ndarray:
+        """The relative errors ``e`` of rows ``rows`` (all by default) times the square root of
+        their weights: the residuals whose sum of squares the fit minimises; ``e`` itself where
+        every row weighs alike."""
+        if self._root_w is None:
+            return e
+        return e * (self._root_w if rows is None else self._root_w[rows])
+
+    def rms(self, e, rows) -> float:
+        """The RMS of the relative errors ``e`` of rows ``rows``, weighted by the rows' weights,
+        sqrt(sum w e^2 / sum w) (the plain RMS where every row weighs alike)."""
+        if self.weights is None:
+            return float(np.sqrt(np.mean(e ** 2)))
+        w = self.weights[rows]
+        return float(np.sqrt(np.sum(w * e ** 2) / np.sum(w)))
+
     def bounds(self):
         lo = np.concatenate([e.surrogate.lo for e in self.effects]) if self.effects else np.zeros(0)
         hi = np.concatenate([e.surrogate.hi for e in self.effects]) if self.effects else np.zeros(0)
@@ -523,10 +573,12 @@ class Model:
         return self._cache["starts"]
 
     def fit(self, idx=None, x0=None):
-        """Least-squares parameters on rows ``idx`` (all by default); (x, result or None).
-        The search starts from the two best design points and, where given, from ``x0`` as
-        well (a refit near an earlier answer: a second minimum is still found); the lowest
-        cost wins."""
+        """Least-squares parameters on rows ``idx`` (all by default); (x, result or None): the
+        sum over the rows of w e^2, e the relative error and w the row's weight (``weights``,
+        :func:`row_weights`; 1 where every row weighs alike), so the residuals handed to the
+        optimiser are sqrt(w) e and its Jacobian theirs.  The search starts from the two best
+        design points and, where given, from ``x0`` as well (a refit near an earlier answer: a
+        second minimum is still found); the lowest cost wins."""
         from scipy.optimize import least_squares
 
         if not self.effects:
@@ -537,7 +589,13 @@ class Model:
         # the rows' measured values and scales taken once: the same relative errors as
         # self.errors(x, rows), for the many evaluations of one fit
         measured, scale = self.measured[rows], self.scale[rows]
-        if idx is None:
+        if self._root_w is not None:
+            root_w = self._root_w[rows]
+            if idx is None:
+                errors, jac = forward_difference(lambda x: (measured - self.predict(x)) / scale * root_w, lo, hi)
+            else:
+                errors, jac = forward_difference(lambda x: (measured - self.predict(x)[rows]) / scale * root_w, lo, hi)
+        elif idx is None:
             errors, jac = forward_difference(lambda x: (measured - self.predict(x)) / scale, lo, hi)
         else:
             errors, jac = forward_difference(lambda x: (measured - self.predict(x)[rows]) / scale, lo, hi)
@@ -546,7 +604,7 @@ class Model:
             best = least_squares(errors, np.clip(np.asarray(x0, float), lo, hi), jac=jac, bounds=(lo, hi),
                                  method="trf")
         starts, predicted = self._at_starts()
-        cost = [float(np.sum(self._relative(p, rows) ** 2)) for p in predicted]
+        cost = [float(np.sum(self.weighted(self._relative(p, rows), rows) ** 2)) for p in predicted]
         null = np.concatenate([[e.effect.null[k] for k in e.effect.theta_names()] for e in self.effects])
         span = np.where(hi > lo, hi - lo, 1.0)
         dist = [float(np.sum(((s - null) / span) ** 2)) for s in starts]
@@ -578,6 +636,12 @@ class Score:
     own_reason: str = ""  # the score's own reason where ``reason`` puts the backward gate's words before it
     aicc_spare: int = 0  # observations beyond the fewest for which the model's AICc is defined (:func:`aicc_needs`)
     test: "PairedTest | None" = None  # which paired test gave ``p`` (:func:`paired_p`); None where none could be run
+    heldout_weights: np.ndarray | None = None  # the weights of the held-out rows (:func:`row_weights`); None: alike
+
+    @property
+    def weighted(self) -> bool:
+        """Whether the held-out rows weigh differently (:func:`row_weights`)."""
+        return self.heldout_weights is not None
 
     def p_text(self, digits: int = 2) -> str:
         """The paired test's p for a sentence, or, where it could not be run, why."""
@@ -586,12 +650,54 @@ class Score:
         return "no paired test (" + (self.no_test or "it could not be computed") + ")"
 
     def rmse(self, ref=False) -> float:
+        """The plain RMS of the held-out relative errors (the model's, or with ``ref`` its
+        reference's)."""
         e = self.ref_heldout_errors if ref else self.heldout_errors
         return float(np.sqrt(np.mean(e ** 2))) if len(e) else math.nan
+
+    def weighted_rmse(self, ref=False) -> float:
+        """The held-out RMS error the selection compares (:func:`lowers_heldout`, :func:`forward`):
+        sqrt(sum w e^2 / sum w) with the rows' weights (:func:`row_weights`), the plain
+        :meth:`rmse` where every row weighs alike."""
+        if self.heldout_weights is None:
+            return self.rmse(ref)
+        e = self.ref_heldout_errors if ref else self.heldout_errors
+        w = self.heldout_weights
+        return float(np.sqrt(np.sum(w * e ** 2) / np.sum(w))) if len(e) else math.nan
 
     def max_error(self, ref=False) -> float:
         e = self.ref_heldout_errors if ref else self.heldout_errors
         return float(np.max(np.abs(e))) if len(e) else math.nan
+
+
+#: relative spread of the rows' variances within which they count as equal (:func:`row_weights`):
+#: a quantity's pooled variance is one number for all its rows, but two quantities of equal
+#: relative variance computed from different data may differ in their last bits
+ALIKE_RTOL = 1e-12
+
+
+def row_weights(obs: pd.DataFrame) -> np.ndarray | None:
+    """Per row of ``obs`` the weight of its squared relative error in the selection's fits,
+    held-out errors and AICc (module docstring): w = 1 / v, v the row's relative variance
+    (:func:`soilcal.loop.residuals.relative_variances`: (sd_m^2 / n_m + sd_s^2 / n_s) / scale^2,
+    the relative SDs pooled per measured quantity), divided by their mean, so that the weights'
+    mean is 1.  None (every row alike: the unweighted least squares) where some row's variance
+    is unknown (no measured SD and one seed, a table without those columns), where the rows'
+    variances do not hold the same parts (a quantity without any measured SD, whose seed
+    scatter alone understates its variance, beside one with it), the same rules as the
+    diagnosis's weights (:func:`soilcal.loop.diagnose.per_test`), or where the variances are
+    equal within :data:`ALIKE_RTOL`."""
+    from soilcal.loop.residuals import relative_variances
+
+    if len(obs) == 0:
+        return None
+    v, parts = relative_variances(obs, parts=True)
+    if not np.all(np.isfinite(v)) or len(set(np.asarray(parts).tolist())) != 1:
+        return None
+    if float(np.max(v) - np.min(v)) <= ALIKE_RTOL * float(np.max(v)):
+        return None
+    w = 1.0 / v
+    return w / np.mean(w)
 
 
 def replicate_groups(obs: pd.DataFrame) -> np.ndarray | None:
@@ -604,14 +710,24 @@ def replicate_groups(obs: pd.DataFrame) -> np.ndarray | None:
     return (obs["simulation"].astype(str) + "|" + obs["measure"].astype(str)).to_numpy()
 
 
-def sse_of(e: np.ndarray, groups: np.ndarray | None) -> tuple[float, int]:
+def sse_of(e: np.ndarray, groups: np.ndarray | None, weights: np.ndarray | None = None) -> tuple[float, int]:
     """(sum of squares, observations) of the relative errors ``e``: over the rows, or over the
-    mean error of each replicate group (:func:`replicate_groups`)."""
+    mean error of each replicate group (:func:`replicate_groups`).  With ``weights`` (per row,
+    :func:`row_weights`) the weighted sum of squares sum w e^2, a replicate group's error its
+    rows' weighted mean with their mean weight: replicate rows of one quantity share its weight
+    but for their repeat counts."""
     e = np.asarray(e, float)
+    if weights is None:
+        if groups is None:
+            return float(np.sum(e ** 2)), len(e)
+        means = pd.Series(e).groupby(np.asarray(groups), sort=False).mean().to_numpy(float)
+        return float(np.sum(means ** 2)), len(means)
+    w = np.asarray(weights, float)
     if groups is None:
-        return float(np.sum(e ** 2)), len(e)
-    means = pd.Series(e).groupby(np.asarray(groups), sort=False).mean().to_numpy(float)
-    return float(np.sum(means ** 2)), len(means)
+        return float(np.sum(w * e ** 2)), len(e)
+    code = pd.factorize(np.asarray(groups))[0]  # (numpy sums: a pandas aggregation per score cost more than its fits)
+    sw, swe, cnt = (np.bincount(code, weights=x) for x in (w, w * e, np.ones(len(e))))
+    return float(np.sum(sw / cnt * (swe / sw) ** 2)), len(sw)
 
 
 def aicc(sse: float, n: int, k: int) -> float:
@@ -649,7 +765,9 @@ def full_fit(model: Model):
 
 def cross_validate(model: Model, folds: Folds) -> tuple[np.ndarray, np.ndarray]:
     """(fold RMS errors, held-out relative error of every row) of a model; done once per
-    model and folds (copies returned)."""
+    model and folds (copies returned).  A fold's RMS error is weighted by its rows' weights
+    where the model has them (:meth:`Model.rms`); the held-out errors are the plain relative
+    errors."""
     if folds not in model._cache:
         model._cache[folds] = _cross_validate(model, folds)
     rms, held = model._cache[folds]
@@ -668,7 +786,7 @@ def _cross_validate(model: Model, folds: Folds) -> tuple[np.ndarray, np.ndarray]
         x, _ = model.fit(train)
         e = model.errors(x, f)
         held[f] = e
-        rms.append(float(np.sqrt(np.mean(e ** 2))))
+        rms.append(model.rms(e, f))
     return np.array(rms), held
 
 
@@ -677,9 +795,10 @@ MIN_IMPROVEMENT = 0.1
 
 
 def lowers_heldout(s, min_improvement: float = MIN_IMPROVEMENT) -> bool:
-    """Whether a :class:`Score`'s model lowers its reference's held-out RMS error by at least
-    ``min_improvement`` (:data:`MIN_IMPROVEMENT`)."""
-    return s.rmse() <= (1 - min_improvement) * s.rmse(True)
+    """Whether a :class:`Score`'s model lowers its reference's held-out RMS error (weighted where
+    the rows weigh differently: :meth:`Score.weighted_rmse`) by at least ``min_improvement``
+    (:data:`MIN_IMPROVEMENT`)."""
+    return s.weighted_rmse() <= (1 - min_improvement) * s.weighted_rmse(True)
 
 
 def short_of_p(s, alpha: float) -> bool:
@@ -716,7 +835,7 @@ class PairedTest(NamedTuple):
                 f"square ({self.ms_between:.3g} between, {self.ms_within:.3g} within), {self.df} df")
 
 
-def paired_p(ref_rms, fold_rms, ref_held, held, folds: Folds) -> PairedTest:
+def paired_p(ref_rms, fold_rms, ref_held, held, folds: Folds, weights: np.ndarray | None = None) -> PairedTest:
     """One-sided p that the reference's held-out error exceeds the model's (:class:`PairedTest`).
 
     The differences of the folds' RMS errors (``ref_rms - fold_rms``) go to a paired t-test
@@ -737,7 +856,11 @@ def paired_p(ref_rms, fold_rms, ref_held, held, folds: Folds) -> PairedTest:
     conditions; on 2 days x 3 or 9 it was 0.021-0.076, so with fewer than
     :data:`MIN_POOLED_FOLDS` folds holding conditions (or no fold with two conditions) the test
     stays over the folds (0.037-0.051 there).  With unequal folds E[MSB] / N falls short of the
-    mean's variance where the days differ (not measured)."""
+    mean's variance where the days differ (not measured).  ``weights`` (per row,
+    :func:`row_weights`): each condition's RMS errors weighted as the folds' are
+    (:meth:`Model.rms`).  The weights act only within each fold's or condition's RMS error: the
+    test over the folds counts every fold alike (and the one over the conditions every
+    condition), however much weight its rows carry."""
     from scipy import stats
 
     ok = np.isfinite(fold_rms) & np.isfinite(ref_rms)
@@ -752,7 +875,12 @@ def paired_p(ref_rms, fold_rms, ref_held, held, folds: Folds) -> PairedTest:
     for u in folds.units:
         e, er = held[u], ref_held[u]
         if len(u) and np.all(np.isfinite(e)) and np.all(np.isfinite(er)):
-            d.append(math.sqrt(float(np.mean(er ** 2))) - math.sqrt(float(np.mean(e ** 2))))
+            if weights is None:
+                d.append(math.sqrt(float(np.mean(er ** 2))) - math.sqrt(float(np.mean(e ** 2))))
+            else:
+                w = weights[u]
+                d.append(math.sqrt(float(np.sum(w * er ** 2) / np.sum(w)))
+                         - math.sqrt(float(np.sum(w * e ** 2) / np.sum(w))))
             g.append(int(fold_of[u[0]]))
     d, g = np.asarray(d), np.asarray(g)
     groups = [d[g == j] for j in dict.fromkeys(g.tolist())]
@@ -771,9 +899,15 @@ def paired_p(ref_rms, fold_rms, ref_held, held, folds: Folds) -> PairedTest:
 def score(model: Model, ref: Model, folds: Folds, alpha: float = 0.05, min_improvement: float = MIN_IMPROVEMENT,
           groups: np.ndarray | None = None) -> Score:
     """Score ``model`` against ``ref`` (module docstring); ``groups``: each row's observation
-    for the AICc (:func:`replicate_groups`; default every row its own)."""
+    for the AICc (:func:`replicate_groups`; default every row its own).  Both models weigh the
+    rows alike (their ``weights``, :func:`row_weights`): errors of different weights are not
+    compared."""
     from scipy import stats
 
+    if (model.weights is None) != (ref.weights is None) or (
+            model.weights is not None and not np.array_equal(model.weights, ref.weights)):
+        raise ValueError("score: the model and its reference weigh the rows differently (Model.weights, "
+                         "select.row_weights); both are to be built with the same weights")
     n = len(model.y0)
     fold_rms, held = cross_validate(model, folds)
     ref_rms, ref_held = cross_validate(ref, folds)
@@ -782,10 +916,11 @@ def score(model: Model, ref: Model, folds: Folds, alpha: float = 0.05, min_impro
     xr, _ = full_fit(ref)
     e = model.errors(x)
     er = ref.errors(xr)
-    sse, sse_r = float(np.sum(e ** 2)), float(np.sum(er ** 2))
+    r = model.weighted(e)  # sqrt(w) e: the residuals of the weighted fit (e itself where the rows weigh alike)
+    sse = float(np.sum(r ** 2))
     k = model.k
     # + 1: the residual variance is estimated too; replicate rows are one observation
-    obs_m, obs_r = sse_of(e, groups), sse_of(er, groups)
+    obs_m, obs_r = sse_of(e, groups, model.weights), sse_of(er, groups, ref.weights)
     a, ar = aicc(*obs_m, k + 1), aicc(*obs_r, ref.k + 1)
     names = [f"{ed.effect.name}.{t}" for ed in model.effects for t in ed.effect.theta_names()]
     ci = {}
@@ -802,7 +937,7 @@ def score(model: Model, ref: Model, folds: Folds, alpha: float = 0.05, min_impro
             groups = [f for f in folds.held_out if len(f)]
             if len(groups) > k + 1:  # the wider of it and the interval clustered by held-out group
                 g = len(groups)
-                meat = sum(np.outer(J[f].T @ e[f], J[f].T @ e[f]) for f in groups)
+                meat = sum(np.outer(J[f].T @ r[f], J[f].T @ r[f]) for f in groups)
                 cr = g / (g - 1) * A @ meat @ A
                 half = np.maximum(half, st.t.ppf(0.975, g - 1) * np.sqrt(np.clip(np.diag(cr), 0, None)))
         # the surrogates end at the design's bounds, and so does a finite interval (an infinite
@@ -827,24 +962,25 @@ def score(model: Model, ref: Model, folds: Folds, alpha: float = 0.05, min_impro
         test_text = "every fold's held-out RMS error changed alike"
         reason = ""
     else:
-        test = paired_p(ref_rms, fold_rms, ref_held, held, folds)
+        test = paired_p(ref_rms, fold_rms, ref_held, held, folds, model.weights)
         p, test_text = test.p, test.text()
         reason = ""
     hm = np.isfinite(held) & np.isfinite(ref_held)
     out = Score(names=names, theta=dict(zip(names, map(float, x))), ci=ci, fold_rms=fold_rms, ref_fold_rms=ref_rms,
                 heldout_errors=held[hm], ref_heldout_errors=ref_held[hm], fitted_errors=e, aicc=a, ref_aicc=ar,
                 p=p, accepted=False, reason=reason, no_test=reason if not np.isfinite(p) else "",
-                aicc_spare=int(obs_m[1]) - aicc_needs(k + 1), test=test)
-    rmse, rmse_r = out.rmse(), out.rmse(True)
+                aicc_spare=int(obs_m[1]) - aicc_needs(k + 1), test=test,
+                heldout_weights=None if model.weights is None else model.weights[hm])
+    rmse, rmse_r = out.weighted_rmse(), out.weighted_rmse(True)
     if not reason:
         fails = []
         if not (p < alpha):
             fails.append(f"held-out error not significantly lower ({test_text}: p = {p:.3g} >= {alpha:g})")
         if not (rmse < rmse_r):
-            fails.append("held-out RMS error not lower")
+            fails.append(f"{'weighted ' if out.weighted else ''}held-out RMS error not lower")
         elif not lowers_heldout(out, min_improvement):
-            fails.append(f"held-out RMS error lower by less than {min_improvement:.0%} ({100 * rmse:.2f} % vs "
-                         f"{100 * rmse_r:.2f} %)")
+            fails.append(f"{'weighted ' if out.weighted else ''}held-out RMS error lower by less than "
+                         f"{min_improvement:.0%} ({100 * rmse:.2f} % vs {100 * rmse_r:.2f} %)")
         undefined = [(nm, kk, o[1]) for nm, kk, v, o in (("the model", k + 1, a, obs_m),
                                                             ("its reference", ref.k + 1, ar, obs_r)) if math.isnan(v)]
         if undefined:  # not scored (judged by the held-out test alone, 2 of 12 tables of 4 offset rows named an effect)
@@ -865,7 +1001,8 @@ BOOTSTRAP_SEED = 0
 
 def bootstrap_ci(effects: list, y0: np.ndarray, measured: np.ndarray, measured_se: np.ndarray,
                  n_boot: int = BOOTSTRAP, seed: int = BOOTSTRAP_SEED, level: float = 0.95, x0=None,
-                 conditions=None, scale: np.ndarray | None = None, joint: Joint | None = None) -> dict | None:
+                 conditions=None, scale: np.ndarray | None = None, joint: Joint | None = None,
+                 weights: np.ndarray | None = None) -> dict | None:
     """Bootstrap interval of the parameters of the model with ``effects``
     (:class:`EffectData` with their runs' ``values`` and ``seeds``) over the seeds and the
     measured values (module docstring): parameter name -> (low, high).
@@ -880,7 +1017,8 @@ def bootstrap_ci(effects: list, y0: np.ndarray, measured: np.ndarray, measured_s
     :func:`soilcal.loop.residuals.scales`); the draws' deviations from each design point's seed mean are added to the mean
     the surrogate went through (which also counts runs without a seed number).  Each refit
     searches from ``x0`` (the fitted parameters) where given, and from the draw's best design
-    points (:meth:`Model.fit`).  None where
+    points (:meth:`Model.fit`), with the rows' ``weights`` (:func:`row_weights`; the fit's own:
+    they come from the rows' pooled variances, not from a draw).  None where
     nothing can be resampled (no per-seed values, fewer than two seeds per row, ``n_boot``
     0) or where fewer than half the draws leave every row two design points."""
     import warnings
@@ -948,7 +1086,7 @@ def bootstrap_ci(effects: list, y0: np.ndarray, measured: np.ndarray, measured_s
                                      e.design))
         if lost:
             continue
-        x, _ = Model(fitted, y0 if yb is None else yb, m, scale, joint).fit(x0=x0)
+        x, _ = Model(fitted, y0 if yb is None else yb, m, scale, joint, weights).fit(x0=x0)
         draws.append(x)
     if len(draws) < max(20, n_boot // 2):
         return None
@@ -1036,6 +1174,7 @@ def forward(obs: pd.DataFrame, y0: np.ndarray, data: dict, fold_by: str | None =
 
     shared = {} if shared is None else shared
     scale = scale_of(obs) if "measured" in obs else None
+    weights = row_weights(obs)
     if fold_by not in shared.setdefault("folds", {}):  # (compared by identity: a model's cross-validations)
         shared["folds"][fold_by] = _folds(obs, fold_by)
     folds = shared["folds"][fold_by]
@@ -1053,7 +1192,7 @@ def forward(obs: pd.DataFrame, y0: np.ndarray, data: dict, fold_by: str | None =
         effects = [data[c] for c in names] + ([bias] if with_bias else [])
         key = tuple(e.effect.name for e in effects)
         if key not in models:
-            models[key] = Model(effects, y0, measured, scale)
+            models[key] = Model(effects, y0, measured, scale, weights=weights)
         return models[key]
 
     def scaled(names):
@@ -1107,7 +1246,8 @@ def forward(obs: pd.DataFrame, y0: np.ndarray, data: dict, fold_by: str | None =
         # error favours the scale's extra parameter: a rate effect beside it beat a true weak
         # adhesion taken as is)
         mixed = any(t[2] for t in better) and not all(t[2] for t in better)
-        name, _, sc = min(better, key=lambda t: (t[1].aicc, t[1].rmse()) if mixed else (t[1].rmse(), t[1].aicc))
+        name, _, sc = min(better, key=lambda t: (t[1].aicc, t[1].weighted_rmse()) if mixed
+                          else (t[1].weighted_rmse(), t[1].aicc))
         chosen.append(name)
         with_scale = with_scale or sc
     forward_chosen = list(chosen)
