@@ -331,7 +331,7 @@ def report(md_path: Path, argv) -> None:
             md.append(f"| {r['soil']} | {r['stage']} | {r['case']} | {r['response']} | {f(r['target'])} | "
                       f"{'' if pd.isna(r['target_source']) else r['target_source']} | {f(r['simulated_mean'])} | "
                       f"{f(r['simulated_sd'])} | {r['n']} | {f(r['relative_error_percent'], 1)} | {r['within_2_percent']} | "
-                      f"{f(r['predicted_minus_target'])} | {str(r['status'])[:60]} |")
+                      f"{f(r['predicted_minus_target'])} | {str(r['status']).replace('|', '/')} |")
     write_page(md_path, md)
 
 

@@ -55,3 +55,31 @@ def test_pso_runs_with_the_blocks_repeats(calls):
 def test_pso_settings_left_out_take_the_documented_defaults(calls):
     optimum_frames(_stage(None), _table(), {}, seed=0)
     assert calls == [{"particles": 50, "iterations": 200, "repeats": 1, "seed": 0}]
+
+
+def test_a_case_whose_target_has_no_value_is_not_optimised_and_says_which_and_why(tmp_path):
+    """A case aiming at a target with no value gets one row, method ``none``, whose note names
+    the target and the reason its targets table gives (the table as ``targets.csv`` holds it:
+    the cohesive soil's 5 % angle was lost in the paper's extraction); the other case is
+    optimised as usual."""
+    from soilcal.chain.files import read_targets
+
+    stage = _stage(None)
+    stage["optimise"]["method"] = "desirability"
+    stage["optimise"]["cases"] = [
+        {"id": "mc05", "goals": {"angle": {"goal": "target", "target": "angle_mc05"}}},
+        {"id": "mc10", "goals": {"angle": {"goal": "target", "target": "angle_mc10"}}}]
+    tcsv = tmp_path / "targets.csv"
+    pd.DataFrame({"target_id": ["angle_mc05", "angle_mc10"], "value": [np.nan, 31.0],
+                  "source": ["not available", "measurement"],
+                  "note": ["no photo group and no printed value: Table 1 lost in extraction", ""]}).to_csv(tcsv, index=False)
+    out = optimum_frames(stage, _table(), read_targets(tcsv), seed=0)["optimum"]
+    lost = out[out["case"] == "mc05"]
+    assert list(lost["method"]) == ["none"]
+    assert lost["note"].iloc[0] == ("target value not available: angle_mc05 (no photo group and no printed "
+                                    "value: Table 1 lost in extraction)")
+    assert (out.loc[out["case"] == "mc10", "method"] == "desirability").any()
+    # a goal naming a target the table does not list says so
+    stage["optimise"]["cases"] = [{"id": "x", "goals": {"angle": {"goal": "target", "target": "angle_mc99"}}}]
+    out = optimum_frames(stage, _table(), read_targets(tcsv), seed=0)["optimum"]
+    assert out["note"].iloc[0] == "target value not available: angle_mc99 (no such target)"

@@ -366,6 +366,25 @@ def goal_values(goals: dict, targets: dict) -> dict:
     return out
 
 
+def missing_targets_note(goals: dict, targets: dict) -> str:
+    """Why a case cannot be optimised: "target value not available", then each target of its
+    goals that has no value, with the reason its targets table gives (``note``, else
+    ``source``), e.g. ``target value not available: angle_mc05 (no photo group and no printed
+    value: not printed in the extracted text)``."""
+    said = []
+    for g in goals.values():
+        tid = g.get("target")
+        if g.get("goal") != "target" or not tid:
+            continue
+        t = targets.get(tid) or {}
+        v = t.get("value")
+        if v is not None and np.isfinite(float(v)):
+            continue
+        why = next((str(t[k]) for k in ("note", "source") if isinstance(t.get(k), str) and t[k].strip()), "")
+        said.append(f"{tid} ({why})" if why else (f"{tid}" if tid in targets else f"{tid} (no such target)"))
+    return "target value not available" + (": " + "; ".join(said) if said else "")
+
+
 def _steepest_frame(stage: dict, table: pd.DataFrame, targets: dict) -> pd.DataFrame:
     """The step closest to the target, per response, and over all targeted responses together.
 
@@ -453,7 +472,7 @@ def optimum_frames(stage: dict, table: pd.DataFrame, targets: dict, seed: int) -
         goals = goal_values(case["goals"], targets)
         if any(g["goal"] == "target" and g.get("value") is None for g in goals.values()):
             frames.append(pd.DataFrame([{"case": case["id"], "method": "none", "solution": "",
-                                         "note": "target value not available"}]))
+                                         "note": missing_targets_note(case["goals"], targets)}]))
             continue
         models = {rid: fits[rid] for rid in goals}
         # one seeded search serves both: the desirability solutions take the end points of its
