@@ -980,7 +980,7 @@ def score(model: Model, ref: Model, folds: Folds, alpha: float = 0.05, min_impro
             fails.append(f"{'weighted ' if out.weighted else ''}held-out RMS error not lower")
         elif not lowers_heldout(out, min_improvement):
             fails.append(f"{'weighted ' if out.weighted else ''}held-out RMS error lower by less than "
-                         f"{min_improvement:.0%} ({100 * rmse:.2f} % vs {100 * rmse_r:.2f} %)")
+                         f"{100 * min_improvement:g} % ({100 * rmse:.2f} % vs {100 * rmse_r:.2f} %)")
         undefined = [(nm, kk, o[1]) for nm, kk, v, o in (("the model", k + 1, a, obs_m),
                                                             ("its reference", ref.k + 1, ar, obs_r)) if math.isnan(v)]
         if undefined:  # not scored (judged by the held-out test alone, 2 of 12 tables of 4 offset rows named an effect)
