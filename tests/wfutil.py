@@ -50,14 +50,14 @@ def copy_workflow(tmp: Path, soils: list[str], source: str | None = None) -> Pat
     return tmp
 
 
-def adaptive_copy(tmp: Path, soil: str, response: str, n_spheres: int, budget: int, setup: dict | None = None,
+def adaptive_soil(tmp: Path, soil: str, response: str, n_spheres: int, budget: int, setup: dict | None = None,
                   photos: bool = True, printed_targets: bool = False, **settings) -> Path:
-    """A workflow copy of one soil for design: adaptive: its ``response`` simulated with
-    ``n_spheres`` spheres (and further ``setup`` values) and a ``budget`` of runs per case (and
-    further ``simulation.adaptive`` settings).  ``photos=False``: without the soil's photos
-    (for a soil whose targets read none of them: no job measures photos nothing reads).
-    ``printed_targets=True``: every target takes its printed value, none reads a photo group."""
-    copy_workflow(tmp, [soil])
+    """Set up ``soil`` of a workflow copy (``copy_workflow``) for design: adaptive: its
+    ``response`` simulated with ``n_spheres`` spheres (and further ``setup`` values) and a
+    ``budget`` of runs per case (and further ``simulation.adaptive`` settings).
+    ``photos=False``: without the soil's photos (for a soil whose targets read none of them: no
+    job measures photos nothing reads).  ``printed_targets=True``: every target takes its
+    printed value, none reads a photo group."""
     p = tmp / f"config/soils/{soil}.yaml"
     d = yaml.safe_load(p.read_text())
     if printed_targets:

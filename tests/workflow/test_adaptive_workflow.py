@@ -1,5 +1,16 @@
-"""design: adaptive inside the DAG, on the tiny preset: one checkpoint per iteration, one DEM
-job per run, stopped and resumed between iterations without redoing a finished run."""
+"""design: adaptive inside the DAG, on the tiny preset, two soils in one workflow copy.
+
+The cinnamon soil: one checkpoint per iteration, one DEM job per run, stopped and resumed
+between iterations without redoing a finished run.
+
+The cohesive soil, cases that share their runs: its three moisture cases aim three targets at
+one simulated heap angle; only the first case runs the start, the others fit their surrogates to
+it from their first iteration, and every case keeps its own budget, verifications and seeds.
+
+Both soils run in one copy (one ``snakemake`` run after the cinnamon soil's first iteration, as
+a run killed there leaves it): each soil's records, runs and seeds are its own (results/<soil>/),
+so each soil's tests read what a copy of that soil alone would hold, and the copy builds the
+kernel stamp (rule dem_kernels) once for both."""
 
 from __future__ import annotations
 
@@ -9,7 +20,7 @@ import pandas as pd
 import pytest
 import yaml
 
-from wfutil import LIFT_SPEED, N_SPHERES, adaptive_copy, planned_jobs, run
+from wfutil import LIFT_SPEED, N_SPHERES, adaptive_soil, copy_workflow, planned_jobs, run
 
 SOIL = "cinnamon-soil"
 CASE = f"results/{SOIL}/dem/adaptive/bbd/stacking_angle"
@@ -19,22 +30,51 @@ BUDGET, VERIFY_SEEDS = 10, 2
 #: how the design stops once the budget is spent: the verification met the target or not
 STOPPED = ("budget spent", "target met")
 
+SHARED_SOIL = "guangxi-cohesive"
+CASES = ["mc00", "mc10", "mc20"]
+#: runs per case of the cohesive soil: the first case's start (2 d + 1 = 7 points, the centre
+#: twice: 8 runs) and one verification of one seed, the least budget the start-up check admits,
+#: so that case verifies its best candidate at iteration 1 and stops at 2; the others run one
+#: proposal (and a verification where theirs is ready) at iteration 1 and stop at 2, the last
+#: iteration
+SHARED_BUDGET, SHARED_VERIFY_SEEDS, BATCH, ITERATIONS = 9, 1, 1, 1
+#: a quarter of the funnel's 0.2 kg load, 0.05 kg, in 375 spheres: the diameter of 0.2 kg in
+#: 1,500 spheres, the largest that passes the soil's check of an outlet five diameters wide;
+#: these tests read the records' runs, seeds, budgets and surrogates, not the angles: every
+#: start heap of this small load still reads (20-43 deg, against 42-49 deg for 0.1 kg in 750
+#: spheres), at about half the DEM jobs' CPU time
+SHARED_SPHERES, LOAD_MASS = 375, 0.05
+
 
 @pytest.fixture(scope="module")
 def wf(tmp_path_factory):
-    # the heaps lifted at the tiny run's speed, a quarter of the lift's steps: these tests read
-    # the records' runs, seeds, levels and files, not the angles' values; the target is the
-    # printed angle and the copy holds no photos (no job measures photos these tests do not
-    # read: the target from the photos is the tiny run's test, test_dem_workflow.py)
-    tmp = adaptive_copy(tmp_path_factory.mktemp("adaptive"), SOIL, "stacking_angle", N_SPHERES, BUDGET,
-                        setup={"lift_speed": LIFT_SPEED}, photos=False, printed_targets=True,
-                        verify_seeds=VERIFY_SEEDS)
-    # first only up to the decision of iteration 1 (the start's runs are done by then), as a
-    # run killed after its first iteration leaves it
+    tmp = copy_workflow(tmp_path_factory.mktemp("adaptive"), [SOIL, SHARED_SOIL])
+    # the cinnamon soil's heaps lifted at the tiny run's speed, a quarter of the lift's steps:
+    # these tests read the records' runs, seeds, levels and files, not the angles' values; the
+    # target is the printed angle and the copy holds no photos (no job measures photos these
+    # tests do not read: the target from the photos is the tiny run's test,
+    # test_dem_workflow.py)
+    adaptive_soil(tmp, SOIL, "stacking_angle", N_SPHERES, BUDGET, setup={"lift_speed": LIFT_SPEED}, photos=False,
+                  printed_targets=True, verify_seeds=VERIFY_SEEDS)
+    # the cohesive soil's photos are left out of the copy: no target of the soil reads them,
+    # nor do these tests
+    adaptive_soil(tmp, SHARED_SOIL, "angle_of_repose", SHARED_SPHERES, SHARED_BUDGET, setup={"load_mass": LOAD_MASS},
+                  photos=False, verify_seeds=SHARED_VERIFY_SEEDS, batch=BATCH, max_iterations=ITERATIONS)
+    # first only up to the cinnamon soil's decision of iteration 1 (the start's runs are done by
+    # then), as a run killed after its first iteration leaves it; the cohesive soil has not
+    # started then, and runs whole in the second run
     run(tmp, "--cores", "2", f"{CASE}/step/1.json", "--config", "design=adaptive")
+    assert not (tmp / f"results/{SHARED_SOIL}/dem/adaptive").exists()
     first = {f.name: f.stat().st_mtime_ns for f in (tmp / CASE / "runs/0").glob("*.csv")}
     run(tmp, "--cores", "2", "--config", "design=adaptive")
     return tmp, first
+
+
+@pytest.fixture(scope="module")
+def left_to_do(wf):
+    """The jobs a further run of the finished copy would plan (a dry run, made once for the two
+    soils' tests: no test of this file changes the copy)."""
+    return planned_jobs(wf[0], "--config", "design=adaptive")
 
 
 def test_iterations_and_runs_follow_the_records(wf):
@@ -75,12 +115,12 @@ def test_ranges_respected_and_fixed_parameters_unchanged(wf):
             assert df[f"p:{pname}"].iloc[0] == pytest.approx(v)
 
 
-def test_resumed_without_redoing_finished_runs(wf):
+def test_resumed_without_redoing_finished_runs(wf, left_to_do):
     tmp, first = wf
     assert len(first) == 8
     now = {f.name: f.stat().st_mtime_ns for f in (tmp / CASE / "runs/0").glob("*.csv")}
     assert now == first
-    assert planned_jobs(tmp, "--config", "design=adaptive") == []
+    assert left_to_do == []
 
 
 def test_outputs_have_the_recipe_file_names_and_say_how_it_stopped(wf):
@@ -103,3 +143,74 @@ def test_outputs_have_the_recipe_file_names_and_say_how_it_stopped(wf):
         r = json.loads(rec.read_text())
         assert len(r["consistent"]) <= 256
         assert all(len(row) == len(r["problem"]["factors"]) for row in r["consistent"])
+
+
+# ------------------------------------------------------------------ cases that share their runs
+# The cohesive soil's three moisture cases, in the same copy.
+
+
+@pytest.fixture(scope="module")
+def shared(wf):
+    return wf[0]
+
+
+def case_dir(tmp, case):
+    return tmp / f"results/{SHARED_SOIL}/dem/adaptive/bbd/{case}"
+
+
+def steps(tmp, case):
+    return sorted((json.loads(p.read_text()) for p in (case_dir(tmp, case) / "step").glob("*.json")),
+                  key=lambda r: r["iteration"])
+
+
+def test_only_the_first_case_runs_the_start(shared):
+    first = steps(shared, "mc00")[0]
+    assert first["message"].startswith("start:") and len(first["runs"]) == 8
+    for c in CASES[1:]:
+        s0 = steps(shared, c)[0]
+        assert s0["status"] == "continue" and s0["runs"] == [] and "first case runs it" in s0["message"]
+
+
+def test_every_case_fits_its_surrogate_to_the_shared_start(shared):
+    # at iteration 1 the first case has its own start points, the others the same points as
+    # shared evidence: every case's surrogate sees them although two of them ran nothing (a
+    # heap a small run cannot read is no point)
+    start = pd.read_csv(case_dir(shared, "mc00") / "runs.csv")
+    start = start[start["kind"] == "start"]
+    read = start.groupby("point")["angle_of_repose"].apply(lambda v: v.notna().any())
+    assert len(read) == 7 and read.sum() >= 3
+    for c in CASES:
+        (sur,) = steps(shared, c)[1]["surrogates"]
+        assert sur["points"] == int(read.sum()), (c, sur)
+
+
+def test_budgets_verifications_and_seeds_are_each_cases_own(shared):
+    seeds = []
+    for c in CASES:
+        runs = pd.read_csv(case_dir(shared, c) / "runs.csv")
+        kinds = runs["kind"].value_counts().to_dict()
+        if c == "mc00":  # the start, then the verification the budget leaves room for
+            assert kinds == {"start": 8, "verification": SHARED_VERIFY_SEEDS} and len(runs) == SHARED_BUDGET
+        else:  # no start of its own: one iteration of proposals, perhaps with a verification
+            assert kinds.get("proposal") == BATCH and kinds.get("verification", 0) in (0, SHARED_VERIFY_SEEDS)
+            assert set(kinds) <= {"proposal", "verification"}
+        assert steps(shared, c)[-1]["status"] != "continue"
+        seeds += runs["seed"].tolist()
+        res = json.loads((case_dir(shared, c) / "result.json").read_text())
+        assert res["runs"] == len(runs)
+        if res["verified"]:
+            ver = runs[runs["kind"] == "verification"]
+            assert res["verified"]["point"] in set(ver["point"])
+    assert len(seeds) == len(set(seeds))  # no seed repeated across the cases
+    # case i draws from its own stream, seed + 100000 i (the soil's seed is the first's)
+    soil_seed = yaml.safe_load((shared / f"config/soils/{SHARED_SOIL}.yaml").read_text()).get("seed", 0)
+    for i, c in enumerate(CASES[1:], start=1):
+        runs = pd.read_csv(case_dir(shared, c) / "runs.csv")
+        if len(runs):
+            assert runs["seed"].min() >= soil_seed + 100_000 * i
+
+
+def test_summary_and_nothing_left_to_do(shared, left_to_do):
+    summ = pd.read_csv(shared / f"results/{SHARED_SOIL}/dem/adaptive/summary.csv")
+    assert set(summ.loc[summ["runs"] > 0, "case"]) <= set(CASES)
+    assert left_to_do == []
