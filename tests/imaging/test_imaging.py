@@ -220,6 +220,34 @@ def test_segmented_class_cache_tells_cues_and_polarities_apart():
     assert np.array_equal(cached, angles(None)) and len(cues.segmented) == 3
 
 
+def test_cues_are_made_when_first_read():
+    """A photo's cue images (:class:`measure._Cues` given the photo) are each channel's own
+    (:func:`measure._gray`), made as the search first reads them: L*a*b* is converted once, for
+    the first of its two cues, and never for a search that reads luminance and chroma only."""
+    rng = np.random.default_rng(5)
+    rgb = rng.random((40, 60, 3))
+    made = []
+    lab = measure._smoothed_lab
+
+    def counted(x):
+        made.append(1)
+        return lab(x)
+
+    lum = measure._gray(rgb)
+    cues = measure._grays(rgb, measure.CUES, lum)
+    orig, measure._smoothed_lab = measure._smoothed_lab, counted
+    try:
+        assert cues["gray"] is lum and np.array_equal(cues["chroma"], measure._gray(rgb, "chroma"))
+        assert made == []
+        for ch in ("lab_b", "saturation", "lab_a"):
+            assert np.array_equal(cues[ch], measure._gray(rgb, ch, lab(rgb)))
+        assert len(made) == 1 and sorted(cues) == sorted(measure.CUES)
+    finally:
+        measure._smoothed_lab = orig
+    with pytest.raises(KeyError):
+        cues["hue"]
+
+
 def test_renderer_is_deterministic():
     a, ta = render.render_drum(7, 43.91)
     b, tb = render.render_drum(7, 43.91)
