@@ -220,6 +220,34 @@ def test_segmented_class_cache_tells_cues_and_polarities_apart():
     assert np.array_equal(cached, angles(None)) and len(cues.segmented) == 3
 
 
+def test_local_threshold_class_is_segmented_once_for_every_plate_line(monkeypatch):
+    """With ``threshold="adaptive"`` a cue's class does not depend on the plate line (the local
+    threshold is the cue's own, pixel by pixel): segmented once per cue and polarity in the
+    photo's cache of segmented classes, and each line measures the heap (35 deg flanks) as
+    with the class segmented afresh."""
+    h, w = 300, 300
+    lum = np.full((h, w), 0.8)
+    lum[_heap_mask(h, w, 240.0, 150.25, 50.0, 35.0)] = 0.3
+    lum[240:] = 0.6  # a plate darker than the wall: no wall above it darker than its surroundings
+    rgb = np.repeat(lum[..., None], 3, axis=-1)
+    rr = np.arange(h)[:, None]
+    calls = []
+    binary = measure._binary
+    monkeypatch.setattr(measure, "_binary", lambda *a: calls.append(a[2]) or binary(*a))
+
+    def angles(segmented, intercept):
+        band = np.broadcast_to((rr < intercept - 3) & (rr > intercept - 0.35 * h), (h, w))
+        r = measure._pile_with("synthetic.png", rgb, lum, "gray", "dark", band, 0.0, intercept, "adaptive", False,
+                               lum=lum, segmented=segmented)
+        return r.left_deg, r.right_deg
+
+    cache = {}
+    cached = [angles(cache, b) for b in (240.0, 239.6)]
+    assert calls == ["adaptive"] and list(cache) == [("gray", "dark", "adaptive")]
+    assert cached == [angles(None, b) for b in (240.0, 239.6)] and len(calls) == 3
+    assert np.abs(np.array(cached) - 35.0).max() < 0.5
+
+
 def test_cues_are_made_when_first_read():
     """A photo's cue images (:class:`measure._Cues` given the photo) are each channel's own
     (:func:`measure._gray`), made as the search first reads them: L*a*b* is converted once, for

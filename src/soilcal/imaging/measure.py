@@ -143,7 +143,8 @@ class _Cues(dict):
     segmented from them (:func:`open_fill` of a cue below a threshold) by (channel, polarity,
     threshold), kept for the photo's further plate lines and checks: two plate candidates a
     few rows apart often give the same Otsu threshold (a histogram bin's centre), so the same
-    class.  With ``rgb`` (the photo) a cue of :data:`CUES` not given is made when it is first read, the
+    class, and the local threshold (``threshold="adaptive"``) gives every line the same one.
+    With ``rgb`` (the photo) a cue of :data:`CUES` not given is made when it is first read, the
     smoothed L*a*b* image once for both of its cues: a photo whose cue searches all end at
     luminance and chroma is never converted to L*a*b*.  ``lines``: what the cue searches on a
     plate line read, by (slope, intercept) (:func:`_line_cues`)."""
@@ -1428,18 +1429,21 @@ def _pile_with(path, rgb, gray, cue, polarity, band, slope, intercept, threshold
     keeps the images levelled on this plate line (:func:`_level`: ``lum`` as "lum", a cue as
     (cue, polarity)) for its further cues and the checks of the heap; ``otsu``: Otsu's
     threshold of ``gray[band]`` where the caller has it already (:func:`_eta`); ``segmented``:
-    a dict of the classes already segmented from the photo's cues by (cue, polarity,
-    threshold) (:class:`_Cues`), looked up before segmenting and added to."""
+    a dict of the classes already segmented from the photo's cues by (cue, polarity, Otsu's
+    threshold, or "adaptive" for the local threshold, which is the same on every plate line)
+    (:class:`_Cues`), looked up before segmenting and added to."""
     if threshold == "otsu":
         t = filters.threshold_otsu(gray[band]) if otsu is None else otsu
         key = (cue, polarity, float(t))
-        binary = None if segmented is None else segmented.get(key)
-        if binary is None:
-            binary = open_fill(gray < t)
-            if segmented is not None:
-                segmented[key] = binary
     else:
-        binary = _binary(path, gray, threshold)
+        # a local threshold does not depend on the plate line (it is the cue's own, pixel by
+        # pixel, over a block of half the image): one class per cue and polarity
+        key = (cue, polarity, threshold)
+    binary = None if segmented is None else segmented.get(key)
+    if binary is None:
+        binary = open_fill(gray < t) if threshold == "otsu" else _binary(path, gray, threshold)
+        if segmented is not None:
+            segmented[key] = binary
     if tried is not None:
         tried.add(label or f"{cue}/{polarity}", binary, (slope, intercept))
     comp = _components_on_plate(path, binary, slope, intercept, "heap")
