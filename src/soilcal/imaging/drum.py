@@ -91,7 +91,7 @@ from skimage import filters, measure, morphology, transform
 from soilcal.errors import InputError
 from soilcal.imaging.drum_options import (CHORD_FRACTION, LEVELS, OPTIONS, RIM_MARGIN,  # noqa: F401
                                           frame_options)
-from soilcal.imaging.edges import canny
+from soilcal.imaging.edges import canny, hough_circle
 from soilcal.imaging.io import read_gray_reduced
 from soilcal.imaging.measure import (PILE_WORK_PIXELS, PLATE_MAX_ROLL_DEG, Stages, _plate_beyond_search, open_fill,
                                      plate_line_any, roll_of)
@@ -323,7 +323,7 @@ def find_drum(gray, edges=None):
     small = transform.rescale(gray, 1.0 / f, anti_aliasing=True) if f > 1 else gray
     m = min(small.shape)
     radii = np.arange(int(0.25 * m), int(0.62 * m) + 1)
-    hs = transform.hough_circle(_edges(small), radii)
+    hs = hough_circle(_edges(small), radii)
     _, xs, ys, rs = _circle_peaks(hs, radii, dist=3, total=8)
     edges = _edges(gray) if edges is None else edges
     er, ec = np.nonzero(edges)
