@@ -504,7 +504,19 @@ def _surface(path, p, inside, cx, cy, rm, circle_said=""):
     # nearest bed pixel is at most k, and the bed's disk(k) erosion keeps the bed pixels farther than k
     # from every pixel off the bed (exact integer distances, as morphology.dilation and .erosion give them
     # with their default reflected border, which puts no pixel nearer than the image's own)
-    air = inside & ~(ndi.distance_transform_edt(~powder) <= 8.0)
+    # Both transforms read the bed's bounding box only, widened by 9 px for the first and 1 px for
+    # the second (within the frame): every bed pixel lies in it, a pixel beyond the wider box is
+    # more than 8 px from the bed, and a bed pixel's nearest pixel off the bed lies in the narrower
+    # box (on its ring of pixels off the bed where none is nearer), so the distances read are the
+    # whole frame's
+    rows_on, cols_on = np.flatnonzero(powder.any(axis=1)), np.flatnonzero(powder.any(axis=0))
+
+    def around(m):  # the bed's bounding box widened by m px, within the frame
+        return np.s_[max(rows_on[0] - m, 0):rows_on[-1] + m + 1, max(cols_on[0] - m, 0):cols_on[-1] + m + 1]
+
+    near = np.zeros_like(powder)
+    near[around(9)] = ndi.distance_transform_edt(~powder[around(9)]) <= 8.0
+    air = inside & ~near
     if air.sum() < 20:
         raise InputError(path, "image", DRUM_EXPECTED, (
             f"the bed filling the drum circle {circle_said}, no air above it: that circle is not the drum's "
@@ -512,7 +524,8 @@ def _surface(path, p, inside, cx, cy, rm, circle_said=""):
             "drum_radius_px, or take a sharper frame)"))
     # the powder's grey from its core 8 px from the bed's edge; a thin bed (a small drum little
     # filled) from as far inside as it has
-    depth = ndi.distance_transform_edt(powder)  # each bed pixel's distance from the nearest pixel off the bed
+    depth = np.zeros(powder.shape)  # each bed pixel's distance from the nearest pixel off the bed
+    depth[around(1)] = ndi.distance_transform_edt(powder[around(1)])
     for k in (8, 4, 2, 1, 0):
         core = ((depth > k) if k else powder) & inside
         if core.sum() >= 20:
