@@ -700,7 +700,7 @@ def _measure_drum_frame(path, threshold, keep_stages, options, tried: Tried) -> 
             raise InputError(path, "level", "a straight base plate edge below the drum (level: plate)", "none found")
     g = transform.rotate(gray, -roll, center=(cx, cy), order=1, mode="edge") if roll else gray
     rm = R * (1.0 - opts["rim_margin"])
-    rr, cc = np.mgrid[0:h, 0:w]
+    rr, cc = np.arange(h)[:, None], np.arange(w)[None, :]  # broadcast as np.mgrid's rows, columns
     inside = (cc - cx) ** 2 + (rr - cy) ** 2 < rm ** 2
     if inside.sum() < 400:
         raise InputError(path, "image", "the drum inside the frame", "drum centre ({:.0f}, {:.0f}) px, "
@@ -712,7 +712,7 @@ def _measure_drum_frame(path, threshold, keep_stages, options, tried: Tried) -> 
     if not bright.any() or not dark.any():
         tried.add("powder and air split in the drum (Otsu)", circle=(cx, cy, rm))
         raise InputError(path, "image", DRUM_EXPECTED, "one grey level in the drum")
-    bright_powder = rr[bright].mean() > rr[dark].mean()
+    bright_powder = np.nonzero(bright)[0].mean() > np.nonzero(dark)[0].mean()  # the classes' mean rows
     tried.add("powder and air split in the drum (Otsu); the lower class is the powder",
               bright if bright_powder else dark, circle=(cx, cy, rm))
     p = g if bright_powder else 1.0 - g
