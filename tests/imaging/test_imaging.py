@@ -3,8 +3,10 @@
 from __future__ import annotations
 
 import functools
+import gc
 import json
 import shutil
+import weakref
 from pathlib import Path
 
 import numpy as np
@@ -274,6 +276,31 @@ def test_cues_are_made_when_first_read():
         measure._smoothed_lab = orig
     with pytest.raises(KeyError):
         cues["hue"]
+
+
+def test_a_photos_cue_images_are_freed_without_the_garbage_collector():
+    """A photo's cue images and what its plate lines keep (band, separabilities, levelled
+    images) go with the last reference to the photo's cues: no reference cycle holds them until
+    a full garbage collection (each photo of a batch would otherwise stay in memory).  The
+    separabilities read are each cue's :func:`measure._eta` in the band, kept for the line."""
+    rng = np.random.default_rng(3)
+    rgb = rng.random((40, 60, 3))
+    gc.disable()
+    try:
+        cues = measure._grays(rgb, measure.CUES, measure._gray(rgb))
+        band, split, levelled = measure._line_cues(cues, 0.0, 35.0, (40, 60))
+        assert np.array_equal(np.flatnonzero(band.any(axis=1)), np.arange(22, 32))  # 3 px to 35 % above
+        for ch in measure.CUES:
+            eta, t = split[ch]
+            assert (eta, t) == measure._eta(cues[ch][band])
+        again = measure._line_cues(cues, 0.0, 35.0, (40, 60))
+        assert again[0] is band and again[2] is levelled and again[1]["lab_a"] is split["lab_a"]
+        levelled["gray"] = cues["gray"].copy()
+        gone = [weakref.ref(cues)] + [weakref.ref(cues[ch]) for ch in measure.CUES]
+        del cues, band, split, levelled, again
+        assert [r() for r in gone] == [None] * len(gone)
+    finally:
+        gc.enable()
 
 
 def test_renderer_is_deterministic():

@@ -176,16 +176,21 @@ def _grays(rgb, channels, lum=None):
     return _Cues({"gray": lum} if lum is not None and "gray" in channels else {}, rgb=rgb)
 
 
-class _Separations(dict):
+class _Separations:
     """Each cue's separability in a plate line's band and its Otsu threshold there
-    (:func:`_eta` of the cue in ``band``), by channel, each computed when first read."""
+    (:func:`_eta` of the cue in ``band``), by channel, each computed when first read and kept in
+    ``known`` (the line's dict in ``grays.lines``, :func:`_line_cues`).  Made afresh for each
+    search on the line and not kept in ``grays`` itself: a view holding ``grays`` inside it
+    would make a reference cycle, and every photo's cue images would outlive its measurement
+    until a full garbage collection."""
 
-    def __init__(self, grays, band):
-        super().__init__()
-        self.grays, self.band = grays, band
+    def __init__(self, grays, band, known):
+        self.grays, self.band, self.known = grays, band, known
 
-    def __missing__(self, channel):
-        self[channel] = v = _eta(self.grays[channel][self.band])
+    def __getitem__(self, channel):
+        v = self.known.get(channel)
+        if v is None:
+            self.known[channel] = v = _eta(self.grays[channel][self.band])
         return v
 
 
@@ -194,17 +199,20 @@ def _line_cues(grays, slope, intercept, shape):
     ``shape``: the rows from 35 % of the photo's height to 3 px above the line, where heap and
     wall meet; the cues' :class:`_Separations` there; and a dict of the images levelled on the
     line (:func:`_pile_with`'s ``levelled``: the luminance and each cue that finds a heap on
-    it).  Kept in ``grays.lines`` for the line's further searches (the plate search, the checks
-    for a second plate line or a rival, which measure the heap on the same lines again) and the
-    checks of the heap found on it (:func:`_judge_foot_below`, :func:`_texture_flanks`)."""
+    it).  The band, the separabilities found and the levelled images are kept in
+    ``grays.lines`` (arrays and numbers only, nothing that refers back to ``grays``) for the
+    line's further searches (the plate search, the checks for a second plate line or a rival,
+    which measure the heap on the same lines again) and the checks of the heap found on it
+    (:func:`_judge_foot_below`, :func:`_texture_flanks`)."""
     key = (slope, intercept)
     if key not in grays.lines:
         h, w = shape
         rr, cc = np.arange(h)[:, None], np.arange(w)[None, :]
         prow = slope * cc + intercept
         band = (rr < prow - 3) & (rr > prow - 0.35 * h)
-        grays.lines[key] = band, _Separations(grays, band), {}
-    return grays.lines[key]
+        grays.lines[key] = band, {}, {}
+    band, known, levelled = grays.lines[key]
+    return band, _Separations(grays, band, known), levelled
 
 
 def _cue_order(split):
