@@ -303,6 +303,30 @@ def test_a_photos_cue_images_are_freed_without_the_garbage_collector():
         gc.enable()
 
 
+def test_a_photos_cues_are_freed_when_measure_pile_returns(monkeypatch):
+    """Right after ``measure_pile`` returns, with the garbage collector off, the photo's cue
+    object is gone: neither the cues nor the refusals of the cues and lines tried on the way
+    (whose tracebacks hold the search's frames) keep it in a reference cycle.  A batch of heap
+    photos measured in one process then holds one photo's images at a time."""
+    made = []
+    grays = measure._grays
+
+    def kept(*a, **k):
+        cues = grays(*a, **k)
+        made.append(weakref.ref(cues))
+        return cues
+
+    monkeypatch.setattr(measure, "_grays", kept)
+    gc.disable()
+    try:
+        # cinnamon-soil's first photo: cues and plate lines are refused before the heap is found
+        res = measure.measure_pile(IMAGES / "cinnamon-soil" / "stacking_1.jpg")
+        assert len(made) == 1 and made[0]() is None
+    finally:
+        gc.enable()
+    assert res.confidence == "ok"
+
+
 def test_renderer_is_deterministic():
     a, ta = render.render_drum(7, 43.91)
     b, tb = render.render_drum(7, 43.91)

@@ -1276,8 +1276,19 @@ def _noting_tilt(refused: InputError, tilted) -> InputError:
                       f"{level_it(roll)}", refused.note)
 
 
-def _on_plate_lines(path, rgb, lum, grays, lines, n_first, channel, threshold, keep_stages, tried, plate_edges,
-                    beside, refused=None, wanted=None):
+def _on_plate_lines(*args, **kwargs):
+    """:func:`_search_plate_lines`, its refusal raised without the traceback of the search: the
+    search's frame holds the refusals it collected (the one raised among them) and this photo's
+    images, a reference cycle that would keep them alive after the measurement until a full
+    garbage collection."""
+    try:
+        return _search_plate_lines(*args, **kwargs)
+    except InputError as e:
+        raise e.with_traceback(None)
+
+
+def _search_plate_lines(path, rgb, lum, grays, lines, n_first, channel, threshold, keep_stages, tried, plate_edges,
+                        beside, refused=None, wanted=None):
     """The heap measured on the first of ``lines`` (numbered from ``n_first``) on which a cue
     finds one (module text); a line refused only because it does not run on beside the heap
     (:func:`_plate_beside_heap`) is added to ``beside`` with the reason; ``refused``: a set
@@ -1333,6 +1344,10 @@ def _on_plate_lines(path, rgb, lum, grays, lines, n_first, channel, threshold, k
                 if e.field == "plate line" and not any(b[0] == n_line for b in beside):
                     beside.append((n_line, slope, intercept, f"line {n_line}: {e.got}"))
                 tried.refuse_last(e)
+                # kept without its traceback: its frames hold this search's images and the
+                # lists holding it, a reference cycle that would keep every photo's images
+                # alive after its measurement until a full garbage collection
+                e.__traceback__ = None
                 refusals.append(e)
                 line_refusals.append(e)
                 if n_line == n_first and first is None and len(line_refusals) == 2 and all(
