@@ -327,6 +327,23 @@ def test_a_photos_cues_are_freed_when_measure_pile_returns(monkeypatch):
     assert res.confidence == "ok"
 
 
+def test_an_unknown_channel_is_refused_before_any_search(monkeypatch):
+    """``channel`` other than "auto" or a cue of :data:`measure.CUES`: one InputError naming the
+    photo and the field, before the photo is read or searched."""
+
+    def searched(*a, **k):
+        raise AssertionError("searched")
+
+    monkeypatch.setattr(measure, "read_photo_reduced", searched)
+    monkeypatch.setattr(measure, "_pile_on_lines", searched)
+    photo = IMAGES / "cinnamon-soil" / "stacking_1.jpg"
+    for kw in ({}, {"image": np.zeros((30, 40, 3))}):
+        with pytest.raises(InputError) as ei:
+            measure.measure_pile(photo, channel="hue", **kw)
+        assert str(ei.value) == f"{photo}: channel: expected 'gray', 'chroma' or 'auto', got 'hue'"
+        assert ei.value.field == "channel" and ei.value.got == "hue"
+
+
 def test_renderer_is_deterministic():
     a, ta = render.render_drum(7, 43.91)
     b, tb = render.render_drum(7, 43.91)

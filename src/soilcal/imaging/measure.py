@@ -624,6 +624,8 @@ def measure_pile(path, threshold="otsu", keep_stages=False, channel="auto", refu
     plate of the soil's colour); ``plate_line`` reports ``plate_px_from`` ("manifest", or
     "command line" for ``soilcal image pile --plate-line-px``).
     """
+    if channel != "auto" and channel not in CUES:
+        raise InputError(path, "channel", "'gray', 'chroma' or 'auto'", channel)
     if plate is not None:
         _check_given_plate(path, plate)
     if plate_px is not None:
