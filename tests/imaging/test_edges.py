@@ -77,3 +77,13 @@ def test_hough_circle_votes_of_one_edge_pixel():
     for (y, x), t in zip(pts, times):
         assert acc[y, x] == (1.0 / n if t == 1 else 1.0 / n + 1.0 / n)
     assert np.count_nonzero(acc) == len(pts)
+
+
+def test_hough_circle_of_no_radius_is_scikit_images():
+    # no radius: an empty accumulator of the image's shape, (0, rows, columns), as scikit-image's
+    img = np.zeros((30, 45), bool)
+    img[10, 5:40] = True
+    for radii in ([], np.array([], int)):
+        want = transform.hough_circle(img, radii)
+        got = edges.hough_circle(img, radii)
+        assert want.shape == (0, 30, 45) and got.shape == want.shape and got.dtype == want.dtype

@@ -166,6 +166,8 @@ def hough_circle(image, radius):
         incrs.append(1.0 / rr.size)  # the increment of one vote, as scikit-image divides
     e_rows, e_cols = np.nonzero(image)
     h, w = image.shape
+    if not incrs:  # no radius: no circle, an empty accumulator as scikit-image gives
+        return np.zeros((0, h, w), np.float64)
     return _circle_counts_kernel()(h, w, e_rows.astype(np.int64), e_cols.astype(np.int64),
                                    np.concatenate(offs_r).astype(np.int64), np.concatenate(offs_c).astype(np.int64),
                                    np.array(starts, np.int64), np.array(incrs, np.float64))
