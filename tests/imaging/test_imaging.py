@@ -3,8 +3,10 @@
 from __future__ import annotations
 
 import functools
+import gc
 import json
 import shutil
+import weakref
 from pathlib import Path
 
 import numpy as np
@@ -218,6 +220,128 @@ def test_segmented_class_cache_tells_cues_and_polarities_apart():
     for (cue, pol, truth), flanks in zip(calls, cached):
         assert np.abs(flanks - truth).max() < 0.5, (cue, pol, flanks)
     assert np.array_equal(cached, angles(None)) and len(cues.segmented) == 3
+
+
+def test_local_threshold_class_is_segmented_once_for_every_plate_line(monkeypatch):
+    """With ``threshold="adaptive"`` a cue's class does not depend on the plate line (the local
+    threshold is the cue's own, pixel by pixel): segmented once per cue and polarity in the
+    photo's cache of segmented classes, and each line measures the heap (35 deg flanks) as
+    with the class segmented afresh."""
+    h, w = 300, 300
+    lum = np.full((h, w), 0.8)
+    lum[_heap_mask(h, w, 240.0, 150.25, 50.0, 35.0)] = 0.3
+    lum[240:] = 0.6  # a plate darker than the wall: no wall above it darker than its surroundings
+    rgb = np.repeat(lum[..., None], 3, axis=-1)
+    rr = np.arange(h)[:, None]
+    calls = []
+    binary = measure._binary
+    monkeypatch.setattr(measure, "_binary", lambda *a: calls.append(a[2]) or binary(*a))
+
+    def angles(segmented, intercept):
+        band = np.broadcast_to((rr < intercept - 3) & (rr > intercept - 0.35 * h), (h, w))
+        r = measure._pile_with("synthetic.png", rgb, lum, "gray", "dark", band, 0.0, intercept, "adaptive", False,
+                               lum=lum, segmented=segmented)
+        return r.left_deg, r.right_deg
+
+    cache = {}
+    cached = [angles(cache, b) for b in (240.0, 239.6)]
+    assert calls == ["adaptive"] and list(cache) == [("gray", "dark", "adaptive")]
+    assert cached == [angles(None, b) for b in (240.0, 239.6)] and len(calls) == 3
+    assert np.abs(np.array(cached) - 35.0).max() < 0.5
+
+
+def test_cues_are_made_when_first_read():
+    """A photo's cue images (:class:`measure._Cues` given the photo) are each channel's own
+    (:func:`measure._gray`), made as the search first reads them: L*a*b* is converted once, for
+    the first of its two cues, and never for a search that reads luminance and chroma only."""
+    rng = np.random.default_rng(5)
+    rgb = rng.random((40, 60, 3))
+    made = []
+    lab = measure._smoothed_lab
+
+    def counted(x):
+        made.append(1)
+        return lab(x)
+
+    lum = measure._gray(rgb)
+    cues = measure._grays(rgb, measure.CUES, lum)
+    orig, measure._smoothed_lab = measure._smoothed_lab, counted
+    try:
+        assert cues["gray"] is lum and np.array_equal(cues["chroma"], measure._gray(rgb, "chroma"))
+        assert made == []
+        for ch in ("lab_b", "saturation", "lab_a"):
+            assert np.array_equal(cues[ch], measure._gray(rgb, ch, lab(rgb)))
+        assert len(made) == 1 and sorted(cues) == sorted(measure.CUES)
+    finally:
+        measure._smoothed_lab = orig
+    with pytest.raises(KeyError):
+        cues["hue"]
+
+
+def test_a_photos_cue_images_are_freed_without_the_garbage_collector():
+    """A photo's cue images and what its plate lines keep (band, separabilities, levelled
+    images) go with the last reference to the photo's cues: no reference cycle holds them until
+    a full garbage collection (each photo of a batch would otherwise stay in memory).  The
+    separabilities read are each cue's :func:`measure._eta` in the band, kept for the line."""
+    rng = np.random.default_rng(3)
+    rgb = rng.random((40, 60, 3))
+    gc.disable()
+    try:
+        cues = measure._grays(rgb, measure.CUES, measure._gray(rgb))
+        band, split, levelled = measure._line_cues(cues, 0.0, 35.0, (40, 60))
+        assert np.array_equal(np.flatnonzero(band.any(axis=1)), np.arange(22, 32))  # 3 px to 35 % above
+        for ch in measure.CUES:
+            eta, t = split[ch]
+            assert (eta, t) == measure._eta(cues[ch][band])
+        again = measure._line_cues(cues, 0.0, 35.0, (40, 60))
+        assert again[0] is band and again[2] is levelled and again[1]["lab_a"] is split["lab_a"]
+        levelled["gray"] = cues["gray"].copy()
+        gone = [weakref.ref(cues)] + [weakref.ref(cues[ch]) for ch in measure.CUES]
+        del cues, band, split, levelled, again
+        assert [r() for r in gone] == [None] * len(gone)
+    finally:
+        gc.enable()
+
+
+def test_a_photos_cues_are_freed_when_measure_pile_returns(monkeypatch):
+    """Right after ``measure_pile`` returns, with the garbage collector off, the photo's cue
+    object is gone: neither the cues nor the refusals of the cues and lines tried on the way
+    (whose tracebacks hold the search's frames) keep it in a reference cycle.  A batch of heap
+    photos measured in one process then holds one photo's images at a time."""
+    made = []
+    grays = measure._grays
+
+    def kept(*a, **k):
+        cues = grays(*a, **k)
+        made.append(weakref.ref(cues))
+        return cues
+
+    monkeypatch.setattr(measure, "_grays", kept)
+    gc.disable()
+    try:
+        # cinnamon-soil's first photo: cues and plate lines are refused before the heap is found
+        res = measure.measure_pile(IMAGES / "cinnamon-soil" / "stacking_1.jpg")
+        assert len(made) == 1 and made[0]() is None
+    finally:
+        gc.enable()
+    assert res.confidence == "ok"
+
+
+def test_an_unknown_channel_is_refused_before_any_search(monkeypatch):
+    """``channel`` other than "auto" or a cue of :data:`measure.CUES`: one InputError naming the
+    photo and the field, before the photo is read or searched."""
+
+    def searched(*a, **k):
+        raise AssertionError("searched")
+
+    monkeypatch.setattr(measure, "read_photo_reduced", searched)
+    monkeypatch.setattr(measure, "_pile_on_lines", searched)
+    photo = IMAGES / "cinnamon-soil" / "stacking_1.jpg"
+    for kw in ({}, {"image": np.zeros((30, 40, 3))}):
+        with pytest.raises(InputError) as ei:
+            measure.measure_pile(photo, channel="hue", **kw)
+        assert str(ei.value) == f"{photo}: channel: expected 'gray', 'chroma' or 'auto', got 'hue'"
+        assert ei.value.field == "channel" and ei.value.got == "hue"
 
 
 def test_renderer_is_deterministic():

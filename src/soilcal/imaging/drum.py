@@ -86,11 +86,12 @@ from dataclasses import asdict, dataclass
 
 import numpy as np
 from scipy import ndimage as ndi
-from skimage import feature, filters, measure, morphology, transform
+from skimage import filters, measure, morphology, transform
 
 from soilcal.errors import InputError
 from soilcal.imaging.drum_options import (CHORD_FRACTION, LEVELS, OPTIONS, RIM_MARGIN,  # noqa: F401
                                           frame_options)
+from soilcal.imaging.edges import canny, hough_circle
 from soilcal.imaging.io import read_gray_reduced
 from soilcal.imaging.measure import (PILE_WORK_PIXELS, PLATE_MAX_ROLL_DEG, Stages, _plate_beyond_search, open_fill,
                                      plate_line_any, roll_of)
@@ -203,7 +204,7 @@ def _edges(img, sigma=2.0):
     sm = filters.gaussian(img, sigma)
     g = np.hypot(ndi.sobel(sm, axis=0), ndi.sobel(sm, axis=1))
     top = float(np.percentile(g, 99.9))
-    return feature.canny(img, sigma=sigma, low_threshold=0.1 * top, high_threshold=0.2 * top)
+    return canny(img, sigma=sigma, low_threshold=0.1 * top, high_threshold=0.2 * top)
 
 
 def _hspace_peaks(img, dist, top=None):
@@ -322,7 +323,7 @@ def find_drum(gray, edges=None):
     small = transform.rescale(gray, 1.0 / f, anti_aliasing=True) if f > 1 else gray
     m = min(small.shape)
     radii = np.arange(int(0.25 * m), int(0.62 * m) + 1)
-    hs = transform.hough_circle(_edges(small), radii)
+    hs = hough_circle(_edges(small), radii)
     _, xs, ys, rs = _circle_peaks(hs, radii, dist=3, total=8)
     edges = _edges(gray) if edges is None else edges
     er, ec = np.nonzero(edges)
@@ -503,7 +504,19 @@ def _surface(path, p, inside, cx, cy, rm, circle_said=""):
     # nearest bed pixel is at most k, and the bed's disk(k) erosion keeps the bed pixels farther than k
     # from every pixel off the bed (exact integer distances, as morphology.dilation and .erosion give them
     # with their default reflected border, which puts no pixel nearer than the image's own)
-    air = inside & ~(ndi.distance_transform_edt(~powder) <= 8.0)
+    # Both transforms read the bed's bounding box only, widened by 9 px for the first and 1 px for
+    # the second (within the frame): every bed pixel lies in it, a pixel beyond the wider box is
+    # more than 8 px from the bed, and a bed pixel's nearest pixel off the bed lies in the narrower
+    # box (on its ring of pixels off the bed where none is nearer), so the distances read are the
+    # whole frame's
+    rows_on, cols_on = np.flatnonzero(powder.any(axis=1)), np.flatnonzero(powder.any(axis=0))
+
+    def around(m):  # the bed's bounding box widened by m px, within the frame
+        return np.s_[max(rows_on[0] - m, 0):rows_on[-1] + m + 1, max(cols_on[0] - m, 0):cols_on[-1] + m + 1]
+
+    near = np.zeros_like(powder)
+    near[around(9)] = ndi.distance_transform_edt(~powder[around(9)]) <= 8.0
+    air = inside & ~near
     if air.sum() < 20:
         raise InputError(path, "image", DRUM_EXPECTED, (
             f"the bed filling the drum circle {circle_said}, no air above it: that circle is not the drum's "
@@ -511,7 +524,8 @@ def _surface(path, p, inside, cx, cy, rm, circle_said=""):
             "drum_radius_px, or take a sharper frame)"))
     # the powder's grey from its core 8 px from the bed's edge; a thin bed (a small drum little
     # filled) from as far inside as it has
-    depth = ndi.distance_transform_edt(powder)  # each bed pixel's distance from the nearest pixel off the bed
+    depth = np.zeros(powder.shape)  # each bed pixel's distance from the nearest pixel off the bed
+    depth[around(1)] = ndi.distance_transform_edt(powder[around(1)])
     for k in (8, 4, 2, 1, 0):
         core = ((depth > k) if k else powder) & inside
         if core.sum() >= 20:
@@ -658,7 +672,7 @@ def _measure_drum_frame(path, threshold, keep_stages, options, tried: Tried) -> 
     if opts["roll_deg"] is not None:
         roll, lref = opts["roll_deg"], "manifest roll"
     elif opts["level"] != "image":
-        edges = feature.canny(gray, sigma=1.5)  # plate_lines' own edge map, kept for the tilted-edge search
+        edges = canny(gray, sigma=1.5)  # plate_lines' own edge map, kept for the tilted-edge search
         line = plate_line_any(path, gray, below=(cx, cy + R), required=False, edges=edges)
         # no plate below the drum within the plate search: a plate tilted beyond it (a camera
         # rolled further) would have given the image axes, and the angle off by the roll.  Only
@@ -686,7 +700,7 @@ def _measure_drum_frame(path, threshold, keep_stages, options, tried: Tried) -> 
             raise InputError(path, "level", "a straight base plate edge below the drum (level: plate)", "none found")
     g = transform.rotate(gray, -roll, center=(cx, cy), order=1, mode="edge") if roll else gray
     rm = R * (1.0 - opts["rim_margin"])
-    rr, cc = np.mgrid[0:h, 0:w]
+    rr, cc = np.arange(h)[:, None], np.arange(w)[None, :]  # broadcast as np.mgrid's rows, columns
     inside = (cc - cx) ** 2 + (rr - cy) ** 2 < rm ** 2
     if inside.sum() < 400:
         raise InputError(path, "image", "the drum inside the frame", "drum centre ({:.0f}, {:.0f}) px, "
@@ -698,7 +712,7 @@ def _measure_drum_frame(path, threshold, keep_stages, options, tried: Tried) -> 
     if not bright.any() or not dark.any():
         tried.add("powder and air split in the drum (Otsu)", circle=(cx, cy, rm))
         raise InputError(path, "image", DRUM_EXPECTED, "one grey level in the drum")
-    bright_powder = rr[bright].mean() > rr[dark].mean()
+    bright_powder = np.nonzero(bright)[0].mean() > np.nonzero(dark)[0].mean()  # the classes' mean rows
     tried.add("powder and air split in the drum (Otsu); the lower class is the powder",
               bright if bright_powder else dark, circle=(cx, cy, rm))
     p = g if bright_powder else 1.0 - g

@@ -33,9 +33,10 @@ from dataclasses import asdict, dataclass, field
 
 import numpy as np
 from scipy import ndimage as ndi
-from skimage import color, feature, filters, measure, morphology, transform, util
+from skimage import color, filters, measure, morphology, transform, util
 
 from soilcal.errors import InputError
+from soilcal.imaging.edges import canny
 from soilcal.imaging.io import read_photo, read_photo_reduced
 from soilcal.imaging.refusal import Tried, explained
 from soilcal.imaging.scenes import furrow_chord_area
@@ -138,22 +139,94 @@ def _smoothed_lab(rgb):
 
 
 class _Cues(dict):
-    """The cue images of one photo by channel (:func:`_grays`), and ``segmented``: each class
+    """The cue images of one photo by channel (:func:`_gray`), and ``segmented``: each class
     segmented from them (:func:`open_fill` of a cue below a threshold) by (channel, polarity,
     threshold), kept for the photo's further plate lines and checks: two plate candidates a
     few rows apart often give the same Otsu threshold (a histogram bin's centre), so the same
-    class."""
+    class, and the local threshold (``threshold="adaptive"``) gives every line the same one.
+    With ``rgb`` (the photo) a cue of :data:`CUES` not given is made when it is first read, the
+    smoothed L*a*b* image once for both of its cues: a photo whose cue searches all end at
+    luminance and chroma is never converted to L*a*b*.  ``lines``: what the cue searches on a
+    plate line read, by (slope, intercept) (:func:`_line_cues`)."""
 
-    def __init__(self, *args, **kwargs):
+    def __init__(self, *args, rgb=None, **kwargs):
         super().__init__(*args, **kwargs)
         self.segmented = {}
+        self.lines = {}
+        self.rgb = rgb
+        self._lab = None
+
+    def __missing__(self, channel):
+        if self.rgb is None or channel not in CUES:
+            raise KeyError(channel)
+        lab = None
+        if channel in ("lab_a", "lab_b"):
+            if self._lab is None:
+                self._lab = _smoothed_lab(self.rgb)
+            lab = self._lab
+        self[channel] = g = _gray(self.rgb, channel, lab)
+        if "lab_a" in self and "lab_b" in self:
+            self._lab = None  # both made: the L*a*b* image is no longer needed
+        return g
 
 
 def _grays(rgb, channels, lum=None):
-    """``_gray`` of each channel (a :class:`_Cues`); the smoothed L*a*b* image is converted
-    once for both of its cues, and ``lum`` (the "gray" channel, already computed) is reused."""
-    lab = _smoothed_lab(rgb) if {"lab_a", "lab_b"} <= set(channels) else None
-    return _Cues({ch: lum if ch == "gray" and lum is not None else _gray(rgb, ch, lab) for ch in channels})
+    """The cues ``channels`` of ``rgb`` (a :class:`_Cues`, each made when first read); ``lum``
+    (the "gray" channel, already computed) is reused."""
+    return _Cues({"gray": lum} if lum is not None and "gray" in channels else {}, rgb=rgb)
+
+
+class _Separations:
+    """Each cue's separability in a plate line's band and its Otsu threshold there
+    (:func:`_eta` of the cue in ``band``), by channel, each computed when first read and kept in
+    ``known`` (the line's dict in ``grays.lines``, :func:`_line_cues`).  Made afresh for each
+    search on the line and not kept in ``grays`` itself: a view holding ``grays`` inside it
+    would make a reference cycle, and every photo's cue images would outlive its measurement
+    until a full garbage collection."""
+
+    def __init__(self, grays, band, known):
+        self.grays, self.band, self.known = grays, band, known
+
+    def __getitem__(self, channel):
+        v = self.known.get(channel)
+        if v is None:
+            self.known[channel] = v = _eta(self.grays[channel][self.band])
+        return v
+
+
+def _line_cues(grays, slope, intercept, shape):
+    """(band, separations, levelled) of the plate line (slope, intercept) in a photo of
+    ``shape``: the rows from 35 % of the photo's height to 3 px above the line, where heap and
+    wall meet; the cues' :class:`_Separations` there; and a dict of the images levelled on the
+    line (:func:`_pile_with`'s ``levelled``: the luminance and each cue that finds a heap on
+    it).  The band, the separabilities found and the levelled images are kept in
+    ``grays.lines`` (arrays and numbers only, nothing that refers back to ``grays``) for the
+    line's further searches (the plate search, the checks for a second plate line or a rival,
+    which measure the heap on the same lines again) and the checks of the heap found on it
+    (:func:`_judge_foot_below`, :func:`_texture_flanks`)."""
+    key = (slope, intercept)
+    if key not in grays.lines:
+        h, w = shape
+        rr, cc = np.arange(h)[:, None], np.arange(w)[None, :]
+        prow = slope * cc + intercept
+        band = (rr < prow - 3) & (rr > prow - 0.35 * h)
+        grays.lines[key] = band, {}, {}
+    band, known, levelled = grays.lines[key]
+    return band, _Separations(grays, band, known), levelled
+
+
+def _cue_order(split):
+    """The cue search's order on a plate line (:func:`measure_pile`): luminance and chroma with
+    the heap darker than the wall, the better separating one first, then every cue and polarity
+    whose cue splits the band clearly (eta at least :data:`MIN_CUE_ETA`) by decreasing eta.
+    Yielded in turn, the further cues' separabilities (``split``, :class:`_Separations`) read
+    only once the search goes past the first two."""
+    first = [(ch, "dark") for ch in sorted(("gray", "chroma"), key=lambda k: -split[k][0])]
+    yield from first
+    # further cues only where they split the band into two clear classes (a unimodal band gives
+    # eta = 2/pi = 0.64 at best: noise, not a heap)
+    yield from sorted([(ch, pol) for ch in CUES for pol in ("dark", "light")
+                       if (ch, pol) not in first and split[ch][0] >= MIN_CUE_ETA], key=lambda t: -split[t[0]][0])
 
 
 def _gray(rgb, channel="gray", lab=None):
@@ -221,7 +294,7 @@ def colour_edges(rgb, sigma=1.5):
         ch = lab[..., k]
         lo, hi = np.percentile(ch, [1, 99])
         if hi - lo > 1e-6:
-            out |= feature.canny(np.clip((ch - lo) / (hi - lo), 0, 1), sigma=sigma)
+            out |= canny(np.clip((ch - lo) / (hi - lo), 0, 1), sigma=sigma)
     return out
 
 
@@ -281,7 +354,7 @@ def _binary(path, gray, method, classes=2):
 
 def plate_line(path, gray, binary):
     """(slope, intercept) of the plate's top edge, row = slope * col + intercept."""
-    edges = feature.canny(gray, sigma=1.5)
+    edges = canny(gray, sigma=1.5)
     h, w = gray.shape
     thetas = np.radians(np.linspace(84, 96, 241))
     hs, ang, dist = transform.hough_line(edges, theta=thetas)
@@ -319,12 +392,17 @@ def _level(mask, slope, intercept):
     roll = np.degrees(np.arctan(slope))
     h, w = mask.shape
     lev = transform.rotate(np.asarray(mask, float), roll, order=1, center=(w / 2 - 0.5, h / 2 - 0.5))
+    return lev, _levelled_plate_row(mask.shape, slope, intercept), -roll
+
+
+def _levelled_plate_row(shape, slope, intercept):
+    """The plate line's row in an image of ``shape`` levelled on it (:func:`_level`)."""
+    h, w = shape[:2]
     # plate row after rotation: the plate point under the image centre
     row_c = slope * (w / 2 - 0.5) + intercept
     ang = np.arctan(slope)
     # distance along the image vertical from centre, after rotation by -ang around the centre
-    plate_row = (h / 2 - 0.5) + (row_c - (h / 2 - 0.5)) * np.cos(ang)
-    return lev, plate_row, -roll
+    return (h / 2 - 0.5) + (row_c - (h / 2 - 0.5)) * np.cos(ang)
 
 
 def _top_edge(lev, c0, c1, glev=None, llev=None):
@@ -546,6 +624,8 @@ def measure_pile(path, threshold="otsu", keep_stages=False, channel="auto", refu
     plate of the soil's colour); ``plate_line`` reports ``plate_px_from`` ("manifest", or
     "command line" for ``soilcal image pile --plate-line-px``).
     """
+    if channel != "auto" and channel not in CUES:
+        raise InputError(path, "channel", "'gray', 'chroma' or 'auto'", channel)
     if plate is not None:
         _check_given_plate(path, plate)
     if plate_px is not None:
@@ -560,6 +640,7 @@ def measure_pile(path, threshold="otsu", keep_stages=False, channel="auto", refu
         res = _texture_flanks(res, tried.gray)
     if res.plate_ambiguous:
         res.confidence = "low"
+    res.__dict__.pop("_levelled", None)  # the search's levelled images: not kept with the result
     return res
 
 
@@ -717,7 +798,7 @@ def _pile_on_lines(path, rgb, threshold, keep_stages, channel, tried: Tried, pla
     if plate is not None:
         lines = [(float(plate[0]), float(plate[1]))]
     else:
-        ledges = feature.canny(lum, sigma=1.5)
+        ledges = canny(lum, sigma=1.5)
         lines = plate_lines(lum, edges=ledges, paired=True)
         cedges = colour_edges(rgb)
         tried.edges = cedges
@@ -1197,8 +1278,19 @@ def _noting_tilt(refused: InputError, tilted) -> InputError:
                       f"{level_it(roll)}", refused.note)
 
 
-def _on_plate_lines(path, rgb, lum, grays, lines, n_first, channel, threshold, keep_stages, tried, plate_edges,
-                    beside, refused=None, wanted=None):
+def _on_plate_lines(*args, **kwargs):
+    """:func:`_search_plate_lines`, its refusal raised without the traceback of the search: the
+    search's frame holds the refusals it collected (the one raised among them) and this photo's
+    images, a reference cycle that would keep them alive after the measurement until a full
+    garbage collection."""
+    try:
+        return _search_plate_lines(*args, **kwargs)
+    except InputError as e:
+        raise e.with_traceback(None)
+
+
+def _search_plate_lines(path, rgb, lum, grays, lines, n_first, channel, threshold, keep_stages, tried, plate_edges,
+                        beside, refused=None, wanted=None):
     """The heap measured on the first of ``lines`` (numbered from ``n_first``) on which a cue
     finds one (module text); a line refused only because it does not run on beside the heap
     (:func:`_plate_beside_heap`) is added to ``beside`` with the reason; ``refused``: a set
@@ -1207,7 +1299,6 @@ def _on_plate_lines(path, rgb, lum, grays, lines, n_first, channel, threshold, k
     a heap failing it is returned as the first cue measured it, unchecked by further cues (for
     a caller that would not use it whatever they found)."""
     h, w = lum.shape
-    rr, cc = np.arange(h)[:, None], np.arange(w)[None, :]
     refusals = []  # every cue's refusal, the topmost line's first
     small = None  # the topmost line's refusal where its first two cues both saw a heap too small
     first = None  # the first cue's result, waiting for a second cue to cross-check it
@@ -1217,8 +1308,7 @@ def _on_plate_lines(path, rgb, lum, grays, lines, n_first, channel, threshold, k
             # (a plate hardly wider than the heap): a line of its grain, above its plate, is
             # no better; only a lower line can be the plate the other one was not
             continue
-        prow = slope * cc + intercept
-        band = (rr < prow - 3) & (rr > prow - 0.35 * h)  # where heap and wall meet
+        band, split, levelled = _line_cues(grays, slope, intercept, (h, w))  # where heap and wall meet
         if not band.any():
             # a line at the frame's top or outside it (a plate line given off the photo): no
             # rows above it for a heap, nor a band for a cue's threshold
@@ -1231,26 +1321,17 @@ def _on_plate_lines(path, rgb, lum, grays, lines, n_first, channel, threshold, k
             if refused is not None:
                 refused.add(n_line)
             continue
-        if channel != "auto":
-            order = [(channel, "dark")]
-        else:
-            # each channel's separability in the band, and its Otsu threshold there (a dark cue
-            # segments the same channel in the same band at it: _pile_with's ``otsu``)
-            split = {ch: _eta(g[band]) for ch, g in grays.items()}
-            etas = {ch: e for ch, (e, _) in split.items()}
-            order = [(ch, "dark") for ch in sorted(("gray", "chroma"), key=lambda k: -etas[k])]
-            # further cues only where they split the band into two clear classes (a unimodal
-            # band gives eta = 2/pi = 0.64 at best: noise, not a heap)
-            order += sorted([(ch, pol) for ch in CUES for pol in ("dark", "light")
-                             if (ch, pol) not in order and etas[ch] >= MIN_CUE_ETA], key=lambda t: -etas[t[0]])
+        # each channel's separability in the band, and its Otsu threshold there (a dark cue
+        # segments the same channel in the same band at it: _pile_with's ``otsu``), read as the
+        # search reaches the channel
+        order = [(channel, "dark")] if channel != "auto" else _cue_order(split)
         checks = CUE_CHECKS
-        levelled = {}  # the luminance levelled on this line, once for all its cues (_pile_with)
         line_refusals = []  # this line's
         dissent = None  # a credible cue that disagrees with the first, waiting for a third
         for ch, pol in order:
             if first is not None and checks == 0:
                 break
-            if first is not None and etas[ch] < MIN_CUE_ETA:
+            if first is not None and split[ch][0] < MIN_CUE_ETA:
                 continue  # no clear split of the band: noise, neither a confirmation nor a refutation
             g = grays[ch] if pol == "dark" else 1.0 - grays[ch]
             try:
@@ -1265,6 +1346,10 @@ def _on_plate_lines(path, rgb, lum, grays, lines, n_first, channel, threshold, k
                 if e.field == "plate line" and not any(b[0] == n_line for b in beside):
                     beside.append((n_line, slope, intercept, f"line {n_line}: {e.got}"))
                 tried.refuse_last(e)
+                # kept without its traceback: its frames hold this search's images and the
+                # lists holding it, a reference cycle that would keep every photo's images
+                # alive after its measurement until a full garbage collection
+                e.__traceback__ = None
                 refusals.append(e)
                 line_refusals.append(e)
                 if n_line == n_first and first is None and len(line_refusals) == 2 and all(
@@ -1366,20 +1451,24 @@ def _pile_with(path, rgb, gray, cue, polarity, band, slope, intercept, threshold
     the photo's luminance, in which a colour cue's edge is refined (:func:`_top_edge`);
     ``plate_edges``: the photo's edge map, in which a plate line found by the search must run
     on beside the heap (:func:`_plate_beside_heap`); ``levelled``: a dict in which the caller
-    keeps ``lum`` levelled on this plate line (:func:`_level`) for its further cues; ``otsu``:
-    Otsu's threshold of ``gray[band]`` where the caller has it already (:func:`_eta`);
-    ``segmented``: a dict of the classes already segmented from the photo's cues by (cue,
-    polarity, threshold) (:class:`_Cues`), looked up before segmenting and added to."""
+    keeps the images levelled on this plate line (:func:`_level`: ``lum`` as "lum", a cue as
+    (cue, polarity)) for its further cues and the checks of the heap; ``otsu``: Otsu's
+    threshold of ``gray[band]`` where the caller has it already (:func:`_eta`); ``segmented``:
+    a dict of the classes already segmented from the photo's cues by (cue, polarity, Otsu's
+    threshold, or "adaptive" for the local threshold, which is the same on every plate line)
+    (:class:`_Cues`), looked up before segmenting and added to."""
     if threshold == "otsu":
         t = filters.threshold_otsu(gray[band]) if otsu is None else otsu
         key = (cue, polarity, float(t))
-        binary = None if segmented is None else segmented.get(key)
-        if binary is None:
-            binary = open_fill(gray < t)
-            if segmented is not None:
-                segmented[key] = binary
     else:
-        binary = _binary(path, gray, threshold)
+        # a local threshold does not depend on the plate line (it is the cue's own, pixel by
+        # pixel, over a block of half the image): one class per cue and polarity
+        key = (cue, polarity, threshold)
+    binary = None if segmented is None else segmented.get(key)
+    if binary is None:
+        binary = open_fill(gray < t) if threshold == "otsu" else _binary(path, gray, threshold)
+        if segmented is not None:
+            segmented[key] = binary
     if tried is not None:
         tried.add(label or f"{cue}/{polarity}", binary, (slope, intercept))
     comp = _components_on_plate(path, binary, slope, intercept, "heap")
@@ -1387,15 +1476,17 @@ def _pile_with(path, rgb, gray, cue, polarity, band, slope, intercept, threshold
         _plate_beside_heap(path, plate_edges, comp, slope, intercept)
     lev, prow, roll = _level(comp, slope, intercept)
 
-    def levelled_lum():
+    def level_once(key, img):
+        # ``img`` levelled on this plate line, kept in ``levelled`` under ``key`` ("lum", or the
+        # cue and its polarity) for the line's further cues and the checks of its heap
         if levelled is None:
-            return _level(lum, slope, intercept)[0]
-        if "lum" not in levelled:
-            levelled["lum"] = _level(lum, slope, intercept)[0]
-        return levelled["lum"]
+            return _level(img, slope, intercept)[0]
+        if key not in levelled:
+            levelled[key] = _level(img, slope, intercept)[0]
+        return levelled[key]
 
-    glev = levelled_lum() if gray is lum else _level(gray, slope, intercept)[0]
-    llev = levelled_lum() if lum is not None and cue != "gray" else None
+    glev = level_once("lum" if gray is lum else (cue, polarity), gray)
+    llev = level_once("lum", lum) if lum is not None and cue != "gray" else None
     cols = np.nonzero(lev.max(axis=0) >= 0.5)[0]
     cu, rv, *rl = _top_edge(lev, cols.min(), cols.max() + 1, glev, llev)
     v = prow - rv
@@ -1437,10 +1528,14 @@ def _pile_with(path, rgb, gray, cue, polarity, band, slope, intercept, threshold
     if keep_stages:
         st = Stages(rgb, gray, binary, lev, [lline + ("left",), rline + ("right",)], [lp, rp])
         st.plate_row = prow
-    return PileResult(str(path), float(ang.mean()), left, right, float(ang.std(ddof=1)), float(roll),
-                      f"{cue}/{polarity}", float(used), float(rms), "low" if low else "ok", st,
-                      flank_outside_share=float(outside),
-                      geometry=(float(slope), float(intercept), lline, rline, float(hmax)))
+    out = PileResult(str(path), float(ang.mean()), left, right, float(ang.std(ddof=1)), float(roll),
+                     f"{cue}/{polarity}", float(used), float(rms), "low" if low else "ok", st,
+                     flank_outside_share=float(outside),
+                     geometry=(float(slope), float(intercept), lline, rline, float(hmax)))
+    # the images levelled on this plate line, for the checks of this heap (_judge_foot_below,
+    # _texture_flanks); not a field, so not reported, and dropped by measure_pile
+    out._levelled = levelled if levelled is not None else {}
+    return out
 
 
 #: plate lines tried, topmost first (the luminance's, then the colour edges'): a wide textured
@@ -1584,7 +1679,12 @@ def _judge_foot_below(res: PileResult, grays) -> None:
     if res.geometry is None:
         return
     slope, intercept, lline, rline, _ = res.geometry
-    glev, prow, _ = _level(grays[res.cue.split("/")[0]], slope, intercept)
+    ch = res.cue.split("/")[0]
+    # the cue image as the heap's search levelled it, where it did (a heap darker than the wall)
+    glev = getattr(res, "_levelled", {}).get("lum" if ch == "gray" else (ch, "dark"))
+    if glev is None:
+        glev = _level(grays[ch], slope, intercept)[0]
+    prow = _levelled_plate_row(glev.shape, slope, intercept)
     shares = [_foot_below_share(glev, prow, ln, side) for ln, side in ((lline, -1.0), (rline, 1.0))]
     res.foot_below_share = float(min(shares)) if np.isfinite(shares).all() else float("nan")
     if res.foot_below_share > FOOT_BELOW_MAX:
@@ -1705,7 +1805,10 @@ def _texture_flanks(res: PileResult, lum) -> PileResult:
     if res.geometry is None:
         return res
     slope, intercept, lline, rline, hmax = res.geometry
-    llev, prow, _ = _level(lum, slope, intercept)
+    llev = getattr(res, "_levelled", {}).get("lum")  # as the heap's search levelled it, where it did
+    if llev is None:
+        llev = _level(lum, slope, intercept)[0]
+    prow = _levelled_plate_row(llev.shape, slope, intercept)
     maps = _texture_maps(llev)
     ang = {"left": res.left_deg, "right": res.right_deg}
     lines = {"left": lline, "right": rline}
@@ -1926,7 +2029,7 @@ def plate_lines(gray, below=None, edges=None, paired=False):
     distance bins (the heap search, whose candidates must also run on beside the heap,
     :func:`_plate_beside_heap`; the drum's level keeps a line's own votes).
     """
-    edges = feature.canny(gray, sigma=1.5) if edges is None else edges
+    edges = canny(gray, sigma=1.5) if edges is None else edges
     h, w = gray.shape
     col0, row0 = below if below is not None else (0.0, 0.5 * h)
     # 0.05 deg steps over +-PLATE_MAX_ROLL_DEG of horizontal
