@@ -1026,9 +1026,11 @@ class Simulation:
             L["nbr_" + s] = np.full(npair, -1, dtype=np.int64)
             L["hist_" + s] = np.zeros((npair, hist_width(self.codes)))
             L["act_" + s] = np.zeros(npair, dtype=np.int8)
-            L["wnbr_" + s] = np.full((n, kw), -1, dtype=np.int64)
+            L["wnbr_" + s] = np.full((kw, n), -1, dtype=np.int64)  # wnbr[k, i]: slot k of i
             L["wcnt_" + s] = np.zeros(n, dtype=np.int64)
-            # wall history rows i * kw + k
+            # wall history rows k * n + i (slot k of particle i): a slot's rows of every
+            # particle lie together, so a run whose particles touch few walls reads a short
+            # stretch of this array whatever the width kw grew to
             L["whist_" + s] = np.zeros((n * kw, H_SIZE))
         L["sorder"] = np.zeros(n, dtype=np.int64)  # particles grouped by slab group
         L["sgroup"] = np.zeros(SGROUP_LEN, dtype=np.int64)  # group offsets, last: groups
@@ -1037,7 +1039,7 @@ class Simulation:
         # per pair in an even bed, up to NBLK_GROUPS per pair in an uneven one)
         nh = npair if old is None else max(npair, old["hits"].shape[0])
         L["hits"] = np.zeros(nh, dtype=np.int32)
-        L["wslot"] = np.zeros((n, kw, 6))
+        L["wslot"] = np.zeros((kw, n, 6))  # wslot[k, i]: slot k of particle i
         L["xr"] = np.zeros((n, 4))
         L["vw"] = np.zeros((n, 8))
         L["perm"] = np.zeros(n, dtype=np.int64)  # spatial sort: new row -> old row
@@ -1045,14 +1047,14 @@ class Simulation:
         L["ibuf"] = np.zeros(n, dtype=np.int64)
         if old is not None:
             npo = int(old["start_a"][-1])
-            kwo = old["wnbr_a"].shape[1]
+            kwo = old["wnbr_a"].shape[0]
             L["start_a"][:] = old["start_a"]
             L["nbr_a"][:npo] = old["nbr_a"][:npo]
             L["hist_a"][:npo] = old["hist_a"][:npo]
             L["act_a"][:npo] = old["act_a"][:npo]
-            L["wnbr_a"][:, :kwo] = old["wnbr_a"]
+            L["wnbr_a"][:kwo] = old["wnbr_a"]
             L["wcnt_a"][:] = old["wcnt_a"]
-            L["whist_a"].reshape(n, kw, H_SIZE)[:, :kwo] = old["whist_a"].reshape(n, kwo, H_SIZE)
+            L["whist_a"].reshape(kw, n, H_SIZE)[:kwo] = old["whist_a"].reshape(kwo, n, H_SIZE)
             L["xr"][:] = old["xr"]
             L["vw"][:] = old["vw"]
             L["sorder"][:] = old["sorder"]

@@ -86,7 +86,7 @@ def _cover(i, k, nwc, p, feat, cx, cy, cz, tol, ri, xi, yi, zi, fk, wnbr, prim_k
         kk = fk if step == 0 else step - 1
         if kk < 0 or kk == k or (step > 0 and kk == fk):
             continue
-        pp = wnbr[i, kk]
+        pp = wnbr[kk, i]
         kq = prim_kind[pp]
         if abs(prim_closest(kq, prim_par, pp, cx, cy, cz)[0]) > tol:
             continue  # c is not on q
@@ -254,7 +254,6 @@ def gather(x, v, om, r, inv_m, inv_i, mat, f, t, ovr, peak, mroll, dt, kick, max
     number of particles with an overlap above max_ovr (of their radius) or a non-finite
     velocity.  ``peak[i]`` keeps the largest overlap of row i (of its radius) seen here."""
     n = x.shape[0]
-    KW = wnbr.shape[1]
     h = 0.5 * dt
     nbad = 0
     bounded = codes[3] == 3
@@ -294,14 +293,14 @@ def gather(x, v, om, r, inv_m, inv_i, mat, f, t, ovr, peak, mroll, dt, kick, max
                 ax = ay = az = bx = by = bz = 0.0
                 touched = False
                 for k in range(nwc if nwc > 1 else 0):  # one primitive: nothing to share
-                    p = wnbr[i, k]
+                    p = wnbr[k, i]
                     r8 = prim_closest(prim_kind[p], prim_par, p, xi, yi, zi)
                     # kept for the force loop below (the slot's reaction is written after)
-                    wslot[i, k, 0] = r8[0]
-                    wslot[i, k, 1] = r8[1]
-                    wslot[i, k, 2] = r8[2]
-                    wslot[i, k, 3] = r8[3]
-                    wslot[i, k, 4] = r8[7]
+                    wslot[k, i, 0] = r8[0]
+                    wslot[k, i, 1] = r8[1]
+                    wslot[k, i, 2] = r8[2]
+                    wslot[k, i, 3] = r8[3]
+                    wslot[k, i, 4] = r8[7]
                     if r8[7] == 0 and r8[0] < ri:
                         if fk < 0:
                             fk = k
@@ -317,7 +316,7 @@ def gather(x, v, om, r, inv_m, inv_i, mat, f, t, ovr, peak, mroll, dt, kick, max
                         elif nref == 1:
                             bx, by, bz = n1, n2, n3
                         nref += 1
-                    if whist[i * KW + k, H_SIZE - 1] != 0.0:
+                    if whist[k * n + i, H_SIZE - 1] != 0.0:
                         touched = True
                         if r8[7] != 0:
                             moved = True
@@ -329,8 +328,8 @@ def gather(x, v, om, r, inv_m, inv_i, mat, f, t, ovr, peak, mroll, dt, kick, max
                 for _ in range(nwc if moved and imi != 0.0 else 0):
                     moved = False
                     for k in range(nwc):
-                        p = wnbr[i, k]
-                        row = i * KW + k
+                        p = wnbr[k, i]
+                        row = k * n + i
                         if whist[row, H_SIZE - 1] == 0.0:
                             continue
                         r8 = prim_closest(prim_kind[p], prim_par, p, xi, yi, zi)
@@ -338,27 +337,27 @@ def gather(x, v, om, r, inv_m, inv_i, mat, f, t, ovr, peak, mroll, dt, kick, max
                             continue
                         kk = _cover(i, k, nwc, p, r8[7], r8[4], r8[5], r8[6], tol, ri, xi, yi,
                                     zi, fk, wnbr, prim_kind, prim_wall, prim_par, wall_vel, wall_omega)
-                        if kk >= 0 and whist[i * KW + kk, H_SIZE - 1] == 0.0:
+                        if kk >= 0 and whist[kk * n + i, H_SIZE - 1] == 0.0:
                             for q in range(H_SIZE):
-                                whist[i * KW + kk, q] = whist[row, q]
+                                whist[kk * n + i, q] = whist[row, q]
                                 whist[row, q] = 0.0
                             moved = True
                     if not moved:
                         break
                 for k in range(nwc):
-                    p = wnbr[i, k]
+                    p = wnbr[k, i]
                     if nwc > 1:  # the closest point of the first loop: c = x - dist n
-                        dist = wslot[i, k, 0]
-                        nx, ny, nz = wslot[i, k, 1], wslot[i, k, 2], wslot[i, k, 3]
-                        feat = int(wslot[i, k, 4])
+                        dist = wslot[k, i, 0]
+                        nx, ny, nz = wslot[k, i, 1], wslot[k, i, 2], wslot[k, i, 3]
+                        feat = int(wslot[k, i, 4])
                         cx, cy, cz = xi - dist * nx, yi - dist * ny, zi - dist * nz
                     else:
                         dist, nx, ny, nz, cx, cy, cz, feat = prim_closest(
                             prim_kind[p], prim_par, p, xi, yi, zi)
                     for q in range(6):
-                        wslot[i, k, q] = 0.0
+                        wslot[k, i, q] = 0.0
                     delta = ri - dist
-                    row = i * KW + k
+                    row = k * n + i
                     touching = whist[row, H_SIZE - 1] != 0.0
                     if delta <= 0.0 and not touching and not gap:
                         continue
@@ -411,12 +410,12 @@ def gather(x, v, om, r, inv_m, inv_i, mat, f, t, ovr, peak, mroll, dt, kick, max
                         px = xi - wall_centre[w, 0]
                         py = yi - wall_centre[w, 1]
                         pz = zi - wall_centre[w, 2]
-                        wslot[i, k, 0] = -cfx
-                        wslot[i, k, 1] = -cfy
-                        wslot[i, k, 2] = -cfz
-                        wslot[i, k, 3] = -(py * cfz - pz * cfy) - ctx
-                        wslot[i, k, 4] = -(pz * cfx - px * cfz) - cty
-                        wslot[i, k, 5] = -(px * cfy - py * cfx) - ctz
+                        wslot[k, i, 0] = -cfx
+                        wslot[k, i, 1] = -cfy
+                        wslot[k, i, 2] = -cfz
+                        wslot[k, i, 3] = -(py * cfz - pz * cfy) - ctx
+                        wslot[k, i, 4] = -(pz * cfx - px * cfz) - cty
+                        wslot[k, i, 5] = -(px * cfy - py * cfx) - ctz
                 iinv = inv_i[i]
                 if bounded and mres > 0.0 and iinv > 0.0:
                     # rotation at the next force evaluation without the resistance: the
@@ -436,12 +435,12 @@ def gather(x, v, om, r, inv_m, inv_i, mat, f, t, ovr, peak, mroll, dt, kick, max
                         ty += ry
                         tz += rz
                         for k in range(nwc):
-                            row = i * KW + k
+                            row = k * n + i
                             if whist[row, H_SIZE - 1] != 0.0:
                                 sh = whist[row, H_MR] / mres
-                                wslot[i, k, 3] -= sh * rx
-                                wslot[i, k, 4] -= sh * ry
-                                wslot[i, k, 5] -= sh * rz
+                                wslot[k, i, 3] -= sh * rx
+                                wslot[k, i, 4] -= sh * ry
+                                wslot[k, i, 5] -= sh * rz
                 f[i, 0] = fx
                 f[i, 1] = fy
                 f[i, 2] = fz
@@ -478,10 +477,10 @@ def reduce_wall_forces(wcnt, wnbr, wslot, prim_wall, wall_force, wall_torque):
     wall_torque[:, :] = 0.0
     for i in range(wcnt.shape[0]):
         for k in range(wcnt[i]):
-            w = prim_wall[wnbr[i, k]]
+            w = prim_wall[wnbr[k, i]]
             for q in range(3):
-                wall_force[w, q] += wslot[i, k, q]
-                wall_torque[w, q] += wslot[i, k, 3 + q]
+                wall_force[w, q] += wslot[k, i, q]
+                wall_torque[w, q] += wslot[k, i, 3 + q]
 
 
 @njit(cache=True, parallel=True)
