@@ -683,8 +683,9 @@ class Simulation:
         self._pair = None
         self.dt = None
         # wall travel since the list build, pair-list builds, wall-list builds, steps since
-        # the last spatial sort (inf: sort at the first build)
-        self._fstate = np.array([0.0, 0.0, 0.0, math.inf])
+        # the last spatial sort (inf: sort at the first build), pair passes over every listed
+        # pair (integrator.run_loop, "Near list"; the others visit the near list only)
+        self._fstate = np.array([0.0, 0.0, 0.0, math.inf, 0.0])
 
     # ------------------------------------------------------------------ building
     def add_particles(self, x, r, material, v=None, omega=None, fixed=False, lock_rotation=False):
@@ -1045,6 +1046,11 @@ class Simulation:
         L["perm"] = np.zeros(n, dtype=np.int64)  # spatial sort: new row -> old row
         L["pbuf"] = np.zeros((n, 8))
         L["ibuf"] = np.zeros(n, dtype=np.int64)
+        # near list of the pair pass (integrator.run_loop): slots of each row, their count,
+        # the displacements when it was written
+        L["near"] = np.zeros(npair, dtype=np.int32)
+        L["ncnt"] = np.zeros(n, dtype=np.int64)
+        L["dref"] = np.zeros((n, 3))
         if old is not None:
             npo = int(old["start_a"][-1])
             kwo = old["wnbr_a"].shape[0]
@@ -1159,8 +1165,8 @@ class Simulation:
                 self._cidx(), self._cof(), self._cpos_arr, self._wcells, self._wbins, self._glob(),
                 L["start_a"], L["nbr_a"], L["hist_a"], L["act_a"], L["start_b"], L["nbr_b"],
                 L["hist_b"], L["act_b"], min(numba.get_num_threads(), GROUPS_MAX),
-                L["sorder"], L["sgroup"], L["sscratch"], L["hits"],
-                L["wnbr_a"], L["wcnt_a"], L["whist_a"], L["wnbr_b"], L["wcnt_b"],
+                L["sorder"], L["sgroup"], L["sscratch"], L["hits"], L["near"], L["ncnt"],
+                L["dref"], L["wnbr_a"], L["wcnt_a"], L["whist_a"], L["wnbr_b"], L["wcnt_b"],
                 L["whist_b"], L["wslot"], wa["prim_kind"], wa["prim_wall"], wa["prim_mat"],
                 wa["prim_par"], wa["prim_pts"], wa["prim_dirs"], wa["wall_vel"],
                 wa["wall_omega"], wa["wall_centre"], self.wall_force, self.wall_torque, reach,

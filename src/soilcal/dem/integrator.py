@@ -51,6 +51,13 @@ from soilcal.dem.walls import CYLINDER, PLANE, move_walls, prim_closest
  NEED_HITS) = 0, 1, 2, 3, 4, 5, 6, 7
 
 
+# near list (run_loop): pairs within NEAR_SKIN x skin (+ the JKR separation range) of
+# contact are checked every step, the others again once a particle has moved NEAR_MOVE x
+# that far (NEAR_MOVE < 1/2: two spheres closing in on each other cannot close the gap)
+NEAR_SKIN = 0.125
+NEAR_MOVE = 0.49
+
+
 # below this many particles a step is shorter than waking the worker threads three times
 # (milliseconds when other processes hold the cores): Simulation.run runs such systems on
 # one thread (results do not depend on the thread count)
@@ -143,13 +150,18 @@ def _same_tol(ri, xi, yi, zi):
 
 @njit(cache=True, parallel=True, fastmath=CONTACT_MATH)
 def pair_forces(colour, xr, vw, pair, codes, box, periodic, dt, start, nbr, hist, act,
-                sorder, sgroup, f, t, ovr, mroll):
+                sorder, sgroup, f, t, ovr, mroll, near, ncnt, mode, cutn):
     """Pair pass of one colour: the slab groups of that colour in parallel (one per
     thread); each evaluates the listed pairs of its particles' rows and adds the force and
     torques to both particles (f, t; ovr: largest overlap of each particle; mroll: the
     ``bounded`` rolling resistance mu_r |F_n| c of each particle).  Slabs of one
     colour share no particle (:func:`soilcal.dem.neighbour._slabs`), so the writes never
-    race."""
+    race.
+
+    ``mode`` 0: every listed pair; 1: every listed pair, and the near list written: the
+    slots k of row i whose pair touches or lies closer than R_i + R_j + ``cutn``, in row
+    order, to near[start[i]:start[i] + ncnt[i]]; 2: the near list's pairs only
+    (:func:`run_loop`, "Near list")."""
     L0 = box[1] - box[0]
     L1 = box[3] - box[2]
     h0 = 0.5 * L0
@@ -173,7 +185,10 @@ def pair_forces(colour, xr, vw, pair, codes, box, periodic, dt, start, nbr, hist
             tzi = 0.0
             dmax = ovr[i]
             mri = 0.0
-            for k in range(start[i], start[i + 1]):
+            k0 = start[i]
+            m = k0
+            for kk in range(k0, k0 + ncnt[i] if mode == 2 else start[i + 1]):
+                k = near[kk] if mode == 2 else kk
                 j = nbr[k]
                 dx = min_image(xi - xr[j, 0], p0, h0, L0)
                 dy = min_image(yi - xr[j, 1], p1, h1, L1)
@@ -182,6 +197,10 @@ def pair_forces(colour, xr, vw, pair, codes, box, periodic, dt, start, nbr, hist
                 rs = ri + rj
                 d2 = dx * dx + dy * dy + dz * dz
                 touching = act[k] != 0
+                if mode == 1:
+                    cn = rs + cutn
+                    near[m] = k
+                    m += (not d2 >= cn * cn) | touching
                 if d2 >= rs * rs and not touching and not gap:
                     continue
                 ims = vw[i, 6] + vw[j, 6]
@@ -243,6 +262,8 @@ def pair_forces(colour, xr, vw, pair, codes, box, periodic, dt, start, nbr, hist
             t[i, 2] += tzi
             ovr[i] = dmax
             mroll[i] += mri
+            if mode == 1:
+                ncnt[i] = m - k0
 
 
 @njit(cache=True, parallel=True, fastmath=CONTACT_MATH)
@@ -485,19 +506,23 @@ def reduce_wall_forces(wcnt, wnbr, wslot, prim_wall, wall_force, wall_torque):
 
 @njit(cache=True, parallel=True)
 def _kick_drift(x, v, om, f, t, r, m, inv_m, inv_i, mat, disp, ovr, mroll, xr, vw, gravity,
-                dt, box, periodic, skin2, drift):
+                dt, box, periodic, skin2, drift, dref, near2):
     """Opening kick and drift (if ``drift``), periodic wrap, displacement since the last
     list build; packs (x, R) and (v, omega, 1/m, material) rows for the pair pass and resets
     the force to the weight, torque, largest overlap and rolling resistance to zero.  Returns
-    the number of particles that moved more than half the skin."""
+    the number of particles that moved more than half the skin since the list build, and
+    the number whose displacement since the near list was written (``dref``: disp then)
+    exceeds sqrt(near2)."""
     n = x.shape[0]
     h = 0.5 * dt if drift else 0.0
     nfar = 0
+    nnear = 0
     for i in prange(n):
         a = inv_m[i] * h
         b = inv_i[i] * h
         far = 0
         s2 = 0.0
+        e2 = 0.0
         for q in range(3):
             v[i, q] += f[i, q] * a
             om[i, q] += t[i, q] * b
@@ -506,8 +531,11 @@ def _kick_drift(x, v, om, f, t, r, m, inv_m, inv_i, mat, disp, ovr, mroll, xr, v
                 x[i, q] += dq
                 disp[i, q] += dq
             s2 += disp[i, q] * disp[i, q]
+            e = disp[i, q] - dref[i, q]
+            e2 += e * e
         if s2 > skin2:
             far = 1
+        nnear += 1 if not e2 <= near2 else 0
         for q in range(2):
             if periodic[q]:
                 lo = box[2 * q]
@@ -529,7 +557,7 @@ def _kick_drift(x, v, om, f, t, r, m, inv_m, inv_i, mat, disp, ovr, mroll, xr, v
         ovr[i] = 0.0
         mroll[i] = 0.0
         nfar += far
-    return nfar
+    return nfar, nnear
 
 
 @njit(cache=True)
@@ -566,8 +594,8 @@ def run_loop(nsteps, step0, resume_mid, need_forces, ke_tol, ke_every, max_ovr, 
              gravity, box, periodic, dt, skin, extra, pair, codes, sort_every, perm, fbuf, ibuf,
              cell_start, cell_idx, cell_of, cpos, wcell_start, wcell_idx, glob,
              start_a, nbr_a, hist_a, act_a, start_b, nbr_b, hist_b, act_b, groups, sorder,
-             sgroup, scratch, hits, wnbr_a, wcnt_a, whist_a, wnbr_b, wcnt_b, whist_b, wslot,
-             prim_kind, prim_wall, prim_mat, prim_par, prim_pts, prim_dirs,
+             sgroup, scratch, hits, near, ncnt, dref, wnbr_a, wcnt_a, whist_a, wnbr_b, wcnt_b,
+             whist_b, wslot, prim_kind, prim_wall, prim_mat, prim_par, prim_pts, prim_dirs,
              wall_vel, wall_omega, wall_centre, wall_force, wall_torque, wall_reach, wlog,
              fstate, status):
     """Run up to nsteps steps; returns the number of completed steps.
@@ -585,11 +613,29 @@ def run_loop(nsteps, step0, resume_mid, need_forces, ke_tol, ke_every, max_ovr, 
     sort: a pair-list build with fstate[3] >= sort_every > 0 first re-sorts the particle
     rows into cell order (:func:`soilcal.dem.neighbour.sort_particles`; perm, fbuf, ibuf:
     its work space; pid: insertion ids, which follow the rows; peak: the largest overlap of
-    each row, gather).  Wall force and torque go to row
+    each row, gather); fstate[4] counts the pair passes over every listed pair (below).
+    Wall force and torque go to row
     (step - log0) / wlog_every - 1 of wlog every wlog_every steps after step log0.
+
+    Near list: of the listed pairs (R_i + R_j + skin + s_c apart at most at the build), most
+    never touch before the next build, yet each is checked every step.  A pass over every
+    listed pair also writes, per row, the slots of the pairs that touch or lie closer than
+    R_i + R_j + s_n + s_c (s_n = NEAR_SKIN x skin) into ``near`` (``ncnt`` per row), and
+    dref takes disp; the following steps' passes visit those slots only, in the same order,
+    until a particle has moved more than NEAR_MOVE x s_n since (_kick_drift) or the lists
+    are rebuilt.  A pair left out neither touched nor lay within s_n + s_c of contact, and
+    its two spheres have since closed that gap by less than 2 NEAR_MOVE s_n < s_n: it is
+    still no closer than the JKR separation range s_c (and s_c bounds the reach of the
+    ``gap`` approach), so the full pass would have skipped it too, or passed it to the
+    contact law only to be told it is apart, with nothing written but its touching flag,
+    already 0.  The forces, their order and every history are those of the full pass.
+    Every run_loop call starts with a full pass (near, ncnt and dref need not survive it).
     """
     n = x.shape[0]
     skin2 = 0.25 * skin * skin
+    cutn = NEAR_SKIN * skin + extra
+    near2 = (NEAR_MOVE * NEAR_SKIN * skin) ** 2
+    nearok = False
     status[0] = DONE
     status[1] = step0
     status[2] = -1
@@ -611,10 +657,13 @@ def run_loop(nsteps, step0, resume_mid, need_forces, ke_tol, ke_every, max_ovr, 
         first = s == -1
         if first or s > 0 or not resume_mid:
             # s == -1: no motion, only the packed rows for the initial forces
-            nfar = _kick_drift(x, v, om, f, t, r, m, inv_m, inv_i, mat, disp, ovr, mroll, xr,
-                               vw, gravity, dt, box, periodic, skin2, not first)
+            nfar, nnear = _kick_drift(x, v, om, f, t, r, m, inv_m, inv_i, mat, disp, ovr,
+                                      mroll, xr, vw, gravity, dt, box, periodic, skin2,
+                                      not first, dref, near2)
             if nfar > 0:
                 rebuild = True
+            if nnear > 0:
+                nearok = False
             if wstep > 0.0 and not first:
                 move_walls(dt, prim_wall, prim_par, prim_pts, prim_dirs, wall_vel,
                            wall_omega, wall_centre)
@@ -675,6 +724,7 @@ def run_loop(nsteps, step0, resume_mid, need_forces, ke_tol, ke_every, max_ovr, 
                 sc, nc, hc, ac = so, no, ho, ao
                 disp[:, :] = 0.0
                 fstate[1] += 1.0
+                nearok = False
             else:
                 fstate[2] += 1.0
             wswapped = not wswapped
@@ -686,9 +736,14 @@ def run_loop(nsteps, step0, resume_mid, need_forces, ke_tol, ke_every, max_ovr, 
         # LIGGGHTS likewise do not update their shear history in a run's setup); -dt tells
         # the contact law it is the setup of a run with step dt (contact.py)
         dth = -dt if first else dt
+        mode = 2 if nearok else 1
         for colour in range(3):
             pair_forces(colour, xr, vw, pair, codes, box, periodic, dth, sc, nc, hc, ac,
-                        sorder, sgroup, f, t, ovr, mroll)
+                        sorder, sgroup, f, t, ovr, mroll, near, ncnt, mode, cutn)
+        if mode == 1:
+            dref[:, :] = disp
+            nearok = True
+            fstate[4] += 1.0
         nbad = gather(x, v, om, r, inv_m, inv_i, mat, f, t, ovr, peak, mroll, dt, not first, max_ovr,
                       pair, codes, prim_kind, prim_wall, prim_mat, prim_par, wall_vel,
                       wall_omega, wall_centre, wnc, wcc, whc, wslot)
