@@ -40,6 +40,7 @@ from __future__ import annotations
 
 import math
 
+import numpy as np
 from numba import njit, prange
 
 from soilcal.dem.contact import H_MR, H_SIZE, contact_force
@@ -173,8 +174,8 @@ def pair_forces(colour, xr, vw, pair, codes, box, periodic, dt, start, nbr, hist
     # JKR across a gap (``jkr_approach: gap``): separated listed pairs go to the contact law
     gap = codes[15] == 1 and codes[4] == 1
     for g in prange(G):
-        k = colour * G + g
-        for q in range(sgroup[k], sgroup[k + 1]):
+        kg = colour * G + g
+        for q in range(sgroup[kg], sgroup[kg + 1]):
             i = sorder[q]
             xi, yi, zi, ri = xr[i, 0], xr[i, 1], xr[i, 2], xr[i, 3]
             fxi = 0.0
@@ -188,8 +189,11 @@ def pair_forces(colour, xr, vw, pair, codes, box, periodic, dt, start, nbr, hist
             k0 = start[i]
             m = k0
             for kk in range(k0, k0 + ncnt[i] if mode == 2 else start[i + 1]):
-                k = near[kk] if mode == 2 else kk
-                j = nbr[k]
+                # slot and partner as unsigned integers: indices known not to be negative
+                # need no wrap-around code (Numba's for signed ones, a few instructions at
+                # each of the pair's dozen array accesses)
+                k = np.uint64(near[kk] if mode == 2 else kk)
+                j = np.uint64(nbr[k])
                 dx = min_image(xi - xr[j, 0], p0, h0, L0)
                 dy = min_image(yi - xr[j, 1], p1, h1, L1)
                 dz = zi - xr[j, 2]
