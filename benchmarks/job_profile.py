@@ -21,7 +21,11 @@ shared, and a job's CPU is what the workflow pays.  Columns:
 * ``loop_s``: every call of integrator.run_loop; ``steps``, ``builds`` (pair lists, with
   the wall lists), ``wall_builds`` (wall lists alone) and ``full_passes`` (pair passes over
   every listed pair, which write the near list; the other steps visit the near list only:
-  integrator.run_loop, "Near list") are the run's counts;
+  integrator.run_loop, "Near list") are the run's counts.  ``full_passes`` includes the
+  setup passes, one in each run_loop call that starts from forces not yet evaluated (the
+  forces of a phase's initial state, before its first step), so full_passes - steps may be
+  positive in a run without a near-list pass; the estimate below charges no more full
+  passes to a call than it has steps;
 * ``pair_s``, ``walls_s``, ``kick_drift_s``, ``build_s`` (list builds without the cell
   grid and triangle bins), ``grid_s``, ``bins_s``, ``wall_build_s``: estimates of the loop's
   parts.  After a run_loop call (at most every 20 s of loop time) the state is probed on

@@ -1021,6 +1021,11 @@ class Simulation:
     def _alloc_lists(self, n, npair, kw, old=None):
         """Pair buffers for ``npair`` pairs (CSR half lists), wall lists of width ``kw``;
         with ``old``, the current lists are carried over."""
+        if npair > np.iinfo(np.int32).max:  # the near list's slot indices are int32 (below)
+            raise SimulationError(
+                f"{n:,} spheres need {npair:,} pair-list slots, more than the near list's "
+                f"int32 slot indices hold ({np.iinfo(np.int32).max:,}); fewer spheres or a "
+                f"narrower size distribution")
         L = {}
         for s in ("a", "b"):
             L["start_" + s] = np.zeros(n + 1, dtype=np.int64)
@@ -1047,7 +1052,10 @@ class Simulation:
         L["pbuf"] = np.zeros((n, 8))
         L["ibuf"] = np.zeros(n, dtype=np.int64)
         # near list of the pair pass (integrator.run_loop): slots of each row, their count,
-        # the displacements when it was written
+        # the displacements when it was written.  A slot index is below npair, and int32
+        # holds up to 2^31 - 1 slots, whose pair lists alone would take over 170 GB (two
+        # buffers of partner, history and flag, over 80 bytes a slot); a larger list is
+        # refused at the top rather than wrapped
         L["near"] = np.zeros(npair, dtype=np.int32)
         L["ncnt"] = np.zeros(n, dtype=np.int64)
         L["dref"] = np.zeros((n, 3))
