@@ -19,14 +19,21 @@ shared, and a job's CPU is what the workflow pays.  Columns:
 * ``setup_measure_s``: the rest of the run outside the time loop (packing, walls, the
   other kernels' loading, measurement);
 * ``loop_s``: every call of integrator.run_loop; ``steps``, ``builds`` (pair lists, with
-  the wall lists) and ``wall_builds`` (wall lists alone) are the run's counts;
+  the wall lists), ``wall_builds`` (wall lists alone) and ``full_passes`` (pair passes over
+  every listed pair, which write the near list; the other steps visit the near list only:
+  integrator.run_loop, "Near list") are the run's counts.  ``full_passes`` includes the
+  setup passes, one in each run_loop call that starts from forces not yet evaluated (the
+  forces of a phase's initial state, before its first step), so full_passes - steps may be
+  positive in a run without a near-list pass; the estimate below charges no more full
+  passes to a call than it has steps;
 * ``pair_s``, ``walls_s``, ``kick_drift_s``, ``build_s`` (list builds without the cell
   grid and triangle bins), ``grid_s``, ``bins_s``, ``wall_build_s``: estimates of the loop's
   parts.  After a run_loop call (at most every 20 s of loop time) the state is probed on
-  copies of every array: one force pass (the three colours of pair_forces, gather,
-  reduce_wall_forces), the same with the wall lists emptied (the difference is the wall
-  contacts), one kick-drift, one pair-list build, its grid and bins alone and one wall-list
-  build, each the median of 3-5 repetitions; each call's steps and builds are charged at
+  copies of every array: one force pass over every listed pair and one over the near list
+  (the three colours of pair_forces, then gather and reduce_wall_forces with the wall lists
+  emptied), the near one again with the wall lists (the difference is the wall contacts),
+  one kick-drift, one pair-list build, its grid and bins alone and one wall-list build, each
+  the median of 3-5 repetitions; each call's steps, full passes and builds are charged at
   the last probe's unit costs.  Their sum is an estimate: it differs from ``loop_s`` by the
   probes' sampling (``estimate_over_loop``).
 
@@ -56,7 +63,7 @@ CASES = {  # case -> (soil, response)
 }
 PARTS = ["pair_s", "walls_s", "kick_drift_s", "build_s", "grid_s", "bins_s", "wall_build_s"]
 FIELDS = ["utc", "commit", "case", "soil", "stage", "seed", "particles", "steps", "builds",
-          "wall_builds", "value", "total_cpu_s", "import_s", "load_s", "setup_measure_s", "loop_s",
+          "wall_builds", "full_passes", "value", "total_cpu_s", "import_s", "load_s", "setup_measure_s", "loop_s",
           *PARTS, "estimate_over_loop", "load_1min"]
 PROBE_EVERY = 20.0
 
@@ -108,11 +115,15 @@ def _probe(names, args):
     dt = A["dt"]
     pair_forces, gather, kick = itg.pair_forces, itg.gather, itg._kick_drift
 
-    def force(c):
+    cutn = itg.NEAR_SKIN * A["skin"] + A["extra"]
+
+    def pairs(c, mode):
         for col in range(3):
             pair_forces(col, c["xr"], c["vw"], c["pair"], c["codes"], c["box"], c["periodic"], dt,
                         c["start_a"], c["nbr_a"], c["hist_a"], c["act_a"], c["sorder"], c["sgroup"],
-                        c["f"], c["t"], c["ovr"], c["mroll"])
+                        c["f"], c["t"], c["ovr"], c["mroll"], c["near"], c["ncnt"], mode, cutn)
+
+    def walls(c):
         gather(c["x"], c["v"], c["om"], c["r"], c["inv_m"], c["inv_i"], c["mat"], c["f"], c["t"],
                c["ovr"], c["peak"], c["mroll"], dt, True, c["max_ovr"], c["pair"], c["codes"],
                c["prim_kind"], c["prim_wall"], c["prim_mat"], c["prim_par"], c["wall_vel"],
@@ -120,10 +131,25 @@ def _probe(names, args):
         itg.reduce_wall_forces(c["wcnt_a"], c["wnbr_a"], c["wslot"], c["prim_wall"], c["wall_force"],
                                c["wall_torque"])
 
+    def full(c):  # every listed pair (the near list written), then the wall pass
+        pairs(c, 1)
+        walls(c)
+
+    def near(c):  # the near list's pairs, then the wall pass
+        pairs(c, 2)
+        walls(c)
+
+    def near_of(prep):  # the near list of the state written first
+        def made():
+            c = prep()
+            pairs(c, 1)
+            return c
+        return made
+
     def kick_drift(c):
         kick(c["x"], c["v"], c["om"], c["f"], c["t"], c["r"], c["m"], c["inv_m"], c["inv_i"],
              c["mat"], c["disp"], c["ovr"], c["mroll"], c["xr"], c["vw"], c["gravity"], dt,
-             c["box"], c["periodic"], 0.25 * c["skin"] ** 2, True)
+             c["box"], c["periodic"], 0.25 * c["skin"] ** 2, True, c["dref"], 0.0)
 
     def build(c):
         nb.build_lists(c["x"], c["r"], c["box"], c["periodic"], c["skin"], c["extra"], c["cell_start"],
@@ -148,9 +174,11 @@ def _probe(names, args):
                             c["wcell_start"], c["wcell_idx"], c["glob"], c["wnbr_a"], c["wcnt_a"],
                             c["whist_a"], c["wnbr_b"], c["wcnt_b"], c["whist_b"])
 
-    f, fw = _median_cpu(force, 5, fresh), _median_cpu(force, 5, nowall)
+    full_s = _median_cpu(full, 5, nowall)
+    f, fw = _median_cpu(near, 5, near_of(fresh)), _median_cpu(near, 5, near_of(nowall))
     g, gb, b = _median_cpu(grid, 3, fresh), _median_cpu(grid_bins, 3, fresh), _median_cpu(build, 3, fresh)
-    return {"pair_s": fw, "walls_s": max(f - fw, 0.0), "kick_drift_s": _median_cpu(kick_drift, 5, fresh),
+    return {"pair_s": fw, "pair_full_s": full_s, "walls_s": max(f - fw, 0.0),
+            "kick_drift_s": _median_cpu(kick_drift, 5, fresh),
             "build_s": max(b - gb, 0.0), "grid_s": g, "bins_s": max(gb - g, 0.0),
             "wall_build_s": _median_cpu(wall_build, 3, fresh)}
 
@@ -170,11 +198,14 @@ def one(case, seed) -> dict:
     sp = point(case, seed)
     real = itg.run_loop
     names = list(inspect.signature(real.py_func).parameters)
-    acc = {k: 0.0 for k in ["loop_s", "load_s", "steps", "builds", "wall_builds", "probe_s", *PARTS]}
+    acc = {k: 0.0 for k in ["loop_s", "load_s", "steps", "builds", "wall_builds", "full_passes",
+                            "probe_s", *PARTS]}
     state = {"unit": None, "since": float("inf"), "pending": [], "calls": 0}
 
-    def charge(unit, steps, builds, wall_builds):
-        for k in ("pair_s", "walls_s", "kick_drift_s"):
+    def charge(unit, steps, builds, wall_builds, fulls):
+        fulls = min(fulls, steps)  # a call's first pass of the forces as they stand is no step
+        acc["pair_s"] += fulls * unit["pair_full_s"] + (steps - fulls) * unit["pair_s"]
+        for k in ("walls_s", "kick_drift_s"):
             acc[k] += steps * unit[k]
         for k in ("build_s", "grid_s", "bins_s"):
             acc[k] += builds * unit[k]
@@ -182,7 +213,7 @@ def one(case, seed) -> dict:
 
     def timed(*args):
         fstate = dict(zip(names, args))["fstate"]
-        b0, w0 = fstate[1], fstate[2]
+        b0, w0, p0 = fstate[1], fstate[2], fstate[4]
         if state["calls"] == 0:
             t = time.process_time()
             real.compile(tuple(numba.typeof(a) for a in args))
@@ -192,10 +223,11 @@ def one(case, seed) -> dict:
         done = real(*args)
         spent = time.process_time() - t
         acc["loop_s"] += spent
-        counts = (done, fstate[1] - b0, fstate[2] - w0)
+        counts = (done, fstate[1] - b0, fstate[2] - w0, fstate[4] - p0)
         acc["steps"] += counts[0]
         acc["builds"] += counts[1]
         acc["wall_builds"] += counts[2]
+        acc["full_passes"] += counts[3]
         state["since"] += spent
         if done > 50 and state["since"] >= PROBE_EVERY:
             t = time.process_time()
@@ -219,6 +251,7 @@ def one(case, seed) -> dict:
     row = {"case": case, "soil": sp["soil"], "stage": sp["stage"], "seed": seed,
            "particles": int(df["particles"].iloc[0]), "steps": int(acc["steps"]),
            "builds": int(acc["builds"]), "wall_builds": int(acc["wall_builds"]),
+           "full_passes": int(acc["full_passes"]),
            "value": f"{float(df['value'].iloc[0]):.4f}",
            "total_cpu_s": round(t_import + sim_s, 2), "import_s": round(t_import, 2),
            "load_s": round(acc["load_s"], 2),

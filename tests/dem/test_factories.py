@@ -262,7 +262,7 @@ def test_lattice_jitter_psd_cylinder_and_count():
 def test_samples_beyond_the_available_memory_are_refused(monkeypatch):
     from soilcal.dem import state
 
-    # 1.1 MB available: 600 spheres of BYTES_PER_PARTICLE (2,000 bytes) do not fit
+    # 1.1 MB available: 600 spheres of BYTES_PER_PARTICLE (2,064 bytes) do not fit
     monkeypatch.setattr(state, "available_memory", lambda: 1_100_000)
     assert state.BYTES_PER_PARTICLE * 600 > 1_100_000 > state.BYTES_PER_PARTICLE * 500
     with pytest.raises(InputError, match=r"fill\.n: expected a particle count whose engine"):

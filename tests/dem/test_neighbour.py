@@ -288,7 +288,7 @@ def test_wall_lists_equal_brute_force_with_binned_triangles(rng, periodic, lift)
             d = prim_closest(wa["prim_kind"][p], wa["prim_par"], p, *sim.x[i])[0]
             if d < sim.p.r[i] + sim.skin + sim.extra:
                 want.add(p)
-        got = set(lists["wnbr_a"][i, : lists["wcnt_a"][i]].tolist())
+        got = set(lists["wnbr_a"][: lists["wcnt_a"][i], i].tolist())
         assert got == want
         total += sum(1 for p in want if p < 800)
     assert total > 50  # the plate is near many particles
@@ -313,7 +313,7 @@ def test_moving_mesh_renews_wall_lists_alone_and_misses_no_contact():
         sim.run(400)
         wa, lists = sim._warr, sim._lists
         for i in range(sim.n):
-            got = set(lists["wnbr_a"][i, : lists["wcnt_a"][i]].tolist())
+            got = set(lists["wnbr_a"][: lists["wcnt_a"][i], i].tolist())
             for p in range(wa["prim_kind"].shape[0]):
                 if prim_closest(wa["prim_kind"][p], wa["prim_par"], p, *sim.x[i])[0] < r:
                     assert p in got

@@ -162,7 +162,9 @@ def test_bytes_per_particle_matches_the_engine_allocation():
     n = sim.n
     assert sim._npair == 8 * n and sim._kw == 4
     per = [a for a in vars(sim.p).values() if isinstance(a, np.ndarray)]
-    per += [a for a in sim._lists.values() if a.shape[0] in (n, n + 1, 8 * n, 4 * n)]
+    # (the wall lists are slot-major: wnbr (4, n), wslot (4, n, 6), whist 4 n rows)
+    per += [a for a in sim._lists.values()
+            if a.shape[0] in (n, n + 1, 8 * n, 4 * n) or a.shape[:2] == (4, n)]
     per += [sim._cidx_arr, sim._cof_arr, sim._cpos_arr]
     total = sum(a.nbytes for a in per) - 2 * 8  # the two row-offset arrays hold n + 1
     assert total == n * BYTES_PER_PARTICLE

@@ -59,7 +59,7 @@ kernel compiled, nothing allocated per particle), from the same code the run use
   pair-list slots a size distribution needs, wider wall lists against triangle-mesh tools
   and room for the lists' reallocation, when old and new buffers coexist), for the largest
   number of spheres alive at once.  The count is of allocated bytes: a 94,000-sphere bin
-  held 1.7 kB per sphere resident after 400 steps against 4.0 kB (3,992 B) counted here
+  held 1.7 kB per sphere resident after 400 steps against 4.1 kB (4,120 B) counted here
   (``throughput.md``, case ``memory``, whose row has the 3.8 kB of an earlier count);
 * **runtime** (:meth:`Cost.wall_s`, :meth:`Cost.runtime_min`): particle-steps over the
   measured engine throughput :data:`THROUGHPUT` (particle-steps per second on one
@@ -251,7 +251,9 @@ def bytes_per_particle(pair_slots: float = PAIR_SLOTS_MIN, hist: int | None = No
     per pair slot: the size it takes in a bed of even packing; where a few of the build's
     block groups hold most pairs, e.g. a dense cluster among sparse spheres, it grows to
     up to NBLK_GROUPS = 32 entries per pair, :func:`soilcal.dem.neighbour.build_lists`,
-    which this count does not assume), and the cell arrays; with ``reallocation`` the
+    which this count does not assume; and the pair pass's near list, int32, one per pair
+    slot, with its count per sphere and the displacements it was written at, 1 + 3 numbers
+    of 8 bytes), and the cell arrays; with ``reallocation`` the
     lists twice (old and new buffers coexist while the engine widens them), plus
     :data:`SCENARIO_BYTES`.  With the defaults and without ``reallocation`` and the
     scenario's bytes it is :data:`soilcal.dem.state.BYTES_PER_PARTICLE`."""
@@ -260,7 +262,8 @@ def bytes_per_particle(pair_slots: float = PAIR_SLOTS_MIN, hist: int | None = No
 
     h = H_SHORT if hist is None else int(hist)
     lists = (2 * (8 + pair_slots * (8 + 8 * h + 1) + wall_slots * (8 + 8 * H_SIZE) + 8)
-             + 8 * (6 * wall_slots + 4 + 8 + 1 + 8 + 1 + 1) + 4 * pair_slots)
+             + 8 * (6 * wall_slots + 4 + 8 + 1 + 8 + 1 + 1 + 1 + 3) + 4 * pair_slots
+             + 4 * pair_slots)
     cells = 8 * (1 + 1 + 4)
     total = STATE_BYTES + cells + lists * (2 if reallocation else 1)
     return int(math.ceil(total + (SCENARIO_BYTES if reallocation else 0)))

@@ -683,8 +683,9 @@ class Simulation:
         self._pair = None
         self.dt = None
         # wall travel since the list build, pair-list builds, wall-list builds, steps since
-        # the last spatial sort (inf: sort at the first build)
-        self._fstate = np.array([0.0, 0.0, 0.0, math.inf])
+        # the last spatial sort (inf: sort at the first build), pair passes over every listed
+        # pair (integrator.run_loop, "Near list"; the others visit the near list only)
+        self._fstate = np.array([0.0, 0.0, 0.0, math.inf, 0.0])
 
     # ------------------------------------------------------------------ building
     def add_particles(self, x, r, material, v=None, omega=None, fixed=False, lock_rotation=False):
@@ -1020,15 +1021,22 @@ class Simulation:
     def _alloc_lists(self, n, npair, kw, old=None):
         """Pair buffers for ``npair`` pairs (CSR half lists), wall lists of width ``kw``;
         with ``old``, the current lists are carried over."""
+        if npair > np.iinfo(np.int32).max:  # the near list's slot indices are int32 (below)
+            raise SimulationError(
+                f"{n:,} spheres need {npair:,} pair-list slots, more than the near list's "
+                f"int32 slot indices hold ({np.iinfo(np.int32).max:,}); fewer spheres or a "
+                f"narrower size distribution")
         L = {}
         for s in ("a", "b"):
             L["start_" + s] = np.zeros(n + 1, dtype=np.int64)
             L["nbr_" + s] = np.full(npair, -1, dtype=np.int64)
             L["hist_" + s] = np.zeros((npair, hist_width(self.codes)))
             L["act_" + s] = np.zeros(npair, dtype=np.int8)
-            L["wnbr_" + s] = np.full((n, kw), -1, dtype=np.int64)
+            L["wnbr_" + s] = np.full((kw, n), -1, dtype=np.int64)  # wnbr[k, i]: slot k of i
             L["wcnt_" + s] = np.zeros(n, dtype=np.int64)
-            # wall history rows i * kw + k
+            # wall history rows k * n + i (slot k of particle i): a slot's rows of every
+            # particle lie together, so a run whose particles touch few walls reads a short
+            # stretch of this array whatever the width kw grew to
             L["whist_" + s] = np.zeros((n * kw, H_SIZE))
         L["sorder"] = np.zeros(n, dtype=np.int64)  # particles grouped by slab group
         L["sgroup"] = np.zeros(SGROUP_LEN, dtype=np.int64)  # group offsets, last: groups
@@ -1037,22 +1045,30 @@ class Simulation:
         # per pair in an even bed, up to NBLK_GROUPS per pair in an uneven one)
         nh = npair if old is None else max(npair, old["hits"].shape[0])
         L["hits"] = np.zeros(nh, dtype=np.int32)
-        L["wslot"] = np.zeros((n, kw, 6))
+        L["wslot"] = np.zeros((kw, n, 6))  # wslot[k, i]: slot k of particle i
         L["xr"] = np.zeros((n, 4))
         L["vw"] = np.zeros((n, 8))
         L["perm"] = np.zeros(n, dtype=np.int64)  # spatial sort: new row -> old row
         L["pbuf"] = np.zeros((n, 8))
         L["ibuf"] = np.zeros(n, dtype=np.int64)
+        # near list of the pair pass (integrator.run_loop): slots of each row, their count,
+        # the displacements when it was written.  A slot index is below npair, and int32
+        # holds up to 2^31 - 1 slots, whose pair lists alone would take over 170 GB (two
+        # buffers of partner, history and flag, over 80 bytes a slot); a larger list is
+        # refused at the top rather than wrapped
+        L["near"] = np.zeros(npair, dtype=np.int32)
+        L["ncnt"] = np.zeros(n, dtype=np.int64)
+        L["dref"] = np.zeros((n, 3))
         if old is not None:
             npo = int(old["start_a"][-1])
-            kwo = old["wnbr_a"].shape[1]
+            kwo = old["wnbr_a"].shape[0]
             L["start_a"][:] = old["start_a"]
             L["nbr_a"][:npo] = old["nbr_a"][:npo]
             L["hist_a"][:npo] = old["hist_a"][:npo]
             L["act_a"][:npo] = old["act_a"][:npo]
-            L["wnbr_a"][:, :kwo] = old["wnbr_a"]
+            L["wnbr_a"][:kwo] = old["wnbr_a"]
             L["wcnt_a"][:] = old["wcnt_a"]
-            L["whist_a"].reshape(n, kw, H_SIZE)[:, :kwo] = old["whist_a"].reshape(n, kwo, H_SIZE)
+            L["whist_a"].reshape(kw, n, H_SIZE)[:kwo] = old["whist_a"].reshape(kwo, n, H_SIZE)
             L["xr"][:] = old["xr"]
             L["vw"][:] = old["vw"]
             L["sorder"][:] = old["sorder"]
@@ -1157,8 +1173,8 @@ class Simulation:
                 self._cidx(), self._cof(), self._cpos_arr, self._wcells, self._wbins, self._glob(),
                 L["start_a"], L["nbr_a"], L["hist_a"], L["act_a"], L["start_b"], L["nbr_b"],
                 L["hist_b"], L["act_b"], min(numba.get_num_threads(), GROUPS_MAX),
-                L["sorder"], L["sgroup"], L["sscratch"], L["hits"],
-                L["wnbr_a"], L["wcnt_a"], L["whist_a"], L["wnbr_b"], L["wcnt_b"],
+                L["sorder"], L["sgroup"], L["sscratch"], L["hits"], L["near"], L["ncnt"],
+                L["dref"], L["wnbr_a"], L["wcnt_a"], L["whist_a"], L["wnbr_b"], L["wcnt_b"],
                 L["whist_b"], L["wslot"], wa["prim_kind"], wa["prim_wall"], wa["prim_mat"],
                 wa["prim_par"], wa["prim_pts"], wa["prim_dirs"], wa["wall_vel"],
                 wa["wall_omega"], wa["wall_centre"], self.wall_force, self.wall_torque, reach,

@@ -40,6 +40,7 @@ from __future__ import annotations
 
 import math
 
+import numpy as np
 from numba import njit, prange
 
 from soilcal.dem.contact import H_MR, H_SIZE, contact_force
@@ -49,6 +50,13 @@ from soilcal.dem.walls import CYLINDER, PLANE, move_walls, prim_closest
 
 (DONE, NEED_PAIRS, NEED_KW, NEED_CELLS, BLOWUP, SETTLED, NEED_WBINS,
  NEED_HITS) = 0, 1, 2, 3, 4, 5, 6, 7
+
+
+# near list (run_loop): pairs within NEAR_SKIN x skin (+ the JKR separation range) of
+# contact are checked every step, the others again once a particle has moved NEAR_MOVE x
+# that far (NEAR_MOVE < 1/2: two spheres closing in on each other cannot close the gap)
+NEAR_SKIN = 0.125
+NEAR_MOVE = 0.49
 
 
 # below this many particles a step is shorter than waking the worker threads three times
@@ -86,7 +94,7 @@ def _cover(i, k, nwc, p, feat, cx, cy, cz, tol, ri, xi, yi, zi, fk, wnbr, prim_k
         kk = fk if step == 0 else step - 1
         if kk < 0 or kk == k or (step > 0 and kk == fk):
             continue
-        pp = wnbr[i, kk]
+        pp = wnbr[kk, i]
         kq = prim_kind[pp]
         if abs(prim_closest(kq, prim_par, pp, cx, cy, cz)[0]) > tol:
             continue  # c is not on q
@@ -143,13 +151,18 @@ def _same_tol(ri, xi, yi, zi):
 
 @njit(cache=True, parallel=True, fastmath=CONTACT_MATH)
 def pair_forces(colour, xr, vw, pair, codes, box, periodic, dt, start, nbr, hist, act,
-                sorder, sgroup, f, t, ovr, mroll):
+                sorder, sgroup, f, t, ovr, mroll, near, ncnt, mode, cutn):
     """Pair pass of one colour: the slab groups of that colour in parallel (one per
     thread); each evaluates the listed pairs of its particles' rows and adds the force and
     torques to both particles (f, t; ovr: largest overlap of each particle; mroll: the
     ``bounded`` rolling resistance mu_r |F_n| c of each particle).  Slabs of one
     colour share no particle (:func:`soilcal.dem.neighbour._slabs`), so the writes never
-    race."""
+    race.
+
+    ``mode`` 0: every listed pair; 1: every listed pair, and the near list written: the
+    slots k of row i whose pair touches or lies closer than R_i + R_j + ``cutn``, in row
+    order, to near[start[i]:start[i] + ncnt[i]]; 2: the near list's pairs only
+    (:func:`run_loop`, "Near list")."""
     L0 = box[1] - box[0]
     L1 = box[3] - box[2]
     h0 = 0.5 * L0
@@ -161,8 +174,8 @@ def pair_forces(colour, xr, vw, pair, codes, box, periodic, dt, start, nbr, hist
     # JKR across a gap (``jkr_approach: gap``): separated listed pairs go to the contact law
     gap = codes[15] == 1 and codes[4] == 1
     for g in prange(G):
-        k = colour * G + g
-        for q in range(sgroup[k], sgroup[k + 1]):
+        kg = colour * G + g
+        for q in range(sgroup[kg], sgroup[kg + 1]):
             i = sorder[q]
             xi, yi, zi, ri = xr[i, 0], xr[i, 1], xr[i, 2], xr[i, 3]
             fxi = 0.0
@@ -173,8 +186,14 @@ def pair_forces(colour, xr, vw, pair, codes, box, periodic, dt, start, nbr, hist
             tzi = 0.0
             dmax = ovr[i]
             mri = 0.0
-            for k in range(start[i], start[i + 1]):
-                j = nbr[k]
+            k0 = start[i]
+            m = k0
+            for kk in range(k0, k0 + ncnt[i] if mode == 2 else start[i + 1]):
+                # slot and partner as unsigned integers: indices known not to be negative
+                # need no wrap-around code (Numba's for signed ones, a few instructions at
+                # each of the pair's dozen array accesses)
+                k = np.uint64(near[kk] if mode == 2 else kk)
+                j = np.uint64(nbr[k])
                 dx = min_image(xi - xr[j, 0], p0, h0, L0)
                 dy = min_image(yi - xr[j, 1], p1, h1, L1)
                 dz = zi - xr[j, 2]
@@ -182,6 +201,10 @@ def pair_forces(colour, xr, vw, pair, codes, box, periodic, dt, start, nbr, hist
                 rs = ri + rj
                 d2 = dx * dx + dy * dy + dz * dz
                 touching = act[k] != 0
+                if mode == 1:
+                    cn = rs + cutn
+                    near[m] = k
+                    m += (not d2 >= cn * cn) | touching
                 if d2 >= rs * rs and not touching and not gap:
                     continue
                 ims = vw[i, 6] + vw[j, 6]
@@ -243,6 +266,8 @@ def pair_forces(colour, xr, vw, pair, codes, box, periodic, dt, start, nbr, hist
             t[i, 2] += tzi
             ovr[i] = dmax
             mroll[i] += mri
+            if mode == 1:
+                ncnt[i] = m - k0
 
 
 @njit(cache=True, parallel=True, fastmath=CONTACT_MATH)
@@ -254,7 +279,6 @@ def gather(x, v, om, r, inv_m, inv_i, mat, f, t, ovr, peak, mroll, dt, kick, max
     number of particles with an overlap above max_ovr (of their radius) or a non-finite
     velocity.  ``peak[i]`` keeps the largest overlap of row i (of its radius) seen here."""
     n = x.shape[0]
-    KW = wnbr.shape[1]
     h = 0.5 * dt
     nbad = 0
     bounded = codes[3] == 3
@@ -294,14 +318,14 @@ def gather(x, v, om, r, inv_m, inv_i, mat, f, t, ovr, peak, mroll, dt, kick, max
                 ax = ay = az = bx = by = bz = 0.0
                 touched = False
                 for k in range(nwc if nwc > 1 else 0):  # one primitive: nothing to share
-                    p = wnbr[i, k]
+                    p = wnbr[k, i]
                     r8 = prim_closest(prim_kind[p], prim_par, p, xi, yi, zi)
                     # kept for the force loop below (the slot's reaction is written after)
-                    wslot[i, k, 0] = r8[0]
-                    wslot[i, k, 1] = r8[1]
-                    wslot[i, k, 2] = r8[2]
-                    wslot[i, k, 3] = r8[3]
-                    wslot[i, k, 4] = r8[7]
+                    wslot[k, i, 0] = r8[0]
+                    wslot[k, i, 1] = r8[1]
+                    wslot[k, i, 2] = r8[2]
+                    wslot[k, i, 3] = r8[3]
+                    wslot[k, i, 4] = r8[7]
                     if r8[7] == 0 and r8[0] < ri:
                         if fk < 0:
                             fk = k
@@ -317,7 +341,7 @@ def gather(x, v, om, r, inv_m, inv_i, mat, f, t, ovr, peak, mroll, dt, kick, max
                         elif nref == 1:
                             bx, by, bz = n1, n2, n3
                         nref += 1
-                    if whist[i * KW + k, H_SIZE - 1] != 0.0:
+                    if whist[k * n + i, H_SIZE - 1] != 0.0:
                         touched = True
                         if r8[7] != 0:
                             moved = True
@@ -329,8 +353,8 @@ def gather(x, v, om, r, inv_m, inv_i, mat, f, t, ovr, peak, mroll, dt, kick, max
                 for _ in range(nwc if moved and imi != 0.0 else 0):
                     moved = False
                     for k in range(nwc):
-                        p = wnbr[i, k]
-                        row = i * KW + k
+                        p = wnbr[k, i]
+                        row = k * n + i
                         if whist[row, H_SIZE - 1] == 0.0:
                             continue
                         r8 = prim_closest(prim_kind[p], prim_par, p, xi, yi, zi)
@@ -338,27 +362,27 @@ def gather(x, v, om, r, inv_m, inv_i, mat, f, t, ovr, peak, mroll, dt, kick, max
                             continue
                         kk = _cover(i, k, nwc, p, r8[7], r8[4], r8[5], r8[6], tol, ri, xi, yi,
                                     zi, fk, wnbr, prim_kind, prim_wall, prim_par, wall_vel, wall_omega)
-                        if kk >= 0 and whist[i * KW + kk, H_SIZE - 1] == 0.0:
+                        if kk >= 0 and whist[kk * n + i, H_SIZE - 1] == 0.0:
                             for q in range(H_SIZE):
-                                whist[i * KW + kk, q] = whist[row, q]
+                                whist[kk * n + i, q] = whist[row, q]
                                 whist[row, q] = 0.0
                             moved = True
                     if not moved:
                         break
                 for k in range(nwc):
-                    p = wnbr[i, k]
+                    p = wnbr[k, i]
                     if nwc > 1:  # the closest point of the first loop: c = x - dist n
-                        dist = wslot[i, k, 0]
-                        nx, ny, nz = wslot[i, k, 1], wslot[i, k, 2], wslot[i, k, 3]
-                        feat = int(wslot[i, k, 4])
+                        dist = wslot[k, i, 0]
+                        nx, ny, nz = wslot[k, i, 1], wslot[k, i, 2], wslot[k, i, 3]
+                        feat = int(wslot[k, i, 4])
                         cx, cy, cz = xi - dist * nx, yi - dist * ny, zi - dist * nz
                     else:
                         dist, nx, ny, nz, cx, cy, cz, feat = prim_closest(
                             prim_kind[p], prim_par, p, xi, yi, zi)
                     for q in range(6):
-                        wslot[i, k, q] = 0.0
+                        wslot[k, i, q] = 0.0
                     delta = ri - dist
-                    row = i * KW + k
+                    row = k * n + i
                     touching = whist[row, H_SIZE - 1] != 0.0
                     if delta <= 0.0 and not touching and not gap:
                         continue
@@ -411,12 +435,12 @@ def gather(x, v, om, r, inv_m, inv_i, mat, f, t, ovr, peak, mroll, dt, kick, max
                         px = xi - wall_centre[w, 0]
                         py = yi - wall_centre[w, 1]
                         pz = zi - wall_centre[w, 2]
-                        wslot[i, k, 0] = -cfx
-                        wslot[i, k, 1] = -cfy
-                        wslot[i, k, 2] = -cfz
-                        wslot[i, k, 3] = -(py * cfz - pz * cfy) - ctx
-                        wslot[i, k, 4] = -(pz * cfx - px * cfz) - cty
-                        wslot[i, k, 5] = -(px * cfy - py * cfx) - ctz
+                        wslot[k, i, 0] = -cfx
+                        wslot[k, i, 1] = -cfy
+                        wslot[k, i, 2] = -cfz
+                        wslot[k, i, 3] = -(py * cfz - pz * cfy) - ctx
+                        wslot[k, i, 4] = -(pz * cfx - px * cfz) - cty
+                        wslot[k, i, 5] = -(px * cfy - py * cfx) - ctz
                 iinv = inv_i[i]
                 if bounded and mres > 0.0 and iinv > 0.0:
                     # rotation at the next force evaluation without the resistance: the
@@ -436,12 +460,12 @@ def gather(x, v, om, r, inv_m, inv_i, mat, f, t, ovr, peak, mroll, dt, kick, max
                         ty += ry
                         tz += rz
                         for k in range(nwc):
-                            row = i * KW + k
+                            row = k * n + i
                             if whist[row, H_SIZE - 1] != 0.0:
                                 sh = whist[row, H_MR] / mres
-                                wslot[i, k, 3] -= sh * rx
-                                wslot[i, k, 4] -= sh * ry
-                                wslot[i, k, 5] -= sh * rz
+                                wslot[k, i, 3] -= sh * rx
+                                wslot[k, i, 4] -= sh * ry
+                                wslot[k, i, 5] -= sh * rz
                 f[i, 0] = fx
                 f[i, 1] = fy
                 f[i, 2] = fz
@@ -478,27 +502,31 @@ def reduce_wall_forces(wcnt, wnbr, wslot, prim_wall, wall_force, wall_torque):
     wall_torque[:, :] = 0.0
     for i in range(wcnt.shape[0]):
         for k in range(wcnt[i]):
-            w = prim_wall[wnbr[i, k]]
+            w = prim_wall[wnbr[k, i]]
             for q in range(3):
-                wall_force[w, q] += wslot[i, k, q]
-                wall_torque[w, q] += wslot[i, k, 3 + q]
+                wall_force[w, q] += wslot[k, i, q]
+                wall_torque[w, q] += wslot[k, i, 3 + q]
 
 
 @njit(cache=True, parallel=True)
 def _kick_drift(x, v, om, f, t, r, m, inv_m, inv_i, mat, disp, ovr, mroll, xr, vw, gravity,
-                dt, box, periodic, skin2, drift):
+                dt, box, periodic, skin2, drift, dref, near2):
     """Opening kick and drift (if ``drift``), periodic wrap, displacement since the last
     list build; packs (x, R) and (v, omega, 1/m, material) rows for the pair pass and resets
     the force to the weight, torque, largest overlap and rolling resistance to zero.  Returns
-    the number of particles that moved more than half the skin."""
+    the number of particles that moved more than half the skin since the list build, and
+    the number whose displacement since the near list was written (``dref``: disp then)
+    exceeds sqrt(near2)."""
     n = x.shape[0]
     h = 0.5 * dt if drift else 0.0
     nfar = 0
+    nnear = 0
     for i in prange(n):
         a = inv_m[i] * h
         b = inv_i[i] * h
         far = 0
         s2 = 0.0
+        e2 = 0.0
         for q in range(3):
             v[i, q] += f[i, q] * a
             om[i, q] += t[i, q] * b
@@ -507,8 +535,11 @@ def _kick_drift(x, v, om, f, t, r, m, inv_m, inv_i, mat, disp, ovr, mroll, xr, v
                 x[i, q] += dq
                 disp[i, q] += dq
             s2 += disp[i, q] * disp[i, q]
+            e = disp[i, q] - dref[i, q]
+            e2 += e * e
         if s2 > skin2:
             far = 1
+        nnear += 1 if not e2 <= near2 else 0
         for q in range(2):
             if periodic[q]:
                 lo = box[2 * q]
@@ -530,7 +561,7 @@ def _kick_drift(x, v, om, f, t, r, m, inv_m, inv_i, mat, disp, ovr, mroll, xr, v
         ovr[i] = 0.0
         mroll[i] = 0.0
         nfar += far
-    return nfar
+    return nfar, nnear
 
 
 @njit(cache=True)
@@ -567,8 +598,8 @@ def run_loop(nsteps, step0, resume_mid, need_forces, ke_tol, ke_every, max_ovr, 
              gravity, box, periodic, dt, skin, extra, pair, codes, sort_every, perm, fbuf, ibuf,
              cell_start, cell_idx, cell_of, cpos, wcell_start, wcell_idx, glob,
              start_a, nbr_a, hist_a, act_a, start_b, nbr_b, hist_b, act_b, groups, sorder,
-             sgroup, scratch, hits, wnbr_a, wcnt_a, whist_a, wnbr_b, wcnt_b, whist_b, wslot,
-             prim_kind, prim_wall, prim_mat, prim_par, prim_pts, prim_dirs,
+             sgroup, scratch, hits, near, ncnt, dref, wnbr_a, wcnt_a, whist_a, wnbr_b, wcnt_b,
+             whist_b, wslot, prim_kind, prim_wall, prim_mat, prim_par, prim_pts, prim_dirs,
              wall_vel, wall_omega, wall_centre, wall_force, wall_torque, wall_reach, wlog,
              fstate, status):
     """Run up to nsteps steps; returns the number of completed steps.
@@ -586,11 +617,29 @@ def run_loop(nsteps, step0, resume_mid, need_forces, ke_tol, ke_every, max_ovr, 
     sort: a pair-list build with fstate[3] >= sort_every > 0 first re-sorts the particle
     rows into cell order (:func:`soilcal.dem.neighbour.sort_particles`; perm, fbuf, ibuf:
     its work space; pid: insertion ids, which follow the rows; peak: the largest overlap of
-    each row, gather).  Wall force and torque go to row
+    each row, gather); fstate[4] counts the pair passes over every listed pair (below).
+    Wall force and torque go to row
     (step - log0) / wlog_every - 1 of wlog every wlog_every steps after step log0.
+
+    Near list: of the listed pairs (R_i + R_j + skin + s_c apart at most at the build), most
+    never touch before the next build, yet each is checked every step.  A pass over every
+    listed pair also writes, per row, the slots of the pairs that touch or lie closer than
+    R_i + R_j + s_n + s_c (s_n = NEAR_SKIN x skin) into ``near`` (``ncnt`` per row), and
+    dref takes disp; the following steps' passes visit those slots only, in the same order,
+    until a particle has moved more than NEAR_MOVE x s_n since (_kick_drift) or the lists
+    are rebuilt.  A pair left out neither touched nor lay within s_n + s_c of contact, and
+    its two spheres have since closed that gap by less than 2 NEAR_MOVE s_n < s_n: it is
+    still no closer than the JKR separation range s_c (and s_c bounds the reach of the
+    ``gap`` approach), so the full pass would have skipped it too, or passed it to the
+    contact law only to be told it is apart, with nothing written but its touching flag,
+    already 0.  The forces, their order and every history are those of the full pass.
+    Every run_loop call starts with a full pass (near, ncnt and dref need not survive it).
     """
     n = x.shape[0]
     skin2 = 0.25 * skin * skin
+    cutn = NEAR_SKIN * skin + extra
+    near2 = (NEAR_MOVE * NEAR_SKIN * skin) ** 2
+    nearok = False
     status[0] = DONE
     status[1] = step0
     status[2] = -1
@@ -612,10 +661,13 @@ def run_loop(nsteps, step0, resume_mid, need_forces, ke_tol, ke_every, max_ovr, 
         first = s == -1
         if first or s > 0 or not resume_mid:
             # s == -1: no motion, only the packed rows for the initial forces
-            nfar = _kick_drift(x, v, om, f, t, r, m, inv_m, inv_i, mat, disp, ovr, mroll, xr,
-                               vw, gravity, dt, box, periodic, skin2, not first)
+            nfar, nnear = _kick_drift(x, v, om, f, t, r, m, inv_m, inv_i, mat, disp, ovr,
+                                      mroll, xr, vw, gravity, dt, box, periodic, skin2,
+                                      not first, dref, near2)
             if nfar > 0:
                 rebuild = True
+            if nnear > 0:
+                nearok = False
             if wstep > 0.0 and not first:
                 move_walls(dt, prim_wall, prim_par, prim_pts, prim_dirs, wall_vel,
                            wall_omega, wall_centre)
@@ -676,6 +728,7 @@ def run_loop(nsteps, step0, resume_mid, need_forces, ke_tol, ke_every, max_ovr, 
                 sc, nc, hc, ac = so, no, ho, ao
                 disp[:, :] = 0.0
                 fstate[1] += 1.0
+                nearok = False
             else:
                 fstate[2] += 1.0
             wswapped = not wswapped
@@ -687,9 +740,14 @@ def run_loop(nsteps, step0, resume_mid, need_forces, ke_tol, ke_every, max_ovr, 
         # LIGGGHTS likewise do not update their shear history in a run's setup); -dt tells
         # the contact law it is the setup of a run with step dt (contact.py)
         dth = -dt if first else dt
+        mode = 2 if nearok else 1
         for colour in range(3):
             pair_forces(colour, xr, vw, pair, codes, box, periodic, dth, sc, nc, hc, ac,
-                        sorder, sgroup, f, t, ovr, mroll)
+                        sorder, sgroup, f, t, ovr, mroll, near, ncnt, mode, cutn)
+        if mode == 1:
+            dref[:, :] = disp
+            nearok = True
+            fstate[4] += 1.0
         nbad = gather(x, v, om, r, inv_m, inv_i, mat, f, t, ovr, peak, mroll, dt, not first, max_ovr,
                       pair, codes, prim_kind, prim_wall, prim_mat, prim_par, wall_vel,
                       wall_omega, wall_centre, wnc, wcc, whc, wslot)

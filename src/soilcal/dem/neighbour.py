@@ -20,7 +20,8 @@ the old list (a merge of the two sorted lists), so history is never lost while t
 particles stay within the cutoff.
 
 Walls: each particle also lists the wall primitives within R_i + skin + s_c (at most KW;
-wall history row i * KW + k).  Unbounded
+wall history row k * n + i for slot k of particle i, so that the first slots of all the
+particles lie together whatever width KW the lists once needed).  Unbounded
 primitives (planes, cylinders, cones, rectangles, disks) are tested by every particle;
 triangles are binned into the cells their bounding box, grown by the cutoff, overlaps, and
 tested only by the particles of those cells.
@@ -410,7 +411,7 @@ def _wall_row(i, io, x, r, cut0, cell_of, prim_kind, prim_par, wcell_start, wcel
     """Wall list of particle i: unbounded primitives, then the triangles binned in its cell
     (history rows copied from row io of the old list: i itself, or the row it had before a
     spatial sort); wcnt_new[i] may exceed KW."""
-    KW = wnbr_new.shape[1]
+    KW, n = wnbr_new.shape
     H = whist_new.shape[1]
     c = cell_of[i]
     xi, yi, zi, ri = x[i, 0], x[i, 1], x[i, 2], r[i]
@@ -426,14 +427,14 @@ def _wall_row(i, io, x, r, cut0, cell_of, prim_kind, prim_par, wcell_start, wcel
         d = prim_closest(prim_kind[p], prim_par, p, xi, yi, zi)[0]
         if d < ri + cut0:
             if wc < KW:
-                wnbr_new[i, wc] = p
-                row = i * KW + wc
+                wnbr_new[wc, i] = p
+                row = wc * n + i
                 for h in range(H):
                     whist_new[row, h] = 0.0
                 for k in range(wcnt_old[io]):
-                    if wnbr_old[io, k] == p:
+                    if wnbr_old[k, io] == p:
                         for h in range(H):
-                            whist_new[row, h] = whist_old[io * KW + k, h]
+                            whist_new[row, h] = whist_old[k * n + io, h]
                         break
             wc += 1
     wcnt_new[i] = wc
@@ -650,7 +651,7 @@ def build_wall_lists(x, r, box, periodic, skin, extra, cell_start, cell_idx, cel
         _wall_row(i, i, x, r, skin + extra, cell_of, prim_kind, prim_par, wcell_start,
                   wcell_idx, glob, ng, wnbr_old, wcnt_old, whist_old, wnbr_new, wcnt_new,
                   whist_new)
-    wneed = _wall_need(wcnt_new, wnbr_new.shape[1])
+    wneed = _wall_need(wcnt_new, wnbr_new.shape[0])
     if wneed > 0:
         return 2, wneed
     return 0, 0
@@ -809,7 +810,7 @@ def build_lists(x, r, box, periodic, skin, extra, cell_start, cell_idx, cell_of,
                           perm, prim_kind, prim_par, wcell_start, wcell_idx, glob, ng,
                           wnbr_old, wcnt_old, whist_old, wnbr_new, wcnt_new, whist_new)
                 h += start_new[i + 1] - start_new[i]
-    wneed = _wall_need(wcnt_new, wnbr_new.shape[1])
+    wneed = _wall_need(wcnt_new, wnbr_new.shape[0])
     if wneed > 0:
         return 2, wneed
     _slabs(cell_idx, cell_of, start_new, act_new, n0, n1, n2, periodic[0], periodic[1],

@@ -87,10 +87,11 @@ STATE_BYTES = 8 * (6 * 3 + 9)
 #   touching flag); 4 wall slots (primitive, 9 history columns) and a wall count
 LIST_BYTES = 2 * (8 + 8 * (8 + 4 * 8 + 1) + 4 * (8 + 9 * 8) + 8)
 #   wall reactions (4 x 6), packed rows (4 + 8), sort work space (1 + 8 + 1), slab order,
-#   cell index, cell of, cell-sorted copy (4); partners of the build's count pass (int32,
-#   one per pair slot: so in a bed whose block groups hold as many pairs each; a bed of
-#   uneven density needs up to NBLK_GROUPS = 32 per pair, neighbour.build_lists)
-WORK_BYTES = 8 * (4 * 6 + 4 + 8 + 1 + 8 + 1 + 1 + 1 + 1 + 4) + 4 * 8
+#   cell index, cell of, cell-sorted copy (4), near-list count and displacements (1 + 3);
+#   partners of the build's count pass (int32, one per pair slot: so in a bed whose block
+#   groups hold as many pairs each; a bed of uneven density needs up to NBLK_GROUPS = 32 per
+#   pair, neighbour.build_lists); the near list (int32, one per pair slot)
+WORK_BYTES = 8 * (4 * 6 + 4 + 8 + 1 + 8 + 1 + 1 + 1 + 1 + 4 + 1 + 3) + 4 * 8 + 4 * 8
 BYTES_PER_PARTICLE = STATE_BYTES + LIST_BYTES + WORK_BYTES
 
 

@@ -48,7 +48,7 @@ radius r_q sized for a sample about 40 mm high (radii uniform in [0.9, 1.1] r_q)
 modulus capped at 5e5 Pa (the stress level scales with it: the convergence study shows by
 how much); ``paper``: 3 kg of the paper's particle sizes (004 Sec. 2.6, taken as diameters)
 and the unscaled modulus.  That is 69.7 million spheres (half of them 0.315 mm across), about
-130 GB of engine state (:data:`soilcal.dem.state.BYTES_PER_PARTICLE`); the paper prints the
+144 GB of engine state (:data:`soilcal.dem.state.BYTES_PER_PARTICLE`); the paper prints the
 mass but no particle count, and its own repose runs used 0.1-0.3 kg (Sec. 2.6, 3.6).  On a
 machine with less memory the run stops at the insertion, before anything is allocated,
 with the count and the memory it needs; ``n_particles`` or ``radius`` in the setup give a
