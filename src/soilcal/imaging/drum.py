@@ -86,12 +86,12 @@ from dataclasses import asdict, dataclass
 
 import numpy as np
 from scipy import ndimage as ndi
-from skimage import filters, measure, morphology, transform
+from skimage import feature, filters, measure, morphology, transform
 
 from soilcal.errors import InputError
 from soilcal.imaging.drum_options import (CHORD_FRACTION, LEVELS, OPTIONS, RIM_MARGIN,  # noqa: F401
                                           frame_options)
-from soilcal.imaging.edges import canny, hough_circle
+from soilcal.imaging.edges import hough_circle
 from soilcal.imaging.io import read_gray_reduced
 from soilcal.imaging.measure import (PILE_WORK_PIXELS, PLATE_MAX_ROLL_DEG, Stages, _plate_beyond_search, open_fill,
                                      plate_line_any, roll_of)
@@ -204,7 +204,7 @@ def _edges(img, sigma=2.0):
     sm = filters.gaussian(img, sigma)
     g = np.hypot(ndi.sobel(sm, axis=0), ndi.sobel(sm, axis=1))
     top = float(np.percentile(g, 99.9))
-    return canny(img, sigma=sigma, low_threshold=0.1 * top, high_threshold=0.2 * top)
+    return feature.canny(img, sigma=sigma, low_threshold=0.1 * top, high_threshold=0.2 * top)
 
 
 def _hspace_peaks(img, dist, top=None):
@@ -672,7 +672,7 @@ def _measure_drum_frame(path, threshold, keep_stages, options, tried: Tried) -> 
     if opts["roll_deg"] is not None:
         roll, lref = opts["roll_deg"], "manifest roll"
     elif opts["level"] != "image":
-        edges = canny(gray, sigma=1.5)  # plate_lines' own edge map, kept for the tilted-edge search
+        edges = feature.canny(gray, sigma=1.5)  # plate_lines' own edge map, kept for the tilted-edge search
         line = plate_line_any(path, gray, below=(cx, cy + R), required=False, edges=edges)
         # no plate below the drum within the plate search: a plate tilted beyond it (a camera
         # rolled further) would have given the image axes, and the angle off by the roll.  Only

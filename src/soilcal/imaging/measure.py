@@ -33,10 +33,9 @@ from dataclasses import asdict, dataclass, field
 
 import numpy as np
 from scipy import ndimage as ndi
-from skimage import color, filters, measure, morphology, transform, util
+from skimage import color, feature, filters, measure, morphology, transform, util
 
 from soilcal.errors import InputError
-from soilcal.imaging.edges import canny
 from soilcal.imaging.io import read_photo, read_photo_reduced
 from soilcal.imaging.refusal import Tried, explained
 from soilcal.imaging.scenes import furrow_chord_area
@@ -294,7 +293,7 @@ def colour_edges(rgb, sigma=1.5):
         ch = lab[..., k]
         lo, hi = np.percentile(ch, [1, 99])
         if hi - lo > 1e-6:
-            out |= canny(np.clip((ch - lo) / (hi - lo), 0, 1), sigma=sigma)
+            out |= feature.canny(np.clip((ch - lo) / (hi - lo), 0, 1), sigma=sigma)
     return out
 
 
@@ -354,7 +353,7 @@ def _binary(path, gray, method, classes=2):
 
 def plate_line(path, gray, binary):
     """(slope, intercept) of the plate's top edge, row = slope * col + intercept."""
-    edges = canny(gray, sigma=1.5)
+    edges = feature.canny(gray, sigma=1.5)
     h, w = gray.shape
     thetas = np.radians(np.linspace(84, 96, 241))
     hs, ang, dist = transform.hough_line(edges, theta=thetas)
@@ -798,7 +797,7 @@ def _pile_on_lines(path, rgb, threshold, keep_stages, channel, tried: Tried, pla
     if plate is not None:
         lines = [(float(plate[0]), float(plate[1]))]
     else:
-        ledges = canny(lum, sigma=1.5)
+        ledges = feature.canny(lum, sigma=1.5)
         lines = plate_lines(lum, edges=ledges, paired=True)
         cedges = colour_edges(rgb)
         tried.edges = cedges
@@ -2029,7 +2028,7 @@ def plate_lines(gray, below=None, edges=None, paired=False):
     distance bins (the heap search, whose candidates must also run on beside the heap,
     :func:`_plate_beside_heap`; the drum's level keeps a line's own votes).
     """
-    edges = canny(gray, sigma=1.5) if edges is None else edges
+    edges = feature.canny(gray, sigma=1.5) if edges is None else edges
     h, w = gray.shape
     col0, row0 = below if below is not None else (0.0, 0.5 * h)
     # 0.05 deg steps over +-PLATE_MAX_ROLL_DEG of horizontal
