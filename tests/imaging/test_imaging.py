@@ -340,7 +340,8 @@ def test_an_unknown_channel_is_refused_before_any_search(monkeypatch):
     for kw in ({}, {"image": np.zeros((30, 40, 3))}):
         with pytest.raises(InputError) as ei:
             measure.measure_pile(photo, channel="hue", **kw)
-        assert str(ei.value) == f"{photo}: channel: expected 'gray', 'chroma' or 'auto', got 'hue'"
+        assert str(ei.value) == (f"{photo}: channel: expected 'gray', 'chroma', 'lab_a', 'lab_b', "
+                                  "'saturation' or 'auto', got 'hue'")
         assert ei.value.field == "channel" and ei.value.got == "hue"
 
 

@@ -12,6 +12,13 @@
 * :mod:`soilcal.imaging.figures`: original / gray / binary / contour / fitted-line figures.
 """
 
+#: the cue images a pile photo can be measured on (``channel`` of
+#: :func:`soilcal.imaging.measure.measure_pile`; ``auto``, the default, lets the search choose
+#: among them)
+CUES = ("gray", "chroma", "lab_a", "lab_b", "saturation")
+#: what ``channel`` accepts, as error messages name it
+CHANNELS_EXPECTED = ", ".join(repr(c) for c in CUES) + " or 'auto'"
+
 
 def huge_pages_off() -> None:
     """Turn numpy's transparent huge pages off in this process, for a photo measurement.

@@ -5,7 +5,7 @@ from __future__ import annotations
 import json
 import sys
 
-from soilcal.imaging import huge_pages_off
+from soilcal.imaging import CUES, huge_pages_off
 from soilcal.imaging.manifest import counted, set_aside_lines
 
 
@@ -194,7 +194,7 @@ def register(subparsers) -> None:
 
     q = sub.add_parser("pile", help="heap photos (several views are averaged)")
     q.add_argument("photos", nargs="+")
-    q.add_argument("--channel", choices=("auto", "gray", "chroma"), default="auto")
+    q.add_argument("--channel", choices=("auto",) + CUES, default="auto")
     q.add_argument("--plate-line-px", dest="plate_line_px", type=float, nargs=4, action="append",
                    metavar=("C0", "R0", "C1", "R1"),
                    help="the plate's top edge given by hand, not searched: two points (column, row) on it in the "

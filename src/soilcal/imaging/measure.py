@@ -36,6 +36,7 @@ from scipy import ndimage as ndi
 from skimage import color, feature, filters, measure, morphology, transform, util
 
 from soilcal.errors import InputError
+from soilcal.imaging import CHANNELS_EXPECTED, CUES
 from soilcal.imaging.io import read_photo, read_photo_reduced
 from soilcal.imaging.refusal import Tried, explained
 from soilcal.imaging.scenes import furrow_chord_area
@@ -261,10 +262,9 @@ def _gray(rgb, channel="gray", lab=None):
             s = delta / top
         s[delta == 0.0] = 0.0
         return filters.gaussian(s, 1.2)
-    raise InputError(None, "channel", "'gray', 'chroma' or 'auto'", channel)
+    raise InputError(None, "channel", CHANNELS_EXPECTED, channel)
 
 
-CUES = ("gray", "chroma", "lab_a", "lab_b", "saturation")
 #: a flank fit is good enough for an "ok" result when at least this share of its band points
 #: lie on its line and their RMS distance from it is at most FLANK_RMS_MAX px
 FLANK_USED_MIN = 0.6
@@ -624,7 +624,7 @@ def measure_pile(path, threshold="otsu", keep_stages=False, channel="auto", refu
     "command line" for ``soilcal image pile --plate-line-px``).
     """
     if channel != "auto" and channel not in CUES:
-        raise InputError(path, "channel", "'gray', 'chroma' or 'auto'", channel)
+        raise InputError(path, "channel", CHANNELS_EXPECTED, channel)
     if plate is not None:
         _check_given_plate(path, plate)
     if plate_px is not None:
