@@ -281,7 +281,7 @@ def bartlett_p(var, dof) -> float:
     return float(stats.chi2.sf(m / c, len(v) - 1))
 
 
-def pooled_relative_variance(sd, n, scale, group, homogeneity: bool = True) -> np.ndarray:
+def pooled_relative_variance(sd, n, scale, group, homogeneity: bool = True, dof: bool = False):
     """Per row, the squared SD over ``scale`` pooled over the rows of its ``group`` (a measured
     quantity) that estimate it (n > 1 values behind it, the SD finite): sum((n - 1) (sd /
     scale)^2) / sum(n - 1); NaN where its group has none, or where Bartlett's test
@@ -291,71 +291,191 @@ def pooled_relative_variance(sd, n, scale, group, homogeneity: bool = True) -> n
     each row keeps its own.  ``homogeneity=False`` skips that test: the pooled value is then
     the group's typical relative variance whatever its rows' spread (the weights of
     :func:`relative_variances`).  Rows repeating one estimate (the replicate rows of one
-    simulation) are to be passed once."""
+    simulation) are to be passed once.  With ``dof``, also per row the pooled value's degrees
+    of freedom, sum(n - 1) over the rows it pools (0 where it is NaN)."""
     sd, n, scale = (np.asarray(x, float) for x in (sd, n, scale))
     rel = (sd / scale) ** 2
     ok = np.isfinite(rel) & np.isfinite(n) & (n > 1)
     num, den = np.where(ok, (n - 1) * rel, 0.0), np.where(ok, n - 1, 0.0)
     names = np.asarray(group).astype(str)
     if len(set(names.tolist())) == len(names):  # every row its own group: nothing to pool or test
-        return np.where(den > 0, num / np.where(den > 0, den, 1.0), np.nan)
-    g = pd.Series(names)
-    num = pd.Series(num).groupby(g).transform("sum").to_numpy(float)
-    den = pd.Series(den).groupby(g).transform("sum").to_numpy(float)
-    out = np.where(den > 0, num / np.where(den > 0, den, 1.0), np.nan)
-    if not homogeneity:
-        return out
-    for _, at in pd.Series(np.arange(len(g))).groupby(g):
-        at = at.to_numpy()
-        at = at[ok[at]]
-        if len(at) > 1 and bartlett_p(rel[at], n[at] - 1.0) < HOMOGENEITY_ALPHA:
-            out[pd.Series(np.asarray(group).astype(str)).to_numpy() == g.iloc[at[0]]] = np.nan
+        out = np.where(den > 0, num / np.where(den > 0, den, 1.0), np.nan)
+    else:
+        g = pd.Series(names)
+        num = pd.Series(num).groupby(g).transform("sum").to_numpy(float)
+        den = pd.Series(den).groupby(g).transform("sum").to_numpy(float)
+        out = np.where(den > 0, num / np.where(den > 0, den, 1.0), np.nan)
+        if homogeneity:
+            for _, at in pd.Series(np.arange(len(g))).groupby(g):
+                at = at.to_numpy()
+                at = at[ok[at]]
+                if len(at) > 1 and bartlett_p(rel[at], n[at] - 1.0) < HOMOGENEITY_ALPHA:
+                    out[names == g.iloc[at[0]]] = np.nan
+    if dof:
+        return out, np.where(np.isfinite(out), den, 0.0)
     return out
 
 
 def pooled_measured_dof(df: pd.DataFrame, known: np.ndarray) -> np.ndarray:
-    """Per row, the degrees of freedom of its quantity's pooled measured SD (the ``known`` rows'
-    n - 1 summed over the quantity), 0 where the quantity's measured SDs are not pooled
-    (:func:`pooled_relative_variance`)."""
+    """Per row, the degrees of freedom of its quantity's measured SD pooled over the ``known``
+    rows (:func:`pooled_relative_variance`: the n - 1 of the rows it pools), 0 where the
+    quantity's measured SDs are not pooled."""
     if "measured_sd" not in df or not len(df):
         return np.zeros(len(df))
-    nm = df["measured_n"].astype(float).fillna(1.0).clip(lower=1.0).to_numpy() if "measured_n" in df else np.ones(len(df))
-    sd = df["measured_sd"].astype(float).to_numpy()
-    meas = (df["measurement"].astype(str) + KEY_SEP + df["measure"].astype(str)).to_numpy()
-    pooled = np.isfinite(pooled_relative_variance(np.where(known, sd, np.nan), nm, scale_of(df), meas))
-    dof = pd.Series(np.where(known & (nm > 1), nm - 1.0, 0.0)).groupby(meas).transform("sum").to_numpy(float)
-    return np.where(pooled, dof, 0.0)
+    c = _columns(df)
+    return pooled_relative_variance(np.where(known, c["sd_m"], np.nan), c["nm"], c["scale"], c["meas"], dof=True)[1]
+
+
+#: the estimates a part of a row's variance can take (:func:`variance_sources`)
+OWN, REPLICATE, POOLED, POOLED_REPLICATE = "own", "replicate", "pooled", "pooled replicate"
+#: the rules of :func:`variance_sources`: which estimates a part takes, the first a row has
+PREFER = {"own": (OWN, REPLICATE, POOLED, POOLED_REPLICATE),  # the noise floor (:func:`noise_floor`)
+          "pooled": (POOLED, OWN),  # the weights (:func:`relative_variances`)
+          "pooled estimates": (POOLED, OWN)}  # the residual's degrees of freedom (:func:`reference_variances`)
+
+
+def _columns(df: pd.DataFrame) -> dict:
+    """The columns the rows' variances come from, as arrays over the rows of ``df``: a column
+    the table lacks is unknown (NaN); a missing repeat count is one repeat (``nm``, the count as
+    given in ``n_given``), a missing seed count no seed; the quantity's key ``meas`` and the
+    simulation ``sims`` (each row its own where the table has no ``simulation`` column)."""
+    n = len(df)
+
+    def col(name):
+        return df[name].astype(float).to_numpy() if name in df else np.full(n, np.nan)
+
+    n_given, ns = col("measured_n"), col("simulated_n")
+    return dict(measured=col("measured"), sd_m=col("measured_sd"), n_given=n_given,
+                nm=np.clip(np.where(np.isnan(n_given), 1.0, n_given), 1.0, None), sd_s=col("simulated_sd"),
+                ns=np.where(np.isnan(ns), 0.0, ns), scale=np.asarray(scale_of(df), float),
+                meas=(df["measurement"].astype(str) + KEY_SEP + df["measure"].astype(str)).to_numpy(),
+                sims=df["simulation"].astype(str).to_numpy() if "simulation" in df else np.arange(n).astype(str))
+
+
+def variance_sources(df: pd.DataFrame, prefer: str, homogeneity: bool = True, once: bool = False,
+                     replicates: bool = False) -> dict:
+    """Which estimate each row's measured part (sd_m^2 / n_m) and seed part (sd_s^2 / n_s) of
+    its variance takes: the one rule set of :func:`reference_variances`,
+    :func:`relative_variances` and the noise floor (:func:`noise_floor`), each a choice of the
+    arguments.  The estimates, each a variance per repeat (or seed) relative to the row's scale
+    squared:
+
+    * own: the row's own SD (a measured SD without a repeat count is the value's own
+      uncertainty, taken as known, n_m 1; a seed SD needs two seeds); an *estimate* where
+      n > 1;
+    * replicate (measured part, with ``replicates``): where a condition's repeats are rows of
+      their own without an SD, the scatter of their values, each the mean of its n_m repeats
+      (one where no count is given), which estimates sigma^2 mean(1 / n_m) of the per-repeat
+      variance sigma^2: var(values) / mean(1 / n_m) on rows - 1 degrees of freedom;
+    * pooled: (sd / scale)^2 pooled over the rows of the measured quantity
+      (:func:`pooled_relative_variance`, with Bartlett's homogeneity test where
+      ``homogeneity``): the seed SDs once per simulation (its replicate rows repeat one
+      estimate), the measured SDs of every row, or with ``once`` a row entered twice (the
+      same simulation, measured value, SD and repeat count) once;
+    * pooled replicate (with ``replicates``): the replicate scatters pooled over the
+      quantity's conditions, each over its mean scale.
+
+    ``prefer`` (:data:`PREFER`): ``"own"`` takes the first of own, replicate, pooled and pooled
+    replicate a row has; ``"pooled"`` the pooled value where there is one, else own;
+    ``"pooled estimates"`` the pooled value only where the row's own part is an estimate, else
+    own.
+
+    Returns the columns read (:func:`_columns`) and per part (suffix ``_m``, ``_s``): ``take``
+    (per row the estimate's name, "" where it has none), ``estimate``, ``pooled`` with its
+    ``pooled_dof`` (0 where NaN) and, with ``replicates``, ``replicate`` (per row the
+    per-repeat variance in the values' unit), ``replicate_key``, ``replicate_dof``,
+    ``pooled_replicate`` and ``pooled_replicate_dof`` (measured part)."""
+    c = _columns(df)
+    n = len(df)
+    m, sd_m, nm, sd_s, ns, scale, meas, sims = (c[k] for k in ("measured", "sd_m", "nm", "sd_s", "ns", "scale",
+                                                                "meas", "sims"))
+    own_m, own_s = np.isfinite(sd_m), np.isfinite(sd_s) & (ns >= 2)
+    enter_m = own_m
+    if once:
+        enter_m = own_m & ~pd.DataFrame({"s": sims, "m": meas, "v": m, "sd": sd_m, "n": nm}).duplicated().to_numpy()
+    first = ~pd.DataFrame({"s": sims, "m": meas}).duplicated().to_numpy()
+    pool_m, pool_dof_m = pooled_relative_variance(np.where(enter_m, sd_m, np.nan), nm, scale, meas, homogeneity,
+                                                  dof=True)
+    pool_s, pool_dof_s = pooled_relative_variance(np.where(first & own_s, sd_s, np.nan), ns, scale, meas, homogeneity,
+                                                  dof=True)
+    out = dict(c, estimate_m=own_m & (nm > 1), estimate_s=own_s, pooled_m=pool_m, pooled_dof_m=pool_dof_m,
+               pooled_s=pool_s, pooled_dof_s=pool_dof_s)
+    has_m = {OWN: own_m, POOLED: np.isfinite(pool_m)}
+    has_s = {OWN: own_s, POOLED: np.isfinite(pool_s)}
+    if prefer == "pooled estimates":
+        has_m[POOLED] = has_m[POOLED] & out["estimate_m"]
+        has_s[POOLED] = has_s[POOLED] & out["estimate_s"]
+    if replicates:
+        out.update(_replicate_scatter(m, ~np.isfinite(sd_m), nm, scale, meas, sims, homogeneity))
+        has_m[REPLICATE] = np.isfinite(out["replicate"])
+        has_m[POOLED_REPLICATE] = np.isfinite(out["pooled_replicate"])
+    take_m, take_s = np.full(n, "", dtype=object), np.full(n, "", dtype=object)
+    for name in PREFER[prefer]:
+        if name in has_m:
+            take_m[(take_m == "") & has_m[name]] = name
+        if name in has_s:
+            take_s[(take_s == "") & has_s[name]] = name
+    out.update(take_m=take_m, take_s=take_s)
+    return out
+
+
+def _replicate_scatter(m, loose, nm, scale, meas, sims, homogeneity: bool) -> dict:
+    """The replicate estimates of :func:`variance_sources`: per row among the ``loose`` rows (no
+    measured SD, a measured value) of a condition (simulation and quantity) with two such rows
+    at least whose values differ (repeats rounded alike state no scatter), the per-repeat
+    variance var(values) / mean(1 / n_m) in the values' unit, its key and degrees of freedom;
+    and per row, those variances relative to their condition's mean scale squared pooled over
+    the quantity's conditions, with their degrees of freedom."""
+    n = len(m)
+    rep, rep_dof = np.full(n, np.nan), np.zeros(n)
+    rep_key = np.array([""] * n, dtype=object)
+    rep_sd, rep_n, rep_scale, rep_q = [], [], [], []
+    loose = loose & np.isfinite(m)
+    if loose.any():
+        key = pd.Series(sims + KEY_SEP + meas)[loose]
+        for k, at in key.groupby(key.to_numpy(), sort=False):
+            at = at.index.to_numpy()
+            if len(at) < 2 or not np.ptp(m[at]) > 0:  # one value, or repeats rounded alike: no scatter
+                continue
+            per_repeat = float(np.var(m[at], ddof=1)) / float(np.mean(1.0 / nm[at]))
+            rep[at], rep_key[at], rep_dof[at] = per_repeat, k, len(at) - 1.0
+            rep_sd.append(np.sqrt(per_repeat)), rep_n.append(len(at)), rep_q.append(meas[at[0]])
+            rep_scale.append(float(np.mean(scale[at])))
+    pooled, pooled_dof = np.full(n, np.nan), np.zeros(n)
+    if rep_sd:
+        v, d = pooled_relative_variance(np.asarray(rep_sd), np.asarray(rep_n, float), np.asarray(rep_scale),
+                                        np.asarray(rep_q), homogeneity, dof=True)
+        by_q = {q: (vq, dq) for q, vq, dq in zip(rep_q, v, d) if np.isfinite(vq)}
+        for i, q in enumerate(meas):
+            if q in by_q:
+                pooled[i], pooled_dof[i] = by_q[q]
+    return dict(replicate=rep, replicate_key=rep_key, replicate_dof=rep_dof, pooled_replicate=pooled,
+                pooled_replicate_dof=pooled_dof)
 
 
 def reference_variances(df: pd.DataFrame, flags: bool = False) -> tuple[np.ndarray, ...]:
     """The measured and seed variances of the rows' means that their residual degrees of
     freedom are computed from: where a part is estimated (n > 1 repeats or seeds), its squared
-    SD relative to the row's scale pooled over the measured quantity's rows
-    (:func:`pooled_relative_variance`; the seeds once per simulation), times the row's scale
-    squared over n (a measured quantity of a measurement table: one rig, one simulated scenario);
-    else the row's own variance (a measured SD without a repeat count is taken
-    as known).  Welch-Satterthwaite's degrees of freedom computed from the row's own estimated
+    SD relative to the row's scale pooled over the measured quantity's rows, with Bartlett's
+    test (:func:`variance_sources`, ``"pooled estimates"``), times the row's scale squared over
+    n (a measured quantity of a measurement table: one rig, one simulated scenario); else the
+    row's own variance (a measured SD without a repeat count is taken as known), 0 where it has
+    none.  Welch-Satterthwaite's degrees of freedom computed from the row's own estimated
     variances grow where those few repeats or seeds happen to scatter little, exactly where
     the standardised residual is large (1 % measured noise over 10 repeats, 5 % seed scatter
     over 3 seeds: 7.9 % of the rows beyond the 5 % two-sided point, mean square 1.23).  With
     ``flags``, also per row whether each estimated part is pooled (else the row's own)."""
-    nm = df["measured_n"].astype(float).fillna(1.0).clip(lower=1.0).to_numpy()
-    ns = df["simulated_n"].astype(float).fillna(0.0).to_numpy()
-    sd_m, sd_s = df["measured_sd"].astype(float).to_numpy(), df["simulated_sd"].astype(float).to_numpy()
-    scale = scale_of(df)
-    meas = (df["measurement"].astype(str) + KEY_SEP + df["measure"].astype(str)).to_numpy()
+    t = variance_sources(df, "pooled estimates")
+    nm, ns, sd_m, sd_s, scale = t["nm"], t["ns"], t["sd_m"], t["sd_s"], t["scale"]
+    # the pooled relative variance back in the row's unit, where the row's scale gives it one
+    pooled_m = (t["take_m"] == POOLED) & np.isfinite(t["pooled_m"] * scale)
+    pooled_s = (t["take_s"] == POOLED) & np.isfinite(t["pooled_s"] * scale)
     own_m = np.where(np.isfinite(sd_m), sd_m ** 2 / nm, 0.0)
     own_s = np.where(np.isfinite(sd_s) & (ns >= 1), sd_s ** 2 / np.clip(ns, 1.0, None), 0.0)
-    cv_m = pooled_relative_variance(sd_m, nm, scale, meas)
-    first = ~pd.DataFrame({"s": df["simulation"].astype(str) if "simulation" in df else np.arange(len(df)).astype(str),
-                           "m": meas}).duplicated().to_numpy()
-    cv_s = pooled_relative_variance(np.where(first, sd_s, np.nan), ns, scale, meas)
-    ref_m = np.where((nm > 1) & np.isfinite(sd_m) & np.isfinite(cv_m * scale), cv_m * scale ** 2 / nm, own_m)
-    ref_s = np.where((ns > 1) & np.isfinite(sd_s) & np.isfinite(cv_s * scale), cv_s * scale ** 2 / np.clip(ns, 1.0, None),
-                     own_s)
+    ref_m = np.where(pooled_m, t["pooled_m"] * scale ** 2 / nm, own_m)
+    ref_s = np.where(pooled_s, t["pooled_s"] * scale ** 2 / np.clip(ns, 1.0, None), own_s)
     if flags:
-        est_m, est_s = (nm > 1) & np.isfinite(sd_m), (ns > 1) & np.isfinite(sd_s)
-        return ref_m, ref_s, ~est_m | np.isfinite(cv_m * scale), ~est_s | np.isfinite(cv_s * scale)
+        return ref_m, ref_s, ~t["estimate_m"] | pooled_m, ~t["estimate_s"] | pooled_s
     return ref_m, ref_s
 
 
@@ -364,22 +484,19 @@ def relative_variances(df: pd.DataFrame, parts: bool = False):
     (sd_m^2 / n_m + sd_s^2 / n_s) / scale^2 (module docstring): the weights of the quantities
     of one measured test (:func:`soilcal.loop.diagnose.per_test`), which are to be one per
     quantity, not the noise of each row's SD.  Each part's relative variance (sd / scale)^2 is
-    pooled over the rows of its measured quantity (:func:`pooled_relative_variance` without its
-    homogeneity test, Bartlett's) and divided by the row's own n: the measured SDs pooled over
-    the quantity's rows, a row entered twice (the same simulation, measured value, SD and
-    repeat count) counted once, and divided by the row's repeat count n_m; the seed SDs pooled
-    once per simulation (its replicate rows repeat one estimate) and divided by the row's seed
-    count n_s.  From three repeats or three seeds an SD squared is a variance on 2 degrees of
-    freedom, a third of such estimates off by a factor of 3 or more either way (chi-square on
-    2: e^-3 + 1 - e^(-1/3) = 0.33); pooled over the 18 rows of a quantity, on 36.  The pooled
-    value stands where the row's own SD is missing too (one seed behind the simulated mean).  A
-    part that no row of the quantity estimates (n > 1) takes the row's own SD (a measured SD
-    without a repeat count is taken as known, n_m 1), and a part with neither is left out, as
-    the residual's standard error leaves it out (no measured SD: the seed scatter alone).  NaN
-    where neither part is known (no measured SD and one seed) or the variance is 0, and for a
-    table without the columns.  With ``parts`` also, per row, which parts the variance holds
-    (1 the measured, 2 the seed, 3 both, 0 none): variances of different parts are not to be
-    weighed against each other (the seed scatter alone understates a row's variance).
+    the one pooled over the rows of its measured quantity wherever there is one, else the
+    row's own (:func:`variance_sources`, ``"pooled"``: without Bartlett's test, a row entered
+    twice counted once), divided by the row's own repeat count n_m or seed count n_s.  From
+    three repeats or three seeds an SD squared is a variance on 2 degrees of freedom, a third
+    of such estimates off by a factor of 3 or more either way (chi-square on 2: e^-3 + 1 -
+    e^(-1/3) = 0.33); pooled over the 18 rows of a quantity, on 36.  The pooled value stands
+    where the row's own SD is missing too (one seed behind the simulated mean).  A part with
+    neither is left out, as the residual's standard error leaves it out (no measured SD: the
+    seed scatter alone).  NaN where neither part is known (no measured SD and one seed) or the
+    variance is 0, and for a table without the columns.  With ``parts`` also, per row, which
+    parts the variance holds (1 the measured, 2 the seed, 3 both, 0 none): variances of
+    different parts are not to be weighed against each other (the seed scatter alone
+    understates a row's variance).
 
     Without Bartlett's test the pool is the mean of (sd / scale)^2 over the quantity's rows
     whatever their spread: for a quantity scaled by its RMS, or with an absolute noise floor,
@@ -392,25 +509,12 @@ def relative_variances(df: pd.DataFrame, parts: bool = False):
     n = len(df)
     if not n or not {"measurement", "measure"} <= set(df.columns) or not {"scale", "measured"} & set(df.columns):
         return (np.full(n, np.nan), np.zeros(n, int)) if parts else np.full(n, np.nan)
-
-    def col(name):
-        return df[name].astype(float).to_numpy() if name in df else np.full(n, np.nan)
-
-    nm = np.clip(np.nan_to_num(col("measured_n"), nan=1.0), 1.0, None)
-    ns = np.nan_to_num(col("simulated_n"), nan=0.0)
-    sd_m, sd_s = col("measured_sd"), col("simulated_sd")
-    scale = scale_of(df).astype(float)
-    meas = (df["measurement"].astype(str) + KEY_SEP + df["measure"].astype(str)).to_numpy()
-    sim = df["simulation"].astype(str).to_numpy() if "simulation" in df else np.arange(n).astype(str)
-    first = ~pd.DataFrame({"s": sim, "m": meas}).duplicated().to_numpy()
-    # a row entered twice (same simulation and measured value, SD and count) pools its SD once
-    once = ~pd.DataFrame({"s": sim, "m": meas, "v": col("measured"), "sd": sd_m, "n": nm}).duplicated().to_numpy()
-    cv_m = pooled_relative_variance(np.where(once, sd_m, np.nan), nm, scale, meas, homogeneity=False)
-    cv_s = pooled_relative_variance(np.where(first, sd_s, np.nan), ns, scale, meas, homogeneity=False)
-    with np.errstate(divide="ignore", invalid="ignore"):
-        part_m = np.where(np.isfinite(cv_m), cv_m, (sd_m / scale) ** 2) / nm
-        part_s = np.where(ns >= 1, np.where(np.isfinite(cv_s), cv_s, (sd_s / scale) ** 2) / np.clip(ns, 1.0, None),
-                          np.nan)
+    t = variance_sources(df, "pooled", homogeneity=False, once=True)
+    nm, ns, sd_m, sd_s, scale = t["nm"], t["ns"], t["sd_m"], t["sd_s"], t["scale"]
+    # the pooled value, else the row's own (NaN where it has no SD); no seed part without a seed
+    part_m = np.where(t["take_m"] == POOLED, t["pooled_m"], (sd_m / scale) ** 2) / nm
+    part_s = np.where(ns >= 1, np.where(t["take_s"] == POOLED, t["pooled_s"], (sd_s / scale) ** 2)
+                      / np.clip(ns, 1.0, None), np.nan)
     known = np.isfinite(part_m) | np.isfinite(part_s)
     var = np.where(np.isfinite(part_m), part_m, 0.0) + np.where(np.isfinite(part_s), part_s, 0.0)
     var = np.where(known & (var > 0), var, np.nan)
@@ -431,86 +535,38 @@ def usable(res: pd.DataFrame) -> pd.DataFrame:
 
 
 def _floor_terms(df: pd.DataFrame) -> dict:
-    """Per row of ``df`` the measured and seed variances of the noise floor (:func:`noise_floor`)
-    relative to the row's scale squared (NaN where unknown), whether each is the row's own, and
-    which estimate each comes from with its degrees of freedom (rows whose parts share one
-    estimate, a pooled SD or one simulation's seeds, share its sampling error)."""
+    """Per row of ``df`` the measured and seed variances of the noise floor (:func:`noise_floor`;
+    :func:`variance_sources`, ``"own"`` with the replicate scatter) relative to the row's scale
+    squared (NaN where unknown), whether each is the row's own, and which estimate each comes
+    from with its degrees of freedom (rows whose parts share one estimate, a pooled SD or one
+    simulation's seeds, share its sampling error)."""
+    t = variance_sources(df, "own", replicates=True)
+    nm, ns, sd_m, sd_s, scale = t["nm"], t["ns"], t["sd_m"], t["sd_s"], t["scale"]
+    meas, sims, n_given, take_m, take_s = t["meas"], t["sims"], t["n_given"], t["take_m"], t["take_s"]
+    with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
+        rel_m = np.select([take_m == OWN, take_m == REPLICATE, take_m == POOLED, take_m == POOLED_REPLICATE],
+                          [sd_m ** 2 / nm / scale ** 2, t["replicate"] / nm / scale ** 2, t["pooled_m"] / nm,
+                           t["pooled_replicate"] / nm], np.nan)
+        rel_s = np.select([take_s == OWN, take_s == POOLED],
+                          [sd_s ** 2 / np.clip(ns, 1.0, None) / scale ** 2, t["pooled_s"] / np.clip(ns, 1.0, None)],
+                          np.nan)
     n_rows = len(df)
-    scale = scale_of(df)
-    meas = (df["measurement"].astype(str) + KEY_SEP + df["measure"].astype(str)).to_numpy()
-    n_given = df["measured_n"].astype(float).to_numpy() if "measured_n" in df else np.full(n_rows, np.nan)
-    nm = np.clip(np.where(np.isfinite(n_given), n_given, 1.0), 1.0, None)
-    sd_m = df["measured_sd"].astype(float).to_numpy() if "measured_sd" in df else np.full(n_rows, np.nan)
-    ns = df["simulated_n"].astype(float).fillna(0.0).to_numpy()
-    sd_s = df["simulated_sd"].astype(float).to_numpy()
-    sims = df["simulation"].astype(str).to_numpy() if "simulation" in df else np.arange(n_rows).astype(str)
-    m = df["measured"].astype(float).to_numpy()
     src_m, src_s = np.array([""] * n_rows, dtype=object), np.array([""] * n_rows, dtype=object)
     dof = {}
-    # measured part: the row's own SD over its repeats (an SD without a repeat count is the value's
-    # own uncertainty, taken as known)
-    own_m = np.isfinite(sd_m)
-    rel_m = np.where(own_m, sd_m ** 2 / nm / scale ** 2, np.nan)
-    for i in np.flatnonzero(own_m):
-        src_m[i] = f"m{i}"
-        dof[src_m[i]] = n_given[i] - 1.0 if np.isfinite(n_given[i]) and n_given[i] > 1 else np.inf
-    # the replicate rows of a condition given without an SD: their scatter is that of the rows'
-    # values, each the mean of its n_m repeats (one where no count is given), so it estimates
-    # sigma^2 mean(1 / n_m) of the per-repeat variance sigma^2, and each row's variance is
-    # sigma^2 / n_m (the rows' own scatter where their counts are equal)
-    rep_sd, rep_n, rep_scale, rep_q = [], [], [], []
-    loose = ~own_m & np.isfinite(m)
-    if loose.any():
-        key = pd.Series(sims + KEY_SEP + meas)[loose]
-        for k, at in key.groupby(key.to_numpy(), sort=False):
-            at = at.index.to_numpy()
-            if len(at) < 2 or not np.ptp(m[at]) > 0:  # one value, or repeats rounded alike: no scatter
-                continue
-            per_repeat = float(np.var(m[at], ddof=1)) / float(np.mean(1.0 / nm[at]))
-            rel_m[at] = per_repeat / nm[at] / scale[at] ** 2  # over each row's own scale
-            src_m[at] = f"r{k}"
-            dof[f"r{k}"] = len(at) - 1.0
-            rep_sd.append(np.sqrt(per_repeat)), rep_n.append(len(at)), rep_q.append(meas[at[0]])
-            rep_scale.append(float(np.mean(scale[at])))
-    # else the measured SD relative to the scale pooled over the quantity's rows, per repeat
-    cv_m = pooled_relative_variance(sd_m, nm, scale, meas)
-    fill = ~np.isfinite(rel_m) & np.isfinite(cv_m)
-    rel_m = np.where(fill, cv_m / nm, rel_m)
-    est = own_m & (nm > 1)
-    pooled_dof = pd.Series(np.where(est, nm - 1.0, 0.0)).groupby(meas).transform("sum").to_numpy(float)
-    for i in np.flatnonzero(fill):
-        src_m[i] = f"pm{meas[i]}"
-        dof[src_m[i]] = pooled_dof[i]
-    if rep_sd:  # else the replicate scatter pooled over the quantity's conditions, per repeat as above
-        pooled = pooled_relative_variance(np.asarray(rep_sd), np.asarray(rep_n, float), np.asarray(rep_scale),
-                                          np.asarray(rep_q))
-        by_q, dof_q = {}, {}
-        for q, v, k in zip(rep_q, pooled, rep_n):
-            if np.isfinite(v):
-                by_q[q] = v
-                dof_q[q] = dof_q.get(q, 0.0) + k - 1.0
-        for i in np.flatnonzero(~np.isfinite(rel_m)):
-            if meas[i] in by_q:
-                rel_m[i] = by_q[meas[i]] / nm[i]
-                src_m[i] = f"pr{meas[i]}"
-                dof[src_m[i]] = dof_q[meas[i]]
-    # seed part: the row's own seed SD over its seeds (two at least), shared by the rows of its
-    # simulation; else the seed SD pooled over the quantity's simulations (each once)
-    own_s = np.isfinite(sd_s) & (ns >= 2)
-    rel_s = np.where(own_s, sd_s ** 2 / np.clip(ns, 1.0, None) / scale ** 2, np.nan)
-    for i in np.flatnonzero(own_s):
-        src_s[i] = f"s{sims[i]}{KEY_SEP}{meas[i]}"
-        dof[src_s[i]] = ns[i] - 1.0
-    first = ~pd.DataFrame({"s": sims, "m": meas}).duplicated().to_numpy()
-    est = first & own_s
-    cv_s = pooled_relative_variance(np.where(est, sd_s, np.nan), ns, scale, meas)
-    fill = ~own_s & np.isfinite(cv_s)
-    rel_s = np.where(fill, cv_s / np.clip(ns, 1.0, None), rel_s)
-    pooled_dof = pd.Series(np.where(est, ns - 1.0, 0.0)).groupby(meas).transform("sum").to_numpy(float)
-    for i in np.flatnonzero(fill):
-        src_s[i] = f"ps{meas[i]}"
-        dof[src_s[i]] = pooled_dof[i]
-    return dict(rel_m=rel_m, rel_s=rel_s, own_m=own_m, own_s=own_s, src_m=src_m, src_s=src_s, dof=dof)
+    for i in range(n_rows):
+        # an SD without a repeat count is the value's own uncertainty, taken as known
+        src, d = {OWN: (f"m{i}", n_given[i] - 1.0 if np.isfinite(n_given[i]) and n_given[i] > 1 else np.inf),
+                  REPLICATE: (f"r{t['replicate_key'][i]}", t["replicate_dof"][i]),
+                  POOLED: (f"pm{meas[i]}", t["pooled_dof_m"][i]),
+                  POOLED_REPLICATE: (f"pr{meas[i]}", t["pooled_replicate_dof"][i])}.get(take_m[i], ("", None))
+        if src:
+            src_m[i], dof[src] = src, d
+        src, d = {OWN: (f"s{sims[i]}{KEY_SEP}{meas[i]}", ns[i] - 1.0),
+                  POOLED: (f"ps{meas[i]}", t["pooled_dof_s"][i])}.get(take_s[i], ("", None))
+        if src:
+            src_s[i], dof[src] = src, d
+    return dict(rel_m=rel_m, rel_s=rel_s, own_m=np.isfinite(sd_m), own_s=np.isfinite(sd_s) & (ns >= 2), src_m=src_m,
+                src_s=src_s, dof=dof)
 
 
 def _picked(df: pd.DataFrame, rows) -> np.ndarray:
@@ -525,19 +581,17 @@ def noise_floor(df: pd.DataFrame, rows=None) -> tuple[float, str]:
     with the row's relative scale (:func:`scales`, the ``scale`` column) and its measured SD over
     its repeats (``n_m`` 1 where the table gives no count, as in the residual's standard error)
     and its seed SD over its seeds.  Where a row's own SD is missing, its variance comes from
-    the rows that estimate one: for the measured part, the scatter of the replicate rows of its
-    condition where the table gives its repeats as rows without an SD (one repeat each, or
-    each the mean of its own count), else the measured SD relative to the scale pooled over its
-    measured quantity's rows (:func:`pooled_relative_variance`, none where Bartlett's test
-    rejects that they share one), else the replicate scatter pooled over the quantity's
-    conditions.  Every one of these is a variance per repeat, divided by the row's own ``n_m``:
+    the rows that estimate one (:func:`variance_sources`, ``"own"``): for the measured part, the
+    scatter of the replicate rows of its condition where the table gives its repeats as rows
+    without an SD, else the measured SD pooled over its quantity's rows (none where Bartlett's
+    test rejects that they share one), else the replicate scatter pooled over the quantity's
+    conditions; for the seed part (one seed), the seed SD pooled over the quantity's
+    simulations.  Every one of these is a variance per repeat, divided by the row's own ``n_m``:
     a row that gives a count of 4 without an SD is the mean of 4 repeats whichever rows its
-    variance comes from (replicate rows of one repeat each scatter as one repeat, rows that are
-    each the mean of n repeats as sigma^2 / n).  For the seed part (one
-    seed), the seed SD pooled over the quantity's simulations.  The pooling runs over every row
-    of ``df``; the mean over ``rows``.  Returns (the floor as a fraction, a note): NaN (not 0)
-    with the reason where some row's uncertainty is unknown, or no row is given; else the note
-    says how many rows took a pooled or replicate variance ("" where every row had its own)."""
+    variance comes from.  The pooling runs over every row of ``df``; the mean over ``rows``.
+    Returns (the floor as a fraction, a note): NaN (not 0) with the reason where some row's
+    uncertainty is unknown, or no row is given; else the note says how many rows took a pooled
+    or replicate variance ("" where every row had its own)."""
     pick = _picked(df, rows)
     if len(df) == 0 or not pick.any():
         return float("nan"), "no row with a measured and a simulated value"
