@@ -670,3 +670,23 @@ def test_a_row_entered_twice_counts_once_in_the_measured_pool():
     t = _one_quantity([("s0", 105.0, 0.10, 3.0, np.nan, 1.0), ("s0", 105.0, 0.10, 3.0, np.nan, 1.0),
                        ("s1", 93.0, 0.40, 3.0, np.nan, 1.0)])
     np.testing.assert_allclose(relative_variances(t), np.full(3, 0.085 / 3.0), rtol=1e-12)
+
+
+def test_a_row_entered_twice_counts_once_in_every_pool():
+    # rows 1 and 2 are one row entered twice (s0, relative measured SD 0.10 over three repeats),
+    # row 3 another (s1, 0.12 over three), row 4 (s2) has no measured SD; every row a relative
+    # seed SD 0.05 over four seeds.  The measured SDs pooled once: (2 0.01 + 2 0.0144) / 4 =
+    # 0.0122 (counted twice, (4 0.01 + 2 0.0144) / 6 = 0.011467).  The residual's degrees of
+    # freedom use it on the rows of three repeats, 0.0122 x (100 N)^2 / 3 = 40.667 N^2; the
+    # noise floor of row 4 takes it for its missing SD (one repeat) beside its own seed part
+    # 0.0025 / 4: sqrt(0.0122 + 0.000625) = 0.113248; the weights as in the test above.
+    from soilcal.loop.residuals import noise_floor, reference_variances, relative_variances
+
+    t = _one_quantity([("s0", 105.0, 0.10, 3.0, 0.05, 4.0), ("s0", 105.0, 0.10, 3.0, 0.05, 4.0),
+                       ("s1", 93.0, 0.12, 3.0, 0.05, 4.0), ("s2", 100.0, np.nan, np.nan, 0.05, 4.0)])
+    ref_m, ref_s = reference_variances(t)
+    np.testing.assert_allclose(ref_m[:3], np.full(3, 0.0122 * 1e4 / 3.0), rtol=1e-12)
+    np.testing.assert_allclose(ref_s, np.full(4, 25.0 / 4.0), rtol=1e-12)
+    floor, _ = noise_floor(t, rows=np.array([False, False, False, True]))
+    assert floor == pytest.approx(np.sqrt(0.0122 + 0.000625), rel=1e-12)
+    np.testing.assert_allclose(relative_variances(t)[:3], np.full(3, 0.0122 / 3.0 + 0.000625), rtol=1e-12)

@@ -807,9 +807,7 @@ def scatter_about_scale(res: pd.DataFrame, s: float) -> tuple[float, int, float]
         u["simulation"] = u["measurement"].astype(str) + "/" + u["row"].astype(str)
     if "simulated_sd" not in u:  # no seed scatter stated
         u["simulated_sd"], u["simulated_n"] = np.nan, 0
-    cov = sorted(c for c in u.columns if c.startswith("cov:"))
-    same = [c for c in ("simulation", "measure", "measured", "measured_sd", "measured_n", *cov) if c in u.columns]
-    u = u.loc[~u[same].astype(str).duplicated()]  # a table row entered twice counts once
+    u = u.loc[rs.first_entries(u)]  # a table row entered twice counts once
     sd_m = u["measured_sd"].astype(float).to_numpy() if "measured_sd" in u else np.full(len(u), np.nan)
     n_m = u["measured_n"].astype(float).fillna(1.0).clip(lower=1.0).to_numpy() if "measured_n" in u else np.ones(len(u))
     known = np.isfinite(sd_m) & (sd_m > 0) & np.isfinite(u["measured"].astype(float).to_numpy())

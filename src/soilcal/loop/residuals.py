@@ -352,8 +352,23 @@ def _columns(df: pd.DataFrame) -> dict:
                 sims=df["simulation"].astype(str).to_numpy() if "simulation" in df else np.arange(n).astype(str))
 
 
-def variance_sources(df: pd.DataFrame, prefer: str, homogeneity: bool = True, once: bool = False,
-                     replicates: bool = False) -> dict:
+def first_entries(df: pd.DataFrame) -> np.ndarray:
+    """Per row, False where it repeats an earlier row of ``df`` (a table row entered twice): the
+    same table, simulation, quantity, covariate values, measured value, SD and repeat count.
+    A copy of a row with a measured SD tells nothing new: it counts once in every pooled SD
+    (:func:`variance_sources`: the residual's degrees of freedom, the weights and the noise
+    floor alike) and in the test of a uniform bias (:func:`soilcal.loop.core.scatter_about_scale`).
+    Rows without an SD are single repeats, and two repeats may read alike: the replicate
+    scatter counts each.  Every row is its own entry where the table
+    has no ``simulation`` column (each row its own simulation)."""
+    if "simulation" not in df or not len(df):
+        return np.ones(len(df), bool)
+    cols = [c for c in ("simulation", "measurement", "measure", "measured", "measured_sd", "measured_n",
+                        *sorted(c for c in df.columns if str(c).startswith("cov:"))) if c in df]
+    return ~df[cols].astype(str).duplicated().to_numpy()
+
+
+def variance_sources(df: pd.DataFrame, prefer: str, homogeneity: bool = True, replicates: bool = False) -> dict:
     """Which estimate each row's measured part (sd_m^2 / n_m) and seed part (sd_s^2 / n_s) of
     its variance takes: the one rule set of :func:`reference_variances`,
     :func:`relative_variances` and the noise floor (:func:`noise_floor`), each a choice of the
@@ -370,8 +385,8 @@ def variance_sources(df: pd.DataFrame, prefer: str, homogeneity: bool = True, on
     * pooled: (sd / scale)^2 pooled over the rows of the measured quantity
       (:func:`pooled_relative_variance`, with Bartlett's homogeneity test where
       ``homogeneity``): the seed SDs once per simulation (its replicate rows repeat one
-      estimate), the measured SDs of every row, or with ``once`` a row entered twice (the
-      same simulation, measured value, SD and repeat count) once;
+      estimate), the measured SDs once per table row, a row entered twice once
+      (:func:`first_entries`);
     * pooled replicate (with ``replicates``): the replicate scatters pooled over the
       quantity's conditions, each over its mean scale.
 
@@ -390,9 +405,8 @@ def variance_sources(df: pd.DataFrame, prefer: str, homogeneity: bool = True, on
     m, sd_m, nm, sd_s, ns, scale, meas, sims = (c[k] for k in ("measured", "sd_m", "nm", "sd_s", "ns", "scale",
                                                                 "meas", "sims"))
     own_m, own_s = np.isfinite(sd_m), np.isfinite(sd_s) & (ns >= 2)
-    enter_m = own_m
-    if once:
-        enter_m = own_m & ~pd.DataFrame({"s": sims, "m": meas, "v": m, "sd": sd_m, "n": nm}).duplicated().to_numpy()
+    entry = first_entries(df)
+    enter_m = own_m & entry
     first = ~pd.DataFrame({"s": sims, "m": meas}).duplicated().to_numpy()
     pool_m, pool_dof_m = pooled_relative_variance(np.where(enter_m, sd_m, np.nan), nm, scale, meas, homogeneity,
                                                   dof=True)
@@ -509,7 +523,7 @@ def relative_variances(df: pd.DataFrame, parts: bool = False):
     n = len(df)
     if not n or not {"measurement", "measure"} <= set(df.columns) or not {"scale", "measured"} & set(df.columns):
         return (np.full(n, np.nan), np.zeros(n, int)) if parts else np.full(n, np.nan)
-    t = variance_sources(df, "pooled", homogeneity=False, once=True)
+    t = variance_sources(df, "pooled", homogeneity=False)
     nm, ns, sd_m, sd_s, scale = t["nm"], t["ns"], t["sd_m"], t["sd_s"], t["scale"]
     # the pooled value, else the row's own (NaN where it has no SD); no seed part without a seed
     part_m = np.where(t["take_m"] == POOLED, t["pooled_m"], (sd_m / scale) ** 2) / nm
