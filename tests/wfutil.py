@@ -3,6 +3,8 @@ directory, and snakemake runs in it."""
 
 from __future__ import annotations
 
+import hashlib
+import os
 import re
 import shutil
 import subprocess
@@ -84,9 +86,49 @@ def run(tmp: Path, *args, check=True):
     return p
 
 
+#: the jobs a dry run planned, by the state of the workflow copy it ran in and its arguments
+#: (``planned_jobs``)
+_PLANNED: dict[str, list[str]] = {}
+
+
+def tree_state(tmp: Path) -> str:
+    """SHA-256 over every entry below ``tmp``: its path, kind, and for a file its size,
+    modification time (ns) and contents, for a symlink its target.  Left out: what Snakemake
+    writes on every call and does not read back unasked, its logs (``.snakemake/log``) and the
+    file a dry run saves its file listing to (``.snakemake/iocache``, read only with
+    ``--trust-io-cache``); everything else a dry run reads (the Snakefile, rules, config,
+    inputs, outputs and their times, Snakemake's metadata) is in."""
+    h = hashlib.sha256()
+    for root, dirs, files in os.walk(tmp):
+        rel = Path(root).relative_to(tmp)
+        if rel == Path(".snakemake"):
+            dirs[:] = [d for d in dirs if d not in ("log", "iocache")]
+        dirs.sort()
+        for name in sorted(dirs) + sorted(files):
+            p = Path(root) / name
+            h.update(str(rel / name).encode() + b"\0")
+            if p.is_symlink():
+                h.update(b"L" + os.readlink(p).encode())
+            elif p.is_dir():
+                h.update(b"D")
+            else:
+                st = p.stat()
+                h.update(b"F%d:%d:" % (st.st_size, st.st_mtime_ns))
+                h.update(hashlib.sha256(p.read_bytes()).digest())
+            h.update(b"\0")
+    return h.hexdigest()
+
+
 def planned_jobs(tmp: Path, *args) -> list[str]:
-    out = run(tmp, "-n", "--cores", "2", *args).stdout
-    return re.findall(r"^\s+output: (.+)$", out, flags=re.M)
+    """The outputs of the jobs ``snakemake -n`` plans in the copy ``tmp``.  A dry run changes
+    nothing in the copy, so two tests asking of the same state (``tree_state``) with the same
+    arguments get the one dry run's answer (a test that restores the files it edited asks
+    again of the state a test before it asked of)."""
+    key = hashlib.sha256(repr((str(tmp), args, tree_state(tmp))).encode()).hexdigest()
+    if key not in _PLANNED:
+        out = run(tmp, "-n", "--cores", "2", *args).stdout
+        _PLANNED[key] = re.findall(r"^\s+output: (.+)$", out, flags=re.M)
+    return list(_PLANNED[key])
 
 
 #: The soil of the tiny run: the cinnamon soil, calibrated on the DEM and replayed from its

@@ -127,12 +127,39 @@ def test_furrow_profile_and_area():
     assert r4.degree == 4 and len(r4.coeffs) == 5
 
 
-def test_measurement_does_not_read_sidecar(tmp_path):
+@pytest.fixture(scope="module")
+def copy_beside_a_false_sidecar(tmp_path_factory):
+    """cinnamon-soil's first photo copied beside a false truth sidecar and measured once, for
+    the two tests that read the measurement: with the garbage collector off and a weak
+    reference to each cue object the measurement makes (:func:`measure._grays`), read right
+    after ``measure_pile`` returns.  Returns (result, whether each cue object was still
+    alive then)."""
+    folder = tmp_path_factory.mktemp("sidecar")
+    shutil.copy(IMAGES / "cinnamon-soil" / "stacking_1.jpg", folder / "p.jpg")
+    (folder / "p.jpg.truth.json").write_text('{"left_deg": 99}')
+    made = []
+    grays = measure._grays
+
+    def kept(*a, **k):
+        cues = grays(*a, **k)
+        made.append(weakref.ref(cues))
+        return cues
+
+    with pytest.MonkeyPatch.context() as m:
+        m.setattr(measure, "_grays", kept)
+        gc.disable()
+        try:
+            res = measure.measure_pile(folder / "p.jpg")
+            alive = [r() is not None for r in made]
+        finally:
+            gc.enable()
+    return res, alive
+
+
+def test_measurement_does_not_read_sidecar(copy_beside_a_false_sidecar):
     # the committed photo beside its true sidecar and a copy beside a false one measure alike
-    src = IMAGES / "cinnamon-soil" / "stacking_1.jpg"
-    shutil.copy(src, tmp_path / "p.jpg")
-    (tmp_path / "p.jpg.truth.json").write_text('{"left_deg": 99}')
-    assert measure.measure_pile(tmp_path / "p.jpg").angle_deg == _measured(src).angle_deg
+    res, _ = copy_beside_a_false_sidecar
+    assert res.angle_deg == _measured(IMAGES / "cinnamon-soil" / "stacking_1.jpg").angle_deg
 
 
 # --- harder set, rendered at test time ------------------------------------------------------
@@ -303,27 +330,15 @@ def test_a_photos_cue_images_are_freed_without_the_garbage_collector():
         gc.enable()
 
 
-def test_a_photos_cues_are_freed_when_measure_pile_returns(monkeypatch):
+def test_a_photos_cues_are_freed_when_measure_pile_returns(copy_beside_a_false_sidecar):
     """Right after ``measure_pile`` returns, with the garbage collector off, the photo's cue
     object is gone: neither the cues nor the refusals of the cues and lines tried on the way
     (whose tracebacks hold the search's frames) keep it in a reference cycle.  A batch of heap
-    photos measured in one process then holds one photo's images at a time."""
-    made = []
-    grays = measure._grays
-
-    def kept(*a, **k):
-        cues = grays(*a, **k)
-        made.append(weakref.ref(cues))
-        return cues
-
-    monkeypatch.setattr(measure, "_grays", kept)
-    gc.disable()
-    try:
-        # cinnamon-soil's first photo: cues and plate lines are refused before the heap is found
-        res = measure.measure_pile(IMAGES / "cinnamon-soil" / "stacking_1.jpg")
-        assert len(made) == 1 and made[0]() is None
-    finally:
-        gc.enable()
+    photos measured in one process then holds one photo's images at a time.  The photo is
+    cinnamon-soil's first (a copy, :func:`copy_beside_a_false_sidecar`): cues and plate lines
+    are refused before the heap is found."""
+    res, alive = copy_beside_a_false_sidecar
+    assert alive == [False]  # one cue object, gone
     assert res.confidence == "ok"
 
 
