@@ -217,3 +217,24 @@ def test_the_scatter_about_the_scale_holds_its_level_where_sds_are_not_pooled():
                      for k, v in enumerate(t * (1.0 + 0.05 * rng.standard_normal(3)))]
         p.append(scatter_about_scale(residual_frame(pd.DataFrame(obs), pd.DataFrame(runs)), 0.0)[2])
     assert np.sum(np.array(p) < 0.05) <= 6, np.sum(np.array(p) < 0.05)
+
+
+def test_a_row_entered_twice_or_copied_into_a_second_table_tells_nothing_new():
+    """A copy of a row with its SD is no new observation: with it, the residual's degrees of
+    freedom of every row and the scatter test (chi-square, degrees of freedom, p) are those of
+    the table without it, whether the copy stands in the same table or in a second one (a
+    second table's SDs are pooled on their own, so the copy is that table's only entry)."""
+    from soilcal.loop.core import scatter_about_scale
+    from soilcal.loop.residuals import reference_variances
+
+    res = _table(np.random.default_rng(11), 12, 0.02, 5, 0.03, 3)
+    twice = pd.concat([res, res.iloc[[3]]], ignore_index=True)
+    copied = pd.concat([res, res.iloc[[3]].assign(measurement="again")], ignore_index=True)
+    ref_m, ref_s = reference_variances(res)
+    base = scatter_about_scale(res, 0.05)
+    assert np.isfinite(base[0]) and base[1] == 11
+    for t in (twice, copied):
+        m, s = reference_variances(t)
+        np.testing.assert_allclose(m[:12], ref_m, rtol=1e-12)
+        np.testing.assert_allclose(s[:12], ref_s, rtol=1e-12)
+        np.testing.assert_allclose(scatter_about_scale(t, 0.05), base, rtol=1e-12)

@@ -807,14 +807,19 @@ def scatter_about_scale(res: pd.DataFrame, s: float) -> tuple[float, int, float]
         u["simulation"] = u["measurement"].astype(str) + "/" + u["row"].astype(str)
     if "simulated_sd" not in u:  # no seed scatter stated
         u["simulated_sd"], u["simulated_n"] = np.nan, 0
-    u = u.loc[rs.first_entries(u)]  # a table row entered twice counts once
     sd_m = u["measured_sd"].astype(float).to_numpy() if "measured_sd" in u else np.full(len(u), np.nan)
     n_m = u["measured_n"].astype(float).fillna(1.0).clip(lower=1.0).to_numpy() if "measured_n" in u else np.ones(len(u))
     known = np.isfinite(sd_m) & (sd_m > 0) & np.isfinite(u["measured"].astype(float).to_numpy())
-    # the variances the degrees of freedom are computed from, and whether they are pooled
+    # the variances the degrees of freedom are computed from, and whether they are pooled: over
+    # every row, as the residual table's degrees of freedom are (a row entered twice pooled once)
     ref_m, ref_s, pool_m, pool_s = rs.reference_variances(u, flags=True)
     # the degrees of freedom of the pooled measured SD (ref_m) of each row's quantity
     pooled_dof = rs.pooled_measured_dof(u, known)  # 0 where the quantity's SDs are not pooled
+    # a table row entered twice, or copied into a second table, is one condition here
+    keep = rs.first_entries(u, across_tables=True)
+    u = u.loc[keep]
+    sd_m, n_m, known, ref_m, ref_s, pool_m, pool_s, pooled_dof = (
+        np.asarray(a)[keep] for a in (sd_m, n_m, known, ref_m, ref_s, pool_m, pool_s, pooled_dof))
     groups = []  # per simulation: its quantities' (measured mean, var_m, dof_m, sim, seed var, n_s, within chi, within dof)
     for _, g in u.groupby(u["simulation"].astype(str), sort=False):
         parts = []

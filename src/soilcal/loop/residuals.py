@@ -318,12 +318,13 @@ def pooled_relative_variance(sd, n, scale, group, homogeneity: bool = True, dof:
 
 def pooled_measured_dof(df: pd.DataFrame, known: np.ndarray) -> np.ndarray:
     """Per row, the degrees of freedom of its quantity's measured SD pooled over the ``known``
-    rows (:func:`pooled_relative_variance`: the n - 1 of the rows it pools), 0 where the
-    quantity's measured SDs are not pooled."""
+    rows (:func:`pooled_relative_variance`: the n - 1 of the rows it pools, a row entered twice
+    once, :func:`first_entries`), 0 where the quantity's measured SDs are not pooled."""
     if "measured_sd" not in df or not len(df):
         return np.zeros(len(df))
     c = _columns(df)
-    return pooled_relative_variance(np.where(known, c["sd_m"], np.nan), c["nm"], c["scale"], c["meas"], dof=True)[1]
+    enter = np.asarray(known, bool) & first_entries(df)
+    return pooled_relative_variance(np.where(enter, c["sd_m"], np.nan), c["nm"], c["scale"], c["meas"], dof=True)[1]
 
 
 #: the estimates a part of a row's variance can take (:func:`variance_sources`)
@@ -352,19 +353,22 @@ def _columns(df: pd.DataFrame) -> dict:
                 sims=df["simulation"].astype(str).to_numpy() if "simulation" in df else np.arange(n).astype(str))
 
 
-def first_entries(df: pd.DataFrame) -> np.ndarray:
+def first_entries(df: pd.DataFrame, across_tables: bool = False) -> np.ndarray:
     """Per row, False where it repeats an earlier row of ``df`` (a table row entered twice): the
-    same table, simulation, quantity, covariate values, measured value, SD and repeat count.
-    A copy of a row with a measured SD tells nothing new: it counts once in every pooled SD
+    same table, simulation, quantity, covariate values, measured value, SD and repeat count;
+    with ``across_tables`` in any table (a row copied into a second table).  A copy of a row
+    with a measured SD tells nothing new: it counts once in every pooled SD
     (:func:`variance_sources`: the residual's degrees of freedom, the weights and the noise
-    floor alike) and in the test of a uniform bias (:func:`soilcal.loop.core.scatter_about_scale`).
-    Rows without an SD are single repeats, and two repeats may read alike: the replicate
-    scatter counts each.  Every row is its own entry where the table
-    has no ``simulation`` column (each row its own simulation)."""
+    floor alike; the SDs are pooled per table, so a copy in another table is that table's own
+    entry) and, in any table, in the test of a uniform bias
+    (:func:`soilcal.loop.core.scatter_about_scale`).  Rows without an SD are single repeats,
+    and two repeats may read alike: the replicate scatter counts each.  Every row is its own
+    entry where the table has no ``simulation`` column (each row its own simulation)."""
     if "simulation" not in df or not len(df):
         return np.ones(len(df), bool)
     cols = [c for c in ("simulation", "measurement", "measure", "measured", "measured_sd", "measured_n",
-                        *sorted(c for c in df.columns if str(c).startswith("cov:"))) if c in df]
+                        *sorted(c for c in df.columns if str(c).startswith("cov:")))
+            if c in df and not (across_tables and c == "measurement")]
     return ~df[cols].astype(str).duplicated().to_numpy()
 
 
