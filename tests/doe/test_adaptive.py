@@ -647,3 +647,114 @@ def test_near_a_bound_is_within_a_fiftieth_of_the_range():
     assert ad.near_a_bound(18.0, 19.8 + eps, 10.0, 20.0) == "high"
     assert ad.near_a_bound(18.0, 19.8 - 1e-6, 10.0, 20.0) is None
     assert ad.near_a_bound(10.0, 20.0, 10.0, 20.0) == "low"  # both: the low one
+
+
+# --------------------------------------------------------------------------- the data back an unreachable verdict
+
+class _Flat(ad.Surrogate):
+    """A surrogate that predicts one level everywhere (one that took the whole signal for noise)."""
+    kind = "flat"
+
+    def __init__(self, level):
+        self.level = level
+
+    def predict(self, xc):
+        xc = np.atleast_2d(xc)
+        return np.full(len(xc), self.level), np.full(len(xc), 0.1)
+
+
+def _points(offsets, m_points=20, level=10.0, target=12.0):
+    """m points of 2 seeds each (replicate SD exactly 1: the seeds read mean -+ 1/sqrt(2))
+    whose means lie ``offsets`` (in standard errors 1/sqrt(2)) from ``level``."""
+    one = ad.Problem([ad.Factor("a", 0, 1)], [ad.Target("y", target, tol=0.1)])
+    se = 1.0 / math.sqrt(2.0)
+    rows = []
+    for i in range(m_points):
+        mean = level + offsets[i] * se
+        for k, sign in enumerate((-1.0, 1.0)):
+            rows.append({"iteration": 0, "kind": "start", "point": i, "seed": 2 * i + k,
+                         "a": i / (m_points - 1), "y": mean + sign * se})
+    runs = pd.DataFrame(rows)
+    points = ad.point_table(one, runs)
+    assert ad.pooled_sd(points, "y") == pytest.approx(1.0)
+    return one, runs, points
+
+
+def _backed(offsets, m_points=20, level=10.0, target=12.0):
+    """surrogate_backed for :func:`_points` about a flat surrogate at ``level``."""
+    one, _, points = _points(offsets, m_points, level, target)
+    return ad.surrogate_backed(one, points, _Flat(level), one.targets[0], level)
+
+
+def test_the_data_back_an_unreachable_verdict_only_when_they_scatter_about_the_surrogate_as_seeds_do():
+    m, nu = 20, 20  # 20 points of 2 seeds: 20 replicate degrees of freedom
+    f_crit = stats.f.ppf(0.95, m, nu)
+    t_crit = stats.t.ppf(1.0 - 0.05 / m, nu)
+    assert 1.0 < f_crit < 2.5 and 3.0 < t_crit < 4.5
+    # a target 12 +- 0.1 above a surrogate at 10: single seeds read up to 11.06, above
+    # 12 - 0.1 - t_{0.975, 20} s = 9.81, so the runs alone do not put it out of reach
+    calm = [0.5 if i % 2 else -0.5 for i in range(m)]
+    one, runs, points = _points(calm)
+    assert not ad.beyond_data(runs, points, one.targets[0])
+    # the surrogate's verdict is backed when the point means scatter about it by half a
+    # standard error each (z^2 = 0.25, z = 0.5)
+    assert _backed(calm)
+    # one point reading closer to the target than the surrogate by more than its seeds explain:
+    # z = 5 > t_crit, while sum z^2 / m = (19 0.25 + 25) / 20 < f_crit
+    assert (19 * 0.25 + 25) / 20 < f_crit < 5.0 ** 2
+    assert not _backed(calm[:-1] + [5.0])
+    # the same point on the far side of the surrogate does not contradict "out of reach above"
+    assert _backed(calm[:-1] + [-5.0])
+    # a diffuse lack of fit, each point 1.8 standard errors off (1.8^2 = 3.24 > f_crit, 1.8 < t_crit)
+    assert 1.8 ** 2 > f_crit and 1.8 < t_crit
+    assert not _backed([1.8 if i % 2 else -1.8 for i in range(m)])
+    # fewer than 10 d points (Loeppky et al. 2009's design size for a Gaussian-process
+    # emulator): the surrogate's verdict is not backed yet; the runs alone can still decide a
+    # target far enough: every seed lies below 20 - 0.1 - t_{0.975, 9} s = 17.6
+    assert not _backed(calm[:9], m_points=9)
+    one, runs, points = _points(calm[:9], m_points=9, target=20.0)
+    assert ad.beyond_data(runs, points, one.targets[0])
+
+
+def test_two_seeds_that_read_alike_do_not_put_a_target_out_of_reach():
+    # single runs at 10 and one replicated point of SD 0.1 (1 degree of freedom) against 10.5 +- 0.1:
+    # the runs lie 0.4 below the band, more than twice the SD (0.2) but less than
+    # t_{0.975, 1} 0.1 = 1.27, the margin an SD of one degree of freedom allows
+    one = ad.Problem([ad.Factor("a", 0, 1)], [ad.Target("y", 10.5, tol=0.1)])
+    ys = [10.0 - 0.1 / math.sqrt(2.0), 10.0 + 0.1 / math.sqrt(2.0)] + [10.0] * 6
+    pts = [0, 0, 1, 2, 3, 4, 5, 6]
+    runs = pd.DataFrame({"iteration": 0, "kind": "start", "point": pts, "seed": range(8),
+                         "a": [p / 6 for p in pts], "y": ys})
+    points = ad.point_table(one, runs)
+    assert ad.pooled_sd(points, "y") == pytest.approx(0.1)
+    assert 2 * 0.1 < 0.4 < stats.t.ppf(0.975, 1) * 0.1
+    assert not ad.beyond_data(runs, points, one.targets[0])
+    # the closest point measured with 4 seeds at mean 9.0 lies below 10.5 - 0.1 - t_{0.975, 1} s / 2
+    # = 9.76, so it reads out of reach; at 10.0 it does not
+    row = pd.Series({"y": 9.0, "y_n": 4})
+    assert ad.beyond_measured(points, row, one.targets[0], reached=9.5)
+    assert not ad.beyond_measured(points, pd.Series({"y": 10.0, "y_n": 4}), one.targets[0], reached=9.5)
+
+
+def test_a_target_two_seed_sds_beyond_reach_is_found_unreachable_though_single_seeds_read_near_it():
+    # y = 10 + a over a, b in [0, 1] reaches 11 at best; the target 13.5 +- 0.27 lies 2.2 seed
+    # SDs (1.0) beyond it, so among 20-odd runs some single seed reads above 13.5 - 0.27 - 2 s:
+    # the runs alone rarely put it out of reach (a seed at a = 1 reads above that margin with
+    # probability 1 - Phi(0.23) = 0.41).  The surrogate, backed by the data and by a
+    # measurement of its closest point, does in at least 8 of 10 designs, within the budget,
+    # and the value it names is no more than the box reaches
+    far = ad.Problem([ad.Factor("a", 0, 1), ad.Factor("b", 0, 1)], [ad.Target("y", 13.5, tol_pct=2.0)])
+    decided = 0
+    for seed in range(10):
+        runs, st = ad.run(far, noisy(lambda lv: {"y": 10.0 + lv["a"]}, 1.0), ad.Settings(seed=seed, budget=40))
+        assert len(runs) <= 40
+        if st.status != "unreachable":
+            continue
+        decided += 1
+        said = st.message.split("closest reachable value is ")[1]
+        value, sd = float(said.split()[0]), float(said.split("(+- ")[1].split(")")[0])
+        assert value - 3 * sd <= 11.0  # no more than the box reaches
+        if ", measured " in said:
+            measured = float(said.split(", measured ")[1].split()[0])
+            assert measured < 13.5 - 0.27
+    assert decided >= 8

@@ -68,9 +68,13 @@ candidate within ``separation`` of a run and no verification due: ``box exhauste
 the surrogate is sure that no point of the
 box is consistent: P < ``p_unreachable`` everywhere after a batch of proposals aimed at the
 target has been run, while the predicted distance to the target exceeds the tolerance plus
-twice the predictive standard deviation and every run's value lies on one side of the target,
-beyond the tolerance plus twice the replicate SD (``unreachable``), with the closest reachable
-value of each response and where it lies.  A stop by target, budget, iterations or box with a
+twice the predictive standard deviation, and either the runs alone put the target out of reach
+(:func:`beyond_data`: every run lies beyond the tolerance plus a t quantile of the replicate
+SD), or the data back the surrogate (:func:`surrogate_backed`: at least 10 d points that
+scatter about it as the seeds' scatter explains) and the closest reachable point, measured
+with ``verify_seeds`` seeds (a verification the design runs for it), reads beyond the
+tolerance too (:func:`beyond_measured`) (``unreachable``), with the closest reachable value
+of each response and where it lies.  A stop by target, budget, iterations or box with a
 verification says, per response whose verification seeds cannot tell the band at one seed's
 scatter s (the pooled replicate SD), how many seeds at one point would: (1.96 s / tol)^2, or
 (1.645 s / tol)^2 for an optimised response's one-sided band (:func:`seeds_to_tell`; at fewer, a
@@ -903,17 +907,28 @@ def step(problem: Problem, runs: pd.DataFrame, settings: Settings, iteration: in
                           f"(<= {settings.improvement_stop:g})" if optimised else "")
                        + _untellable(verified))
     # unreachable: no point of the box is plausibly consistent, and the closest reachable
-    # prediction lies further from a target than its uncertainty explains
-    if near is not None:
-        far = [t for t in problem.targets if not t.optimised
-               and abs(near["values"][t.response] - t.value) > t.tolerance + 2.0 * near["sd"][t.response]
-               and _beyond_data(data, points, t)]
-        # only after a batch of proposals aimed at the target has been run
-        if far and (runs["kind"] == "proposal").any():
+    # prediction lies further from a target than its uncertainty explains; the data put the
+    # target out of reach, or back the surrogate and have measured the closest point
+    measure_near = False
+    if near is not None and (runs["kind"] == "proposal").any():  # after proposals aimed at the target
+        aimed = [t for t in problem.targets if not t.optimised
+                 and abs(near["values"][t.response] - t.value) > t.tolerance + 2.0 * near["sd"][t.response]]
+        far = [t for t in aimed if beyond_data(data, points, t)]
+        backed = [t for t in aimed if t not in far
+                  and surrogate_backed(problem, points, surrogates[t.response], t, near["values"][t.response])]
+        measured = measured_at(problem, points, near["coded"], settings) if backed else None
+        by_model = [t for t in backed
+                    if measured is not None and beyond_measured(points, measured, t, near["values"][t.response])]
+        measure_near = bool(backed) and measured is None
+        if far or by_model:
             at = _where(problem, near["actual"])
             msg = "; ".join(f"{t.response}: target {t.value:g} is outside what the factor ranges reach: "
                             f"the closest reachable value is {near['values'][t.response]:.4g} "
-                            f"(+- {near['sd'][t.response]:.2g})" for t in far)
+                            f"(+- {near['sd'][t.response]:.2g})"
+                            + (f", measured {measured[t.response]:.4g} (+- {_se(points, measured, t):.2g}, "
+                               f"{int(measured[t.response + '_n'])} seeds) within {settings.separation:g} (coded) of it"
+                               if t in by_model else "")
+                            for t in far + by_model)
             return decided("unreachable", f"{msg}, at {at}")
     if spent >= settings.budget:
         return decided("budget spent",
@@ -943,8 +958,11 @@ def step(problem: Problem, runs: pd.DataFrame, settings: Settings, iteration: in
     # verification, so a best candidate nobody verified is verified now, ready or not (a design
     # that spends its budget leaves a measured answer, not only a predicted one)
     last_chance = cand_v is best and left < settings.verify_seeds + settings.batch
+    # measure_near: the data back the surrogate's verdict that a target is out of reach, and
+    # the closest reachable point (the best candidate) is measured before the design says so
     if cand_v is not None and left >= settings.verify_seeds and (
-            last_chance or ((stalled or not unsearched) and ready_to_verify(problem, cand_v, scatter, settings, stalled))):
+            last_chance or (measure_near and cand_v is best)
+            or ((stalled or not unsearched) and ready_to_verify(problem, cand_v, scatter, settings, stalled))):
         best = cand_v
         coded.append(best["coded"])
         kinds.append("verification")
@@ -980,16 +998,102 @@ def step(problem: Problem, runs: pd.DataFrame, settings: Settings, iteration: in
     return decided("continue", msg, new)
 
 
-def _beyond_data(runs: pd.DataFrame, points: pd.DataFrame, t: Target) -> bool:
-    """Every run's value lies on one side of the target, further than its tolerance plus twice
-    the replicate SD: the data themselves, not only the surrogate, put the target out of reach
-    (a surrogate that takes the whole signal for noise is flat and would claim it too)."""
+#: the level of the tests of :func:`beyond_data`, :func:`surrogate_backed` (the family's, for
+#: the test at every point) and :func:`beyond_measured`
+UNREACHABLE_ALPHA = 0.05
+
+
+def _margin_sd(points: pd.DataFrame, response: str) -> tuple[float, float]:
+    """The pooled replicate SD s and its degrees of freedom nu (0, 0 without replicates)."""
+    n = points[f"{response}_n"].to_numpy(float)
+    sd = points[f"{response}_sd"].to_numpy(float)
+    ok = (n > 1) & np.isfinite(sd)
+    s = pooled_sd(points, response)
+    return (float(s), float(np.sum(n[ok] - 1))) if s else (0.0, 0.0)
+
+
+def beyond_data(runs: pd.DataFrame, points: pd.DataFrame, t: Target) -> bool:
+    """The runs alone put target ``t`` out of reach: every run's value lies on one side of the
+    target, further than its tolerance plus t_{1 - alpha/2, nu} s (s the pooled replicate SD with
+    nu degrees of freedom; with a few replicates the quantile is wide: two seeds at the centre
+    can read alike by chance, and s = 0 would make any run's distance count)."""
+    from scipy import stats
+
     v = runs[t.response].to_numpy(float)
     v = v[np.isfinite(v)]
-    if not v.size:
+    s, nu = _margin_sd(points, t.response)
+    if not v.size or nu < 1:
         return False
-    margin = t.tolerance + 2.0 * (pooled_sd(points, t.response) or 0.0)
+    margin = t.tolerance + float(stats.t.ppf(1.0 - UNREACHABLE_ALPHA / 2.0, nu)) * s
     return bool(v.max() < t.value - margin or v.min() > t.value + margin)
+
+
+def surrogate_backed(problem: Problem, points: pd.DataFrame, surrogate: Surrogate, t: Target,
+                     reached: float) -> bool:
+    """Whether the data back the surrogate's verdict that target ``t`` lies beyond the value
+    ``reached`` at best (a surrogate that takes the whole signal for noise is flat and would
+    claim it too).  The single runs alone cannot carry a target a few seed SDs beyond the
+    reach: among many runs the largest single seed lies a few SDs above its mean, so some run
+    always reads near such a target; the surrogate pools the runs, and these tests keep it
+    honest.  With the point means ybar_i of n_i seeds, the surrogate's mu_i there, the pooled
+    replicate SD s with nu degrees of freedom and z_i = (ybar_i - mu_i) sqrt(n_i) / s:
+
+    - at least 10 d points (d factors; the rule of thumb for a Gaussian-process emulator's
+      design size, Loeppky, Sacks and Welch 2009, Technometrics 51, 366-376);
+    - overall: sum z_i^2 / m below the (1 - alpha) quantile of F(m, nu) (m points; a
+      lack-of-fit test);
+    - at every point, on the target's side: sign(t - reached) z_i below the (1 - alpha / m)
+      quantile of Student's t with nu degrees of freedom (Bonferroni over the m points): no
+      point reads closer to the target than the surrogate by more than its seeds explain.
+
+    A verdict backed so still needs the closest point measured (:func:`beyond_measured`): the
+    tests have little power against a feature the points have not sampled, such as a corner
+    the surrogate's smoothness flattens."""
+    from scipy import stats
+
+    r = t.response
+    s, nu = _margin_sd(points, r)
+    ok = np.isfinite(points[r].to_numpy(float))
+    m = int(ok.sum())
+    if nu < 1 or m < 10 * len(problem.factors):
+        return False
+    n = points.loc[ok, f"{r}_n"].to_numpy(float)
+    mu, _ = surrogate.predict(problem.to_coded(points.loc[ok, problem.names].to_numpy(float)))
+    z = (points.loc[ok, r].to_numpy(float) - mu) * np.sqrt(n) / s
+    side = 1.0 if t.value > reached else -1.0
+    fits = float(np.mean(z ** 2)) <= float(stats.f.ppf(1.0 - UNREACHABLE_ALPHA, m, nu))
+    return fits and float(np.max(side * z)) <= float(stats.t.ppf(1.0 - UNREACHABLE_ALPHA / m, nu))
+
+
+def measured_at(problem: Problem, points: pd.DataFrame, coded: np.ndarray, settings: Settings):
+    """The evaluated point of at least ``verify_seeds`` seeds closest to ``coded``, within
+    ``separation`` of it (a row of ``points``), or None."""
+    n = points[[f"{r}_n" for r in problem.responses]].to_numpy(float).min(axis=1)
+    xe = problem.to_coded(points[problem.names].to_numpy(float))
+    dist = np.linalg.norm(xe - np.asarray(coded, float), axis=1)
+    ok = (n >= settings.verify_seeds) & (dist < max(settings.separation, 1e-9))
+    if not ok.any():
+        return None
+    return points.iloc[int(np.flatnonzero(ok)[np.argmin(dist[ok])])]
+
+
+def _se(points: pd.DataFrame, row, t: Target) -> float:
+    s, _ = _margin_sd(points, t.response)
+    return s / math.sqrt(max(float(row[f"{t.response}_n"]), 1.0))
+
+
+def beyond_measured(points: pd.DataFrame, row, t: Target, reached: float) -> bool:
+    """The measured mean at the closest point (``row``) lies on the surrogate's side of target
+    ``t``, further than its tolerance plus t_{1 - alpha/2, nu} s / sqrt(n) (s the pooled
+    replicate SD, nu its degrees of freedom, n the point's seeds)."""
+    from scipy import stats
+
+    s, nu = _margin_sd(points, t.response)
+    mean = float(row[t.response])
+    if nu < 1 or not math.isfinite(mean):
+        return False
+    margin = t.tolerance + float(stats.t.ppf(1.0 - UNREACHABLE_ALPHA / 2.0, nu)) * _se(points, row, t)
+    return bool(mean < t.value - margin) if t.value > reached else bool(mean > t.value + margin)
 
 
 def seed_sd(problem: Problem, points: pd.DataFrame, surrogates: dict) -> dict:
