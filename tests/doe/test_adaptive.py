@@ -714,6 +714,13 @@ def test_the_data_back_an_unreachable_verdict_only_when_they_scatter_about_the_s
     assert not _backed(calm[:9], m_points=9)
     one, runs, points = _points(calm[:9], m_points=9, target=20.0)
     assert ad.beyond_data(runs, points, one.targets[0])
+    # against 14 +- 0.1 the seeds (up to 11.06) lie beyond 14 - 0.1 - t_{0.975, 20} 1 = 11.81;
+    # at a seed scatter of 1.5 as a surrogate's fit sees it (larger than the replicates'),
+    # the margin reaches down to 14 - 0.1 - t_{0.975, 20} 1.5 = 10.77, below them
+    one, runs, points = _points(calm, target=14.0)
+    assert 14.0 - 0.1 - stats.t.ppf(0.975, 20) * 1.5 < runs["y"].max() < 14.0 - 0.1 - stats.t.ppf(0.975, 20)
+    assert ad.beyond_data(runs, points, one.targets[0])
+    assert not ad.beyond_data(runs, points, one.targets[0], scatter=1.5)
 
 
 def test_two_seeds_that_read_alike_do_not_put_a_target_out_of_reach():

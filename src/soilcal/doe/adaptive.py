@@ -69,8 +69,8 @@ the surrogate is sure that no point of the
 box is consistent: P < ``p_unreachable`` everywhere after a batch of proposals aimed at the
 target has been run, while the predicted distance to the target exceeds the tolerance plus
 twice the predictive standard deviation, and either the runs alone put the target out of reach
-(:func:`beyond_data`: every run lies beyond the tolerance plus a t quantile of the replicate
-SD), or the data back the surrogate (:func:`surrogate_backed`: at least 10 d points that
+(:func:`beyond_data`: every run lies beyond the tolerance plus a t quantile of one seed's
+scatter), or the data back the surrogate (:func:`surrogate_backed`: at least 10 d points that
 scatter about it as the seeds' scatter explains) and the closest reachable point, measured
 with ``verify_seeds`` seeds (a verification the design runs for it), reads beyond the
 tolerance too (:func:`beyond_measured`) (``unreachable``), with the closest reachable value
@@ -913,10 +913,10 @@ def step(problem: Problem, runs: pd.DataFrame, settings: Settings, iteration: in
     if near is not None and (runs["kind"] == "proposal").any():  # after proposals aimed at the target
         aimed = [t for t in problem.targets if not t.optimised
                  and abs(near["values"][t.response] - t.value) > t.tolerance + 2.0 * near["sd"][t.response]]
-        far = [t for t in aimed if beyond_data(data, points, t)]
+        far = [t for t in aimed if beyond_data(data, points, t, scatter[t.response])]
         backed = [t for t in aimed if t not in far
                   and surrogate_backed(problem, points, surrogates[t.response], t, near["values"][t.response])]
-        measured = measured_at(problem, points, near["coded"], settings) if backed else None
+        measured = measured_at(problem, points, surrogates, near, backed, settings) if backed else None
         by_model = [t for t in backed
                     if measured is not None and beyond_measured(points, measured, t, near["values"][t.response])]
         measure_near = bool(backed) and measured is None
@@ -926,7 +926,7 @@ def step(problem: Problem, runs: pd.DataFrame, settings: Settings, iteration: in
                             f"the closest reachable value is {near['values'][t.response]:.4g} "
                             f"(+- {near['sd'][t.response]:.2g})"
                             + (f", measured {measured[t.response]:.4g} (+- {_se(points, measured, t):.2g}, "
-                               f"{int(measured[t.response + '_n'])} seeds) within {settings.separation:g} (coded) of it"
+                               f"{int(measured[t.response + '_n'])} seeds) where {_where(problem, measured[problem.names].to_numpy(float))}"
                                if t in by_model else "")
                             for t in far + by_model)
             return decided("unreachable", f"{msg}, at {at}")
@@ -1012,11 +1012,12 @@ def _margin_sd(points: pd.DataFrame, response: str) -> tuple[float, float]:
     return (float(s), float(np.sum(n[ok] - 1))) if s else (0.0, 0.0)
 
 
-def beyond_data(runs: pd.DataFrame, points: pd.DataFrame, t: Target) -> bool:
+def beyond_data(runs: pd.DataFrame, points: pd.DataFrame, t: Target, scatter: float = 0.0) -> bool:
     """The runs alone put target ``t`` out of reach: every run's value lies on one side of the
-    target, further than its tolerance plus t_{1 - alpha/2, nu} s (s the pooled replicate SD with
-    nu degrees of freedom; with a few replicates the quantile is wide: two seeds at the centre
-    can read alike by chance, and s = 0 would make any run's distance count)."""
+    target, further than its tolerance plus t_{1 - alpha/2, nu} s, s the larger of the pooled
+    replicate SD (nu its degrees of freedom) and ``scatter`` (one seed's scatter as the
+    surrogate's fit sees it, :func:`seed_sd`): two seeds at the centre can read alike by
+    chance, and an SD of one degree of freedom near 0 would make any run's distance count."""
     from scipy import stats
 
     v = runs[t.response].to_numpy(float)
@@ -1024,7 +1025,7 @@ def beyond_data(runs: pd.DataFrame, points: pd.DataFrame, t: Target) -> bool:
     s, nu = _margin_sd(points, t.response)
     if not v.size or nu < 1:
         return False
-    margin = t.tolerance + float(stats.t.ppf(1.0 - UNREACHABLE_ALPHA / 2.0, nu)) * s
+    margin = t.tolerance + float(stats.t.ppf(1.0 - UNREACHABLE_ALPHA / 2.0, nu)) * max(s, scatter)
     return bool(v.max() < t.value - margin or v.min() > t.value + margin)
 
 
@@ -1065,13 +1066,27 @@ def surrogate_backed(problem: Problem, points: pd.DataFrame, surrogate: Surrogat
     return fits and float(np.max(side * z)) <= float(stats.t.ppf(1.0 - UNREACHABLE_ALPHA / m, nu))
 
 
-def measured_at(problem: Problem, points: pd.DataFrame, coded: np.ndarray, settings: Settings):
-    """The evaluated point of at least ``verify_seeds`` seeds closest to ``coded``, within
-    ``separation`` of it (a row of ``points``), or None."""
+def measured_at(problem: Problem, points: pd.DataFrame, surrogates: dict, near: dict, targets: list[Target],
+                settings: Settings):
+    """The evaluated point of at least ``verify_seeds`` seeds that measures the closest reachable
+    point ``near`` (a row of ``points``), or None: one within ``separation`` of it, or one the
+    surrogates predict as close to each of ``targets`` as ``near`` within their uncertainty
+    (|mu_k - mu_near| <= 2 sqrt(s_k^2 + s_near^2)) -- where the response is flat near its best,
+    the closest point moves with every refit, and a measurement anywhere on that plateau
+    measures the reach; of several, the one predicted closest to the targets (in tolerances)."""
     n = points[[f"{r}_n" for r in problem.responses]].to_numpy(float).min(axis=1)
+    if not (n >= settings.verify_seeds).any():
+        return None
     xe = problem.to_coded(points[problem.names].to_numpy(float))
-    dist = np.linalg.norm(xe - np.asarray(coded, float), axis=1)
-    ok = (n >= settings.verify_seeds) & (dist < max(settings.separation, 1e-9))
+    ok = (n >= settings.verify_seeds) & (np.linalg.norm(xe - np.asarray(near["coded"], float), axis=1)
+                                         < max(settings.separation, 1e-9))
+    plateau = n >= settings.verify_seeds
+    dist = np.zeros(len(xe))
+    for t in targets:
+        mu, sd = surrogates[t.response].predict(xe)
+        plateau &= np.abs(mu - near["values"][t.response]) <= 2.0 * np.sqrt(sd ** 2 + near["sd"][t.response] ** 2)
+        dist += ((mu - t.value) / t.tolerance) ** 2
+    ok |= plateau
     if not ok.any():
         return None
     return points.iloc[int(np.flatnonzero(ok)[np.argmin(dist[ok])])]
