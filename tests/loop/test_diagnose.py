@@ -5,6 +5,8 @@ quantities."""
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 import pandas as pd
 import pytest
@@ -690,3 +692,31 @@ def test_a_row_entered_twice_counts_once_in_every_pool():
     floor, _ = noise_floor(t, rows=np.array([False, False, False, True]))
     assert floor == pytest.approx(np.sqrt(0.0122 + 0.000625), rel=1e-12)
     np.testing.assert_allclose(relative_variances(t)[:3], np.full(3, 0.0122 / 3.0 + 0.000625), rtol=1e-12)
+
+
+def test_a_copied_row_shares_its_sds_sampling_error_in_the_floor_interval():
+    # rows s0 (relative measured SD 0.10 over three repeats) and s1 (0.12 over three), each a
+    # relative seed SD 0.05 over four seeds; s0 entered twice in its table, or copied into a
+    # second one.  Three rows, so each estimate's share T of floor^2 is its term over 3: s0's
+    # measured SD 2 (0.01 / 3) / 3 on 2 degrees of freedom (both copies repeat one estimate, as
+    # both read s0's seeds, the same runs in either table: 2 (0.0025 / 4) / 3 on 3), s1's
+    # 0.0144 / 3 / 3 on 2 and
+    # 0.0025 / 4 / 3 on 3; Satterthwaite's nu as in test_noise_floor's interval by hand
+    from scipy import stats
+
+    from soilcal.loop.residuals import floor_interval, noise_floor
+
+    share = [(2 * 0.01 / 3 / 3, 2), (2 * 0.0025 / 4 / 3, 3), (0.0144 / 3 / 3, 2), (0.0025 / 4 / 3, 3)]
+    floor2 = sum(t for t, _ in share)
+    quad = sum(t ** 2 / (d + 2) for t, d in share)
+    nu = (floor2 ** 2 - 2 * quad) / quad
+    rows = [("s0", 105.0, 0.10, 3.0, 0.05, 4.0), ("s0", 105.0, 0.10, 3.0, 0.05, 4.0), ("s1", 93.0, 0.12, 3.0, 0.05, 4.0)]
+    same = _one_quantity(rows)
+    second = same.copy()
+    second.loc[1, "measurement"] = "field"  # the copy in a second table
+    for t in (same, second):
+        floor, _ = noise_floor(t)
+        assert floor ** 2 == pytest.approx(floor2, rel=1e-12)
+        lo, hi, dof = floor_interval(t)
+        assert dof == pytest.approx(nu, rel=1e-12)
+        assert lo == pytest.approx(math.sqrt(floor2 * nu / stats.chi2.ppf(0.975, nu)), rel=1e-12)

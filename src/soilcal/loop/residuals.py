@@ -364,12 +364,19 @@ def first_entries(df: pd.DataFrame, across_tables: bool = False) -> np.ndarray:
     (:func:`soilcal.loop.core.scatter_about_scale`).  Rows without an SD are single repeats,
     and two repeats may read alike: the replicate scatter counts each.  Every row is its own
     entry where the table has no ``simulation`` column (each row its own simulation)."""
+    return entry_of(df, across_tables) == np.arange(len(df))
+
+
+def entry_of(df: pd.DataFrame, across_tables: bool = False) -> np.ndarray:
+    """Per row of ``df``, the position of its first entry (:func:`first_entries`): its own
+    position, or that of the earlier row it repeats."""
     if "simulation" not in df or not len(df):
-        return np.ones(len(df), bool)
+        return np.arange(len(df))
     cols = [c for c in ("simulation", "measurement", "measure", "measured", "measured_sd", "measured_n",
                         *sorted(c for c in df.columns if str(c).startswith("cov:")))
             if c in df and not (across_tables and c == "measurement")]
-    return ~df[cols].astype(str).duplicated().to_numpy()
+    keys = pd.Series(list(map(tuple, df[cols].astype(str).to_numpy())))
+    return keys.map({k: i for i, k in reversed(list(enumerate(keys)))}).to_numpy(int)
 
 
 def variance_sources(df: pd.DataFrame, prefer: str, homogeneity: bool = True, replicates: bool = False) -> dict:
@@ -571,15 +578,20 @@ def _floor_terms(df: pd.DataFrame) -> dict:
     n_rows = len(df)
     src_m, src_s = np.array([""] * n_rows, dtype=object), np.array([""] * n_rows, dtype=object)
     dof = {}
+    # a row entered twice, or copied into a second table, repeats one estimate: its copies
+    # share its sampling error; a simulation's seeds are one estimate per measured quantity in
+    # whichever table reads them (the runs are shared, one per simulation and seed)
+    entry = entry_of(df, across_tables=True)
+    measure = df["measure"].astype(str).to_numpy() if "measure" in df else np.full(n_rows, "")
     for i in range(n_rows):
         # an SD without a repeat count is the value's own uncertainty, taken as known
-        src, d = {OWN: (f"m{i}", n_given[i] - 1.0 if np.isfinite(n_given[i]) and n_given[i] > 1 else np.inf),
+        src, d = {OWN: (f"m{entry[i]}", n_given[i] - 1.0 if np.isfinite(n_given[i]) and n_given[i] > 1 else np.inf),
                   REPLICATE: (f"r{t['replicate_key'][i]}", t["replicate_dof"][i]),
                   POOLED: (f"pm{meas[i]}", t["pooled_dof_m"][i]),
                   POOLED_REPLICATE: (f"pr{meas[i]}", t["pooled_replicate_dof"][i])}.get(take_m[i], ("", None))
         if src:
             src_m[i], dof[src] = src, d
-        src, d = {OWN: (f"s{sims[i]}{KEY_SEP}{meas[i]}", ns[i] - 1.0),
+        src, d = {OWN: (f"s{sims[i]}{KEY_SEP}{measure[i]}", ns[i] - 1.0),
                   POOLED: (f"ps{meas[i]}", t["pooled_dof_s"][i])}.get(take_s[i], ("", None))
         if src:
             src_s[i], dof[src] = src, d
@@ -661,8 +673,9 @@ def floor_interval(df: pd.DataFrame, rows=None, level: float = 0.95) -> tuple[fl
     if it were known, while the true variance behind it may be anything below the resolution of
     the values; its width is unknown, and the report says so.  A pooled estimate and the rows'
     own SDs it pools are counted as independent, which overstates nu a little where some rows
-    take it.  With three repeats and three seeds
-    per row each SD has 2 degrees of freedom: on 18 rows of equal shares nu is about 72, and the
+    take it.  A row entered twice or copied into a second table (:func:`first_entries`) repeats
+    its SDs: its copies share one estimate, as the rows of one simulation share its seeds'.
+    With three repeats and three seeds per row each SD has 2 degrees of freedom: on 18 rows of equal shares nu is about 72, and the
     interval runs from 0.86 to 1.19 times the floor."""
     return noise_floor_and_interval(df, rows, level)[2]
 
