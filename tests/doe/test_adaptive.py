@@ -765,3 +765,41 @@ def test_a_target_two_seed_sds_beyond_reach_is_found_unreachable_though_single_s
             measured = float(said.split(", measured ")[1].split()[0])
             assert measured < 13.5 - 0.27
     assert decided >= 8
+
+
+class _Line(ad.Surrogate):
+    """y = level + slope a with a fixed predictive SD, on coded a in [-1, 1]."""
+    kind = "line"
+
+    def __init__(self, level, slope, sd):
+        self.level, self.slope, self.sd = level, slope, sd
+
+    def predict(self, xc):
+        xc = np.atleast_2d(xc)
+        return self.level + self.slope * xc[:, 0], np.full(len(xc), self.sd)
+
+
+def test_a_stop_as_unreachable_needs_every_surrogate_and_the_proposals_follow_the_most_hopeful():
+    one = ad.Problem([ad.Factor("a", -1, 1)], [ad.Target("y", 12.0, tol=0.2)])
+    t = one.targets[0]
+    xc = np.linspace(-1, 1, 21)[:, None]
+    chosen = _Flat(10.0)  # 10 everywhere: the target out of its reach
+    assert not ad.rivals_reach(one, chosen, xc, t)  # no rival: nothing to disagree
+    # a rival rising to 11 +- 0.5 at a = 1: its band reaches 11.98 >= 11.8, the target's lower edge
+    chosen.rivals = (_Line(10.0, 1.0, 0.5),)
+    assert 11.0 + 1.96 * 0.5 >= 12.0 - 0.2
+    assert ad.rivals_reach(one, chosen, xc, t)
+    # the same rival, surer (+- 0.3: 11.59 < 11.8), agrees that the target is out of reach
+    chosen.rivals = (_Line(10.0, 1.0, 0.3),)
+    assert not ad.rivals_reach(one, chosen, xc, t)
+    # the proposals' score where no point is plausibly consistent: per point the larger of the
+    # two surrogates' -(max(|mu - t| - tol, 0) / s)^2; the flat one (s 0.1) gives -(1.8 / 0.1)^2
+    # = -324 everywhere, the rival -(0.8 / 0.3)^2 at a = 1 and -(2.8 / 0.3)^2 = -87.1 at a = -1
+    pred = {"y": chosen.predict(xc)}
+    score = ad.optimistic_shortfall(one, {"y": chosen}, xc, pred)
+    assert score[-1] == pytest.approx(-(0.8 / 0.3) ** 2)
+    assert score[0] == pytest.approx(-(2.8 / 0.3) ** 2)
+    assert np.all(score >= -(1.8 / 0.1) ** 2) and int(np.argmax(score)) == len(xc) - 1
+    # without a rival, the chosen surrogate's own shortfall
+    chosen.rivals = ()
+    np.testing.assert_allclose(ad.optimistic_shortfall(one, {"y": chosen}, xc, pred), -(1.8 / 0.1) ** 2)

@@ -380,6 +380,9 @@ class Surrogate:
     kind = ""
     loo_rmse = math.inf
     noise_sd = 0.0
+    #: the other surrogates fitted to the same points, not chosen (:func:`fit_surrogates`): a
+    #: second opinion where the chosen one's verdict decides a stop (:func:`rivals_reach`)
+    rivals: tuple = ()
 
     def predict(self, xc: np.ndarray) -> tuple[np.ndarray, np.ndarray]:  # pragma: no cover
         raise NotImplementedError
@@ -500,6 +503,7 @@ def fit_surrogates(problem: Problem, points: pd.DataFrame, seed: int) -> tuple[d
         if ok.sum() >= p + 2:
             cands.append(QuadraticSurrogate(xc, y))
         best = min(cands, key=lambda s: s.loo_rmse)
+        best.rivals = tuple(c for c in cands if c is not best)
         chosen[r] = best
         row = {"response": r, "points": int(ok.sum()), "replicate_sd": sd,
                "gp_loo_rmse": cands[0].loo_rmse,
@@ -582,6 +586,37 @@ def shortfall(problem: Problem, pred: dict) -> np.ndarray:
         mu, sd = pred[t.response]
         out = out - (np.maximum(t.miss(mu), 0.0) / np.maximum(sd, 1e-12)) ** 2
     return np.asarray(out, float)
+
+
+def rivals_reach(problem: Problem, surrogate: Surrogate, xc: np.ndarray, t: Target) -> bool:
+    """Whether a rival of ``surrogate`` (another surrogate fitted to the same points, not
+    chosen: :attr:`Surrogate.rivals`) sees target ``t`` within reach at some point of ``xc``:
+    its 95 % band there, mu +- 1.96 s, meets the target's band t +- tol.  Surrogates differ most
+    where the points are few, at the box's corners and edges: a Gaussian process reverts to its
+    mean level there, a quadratic follows its trend; a stop as ``unreachable`` needs them all."""
+    for rival in surrogate.rivals:
+        mu, sd = rival.predict(xc)
+        if bool(np.any((mu - 1.96 * sd <= t.value + t.tolerance) & (mu + 1.96 * sd >= t.value - t.tolerance))):
+            return True
+    return False
+
+
+def optimistic_shortfall(problem: Problem, surrogates: dict, xc: np.ndarray, pred: dict) -> np.ndarray:
+    """:func:`shortfall` at ``xc`` by the chosen surrogates (``pred``) or by their rivals
+    (:attr:`Surrogate.rivals`), whichever sees each point closer to the targets: where no
+    point is plausibly consistent, the proposals go where any surrogate sees the targets
+    nearest, so a rival's trend towards a corner the chosen one reverts from gets run."""
+    best = shortfall(problem, pred)
+    n_rivals = max((len(surrogates[t.response].rivals) for t in problem.targets), default=0)
+    for k in range(n_rivals):
+        alt = dict(pred)
+        for t in problem.targets:
+            rivals = surrogates[t.response].rivals
+            if k < len(rivals):
+                mu, sd = rivals[k].predict(xc)
+                alt[t.response] = (mu, np.maximum(sd, 1e-12))
+        best = np.maximum(best, shortfall(problem, alt))
+    return best
 
 
 # --------------------------------------------------------------------------- proposals
@@ -915,7 +950,8 @@ def step(problem: Problem, runs: pd.DataFrame, settings: Settings, iteration: in
                  and abs(near["values"][t.response] - t.value) > t.tolerance + 2.0 * near["sd"][t.response]]
         far = [t for t in aimed if beyond_data(data, points, t, scatter[t.response])]
         backed = [t for t in aimed if t not in far
-                  and surrogate_backed(problem, points, surrogates[t.response], t, near["values"][t.response])]
+                  and surrogate_backed(problem, points, surrogates[t.response], t, near["values"][t.response])
+                  and not rivals_reach(problem, surrogates[t.response], np.vstack([cand, xe]), t)]
         measured = measured_at(problem, points, surrogates, near, backed, settings) if backed else None
         by_model = [t for t in backed
                     if measured is not None and beyond_measured(points, measured, t, near["values"][t.response])]
@@ -970,7 +1006,8 @@ def step(problem: Problem, runs: pd.DataFrame, settings: Settings, iteration: in
         left -= settings.verify_seeds
     n_new = max(0, min(settings.batch, left))
     taken = np.vstack([xe, np.atleast_2d(coded)]) if coded else xe
-    score = gain if unsearched else (p_c if p_c.max() >= settings.p_unreachable else shortfall(problem, pred_c))
+    score = gain if unsearched else (p_c if p_c.max() >= settings.p_unreachable
+                                     else optimistic_shortfall(problem, surrogates, cand, pred_c))
     for i in pick_batch(cand, score, taken, n_new, settings.separation):
         coded.append(cand[i])
         kinds.append("proposal")
