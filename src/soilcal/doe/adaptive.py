@@ -47,7 +47,9 @@ largest P, each at least ``separation`` (coded distance) from the points already
 from every evaluated point.  Where P vanishes everywhere (all below ``p_unreachable``), the
 candidates are ranked by the standardised shortfall instead,
 -sum_j (max(|mu_j - t_j| - tol_j, 0) / s_j)^2 (the exponent of P's Gaussian tail), so the
-proposals still head for the targets.
+proposals still head for the targets; per candidate the larger of the chosen surrogates' and
+their rivals' (the surrogate not chosen, :func:`optimistic_shortfall`), so a corner where the
+quadratic's trend sees the target and the Gaussian process reverts to its mean gets run.
 
 Stopping
 --------
@@ -71,7 +73,8 @@ target has been run, while the predicted distance to the target exceeds the tole
 twice the predictive standard deviation, and either the runs alone put the target out of reach
 (:func:`beyond_data`: every run lies beyond the tolerance plus a t quantile of one seed's
 scatter), or the data back the surrogate (:func:`surrogate_backed`: at least 10 d points that
-scatter about it as the seeds' scatter explains) and the closest reachable point, measured
+scatter about it as the seeds' scatter explains), the surrogate not chosen sees the target
+beyond its 95 % band too (:func:`rivals_reach`), and the closest reachable point, measured
 with ``verify_seeds`` seeds (a verification the design runs for it), reads beyond the
 tolerance too (:func:`beyond_measured`) (``unreachable``), with the closest reachable value
 of each response and where it lies.  A stop by target, budget, iterations or box with a
