@@ -784,14 +784,14 @@ def test_a_stop_as_unreachable_needs_every_surrogate_and_the_proposals_follow_th
     t = one.targets[0]
     xc = np.linspace(-1, 1, 21)[:, None]
     chosen = _Flat(10.0)  # 10 everywhere: the target out of its reach
-    assert not ad.rivals_reach(one, chosen, xc, t)  # no rival: nothing to disagree
+    assert not ad.rivals_reach(chosen, xc, t)  # no rival: nothing to disagree
     # a rival rising to 11 +- 0.5 at a = 1: its band reaches 11.98 >= 11.8, the target's lower edge
     chosen.rivals = (_Line(10.0, 1.0, 0.5),)
     assert 11.0 + 1.96 * 0.5 >= 12.0 - 0.2
-    assert ad.rivals_reach(one, chosen, xc, t)
+    assert ad.rivals_reach(chosen, xc, t)
     # the same rival, surer (+- 0.3: 11.59 < 11.8), agrees that the target is out of reach
     chosen.rivals = (_Line(10.0, 1.0, 0.3),)
-    assert not ad.rivals_reach(one, chosen, xc, t)
+    assert not ad.rivals_reach(chosen, xc, t)
     # the proposals' score where no point is plausibly consistent: per point the larger of the
     # two surrogates' -(max(|mu - t| - tol, 0) / s)^2; the flat one (s 0.1) gives -(1.8 / 0.1)^2
     # = -324 everywhere, the rival -(0.8 / 0.3)^2 at a = 1 and -(2.8 / 0.3)^2 = -87.1 at a = -1

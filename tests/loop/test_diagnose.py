@@ -710,7 +710,8 @@ def test_a_copied_row_shares_its_sds_sampling_error_in_the_floor_interval():
     floor2 = sum(t for t, _ in share)
     quad = sum(t ** 2 / (d + 2) for t, d in share)
     nu = (floor2 ** 2 - 2 * quad) / quad
-    rows = [("s0", 105.0, 0.10, 3.0, 0.05, 4.0), ("s0", 105.0, 0.10, 3.0, 0.05, 4.0), ("s1", 93.0, 0.12, 3.0, 0.05, 4.0)]
+    rows = [("s0", 105.0, 0.10, 3.0, 0.05, 4.0), ("s0", 105.0, 0.10, 3.0, 0.05, 4.0),
+            ("s1", 93.0, 0.12, 3.0, 0.05, 4.0)]
     same = _one_quantity(rows)
     second = same.copy()
     second.loc[1, "measurement"] = "field"  # the copy in a second table

@@ -591,7 +591,7 @@ def shortfall(problem: Problem, pred: dict) -> np.ndarray:
     return np.asarray(out, float)
 
 
-def rivals_reach(problem: Problem, surrogate: Surrogate, xc: np.ndarray, t: Target) -> bool:
+def rivals_reach(surrogate: Surrogate, xc: np.ndarray, t: Target) -> bool:
     """Whether a rival of ``surrogate`` (another surrogate fitted to the same points, not
     chosen: :attr:`Surrogate.rivals`) sees target ``t`` within reach at some point of ``xc``:
     its 95 % band there, mu +- 1.96 s, meets the target's band t +- tol.  Surrogates differ most
@@ -954,7 +954,7 @@ def step(problem: Problem, runs: pd.DataFrame, settings: Settings, iteration: in
         far = [t for t in aimed if beyond_data(data, points, t, scatter[t.response])]
         backed = [t for t in aimed if t not in far
                   and surrogate_backed(problem, points, surrogates[t.response], t, near["values"][t.response])
-                  and not rivals_reach(problem, surrogates[t.response], np.vstack([cand, xe]), t)]
+                  and not rivals_reach(surrogates[t.response], np.vstack([cand, xe]), t)]
         measured = measured_at(problem, points, surrogates, near, backed, settings) if backed else None
         by_model = [t for t in backed
                     if measured is not None and beyond_measured(points, measured, t, near["values"][t.response])]
@@ -965,7 +965,8 @@ def step(problem: Problem, runs: pd.DataFrame, settings: Settings, iteration: in
                             f"the closest reachable value is {near['values'][t.response]:.4g} "
                             f"(+- {near['sd'][t.response]:.2g})"
                             + (f", measured {measured[t.response]:.4g} (+- {_se(points, measured, t):.2g}, "
-                               f"{int(measured[t.response + '_n'])} seeds) where {_where(problem, measured[problem.names].to_numpy(float))}"
+                               f"{int(measured[t.response + '_n'])} seeds) where "
+                               + _where(problem, measured[problem.names].to_numpy(float))
                                if t in by_model else "")
                             for t in far + by_model)
             return decided("unreachable", f"{msg}, at {at}")

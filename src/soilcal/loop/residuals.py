@@ -675,8 +675,8 @@ def floor_interval(df: pd.DataFrame, rows=None, level: float = 0.95) -> tuple[fl
     own SDs it pools are counted as independent, which overstates nu a little where some rows
     take it.  A row entered twice or copied into a second table (:func:`first_entries`) repeats
     its SDs: its copies share one estimate, as the rows of one simulation share its seeds'.
-    With three repeats and three seeds per row each SD has 2 degrees of freedom: on 18 rows of equal shares nu is about 72, and the
-    interval runs from 0.86 to 1.19 times the floor."""
+    With three repeats and three seeds per row each SD has 2 degrees of freedom: on 18 rows of
+    equal shares nu is about 72, and the interval runs from 0.86 to 1.19 times the floor."""
     return noise_floor_and_interval(df, rows, level)[2]
 
 
