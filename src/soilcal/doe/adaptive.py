@@ -367,12 +367,19 @@ def point_table(problem: Problem, runs: pd.DataFrame) -> pd.DataFrame:
 
 def pooled_sd(points: pd.DataFrame, response: str) -> float | None:
     """Pooled replicate standard deviation over the points with at least two seeds."""
+    return pooled_sd_dof(points, response)[0]
+
+
+def pooled_sd_dof(points: pd.DataFrame, response: str) -> tuple[float | None, float]:
+    """:func:`pooled_sd` and its degrees of freedom, sum(n_i - 1) over the points it pools
+    (None, 0 without replicates)."""
     n = points[f"{response}_n"].to_numpy(int)
     sd = points[f"{response}_sd"].to_numpy(float)
     ok = (n > 1) & np.isfinite(sd)
     if not ok.any():
-        return None
-    return float(math.sqrt(np.sum((n[ok] - 1) * sd[ok] ** 2) / np.sum(n[ok] - 1)))
+        return None, 0.0
+    nu = float(np.sum(n[ok] - 1))
+    return float(math.sqrt(np.sum((n[ok] - 1) * sd[ok] ** 2) / nu)), nu
 
 
 # --------------------------------------------------------------------------- surrogates
@@ -964,7 +971,8 @@ def step(problem: Problem, runs: pd.DataFrame, settings: Settings, iteration: in
             msg = "; ".join(f"{t.response}: target {t.value:g} is outside what the factor ranges reach: "
                             f"the closest reachable value is {near['values'][t.response]:.4g} "
                             f"(+- {near['sd'][t.response]:.2g})"
-                            + (f", measured {measured[t.response]:.4g} (+- {_se(points, measured, t):.2g}, "
+                            + (f", measured {measured[t.response]:.4g} "
+                               f"(+- {_se(_margin_sd(points, t.response)[0], measured, t):.2g}, "
                                f"{int(measured[t.response + '_n'])} seeds) where "
                                + _where(problem, measured[problem.names].to_numpy(float))
                                if t in by_model else "")
@@ -1045,12 +1053,9 @@ UNREACHABLE_ALPHA = 0.05
 
 
 def _margin_sd(points: pd.DataFrame, response: str) -> tuple[float, float]:
-    """The pooled replicate SD s and its degrees of freedom nu (0, 0 without replicates)."""
-    n = points[f"{response}_n"].to_numpy(float)
-    sd = points[f"{response}_sd"].to_numpy(float)
-    ok = (n > 1) & np.isfinite(sd)
-    s = pooled_sd(points, response)
-    return (float(s), float(np.sum(n[ok] - 1))) if s else (0.0, 0.0)
+    """:func:`pooled_sd_dof`, (0, 0) where there is no SD or it is 0 (nothing to scale by)."""
+    s, nu = pooled_sd_dof(points, response)
+    return (s, nu) if s else (0.0, 0.0)
 
 
 def beyond_data(runs: pd.DataFrame, points: pd.DataFrame, t: Target, scatter: float = 0.0) -> bool:
@@ -1133,8 +1138,8 @@ def measured_at(problem: Problem, points: pd.DataFrame, surrogates: dict, near: 
     return points.iloc[int(np.flatnonzero(ok)[np.argmin(dist[ok])])]
 
 
-def _se(points: pd.DataFrame, row, t: Target) -> float:
-    s, _ = _margin_sd(points, t.response)
+def _se(s: float, row, t: Target) -> float:
+    """The standard error s / sqrt(n) of the mean at ``row`` (n its seeds)."""
     return s / math.sqrt(max(float(row[f"{t.response}_n"]), 1.0))
 
 
@@ -1148,7 +1153,7 @@ def beyond_measured(points: pd.DataFrame, row, t: Target, reached: float) -> boo
     mean = float(row[t.response])
     if nu < 1 or not math.isfinite(mean):
         return False
-    margin = t.tolerance + float(stats.t.ppf(1.0 - UNREACHABLE_ALPHA / 2.0, nu)) * _se(points, row, t)
+    margin = t.tolerance + float(stats.t.ppf(1.0 - UNREACHABLE_ALPHA / 2.0, nu)) * _se(s, row, t)
     return bool(mean < t.value - margin) if t.value > reached else bool(mean > t.value + margin)
 
 
