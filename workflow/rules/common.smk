@@ -87,10 +87,11 @@ def printed_table(soil, stage):
 
 
 def source_stages(soil, source):
-    """Stage ids a source runs: every stage (published), simulation.stages (dem)."""
+    """Stage ids a source runs: every stage with factors of its own (published: a stage leaving
+    its factors to the DEM recipe has no design to replay), simulation.stages (dem)."""
     if source == "dem":
         return derive.dem_stage_ids(soil_cfg(soil))
-    return [st["id"] for st in SOILS[soil].stages]
+    return [st["id"] for st in SOILS[soil].stages if st["factors"]]
 
 
 def has_responses(soil, source, stage):
@@ -163,7 +164,8 @@ def image_photos(wildcards):
 
 def errata_inputs(wildcards):
     out = []
-    for st in SOILS[wildcards.soil].stages:
+    for sid in source_stages(wildcards.soil, "published"):
+        st = stage_cfg(wildcards.soil, sid)
         out += [f for f in stage_targets(wildcards.soil, st) if f.endswith(".csv")]
         if st.get("table") is not None:
             out.append(f"{stage_dir(wildcards.soil, st['id'])}/design_check.csv")

@@ -608,6 +608,23 @@ def dem_value_in_range(soil_path, name: str, value, scale: float, where: str) ->
         raise InputError(soil_path, where, f"{exc.expected} (DEM parameter {name})", value) from None
 
 
+def check_own_factors(soil_path, soil_data: dict, stage_id: str) -> None:
+    """A simulated stage that leaves its factors to the recipe
+    (:func:`soilcal.config.load.left_to_recipe`) must be derived by it (:func:`dependencies`),
+    else InputError naming ``stages.<id>.factors``: ``design: printed`` and ``adaptive`` run a
+    stage's own factors, as does the recipe when the stage it follows is not simulated."""
+    st = _stage(soil_data, stage_id)
+    if st["factors"] or "from" in dependencies(soil_data, stage_id):
+        return
+    how = {"printed": "simulation.design: printed runs the stage's own levels",
+           "adaptive": "simulation.design: adaptive ranges the stage's own factors over their screening's"}
+    why = how.get(design_mode(soil_data), f"stage {st.get('from_stage')} is not simulated (simulation.stages), "
+                                          "so the stage runs its own levels")
+    raise InputError(soil_path, f"stages.{stage_id}.factors", f"the stage's factors ({why})", "nothing",
+                     note="only the DEM recipe (simulation.design: recipe, the default) derives a stage's factors "
+                          "from the DEM results of the stage it follows")
+
+
 def check_dem_stages(soil_path, soil_data: dict) -> None:
     """Start-up check of the stages the DEM source runs (:func:`simulated_stage_ids`), so that a
     config the chain cannot run fails before any DEM job, naming the soil file and field:
@@ -687,5 +704,5 @@ def check_dem_stages(soil_path, soil_data: dict) -> None:
             in_range(name, v, scale, where)
 
 
-__all__ = ["bbd_from_path", "check_dem_stages", "dem_value_in_range", "dem_stage", "dem_stage_ids", "simulated_stage_ids", "dependencies", "design_mode",
+__all__ = ["bbd_from_path", "check_dem_stages", "check_own_factors", "dem_value_in_range", "dem_stage", "dem_stage_ids", "simulated_stage_ids", "dependencies", "design_mode",
            "path_from_screening", "published_stage", "response_targets", "decodes_low_high", "runs_own_levels"]

@@ -185,8 +185,36 @@ def _schema_error(path: Path, schema: dict, data: Any) -> None:
     raise InputError(path, where, err.message)
 
 
-def design_runs(stage: dict) -> int:
-    """Number of runs of a stage's design, from its kind and factor count."""
+#: what a stage without ``factors`` is expected to be
+DERIVED_FACTORS_EXPECTED = ("the stage's factors (only a steepest_ascent stage after a plackett_burman one, or a "
+                            "box_behnken stage after a steepest_ascent one, with from_stage and no table, may leave "
+                            "them to the DEM recipe, which derives them from the earlier stage's DEM results)")
+_DERIVED_PAIRS = {"steepest_ascent": "plackett_burman", "box_behnken": "steepest_ascent"}
+
+
+def derived_by_recipe(stage: dict, stages: list[dict] | None = None) -> bool:
+    """Whether ``stage`` may leave its ``factors`` to the DEM recipe: a steepest ascent or a
+    Box-Behnken stage with ``from_stage`` and no printed table (``stages``: the soil's, to
+    check that the earlier stage is of the kind the recipe derives it from)."""
+    if stage.get("kind") not in _DERIVED_PAIRS or not stage.get("from_stage") or stage.get("table") is not None:
+        return False
+    if stages is None:
+        return True
+    up = next((s for s in stages if s.get("id") == stage["from_stage"]), None)
+    return up is not None and up.get("kind") == _DERIVED_PAIRS[stage["kind"]]
+
+
+def left_to_recipe(stage: dict) -> bool:
+    """Whether a loaded stage declares no factors of its own (:func:`derived_by_recipe`): the
+    DEM recipe derives them, and nothing runs the stage on its config's levels."""
+    return not stage.get("factors") and derived_by_recipe(stage)
+
+
+def design_runs(stage: dict) -> int | None:
+    """Number of runs of a stage's design, from its kind and factor count; None for a stage
+    whose factors the DEM recipe derives (:func:`left_to_recipe`)."""
+    if left_to_recipe(stage):
+        return None
     kind = stage["kind"]
     k = len(stage["factors"])
     if kind == "plackett_burman":
@@ -456,6 +484,12 @@ def _semantic_checks(path: Path, d: dict, resources_root: Path,
         sid = st["id"]
         if sid in seen:
             raise InputError(path, f"{where}.id", "a stage id used once", sid)
+        if "factors" not in st:
+            if not derived_by_recipe(st, list(seen.values())):
+                raise InputError(path, f"{where}.factors", DERIVED_FACTORS_EXPECTED, "nothing")
+            # the DEM recipe derives them from the earlier stage's DEM results
+            # (soilcal.chain.derive); a source or design that needs them says so at start-up
+            st["factors"] = {}
         for sym, f in st["factors"].items():
             fw = f"{where}.factors.{sym}"
             if f["parameter"] not in params:
@@ -485,7 +519,7 @@ def _semantic_checks(path: Path, d: dict, resources_root: Path,
             if p not in params:
                 raise InputError(path, f"{where}.fixed.{p}", "an id listed under parameters", p)
         _check_stage_sets_each_parameter_once(path, where, st, params)
-        if st["kind"] == "box_behnken" and len(st["factors"]) < BBD_MIN_FACTORS:
+        if st["kind"] == "box_behnken" and len(st["factors"]) < BBD_MIN_FACTORS and not left_to_recipe(st):
             # the design exists for three factors and more (its design job would stop)
             raise InputError(path, f"{where}.factors", f"at least {BBD_MIN_FACTORS} factors for a Box-Behnken design "
                              "(fix the others in fixed)", f"{len(st['factors'])} ({', '.join(st['factors'])})")

@@ -174,7 +174,8 @@ def check_block(soil_path, data: dict) -> None:
         if sid not in ids:
             raise InputError(soil_path, f"{BLOCK}.stages[{i}]", "a stage id (" + ", ".join(ids) + ")", sid)
     from soilcal.chain import adaptive
-    from soilcal.chain.derive import check_dem_stages, dependencies, design_mode, runs_own_levels, simulated_stage_ids
+    from soilcal.chain.derive import (check_dem_stages, check_own_factors, dependencies, design_mode, runs_own_levels,
+                                      simulated_stage_ids)
     from soilcal.doe.designs import BBD_MIN_FACTORS
 
     min_factors = _check_screening(soil_path, sim)
@@ -186,6 +187,7 @@ def check_block(soil_path, data: dict) -> None:
                                  f"an entry for the response {r['id']!r} of stage {sid!r} (or leave the stage out "
                                  f"of {BLOCK}.stages)", sorted(sim.get("responses") or {}))
         deps = dependencies(data, sid)
+        check_own_factors(soil_path, data, sid)
         if "from" in deps:
             if st["kind"] == "steepest_ascent" and not _has_target(data, [r["id"] for r in st["responses"]]):
                 raise InputError(soil_path, f"stages.{sid}.responses",
