@@ -736,11 +736,89 @@ def test_two_seeds_that_read_alike_do_not_put_a_target_out_of_reach():
     assert ad.pooled_sd(points, "y") == pytest.approx(0.1)
     assert 2 * 0.1 < 0.4 < stats.t.ppf(0.975, 1) * 0.1
     assert not ad.beyond_data(runs, points, one.targets[0])
-    # the closest point measured with 4 seeds at mean 9.0 lies below 10.5 - 0.1 - t_{0.975, 1} s / 2
-    # = 9.76, so it reads out of reach; at 10.0 it does not
-    row = pd.Series({"y": 9.0, "y_n": 4})
-    assert ad.beyond_measured(points, row, one.targets[0], reached=9.5)
-    assert not ad.beyond_measured(points, pd.Series({"y": 10.0, "y_n": 4}), one.targets[0], reached=9.5)
+    # the closest point measured with 4 seeds: a one-sided test (the surrogate's reach, 9.5,
+    # below the target sets its side), so the margin is 10.5 - 0.1 - t_{0.95, 1} s / 2 = 10.08;
+    # at 10.0 the mean reads out of reach, at 10.1 it does not
+    edge = 10.5 - 0.1 - stats.t.ppf(0.95, 1) * 0.1 / 2
+    assert 10.0 < edge < 10.1
+    assert ad.beyond_measured(points, pd.Series({"y": 10.0, "y_n": 4}), one.targets[0], reached=9.5)
+    assert not ad.beyond_measured(points, pd.Series({"y": 10.1, "y_n": 4}), one.targets[0], reached=9.5)
+    # the side is the surrogate's: a reach above the target asks the mean to lie above it
+    assert not ad.beyond_measured(points, pd.Series({"y": 10.0, "y_n": 4}), one.targets[0], reached=11.0)
+
+
+def test_replicates_that_read_alike_leave_the_tolerance_as_the_margin():
+    # a response its seeds do not move: the centre's two seeds read alike (replicate SD 0 on 1
+    # degree of freedom) and every run lies 0.4 below the band of 10.5 +- 0.1: the runs alone
+    # put the target out of reach, by the tolerance plus whatever scatter the surrogate sees
+    one = ad.Problem([ad.Factor("a", 0, 1)], [ad.Target("y", 10.5, tol=0.1)])
+    pts = [0, 0, 1, 2, 3, 4, 5, 6]
+    runs = pd.DataFrame({"iteration": 0, "kind": "start", "point": pts, "seed": range(8),
+                         "a": [p / 6 for p in pts], "y": [10.0] * 8})
+    points = ad.point_table(one, runs)
+    assert ad.pooled_sd_dof(points, "y") == (0.0, 1.0)
+    assert ad.beyond_data(runs, points, one.targets[0])
+    # a surrogate that sees a seed scatter of 0.1: margin 0.1 + t_{0.975, 1} 0.1 = 1.37 > 0.4
+    assert 0.1 + stats.t.ppf(0.975, 1) * 0.1 > 0.4
+    assert not ad.beyond_data(runs, points, one.targets[0], scatter=0.1)
+    # a measured closest point 0.2 below the band reads out of reach (standard error 0)
+    assert ad.beyond_measured(points, pd.Series({"y": 10.2, "y_n": 4}), one.targets[0], reached=10.0)
+    # the residuals about a surrogate have no scatter to be judged by: not backed
+    many = pd.DataFrame({"iteration": 0, "kind": "start", "point": range(12), "seed": range(12),
+                         "a": np.linspace(0, 1, 12), "y": 10.0})
+    many = pd.concat([many, many.iloc[[0]].assign(seed=12)], ignore_index=True)
+    assert not ad.surrogate_backed(one, ad.point_table(one, many), _Flat(10.0), one.targets[0], 10.0)
+
+
+def test_the_lack_of_fit_counts_the_degrees_of_freedom_the_fit_spends():
+    """A quadratic fitted to 20 point means of 2 seeds each (replicate SD exactly 1, 20 degrees
+    of freedom) whose residuals are a pattern orthogonal to its six terms: the fit recovers the
+    quadratic and leaves that pattern.  Its z_i = residual sqrt(2) / 1 sum to sum z^2; against
+    pure error the lack of fit is sum z^2 / (20 - 6) on F(14, 20) (Montgomery, Sec. 10.3.5),
+    not sum z^2 / 20 on F(20, 20)."""
+    two = ad.Problem([ad.Factor("a", 0, 1), ad.Factor("b", 0, 1)], [ad.Target("y", 30.0, tol=0.1)])
+    grid = np.array([(a, b) for a in np.linspace(0, 1, 5) for b in np.linspace(0, 1, 4)])
+    xc = two.to_coded(grid)
+    Q = ad.quadratic_terms(xc)
+    assert Q.shape == (20, 6)
+    pattern = np.cos(3.0 * xc[:, 0] + 2.0 * xc[:, 1] ** 3) * np.where(np.arange(20) % 3 == 0, 1.5, -1.0)
+    pattern = pattern - Q @ np.linalg.lstsq(Q, pattern, rcond=None)[0]
+
+    def backed(sum_z2):
+        z = pattern * math.sqrt(sum_z2 / float(np.sum(pattern ** 2)))
+        means = 10.0 + 2.0 * grid[:, 0] - grid[:, 1] + grid[:, 0] * grid[:, 1] + 0.5 * grid[:, 1] ** 2 + z / math.sqrt(2)
+        se = 1.0 / math.sqrt(2.0)
+        rows = [{"iteration": 0, "kind": "start", "point": i, "seed": 2 * i + k, "a": grid[i, 0], "b": grid[i, 1],
+                 "y": means[i] + sign * se} for i in range(20) for k, sign in enumerate((-1.0, 1.0))]
+        points = ad.point_table(two, pd.DataFrame(rows))
+        assert ad.pooled_sd_dof(points, "y") == (pytest.approx(1.0), 20.0)
+        sur = ad.QuadraticSurrogate(two.to_coded(points[["a", "b"]].to_numpy(float)), points["y"].to_numpy(float))
+        assert float(np.sum(sur.hat)) == pytest.approx(6.0)  # the trace of a projection on six terms
+        # no single point decides: every studentised residual below the Bonferroni bound
+        assert np.max(np.abs(z) / np.sqrt(1.0 - sur.hat)) < stats.t.ppf(1.0 - 0.05 / 20, 20)
+        return ad.surrogate_backed(two, points, sur, two.targets[0], 14.0)
+
+    f14, f20 = stats.f.ppf(0.95, 14, 20), stats.f.ppf(0.95, 20, 20)
+    # 36: 36 / 20 = 1.8 passes F(20, 20) (2.12) but 36 / 14 = 2.57 fails F(14, 20) (2.22)
+    assert 36.0 / 20 < f20 and 36.0 / 14 > f14
+    assert not backed(36.0)
+    # 24: 24 / 14 = 1.71 passes
+    assert 24.0 / 14 < f14
+    assert backed(24.0)
+
+
+def test_the_surrogates_leverages():
+    # the quadratic's leverages are those of least squares on its terms: they sum to the
+    # number of terms; the Gaussian process's lie in [0, 1] and sum to between 1 (the level
+    # alone) and the number of points (interpolation)
+    rng = np.random.default_rng(5)
+    xc = 2.0 * rng.random((24, 2)) - 1.0
+    y = 3.0 + xc[:, 0] - 2.0 * xc[:, 1] ** 2 + 0.3 * rng.standard_normal(24)
+    quad = ad.QuadraticSurrogate(xc, y)
+    assert float(np.sum(quad.hat)) == pytest.approx(ad.n_quadratic_terms(2))
+    gp = ad.GPSurrogate(xc, y, np.full(24, 2), 0.3, seed=0)
+    assert gp.hat.shape == (24,) and np.all(gp.hat > -1e-9) and np.all(gp.hat < 1.0 + 1e-9)
+    assert 1.0 - 1e-9 <= float(np.sum(gp.hat)) <= 24.0 + 1e-9
 
 
 def test_a_target_two_seed_sds_beyond_reach_is_found_unreachable_though_single_seeds_read_near_it():

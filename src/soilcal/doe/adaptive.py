@@ -393,6 +393,10 @@ class Surrogate:
     #: the other surrogates fitted to the same points, not chosen (:func:`fit_surrogates`): a
     #: second opinion where the chosen one's verdict decides a stop (:func:`rivals_reach`)
     rivals: tuple = ()
+    #: the leverage of each point the surrogate was fitted to (the diagonal of the linear map
+    #: from the points' values to its predictions there), in the order of the points; None for
+    #: a surrogate not fitted to them (leverage 0: its predictions do not follow the values)
+    hat: np.ndarray | None = None
 
     def predict(self, xc: np.ndarray) -> tuple[np.ndarray, np.ndarray]:  # pragma: no cover
         raise NotImplementedError
@@ -447,6 +451,11 @@ class GPSurrogate(Surrogate):
         self.one_kinv_one = float(ones @ self.kinv_one)
         self.level = float(self.kinv_one @ yn) / self.one_kinv_one
         self.weights = Kinv @ (yn - self.level)
+        # leverages: at the points the predictor is H yn with H = 1 c' + A (I - 1 c'),
+        # c = K^-1 1 / (1' K^-1 1) (the level's weights) and A = K_s K^-1 (K_s the signal kernel)
+        c = self.kinv_one / self.one_kinv_one
+        A = gp.kernel_.k1(self.xc) @ Kinv
+        self.hat = c + np.diag(A) - (A @ ones) * c
 
     def predict(self, xc):
         """Mean response and its standard error (no seed scatter) at coded points: the
@@ -482,6 +491,7 @@ class QuadraticSurrogate(Surrogate):
         self.fit = OLS(y, X).fit()
         self.noise_sd = float(np.sqrt(self.fit.mse_resid)) if self.fit.df_resid > 0 else 0.0
         h = self.fit.get_influence().hat_matrix_diag
+        self.hat = np.asarray(h, float)
         press = self.fit.resid / np.maximum(1.0 - h, 1e-12)
         self.loo_rmse = float(np.sqrt(np.mean(press ** 2)))
 
@@ -1053,9 +1063,11 @@ UNREACHABLE_ALPHA = 0.05
 
 
 def _margin_sd(points: pd.DataFrame, response: str) -> tuple[float, float]:
-    """:func:`pooled_sd_dof`, (0, 0) where there is no SD or it is 0 (nothing to scale by)."""
+    """:func:`pooled_sd_dof` with 0 for no SD: (0, 0) without replicates (no scatter known),
+    (0, nu) where every point's seeds read alike (a response its seeds do not move: the
+    margins are then the tolerance and whatever scatter the surrogate's fit sees)."""
     s, nu = pooled_sd_dof(points, response)
-    return (s, nu) if s else (0.0, 0.0)
+    return (s or 0.0, nu)
 
 
 def beyond_data(runs: pd.DataFrame, points: pd.DataFrame, t: Target, scatter: float = 0.0) -> bool:
@@ -1083,15 +1095,24 @@ def surrogate_backed(problem: Problem, points: pd.DataFrame, surrogate: Surrogat
     reach: among many runs the largest single seed lies a few SDs above its mean, so some run
     always reads near such a target; the surrogate pools the runs, and these tests keep it
     honest.  With the point means ybar_i of n_i seeds, the surrogate's mu_i there, the pooled
-    replicate SD s with nu degrees of freedom and z_i = (ybar_i - mu_i) sqrt(n_i) / s:
+    replicate SD s with nu degrees of freedom, z_i = (ybar_i - mu_i) sqrt(n_i) / s and h_i the
+    surrogate's leverage at point i (:attr:`Surrogate.hat`; its fit spends sum h_i of the m
+    points' degrees of freedom, the number of terms of the quadratic, the trace of the
+    Gaussian process's smoother):
 
     - at least 10 d points (d factors; the rule of thumb for a Gaussian-process emulator's
       design size, Loeppky, Sacks and Welch 2009, Technometrics 51, 366-376);
-    - overall: sum z_i^2 / m below the (1 - alpha) quantile of F(m, nu) (m points; a
-      lack-of-fit test);
-    - at every point, on the target's side: sign(t - reached) z_i below the (1 - alpha / m)
-      quantile of Student's t with nu degrees of freedom (Bonferroni over the m points): no
-      point reads closer to the target than the surrogate by more than its seeds explain.
+    - overall: sum z_i^2 / (m - sum h_i) below the (1 - alpha) quantile of F(m - sum h_i, nu)
+      (the lack-of-fit test against pure error: residuals of a fit to the same points are
+      smaller than the points' scatter about the true surface, by the degrees of freedom the
+      fit spends; Montgomery, Design and Analysis of Experiments, Sec. 10.3.5);
+    - at every point, on the target's side: sign(t - reached) z_i / sqrt(1 - h_i) below the
+      (1 - alpha / m) quantile of Student's t with nu degrees of freedom (Bonferroni over the
+      m points; the residual studentised by its leverage): no point reads closer to the
+      target than the surrogate by more than its seeds explain.
+
+    Where the seeds of every point read alike (s = 0) the residuals have no scatter to be
+    judged by, and the verdict is left to :func:`beyond_data`.
 
     A verdict backed so still needs the closest point measured (:func:`beyond_measured`): the
     tests have little power against a feature the points have not sampled, such as a corner
@@ -1102,14 +1123,21 @@ def surrogate_backed(problem: Problem, points: pd.DataFrame, surrogate: Surrogat
     s, nu = _margin_sd(points, r)
     ok = np.isfinite(points[r].to_numpy(float))
     m = int(ok.sum())
-    if nu < 1 or m < 10 * len(problem.factors):
+    if nu < 1 or not s > 0 or m < 10 * len(problem.factors):
         return False
+    h = np.zeros(m) if surrogate.hat is None else np.asarray(surrogate.hat, float)
+    if h.shape != (m,):
+        raise ValueError(f"surrogate_backed: the surrogate was fitted to {h.size} points, not to the {m} given")
+    dof = m - float(np.sum(h))
+    if dof < 1.0:
+        return False  # a fit that spends every point's degree of freedom leaves no lack of fit to test
     n = points.loc[ok, f"{r}_n"].to_numpy(float)
     mu, _ = surrogate.predict(problem.to_coded(points.loc[ok, problem.names].to_numpy(float)))
     z = (points.loc[ok, r].to_numpy(float) - mu) * np.sqrt(n) / s
     side = 1.0 if t.value > reached else -1.0
-    fits = float(np.mean(z ** 2)) <= float(stats.f.ppf(1.0 - UNREACHABLE_ALPHA, m, nu))
-    return fits and float(np.max(side * z)) <= float(stats.t.ppf(1.0 - UNREACHABLE_ALPHA / m, nu))
+    fits = float(np.sum(z ** 2)) / dof <= float(stats.f.ppf(1.0 - UNREACHABLE_ALPHA, dof, nu))
+    zs = z / np.sqrt(np.maximum(1.0 - h, 1e-12))
+    return fits and float(np.max(side * zs)) <= float(stats.t.ppf(1.0 - UNREACHABLE_ALPHA / m, nu))
 
 
 def measured_at(problem: Problem, points: pd.DataFrame, surrogates: dict, near: dict, targets: list[Target],
@@ -1145,15 +1173,17 @@ def _se(s: float, row, t: Target) -> float:
 
 def beyond_measured(points: pd.DataFrame, row, t: Target, reached: float) -> bool:
     """The measured mean at the closest point (``row``) lies on the surrogate's side of target
-    ``t``, further than its tolerance plus t_{1 - alpha/2, nu} s / sqrt(n) (s the pooled
-    replicate SD, nu its degrees of freedom, n the point's seeds)."""
+    ``t``, further than its tolerance plus t_{1 - alpha, nu} s / sqrt(n) (s the pooled
+    replicate SD, nu its degrees of freedom, n the point's seeds): a one-sided test, its side
+    set before the measurement by the surrogate's reach (``reached`` below or above the
+    target), where :func:`beyond_data` takes the side its runs fall on and so tests both."""
     from scipy import stats
 
     s, nu = _margin_sd(points, t.response)
     mean = float(row[t.response])
     if nu < 1 or not math.isfinite(mean):
         return False
-    margin = t.tolerance + float(stats.t.ppf(1.0 - UNREACHABLE_ALPHA / 2.0, nu)) * _se(s, row, t)
+    margin = t.tolerance + float(stats.t.ppf(1.0 - UNREACHABLE_ALPHA, nu)) * _se(s, row, t)
     return bool(mean < t.value - margin) if t.value > reached else bool(mean > t.value + margin)
 
 
