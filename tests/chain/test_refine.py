@@ -4,6 +4,8 @@ surface and every corrected set are known in closed form."""
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 import pandas as pd
 import pytest
@@ -232,7 +234,7 @@ def test_unbiased_miss_note_by_hand():
     stats = {"y1": (31.0, 1.0, 4), "y2": (33.0, 2.0, 4), "y3": (40.0, np.nan, 1)}
     pred = {"y1": 31.0, "y2": 32.5, "y3": 40.0}
     head = ("missed, but the verification means differ from the surface's prediction by no more than two "
-            "standard errors (no bias to correct); ")
+            "standard errors of the seeds' mean and the surface's prediction together (no bias to correct); ")
     y1 = "y1: the miss +1 is within two standard errors (1) of the mean of 4 seeds (seed scatter)"
     y2 = ("y2: the miss +3 is more than seed scatter (two standard errors 2 of 4 seeds): the surface itself "
           "predicts 32.5 at this set, +2.5 from the target")
@@ -244,3 +246,40 @@ def test_unbiased_miss_note_by_hand():
                                      "region", y3])
     note = _unbiased_miss(stage, inside, tgt, stats, pred, ["y2"])
     assert note == head + y2 + ": the surface does not reach the target there"
+
+
+def test_a_target_of_zero_is_kept_with_its_reason():
+    # a target of 0 has no relative 2 % band (the verification gives it no relative error):
+    # the case keeps its set and says why, instead of dividing by it
+    zero = {"y": {"value": 0.0, "source": "measurement"}, "lost": {"value": None}}
+    df = refine_frame(_stage(), _table(), zero, OPTIMUM, RUNS).set_index("case")
+    r = df.loc["biased"]
+    assert (r["round"], bool(r["refined"])) == (1, False)
+    assert "a target of 0" in r["note"]
+
+
+def test_a_bias_within_the_surfaces_own_error_is_not_corrected():
+    """The "biased" case's seeds (mean 32, SD 0.082) at a set where the surface fitted to a
+    scattered table is uncertain: the table's edge points carry +-1.5 about 30 + 2 A, so the
+    full quadratic's prediction at the set has a standard error (its covariance, checked here
+    against the formula MSE f'(X'X)^-1 f) that makes the difference +1 no bias."""
+    from soilcal.chain.stage import fit_stage
+
+    t = _table()
+    t.loc[:11, "y"] += 1.5 * np.where(np.arange(12) % 2 == 0, 1.0, -1.0)
+    fit = fit_stage(_stage(), t)[0].full
+    x0 = np.array([0.5, 0.3, -0.2])
+    X = fit.X_coded
+    F = np.column_stack([np.ones(len(X)), X, X[:, 0] * X[:, 1], X[:, 0] * X[:, 2], X[:, 1] * X[:, 2], X ** 2])
+    f = np.concatenate([[1.0], x0, [x0[0] * x0[1], x0[0] * x0[2], x0[1] * x0[2]], x0 ** 2])
+    se = math.sqrt(fit.mse * f @ np.linalg.inv(F.T @ F) @ f)
+    assert fit.predict_se(x0) == pytest.approx(se, rel=1e-6)
+    pred = float(fit.predict(x0[None, :])[0])
+    sd = float(np.std([32.1, 31.9, 32.0, 32.0], ddof=1))
+    # the seeds alone would call it a bias, the seeds and the surface together do not
+    assert abs(32.0 - pred) > 2 * sd / 2 and abs(32.0 - pred) <= 2 * math.sqrt(sd ** 2 / 4 + se ** 2)
+    opt = OPTIMUM.copy()
+    opt.loc[opt["case"] == "biased", "y"] = pred
+    r = refine_frame(_stage(), t, TARGETS, opt, RUNS).set_index("case").loc["biased"]
+    assert (r["round"], bool(r["refined"])) == (1, False)
+    assert "no bias to correct" in r["note"]

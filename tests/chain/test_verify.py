@@ -9,6 +9,7 @@ printed optimum A 0.08, B 0.37, C 0.64 and verification 27.62 deg with a relativ
 from __future__ import annotations
 
 import copy
+import math
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -150,6 +151,17 @@ def test_diagnose_surface_bias():
     assert note.startswith("undecided: 1 seed gave 31.00") and "+1.00" in note and "nan" not in note
     # predicted exactly 0.5 from the target is not beyond the surface tolerance
     assert diagnose(31.0, 0.4, 4, 30.0, 30.5).startswith("surface bias")
+
+
+def test_diagnose_counts_the_surfaces_own_error_before_it_calls_a_bias():
+    # mean 31 of 4 seeds (standard error 0.2) against the surface's 30.1, 0.9 apart; a 95 %
+    # interval 29.1 to 31.1 gives the surface a standard error of 1.0 / 1.96 = 0.51: two
+    # standard errors of the difference, 2 sqrt(0.2^2 + 0.51^2) = 1.10, exceed 0.9
+    assert 2 * math.sqrt(0.2 ** 2 + (1.0 / 1.96) ** 2) > 0.9
+    note = diagnose(31.0, 0.4, 4, 30.0, 30.1, ci=(29.1, 31.1))
+    assert note.startswith("surface uncertainty") and "0.51" in note
+    # an interval of 29.9 to 30.3 (standard error 0.10): 2 sqrt(0.04 + 0.0104) = 0.45 < 0.9
+    assert diagnose(31.0, 0.4, 4, 30.0, 30.1, ci=(29.9, 30.3)).startswith("surface bias")
 
 
 # --------------------------------------------------------------------------- verification frame

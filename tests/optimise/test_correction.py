@@ -45,6 +45,19 @@ def test_significant_bias_two_standard_errors():
     assert significant_bias(32.0, float("nan"), 4, 31.0) == 0.0
 
 
+def test_significant_bias_counts_the_surfaces_own_error():
+    # the surface's prediction of standard error 0.5 beside the mean's 0.25: the difference's
+    # standard error is sqrt(0.25^2 + 0.5^2) = 0.559, two of them 1.118 > |32 - 31|: no bias
+    assert 2 * math.sqrt(0.25 ** 2 + 0.5 ** 2) > 1.0
+    assert significant_bias(32.0, 0.5, 4, 31.0, 0.5) == 0.0
+    # 0.3: sqrt(0.0625 + 0.09) = 0.39, two of them 0.78 < 1: a bias
+    assert significant_bias(32.0, 0.5, 4, 31.0, 0.3) == pytest.approx(1.0)
+    # numbers of numpy's types count as numbers
+    assert significant_bias(np.float32(32.0), np.float64(0.5), np.int64(4), np.int64(31), np.float32(0.3)) \
+        == pytest.approx(1.0)
+    assert significant_bias(32.0, 0.5, 4, 31.0, float("nan")) == 0.0
+
+
 def test_shifted_model_adds_the_bias_everywhere():
     m = Lin(lambda X: 30.0 + 2.0 * X[:, 0])
     s = Shifted(m, 1.5)

@@ -3,8 +3,10 @@
 For every optimisation case of a stage, :func:`refine_frame` compares the verification seeds
 at the calibrated set x0 (``optimum.csv``, ``calibrated = True``) with the targets.  A case is
 refined when a target is missed by more than 2 % and the verification mean differs from the
-response surface's prediction at x0 by more than two standard errors for at least one targeted
-response (:func:`soilcal.optimise.correction.significant_bias`); the new set is the smallest
+response surface's prediction at x0 by more than two standard errors of that difference (the
+seeds' mean's and the surface's prediction's, :meth:`soilcal.rsm.model.RSMFit.predict_se`,
+together) for at least one targeted response
+(:func:`soilcal.optimise.correction.significant_bias`); the new set is the smallest
 move from x0 at which the bias-corrected surfaces meet every target
 (:func:`soilcal.optimise.correction.corrected_set`), and the workflow verifies it with fresh
 seeds (``seed + seed_offset + replicates + k``).  Where the corrected surfaces cannot meet every
@@ -40,6 +42,8 @@ of a stage, and on ``final.csv``'s).
 """
 
 from __future__ import annotations
+
+import math
 
 import numpy as np
 import pandas as pd
@@ -119,7 +123,8 @@ def _unbiased_miss(stage: dict, cal: pd.DataFrame, tgt: dict, stats: dict, pred:
                      f"{n} seeds): the surface itself predicts {p:.4g} at this set, {p - t:+.3g} from the "
                      f"target{where}")
     return ("missed, but the verification means differ from the surface's prediction by no more than two "
-            "standard errors (no bias to correct); " + "; ".join(parts))
+            "standard errors of the seeds' mean and the surface's prediction together (no bias to correct); "
+            + "; ".join(parts))
 
 
 def _kept(case_id, cal: pd.DataFrame, note: str, columns) -> dict:
@@ -205,14 +210,18 @@ def refine_frame(stage: dict, table: pd.DataFrame, targets: dict, optimum: pd.Da
         cid = case["id"]
         cal = calibrated_rows(optimum, cid)
         goals = goal_values(case["goals"], targets)
-        tgt = {r: float(g["value"]) for r, g in goals.items()
-               if g.get("goal") == "target" and g.get("value") is not None}
+        aimed = {r: float(g["value"]) for r, g in goals.items()
+                 if g.get("goal") == "target" and g.get("value") is not None}
+        # a target of 0 has no relative band to miss (the verification gives it no error either)
+        tgt = {r: v for r, v in aimed.items() if math.isfinite(v) and v != 0.0}
         columns = [f"{s}_coded" for s in syms] + list(syms) + list(goals)
         if not len(cal):
             rows.append(_kept(cid, cal, "no calibrated set (see optimum.csv)", columns))
             continue
         if not tgt:
-            rows.append(_kept(cid, cal, "no target value to correct towards", columns))
+            rows.append(_kept(cid, cal, "no target value to correct towards" + (
+                f" (a target of 0 has no {TOLERANCE_PERCENT:g} % band: {', '.join(aimed)})" if aimed else ""),
+                columns))
             continue
         frames = runs.get(cid, [])
         done = pd.concat(frames, ignore_index=True) if frames else pd.DataFrame()
@@ -226,7 +235,13 @@ def refine_frame(stage: dict, table: pd.DataFrame, targets: dict, optimum: pd.Da
         if not missed:
             rows.append(_kept(cid, cal, "the first round meets every target within 2 %", columns))
             continue
-        bias = {r: significant_bias(m, sd, n, pred[r]) for r, (m, sd, n) in stats.items()}
+        if fits is None:
+            fits = {sf.response: (sf.reduced if opt.get("model", "reduced") == "reduced" else sf.full)
+                    for sf in fit_stage(stage, table)}
+        x0 = np.array([(float(cal[s].iloc[0]) - centre[j]) / half[j] for j, s in enumerate(syms)])
+        # the bias against the seeds' and the surface's standard errors together
+        bias = {r: significant_bias(m, sd, n, pred[r], fits[r].predict_se(x0) if r in fits else 0.0)
+                for r, (m, sd, n) in stats.items()}
         unbiased = ""
         if not any(bias.values()):
             from soilcal.chain.verify import seed_scatter
@@ -236,10 +251,6 @@ def refine_frame(stage: dict, table: pd.DataFrame, targets: dict, optimum: pd.Da
             if not (can_leave and any(seed_scatter(*stats[r], tgt[r])[1] is False for r in missed)):
                 rows.append(_kept(cid, cal, unbiased, columns))
                 continue
-        if fits is None:
-            fits = {sf.response: (sf.reduced if opt.get("model", "reduced") == "reduced" else sf.full)
-                    for sf in fit_stage(stage, table)}
-        x0 = np.array([(float(cal[s].iloc[0]) - centre[j]) / half[j] for j, s in enumerate(syms)])
         models = {r: fits[r] for r in goals if r in fits}
         try:
             sols = desirability_optimise({r: Shifted(m, bias.get(r, 0.0)) for r, m in models.items()},

@@ -140,8 +140,15 @@ def diagnose(mean: float, sd: float, n: int, target: float, predicted: float | N
       would make two standard errors as small as the 2 % band,
       n = ceil((2 sd / (0.02 |target|))^2), so that a user can judge whether seeds or larger
       heaps are the way;
-    * surface bias: the surface predicts the target but the DEM mean differs by more than
-      the seed scatter explains (lack of fit of the quadratic at the optimum);
+    * surface bias: the surface predicts the target but the DEM mean differs from its
+      prediction by more than two standard errors of the difference, the seeds' mean's and
+      the surface's own together (the same test as the second round's,
+      :func:`soilcal.optimise.correction.significant_bias`; the surface's standard error read
+      from its 95 % interval ``ci`` as its half-width over 1.96, at most t_{0.975, df} / 1.96
+      times the true one): the quadratic misrepresents the DEM at the optimum;
+    * surface uncertainty: the surface predicts the target and the mean differs from it by
+      more than the seeds explain but not by more than the surface's and the seeds' errors
+      together: the design points' scatter leaves the surface too uncertain there to tell;
     * undecided: fewer than two seeds (failed seeds can leave one): no scatter to tell seed
       scatter from a surface bias.
 
@@ -191,9 +198,20 @@ def diagnose(mean: float, sd: float, n: int, target: float, predicted: float | N
                      f"{mean - target:+.2f} by (it takes two seeds), so seed scatter and a surface bias cannot be "
                      "told apart; more seeds would tell")
     elif not notes and predicted is not None and np.isfinite(predicted):
-        notes.append(f"surface bias: the surface predicts the target but {n} seeds give {mean:.2f} "
-                     f"(+-{sem:.2f} standard error): the quadratic "
-                     "misrepresents the DEM at the optimum (see the lack-of-fit test)")
+        from soilcal.optimise.correction import SIGNIFICANCE, significant_bias
+
+        lo, hi = ci if ci is not None else (np.nan, np.nan)
+        pse = (hi - lo) / 2.0 / 1.96 if np.isfinite(lo) and np.isfinite(hi) else 0.0
+        if significant_bias(mean, sd, n, predicted, pse):
+            notes.append(f"surface bias: the surface predicts the target but {n} seeds give {mean:.2f} "
+                         f"(+-{sem:.2f} standard error): the quadratic "
+                         "misrepresents the DEM at the optimum (see the lack-of-fit test)")
+        else:
+            notes.append(f"surface uncertainty: the surface predicts {predicted:.2f} and {n} seeds give {mean:.2f} "
+                         f"(+-{sem:.2f} standard error), apart by no more than {SIGNIFICANCE:g} standard errors "
+                         f"of the two together (the surface's {pse:.2f}): the design points' scatter leaves the "
+                         "surface too uncertain at the optimum to tell a bias (replicates per design point or more "
+                         "seeds would)")
     elif not notes:
         notes.append(f"the mean of {n} seeds, {mean:.2f}, misses the target by more than the seed scatter "
                      "explains (no surface prediction at this set)")

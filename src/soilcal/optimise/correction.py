@@ -10,8 +10,9 @@ The bias-corrected surface
 agrees with the verification mean at x0 and keeps the fitted slopes: the zeroth-order
 correction of space mapping (Bandler et al., IEEE Trans. MTT 52 (2004) 337) and of a
 constant model discrepancy (Kennedy & O'Hagan, JRSS B 63 (2001) 425).  A bias is applied only
-when it exceeds two standard errors of the verification mean (:func:`significant_bias`): a
-smaller one is scatter, and correcting by it would chase noise.
+when it exceeds two standard errors of the difference ybar - yhat(x0), the verification mean's
+and the surface's own at x0 together (:func:`significant_bias`): a smaller one is scatter of
+the seeds or of the fit, and correcting by it would chase noise.
 
 The corrected set (:func:`corrected_set`) is the smallest move from x0 (coded Euclidean
 distance) at which every corrected surface meets its target, within the factor box: the bias
@@ -35,18 +36,29 @@ from scipy import optimize
 
 from soilcal.errors import InputError
 
-#: a bias counts when |ybar - yhat(x0)| exceeds this many standard errors sd / sqrt(n)
+#: a bias counts when |ybar - yhat(x0)| exceeds this many standard errors of that difference
 SIGNIFICANCE = 2.0
 
 
-def significant_bias(mean: float, sd: float, n: int, predicted: float, k: float = SIGNIFICANCE) -> float:
-    """``mean - predicted`` when it exceeds ``k`` standard errors ``sd / sqrt(n)`` of the mean
-    of ``n >= 2`` runs; otherwise 0 (no evidence of a bias).  NaN inputs give 0."""
-    vals = (mean, sd, predicted)
-    if n < 2 or not all(isinstance(v, (int, float)) and math.isfinite(v) for v in vals):
+def _number(v) -> float:
+    try:
+        return float(v)
+    except (TypeError, ValueError):
+        return math.nan
+
+
+def significant_bias(mean: float, sd: float, n: int, predicted: float, predicted_se: float = 0.0,
+                     k: float = SIGNIFICANCE) -> float:
+    """``mean - predicted`` when it exceeds ``k`` standard errors of that difference,
+    sqrt(sd^2 / n + predicted_se^2): the mean of ``n >= 2`` runs of SD ``sd`` and the surface's
+    prediction of standard error ``predicted_se`` (:meth:`soilcal.rsm.model.RSMFit.predict_se`;
+    0 for a prediction known exactly) are independent estimates of the response at the set;
+    otherwise 0 (no evidence of a bias).  Numbers of any numeric type; NaN inputs give 0."""
+    m, s, p, ps = _number(mean), _number(sd), _number(predicted), _number(predicted_se)
+    if n < 2 or not all(math.isfinite(v) for v in (m, s, p, ps)):
         return 0.0
-    b = float(mean) - float(predicted)
-    return b if abs(b) > k * float(sd) / math.sqrt(n) else 0.0
+    b = m - p
+    return b if abs(b) > k * math.sqrt(s * s / n + ps * ps) else 0.0
 
 
 class Shifted:

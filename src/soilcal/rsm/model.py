@@ -346,6 +346,19 @@ class RSMFit:
         y = self.predict(np.array(points))
         return float(np.min(y)), float(np.max(y))
 
+    def predict_se(self, x_coded) -> float:
+        """The standard error of the surface's mean prediction at one set (coded levels),
+        sqrt(a' C a) with C the coefficients' covariance and a = g'(eta) f(x), f the model row,
+        eta the prediction on the transformed scale and g the inverse transform (the delta
+        method; exact without a transform, where it is statsmodels' ``se_mean``)."""
+        mm = _model_matrix(self._coded_input(np.atleast_2d(np.asarray(x_coded, float))), self._exp_array)
+        eta = mm @ self.params
+        h = 1e-6 * np.maximum(1.0, np.abs(eta))
+        up = inverse_transform(eta + h, self.transform, self.transform_constant)
+        down = inverse_transform(eta - h, self.transform, self.transform_constant)
+        a = float(((np.asarray(up, float) - np.asarray(down, float)) / (2 * h))[0]) * mm[0]
+        return float(np.sqrt(max(float(a @ np.asarray(self._res.cov_params()) @ a), 0.0)))
+
     def change_se(self, x_from_coded, x_to_coded) -> float:
         """The standard error of the surface's change between two sets (coded levels),
         predict(x_to) - predict(x_from): sqrt(a' C a) with C the coefficients' covariance and
