@@ -79,8 +79,13 @@ def adaptive_soil(tmp: Path, soil: str, response: str, n_spheres: int, budget: i
     return tmp
 
 
+#: the Snakemake default's re-planning interval (profiles/default sets ten seconds, which a run
+#: waits out at its end: a test's short runs would wait it out every time)
+PASS_INTERVAL = ["--max-jobs-per-timespan", "100/1s"]
+
+
 def run(tmp: Path, *args, check=True):
-    p = subprocess.run(SNAKEMAKE + list(args), cwd=tmp, capture_output=True, text=True)
+    p = subprocess.run(SNAKEMAKE + PASS_INTERVAL + list(args), cwd=tmp, capture_output=True, text=True)
     if check and p.returncode != 0:
         raise AssertionError(p.stdout[-4000:] + p.stderr[-4000:])
     return p
