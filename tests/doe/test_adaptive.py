@@ -881,3 +881,23 @@ def test_a_stop_as_unreachable_needs_every_surrogate_and_the_proposals_follow_th
     # without a rival, the chosen surrogate's own shortfall
     chosen.rivals = ()
     np.testing.assert_allclose(ad.optimistic_shortfall(one, {"y": chosen}, xc, pred), -(1.8 / 0.1) ** 2)
+
+
+def test_a_verified_point_with_a_failed_seed_still_measures_the_reach():
+    # the closest reachable point a = 1 was verified with 4 seeds, one of which failed (NaN):
+    # its 3 seeds measure it (the design does not verify again near a verified point); a
+    # proposal's 3 seeds there do not stand for a verification of 4
+    one = ad.Problem([ad.Factor("a", 0, 1)], [ad.Target("y", 13.5, tol=0.1)])
+    start = [{"iteration": 0, "kind": "start", "point": i, "seed": i, "a": i / 4, "y": 10.0 + i / 4} for i in range(4)]
+
+    def table(kind):
+        last = [{"iteration": 1, "kind": kind, "point": 4, "seed": 10 + k, "a": 1.0, "y": y}
+                for k, y in enumerate([11.1, np.nan, 10.9, 11.0])]
+        return ad.point_table(one, pd.DataFrame(start + last))
+
+    near = {"coded": np.array([1.0]), "values": {"y": 11.0}, "sd": {"y": 0.1}}
+    settings = ad.Settings()
+    assert settings.verify_seeds == 4
+    row = ad.measured_at(one, table("verification"), {"y": _Flat(11.0)}, near, one.targets, settings)
+    assert row is not None and int(row["point"]) == 4 and int(row["y_n"]) == 3
+    assert ad.measured_at(one, table("proposal"), {"y": _Flat(11.0)}, near, one.targets, settings) is None

@@ -75,7 +75,8 @@ twice the predictive standard deviation, and either the runs alone put the targe
 scatter), or the data back the surrogate (:func:`surrogate_backed`: at least 10 d points that
 scatter about it as the seeds' scatter explains), the surrogate not chosen sees the target
 beyond its 95 % band too (:func:`rivals_reach`), and the closest reachable point, measured
-with ``verify_seeds`` seeds (a verification the design runs for it), reads beyond the
+with ``verify_seeds`` seeds (a verification the design runs for it; a verified point counts with
+the seeds that did not fail, two at least), reads beyond the
 tolerance too (:func:`beyond_measured`) (``unreachable``), with the closest reachable value
 of each response and where it lies.  A stop by target, budget, iterations or box with a
 verification says, per response whose verification seeds cannot tell the band at one seed's
@@ -1142,19 +1143,22 @@ def surrogate_backed(problem: Problem, points: pd.DataFrame, surrogate: Surrogat
 
 def measured_at(problem: Problem, points: pd.DataFrame, surrogates: dict, near: dict, targets: list[Target],
                 settings: Settings):
-    """The evaluated point of at least ``verify_seeds`` seeds that measures the closest reachable
-    point ``near`` (a row of ``points``), or None: one within ``separation`` of it, or one the
+    """The evaluated point of at least ``verify_seeds`` seeds of each of ``targets``' responses
+    (a point the design verified: at least two, as a failed seed leaves fewer and the design
+    does not verify again near a verified point) that measures the closest reachable point
+    ``near`` (:func:`closest_reachable`), or None: one within ``separation`` of it, or one the
     surrogates predict as close to each of ``targets`` as ``near`` within their uncertainty
     (|mu_k - mu_near| <= 2 sqrt(s_k^2 + s_near^2)) -- where the response is flat near its best,
     the closest point moves with every refit, and a measurement anywhere on that plateau
     measures the reach; of several, the one predicted closest to the targets (in tolerances)."""
-    n = points[[f"{r}_n" for r in problem.responses]].to_numpy(float).min(axis=1)
-    if not (n >= settings.verify_seeds).any():
+    n = points[[f"{t.response}_n" for t in targets]].to_numpy(float).min(axis=1)
+    verified = points["kind"].astype(str).to_numpy() == "verification" if "kind" in points else False
+    enough = (n >= settings.verify_seeds) | (verified & (n >= 2))
+    if not enough.any():
         return None
     xe = problem.to_coded(points[problem.names].to_numpy(float))
-    ok = (n >= settings.verify_seeds) & (np.linalg.norm(xe - np.asarray(near["coded"], float), axis=1)
-                                         < max(settings.separation, 1e-9))
-    plateau = n >= settings.verify_seeds
+    ok = enough & (np.linalg.norm(xe - np.asarray(near["coded"], float), axis=1) < max(settings.separation, 1e-9))
+    plateau = enough.copy()
     dist = np.zeros(len(xe))
     for t in targets:
         mu, sd = surrogates[t.response].predict(xe)
