@@ -189,19 +189,19 @@ def _schema_error(path: Path, schema: dict, data: Any) -> None:
 DERIVED_FACTORS_EXPECTED = ("the stage's factors (only a steepest_ascent stage after a plackett_burman one, or a "
                             "box_behnken stage after a steepest_ascent one, with from_stage and no table, may leave "
                             "them to the DEM recipe, which derives them from the earlier stage's DEM results)")
-_DERIVED_PAIRS = {"steepest_ascent": "plackett_burman", "box_behnken": "steepest_ascent"}
-
-
 def derived_by_recipe(stage: dict, stages: list[dict] | None = None) -> bool:
     """Whether ``stage`` may leave its ``factors`` to the DEM recipe: a steepest ascent or a
     Box-Behnken stage with ``from_stage`` and no printed table (``stages``: the soil's, to
     check that the earlier stage is of the kind the recipe derives it from)."""
-    if stage.get("kind") not in _DERIVED_PAIRS or not stage.get("from_stage") or stage.get("table") is not None:
+    from soilcal.chain.derive import DERIVED_KINDS
+
+    if (stage.get("kind") not in {k for _, k in DERIVED_KINDS} or not stage.get("from_stage")
+            or stage.get("table") is not None):
         return False
     if stages is None:
         return True
     up = next((s for s in stages if s.get("id") == stage["from_stage"]), None)
-    return up is not None and up.get("kind") == _DERIVED_PAIRS[stage["kind"]]
+    return up is not None and (up.get("kind"), stage["kind"]) in DERIVED_KINDS
 
 
 def left_to_recipe(stage: dict) -> bool:

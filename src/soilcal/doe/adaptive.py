@@ -1152,7 +1152,7 @@ def measured_at(problem: Problem, points: pd.DataFrame, surrogates: dict, near: 
     the closest point moves with every refit, and a measurement anywhere on that plateau
     measures the reach; of several, the one predicted closest to the targets (in tolerances)."""
     n = points[[f"{t.response}_n" for t in targets]].to_numpy(float).min(axis=1)
-    verified = points["kind"].astype(str).to_numpy() == "verification" if "kind" in points else False
+    verified = points["kind"].astype(str).to_numpy() == "verification"
     enough = (n >= settings.verify_seeds) | (verified & (n >= 2))
     if not enough.any():
         return None

@@ -346,33 +346,33 @@ class RSMFit:
         y = self.predict(np.array(points))
         return float(np.min(y)), float(np.max(y))
 
-    def predict_se(self, x_coded) -> float:
-        """The standard error of the surface's mean prediction at one set (coded levels),
-        sqrt(a' C a) with C the coefficients' covariance and a = g'(eta) f(x), f the model row,
-        eta the prediction on the transformed scale and g the inverse transform (the delta
-        method; exact without a transform, where it is statsmodels' ``se_mean``)."""
-        mm = _model_matrix(self._coded_input(np.atleast_2d(np.asarray(x_coded, float))), self._exp_array)
+    def _gradients(self, X_coded) -> np.ndarray:
+        """Per set (rows, coded levels) the gradient of the prediction in the coefficients,
+        g'(eta) f(x): f the model row, eta the prediction on the transformed scale, g the
+        inverse transform (central differences; f(x) itself without a transform)."""
+        mm = _model_matrix(self._coded_input(np.atleast_2d(np.asarray(X_coded, float))), self._exp_array)
         eta = mm @ self.params
         h = 1e-6 * np.maximum(1.0, np.abs(eta))
         up = inverse_transform(eta + h, self.transform, self.transform_constant)
         down = inverse_transform(eta - h, self.transform, self.transform_constant)
-        a = float(((np.asarray(up, float) - np.asarray(down, float)) / (2 * h))[0]) * mm[0]
+        return ((np.asarray(up, float) - np.asarray(down, float)) / (2 * h))[:, None] * mm
+
+    def _delta_se(self, a: np.ndarray) -> float:
+        """sqrt(a' C a), C the coefficients' covariance (the delta method)."""
         return float(np.sqrt(max(float(a @ np.asarray(self._res.cov_params()) @ a), 0.0)))
+
+    def predict_se(self, x_coded) -> float:
+        """The standard error of the surface's mean prediction at one set (coded levels),
+        sqrt(a' C a) with a = g'(eta) f(x) (:meth:`_gradients`; exact without a transform,
+        where it is statsmodels' ``se_mean``)."""
+        return self._delta_se(self._gradients(x_coded)[0])
 
     def change_se(self, x_from_coded, x_to_coded) -> float:
         """The standard error of the surface's change between two sets (coded levels),
-        predict(x_to) - predict(x_from): sqrt(a' C a) with C the coefficients' covariance and
-        a = g'(eta_to) f(x_to) - g'(eta_from) f(x_from), f the model row, eta the prediction on
-        the transformed scale and g the inverse transform (the delta method; g' = 1 without a
-        transform, where it is exact)."""
-        mm = _model_matrix(self._coded_input(np.vstack([x_from_coded, x_to_coded])), self._exp_array)
-        eta = mm @ self.params
-        h = 1e-6 * np.maximum(1.0, np.abs(eta))
-        up = inverse_transform(eta + h, self.transform, self.transform_constant)
-        down = inverse_transform(eta - h, self.transform, self.transform_constant)
-        slope = (np.asarray(up, float) - np.asarray(down, float)) / (2 * h)
-        a = slope[1] * mm[1] - slope[0] * mm[0]
-        return float(np.sqrt(max(float(a @ np.asarray(self._res.cov_params()) @ a), 0.0)))
+        predict(x_to) - predict(x_from): sqrt(a' C a) with a = g'(eta_to) f(x_to) -
+        g'(eta_from) f(x_from) (:meth:`_gradients`; exact without a transform)."""
+        a = self._gradients(np.vstack([x_from_coded, x_to_coded]))
+        return self._delta_se(a[1] - a[0])
 
     # -- ANOVA
     def _pure_error(self) -> tuple[float, int]:
