@@ -17,6 +17,11 @@ class SoilcalError(Exception):
     """Base class of all soilcal errors."""
 
 
+#: what an error says a table cell held where it holds no value: the reader takes a blank cell
+#: and the usual missing-value marks alike (NA, N/A, nan, null: pandas' ``na_values``)
+EMPTY_CELL = "empty (a blank cell or a missing-value mark such as NA or nan)"
+
+
 class InputError(SoilcalError, ValueError):
     """Bad user input: names the file, the field and what was expected."""
 

@@ -485,11 +485,23 @@ def test_a_table_in_kilonewtons_under_a_name_in_newtons_is_pointed_out():
     out = core.run_inprocess("user", kn, S.base_params, S.simulate, none)
     for m in ("horizontal_force_N", "vertical_force_N"):
         assert (f"the measured {m} of plates is about 1/1000 times the simulated (median ratio 0.00" in out.verdict
-                and "another unit than the N of its name" in out.verdict), out.verdict
+                and "the measured values read in N): are the table's values in another unit than the one its "
+                "response declares" in out.verdict), out.verdict
+    # the offset is fitted as the factor it is (1/1000 within the 2 % noise), not held at a bound
+    # of the scale and then read as rows scattering about it (stones)
+    assert "the measured values are 99.9 % below the model throughout" in out.verdict, out.verdict
+    assert "stones" not in out.verdict and "scatter about that level" not in out.verdict, out.verdict
     # the same table in N, 10 % above the stand-in: no word of a unit
     ten = [replace(c, responses=tuple(dict(r, measured=r["measured"] * 1.1) for r in c.responses)) for c in good]
     assert "another unit" not in core.run_inprocess("user", ten, S.base_params, S.simulate,
                                                     none).verdict
+    # 20 % below the stand-in: the verdict gives the offset's size and sign (20 % within the
+    # 2 % noise of 16 values), as it does for one above
+    low = [replace(c, responses=tuple(dict(r, measured=r["measured"] * 0.8) for r in c.responses)) for c in good]
+    verdict = core.run_inprocess("user", low, S.base_params, S.simulate, none).verdict
+    size = re.search(r"the measured values are ([\d.]+) % below the model throughout \(95 %", verdict)
+    assert size and abs(float(size.group(1)) - 20.0) < 2.0, verdict
+    assert "a uniform bias" in verdict, verdict
 
 
 def test_a_table_equal_to_the_model_has_no_residual_to_explain():
@@ -905,3 +917,35 @@ def test_one_condition_gives_its_offset_per_measured_quantity():
         m = re.search(head + r" one measured condition, horizontal_force_N ([0-9.]+) % above, vertical_force_N "
                       r"([0-9.]+) % below the model", out.verdict)
         assert m and abs(float(m.group(1)) - 20.0) < 1.5 and abs(float(m.group(2)) - 20.0) < 1.5, out.verdict
+
+
+def test_synthesize_writes_a_table_in_the_unit_its_response_declares(tmp_path, monkeypatch):
+    # small4 declared in kN: the simulator gives the measure's own unit (N), 10 + row; with no
+    # noise and one seed the copy holds (10 + row) / 1000 kN, which reading it takes back to N
+    soil, res = user_soil(tmp_path)
+    text = soil.read_text().replace("{measure: horizontal_force_N, value: force_N, unit: N}",
+                                    "{measure: horizontal_force_N, value: force_kN, unit: kN}")
+    soil.write_text(text)
+    table = res / "measurements/loess-test/small4.csv"
+    table.write_text(SMALL4.replace("force_N", "force_kN").replace(",10\n", ",0.010\n").replace(",11\n", ",0.011\n")
+                     .replace(",12\n", ",0.012\n").replace(",13\n", ",0.013\n"))
+    monkeypatch.setattr(lc, "dem_simulator", _counting_simulator([]))
+    code, out = _synthesize(tmp_path, soil, res, "--measurement", "small4", "--noise", "0", "--repeats", "1")
+    assert code == 0
+    got = pd.read_csv(out)
+    assert list(got["force_kN"]) == pytest.approx([0.011, 0.012, 0.013, 0.014])
+    truth = pd.read_csv(out.with_suffix(".truth.csv"))
+    assert list(truth.sort_values("row")["value"]) == pytest.approx([11.0, 12.0, 13.0, 14.0])  # SI, N
+
+
+def test_an_unknown_param_on_the_command_line_is_named_there(tmp_path, monkeypatch, capsys):
+    soil, res = user_soil(tmp_path)
+    calls = []
+    monkeypatch.setattr(lc, "dem_simulator", _counting_simulator(calls))
+    code = main(["loop", "run", str(soil), "--resources", str(res), "--param", "soil_friction=0.5",
+                 "--out", str(tmp_path / "out")])
+    err = [ln for ln in capsys.readouterr().err.splitlines() if ln.strip()]
+    assert code == 2 and len(err) == 1, err
+    assert err[0].startswith("soilcal: error: <command line>: --param: expected NAME=NUMBER with NAME one of ")
+    assert "soil_soil_static_friction" in err[0] and err[0].endswith("got 'soil_friction'")
+    assert calls == []

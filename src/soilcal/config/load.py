@@ -18,7 +18,7 @@ import pandas as pd
 import yaml
 
 from soilcal.config.tables import read_table  # noqa: F401 (re-exported)
-from soilcal.errors import InputError
+from soilcal.errors import EMPTY_CELL, InputError
 
 SOIL_SCHEMA = Path(str(resources.files("soilcal.config") / "soil.schema.yaml"))
 #: the workflow config's schema (config/config.yaml and --config; workflow/schemas links to it)
@@ -886,7 +886,7 @@ def _check_cells(tpath: Path, df: pd.DataFrame, column: str, required: bool) -> 
     for i, v in enumerate(col.tolist()):
         if v is None or (isinstance(v, float) and math.isnan(v)) or (isinstance(v, str) and not v.strip()):
             if required:
-                raise InputError(tpath, f"row {i + 1}, column {column}", "a number", "empty")
+                raise InputError(tpath, f"row {i + 1}, column {column}", "a number", EMPTY_CELL)
             continue
         try:
             x = float(v)

@@ -94,7 +94,7 @@ from soilcal.config.quantities import (  # noqa: F401 (QUANTITIES re-exported)
     quantity_factor,
     unit_powers,
 )
-from soilcal.errors import InputError
+from soilcal.errors import EMPTY_CELL, InputError
 
 BLOCK = "measurements"
 DEFAULT_REPLICATES = 3
@@ -678,7 +678,7 @@ def _entry(soil_path, data: dict, mid: str, entry: dict, tpath: Path):
     def empty(row, col, what):
         word = na_words.get((row - 1, col))
         if word is None:
-            raise InputError(tpath, f"row {row}, column {col}", what, "empty")
+            raise InputError(tpath, f"row {row}, column {col}", what, EMPTY_CELL)
         raise InputError(tpath, f"row {row}, column {col}",
                          f"{what} ({word!r} is read as a missing value, as R's write.csv writes one; a tool, day "
                          f"or group so named is kept as a label where the column's setup or case map has it for a "
@@ -798,7 +798,7 @@ def _entry(soil_path, data: dict, mid: str, entry: dict, tpath: Path):
                     if key == "value":
                         raise InputError(tpath, at(col),
                                          f"the measured {r['measure']} (or value: null in {where}.responses[{j}])",
-                                         "empty")
+                                         EMPTY_CELL)
                     vals[key] = None
                     continue
                 x = _number(cell)

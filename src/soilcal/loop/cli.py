@@ -184,7 +184,17 @@ def _lookup(table: dict):
 
 
 def _params(args) -> dict:
-    return _pairs(args.param, "--param", "NAME=NUMBER, a DEM parameter and its SI value")
+    from soilcal.dem.scenarios.base import DemParams
+    from soilcal.errors import InputError
+
+    pairs = _pairs(args.param, "--param", "NAME=NUMBER, a DEM parameter and its SI value")
+    # the names checked here, where the user typed them: later they are checked per measured row
+    # (and an unknown one would be reported against the table's first row)
+    known = DemParams.names()
+    for key in pairs:
+        if key not in known:
+            raise InputError("<command line>", "--param", f"NAME=NUMBER with NAME one of {', '.join(known)}", key)
+    return pairs
 
 
 def _conditions(args, every: bool = False):
@@ -228,7 +238,7 @@ def _synthesize(args) -> int:
     from soilcal.atomic import write_text
     from soilcal.config.load import read_table
     from soilcal.errors import InputError
-    from soilcal.config.measurements import measurements_dir
+    from soilcal.config.measurements import measurements_dir, unit_factor
     from soilcal.loop import synthesize as sy
 
     soil, conds, every = _conditions(args, every=True)
@@ -268,11 +278,14 @@ def _synthesize(args) -> int:
         t = table[table["measure"] == r["measure"]].sort_values("row")
         if r.get("value") is None:
             continue
-        df[r["value"]] = _significant(t["value"].to_numpy(float))
+        # the simulation gives the measure's own unit (N, mm); the table's columns are in the
+        # unit the response declares (kN, cm), which reading it converts back from
+        per = 1.0 / unit_factor(r["unit"], r["measure"])
+        df[r["value"]] = _significant(t["value"].to_numpy(float) * per)
         if r.get("sd"):
             # an SD of 0 (one repeat, or a run without seed scatter) is not known: a blank cell,
             # as a measured table gives it (an SD of 0 would call the value exact)
-            sd = _significant(t["sd"].to_numpy(float))
+            sd = _significant(t["sd"].to_numpy(float) * per)
             df[r["sd"]] = np.where(sd > 0, sd, np.nan)
         if r.get("n"):
             df[r["n"]] = t["n"].to_numpy(int)
@@ -280,7 +293,8 @@ def _synthesize(args) -> int:
     truth = Path(args.out).with_suffix(".truth.csv")
     write_text(truth, table.to_csv(index=False))
     print(f"{len(df)} rows -> {args.out} (truth: {truth}; parameters: {source}; hidden {hidden or 'none'}, "
-          f"disturbances {dist or 'none'}, seed {args.seed}; reference {reference or 'none'}, SI units)")
+          f"disturbances {dist or 'none'}, seed {args.seed}; reference {reference or 'none'}; the truth in SI units, "
+          "the table in its declared units)")
     return 0
 
 

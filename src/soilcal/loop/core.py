@@ -570,7 +570,8 @@ def unit_hints(u: pd.DataFrame) -> list[str]:
         unit = str(g["unit"].iloc[0]) if "unit" in g else ""
         factor = f"{10 ** k:g}" if k > 0 else f"1/{10 ** -k:g}"
         out.append(f"the measured {q} of {m} is about {factor} times the simulated (median ratio "
-                   f"{np.median(ratio):.3g}): is the table's column in another unit than the {unit} of its name?")
+                   f"{np.median(ratio):.3g}, the measured values read in {unit}): are the table's values in another "
+                   "unit than the one its response declares (`unit`)?")
     return out
 
 
@@ -1136,9 +1137,16 @@ def _analyse(soil: str, res: pd.DataFrame, diag: pd.DataFrame, cands: list, effe
             res_after = residual_after(res, fitted)
             after = dg.diagnose(res_after, quantity_cols, settings.alpha)
         rest = dg.ranking(after)
+        scatter_left = after[(after["test"] == "scatter") & after["significant"].astype(bool)]
         rest = rest[rest["significant"].astype(bool) & (rest["covariate"] != "scatter")]
         if len(rest) and sel.chosen:
             left = _follows(rest, res_after, quantity_cols, settings.alpha)
+        elif len(scatter_left) and sel.chosen:
+            # no covariate, but the rows still scatter about the chosen effects' prediction
+            # beyond their measured and seed uncertainty (an offset the effect's parameter took
+            # up only in part, stones): a part of the residual no effect accounted for
+            left = ("no covariate but scatters beyond the measured and seed uncertainty (Holm p "
+                    f"{float(scatter_left['p_adjusted'].min()):.2g})")
     if n == 0:
         measured = np.isfinite(res["measured"].astype(float)).any() if len(res) else False
         verdict = ("no simulated value to compare with: every run of the measured conditions failed or none ran"
@@ -1338,8 +1346,14 @@ def _analyse(soil: str, res: pd.DataFrame, diag: pd.DataFrame, cands: list, effe
                         + _far_off(diag))
             nuisance = (nuisance[0], nuisance[1], "fitted alone: the mean offset of the rows, the calibrated model "
                         "times (1 + s); they scatter about it beyond their uncertainty (no uniform bias)")
-        elif spread_note:  # uneven spread: stones or the rig's noise form (noted below)
-            nuisance = (nuisance[0], nuisance[1], nuisance[2] + UNEVEN_SPREAD_WORDS)
+        else:
+            # the offset's size and sign in the verdict too, as where an effect was judged against it
+            verdict += (f"; the measured values are {abs(100 * sv):.1f} % {'above' if sv > 0 else 'below'} the model "
+                        + (f"throughout (95 %: {100 * lo:+.1f} to {100 * hi:+.1f} %)"
+                           if np.isfinite(lo) and np.isfinite(hi) else "throughout")
+                        + ", a uniform bias (an instrument's calibration) that no mechanism of the library carries")
+            if spread_note:  # uneven spread: stones or the rig's noise form (noted below)
+                nuisance = (nuisance[0], nuisance[1], nuisance[2] + UNEVEN_SPREAD_WORDS)
     if sel is not None:
         verdict += _unscored(sel, u, settings.alpha)
     matched = dg.matched_quantities(diag) if len(diag) else set()
