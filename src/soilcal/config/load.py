@@ -485,6 +485,9 @@ def _semantic_checks(path: Path, d: dict, resources_root: Path,
         if sid in seen:
             raise InputError(path, f"{where}.id", "a stage id used once", sid)
         if "factors" not in st:
+            if st.get("from_stage") and st["from_stage"] not in seen:
+                # a misspelt from_stage, not the missing factors (checked below for every stage)
+                raise InputError(path, f"{where}.from_stage", "the id of an earlier stage", st["from_stage"])
             if not derived_by_recipe(st, list(seen.values())):
                 raise InputError(path, f"{where}.factors", DERIVED_FACTORS_EXPECTED, "nothing")
             # the DEM recipe derives them from the earlier stage's DEM results
@@ -546,10 +549,23 @@ def _semantic_checks(path: Path, d: dict, resources_root: Path,
                         raise InputError(path, gw, "a response id of this stage (" + ", ".join(rids) + ")", r)
                     if g["goal"] == "target" and "value" not in g and "target" not in g:
                         raise InputError(path, gw, "a target value or a target id", g)
+                    if "value" in g and "target" in g:
+                        raise InputError(path, gw, "a target value or a target id, not both (which would it aim at?)",
+                                         g)
                     if "target" in g and g["target"] not in targets:
                         raise InputError(path, f"{gw}.target", "an id listed under targets", g["target"])
                     if g["goal"] == "in_range" and not ("low" in g and "high" in g and g["low"] < g["high"]):
                         raise InputError(path, gw, "low < high for an in_range goal", g)
+                cw = f"{where}.optimise.cases[{j}]"
+                syms = list(st.get("factors") or {})
+                for key in case.get("printed_optimum") or {}:
+                    if syms and key not in syms and key not in rids:
+                        raise InputError(path, f"{cw}.printed_optimum.{key}", "a factor symbol of this stage ("
+                                         + ", ".join(syms) + ") or a response id (" + ", ".join(rids) + ")", key)
+                for key in case.get("printed_verification") or {}:
+                    if key not in rids:
+                        raise InputError(path, f"{cw}.printed_verification.{key}",
+                                         "a response id of this stage (" + ", ".join(rids) + ")", key)
         _check_table(path, st, where, resources_root / "published" / d["name"])
         for r, pr in st.get("printed", {}).items():
             for key in ("anova_full", "anova_reduced", "effects", "coefficients"):
@@ -834,7 +850,9 @@ def _check_table(path: Path, st: dict, where: str, pub: Path) -> None:
     for c in ids + list(st["factors"]) + rcols:
         if c in rcols and df[c].isna().all():
             continue  # a response the paper does not print
-        _check_cells(tpath, df, c, required=c not in rcols)
+        # a response the paper prints has a number in every run: a blank or "n/a" cell would
+        # leave that run out of the fit without a word
+        _check_cells(tpath, df, c, required=True)
     for c in ids:
         dup = df[c][df[c].duplicated()]
         if len(dup):
@@ -920,6 +938,8 @@ def _check_paper_psd(path: Path, d: dict) -> None:
         if "paper_psd" not in given or preset == "paper" or entry.get("scenario") not in SCENARIOS:
             continue
         mod = SCENARIOS[entry["scenario"]]
+        if entry.get("setup") not in mod.setups():  # a setup name the entry's own check names
+            continue
         params = params or base_params(d, path)
         sizes = {k: None for k in ("radius", "n_particles") if k in mod.setups()[entry["setup"]]}
         try:

@@ -276,12 +276,27 @@ _UNIT_SCALE = {"-": 1.0, "Pa": 1.0, "kPa": 1e3, "MPa": 1e6, "GPa": 1e9, "J/m^2":
                "mJ/m^2": 1e-3, "kg/m^3": 1.0, "g/cm^3": 1e3}
 
 
-def unit_scale(path, entry: dict, where: str) -> float:
+#: the units of each kind of DEM parameter (``_RANGES``): a unit of another quantity would
+#: rescale the value without a word (a friction coefficient in mJ/m^2 taken times 1e-3)
+_KIND_UNITS = {"restitution": ("-",), "static_friction": ("-",), "rolling_friction": ("-",),
+               "poisson": ("-",), "plasticity": ("-",), "surface_energy": ("J/m^2", "mJ/m^2"),
+               "density": ("kg/m^3", "g/cm^3"), "shear_modulus": ("Pa", "kPa", "MPa", "GPa")}
+
+
+def unit_scale(path, entry: dict, where: str, field: str | None = None) -> float:
     """Factor to SI of a config entry's printed ``unit`` (``_UNIT_SCALE``); another unit raises
-    InputError naming ``<where>.unit``."""
+    InputError naming ``<where>.unit``, and so does, where ``field`` names the DEM parameter
+    the entry sets, a unit of another quantity than that parameter's kind (:data:`_KIND_UNITS`)."""
     unit = entry.get("unit", "-")
     if unit not in _UNIT_SCALE:
         raise InputError(path, f"{where}.unit", f"one of {', '.join(_UNIT_SCALE)}", unit)
+    if field is not None:
+        try:
+            fits = _KIND_UNITS[_kind(field)]
+        except KeyError:
+            fits = tuple(_UNIT_SCALE)
+        if unit not in fits:
+            raise InputError(path, f"{where}.unit", f"a unit of {field} ({', '.join(fits)})", unit)
     return _UNIT_SCALE[unit]
 
 
@@ -316,7 +331,7 @@ def dem_field(path, soil_data: dict, pname: str, where: str) -> tuple[str, float
     known = DemParams.names()
     if name not in known:
         raise InputError(path, f"parameters.{pname}", f"a DEM parameter ({', '.join(known)})", name)
-    return name, unit_scale(path, entry, f"parameters.{pname}")
+    return name, unit_scale(path, entry, f"parameters.{pname}", field=name)
 
 
 def stage_params(soil, stage_id: str, levels: dict, base: "DemParams | None" = None,
