@@ -130,3 +130,12 @@ def test_a_misspelt_setup_of_a_test_with_its_own_particle_sizes_is_one_error(tmp
     entry.setdefault("set", {})["paper_psd"] = [[0.001, 40.0], [0.0005, 60.0]]
     e = _error(tmp_path, d)
     assert e.field.endswith(".setup") and e.got == entry["setup"], str(e)
+
+
+def test_a_target_sd_of_zero_is_refused(tmp_path, raw):
+    # as in a measured table: an SD of 0 calls the measured value exact
+    d = copy.deepcopy(raw)
+    tid = next(iter(d["targets"]))
+    d["targets"][tid]["sd"] = 0
+    e = _error(tmp_path, d)
+    assert (e.field, e.got) == (f"targets.{tid}.sd", 0)
