@@ -12,6 +12,12 @@ and ``calibration_runs.csv`` (one per workflow run); ``calibration.md`` is the p
     python benchmarks/calibration.py --soils cinnamon-soil --kill-after 60
     python benchmarks/calibration.py --report-only
     python benchmarks/calibration.py --surfaces-of /tmp/run   # surfaces of a directory that ran
+    python benchmarks/calibration.py --breakdown-of /tmp/run  # its jobs per soil and rule
+
+The breakdown (``calibration_soils.csv``) splits a run's job time by soil and rule and adds
+the DEM work the jobs' logs name (every scenario run prints its particles, steps and wall time,
+:func:`soilcal.chain.sources.run_point`): particle-steps, and the rate the runs reached, which
+tell whether a soil costs much because it simulates much or because its runs are slow.
 """
 
 from __future__ import annotations
@@ -41,7 +47,12 @@ RUN_FIELDS = ["utc", "commit", "run_id", "soils", "cores", "kind", "elapsed_s", 
 SURFACE_FIELDS = ["utc", "commit", "run_id", "soil", "stage", "response", "points", "centre_points", "seed_sd",
                   "centre_sd", "largest_effect", "largest_effect_factor", "effect_over_centre_sd", "model_p",
                   "lack_of_fit_p"]
+BREAKDOWN_FIELDS = ["utc", "commit", "run_id", "soil", "rule", "jobs", "sum_s", "dem_runs", "dem_wall_s",
+                    "particle_steps"]
 SNAKEMAKE = [sys.executable, "-m", "snakemake"]
+#: the line every DEM scenario run of a job writes to its log (soilcal.chain.sources.run_point)
+RUN_LINE = re.compile(r"^(\S+) (\S+) \((\w+)\): (\d+) particles, (\d+) steps, ([\d.]+) s on \d+ thread",
+                      flags=re.M)
 
 
 def copy_workflow(dest: Path, soils: list[str] | None) -> Path:
@@ -88,6 +99,39 @@ def rule_times(workdir: Path) -> pd.DataFrame:
     return pd.DataFrame(rows)
 
 
+def breakdown_rows(workdir: Path) -> list[dict]:
+    """Per soil and rule: the jobs, the sum of their benchmark-file wall times, and the DEM
+    runs their logs name (``logs/<the benchmark file's path>.log``) with those runs' wall
+    time and particle-steps (particles x steps, summed).  A job whose log names no run (a
+    fit, a figure, the photo pipeline) adds to ``sum_s`` only; ``dem_kernels`` has no soil."""
+    bench = workdir / "benchmarks/workflow"
+    acc: dict[tuple[str, str], dict] = {}
+    for p in sorted(bench.rglob("*.tsv")):
+        rel = p.relative_to(bench)
+        df = pd.read_csv(p, sep="\t")
+        if not len(df):
+            continue
+        soil = rel.parts[0] if len(rel.parts) > 1 else ""
+        a = acc.setdefault((soil, rule_of(rel)), dict(jobs=0, sum_s=0.0, dem_runs=0, dem_wall_s=0.0,
+                                                       particle_steps=0))
+        a["jobs"] += 1
+        a["sum_s"] += float(df["s"].iloc[-1])
+        log = workdir / "logs" / rel.with_suffix(".log")
+        for m in RUN_LINE.finditer(log.read_text(errors="replace") if log.is_file() else ""):
+            a["dem_runs"] += 1
+            a["dem_wall_s"] += float(m.group(6))
+            a["particle_steps"] += int(m.group(4)) * int(m.group(5))
+    return [dict(soil=soil, rule=rule, jobs=a["jobs"], sum_s=round(a["sum_s"], 1), dem_runs=a["dem_runs"],
+                 dem_wall_s=round(a["dem_wall_s"], 1), particle_steps=a["particle_steps"])
+            for (soil, rule), a in sorted(acc.items())]
+
+
+def add_breakdown(workdir: Path, utc: str, run_id: str, rev: str) -> None:
+    rows = [dict(r, utc=utc, commit=rev, run_id=run_id) for r in breakdown_rows(workdir)]
+    write_rows(OUT / "calibration_soils.csv", read_rows(OUT / "calibration_soils.csv", BREAKDOWN_FIELDS) + rows,
+               BREAKDOWN_FIELDS)
+
+
 def machine_busy_s() -> float:
     """CPU seconds the whole machine has spent busy (every CPU; /proc/stat, Linux)."""
     try:
@@ -109,8 +153,12 @@ def snakemake(workdir: Path, cores: int, *extra, timeout=None, load=None):
     (``other_cpu_s``): a run that shared the machine says so."""
     t0 = time.perf_counter()
     busy0, own0 = machine_busy_s(), children_cpu_s()
+    # the package of this checkout, whose commit the rows name, whatever soilcal the environment
+    # has installed (an editable install of another checkout would run that one's code)
+    env = dict(os.environ, PYTHONPATH=os.pathsep.join([str(ROOT / "src")] + [
+        x for x in os.environ.get("PYTHONPATH", "").split(os.pathsep) if x]))
     p = subprocess.Popen(SNAKEMAKE + ["--cores", str(cores), *extra], cwd=workdir, stdout=subprocess.PIPE,
-                         stderr=subprocess.STDOUT, text=True, start_new_session=True)
+                         stderr=subprocess.STDOUT, text=True, start_new_session=True, env=env)
     killed = False
     try:
         out, _ = p.communicate(timeout=timeout)
@@ -201,6 +249,9 @@ def main(argv=None) -> int:
     ap.add_argument("--report-only", action="store_true")
     ap.add_argument("--surfaces-of", metavar="WORKDIR", default=None,
                     help="only add the response-surface rows of a workflow directory that has run")
+    ap.add_argument("--breakdown-of", metavar="WORKDIR", default=None,
+                    help="only add the per-soil breakdown of a workflow directory that has run")
+    ap.add_argument("--run-id", default=None, help="with --breakdown-of: the run's id in calibration.csv")
     args = ap.parse_args(argv)
     OUT.mkdir(exist_ok=True)
     rev = commit()
@@ -211,6 +262,13 @@ def main(argv=None) -> int:
         if not (wd / "results").is_dir():
             sys.exit(f"--surfaces-of {wd}: expected a workflow directory with results/, found none")
         add_surfaces(wd, utc, f"{run_id} ({wd.name})")
+    elif args.breakdown_of:
+        wd = Path(args.breakdown_of)
+        if not (wd / "benchmarks/workflow").is_dir():
+            sys.exit(f"--breakdown-of {wd}: expected a workflow directory with benchmarks/workflow/, found none")
+        made = sorted({str(c)[:7] for f in (wd / "results").glob("*/dem/*/runs/*.csv")
+                       for c in pd.read_csv(f, usecols=["commit"])["commit"].dropna().unique()})
+        add_breakdown(wd, utc, args.run_id or f"{run_id} ({wd.name})", "+".join(made))
     elif not args.report_only:
         soils = args.soils
         wd = copy_workflow(Path(args.workdir), soils)
@@ -252,6 +310,7 @@ def main(argv=None) -> int:
             summ.insert(0, "utc", utc)
             summ.to_csv(OUT / "calibration_summary.csv", index=False)
         add_surfaces(wd, utc, run_id)
+        add_breakdown(wd, utc, run_id, rev)
         write_rows(OUT / "calibration_runs.csv", read_rows(OUT / "calibration_runs.csv", RUN_FIELDS) + runs,
                    RUN_FIELDS)
         write_rows(OUT / "calibration.csv", read_rows(OUT / "calibration.csv", RULE_FIELDS) + rules, RULE_FIELDS)
@@ -293,6 +352,32 @@ def report(md_path: Path, argv) -> None:
         for r in sorted(sel, key=lambda r: -float(r["sum_s"])):
             md.append(f"| {r['rule']} | {r['jobs']} | {r['sum_s']} | {100 * float(r['sum_s']) / tot:.0f} % | "
                       f"{r['mean_s']} | {r['max_s']} | {r['max_rss_mb']} |")
+    parts = read_rows(OUT / "calibration_soils.csv", BREAKDOWN_FIELDS)
+    if parts:
+        rid = parts[-1]["run_id"]
+        sel = [r for r in parts if r["run_id"] == rid]
+        tot = sum(float(r["sum_s"]) for r in sel)
+        soils = sorted({r["soil"] for r in sel}, key=lambda s: (s == "", s))
+        md += ["", f"Where the time went, run {rid} ({sel[0]['commit']}; `calibration_soils.csv`, "
+               "`--breakdown-of`): each soil's jobs (benchmark-file wall times, the other job beside "
+               "them) and the DEM runs their logs name: the runs' own wall time, their particle-steps, and "
+               "the rate (particle-steps per second of run wall time); DEM rules are the jobs that run "
+               "scenarios (design points, verification, second round, tools, the loop):", "",
+               "| soil | jobs | job s | share | DEM jobs | DEM job s | runs | run s | particle-steps (1e9) | "
+               "M particle-steps/s | largest rule |",
+               "|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---|"]
+        for soil in soils:
+            rs = [r for r in sel if r["soil"] == soil]
+            dem = [r for r in rs if int(r["dem_runs"]) > 0]
+            job_s = sum(float(r["sum_s"]) for r in rs)
+            run_s = sum(float(r["dem_wall_s"]) for r in rs)
+            ps = sum(int(r["particle_steps"]) for r in rs)
+            big = max(rs, key=lambda r: float(r["sum_s"]))
+            md.append(f"| {soil or '(kernels, summary)'} | {sum(int(r['jobs']) for r in rs)} | {job_s:.0f} | "
+                      f"{100 * job_s / tot:.0f} % | {sum(int(r['jobs']) for r in dem)} | "
+                      f"{sum(float(r['sum_s']) for r in dem):.0f} | {sum(int(r['dem_runs']) for r in rs)} | "
+                      f"{run_s:.0f} | {ps / 1e9:.2f} | {ps / run_s / 1e6 if run_s else float('nan'):.2f} | "
+                      f"{big['rule']} ({float(big['sum_s']):.0f} s) |")
     surfaces = read_rows(OUT / "calibration_surfaces.csv", SURFACE_FIELDS)
     last = {}
     for r in surfaces:  # the last run of every soil

@@ -59,3 +59,38 @@ def test_a_screening_stage_has_no_row(tmp_path, calibration):
     pd.DataFrame({"response": ["angle"], "model": ["full"], "source": ["Model"], "p": [0.1]}).to_csv(
         d / "anova.csv", index=False)
     assert calibration.surface_rows(tmp_path) == []
+
+
+def _job(root: Path, rel: str, seconds: float, log: str | None):
+    b = root / "benchmarks/workflow" / f"{rel}.tsv"
+    b.parent.mkdir(parents=True, exist_ok=True)
+    b.write_text("s\th:m:s\tmax_rss\n" f"{seconds}\t0:00:01\t100.0\n")
+    if log is not None:
+        g = root / "logs" / f"{rel}.log"
+        g.parent.mkdir(parents=True, exist_ok=True)
+        g.write_text(log)
+
+
+def test_breakdown_sums_jobs_and_the_runs_their_logs_name(tmp_path, calibration):
+    # two design points of one soil, one of them running two scenarios (a heap and a drum),
+    # a fit without DEM runs, a failed run (no particles line) and the kernels' job
+    _job(tmp_path, "soil-a/dem/bbd/runs/1", 10.0,
+         "soil-a bbd run 1 seed 5: {}\n"
+         "repose soil-a-100mm (quick): 1000 particles, 2000 steps, 4.50 s on 1 thread(s)\n"
+         "drum soil-a (quick): 500 particles, 3000 steps, 3.25 s on 1 thread(s)\n")
+    _job(tmp_path, "soil-a/dem/bbd/runs/2", 6.0,
+         "repose soil-a-100mm (quick): failed after 1.00 s on 1 thread(s): SimulationError: blow-up\n")
+    _job(tmp_path, "soil-a/dem/bbd/regression", 2.5, "fitted\n")
+    _job(tmp_path, "soil-a/dem/verify/quick/bbd/c1/0", 7.0,
+         "repose soil-a-100mm (quick): 1000 particles, 1000 steps, 2.00 s on 1 thread(s)\n")
+    _job(tmp_path, "dem_kernels", 30.0, None)
+    rows = {(r["soil"], r["rule"]): r for r in calibration.breakdown_rows(tmp_path)}
+    assert set(rows) == {("soil-a", "dem_point"), ("soil-a", "regression"), ("soil-a", "verify_point"),
+                         ("", "dem_kernels")}
+    d = rows[("soil-a", "dem_point")]
+    assert (d["jobs"], d["sum_s"], d["dem_runs"]) == (2, 16.0, 2)
+    assert d["dem_wall_s"] == pytest.approx(7.75, abs=0.05)  # rounded to 0.1 s
+    assert d["particle_steps"] == 1000 * 2000 + 500 * 3000
+    assert (rows[("soil-a", "regression")]["dem_runs"], rows[("soil-a", "regression")]["sum_s"]) == (0, 2.5)
+    assert rows[("soil-a", "verify_point")]["particle_steps"] == 1_000_000
+    assert (rows[("", "dem_kernels")]["jobs"], rows[("", "dem_kernels")]["dem_runs"]) == (1, 0)
