@@ -126,3 +126,17 @@ def test_default_seed_is_written_where_it_is_used(replayed):
     searched = opt[opt["method"].isin(["desirability", "near_optimal"])]
     assert len(searched) and (searched["seed"] == 0).all()
     assert searched["angle"].sub(31.0).abs().min() < 0.05
+
+
+def test_a_target_moisture_in_a_fraction_is_written_as_a_fraction(tmp_path):
+    # the soil declares its moisture as a fraction (0.172, not 17.2 %): the targets rule
+    # writes the target's moisture in that unit, as the soil's own reader gives it
+    tmp = copy_workflow(tmp_path, ["my-soil"], source="published")
+    p = _write(tmp)
+    p.write_text(SOIL_YAML.replace("  angle: {value: 31.0, unit: deg}\n",
+                                   "  angle: {value: 31.0, unit: deg, moisture_content: 0.172}\n")
+                 + "properties:\n  moisture_content: {value: 0.172, unit: fraction}\n")
+    run(tmp, "--cores", "1", "results/my-soil/published/targets.csv")
+    t = pd.read_csv(tmp / "results/my-soil/published/targets.csv").set_index("target_id")
+    assert t.loc["angle", "moisture_content"] == pytest.approx(0.172)
+    assert t.loc["angle", "moisture_unit"] == "fraction"
