@@ -818,3 +818,33 @@ def test_the_figure_of_a_frame_flagged_low_says_so(tmp_path, monkeypatch):
     assert titles[2].startswith("f.png\nconfidence low, accepted by the user (accept_low): the free surface ends")
     assert "short of the drum circle" in " ".join(titles[2].split())
     assert (tmp_path / "figs" / "accepted.png").is_file()
+
+
+def _plain_drum(angle_deg, size=600, radius=230, seed=0):
+    """A drum drawn plainly: dark rim, light air, brown powder below a straight free surface
+    through the centre at ``angle_deg`` (rising to the right), pixel noise of SD 8."""
+    rng = np.random.default_rng(seed)
+    y, x = np.mgrid[0:size, 0:size].astype(float)
+    c = size / 2
+    r = np.hypot(x - c, y - c)
+    img = np.empty((size, size, 3))
+    img[:] = (60, 60, 65)
+    img[r < radius + 12] = (30, 30, 30)
+    inside = r < radius
+    img[inside] = (225, 225, 230)
+    img[inside & (y > c - (x - c) * np.tan(np.radians(angle_deg)))] = (120, 90, 60)
+    return np.clip(img + rng.normal(0, 8, img.shape), 0, 255).astype(np.uint8)
+
+
+def test_a_surface_steeper_than_the_range_is_refused_as_too_steep(tmp_path):
+    # 85 deg lies above the 80 deg a turning drum's powder surface reaches: the refusal says
+    # it is too steep, not that it is a level edge; the same drawing at 40 deg measures 40
+    from skimage import io
+
+    io.imsave(tmp_path / "d40.png", _plain_drum(40.0), check_contrast=False)
+    assert abs(drum.measure_drum_frame(tmp_path / "d40.png").angle_deg - 40.0) <= 0.5
+    p = tmp_path / "steep.png"
+    io.imsave(p, _plain_drum(85.0), check_contrast=False)
+    with pytest.raises(InputError) as exc:
+        drum.measure_drum_frame(p)
+    assert "steeper than 80 deg" in str(exc.value) and "level edge" not in str(exc.value), str(exc.value)

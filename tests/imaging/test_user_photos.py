@@ -470,3 +470,40 @@ def test_planar_sixteen_bit_tiff_is_read_at_its_depth(tmp_path, bits):
     tifffile.imwrite(p, np.moveaxis(a, -1, 0), planarconfig="separate", photometric="rgb")
     assert np.abs(read_photo(p) - a / (2.0 ** bits - 1)).max() < 1e-9
     _assert_flanks(measure.measure_pile(p), 32.0, 35.0)
+
+
+def test_a_photo_listed_twice_in_its_group_is_refused(tmp_path):
+    # a copy-paste slip: the same file as two views of one group would weigh twice in its mean
+    import numpy as np
+    from skimage import io
+
+    from soilcal.errors import InputError
+    from soilcal.imaging.manifest import read_manifest
+
+    io.imsave(tmp_path / "heap.png", np.zeros((8, 8), np.uint8), check_contrast=False)
+    io.imsave(tmp_path / "other.png", np.zeros((8, 8), np.uint8), check_contrast=False)
+    m = tmp_path / "manifest.yaml"
+    m.write_text("photos:\n"
+                 "  - {file: heap.png, kind: pile, group: s, view: S}\n"
+                 "  - {file: other.png, kind: pile, group: t}\n"
+                 "  - {file: heap.png, kind: pile, group: s, view: N}\n")
+    with pytest.raises(InputError) as exc:
+        read_manifest(m)
+    e = exc.value
+    assert (e.field, e.got) == ("photos[2].file", "heap.png") and "photos[0]" in e.expected, str(e)
+    # in another group the same photo is no slip of this kind
+    m.write_text("photos:\n  - {file: heap.png, kind: pile, group: s}\n  - {file: heap.png, kind: pile, group: t}\n")
+    assert len(read_manifest(m)["photos"]) == 2
+
+
+def test_the_command_line_prints_json_without_nan(capsys):
+    # JSON has no NaN: a value not measured is null, so that any strict parser reads the output
+    import json
+
+    from soilcal.imaging.cli import _print
+
+    _print({"angle_deg": 30.0, "cue_outvoted_deg": float("nan"), "rows": [1.0, float("inf")], "ok": "x"})
+    out = capsys.readouterr().out
+    assert "NaN" not in out and "Infinity" not in out
+    assert json.loads(out, parse_constant=lambda c: pytest.fail(c)) == {
+        "angle_deg": 30.0, "cue_outvoted_deg": None, "rows": [1.0, None], "ok": "x"}

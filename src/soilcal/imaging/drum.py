@@ -813,9 +813,13 @@ def _measure_drum_frame(path, threshold, keep_stages, options, tried: Tried) -> 
                "surface (a cascade's curtain) or lumps gathered on one part, traced as surface; take a frame where "
                "the curtain is sparse, with a shorter exposure, or the tester's time-averaged frame; if the "
                "surface truly bends so, read its angle from the frame by hand")
-    if not DRUM_ANGLE_RANGE[0] <= angle <= DRUM_ANGLE_RANGE[1]:
+    if angle < DRUM_ANGLE_RANGE[0]:
         raise InputError(path, "image", DRUM_EXPECTED, f"a surface at {angle:.1f} deg ({where}): a level edge, "
                          "no turning drum in the frame")
+    if angle > DRUM_ANGLE_RANGE[1]:
+        raise InputError(path, "image", DRUM_EXPECTED, f"a surface at {angle:.1f} deg ({where}): steeper than "
+                         f"{DRUM_ANGLE_RANGE[1]:g} deg, no powder surface in a turning drum stands so (a wall or an "
+                         "edge of the drum taken for it)")
     if rms > MAX_LINE_RMS_PCT:
         raise InputError(path, "image", DRUM_EXPECTED, f"a powder boundary straying {rms:.0f} % of the drum radius "
                          f"(RMS) from a line, at most {MAX_LINE_RMS_PCT:.0f} % ({where})")

@@ -174,6 +174,13 @@ def read_manifest(path):
                     raise InputError(path, f"{at}.{k}", f"no {k}: it is an option of drum frames (kind drum) only "
                                      f"(photo {p['file']}, kind {p['kind']})", p[k])
         p.setdefault("group", p["kind"])
+        # a photo listed twice in its group (a copy-paste slip) would weigh twice in its mean
+        twice = [j for j, q in enumerate(data["photos"][:i])
+                 if (path.parent / q["file"]).resolve() == (path.parent / p["file"]).resolve()
+                 and q.get("group", q.get("kind")) == p["group"]]
+        if twice:
+            raise InputError(path, f"{at}.file", f"a photo not yet in group {p['group']!r} (photos[{twice[0]}] "
+                             "lists the same file: each photo counts once in its group's mean)", p["file"])
         first = kinds.setdefault(p["group"], p["kind"])
         if first != p["kind"]:
             raise InputError(path, f"{at}.kind", f"{first}, the kind of the other photos of group {p['group']!r}", p["kind"])

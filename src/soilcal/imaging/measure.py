@@ -844,7 +844,8 @@ def _pile_on_lines(path, rgb, threshold, keep_stages, channel, tried: Tried, pla
                              f"{roll:.1f} deg, on which no heap was measured: if it is the plate's (the camera "
                              f"rolled), {turn}")
     if not lines:
-        raise InputError(path, "image", "a straight base plate edge", "none found")
+        raise InputError(path, "image", "a straight base plate edge (or the plate's line given: "
+                         "--plate-line-px X0 Y0 X1 Y1, a manifest's plate_line_px)", "none found")
     beside = []  # lines on which a heap was measured but which do not run on beside it
     refused = set()  # the lines every cue refused (numbered from 1)
     try:
