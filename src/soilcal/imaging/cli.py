@@ -2,30 +2,18 @@
 
 from __future__ import annotations
 
-import json
 import sys
 
 from soilcal.imaging import CUES, huge_pages_off
 from soilcal.imaging.manifest import counted, set_aside_lines
 
 
-def _json_safe(obj):
-    """``obj`` with every non-finite float as None: JSON has no NaN or infinity (a strict
-    parser refuses Python's ``NaN`` token), a value not measured is ``null``."""
-    import math
-
-    if isinstance(obj, float):
-        return obj if math.isfinite(obj) else None
-    if isinstance(obj, dict):
-        return {k: _json_safe(v) for k, v in obj.items()}
-    if isinstance(obj, (list, tuple)):
-        return [_json_safe(v) for v in obj]
-    return obj
-
-
 def _print(obj):
-    json.dump(_json_safe(obj), sys.stdout, indent=2, allow_nan=False)
-    sys.stdout.write("\n")
+    """``obj`` on stdout as JSON, a value not measured (NaN) as ``null``
+    (:func:`soilcal.chain.files.json_text`: JSON has no NaN, and strict parsers refuse it)."""
+    from soilcal.chain.files import json_text
+
+    sys.stdout.write(json_text(obj))
 
 
 def _warn_set_aside(summary, group=None):
