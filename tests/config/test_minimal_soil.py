@@ -140,3 +140,14 @@ def test_a_target_moisture_in_a_fraction_is_written_as_a_fraction(tmp_path):
     t = pd.read_csv(tmp / "results/my-soil/published/targets.csv").set_index("target_id")
     assert t.loc["angle", "moisture_content"] == pytest.approx(0.172)
     assert t.loc["angle", "moisture_unit"] == "fraction"
+
+
+def test_a_replay_of_a_soil_without_printed_tables_says_why_it_writes_only_designs(tmp_path):
+    tmp = copy_workflow(tmp_path, ["my-soil"], source="published")
+    p = _write(tmp)
+    p.write_text(SOIL_YAML.replace("    table: bbd.csv\n", ""))
+    out = run(tmp, "-n", "--cores", "1")
+    assert "no stage of this soil has one: only its designs are written" in out.stderr, out.stderr[-2000:]
+    # with its table the note is not given
+    p.write_text(SOIL_YAML)
+    assert "only its designs are written" not in run(tmp, "-n", "--cores", "1").stderr

@@ -507,3 +507,15 @@ def test_the_command_line_prints_json_without_nan(capsys):
     assert "NaN" not in out and "Infinity" not in out
     assert json.loads(out, parse_constant=lambda c: pytest.fail(c)) == {
         "angle_deg": 30.0, "cue_outvoted_deg": None, "rows": [1.0, None], "ok": "x"}
+
+
+def test_a_folder_given_as_a_photo_is_named_a_folder(tmp_path):
+    from soilcal.errors import InputError
+    from soilcal.imaging.io import read_photo
+
+    with pytest.raises(InputError) as exc:
+        read_photo(tmp_path)
+    assert (exc.value.field, exc.value.got) == ("file", "a folder")
+    with pytest.raises(InputError) as exc:
+        read_photo(tmp_path / "nothing.png")
+    assert exc.value.got == "missing"

@@ -38,9 +38,14 @@ except InputError as e:
     sys.exit(2)
 # what a soil's user should know though nothing is wrong (measured rows simulated alike), as
 # soilcal config check says it
-for _soil in SOILS.values():
+for _soil_id, _soil in SOILS.items():
     for _note in _soil.load_notes:
         print(f"soilcal: note: {_soil.path}: {_note}", file=sys.stderr)
+    # a replay asked of a soil that prints no table plans its designs only: say why
+    if "published" in SOURCES[_soil_id] and not any(st.get("table") for st in _soil.stages):
+        print(f"soilcal: note: {_soil.path}: source published replays the printed tables (stages[].table), and "
+              "no stage of this soil has one: only its designs are written; source: dem calibrates it on the DEM",
+              file=sys.stderr)
 RES = config.get("resources", "resources")
 # every soil's photo manifest, read and checked with the soil (soilcal config check does the same)
 IMAGE_MANIFESTS = {soil: s.manifest for soil, s in SOILS.items() if s.manifest is not None}

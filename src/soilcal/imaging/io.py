@@ -207,7 +207,7 @@ def _decode(path, formats: str, min_pixels=None, geometry=None):
 
     p = Path(path)
     if not p.is_file():
-        raise InputError(p, "file", "an existing image file", "missing")
+        raise InputError(p, "file", "an existing image file", "a folder" if p.is_dir() else "missing")
     expected = f"a complete, readable image ({formats})"
     try:
         with warnings.catch_warnings():

@@ -1166,8 +1166,8 @@ def _analyse(soil: str, res: pd.DataFrame, diag: pd.DataFrame, cands: list, effe
                     "fitted alone: the uniform bias the verdict names, the calibrated model times (1 + s)")
         beside = _beside_clause(sel, settings.alpha)
         chi, dof, p_about = _scatter_about_holm(res, sv, diag)
-        where = ("the model throughout, a uniform bias (an instrument's calibration, a zero offset) that no "
-                 "mechanism of the library carries; ")
+        where = ("the model throughout, a uniform bias (an instrument's calibration: every value times one factor) "
+                 "that no mechanism of the library carries; ")
         if p_about < settings.alpha:  # the rows are not shifted alike: no uniform bias
             nuisance = (nuisance[0], nuisance[1], "fitted alone: the mean offset of the rows, the calibrated model "
                         "times (1 + s); they scatter about it beyond their uncertainty (no uniform bias)")
