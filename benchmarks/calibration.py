@@ -90,44 +90,42 @@ def rule_of(path: Path) -> str:
 
 
 def rule_times(workdir: Path) -> pd.DataFrame:
+    """One row per job's benchmark file: its path under ``benchmarks/workflow/`` (``rel``), soil
+    (the path's first folder; none for ``dem_kernels``), rule, wall time ``s`` and ``max_rss``."""
+    bench = workdir / "benchmarks/workflow"
     rows = []
-    for p in (workdir / "benchmarks/workflow").rglob("*.tsv"):
+    for p in sorted(bench.rglob("*.tsv")):
         df = pd.read_csv(p, sep="\t")
         if len(df):
-            rows.append({"rule": rule_of(p.relative_to(workdir / "benchmarks/workflow")), "s": float(df["s"].iloc[-1]),
+            rel = p.relative_to(bench)
+            rows.append({"rel": rel, "soil": rel.parts[0] if len(rel.parts) > 1 else "", "rule": rule_of(rel),
+                         "s": float(df["s"].iloc[-1]),
                          "max_rss": float(pd.to_numeric(df["max_rss"], errors="coerce").iloc[-1])})
-    return pd.DataFrame(rows)
+    return pd.DataFrame(rows, columns=["rel", "soil", "rule", "s", "max_rss"])
 
 
-def breakdown_rows(workdir: Path) -> list[dict]:
-    """Per soil and rule: the jobs, the sum of their benchmark-file wall times, and the DEM
-    runs their logs name (``logs/<the benchmark file's path>.log``) with those runs' wall
-    time and particle-steps (particles x steps, summed).  A job whose log names no run (a
-    fit, a figure, the photo pipeline) adds to ``sum_s`` only; ``dem_kernels`` has no soil."""
-    bench = workdir / "benchmarks/workflow"
-    acc: dict[tuple[str, str], dict] = {}
-    for p in sorted(bench.rglob("*.tsv")):
-        rel = p.relative_to(bench)
-        df = pd.read_csv(p, sep="\t")
-        if not len(df):
-            continue
-        soil = rel.parts[0] if len(rel.parts) > 1 else ""
-        a = acc.setdefault((soil, rule_of(rel)), dict(jobs=0, sum_s=0.0, dem_runs=0, dem_wall_s=0.0,
-                                                       particle_steps=0))
-        a["jobs"] += 1
-        a["sum_s"] += float(df["s"].iloc[-1])
-        log = workdir / "logs" / rel.with_suffix(".log")
-        for m in RUN_LINE.finditer(log.read_text(errors="replace") if log.is_file() else ""):
-            a["dem_runs"] += 1
-            a["dem_wall_s"] += float(m.group(6))
-            a["particle_steps"] += int(m.group(4)) * int(m.group(5))
-    return [dict(soil=soil, rule=rule, jobs=a["jobs"], sum_s=round(a["sum_s"], 1), dem_runs=a["dem_runs"],
-                 dem_wall_s=round(a["dem_wall_s"], 1), particle_steps=a["particle_steps"])
-            for (soil, rule), a in sorted(acc.items())]
+def breakdown_rows(workdir: Path, rt: pd.DataFrame | None = None) -> list[dict]:
+    """Per soil and rule: the jobs, the sum of their benchmark-file wall times (``rt``, the
+    run's :func:`rule_times`), and the DEM runs their logs name (``logs/<the benchmark file's
+    path>.log``) with those runs' wall time and particle-steps (particles x steps, summed).  A
+    job whose log names no run (a fit, a figure, the photo pipeline) adds to ``sum_s`` only;
+    ``dem_kernels`` has no soil."""
+    rt = rule_times(workdir) if rt is None else rt
+    out = []
+    for (soil, rule), g in rt.groupby(["soil", "rule"], sort=True):
+        runs = [m for rel in g["rel"] for m in RUN_LINE.finditer(_text(workdir / "logs" / rel.with_suffix(".log")))]
+        out.append(dict(soil=soil, rule=rule, jobs=len(g), sum_s=round(float(g["s"].sum()), 1), dem_runs=len(runs),
+                        dem_wall_s=round(sum((float(m.group(6)) for m in runs), 0.0), 1),
+                        particle_steps=sum(int(m.group(4)) * int(m.group(5)) for m in runs)))
+    return out
 
 
-def add_breakdown(workdir: Path, utc: str, run_id: str, rev: str) -> None:
-    rows = [dict(r, utc=utc, commit=rev, run_id=run_id) for r in breakdown_rows(workdir)]
+def _text(path: Path) -> str:
+    return path.read_text(errors="replace") if path.is_file() else ""
+
+
+def add_breakdown(workdir: Path, utc: str, run_id: str, rev: str, rt: pd.DataFrame | None = None) -> None:
+    rows = [dict(r, utc=utc, commit=rev, run_id=run_id) for r in breakdown_rows(workdir, rt)]
     write_rows(OUT / "calibration_soils.csv", read_rows(OUT / "calibration_soils.csv", BREAKDOWN_FIELDS) + rows,
                BREAKDOWN_FIELDS)
 
@@ -310,7 +308,7 @@ def main(argv=None) -> int:
             summ.insert(0, "utc", utc)
             summ.to_csv(OUT / "calibration_summary.csv", index=False)
         add_surfaces(wd, utc, run_id)
-        add_breakdown(wd, utc, run_id, rev)
+        add_breakdown(wd, utc, run_id, rev, rt)
         write_rows(OUT / "calibration_runs.csv", read_rows(OUT / "calibration_runs.csv", RUN_FIELDS) + runs,
                    RUN_FIELDS)
         write_rows(OUT / "calibration.csv", read_rows(OUT / "calibration.csv", RULE_FIELDS) + rules, RULE_FIELDS)

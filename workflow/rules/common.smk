@@ -91,6 +91,15 @@ def printed_table(soil, stage):
     return None if st.get("table") is None else f"{RES}/published/{soil}/{st['table']}"
 
 
+def moisture_property(soil):
+    """The soil's ``properties.moisture_content`` as the targets table reads it (its values,
+    range and unit, :func:`soilcal.config.quantities.soil_moisture`), or nothing."""
+    prop = (soil_cfg(soil).get("properties") or {}).get("moisture_content")
+    if not isinstance(prop, dict):
+        return {}
+    return {"moisture_content": {k: prop[k] for k in ("value", "values", "low", "high", "unit") if k in prop}}
+
+
 def source_stages(soil, source):
     """Stage ids a source runs: every stage with factors of its own (published: a stage leaving
     its factors to the DEM recipe has no design to replay), simulation.stages (dem)."""

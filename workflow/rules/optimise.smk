@@ -14,10 +14,10 @@ rule targets:
         "results/{soil}/{source}/targets.csv",
     params:
         # citation: whether the soil has a paper to have printed values (its text changes nothing here)
-        # properties.moisture_content: the unit a target's moisture is written in (targets.csv)
+        # properties.moisture_content: the unit a target's moisture is written in (targets.csv),
+        # without its documentation (editing a note re-runs nothing)
         soil=lambda w: {"targets": soil_cfg(w.soil)["targets"], "citation": bool(soil_cfg(w.soil).get("citation")),
-                        "properties": {k: v for k, v in (soil_cfg(w.soil).get("properties") or {}).items()
-                                       if k == "moisture_content"}},
+                        "properties": moisture_property(w.soil)},
     conda:
         "../../envs/soilcal.yaml"
     log:

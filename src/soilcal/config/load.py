@@ -795,11 +795,6 @@ def _check_targets(path: Path, d: dict, resources_root: Path) -> None:
             raise InputError(path, f"targets.{tid}.table", f"an existing file under {mdir}", t["table"])
         if t.get("moisture_content") is not None:
             _check_target_moisture(path, d, tid, t["moisture_content"])
-        sd = t.get("sd")
-        if sd is not None and not (isinstance(sd, (int, float)) and not isinstance(sd, bool) and sd > 0):
-            # as a measured table's SD: 0 would call the target exact (leave sd out where unknown)
-            raise InputError(path, f"targets.{tid}.sd", "an SD > 0 of the measured value (or no sd where it "
-                             "is not known)", sd)
     for st in d["stages"]:
         units = {r["id"]: r["unit"] for r in st["responses"]}
         links = [(rid, rid, "whose id it bears") for rid in units if rid in targets]

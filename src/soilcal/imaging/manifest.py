@@ -139,6 +139,7 @@ def read_manifest(path):
         raise InputError(path, "threshold", f"one of {', '.join(THRESHOLDS)}", data.get("threshold"))
     known = PHOTO_FIELDS + tuple(OPTIONS)
     kinds: dict[str, str] = {}
+    listed: dict[tuple, int] = {}  # (group, photo file) -> the entry that lists it first
     for i, p in enumerate(data["photos"]):
         at = f"photos[{i}]"
         if not isinstance(p, dict) or "file" not in p:
@@ -175,11 +176,9 @@ def read_manifest(path):
                                      f"(photo {p['file']}, kind {p['kind']})", p[k])
         p.setdefault("group", p["kind"])
         # a photo listed twice in its group (a copy-paste slip) would weigh twice in its mean
-        twice = [j for j, q in enumerate(data["photos"][:i])
-                 if (path.parent / q["file"]).resolve() == (path.parent / p["file"]).resolve()
-                 and q.get("group", q.get("kind")) == p["group"]]
-        if twice:
-            raise InputError(path, f"{at}.file", f"a photo not yet in group {p['group']!r} (photos[{twice[0]}] "
+        j = listed.setdefault((p["group"], (path.parent / p["file"]).resolve()), i)
+        if j != i:
+            raise InputError(path, f"{at}.file", f"a photo not yet in group {p['group']!r} (photos[{j}] "
                              "lists the same file: each photo counts once in its group's mean)", p["file"])
         first = kinds.setdefault(p["group"], p["kind"])
         if first != p["kind"]:
