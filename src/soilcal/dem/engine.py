@@ -1090,6 +1090,7 @@ class Simulation:
                 or not (math.isfinite(steps) and steps >= 0 and float(steps) == int(steps))):
             raise InputError(self.source, "steps", "a whole number of steps >= 0", steps)
         steps = int(steps)
+        self._wrap_periodic()
         if self._pair is None or self._need_forces:
             self._prepare()
         p, wa = self.p, self._warr
@@ -1129,6 +1130,24 @@ class Simulation:
                     f"not settled after {limit} steps ({limit * self.dt:.4g} s), where a moving "
                     f"wall reaches the end of the path it may take: {exc.got}") from None
         return done
+
+    def _wrap_periodic(self):
+        """Bring the positions on a periodic axis into the box, lo + (x - lo) mod L, before a
+        run: the kernels' minimum image and their wrap after each drift move a sphere by one
+        period at most, so a sphere given (or set) more than one period outside the box would
+        miss its neighbours there, passing through them without a force.  A sphere moved
+        makes the run start by building its lists and evaluating its forces anew."""
+        x = self.p.x
+        for q in range(2):
+            if not self.periodic[q] or not len(x):
+                continue
+            lo, hi = float(self.box[2 * q]), float(self.box[2 * q + 1])
+            c = x[:, q]
+            out = ~((c >= lo) & (c < hi)) & np.isfinite(c)
+            if out.any():
+                w = lo + np.mod(c[out] - lo, hi - lo)
+                c[out] = np.where(w < hi, w, lo)  # a remainder rounded up to L is 0
+                self._need_forces = True
 
     def _periodic_steps(self, steps) -> int:
         """The most steps up to ``steps`` over which the walls pass
@@ -1736,7 +1755,13 @@ class Simulation:
         return self._cof_arr
 
     def compute_forces(self):
-        """Evaluate forces of the current state without stepping (into p.f, p.t, wall_force)."""
+        """Evaluate forces of the current state without stepping (into p.f, p.t, wall_force),
+        with the walls' and spheres' present velocities in the dashpots, as LIGGGHTS and LAMMPS
+        do when a ``run`` starts (soilcal.reference.deck evaluates every phase's start so).
+        The next step starts from these forces, not from the last step's (whose dashpots saw
+        half-step velocities), so a run interrupted by this call differs from one that is
+        not (slightly, where dashpots act); to look at the forces of a
+        run without touching it, call it on a copy (``copy.deepcopy(sim)``)."""
         self._need_forces = True
         self.run(0)
         return self.p.f, self.p.t
