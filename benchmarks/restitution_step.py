@@ -85,8 +85,8 @@ def main(argv=None):
                 rows.append(dict(utc=utc, commit=commit(), youngs_Pa=a.youngs, radius_m=a.radius,
                                  v0_m_s=v0, restitution=e, dt_fraction=f,
                                  dt_fraction_used=round(used, 4), dt_s=f"{dt:.4g}",
-                                 contact_steps=steps, delivered=round(got, 5),
-                                 rel_error_pct=round(100 * (got - e) / e, 2)))
+                                 contact_steps=steps, delivered=round(float(got), 5),
+                                 rel_error_pct=round(float(100 * (got - e) / e), 2)))
                 print(rows[-1], flush=True)
     out = Path(a.out)
     out.mkdir(parents=True, exist_ok=True)
@@ -97,7 +97,7 @@ def main(argv=None):
     table += ["| " + " | ".join(str(r[k]) for k in head) + " |" for r in rows]
     write_page(out / "restitution_step.md",
                ["# Restitution delivered against the time step", "", f"Machine: {platform.machine()}, Python {platform.python_version()}.  Last "
-                f"command: `python benchmarks/restitution_step.py {' '.join(sys.argv[1:])}`."
+                f"command: `{' '.join(['python benchmarks/restitution_step.py'] + sys.argv[1:])}`."
                 f"  Rows: `restitution_step.csv` ({rows[0]['utc']} UTC, commit "
                 f"{rows[0]['commit']}); Young's modulus {a.youngs:g} Pa, radius {a.radius:g} m.",
                 "", *table])
