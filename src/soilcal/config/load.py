@@ -252,8 +252,13 @@ class Soil:
     def load_notes(self) -> list[str]:
         """What the user should know of how the soil is simulated though nothing is wrong:
         measured rows that differ only in ignored covariates and share one simulation
-        (:attr:`soilcal.config.measurements.Condition.note`), each once."""
-        return list(dict.fromkeys(c.note for c in (self.measured or ()) if c.note))
+        (:attr:`soilcal.config.measurements.Condition.note`), each once; a file in the soil's
+        measurement folder that the soil file names nowhere, and so is not read
+        (:func:`soilcal.config.measurements.unread_files`)."""
+        from soilcal.config.measurements import unread_files
+
+        return (list(dict.fromkeys(c.note for c in (self.measured or ()) if c.note))
+                + unread_files(self.data, self.resources_root))
 
     @property
     def stages(self) -> list[dict]:

@@ -86,6 +86,7 @@ from soilcal.config.quantities import (  # noqa: F401 (QUANTITIES re-exported)
     LENGTH_FACTORS,
     MILLIPASCAL,
     MOISTURE_UNITS,
+    NONNEGATIVE_QUANTITIES,
     PLAUSIBLE,
     POSITIVE_QUANTITIES,
     QUANTITIES,
@@ -228,6 +229,40 @@ def unit_factor(unit, measure: str) -> float | None:
 
 def measurements_dir(resources_root, soil_name: str) -> Path:
     return Path(resources_root) / BLOCK / soil_name
+
+
+def unread_files(data: dict, resources_root) -> list[str]:
+    """A note per file under the soil's measurement folder (:func:`measurements_dir`) that the
+    soil file names nowhere (no ``measurements.<id>.table``, no text of it mentions the file's
+    path in the folder): a table put beside the others and not declared is read by nothing,
+    and its rows would be left out of every comparison without a word."""
+    folder = measurements_dir(resources_root, data.get("name", ""))
+    if not folder.is_dir():
+        return []
+    texts = []
+
+    def walk(v):
+        if isinstance(v, str):
+            texts.append(v)
+        elif isinstance(v, dict):
+            for x in v.values():
+                walk(x)
+        elif isinstance(v, (list, tuple)):
+            for x in v:
+                walk(x)
+
+    walk(data)
+    out = []
+    for f in sorted(p for p in folder.rglob("*") if p.is_file() and not p.name.startswith(".")):
+        rel = f.relative_to(folder).as_posix()
+        named = re.compile(r"(?<![\w.-])" + re.escape(rel) + r"(?![\w-])")
+        if any(named.search(t) for t in texts):
+            continue
+        what = ("declare it as a measurement's table (measurements.<id>.table) to compare the model with it"
+                if f.suffix.lower() == ".csv" else "soilcal reads measured tables as CSV: save it as one and declare it "
+                "as a measurement's table (measurements.<id>.table)")
+        out.append(f"{folder / rel} is named nowhere in the soil file: it is not read ({what})")
+    return out
 
 
 def _text(v) -> str:
@@ -839,6 +874,9 @@ def _entry(soil_path, data: dict, mid: str, entry: dict, tpath: Path):
                 raise InputError(tpath, at(col), f"a number ({q} in {covs[col]['unit']})", _plain(cell))
             if q in POSITIVE_QUANTITIES and not x > 0:
                 raise InputError(tpath, at(col), f"a positive {q} (in {covs[col]['unit']})", _plain(cell))
+            if q in NONNEGATIVE_QUANTITIES and x < 0:
+                raise InputError(tpath, at(col), f"a {q} of zero or more (in {covs[col]['unit']}; an oven-dry "
+                                 "soil's is 0)", _plain(cell))
             quantities[q] = x * quantity_factor(q, covs[col]["unit"])
         label_parts = [f"{c}={_text(rec[c])}" for c in active]
         conds.append(Condition(
@@ -931,6 +969,36 @@ MOISTURE_MATCH = 0.3
 MOISTURE_FRACTION_NEAR = 3.0
 
 
+def _check_lone_moisture(tpath: Path, where: str, unit: str, x, pct) -> None:
+    """One value of a moisture column that is 1.5 to 2.5 decades off the rest and, read the other
+    way (x 100 or / 100), falls among them (within :data:`MOISTURE_LONE_SPAN` of their range: a
+    0.116 among 11.6 to 12.5 %) is refused naming it: one value typed in the other unit would
+    give the moisture effect a change of 99 %.  A value that read either way lies outside the
+    others' range is a real spread of moisture (air-dry tests at 0.5 % beside 20 to 30 %)."""
+    import numpy as np
+
+    if len(pct) < 3:
+        return
+    for i, v in enumerate(pct):
+        rest = np.delete(pct, i)
+        lo, hi = float(rest.min()), float(rest.max())
+        if v <= 0 or lo <= 0 or lo <= v <= hi:
+            continue
+        off = float(np.log10(lo / v)) if v < lo else float(np.log10(v / hi))
+        other = v * 100.0 if v < lo else v / 100.0
+        if (MOISTURE_DECADES[0] <= off <= MOISTURE_DECADES[1]
+                and lo / MOISTURE_LONE_SPAN <= other <= hi * MOISTURE_LONE_SPAN):
+            raise InputError(tpath, where, f"moisture contents in one unit (unit: {unit}): {x[i]:g} lies "
+                             f"{10 ** round(off):g} times {'below' if v < lo else 'above'} the column's other "
+                             f"values ({lo:g} to {hi:g} %) and {'x' if v < lo else '/'} 100 would fall among "
+                             "them: a value typed in the other unit (or the others)?", float(x[i]))
+
+
+#: how far (a factor) outside the range of a moisture column's other values one value read the
+#: other way (x 100 or / 100) may fall and still be taken for a value typed in the other unit
+MOISTURE_LONE_SPAN = 1.1
+
+
 def _check_moisture(soil_path, data: dict, tpath: Path, df: pd.DataFrame, covs: dict, quantity_cols: dict) -> None:
     """A moisture column whose numbers are fractions under a percent unit (0.15 for 15 %), or
     percentages under a fraction unit: the moisture effect would take a change of 0.1 % for one
@@ -983,6 +1051,14 @@ def _check_moisture(soil_path, data: dict, tpath: Path, df: pd.DataFrame, covs: 
                              f"an andisol's) and {own}; if the cells are percentages, declare unit: \"%\" under "
                              f"covariates.{col}", float(x.max()))
         pct = x * factor
+        if factor == 1.0 and pct.max() > 100.0 and (wettest is None or pct.max() > MOISTURE_FRACTION_NEAR * wettest):
+            own = ("the soil gives no properties.moisture_content (give it if the soil is that wet)"
+                   if wettest is None else f"the soil's own properties.moisture_content is {soil[1]}, more than "
+                   f"{MOISTURE_FRACTION_NEAR:g} times drier")
+            raise InputError(tpath, where, f"a moisture content in % (unit: {unit}) of at most 100 % unless the "
+                             f"soil says it is that wet: {pct.max():g} % is more water than dry soil (a peat's or "
+                             f"an andisol's) and {own}", float(x.max()))
+        _check_lone_moisture(tpath, where, unit, x, pct)
         med = float(np.median(pct))
         if soil is not None:
             if med > 0 and ref > 0:
@@ -1371,6 +1447,11 @@ def _check_response_column_units(soil_path, rw: str, r: dict, tpath: Path) -> No
                                  f"{named.split('/')[0]} per {named.split('/', 1)[1]}, another quantity "
                                  "(a force per width is no force; give the measured total in its own column)",
                                  col)
+            if named not in family and not any(n in family for n in names):
+                raise InputError(soil_path, f"{rw}.value" if key == "value" else f"{rw}.{key}",
+                                 f"a column of {r['measure']} in a unit of its quantity ({', '.join(family)}): the "
+                                 f"name of column {col} says {named}, a unit of another quantity (is {col} the "
+                                 f"column of this response, and {r['measure']} its measure?)", col)
             if named not in family or abs(family[named] - declared) <= 1e-9 * declared:
                 continue
             raise InputError(soil_path, f"{rw}.unit",

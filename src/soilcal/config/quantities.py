@@ -151,6 +151,9 @@ def declares_moisture(declared: dict, pct: float) -> bool:
 #: quantities that must be above zero (an effect takes their logarithm or a ratio to them)
 POSITIVE_QUANTITIES = ("tool_speed", "working_depth", "rotor_speed", "layer_depth", "bulk_density")
 
+#: quantities that cannot be below zero but may be zero (an oven-dry soil's moisture content)
+NONNEGATIVE_QUANTITIES = ("moisture_content",)
+
 
 # ------------------------------------------------------------------ physical ranges
 
