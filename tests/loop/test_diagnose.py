@@ -721,3 +721,35 @@ def test_a_copied_row_shares_its_sds_sampling_error_in_the_floor_interval():
         lo, hi, dof = floor_interval(t)
         assert dof == pytest.approx(nu, rel=1e-12)
         assert lo == pytest.approx(math.sqrt(floor2 * nu / stats.chi2.ppf(0.975, nu)), rel=1e-12)
+
+
+def test_a_pattern_at_the_shortest_resolvable_period_is_found_exactly():
+    # twelve tests 0.5 m apart whose residual alternates +5 % / -5 %: the cosine at the Nyquist
+    # frequency of the spacing, wavelength 2 x 0.5 m = 1.0 m, explains all of it (r2 1).  Its
+    # sine is 0 at every position, so the scan keeps its cosine alone (it dropped the frequency
+    # as one it could not tell from the mean); the scan stops there, at (m - 1) / 2 periods over
+    # the span, as shorter periods only alias longer ones at these positions
+    from soilcal.loop.diagnose import _periodic
+
+    x = 0.5 * np.arange(12)
+    r = 0.05 * np.cos(np.pi * np.arange(12))
+    row = _periodic("position_m", "position", x, r, 12, float(r @ r))
+    assert row["r2"] == pytest.approx(1.0, abs=1e-12)
+    assert row["estimate"] == pytest.approx(1.0, rel=1e-12)
+    # no permutation of the alternating signs explains more than the pattern itself
+    assert row["p"] < 0.01
+
+
+def test_the_verdict_names_a_periodic_structure_with_its_wavelength():
+    from soilcal.loop.core import _follows
+
+    rng = np.random.default_rng(5)
+    x = np.sort(rng.uniform(0.0, 40.0, 16))
+    r = 0.1 * np.sin(2 * np.pi * x / 8.0 + 0.4) + rng.normal(0.0, 0.005, 16)
+    res = pd.DataFrame({"measurement": "bin", "row": np.arange(1, 17), "measure": "F_N", "relative_residual": r,
+                        "standardised_residual": np.nan, "cov:position_m": x})
+    diag = diagnose(res, {"position_m": "position"})
+    per = diag[diag["test"] == "periodic"].iloc[0]
+    text = _follows(ranking(diag))
+    assert text.startswith(f"position_m periodically (a sine of wavelength {per['estimate']:.3g} in position_m's unit, "
+                           f"r2 {per['r2']:.2f}, Holm p {per['p_adjusted']:.3g})"), text

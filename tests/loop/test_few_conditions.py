@@ -269,6 +269,8 @@ def test_the_warning_for_an_effect_judged_against_the_scale_alone_reaches_the_re
     write_csv(out.summary, tmp_path / "loop_summary.csv")
     summary = pd.read_csv(tmp_path / "loop_summary.csv")["verdict"].iloc[0]
     for text in (report, summary):
-        assert "explained by rate_friction; beside a free uniform scale it could not be scored (" in text
+        beta = out.theta["rate_friction.beta"]
+        assert (f"explained by rate_friction (rate_friction.beta {beta:.3g}, 95 %: " in text
+                and "); beside a free uniform scale it could not be scored (" in text)
         assert "so it was judged against that scale alone, which it beats (held-out RMS" in text
         assert "whether a uniform bias lies beside it these rows cannot tell: its parameter may hold it" in text

@@ -72,12 +72,16 @@ def test_a_library_effect_is_named_and_recovered(effect, seed):
     theta = LIBRARY[effect]
     out = _run({effect: theta}, {}, seed)
     assert out.chosen == [effect], out.verdict
-    assert out.verdict == f"explained by {effect}"
+    words = []
     for k, true in theta.items():
         got = out.theta[f"{effect}.{k}"]
         assert abs(got - true) <= 0.25 * abs(true), (k, got, true)
         lo, hi = core.json.loads(out.summary["ci95"].iloc[0])[f"{effect}.{k}"]
         assert lo < got < hi
+        words.append(f"{effect}.{k} {got:.3g}, 95 %: {lo:.3g} to {hi:.3g}")
+    # the verdict names the effect with its parameter and that parameter's 95 % interval
+    assert out.verdict == f"explained by {effect} ({'; '.join(words)})"
+    assert out.summary["verdict"].iloc[0] == out.verdict
     s = out.summary.iloc[0]
     assert s["rmse_after_percent"] <= 0.3 * s["rmse_before_percent"], (s["rmse_before_percent"], s["rmse_after_percent"])
 
@@ -154,10 +158,10 @@ def test_plastic_contact_is_named_and_recovered_in_a_compression_campaign(seed):
     true = 0.4
     out = _run_compression({"plastic_contact": {"lambda_p": true}}, seed)
     assert out.chosen == ["plastic_contact"], out.verdict
-    assert out.verdict == "explained by plastic_contact"
     got = out.theta["plastic_contact.lambda_p"]
     assert abs(got - true) <= 0.25 * true, got
     lo, hi = core.json.loads(out.summary["ci95"].iloc[0])["plastic_contact.lambda_p"]
+    assert out.verdict == f"explained by plastic_contact (plastic_contact.lambda_p {got:.3g}, 95 %: {lo:.3g} to {hi:.3g})"
     assert lo < got < hi
     s = out.summary.iloc[0]
     assert s["rmse_after_percent"] <= 0.3 * s["rmse_before_percent"], (s["rmse_before_percent"], s["rmse_after_percent"])

@@ -124,3 +124,47 @@ def test_a_table_written_without_scatter_has_blank_sds_and_its_values_in_full(tm
     assert list(df["draft_N"]) == [10.0 + r for r in range(1, len(rows) + 1)]  # rows numbered from 1
     out.replace(target)
     load_soil(soil, res)  # the written table is a valid measured table of the soil
+
+
+@pytest.mark.parametrize("hidden, field, words", [
+    # no finite number (it was blamed on a table row), or outside the physical range the
+    # library states (plastic_contact lambda_p in [0, 0.95], soilcal.loop.effects)
+    ({"rate_friction": {"beta": float("nan")}}, "effect.rate_friction.beta", "a finite number (-)"),
+    ({"rate_friction": {"beta": float("inf")}}, "effect.rate_friction.beta", "a finite number (-)"),
+    ({"plastic_contact": {"lambda_p": 1.2}}, "effect.plastic_contact.lambda_p", "a finite number from 0 to 0.95, its physical range (-)"),
+])
+def test_a_hidden_effect_parameter_that_is_no_number_or_unphysical_is_refused_naming_it(hidden, field, words):
+    with pytest.raises(InputError) as exc:
+        sy.check_hidden(hidden, "--effect")
+    assert str(exc.value).startswith(f"--effect: {field}: expected {words}")
+    with pytest.raises(InputError):
+        sy.synthesize(_conds(), S.base_params, S.simulate, hidden, None, {}, noise=0.0, seed=0)
+
+
+def test_a_hidden_effect_driven_to_a_physical_limit_is_refused_naming_the_row():
+    # f = 1 + g (d / d0 - 1) with g -5 is below 0.1 at the deeper rows (d / d0 > 1.18): the
+    # density and stiffness stop at their floor instead of following g; an adhesion of -1 J/m^2
+    # on a soil-steel surface energy of 0 (the stand-in's) stays 0 on every row
+    conds = _conds()
+    ref = sy.default_reference(conds, None)
+    with pytest.raises(InputError) as exc:
+        sy.check_acts({"depth_compaction": {"g": -5.0}}, {}, conds, S.base_params, ref, "--effect")
+    assert str(exc.value).startswith("--effect: effect.depth_compaction.g: expected a value at which depth_compaction "
+                                     "follows its formula")
+    assert "to a physical limit" in str(exc.value)
+    with pytest.raises(InputError) as exc:
+        sy.check_acts({"tool_adhesion": {"gamma_a": -1.0}}, {}, conds, S.base_params, ref, "--effect")
+    assert "held at its physical limit" in str(exc.value)
+    # within the formula's reach both act
+    sy.check_acts({"depth_compaction": {"g": 0.4}, "tool_adhesion": {"gamma_a": 1.0}}, {}, conds, S.base_params,
+                  ref, "--effect")
+
+
+def test_the_truth_records_the_hidden_effect_and_the_disturbance_with_their_parameters():
+    conds = _conds()
+    table = sy.synthesize(conds, S.base_params, S.simulate, {"rate_friction": {"beta": 0.2}}, None,
+                          {"stones": {"fraction": 0.5}}, noise=0.0, seed=0)
+    assert (table["hidden:rate_friction.beta"] == 0.2).all()
+    assert (table["disturbance:stones.fraction"] == 0.5).all()
+    # the defaults filled in are recorded too (synthesize.DISTURBANCES)
+    assert (table["disturbance:stones.low"] == 0.1).all() and (table["disturbance:stones.high"] == 0.3).all()

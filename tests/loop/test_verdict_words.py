@@ -67,3 +67,19 @@ def test_a_rounded_table_the_model_agrees_with_is_not_named():
     assert core.constant_hints(_constant(np.linspace(1.0, 3.0, 12), 2.0))
     # a spread of 0.08 mm where the table is read to 0.01 mm without an SD: named
     assert core.constant_hints(_constant(sim, 2.01))
+
+
+def test_a_table_of_the_other_sign_is_asked_after_its_sign_convention():
+    # a draught recorded as negative: every measured value is -1 times the simulated one, a
+    # relative residual of -200 % that no effect could explain
+    import pandas as pd
+
+    from soilcal.loop.core import unit_hints
+
+    sim = [300.0, 320.0, 350.0, 390.0]
+    u = pd.DataFrame({"measurement": "bin", "measure": "horizontal_force_N", "unit": "N",
+                      "simulated_mean": sim, "measured": [-x for x in sim]})
+    hints = unit_hints(u)
+    assert len(hints) == 1 and "the other sign than the simulated in 4 of 4 rows (median ratio -1)" in hints[0]
+    # the same values with the simulation's sign give no hint
+    assert unit_hints(u.assign(measured=sim)) == []

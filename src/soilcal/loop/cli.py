@@ -18,6 +18,7 @@ its truth file (``params_source``, ``base:<parameter>``), ``run`` in ``parameter
 from __future__ import annotations
 
 import math
+import sys
 from pathlib import Path
 
 from soilcal.loop import ERROR_KEY
@@ -292,6 +293,14 @@ def _synthesize(args) -> int:
     write_text(args.out, df.to_csv(index=False))
     truth = Path(args.out).with_suffix(".truth.csv")
     write_text(truth, table.to_csv(index=False))
+    from soilcal.loop.effects import EFFECTS
+
+    for name, theta in hidden.items():
+        for k, v in theta.items():
+            lo, hi = EFFECTS[name].bounds()[k]
+            if not lo <= v <= hi:
+                print(f"note: the hidden {name}.{k} {v:g} lies outside the bounds the loop fits it over ({lo:g} to "
+                      f"{hi:g}; loop.bounds widens them): the loop will find it at a bound", file=sys.stderr)
     print(f"{len(df)} rows -> {args.out} (truth: {truth}; parameters: {source}; hidden {hidden or 'none'}, "
           f"disturbances {dist or 'none'}, seed {args.seed}; reference {reference or 'none'}; the truth in SI units, "
           "the table in its declared units)")

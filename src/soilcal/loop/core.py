@@ -426,6 +426,10 @@ def _follows(rank: pd.DataFrame, res: pd.DataFrame | None = None, quantity_of: d
         return ""
     top = cov.iloc[0]
     text = f"{top['covariate']} (r2 {top['r2']:.2f}, Holm p {top['p_adjusted']:.3g})"
+    if top.get("best_test") == "periodic" and np.isfinite(float(top.get("best_estimate", np.nan))):
+        # a sine along the position: its wavelength, and the share and p of that test itself
+        text = (f"{top['covariate']} periodically (a sine of wavelength {float(top['best_estimate']):.3g} in "
+                f"{top['covariate']}'s unit, r2 {float(top['best_r2']):.2f}, Holm p {float(top['best_p_adjusted']):.3g})")
     if not bool(top["significant"]):
         return text
     also = []
@@ -554,13 +558,23 @@ def unit_hints(u: pd.DataFrame) -> list[str]:
     """A sentence per measured quantity of a table (``u``: usable residual rows) whose measured
     values are about a power of ten (10 to 10^6, or its inverse) times the simulated ones, the
     median ratio within :data:`UNIT_DECADES` of it: a table in kN under a name in N, or in mm
-    under a name in m, reads as a bias of -99.9 % that no effect of the library can explain."""
+    under a name in m, reads as a bias of -99.9 % that no effect of the library can explain.
+    Where most of its rows have the other sign than the simulated, the sentence asks after the
+    table's sign convention instead (a draught recorded as negative reads as a bias of -200 %)."""
     out = []
     if not len(u):
         return out
     for (m, q), g in u.groupby(["measurement", "measure"], sort=False):
         ratio = g["measured"].to_numpy(float) / g["simulated_mean"].to_numpy(float)
-        ratio = ratio[np.isfinite(ratio) & (ratio > 0)]
+        ratio = ratio[np.isfinite(ratio) & (ratio != 0)]
+        if len(ratio) and np.mean(ratio < 0) > 0.5:
+            # most rows of the other sign: a sign convention, not a misfit (-200 % and below)
+            out.append(f"the measured {q} of {m} has the other sign than the simulated in "
+                       f"{int(np.sum(ratio < 0))} of {len(ratio)} rows (median ratio {np.median(ratio):.3g}): does the "
+                       f"table count {q} with the other sign (a draught recorded as negative, the force on the tool "
+                       "for the force on the soil)? give it with the simulation's sign")
+            continue
+        ratio = ratio[ratio > 0]
         if len(ratio) == 0:
             continue
         lg = float(np.log10(np.median(ratio)))
@@ -708,6 +722,26 @@ def _not_separated(sel, alpha: float) -> str:
                 "parameters and any uniform scale reported are fitted without it; these rows can "
                 "neither name nor rule it out (more groups decide)")
     return out
+
+
+def _few_groups_clause(sel, u: pd.DataFrame, fold_by, alpha: float, judged: bool = False) -> str:
+    """Where a candidate (``judged``: a judged effect beside the uniform scale) failed a paired
+    test over few held-out groups (over the folds, or over the conditions with the mean's
+    variance from the between-group mean square): how many groups and degrees of freedom that
+    test had, which passes only a large gain, so the verdict says what would decide."""
+    groups = len(sl._folds(u, fold_by).held_out) if fold_by else 0
+    if sel is None or not 2 <= groups < FEW_FOLDS:
+        return ""
+    scores = [s for _, _, s in sel.steps] + ([sel.beside_uniform] if judged and sel.beside_uniform else [])
+    few = sorted({s.test.df for s in scores
+                  if s.test is not None and not s.accepted and not s.p < alpha
+                  and (s.test.test == "folds" or s.test.variance == "between")})
+    if not few:
+        return ""
+    df = few[0]
+    return (f"; the rows were held out by `{fold_by}`, {groups} groups, and the paired test that "
+            f"{'judged it' if judged else 'rejected a candidate'} had {df} degree{'s' if df != 1 else ''} of freedom "
+            "over them; it passes only a large gain (more groups decide; loop.fold_by sets the grouping)")
 
 
 def _beside_clause(sel, alpha: float) -> str:
@@ -1166,8 +1200,8 @@ def _analyse(soil: str, res: pd.DataFrame, diag: pd.DataFrame, cands: list, effe
                     "fitted alone: the uniform bias the verdict names, the calibrated model times (1 + s)")
         beside = _beside_clause(sel, settings.alpha)
         chi, dof, p_about = _scatter_about_holm(res, sv, diag)
-        where = ("the model throughout, a uniform bias (an instrument's calibration: every value times one factor) "
-                 "that no mechanism of the library carries; ")
+        where = ("the model throughout, a uniform bias (an instrument's calibration: every value times one factor); "
+                 "of the library's mechanisms, ")
         if p_about < settings.alpha:  # the rows are not shifted alike: no uniform bias
             nuisance = (nuisance[0], nuisance[1], "fitted alone: the mean offset of the rows, the calibrated model "
                         "times (1 + s); they scatter about it beyond their uncertainty (no uniform bias)")
@@ -1179,10 +1213,11 @@ def _analyse(soil: str, res: pd.DataFrame, diag: pd.DataFrame, cands: list, effe
             nuisance = (nuisance[0], nuisance[1], nuisance[2] + UNEVEN_SPREAD_WORDS)
         words, rm, rr = _heldout(sel.uniform)
         verdict = (f"unexplained: the measured values are {abs(100 * sv):.1f} % {'above' if sv > 0 else 'below'} "
-                   + where + " + ".join(sel.judged) + f" fit{'s' if k == 1 else ''} it "
+                   + where + " + ".join(sel.judged) + f" fit{'s' if k == 1 else ''} the rows too "
                    f"({words} {rm:.2f} % against {rr:.2f} % for "
                    f"the uniform bias alone) but {beside}: on these rows "
-                   f"{'its' if k == 1 else 'their'} signature cannot be told from a constant")
+                   f"{'its' if k == 1 else 'their'} signature cannot be told from a constant, so the offset is "
+                   "left to the uniform bias" + _few_groups_clause(sel, u, fold_by, settings.alpha, judged=True))
     elif sel is not None and sel.chosen:
         chosen = sel.chosen
         final = sel.final
@@ -1211,7 +1246,7 @@ def _analyse(soil: str, res: pd.DataFrame, diag: pd.DataFrame, cands: list, effe
         meas = u["measured"].to_numpy(float)
         pred["heldout_prediction"] = meas - held * rs.scale_of(u)
         after_cv = held
-        verdict = "explained by " + " + ".join(chosen)
+        verdict = "explained by " + " + ".join(chosen) + _parameter_words(theta, ci)
         b = sel.beside_uniform
         if uniform is None and b is not None and SCALE_KEY in b.theta:
             others = ", ".join(f"{k} {v:.4g}" for k, v in b.theta.items() if k != SCALE_KEY)
@@ -1312,17 +1347,7 @@ def _analyse(soil: str, res: pd.DataFrame, diag: pd.DataFrame, cands: list, effe
     else:
         rejected = _rejected(sel_rows)
         verdict = f"unexplained: the residual follows {follows}; candidates rejected ({rejected})"
-        groups = len(sl._folds(u, fold_by).held_out) if fold_by else 0
-        # the few-groups clause where a candidate failed a paired test over the groups (over the
-        # folds, or over the conditions with the mean's variance from the between-group mean square)
-        few = sorted({s.test.df for _, _, s in (sel.steps if sel is not None else [])
-                      if s.test is not None and not s.accepted and not s.p < settings.alpha
-                      and (s.test.test == "folds" or s.test.variance == "between")})
-        if 2 <= groups < FEW_FOLDS and few:
-            df = few[0]
-            verdict += (f"; the rows were held out by `{fold_by}`, {groups} groups, and the paired test that "
-                        f"rejected a candidate had {df} degree{'s' if df != 1 else ''} of freedom over them; it "
-                        "passes only a large gain (more groups decide; loop.fold_by sets the grouping)")
+        verdict += _few_groups_clause(sel, u, fold_by, settings.alpha)
     if (not nuisance[0] and n >= 3 and len(diag) and verdict.startswith("unexplained")
             and bool(((diag["test"] == "bias") & diag["significant"].astype(bool)).any())):
         # the residual follows a bias no effect explained: the uniform scale alone, its value and
@@ -1459,7 +1484,19 @@ def _with_interval(out: Outcome, pending: tuple | None, settings: Settings) -> O
     summary = out.summary.copy()
     summary.loc[0, "ci95"] = _fmt_ci(ci)
     summary.loc[0, "ci95_method"] = ci_method + after_words
-    return dataclasses.replace(out, summary=summary)
+    verdict = out.verdict.replace(_parameter_words(out.theta, {}), _parameter_words(out.theta, ci), 1)
+    summary.loc[0, "verdict"] = verdict
+    return dataclasses.replace(out, summary=summary, verdict=verdict)
+
+
+def _parameter_words(theta: dict, ci: dict) -> str:
+    """The chosen effects' parameters for the verdict, each with its 95 % interval where it
+    has a finite one: `` (rate_friction.beta 0.198, 95 %: 0.171 to 0.226)``."""
+    parts = []
+    for k, v in theta.items():
+        lo, hi = (ci or {}).get(k, (math.nan, math.nan))
+        parts.append(f"{k} {v:.3g}" + (f", 95 %: {lo:.3g} to {hi:.3g}" if np.isfinite(lo) and np.isfinite(hi) else ""))
+    return f" ({'; '.join(parts)})" if parts else ""
 
 
 # --------------------------------------------------------------------------- in process

@@ -191,8 +191,10 @@ PERIODIC_SEED = 0
 
 def _periodic(name, q, x, r, distinct, sst) -> dict:
     """The ``periodic`` test of a position along the bin: r ~ a sin(2 pi x / L) + b cos(2 pi x / L)
-    + c, scanned over the frequencies 1 / L from one period over the positions' span to m / 2
-    periods (the mean Nyquist frequency of m distinct irregular positions), :data:`PERIODIC_OVERSAMPLE`
+    + c, scanned over the frequencies 1 / L from one period over the positions' span to (m - 1) / 2
+    periods (the Nyquist frequency of m distinct positions at their mean spacing, span / (m - 1):
+    the shortest period evenly spaced positions resolve, beyond which a sine aliases one
+    scanned already), :data:`PERIODIC_OVERSAMPLE`
     per step; the statistic is the largest share of the residual variance a sine explains over
     the scan, and its p the share of :data:`PERIODIC_PERMUTATIONS` permutations of the residuals
     over the positions (generator seed :data:`PERIODIC_SEED`) whose largest share is as large,
@@ -203,15 +205,23 @@ def _periodic(name, q, x, r, distinct, sst) -> dict:
     n = len(r)
     m = int(distinct)  # distinct positions: repeats at one position add no frequency to tell
     span = float(np.max(x) - np.min(x))
-    freqs = np.linspace(1.0 / span, (m / 2.0) / span, PERIODIC_OVERSAMPLE * max(m // 2, 1))
+    freqs = np.linspace(1.0 / span, ((m - 1) / 2.0) / span, PERIODIC_OVERSAMPLE * max((m - 1) // 2, 1))
     w = 2 * np.pi * freqs[:, None] * (x - x.min())[None, :]
     basis = []
     keep = []
+    tiny = 1e-9 * np.sqrt(n)
     for j, (sn, cs) in enumerate(zip(np.sin(w), np.cos(w))):
-        X = np.column_stack([sn - sn.mean(), cs - cs.mean()])
-        qm, rr = np.linalg.qr(X)
-        if np.min(np.abs(np.diag(rr))) < 1e-9 * np.sqrt(n):  # a frequency the positions cannot tell from the mean
+        cols = [c - c.mean() for c in (sn, cs)]
+        cols = [c for c in cols if np.linalg.norm(c) >= tiny]
+        if not cols:  # a frequency the positions cannot tell from the mean
             continue
+        qm, rr = np.linalg.qr(np.column_stack(cols))
+        if len(cols) == 2 and abs(rr[1, 1]) < tiny:
+            # the sine and cosine one column at these positions (at the Nyquist frequency of
+            # evenly spaced ones the sine is 0 at every position, the cosine +-1): one direction
+            qm, rr = qm[:, :1], rr[:1, :1]
+        if qm.shape[1] == 1:
+            qm = np.column_stack([qm[:, 0], np.zeros(n)])
         basis.append(qm)
         keep.append(j)
     rc = r - r.mean()
@@ -685,11 +695,19 @@ def ranking(diag: pd.DataFrame) -> pd.DataFrame:
     """Covariates (and ``bias``) by the largest share of the residual any of their tests
     explains, with their smallest corrected p and whether any test is significant."""
     if len(diag) == 0:
-        return pd.DataFrame(columns=["covariate", "quantity", "r2", "p_adjusted", "significant", "tests"])
+        return pd.DataFrame(columns=["covariate", "quantity", "r2", "p_adjusted", "significant", "tests", "best_test",
+                                     "best_estimate", "best_r2", "best_p_adjusted"])
     d = diag.assign(covariate=diag["covariate"].where(~diag["test"].isin(["bias", "scatter"]), diag["test"]))
     out = d.groupby("covariate", sort=False).agg(quantity=("quantity", "first"), r2=("r2", "max"),
                                                  p_adjusted=("p_adjusted", "min"), significant=("significant", "any"),
                                                  tests=("test", lambda s: " ".join(s)))
+    # the test that carries the covariate's largest share (a significant one first): its kind,
+    # estimate (a periodic test's wavelength), share and corrected p, said together
+    order = d.assign(_sig=d["significant"].astype(bool), _r2=d["r2"].astype(float).fillna(-1.0))
+    best = (order.sort_values(["_sig", "_r2"], ascending=[False, False], kind="stable")
+            .groupby("covariate", sort=False).first())
+    out = out.join(best[["test", "estimate", "r2", "p_adjusted"]].rename(
+        columns={"test": "best_test", "estimate": "best_estimate", "r2": "best_r2", "p_adjusted": "best_p_adjusted"}))
     return out.sort_values(["significant", "r2"], ascending=[False, False]).reset_index()
 
 

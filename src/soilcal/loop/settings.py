@@ -97,11 +97,12 @@ def settings_from(soil_data: dict, source="<soil>") -> Settings:
         if q not in QUANTITIES or QUANTITIES[q] is None:
             raise InputError(source, f"loop.reference.{q}", "a numeric quantity ("
                              + ", ".join(k for k, u in QUANTITIES.items() if u) + ")", q)
-        from soilcal.config.quantities import POSITIVE_QUANTITIES
+        from soilcal.config.quantities import NONNEGATIVE_QUANTITIES, POSITIVE_QUANTITIES
 
-        if not isinstance(v, (int, float)) or not math.isfinite(v) or (q in POSITIVE_QUANTITIES and not v > 0):
-            raise InputError(source, f"loop.reference.{q}",
-                             f"a {'positive ' if q in POSITIVE_QUANTITIES else ''}number in {QUANTITIES[q][0]}", v)
+        sign = "positive " if q in POSITIVE_QUANTITIES else "non-negative " if q in NONNEGATIVE_QUANTITIES else ""
+        if (not isinstance(v, (int, float)) or isinstance(v, bool) or not math.isfinite(v)
+                or (q in POSITIVE_QUANTITIES and not v > 0) or (q in NONNEGATIVE_QUANTITIES and v < 0)):
+            raise InputError(source, f"loop.reference.{q}", f"a {sign}number in {QUANTITIES[q][0]}", v)
         s.reference[q] = float(v)
     if "design_points" in block:
         v = block["design_points"]

@@ -21,8 +21,12 @@ measurement noise:
   a soil-bin test.
 
 Every random draw comes from one generator seeded by ``seed``; the draws are listed in the
-returned table's ``truth`` columns (``soilcal loop synthesize`` writes them to
-``<out>.truth.csv`` with the parameters each condition ran at).
+returned table's ``truth`` columns, the hidden effects' parameters in its ``hidden:<effect>.<parameter>``
+columns and the disturbances' in its ``disturbance:<name>.<parameter>`` columns (``soilcal loop
+synthesize`` writes them to ``<out>.truth.csv`` with the parameters each condition ran at).  A
+hidden effect's parameter is a finite number (within its physical range where the library
+states one, :attr:`soilcal.loop.effects.Effect.ranges`) at which the effect follows its
+formula at every row (:func:`check_acts`: no parameter driven to a physical limit).
 """
 
 from __future__ import annotations
@@ -65,6 +69,16 @@ def check_hidden(hidden: dict, source="<synthesize>") -> None:
             if k not in EFFECTS[name].params:
                 raise InputError(source, f"effect.{name}", "a parameter of the effect (" + ", ".join(EFFECTS[name].params)
                                  + ")", k)
+        for k, v in theta.items():
+            unit = EFFECTS[name].params[k][0]
+            lo, hi = EFFECTS[name].ranges.get(k, (-math.inf, math.inf))
+            try:
+                x = float(v)
+            except (TypeError, ValueError):
+                x = math.nan
+            if not (math.isfinite(x) and lo <= x <= hi):
+                rng = "" if (lo, hi) == (-math.inf, math.inf) else f" from {lo:g} to {hi:g}, its physical range"
+                raise InputError(source, f"effect.{name}.{k}", f"a finite number{rng} ({unit})", v)
 
 
 def check_disturbances(disturbances: dict, conditions, source="<synthesize>") -> dict:
@@ -126,9 +140,31 @@ def check_acts(hidden: dict, disturbances: dict, conditions, base_params, refere
         changed = False
         for c in conditions:
             p = base_params(c)
-            if eff.apply(p, c.quantities or {}, theta, reference, c.scenario) != p:
-                changed = True
-                break
+            on = eff.apply(p, c.quantities or {}, theta, reference, c.scenario)
+            changed = changed or on != p
+            # a parameter the effect drives to a physical limit (a friction of 0, a surface
+            # energy below 0) stops following its formula there: it does not move with the
+            # effect's parameter, so the table would carry another mechanism than the truth says
+            for k, v in theta.items():
+                if v == 0.0:
+                    continue
+                near = eff.apply(p, c.quantities or {}, {**theta, k: v * (1.0 - 1e-3)}, reference, c.scenario)
+                pinned = [key for key in eff.changes if on.get(key) != p.get(key) and on.get(key) == near.get(key)]
+                if pinned:
+                    lo, hi = eff.bounds()[k]
+                    raise InputError(source, f"effect.{name}.{k}",
+                                     f"a value at which {name} follows its formula ({eff.formula}) at every row: at "
+                                     f"{c.measurement} row {c.row} it drives {', '.join(pinned)} to a physical limit "
+                                     f"({', '.join(f'{key} {on[key]:.4g}' for key in pinned)}), where it stops "
+                                     f"(the loop fits {k} from {lo:g} to {hi:g})", v)
+        if not changed and not eff.needs:
+            # acting on every row and changing none: its parameters sit at a physical limit
+            p = base_params(conditions[0])
+            raise InputError(source, f"effect.{name}", f"an effect that changes some row of {tables}: at "
+                             + ", ".join(f"{k} {v:g}" for k, v in theta.items()) + f" {name} ({eff.formula}) "
+                             "leaves every row as calibrated, " + ", ".join(f"{key} {p.get(key, 0.0):.4g}"
+                                                                            for key in eff.changes)
+                             + " held at its physical limit", "no row changed")
         if not changed:
             at = ", ".join(f"{q} = {reference[q]:.6g} {QUANTITIES[q][0]}" for q in eff.needs if q in reference)
             raise InputError(source, f"effect.{name}", f"an effect that changes some row of {tables}: every row "
@@ -246,7 +282,9 @@ def synthesize(conditions, base_params, simulate, hidden: dict | None = None, re
             rows.append({"measurement": c.measurement, "row": c.row, "measure": r["measure"],
                          "value": float(np.mean(reps)), "sd": float(np.std(reps, ddof=1)) if len(reps) > 1 else math.nan,
                          "n": len(reps), "truth_simulated": float(np.mean(sims)), "truth_disturbance": factor[i],
-                         **{f"reference:{q}": v for q, v in reference.items()}})
+                         **{f"reference:{q}": v for q, v in reference.items()},
+                         **{f"hidden:{nm}.{k}": float(v) for nm, th in hidden.items() for k, v in th.items()},
+                         **{f"disturbance:{nm}.{k}": float(v) for nm, d in disturbances.items() for k, v in d.items()}})
     return pd.DataFrame(rows)
 
 
