@@ -48,7 +48,7 @@ DEGREES = (1, 15)
 MEASURES = {
     "pile": ("angle_deg", "left_deg", "right_deg", "spread_deg", "n_photos"),
     "drum": ("angle_deg", "spread_deg", "n_frames", "upper_deg", "lower_deg", "s_shape_deg", "line_rms_pct"),
-    "furrow": ("area_mm2", "area_dm2", "degree", "coverage", "end_gap_mm", "fit_rms_mm", "px_per_mm", "roll_deg"),
+    "furrow": ("area_mm2", "area_dm2", "degree", "coverage", "end_gap_mm", "fit_rms_mm", "area_fit_mm2", "boundary_rms_mm", "px_per_mm", "roll_deg"),
 }
 
 
