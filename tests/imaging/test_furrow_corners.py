@@ -48,9 +48,10 @@ CASES = {
 def test_a_furrow_with_corners_reads_its_drawn_area(tmp_path, case):
     depth_of, truth = CASES[case]
     r = measure.measure_furrow(_draw(tmp_path / f"{case}.jpg", depth_of), SPAN, DATUM)
-    assert abs(r.area_mm2 / truth - 1) <= 0.01, (r.area_mm2, truth)
+    assert abs(r.area_mm2 / truth - 1) <= 0.02, (r.area_mm2, truth)
     assert r.confidence == "ok"
     assert abs(r.chord_ends_mm[0]) < 1.0 and abs(r.chord_ends_mm[1]) < 1.0
+    assert abs(r.area_fit_mm2 / truth - 1) > 0.03  # the polynomial's own chord area misses
 
 
 def test_the_chord_follows_a_sloping_surface(tmp_path):
@@ -58,5 +59,5 @@ def test_the_chord_follows_a_sloping_surface(tmp_path):
     chord joining its two ends."""
     depth_of, truth = CASES["trapezoid"]
     r = measure.measure_furrow(_draw(tmp_path / "tilt.jpg", depth_of, tilt_mm=20.0), SPAN, DATUM)
-    assert abs(r.area_mm2 / truth - 1) <= 0.01, (r.area_mm2, truth)
+    assert abs(r.area_mm2 / truth - 1) <= 0.02, (r.area_mm2, truth)
     assert abs((r.chord_ends_mm[1] - r.chord_ends_mm[0]) - 20.0) < 1.0

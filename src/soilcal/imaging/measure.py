@@ -2197,6 +2197,7 @@ class FurrowResult:
     area_fit_mm2: float = float("nan")  # the chord area of the fitted polynomial (Eq. (3)'s way)
     boundary_rms_mm: float = 0.0  # RMS of the kept points about their running median
     chord_ends_mm: list = field(default_factory=list)  # the chord's heights at the span's ends
+    chord_ends_from: list = field(default_factory=list)  # "polynomial" or "line", per end
 
     def as_dict(self):
         return {"path": self.path, "degree": self.degree, "coeffs": self.coeffs,
@@ -2204,6 +2205,7 @@ class FurrowResult:
                 "confidence": self.confidence, "coverage": self.coverage, "end_gap_mm": self.end_gap_mm,
                 "fit_rms_mm": self.fit_rms_mm, "area_fit_mm2": self.area_fit_mm2,
                 "boundary_rms_mm": self.boundary_rms_mm, "chord_ends_mm": self.chord_ends_mm,
+                "chord_ends_from": self.chord_ends_from,
                 "px_per_mm": self.px_per_mm, "roll_deg": self.roll_deg,
                 "profile": {"x_mm": np.round(self.x_mm[::10], 2).tolist(),
                             "z_mm": np.round(self.z_mm[::10], 2).tolist()}}
@@ -2508,7 +2510,7 @@ def _measure_furrow(path, scale_length_mm, datum_mm, degree, threshold, keep_sta
     poly, _ = _profile_fit(x, z, degree)
     coeffs = poly.convert().coef[::-1].tolist()
     area_fit = furrow_chord_area(a, b, coeffs)
-    area, keep, ends, boundary_rms = _direct_chord_area(x, z, a, b)
+    area, keep, ends, boundary_rms, ends_from = _direct_chord_area(x, z, a, b, poly)
     x, z = x[keep], z[keep]
     # the soil found, in the photo's own pixels, for the figures (keep_stages) only: nothing
     # after this point refuses the photo, so no diagnostic image draws it, and skimage's
@@ -2538,26 +2540,34 @@ def _measure_furrow(path, scale_length_mm, datum_mm, degree, threshold, keep_sta
            or boundary_rms > FURROW_LOW_IF["rms_mm_above"])
     return FurrowResult(str(path), x, z, coeffs, degree, float(area), float(s), roll, st, coverage, end_gap, rms,
                         "low" if low else "ok", area_fit_mm2=float(area_fit), boundary_rms_mm=boundary_rms,
-                        chord_ends_mm=[float(ends[0]), float(ends[1])])
+                        chord_ends_mm=[float(ends[0]), float(ends[1])], chord_ends_from=ends_from)
 
 
 #: points of the running median a furrow boundary point is compared with (one per column)
 FURROW_MEDIAN_POINTS = 9
-#: share of the span at each end whose boundary points give the chord's end height (a line)
+#: share of the span at each end whose boundary points judge the polynomial's end height and,
+#: where it does not follow them, give the chord's end height (a line)
 FURROW_END_SHARE = 0.05
+#: the most the boundary points at an end may stray from the polynomial (RMS, mm) for its end
+#: height to be the chord's (drawn and rendered furrows: 0.1-0.6 mm where it follows them, 2.9
+#: and 3.6 mm at a rounded trough's and a trapezoid's flat ends, where it swings)
+FURROW_END_FIT_MM = 1.0
 
 
-def _direct_chord_area(x, z, a, b):
-    """The furrow's chord area from its measured boundary, not from a fitted polynomial:
-    (area mm^2, kept mask, (z(a), z(b)), boundary RMS mm).  A point more than 4 robust SDs (at
+def _direct_chord_area(x, z, a, b, poly):
+    """The furrow's chord area with its profile integrated over the measured boundary points:
+    (area mm^2, kept mask, (z(a), z(b)), boundary RMS mm, what gave each end height).  A point more than 4 robust SDs (at
     least 1 mm) off the running median of its FURROW_MEDIAN_POINTS neighbours (a clod, a
-    speck) is dropped; the chord joins the surface heights at the span's ends, each from a line
-    through the kept points within FURROW_END_SHARE of the span of the outermost one (carried
-    to the end where the points stop short of it); the area is the chord's trapezoid less the
-    trapezoidal integral of the kept points closed by those end heights.  A polynomial of any
-    degree swings at the span's ends where the profile has corners (a trapezoid's or a V's
-    furrow meeting a flat surface: a degree-9 fit rose 10 mm at both ends of a drawn trapezoid
-    and its chord area read 21 % high); the measured points do not."""
+    speck) is dropped; the chord joins the surface heights at the span's ends: the
+    polynomial's (smoothed over the whole profile, the steadiest estimate) where the kept
+    points within FURROW_END_SHARE of the span of the outermost one stray from it by at most
+    FURROW_END_FIT_MM RMS, else a line's through those points (carried to the end where they
+    stop short of it); the area is the chord's trapezoid less the trapezoidal integral of the kept
+    points closed by those end heights.  A polynomial of any degree swings at the span's ends
+    where the profile has corners (a trapezoid's or a V's furrow meeting a flat surface: a
+    degree-9 fit rose 10 mm at both ends of a drawn trapezoid and its chord area read 21 %
+    high); the measured points do not, but a line through the few points at an end is noisier
+    than the polynomial where that follows them."""
     from scipy.ndimage import median_filter
 
     order = np.argsort(x, kind="stable")
@@ -2576,8 +2586,15 @@ def _direct_chord_area(x, z, a, b):
             return float(k * at + c)
         return float(np.mean(zs))
 
-    za = end_height(a, xk <= xk.min() + reach)
-    zb = end_height(b, xk >= xk.max() - reach)
+    heights, ends_from = [], []
+    for at, sel in ((a, xk <= xk.min() + reach), (b, xk >= xk.max() - reach)):
+        if float(np.sqrt(np.mean((zk[sel] - poly(xk[sel])) ** 2))) <= FURROW_END_FIT_MM:
+            heights.append(float(poly(at)))  # the polynomial follows the surface there
+            ends_from.append("polynomial")
+        else:
+            heights.append(end_height(at, sel))
+            ends_from.append("line")
+    za, zb = heights
     inside = (xk > a) & (xk < b)
     xs = np.concatenate([[a], xk[inside], [b]])
     zs = np.concatenate([[za], zk[inside], [zb]])
@@ -2585,4 +2602,4 @@ def _direct_chord_area(x, z, a, b):
     rms = float(np.sqrt(np.mean(r[keep] ** 2))) if keep.any() else float("nan")
     mask = np.zeros(len(order), bool)
     mask[order[keep]] = True
-    return float(area), mask, (za, zb), rms
+    return float(area), mask, (za, zb), rms, ends_from
