@@ -93,8 +93,8 @@ def test_the_same_photo_at_another_resolution_gives_the_same_area(tmp_path, subs
 def test_a_profile_whose_end_is_not_found_is_flagged(tmp_path):
     """Photo 256 of the seeded corpus: the soil rises into the beam's dark shadow at the left
     end of the span, whose last 38 mm get no boundary point; the chord's end height is then
-    extrapolated (a line through the points nearest that end) and the area is off by more than
-    2 %: flagged low."""
+    extrapolated (the polynomial's, which the points before the gap follow) and the area is off
+    by more than 2 %: flagged low."""
     path, truth = corpus.write_furrow_photo(corpus.furrow_photo_params(257, seed=0)[256], tmp_path, "f256")
     r = _measure(path, truth)
     assert abs(r.area_mm2 / truth["area_mm2"] - 1) > 0.02

@@ -149,6 +149,10 @@ def furrow_figure(result, stem, title=""):
     ax[2].plot(result.x_mm, result.z_mm, ".", ms=1, label="contour")
     x = np.linspace(result.x_mm.min(), result.x_mm.max(), 400)
     ax[2].plot(x, np.polyval(result.coeffs, x), "r-", lw=1, label=f"degree-{result.degree} fit")
+    if len(result.chord_ends_mm) == 2 and st.frame is not None:
+        half = 0.5 * (st.frame[1] - st.frame[0]) / st.frame[3]  # the beam's span, mm
+        ax[2].plot([-half, half], result.chord_ends_mm, "k--", lw=1,
+                   label="chord (ends: " + ", ".join(result.chord_ends_from) + ")")
     ax[2].set_xlabel("x / mm")
     ax[2].set_ylabel("F(x) / mm")
     ax[2].set_title(f"(c) profile, area {result.area_mm2 / 1e4:.3f} dm$^2$")

@@ -2555,7 +2555,7 @@ FURROW_END_FIT_MM = 1.0
 
 
 def _direct_chord_area(x, z, a, b, poly):
-    """The furrow's chord area with its profile integrated over the measured boundary points:
+    """``x`` in increasing order (one point per column along the beam).  The furrow's chord area with its profile integrated over the measured boundary points:
     (area mm^2, kept mask, (z(a), z(b)), boundary RMS mm, what gave each end height).  A point more than 4 robust SDs (at
     least 1 mm) off the running median of its FURROW_MEDIAN_POINTS neighbours (a clod, a
     speck) is dropped; the chord joins the surface heights at the span's ends: the
@@ -2570,8 +2570,6 @@ def _direct_chord_area(x, z, a, b, poly):
     than the polynomial where that follows them."""
     from scipy.ndimage import median_filter
 
-    order = np.argsort(x, kind="stable")
-    x, z = x[order], z[order]
     med = median_filter(z, size=min(FURROW_MEDIAN_POINTS, len(z)), mode="nearest")
     r = z - med
     sc = 1.4826 * float(np.median(np.abs(r - np.median(r))))
@@ -2600,6 +2598,4 @@ def _direct_chord_area(x, z, a, b, poly):
     zs = np.concatenate([[za], zk[inside], [zb]])
     area = 0.5 * (za + zb) * (b - a) - float(np.trapezoid(zs, xs))
     rms = float(np.sqrt(np.mean(r[keep] ** 2))) if keep.any() else float("nan")
-    mask = np.zeros(len(order), bool)
-    mask[order[keep]] = True
-    return float(area), mask, (za, zb), rms, ends_from
+    return float(area), keep, (za, zb), rms, ends_from
