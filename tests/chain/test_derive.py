@@ -15,6 +15,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 import pytest
+from scipy import stats
 
 from soilcal.chain.derive import (
     bbd_from_path,
@@ -259,7 +260,15 @@ def test_bbd_centre_follows_the_trend_of_a_noisy_path(soils):
     assert st["derivation"]["choice"] == "fitted"
     trend = st["derivation"]["trend"]["stacking_angle"]
     assert trend["degree"] == 1 and trend["n"] == 6
+    # the lucky run leaves the line's slope short of significance (its OLS t-test, scipy's
+    # linregress: p = 0.099): the derivation says so beside the choice
+    p_slope = stats.linregress(s, y).pvalue
+    assert 0.05 < p_slope < 0.1
+    assert f"p = {p_slope:.2g}" in st["derivation"]["cautions"]["stacking_angle"]
+    assert "no significant slope" in st["derivation"]["text"]
     json.dumps(st)  # stage.json: no NaN, no numpy types
+    clean = bbd_from_path(cin, "bbd", path, _path_responses(list(49.0 - 4.0 * s + 0.1 * (-1.0) ** s)))
+    assert clean["derivation"]["cautions"] == {}
     # the papers' rule, asked for in the soil's simulation block
     cin["simulation"]["path"] = {"choose": "closest"}
     path = path_from_screening(cin, "steepest", _stage(cin, "pb"), _effects(P_SIG, B_SIG),

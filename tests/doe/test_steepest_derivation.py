@@ -18,6 +18,7 @@ from soilcal.doe.steepest import (
     derive_path,
     path_direction,
     path_trend,
+    trend_caution,
     select_factors,
     steepest_ascent_path,
 )
@@ -379,6 +380,25 @@ def test_path_trend_of_a_line_is_its_least_squares_line():
     resid = ALT + 0.3 / 17.5 * (STEPS - 3.5)
     assert tr["residual_sd"] == pytest.approx(np.sqrt(np.sum(resid ** 2) / 4), rel=1e-9)
     assert tr["p_quadratic"] > 0.05  # tested (six steps) and not kept
+
+
+def test_path_trend_tests_its_slope_and_says_when_it_tells_no_step_apart():
+    """The slope's p-value is the OLS t-test of the line's slope (scipy's linregress gives it
+    independently); a path whose runs scatter with no slope (here one without curvature the
+    test would keep) is cautioned, a clear line is not."""
+    y = np.array([8.4, 36.8, 31.1, 23.9, 14.1, 14.2])
+    tr = path_trend(STEPS, y)
+    assert tr["degree"] == 1
+    assert tr["p_slope"] == pytest.approx(stats.linregress(STEPS, y).pvalue, rel=1e-9)
+    assert tr["p_slope"] > 0.05
+    text = trend_caution(tr)
+    assert "no significant slope" in text and f"p = {tr['p_slope']:.2g}" in text
+    line = path_trend(STEPS, 60 - 5 * STEPS + ALT)
+    assert line["p_slope"] == pytest.approx(stats.linregress(STEPS, 60 - 5 * STEPS + ALT).pvalue, rel=1e-9)
+    assert trend_caution(line) == ""
+    # a curvature kept is a trend too; a trend not fitted (two steps) is not judged
+    assert trend_caution(path_trend(STEPS, 30 + 2 * (STEPS - 3.5) ** 2 + ALT)) == ""
+    assert trend_caution(path_trend([1.0, 2.0], [3.0, 9.0])) == ""
 
 
 def test_path_trend_keeps_a_curvature_the_runs_show():

@@ -472,7 +472,7 @@ def _upstream_origin(stage: dict, pname: str, what: str) -> str:
 
 def bbd_from_path(soil_data: dict, stage_id: str, path_stage: dict, path_responses: pd.DataFrame) -> dict:
     """A Box-Behnken stage centred on the DEM path step closest to the targets."""
-    from soilcal.doe.steepest import bbd_levels, chosen_step
+    from soilcal.doe.steepest import bbd_levels, chosen_step, trend_caution
 
     config_stage = _stage(soil_data, stage_id)
     syms = list(path_stage["factors"])
@@ -486,6 +486,7 @@ def bbd_from_path(soil_data: dict, stage_id: str, path_stage: dict, path_respons
     step, table = chosen_step(path, ys, targets, rule=choice)
     trends = {r: {k: (None if isinstance(v, float) and not np.isfinite(v) else v) for k, v in t.items()}
               for r, t in table.attrs.get("trend", {}).items()}  # stage.json: no NaN
+    cautions = {r: c for r, t in table.attrs.get("trend", {}).items() if (c := trend_caution(t))}
     bounds = {s: _bounds_in_config_units(soil_data, path_stage["factors"][s]["parameter"]) for s in syms}
     levels = bbd_levels(path, step, syms, bounds)
     st = _dem_base(config_stage)
@@ -503,7 +504,9 @@ def bbd_from_path(soil_data: dict, stage_id: str, path_stage: dict, path_respons
         "from_stage": path_stage["id"],
         "text": (f"Box-Behnken centred on step {step} of the DEM path {path_stage['id']}"
                  + (" (the step closest to the target on the trend fitted through the path's runs)"
-                    if choice == "fitted" else " (the step whose own run is closest to the target)")),
+                    if choice == "fitted" else " (the step whose own run is closest to the target)")
+                 + "".join(f"; {r}: {c}" for r, c in cautions.items())),
+        "cautions": cautions,
         "chosen_step": int(step),
         "choice": choice,
         "trend": trends,

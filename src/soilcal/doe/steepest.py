@@ -430,7 +430,10 @@ def path_trend(steps, values, alpha: float = TREND_ALPHA) -> dict:
 
     Returns ``{"fitted": array per step (NaN where the run failed), "degree", "n",
     "residual_sd" (the runs' scatter about the trend, NaN without residual degrees of
-    freedom), "p_quadratic" (NaN when not tested), "r2"}``.
+    freedom), "p_quadratic" (NaN when not tested), "p_slope" (the line's t-test of its slope,
+    NaN without residual degrees of freedom), "r2"}``.  A trend with neither its slope nor its
+    curvature significant does not establish which step is closest to a target
+    (:func:`trend_caution`).
     """
     # the OLS class itself, not statsmodels.api (which imports every model family: about
     # 0.3 s more of each job that draws or chooses on a path's trend)
@@ -443,7 +446,7 @@ def path_trend(steps, values, alpha: float = TREND_ALPHA) -> dict:
     ok = np.isfinite(y)
     n = int(ok.sum())
     out = {"fitted": np.where(ok, y, np.nan), "degree": None, "n": n, "residual_sd": float("nan"),
-           "p_quadratic": float("nan"), "r2": float("nan")}
+           "p_quadratic": float("nan"), "p_slope": float("nan"), "r2": float("nan")}
     if n < 3:
         return out
     half = (s[ok].max() - s[ok].min()) / 2.0
@@ -455,6 +458,9 @@ def path_trend(steps, values, alpha: float = TREND_ALPHA) -> dict:
 
     X, res = fit(1)
     deg = 1
+    if n > 2:
+        ps = float(res.pvalues[1])
+        out["p_slope"] = ps if np.isfinite(ps) else float("nan")
     if n >= 5:
         X2, res2 = fit(2)
         p2 = float(res2.pvalues[2])
@@ -469,6 +475,21 @@ def path_trend(steps, values, alpha: float = TREND_ALPHA) -> dict:
         out["residual_sd"] = float(np.sqrt(np.sum(res.resid ** 2) / dof))
     out["r2"] = float(res.rsquared) if np.isfinite(res.rsquared) else float("nan")
     return out
+
+
+def trend_caution(trend: dict, alpha: float = TREND_ALPHA) -> str:
+    """A sentence saying that a path's trend (:func:`path_trend`) does not tell its steps
+    apart (a line whose slope's p-value is at least ``alpha``), or "" where it does or was not
+    tested."""
+    ps = trend.get("p_slope", float("nan"))
+    if trend.get("degree") != 1 or ps is None or not np.isfinite(ps) or ps < alpha:
+        return ""
+    r2 = trend.get("r2", float("nan"))
+    sd = trend.get("residual_sd", float("nan"))
+    return (f"the trend through the path's runs has no significant slope (p = {ps:.2g}, R^2 = {r2:.2f}, "
+            f"the runs scattering {sd:.3g} about it), so the path's runs do not establish which step is "
+            "closest to the target nor show the screening's effects along it (more seeds per step, or "
+            "larger samples, would)")
 
 
 def chosen_step(
