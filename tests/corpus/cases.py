@@ -761,7 +761,7 @@ def _(tmp):
     return pile_args("notes.png")
 
 
-@case("photo-pdf-named-jpg", "photo", "photos/scan.jpg", "file", "a complete, readable image (JPEG/PNG/TIFF)")
+@case("photo-pdf-named-jpg", "photo", "photos/scan.jpg", "file", "a complete, readable image (JPEG/PNG/TIFF/HEIC)")
 def _(tmp):
     (photo_dir(tmp) / "scan.jpg").write_bytes(b"%PDF-1.4\n1 0 obj<<>>endobj\ntrailer<<>>\n%%EOF\n")
     return pile_args("scan.jpg")
@@ -835,7 +835,7 @@ def _(tmp):
     return ["image", "pile", "photos/a.jpg", "photos/b.jpg", "--figures", "out"]
 
 
-@case("drum-frame-text-file", "photo", "photos/frame.bmp", "file", "a complete, readable image (BMP/PNG/TIFF/JPEG)")
+@case("drum-frame-text-file", "photo", "photos/frame.bmp", "file", "a complete, readable image (BMP/PNG/TIFF/JPEG/HEIC)")
 def _(tmp):
     (photo_dir(tmp) / "frame.bmp").write_text("frame 1\n")
     return ["image", "drum", "photos/frame.bmp", "--figures", "out"]

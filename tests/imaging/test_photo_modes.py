@@ -122,3 +122,51 @@ def test_grey_alpha_16_bit_png_is_read_with_tiles_as_plain_tuples(tmp_path, monk
         assert all(type(t) is tuple for t in im.tile)
     mode, g, _, shown, _ = _decode(p, "PNG")
     assert mode == "I;16" and shown == (400, 300) and np.array_equal(np.round(g * 65535), grey)
+
+
+def test_a_heic_photo_reads_as_its_jpeg_does_turned_as_shown(reference, tmp_path):
+    """An iPhone's HEIC: read through pillow-heif, as its JPEG is; one stored sideways with an
+    EXIF orientation (6: turn 90 deg clockwise to show it) reads as the upright photo, as a
+    viewer shows it (pillow-heif applies the stored rotation and leaves the orientation 1)."""
+    import pillow_heif
+
+    pillow_heif.register_heif_opener()
+    _, rgb, angle = reference
+    p = tmp_path / "heap.heic"
+    rgb.save(p, quality=92)
+    assert Image.open(p).format == "HEIF"
+    assert abs(measure.measure_pile(p).angle_deg - angle) <= 0.3
+    side = rgb.transpose(Image.Transpose.ROTATE_90)  # as the sensor stored it: shown by turning it back
+    exif = Image.Exif()
+    exif[0x0112] = 6
+    q = tmp_path / "heap_sideways.heic"
+    side.save(q, quality=92, exif=exif.tobytes())
+    img = read_photo(q)
+    assert img.shape == (rgb.height, rgb.width, 3)
+    assert abs(measure.measure_pile(q).angle_deg - angle) <= 0.3
+
+
+def test_a_heic_photo_without_pillow_heif_is_refused_naming_it(reference, tmp_path, monkeypatch):
+    import builtins
+
+    import pillow_heif
+
+    from soilcal.errors import InputError
+    from soilcal.imaging import io
+
+    pillow_heif.register_heif_opener()
+    _, rgb, _ = reference
+    p = tmp_path / "heap.heic"
+    rgb.save(p, quality=80)
+    real_import = builtins.__import__
+
+    def no_heif(name, *args, **kwargs):
+        if name == "pillow_heif":
+            raise ImportError(name)
+        return real_import(name, *args, **kwargs)
+
+    monkeypatch.setattr(io, "_HEIF_REGISTERED", [])
+    monkeypatch.setattr(builtins, "__import__", no_heif)
+    with pytest.raises(InputError) as e:
+        read_photo(p)
+    assert e.value.field == "file" and "pillow-heif" in str(e.value) and "export it as JPEG" in str(e.value)

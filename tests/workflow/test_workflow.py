@@ -44,7 +44,7 @@ def test_bad_photo_found_by_a_job_is_one_line_without_traceback(tmp_path):
     r = _run(tmp, "--cores", "1", out, check=False)
     text = r.stdout + r.stderr
     line = ("soilcal: error: resources/images/cinnamon-soil/stacking_1.jpg: file: "
-            "expected a complete, readable image (JPEG/PNG/TIFF)")
+            "expected a complete, readable image (JPEG/PNG/TIFF/HEIC)")
     assert r.returncode != 0
     assert sum(line in ln for ln in text.splitlines()) == 1, text[-3000:]
     assert "Traceback" not in text and "returned non-zero exit status 2" in text

@@ -12,6 +12,9 @@ its values, so that a hot pixel does not set it), so it reads like its 8-bit ver
 of more than 8 bits per sample with its planes stored apart (planar configuration), which PIL
 decodes as 8-bit samples, is read at its depth with ``tifffile`` (:func:`_tiff_decode`).  A photo with an EXIF Orientation
 tag (a phone held upright or upside down) is turned as a viewer shows it before it is measured.
+A HEIC or HEIF photo (an iPhone's default format) is read through ``pillow-heif``
+(:func:`_heif_opener`), which turns it as it is shown (the rotation the file stores, its EXIF
+orientation then 1); where that package cannot be imported, such a photo is refused naming it.
 :func:`read_photo_reduced` and :func:`read_gray_reduced` decode a large photo reduced by a whole
 factor (a JPEG in its decoder), so it is never held at full size as floats.  A colour photo
 must span an eighth of its grey levels (:data:`MIN_GREY_LEVELS` of 256 at 8 bits).  A photo may have at most
@@ -190,6 +193,36 @@ _REVERSED = {2: (True, False), 3: (True, True), 4: (False, True), 6: (True, Fals
              8: (False, True)}
 
 
+#: the brands of an ISO base media file's ``ftyp`` box that make it a HEIF still image (HEIC
+#: from a phone: heic, heix, mif1; sequences and AVIF are HEIF too)
+_HEIF_BRANDS = (b"heic", b"heix", b"heim", b"heis", b"hevc", b"hevx", b"mif1", b"msf1", b"avif", b"avis")
+
+
+def _is_heif(p: Path) -> bool:
+    """Whether the file starts as a HEIF image does (an ``ftyp`` box of a HEIF brand)."""
+    try:
+        with open(p, "rb") as f:
+            head = f.read(12)
+    except OSError:
+        return False
+    return len(head) == 12 and head[4:8] == b"ftyp" and head[8:12] in _HEIF_BRANDS
+
+
+_HEIF_REGISTERED: list = []
+
+
+def _heif_opener() -> bool:
+    """Register ``pillow-heif``'s HEIF opener with PIL once; False where it cannot be imported."""
+    if not _HEIF_REGISTERED:
+        try:
+            import pillow_heif
+        except ImportError:
+            return False
+        pillow_heif.register_heif_opener()
+        _HEIF_REGISTERED.append(True)
+    return True
+
+
 def _decode(path, formats: str, min_pixels=None, geometry=None):
     """(PIL mode, grey [0, 1] for single-channel modes else None, RGB [0, 1] else None, (width,
     height) as shown, grey levels of the photo's depth: 256 for 8 bits per channel).  A colour
@@ -209,6 +242,9 @@ def _decode(path, formats: str, min_pixels=None, geometry=None):
     if not p.is_file():
         raise InputError(p, "file", "an existing image file", "a folder" if p.is_dir() else "missing")
     expected = f"a complete, readable image ({formats})"
+    if _is_heif(p) and not _heif_opener():
+        raise InputError(p, "file", expected + "; a HEIC or HEIF photo needs the package pillow-heif "
+                         "(pip install pillow-heif), or export it as JPEG", "a HEIF image, pillow-heif not installed")
     try:
         with warnings.catch_warnings():
             warnings.simplefilter("ignore", Image.DecompressionBombWarning)
@@ -371,7 +407,7 @@ def read_photo_reduced(path, min_pixels=None, with_depth=False, with_map=False):
 
     p = Path(path)
     geometry = {}
-    mode, g, rgb, shown, depth = _decode(p, "JPEG/PNG/TIFF", min_pixels, geometry)
+    mode, g, rgb, shown, depth = _decode(p, "JPEG/PNG/TIFF/HEIC", min_pixels, geometry)
     if rgb is None:
         if mode in _HIGH_DEPTH:
             g = _stretch(g)
@@ -420,7 +456,7 @@ def read_gray_reduced(path, min_pixels=None):
     from soilcal.errors import InputError
 
     p = Path(path)
-    mode, g, rgb, shown, _ = _decode(p, "BMP/PNG/TIFF/JPEG", min_pixels)
+    mode, g, rgb, shown, _ = _decode(p, "BMP/PNG/TIFF/JPEG/HEIC", min_pixels)
     if g is None:
         g = rgb2gray(rgb)
     if g.ndim != 2 or min(g.shape) < 64:
