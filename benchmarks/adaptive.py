@@ -31,6 +31,7 @@ commit of that soil's adaptive rows.
     python benchmarks/adaptive.py --soils cinnamon-soil --methods adaptive
     python benchmarks/adaptive.py --soils yangtze-clay-loam --progress-from /tmp/soilcal-adaptive-bench
     python benchmarks/adaptive.py --soils guangxi-cohesive --recipe-from /tmp/calibration-bench
+    python benchmarks/adaptive.py --soils guangxi-cohesive --methods adaptive --budget 20
     python benchmarks/adaptive.py --report-only
 """
 
@@ -169,8 +170,23 @@ def figures(rows: list[dict], progress: list[dict]) -> list[Path]:
     return out
 
 
-def run_method(soil: str, method: str, cores: int, workdir: Path) -> tuple[list[dict], float, int]:
+def set_budget(wd: Path, soil: str, budget: int) -> None:
+    """Give the adaptive design of ``soil`` in the workflow copy ``wd`` a budget of ``budget`` runs
+    per case (``simulation.adaptive.budget``), the soil's other adaptive settings kept."""
+    import yaml
+
+    p = wd / "config/soils" / f"{soil}.yaml"
+    d = yaml.safe_load(p.read_text())
+    sim = d.setdefault("simulation", {})
+    sim["adaptive"] = dict(sim.get("adaptive") or {}, budget=int(budget))
+    p.write_text(yaml.safe_dump(d, sort_keys=False))
+
+
+def run_method(soil: str, method: str, cores: int, workdir: Path,
+               budget: int | None = None) -> tuple[list[dict], float, int]:
     wd = copy_workflow(workdir / f"{soil}-{method}", [soil])
+    if budget is not None and method == "adaptive":
+        set_budget(wd, soil, budget)
     t0 = time.perf_counter()
     p = subprocess.run(SNAKEMAKE + ["--cores", str(cores), "--config", f"design={method}", "source=dem"],
                        cwd=wd, capture_output=True, text=True)
@@ -179,7 +195,10 @@ def run_method(soil: str, method: str, cores: int, workdir: Path) -> tuple[list[
     if p.returncode != 0:
         print(p.stderr[-3000:], file=sys.stderr)
         return [], elapsed, p.returncode
-    return (recipe_rows if method == "recipe" else adaptive_rows)(wd, soil), elapsed, 0
+    rows = (recipe_rows if method == "recipe" else adaptive_rows)(wd, soil)
+    if budget is not None and method == "adaptive":
+        rows = [dict(r, note=f"{r['note']}; budget {budget} runs per case (--budget)") for r in rows]
+    return rows, elapsed, 0
 
 
 def page(rows: list[dict]) -> list[str]:
@@ -218,6 +237,9 @@ def main(argv=None):
     ap.add_argument("--cores", type=int, default=2)
     ap.add_argument("--workdir", default="/tmp/soilcal-adaptive-bench")
     ap.add_argument("--report-only", action="store_true")
+    ap.add_argument("--budget", type=int, default=None,
+                    help="the adaptive design's runs per case (simulation.adaptive.budget) in the workflow copy; "
+                         "default: the soil's own (60 where it gives none); recorded in the rows' note")
     given = ap.add_mutually_exclusive_group()
     given.add_argument("--progress-from", default=None, help="read the adaptive curves of --soils from this workdir")
     given.add_argument("--recipe-from", default=None,
@@ -255,7 +277,7 @@ def main(argv=None):
         wd.mkdir(parents=True, exist_ok=True)
         for soil in a.soils.split(","):
             for method in a.methods.split(","):
-                new, elapsed, rc = run_method(soil, method, a.cores, wd)
+                new, elapsed, rc = run_method(soil, method, a.cores, wd, a.budget)
                 if rc:
                     raise SystemExit(f"{soil} {method}: snakemake exited {rc} (log in {wd})")
                 utc = datetime.now(timezone.utc).strftime("%Y-%m-%d %H:%M")
