@@ -11,6 +11,12 @@ measured area, scale and roll errors, or the refusal) and ``furrow_photos.md`` (
 measured and within 1 and 2 % of the true area; notes below its marker are kept).
 
     python benchmarks/furrow_photos.py [--n 300] [--seed 0] [--out DIR] [--jobs 1]
+    python benchmarks/furrow_photos.py --shapes opener [--n 150]
+
+``--shapes opener`` renders the furrows as openers leave them instead
+(``furrow_photo_params(..., shapes="opener")``: a flat, slightly tilted surface broken by a
+trapezoid, V, rounded or smooth trough, corners kept, with or without rim ridges; exact
+polygon truth) and writes ``furrow_photos_opener.csv`` / ``.md`` (column ``shape``).
 """
 
 from __future__ import annotations
@@ -43,19 +49,30 @@ def measured(path, truth):
 
 def truth_fields(t):
     """The truth's fields of one photo's row."""
-    return dict(span_mm=round(t["scale_length_mm"], 2), area_mm2=round(t["area_mm2"], 1))
+    row = dict(span_mm=round(t["scale_length_mm"], 2), area_mm2=round(t["area_mm2"], 1))
+    if "shape" in t:
+        row["shape"] = t["shape"]
+    return row
 
 
 def main(argv=None):
+    argv = sys.argv[1:] if argv is None else list(argv)
+    shapes = "polynomial"
+    if "--shapes" in argv:
+        i = argv.index("--shapes")
+        shapes = argv[i + 1]
+        argv = argv[:i] + argv[i + 2:]
     args = corpus_args(__doc__, 300, argv)
 
     from soilcal.imaging import corpus
 
-    rows, wall = corpus_rows(corpus.furrow_photo_params(args.n, args.seed), corpus.write_furrow_photo,
-                             truth_fields, measured, stem="furrow", jobs=args.jobs)
+    rows, wall = corpus_rows(corpus.furrow_photo_params(args.n, args.seed, shapes=shapes),
+                             corpus.write_furrow_photo, truth_fields, measured, stem="furrow", jobs=args.jobs)
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
-    write_rows(out / "furrow_photos.csv", rows, FIELDS)
+    name = "furrow_photos" if shapes == "polynomial" else f"furrow_photos_{shapes}"
+    fields = FIELDS if shapes == "polynomial" else FIELDS[:1] + ["shape"] + FIELDS[1:]
+    write_rows(out / f"{name}.csv", rows, fields)
 
     n = len(rows)
     meas = [r for r in rows if r.get("error_pct", "") != ""]
@@ -65,7 +82,8 @@ def main(argv=None):
                              "| p95 | max |")
     md = ["# Furrow-photo stress benchmark",
           "",
-          corpus_header("furrow_photos.py", sys.argv[1:] if argv is None else argv, n, args.seed, wall),
+          corpus_header("furrow_photos.py", (["--shapes", shapes] if shapes != "polynomial" else []) + argv, n,
+                        args.seed, wall),
           "",
           "Each photo measured with default arguments (`soilcal.imaging.measure.measure_furrow`, degree 9, "
           "the meter's span and datum as a user's manifest gives them); error = measured chord area over the "
@@ -82,9 +100,28 @@ def main(argv=None):
           "",
           refusal_line(rows, len(meas)),
           ""]
-    write_page(out / "furrow_photos.md", md)
+    if shapes != "polynomial":
+        md[0] = "# Furrow-photo stress benchmark: furrows as openers leave them"
+        md += _by_shape(rows)
+    write_page(out / f"{name}.md", md)
     print("\n".join(table))
     print(f"refused {n - len(meas)} of {n}")
+
+
+def _by_shape(rows):
+    """Per furrow shape: photos measured, within 2 %, median abs error of the boundary's and the
+    polynomial's chord area."""
+    lines = ["| shape | measured | within 2 % | median abs error % | polynomial's chord area: within 2 % "
+             "| median abs error % |", "|---|---:|---:|---:|---:|---:|"]
+    for shape in sorted({r.get("shape", "") for r in rows}):
+        m = [r for r in rows if r.get("shape") == shape and r.get("error_pct", "") != ""]
+        if not m:
+            continue
+        e = np.abs([float(r["error_pct"]) for r in m])
+        f = np.abs([float(r["fit_error_pct"]) for r in m])
+        lines.append(f"| {shape} | {len(m)} | {100 * np.mean(e <= 2):.1f} % | {np.median(e):.2f} | "
+                     f"{100 * np.mean(f <= 2):.1f} % | {np.median(f):.2f} |")
+    return ["", *lines, ""]
 
 
 if __name__ == "__main__":

@@ -48,9 +48,11 @@ CASES = {
 def test_a_furrow_with_corners_reads_its_drawn_area(tmp_path, case):
     depth_of, truth = CASES[case]
     r = measure.measure_furrow(_draw(tmp_path / f"{case}.jpg", depth_of), SPAN, DATUM)
-    assert abs(r.area_mm2 / truth - 1) <= 0.02, (r.area_mm2, truth)
+    assert abs(r.area_mm2 / truth - 1) <= 0.01, (r.area_mm2, truth)
     assert r.confidence == "ok"
-    assert abs(r.chord_ends_mm[0]) < 1.0 and abs(r.chord_ends_mm[1]) < 1.0
+    # the drawn surface is at 0 beyond the furrow: the chord's ends lie on it (the V's
+    # polynomial follows its flat ends on the whole but ends 0.55 mm below them: not taken)
+    assert abs(r.chord_ends_mm[0]) < 0.25 and abs(r.chord_ends_mm[1]) < 0.25, (r.chord_ends_mm, r.chord_ends_from)
     assert abs(r.area_fit_mm2 / truth - 1) > 0.03  # the polynomial's own chord area misses
 
 

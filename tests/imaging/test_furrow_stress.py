@@ -93,8 +93,9 @@ def test_the_same_photo_at_another_resolution_gives_the_same_area(tmp_path, subs
 def test_a_profile_whose_end_is_not_found_is_flagged(tmp_path):
     """Photo 256 of the seeded corpus: the soil rises into the beam's dark shadow at the left
     end of the span, whose last 38 mm get no boundary point; the chord's end height is then
-    extrapolated (the polynomial's, which the points before the gap follow) and the area is off
-    by more than 2 %: flagged low."""
+    extrapolated over the gap (by the line through the last 10 mm of points before it, from
+    which the polynomial's end height departs) and the area is off by more than 2 %: flagged
+    low."""
     path, truth = corpus.write_furrow_photo(corpus.furrow_photo_params(257, seed=0)[256], tmp_path, "f256")
     r = _measure(path, truth)
     assert abs(r.area_mm2 / truth["area_mm2"] - 1) > 0.02
@@ -127,3 +128,32 @@ def test_furrow_photo_rolled_beyond_the_beam_search_names_the_roll(tmp_path, rol
     Image.open(p).rotate(turn, resample=Image.Resampling.BILINEAR, expand=True, fillcolor=(128, 128, 128)).save(q)
     r = measure.measure_furrow(q, 400.0, truth["beam_datum_mm"])
     assert abs(r.area_mm2 / truth["area_mm2"] - 1) <= 0.02, (r.area_mm2, truth["area_mm2"])
+
+
+def test_opener_corpus_truth_is_the_polygons_exact_chord_area():
+    """A furrow drawn as a polygon (an opener's trapezoid in a flat surface): the truth is the
+    trapezoid's area, (top + bottom) / 2 * depth, the chord lying on the flat surface."""
+    from soilcal.imaging import render
+
+    xs = [-200.0, -90.0, -40.0, 40.0, 90.0, 200.0]
+    zs = [120.0, 120.0, 20.0, 20.0, 120.0, 120.0]
+    _, truth = render.render_furrow(7, None, (-200.0, 200.0), 180.0, profile=[xs, zs], roll_deg=0.0)
+    assert truth["area_mm2"] == pytest.approx((180.0 + 80.0) / 2 * 100.0, rel=1e-12)
+    # a tilted surface: the chord joins the ends, the trapezoid below it keeps its area
+    tilt = [z + 10.0 * (x + 200.0) / 400.0 for x, z in zip(xs, zs)]
+    _, truth = render.render_furrow(7, None, (-200.0, 200.0), 180.0, profile=[xs, tilt], roll_deg=0.0)
+    assert truth["area_mm2"] == pytest.approx(13000.0, rel=1e-12)
+
+
+def test_opener_corpus_is_seeded_and_draws_every_shape():
+    a = corpus.furrow_photo_params(24, seed=2, shapes="opener")
+    assert a == corpus.furrow_photo_params(24, seed=2, shapes="opener")
+    assert {p["shape"] for p in a} == set(corpus.OPENER_SHAPES)
+    for p in a:
+        xs, zs = map(np.asarray, p["profile"])
+        lo, hi = p["span_mm"]
+        assert xs[0] <= lo and xs[-1] >= hi and np.all(np.diff(xs) > 0)
+        assert zs.max() < p["beam_datum_mm"] - 15.0 and zs.min() > -20.0
+        assert p["coeffs"] is None
+    with pytest.raises(ValueError):
+        corpus.furrow_photo_params(1, shapes="spline")

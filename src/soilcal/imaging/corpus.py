@@ -144,12 +144,59 @@ def _furrow_coeffs(rng, a, b, datum):
     raise RuntimeError("no furrow profile below the beam in 100 draws")
 
 
-def furrow_photo_params(n, seed=0):
+#: furrow shapes of :func:`furrow_photo_params` ``shapes="opener"``
+OPENER_SHAPES = ("trapezoid", "v", "rounded", "trough")
+
+
+def _opener_profile(rng, a, b, datum):
+    """A furrow as an opener leaves it, F(x) (mm) as polygon vertices ``[xs, zs]`` on [a, b]:
+    a flat surface (tilted up to 10 mm across the span) broken by a trapezoid, a V, a rounded
+    (parabolic) trough or the corpus's smooth trough itself (not fitted by any polynomial), 60-150 mm
+    deep, 35-70 % of the span wide, anywhere within it with at least 8 % of flat surface at each
+    end, with or without a low ridge of thrown soil beside each rim; the corners stay corners."""
+    shape = OPENER_SHAPES[int(rng.integers(len(OPENER_SHAPES)))]
+    L = b - a
+    bottom = rng.uniform(0.0, 30.0)  # as the smooth troughs: the profile's zero near the bottom,
+    depth = rng.uniform(60.0, min(150.0, datum - 50.0 - bottom))  # the surface, tilt and ridges below the beam
+    top = bottom + depth
+    width = rng.uniform(0.35, 0.70) * L
+    left = a + rng.uniform(0.08 * L, 0.92 * L - width)
+    right = left + width
+    tilt = rng.uniform(-10.0, 10.0)
+    x = np.linspace(a, b, int(round(L)) * 2 + 1)  # vertices every half millimetre
+    u = (x - left) / width  # 0..1 across the furrow
+    inside = (u > 0) & (u < 1)
+    if shape == "trapezoid":
+        bottom = rng.uniform(0.2, 0.6)  # the bottom's share of the top width
+        wall = (1 - bottom) / 2
+        d = np.clip(np.minimum(u, 1 - u) / wall, 0, 1)
+    elif shape == "v":
+        c = rng.uniform(0.35, 0.65)
+        d = np.where(u < c, u / c, (1 - u) / (1 - c))
+    elif shape == "rounded":
+        d = 1 - (2 * u - 1) ** 2
+    else:
+        c, pw = rng.uniform(0.4, 0.6), rng.uniform(1.6, 4.0)
+        w = np.where(u < c, c, 1 - c) / 2.2
+        d = np.exp(-(np.abs(u - c) / w) ** pw) - np.exp(-(np.where(u < c, c, 1 - c) / w) ** pw)
+        d = d / d.max()
+    f = top + tilt * (x - a) / L - depth * np.where(inside, np.clip(d, 0, 1), 0.0)
+    for rim in (left, right):
+        if rng.random() < 0.5:
+            f += rng.uniform(3.0, 15.0) * np.exp(-((x - rim) / rng.uniform(10.0, 25.0)) ** 2) * (~inside)
+    return shape, [x.tolist(), f.tolist()]
+
+
+def furrow_photo_params(n, seed=0, shapes="polynomial"):
     """Parameter sets of ``n`` stress furrow photos: troughs of any depth, width and shape
     (:func:`_furrow_coeffs`), meter spans of 300-500 mm with the beam 150-250 mm above the
     profile's zero, boards of any light colour with or without a grid, beam shadows cast on the
     board, soils light to dark with shading down the face, walls of any colour around the
-    board, camera roll up to 5 deg, under- and over-exposure, blur, noise, JPEG quality 60-95."""
+    board, camera roll up to 5 deg, under- and over-exposure, blur, noise, JPEG quality 60-95.
+    ``shapes="opener"`` draws the furrows as openers leave them instead (:func:`_opener_profile`:
+    flat surface, trapezoid, V, rounded or smooth trough with corners), the rest alike."""
+    if shapes not in ("polynomial", "opener"):
+        raise ValueError(f"shapes: expected 'polynomial' or 'opener', got {shapes!r}")
     rng = np.random.default_rng(seed)
     out = []
     for _ in range(n):
@@ -173,9 +220,14 @@ def furrow_photo_params(n, seed=0):
                  "wall_rgb": _hsv(rng, (0.0, 0.6), (0.15, 0.95)), "clutter": bool(rng.random() < 0.5),
                  "exposure": float(rng.uniform(0.6, 1.4)), "noise": float(rng.uniform(0.005, 0.03)),
                  "blur_px": float(rng.uniform(0.5, 2.5))}
-        out.append({"seed": int(rng.integers(0, 2 ** 31 - 1)), "span_mm": [a, b], "beam_datum_mm": datum,
-                    "coeffs": _furrow_coeffs(rng, a, b, datum), "roll_deg": float(rng.uniform(-5.0, 5.0)),
-                    "quality": int(rng.integers(60, 96)), "style": style})
+        row = {"seed": int(rng.integers(0, 2 ** 31 - 1)), "span_mm": [a, b], "beam_datum_mm": datum}
+        if shapes == "opener":
+            row["shape"], row["profile"] = _opener_profile(rng, a, b, datum)
+            row["coeffs"] = None
+        else:
+            row["coeffs"] = _furrow_coeffs(rng, a, b, datum)
+        row.update({"roll_deg": float(rng.uniform(-5.0, 5.0)), "quality": int(rng.integers(60, 96)), "style": style})
+        out.append(row)
     return out
 
 
@@ -184,7 +236,10 @@ def write_furrow_photo(params, outdir, name):
     truth with the meter's ``scale_length_mm`` (its span) and ``area_mm2``."""
     a, b = params["span_mm"]
     img, truth = render.render_furrow(params["seed"], params["coeffs"], (a, b), params["beam_datum_mm"],
-                                      roll_deg=params["roll_deg"], style=params["style"])
+                                      roll_deg=params["roll_deg"], style=params["style"],
+                                      profile=params.get("profile"))
     truth = dict(truth, scale_length_mm=b - a, style=params["style"], quality=params["quality"])
+    if "shape" in params:
+        truth["shape"] = params["shape"]
     path = render.save_photo(Path(outdir) / f"{name}.jpg", img, truth, quality=params["quality"])
     return path, truth

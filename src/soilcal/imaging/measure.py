@@ -2197,7 +2197,7 @@ class FurrowResult:
     area_fit_mm2: float = float("nan")  # the chord area of the fitted polynomial (Eq. (3)'s way)
     boundary_rms_mm: float = 0.0  # RMS of the kept points about their running median
     chord_ends_mm: list = field(default_factory=list)  # the chord's heights at the span's ends
-    chord_ends_from: list = field(default_factory=list)  # "polynomial" or "line", per end
+    chord_ends_from: list = field(default_factory=list)  # "polynomial", "end line" or "line", per end
 
     def as_dict(self):
         return {"path": self.path, "degree": self.degree, "coeffs": self.coeffs,
@@ -2552,6 +2552,14 @@ FURROW_END_SHARE = 0.05
 #: height to be the chord's (drawn and rendered furrows: 0.1-0.6 mm where it follows them, 2.9
 #: and 3.6 mm at a rounded trough's and a trapezoid's flat ends, where it swings)
 FURROW_END_FIT_MM = 1.0
+#: where it does (FURROW_END_FIT_MM), the polynomial's end height is still checked against a
+#: line through the boundary points within this many mm of the end: a polynomial that follows
+#: an end's points on the whole can bend away in its last millimetres where the furrow has
+#: corners (a drawn V: 0.55 mm low at both ends; opener-shaped stress photos: up to 3 mm)
+FURROW_END_LINE_MM = 10.0
+#: the most the polynomial's end height may differ from that line's, beyond three standard
+#: errors of the line's end height, for the polynomial's to be kept (mm)
+FURROW_END_AGREE_MM = 0.3
 
 
 def _direct_chord_area(x, z, a, b, poly):
@@ -2561,8 +2569,10 @@ def _direct_chord_area(x, z, a, b, poly):
     speck) is dropped; the chord joins the surface heights at the span's ends: the
     polynomial's (smoothed over the whole profile, the steadiest estimate) where the kept
     points within FURROW_END_SHARE of the span of the outermost one stray from it by at most
-    FURROW_END_FIT_MM RMS, else a line's through those points (carried to the end where they
-    stop short of it); the area is the chord's trapezoid less the trapezoidal integral of the kept
+    FURROW_END_FIT_MM RMS and its end height lies within FURROW_END_AGREE_MM (or three standard
+    errors) of a line's through the points within FURROW_END_LINE_MM of the end (else that
+    line's, "end line"), else a line's through the FURROW_END_SHARE points ("line"; both
+    carried to the end where the points stop short of it); the area is the chord's trapezoid less the trapezoidal integral of the kept
     points closed by those end heights.  A polynomial of any degree swings at the span's ends
     where the profile has corners (a trapezoid's or a V's furrow meeting a flat surface: a
     degree-9 fit rose 10 mm at both ends of a drawn trapezoid and its chord area read 21 %
@@ -2577,21 +2587,33 @@ def _direct_chord_area(x, z, a, b, poly):
     xk, zk = x[keep], z[keep]
     reach = FURROW_END_SHARE * (b - a)
 
-    def end_height(at, sel):
+    def end_line(at, sel):
+        """A least-squares line's height at ``at`` through the points ``sel`` and its standard
+        error (inf without residual degrees of freedom; the points' mean where they span no
+        width)."""
         xs, zs = xk[sel], zk[sel]
-        if len(xs) >= 3 and np.ptp(xs) > 0:
-            k, c = np.polyfit(xs, zs, 1)
-            return float(k * at + c)
-        return float(np.mean(zs))
+        if len(xs) < 3 or np.ptp(xs) <= 0:
+            return float(np.mean(zs)), float("inf")
+        X = np.column_stack([np.ones_like(xs), xs - at])
+        coef, *_ = np.linalg.lstsq(X, zs, rcond=None)
+        res = zs - X @ coef
+        cov = float(res @ res) / (len(xs) - 2) * np.linalg.inv(X.T @ X)
+        return float(coef[0]), float(np.sqrt(cov[0, 0]))
 
     heights, ends_from = [], []
-    for at, sel in ((a, xk <= xk.min() + reach), (b, xk >= xk.max() - reach)):
-        if float(np.sqrt(np.mean((zk[sel] - poly(xk[sel])) ** 2))) <= FURROW_END_FIT_MM:
+    for at, sel, near in ((a, xk <= xk.min() + reach, xk <= xk.min() + FURROW_END_LINE_MM),
+                          (b, xk >= xk.max() - reach, xk >= xk.max() - FURROW_END_LINE_MM)):
+        if float(np.sqrt(np.mean((zk[sel] - poly(xk[sel])) ** 2))) > FURROW_END_FIT_MM:
+            heights.append(end_line(at, sel)[0])  # the polynomial swings over the end's points
+            ends_from.append("line")
+            continue
+        z_line, se = end_line(at, near)
+        if abs(float(poly(at)) - z_line) <= max(FURROW_END_AGREE_MM, 3.0 * se):
             heights.append(float(poly(at)))  # the polynomial follows the surface there
             ends_from.append("polynomial")
         else:
-            heights.append(end_height(at, sel))
-            ends_from.append("line")
+            heights.append(z_line)  # it bends away from the end's last points
+            ends_from.append("end line")
     za, zb = heights
     inside = (xk > a) & (xk < b)
     xs = np.concatenate([[a], xk[inside], [b]])

@@ -523,8 +523,12 @@ def save_frame(path, img, bits=8):
 
 
 def render_furrow(seed, coeffs, span_mm, beam_datum_mm=180.0, soil="yangtze-clay-loam", roll_deg=None,
-                  style=None):
-    """Furrow cross-section in front of a gridded profile board, meter beam above.  ``style``
+                  style=None, profile=None):
+    """Furrow cross-section in front of a gridded profile board, meter beam above.  The soil's
+    top F(x) (mm) is the polynomial of ``coeffs`` (highest power first), or with ``profile``
+    (``[xs, zs]``, xs increasing over the span) the polygon through those vertices, corners
+    and flat stretches as an opener leaves them (``coeffs`` then None); the truth's area is
+    that of the chord over F either way, exact.  ``style``
     (stress photos; absent: the shipped photo's look) may set ``board_rgb``, ``grid_rgb``,
     ``grid_mm`` (0: no grid), ``board_gradient`` (relative change across the board, (x, y)),
     ``soil_rgb``, ``soil_shading`` (relative darkening of the soil face from top to bottom),
@@ -565,7 +569,11 @@ def render_furrow(seed, coeffs, span_mm, beam_datum_mm=180.0, soil="yangtze-clay
     on_board = (X > a - 40) & (X < b + 40) & (Z > -10) & (Z < beam_datum_mm + 60)
     canvas[on_board] = board[on_board]
     xc = np.clip(X[0], a, b)
-    prof = np.polyval(coeffs, xc)
+    if profile is not None:
+        px, pz = (np.asarray(v, dtype=float) for v in profile)
+        prof = np.interp(xc, px, pz)
+    else:
+        prof = np.polyval(coeffs, xc)
     soil_m = Z < prof[None, :] + 0.3 * _noise(rng, (1, cw), 1.5)
     albedo = np.array(st.get("soil_rgb", SOIL_COLOURS.get(soil, SOIL_COLOURS["yangtze-clay-loam"])))
     face = albedo * _one_plus(0.12, _texture(rng, (ch, cw)))[soil_m][:, None]
@@ -579,10 +587,19 @@ def render_furrow(seed, coeffs, span_mm, beam_datum_mm=180.0, soil="yangtze-clay
                                                         if k in st} or None)
     from soilcal.imaging.scenes import furrow_chord_area
 
-    area = furrow_chord_area(a, b, coeffs)  # the chord's area above F on [a, b]
+    if profile is not None:
+        # the polygon's exact chord area: its vertices within the span and F at both ends
+        inner = (px > a) & (px < b)
+        vx = np.concatenate([[a], px[inner], [b]])
+        vz = np.interp(vx, px, pz)
+        area = float(0.5 * (vz[0] + vz[-1]) * (b - a) - np.trapezoid(vz, vx))
+    else:
+        area = furrow_chord_area(a, b, coeffs)  # the chord's area above F on [a, b]
     truth = {"kind": "furrow", "seed": int(seed), "roll_deg": float(roll_deg), "px_per_mm": s,
-             "span_mm": [a, b], "beam_datum_mm": beam_datum_mm, "coeffs": list(coeffs),
-             "area_mm2": area}
+             "span_mm": [a, b], "beam_datum_mm": beam_datum_mm,
+             "coeffs": list(coeffs) if coeffs is not None else None, "area_mm2": area}
+    if profile is not None:
+        truth["profile"] = [list(map(float, px)), list(map(float, pz))]
     return img, truth
 
 
