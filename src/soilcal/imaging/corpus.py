@@ -167,8 +167,8 @@ def _opener_profile(rng, a, b, datum):
     u = (x - left) / width  # 0..1 across the furrow
     inside = (u > 0) & (u < 1)
     if shape == "trapezoid":
-        bottom = rng.uniform(0.2, 0.6)  # the bottom's share of the top width
-        wall = (1 - bottom) / 2
+        floor_share = rng.uniform(0.2, 0.6)  # the flat bottom's share of the top width
+        wall = (1 - floor_share) / 2
         d = np.clip(np.minimum(u, 1 - u) / wall, 0, 1)
     elif shape == "v":
         c = rng.uniform(0.35, 0.65)
