@@ -2326,12 +2326,17 @@ class _Beam:
         return ndi.map_coordinates(img, [rr, cc], order=1, mode="nearest")
 
 
+#: how far beyond the beam's dark pixels (across its axis, px) its long edges are looked for
+BEAM_EDGE_MARGIN_PX = 6.0
+
+
 def _beam_axis(path, gray, br, bc) -> tuple[_Beam, float]:
     """The beam's axis and long edges from its pixels (rows ``br``, columns ``bc``): first the
     straight line through their column means, then turned to the straighter of its two long
     edges (a shadow merged into one side of the bar tilts the column means, not the other
     edge); the edges are the strongest steps of the luminance across the beam (sub-pixel, mean
-    over its middle 80 %).  Returns the beam and the axis's slope in the image."""
+    over its middle 80 %) within BEAM_EDGE_MARGIN_PX of the bar's pixels.  Returns the beam and
+    the axis's slope in the image."""
     cols = np.unique(bc)
     rows = np.array([br[bc == c].mean() for c in cols])
     slope, icpt = np.polyfit(cols, rows, 1)
@@ -2347,8 +2352,14 @@ def _beam_axis(path, gray, br, bc) -> tuple[_Beam, float]:
         beam = _Beam(o, np.array([1.0, slope]) / n, np.array([-slope, 1.0]) / n, np.nan, np.nan, thick)
         cut = beam.sample(gray, u_mid, v_x)
         across = cut.mean(axis=1)
-        beam.top = _edge_peak(across, 0, i0 + 1, -1) + v_x[0]
-        beam.low = _edge_peak(across, i0, len(v_x), +1) + v_x[0]
+        # each long edge within the bar's own extent across the axis (and a few pixels): a
+        # line of a grid running beside the beam, sharper than the blurred lower edge of a
+        # shadow merged into the bar, is no edge of it
+        v_bar = (bc - o[0]) * beam.vx[0] + (br - o[1]) * beam.vx[1]
+        j_top = int(np.searchsorted(v_x, v_bar.min() - BEAM_EDGE_MARGIN_PX))
+        j_low = int(np.searchsorted(v_x, v_bar.max() + BEAM_EDGE_MARGIN_PX, side="right"))
+        beam.top = _edge_peak(across, max(0, min(j_top, i0)), i0 + 1, -1) + v_x[0]
+        beam.low = _edge_peak(across, i0, min(len(v_x), max(j_low, i0 + 2)), +1) + v_x[0]
         if not (np.isfinite(beam.top) and np.isfinite(beam.low)) or beam.low - beam.top < 2:
             raise InputError(path, "image", "a profile-meter beam with two clear long edges", "none found")
         if not refine:
