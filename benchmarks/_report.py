@@ -14,9 +14,9 @@ HERE = Path(__file__).resolve().parent
 NOTES = "<!-- notes: kept when the table is regenerated -->"
 
 
-def corpus_args(doc, n, argv):
+def corpus_args(doc, n, argv, extra=None):
     """Arguments of a photo-corpus benchmark: --n photos, --seed of the corpus, --out folder,
-    --jobs photos measured at a time (processes)."""
+    --jobs photos measured at a time (processes); ``extra(parser)`` adds a benchmark's own."""
     import argparse
 
     ap = argparse.ArgumentParser(description=doc.splitlines()[0])
@@ -24,6 +24,8 @@ def corpus_args(doc, n, argv):
     ap.add_argument("--seed", type=int, default=0)
     ap.add_argument("--out", default=str(HERE / "results"))
     ap.add_argument("--jobs", type=int, default=1)
+    if extra is not None:
+        extra(ap)
     return ap.parse_args(argv)
 
 

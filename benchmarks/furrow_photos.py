@@ -56,13 +56,9 @@ def truth_fields(t):
 
 
 def main(argv=None):
-    argv = sys.argv[1:] if argv is None else list(argv)
-    shapes = "polynomial"
-    if "--shapes" in argv:
-        i = argv.index("--shapes")
-        shapes = argv[i + 1]
-        argv = argv[:i] + argv[i + 2:]
-    args = corpus_args(__doc__, 300, argv)
+    args = corpus_args(__doc__, 300, argv, extra=lambda ap: ap.add_argument(
+        "--shapes", choices=["polynomial", "opener"], default="polynomial"))
+    shapes = args.shapes
 
     from soilcal.imaging import corpus
 
@@ -82,8 +78,7 @@ def main(argv=None):
                              "| p95 | max |")
     md = ["# Furrow-photo stress benchmark",
           "",
-          corpus_header("furrow_photos.py", (["--shapes", shapes] if shapes != "polynomial" else []) + argv, n,
-                        args.seed, wall),
+          corpus_header("furrow_photos.py", sys.argv[1:] if argv is None else argv, n, args.seed, wall),
           "",
           "Each photo measured with default arguments (`soilcal.imaging.measure.measure_furrow`, degree 9, "
           "the meter's span and datum as a user's manifest gives them); error = measured chord area over the "

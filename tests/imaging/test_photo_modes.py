@@ -165,8 +165,11 @@ def test_a_heic_photo_without_pillow_heif_is_refused_naming_it(reference, tmp_pa
             raise ImportError(name)
         return real_import(name, *args, **kwargs)
 
-    monkeypatch.setattr(io, "_HEIF_REGISTERED", [])
+    io._heif_opener.cache_clear()
     monkeypatch.setattr(builtins, "__import__", no_heif)
-    with pytest.raises(InputError) as e:
-        read_photo(p)
+    try:
+        with pytest.raises(InputError) as e:
+            read_photo(p)
+    finally:
+        io._heif_opener.cache_clear()  # the next photo imports pillow-heif again
     assert e.value.field == "file" and "pillow-heif" in str(e.value) and "export it as JPEG" in str(e.value)

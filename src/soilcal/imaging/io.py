@@ -23,6 +23,7 @@ must span an eighth of its grey levels (:data:`MIN_GREY_LEVELS` of 256 at 8 bits
 
 from __future__ import annotations
 
+import functools
 import math
 import warnings
 from pathlib import Path
@@ -208,18 +209,14 @@ def _is_heif(p: Path) -> bool:
     return len(head) == 12 and head[4:8] == b"ftyp" and head[8:12] in _HEIF_BRANDS
 
 
-_HEIF_REGISTERED: list = []
-
-
+@functools.cache
 def _heif_opener() -> bool:
-    """Register ``pillow-heif``'s HEIF opener with PIL once; False where it cannot be imported."""
-    if not _HEIF_REGISTERED:
-        try:
-            import pillow_heif
-        except ImportError:
-            return False
-        pillow_heif.register_heif_opener()
-        _HEIF_REGISTERED.append(True)
+    """Register ``pillow-heif``'s HEIF opener with PIL (once); False where it cannot be imported."""
+    try:
+        import pillow_heif
+    except ImportError:
+        return False
+    pillow_heif.register_heif_opener()
     return True
 
 

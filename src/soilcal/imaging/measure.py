@@ -2590,10 +2590,13 @@ def _direct_chord_area(x, z, a, b, poly):
     high); the measured points do not, but a line through the few points at an end is noisier
     than the polynomial where that follows them."""
     from scipy.ndimage import median_filter
+    from scipy.stats import linregress, median_abs_deviation
+
+    from soilcal.imaging.scenes import polyline_chord_area
 
     med = median_filter(z, size=min(FURROW_MEDIAN_POINTS, len(z)), mode="nearest")
     r = z - med
-    sc = 1.4826 * float(np.median(np.abs(r - np.median(r))))
+    sc = float(median_abs_deviation(r, scale="normal"))
     keep = np.abs(r) <= max(4.0 * sc, 1.0)
     xk, zk = x[keep], z[keep]
     reach = FURROW_END_SHARE * (b - a)
@@ -2605,11 +2608,8 @@ def _direct_chord_area(x, z, a, b, poly):
         xs, zs = xk[sel], zk[sel]
         if len(xs) < 3 or np.ptp(xs) <= 0:
             return float(np.mean(zs)), float("inf")
-        X = np.column_stack([np.ones_like(xs), xs - at])
-        coef, *_ = np.linalg.lstsq(X, zs, rcond=None)
-        res = zs - X @ coef
-        cov = float(res @ res) / (len(xs) - 2) * np.linalg.inv(X.T @ X)
-        return float(coef[0]), float(np.sqrt(cov[0, 0]))
+        fit = linregress(xs - at, zs)
+        return float(fit.intercept), float(fit.intercept_stderr)
 
     heights, ends_from = [], []
     for at, sel, near in ((a, xk <= xk.min() + reach, xk <= xk.min() + FURROW_END_LINE_MM),
@@ -2627,8 +2627,6 @@ def _direct_chord_area(x, z, a, b, poly):
             ends_from.append("end line")
     za, zb = heights
     inside = (xk > a) & (xk < b)
-    xs = np.concatenate([[a], xk[inside], [b]])
-    zs = np.concatenate([[za], zk[inside], [zb]])
-    area = 0.5 * (za + zb) * (b - a) - float(np.trapezoid(zs, xs))
+    area = polyline_chord_area(np.concatenate([[a], xk[inside], [b]]), np.concatenate([[za], zk[inside], [zb]]))
     rms = float(np.sqrt(np.mean(r[keep] ** 2))) if keep.any() else float("nan")
     return float(area), keep, (za, zb), rms, ends_from

@@ -585,14 +585,13 @@ def render_furrow(seed, coeffs, span_mm, beam_datum_mm=180.0, soil="yangtze-clay
     canvas[beam] = np.array(st.get("beam_rgb", [0.08, 0.08, 0.09]))
     img = _finish(rng, canvas, roll_deg, False, style={k: st[k] for k in ("blur_px", "exposure", "noise")
                                                         if k in st} or None)
-    from soilcal.imaging.scenes import furrow_chord_area
+    from soilcal.imaging.scenes import furrow_chord_area, polyline_chord_area
 
     if profile is not None:
         # the polygon's exact chord area: its vertices within the span and F at both ends
         inner = (px > a) & (px < b)
         vx = np.concatenate([[a], px[inner], [b]])
-        vz = np.interp(vx, px, pz)
-        area = float(0.5 * (vz[0] + vz[-1]) * (b - a) - np.trapezoid(vz, vx))
+        area = polyline_chord_area(vx, np.interp(vx, px, pz))
     else:
         area = furrow_chord_area(a, b, coeffs)  # the chord's area above F on [a, b]
     truth = {"kind": "furrow", "seed": int(seed), "roll_deg": float(roll_deg), "px_per_mm": s,

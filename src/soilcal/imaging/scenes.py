@@ -75,6 +75,13 @@ def furrow_chord_area(a: float = FURROW_SPAN_MM[0], b: float = FURROW_SPAN_MM[1]
     return float(0.5 * (p(a) + p(b)) * (b - a) - (P(b) - P(a)))
 
 
+def polyline_chord_area(xs, zs) -> float:
+    """Area (mm^2) between the chord joining the first and last points of a profile given as a
+    polyline (``xs`` increasing, mm) and the polyline itself: exact for straight pieces."""
+    xs, zs = np.asarray(xs, dtype=float), np.asarray(zs, dtype=float)
+    return float(0.5 * (zs[0] + zs[-1]) * (xs[-1] - xs[0]) - np.trapezoid(zs, xs))
+
+
 @dataclass(frozen=True)
 class Scene:
     """One photo (or one drum sequence) to render."""
