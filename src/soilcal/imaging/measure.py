@@ -2475,14 +2475,15 @@ def _soil_boundary(path, rgb, beam: _Beam):
 
 def _profile_fit(x, z, degree):
     """The profile polynomial of ``degree`` through (x, z), refitted twice without the points
-    more than 4 robust SDs (at least 1 mm) off the fit before; returns (poly, kept mask)."""
+    more than 4 robust SDs (at least 1 mm) off the fit before (the area takes its own points,
+    :func:`_direct_chord_area`)."""
     poly = np.polynomial.Polynomial.fit(x, z, degree)
     for _ in range(2):
         res = z - poly(x)
         mad = 1.4826 * np.median(np.abs(res - np.median(res)))
         keep = np.abs(res) <= max(4 * mad, 1.0)
         poly = np.polynomial.Polynomial.fit(x[keep], z[keep], degree)
-    return poly, keep
+    return poly
 
 
 def _measure_furrow(path, scale_length_mm, datum_mm, degree, threshold, keep_stages, tried: Tried):
@@ -2518,7 +2519,7 @@ def _measure_furrow(path, scale_length_mm, datum_mm, degree, threshold, keep_sta
     x = (u[ok] - u_c) / s
     z = datum_mm - (z_row[ok] - beam.low) / s
     a, b = -scale_length_mm / 2, scale_length_mm / 2
-    poly, _ = _profile_fit(x, z, degree)
+    poly = _profile_fit(x, z, degree)
     coeffs = poly.convert().coef[::-1].tolist()
     area_fit = furrow_chord_area(a, b, coeffs)
     area, keep, ends, boundary_rms, ends_from = _direct_chord_area(x, z, a, b, poly)
