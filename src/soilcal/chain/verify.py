@@ -737,11 +737,13 @@ def write_verification(soil_data: dict, stage_ids, stage_dirs: dict[str, str], t
 
 def tool_point(soil, cond, stage: dict, optimum: pd.DataFrame) -> dict:
     """Everything one measured condition's job simulates (plain data, the job's params): one
-    point spec per replicate seed (``seed + seed_offset + k``) at the calibrated set of the
-    condition's case, with the condition's setup and parameters; ``{"not_run": reason}`` when
-    that case has no calibrated set."""
+    point spec per replicate seed (the condition's own seed of ``seed + seed_offset + k``,
+    :func:`soilcal.config.measurements.condition_seed`: each measured test a sample of its own)
+    at the calibrated set of the condition's case, with the condition's setup and parameters;
+    ``{"not_run": reason}`` when that case has no calibrated set."""
     from soilcal.chain.sources import point_spec
     from soilcal.chain.stage import calibrated_levels
+    from soilcal.config.measurements import condition_seed
 
     base = {"measurement": cond.measurement, "row": cond.row, "stage": stage["id"],
             "measures": [r["measure"] for r in cond.responses]}
@@ -752,8 +754,9 @@ def tool_point(soil, cond, stage: dict, optimum: pd.DataFrame) -> dict:
     v = verify_settings(soil.data)
     specs = []
     for k in range(int(cond.replicates)):
-        spec = point_spec(soil, stage, levels, run=int(cond.row), seed=int(soil.data["seed"]) + int(v["seed_offset"]) + k,
-                          replicates=1, extra_params=dict(cond.params), responses=[])
+        seed = condition_seed(cond, int(soil.data["seed"]) + int(v["seed_offset"]) + k)
+        spec = point_spec(soil, stage, levels, run=int(cond.row), seed=seed, replicates=1,
+                          extra_params=dict(cond.params), responses=[])
         spec["responses"] = {r["measure"]: {"scenario": cond.scenario, "setup": dict(cond.setup),
                                             "measure": r["measure"], "preset": cond.preset}
                              for r in cond.responses}

@@ -53,11 +53,15 @@ def _pairs(values, what: str, form: str) -> dict:
 
 def dem_simulator(threads=None):
     """``simulate(cond, params, seed)`` on soilcal's DEM: one run of the condition's scenario
-    and setup at its preset; measure -> value (NaN where the run failed)."""
+    and setup at its preset, with the condition's own DEM seed for ``seed``
+    (:func:`soilcal.config.measurements.condition_seed`: each measured test a sample of its own,
+    the same samples at every effect parameter); measure -> value (NaN where the run failed)."""
     from soilcal.chain.sources import simulate
+    from soilcal.config.measurements import condition_seed
 
     def run(cond, params, seed):
-        spec = {"soil": "loop", "stage": cond.stage, "run": int(cond.row), "levels": {}, "seed": int(seed),
+        spec = {"soil": "loop", "stage": cond.stage, "run": int(cond.row), "levels": {},
+                "seed": condition_seed(cond, int(seed)),
                 "replicates": 1, "params": dict(params),
                 "responses": {r["measure"]: {"scenario": cond.scenario, "setup": dict(cond.setup),
                                              "measure": r["measure"], "preset": cond.preset} for r in cond.responses}}

@@ -1507,7 +1507,8 @@ def run_inprocess(soil: str, conditions, base_params, simulate, settings: Settin
     """The whole loop in one process: ``base_params(cond)`` gives a condition's calibrated
     DEM parameters (name -> SI value), ``simulate(cond, params, seed)`` one run's measured
     quantities (measure -> value).  The calibrated runs and every design point use the same
-    ``seeds``."""
+    ``seeds``; the simulator maps them onto each condition's own DEM seeds
+    (:func:`soilcal.loop.cli.dem_simulator`, :func:`soilcal.config.measurements.condition_seed`)."""
     settings = settings or Settings()
     done = {}  # a test measured twice (rows of one simulation) runs once per design point and seed
 
