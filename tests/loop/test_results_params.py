@@ -250,6 +250,15 @@ def test_synthesize_records_the_parameters_in_the_truth_file(tmp_path, monkeypat
     # 500 mu (1 + 0.01 row + 0.001 seed) averaged over the seeds 1000, 1001, 1002 (no hidden effect)
     h = truth[(truth["measure"] == "horizontal_force_N") & (truth["row"] == 1)].iloc[0]
     assert h["truth_simulated"] == pytest.approx(500.0 * 0.615 * (1 + 0.01 * 1 + 0.001 * 1001), rel=1e-12)
+    # each row's DEM seeds, the condition's own (the four plates: four sets, none shared)
+    from soilcal.config.load import load_soil
+    from soilcal.config.measurements import condition_seed, conditions
+
+    conds = {c.row: c for c in conditions(load_soil(CINNAMON, RES))}
+    for r in truth.itertuples():
+        assert r.dem_seeds == " ".join(str(condition_seed(conds[r.row], s)) for s in (1000, 1001, 1002))
+    seeds = {r.row: r.dem_seeds for r in truth.itertuples()}
+    assert len(set(seeds.values())) == 4 and not set(" ".join(seeds.values()).split()) & {"1000", "1001", "1002"}
     # without --results: the soil's own parameters, recorded as such
     main(["loop", "synthesize", str(CINNAMON), "--measurement", "cutting_resistance", "--resources", str(RES),
           "--out", str(out)])

@@ -274,6 +274,12 @@ def _synthesize(args) -> int:
     source = params_source(args, overrides)
     keys = list(zip(table["measurement"], table["row"].astype(int)))
     table["params_source"] = source
+    # each row's DEM seeds, one a repeat: the condition's own (dem_simulator, condition_seed)
+    from soilcal.config.measurements import condition_seed
+
+    by_key = {(c.measurement, int(c.row)): c for c in conds}
+    table["dem_seeds"] = [" ".join(str(condition_seed(by_key[k], s)) for s in range(1000, 1000 + args.repeats))
+                          for k in keys]
     table = table.join(pd.DataFrame([params[k] for k in keys], index=table.index).add_prefix("base:"))
     entry = soil.data["measurements"][args.measurement]
     src = measurements_dir(soil.resources_root, soil.name) / entry["table"]
