@@ -23,13 +23,16 @@ import numpy as np
 import pandas as pd
 
 HERE = Path(__file__).resolve().parent
+sys.path.insert(0, str(HERE.parent))
+
+from _report import commit, write_page  # noqa: E402
+
 OUT = HERE.parent / "results" / "loop_seeds"
 #: (speed m/s, depth m) of the three conditions
 CONDITIONS = ((0.2, 0.025), (0.8, 0.035), (0.4, 0.030))
 
 
 def main(argv=None) -> None:
-    from soilcal.chain.sources import commit
     from soilcal.dem.scenarios import bulldozing as B
     from soilcal.dem.scenarios.base import DemParams
 
@@ -70,8 +73,8 @@ def main(argv=None) -> None:
             lines.append(f"| {CONDITIONS[a][0]} m/s {1000 * CONDITIONS[a][1]:g} mm - {CONDITIONS[b][0]} m/s "
                          f"{1000 * CONDITIONS[b][1]:g} mm | {r:.3f} | {math.tanh(z - 1.96 * se):.2f} to "
                          f"{math.tanh(z + 1.96 * se):.2f} |")
-    lines += ["", "Rows: `bed_correlation.csv`.", ""]
-    (OUT / "bed_correlation.md").write_text("\n".join(lines))
+    lines += ["", "Rows: `bed_correlation.csv`."]
+    write_page(OUT / "bed_correlation.md", lines)
     print("\n".join(lines))
 
 

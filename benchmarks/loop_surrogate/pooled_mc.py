@@ -43,6 +43,10 @@ from scipy import stats
 from scipy.optimize import minimize_scalar
 
 HERE = Path(__file__).resolve().parent
+sys.path.insert(0, str(HERE.parent))
+
+from _report import commit, write_page  # noqa: E402
+
 OUT = HERE.parent / "results" / "loop_surrogate"
 N, SEEDS, D0 = 18, 3, 0.03
 BOUNDS = (-0.5, 1.0)
@@ -109,7 +113,6 @@ def campaign(rng, truth, scatter, T):
 
 
 def main(argv=None) -> None:
-    from soilcal.chain.sources import commit
     from soilcal.loop import select as sl
     from soilcal.loop.effects import EFFECTS
 
@@ -140,8 +143,8 @@ def main(argv=None) -> None:
         lines.append(f"| {scatter} | {truth:g} | {method} | {len(g)} | {np.mean(g['paired_p'] < 0.05):.3f} | "
                      f"{100 * g['heldout_rms'].median():.2f} | {100 * g['reference_rms'].median():.2f} | "
                      f"{np.sqrt(np.mean((g['g_fitted'] - truth) ** 2)):.3f} |")
-    lines += ["", "Rows: `pooled_mc.csv`.", ""]
-    (OUT / "pooled_mc.md").write_text("\n".join(lines))
+    lines += ["", "Rows: `pooled_mc.csv`."]
+    write_page(OUT / "pooled_mc.md", lines)
     print("\n".join(lines))
 
 
