@@ -70,14 +70,20 @@ def corpus_rows(params, write, truth_row, measured_row, stem="photo", jobs=1):
     return rows, time.perf_counter() - t_all
 
 
-def corpus_header(script, argv, n, seed, wall):
-    """The first line of a photo-corpus page: machine, commit, time, command, photos, wall time."""
+def run_header(script, argv, what: str) -> str:
+    """The first line of a results page: machine, commit, time, the command
+    (``python benchmarks/<script> <argv>``) and ``what`` in brackets after it (its wall time)."""
     import platform
     import time
 
     return (f"Machine: {platform.machine()}, {os.cpu_count()} logical CPUs, Python {platform.python_version()}; "
             f"commit {commit()}, {time.strftime('%Y-%m-%d %H:%M', time.gmtime())} UTC; "
-            f"`python benchmarks/{script} {' '.join(argv)}` ({n} photos, seed {seed}, {wall:.0f} s).")
+            f"`python benchmarks/{script} {' '.join(str(a) for a in argv)}` ({what})")
+
+
+def corpus_header(script, argv, n, seed, wall):
+    """The first line of a photo-corpus page: machine, commit, time, command, photos, wall time."""
+    return run_header(script, argv, f"{n} photos, seed {seed}, {wall:.0f} s") + "."
 
 
 def percentile_text(a, p, digits):
@@ -223,6 +229,14 @@ def write_page(md_path: Path, lines) -> None:
     text = "\n".join(list(lines) + ["", kept_notes(md_path)]) + "\n"
     with _replacing(md_path) as fh:
         fh.write(text)
+
+
+def write_rows_page(md_path: Path, lines, rows_file: str) -> None:
+    """A results page ending with the line that names its rows file: written
+    (:func:`write_page`) and printed."""
+    lines = list(lines) + ["", f"Rows: `{rows_file}`."]
+    write_page(md_path, lines)
+    print("\n".join(lines))
 
 
 def kept_notes(md_path: Path) -> str:

@@ -13,8 +13,6 @@ between the conditions (with their 95 % Fisher intervals) to
 from __future__ import annotations
 
 import math
-import os
-import platform
 import sys
 import time
 from pathlib import Path
@@ -25,7 +23,7 @@ import pandas as pd
 HERE = Path(__file__).resolve().parent
 sys.path.insert(0, str(HERE.parent))
 
-from _report import commit, write_page  # noqa: E402
+from _report import run_header, write_rows_page  # noqa: E402
 
 OUT = HERE.parent / "results" / "loop_seeds"
 #: (speed m/s, depth m) of the three conditions
@@ -56,9 +54,7 @@ def main(argv=None) -> None:
                   [list(CONDITIONS)].to_numpy(float))
     corr = np.corrcoef(wide.T)
     lines = ["# Seed scatter a soil-bin run shares with the other runs of its seed", "",
-             f"Machine: {platform.machine()}, {os.cpu_count()} logical CPUs, Python {platform.python_version()}; "
-             f"commit {commit()}, {time.strftime('%Y-%m-%d %H:%M', time.gmtime())} UTC; "
-             f"`python benchmarks/loop_seeds/bed_correlation.py {n}` ({wall:.0f} s).  The cinnamon soil's quick "
+             run_header("loop_seeds/bed_correlation.py", [n], f"{wall:.0f} s") + ".  The cinnamon soil's quick "
              "line plate, calibrated parameters of the soil file, seeds 0..{0}: each seed's settled bin is shared by "
              "the three conditions (its cache key holds the seed, not the tool's speed or depth).".format(n - 1), "",
              "| condition | mean horizontal force, N | relative SD per run |", "|---|---:|---:|"]
@@ -73,9 +69,7 @@ def main(argv=None) -> None:
             lines.append(f"| {CONDITIONS[a][0]} m/s {1000 * CONDITIONS[a][1]:g} mm - {CONDITIONS[b][0]} m/s "
                          f"{1000 * CONDITIONS[b][1]:g} mm | {r:.3f} | {math.tanh(z - 1.96 * se):.2f} to "
                          f"{math.tanh(z + 1.96 * se):.2f} |")
-    lines += ["", "Rows: `bed_correlation.csv`."]
-    write_page(OUT / "bed_correlation.md", lines)
-    print("\n".join(lines))
+    write_rows_page(OUT / "bed_correlation.md", lines, "bed_correlation.csv")
 
 
 if __name__ == "__main__":

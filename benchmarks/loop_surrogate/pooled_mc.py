@@ -31,8 +31,6 @@ Writes ``benchmarks/results/loop_surrogate/pooled_mc.{csv,md}``.
 
 from __future__ import annotations
 
-import os
-import platform
 import sys
 import time
 from pathlib import Path
@@ -45,7 +43,7 @@ from scipy.optimize import minimize_scalar
 HERE = Path(__file__).resolve().parent
 sys.path.insert(0, str(HERE.parent))
 
-from _report import commit, write_page  # noqa: E402
+from _report import run_header, write_rows_page  # noqa: E402
 
 OUT = HERE.parent / "results" / "loop_surrogate"
 N, SEEDS, D0 = 18, 3, 0.03
@@ -131,9 +129,7 @@ def main(argv=None) -> None:
     OUT.mkdir(parents=True, exist_ok=True)
     df.to_csv(OUT / "pooled_mc.csv", index=False)
     lines = ["# Row-by-row surrogates against a response shape pooled over the conditions", "",
-             f"Machine: {platform.machine()}, {os.cpu_count()} logical CPUs, Python {platform.python_version()}; "
-             f"commit {commit()}, {time.strftime('%Y-%m-%d %H:%M', time.gmtime())} UTC; "
-             f"`python benchmarks/loop_surrogate/pooled_mc.py {n}` ({time.perf_counter() - t0:.0f} s); "
+             run_header("loop_surrogate/pooled_mc.py", [n], f"{time.perf_counter() - t0:.0f} s") + "; "
              "the stand-in, methods and proxy test are in the script's docstring.  Significant: the paired one-sided "
              "t-test of the conditions' held-out squared errors against the reference's at p < 0.05 (with no hidden "
              "effect a false gain, which the loop's other gates then face).", "",
@@ -143,9 +139,7 @@ def main(argv=None) -> None:
         lines.append(f"| {scatter} | {truth:g} | {method} | {len(g)} | {np.mean(g['paired_p'] < 0.05):.3f} | "
                      f"{100 * g['heldout_rms'].median():.2f} | {100 * g['reference_rms'].median():.2f} | "
                      f"{np.sqrt(np.mean((g['g_fitted'] - truth) ** 2)):.3f} |")
-    lines += ["", "Rows: `pooled_mc.csv`."]
-    write_page(OUT / "pooled_mc.md", lines)
-    print("\n".join(lines))
+    write_rows_page(OUT / "pooled_mc.md", lines, "pooled_mc.csv")
 
 
 if __name__ == "__main__":

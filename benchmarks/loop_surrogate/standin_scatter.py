@@ -20,8 +20,6 @@ from __future__ import annotations
 
 import hashlib
 import json
-import os
-import platform
 import sys
 import time
 from pathlib import Path
@@ -32,7 +30,7 @@ import pandas as pd
 HERE = Path(__file__).resolve().parent
 sys.path.insert(0, str(HERE.parent))
 
-from _report import commit, write_page  # noqa: E402
+from _report import run_header, write_rows_page  # noqa: E402
 
 OUT = HERE.parent / "results" / "loop_surrogate"
 REF = {"tool_speed": 1.75, "working_depth": 0.1, "moisture_content": 16.0}
@@ -84,9 +82,7 @@ def main(argv=None) -> None:
     OUT.mkdir(parents=True, exist_ok=True)
     df.to_csv(OUT / "standin_scatter.csv", index=False)
     lines = ["# The loop on the stand-in blade with the DEM plate's seed scatter", "",
-             f"Machine: {platform.machine()}, {os.cpu_count()} logical CPUs, Python {platform.python_version()}; "
-             f"commit {commit()}, {time.strftime('%Y-%m-%d %H:%M', time.gmtime())} UTC; "
-             f"`python benchmarks/loop_surrogate/standin_scatter.py {n}` ({wall:.0f} s); the campaigns and the "
+             run_header("loop_surrogate/standin_scatter.py", [n], f"{wall:.0f} s") + "; the campaigns and the "
              "scatter are in the script's docstring.", "",
              "| scatter | hidden | campaigns | correct | false attribution | median parameter error, % |",
              "|---|---|---:|---:|---:|---:|"]
@@ -94,9 +90,7 @@ def main(argv=None) -> None:
         med = g["parameter_error_percent"].median()
         lines.append(f"| {scatter} | {case} | {len(g)} | {int(g['correct'].sum())} | "
                      f"{int(g['false_attribution'].sum())} | {'' if np.isnan(med) else f'{med:.1f}'} |")
-    lines += ["", "Rows: `standin_scatter.csv`."]
-    write_page(OUT / "standin_scatter.md", lines)
-    print("\n".join(lines))
+    write_rows_page(OUT / "standin_scatter.md", lines, "standin_scatter.csv")
 
 
 if __name__ == "__main__":
