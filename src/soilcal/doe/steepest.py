@@ -458,9 +458,8 @@ def path_trend(steps, values, alpha: float = TREND_ALPHA) -> dict:
 
     X, res = fit(1)
     deg = 1
-    if n > 2:
-        ps = float(res.pvalues[1])
-        out["p_slope"] = ps if np.isfinite(ps) else float("nan")
+    ps = float(res.pvalues[1])  # n >= 3: the line has a residual degree of freedom
+    out["p_slope"] = ps if np.isfinite(ps) else float("nan")
     if n >= 5:
         X2, res2 = fit(2)
         p2 = float(res2.pvalues[2])

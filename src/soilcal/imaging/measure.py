@@ -2477,11 +2477,12 @@ def _profile_fit(x, z, degree):
     """The profile polynomial of ``degree`` through (x, z), refitted twice without the points
     more than 4 robust SDs (at least 1 mm) off the fit before (the area takes its own points,
     :func:`_direct_chord_area`)."""
+    from scipy.stats import median_abs_deviation
+
     poly = np.polynomial.Polynomial.fit(x, z, degree)
     for _ in range(2):
         res = z - poly(x)
-        mad = 1.4826 * np.median(np.abs(res - np.median(res)))
-        keep = np.abs(res) <= max(4 * mad, 1.0)
+        keep = np.abs(res) <= max(4 * float(median_abs_deviation(res, scale="normal")), 1.0)
         poly = np.polynomial.Polynomial.fit(x[keep], z[keep], degree)
     return poly
 
