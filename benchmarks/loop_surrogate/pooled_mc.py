@@ -16,11 +16,16 @@ the loop's paired held-out test.  Methods:
 * ``rows``: the loop's surrogates now (:class:`soilcal.loop.select.Surrogate`, quadratic or
   monotone cubic per row by :func:`soilcal.loop.select.smooth_fits`); reference: the
   switched-off design mean (the calibrated runs), as the loop's;
+* ``rows, level``: the same surrogates; reference: their value at g = 0 (the calibrated model as the
+  row's smoothed design estimates it);
 * ``pooled, base``: ln y = ln y0_i + a x + b x^2 with x = ln f the density factor's logarithm, a
   and b shared by the rows (least squares on the rows' log design means with a level per row),
   anchored at each row's switched-off mean; reference: that mean;
 * ``pooled, level``: the same shape with each row's level fitted over all its design points;
   reference: that level at g = 0 (the calibrated model estimated from every run of the row);
+* ``loop's shape``: the loop's :class:`soilcal.loop.select.PooledSurrogate` ("pooled, level" where
+  its lack-of-fit test passes, else the rows' surrogates), reference: its value at g = 0, as the
+  loop's (:func:`soilcal.loop.select.baseline`);
 * ``pooled, level vs base``: that model against the switched-off mean (unfair: more runs behind
   the model than behind its reference).
 
@@ -96,8 +101,11 @@ def campaign(rng, truth, scatter, T):
     base = Y[list(T).index(0.0)]
     rows = sl.Surrogate(EFFECTS["depth_compaction"], {"g": BOUNDS}, T[:, None], Y, sl.smooth_fits(T[:, None], V)[0])
     pb, pl = Pooled(T, Y, z, "base"), Pooled(T, Y, z, "level")
+    pk = sl.PooledSurrogate(EFFECTS["depth_compaction"], {"g": BOUNDS}, T[:, None], Y, z, ["plate|F"] * N, V,
+                            sl.smooth_fits(T[:, None], V)[0])
     out = []
-    for method, f, ref in (("rows", rows, base), ("pooled, base", pb, base), ("pooled, level", pl, pl([0.0])),
+    for method, f, ref in (("rows", rows, base), ("rows, level", rows, rows([0.0])), ("pooled, base", pb, base),
+                           ("pooled, level", pl, pl([0.0])), ("loop's shape", pk, pk([0.0])),
                            ("pooled, level vs base", pl, base)):
         e = np.empty(N)
         for i in range(N):

@@ -15,16 +15,18 @@ def test_defaults_are_every_effect_matched_at_five_levels():
     s = core.settings_from({})
     assert s.effects == list(EFFECTS) and s.candidates == "matched" and s.design_points == 5
     assert s.alpha == 0.05 and s.max_effects == 2 and s.fold_by is None and s.bootstrap == 200
+    assert s.surrogate == "pooled"
 
 
 def test_a_full_block_is_read():
     s = core.settings_from({"loop": {"alpha": 0.01, "effects": ["rate_friction"], "candidates": "all",
                                      "bounds": {"rate_friction": {"beta": [0, 0.5]}}, "reference": {"tool_speed": 2},
                                      "design_points": 4, "fold_by": "day", "max_effects": 1,
-                                     "bootstrap": 0}})
+                                     "bootstrap": 0, "surrogate": "rows"}})
     assert s.alpha == 0.01 and s.effects == ["rate_friction"] and s.candidates == "all"
     assert s.effect_bounds("rate_friction") == {"beta": (0.0, 0.5)}
     assert s.reference == {"tool_speed": 2.0} and s.design_points == 4 and s.max_effects == 1 and s.bootstrap == 0
+    assert s.surrogate == "rows"
 
 
 @pytest.mark.parametrize("block, field", [
@@ -50,6 +52,7 @@ def test_a_full_block_is_read():
     ({"max_effects": 0}, "loop.max_effects"),
     ({"bootstrap": 10}, "loop.bootstrap"),
     ({"bootstrap": True}, "loop.bootstrap"),
+    ({"surrogate": "gp"}, "loop.surrogate"),
     ({"unknown": 1}, "loop.unknown"),
 ])
 def test_bad_settings_name_the_field(block, field):

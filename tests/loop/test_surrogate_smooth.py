@@ -218,7 +218,8 @@ def test_the_selection_files_say_which_surrogate_each_fit_used(tmp_path, scatter
     #   F > 1e5 on (3, 10) df, p < 1e-20 in every row, the monotone cubic in every row, and the
     #   smallest p written (to 6 decimals) 0.
     # Every selection.csv row that fitted rate_friction, and loop_summary.csv where it is
-    # chosen, must say so.
+    # chosen, must say so (the row-by-row surrogates, loop.surrogate: rows; the shared shape is
+    # tested in test_pooled_surrogate.py).
     import json
 
     from soilcal.chain.files import write_csv
@@ -232,7 +233,7 @@ def test_the_selection_files_say_which_surrogate_each_fit_used(tmp_path, scatter
     table = sy.synthesize(conds, S.base_params, simulate, {"rate_friction": {"beta": 0.3}}, ref, {}, noise=0.01,
                           seed=37)
     out = core.run_inprocess("bin", sy.with_measured(conds, table), S.base_params, simulate,
-                             core.Settings(reference=ref, bootstrap=0))
+                             core.Settings(reference=ref, bootstrap=0, surrogate="rows"))
     assert out.chosen == ["rate_friction"], out.verdict
     write_csv(out.selection, tmp_path / "selection.csv")
     write_csv(out.summary, tmp_path / "loop_summary.csv")

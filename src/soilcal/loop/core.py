@@ -34,6 +34,8 @@ Settings (the soil's optional ``loop`` block, every value written into the outpu
       max_effects: 2
       bootstrap: 200         # refits of the chosen effects' 95 % interval over the seeds and
                              # the measured values (0: the fit's own interval, seeds ignored)
+      surrogate: pooled      # or rows: an effect with a dose fits one shape per measured
+                             # quantity shared by its rows (select.PooledSurrogate), or one per row
 """
 
 from __future__ import annotations
@@ -1118,7 +1120,8 @@ def _analyse(soil: str, res: pd.DataFrame, diag: pd.DataFrame, cands: list, effe
                 if nm not in rounds.effect_data:
                     try:
                         rounds.effect_data[nm] = sl.build_effect_data(u, effect_runs[nm], EFFECTS[nm],
-                                                                      settings.effect_bounds(nm))
+                                                                      settings.effect_bounds(nm),
+                                                                      reference if settings.surrogate == "pooled" else None)
                     except ValueError as exc:
                         rounds.effect_data[nm] = str(exc)
                 built = rounds.effect_data[nm]
@@ -1162,7 +1165,7 @@ def _analyse(soil: str, res: pd.DataFrame, diag: pd.DataFrame, cands: list, effe
             # an 8 % offset ran to its bound): refit them beside a free uniform scale of the
             # model (select.scale_data), and say it
             bias, sc = sl.scale_data(), rs.scale_of(u)
-            ref = sl.Model([bias], y0, meas, sc, weights=weights)
+            ref = sl.Model([bias], y0, meas, sc, weights=weights, base=[data[c] for c in names])
             m = sl.Model([data[c] for c in names] + [bias], y0, meas, sc, jt, weights)
             uniform = sl.score(m, ref, sl._folds(u, fold_by), settings.alpha, groups=sl.replicate_groups(u))
             sel_rows.append(_selection_row("refit beside uniform scale", uniform, data=data))
@@ -1225,7 +1228,8 @@ def _analyse(soil: str, res: pd.DataFrame, diag: pd.DataFrame, cands: list, effe
             y0 = u["simulated_mean"].to_numpy(float)
             final = sl.score(sl.Model([data[c] for c in chosen], y0, u["measured"].to_numpy(float), rs.scale_of(u), jt,
                                       weights),
-                             sl.Model([], y0, u["measured"].to_numpy(float), rs.scale_of(u), weights=weights),
+                             sl.Model([], y0, u["measured"].to_numpy(float), rs.scale_of(u), weights=weights,
+                                      base=[data[c] for c in chosen]),
                              sl._folds(u, fold_by),
                              settings.alpha, groups=sl.replicate_groups(u))
         theta = final.theta

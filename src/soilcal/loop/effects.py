@@ -260,6 +260,49 @@ EFFECTS: dict[str, Effect] = {
 }
 
 
+#: The dose through which an effect of one parameter acts on a condition, where it has one: the
+#: effect name -> (form, quantities, z, floor).  ``z`` is the condition's covariate relative to
+#: the reference (``"ratio"``: x / x0 - 1; ``"log"``: ln(x / x0); ``"difference"``: x - x0) and
+#: the dose at the parameter t is ln(max(1 + t z, floor)) for a ``"factor"`` (the log of the
+#: factor the effect multiplies a DEM parameter by: the density factor f of depth_compaction,
+#: the friction factor of rate_friction, their floors those of the formulas above, the
+#: friction's its limit near 0) or t z for an ``"added"`` quantity (the surface energy
+#: moisture_cohesion adds, its clamp at 0 left out).  Every condition then sees the same
+#: mechanism at a different strength, which a response shape shared by the conditions can
+#: carry (:class:`soilcal.loop.select.PooledSurrogate`).  tool_adhesion and plastic_contact act
+#: alike on every condition (no covariate): they have no dose.
+DOSES = {"depth_compaction": ("factor", ("working_depth", "layer_depth"), "ratio", 0.1),
+         "rate_friction": ("factor", ("tool_speed", "rotor_speed"), "log", 0.05),
+         "moisture_cohesion": ("added", ("moisture_content",), "difference", None)}
+
+
+def dose_z(name: str, quantities: dict, reference: dict) -> float:
+    """The covariate term ``z`` of the effect ``name``'s dose (:data:`DOSES`) at a condition
+    carrying ``quantities``: 0 where the condition lacks the covariate or its reference (the
+    effect leaves it unchanged, :meth:`Effect.apply`)."""
+    _, names, kind, _ = DOSES[name]
+    xr = _ref(quantities, reference, names)
+    if xr is None:
+        return 0.0
+    x, x0 = xr
+    if kind == "ratio":
+        return x / x0 - 1.0
+    if kind == "log":
+        return math.log(x / x0)
+    return x - x0
+
+
+def dose(name: str, t: float, z):
+    """The dose of the effect ``name`` at its parameter value ``t`` for the conditions' ``z``
+    (:func:`dose_z`; an array): :data:`DOSES`."""
+    import numpy as np
+
+    form, _, _, floor = DOSES[name]
+    if form == "factor":
+        return np.log(np.maximum(1.0 + t * z, floor))
+    return t * z
+
+
 def get(name: str, source="<loop>") -> Effect:
     if name not in EFFECTS:
         raise InputError(source, "loop.effects", "one of " + ", ".join(EFFECTS), name)

@@ -21,6 +21,7 @@ class Settings:
     fold_by: str | None = None
     max_effects: int = 2
     bootstrap: int = 200
+    surrogate: str = "pooled"
 
     def effect_bounds(self, name: str) -> dict:
         return get(name).bounds(self.bounds.get(name))
@@ -116,6 +117,10 @@ def settings_from(soil_data: dict, source="<soil>") -> Settings:
         if not isinstance(v, int) or isinstance(v, bool) or not (v == 0 or v >= 50):
             raise InputError(source, "loop.bootstrap", "0 (the fit's own interval) or an integer >= 50", v)
         s.bootstrap = v
+    if "surrogate" in block:
+        if block["surrogate"] not in ("pooled", "rows"):
+            raise InputError(source, "loop.surrogate", "pooled or rows", block["surrogate"])
+        s.surrogate = block["surrogate"]
     if "max_effects" in block:
         v = block["max_effects"]
         if not isinstance(v, int) or v < 1:
