@@ -9,9 +9,13 @@ seeds per design point) is multiplied by exp(s z), z drawn anew for every condit
 parameter set (a bed settled anew at each density or friction, as the DEM's are), s = 0.14
 (``uniform``) or rising with the working depth from 0.10 at 0.05 m to 0.28 at 0.15 m
 (``depth``: the DEM plate's SD of log force from 20 to 40 mm, ``benchmarks/results/loop.md``).
-Cases: no hidden effect, depth_compaction g 0.6, rate_friction beta 0.4; campaigns 0..N-1.
+Cases: no hidden effect, depth_compaction g 0.6, rate_friction beta 0.4; campaigns 0..N-1; the
+loop's surrogates (``loop.surrogate``): ``pooled`` (its default: one shape per measured
+quantity through the effect's dose where it passes its lack-of-fit test) and ``rows`` (one
+surrogate per row), on the same campaigns.  Column ``surrogate_used``: the hidden effect's
+surrogate as the loop's files name it (``rate_friction``'s where nothing is hidden).
 
-    python benchmarks/loop_surrogate/standin_scatter.py [CAMPAIGNS]    # default 40 per case
+    python benchmarks/loop_surrogate/standin_scatter.py [CAMPAIGNS] [SURROGATES]   # default 40 pooled,rows
 
 Writes ``benchmarks/results/loop_surrogate/standin_scatter.{csv,md}``.
 """
@@ -19,6 +23,7 @@ Writes ``benchmarks/results/loop_surrogate/standin_scatter.{csv,md}``.
 from __future__ import annotations
 
 import hashlib
+import itertools
 import json
 import sys
 import time
@@ -59,19 +64,22 @@ def main(argv=None) -> None:
 
     args = sys.argv[1:] if argv is None else argv
     n = int(args[0]) if args else 40
+    kinds = (args[1] if len(args) > 1 else "pooled,rows").split(",")
     rows = []
     t0 = time.perf_counter()
-    for scatter in ("uniform", "depth"):
+    for kind, scatter in itertools.product(kinds, ("uniform", "depth")):
         sim = simulator(scatter)
         for case, hidden in CASES.items():
             for c in range(n):
                 conds = S.conditions(S.grid(c, 18, moisture=True), measures=("horizontal_force_N",))
                 table = sy.synthesize(conds, S.base_params, sim, hidden, REF, {}, noise=0.02, seed=c + 10)
                 out = core.run_inprocess("bin", sy.with_measured(conds, table), S.base_params, sim,
-                                         core.Settings(reference=REF, bootstrap=0))
+                                         core.Settings(reference=REF, bootstrap=0, surrogate=kind))
                 truth = next((v for th in hidden.values() for v in th.values()), None)
                 theta = next(iter(out.theta.values()), None) if out.chosen == list(hidden) else None
-                rows.append({"scatter": scatter, "case": case, "campaign": c, "chosen": "+".join(out.chosen),
+                ed = (out.effect_data or {}).get(next(iter(hidden), "rate_friction"))
+                rows.append({"surrogate": kind, "surrogate_used": ed.surrogate.kind() if ed is not None else "",
+                             "scatter": scatter, "case": case, "campaign": c, "chosen": "+".join(out.chosen),
                              "correct": out.chosen == list(hidden),
                              "false_attribution": bool(set(out.chosen) - set(hidden)),
                              "parameter_error_percent": (100 * abs(theta - truth) / truth
@@ -82,14 +90,16 @@ def main(argv=None) -> None:
     OUT.mkdir(parents=True, exist_ok=True)
     df.to_csv(OUT / "standin_scatter.csv", index=False)
     lines = ["# The loop on the stand-in blade with the DEM plate's seed scatter", "",
-             run_header("loop_surrogate/standin_scatter.py", [n], f"{wall:.0f} s") + "; the campaigns and the "
-             "scatter are in the script's docstring.", "",
-             "| scatter | hidden | campaigns | correct | false attribution | median parameter error, % |",
-             "|---|---|---:|---:|---:|---:|"]
-    for (scatter, case), g in df.groupby(["scatter", "case"], sort=False):
+             run_header("loop_surrogate/standin_scatter.py", [n, ",".join(kinds)], f"{wall:.0f} s")
+             + "; the campaigns and the scatter are in the script's docstring.  Shape shared: the campaigns whose "
+             "hidden effect (rate_friction where none) was fitted through one shape shared by the rows.", "",
+             "| loop.surrogate | scatter | hidden | campaigns | correct | false attribution | median parameter error, % "
+             "| shape shared |", "|---|---|---|---:|---:|---:|---:|---:|"]
+    for (kind, scatter, case), g in df.groupby(["surrogate", "scatter", "case"], sort=False):
         med = g["parameter_error_percent"].median()
-        lines.append(f"| {scatter} | {case} | {len(g)} | {int(g['correct'].sum())} | "
-                     f"{int(g['false_attribution'].sum())} | {'' if np.isnan(med) else f'{med:.1f}'} |")
+        shared = int(g["surrogate_used"].astype(str).str.startswith("pooled through the dose").sum())
+        lines.append(f"| {kind} | {scatter} | {case} | {len(g)} | {int(g['correct'].sum())} | "
+                     f"{int(g['false_attribution'].sum())} | {'' if np.isnan(med) else f'{med:.1f}'} | {shared} |")
     write_rows_page(OUT / "standin_scatter.md", lines, "standin_scatter.csv")
 
 
