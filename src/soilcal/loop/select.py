@@ -680,8 +680,7 @@ class Model:
     _cache: dict = field(default_factory=dict, init=False, repr=False, compare=False)
 
     def __post_init__(self):
-        self.calibrated = np.asarray(self.y0, float)
-        self.y0 = baseline(self.effects if self.base is None else self.base, self.calibrated)
+        self.y0 = baseline(self.effects if self.base is None else self.base, self.y0)
         if self.scale is None:
             self.scale = np.abs(np.asarray(self.measured, float))
         if self.weights is not None:
