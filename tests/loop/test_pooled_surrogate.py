@@ -183,3 +183,22 @@ def test_the_loop_builds_the_pooled_shape_from_its_rows_quantities():
     # force in proportion to the density factor: a 1 within the seed scatter, b about 0
     assert ed.surrogate.a[0] == pytest.approx(1.0, abs=0.15) and abs(ed.surrogate.b[0]) < 0.5
     assert isinstance(sl.build_effect_data(obs, runs, EFF, BOUNDS).surrogate, sl.Surrogate)
+
+
+def test_the_bootstrap_refits_the_shared_shape_and_its_interval_holds_the_hidden_value():
+    # measured values the force at g 0.4 exactly, runs scattering 5 % about the force at each g:
+    # the bootstrap (seeds resampled, the shape refitted per draw with the groups' forms kept)
+    # gives an interval that holds 0.4
+    rng = np.random.default_rng(8)
+    n = 10
+    d = np.linspace(0.020, 0.040, n)
+    obs = pd.DataFrame({"measurement": "bin", "row": np.arange(1, n + 1), "measure": "F", "q:working_depth": d})
+    force = lambda g: (40.0 + 1500.0 * d) * np.maximum(1 + g * (d / D0 - 1), 0.1)  # noqa: E731
+    runs = pd.DataFrame([{"measurement": "bin", "row": i + 1, "measure": "F", "value": v, "t:g": t, "seed": sd}
+                         for t in T for sd in range(4)
+                         for i, v in enumerate(force(t) * np.exp(0.05 * rng.standard_normal(n)))])
+    ed = sl.build_effect_data(obs, runs, EFF, BOUNDS, {"working_depth": D0})
+    measured = force(0.4)
+    ci = sl.bootstrap_ci([ed], ed.means[list(T).index(0.0)], measured, np.full(n, 0.01 * measured.mean()), 100)
+    lo, hi = ci["depth_compaction.g"]
+    assert lo < 0.4 < hi and hi - lo < 0.5
