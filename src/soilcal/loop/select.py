@@ -418,7 +418,7 @@ class EffectData:
 
     effect: object
     bounds: dict
-    surrogate: Surrogate
+    surrogate: Surrogate  # or a PooledSurrogate (build_effect_data)
     design: list = field(default_factory=list)
     missing: list = field(default_factory=list)  # rows with a failed run at some design point
     values: np.ndarray | None = None
@@ -1236,9 +1236,8 @@ def bootstrap_ci(effects: list, y0: np.ndarray, measured: np.ndarray, measured_s
             Vp = np.concatenate([V, np.full(V.shape[:2] + (1,), np.nan)], axis=2)
             mean = np.nanmean(V, axis=2)[..., None]
             count = np.sum(np.isfinite(V), axis=2)[..., None]
-            thetas = e.thetas()
             prepared.append((Vp, W, pad, mean, np.sqrt(count / np.maximum(count - 1, 1)),
-                             [tuple(t) for t in thetas], thetas))
+                             [tuple(t) for t in e.thetas()]))
     rng = np.random.default_rng(seed)
     se = np.where(np.isfinite(measured_se), measured_se, 0.0)
     names = [f"{e.effect.name}.{t}" for e in effects for t in e.effect.theta_names()]
@@ -1250,7 +1249,7 @@ def bootstrap_ci(effects: list, y0: np.ndarray, measured: np.ndarray, measured_s
         rows = picks[gindex]  # (n, width), -1 beyond a condition's own seed count
         m = measured + se * rng.standard_normal(n)
         fitted, lost = [], False
-        for e, (Vp, W, pad, mean, widen, design, thetas) in zip(effects, prepared):
+        for e, (Vp, W, pad, mean, widen, design) in zip(effects, prepared):
             at = np.where(rows >= 0, np.take_along_axis(W, np.clip(rows, 0, None), axis=1), pad)
             take = np.take_along_axis(Vp, np.broadcast_to(at[None], (Vp.shape[0],) + at.shape), axis=2)
             with warnings.catch_warnings():
