@@ -269,7 +269,7 @@ EFFECTS: dict[str, Effect] = {
 #: friction's its limit near 0) or t z for an ``"added"`` quantity (the surface energy
 #: moisture_cohesion adds).  The clamps of the DEM parameters to their physical ranges are
 #: left out (a surface energy held at 0, a friction at 2): where they act, the rows no longer
-#: share the shape, which its lack-of-fit test finds.  Every condition then sees the same
+#: share the shape, which its lack-of-fit test is there to find.  Every condition then sees the same
 #: mechanism at a different strength, which a response shape shared by the conditions can
 #: carry (:class:`soilcal.loop.select.PooledSurrogate`).  tool_adhesion and plastic_contact act
 #: alike on every condition (no covariate): they have no dose.
