@@ -60,22 +60,23 @@ def _force(d, g):
 
 
 def _dose(g, z):
-    return np.log(np.maximum(1 + g * z, 0.1))
+    from soilcal.loop.effects import dose
+
+    return dose("depth_compaction", g, z)
 
 
 class Pooled:
-    """exp(level_i + a x + b x^2): level_i the row's switched-off mean's log (``anchor``
-    "base") or fitted over its design points ("level")."""
+    """exp(level_i + a x + b x^2), a and b the loop's fit (:func:`soilcal.loop.select._pooled_fit`):
+    level_i the row's switched-off mean's log (``anchor`` "base") or fitted over its design
+    points ("level", the loop's own)."""
 
     def __init__(self, T, Y, z, anchor):
+        from soilcal.loop.select import _pooled_fit
+
         L = np.log(Y)
-        X = np.stack([_dose(g, z) for g in T])
-        cols = [X - X.mean(axis=0), X * X - (X * X).mean(axis=0)]
-        A = np.column_stack([c.ravel() for c in cols])
-        (self.a, self.b), *_ = np.linalg.lstsq(A, (L - L.mean(axis=0)).ravel(), rcond=None)
+        self.a, self.b, level = _pooled_fit(L, np.stack([_dose(g, z) for g in T]))
         self.z = z
-        self.level = (L[list(T).index(0.0)] if anchor == "base"
-                      else (L - (self.a * X + self.b * X * X)).mean(axis=0))
+        self.level = L[list(T).index(0.0)] if anchor == "base" else level
 
     def __call__(self, th):
         x = _dose(float(th[0]), self.z)

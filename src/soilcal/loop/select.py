@@ -125,6 +125,14 @@ def theta_design(effect, bounds: dict, points: int = 5) -> list[dict]:
 LACK_OF_FIT_ALPHA = 0.05
 
 
+def _point_seed_ss(V: np.ndarray) -> float:
+    """The point x seed interaction sum of squares of one row's runs ``V`` (design point x
+    seed): the error of a two-way layout without replication, the seeds' own levels taken
+    out (:func:`smooth_fits`, :func:`_pooled_lack_of_fit`)."""
+    means = V.mean(axis=1)
+    return float(np.sum((V - means[:, None] - V.mean(axis=0)[None, :] + means.mean()) ** 2))
+
+
 def smooth_fits(thetas: np.ndarray, values: np.ndarray | None) -> tuple[np.ndarray, np.ndarray]:
     """Per row, whether a least-squares quadratic in one parameter follows the design's seed
     means within that row's own seed scatter, and the row's lack-of-fit p: (smooth, p), each
@@ -161,7 +169,7 @@ def smooth_fits(thetas: np.ndarray, values: np.ndarray | None) -> tuple[np.ndarr
         means = V.mean(axis=1)
         coef, *_ = np.linalg.lstsq(B, means, rcond=None)
         ss_lof = S * float(np.sum((means - B @ coef) ** 2))
-        ss_err = float(np.sum((V - means[:, None] - V.mean(axis=0)[None, :] + means.mean()) ** 2))
+        ss_err = _point_seed_ss(V)
         # a row whose point x seed error is rounding only (at most RSMFit.PURE_ERROR_RTOL of its
         # total, what means of equal floats leave) has no scatter to test against
         if ss_err > RSMFit.PURE_ERROR_RTOL * float(np.sum((V - V.mean()) ** 2)):
@@ -326,7 +334,6 @@ class PooledSurrogate:
         self.bounds = dict(bounds)
         self.lo = np.array([bounds[k][0] for k in self.names], float)
         self.hi = np.array([bounds[k][1] for k in self.names], float)
-        self.span = self.hi - self.lo
         self.z = np.asarray(z, float)
         self.groups = pd.factorize(pd.Series(list(groups)).astype(str))[0]
         self._dose = dose
@@ -402,7 +409,7 @@ def _pooled_lack_of_fit(V: np.ndarray | None, X: np.ndarray, log: bool, D: int) 
     M = W.mean(axis=2)
     a, b, lvl = _pooled_fit(M, X)
     ss_lof = S * float(np.sum((M - (lvl + a * X + b * X * X)) ** 2))
-    ss_err = float(np.sum((W - M[:, :, None] - W.mean(axis=0)[None] + W.mean(axis=(0, 2))[None, :, None]) ** 2))
+    ss_err = sum(_point_seed_ss(W[:, i, :]) for i in range(n))
     df_lof = n * D - n - (2 if np.ptp(X) > 0 else 0)
     df_err = n * (D - 1) * (S - 1)
     if df_lof <= 0 or not ss_err > 1e-12 * float(np.sum((W - W.mean()) ** 2)):
