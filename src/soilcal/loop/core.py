@@ -1093,6 +1093,7 @@ def _analyse(soil: str, res: pd.DataFrame, diag: pd.DataFrame, cands: list, effe
     models over them, fitted and cross-validated there."""
     u = rs.usable(res)
     weights = sl.row_weights(u)  # the selection's weights of the rows (None: alike), for every fit of them below
+    floor = sl.heldout_floor(u, weights)  # the noise floor's interval, for every reference below (select.lowers_heldout)
     spread_note = _replicate_spread(u, settings.alpha)  # the verdict's note ("": none) and its nuisance words
     rank = dg.ranking(diag)
     follows = _follows(rank, res, quantity_cols, settings.alpha)
@@ -1165,7 +1166,7 @@ def _analyse(soil: str, res: pd.DataFrame, diag: pd.DataFrame, cands: list, effe
             # an 8 % offset ran to its bound): refit them beside a free uniform scale of the
             # model (select.scale_data), and say it
             bias, sc = sl.scale_data(), rs.scale_of(u)
-            ref = sl.Model([bias], y0, meas, sc, weights=weights, base=[data[c] for c in names])
+            ref = sl.Model([bias], y0, meas, sc, weights=weights, base=[data[c] for c in names], floor=floor)
             m = sl.Model([data[c] for c in names] + [bias], y0, meas, sc, jt, weights)
             uniform = sl.score(m, ref, sl._folds(u, fold_by), settings.alpha, groups=sl.replicate_groups(u))
             sel_rows.append(_selection_row("refit beside uniform scale", uniform, data=data))
@@ -1229,7 +1230,7 @@ def _analyse(soil: str, res: pd.DataFrame, diag: pd.DataFrame, cands: list, effe
             final = sl.score(sl.Model([data[c] for c in chosen], y0, u["measured"].to_numpy(float), rs.scale_of(u), jt,
                                       weights),
                              sl.Model([], y0, u["measured"].to_numpy(float), rs.scale_of(u), weights=weights,
-                                      base=[data[c] for c in chosen]),
+                                      base=[data[c] for c in chosen], floor=floor),
                              sl._folds(u, fold_by),
                              settings.alpha, groups=sl.replicate_groups(u))
         theta = final.theta
@@ -1362,7 +1363,8 @@ def _analyse(soil: str, res: pd.DataFrame, diag: pd.DataFrame, cands: list, effe
         else:
             y0, meas, sc = u["simulated_mean"].to_numpy(float), u["measured"].to_numpy(float), rs.scale_of(u)
             alone = sl.Model([sl.scale_data()], y0, meas, sc, weights=weights)
-            sv, lo, hi = _scale_fit(sl.score(alone, sl.Model([], y0, meas, sc, weights=weights), sl._folds(u, fold_by),
+            sv, lo, hi = _scale_fit(sl.score(alone, sl.Model([], y0, meas, sc, weights=weights, floor=floor),
+                                             sl._folds(u, fold_by),
                                              settings.alpha, groups=sl.replicate_groups(u)))
         nuisance = ({SCALE_KEY: sv}, {SCALE_KEY: (lo, hi)},
                     "fitted alone: the uniform bias the residual follows, the calibrated model times (1 + s)")

@@ -599,6 +599,14 @@ def _floor_terms(df: pd.DataFrame) -> dict:
                 src_s=src_s, dof=dof)
 
 
+def floor_variances(df: pd.DataFrame) -> np.ndarray:
+    """Per row of ``df`` its share of the noise floor's square (:func:`noise_floor`): (sd_m^2 /
+    n_m + sd_s^2 / n_s) / scale^2 with the same variances the floor takes (NaN where a part is
+    unknown); the floor is sqrt of their mean."""
+    t = _floor_terms(df)
+    return t["rel_m"] + t["rel_s"]
+
+
 def _picked(df: pd.DataFrame, rows) -> np.ndarray:
     return np.ones(len(df), bool) if rows is None else np.asarray(rows, bool)
 
