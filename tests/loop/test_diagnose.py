@@ -753,3 +753,44 @@ def test_the_verdict_names_a_periodic_structure_with_its_wavelength():
     text = _follows(ranking(diag))
     assert text.startswith(f"position_m periodically (a sine of wavelength {per['estimate']:.3g} in position_m's unit, "
                            f"r2 {per['r2']:.2f}, Holm p {per['p_adjusted']:.3g})"), text
+
+
+def test_a_trend_common_to_two_quantities_is_tested_beside_their_offsets():
+    # two tables of three tests each, one quantity each (a heap's static and a drum's dynamic
+    # angle), the layer depth 20, 40, 60 cm: r = a_q + 0.002 (x - 40) + e, the quantities'
+    # offsets a = -0.02 and -0.13, e = 0.001 (1, -2, 1) in each table (no mean, no slope in x).
+    # By hand, least squares with an intercept per quantity: the slope 0.002 exactly, its
+    # variance s^2 / Sxx with Sxx = 2 * 800 (x about each table's mean), s^2 = sum e^2 / (6 - 3);
+    # the share it adds, (SSR of the offsets alone - sum e^2) / SST
+    x = np.array([20.0, 40.0, 60.0] * 2)
+    q = np.array(["angle_deg"] * 3 + ["angle_avalanche_deg"] * 3)
+    a = np.where(q == "angle_deg", -0.02, -0.13)
+    e = 0.001 * np.array([1.0, -2.0, 1.0] * 2)
+    r = a + 0.002 * (x - 40.0) + e
+    t = pd.DataFrame({"measurement": np.where(q == "angle_deg", "static", "dynamic"), "row": [1, 2, 3] * 2,
+                      "measure": q, "relative_residual": r, "standardised_residual": 1.0, "cov:depth": x})
+    diag = diagnose(t, quantity_of={"depth": "layer_depth"})
+    row = _row(diag, "trend", "depth")
+    s2 = float(np.sum(e ** 2)) / 3
+    t_stat = 0.002 / math.sqrt(s2 / 1600.0)
+    assert row["estimate"] == pytest.approx(0.002, rel=1e-9)
+    assert row["statistic"] == pytest.approx(t_stat, rel=1e-9)
+    assert row["p"] == pytest.approx(2 * stats.t.sf(t_stat, 3), rel=1e-6)
+    sst = float(np.sum((r - r.mean()) ** 2))
+    ssr0 = float(sum(np.sum((r[q == k] - r[q == k].mean()) ** 2) for k in set(q)))
+    assert row["r2"] == pytest.approx((ssr0 - np.sum(e ** 2)) / sst, rel=1e-9)
+    # without the offsets the quantities' difference is scatter to the trend: p 0.30 on these
+    # rows (the least-squares slope is the same, the tables being alike in x)
+    plain = stats.linregress(x, r)
+    assert plain.slope == pytest.approx(0.002, rel=1e-9) and plain.pvalue > 0.29 > 100 * row["p"]
+    # a covariate that changes only with the quantity (a speed per table) is not tested: no
+    # trend is left beside the offsets
+    diag = diagnose(t.assign(**{"cov:speed": np.where(q == "angle_deg", 1.0, 2.0)}))
+    assert not (diag["covariate"] == "speed").any()
+    # one quantity: the tests as they always were, the fit's R^2
+    one = t[q == "angle_deg"].assign(row=[1, 2, 3])
+    one = pd.concat([one, one.assign(row=[4, 5, 6], **{"cov:depth": [30.0, 50.0, 70.0]})], ignore_index=True)
+    fit = stats.linregress(one["cov:depth"], one["relative_residual"])
+    row = _row(diagnose(one), "trend", "depth")
+    assert row["estimate"] == pytest.approx(fit.slope, rel=1e-9) and row["p"] == pytest.approx(fit.pvalue, rel=1e-9)
+    assert row["r2"] == pytest.approx(fit.rvalue ** 2, rel=1e-9)

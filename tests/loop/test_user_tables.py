@@ -610,9 +610,25 @@ def test_a_quantity_with_one_value_in_each_table_is_not_taken_for_an_effect():
     conds = sy.with_measured(a + b, table)
     out = core.run_inprocess("user", conds, S.base_params, S.simulate, core.Settings(bootstrap=0))
     assert "rate_friction" not in out.candidates and out.chosen == [], out.verdict
+    # the speed changes only with the tables' measured quantities, whose own offsets the
+    # covariates' tests fit beside them: no test of the speed is left, the residual follows the
+    # quantity measured
+    assert not out.diagnosis["covariate"].astype(str).str.contains("speed").any(), out.diagnosis
+    assert out.verdict.startswith("unexplained: the residual follows measure"), out.verdict
+    assert core.per_table_quantities(conds)["tool_speed"] == {"a": 1.0, "b": 2.0}
+    # the same two tables measuring one quantity: the speed's two levels are tested, follow the
+    # tables' offset, and the rate effect is not tried, the verdict says why
+    a = [replace(c, measurement="a") for c in S.conditions([dict(r, tool_speed=1.0) for r in S.grid(seed=1, n=8)],
+                                                            measures=("horizontal_force_N",))]
+    b = [replace(c, measurement="b") for c in S.conditions([dict(r, tool_speed=2.0) for r in S.grid(seed=2, n=8)],
+                                                            measures=("horizontal_force_N",))]
+    table = sy.synthesize(a + b, S.base_params, S.simulate, {}, {}, {}, noise=0.02, seed=1)
+    table.loc[table["measurement"] == "b", "value"] *= 1.10
+    out = core.run_inprocess("user", sy.with_measured(a + b, table), S.base_params, S.simulate,
+                             core.Settings(bootstrap=0))
+    assert "rate_friction" not in out.candidates and out.chosen == [], out.verdict
     assert ("rate_friction not tried: tool_speed has one value in each measured table (a: 1 m/s, b: 2 m/s), so "
             "the effect cannot be told from a difference between the tables") in out.verdict
-    assert core.per_table_quantities(conds)["tool_speed"] == {"a": 1.0, "b": 2.0}
 
 
 def test_a_rate_effect_beside_a_uniform_bias_keeps_its_parameter_and_names_the_bias():
