@@ -601,14 +601,17 @@ def test_a_quantity_with_one_value_in_each_table_is_not_taken_for_an_effect():
     from soilcal.loop import standin as S
     from soilcal.loop import synthesize as sy
 
-    a = [replace(c, measurement="a") for c in S.conditions([dict(r, tool_speed=1.0) for r in S.grid(seed=1, n=8)],
-                                                            measures=("horizontal_force_N",))]
-    b = [replace(c, measurement="b") for c in S.conditions([dict(r, tool_speed=2.0) for r in S.grid(seed=2, n=8)],
-                                                            measures=("vertical_force_N",))]
-    table = sy.synthesize(a + b, S.base_params, S.simulate, {}, {}, {}, noise=0.02, seed=1)
-    table.loc[table["measurement"] == "b", "value"] *= 1.10
-    conds = sy.with_measured(a + b, table)
-    out = core.run_inprocess("user", conds, S.base_params, S.simulate, core.Settings(bootstrap=0))
+    def two_tables(measure_b):
+        a = [replace(c, measurement="a") for c in S.conditions([dict(r, tool_speed=1.0) for r in S.grid(seed=1, n=8)],
+                                                                measures=("horizontal_force_N",))]
+        b = [replace(c, measurement="b") for c in S.conditions([dict(r, tool_speed=2.0) for r in S.grid(seed=2, n=8)],
+                                                                measures=(measure_b,))]
+        table = sy.synthesize(a + b, S.base_params, S.simulate, {}, {}, {}, noise=0.02, seed=1)
+        table.loc[table["measurement"] == "b", "value"] *= 1.10
+        conds = sy.with_measured(a + b, table)
+        return conds, core.run_inprocess("user", conds, S.base_params, S.simulate, core.Settings(bootstrap=0))
+
+    conds, out = two_tables("vertical_force_N")
     assert "rate_friction" not in out.candidates and out.chosen == [], out.verdict
     # the speed changes only with the tables' measured quantities, whose own offsets the
     # covariates' tests fit beside them: no test of the speed is left, the residual follows the
@@ -618,14 +621,7 @@ def test_a_quantity_with_one_value_in_each_table_is_not_taken_for_an_effect():
     assert core.per_table_quantities(conds)["tool_speed"] == {"a": 1.0, "b": 2.0}
     # the same two tables measuring one quantity: the speed's two levels are tested, follow the
     # tables' offset, and the rate effect is not tried, the verdict says why
-    a = [replace(c, measurement="a") for c in S.conditions([dict(r, tool_speed=1.0) for r in S.grid(seed=1, n=8)],
-                                                            measures=("horizontal_force_N",))]
-    b = [replace(c, measurement="b") for c in S.conditions([dict(r, tool_speed=2.0) for r in S.grid(seed=2, n=8)],
-                                                            measures=("horizontal_force_N",))]
-    table = sy.synthesize(a + b, S.base_params, S.simulate, {}, {}, {}, noise=0.02, seed=1)
-    table.loc[table["measurement"] == "b", "value"] *= 1.10
-    out = core.run_inprocess("user", sy.with_measured(a + b, table), S.base_params, S.simulate,
-                             core.Settings(bootstrap=0))
+    _, out = two_tables("horizontal_force_N")
     assert "rate_friction" not in out.candidates and out.chosen == [], out.verdict
     assert ("rate_friction not tried: tool_speed has one value in each measured table (a: 1 m/s, b: 2 m/s), so "
             "the effect cannot be told from a difference between the tables") in out.verdict
