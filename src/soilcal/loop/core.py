@@ -1133,7 +1133,7 @@ def _analyse(soil: str, res: pd.DataFrame, diag: pd.DataFrame, cands: list, effe
             if fold_by and f"cov:{fold_by}" not in u.columns:
                 raise InputError("<soil>", "loop.fold_by", "a covariate column of the measured tables", fold_by)
             sel = sl.forward(u, u["simulated_mean"].to_numpy(float), data, fold_by, settings.alpha,
-                             settings.max_effects, shared=rounds.models)
+                             settings.max_effects, shared=rounds.models, floor=floor)
             rounds.selections[tuple(cands)] = (data, unfit, sel)
         for nm, why in unfit.items():
             sel_rows.append({"step": 1, "effects": nm, "parameters": "{}", "ci95": "{}", "accepted": False,

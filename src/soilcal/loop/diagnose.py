@@ -158,6 +158,13 @@ def _covariate_columns(res: pd.DataFrame) -> list[str]:
     return [c for c in res.columns if c.startswith("cov:")]
 
 
+def _indicators(labels, n: int) -> np.ndarray:
+    """Indicator columns of the levels of ``labels`` (n of them), the first (sorted) level
+    dropped; no column where there is one level."""
+    labels = np.asarray(labels).astype(str)
+    return np.column_stack([(labels == lv).astype(float) for lv in sorted(set(labels))[1:]] or [np.empty((n, 0))])
+
+
 def quantity_sets(frame: pd.DataFrame) -> np.ndarray | None:
     """Per row of a frame of measured tests (:func:`per_test`, :func:`per_condition`) the
     measured quantities its test holds, joined by ``+`` (a plate's two forces are one set);
@@ -178,11 +185,7 @@ def quantity_offsets(frame: pd.DataFrame, rows=None) -> np.ndarray:
     n = len(frame) if rows is None else int(np.sum(rows))
     if q is None:
         return np.empty((n, 0))
-    q = q if rows is None else q[np.asarray(rows, bool)]
-    levels = sorted(set(q))
-    if len(levels) < 2:
-        return np.empty((n, 0))
-    return np.column_stack([(q == lv).astype(float) for lv in levels[1:]])
+    return _indicators(q if rows is None else q[np.asarray(rows, bool)], n)
 
 
 def _covariate_tests(name, q, col, r, numeric, distinct, offsets: np.ndarray | None = None) -> list[dict]:
@@ -199,7 +202,8 @@ def _covariate_tests(name, q, col, r, numeric, distinct, offsets: np.ndarray | N
     rows = []
     if n <= base.shape[1]:
         return rows
-    ssr0 = float(_ols(r, base).ssr) if k else sst
+    f0 = _ols(r, base) if k else None  # the offsets alone
+    ssr0 = float(f0.ssr) if k else sst
 
     def share(fit) -> float:
         return float((ssr0 - fit.ssr) / sst) if sst > 0 else 0.0
@@ -228,15 +232,13 @@ def _covariate_tests(name, q, col, r, numeric, distinct, offsets: np.ndarray | N
         if q == "position" and distinct >= PERIODIC_MIN:
             rows.append(_periodic(name, q, pd.to_numeric(col, errors="coerce").to_numpy(float), r, distinct, sst))
     else:
-        labels = col.astype(str).to_numpy()
-        levels = sorted(set(labels))
-        X = np.column_stack([base] + [(labels == lv).astype(float) for lv in levels[1:]])
+        X = np.column_stack([base, _indicators(col, n)])
         rank = np.linalg.matrix_rank(X)
         if n <= rank or not adds(X):  # no row left to estimate the within-group variance, or no group beyond the offsets
             return rows
         f = _ols(r, X)
         if k:
-            stat, p, _ = f.compare_f_test(_ols(r, base))
+            stat, p, _ = f.compare_f_test(f0)
         else:
             stat, p = f.fvalue, f.f_pvalue
         rows.append(dict(test="group", covariate=name, quantity=q or ("measure" if name == "measure" else ""),
@@ -721,11 +723,7 @@ def _terms(res: pd.DataFrame, name: str, quantity_of: dict) -> np.ndarray | None
     if _numeric(col, name, quantity_of.get(name, "")) and distinct >= 3:
         xs = _standardised(col)
         return np.column_stack([xs, xs ** 2]) if distinct >= 4 else xs[:, None]
-    labels = col.astype(str).to_numpy()
-    levels = sorted(set(labels))[1:]
-    if not levels:  # one level on these rows: no structure of its own
-        return np.empty((len(res), 0))
-    return np.column_stack([(labels == lv).astype(float) for lv in levels])
+    return _indicators(col, len(res))  # no column for one level on these rows: no structure of its own
 
 
 def beyond(res: pd.DataFrame, name: str, first: str, quantity_of: dict | None = None) -> float:
@@ -896,8 +894,6 @@ def detectable(res: pd.DataFrame, diag: pd.DataFrame, quantity_of: dict | None =
             x = pd.to_numeric(col[has], errors="coerce").to_numpy(float)
             r = frame["relative_residual"].to_numpy(float)[has]
             n = len(r)
-            if n < 4:
-                continue
             Z = np.column_stack([np.ones(n), quantity_offsets(frame, has)])  # as the trend test fits it
             k = Z.shape[1] - 1
             if n < 4 + k:

@@ -1397,7 +1397,7 @@ class Selection:
 
 
 def forward(obs: pd.DataFrame, y0: np.ndarray, data: dict, fold_by: str | None = None, alpha: float = 0.05,
-            max_effects: int = 2, shared: dict | None = None) -> Selection:
+            max_effects: int = 2, shared: dict | None = None, floor: tuple | None = None) -> Selection:
     """Selection over the candidates ``data`` (name -> :class:`EffectData`):
 
     1. forward: add, one at a time, the candidate whose model has the lowest held-out RMS
@@ -1425,7 +1425,9 @@ def forward(obs: pd.DataFrame, y0: np.ndarray, data: dict, fold_by: str | None =
     :class:`EffectData` of each candidate share, a later one with more candidates (the loop's
     second round): the folds and one :class:`Model` per set of effects, each fitted and
     cross-validated once over all of them; every score is the one a selection of its own
-    gives.
+    gives.  ``floor``: the rows' noise-floor interval in the selection's weighting
+    (:func:`heldout_floor` of ``obs``, computed here where not given), which every reference
+    carries into its score (:func:`lowers_heldout`).
     """
     measured = obs["measured"].to_numpy(float)
     from soilcal.loop.residuals import scale_of
@@ -1433,9 +1435,7 @@ def forward(obs: pd.DataFrame, y0: np.ndarray, data: dict, fold_by: str | None =
     shared = {} if shared is None else shared
     scale = scale_of(obs) if "measured" in obs else None
     weights = row_weights(obs)
-    if "floor" not in shared:
-        shared["floor"] = heldout_floor(obs, weights)
-    floor = shared["floor"]
+    floor = heldout_floor(obs, weights) if floor is None else floor
     if fold_by not in shared.setdefault("folds", {}):  # (compared by identity: a model's cross-validations)
         shared["folds"][fold_by] = _folds(obs, fold_by)
     folds = shared["folds"][fold_by]
