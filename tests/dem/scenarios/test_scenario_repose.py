@@ -204,6 +204,38 @@ def test_the_funnel_cover_is_a_smooth_gate(gate):
         assert v[0] > 0.01
 
 
+@pytest.mark.parametrize("name", ["black-soil-stage1", "black-soil-stage2", "guangxi-cohesive"])
+def test_every_funnel_run_covers_its_outlet_with_the_gate(name, monkeypatch):
+    """The funnel setups' runs build their cover of ``repose.GATE``, whatever their wall
+    material (soil for the black soil's stage 1, steel otherwise), and the funnel itself of
+    the wall material; the run is stopped as its walls are built."""
+    from soilcal.dem import engine
+    from soilcal.dem.scenarios.base import merge_setup
+
+    seen = {}
+
+    class Built(Exception):
+        pass
+
+    def add_mesh(self, v, t, material, name=None, **kw):
+        seen[name] = (material, self.materials.pairs[(self.materials.index("soil"),
+                                                      self.materials.index(material))])
+        if name == "cover":
+            raise Built
+
+    monkeypatch.setattr(engine.Simulation, "add_mesh", add_mesh)
+    setup = merge_setup(repose.setups(), name, {}, "t")
+    with pytest.raises(Built):
+        repose.run(setup, DemParams(soil_density=1560.0, soil_soil_static_friction=0.9,
+                                    soil_steel_static_friction=0.6, soil_soil_surface_energy=0.3),
+                   "quick", seed=0, threads=1)
+    (fm, fp), (cm, cp) = seen["funnel"], seen["cover"]
+    assert fm == setup["wall_material"] and cm == repose.GATE
+    assert fp.friction in (0.9, 0.6) and fp.friction > 0.0
+    assert (cp.friction, cp.rolling_friction, cp.surface_energy) == (0.0, 0.0, 0.0)
+    assert cp.restitution == fp.restitution
+
+
 def test_read_time_reads_the_heap_that_long_after_the_release_whatever_its_speed():
     """With ``read_time`` the heap is read ``read_time`` after the cover starts to move (the
     paper's fixed simulated duration), not when the rest rule fires: with a rest speed no heap
