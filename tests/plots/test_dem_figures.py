@@ -181,6 +181,12 @@ def test_summary_figure(tmp_path):
     bars = [p for p in ax.patches if p is not band]
     assert len(bars) == len(df) - 1
     assert sorted({round(b.get_width(), 6) for b in bars}) == [-0.8, 1.2]
+    # the title is drawn whole inside the figure, whatever the row labels' width
+    long = df.assign(case=["a case whose label is long enough to squeeze the axes"] * len(df))
+    fig = dem._summary_figure(long)
+    fig.canvas.draw()
+    box = fig._suptitle.get_window_extent()
+    assert box.x0 >= 0 and box.x1 <= fig.bbox.x1 and box.y1 <= fig.bbox.y1
 
 
 # --------------------------------------------------------------------------- tools

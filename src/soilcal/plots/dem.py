@@ -346,7 +346,8 @@ def _summary_figure(df: pd.DataFrame, title: str | None = None) -> Figure:
     lim = np.nanmax(np.abs(np.concatenate([err + err_sd, err - err_sd, [2.5]])))
     ax.set_xlim(-1.1 * lim, 1.1 * lim)
     ax.set_xlabel("relative error at the calibrated optimum (%)")
-    ax.set_title(title or "Relative error of every target at the calibrated optimum")
+    # over the figure, not the axes: long row labels leave the axes narrower than the title
+    fig.suptitle(title or "Relative error of every target at the calibrated optimum")
     ax.legend(loc="best", fontsize=8)
     ax.grid(axis="x", alpha=0.3)
     fig.tight_layout()

@@ -186,9 +186,9 @@ def test_the_funnel_cover_is_a_smooth_gate(gate):
                   soil_soil_surface_energy=0.4, soil_shear_modulus=1e8)
     sim, _ = make_simulation(p, setup, "quick", "t")
     mat = repose._add_gate(sim, setup) if gate else setup["wall_material"]
-    gm = sim.materials.materials[sim.materials.index("gate" if gate else "soil")]
-    soil = sim.materials.materials[sim.materials.index("soil")]
-    assert (gm.density, gm.poisson, gm.shear) == (soil.density, soil.poisson, soil.shear)
+    if gate:
+        gm, soil = (sim.materials.materials[sim.materials.index(m)] for m in (repose.GATE, "soil"))
+        assert (gm.density, gm.poisson, gm.shear) == (soil.density, soil.poisson, soil.shear)
     cv, ct = disk_mesh(0.05, 24, centre=(0.0, 0.0, 0.0))
     cover = sim.add_mesh(cv, ct, mat, name="cover")
     r = 0.003
@@ -231,7 +231,7 @@ def test_every_funnel_run_covers_its_outlet_with_the_gate(name, monkeypatch):
                    "quick", seed=0, threads=1)
     (fm, fp), (cm, cp) = seen["funnel"], seen["cover"]
     assert fm == setup["wall_material"] and cm == repose.GATE
-    assert fp.friction in (0.9, 0.6) and fp.friction > 0.0
+    assert fp.friction in (0.9, 0.6)
     assert (cp.friction, cp.rolling_friction, cp.surface_energy) == (0.0, 0.0, 0.0)
     assert cp.restitution == fp.restitution
 

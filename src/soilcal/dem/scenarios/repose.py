@@ -326,11 +326,10 @@ def _add_gate(sim, setup: dict) -> str:
     mats.add(Material(GATE, density=wall.density, poisson=wall.poisson, shear=wall.shear,
                       source=mats.source))
     e = mats.pairs[(mats.index("soil"), mats.index(setup["wall_material"]))].restitution
-    mats.set_pair("soil", GATE, restitution=e, friction=0.0)
-    for m in mats.materials:
-        if m.name not in ("soil", GATE):
+    for m in mats.materials:  # the gate itself among them
+        if m.name != "soil":
             mats.set_pair(m.name, GATE, restitution=0.5, friction=0.3)
-    mats.set_pair(GATE, GATE, restitution=0.5, friction=0.3)
+    mats.set_pair("soil", GATE, restitution=e, friction=0.0)
     return GATE
 
 
