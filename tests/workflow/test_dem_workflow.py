@@ -189,6 +189,40 @@ def test_a_refined_case_plans_its_second_round(done):
     assert planned_jobs(done) == []
 
 
+def test_a_second_verification_stage_plans_the_seeds_its_table_asks_for(done):
+    """max_replicates above replicates: the verify_seeds checkpoint sizes each case's seeds from
+    the first stage's runs; a table asking for four seeds of the case plans the two seeds after
+    the first stage's two (the next seeds), and the verification that reads them; the first
+    stage's runs and the design are not re-run.  Restoring the soil leaves nothing to do."""
+    soil = done / "config/soils/cinnamon-soil.yaml"
+    text, st = soil.read_text(), soil.stat()
+    seeds_csv = done / "results/cinnamon-soil/dem/bbd/verify_seeds.csv"
+    d = yaml.safe_load(text)
+    d["simulation"]["verification"]["max_replicates"] = 6
+    try:
+        soil.write_text(yaml.safe_dump(d, sort_keys=False))
+        run(done, "--cores", "2", str(seeds_csv.relative_to(done)))
+        plan = pd.read_csv(seeds_csv)
+        assert list(plan["case"]) == ["stacking_angle"] and set(plan["first_seeds"]) == {2}
+        assert 2 <= int(plan["seeds"].iloc[0]) <= 6
+        plan["seeds"] = 4
+        plan.to_csv(seeds_csv, index=False)
+        planned = planned_jobs(done)
+    finally:
+        soil.write_text(text)
+        os.utime(soil, ns=(st.st_atime_ns, st.st_mtime_ns))
+        seeds_csv.unlink(missing_ok=True)
+    base = "results/cinnamon-soil/dem/"
+    assert sorted(o for o in planned if "/verify/" in o) == [
+        base + "verify/quick/bbd/stacking_angle/2.csv", base + "verify/quick/bbd/stacking_angle/3.csv"]
+    assert base + "verification.csv" in planned and base + "bbd/refined.csv" in planned
+    # the verification's settings are no design stage's params: no stage, design point or
+    # first-stage seed runs again
+    assert not any(re.search(r"/dem/[^/]+/(stage\.json|design\.csv|responses\.csv|optimum\.csv)|/dem/[^/]+/runs/", o)
+                   for o in planned), planned
+    assert planned_jobs(done) == []
+
+
 def test_the_loop_compares_every_measured_plate_and_fits_the_adhesion_effect(done):
     d = done / "results/cinnamon-soil"
     tools = pd.read_csv(d / "dem/tool_verification.csv")

@@ -359,21 +359,59 @@ def verify_presets(soil, stage, case):
 
 
 def verify_runs(w):
-    reps = int(verify.verify_settings(soil_cfg(w.soil))["replicates"])
+    reps = verify.first_stage_seeds(soil_cfg(w.soil))
+    own = sim_cfg(w.soil).get("preset", "quick")
     out = []
     for sid, case in verify.verification_cases(soil_cfg(w.soil), optimised_stages(w.soil)):
         for preset in verify_presets(w.soil, sid, case):
-            out += [f"results/{w.soil}/dem/verify/{preset}/{sid}/{case}/{k}.csv" for k in range(reps)]
+            n = case_seed_counts(w.soil, sid).get(case, reps) if preset == own else reps
+            out += [f"results/{w.soil}/dem/verify/{preset}/{sid}/{case}/{k}.csv" for k in range(n)]
     return out
+
+
+def stage_first_runs(w):
+    """The first verification stage's runs of one stage at the soil's own preset
+    (``replicates`` seeds per case), from which verify_seeds sizes the second stage."""
+    reps = verify.first_stage_seeds(soil_cfg(w.soil))
+    preset = sim_cfg(w.soil).get("preset", "quick")
+    return [f"results/{w.soil}/dem/verify/{preset}/{w.stage}/{case}/{k}.csv"
+            for sid, case in verify.verification_cases(soil_cfg(w.soil), [w.stage]) for k in range(reps)]
+
+
+def case_seed_counts(soil, stage):
+    """Each case's verification seeds at the soil's own preset once the verify_seeds
+    checkpoint has sized them (a soil whose max_replicates exceeds its replicates); {} (every
+    case its replicates) otherwise."""
+    import pandas as pd
+
+    if not verify.two_stage(soil_cfg(soil)):
+        return {}
+    return verify.case_seeds(pd.read_csv(verify_seeds_of(soil, stage)))
+
+
+def verify_seeds_of(soil, stage):
+    """verify_seeds.csv of a stage once that checkpoint has run (after its optimum)."""
+    optimum_file(soil, stage)
+    return checkpoints.verify_seeds.get(soil=soil, stage=stage).output[0]
 
 
 def stage_verify_runs(w):
     """The first round's verification runs of one stage at the soil's own preset (what the
-    second round corrects from)."""
-    reps = int(verify.verify_settings(soil_cfg(w.soil))["replicates"])
+    second round corrects from): both stages of it where the soil runs two."""
+    reps = verify.first_stage_seeds(soil_cfg(w.soil))
     preset = sim_cfg(w.soil).get("preset", "quick")
+    counts = case_seed_counts(w.soil, w.stage)
     return [f"results/{w.soil}/dem/verify/{preset}/{w.stage}/{case}/{k}.csv"
-            for sid, case in verify.verification_cases(soil_cfg(w.soil), [w.stage]) for k in range(reps)]
+            for sid, case in verify.verification_cases(soil_cfg(w.soil), [w.stage])
+            for k in range(counts.get(case, reps))]
+
+
+def verify_seed_files(w):
+    """verify_seeds.csv of every optimised stage where the soil runs a second verification
+    stage (the verification notes which cases took more seeds), else none."""
+    if not verify.two_stage(soil_cfg(w.soil)):
+        return []
+    return [verify_seeds_of(w.soil, s) for s in optimised_stages(w.soil)]
 
 
 def refine_on(soil):
@@ -401,11 +439,13 @@ def final_files(w):
 
 
 def _stage_refined_runs(soil, stage):
-    """The second round's runs of one stage: its refined cases at their bias-corrected sets."""
-    reps = int(verify.verify_settings(soil_cfg(soil))["replicates"])
+    """The second round's runs of one stage: its refined cases at their bias-corrected sets,
+    each with as many seeds as its first round ended with."""
+    reps = verify.first_stage_seeds(soil_cfg(soil))
     _, ref = _calibration(soil, stage, refined=True)
+    counts = case_seed_counts(soil, stage)
     return [f"results/{soil}/dem/refine/{stage}/{case}/{k}.csv"
-            for case in refine.refined_cases(ref) for k in range(reps)]
+            for case in refine.refined_cases(ref) for k in range(counts.get(case, reps))]
 
 
 def stage_refined_runs(w):
@@ -424,13 +464,13 @@ def verification_soil(w):
     """The soil config the verification and final.csv judge a round by (without its
     documentation: editing a note re-runs nothing); ``citation``: whether the soil has a paper
     whose targets and verification to set beside."""
-    return dict(dem_context(soil_cfg(w.soil)), citation=bool(soil_cfg(w.soil).get("citation")))
+    return dict(dem_context(soil_cfg(w.soil), verification=True), citation=bool(soil_cfg(w.soil).get("citation")))
 
 
 def refine_spec(w):
     st, ref = _calibration(w.soil, w.stage, refined=True)
-    reps = int(verify.verify_settings(soil_cfg(w.soil))["replicates"])
-    return verify.verification_point(SOILS[w.soil], st, ref, w.case, reps + int(w.rep))
+    # after every seed the first round may take (both its stages), so that no seed repeats
+    return verify.verification_point(SOILS[w.soil], st, ref, w.case, verify.most_seeds(soil_cfg(w.soil)) + int(w.rep))
 
 
 _CALIBRATED = {}

@@ -1,5 +1,6 @@
 # Verification of the DEM calibration: every optimisation case at its calibrated set with
-# several seeds apart from the design seeds (one job per case and seed; also at the paper preset
+# several seeds apart from the design seeds, more where the first ones leave a miss within their
+# scatter and the soil allows more (checkpoint verify_seeds; one job per case and seed; also at the paper preset
 # for the responses listed under simulation.verification.paper), the papers' tool and
 # process tests declared in the soil's `measurements` block (one job per distinct measured
 # condition: a tiller speed whose flatness and power are tabled apart is one job),
@@ -31,6 +32,28 @@ rule verify_point:
         "benchmarks/workflow/{soil}/dem/verify/{preset}/{stage}/{case}/{rep}.tsv"
     script:
         "../scripts/verify_point.py"
+
+
+checkpoint verify_seeds:
+    # the second verification stage (a soil whose simulation.verification.max_replicates exceeds
+    # its replicates): how many seeds each case of the stage takes, from its first stage's runs
+    input:
+        stage="results/{soil}/dem/{stage}/stage.json",
+        targets="results/{soil}/dem/targets.csv",
+        optimum=lambda w: optimum_of(w.soil, w.stage),
+        runs=stage_first_runs,
+    output:
+        report("results/{soil}/dem/{stage}/verify_seeds.csv", caption="../report/verify_seeds.rst",
+               category="{soil}", subcategory="dem verification"),
+    params:
+        soil=verification_soil,
+        preset=lambda w: sim_cfg(w.soil).get("preset", "quick"),
+    conda:
+        "../../envs/soilcal.yaml"
+    log:
+        "logs/{soil}/dem/{stage}/verify_seeds.log",
+    script:
+        "../scripts/verify_seeds.py"
 
 
 checkpoint refine:
@@ -105,6 +128,7 @@ rule verification:
         runs=verify_runs,
         refined=lambda w: list(refined_files(w).values()),
         refined_runs=refined_runs,
+        seeds=verify_seed_files,
     output:
         report("results/{soil}/dem/verification.csv", caption="../report/verification.rst", category="{soil}",
                subcategory="dem verification"),

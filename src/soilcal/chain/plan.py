@@ -30,15 +30,21 @@ def _strip_notes(obj):
     return obj
 
 
-def dem_context(soil_data: dict, search_ranges: bool = False) -> dict:
+def dem_context(soil_data: dict, search_ranges: bool = False, verification: bool = False) -> dict:
     """The soil config without its documentation (citation, notes, errata, printed
     verification prose): what the DEM source's results depend on.  Passed to the DEM rules
     as params, so that editing a note re-runs nothing.  ``simulation.search_ranges`` only with
     ``search_ranges`` (the second round's rules, which search within it, and the adaptive
     design's, which record it as not used, :func:`soilcal.chain.adaptive.stage_for`:
-    editing a declared range re-runs those alone, :func:`without_search_ranges`)."""
+    editing a declared range re-runs those alone, :func:`without_search_ranges`);
+    ``simulation.verification`` only with ``verification`` (the rules that read its seeds and
+    rounds: raising the verification's seeds re-runs the verification alone, not the design
+    stages before it)."""
     d = {k: copy.deepcopy(v) for k, v in soil_data.items() if k not in _DOCUMENTATION}
-    return _strip_notes(d if search_ranges else without_search_ranges(d))
+    d = d if search_ranges else without_search_ranges(d)
+    if not verification and isinstance(d.get("simulation"), dict) and "verification" in d["simulation"]:
+        d = dict(d, simulation={k: v for k, v in d["simulation"].items() if k != "verification"})
+    return _strip_notes(d)
 
 
 def without_search_ranges(soil_data: dict) -> dict:

@@ -9,7 +9,8 @@ together) for at least one targeted response
 (:func:`soilcal.optimise.correction.significant_bias`); the new set is the smallest
 move from x0 at which the bias-corrected surfaces meet every target
 (:func:`soilcal.optimise.correction.corrected_set`), and the workflow verifies it with fresh
-seeds (``seed + seed_offset + replicates + k``).  Where the corrected surfaces cannot meet every
+seeds (``seed + seed_offset + max_replicates + k``, after every seed the first round may take;
+as many as the first round ended with for the case).  Where the corrected surfaces cannot meet every
 target inside the design region, the region is moved, as response-surface practice moves it
 towards a target outside it (Myers, Montgomery & Anderson-Cook, Response Surface Methodology,
 ch. 5-6): the search reaches past the box (``design: recipe``; ``printed`` keeps the box, to be

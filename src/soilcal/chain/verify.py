@@ -10,6 +10,9 @@ the papers' tool and process tests, and the calibrated set beside the paper's.
   says why (:func:`diagnose`).  A seed whose run failed is counted (``failed_seeds``); where
   others succeeded the status says how many of the seeds failed (never ``ok``) and the note
   names them with the reason, the statistics being those of the others.
+* :func:`seeds_frame` - the second verification stage (``simulation.verification.max_replicates``
+  above ``replicates``): a case whose first seeds leave a missed target within their scatter
+  takes as many seeds as Stein's two-stage rule asks for (:func:`stein_seeds`), up to that cap.
 * :func:`tool_frame` - the soil's ``measurements`` (:mod:`soilcal.config.measurements`)
   simulated at the calibrated set of the case each row names.
 * :func:`calibrated_vs_paper` - every calibrated parameter beside the paper's calibrated value.
@@ -22,7 +25,8 @@ import pandas as pd
 
 from soilcal.errors import InputError
 
-VERIFY_DEFAULTS = {"replicates": 4, "seed_offset": 10000, "paper": []}
+VERIFY_DEFAULTS = {"replicates": 4, "max_replicates": "replicates (no second stage)", "seed_offset": 10000,
+                   "paper": []}
 TOLERANCE_PERCENT = 2.0
 SURFACE_TOLERANCE = 0.5
 VERIFICATION_COLUMNS = ["stage", "case", "round", "response", "unit", "target_id", "target", "target_source", "preset", "n",
@@ -37,7 +41,30 @@ TOOL_COLUMNS = ["measurement", "row", "covariate", "covariate_value", "scenario"
 
 
 def verify_settings(soil_data: dict) -> dict:
-    return {**VERIFY_DEFAULTS, **((soil_data.get("simulation") or {}).get("verification") or {})}
+    """The soil's ``simulation.verification`` block over :data:`VERIFY_DEFAULTS`;
+    ``max_replicates`` defaults to ``replicates`` (one stage, :func:`stein_seeds`)."""
+    v = {**VERIFY_DEFAULTS, **((soil_data.get("simulation") or {}).get("verification") or {})}
+    if not isinstance(v["max_replicates"], int) or isinstance(v["max_replicates"], bool):
+        v["max_replicates"] = int(v["replicates"])
+    return v
+
+
+def first_stage_seeds(soil_data: dict) -> int:
+    """Seeds of a case's first verification stage (``simulation.verification.replicates``)."""
+    return int(verify_settings(soil_data)["replicates"])
+
+
+def most_seeds(soil_data: dict) -> int:
+    """The most seeds one case's verification takes (``simulation.verification.max_replicates``,
+    default its ``replicates``: no second stage); the second calibration round's seeds follow
+    them (``seed + seed_offset + most_seeds + k``), so that no round reuses another's seed."""
+    v = verify_settings(soil_data)
+    return max(int(v["max_replicates"]), int(v["replicates"]))
+
+
+def two_stage(soil_data: dict) -> bool:
+    """Whether the soil's verification may add seeds to a case (:func:`seeds_frame`)."""
+    return most_seeds(soil_data) > first_stage_seeds(soil_data)
 
 
 def verification_cases(soil_data: dict, stage_ids) -> list[tuple[str, str]]:
@@ -106,6 +133,108 @@ def seed_scatter(mean: float, sd: float, n: int, target: float) -> tuple[float, 
         return float("nan"), None
     sem = sd / np.sqrt(n)
     return float(sem), bool(abs(mean - target) <= 2 * sem)
+
+
+#: the confidence of the interval the second verification stage sizes (:func:`stein_seeds`)
+STEIN_LEVEL = 0.95
+SEEDS_COLUMNS = ["stage", "case", "response", "preset", "target", "first_seeds", "n", "simulated_mean",
+                 "simulated_sd", "relative_error_percent", "band", "undecided", "stein_seeds", "seeds", "capped",
+                 "note"]
+
+
+def stein_seeds(sd0: float, n0: int, half_width: float, level: float = STEIN_LEVEL) -> int:
+    """Seeds in all that Stein's two-stage procedure asks for (Stein 1945, Ann. Math. Statist.
+    16:243): from a first stage of ``n0`` values with sample SD ``sd0``,
+    n = max(n0, ceil((t_{(1 + level)/2, n0 - 1} sd0 / half_width)^2)) values make the ``level``
+    confidence interval of the mean, t sd0 / sqrt(n) either side of it, no wider than
+    ``half_width`` whatever the true SD.  ``n0`` where the first stage has fewer than two
+    values or no finite SD (nothing to size by) or ``half_width`` is not positive."""
+    from scipy.stats import t as student_t
+
+    if n0 < 2 or not np.isfinite(sd0) or not (np.isfinite(half_width) and half_width > 0):
+        return int(n0)
+    q = float(student_t.ppf(0.5 + level / 2.0, n0 - 1))
+    return max(int(n0), int(np.ceil((q * sd0 / half_width) ** 2 - 1e-9)))
+
+
+def seeds_frame(soil_data: dict, stage: dict, optimum: pd.DataFrame, targets: dict,
+                runs: dict[str, list[pd.DataFrame]], preset: str) -> pd.DataFrame:
+    """How many seeds each case of a stage is verified with, from its first stage's runs
+    ``runs`` (case id -> its run frames, :func:`soilcal.chain.refine.runs_by_case`) at the
+    soil's own ``preset``: one row per case and targeted response (:data:`SEEDS_COLUMNS`).
+
+    A response is ``undecided`` where the mean of its first-stage seeds misses the 2 % band of
+    its target by no more than two standard errors (:func:`seed_scatter`: the row's note would
+    say "seed scatter", the seeds cannot tell a miss from a hit); it then asks for
+    ``stein_seeds`` (:func:`stein_seeds`, the interval's half-width the band, 2 % of the target).
+    ``seeds``, the case's count, is the most any of its responses asks for, at least the first
+    stage's and at most ``simulation.verification.max_replicates`` (``capped`` where that cut
+    it).  A case that met every target, missed one by more than its seeds scatter, or has no
+    calibrated set keeps its first stage's seeds."""
+    first, top = first_stage_seeds(soil_data), most_seeds(soil_data)
+    rows = []
+    for case in (stage.get("optimise") or {}).get("cases", []):
+        frames = runs.get(case["id"], [])
+        crow = [r for r in _case_rows(soil_data, stage, case, optimum, targets, frames, 1)
+                if r["preset"] in (preset, "")]
+        here = []
+        for r in crow:
+            target, n, mean, sd = float(r["target"]), int(r["n"]), r["simulated_mean"], r["simulated_sd"]
+            band = TOLERANCE_PERCENT / 100 * abs(target) if np.isfinite(target) else np.nan
+            missed = bool(n and np.isfinite(band) and band > 0 and not r["within_2_percent"])
+            _, scatter = seed_scatter(mean, sd, n, target) if missed else (np.nan, None)
+            undecided = bool(missed and scatter)
+            need = stein_seeds(sd, n, band) if undecided else n
+            if undecided:
+                note = (f"undecided: the miss {mean - target:+.3g} is within two standard errors of the mean of "
+                        f"{n} seeds; Stein's rule asks for {need} seeds in all (t quantile of {n - 1} degrees of "
+                        f"freedom, SD {sd:.3g}, half-width {band:.3g}, the 2 % band)")
+            elif not n:
+                note = "no seed gave a value"
+            elif missed and scatter is None:
+                note = "missed with fewer than two seeds: no scatter to size a second stage by"
+            elif missed:
+                note = "missed by more than the seeds scatter: decided"
+            elif np.isfinite(band):
+                note = "met within 2 %"
+            else:
+                note = "no target value"
+            here.append({"stage": stage["id"], "case": case["id"], "response": r["response"],
+                         "preset": r["preset"] or preset, "target": target, "first_seeds": len(frames), "n": n,
+                         "simulated_mean": mean, "simulated_sd": sd,
+                         "relative_error_percent": r["relative_error_percent"], "band": band,
+                         "undecided": undecided, "stein_seeds": need, "note": note})
+        asked = max([h["stein_seeds"] for h in here if h["undecided"]], default=0)
+        total = min(top, max(first, len(frames), asked))
+        for h in here:
+            h["seeds"] = total
+            h["capped"] = bool(asked > total)
+            if h["undecided"] and asked > total:
+                h["note"] += f"; capped at simulation.verification.max_replicates {top}"
+        rows += here or [{"stage": stage["id"], "case": case["id"], "response": "", "preset": preset,
+                          "target": np.nan, "first_seeds": len(frames), "n": 0, "simulated_mean": np.nan,
+                          "simulated_sd": np.nan, "relative_error_percent": np.nan, "band": np.nan,
+                          "undecided": False, "stein_seeds": 0, "seeds": max(first, len(frames)), "capped": False,
+                          "note": "no targeted response"}]
+    return pd.DataFrame(rows, columns=SEEDS_COLUMNS)
+
+
+def case_seeds(frame: pd.DataFrame) -> dict[str, int]:
+    """Each case's seed count of a :func:`seeds_frame` (``verify_seeds.csv``)."""
+    return {str(c): int(g["seeds"].max()) for c, g in frame.groupby("case", sort=False)}
+
+
+def write_seeds(soil_data: dict, stage_json, optimum_csv, targets_csv, run_paths, preset: str, out) -> pd.DataFrame:
+    """``verify_seeds.csv`` of one stage (:func:`seeds_frame`) from its files and the first
+    stage's verification runs ``verify/<preset>/<stage>/<case>/<k>.csv``."""
+    from soilcal.chain.files import read_stage, read_targets, write_csv
+    from soilcal.chain.refine import runs_by_case
+
+    stage = read_stage(stage_json)
+    df = seeds_frame(soil_data, stage, pd.read_csv(optimum_csv), read_targets(targets_csv),
+                     runs_by_case(run_paths, stage["id"]), preset)
+    write_csv(df, out)
+    return df
 
 
 def region_limit(on_bounds, otherwise: str) -> str:
@@ -639,8 +768,9 @@ def tool_frame(conditions, runs: dict[tuple[str, int], pd.DataFrame]) -> pd.Data
     return pd.DataFrame(rows, columns=TOOL_COLUMNS)
 
 
-__all__ = ["TOOL_COLUMNS", "VERIFICATION_COLUMNS", "calibrated_vs_paper", "diagnose", "not_run_rows",
-           "tool_frame", "verification_cases", "verification_frame", "verification_spec", "verify_settings"]
+__all__ = ["SEEDS_COLUMNS", "TOOL_COLUMNS", "VERIFICATION_COLUMNS", "calibrated_vs_paper", "case_seeds", "diagnose",
+           "first_stage_seeds", "most_seeds", "not_run_rows", "seeds_frame", "stein_seeds", "tool_frame", "two_stage",
+           "verification_cases", "verification_frame", "verification_spec", "verify_settings"]
 
 
 # --------------------------------------------------------------------------- file level
@@ -711,17 +841,34 @@ def run_verification_point(spec: dict, out, threads: int | None = None,
     return df
 
 
+def seed_note(plan: pd.DataFrame) -> str:
+    """What the second verification stage did for one case, from its rows of
+    ``verify_seeds.csv`` (:func:`seeds_frame`); empty where it took no more seeds."""
+    und = plan[plan["undecided"].astype(str).str.lower() == "true"]
+    if und.empty or int(plan["seeds"].max()) <= int(plan["first_seeds"].max()):
+        return ""
+    asked, took = int(und["stein_seeds"].max()), int(plan["seeds"].max())
+    return (f"two-stage verification: the first {int(plan['first_seeds'].max())} seeds left "
+            f"{', '.join(und['response'].astype(str))} within seed scatter of the target; Stein's rule asked for "
+            f"{asked} seeds in all, {took} ran" + (" (capped at simulation.verification.max_replicates)"
+                                                   if asked > took else ""))
+
+
 def write_verification(soil_data: dict, stage_ids, stage_dirs: dict[str, str], targets_csv, run_paths, out,
-                       refined_paths: dict[str, str] | None = None, refined_run_paths=()) -> pd.DataFrame:
+                       refined_paths: dict[str, str] | None = None, refined_run_paths=(),
+                       seed_paths=()) -> pd.DataFrame:
     """``verification.csv`` of a soil from its replicate runs ``verify/<preset>/<stage>/<case>/<k>.csv``
     and, where the soil runs a second round, its stages' ``refined.csv`` (``refined_paths``)
-    with the runs at the refined sets ``refine/<stage>/<case>/<k>.csv``."""
+    with the runs at the refined sets ``refine/<stage>/<case>/<k>.csv``; ``seed_paths``: the
+    stages' ``verify_seeds.csv`` where the soil runs a second verification stage, whose first
+    round rows at the soil's preset then say what it did (:func:`seed_note`)."""
     from pathlib import Path
 
     from soilcal.chain.files import read_stage, read_targets, write_csv
     from soilcal.chain.refine import runs_by_case
 
     targets = read_targets(targets_csv)
+    plans = {Path(p).parent.name: pd.read_csv(p) for p in seed_paths}
     frames = []
     for sid in stage_ids:
         d = Path(stage_dirs[sid])
@@ -729,7 +876,16 @@ def write_verification(soil_data: dict, stage_ids, stage_dirs: dict[str, str], t
         runs = runs_by_case(run_paths, sid)
         ref = pd.read_csv(refined_paths[sid]) if refined_paths and sid in refined_paths else None
         runs2 = runs_by_case(refined_run_paths, sid)
-        frames.append(verification_frame(soil_data, stage, pd.read_csv(d / "optimum.csv"), targets, runs, ref, runs2))
+        frame = verification_frame(soil_data, stage, pd.read_csv(d / "optimum.csv"), targets, runs, ref, runs2)
+        if sid in plans and len(frame):
+            for case, plan in plans[sid].groupby("case"):
+                note = seed_note(plan)
+                at = ((frame["case"].astype(str) == str(case)) & (frame["round"] == 1)
+                      & frame["preset"].astype(str).isin(set(plan["preset"].astype(str))))
+                if note:
+                    frame.loc[at, "note"] = [note + (f"; {v}" if isinstance(v, str) and v else "")
+                                             for v in frame.loc[at, "note"]]
+        frames.append(frame)
     df = pd.concat(frames, ignore_index=True) if frames else pd.DataFrame(columns=VERIFICATION_COLUMNS)
     write_csv(df, out)
     return df

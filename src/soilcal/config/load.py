@@ -383,6 +383,19 @@ def check_search_ranges(path: Path, d: dict) -> None:
                                  f"search range contains every stage's range of {pid}", r["high"])
 
 
+def _check_verification_seeds(path: Path, d: dict) -> None:
+    """``simulation.verification.max_replicates`` is at least its ``replicates`` (default 4):
+    the second verification stage adds seeds to the first stage's, it cannot take fewer."""
+    from soilcal.chain.verify import VERIFY_DEFAULTS
+
+    ver = (d.get("simulation") or {}).get("verification") or {}
+    if "max_replicates" in ver:
+        reps = ver.get("replicates", VERIFY_DEFAULTS["replicates"])
+        if ver["max_replicates"] < reps:
+            raise InputError(path, "simulation.verification.max_replicates",
+                             f"at least simulation.verification.replicates ({reps})", ver["max_replicates"])
+
+
 def _check_stage_sets_each_parameter_once(path: Path, where: str, st: dict, params: dict) -> None:
     """A stage varies or fixes each parameter once: two factors on one parameter, or a factor
     and a fixed value of it, would leave one of the two without any effect on the runs (the
@@ -588,6 +601,7 @@ def _semantic_checks(path: Path, d: dict, resources_root: Path,
                else f"source {d['source']} runs the DEM; or source: published")
         raise InputError(path, "simulation", f"a simulation block naming the scenario of each response ({how})", None)
     check_search_ranges(path, d)
+    _check_verification_seeds(path, d)
     if d.get("simulation"):
         from soilcal.dem.scenarios.design import check_block
 
