@@ -190,8 +190,8 @@ def test_a_refined_case_plans_its_second_round(done):
 
 
 def test_a_second_verification_stage_plans_the_seeds_its_table_asks_for(done):
-    """max_replicates above replicates: the verify_seeds checkpoint sizes each case's seeds from
-    the first stage's runs; a table asking for four seeds of the case plans the two seeds after
+    """max_replicates above replicates: the verify_seeds checkpoint, a target of the run, sizes
+    each case's seeds from the first stage's runs; a table asking for four seeds of the case plans the two seeds after
     the first stage's two (the next seeds), and the verification that reads them; the first
     stage's runs and the design are not re-run.  Restoring the soil leaves nothing to do."""
     soil = done / "config/soils/cinnamon-soil.yaml"
@@ -201,6 +201,9 @@ def test_a_second_verification_stage_plans_the_seeds_its_table_asks_for(done):
     d["simulation"]["verification"]["max_replicates"] = 6
     try:
         soil.write_text(yaml.safe_dump(d, sort_keys=False))
+        # turned on after a finished run, the checkpoint is planned by the run's own target
+        # (rule all), not only when asked for by name
+        assert str(seeds_csv.relative_to(done)) in planned_jobs(done)
         run(done, "--cores", "2", str(seeds_csv.relative_to(done)))
         plan = pd.read_csv(seeds_csv)
         assert list(plan["case"]) == ["stacking_angle"] and set(plan["first_seeds"]) == {2}

@@ -142,7 +142,7 @@ def optimised_stages(soil):
 def dem_soil_targets(soil):
     d = f"results/{soil}/dem"
     out = [f"{d}/targets.csv", f"{d}/simulation.csv", f"{d}/verification.csv", f"{d}/calibrated_vs_paper.csv",
-           f"{d}/figures/verification"]
+           f"{d}/figures/verification"] + seed_files(soil)
     if soil_cfg(soil).get("measurements"):
         out += [f"{d}/tool_verification.csv", f"{d}/figures/tools"]
         loop = f"results/{soil}/loop"
@@ -406,12 +406,21 @@ def stage_verify_runs(w):
             for k in range(counts.get(case, reps))]
 
 
-def verify_seed_files(w):
+def seed_files(soil):
     """verify_seeds.csv of every optimised stage where the soil runs a second verification
-    stage (the verification notes which cases took more seeds), else none."""
-    if not verify.two_stage(soil_cfg(w.soil)):
+    stage, else none.  They are targets of the run (dem_soil_targets): a job whose input only
+    a checkpoint's result names (the verification's seeds) keeps its output until the
+    checkpoint has run, and Snakemake runs a checkpoint that no target asks for only for a job
+    that must run anyway, so a soil that turns the second stage on after a finished run would
+    otherwise get nothing."""
+    if not verify.two_stage(soil_cfg(soil)):
         return []
-    return [verify_seeds_of(w.soil, s) for s in optimised_stages(w.soil)]
+    return [f"results/{soil}/dem/{s}/verify_seeds.csv" for s in optimised_stages(soil)]
+
+
+def verify_seed_files(w):
+    """The soil's verify_seeds.csv files (seed_files), which the verification notes."""
+    return seed_files(w.soil)
 
 
 def refine_on(soil):
