@@ -70,7 +70,7 @@ wildcard_constraints:
 localrules:
     design, errata, image_measure, targets, optimum, figures, verification_figures, tool_figures,
     summary, regression, published_responses, dem_responses, simulation_setup, printed_comparison, refine,
-    verification, tool_verification, calibrated_vs_paper, loop_diagnose, loop_more, loop_select,
+    verify_seeds, final_set, verification, tool_verification, calibrated_vs_paper, loop_diagnose, loop_more, loop_select,
     adaptive_step, adaptive_case, adaptive_stage, adaptive_verification, adaptive_figures,
 
 
