@@ -361,10 +361,11 @@ def verify_presets(soil, stage, case):
 def verify_runs(w):
     reps = verify.first_stage_seeds(soil_cfg(w.soil))
     own = sim_cfg(w.soil).get("preset", "quick")
+    counts = {sid: case_seed_counts(w.soil, sid) for sid in optimised_stages(w.soil)}
     out = []
     for sid, case in verify.verification_cases(soil_cfg(w.soil), optimised_stages(w.soil)):
         for preset in verify_presets(w.soil, sid, case):
-            n = case_seed_counts(w.soil, sid).get(case, reps) if preset == own else reps
+            n = counts[sid].get(case, reps) if preset == own else reps
             out += [f"results/{w.soil}/dem/verify/{preset}/{sid}/{case}/{k}.csv" for k in range(n)]
     return out
 
@@ -386,7 +387,14 @@ def case_seed_counts(soil, stage):
 
     if not verify.two_stage(soil_cfg(soil)):
         return {}
-    return verify.case_seeds(pd.read_csv(verify_seeds_of(soil, stage)))
+    path = verify_seeds_of(soil, stage)
+    key = (path, os.path.getmtime(path))
+    if key not in _SEED_COUNTS:  # read once per file version, as _calibration reads a set
+        _SEED_COUNTS[key] = verify.case_seeds(pd.read_csv(path))
+    return _SEED_COUNTS[key]
+
+
+_SEED_COUNTS = {}
 
 
 def verify_seeds_of(soil, stage):

@@ -205,7 +205,7 @@ def seeds_frame(soil_data: dict, stage: dict, optimum: pd.DataFrame, targets: di
                          "relative_error_percent": r["relative_error_percent"], "band": band,
                          "undecided": undecided, "stein_seeds": need, "note": note})
         asked = max([h["stein_seeds"] for h in here if h["undecided"]], default=0)
-        total = min(top, max(first, len(frames), asked))
+        total = min(top, max(first, asked))
         for h in here:
             h["seeds"] = total
             h["capped"] = bool(asked > total)
@@ -214,7 +214,7 @@ def seeds_frame(soil_data: dict, stage: dict, optimum: pd.DataFrame, targets: di
         rows += here or [{"stage": stage["id"], "case": case["id"], "response": "", "preset": preset,
                           "target": np.nan, "first_seeds": len(frames), "n": 0, "simulated_mean": np.nan,
                           "simulated_sd": np.nan, "relative_error_percent": np.nan, "band": np.nan,
-                          "undecided": False, "stein_seeds": 0, "seeds": max(first, len(frames)), "capped": False,
+                          "undecided": False, "stein_seeds": 0, "seeds": first, "capped": False,
                           "note": "no targeted response"}]
     return pd.DataFrame(rows, columns=SEEDS_COLUMNS)
 
@@ -880,11 +880,12 @@ def write_verification(soil_data: dict, stage_ids, stage_dirs: dict[str, str], t
         if sid in plans and len(frame):
             for case, plan in plans[sid].groupby("case"):
                 note = seed_note(plan)
+                if not note:
+                    continue
                 at = ((frame["case"].astype(str) == str(case)) & (frame["round"] == 1)
                       & frame["preset"].astype(str).isin(set(plan["preset"].astype(str))))
-                if note:
-                    frame.loc[at, "note"] = [note + (f"; {v}" if isinstance(v, str) and v else "")
-                                             for v in frame.loc[at, "note"]]
+                frame.loc[at, "note"] = [note + (f"; {v}" if isinstance(v, str) and v else "")
+                                         for v in frame.loc[at, "note"]]
         frames.append(frame)
     df = pd.concat(frames, ignore_index=True) if frames else pd.DataFrame(columns=VERIFICATION_COLUMNS)
     write_csv(df, out)
