@@ -4,7 +4,8 @@
 # structure, each simulated at a small design of its parameters (one DEM job per design point
 # and measured condition, with the tool runs' seeds), then fitted, scored on held-out
 # measurements and chosen or rejected.  A second round (checkpoint loop_more) fits the effects
-# that the residual left by the first round's model matches.
+# that the residual left by the first round's model matches, and runs more levels of an effect
+# whose scenario stopped measuring past some level (soilcal.loop.select.narrowing).
 
 
 checkpoint loop_diagnose:

@@ -16,8 +16,10 @@ for tests, the benchmark and ``soilcal loop synthesize``) share them:
    every condition simulated at every design point with the seeds of the calibrated runs;
 5. :func:`analyse`: surrogates, forward selection, the verdict and the report tables;
 6. :func:`more_candidates`: one second round for an effect the first one masked (the
-   residual left by the first round's model matches it), then :func:`analyse` again over
-   both rounds' candidates.
+   residual left by the first round's model matches it), and for an effect whose scenario
+   stopped measuring past some level (:func:`soilcal.loop.select.narrowing`: the levels
+   inside that gap, :func:`more_designs`), then :func:`analyse` again over both rounds'
+   candidates.
 
 Settings (the soil's optional ``loop`` block, every value written into the outputs)::
 
@@ -403,6 +405,7 @@ class Outcome:
     uniform_scale: bool = False  # whether the chosen effects were fitted beside a free uniform scale
     floor_note: str = ""  # why the noise floor is empty, or which rows took a pooled variance (:func:`noise_floor`)
     floor_interval: tuple = (math.nan, math.nan, math.nan)  # its 95 % interval and degrees of freedom
+    narrowed: dict = None  # effect -> select.Narrowing: fitted over the levels at which its scenario measured
 
 
 def _follows(rank: pd.DataFrame, res: pd.DataFrame | None = None, quantity_of: dict | None = None,
@@ -1034,6 +1037,14 @@ def _unscored(sel, u: pd.DataFrame, alpha: float = 0.05) -> str:
     return out
 
 
+def _design_key(runs: pd.DataFrame, effect) -> tuple:
+    """The levels an effect's runs were simulated at (its design, as run)."""
+    cols = [sl.T_PREFIX + k for k in effect.theta_names() if sl.T_PREFIX + k in runs.columns]
+    if not cols or not len(runs):
+        return ()
+    return tuple(sorted({tuple(float(x) for x in t) for t in runs[cols].itertuples(index=False)}))
+
+
 @dataclass
 class _Rounds:
     """What the rounds of one :func:`run_inprocess` share (:func:`_analyse`; the same residual
@@ -1048,6 +1059,7 @@ class _Rounds:
     effect_data: dict = dataclasses.field(default_factory=dict)
     models: dict = dataclasses.field(default_factory=dict)
     table: object = None
+    narrowed: dict = dataclasses.field(default_factory=dict)
 
     def check(self, res) -> None:
         """Bind the rounds to the residual table ``res`` or check they are bound to it."""
@@ -1111,21 +1123,35 @@ def _analyse(soil: str, res: pd.DataFrame, diag: pd.DataFrame, cands: list, effe
     data = {}
     fold_by, fold_text = fold_grouping(settings, quantity_cols, res)
     unfit = {}
+    narrowed = {}  # effect -> select.Narrowing: fitted over the levels where its scenario measured
     if n >= 3 and cands:
         rounds = selections if selections is not None else _Rounds()
         rounds.check(res)
-        if tuple(cands) in rounds.selections:
-            data, unfit, sel = rounds.selections[tuple(cands)]
+        # an effect's runs past the levels where its scenario stops measuring leave it the
+        # working range (select.narrowing); keyed by its design, which a second round extends
+        designs = {nm: _design_key(effect_runs[nm], EFFECTS[nm]) for nm in cands}
+        sel_key = tuple((nm, designs[nm]) for nm in cands)
+        if sel_key in rounds.selections:
+            data, unfit, sel = rounds.selections[sel_key]
         else:
             for nm in cands:  # an effect whose runs failed at too many design points cannot be fitted
-                if nm not in rounds.effect_data:
+                key = (nm, designs[nm])
+                if key not in rounds.effect_data:
+                    if any(k[0] == nm for k in rounds.effect_data):
+                        rounds.models.clear()  # the models fitted over its earlier design
+                    nar = sl.narrowing(effect_runs[nm], EFFECTS[nm], settings.design_points)
+                    runs_nm, bounds_nm = effect_runs[nm], settings.effect_bounds(nm)
+                    if nar is not None:
+                        runs_nm, bounds_nm = sl.within(runs_nm, nar), {**bounds_nm, nar.param: (nar.low, nar.high)}
                     try:
-                        rounds.effect_data[nm] = sl.build_effect_data(u, effect_runs[nm], EFFECTS[nm],
-                                                                      settings.effect_bounds(nm),
-                                                                      reference if settings.surrogate == "pooled" else None)
+                        if nar is not None and nar.low == nar.high:
+                            raise ValueError(nar.text())
+                        rounds.effect_data[key] = sl.build_effect_data(u, runs_nm, EFFECTS[nm], bounds_nm,
+                                                                       reference if settings.surrogate == "pooled" else None)
                     except ValueError as exc:
-                        rounds.effect_data[nm] = str(exc)
-                built = rounds.effect_data[nm]
+                        rounds.effect_data[key] = str(exc)
+                    rounds.narrowed[key] = nar
+                built = rounds.effect_data[key]
                 if isinstance(built, str):
                     unfit[nm] = built
                 else:
@@ -1134,7 +1160,9 @@ def _analyse(soil: str, res: pd.DataFrame, diag: pd.DataFrame, cands: list, effe
                 raise InputError("<soil>", "loop.fold_by", "a covariate column of the measured tables", fold_by)
             sel = sl.forward(u, u["simulated_mean"].to_numpy(float), data, fold_by, settings.alpha,
                              settings.max_effects, shared=rounds.models, floor=floor)
-            rounds.selections[tuple(cands)] = (data, unfit, sel)
+            rounds.selections[sel_key] = (data, unfit, sel)
+        narrowed = {nm: rounds.narrowed[(nm, designs[nm])] for nm in cands
+                    if rounds.narrowed.get((nm, designs[nm])) is not None}
         for nm, why in unfit.items():
             sel_rows.append({"step": 1, "effects": nm, "parameters": "{}", "ci95": "{}", "accepted": False,
                              "reason": f"not fitted: {why}"})
@@ -1302,6 +1330,9 @@ def _analyse(soil: str, res: pd.DataFrame, diag: pd.DataFrame, cands: list, effe
         edge = _at_bounds(theta, [data[c] for c in chosen])
         if edge:
             verdict += "; " + "; ".join(edge)
+        for c in chosen:  # its design's failed levels bound it (not loop.bounds)
+            if narrowed.get(c) is not None:
+                verdict += "; " + narrowed[c].text()
         verdict += _not_separated(sel, settings.alpha)
         if left:  # what the chosen effects leave: structure no effect of the library accounted for
             verdict += f"; the residual left still follows {left}, which stays unexplained"
@@ -1426,7 +1457,7 @@ def _analyse(soil: str, res: pd.DataFrame, diag: pd.DataFrame, cands: list, effe
     out = Outcome(res, diag, rank, cands, pd.DataFrame(sel_rows, columns=SELECTION_COLUMNS), summary, pred,
                   verdict, chosen, theta, after, dg.detectable(res, diag, quantity_cols, settings.alpha),
                   {nm: list(d.missing) for nm, d in data.items() if d.missing}, dict(skipped_effects or {}),
-                  fold_by, fold_text, data, uniform is not None, e["floor_note"], e["floor_interval"])
+                  fold_by, fold_text, data, uniform is not None, e["floor_note"], e["floor_interval"], narrowed)
     return out, (None if pending is None else pending + (ci_method,))
 
 
@@ -1551,11 +1582,13 @@ def run_inprocess(soil: str, conditions, base_params, simulate, settings: Settin
     cands = candidates(diag, conditions, settings)
     effect_runs = {}
 
-    def simulate_candidates(names):
+    def simulate_candidates(names, designs=None):
         for name in names:
             eff = EFFECTS[name]
             frames = []
-            for th in sl.theta_design(eff, settings.effect_bounds(name), settings.design_points):
+            design = (designs or {}).get(name) or sl.theta_design(eff, settings.effect_bounds(name),
+                                                                   settings.design_points)
+            for th in design:
                 if eff.is_null(th):  # switched off: the calibrated runs
                     frames.append(base.assign(**{sl.T_PREFIX + k: float(v) for k, v in th.items()}))
                 else:
@@ -1570,8 +1603,9 @@ def run_inprocess(soil: str, conditions, base_params, simulate, settings: Settin
                             selections)
     more = more_candidates(out, conditions, settings)
     if more:
-        simulate_candidates(more)  # the second round, as the workflow's loop_more checkpoint
-        cands = cands + more
+        # the second round, as the workflow's loop_more checkpoint
+        simulate_candidates(more, more_designs(out, settings))
+        cands = cands + [c for c in more if c not in cands]
         out, pending = _analyse(soil, res, diag, cands, effect_runs, settings, reference, qcols, skip, None, False,
                                 selections)
     # the chosen effects simulated (together, where there are several) at the fitted parameters and
@@ -1613,10 +1647,29 @@ def run_inprocess(soil: str, conditions, base_params, simulate, settings: Settin
 def more_candidates(out: Outcome, conditions, settings: Settings) -> list[str]:
     """The second round's candidates: effects that the residual left by the first round's
     model (the chosen effects, or those the forward step added before the gate) matches, and
-    that were not fitted yet; none when the model already holds ``max_effects``."""
-    if out.diagnosis_after is None or len(out.chosen) >= settings.max_effects:
-        return []
-    return [c for c in candidates(out.diagnosis_after, conditions, settings) if c not in out.candidates]
+    that were not fitted yet (none when the model already holds ``max_effects``); and the first
+    round's effects whose scenario stopped measuring past some level (:func:`more_designs`)."""
+    new = []
+    if out.diagnosis_after is not None and len(out.chosen) < settings.max_effects:
+        new = [c for c in candidates(out.diagnosis_after, conditions, settings) if c not in out.candidates]
+    return [c for c in out.candidates if (out.narrowed or {}).get(c) is not None and out.narrowed[c].gaps] + new
+
+
+def more_designs(out: Outcome, settings: Settings) -> dict[str, list[dict]]:
+    """The second round's design of each first-round effect whose runs stopped measuring past
+    some level (:class:`soilcal.loop.select.Narrowing`): its first design, failed levels
+    included (their runs are done), and the narrowing's ``gaps``, the levels between the
+    working range and the failures, where the second round learns how far the scenario goes
+    and the surrogate gains the points its working range lacked.  Every other candidate of
+    the second round takes :func:`soilcal.loop.select.theta_design`."""
+    out_d = {}
+    for name, nar in (out.narrowed or {}).items():
+        if nar is None or not nar.gaps:
+            continue
+        first = sl.theta_design(EFFECTS[name], settings.effect_bounds(name), settings.design_points)
+        levels = sorted({float(t[nar.param]) for t in first} | {float(g) for g in nar.gaps})
+        out_d[name] = [{nar.param: lv} for lv in levels]
+    return out_d
 
 
 def residual_after(res: pd.DataFrame, predicted: np.ndarray) -> pd.DataFrame:

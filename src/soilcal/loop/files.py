@@ -110,13 +110,22 @@ def diagnose_files(soil_path, resources_root, tool_files: dict, outdir) -> dict:
     return plan
 
 
-def _plan(soil_name, cands, reference, settings, qcols, skipped: dict | None = None, res=None) -> dict:
+def _plan(soil_name, cands, reference, settings, qcols, skipped: dict | None = None, res=None,
+          designs: dict | None = None, narrowed: dict | None = None) -> dict:
+    """A round's plan: its candidates and their designs (``designs``: an effect's own, else
+    :func:`soilcal.loop.select.theta_design`); ``narrowed``: effect -> why its design was
+    extended (:func:`soilcal.loop.core.more_designs`)."""
     fold_by, folds = core.fold_grouping(settings, qcols, res)
-    return {"soil": soil_name, "candidates": cands, "skipped": dict(skipped or {}), "reference": reference,
-            "design": {nm: sl.theta_design(EFFECTS[nm], settings.effect_bounds(nm), settings.design_points)
+    designs = designs or {}
+    plan = {"soil": soil_name, "candidates": cands, "skipped": dict(skipped or {}), "reference": reference,
+            "design": {nm: designs.get(nm) or sl.theta_design(EFFECTS[nm], settings.effect_bounds(nm),
+                                                               settings.design_points)
                        for nm in cands},
             "fold_by": fold_by, "folds": folds, "quantity_columns": qcols,
             "settings": asdict(settings)}
+    if narrowed:
+        plan["narrowed"] = dict(narrowed)
+    return plan
 
 
 def loop_job(tool_job: dict, cond, effect: str, theta: dict, reference: dict) -> dict:
@@ -170,8 +179,8 @@ def _outcome(soil, outdir, effect_files: dict, plans: list[dict], interval: bool
     res = read_written(out / "residuals.csv")
     diag = read_written(out / "diagnosis.csv")
     cands, designs = [], {}
-    for plan in plans:
-        cands += plan["candidates"]
+    for plan in plans:  # a later round's design of an effect extends the earlier one's (core.more_designs)
+        cands += [c for c in plan["candidates"] if c not in cands]
         designs.update(plan["design"])
     effect_runs = {}
     for nm in cands:
@@ -194,8 +203,10 @@ def more_files(soil_path, resources_root, outdir, effect_files: dict, out_plan) 
     # the first round's interval is not needed to find the second round's candidates
     outcome, conds, settings = _outcome(soil, outdir, effect_files, [plan], interval=False)
     more = core.more_candidates(outcome, conds, settings) if plan["candidates"] else []
+    designs = core.more_designs(outcome, settings) if more else {}
     plan_more = _plan(soil.name, more, plan["reference"], settings, plan["quantity_columns"],
-                      res=read_written(Path(outdir) / "residuals.csv"))
+                      res=read_written(Path(outdir) / "residuals.csv"), designs=designs,
+                      narrowed={nm: outcome.narrowed[nm].text() for nm in designs if nm in more})
     write_json(plan_more, out_plan)
     return plan_more
 
@@ -396,10 +407,17 @@ def report(soil: str, o: core.Outcome, plans: list) -> str:
         lines += ["", f"{name}: a run failed at some design point for {len(rows)} row{'s' if len(rows) > 1 else ''} "
                   f"({'; '.join(rows)}); each was filled from the row's other design points "
                   "(`soilcal.loop.select._fill_failed`)."]
-    second = plans[1]["candidates"] if len(plans) > 1 else []
+    for name, nar in (o.narrowed or {}).items():
+        lines += ["", f"{nar.text()} (`soilcal.loop.select.narrowing`): a run that cannot be measured there says "
+                  "the measured values rule those levels out, not what the response would be."]
+    extended = plans[1].get("narrowed", {}) if len(plans) > 1 else {}
+    second = [c for c in plans[1]["candidates"] if c not in extended] if len(plans) > 1 else []
     lines += ["", "Candidates of the first round: " + (", ".join(plan["candidates"]) or "none")
               + "; of the second (matched by the residual the first round's model left): "
               + (", ".join(second) or "none") + "."]
+    for name, why in extended.items():
+        lines += ["", f"{name}: its design extended in the second round, between the levels that measured and those "
+                  f"that did not (first round: {why})."]
     lines += ["", "## Settings", "", f"- reference values (where the calibrated parameters hold): "
               f"{json.dumps(plan.get('reference', {}))}", f"- settings: {json.dumps(plan.get('settings', {}))}",
               "", "Figures: `figures/residuals/` (calibrated model), `figures/after/` (with the chosen effects).", ""]

@@ -471,6 +471,110 @@ def baseline(effects: list, y0: np.ndarray) -> np.ndarray:
     return np.asarray(y0, float) if not at else np.mean(at, axis=0)
 
 
+@dataclass(frozen=True)
+class Narrowing:
+    """Where a one-parameter effect's runs stop measuring: every run at the levels past the
+    working range failed (a tail of its design, :func:`narrowing`).  ``low``..``high``: the
+    levels contiguous with the switched-off value at which every row measured (the range the
+    effect is fitted over); ``failed_below`` / ``failed_above``: the nearest failing level on
+    each side (None where that side works to the design's end); ``where``: the first row that
+    failed there and its error; ``gaps``: the levels a second round runs between the working
+    range and the failures, to learn how far the scenario goes."""
+
+    effect: str
+    param: str
+    low: float
+    high: float
+    failed_below: float | None
+    failed_above: float | None
+    where: str
+    gaps: tuple
+
+    def failed(self) -> str:
+        """Where its runs stopped measuring, and the first failing row's error."""
+        sides = [f"{'at or above' if s == 'above' else 'at or below'} {v:g}"
+                 for s, v in (("below", self.failed_below), ("above", self.failed_above)) if v is not None]
+        return f"{self.effect}.{self.param}: no run measured {' or '.join(sides)} ({self.where})"
+
+    def text(self) -> str:
+        if self.low == self.high:
+            return self.failed() + f"; every row measured at its switched-off value {self.low:g} alone"
+        return self.failed() + f"; fitted over {self.low:g} to {self.high:g}, the levels at which every row measured"
+
+
+def _row_key(rec) -> str:
+    return f"{rec[0]} row {rec[1]} {rec[2]}"
+
+
+def narrowing(runs: pd.DataFrame, effect, points: int = 5) -> Narrowing | None:
+    """The :class:`Narrowing` of a one-parameter effect whose runs (``measurement``, ``row``,
+    ``measure``, ``value``, ``status``, ``t:<name>``) fail at every level past some level on
+    one side of its switched-off value, for some row: a scenario that the effect, strong
+    enough, leaves with nothing to measure (soil held by an adhesive tube leaves no heap),
+    which says the measured value rules those levels out rather than that the response stays
+    at its last value (the interpolation of :func:`_fill_failed` for isolated failures).  None
+    where the effect has two parameters, its switched-off level failed or is not in the
+    design, or no side fails to its end.  ``gaps``: ``max(2, points - working levels)`` levels
+    evenly inside each failing gap."""
+    names = effect.theta_names()
+    if len(names) != 1 or runs is None or not len(runs):
+        return None
+    k = names[0]
+    col = T_PREFIX + k
+    if col not in runs.columns:
+        return None
+    level = pd.to_numeric(runs[col], errors="coerce").to_numpy(float)
+    value = pd.to_numeric(runs["value"], errors="coerce").to_numpy(float)
+    ok = np.isfinite(value)
+    if "status" in runs.columns:
+        ok &= runs["status"].astype(str).to_numpy() == "ok"
+    keys = list(zip(runs["measurement"].astype(str), runs["row"], runs["measure"].astype(str)))
+    levels = sorted({float(x) for x in level[np.isfinite(level)]})
+    null = float(effect.null[k])
+    if null not in levels:
+        return None
+    works, first = [], {}
+    for lv in levels:
+        at = level == lv
+        rows = {kk for kk, a in zip(keys, at) if a}
+        good = {kk for kk, a, o in zip(keys, at, ok) if a and o}
+        works.append(rows <= good)
+        bad = sorted(rows - good, key=str)
+        if bad:
+            i = next(j for j, (kk, a) in enumerate(zip(keys, at)) if a and kk == bad[0])
+            err = str(runs["error"].iloc[i]) if "error" in runs.columns and pd.notna(runs["error"].iloc[i]) else ""
+            # the error's first clause (the run file holds all of it)
+            first[lv] = _row_key(bad[0]) + (f": {err.split('; ')[0]}" if err else ": no value")
+    i0 = levels.index(null)
+    if not works[i0]:
+        return None
+    lo_i = hi_i = i0
+    while hi_i + 1 < len(levels) and works[hi_i + 1]:
+        hi_i += 1
+    while lo_i > 0 and works[lo_i - 1]:
+        lo_i -= 1
+    above = hi_i + 1 < len(levels) and not any(works[hi_i + 1:])
+    below = lo_i > 0 and not any(works[:lo_i])
+    if not (above or below):
+        return None
+    n_gap = max(2, int(points) - (hi_i - lo_i + 1))
+    gaps = []
+    if above:
+        gaps += np.linspace(levels[hi_i], levels[hi_i + 1], n_gap + 2)[1:-1].tolist()
+    if below:
+        gaps += np.linspace(levels[lo_i - 1], levels[lo_i], n_gap + 2)[1:-1].tolist()
+    near = levels[hi_i + 1] if above else levels[lo_i - 1]
+    return Narrowing(effect.name, k, levels[lo_i] if below else levels[0], levels[hi_i] if above else levels[-1],
+                     levels[lo_i - 1] if below else None, levels[hi_i + 1] if above else None,
+                     first[near], tuple(sorted(round(float(g), 12) for g in gaps)))
+
+
+def within(runs: pd.DataFrame, nar: Narrowing) -> pd.DataFrame:
+    """The runs at the levels of a :class:`Narrowing`'s working range."""
+    lv = pd.to_numeric(runs[T_PREFIX + nar.param], errors="coerce")
+    return runs[(lv >= nar.low) & (lv <= nar.high)]
+
+
 def _fill_failed(Y: np.ndarray, design: list, effect, obs: pd.DataFrame | None) -> list[str]:
     """Fill, in place, the NaN cells of the design-point means ``Y`` (design x rows): a run
     that failed at a design point; the row's value there is interpolated over its other
