@@ -69,7 +69,7 @@ wildcard_constraints:
 # cluster executor sends the DEM jobs away (profiles/slurm); locally this changes nothing.
 localrules:
     design, errata, image_measure, targets, optimum, figures, verification_figures, tool_figures,
-    summary, regression, published_responses, dem_responses, simulation_setup, printed_comparison, refine,
+    summary, regression, published_responses, dem_responses, simulation_setup, printed_comparison, refine, local_design,
     verify_seeds, final_set, verification, tool_verification, calibrated_vs_paper, loop_diagnose, loop_more, loop_select,
     adaptive_step, adaptive_case, adaptive_stage, adaptive_verification, adaptive_figures,
 
@@ -142,7 +142,7 @@ def optimised_stages(soil):
 def dem_soil_targets(soil):
     d = f"results/{soil}/dem"
     out = [f"{d}/targets.csv", f"{d}/simulation.csv", f"{d}/verification.csv", f"{d}/calibrated_vs_paper.csv",
-           f"{d}/figures/verification"] + seed_files(soil)
+           f"{d}/figures/verification"] + seed_files(soil) + local_targets(soil)
     if soil_cfg(soil).get("measurements"):
         out += [f"{d}/tool_verification.csv", f"{d}/figures/tools"]
         loop = f"results/{soil}/loop"
@@ -482,6 +482,65 @@ def verification_soil(w):
     documentation: editing a note re-runs nothing); ``citation``: whether the soil has a paper
     whose targets and verification to set beside."""
     return dict(dem_context(soil_cfg(w.soil), verification=True), citation=bool(soil_cfg(w.soil).get("citation")))
+
+
+def local_half_width(soil):
+    """The local design's half-width (soilcal.chain.local.half_width), or None: no local design."""
+    from soilcal.chain.local import half_width
+
+    return half_width(soil_cfg(soil))
+
+
+def local_of(soil, stage):
+    """local.csv of a stage once the local_design checkpoint has run (after its first round)."""
+    optimum_file(soil, stage)
+    return checkpoints.local_design.get(soil=soil, stage=stage).output[0]
+
+
+def local_targets(soil):
+    """local.csv of every optimised stage where the soil runs local designs: targets of the run
+    (dem_soil_targets), as verify_seeds.csv (seed_files), so that a finished run that turns the
+    local design on plans it (refine names it only through the checkpoint)."""
+    if "dem" not in SOURCES[soil] or derive.design_mode(soil_cfg(soil)) == "adaptive" or local_half_width(soil) is None:
+        return []
+    return [f"results/{soil}/dem/{s}/local.csv" for s in optimised_stages(soil)]
+
+
+def local_files(w):
+    return [local_of(w.soil, w.stage)] if local_half_width(w.soil) is not None else []
+
+
+_LOCAL_POINTS = {}
+
+
+def _local_points(soil, stage):
+    """local.csv of a stage, read once per file version."""
+    import pandas as pd
+
+    path = local_of(soil, stage)
+    stamp = (path, os.path.getmtime(path))
+    if stamp not in _LOCAL_POINTS:
+        _LOCAL_POINTS[stamp] = pd.read_csv(path)
+    return _LOCAL_POINTS[stamp]
+
+
+def stage_local_runs(w):
+    """The runs of a stage's local designs (none where the soil runs no local design)."""
+    if local_half_width(w.soil) is None:
+        return []
+    df = _local_points(w.soil, w.stage)
+    return [f"results/{w.soil}/dem/local/{w.stage}/{c}/{int(p)}.csv" for c, p in zip(df["case"], df["point"])]
+
+
+def local_spec(w):
+    """One local point's job: its levels as the case's set, one seed after every verification
+    and second-round seed (soilcal.chain.local.SEED_OFFSET)."""
+    from soilcal.chain.local import SEED_OFFSET, point_optimum
+
+    st, opt = _calibration(w.soil, w.stage)
+    one = point_optimum(opt, _local_points(w.soil, w.stage), w.case, int(w.rep))
+    return verify.verification_point(SOILS[w.soil], st, one, w.case,
+                                     verify.most_seeds(soil_cfg(w.soil)) + SEED_OFFSET + int(w.rep))
 
 
 def refine_spec(w):

@@ -8,7 +8,10 @@ seeds' mean's and the surface's prediction's, :meth:`soilcal.rsm.model.RSMFit.pr
 together) for at least one targeted response
 (:func:`soilcal.optimise.correction.significant_bias`); the new set is the smallest
 move from x0 at which the bias-corrected surfaces meet every target
-(:func:`soilcal.optimise.correction.corrected_set`), and the workflow verifies it with fresh
+(:func:`soilcal.optimise.correction.corrected_set`); where a local design at x0 has run
+(:mod:`soilcal.chain.local`, the workflow's default for such a case), the surfaces are corrected
+to the DEM's level and slope there instead of shifted, and the move stays within its trust
+region (:func:`_local_row`).  The workflow verifies the new set with fresh
 seeds (``seed + seed_offset + max_replicates + k``, after every seed the first round may take;
 as many as the first round ended with for the case).  Where the corrected surfaces cannot meet every
 target inside the design region, the region is moved, as response-surface practice moves it
@@ -189,13 +192,85 @@ def search_ranges_text(stage: dict, wider: dict | None, unused=()) -> str:
     return text + ("; not used: " + "; ".join(unused) if unused else "")
 
 
+def _local_row(stage, cid, cal, syms, centre, half, x0, tgt, stats, models, frames, local, h, lo_w, hi_w,
+               wider, columns) -> dict:
+    """The second round of a case with a local design at x0 (:mod:`soilcal.chain.local`):
+    the surfaces corrected to first order there by the DEM's plane through the local runs and
+    the first round's seeds, the smallest move within the trust region meeting every target,
+    or the compromise there where it promises :data:`COMPROMISE_GAIN` points less worst error."""
+    from soilcal.chain import local as lc
+    from soilcal.optimise.correction import Shifted, corrected_set
+
+    corrected, said, bias, cov = {}, [], {}, {}
+    for r in tgt:
+        pl = lc.plane(frames, local, r, syms, centre, half, x0)
+        s0 = float(models[r].predict(x0[None, :])[0])
+        if pl is None:  # too few runs measured: the constant shift of the surface, as without a design
+            b = stats[r][0] - s0
+            corrected[r], bias[r], cov[r] = Shifted(models[r], b), b, None
+            said.append(f"{r}: too few local runs measured for a plane; the surface shifted by {b:+.3g}")
+            continue
+        level, g, cg, n, sd = pl["level"], pl["slope"], pl["cov"], pl["runs"], pl["sd"]
+        gs = lc.gradient(models[r], x0)
+        corrected[r] = lc.FirstOrder(models[r], level - s0, g - gs, x0)
+        bias[r], cov[r] = level - s0, cg
+        tiny = 1e-9 * max(1.0, float(np.max(np.abs(np.r_[g, gs]))))  # rounding, said as 0
+
+        def num(v):
+            return f"{(v if abs(v) > tiny else 0.0):+.3g}"
+        slopes = ", ".join(f"{sy} {num(a)} (se {math.sqrt(max(v, 0.0)):.2g}; surface {num(b)})"
+                           for sy, a, v, b in zip(syms, g, np.diag(cg), gs))
+        said.append(f"{r}: level {level:.4g} at the first set (its seeds' mean; surface {s0:.4g}), slope per coded "
+                    f"unit {slopes}, the first set standing {pl['curvature']:+.3g} (se {pl['curvature_se']:.2g}) off "
+                    f"the design's plane there, from {n} runs (residual SD {sd:.3g})")
+    lo_t, hi_t = np.maximum(lo_w, x0 - lc.TRUST * h), np.minimum(hi_w, x0 + lc.TRUST * h)
+    res = corrected_set(corrected, tgt, {}, x0, lower=lo_t, upper=hi_t)
+    x = res["x_coded"]
+
+    def worst(xc):
+        return max(abs(float(corrected[r].predict(xc[None, :])[0]) - t) / abs(t) * 100 for r, t in tgt.items())
+    n_local = len(local)  # one run file per point
+    lead = (f"local design at the first set ({n_local} points at +- {h:g} coded, one seed each, with the first "
+            f"round's seeds there): " + "; ".join(said) + "; the surface corrected to the DEM's level and slope "
+            "there (first-order model management)")
+    trust = f"within the trust region (+- {lc.TRUST * h:g} coded about the first set, inside the search region)"
+    w0, w1 = worst(x0), worst(x)
+    if not res["success"] and w1 > w0 - COMPROMISE_GAIN:
+        return _kept(cid, cal, f"{lead}: it reaches no set meeting every target {trust} (its least-squares "
+                     f"compromise: worst error {w1:.2g} % against {w0:.2g} % at the first set)", columns) | {
+            f"bias_{r}": b for r, b in bias.items()} | {"local_points": n_local}
+    row = {"case": cid, "round": 2, "refined": True, "calibrated": True}
+    row.update({f"{s}_coded": float(x[j]) for j, s in enumerate(syms)})
+    row.update({s: float(centre[j] + x[j] * half[j]) for j, s in enumerate(syms)})
+    for r, m in models.items():
+        row[r] = float((corrected[r] if r in corrected else m).predict(x[None, :])[0])
+    row.update({f"bias_{r}": b for r, b in bias.items()})
+    dx = x - x0
+    # the corrected surface's change from x0 is the plane's to first order: its slope's error
+    row.update({f"surface_change_se_{r}": (float(math.sqrt(max(dx @ cov[r] @ dx, 0.0))) if cov.get(r) is not None
+                                           else models[r].change_se(x0, x)) for r in tgt})
+    row["move_coded"] = res["move"]
+    past = beyond_text(stage, x, wider)
+    row["region"] = "beyond" if past else "inside"
+    row["note"] = (f"{lead}; " + (f"smallest move (coded {res['move']:.3f}) {trust} at which the corrected surface "
+                                  "meets every target" if res["success"] else
+                                  f"compromise {trust}: worst error {w1:.2g} % against {w0:.2g} % at the first set")
+                   + (f"; beyond the design region: {past}" if past else ""))
+    row["local_points"] = n_local
+    return row
+
+
 def refine_frame(stage: dict, table: pd.DataFrame, targets: dict, optimum: pd.DataFrame,
-                 runs: dict[str, list[pd.DataFrame]], wider: dict | None = None, unused=()) -> pd.DataFrame:
+                 runs: dict[str, list[pd.DataFrame]], wider: dict | None = None, unused=(),
+                 local: dict[str, list[pd.DataFrame]] | None = None, half_width: float | None = None) -> pd.DataFrame:
     """``refined.csv`` of one stage (module docstring).  ``table``: the stage's responses
     (design points), ``runs``: case id -> the first round's verification frames at the soil's
     own preset, ``wider``: symbol -> (low, high, origin), the range each factor may be searched over
     (:func:`soilcal.chain.stage.screening_ranges`; none: every factor stays in the box),
-    ``unused``: the declared ranges it does not use (:func:`search_ranges_text`)."""
+    ``unused``: the declared ranges it does not use (:func:`search_ranges_text`); ``local``:
+    case id -> the run frames of its local design at the first set (:mod:`soilcal.chain.local`,
+    of half-width ``half_width``), which a biased case's move then follows instead of the
+    constantly shifted surface."""
     from soilcal.chain.stage import bounds, calibrated_rows, fit_stage, goal_values
     from soilcal.optimise import desirability_optimise
     from soilcal.optimise.correction import Shifted, corrected_set, significant_bias
@@ -253,6 +328,10 @@ def refine_frame(stage: dict, table: pd.DataFrame, targets: dict, optimum: pd.Da
                 rows.append(_kept(cid, cal, unbiased, columns))
                 continue
         models = {r: fits[r] for r in goals if r in fits}
+        if local and local.get(cid) and half_width and any(bias.values()):
+            rows.append(_local_row(stage, cid, cal, syms, centre, half, x0, tgt, stats, models, frames, local[cid],
+                                   half_width, lo_w, hi_w, wider, columns))
+            continue
         try:
             sols = desirability_optimise({r: Shifted(m, bias.get(r, 0.0)) for r, m in models.items()},
                                          goals, n_solutions=5, seed=0)
@@ -343,15 +422,11 @@ def runs_by_case(paths, stage_id: str) -> dict[str, list[pd.DataFrame]]:
     return got
 
 
-def write_refined(stage_json, responses_csv, targets_csv, optimum_csv, run_paths, out,
-                  soil_data: dict | None = None) -> pd.DataFrame:
-    """``refined.csv`` of one stage from its files and the first round's verification runs
-    ``verify/<preset>/<stage>/<case>/<k>.csv`` (the soil's own preset only); ``soil_data``
-    (the soil config) gives the screening or declared ranges the second round may move into
-    (:func:`soilcal.chain.stage.screening_ranges`)."""
+def _refined_from_files(stage_json, responses_csv, targets_csv, optimum_csv, run_paths, soil_data,
+                        local_paths=(), half_width=None):
     from pathlib import Path
 
-    from soilcal.chain.files import read_stage, read_targets, write_csv
+    from soilcal.chain.files import read_stage, read_targets
     from soilcal.chain.stage import screening_ranges, unused_search_ranges
     from soilcal.config.tables import read_table
 
@@ -359,8 +434,58 @@ def write_refined(stage_json, responses_csv, targets_csv, optimum_csv, run_paths
     runs = runs_by_case(run_paths, stage["id"])
     wider = screening_ranges(soil_data, stage) if soil_data else {}
     unused = unused_search_ranges(soil_data, stage) if soil_data else []
-    df = refine_frame(stage, read_table(Path(responses_csv)), read_targets(targets_csv), pd.read_csv(optimum_csv), runs,
-                      wider, unused)
+    optimum = pd.read_csv(optimum_csv)
+    local = runs_by_case(local_paths, stage["id"]) if local_paths else None
+    df = refine_frame(stage, read_table(Path(responses_csv)), read_targets(targets_csv), optimum, runs,
+                      wider, unused, local, half_width)
+    return stage, optimum, wider, df
+
+
+def write_refined(stage_json, responses_csv, targets_csv, optimum_csv, run_paths, out,
+                  soil_data: dict | None = None, local_paths=(), half_width: float | None = None,
+                  local_csv=None) -> pd.DataFrame:
+    """``refined.csv`` of one stage from its files and the first round's verification runs
+    ``verify/<preset>/<stage>/<case>/<k>.csv`` (the soil's own preset only); ``soil_data``
+    (the soil config) gives the screening or declared ranges the second round may move into
+    (:func:`soilcal.chain.stage.screening_ranges`); ``local_paths``: the runs of the local
+    designs ``local/<stage>/<case>/<point>.csv`` (:mod:`soilcal.chain.local`) of the stage's
+    ``local_csv`` (``<stage>/local.csv``, required with ``half_width``; every point's run must be
+    among ``local_paths``, else InputError)."""
+    from pathlib import Path
+
+    from soilcal.chain.files import write_csv
+
+    if half_width is not None:
+        # the local design's points and runs must all be in: a refine job that Snakemake ran
+        # before its checkpoint's output was known would silently fall back to the constant shift
+        if not local_csv:
+            raise InputError(str(out), "input.local", "the stage's local.csv (checkpoint local_design) where the soil "
+                             "runs local designs (simulation.verification.local); target it, or run without "
+                             "forcing refine", "none given")
+        pts = pd.read_csv(local_csv)
+        want = {str(Path(local_csv).parent.parent / "local" / Path(local_csv).parent.name / str(c) / f"{int(k)}.csv")
+                for c, k in zip(pts["case"], pts["point"])}
+        have = {str(Path(p)) for p in local_paths}
+        if want - have:
+            raise InputError(str(out), "input.local_runs", f"the runs of every point of {local_csv}",
+                             f"missing {sorted(want - have)[0]}")
+    df = _refined_from_files(stage_json, responses_csv, targets_csv, optimum_csv, run_paths, soil_data,
+                             local_paths, half_width)[3]
+    write_csv(df, out)
+    return df
+
+
+def write_local(stage_json, responses_csv, targets_csv, optimum_csv, run_paths, out,
+                soil_data: dict | None = None, half_width: float | None = None) -> pd.DataFrame:
+    """``local.csv`` of one stage (:func:`soilcal.chain.local.local_frame`): the local design
+    of every case the second round would move because of a bias, from the same files as
+    :func:`write_refined` (before any local run)."""
+    from soilcal.chain.files import write_csv
+    from soilcal.chain.local import local_frame
+
+    stage, optimum, wider, refined = _refined_from_files(stage_json, responses_csv, targets_csv, optimum_csv,
+                                                         run_paths, soil_data)
+    df = local_frame(stage, refined, optimum, half_width, wider)
     write_csv(df, out)
     return df
 

@@ -371,7 +371,9 @@ def verification_frame(soil_data: dict, stage: dict, optimum: pd.DataFrame, targ
                 rid = r2["response"]
                 bias = ref[f"bias_{rid}"].iloc[0] if f"bias_{rid}" in ref.columns else 0.0
                 se = ref[f"surface_change_se_{rid}"].iloc[0] if f"surface_change_se_{rid}" in ref.columns else 0.0
-                change = round_change(r1[0], r2, bias, se) if r1 and len(ref) else ""
+                lp = ref["local_points"].iloc[0] if "local_points" in ref.columns and len(ref) else np.nan
+                local = bool(pd.notna(lp) and float(lp) > 0)
+                change = round_change(r1[0], r2, bias, se, local) if r1 and len(ref) else ""
                 if change:
                     r2["note"] = "; ".join(x for x in (r2["note"], change) if x)
             _better_round(first, second)
@@ -461,7 +463,7 @@ def _better_round(first: list[dict], second: list[dict]) -> None:
             r["note"] = "; ".join(x for x in (r["note"], why) if x)
 
 
-def round_change(first: dict, second: dict, bias, surface_se=0.0) -> str:
+def round_change(first: dict, second: dict, bias, surface_se=0.0, local: bool = False) -> str:
     """What the move from the first set to the second round's did to one response, beside what
     the response surface promised: the DEM's change, the verification means' difference
     m2 - m1, against the surface's change between the two sets, ``second.predicted - bias -
@@ -471,7 +473,9 @@ def round_change(first: dict, second: dict, bias, surface_se=0.0) -> str:
     (``surface_change_se_<response>`` of ``refined.csv``, which grows with the move).  Where
     they differ by more, the surface's slope along the move is not the DEM's there, so a
     constant bias correction cannot be relied on to aim the set (where the second round missed,
-    a local design at the set, more than one point near it, would learn the slope).  Empty where
+    a local design at the set, more than one point near it, would learn the slope).  With
+    ``local`` the second set came from the surface corrected by such a design
+    (:mod:`soilcal.chain.local`), whose slope is then the one that did not hold.  Empty where
     either round has fewer than two seeds or no prediction."""
     m1, s1, n1 = first["simulated_mean"], first["simulated_sd"], first["n"]
     m2, s2, n2 = second["simulated_mean"], second["simulated_sd"], second["n"]
@@ -483,10 +487,16 @@ def round_change(first: dict, second: dict, bias, surface_se=0.0) -> str:
         return ""
     dem, surf = float(m2 - m1), float(p2 - b - p1)
     two_se = 2.0 * float(np.sqrt(s1 ** 2 / n1 + s2 ** 2 / n2 + sse ** 2))
-    text = (f"from the first set the DEM changed by {dem:+.2f} where the surface promised {surf:+.2f} (two "
+    what = "the surface corrected by the local design" if local else "the surface"
+    text = (f"from the first set the DEM changed by {dem:+.2f} where {what} promised {surf:+.2f} (two "
             f"standard errors of their difference {two_se:.2f}, seeds and surface)")
     if abs(dem - surf) <= two_se:
-        return text + ": as the surface said"
+        return text + (": as the local plane said" if local else ": as the surface said")
+    if local:
+        return text + (": the local plane's slope did not hold over the move (the response bends within it, or "
+                       "one seed per local point left the slope uncertain: more seeds per point or a smaller "
+                       "half-width, simulation.verification.local)"
+                       + (" (the target is met nonetheless)" if second.get("within_2_percent") else ""))
     if second.get("within_2_percent"):
         return text + ": the surface's slope along the move is not the DEM's here (the target is met nonetheless)"
     return (text + ": the surface's slope along the move is not the DEM's here, so shifting it by a constant "
