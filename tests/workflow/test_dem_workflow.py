@@ -189,6 +189,42 @@ def test_a_refined_case_plans_its_second_round(done):
     assert planned_jobs(done) == []
 
 
+def test_a_local_design_plans_one_job_per_point_and_the_second_round_after_it(done):
+    """The local design's wiring: a local.csv with four points for the case (the tiny run
+    itself may or may not have needed one) plans one local_point job per point and the
+    second round after them (refine), not the design or the first verification; restoring the
+    file leaves nothing to do.  local.csv is a target of the run."""
+    import os
+
+    from soilcal.chain.local import design_points
+
+    p = done / "results/cinnamon-soil/dem/bbd/local.csv"
+    assert p.is_file()
+    text, st = p.read_text(), p.stat()
+    opt = pd.read_csv(done / "results/cinnamon-soil/dem/bbd/optimum.csv")
+    cal = opt[opt["calibrated"].astype(str).str.lower() == "true"].iloc[0]
+    factors = json.loads((done / "results/cinnamon-soil/dem/bbd/stage.json").read_text())["factors"]
+    syms = list(factors)
+    x0 = np.array([float(cal[f"{s}_coded"]) for s in syms])
+    pts = design_points(x0, 0.35, [-1] * len(syms), [1] * len(syms))
+    half = {s: (f["high"] - f["low"]) / 2.0 for s, f in factors.items()}
+    mid = {s: (f["high"] + f["low"]) / 2.0 for s, f in factors.items()}
+    local = pd.DataFrame([{"case": cal["case"], "point": i, **{f"{s}_coded": x[j] for j, s in enumerate(syms)},
+                           **{s: mid[s] + x[j] * half[s] for j, s in enumerate(syms)}} for i, x in enumerate(pts)])
+    try:
+        local.to_csv(p, index=False)
+        planned = planned_jobs(done)
+    finally:
+        p.write_text(text)
+        os.utime(p, ns=(st.st_atime_ns, st.st_mtime_ns))
+    base = "results/cinnamon-soil/dem/"
+    assert sorted(o for o in planned if "/local/" in o) == [
+        f"{base}local/bbd/{cal['case']}/{i}.csv" for i in range(len(pts))], planned
+    assert base + "bbd/refined.csv" in planned
+    assert not any(re.search(r"/dem/[^/]+/runs/|/verify/", o) for o in planned), planned
+    assert planned_jobs(done) == []
+
+
 def test_a_second_verification_stage_plans_the_seeds_its_table_asks_for(done):
     """max_replicates above replicates: the verify_seeds checkpoint, a target of the run, sizes
     each case's seeds from the first stage's runs; a table asking for four seeds of the case plans the two seeds after

@@ -436,8 +436,11 @@ def refine_on(soil):
 
 
 def refined_of(soil, stage):
-    """refined.csv of a stage once the refine checkpoint has run (after its optimum)."""
+    """refined.csv of a stage once the refine checkpoint has run (after its optimum, and after
+    its local design where the soil runs one)."""
     optimum_file(soil, stage)
+    if local_half_width(soil) is not None:
+        local_of(soil, stage)
     return checkpoints.refine.get(soil=soil, stage=stage).output[0]
 
 
@@ -492,8 +495,10 @@ def local_half_width(soil):
 
 
 def local_of(soil, stage):
-    """local.csv of a stage once the local_design checkpoint has run (after its first round)."""
+    """local.csv of a stage once the local_design checkpoint has run (after its optimum and the
+    first round's seed counts, verify_seeds, where the soil sizes them)."""
     optimum_file(soil, stage)
+    case_seed_counts(soil, stage)
     return checkpoints.local_design.get(soil=soil, stage=stage).output[0]
 
 
