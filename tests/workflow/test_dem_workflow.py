@@ -155,17 +155,26 @@ def test_verification_and_comparison_tables(done):
     assert list((d / "figures/verification").glob("*.png"))
 
 
+def _planned_with(done, rel, frame):
+    """The jobs the finished run plans with its file ``rel`` replaced by ``frame``; the file is
+    restored after, contents and modification time."""
+    p = done / rel
+    text, st = p.read_text(), p.stat()
+    try:
+        frame.to_csv(p, index=False)
+        return planned_jobs(done)
+    finally:
+        p.write_text(text)
+        os.utime(p, ns=(st.st_atime_ns, st.st_mtime_ns))
+
+
 def test_a_refined_case_plans_its_second_round(done):
     """The second round's wiring: a refined.csv that moves the case to a set it has not been
     verified at (its first factor half a coded unit nearer the centre, marked round 2; the
     tiny run itself may or may not have moved it) plans one refine job per verification seed,
     with the next seeds, and the tables that read the final set; restoring the file leaves
     nothing to do."""
-    import os
-
-    p = done / "results/cinnamon-soil/dem/bbd/refined.csv"
-    text, st = p.read_text(), p.stat()
-    ref = pd.read_csv(p)
+    ref = pd.read_csv(done / "results/cinnamon-soil/dem/bbd/refined.csv")
     factors = json.loads((done / "results/cinnamon-soil/dem/bbd/stage.json").read_text())["factors"]
     sym, f = next(iter(factors.items()))
     coded = float(ref[f"{sym}_coded"].iloc[0])
@@ -173,12 +182,7 @@ def test_a_refined_case_plans_its_second_round(done):
     ref[f"{sym}_coded"] = coded
     ref[sym] = f["centre"] + coded * ((f["high"] - f["centre"]) if coded > 0 else (f["centre"] - f["low"]))
     ref[["round", "refined"]] = [2, True]
-    try:
-        ref.to_csv(p, index=False)
-        planned = planned_jobs(done)
-    finally:
-        p.write_text(text)
-        os.utime(p, ns=(st.st_atime_ns, st.st_mtime_ns))
+    planned = _planned_with(done, "results/cinnamon-soil/dem/bbd/refined.csv", ref)
     base = "results/cinnamon-soil/dem/"
     assert sorted(o for o in planned if "/refine/" in o) == [
         base + "refine/bbd/stacking_angle/0.csv", base + "refine/bbd/stacking_angle/1.csv"]
@@ -194,13 +198,10 @@ def test_a_local_design_plans_one_job_per_point_and_the_second_round_after_it(do
     itself may or may not have needed one) plans one local_point job per point and the
     second round after them (refine), not the design or the first verification; restoring the
     file leaves nothing to do.  local.csv is a target of the run."""
-    import os
 
     from soilcal.chain.local import design_points
 
-    p = done / "results/cinnamon-soil/dem/bbd/local.csv"
-    assert p.is_file()
-    text, st = p.read_text(), p.stat()
+    assert (done / "results/cinnamon-soil/dem/bbd/local.csv").is_file()
     opt = pd.read_csv(done / "results/cinnamon-soil/dem/bbd/optimum.csv")
     cal = opt[opt["calibrated"].astype(str).str.lower() == "true"].iloc[0]
     factors = json.loads((done / "results/cinnamon-soil/dem/bbd/stage.json").read_text())["factors"]
@@ -211,12 +212,7 @@ def test_a_local_design_plans_one_job_per_point_and_the_second_round_after_it(do
     mid = {s: (f["high"] + f["low"]) / 2.0 for s, f in factors.items()}
     local = pd.DataFrame([{"case": cal["case"], "point": i, **{f"{s}_coded": x[j] for j, s in enumerate(syms)},
                            **{s: mid[s] + x[j] * half[s] for j, s in enumerate(syms)}} for i, x in enumerate(pts)])
-    try:
-        local.to_csv(p, index=False)
-        planned = planned_jobs(done)
-    finally:
-        p.write_text(text)
-        os.utime(p, ns=(st.st_atime_ns, st.st_mtime_ns))
+    planned = _planned_with(done, "results/cinnamon-soil/dem/bbd/local.csv", local)
     base = "results/cinnamon-soil/dem/"
     assert sorted(o for o in planned if "/local/" in o) == [
         f"{base}local/bbd/{cal['case']}/{i}.csv" for i in range(len(pts))], planned

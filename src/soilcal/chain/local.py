@@ -34,8 +34,6 @@ verification and second-round seed).
 
 from __future__ import annotations
 
-import math
-
 import numpy as np
 import pandas as pd
 
@@ -89,6 +87,7 @@ def local_frame(stage: dict, refined: pd.DataFrame, optimum: pd.DataFrame, h: fl
     without one or with ``h`` None."""
     from soilcal.chain.refine import search_region
     from soilcal.chain.stage import bounds, calibrated_rows
+    from soilcal.chain.verify import _finite
 
     syms, low, high = bounds(stage)
     cols = ["case", "point", *[f"{s}_coded" for s in syms], *syms]
@@ -98,7 +97,7 @@ def local_frame(stage: dict, refined: pd.DataFrame, optimum: pd.DataFrame, h: fl
     lo_w, hi_w = search_region(stage, wider)
     rows = []
     for rec in refined.to_dict("records"):
-        biased = [k for k, v in rec.items() if k.startswith("bias_") and _finite(v) and float(v) != 0.0]
+        biased = [k for k, v in rec.items() if k.startswith("bias_") and _finite(v, 0.0) != 0.0]
         if str(rec.get("refined")).lower() != "true" or not biased:
             continue
         cal = calibrated_rows(optimum, rec["case"])
@@ -125,13 +124,6 @@ def point_optimum(optimum: pd.DataFrame, local: pd.DataFrame, case: str, point: 
             row[c] = float(sel[c].iloc[0])
     row["calibrated"] = True
     return row
-
-
-def _finite(v) -> bool:
-    try:
-        return math.isfinite(float(v))
-    except (TypeError, ValueError):
-        return False
 
 
 class FirstOrder:
