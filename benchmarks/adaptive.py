@@ -6,8 +6,8 @@ For every soil given, a fresh copy of the workflow (``benchmarks/calibration.py`
 ``design=adaptive``.  Per case and target response one row per method:
 
 * recipe: runs = every DEM run of the soil's stages (design points times their replicates), its
-  verification seeds and its second-round seeds (the tool tests and the measured-data loop are
-  not part of the calibration and are not counted); error = the last round's verification row;
+  verification seeds, its local design's points and its second-round seeds (the tool tests and
+  the measured-data loop are not part of the calibration and are not counted); error = the last round's verification row;
 * adaptive: runs and error from ``results/<soil>/dem/adaptive/summary.csv`` (the verified point's
   mean; no error when no point was verified), and why it stopped.
 
@@ -70,7 +70,7 @@ def recipe_rows(wd: Path, soil: str) -> list[dict]:
         df = pd.read_csv(f)
         runs += int(df["replicates"].iloc[0]) if len(df) else 0
     # a verification seed of a case without a calibrated set writes a 'not run' row: no run
-    runs += sum(_ran(f) for f in [*d.glob("verify/*/*/*/*.csv"), *d.glob("refine/*/*/*.csv")])
+    runs += sum(_ran(f) for f in _seed_files(d))
     ver = pd.read_csv(d / "verification.csv")
     rows = []
     goals = {(st["id"], c["id"], rid): g.get("goal", "target") for st in _stages(wd, soil)
@@ -91,6 +91,12 @@ def recipe_rows(wd: Path, soil: str) -> list[dict]:
     return rows
 
 
+def _seed_files(d: Path) -> list[Path]:
+    """The one-seed run files of a soil's DEM calibration beside its design points: the
+    verification seeds, the second round's seeds and the local design's points."""
+    return [*d.glob("verify/*/*/*/*.csv"), *d.glob("refine/*/*/*.csv"), *d.glob("local/*/*/*.csv")]
+
+
 def _ran(f: Path) -> bool:
     """Whether the seed file ``f`` holds a DEM run (not a 'not run' row)."""
     df = pd.read_csv(f)
@@ -101,7 +107,7 @@ def recipe_commit(wd: Path, soil: str) -> str:
     """The commit every DEM run of a recipe workdir ran at (its run rows' ``commit``)."""
     d = wd / "results" / soil / "dem"
     found = set()
-    for f in [*d.glob("*/runs/*.csv"), *d.glob("verify/*/*/*/*.csv"), *d.glob("refine/*/*/*.csv")]:
+    for f in [*d.glob("*/runs/*.csv"), *_seed_files(d)]:
         found |= {str(c)[:7] for c in pd.read_csv(f).get("commit", pd.Series(dtype=str)).dropna()}
     if len(found) != 1:
         raise SystemExit(f"--recipe-from: the runs under {d} name {len(found)} commits ({sorted(found)}), not one")
