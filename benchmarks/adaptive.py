@@ -7,7 +7,8 @@ For every soil given, a fresh copy of the workflow (``benchmarks/calibration.py`
 
 * recipe: runs = every DEM run of the soil's stages (design points times their replicates), its
   verification seeds, its local design's points and its second-round seeds (the tool tests and
-  the measured-data loop are not part of the calibration and are not counted); error = the last round's verification row;
+  the measured-data loop are not part of the calibration and are not counted); error = the last
+  round's verification row;
 * adaptive: runs and error from ``results/<soil>/dem/adaptive/summary.csv`` (the verified point's
   mean; no error when no point was verified), and why it stopped.
 

@@ -1,7 +1,7 @@
 """The adaptive benchmark's recipe rows count the DEM runs a recipe spent: design points times
-their replicates, verification seeds, local-design points and second-round seeds that ran, not the 'not run' rows a case
-without a calibrated set writes; a case's row is the round it ends with (``final``); the commit
-is the one the runs name."""
+their replicates, verification seeds, local-design points and second-round seeds that ran, not
+the 'not run' rows a case without a calibrated set writes; a case's row is the round it ends
+with (``final``); the commit is the one the runs name."""
 
 from __future__ import annotations
 
