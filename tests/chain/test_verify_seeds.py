@@ -173,3 +173,54 @@ def test_the_design_stages_params_leave_the_verification_out(cinnamon):
     assert dem_context(soil, verification=True)["simulation"]["verification"] == {"replicates": 4,
                                                                                   "max_replicates": 12}
     assert dem_context(soil) == dem_context(_soil(cinnamon, replicates=6))
+
+
+# --------------------------------------------------------------------------- which responses run on
+
+
+def _two_response_stage():
+    return {"id": "bbd", "factors": {"A": {"parameter": "soil_soil_rolling_friction"}},
+            "responses": [{"id": "static_angle", "unit": "deg"}, {"id": "dynamic_angle", "unit": "deg"}],
+            "optimise": {"cases": [{"id": "layer", "goals": {
+                "static_angle": {"goal": "target", "target": "s30"},
+                "dynamic_angle": {"goal": "target", "target": "d45"}}}]}}
+
+
+def test_the_second_stage_runs_only_the_undecided_responses(cinnamon):
+    from soilcal.chain.verify import second_stage_responses
+
+    soil = _soil(cinnamon, replicates=4, max_replicates=40)
+    opt = pd.DataFrame({"case": ["layer"], "method": ["desirability"], "A": [0.1], "static_angle": [30.0],
+                        "dynamic_angle": [45.0], "calibrated": [True]})
+    targets = {"s30": {"value": 30.0, "source": "config"}, "d45": {"value": 45.0, "source": "config"}}
+    runs = _runs([29.0, 31.0, 28.0, 29.4], "static_angle") + _runs([45.1, 44.8, 45.3, 45.0], "dynamic_angle")
+    df = seeds_frame(soil, _two_response_stage(), opt, targets, {"layer": runs}, "quick")
+    rows = df.set_index("response")
+    # the static mean 29.35 misses its band (0.6) by less than two standard errors: undecided;
+    # the dynamic mean 45.05 is within 2 % of 45: met
+    assert rows.loc["static_angle", "undecided"] and not rows.loc["dynamic_angle", "undecided"]
+    assert second_stage_responses(df, "layer") == ["static_angle"]
+    # a case with nothing undecided: every response (None)
+    met = _runs([30.1, 29.8, 30.3, 30.0], "static_angle") + _runs([45.1, 44.8, 45.3, 45.0], "dynamic_angle")
+    assert second_stage_responses(seeds_frame(soil, _two_response_stage(), opt, targets, {"layer": met}, "quick"),
+                                  "layer") is None
+
+
+def test_a_verification_spec_of_some_responses_simulates_only_those():
+    from soilcal.chain.verify import verification_spec
+    from soilcal.config.load import load_soil as load
+
+    soil = load(ROOT / "config" / "soils" / "xinjiang-vineyard.yaml", ROOT / "resources")
+    stage = next(s for s in soil.data["stages"] if s["id"] == "bbd")
+    stage = dict(stage, source="dem")
+    syms = list(stage["factors"])
+    opt = pd.DataFrame({"case": ["upper"], "method": ["desirability"], "calibrated": [True],
+                        **{s: [float(stage["factors"][s].get("centre", 0.5 * (stage["factors"][s]["low"]
+                                                                                + stage["factors"][s]["high"])))]
+                           for s in syms}})
+    every = verification_spec(soil, stage, opt, "upper", 5)
+    assert set(every["responses"]) == {"static_angle", "dynamic_angle"}
+    some = verification_spec(soil, stage, opt, "upper", 5, responses=["static_angle"])
+    assert list(some["responses"]) == ["static_angle"]
+    # the same seed and set: only the responses differ
+    assert {k: v for k, v in some.items() if k != "responses"} == {k: v for k, v in every.items() if k != "responses"}

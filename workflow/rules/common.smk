@@ -550,8 +550,12 @@ def local_spec(w):
 
 def refine_spec(w):
     st, ref = _calibration(w.soil, w.stage, refined=True)
-    # after every seed the first round may take (both its stages), so that no seed repeats
-    return verify.verification_point(SOILS[w.soil], st, ref, w.case, verify.most_seeds(soil_cfg(w.soil)) + int(w.rep))
+    # after every seed the first round may take (both its stages), so that no seed repeats; a
+    # seed past the first stage's runs, as in the first round, only the responses its second
+    # stage ran (the ones the first seeds left undecided)
+    return verify.verification_point(SOILS[w.soil], st, ref, w.case, verify.most_seeds(soil_cfg(w.soil)) + int(w.rep),
+                                     responses=second_stage_responses(w.soil, w.stage, w.case, int(w.rep),
+                                                                      sim_cfg(w.soil).get("preset", "quick")))
 
 
 _CALIBRATED = {}
@@ -589,9 +593,27 @@ def optimum_of(soil, stage):
 
 def verify_spec(w):
     st, opt = _calibration(w.soil, w.stage)
-    spec = verify.verification_point(SOILS[w.soil], st, opt, w.case, int(w.rep), w.preset)
+    spec = verify.verification_point(SOILS[w.soil], st, opt, w.case, int(w.rep), w.preset,
+                                     second_stage_responses(w.soil, w.stage, w.case, int(w.rep), w.preset))
     same = _same_case(w)
     return dict(spec, same_as=same) if same else spec
+
+
+def second_stage_responses(soil, stage, case, rep, preset):
+    """The responses a second-stage verification seed runs (verify.second_stage_responses:
+    the ones the first seeds left undecided); None (all) for a first-stage seed, another
+    preset, or a soil without a second stage. Only a seed past the first stage reads the
+    verify_seeds checkpoint, whose job it follows."""
+    if (not verify.two_stage(soil_cfg(soil)) or rep < verify.first_stage_seeds(soil_cfg(soil))
+            or preset != sim_cfg(soil).get("preset", "quick")):
+        return None
+    import pandas as pd
+
+    path = verify_seeds_of(soil, stage)
+    key = ("responses", path, os.path.getmtime(path))
+    if key not in _SEED_COUNTS:
+        _SEED_COUNTS[key] = pd.read_csv(path)
+    return verify.second_stage_responses(_SEED_COUNTS[key], case)
 
 
 def _same_case(w):
@@ -601,8 +623,10 @@ def _same_case(w):
     st, opt = _calibration(w.soil, w.stage)
     key = (w.soil, w.stage, int(w.rep), w.preset, id(st), id(opt))
     if key not in _SAME_SPECS:
-        _SAME_SPECS[key] = {c: verify.verification_point(SOILS[w.soil], st, opt, c, int(w.rep), w.preset)
-                            for s, c in verify.verification_cases(soil_cfg(w.soil), [w.stage])}
+        _SAME_SPECS[key] = {c: verify.verification_point(
+            SOILS[w.soil], st, opt, c, int(w.rep), w.preset,
+            second_stage_responses(w.soil, w.stage, c, int(w.rep), w.preset))
+            for s, c in verify.verification_cases(soil_cfg(w.soil), [w.stage])}
     return verify.same_as(_SAME_SPECS[key], w.case)
 
 

@@ -13,7 +13,14 @@ from the DEM results of the earlier stage, as the papers derived it from theirs:
   its direction descends the summed squared relative error of the first-order models to the
   targets (:func:`soilcal.doe.steepest.path_direction`); the path walks each factor's
   screening range (``simulation.path.rule: range``, the papers' practice) or steps in the
-  ratio of the effects (``proportional``, Montgomery 11.2); the other screened factors are
+  ratio of the effects (``proportional``, Montgomery 11.2), or, aimed at several targets
+  together (``target``), steps Montgomery's way along the line from the centre through the
+  point where the first-order models meet all of them
+  (:func:`soilcal.doe.steepest.path_target`): the papers' rule uses only the signs of the
+  summed pull, which walks every factor the same way even where one targeted response needs
+  to rise and another to stay (vineyard soil: static and dynamic angles).  The default
+  (``auto``) is ``range`` for one targeted response and ``target`` for several; the other
+  screened factors are
   held at their intermediate levels (the centre of their screening range: "the parameters
   with insignificant influence were taken as intermediate level values", cinnamon soil
   Sec. 3.3.2), or at the value the path stage's own ``fixed`` gives them (the vineyard soil's
@@ -393,7 +400,7 @@ def _keep_printed_optimum(st: dict, config_stage: dict) -> None:
 def path_from_screening(soil_data: dict, stage_id: str, screening_stage: dict, effects: pd.DataFrame,
                         responses: pd.DataFrame, targets: dict) -> dict:
     """A steepest-ascent stage laid out from the DEM screening (module docstring)."""
-    from soilcal.doe.steepest import derive_path, path_direction, select_factors
+    from soilcal.doe.steepest import derive_path, path_direction, path_target, select_factors
 
     config_stage = _stage(soil_data, stage_id)
     sim = sim_block(soil_data)
@@ -403,7 +410,7 @@ def path_from_screening(soil_data: dict, stage_id: str, screening_stage: dict, e
     path_cfg = sim.get("path") or {}
     n_levels = {len(f.get("levels") or []) for f in config_stage["factors"].values()} - {0}
     n_steps = int(path_cfg.get("steps") or (n_levels.pop() if len(n_levels) == 1 else DEFAULT_STEPS))
-    rule = path_cfg.get("rule", "range")
+    rule = path_cfg.get("rule", "auto")
 
     rids = [r["id"] for r in config_stage["responses"]]
     ptargets = response_targets(soil_data, rids, targets)
@@ -417,12 +424,35 @@ def path_from_screening(soil_data: dict, stage_id: str, screening_stage: dict, e
     chosen = [t for t in sel.loc[sel["selected"], "term"]]
     coefs = {r: {t: float(b) for t, b in zip(g["term"], g["coefficient"]) if t in chosen}
              for r, g in eff.groupby("response", sort=False)}
-    intercepts = {r: float(responses[r].mean()) for r in coefs}
-    direction = path_direction(coefs, intercepts, {r: ptargets[r]["value"] for r in coefs})
     sf = screening_stage["factors"]
+    # where the path starts: the screening's centre runs where it has them (the two-level runs'
+    # mean misses the centre where the response curves), else that mean; plus the first-order
+    # effect of every screened factor off the path held away from its centre (the path stage's
+    # own fixed value, e.g. the vineyard soil's shear modulus at the low end of its range)
+    from soilcal.chain.stage import screening_centre
+
+    centre = screening_centre(screening_stage, responses)
+    factorial = ~_centre_rows(screening_stage, responses)
+    held = _held_coded(config_stage, sf, chosen)
+    intercepts, start = {}, {}
+    for r in coefs:
+        c = centre.get(r)
+        b0 = c["mean"] if c else float(responses.loc[factorial, r].mean())
+        shift = sum(float(b) * held[t] for t, b in zip(eff.loc[eff["response"] == r, "term"],
+                                                        eff.loc[eff["response"] == r, "coefficient"]) if t in held)
+        intercepts[r] = b0 + shift
+        start[r] = {"from": "centre runs" if c else "two-level runs' mean", "value": _g12(b0),
+                    "held_factors_shift": _g12(shift), "intercept": _g12(b0 + shift)}
+    tvals = {r: ptargets[r]["value"] for r in coefs}
+    direction = path_direction(coefs, intercepts, tvals)
+    if rule == "auto":  # one target: the papers' rule; several: aimed at all of them together
+        rule = "target" if len(tvals) > 1 else "range"
     low = {t: float(sf[t]["low"]) for t in chosen}
     high = {t: float(sf[t]["high"]) for t in chosen}
-    path = derive_path(direction, low, high, n_steps, rule=rule)
+    if rule == "target":
+        path = derive_path(path_target(coefs, intercepts, tvals), low, high, n_steps, rule=rule)
+    else:
+        path = derive_path(direction, low, high, n_steps, rule=rule)
 
     st = _dem_base(config_stage)
     st.pop("chosen_step", None)  # the paper's choice on the paper's path
@@ -453,12 +483,51 @@ def path_from_screening(soil_data: dict, stage_id: str, screening_stage: dict, e
                  "unless the stage fixes them (derivation.fixed: each fixed value and where it comes from)"),
         "selection": sel.to_dict("records"),
         "direction": {t: float(v) for t, v in direction.items()},
+        "start": start,
+        "held_coded": {t: _g12(v) for t, v in held.items()},
+        "curvature": centre,
         "rule": rule,
+        **({"target": {"coded": {t: _g12(v) for t, v in path.attrs["target_coded"].items()},
+                       "base": path.attrs["base"]},
+            "box_half_width": {_sym_of(factors, t): _g12(v) for t, v in path.attrs["box_half_width"].items()}}
+           if rule == "target" else {}),
         "screening": scr,
         "paper_factors": {s: f["parameter"] for s, f in config_stage["factors"].items()},
     }
     apply_own_fixed(st, config_stage, fixed, origin, {f["parameter"] for f in factors.values()}, soil_data)
     return st
+
+
+def _centre_rows(screening_stage: dict, responses: pd.DataFrame) -> np.ndarray:
+    from soilcal.chain.stage import is_centre_run, stage_data
+
+    if not int(screening_stage.get("center_points") or 0):
+        return np.zeros(len(responses), dtype=bool)
+    return is_centre_run(screening_stage, stage_data(screening_stage, responses))
+
+
+def _held_coded(config_stage: dict, sf: dict, chosen: list[str]) -> dict[str, float]:
+    """Coded level of each screened factor off the path that the path stage's own ``fixed``
+    holds away from the centre of its screening range (the others sit at 0)."""
+    own = config_stage.get("fixed") or {}
+    out = {}
+    for t, f in sf.items():
+        if t in chosen or f["parameter"] not in own:
+            continue
+        v = own[f["parameter"]]
+        v = v.get("value") if isinstance(v, dict) else v
+        try:
+            x = (float(v) - _centre(f)) / ((float(f["high"]) - float(f["low"])) / 2.0)
+        except (TypeError, ValueError):
+            continue
+        if np.isfinite(x) and abs(x) > 1e-9:  # not the centre written with round-off
+            out[t] = x
+    return out
+
+
+def _sym_of(factors: dict, screening_symbol: str) -> str:
+    """The path stage's symbol of the factor a screening symbol names."""
+    return next(s for s, f in factors.items() if f["screening_symbol"] == screening_symbol)
 
 
 def _upstream_origin(stage: dict, pname: str, what: str) -> str:
@@ -488,7 +557,10 @@ def bbd_from_path(soil_data: dict, stage_id: str, path_stage: dict, path_respons
               for r, t in table.attrs.get("trend", {}).items()}  # stage.json: no NaN
     cautions = {r: c for r, t in table.attrs.get("trend", {}).items() if (c := trend_caution(t))}
     bounds = {s: _bounds_in_config_units(soil_data, path_stage["factors"][s]["parameter"]) for s in syms}
-    levels = bbd_levels(path, step, syms, bounds)
+    # a path aimed at several targets gives each factor the box half width of the "range"
+    # rule's neighbours (soilcal.doe.steepest.derive_path, rule "target")
+    half_width = (path_stage.get("derivation") or {}).get("box_half_width")
+    levels = bbd_levels(path, step, syms, bounds, half_width=half_width)
     st = _dem_base(config_stage)
     st["factors"] = {s: {"parameter": path_stage["factors"][s]["parameter"],
                          "low": _g12(levels[s]["low"]), "centre": _g12(levels[s]["centre"]),
@@ -582,6 +654,12 @@ def dem_stage(soil_data: dict, stage_id: str, targets: dict, upstream: dict | No
         if config_stage.get("from_stage") and config_stage["from_stage"] not in dem_stage_ids(soil_data):
             why += f" (stage {config_stage['from_stage']} is not simulated: simulation.stages)"
         st["derivation"] = {"kind": "config", "text": why}
+        n_centre = int((sim_block(soil_data).get("screening") or {}).get("center_points") or 0)
+        if st["kind"] == "plackett_burman" and n_centre and design_mode(soil_data) == "recipe":
+            st["center_points"] = n_centre
+            st["derivation"]["text"] += (f", plus {n_centre} centre run(s) (simulation.screening.center_points: "
+                                         "they measure the response where the path starts and its curvature; "
+                                         "the effects come from the two-level runs)")
         apply_own_fixed(st, config_stage, {}, {}, set(), soil_data)
         if st["kind"] == "steepest_ascent":
             st["path_targets"] = response_targets(soil_data, [r["id"] for r in st["responses"]], targets)

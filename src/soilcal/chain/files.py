@@ -209,7 +209,7 @@ def write_figures(kind: str, stage: dict, table_path, targets: dict, outdir, par
     steepest-ascent plot (the same path: same parameters, same levels).
     """
     from soilcal import plots
-    from soilcal.chain.stage import fit_stage, response_columns, stage_data
+    from soilcal.chain.stage import analysis_data, fit_stage, response_columns
 
     outdir = Path(outdir)
     outdir.mkdir(parents=True, exist_ok=True)
@@ -239,7 +239,7 @@ def write_figures(kind: str, stage: dict, table_path, targets: dict, outdir, par
     # steepest-ascent path's figure draws its runs (and their trend) without it
     from soilcal import rsm
 
-    data = stage_data(stage, table)
+    data = analysis_data(stage, table)
     syms = list(stage["factors"])
     labels = _labels(stage, parameters or {})
     rlabels = {r["id"]: f"{r['name']} ({r['unit']})" for r in stage["responses"]}

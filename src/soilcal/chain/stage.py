@@ -63,6 +63,67 @@ def stage_data(stage: dict, table: pd.DataFrame, snap: bool = True) -> pd.DataFr
     return out
 
 
+def is_centre_run(stage: dict, data: pd.DataFrame) -> np.ndarray:
+    """Rows of a stage's coded data (:func:`stage_data`) that are centre runs of a two-level
+    screening (every factor at coded 0; ``center_points`` of the DEM source's Plackett-Burman
+    design, :func:`generated_design`); all False for other stages."""
+    if stage["kind"] != "plackett_burman" or not int(stage.get("center_points") or 0):
+        return np.zeros(len(data), dtype=bool)
+    x = data[list(stage["factors"])].to_numpy(float)
+    return np.all(np.abs(x) <= SNAP_TOLERANCE, axis=1)
+
+
+def analysis_data(stage: dict, table: pd.DataFrame) -> pd.DataFrame:
+    """:func:`stage_data` without a screening's centre runs: the main effects come from its
+    two-level runs (the centre runs measure curvature, :func:`screening_centre`)."""
+    data = stage_data(stage, table)
+    return data[~is_centre_run(stage, data)]
+
+
+def screening_centre(stage: dict, table: pd.DataFrame) -> dict[str, dict]:
+    """The centre runs of a Plackett-Burman stage against its two-level runs, per response.
+
+    For each response with at least one centre run: ``n``, ``mean``, ``sd`` (None for one
+    run) of the centre runs, ``factorial_mean`` of the two-level runs, ``curvature`` =
+    factorial mean - centre mean, and its test (Montgomery, Design and Analysis of
+    Experiments, sec. 6.8: SS_curv = n_F n_C (ybar_F - ybar_C)^2 / (n_F + n_C) on 1 degree of
+    freedom) against the residual mean square of the main-effects model of the two-level runs
+    pooled with the centre runs' pure error: ``F``, ``df_error``, ``p`` (None where no degree of
+    freedom is left). Empty for a stage without centre runs.
+    """
+    from scipy import stats
+
+    if stage["kind"] != "plackett_burman" or not int(stage.get("center_points") or 0):
+        return {}
+    data = stage_data(stage, table)
+    centre = is_centre_run(stage, data)
+    if not centre.any():
+        return {}
+    out = {}
+    for rid in response_columns(stage):
+        yc = data.loc[centre, rid].dropna().to_numpy(float)
+        fac = data.loc[~centre].dropna(subset=[rid])
+        yf = fac[rid].to_numpy(float)
+        if yc.size == 0 or yf.size == 0:
+            continue
+        nf, nc = yf.size, yc.size
+        x = np.column_stack([np.ones(nf), fac[list(stage["factors"])].to_numpy(float)])
+        beta, *_ = np.linalg.lstsq(x, yf, rcond=None)
+        ss_res = float(np.sum((yf - x @ beta) ** 2))
+        df_res = nf - np.linalg.matrix_rank(x)
+        ss_pure = float(np.sum((yc - yc.mean()) ** 2))
+        df_err = df_res + nc - 1
+        curv = float(yf.mean() - yc.mean())
+        ss_curv = nf * nc * curv**2 / (nf + nc)
+        row = {"n": int(nc), "mean": float(yc.mean()), "sd": float(yc.std(ddof=1)) if nc > 1 else None,
+               "factorial_mean": float(yf.mean()), "curvature": curv, "F": None, "df_error": int(df_err), "p": None}
+        if df_err > 0 and ss_res + ss_pure > 0:
+            f = ss_curv / ((ss_res + ss_pure) / df_err)
+            row["F"], row["p"] = float(f), float(stats.f.sf(f, 1, df_err))
+        out[rid] = row
+    return out
+
+
 # --------------------------------------------------------------------------- design
 
 
@@ -91,7 +152,9 @@ def generated_design(stage: dict) -> np.ndarray:
     k = len(stage["factors"])
     if stage["kind"] == "plackett_burman":
         cols = k + len(stage.get("dummies") or [])
-        return doe.plackett_burman(pb_columns(stage))[:, :cols]
+        coded = doe.plackett_burman(pb_columns(stage))[:, :cols]
+        n_centre = int(stage.get("center_points") or 0)  # the DEM source's centre runs, last
+        return np.vstack([coded, np.zeros((n_centre, cols))]) if n_centre else coded
     if stage["kind"] == "box_behnken":
         return doe.box_behnken(k, int(stage.get("center_points", 0)))
     raise ValueError(stage["kind"])
@@ -226,7 +289,7 @@ def fit_stage(stage: dict, table: pd.DataFrame) -> list[StageFit]:
     from soilcal import rsm  # here, not at module import: the design jobs fit nothing
 
     syms, low, high = bounds(stage)
-    data = stage_data(stage, table)
+    data = analysis_data(stage, table)
     fits = []
     for rid in response_columns(stage):
         sub = data.dropna(subset=[rid])
@@ -305,7 +368,7 @@ def regression_frames(stage: dict, table: pd.DataFrame) -> dict[str, pd.DataFram
     from soilcal import rsm  # here, not at module import: the design jobs fit nothing
 
     anova, fit, coef, effects = [], [], [], []
-    data = stage_data(stage, table)
+    data = analysis_data(stage, table)
     syms = list(stage["factors"])
     for sf in fit_stage(stage, table):
         models = [("full", sf.full)] if stage["kind"] == "plackett_burman" else [("full", sf.full), ("reduced", sf.reduced)]

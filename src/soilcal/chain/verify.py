@@ -85,10 +85,12 @@ def _case(stage: dict, case_id: str) -> dict:
 
 
 def verification_spec(soil, stage: dict, optimum: pd.DataFrame, case_id: str, rep: int,
-                      preset: str | None = None) -> dict:
+                      preset: str | None = None, responses=None) -> dict:
     """The point spec (:func:`soilcal.chain.sources.point_spec`) of verification replicate
     ``rep`` of one case: the calibrated set, every response the case aims at, one seed; with
-    ``preset`` (``paper``) only the responses :func:`paper_responses` admits, at that preset."""
+    ``preset`` (``paper``) only the responses :func:`paper_responses` admits, at that preset;
+    with ``responses`` only those of them (a second verification stage's seed runs only the
+    responses its first seeds left undecided, :func:`second_stage_responses`)."""
     from soilcal.chain.sources import point_spec
     from soilcal.chain.stage import calibrated_levels
 
@@ -97,6 +99,8 @@ def verification_spec(soil, stage: dict, optimum: pd.DataFrame, case_id: str, re
     case = _case(stage, case_id)
     seed = int(soil.data["seed"]) + int(v["seed_offset"]) + int(rep)
     rids = list(case["goals"])
+    if responses is not None:
+        rids = [r for r in rids if r in set(responses)] or rids
     if preset == "paper":
         rids = [r for r in rids if r in paper_responses(soil, rids)]
     spec = point_spec(soil, stage, levels, run=rep, seed=seed, replicates=1, responses=rids)
@@ -222,6 +226,17 @@ def seeds_frame(soil_data: dict, stage: dict, optimum: pd.DataFrame, targets: di
 def case_seeds(frame: pd.DataFrame) -> dict[str, int]:
     """Each case's seed count of a :func:`seeds_frame` (``verify_seeds.csv``)."""
     return {str(c): int(g["seeds"].max()) for c, g in frame.groupby("case", sort=False)}
+
+
+def second_stage_responses(frame: pd.DataFrame, case_id: str) -> list[str] | None:
+    """The responses a case's second-stage seeds run (``verify_seeds.csv``, :func:`seeds_frame`):
+    the ones its first seeds left undecided. A response already decided (met, or missed by
+    more than its seeds scatter) gains nothing from more seeds, and where it is another
+    scenario (the vineyard soil's drum beside its heap) skipping it saves most of the time.
+    None (every response) where the case has no undecided response."""
+    g = frame[frame["case"].astype(str) == str(case_id)]
+    und = g[g["undecided"].astype(str).str.lower() == "true"]["response"].astype(str).tolist()
+    return und or None
 
 
 def write_seeds(soil_data: dict, stage_json, optimum_csv, targets_csv, run_paths, preset: str, out) -> pd.DataFrame:
@@ -779,6 +794,7 @@ def tool_frame(conditions, runs: dict[tuple[str, int], pd.DataFrame]) -> pd.Data
 
 
 __all__ = ["SEEDS_COLUMNS", "TOOL_COLUMNS", "VERIFICATION_COLUMNS", "calibrated_vs_paper", "case_seeds", "diagnose",
+           "second_stage_responses",
            "first_stage_seeds", "most_seeds", "not_run_rows", "seeds_frame", "stein_seeds", "tool_frame", "two_stage",
            "verification_cases", "verification_frame", "verification_spec", "verify_settings"]
 
@@ -795,12 +811,12 @@ def _soil(soil_path, soil_data, resources_root="resources"):
 
 
 def verification_point(soil, stage: dict, optimum: pd.DataFrame, case_id: str, rep: int,
-                       preset: str | None = None) -> dict:
+                       preset: str | None = None, responses=None) -> dict:
     """Everything one verification job simulates (plain data, the job's params): the spec of
     :func:`verification_spec`, or ``{"not_run": reason}`` when the case has no calibrated set
     (e.g. its target is missing)."""
     try:
-        spec = verification_spec(soil, stage, optimum, case_id, rep, preset)
+        spec = verification_spec(soil, stage, optimum, case_id, rep, preset, responses)
     except InputError as exc:
         return {"not_run": str(exc), "stage": stage["id"], "case": case_id,
                 "responses": list(_case(stage, case_id)["goals"])}

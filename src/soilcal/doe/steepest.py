@@ -16,7 +16,9 @@ Deriving the climbing stage from our own screening (instead of copying the paper
    into one direction: the negative gradient of the summed squared relative error to the
    targets (Montgomery sec. 11.2 with the response replaced by that error).
 3. :func:`derive_path` lays the steps out in actual units, either the papers' way (every factor
-   walks its whole screening range) or Montgomery's (steps proportional to the coefficients).
+   walks its whole screening range), Montgomery's (steps proportional to the coefficients), or
+   aimed at several targets at once (``target``: Montgomery's layout along the line through
+   the point where the first-order models meet every target together, :func:`path_target`).
 4. :func:`chosen_step` picks the simulated step closest to the targets: the step whose own
    run is closest (``closest``, the papers' rule), or the step whose value on the trend
    fitted through all the path's runs is closest (``fitted``, :func:`path_trend`), which a
@@ -297,6 +299,42 @@ def path_direction(
     return d
 
 
+def path_target(
+    coefficients: dict[str, dict[str, float]],
+    intercepts: dict[str, float],
+    targets: dict[str, float],
+) -> dict[str, float]:
+    """Coded point where the first-order models meet every target together.
+
+    The gradient of :func:`path_direction` sums the responses' pulls, so where two targeted
+    responses need different moves (one angle too low, the other already high enough) it walks
+    both the same way. Solving the first-order models for the targets instead, in relative
+    terms,
+
+        sum_j b_rj / t_r * x_j = (t_r - b0_r) / t_r     for every targeted response r,
+
+    gives the move x* (coded units from the design centre) the linear models predict meets all
+    targets: the minimum-norm solution when there are fewer responses than factors (the
+    Gauss-Newton step of the relative errors), the least-squares one when there are more. For
+    one response it lies on Montgomery's path of steepest ascent (sec. 11.2), where the line
+    reaches the target: x* = b (t - b0) / |b|^2.
+
+    Same arguments and checks as :func:`path_direction`. Returns {factor: x*_j}; raises
+    InputError when every target equals its centre response (no move to aim at).
+    """
+    d = path_direction(coefficients, intercepts, targets)  # validates; zero gradient -> InputError
+    factors = list(d)
+    rows, rhs = [], []
+    for r, t in targets.items():
+        t = float(t)
+        rows.append([float(coefficients[r][f]) / t for f in factors])
+        rhs.append((t - float(intercepts[r])) / t)
+    x, *_ = np.linalg.lstsq(np.asarray(rows), np.asarray(rhs), rcond=None)
+    if not np.all(np.isfinite(x)) or np.max(np.abs(x)) == 0.0:
+        raise InputError(None, "coefficients/intercepts", "a finite, non-zero move to the targets", x.tolist())
+    return {f: float(v) for f, v in zip(factors, x)}
+
+
 def _factor_bounds(direction, low, high) -> tuple[list[str], dict, dict, dict]:
     if not isinstance(direction, Mapping) or not direction:
         raise InputError(None, "direction", "a non-empty mapping factor -> direction component", direction)
@@ -346,14 +384,27 @@ def derive_path(
     centre. With the default base_step the base factor walks exactly its screening range, as in
     the "range" rule; other factors may leave their screening ranges (no clipping).
 
+    rule "target" (several targeted responses, :func:`path_target`): ``direction`` is the coded
+    point x* where the first-order models meet every target together, and the path is laid out
+    as "proportional" along the line from the centre through it: the factor of largest |x*_j|
+    (the base) walks its whole screening range, every other factor x*_j / |x*_base| of its own,
+    so the path stays inside the screening box the models were fitted in (from one face to the
+    opposite one, through the centre and, where x* lies inside the box, through x*). Where two
+    responses pull apart, x* moves a factor only one of them needs (the summed gradient of
+    "range" walks every factor the same way). Because the steps' spacing per factor follows
+    x*, a factor x* hardly moves would get almost no range from the steps' neighbours;
+    ``attrs["box_half_width"]`` therefore gives every factor the half width the "range" rule's
+    neighbours would (its screening range / (n_steps - 1)), for :func:`bbd_levels`.
+
     Returns columns step and one per factor; ``attrs["rule"]``, ``attrs["step"]`` (signed
     actual increment per factor), ``attrs["direction"]`` (sign per factor: +1, -1 or 0) and,
-    for "proportional", ``attrs["base"]`` and ``attrs["coded_step"]``.
+    for "proportional" and "target", ``attrs["base"]`` and ``attrs["coded_step"]``; for
+    "target" also ``attrs["target_coded"]`` (x*) and ``attrs["box_half_width"]``.
     """
     factors, d, lo, hi = _factor_bounds(direction, low, high)
     n = _check_int(n_steps, "n_steps", 2)
-    if rule not in ("range", "proportional"):
-        raise InputError(None, "rule", "'range' or 'proportional'", rule)
+    if rule not in ("range", "proportional", "target"):
+        raise InputError(None, "rule", "'range', 'proportional' or 'target'", rule)
     if all(v == 0.0 for v in d.values()):
         raise InputError(None, "direction", "at least one non-zero component", d)
     sign = {f: int(np.sign(d[f])) for f in factors}
@@ -375,6 +426,9 @@ def derive_path(
                 out[f] = np.full(n, centre[f])
             step_actual[f] = sign[f] * (hi[f] - lo[f]) / (n - 1)
     else:
+        if rule == "target" and (base is not None or base_step is not None):
+            raise InputError(None, "base/base_step", "None with rule 'target' (its base is the largest move)",
+                             (base, base_step))
         if base is None:
             base = max(factors, key=lambda f: abs(d[f]))  # max() keeps the first on ties
         elif base not in d:
@@ -395,6 +449,9 @@ def derive_path(
             out[f] = centre[f] + (steps - 1 - shift) * step_actual[f]
         out.attrs["base"] = base
         out.attrs["coded_step"] = coded
+        if rule == "target":
+            out.attrs["target_coded"] = dict(d)
+            out.attrs["box_half_width"] = {f: 2.0 * half[f] / (n - 1) for f in factors}
     out.attrs["rule"] = rule
     out.attrs["step"] = step_actual
     out.attrs["direction"] = sign
@@ -569,6 +626,7 @@ def bbd_levels(
     step: int,
     factors: list[str],
     bounds: dict[str, tuple[float, float]] | None = None,
+    half_width: dict[str, float] | None = None,
 ) -> dict[str, dict[str, float]]:
     """Box-Behnken low / centre / high levels from the chosen step of the climbing path.
 
@@ -579,6 +637,10 @@ def bbd_levels(
     ``step`` and the other two levels are those of the previous and next rows of ``path``
     (sorted by step), sorted so low < high. At the first or last step the missing neighbour is
     the centre mirrored: centre -/+ the distance to the one existing neighbour.
+
+    half_width: optional factor -> half width (actual units, > 0): the low and high levels are
+    the centre -/+ it instead of the neighbours (the "target" rule's path, whose steps' spacing
+    per factor follows its direction; :func:`derive_path`'s ``attrs["box_half_width"]``).
 
     bounds: optional physical limits factor -> (lower, upper), closed, None for no limit on a
     side (e.g. restitution (1e-6, 1), friction (0, None)). A triple with a level outside is
@@ -609,13 +671,22 @@ def bbd_levels(
     bounds = {} if bounds is None else bounds
     if not isinstance(bounds, Mapping):
         raise InputError(None, "bounds", "a mapping factor -> (lower, upper)", bounds)
+    half_width = {} if half_width is None else half_width
+    if not isinstance(half_width, Mapping):
+        raise InputError(None, "half_width", "a mapping factor -> half width", half_width)
     out: dict[str, dict[str, float]] = {}
     for f in factors:
         vals = p[f].to_numpy(dtype=float)
         c = vals[i]
         prev = vals[i - 1] if i > 0 else None
         nxt = vals[i + 1] if i + 1 < len(vals) else None
-        if prev is None:
+        if f in half_width:
+            hw = float(half_width[f])
+            if not (np.isfinite(hw) and hw > 0.0):
+                raise InputError(None, f"half_width[{f}]", "a finite half width > 0", half_width[f])
+            prev, nxt = c - hw, c + hw
+            note = f"centre = step {steps[i]}, low/high = centre -/+ {_fmt(hw)} (the path's box half width)"
+        elif prev is None:
             prev = 2.0 * c - nxt
             note = (f"centre = step {steps[i]}, other level = step {steps[i + 1]}, "
                     f"mirrored level = 2 * centre - step {steps[i + 1]} (first step of the path)")
@@ -674,6 +745,7 @@ __all__ = [
     "chosen_step",
     "derive_path",
     "path_direction",
+    "path_target",
     "select_factors",
     "steepest_ascent_path",
 ]
