@@ -222,5 +222,7 @@ def test_a_verification_spec_of_some_responses_simulates_only_those():
     assert set(every["responses"]) == {"static_angle", "dynamic_angle"}
     some = verification_spec(soil, stage, opt, "upper", 5, responses=["static_angle"])
     assert list(some["responses"]) == ["static_angle"]
+    with pytest.raises(InputError, match="goals"):
+        verification_spec(soil, stage, opt, "upper", 5, responses=["no_such_angle"])
     # the same seed and set: only the responses differ
     assert {k: v for k, v in some.items() if k != "responses"} == {k: v for k, v in every.items() if k != "responses"}

@@ -100,7 +100,11 @@ def verification_spec(soil, stage: dict, optimum: pd.DataFrame, case_id: str, re
     seed = int(soil.data["seed"]) + int(v["seed_offset"]) + int(rep)
     rids = list(case["goals"])
     if responses is not None:
-        rids = [r for r in rids if r in set(responses)] or rids
+        some = [r for r in rids if r in set(responses)]
+        if not some:
+            raise InputError(stage.get("id"), f"optimise.cases.{case_id}.goals",
+                             f"a response of the case among {list(responses)}", rids)
+        rids = some
     if preset == "paper":
         rids = [r for r in rids if r in paper_responses(soil, rids)]
     spec = point_spec(soil, stage, levels, run=rep, seed=seed, replicates=1, responses=rids)
