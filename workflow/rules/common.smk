@@ -383,18 +383,23 @@ def case_seed_counts(soil, stage):
     """Each case's verification seeds at the soil's own preset once the verify_seeds
     checkpoint has sized them (a soil whose max_replicates exceeds its replicates); {} (every
     case its replicates) otherwise."""
-    import pandas as pd
-
     if not verify.two_stage(soil_cfg(soil)):
         return {}
+    return verify.case_seeds(_seeds_frame(soil, stage))
+
+
+def _seeds_frame(soil, stage):
+    """verify_seeds.csv of a stage, read once per file version (as _calibration reads a set)."""
+    import pandas as pd
+
     path = verify_seeds_of(soil, stage)
     key = (path, os.path.getmtime(path))
-    if key not in _SEED_COUNTS:  # read once per file version, as _calibration reads a set
-        _SEED_COUNTS[key] = verify.case_seeds(pd.read_csv(path))
-    return _SEED_COUNTS[key]
+    if key not in _SEED_FRAMES:
+        _SEED_FRAMES[key] = pd.read_csv(path)
+    return _SEED_FRAMES[key]
 
 
-_SEED_COUNTS = {}
+_SEED_FRAMES = {}
 
 
 def verify_seeds_of(soil, stage):
@@ -607,13 +612,7 @@ def second_stage_responses(soil, stage, case, rep, preset):
     if (not verify.two_stage(soil_cfg(soil)) or rep < verify.first_stage_seeds(soil_cfg(soil))
             or preset != sim_cfg(soil).get("preset", "quick")):
         return None
-    import pandas as pd
-
-    path = verify_seeds_of(soil, stage)
-    key = ("responses", path, os.path.getmtime(path))
-    if key not in _SEED_COUNTS:
-        _SEED_COUNTS[key] = pd.read_csv(path)
-    return verify.second_stage_responses(_SEED_COUNTS[key], case)
+    return verify.second_stage_responses(_seeds_frame(soil, stage), case)
 
 
 def _same_case(w):

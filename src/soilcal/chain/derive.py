@@ -432,12 +432,11 @@ def path_from_screening(soil_data: dict, stage_id: str, screening_stage: dict, e
     from soilcal.chain.stage import screening_centre
 
     centre = screening_centre(screening_stage, responses)
-    factorial = ~_centre_rows(screening_stage, responses)
     held = _held_coded(config_stage, sf, chosen)
     intercepts, start = {}, {}
     for r in coefs:
         c = centre.get(r)
-        b0 = c["mean"] if c else float(responses.loc[factorial, r].mean())
+        b0 = c["mean"] if c else float(responses[r].mean())  # no centre value: the two-level runs
         shift = sum(float(b) * held[t] for t, b in zip(eff.loc[eff["response"] == r, "term"],
                                                         eff.loc[eff["response"] == r, "coefficient"]) if t in held)
         intercepts[r] = b0 + shift
@@ -496,14 +495,6 @@ def path_from_screening(soil_data: dict, stage_id: str, screening_stage: dict, e
     }
     apply_own_fixed(st, config_stage, fixed, origin, {f["parameter"] for f in factors.values()}, soil_data)
     return st
-
-
-def _centre_rows(screening_stage: dict, responses: pd.DataFrame) -> np.ndarray:
-    from soilcal.chain.stage import is_centre_run, stage_data
-
-    if not int(screening_stage.get("center_points") or 0):
-        return np.zeros(len(responses), dtype=bool)
-    return is_centre_run(screening_stage, stage_data(screening_stage, responses))
 
 
 def _held_coded(config_stage: dict, sf: dict, chosen: list[str]) -> dict[str, float]:
