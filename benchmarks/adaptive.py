@@ -69,7 +69,8 @@ def recipe_rows(wd: Path, soil: str) -> list[dict]:
     runs = 0
     for f in d.glob("*/runs/*.csv"):
         df = pd.read_csv(f)
-        runs += int(df["replicates"].iloc[0]) if len(df) else 0
+        # a point's seeds: the most any of its responses ran (a response may run its own count)
+        runs += int(df["replicates"].max()) if len(df) else 0
     # a verification seed of a case without a calibrated set writes a 'not run' row: no run
     runs += sum(_ran(f) for f in _seed_files(d))
     ver = pd.read_csv(d / "verification.csv")

@@ -28,7 +28,9 @@ def _workdir(tmp_path: Path, commit2="303e2e901320") -> Path:
     for k in range(5):  # five design points of two replicates each: 10 runs
         p = d / "bbd" / "runs" / f"{k}.csv"
         p.parent.mkdir(parents=True, exist_ok=True)
-        pd.DataFrame([{"status": "ok", "commit": "303e2e901320", "replicates": 2}] * 2).to_csv(p, index=False)
+        # a response of its own count (1) listed first: the point ran the most of them, 2 seeds
+        pd.DataFrame([{"status": "ok", "commit": "303e2e901320", "replicates": 1},
+                      {"status": "ok", "commit": "303e2e901320", "replicates": 2}]).to_csv(p, index=False)
     for k in range(4):
         _seed(d / "verify/quick/bbd/a" / f"{k}.csv", "ok")  # 4 seeds ran
         _seed(d / "verify/quick/bbd/b" / f"{k}.csv", "not run", None)  # no calibrated set: 0 ran

@@ -295,7 +295,7 @@ _POINTS = {}
 
 def _points(soil, stage):
     """(stage, design points, seeds) of a DEM stage, read once per file version."""
-    from soilcal.chain.sources import design_points, point_seeds
+    from soilcal.chain.sources import design_points, point_seeds, seed_stride
 
     import pandas as pd
 
@@ -304,7 +304,7 @@ def _points(soil, stage):
     if key not in _POINTS:
         st = read_stage(f"{d}/stage.json")
         pts = design_points(st, pd.read_csv(f"{d}/design.csv"))
-        seeds = point_seeds(pts, int(soil_cfg(soil)["seed"]), int(sim_cfg(soil).get("replicates", 1)))
+        seeds = point_seeds(pts, int(soil_cfg(soil)["seed"]), seed_stride(soil_cfg(soil)))
         _POINTS[key] = (st, dict(pts), seeds)
     return _POINTS[key]
 
@@ -699,6 +699,27 @@ def conditions(soil):
 
 def tool_runs(w):
     return [f"results/{w.soil}/dem/tools/{k}.csv" for k in dict.fromkeys(tool_jobs(w.soil)[1].values())]
+
+
+def after_checkpoints(fn):
+    """A params function read through checkpoints, whose value waits for them as Snakemake's
+    own placeholder (<TBD>) does for a checkpoint among a rule's inputs.  On a run over earlier
+    results (a soil edited, a run resumed), Snakemake may count a checkpoint whose old output is
+    on disk as done while it evaluates a job's params but not while it evaluated the inputs;
+    the params then reach a later checkpoint than the inputs name, and Snakemake stops the whole
+    run.  The job, whose inputs still point at a checkpoint, is evaluated again when that
+    checkpoint finishes, before it can run."""
+    from snakemake.common.tbdstring import TBDString
+    from snakemake.exceptions import IncompleteCheckpointException
+
+    def params(w):
+        try:
+            return fn(w)
+        except IncompleteCheckpointException:
+            return TBDString()
+
+    params.__name__ = fn.__name__
+    return params
 
 
 def tool_run_map(w):

@@ -25,7 +25,7 @@ checkpoint loop_diagnose:
     params:
         soil_path=lambda w: str(SOILS[w.soil].path),
         resources_root=RES,
-        files=tool_file_map,
+        files=after_checkpoints(tool_file_map),
         loop=lambda w: soil_cfg(w.soil).get("loop") or {},
         measurements=lambda w: soil_cfg(w.soil).get("measurements") or {},
     conda:

@@ -225,7 +225,7 @@ rule tool_verification:
     params:
         soil_path=lambda w: str(SOILS[w.soil].path),
         resources_root=RES,
-        runs=tool_run_map,
+        runs=after_checkpoints(tool_run_map),
     conda:
         "../../envs/soilcal.yaml"
     log:

@@ -406,6 +406,9 @@ def simulation_setup(soil, design_override: str | None = None) -> "pd.DataFrame"
         add(f"{where}.scenario", entry["scenario"], "soil", f"{where}.scenario")
         add(f"{where}.setup", entry["setup"], "soil", f"{where}.setup (named setup)")
         add(f"{where}.measure", entry["measure"], "soil", f"{where}.measure")
+        if "replicates" in entry:
+            add(f"{where}.replicates", entry["replicates"], "soil", f"{where}.replicates (seeds per design point "
+                "of this response, in place of simulation.replicates)")
         for pr in [preset] + (["paper"] if rid in paper and preset != "paper" else []):
             _setup_rows(add, where if pr == preset else f"{where}[{pr}]", entry["scenario"], entry["setup"],
                         dict(entry.get("set") or {}), pr, params, soil.path)

@@ -94,9 +94,21 @@ def response_specs(soil, response_ids) -> dict[str, dict]:
     return out
 
 
-def design_replicates(soil_data: dict) -> int:
-    """Seeds per design point: the soil's ``simulation.replicates``, 1 where it gives none."""
-    return int((soil_data.get("simulation") or {}).get("replicates", 1))
+def design_replicates(soil_data: dict, response: str | None = None) -> int:
+    """Seeds per design point: the soil's ``simulation.replicates``, 1 where it gives none; for
+    a ``response`` with its own ``simulation.responses.<id>.replicates`` (a cheap, noisy
+    response, such as a small heap, averaged over more seeds than a costly one run beside it),
+    that count."""
+    sim = soil_data.get("simulation") or {}
+    own = ((sim.get("responses") or {}).get(response) or {}).get("replicates") if response else None
+    return int(own if own is not None else sim.get("replicates", 1))
+
+
+def seed_stride(soil_data: dict) -> int:
+    """Seeds between two design points' first seeds (:func:`point_seeds`): the most seeds any
+    response of the soil runs per point, so that no two points share a packing draw."""
+    sim = soil_data.get("simulation") or {}
+    return max([design_replicates(soil_data)] + [design_replicates(soil_data, r) for r in sim.get("responses") or {}])
 
 
 def point_spec(soil, stage: dict, levels: dict, run: int, seed: int, replicates: int | None = None,
@@ -114,10 +126,18 @@ def point_spec(soil, stage: dict, levels: dict, run: int, seed: int, replicates:
     if extra_params:
         dem = dem.replace(**extra_params)
     rids = responses if responses is not None else [r["id"] for r in stage["responses"]]
+    reps = int(replicates or design_replicates(soil.data))
+    specs = response_specs(soil, rids)
+    if replicates is None:
+        # a response's own seed count where the soil gives one (written only where it differs,
+        # so that the jobs of a soil without one keep their params)
+        for rid, rs in specs.items():
+            own = design_replicates(soil.data, rid)
+            if own != reps:
+                rs["replicates"] = own
     return {"soil": soil.name, "stage": stage["id"], "run": int(run),
             "levels": {k: float(v) for k, v in levels.items()},
-            "seed": int(seed), "replicates": int(replicates or design_replicates(soil.data)),
-            "params": dem.as_dict(), "responses": response_specs(soil, rids)}
+            "seed": int(seed), "replicates": reps, "params": dem.as_dict(), "responses": specs}
 
 
 def commit() -> str:
@@ -136,11 +156,18 @@ def commit() -> str:
         return "unknown"
 
 
+def replicates_of(spec: dict, rid: str) -> int:
+    """Seeds a point spec runs for response ``rid``: its own ``replicates`` where
+    :func:`point_spec` gave it one, else the spec's."""
+    return int(spec["responses"][rid].get("replicates", spec["replicates"]))
+
+
 def simulate(spec: dict, threads: int | None = None, rev: str | None = None,
              restart_dir=None) -> pd.DataFrame:
     """Run every response of a point spec; one row per response (:data:`RUN_COLUMNS`, then
     ``f:<factor>`` levels and ``p:<parameter>`` DEM parameters).  Responses measured by the same
-    scenario and setup (a plate's horizontal and vertical force) share one run per seed.
+    scenario and setup with the same seed count (:func:`replicates_of`; a plate's horizontal
+    and vertical force) share one run per seed.
     ``restart_dir``: where the runs keep their restart files (one folder per scenario and
     setup; :func:`soilcal.dem.scenarios.base.run_replicates`), so that a killed job resumes."""
     from pathlib import Path
@@ -155,15 +182,16 @@ def simulate(spec: dict, threads: int | None = None, rev: str | None = None,
     # beyond a factor range, a loop effect switched on): only their physical range holds here
     params = DemParams.from_mapping(spec["params"], "<point spec>", plausible=False)
     rev = rev or commit()
-    k = int(spec["replicates"])
-    seeds = list(range(int(spec["seed"]), int(spec["seed"]) + k))
     groups: dict[str, list[str]] = {}
     for rid, rs in spec["responses"].items():
-        key = json.dumps([rs["scenario"], rs["setup"], rs["preset"]], sort_keys=True, default=str)
+        key = json.dumps([rs["scenario"], rs["setup"], rs["preset"], replicates_of(spec, rid)], sort_keys=True,
+                         default=str)
         groups.setdefault(key, []).append(rid)
     rows = []
     for rids in groups.values():
         rs = spec["responses"][rids[0]]
+        k = replicates_of(spec, rids[0])
+        seeds = list(range(int(spec["seed"]), int(spec["seed"]) + k))
         base = {"soil": spec["soil"], "stage": spec["stage"], "run": spec["run"], "scenario": rs["scenario"],
                 "setup": rs["setup"]["name"], "preset": rs["preset"], "seed": spec["seed"], "replicates": k,
                 "seeds": " ".join(map(str, seeds)), "commit": rev}
@@ -303,5 +331,6 @@ def printed_comparison(stage: dict, printed_stage: dict, responses: pd.DataFrame
     return {"points": pd.DataFrame(pts), "summary": pd.DataFrame(summ)}
 
 
-__all__ = ["RUN_COLUMNS", "design_points", "gather_runs", "point_seeds", "point_spec", "printed_comparison",
-           "published_responses", "read_runs", "run_point", "simulate", "soil_with_stage"]
+__all__ = ["RUN_COLUMNS", "design_points", "design_replicates", "gather_runs", "point_seeds", "point_spec",
+           "printed_comparison", "published_responses", "read_runs", "replicates_of", "run_point", "seed_stride",
+           "simulate", "soil_with_stage"]

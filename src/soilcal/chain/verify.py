@@ -580,7 +580,7 @@ def _verification_row(stage, case, rid, goal, targets, soil_data, cal, sel, pres
     model = (stage.get("optimise") or {}).get("model", "reduced")
     bounds = factors_on_bounds(stage, cal.iloc[0]) if len(cal) else []
     tsd = target_scatter(t)
-    note = diagnose(mean, sd, n, target, pred, ci, design_replicates(soil_data), model, bounds, tsd) \
+    note = diagnose(mean, sd, n, target, pred, ci, design_replicates(soil_data, rid), model, bounds, tsd) \
         if len(cal) and n else ""
     if len(cal) and n and goal.get("goal") != "target":
         note = f"goal {goal.get('goal')}: no target value" + (

@@ -627,28 +627,29 @@ def combine(costs, replicates: int = 1) -> Cost:
 
 
 def spec_groups(spec: dict) -> list[dict]:
-    """The distinct runs of a point spec: responses that share scenario, setup and preset
-    run once (as :func:`soilcal.chain.sources.simulate` groups them)."""
+    """The distinct runs of a point spec: responses that share scenario, setup, preset and
+    seed count run once (as :func:`soilcal.chain.sources.simulate` groups them); each with its
+    ``replicates`` (the response's own, else the spec's)."""
     seen = {}
     for rid, rs in (spec.get("responses") or {}).items():
-        key = json.dumps([rs["scenario"], rs["setup"], rs["preset"]], sort_keys=True, default=str)
-        seen.setdefault(key, rs)
+        k = int(rs.get("replicates", spec.get("replicates", 1)))
+        key = json.dumps([rs["scenario"], rs["setup"], rs["preset"], k], sort_keys=True, default=str)
+        seen.setdefault(key, dict(rs, replicates=k))
     return list(seen.values())
 
 
 def estimate_spec(spec: dict, source: str | None = None) -> Cost:
     """:class:`Cost` of a job of :func:`soilcal.chain.sources.point_spec`: the sum over its
-    distinct runs (:func:`spec_groups`), each ``spec['replicates']`` times, with the spec's
-    DEM parameters."""
+    distinct runs (:func:`spec_groups`), each its ``replicates`` times, with the spec's DEM
+    parameters."""
     src = source or "{}/{}/run {}".format(spec.get("soil", "<spec>"), spec.get("stage", "?"),
                                           spec.get("run", "?"))
     groups = spec_groups(spec)
     if not groups:
         raise InputError(src, "responses", "at least one response to simulate", None)
-    k = int(spec.get("replicates", 1))
-    costs = [estimate(rs["scenario"], rs["setup"], spec.get("params"), rs["preset"], k, src)
+    costs = [estimate(rs["scenario"], rs["setup"], spec.get("params"), rs["preset"], rs["replicates"], src)
              for rs in groups]
-    return combine(costs, k)
+    return combine(costs, max(rs["replicates"] for rs in groups))
 
 
 def estimate_job(job: dict) -> Cost | None:

@@ -10,8 +10,8 @@ unit slip the config documents)::
       preset: quick          # quick (default) or paper
       replicates: 1          # seeds per design point, responses averaged (base.run_replicates)
       params: {soil_density: 1757.567}
-      responses:
-        static_angle: {scenario: repose, setup: xinjiang-vineyard-100mm, measure: angle_deg}
+      responses:               # a response's own replicates: more seeds for a cheap, noisy one
+        static_angle: {scenario: repose, setup: xinjiang-vineyard-100mm, measure: angle_deg, replicates: 4}
         dynamic_angle: {scenario: drum, setup: xinjiang-vineyard, measure: angle_avalanche_deg}
 
 The DEM parameters of one design point are, in increasing precedence: the defaults of
@@ -132,7 +132,8 @@ def spec_from(soil_path, data: dict, response_id: str) -> SimulationSpec:
     except InputError as exc:
         raise _renamed(exc, soil_path, "setup.", f"{where}.set.") from None
     return SimulationSpec(response=response_id, scenario=name, setup=setup, measure=entry["measure"],
-                          preset=preset, replicates=int(sim.get("replicates", 1)), params=params)
+                          preset=preset, replicates=int(entry.get("replicates", sim.get("replicates", 1))),
+                          params=params)
 
 
 def check_block(soil_path, data: dict) -> None:
