@@ -6,9 +6,9 @@ For every soil given, a fresh copy of the workflow (``benchmarks/calibration.py`
 ``design=adaptive``.  Per case and target response one row per method:
 
 * recipe: runs = every DEM run of the soil's stages (design points times their replicates), its
-  verification seeds, its local design's points and its second-round seeds (the tool tests and
-  the measured-data loop are not part of the calibration and are not counted); error = the last
-  round's verification row;
+  verification seeds, its local design's points times their seeds and its second-round seeds
+  (the tool tests and the measured-data loop are not part of the calibration and are not
+  counted); error = the last round's verification row;
 * adaptive: runs and error from ``results/<soil>/dem/adaptive/summary.csv`` (the verified point's
   mean; no error when no point was verified), and why it stopped.
 
@@ -71,7 +71,8 @@ def recipe_rows(wd: Path, soil: str) -> list[dict]:
         df = pd.read_csv(f)
         # a point's seeds: the most any of its responses ran (a response may run its own count)
         runs += int(df["replicates"].max()) if len(df) else 0
-    # a verification seed of a case without a calibrated set writes a 'not run' row: no run
+    # a verification seed of a case without a calibrated set writes a 'not run' row: no run; a
+    # local design's point runs a design point's seeds
     runs += sum(_ran(f) for f in _seed_files(d))
     ver = pd.read_csv(d / "verification.csv")
     rows = []
@@ -99,10 +100,14 @@ def _seed_files(d: Path) -> list[Path]:
     return [*d.glob("verify/*/*/*/*.csv"), *d.glob("refine/*/*/*.csv"), *d.glob("local/*/*/*.csv")]
 
 
-def _ran(f: Path) -> bool:
-    """Whether the seed file ``f`` holds a DEM run (not a 'not run' row)."""
+def _ran(f: Path) -> int:
+    """The seeds the run file ``f`` ran: the most any of its rows ran, none for a 'not run'
+    row."""
     df = pd.read_csv(f)
-    return bool(len(df)) and (df["status"].astype(str) != "not run").any()
+    ran = df[df["status"].astype(str) != "not run"] if len(df) else df
+    if not len(ran):
+        return 0
+    return int(pd.to_numeric(ran["replicates"], errors="coerce").fillna(1).max()) if "replicates" in ran.columns else 1
 
 
 def recipe_commit(wd: Path, soil: str) -> str:
@@ -212,7 +217,7 @@ def run_method(soil: str, method: str, cores: int, workdir: Path,
 def page(rows: list[dict]) -> list[str]:
     lines = ["# Runs spent and verified error: the papers' recipe against the adaptive design", "",
              f"Machine: {platform.machine()}, Python {platform.python_version()}.  Rows: `adaptive.csv` "
-             "(utc and commit per row).  runs: DEM runs of one seed each; error: the verified mean's signed "
+             "(utc and commit per row).  runs: DEM runs, one per seed; error: the verified mean's signed "
              "relative error, percent.", "",
              "| soil | stage | case | target | method | runs | verified | error % | within 2 % | stopped because "
              "| elapsed min |",

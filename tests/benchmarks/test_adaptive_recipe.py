@@ -1,5 +1,5 @@
-"""The adaptive benchmark's recipe rows count the DEM runs a recipe spent: design points times
-their replicates, verification seeds, local-design points and second-round seeds that ran, not
+"""The adaptive benchmark's recipe rows count the DEM runs a recipe spent: design points and
+local-design points times their replicates, verification and second-round seeds that ran, not
 the 'not run' rows a case without a calibrated set writes; a case's row is the round it ends
 with (``final``); the commit is the one the runs name."""
 
@@ -17,9 +17,9 @@ def bench(load_benchmark):
     return load_benchmark("adaptive.py", "adaptive_bench")
 
 
-def _seed(path: Path, status: str, commit: str | None = "303e2e901320"):
+def _seed(path: Path, status: str, commit: str | None = "303e2e901320", replicates: int = 1):
     path.parent.mkdir(parents=True, exist_ok=True)
-    pd.DataFrame([{"status": status, "commit": commit, "replicates": 1}]).to_csv(path, index=False)
+    pd.DataFrame([{"status": status, "commit": commit, "replicates": replicates}]).to_csv(path, index=False)
 
 
 def _workdir(tmp_path: Path, commit2="303e2e901320") -> Path:
@@ -36,8 +36,8 @@ def _workdir(tmp_path: Path, commit2="303e2e901320") -> Path:
         _seed(d / "verify/quick/bbd/b" / f"{k}.csv", "not run", None)  # no calibrated set: 0 ran
     _seed(d / "verify/quick/bbd/a/4.csv", "failed", commit2)  # a failed seed ran
     _seed(d / "refine/bbd/a/0.csv", "ok")
-    for k in range(3):  # the local design at the first set: 3 points ran
-        _seed(d / "local/bbd/a" / f"{k}.csv", "ok")
+    for k in range(3):  # the local design at the first set: 3 points of 2 seeds each ran
+        _seed(d / "local/bbd/a" / f"{k}.csv", "ok", replicates=2)
     pd.DataFrame([
         {"stage": "bbd", "case": "a", "round": 1, "response": "r", "simulated_mean": 30.0, "simulated_sd": 1.0,
          "relative_error_percent": 1.0, "within_2_percent": True, "status": "ok", "final": True},
@@ -56,7 +56,7 @@ def _workdir(tmp_path: Path, commit2="303e2e901320") -> Path:
 
 def test_not_run_seeds_are_not_counted(bench, tmp_path):
     rows = bench.recipe_rows(_workdir(tmp_path), "s")
-    assert [r["runs"] for r in rows] == [10 + 5 + 3 + 1] * 2
+    assert [r["runs"] for r in rows] == [10 + 5 + 3 * 2 + 1] * 2
     assert rows[0]["stopped_because"] == "recipe complete" and rows[1]["stopped_because"].startswith("not run")
     assert rows[0]["verified_mean"] == 30.0 and rows[0]["note"].endswith("round 1")  # the final round
     assert bench.recipe_commit(tmp_path, "s") == "303e2e9"

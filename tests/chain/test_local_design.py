@@ -212,3 +212,32 @@ def test_files_the_local_design_and_the_second_round_read_and_write(tmp_path):
     with pytest.raises(InputError, match="input.local_runs"):
         write_refined(*args, d / "bbd" / "refined.csv", local_paths=runs[:3], half_width=0.35,
                       local_csv=d / "bbd" / "local.csv")
+
+
+def test_local_points_of_several_seeds_weigh_as_many_seeds():
+    # every local point run twice, each row the mean of n = 4 seeds, w = 0.2 either side of the
+    # DEM's line; the first set's four one-seed runs scatter by +-0.01 about 32.  Weighted by
+    # seeds, the residual SD of one seed is sqrt((4 x 0.01^2 + 8 x 4 x 0.2^2) / (12 - 5)) (12
+    # rows, 5 terms); unweighted it would be sqrt((4e-4 + 8 x 0.04) / 7)
+    local = lc.local_frame(_stage(), refine_frame(_stage(), _table(), TARGETS, OPTIMUM, FIRST), OPTIMUM, 0.35)
+    runs = []
+    for i in range(len(local)):
+        xc = local.loc[i, ["A_coded", "B_coded", "C_coded"]].to_numpy(float)
+        for j, w in enumerate((0.2, -0.2)):
+            r = _run(xc, 10 + 2 * i + j, w)
+            r["n"] = 4
+            runs.append(r)
+    pl = lc.plane(FIRST["biased"], runs, "y", "ABC", CENTRE, HALF, X0C)
+    assert pl["slope"] == pytest.approx([1.5, 0.0, 0.0], abs=1e-9)
+    assert pl["level"] == pytest.approx(32.0, abs=1e-12)
+    assert pl["sd"] == pytest.approx(np.sqrt((4e-4 + 8 * 4 * 0.04) / 7), rel=1e-9)
+    assert (pl["runs"], pl["seeds"]) == (12, 4 + 8 * 4)
+
+
+def test_local_points_start_a_design_points_seeds_apart_after_every_verification_seed():
+    soil = {"seed": 3, "simulation": {"responses": {"y": {"replicates": 4}},
+                                      "verification": {"replicates": 4, "max_replicates": 10}}}
+    # most_seeds 10, then SEED_OFFSET, then four seeds (the heap's count) per point
+    assert [lc.point_seed(soil, p) - lc.SEED_OFFSET for p in range(3)] == [10, 14, 18]
+    soil["simulation"]["responses"]["y"].pop("replicates")
+    assert [lc.point_seed(soil, p) - lc.SEED_OFFSET for p in range(3)] == [10, 11, 12]

@@ -543,14 +543,14 @@ def stage_local_runs(w):
 
 
 def local_spec(w):
-    """One local point's job: its levels as the case's set, one seed after every verification
-    and second-round seed (soilcal.chain.local.SEED_OFFSET)."""
-    from soilcal.chain.local import SEED_OFFSET, point_optimum
+    """One local point's job: its levels as the case's set, each response's seeds per design
+    point, after every verification and second-round seed (soilcal.chain.local.point_seed)."""
+    from soilcal.chain.local import point_optimum, point_seed
 
     st, opt = _calibration(w.soil, w.stage)
     one = point_optimum(opt, _local_points(w.soil, w.stage), w.case, int(w.rep))
-    return verify.verification_point(SOILS[w.soil], st, one, w.case,
-                                     verify.most_seeds(soil_cfg(w.soil)) + SEED_OFFSET + int(w.rep))
+    return verify.verification_point(SOILS[w.soil], st, one, w.case, point_seed(soil_cfg(w.soil), int(w.rep)),
+                                     design_seeds=True)
 
 
 def refine_spec(w):

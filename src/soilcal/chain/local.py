@@ -12,15 +12,17 @@ a local design about x0 (checkpoint ``local_design``, ``local.csv`` of the stage
 per point, ``results/<soil>/dem/local/<stage>/<case>/<point>.csv``): a two-level
 Plackett-Burman design (pyDOE3 ``pbdesign``: 4 points for up to three factors, 8 for four to
 seven) at x0 +- h in coded units (h = ``simulation.verification.local.half_width``, default
-:data:`HALF_WIDTH` box half-widths), one seed per point, centred on x0 moved inward where x0 +- h
-would leave the second round's search region.  The second round then fits, per targeted
-response, a plane to the local runs and the first round's seeds at x0 (least squares,
-statsmodels OLS, with a centre indicator: the factorial-plus-centre-points model, so that a bend
-of the response within the design, the first set standing off the design's plane, is estimated
-apart and does not tilt the level): the DEM's level a at x0 (its seeds' mean) and slope g
-there, with the slope's covariance.  It corrects the
-surface to first order there, s(x) + (a - s(x0)) + (g - grad s(x0)) . (x - x0), so that the
-corrected surface has the DEM's value and slope at x0 and the surface's curvature
+:data:`HALF_WIDTH` box half-widths), each point run with the seeds of a design point (every
+response its ``simulation.replicates``, or its own ``simulation.responses.<id>.replicates``),
+centred on x0 moved inward where x0 +- h would leave the second round's search region.  The
+second round then fits, per targeted response, a plane to the local runs and the first round's
+seeds at x0 (least squares weighted by each run's seeds, statsmodels WLS, with a centre
+indicator: the factorial-plus-centre-points model, so that a bend of the response within the
+design, the first set standing off the design's plane, is estimated apart and does not tilt the
+level): the DEM's level a at x0 (its seeds' mean) and slope g there, with the slope's
+covariance.  It corrects the surface to first order there,
+s(x) + (a - s(x0)) + (g - grad s(x0)) . (x - x0), so that the corrected surface has the DEM's
+value and slope at x0 and the surface's curvature
 (first-order model management: Alexandrov, Dennis, Lewis and Torczon, Structural Optimization
 15 (1998) 16-23), and takes the smallest move at which the corrected surfaces meet every
 target, within the trust region |x - x0| <= :data:`TRUST` h in every coded factor (and the
@@ -28,8 +30,8 @@ search region), where the plane was measured; where none does, the corrected sur
 least-squares compromise there if it promises a worst error :data:`soilcal.chain.refine.COMPROMISE_GAIN`
 points lower than at x0.  Fresh seeds verify the new set, as for every second round.
 
-The local seeds are ``seed + seed_offset + most_seeds + SEED_OFFSET + point`` (after every
-verification and second-round seed).
+The local seeds start at ``seed + seed_offset + most_seeds + SEED_OFFSET + stride * point``
+(after every verification and second-round seed; :func:`point_seed`).
 """
 
 from __future__ import annotations
@@ -46,6 +48,17 @@ HALF_WIDTH = 0.35
 TRUST = 2.0
 #: the local design's seeds start this many seeds after the verification's last
 SEED_OFFSET = 1000
+
+
+def point_seed(soil_data: dict, point: int) -> int:
+    """The first seed of local point ``point`` past ``seed + seed_offset``: after every
+    verification and second-round seed (:func:`soilcal.chain.verify.most_seeds` plus
+    :data:`SEED_OFFSET`), the points' seeds as many apart as a design point's
+    (:func:`soilcal.chain.sources.seed_stride`), so that no two points share a packing draw."""
+    from soilcal.chain.sources import seed_stride
+    from soilcal.chain.verify import most_seeds
+
+    return most_seeds(soil_data) + SEED_OFFSET + seed_stride(soil_data) * int(point)
 
 
 def half_width(soil_data: dict) -> float | None:
@@ -152,41 +165,48 @@ def gradient(model, x0, eps: float = 1e-4) -> np.ndarray:
 
 
 def _runs_xy(frames, response, syms, centre, half, x0):
+    """(y, X, n) of the runs of ``response``: each row's value (the mean of its ``n`` seeds),
+    its coded offset from x0 and its seed count (1 where a row gives none)."""
+    empty = np.empty(0), np.empty((0, len(syms))), np.empty(0)
     if not frames:
-        return np.empty(0), np.empty((0, len(syms)))
+        return empty
     d = pd.concat(frames, ignore_index=True)
     d = d[(d["response"].astype(str) == response) & (d["status"].astype(str) == "ok")]
     fcols = [f"f:{s}" for s in syms]
     if any(c not in d.columns for c in fcols):
-        return np.empty(0), np.empty((0, len(syms)))
+        return empty
     y = pd.to_numeric(d["value"], errors="coerce").to_numpy(float)
     X = (d[fcols].apply(pd.to_numeric, errors="coerce").to_numpy(float) - centre) / half - np.asarray(x0, float)
+    n = pd.to_numeric(d["n"], errors="coerce").to_numpy(float) if "n" in d.columns else np.ones(y.size)
+    n = np.where(np.isfinite(n) & (n >= 1), n, 1.0)
     ok = np.isfinite(y) & np.all(np.isfinite(X), axis=1)
-    return y[ok], X[ok]
+    return y[ok], X[ok], n[ok]
 
 
 def plane(centre_frames: list[pd.DataFrame], local_frames: list[pd.DataFrame], response: str, syms, centre,
           half, x0):
     """The DEM about x0 from the first round's runs at x0 (``centre_frames``) and the local
-    design's (``local_frames``; each run's ``f:<symbol>`` actual levels, ``value``,
+    design's (``local_frames``; each run's ``f:<symbol>`` actual levels, ``value``, ``n``,
     ``status``): least squares of y on 1, x - x0 (coded) and a centre indicator, the
     factorial-plus-centre-points model, so that the slopes come from the design's two levels
     and a bend of the response within them (the centre standing off the design's plane) is
-    estimated apart instead of tilting the level.  Returns dict(level: the centre's mean
+    estimated apart instead of tilting the level; each row weighted by its seed count ``n``
+    (a mean of n seeds has 1/n of one seed's variance: statsmodels WLS), so that a local point
+    of several seeds counts as much as they do.  Returns dict(level: the centre's mean
     response, slope per coded unit, cov: the slopes' covariance, curvature: the centre minus
-    the plane there, curvature_se, runs, sd: the residual SD), or None with too few runs of
-    either kind or no residual degree of freedom."""
+    the plane there, curvature_se, runs: the rows, seeds: their seeds, sd: the residual SD of
+    one seed), or None with too few runs of either kind or no residual degree of freedom."""
     import statsmodels.api as sm
 
-    yc, Xc = _runs_xy(centre_frames, response, syms, centre, half, x0)
-    yl, Xl = _runs_xy(local_frames, response, syms, centre, half, x0)
+    yc, Xc, nc = _runs_xy(centre_frames, response, syms, centre, half, x0)
+    yl, Xl, nl = _runs_xy(local_frames, response, syms, centre, half, x0)
     k = len(syms)
     if yc.size < 1 or yl.size < k + 1 or yc.size + yl.size < k + 3 or np.linalg.matrix_rank(Xl) < k:
         return None
     X = np.column_stack([np.ones(yc.size + yl.size), np.vstack([Xc, Xl]),
                          np.r_[np.ones(yc.size), np.zeros(yl.size)]])
-    fit = sm.OLS(np.r_[yc, yl], X).fit()
+    fit = sm.WLS(np.r_[yc, yl], X, weights=np.r_[nc, nl]).fit()
     params, cov = np.asarray(fit.params, float), np.asarray(fit.cov_params(), float)
-    return {"level": float(yc.mean()), "slope": params[1:k + 1], "cov": cov[1:k + 1, 1:k + 1],
+    return {"level": float(np.average(yc, weights=nc)), "slope": params[1:k + 1], "cov": cov[1:k + 1, 1:k + 1],
             "curvature": float(params[-1]), "curvature_se": float(np.sqrt(max(cov[-1, -1], 0.0))),
-            "runs": int(yc.size + yl.size), "sd": float(np.sqrt(fit.mse_resid))}
+            "runs": int(yc.size + yl.size), "seeds": int(nc.sum() + nl.sum()), "sd": float(np.sqrt(fit.mse_resid))}

@@ -222,7 +222,8 @@ def _local_row(stage, cid, cal, syms, centre, half, x0, tgt, stats, models, fram
                            for sy, a, v, b in zip(syms, g, np.diag(cg), gs))
         said.append(f"{r}: level {level:.4g} at the first set (its seeds' mean; surface {s0:.4g}), slope per coded "
                     f"unit {slopes}, the first set standing {pl['curvature']:+.3g} (se {pl['curvature_se']:.2g}) off "
-                    f"the design's plane there, from {n} runs (residual SD {sd:.3g})")
+                    f"the design's plane there, from {n} runs of {pl['seeds']} seeds (residual SD of one seed "
+                    f"{sd:.3g})")
     lo_t, hi_t = np.maximum(lo_w, x0 - lc.TRUST * h), np.minimum(hi_w, x0 + lc.TRUST * h)
     res = corrected_set(corrected, tgt, {}, x0, lower=lo_t, upper=hi_t)
     x = res["x_coded"]
@@ -230,9 +231,9 @@ def _local_row(stage, cid, cal, syms, centre, half, x0, tgt, stats, models, fram
     def worst(xc):
         return max(abs(float(corrected[r].predict(xc[None, :])[0]) - t) / abs(t) * 100 for r, t in tgt.items())
     n_local = len(local)  # one run file per point
-    lead = (f"local design at the first set ({n_local} points at +- {h:g} coded, one seed each, with the first "
-            f"round's seeds there): " + "; ".join(said) + "; the surface corrected to the DEM's level and slope "
-            "there (first-order model management)")
+    lead = (f"local design at the first set ({n_local} points at +- {h:g} coded, each with a design point's "
+            f"seeds, with the first round's seeds there): " + "; ".join(said) + "; the surface corrected to the "
+            "DEM's level and slope there (first-order model management)")
     trust = f"within the trust region (+- {lc.TRUST * h:g} coded about the first set, inside the search region)"
     w0, w1 = worst(x0), worst(x)
     if not res["success"] and w1 > w0 - COMPROMISE_GAIN:

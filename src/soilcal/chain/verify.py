@@ -85,12 +85,14 @@ def _case(stage: dict, case_id: str) -> dict:
 
 
 def verification_spec(soil, stage: dict, optimum: pd.DataFrame, case_id: str, rep: int,
-                      preset: str | None = None, responses=None) -> dict:
+                      preset: str | None = None, responses=None, design_seeds: bool = False) -> dict:
     """The point spec (:func:`soilcal.chain.sources.point_spec`) of verification replicate
     ``rep`` of one case: the calibrated set, every response the case aims at, one seed; with
     ``preset`` (``paper``) only the responses :func:`paper_responses` admits, at that preset;
     with ``responses`` only those of them (a second verification stage's seed runs only the
-    responses its first seeds left undecided, :func:`second_stage_responses`)."""
+    responses its first seeds left undecided, :func:`second_stage_responses`); with
+    ``design_seeds`` each response's seeds per design point instead of one (a local design's
+    point, :mod:`soilcal.chain.local`), from seed ``rep`` on."""
     from soilcal.chain.sources import point_spec
     from soilcal.chain.stage import calibrated_levels
 
@@ -107,7 +109,8 @@ def verification_spec(soil, stage: dict, optimum: pd.DataFrame, case_id: str, re
         rids = some
     if preset == "paper":
         rids = [r for r in rids if r in paper_responses(soil, rids)]
-    spec = point_spec(soil, stage, levels, run=rep, seed=seed, replicates=1, responses=rids)
+    spec = point_spec(soil, stage, levels, run=rep, seed=seed, replicates=None if design_seeds else 1,
+                      responses=rids)
     if preset:
         for rs in spec["responses"].values():
             rs["preset"] = preset
@@ -815,12 +818,12 @@ def _soil(soil_path, soil_data, resources_root="resources"):
 
 
 def verification_point(soil, stage: dict, optimum: pd.DataFrame, case_id: str, rep: int,
-                       preset: str | None = None, responses=None) -> dict:
+                       preset: str | None = None, responses=None, design_seeds: bool = False) -> dict:
     """Everything one verification job simulates (plain data, the job's params): the spec of
     :func:`verification_spec`, or ``{"not_run": reason}`` when the case has no calibrated set
     (e.g. its target is missing)."""
     try:
-        spec = verification_spec(soil, stage, optimum, case_id, rep, preset, responses)
+        spec = verification_spec(soil, stage, optimum, case_id, rep, preset, responses, design_seeds)
     except InputError as exc:
         return {"not_run": str(exc), "stage": stage["id"], "case": case_id,
                 "responses": list(_case(stage, case_id)["goals"])}
